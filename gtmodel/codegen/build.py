@@ -1,0 +1,303 @@
+"""Build generated C into a shared library with the system C compiler, and load it.
+
+The compiler is ``$CC`` if set, else ``gcc`` or ``cc`` on ``PATH``. Its absence raises
+:class:`~gtmodel.errors.CompilerNotFoundError` with a one-line message saying how to fix
+it. The wrapper source is compiled with ``-std=c99 -Wall -Wextra`` (optionally
+``-Werror``); the CasADi-generated source with the same standard and its own harmless
+warnings silenced.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import os
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.specs import FunctionSpec
+from gtmodel.errors import CodegenError, CompilerNotFoundError
+
+__all__ = [
+    "COMMON_FLAGS",
+    "WRAPPER_WARNINGS",
+    "CASADI_WARNINGS",
+    "find_compiler",
+    "compile_shared",
+    "load_library",
+    "CompiledFunction",
+    "CompiledLibrary",
+]
+
+log = logging.getLogger("gtmodel")
+
+#: Flags for every translation unit.
+COMMON_FLAGS = ("-std=c99", "-O2", "-fPIC")
+#: Warnings for the wrapper (kept warning-free; the tests add ``-Werror``).
+WRAPPER_WARNINGS = ("-Wall", "-Wextra")
+#: Warnings for the CasADi-generated part (not ours to fix).
+CASADI_WARNINGS = ("-Wall", "-Wextra", "-Wno-unused-parameter", "-Wno-unused-variable", "-Wno-unused-function")
+
+_FIX = "install a C compiler (e.g. `apt-get install gcc`) or set CC to one"
+
+
+def find_compiler() -> list[str]:
+    """The C compiler command: ``$CC`` if set, else ``gcc`` or ``cc`` found on ``PATH``.
+
+    Returns
+    -------
+    list of str
+        The command words, the first an absolute path to the executable (``$CC`` may
+        carry extra flags, e.g. ``"gcc -m64"``).
+
+    Raises
+    ------
+    CompilerNotFoundError
+        ``$CC`` names no executable, or neither ``gcc`` nor ``cc`` is on ``PATH``; the
+        one-line message says how to fix it.
+    """
+    cc = os.environ.get("CC", "").strip()
+    if cc:
+        words = shlex.split(cc)
+        exe = shutil.which(words[0])
+        if exe is None:
+            raise CompilerNotFoundError(f"no C compiler: CC={cc!r} is not an executable; {_FIX}")
+        return [exe, *words[1:]]
+    for name in ("gcc", "cc"):
+        exe = shutil.which(name)
+        if exe is not None:
+            return [exe]
+    raise CompilerNotFoundError(f"no C compiler found (CC unset, no gcc or cc on PATH); {_FIX}")
+
+
+def _run(cmd: list[str], what: str) -> str:
+    log.debug("codegen: %s", " ".join(shlex.quote(c) for c in cmd))
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    except FileNotFoundError:
+        raise CompilerNotFoundError(f"no C compiler: {cmd[0]!r} cannot be run; {_FIX}") from None
+    except subprocess.TimeoutExpired:
+        raise CodegenError(f"{what}: the compiler did not finish within 300 s") from None
+    if proc.returncode != 0:
+        msg = (proc.stderr or proc.stdout).strip()
+        lines = msg.splitlines()
+        if len(lines) > 40:
+            msg = "\n".join(lines[:40] + [f"... ({len(lines) - 40} more lines)"])
+        raise CodegenError(f"{what} failed (exit {proc.returncode}): {' '.join(cmd)}\n{msg}")
+    if proc.stderr.strip():
+        log.debug("codegen: %s: compiler output:\n%s", what, proc.stderr.strip())
+    return proc.stderr
+
+
+def compile_shared(
+    generated: GeneratedCode,
+    build_dir: str | Path | None = None,
+    *,
+    werror: bool = False,
+    extra_flags: Sequence[str] = (),
+) -> Path:
+    """Compile generated code into a shared library.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        Result of :func:`gtmodel.codegen.generate`.
+    build_dir : str or pathlib.Path or None, optional
+        Folder for objects and the library (created if missing); default
+        ``<out_dir>/build``.
+    werror : bool, optional
+        Compile the wrapper with ``-Werror`` (its warnings become errors).
+    extra_flags : sequence of str, optional
+        More compiler flags for both sources (e.g. ``("-march=native",)``).
+
+    Returns
+    -------
+    pathlib.Path
+        The shared library, ``lib<prefix>.so`` (``.dylib`` on macOS).
+
+    Raises
+    ------
+    CompilerNotFoundError
+        No C compiler (see :func:`find_compiler`).
+    CodegenError
+        Compilation or linking failed; the message holds the command and the compiler output.
+    """
+    cc = find_compiler()
+    build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
+    build.mkdir(parents=True, exist_ok=True)
+    inc = ["-I", str(generated.out_dir)]
+    extra = list(extra_flags)
+    obj_casadi = build / f"{generated.prefix}_casadi.o"
+    obj_wrap = build / f"{generated.prefix}.o"
+    _run(
+        [*cc, *COMMON_FLAGS, *CASADI_WARNINGS, *extra, *inc, "-c", str(generated.casadi_source), "-o", str(obj_casadi)],
+        f"compiling {generated.casadi_source.name}",
+    )
+    werr = ["-Werror"] if werror else []
+    _run(
+        [*cc, *COMMON_FLAGS, *WRAPPER_WARNINGS, *werr, *extra, *inc, "-c", str(generated.source), "-o", str(obj_wrap)],
+        f"compiling {generated.source.name}",
+    )
+    suffix = ".dylib" if sys.platform == "darwin" else ".so"
+    lib = build / f"lib{generated.prefix}{suffix}"
+    _run([*cc, "-shared", *extra, str(obj_casadi), str(obj_wrap), "-o", str(lib), "-lm"], f"linking {lib.name}")
+    log.info("codegen: built %s", lib)
+    return lib
+
+
+class CompiledFunction:
+    """One generated C function, callable from Python through ctypes.
+
+    Parameters
+    ----------
+    cfunc : ctypes function pointer
+        The loaded symbol ``<prefix>_<name>``.
+    spec : FunctionSpec
+        Its declaration.
+    sizes_in : sequence of int
+        Length of each array argument (0 for ``int`` arguments), in C order.
+    sizes_out : sequence of int
+        Length of each output array, in C order.
+    """
+
+    def __init__(self, cfunc, spec: FunctionSpec, sizes_in: Sequence[int], sizes_out: Sequence[int]) -> None:
+        self.cfunc = cfunc
+        self.spec = spec
+        self.sizes_in = tuple(sizes_in)
+        self.sizes_out = tuple(sizes_out)
+
+    def __call__(self, *args, out: Sequence[np.ndarray] | None = None) -> tuple[int, tuple[np.ndarray, ...]]:
+        """Call the C function.
+
+        Parameters
+        ----------
+        *args : array_like or int
+            The inputs in C order: arrays of the declared sizes, ``int`` for
+            configuration/solution.
+        out : sequence of numpy.ndarray or None, optional
+            Output buffers (float64, C-contiguous, declared sizes); new zero arrays if None.
+
+        Returns
+        -------
+        status : int
+            The returned status code (0 = ``GT_OK``).
+        outputs : tuple of numpy.ndarray
+            The output buffers (untouched by the C code unless ``status == 0``).
+
+        Raises
+        ------
+        CodegenError
+            Wrong number of arguments or wrong array sizes.
+        """
+        if len(args) != len(self.sizes_in):
+            raise CodegenError(f"{self.spec.name}: expected {len(self.sizes_in)} arguments, got {len(args)}")
+        if out is None:
+            out = tuple(np.zeros(n) for n in self.sizes_out)
+        cargs = []
+        for a, n in zip(args, self.sizes_in):
+            if n == 0:
+                cargs.append(int(a))
+            else:
+                arr = np.ascontiguousarray(a, dtype=np.float64)
+                if arr.size != n:
+                    raise CodegenError(f"{self.spec.name}: expected an array of {n} values, got shape {arr.shape}")
+                cargs.append(arr.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        for o, n in zip(out, self.sizes_out):
+            if o.dtype != np.float64 or o.size != n or not o.flags.c_contiguous:
+                raise CodegenError(f"{self.spec.name}: output buffer must be a C-contiguous float64 array of {n}")
+            cargs.append(o.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        status = int(self.cfunc(*cargs))
+        return status, tuple(out)
+
+
+class CompiledLibrary:
+    """A loaded generated library: its functions by name, its version string.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        What was generated (signatures are taken from it).
+    path : pathlib.Path
+        The shared library built by :func:`compile_shared`.
+    """
+
+    def __init__(self, generated: GeneratedCode, path: Path) -> None:
+        self.generated = generated
+        self.path = Path(path)
+        try:
+            self.cdll = ctypes.CDLL(str(self.path))
+        except OSError as exc:
+            raise CodegenError(f"cannot load {self.path}: {exc}") from None
+        p = generated.prefix
+        self._version = getattr(self.cdll, f"{p}_version")
+        self._version.restype = ctypes.c_char_p
+        self._version.argtypes = []
+        self._status_string = getattr(self.cdll, f"{p}_status_string")
+        self._status_string.restype = ctypes.c_char_p
+        self._status_string.argtypes = [ctypes.c_int]
+        self.functions: dict[str, CompiledFunction] = {}
+        dptr = ctypes.POINTER(ctypes.c_double)
+        for spec in generated.specs:
+            sizes_in, sizes_out = generated.signatures[spec.name]
+            cf = getattr(self.cdll, f"{p}_{spec.name}")
+            cf.restype = ctypes.c_int
+            cf.argtypes = [ctypes.c_int if n == 0 else dptr for n in sizes_in] + [dptr] * len(sizes_out)
+            self.functions[spec.name] = CompiledFunction(cf, spec, sizes_in, sizes_out)
+
+    def __getitem__(self, name: str) -> CompiledFunction:
+        return self.functions[name]
+
+    def version(self) -> str:
+        """The version string compiled into the library.
+
+        Returns
+        -------
+        str
+            E.g. ``"gtmodel 0.1.0; casadi 3.8.2; parameters L1 sha256:...; friction exact"``.
+        """
+        return self._version().decode()
+
+    def status_string(self, status: int) -> str:
+        """Name of a status code, from the library.
+
+        Parameters
+        ----------
+        status : int
+            A returned status.
+
+        Returns
+        -------
+        str
+            E.g. ``"GT_UNREACHABLE"``.
+        """
+        return self._status_string(int(status)).decode()
+
+
+def load_library(generated: GeneratedCode, path: str | Path) -> CompiledLibrary:
+    """Load a compiled library with ctypes and declare its function signatures.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        What was generated.
+    path : str or pathlib.Path
+        Shared library from :func:`compile_shared`.
+
+    Returns
+    -------
+    CompiledLibrary
+        Callable functions by name (``lib["ik"](T, 0)`` -> ``(status, (q,))``).
+
+    Raises
+    ------
+    CodegenError
+        The library cannot be loaded.
+    """
+    return CompiledLibrary(generated, Path(path))

@@ -1,0 +1,571 @@
+"""Direct collocation transcription of an :class:`~gtmodel.modeling.Optimization` to an NLP.
+
+Method (as in JModelica.org's LocalDAECollocator): the horizon is split into ``elements``
+uniform elements; in each, states are polynomials of degree ``points`` through the
+element start and the ``points`` collocation points (``casadi.collocation_points``,
+Radau IIA or Gauss-Legendre); inputs and algebraic variables are NLP variables at the
+collocation points only. States are continuous across elements. A free final time is
+handled by time scaling ``t = t0 + tau (tf - t0)`` with ``tf`` an NLP variable.
+
+Conventions:
+
+* Path constraints and variable bounds of inputs/algebraics are enforced at the
+  collocation points; state bounds also at element boundaries.
+* Point constraints and the Mayer term at the final time use the final state and, for
+  inputs/algebraics, the last element's polynomial at ``tau = 1`` (for Radau a
+  collocation point; for Legendre an extrapolation).
+* Point constraints at the start time use the initial state and, for inputs/algebraics,
+  the first element's Lagrange polynomial through its collocation points evaluated at
+  ``tau = 0`` (an extrapolation for both schemes).
+* The Lagrange term uses the quadrature of the collocation points.
+
+Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
+solved repeatedly for new parameter values and initial guesses.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as _time
+from collections.abc import Mapping
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError, SolverError
+from gtmodel.modeling.model import FlatDAE, _eval_outputs, _unpack, _vector_value
+from gtmodel.modeling.optimization import Optimization
+from gtmodel.modeling.result import (
+    CollocationData,
+    OptimizationResult,
+    lagrange_basis,
+    normalize_ipopt_status,
+)
+
+__all__ = ["CollocationTranscription", "solve"]
+
+_log = logging.getLogger("gtmodel")
+
+#: CasADi-level nlpsol options passed through unchanged (others are IPOPT options).
+_CASADI_OPTIONS = {
+    "print_time",
+    "expand",
+    "error_on_fail",
+    "record_time",
+    "verbose",
+    "calc_lam_p",
+    "calc_lam_x",
+    "calc_f",
+    "calc_g",
+    "bound_consistency",
+    "show_eval_warnings",
+    "iteration_callback",
+    "regularity_check",
+}
+
+
+def _merge_options(verbose: bool, solver_options: Mapping[str, Any] | None) -> dict[str, Any]:
+    ipopt: dict[str, Any] = {"max_iter": 3000, "tol": 1e-8}
+    top: dict[str, Any] = {"error_on_fail": False}
+    if verbose:
+        ipopt["print_level"] = 5
+        top["print_time"] = True
+    else:
+        ipopt["print_level"] = 0
+        ipopt["sb"] = "yes"
+        top["print_time"] = False
+        top["show_eval_warnings"] = False
+    for key, value in (solver_options or {}).items():
+        if not isinstance(key, str):
+            raise InputError(f"solver_options keys must be strings, got {key!r}")
+        if key == "ipopt" and isinstance(value, Mapping):
+            ipopt.update(value)
+        elif key.startswith("ipopt."):
+            ipopt[key[6:]] = value
+        elif key in _CASADI_OPTIONS:
+            top[key] = value
+        else:
+            ipopt[key] = value
+    top["ipopt"] = ipopt
+    return top
+
+
+def _collocation_coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
+    """Derivative matrix, continuity, quadrature and extrapolation weights."""
+    tau = np.array(ca.collocation_points(d, scheme), dtype=float)
+    root = np.concatenate([[0.0], tau])
+    C = np.zeros((d + 1, d + 1))
+    D = np.zeros(d + 1)
+    for j in range(d + 1):
+        coeff = np.zeros(d + 1)
+        coeff[j] = 1.0
+        poly = np.poly1d(np.polyfit(root, coeff, d))
+        D[j] = poly(1.0)
+        dpoly = np.polyder(poly)
+        C[j] = dpoly(root)
+    B = np.zeros(d)
+    for j in range(d):
+        coeff = np.zeros(d)
+        coeff[j] = 1.0
+        poly = np.poly1d(np.polyfit(tau, coeff, d - 1)) if d > 1 else np.poly1d([1.0])
+        ipoly = np.polyint(poly)
+        B[j] = ipoly(1.0) - ipoly(0.0)
+    return {
+        "tau": tau,
+        "root": root,
+        "C": C,
+        "D": D,
+        "B": B,
+        "L0": lagrange_basis(tau, np.array([0.0]))[0],
+        "L1": lagrange_basis(tau, np.array([1.0]))[0],
+    }
+
+
+class CollocationTranscription:
+    """An optimisation problem transcribed once by direct collocation, solvable repeatedly.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The declared problem.
+    elements : int, optional
+        Number of uniform elements; default 50.
+    points : int, optional
+        Collocation points per element (polynomial degree of states); default 3.
+    scheme : {"radau", "legendre"}, optional
+        Collocation points; default ``"radau"``.
+    verbose : bool, optional
+        Show IPOPT output and timing; default False.
+    solver_options : mapping, optional
+        IPOPT options (plain names such as ``"max_iter"`` or ``"ipopt.max_iter"``, or a
+        nested ``{"ipopt": {...}}``) and CasADi nlpsol options (``"print_time"``,
+        ``"expand"``, ...); merged over the defaults ``max_iter=3000``, ``tol=1e-8``,
+        ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings)
+        unless ``verbose``.
+
+    Raises
+    ------
+    InputError
+        If ``elements``/``points``/``scheme`` are invalid.
+    ModelError
+        If the model cannot be flattened.
+    SolverError
+        If CasADi cannot build the NLP solver.
+    """
+
+    def __init__(
+        self,
+        optimization: Optimization,
+        elements: int = 50,
+        points: int = 3,
+        scheme: str = "radau",
+        verbose: bool = False,
+        solver_options: Mapping[str, Any] | None = None,
+    ) -> None:
+        if not isinstance(optimization, Optimization):
+            raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
+        if not isinstance(elements, (int, np.integer)) or isinstance(elements, bool) or elements < 1:
+            raise InputError(f"elements must be a positive integer, got {elements!r}")
+        if not isinstance(points, (int, np.integer)) or isinstance(points, bool) or not 1 <= points <= 9:
+            raise InputError(f"points must be an integer in 1..9, got {points!r}")
+        if scheme not in ("radau", "legendre"):
+            raise InputError(f"scheme must be 'radau' or 'legendre', got {scheme!r}")
+        self.optimization = optimization
+        self.elements = int(elements)
+        self.points = int(points)
+        self.scheme = scheme
+        self.options = _merge_options(verbose, solver_options)
+        self.dae: FlatDAE = optimization.flat()
+        self._build()
+
+    # ------------------------------------------------------------------ build
+    def _build(self) -> None:
+        opt, dae = self.optimization, self.dae
+        N, d = self.elements, self.points
+        co = _collocation_coefficients(d, self.scheme)
+        self._co = co
+        nx, nz, nu = dae.nx, dae.nz, dae.nu
+        t0 = opt.start_time
+
+        # expression functions of (t, x, z, u, p, tf); der() replaced by the ODE rhs
+        args = [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time]
+
+        def fn(name: str, exprs: list[ca.SX]) -> ca.Function:
+            e = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
+            if dae.nx:
+                e = ca.substitute(e, dae.xdot, dae.ode_expr)
+            return ca.Function(name, args, [e])
+
+        path_fn = fn("path", [c.expr for c in opt.path_constraints])
+        start_c = [c for c in opt.point_constraints if c.at == "start"]
+        final_c = [c for c in opt.point_constraints if c.at == "final"]
+        start_fn = fn("point_start", [c.expr for c in start_c])
+        final_fn = fn("point_final", [c.expr for c in final_c])
+        mayer_fn = fn("mayer", [opt.mayer])
+        lagr_fn = fn("lagrange", [opt.lagrange])
+        ode_fn = ca.Function("ode", args[:5], [dae.ode_expr])
+        alg_fn = ca.Function("alg", args[:5], [dae.alg_expr])
+
+        P = dae.p
+        free = opt.free_final_time
+        T = ca.SX.sym("tf") if free else ca.SX(opt.final_time_value)
+        h = (T - t0) / N
+
+        x_lb, x_ub = opt.bounds_vectors(dae, "x")
+        z_lb, z_ub = opt.bounds_vectors(dae, "z")
+        u_lb, u_ub = opt.bounds_vectors(dae, "u")
+
+        w: list[ca.SX] = []
+        lbw: list[np.ndarray] = []
+        ubw: list[np.ndarray] = []
+        blocks: list[tuple[str, int, int]] = []  # (kind, element, tau index)
+        g: list[ca.SX] = []
+        lbg: list[np.ndarray] = []
+        ubg: list[np.ndarray] = []
+
+        def var(kind: str, k: int, j: int, n: int, lb: np.ndarray, ub: np.ndarray) -> ca.SX:
+            v = ca.SX.sym(f"{kind}_{k}_{j}", n)
+            w.append(v)
+            lbw.append(lb)
+            ubw.append(ub)
+            blocks.append((kind, k, j))
+            return v
+
+        def con(expr: ca.SX, lb: np.ndarray, ub: np.ndarray) -> None:
+            if expr.numel():
+                g.append(expr)
+                lbg.append(np.broadcast_to(lb, (expr.numel(),)).astype(float))
+                ubg.append(np.broadcast_to(ub, (expr.numel(),)).astype(float))
+
+        path_lb = np.concatenate([c.lb for c in opt.path_constraints]) if opt.path_constraints else np.zeros(0)
+        path_ub = np.concatenate([c.ub for c in opt.path_constraints]) if opt.path_constraints else np.zeros(0)
+
+        Xs: list[list[ca.SX]] = []
+        Us: list[list[ca.SX]] = []
+        Zs: list[list[ca.SX]] = []
+        J = ca.SX(0)
+        Xk0 = var("x", 0, 0, nx, x_lb, x_ub)
+        for k in range(N):
+            Xk = [Xk0] + [var("x", k, j, nx, x_lb, x_ub) for j in range(1, d + 1)]
+            Uk = [var("u", k, j, nu, u_lb, u_ub) for j in range(1, d + 1)]
+            Zk = [var("z", k, j, nz, z_lb, z_ub) for j in range(1, d + 1)]
+            Xs.append(Xk)
+            Us.append(Uk)
+            Zs.append(Zk)
+            for j in range(1, d + 1):
+                tkj = t0 + (k + co["root"][j]) * h
+                xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1))
+                fkj = ode_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P)
+                con(h * fkj - xp, np.zeros(1), np.zeros(1))
+                con(alg_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P), np.zeros(1), np.zeros(1))
+                if opt.path_constraints:
+                    con(path_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T), path_lb, path_ub)
+                J = J + co["B"][j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T)
+            xend = sum(co["D"][r] * Xk[r] for r in range(d + 1))
+            Xk0 = var("x", k + 1, 0, nx, x_lb, x_ub)
+            con(Xk0 - xend, np.zeros(1), np.zeros(1))
+        XN = Xk0
+        if free:
+            w.append(T)
+            lbw.append(np.array([opt.final_time_bounds[0]]))
+            ubw.append(np.array([opt.final_time_bounds[1]]))
+            blocks.append(("tf", 0, 0))
+
+        def extrap(vals: list[ca.SX], weights: np.ndarray, n: int) -> ca.SX:
+            if n == 0:
+                return ca.SX(0, 1)
+            return sum(weights[j] * vals[j] for j in range(d))
+
+        u_start, z_start = extrap(Us[0], co["L0"], nu), extrap(Zs[0], co["L0"], nz)
+        u_final, z_final = extrap(Us[-1], co["L1"], nu), extrap(Zs[-1], co["L1"], nz)
+        if start_c:
+            con(
+                start_fn(t0, Xs[0][0], z_start, u_start, P, T),
+                np.concatenate([c.lb for c in start_c]),
+                np.concatenate([c.ub for c in start_c]),
+            )
+        if final_c:
+            con(
+                final_fn(T, XN, z_final, u_final, P, T),
+                np.concatenate([c.lb for c in final_c]),
+                np.concatenate([c.ub for c in final_c]),
+            )
+        J = J + mayer_fn(T, XN, z_final, u_final, P, T)
+
+        wv = ca.vertcat(*w)
+        gv = ca.vertcat(*g) if g else ca.SX(0, 1)
+        self._blocks = blocks
+        self._block_sizes = [int(b.numel()) for b in w]
+        self._lbw = np.concatenate(lbw) if lbw else np.zeros(0)
+        self._ubw = np.concatenate(ubw) if ubw else np.zeros(0)
+        self._lbg = np.concatenate(lbg) if lbg else np.zeros(0)
+        self._ubg = np.concatenate(ubg) if ubg else np.zeros(0)
+        self._fg = ca.Function("fg", [wv, P], [J, gv])
+        xc = ca.horzcat(*[ca.horzcat(*Xk) for Xk in Xs])
+        uc = ca.horzcat(*[ca.horzcat(*Uk) for Uk in Us]) if nu else ca.SX(0, N * d)
+        zc = ca.horzcat(*[ca.horzcat(*Zk) for Zk in Zs]) if nz else ca.SX(0, N * d)
+        self._extract = ca.Function("extract", [wv], [xc, uc, zc, XN, ca.vertcat(T)])
+        self.key = (id(self), N, d, self.scheme, int(wv.numel()))
+        try:
+            self.solver = ca.nlpsol(
+                f"{dae.name}_collocation",
+                "ipopt",
+                {"x": wv, "p": P, "f": J, "g": gv},
+                self.options,
+            )
+        except RuntimeError as exc:
+            raise SolverError(f"could not build the IPOPT solver: {exc}") from exc
+        _log.debug(
+            "collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel()
+        )
+
+    # ------------------------------------------------------------------ guesses
+    def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float) -> np.ndarray:
+        opt, dae, co = self.optimization, self.dae, self._co
+        N, t0 = self.elements, opt.start_time
+        h = (tf_guess - t0) / N
+        fns = {}
+        for cat, vars_, start in (("x", dae.x_vars, dae.x_start), ("z", dae.z_vars, dae.z_start), ("u", dae.u_vars, None)):
+            for name, sl in vars_.items():
+                n = sl.stop - sl.start
+                if start is None:
+                    kind_syms = self.optimization.model._vars[name]
+                    default = kind_syms.start.copy()
+                else:
+                    default = start[sl].copy()
+                fns[(cat, name)] = (sl, _guess_fn(guesses.get(name), n, name, default))
+        w0 = []
+        for (kind, k, j), size in zip(self._blocks, self._block_sizes):
+            if kind == "tf":
+                w0.append(np.array([tf_guess]))
+                continue
+            t = t0 + (k + co["root"][j]) * h
+            vals = np.zeros(size)
+            for (cat, _name), (sl, f) in fns.items():
+                if cat == kind:
+                    vals[sl] = f(t)
+            w0.append(vals)
+        w = np.concatenate(w0) if w0 else np.zeros(0)
+        lo, hi = self._lbw, self._ubw
+        return np.clip(w, lo, hi)
+
+    # ------------------------------------------------------------------ solve
+    def solve(
+        self,
+        parameters: Mapping[str, Any] | None = None,
+        initial_guess: OptimizationResult | Mapping[str, Any] | None = None,
+    ) -> OptimizationResult:
+        """Solve the NLP; never raises for a non-optimal outcome.
+
+        Parameters
+        ----------
+        parameters : mapping of str to float or array_like, optional
+            Parameter values overriding the model defaults and
+            :meth:`Optimization.set_parameter`.
+        initial_guess : OptimizationResult or mapping, optional
+            A previous result of this transcription (its NLP vector is reused: warm
+            start), a result of another transcription (sampled), or a mapping from
+            variable names (and ``"final_time"``) to guesses in the formats of
+            :meth:`Optimization.set_initial_guess`. Default: the problem's guesses.
+
+        Returns
+        -------
+        OptimizationResult
+            With ``status`` and the solution or the last iterate.
+
+        Raises
+        ------
+        InputError
+            If parameters or guesses are malformed.
+        """
+        opt, dae = self.optimization, self.dae
+        merged = {k: v for k, v in opt.parameters.items()}
+        merged.update(parameters or {})
+        pvec = dae.parameter_vector(merged)
+        guesses: dict[str, Any] = dict(opt.initial_guesses)
+        tf_guess = opt.final_time_guess
+        w0 = None
+        if isinstance(initial_guess, OptimizationResult):
+            if initial_guess.transcription_key == self.key and initial_guess.w is not None:
+                w0 = np.clip(initial_guess.w, self._lbw, self._ubw)
+            elif initial_guess.collocation is not None:
+                res = initial_guess
+                tf_guess = float(np.clip(res.final_time, *opt.final_time_bounds))
+                span_old = res.final_time - opt.start_time
+
+                def from_result(cat: str, name: str, res: OptimizationResult = res) -> Any:
+                    def f(t: float) -> np.ndarray:
+                        s = opt.start_time + (t - opt.start_time) / (tf_guess - opt.start_time) * span_old
+                        return np.asarray(res.sample([s])[cat][name], dtype=float).reshape(-1)
+
+                    return f
+
+                for cat, vars_ in (("states", dae.x_vars), ("inputs", dae.u_vars), ("algebraics", dae.z_vars)):
+                    for name in vars_:
+                        guesses[name] = from_result(cat, name)
+        elif isinstance(initial_guess, Mapping):
+            for name, value in initial_guess.items():
+                if name == "final_time":
+                    tf_guess = float(np.clip(float(value), *opt.final_time_bounds))
+                    continue
+                known = {**dae.x_vars, **dae.z_vars, **dae.u_vars}
+                if name not in known:
+                    raise InputError(f"initial_guess: {name!r} is not a state, input or algebraic variable")
+                guesses[name] = value
+        elif initial_guess is not None:
+            raise InputError("initial_guess must be an OptimizationResult or a mapping")
+        if w0 is None:
+            w0 = self._initial_w(guesses, tf_guess)
+
+        t_start = _time.perf_counter()
+        error_msg = None
+        try:
+            sol = self.solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pvec)
+            w_opt = np.array(sol["x"], dtype=float).reshape(-1)
+        except RuntimeError as exc:  # e.g. NaN/exception inside an evaluation
+            error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
+            w_opt = w0
+        solve_time = _time.perf_counter() - t_start
+        stats = dict(self.solver.stats())
+        message = error_msg or str(stats.get("return_status", "unknown"))
+        status = "error" if error_msg else normalize_ipopt_status(message)
+        if not np.all(np.isfinite(w_opt)):
+            status = "error"
+        return self._result(w_opt, pvec, status, message, stats, solve_time)
+
+    def _result(
+        self,
+        w: np.ndarray,
+        pvec: np.ndarray,
+        status: str,
+        message: str,
+        stats: dict[str, Any],
+        solve_time: float,
+    ) -> OptimizationResult:
+        dae, opt, co = self.dae, self.optimization, self._co
+        N, d = self.elements, self.points
+        f_val, g_val = self._fg(w, pvec)
+        f_val = float(f_val)
+        g_val = np.array(g_val, dtype=float).reshape(-1)
+        viol = [0.0]
+        if g_val.size:
+            viol.append(float(np.max(np.maximum(self._lbg - g_val, g_val - self._ubg))))
+        if w.size:
+            viol.append(float(np.max(np.maximum(self._lbw - w, w - self._ubw))))
+        max_viol = float(max(viol)) if np.all(np.isfinite(g_val)) else float("nan")
+        xc, uc, zc, _xn, T = self._extract(w)
+        tf = float(T)
+        colloc = CollocationData(
+            t0=opt.start_time,
+            tf=tf,
+            elements=N,
+            points=d,
+            scheme=self.scheme,
+            tau_root=co["root"].copy(),
+            xc=np.array(xc).reshape(dae.nx, N, d + 1).transpose(1, 2, 0),
+            uc=np.array(uc).reshape(dae.nu, N, d).transpose(1, 2, 0),
+            zc=np.array(zc).reshape(dae.nz, N, d).transpose(1, 2, 0),
+        )
+        t = colloc.mesh()
+        xs, us, zs = colloc.evaluate(t)
+        params = {k: pvec[s].copy() for k, s in dae.p_vars.items()}
+        try:
+            outs = _eval_outputs(dae, t, xs, zs, us, pvec)
+        except RuntimeError:
+            outs = {}
+        iterations = int(stats.get("iter_count", 0) or 0)
+        if status != "optimal":
+            _log.warning("collocation solve of %s ended with status %s (%s)", dae.name, status, message)
+        return OptimizationResult(
+            success=status == "optimal",
+            status=status,
+            message=message,
+            iterations=iterations,
+            solve_time=solve_time,
+            objective=f_val,
+            final_time=tf,
+            max_constraint_violation=max_viol,
+            t=t,
+            states=_unpack(dae.x_vars, xs),
+            inputs=_unpack(dae.u_vars, us),
+            algebraics=_unpack(dae.z_vars, zs),
+            outputs=outs,
+            parameters=params,
+            last_iterate=status not in ("optimal", "acceptable"),
+            stats=stats,
+            collocation=colloc,
+            dae=dae,
+            w=w.copy(),
+            transcription_key=self.key,
+        )
+
+
+def _guess_fn(spec: Any, size: int, name: str, default: np.ndarray) -> Any:
+    """Turn a guess specification into ``f(t) -> (size,)``."""
+    if spec is None:
+        return lambda t: default
+    if callable(spec):
+        return lambda t: _vector_value(spec(t), size, f"initial guess of {name!r}")
+    if isinstance(spec, tuple) and len(spec) == 2:
+        tg = np.asarray(spec[0], dtype=float).reshape(-1)
+        vg = np.asarray(spec[1], dtype=float).reshape(tg.size, -1)
+        if vg.shape[1] != size:
+            raise InputError(f"initial guess of {name!r}: expected {size} columns, got {vg.shape[1]}")
+        return lambda t: np.array([np.interp(t, tg, vg[:, i]) for i in range(size)])
+    const = _vector_value(spec, size, f"initial guess of {name!r}")
+    return lambda t: const
+
+
+def solve(
+    optimization: Optimization,
+    elements: int = 50,
+    points: int = 3,
+    scheme: str = "radau",
+    verbose: bool = False,
+    solver_options: Mapping[str, Any] | None = None,
+    initial_guess: OptimizationResult | Mapping[str, Any] | None = None,
+) -> OptimizationResult:
+    """Transcribe by direct collocation and solve with IPOPT.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The declared problem.
+    elements : int, optional
+        Number of uniform elements; default 50.
+    points : int, optional
+        Collocation points per element; default 3.
+    scheme : {"radau", "legendre"}, optional
+        Collocation scheme; default ``"radau"``.
+    verbose : bool, optional
+        Show IPOPT output; default False.
+    solver_options : mapping, optional
+        IPOPT/CasADi options merged over the defaults (see
+        :class:`CollocationTranscription`).
+    initial_guess : OptimizationResult or mapping, optional
+        See :meth:`CollocationTranscription.solve`.
+
+    Returns
+    -------
+    OptimizationResult
+        The result; ``success`` is True only for status ``"optimal"``.
+
+    Raises
+    ------
+    InputError
+        On invalid transcription arguments or guesses.
+    ModelError
+        If the model cannot be flattened.
+    SolverError
+        If the NLP solver cannot be built.
+    """
+    tr = CollocationTranscription(
+        optimization,
+        elements=elements,
+        points=points,
+        scheme=scheme,
+        verbose=verbose,
+        solver_options=solver_options,
+    )
+    return tr.solve(initial_guess=initial_guess)

@@ -1,0 +1,336 @@
+"""Results of optimal control solves (in the style of python-control's OptimalControlResult).
+
+Trajectories are stored at the collocation mesh; :meth:`OptimizationResult.sample` and
+:meth:`OptimizationResult.resample` evaluate the collocation polynomials elsewhere:
+states through the ``d + 1`` points of an element (its start and the ``d`` collocation
+points), inputs and algebraic variables through the ``d`` collocation points. A time on
+an element boundary is evaluated with the element to its left (``tau = 1``), except the
+start time, which uses the first element at ``tau = 0`` (an extrapolation for inputs and
+algebraics).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gtmodel.errors import InputError
+from gtmodel.modeling.model import FlatDAE, _eval_outputs, _frame, _unpack
+
+__all__ = ["OptimizationResult", "CollocationData", "normalize_ipopt_status", "lagrange_basis"]
+
+_log = logging.getLogger("gtmodel")
+
+_IPOPT_STATUS = {
+    "Solve_Succeeded": "optimal",
+    "Solved_To_Acceptable_Level": "acceptable",
+    "Feasible_Point_Found": "acceptable",
+    "Infeasible_Problem_Detected": "infeasible",
+    "Maximum_Iterations_Exceeded": "max_iterations",
+    "Maximum_CpuTime_Exceeded": "max_iterations",
+    "Maximum_WallTime_Exceeded": "max_iterations",
+}
+
+
+def normalize_ipopt_status(return_status: str) -> str:
+    """Map an IPOPT ``return_status`` string to a gtmodel status.
+
+    Parameters
+    ----------
+    return_status : str
+        IPOPT's return status, e.g. ``"Solve_Succeeded"``.
+
+    Returns
+    -------
+    str
+        One of ``"optimal"`` (Solve_Succeeded), ``"acceptable"``
+        (Solved_To_Acceptable_Level, Feasible_Point_Found), ``"infeasible"``
+        (Infeasible_Problem_Detected), ``"max_iterations"`` (iteration, CPU- or
+        wall-time limit) and ``"error"`` for everything else (Restoration_Failed,
+        Invalid_Number_Detected, Search_Direction_Becomes_Too_Small, exceptions, ...).
+    """
+    return _IPOPT_STATUS.get(str(return_status), "error")
+
+
+def lagrange_basis(nodes: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Values of the Lagrange basis polynomials through ``nodes`` at points ``tau``.
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Distinct interpolation nodes, shape ``(m,)``.
+    tau : numpy.ndarray
+        Evaluation points, shape ``(K,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(K, m)``; row ``i`` holds ``l_j(tau_i)``.
+    """
+    nodes = np.asarray(nodes, dtype=float).reshape(-1)
+    tau = np.asarray(tau, dtype=float).reshape(-1)
+    out = np.ones((tau.size, nodes.size))
+    for j in range(nodes.size):
+        for r in range(nodes.size):
+            if r != j:
+                out[:, j] *= (tau - nodes[r]) / (nodes[j] - nodes[r])
+    return out
+
+
+@dataclass
+class CollocationData:
+    """Collocation polynomial data of a solution (used for sampling).
+
+    Parameters
+    ----------
+    t0, tf : float
+        Start and final time, s.
+    elements : int
+        Number of elements ``N`` (uniform mesh).
+    points : int
+        Collocation points per element ``d``.
+    scheme : str
+        ``"radau"`` or ``"legendre"``.
+    tau_root : numpy.ndarray
+        ``[0, tau_1, ..., tau_d]`` on the unit element, shape ``(d + 1,)``.
+    xc : numpy.ndarray
+        State values at ``tau_root`` per element, shape ``(N, d + 1, nx)``.
+    uc : numpy.ndarray
+        Input values at the collocation points, shape ``(N, d, nu)``.
+    zc : numpy.ndarray
+        Algebraic values at the collocation points, shape ``(N, d, nz)``.
+    """
+
+    t0: float
+    tf: float
+    elements: int
+    points: int
+    scheme: str
+    tau_root: np.ndarray
+    xc: np.ndarray
+    uc: np.ndarray
+    zc: np.ndarray
+
+    def mesh(self) -> np.ndarray:
+        """Collocation mesh: start time, interior collocation points and element ends.
+
+        Returns
+        -------
+        numpy.ndarray
+            Increasing times, s, shape ``(K,)``.
+        """
+        h = (self.tf - self.t0) / self.elements
+        inner = [c for c in self.tau_root[1:] if c < 1.0 - 1e-12]
+        local = np.array(inner + [1.0])
+        ts = [np.array([self.t0])]
+        for k in range(self.elements):
+            ts.append(self.t0 + (k + local) * h)
+        return np.concatenate(ts)
+
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Evaluate the collocation polynomials.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times within ``[t0, tf]``, s, shape ``(K,)``.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(x, u, z)`` of shapes ``(K, nx)``, ``(K, nu)``, ``(K, nz)``.
+
+        Raises
+        ------
+        InputError
+            If a time lies outside the horizon.
+        """
+        t = np.asarray(t, dtype=float).reshape(-1)
+        span = self.tf - self.t0
+        tol = 1e-9 * max(1.0, abs(span))
+        if np.any(~np.isfinite(t)) or np.any(t < self.t0 - tol) or np.any(t > self.tf + tol):
+            raise InputError(f"sample times must lie in [{self.t0}, {self.tf}]")
+        h = span / self.elements
+        s = (t - self.t0) / h
+        k = np.clip(np.ceil(s - 1e-9) - 1, 0, self.elements - 1).astype(int)
+        tau = np.clip(s - k, 0.0, 1.0)
+        nx, nu, nz = self.xc.shape[2], self.uc.shape[2], self.zc.shape[2]
+        xs, us, zs = np.zeros((t.size, nx)), np.zeros((t.size, nu)), np.zeros((t.size, nz))
+        lx = lagrange_basis(self.tau_root, tau)
+        lu = lagrange_basis(self.tau_root[1:], tau)
+        for i in range(t.size):
+            xs[i] = lx[i] @ self.xc[k[i]]
+            if nu:
+                us[i] = lu[i] @ self.uc[k[i]]
+            if nz:
+                zs[i] = lu[i] @ self.zc[k[i]]
+        return xs, us, zs
+
+
+@dataclass
+class OptimizationResult:
+    """Result of an optimal control solve.
+
+    Parameters
+    ----------
+    success : bool
+        True only if ``status == "optimal"``.
+    status : str
+        ``"optimal"``, ``"acceptable"``, ``"infeasible"``, ``"max_iterations"`` or
+        ``"error"`` (see :func:`normalize_ipopt_status`).
+    message : str
+        IPOPT's ``return_status`` text, or the exception message on errors.
+    iterations : int
+        IPOPT iterations.
+    solve_time : float
+        Wall-clock time of the NLP solve, s.
+    objective : float
+        Objective value at the returned point.
+    final_time : float
+        Final time, s (optimised when free).
+    max_constraint_violation : float
+        Largest violation of ``lbg <= g(w) <= ubg`` and ``lbw <= w <= ubw`` at the
+        returned point (0 if all hold; NaN if the constraints evaluate to NaN).
+    t : numpy.ndarray
+        Collocation mesh, s, shape ``(K,)``.
+    states, inputs, algebraics, outputs : dict of str to numpy.ndarray
+        Declared name -> values on the mesh, ``(K,)`` or ``(K, n)``.
+    parameters : dict of str to numpy.ndarray
+        Parameter values used.
+    last_iterate : bool
+        True when the trajectories are IPOPT's last iterate of a solve that did not
+        reach "optimal" or "acceptable" (not a solution).
+    stats : dict
+        Raw solver statistics.
+    collocation : CollocationData or None
+        Polynomial data used by :meth:`sample`.
+    dae : FlatDAE or None
+        Flattened model (for outputs when sampling).
+    w : numpy.ndarray or None
+        Raw NLP decision vector (for warm starts).
+    transcription_key : tuple or None
+        Identifies the transcription that produced ``w``.
+    """
+
+    success: bool
+    status: str
+    message: str
+    iterations: int
+    solve_time: float
+    objective: float
+    final_time: float
+    max_constraint_violation: float
+    t: np.ndarray
+    states: dict[str, np.ndarray]
+    inputs: dict[str, np.ndarray]
+    algebraics: dict[str, np.ndarray]
+    outputs: dict[str, np.ndarray]
+    parameters: dict[str, np.ndarray] = field(default_factory=dict)
+    last_iterate: bool = False
+    stats: dict[str, Any] = field(default_factory=dict)
+    collocation: CollocationData | None = field(default=None, repr=False)
+    dae: FlatDAE | None = field(default=None, repr=False)
+    w: np.ndarray | None = field(default=None, repr=False)
+    transcription_key: tuple | None = field(default=None, repr=False)
+
+    def sample(self, t: Any) -> dict[str, Any]:
+        """Evaluate the solution at given times with the collocation polynomials.
+
+        Parameters
+        ----------
+        t : array_like
+            Times within ``[start_time, final_time]``, s, shape ``(K,)``.
+
+        Returns
+        -------
+        dict
+            ``{"t": (K,), "states": {...}, "inputs": {...}, "algebraics": {...},
+            "outputs": {...}}`` with ``(K,)`` or ``(K, n)`` arrays per declared name.
+
+        Raises
+        ------
+        InputError
+            If no polynomial data is available or a time is outside the horizon.
+        """
+        if self.collocation is None or self.dae is None:
+            raise InputError("this result holds no collocation data to sample")
+        tt = np.asarray(t, dtype=float).reshape(-1)
+        xs, us, zs = self.collocation.evaluate(tt)
+        pv = self.dae.parameter_vector(self.parameters)
+        return {
+            "t": tt,
+            "states": _unpack(self.dae.x_vars, xs),
+            "inputs": _unpack(self.dae.u_vars, us),
+            "algebraics": _unpack(self.dae.z_vars, zs),
+            "outputs": _eval_outputs(self.dae, tt, xs, zs, us, pv),
+        }
+
+    def resample(self, dt: float) -> dict[str, Any]:
+        """Sample the solution on the uniform grid ``t0, t0 + dt, ...`` (up to ``tf``).
+
+        Parameters
+        ----------
+        dt : float
+            Sample period, s (e.g. 0.004 for a 4 ms controller). The grid ends at the
+            last multiple of ``dt`` not after the final time (within 1e-9 dt).
+
+        Returns
+        -------
+        dict
+            As :meth:`sample`.
+
+        Raises
+        ------
+        InputError
+            If ``dt`` is not positive or no polynomial data is available.
+        """
+        if self.collocation is None:
+            raise InputError("this result holds no collocation data to sample")
+        dt = float(dt)
+        if not dt > 0 or not np.isfinite(dt):
+            raise InputError(f"dt must be positive, got {dt}")
+        t0, tf = self.collocation.t0, self.collocation.tf
+        n = int(np.floor((tf - t0) / dt + 1e-9)) + 1
+        return self.sample(t0 + dt * np.arange(n))
+
+    def to_dataframe(self, dt: float | None = None) -> Any:
+        """Trajectories as a pandas DataFrame.
+
+        Parameters
+        ----------
+        dt : float, optional
+            If given, resample uniformly with this period (s); else use the mesh.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Column ``"t"`` then one column per scalar element of states, inputs,
+            algebraics and outputs (``"T[0]"`` style names for vectors).
+        """
+        if dt is None:
+            return _frame(self.t, self.states, self.inputs, self.algebraics, self.outputs)
+        s = self.resample(dt)
+        return _frame(s["t"], s["states"], s["inputs"], s["algebraics"], s["outputs"])
+
+    def to_csv(self, path: str | Path, dt: float | None = None) -> Path:
+        """Write the trajectories to a CSV file (header row, SI units).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            Output file.
+        dt : float, optional
+            Uniform sample period, s; default the collocation mesh.
+
+        Returns
+        -------
+        pathlib.Path
+            The written file.
+        """
+        p = Path(path)
+        self.to_dataframe(dt).to_csv(p, index=False)
+        return p

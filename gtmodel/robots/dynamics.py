@@ -1,0 +1,356 @@
+"""Rigid-body dynamics of the 3-link Gantry-Tau with cart friction, in CasADi.
+
+Point masses (Dressler (2012), ch. 6.2): the plate ``m_p`` at the TCP, cart ``i`` ``m_c,i``
+at ``A_i = As_i + q_i v_i``, link cluster ``i`` ``m_a,i`` at the link midpoint
+``(A_i + T)/2``. The equations of motion are derived by Lagrange in minimal coordinates
+(the TCP position ``T``, or the cart positions ``q``), the closure equations (eq. 4.9)
+eliminating the other set, with CasADi's automatic differentiation::
+
+    M(x) x_ddot + h(x, x_dot) + G(x) = B(x)^T f,      f = tau - f_fric(q_dot)
+
+where ``B = dq/dx`` maps the cart forces ``f`` to generalised forces (``B = J^-1`` of
+eq. 6.5 for TCP coordinates, ``I`` for cart coordinates). In TCP coordinates with
+``v_i = e_x`` this reproduces the thesis' form ``M1 T_ddot + M2 q_ddot + G = J^-T f``
+(eq. 6.7, the velocity terms being those of ``q_ddot`` in eq. 6.6); a test checks it.
+Friction: eq. 6.8 in one of the forms of :mod:`gtmodel.robots.friction`.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Sequence
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError, SingularConfigurationError
+from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form, friction_force
+from gtmodel.robots.kinematics import (
+    SINGULARITY_TOLERANCE,
+    GantryTau3Kinematics,
+    _as_points,
+    _Mapped,
+    configuration_signs,
+    fk_expression,
+    ik_expression,
+    jacobian_inverse_expression,
+)
+from gtmodel.robots.parameters import RobotParameters, load_parameters
+
+__all__ = ["lagrange_terms", "GantryTau3Dynamics"]
+
+
+def lagrange_terms(x, x_dot, positions: Sequence[tuple[float, ca.SX]], gravity: float):
+    """Mass matrix, velocity terms and gravity of point masses by Lagrange's equations.
+
+    With ``KE = 1/2 sum m_k |d p_k/dt|^2`` and ``V = g sum m_k p_k,z``, Lagrange's equations
+    ``d/dt dKE/dx_dot - dKE/dx + dV/dx = Q`` are written ``M x_ddot + h + G = Q``.
+
+    Parameters
+    ----------
+    x, x_dot : casadi.SX, shape (n, 1)
+        Generalised coordinates and velocities.
+    positions : sequence of (float, casadi.SX)
+        Pairs ``(m_k, p_k(x))``: mass [kg] and position (3, 1) [m] of each point mass.
+    gravity : float
+        Gravitational acceleration [m/s^2] along -z.
+
+    Returns
+    -------
+    M : casadi.SX, shape (n, n)
+        Mass matrix ``d^2 KE / dx_dot^2``.
+    h : casadi.SX, shape (n, 1)
+        Velocity terms ``d(dKE/dx_dot)/dx x_dot - dKE/dx``.
+    G : casadi.SX, shape (n, 1)
+        Gravity ``dV/dx``.
+    KE : casadi.SX, scalar
+        Kinetic energy [J].
+    V : casadi.SX, scalar
+        Potential energy [J] (zero at z = 0).
+    """
+    KE = 0
+    V = 0
+    for m, p in positions:
+        if m == 0:
+            continue
+        p_dot = ca.jtimes(p, x, x_dot)
+        KE += 0.5 * m * ca.dot(p_dot, p_dot)
+        V += m * gravity * p[2]
+    KE = ca.SX(KE)
+    V = ca.SX(V)
+    dKE_dxd = ca.gradient(KE, x_dot)
+    M = ca.jacobian(dKE_dxd, x_dot)
+    h = ca.jacobian(dKE_dxd, x) @ x_dot - ca.gradient(KE, x)
+    G = ca.gradient(V, x)
+    return M, h, G, KE, V
+
+
+class GantryTau3Dynamics:
+    """Rigid-body dynamics with cart friction of a 3-link Gantry-Tau (eqs. 6.7, 6.8).
+
+    Parameters
+    ----------
+    parameters : RobotParameters or str or pathlib.Path
+        A parameter set or the name/path of one.
+    friction : {"exact", "tanh", "piecewise"}, optional
+        Form of the sign in the friction model (default ``"exact"``); see
+        :mod:`gtmodel.robots.friction`.
+    friction_width : float, optional
+        Velocity width [m/s] of the smooth forms (default 0.01 m/s).
+    asymmetric : bool, optional
+        Use the asymmetric friction of Table 6.1 (default False: symmetric Table 6.3).
+    gravity : bool, optional
+        Include gravity (default True).
+
+    Raises
+    ------
+    InputError
+        Invalid friction form/width, or asymmetric friction without its parameters.
+    """
+
+    def __init__(
+        self,
+        parameters: RobotParameters | str,
+        friction: str = "exact",
+        friction_width: float = DEFAULT_FRICTION_WIDTH,
+        asymmetric: bool = False,
+        gravity: bool = True,
+    ) -> None:
+        self.parameters = load_parameters(parameters)
+        check_friction_form(friction, friction_width)
+        if asymmetric and self.parameters.dynamics.asymmetric is None:
+            raise InputError(f"asymmetric friction requested but parameter set {self.parameters.name!r} has none")
+        self.friction = friction
+        self.friction_width = float(friction_width)
+        self.asymmetric = bool(asymmetric)
+        self.gravity = bool(gravity)
+        self.kinematics = GantryTau3Kinematics(self.parameters)
+        kp = self.parameters.kinematics
+        self.L, self.As, self.v = np.asarray(kp.L), np.asarray(kp.As), np.asarray(kp.v)
+
+    # ----------------------------------------------------------------- symbolic core
+    def friction_force(self, q_dot):
+        """Friction force of this model, eq. 6.8 (see :func:`gtmodel.robots.friction.friction_force`).
+
+        Parameters
+        ----------
+        q_dot : casadi.SX or casadi.MX, shape (3, 1)
+            Cart velocities [m/s].
+
+        Returns
+        -------
+        casadi.SX or casadi.MX, shape (3, 1)
+            Friction force [N].
+        """
+        return friction_force(q_dot, self.parameters.dynamics, self.friction, self.friction_width, self.asymmetric)
+
+    def _bodies(self, T, q):
+        d = self.parameters.dynamics
+        bodies = [(float(d.m_p), T)]
+        for i in range(3):
+            A = self.As[i] + q[i] * self.v[i]
+            bodies.append((float(d.m_c[i]), A))
+            bodies.append((float(d.m_a[i]), (A + T) / 2))
+        return bodies
+
+    def tcp_terms(self, T, T_dot, s):
+        """Lagrange terms in TCP coordinates (eq. 6.7 generalised to any ``v_i``).
+
+        Parameters
+        ----------
+        T, T_dot : casadi.SX, shape (3, 1)
+            TCP position [m] and velocity [m/s].
+        s : casadi.SX or array_like, shape (3,)
+            IK root signs (see :func:`gtmodel.robots.kinematics.configuration_signs`).
+
+        Returns
+        -------
+        dict
+            ``M`` (3, 3) [kg], ``h`` (3,) [N], ``G`` (3,) [N], ``Jinv`` (3, 3), ``q`` (3,) [m],
+            ``q_dot`` (3,) [m/s], ``disc`` (3,) [m^2], ``KE``, ``V`` [J].
+        """
+        q, disc = ik_expression(T, s, self.L, self.As, self.v)
+        Jinv = jacobian_inverse_expression(T, q, self.As, self.v)
+        M, h, G, KE, V = lagrange_terms(T, T_dot, self._bodies(T, q), self.parameters.dynamics.g if self.gravity else 0.0)
+        return dict(M=M, h=h, G=G, Jinv=Jinv, q=q, q_dot=Jinv @ T_dot, disc=disc, KE=KE, V=V)
+
+    def cart_terms(self, q, q_dot, solution=1.0):
+        """Lagrange terms in cart coordinates (``T`` from forward kinematics, eq. 4.9).
+
+        Parameters
+        ----------
+        q, q_dot : casadi.SX, shape (3, 1)
+            Cart positions [m] and velocities [m/s].
+        solution : float or casadi.SX, optional
+            FK assembly (+1 or -1).
+
+        Returns
+        -------
+        dict
+            ``M`` (3, 3) [kg], ``h`` (3,) [N], ``G`` (3,) [N], ``T`` (3,) [m], ``T_dot`` (3,)
+            [m/s], ``h2`` (FK discriminant) [m^2], ``KE``, ``V`` [J].
+        """
+        T, h2, _ = fk_expression(q, solution, self.L, self.As, self.v)
+        M, h, G, KE, V = lagrange_terms(q, q_dot, self._bodies(T, q), self.parameters.dynamics.g if self.gravity else 0.0)
+        return dict(M=M, h=h, G=G, T=T, T_dot=ca.jtimes(T, q, q_dot), h2=h2, KE=KE, V=V)
+
+    def _cos_min(self, T, q):
+        cos = []
+        for i in range(3):
+            dP = T - (self.As[i] + q[i] * self.v[i])
+            cos.append(ca.fabs(ca.dot(dP, self.v[i])) / (ca.norm_2(dP) * np.linalg.norm(self.v[i])))
+        return ca.mmin(ca.vertcat(*cos))
+
+    # ----------------------------------------------------------------- CasADi Functions
+    @cached_property
+    def inverse_dynamics_function(self) -> ca.Function:
+        """CasADi Function ``inverse_dynamics(T, T_dot, T_ddot, s) -> (tau, disc, cos_min)``.
+
+        ``tau = J^T (M T_ddot + h + G) + f_fric(q_dot)`` [N] (eqs. 6.7, 6.8); ``disc`` (3)
+        and ``cos_min`` as in :attr:`GantryTau3Kinematics.jacobian_function` for status checks.
+        """
+        T, T_dot, T_ddot, s = (ca.SX.sym(n, 3) for n in ("T", "T_dot", "T_ddot", "s"))
+        t = self.tcp_terms(T, T_dot, s)
+        f = ca.solve(t["Jinv"].T, t["M"] @ T_ddot + t["h"] + t["G"])
+        tau = f + self.friction_force(t["q_dot"])
+        return ca.Function(
+            "inverse_dynamics",
+            [T, T_dot, T_ddot, s],
+            [tau, t["disc"], self._cos_min(T, t["q"])],
+            ["T", "T_dot", "T_ddot", "s"],
+            ["tau", "disc", "cos_min"],
+        )
+
+    @cached_property
+    def forward_dynamics_function(self) -> ca.Function:
+        """CasADi Function ``forward_dynamics(T, T_dot, tau, s) -> (T_ddot, disc, cos_min)`` (eqs. 6.7, 6.8)."""
+        T, T_dot, tau, s = (ca.SX.sym(n, 3) for n in ("T", "T_dot", "tau", "s"))
+        t = self.tcp_terms(T, T_dot, s)
+        f = tau - self.friction_force(t["q_dot"])
+        T_ddot = ca.solve(t["M"], t["Jinv"].T @ f - t["h"] - t["G"])
+        return ca.Function(
+            "forward_dynamics",
+            [T, T_dot, tau, s],
+            [T_ddot, t["disc"], self._cos_min(T, t["q"])],
+            ["T", "T_dot", "tau", "s"],
+            ["T_ddot", "disc", "cos_min"],
+        )
+
+    @cached_property
+    def energy_function(self) -> ca.Function:
+        """CasADi Function ``energy(T, T_dot, s) -> (KE, V)``: kinetic and potential energy [J]."""
+        T, T_dot, s = (ca.SX.sym(n, 3) for n in ("T", "T_dot", "s"))
+        t = self.tcp_terms(T, T_dot, s)
+        return ca.Function("energy", [T, T_dot, s], [t["KE"], t["V"]], ["T", "T_dot", "s"], ["KE", "V"])
+
+    @cached_property
+    def _inv(self) -> _Mapped:
+        return _Mapped(self.inverse_dynamics_function)
+
+    @cached_property
+    def _fwd(self) -> _Mapped:
+        return _Mapped(self.forward_dynamics_function)
+
+    def _checked(self, mapped: _Mapped, T, a, b, configuration, names):
+        Tn, single = _as_points(T, names[0])
+        An, _ = _as_points(a, names[1])
+        Bn, _ = _as_points(b, names[2])
+        if not (Tn.shape == An.shape == Bn.shape):
+            raise InputError(f"{', '.join(names)}: expected equal shapes, got {Tn.shape}, {An.shape}, {Bn.shape}")
+        s = configuration_signs(configuration)
+        out, disc, cos_min = mapped(Tn.T, An.T, Bn.T, s[:, None])
+        self.kinematics._check_reach(disc, Tn)
+        cos_min = cos_min.ravel()
+        if np.any(cos_min < SINGULARITY_TOLERANCE):
+            k = int(np.argmin(cos_min))
+            raise SingularConfigurationError(f"pose T={Tn[k].tolist()} is singular: a link is perpendicular to its guideway")
+        out = out.T
+        return out[0] if single else out
+
+    # ----------------------------------------------------------------- numpy API
+    def inverse_dynamics(self, T, T_dot, T_ddot, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Actuator forces for a TCP motion, Dressler (2012), eqs. 6.7 and 6.8.
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position [m].
+        T_dot : array_like, shape (3,) or (N, 3)
+            TCP velocity [m/s].
+        T_ddot : array_like, shape (3,) or (N, 3)
+            TCP acceleration [m/s^2].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`GantryTau3Kinematics.ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            Actuator (cart) forces ``tau`` [N].
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        SingularConfigurationError
+            A link is perpendicular to its guideway.
+        InputError
+            Wrong or mismatched shapes, non-finite values.
+        """
+        return self._checked(self._inv, T, T_dot, T_ddot, configuration, ("T", "T_dot", "T_ddot"))
+
+    def forward_dynamics(self, T, T_dot, tau, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """TCP acceleration for actuator forces, Dressler (2012), eqs. 6.7 and 6.8.
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position [m].
+        T_dot : array_like, shape (3,) or (N, 3)
+            TCP velocity [m/s].
+        tau : array_like, shape (3,) or (N, 3)
+            Actuator forces [N].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`GantryTau3Kinematics.ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            TCP acceleration [m/s^2].
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        SingularConfigurationError
+            A link is perpendicular to its guideway.
+        InputError
+            Wrong or mismatched shapes, non-finite values.
+        """
+        return self._checked(self._fwd, T, T_dot, tau, configuration, ("T", "T_dot", "tau"))
+
+    def gravity_forces(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Actuator forces that hold the robot at rest: ``J^T G`` (Dressler (2012), Table 6.2).
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position [m].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`GantryTau3Kinematics.ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            Static actuator forces [N] (friction is zero at rest in every form).
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        InputError
+            Wrong shape or non-finite values.
+        """
+        Tn, single = _as_points(T, "T")
+        zero = np.zeros_like(Tn)
+        out = self.inverse_dynamics(Tn, zero, zero, configuration)
+        return out[0] if single else out

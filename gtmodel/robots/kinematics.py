@@ -1,0 +1,796 @@
+"""Kinematics of the 3-link Gantry-Tau model (nominal and modified), in CasADi.
+
+The closure equation of arm ``i`` (Dressler (2012), eq. 4.9)::
+
+    L_i^2 = || As_i + q_i v_i - T ||^2
+
+is written once, symbolically. Inverse kinematics (a quadratic per arm), forward
+kinematics (trilateration of three spheres), the inverse Jacobian (eq. 6.5) and the
+acceleration relation (eq. 6.6) are CasADi expressions of it; :class:`GantryTau3Kinematics`
+wraps them in :class:`casadi.Function` objects (the same graph serves NumPy evaluation,
+derivatives for the solvers and generated C) and in NumPy-friendly methods that accept one
+pose ``(3,)`` or ``N`` poses ``(N, 3)`` (evaluated with ``Function.map``, not Python loops).
+
+Configurations
+--------------
+IK: each arm has two solutions, ``q_i = (d.v_i + s_i sqrt(disc_i)) / |v_i|^2`` with
+``d = T - As_i``. Configuration ``c`` (an integer 0-7) selects the signs: bit ``i`` clear
+gives ``s_i = -1``, for which ``(T - A_i) . v_i > 0`` (the TCP lies ahead of cart ``i``
+along its guideway: the nominal assembly), bit ``i`` set gives ``s_i = +1``.
+
+FK: the three spheres (centres ``A_i``, radii ``L_i``) meet in two points mirrored in
+the plane of the centres. ``solution=+1`` (default) picks the one on the side the mean
+guideway direction points to, ``solution=-1`` the other.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Sequence
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
+from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
+
+__all__ = [
+    "closure_residual",
+    "ik_expression",
+    "fk_expression",
+    "jacobian_inverse_expression",
+    "acceleration_expression",
+    "cart_acceleration_expression",
+    "configuration_signs",
+    "GantryTau3Kinematics",
+    "SINGULARITY_TOLERANCE",
+    "DEGENERACY_TOLERANCE",
+]
+
+#: Smallest accepted |cos| of the angle between a link and its guideway; below it the
+#: Jacobian (eq. 6.5) is treated as singular.
+SINGULARITY_TOLERANCE = 1e-6
+#: Smallest accepted distance [m] of the third sphere centre from the line through the
+#: first two in FK (collinear centres give no unique pose).
+DEGENERACY_TOLERANCE = 1e-9
+
+
+# ----------------------------------------------------------------------------- expressions
+def _row(M: ca.SX | ca.MX, i: int) -> ca.SX | ca.MX:
+    return M[i, :].T
+
+
+def closure_residual(T, q, L, As, v):
+    """Closure equations of the 3-link model, Dressler (2012), eq. 4.9.
+
+    Parameters
+    ----------
+    T : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m].
+    q : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m].
+    L : casadi.SX or casadi.MX or numpy.ndarray, shape (3,)
+        Link lengths [m].
+    As : casadi.SX or casadi.MX or numpy.ndarray, shape (3, 3)
+        Row i: joint point of arm i at ``q_i = 0`` [m].
+    v : casadi.SX or casadi.MX or numpy.ndarray, shape (3, 3)
+        Row i: guideway direction of arm i.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX, shape (3, 1)
+        ``||As_i + q_i v_i - T||^2 - L_i^2`` [m^2]; zero on a consistent pose.
+    """
+    res = []
+    for i in range(3):
+        dP = T - (_row(As, i) + q[i] * _row(v, i))
+        res.append(ca.dot(dP, dP) - L[i] ** 2)
+    return ca.vertcat(*res)
+
+
+def ik_expression(T, s, L, As, v):
+    """Inverse kinematics of the 3-link model: one quadratic per arm (eq. 4.9).
+
+    Parameters
+    ----------
+    T : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m].
+    s : casadi.SX or casadi.MX or sequence of float, shape (3,)
+        Root sign per arm, -1 or +1 (see :func:`configuration_signs`).
+    L, As, v
+        Kinematic parameters, as in :func:`closure_residual`.
+
+    Returns
+    -------
+    q : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m]. Where an arm cannot reach ``T`` the square root is taken of
+        zero, so ``q`` stays finite; check ``disc``.
+    disc : casadi.SX or casadi.MX, shape (3, 1)
+        Scaled discriminant ``(d.v)^2 - |v|^2 (|d|^2 - L^2)`` per arm [m^2]; negative
+        means arm i cannot reach ``T``.
+    """
+    q, disc = [], []
+    for i in range(3):
+        vi = _row(v, i)
+        d = T - _row(As, i)
+        dv = ca.dot(d, vi)
+        vv = ca.dot(vi, vi)
+        di = dv**2 - vv * (ca.dot(d, d) - L[i] ** 2)
+        q.append((dv + s[i] * ca.sqrt(ca.fmax(di, 0))) / vv)
+        disc.append(di)
+    return ca.vertcat(*q), ca.vertcat(*disc)
+
+
+def fk_expression(q, solution, L, As, v):
+    """Forward kinematics by trilateration of the three spheres (eq. 4.9).
+
+    Parameters
+    ----------
+    q : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m].
+    solution : casadi.SX or casadi.MX or float
+        +1 for the intersection on the side of the mean guideway direction, -1 for the
+        mirror image.
+    L, As, v
+        Kinematic parameters, as in :func:`closure_residual`.
+
+    Returns
+    -------
+    T : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m] (finite even where the spheres do not meet; check ``h2``).
+    h2 : casadi.SX or casadi.MX, scalar
+        Squared distance of the TCP from the plane of the sphere centres [m^2];
+        negative means the spheres do not intersect (no pose for ``q``).
+    j : casadi.SX or casadi.MX, scalar
+        Distance of the third centre from the line through the first two [m]; near zero
+        the centres are collinear and the pose is not unique.
+    """
+    A = [_row(As, i) + q[i] * _row(v, i) for i in range(3)]
+    d21 = A[1] - A[0]
+    d31 = A[2] - A[0]
+    d = ca.norm_2(d21)
+    ex = d21 / d
+    i_ = ca.dot(ex, d31)
+    ey_raw = d31 - i_ * ex
+    j = ca.norm_2(ey_raw)
+    ey = ey_raw / j
+    ez = ca.cross(ex, ey)
+    x = (L[0] ** 2 - L[1] ** 2 + d**2) / (2 * d)
+    y = (L[0] ** 2 - L[2] ** 2 + i_**2 + j**2) / (2 * j) - (i_ / j) * x
+    h2 = L[0] ** 2 - x**2 - y**2
+    vbar = (_row(v, 0) + _row(v, 1) + _row(v, 2)) / 3
+    side = ca.sign(ca.dot(ez, vbar))
+    side = ca.if_else(side == 0, 1, side)
+    z = solution * side * ca.sqrt(ca.fmax(h2, 0))
+    T = A[0] + x * ex + y * ey + z * ez
+    return T, h2, j
+
+
+def jacobian_inverse_expression(T, q, As, v):
+    """Inverse Jacobian ``q_dot = J^-1 T_dot``, Dressler (2012), eq. 6.5.
+
+    Row i is ``dP_i^T / (dP_i . v_i)`` with ``dP_i = T - (As_i + q_i v_i)``; for
+    ``v_i = e_x`` this is ``(1, dY_i/dX_i, dZ_i/dX_i)`` as printed in the thesis.
+
+    Parameters
+    ----------
+    T : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m].
+    q : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m] consistent with ``T``.
+    As, v
+        Kinematic parameters, as in :func:`closure_residual`.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX, shape (3, 3)
+        ``J^-1`` (dimensionless).
+    """
+    rows = []
+    for i in range(3):
+        dP = T - (_row(As, i) + q[i] * _row(v, i))
+        rows.append(dP.T / ca.dot(dP, _row(v, i)))
+    return ca.vertcat(*rows)
+
+
+def _dP_matrix(T, q, As, v):
+    return ca.vertcat(*[(T - (_row(As, i) + q[i] * _row(v, i))).T for i in range(3)])
+
+
+def _s_vector(T_dot, q_dot, v):
+    return ca.vertcat(*[ca.sumsqr(T_dot - q_dot[i] * _row(v, i)) for i in range(3)])
+
+
+def acceleration_expression(T, T_dot, q, q_dot, q_ddot, As, v):
+    """TCP acceleration from cart accelerations, Dressler (2012), eq. 6.6.
+
+    ``T_ddot = J q_ddot - [dP]^-1 s`` with ``s_i = |T_dot - q_dot_i v_i|^2`` (for
+    ``v_i = e_x``: ``(T_dot_x - q_dot_i)^2 + T_dot_y^2 + T_dot_z^2``). Derived by
+    differentiating the closure equation twice.
+
+    Parameters
+    ----------
+    T, T_dot : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m] and velocity [m/s].
+    q, q_dot, q_ddot : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m], velocities [m/s] and accelerations [m/s^2].
+    As, v
+        Kinematic parameters, as in :func:`closure_residual`.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX, shape (3, 1)
+        TCP acceleration [m/s^2].
+    """
+    dP = _dP_matrix(T, q, As, v)
+    D = ca.diag(ca.vertcat(*[ca.dot(dP[i, :].T, _row(v, i)) for i in range(3)]))
+    return ca.solve(dP, D @ q_ddot - _s_vector(T_dot, q_dot, v))
+
+
+def cart_acceleration_expression(T, T_dot, T_ddot, q, q_dot, As, v):
+    """Cart accelerations from the TCP motion: eq. 6.6 solved for ``q_ddot``.
+
+    ``q_ddot_i = (dP_i . T_ddot + s_i) / (dP_i . v_i)``.
+
+    Parameters
+    ----------
+    T, T_dot, T_ddot : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m], velocity [m/s], acceleration [m/s^2].
+    q, q_dot : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m] and velocities [m/s] consistent with ``T``, ``T_dot``.
+    As, v
+        Kinematic parameters, as in :func:`closure_residual`.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX, shape (3, 1)
+        Cart accelerations [m/s^2].
+    """
+    s = _s_vector(T_dot, q_dot, v)
+    out = []
+    for i in range(3):
+        dP = T - (_row(As, i) + q[i] * _row(v, i))
+        out.append((ca.dot(dP, T_ddot) + s[i]) / ca.dot(dP, _row(v, i)))
+    return ca.vertcat(*out)
+
+
+def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:
+    """Root signs ``s`` of the three IK quadratics for an IK configuration.
+
+    Parameters
+    ----------
+    configuration : int or sequence of int
+        An integer 0-7 (bit i set = arm i+1 takes the ``+`` root) or three signs
+        (each -1 or +1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        Signs, each -1.0 or +1.0.
+
+    Raises
+    ------
+    InputError
+        For an integer outside 0-7 or signs other than -1/+1.
+    """
+    if isinstance(configuration, (int, np.integer)) and not isinstance(configuration, bool):
+        c = int(configuration)
+        if not 0 <= c <= 7:
+            raise InputError(f"configuration: expected an integer 0-7, got {c}")
+        return np.array([1.0 if (c >> i) & 1 else -1.0 for i in range(3)])
+    try:
+        s = np.array(configuration, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"configuration: expected an integer 0-7 or three signs, got {configuration!r}") from None
+    if s.shape != (3,) or not np.all(np.isin(s, (-1.0, 1.0))):
+        raise InputError(f"configuration: expected an integer 0-7 or three signs -1/+1, got {configuration!r}")
+    return s
+
+
+# ----------------------------------------------------------------------------- numpy glue
+def _as_points(x, name: str) -> tuple[np.ndarray, bool]:
+    """(N, 3) float array and whether the input was a single (3,) point."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected an array of shape (3,) or (N, 3), got {x!r}") from None
+    single = arr.ndim == 1
+    if single:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] == 0:
+        raise InputError(f"{name}: expected shape (3,) or (N, 3), got {np.shape(x)}")
+    bad = ~np.all(np.isfinite(arr), axis=1)
+    if np.any(bad):
+        raise InputError(f"{name}: row {int(np.argmax(bad))} is not finite: {arr[np.argmax(bad)].tolist()}")
+    return arr, single
+
+
+def _solution_sign(solution: int) -> float:
+    if solution not in (1, -1) or isinstance(solution, bool):
+        raise InputError(f"solution: expected +1 or -1, got {solution!r}")
+    return float(solution)
+
+
+class _Mapped:
+    """Evaluate a CasADi Function column-wise on N samples, caching ``map`` per N."""
+
+    def __init__(self, f: ca.Function) -> None:
+        self.f = f
+        self._maps: dict[int, ca.Function] = {}
+
+    def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
+        n = max(a.shape[1] for a in args)
+        if n == 1:
+            out = self.f(*args)
+        else:
+            if n not in self._maps:
+                self._maps[n] = self.f.map(n)
+            out = self._maps[n](*args)
+        if not isinstance(out, (list, tuple)):
+            out = [out]
+        return [np.asarray(o) for o in out]
+
+
+class GantryTau3Kinematics:
+    """Kinematics of a 3-link Gantry-Tau (nominal "ideal" or "modified" model).
+
+    Parameters
+    ----------
+    parameters : RobotParameters or KinematicParameters or str or pathlib.Path
+        A parameter set, or the name/path of one (see
+        :func:`gtmodel.robots.parameters.load_parameters`).
+
+    Notes
+    -----
+    The CasADi Functions (attributes ``*_function``) have the parameters embedded as
+    constants, so they can be code-generated as they are. Their inputs are column
+    vectors; ``s`` (3) holds IK root signs and ``solution`` (1) the FK branch.
+    """
+
+    def __init__(self, parameters: RobotParameters | KinematicParameters | str) -> None:
+        if isinstance(parameters, KinematicParameters):
+            self.parameters: RobotParameters | None = None
+            self.kinematic_parameters = parameters
+        else:
+            self.parameters = load_parameters(parameters)
+            self.kinematic_parameters = self.parameters.kinematics
+        kp = self.kinematic_parameters
+        self.L = np.asarray(kp.L, dtype=float)
+        self.As = np.asarray(kp.As, dtype=float)
+        self.v = np.asarray(kp.v, dtype=float)
+
+    # --------------------------------------------------------------- CasADi Functions
+    @cached_property
+    def ik_function(self) -> ca.Function:
+        """CasADi Function ``ik(T[3], s[3]) -> (q[3], disc[3])``, see :func:`ik_expression`."""
+        T = ca.SX.sym("T", 3)
+        s = ca.SX.sym("s", 3)
+        q, disc = ik_expression(T, s, self.L, self.As, self.v)
+        return ca.Function("ik", [T, s], [q, disc], ["T", "s"], ["q", "disc"])
+
+    @cached_property
+    def fk_function(self) -> ca.Function:
+        """CasADi Function ``fk(q[3], solution) -> (T[3], h2, j)``, see :func:`fk_expression`."""
+        q = ca.SX.sym("q", 3)
+        sol = ca.SX.sym("solution")
+        T, h2, j = fk_expression(q, sol, self.L, self.As, self.v)
+        return ca.Function("fk", [q, sol], [T, h2, j], ["q", "solution"], ["T", "h2", "j"])
+
+    @cached_property
+    def jacobian_function(self) -> ca.Function:
+        """CasADi Function ``jacobian(T[3], s[3]) -> (J[3x3], Jinv[3x3], q[3], disc[3], cos_min)``.
+
+        ``cos_min`` is the smallest ``|dP_i . v_i| / (|dP_i| |v_i|)``: near zero the
+        configuration is singular (eq. 6.5).
+        """
+        T = ca.SX.sym("T", 3)
+        s = ca.SX.sym("s", 3)
+        q, disc = ik_expression(T, s, self.L, self.As, self.v)
+        Jinv = jacobian_inverse_expression(T, q, self.As, self.v)
+        J = ca.inv(Jinv)
+        cos = []
+        for i in range(3):
+            dP = T - (self.As[i] + q[i] * self.v[i])
+            cos.append(ca.fabs(ca.dot(dP, self.v[i])) / (ca.norm_2(dP) * np.linalg.norm(self.v[i])))
+        cos_min = ca.mmin(ca.vertcat(*cos))
+        return ca.Function(
+            "jacobian", [T, s], [J, Jinv, q, disc, cos_min], ["T", "s"], ["J", "Jinv", "q", "disc", "cos_min"]
+        )
+
+    @cached_property
+    def acceleration_function(self) -> ca.Function:
+        """CasADi Function ``acceleration(T, T_dot, q_ddot, s) -> T_ddot`` (eq. 6.6), all (3,)."""
+        T, T_dot, q_ddot, s = (ca.SX.sym(n, 3) for n in ("T", "T_dot", "q_ddot", "s"))
+        q, _ = ik_expression(T, s, self.L, self.As, self.v)
+        q_dot = jacobian_inverse_expression(T, q, self.As, self.v) @ T_dot
+        T_ddot = acceleration_expression(T, T_dot, q, q_dot, q_ddot, self.As, self.v)
+        return ca.Function("acceleration", [T, T_dot, q_ddot, s], [T_ddot], ["T", "T_dot", "q_ddot", "s"], ["T_ddot"])
+
+    @cached_property
+    def cart_acceleration_function(self) -> ca.Function:
+        """CasADi Function ``cart_acceleration(T, T_dot, T_ddot, s) -> (q_dot, q_ddot)`` (eq. 6.6), all (3,)."""
+        T, T_dot, T_ddot, s = (ca.SX.sym(n, 3) for n in ("T", "T_dot", "T_ddot", "s"))
+        q, _ = ik_expression(T, s, self.L, self.As, self.v)
+        q_dot = jacobian_inverse_expression(T, q, self.As, self.v) @ T_dot
+        q_ddot = cart_acceleration_expression(T, T_dot, T_ddot, q, q_dot, self.As, self.v)
+        return ca.Function(
+            "cart_acceleration", [T, T_dot, T_ddot, s], [q_dot, q_ddot], ["T", "T_dot", "T_ddot", "s"], ["q_dot", "q_ddot"]
+        )
+
+    @cached_property
+    def _ik(self) -> _Mapped:
+        return _Mapped(self.ik_function)
+
+    @cached_property
+    def _fk(self) -> _Mapped:
+        return _Mapped(self.fk_function)
+
+    @cached_property
+    def _jac(self) -> _Mapped:
+        return _Mapped(self.jacobian_function)
+
+    @cached_property
+    def _acc(self) -> _Mapped:
+        return _Mapped(self.acceleration_function)
+
+    @cached_property
+    def _cacc(self) -> _Mapped:
+        return _Mapped(self.cart_acceleration_function)
+
+    # --------------------------------------------------------------- checks
+    def _check_reach(self, disc: np.ndarray, T: np.ndarray) -> None:
+        bad = disc < 0  # (3, N)
+        if np.any(bad):
+            k = int(np.argwhere(bad)[0][1])
+            arms = [int(a) for a in np.flatnonzero(bad[:, k])]
+            where = "" if T.shape[0] == 1 else f" (row {k})"
+            details = []
+            for i in arms:
+                d = T[k] - self.As[i]
+                vh = self.v[i] / np.linalg.norm(self.v[i])
+                dist = float(np.sqrt(max(d @ d - (d @ vh) ** 2, 0.0)))
+                details.append(f"arm {i + 1} (distance to guideway {dist:.4f} m > link length {self.L[i]:.4f} m)")
+            raise UnreachablePoseError(f"pose T={T[k].tolist()}{where} is unreachable: " + ", ".join(details))
+
+    # --------------------------------------------------------------- public numpy API
+    def ik(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Cart positions for TCP positions (inverse kinematics, eq. 4.9).
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        configuration : int or sequence of int, optional
+            IK configuration 0-7 or three root signs (default 0: the nominal assembly, the
+            TCP ahead of every cart along its guideway). See :func:`configuration_signs`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            Cart positions q [m].
+
+        Raises
+        ------
+        UnreachablePoseError
+            Some arm cannot reach some pose; the message names the arm and the row.
+        InputError
+            Wrong shape, non-finite values or an invalid configuration.
+        """
+        Tn, single = _as_points(T, "T")
+        s = configuration_signs(configuration)
+        q, disc = self._ik(Tn.T, s[:, None])
+        self._check_reach(disc, Tn)
+        q = q.T
+        return q[0] if single else q
+
+    def fk(self, q, solution: int = 1) -> np.ndarray:
+        """TCP positions for cart positions (forward kinematics by trilateration, eq. 4.9).
+
+        Parameters
+        ----------
+        q : array_like, shape (3,) or (N, 3)
+            Cart positions [m].
+        solution : {1, -1}, optional
+            FK assembly: +1 (default) the TCP on the side of the sphere-centre plane the
+            mean guideway direction points to, -1 its mirror image.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            TCP position(s) T [m].
+
+        Raises
+        ------
+        UnreachablePoseError
+            The three spheres do not intersect (no pose for these joint values) or their
+            centres are collinear; the message names the row.
+        InputError
+            Wrong shape, non-finite values or an invalid ``solution``.
+        """
+        qn, single = _as_points(q, "q")
+        sol = _solution_sign(solution)
+        T, h2, j = self._fk(qn.T, np.array([[sol]]))
+        h2 = h2.ravel()
+        j = j.ravel()
+        bad = (h2 < 0) | ~(j > DEGENERACY_TOLERANCE)
+        if np.any(bad):
+            k = int(np.argmax(bad))
+            where = "" if single else f" (row {k})"
+            why = "the centres of the three link spheres are collinear" if not j[k] > DEGENERACY_TOLERANCE else (
+                "the three link spheres do not intersect"
+            )
+            raise UnreachablePoseError(f"joint values q={qn[k].tolist()}{where} admit no pose: {why}")
+        T = T.T
+        return T[0] if single else T
+
+    def _jacobians(self, T, configuration) -> tuple[np.ndarray, np.ndarray, bool]:
+        Tn, single = _as_points(T, "T")
+        s = configuration_signs(configuration)
+        J, Jinv, _, disc, cos_min = self._jac(Tn.T, s[:, None])
+        self._check_reach(disc, Tn)
+        cos_min = cos_min.ravel()
+        if np.any(cos_min < SINGULARITY_TOLERANCE):
+            k = int(np.argmin(cos_min))
+            raise SingularConfigurationError(
+                f"pose T={Tn[k].tolist()} is singular: a link is perpendicular to its guideway "
+                f"(|cos| = {cos_min[k]:.3g} < {SINGULARITY_TOLERANCE})"
+            )
+        n = Tn.shape[0]
+        # mapped outputs are horizontally stacked 3x3 blocks
+        J = J.reshape(3, n, 3).transpose(1, 0, 2) if n > 1 else J[None]
+        Jinv = Jinv.reshape(3, n, 3).transpose(1, 0, 2) if n > 1 else Jinv[None]
+        return J, Jinv, single
+
+    def jacobian(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Jacobian ``J`` with ``T_dot = J q_dot`` (inverse of eq. 6.5).
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, 3) or (N, 3, 3)
+            ``J`` (dimensionless).
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        SingularConfigurationError
+            A link is perpendicular to its guideway (``|cos| < SINGULARITY_TOLERANCE``).
+        InputError
+            Wrong shape or non-finite values.
+        """
+        J, _, single = self._jacobians(T, configuration)
+        return J[0] if single else J
+
+    def jacobian_inverse(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Inverse Jacobian ``J^-1`` with ``q_dot = J^-1 T_dot``, Dressler (2012), eq. 6.5.
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, 3) or (N, 3, 3)
+            ``J^-1`` (dimensionless); row i is ``dP_i^T / (dP_i . v_i)``.
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        SingularConfigurationError
+            A link is perpendicular to its guideway.
+        InputError
+            Wrong shape or non-finite values.
+        """
+        _, Jinv, single = self._jacobians(T, configuration)
+        return Jinv[0] if single else Jinv
+
+    def acceleration(self, T, T_dot, q_ddot, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """TCP acceleration from cart accelerations, Dressler (2012), eq. 6.6.
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        T_dot : array_like, shape (3,) or (N, 3)
+            TCP velocity [m/s].
+        q_ddot : array_like, shape (3,) or (N, 3)
+            Cart accelerations [m/s^2].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            TCP acceleration [m/s^2].
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        InputError
+            Wrong or mismatched shapes, non-finite values.
+        """
+        Tn, single = _as_points(T, "T")
+        Td, _ = _as_points(T_dot, "T_dot")
+        qdd, _ = _as_points(q_ddot, "q_ddot")
+        if not (Tn.shape == Td.shape == qdd.shape):
+            raise InputError(f"T, T_dot, q_ddot: expected equal shapes, got {Tn.shape}, {Td.shape}, {qdd.shape}")
+        s = configuration_signs(configuration)
+        _, disc = self._ik(Tn.T, s[:, None])
+        self._check_reach(disc, Tn)
+        (out,) = self._acc(Tn.T, Td.T, qdd.T, s[:, None])
+        out = out.T
+        return out[0] if single else out
+
+    def cart_motion(self, T, T_dot, T_ddot, configuration: int | Sequence[int] = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cart positions, velocities and accelerations for a TCP motion (eqs. 4.9, 6.5, 6.6).
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        T_dot : array_like, shape (3,) or (N, 3)
+            TCP velocity [m/s].
+        T_ddot : array_like, shape (3,) or (N, 3)
+            TCP acceleration [m/s^2].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+
+        Returns
+        -------
+        q, q_dot, q_ddot : numpy.ndarray, each shape (3,) or (N, 3)
+            Cart positions [m], velocities [m/s] and accelerations [m/s^2].
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        InputError
+            Wrong or mismatched shapes, non-finite values.
+        """
+        Tn, single = _as_points(T, "T")
+        Td, _ = _as_points(T_dot, "T_dot")
+        Tdd, _ = _as_points(T_ddot, "T_ddot")
+        if not (Tn.shape == Td.shape == Tdd.shape):
+            raise InputError(f"T, T_dot, T_ddot: expected equal shapes, got {Tn.shape}, {Td.shape}, {Tdd.shape}")
+        s = configuration_signs(configuration)
+        q, disc = self._ik(Tn.T, s[:, None])
+        self._check_reach(disc, Tn)
+        qd, qdd = self._cacc(Tn.T, Td.T, Tdd.T, s[:, None])
+        out = (q.T, qd.T, qdd.T)
+        return tuple(o[0] for o in out) if single else out
+
+    # --------------------------------------------------------------- workspace
+    def link_angles(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Angle between each link and its guideway direction [rad].
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            Angle of link i to ``v_i`` (0 = link along the guideway) [rad].
+
+        Raises
+        ------
+        UnreachablePoseError
+            The pose is unreachable (names the arm).
+        InputError
+            Wrong shape or non-finite values.
+        """
+        Tn, single = _as_points(T, "T")
+        q = self.ik(Tn, configuration)
+        ang = np.empty_like(q)
+        for i in range(3):  # three arms, vectorised over poses
+            dP = Tn - (self.As[i] + q[:, i : i + 1] * self.v[i])
+            c = dP @ self.v[i] / (np.linalg.norm(dP, axis=1) * np.linalg.norm(self.v[i]))
+            ang[:, i] = np.arccos(np.clip(np.abs(c), 0.0, 1.0))
+        return ang[0] if single else ang
+
+    def in_workspace(self, T, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
+        """Whether poses are reachable within cart travel and spherical-joint limits.
+
+        A pose is in the workspace if every arm reaches it (eq. 4.9), every cart position
+        lies in ``limits.cart_travel`` and every link makes at most
+        ``limits.joint_angle_max`` with its guideway.
+
+        Parameters
+        ----------
+        T : array_like, shape (3,) or (N, 3)
+            TCP position(s) [m].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+        limits : bool, optional
+            If False, only reachability is checked (no travel or joint-angle limits).
+
+        Returns
+        -------
+        bool or numpy.ndarray of bool, shape (N,)
+            True where the pose is in the workspace.
+
+        Raises
+        ------
+        InputError
+            Wrong shape, non-finite values, or no limits known (kinematic parameters only).
+        """
+        if limits and self.parameters is None:
+            raise InputError("in_workspace: needs a full RobotParameters set with limits")
+        Tn, single = _as_points(T, "T")
+        s = configuration_signs(configuration)
+        q, disc = self._ik(Tn.T, s[:, None])
+        ok = np.all(disc >= 0, axis=0)
+        if not limits:
+            return bool(ok[0]) if single else ok
+        q = q.T
+        lim = self.parameters.limits
+        ok &= np.all((q >= lim.cart_travel[:, 0]) & (q <= lim.cart_travel[:, 1]), axis=1)
+        for i in range(3):
+            dP = Tn - (self.As[i] + q[:, i : i + 1] * self.v[i])
+            c = np.abs(dP @ self.v[i]) / (np.linalg.norm(dP, axis=1) * np.linalg.norm(self.v[i]))
+            ok &= c >= np.cos(lim.joint_angle_max)
+        return bool(ok[0]) if single else ok
+
+    def workspace_bounds(self) -> np.ndarray:
+        """Axis-aligned box that contains the whole workspace.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, 2)
+            Row k: ``(min, max)`` of TCP coordinate k [m], from cart travel and link lengths.
+
+        Raises
+        ------
+        InputError
+            No limits known (kinematic parameters only).
+        """
+        if self.parameters is None:
+            raise InputError("workspace_bounds: needs a full RobotParameters set with limits")
+        lim = self.parameters.limits.cart_travel
+        ends = np.array([[self.As[i] + lim[i, k] * self.v[i] for k in range(2)] for i in range(3)]).reshape(-1, 3)
+        L = self.L.max()
+        return np.column_stack([ends.min(axis=0) - L, ends.max(axis=0) + L])
+
+    def workspace_grid(self, step: float = 0.05, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
+        """Regular grid of TCP positions filling the workspace.
+
+        Parameters
+        ----------
+        step : float, optional
+            Grid spacing [m] (default 0.05).
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+        limits : bool, optional
+            If False, keep every reachable grid point (see :meth:`in_workspace`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Grid points inside the workspace (see :meth:`in_workspace`) [m].
+
+        Raises
+        ------
+        InputError
+            Non-positive step or no limits known.
+        """
+        if not step > 0:
+            raise InputError(f"step: expected a positive spacing in m, got {step!r}")
+        box = self.workspace_bounds()
+        axes = [np.arange(lo, hi + step / 2, step) for lo, hi in box]
+        X = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        return X[self.in_workspace(X, configuration, limits=limits)]

@@ -1,0 +1,1 @@
+"""gtmodel.trajectory (see DESIGN.md)."""

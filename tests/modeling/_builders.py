@@ -1,0 +1,36 @@
+"""Builders of small reference problems shared by the modelling-layer tests."""
+
+from __future__ import annotations
+
+from gtmodel.modeling import Model, Optimization
+
+
+def double_integrator():
+    """Double integrator x'' = u as a two-state model; returns (model, x, v, u)."""
+    m = Model("double_integrator")
+    x = m.state("x")
+    v = m.state("v")
+    u = m.input("u")
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), u)
+    m.output("kinetic", 0.5 * v**2)
+    return m, x, v, u
+
+
+def rest_to_rest(opt: Optimization, x, v, distance=1.0) -> None:
+    """x(t0) = v(t0) = 0, x(tf) = distance, v(tf) = 0."""
+    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0, name="x_start")
+    opt.add_point_constraint(v, at="start", lb=0.0, ub=0.0, name="v_start")
+    opt.add_point_constraint(x, at="final", lb=distance, ub=distance, name="x_final")
+    opt.add_point_constraint(v, at="final", lb=0.0, ub=0.0, name="v_final")
+
+
+def min_energy_problem():
+    """Fixed-time (1 s) minimum-energy rest-to-rest transfer over distance 1."""
+    m, x, v, u = double_integrator()
+    opt = Optimization(m, start_time=0.0, final_time=1.0)
+    opt.set_objective(lagrange=u**2)
+    rest_to_rest(opt, x, v)
+    return opt
+
+
