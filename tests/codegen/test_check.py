@@ -1,0 +1,127 @@
+"""Self-check: compiled C against the Python evaluation of the same CasADi model.
+
+Independent reference: the Python evaluation (``GantryTau3Kinematics.ik/fk/jacobian``,
+``GantryTau3Dynamics.inverse_dynamics``, which run the CasADi Functions in CasADi's own
+virtual machine), never the generated C.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from gtmodel.codegen import check
+from gtmodel.codegen.check import (
+    FK_TOLERANCE,
+    IK_TOLERANCE,
+    INVERSE_DYNAMICS_TOLERANCE,
+    JACOBIAN_TOLERANCE,
+    SENTINEL,
+)
+from gtmodel.codegen.specs import RobotModel
+from gtmodel.errors import InputError
+from gtmodel.robots.dynamics import GantryTau3Dynamics
+from gtmodel.robots.kinematics import GantryTau3Kinematics
+
+#: Required accuracy from the issue: 1e-12 m (kinematics), 1e-9 N (dynamics).
+REQUIRED = {"ik": 1e-12, "fk": 1e-12, "jacobian": 1e-12, "inverse_dynamics": 1e-9}
+N_POSES = 1000
+
+
+def test_tolerances_are_the_required_ones():
+    assert (IK_TOLERANCE, FK_TOLERANCE, JACOBIAN_TOLERANCE, INVERSE_DYNAMICS_TOLERANCE) == (1e-12, 1e-12, 1e-12, 1e-9)
+
+
+@pytest.mark.parametrize("robot", ["L1", "D1"])
+def test_check_passes_on_1000_random_reachable_poses(built, robot):
+    gen, lib = built(robot)
+    report = check(gen, n=N_POSES, seed=0, library=lib)
+    lines = report.summary_lines()
+    assert report.passed, "\n".join(lines)
+    assert report.n == N_POSES
+    assert {f.name: f.max_abs_diff <= REQUIRED[f.name] for f in report.functions} == {k: True for k in REQUIRED}
+    assert all(f.n_not_ok == 0 for f in report.functions)
+    # every generated function was probed with an unreachable input and bad arguments
+    probed = {(p.function, p.expected) for p in report.probes}
+    for name in gen.functions:
+        assert (name, "GT_UNREACHABLE") in probed and (name, "GT_BAD_ARGUMENT") in probed
+    assert ("jacobian", "GT_SINGULAR") in probed and ("inverse_dynamics", "GT_SINGULAR") in probed
+    assert lines[1].startswith("ik: max |C - Python| = ") and lines[1].endswith(" m (tol 1e-12) OK")
+    assert lines[-1] == "PASSED"
+
+
+def test_c_matches_python_on_a_workspace_pose_directly(built):
+    """One pose, every output, against the NumPy wrappers (a readable spot check)."""
+    gen, lib = built("L1")
+    k = GantryTau3Kinematics("L1")
+    dyn = GantryTau3Dynamics("L1", friction="exact")
+    T = k.workspace_grid(0.1)[17]
+    Td, Tdd = np.array([0.3, -0.2, 0.1]), np.array([1.0, 2.0, -3.0])
+    for c in range(8):
+        status, (q,) = lib["ik"](T, c)
+        assert status == 0
+        np.testing.assert_allclose(q, k.ik(T, c), rtol=0, atol=IK_TOLERANCE)
+    status, (J,) = lib["jacobian"](T, 0)
+    assert status == 0
+    np.testing.assert_allclose(J.reshape(3, 3), k.jacobian(T, 0), rtol=0, atol=JACOBIAN_TOLERANCE)  # row-major
+    status, (T_back,) = lib["fk"](k.ik(T, 0), 1)
+    assert status == 0
+    np.testing.assert_allclose(T_back, k.fk(k.ik(T, 0), 1), rtol=0, atol=FK_TOLERANCE)
+    status, (tau,) = lib["inverse_dynamics"](T, Td, Tdd, 0)
+    assert status == 0
+    np.testing.assert_allclose(tau, dyn.inverse_dynamics(T, Td, Tdd, 0), rtol=0, atol=INVERSE_DYNAMICS_TOLERANCE)
+
+
+@pytest.mark.parametrize("name", ["ik", "jacobian", "inverse_dynamics"])
+def test_unreachable_pose_gives_nonzero_status_and_untouched_output(built, name):
+    gen, lib = built("L1")
+    k = GantryTau3Kinematics("L1")
+    T = k.workspace_bounds()[:, 1] + 5.0
+    assert not k.in_workspace(T, limits=False)  # Python agrees: unreachable
+    cf = lib[name]
+    args = {"ik": (T, 0), "jacobian": (T, 0), "inverse_dynamics": (T, np.zeros(3), np.zeros(3), 0)}[name]
+    out = [np.full(n, SENTINEL) for n in cf.sizes_out]
+    status, out = cf(*args, out=out)
+    assert status == 1  # GT_UNREACHABLE
+    assert all(np.all(o == SENTINEL) for o in out)
+
+
+def test_fk_of_non_intersecting_spheres_is_unreachable(built):
+    gen, lib = built("L1")
+    out = [np.full(3, SENTINEL)]
+    status, out = lib["fk"](np.array([-9.0, 0.0, 9.0]), 1, out=out)
+    assert status == 1 and np.all(out[0] == SENTINEL)
+
+
+def test_check_detects_a_difference(built):
+    """Negative control: a reference shifted by 10x the tolerance must fail the check."""
+    gen, lib = built("L1")
+    spec = gen.spec("ik")
+    shifted = dataclasses.replace(
+        spec, reference=lambda m, inp: {"q": spec.reference(m, inp)["q"] + 10 * IK_TOLERANCE}
+    )
+    gen2 = dataclasses.replace(gen, specs=(shifted,), functions=("ik",))
+    report = check(gen2, n=50, library=lib)
+    assert not report.passed
+    assert report.functions[0].max_abs_diff == pytest.approx(10 * IK_TOLERANCE, rel=1e-2)
+    assert report.summary_lines()[1].endswith("FAILED")
+
+
+def test_check_uses_the_requested_friction_form(tmp_path):
+    """The smooth (tanh) friction model is generated and checked as well."""
+    from gtmodel.codegen import generate
+
+    gen = generate("L1", tmp_path / "src", functions=("inverse_dynamics",), friction="tanh")
+    assert "friction tanh" in gen.version
+    report = check(gen, n=100, build_dir=tmp_path / "build")
+    assert report.passed, "\n".join(report.summary_lines())
+    assert RobotModel(gen.parameters, "tanh").dynamics.friction == "tanh"
+
+
+@pytest.mark.parametrize("n", [0, -3, 2.5, True])
+def test_bad_sample_count(built, n):
+    gen, lib = built("L1")
+    with pytest.raises(InputError, match="n:"):
+        check(gen, n=n, library=lib)

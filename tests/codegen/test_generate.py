@@ -1,0 +1,134 @@
+"""C generation: files, header declarations, version string, declarations of new functions.
+
+Independent reference: the CasADi model evaluated from Python (kinematics/dynamics
+Functions) for values; the issue text for the required C signatures and status codes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import gtmodel
+from gtmodel.codegen import FUNCTION_SPECS, FunctionSpec, check, compile_shared, generate, load_library, parameter_hash
+from gtmodel.codegen.specs import ArgSpec, OutputSpec
+from gtmodel.errors import CodegenError, InputError
+from gtmodel.robots.parameters import load_parameters
+
+#: Generic functions are compared with the CasADi Function evaluated from Python [m/s, m/s^2].
+CART_ACCELERATION_TOLERANCE = 1e-10
+
+EXPECTED_SIGNATURES = [
+    "int gt_L1_ik(const double T[3], int configuration, double q[3]);",
+    "int gt_L1_fk(const double q[3], int solution, double T[3]);",
+    "int gt_L1_jacobian(const double T[3], int configuration, double J[9]);",
+    "int gt_L1_inverse_dynamics(const double T[3], const double T_dot[3], const double T_ddot[3], "
+    "int configuration, double tau[3]);",
+]
+
+
+def test_files_exist_and_header_declares_all_functions(built):
+    gen, _ = built("L1")
+    assert gen.prefix == "gt_L1"
+    assert gen.functions == ("ik", "fk", "jacobian", "inverse_dynamics")
+    for p in gen.files:
+        assert p.exists() and p.stat().st_size > 0, p
+    assert gen.header.name == "gt_L1.h" and gen.source.name == "gt_L1.c"
+    header = gen.header.read_text()
+    for sig in EXPECTED_SIGNATURES:
+        assert sig in header, sig
+    for macro, value in [("GT_OK", 0), ("GT_UNREACHABLE", 1), ("GT_SINGULAR", 2), ("GT_DEGENERATE", 3), ("GT_BAD_ARGUMENT", 4)]:
+        assert re.search(rf"#define {macro} {value}\b", header), macro
+    assert "ROW-MAJOR" in header
+    # the public header is plain C: no CasADi types
+    assert "casadi_real" not in header and "casadi_int" not in header and "#include" not in header
+
+
+def test_version_string_names_versions_and_parameter_hash(built):
+    gen, lib = built("L1")
+    assert f"gtmodel {gtmodel.__version__}" in gen.version
+    assert f"casadi {ca.__version__}" in gen.version
+    assert gen.parameter_hash in gen.version
+    assert lib.version() == gen.version
+    assert f'#define GT_L1_VERSION "{gen.version}"' in gen.header.read_text()
+
+
+def test_parameter_hash_identifies_the_numbers():
+    p = load_parameters("L1")
+    changed = dataclasses.replace(p, kinematics=dataclasses.replace(p.kinematics, L=p.kinematics.L + np.array([1e-12, 0, 0])))
+    assert parameter_hash(p) == parameter_hash(load_parameters("L1"))
+    assert parameter_hash(p) != parameter_hash(changed)
+    assert parameter_hash(p) != parameter_hash(load_parameters("D1"))
+
+
+def test_wrapper_uses_fixed_stack_arrays_only(built):
+    gen, _ = built("L1")
+    src = gen.source.read_text()
+    assert "malloc" not in src and "static double" not in src
+    for name in gen.functions:
+        assert f"#define GT_L1_{name.upper()}_SZ_W " in src
+        assert name in gen.work_sizes
+
+
+def test_subset_and_custom_prefix_compile_warning_free(tmp_path):
+    gen = generate("D1", tmp_path / "src", functions=("ik",), prefix="robot_d1")
+    assert gen.functions == ("ik",)
+    header = gen.header.read_text()
+    assert "int robot_d1_ik(const double T[3], int configuration, double q[3]);" in header
+    assert "robot_d1_fk" not in header
+    lib = load_library(gen, compile_shared(gen, tmp_path / "build", werror=True))
+    status, (q,) = lib["ik"](np.array([0.3, 0.2, -0.1]) + 0.0, 0)
+    assert status in (0, 1)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"functions": ("ik", "nope")}, "unknown function 'nope'"),
+        ({"prefix": "1bad-prefix"}, "prefix"),
+        ({"friction": "magic"}, "friction"),
+        ({"functions": ()}, "at least one"),
+    ],
+)
+def test_bad_arguments_are_refused(tmp_path, kwargs, match):
+    with pytest.raises(InputError, match=match):
+        generate("L1", tmp_path, **kwargs)
+
+
+def test_declaration_mismatch_is_a_codegen_error(tmp_path):
+    bad = dataclasses.replace(FUNCTION_SPECS["ik"], name="ik2", args=FUNCTION_SPECS["ik"].args[:1])
+    with pytest.raises(CodegenError, match="not fed"):
+        generate("L1", tmp_path, functions=(bad,))
+
+
+def test_new_function_is_a_declaration(tmp_path):
+    """A function not shipped (cart accelerations, eq. 6.6) added by declaring it only.
+
+    Reference: the same CasADi Function evaluated from Python (the generic fallback).
+    """
+    spec = FunctionSpec(
+        name="cart_acceleration",
+        build=lambda m: m.kinematics.cart_acceleration_function,
+        args=(
+            ArgSpec("T", "vector", "T", "TCP position [m]"),
+            ArgSpec("T_dot", "vector", "T_dot", "TCP velocity [m/s]"),
+            ArgSpec("T_ddot", "vector", "T_ddot", "TCP acceleration [m/s^2]"),
+            ArgSpec("configuration", "configuration", "s", "IK configuration 0-7"),
+        ),
+        outputs=(OutputSpec("q_dot", "q_dot", "cart velocities [m/s]"), OutputSpec("q_ddot", "q_ddot", "cart accelerations [m/s^2]")),
+        doc="Cart velocities and accelerations for a TCP motion (Dressler (2012), eq. 6.6).",
+        tolerance=CART_ACCELERATION_TOLERANCE,
+        unit="m/s, m/s^2",
+    )
+    gen = generate("L1", tmp_path / "src", functions=("ik", spec))
+    assert (
+        "int gt_L1_cart_acceleration(const double T[3], const double T_dot[3], const double T_ddot[3], "
+        "int configuration, double q_dot[3], double q_ddot[3]);" in gen.header.read_text()
+    )
+    report = check(gen, n=200, build_dir=tmp_path / "build")
+    assert report.passed, "\n".join(report.summary_lines())
+    assert report.functions[1].max_abs_diff <= CART_ACCELERATION_TOLERANCE
