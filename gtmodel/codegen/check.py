@@ -62,7 +62,7 @@ _STATUS_NAMES = {v[0]: k for k, v in STATUS_CODES.items()}
 class FunctionCheck:
     """Comparison of one C function with the Python evaluation.
 
-    Attributes
+    Parameters
     ----------
     name : str
         Function name.
@@ -93,7 +93,7 @@ class FunctionCheck:
 class StatusProbe:
     """One status-code probe: an invalid input must give a given non-zero status.
 
-    Attributes
+    Parameters
     ----------
     function : str
         Function probed.
@@ -121,7 +121,7 @@ class StatusProbe:
 class CheckReport:
     """Result of :func:`check`.
 
-    Attributes
+    Parameters
     ----------
     robot : str
         Parameter-set name.

@@ -51,7 +51,7 @@ _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 class GeneratedCode:
     """The files written by :func:`generate` and what they contain.
 
-    Attributes
+    Parameters
     ----------
     out_dir : pathlib.Path
         Folder holding the files.

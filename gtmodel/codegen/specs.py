@@ -86,7 +86,7 @@ class RobotModel:
 class ArgSpec:
     """One public argument of a generated C function.
 
-    Attributes
+    Parameters
     ----------
     name : str
         C parameter name.
@@ -110,7 +110,7 @@ class ArgSpec:
 class OutputSpec:
     """One public output array of a generated C function.
 
-    Attributes
+    Parameters
     ----------
     name : str
         C parameter name (``double name[n]``, row-major for matrices).
@@ -131,7 +131,7 @@ class StatusCheck:
 
     The condition is written so that NaN fails it: ``!(value op threshold)`` gives ``status``.
 
-    Attributes
+    Parameters
     ----------
     casadi_output : str
         CasADi output tested.
@@ -153,7 +153,7 @@ class StatusCheck:
 class FunctionSpec:
     """Declaration of one generated C function.
 
-    Attributes
+    Parameters
     ----------
     name : str
         Function name; the C symbol is ``<prefix>_<name>``.

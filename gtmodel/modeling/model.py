@@ -662,6 +662,11 @@ class Model:
             raise InputError(f"kind must be one of {_KINDS}, got {kind!r}")
         return {v.name: v.sym for v in self._vars.values() if v.kind == kind}
 
+    @property
+    def outputs(self) -> dict[str, ca.SX]:
+        """Declared outputs: name -> expression, in declaration order."""
+        return dict(self._outputs)
+
     def locate(self, sym: Any) -> tuple[str, str, list[int]]:
         """Find which declared variable the scalar elements of ``sym`` belong to.
 
