@@ -203,6 +203,9 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
     )
     opt.set_objective(mayer=opt.final_time, lagrange=w * ca.sumsqr(tau))
     opt.set_bounds(tau, -problem.force_limit, problem.force_limit)
+    # the force at the start time is the first element's polynomial extrapolated to it:
+    # bound it too, so that the sampled forces stay within the limits everywhere
+    opt.add_point_constraint(tau, at="start", lb=-problem.force_limit, ub=problem.force_limit, name="tau(start)")
     T_ddot = model.der(T_dot)
     for at, pose in (("start", problem.start), ("final", problem.end)):
         opt.add_point_constraint(T - pose, at=at, lb=0.0, ub=0.0, name=f"T({at})")
@@ -276,6 +279,13 @@ class PointToPointSolution:
             Columns :data:`TRAJECTORY_COLUMNS` then ``xd, yd, zd`` (TCP velocity [m/s]),
             each shape (K,); the last sample is the final time.
 
+        Notes
+        -----
+        States (and the cart motion computed from them) are the collocation polynomials.
+        Forces are interpolated linearly between the collocation points (and the start
+        time): a polynomial through bang-bang values overshoots, while linear
+        interpolation never leaves the limits that hold at the points.
+
         Raises
         ------
         InputError
@@ -289,7 +299,8 @@ class PointToPointSolution:
         s = self.result.sample(t)
         T = np.asarray(s["states"]["T"]).reshape(-1, 3)
         T_dot = np.asarray(s["states"]["T_dot"]).reshape(-1, 3)
-        tau = np.asarray(s["inputs"]["tau"]).reshape(-1, 3)
+        mesh_tau = np.asarray(self.result.inputs["tau"]).reshape(-1, 3)
+        tau = np.column_stack([np.interp(t, self.result.t, mesh_tau[:, k]) for k in range(3)])
         q = np.asarray(s["outputs"]["q"]).reshape(-1, 3)
         q_dot = np.asarray(s["outputs"]["q_dot"]).reshape(-1, 3)
         cols = {"t": t}

@@ -1,0 +1,158 @@
+"""The ``gtmodel`` command.
+
+``gtmodel solve PROBLEM.toml [--out DIR]``
+    Load, validate and solve a problem file; write ``DIR/summary.json`` (always),
+    ``DIR/trajectory.csv`` and PNG plots. Exit code 0 only for an optimal solution,
+    1 for a non-optimal solver status, 2 for invalid input, 3 for an internal error.
+``gtmodel codegen --robot L1 --out DIR [--check]``
+    Generate C for the real-time kinematics and inverse dynamics; ``--check`` compiles it
+    and compares it with the Python model.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+import traceback
+from pathlib import Path
+from typing import Sequence
+
+from gtmodel import __version__
+from gtmodel.errors import GtModelError
+
+__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_OPTIMAL", "EXIT_BAD_INPUT", "EXIT_INTERNAL"]
+
+EXIT_OK = 0
+EXIT_NOT_OPTIMAL = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
+
+_log = logging.getLogger("gtmodel")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``gtmodel`` command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Parser with the sub-commands ``solve`` and ``codegen``.
+    """
+    parser = argparse.ArgumentParser(prog="gtmodel", description="Gantry-Tau modelling, optimal control and C code generation")
+    parser.add_argument("--version", action="version", version=f"gtmodel {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    solve = sub.add_parser("solve", help="solve a problem file and write a result folder")
+    solve.add_argument("problem", type=Path, help="problem file (TOML), e.g. problems/l1_time_optimal.toml")
+    solve.add_argument("--out", type=Path, default=None, help="result folder (default: results/<problem name>)")
+    group = solve.add_mutually_exclusive_group()
+    group.add_argument("-q", "--quiet", action="store_true", help="no solver progress")
+    group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
+    solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
+    solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+
+    cg = sub.add_parser("codegen", help="generate C for ik, fk, jacobian and inverse_dynamics")
+    cg.add_argument("--robot", default="L1", help="parameter set name or TOML path (default L1)")
+    cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
+    cg.add_argument("--friction", default="exact", choices=("exact", "tanh", "piecewise"), help="friction form in inverse_dynamics")
+    cg.add_argument("--check", action="store_true", help="compile with gcc and compare with the Python model")
+    cg.add_argument("-n", "--samples", type=int, default=1000, help="random reachable poses for --check (default 1000)")
+    cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
+    cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    return parser
+
+
+def _setup_logging(quiet: bool) -> None:
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    _log.addHandler(handler)
+    _log.setLevel(logging.WARNING if quiet else logging.INFO)
+
+
+def _solve(args: argparse.Namespace) -> int:
+    from gtmodel.problems import error_summary, load_problem, solve_problem, write_results, write_summary
+
+    out = args.out if args.out is not None else Path("results") / args.problem.stem
+    kind = None
+    try:
+        problem = load_problem(args.problem)
+        kind = problem.kind
+        out = args.out if args.out is not None else Path("results") / problem.name
+        show_progress = args.verbose or (not args.quiet and sys.stdout.isatty())
+        _log.info("solving %s (%s) ...", problem.name, problem.kind)
+        solution = solve_problem(problem, verbose=show_progress)
+        summary = write_results(problem, solution, out, plots=not args.no_plots)
+    except GtModelError as exc:
+        write_summary(out, error_summary(args.problem, exc, kind))
+        print(f"gtmodel: error: {exc}", file=sys.stderr)
+        print(f"gtmodel: wrote {out / 'summary.json'} (status error)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # noqa: BLE001 - reported, summarised, non-zero exit
+        write_summary(out, error_summary(args.problem, exc, kind))
+        if args.debug:
+            traceback.print_exc()
+        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+    lines = [
+        f"problem      {summary['name']} ({summary['kind']})",
+        f"status       {summary['status']} ({summary['message']})",
+        f"final time   {summary['final_time_s']:.4f} s",
+        f"energy       {summary['energy']:.6g} N^2 s",
+        f"objective    {summary['objective']:.6g}",
+        f"iterations   {summary['iterations']}",
+        f"solve time   {summary['solve_time_s']:.2f} s",
+        f"violation    {summary['max_constraint_violation']:.2e}",
+    ]
+    if "fraction_at_force_bound" in summary:
+        frac = ", ".join(f"{100 * f:.0f} %" for f in summary["fraction_at_force_bound"])
+        lines.append(f"at bound     {frac} of the samples (tau1, tau2, tau3)")
+    lines.append(f"results in   {out}/ ({', '.join(summary.get('files', ['summary.json']))})")
+    print("\n".join(lines))
+    return EXIT_OK if summary["status"] == "optimal" else EXIT_NOT_OPTIMAL
+
+
+def _codegen(args: argparse.Namespace) -> int:
+    from gtmodel.codegen import check, generate
+
+    try:
+        generated = generate(robot=args.robot, out_dir=args.out, friction=args.friction)
+        print(f"wrote {', '.join(str(p) for p in generated.files)}")
+        if not args.check:
+            return EXIT_OK
+        report = check(generated, n=args.samples, seed=args.seed)
+    except GtModelError as exc:
+        print(f"gtmodel: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # noqa: BLE001
+        if args.debug:
+            traceback.print_exc()
+        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+    print("\n".join(report.summary_lines()))
+    return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``gtmodel`` command.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit code: 0 success (optimal / check passed), 1 not optimal / check failed,
+        2 invalid input, 3 internal error.
+    """
+    args = build_parser().parse_args(argv)
+    _setup_logging(getattr(args, "quiet", False))
+    if args.command == "solve":
+        return _solve(args)
+    return _codegen(args)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,95 @@
+"""Plots of optimal trajectories, drawn with matplotlib's object API (no screen needed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+from matplotlib.figure import Figure
+
+__all__ = ["plot_tcp_path", "plot_forces"]
+
+
+def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, title: str = "") -> Path:
+    """Plot the TCP path: coordinates against time and two projections.
+
+    Parameters
+    ----------
+    traj : Mapping[str, numpy.ndarray]
+        Columns ``t, x, y, z`` (each shape (K,)) [s, m], e.g. from
+        :meth:`gtmodel.trajectory.point_to_point.PointToPointSolution.trajectory`.
+    start, end : array_like, shape (3,)
+        Declared end poses [m], marked on the projections.
+    path : str or pathlib.Path
+        PNG file to write.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    fig = Figure(figsize=(11, 3.6), layout="constrained")
+    ax_t, ax_xy, ax_yz = fig.subplots(1, 3)
+    t = traj["t"]
+    for c in "xyz":
+        ax_t.plot(t, traj[c] - traj[c][0], label=f"{c} - {c}(0)")
+    ax_t.set_xlabel("t [s]")
+    ax_t.set_ylabel("TCP displacement [m]")
+    ax_t.legend()
+    ax_t.grid(True)
+    for ax, (a, b) in ((ax_xy, ("x", "y")), (ax_yz, ("y", "z"))):
+        i, j = "xyz".index(a), "xyz".index(b)
+        ax.plot(traj[a], traj[b], "-", label="optimal path")
+        ax.plot([start[i], end[i]], [start[j], end[j]], "k:", label="straight line")
+        ax.plot(start[i], start[j], "go", label="start")
+        ax.plot(end[i], end[j], "rs", label="end")
+        ax.set_xlabel(f"{a} [m]")
+        ax.set_ylabel(f"{b} [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True)
+    ax_xy.legend(fontsize="small")
+    fig.suptitle(f"{title}: TCP path" if title else "TCP path")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def plot_forces(traj: Mapping[str, np.ndarray], force_limit, path: str | Path, title: str = "") -> Path:
+    """Plot the three cart forces against their limits.
+
+    Parameters
+    ----------
+    traj : Mapping[str, numpy.ndarray]
+        Columns ``t, tau1, tau2, tau3`` (each shape (K,)) [s, N].
+    force_limit : array_like, shape (3,)
+        Symmetric force limits [N], drawn as dashed lines.
+    path : str or pathlib.Path
+        PNG file to write.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    fig = Figure(figsize=(8, 6.5), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    t = traj["t"]
+    for i, ax in enumerate(axes):
+        lim = float(force_limit[i])
+        ax.plot(t, traj[f"tau{i + 1}"], label=f"tau{i + 1}")
+        ax.axhline(lim, color="r", ls="--", lw=1, label="limit")
+        ax.axhline(-lim, color="r", ls="--", lw=1)
+        ax.set_ylabel(f"tau{i + 1} [N]")
+        ax.set_ylim(-1.15 * lim, 1.15 * lim)
+        ax.grid(True)
+        ax.legend(loc="upper right", fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(f"{title}: cart forces" if title else "cart forces")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
