@@ -86,7 +86,7 @@ _REQUIRED_TABLES = ("robot", "motion", "limits", "objective")
 class Problem:
     """A validated problem file.
 
-    Attributes
+    Parameters
     ----------
     path : pathlib.Path
         The file.

@@ -39,7 +39,7 @@ class KinematicParameters:
 
     Dressler (2012), eqs. 4.7-4.9: ``L_i^2 = ||As_i + q_i v_i - T||^2``.
 
-    Attributes
+    Parameters
     ----------
     L : numpy.ndarray, shape (3,)
         Link lengths [m].
@@ -71,7 +71,7 @@ class KinematicParameters:
 class FrictionParameters:
     """Asymmetric Coulomb + viscous cart friction, Dressler (2012), Table 6.1.
 
-    Attributes
+    Parameters
     ----------
     f_c_plus, f_c_minus : numpy.ndarray, shape (3,)
         Coulomb friction [N] for positive / negative cart velocity (both positive numbers).
@@ -92,7 +92,7 @@ class FrictionParameters:
 class DynamicParameters:
     """Point-mass rigid-body model with cart friction, Dressler (2012), eqs. 6.7-6.8.
 
-    Attributes
+    Parameters
     ----------
     m_p : float
         Plate (end-effector) mass [kg].
@@ -129,7 +129,7 @@ class DynamicParameters:
 class Limits:
     """Motion limits of the robot.
 
-    Attributes
+    Parameters
     ----------
     cart_travel : numpy.ndarray, shape (3, 2)
         Row i is ``(q_min, q_max)`` of cart i [m].
@@ -148,7 +148,7 @@ class Limits:
 class RobotParameters:
     """A complete, validated Gantry-Tau parameter set.
 
-    Attributes
+    Parameters
     ----------
     name : str
         Short name, e.g. ``"L1"``.

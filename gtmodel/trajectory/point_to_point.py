@@ -246,7 +246,7 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
 class PointToPointSolution:
     """Solution of a point-to-point problem.
 
-    Attributes
+    Parameters
     ----------
     problem : PointToPoint
         The declaration.

@@ -1,0 +1,39 @@
+"""Table of broken problem files shared by the problem-loader and CLI tests.
+
+Each case edits the shipped ``problems/l1_time_optimal.toml`` and gives the regular
+expression the error message must match (it must name the field).
+"""
+
+from __future__ import annotations
+
+from .conftest import PROBLEMS_DIR
+
+BASE = PROBLEMS_DIR / "l1_time_optimal.toml"
+
+
+def _replace(old: str, new: str):
+    def edit(text: str) -> str:
+        assert old in text, f"test table out of date: {old!r} not in {BASE.name}"
+        return text.replace(old, new, 1)
+
+    return edit
+
+
+BAD_PROBLEMS = [
+    ("missing_field", _replace("force = [450.0, 450.0, 450.0]", ""), r"missing field 'limits\.force'"),
+    ("missing_table", _replace("[objective]\nw = 0.0", ""), r"missing table '\[objective\]'"),
+    ("unknown_field", _replace("w = 0.0", "w = 0.0\nweight = 2.0"), r"unknown field 'objective\.weight'"),
+    ("unknown_top_field", _replace('kind = "point_to_point"', 'kind = "point_to_point"\nsolver_name = "x"'), r"unknown field 'solver_name'"),
+    ("wrong_type", _replace("w = 0.0", 'w = "zero"'), r"field 'objective\.w': expected a finite number"),
+    ("wrong_shape", _replace("force = [450.0, 450.0, 450.0]", "force = [450.0, 450.0]"), r"field 'limits\.force': expected a list of 3"),
+    ("negative_limit", _replace("force = [450.0, 450.0, 450.0]", "force = [450.0, -450.0, 450.0]"), r"field 'limits\.force': expected 3 positive"),
+    ("negative_weight", _replace("w = 0.0", "w = -1.0"), r"field 'objective\.w': expected a non-negative"),
+    ("unreachable_start", _replace("start = [-0.20, 2.75, -0.40]", "start = [-0.20, 7.75, -0.40]"), r"field 'motion\.start': pose .* unreachable: arm"),
+    ("start_outside_limits", _replace("start = [-0.20, 2.75, -0.40]", "start = [-1.9, 2.75, -0.40]"), r"field 'motion\.start': .*outside the workspace"),
+    ("start_equals_end", _replace("end   = [ 0.20, 3.00, -0.60]", "end = [-0.20, 2.75, -0.40]"), r"field 'motion\.end': expected a pose different from motion\.start"),
+    ("bad_kind", _replace('kind = "point_to_point"', 'kind = "teleport"'), r"field 'kind': expected one of point_to_point"),
+    ("bad_robot", _replace('parameters = "L1"', 'parameters = "Z9"'), r"field 'robot\.parameters'"),
+    ("bad_scheme", _replace('scheme = "radau"', 'scheme = "euler"'), r"field 'collocation\.scheme': expected one of radau, legendre"),
+    ("bad_bounds", _replace("bounds = [0.05, 10.0]", "bounds = [10.0, 0.05]"), r"field 'final_time\.bounds'"),
+    ("toml_syntax", _replace("[limits]", "[limits"), r"invalid TOML"),
+]

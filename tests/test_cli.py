@@ -1,0 +1,131 @@
+"""The ``gtmodel`` command, end to end on the shipped problems and on broken input.
+
+Independent checks of a solve: the trajectory file is read back and checked against the
+problem's declared poses and limits, the energy in the summary against a trapezoidal
+integral of the sampled forces, and the thesis' shape (ch. 3.5: the minimum-time
+solution has all three forces at a bound most of the time).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tomllib
+
+import numpy as np
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_NOT_OPTIMAL, main
+
+from .bad_problems import BAD_PROBLEMS, BASE
+from .conftest import PROBLEMS_DIR
+
+SHIPPED = sorted(PROBLEMS_DIR.glob("*.toml"))
+HEADER = "t,x,y,z,q1,q2,q3,qd1,qd2,qd3,tau1,tau2,tau3"
+#: End poses reached [m] and end velocities [m/s].
+POSE_TOL = 1e-8
+#: Forces within their limits, relative (issue requirement).
+FORCE_RTOL = 1e-6
+#: Sampled energy (trapezoid on 4 ms samples) vs the exact polynomial integral, relative.
+ENERGY_RTOL = 0.02
+#: "Most of the motion" at a bound: at least this fraction of samples per actuator.
+AT_BOUND_FRACTION = 0.75
+SAMPLE_TIME = 0.004
+
+
+@pytest.fixture(scope="module", params=SHIPPED, ids=[p.name for p in SHIPPED])
+def solved(request, tmp_path_factory):
+    out = tmp_path_factory.mktemp(request.param.stem)
+    env = dict(os.environ, MPLBACKEND="Agg")
+    proc = subprocess.run(
+        [sys.executable, "-m", "gtmodel.cli", "solve", str(request.param), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
+    return request.param, out, proc
+
+
+def test_solve_exits_zero_with_optimal_status(solved):
+    _, out, proc = solved
+    assert proc.returncode == 0, proc.stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "optimal"
+    for key in ("problem", "kind", "status", "final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation"):
+        assert key in summary
+    assert "status       optimal" in proc.stdout
+    for name in ("trajectory.csv", "tcp_path.png", "forces.png"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_trajectory_starts_and_ends_at_rest_at_declared_poses(solved):
+    path, out, _ = solved
+    declared = tomllib.loads(path.read_text())
+    assert (out / "trajectory.csv").read_text().splitlines()[0].startswith(HEADER)
+    data = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
+    T = np.column_stack([data["x"], data["y"], data["z"]])
+    np.testing.assert_allclose(T[0], declared["motion"]["start"], atol=POSE_TOL)
+    np.testing.assert_allclose(T[-1], declared["motion"]["end"], atol=POSE_TOL)
+    for c in ("qd1", "qd2", "qd3", "xd", "yd", "zd"):
+        assert abs(data[c][0]) < POSE_TOL and abs(data[c][-1]) < POSE_TOL
+    dt = np.diff(data["t"])
+    np.testing.assert_allclose(dt[:-1], SAMPLE_TIME, rtol=1e-9)
+    assert 0 < dt[-1] <= SAMPLE_TIME + 1e-12
+
+
+def test_forces_within_limits_and_at_bound_most_of_the_time(solved):
+    path, out, _ = solved
+    declared = tomllib.loads(path.read_text())
+    limit = np.array(declared["limits"]["force"])
+    data = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
+    tau = np.column_stack([data["tau1"], data["tau2"], data["tau3"]])
+    assert np.all(np.abs(tau) <= limit * (1 + FORCE_RTOL))
+    if declared["objective"]["w"] == 0:
+        at_bound = (np.abs(tau) >= 0.999 * limit).mean(axis=0)
+        assert np.all(at_bound >= AT_BOUND_FRACTION), at_bound
+    summary = json.loads((out / "summary.json").read_text())
+    sampled = np.trapezoid(np.sum(tau**2, axis=1), data["t"])
+    assert abs(sampled - summary["energy"]) <= ENERGY_RTOL * summary["energy"]
+    assert 0.5 <= summary["final_time_s"] <= 1.5
+
+
+@pytest.mark.parametrize("case, edit, match", BAD_PROBLEMS, ids=[c[0] for c in BAD_PROBLEMS])
+def test_bad_problem_gives_one_message_nonzero_exit_and_error_summary(tmp_path, capsys, case, edit, match):
+    f = tmp_path / f"{case}.toml"
+    f.write_text(edit(BASE.read_text()))
+    out = tmp_path / "out"
+    code = main(["solve", str(f), "--out", str(out), "--quiet"])
+    assert code == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.startswith("gtmodel: error: ")
+    assert "Traceback" not in err
+    import re
+
+    assert re.search(match, err)
+    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "error"
+    assert re.search(match, summary["message"])
+
+
+def test_not_optimal_exits_nonzero_without_trajectory(tmp_path, capsys):
+    text = BASE.read_text().replace("max_iter = 3000", "max_iter = 3").replace("elements = 50", "elements = 10")
+    f = tmp_path / "short.toml"
+    f.write_text(text)
+    out = tmp_path / "out"
+    code = main(["solve", str(f), "--out", str(out), "--quiet"])
+    assert code == EXIT_NOT_OPTIMAL
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "max_iterations"
+    assert not (out / "trajectory.csv").exists()
+
+
+def test_codegen_check_from_cli(tmp_path, capsys):
+    code = main(["codegen", "--robot", "L1", "--out", str(tmp_path), "--check", "-n", "200"])
+    printed = capsys.readouterr().out
+    assert code == 0, printed
+    assert "PASSED" in printed
+    assert (tmp_path / "gt_L1.h").exists()
