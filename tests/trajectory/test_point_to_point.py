@@ -1,0 +1,79 @@
+"""Point-to-point optimal motion: initial-guess profile, declaration checks, energy integral.
+
+Independent references: the closed form of the trapezoidal velocity profile, and a dense
+numerical quadrature of the sampled force polynomials for the exact energy integral.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtmodel.errors import InputError, UnreachablePoseError
+from gtmodel.trajectory.point_to_point import PointToPoint, build_optimization, solve_point_to_point, trapezoid_profile
+
+START = np.array([-0.2, 2.75, -0.40])
+END = np.array([0.2, 3.0, -0.6])
+CLOSED_FORM_TOL = 1e-12
+
+
+def test_trapezoid_closed_form():
+    t = np.linspace(0, 1.2, 1201)
+    T, Td, Tdd = trapezoid_profile(START, END, 1.2, t)
+    np.testing.assert_allclose(T[0], START, atol=CLOSED_FORM_TOL)
+    np.testing.assert_allclose(T[-1], END, atol=CLOSED_FORM_TOL)
+    np.testing.assert_allclose(Td[[0, -1]], 0, atol=CLOSED_FORM_TOL)
+    # ramp 1/3: peak speed 1.5 D / duration, reached on the middle third
+    D = END - START
+    np.testing.assert_allclose(Td[600], 1.5 * D / 1.2, rtol=CLOSED_FORM_TOL)
+    # the velocity integrates to the displacement (trapezoid rule is exact on a piecewise-linear velocity at its knots)
+    np.testing.assert_allclose(np.trapezoid(Td, t, axis=0), D, rtol=1e-5)
+    np.testing.assert_allclose(Tdd[100], 1.5 * D / 1.2 / 0.4, rtol=CLOSED_FORM_TOL)
+
+
+@pytest.mark.parametrize("kwargs, exc, match", [
+    (dict(force_limit=[450, -1, 450]), InputError, "force_limit: expected positive"),
+    (dict(force_limit=[450, 450]), InputError, "force_limit: expected three finite"),
+    (dict(end=START), InputError, "the poses coincide"),
+    (dict(w=-0.1), InputError, "w: expected a non-negative"),
+])
+def test_bad_declarations(kwargs, exc, match):
+    args = dict(robot="L1", start=START, end=END, force_limit=[450, 450, 450])
+    args.update(kwargs)
+    with pytest.raises(exc, match=match):
+        PointToPoint(**args)
+
+
+def test_unreachable_end_names_it():
+    p = PointToPoint("L1", start=START, end=[0.2, 7.0, -0.6], force_limit=[450, 450, 450])
+    with pytest.raises(UnreachablePoseError, match="end: pose .* unreachable: arm"):
+        build_optimization(p)
+
+
+@pytest.fixture(scope="module")
+def coarse_solution():
+    p = PointToPoint("L1", start=START, end=END, force_limit=[450, 450, 450], elements=12)
+    return solve_point_to_point(p)
+
+
+def test_coarse_solve_is_optimal_and_within_limits(coarse_solution):
+    r = coarse_solution.result
+    assert r.status == "optimal", r.message
+    tr = coarse_solution.trajectory()
+    tau = np.column_stack([tr["tau1"], tr["tau2"], tr["tau3"]])
+    assert np.all(np.abs(tau) <= 450 * (1 + 1e-6))
+
+
+def test_energy_is_the_integral_of_the_force_polynomials(coarse_solution):
+    r = coarse_solution.result
+    t = np.linspace(0, r.final_time, 20001)
+    tau = np.asarray(r.sample(t)["inputs"]["tau"]).reshape(-1, 3)
+    dense = np.trapezoid(np.sum(tau**2, axis=1), t)
+    assert abs(dense - coarse_solution.energy) <= 1e-4 * coarse_solution.energy
+
+
+def test_trajectory_columns(coarse_solution):
+    tr = coarse_solution.trajectory(0.01)
+    assert list(tr)[:13] == ["t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3"]
+    with pytest.raises(InputError, match="dt: expected a positive"):
+        coarse_solution.trajectory(0.0)
