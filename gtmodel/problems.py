@@ -265,17 +265,9 @@ def load_problem(path: str | Path) -> Problem:
     kin = GantryTau3Kinematics(params)
     for key, pose in (("start", start), ("end", end)):
         try:
-            kin.ik(pose, configuration)
+            kin.require_in_workspace(pose, configuration)
         except UnreachablePoseError as exc:
             raise ProblemError(f"{path}: field 'motion.{key}': {exc}") from None
-        if not kin.in_workspace(pose, configuration):
-            q = kin.ik(pose, configuration)
-            ang = np.degrees(kin.link_angles(pose, configuration))
-            raise ProblemError(
-                f"{path}: field 'motion.{key}': pose {pose.tolist()} is outside the workspace of {params.name}: "
-                f"cart positions {np.round(q, 4).tolist()} m (travel {params.limits.cart_travel.tolist()} m), "
-                f"link angles {np.round(ang, 1).tolist()} deg (limit {np.degrees(params.limits.joint_angle_max):.1f} deg)"
-            )
     decl = PointToPoint(
         robot=params,
         start=start,

@@ -746,6 +746,40 @@ class GantryTau3Kinematics:
             ok &= c >= np.cos(lim.joint_angle_max)
         return bool(ok[0]) if single else ok
 
+    def require_in_workspace(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+        """Cart positions of a pose, which must lie in the workspace (see :meth:`in_workspace`).
+
+        Parameters
+        ----------
+        T : array_like, shape (3,)
+            TCP position [m].
+        configuration : int or sequence of int, optional
+            IK configuration (see :meth:`ik`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            Cart positions q [m].
+
+        Raises
+        ------
+        UnreachablePoseError
+            Some arm cannot reach ``T`` (names the arm), or a cart position or link angle
+            is outside the limits (the message gives both with their limits).
+        InputError
+            Wrong shape, non-finite values, or no limits known.
+        """
+        q = self.ik(T, configuration)
+        if not self.in_workspace(T, configuration):
+            lim = self.parameters.limits
+            ang = np.degrees(self.link_angles(T, configuration))
+            raise UnreachablePoseError(
+                f"pose {np.asarray(T, dtype=float).tolist()} is outside the workspace of {self.parameters.name}: "
+                f"cart positions {np.round(q, 4).tolist()} m (travel {lim.cart_travel.tolist()} m), "
+                f"link angles {np.round(ang, 1).tolist()} deg (limit {np.degrees(lim.joint_angle_max):.1f} deg)"
+            )
+        return q
+
     def workspace_bounds(self) -> np.ndarray:
         """Axis-aligned box that contains the whole workspace.
 

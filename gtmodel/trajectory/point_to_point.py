@@ -180,17 +180,9 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
     kin = model.dynamics.kinematics
     for label, pose in (("start", problem.start), ("end", problem.end)):
         try:
-            kin.ik(pose, problem.configuration)
+            kin.require_in_workspace(pose, problem.configuration)
         except UnreachablePoseError as exc:
             raise UnreachablePoseError(f"{label}: {exc}") from None
-        if not kin.in_workspace(pose, problem.configuration):
-            q = kin.ik(pose, problem.configuration)
-            ang = np.degrees(kin.link_angles(pose, problem.configuration))
-            raise UnreachablePoseError(
-                f"{label}: pose {pose.tolist()} is outside the workspace: cart positions {np.round(q, 4).tolist()} m "
-                f"(travel {p.limits.cart_travel.tolist()}), link angles {np.round(ang, 1).tolist()} deg "
-                f"(limit {np.degrees(p.limits.joint_angle_max):.1f} deg)"
-            )
     w = model.parameter("w", problem.w)
     T, T_dot, tau = model.variables("state")["T"], model.variables("state")["T_dot"], model.variables("input")["tau"]
     opt = Optimization(
