@@ -22,6 +22,7 @@ from typing import Sequence
 
 import casadi as ca
 import numpy as np
+import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import InputError, SingularConfigurationError
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form, friction_force
@@ -34,13 +35,14 @@ from gtmodel.robots.kinematics import (
     fk_expression,
     ik_expression,
     jacobian_inverse_expression,
+    link_cosines_expression,
 )
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 
 __all__ = ["lagrange_terms", "GantryTau3Dynamics"]
 
 
-def lagrange_terms(x, x_dot, positions: Sequence[tuple[float, ca.SX]], gravity: float):
+def lagrange_terms(x: ca.SX, x_dot: ca.SX, positions: Sequence[tuple[float, ca.SX]], gravity: float) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX, ca.SX]:
     """Mass matrix, velocity terms and gravity of point masses by Lagrange's equations.
 
     With ``KE = 1/2 sum m_k |d p_k/dt|^2`` and ``V = g sum m_k p_k,z``, Lagrange's equations
@@ -129,7 +131,7 @@ class GantryTau3Dynamics:
         self.L, self.As, self.v = np.asarray(kp.L), np.asarray(kp.As), np.asarray(kp.v)
 
     # ----------------------------------------------------------------- symbolic core
-    def friction_force(self, q_dot):
+    def friction_force(self, q_dot: ca.SX | ca.MX) -> ca.SX | ca.MX:
         """Friction force of this model, eq. 6.8 (see :func:`gtmodel.robots.friction.friction_force`).
 
         Parameters
@@ -153,7 +155,7 @@ class GantryTau3Dynamics:
             bodies.append((float(d.m_a[i]), (A + T) / 2))
         return bodies
 
-    def tcp_terms(self, T, T_dot, s):
+    def tcp_terms(self, T: ca.SX, T_dot: ca.SX, s: ca.SX | Sequence[float]) -> dict[str, ca.SX]:
         """Lagrange terms in TCP coordinates (eq. 6.7 generalised to any ``v_i``).
 
         Parameters
@@ -174,7 +176,7 @@ class GantryTau3Dynamics:
         M, h, G, KE, V = lagrange_terms(T, T_dot, self._bodies(T, q), self.parameters.dynamics.g if self.gravity else 0.0)
         return dict(M=M, h=h, G=G, Jinv=Jinv, q=q, q_dot=Jinv @ T_dot, disc=disc, KE=KE, V=V)
 
-    def cart_terms(self, q, q_dot, solution=1.0):
+    def cart_terms(self, q: ca.SX, q_dot: ca.SX, solution: float | ca.SX = 1.0) -> dict[str, ca.SX]:
         """Lagrange terms in cart coordinates (``T`` from forward kinematics, eq. 4.9).
 
         Parameters
@@ -195,11 +197,7 @@ class GantryTau3Dynamics:
         return dict(M=M, h=h, G=G, T=T, T_dot=ca.jtimes(T, q, q_dot), h2=h2, KE=KE, V=V)
 
     def _cos_min(self, T, q):
-        cos = []
-        for i in range(3):
-            dP = T - (self.As[i] + q[i] * self.v[i])
-            cos.append(ca.fabs(ca.dot(dP, self.v[i])) / (ca.norm_2(dP) * np.linalg.norm(self.v[i])))
-        return ca.mmin(ca.vertcat(*cos))
+        return ca.mmin(ca.fabs(link_cosines_expression(T, q, self.As, self.v)))
 
     # ----------------------------------------------------------------- CasADi Functions
     @cached_property
@@ -268,7 +266,7 @@ class GantryTau3Dynamics:
         return out[0] if single else out
 
     # ----------------------------------------------------------------- numpy API
-    def inverse_dynamics(self, T, T_dot, T_ddot, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def inverse_dynamics(self, T: np.typing.ArrayLike, T_dot: np.typing.ArrayLike, T_ddot: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Actuator forces for a TCP motion, Dressler (2012), eqs. 6.7 and 6.8.
 
         Parameters
@@ -298,7 +296,7 @@ class GantryTau3Dynamics:
         """
         return self._checked(self._inv, T, T_dot, T_ddot, configuration, ("T", "T_dot", "T_ddot"))
 
-    def forward_dynamics(self, T, T_dot, tau, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def forward_dynamics(self, T: np.typing.ArrayLike, T_dot: np.typing.ArrayLike, tau: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """TCP acceleration for actuator forces, Dressler (2012), eqs. 6.7 and 6.8.
 
         Parameters
@@ -328,7 +326,7 @@ class GantryTau3Dynamics:
         """
         return self._checked(self._fwd, T, T_dot, tau, configuration, ("T", "T_dot", "tau"))
 
-    def gravity_forces(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def gravity_forces(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Actuator forces that hold the robot at rest: ``J^T G`` (Dressler (2012), Table 6.2).
 
         Parameters

@@ -56,7 +56,7 @@ def check_friction_form(form: str, width: float) -> None:
         raise InputError(f"friction_width: expected a positive velocity in m/s, got {width!r}")
 
 
-def sign_approximation(q_dot, form: str = "exact", width: float = DEFAULT_FRICTION_WIDTH):
+def sign_approximation(q_dot: ca.SX | ca.MX, form: str = "exact", width: float = DEFAULT_FRICTION_WIDTH) -> ca.SX | ca.MX:
     """The sign function of the friction model in the chosen form.
 
     Parameters
@@ -86,7 +86,7 @@ def sign_approximation(q_dot, form: str = "exact", width: float = DEFAULT_FRICTI
     return ca.fmin(ca.fmax(q_dot / width, -1), 1)
 
 
-def friction_force(q_dot, dynamics: DynamicParameters, form: str = "exact", width: float = DEFAULT_FRICTION_WIDTH, asymmetric: bool = False):
+def friction_force(q_dot: ca.SX | ca.MX, dynamics: DynamicParameters, form: str = "exact", width: float = DEFAULT_FRICTION_WIDTH, asymmetric: bool = False) -> ca.SX | ca.MX:
     """Friction force on the carts, Dressler (2012), eq. 6.8 (Table 6.1 if asymmetric).
 
     Parameters

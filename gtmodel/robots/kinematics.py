@@ -30,6 +30,7 @@ from typing import Sequence
 
 import casadi as ca
 import numpy as np
+import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
@@ -39,6 +40,7 @@ __all__ = [
     "ik_expression",
     "fk_expression",
     "jacobian_inverse_expression",
+    "link_cosines_expression",
     "acceleration_expression",
     "cart_acceleration_expression",
     "configuration_signs",
@@ -46,6 +48,9 @@ __all__ = [
     "SINGULARITY_TOLERANCE",
     "DEGENERACY_TOLERANCE",
 ]
+
+#: A CasADi expression (or a numeric array where a parameter is numeric).
+Expr = ca.SX | ca.MX | ca.DM | np.ndarray
 
 #: Smallest accepted |cos| of the angle between a link and its guideway; below it the
 #: Jacobian (eq. 6.5) is treated as singular.
@@ -60,7 +65,7 @@ def _row(M: ca.SX | ca.MX, i: int) -> ca.SX | ca.MX:
     return M[i, :].T
 
 
-def closure_residual(T, q, L, As, v):
+def closure_residual(T: Expr, q: Expr, L: Expr, As: Expr, v: Expr) -> Expr:
     """Closure equations of the 3-link model, Dressler (2012), eq. 4.9.
 
     Parameters
@@ -88,7 +93,7 @@ def closure_residual(T, q, L, As, v):
     return ca.vertcat(*res)
 
 
-def ik_expression(T, s, L, As, v):
+def ik_expression(T: Expr, s: Expr, L: Expr, As: Expr, v: Expr) -> tuple[Expr, Expr]:
     """Inverse kinematics of the 3-link model: one quadratic per arm (eq. 4.9).
 
     Parameters
@@ -121,7 +126,7 @@ def ik_expression(T, s, L, As, v):
     return ca.vertcat(*q), ca.vertcat(*disc)
 
 
-def fk_expression(q, solution, L, As, v):
+def fk_expression(q: Expr, solution: Expr | float, L: Expr, As: Expr, v: Expr) -> tuple[Expr, Expr, Expr]:
     """Forward kinematics by trilateration of the three spheres (eq. 4.9).
 
     Parameters
@@ -166,7 +171,7 @@ def fk_expression(q, solution, L, As, v):
     return T, h2, j
 
 
-def jacobian_inverse_expression(T, q, As, v):
+def jacobian_inverse_expression(T: Expr, q: Expr, As: Expr, v: Expr) -> Expr:
     """Inverse Jacobian ``q_dot = J^-1 T_dot``, Dressler (2012), eq. 6.5.
 
     Row i is ``dP_i^T / (dP_i . v_i)`` with ``dP_i = T - (As_i + q_i v_i)``; for
@@ -193,6 +198,34 @@ def jacobian_inverse_expression(T, q, As, v):
     return ca.vertcat(*rows)
 
 
+def link_cosines_expression(T: Expr, q: Expr, As: Expr, v: Expr) -> Expr:
+    """Cosine of the angle between each link and its guideway direction.
+
+    ``c_i = dP_i . v_i / (|dP_i| |v_i|)`` with ``dP_i = T - (As_i + q_i v_i)``: +1 for a link
+    pointing along ``v_i`` (the nominal assembly), 0 where the Jacobian of eq. 6.5 is
+    singular. The spherical-joint limit is ``|c_i| >= cos(joint_angle_max)``.
+
+    Parameters
+    ----------
+    T : casadi.SX or casadi.MX, shape (3, 1)
+        TCP position [m].
+    q : casadi.SX or casadi.MX, shape (3, 1)
+        Cart positions [m] consistent with ``T``.
+    As, v
+        Kinematic parameters, as in :func:`closure_residual`.
+
+    Returns
+    -------
+    casadi.SX or casadi.MX, shape (3, 1)
+        The three cosines (dimensionless).
+    """
+    out = []
+    for i in range(3):
+        dP = T - (_row(As, i) + q[i] * _row(v, i))
+        out.append(ca.dot(dP, _row(v, i)) / (ca.norm_2(dP) * ca.norm_2(_row(v, i))))
+    return ca.vertcat(*out)
+
+
 def _dP_matrix(T, q, As, v):
     return ca.vertcat(*[(T - (_row(As, i) + q[i] * _row(v, i))).T for i in range(3)])
 
@@ -201,7 +234,7 @@ def _s_vector(T_dot, q_dot, v):
     return ca.vertcat(*[ca.sumsqr(T_dot - q_dot[i] * _row(v, i)) for i in range(3)])
 
 
-def acceleration_expression(T, T_dot, q, q_dot, q_ddot, As, v):
+def acceleration_expression(T: Expr, T_dot: Expr, q: Expr, q_dot: Expr, q_ddot: Expr, As: Expr, v: Expr) -> Expr:
     """TCP acceleration from cart accelerations, Dressler (2012), eq. 6.6.
 
     ``T_ddot = J q_ddot - [dP]^-1 s`` with ``s_i = |T_dot - q_dot_i v_i|^2`` (for
@@ -227,7 +260,7 @@ def acceleration_expression(T, T_dot, q, q_dot, q_ddot, As, v):
     return ca.solve(dP, D @ q_ddot - _s_vector(T_dot, q_dot, v))
 
 
-def cart_acceleration_expression(T, T_dot, T_ddot, q, q_dot, As, v):
+def cart_acceleration_expression(T: Expr, T_dot: Expr, T_ddot: Expr, q: Expr, q_dot: Expr, As: Expr, v: Expr) -> Expr:
     """Cart accelerations from the TCP motion: eq. 6.6 solved for ``q_ddot``.
 
     ``q_ddot_i = (dP_i . T_ddot + s_i) / (dP_i . v_i)``.
@@ -388,14 +421,23 @@ class GantryTau3Kinematics:
         q, disc = ik_expression(T, s, self.L, self.As, self.v)
         Jinv = jacobian_inverse_expression(T, q, self.As, self.v)
         J = ca.inv(Jinv)
-        cos = []
-        for i in range(3):
-            dP = T - (self.As[i] + q[i] * self.v[i])
-            cos.append(ca.fabs(ca.dot(dP, self.v[i])) / (ca.norm_2(dP) * np.linalg.norm(self.v[i])))
-        cos_min = ca.mmin(ca.vertcat(*cos))
+        cos_min = ca.mmin(ca.fabs(link_cosines_expression(T, q, self.As, self.v)))
         return ca.Function(
             "jacobian", [T, s], [J, Jinv, q, disc, cos_min], ["T", "s"], ["J", "Jinv", "q", "disc", "cos_min"]
         )
+
+    @cached_property
+    def link_cosines_function(self) -> ca.Function:
+        """CasADi Function ``link_cosines(T[3], s[3]) -> (cos[3], q[3], disc[3])``, see :func:`link_cosines_expression`."""
+        T = ca.SX.sym("T", 3)
+        s = ca.SX.sym("s", 3)
+        q, disc = ik_expression(T, s, self.L, self.As, self.v)
+        c = link_cosines_expression(T, q, self.As, self.v)
+        return ca.Function("link_cosines", [T, s], [c, q, disc], ["T", "s"], ["cos", "q", "disc"])
+
+    @cached_property
+    def _cos(self) -> _Mapped:
+        return _Mapped(self.link_cosines_function)
 
     @cached_property
     def acceleration_function(self) -> ca.Function:
@@ -453,7 +495,7 @@ class GantryTau3Kinematics:
             raise UnreachablePoseError(f"pose T={T[k].tolist()}{where} is unreachable: " + ", ".join(details))
 
     # --------------------------------------------------------------- public numpy API
-    def ik(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def ik(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Cart positions for TCP positions (inverse kinematics, eq. 4.9).
 
         Parameters
@@ -483,7 +525,7 @@ class GantryTau3Kinematics:
         q = q.T
         return q[0] if single else q
 
-    def fk(self, q, solution: int = 1) -> np.ndarray:
+    def fk(self, q: np.typing.ArrayLike, solution: int = 1) -> np.ndarray:
         """TCP positions for cart positions (forward kinematics by trilateration, eq. 4.9).
 
         Parameters
@@ -541,7 +583,7 @@ class GantryTau3Kinematics:
         Jinv = Jinv.reshape(3, n, 3).transpose(1, 0, 2) if n > 1 else Jinv[None]
         return J, Jinv, single
 
-    def jacobian(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def jacobian(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Jacobian ``J`` with ``T_dot = J q_dot`` (inverse of eq. 6.5).
 
         Parameters
@@ -568,7 +610,7 @@ class GantryTau3Kinematics:
         J, _, single = self._jacobians(T, configuration)
         return J[0] if single else J
 
-    def jacobian_inverse(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def jacobian_inverse(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Inverse Jacobian ``J^-1`` with ``q_dot = J^-1 T_dot``, Dressler (2012), eq. 6.5.
 
         Parameters
@@ -595,7 +637,7 @@ class GantryTau3Kinematics:
         _, Jinv, single = self._jacobians(T, configuration)
         return Jinv[0] if single else Jinv
 
-    def acceleration(self, T, T_dot, q_ddot, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def acceleration(self, T: np.typing.ArrayLike, T_dot: np.typing.ArrayLike, q_ddot: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """TCP acceleration from cart accelerations, Dressler (2012), eq. 6.6.
 
         Parameters
@@ -633,7 +675,7 @@ class GantryTau3Kinematics:
         out = out.T
         return out[0] if single else out
 
-    def cart_motion(self, T, T_dot, T_ddot, configuration: int | Sequence[int] = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def cart_motion(self, T: np.typing.ArrayLike, T_dot: np.typing.ArrayLike, T_ddot: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Cart positions, velocities and accelerations for a TCP motion (eqs. 4.9, 6.5, 6.6).
 
         Parameters
@@ -672,7 +714,7 @@ class GantryTau3Kinematics:
         return tuple(o[0] for o in out) if single else out
 
     # --------------------------------------------------------------- workspace
-    def link_angles(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def link_angles(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Angle between each link and its guideway direction [rad].
 
         Parameters
@@ -695,15 +737,13 @@ class GantryTau3Kinematics:
             Wrong shape or non-finite values.
         """
         Tn, single = _as_points(T, "T")
-        q = self.ik(Tn, configuration)
-        ang = np.empty_like(q)
-        for i in range(3):  # three arms, vectorised over poses
-            dP = Tn - (self.As[i] + q[:, i : i + 1] * self.v[i])
-            c = dP @ self.v[i] / (np.linalg.norm(dP, axis=1) * np.linalg.norm(self.v[i]))
-            ang[:, i] = np.arccos(np.clip(np.abs(c), 0.0, 1.0))
+        s = configuration_signs(configuration)
+        c, _, disc = self._cos(Tn.T, s[:, None])
+        self._check_reach(disc, Tn)
+        ang = np.arccos(np.clip(np.abs(c.T), 0.0, 1.0))
         return ang[0] if single else ang
 
-    def in_workspace(self, T, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
+    def in_workspace(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
         """Whether poses are reachable within cart travel and spherical-joint limits.
 
         A pose is in the workspace if every arm reaches it (eq. 4.9), every cart position
@@ -733,20 +773,16 @@ class GantryTau3Kinematics:
             raise InputError("in_workspace: needs a full RobotParameters set with limits")
         Tn, single = _as_points(T, "T")
         s = configuration_signs(configuration)
-        q, disc = self._ik(Tn.T, s[:, None])
+        c, q, disc = self._cos(Tn.T, s[:, None])
         ok = np.all(disc >= 0, axis=0)
-        if not limits:
-            return bool(ok[0]) if single else ok
-        q = q.T
-        lim = self.parameters.limits
-        ok &= np.all((q >= lim.cart_travel[:, 0]) & (q <= lim.cart_travel[:, 1]), axis=1)
-        for i in range(3):
-            dP = Tn - (self.As[i] + q[:, i : i + 1] * self.v[i])
-            c = np.abs(dP @ self.v[i]) / (np.linalg.norm(dP, axis=1) * np.linalg.norm(self.v[i]))
-            ok &= c >= np.cos(lim.joint_angle_max)
+        if limits:
+            lim = self.parameters.limits
+            q = q.T
+            ok &= np.all((q >= lim.cart_travel[:, 0]) & (q <= lim.cart_travel[:, 1]), axis=1)
+            ok &= np.all(np.abs(c) >= np.cos(lim.joint_angle_max), axis=0)
         return bool(ok[0]) if single else ok
 
-    def require_in_workspace(self, T, configuration: int | Sequence[int] = 0) -> np.ndarray:
+    def require_in_workspace(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:
         """Cart positions of a pose, which must lie in the workspace (see :meth:`in_workspace`).
 
         Parameters
@@ -786,7 +822,8 @@ class GantryTau3Kinematics:
         Returns
         -------
         numpy.ndarray, shape (3, 2)
-            Row k: ``(min, max)`` of TCP coordinate k [m], from cart travel and link lengths.
+            Row k: ``(min, max)`` of TCP coordinate k [m]: the intersection over the arms
+            of the guideway segment's bounding box grown by the link length.
 
         Raises
         ------
@@ -796,9 +833,14 @@ class GantryTau3Kinematics:
         if self.parameters is None:
             raise InputError("workspace_bounds: needs a full RobotParameters set with limits")
         lim = self.parameters.limits.cart_travel
-        ends = np.array([[self.As[i] + lim[i, k] * self.v[i] for k in range(2)] for i in range(3)]).reshape(-1, 3)
-        L = self.L.max()
-        return np.column_stack([ends.min(axis=0) - L, ends.max(axis=0) + L])
+        # T lies within L_i of guideway segment i for every arm: intersect the boxes
+        lo = np.full(3, -np.inf)
+        hi = np.full(3, np.inf)
+        for i in range(3):
+            ends = np.array([self.As[i] + lim[i, k] * self.v[i] for k in range(2)])
+            lo = np.maximum(lo, ends.min(axis=0) - self.L[i])
+            hi = np.minimum(hi, ends.max(axis=0) + self.L[i])
+        return np.column_stack([lo, hi])
 
     def workspace_grid(self, step: float = 0.05, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
         """Regular grid of TCP positions filling the workspace.

@@ -28,6 +28,7 @@ from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Optimization, OptimizationResult
 from gtmodel.modeling.result import lagrange_basis
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
+from gtmodel.robots.kinematics import configuration_signs, link_cosines_expression
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 
@@ -207,14 +208,12 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
     q = model.outputs["q"]
     travel = p.limits.cart_travel
     opt.add_path_constraint(q, lb=travel[:, 0], ub=travel[:, 1], name="cart_travel")
+    # spherical-joint limit |cos(link, guideway)| >= cos(limit); the sign of the cosine is
+    # fixed by the IK configuration (+ for root sign -1), so the constraint is smooth
+    signs = -configuration_signs(problem.configuration)
+    cos = link_cosines_expression(T, q, kin.As, kin.v)
     cos_lim = float(np.cos(p.limits.joint_angle_max))
-    cos = []
-    for i in range(3):
-        dP = T - (kin.As[i] + q[i] * kin.v[i])
-        cos.append(ca.dot(dP, kin.v[i]) / (ca.norm_2(dP) * np.linalg.norm(kin.v[i])))
-    sign = -1.0 if problem.configuration else 1.0
-    if problem.configuration in (0, 7):
-        opt.add_path_constraint(sign * ca.vertcat(*cos), lb=cos_lim, ub=1.0, name="joint_angle")
+    opt.add_path_constraint(ca.DM(signs) * cos, lb=cos_lim, ub=1.0, name="joint_angle")
 
     tf0 = problem.final_time_guess
     dyn = model.dynamics

@@ -29,7 +29,7 @@ GRID_STEP = 0.1
 #: amplify rounding errors beyond ROUND_TRIP_TOL (error ~ eps * L / h); excluded [m].
 FK_SINGULARITY_MARGIN = 0.01
 
-ROBOTS = ["L1", "D1"]
+ROBOTS = ["L1", "L1_ideal", "D1"]
 
 
 @pytest.fixture(scope="module", params=ROBOTS)
@@ -37,9 +37,19 @@ def kin(request) -> GantryTau3Kinematics:
     return GantryTau3Kinematics(request.param)
 
 
+_GRIDS: dict = {}
+
+
 def _grid(kin, configuration):
     """Workspace grid for a configuration; for configurations that violate the joint
-    limits everywhere, the reachable grid away from the FK singularity."""
+    limits everywhere, the reachable grid away from the FK singularity (cached)."""
+    key = (kin.parameters.name, configuration)
+    if key not in _GRIDS:
+        _GRIDS[key] = _compute_grid(kin, configuration)
+    return _GRIDS[key]
+
+
+def _compute_grid(kin, configuration):
     G = kin.workspace_grid(GRID_STEP, configuration)
     if len(G) == 0:
         G = kin.workspace_grid(GRID_STEP, configuration, limits=False)
@@ -50,7 +60,7 @@ def _grid(kin, configuration):
 
 
 def test_workspace_grid_is_large(kin):
-    G = kin.workspace_grid(GRID_STEP)
+    G = _grid(kin, 0)
     assert len(G) > 500
     assert kin.in_workspace(G).all()
 
@@ -68,9 +78,9 @@ def test_fk_of_ik_round_trip(kin, configuration):
 
 def test_default_configurations_pair(kin):
     """Nominal IK configuration 0 pairs with FK solution +1 (and 7 with -1) on the whole workspace."""
-    G = kin.workspace_grid(GRID_STEP, 0)
+    G = _grid(kin, 0)
     np.testing.assert_allclose(kin.fk(kin.ik(G, 0), 1), G, atol=ROUND_TRIP_TOL, rtol=0)
-    G7 = kin.workspace_grid(GRID_STEP, 7)
+    G7 = _grid(kin, 7)
     np.testing.assert_allclose(kin.fk(kin.ik(G7, 7), -1), G7, atol=ROUND_TRIP_TOL, rtol=0)
 
 
@@ -85,7 +95,7 @@ def test_ik_satisfies_closure(kin, configuration):
 
 
 def test_configuration_signs_select_roots(kin):
-    T = kin.workspace_grid(GRID_STEP)[0]
+    T = _grid(kin, 0)[0]
     s = configuration_signs(5)
     np.testing.assert_array_equal(s, [1, -1, 1])
     q0, q5 = kin.ik(T, 0), kin.ik(T, 5)
@@ -96,7 +106,7 @@ def test_configuration_signs_select_roots(kin):
 
 
 def test_single_and_batched_agree(kin):
-    G = kin.workspace_grid(GRID_STEP)[:7]
+    G = _grid(kin, 0)[:7]
     Q = kin.ik(G)
     for k in (0, 3, 6):
         np.testing.assert_array_equal(kin.ik(G[k]), Q[k])
@@ -131,7 +141,8 @@ def test_analytic_jacobian_equals_ad_jacobian(kin, configuration):
 def test_acceleration_relation_matches_finite_difference(kin):
     """Eq. 6.6: along T(t) = T0 + t a + t^2 b, d/dt(q_dot) by central differences equals
     the q_ddot of cart_motion, and acceleration() maps it back to T_ddot."""
-    T0 = kin.workspace_grid(GRID_STEP)[len(kin.workspace_grid(GRID_STEP)) // 2]
+    G = _grid(kin, 0)
+    T0 = G[len(G) // 2]
     a = np.array([0.3, -0.2, 0.1])
     b = np.array([0.5, 0.4, -0.3])
     h = 1e-6

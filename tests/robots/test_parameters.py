@@ -26,18 +26,27 @@ def _reference(name: str) -> dict:
     return tomllib.loads(path.read_text())
 
 
-@pytest.mark.parametrize("name", ["L1", "D1"])
-def test_shipped_sets_load(name):
+@pytest.mark.parametrize("name, n_parameters", [("L1", 21), ("L1_ideal", 15), ("D1", 21)])
+def test_shipped_sets_load(name, n_parameters):
     p = load_parameters(name)
     assert p.name == name
     assert p.kinematics.L.shape == (3,)
     assert p.kinematics.As.shape == (3, 3)
     assert p.kinematics.v.shape == (3, 3)
-    assert p.kinematics.n_parameters == 21
+    assert p.kinematics.n_parameters == n_parameters
+
+
+def test_l1_ideal_matches_table_5_1_with_one_direction():
+    ref = _reference("gantry_tau_L1.toml")
+    p = load_parameters("L1_ideal")
+    np.testing.assert_allclose(p.kinematics.L, ref["table_5_1"]["ideal"]["L"], atol=EXACT)
+    np.testing.assert_allclose(p.kinematics.As, ref["table_5_1"]["ideal"]["As"], atol=EXACT)
+    assert np.all(p.kinematics.v == p.kinematics.v[0])
+    assert "ASSUMPTION" in p.kinematics.source
 
 
 def test_available_sets():
-    assert {"L1", "D1"} <= set(available_parameter_sets())
+    assert {"L1", "L1_ideal", "D1"} <= set(available_parameter_sets())
 
 
 def test_l1_matches_table_5_1_and_6_3():
