@@ -3,7 +3,8 @@
 ``gtmodel solve PROBLEM.toml [--out DIR]``
     Load, validate and solve a problem file; write ``DIR/summary.json`` (always),
     ``DIR/trajectory.csv`` and PNG plots. Exit code 0 only for an optimal solution,
-    1 for a non-optimal solver status, 2 for invalid input, 3 for an internal error.
+    1 for a non-optimal solver status, 2 for invalid input, 3 for an internal error,
+    130 when interrupted (Ctrl-C).
 ``gtmodel codegen --robot L1 --out DIR [--check]``
     Generate C for the real-time kinematics and inverse dynamics; ``--check`` compiles it
     and compares it with the Python model.
@@ -21,12 +22,13 @@ from typing import Sequence
 from gtmodel import __version__
 from gtmodel.errors import GtModelError
 
-__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_OPTIMAL", "EXIT_BAD_INPUT", "EXIT_INTERNAL"]
+__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_OPTIMAL", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_NOT_OPTIMAL = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 3
+EXIT_INTERRUPTED = 130
 
 _log = logging.getLogger("gtmodel")
 
@@ -70,6 +72,16 @@ def _setup_logging(quiet: bool) -> None:
     _log.setLevel(logging.WARNING if quiet else logging.INFO)
 
 
+def _try_write_summary(write_summary, out: Path, summary: dict) -> None:
+    """Write an error summary; if even that fails, say so (the exit code is non-zero anyway)."""
+    try:
+        target = write_summary(out, summary)
+    except OSError as exc:
+        print(f"gtmodel: error: cannot write {out / 'summary.json'}: {exc.strerror}", file=sys.stderr)
+        return
+    print(f"gtmodel: wrote {target} (status error)", file=sys.stderr)
+
+
 def _solve(args: argparse.Namespace) -> int:
     from gtmodel.problems import error_summary, load_problem, solve_problem, write_results, write_summary
 
@@ -79,17 +91,25 @@ def _solve(args: argparse.Namespace) -> int:
         problem = load_problem(args.problem)
         kind = problem.kind
         out = args.out if args.out is not None else Path("results") / problem.name
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            print(f"gtmodel: error: --out {out}: cannot create the result folder ({exc.strerror})", file=sys.stderr)
+            return EXIT_BAD_INPUT
         show_progress = args.verbose or (not args.quiet and sys.stdout.isatty())
         _log.info("solving %s (%s) ...", problem.name, problem.kind)
         solution = solve_problem(problem, verbose=show_progress)
         summary = write_results(problem, solution, out, plots=not args.no_plots)
     except GtModelError as exc:
-        write_summary(out, error_summary(args.problem, exc, kind))
+        _try_write_summary(write_summary, out, error_summary(args.problem, exc, kind))
         print(f"gtmodel: error: {exc}", file=sys.stderr)
-        print(f"gtmodel: wrote {out / 'summary.json'} (status error)", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        _try_write_summary(write_summary, out, error_summary(args.problem, RuntimeError("interrupted by the user"), kind))
+        print("gtmodel: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - reported, summarised, non-zero exit
-        write_summary(out, error_summary(args.problem, exc, kind))
+        _try_write_summary(write_summary, out, error_summary(args.problem, exc, kind))
         if args.debug:
             traceback.print_exc()
         print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
@@ -145,7 +165,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         Exit code: 0 success (optimal / check passed), 1 not optimal / check failed,
-        2 invalid input, 3 internal error.
+        2 invalid input, 3 internal error, 130 interrupted.
     """
     args = build_parser().parse_args(argv)
     _setup_logging(getattr(args, "quiet", False))

@@ -129,3 +129,12 @@ def test_codegen_check_from_cli(tmp_path, capsys):
     assert code == 0, printed
     assert "PASSED" in printed
     assert (tmp_path / "gt_L1.h").exists()
+
+
+def test_result_folder_that_is_a_file_fails_before_solving(tmp_path, capsys):
+    blocker = tmp_path / "taken"
+    blocker.write_text("not a folder")
+    code = main(["solve", str(BASE), "--out", str(blocker), "--quiet"])
+    assert code == EXIT_BAD_INPUT
+    assert "cannot create the result folder" in capsys.readouterr().err
+    assert blocker.read_text() == "not a folder"
