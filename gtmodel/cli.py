@@ -101,8 +101,8 @@ def _solve(args: argparse.Namespace) -> int:
         solution = solve_problem(problem, verbose=show_progress)
         summary = write_results(problem, solution, out, plots=not args.no_plots)
     except GtModelError as exc:
-        _try_write_summary(write_summary, out, error_summary(args.problem, exc, kind))
         print(f"gtmodel: error: {exc}", file=sys.stderr)
+        _try_write_summary(write_summary, out, error_summary(args.problem, exc, kind))
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         _try_write_summary(write_summary, out, error_summary(args.problem, RuntimeError("interrupted by the user"), kind))
