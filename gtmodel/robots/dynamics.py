@@ -2,16 +2,26 @@
 
 Point masses (Dressler (2012), ch. 6.2): the plate ``m_p`` at the TCP, cart ``i`` ``m_c,i``
 at ``A_i = As_i + q_i v_i``, link cluster ``i`` ``m_a,i`` at the link midpoint
-``(A_i + T)/2``. The equations of motion are derived by Lagrange in minimal coordinates
-(the TCP position ``T``, or the cart positions ``q``), the closure equations (eq. 4.9)
-eliminating the other set, with CasADi's automatic differentiation::
+``(A_i + T)/2``. Lagrange's equations in minimal coordinates (the TCP position ``T``, or
+the cart positions ``q``), the closure equations (eq. 4.9) eliminating the other set::
 
     M(x) x_ddot + h(x, x_dot) + G(x) = B(x)^T f,      f = tau - f_fric(q_dot)
 
 where ``B = dq/dx`` maps the cart forces ``f`` to generalised forces (``B = J^-1`` of
-eq. 6.5 for TCP coordinates, ``I`` for cart coordinates). In TCP coordinates with
-``v_i = e_x`` this reproduces the thesis' form ``M1 T_ddot + M2 q_ddot + G = J^-T f``
-(eq. 6.7, the velocity terms being those of ``q_ddot`` in eq. 6.6); a test checks it.
+eq. 6.5 for TCP coordinates, ``I`` for cart coordinates).
+
+- TCP coordinates (:meth:`GantryTau3Dynamics.tcp_terms`, used by inverse/forward dynamics,
+  the optimal-control model and the generated C): for point masses ``p_b(T)`` Lagrange's
+  equations are ``sum_b m_b J_b^T p_ddot_b + dV/dT = J^-T f`` with ``J_b = dp_b/dT``; the
+  cart accelerations come in closed form from eq. 6.6, ``q_ddot_i = (dP_i . T_ddot +
+  s_i) / (dP_i . v_i)``. With ``v_i = e_x`` this is the thesis' form
+  ``M1 T_ddot + M2 q_ddot + G = J^-T f`` (eq. 6.7).
+- Cart coordinates (:meth:`GantryTau3Dynamics.cart_terms`): the kinetic and potential
+  energy are differentiated by CasADi's automatic differentiation
+  (:func:`lagrange_terms`), the TCP following from the FK.
+
+Tests check both against the thesis' eq. 6.7, a redundant-coordinate formulation with
+Lagrange multipliers, and :func:`lagrange_terms` applied in TCP coordinates.
 Friction: eq. 6.8 in one of the forms of :mod:`gtmodel.robots.friction`.
 """
 
@@ -156,7 +166,12 @@ class GantryTau3Dynamics:
         return bodies
 
     def tcp_terms(self, T: ca.SX, T_dot: ca.SX, s: ca.SX | Sequence[float]) -> dict[str, ca.SX]:
-        """Lagrange terms in TCP coordinates (eq. 6.7 generalised to any ``v_i``).
+        """Lagrange terms in TCP coordinates: eq. 6.7 generalised to any ``v_i``.
+
+        ``M T_ddot + h + G = J^-T f`` with ``M = m_p I + sum_i (m_c,i |v_i|^2 g_i g_i^T +
+        m_a,i J_i^T J_i)``, ``g_i = dq_i/dT`` (row i of eq. 6.5), ``J_i = (I + v_i g_i^T)/2``
+        (link midpoint), and ``h`` from the velocity part ``s_i / (dP_i . v_i)`` of the cart
+        accelerations (eq. 6.6).
 
         Parameters
         ----------
@@ -171,10 +186,35 @@ class GantryTau3Dynamics:
             ``M`` (3, 3) [kg], ``h`` (3,) [N], ``G`` (3,) [N], ``Jinv`` (3, 3), ``q`` (3,) [m],
             ``q_dot`` (3,) [m/s], ``disc`` (3,) [m^2], ``KE``, ``V`` [J].
         """
+        p = self.parameters.dynamics
+        g_acc = p.g if self.gravity else 0.0
         q, disc = ik_expression(T, s, self.L, self.As, self.v)
         Jinv = jacobian_inverse_expression(T, q, self.As, self.v)
-        M, h, G, KE, V = lagrange_terms(T, T_dot, self._bodies(T, q), self.parameters.dynamics.g if self.gravity else 0.0)
-        return dict(M=M, h=h, G=G, Jinv=Jinv, q=q, q_dot=Jinv @ T_dot, disc=disc, KE=KE, V=V)
+        q_dot = Jinv @ T_dot
+        ez = ca.DM([0.0, 0.0, 1.0])
+        eye = ca.DM.eye(3)
+        # Lagrange's equations of point masses p_b(T): sum_b m_b J_b^T p_ddot_b + dV/dT = Q,
+        # with J_b = dp_b/dT and p_ddot_b = J_b T_ddot + (velocity terms); the cart
+        # accelerations q_ddot_i = g_i . T_ddot + sigma_i come from eq. 6.6.
+        M = p.m_p * eye
+        h = ca.SX.zeros(3)
+        G = g_acc * p.m_p * ez
+        KE = 0.5 * p.m_p * ca.sumsqr(T_dot)
+        V = g_acc * p.m_p * T[2]
+        for i in range(3):
+            v = ca.DM(self.v[i])
+            A = ca.DM(self.As[i]) + q[i] * v
+            g = Jinv[i, :].T  # dq_i/dT, eq. 6.5
+            sigma = ca.sumsqr(T_dot - q_dot[i] * v) / ca.dot(T - A, v)  # velocity part of q_ddot_i, eq. 6.6
+            m_c, m_a = float(p.m_c[i]), float(p.m_a[i])
+            J_mid = (eye + v @ g.T) / 2  # d/dT of the link midpoint (T + A_i)/2
+            M += m_c * float(self.v[i] @ self.v[i]) * (g @ g.T) + m_a * (J_mid.T @ J_mid)
+            h += m_c * float(self.v[i] @ self.v[i]) * sigma * g + m_a * (J_mid.T @ (v * sigma / 2))
+            G += g_acc * (m_c * float(self.v[i][2]) * g + m_a * (J_mid.T @ ez))
+            mid_dot = (T_dot + q_dot[i] * v) / 2
+            KE += 0.5 * m_c * float(self.v[i] @ self.v[i]) * q_dot[i] ** 2 + 0.5 * m_a * ca.sumsqr(mid_dot)
+            V += g_acc * (m_c * A[2] + m_a * (T[2] + A[2]) / 2)
+        return dict(M=M, h=h, G=G, Jinv=Jinv, q=q, q_dot=q_dot, disc=disc, KE=KE, V=V)
 
     def cart_terms(self, q: ca.SX, q_dot: ca.SX, solution: float | ca.SX = 1.0) -> dict[str, ca.SX]:
         """Lagrange terms in cart coordinates (``T`` from forward kinematics, eq. 4.9).

@@ -218,3 +218,23 @@ def test_bad_friction_form():
 def test_asymmetric_needs_parameters():
     with pytest.raises(InputError, match="asymmetric"):
         GantryTau3Dynamics("D1", asymmetric=True)
+
+
+def test_tcp_closed_form_equals_automatic_differentiation_of_the_energies():
+    """tcp_terms (closed form via eq. 6.6) against lagrange_terms (CasADi AD of KE and V)."""
+    from gtmodel.robots.dynamics import lagrange_terms
+    from gtmodel.robots.kinematics import ik_expression
+
+    dyn = GantryTau3Dynamics(_with_link_masses())
+    T = ca.SX.sym("T", 3)
+    Td = ca.SX.sym("Td", 3)
+    s = -np.ones(3)
+    closed = dyn.tcp_terms(T, Td, s)
+    q, _ = ik_expression(T, s, dyn.L, dyn.As, dyn.v)
+    M, h, G, KE, V = lagrange_terms(T, Td, dyn._bodies(T, q), dyn.parameters.dynamics.g)
+    f = ca.Function("f", [T, Td], [closed["M"] - M, closed["h"] - h, closed["G"] - G, closed["KE"] - KE, closed["V"] - V, M, h])
+    for Tk, Tdk, _ in zip(*_samples(dyn, 10)):
+        dM, dh, dG, dKE, dV, M_ref, h_ref = (np.asarray(x) for x in f(Tk, Tdk))
+        assert np.abs(dM).max() <= FORMULATION_RTOL * np.abs(M_ref).max()
+        assert np.abs(dh).max() <= FORMULATION_RTOL * max(np.abs(h_ref).max(), 1.0)
+        assert np.abs(dG).max() <= 1e-9 and np.abs(dKE).max() <= 1e-9 and np.abs(dV).max() <= 1e-9
