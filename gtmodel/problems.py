@@ -47,13 +47,13 @@ from __future__ import annotations
 import json
 import logging
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 
+from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ParameterError, ProblemError, UnreachablePoseError
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.robots.kinematics import GantryTau3Kinematics
@@ -207,14 +207,7 @@ def load_problem(path: str | Path) -> Problem:
         end. The message names the file and the field.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProblemError(f"{path}: cannot read problem file ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ProblemError(f"{path}: invalid TOML: {exc}") from None
+    data = read_toml(path, ProblemError, "problem file")
     f = _Fields(data, path)
     kind = f.get("", "kind")
     if kind not in KINDS:

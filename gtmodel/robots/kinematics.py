@@ -65,6 +65,11 @@ def _row(M: ca.SX | ca.MX, i: int) -> ca.SX | ca.MX:
     return M[i, :].T
 
 
+def _link_vectors(T, q, As, v) -> list:
+    """``dP_i = T - (As_i + q_i v_i)``, the link vector of arm i (eqs. 4.9, 6.3)."""
+    return [T - (_row(As, i) + q[i] * _row(v, i)) for i in range(3)]
+
+
 def closure_residual(T: Expr, q: Expr, L: Expr, As: Expr, v: Expr) -> Expr:
     """Closure equations of the 3-link model, Dressler (2012), eq. 4.9.
 
@@ -86,11 +91,7 @@ def closure_residual(T: Expr, q: Expr, L: Expr, As: Expr, v: Expr) -> Expr:
     casadi.SX or casadi.MX, shape (3, 1)
         ``||As_i + q_i v_i - T||^2 - L_i^2`` [m^2]; zero on a consistent pose.
     """
-    res = []
-    for i in range(3):
-        dP = T - (_row(As, i) + q[i] * _row(v, i))
-        res.append(ca.dot(dP, dP) - L[i] ** 2)
-    return ca.vertcat(*res)
+    return ca.vertcat(*[ca.dot(dP, dP) - L[i] ** 2 for i, dP in enumerate(_link_vectors(T, q, As, v))])
 
 
 def ik_expression(T: Expr, s: Expr, L: Expr, As: Expr, v: Expr) -> tuple[Expr, Expr]:
@@ -191,11 +192,7 @@ def jacobian_inverse_expression(T: Expr, q: Expr, As: Expr, v: Expr) -> Expr:
     casadi.SX or casadi.MX, shape (3, 3)
         ``J^-1`` (dimensionless).
     """
-    rows = []
-    for i in range(3):
-        dP = T - (_row(As, i) + q[i] * _row(v, i))
-        rows.append(dP.T / ca.dot(dP, _row(v, i)))
-    return ca.vertcat(*rows)
+    return ca.vertcat(*[dP.T / ca.dot(dP, _row(v, i)) for i, dP in enumerate(_link_vectors(T, q, As, v))])
 
 
 def link_cosines_expression(T: Expr, q: Expr, As: Expr, v: Expr) -> Expr:
@@ -219,15 +216,13 @@ def link_cosines_expression(T: Expr, q: Expr, As: Expr, v: Expr) -> Expr:
     casadi.SX or casadi.MX, shape (3, 1)
         The three cosines (dimensionless).
     """
-    out = []
-    for i in range(3):
-        dP = T - (_row(As, i) + q[i] * _row(v, i))
-        out.append(ca.dot(dP, _row(v, i)) / (ca.norm_2(dP) * ca.norm_2(_row(v, i))))
-    return ca.vertcat(*out)
+    return ca.vertcat(
+        *[ca.dot(dP, _row(v, i)) / (ca.norm_2(dP) * ca.norm_2(_row(v, i))) for i, dP in enumerate(_link_vectors(T, q, As, v))]
+    )
 
 
 def _dP_matrix(T, q, As, v):
-    return ca.vertcat(*[(T - (_row(As, i) + q[i] * _row(v, i))).T for i in range(3)])
+    return ca.vertcat(*[dP.T for dP in _link_vectors(T, q, As, v)])
 
 
 def _s_vector(T_dot, q_dot, v):
@@ -280,11 +275,9 @@ def cart_acceleration_expression(T: Expr, T_dot: Expr, T_ddot: Expr, q: Expr, q_
         Cart accelerations [m/s^2].
     """
     s = _s_vector(T_dot, q_dot, v)
-    out = []
-    for i in range(3):
-        dP = T - (_row(As, i) + q[i] * _row(v, i))
-        out.append((ca.dot(dP, T_ddot) + s[i]) / ca.dot(dP, _row(v, i)))
-    return ca.vertcat(*out)
+    return ca.vertcat(
+        *[(ca.dot(dP, T_ddot) + s[i]) / ca.dot(dP, _row(v, i)) for i, dP in enumerate(_link_vectors(T, q, As, v))]
+    )
 
 
 def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:

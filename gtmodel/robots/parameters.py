@@ -9,7 +9,6 @@ Every field is validated on load; an error names the file and the field.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -17,6 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from gtmodel._toml import read_toml
 from gtmodel.errors import ParameterError
 
 __all__ = [
@@ -388,9 +388,9 @@ def load_parameters(name_or_path: str | Path) -> RobotParameters:
     text_name = str(name_or_path)
     if isinstance(name_or_path, str) and text_name in available_parameter_sets():
         resource = resources.files(_DATA_PACKAGE) / "data" / f"{text_name}.toml"
-        origin = f"{text_name}.toml (shipped)"
-        raw = resource.read_text(encoding="utf-8")
         path = Path(str(resource))
+        data = read_toml(path, ParameterError, "parameter file", f"{text_name}.toml (shipped)", resource.read_text(encoding="utf-8"))
+        origin = f"{text_name}.toml (shipped)"
     else:
         path = Path(name_or_path)
         if path.suffix != ".toml" and not path.exists():
@@ -398,12 +398,5 @@ def load_parameters(name_or_path: str | Path) -> RobotParameters:
                 f"unknown parameter set {text_name!r}: not a shipped set ({', '.join(available_parameter_sets())}) and no such file"
             )
         origin = str(path)
-        try:
-            raw = path.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise ParameterError(f"{origin}: cannot read parameter file ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(raw)
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"{origin}: invalid TOML: {exc}") from None
+        data = read_toml(path, ParameterError, "parameter file")
     return parameters_from_mapping(data, origin=origin, path=path)

@@ -1,0 +1,47 @@
+"""Reading TOML files with errors that name the file (internal helper)."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from gtmodel.errors import GtModelError
+
+
+def read_toml(path: Path, error: type[GtModelError], what: str, origin: str | None = None, text: str | None = None) -> dict[str, Any]:
+    """Parse a TOML file; unreadable files and syntax errors raise ``error`` naming the file.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    error : type of GtModelError
+        Exception class to raise.
+    what : str
+        What the file is, for the message (e.g. ``"problem file"``).
+    origin : str, optional
+        Name of the file in messages (default ``str(path)``).
+    text : str, optional
+        The file's content, when already read (e.g. a packaged resource).
+
+    Returns
+    -------
+    dict
+        The parsed document.
+
+    Raises
+    ------
+    GtModelError
+        Of class ``error``: the file cannot be read or is not valid TOML.
+    """
+    origin = str(path) if origin is None else origin
+    if text is None:
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except OSError as exc:
+            raise error(f"{origin}: cannot read {what} ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{origin}: invalid TOML: {exc}") from None
