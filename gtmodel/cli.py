@@ -114,9 +114,10 @@ def _solve(args: argparse.Namespace) -> int:
             traceback.print_exc()
         print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
         return EXIT_INTERNAL
+    note = "  (solver's last iterate, NOT a solution)" if summary.get("last_iterate") else ""
     lines = [
         f"problem      {summary['name']} ({summary['kind']})",
-        f"status       {summary['status']} ({summary['message']})",
+        f"status       {summary['status']} ({summary['message']}){note}",
         f"final time   {summary['final_time_s']:.4f} s",
         f"energy       {summary['energy']:.6g} N^2 s",
         f"objective    {summary['objective']:.6g}",

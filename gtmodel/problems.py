@@ -54,11 +54,11 @@ from typing import Any, Mapping
 import numpy as np
 
 from gtmodel._toml import read_toml
-from gtmodel.errors import GtModelError, ParameterError, ProblemError, UnreachablePoseError
+from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError, UnreachablePoseError
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import available_parameter_sets, load_parameters
-from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, solve_point_to_point
+from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, check_holding_forces, solve_point_to_point
 
 __all__ = ["KINDS", "Problem", "load_problem", "solve_problem", "write_results", "error_summary", "write_summary"]
 
@@ -203,8 +203,9 @@ def load_problem(path: str | Path) -> Problem:
     ------
     ProblemError
         Unreadable file, TOML syntax error, a missing, unknown or invalid field, an invalid
-        robot parameter set, a start or end pose outside the workspace, or start equal to
-        end. The message names the file and the field.
+        robot parameter set, a start or end pose outside the workspace, start equal to
+        end, or force limits that cannot hold the robot at rest at start or end. The
+        message names the file and the field.
     """
     path = Path(path)
     data = read_toml(path, ProblemError, "problem file")
@@ -279,6 +280,10 @@ def load_problem(path: str | Path) -> Problem:
         tol=tol,
         name=name,
     )
+    try:
+        check_holding_forces(decl)
+    except InputError as exc:
+        raise ProblemError(f"{path}: field 'limits.force': {exc}") from None
     return Problem(path=path, name=name, kind=kind, description=description, declaration=decl)
 
 
@@ -407,6 +412,7 @@ def write_results(problem: Problem, solution: PointToPointSolution, out_dir: str
         "solve_time_s": r.solve_time,
         "objective": r.objective,
         "max_constraint_violation": r.max_constraint_violation,
+        "last_iterate": r.last_iterate,
         "w": decl.w,
         "force_limit_N": decl.force_limit.tolist(),
         "collocation": {"elements": decl.elements, "points": decl.points, "scheme": decl.scheme},

@@ -35,5 +35,6 @@ BAD_PROBLEMS = [
     ("bad_robot", _replace('parameters = "L1"', 'parameters = "Z9"'), r"field 'robot\.parameters'"),
     ("bad_scheme", _replace('scheme = "radau"', 'scheme = "euler"'), r"field 'collocation\.scheme': expected one of radau, legendre"),
     ("bad_bounds", _replace("bounds = [0.05, 10.0]", "bounds = [10.0, 0.05]"), r"field 'final_time\.bounds'"),
+    ("force_cannot_hold", _replace("force = [450.0, 450.0, 450.0]", "force = [100.0, 100.0, 100.0]"), r"field 'limits\.force': .*cannot hold the robot at rest at the start pose"),
     ("toml_syntax", _replace("[limits]", "[limits"), r"invalid TOML"),
 ]

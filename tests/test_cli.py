@@ -120,6 +120,8 @@ def test_not_optimal_exits_nonzero_without_trajectory(tmp_path, capsys):
     assert code == EXIT_NOT_OPTIMAL
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "max_iterations"
+    assert summary["last_iterate"] is True
+    assert "NOT a solution" in capsys.readouterr().out
     assert not (out / "trajectory.csv").exists()
 
 

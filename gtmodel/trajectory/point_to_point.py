@@ -27,6 +27,7 @@ import numpy as np
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Optimization, OptimizationResult
 from gtmodel.modeling.result import lagrange_basis
+from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
 from gtmodel.robots.kinematics import configuration_signs, link_cosines_expression
 from gtmodel.robots.model import gantry_tau_model
@@ -37,6 +38,7 @@ __all__ = [
     "PointToPointSolution",
     "trapezoid_profile",
     "build_optimization",
+    "check_holding_forces",
     "solve_point_to_point",
     "SAMPLE_TIME",
     "TRAJECTORY_COLUMNS",
@@ -152,6 +154,35 @@ def trapezoid_profile(start, end, duration: float, t, ramp: float = 1.0 / 3.0) -
     return start + np.outer(s, delta), np.outer(sd, delta), np.outer(sdd, delta)
 
 
+def check_holding_forces(problem: PointToPoint, dynamics: GantryTau3Dynamics | None = None) -> None:
+    """Check that the force limits can hold the robot at rest at both end poses.
+
+    At rest friction is zero in every form, so the actuators must supply exactly
+    ``J^T G`` (Dressler (2012), eq. 6.7 with ``T_dot = T_ddot = 0``); if that exceeds a
+    limit, the rest-to-rest problem is infeasible whatever the solver does.
+
+    Parameters
+    ----------
+    problem : PointToPoint
+        The declaration.
+    dynamics : GantryTau3Dynamics, optional
+        The dynamics to use (default: built from the problem's parameter set).
+
+    Raises
+    ------
+    InputError
+        A holding force exceeds its limit; the message gives both.
+    """
+    dyn = dynamics or GantryTau3Dynamics(problem.parameters, friction=problem.friction, friction_width=problem.friction_width)
+    for label, pose in (("start", problem.start), ("end", problem.end)):
+        hold = dyn.gravity_forces(pose, problem.configuration)
+        if np.any(np.abs(hold) > problem.force_limit):
+            raise InputError(
+                f"force_limit: {problem.force_limit.tolist()} N cannot hold the robot at rest at the {label} pose "
+                f"{pose.tolist()}, which needs {np.round(hold, 2).tolist()} N (gravity, eq. 6.7)"
+            )
+
+
 def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
     """Declare the point-to-point problem as an :class:`Optimization` (not yet transcribed).
 
@@ -173,6 +204,8 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
     ------
     UnreachablePoseError
         ``start`` or ``end`` is outside the workspace (names which and why).
+    InputError
+        The force limits cannot hold the robot at rest at ``start`` or ``end``.
     """
     p = problem.parameters
     model = gantry_tau_model(
@@ -184,6 +217,7 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
             kin.require_in_workspace(pose, problem.configuration)
         except UnreachablePoseError as exc:
             raise UnreachablePoseError(f"{label}: {exc}") from None
+    check_holding_forces(problem, model.dynamics)
     w = model.parameter("w", problem.w)
     T, T_dot, tau = model.variables("state")["T"], model.variables("state")["T_dot"], model.variables("input")["tau"]
     opt = Optimization(
