@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, UnreachablePoseError
-from gtmodel.modeling import CollocationTranscription, Optimization, OptimizationResult
+from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
@@ -183,7 +183,7 @@ def check_holding_forces(problem: PointToPoint, dynamics: GantryTau3Dynamics | N
             )
 
 
-def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
+def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     """Declare the point-to-point problem as an :class:`Optimization` (not yet transcribed).
 
     Parameters
@@ -206,6 +206,11 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Any]:
         ``start`` or ``end`` is outside the workspace (names which and why).
     InputError
         The force limits cannot hold the robot at rest at ``start`` or ``end``.
+
+    Notes
+    -----
+    Path constraints (cart travel, joint angles) and force bounds hold at the collocation
+    points, as in any direct collocation; between them the polynomials are not bounded.
     """
     p = problem.parameters
     model = gantry_tau_model(
