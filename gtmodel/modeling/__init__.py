@@ -13,6 +13,15 @@ from gtmodel.modeling.collocation import CollocationTranscription, solve
 from gtmodel.modeling.model import FlatDAE, Model, SimulationResult
 from gtmodel.modeling.optimization import Optimization
 from gtmodel.modeling.result import OptimizationResult
+from gtmodel.modeling.expressions import (
+    Objective,
+    ParsedConstraint,
+    apply_to,
+    optimization_names,
+    parse_constraint,
+    parse_expression,
+    parse_objective,
+)
 
 __all__ = [
     "Model",
@@ -22,4 +31,11 @@ __all__ = [
     "OptimizationResult",
     "CollocationTranscription",
     "solve",
+    "Objective",
+    "ParsedConstraint",
+    "parse_expression",
+    "parse_objective",
+    "parse_constraint",
+    "optimization_names",
+    "apply_to",
 ]
