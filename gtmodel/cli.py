@@ -2,9 +2,13 @@
 
 ``gtmodel solve PROBLEM.toml [--out DIR]``
     Load, validate and solve a problem file; write ``DIR/summary.json`` (always),
-    ``DIR/trajectory.csv`` and PNG plots. Exit code 0 only for an optimal solution,
+    the data files of its kind and PNG plots. Exit code 0 only for an optimal solution,
     1 for a non-optimal solver status, 2 for invalid input, 3 for an internal error,
     130 when interrupted (Ctrl-C).
+``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
+    A study: every case in ``DIR/<case>/`` and a comparison table (``comparison.md``,
+    ``comparison.csv``) with overlay plots in ``DIR``. Exit code 0 only if every case is
+    optimal; otherwise the worst of the cases' codes.
 ``gtmodel codegen --robot L1 --out DIR [--check]``
     Generate C for the real-time kinematics and inverse dynamics; ``--check`` compiles it
     and compares it with the Python model.
@@ -46,8 +50,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     solve = sub.add_parser("solve", help="solve a problem file and write a result folder")
-    solve.add_argument("problem", type=Path, help="problem file (TOML), e.g. problems/l1_time_optimal.toml")
+    solve.add_argument("problem", type=Path, nargs="+", help="problem file(s) (TOML), e.g. problems/l1_time_optimal.toml")
     solve.add_argument("--out", type=Path, default=None, help="result folder (default: results/<problem name>)")
+    solve.add_argument(
+        "--sweep", default=None, metavar="FIELD=V1,V2,...", help="solve one file for several values of a field, e.g. w=0,0.001,0.01"
+    )
+    solve.add_argument("--warm-start", action="store_true", help="in a sweep, start each case from the previous solution")
     group = solve.add_mutually_exclusive_group()
     group.add_argument("-q", "--quiet", action="store_true", help="no solver progress")
     group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
@@ -82,13 +90,35 @@ def _try_write_summary(write_summary, out: Path, summary: dict) -> None:
     print(f"gtmodel: wrote {target} (status error)", file=sys.stderr)
 
 
-def _solve(args: argparse.Namespace) -> int:
+def _print_summary(summary: dict, out: Path) -> None:
+    note = "  (solver's last iterate, NOT a solution)" if summary.get("last_iterate") else ""
+    lines = [f"problem      {summary['name']} ({summary['kind']})", f"status       {summary['status']} ({summary['message']}){note}"]
+    for key, label, fmt in (
+        ("final_time_s", "final time", "{:.4f} s"),
+        ("energy", "energy", "{:.6g} N^2 s"),
+        ("objective", "objective", "{:.6g}"),
+        ("mean_error_m", "mean error", "{:.3e} m"),
+        ("max_error_m", "max error", "{:.3e} m"),
+        ("iterations", "iterations", "{}"),
+        ("solve_time_s", "solve time", "{:.3f} s"),
+        ("max_constraint_violation", "violation", "{:.2e}"),
+    ):
+        if summary.get(key) is not None:
+            lines.append(f"{label:<12} {fmt.format(summary[key])}")
+    if "fraction_at_force_bound" in summary:
+        frac = ", ".join(f"{100 * f:.0f} %" for f in summary["fraction_at_force_bound"])
+        lines.append(f"at bound     {frac} of the samples (tau1, tau2, tau3)")
+    lines.append(f"results in   {out}/ ({', '.join(summary.get('files', ['summary.json']))})")
+    print("\n".join(lines))
+
+
+def _solve_one(args: argparse.Namespace, path: Path) -> int:
     from gtmodel.problems import error_summary, load_problem, solve_problem, write_results, write_summary
 
-    out = args.out if args.out is not None else Path("results") / args.problem.stem
+    out = args.out if args.out is not None else Path("results") / path.stem
     kind = None
     try:
-        problem = load_problem(args.problem)
+        problem = load_problem(path)
         kind = problem.kind
         out = args.out if args.out is not None else Path("results") / problem.name
         try:
@@ -102,35 +132,73 @@ def _solve(args: argparse.Namespace) -> int:
         summary = write_results(problem, solution, out, plots=not args.no_plots)
     except GtModelError as exc:
         print(f"gtmodel: error: {exc}", file=sys.stderr)
-        _try_write_summary(write_summary, out, error_summary(args.problem, exc, kind))
+        _try_write_summary(write_summary, out, error_summary(path, exc, kind))
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        _try_write_summary(write_summary, out, error_summary(args.problem, RuntimeError("interrupted by the user"), kind))
+        _try_write_summary(write_summary, out, error_summary(path, RuntimeError("interrupted by the user"), kind))
         print("gtmodel: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - reported, summarised, non-zero exit
-        _try_write_summary(write_summary, out, error_summary(args.problem, exc, kind))
+        _try_write_summary(write_summary, out, error_summary(path, exc, kind))
         if args.debug:
             traceback.print_exc()
         print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
         return EXIT_INTERNAL
-    note = "  (solver's last iterate, NOT a solution)" if summary.get("last_iterate") else ""
-    lines = [
-        f"problem      {summary['name']} ({summary['kind']})",
-        f"status       {summary['status']} ({summary['message']}){note}",
-        f"final time   {summary['final_time_s']:.4f} s",
-        f"energy       {summary['energy']:.6g} N^2 s",
-        f"objective    {summary['objective']:.6g}",
-        f"iterations   {summary['iterations']}",
-        f"solve time   {summary['solve_time_s']:.2f} s",
-        f"violation    {summary['max_constraint_violation']:.2e}",
-    ]
-    if "fraction_at_force_bound" in summary:
-        frac = ", ".join(f"{100 * f:.0f} %" for f in summary["fraction_at_force_bound"])
-        lines.append(f"at bound     {frac} of the samples (tau1, tau2, tau3)")
-    lines.append(f"results in   {out}/ ({', '.join(summary.get('files', ['summary.json']))})")
-    print("\n".join(lines))
+    _print_summary(summary, out)
     return EXIT_OK if summary["status"] == "optimal" else EXIT_NOT_OPTIMAL
+
+
+def _solve_study(args: argparse.Namespace) -> int:
+    from gtmodel._fields import parse_override
+    from gtmodel.problems import solve_study
+
+    try:
+        sweep = parse_override(args.sweep) if args.sweep else None
+    except GtModelError as exc:
+        print(f"gtmodel: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if sweep is not None and len(args.problem) != 1:
+        print(f"gtmodel: error: --sweep needs exactly one problem file, got {len(args.problem)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    default = args.problem[0].stem + ("_sweep_" + sweep[0].replace(".", "_") if sweep else "_study")
+    out = args.out if args.out is not None else Path("results") / default
+    show_progress = args.verbose or (not args.quiet and sys.stdout.isatty())
+    codes: list[int] = []
+
+    def report(case) -> None:
+        s = case.summary
+        status = s.get("status")
+        if status == "error":
+            print(f"gtmodel: error: {case.label}: {s.get('message')}", file=sys.stderr)
+            codes.append(EXIT_BAD_INPUT)
+        else:
+            codes.append(EXIT_OK if status == "optimal" else EXIT_NOT_OPTIMAL)
+        _log.info("%s: %s", case.label, status)
+
+    try:
+        solve_study(
+            args.problem, out, sweep=sweep, verbose=show_progress, plots=not args.no_plots, warm_start=args.warm_start, on_case=report
+        )
+    except GtModelError as exc:
+        print(f"gtmodel: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("gtmodel: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # noqa: BLE001
+        if args.debug:
+            traceback.print_exc()
+        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+    print((out / "comparison.md").read_text(encoding="utf-8"), end="")
+    print(f"results in   {out}/ (comparison.md, comparison.csv, one folder per case)")
+    return max(codes) if codes else EXIT_BAD_INPUT
+
+
+def _solve(args: argparse.Namespace) -> int:
+    if len(args.problem) == 1 and args.sweep is None:
+        return _solve_one(args, args.problem[0])
+    return _solve_study(args)
 
 
 def _codegen(args: argparse.Namespace) -> int:

@@ -1,45 +1,16 @@
-"""Problem files: TOML schema, validation, dispatch to the solvers, result folders.
+"""Problem files: reading, dispatch to the solvers by ``kind``, result folders, studies.
 
-A problem file declares one problem; ``kind`` selects the solver. Every field is
-validated on load and an error names the file, the field and what was expected.
+A problem file (TOML) declares one problem; ``kind`` selects its schema and solver:
 
-Kind ``point_to_point`` (Dressler (2012), ch. 3.5, Table 3.1, "direct" rows)::
+- ``point_to_point``: free-path time/energy-optimal motion between two poses
+  (:mod:`gtmodel.trajectory.problem_files` documents the fields; the objective and
+  constraints are written in the problem language of ``docs/problem_language.md``).
 
-    name = "l1_time_optimal"            # optional, default: the file name
-    kind = "point_to_point"
-    description = "..."                 # optional
-
-    [robot]
-    parameters = "L1"                   # shipped set name, or a path relative to the file
-    configuration = 0                   # IK configuration 0-7 (optional, default 0)
-    friction = "tanh"                   # "tanh" | "piecewise" | "exact" (optional)
-    friction_width = 0.01               # [m/s] (optional)
-
-    [motion]
-    start = [-0.2, 2.75, -0.4]          # TCP at rest [m]
-    end = [0.2, 3.0, -0.6]              # TCP at rest [m]
-
-    [limits]
-    force = [450.0, 450.0, 450.0]       # |tau_i| <= force_i [N]
-
-    [objective]
-    w = 0.0                             # cost = final_time + w * sum_i integral tau_i^2 dt
-
-    [final_time]                        # optional table
-    initial_guess = 1.0                 # [s]
-    bounds = [0.05, 10.0]               # [s]
-
-    [collocation]                       # optional table
-    elements = 50
-    points = 3
-    scheme = "radau"                    # or "legendre"
-
-    [solver]                            # optional table
-    max_iter = 3000
-    tol = 1e-8
-
-The result folder (``write_results``) holds ``summary.json`` (always, also on failure),
-``trajectory.csv`` sampled every 4 ms and PNG plots.
+Every field is validated on load and an error names the file, the field and what was
+expected. A result folder holds ``summary.json`` (always, also on failure, with
+``status``), the data files of the kind and PNG plots. :func:`solve_study` solves several
+files or a sweep over one field and writes a comparison table (Dressler (2012),
+Table 3.1) with overlay plots.
 """
 
 from __future__ import annotations
@@ -47,39 +18,33 @@ from __future__ import annotations
 import json
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from gtmodel._fields import FieldReader, apply_override
 from gtmodel._toml import read_toml
-from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError, UnreachablePoseError
-from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
-from gtmodel.robots.kinematics import GantryTau3Kinematics
-from gtmodel.robots.parameters import available_parameter_sets, load_parameters
-from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, check_holding_forces, solve_point_to_point
+from gtmodel.errors import GtModelError, ProblemError
 
-__all__ = ["KINDS", "Problem", "load_problem", "solve_problem", "write_results", "error_summary", "write_summary"]
+__all__ = [
+    "KINDS",
+    "Problem",
+    "StudyCase",
+    "load_problem",
+    "solve_problem",
+    "write_results",
+    "error_summary",
+    "write_summary",
+    "solve_study",
+    "write_comparison",
+]
 
 _log = logging.getLogger("gtmodel")
 
 #: Problem kinds understood by :func:`load_problem`.
 KINDS = ("point_to_point",)
-#: Relative tolerance on force limits when reporting the fraction of time at a bound.
-AT_BOUND_RTOL = 1e-3
-
-_SCHEMA: dict[str, set[str]] = {
-    "": {"name", "kind", "description", "robot", "motion", "limits", "objective", "final_time", "collocation", "solver"},
-    "robot": {"parameters", "configuration", "friction", "friction_width"},
-    "motion": {"start", "end"},
-    "limits": {"force"},
-    "objective": {"w"},
-    "final_time": {"initial_guess", "bounds"},
-    "collocation": {"elements", "points", "scheme"},
-    "solver": {"max_iter", "tol"},
-}
-_REQUIRED_TABLES = ("robot", "motion", "limits", "objective")
 
 
 @dataclass
@@ -96,103 +61,34 @@ class Problem:
         One of :data:`KINDS`.
     description : str
         Free text.
-    declaration : PointToPoint
-        The solver-level declaration built from the file.
+    declaration : Any
+        The solver-level declaration built from the file (e.g.
+        :class:`~gtmodel.trajectory.PointToPoint`).
+    data : dict
+        The parsed file (after overrides), for sweeps.
+    overrides : dict
+        Fields replaced on load (``--sweep``), field -> value.
     """
 
     path: Path
     name: str
     kind: str
     description: str
-    declaration: PointToPoint
+    declaration: Any
+    data: dict = field(default_factory=dict, repr=False)
+    overrides: dict = field(default_factory=dict)
 
 
-class _Fields:
-    """Reads fields of a parsed TOML document with messages naming file and field."""
-
-    def __init__(self, data: Mapping[str, Any], path: Path) -> None:
-        self.data = data
-        self.path = path
-
-    def fail(self, field: str, expected: str, got: Any = ...) -> ProblemError:
-        tail = "" if got is ... else f", got {got!r}"
-        return ProblemError(f"{self.path}: field '{field}': expected {expected}{tail}")
-
-    def table(self, name: str, required: bool) -> Mapping[str, Any]:
-        if name not in self.data:
-            if required:
-                raise ProblemError(f"{self.path}: missing table '[{name}]'")
-            return {}
-        value = self.data[name]
-        if not isinstance(value, Mapping):
-            raise self.fail(name, "a table", value)
-        return value
-
-    def get(self, table: str, key: str, default: Any = ...) -> Any:
-        src = self.data if table == "" else self.table(table, required=default is ...)
-        field = key if table == "" else f"{table}.{key}"
-        if key not in src:
-            if default is ...:
-                raise ProblemError(f"{self.path}: missing field '{field}'")
-            return default
-        return src[key]
-
-    def number(self, table: str, key: str, default: Any = ..., positive: bool = False, nonnegative: bool = False) -> float:
-        field = key if table == "" else f"{table}.{key}"
-        value = self.get(table, key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise self.fail(field, "a finite number", value)
-        if positive and value <= 0:
-            raise self.fail(field, "a positive number", value)
-        if nonnegative and value < 0:
-            raise self.fail(field, "a non-negative number", value)
-        return float(value)
-
-    def integer(self, table: str, key: str, default: Any, lo: int, hi: int) -> int:
-        field = f"{table}.{key}"
-        value = self.get(table, key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            raise self.fail(field, f"an integer in {lo}..{hi}", value)
-        return int(value)
-
-    def vector(self, table: str, key: str, n: int, default: Any = ..., positive: bool = False) -> np.ndarray:
-        field = f"{table}.{key}"
-        value = self.get(table, key, default)
-        ok = isinstance(value, list) and len(value) == n and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value
-        )
-        if not ok:
-            raise self.fail(field, f"a list of {n} finite numbers", value)
-        arr = np.array(value, dtype=float)
-        if positive and np.any(arr <= 0):
-            raise self.fail(field, f"{n} positive numbers", value)
-        return arr
-
-    def choice(self, table: str, key: str, options: tuple[str, ...], default: str) -> str:
-        value = self.get(table, key, default)
-        if value not in options:
-            raise self.fail(f"{table}.{key}", f"one of {', '.join(options)}", value)
-        return value
-
-
-def _check_unknown(data: Mapping[str, Any], path: Path) -> None:
-    for table, allowed in _SCHEMA.items():
-        src = data if table == "" else data.get(table, {})
-        if not isinstance(src, Mapping):
-            continue
-        for key in src:
-            if key not in allowed:
-                field = key if table == "" else f"{table}.{key}"
-                raise ProblemError(f"{path}: unknown field '{field}' (allowed here: {', '.join(sorted(allowed))})")
-
-
-def load_problem(path: str | Path) -> Problem:
+def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
     """Read and validate a problem file.
 
     Parameters
     ----------
     path : str or pathlib.Path
         The TOML problem file.
+    overrides : Mapping[str, Any], optional
+        Fields to replace before validation (dotted names; a bare name is looked up in
+        ``[parameters]`` first), e.g. ``{"w": 0.001}``.
 
     Returns
     -------
@@ -202,92 +98,35 @@ def load_problem(path: str | Path) -> Problem:
     Raises
     ------
     ProblemError
-        Unreadable file, TOML syntax error, a missing, unknown or invalid field, an invalid
-        robot parameter set, a start or end pose outside the workspace, start equal to
-        end, or force limits that cannot hold the robot at rest at start or end. The
-        message names the file and the field.
+        Unreadable file, TOML syntax error, a missing, unknown or invalid field, an
+        invalid expression, a pose outside the workspace, limits that cannot hold the robot
+        at rest, an override of a field the file does not have. The message names the file
+        and the field.
     """
     path = Path(path)
     data = read_toml(path, ProblemError, "problem file")
-    f = _Fields(data, path)
+    for key, value in (overrides or {}).items():
+        data = apply_override(data, key, value, path)
+    f = FieldReader(data, path)
     kind = f.get("", "kind")
     if kind not in KINDS:
         raise f.fail("kind", f"one of {', '.join(KINDS)}", kind)
-    for table in _REQUIRED_TABLES:
-        f.table(table, required=True)
-    for table in ("final_time", "collocation", "solver"):
-        f.table(table, required=False)
-    _check_unknown(data, path)
     name = f.get("", "name", path.stem)
     if not isinstance(name, str) or not name:
         raise f.fail("name", "a non-empty string", name)
     description = f.get("", "description", "")
     if not isinstance(description, str):
         raise f.fail("description", "a string", description)
+    if kind == "point_to_point":
+        from gtmodel.trajectory.problem_files import load_point_to_point
 
-    robot_ref = f.get("robot", "parameters")
-    if not isinstance(robot_ref, str) or not robot_ref:
-        raise f.fail("robot.parameters", f"a parameter-set name ({', '.join(available_parameter_sets())}) or a file path", robot_ref)
-    if robot_ref not in available_parameter_sets():
-        robot_ref = str((path.parent / robot_ref).resolve())
-    try:
-        params = load_parameters(robot_ref)
-    except ParameterError as exc:
-        raise ProblemError(f"{path}: field 'robot.parameters': {exc}") from None
-    configuration = f.integer("robot", "configuration", 0, 0, 7)
-    friction = f.choice("robot", "friction", FRICTION_FORMS, "tanh")
-    width = f.number("robot", "friction_width", DEFAULT_FRICTION_WIDTH, positive=True)
-
-    start = f.vector("motion", "start", 3)
-    end = f.vector("motion", "end", 3)
-    force = f.vector("limits", "force", 3, positive=True)
-    w = f.number("objective", "w", nonnegative=True)
-    tf_guess = f.number("final_time", "initial_guess", 1.0, positive=True)
-    bounds = f.vector("final_time", "bounds", 2, default=[0.05, 10.0], positive=True)
-    if not bounds[0] < bounds[1]:
-        raise f.fail("final_time.bounds", "[lo, hi] with 0 < lo < hi", bounds.tolist())
-    if not bounds[0] <= tf_guess <= bounds[1]:
-        raise f.fail("final_time.initial_guess", f"a duration within final_time.bounds {bounds.tolist()}", tf_guess)
-    elements = f.integer("collocation", "elements", 50, 1, 10000)
-    points = f.integer("collocation", "points", 3, 1, 9)
-    scheme = f.choice("collocation", "scheme", ("radau", "legendre"), "radau")
-    max_iter = f.integer("solver", "max_iter", 3000, 1, 10**6)
-    tol = f.number("solver", "tol", 1e-8, positive=True)
-
-    if np.linalg.norm(end - start) < 1e-9:
-        raise f.fail("motion.end", "a pose different from motion.start", end.tolist())
-    kin = GantryTau3Kinematics(params)
-    for key, pose in (("start", start), ("end", end)):
-        try:
-            kin.require_in_workspace(pose, configuration)
-        except UnreachablePoseError as exc:
-            raise ProblemError(f"{path}: field 'motion.{key}': {exc}") from None
-    decl = PointToPoint(
-        robot=params,
-        start=start,
-        end=end,
-        force_limit=force,
-        w=w,
-        final_time_guess=tf_guess,
-        final_time_bounds=(float(bounds[0]), float(bounds[1])),
-        friction=friction,
-        friction_width=width,
-        configuration=configuration,
-        elements=elements,
-        points=points,
-        scheme=scheme,
-        max_iter=max_iter,
-        tol=tol,
-        name=name,
-    )
-    try:
-        check_holding_forces(decl)
-    except InputError as exc:
-        raise ProblemError(f"{path}: field 'limits.force': {exc}") from None
-    return Problem(path=path, name=name, kind=kind, description=description, declaration=decl)
+        decl = load_point_to_point(f, name)
+    else:  # pragma: no cover - KINDS is checked above
+        raise f.fail("kind", f"one of {', '.join(KINDS)}", kind)
+    return Problem(path=path, name=name, kind=kind, description=description, declaration=decl, data=data, overrides=dict(overrides or {}))
 
 
-def solve_problem(problem: Problem, verbose: bool = False) -> PointToPointSolution:
+def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> Any:
     """Solve a loaded problem with the solver its ``kind`` selects.
 
     Parameters
@@ -296,13 +135,28 @@ def solve_problem(problem: Problem, verbose: bool = False) -> PointToPointSoluti
         From :func:`load_problem`.
     verbose : bool, optional
         Show the solver's iteration log.
+    previous : Any, optional
+        The solution of the previous case of a sweep (its NLP is reused when only named
+        parameters differ).
+    warm_start : bool, optional
+        Start from ``previous``'s solution.
 
     Returns
     -------
-    PointToPointSolution
-        The solution (check ``solution.result.status``).
+    Any
+        The kind's solution object (e.g. :class:`~gtmodel.trajectory.PointToPointSolution`);
+        its ``result.status`` says whether it is optimal.
+
+    Raises
+    ------
+    GtModelError
+        Bad input discovered while building the problem.
     """
-    return solve_point_to_point(problem.declaration, verbose=verbose)
+    if problem.kind == "point_to_point":
+        from gtmodel.trajectory.point_to_point import solve_point_to_point
+
+        return solve_point_to_point(problem.declaration, verbose=verbose, previous=previous, warm_start=warm_start)
+    raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no solver")  # pragma: no cover
 
 
 def _json_safe(value: Any) -> Any:
@@ -371,20 +225,19 @@ def error_summary(problem_path: str | Path, error: BaseException, kind: str | No
     }
 
 
-def write_results(problem: Problem, solution: PointToPointSolution, out_dir: str | Path, plots: bool = True) -> dict[str, Any]:
+def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True) -> dict[str, Any]:
     """Write the result folder of a solved problem.
 
-    ``summary.json`` is always written. The trajectory (``trajectory.csv``, every 4 ms)
-    and the plots (``tcp_path.png``, ``forces.png``) are written only when the solver
-    returned a solution (status optimal or acceptable), never for a failed solve's last
-    iterate.
+    ``summary.json`` is always written. Data files (``trajectory.csv`` every 4 ms,
+    ``trajectory.h``) and plots are written only when the solver returned a solution
+    (status optimal or acceptable), never for a failed solve's last iterate.
 
     Parameters
     ----------
     problem : Problem
         The problem.
-    solution : PointToPointSolution
-        Its solution.
+    solution : Any
+        Its solution from :func:`solve_problem`.
     out_dir : str or pathlib.Path
         Result folder (created if missing).
     plots : bool, optional
@@ -397,40 +250,183 @@ def write_results(problem: Problem, solution: PointToPointSolution, out_dir: str
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    r = solution.result
-    decl = problem.declaration
-    summary: dict[str, Any] = {
-        "problem": str(problem.path),
-        "name": problem.name,
-        "kind": problem.kind,
-        "status": r.status,
-        "message": r.message,
-        "final_time_s": r.final_time,
-        "energy": solution.energy,
-        "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
-        "iterations": r.iterations,
-        "solve_time_s": r.solve_time,
-        "objective": r.objective,
-        "max_constraint_violation": r.max_constraint_violation,
-        "last_iterate": r.last_iterate,
-        "w": decl.w,
-        "force_limit_N": decl.force_limit.tolist(),
-        "collocation": {"elements": decl.elements, "points": decl.points, "scheme": decl.scheme},
-        "robot": decl.parameters.name,
-    }
-    if r.status in ("optimal", "acceptable"):
-        traj = solution.trajectory()
-        tau = np.column_stack([traj["tau1"], traj["tau2"], traj["tau3"]])
-        summary["max_force_ratio"] = (np.abs(tau).max(axis=0) / decl.force_limit).tolist()
-        summary["fraction_at_force_bound"] = (np.abs(tau) >= (1 - AT_BOUND_RTOL) * decl.force_limit).mean(axis=0).tolist()
-        summary["sample_time_s"] = float(traj["t"][1] - traj["t"][0]) if len(traj["t"]) > 1 else None
-        solution.write_csv(out / "trajectory.csv")
-        summary["files"] = ["summary.json", "trajectory.csv"]
-        if plots:
-            from gtmodel.trajectory.plots import plot_forces, plot_tcp_path
+    summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
+    if problem.overrides:
+        summary["overrides"] = dict(problem.overrides)
+    if problem.kind == "point_to_point":
+        from gtmodel.trajectory.problem_files import write_point_to_point
 
-            plot_tcp_path(traj, decl.start, decl.end, out / "tcp_path.png", title=problem.name)
-            plot_forces(traj, decl.force_limit, out / "forces.png", title=problem.name)
-            summary["files"] += ["tcp_path.png", "forces.png"]
+        fields, files = write_point_to_point(problem.declaration, solution, out, plots, problem.name)
+    else:  # pragma: no cover
+        raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no result writer")
+    summary.update(fields)
+    summary["files"] = ["summary.json", *files]
     write_summary(out, summary)
     return summary
+
+
+@dataclass
+class StudyCase:
+    """One case of a study (a file, or one value of a sweep).
+
+    Parameters
+    ----------
+    label : str
+        Case label (problem name, or ``name[w=0.001]``).
+    path : pathlib.Path
+        Problem file.
+    overrides : dict
+        Fields replaced for this case.
+    out : pathlib.Path
+        Its result folder.
+    summary : dict
+        Its summary (status ``error`` with a message for bad input).
+    solution : Any
+        Its solution (None only when it could not be loaded or solved).
+    """
+
+    label: str
+    path: Path
+    overrides: dict
+    out: Path
+    summary: dict = field(default_factory=dict)
+    solution: Any = None
+
+
+def solve_study(
+    paths: Sequence[str | Path],
+    out_dir: str | Path,
+    sweep: tuple[str, Sequence[Any]] | None = None,
+    verbose: bool = False,
+    plots: bool = True,
+    warm_start: bool = False,
+    on_case: Callable[[StudyCase], None] | None = None,
+) -> list[StudyCase]:
+    """Solve several problem files, or one file over a sweep of one field, and compare.
+
+    Each case gets its own result folder ``out_dir/<label>``; a sweep over a named
+    parameter reuses the NLP built for the first case (and, with ``warm_start``, starts
+    from the previous solution). Bad input in one case is recorded as its error summary
+    and the study goes on. ``out_dir`` receives ``comparison.csv``, ``comparison.md`` and
+    overlay plots (:func:`write_comparison`).
+
+    Parameters
+    ----------
+    paths : sequence of str or pathlib.Path
+        Problem files (exactly one with ``sweep``).
+    out_dir : str or pathlib.Path
+        Study folder.
+    sweep : tuple of (str, sequence), optional
+        Field name and its values, e.g. ``("w", [0, 0.001, 0.01])``.
+    verbose : bool, optional
+        Solver progress.
+    plots : bool, optional
+        Write PNG plots.
+    warm_start : bool, optional
+        Start each sweep case from the previous case's solution.
+    on_case : callable, optional
+        Called with each finished :class:`StudyCase` (progress reporting).
+
+    Returns
+    -------
+    list of StudyCase
+        In the order solved.
+
+    Raises
+    ------
+    ProblemError
+        A sweep with more than one file.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if sweep is not None and len(paths) != 1:
+        raise ProblemError(f"--sweep needs exactly one problem file, got {len(paths)}")
+    specs: list[tuple[Path, dict]] = []
+    if sweep is not None:
+        key, values = sweep
+        specs = [(Path(paths[0]), {key: v}) for v in values]
+    else:
+        specs = [(Path(p), {}) for p in paths]
+    cases: list[StudyCase] = []
+    previous = None
+    for path, overrides in specs:
+        label = path.stem + "".join(f"[{k}={v}]" for k, v in overrides.items())
+        case = StudyCase(label=label, path=path, overrides=overrides, out=out_dir / _safe_folder(label))
+        try:
+            problem = load_problem(path, overrides)
+            case.label = problem.name + "".join(f"[{k}={v}]" for k, v in overrides.items())
+            case.out = out_dir / _safe_folder(case.label)
+            solution = solve_problem(problem, verbose=verbose, previous=previous if sweep else None, warm_start=warm_start)
+            case.solution = solution
+            case.summary = write_results(problem, solution, case.out, plots=plots)
+            previous = solution
+        except GtModelError as exc:
+            case.summary = error_summary(path, exc)
+            write_summary(case.out, case.summary)
+        cases.append(case)
+        if on_case is not None:
+            on_case(case)
+    write_comparison(cases, out_dir, plots=plots)
+    return cases
+
+
+def _safe_folder(label: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_.=" else "_" for c in label).strip("_")
+
+
+#: Columns of the comparison table (Dressler (2012), Table 3.1).
+_COMPARISON = (
+    ("case", "case"),
+    ("status", "status"),
+    ("final_time_s", "T_final [s]"),
+    ("energy", "energy [N^2 s]"),
+    ("iterations", "iterations"),
+    ("solve_time_s", "solve time [s]"),
+)
+
+
+def write_comparison(cases: Sequence[StudyCase], out_dir: str | Path, plots: bool = True) -> list[Path]:
+    """Write the comparison table of a study and overlay plots.
+
+    Parameters
+    ----------
+    cases : sequence of StudyCase
+        Solved cases.
+    out_dir : str or pathlib.Path
+        Study folder.
+    plots : bool, optional
+        Also write ``overlay_forces.png`` and ``overlay_tcp.png`` (Dressler (2012),
+        Figs. 3.9-3.10) from the cases that have a trajectory.
+
+    Returns
+    -------
+    list of pathlib.Path
+        Files written: ``comparison.csv``, ``comparison.md`` and the plots.
+    """
+    out_dir = Path(out_dir)
+    rows = []
+    for c in cases:
+        s = c.summary
+        rows.append([c.label, s.get("status"), s.get("final_time_s"), s.get("energy"), s.get("iterations"), s.get("solve_time_s")])
+
+    def fmt(v: Any, k: int) -> str:
+        if v is None:
+            return "-"
+        if isinstance(v, float):
+            return f"{v:.5g}" if k != 2 else f"{v:.5f}"
+        return str(v)
+
+    csv_lines = [",".join(k for k, _ in _COMPARISON)]
+    csv_lines += [",".join("" if v is None else str(v) for v in r) for r in rows]
+    (out_dir / "comparison.csv").write_text("\n".join(csv_lines) + "\n", encoding="utf-8")
+    md = ["| " + " | ".join(h for _, h in _COMPARISON) + " |", "|" + "---|" * len(_COMPARISON)]
+    md += ["| " + " | ".join(fmt(v, k) for k, v in enumerate(r)) + " |" for r in rows]
+    (out_dir / "comparison.md").write_text("\n".join(md) + "\n", encoding="utf-8")
+    files = [out_dir / "comparison.csv", out_dir / "comparison.md"]
+    if plots:
+        from gtmodel.trajectory.plots import plot_overlay
+
+        trajs = {c.label: c.solution.trajectory() for c in cases if c.solution is not None and c.summary.get("status") in ("optimal", "acceptable")}
+        if trajs:
+            files += plot_overlay(trajs, out_dir)
+    return files

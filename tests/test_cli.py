@@ -61,8 +61,20 @@ def test_solve_exits_zero_with_optimal_status(solved):
     for key in ("problem", "kind", "status", "final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation"):
         assert key in summary
     assert "status       optimal" in proc.stdout
-    for name in ("trajectory.csv", "tcp_path.png", "forces.png"):
+    for name in ("trajectory.csv", "trajectory.h", "tcp_path.png", "forces.png"):
         assert (out / name).stat().st_size > 0
+
+
+def test_c_header_holds_the_csv_table(solved):
+    """The C array header (read back independently of its writer's format) equals the CSV."""
+    _, out, _ = solved
+    from gtmodel.trajectory.export import read_c_header
+
+    data = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
+    arrays = read_c_header(out / "trajectory.h")
+    assert set(data.dtype.names) <= set(arrays)
+    for name in data.dtype.names:
+        np.testing.assert_allclose(arrays[name], data[name], rtol=1e-9, atol=1e-12)
 
 
 def test_trajectory_starts_and_ends_at_rest_at_declared_poses(solved):
@@ -87,7 +99,7 @@ def test_forces_within_limits_and_at_bound_most_of_the_time(solved):
     data = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
     tau = np.column_stack([data["tau1"], data["tau2"], data["tau3"]])
     assert np.all(np.abs(tau) <= limit * (1 + FORCE_RTOL))
-    if declared["objective"]["w"] == 0:
+    if declared["parameters"]["w"] == 0:
         at_bound = (np.abs(tau) >= 0.999 * limit).mean(axis=0)
         assert np.all(at_bound >= AT_BOUND_FRACTION), at_bound
     summary = json.loads((out / "summary.json").read_text())

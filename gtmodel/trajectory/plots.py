@@ -8,7 +8,7 @@ from typing import Mapping
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["plot_tcp_path", "plot_forces"]
+__all__ = ["plot_tcp_path", "plot_forces", "plot_overlay"]
 
 
 def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, title: str = "") -> Path:
@@ -93,3 +93,50 @@ def plot_forces(traj: Mapping[str, np.ndarray], force_limit, path: str | Path, t
     path = Path(path)
     fig.savefig(path, dpi=110)
     return path
+
+
+def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | Path) -> list[Path]:
+    """Overlay the forces and TCP paths of several solutions (Dressler (2012), Figs. 3.9-3.10).
+
+    Parameters
+    ----------
+    trajs : Mapping[str, Mapping[str, numpy.ndarray]]
+        Case label -> trajectory columns ``t, x, y, z, tau1, tau2, tau3`` (each (K,)).
+    out_dir : str or pathlib.Path
+        Folder for ``overlay_forces.png`` and ``overlay_tcp.png``.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The two written files.
+    """
+    out_dir = Path(out_dir)
+    fig = Figure(figsize=(8, 6.5), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    for label, tr in trajs.items():
+        for i, ax in enumerate(axes):
+            ax.plot(tr["t"] - tr["t"][0], tr[f"tau{i + 1}"], label=label)
+    for i, ax in enumerate(axes):
+        ax.set_ylabel(f"tau{i + 1} [N]")
+        ax.grid(True)
+    axes[0].legend(fontsize="small", loc="upper right")
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle("cart forces")
+    f1 = out_dir / "overlay_forces.png"
+    fig.savefig(f1, dpi=110)
+
+    fig = Figure(figsize=(11, 3.6), layout="constrained")
+    axes = fig.subplots(1, 3)
+    for label, tr in trajs.items():
+        for ax, (a, b) in zip(axes, (("x", "y"), ("y", "z"), ("x", "z"))):
+            ax.plot(tr[a], tr[b], label=label)
+    for ax, (a, b) in zip(axes, (("x", "y"), ("y", "z"), ("x", "z"))):
+        ax.set_xlabel(f"{a} [m]")
+        ax.set_ylabel(f"{b} [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True)
+    axes[0].legend(fontsize="small")
+    fig.suptitle("TCP paths")
+    f2 = out_dir / "overlay_tcp.png"
+    fig.savefig(f2, dpi=110)
+    return [f1, f2]

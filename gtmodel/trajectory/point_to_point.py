@@ -17,7 +17,7 @@ along it.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -29,13 +29,16 @@ from gtmodel.modeling import CollocationTranscription, Model, Optimization, Opti
 from gtmodel.modeling.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
-from gtmodel.robots.kinematics import configuration_signs, link_cosines_expression
+from gtmodel.robots.kinematics import cart_acceleration_expression, configuration_signs, link_cosines_expression
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 
 __all__ = [
     "PointToPoint",
     "PointToPointSolution",
+    "DEFAULT_OBJECTIVE",
+    "problem_names",
+    "bang_bang_duration",
     "trapezoid_profile",
     "build_optimization",
     "check_holding_forces",
@@ -52,9 +55,13 @@ SAMPLE_TIME = 0.004
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3")
 
 
+#: The objective of Dressler (2012), ch. 3.5 (Table 3.1) in the problem language.
+DEFAULT_OBJECTIVE = "final_time + w * integral(tau1^2 + tau2^2 + tau3^2)"
+
+
 @dataclass
 class PointToPoint:
-    """Declaration of a point-to-point optimal motion.
+    """Declaration of a point-to-point optimal motion (free path between two poses).
 
     Parameters
     ----------
@@ -65,9 +72,11 @@ class PointToPoint:
     force_limit : array_like, shape (3,)
         Symmetric bound on each actuator force, ``|tau_i| <= force_limit_i`` [N].
     w : float
-        Energy weight in ``final_time + w * sum integral tau^2 dt`` [s / (N^2 s)].
+        Value of the named parameter ``w`` (energy weight of the default objective
+        ``final_time + w * sum integral tau^2 dt``) [s / (N^2 s)], unless
+        ``named_parameters`` sets it.
     final_time_guess : float
-        Initial guess of the duration [s].
+        Initial guess of the duration [s]; the duration itself if the final time is fixed.
     final_time_bounds : tuple of float
         Bounds of the free duration [s].
     friction, friction_width : str, float
@@ -80,6 +89,35 @@ class PointToPoint:
         IPOPT iteration limit and tolerance.
     name : str
         Name of the problem (used in reports).
+    objective : str
+        Objective in the problem language (:mod:`gtmodel.modeling.expressions`), over the
+        names of :func:`problem_names`.
+    constraints : sequence of str
+        Extra path or point constraints in the problem language.
+    named_parameters : Mapping[str, float]
+        Values of the named parameters used in ``objective`` and ``constraints``.
+    free_final_time : bool
+        Minimise over the duration (True) or fix it to ``final_time_guess``.
+    cart_velocity_limit, cart_acceleration_limit : array_like, shape (3,), optional
+        ``|q_dot_i|`` [m/s] and ``|q_ddot_i|`` [m/s^2] bounds along the motion.
+    tcp_velocity_limit : float, optional
+        ``||T_dot||`` bound [m/s].
+    joint_angle_limit : float, optional
+        Spherical-joint limit [rad] (link angle to its guideway); default the robot's.
+    guess : str or pathlib.Path or PointToPointSolution
+        ``"trapezoid"`` (straight line, trapezoidal velocity: the thesis' choice),
+        ``"bang_bang"`` (the same line with the duration estimated from the force limits),
+        a trajectory CSV written by :meth:`PointToPointSolution.write_csv`, or a previous
+        solution.
+    origin : str
+        Where the declaration comes from (file name), used in error messages.
+    start_time : float
+        Start time ``t0`` [s]; the final time and its bounds are absolute times.
+
+    Raises
+    ------
+    InputError
+        Malformed numbers (naming the argument).
     """
 
     robot: RobotParameters | str
@@ -98,6 +136,17 @@ class PointToPoint:
     max_iter: int = 3000
     tol: float = 1e-8
     name: str = "point_to_point"
+    objective: str = DEFAULT_OBJECTIVE
+    constraints: tuple[str, ...] = ()
+    named_parameters: dict[str, float] = field(default_factory=dict)
+    free_final_time: bool = True
+    cart_velocity_limit: Any = None
+    cart_acceleration_limit: Any = None
+    tcp_velocity_limit: float | None = None
+    joint_angle_limit: float | None = None
+    guess: Any = "trapezoid"
+    origin: str = "<python>"
+    start_time: float = 0.0
     parameters: RobotParameters = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -109,10 +158,29 @@ class PointToPoint:
             setattr(self, key, arr)
         if np.any(self.force_limit <= 0):
             raise InputError(f"force_limit: expected positive forces in N, got {self.force_limit.tolist()}")
+        for key in ("cart_velocity_limit", "cart_acceleration_limit"):
+            val = getattr(self, key)
+            if val is not None:
+                arr = np.asarray(val, dtype=float)
+                if arr.shape != (3,) or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+                    raise InputError(f"{key}: expected three positive finite numbers, got {val!r}")
+                setattr(self, key, arr)
+        for key in ("tcp_velocity_limit", "joint_angle_limit"):
+            val = getattr(self, key)
+            if val is not None and not (np.isfinite(val) and val > 0):
+                raise InputError(f"{key}: expected a positive number, got {val!r}")
         if not (np.isfinite(self.w) and self.w >= 0):
             raise InputError(f"w: expected a non-negative weight, got {self.w!r}")
+        named = {k: float(v) for k, v in dict(self.named_parameters).items()}
+        if "w" not in named and (self.objective == DEFAULT_OBJECTIVE or self.w != 0.0):
+            named["w"] = float(self.w)
+        self.named_parameters = named
+        self.w = named.get("w", 0.0)
+        self.constraints = tuple(self.constraints)
         if np.linalg.norm(self.end - self.start) < 1e-9:
             raise InputError("start and end: the poses coincide, there is no motion to optimise")
+        if not self.free_final_time and not self.final_time_guess > 0:
+            raise InputError(f"final_time_guess: a fixed duration must be positive, got {self.final_time_guess!r}")
 
 
 def trapezoid_profile(start, end, duration: float, t, ramp: float = 1.0 / 3.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -183,6 +251,76 @@ def check_holding_forces(problem: PointToPoint, dynamics: GantryTau3Dynamics | N
             )
 
 
+def problem_names(model: Model, optimization: Optimization, named_parameters: dict[str, ca.SX]) -> dict[str, ca.SX]:
+    """The names the problem language knows for the Gantry-Tau TCP-state model.
+
+    Parameters
+    ----------
+    model : gtmodel.modeling.Model
+        From :func:`gtmodel.robots.gantry_tau_model` with ``states="tcp"``.
+    optimization : gtmodel.modeling.Optimization
+        The problem (for ``final_time``).
+    named_parameters : dict of str to casadi.SX
+        Declared named parameters (symbols of the model).
+
+    Returns
+    -------
+    dict of str to casadi.SX
+        ``x, y, z`` (TCP [m]), ``xd, yd, zd`` [m/s], ``xdd, ydd, zdd`` [m/s^2],
+        ``q1..q3`` (carts [m]), ``qd1..qd3`` [m/s], ``qdd1..qdd3`` [m/s^2],
+        ``tau1..tau3`` (cart forces [N]), ``power`` (sum tau_i qd_i [W]), ``time``,
+        ``start_time``, ``final_time`` and the named parameters.
+    """
+    st, out = model.variables("state"), model.outputs
+    T, T_dot = st["T"], st["T_dot"]
+    tau = model.variables("input")["tau"]
+    T_ddot = model.der(T_dot)
+    kin = model.dynamics.kinematics
+    q, q_dot = out["q"], out["q_dot"]
+    q_ddot = cart_acceleration_expression(T, T_dot, T_ddot, q, q_dot, kin.As, kin.v)
+    names: dict[str, ca.SX] = {}
+    for k, c in enumerate("xyz"):
+        names[c], names[f"{c}d"], names[f"{c}dd"] = T[k], T_dot[k], T_ddot[k]
+    for k in range(3):
+        names[f"q{k + 1}"], names[f"qd{k + 1}"], names[f"qdd{k + 1}"] = q[k], q_dot[k], q_ddot[k]
+        names[f"tau{k + 1}"] = tau[k]
+    names["power"] = out["power"]
+    names["time"] = model.time
+    names["final_time"] = optimization.final_time
+    names["start_time"] = ca.SX(optimization.start_time)
+    names.update(named_parameters)
+    return names
+
+
+def bang_bang_duration(problem: PointToPoint, dynamics: GantryTau3Dynamics | None = None) -> float:
+    """Rough minimum duration from the force limits, for the initial guess.
+
+    Each cart is treated as a double integrator with the force left after gravity and
+    Coulomb friction at the start pose, driving its own mass plus a third of the plate,
+    over its IK displacement (bang-bang: ``t_i = 2 sqrt(|dq_i| / a_i)``).
+
+    Parameters
+    ----------
+    problem : PointToPoint
+        The declaration.
+    dynamics : GantryTau3Dynamics, optional
+        Dynamics to use (built from the problem if omitted).
+
+    Returns
+    -------
+    float
+        The largest ``t_i`` [s].
+    """
+    dyn = dynamics or GantryTau3Dynamics(problem.parameters, friction=problem.friction, friction_width=problem.friction_width)
+    kin = dyn.kinematics
+    dq = np.abs(kin.ik(problem.end, problem.configuration) - kin.ik(problem.start, problem.configuration))
+    d = problem.parameters.dynamics
+    hold = np.abs(dyn.gravity_forces(problem.start, problem.configuration)) + np.asarray(d.f_c)
+    spare = np.maximum(problem.force_limit - hold, 0.05 * problem.force_limit)
+    mass = np.asarray(d.m_c) + np.asarray(d.m_a) + d.m_p / 3.0
+    return float(np.max(2.0 * np.sqrt(dq / (spare / mass))))
+
+
 def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     """Declare the point-to-point problem as an :class:`Optimization` (not yet transcribed).
 
@@ -194,9 +332,10 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     Returns
     -------
     optimization : gtmodel.modeling.Optimization
-        Objective ``final_time + w * integral(sum tau^2)``, free final time, force bounds,
-        rest-to-rest point constraints (position, velocity, acceleration), cart-travel
-        and spherical-joint path constraints, trapezoid initial guess.
+        The objective and extra constraints parsed from the problem language, free or fixed
+        final time, force bounds, rest-to-rest point constraints (position, velocity,
+        acceleration), cart-travel, spherical-joint and optional velocity/acceleration
+        path constraints, and the initial guess.
     model : gtmodel.modeling.Model
         The robot model (TCP states) it is declared on.
 
@@ -205,13 +344,20 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     UnreachablePoseError
         ``start`` or ``end`` is outside the workspace (names which and why).
     InputError
-        The force limits cannot hold the robot at rest at ``start`` or ``end``.
+        The force limits cannot hold the robot at rest at ``start`` or ``end``, or the
+        guess file is unusable.
+    ProblemError
+        An objective or constraint expression is invalid (names the origin, the field and
+        the offending token).
 
     Notes
     -----
-    Path constraints (cart travel, joint angles) and force bounds hold at the collocation
-    points, as in any direct collocation; between them the polynomials are not bounded.
+    Path constraints (cart travel, joint angles, limits) and force bounds hold at the
+    collocation points, as in any direct collocation; between them the polynomials are not
+    bounded.
     """
+    from gtmodel.modeling.expressions import parse_constraint, parse_objective
+
     p = problem.parameters
     model = gantry_tau_model(
         p, states="tcp", friction=problem.friction, friction_width=problem.friction_width, configuration=problem.configuration
@@ -223,17 +369,30 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
         except UnreachablePoseError as exc:
             raise UnreachablePoseError(f"{label}: {exc}") from None
     check_holding_forces(problem, model.dynamics)
-    w = model.parameter("w", problem.w)
+    psyms = {k: model.parameter(k, v) for k, v in problem.named_parameters.items()}
     T, T_dot, tau = model.variables("state")["T"], model.variables("state")["T_dot"], model.variables("input")["tau"]
+    dyn = model.dynamics
+    if isinstance(problem.guess, str) and problem.guess == "bang_bang":
+        tf0 = float(np.clip(problem.start_time + bang_bang_duration(problem, dyn), *problem.final_time_bounds))
+    else:
+        tf0 = problem.final_time_guess
     opt = Optimization(
         model,
-        start_time=0.0,
-        final_time=problem.final_time_guess,
-        free_final_time=True,
-        final_time_guess=problem.final_time_guess,
-        final_time_bounds=problem.final_time_bounds,
+        start_time=problem.start_time,
+        final_time=tf0,
+        free_final_time=problem.free_final_time,
+        final_time_guess=tf0 if problem.free_final_time else None,
+        final_time_bounds=problem.final_time_bounds if problem.free_final_time else None,
     )
-    opt.set_objective(mayer=opt.final_time, lagrange=w * ca.sumsqr(tau))
+    names = problem_names(model, opt, psyms)
+    obj = parse_objective(problem.objective, names, origin=problem.origin, key="optimization.objective", static=set(psyms))
+    opt.set_objective(mayer=obj.mayer, lagrange=obj.lagrange)
+    for k, text in enumerate(problem.constraints):
+        c = parse_constraint(text, names, origin=problem.origin, key=f"optimization.constraints[{k}]", static=set(psyms))
+        if c.at is None:
+            opt.add_path_constraint(c.expr, lb=c.lb, ub=c.ub, name=text)
+        else:
+            opt.add_point_constraint(c.expr, at=c.at, lb=c.lb, ub=c.ub, name=text)
     opt.set_bounds(tau, -problem.force_limit, problem.force_limit)
     # the force at the start time is the first element's polynomial extrapolated to it:
     # bound it too, so that the sampled forces stay within the limits everywhere
@@ -251,25 +410,78 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     # fixed by the IK configuration (+ for root sign -1), so the constraint is smooth
     signs = -configuration_signs(problem.configuration)
     cos = link_cosines_expression(T, q, kin.As, kin.v)
-    cos_lim = float(np.cos(p.limits.joint_angle_max))
-    opt.add_path_constraint(ca.DM(signs) * cos, lb=cos_lim, ub=1.0, name="joint_angle")
+    limit = p.limits.joint_angle_max if problem.joint_angle_limit is None else problem.joint_angle_limit
+    opt.add_path_constraint(ca.DM(signs) * cos, lb=float(np.cos(limit)), ub=1.0, name="joint_angle")
+    if problem.cart_velocity_limit is not None:
+        lim = problem.cart_velocity_limit
+        opt.add_path_constraint(model.outputs["q_dot"], lb=-lim, ub=lim, name="cart_velocity")
+    if problem.cart_acceleration_limit is not None:
+        lim = problem.cart_acceleration_limit
+        q_ddot = ca.vertcat(*(names[f"qdd{k + 1}"] for k in range(3)))
+        opt.add_path_constraint(q_ddot, lb=-lim, ub=lim, name="cart_acceleration")
+    if problem.tcp_velocity_limit is not None:
+        opt.add_path_constraint(ca.sumsqr(T_dot), lb=0.0, ub=problem.tcp_velocity_limit**2, name="tcp_velocity")
+    _set_guess(problem, opt, T, T_dot, tau, dyn, tf0)
+    return opt, model
 
-    tf0 = problem.final_time_guess
-    dyn = model.dynamics
 
-    def guess(t):
-        Tg, Tdg, Tddg = trapezoid_profile(problem.start, problem.end, tf0, np.atleast_1d(t))
-        return Tg, Tdg, Tddg
+def _set_guess(problem: PointToPoint, opt: Optimization, T, T_dot, tau, dyn: GantryTau3Dynamics, tf0: float) -> None:
+    """Initial guess: trapezoid / bang-bang line, a trajectory CSV, or a previous solution."""
+    guess = problem.guess
+    if isinstance(guess, PointToPointSolution):
+        r = guess.result
+        opt.set_initial_guess(T, lambda t: np.asarray(r.sample(np.atleast_1d(t))["states"]["T"]).ravel())
+        opt.set_initial_guess(T_dot, lambda t: np.asarray(r.sample(np.atleast_1d(t))["states"]["T_dot"]).ravel())
+        mesh_tau = np.asarray(r.inputs["tau"]).reshape(-1, 3)
+        opt.set_initial_guess(tau, lambda t: np.array([np.interp(t, r.t, mesh_tau[:, k]) for k in range(3)]).ravel())
+        if problem.free_final_time:
+            opt.final_time_guess = float(np.clip(r.final_time, *problem.final_time_bounds))
+        return
+    if isinstance(guess, (str, Path)) and str(guess) not in ("trapezoid", "bang_bang"):
+        data = _read_guess_csv(Path(guess))
+        tg = data["t"]
+        Tg = np.column_stack([data[c] for c in "xyz"])
+        Tdg = np.column_stack([data[f"{c}d"] for c in "xyz"])
+        taug = np.column_stack([data[f"tau{k}"] for k in (1, 2, 3)])
 
-    opt.set_initial_guess(T, lambda t: guess(t)[0].ravel())
-    opt.set_initial_guess(T_dot, lambda t: guess(t)[1].ravel())
+        def interp(arr):
+            return lambda t: np.array([np.interp(t, tg, arr[:, k]) for k in range(3)]).ravel()
+
+        opt.set_initial_guess(T, interp(Tg))
+        opt.set_initial_guess(T_dot, interp(Tdg))
+        opt.set_initial_guess(tau, interp(taug))
+        if problem.free_final_time:
+            opt.final_time_guess = float(np.clip(tg[-1], *problem.final_time_bounds))
+        return
+
+    def line(t):
+        return trapezoid_profile(problem.start, problem.end, tf0 - problem.start_time, np.atleast_1d(t) - problem.start_time)
+
+    opt.set_initial_guess(T, lambda t: line(t)[0].ravel())
+    opt.set_initial_guess(T_dot, lambda t: line(t)[1].ravel())
     opt.set_initial_guess(
         tau,
         lambda t: np.clip(
-            dyn.inverse_dynamics(*(g.ravel() for g in guess(t)), problem.configuration), -problem.force_limit, problem.force_limit
+            dyn.inverse_dynamics(*(g.ravel() for g in line(t)), problem.configuration), -problem.force_limit, problem.force_limit
         ),
     )
-    return opt, model
+
+
+def _read_guess_csv(path: Path) -> dict[str, np.ndarray]:
+    """Read a trajectory CSV (as written by :meth:`PointToPointSolution.write_csv`) for a guess."""
+    try:
+        data = np.genfromtxt(path, delimiter=",", names=True)
+    except OSError as exc:
+        raise InputError(f"guess: cannot read trajectory file {path}: {exc}") from None
+    need = ["t", "x", "y", "z", "xd", "yd", "zd", "tau1", "tau2", "tau3"]
+    names = data.dtype.names or ()
+    missing = [c for c in need if c not in names]
+    if missing:
+        raise InputError(f"guess: trajectory file {path} lacks the columns {', '.join(missing)}")
+    out = {c: np.atleast_1d(np.asarray(data[c], dtype=float)) for c in need}
+    if out["t"].size < 2 or not np.all(np.isfinite(np.column_stack(list(out.values())))) or np.any(np.diff(out["t"]) <= 0):
+        raise InputError(f"guess: trajectory file {path} needs >= 2 rows of finite values with increasing t")
+    return out
 
 
 @dataclass
@@ -284,11 +496,14 @@ class PointToPointSolution:
         The optimisation result (status, iterations, trajectories, ...).
     energy : float
         ``sum_i integral tau_i^2 dt`` [N^2 s], exact for the collocation polynomials.
+    transcription : gtmodel.modeling.CollocationTranscription, optional
+        The NLP it was solved with (reused by sweeps).
     """
 
     problem: PointToPoint
     result: OptimizationResult
     energy: float
+    transcription: Any = field(default=None, repr=False, compare=False)
 
     @property
     def success(self) -> bool:
@@ -327,7 +542,7 @@ class PointToPointSolution:
         if not dt > 0:
             raise InputError(f"dt: expected a positive sample time in s, got {dt!r}")
         tf = self.result.final_time
-        t = np.arange(0.0, tf, dt)
+        t = np.arange(float(self.result.t[0]), tf, dt)
         t = np.append(t, tf) if tf - t[-1] > 1e-12 else t
         s = self.result.sample(t)
         T = np.asarray(s["states"]["T"]).reshape(-1, 3)
@@ -384,7 +599,25 @@ def _energy(result: OptimizationResult) -> float:
     return float(total)
 
 
-def solve_point_to_point(problem: PointToPoint, verbose: bool = False) -> PointToPointSolution:
+def _structure(problem: PointToPoint) -> tuple:
+    """What must be equal for two declarations to share one transcription."""
+    skip = {"named_parameters", "w", "name", "parameters", "guess", "origin"}
+    out = []
+    for f in fields(problem):
+        if f.name in skip:
+            continue
+        v = getattr(problem, f.name)
+        out.append((f.name, tuple(np.ravel(v)) if isinstance(v, np.ndarray) else v if not isinstance(v, RobotParameters) else v.name))
+    out.append(("parameter_names", tuple(sorted(problem.named_parameters))))
+    return tuple(out)
+
+
+def solve_point_to_point(
+    problem: PointToPoint,
+    verbose: bool = False,
+    previous: PointToPointSolution | None = None,
+    warm_start: bool = False,
+) -> PointToPointSolution:
     """Transcribe by collocation and solve a point-to-point problem with IPOPT.
 
     Parameters
@@ -393,6 +626,11 @@ def solve_point_to_point(problem: PointToPoint, verbose: bool = False) -> PointT
         The declaration.
     verbose : bool, optional
         Show IPOPT's iteration log.
+    previous : PointToPointSolution, optional
+        A solution of a problem that differs only in its named parameters (a sweep): its
+        NLP is reused instead of rebuilt.
+    warm_start : bool, optional
+        Start from ``previous``'s solution instead of the declared guess.
 
     Returns
     -------
@@ -403,16 +641,20 @@ def solve_point_to_point(problem: PointToPoint, verbose: bool = False) -> PointT
     ------
     UnreachablePoseError
         ``start`` or ``end`` outside the workspace.
+    ProblemError
+        Invalid objective or constraint expression.
     """
-    opt, _ = build_optimization(problem)
-    tr = CollocationTranscription(
-        opt,
-        elements=problem.elements,
-        points=problem.points,
-        scheme=problem.scheme,
-        verbose=verbose,
-        solver_options={"max_iter": problem.max_iter, "tol": problem.tol},
-    )
-    result = tr.solve()
+    options = {"max_iter": problem.max_iter, "tol": problem.tol}
+    if previous is not None and previous.transcription is not None and _structure(previous.problem) == _structure(problem):
+        tr = previous.transcription
+        guess = previous.result if warm_start else None
+        result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
+    else:
+        opt, _ = build_optimization(problem)
+        tr = CollocationTranscription(
+            opt, elements=problem.elements, points=problem.points, scheme=problem.scheme, verbose=verbose, solver_options=options
+        )
+        guess = previous.result if (warm_start and previous is not None) else None
+        result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
-    return PointToPointSolution(problem=problem, result=result, energy=_energy(result))
+    return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)
