@@ -352,15 +352,26 @@ def parameters_from_mapping(data: Mapping[str, Any], origin: str = "<mapping>", 
 
 
 def available_parameter_sets() -> list[str]:
-    """Names of the parameter sets shipped with gtmodel.
+    """Names of the 3-link parameter sets shipped with gtmodel (kinematics + dynamics).
+
+    Data files of other models (six-link, F1) in the same folder have their own loaders
+    and are not listed.
 
     Returns
     -------
     list of str
-        E.g. ``["D1", "L1"]``.
+        E.g. ``["D1", "L1", "L1_ideal"]``.
     """
+    import tomllib
+
     folder = resources.files(_DATA_PACKAGE) / "data"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    names = []
+    for p in folder.iterdir():
+        if p.name.endswith(".toml"):
+            data = tomllib.loads(p.read_text(encoding="utf-8"))
+            if "kinematics" in data and "dynamics" in data:
+                names.append(p.name[:-5])
+    return sorted(names)
 
 
 def load_parameters(name_or_path: str | Path) -> RobotParameters:
