@@ -1,0 +1,93 @@
+"""Studies from the command line: a sweep over the energy weight and several files at once.
+
+Independent reference: the shape of Dressler (2012), Table 3.1 -- a larger energy weight
+``w`` gives a strictly longer motion and strictly less energy -- and the per-case result
+folders, which are checked against the comparison table written from them.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
+
+from .conftest import PROBLEMS_DIR
+
+BASE = PROBLEMS_DIR / "l1_time_optimal.toml"
+WEIGHTS = ("0", "0.001", "0.01")
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sweep")
+    code = main(["solve", str(BASE), "--sweep", "w=" + ",".join(WEIGHTS), "--out", str(out), "--quiet", "--no-plots"])
+    with open(out / "comparison.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return code, out, rows
+
+
+def test_sweep_exits_zero_and_writes_one_row_per_value(sweep):
+    code, out, rows = sweep
+    assert code == EXIT_OK
+    assert [r["case"] for r in rows] == [f"l1_time_optimal[w={w}]" for w in ("0", "0.001", "0.01")]
+    assert all(r["status"] == "optimal" for r in rows)
+    assert (out / "comparison.md").read_text().startswith("| case | status | T_final [s]")
+
+
+def test_larger_weight_gives_longer_time_and_less_energy(sweep):
+    _, _, rows = sweep
+    tf = [float(r["final_time_s"]) for r in rows]
+    energy = [float(r["energy"]) for r in rows]
+    assert tf[0] < tf[1] < tf[2], tf
+    assert energy[0] > energy[1] > energy[2], energy
+
+
+def test_comparison_rows_equal_the_case_summaries(sweep):
+    _, out, rows = sweep
+    for r in rows:
+        folder = out / r["case"].replace("[", "_").replace("]", "")
+        summary = json.loads((folder / "summary.json").read_text())
+        assert summary["status"] == r["status"]
+        assert summary["final_time_s"] == pytest.approx(float(r["final_time_s"]), rel=1e-12)
+        assert summary["overrides"] == {"w": float(r["case"].split("w=")[1].rstrip("]"))}
+
+
+def test_several_files_one_bad_records_the_error_and_exits_nonzero(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(BASE.read_text().replace('kind = "point_to_point"', 'kind = "teleport"'))
+    worse = tmp_path / "worse.toml"
+    worse.write_text("this is not TOML [")
+    out = tmp_path / "study"
+    code = main(["solve", str(bad), str(worse), "--out", str(out), "--quiet", "--no-plots"])
+    assert code == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert "field 'kind'" in err and "invalid TOML" in err and "Traceback" not in err
+    rows = list(csv.DictReader(open(out / "comparison.csv", newline="")))
+    assert [r["status"] for r in rows] == ["error", "error"]
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["--sweep", "w"], r"expected FIELD=VALUE1"),
+        (["--sweep", "w=0,[1"], r"values must be TOML literals"),
+        (["--sweep", "nonexistent=1,2"], r"cannot sweep 'nonexistent'"),
+        (["--sweep", "limits.nothing=1"], r"cannot sweep 'limits.nothing'"),
+    ],
+    ids=["no_values", "bad_literal", "unknown_field", "unknown_dotted_field"],
+)
+def test_bad_sweep_arguments(tmp_path, capsys, args, match):
+    import re
+
+    code = main(["solve", str(BASE), *args, "--out", str(tmp_path / "o"), "--quiet", "--no-plots"])
+    assert code == EXIT_BAD_INPUT
+    assert re.search(match, capsys.readouterr().err)
+
+
+def test_sweep_with_two_files_is_rejected(tmp_path, capsys):
+    code = main(["solve", str(BASE), str(BASE), "--sweep", "w=0,1", "--out", str(tmp_path / "o"), "--quiet"])
+    assert code == EXIT_BAD_INPUT
+    assert "exactly one problem file" in capsys.readouterr().err
