@@ -1,0 +1,210 @@
+"""The piecewise-linear actuator model (Dressler (2012), eq. 5.7) as a closure model.
+
+Independent references, per test: ``numpy.interp`` (the interpolation); the closed-form
+trilateration FK of the linear 3-link model (straight guideways, after the frame fit);
+the known true deviation of a bent guideway, :meth:`ActuatorErrors.deviation`, and the
+FK of the true robot; the parallelogram property of the six-link layout (with link
+offsets equal to the plate offsets the plate keeps its orientation and the TCP follows
+the 3-link model with ``As_i - B0_i1``).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.calibration.measurements import CartMeasurements
+from gtmodel.calibration.synthetic import (
+    NO_NOISE,
+    ActuatorErrors,
+    DeviatedClosure,
+    guideway_axes,
+    line_fit_residuals,
+    random_poses,
+    synthetic_cart_measurements,
+)
+from gtmodel.errors import InputError
+from gtmodel.robots.actuator import SIX_LINK_LAYOUT, PiecewiseActuatorClosure, piecewise_linear
+from gtmodel.robots.closure import ThreeLinkClosure, zyz_to_rotation
+from gtmodel.robots.parameters import KinematicParameters
+
+#: Straight survey: piecewise model vs linear 3-link model after the frame fit [m].
+STRAIGHT_TOLERANCE = 1e-9
+#: Bent survey, 0.01 m node spacing: interpolation error bound |P''| h^2 / 8 of the cyclic
+#: error (amplitude <= 0.1 mm, period 0.2 m: |P''| <= 0.1 m^-1) is 1.2 um [m].
+INTERPOLATION_TOLERANCE = 1.5e-6
+#: Bent survey: TCP error of the piecewise model vs the true robot [m].
+BENT_FK_TOLERANCE = 5e-6
+#: Interpolation vs numpy.interp: the sum of ramps accumulates rounding over the nodes
+#: (~ M eps max|slope|; values O(1), slopes up to ~50 in the test).
+INTERP_TOLERANCE = 1e-12
+
+SURVEY_NODES = np.round(np.arange(-0.65, 0.7001, 0.01), 10)
+ROTATION_ANGLES = [(0.4, 0.05, -0.3), (2.0, 0.2, 0.1), (-1.0, 0.01, 0.7)]
+
+
+@pytest.fixture(scope="module")
+def l1() -> ThreeLinkClosure:
+    return ThreeLinkClosure("L1")
+
+
+@pytest.fixture(scope="module")
+def survey_frames() -> tuple[np.ndarray, np.ndarray]:
+    R = np.array([zyz_to_rotation(*a) for a in ROTATION_ANGLES])
+    t = np.array([[1.8, -4.3, -0.08], [1.4, -3.9, 0.09], [0.5, -2.1, 0.04]])
+    return R, t
+
+
+@pytest.fixture(scope="module")
+def q_test(l1) -> np.ndarray:
+    q = random_poses(l1, 200, seed=21)
+    return q[np.all(np.abs(q) < 0.64, axis=1)]  # inside the survey range [-0.65, 0.70]
+
+
+def test_interpolation_matches_numpy_interp():
+    """The sum-of-ramps expression equals numpy.interp inside the nodes and extends the end segments."""
+    rng = np.random.default_rng(0)
+    g = np.sort(rng.uniform(-1, 1, 12))
+    v = rng.normal(size=12)
+    x = ca.SX.sym("x")
+    f = ca.Function("f", [x], [piecewise_linear(x, g, v)])
+    xs = np.linspace(g[0], g[-1], 101)
+    np.testing.assert_allclose(np.array(f.map(101)(xs[None, :])).ravel(), np.interp(xs, g, v), rtol=0, atol=INTERP_TOLERANCE)
+    slope_end = (v[-1] - v[-2]) / (g[-1] - g[-2])
+    assert float(f(g[-1] + 0.5)) == pytest.approx(v[-1] + 0.5 * slope_end, abs=INTERP_TOLERANCE)
+    dfdx = ca.Function("df", [x], [ca.jacobian(piecewise_linear(x, g, v), x)])
+    k = 5
+    assert float(dfdx(0.5 * (g[k] + g[k + 1]))) == pytest.approx((v[k + 1] - v[k]) / (g[k + 1] - g[k]), rel=1e-12)
+
+
+def test_straight_survey_reproduces_the_three_link_model(l1, survey_frames, q_test):
+    """Straight guideways surveyed in their own frames: after the frame fit the piecewise model's FK
+    equals the closed-form 3-link FK to 1e-9 m."""
+    cart = synthetic_cart_measurements(l1, None, SURVEY_NODES, noise=NO_NOISE, frames=survey_frames)
+    pw = PiecewiseActuatorClosure.from_model(l1, cart)
+    T_pw, R_pw = pw.fk(q_test)
+    np.testing.assert_allclose(T_pw, l1.fk(q_test)[0], rtol=0, atol=STRAIGHT_TOLERANCE)
+    np.testing.assert_array_equal(R_pw, np.broadcast_to(np.eye(3), R_pw.shape))
+
+
+def test_frame_fit_recovers_the_survey_frames(l1, survey_frames):
+    """With a bent survey (a unique fit) the fitted (R_i, o_i) are the frames the survey was taken in."""
+    errors = ActuatorErrors.table_4_1()
+    true_robot = DeviatedClosure(l1, errors)
+    cart = synthetic_cart_measurements(l1, errors, SURVEY_NODES, noise=NO_NOISE, frames=survey_frames)
+    pw = PiecewiseActuatorClosure.from_model(true_robot, cart)
+    for i in range(3):
+        np.testing.assert_allclose(pw.frame_rotation(i), survey_frames[0][i], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(pw.frame_offset[i], survey_frames[1][i], rtol=0, atol=1e-8)
+
+
+def test_bent_survey_follows_the_true_cart_path(l1, survey_frames, q_test):
+    """Bent guideways (Table 4.1 magnitudes): between the nodes the piecewise joint points differ from
+    the linear model by the known true deviation (to the interpolation error), the FK follows the true
+    robot, and the best linear fit of the same survey cannot (tens of um)."""
+    errors = ActuatorErrors.table_4_1()
+    true_robot = DeviatedClosure(l1, errors)
+    cart = synthetic_cart_measurements(l1, errors, SURVEY_NODES, noise=NO_NOISE, frames=survey_frames)
+    pw = PiecewiseActuatorClosure.from_model(true_robot, cart)
+    k = l1.kinematics
+    axes = guideway_axes(l1)
+    mid = 0.5 * (SURVEY_NODES[:-1] + SURVEY_NODES[1:])
+    for i in range(3):
+        qs = np.zeros((mid.size, 3))
+        qs[:, i] = mid
+        dev_pw = pw.joint_points(qs)[:, i] - (k.As[i] + mid[:, None] * k.v[i])
+        dev_true = errors.deviation(i, mid, 1.0, axes[i])
+        np.testing.assert_allclose(dev_pw, dev_true, rtol=0, atol=INTERPOLATION_TOLERANCE)
+        assert np.max(np.linalg.norm(dev_true, axis=1)) > 50e-6
+    T_true, _ = true_robot.fk(q_test)
+    err_pw = np.linalg.norm(pw.fk(q_test)[0] - T_true, axis=1)
+    # best linear actuators: a least-squares line through each arm's true joint points
+    As, v = np.empty((3, 3)), np.empty((3, 3))
+    for i in range(3):
+        P = cart.positions[i] @ survey_frames[0][i].T + survey_frames[1][i]
+        coef = np.polyfit(cart.q[i], P, 1)
+        v[i], As[i] = coef[0], coef[1]
+        assert line_fit_residuals(cart.q[i], P).mean() > 20e-6
+    linear = ThreeLinkClosure(KinematicParameters(L=k.L, As=As, v=v, model="modified"))
+    err_lin = np.linalg.norm(linear.fk(q_test)[0] - T_true, axis=1)
+    assert err_pw.max() < BENT_FK_TOLERANCE
+    assert err_lin.mean() > 10 * err_pw.max()
+
+
+def test_parameters_per_arm_and_round_trip(l1, survey_frames):
+    """7 parameters per arm (Table 5.8 model 2), read from the graph; with_parameters/parameter_vector
+    round trip; a frame change moves the FK as x' = R x + t."""
+    cart = synthetic_cart_measurements(l1, None, SURVEY_NODES, noise=NO_NOISE, frames=survey_frames)
+    pw = PiecewiseActuatorClosure.from_model(l1, cart)
+    assert pw.n_parameters == 21
+    for i in range(3):
+        np.testing.assert_array_equal(pw.arm_parameter_indices(i), np.arange(7 * i, 7 * i + 7))
+    assert pw.parameter_names()[:7] == ("L1", "o1_x", "o1_y", "o1_z", "euler1_alpha", "euler1_beta", "euler1_gamma")
+    np.testing.assert_array_equal(pw.with_parameters(pw.parameter_vector()).parameter_vector(), pw.parameter_vector())
+    q = np.array([[0.1, -0.2, 0.3], [-0.4, 0.2, 0.0]])
+    Rm, t = zyz_to_rotation(0.3, 0.5, -0.2), np.array([0.1, 0.2, -0.3])
+    np.testing.assert_allclose(pw.transformed(Rm, t).fk(q)[0], pw.fk(q)[0] @ Rm.T + t, rtol=0, atol=1e-12)
+
+
+def test_six_link_layout_parallelograms(l1, survey_frames):
+    """Six-link layout (model 4) with link offsets equal to the plate offsets (parallelograms): the plate
+    keeps the identity orientation and T is the 3-link FK with As_i - B0_i1 (closed form)."""
+    B0 = np.array([[-0.05, -0.05, -0.10], [-0.05, -0.12, -0.08], [-0.06, 0.00, 0.14],
+                   [-0.19, -0.09, 0.04], [-0.05, -0.00, -0.14], [-0.05, 0.12, 0.08]])
+    cart = synthetic_cart_measurements(l1, None, SURVEY_NODES, noise=NO_NOISE, frames=survey_frames)
+    three = PiecewiseActuatorClosure.from_model(l1, cart)
+    first = [0, 1, 1, 3, 3, 3]
+    arm = [0, 1, 1, 2, 2, 2]
+    a = np.array([three.frame_rotation(arm[j]).T @ (B0[j] - B0[first[j]]) for j in range(6)])
+    six = PiecewiseActuatorClosure(
+        cart, l1.kinematics.L[arm], three.frame_offset, three.frame_euler_zyz,
+        links=SIX_LINK_LAYOUT, link_offsets=a, B0=B0,
+    )
+    assert six.orientation and six.n_parameters == 51
+    assert [len(six.arm_parameter_indices(i)) for i in range(3)] == [10, 17, 24]
+    q = np.array([[0.1, -0.2, 0.3], [-0.4, 0.2, 0.0], [0.5, 0.5, 0.5]])
+    T, R = six.fk(q)
+    k = l1.kinematics
+    shifted = ThreeLinkClosure(KinematicParameters(L=k.L, As=k.As - B0[[0, 1, 3]], v=k.v, model="modified"))
+    np.testing.assert_allclose(T, shifted.fk(q)[0], rtol=0, atol=STRAIGHT_TOLERANCE)
+    np.testing.assert_allclose(R, np.broadcast_to(np.eye(3), R.shape), rtol=0, atol=1e-9)
+
+
+def _cart(n: int = 5) -> CartMeasurements:
+    g = np.linspace(-0.65, 0.7, n)
+    return CartMeasurements(q=(g, g, g), positions=tuple(np.column_stack([g, 0 * g, 0 * g]) for _ in range(3)))
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(L=[2.0, 2.0, -1.0]), r"L: link lengths must be positive"),
+        (dict(L=[2.0, 2.0]), r"L: expected finite values of shape \(3,\)"),
+        (dict(frame_offset=np.zeros((2, 3))), r"frame_offset: expected finite values of shape \(3, 3\)"),
+        (dict(links=(("1", "2"), ("3",))), r"links: expected THREE_LINK_LAYOUT"),
+        (dict(B0=np.ones((3, 3))), r"link_offsets and B0 belong to the six-link layout"),
+        (dict(cart=object()), r"cart: expected cart measurements with attributes q and positions"),
+        (
+            dict(L=np.full(6, 2.0), links=SIX_LINK_LAYOUT, link_offsets=np.ones((6, 3))),
+            r"link_offsets: row 0 \(first link of arm 1\) must be zero",
+        ),
+    ],
+    ids=["negative-L", "L-shape", "offset-shape", "layout", "B0-three-link", "cart-type", "first-link-offset"],
+)
+def test_constructor_rejects_bad_input(kwargs, match):
+    """Bad constructor arguments raise InputError naming the argument."""
+    args = dict(cart=_cart(), L=[2.0, 2.0, 2.0], frame_offset=np.zeros((3, 3)), frame_euler_zyz=np.zeros((3, 3)))
+    args.update(kwargs)
+    with pytest.raises(InputError, match=match):
+        PiecewiseActuatorClosure(**args)
+
+
+def test_fk_outside_the_survey_range(l1):
+    """q outside the surveyed range is an InputError naming the actuator, unless extrapolation is asked for."""
+    cart = synthetic_cart_measurements(l1, None, SURVEY_NODES, noise=NO_NOISE)
+    pw = PiecewiseActuatorClosure.from_model(l1, cart)
+    with pytest.raises(InputError, match=r"q2 = 0\.8 \(row 0\) is outside the surveyed range"):
+        pw.fk([0.0, 0.8, 0.0])
+    pwx = PiecewiseActuatorClosure.from_model(l1, cart, extrapolate=True)
+    np.testing.assert_allclose(pwx.fk([0.0, 0.8, 0.0])[0], l1.fk([0.0, 0.8, 0.0])[0], rtol=0, atol=STRAIGHT_TOLERANCE)
