@@ -5,6 +5,8 @@ A problem file (TOML) declares one problem; ``kind`` selects its schema and solv
 - ``point_to_point``: free-path time/energy-optimal motion between two poses
   (:mod:`gtmodel.trajectory.problem_files` documents the fields; the objective and
   constraints are written in the problem language of ``docs/problem_language.md``).
+- ``path_constrained``: time-optimal motion along a declared TCP path, by the convex
+  reformulation (Verscheure et al. 2009) or the thesis' projection solved by collocation.
 
 Every field is validated on load and an error names the file, the field and what was
 expected. A result folder holds ``summary.json`` (always, also on failure, with
@@ -44,7 +46,7 @@ __all__ = [
 _log = logging.getLogger("gtmodel")
 
 #: Problem kinds understood by :func:`load_problem`.
-KINDS = ("point_to_point",)
+KINDS = ("point_to_point", "path_constrained")
 
 
 @dataclass
@@ -121,6 +123,10 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
         from gtmodel.trajectory.problem_files import load_point_to_point
 
         decl = load_point_to_point(f, name)
+    elif kind == "path_constrained":
+        from gtmodel.trajectory.problem_files import load_path_constrained
+
+        decl = load_path_constrained(f, name)
     else:  # pragma: no cover - KINDS is checked above
         raise f.fail("kind", f"one of {', '.join(KINDS)}", kind)
     return Problem(path=path, name=name, kind=kind, description=description, declaration=decl, data=data, overrides=dict(overrides or {}))
@@ -156,6 +162,10 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
         from gtmodel.trajectory.point_to_point import solve_point_to_point
 
         return solve_point_to_point(problem.declaration, verbose=verbose, previous=previous, warm_start=warm_start)
+    if problem.kind == "path_constrained":
+        from gtmodel.trajectory.problem_files import solve_path_declaration
+
+        return solve_path_declaration(problem.declaration, verbose=verbose)
     raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no solver")  # pragma: no cover
 
 
@@ -257,6 +267,10 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         from gtmodel.trajectory.problem_files import write_point_to_point
 
         fields, files = write_point_to_point(problem.declaration, solution, out, plots, problem.name)
+    elif problem.kind == "path_constrained":
+        from gtmodel.trajectory.problem_files import write_path_constrained
+
+        fields, files = write_path_constrained(problem.declaration, solution, out, plots, problem.name)
     else:  # pragma: no cover
         raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no result writer")
     summary.update(fields)
@@ -426,7 +440,13 @@ def write_comparison(cases: Sequence[StudyCase], out_dir: str | Path, plots: boo
     if plots:
         from gtmodel.trajectory.plots import plot_overlay
 
-        trajs = {c.label: c.solution.trajectory() for c in cases if c.solution is not None and c.summary.get("status") in ("optimal", "acceptable")}
+        from gtmodel.trajectory.problem_files import path_trajectory_columns
+
+        trajs = {
+            c.label: (path_trajectory_columns(c.solution) if c.summary.get("kind") == "path_constrained" else c.solution.trajectory())
+            for c in cases
+            if c.solution is not None and c.summary.get("status") in ("optimal", "acceptable") and "final_time_s" in c.summary
+        }
         if trajs:
             files += plot_overlay(trajs, out_dir)
     return files

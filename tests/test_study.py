@@ -91,3 +91,16 @@ def test_sweep_with_two_files_is_rejected(tmp_path, capsys):
     code = main(["solve", str(BASE), str(BASE), "--sweep", "w=0,1", "--out", str(tmp_path / "o"), "--quiet"])
     assert code == EXIT_BAD_INPUT
     assert "exactly one problem file" in capsys.readouterr().err
+
+
+def test_free_path_is_faster_and_the_straight_line_uses_less_energy(tmp_path):
+    """Dressler (2012), Table 3.1 / ch. 3.5: the time-optimal free path is faster than the
+    path-constrained straight line, at more energy. Both files declare the same poses and limits."""
+    out = tmp_path / "table_3_1"
+    files = [str(PROBLEMS_DIR / "l1_time_optimal.toml"), str(PROBLEMS_DIR / "l1_path_constrained.toml")]
+    code = main(["solve", *files, "--out", str(out), "--quiet", "--no-plots"])
+    assert code == EXIT_OK
+    rows = {r["case"]: r for r in csv.DictReader(open(out / "comparison.csv", newline=""))}
+    free, line = rows["l1_time_optimal"], rows["l1_path_constrained"]
+    assert float(free["final_time_s"]) < float(line["final_time_s"])
+    assert float(line["energy"]) < float(free["energy"])

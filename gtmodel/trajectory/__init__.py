@@ -8,6 +8,14 @@ from gtmodel.trajectory.point_to_point import (
     solve_point_to_point,
     trapezoid_profile,
 )
+from gtmodel.trajectory.path import Path, Polyline, SplinePath, StraightLine
+from gtmodel.trajectory.path_constrained import (
+    PathConstrainedProblem,
+    PathConstraints,
+    PathSolution,
+    solve_path_collocation,
+    solve_path_convex,
+)
 
 __all__ = [
     "SAMPLE_TIME",
@@ -16,4 +24,13 @@ __all__ = [
     "build_optimization",
     "solve_point_to_point",
     "trapezoid_profile",
+    "Path",
+    "StraightLine",
+    "Polyline",
+    "SplinePath",
+    "PathConstraints",
+    "PathConstrainedProblem",
+    "PathSolution",
+    "solve_path_convex",
+    "solve_path_collocation",
 ]

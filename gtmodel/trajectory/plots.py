@@ -8,7 +8,7 @@ from typing import Mapping
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["plot_tcp_path", "plot_forces", "plot_overlay"]
+__all__ = ["plot_tcp_path", "plot_forces", "plot_overlay", "plot_path_profile"]
 
 
 def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, title: str = "") -> Path:
@@ -140,3 +140,37 @@ def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | P
     f2 = out_dir / "overlay_tcp.png"
     fig.savefig(f2, dpi=110)
     return [f1, f2]
+
+
+def plot_path_profile(solution, path: str | Path, title: str = "") -> Path:
+    """Plot a path-constrained profile: ``s_dot`` and ``s_ddot`` against ``s``.
+
+    Parameters
+    ----------
+    solution : gtmodel.trajectory.path_constrained.PathSolution
+        Solution with grid arrays ``s``, ``s_dot``, ``s_ddot`` (each (N,)).
+    path : str or pathlib.Path
+        PNG file to write.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+    """
+    fig = Figure(figsize=(8, 5), layout="constrained")
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    s = np.asarray(solution.s)
+    ax1.plot(s, np.asarray(solution.s_dot), "-")
+    ax1.set_ylabel("s_dot [1/s]")
+    ax1.grid(True)
+    sdd = np.asarray(solution.s_ddot)
+    ax2.step(s[: sdd.size], sdd, where="post")
+    ax2.set_ylabel("s_ddot [1/s^2]")
+    ax2.set_xlabel("path coordinate s [-]")
+    ax2.grid(True)
+    fig.suptitle(f"{title}: path profile" if title else "path profile")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path

@@ -55,6 +55,7 @@ Kind ``point_to_point`` (free path between two poses; Dressler (2012), ch. 3.5, 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +76,13 @@ __all__ = [
     "load_point_to_point",
     "point_to_point_summary",
     "write_point_to_point",
+    "PATH_CONSTRAINED_SCHEMA",
+    "PATH_METHODS",
+    "PathConstrainedDeclaration",
+    "load_path_constrained",
+    "solve_path_declaration",
+    "path_trajectory_columns",
+    "write_path_constrained",
 ]
 
 #: Relative tolerance on force limits when reporting the fraction of time at a bound.
@@ -397,4 +405,284 @@ def write_point_to_point(decl: PointToPoint, solution: PointToPointSolution, out
             plot_tcp_path(traj, decl.start, decl.end, out / "tcp_path.png", title=title)
             plot_forces(traj, decl.force_limit, out / "forces.png", title=title)
             files += ["tcp_path.png", "forces.png"]
+    return summary, files
+
+
+# ---------------------------------------------------------------------- path_constrained
+#: Allowed fields of a ``path_constrained`` problem file.
+PATH_CONSTRAINED_SCHEMA: dict[str, set[str]] = {
+    "": {"name", "kind", "description", "robot", "motion", "path", "limits", "method", "collocation", "solver"},
+    "robot": {"parameters", "configuration", "viscous_friction"},
+    "motion": {"start", "end"},
+    "path": {"shape", "via"},
+    "limits": {"force", "cart_velocity", "cart_acceleration", "tcp_velocity", "tcp_speed", "tcp_acceleration"},
+    "method": {"name", "grid", "w", "final_time_guess", "final_time_bounds"},
+    "collocation": {"elements", "points", "scheme"},
+    "solver": {"max_iter", "tol"},
+}
+
+#: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
+#: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection
+#: solved by collocation (Dressler (2012), ch. 3.5).
+PATH_METHODS = ("convex", "collocation")
+
+
+@dataclass
+class PathConstrainedDeclaration:
+    """A validated ``path_constrained`` problem.
+
+    Parameters
+    ----------
+    path : gtmodel.trajectory.path.Path
+        The TCP path (checked inside the workspace).
+    robot : RobotParameters
+        Parameter set.
+    constraints : gtmodel.trajectory.path_constrained.PathConstraints
+        Limits along the path.
+    method : str
+        One of :data:`PATH_METHODS`.
+    grid : int
+        Grid points of the convex method.
+    w : float
+        Energy weight of the collocation method's objective
+        ``final_time + w * sum_i integral tau_i^2 dt`` [1/N^2].
+    configuration : int
+        IK configuration.
+    viscous_friction : bool
+        Include viscous friction.
+    options : dict
+        Collocation mesh, final-time guess/bounds and solver options.
+    """
+
+    path: Any
+    robot: RobotParameters
+    constraints: Any
+    method: str
+    grid: int
+    w: float
+    configuration: int
+    viscous_friction: bool
+    options: dict
+
+
+def load_path_constrained(f: FieldReader, name: str) -> PathConstrainedDeclaration:
+    """Validate a ``path_constrained`` problem file.
+
+    Parameters
+    ----------
+    f : FieldReader
+        The problem file.
+    name : str
+        Problem name.
+
+    Returns
+    -------
+    PathConstrainedDeclaration
+
+    Raises
+    ------
+    ProblemError
+        A missing, unknown or invalid field, a path outside the workspace (naming the path
+        coordinate), a method that does not support the given limits.
+    """
+    from gtmodel.trajectory.path import Polyline, SplinePath, StraightLine
+    from gtmodel.trajectory.path_constrained import PathConstraints
+
+    f.check_unknown(PATH_CONSTRAINED_SCHEMA)
+    for table in ("robot", "motion", "limits"):
+        f.table(table, required=True)
+    params = load_robot(f)
+    configuration = f.integer("robot", "configuration", 0, 0, 7)
+    viscous = f.boolean("robot", "viscous_friction", True)
+    start = f.vector("motion", "start", 3)
+    end = f.vector("motion", "end", 3)
+    shape = f.choice("path", "shape", ("line", "polyline", "spline"), "line")
+    via = f.get("path", "via", [])
+    if not isinstance(via, list) or not all(isinstance(p, list) and len(p) == 3 for p in via):
+        raise f.fail("path.via", "a list of [x, y, z] points [m]", via)
+    if shape == "line" and via:
+        raise f.fail("path.via", 'no via points for shape = "line" (use "polyline" or "spline")', via)
+    if shape != "line" and not via:
+        raise f.fail("path.via", f"at least one via point for shape = {shape!r}", via)
+    lim = f.table("limits", True)
+
+    def opt_vec(key: str) -> Any:
+        return f.vector("limits", key, 3, positive=True) if key in lim else None
+
+    method = f.choice("method", "name", PATH_METHODS, "convex")
+    grid = f.integer("method", "grid", 500, 2, 10**6)
+    w = f.number("method", "w", 0.0, nonnegative=True)
+    tf_guess = f.number("method", "final_time_guess", 1.0, positive=True)
+    bounds = f.vector("method", "final_time_bounds", 2, default=[0.05, 10.0], positive=True)
+    if not bounds[0] < bounds[1]:
+        raise f.fail("method.final_time_bounds", "[lo, hi] with 0 < lo < hi", bounds.tolist())
+    if method == "convex" and w != 0.0:
+        raise f.fail("method.w", 'w = 0 for method "convex" (time-optimal); use method "collocation" for an energy weight', w)
+    try:
+        cons = PathConstraints(
+            force_limit=opt_vec("force"),
+            cart_velocity_limit=opt_vec("cart_velocity"),
+            cart_acceleration_limit=opt_vec("cart_acceleration"),
+            tcp_velocity_limit=opt_vec("tcp_velocity"),
+            tcp_speed_limit=f.number("limits", "tcp_speed", positive=True) if "tcp_speed" in lim else None,
+            tcp_acceleration_limit=opt_vec("tcp_acceleration"),
+        )
+    except InputError as exc:
+        raise ProblemError(f"{f.path}: field 'limits': {exc}") from None
+    if method == "collocation" and cons.force_limit is None:
+        raise f.fail("limits.force", 'force limits for method "collocation"')
+    points = [start, *[np.asarray(p, dtype=float) for p in via], end]
+    try:
+        if shape == "line":
+            path = StraightLine(start, end, robot=params, configuration=configuration)
+        elif shape == "polyline":
+            path = Polyline(points, robot=params, configuration=configuration)
+        else:
+            path = SplinePath(points, robot=params, configuration=configuration)
+    except UnreachablePoseError as exc:
+        raise ProblemError(f"{f.path}: field 'path': {exc}") from None
+    except InputError as exc:
+        raise ProblemError(f"{f.path}: field 'motion'/'path': {exc}") from None
+    options = {
+        "elements": f.integer("collocation", "elements", 50, 1, 10000),
+        "points": f.integer("collocation", "points", 3, 1, 9),
+        "scheme": f.choice("collocation", "scheme", ("radau", "legendre"), "radau"),
+        "final_time_guess": tf_guess,
+        "final_time_bounds": (float(bounds[0]), float(bounds[1])),
+        "max_iter": f.integer("solver", "max_iter", 3000, 1, 10**6),
+        "tol": f.number("solver", "tol", 1e-8, positive=True),
+    }
+    return PathConstrainedDeclaration(path, params, cons, method, grid, w, configuration, viscous, options)
+
+
+def solve_path_declaration(decl: PathConstrainedDeclaration, verbose: bool = False) -> Any:
+    """Solve a ``path_constrained`` declaration with its method.
+
+    Parameters
+    ----------
+    decl : PathConstrainedDeclaration
+        The declaration.
+    verbose : bool, optional
+        IPOPT output (collocation method).
+
+    Returns
+    -------
+    gtmodel.trajectory.path_constrained.PathSolution
+        Always returned; ``status`` says whether it is optimal.
+    """
+    from gtmodel.trajectory.path_constrained import solve_path_collocation, solve_path_convex
+
+    if decl.method == "convex":
+        return solve_path_convex(
+            decl.path, decl.constraints, robot=decl.robot, grid=decl.grid, configuration=decl.configuration, viscous_friction=decl.viscous_friction
+        )
+    o = decl.options
+    return solve_path_collocation(
+        decl.path,
+        decl.robot,
+        decl.constraints.force_limit,
+        w=decl.w,
+        configuration=decl.configuration,
+        viscous_friction=decl.viscous_friction,
+        elements=o["elements"],
+        points=o["points"],
+        scheme=o["scheme"],
+        final_time_guess=o["final_time_guess"],
+        final_time_bounds=o["final_time_bounds"],
+        max_iter=o["max_iter"],
+        tol=o["tol"],
+        verbose=verbose,
+    )
+
+
+def path_trajectory_columns(solution: Any) -> dict[str, np.ndarray]:
+    """The 4 ms table of a path-constrained solution, with the columns of the free-path CSV.
+
+    Parameters
+    ----------
+    solution : gtmodel.trajectory.path_constrained.PathSolution
+        A solved problem.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``t, x, y, z, q1..q3, qd1..qd3, tau1..tau3, xd, yd, zd, s, s_dot, s_ddot``, each (K,).
+    """
+    tr = solution.trajectory()
+    cols: dict[str, np.ndarray] = {"t": tr["t"]}
+    for k, c in enumerate("xyz"):
+        cols[c] = tr["T"][:, k]
+    for name, key in (("q", "q"), ("qd", "q_dot"), ("tau", "tau")):
+        for k in range(3):
+            cols[f"{name}{k + 1}"] = tr[key][:, k]
+    for k, c in enumerate("xyz"):
+        cols[f"{c}d"] = tr["T_dot"][:, k]
+    for key in ("s", "s_dot", "s_ddot"):
+        cols[key] = tr[key]
+    return cols
+
+
+def write_path_constrained(decl: PathConstrainedDeclaration, solution: Any, out: Path, plots: bool, title: str) -> tuple[dict[str, Any], list[str]]:
+    """Summary fields, data files and plots of a solved ``path_constrained`` problem.
+
+    Parameters
+    ----------
+    decl : PathConstrainedDeclaration
+        The declaration.
+    solution : gtmodel.trajectory.path_constrained.PathSolution
+        Its solution.
+    out : pathlib.Path
+        Result folder (exists).
+    plots : bool
+        Write PNG plots.
+    title : str
+        Plot title.
+
+    Returns
+    -------
+    summary : dict
+        Status, final time, energy, iterations, solve time, method, grid and force figures.
+    files : list of str
+        Files written besides ``summary.json``.
+    """
+    from gtmodel.trajectory.export import write_c_header
+
+    summary: dict[str, Any] = {
+        "status": solution.status,
+        "message": solution.message,
+        "final_time_s": solution.final_time if solution.success else None,
+        "energy": solution.energy if solution.success else None,
+        "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
+        "iterations": solution.iterations,
+        "solve_time_s": solution.solve_time,
+        "objective": solution.final_time if solution.success else None,
+        "max_constraint_violation": None,
+        "method": solution.method,
+        "grid_points": int(np.size(solution.s)) if solution.s is not None else None,
+        "w": decl.w,
+        "robot": decl.robot.name,
+    }
+    files: list[str] = []
+    if solution.status in ("optimal", "acceptable"):
+        cols = path_trajectory_columns(solution)
+        tau = np.column_stack([cols["tau1"], cols["tau2"], cols["tau3"]])
+        if decl.constraints.force_limit is not None:
+            limit = np.asarray(decl.constraints.force_limit)
+            summary["force_limit_N"] = limit.tolist()
+            summary["max_force_ratio"] = (np.abs(tau).max(axis=0) / limit).tolist()
+            summary["fraction_at_force_bound"] = (np.abs(tau) >= (1 - AT_BOUND_RTOL) * limit).mean(axis=0).tolist()
+        summary["sample_time_s"] = float(cols["t"][1] - cols["t"][0]) if cols["t"].size > 1 else None
+        data = np.column_stack(list(cols.values()))
+        np.savetxt(out / "trajectory.csv", data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+        write_c_header(cols, out / "trajectory.h", name=title)
+        files += ["trajectory.csv", "trajectory.h"]
+        if plots:
+            from gtmodel.trajectory.plots import plot_forces, plot_path_profile, plot_tcp_path
+
+            plot_tcp_path(cols, decl.path.start, decl.path.end, out / "tcp_path.png", title=title)
+            if decl.constraints.force_limit is not None:
+                plot_forces(cols, decl.constraints.force_limit, out / "forces.png", title=title)
+                files.append("forces.png")
+            plot_path_profile(solution, out / "profile.png", title=title)
+            files += ["tcp_path.png", "profile.png"]
     return summary, files
