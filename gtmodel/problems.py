@@ -7,6 +7,8 @@ A problem file (TOML) declares one problem; ``kind`` selects its schema and solv
   constraints are written in the problem language of ``docs/problem_language.md``).
 - ``path_constrained``: time-optimal motion along a declared TCP path, by the convex
   reformulation (Verscheure et al. 2009) or the thesis' projection solved by collocation.
+- ``calibration``: kinematic calibration from closure equations with identifiability
+  and an accuracy report (:mod:`gtmodel.calibration.problem_files`).
 
 Every field is validated on load and an error names the file, the field and what was
 expected. A result folder holds ``summary.json`` (always, also on failure, with
@@ -46,7 +48,7 @@ __all__ = [
 _log = logging.getLogger("gtmodel")
 
 #: Problem kinds understood by :func:`load_problem`.
-KINDS = ("point_to_point", "path_constrained")
+KINDS = ("point_to_point", "path_constrained", "calibration")
 
 
 @dataclass
@@ -127,6 +129,10 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
         from gtmodel.trajectory.problem_files import load_path_constrained
 
         decl = load_path_constrained(f, name)
+    elif kind == "calibration":
+        from gtmodel.calibration.problem_files import load_calibration
+
+        decl = load_calibration(f, name)
     else:  # pragma: no cover - KINDS is checked above
         raise f.fail("kind", f"one of {', '.join(KINDS)}", kind)
     return Problem(path=path, name=name, kind=kind, description=description, declaration=decl, data=data, overrides=dict(overrides or {}))
@@ -166,6 +172,10 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
         from gtmodel.trajectory.problem_files import solve_path_declaration
 
         return solve_path_declaration(problem.declaration, verbose=verbose)
+    if problem.kind == "calibration":
+        from gtmodel.calibration.problem_files import solve_calibration
+
+        return solve_calibration(problem.declaration, verbose=verbose)
     raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no solver")  # pragma: no cover
 
 
@@ -271,6 +281,10 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         from gtmodel.trajectory.problem_files import write_path_constrained
 
         fields, files = write_path_constrained(problem.declaration, solution, out, plots, problem.name)
+    elif problem.kind == "calibration":
+        from gtmodel.calibration.problem_files import write_calibration
+
+        fields, files = write_calibration(problem.declaration, solution, out, plots, problem.name)
     else:  # pragma: no cover
         raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no result writer")
     summary.update(fields)

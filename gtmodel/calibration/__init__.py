@@ -3,8 +3,22 @@
 Dressler (2012), ch. 5: measured poses (:class:`MeasurementSet`, read from CSV files by
 :func:`read_measurements`), cart surveys for the piecewise-linear actuator model
 (:class:`CartMeasurements`), and synthetic data of a "true" robot with actuator errors and
-device noise for studies and tests (:mod:`gtmodel.calibration.synthetic`).
+device noise for studies and tests (:mod:`gtmodel.calibration.synthetic`); calibration
+from closure equations (:mod:`gtmodel.calibration.calibrate`), identifiability
+(:mod:`gtmodel.calibration.identifiability`), pose selection
+(:mod:`gtmodel.calibration.pose_selection`) and accuracy reports
+(:mod:`gtmodel.calibration.evaluation`).
 """
+
+from gtmodel.calibration.calibrate import (
+    CalibrationProblem,
+    CalibrationResult,
+    ParameterSelection,
+    analyze_identifiability,
+    calibrate,
+)
+from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, plot_error_histogram
+from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian
 
 from gtmodel.calibration.measurements import (
     CartMeasurements,
@@ -13,6 +27,7 @@ from gtmodel.calibration.measurements import (
     read_cart_measurements,
     read_measurements,
 )
+from gtmodel.calibration.pose_selection import select_poses, simulate_calibration
 from gtmodel.calibration.synthetic import (
     LASER_TRACKER,
     NO_NOISE,
@@ -28,6 +43,19 @@ from gtmodel.calibration.synthetic import (
 )
 
 __all__ = [
+    "calibrate",
+    "CalibrationProblem",
+    "CalibrationResult",
+    "ParameterSelection",
+    "analyze_identifiability",
+    "IdentifiabilityReport",
+    "analyze_jacobian",
+    "select_poses",
+    "simulate_calibration",
+    "AccuracyReport",
+    "evaluate",
+    "parameter_sensitivity",
+    "plot_error_histogram",
     "MeasurementSet",
     "CartMeasurements",
     "read_measurements",

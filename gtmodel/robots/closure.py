@@ -717,7 +717,7 @@ class ThreeLinkClosure(ClosureModel):
         out.robot = self.robot
         return out
 
-    @property
+    @cached_property
     def three_link(self) -> GantryTau3Kinematics:
         """The closed-form kinematics of the same parameters (:class:`GantryTau3Kinematics`)."""
         return GantryTau3Kinematics(self.kinematics)
