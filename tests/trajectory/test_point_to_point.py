@@ -77,3 +77,47 @@ def test_trajectory_columns(coarse_solution):
     assert list(tr)[:13] == ["t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3"]
     with pytest.raises(InputError, match="dt: expected a positive"):
         coarse_solution.trajectory(0.0)
+
+
+#: Limits hold at the collocation points up to IPOPT's tolerance (relative).
+LIMIT_RTOL = 1e-6
+
+
+def test_cart_velocity_limit_holds_and_costs_time(coarse_solution):
+    """A cart-velocity limit below the unconstrained peak: it holds at the collocation
+    points, and the minimum time grows (the unconstrained solution is the reference)."""
+    free_peak = np.abs(np.asarray(coarse_solution.result.outputs["q_dot"]).reshape(-1, 3)).max()
+    lim = 0.6 * free_peak
+    p = PointToPoint("L1", start=START, end=END, force_limit=[450, 450, 450], elements=12, cart_velocity_limit=[lim] * 3)
+    sol = solve_point_to_point(p)
+    assert sol.result.status == "optimal", sol.result.message
+    qd = np.asarray(sol.result.outputs["q_dot"]).reshape(-1, 3)
+    assert np.abs(qd).max() <= lim * (1 + LIMIT_RTOL)
+    assert sol.result.final_time > coarse_solution.result.final_time
+
+
+def test_language_constraint_and_fixed_time_minimum_energy(coarse_solution):
+    """Fixed duration, objective integral(tau^2), a path constraint written in the language:
+    the duration is the declared one and the energy is below the minimum-time solution's
+    (which is feasible for no longer duration than its own, and this one is longer)."""
+    tf = 1.5 * coarse_solution.result.final_time
+    p = PointToPoint(
+        "L1", start=START, end=END, force_limit=[450, 450, 450], elements=12,
+        objective="integral(tau1^2 + tau2^2 + tau3^2)", constraints=("abs(qd2) <= 1.5",),
+        free_final_time=False, final_time_guess=tf,
+    )
+    sol = solve_point_to_point(p)
+    assert sol.result.status == "optimal", sol.result.message
+    assert sol.result.final_time == pytest.approx(tf, rel=1e-12)
+    assert sol.energy < coarse_solution.energy
+    assert np.abs(np.asarray(sol.result.outputs["q_dot"]).reshape(-1, 3)[:, 1]).max() <= 1.5 * (1 + LIMIT_RTOL)
+    assert "w" not in p.named_parameters
+
+
+def test_warm_started_sweep_reuses_the_nlp(coarse_solution):
+    """A change of a named parameter only: the same transcription is reused."""
+    p = PointToPoint("L1", start=START, end=END, force_limit=[450, 450, 450], elements=12, w=1e-7)
+    sol = solve_point_to_point(p, previous=coarse_solution, warm_start=True)
+    assert sol.transcription is coarse_solution.transcription
+    assert sol.result.status == "optimal"
+    assert sol.result.final_time >= coarse_solution.result.final_time - 1e-9
