@@ -1,19 +1,25 @@
 """Concrete robot models: Gantry-Tau parameter sets, kinematics, dynamics, modelling-layer models."""
 
 from gtmodel.robots.dynamics import GantryTau3Dynamics
+from gtmodel.robots.f1 import F1Closure, load_f1
 from gtmodel.robots.friction import FRICTION_FORMS, friction_force
 from gtmodel.robots.kinematics import GantryTau3Kinematics, configuration_signs
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, available_parameter_sets, load_parameters
+from gtmodel.robots.six_link import SixLinkClosure, load_six_link
 
 __all__ = [
+    "F1Closure",
+    "load_f1",
     "GantryTau3Dynamics",
     "GantryTau3Kinematics",
     "FRICTION_FORMS",
     "RobotParameters",
+    "SixLinkClosure",
     "available_parameter_sets",
     "configuration_signs",
     "friction_force",
     "gantry_tau_model",
     "load_parameters",
+    "load_six_link",
 ]
