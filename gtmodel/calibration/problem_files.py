@@ -77,7 +77,7 @@ MODEL_TYPES = ("three_link", "three_link_piecewise", "six_link", "six_link_piece
 CALIBRATION_SCHEMA: dict[str, set[str]] = {
     "": {"name", "kind", "description", "data", "truth", "models", "calibration", "pose_selection"},
     "data": {"file", "cart_file"},
-    "truth": {"model", "parameters", "noise", "actuator_errors", "grid_step", "random_poses", "seed", "rotary_travel_deg", "rotary_step_deg"},
+    "truth": {"model", "parameters", "noise", "actuator_errors", "grid_step", "grid_step_deg", "random_poses", "seed", "rotary_travel_deg", "rotary_step_deg"},
     "calibration": {"solver", "max_iter", "align"},
     "pose_selection": {"n"},
 }
@@ -219,7 +219,14 @@ def load_calibration(f: FieldReader, name: str) -> CalibrationDeclaration:
             rotary = np.deg2rad(np.asarray(f.get("truth", "rotary_travel_deg"), dtype=float))
             rot_step = float(np.deg2rad(f.number("truth", "rotary_step_deg", 10.0, positive=True)))
         try:
-            if "grid_step" in f.table("truth", True):
+            if "grid_step" in f.table("truth", True) and tkind == "f1":
+                # the F1's own 6-D workspace grid (position and orientation steps)
+                _, _, q = truth.workspace_grid(
+                    step_m=f.number("truth", "grid_step", positive=True),
+                    step_deg=f.number("truth", "grid_step_deg", 10.0, positive=True),
+                    return_q=True,
+                )
+            elif "grid_step" in f.table("truth", True):
                 q = grid_poses(truth, f.number("truth", "grid_step", positive=True), rotary_travel=rotary, rotary_step=rot_step)
             else:
                 q = random_poses(truth, f.integer("truth", "random_poses", 400, 2, 10**6), seed=seed, rotary_travel=rotary)
@@ -368,6 +375,7 @@ def solve_calibration(decl: CalibrationDeclaration, verbose: bool = False) -> Ca
         data = data.subset(np.sort(selected))
     cal, val = data.split_alternate()
     results = []
+    starts: dict[str, Any] = {}
     for spec in decl.models:
         _log.info("calibrating %s (%s) on %d poses ...", spec["name"], spec["type"], cal.n_poses)
         try:
@@ -381,14 +389,19 @@ def solve_calibration(decl: CalibrationDeclaration, verbose: bool = False) -> Ca
             msg = res.message
         except GtModelError as exc:
             report, msg = None, f"evaluation failed: {exc}"
+        try:  # the uncalibrated start on the same poses (after the frame alignment)
+            start_report = evaluate(spec["model"].transformed(res.rotation, res.translation), val, label="start")
+        except GtModelError:
+            start_report = None
         results.append((spec["name"], res, report, msg))
+        starts[spec["name"]] = start_report
     floor = None
     if decl.truth is not None:
         try:
             floor = evaluate(decl.truth, val, label="true robot (noise floor)")
         except GtModelError:
             floor = None
-    return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0)
+    return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts})
 
 
 def _within_3_std(res: Any, truth: Any) -> dict[str, Any] | None:
@@ -452,6 +465,12 @@ def write_calibration(decl: CalibrationDeclaration, outcome: CalibrationOutcome,
                 row["parameters_vs_truth"] = check
         if rep is not None:
             row.update(rep.to_dict())
+        start = outcome.extra.get("start_reports", {}).get(name)
+        if start is not None:
+            row["start_mean_error_m"] = start.mean_error
+            row["start_max_error_m"] = start.max_error
+            if start.angle_errors is not None:
+                row["start_max_angle_error_deg"] = float(np.rad2deg(start.angle_errors.max()))
         rows.append(row)
     first = rows[0]
     summary: dict[str, Any] = {
