@@ -1,6 +1,6 @@
 """Solve time and iterations of the shipped problems (a benchmark, not a test).
 
-Usage: python benchmarks/bench_solve.py [problems/*.toml]
+Usage: python benchmarks/bench_solve.py [problems/*.toml]   (default: the point_to_point problems)
 
 Printed next to peers measured in the same run, because these machines are noisy:
 - iterations against the thesis' Optimica/IPOPT figure for the same kind of problem
@@ -47,7 +47,11 @@ def peer_double_integrator(elements: int, points: int) -> tuple[float, float, in
 
 
 def main(paths: list[str]) -> None:
-    files = [Path(p) for p in paths] or sorted(Path(__file__).resolve().parents[1].glob("problems/*.toml"))
+    import tomllib
+
+    files = [Path(p) for p in paths] or sorted(
+        p for p in Path(__file__).resolve().parents[1].glob("problems/*.toml") if tomllib.loads(p.read_text())["kind"] == "point_to_point"
+    )
     print(f"casadi {ca.__version__}")
     print(f"{'problem':28s} {'status':10s} {'T_f [s]':>8s} {'iter':>5s} {'iter/thesis':>11s} {'solve [s]':>9s} {'total [s]':>9s} {'peer solve [s]':>14s} {'ratio':>6s}")
     for f in files:
