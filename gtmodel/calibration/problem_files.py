@@ -77,7 +77,7 @@ MODEL_TYPES = ("three_link", "three_link_piecewise", "six_link", "six_link_piece
 CALIBRATION_SCHEMA: dict[str, set[str]] = {
     "": {"name", "kind", "description", "data", "truth", "models", "calibration", "pose_selection"},
     "data": {"file", "cart_file"},
-    "truth": {"model", "parameters", "noise", "actuator_errors", "grid_step", "grid_step_deg", "random_poses", "seed", "rotary_travel_deg", "rotary_step_deg"},
+    "truth": {"model", "parameters", "perturbation", "noise", "actuator_errors", "grid_step", "grid_step_deg", "random_poses", "seed", "rotary_travel_deg", "rotary_step_deg"},
     "calibration": {"solver", "max_iter", "align"},
     "pose_selection": {"n"},
 }
@@ -207,6 +207,8 @@ def load_calibration(f: FieldReader, name: str) -> CalibrationDeclaration:
     else:
         tkind = f.choice("truth", "model", ("three_link", "six_link", "f1"), ...)
         truth = _closure_from(tkind, f.string("truth", "parameters"), f, "truth.parameters")
+        # a robot that differs from its parameter set (built tolerances): every parameter moved
+        truth = _perturbed(truth, f.number("truth", "perturbation", 0.0, nonnegative=True), 7)
         noise_name = f.choice("truth", "noise", ("laser_tracker", "stereo_vision", "none"), "laser_tracker")
         noise = device_noise(noise_name)
         noise_sigma = noise.position_sigma_m
@@ -328,8 +330,8 @@ class CalibrationOutcome:
         """Worst status over the models (``error`` if a model could not be calibrated)."""
         rank = {"optimal": 0, "acceptable": 1, "max_iterations": 2, "error": 3}
         worst = "optimal"
-        for _, res, _, _ in self.results:
-            s = res.status if res is not None else "error"
+        for _, res, rep, _ in self.results:
+            s = res.status if res is not None else ("optimal" if rep is not None else "error")
             worst = s if rank.get(s, 3) > rank.get(worst, 3) else worst
         return worst
 
@@ -448,7 +450,7 @@ def write_calibration(decl: CalibrationDeclaration, outcome: CalibrationOutcome,
 
     rows = []
     for name, res, rep, msg in outcome.results:
-        row: dict[str, Any] = {"name": name, "status": res.status if res else "error", "message": msg}
+        row: dict[str, Any] = {"name": name, "status": res.status if res else ("optimal" if rep is not None else "error"), "message": msg}
         if res is not None:
             ident = res.identifiability
             row.update(

@@ -111,3 +111,15 @@ def test_measured_data_file_with_a_bad_row_names_the_row(tmp_path):
     f.write_text(head + '\n[data]\nfile = "m.csv"\n\n[[models]]' + tail)
     with pytest.raises(ProblemError, match=r"field 'data': .*m\.csv: line 3, column 'q3_m'"):
         load_problem(f)
+
+
+def test_d1_piecewise_actuator_models_beat_the_linear_ones(tmp_path):
+    """Dressler (2012), Table 5.3: with actuator non-linearity in the data, the piecewise-linear
+    actuator models (2, 4) are more accurate than their linear counterparts (1, 3)."""
+    out = tmp_path / "d1"
+    assert main(["solve", str(PROBLEMS_DIR / "d1_error_models.toml"), "--out", str(out), "--quiet", "--no-plots"]) == EXIT_OK
+    s = json.loads((out / "summary.json").read_text())
+    models = {m["name"][0]: m for m in s["models"]}
+    assert all(m["status"] == "optimal" for m in models.values())
+    assert models["2"]["mean_error_m"] < models["1"]["mean_error_m"]
+    assert models["4"]["mean_error_m"] < models["3"]["mean_error_m"]
