@@ -144,17 +144,24 @@ def _closure_from(kind: str, ref: str, f: FieldReader, field_name: str, parametr
         raise ProblemError(f"{f.path}: field '{field_name}': {exc}") from None
 
 
-def _perturbed(model: Any, size: float, seed: int) -> Any:
+def _perturbed(model: Any, size: float, seed: int, keep: Any = ()) -> Any:
     """Start model with every parameter moved by up to ``size`` (lengths/points) at random.
 
     Direction-like parameters (guideway ``v`` and quaternions) are perturbed by ``size``
     relative to their unit size, so the start error stays of the order of ``size`` [m].
+    Parameters matching a pattern in ``keep`` (fixed ones, tie targets) are not moved:
+    a calibration cannot recover a value it holds fixed.
     """
     if size == 0.0:
         return model
+    from fnmatch import fnmatchcase
+
     rng = np.random.default_rng(seed)
     p = model.parameter_vector().copy()
-    p += rng.uniform(-size, size, p.size)
+    step = rng.uniform(-size, size, p.size)
+    names = model.parameter_names()
+    held = [any(fnmatchcase(n, k) or n.startswith(k + "_") for k in keep) for n in names]
+    p += np.where(held, 0.0, step)
     return model.with_parameters(p)
 
 
@@ -261,7 +268,8 @@ def load_calibration(f: FieldReader, name: str) -> CalibrationDeclaration:
             base_type = "three_link" if mtype.startswith("three_link") else "six_link" if mtype.startswith("six_link") else "f1"
             start = _closure_from(base_type, start_ref, f, f"{key}.start", param)
         pert = float(raw.get("perturbation", 0.0))
-        start = _perturbed(start, pert, 1000 + k)
+        held = [*raw.get("fixed", []), *(t.split("=")[0].strip() for t in raw.get("ties", []) if isinstance(t, str))]
+        start = _perturbed(start, pert, 1000 + k, keep=held)
         if mtype.endswith("_piecewise"):
             if cart is None:
                 raise f.fail("data.cart_file", f"cart surveys for the piecewise-linear model '{mname}'")
@@ -391,10 +399,7 @@ def solve_calibration(decl: CalibrationDeclaration, verbose: bool = False) -> Ca
             msg = res.message
         except GtModelError as exc:
             report, msg = None, f"evaluation failed: {exc}"
-        try:  # the uncalibrated start on the same poses (after the frame alignment)
-            start_report = evaluate(spec["model"].transformed(res.rotation, res.translation), val, label="start")
-        except GtModelError:
-            start_report = None
+        start_report = _start_report(spec["model"].transformed(res.rotation, res.translation), val)
         results.append((spec["name"], res, report, msg))
         starts[spec["name"]] = start_report
     floor = None
@@ -404,6 +409,29 @@ def solve_calibration(decl: CalibrationDeclaration, verbose: bool = False) -> Ca
         except GtModelError:
             floor = None
     return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts})
+
+
+def _start_report(model: Any, val: Any) -> Any:
+    """The uncalibrated start on the validation poses; poses where it cannot assemble are skipped."""
+    from gtmodel.calibration.evaluation import evaluate
+
+    try:
+        return evaluate(model, val, label="start")
+    except GtModelError:
+        pass
+    reps = []
+    for k in range(val.n_poses):
+        try:
+            reps.append(evaluate(model, val.subset([k]), label="start"))
+        except GtModelError:
+            continue
+    if not reps:
+        return None
+    from gtmodel.calibration.evaluation import AccuracyReport
+
+    rep = AccuracyReport(np.vstack([r.error_vectors for r in reps]), label="start")
+    rep.skipped = val.n_poses - len(reps)
+    return rep
 
 
 def _within_3_std(res: Any, truth: Any) -> dict[str, Any] | None:
@@ -471,6 +499,7 @@ def write_calibration(decl: CalibrationDeclaration, outcome: CalibrationOutcome,
         if start is not None:
             row["start_mean_error_m"] = start.mean_error
             row["start_max_error_m"] = start.max_error
+            row["start_poses_without_assembly"] = int(getattr(start, "skipped", 0))
             if start.angle_errors is not None:
                 row["start_max_angle_error_deg"] = float(np.rad2deg(start.angle_errors.max()))
         rows.append(row)

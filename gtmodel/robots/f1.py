@@ -82,6 +82,7 @@ __all__ = [
     "FK_TOLERANCE",
     "FK_MAX_ITER",
     "START_SUBSTEPS",
+    "FK_CONTINUATION_STEPS",
     "START_NEWTON_STEPS",
     "GRID_FK_TOLERANCE",
     "ROTATION_TOLERANCE",
@@ -107,6 +108,10 @@ FK_MAX_ITER = 20
 START_SUBSTEPS = 12
 #: ... each followed by this many Newton steps.
 START_NEWTON_STEPS = 2
+#: Steps in ``q`` of the second FK start (:meth:`F1Closure.fk` with the default start): a
+#: pose whose continuation from the home pose fails is reached from the nearest converged
+#: pose of the same call in this many equal steps.
+FK_CONTINUATION_STEPS = 8
 #: Newton steps per evaluation in the NumPy methods: :meth:`F1Closure.ik` and
 #: :meth:`F1Closure.fk` run chunks of this many unrolled steps on the poses not yet
 #: converged (the same iterates as one unrolled run of ``max_iter`` steps).
@@ -921,11 +926,15 @@ class F1Closure(ClosureModel):
             T0a = np.broadcast_to(T0r, (N, 3)).T
             R0m = self._R_cols(_as_rotations(R0, N, "R0"))
         T, R, e, it, ok = self._run_fk(n_it, qa.T, T0a, R0m)
+        if T0 is None and not np.all(ok) and np.any(ok):
+            self._fk_continue(n_it, qa, T, R, e, it, ok)
         if not np.all(ok):
             k = int(np.argmin(ok))
+            ek = np.abs(e[:, k])
+            resid = f"{np.max(ek):.3g} m" if np.all(np.isfinite(ek)) else "not finite (diverged)"
             raise ConvergenceError(
                 f"{self.name}: forward kinematics did not converge for pose row {k} (q = {qa[k].tolist()}): "
-                f"max |link length residual| {np.nanmax(np.abs(e[:, k])):.3g} m > {FK_TOLERANCE:g} m after "
+                f"max |link length residual| {resid} > {FK_TOLERANCE:g} m after "
                 f"{n_it} Newton iterations (no assembly near the start, or max_iter too small); "
                 f"{int(np.sum(~ok))} pose(s) failed"
             )
@@ -933,6 +942,38 @@ class F1Closure(ClosureModel):
         R = self._R_from_cols(R, N)
         out = (T[0], R[0], it[0]) if single else (T, R, it)
         return out if return_iterations else out[:2]
+
+    def _fk_continue(self, n_it: int, qa: np.ndarray, T: np.ndarray, Rc: np.ndarray, e: np.ndarray, it: np.ndarray, ok: np.ndarray) -> None:
+        """Second start for rows whose default-start FK failed (in place).
+
+        A model far from the one whose home pose the default start follows (e.g. a
+        calibration start perturbed by tens of mm) can leave the continuation of
+        :attr:`fk_start_function` on some poses. Such a row is reached from the converged
+        row nearest in ``q`` (scaled: metres, radians) by :data:`FK_CONTINUATION_STEPS`
+        equal steps in ``q``, each a Newton solve started from the previous solution.
+        """
+        N = qa.shape[0]
+        good = np.flatnonzero(ok)
+        bad = np.flatnonzero(~ok)
+        d = np.linalg.norm(qa[bad, None, :] - qa[None, good, :], axis=2)
+        src = good[np.argmin(d, axis=1)]
+        Rcols = Rc.reshape(3, N, 3)
+        Tb = T[:, src].copy()
+        Rb = Rcols[:, src, :].reshape(3, -1)
+        fine = np.ones(bad.size, dtype=bool)
+        for s in range(1, FK_CONTINUATION_STEPS + 1):
+            w = s / FK_CONTINUATION_STEPS
+            qs = ((1.0 - w) * qa[src] + w * qa[bad]).T
+            Tb, Rb, eb, itb, okb = self._run_fk(n_it, qs, Tb, Rb)
+            fine &= okb
+            it[bad] += itb
+        for j, k in enumerate(bad):
+            if fine[j] and np.all(np.isfinite(eb[:, j])):
+                T[:, k] = Tb[:, j]
+                Rcols[:, k, :] = Rb.reshape(3, bad.size, 3)[:, j, :]
+                e[:, k] = eb[:, j]
+                ok[k] = True
+        Rc[:] = Rcols.reshape(3, -1)
 
     def ik(
         self,
