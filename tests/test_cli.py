@@ -172,3 +172,23 @@ def test_csv_forces_replayed_through_the_model_reproduce_the_path(solved):
     model = gantry_tau_model(robot["parameters"], states="tcp", friction=robot["friction"], friction_width=robot["friction_width"])
     sim = model.simulate(data["t"], x0={"T": T[0], "T_dot": np.zeros(3)}, u=(tau[:-1] + tau[1:]) / 2, integrator="idas", rtol=1e-9, atol=1e-11)
     assert np.abs(sim.x["T"] - T).max() < REPLAY_TOL
+
+
+def test_infeasible_duration_bounds_give_status_infeasible(tmp_path, capsys):
+    """Limits too tight for the distance: the motion cannot be done within 0.2 s at 450 N."""
+    text = (
+        BASE.read_text()
+        .replace("bounds = [0.05, 10.0]", "bounds = [0.05, 0.2]")
+        .replace("initial_guess = 1.0 ", "initial_guess = 0.2 ")
+        .replace("elements = 50 ", "elements = 15 ")
+    )
+    f = tmp_path / "too_fast.toml"
+    f.write_text(text)
+    out = tmp_path / "out"
+    code = main(["solve", str(f), "--out", str(out), "--quiet"])
+    assert code == EXIT_NOT_OPTIMAL
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "infeasible"
+    assert summary["last_iterate"] is True
+    assert not (out / "trajectory.csv").exists()
+    assert "Traceback" not in capsys.readouterr().err
