@@ -181,6 +181,25 @@ def main() -> None:
         t_solve = min(l1v.solve(gp).solve_time for _ in range(args.repeat))
         print(f"{'L1 450 N, +viscous':22s} {n:6d} {sol.final_time:15.10f} {'-':>15s} {'-':>9s} {t_solve * 1e3:9.2f} {t_total * 1e3:9.2f} {'-':>9s} {'-':>11s}  ({sol.status}, {sol.method})")
 
+    # 4. the direct (free-path) minimum-time problem: iterations and wall time, against the
+    #    thesis' 199 IPOPT iterations (Table 3.1) and the path-constrained solve of the same poses
+    from pathlib import Path
+
+    from gtmodel.problems import load_problem, solve_problem
+
+    THESIS_ITERATIONS = 199
+    problem = load_problem(Path(__file__).resolve().parents[1] / "problems" / "l1_time_optimal.toml")
+    t0 = time.perf_counter()
+    direct = solve_problem(problem)
+    total = time.perf_counter() - t0
+    r = direct.result
+    _, line_sol = best_of(lambda: l1v.solve(500), 1)
+    print()
+    print(f"direct minimum time (problems/l1_time_optimal.toml): {r.status}, T_f {r.final_time:.4f} s, "
+          f"{r.iterations} IPOPT iterations ({r.iterations / THESIS_ITERATIONS:.2f} x the thesis' {THESIS_ITERATIONS}), "
+          f"solve {r.solve_time:.2f} s, build + solve {total:.2f} s; path-constrained on the same poses "
+          f"{line_sol.final_time:.4f} s in {line_sol.solve_time * 1e3:.1f} ms (ratio {r.solve_time / line_sol.solve_time:.0f})")
+
 
 if __name__ == "__main__":
     main()
