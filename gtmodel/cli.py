@@ -74,7 +74,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _setup_logging(quiet: bool) -> None:
+    # one CLI handler at a time, bound to the current stderr (main() may run repeatedly in
+    # one process, e.g. from tests or notebooks, each time with another sys.stderr)
+    for old in [h for h in _log.handlers if getattr(h, "_gtmodel_cli", False)]:
+        _log.removeHandler(old)
     handler = logging.StreamHandler(sys.stderr)
+    handler._gtmodel_cli = True  # type: ignore[attr-defined]
     handler.setFormatter(logging.Formatter("%(message)s"))
     _log.addHandler(handler)
     _log.setLevel(logging.WARNING if quiet else logging.INFO)
