@@ -6,17 +6,9 @@ expression the error message must match (it must name the field).
 
 from __future__ import annotations
 
-from .conftest import PROBLEMS_DIR
+from .conftest import PROBLEMS_DIR, replace_once as _replace
 
 BASE = PROBLEMS_DIR / "l1_time_optimal.toml"
-
-
-def _replace(old: str, new: str):
-    def edit(text: str) -> str:
-        assert old in text, f"test table out of date: {old!r} not in {BASE.name}"
-        return text.replace(old, new, 1)
-
-    return edit
 
 
 BAD_PROBLEMS = [

@@ -15,6 +15,16 @@ NOTEBOOKS_DIR = REPO / "notebooks"
 SHARED_REFERENCE = REPO.parent / "shared" / "reference"
 
 
+def replace_once(old: str, new: str):
+    """An edit of a shipped problem file for a table of bad inputs (fails if ``old`` is gone)."""
+
+    def edit(text: str) -> str:
+        assert old in text, f"test table out of date: {old!r} is not in the file"
+        return text.replace(old, new, 1)
+
+    return edit
+
+
 @pytest.fixture(scope="session")
 def repo() -> Path:
     return REPO

@@ -17,7 +17,7 @@ from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem
 from gtmodel.robots.parameters import load_parameters
 
-from ..conftest import PROBLEMS_DIR
+from ..conftest import PROBLEMS_DIR, replace_once as _edit
 
 L1_FILE = PROBLEMS_DIR / "l1_calibration.toml"
 #: Validation mean error vs the true model's on the same data (issue: within 20 %).
@@ -66,13 +66,6 @@ def test_parameters_file_is_a_robot_parameter_set(l1):
     p = load_parameters(out / "parameters.toml")
     assert p.kinematics.model == "modified" and p.kinematics.L.shape == (3,)
 
-
-def _edit(old: str, new: str):
-    def edit(text: str) -> str:
-        assert old in text, f"test table out of date: {old!r}"
-        return text.replace(old, new, 1)
-
-    return edit
 
 
 BAD = [

@@ -16,7 +16,7 @@ from gtmodel.cli import EXIT_BAD_INPUT, EXIT_NOT_OPTIMAL, EXIT_OK, main
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem
 
-from ..conftest import PROBLEMS_DIR
+from ..conftest import PROBLEMS_DIR, replace_once as _edit
 
 PATH_FILE = PROBLEMS_DIR / "l1_path_constrained.toml"
 #: Duration of the reachability solution vs IPOPT on the same grid, relative.
@@ -59,13 +59,6 @@ def test_duration_equals_ipopt_on_the_same_grid(solved):
     nlp = PathConstrainedProblem(d.path, d.constraints, robot=d.robot, configuration=d.configuration).solve_nlp(grid=d.grid)
     assert nlp.final_time == pytest.approx(summary["final_time_s"], rel=DURATION_RTOL)
 
-
-def _edit(old: str, new: str):
-    def edit(text: str) -> str:
-        assert old in text, f"test table out of date: {old!r}"
-        return text.replace(old, new, 1)
-
-    return edit
 
 
 BAD = [
