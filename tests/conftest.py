@@ -12,7 +12,8 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 REPO = Path(__file__).resolve().parents[1]
 PROBLEMS_DIR = REPO / "problems"
 NOTEBOOKS_DIR = REPO / "notebooks"
-SHARED_REFERENCE = REPO.parent / "shared" / "reference"
+#: The reference figures (copies of shared/reference/*.toml, see tests/reference/README.md).
+SHARED_REFERENCE = REPO / "tests" / "reference"
 
 
 def replace_once(old: str, new: str):

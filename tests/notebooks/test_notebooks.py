@@ -16,7 +16,8 @@ import pytest
 nbformat = pytest.importorskip("nbformat")
 nbclient = pytest.importorskip("nbclient")
 
-NOTEBOOKS_DIR = Path(__file__).resolve().parents[2] / "notebooks"
+REPO = Path(__file__).resolve().parents[2]
+NOTEBOOKS_DIR = REPO / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOKS_DIR.glob("*.ipynb"))
 IDS = [p.name for p in NOTEBOOKS]
 
@@ -36,6 +37,9 @@ def test_notebook_has_no_outputs(path: Path) -> None:
 def test_notebook_executes(path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("MPLBACKEND", "Agg")  # inherited by the kernel process
     monkeypatch.chdir(tmp_path)
+    # notebooks that read shipped problem files find them here (the package may be installed
+    # non-editable, away from the checkout)
+    monkeypatch.setenv("GTMODEL_PROBLEMS", str(REPO / "problems"))
     copy = tmp_path / path.name
     shutil.copy(path, copy)
     nb = nbformat.read(copy, as_version=4)
