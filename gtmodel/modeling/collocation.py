@@ -92,18 +92,20 @@ def _merge_options(verbose: bool, solver_options: Mapping[str, Any] | None) -> d
 
 
 def _collocation_coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
-    """Derivative matrix, continuity, quadrature and extrapolation weights."""
+    """Derivative matrix, continuity, quadrature and extrapolation weights.
+
+    ``C`` and ``D`` from ``casadi.collocation_coeff`` (Lagrange polynomials through ``0``
+    and the collocation points), which keeps the exact zeros of the scheme: for Radau the
+    end of an element is its last collocation point, so ``D = (0, ..., 0, 1)`` and a
+    continuity constraint involves two states only. ``B`` integrates the polynomial through
+    the collocation points (inputs and algebraics have no value at the element start).
+    """
     tau = np.array(ca.collocation_points(d, scheme), dtype=float)
     root = np.concatenate([[0.0], tau])
+    c_, d_, _ = ca.collocation_coeff(tau.tolist())
     C = np.zeros((d + 1, d + 1))
-    D = np.zeros(d + 1)
-    for j in range(d + 1):
-        coeff = np.zeros(d + 1)
-        coeff[j] = 1.0
-        poly = np.poly1d(np.polyfit(root, coeff, d))
-        D[j] = poly(1.0)
-        dpoly = np.polyder(poly)
-        C[j] = dpoly(root)
+    C[:, 1:] = np.array(c_, dtype=float)  # C[r, j]: derivative of basis r at root j (j >= 1)
+    # quadrature weights of the collocation points (interpolatory, without the element start)
     B = np.zeros(d)
     for j in range(d):
         coeff = np.zeros(d)
@@ -115,7 +117,7 @@ def _collocation_coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
         "tau": tau,
         "root": root,
         "C": C,
-        "D": D,
+        "D": np.array(d_, dtype=float).reshape(-1),
         "B": B,
         "L0": lagrange_basis(tau, np.array([0.0]))[0],
         "L1": lagrange_basis(tau, np.array([1.0]))[0],
@@ -143,6 +145,20 @@ class CollocationTranscription:
         ``"expand"``, ...); merged over the defaults ``max_iter=3000``, ``tol=1e-8``,
         ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings)
         unless ``verbose``.
+    nominal : mapping of str to float or array_like, optional
+        Nominal magnitudes of states, inputs, algebraic variables (by name) and of
+        ``"final_time"``: the NLP works with ``variable / nominal`` (Modelica's
+        ``nominal`` attribute, JModelica's variable scaling), so that variables of
+        different units (forces in hundreds of N, positions in m) are of order one.
+        Results, guesses and bounds stay in the model's units. Default: no scaling.
+    derivatives : {"assembled", "casadi"}, optional
+        How the Jacobian of the constraints and the Hessian of the Lagrangian are
+        built. ``"assembled"`` (default): differentiate the per-point functions (model
+        equations, path constraints, Lagrange integrand) once and assemble the sparse
+        matrices from their values at each collocation point; the collocation
+        constraints call the per-point function instead of copying its expression
+        graph. ``"casadi"``: CasADi differentiates the whole expression graph of the
+        NLP (several times slower to build, the same values).
 
     Raises
     ------
@@ -162,6 +178,8 @@ class CollocationTranscription:
         scheme: str = "radau",
         verbose: bool = False,
         solver_options: Mapping[str, Any] | None = None,
+        nominal: Mapping[str, Any] | None = None,
+        derivatives: str = "assembled",
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -175,9 +193,35 @@ class CollocationTranscription:
         self.elements = int(elements)
         self.points = int(points)
         self.scheme = scheme
+        if derivatives not in ("assembled", "casadi"):
+            raise InputError(f"derivatives must be 'assembled' or 'casadi', got {derivatives!r}")
+        self.derivatives = derivatives
         self.options = _merge_options(verbose, solver_options)
         self.dae: FlatDAE = optimization.flat()
+        self.nominal = self._nominal_values(nominal)
         self._build()
+
+    def _nominal_values(self, nominal: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
+        """Per-kind scale vectors ``{"x", "z", "u", "tf"}`` from the ``nominal`` mapping."""
+        dae = self.dae
+        out = {"x": np.ones(dae.nx), "z": np.ones(dae.nz), "u": np.ones(dae.nu), "tf": np.ones(1)}
+        known = {"final_time": ("tf", slice(0, 1))}
+        for kind, vars_ in (("x", dae.x_vars), ("z", dae.z_vars), ("u", dae.u_vars)):
+            for name, sl in vars_.items():
+                known[name] = (kind, sl)
+        for name, value in (nominal or {}).items():
+            if name not in known:
+                raise InputError(f"nominal: {name!r} is not a state, input, algebraic variable or 'final_time'")
+            kind, sl = known[name]
+            n = sl.stop - sl.start
+            try:
+                v = np.broadcast_to(np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) else float(value), (n,))
+            except (TypeError, ValueError):
+                raise InputError(f"nominal of {name!r}: expected a positive number or {n} of them, got {value!r}") from None
+            if not np.all(np.isfinite(v) & (v > 0)):
+                raise InputError(f"nominal of {name!r}: expected positive finite values, got {value!r}")
+            out[kind][sl] = v
+        return out
 
     # ------------------------------------------------------------------ build
     def _build(self) -> None:
@@ -187,29 +231,41 @@ class CollocationTranscription:
         self._co = co
         nx, nz, nu = dae.nx, dae.nz, dae.nu
         t0 = opt.start_time
+        assembled = self.derivatives == "assembled"
 
         # expression functions of (t, x, z, u, p, tf); der() replaced by the ODE rhs
         args = [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time]
 
+        def subst(e: ca.SX) -> ca.SX:
+            return ca.substitute(e, dae.xdot, dae.ode_expr) if dae.nx else e
+
         def fn(name: str, exprs: list[ca.SX]) -> ca.Function:
             e = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
-            if dae.nx:
-                e = ca.substitute(e, dae.xdot, dae.ode_expr)
-            return ca.Function(name, args, [e])
+            return ca.Function(name, args, [subst(e)])
 
-        path_fn = fn("path", [c.expr for c in opt.path_constraints])
         start_c = [c for c in opt.point_constraints if c.at == "start"]
         final_c = [c for c in opt.point_constraints if c.at == "final"]
         start_fn = fn("point_start", [c.expr for c in start_c])
         final_fn = fn("point_final", [c.expr for c in final_c])
         mayer_fn = fn("mayer", [opt.mayer])
         lagr_fn = fn("lagrange", [opt.lagrange])
-        ode_fn = ca.Function("ode", args[:5], [dae.ode_expr])
-        alg_fn = ca.Function("alg", args[:5], [dae.alg_expr])
+        # what is imposed at each collocation point: the model equations and the path
+        # constraints, one function with common subexpressions (kinematics, mass matrix)
+        # computed once
+        path_expr = subst(ca.vertcat(*[c.expr for c in opt.path_constraints])) if opt.path_constraints else ca.SX(0, 1)
+        point_out = ca.cse([dae.ode_expr, dae.alg_expr, path_expr])
+        point_fn = ca.Function("point", args, point_out)
+        # in the NLP graph a call node per point (not a copy of the graph) when the
+        # derivatives are assembled from the per-point ones below
+        point_call = ca.Function("point_call", args, point_out, {"never_inline": True}) if assembled else point_fn
+        npath = int(path_expr.numel())
 
         P = dae.p
         free = opt.free_final_time
-        T = ca.SX.sym("tf") if free else ca.SX(opt.final_time_value)
+        noms = self.nominal
+        tf_nom = float(noms["tf"][0])
+        T_sym = ca.SX.sym("tf")
+        T = T_sym * tf_nom if free else ca.SX(opt.final_time_value)
         h = (T - t0) / N
 
         x_lb, x_ub = opt.bounds_vectors(dae, "x")
@@ -219,31 +275,46 @@ class CollocationTranscription:
         w: list[ca.SX] = []
         lbw: list[np.ndarray] = []
         ubw: list[np.ndarray] = []
+        scale: list[np.ndarray] = []
         blocks: list[tuple[str, int, int]] = []  # (kind, element, tau index)
+        offsets: dict[tuple[str, int, int], int] = {}  # first index in w of each block
         g: list[ca.SX] = []
         lbg: list[np.ndarray] = []
         ubg: list[np.ndarray] = []
+        n_w = [0]
+        n_g = [0]
 
         def var(kind: str, k: int, j: int, n: int, lb: np.ndarray, ub: np.ndarray) -> ca.SX:
             v = ca.SX.sym(f"{kind}_{k}_{j}", n)
+            sc = noms[kind]
+            offsets[(kind, k, j)] = n_w[0]
+            n_w[0] += n
             w.append(v)
-            lbw.append(lb)
-            ubw.append(ub)
+            lbw.append(lb / sc)
+            ubw.append(ub / sc)
+            scale.append(sc)
             blocks.append((kind, k, j))
-            return v
+            return v * ca.DM(sc) if np.any(sc != 1.0) else v
 
-        def con(expr: ca.SX, lb: np.ndarray, ub: np.ndarray) -> None:
+        def con(expr: ca.SX, lb: np.ndarray, ub: np.ndarray) -> int:
+            first = n_g[0]
             if expr.numel():
+                n_g[0] += int(expr.numel())
                 g.append(expr)
                 lbg.append(np.broadcast_to(lb, (expr.numel(),)).astype(float))
                 ubg.append(np.broadcast_to(ub, (expr.numel(),)).astype(float))
+            return first
 
         path_lb = np.concatenate([c.lb for c in opt.path_constraints]) if opt.path_constraints else np.zeros(0)
         path_ub = np.concatenate([c.ub for c in opt.path_constraints]) if opt.path_constraints else np.zeros(0)
+        point_lb = np.concatenate([np.zeros(nx + nz), path_lb])
+        point_ub = np.concatenate([np.zeros(nx + nz), path_ub])
 
         Xs: list[list[ca.SX]] = []
         Us: list[list[ca.SX]] = []
         Zs: list[list[ca.SX]] = []
+        rows_point: list[tuple[int, int, int]] = []  # (k, j, first row) of the point constraints
+        rows_cont: list[tuple[int, int]] = []  # (k, first row) of the continuity constraints
         J = ca.SX(0)
         Xk0 = var("x", 0, 0, nx, x_lb, x_ub)
         for k in range(N):
@@ -255,21 +326,22 @@ class CollocationTranscription:
             Zs.append(Zk)
             for j in range(1, d + 1):
                 tkj = t0 + (k + co["root"][j]) * h
-                xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1))
-                fkj = ode_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P)
-                con(h * fkj - xp, np.zeros(1), np.zeros(1))
-                con(alg_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P), np.zeros(1), np.zeros(1))
-                if opt.path_constraints:
-                    con(path_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T), path_lb, path_ub)
+                xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1) if co["C"][r, j] != 0.0)
+                fkj, akj, pkj = point_call(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T)
+                first = con(ca.vertcat(h * fkj - xp, akj, pkj), point_lb, point_ub)
+                rows_point.append((k, j, first))
                 J = J + co["B"][j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T)
-            xend = sum(co["D"][r] * Xk[r] for r in range(d + 1))
+            xend = sum(co["D"][r] * Xk[r] for r in range(d + 1) if co["D"][r] != 0.0)
             Xk0 = var("x", k + 1, 0, nx, x_lb, x_ub)
-            con(Xk0 - xend, np.zeros(1), np.zeros(1))
+            rows_cont.append((k, con(Xk0 - xend, np.zeros(1), np.zeros(1))))
         XN = Xk0
         if free:
-            w.append(T)
-            lbw.append(np.array([opt.final_time_bounds[0]]))
-            ubw.append(np.array([opt.final_time_bounds[1]]))
+            offsets[("tf", 0, 0)] = n_w[0]
+            n_w[0] += 1
+            w.append(T_sym)
+            lbw.append(np.array([opt.final_time_bounds[0]]) / tf_nom)
+            ubw.append(np.array([opt.final_time_bounds[1]]) / tf_nom)
+            scale.append(np.array([tf_nom]))
             blocks.append(("tf", 0, 0))
 
         def extrap(vals: list[ca.SX], weights: np.ndarray, n: int) -> ca.SX:
@@ -279,24 +351,21 @@ class CollocationTranscription:
 
         u_start, z_start = extrap(Us[0], co["L0"], nu), extrap(Zs[0], co["L0"], nz)
         u_final, z_final = extrap(Us[-1], co["L1"], nu), extrap(Zs[-1], co["L1"], nz)
+        ends: list[tuple[int, ca.SX]] = []  # (first row, expression) of the point constraints
         if start_c:
-            con(
-                start_fn(t0, Xs[0][0], z_start, u_start, P, T),
-                np.concatenate([c.lb for c in start_c]),
-                np.concatenate([c.ub for c in start_c]),
-            )
+            e = start_fn(t0, Xs[0][0], z_start, u_start, P, T)
+            ends.append((con(e, np.concatenate([c.lb for c in start_c]), np.concatenate([c.ub for c in start_c])), e))
         if final_c:
-            con(
-                final_fn(T, XN, z_final, u_final, P, T),
-                np.concatenate([c.lb for c in final_c]),
-                np.concatenate([c.ub for c in final_c]),
-            )
-        J = J + mayer_fn(T, XN, z_final, u_final, P, T)
+            e = final_fn(T, XN, z_final, u_final, P, T)
+            ends.append((con(e, np.concatenate([c.lb for c in final_c]), np.concatenate([c.ub for c in final_c])), e))
+        mayer = mayer_fn(T, XN, z_final, u_final, P, T)
+        J = J + mayer
 
         wv = ca.vertcat(*w)
         gv = ca.vertcat(*g) if g else ca.SX(0, 1)
         self._blocks = blocks
         self._block_sizes = [int(b.numel()) for b in w]
+        self._scale = np.concatenate(scale) if scale else np.zeros(0)
         self._lbw = np.concatenate(lbw) if lbw else np.zeros(0)
         self._ubw = np.concatenate(ubw) if ubw else np.zeros(0)
         self._lbg = np.concatenate(lbg) if lbg else np.zeros(0)
@@ -307,18 +376,141 @@ class CollocationTranscription:
         zc = ca.horzcat(*[ca.horzcat(*Zk) for Zk in Zs]) if nz else ca.SX(0, N * d)
         self._extract = ca.Function("extract", [wv], [xc, uc, zc, XN, ca.vertcat(T)])
         self.key = (id(self), N, d, self.scheme, int(wv.numel()))
+        nlp_options = dict(self.options)
+        if assembled:
+            nlp_options["jac_g"], nlp_options["hess_lag"] = self._assembled_derivatives(
+                wv, gv, P, point_fn, lagr_fn, offsets, rows_point, rows_cont, ends, mayer, t0, tf_nom, npath
+            )
         try:
             self.solver = ca.nlpsol(
                 f"{dae.name}_collocation",
                 "ipopt",
                 {"x": wv, "p": P, "f": J, "g": gv},
-                self.options,
+                nlp_options,
             )
         except RuntimeError as exc:
             raise SolverError(f"could not build the IPOPT solver: {exc}") from exc
         _log.debug(
             "collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel()
         )
+
+    def _assembled_derivatives(
+        self,
+        wv: ca.SX,
+        gv: ca.SX,
+        P: ca.SX,
+        point_fn: ca.Function,
+        lagr_fn: ca.Function,
+        offsets: Mapping[tuple[str, int, int], int],
+        rows_point: list[tuple[int, int, int]],
+        rows_cont: list[tuple[int, int]],
+        ends: list[tuple[int, ca.SX]],
+        mayer: ca.SX,
+        t0: float,
+        tf_nom: float,
+        npath: int,
+    ) -> tuple[ca.Function, ca.Function]:
+        """Constraint Jacobian and Lagrangian Hessian assembled from per-point derivatives.
+
+        At collocation point ``(k, j)`` the nonlinear constraints ``h f(t, x, z, u), g_alg,
+        path`` and the Lagrange term depend only on that point's ``x, z, u`` and on the
+        final time; the collocation polynomial and continuity terms are linear with the
+        constant coefficients ``C`` and ``D``. So the point functions are differentiated
+        once (small expressions) and their derivatives, called at every point, are placed
+        into the sparse NLP matrices. The point constraints at the start and final time
+        (few) are differentiated directly. Returns the ``jac_g`` and ``hess_lag``
+        functions of ``casadi.nlpsol``.
+        """
+        opt, dae, co, noms = self.optimization, self.dae, self._co, self.nominal
+        N, d = self.elements, self.points
+        nx, nz, nu = dae.nx, dae.nz, dae.nu
+        free = opt.free_final_time
+        nw, ng = int(wv.numel()), int(gv.numel())
+        nr = nx + nz + npath
+
+        # local functions of the scaled point variables v = (x, z, u[, tf])
+        xs, zs, us = ca.SX.sym("xs", nx), ca.SX.sym("zs", nz), ca.SX.sym("us", nu)
+        ts = ca.SX.sym("ts") if free else ca.SX(0, 1)
+        c, b, lam_f = ca.SX.sym("c"), ca.SX.sym("b"), ca.SX.sym("lam_f")
+        lam_r = ca.SX.sym("lam_r", nr)
+        T = ts * tf_nom if free else ca.SX(opt.final_time_value)
+        h = (T - t0) / N
+        t = t0 + c * h
+        x, z, u = xs * ca.DM(noms["x"]), zs * ca.DM(noms["z"]), us * ca.DM(noms["u"])
+        f, a, p = point_fn(t, x, z, u, P, T)
+        r = ca.vertcat(h * f, a, p)
+        v = ca.vertcat(xs, zs, us, ts)
+        jac_r = ca.jacobian(r, v)
+        lag = ca.dot(lam_r, r) + lam_f * b * h * lagr_fn(t, x, z, u, P, T)
+        hess_r = ca.triu(ca.hessian(lag, v)[0])
+        local_in = [xs, zs, us, ts, P, c]
+        jac_fn = ca.Function("point_jac", local_in, [jac_r], {"never_inline": True})
+        hess_fn = ca.Function("point_hess", local_in + [b, lam_f, lam_r], [hess_r], {"never_inline": True})
+        jr, jc = jac_r.sparsity().get_triplet()
+        hr, hc = hess_r.sparsity().get_triplet()
+
+        lam_f_g = ca.SX.sym("lam_f")
+        lam_g = ca.SX.sym("lam_g", ng)
+        tf_index = [offsets[("tf", 0, 0)]] if free else []
+        tf_arg = wv[tf_index[0]] if free else ca.SX(0, 1)
+        jac: dict[tuple[int, int], list] = {}
+        hess: dict[tuple[int, int], list] = {}
+
+        def add(store: dict, row: int, col: int, value: Any) -> None:
+            store.setdefault((row, col), []).append(value)
+
+        for k, j, first in rows_point:
+            ox, oz, ou = offsets[("x", k, j)], offsets[("z", k, j)], offsets[("u", k, j)]
+            cols = np.concatenate([ox + np.arange(nx), oz + np.arange(nz), ou + np.arange(nu), tf_index]).astype(int)
+            arg = [wv[ox:ox + nx], wv[oz:oz + nz], wv[ou:ou + nu], tf_arg, P, k + co["root"][j]]
+            for value, rr, cc in zip(jac_fn(*arg).nonzeros(), jr, jc):
+                add(jac, first + rr, int(cols[cc]), value)
+            # collocation polynomial: - sum_r C[r, j] x_{k,r} (scaled variables)
+            for r_ in range(d + 1):
+                if co["C"][r_, j] != 0.0:
+                    o = offsets[("x", k, r_)]
+                    for i in range(nx):
+                        add(jac, first + i, o + i, -co["C"][r_, j] * noms["x"][i])
+            hk = hess_fn(*arg, co["B"][j - 1], lam_f_g, lam_g[first:first + nr])
+            for value, rr, cc in zip(hk.nonzeros(), hr, hc):
+                R, C_ = int(cols[rr]), int(cols[cc])
+                add(hess, min(R, C_), max(R, C_), value)
+        for k, first in rows_cont:
+            o = offsets[("x", k + 1, 0)]
+            for i in range(nx):
+                add(jac, first + i, o + i, noms["x"][i])
+            for r_ in range(d + 1):
+                if co["D"][r_] != 0.0:
+                    o = offsets[("x", k, r_)]
+                    for i in range(nx):
+                        add(jac, first + i, o + i, -co["D"][r_] * noms["x"][i])
+        # point constraints at the ends and the Mayer term: few, differentiated directly
+        lag_ends = lam_f_g * mayer
+        for first, e in ends:
+            n = int(e.numel())
+            je = ca.jacobian(e, wv)
+            for value, rr, cc in zip(je.nonzeros(), *je.sparsity().get_triplet()):
+                add(jac, first + rr, cc, value)
+            lag_ends = lag_ends + ca.dot(lam_g[first:first + n], e)
+        he = ca.triu(ca.hessian(lag_ends, wv)[0])
+        for value, rr, cc in zip(he.nonzeros(), *he.sparsity().get_triplet()):
+            add(hess, rr, cc, value)
+
+        def matrix(store: dict, nrow: int, ncol: int) -> ca.SX:
+            keys = sorted(store, key=lambda rc: (rc[1], rc[0]))  # column-major, as CasADi stores
+            sp = ca.Sparsity.triplet(nrow, ncol, [rc[0] for rc in keys], [rc[1] for rc in keys])
+            values = [ca.SX(0)] * len(keys)
+            for i, key in enumerate(keys):
+                terms = store[key]
+                values[i] = terms[0] if len(terms) == 1 else sum(terms[1:], terms[0])
+            return ca.SX(sp, ca.vertcat(*values)) if keys else ca.SX(nrow, ncol)
+
+        jac_g = ca.Function("nlp_jac_g", [wv, P], [gv, matrix(jac, ng, nw)], ["x", "p"], ["g", "jac_g_x"])
+        hess_lag = ca.Function(
+            "nlp_hess_l", [wv, P, lam_f_g, lam_g], [matrix(hess, nw, nw)], ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]
+        )
+        return jac_g, hess_lag
+
 
     # ------------------------------------------------------------------ guesses
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float) -> np.ndarray:
@@ -348,7 +540,7 @@ class CollocationTranscription:
             w0.append(vals)
         w = np.concatenate(w0) if w0 else np.zeros(0)
         lo, hi = self._lbw, self._ubw
-        return np.clip(w, lo, hi)
+        return np.clip(w / self._scale, lo, hi)  # the NLP works with variable / nominal
 
     # ------------------------------------------------------------------ solve
     def solve(
@@ -452,7 +644,7 @@ class CollocationTranscription:
         if g_val.size:
             viol.append(float(np.max(np.maximum(self._lbg - g_val, g_val - self._ubg))))
         if w.size:
-            viol.append(float(np.max(np.maximum(self._lbw - w, w - self._ubw))))
+            viol.append(float(np.max(np.maximum(self._lbw - w, w - self._ubw) * self._scale)))
         max_viol = float(max(viol)) if np.all(np.isfinite(g_val)) else float("nan")
         xc, uc, zc, _xn, T = self._extract(w)
         tf = float(T)
