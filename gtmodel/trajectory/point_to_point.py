@@ -62,6 +62,7 @@ SAMPLE_TIME = 0.004
 #: their limits (:func:`solve_point_to_point`) this halves the iterations of the L1
 #: problem and six variants of it (median 165 -> 70; the L1 problem 119 -> 49).
 #: ``perturb_always_cd`` is neutral on the median but gives the L1 problem 49 instead of 64.
+#: The objective scaling is applied only with a free final time (see the function).
 SOLVER_OPTIONS = {"obj_scaling_factor": 1e4, "perturb_always_cd": "yes"}
 #: Leading columns of the trajectory table, in this order.
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3")
@@ -663,6 +664,10 @@ def solve_point_to_point(
     :data:`SOLVER_OPTIONS`; neither changes the problem, only the path IPOPT takes.
     """
     options = {"max_iter": problem.max_iter, "tol": problem.tol, **SOLVER_OPTIONS}
+    if not problem.free_final_time:
+        # the objective scaling is tuned for a cost in seconds (free final time); a
+        # fixed-time energy cost (~1e5 N^2 s) needs none
+        options.pop("obj_scaling_factor")
     if previous is not None and previous.transcription is not None and _structure(previous.problem) == _structure(problem):
         tr = previous.transcription
         guess = previous.result if warm_start else None
