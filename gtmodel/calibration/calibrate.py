@@ -597,8 +597,11 @@ def tcp_errors(model: ClosureModel, q: np.typing.ArrayLike, T: np.typing.ArrayLi
     Ta = np.atleast_2d(np.asarray(T, dtype=float))
     if Ta.shape != (qa.shape[0], 3):
         raise InputError(f"T: expected shape ({qa.shape[0]}, 3) to match q, got {Ta.shape}")
-    Tf, _ = model.fk(qa)
-    return np.linalg.norm(np.atleast_2d(Tf) - Ta, axis=1)
+    from gtmodel.calibration.evaluation import evaluate
+    from gtmodel.calibration.measurements import MeasurementSet
+
+    # one implementation of eq. 5.5: the accuracy report's
+    return evaluate(model, MeasurementSet(q=qa, T=Ta)).errors
 
 
 # ------------------------------------------------------------------ data
