@@ -47,8 +47,38 @@ __all__ = [
 
 _log = logging.getLogger("gtmodel")
 
+#: Problem kinds understood by :func:`load_problem`, each with the module that reads,
+#: solves and writes it: ``(module, load, solve, write)``. ``load(f, name)`` builds the
+#: declaration from a :class:`~gtmodel._fields.FieldReader`, ``solve(decl, verbose=...)``
+#: returns a solution, ``write(decl, solution, out, plots, name)`` returns the summary
+#: fields and the written file names. Adding a kind is one entry here.
+_KIND_HANDLERS: dict[str, tuple[str, str, str, str]] = {
+    "point_to_point": ("gtmodel.trajectory.problem_files", "load_point_to_point", "", "write_point_to_point"),
+    "path_constrained": ("gtmodel.trajectory.problem_files", "load_path_constrained", "solve_path_declaration", "write_path_constrained"),
+    "calibration": ("gtmodel.calibration.problem_files", "load_calibration", "solve_calibration", "write_calibration"),
+    "dynamic_identification": (
+        "gtmodel.calibration.dynamic_problem_files",
+        "load_dynamic_identification",
+        "solve_dynamic_identification",
+        "write_dynamic_identification",
+    ),
+    "elasto_geometric_calibration": (
+        "gtmodel.calibration.elasto_geometric_problem_files",
+        "load_elasto_geometric",
+        "solve_elasto_geometric",
+        "write_elasto_geometric",
+    ),
+}
+
 #: Problem kinds understood by :func:`load_problem`.
-KINDS = ("point_to_point", "path_constrained", "calibration")
+KINDS = tuple(_KIND_HANDLERS)
+
+
+def _handler(kind: str, role: int) -> Callable[..., Any]:
+    import importlib
+
+    module = importlib.import_module(_KIND_HANDLERS[kind][0])
+    return getattr(module, _KIND_HANDLERS[kind][role])
 
 
 @dataclass
@@ -121,20 +151,7 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
     description = f.get("", "description", "")
     if not isinstance(description, str):
         raise f.fail("description", "a string", description)
-    if kind == "point_to_point":
-        from gtmodel.trajectory.problem_files import load_point_to_point
-
-        decl = load_point_to_point(f, name)
-    elif kind == "path_constrained":
-        from gtmodel.trajectory.problem_files import load_path_constrained
-
-        decl = load_path_constrained(f, name)
-    elif kind == "calibration":
-        from gtmodel.calibration.problem_files import load_calibration
-
-        decl = load_calibration(f, name)
-    else:  # pragma: no cover - KINDS is checked above
-        raise f.fail("kind", f"one of {', '.join(KINDS)}", kind)
+    decl = _handler(kind, 1)(f, name)
     return Problem(path=path, name=name, kind=kind, description=description, declaration=decl, data=data, overrides=dict(overrides or {}))
 
 
@@ -168,15 +185,9 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
         from gtmodel.trajectory.point_to_point import solve_point_to_point
 
         return solve_point_to_point(problem.declaration, verbose=verbose, previous=previous, warm_start=warm_start)
-    if problem.kind == "path_constrained":
-        from gtmodel.trajectory.problem_files import solve_path_declaration
-
-        return solve_path_declaration(problem.declaration, verbose=verbose)
-    if problem.kind == "calibration":
-        from gtmodel.calibration.problem_files import solve_calibration
-
-        return solve_calibration(problem.declaration, verbose=verbose)
-    raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no solver")  # pragma: no cover
+    if problem.kind not in _KIND_HANDLERS:  # pragma: no cover - checked on load
+        raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no solver")
+    return _handler(problem.kind, 2)(problem.declaration, verbose=verbose)
 
 
 def _json_safe(value: Any) -> Any:
@@ -273,20 +284,9 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
     summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
     if problem.overrides:
         summary["overrides"] = dict(problem.overrides)
-    if problem.kind == "point_to_point":
-        from gtmodel.trajectory.problem_files import write_point_to_point
-
-        fields, files = write_point_to_point(problem.declaration, solution, out, plots, problem.name)
-    elif problem.kind == "path_constrained":
-        from gtmodel.trajectory.problem_files import write_path_constrained
-
-        fields, files = write_path_constrained(problem.declaration, solution, out, plots, problem.name)
-    elif problem.kind == "calibration":
-        from gtmodel.calibration.problem_files import write_calibration
-
-        fields, files = write_calibration(problem.declaration, solution, out, plots, problem.name)
-    else:  # pragma: no cover
+    if problem.kind not in _KIND_HANDLERS:  # pragma: no cover - checked on load
         raise ProblemError(f"{problem.path}: kind {problem.kind!r} has no result writer")
+    fields, files = _handler(problem.kind, 3)(problem.declaration, solution, out, plots, problem.name)
     summary.update(fields)
     summary["files"] = ["summary.json", *files]
     write_summary(out, summary)
