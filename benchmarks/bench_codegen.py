@@ -1,21 +1,24 @@
-"""Benchmark: generated C against the same CasADi Functions called from Python.
+"""Benchmark: generated C against the same model evaluated from Python, with instruction counts.
 
-Generates and compiles the C library for a parameter set (default L1) into a temporary
-folder, then times per call:
+Generates and compiles the C libraries of L1 (3-link) and F1 into a temporary folder and
+prints, per function and for the per-cycle bundles of the 4 ms loop,
 
-* the C functions ``ik``, ``jacobian``, ``inverse_dynamics`` in a C loop (a small timing
-  harness using ``clock_gettime``, linked against the generated shared library),
-* the same C functions called through ctypes (for reference: Python call overhead),
-* the CasADi Functions they were generated from, called from Python as ``f(T, s)`` with
-  NumPy inputs,
+* ns/call of the generated C in a C loop (``gtmodel.codegen.check.time_functions``),
+* ns/call of the same CasADi Function called from Python (closed-form functions), or of
+  the Python model's method (Newton functions: ``F1Closure.ik``/``fk``, which iterate the
+  same CasADi step Functions), on the same input,
+* the ratio Python/C,
+* instructions per call counted by valgrind's callgrind (if valgrind is on PATH).
 
-and prints the ratio Python/C. Not a test; run as ``python benchmarks/bench_codegen.py``.
+Bundles: L1 = ik + jacobian + inverse_dynamics (aim < 1 us), F1 = ik + fk, both
+warm-started from the previous sample (aim < 10 us); the F1 default starts (continuation
+from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py``.
 """
 
 from __future__ import annotations
 
 import argparse
-import ctypes
+import shutil
 import subprocess
 import tempfile
 import time
@@ -24,164 +27,160 @@ from pathlib import Path
 import numpy as np
 
 from gtmodel.codegen import compile_shared, find_compiler, generate, load_library
-from gtmodel.codegen.specs import RobotModel
+from gtmodel.codegen.check import _row_args, sample_inputs, time_functions
 from gtmodel.robots.kinematics import configuration_signs
 
-FUNCTIONS = ("ik", "jacobian", "inverse_dynamics")
+BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}
 
-HARNESS = r"""
-#define _POSIX_C_SOURCE 199309L
-#include <stdio.h>
+COUNTER = r"""
 #include <stdlib.h>
-#include <time.h>
-#include "{prefix}.h"
-
-static double now_ns(void)
-{{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}}
-
+#include <string.h>
+#include "{header}"
 int main(int argc, char **argv)
 {{
-    long n = argc > 1 ? atol(argv[1]) : 100000L;
-    const double T0[3] = {{{T0}}};
-    double T[3], Td[3] = {{{Td}}}, Tdd[3] = {{{Tdd}}}, out[9];
-    volatile double sink = 0.0;
+    long i, n = argc > 2 ? atol(argv[2]) : 0;
     int status = 0;
-    long i;
-    double t0, t1;
-    T[0] = T0[0]; T[1] = T0[1]; T[2] = T0[2];
-
-    /* each loop perturbs the input so nothing can be hoisted out of it */
-    t0 = now_ns();
-    for (i = 0; i < n; ++i) {{
-        T[0] = T0[0] + 1e-9 * (double)(i & 1023);
-        status |= {prefix}_ik(T, 0, out);
-        sink += out[0];
-    }}
-    t1 = now_ns();
-    printf("ik %.3f\n", (t1 - t0) / (double)n);
-
-    t0 = now_ns();
-    for (i = 0; i < n; ++i) {{
-        T[0] = T0[0] + 1e-9 * (double)(i & 1023);
-        status |= {prefix}_jacobian(T, 0, out);
-        sink += out[0];
-    }}
-    t1 = now_ns();
-    printf("jacobian %.3f\n", (t1 - t0) / (double)n);
-
-    t0 = now_ns();
-    for (i = 0; i < n; ++i) {{
-        T[0] = T0[0] + 1e-9 * (double)(i & 1023);
-        status |= {prefix}_inverse_dynamics(T, Td, Tdd, 0, out);
-        sink += out[0];
-    }}
-    t1 = now_ns();
-    printf("inverse_dynamics %.3f\n", (t1 - t0) / (double)n);
-    printf("status %d\n", status);
+    const char *which = argc > 1 ? argv[1] : "";
+{blocks}
     return status != 0;
 }}
 """
 
 
-def _fmt(x: np.ndarray) -> str:
-    return ", ".join(repr(float(v)) for v in x)
+def _literal(v) -> str:
+    return ", ".join(repr(float(x)) for x in np.ravel(v))
 
 
-def time_c_loop(generated, lib_path: Path, build: Path, T: np.ndarray, Td: np.ndarray, Tdd: np.ndarray, n: int) -> dict[str, float]:
-    """ns/call of the C functions timed in a C loop (harness linked against the library)."""
-    src = build / "bench_harness.c"
-    src.write_text(HARNESS.format(prefix=generated.prefix, T0=_fmt(T), Td=_fmt(Td), Tdd=_fmt(Tdd)))
-    exe = build / "bench_harness"
-    cc = find_compiler()
-    subprocess.run(
-        [*cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-I", str(generated.out_dir), str(src), "-o", str(exe),
-         "-L", str(lib_path.parent), f"-l{generated.prefix}", f"-Wl,-rpath,{lib_path.parent}", "-lm"],
-        check=True,
-    )
-    out = subprocess.run([str(exe), str(n)], check=True, capture_output=True, text=True).stdout
-    res = dict(line.split() for line in out.strip().splitlines())
-    if int(res.pop("status")) != 0:
-        raise SystemExit("C harness: a call returned a non-OK status")
-    return {k: float(v) for k, v in res.items()}
+def _count_block(gen, spec, label: str, args) -> str:
+    sizes_in, sizes_out = gen.signatures[spec.name]
+    lines, call = [f'    if (strcmp(which, "{label}") == 0) {{'], []
+    for k, (v, n) in enumerate(zip(args, sizes_in)):
+        if n == 0:
+            call.append(str(int(v)))
+        elif v is None:
+            call.append("NULL")
+        else:
+            lines.append(f"        static const double a{k}[{n}] = {{{_literal(v)}}};")
+            call.append(f"a{k}")
+    for k, n in enumerate(sizes_out):
+        lines.append(f"        double o{k}[{n}];")
+        call.append(f"o{k}")
+    if spec.newton is not None:
+        lines.append("        int it;")
+        call.append("&it")
+    lines += [f"        for (i = 0; i < n; ++i) status |= {gen.prefix}_{spec.name}({', '.join(call)});", "    }"]
+    return "\n".join(lines)
 
 
-def time_ctypes(lib, T: np.ndarray, Td: np.ndarray, Tdd: np.ndarray, n: int) -> dict[str, float]:
-    """ns/call of the C functions called through ctypes (pointers prepared once)."""
-    dp = ctypes.POINTER(ctypes.c_double)
-    bufs = {k: np.ascontiguousarray(v, dtype=float) for k, v in dict(T=T, Td=Td, Tdd=Tdd).items()}
-    p = {k: v.ctypes.data_as(dp) for k, v in bufs.items()}
-    out = np.zeros(9)
-    po = out.ctypes.data_as(dp)
-    calls = {
-        "ik": (lib["ik"].cfunc, (p["T"], 0, po)),
-        "jacobian": (lib["jacobian"].cfunc, (p["T"], 0, po)),
-        "inverse_dynamics": (lib["inverse_dynamics"].cfunc, (p["T"], p["Td"], p["Tdd"], 0, po)),
-    }
-    res = {}
-    for name, (f, args) in calls.items():
-        assert f(*args) == 0, name
-        t0 = time.perf_counter()
-        for _ in range(n):
-            f(*args)
-        res[name] = (time.perf_counter() - t0) / n * 1e9
-    return res
+def _rows(gen, data):
+    """Per function: the first sample with a warm start and the first without (label -> (spec, args))."""
+    out = {}
+    for spec in gen.specs:
+        inp = data[spec.name]
+        seen = {}
+        for i in range(len(inp[spec.args[0].name])):
+            args = _row_args(spec, inp, i)
+            seen.setdefault(any(a.optional and v is None for a, v in zip(spec.args, args)), args)
+            if len(seen) == 2:
+                break
+        if False in seen:
+            out[spec.name] = (spec, seen[False])
+        if True in seen:
+            out[f"{spec.name} (default start)" if False in seen else spec.name] = (spec, seen[True])
+    return out
 
 
-def time_casadi(model: RobotModel, T: np.ndarray, Td: np.ndarray, Tdd: np.ndarray, n: int) -> dict[str, float]:
-    """ns/call of the CasADi Functions called from Python with NumPy inputs."""
-    s = configuration_signs(0)
-    calls = {
-        "ik": (model.kinematics.ik_function, (T, s)),
-        "jacobian": (model.kinematics.jacobian_function, (T, s)),
-        "inverse_dynamics": (model.dynamics.inverse_dynamics_function, (T, Td, Tdd, s)),
-    }
-    res = {}
-    for name, (f, args) in calls.items():
-        f(*args)  # warm-up
-        t0 = time.perf_counter()
-        for _ in range(n):
-            f(*args)
-        res[name] = (time.perf_counter() - t0) / n * 1e9
-    return res
+def callgrind_counts(gen, lib: Path, rows, build: Path, calls: int = 200) -> dict[str, float]:
+    """Instructions per call from callgrind: (Ir with ``calls`` calls - Ir with none) / calls."""
+    if shutil.which("valgrind") is None:
+        return {}
+    labels = {label: f"f{k}" for k, label in enumerate(rows)}
+    src = build / "bench_count.c"
+    src.write_text(COUNTER.format(header=gen.header.name, blocks="\n".join(
+        _count_block(gen, spec, labels[label], args) for label, (spec, args) in rows.items())))
+    exe = build / "bench_count"
+    subprocess.run([*find_compiler(), "-std=c99", "-O2", "-I", str(gen.out_dir), str(src), "-o", str(exe), "-L", str(lib.parent),
+                    f"-l{gen.prefix}", f"-Wl,-rpath,{lib.parent}", "-lm"], check=True)
+    out = {}
+    for label, key in labels.items():
+        ir = []
+        for n in (0, calls):
+            cg = build / f"cg_{key}_{n}.out"
+            subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={cg}", str(exe), key, str(n)],
+                           check=True, capture_output=True)
+            text = cg.read_text()
+            line = next(l for l in text.splitlines() if l.startswith("summary:") or l.startswith("totals:"))
+            ir.append(int(line.split()[1]))
+        out[label] = (ir[1] - ir[0]) / calls
+    return out
+
+
+def _py_time(f, args, n: int) -> float:
+    f(*args)
+    t0 = time.perf_counter()
+    for _ in range(n):
+        f(*args)
+    return (time.perf_counter() - t0) / n * 1e9
+
+
+def python_times(gen, rows, n: int) -> dict[str, float]:
+    """ns/call from Python: the CasADi Function (closed form) or the model's Newton method."""
+    model = gen.model()
+    out = {}
+    for label, (spec, args) in rows.items():
+        a = dict(zip([x.name for x in spec.args], args))
+        if spec.newton is None:
+            f = spec.build(model)
+            cas = []
+            for x in spec.args:
+                v = a[x.name]
+                cas.append(configuration_signs(int(v)) if x.kind == "configuration" else (float(v) if x.kind == "solution" else np.asarray(v)))
+            out[label] = _py_time(f, cas, n)
+        elif gen.kind == "f1" and spec.name == "ik":
+            R = np.reshape(a["R"], (3, 3))
+            out[label] = _py_time(lambda: model.closure.ik(a["T"], R, a["q0"]), (), max(n // 20, 20))
+        elif gen.kind == "f1" and spec.name == "fk":
+            R0 = None if a["R0"] is None else np.reshape(a["R0"], (3, 3))
+            out[label] = _py_time(lambda: model.closure.fk(a["q"], a["T0"], R0), (), max(n // 20, 20))
+    return out
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Run the benchmark and print a table (ns/call, ratios)."""
+    """Run the benchmark and print one table per robot."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--robot", default="L1")
-    ap.add_argument("--c-calls", type=int, default=100_000, help="calls per function in the C loop")
-    ap.add_argument("--ctypes-calls", type=int, default=20_000, help="calls per function through ctypes")
-    ap.add_argument("--python-calls", type=int, default=2_000, help="calls per CasADi Function from Python")
+    ap.add_argument("--robots", default="L1,F1", help="comma-separated robots (default L1,F1)")
+    ap.add_argument("--python-calls", type=int, default=2000, help="calls per function from Python")
+    ap.add_argument("--no-callgrind", action="store_true", help="skip the instruction counts")
+    ap.add_argument("--newton-check-every", type=int, default=None,
+                    help="test Newton convergence every k steps (default: the declaration's; F1: 4 like Python)")
     args = ap.parse_args(argv)
-
     with tempfile.TemporaryDirectory(prefix="gt_bench_") as tmp:
-        gen = generate(args.robot, Path(tmp) / "src", functions=("ik", "fk", "jacobian", "inverse_dynamics"))
-        lib_path = compile_shared(gen, Path(tmp) / "build")
-        lib = load_library(gen, lib_path)
-        model = RobotModel(gen.parameters, gen.friction)
-        rng = np.random.default_rng(1)
-        grid = model.kinematics.workspace_grid(0.1)
-        T = grid[len(grid) // 2]
-        Td = rng.uniform(-0.5, 0.5, 3)
-        Tdd = rng.uniform(-2.0, 2.0, 3)
-
-        c_loop = time_c_loop(gen, lib_path, Path(tmp) / "build", T, Td, Tdd, args.c_calls)
-        c_types = time_ctypes(lib, T, Td, Tdd, args.ctypes_calls)
-        py = time_casadi(model, T, Td, Tdd, args.python_calls)
-
-    print(f"gtmodel codegen benchmark: robot {args.robot}, pose T = {np.round(T, 4).tolist()} m, configuration 0")
-    print(f"  C loop: {args.c_calls} calls, ctypes: {args.ctypes_calls}, CasADi from Python: {args.python_calls}")
-    hdr = f"{'function':<18}{'C loop ns':>11}{'ctypes ns':>11}{'CasADi/Py ns':>14}{'Py/C':>9}{'Py/ctypes':>11}"
-    print(hdr)
-    print("-" * len(hdr))
-    for name in FUNCTIONS:
-        c, ct, p = c_loop[name], c_types[name], py[name]
-        print(f"{name:<18}{c:>11.1f}{ct:>11.1f}{p:>14.1f}{p / c:>9.0f}{p / ct:>11.1f}")
-    print("Py/C: wall time per call of the CasADi Function called from Python over the generated C in a C loop.")
+        for robot in args.robots.split(","):
+            root = Path(tmp) / robot
+            gen = generate(robot, root / "src", newton_check_every=args.newton_check_every)
+            lib = compile_shared(gen, root / "build")
+            load_library(gen, lib)
+            data = sample_inputs(gen, 50, seed=3)
+            rows = _rows(gen, data)
+            c = time_functions(gen, lib, data, root / "build", budget_s=0.2)
+            py = python_times(gen, rows, args.python_calls)
+            ir = {} if args.no_callgrind else callgrind_counts(gen, lib, rows, root / "build")
+            print(f"\n{robot}: {gen.version}")
+            hdr = f"{'function':<38}{'C ns/call':>11}{'Python ns/call':>16}{'Py/C':>8}{'instr/call':>12}"
+            print(hdr)
+            print("-" * len(hdr))
+            for label in rows:
+                ins = f"{ir[label]:>12.0f}" if label in ir else f"{'-':>12}"
+                print(f"{label:<38}{c[label]:>11.0f}{py[label]:>16.0f}{py[label] / c[label]:>8.0f}{ins}")
+            bundle = BUNDLES.get(robot, ())
+            if bundle and all(b in c for b in bundle):
+                tc, tp = sum(c[b] for b in bundle), sum(py[b] for b in bundle)
+                ins = f"{sum(ir[b] for b in bundle):>12.0f}" if all(b in ir for b in bundle) else f"{'-':>12}"
+                aim = 1000 if robot == "L1" else 10000
+                print(f"{'bundle ' + '+'.join(bundle):<38}{tc:>11.0f}{tp:>16.0f}{tp / tc:>8.0f}{ins}   (aim < {aim} ns: "
+                      f"{'met' if tc < aim else 'NOT met'})")
+    print("\nC: mean over a C loop of one input (warm start = a nearby sample); Python: the CasADi Function called "
+          "with NumPy inputs, or for the F1 Newton functions the Python model's method (same step Functions).")
 
 
 if __name__ == "__main__":

@@ -10,8 +10,10 @@
     ``comparison.csv``) with overlay plots in ``DIR``. Exit code 0 only if every case is
     optimal; otherwise the worst of the cases' codes.
 ``gtmodel codegen --robot L1 --out DIR [--check]``
-    Generate C for the real-time kinematics and inverse dynamics; ``--check`` compiles it
-    and compares it with the Python model.
+    Generate C for the real-time kinematics and inverse dynamics (3-link sets, also a
+    calibration's ``parameters.toml``; ``D1_six_link``; ``F1``); ``--check`` compiles it,
+    compares every function with the Python model on random and edge-case inputs and
+    prints the largest error and ns/call.
 """
 
 from __future__ import annotations
@@ -62,12 +64,16 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
-    cg = sub.add_parser("codegen", help="generate C for ik, fk, jacobian and inverse_dynamics")
-    cg.add_argument("--robot", default="L1", help="parameter set name or TOML path (default L1)")
+    cg = sub.add_parser("codegen", help="generate C for the real-time kinematics and inverse dynamics")
+    cg.add_argument("--robot", default="L1", help="L1, D1, L1_ideal, D1_six_link, F1 or a parameter TOML path (default L1)")
     cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
     cg.add_argument("--friction", default="exact", choices=("exact", "tanh", "piecewise"), help="friction form in inverse_dynamics")
-    cg.add_argument("--check", action="store_true", help="compile with gcc and compare with the Python model")
-    cg.add_argument("-n", "--samples", type=int, default=1000, help="random reachable poses for --check (default 1000)")
+    cg.add_argument("--real", default="double", choices=("double", "float"), help="floating-point type (default double)")
+    cg.add_argument("--newton-tolerance", type=float, default=None, help="tolerance of the Newton loops (default per function)")
+    cg.add_argument("--max-iter", type=int, default=None, help="iteration limit of the Newton loops (default 20)")
+    cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
+    cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function")
+    cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
     cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
     cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     return parser
@@ -210,11 +216,16 @@ def _codegen(args: argparse.Namespace) -> int:
     from gtmodel.codegen import check, generate
 
     try:
-        generated = generate(robot=args.robot, out_dir=args.out, friction=args.friction)
+        functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+        generated = generate(
+            robot=args.robot, out_dir=args.out, friction=args.friction, real=args.real,
+            newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions,
+        )
         print(f"wrote {', '.join(str(p) for p in generated.files)}")
+        print(generated.version)
         if not args.check:
             return EXIT_OK
-        report = check(generated, n=args.samples, seed=args.seed)
+        report = check(generated, n=args.samples, seed=args.seed, timing=True)
     except GtModelError as exc:
         print(f"gtmodel: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

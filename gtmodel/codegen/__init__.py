@@ -1,8 +1,11 @@
 """C code generation from the CasADi model, compilation and self-check.
 
-``generate`` writes C and a header for model functions (``ik``, ``fk``, ``jacobian``,
-``inverse_dynamics``); ``compile_shared`` builds a shared library with the system C
-compiler; ``check`` compares the compiled C with the Python evaluation.
+``generate`` writes C and a header for the model functions of a robot (3-link sets: ``ik``,
+``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
+``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``); ``compile_shared``
+builds a shared library with the system C compiler; ``check`` compares the compiled C with
+the Python evaluation, probes the edge cases and times every function. The hand-written
+harness (Makefile, 4 ms loop, C unit tests) is in ``codegen/`` at the top of the repository.
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler
 from gtmodel.codegen.check import CheckReport, FunctionCheck, StatusProbe, check
 
 from gtmodel.codegen.generate import GeneratedCode, generate, parameter_hash
-from gtmodel.codegen.specs import FUNCTION_SPECS, FunctionSpec
+from gtmodel.codegen.specs import FUNCTION_SPECS, FunctionSpec, NewtonLoop, load_robot
 
 __all__ = [
     "generate",
@@ -26,5 +29,7 @@ __all__ = [
     "CompiledLibrary",
     "FunctionSpec",
     "FUNCTION_SPECS",
+    "NewtonLoop",
+    "load_robot",
     "parameter_hash",
 ]

@@ -2,9 +2,8 @@
 
 The compiler is ``$CC`` if set, else ``gcc`` or ``cc`` on ``PATH``. Its absence raises
 :class:`~gtmodel.errors.CompilerNotFoundError` with a one-line message saying how to fix
-it. The wrapper source is compiled with ``-std=c99 -Wall -Wextra`` (optionally
-``-Werror``); the CasADi-generated source with the same standard and its own harmless
-warnings silenced.
+it. Both sources (wrapper and CasADi-generated part) are compiled with ``-std=c99 -O2
+-Wall -Wextra`` (optionally ``-Werror``).
 """
 
 from __future__ import annotations
@@ -42,8 +41,8 @@ log = logging.getLogger("gtmodel")
 COMMON_FLAGS = ("-std=c99", "-O2", "-fPIC")
 #: Warnings for the wrapper (kept warning-free; the tests add ``-Werror``).
 WRAPPER_WARNINGS = ("-Wall", "-Wextra")
-#: Warnings for the CasADi-generated part (not ours to fix).
-CASADI_WARNINGS = ("-Wall", "-Wextra", "-Wno-unused-parameter", "-Wno-unused-variable", "-Wno-unused-function")
+#: Warnings for the CasADi-generated part (the same: its unused parameters are marked ``(void)``).
+CASADI_WARNINGS = ("-Wall", "-Wextra")
 
 _FIX = "install a C compiler (e.g. `apt-get install gcc`) or set CC to one"
 
@@ -113,7 +112,7 @@ def compile_shared(
         Folder for objects and the library (created if missing); default
         ``<out_dir>/build``.
     werror : bool, optional
-        Compile the wrapper with ``-Werror`` (its warnings become errors).
+        Compile with ``-Werror`` (warnings become errors).
     extra_flags : sequence of str, optional
         More compiler flags for both sources (e.g. ``("-march=native",)``).
 
@@ -136,11 +135,11 @@ def compile_shared(
     extra = list(extra_flags)
     obj_casadi = build / f"{generated.prefix}_casadi.o"
     obj_wrap = build / f"{generated.prefix}.o"
+    werr = ["-Werror"] if werror else []
     _run(
-        [*cc, *COMMON_FLAGS, *CASADI_WARNINGS, *extra, *inc, "-c", str(generated.casadi_source), "-o", str(obj_casadi)],
+        [*cc, *COMMON_FLAGS, *CASADI_WARNINGS, *werr, *extra, *inc, "-c", str(generated.casadi_source), "-o", str(obj_casadi)],
         f"compiling {generated.casadi_source.name}",
     )
-    werr = ["-Werror"] if werror else []
     _run(
         [*cc, *COMMON_FLAGS, *WRAPPER_WARNINGS, *werr, *extra, *inc, "-c", str(generated.source), "-o", str(obj_wrap)],
         f"compiling {generated.source.name}",
@@ -165,24 +164,31 @@ class CompiledFunction:
         Length of each array argument (0 for ``int`` arguments), in C order.
     sizes_out : sequence of int
         Length of each output array, in C order.
+    real : {"double", "float"}, optional
+        Floating-point type of the arrays.
     """
 
-    def __init__(self, cfunc, spec: FunctionSpec, sizes_in: Sequence[int], sizes_out: Sequence[int]) -> None:
+    def __init__(self, cfunc, spec: FunctionSpec, sizes_in: Sequence[int], sizes_out: Sequence[int], real: str = "double") -> None:
         self.cfunc = cfunc
         self.spec = spec
         self.sizes_in = tuple(sizes_in)
         self.sizes_out = tuple(sizes_out)
+        self.dtype = np.float32 if real == "float" else np.float64
+        self.ctype = ctypes.c_float if real == "float" else ctypes.c_double
+        self.iterations = ctypes.c_int(-1)
 
     def __call__(self, *args, out: Sequence[np.ndarray] | None = None) -> tuple[int, tuple[np.ndarray, ...]]:
         """Call the C function.
 
         Parameters
         ----------
-        *args : array_like or int
-            The inputs in C order: arrays of the declared sizes, ``int`` for
-            configuration/solution.
+        *args : array_like or int or None
+            The inputs in C order: arrays of the declared sizes (matrices row-major, 9
+            values), ``int`` for configuration/solution, None for a NULL optional pointer.
         out : sequence of numpy.ndarray or None, optional
-            Output buffers (float64, C-contiguous, declared sizes); new zero arrays if None.
+            Output buffers (float64 or float32 as generated, C-contiguous, declared
+            sizes); new zero arrays if None. A Newton function's iteration count is left
+            in :attr:`iterations` (``.value``).
 
         Returns
         -------
@@ -199,20 +205,28 @@ class CompiledFunction:
         if len(args) != len(self.sizes_in):
             raise CodegenError(f"{self.spec.name}: expected {len(self.sizes_in)} arguments, got {len(args)}")
         if out is None:
-            out = tuple(np.zeros(n) for n in self.sizes_out)
+            out = tuple(np.zeros(n, dtype=self.dtype) for n in self.sizes_out)
         cargs = []
+        keep = []
+        ptr = ctypes.POINTER(self.ctype)
         for a, n in zip(args, self.sizes_in):
             if n == 0:
                 cargs.append(int(a))
+            elif a is None:
+                cargs.append(None)
             else:
-                arr = np.ascontiguousarray(a, dtype=np.float64)
+                arr = np.ascontiguousarray(a, dtype=self.dtype)
                 if arr.size != n:
                     raise CodegenError(f"{self.spec.name}: expected an array of {n} values, got shape {arr.shape}")
-                cargs.append(arr.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+                keep.append(arr)
+                cargs.append(arr.ctypes.data_as(ptr))
         for o, n in zip(out, self.sizes_out):
-            if o.dtype != np.float64 or o.size != n or not o.flags.c_contiguous:
-                raise CodegenError(f"{self.spec.name}: output buffer must be a C-contiguous float64 array of {n}")
-            cargs.append(o.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+            if o.dtype != self.dtype or o.size != n or not o.flags.c_contiguous:
+                raise CodegenError(f"{self.spec.name}: output buffer must be a C-contiguous {np.dtype(self.dtype).name} array of {n}")
+            cargs.append(o.ctypes.data_as(ptr))
+        if self.spec.newton is not None:
+            self.iterations.value = -1
+            cargs.append(ctypes.byref(self.iterations))
         status = int(self.cfunc(*cargs))
         return status, tuple(out)
 
@@ -243,13 +257,17 @@ class CompiledLibrary:
         self._status_string.restype = ctypes.c_char_p
         self._status_string.argtypes = [ctypes.c_int]
         self.functions: dict[str, CompiledFunction] = {}
-        dptr = ctypes.POINTER(ctypes.c_double)
+        real = getattr(generated, "real", "double")
+        dptr = ctypes.POINTER(ctypes.c_float if real == "float" else ctypes.c_double)
         for spec in generated.specs:
             sizes_in, sizes_out = generated.signatures[spec.name]
             cf = getattr(self.cdll, f"{p}_{spec.name}")
             cf.restype = ctypes.c_int
-            cf.argtypes = [ctypes.c_int if n == 0 else dptr for n in sizes_in] + [dptr] * len(sizes_out)
-            self.functions[spec.name] = CompiledFunction(cf, spec, sizes_in, sizes_out)
+            types = [ctypes.c_int if n == 0 else dptr for n in sizes_in] + [dptr] * len(sizes_out)
+            if spec.newton is not None:
+                types.append(ctypes.POINTER(ctypes.c_int))
+            cf.argtypes = types
+            self.functions[spec.name] = CompiledFunction(cf, spec, sizes_in, sizes_out, real)
 
     def __getitem__(self, name: str) -> CompiledFunction:
         return self.functions[name]

@@ -1,17 +1,25 @@
 """Generate C for the robot model: CasADi-generated code plus plain-C wrappers.
 
-For a parameter set (``"L1"``) :func:`generate` writes, into ``out_dir``:
+For a robot (a 3-link parameter set such as ``"L1"`` or a calibration's
+``parameters.toml``, the six-link model ``"D1_six_link"``, or ``"F1"``) :func:`generate`
+writes, into ``out_dir``:
 
 ``<prefix>_casadi.c`` / ``<prefix>_casadi.h``
-    The CasADi Functions of the model (kinematics, dynamics), emitted by
+    The CasADi Functions of the model (kinematics, dynamics, Newton steps), emitted by
     :class:`casadi.CodeGenerator`: the maths, with the parameters embedded as constants.
+    Unused parameters of CasADi's function signatures are marked ``(void)`` so that the
+    file compiles with ``-Wall -Wextra -Werror``.
 ``<prefix>.c`` / ``<prefix>.h``
     The public API: one plain-C function per model function with fixed-size array
     arguments, an ``int`` status return (``GT_OK`` = 0) and no dynamic memory. The work
     arrays are on the stack, sized at generation time from the generated ``*_work``
-    functions. On any non-OK status the outputs are left untouched: no NaN is ever written.
+    functions (the header states the largest). On any non-OK status the outputs are left
+    untouched: no NaN is ever written. Functions solved by Newton's method run a loop of
+    at most ``<PREFIX>_<NAME>_MAX_ITER + 1`` step evaluations with an early exit on
+    convergence and return ``GT_NOT_CONVERGED`` otherwise.
 
-The C functions are reentrant (no static state) and thus thread-safe.
+The C functions are reentrant (no static or global mutable state) and thus thread-safe.
+``real="float"`` generates single-precision code (``float`` arrays in the API).
 """
 
 from __future__ import annotations
@@ -23,7 +31,7 @@ import logging
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 import casadi as ca
 import numpy as np
@@ -31,20 +39,24 @@ import numpy as np
 import gtmodel
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.codegen.specs import (
-    DEFAULT_FUNCTIONS,
-    FUNCTION_SPECS,
+    SPECS_BY_KIND,
     STATUS_CODES,
     THRESHOLD_MACROS,
     FunctionSpec,
     RobotModel,
+    StatusCheck,
+    default_functions,
+    load_robot,
 )
-from gtmodel.robots.parameters import RobotParameters, load_parameters
+from gtmodel.robots.parameters import RobotParameters
 
-__all__ = ["GeneratedCode", "generate", "parameter_hash"]
+__all__ = ["GeneratedCode", "generate", "parameter_hash", "REAL_TYPES"]
 
 log = logging.getLogger("gtmodel")
 
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: Selectable floating-point types of the generated code.
+REAL_TYPES = ("double", "float")
 
 
 @dataclass(frozen=True)
@@ -67,8 +79,8 @@ class GeneratedCode:
         CasADi-generated source ``<prefix>_casadi.c``.
     casadi_header : pathlib.Path
         CasADi-generated header ``<prefix>_casadi.h`` (internal).
-    parameters : RobotParameters
-        The parameter set embedded in the code.
+    parameters : RobotParameters or SixLinkClosure or F1Closure
+        The robot model embedded in the code.
     friction : str
         Friction form of the dynamics.
     parameter_hash : str
@@ -82,6 +94,12 @@ class GeneratedCode:
     signatures : dict
         ``{name: (sizes_in, sizes_out)}``: length of each C argument in order (0 for an
         ``int``) and of each output array.
+    real : str
+        ``"double"`` or ``"float"``.
+    kind : str
+        Robot kind (``"three_link"``, ``"six_link"``, ``"f1"``).
+    newton : dict
+        ``{name: (tolerance, max_iter)}`` of the Newton functions.
     """
 
     out_dir: Path
@@ -91,13 +109,16 @@ class GeneratedCode:
     header: Path
     casadi_source: Path
     casadi_header: Path
-    parameters: RobotParameters = field(repr=False)
+    parameters: Any = field(repr=False)
     friction: str
     parameter_hash: str
     version: str
     specs: tuple[FunctionSpec, ...] = field(repr=False)
     work_sizes: dict[str, tuple[int, int, int, int]] = field(repr=False)
     signatures: dict[str, tuple[tuple[int, ...], tuple[int, ...]]] = field(repr=False)
+    real: str = "double"
+    kind: str = "three_link"
+    newton: dict[str, tuple[float, int]] = field(default_factory=dict, repr=False)
 
     @property
     def c_sources(self) -> tuple[Path, Path]:
@@ -108,6 +129,21 @@ class GeneratedCode:
     def files(self) -> tuple[Path, ...]:
         """All written files."""
         return (self.casadi_source, self.casadi_header, self.source, self.header)
+
+    @property
+    def robot_name(self) -> str:
+        """Name of the robot model (e.g. ``"L1"``)."""
+        return str(self.parameters.name)
+
+    def model(self) -> RobotModel:
+        """The symbolic model the code was generated from.
+
+        Returns
+        -------
+        RobotModel
+            Built from :attr:`parameters` and :attr:`friction`.
+        """
+        return RobotModel(self.parameters, self.friction)
 
     def spec(self, name: str) -> FunctionSpec:
         """Declaration of one generated function.
@@ -164,17 +200,18 @@ def parameter_hash(parameters: RobotParameters) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _resolve_specs(functions: Iterable[str | FunctionSpec]) -> tuple[FunctionSpec, ...]:
+def _resolve_specs(functions: Iterable[str | FunctionSpec], kind: str) -> tuple[FunctionSpec, ...]:
+    table = SPECS_BY_KIND[kind]
     if isinstance(functions, (str, FunctionSpec)):
         functions = (functions,)
     specs = []
     for f in functions:
         if isinstance(f, FunctionSpec):
             specs.append(f)
-        elif isinstance(f, str) and f in FUNCTION_SPECS:
-            specs.append(FUNCTION_SPECS[f])
+        elif isinstance(f, str) and f in table:
+            specs.append(table[f])
         else:
-            raise InputError(f"functions: unknown function {f!r} (available: {', '.join(FUNCTION_SPECS)})")
+            raise InputError(f"functions: unknown function {f!r} for a {kind} robot (available: {', '.join(table)})")
     if not specs:
         raise InputError("functions: expected at least one function")
     names = [s.name for s in specs]
@@ -183,12 +220,40 @@ def _resolve_specs(functions: Iterable[str | FunctionSpec]) -> tuple[FunctionSpe
     for s in specs:
         if not _IDENT.match(s.name):
             raise InputError(f"functions: {s.name!r} is not a valid C identifier")
+        if s.kind != kind:
+            raise InputError(f"functions: {s.name!r} is declared for a {s.kind} robot, not a {kind} robot")
     return tuple(specs)
 
 
 def _c_float(x: float) -> str:
     r = repr(float(x))
     return r if any(ch in r for ch in ".eE") else r + ".0"
+
+
+def _check_arg_input(spec: FunctionSpec, f: ca.Function, a, where: str) -> None:
+    sp = f.sparsity_in(a.casadi_input)
+    n = sp.numel()
+    if not sp.is_dense():
+        raise CodegenError(f"{spec.name}: {where} input {a.casadi_input!r} must be dense")
+    if a.kind == "matrix":
+        if (sp.size1(), sp.size2()) != (3, 3):
+            raise CodegenError(f"{spec.name}: matrix input {a.casadi_input!r} must be 3x3")
+        return
+    if sp.size2() != 1:
+        raise CodegenError(f"{spec.name}: {where} input {a.casadi_input!r} must be a dense column vector")
+    if a.kind == "configuration" and n != 3:
+        raise CodegenError(f"{spec.name}: configuration input {a.casadi_input!r} must have 3 elements, has {n}")
+    if a.kind == "solution" and n != 1:
+        raise CodegenError(f"{spec.name}: solution input {a.casadi_input!r} must be scalar, has {n}")
+    if a.kind not in ("vector", "configuration", "solution"):
+        raise CodegenError(f"{spec.name}: unknown argument kind {a.kind!r}")
+
+
+def _renamed(f: ca.Function, cname: str) -> ca.Function:
+    ins = f.sx_in() if f.is_a("SXFunction") else f.mx_in()
+    outs = [ca.densify(o) for o in f.call(ins)]
+    g = ca.Function(cname, ins, outs, f.name_in(), f.name_out())
+    return g.expand() if not g.is_a("SXFunction") else g
 
 
 def _prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
@@ -199,16 +264,7 @@ def _prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
     for a in spec.args:
         if a.casadi_input not in names_in:
             raise CodegenError(f"{spec.name}: CasADi Function has no input {a.casadi_input!r} (inputs: {names_in})")
-        sp = f.sparsity_in(a.casadi_input)
-        if not sp.is_dense() or sp.size2() != 1:
-            raise CodegenError(f"{spec.name}: input {a.casadi_input!r} must be a dense column vector")
-        n = sp.numel()
-        if a.kind == "configuration" and n != 3:
-            raise CodegenError(f"{spec.name}: configuration input {a.casadi_input!r} must have 3 elements, has {n}")
-        if a.kind == "solution" and n != 1:
-            raise CodegenError(f"{spec.name}: solution input {a.casadi_input!r} must be scalar, has {n}")
-        if a.kind not in ("vector", "configuration", "solution"):
-            raise CodegenError(f"{spec.name}: unknown argument kind {a.kind!r}")
+        _check_arg_input(spec, f, a, "")
     fed = {a.casadi_input for a in spec.args}
     missing = [n for n in names_in if n not in fed]
     if missing:
@@ -216,18 +272,32 @@ def _prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
     for name in [o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]:
         if name not in names_out:
             raise CodegenError(f"{spec.name}: CasADi Function has no output {name!r} (outputs: {names_out})")
-    if f.is_a("SXFunction"):
-        ins = f.sx_in()
-    else:
-        ins = f.mx_in()
-    outs = [ca.densify(o) for o in f.call(ins)]
-    return ca.Function(cname, ins, outs, names_in, names_out)
+    return _renamed(f, cname)
+
+
+def _prepare_part(spec: FunctionSpec, part: str, f: ca.Function, cname: str, size: int, outputs: Sequence[str]) -> ca.Function:
+    """Validate one Function of a Newton loop (inputs ``x`` and public ones) and rename it."""
+    if not isinstance(f, ca.Function):
+        raise CodegenError(f"{spec.name}: newton.{part} returned {type(f).__name__}, expected casadi.Function")
+    by_input = {a.casadi_input: a for a in spec.args}
+    for name in f.name_in():
+        if name == "x":
+            if f.numel_in("x") != size:
+                raise CodegenError(f"{spec.name}: newton.{part} input 'x' must have {size} elements")
+        elif name in by_input:
+            _check_arg_input(spec, f, by_input[name], f"newton.{part}")
+        else:
+            raise CodegenError(f"{spec.name}: newton.{part} input {name!r} is not 'x' nor fed by any C argument")
+    for name in outputs:
+        if name not in f.name_out():
+            raise CodegenError(f"{spec.name}: newton.{part} has no output {name!r} (outputs: {f.name_out()})")
+    return _renamed(f, cname)
 
 
 def _work_sizes(casadi_c: str, cname: str, f: ca.Function) -> tuple[int, int, int, int]:
     """Work-array sizes from the generated ``<cname>_work`` function (CasADi's values as fallback)."""
     pat = re.compile(
-        rf"int {re.escape(cname)}_work\(.*?\{{\s*"
+        rf"int {re.escape(cname)}_work\(.*?\{{\s*(?:\(void\)\w+;\s*)*"
         r"if \(sz_arg\) \*sz_arg = (\d+);\s*if \(sz_res\) \*sz_res = (\d+);\s*"
         r"if \(sz_iw\) \*sz_iw = (\d+);\s*if \(sz_w\) \*sz_w = (\d+);",
         re.S,
@@ -241,22 +311,55 @@ def _work_sizes(casadi_c: str, cname: str, f: ca.Function) -> tuple[int, int, in
     return (max(sizes[0], f.n_in()), max(sizes[1], f.n_out()), sizes[2], sizes[3])
 
 
-def _signature(spec: FunctionSpec, f: ca.Function) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    sizes_in = tuple(f.numel_in(a.casadi_input) if a.kind == "vector" else 0 for a in spec.args)
-    sizes_out = tuple(f.numel_out(o.casadi_output) for o in spec.outputs)
-    return sizes_in, sizes_out
+_FUNC_DEF = re.compile(r"^((?:CASADI_SYMBOL_EXPORT |static )?[A-Za-z_][\w ]*?[\s\*]+\w+)\(([^()]*)\) \{$", re.M)
+
+
+def _void_unused_parameters(text: str) -> str:
+    """Mark every parameter of every function definition ``(void)``: no unused-parameter warnings."""
+
+    def add(m: re.Match) -> str:
+        params = m.group(2).strip()
+        if params in ("", "void"):
+            return m.group(0)
+        names = [re.split(r"[\s\*]+", p.strip())[-1] for p in params.split(",")]
+        return m.group(0) + " " + " ".join(f"(void){n};" for n in names)
+
+    return _FUNC_DEF.sub(add, text)
 
 
 # ----------------------------------------------------------------------------- C text
-def _c_params(spec: FunctionSpec, f: ca.Function, *, with_names: bool = True) -> str:
+def _arg_size(spec: FunctionSpec, funcs: dict, a) -> int:
+    """Number of values of an array argument (0 for ``int`` arguments)."""
+    if a.kind not in ("vector", "matrix"):
+        return 0
+    for f in _parts(spec, funcs):
+        if a.casadi_input in f.name_in():
+            return f.numel_in(a.casadi_input)
+    raise CodegenError(f"{spec.name}: argument {a.name!r} feeds no CasADi Function")  # pragma: no cover
+
+
+def _out_function(spec: FunctionSpec, funcs: dict) -> ca.Function:
+    """The Function whose outputs are published (the finish Function of a Newton loop)."""
+    return funcs[spec.name]["finish"] if spec.newton is not None else funcs[spec.name]
+
+
+def _parts(spec: FunctionSpec, funcs: dict) -> list[ca.Function]:
+    v = funcs[spec.name]
+    return list(v.values()) if isinstance(v, dict) else [v]
+
+
+def _c_params(spec: FunctionSpec, funcs: dict, real: str) -> str:
     parts = []
+    fo = _out_function(spec, funcs)
     for a in spec.args:
-        if a.kind == "vector":
-            parts.append(f"const double {a.name}[{f.numel_in(a.casadi_input)}]")
+        if a.kind in ("vector", "matrix"):
+            parts.append(f"const {real} {a.name}[{_arg_size(spec, funcs, a)}]")
         else:
             parts.append(f"int {a.name}")
     for o in spec.outputs:
-        parts.append(f"double {o.name}[{f.numel_out(o.casadi_output)}]")
+        parts.append(f"{real} {o.name}[{fo.numel_out(o.casadi_output)}]")
+    if spec.newton is not None:
+        parts.append("int *iterations")
     return ", ".join(parts)
 
 
@@ -267,36 +370,64 @@ def _comment_block(lines: Sequence[str], indent: str = "") -> str:
     return "\n".join(out)
 
 
-def _doc_lines(spec: FunctionSpec, f: ca.Function) -> list[str]:
-    lines = [spec.doc, "", "Inputs:"]
+def _statuses(spec: FunctionSpec) -> list[str]:
+    checks = list(spec.checks) + (list(spec.newton.start_checks) if spec.newton else [])
+    out = ["GT_OK"] + list(dict.fromkeys(c.status for c in checks)) + ["GT_BAD_ARGUMENT", "GT_NUMERIC_ERROR"]
+    if spec.newton is not None:
+        out.append("GT_NOT_CONVERGED")
+    return list(dict.fromkeys(out))
+
+
+def _doc_lines(spec: FunctionSpec, funcs: dict, P: str, sizes: tuple[int, int, int, int]) -> list[str]:
+    import textwrap
+
+    fo = _out_function(spec, funcs)
+    lines = textwrap.wrap(spec.doc, 88) + ["", "Inputs:"]
     for a in spec.args:
-        if a.kind == "vector":
-            lines.append(f"  {a.name}[{f.numel_in(a.casadi_input)}]: {a.doc}")
+        null = " (may be NULL)" if a.optional else ""
+        if a.kind in ("vector", "matrix"):
+            lines.append(f"  {a.name}[{_arg_size(spec, funcs, a)}]{null}: {a.doc}")
         else:
             lines.append(f"  {a.name}: {a.doc}")
     lines.append("Outputs (written only when GT_OK is returned):")
     for o in spec.outputs:
-        lines.append(f"  {o.name}[{f.numel_out(o.casadi_output)}]: {o.doc}")
-    statuses = ["GT_OK"] + list(dict.fromkeys(c.status for c in spec.checks)) + ["GT_BAD_ARGUMENT", "GT_NUMERIC_ERROR"]
-    lines.append("Returns: " + ", ".join(statuses) + ".")
+        lines.append(f"  {o.name}[{fo.numel_out(o.casadi_output)}]: {o.doc}")
+    if spec.newton is not None:
+        nl = spec.newton
+        N = f"{P}_{spec.name.upper()}"
+        if nl.warm:
+            lines.append(f"  Start: {' and '.join(nl.warm)} if non-NULL, else the default start.")
+        lines += [
+            "  iterations (may be NULL): Newton steps taken (written on every return after the",
+            "    argument checks, also on GT_NOT_CONVERGED).",
+            f"Newton loop: at most {N}_MAX_ITER + 1 step evaluations, converged when the residual,",
+            f"  {nl.residual_unit}, is <= {N}_TOLERANCE.",
+        ]
+    lines.append("Returns: " + ", ".join(_statuses(spec)) + ".")
+    sa, sr, siw, sw = sizes
+    lines.append(f"Stack use: about {8 * (sw + 64) + 8 * (sa + sr) + 8 * siw} bytes of work arrays; no heap.")
     return lines
 
 
-def _header_text(gen_prefix: str, specs, funcs, version: str, phash: str, parameters: RobotParameters, friction: str) -> str:
+def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str, model: RobotModel, friction: str, real: str, newton: dict) -> str:
     P = gen_prefix.upper()
     out = [
-        f"/* {gen_prefix}.h: C API of the {parameters.name} Gantry-Tau model.",
+        f"/* {gen_prefix}.h: C API of the {model.name} Gantry-Tau model.",
         " *",
         " * Generated by gtmodel from the CasADi model; do not edit.",
         f" * {version}",
-        f" * Robot: {parameters.description}",
-        f" * Friction form of the dynamics: {friction}",
+        f" * Robot: {model.description}",
+        f" * Friction form of the dynamics: {friction}" if model.kind == "three_link" else " * Kinematics only.",
+        f" * Floating-point type: {real}",
         " *",
-        " * Conventions: SI units (m, m/s, m/s^2, N); arrays of fixed size as declared;",
+        " * Conventions: SI units (m, rad, m/s, m/s^2, N); arrays of fixed size as declared;",
         " * matrices ROW-MAJOR (element (r, c) of a 3x3 matrix at index 3*r + c).",
         " * Every function returns a status code (GT_OK = 0). On any other status the",
         " * output arrays are NOT written (left untouched), so no NaN is ever written.",
-        " * The functions use no dynamic memory and no static state: they are reentrant.",
+        " * Memory: work arrays are automatic (stack) arrays whose sizes are fixed at",
+        " * generation time; no heap allocation, no static or global mutable state. The",
+        " * functions are reentrant and thread-safe; the only memory they touch is their",
+        " * stack frame and the caller's arrays.",
         " */",
         f"#ifndef {P}_H",
         f"#define {P}_H",
@@ -316,11 +447,23 @@ def _header_text(gen_prefix: str, specs, funcs, version: str, phash: str, parame
         "",
         f'#define {P}_VERSION "{version}"',
         f'#define {P}_PARAMETER_HASH "{phash}"',
-        f'#define {P}_ROBOT "{parameters.name}"',
+        f'#define {P}_ROBOT "{model.name}"',
+        f"/* Floating-point type of every array argument. */",
+        f"typedef {real} {gen_prefix}_real;",
+        f"#define {P}_REAL_IS_FLOAT {1 if real == 'float' else 0}",
         "/* Smallest accepted |cos| of the link-to-guideway angle; below it GT_SINGULAR. */",
         f"#define {P}_SINGULARITY_TOLERANCE {_c_float(THRESHOLD_MACROS['SINGULARITY_TOLERANCE'])}",
         "/* Smallest accepted distance [m] of sphere centre 3 from the line through 1 and 2 (FK). */",
         f"#define {P}_DEGENERACY_TOLERANCE {_c_float(THRESHOLD_MACROS['DEGENERACY_TOLERANCE'])}",
+    ]
+    for name, (tol, max_iter) in newton.items():
+        N = f"{P}_{name.upper()}"
+        out += [
+            f"/* Newton loop of {gen_prefix}_{name}: convergence tolerance and iteration limit (generation options). */",
+            f"#define {N}_TOLERANCE {_c_float(tol)}",
+            f"#define {N}_MAX_ITER {int(max_iter)}",
+        ]
+    out += [
         "",
         "/* Version string: gtmodel and CasADi versions and the parameter-set hash. */",
         f"const char *{gen_prefix}_version(void);",
@@ -330,17 +473,239 @@ def _header_text(gen_prefix: str, specs, funcs, version: str, phash: str, parame
         "",
     ]
     for spec in specs:
-        f = funcs[spec.name]
-        out.append(_comment_block(_doc_lines(spec, f)))
-        out.append(f"int {gen_prefix}_{spec.name}({_c_params(spec, f)});")
+        out.append(_comment_block(_doc_lines(spec, funcs, P, sizes[spec.name])))
+        out.append(f"int {gen_prefix}_{spec.name}({_c_params(spec, funcs, real)});")
         out.append("")
     out += ["#ifdef __cplusplus", '} /* extern "C" */', "#endif", "", f"#endif /* {P}_H */", ""]
     return "\n".join(out)
 
 
-def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, version: str) -> str:
-    P = gen_prefix.upper()
+def _helpers(gp: str, specs) -> list[str]:
     kinds = {a.kind for s in specs for a in s.args}
+    out = [
+        "/* 1 if all n values are finite. */",
+        f"static int {gp}_finite(const casadi_real *x, int n)",
+        "{",
+        "    int i;",
+        "    for (i = 0; i < n; ++i) {",
+        "        if (!isfinite(x[i])) return 0;",
+        "    }",
+        "    return 1;",
+        "}",
+        "",
+        "/* 1 if x[i] op t for all i (NaN fails); op 0: >=, 1: >. */",
+        f"static int {gp}_all(const casadi_real *x, int n, double t, int strict)",
+        "{",
+        "    int i;",
+        "    for (i = 0; i < n; ++i) {",
+        "        if (strict ? !(x[i] > t) : !(x[i] >= t)) return 0;",
+        "    }",
+        "    return 1;",
+        "}",
+        "",
+        "/* dst = src (n values). */",
+        f"static void {gp}_copy(casadi_real *dst, const casadi_real *src, int n)",
+        "{",
+        "    int i;",
+        "    for (i = 0; i < n; ++i) dst[i] = src[i];",
+        "}",
+        "",
+    ]
+    out += [
+        "/* dst (column-major, CasADi) = src (row-major, API) for an r x c matrix, or back (swap r, c). */",
+        f"static void {gp}_transpose(casadi_real *dst, const casadi_real *src, int r, int c)",
+        "{",
+        "    int i;",
+        "    for (i = 0; i < r * c; ++i) dst[(i % c) * r + i / c] = src[i];",
+        "}",
+        "",
+    ]
+    if "configuration" in kinds:
+        out += [
+            "/* IK root signs of configuration c (bit i set: +1, clear: -1); 0 if c is valid. */",
+            f"static int {gp}_signs(int c, casadi_real s[3])",
+            "{",
+            "    int i;",
+            "    if (c < 0 || c > 7) return 1;",
+            "    for (i = 0; i < 3; ++i) s[i] = ((c >> i) & 1) ? 1.0 : -1.0;",
+            "    return 0;",
+            "}",
+            "",
+        ]
+    return out
+
+
+def _drop_function(lines: list[str], name: str) -> list[str]:
+    """Remove a static helper (comment line, definition, blank line) from ``lines``."""
+    start = next(i for i, l in enumerate(lines) if name + "(" in l and l.startswith("static"))
+    end = lines.index("}", start)
+    return lines[: start - 1] + lines[end + 2 :]
+
+
+def _arg_prologue(gp: str, spec: FunctionSpec, funcs: dict) -> tuple[list[str], list[str], dict[str, str]]:
+    """Declarations, validation statements and the C expression feeding each CasADi input."""
+    decl, body, feed = [], [], {}
+    ptrs = [a.name for a in spec.args if a.kind in ("vector", "matrix") and not a.optional] + [o.name for o in spec.outputs]
+    if ptrs:
+        body.append("    if (" + " || ".join(f"{p} == NULL" for p in ptrs) + ") return GT_BAD_ARGUMENT;")
+    for a in spec.args:
+        n = _arg_size(spec, funcs, a)
+        guard = f"{a.name} != NULL && " if a.optional else ""
+        if a.kind == "vector":
+            body.append(f"    if ({guard}!{gp}_finite({a.name}, {n})) return GT_BAD_ARGUMENT;")
+            feed[a.casadi_input] = a.name
+        elif a.kind == "matrix":
+            decl.append(f"    casadi_real in_{a.name}[{n}];")
+            body.append(f"    if ({guard}!{gp}_finite({a.name}, {n})) return GT_BAD_ARGUMENT;")
+            if a.optional:
+                body.append(f"    if ({a.name} != NULL) {gp}_transpose(in_{a.name}, {a.name}, 3, 3);")
+            else:
+                body.append(f"    {gp}_transpose(in_{a.name}, {a.name}, 3, 3);")
+            feed[a.casadi_input] = f"in_{a.name}"
+        elif a.kind == "configuration":
+            decl.append(f"    casadi_real in_{a.name}[3];")
+            body.append(f"    if ({gp}_signs({a.name}, in_{a.name}) != 0) return GT_BAD_ARGUMENT;")
+            feed[a.casadi_input] = f"in_{a.name}"
+        else:
+            decl.append(f"    casadi_real in_{a.name}[1];")
+            body.append(f"    if ({a.name} != 1 && {a.name} != -1) return GT_BAD_ARGUMENT;")
+            body.append(f"    in_{a.name}[0] = (casadi_real){a.name};")
+            feed[a.casadi_input] = f"in_{a.name}"
+    return decl, body, feed
+
+
+def _call(f: ca.Function, cname: str, N: str, feed: dict[str, str], results: dict[str, str], indent: str = "    ") -> list[str]:
+    """Statements setting arg/res and calling ``cname``; evaluates to the CasADi return code in ``flag``."""
+    out = [f"{indent}for (i = 0; i < {N}_SZ_ARG; ++i) arg[i] = NULL;", f"{indent}for (i = 0; i < {N}_SZ_RES; ++i) res[i] = NULL;"]
+    for k, name in enumerate(f.name_in()):
+        out.append(f"{indent}arg[{k}] = {feed[name]};")
+    for k, name in enumerate(f.name_out()):
+        if name in results:
+            out.append(f"{indent}res[{k}] = {results[name]};")
+    out.append(f"{indent}flag = {cname}(arg, res, iw, w, 0);")
+    return out
+
+
+def _check_lines(gp: str, P: str, f: ca.Function, checks: Sequence[StatusCheck], prefix: str = "out_", indent: str = "    ") -> list[str]:
+    out = []
+    for c in checks:
+        strict = 1 if c.op == ">" else 0
+        thr = f"{P}_{c.threshold}" if c.threshold in THRESHOLD_MACROS else c.threshold
+        out.append(f"{indent}if (!{gp}_all({prefix}{c.casadi_output}, {f.numel_out(c.casadi_output)}, {thr}, {strict})) return {c.status};")
+    return out
+
+
+def _publish_lines(gp: str, spec: FunctionSpec, f: ca.Function) -> list[str]:
+    out = []
+    for o in spec.outputs:
+        out.append(f"    if (!{gp}_finite(out_{o.casadi_output}, {f.numel_out(o.casadi_output)})) return GT_NUMERIC_ERROR;")
+    for o in spec.outputs:
+        sp = f.sparsity_out(o.casadi_output)
+        nr, nc = sp.size1(), sp.size2()
+        if nc == 1 or nr == 1:
+            out.append(f"    {gp}_copy({o.name}, out_{o.casadi_output}, {nr * nc});")
+        else:  # CasADi is column-major; the C API is row-major
+            out.append(f"    {gp}_transpose({o.name}, out_{o.casadi_output}, {nc}, {nr});")
+    return out
+
+
+def _closed_form_body(gp: str, P: str, spec: FunctionSpec, f: ca.Function, cname: str, real: str, funcs: dict) -> list[str]:
+    N = f"{P}_{spec.name.upper()}"
+    used_out = list(dict.fromkeys([o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]))
+    decl, valid, feed = _arg_prologue(gp, spec, funcs)
+    body = [
+        f"int {gp}_{spec.name}({_c_params(spec, funcs, real)})",
+        "{",
+        f"    const casadi_real *arg[{N}_SZ_ARG];",
+        f"    casadi_real *res[{N}_SZ_RES];",
+        f"    casadi_int iw[{N}_SZ_IW];",
+        f"    casadi_real w[{N}_SZ_W];",
+        *decl,
+    ]
+    for name in used_out:
+        body.append(f"    casadi_real out_{name}[{f.numel_out(name)}];")
+    body += ["    int i, flag;", *valid]
+    body += _call(f, cname, N, feed, {n: f"out_{n}" for n in used_out})
+    body.append("    if (flag != 0) return GT_NUMERIC_ERROR;")
+    body += _check_lines(gp, P, f, spec.checks)
+    body += _publish_lines(gp, spec, f)
+    body += ["    return GT_OK;", "}", ""]
+    return body
+
+
+def _newton_body(gp: str, P: str, spec: FunctionSpec, parts: dict, cnames: dict, real: str, funcs: dict, newton_check_every: int | None) -> list[str]:
+    nl = spec.newton
+    N = f"{P}_{spec.name.upper()}"
+    n = nl.size
+    fs, fst, ff = parts["start"], parts["step"], parts["finish"]
+    used_out = list(dict.fromkeys([o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]))
+    decl, valid, feed = _arg_prologue(gp, spec, funcs)
+    body = [
+        f"int {gp}_{spec.name}({_c_params(spec, funcs, real)})",
+        "{",
+        f"    const casadi_real *arg[{N}_SZ_ARG];",
+        f"    casadi_real *res[{N}_SZ_RES];",
+        f"    casadi_int iw[{N}_SZ_IW];",
+        f"    casadi_real w[{N}_SZ_W];",
+        *decl,
+        f"    casadi_real x[{n}], x_next[{n}], residual[1]{', valid[1]' if 'valid' in fst.name_out() else ''};",
+    ]
+    start_out = [c.casadi_output for c in nl.start_checks]
+    for name in start_out:
+        body.append(f"    casadi_real st_{name}[{fs.numel_out(name)}];")
+    for name in used_out:
+        body.append(f"    casadi_real out_{name}[{ff.numel_out(name)}];")
+    body += ["    int i, k, flag, converged = 0;", *valid]
+    feed_x = dict(feed, x="x")
+    start_call = _call(fs, cnames["start"], N, feed, dict({"x0": "x"}, **{s: f"st_{s}" for s in start_out}), "        ")
+    start_call += ["        if (flag != 0) return GT_NUMERIC_ERROR;"]
+    start_call += _check_lines(gp, P, fs, nl.start_checks, "st_", "        ")
+    if nl.warm:
+        cond = " && ".join(f"{w} != NULL" for w in nl.warm)
+        body.append(f"    if ({cond}) {{")
+        body += _call(parts["warm"], cnames["warm"], N, feed, {"x0": "x"}, "        ")
+        body += ["        if (flag != 0) return GT_NUMERIC_ERROR;", "    } else {"]
+        body += start_call
+        body.append("    }")
+    else:
+        body.append("    {")
+        body += start_call
+        body.append("    }")
+    has_valid = "valid" in fst.name_out()
+    conv = f"residual[0] <= {N}_TOLERANCE" + (" && valid[0] >= 0" if has_valid else "")
+    every = newton_check_every if newton_check_every is not None else nl.check_every
+    if every > 1:
+        conv = f"k > 0 && k % {every} == 0 && " + conv
+    body += [
+        f"    for (k = 0; k <= {N}_MAX_ITER; ++k) {{  /* bounded: at most MAX_ITER + 1 steps */",
+    ]
+    body += _call(fst, cnames["step"], N, feed_x, {"x_next": "x_next", "residual": "residual", "valid": "valid"}, "        ")
+    body += [
+        "        if (flag != 0) break;",
+        f"        if ({conv}) {{",
+        "            converged = 1;",
+    ]
+    if nl.accept == "next":
+        body.append(f"            if ({gp}_finite(x_next, {n})) {gp}_copy(x, x_next, {n});")
+    body += [
+        "            break;",
+        "        }",
+        f"        if (k == {N}_MAX_ITER || !{gp}_finite(x_next, {n})) break;",
+        f"        {gp}_copy(x, x_next, {n});",
+        "    }",
+        f"    if (iterations != NULL) *iterations = k > {N}_MAX_ITER ? {N}_MAX_ITER : k;",
+    ]
+    body += _call(ff, cnames["finish"], N, feed_x, {n_: f"out_{n_}" for n_ in used_out})
+    body.append("    if (flag != 0) return GT_NUMERIC_ERROR;")
+    body += _check_lines(gp, P, ff, spec.checks)
+    body.append("    if (!converged) return GT_NOT_CONVERGED;")
+    body += _publish_lines(gp, spec, ff)
+    body += ["    return GT_OK;", "}", ""]
+    return body
+
+
+def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newton_check_every: int | None = None) -> str:
+    P = gen_prefix.upper()
     out = [
         f"/* {gen_prefix}.c: plain-C wrappers of the CasADi-generated model functions.",
         " * Generated by gtmodel; do not edit. See the header for the API. */",
@@ -355,19 +720,12 @@ def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, version: str) ->
     for spec in specs:
         N = f"{P}_{spec.name.upper()}"
         sa, sr, siw, sw = sizes[spec.name]
-        cn = cnames[spec.name]
         out += [
             f"#define {N}_SZ_ARG {max(sa, 1)}",
             f"#define {N}_SZ_RES {max(sr, 1)}",
             f"#define {N}_SZ_IW {max(siw, 1)}",
             f"#define {N}_SZ_W {max(sw, 1)}",
         ]
-        for k in ("ARG", "RES", "IW", "W"):
-            out += [
-                f"#if defined({cn}_SZ_{k}) && ({cn}_SZ_{k} > {N}_SZ_{k})",
-                f'#error "work array {k} of {spec.name} too small: regenerate the code"',
-                "#endif",
-            ]
     out += [
         "",
         f"const char *{gen_prefix}_version(void) {{ return {P}_VERSION; }}",
@@ -379,152 +737,68 @@ def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, version: str) ->
     for macro in STATUS_CODES:
         out.append(f'    case {macro}: return "{macro}";')
     out += ["    default: return \"unknown\";", "    }", "}", ""]
-    out += [
-        "/* 1 if all n values are finite. */",
-        f"static int {gen_prefix}_finite(const casadi_real *x, int n)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < n; ++i) {",
-        "        if (!isfinite(x[i])) return 0;",
-        "    }",
-        "    return 1;",
-        "}",
-        "",
-        "/* 1 if x[i] >= t for all i (NaN fails). */",
-        f"static int {gen_prefix}_all_ge(const casadi_real *x, int n, double t)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < n; ++i) {",
-        "        if (!(x[i] >= t)) return 0;",
-        "    }",
-        "    return 1;",
-        "}",
-        "",
-        "/* 1 if x[i] > t for all i (NaN fails). */",
-        f"static int {gen_prefix}_all_gt(const casadi_real *x, int n, double t)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < n; ++i) {",
-        "        if (!(x[i] > t)) return 0;",
-        "    }",
-        "    return 1;",
-        "}",
-        "",
-    ]
-    used_ops = {c.op for s in specs for c in s.checks}
-    if ">=" not in used_ops:
-        out = _drop_function(out, f"{gen_prefix}_all_ge")
-    if ">" not in used_ops:
-        out = _drop_function(out, f"{gen_prefix}_all_gt")
-    if "configuration" in kinds:
-        out += [
-            "/* IK root signs of configuration c (bit i set: +1, clear: -1); 0 if c is valid. */",
-            f"static int {gen_prefix}_signs(int c, casadi_real s[3])",
-            "{",
-            "    int i;",
-            "    if (c < 0 || c > 7) return 1;",
-            "    for (i = 0; i < 3; ++i) s[i] = ((c >> i) & 1) ? 1.0 : -1.0;",
-            "    return 0;",
-            "}",
-            "",
-        ]
+    bodies: list[str] = []
     for spec in specs:
-        f = funcs[spec.name]
-        cn = cnames[spec.name]
-        N = f"{P}_{spec.name.upper()}"
-        names_in, names_out = f.name_in(), f.name_out()
-        used_out = list(dict.fromkeys([o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]))
-        body = [
-            f"int {gen_prefix}_{spec.name}({_c_params(spec, f)})",
-            "{",
-            f"    const casadi_real *arg[{N}_SZ_ARG];",
-            f"    casadi_real *res[{N}_SZ_RES];",
-            f"    casadi_int iw[{N}_SZ_IW];",
-            f"    casadi_real w[{N}_SZ_W];",
-        ]
-        for a in spec.args:
-            if a.kind == "configuration":
-                body.append(f"    casadi_real in_{a.name}[3];")
-            elif a.kind == "solution":
-                body.append(f"    casadi_real in_{a.name}[1];")
-        for name in used_out:
-            body.append(f"    casadi_real out_{name}[{f.numel_out(name)}];")
-        body.append("    int i;")
-        ptrs = [a.name for a in spec.args if a.kind == "vector"] + [o.name for o in spec.outputs]
-        body.append("    if (" + " || ".join(f"{p} == NULL" for p in ptrs) + ") return GT_BAD_ARGUMENT;")
-        for a in spec.args:
-            if a.kind == "vector":
-                body.append(
-                    f"    if (!{gen_prefix}_finite({a.name}, {f.numel_in(a.casadi_input)})) return GT_BAD_ARGUMENT;"
-                )
-            elif a.kind == "configuration":
-                body.append(f"    if ({gen_prefix}_signs({a.name}, in_{a.name}) != 0) return GT_BAD_ARGUMENT;")
-            else:
-                body.append(f"    if ({a.name} != 1 && {a.name} != -1) return GT_BAD_ARGUMENT;")
-                body.append(f"    in_{a.name}[0] = (casadi_real){a.name};")
-        body.append(f"    for (i = 0; i < {N}_SZ_ARG; ++i) arg[i] = NULL;")
-        body.append(f"    for (i = 0; i < {N}_SZ_RES; ++i) res[i] = NULL;")
-        for a in spec.args:
-            src = a.name if a.kind == "vector" else f"in_{a.name}"
-            body.append(f"    arg[{names_in.index(a.casadi_input)}] = {src};")
-        for name in used_out:
-            body.append(f"    res[{names_out.index(name)}] = out_{name};")
-        body.append(f"    if ({cn}(arg, res, iw, w, 0) != 0) return GT_NUMERIC_ERROR;")
-        for c in spec.checks:
-            fn = f"{gen_prefix}_all_ge" if c.op == ">=" else f"{gen_prefix}_all_gt"
-            thr = f"{P}_{c.threshold}" if c.threshold in THRESHOLD_MACROS else c.threshold
-            body.append(f"    if (!{fn}(out_{c.casadi_output}, {f.numel_out(c.casadi_output)}, {thr})) return {c.status};")
-        for o in spec.outputs:
-            body.append(
-                f"    if (!{gen_prefix}_finite(out_{o.casadi_output}, {f.numel_out(o.casadi_output)})) return GT_NUMERIC_ERROR;"
-            )
-        for o in spec.outputs:
-            sp = f.sparsity_out(o.casadi_output)
-            nr, nc = sp.size1(), sp.size2()
-            if nc == 1 or nr == 1:
-                body.append(f"    for (i = 0; i < {nr * nc}; ++i) {o.name}[i] = out_{o.casadi_output}[i];")
-            else:  # CasADi is column-major; the C API is row-major
-                body.append(
-                    f"    for (i = 0; i < {nr * nc}; ++i) {o.name}[i] = out_{o.casadi_output}[(i % {nc}) * {nr} + i / {nc}];"
-                )
-        body += ["    return GT_OK;", "}", ""]
-        out += body
-    return "\n".join(out)
-
-
-def _drop_function(lines: list[str], name: str) -> list[str]:
-    """Remove a static helper (comment line, definition, blank line) from ``lines``."""
-    start = next(i for i, l in enumerate(lines) if name + "(" in l and l.startswith("static"))
-    end = lines.index("}", start)
-    return lines[: start - 1] + lines[end + 2 :]
+        if spec.newton is None:
+            bodies += _closed_form_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs)
+        else:
+            bodies += _newton_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs, newton_check_every)
+    helpers = _helpers(gen_prefix, specs)
+    used = "\n".join(bodies)
+    for h in ("finite", "all", "copy", "transpose", "signs"):
+        name = f"{gen_prefix}_{h}"
+        if f"static " in "\n".join(helpers) and any(name + "(" in l for l in helpers) and name + "(" not in used:
+            helpers = _drop_function(helpers, name)
+    return "\n".join(out + helpers + bodies)
 
 
 # ----------------------------------------------------------------------------- API
 def generate(
-    robot: str | Path | RobotParameters = "L1",
+    robot: Any = "L1",
     out_dir: str | Path = "codegen_out",
-    functions: Sequence[str | FunctionSpec] = DEFAULT_FUNCTIONS,
+    functions: Sequence[str | FunctionSpec] | None = None,
     prefix: str | None = None,
     friction: str = "exact",
+    real: str = "double",
+    newton_tolerance: float | None = None,
+    max_iter: int | None = None,
+    newton_check_every: int | None = None,
 ) -> GeneratedCode:
-    """Generate C source and a public header for model functions of a 3-link Gantry-Tau.
+    """Generate C source and a public header for the model functions of a robot.
 
     Parameters
     ----------
-    robot : str or pathlib.Path or RobotParameters, optional
-        Parameter set: shipped name (``"L1"``, ``"D1"``), path of a TOML file, or a loaded
-        set. Its values are embedded as constants.
+    robot : str or pathlib.Path or RobotParameters or SixLinkClosure or F1Closure, optional
+        The robot: a 3-link parameter set (shipped name ``"L1"``, ``"D1"``, ``"L1_ideal"``
+        or a TOML path, e.g. a calibration's ``parameters.toml``), the six-link error model
+        (``"D1_six_link"``) or the F1 (``"F1"``); see
+        :func:`gtmodel.codegen.specs.load_robot`. Its values are embedded as constants.
     out_dir : str or pathlib.Path, optional
         Folder to write into (created if missing; existing files of the same names are
         overwritten).
     functions : sequence of str or FunctionSpec, optional
-        Functions to generate: names from :data:`gtmodel.codegen.specs.FUNCTION_SPECS`
-        (default ``ik``, ``fk``, ``jacobian``, ``inverse_dynamics``) or declarations.
+        Functions to generate: names from the robot kind's table in
+        :data:`gtmodel.codegen.specs.SPECS_BY_KIND` or declarations; default all of
+        :func:`gtmodel.codegen.specs.default_functions` (3-link: ``ik``, ``fk``,
+        ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
+        ``gravity``; six-link: ``fk``, ``ik``; F1: ``ik``, ``fk``).
     prefix : str or None, optional
         C symbol prefix; default ``"gt_<robot name>"``, e.g. ``gt_L1`` (giving
         ``gt_L1_ik``, header ``gt_L1.h``).
     friction : str, optional
-        Friction form of the dynamics: ``"exact"`` (default), ``"tanh"``, ``"piecewise"``.
+        Friction form of the dynamics (eq. 6.8): ``"exact"`` sign (default), ``"tanh"``
+        (smooth) or ``"piecewise"``.
+    real : {"double", "float"}, optional
+        Floating-point type of the generated code and its API.
+    newton_tolerance : float or None, optional
+        Convergence tolerance of every Newton loop (unit of its residual, see the header);
+        default the declaration's (the Python model's tolerance in double precision, a
+        looser one in single precision).
+    max_iter : int or None, optional
+        Iteration limit of every Newton loop; default the declaration's (20).
+    newton_check_every : int or None, optional
+        Test convergence every this many Newton steps; default the declaration's (F1: 4,
+        the block size of the Python model, for identical results; 1 exits earliest).
 
     Returns
     -------
@@ -534,58 +808,120 @@ def generate(
     Raises
     ------
     InputError
-        Unknown function name, invalid prefix or friction form.
+        Unknown function name, invalid prefix, friction form, real type, tolerance or
+        iteration limit.
     ParameterError
-        Unknown or invalid parameter set.
+        Unknown or invalid robot / parameter set.
     CodegenError
         A CasADi Function does not match its declaration, or writing the files failed.
     """
-    parameters = load_parameters(robot)
+    model = RobotModel(load_robot(robot), friction)
     if prefix is None:
-        prefix = "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", parameters.name)
+        prefix = "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", model.name)
     if not isinstance(prefix, str) or not _IDENT.match(prefix):
         raise InputError(f"prefix: expected a C identifier such as 'gt_L1', got {prefix!r}")
     from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
 
     check_friction_form(friction, DEFAULT_FRICTION_WIDTH)
-    specs = _resolve_specs(functions)
+    if real not in REAL_TYPES:
+        raise InputError(f"real: expected 'double' or 'float', got {real!r}")
+    if newton_tolerance is not None and not (
+        isinstance(newton_tolerance, (int, float)) and not isinstance(newton_tolerance, bool)
+        and np.isfinite(newton_tolerance) and newton_tolerance > 0
+    ):
+        raise InputError(f"newton_tolerance: expected a positive number, got {newton_tolerance!r}")
+    if max_iter is not None and (isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or not 1 <= max_iter <= 1000):
+        raise InputError(f"max_iter: expected an integer from 1 to 1000, got {max_iter!r}")
+    if newton_check_every is not None and (
+        isinstance(newton_check_every, bool) or not isinstance(newton_check_every, (int, np.integer)) or not 1 <= newton_check_every <= 100
+    ):
+        raise InputError(f"newton_check_every: expected an integer from 1 to 100, got {newton_check_every!r}")
+    specs = _resolve_specs(default_functions(model.kind) if functions is None else functions, model.kind)
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise CodegenError(f"cannot create output folder {out}: {exc.strerror}") from None
 
-    model = RobotModel(parameters, friction)
-    funcs: dict[str, ca.Function] = {}
-    cnames: dict[str, str] = {}
-    cg = ca.CodeGenerator(f"{prefix}_casadi.c", {"with_header": True, "prefix": f"{prefix}_cg_"})
+    funcs: dict[str, Any] = {}
+    cnames: dict[str, Any] = {}
+    newton: dict[str, tuple[float, int]] = {}
+    cg = ca.CodeGenerator(
+        f"{prefix}_casadi.c", {"with_header": True, "prefix": f"{prefix}_cg_", "casadi_real": real}
+    )
     for spec in specs:
-        cname = f"{prefix}_cg_{spec.name}"
-        f = _prepare(spec, spec.build(model), cname)
-        funcs[spec.name] = f
-        cnames[spec.name] = cname
-        cg.add(f)
+        base = f"{prefix}_cg_{spec.name}"
+        if spec.newton is None:
+            if spec.build is None:
+                raise CodegenError(f"{spec.name}: a declaration needs build or newton")
+            f = _prepare(spec, spec.build(model), base)
+            funcs[spec.name] = f
+            cnames[spec.name] = base
+            cg.add(f)
+            continue
+        nl = spec.newton
+        parts = {
+            "start": _prepare_part(spec, "start", nl.start(model), f"{base}_start", nl.size, ["x0"] + [c.casadi_output for c in nl.start_checks]),
+            "step": _prepare_part(spec, "step", nl.step(model), f"{base}_step", nl.size, ["x_next", "residual"]),
+            "finish": _prepare_part(
+                spec, "finish", nl.finish(model), f"{base}_finish", nl.size,
+                [o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks],
+            ),
+        }
+        if nl.warm:
+            if nl.warm_start is None:
+                raise CodegenError(f"{spec.name}: newton.warm is set but warm_start is None")
+            parts["warm"] = _prepare_part(spec, "warm", nl.warm_start(model), f"{base}_warm", nl.size, ["x0"])
+        fed = {"x"} | {a.casadi_input for a in spec.args}
+        used = {n for f in parts.values() for n in f.name_in()}
+        unused = [a.name for a in spec.args if a.casadi_input not in used]
+        if unused:
+            raise CodegenError(f"{spec.name}: C arguments {unused} feed no Function of the Newton loop")
+        del fed
+        funcs[spec.name] = parts
+        cnames[spec.name] = {k: f"{base}_{k}" for k in parts}
+        for f in parts.values():
+            cg.add(f)
+        tol = newton_tolerance if newton_tolerance is not None else (nl.tolerance if real == "double" else nl.float_tolerance)
+        newton[spec.name] = (float(tol), int(max_iter if max_iter is not None else nl.max_iter))
     try:
         cg.generate(str(out) + "/")
     except RuntimeError as exc:
         raise CodegenError(f"CasADi code generation failed: {exc}") from None
     casadi_source = out / f"{prefix}_casadi.c"
     casadi_text = casadi_source.read_text()
-    sizes = {s.name: _work_sizes(casadi_text, cnames[s.name], funcs[s.name]) for s in specs}
+    sizes: dict[str, tuple[int, int, int, int]] = {}
+    for spec in specs:
+        if spec.newton is None:
+            sizes[spec.name] = _work_sizes(casadi_text, cnames[spec.name], funcs[spec.name])
+        else:
+            each = [_work_sizes(casadi_text, cnames[spec.name][k], f) for k, f in funcs[spec.name].items()]
+            sizes[spec.name] = tuple(max(s[i] for s in each) for i in range(4))  # type: ignore[assignment]
+    casadi_source.write_text(
+        "/* CasADi-generated code; gtmodel marked unused function parameters (void). */\n"
+        + _void_unused_parameters(casadi_text)
+    )
 
-    phash = parameter_hash(parameters)
+    phash = model.parameter_hash()
     version = (
         f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; "
-        f"parameters {parameters.name} sha256:{phash}; friction {friction}"
+        f"parameters {model.name} sha256:{phash}; friction {friction}; real {real}"
     )
     header = out / f"{prefix}.h"
     source = out / f"{prefix}.c"
     try:
-        header.write_text(_header_text(prefix, specs, funcs, version, phash, parameters, friction))
-        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, version))
+        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton))
+        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
-    log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), parameters.name)
+    log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)
+    signatures = {}
+    for s in specs:
+        fo = _out_function(s, funcs)
+        signatures[s.name] = (
+            tuple(_arg_size(s, funcs, a) for a in s.args),
+            tuple(fo.numel_out(o.casadi_output) for o in s.outputs),
+        )
     return GeneratedCode(
         out_dir=out,
         prefix=prefix,
@@ -594,11 +930,14 @@ def generate(
         header=header,
         casadi_source=casadi_source,
         casadi_header=out / f"{prefix}_casadi.h",
-        parameters=parameters,
+        parameters=model.robot,
         friction=friction,
         parameter_hash=phash,
         version=version,
         specs=specs,
         work_sizes=sizes,
-        signatures={s.name: _signature(s, funcs[s.name]) for s in specs},
+        signatures=signatures,
+        real=real,
+        kind=model.kind,
+        newton=newton,
     )

@@ -9,7 +9,7 @@ from gtmodel.codegen import compile_shared, generate, load_library
 
 @pytest.fixture(scope="session")
 def built(tmp_path_factory):
-    """``built(robot) -> (GeneratedCode, CompiledLibrary)``, wrapper compiled with -Werror."""
+    """``built(robot) -> (GeneratedCode, CompiledLibrary)``, both sources compiled with -Werror."""
     cache = {}
 
     def get(robot: str):

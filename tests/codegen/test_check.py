@@ -25,9 +25,15 @@ from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 
-#: Required accuracy from the issue: 1e-12 m (kinematics), 1e-9 N (dynamics).
-REQUIRED = {"ik": 1e-12, "fk": 1e-12, "jacobian": 1e-12, "inverse_dynamics": 1e-9}
-N_POSES = 1000
+#: Required accuracy from the issue: 1e-12 m / rad (kinematics), 1e-9 N (dynamics).
+REQUIRED = {
+    "ik": 1e-12, "fk": 1e-12, "jacobian": 1e-12, "jacobian_inverse": 1e-12,
+    "acceleration": 1e-9, "inverse_dynamics": 1e-9, "gravity": 1e-9,
+}
+#: Random inputs per function for the 3-link acceptance check (the issue: 10^4).
+N_POSES = 10_000
+#: Random inputs for the Newton functions (six-link, F1): the Python reference is slower.
+N_NEWTON = 1000
 
 
 def test_tolerances_are_the_required_ones():
@@ -35,21 +41,43 @@ def test_tolerances_are_the_required_ones():
 
 
 @pytest.mark.parametrize("robot", ["L1", "D1"])
-def test_check_passes_on_1000_random_reachable_poses(built, robot):
+def test_check_passes_on_10000_random_reachable_poses(built, robot):
     gen, lib = built(robot)
-    report = check(gen, n=N_POSES, seed=0, library=lib)
+    n = N_POSES if robot == "L1" else N_NEWTON
+    report = check(gen, n=n, seed=0, library=lib)
     lines = report.summary_lines()
     assert report.passed, "\n".join(lines)
-    assert report.n == N_POSES
+    assert report.n == n
     assert {f.name: f.max_abs_diff <= REQUIRED[f.name] for f in report.functions} == {k: True for k in REQUIRED}
-    assert all(f.n_not_ok == 0 for f in report.functions)
-    # every generated function was probed with an unreachable input and bad arguments
+    assert all(f.n_not_ok == 0 and f.n == n for f in report.functions)
+    # every generated function was probed with unreachable, boundary and bad inputs
     probed = {(p.function, p.expected) for p in report.probes}
+    cases = {(p.function, p.case) for p in report.probes}
     for name in gen.functions:
         assert (name, "GT_UNREACHABLE") in probed and (name, "GT_BAD_ARGUMENT") in probed
+    for name in ("ik", "jacobian", "inverse_dynamics", "gravity"):
+        assert (name, "on the workspace boundary (arm stretched)") in cases
+        assert (name, "just beyond the workspace boundary") in cases
     assert ("jacobian", "GT_SINGULAR") in probed and ("inverse_dynamics", "GT_SINGULAR") in probed
     assert lines[1].startswith("ik: max |C - Python| = ") and lines[1].endswith(" m (tol 1e-12) OK")
     assert lines[-1] == "PASSED"
+
+
+@pytest.mark.parametrize("robot", ["D1_six_link", "F1"])
+def test_newton_functions_match_python(built, robot):
+    """Six-link FK (eq. 4.15) and F1 IK/FK (eqs. 4.27-4.33) against the Python Newton solvers.
+
+    Reference: ``SixLinkClosure.fk_solve`` / ``ik`` and ``F1Closure.ik`` / ``fk`` (CasADi's
+    virtual machine, chunked NumPy iteration), never the generated C.
+    """
+    gen, lib = built(robot)
+    report = check(gen, n=N_NEWTON, seed=1, library=lib)
+    assert report.passed, "\n".join(report.summary_lines())
+    for f in report.functions:
+        assert f.max_abs_diff <= REQUIRED[f.name]
+        assert f.n >= 0.98 * N_NEWTON  # at most 2 % refused by the Python model
+    expected = {(p.function, p.expected) for p in report.probes}
+    assert all((name, "GT_BAD_ARGUMENT") in expected for name in gen.functions)
 
 
 def test_c_matches_python_on_a_workspace_pose_directly(built):

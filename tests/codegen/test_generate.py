@@ -26,22 +26,27 @@ EXPECTED_SIGNATURES = [
     "int gt_L1_ik(const double T[3], int configuration, double q[3]);",
     "int gt_L1_fk(const double q[3], int solution, double T[3]);",
     "int gt_L1_jacobian(const double T[3], int configuration, double J[9]);",
+    "int gt_L1_jacobian_inverse(const double T[3], int configuration, double Jinv[9]);",
+    "int gt_L1_acceleration(const double T[3], const double T_dot[3], const double q_ddot[3], int configuration, double T_ddot[3]);",
     "int gt_L1_inverse_dynamics(const double T[3], const double T_dot[3], const double T_ddot[3], "
     "int configuration, double tau[3]);",
+    "int gt_L1_gravity(const double T[3], int configuration, double tau[3]);",
 ]
 
 
 def test_files_exist_and_header_declares_all_functions(built):
     gen, _ = built("L1")
     assert gen.prefix == "gt_L1"
-    assert gen.functions == ("ik", "fk", "jacobian", "inverse_dynamics")
+    assert gen.functions == ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity")
     for p in gen.files:
         assert p.exists() and p.stat().st_size > 0, p
     assert gen.header.name == "gt_L1.h" and gen.source.name == "gt_L1.c"
     header = gen.header.read_text()
     for sig in EXPECTED_SIGNATURES:
         assert sig in header, sig
-    for macro, value in [("GT_OK", 0), ("GT_UNREACHABLE", 1), ("GT_SINGULAR", 2), ("GT_DEGENERATE", 3), ("GT_BAD_ARGUMENT", 4)]:
+    for macro, value in [
+        ("GT_OK", 0), ("GT_UNREACHABLE", 1), ("GT_SINGULAR", 2), ("GT_DEGENERATE", 3), ("GT_BAD_ARGUMENT", 4), ("GT_NOT_CONVERGED", 6)
+    ]:
         assert re.search(rf"#define {macro} {value}\b", header), macro
     assert "ROW-MAJOR" in header
     # the public header is plain C: no CasADi types
@@ -132,3 +137,86 @@ def test_new_function_is_a_declaration(tmp_path):
     report = check(gen, n=200, build_dir=tmp_path / "build")
     assert report.passed, "\n".join(report.summary_lines())
     assert report.functions[1].max_abs_diff <= CART_ACCELERATION_TOLERANCE
+
+
+def test_header_documents_units_sizes_statuses_and_newton_bounds(built):
+    """The F1 header: units, array sizes, status codes, the Newton bounds, version and hash."""
+    gen, _ = built("F1")
+    header = gen.header.read_text()
+    assert "int gt_F1_ik(const double T[3], const double R[9], const double q0[6], double q[6], int *iterations);" in header
+    assert "int gt_F1_fk(const double q[6], const double T0[3], const double R0[9], double T[3], double R[9], int *iterations);" in header
+    assert re.search(r"#define GT_F1_IK_MAX_ITER 20\b", header) and re.search(r"#define GT_F1_FK_TOLERANCE 1e-13\b", header)
+    assert "q0[6] (may be NULL)" in header and "[m, rad]" in header and "ROW-MAJOR" in header
+    assert "GT_NOT_CONVERGED" in header and f'#define GT_F1_PARAMETER_HASH "{gen.parameter_hash}"' in header
+    assert "typedef double gt_F1_real;" in header and "no heap allocation" in header
+
+
+def test_newton_loops_are_bounded(built):
+    """No unbounded branch: no while loop; every Newton loop runs k = 0 .. MAX_ITER."""
+    for robot in ("D1_six_link", "F1"):
+        gen, _ = built(robot)
+        src = gen.source.read_text()
+        assert "while" not in src and "goto" not in src
+        for name, (tol, max_iter) in gen.newton.items():
+            assert f"for (k = 0; k <= {gen.prefix.upper()}_{name.upper()}_MAX_ITER; ++k)" in src
+            assert max_iter == 20 and tol > 0
+
+
+def test_non_convergence_gives_status_and_leaves_outputs(tmp_path):
+    """Six-link FK (eq. 4.15) limited to 1 Newton step: GT_NOT_CONVERGED, outputs untouched.
+
+    Reference: the Python FK needs 2 iterations on the D1 workspace (tests/robots/test_six_link.py).
+    """
+    from gtmodel.codegen.check import SENTINEL
+    from gtmodel.robots.kinematics import GantryTau3Kinematics
+
+    gen = generate("D1_six_link", tmp_path / "src", functions=("fk",), max_iter=1)
+    assert gen.newton == {"fk": (1e-12, 1)}
+    lib = load_library(gen, compile_shared(gen, tmp_path / "build", werror=True))
+    k = GantryTau3Kinematics("D1")
+    q = k.ik(k.workspace_grid(0.1)[5])
+    out = [np.full(3, SENTINEL), np.full(9, SENTINEL)]
+    status, out = lib["fk"](q, 0, 1, out=out)
+    assert status == 6  # GT_NOT_CONVERGED
+    assert lib["fk"].iterations.value == 1
+    assert all(np.all(o == SENTINEL) for o in out)
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"real": "long double"}, "real"),
+        ({"newton_tolerance": -1.0}, "newton_tolerance"),
+        ({"max_iter": 0}, "max_iter"),
+        ({"newton_check_every": 0}, "newton_check_every"),
+        ({"functions": ("inverse_dynamics",)}, "unknown function 'inverse_dynamics' for a six_link robot"),
+    ],
+)
+def test_bad_generation_options_are_refused(tmp_path, kwargs, match):
+    with pytest.raises(InputError, match=match):
+        generate("D1_six_link", tmp_path, **kwargs)
+
+
+def test_unknown_robot_is_a_parameter_error(tmp_path):
+    from gtmodel.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="unknown robot 'T9'"):
+        generate("T9", tmp_path)
+
+
+def test_calibrated_parameters_toml_generates_and_matches(tmp_path):
+    """A calibration's parameters.toml (3-link set) generates C that matches its Python model.
+
+    Reference: ``GantryTau3Kinematics``/``GantryTau3Dynamics`` of the loaded file.
+    """
+    from pathlib import Path
+
+    from gtmodel.cli import main
+
+    problem = Path(__file__).resolve().parents[2] / "problems" / "l1_calibration.toml"
+    assert main(["solve", str(problem), "--out", str(tmp_path / "cal"), "--no-plots", "-q"]) == 0
+    gen = generate(tmp_path / "cal" / "parameters.toml", tmp_path / "src", functions=("ik", "jacobian", "inverse_dynamics"))
+    assert gen.prefix == "gt_l1_calibration_calibrated"
+    assert gen.parameter_hash != parameter_hash(load_parameters("L1"))
+    report = check(gen, n=500, build_dir=tmp_path / "build")
+    assert report.passed, "\n".join(report.summary_lines())

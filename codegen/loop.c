@@ -1,0 +1,179 @@
+/* loop.c: a 4 ms control loop calling the generated 3-link model functions.
+ *
+ * Every cycle reads one sample of a trajectory table (trajectory.h, written by
+ * `gtmodel solve problems/l1_time_optimal.toml`), computes the feedforward of
+ * Dressler (2012), ch. 3.2: cart references by the inverse kinematics (eq. 4.9), the
+ * Jacobian (eq. 6.5) and the actuator forces by the inverse dynamics (eqs. 6.7, 6.8),
+ * and checks its timing with clock_gettime(CLOCK_MONOTONIC).
+ *
+ *   loop --mode measure  --cycles 100000   cycles back to back; a deadline miss is a cycle
+ *                                          whose compute time exceeds the period
+ *   loop --mode realtime --cycles 250      one cycle per period, clock_nanosleep(TIMER_ABSTIME);
+ *                                          a miss is a cycle finishing after its deadline
+ *   --period-us 4000                       the period [us]
+ *
+ * As a real controller would, the program asks for real-time scheduling (SCHED_FIFO,
+ * priority 80) and locks its memory (mlockall) before the loop, and says whether it got
+ * them; without them (no privilege) a preemption by another process longer than the
+ * period counts as a deadline miss.
+ *
+ * The trajectory is replayed cyclically (sample k mod N). The TCP acceleration is the
+ * central difference of the tabulated TCP velocity. Exit code 0 only if every call returned
+ * GT_OK, no deadline was missed, the cart references equal the table's (IK of the same
+ * model) within 1e-9 m and no heap allocation happened in the loop (calls to
+ * malloc/calloc/realloc/free from this program and the generated library are counted
+ * through the linker's --wrap option).
+ *
+ * Build: see the Makefile (defines GT_HEADER, GT_PREFIX, TRAJ_HEADER, TRAJ_NAME).
+ */
+#define _POSIX_C_SOURCE 200112L
+#include <math.h>
+#include <sched.h>
+#include <stdio.h>
+#include <sys/mman.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include GT_HEADER
+#include TRAJ_HEADER
+
+#define CAT2(a, b) a##b
+#define CAT(a, b) CAT2(a, b)
+#define GT(fn) CAT(GT_PREFIX, CAT(_, fn))
+#define TR(col) CAT(TRAJ_NAME, CAT(_, col))
+#define TRAJ_LEN ((long)(sizeof(TR(t)) / sizeof(TR(t)[0])))
+
+/* cart references must equal the table's (same model) within this [m] */
+#define Q_TOLERANCE 1e-9
+
+/* ---- heap-allocation counter (link with -Wl,--wrap=malloc,...) ---- */
+static long heap_calls = 0; /* counts calls made while heap_watch is set */
+static int heap_watch = 0;
+void *__real_malloc(size_t n);
+void *__real_calloc(size_t n, size_t m);
+void *__real_realloc(void *p, size_t n);
+void __real_free(void *p);
+void *__wrap_malloc(size_t n) { heap_calls += heap_watch; return __real_malloc(n); }
+void *__wrap_calloc(size_t n, size_t m) { heap_calls += heap_watch; return __real_calloc(n, m); }
+void *__wrap_realloc(void *p, size_t n) { heap_calls += heap_watch; return __real_realloc(p, n); }
+void __wrap_free(void *p) { heap_calls += heap_watch; __real_free(p); }
+
+static double ns_of(const struct timespec *t) { return (double)t->tv_sec * 1e9 + (double)t->tv_nsec; }
+
+static void add_ns(struct timespec *t, long ns)
+{
+    t->tv_nsec += ns;
+    while (t->tv_nsec >= 1000000000L) {
+        t->tv_nsec -= 1000000000L;
+        t->tv_sec += 1;
+    }
+}
+
+int main(int argc, char **argv)
+{
+    long cycles = 100000, period_ns = 4000000L, k, misses = 0, bad_status = 0;
+    int realtime = 0, i, a;
+    double max_ns = 0.0, sum_ns = 0.0, max_dq = 0.0, max_late = 0.0;
+    double sink = 0.0;
+    struct timespec next, t0, t1;
+    const long n = TRAJ_LEN;
+    const double dt = TR(t)[1] - TR(t)[0];
+
+    for (a = 1; a < argc; ++a) {
+        if (strcmp(argv[a], "--cycles") == 0 && a + 1 < argc) cycles = atol(argv[++a]);
+        else if (strcmp(argv[a], "--period-us") == 0 && a + 1 < argc) period_ns = 1000L * atol(argv[++a]);
+        else if (strcmp(argv[a], "--mode") == 0 && a + 1 < argc) realtime = strcmp(argv[++a], "realtime") == 0;
+        else {
+            fprintf(stderr, "usage: %s [--mode measure|realtime] [--cycles N] [--period-us P]\n", argv[0]);
+            return 2;
+        }
+    }
+    if (cycles < 1 || period_ns < 1) {
+        fprintf(stderr, "loop: --cycles and --period-us must be positive\n");
+        return 2;
+    }
+    {
+        struct sched_param sp;
+        int fifo, locked;
+        memset(&sp, 0, sizeof sp);
+        sp.sched_priority = 80;
+        fifo = sched_setscheduler(0, SCHED_FIFO, &sp) == 0;
+        locked = mlockall(MCL_CURRENT | MCL_FUTURE) == 0;
+        printf("real-time scheduling SCHED_FIFO: %s; memory locked: %s\n", fifo ? "yes" : "no (not permitted)",
+               locked ? "yes" : "no (not permitted)");
+    }
+    printf("%s\n", GT(version)());
+    printf("trajectory: %ld samples, dt = %g s; mode %s, %ld cycles, period %ld us\n", n, dt,
+           realtime ? "realtime" : "measure", cycles, period_ns / 1000L);
+    fflush(stdout);
+
+    {   /* warm-up call set, untimed (first-touch page faults, instruction caches) */
+        const double T[3] = {TR(x)[0], TR(y)[0], TR(z)[0]}, zero[3] = {0.0, 0.0, 0.0};
+        double q[3], J[9], tau[3];
+        if ((GT(ik)(T, 0, q) | GT(jacobian)(T, 0, J) | GT(inverse_dynamics)(T, zero, zero, 0, tau)) != GT_OK) {
+            printf("warm-up: the first trajectory sample gives a non-OK status\n");
+        }
+    }
+    clock_gettime(CLOCK_MONOTONIC, &next);
+    heap_watch = 1;
+    for (k = 0; k < cycles; ++k) {
+        const long s = k % n;
+        const long sp = s + 1 < n ? s + 1 : s, sm = s > 0 ? s - 1 : s;
+        double T[3], T_dot[3], T_ddot[3], q[3], J[9], tau[3];
+        int status = 0;
+        if (realtime) {
+            add_ns(&next, period_ns);
+            clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, NULL);
+        }
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        /* --- the cycle: read references, IK + Jacobian + inverse dynamics --- */
+        T[0] = TR(x)[s];
+        T[1] = TR(y)[s];
+        T[2] = TR(z)[s];
+        T_dot[0] = TR(xd)[s];
+        T_dot[1] = TR(yd)[s];
+        T_dot[2] = TR(zd)[s];
+        T_ddot[0] = (TR(xd)[sp] - TR(xd)[sm]) / ((double)(sp - sm) * dt + (sp == sm));
+        T_ddot[1] = (TR(yd)[sp] - TR(yd)[sm]) / ((double)(sp - sm) * dt + (sp == sm));
+        T_ddot[2] = (TR(zd)[sp] - TR(zd)[sm]) / ((double)(sp - sm) * dt + (sp == sm));
+        status |= GT(ik)(T, 0, q);
+        status |= GT(jacobian)(T, 0, J);
+        status |= GT(inverse_dynamics)(T, T_dot, T_ddot, 0, tau);
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        /* --- bookkeeping (outside the timed part) --- */
+        {
+            const double c = ns_of(&t1) - ns_of(&t0);
+            sum_ns += c;
+            if (c > max_ns) max_ns = c;
+            if (realtime) {
+                const double late = ns_of(&t1) - (ns_of(&next) + (double)period_ns);
+                if (late > 0.0) ++misses;
+                if (late > max_late) max_late = late;
+            } else if (c > (double)period_ns) {
+                ++misses;
+            }
+        }
+        if (status != GT_OK) {
+            ++bad_status;
+            continue;
+        }
+        {
+            const double qt[3] = {TR(q1)[s], TR(q2)[s], TR(q3)[s]};
+            for (i = 0; i < 3; ++i) {
+                if (fabs(q[i] - qt[i]) > max_dq) max_dq = fabs(q[i] - qt[i]);
+            }
+        }
+        sink += tau[0] + J[0];
+    }
+    heap_watch = 0;
+    printf("cycles %ld\n", cycles);
+    printf("deadline misses %ld\n", misses);
+    printf("non-OK status %ld\n", bad_status);
+    printf("compute time per cycle: mean %.0f ns, max %.0f ns (period %ld ns)\n", sum_ns / (double)cycles, max_ns, period_ns);
+    if (realtime) printf("largest lateness after the deadline: %.0f ns\n", max_late);
+    printf("max |q - q_table| %.3g m\n", max_dq);
+    printf("heap allocations in the loop %ld\n", heap_calls);
+    if (!isfinite(sink)) printf("non-finite feedforward\n");
+    return (misses == 0 && bad_status == 0 && max_dq <= Q_TOLERANCE && heap_calls == 0 && isfinite(sink)) ? 0 : 1;
+}

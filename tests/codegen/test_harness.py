@@ -1,0 +1,201 @@
+"""The C harness in ``codegen/``: Makefile build, C unit tests, the 4 ms loop, memory guarantees.
+
+Independent references: the C unit-test program checks model identities (FK(IK(T)) = T,
+J J^-1 = I, inverse dynamics at rest = gravity); the loop compares its cart references
+with the trajectory table's (the optimal-control solution); ``nm`` and valgrind inspect
+the compiled code itself.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from gtmodel.cli import main
+from gtmodel.codegen import generate
+
+HARNESS = Path(__file__).resolve().parents[2] / "codegen"
+PROBLEM = Path(__file__).resolve().parents[2] / "problems" / "l1_time_optimal.toml"
+#: Flags the issue requires for the generated code.
+REQUIRED_FLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror")
+#: Measure-only cycles of the acceptance run (the issue: 10^5).
+MEASURE_CYCLES = 100_000
+#: Real 4 ms periods of the short real-time run (1 s).
+REALTIME_CYCLES = 250
+#: Cycles under valgrind (about 50x slower).
+VALGRIND_CYCLES = 2000
+HEAP_FUNCTIONS = ("malloc", "calloc", "realloc", "free")
+
+needs_make = pytest.mark.skipif(shutil.which("make") is None or shutil.which("gcc") is None, reason="no make/gcc")
+
+
+@pytest.fixture(scope="session")
+def harness(tmp_path_factory):
+    """Generated L1 code, the shipped trajectory table and the harness built with make."""
+    root = tmp_path_factory.mktemp("harness")
+    generate("L1", root / "gen")
+    assert main(["solve", str(PROBLEM), "--out", str(root / "traj"), "--no-plots", "-q"]) == 0
+    build = root / "build"
+    args = [f"BUILD={build}", f"GEN={root / 'gen'}", f"TRAJ={root / 'traj' / 'trajectory.h'}", "TRAJ_NAME=l1_time_optimal"]
+    proc = subprocess.run(["make", "-C", str(HARNESS), *args, "all"], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    return build, proc.stdout
+
+
+def _run(cmd, timeout=300):
+    return subprocess.run([str(c) for c in cmd], capture_output=True, text=True, timeout=timeout)
+
+
+def _field(text: str, name: str) -> int:
+    m = re.search(rf"^{name} (\d+)$", text, re.M)
+    assert m, text
+    return int(m.group(1))
+
+
+@needs_make
+def test_makefile_builds_static_and_shared_library_with_strict_flags(harness):
+    build, log = harness
+    assert (build / "libgt_L1.a").exists() and (build / "libgt_L1.so").exists()
+    compile_lines = [l for l in log.splitlines() if " -c " in l]
+    assert len(compile_lines) == 2  # CasADi part and wrapper
+    for line in compile_lines:
+        for flag in REQUIRED_FLAGS:
+            assert flag in line.split(), (flag, line)
+
+
+@needs_make
+def test_c_unit_test_program_passes(harness):
+    build, _ = harness
+    proc = _run([build / "unit_test"])
+    assert proc.returncode == 0, proc.stdout
+    assert re.search(r"unit_test: \d+ checks, 0 failures", proc.stdout)
+
+
+@needs_make
+def test_loop_100000_cycles_measure_only_without_deadline_miss(harness):
+    build, _ = harness
+    proc = _run([build / "loop", "--mode", "measure", "--cycles", MEASURE_CYCLES])
+    assert proc.returncode == 0, proc.stdout
+    assert _field(proc.stdout, "cycles") == MEASURE_CYCLES
+    assert _field(proc.stdout, "deadline misses") == 0
+    assert _field(proc.stdout, "non-OK status") == 0
+    assert _field(proc.stdout, "heap allocations in the loop") == 0
+    assert "max |q - q_table| 0 m" in proc.stdout or re.search(r"max \|q - q_table\| [0-9.e-]+ m", proc.stdout)
+
+
+@needs_make
+def test_loop_short_realtime_run(harness):
+    build, _ = harness
+    proc = _run([build / "loop", "--mode", "realtime", "--cycles", REALTIME_CYCLES])
+    assert proc.returncode == 0, proc.stdout
+    assert _field(proc.stdout, "deadline misses") == 0
+
+
+@needs_make
+def test_generated_objects_call_no_heap_functions(harness, built):
+    """``nm -u``: neither the L1 objects nor the six-link / F1 ones reference malloc & co."""
+    build, _ = harness
+    objects = list(build.glob("*.o")) + list(built("D1_six_link")[1].path.parent.glob("*.o"))
+    assert len(objects) >= 4
+    for obj in objects:
+        undefined = _run(["nm", "-u", obj]).stdout.split()
+        assert not set(undefined) & set(HEAP_FUNCTIONS), (obj, undefined)
+
+
+@needs_make
+def test_generated_objects_have_no_mutable_global_state(harness, built):
+    """``nm``: no data/bss symbols (B, D, C): only code and read-only constants."""
+    build, _ = harness
+    for obj in list(build.glob("gt_*.o")) + list(built("D1_six_link")[1].path.parent.glob("*.o")):
+        lines = _run(["nm", obj]).stdout.splitlines()
+        mutable = [l for l in lines if re.search(r" [BbDdC] ", l)]
+        assert not mutable, (obj, mutable)
+
+
+@needs_make
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind not on PATH")
+def test_valgrind_memcheck_clean_and_no_allocation_in_the_loop(harness):
+    """memcheck: no errors; the number of heap allocations does not grow with the cycles."""
+    build, _ = harness
+    allocs = []
+    for cycles in (VALGRIND_CYCLES // 2, VALGRIND_CYCLES):
+        proc = _run(["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full",
+                     build / "loop", "--mode", "measure", "--cycles", cycles])
+        # exit 99 = memcheck errors; a deadline miss under valgrind's ~50x slow-down is no error here
+        assert proc.returncode in (0, 1), proc.stderr[-2000:]
+        assert "ERROR SUMMARY: 0 errors" in proc.stderr
+        assert _field(proc.stdout, "heap allocations in the loop") == 0
+        assert _field(proc.stdout, "non-OK status") == 0
+        m = re.search(r"total heap usage: ([\d,]+) allocs", proc.stderr)
+        assert m, proc.stderr[-2000:]
+        allocs.append(int(m.group(1).replace(",", "")))
+    assert allocs[0] == allocs[1]
+
+
+def test_cli_check_prints_error_and_time_per_function(tmp_path, capsys):
+    code = main(["codegen", "--robot", "L1", "--out", str(tmp_path / "gen"), "--check", "-n", "300"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    for name in ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity"):
+        assert re.search(rf"^{name}: max \|C - Python\| = \S+ .*\d+ ns/call .*OK$", out, re.M), out
+    assert re.search(r"^C unit tests \(codegen/unit_test.c\): unit_test: \d+ checks, 0 failures$", out, re.M), out
+    assert out.rstrip().endswith("PASSED")
+
+
+def test_single_precision_code_compiles_strictly_and_matches(tmp_path):
+    """``real="float"``: float API, compiled with -Werror, within FLOAT_RELATIVE_TOLERANCE of Python."""
+    from gtmodel.codegen import check
+
+    gen = generate("L1", tmp_path / "gen", real="float", functions=("ik", "jacobian", "inverse_dynamics"))
+    assert "int gt_L1_ik(const float T[3], int configuration, float q[3]);" in gen.header.read_text()
+    report = check(gen, n=300, build_dir=tmp_path / "build")
+    assert report.passed, "\n".join(report.summary_lines())
+
+
+REENTRANCY_PROGRAM = r"""
+#define _POSIX_C_SOURCE 200112L
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+#include "gt_L1.h"
+#define N 20000
+static double base[N][3];
+static void run(double (*out)[3])
+{
+    long i;
+    for (i = 0; i < N; ++i) {
+        const double T[3] = {-0.2 + 1e-5 * (double)(i % 1000), 2.75, -0.4 - 1e-6 * (double)(i % 700)};
+        const double Td[3] = {0.1, 0.2, -0.3}, Tdd[3] = {1.0, -2.0, 0.5};
+        if (gt_L1_inverse_dynamics(T, Td, Tdd, 0, out[i]) != GT_OK) out[i][0] = -1.0;
+    }
+}
+static double res[2][N][3];
+static void *worker(void *arg) { run(res[*(int *)arg]); return NULL; }
+int main(void)
+{
+    pthread_t t[2];
+    int id[2] = {0, 1}, k;
+    run(base);
+    for (k = 0; k < 2; ++k) pthread_create(&t[k], NULL, worker, &id[k]);
+    for (k = 0; k < 2; ++k) pthread_join(t[k], NULL);
+    printf("%d %d\n", memcmp(base, res[0], sizeof base) == 0, memcmp(base, res[1], sizeof base) == 0);
+    return 0;
+}
+"""
+
+
+@needs_make
+def test_functions_are_reentrant_across_threads(harness, tmp_path):
+    """Two threads calling the same function concurrently get bit-identical results (no shared state)."""
+    build, _ = harness
+    src = tmp_path / "reentrant.c"
+    src.write_text(REENTRANCY_PROGRAM)
+    exe = tmp_path / "reentrant"
+    proc = _run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pthread", f"-I{build.parent / 'gen'}", src,
+                 build / "libgt_L1.a", "-lm", "-o", exe])
+    assert proc.returncode == 0, proc.stderr
+    assert _run([exe]).stdout.split() == ["1", "1"]
