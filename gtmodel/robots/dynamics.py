@@ -47,7 +47,7 @@ from gtmodel.robots.kinematics import (
     jacobian_inverse_expression,
     link_cosines_expression,
 )
-from gtmodel.robots.parameters import RobotParameters, load_parameters
+from gtmodel.robots.parameters import DynamicParameters, RobotParameters, load_parameters
 
 __all__ = ["lagrange_terms", "GantryTau3Dynamics"]
 
@@ -97,6 +97,13 @@ def lagrange_terms(x: ca.SX, x_dot: ca.SX, positions: Sequence[tuple[float, ca.S
     return M, h, G, KE, V
 
 
+def _mass(m, i: int):
+    """Entry i of a mass vector: a float, or a CasADi symbol kept symbolic."""
+    if isinstance(m, (ca.SX, ca.MX)):
+        return m[i]
+    return float(m[i])
+
+
 class GantryTau3Dynamics:
     """Rigid-body dynamics with cart friction of a 3-link Gantry-Tau (eqs. 6.7, 6.8).
 
@@ -141,20 +148,24 @@ class GantryTau3Dynamics:
         self.L, self.As, self.v = np.asarray(kp.L), np.asarray(kp.As), np.asarray(kp.v)
 
     # ----------------------------------------------------------------- symbolic core
-    def friction_force(self, q_dot: ca.SX | ca.MX) -> ca.SX | ca.MX:
+    def friction_force(self, q_dot: ca.SX | ca.MX, dynamics: DynamicParameters | None = None) -> ca.SX | ca.MX:
         """Friction force of this model, eq. 6.8 (see :func:`gtmodel.robots.friction.friction_force`).
 
         Parameters
         ----------
         q_dot : casadi.SX or casadi.MX, shape (3, 1)
             Cart velocities [m/s].
+        dynamics : DynamicParameters, optional
+            Parameters to use instead of the parameter set's (default None); their
+            friction coefficients may be CasADi symbols (identification regressor).
 
         Returns
         -------
         casadi.SX or casadi.MX, shape (3, 1)
             Friction force [N].
         """
-        return friction_force(q_dot, self.parameters.dynamics, self.friction, self.friction_width, self.asymmetric)
+        d = self.parameters.dynamics if dynamics is None else dynamics
+        return friction_force(q_dot, d, self.friction, self.friction_width, self.asymmetric)
 
     def _bodies(self, T, q):
         d = self.parameters.dynamics
@@ -165,7 +176,7 @@ class GantryTau3Dynamics:
             bodies.append((float(d.m_a[i]), (A + T) / 2))
         return bodies
 
-    def tcp_terms(self, T: ca.SX, T_dot: ca.SX, s: ca.SX | Sequence[float]) -> dict[str, ca.SX]:
+    def tcp_terms(self, T: ca.SX, T_dot: ca.SX, s: ca.SX | Sequence[float], dynamics: DynamicParameters | None = None) -> dict[str, ca.SX]:
         """Lagrange terms in TCP coordinates: eq. 6.7 generalised to any ``v_i``.
 
         ``M T_ddot + h + G = J^-T f`` with ``M = m_p I + sum_i (m_c,i |v_i|^2 g_i g_i^T +
@@ -179,6 +190,10 @@ class GantryTau3Dynamics:
             TCP position [m] and velocity [m/s].
         s : casadi.SX or array_like, shape (3,)
             IK root signs (see :func:`gtmodel.robots.kinematics.configuration_signs`).
+        dynamics : DynamicParameters, optional
+            Parameters to use instead of the parameter set's (default None). ``m_p``,
+            ``m_c`` and ``m_a`` may be CasADi symbols: the terms are linear in them, which
+            the identification regressor uses (``tau = Y theta``, Dressler (2012), ch. 6.2).
 
         Returns
         -------
@@ -186,7 +201,7 @@ class GantryTau3Dynamics:
             ``M`` (3, 3) [kg], ``h`` (3,) [N], ``G`` (3,) [N], ``Jinv`` (3, 3), ``q`` (3,) [m],
             ``q_dot`` (3,) [m/s], ``disc`` (3,) [m^2], ``KE``, ``V`` [J].
         """
-        p = self.parameters.dynamics
+        p = self.parameters.dynamics if dynamics is None else dynamics
         g_acc = p.g if self.gravity else 0.0
         q, disc = ik_expression(T, s, self.L, self.As, self.v)
         Jinv = jacobian_inverse_expression(T, q, self.As, self.v)
@@ -206,7 +221,7 @@ class GantryTau3Dynamics:
             A = ca.DM(self.As[i]) + q[i] * v
             g = Jinv[i, :].T  # dq_i/dT, eq. 6.5
             sigma = ca.sumsqr(T_dot - q_dot[i] * v) / ca.dot(T - A, v)  # velocity part of q_ddot_i, eq. 6.6
-            m_c, m_a = float(p.m_c[i]), float(p.m_a[i])
+            m_c, m_a = _mass(p.m_c, i), _mass(p.m_a, i)
             J_mid = (eye + v @ g.T) / 2  # d/dT of the link midpoint (T + A_i)/2
             M += m_c * float(self.v[i] @ self.v[i]) * (g @ g.T) + m_a * (J_mid.T @ J_mid)
             h += m_c * float(self.v[i] @ self.v[i]) * sigma * g + m_a * (J_mid.T @ (v * sigma / 2))
@@ -239,6 +254,34 @@ class GantryTau3Dynamics:
     def _cos_min(self, T, q):
         return ca.mmin(ca.fabs(link_cosines_expression(T, q, self.As, self.v)))
 
+    def inverse_dynamics_expression(self, T: ca.SX, T_dot: ca.SX, T_ddot: ca.SX, s: ca.SX | Sequence[float], dynamics: DynamicParameters | None = None) -> tuple[ca.SX, dict[str, ca.SX]]:
+        """Actuator forces as a CasADi expression, Dressler (2012), eqs. 6.7 and 6.8.
+
+        ``tau = J^T (M T_ddot + h + G) + f_fric(q_dot)``. With symbolic ``dynamics`` the
+        result is linear in the masses and friction coefficients, ``tau = Y theta``
+        (the identification regressor, ch. 6.2).
+
+        Parameters
+        ----------
+        T, T_dot, T_ddot : casadi.SX, shape (3, 1)
+            TCP position [m], velocity [m/s] and acceleration [m/s^2].
+        s : casadi.SX or array_like, shape (3,)
+            IK root signs (see :func:`gtmodel.robots.kinematics.configuration_signs`).
+        dynamics : DynamicParameters, optional
+            Parameters to use instead of the parameter set's (default None); may hold
+            CasADi symbols (see :meth:`tcp_terms`).
+
+        Returns
+        -------
+        tau : casadi.SX, shape (3, 1)
+            Actuator forces [N].
+        terms : dict
+            The :meth:`tcp_terms` used.
+        """
+        t = self.tcp_terms(T, T_dot, s, dynamics)
+        f = ca.solve(t["Jinv"].T, t["M"] @ T_ddot + t["h"] + t["G"])
+        return f + self.friction_force(t["q_dot"], dynamics), t
+
     # ----------------------------------------------------------------- CasADi Functions
     @cached_property
     def inverse_dynamics_function(self) -> ca.Function:
@@ -248,9 +291,7 @@ class GantryTau3Dynamics:
         and ``cos_min`` as in :attr:`GantryTau3Kinematics.jacobian_function` for status checks.
         """
         T, T_dot, T_ddot, s = (ca.SX.sym(n, 3) for n in ("T", "T_dot", "T_ddot", "s"))
-        t = self.tcp_terms(T, T_dot, s)
-        f = ca.solve(t["Jinv"].T, t["M"] @ T_ddot + t["h"] + t["G"])
-        tau = f + self.friction_force(t["q_dot"])
+        tau, t = self.inverse_dynamics_expression(T, T_dot, T_ddot, s)
         return ca.Function(
             "inverse_dynamics",
             [T, T_dot, T_ddot, s],

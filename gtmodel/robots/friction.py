@@ -94,7 +94,9 @@ def friction_force(q_dot: ca.SX | ca.MX, dynamics: DynamicParameters, form: str 
     q_dot : casadi.SX or casadi.MX, shape (3, 1)
         Cart velocities [m/s].
     dynamics : DynamicParameters
-        Provides ``f_c``, ``f_v`` (and ``asymmetric`` for the asymmetric variant).
+        Provides ``f_c``, ``f_v`` (and ``asymmetric`` for the asymmetric variant). The
+        coefficients may be numbers or CasADi symbols (``SX``/``MX`` columns of 3), e.g.
+        to build the identification regressor ``d tau / d theta``.
     form : {"exact", "tanh", "piecewise"}, optional
         Form of the sign function.
     width : float, optional
@@ -115,12 +117,23 @@ def friction_force(q_dot: ca.SX | ca.MX, dynamics: DynamicParameters, form: str 
     """
     sigma = sign_approximation(q_dot, form, width)
     if not asymmetric:
-        return ca.DM(dynamics.f_c) * sigma + ca.DM(dynamics.f_v) * q_dot
+        return _coefficients(dynamics.f_c) * sigma + _coefficients(dynamics.f_v) * q_dot
     a = dynamics.asymmetric
     if a is None:
         raise InputError("asymmetric friction requested but the parameter set has no [dynamics.asymmetric_friction] table")
-    fc_mean = ca.DM((a.f_c_plus + a.f_c_minus) / 2)
-    fc_diff = ca.DM((a.f_c_plus - a.f_c_minus) / 2)
-    fv_mean = ca.DM((a.f_v_plus + a.f_v_minus) / 2)
-    fv_diff = ca.DM((a.f_v_plus - a.f_v_minus) / 2)
+    fc_plus, fc_minus = _coefficients(a.f_c_plus), _coefficients(a.f_c_minus)
+    fv_plus, fv_minus = _coefficients(a.f_v_plus), _coefficients(a.f_v_minus)
+    fc_mean = (fc_plus + fc_minus) / 2
+    fc_diff = (fc_plus - fc_minus) / 2
+    fv_mean = (fv_plus + fv_minus) / 2
+    fv_diff = (fv_plus - fv_minus) / 2
     return fc_mean * sigma + fc_diff * sigma**2 + q_dot * (fv_mean + fv_diff * sigma)
+
+
+def _coefficients(x):
+    """Friction coefficients as a CasADi column: numbers become ``DM``; symbols (``SX``/``MX``,
+    e.g. the parameters of a regressor, :mod:`gtmodel.calibration.dynamic_identification`)
+    pass through unchanged."""
+    if isinstance(x, (ca.SX, ca.MX)):
+        return x
+    return ca.DM(np.asarray(x, dtype=float))
