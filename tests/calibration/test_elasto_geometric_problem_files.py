@@ -1,0 +1,104 @@
+"""``elasto_geometric_calibration`` problem files end to end, and their bad input.
+
+Independent references: the synthetic truth's own validation error on the same noisy poses
+(the noise floor, as the L1 kinematic calibration test), the true compliances that
+generated the data, and the D1's measured TCP stiffness (2-4 N/um, reference table).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from gtmodel.errors import ProblemError
+from gtmodel.problems import load_problem
+
+from ..conftest import PROBLEMS_DIR, replace_once as _edit
+
+FILE = PROBLEMS_DIR / "l1_elasto_geometric.toml"
+#: Elasto-geometric validation mean error vs the noise floor (true model on the same poses).
+NOISE_FLOOR_RTOL = 0.05
+#: Geometric-only vs elasto-geometric mean error on the two-load data: at least this ratio.
+IMPROVEMENT_RATIO = 3.0
+#: Calibrated compliances within this many standard deviations of the truth.
+N_SIGMA = 3.0
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    out = tmp_path_factory.mktemp("l1eg")
+    code = main(["solve", str(FILE), "--out", str(out), "--quiet"])
+    return code, out, json.loads((out / "summary.json").read_text())
+
+
+def test_shipped_problem_is_optimal_with_the_required_summary(solved):
+    code, out, s = solved
+    assert code == EXIT_OK
+    assert s["status"] == "optimal"
+    for key in ("geometric_mean_error_m", "geometric_max_error_m", "elasto_geometric_mean_error_m",
+                "elasto_geometric_max_error_m", "noise_floor_mean_error_m", "noise_floor_max_error_m",
+                "improvement_mean_error_m", "identifiability", "load_identifiability", "compliances",
+                "stiffness_values", "stiffness_map", "single_load", "payloads_kg"):
+        assert key in s, key
+    for name in ("parameters.toml", "errors.csv", "error_histogram.png", "stiffness_map.png"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_elasto_geometric_reaches_the_noise_floor_and_beats_the_geometric_model(solved):
+    _, _, s = solved
+    floor = s["noise_floor_mean_error_m"]
+    assert abs(s["elasto_geometric_mean_error_m"] - floor) <= NOISE_FLOOR_RTOL * floor
+    assert s["geometric_mean_error_m"] >= IMPROVEMENT_RATIO * s["elasto_geometric_mean_error_m"]
+    assert s["mean_error_m"] == s["elasto_geometric_mean_error_m"]
+
+
+def test_compliances_identifiable_with_the_geometry(solved):
+    _, _, s = solved
+    ident = s["identifiability"]
+    assert ident["rank"] == ident["n_parameters"] == 27 and ident["non_identifiable"] == []
+    assert all(abs(row["z"]) < N_SIGMA for row in s["compliances"])
+    single = s["single_load"]["load_identifiability"]
+    assert single["rank"] == single["n_parameters"] - 1 and single["explanations"]
+
+
+def test_stiffness_map_is_reported_with_the_measured_figure(solved):
+    _, _, s = solved
+    m = s["stiffness_map"]
+    assert m["measured_D1_N_per_um"] == [2.0, 4.0]
+    assert 0 < m["min_eigenvalue_N_per_um"][0] <= m["axis_N_per_um"]["z"][0]
+    assert s["stiffness_values"]["k_joint_N_per_m"] == 1.15e8
+
+
+BAD = [
+    ("negative_payload", _edit("payloads_kg = [0.0, 40.0]", "payloads_kg = [0.0, -40.0]"), r"field 'truth\.payloads_kg'"),
+    ("unknown_field", _edit("seed = 0", "seed = 0\nsead = 1"), r"unknown field 'truth\.sead'"),
+    ("bad_stiffness_file", _edit('stiffness = "stiffness"', 'stiffness = "nothing.toml"'), r"field 'truth\.stiffness'"),
+    ("bad_pattern", _edit('free_compliance = ["c_l*", "c_a*"]', 'free_compliance = ["k*"]'), r"field 'calibration\.free_compliance'"),
+    ("bad_noise", _edit('noise = "laser_tracker"', 'noise = "ruler"'), r"field 'truth\.noise'"),
+    ("bad_start_compliance", _edit('compliance = "zero"', 'compliance = "half"'), r"field 'start\.compliance'"),
+    ("coarse_grid", _edit("grid_step = 0.1153", "grid_step = 0.9"), r"field 'truth\.grid_step'"),
+    ("bad_parameter_set", _edit('parameters = "L1"', 'parameters = "L9"'), r"field 'truth\.parameters'"),
+    ("negative_map_step", _edit("step = 0.05", "step = -0.05"), r"field 'stiffness_map\.step'"),
+]
+
+
+@pytest.mark.parametrize("case, edit, match", BAD, ids=[c[0] for c in BAD])
+def test_bad_files(tmp_path, case, edit, match):
+    f = tmp_path / f"{case}.toml"
+    f.write_text(edit(FILE.read_text()))
+    with pytest.raises(ProblemError, match=match) as info:
+        load_problem(f)
+    assert str(f) in str(info.value).splitlines()[0]
+
+
+def test_bad_file_through_the_cli(tmp_path, capsys):
+    f = tmp_path / "bad.toml"
+    f.write_text(FILE.read_text().replace("payloads_kg = [0.0, 40.0]", 'payloads_kg = "heavy"'))
+    code = main(["solve", str(f), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err
+    assert re.search(r"payloads_kg", err)
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["status"] == "error"
