@@ -17,7 +17,23 @@ from gtmodel.calibration.calibrate import (
     analyze_identifiability,
     calibrate,
 )
+from gtmodel.calibration.elasto_geometric import (
+    ElastoGeometricClosure,
+    calibrate_elasto_geometric,
+    compliant_measurements,
+    elasto_geometric_study,
+)
+from gtmodel.calibration.dynamic_identification import (
+    DynamicIdentificationResult,
+    DynamicRegressor,
+    MotionLog,
+    identify_dynamics,
+    preprocess_log,
+    read_motion_log,
+    simulate_log,
+)
 from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, plot_error_histogram
+from gtmodel.calibration.excitation import FourierTrajectory, design_excitation
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian
 
 from gtmodel.calibration.measurements import (
@@ -40,6 +56,22 @@ from gtmodel.calibration.synthetic import (
     random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
+)
+from gtmodel.calibration.system_identification import (
+    ActuatorIdentification,
+    StateSpaceIdentification,
+    identify_actuator,
+    identify_state_space,
+    physical_from_state_space,
+    prbs,
+)
+from gtmodel.calibration.joint_stiffness import (
+    DeflectionData,
+    DeflectionNoise,
+    JointStiffnessResult,
+    calibrate_cp,
+    calibrate_dpp,
+    synthetic_deflections,
 )
 
 __all__ = [
@@ -72,4 +104,29 @@ __all__ = [
     "random_poses",
     "synthetic_measurements",
     "synthetic_cart_measurements",
+    "ActuatorIdentification",
+    "StateSpaceIdentification",
+    "identify_actuator",
+    "identify_state_space",
+    "physical_from_state_space",
+    "prbs",
+    "ElastoGeometricClosure",
+    "calibrate_elasto_geometric",
+    "compliant_measurements",
+    "elasto_geometric_study",
+    "DynamicRegressor",
+    "DynamicIdentificationResult",
+    "MotionLog",
+    "identify_dynamics",
+    "preprocess_log",
+    "read_motion_log",
+    "simulate_log",
+    "FourierTrajectory",
+    "design_excitation",
+    "DeflectionData",
+    "DeflectionNoise",
+    "JointStiffnessResult",
+    "calibrate_cp",
+    "calibrate_dpp",
+    "synthetic_deflections",
 ]

@@ -7,6 +7,11 @@ from gtmodel.robots.kinematics import GantryTau3Kinematics, configuration_signs
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, available_parameter_sets, load_parameters
 from gtmodel.robots.six_link import SixLinkClosure, load_six_link
+from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
+from gtmodel.robots.structural import PhysicalModel
+from gtmodel.robots.stiffness import GantryTau3Stiffness, StiffnessParameters, load_stiffness
+from gtmodel.robots.serial import SerialArm, load_serial_arm
+from gtmodel.robots.dynamic_stiffness import DynamicStiffnessGP, fit_single_mode, simulate_single_mode, single_mode_frf
 
 __all__ = [
     "F1Closure",
@@ -22,4 +27,16 @@ __all__ = [
     "gantry_tau_model",
     "load_parameters",
     "load_six_link",
+    "actuator_models",
+    "load_dynamics_models",
+    "PhysicalModel",
+    "GantryTau3Stiffness",
+    "StiffnessParameters",
+    "load_stiffness",
+    "SerialArm",
+    "load_serial_arm",
+    "DynamicStiffnessGP",
+    "fit_single_mode",
+    "simulate_single_mode",
+    "single_mode_frf",
 ]

@@ -16,6 +16,7 @@ from gtmodel.trajectory.path_constrained import (
     solve_path_collocation,
     solve_path_convex,
 )
+from gtmodel.trajectory.milling import MillingProcess, SpindleAngleResult, optimise_spindle_angle
 
 __all__ = [
     "SAMPLE_TIME",
@@ -33,4 +34,7 @@ __all__ = [
     "PathSolution",
     "solve_path_convex",
     "solve_path_collocation",
+    "MillingProcess",
+    "SpindleAngleResult",
+    "optimise_spindle_angle",
 ]

@@ -1,0 +1,521 @@
+"""Joint-stiffness calibration of a serial arm: complete pose (CP) and decoupled partial pose (DPP).
+
+Cvitanic (2021), section 1. Measurements are pairs of a TCP wrench ``F = [f; m]`` (base
+frame, N and N m) and the deflection screw ``dX = [dp; dphi]`` it causes (m and rad) at
+known joint angles ``theta``. The joint-spring model, eq. (3),
+``dX = J K_theta^-1 J^T F``, is linear in the compliances ``c_i = 1/k_i``::
+
+    dX = A(theta, F) c,    A = J diag(J^T F)        (SerialArm.compliance_regressor)
+
+so the nonlinear least-squares problem in ``k`` becomes a linear one in ``c``, solved
+exactly (``numpy.linalg.lstsq``, or ``scipy.optimize.lsq_linear`` with ``c >= 0`` when
+``bounds="positive"``).
+
+* **CP** (complete pose): all six deflection components of every measurement, the rotation
+  rows multiplied by ``rotation_weight`` (default 1: rotations in rad against translations
+  in m; the thesis' "x10" is ``rotation_weight=10``). The weighting is part of the problem
+  statement: it changes the result (Table 2).
+* **DPP** (decoupled partial pose): step 1, eq. (4), fits joints 1-3 from the wrist-centre
+  displacement ``dp_wc = dp - dphi x (p_TCP - p_wc)`` (axes 4-6 pass through the wrist
+  centre, so it does not move with joints 4-6); step 2, eq. (5), fits joints 4-6 from the
+  rotation left after subtracting joints 1-3: ``dphi - sum_{i<=3} z_i c_i tau_i``.
+
+Synthetic data (:func:`synthetic_deflections`) come from the same model with stated
+noise: laser-tracker position noise ``sigma_p = a + b * distance`` per coordinate and
+measurement (Leica AT960 MPE 15 um + 6 um/m, Table 2 notes), rotation noise, optional
+force-measurement noise (errors in variables) and an optional unmodelled translational
+compliance in series at the TCP (e.g. the spindle/tool, 231 MN/m).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.optimize
+
+from gtmodel.errors import InputError
+from gtmodel.robots.serial import SerialArm
+
+__all__ = [
+    "TABLE_1_POSES_DEG",
+    "TABLE_2_K_THETA",
+    "DeflectionData",
+    "DeflectionNoise",
+    "JointStiffnessResult",
+    "axis_wrenches",
+    "synthetic_deflections",
+    "calibrate_cp",
+    "calibrate_dpp",
+]
+
+_log = logging.getLogger("gtmodel")
+
+#: Cvitanic (2021), Table 1: the ten calibration poses of the KR 500-3 [deg] (rows: poses).
+TABLE_1_POSES_DEG = np.array(
+    [
+        [19.67, -52.14, 117.9, 11.86, -66.08, -4.84],
+        [26.35, -32.54, 123.49, -8.99, -90.81, -0.15],
+        [58.28, -10.5, 105.98, 42.39, -115.04, -2.57],
+        [44.71, -70.81, 58.16, 138.51, -41.63, -125.84],
+        [-23.13, -85.41, 80.84, 70.31, 83.63, -71.78],
+        [2.39, -34.82, 69.97, 115.13, 72.1, 176.98],
+        [25.21, -55.7, 130.03, 169.88, 72.17, -179.78],
+        [42.99, -40.39, 97.42, -177.38, 72.1, -179.8],
+        [42.99, -57.91, 110.04, -155.79, 51.1, -179.83],
+        [28.12, -55.4, 84.06, -167.6, 27.07, -179.85],
+    ]
+)
+
+#: Cvitanic (2021), Table 2: identified joint stiffnesses of the KR 500-3 [N m/rad].
+TABLE_2_K_THETA = {
+    "CP": np.array([3.93, 3.46, 2.77, 1.57, 0.24, 0.17]) * 1e6,
+    "DPP": np.array([2.86, 2.36, 1.67, 0.24, 0.16, 0.14]) * 1e6,
+    "CP_rotations_scaled_x10": np.array([2.13, 1.59, 1.12, 1.89, 0.26, 0.17]) * 1e6,
+}
+
+
+def _array(value: Any, shape: tuple[int | None, ...], name: str) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected numbers of shape {shape}, got {value!r}") from None
+    if arr.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, arr.shape)):
+        want = "(" + ", ".join("N" if s is None else str(s) for s in shape) + ")"
+        raise InputError(f"{name}: expected shape {want}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        idx = np.argwhere(~np.isfinite(arr))[0]
+        raise InputError(f"{name}: non-finite value at index {tuple(int(i) for i in idx)}")
+    return arr
+
+
+@dataclass(frozen=True)
+class DeflectionData:
+    """Measured (or synthetic) static deflections under known wrenches.
+
+    Parameters
+    ----------
+    theta : numpy.ndarray, shape (N, 6)
+        Joint angles of each measurement [rad].
+    F : numpy.ndarray, shape (N, 6)
+        Wrench at the TCP, base frame: force [N], moment [N m].
+    dX : numpy.ndarray, shape (N, 6)
+        Deflection screw: translation [m], rotation vector [rad].
+    description : str, optional
+        Where the data come from (synthetic: the truth and the noise).
+
+    Raises
+    ------
+    InputError
+        Wrong shapes, different row counts, non-finite values or fewer than 2 rows.
+    """
+
+    theta: np.ndarray
+    F: np.ndarray
+    dX: np.ndarray
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        th = _array(self.theta, (None, 6), "theta")
+        F = _array(self.F, (None, 6), "F")
+        dX = _array(self.dX, (None, 6), "dX")
+        if not th.shape[0] == F.shape[0] == dX.shape[0]:
+            raise InputError(f"theta, F, dX: expected the same number of rows, got {th.shape[0]}, {F.shape[0]}, {dX.shape[0]}")
+        if th.shape[0] < 2:
+            raise InputError(f"theta: expected at least 2 measurements, got {th.shape[0]}")
+        object.__setattr__(self, "theta", th)
+        object.__setattr__(self, "F", F)
+        object.__setattr__(self, "dX", dX)
+
+    @property
+    def n(self) -> int:
+        """Number of measurements."""
+        return int(self.theta.shape[0])
+
+
+@dataclass(frozen=True)
+class DeflectionNoise:
+    """Noise of a synthetic deflection measurement (each deflection = loaded - unloaded pose).
+
+    Parameters
+    ----------
+    position_std : float, optional
+        Constant part of the position noise per coordinate and measurement [m]
+        (default 15e-6, the AT960 MPE of Table 2's notes used as a standard deviation).
+    position_std_per_m : float, optional
+        Distance-proportional part [m per m of tracker-to-TCP distance] (default 6e-6).
+    rotation_std : float, optional
+        Rotation noise per axis and measurement [rad] (default 2.6e-4 = 0.015 deg, Table 7
+        baseline orientation noise).
+    force_relative_std : float, optional
+        Relative noise of the measured wrench (errors in variables; the calibration uses
+        the noisy wrench) [-] (default 0).
+    tracker_position : tuple of float, optional
+        Tracker position in the base frame [m] (default (4, 0, 1)).
+    """
+
+    position_std: float = 15e-6
+    position_std_per_m: float = 6e-6
+    rotation_std: float = 2.6e-4
+    force_relative_std: float = 0.0
+    tracker_position: tuple[float, float, float] = (4.0, 0.0, 1.0)
+
+    def __post_init__(self) -> None:
+        for name in ("position_std", "position_std_per_m", "rotation_std", "force_relative_std"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v < 0:
+                raise InputError(f"DeflectionNoise.{name}: expected a finite number >= 0, got {v!r}")
+        _array(self.tracker_position, (3,), "DeflectionNoise.tracker_position")
+
+
+@dataclass
+class JointStiffnessResult:
+    """Result of a joint-stiffness calibration (status, never None).
+
+    Parameters
+    ----------
+    success : bool
+        True if the regressor has full rank and every compliance is positive.
+    status : str
+        ``"optimal"``, or ``"error"`` (rank-deficient regressor or a non-positive
+        compliance, see ``message``).
+    message : str
+        What happened, naming the offending joints.
+    method : str
+        ``"CP"`` or ``"DPP"``.
+    k_theta : numpy.ndarray, shape (6,)
+        Identified joint stiffnesses [N m/rad] (``inf`` where the compliance is <= 0).
+    compliance : numpy.ndarray, shape (6,)
+        Identified compliances ``1/k`` [rad/(N m)].
+    std_compliance : numpy.ndarray, shape (6,)
+        Standard deviations of the compliances [rad/(N m)]: sandwich covariance with one
+        residual variance for the translation rows and one for the rotation rows (valid
+        for any rotation weight).
+    std_k_theta : numpy.ndarray, shape (6,)
+        First-order standard deviations of ``k`` (``std_c / c^2``) [N m/rad].
+    rotation_weight : float
+        Factor on the rotation residual rows (CP; 1 for DPP).
+    residuals : numpy.ndarray, shape (N, 6)
+        Unweighted model - measurement deflection residuals [m, rad].
+    rms_translation : float
+        RMS of the translation residuals [m].
+    rms_rotation : float
+        RMS of the rotation residuals [rad].
+    condition : float
+        Condition number of the (weighted) regressor(s) (worst step for DPP).
+    n_measurements : int
+        Number of measurements used.
+    extra : dict, optional
+        Method-specific details (DPP: ``condition_step1``, ``condition_step2``).
+    """
+
+    success: bool
+    status: str
+    message: str
+    method: str
+    k_theta: np.ndarray
+    compliance: np.ndarray
+    std_compliance: np.ndarray
+    std_k_theta: np.ndarray
+    rotation_weight: float
+    residuals: np.ndarray
+    rms_translation: float
+    rms_rotation: float
+    condition: float
+    n_measurements: int
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def axis_wrenches(n_poses: int, force: float = 1000.0, moment: float = 200.0) -> tuple[np.ndarray, np.ndarray]:
+    """Standard load cases: forces along +x, +y, -z and moments about x, y, z of the base at each pose.
+
+    Six load cases per pose. The moments are needed to excite joint 6: a pure force at
+    a TCP on the axis of joint 6 exerts no torque on it.
+
+    Parameters
+    ----------
+    n_poses : int
+        Number of poses (>= 1).
+    force : float, optional
+        Magnitude of the applied forces [N] (> 0, default 1000).
+    moment : float, optional
+        Magnitude of the applied moments [N m] (> 0, default 200).
+
+    Returns
+    -------
+    pose_index : numpy.ndarray, shape (6 n_poses,)
+        Index of the pose of each load case.
+    F : numpy.ndarray, shape (6 n_poses, 6)
+        Wrenches [N, N m].
+
+    Raises
+    ------
+    InputError
+        ``n_poses < 1`` or a non-positive / non-finite ``force`` or ``moment``.
+    """
+    if isinstance(n_poses, bool) or int(n_poses) != n_poses or n_poses < 1:
+        raise InputError(f"n_poses: expected an integer >= 1, got {n_poses!r}")
+    for name, v in (("force", force), ("moment", moment)):
+        if not np.isfinite(v) or v <= 0:
+            raise InputError(f"{name}: expected a finite number > 0, got {v!r}")
+    base = np.diag([force, force, -force, moment, moment, moment]).astype(float)
+    idx = np.repeat(np.arange(int(n_poses)), 6)
+    return idx, np.tile(base, (int(n_poses), 1))
+
+
+def synthetic_deflections(
+    arm: SerialArm,
+    theta: Any,
+    F: Any,
+    k_theta: Any,
+    noise: DeflectionNoise | None = None,
+    series_translational_stiffness: float | None = None,
+    rotation_only_stiffness: float | None = None,
+    seed: int = 0,
+) -> DeflectionData:
+    """Synthetic (F, dX) measurements of the joint-spring model, Cvitanic (2021), eq. (3).
+
+    ``dX_true = J K_theta^-1 J^T F (+ f / k_s on the translation if a series stiffness k_s
+    is given)``; the deflection is the difference of a loaded and an unloaded pose
+    measurement, each with independent position noise ``position_std + position_std_per_m
+    * |p_TCP - p_tracker|`` per coordinate and rotation noise ``rotation_std`` per axis
+    (hence a factor sqrt(2) on the deflection). The returned wrench carries the relative
+    force noise (the calibration sees the measured, not the applied, wrench).
+
+    Parameters
+    ----------
+    arm : SerialArm
+        The arm (its Jacobian and FK are used).
+    theta : array_like, shape (N, 6)
+        Joint angles of each measurement [rad] (degrees only at the user boundary).
+    F : array_like, shape (N, 6)
+        Applied wrenches [N, N m].
+    k_theta : array_like, shape (6,)
+        True joint stiffnesses [N m/rad], positive.
+    noise : DeflectionNoise, optional
+        Noise model (default :class:`DeflectionNoise` defaults). ``DeflectionNoise(0, 0, 0)``
+        gives exact data.
+    series_translational_stiffness : float, optional
+        Unmodelled translational stiffness in series at the TCP [N/m] (e.g. 231e6 for the
+        spindle of Table 2's notes); default none.
+    rotation_only_stiffness : float, optional
+        Unmodelled isotropic rotational stiffness [N m/rad] seen by the orientation
+        measurement only: ``dphi += (m + (p_TCP - p_wc) x f) / k_r`` (moment about the
+        wrist centre) without a TCP translation, e.g. a compliant 6-DOF probe mount or a
+        tool holder tilting about the tool tip. A hypothesis for the CP/DPP gap of Table 2,
+        not a thesis figure; default none.
+    seed : int, optional
+        Seed of ``numpy.random.default_rng``.
+
+    Returns
+    -------
+    DeflectionData
+        Measured wrenches and deflections.
+
+    Raises
+    ------
+    InputError
+        Wrong shapes, non-finite values, non-positive stiffness.
+    """
+    th = _array(theta, (None, 6), "theta")
+    Fa = _array(F, (None, 6), "F")
+    if th.shape[0] != Fa.shape[0]:
+        raise InputError(f"theta, F: expected the same number of rows, got {th.shape[0]} and {Fa.shape[0]}")
+    k = _array(k_theta, (6,), "k_theta")
+    if np.any(k <= 0):
+        j = int(np.flatnonzero(k <= 0)[0])
+        raise InputError(f"k_theta: expected positive stiffnesses, joint {j + 1} has {k[j]!r}")
+    if series_translational_stiffness is not None and (not np.isfinite(series_translational_stiffness) or series_translational_stiffness <= 0):
+        raise InputError(f"series_translational_stiffness: expected a finite number > 0, got {series_translational_stiffness!r}")
+    if rotation_only_stiffness is not None and (not np.isfinite(rotation_only_stiffness) or rotation_only_stiffness <= 0):
+        raise InputError(f"rotation_only_stiffness: expected a finite number > 0, got {rotation_only_stiffness!r}")
+    noise = DeflectionNoise() if noise is None else noise
+    rng = np.random.default_rng(seed)
+    dX = np.array([arm.deflection(t, f, k) for t, f in zip(th, Fa)])
+    if series_translational_stiffness is not None:
+        dX[:, :3] += Fa[:, :3] / series_translational_stiffness
+    if rotation_only_stiffness is not None:
+        for j, (t, f) in enumerate(zip(th, Fa)):
+            r = arm.position(t) - arm.wrist_centre(t)
+            dX[j, 3:] += (f[3:] + np.cross(r, f[:3])) / rotation_only_stiffness
+    p = arm.position(th)
+    dist = np.linalg.norm(p - np.asarray(noise.tracker_position), axis=1)
+    sig_p = noise.position_std + noise.position_std_per_m * dist
+    dX[:, :3] += np.sqrt(2.0) * sig_p[:, None] * rng.standard_normal((th.shape[0], 3))
+    dX[:, 3:] += np.sqrt(2.0) * noise.rotation_std * rng.standard_normal((th.shape[0], 3))
+    Fm = Fa * (1.0 + noise.force_relative_std * rng.standard_normal(Fa.shape))
+    desc = (
+        f"synthetic: k_theta = {np.round(k / 1e6, 4).tolist()} MN m/rad, {noise}, "
+        f"series stiffness {series_translational_stiffness} N/m, rotation-only stiffness "
+        f"{rotation_only_stiffness} N m/rad, seed {seed}"
+    )
+    return DeflectionData(th, Fm, dX, desc)
+
+
+def _solve(A: np.ndarray, y: np.ndarray, bounds: str, what: str, groups: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, list[str]]:
+    """Weighted linear LS; returns c, std, condition, problems.
+
+    The covariance is the sandwich ``(A^T A)^-1 A^T S A (A^T A)^-1`` with one residual
+    variance per row group (translation rows, rotation rows), so the standard deviations
+    stay valid when the weighting does not equalise the noise of the groups.
+    """
+    problems = []
+    cond = float(np.linalg.cond(A))
+    rank = np.linalg.matrix_rank(A)
+    if rank < A.shape[1]:
+        problems.append(f"{what}: regressor rank {rank} < {A.shape[1]} (joints not excited by these poses/wrenches)")
+    if bounds == "positive":
+        c = scipy.optimize.lsq_linear(A, y, bounds=(0.0, np.inf), method="bvls").x
+    else:
+        c = np.linalg.lstsq(A, y, rcond=None)[0]
+    g = np.zeros(A.shape[0], dtype=int) if groups is None else groups
+    r = A @ c - y
+    dof_total = A.shape[0] - A.shape[1]
+    var = np.empty(A.shape[0])
+    for label in np.unique(g):
+        rows = g == label
+        dof = rows.sum() * dof_total / A.shape[0]  # parameters shared out in proportion to the rows
+        var[rows] = float(r[rows] @ r[rows]) / dof if dof > 0 else np.inf
+    try:
+        AtA_inv = np.linalg.inv(A.T @ A)
+        cov = AtA_inv @ (A.T * var) @ A @ AtA_inv
+        std = np.sqrt(np.clip(np.diag(cov), 0, None))
+    except np.linalg.LinAlgError:
+        std = np.full(A.shape[1], np.inf)
+    if not np.all(np.isfinite(std)):
+        std = np.where(np.isfinite(std), std, np.inf)
+    return c, std, cond, problems
+
+
+def _result(method: str, c: np.ndarray, std: np.ndarray, cond: float, problems: list[str], arm: SerialArm, data: DeflectionData, w: float, extra: dict) -> JointStiffnessResult:
+    for j in np.flatnonzero(c <= 0):
+        problems.append(f"joint {j + 1}: compliance {c[j]:.3g} rad/(N m) <= 0 (not identifiable from these data; try bounds='positive' or more/other poses)")
+    with np.errstate(divide="ignore"):
+        k = np.where(c > 0, 1.0 / np.where(c > 0, c, 1.0), np.inf)
+        std_k = np.where(c > 0, std / np.where(c > 0, c, 1.0) ** 2, np.inf)
+    pred = np.array([arm.compliance_regressor(t, f) @ c for t, f in zip(data.theta, data.F)])
+    res = pred - data.dX
+    ok = not problems
+    msg = "; ".join(problems) if problems else f"{method}: linear least squares in the compliances solved exactly"
+    if problems:
+        _log.warning("joint stiffness %s: %s", method, msg)
+    return JointStiffnessResult(
+        success=ok,
+        status="optimal" if ok else "error",
+        message=msg,
+        method=method,
+        k_theta=k,
+        compliance=c,
+        std_compliance=std,
+        std_k_theta=std_k,
+        rotation_weight=float(w),
+        residuals=res,
+        rms_translation=float(np.sqrt(np.mean(res[:, :3] ** 2))),
+        rms_rotation=float(np.sqrt(np.mean(res[:, 3:] ** 2))),
+        condition=cond,
+        n_measurements=data.n,
+        extra=extra,
+    )
+
+
+def _check_common(arm: Any, data: Any, bounds: str) -> None:
+    if not isinstance(arm, SerialArm):
+        raise InputError(f"arm: expected a SerialArm, got {type(arm).__name__}")
+    if not isinstance(data, DeflectionData):
+        raise InputError(f"data: expected a DeflectionData, got {type(data).__name__}")
+    if bounds not in ("none", "positive"):
+        raise InputError(f"bounds: expected 'none' or 'positive', got {bounds!r}")
+
+
+def calibrate_cp(arm: SerialArm, data: DeflectionData, rotation_weight: float = 1.0, bounds: str = "none") -> JointStiffnessResult:
+    """Complete-pose (CP) joint-stiffness calibration, Cvitanic (2021), eq. (3) and Table 2.
+
+    Minimises ``sum_j || W (A(theta_j, F_j) c - dX_j) ||^2`` over the compliances
+    ``c = 1/k`` with ``W = diag(1, 1, 1, w, w, w)``: rotation residuals [rad] are
+    multiplied by ``w = rotation_weight`` against translation residuals [m]. The thesis
+    used ``w = 1`` (CP) and ``w = 10`` (CP, rotations scaled x10). Statistically the
+    efficient choice is the inverse-noise weight ``w = sigma_translation / sigma_rotation``
+    [m/rad] (about 0.1 for a laser tracker with 15 um + 6 um/m and 0.015 deg): weighting
+    rotations up amplifies their noise.
+
+    Parameters
+    ----------
+    arm : SerialArm
+        Nominal arm (Jacobian source).
+    data : DeflectionData
+        Measured wrenches and deflections.
+    rotation_weight : float, optional
+        Factor on the rotation residual rows [m/rad] (> 0, default 1).
+    bounds : {"none", "positive"}, optional
+        ``"positive"`` constrains ``c >= 0`` (``scipy.optimize.lsq_linear``).
+
+    Returns
+    -------
+    JointStiffnessResult
+        Identified stiffnesses, standard deviations and status.
+
+    Raises
+    ------
+    InputError
+        Wrong argument types or a non-positive / non-finite ``rotation_weight``.
+    """
+    _check_common(arm, data, bounds)
+    if not np.isfinite(rotation_weight) or rotation_weight <= 0:
+        raise InputError(f"rotation_weight: expected a finite number > 0, got {rotation_weight!r}")
+    w = np.array([1, 1, 1, rotation_weight, rotation_weight, rotation_weight], dtype=float)
+    A = np.vstack([w[:, None] * arm.compliance_regressor(t, f) for t, f in zip(data.theta, data.F)])
+    y = (w[None, :] * data.dX).reshape(-1)
+    groups = np.tile([0, 0, 0, 1, 1, 1], data.n)
+    c, std, cond, problems = _solve(A, y, bounds, "CP", groups)
+    return _result("CP", c, std, cond, problems, arm, data, rotation_weight, {})
+
+
+def calibrate_dpp(arm: SerialArm, data: DeflectionData, bounds: str = "none") -> JointStiffnessResult:
+    """Decoupled partial-pose (DPP) calibration, Cvitanic (2021), eqs. (4)-(5) and Table 2.
+
+    Step 1, eq. (4): joints 1-3 from the wrist-centre displacement
+    ``dp_wc = dp - dphi x (p_TCP - p_wc) = sum_{i<=3} J_wc,i c_i tau_i`` with
+    ``tau = J^T F``. Step 2, eq. (5): joints 4-6 from the rotation left by joints 1-3,
+    ``dphi - sum_{i<=3} z_i c_i tau_i = sum_{i>=4} z_i c_i tau_i``.
+
+    Parameters
+    ----------
+    arm : SerialArm
+        Nominal arm with a spherical wrist (wrist centre independent of joints 4-6).
+    data : DeflectionData
+        Measured wrenches and deflections (rotations are needed for both steps).
+    bounds : {"none", "positive"}, optional
+        ``"positive"`` constrains ``c >= 0`` in both steps.
+
+    Returns
+    -------
+    JointStiffnessResult
+        Identified stiffnesses (``extra`` holds the per-step conditions), status.
+
+    Raises
+    ------
+    InputError
+        Wrong argument types, or an arm whose wrist centre moves with joints 4-6.
+    """
+    _check_common(arm, data, bounds)
+    A1, y1, A2_parts, y2_parts, z_parts = [], [], [], [], []
+    for t, f, dx in zip(data.theta, data.F, data.dX):
+        J = arm.jacobian(t)
+        Jwc = arm.wrist_jacobian(t)
+        if np.max(np.abs(Jwc[:, 3:])) > 1e-9:
+            raise InputError(f"arm {arm.name!r}: DPP needs a spherical wrist (wrist centre independent of joints 4-6)")
+        r = arm.position(t) - arm.wrist_centre(t)
+        tau = J.T @ f
+        A1.append(Jwc[:, :3] * tau[None, :3])
+        y1.append(dx[:3] - np.cross(dx[3:], r))
+        A2_parts.append(J[3:, 3:] * tau[None, 3:])
+        z_parts.append(J[3:, :3] * tau[None, :3])
+        y2_parts.append(dx[3:])
+    c13, std13, cond1, problems = _solve(np.vstack(A1), np.concatenate(y1), bounds, "DPP step 1 (wrist centre, joints 1-3)")
+    y2 = np.concatenate([y - z @ c13 for y, z in zip(y2_parts, z_parts)])
+    c46, std46, cond2, problems2 = _solve(np.vstack(A2_parts), y2, bounds, "DPP step 2 (rotation, joints 4-6)")
+    c = np.concatenate([c13, c46])
+    std = np.concatenate([std13, std46])
+    return _result("DPP", c, std, max(cond1, cond2), problems + problems2, arm, data, 1.0, {"condition_step1": cond1, "condition_step2": cond2})

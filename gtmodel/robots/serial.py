@@ -1,0 +1,566 @@
+"""Serial 6R manipulator from a Denavit-Hartenberg table, with the joint-spring compliance model.
+
+Kinematics (standard, i.e. distal, Denavit-Hartenberg convention)::
+
+    A_i(theta_i) = Rz(theta_i + theta_offset_i) Tz(d_i) Tx(a_i) Rx(alpha_i)
+    T_TCP(theta) = base A_1 ... A_6 tool
+
+is written once as a CasADi SX graph. The geometric Jacobian ``J = [J_v; J_w]`` (6 x 6,
+linear velocity of the TCP over angular velocity) takes its position rows from
+``ca.jacobian`` of the TCP position of that graph and its rotation rows from the joint axes
+``z_{i-1}`` of the same graph.
+
+Joint-spring compliance (Cvitanic (2021), section 1): every joint is a linear torsional
+spring of stiffness ``k_i`` [N m/rad]; under a wrench ``F = [f; m]`` at the TCP (force [N],
+moment [N m], base frame) the small deflection screw ``dX = [dp; dphi]`` (translation [m],
+rotation vector [rad]) is::
+
+    dX = J K_theta^-1 J^T F                      Cvitanic (2021), eq. (3)
+    K_x = J^-T K_theta J^-1                      Cvitanic (2021), eq. (7)
+
+(the complementary stiffness of eq. (2) is neglected). With the compliances ``c_i = 1/k_i``
+eq. (3) is linear: ``dX = sum_i c_i J_i (J_i^T F)`` (:meth:`SerialArm.compliance_regressor`).
+
+The only shipped geometry, ``serial_6r_illustrative``, is an ILLUSTRATIVE KR 500-like arm:
+the thesis gives no DH table for its KUKA KR 500-3, so its values are assumptions.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+import casadi as ca
+import numpy as np
+
+from gtmodel._toml import read_toml
+from gtmodel.errors import ConvergenceError, InputError, ParameterError, SingularConfigurationError
+
+__all__ = [
+    "SerialArm",
+    "load_serial_arm",
+    "rotation_rpy",
+    "SINGULAR_CONDITION",
+]
+
+_log = logging.getLogger("gtmodel")
+_DATA_PACKAGE = "gtmodel.robots"
+
+#: Condition number of ``J`` above which a pose is treated as singular.
+SINGULAR_CONDITION = 1e8
+
+
+def _vector(value: Any, n: int, name: str, positive: bool = False) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected {n} numbers, got {value!r}") from None
+    if arr.shape != (n,):
+        raise InputError(f"{name}: expected shape ({n},), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name}: expected finite numbers, got {arr.tolist()}")
+    if positive and np.any(arr <= 0):
+        bad = int(np.flatnonzero(arr <= 0)[0])
+        raise InputError(f"{name}: expected positive values, entry {bad} is {arr[bad]!r}")
+    return arr
+
+
+def _rows(value: Any, n: int, name: str) -> tuple[np.ndarray, bool]:
+    """(N, n) array from (n,) or (N, n); the flag says whether the input was a single row."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected an array of shape ({n},) or (N, {n}), got {value!r}") from None
+    single = arr.ndim == 1
+    arr2 = arr.reshape(1, -1) if single else arr
+    if arr2.ndim != 2 or arr2.shape[1] != n or arr2.shape[0] == 0:
+        raise InputError(f"{name}: expected shape ({n},) or (N, {n}), got {arr.shape}")
+    if not np.all(np.isfinite(arr2)):
+        row = int(np.flatnonzero(~np.all(np.isfinite(arr2), axis=1))[0])
+        raise InputError(f"{name}: row {row} has a non-finite value: {arr2[row].tolist()}")
+    return arr2, single
+
+
+def rotation_rpy(rpy: Any) -> np.ndarray:
+    """Rotation matrix ``Rz(yaw) Ry(pitch) Rx(roll)`` from roll, pitch, yaw.
+
+    Parameters
+    ----------
+    rpy : array_like, shape (3,)
+        Roll, pitch, yaw [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        The rotation matrix.
+
+    Raises
+    ------
+    InputError
+        Wrong shape or non-finite values.
+    """
+    r, p, y = _vector(rpy, 3, "rpy")
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1.0]])
+    ry = np.array([[cp, 0, sp], [0, 1.0, 0], [-sp, 0, cp]])
+    rx = np.array([[1.0, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    return rz @ ry @ rx
+
+
+def _dh_sx(theta: ca.SX, a: float, alpha: float, d: float) -> ca.SX:
+    """Standard DH transform Rz(theta) Tz(d) Tx(a) Rx(alpha) as a 4x4 SX."""
+    ct, st = ca.cos(theta), ca.sin(theta)
+    ca_, sa = math.cos(alpha), math.sin(alpha)
+    return ca.vertcat(
+        ca.horzcat(ct, -st * ca_, st * sa, a * ct),
+        ca.horzcat(st, ct * ca_, -ct * sa, a * st),
+        ca.horzcat(0, sa, ca_, d),
+        ca.horzcat(0, 0, 0, 1),
+    )
+
+
+class SerialArm:
+    """A 6R serial manipulator from a standard DH table, CasADi graph and joint-spring model.
+
+    Parameters
+    ----------
+    a : array_like, shape (6,)
+        DH link lengths ``a_i`` [m].
+    alpha : array_like, shape (6,)
+        DH link twists ``alpha_i`` [rad].
+    d : array_like, shape (6,)
+        DH link offsets ``d_i`` [m].
+    theta_offset : array_like, shape (6,), optional
+        Added to the joint angles [rad] (default zeros).
+    tool : array_like, shape (4, 4), optional
+        Flange -> TCP homogeneous transform [m] (default identity).
+    base : array_like, shape (4, 4), optional
+        World -> joint-1 frame homogeneous transform [m] (default identity).
+    name : str, optional
+        Name of the arm.
+    description : str, optional
+        What the geometry is (and whether it is illustrative).
+
+    Raises
+    ------
+    InputError
+        Wrong shapes, non-finite values, or a ``tool``/``base`` that is not a rigid transform.
+
+    Notes
+    -----
+    The wrist centre is the origin of DH frame 5 (after joints 1-5); for the spherical
+    wrist of the illustrative arm it depends on joints 1-3 only. Cvitanic (2021), eqs.
+    (3), (4), (7).
+    """
+
+    n_joints = 6
+
+    def __init__(
+        self,
+        a: Any,
+        alpha: Any,
+        d: Any,
+        theta_offset: Any = None,
+        tool: Any = None,
+        base: Any = None,
+        name: str = "serial_arm",
+        description: str = "",
+    ) -> None:
+        self.a = _vector(a, 6, "a")
+        self.alpha = _vector(alpha, 6, "alpha")
+        self.d = _vector(d, 6, "d")
+        self.theta_offset = np.zeros(6) if theta_offset is None else _vector(theta_offset, 6, "theta_offset")
+        self.tool = self._transform(tool, "tool")
+        self.base = self._transform(base, "base")
+        self.name = str(name)
+        self.description = str(description)
+
+    @staticmethod
+    def _transform(value: Any, name: str) -> np.ndarray:
+        if value is None:
+            return np.eye(4)
+        arr = np.asarray(value, dtype=float)
+        if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
+            raise InputError(f"{name}: expected a finite 4x4 homogeneous transform, got shape {arr.shape}")
+        rot = arr[:3, :3]
+        if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-9) or not np.allclose(arr[3], [0, 0, 0, 1]):
+            raise InputError(f"{name}: the 4x4 transform is not rigid (rotation not orthonormal or last row not [0 0 0 1])")
+        return arr
+
+    # ------------------------------------------------------------------ symbolic graph
+    @cached_property
+    def _graph(self) -> dict[str, ca.SX]:
+        theta = ca.SX.sym("theta", 6)
+        T = ca.SX(self.base)
+        z_axes, origins = [T[:3, 2]], [T[:3, 3]]
+        frames = []
+        for i in range(6):
+            T = ca.mtimes(T, _dh_sx(theta[i] + float(self.theta_offset[i]), float(self.a[i]), float(self.alpha[i]), float(self.d[i])))
+            frames.append(T)
+            z_axes.append(T[:3, 2])
+            origins.append(T[:3, 3])
+        T_tcp = ca.mtimes(T, ca.SX(self.tool))
+        p = T_tcp[:3, 3]
+        J_v = ca.jacobian(p, theta)
+        J_w = ca.horzcat(*z_axes[:6])
+        J = ca.vertcat(J_v, J_w)
+        p_wc = frames[4][:3, 3]
+        return {"theta": theta, "T": T_tcp, "p": p, "J": J, "p_wc": p_wc, "J_wc": ca.jacobian(p_wc, theta)}
+
+    @cached_property
+    def fk_function(self) -> ca.Function:
+        """CasADi function ``theta (6) -> T (4x4)``, base -> TCP homogeneous transform [m]."""
+        g = self._graph
+        return ca.Function("fk", [g["theta"]], [g["T"]], ["theta"], ["T"])
+
+    @cached_property
+    def jacobian_function(self) -> ca.Function:
+        """CasADi function ``theta (6) -> J (6x6)``, geometric Jacobian ``[J_v; J_w]`` of the TCP."""
+        g = self._graph
+        return ca.Function("jacobian", [g["theta"]], [g["J"]], ["theta"], ["J"])
+
+    @cached_property
+    def wrist_function(self) -> ca.Function:
+        """CasADi function ``theta (6) -> (p_wc (3), J_wc (3x6))``, wrist centre and its Jacobian."""
+        g = self._graph
+        return ca.Function("wrist", [g["theta"]], [g["p_wc"], g["J_wc"]], ["theta"], ["p_wc", "J_wc"])
+
+    @cached_property
+    def deflection_function(self) -> ca.Function:
+        """CasADi function ``(theta (6), F (6), k_theta (6)) -> dX (6)``, Cvitanic (2021), eq. (3)."""
+        g = self._graph
+        F = ca.SX.sym("F", 6)
+        k = ca.SX.sym("k_theta", 6)
+        J = g["J"]
+        dX = ca.mtimes(J, ca.mtimes(ca.diag(1 / k), ca.mtimes(J.T, F)))
+        return ca.Function("deflection", [g["theta"], F, k], [dX], ["theta", "F", "k_theta"], ["dX"])
+
+    @cached_property
+    def regressor_function(self) -> ca.Function:
+        """CasADi function ``(theta, F) -> A (6x6)`` with ``dX = A c``, ``c_i = 1/k_i``, eq. (3)."""
+        g = self._graph
+        F = ca.SX.sym("F", 6)
+        J = g["J"]
+        A = ca.mtimes(J, ca.diag(ca.mtimes(J.T, F)))
+        return ca.Function("compliance_regressor", [g["theta"], F], [A], ["theta", "F"], ["A"])
+
+    # ------------------------------------------------------------------ numeric API
+    def fk(self, theta: Any) -> np.ndarray:
+        """Forward kinematics: base -> TCP homogeneous transform.
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,) or (N, 6)
+            Joint angles [rad].
+
+        Returns
+        -------
+        numpy.ndarray, shape (4, 4) or (N, 4, 4)
+            ``T_TCP(theta)`` [m]; rotation in ``[:3, :3]``, position in ``[:3, 3]``.
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite angles.
+        """
+        th, single = _rows(theta, 6, "theta")
+        out = np.stack([np.array(self.fk_function(row)) for row in th])
+        return out[0] if single else out
+
+    def position(self, theta: Any) -> np.ndarray:
+        """TCP position.
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,) or (N, 6)
+            Joint angles [rad].
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (N, 3)
+            TCP position in the base frame [m].
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite angles.
+        """
+        T = self.fk(theta)
+        return T[..., :3, 3]
+
+    def jacobian(self, theta: Any) -> np.ndarray:
+        """Geometric Jacobian ``[J_v; J_w]`` of the TCP (rows: linear then angular velocity).
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,)
+            Joint angles [rad].
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            ``J`` with ``[v; omega] = J theta_dot`` [m/rad; 1].
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite angles.
+        """
+        th = _vector(theta, 6, "theta")
+        return np.array(self.jacobian_function(th))
+
+    def wrist_centre(self, theta: Any) -> np.ndarray:
+        """Wrist-centre position (origin of DH frame 5).
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,)
+            Joint angles [rad].
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            Wrist centre in the base frame [m].
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite angles.
+        """
+        th = _vector(theta, 6, "theta")
+        return np.array(self.wrist_function(th)[0]).reshape(3)
+
+    def wrist_jacobian(self, theta: Any) -> np.ndarray:
+        """Jacobian of the wrist-centre position (zero columns 4-6 for a spherical wrist).
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,)
+            Joint angles [rad].
+
+        Returns
+        -------
+        numpy.ndarray, shape (3, 6)
+            ``d p_wc / d theta`` [m/rad]; used by DPP, Cvitanic (2021), eq. (4).
+
+        Raises
+        ------
+        InputError
+            Wrong shape or non-finite angles.
+        """
+        th = _vector(theta, 6, "theta")
+        return np.array(self.wrist_function(th)[1])
+
+    def _checked_jacobian(self, theta: np.ndarray) -> np.ndarray:
+        J = self.jacobian(theta)
+        cond = np.linalg.cond(J)
+        if not np.isfinite(cond) or cond > SINGULAR_CONDITION:
+            raise SingularConfigurationError(
+                f"{self.name}: Jacobian is singular at theta = {np.round(theta, 6).tolist()} rad (condition number {cond:.3g})"
+            )
+        return J
+
+    def deflection(self, theta: Any, F: Any, k_theta: Any) -> np.ndarray:
+        """Static TCP deflection of the joint-spring model, Cvitanic (2021), eq. (3).
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,)
+            Joint angles [rad].
+        F : array_like, shape (6,)
+            Wrench at the TCP in the base frame: force [N], moment [N m].
+        k_theta : array_like, shape (6,)
+            Joint stiffnesses [N m/rad], all positive.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6,)
+            ``dX = J K_theta^-1 J^T F``: translation [m], rotation vector [rad].
+
+        Raises
+        ------
+        InputError
+            Wrong shapes, non-finite values or a non-positive stiffness.
+        """
+        th = _vector(theta, 6, "theta")
+        f = _vector(F, 6, "F")
+        k = _vector(k_theta, 6, "k_theta", positive=True)
+        return np.array(self.deflection_function(th, f, k)).reshape(6)
+
+    def compliance_regressor(self, theta: Any, F: Any) -> np.ndarray:
+        """Regressor ``A`` of eq. (3) in the compliances: ``dX = A c`` with ``c_i = 1/k_i``.
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,)
+            Joint angles [rad].
+        F : array_like, shape (6,)
+            Wrench at the TCP in the base frame: force [N], moment [N m].
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            Column ``i`` is ``J_i (J_i^T F)`` [m N m, N m]; Cvitanic (2021), eq. (3).
+
+        Raises
+        ------
+        InputError
+            Wrong shapes or non-finite values.
+        """
+        th = _vector(theta, 6, "theta")
+        f = _vector(F, 6, "F")
+        return np.array(self.regressor_function(th, f))
+
+    def cartesian_stiffness(self, theta: Any, k_theta: Any) -> np.ndarray:
+        """Cartesian stiffness ``K_x = J^-T K_theta J^-1``, Cvitanic (2021), eq. (7).
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,)
+            Joint angles [rad].
+        k_theta : array_like, shape (6,)
+            Joint stiffnesses [N m/rad], all positive.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            ``K_x`` mapping ``[dp; dphi]`` to ``[f; m]`` [N/m, N, N m/rad].
+
+        Raises
+        ------
+        InputError
+            Wrong shapes, non-finite values or a non-positive stiffness.
+        SingularConfigurationError
+            ``J`` is singular (condition number above :data:`SINGULAR_CONDITION`).
+        """
+        th = _vector(theta, 6, "theta")
+        k = _vector(k_theta, 6, "k_theta", positive=True)
+        J = self._checked_jacobian(th)
+        Jinv = np.linalg.inv(J)
+        return Jinv.T @ np.diag(k) @ Jinv
+
+    def ik(self, T_target: Any, theta0: Any, tol: float = 1e-10, max_iter: int = 50) -> np.ndarray:
+        """Inverse kinematics by Newton's method on the CasADi FK and Jacobian.
+
+        Iterates ``theta <- theta + J^-1 [p_t - p; e_R]`` with the orientation error
+        ``e_R = 1/2 sum_i r_i x r_t,i`` (columns of ``R`` and ``R_target``).
+
+        Parameters
+        ----------
+        T_target : array_like, shape (4, 4)
+            Target TCP pose (homogeneous transform) [m].
+        theta0 : array_like, shape (6,)
+            Start angles [rad]; selects the configuration (branch) of the solution.
+        tol : float, optional
+            Convergence tolerance on the 6-D error norm [m, rad].
+        max_iter : int, optional
+            Maximum number of Newton steps.
+
+        Returns
+        -------
+        numpy.ndarray, shape (6,)
+            Joint angles [rad] reaching ``T_target``.
+
+        Raises
+        ------
+        InputError
+            Wrong shapes or a non-rigid target.
+        SingularConfigurationError
+            A Newton step met a singular Jacobian.
+        ConvergenceError
+            No convergence within ``max_iter`` steps (target out of reach?).
+        """
+        Tt = self._transform(T_target, "T_target")
+        th = _vector(theta0, 6, "theta0").copy()
+        err = np.inf
+        for _ in range(int(max_iter)):
+            T = np.array(self.fk_function(th))
+            e_p = Tt[:3, 3] - T[:3, 3]
+            e_r = 0.5 * sum(np.cross(T[:3, i], Tt[:3, i]) for i in range(3))
+            e = np.concatenate([e_p, e_r])
+            err = float(np.linalg.norm(e))
+            if err < tol:
+                return th
+            J = self._checked_jacobian(th)
+            th = th + np.linalg.solve(J, e)
+        raise ConvergenceError(f"{self.name}: inverse kinematics did not converge in {max_iter} steps (error {err:.3g})")
+
+
+def _arm_from_mapping(data: Mapping[str, Any], origin: str) -> SerialArm:
+    dh = data.get("dh")
+    if not isinstance(dh, Mapping):
+        raise ParameterError(f"{origin}: missing table [dh]")
+    convention = dh.get("convention", "standard")
+    if convention != "standard":
+        raise ParameterError(f"{origin}: dh.convention: only 'standard' DH is supported, got {convention!r}")
+    values = {}
+    for key in ("a", "alpha_deg", "d", "theta_offset_deg"):
+        if key not in dh:
+            raise ParameterError(f"{origin}: dh.{key}: missing (expected 6 numbers)")
+        try:
+            values[key] = _vector(dh[key], 6, f"dh.{key}")
+        except InputError as exc:
+            raise ParameterError(f"{origin}: {exc}") from None
+    tool_tab = data.get("tool", {})
+    try:
+        t = _vector(tool_tab.get("translation", [0, 0, 0]), 3, "tool.translation")
+        rpy = _vector(tool_tab.get("rpy_deg", [0, 0, 0]), 3, "tool.rpy_deg")
+    except InputError as exc:
+        raise ParameterError(f"{origin}: {exc}") from None
+    tool = np.eye(4)
+    tool[:3, :3] = rotation_rpy(np.radians(rpy))
+    tool[:3, 3] = t
+    return SerialArm(
+        values["a"],
+        np.radians(values["alpha_deg"]),
+        values["d"],
+        np.radians(values["theta_offset_deg"]),
+        tool=tool,
+        name=str(data.get("name", origin)),
+        description=str(data.get("description", "")),
+    )
+
+
+def load_serial_arm(name_or_path: str | Path = "serial_6r_illustrative") -> SerialArm:
+    """Load a serial arm from a DH file by name (shipped) or path.
+
+    The format (TOML): ``name``, ``description``, table ``[dh]`` with ``convention =
+    "standard"``, ``a`` [m], ``alpha_deg``, ``d`` [m], ``theta_offset_deg`` (6 numbers
+    each) and optional ``[tool]`` with ``translation`` [m] and ``rpy_deg``. The only
+    shipped file, ``serial_6r_illustrative``, is an ILLUSTRATIVE KR 500-like geometry
+    (assumed values: Cvitanic (2021) gives no DH table).
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path, optional
+        A shipped file's name or a path.
+
+    Returns
+    -------
+    SerialArm
+        The arm.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name, unreadable file, TOML syntax error or an invalid field (the message
+        names the file and the field).
+    """
+    text_name = str(name_or_path)
+    resource = resources.files(_DATA_PACKAGE) / "data" / f"{text_name}.toml"
+    if isinstance(name_or_path, str) and "/" not in text_name and not text_name.endswith(".toml") and resource.is_file():
+        origin = f"{text_name}.toml (shipped)"
+        data = read_toml(Path(str(resource)), ParameterError, "serial arm file", origin, resource.read_text(encoding="utf-8"))
+    else:
+        path = Path(name_or_path)
+        if not path.exists():
+            raise ParameterError(f"unknown serial arm {text_name!r}: not a shipped arm and no such file")
+        origin = str(path)
+        data = read_toml(path, ParameterError, "serial arm file")
+    if data.get("model", "serial_dh") != "serial_dh":
+        raise ParameterError(f"{origin}: model: expected 'serial_dh', got {data.get('model')!r}")
+    return _arm_from_mapping(data, origin)
