@@ -29,3 +29,43 @@ def replace_once(old: str, new: str):
 @pytest.fixture(scope="session")
 def repo() -> Path:
     return REPO
+
+
+def solve_through_cli(path: Path, out: Path, *options: str) -> tuple[int, dict]:
+    """``gtmodel solve <path> --out <out> --quiet [options]``: exit code and ``summary.json``."""
+    import json
+
+    from gtmodel.cli import main
+
+    code = main(["solve", str(path), "--out", str(out), "--quiet", *options])
+    return code, json.loads((out / "summary.json").read_text())
+
+
+def assert_bad_problem(tmp_path: Path, base: Path, case: str, edit, match: str):
+    """Write ``edit(base)`` as ``<case>.toml`` and check that loading it raises one
+    ProblemError matching ``match`` whose first line names the file; returns the error."""
+    from gtmodel.errors import ProblemError
+    from gtmodel.problems import load_problem
+
+    f = tmp_path / f"{case}.toml"
+    f.write_text(edit(base.read_text()))
+    with pytest.raises(ProblemError, match=match) as info:
+        load_problem(f)
+    assert str(f) in str(info.value).splitlines()[0]
+    return info.value
+
+
+def assert_bad_problem_through_cli(tmp_path: Path, capsys, text: str, match: str) -> None:
+    """A problem file ``text`` given to ``gtmodel solve``: exit code EXIT_BAD_INPUT, no
+    traceback, a message matching ``match`` on stderr, ``status = "error"`` in the summary."""
+    import re
+
+    from gtmodel.cli import EXIT_BAD_INPUT
+
+    f = tmp_path / "bad.toml"
+    f.write_text(text)
+    code, summary = solve_through_cli(f, tmp_path / "out")
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err, err
+    assert re.search(match, err), err
+    assert summary["status"] == "error"

@@ -72,6 +72,8 @@ from gtmodel.calibration.joint_stiffness import (
     calibrate_cp,
     calibrate_dpp,
     synthetic_deflections,
+    table_2_scenario,
+    cp_dpp_study,
 )
 
 __all__ = [
@@ -129,4 +131,6 @@ __all__ = [
     "calibrate_cp",
     "calibrate_dpp",
     "synthetic_deflections",
+    "table_2_scenario",
+    "cp_dpp_study",
 ]

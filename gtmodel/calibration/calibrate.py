@@ -98,7 +98,7 @@ import math
 import time
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -1008,6 +1008,12 @@ class CalibrationResult:
 _STATUS_RANK = {"optimal": 0, "fixed": 0, "acceptable": 1, "max_iterations": 2, "error": 3}
 
 
+def _worst_status(statuses: Iterable[str]) -> str:
+    """The worst of solver statuses (optimal < acceptable < max_iterations < error; an unknown
+    status ranks as error; the first of equally bad ones), ``"optimal"`` for none."""
+    return max(statuses, key=lambda s: _STATUS_RANK.get(s, 3), default="optimal")
+
+
 # ------------------------------------------------------------------ the problem
 class CalibrationProblem:
     """Calibration NLPs of a model and a parameter selection, built once, solved many times.
@@ -1377,7 +1383,7 @@ class CalibrationProblem:
         std_p = np.where(touches_inf, math.inf, np.sqrt(np.maximum(var_p, 0.0)))
 
         names = self.resolution.names
-        worst = max((g.status for g in group_results), key=lambda s: _STATUS_RANK.get(s, 3), default="optimal")
+        worst = _worst_status(g.status for g in group_results)
         status = "optimal" if worst == "fixed" else worst
         message = "; ".join(f"arm(s) {','.join(str(a + 1) for a in g.arms)}: {g.message}" for g in group_results)
         qnorms = {}

@@ -73,6 +73,7 @@ from gtmodel.calibration.calibrate import (
     CalibrationProblem,
     CalibrationResult,
     ParameterSelection,
+    _worst_status,
     analyze_identifiability,
 )
 from gtmodel.calibration.evaluation import AccuracyReport, evaluate
@@ -626,8 +627,7 @@ class ElastoGeometricStudy:
     @property
     def status(self) -> str:
         """Worse status of the two calibrations."""
-        rank = {"optimal": 0, "acceptable": 1, "max_iterations": 2, "error": 3}
-        return max((self.geometric.status, self.elasto.status), key=lambda s: rank.get(s, 3))
+        return _worst_status((self.geometric.status, self.elasto.status))
 
     def compliance_table(self) -> list[dict[str, float]]:
         """Calibrated compliances against the truth.

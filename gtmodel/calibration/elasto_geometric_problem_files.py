@@ -154,9 +154,9 @@ class ElastoGeometricOutcome:
     @property
     def status(self) -> str:
         """Worst status of the calibrations."""
-        rank = {"optimal": 0, "acceptable": 1, "max_iterations": 2, "error": 3}
-        sts = [self.study.status] + ([self.single_load.status] if self.single_load is not None else [])
-        return max(sts, key=lambda s: rank.get(s, 3))
+        from gtmodel.calibration.calibrate import _worst_status
+
+        return _worst_status([self.study.status] + ([self.single_load.status] if self.single_load is not None else []))
 
 
 def _parameter_set(f: FieldReader, table: str, key: str) -> Any:
@@ -347,6 +347,7 @@ def write_elasto_geometric(
         Files written besides ``summary.json``.
     """
     from gtmodel.calibration.evaluation import plot_error_histogram
+    from gtmodel.calibration.problem_files import _calibrated_tables
     from gtmodel.robots.stiffness import plot_stiffness_map
 
     st = solution.study
@@ -388,10 +389,7 @@ def write_elasto_geometric(
         "# Frame: the measurement frame (Dressler (2012), eqs. 5.3-5.4). SI units: m, m/N, N.",
         f'model = "{st.elasto.model.name}"',
         "",
-        "[calibrated]",
-    ] + [f'"{k}" = {v!r}' for k, v in st.elasto.parameters.items()] + ["", "[standard_deviation]"] + [
-        f'"{k}" = {float(v)!r}' if np.isfinite(v) else f'"{k}" = nan' for k, v in st.elasto.std.items()
-    ]
+    ] + _calibrated_tables(st.elasto.parameters, st.elasto.std)
     (out / "parameters.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
     files.append("parameters.toml")
     cols = np.column_stack([np.arange(st.validation.n_poses), st.geometric_report.errors, st.elasto_report.errors, st.noise_floor.errors])

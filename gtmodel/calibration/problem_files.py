@@ -336,12 +336,9 @@ class CalibrationOutcome:
     @property
     def status(self) -> str:
         """Worst status over the models (``error`` if a model could not be calibrated)."""
-        rank = {"optimal": 0, "acceptable": 1, "max_iterations": 2, "error": 3}
-        worst = "optimal"
-        for _, res, rep, _ in self.results:
-            s = res.status if res is not None else ("optimal" if rep is not None else "error")
-            worst = s if rank.get(s, 3) > rank.get(worst, 3) else worst
-        return worst
+        from gtmodel.calibration.calibrate import _worst_status
+
+        return _worst_status(res.status if res is not None else ("optimal" if rep is not None else "error") for _, res, rep, _ in self.results)
 
     @property
     def success(self) -> bool:
@@ -590,12 +587,22 @@ def _write_parameters(res: Any, path: Path, decl: CalibrationDeclaration, title:
                 f"joint_angle_max_deg = {float(np.rad2deg(lim.joint_angle_max))!r}",
             ]
     else:
-        lines += [f'model = "{model.name}"', "", "[calibrated]  # name = value [m, rad, 1]"]
-        lines += [f'"{n}" = {v!r}' for n, v in res.parameters.items()]
+        lines += [f'model = "{model.name}"', ""]
+        lines += _calibrated_tables(res.parameters, res.std, "  # name = value [m, rad, 1]", "  # from the Jacobian and the residual variance")
     if isinstance(model, ThreeLinkClosure):  # the parameter-set schema has no such table: comments
         lines += ["", "# standard deviations (from the Jacobian and the residual variance):"]
         lines += [f"#   {n} = {float(s):.3e}" for n, s in res.std.items()]
-    else:
-        lines += ["", "[standard_deviation]  # from the Jacobian and the residual variance"]
-        lines += [f'"{n}" = {float(s)!r}' if np.isfinite(s) else f'"{n}" = nan' for n, s in res.std.items()]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def _calibrated_tables(parameters: dict[str, float], std: dict[str, float], comment: str = "", std_comment: str = "") -> list[str]:
+    """TOML lines of the ``[calibrated]`` values and their ``[standard_deviation]`` (``nan`` if not finite).
+
+    Shared by the result files of the calibration kinds (``parameters.toml``).
+    """
+    return (
+        [f"[calibrated]{comment}"]
+        + [f'"{n}" = {v!r}' for n, v in parameters.items()]
+        + ["", f"[standard_deviation]{std_comment}"]
+        + [f'"{n}" = {float(s)!r}' if np.isfinite(s) else f'"{n}" = nan' for n, s in std.items()]
+    )

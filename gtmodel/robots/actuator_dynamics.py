@@ -32,7 +32,6 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -40,9 +39,8 @@ import control
 import numpy as np
 import scipy.optimize
 
-from gtmodel._toml import read_toml
-from gtmodel.errors import InputError, ParameterError
-from gtmodel.robots.parameters import _Reader
+from gtmodel.errors import InputError
+from gtmodel.robots.parameters import _read_data_file, _Reader
 
 __all__ = [
     "ActuatorParameters",
@@ -58,7 +56,6 @@ __all__ = [
 ]
 
 _log = logging.getLogger("gtmodel")
-_DATA_PACKAGE = "gtmodel.robots"
 _DEFAULT_FILE = "L1_dynamics_models"
 _CONVENTIONS = ("thesis", "standard")
 
@@ -271,18 +268,9 @@ def load_dynamics_models(name_or_path: str | Path = _DEFAULT_FILE) -> DynamicsMo
         Unknown name, unreadable file, TOML syntax error or an invalid field (the message
         names the file and the field).
     """
-    text_name = str(name_or_path)
-    resource = resources.files(_DATA_PACKAGE) / "data" / f"{text_name}.toml"
-    if isinstance(name_or_path, str) and "/" not in text_name and not text_name.endswith(".toml") and resource.is_file():
-        origin = f"{text_name}.toml (shipped)"
-        path = Path(str(resource))
-        data = read_toml(path, ParameterError, "dynamics-models file", origin, resource.read_text(encoding="utf-8"))
-    else:
-        path = Path(name_or_path)
-        if not path.exists():
-            raise ParameterError(f"unknown dynamics-models file {text_name!r}: not a shipped name ({_DEFAULT_FILE}) and no such file")
-        origin = str(path)
-        data = read_toml(path, ParameterError, "dynamics-models file")
+    data, origin, path = _read_data_file(
+        name_or_path, "dynamics-models file", f"not a shipped name ({_DEFAULT_FILE}) and no such file", any_suffix_must_exist=True
+    )
     return dynamics_models_from_mapping(data, origin=origin, path=path)
 
 

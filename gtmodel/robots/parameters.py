@@ -258,6 +258,52 @@ class _Reader:
         return arr
 
 
+def _read_data_file(name_or_path: str | Path, what: str, unknown: str, any_suffix_must_exist: bool = False) -> tuple[dict[str, Any], str, Path]:
+    """Parse a data file shipped in ``gtmodel/robots/data`` (by bare name) or at a path.
+
+    A ``str`` without ``/`` and ``.toml`` naming a shipped ``<name>.toml`` is that file
+    (``origin`` ``"<name>.toml (shipped)"``); anything else is a path. A missing path raises
+    ``ParameterError("unknown {what} {name!r}: {unknown}")``: only without the ``.toml``
+    suffix, or always with ``any_suffix_must_exist`` (otherwise :func:`read_toml` says the
+    file cannot be read).
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        Shipped name or path.
+    what : str
+        What the file is, for messages (e.g. ``"dynamics-models file"``).
+    unknown : str
+        End of the message for an unknown name (e.g. ``"not a shipped name and no such file"``).
+    any_suffix_must_exist : bool, optional
+        Check the existence of ``.toml`` paths too.
+
+    Returns
+    -------
+    data : dict
+        The parsed document.
+    origin : str
+        Name of the file in messages.
+    path : pathlib.Path
+        The file.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name, unreadable file or TOML syntax error.
+    """
+    text_name = str(name_or_path)
+    resource = resources.files(_DATA_PACKAGE) / "data" / f"{text_name}.toml"
+    if isinstance(name_or_path, str) and "/" not in text_name and not text_name.endswith(".toml") and resource.is_file():
+        origin = f"{text_name}.toml (shipped)"
+        path = Path(str(resource))
+        return read_toml(path, ParameterError, what, origin, resource.read_text(encoding="utf-8")), origin, path
+    path = Path(name_or_path)
+    if (any_suffix_must_exist or path.suffix != ".toml") and not path.exists():
+        raise ParameterError(f"unknown {what} {text_name!r}: {unknown}")
+    return read_toml(path, ParameterError, what), str(path), path
+
+
 def _kinematics(r: _Reader) -> KinematicParameters:
     r.check_keys({"source", "model", "L", "As", "v"})
     model = r.string("model", default="modified")

@@ -67,6 +67,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._docstrings import fill_doc
 from gtmodel._toml import read_toml
 from gtmodel.errors import InputError, ParameterError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.kinematics import (
@@ -105,6 +106,42 @@ MEASURED_D1_N_PER_UM = (2.0, 4.0)
 N_PER_UM = 1e6
 
 _DATA_PACKAGE = "gtmodel.robots"
+
+# numpydoc entries shared by the methods that take the same arguments (gtmodel._docstrings)
+_LENGTHS_PARAMETERS = """
+Parameters
+----------
+L : array_like, shape (3,)
+    Link lengths [m].
+"""
+_LENGTHS_RAISES = """
+Raises
+------
+InputError
+    Non-positive or wrongly shaped lengths.
+"""
+_POSE_PARAMETERS = """
+Parameters
+----------
+T : array_like, shape (3,) or (N, 3)
+    TCP position(s) [m].
+"""
+_POSE_OPTIONS = """
+configuration : int or sequence of int, optional
+    IK configuration (see :meth:`GantryTau3Kinematics.ik`).
+limits : bool, optional
+    Require the poses inside cart travel and joint limits (default True).
+"""
+_POSE_RAISES = """
+Raises
+------
+UnreachablePoseError
+    A pose is unreachable or outside the workspace limits.
+InputError
+    Wrong shapes (also of ``F`` where given) or non-finite values.
+"""
+_lengths_doc = fill_doc(lengths_parameters=_LENGTHS_PARAMETERS, lengths_raises=_LENGTHS_RAISES)
+_pose_doc = fill_doc(pose_parameters=_POSE_PARAMETERS, pose_options=_POSE_OPTIONS, pose_raises=_POSE_RAISES)
 
 
 # ----------------------------------------------------------------------------- parameters
@@ -185,33 +222,26 @@ class StiffnessParameters:
         """Cross-section of a link tube [m^2]."""
         return math.pi / 4 * (self.outer_diameter**2 - self.inner_diameter**2)
 
+    @_lengths_doc
     def link_stiffness(self, L: np.typing.ArrayLike) -> np.ndarray:
         """Axial stiffness ``E A / L`` of one link tube of each arm.
 
-        Parameters
-        ----------
-        L : array_like, shape (3,)
-            Link lengths [m].
+        {lengths_parameters}
 
         Returns
         -------
         numpy.ndarray, shape (3,)
             ``k_l`` [N/m].
 
-        Raises
-        ------
-        InputError
-            Non-positive or wrongly shaped lengths.
+        {lengths_raises}
         """
         return self.E * self.link_area / _positive(L, "L", (3,))
 
+    @_lengths_doc
     def compliances(self, L: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Constant and actuator parts of the arm compliance, eq. (2) of the module docstring.
 
-        Parameters
-        ----------
-        L : array_like, shape (3,)
-            Link lengths [m].
+        {lengths_parameters}
 
         Returns
         -------
@@ -220,10 +250,7 @@ class StiffnessParameters:
         c_act : numpy.ndarray, shape (3,)
             ``1/k_a`` [m/N]: the cart along its guideway (scaled by ``(u_i . w_i)^2`` at a pose).
 
-        Raises
-        ------
-        InputError
-            Non-positive or wrongly shaped lengths.
+        {lengths_raises}
         """
         kl = self.link_stiffness(L)
         c_link = (1.0 / kl + self.joints_per_link / self.k_joint) / self.links_per_arm
@@ -627,146 +654,97 @@ class GantryTau3Stiffness:
         K = K.reshape(3, n, 3).transpose(1, 0, 2) if n > 1 else K[None]
         return [K, k.T, f.T, dT.T], single, n
 
+    def _output(self, index: int, T: Any, F: Any, configuration: Any, limits: bool) -> np.ndarray:
+        """Output ``index`` of :meth:`_evaluate` (K, k, f, dT), per pose or for the single pose given."""
+        out, single, _ = self._evaluate(T, F, configuration, limits)
+        return out[index][0] if single else out[index]
+
     # ------------------------------------------------------------------ public
+    @_pose_doc
     def cartesian_stiffness(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
         """Cartesian stiffness ``K_x(T) = sum_i k_i u_i u_i^T`` (Dressler (2012), ch. 6.3; eq. 1).
 
-        Parameters
-        ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP position(s) [m].
-        configuration : int or sequence of int, optional
-            IK configuration (see :meth:`GantryTau3Kinematics.ik`).
-        limits : bool, optional
-            Require the poses inside cart travel and joint limits (default True).
+        {pose_parameters}
+        {pose_options}
 
         Returns
         -------
         numpy.ndarray, shape (3, 3) or (N, 3, 3)
             ``K_x`` [N/m].
 
-        Raises
-        ------
-        UnreachablePoseError
-            A pose is unreachable or outside the workspace limits.
-        InputError
-            Wrong shape or non-finite values.
+        {pose_raises}
         """
-        (K, *_), single, _ = self._evaluate(T, None, configuration, limits)
-        return K[0] if single else K
+        return self._output(0, T, None, configuration, limits)
 
+    @_pose_doc
     def arm_stiffness(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
         """Effective axial stiffness ``k_i = 1 / c_i`` of each arm at a pose (eq. 2).
 
-        Parameters
-        ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP position(s) [m].
-        configuration : int or sequence of int, optional
-            IK configuration.
-        limits : bool, optional
-            Require the poses inside the workspace limits.
+        {pose_parameters}
+        {pose_options}
 
         Returns
         -------
         numpy.ndarray, shape (3,) or (N, 3)
             ``k_i`` [N/m].
 
-        Raises
-        ------
-        UnreachablePoseError
-            A pose is unreachable or outside the workspace limits.
-        InputError
-            Wrong shape or non-finite values.
+        {pose_raises}
         """
-        (_, k, *_), single, _ = self._evaluate(T, None, configuration, limits)
-        return k[0] if single else k
+        return self._output(1, T, None, configuration, limits)
 
+    @_pose_doc
     def link_forces(
         self, T: np.typing.ArrayLike, F: np.typing.ArrayLike | None = None, configuration: int | Sequence[int] = 0, limits: bool = True
     ) -> np.ndarray:
         """Axial arm forces balancing a plate force, ``U^T f = F`` (eq. 3).
 
-        Parameters
-        ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP position(s) [m].
+        {pose_parameters}
         F : array_like, shape (3,) or (N, 3), optional
             Force on the plate [N]; default the gravity load :attr:`gravity_force`.
-        configuration : int or sequence of int, optional
-            IK configuration.
-        limits : bool, optional
-            Require the poses inside the workspace limits.
+        {pose_options}
 
         Returns
         -------
         numpy.ndarray, shape (3,) or (N, 3)
             Arm (cluster) forces [N], tension positive.
 
-        Raises
-        ------
-        UnreachablePoseError
-            A pose is unreachable or outside the workspace limits.
-        InputError
-            Wrong shapes (also of ``F``) or non-finite values.
+        {pose_raises}
         """
-        (_, _, f, _), single, _ = self._evaluate(T, F, configuration, limits)
-        return f[0] if single else f
+        return self._output(2, T, F, configuration, limits)
 
+    @_pose_doc
     def deflection(
         self, T: np.typing.ArrayLike, F: np.typing.ArrayLike | None = None, configuration: int | Sequence[int] = 0, limits: bool = True
     ) -> np.ndarray:
         """TCP deflection ``dT = K_x^-1 F`` under a force on the plate (eq. 3).
 
-        Parameters
-        ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP position(s) [m].
+        {pose_parameters}
         F : array_like, shape (3,) or (N, 3), optional
             Force at the TCP/plate [N]; default the gravity load :attr:`gravity_force`.
-        configuration : int or sequence of int, optional
-            IK configuration.
-        limits : bool, optional
-            Require the poses inside the workspace limits.
+        {pose_options}
 
         Returns
         -------
         numpy.ndarray, shape (3,) or (N, 3)
             ``dT`` [m].
 
-        Raises
-        ------
-        UnreachablePoseError
-            A pose is unreachable or outside the workspace limits.
-        InputError
-            Wrong shapes (also of ``F``) or non-finite values.
+        {pose_raises}
         """
-        (*_, dT), single, _ = self._evaluate(T, F, configuration, limits)
-        return dT[0] if single else dT
+        return self._output(3, T, F, configuration, limits)
 
+    @_pose_doc
     def gravity_deflection(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0, limits: bool = True) -> np.ndarray:
         """TCP deflection under the plate's own weight and the payload, ``K_x^-1 F_g``.
 
-        Parameters
-        ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP position(s) [m].
-        configuration : int or sequence of int, optional
-            IK configuration.
-        limits : bool, optional
-            Require the poses inside the workspace limits.
+        {pose_parameters}
+        {pose_options}
 
         Returns
         -------
         numpy.ndarray, shape (3,) or (N, 3)
             ``dT`` [m].
 
-        Raises
-        ------
-        UnreachablePoseError
-            A pose is unreachable or outside the workspace limits.
-        InputError
-            Wrong shape or non-finite values.
+        {pose_raises}
         """
         return self.deflection(T, None, configuration, limits)
 
@@ -805,6 +783,7 @@ class GantryTau3Stiffness:
             raise InputError(f"no point of the section x = {x0} m (step {step} m) lies in the workspace")
         return P
 
+    @_pose_doc
     def stiffness_map(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0, limits: bool = True) -> StiffnessMap:
         """Stiffness and gravity deflection over a set of poses (e.g. :meth:`section_grid`).
 
@@ -812,21 +791,13 @@ class GantryTau3Stiffness:
         ----------
         T : array_like, shape (N, 3)
             TCP positions [m].
-        configuration : int or sequence of int, optional
-            IK configuration.
-        limits : bool, optional
-            Require the poses inside the workspace limits.
+        {pose_options}
 
         Returns
         -------
         StiffnessMap
 
-        Raises
-        ------
-        UnreachablePoseError
-            A pose is unreachable or outside the workspace limits.
-        InputError
-            Wrong shape or non-finite values.
+        {pose_raises}
         """
         Tn, _ = _as_points(T, "T")
         (K, _, _, dT), _, _ = self._evaluate(Tn, None, configuration, limits)

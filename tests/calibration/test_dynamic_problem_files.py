@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,7 +14,10 @@ from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem, solve_problem, write_results
 from gtmodel.robots.parameters import load_parameters
 
-SHIPPED = Path(__file__).parents[2] / "problems" / "l1_dynamic_identification.toml"
+from ..conftest import PROBLEMS_DIR, assert_bad_problem
+from ..conftest import replace_once as _edit
+
+SHIPPED = PROBLEMS_DIR / "l1_dynamic_identification.toml"
 #: Acceptance: model-2 estimates within this many standard deviations of the truth.
 Z_LIMIT = 3.0
 #: The unmodelled Stribeck friction must make the 0.02-0.05 m/s residual this many times
@@ -95,10 +97,6 @@ def test_problem_with_a_log_file(tmp_path):
     assert abs(summary["parameters"]["m_p"]["estimate"] - 9.13) < 0.2
 
 
-def _edit(old, new):
-    return lambda text: text.replace(old, new, 1)
-
-
 BAD = [
     ("data_and_truth", lambda t: t + '\n[data]\nfile = "x.csv"\n', r"declare exactly one of '\[data\]'"),
     ("unknown_field", _edit("seed = 1", "seed = 1\nnoise = 3"), r"unknown field 'truth.noise'"),
@@ -114,11 +112,7 @@ BAD = [
 @pytest.mark.parametrize("case, edit, match", BAD, ids=[c[0] for c in BAD])
 def test_bad_problem_file(tmp_path, case, edit, match):
     """Invalid fields give one ProblemError naming the file and the field."""
-    f = tmp_path / f"{case}.toml"
-    f.write_text(edit(SHIPPED.read_text()))
-    with pytest.raises(ProblemError, match=match) as info:
-        load_problem(f)
-    assert str(f) in str(info.value)
+    assert_bad_problem(tmp_path, SHIPPED, case, edit, match)
 
 
 def test_data_file_with_bad_row(tmp_path):

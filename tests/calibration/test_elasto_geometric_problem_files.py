@@ -7,16 +7,12 @@ generated the data, and the D1's measured TCP stiffness (2-4 N/um, reference tab
 
 from __future__ import annotations
 
-import json
-import re
-
 import pytest
 
-from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
-from gtmodel.errors import ProblemError
-from gtmodel.problems import load_problem
+from gtmodel.cli import EXIT_OK
 
-from ..conftest import PROBLEMS_DIR, replace_once as _edit
+from ..conftest import PROBLEMS_DIR, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
+from ..conftest import replace_once as _edit
 
 FILE = PROBLEMS_DIR / "l1_elasto_geometric.toml"
 #: Elasto-geometric validation mean error vs the noise floor (true model on the same poses).
@@ -30,8 +26,8 @@ N_SIGMA = 3.0
 @pytest.fixture(scope="module")
 def solved(tmp_path_factory):
     out = tmp_path_factory.mktemp("l1eg")
-    code = main(["solve", str(FILE), "--out", str(out), "--quiet"])
-    return code, out, json.loads((out / "summary.json").read_text())
+    code, summary = solve_through_cli(FILE, out)
+    return code, out, summary
 
 
 def test_shipped_problem_is_optimal_with_the_required_summary(solved):
@@ -87,18 +83,9 @@ BAD = [
 
 @pytest.mark.parametrize("case, edit, match", BAD, ids=[c[0] for c in BAD])
 def test_bad_files(tmp_path, case, edit, match):
-    f = tmp_path / f"{case}.toml"
-    f.write_text(edit(FILE.read_text()))
-    with pytest.raises(ProblemError, match=match) as info:
-        load_problem(f)
-    assert str(f) in str(info.value).splitlines()[0]
+    assert_bad_problem(tmp_path, FILE, case, edit, match)
 
 
 def test_bad_file_through_the_cli(tmp_path, capsys):
-    f = tmp_path / "bad.toml"
-    f.write_text(FILE.read_text().replace("payloads_kg = [0.0, 40.0]", 'payloads_kg = "heavy"'))
-    code = main(["solve", str(f), "--out", str(tmp_path / "out"), "--quiet"])
-    err = capsys.readouterr().err
-    assert code == EXIT_BAD_INPUT and "Traceback" not in err
-    assert re.search(r"payloads_kg", err)
-    assert json.loads((tmp_path / "out" / "summary.json").read_text())["status"] == "error"
+    text = FILE.read_text().replace("payloads_kg = [0.0, 40.0]", 'payloads_kg = "heavy"')
+    assert_bad_problem_through_cli(tmp_path, capsys, text, r"payloads_kg")
