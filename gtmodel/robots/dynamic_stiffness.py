@@ -32,6 +32,7 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
+from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError
 
 __all__ = [
@@ -50,6 +51,21 @@ _log = logging.getLogger("gtmodel")
 DIRECTIONS = ("x", "y", "z")
 
 
+# numpydoc entries of the single-mode parameters, shared by eq. (8)'s functions (gtmodel._docstrings)
+_mck_doc = fill_doc(
+    mck="""
+    Parameters
+    ----------
+    m : float
+        Modal mass [kg], > 0.
+    c : float
+        Modal damping [N s/m], > 0.
+    k : float
+        Modal stiffness [N/m], > 0.
+    """
+)
+
+
 def _positive(value: Any, name: str) -> float:
     try:
         v = float(value)
@@ -60,17 +76,11 @@ def _positive(value: Any, name: str) -> float:
     return v
 
 
+@_mck_doc
 def single_mode_tf(m: float, c: float, k: float) -> control.TransferFunction:
     """Compliance transfer function ``X/F = 1/(m s^2 + c s + k)``, Cvitanic (2021), eq. (8).
 
-    Parameters
-    ----------
-    m : float
-        Modal mass [kg], > 0.
-    c : float
-        Modal damping [N s/m], > 0.
-    k : float
-        Modal stiffness [N/m], > 0.
+    {mck}
 
     Returns
     -------
@@ -103,17 +113,11 @@ def _check_freq(freq_hz: Any, name: str = "freq_hz") -> np.ndarray:
     return f
 
 
+@_mck_doc
 def single_mode_frf(m: float, c: float, k: float, freq_hz: Any) -> np.ndarray:
     """Frequency response ``H(j 2 pi f)`` of the single-mode model, Cvitanic (2021), eq. (8).
 
-    Parameters
-    ----------
-    m : float
-        Modal mass [kg], > 0.
-    c : float
-        Modal damping [N s/m], > 0.
-    k : float
-        Modal stiffness [N/m], > 0.
+    {mck}
     freq_hz : array_like, shape (n,)
         Strictly increasing positive frequencies [Hz], n >= 3.
 

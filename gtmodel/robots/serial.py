@@ -30,15 +30,15 @@ from __future__ import annotations
 import logging
 import math
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
 import casadi as ca
 import numpy as np
 
-from gtmodel._toml import read_toml
+from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError, ParameterError, SingularConfigurationError
+from gtmodel.robots.parameters import _read_data_file
 
 __all__ = [
     "SerialArm",
@@ -48,10 +48,59 @@ __all__ = [
 ]
 
 _log = logging.getLogger("gtmodel")
-_DATA_PACKAGE = "gtmodel.robots"
 
 #: Condition number of ``J`` above which a pose is treated as singular.
 SINGULAR_CONDITION = 1e8
+
+
+# numpydoc entries shared by the methods that take the same arguments (gtmodel._docstrings)
+_THETA = """
+Parameters
+----------
+theta : array_like, shape (6,)
+    Joint angles [rad].
+"""
+_THETA_ROWS = """
+Parameters
+----------
+theta : array_like, shape (6,) or (N, 6)
+    Joint angles [rad].
+"""
+_WRENCH = """
+F : array_like, shape (6,)
+    Wrench at the TCP in the base frame: force [N], moment [N m].
+"""
+_K_THETA = """
+k_theta : array_like, shape (6,)
+    Joint stiffnesses [N m/rad], all positive.
+"""
+_ANGLE_RAISES = """
+Raises
+------
+InputError
+    Wrong shape or non-finite angles.
+"""
+_WRENCH_RAISES = """
+Raises
+------
+InputError
+    Wrong shapes or non-finite values.
+"""
+_STIFFNESS_RAISES = """
+Raises
+------
+InputError
+    Wrong shapes, non-finite values or a non-positive stiffness.
+"""
+_doc = fill_doc(
+    theta=_THETA,
+    theta_rows=_THETA_ROWS,
+    wrench=_WRENCH,
+    k_theta=_K_THETA,
+    angle_raises=_ANGLE_RAISES,
+    wrench_raises=_WRENCH_RAISES,
+    stiffness_raises=_STIFFNESS_RAISES,
+)
 
 
 def _vector(value: Any, n: int, name: str, positive: bool = False) -> np.ndarray:
@@ -240,6 +289,33 @@ class SerialArm:
         return ca.Function("deflection", [g["theta"], F, k], [dX], ["theta", "F", "k_theta"], ["dX"])
 
     @cached_property
+    def complementary_stiffness_function(self) -> ca.Function:
+        """CasADi function ``(theta (6), F (6)) -> K_c (6x6)``, ``K_c = d(J^T F)/d theta``, Cvitanic (2021), eq. (2).
+
+        ``ca.jacobian`` of the joint torques ``J(theta)^T F`` of the same graph, for a wrench
+        ``F`` fixed in the base frame [N m/rad].
+        """
+        g = self._graph
+        F = ca.SX.sym("F", 6)
+        K_c = ca.jacobian(ca.mtimes(g["J"].T, F), g["theta"])
+        return ca.Function("complementary_stiffness", [g["theta"], F], [K_c], ["theta", "F"], ["K_c"])
+
+    @cached_property
+    def loaded_deflection_function(self) -> ca.Function:
+        """CasADi function ``(theta, F, k_theta) -> dX = J (K_theta - K_c)^-1 J^T F``, Cvitanic (2021), eq. (2).
+
+        The deflection with the complementary stiffness ``K_c`` kept (first order in the
+        deflection about the loaded equilibrium ``K_theta dtheta = J(theta + dtheta)^T F``).
+        """
+        g = self._graph
+        F = ca.SX.sym("F", 6)
+        k = ca.SX.sym("k_theta", 6)
+        J = g["J"]
+        K_c = ca.jacobian(ca.mtimes(J.T, F), g["theta"])
+        dtheta = ca.solve(ca.diag(k) - K_c, ca.mtimes(J.T, F))
+        return ca.Function("loaded_deflection", [g["theta"], F, k], [ca.mtimes(J, dtheta)], ["theta", "F", "k_theta"], ["dX"])
+
+    @cached_property
     def regressor_function(self) -> ca.Function:
         """CasADi function ``(theta, F) -> A (6x6)`` with ``dX = A c``, ``c_i = 1/k_i``, eq. (3)."""
         g = self._graph
@@ -249,111 +325,93 @@ class SerialArm:
         return ca.Function("compliance_regressor", [g["theta"], F], [A], ["theta", "F"], ["A"])
 
     # ------------------------------------------------------------------ numeric API
+    def _eval(self, fn: ca.Function, theta: Any, F: Any = None, k_theta: Any = None) -> list[np.ndarray]:
+        """Validate ``theta`` (and ``F``, ``k_theta`` when given) and evaluate a function of the graph."""
+        args = [_vector(theta, 6, "theta")]
+        if F is not None:
+            args.append(_vector(F, 6, "F"))
+        if k_theta is not None:
+            args.append(_vector(k_theta, 6, "k_theta", positive=True))
+        out = fn(*args)
+        return [np.array(o) for o in (out if isinstance(out, (list, tuple)) else [out])]
+
+    @_doc
     def fk(self, theta: Any) -> np.ndarray:
         """Forward kinematics: base -> TCP homogeneous transform.
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,) or (N, 6)
-            Joint angles [rad].
+        {theta_rows}
 
         Returns
         -------
         numpy.ndarray, shape (4, 4) or (N, 4, 4)
             ``T_TCP(theta)`` [m]; rotation in ``[:3, :3]``, position in ``[:3, 3]``.
 
-        Raises
-        ------
-        InputError
-            Wrong shape or non-finite angles.
+        {angle_raises}
         """
         th, single = _rows(theta, 6, "theta")
         out = np.stack([np.array(self.fk_function(row)) for row in th])
         return out[0] if single else out
 
+    @_doc
     def position(self, theta: Any) -> np.ndarray:
         """TCP position.
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,) or (N, 6)
-            Joint angles [rad].
+        {theta_rows}
 
         Returns
         -------
         numpy.ndarray, shape (3,) or (N, 3)
             TCP position in the base frame [m].
 
-        Raises
-        ------
-        InputError
-            Wrong shape or non-finite angles.
+        {angle_raises}
         """
         T = self.fk(theta)
         return T[..., :3, 3]
 
+    @_doc
     def jacobian(self, theta: Any) -> np.ndarray:
         """Geometric Jacobian ``[J_v; J_w]`` of the TCP (rows: linear then angular velocity).
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,)
-            Joint angles [rad].
+        {theta}
 
         Returns
         -------
         numpy.ndarray, shape (6, 6)
             ``J`` with ``[v; omega] = J theta_dot`` [m/rad; 1].
 
-        Raises
-        ------
-        InputError
-            Wrong shape or non-finite angles.
+        {angle_raises}
         """
-        th = _vector(theta, 6, "theta")
-        return np.array(self.jacobian_function(th))
+        return self._eval(self.jacobian_function, theta)[0]
 
+    @_doc
     def wrist_centre(self, theta: Any) -> np.ndarray:
         """Wrist-centre position (origin of DH frame 5).
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,)
-            Joint angles [rad].
+        {theta}
 
         Returns
         -------
         numpy.ndarray, shape (3,)
             Wrist centre in the base frame [m].
 
-        Raises
-        ------
-        InputError
-            Wrong shape or non-finite angles.
+        {angle_raises}
         """
-        th = _vector(theta, 6, "theta")
-        return np.array(self.wrist_function(th)[0]).reshape(3)
+        return self._eval(self.wrist_function, theta)[0].reshape(3)
 
+    @_doc
     def wrist_jacobian(self, theta: Any) -> np.ndarray:
         """Jacobian of the wrist-centre position (zero columns 4-6 for a spherical wrist).
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,)
-            Joint angles [rad].
+        {theta}
 
         Returns
         -------
         numpy.ndarray, shape (3, 6)
             ``d p_wc / d theta`` [m/rad]; used by DPP, Cvitanic (2021), eq. (4).
 
-        Raises
-        ------
-        InputError
-            Wrong shape or non-finite angles.
+        {angle_raises}
         """
-        th = _vector(theta, 6, "theta")
-        return np.array(self.wrist_function(th)[1])
+        return self._eval(self.wrist_function, theta)[1]
 
     def _checked_jacobian(self, theta: np.ndarray) -> np.ndarray:
         J = self.jacobian(theta)
@@ -364,76 +422,76 @@ class SerialArm:
             )
         return J
 
-    def deflection(self, theta: Any, F: Any, k_theta: Any) -> np.ndarray:
-        """Static TCP deflection of the joint-spring model, Cvitanic (2021), eq. (3).
+    @_doc
+    def deflection(self, theta: Any, F: Any, k_theta: Any, complementary: bool = False) -> np.ndarray:
+        """Static TCP deflection of the joint-spring model, Cvitanic (2021), eq. (3) (or (2)).
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,)
-            Joint angles [rad].
-        F : array_like, shape (6,)
-            Wrench at the TCP in the base frame: force [N], moment [N m].
-        k_theta : array_like, shape (6,)
-            Joint stiffnesses [N m/rad], all positive.
+        {theta}
+        {wrench}
+        {k_theta}
+        complementary : bool, optional
+            Keep the complementary stiffness ``K_c = d(J^T F)/d theta`` of eq. (2):
+            ``dX = J (K_theta - K_c)^-1 J^T F`` (default False: eq. (3), ``K_c`` neglected).
 
         Returns
         -------
         numpy.ndarray, shape (6,)
-            ``dX = J K_theta^-1 J^T F``: translation [m], rotation vector [rad].
+            ``dX``: translation [m], rotation vector [rad].
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or a non-positive stiffness.
+        {stiffness_raises}
         """
-        th = _vector(theta, 6, "theta")
-        f = _vector(F, 6, "F")
-        k = _vector(k_theta, 6, "k_theta", positive=True)
-        return np.array(self.deflection_function(th, f, k)).reshape(6)
+        fn = self.loaded_deflection_function if complementary else self.deflection_function
+        return self._eval(fn, theta, F, k_theta)[0].reshape(6)
 
+    @_doc
+    def complementary_stiffness(self, theta: Any, F: Any) -> np.ndarray:
+        """Complementary stiffness ``K_c = d(J(theta)^T F)/d theta``, Cvitanic (2021), eq. (2).
+
+        The load-dependent term of ``K = J^-T (K_theta - K_c) J^-1`` that eq. (3) neglects;
+        computed by ``ca.jacobian`` of the joint torques of the CasADi graph, for a wrench
+        held constant in the base frame.
+
+        {theta}
+        {wrench}
+
+        Returns
+        -------
+        numpy.ndarray, shape (6, 6)
+            ``K_c`` [N m/rad].
+
+        {wrench_raises}
+        """
+        return self._eval(self.complementary_stiffness_function, theta, F)[0]
+
+    @_doc
     def compliance_regressor(self, theta: Any, F: Any) -> np.ndarray:
         """Regressor ``A`` of eq. (3) in the compliances: ``dX = A c`` with ``c_i = 1/k_i``.
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,)
-            Joint angles [rad].
-        F : array_like, shape (6,)
-            Wrench at the TCP in the base frame: force [N], moment [N m].
+        {theta}
+        {wrench}
 
         Returns
         -------
         numpy.ndarray, shape (6, 6)
             Column ``i`` is ``J_i (J_i^T F)`` [m N m, N m]; Cvitanic (2021), eq. (3).
 
-        Raises
-        ------
-        InputError
-            Wrong shapes or non-finite values.
+        {wrench_raises}
         """
-        th = _vector(theta, 6, "theta")
-        f = _vector(F, 6, "F")
-        return np.array(self.regressor_function(th, f))
+        return self._eval(self.regressor_function, theta, F)[0]
 
+    @_doc
     def cartesian_stiffness(self, theta: Any, k_theta: Any) -> np.ndarray:
         """Cartesian stiffness ``K_x = J^-T K_theta J^-1``, Cvitanic (2021), eq. (7).
 
-        Parameters
-        ----------
-        theta : array_like, shape (6,)
-            Joint angles [rad].
-        k_theta : array_like, shape (6,)
-            Joint stiffnesses [N m/rad], all positive.
+        {theta}
+        {k_theta}
 
         Returns
         -------
         numpy.ndarray, shape (6, 6)
             ``K_x`` mapping ``[dp; dphi]`` to ``[f; m]`` [N/m, N, N m/rad].
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or a non-positive stiffness.
+        {stiffness_raises}
         SingularConfigurationError
             ``J`` is singular (condition number above :data:`SINGULAR_CONDITION`).
         """
@@ -550,17 +608,7 @@ def load_serial_arm(name_or_path: str | Path = "serial_6r_illustrative") -> Seri
         Unknown name, unreadable file, TOML syntax error or an invalid field (the message
         names the file and the field).
     """
-    text_name = str(name_or_path)
-    resource = resources.files(_DATA_PACKAGE) / "data" / f"{text_name}.toml"
-    if isinstance(name_or_path, str) and "/" not in text_name and not text_name.endswith(".toml") and resource.is_file():
-        origin = f"{text_name}.toml (shipped)"
-        data = read_toml(Path(str(resource)), ParameterError, "serial arm file", origin, resource.read_text(encoding="utf-8"))
-    else:
-        path = Path(name_or_path)
-        if not path.exists():
-            raise ParameterError(f"unknown serial arm {text_name!r}: not a shipped arm and no such file")
-        origin = str(path)
-        data = read_toml(path, ParameterError, "serial arm file")
+    data, origin, _ = _read_data_file(name_or_path, "serial arm file", "not a shipped arm and no such file", any_suffix_must_exist=True)
     if data.get("model", "serial_dh") != "serial_dh":
         raise ParameterError(f"{origin}: model: expected 'serial_dh', got {data.get('model')!r}")
     return _arm_from_mapping(data, origin)

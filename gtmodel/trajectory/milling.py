@@ -43,7 +43,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import ConvergenceError, InputError, SingularConfigurationError
-from gtmodel.robots.dynamic_stiffness import DynamicStiffnessGP, simulate_single_mode
+from gtmodel.robots.dynamic_stiffness import DynamicStiffnessGP, _positive, simulate_single_mode
 from gtmodel.robots.serial import SerialArm
 
 __all__ = [
@@ -101,16 +101,6 @@ class MillingCoefficients:
 TABLE_3_COEFFICIENTS = MillingCoefficients(K_te=6.0899e3, K_tc=9.0377e8, K_re=6.6017e3, K_rc=2.9379e8, K_ae=1.1169e3, K_ac=2.7783e8)
 
 
-def _pos(v: Any, name: str) -> float:
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a number > 0, got {v!r}") from None
-    if not math.isfinite(x) or x <= 0:
-        raise InputError(f"{name}: expected a finite number > 0, got {v!r}")
-    return x
-
-
 class MillingProcess:
     """A milling operation: cutter, cutting conditions and the force model (12)-(17).
 
@@ -150,9 +140,9 @@ class MillingProcess:
         if isinstance(n_teeth, bool) or not isinstance(n_teeth, (int, np.integer)) or n_teeth < 1:
             raise InputError(f"n_teeth: expected an integer >= 1, got {n_teeth!r}")
         self.n_teeth = int(n_teeth)
-        self.spindle_speed_rpm = _pos(spindle_speed_rpm, "spindle_speed_rpm")
-        self.feed_per_tooth = _pos(feed_per_tooth, "feed_per_tooth")
-        self.axial_depth = _pos(axial_depth, "axial_depth")
+        self.spindle_speed_rpm = _positive(spindle_speed_rpm, "spindle_speed_rpm")
+        self.feed_per_tooth = _positive(feed_per_tooth, "feed_per_tooth")
+        self.axial_depth = _positive(axial_depth, "axial_depth")
         st, ex = float(entry_angle), float(exit_angle)
         if not (math.isfinite(st) and math.isfinite(ex) and 0.0 <= st < ex <= math.pi):
             raise InputError(f"entry_angle, exit_angle: expected 0 <= entry < exit <= pi [rad], got {entry_angle!r}, {exit_angle!r}")
@@ -237,7 +227,7 @@ class MillingProcess:
         InputError
             Out-of-range arguments.
         """
-        n_revolutions = _pos(n_revolutions, "n_revolutions")
+        n_revolutions = _positive(n_revolutions, "n_revolutions")
         if int(samples_per_revolution) != samples_per_revolution or samples_per_revolution < 8:
             raise InputError(f"samples_per_revolution: expected an integer >= 8, got {samples_per_revolution!r}")
         n = int(round(n_revolutions * samples_per_revolution))
@@ -457,6 +447,11 @@ def optimise_spindle_angle(
     static = np.full(A.size, np.nan)
     dynamic = np.full(A.size, np.nan)
     p = Tn[:3, 3]
+    if isinstance(dynamics, DynamicStiffnessGP) and np.any(feasible):
+        # one GP call for all angles (sklearn's predict per sample dominates the run time otherwise)
+        rows = np.flatnonzero(feasible)
+        pred = dynamics.predict(np.column_stack([np.tile(p, (rows.size, 1)), np.radians(A[rows])]))
+        gp_mck = {int(i): (pred["m"][j], pred["c"][j], pred["k"][j]) for j, i in enumerate(rows)}
     for i in np.flatnonzero(feasible):
         try:
             Kx = arm.cartesian_stiffness(theta[i], k)
@@ -468,8 +463,7 @@ def optimise_spindle_angle(
         static[i] = float(np.linalg.norm(dX[:3]))
         if dynamics is not None:
             if isinstance(dynamics, DynamicStiffnessGP):
-                pr = dynamics.predict(np.concatenate([p, [math.radians(A[i])]]))
-                mck = (pr["m"][0], pr["c"][0], pr["k"][0])
+                mck = gp_mck[int(i)]
             else:
                 mck = dynamics(theta[i], p, math.radians(A[i]))
             x = simulate_single_mode(*mck, t, F_base)

@@ -2,7 +2,9 @@
 
 Independent references: closed-form positions of the illustrative arm at its home pose,
 central finite differences of the FK (Jacobian), the FK of the deflected joint angles
-(eq. (3) as a small-displacement limit), and eq. (7) solved against eq. (3).
+(eq. (3) as a small-displacement limit), eq. (7) solved against eq. (3), and for the
+complementary stiffness of eq. (2) central differences of ``J^T F`` and the loaded
+equilibrium ``K_theta dtheta = J(theta + dtheta)^T F`` solved by fixed-point iteration.
 """
 
 from __future__ import annotations
@@ -19,6 +21,9 @@ FD_TOLERANCE = 1e-7  # m/rad, rad/rad
 GEOMETRY_TOLERANCE = 1e-12  # m
 SMALL_DEFLECTION_RELATIVE = 1e-3  # linearisation error of eq. (3) at ~1e-4 rad
 IK_TOLERANCE = 1e-9
+KC_FD_RELATIVE = 1e-6  # K_c against central differences, relative to max |K_c|
+KC_EQUILIBRIUM_RELATIVE = 2e-2  # first-order (2) vs the nonlinear equilibrium at 5 kN
+HEAVY_WRENCH = np.array([1000.0, 0.0, -5000.0, 0.0, 200.0, 0.0])  # N, N m
 
 K_THETA = np.array([2.86, 2.36, 1.67, 0.24, 0.16, 0.14]) * 1e6  # Cvitanic (2021), Table 2 DPP
 POSES = np.radians([[19.67, -52.14, 117.9, 11.86, -66.08, -4.84], [44.71, -70.81, 58.16, 138.51, -41.63, -125.84],
@@ -96,6 +101,34 @@ def test_cartesian_stiffness_inverts_deflection(arm, i):
     np.testing.assert_allclose(np.linalg.solve(Kx, F), dX, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(arm.compliance_regressor(th, F) @ (1 / K_THETA), dX, rtol=1e-9, atol=1e-15)
     np.testing.assert_allclose(Kx, Kx.T, rtol=1e-9, atol=1e-6 * np.max(np.abs(Kx)))
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_complementary_stiffness_matches_finite_differences(arm, i):
+    """K_c of eq. (2) (ca.jacobian of J^T F) against central differences of J(theta)^T F."""
+    th = POSES[i]
+    Kc = arm.complementary_stiffness(th, HEAVY_WRENCH)
+    fd = np.column_stack([(arm.jacobian(th + FD_STEP * e).T - arm.jacobian(th - FD_STEP * e).T) @ HEAVY_WRENCH / (2 * FD_STEP) for e in np.eye(6)])
+    assert np.max(np.abs(Kc - fd)) < KC_FD_RELATIVE * np.max(np.abs(Kc))
+
+
+@pytest.mark.parametrize("i", range(len(POSES)))
+def test_deflection_with_complementary_stiffness_matches_equilibrium(arm, i):
+    """dX = J (K_theta - K_c)^-1 J^T F against the loaded equilibrium K dtheta = J(theta + dtheta)^T F.
+
+    Second method: fixed-point iteration on the nonlinear equilibrium (Jacobian re-evaluated at
+    the deflected angles); eq. (3) without K_c differs from it by more than (2) does.
+    """
+    th = POSES[i]
+    dth = np.zeros(6)
+    for _ in range(30):
+        dth = (arm.jacobian(th + dth).T @ HEAVY_WRENCH) / K_THETA
+    dX_eq = arm.jacobian(th) @ dth
+    dX_c = arm.deflection(th, HEAVY_WRENCH, K_THETA, complementary=True)
+    dX_3 = arm.deflection(th, HEAVY_WRENCH, K_THETA)
+    err_c, err_3 = np.linalg.norm(dX_c - dX_eq), np.linalg.norm(dX_3 - dX_eq)
+    assert err_c < KC_EQUILIBRIUM_RELATIVE * np.linalg.norm(dX_eq)
+    assert err_c < err_3
 
 
 def test_ik_round_trip(arm):
