@@ -56,8 +56,12 @@ the accumulated mass 22.38 kg removed first; without it the gravity is absorbed 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import logging
 import math
+import os
+import subprocess
+import tempfile
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -112,8 +116,17 @@ MIN_SAMPLES = 30
 #: Largest relative deviation of a sampling interval from the median before a log is
 #: rejected as non-uniformly sampled (the filters assume a constant rate).
 SAMPLING_TOLERANCE = 0.01
-#: Samples per mapped evaluation of the regressor (bounds the size of a CasADi map).
-_CHUNK = 20000
+#: Samples per mapped evaluation of the regressor, a power of two (building a CasADi map
+#: costs about 2 us per sample, more than the compiled evaluation; the remainder of a log
+#: is split into powers of two, so that a regressor builds a few small maps once).
+_CHUNK = 4096
+#: From this many samples :meth:`DynamicRegressor.evaluate` runs the regressor compiled to
+#: C (below it the CasADi interpreter is faster than a first compilation).
+_COMPILE_MIN_SAMPLES = 5000
+#: Compiler flags of the regressor's shared library (no fast-math: IEEE results).
+_COMPILE_FLAGS = ("-O3", "-fPIC", "-shared")
+#: Environment variable switching the compiled regressor off (``0``).
+_COMPILE_ENV = "GTMODEL_COMPILE"
 #: Largest relative speed difference of two runs paired by :func:`two_direction_friction`.
 SPEED_MATCH_TOLERANCE = 0.05
 #: Edges [m/s] of the speed bins of the residual report (Stribeck effect at low speed).
@@ -243,6 +256,89 @@ def _symbolic_dynamics(variant: ModelVariant, base: DynamicParameters) -> tuple[
 
 
 # ----------------------------------------------------------------------------- regressor
+def _cache_dir() -> Path:
+    """Folder of compiled regressors: ``$GTMODEL_CACHE_DIR``, else ``$XDG_CACHE_HOME/gtmodel``
+    (default ``~/.cache/gtmodel``), subfolder ``regressor``."""
+    env = os.environ.get("GTMODEL_CACHE_DIR", "").strip()
+    if env:
+        return Path(env) / "regressor"
+    xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "gtmodel" / "regressor"
+
+
+def _chunks(n: int) -> list[tuple[int, int]]:
+    """(start, size) of the mapped evaluations of n samples: chunks of :data:`_CHUNK`, then
+    the remainder's binary digits (map sizes from a fixed small set)."""
+    out = [(s, _CHUNK) for s in range(0, n - n % _CHUNK, _CHUNK)]
+    start = n - n % _CHUNK
+    size = _CHUNK // 2
+    while size:
+        if (n - start) >= size:
+            out.append((start, size))
+            start += size
+        size //= 2
+    return out
+
+
+#: Compiled regressors loaded in this process, by library path: shared by all
+#: DynamicRegressor instances of one model, with the maps CasADi caches on them.
+_LOADED: dict[str, ca.Function] = {}
+
+
+def _compiled(f: ca.Function) -> tuple[ca.Function, str]:
+    """``f`` as a shared library compiled from its CasADi-generated C, or ``f`` itself.
+
+    The C is derived from the one CasADi graph; the library is cached under
+    :func:`_cache_dir`, keyed by a hash of the generated source, the compiler, the flags
+    and the CasADi version, so it is built once per model. Without a compiler, with
+    ``GTMODEL_COMPILE=0`` or on any build/load failure, ``f`` is returned (the CasADi
+    interpreter) and the reason is logged. Returns the Function and a description of the
+    path taken.
+    """
+    if os.environ.get(_COMPILE_ENV, "").strip() == "0":
+        return f, f"CasADi interpreter ({_COMPILE_ENV}=0)"
+    from gtmodel.codegen.build import find_compiler
+    from gtmodel.errors import CodegenError
+
+    try:
+        cc = find_compiler()
+    except CodegenError as e:
+        return f, f"CasADi interpreter ({e})"
+    cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
+    cg.add(f)
+    src = cg.dump()
+    key = hashlib.sha256("\0".join([src, " ".join(cc), " ".join(_COMPILE_FLAGS), ca.__version__]).encode()).hexdigest()[:20]
+    name = f"gtm_{f.name()}_{key}"
+    folder = _cache_dir()
+    lib = folder / f"{name}.so"
+    if str(lib) in _LOADED:
+        return _LOADED[str(lib)], f"compiled C (already loaded {lib})"
+    try:
+        if lib.exists():
+            how = f"compiled C (cached {lib})"
+        else:
+            folder.mkdir(parents=True, exist_ok=True)
+            # the symbol names the hash too, so that two libraries never clash in one process
+            xs = f.sx_in()
+            g = ca.Function(name, xs, f.call(xs), f.name_in(), f.name_out())
+            cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+            cg.add(g)
+            t0 = time.perf_counter()
+            with tempfile.TemporaryDirectory(dir=folder) as tmp:
+                c_file = Path(tmp) / f"{name}.c"
+                c_file.write_text(cg.dump())
+                out = Path(tmp) / lib.name
+                proc = subprocess.run([*cc, *_COMPILE_FLAGS, str(c_file), "-o", str(out), "-lm"], capture_output=True, text=True, timeout=300)
+                if proc.returncode != 0:
+                    raise CodegenError(f"{' '.join(cc)} exit {proc.returncode}: {proc.stderr.strip()[:500]}")
+                os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
+            how = f"compiled C (built {lib} in {time.perf_counter() - t0:.2f} s)"
+        _LOADED[str(lib)] = ca.external(name, str(lib))
+        return _LOADED[str(lib)], how
+    except (CodegenError, OSError, RuntimeError, subprocess.SubprocessError) as e:
+        return f, f"CasADi interpreter (compiling failed: {e})"
+
+
 class DynamicRegressor:
     """The regressor ``tau = Y theta + tau_0`` of the inverse dynamics, Dressler (2012), eqs. 6.7-6.8.
 
@@ -290,7 +386,8 @@ class DynamicRegressor:
         if solution not in (1, -1) or isinstance(solution, bool):
             raise InputError(f"solution: expected +1 or -1, got {solution!r}")
         self.solution = float(solution)
-        self._maps: dict[tuple[str, int], ca.Function] = {}
+        self._maps: dict[tuple[str, bool, int], ca.Function] = {}
+        self._evaluation: dict[tuple[str, bool], ca.Function] = {}
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -349,6 +446,23 @@ class DynamicRegressor:
         return ca.Function("regressor_cart", [q, q_dot, q_ddot], [Y, tau0, q_dot, h2, cos_min],
                            ["q", "q_dot", "q_ddot"], ["Y", "tau0", "cart_velocity", "h2", "cos_min"])
 
+    def _evaluation_function(self, coordinates: str, compiled: bool) -> ca.Function:
+        """:attr:`cart_function` or :attr:`tcp_function` with ``Y`` transposed (so that a map
+        writes (N, 3, p) in C order) and common subexpressions merged (:func:`casadi.cse`),
+        compiled to C if ``compiled`` (see :func:`_compiled`)."""
+        key = (coordinates, compiled)
+        if key not in self._evaluation:
+            f = self.cart_function if coordinates == "cart" else self.tcp_function
+            xs = f.sx_in()
+            outs = f.call(xs)
+            outs = ca.cse([outs[0].T, *outs[1:]])
+            g = ca.Function(f"{f.name()}_eval", xs, outs, f.name_in(), f.name_out())
+            if compiled:
+                g, how = _compiled(g)
+                _log.info("DynamicRegressor (%s, variant %s, %s coordinates): %s", self.robot.name, self.variant.name, coordinates, how)
+            self._evaluation[key] = g
+        return self._evaluation[key]
+
     def evaluate(self, x: np.typing.ArrayLike, x_dot: np.typing.ArrayLike, x_ddot: np.typing.ArrayLike, coordinates: str = "cart") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Regressor on N samples, Dressler (2012), eqs. 6.7-6.8.
 
@@ -377,6 +491,14 @@ class DynamicRegressor:
             A sample admits no pose (names the sample).
         SingularConfigurationError
             A link is perpendicular to its guideway at some sample (names it).
+
+        Notes
+        -----
+        From a few thousand samples the CasADi graph (common subexpressions merged by
+        :func:`casadi.cse`) runs as C generated from it and compiled once into a shared
+        library cached under ``$GTMODEL_CACHE_DIR`` (default ``~/.cache/gtmodel``),
+        mapped over the samples; without a C compiler (or with ``GTMODEL_COMPILE=0``)
+        the CasADi interpreter runs the same graph. The path taken is logged (INFO).
         """
         if coordinates not in ("cart", "tcp"):
             raise InputError(f"coordinates: expected 'cart' or 'tcp', got {coordinates!r}")
@@ -385,17 +507,17 @@ class DynamicRegressor:
         for a, name in zip(arrs[1:], ("x_dot", "x_ddot")):
             if a.shape[0] != n:
                 raise InputError(f"{name}: expected {n} samples (as x), got {a.shape[0]}")
-        f = self.cart_function if coordinates == "cart" else self.tcp_function
+        compiled = n >= _COMPILE_MIN_SAMPLES
+        f = self._evaluation_function(coordinates, compiled)
         p = self.n_parameters
         n_reach = f.nnz_out(3)
-        Y = np.empty((n, max(p, 1), 3))
+        Y = np.empty((n, 3, max(p, 1)))
         tau0, q_dot, cos_min = np.empty((n, 3)), np.empty((n, 3)), np.empty(n)
         reach = np.empty((n, n_reach))
         # evaluation through Function.buffer: the mapped CasADi graph writes into the NumPy
-        # arrays (column-major (3, p) blocks per sample = C-order (p, 3)); chunks cap the map size
-        for start in range(0, n, _CHUNK):
-            m = min(_CHUNK, n - start)
-            key = (coordinates, m)
+        # arrays (column-major (p, 3) blocks Y^T per sample = C-order (3, p)); chunks cap the map size
+        for start, m in _chunks(n):
+            key = (coordinates, compiled, m)
             if key not in self._maps:
                 self._maps[key] = f.map(m) if m > 1 else f
             fb, ev = self._maps[key].buffer()
@@ -415,8 +537,7 @@ class DynamicRegressor:
         if np.any(cos_min < SINGULARITY_TOLERANCE):
             k = int(np.argmin(cos_min))
             raise SingularConfigurationError(f"sample {k}: a link is perpendicular to its guideway (singular Jacobian, eq. 6.5)")
-        Y = Y.transpose(0, 2, 1) if p else np.zeros((n, 3, 0))
-        return Y, tau0, q_dot
+        return (Y if p else np.zeros((n, 3, 0))), tau0, q_dot
 
     def forces(self, theta: np.typing.ArrayLike, x: np.typing.ArrayLike, x_dot: np.typing.ArrayLike, x_ddot: np.typing.ArrayLike, coordinates: str = "cart") -> np.ndarray:
         """Actuator forces ``Y theta + tau0`` of a parameter vector (eqs. 6.7-6.8).
@@ -864,12 +985,16 @@ def preprocess_log(
     if n_left < MIN_SAMPLES:
         raise InputError(f"log: only {max(n_left, 0)} samples remain after trim={trim} (twice) and decimate={decimate}, expected at least {MIN_SAMPLES}")
     info.update(cutoff_hz=float(cutoff), sample_time_s=dt, decimate=int(decimate), trim=int(trim), method=method)
+    # the smoother filters each signal of y (N, ...) along time; on the (signals, N) view
+    # the filter runs about a third faster than along axis 0 of (N, 3, p) (same results)
     if method == "butter":
         def smoother(y: np.ndarray) -> np.ndarray:
-            return scipy.signal.filtfilt(b, a, y, axis=0)
+            y = np.asarray(y)
+            return scipy.signal.filtfilt(b, a, y.reshape(y.shape[0], -1).T, axis=-1).T.reshape(y.shape)
     else:
         def smoother(y: np.ndarray) -> np.ndarray:
-            return scipy.signal.savgol_filter(y, w, order, axis=0)
+            y = np.asarray(y)
+            return scipy.signal.savgol_filter(y.reshape(y.shape[0], -1).T, w, order, axis=-1).T.reshape(y.shape)
     return DynamicSamples(t[keep], xf[keep], xd[keep], xdd[keep], tauf[keep], log.coordinates, info, int(decimate), smoother)
 
 
@@ -922,8 +1047,10 @@ class DynamicIdentificationResult:
     solve_time : float
         Wall time [s].
     info : dict
-        Options (min_speed, weighting, preprocessing) and ``regressor_time_s``, the wall
-        time of the regressor evaluation within :attr:`solve_time`.
+        Options (min_speed, weighting, preprocessing) and the split of :attr:`solve_time`
+        [s]: ``regressor_time_s`` (regressor evaluation), ``filter_time_s`` (parallel
+        filtering of the regressor) and ``least_squares_time_s`` (least squares and all
+        statistics).
     """
 
     variant: str
@@ -1089,16 +1216,58 @@ def column_dependency(Y: np.typing.ArrayLike, names: Sequence[str], parameter: s
 
 
 def _speed_bins(q_dot: np.ndarray, r: np.ndarray) -> list[dict[str, Any]]:
+    # one pass: bin index of every (sample, actuator), then counts and sums of squares per bin
+    edges = np.asarray(SPEED_BINS)
+    nb = edges.size - 1
+    v = np.abs(q_dot)
+    idx = np.searchsorted(edges, v, side="right") - 1  # edges[j] <= v < edges[j + 1]
+    ok = (idx >= 0) & (idx < nb)
+    flat = (idx * 3 + np.arange(3))[ok]
+    n = np.bincount(flat, minlength=3 * nb).reshape(nb, 3)
+    ss = np.bincount(flat, weights=np.square(r)[ok], minlength=3 * nb).reshape(nb, 3)
     out = []
-    edges = SPEED_BINS
-    for lo, hi in zip(edges[:-1], edges[1:]):
-        row: dict[str, Any] = {"v_min": lo, "v_max": hi, "n": [], "rms": []}
-        for i in range(3):
-            m = (np.abs(q_dot[:, i]) >= lo) & (np.abs(q_dot[:, i]) < hi)
-            row["n"].append(int(m.sum()))
-            row["rms"].append(float(np.sqrt(np.mean(r[m, i] ** 2))) if m.any() else math.nan)
-        out.append(row)
+    for j, (lo, hi) in enumerate(zip(SPEED_BINS[:-1], SPEED_BINS[1:])):
+        out.append({"v_min": lo, "v_max": hi, "n": [int(c) for c in n[j]],
+                    "rms": [float(np.sqrt(ss[j, i] / n[j, i])) if n[j, i] else math.nan for i in range(3)]})
     return out
+
+
+def _row_factors(Y: np.ndarray, b: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Per actuator ``i`` a (p+1)-square ``S_i`` with ``S_i^T S_i = M_i^T M_i`` of its rows
+    ``M_i = [Y[k, i, :], b[k, i]]`` (``mask[k, i]``): the R of a Householder QR (LAPACK
+    ``dgeqrf`` on a Fortran-ordered copy of the rows, the only copy made)."""
+    p = Y.shape[2]
+    S = np.zeros((3, p + 1, p + 1))
+    for i in range(3):
+        mi = mask[:, i]
+        r = int(np.count_nonzero(mi))
+        if r == 0:
+            continue
+        Mt = np.empty((p + 1, r))
+        Mt[:p] = Y[:, i, :][mi].T
+        Mt[p] = b[mi, i]
+        M = Mt.T  # Fortran order, as LAPACK wants it
+        if r <= p:  # fewer rows than columns: the rows themselves have the right Gram matrix
+            S[i, :r] = M
+            continue
+        qr, _, _, info = scipy.linalg.lapack.dgeqrf(M, overwrite_a=True)
+        if info != 0:
+            raise ModelError(f"QR of the regressor rows of actuator {i + 1} failed (LAPACK dgeqrf info {info})")
+        S[i] = np.triu(qr[:p + 1])
+    return S
+
+
+def _stacked_factor(S: np.ndarray, w: np.ndarray, cols: Sequence[int]) -> np.ndarray:
+    """R (k+1 square) of the weighted rows restricted to the columns ``cols`` plus the
+    right-hand side: QR of the stack ``[w_i S_i[:, cols + rhs]]``; ``R[:k, :k] x = R[:k, k]``
+    is the least-squares solution and ``R[k, k]^2`` the weighted residual sum of squares.
+    Rows are signed so that the diagonal is non-negative: R is then the unique Cholesky
+    factor of the weighted Gram matrix, whatever order the QR steps took (the pivoted QR of
+    the identifiability report sees the same matrix for the same data)."""
+    c = [*cols, S.shape[2] - 1]
+    Z = np.concatenate([w[i] * S[i][:, c] for i in range(3)])
+    R = scipy.linalg.qr(Z, mode="r", check_finite=False)[0][:len(c)]
+    return R * np.where(np.diag(R) < 0, -1.0, 1.0)[:, None]
 
 
 def identify_dynamics(
@@ -1119,7 +1288,11 @@ def identify_dynamics(
     with ``|q_dot_i| >= min_speed``; ``Y`` from :class:`DynamicRegressor` (one symbolic
     model). Standard deviations from ``sigma^2 (Y_w^T Y_w)^-1`` with ``sigma^2 = RSS_w /
     (m - p)`` and the base (identifiable) parameters from the column-pivoted QR of
-    :func:`gtmodel.calibration.identifiability.analyze_jacobian`.
+    :func:`gtmodel.calibration.identifiability.analyze_jacobian`. The rows are read once:
+    each actuator's rows ``[Y_i, tau_i - tau0_i]`` are reduced to a (p+1)-square triangular
+    factor by a Householder QR; the weighting, the solution, the standard deviations and
+    the base-parameter analysis then work on the stack of these factors (the same least
+    squares, as accurate as :func:`numpy.linalg.lstsq` on the rows).
 
     Parameters
     ----------
@@ -1186,28 +1359,33 @@ def identify_dynamics(
     t_reg = time.perf_counter()
     Y, tau0, q_dot = reg.evaluate(samples.x, samples.x_dot, samples.x_ddot, samples.coordinates)
     t_reg = time.perf_counter() - t_reg
+    t_filt = time.perf_counter()
     tau = samples.tau
     edge = 0
     if parallel_filter and samples.smoother is not None:
         Y, tau0 = samples.smoother(Y), samples.smoother(tau0)
         edge = int(samples.info.get("trim", 0))
-    sel = np.arange(edge, samples.n_samples - edge, samples.decimate)
-    if sel.size < 2:
-        raise InputError(f"samples: {samples.n_samples} samples leave {sel.size} after trim={edge} and decimate={samples.decimate}")
+    t_filt = time.perf_counter() - t_filt
+    t_ls = time.perf_counter()
+    sel = slice(edge, samples.n_samples - edge, samples.decimate)  # views, no copies
+    n_used = len(range(samples.n_samples)[sel])
+    if n_used < 2:
+        raise InputError(f"samples: {samples.n_samples} samples leave {n_used} after trim={edge} and decimate={samples.decimate}")
     Y, tau0, q_dot, tau = Y[sel], tau0[sel], q_dot[sel], tau[sel]
-    n_used = int(sel.size)
     b_all = tau - tau0
     mask = np.abs(q_dot) >= min_speed  # (N, 3)
-    rows_k, rows_i = np.nonzero(mask)
-    m = rows_k.size
+    counts = mask.sum(axis=0)
+    m = int(counts.sum())
     if m <= p:
         raise InputError(f"samples: {m} rows with |q_dot| >= min_speed = {min_speed} m/s, expected more than the {p} parameters")
-    A = Y[rows_k, rows_i, :]
-    b = b_all[rows_k, rows_i]
 
-    # One thin QR per weighting pass; everything else works on the p x p factor R (the
-    # column norms, the pivoted QR and the singular values of R are those of the rows).
-    R0 = scipy.linalg.qr(A, mode="r", check_finite=False)[0][:p]
+    # One pass over the data: per actuator the triangular factor S_i of its rows [Y_i b_i]
+    # (Householder QR). The rows of any weighting and any column subset have the factor of
+    # the small stack [w_i S_i] (orthogonal invariance), so the solution, the residual sums,
+    # the standard deviations and the base-parameter analysis all come from (p+1)-square
+    # blocks; no second pass and no normal equations.
+    S = _row_factors(Y, b_all, mask)
+    R0 = _stacked_factor(S, np.ones(3), list(range(p)))[:p, :p]
     report0 = analyze_jacobian(R0, names)
     ident = sorted(names.index(n) for n in report0.identifiable)
     if not report0.full_rank:
@@ -1215,43 +1393,35 @@ def identify_dynamics(
         if rank_deficient == "raise":
             raise ModelError(msg + "; choose a variant without these parameters or rank_deficient='base'")
         _log.warning(msg)
+    k = len(ident)
 
-    def solve(w_rows: np.ndarray, R: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        # corrected semi-normal equations (Bjorck): R from a QR of the rows (Q not formed),
-        # R^T R x = A^T b, then one step of refinement on the residual
-        Aw = A[:, ident] * w_rows[:, None]
-        bw = b * w_rows
-        if R is None:
-            R = scipy.linalg.qr(Aw, mode="r", check_finite=False)[0][:len(ident)]
-
-        def rr(rhs: np.ndarray) -> np.ndarray:
-            y = scipy.linalg.solve_triangular(R, rhs, trans="T", check_finite=False)
-            return scipy.linalg.solve_triangular(R, y, check_finite=False)
-
-        x = rr(Aw.T @ bw)
-        x = x + rr(Aw.T @ (bw - Aw @ x))
+    def solve(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        # least squares on the identifiable columns with actuator weights w: R x = c
+        F = _stacked_factor(S, w, ident)
         th = np.zeros(p)
-        th[ident] = x
-        return th, R
+        th[ident] = scipy.linalg.solve_triangular(F[:k, :k], F[:k, k], check_finite=False)
+        return th, F[:k, :k]
 
     w = fixed_w if fixed_w is not None else np.ones(3)
-    th, R = solve(w[rows_i], R0 if (fixed_w is None and report0.full_rank) else None)
+    th, R = solve(w)
     if fixed_w is None and weighting == "actuator":
-        r = b - A @ th
-        rms = np.array([np.sqrt(np.mean(r[rows_i == i] ** 2)) if np.any(rows_i == i) else 1.0 for i in range(3)])
+        # residual sum of squares per actuator ||S_i [theta; -1]||^2 (no pass over the rows)
+        ext = np.append(th, -1.0)
+        rss = np.array([float(np.sum((S[i] @ ext) ** 2)) for i in range(3)])
+        rms = np.where(counts > 0, np.sqrt(rss / np.maximum(counts, 1)), 1.0)
         w = 1.0 / np.where(rms > 0, rms, 1.0)
-        th, R = solve(w[rows_i])
-    wr = w[rows_i]
-    r = b - A @ th
+        th, R = solve(w)
+    r_all = b_all - (Y.reshape(-1, p) @ th).reshape(-1, 3) if p else b_all.copy()
+    res_ss = np.array([float(np.sum(np.square(r_all[:, i][mask[:, i]]))) for i in range(3)])
+    res_rms = np.array([math.sqrt(res_ss[i] / counts[i]) if counts[i] else math.nan for i in range(3)])
     # covariance sigma^2 (Y_I^T W^2 Y_I)^-1 = sigma^2 R^-1 R^-T, sigma^2 = RSS_w / (m - rank)
-    k = len(ident)
-    sigma2 = float(np.sum((r * wr) ** 2)) / (m - k)
+    sigma2 = float(np.sum(w**2 * res_ss)) / (m - k)
     Rinv = scipy.linalg.solve_triangular(R, np.eye(k), check_finite=False)
     cov = np.full((p, p), math.inf)
     cov[np.ix_(ident, ident)] = sigma2 * (Rinv @ Rinv.T)
     std = np.array([math.sqrt(cov[j, j]) if j in ident else math.inf for j in range(p)])
     # the base-parameter report on all columns (R of the weighted rows, all parameters)
-    R_all = R if k == p else scipy.linalg.qr(A * wr[:, None], mode="r", check_finite=False)[0][:p]
+    R_all = R if k == p else _stacked_factor(S, w, list(range(p)))[:p, :p]
     report = analyze_jacobian(R_all, names)
     report = dataclasses.replace(
         report, n_residuals=int(m), std={n: float(std[j]) for j, n in enumerate(names)}, covariance=cov,
@@ -1261,21 +1431,20 @@ def identify_dynamics(
     cond_raw = float(sv[0] / sv[-1]) if sv[-1] > 0 else math.inf
     sv_s = np.linalg.svd(R / np.linalg.norm(R, axis=0), compute_uv=False)
     cond = float(sv_s[0] / sv_s[-1]) if sv_s[-1] > 0 else math.inf
-    res_rms = np.array([np.sqrt(np.mean(r[rows_i == i] ** 2)) if np.any(rows_i == i) else math.nan for i in range(3)])
-    res_ss = np.array([float(np.sum(r[rows_i == i] ** 2)) for i in range(3)])
-    r_all = b_all - Y @ th
     near = _near_dependencies(R, [names[j] for j in ident], count=min(3, k - 1))
+    by_speed = _speed_bins(q_dot, r_all)
+    t_ls = time.perf_counter() - t_ls
     status = "optimal"
     message = f"{m} rows ({n_used} samples), rank {report.rank}/{p}"
     if not report.full_rank:
         message += f"; base parameters only: {report.describe()}"
     return DynamicIdentificationResult(
         variant=reg.variant.name, names=names, theta=th, std=std, covariance=cov, residual_rms=res_rms, residual_ss=res_ss,
-        residual_by_speed=_speed_bins(q_dot, r_all), condition_number=float(cond), condition_number_raw=cond_raw,
+        residual_by_speed=by_speed, condition_number=float(cond), condition_number_raw=cond_raw,
         identifiability=report, near_dependencies=near, weights=w, n_samples=n_used, n_rows=int(m),
         status=status, message=message, solve_time=time.perf_counter() - t0,
         info={"min_speed": float(min_speed), "weighting": weighting if isinstance(weighting, str) else "fixed",
-              "regressor_time_s": t_reg, **samples.info},
+              "regressor_time_s": t_reg, "filter_time_s": t_filt, "least_squares_time_s": t_ls, **samples.info},
     )
 
 

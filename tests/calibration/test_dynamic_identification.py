@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 import tomllib
 from pathlib import Path
@@ -42,6 +43,14 @@ FORCE_TOLERANCE_N = 1e-8
 EXACT_RELATIVE_TOLERANCE = 1e-6
 #: Acceptance: every estimate within this many standard deviations of the truth.
 Z_LIMIT = 3.0
+#: identify_dynamics (QR of the per-actuator row blocks) against numpy.linalg.lstsq on the
+#: same rows: relative difference of every estimate.
+LSTSQ_RELATIVE_TOLERANCE = 1e-10
+#: Standard deviations against sigma^2 (A^T W^2 A)^-1 by NumPy (normal equations), relative.
+STD_RELATIVE_TOLERANCE = 1e-8
+#: Regressor compiled to C against the CasADi interpreter (same graph, IEEE arithmetic),
+#: relative to the largest entry.
+COMPILED_RELATIVE_TOLERANCE = 1e-12
 #: Force noise of the simulated logs [N] (Gaussian, per 4 ms sample).
 FORCE_NOISE_N = 5.0
 #: Table 6.2: the three gravity forces of a pose sum to zero (force balance along the
@@ -436,3 +445,117 @@ def test_constant_velocity_data_validates_lengths():
     """Runs with mismatched arrays: InputError naming the argument."""
     with pytest.raises(InputError, match=r"q_dot: expected 2 samples"):
         ConstantVelocityData(np.zeros((2, 3)), np.zeros((3, 3)), np.zeros((2, 3)), [0, 0])
+
+
+# ----------------------------------------------------------------------------- fast paths
+def _stacked_rows(samples, reg, min_speed, weights=(1.0, 1.0, 1.0)):
+    """The fitted rows by hand: (sample, actuator) with |q_dot| >= min_speed, weighted."""
+    Y, tau0, v = reg.evaluate(samples.x, samples.x_dot, samples.x_ddot, samples.coordinates)
+    k, i = np.nonzero(np.abs(v) >= min_speed)
+    w = np.asarray(weights)[i]
+    return Y[k, i, :] * w[:, None], (samples.tau - tau0)[k, i] * w, Y, tau0, v
+
+
+@pytest.mark.parametrize("weighting", ["none", (1.0, 0.5, 2.0)])
+def test_least_squares_equals_numpy_lstsq(noisy_log, regressor, weighting):
+    """Peer library: numpy.linalg.lstsq (SVD) on the same, explicitly stacked and weighted
+    rows gives the estimates to 1e-10 relative; the standard deviations equal
+    sqrt(diag(sigma^2 (A^T W^2 A)^-1)) formed by NumPy, the residual sums and the
+    per-speed-bin RMS equal those of the explicit residual."""
+    s = preprocess_log(noisy_log[0], cutoff=10.0, decimate=1)
+    res = identify_dynamics(s, regressor=regressor, weighting=weighting, parallel_filter=False)
+    w = (1.0, 1.0, 1.0) if weighting == "none" else weighting
+    A, b, Y, tau0, v = _stacked_rows(s, regressor, res.info["min_speed"], w)
+    theta, *_ = np.linalg.lstsq(A, b, rcond=None)
+    np.testing.assert_allclose(res.theta, theta, rtol=LSTSQ_RELATIVE_TOLERANCE, atol=0)
+    m, p = A.shape
+    r = b - A @ theta
+    cov = float(r @ r) / (m - p) * np.linalg.inv(A.T @ A)
+    np.testing.assert_allclose(res.std, np.sqrt(np.diag(cov)), rtol=STD_RELATIVE_TOLERANCE)
+    r_all = s.tau - tau0 - Y @ res.theta
+    fitted = np.abs(v) >= res.info["min_speed"]
+    ss = [np.sum(r_all[fitted[:, i], i] ** 2) for i in range(3)]
+    np.testing.assert_allclose(res.residual_ss, ss, rtol=1e-12)
+    for row in res.residual_by_speed:
+        for i in range(3):
+            sel = (np.abs(v[:, i]) >= row["v_min"]) & (np.abs(v[:, i]) < row["v_max"])
+            assert row["n"][i] == int(sel.sum())
+            if sel.any():
+                assert row["rms"][i] == pytest.approx(math.sqrt(np.mean(r_all[sel, i] ** 2)), rel=1e-12)
+
+
+def test_actuator_weighting_equals_lstsq_on_weighted_rows(noisy_log, regressor):
+    """Two-step actuator weighting: the reported weights are 1/RMS of the unweighted fit's
+    residual per actuator (recomputed here from numpy.linalg.lstsq), and the estimate is
+    lstsq on the rows weighted with them (to 1e-10 relative)."""
+    s = preprocess_log(noisy_log[0], cutoff=10.0, decimate=1)
+    res = identify_dynamics(s, regressor=regressor, weighting="actuator", parallel_filter=False)
+    A, b, _, _, v = _stacked_rows(s, regressor, res.info["min_speed"])
+    th0, *_ = np.linalg.lstsq(A, b, rcond=None)
+    i = np.nonzero(np.abs(v) >= res.info["min_speed"])[1]
+    r = b - A @ th0
+    w = np.array([1.0 / math.sqrt(np.mean(r[i == a] ** 2)) for a in range(3)])
+    np.testing.assert_allclose(res.weights, w, rtol=1e-9)
+    Aw, bw, *_ = _stacked_rows(s, regressor, res.info["min_speed"], res.weights)
+    theta, *_ = np.linalg.lstsq(Aw, bw, rcond=None)
+    np.testing.assert_allclose(res.theta, theta, rtol=LSTSQ_RELATIVE_TOLERANCE, atol=0)
+
+
+def _compiler_available() -> bool:
+    from gtmodel.codegen.build import find_compiler
+    from gtmodel.errors import CompilerNotFoundError
+
+    try:
+        find_compiler()
+    except CompilerNotFoundError:
+        return False
+    return True
+
+
+@pytest.fixture
+def compile_everything(monkeypatch, tmp_path):
+    """Compile from the first sample, into an empty cache folder."""
+    import gtmodel.calibration.dynamic_identification as di
+
+    monkeypatch.setattr(di, "_COMPILE_MIN_SAMPLES", 1)
+    monkeypatch.setenv("GTMODEL_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("GTMODEL_COMPILE", raising=False)
+    return tmp_path
+
+
+@pytest.mark.skipif(not _compiler_available(), reason="no C compiler")
+def test_compiled_regressor_equals_the_interpreter_and_is_cached(motion, compile_everything, monkeypatch, caplog):
+    """Second route: the regressor compiled to C from the CasADi graph (cached shared
+    library) gives the CasADi interpreter's Y, tau0 and q_dot to round-off, in cart and
+    TCP coordinates; a second regressor of the same model reuses the library (no build)."""
+    T, Td, Tdd = motion
+    reg = DynamicRegressor("L1", "model_4")
+    q, qd, qdd = reg.model.kinematics.cart_motion(T, Td, Tdd)
+    with caplog.at_level(logging.INFO, logger="gtmodel"):
+        out = {c: reg.evaluate(*x, c) for c, x in (("cart", (q, qd, qdd)), ("tcp", (T, Td, Tdd)))}
+    assert sum("compiled C (built" in m for m in caplog.messages) == 2, caplog.messages
+    assert len(list(compile_everything.glob("regressor/*.so"))) == 2
+    monkeypatch.setenv("GTMODEL_COMPILE", "0")
+    ref = DynamicRegressor("L1", "model_4")
+    for c, x in (("cart", (q, qd, qdd)), ("tcp", (T, Td, Tdd))):
+        for a, b in zip(out[c], ref.evaluate(*x, c)):
+            np.testing.assert_allclose(a, b, rtol=0, atol=COMPILED_RELATIVE_TOLERANCE * np.max(np.abs(b)))
+    monkeypatch.delenv("GTMODEL_COMPILE")
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="gtmodel"):
+        DynamicRegressor("L1", "model_4").evaluate(T, Td, Tdd, "tcp")
+    assert any("compiled C (" in m for m in caplog.messages), caplog.messages
+    assert not any("built" in m for m in caplog.messages), caplog.messages
+
+
+def test_regressor_falls_back_to_the_interpreter_without_compiler(motion, compile_everything, monkeypatch, caplog):
+    """No C compiler (CC names no executable): the regressor is evaluated by the CasADi
+    interpreter, says so in the log, and gives the same forces as the model's inverse
+    dynamics (eqs. 6.7/6.8)."""
+    monkeypatch.setenv("CC", str(compile_everything / "no-such-compiler"))
+    T, Td, Tdd = motion
+    reg = DynamicRegressor("L1", "model_2")
+    with caplog.at_level(logging.INFO, logger="gtmodel"):
+        tau = reg.forces(reg.theta_of(), T, Td, Tdd, "tcp")
+    assert any("CasADi interpreter (no C compiler" in m for m in caplog.messages), caplog.messages
+    np.testing.assert_allclose(tau, GantryTau3Dynamics("L1").inverse_dynamics(T, Td, Tdd), atol=FORCE_TOLERANCE_N)
