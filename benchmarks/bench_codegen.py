@@ -12,7 +12,9 @@ prints, per function and for the per-cycle bundles of the 4 ms loop,
 
 Bundles: L1 = ik + jacobian + inverse_dynamics (aim < 1 us), F1 = ik + fk, both
 warm-started from the previous sample (aim < 10 us); the F1 default starts (continuation
-from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py``.
+from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py``
+(``--cflags "-O3 -march=native"``: optional extra flags for the libraries, to see what
+the target's instruction set gains; the generated code needs only ``-std=c99 -O2``).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from gtmodel.codegen import compile_shared, find_compiler, generate, load_library
-from gtmodel.codegen.check import _row_args, sample_inputs, time_functions
+from gtmodel.codegen.check import _c_call, sample_inputs, time_functions, timed_rows
 from gtmodel.robots.kinematics import configuration_signs
 
 BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}
@@ -47,47 +49,10 @@ int main(int argc, char **argv)
 """
 
 
-def _literal(v) -> str:
-    return ", ".join(repr(float(x)) for x in np.ravel(v))
-
-
 def _count_block(gen, spec, label: str, args) -> str:
-    sizes_in, sizes_out = gen.signatures[spec.name]
-    lines, call = [f'    if (strcmp(which, "{label}") == 0) {{'], []
-    for k, (v, n) in enumerate(zip(args, sizes_in)):
-        if n == 0:
-            call.append(str(int(v)))
-        elif v is None:
-            call.append("NULL")
-        else:
-            lines.append(f"        static const double a{k}[{n}] = {{{_literal(v)}}};")
-            call.append(f"a{k}")
-    for k, n in enumerate(sizes_out):
-        lines.append(f"        double o{k}[{n}];")
-        call.append(f"o{k}")
-    if spec.newton is not None:
-        lines.append("        int it;")
-        call.append("&it")
-    lines += [f"        for (i = 0; i < n; ++i) status |= {gen.prefix}_{spec.name}({', '.join(call)});", "    }"]
-    return "\n".join(lines)
-
-
-def _rows(gen, data):
-    """Per function: the first sample with a warm start and the first without (label -> (spec, args))."""
-    out = {}
-    for spec in gen.specs:
-        inp = data[spec.name]
-        seen = {}
-        for i in range(len(inp[spec.args[0].name])):
-            args = _row_args(spec, inp, i)
-            seen.setdefault(any(a.optional and v is None for a, v in zip(spec.args, args)), args)
-            if len(seen) == 2:
-                break
-        if False in seen:
-            out[spec.name] = (spec, seen[False])
-        if True in seen:
-            out[f"{spec.name} (default start)" if False in seen else spec.name] = (spec, seen[True])
-    return out
+    decl, call = _c_call(gen, spec, args)
+    return "\n".join([f'    if (strcmp(which, "{label}") == 0) {{', *decl,
+                      f"        for (i = 0; i < n; ++i) status |= {call};", "    }"])
 
 
 def callgrind_counts(gen, lib: Path, rows, build: Path, calls: int = 200) -> dict[str, float]:
@@ -151,6 +116,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--robots", default="L1,F1", help="comma-separated robots (default L1,F1)")
     ap.add_argument("--python-calls", type=int, default=2000, help="calls per function from Python")
     ap.add_argument("--no-callgrind", action="store_true", help="skip the instruction counts")
+    ap.add_argument("--cflags", default="", help='extra compiler flags for the libraries, e.g. "-O3 -march=native" '
+                    "(optional; the generated code needs only -std=c99 -O2)")
     ap.add_argument("--newton-check-every", type=int, default=None,
                     help="test Newton convergence every k steps (default: the declaration's; F1: 4 like Python)")
     args = ap.parse_args(argv)
@@ -158,14 +125,14 @@ def main(argv: list[str] | None = None) -> None:
         for robot in args.robots.split(","):
             root = Path(tmp) / robot
             gen = generate(robot, root / "src", newton_check_every=args.newton_check_every)
-            lib = compile_shared(gen, root / "build")
+            lib = compile_shared(gen, root / "build", extra_flags=args.cflags.split())
             load_library(gen, lib)
             data = sample_inputs(gen, 50, seed=3)
-            rows = _rows(gen, data)
+            rows = timed_rows(gen, data)
             c = time_functions(gen, lib, data, root / "build", budget_s=0.2)
             py = python_times(gen, rows, args.python_calls)
             ir = {} if args.no_callgrind else callgrind_counts(gen, lib, rows, root / "build")
-            print(f"\n{robot}: {gen.version}")
+            print(f"\n{robot}: {gen.version}" + (f"; extra flags {args.cflags}" if args.cflags else ""))
             hdr = f"{'function':<38}{'C ns/call':>11}{'Python ns/call':>16}{'Py/C':>8}{'instr/call':>12}"
             print(hdr)
             print("-" * len(hdr))

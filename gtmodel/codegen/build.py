@@ -176,6 +176,67 @@ class CompiledFunction:
         self.dtype = np.float32 if real == "float" else np.float64
         self.ctype = ctypes.c_float if real == "float" else ctypes.c_double
         self.iterations = ctypes.c_int(-1)
+        # the same symbol with address arguments, for the row loop of :meth:`call_rows`
+        raw_types = [ctypes.c_int if n == 0 else ctypes.c_void_p for n in self.sizes_in]
+        raw_types += [ctypes.c_void_p] * (len(self.sizes_out) + (spec.newton is not None))
+        self._raw = ctypes.CFUNCTYPE(ctypes.c_int, *raw_types)(ctypes.cast(cfunc, ctypes.c_void_p).value)
+
+    def call_rows(self, *args, fill: float = 0.0) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+        """Call the C function once per row of stacked inputs (a C-side loop of single calls).
+
+        Parameters
+        ----------
+        *args : array_like
+            The inputs in C order, one row per call: ``(N, n)`` arrays of the declared
+            sizes (matrices row-major, 9 values), ``(N,)`` integers for
+            configuration/solution. A row of an optional argument that is not all finite
+            is passed as NULL.
+        fill : float, optional
+            Value the output rows hold before the call (kept where the status is not OK).
+
+        Returns
+        -------
+        status : numpy.ndarray of int, shape (N,)
+            The returned status codes (0 = ``GT_OK``).
+        outputs : tuple of numpy.ndarray, shape (N, n)
+            The outputs, one row per call.
+
+        Raises
+        ------
+        CodegenError
+            Wrong number of arguments, wrong array sizes or differing row counts.
+        """
+        if len(args) != len(self.sizes_in):
+            raise CodegenError(f"{self.spec.name}: expected {len(self.sizes_in)} arguments, got {len(args)}")
+        N = len(args[0])
+        item = np.dtype(self.dtype).itemsize
+        columns: list[list] = []
+        keep = []  # the input buffers the addresses point into
+        for a, n, decl in zip(args, self.sizes_in, self.spec.args):
+            if n == 0:
+                vals = np.asarray(a, dtype=int).reshape(-1)
+                if vals.size != N:
+                    raise CodegenError(f"{self.spec.name}: {decl.name}: expected {N} values, got {vals.size}")
+                columns.append([int(v) for v in vals])
+                continue
+            arr = np.ascontiguousarray(np.reshape(a, (N, -1)), dtype=self.dtype)
+            if arr.shape[1] != n:
+                raise CodegenError(f"{self.spec.name}: {decl.name}: expected rows of {n} values, got {arr.shape[1]}")
+            base = arr.ctypes.data
+            ptrs = [base + i * n * item for i in range(N)]
+            if decl.optional:
+                ptrs = [p if f else None for p, f in zip(ptrs, np.all(np.isfinite(arr), axis=1))]
+            columns.append(ptrs)
+            keep.append(arr)
+        outs = tuple(np.full((N, n), fill, dtype=self.dtype) for n in self.sizes_out)
+        for o, n in zip(outs, self.sizes_out):
+            columns.append([o.ctypes.data + i * n * item for i in range(N)])
+        if self.spec.newton is not None:
+            columns.append([ctypes.addressof(self.iterations)] * N)
+        raw = self._raw
+        status = np.fromiter((raw(*row) for row in zip(*columns)), dtype=int, count=N)
+        del keep
+        return status, outs
 
     def __call__(self, *args, out: Sequence[np.ndarray] | None = None) -> tuple[int, tuple[np.ndarray, ...]]:
         """Call the C function.

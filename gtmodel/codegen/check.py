@@ -49,6 +49,7 @@ __all__ = [
     "StatusProbe",
     "CheckReport",
     "sample_inputs",
+    "timed_rows",
     "time_functions",
     "run_harness_unit_tests",
     "check",
@@ -416,11 +417,15 @@ def _call_row(cf, spec: FunctionSpec, inputs: Mapping[str, np.ndarray], i: int, 
     return cf(*_row_args(spec, inputs, i, overrides), out=out)
 
 
-def _diffs(spec: FunctionSpec, out, ref: Mapping[str, np.ndarray], i: int, real: str) -> tuple[float, float, bool]:
+def _diffs(spec: FunctionSpec, out, ref: Mapping[str, np.ndarray], real: str) -> tuple[float, float, bool]:
+    """Largest absolute and relative ``|C - Python|`` of stacked outputs ``(N, n)``, and the verdict."""
     worst_abs, worst_rel, ok = 0.0, 0.0, True
     for o, val in zip(spec.outputs, out):
-        r = np.reshape(ref[o.name][i], -1)
-        d = np.abs(np.asarray(val, dtype=float) - r)
+        val = np.asarray(val, dtype=float)
+        if val.size == 0:
+            continue
+        r = np.reshape(ref[o.name], val.shape)
+        d = np.abs(val - r)
         if not np.all(np.isfinite(d)):
             return np.inf, np.inf, False
         worst_abs = max(worst_abs, float(d.max()))
@@ -437,23 +442,17 @@ def _diffs(spec: FunctionSpec, out, ref: Mapping[str, np.ndarray], i: int, real:
 def _compare(spec: FunctionSpec, cf, model: RobotModel, inputs: Mapping[str, np.ndarray], real: str) -> FunctionCheck:
     n = len(inputs[spec.args[0].name])
     ref = spec.reference(model, inputs) if spec.reference is not None else _casadi_reference(spec, model, inputs)
-    worst_abs = worst_rel = 0.0
-    all_ok = True
-    not_ok = refused = 0
-    for i in range(n):
-        if not all(np.all(np.isfinite(ref[o.name][i])) for o in spec.outputs):
-            refused += 1
-            continue
-        status, out = _call_row(cf, spec, inputs, i)
-        if status != 0:
-            not_ok += 1
-            continue
-        a, r, ok = _diffs(spec, out, ref, i, real)
-        worst_abs, worst_rel, all_ok = max(worst_abs, a), max(worst_rel, r), all_ok and ok
-    compared = n - refused
-    passed = bool(all_ok and not_ok == 0 and compared > 0)
+    ref = {o.name: np.reshape(ref[o.name], (n, -1)) for o in spec.outputs}
+    valid = np.all([np.all(np.isfinite(ref[o.name]), axis=1) for o in spec.outputs], axis=0)
+    rows = np.flatnonzero(valid)
+    status, out = cf.call_rows(*[np.asarray(inputs[a.name])[rows] for a in spec.args], fill=SENTINEL)
+    good = status == 0
+    worst_abs, worst_rel, all_ok = _diffs(spec, [o[good] for o in out], {k: v[rows[good]] for k, v in ref.items()}, real)
+    refused = n - rows.size
+    not_ok = int(np.sum(~good))
+    passed = bool(all_ok and not_ok == 0 and rows.size > 0)
     tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else spec.tolerance
-    return FunctionCheck(spec.name, compared, worst_abs, tol, spec.unit, not_ok, passed, worst_rel, None, refused)
+    return FunctionCheck(spec.name, int(rows.size), worst_abs, tol, spec.unit, not_ok, passed, worst_rel, None, refused)
 
 
 def _probe(cf, spec: FunctionSpec, inputs, case: str, expected: str, overrides: Mapping, model: RobotModel | None = None, real: str = "double") -> StatusProbe:
@@ -462,7 +461,7 @@ def _probe(cf, spec: FunctionSpec, inputs, case: str, expected: str, overrides: 
     if status == 0 and model is not None:
         row = {a.name: np.asarray([overrides.get(a.name, inputs[a.name][0])]) for a in spec.args}
         ref = spec.reference(model, row) if spec.reference is not None else _casadi_reference(spec, model, row)
-        fine = _diffs(spec, out, ref, 0, real)[2]
+        fine = _diffs(spec, [np.reshape(o, (1, -1)) for o in out], ref, real)[2]
     else:
         fine = all(np.all(o == np.asarray(SENTINEL, dtype=o.dtype)) for o in out)
     passed = bool(status in codes and fine)
@@ -570,26 +569,35 @@ def _c_literal(values, real: str) -> str:
     return ", ".join(f"{float(v)!r}" + ("f" if real == "float" else "") for v in np.ravel(values))
 
 
-def _timing_block(generated: GeneratedCode, spec: FunctionSpec, label: str, args: list, budget_s: float) -> str:
+def _c_call(generated: GeneratedCode, spec: FunctionSpec, args: list, indent: str = "        ") -> tuple[list[str], str]:
+    """C declarations of the argument/output buffers of one call, and the call expression.
+
+    Inputs become ``static const`` arrays ``a<k>`` (NULL for a None optional argument),
+    outputs ``o<k>``; a Newton function also gets ``int it``.
+    """
     real = generated.real
     sizes_in, sizes_out = generated.signatures[spec.name]
-    lines = ["    {"]
-    call = []
-    for k, (a, v, n) in enumerate(zip(spec.args, args, sizes_in)):
+    lines, call = [], []
+    for k, (v, n) in enumerate(zip(args, sizes_in)):
         if n == 0:
             call.append(str(int(v)))
         elif v is None:
             call.append("NULL")
         else:
-            lines.append(f"        static const {real} a{k}[{n}] = {{{_c_literal(v, real)}}};")
+            lines.append(f"{indent}static const {real} a{k}[{n}] = {{{_c_literal(v, real)}}};")
             call.append(f"a{k}")
     for k, n in enumerate(sizes_out):
-        lines.append(f"        {real} o{k}[{n}];")
+        lines.append(f"{indent}{real} o{k}[{n}];")
         call.append(f"o{k}")
     if spec.newton is not None:
-        lines.append("        int it;")
+        lines.append(f"{indent}int it;")
         call.append("&it")
-    c = f"{generated.prefix}_{spec.name}({', '.join(call)})"
+    return lines, f"{generated.prefix}_{spec.name}({', '.join(call)})"
+
+
+def _timing_block(generated: GeneratedCode, spec: FunctionSpec, label: str, args: list, budget_s: float) -> str:
+    decl, c = _c_call(generated, spec, args)
+    lines = ["    {", *decl]
     lines += [
         f"        t0 = now_ns(); for (i = 0; i < 100; ++i) {{ status |= {c}; sink += o0[0]; }} t1 = now_ns();",
         f"        n = (long)({budget_s * 1e9} / ((t1 - t0) / 100.0 + 1.0)); if (n < 100) n = 100;",
@@ -598,6 +606,39 @@ def _timing_block(generated: GeneratedCode, spec: FunctionSpec, label: str, args
         "    }",
     ]
     return "\n".join(lines)
+
+
+def timed_rows(generated: GeneratedCode, samples: Mapping[str, Mapping[str, np.ndarray]]) -> dict[str, tuple[FunctionSpec, list]]:
+    """The sample rows a timing uses, by label.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        What was generated.
+    samples : Mapping
+        Inputs per function (as from :func:`sample_inputs`).
+
+    Returns
+    -------
+    dict of str to tuple of (FunctionSpec, list)
+        Per function the first row with a warm start (label = the function name) and, for
+        Newton functions with an optional warm start, the first row without one (label
+        ``"<name> (default start)"``); the list holds the C arguments (None = NULL).
+    """
+    out = {}
+    for spec in generated.specs:
+        inp = samples[spec.name]
+        rows: dict[bool, list] = {}
+        for i in range(len(inp[spec.args[0].name])):
+            args = _row_args(spec, inp, i)
+            rows.setdefault(any(a.optional and v is None for a, v in zip(spec.args, args)), args)
+            if len(rows) == 2:
+                break
+        if False in rows:
+            out[spec.name] = (spec, rows[False])
+        if True in rows:
+            out[f"{spec.name} (default start)" if False in rows else spec.name] = (spec, rows[True])
+    return out
 
 
 def time_functions(generated: GeneratedCode, library: Path, samples: Mapping[str, Mapping[str, np.ndarray]], build_dir: Path, budget_s: float = 0.05) -> dict[str, float]:
@@ -628,22 +669,7 @@ def time_functions(generated: GeneratedCode, library: Path, samples: Mapping[str
     CodegenError
         The timing program failed to build or a timed call returned a non-OK status.
     """
-    blocks = []
-    for spec in generated.specs:
-        inp = samples[spec.name]
-        n = len(inp[spec.args[0].name])
-        rows = {}
-        for i in range(n):
-            args = _row_args(spec, inp, i)
-            has_null = any(a.optional and v is None for a, v in zip(spec.args, args))
-            rows.setdefault(has_null, args)
-            if len(rows) == 2:
-                break
-        if False in rows:
-            blocks.append(_timing_block(generated, spec, spec.name, rows[False], budget_s))
-        if True in rows:
-            label = f"{spec.name} (default start)" if False in rows else spec.name
-            blocks.append(_timing_block(generated, spec, label, rows[True], budget_s))
+    blocks = [_timing_block(generated, spec, label, args, budget_s) for label, (spec, args) in timed_rows(generated, samples).items()]
     build_dir = Path(build_dir)
     build_dir.mkdir(parents=True, exist_ok=True)
     src = build_dir / f"{generated.prefix}_timing.c"

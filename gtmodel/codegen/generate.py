@@ -8,7 +8,10 @@ writes, into ``out_dir``:
     The CasADi Functions of the model (kinematics, dynamics, Newton steps), emitted by
     :class:`casadi.CodeGenerator`: the maths, with the parameters embedded as constants.
     Unused parameters of CasADi's function signatures are marked ``(void)`` so that the
-    file compiles with ``-Wall -Wextra -Werror``.
+    file compiles with ``-Wall -Wextra -Werror``; its scalar helpers are made ``static``
+    (inlined). Every Function passes through ``casadi.cse`` (common subexpressions merged)
+    and, in a Newton loop, the subexpressions of the fixed inputs are computed once before
+    the loop (``casadi.extract_parametric``); neither changes a single value.
 ``<prefix>.c`` / ``<prefix>.h``
     The public API: one plain-C function per model function with fixed-size array
     arguments, an ``int`` status return (``GT_OK`` = 0) and no dynamic memory. The work
@@ -16,7 +19,8 @@ writes, into ``out_dir``:
     functions (the header states the largest). On any non-OK status the outputs are left
     untouched: no NaN is ever written. Functions solved by Newton's method run a loop of
     at most ``<PREFIX>_<NAME>_MAX_ITER + 1`` step evaluations with an early exit on
-    convergence and return ``GT_NOT_CONVERGED`` otherwise.
+    convergence and return ``GT_NOT_CONVERGED`` otherwise; a loop that tests convergence
+    every ``k > 1`` steps evaluates only the residual at the tests.
 
 The C functions are reentrant (no static or global mutable state) and thus thread-safe.
 ``real="float"`` generates single-precision code (``float`` arrays in the API).
@@ -250,10 +254,17 @@ def _check_arg_input(spec: FunctionSpec, f: ca.Function, a, where: str) -> None:
 
 
 def _renamed(f: ca.Function, cname: str) -> ca.Function:
-    ins = f.sx_in() if f.is_a("SXFunction") else f.mx_in()
-    outs = [ca.densify(o) for o in f.call(ins)]
-    g = ca.Function(cname, ins, outs, f.name_in(), f.name_out())
-    return g.expand() if not g.is_a("SXFunction") else g
+    """``f`` as an SX Function named ``cname`` with dense outputs and common subexpressions merged.
+
+    ``ca.cse`` only merges structurally identical subexpressions: every output is computed
+    by the same operations on the same operands, so the values are bit-identical to the
+    ones of ``f`` (fewer instructions, shorter source, faster compilation).
+    """
+    if not f.is_a("SXFunction"):
+        f = f.expand()
+    ins = f.sx_in()
+    outs = ca.cse([ca.densify(o) for o in f.call(ins)])
+    return ca.Function(cname, ins, outs, f.name_in(), f.name_out())
 
 
 def _prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
@@ -294,6 +305,53 @@ def _prepare_part(spec: FunctionSpec, part: str, f: ca.Function, cname: str, siz
     return _renamed(f, cname)
 
 
+def _check_every(nl, newton_check_every: int | None) -> int:
+    """Steps between convergence tests of a Newton loop (generation option, else the declaration's)."""
+    return newton_check_every if newton_check_every is not None else nl.check_every
+
+
+def _hoist_invariants(parts: dict[str, ca.Function], cname: str) -> dict[str, ca.Function]:
+    """Move what a Newton step computes from the fixed inputs alone out of the loop.
+
+    ``casadi.extract_parametric`` replaces every subexpression of the step that depends
+    only on the public inputs (e.g. the F1 cart-side joint points, with the sines and
+    cosines of the actuator angles, in the forward kinematics) by a new input ``pre``;
+    the Function ``invariant(public inputs) -> pre`` computes them once before the loop.
+    Same operations on the same operands: bit-identical iterates.
+    """
+    step = parts["step"]
+    names, ins = step.name_in(), step.sx_in()
+    public = [v for n, v in zip(names, ins) if n != "x"]
+    outs = step.call(ins)
+    expr, symbols, values = ca.extract_parametric(ca.vertcat(*[ca.vec(o) for o in outs]), ca.vertcat(*[ca.vec(v) for v in public]))
+    if not symbols:
+        return parts
+    split, k = [], 0
+    for o in outs:
+        split.append(ca.reshape(expr[k : k + o.numel()], o.size1(), o.size2()))
+        k += o.numel()
+    pre = ca.vertcat(*symbols)
+    public_names = [n for n in names if n != "x"]
+    return dict(
+        parts,
+        step=ca.Function(step.name(), [*ins, pre], split, [*names, "pre"], step.name_out()),
+        invariant=ca.Function(cname, public, [ca.vertcat(*values)], public_names, ["pre"]),
+    )
+
+
+def _residual_part(step: ca.Function, cname: str) -> ca.Function:
+    """The residual (and ``valid``) outputs of a Newton step Function alone.
+
+    Used at the convergence tests of a loop that tests every ``k > 1`` steps: the test
+    needs the residual of ``x_k`` but not the step from it. The graph is the step's,
+    pruned to what these outputs depend on (same operations, bit-identical values).
+    """
+    keep = [n for n in ("residual", "valid") if n in step.name_out()]
+    ins = step.sx_in()
+    outs = step.call(dict(zip(step.name_in(), ins)))
+    return ca.Function(cname, ins, [outs[n] for n in keep], step.name_in(), keep)
+
+
 def _work_sizes(casadi_c: str, cname: str, f: ca.Function) -> tuple[int, int, int, int]:
     """Work-array sizes from the generated ``<cname>_work`` function (CasADi's values as fallback)."""
     pat = re.compile(
@@ -312,6 +370,19 @@ def _work_sizes(casadi_c: str, cname: str, f: ca.Function) -> tuple[int, int, in
 
 
 _FUNC_DEF = re.compile(r"^((?:CASADI_SYMBOL_EXPORT |static )?[A-Za-z_][\w ]*?[\s\*]+\w+)\(([^()]*)\) \{$", re.M)
+
+
+_HELPER_DEF = re.compile(r"^casadi_real (casadi_\w+)\(", re.M)
+
+
+def _static_helpers(text: str) -> str:
+    """Give CasADi's scalar helpers (``casadi_sq``, ``casadi_fmax``, ...) internal linkage.
+
+    Generated with external linkage, they are called through the PLT of a shared library
+    (``-fPIC`` keeps them interposable) and never inlined: one call per ``x*x`` of the
+    model. ``static`` lets the compiler inline them (same operations, same values).
+    """
+    return _HELPER_DEF.sub(lambda m: f"static casadi_real {m.group(1)}(" if text.count(m.group(1) + "(") > 1 else m.group(0), text)
 
 
 def _void_unused_parameters(text: str) -> str:
@@ -609,11 +680,12 @@ def _publish_lines(gp: str, spec: FunctionSpec, f: ca.Function) -> list[str]:
     return out
 
 
-def _closed_form_body(gp: str, P: str, spec: FunctionSpec, f: ca.Function, cname: str, real: str, funcs: dict) -> list[str]:
+def _function_head(gp: str, P: str, spec: FunctionSpec, funcs: dict, real: str) -> tuple[str, list[str], list[str], list[str], dict[str, str]]:
+    """Start of a wrapper: ``(macro stem, used CasADi outputs, signature and declarations, argument checks, feed)``."""
     N = f"{P}_{spec.name.upper()}"
     used_out = list(dict.fromkeys([o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]))
     decl, valid, feed = _arg_prologue(gp, spec, funcs)
-    body = [
+    head = [
         f"int {gp}_{spec.name}({_c_params(spec, funcs, real)})",
         "{",
         f"    const casadi_real *arg[{N}_SZ_ARG];",
@@ -622,6 +694,11 @@ def _closed_form_body(gp: str, P: str, spec: FunctionSpec, f: ca.Function, cname
         f"    casadi_real w[{N}_SZ_W];",
         *decl,
     ]
+    return N, used_out, head, valid, feed
+
+
+def _closed_form_body(gp: str, P: str, spec: FunctionSpec, f: ca.Function, cname: str, real: str, funcs: dict) -> list[str]:
+    N, used_out, body, valid, feed = _function_head(gp, P, spec, funcs, real)
     for name in used_out:
         body.append(f"    casadi_real out_{name}[{f.numel_out(name)}];")
     body += ["    int i, flag;", *valid]
@@ -635,21 +712,10 @@ def _closed_form_body(gp: str, P: str, spec: FunctionSpec, f: ca.Function, cname
 
 def _newton_body(gp: str, P: str, spec: FunctionSpec, parts: dict, cnames: dict, real: str, funcs: dict, newton_check_every: int | None) -> list[str]:
     nl = spec.newton
-    N = f"{P}_{spec.name.upper()}"
     n = nl.size
     fs, fst, ff = parts["start"], parts["step"], parts["finish"]
-    used_out = list(dict.fromkeys([o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]))
-    decl, valid, feed = _arg_prologue(gp, spec, funcs)
-    body = [
-        f"int {gp}_{spec.name}({_c_params(spec, funcs, real)})",
-        "{",
-        f"    const casadi_real *arg[{N}_SZ_ARG];",
-        f"    casadi_real *res[{N}_SZ_RES];",
-        f"    casadi_int iw[{N}_SZ_IW];",
-        f"    casadi_real w[{N}_SZ_W];",
-        *decl,
-        f"    casadi_real x[{n}], x_next[{n}], residual[1]{', valid[1]' if 'valid' in fst.name_out() else ''};",
-    ]
+    N, used_out, body, valid, feed = _function_head(gp, P, spec, funcs, real)
+    body.append(f"    casadi_real x[{n}], x_next[{n}], residual[1]{', valid[1]' if 'valid' in fst.name_out() else ''};")
     start_out = [c.casadi_output for c in nl.start_checks]
     for name in start_out:
         body.append(f"    casadi_real st_{name}[{fs.numel_out(name)}];")
@@ -671,26 +737,42 @@ def _newton_body(gp: str, P: str, spec: FunctionSpec, parts: dict, cnames: dict,
         body.append("    {")
         body += start_call
         body.append("    }")
+    if "invariant" in parts:  # the step's subexpressions of the fixed inputs, once
+        body.insert(body.index("    int i, k, flag, converged = 0;"), f"    casadi_real pre[{parts['invariant'].numel_out('pre')}];")
+        body += _call(parts["invariant"], cnames["invariant"], N, feed, {"pre": "pre"})
+        body.append("    if (flag != 0) return GT_NUMERIC_ERROR;")
+        feed_x["pre"] = "pre"
     has_valid = "valid" in fst.name_out()
     conv = f"residual[0] <= {N}_TOLERANCE" + (" && valid[0] >= 0" if has_valid else "")
-    every = newton_check_every if newton_check_every is not None else nl.check_every
-    if every > 1:
-        conv = f"k > 0 && k % {every} == 0 && " + conv
+    every = _check_every(nl, newton_check_every)
+    tested = {"residual": "residual", "valid": "valid"}
     body += [
         f"    for (k = 0; k <= {N}_MAX_ITER; ++k) {{  /* bounded: at most MAX_ITER + 1 steps */",
     ]
-    body += _call(fst, cnames["step"], N, feed_x, {"x_next": "x_next", "residual": "residual", "valid": "valid"}, "        ")
+    if every == 1:  # the step returns the residual of x_k with x_{k+1}: test every step
+        body += _call(fst, cnames["step"], N, feed_x, {"x_next": "x_next", **tested}, "        ")
+        body += ["        if (flag != 0) break;", f"        if ({conv}) {{", "            converged = 1;"]
+        if nl.accept == "next":
+            body.append(f"            if ({gp}_finite(x_next, {n})) {gp}_copy(x, x_next, {n});")
+        body += ["            break;", "        }", f"        if (k == {N}_MAX_ITER) break;"]
+    else:  # test x_k only at k = every, 2 every, ...: the residual alone there, no step
+        if nl.accept != "current":
+            raise CodegenError(f"{spec.name}: newton.check_every > 1 needs accept='current'")
+        body.append(f"        if (k > 0 && k % {every} == 0) {{")
+        body += _call(parts["residual"], cnames["residual"], N, feed_x, tested, "            ")
+        body += [
+            "            if (flag != 0) break;",
+            f"            if ({conv}) {{",
+            "                converged = 1;",
+            "                break;",
+            "            }",
+            "        }",
+            f"        if (k == {N}_MAX_ITER) break;",
+        ]
+        body += _call(fst, cnames["step"], N, feed_x, {"x_next": "x_next"}, "        ")
+        body.append("        if (flag != 0) break;")
     body += [
-        "        if (flag != 0) break;",
-        f"        if ({conv}) {{",
-        "            converged = 1;",
-    ]
-    if nl.accept == "next":
-        body.append(f"            if ({gp}_finite(x_next, {n})) {gp}_copy(x, x_next, {n});")
-    body += [
-        "            break;",
-        "        }",
-        f"        if (k == {N}_MAX_ITER || !{gp}_finite(x_next, {n})) break;",
+        f"        if (!{gp}_finite(x_next, {n})) break;",
         f"        {gp}_copy(x, x_next, {n});",
         "    }",
         f"    if (iterations != NULL) *iterations = k > {N}_MAX_ITER ? {N}_MAX_ITER : k;",
@@ -872,6 +954,9 @@ def generate(
             if nl.warm_start is None:
                 raise CodegenError(f"{spec.name}: newton.warm is set but warm_start is None")
             parts["warm"] = _prepare_part(spec, "warm", nl.warm_start(model), f"{base}_warm", nl.size, ["x0"])
+        parts = _hoist_invariants(parts, f"{base}_invariant")
+        if _check_every(nl, newton_check_every) > 1:
+            parts["residual"] = _residual_part(parts["step"], f"{base}_residual")
         fed = {"x"} | {a.casadi_input for a in spec.args}
         used = {n for f in parts.values() for n in f.name_in()}
         unused = [a.name for a in spec.args if a.casadi_input not in used]
@@ -898,8 +983,9 @@ def generate(
             each = [_work_sizes(casadi_text, cnames[spec.name][k], f) for k, f in funcs[spec.name].items()]
             sizes[spec.name] = tuple(max(s[i] for s in each) for i in range(4))  # type: ignore[assignment]
     casadi_source.write_text(
-        "/* CasADi-generated code; gtmodel marked unused function parameters (void). */\n"
-        + _void_unused_parameters(casadi_text)
+        "/* CasADi-generated code; gtmodel marked unused function parameters (void) and the\n"
+        " * scalar helpers (casadi_sq, casadi_fmax, ...) static, so that they are inlined. */\n"
+        + _static_helpers(_void_unused_parameters(casadi_text))
     )
 
     phash = model.parameter_hash()

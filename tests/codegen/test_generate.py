@@ -21,6 +21,8 @@ from gtmodel.robots.parameters import load_parameters
 
 #: Generic functions are compared with the CasADi Function evaluated from Python [m/s, m/s^2].
 CART_ACCELERATION_TOLERANCE = 1e-10
+#: Newton steps per block of the Python F1 solvers (``F1Closure.ik``/``fk``).
+F1_BLOCK = 4
 
 EXPECTED_SIGNATURES = [
     "int gt_L1_ik(const double T[3], int configuration, double q[3]);",
@@ -160,6 +162,55 @@ def test_newton_loops_are_bounded(built):
         for name, (tol, max_iter) in gen.newton.items():
             assert f"for (k = 0; k <= {gen.prefix.upper()}_{name.upper()}_MAX_ITER; ++k)" in src
             assert max_iter == 20 and tol > 0
+
+
+def test_f1_loop_hoists_invariants_and_tests_the_residual_alone(built):
+    """F1 loops: the fixed-input part once before the loop, the residual alone at the tests."""
+    gen, _ = built("F1")
+    src = gen.source.read_text()
+    for name in ("ik", "fk"):
+        body = src[src.index(f"int gt_F1_{name}(") :]
+        body = body[: body.index("\n}\n")]
+        loop = body.index("for (k = 0;")
+        assert 0 < body.index(f"gt_F1_cg_{name}_invariant(") < loop
+        assert body.index(f"gt_F1_cg_{name}_residual(") > loop
+        assert f"k % {F1_BLOCK} == 0" in body
+    casadi_src = gen.casadi_source.read_text()
+    assert "static casadi_real casadi_sq(" in casadi_src  # inlined helper, not a PLT call
+
+
+@pytest.mark.parametrize("name", ["ik", "fk"])
+def test_cse_hoisting_and_residual_part_keep_every_value(name):
+    """``cse``, ``extract_parametric`` and the pruned residual change no bit of the F1 step.
+
+    Reference: the declared step Function (the Python model's own step graph) evaluated by
+    CasADi's virtual machine on random iterates near the home pose.
+    """
+    from gtmodel.codegen.generate import _hoist_invariants, _renamed, _residual_part
+    from gtmodel.codegen.specs import F1_SPECS, RobotModel, load_robot
+
+    model = RobotModel(load_robot("F1"))
+    nl = F1_SPECS[name].newton
+    step = nl.step(model)
+    parts = _hoist_invariants({"step": _renamed(step, "s")}, "inv")
+    residual = _residual_part(parts["step"], "r")
+    rng = np.random.default_rng(5)
+    f1 = model.closure
+    for _ in range(20):
+        if name == "ik":
+            T_h, R_h = f1.home
+            fixed = {"T": T_h + rng.uniform(-0.01, 0.01, 3), "R": R_h}
+            x = f1.q_home[[1, 3, 2, 4, 5]] + rng.uniform(-0.01, 0.01, 5)
+        else:
+            T_h, R_h = f1.home
+            fixed = {"q": f1.q_home + rng.uniform(-0.005, 0.005, 6)}
+            x = np.concatenate([T_h, R_h.T.ravel()])  # column-major R
+        ref = step(x=x, **fixed)
+        pre = parts["invariant"](**fixed)["pre"]
+        got = parts["step"](x=x, pre=pre, **fixed)
+        for out in ("x_next", "residual"):
+            np.testing.assert_array_equal(np.asarray(got[out]), np.asarray(ref[out]))
+        np.testing.assert_array_equal(np.asarray(residual(x=x, pre=pre, **fixed)["residual"]), np.asarray(ref["residual"]))
 
 
 def test_non_convergence_gives_status_and_leaves_outputs(tmp_path):
