@@ -68,6 +68,12 @@ _KIND_HANDLERS: dict[str, tuple[str, str, str, str]] = {
         "solve_elasto_geometric",
         "write_elasto_geometric",
     ),
+    "joint_stiffness_calibration": (
+        "gtmodel.calibration.joint_stiffness_problem_files",
+        "load_joint_stiffness",
+        "solve_joint_stiffness",
+        "write_joint_stiffness",
+    ),
 }
 
 #: Problem kinds understood by :func:`load_problem`.

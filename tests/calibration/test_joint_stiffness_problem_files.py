@@ -1,0 +1,170 @@
+"""``joint_stiffness_calibration`` problem files end to end, and their bad input.
+
+Independent references: the true joint stiffnesses that generated the synthetic data (noise
+free, exact joint-spring model: every method must return them), and the thesis' Table 2 rows
+(Cvitanic (2021), reference table ``serial_kr500.toml``) that the summary must carry unchanged.
+"""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from gtmodel.calibration.joint_stiffness_problem_files import DATA_COLUMNS, METHODS
+from gtmodel.cli import EXIT_OK
+
+from ..conftest import PROBLEMS_DIR, SHARED_REFERENCE, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
+from ..conftest import replace_once as _edit
+
+FILE = PROBLEMS_DIR / "kr500_joint_stiffness.toml"
+#: Noise-free, exact-model data: identified / true stiffness within this relative error.
+EXACT_RTOL = 1e-6
+#: MN m/rad -> N m/rad.
+MEGA = 1e6
+
+EXACT = _edit('scenario = "table_2"               # "none" | "table_2" (unmodelled rotation-only compliance)\n'
+              "rotation_only_stiffness = 0.3e6    # N m/rad", 'scenario = "none"')
+
+
+def _noise_free(text: str) -> str:
+    text = EXACT(text)
+    for key in ("position_std = 15e-6", "position_std_per_m = 6e-6", "rotation_std = 2.6e-4"):
+        text = _edit(key, key.split("=")[0] + "= 0.0")(text)
+    return text
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    out = tmp_path_factory.mktemp("kr500js")
+    code, summary = solve_through_cli(FILE, out)
+    return code, out, summary
+
+
+def test_shipped_problem_is_optimal_with_the_required_summary(solved):
+    """The shipped file solves; summary, CSV and plot hold what the kind promises."""
+    code, out, s = solved
+    assert code == EXIT_OK and s["status"] == "optimal"
+    assert s["n_measurements"] == 60
+    assert set(s["methods"]) == set(METHODS)
+    for m in METHODS:
+        row = s["methods"][m]
+        for key in ("k_theta_Nm_per_rad", "std_k_theta_Nm_per_rad", "ratio_to_truth", "rms_translation_m",
+                    "rms_rotation_rad", "condition_number", "status"):
+            assert key in row, (m, key)
+        assert len(row["k_theta_Nm_per_rad"]) == 6 and row["status"] == "optimal"
+    assert s["methods"]["CP"]["rotation_weight"] == 1.0
+    assert s["methods"]["CP_rotations_scaled_x10"]["rotation_weight"] == 10.0
+    assert "condition_step1" in s["methods"]["DPP"]
+    csv_lines = (out / "stiffness.csv").read_text().splitlines()
+    assert len(csv_lines) == 1 + 6 * len(METHODS)
+    assert (out / "joint_stiffness.png").stat().st_size > 0
+
+
+def test_summary_carries_the_thesis_table_2_rows(solved):
+    """Table 2 rows in the summary equal the reference file (independent copy of the thesis)."""
+    _, _, s = solved
+    ref = tomllib.loads((SHARED_REFERENCE / "serial_kr500.toml").read_text())["static_stiffness"]
+    for m in METHODS:
+        assert np.allclose(s["thesis_table_2_Nm_per_rad"][m], np.array(ref[m]) * MEGA)
+    assert np.allclose(s["k_theta_true_Nm_per_rad"], np.array(ref["DPP"]) * MEGA)
+
+
+def test_table_2_scenario_unscaled_cp_overestimates_joints_1_2_and_x10_lowers_them(solved):
+    """The stated hypothesis of the scenario (thesis Table 2: CP above CP x10 on joints 1-2)."""
+    _, _, s = solved
+    cp, cp10 = s["methods"]["CP"]["ratio_to_truth"], s["methods"]["CP_rotations_scaled_x10"]["ratio_to_truth"]
+    assert cp[0] > 1 and cp[1] > 1 and cp10[0] < cp[0] and cp10[1] < cp[1]
+
+
+def test_noise_free_exact_model_recovers_the_truth(tmp_path):
+    """Every method returns the generating stiffnesses on exact data."""
+    f = tmp_path / "exact.toml"
+    f.write_text(_noise_free(FILE.read_text()))
+    code, s = solve_through_cli(f, tmp_path / "out")
+    assert code == EXIT_OK and s["status"] == "optimal"
+    for m in METHODS:
+        assert np.allclose(s["methods"][m]["ratio_to_truth"], 1.0, rtol=0, atol=EXACT_RTOL), m
+
+
+def _write_csv(path, data) -> None:
+    rows = np.column_stack([np.degrees(data.theta), data.F, data.dX])
+    lines = [",".join(DATA_COLUMNS), "# a comment line"] + [",".join(f"{v:.17g}" for v in r) for r in rows]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _data_problem(tmp_path, csv_text_edit=None) -> tuple:
+    """A [data] problem on the noise-free synthetic data written as CSV; returns (file, truth)."""
+    from gtmodel.problems import load_problem
+
+    exact = tmp_path / "exact.toml"
+    exact.write_text(_noise_free(FILE.read_text()))
+    decl = load_problem(exact).declaration
+    csv_path = tmp_path / "deflections.csv"
+    _write_csv(csv_path, decl.data)
+    if csv_text_edit is not None:
+        csv_path.write_text(csv_text_edit(csv_path.read_text()))
+    text = FILE.read_text()
+    text = text[: text.index("\n[truth]")] + '[data]\nfile = "deflections.csv"\n\n' + text[text.index("\n[calibration]"):]
+    f = tmp_path / "measured.toml"
+    f.write_text(text)
+    return f, decl.k_true
+
+
+def test_measured_csv_recovers_the_truth(tmp_path):
+    """A [data] CSV of exact deflections gives back the stiffnesses that generated them."""
+    f, k_true = _data_problem(tmp_path)
+    code, s = solve_through_cli(f, tmp_path / "out")
+    assert code == EXIT_OK and s["status"] == "optimal" and s["k_theta_true_Nm_per_rad"] is None
+    for m in METHODS:
+        assert np.allclose(np.array(s["methods"][m]["k_theta_Nm_per_rad"]) / k_true, 1.0, rtol=0, atol=EXACT_RTOL), m
+
+
+def _first_cell(text: str, cell: str) -> str:
+    """The CSV text with the first cell of line 3 (the first measurement) replaced by ``cell``."""
+    lines = text.splitlines()
+    lines[2] = cell + lines[2][lines[2].index(","):]
+    return "\n".join(lines) + "\n"
+
+
+BAD_CSV = [
+    ("not_a_number", lambda t: _first_cell(t, "x"), r"line 3, column 1 \(theta1_deg\): expected a finite number, got 'x'"),
+    ("short_line", lambda t: t + "1,2,3\n", r"line 63: expected 18 columns, got 3"),
+    ("bad_header", lambda t: t.replace("theta1_deg", "q1", 1), r"line 1: expected the header"),
+]
+
+
+@pytest.mark.parametrize("case, edit, match", BAD_CSV, ids=[c[0] for c in BAD_CSV])
+def test_bad_data_file_names_line_and_column(tmp_path, case, edit, match):
+    from gtmodel.errors import ProblemError
+    from gtmodel.problems import load_problem
+
+    f, _ = _data_problem(tmp_path, edit)
+    with pytest.raises(ProblemError, match=r"field 'data\.file': .*deflections\.csv: " + match):
+        load_problem(f)
+
+
+BAD = [
+    ("unknown_field", _edit("seed = 0", "seed = 0\nsead = 1"), r"unknown field 'truth\.sead'"),
+    ("wrong_type", _edit("force = 1000.0", 'force = "heavy"'), r"field 'truth\.force'"),
+    ("non_positive_stiffness", _edit("0.24e6, 0.16e6", "0.0, 0.16e6"), r"field 'truth\.k_theta'.*positive"),
+    ("wrong_vector_length", _edit("0.16e6, 0.14e6]", "0.16e6]"), r"field 'truth\.k_theta'.*6 finite numbers"),
+    ("unknown_scenario", _edit('scenario = "table_2"', 'scenario = "wobbly"'), r"field 'truth\.scenario'"),
+    ("negative_noise", _edit("rotation_std = 2.6e-4", "rotation_std = -1.0"), r"field 'noise\.rotation_std'"),
+    ("bad_bounds", _edit('bounds = "none"', 'bounds = "loose"'), r"field 'calibration\.bounds'"),
+    ("bad_weight", _edit("scaled_rotation_weight = 10.0", "scaled_rotation_weight = 0.0"), r"field 'calibration\.scaled_rotation_weight'"),
+    ("unknown_arm", _edit('model = "serial_6r_illustrative"', 'model = "kr9"'), r"field 'arm\.model'"),
+    ("truth_and_data", _edit("[calibration]", '[data]\nfile = "x.csv"\n\n[calibration]'), r"exactly one of the tables \[truth\]"),
+    ("missing_data_file", lambda t: t[: t.index("\n[truth]")] + '[data]\nfile = "nothing.csv"\n', r"field 'data\.file'.*cannot read"),
+]
+
+
+@pytest.mark.parametrize("case, edit, match", BAD, ids=[c[0] for c in BAD])
+def test_bad_files(tmp_path, case, edit, match):
+    assert_bad_problem(tmp_path, FILE, case, edit, match)
+
+
+def test_bad_file_through_the_cli(tmp_path, capsys):
+    text = FILE.read_text().replace('scenario = "table_2"', 'scenario = "wobbly"')
+    assert_bad_problem_through_cli(tmp_path, capsys, text, r"truth\.scenario")
