@@ -626,10 +626,12 @@ class _Data:
         return ext(self.q), ext(self.T), ext(self.quat), np.ascontiguousarray(np.concatenate([s, np.zeros(pad)]))
 
 
-def _unpack_measurements(q: Any, T: Any, quat: Any, weights: Any) -> tuple[Any, Any, Any, Any]:
+def _unpack_measurements(q: Any, T: Any, quat: Any, weights: Any, model: ClosureModel | None = None) -> tuple[Any, Any, Any, Any]:
     if T is None and not isinstance(q, (np.ndarray, list, tuple)) and hasattr(q, "q") and hasattr(q, "quat"):
         m = q
-        return m.q, m.T, getattr(m, "quat", None), getattr(m, "weights", None)
+        # the model builds its per-pose input rows from the measurement set (the actuator
+        # values; the elasto-geometric closure appends the plate load)
+        return (m.q if model is None else model.pose_inputs(m)), m.T, getattr(m, "quat", None), getattr(m, "weights", None)
     return q, T, quat, weights
 
 
@@ -1268,7 +1270,7 @@ class CalibrationProblem:
             raise InputError(f"solver: expected one of {', '.join(SOLVERS)}, got {solver!r}{hint}")
         if not (isinstance(max_iter, (int, np.integer)) and max_iter > 0):
             raise InputError(f"max_iter: expected a positive integer, got {max_iter!r}")
-        q, T, quat, weights = _unpack_measurements(q, T, quat, weights)
+        q, T, quat, weights = _unpack_measurements(q, T, quat, weights, self.model)
         data = _check_data(self.model, q, T, quat, weights)
         self._check_counts(data)
         build = self._build()
@@ -1744,7 +1746,7 @@ def analyze_identifiability(
     """
     sel = _selection_of(selection, free, fixed, ties)
     problem = _problem(model, sel)
-    q, T, quat, weights = _unpack_measurements(q, T, quat, weights)
+    q, T, quat, weights = _unpack_measurements(q, T, quat, weights, model)
     r, J, names = problem.jacobian(model.parameter_vector(), q, T, quat, weights)
     w = np.ones(r.shape[0]) if weights is None else np.asarray(weights, dtype=float).ravel()
     keep = w > 0

@@ -47,7 +47,8 @@ link lengths and the geometric parameters absorb it (synthetic L1, 40 kg: geomet
 validation error 16.3 um against the 15.9 um noise floor; compliance standard deviations
 larger than the values). Measuring the poses with known different loads (with and without a
 payload) separates the compliances: ``per_pose_load=True`` takes each pose's plate load from
-``q`` columns 4-6; then the geometric-only model stays at ~80 um while the elasto-geometric
+the measurement set's ``load`` field (:attr:`~gtmodel.calibration.measurements.MeasurementSet.load`,
+CSV columns ``F_x_N, F_y_N, F_z_N``); then the geometric-only model stays at ~80 um while the elasto-geometric
 model reaches the noise floor (``problems/l1_elasto_geometric.toml``).
 
 Synthetic data of a compliant robot (:func:`compliant_measurements`) come from eq. (1)
@@ -124,9 +125,12 @@ class ElastoGeometricClosure(ClosureModel):
     F : array_like, shape (3,), optional
         Constant load on the plate in the model frame [N]; default 0.
     per_pose_load : bool, optional
-        If True, the poses carry their own known plate load: ``q`` has 6 columns, the cart
-        positions [m] and the load ``(F_x, F_y, F_z)`` [N] of that pose (e.g. measurements
-        with and without a payload), added to ``F``. Default False (``q`` has 3 columns).
+        If True, the poses carry their own known plate load, added to ``F`` (e.g.
+        measurements with and without a payload): the calibration and evaluation take it
+        from :attr:`MeasurementSet.load <gtmodel.calibration.measurements.MeasurementSet>`
+        through :meth:`pose_inputs`. The model's per-pose input (``n_q``, the ``q`` of
+        :meth:`link_points` and :meth:`fk`) is then the cart positions [m] followed by the
+        load ``(F_x, F_y, F_z)`` [N], 6 values. Default False (3 cart positions).
 
     Raises
     ------
@@ -173,6 +177,43 @@ class ElastoGeometricClosure(ClosureModel):
         else:
             self._v_idx = [[idx[f"v{i + 1}_{c}"] for c in "xyz"] for i in range(3)]
 
+    def pose_inputs(self, measurements: MeasurementSet) -> np.ndarray:
+        """Per-pose inputs of the closure equations from a measurement set.
+
+        The cart positions, followed with ``per_pose_load`` by the pose's known plate load
+        (:attr:`MeasurementSet.load <gtmodel.calibration.measurements.MeasurementSet>`).
+        The calibration (:class:`~gtmodel.calibration.calibrate.CalibrationProblem`) and
+        the evaluation (:func:`~gtmodel.calibration.evaluation.evaluate`, eq. 5.5) call it.
+
+        Parameters
+        ----------
+        measurements : MeasurementSet
+            Measured poses (with ``load`` [N], shape (N, 3), if ``per_pose_load``).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, n_q)
+            ``q`` [m] (3 columns), or ``q`` [m] and ``load`` [N] (6 columns).
+
+        Raises
+        ------
+        InputError
+            If ``measurements`` is not a :class:`MeasurementSet`, does not hold 3 cart
+            positions per pose, or holds no load while the model needs one.
+        """
+        if not isinstance(measurements, MeasurementSet):
+            raise InputError(f"measurements: expected a MeasurementSet, got {type(measurements).__name__}")
+        if measurements.n_q != 3:
+            raise InputError(f"measurements: {measurements.n_q} actuator columns, the model {self.name} needs 3")
+        if not self.per_pose_load:
+            return measurements.q
+        if measurements.load is None:
+            raise InputError(
+                f"measurements: {measurements.source!r} holds no plate load (load / columns F_x_N, F_y_N, F_z_N), "
+                f"which {self.name} (per_pose_load) needs for every pose"
+            )
+        return np.hstack([measurements.q, measurements.load])
+
     @classmethod
     def from_stiffness(cls, stiffness: GantryTau3Stiffness, model: str = "modified", per_pose_load: bool = False) -> "ElastoGeometricClosure":
         """The closure model of a stiffness model: its geometry, compliances and gravity load.
@@ -184,7 +225,8 @@ class ElastoGeometricClosure(ClosureModel):
         model : {"ideal", "modified"}, optional
             Geometric parametrisation (default "modified").
         per_pose_load : bool, optional
-            Loads come with the poses (``q`` columns 4-6); the constant load is then zero.
+            Loads come with the poses (:attr:`MeasurementSet.load`); the constant load is
+            then zero.
 
         Returns
         -------
@@ -305,7 +347,8 @@ class ElastoGeometricClosure(ClosureModel):
         Parameters
         ----------
         q : array_like, shape (n_q,) or (N, n_q)
-            Cart positions [m] (and plate loads [N] with ``per_pose_load``).
+            Cart positions [m] (and plate loads [N] with ``per_pose_load``: the rows of
+            :meth:`pose_inputs`).
 
         Returns
         -------
@@ -356,12 +399,12 @@ def compliant_measurements(
         Seed of :func:`numpy.random.default_rng`.
     payloads_kg : array_like, shape (N,), optional
         Payload of each pose [kg] (poses measured with different payloads). Default: every
-        pose with ``stiffness.payload_kg`` and a 3-column result.
+        pose with ``stiffness.payload_kg`` and no ``load`` field (one constant load).
 
     Returns
     -------
     MeasurementSet
-        ``q`` and the measured ``T``; with ``payloads_kg`` the ``q`` columns 4-6 hold the
+        ``q`` and the measured ``T``; with ``payloads_kg`` the ``load`` field holds the
         plate load of each pose [N] (for :class:`ElastoGeometricClosure` with
         ``per_pose_load``). ``source`` states the payload and the stiffness values.
 
@@ -388,7 +431,7 @@ def compliant_measurements(
             raise InputError(f"payloads_kg: expected {N} non-negative masses [kg] (one per pose), got shape {np.shape(payloads_kg)}")
         base = stiffness.plate_mass - stiffness.payload_kg
         F = np.column_stack([np.zeros(N), np.zeros(N), -g * (base + m)])
-        what = f"payloads {sorted(set(np.round(m, 6).tolist()))} kg per pose (load in q columns 4-6)"
+        what = f"payloads {sorted(set(np.round(m, 6).tolist()))} kg per pose (plate load in the load field)"
     dev = device_noise(noise)
     rng = np.random.default_rng(seed)
     e = rng.standard_normal(qa.shape) * dev.position_sigma_m
@@ -398,8 +441,9 @@ def compliant_measurements(
         f"synthetic compliant robot: {stiffness.parameters.name}, {what}, {stiffness.stiffness.describe()}; "
         f"{N} poses, device {dev.name} (sigma {dev.position_sigma_m:.3g} m), seed {seed}"
     )
-    q_out = qa if payloads_kg is None else np.hstack([qa, F])
-    return MeasurementSet(q=q_out, T=T_rigid + dT + e, source=src, comments=(" " + src,))
+    return MeasurementSet(
+        q=qa, T=T_rigid + dT + e, source=src, comments=(" " + src,), load=None if payloads_kg is None else F
+    )
 
 
 # ------------------------------------------------------------------ calibration
@@ -460,8 +504,9 @@ def calibrate_elasto_geometric(
     ----------
     start : ElastoGeometricClosure
         Start model (geometry, start compliances, the known load).
-    q : array_like, shape (N, 3), or MeasurementSet
-        Cart positions [m] (or a measurement set).
+    q : array_like, shape (N, n_q), or MeasurementSet
+        A measurement set (with ``load`` [N] for a ``per_pose_load`` model), or the rows
+        of :meth:`ElastoGeometricClosure.pose_inputs` (cart positions [m], then the load [N]).
     T : array_like, shape (N, 3), optional
         Measured TCP positions [m] (omit for a measurement set).
     weights : array_like, shape (N,), optional
@@ -510,8 +555,9 @@ def compliance_identifiability(
     ----------
     model : ElastoGeometricClosure
         Linearisation point (e.g. the calibrated model).
-    q : array_like, shape (N, 3), or MeasurementSet
-        Cart positions [m].
+    q : array_like, shape (N, n_q), or MeasurementSet
+        A measurement set (with ``load`` [N] for a ``per_pose_load`` model), or the rows
+        of :meth:`ElastoGeometricClosure.pose_inputs` (cart positions [m], then the load [N]).
     T : array_like, shape (N, 3), optional
         TCP positions in the model's frame [m].
     free_compliance : str or sequence of str, optional
@@ -647,11 +693,6 @@ class ElastoGeometricStudy:
         return rows
 
 
-def _positions_only(m: MeasurementSet) -> MeasurementSet:
-    """The measurement set with the cart positions only (for the rigid geometric model)."""
-    return m if m.q.shape[1] == 3 else MeasurementSet(q=m.q[:, :3].copy(), T=m.T, source=m.source)
-
-
 def elasto_geometric_study(
     truth: GantryTau3Stiffness,
     start: ThreeLinkClosure,
@@ -730,7 +771,7 @@ def elasto_geometric_study(
     cal = data.subset(np.flatnonzero(grid_index % 2 == 0))
     val = data.subset(np.flatnonzero(grid_index % 2 == 1))
     true_model = ElastoGeometricClosure.from_stiffness(truth, start.model, per_pose)
-    geo = CalibrationProblem(start).solve(_positions_only(cal), solver=solver, align=align, max_iter=max_iter)
+    geo = CalibrationProblem(start).solve(cal, solver=solver, align=align, max_iter=max_iter)
     zero = np.zeros(3)
     el_start = ElastoGeometricClosure(
         start,
@@ -740,13 +781,13 @@ def elasto_geometric_study(
         per_pose,
     )
     el = calibrate_elasto_geometric(el_start, cal, free_compliance=free_compliance, solver=solver, align=align, max_iter=max_iter)
-    rep_geo = evaluate(geo.model, _positions_only(val), label="geometric only")
+    rep_geo = evaluate(geo.model, val, label="geometric only")
     rep_el = evaluate(el.model, val, label="elasto-geometric")
     floor = evaluate(true_model, val, label="true model (noise floor)")
     ident = el.identifiability
     load = compliance_identifiability(el.model, cal, free_compliance=free_compliance, free_load=True)
-    T_rigid = np.atleast_2d(truth.kinematics.fk(data.q[:, :3]))
-    F = data.q[:, 3:6] if per_pose else None
+    T_rigid = np.atleast_2d(truth.kinematics.fk(data.q))
+    F = data.load if per_pose else None
     dT = np.linalg.norm(np.atleast_2d(truth.deflection(T_rigid, F, limits=False)), axis=1)
     return ElastoGeometricStudy(
         truth, true_model, cal, val, geo, el, rep_geo, rep_el, floor, ident, load, dT,

@@ -37,8 +37,10 @@ The result folder holds ``summary.json`` (``status``; validation mean/max errors
 models and of the true model; the improvement; identifiability of the compliances with the
 geometry: rank, condition number, non-identifiable parameters with dependencies and
 explanations; calibrated compliances vs the truth; the stiffness map ranges vs the D1's
-measured 2-4 N/um), ``parameters.toml``, ``errors.csv``, ``error_histogram.png`` and
-``stiffness_map.png``.
+measured 2-4 N/um), ``parameters.toml``, ``errors.csv``, ``calibration_measurements.csv`` and
+``validation_measurements.csv`` (the synthetic poses in the measurement-file format of
+:mod:`gtmodel.calibration.measurements`; with several payloads each pose's plate load in the
+columns ``F_x_N, F_y_N, F_z_N``), ``error_histogram.png`` and ``stiffness_map.png``.
 """
 
 from __future__ import annotations
@@ -396,6 +398,10 @@ def write_elasto_geometric(
     np.savetxt(out / "errors.csv", cols, delimiter=",", header="pose,error_m[geometric],error_m[elasto_geometric],error_m[true_model]",
                comments="", fmt="%.9g")
     files.append("errors.csv")
+    # the synthetic data (with the per-pose plate load), readable by read_measurements
+    for label, data in (("calibration", st.calibration), ("validation", st.validation)):
+        data.to_csv(out / f"{label}_measurements.csv")
+        files.append(f"{label}_measurements.csv")
     if plots:
         reports = {"geometric only": st.geometric_report, "elasto-geometric": st.elasto_report, "true model": st.noise_floor}
         plot_error_histogram(reports, out / "error_histogram.png", title=f"{name}: TCP error on {st.validation.n_poses} validation poses")

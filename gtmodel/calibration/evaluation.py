@@ -134,13 +134,13 @@ class AccuracyReport:
         return out
 
 
-def _check(model: ClosureModel, data: MeasurementSet) -> None:
+def _check(model: ClosureModel, data: MeasurementSet) -> np.ndarray:
+    """Checked per-pose model inputs: ``q``, or ``model.pose_inputs(data)`` (e.g. q and the plate load)."""
     if not isinstance(model, ClosureModel):
         raise InputError(f"model: expected a ClosureModel, got {type(model).__name__}")
     if not isinstance(data, MeasurementSet):
         raise InputError(f"measurements: expected a MeasurementSet, got {type(data).__name__}")
-    if data.n_q != model.n_q:
-        raise InputError(f"measurements: {data.n_q} actuator columns, the model {model.name} needs {model.n_q}")
+    return model.pose_inputs(data)
 
 
 def evaluate(model: ClosureModel, measurements: MeasurementSet, label: str = "") -> AccuracyReport:
@@ -168,8 +168,8 @@ def evaluate(model: ClosureModel, measurements: MeasurementSet, label: str = "")
     UnreachablePoseError
         If the model cannot assemble at some measured ``q``.
     """
-    _check(model, measurements)
-    T, R = model.fk(measurements.q)
+    q = _check(model, measurements)
+    T, R = model.fk(q)
     T = np.asarray(T).reshape(-1, 3)
     angle = euler = None
     if measurements.has_orientation and model.orientation:
@@ -242,11 +242,10 @@ def parameter_sensitivity(model: ClosureModel, measurements: MeasurementSet, ste
     InputError
         Non-positive step or mismatched data.
     """
-    _check(model, measurements)
+    q = _check(model, measurements)
     if not (np.isfinite(step) and step > 0):
         raise InputError(f"step: expected a positive perturbation, got {step!r}")
     p0 = model.parameter_vector()
-    q = measurements.q
     T0, R0 = model.fk(q)
     T0 = np.asarray(T0).reshape(-1, 3)
     R0 = np.asarray(R0).reshape(-1, 3, 3)

@@ -7,8 +7,8 @@ the file) and the column.
 Pose measurements (:func:`read_measurements`, :meth:`MeasurementSet.to_csv`)
 ---------------------------------------------------------------------------
 One row per measured pose: the actuator values commanded to the robot and the measured
-TCP (target) position, optionally the measured orientation of the plate/target frame and
-a weight. Example (3-DOF robot, laser tracker)::
+TCP (target) position, optionally the measured orientation of the plate/target frame, the
+known load on the plate and a weight. Example (3-DOF robot, laser tracker)::
 
     # robot: L1, device: Leica laser tracker, corner cube on the plate
     # date: 2011-05-03
@@ -30,6 +30,9 @@ a weight. Example (3-DOF robot, laser tracker)::
   ``qw, qx, qy, qz``                   measured orientation of the plate/target frame as a
                                        unit quaternion ``(w, x, y, z)`` (6-D target, e.g.
                                        Leica T-Mac); all four or none
+  ``F_x_N, F_y_N, F_z_N``              known load on the plate/TCP during the measurement [N]
+                                       (e.g. the weight of plate and payload; used by the
+                                       elasto-geometric calibration); all three or none
   ``weight``                           positive weight of the pose in the calibration cost
                                        (optional; all poses weigh 1 without it)
   ===================================  =======================================================
@@ -110,12 +113,13 @@ _Q_LINEAR = ("q1_m", "q2_m", "q3_m")
 _Q_ROTARY = ("q4_rad", "q5_rad", "q6_rad")
 _T_COLS = ("Tx_m", "Ty_m", "Tz_m")
 _QUAT_COLS = ("qw", "qx", "qy", "qz")
+_LOAD_COLS = ("F_x_N", "F_y_N", "F_z_N")
 _WEIGHT_COL = "weight"
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 _NONFINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
-def measurement_columns(n_q: int = 3, orientation: bool = False, weights: bool = False) -> tuple[str, ...]:
+def measurement_columns(n_q: int = 3, orientation: bool = False, weights: bool = False, load: bool = False) -> tuple[str, ...]:
     """Header of a pose-measurement file, in the order :meth:`MeasurementSet.to_csv` writes.
 
     Parameters
@@ -126,6 +130,9 @@ def measurement_columns(n_q: int = 3, orientation: bool = False, weights: bool =
         Whether the quaternion columns ``qw, qx, qy, qz`` are included.
     weights : bool, optional
         Whether the ``weight`` column is included.
+    load : bool, optional
+        Whether the load columns ``F_x_N, F_y_N, F_z_N`` are included (after the
+        quaternion, before the weight).
 
     Returns
     -------
@@ -142,6 +149,8 @@ def measurement_columns(n_q: int = 3, orientation: bool = False, weights: bool =
     cols = list(_Q_LINEAR) + (list(_Q_ROTARY) if n_q == 6 else []) + list(_T_COLS)
     if orientation:
         cols += list(_QUAT_COLS)
+    if load:
+        cols += list(_LOAD_COLS)
     if weights:
         cols.append(_WEIGHT_COL)
     return tuple(cols)
@@ -167,6 +176,9 @@ class MeasurementSet:
         Where the data come from (file path, or a description of a synthetic set).
     comments : tuple of str, optional
         Provenance lines (without the leading ``#``), written back by :meth:`to_csv`.
+    load : numpy.ndarray, shape (N, 3), or None, optional
+        Known load on the plate/TCP of each pose [N] in the measurement frame (e.g. the
+        weight of plate and payload, for the elasto-geometric calibration), or None.
 
     Raises
     ------
@@ -181,6 +193,7 @@ class MeasurementSet:
     weights: np.ndarray | None = None
     source: str = ""
     comments: tuple[str, ...] = field(default=(), compare=False)
+    load: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         q = np.array(self.q, dtype=float, ndmin=2)
@@ -217,6 +230,17 @@ class MeasurementSet:
                 k = int(np.argmax(bad))
                 raise InputError(f"MeasurementSet.weights: row {k} is {float(w[k])!r}, expected a positive finite weight")
             object.__setattr__(self, "weights", w)
+        if self.load is not None:
+            try:
+                F = np.array(self.load, dtype=float, ndmin=2)
+            except (TypeError, ValueError):
+                raise InputError(f"MeasurementSet.load: expected numbers of shape ({N}, 3) [N] or None, got {self.load!r}") from None
+            if F.shape != (N, 3):
+                raise InputError(f"MeasurementSet.load: expected shape ({N}, 3) [N] or None, got {np.shape(self.load)}")
+            bad = ~np.all(np.isfinite(F), axis=1)
+            if np.any(bad):
+                raise InputError(f"MeasurementSet.load: non-finite value in row {int(np.argmax(bad))}")
+            object.__setattr__(self, "load", F)
         object.__setattr__(self, "comments", tuple(str(c) for c in self.comments))
 
     # ------------------------------------------------------------------ properties
@@ -251,6 +275,11 @@ class MeasurementSet:
         if self.quat is None:
             raise InputError(f"measurements {self.source!r} hold no orientations (no qw, qx, qy, qz columns)")
         return np.array([quaternion_to_rotation(qk) for qk in self.quat])
+
+    @property
+    def has_load(self) -> bool:
+        """Whether the poses carry a known plate load (``load`` is not None)."""
+        return self.load is not None
 
     def weights_or_ones(self) -> np.ndarray:
         """The pose weights, ones where none were given.
@@ -301,6 +330,7 @@ class MeasurementSet:
             weights=None if self.weights is None else self.weights[idx],
             source=f"{self.source} [subset of {idx.size} of {self.n_poses} poses]",
             comments=self.comments,
+            load=None if self.load is None else self.load[idx],
         )
 
     def split_alternate(self) -> tuple["MeasurementSet", "MeasurementSet"]:
@@ -331,7 +361,7 @@ class MeasurementSet:
         -------
         tuple of str
         """
-        return measurement_columns(self.n_q, self.quat is not None, self.weights is not None)
+        return measurement_columns(self.n_q, self.quat is not None, self.weights is not None, self.load is not None)
 
     def to_csv(self, path: str | Path) -> Path:
         """Write the set in the pose-measurement CSV format (module docstring).
@@ -358,6 +388,8 @@ class MeasurementSet:
         blocks = [self.q, self.T]
         if self.quat is not None:
             blocks.append(self.quat)
+        if self.load is not None:
+            blocks.append(self.load)
         if self.weights is not None:
             blocks.append(self.weights[:, None])
         comments = list(self.comments) or ([f" source: {self.source}"] if self.source else [])
@@ -593,8 +625,8 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
     Raises
     ------
     InputError
-        Unreadable file; unknown, missing, incomplete (quaternion, F1 angles) or repeated
-        columns; a row with the wrong number of values; a value that is not a finite
+        Unreadable file; unknown, missing, incomplete (quaternion, F1 angles, load) or
+        repeated columns; a row with the wrong number of values; a value that is not a finite
         decimal number; a non-unit quaternion (:data:`QUATERNION_NORM_TOLERANCE`); a
         non-positive weight; two identical rows; fewer than ``min_poses`` rows; or
         ``n_q`` disagreeing with the header. The message names the file, the line
@@ -604,12 +636,13 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
         raise InputError(f"n_q: expected 3, 6 or None, got {n_q!r}")
     table = _read_table(path, "measurement file")
     origin, cols, hl = table.origin, table.columns, table.header_line
-    known = set(_Q_LINEAR) | set(_Q_ROTARY) | set(_T_COLS) | set(_QUAT_COLS) | {_WEIGHT_COL}
+    known = set(_Q_LINEAR) | set(_Q_ROTARY) | set(_T_COLS) | set(_QUAT_COLS) | set(_LOAD_COLS) | {_WEIGHT_COL}
     for c in cols:
         if c not in known:
             raise InputError(
                 f"{origin}: line {hl} (header): unknown column '{c}'; expected the columns "
-                f"{','.join(measurement_columns(6, True, True))} (q4..q6 for the F1 only, qw..qz and weight optional)"
+                f"{','.join(measurement_columns(6, True, True, True))} (q4..q6 for the F1 only, qw..qz, F_x_N..F_z_N and "
+                "weight optional)"
             )
     rotary = [c for c in _Q_ROTARY if c in cols]
     if rotary and len(rotary) != 3:
@@ -626,6 +659,10 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
     if quat_cols and len(quat_cols) != 4:
         missing = [c for c in _QUAT_COLS if c not in cols]
         raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)} (a quaternion needs qw, qx, qy, qz)")
+    load_cols = [c for c in _LOAD_COLS if c in cols]
+    if load_cols and len(load_cols) != 3:
+        missing = [c for c in _LOAD_COLS if c not in cols]
+        raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)} (a load needs F_x_N, F_y_N, F_z_N)")
     data = _parse_rows(table)
     if data.shape[0] < min_poses:
         raise InputError(f"{origin}: {data.shape[0]} data row(s), expected at least {min_poses} poses")
@@ -657,6 +694,7 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
         weights=weights,
         source=origin,
         comments=tuple(table.comments),
+        load=data[:, [ix[c] for c in _LOAD_COLS]] if load_cols else None,
     )
     _log.debug("read %d poses (n_q=%d, orientation=%s) from %s", ms.n_poses, ms.n_q, quat is not None, origin)
     return ms

@@ -326,6 +326,34 @@ class ClosureModel(ABC):
         """Number of links (closure equations per pose)."""
         return sum(len(a) for a in self.links)
 
+    def pose_inputs(self, measurements: Any) -> np.ndarray:
+        """Per-pose inputs of the closure equations built from a measurement set.
+
+        The actuator values ``q``. A model with further known per-pose inputs overrides
+        this (the elasto-geometric closure appends the plate load). The calibration
+        (:class:`~gtmodel.calibration.calibrate.CalibrationProblem`) and the evaluation
+        (:func:`~gtmodel.calibration.evaluation.evaluate`, eq. 5.5) call it.
+
+        Parameters
+        ----------
+        measurements : MeasurementSet
+            Measured poses (:class:`gtmodel.calibration.measurements.MeasurementSet`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, n_q)
+            Actuator values [m or rad].
+
+        Raises
+        ------
+        InputError
+            If the measurements hold another number of actuator columns than the model.
+        """
+        q = np.asarray(measurements.q, dtype=float)
+        if q.ndim != 2 or q.shape[1] != self.n_q:
+            raise InputError(f"measurements: {q.shape[-1] if q.ndim else 0} actuator columns, the model {self.name} needs {self.n_q}")
+        return q
+
     def quaternion_indices(self) -> list[tuple[int, int, int, int]]:
         """Indices of parameters that are quaternions ``(w, x, y, z)``, as 4-tuples.
 

@@ -17,12 +17,15 @@ import pytest
 from gtmodel.calibration.elasto_geometric import (
     COMPLIANCE_NAMES,
     ElastoGeometricClosure,
+    calibrate_elasto_geometric,
     compliance_identifiability,
     compliance_selection,
     compliant_measurements,
     elasto_geometric_study,
     explain_identifiability,
 )
+from gtmodel.calibration.evaluation import evaluate
+from gtmodel.calibration.measurements import MeasurementSet, read_measurements
 from gtmodel.calibration.synthetic import NO_NOISE, grid_poses
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import ThreeLinkClosure
@@ -75,11 +78,27 @@ def test_loaded_closure_fk_matches_linear_deflection_of_the_stiffness_model(trut
 
 
 def test_per_pose_loads_give_the_same_deflection(truth, q):
-    """A load carried with the pose (q columns 4-6) acts like the constant load."""
+    """A load carried with the pose (MeasurementSet.load) acts like the constant load: the
+    stiffness model's gravity force, and Newton's FK on eq. 2 against the linear deflection."""
     loaded = ElastoGeometricClosure.from_stiffness(truth, per_pose_load=True)
     data = compliant_measurements(truth, q[:20], noise=NO_NOISE, payloads_kg=np.full(20, PAYLOAD_KG))
-    np.testing.assert_allclose(data.q[:, 3:], np.broadcast_to(truth.gravity_force, (20, 3)), rtol=1e-12)
-    np.testing.assert_allclose(loaded.fk(data.q)[0], data.T, atol=SECOND_ORDER_TOL)
+    assert data.n_q == 3 and data.has_load
+    np.testing.assert_allclose(data.load, np.broadcast_to(truth.gravity_force, (20, 3)), rtol=1e-12)
+    np.testing.assert_allclose(loaded.fk(loaded.pose_inputs(data))[0], data.T, atol=SECOND_ORDER_TOL)
+    np.testing.assert_allclose(evaluate(loaded, data).errors, 0.0, atol=SECOND_ORDER_TOL)
+
+
+def test_load_survives_the_csv_file(truth, start, q, tmp_path):
+    """Two-load data written to CSV (F_x_N..F_z_N columns) and read back calibrate to the same
+    parameters as the data in memory (the file carries the load exactly)."""
+    rows = np.repeat(np.arange(12), 2)
+    data = compliant_measurements(truth, q[rows], seed=SEED, payloads_kg=np.tile([0.0, PAYLOAD_KG], 12))
+    back = read_measurements(data.to_csv(tmp_path / "two_loads.csv"))
+    np.testing.assert_array_equal(back.load, data.load)
+    el = ElastoGeometricClosure(start, per_pose_load=True)
+    a = calibrate_elasto_geometric(el, data, free_compliance="c_l*", max_iter=20)
+    b = calibrate_elasto_geometric(el, back, free_compliance="c_l*", max_iter=20)
+    np.testing.assert_allclose(b.model.parameter_vector(), a.model.parameter_vector(), rtol=0, atol=1e-12)
 
 
 def test_zero_compliance_is_the_rigid_closure(q):
@@ -161,6 +180,10 @@ def test_compliance_not_separable_from_length_on_a_pure_translation(truth):
 
 
 # ------------------------------------------------------------------ bad input
+#: Poses without a load (for the per-pose-load bad-input rows).
+_POSES = MeasurementSet(q=np.zeros((2, 3)), T=np.ones((2, 3)), source="no load")
+
+
 @pytest.mark.parametrize(
     "call, match",
     [
@@ -173,8 +196,14 @@ def test_compliance_not_separable_from_length_on_a_pure_translation(truth):
         (lambda t: compliant_measurements(t, np.zeros((2, 3)), payloads_kg=[1.0, -1.0]), r"payloads_kg"),
         (lambda t: compliant_measurements("L1", np.zeros((2, 3))), r"stiffness: expected a GantryTau3Stiffness"),
         (lambda t: compliance_selection("c_x*"), r"free_compliance: 'c_x\*' matches no compliance"),
+        (lambda t: ElastoGeometricClosure(ThreeLinkClosure("L1"), per_pose_load=True).pose_inputs(_POSES), r"holds no plate load"),
+        (lambda t: ElastoGeometricClosure(ThreeLinkClosure("L1"), per_pose_load=True).pose_inputs(_POSES.q), r"measurements: expected a MeasurementSet"),
+        (lambda t: calibrate_elasto_geometric(ElastoGeometricClosure(ThreeLinkClosure("L1"), per_pose_load=True), _POSES), r"holds no plate load"),
+        (lambda t: evaluate(ElastoGeometricClosure(ThreeLinkClosure("L1"), per_pose_load=True), _POSES), r"holds no plate load"),
+        (lambda t: ElastoGeometricClosure(ThreeLinkClosure("L1")).pose_inputs(MeasurementSet(np.zeros((2, 6)), np.zeros((2, 3)))), r"6 actuator columns"),
     ],
-    ids=["not_closure", "c_shape", "nan_load", "p_size", "fk_columns", "q_shape", "negative_payload", "not_stiffness", "bad_pattern"],
+    ids=["not_closure", "c_shape", "nan_load", "p_size", "fk_columns", "q_shape", "negative_payload", "not_stiffness", "bad_pattern",
+         "no_load", "not_a_set", "calibrate_no_load", "evaluate_no_load", "f1_columns"],
 )
 def test_bad_input(truth, call, match):
     with pytest.raises(InputError, match=match):

@@ -7,6 +7,7 @@ generated the data, and the D1's measured TCP stiffness (2-4 N/um, reference tab
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from gtmodel.cli import EXIT_OK
@@ -21,6 +22,8 @@ NOISE_FLOOR_RTOL = 0.05
 IMPROVEMENT_RATIO = 3.0
 #: Calibrated compliances within this many standard deviations of the truth.
 N_SIGMA = 3.0
+#: Load step between the payloads vs m g with g = 9.81 m/s^2 (the parameter set's g).
+PAYLOAD_WEIGHT_RTOL = 1e-9
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +42,8 @@ def test_shipped_problem_is_optimal_with_the_required_summary(solved):
                 "improvement_mean_error_m", "identifiability", "load_identifiability", "compliances",
                 "stiffness_values", "stiffness_map", "single_load", "payloads_kg"):
         assert key in s, key
-    for name in ("parameters.toml", "errors.csv", "error_histogram.png", "stiffness_map.png"):
+    for name in ("parameters.toml", "errors.csv", "error_histogram.png", "stiffness_map.png",
+                 "calibration_measurements.csv", "validation_measurements.csv"):
         assert (out / name).stat().st_size > 0
 
 
@@ -49,6 +53,21 @@ def test_elasto_geometric_reaches_the_noise_floor_and_beats_the_geometric_model(
     assert abs(s["elasto_geometric_mean_error_m"] - floor) <= NOISE_FLOOR_RTOL * floor
     assert s["geometric_mean_error_m"] >= IMPROVEMENT_RATIO * s["elasto_geometric_mean_error_m"]
     assert s["mean_error_m"] == s["elasto_geometric_mean_error_m"]
+
+
+def test_written_measurements_carry_the_plate_load(solved):
+    """The calibration/validation CSV files read back with the load columns: two plate loads
+    (without and with the declared payload), their difference the payload's weight (m g)."""
+    from gtmodel.calibration.measurements import read_measurements
+
+    _, out, s = solved
+    cal = read_measurements(out / "calibration_measurements.csv")
+    val = read_measurements(out / "validation_measurements.csv")
+    assert cal.n_poses == s["n_calibration"] and val.n_poses == s["n_validation"]
+    assert cal.has_load and val.has_load and cal.n_q == 3
+    Fz = np.unique(cal.load[:, 2])
+    assert Fz.size == 2
+    assert Fz[1] - Fz[0] == pytest.approx(9.81 * max(s["payloads_kg"]), rel=PAYLOAD_WEIGHT_RTOL)
 
 
 def test_compliances_identifiable_with_the_geometry(solved):

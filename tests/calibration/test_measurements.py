@@ -25,7 +25,7 @@ from gtmodel.errors import InputError
 ROUND_TRIP_TOLERANCE = 1e-15
 
 
-def _set(n_q: int, orientation: bool, weights: bool, n: int = 9, seed: int = 0) -> MeasurementSet:
+def _set(n_q: int, orientation: bool, weights: bool, n: int = 9, seed: int = 0, load: bool = False) -> MeasurementSet:
     rng = np.random.default_rng(seed)
     quat = Rotation.random(n, random_state=seed).as_quat(scalar_first=True) if orientation else None
     return MeasurementSet(
@@ -35,20 +35,25 @@ def _set(n_q: int, orientation: bool, weights: bool, n: int = 9, seed: int = 0) 
         weights=rng.uniform(0.5, 2.0, n) if weights else None,
         source="test set",
         comments=(" robot: L1", " device: laser tracker"),
+        load=rng.uniform(-500, 0, (n, 3)) if load else None,
     )
 
 
 @pytest.mark.parametrize(
-    "n_q, orientation, weights",
-    [(3, False, False), (3, True, False), (3, False, True), (6, True, True)],
-    ids=["3dof-position", "3dof-quaternion", "3dof-weights", "f1-all-columns"],
+    "n_q, orientation, weights, load",
+    [(3, False, False, False), (3, True, False, False), (3, False, True, False), (3, False, False, True), (6, True, True, True)],
+    ids=["3dof-position", "3dof-quaternion", "3dof-weights", "3dof-load", "f1-all-columns"],
 )
-def test_csv_round_trip(tmp_path, n_q, orientation, weights):
-    """write -> read gives the same arrays (to 1e-15), the same comments, and the documented header."""
-    ms = _set(n_q, orientation, weights)
+def test_csv_round_trip(tmp_path, n_q, orientation, weights, load):
+    """write -> read gives the same arrays (to 1e-15; the load [N] to 1e-15 relative), the same
+    comments, and the documented header."""
+    ms = _set(n_q, orientation, weights, load=load)
     path = ms.to_csv(tmp_path / "m.csv")
     back = read_measurements(path)
-    assert path.read_text().splitlines()[2] == ",".join(measurement_columns(n_q, orientation, weights))
+    assert path.read_text().splitlines()[2] == ",".join(measurement_columns(n_q, orientation, weights, load))
+    assert back.has_load == load
+    if load:
+        np.testing.assert_allclose(back.load, ms.load, rtol=ROUND_TRIP_TOLERANCE, atol=0)
     assert back.n_poses == ms.n_poses and back.n_q == n_q
     np.testing.assert_allclose(back.q, ms.q, rtol=0, atol=ROUND_TRIP_TOLERANCE)
     np.testing.assert_allclose(back.T, ms.T, rtol=0, atol=ROUND_TRIP_TOLERANCE)
@@ -111,6 +116,10 @@ MALFORMED = [
     ("inf", f"# t\n{GOOD_HEADER}\n-inf,0.2,0.3,1,2,3\n{ROW_B}\n", r"line 3, column 'q1_m': NaN/inf is not allowed"),
     ("duplicated-row", f"# t\n{GOOD_HEADER}\n{ROW_A}\n{ROW_B}\n{ROW_A}\n", r"line 5: duplicated row, identical to line 3"),
     ("non-unit-quaternion", f"# t\n{GOOD_HEADER},qw,qx,qy,qz\n{ROW_A},1,0,0,0\n{ROW_B},0.99,0,0,0\n", r"line 4, columns 'qw,qx,qy,qz': quaternion norm 0\.99"),
+    ("incomplete-load", f"# t\n{GOOD_HEADER},F_x_N,F_z_N\n{ROW_A},0,-90\n{ROW_B},0,-490\n", r"line 2 \(header\): missing column\(s\) F_y_N"),
+    ("unitless-load", f"# t\n{GOOD_HEADER},F_x,F_y,F_z\n{ROW_A},0,0,-90\n{ROW_B},0,0,-490\n", r"line 2 \(header\): unknown column 'F_x'"),
+    ("non-numeric-load", f"# t\n{GOOD_HEADER},F_x_N,F_y_N,F_z_N\n{ROW_A},0,0,-90\n{ROW_B},0,0,-4 90\n", r"line 4, column 'F_z_N': expected a decimal number"),
+    ("nan-load", f"# t\n{GOOD_HEADER},F_x_N,F_y_N,F_z_N\n{ROW_A},0,NaN,-90\n{ROW_B},0,0,-490\n", r"line 3, column 'F_y_N': NaN/inf is not allowed"),
     ("zero-weight", f"# t\n{GOOD_HEADER},weight\n{ROW_A},1\n{ROW_B},0\n", r"line 4, column 'weight': expected a positive weight"),
     ("negative-weight", f"# t\n{GOOD_HEADER},weight\n{ROW_A},-2\n{ROW_B},1\n", r"line 3, column 'weight': expected a positive weight"),
     ("too-few-rows", f"# t\n{GOOD_HEADER}\n{ROW_A}\n", r"1 data row\(s\), expected at least 2 poses"),
@@ -193,8 +202,9 @@ def test_malformed_cart_file(tmp_path, content, match):
 
 def test_split_alternate_every_second_pose():
     """Calibration = rows 0, 2, 4, ...; validation = rows 1, 3, 5, ... (Dressler (2012), ch. 5.2)."""
-    ms = _set(3, True, True, n=7)
+    ms = _set(3, True, True, n=7, load=True)
     cal, val = ms.split_alternate()
+    np.testing.assert_array_equal(val.load, ms.load[[1, 3, 5]])
     np.testing.assert_array_equal(cal.q, ms.q[[0, 2, 4, 6]])
     np.testing.assert_array_equal(val.T, ms.T[[1, 3, 5]])
     np.testing.assert_array_equal(val.quat, ms.quat[[1, 3, 5]])
@@ -220,8 +230,12 @@ def test_subset_rejects_bad_indices(indices, match):
         (dict(q=np.zeros((2, 3)), T=np.zeros((2, 3)), quat=np.zeros((2, 4))), r"MeasurementSet\.quat: row 0 has norm 0\.0"),
         (dict(q=np.zeros((2, 3)), T=np.zeros((2, 3)), weights=[1.0, -1.0]), r"MeasurementSet\.weights: row 1"),
         (dict(q=[[0, 0, np.nan]] * 2, T=np.zeros((2, 3))), r"MeasurementSet\.q: non-finite value in row 0"),
+        (dict(q=np.zeros((2, 3)), T=np.zeros((2, 3)), load=np.zeros((2, 2))), r"MeasurementSet\.load: expected shape \(2, 3\)"),
+        (dict(q=np.zeros((2, 3)), T=np.zeros((2, 3)), load=np.zeros((3, 3))), r"MeasurementSet\.load: expected shape \(2, 3\)"),
+        (dict(q=np.zeros((2, 3)), T=np.zeros((2, 3)), load=[[0, 0, -90], [0, np.inf, 0]]), r"MeasurementSet\.load: non-finite value in row 1"),
+        (dict(q=np.zeros((2, 3)), T=np.zeros((2, 3)), load=[["a", 0, 0], [0, 0, 0]]), r"MeasurementSet\.load: expected numbers"),
     ],
-    ids=["q-columns", "T-rows", "quaternion-norm", "weight", "nan"],
+    ids=["q-columns", "T-rows", "quaternion-norm", "weight", "nan", "load-columns", "load-rows", "load-inf", "load-text"],
 )
 def test_measurement_set_validates(kwargs, match):
     """The dataclass checks shapes and values as the reader does."""
