@@ -217,6 +217,13 @@ def load_dynamic_identification(f: FieldReader, name: str) -> DynamicIdentificat
             "seed": f.integer("excitation", "seed", 0, 0, 2**31 - 1),
             "max_iter": f.integer("excitation", "max_iter", 150, 1, 10000),
         }
+        from gtmodel.robots.kinematics import GantryTau3Kinematics
+
+        try:
+            GantryTau3Kinematics(robot).require_in_workspace(excitation["T_center"], configuration)
+        except GtModelError as exc:
+            raise f.fail("excitation.T_center", f"a TCP position [m] inside the workspace of {robot.name} ({exc})",
+                         [float(x) for x in excitation["T_center"]]) from None
         if excitation["n_grid"] < 4 * excitation["harmonics"]:
             raise f.fail("excitation.n_grid", f"at least 4 points per period of the highest harmonic ({4 * excitation['harmonics']})", excitation["n_grid"])
         source = (f"SYNTHETIC: true robot {truth['robot'].name} ({truth['robot'].dynamics.source}), force noise {truth['force_noise']} N, "

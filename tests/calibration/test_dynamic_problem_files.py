@@ -105,6 +105,7 @@ BAD = [
     ("bad_method", _edit('method = "butter"', 'method = "kalman"'), r"field 'filter.method': expected one of butter, savgol"),
     ("negative_noise", _edit("force_noise = 5.0", "force_noise = -5.0"), r"field 'truth.force_noise': expected a non-negative"),
     ("coarse_grid", _edit("n_grid = 60", "n_grid = 10"), r"field 'excitation.n_grid'"),
+    ("unreachable_centre", _edit("T_center = [0.0, 2.9, -0.5]", "T_center = [0.0, 9.0, -0.5]"), r"field 'excitation.T_center': .*unreachable"),
     ("unknown_parameter_set", _edit('parameters = "L1"              # kinematics', 'parameters = "L9"              # kinematics'), r"field 'robot.parameters'"),
 ]
 
