@@ -349,7 +349,6 @@ def write_elasto_geometric(
         Files written besides ``summary.json``.
     """
     from gtmodel.calibration.evaluation import plot_error_histogram
-    from gtmodel.calibration.problem_files import _calibrated_tables
     from gtmodel.robots.stiffness import plot_stiffness_map
 
     st = solution.study
@@ -385,15 +384,11 @@ def write_elasto_geometric(
         )}
         summary["single_load"]["payload_kg"] = float(decl.truth.payload_kg)
     files: list[str] = []
-    # calibrated parameters with standard deviations
-    lines = [
-        f"# Elasto-geometric calibration ({name}), {decl.solver}, {st.calibration.n_poses} poses; {decl.source}",
-        "# Frame: the measurement frame (Dressler (2012), eqs. 5.3-5.4). SI units: m, m/N, N.",
-        f'model = "{st.elasto.model.name}"',
-        "",
-    ] + _calibrated_tables(st.elasto.parameters, st.elasto.std)
-    (out / "parameters.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
-    files.append("parameters.toml")
+    # calibrated parameters with standard deviations: only for a converged calibration (a
+    # stopped one's last iterate is not a parameter set to hand to a controller)
+    if st.elasto.success:
+        _write_parameters(out / "parameters.toml", decl, st, name)
+        files.append("parameters.toml")
     cols = np.column_stack([np.arange(st.validation.n_poses), st.geometric_report.errors, st.elasto_report.errors, st.noise_floor.errors])
     np.savetxt(out / "errors.csv", cols, delimiter=",", header="pose,error_m[geometric],error_m[elasto_geometric],error_m[true_model]",
                comments="", fmt="%.9g")
@@ -409,3 +404,16 @@ def write_elasto_geometric(
         plot_stiffness_map(smap, out / "stiffness_map.png", title=decl.truth.parameters.name)
         files.append("stiffness_map.png")
     return summary, files
+
+
+def _write_parameters(path: Path, decl: Any, st: Any, name: str) -> None:
+    """``parameters.toml``: the calibrated geometric and compliance parameters with std."""
+    from gtmodel.calibration.problem_files import _calibrated_tables
+
+    lines = [
+        f"# Elasto-geometric calibration ({name}), {decl.solver}, {st.calibration.n_poses} poses; {decl.source}",
+        "# Frame: the measurement frame (Dressler (2012), eqs. 5.3-5.4). SI units: m, m/N, N.",
+        f'model = "{st.elasto.model.name}"',
+        "",
+    ] + _calibrated_tables(st.elasto.parameters, st.elasto.std)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")

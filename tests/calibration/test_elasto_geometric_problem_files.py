@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.cli import EXIT_OK
+from gtmodel.cli import EXIT_NOT_OPTIMAL, EXIT_OK
 
 from ..conftest import PROBLEMS_DIR, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
 from ..conftest import replace_once as _edit
@@ -45,6 +45,18 @@ def test_shipped_problem_is_optimal_with_the_required_summary(solved):
     for name in ("parameters.toml", "errors.csv", "error_histogram.png", "stiffness_map.png",
                  "calibration_measurements.csv", "validation_measurements.csv"):
         assert (out / name).stat().st_size > 0
+
+
+def test_stopped_calibration_writes_no_parameter_set(tmp_path):
+    """max_iter = 1 stops the LM early: status max_iterations, exit 1, and no
+    parameters.toml (a last iterate is not handed on as a calibrated robot)."""
+    f = tmp_path / "stopped.toml"
+    f.write_text(_edit("max_iter = 200", "max_iter = 1")(FILE.read_text()))
+    code, s = solve_through_cli(f, tmp_path / "out")
+    assert code == EXIT_NOT_OPTIMAL
+    assert s["status"] == "max_iterations"
+    assert not (tmp_path / "out" / "parameters.toml").exists()
+    assert "parameters.toml" not in s["files"]
 
 
 def test_elasto_geometric_reaches_the_noise_floor_and_beats_the_geometric_model(solved):
