@@ -56,12 +56,8 @@ the accumulated mass 22.38 kg removed first; without it the gravity is absorbed 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import logging
 import math
-import os
-import subprocess
-import tempfile
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -74,6 +70,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 import scipy.linalg
 import scipy.signal
 
+from gtmodel._compiler import compiled_function
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian, observability_indices
 from gtmodel.errors import InputError, ModelError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
@@ -125,8 +122,6 @@ _CHUNK = 4096
 _COMPILE_MIN_SAMPLES = 5000
 #: Compiler flags of the regressor's shared library (no fast-math: IEEE results).
 _COMPILE_FLAGS = ("-O3", "-fPIC", "-shared")
-#: Environment variable switching the compiled regressor off (``0``).
-_COMPILE_ENV = "GTMODEL_COMPILE"
 #: Largest relative speed difference of two runs paired by :func:`two_direction_friction`.
 SPEED_MATCH_TOLERANCE = 0.05
 #: Edges [m/s] of the speed bins of the residual report (Stribeck effect at low speed).
@@ -256,16 +251,6 @@ def _symbolic_dynamics(variant: ModelVariant, base: DynamicParameters) -> tuple[
 
 
 # ----------------------------------------------------------------------------- regressor
-def _cache_dir() -> Path:
-    """Folder of compiled regressors: ``$GTMODEL_CACHE_DIR``, else ``$XDG_CACHE_HOME/gtmodel``
-    (default ``~/.cache/gtmodel``), subfolder ``regressor``."""
-    env = os.environ.get("GTMODEL_CACHE_DIR", "").strip()
-    if env:
-        return Path(env) / "regressor"
-    xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "gtmodel" / "regressor"
-
-
 def _chunks(n: int) -> list[tuple[int, int]]:
     """(start, size) of the mapped evaluations of n samples: chunks of :data:`_CHUNK`, then
     the remainder's binary digits (map sizes from a fixed small set)."""
@@ -278,65 +263,6 @@ def _chunks(n: int) -> list[tuple[int, int]]:
             start += size
         size //= 2
     return out
-
-
-#: Compiled regressors loaded in this process, by library path: shared by all
-#: DynamicRegressor instances of one model, with the maps CasADi caches on them.
-_LOADED: dict[str, ca.Function] = {}
-
-
-def _compiled(f: ca.Function) -> tuple[ca.Function, str]:
-    """``f`` as a shared library compiled from its CasADi-generated C, or ``f`` itself.
-
-    The C is derived from the one CasADi graph; the library is cached under
-    :func:`_cache_dir`, keyed by a hash of the generated source, the compiler, the flags
-    and the CasADi version, so it is built once per model. Without a compiler, with
-    ``GTMODEL_COMPILE=0`` or on any build/load failure, ``f`` is returned (the CasADi
-    interpreter) and the reason is logged. Returns the Function and a description of the
-    path taken.
-    """
-    if os.environ.get(_COMPILE_ENV, "").strip() == "0":
-        return f, f"CasADi interpreter ({_COMPILE_ENV}=0)"
-    from gtmodel.codegen.build import find_compiler
-    from gtmodel.errors import CodegenError
-
-    try:
-        cc = find_compiler()
-    except CodegenError as e:
-        return f, f"CasADi interpreter ({e})"
-    cg = ca.CodeGenerator(f"{f.name()}.c", {"with_header": False})
-    cg.add(f)
-    src = cg.dump()
-    key = hashlib.sha256("\0".join([src, " ".join(cc), " ".join(_COMPILE_FLAGS), ca.__version__]).encode()).hexdigest()[:20]
-    name = f"gtm_{f.name()}_{key}"
-    folder = _cache_dir()
-    lib = folder / f"{name}.so"
-    if str(lib) in _LOADED:
-        return _LOADED[str(lib)], f"compiled C (already loaded {lib})"
-    try:
-        if lib.exists():
-            how = f"compiled C (cached {lib})"
-        else:
-            folder.mkdir(parents=True, exist_ok=True)
-            # the symbol names the hash too, so that two libraries never clash in one process
-            xs = f.sx_in()
-            g = ca.Function(name, xs, f.call(xs), f.name_in(), f.name_out())
-            cg = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-            cg.add(g)
-            t0 = time.perf_counter()
-            with tempfile.TemporaryDirectory(dir=folder) as tmp:
-                c_file = Path(tmp) / f"{name}.c"
-                c_file.write_text(cg.dump())
-                out = Path(tmp) / lib.name
-                proc = subprocess.run([*cc, *_COMPILE_FLAGS, str(c_file), "-o", str(out), "-lm"], capture_output=True, text=True, timeout=300)
-                if proc.returncode != 0:
-                    raise CodegenError(f"{' '.join(cc)} exit {proc.returncode}: {proc.stderr.strip()[:500]}")
-                os.replace(out, lib)  # atomic: a concurrent process sees the whole library or none
-            how = f"compiled C (built {lib} in {time.perf_counter() - t0:.2f} s)"
-        _LOADED[str(lib)] = ca.external(name, str(lib))
-        return _LOADED[str(lib)], how
-    except (CodegenError, OSError, RuntimeError, subprocess.SubprocessError) as e:
-        return f, f"CasADi interpreter (compiling failed: {e})"
 
 
 class DynamicRegressor:
@@ -449,7 +375,7 @@ class DynamicRegressor:
     def _evaluation_function(self, coordinates: str, compiled: bool) -> ca.Function:
         """:attr:`cart_function` or :attr:`tcp_function` with ``Y`` transposed (so that a map
         writes (N, 3, p) in C order) and common subexpressions merged (:func:`casadi.cse`),
-        compiled to C if ``compiled`` (see :func:`_compiled`)."""
+        compiled to C if ``compiled`` (see :func:`gtmodel._compiler.compiled_function`)."""
         key = (coordinates, compiled)
         if key not in self._evaluation:
             f = self.cart_function if coordinates == "cart" else self.tcp_function
@@ -458,7 +384,7 @@ class DynamicRegressor:
             outs = ca.cse([outs[0].T, *outs[1:]])
             g = ca.Function(f"{f.name()}_eval", xs, outs, f.name_in(), f.name_out())
             if compiled:
-                g, how = _compiled(g)
+                g, how = compiled_function(g, _COMPILE_FLAGS, "regressor")
                 _log.info("DynamicRegressor (%s, variant %s, %s coordinates): %s", self.robot.name, self.variant.name, coordinates, how)
             self._evaluation[key] = g
         return self._evaluation[key]

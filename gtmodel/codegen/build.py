@@ -10,19 +10,17 @@ from __future__ import annotations
 
 import ctypes
 import logging
-import os
-import shlex
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
+from gtmodel._compiler import find_compiler
+from gtmodel._compiler import run_compiler as _run
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.codegen.specs import FunctionSpec
-from gtmodel.errors import CodegenError, CompilerNotFoundError
+from gtmodel.errors import CodegenError
 
 __all__ = [
     "COMMON_FLAGS",
@@ -44,55 +42,6 @@ WRAPPER_WARNINGS = ("-Wall", "-Wextra")
 #: Warnings for the CasADi-generated part (the same: its unused parameters are marked ``(void)``).
 CASADI_WARNINGS = ("-Wall", "-Wextra")
 
-_FIX = "install a C compiler (e.g. `apt-get install gcc`) or set CC to one"
-
-
-def find_compiler() -> list[str]:
-    """The C compiler command: ``$CC`` if set, else ``gcc`` or ``cc`` found on ``PATH``.
-
-    Returns
-    -------
-    list of str
-        The command words, the first an absolute path to the executable (``$CC`` may
-        carry extra flags, e.g. ``"gcc -m64"``).
-
-    Raises
-    ------
-    CompilerNotFoundError
-        ``$CC`` names no executable, or neither ``gcc`` nor ``cc`` is on ``PATH``; the
-        one-line message says how to fix it.
-    """
-    cc = os.environ.get("CC", "").strip()
-    if cc:
-        words = shlex.split(cc)
-        exe = shutil.which(words[0])
-        if exe is None:
-            raise CompilerNotFoundError(f"no C compiler: CC={cc!r} is not an executable; {_FIX}")
-        return [exe, *words[1:]]
-    for name in ("gcc", "cc"):
-        exe = shutil.which(name)
-        if exe is not None:
-            return [exe]
-    raise CompilerNotFoundError(f"no C compiler found (CC unset, no gcc or cc on PATH); {_FIX}")
-
-
-def _run(cmd: list[str], what: str) -> str:
-    log.debug("codegen: %s", " ".join(shlex.quote(c) for c in cmd))
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    except FileNotFoundError:
-        raise CompilerNotFoundError(f"no C compiler: {cmd[0]!r} cannot be run; {_FIX}") from None
-    except subprocess.TimeoutExpired:
-        raise CodegenError(f"{what}: the compiler did not finish within 300 s") from None
-    if proc.returncode != 0:
-        msg = (proc.stderr or proc.stdout).strip()
-        lines = msg.splitlines()
-        if len(lines) > 40:
-            msg = "\n".join(lines[:40] + [f"... ({len(lines) - 40} more lines)"])
-        raise CodegenError(f"{what} failed (exit {proc.returncode}): {' '.join(cmd)}\n{msg}")
-    if proc.stderr.strip():
-        log.debug("codegen: %s: compiler output:\n%s", what, proc.stderr.strip())
-    return proc.stderr
 
 
 def compile_shared(
