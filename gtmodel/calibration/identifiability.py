@@ -221,7 +221,6 @@ def observability_indices(singular_values: np.typing.ArrayLike, n_residuals: int
     smax, smin = float(s[0]), float(s[-1])
     if smin <= 0.0:
         return {"O1": 0.0, "O2": 0.0, "O3": 0.0, "O4": 0.0, "O5": 0.0}
-    n = s.size
     return {
         "O1": float(np.exp(np.mean(np.log(s)))) / math.sqrt(int(n_residuals)),
         "O2": smin / smax,

@@ -519,7 +519,7 @@ def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str,
         f'#define {P}_VERSION "{version}"',
         f'#define {P}_PARAMETER_HASH "{phash}"',
         f'#define {P}_ROBOT "{model.name}"',
-        f"/* Floating-point type of every array argument. */",
+        "/* Floating-point type of every array argument. */",
         f"typedef {real} {gen_prefix}_real;",
         f"#define {P}_REAL_IS_FLOAT {1 if real == 'float' else 0}",
         "/* Smallest accepted |cos| of the link-to-guideway angle; below it GT_SINGULAR. */",
@@ -829,7 +829,7 @@ def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newto
     used = "\n".join(bodies)
     for h in ("finite", "all", "copy", "transpose", "signs"):
         name = f"{gen_prefix}_{h}"
-        if f"static " in "\n".join(helpers) and any(name + "(" in l for l in helpers) and name + "(" not in used:
+        if any(name + "(" in line for line in helpers) and name + "(" not in used:  # unused helper: drop it (-Werror)
             helpers = _drop_function(helpers, name)
     return "\n".join(out + helpers + bodies)
 

@@ -66,7 +66,7 @@ from gtmodel.errors import InputError, ParameterError, ProblemError, Unreachable
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import RobotParameters, available_parameter_sets, load_parameters
-from gtmodel.trajectory.point_to_point import DEFAULT_OBJECTIVE, PointToPoint, PointToPointSolution, check_holding_forces
+from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, check_holding_forces
 
 __all__ = [
     "POINT_TO_POINT_SCHEMA",

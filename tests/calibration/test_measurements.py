@@ -103,10 +103,10 @@ ROW_B = "0.4,0.5,0.6,4.0,5.0,6.0"
 # Every file starts with a comment line, so data line numbers differ from row indices.
 MALFORMED = [
     ("unknown-column", f"# t\nq1_m,q2_m,q3_m,Tx_m,Ty_m,Tz_mm\n{ROW_A}\n{ROW_B}\n", r"line 2 \(header\): unknown column 'Tz_mm'"),
-    ("missing-column", f"# t\nq1_m,q2_m,q3_m,Tx_m,Ty_m\n0.1,0.2,0.3,1,2\n0.4,0.5,0.6,4,5\n", r"line 2 \(header\): missing column\(s\) Tz_m"),
+    ("missing-column", "# t\nq1_m,q2_m,q3_m,Tx_m,Ty_m\n0.1,0.2,0.3,1,2\n0.4,0.5,0.6,4,5\n", r"line 2 \(header\): missing column\(s\) Tz_m"),
     ("repeated-column", f"# t\n{GOOD_HEADER},Tx_m\n{ROW_A},1\n{ROW_B},4\n", r"line 2 \(header\): column 'Tx_m' appears twice"),
     ("incomplete-quaternion", f"# t\n{GOOD_HEADER},qw,qx,qy\n{ROW_A},1,0,0\n{ROW_B},1,0,0\n", r"line 2 \(header\): missing column\(s\) qz"),
-    ("incomplete-f1-angles", f"# t\nq1_m,q2_m,q3_m,q4_rad,Tx_m,Ty_m,Tz_m\n0,0,0,0,1,2,3\n", r"line 2 \(header\): missing column\(s\) q5_rad, q6_rad"),
+    ("incomplete-f1-angles", "# t\nq1_m,q2_m,q3_m,q4_rad,Tx_m,Ty_m,Tz_m\n0,0,0,0,1,2,3\n", r"line 2 \(header\): missing column\(s\) q5_rad, q6_rad"),
     ("too-few-values", f"# t\n{GOOD_HEADER}\n{ROW_A}\n0.4,0.5,0.6,4.0,5.0\n", r"line 4: 5 values, expected 6"),
     ("too-many-values", f"# t\n{GOOD_HEADER}\n{ROW_A},7\n{ROW_B}\n", r"line 3: 7 values, expected 6"),
     ("non-numeric", f"# t\n{GOOD_HEADER}\n{ROW_A}\n0.4,0.5,0.6,4.0,abc,6.0\n", r"line 4, column 'Ty_m': expected a decimal number, got 'abc'"),
@@ -180,7 +180,7 @@ CART_OK = "\n".join(f"{a},{q},0,0,0" for a in (1, 2, 3) for q in (-0.5, 0.5))
 
 MALFORMED_CART = [
     ("unknown-column", f"# t\narm,q_m,x_m,y_m,z\n{CART_OK}\n", r"line 2 \(header\): unknown column 'z'"),
-    ("missing-column", f"# t\narm,q_m,x_m,y_m\n1,0,0,0\n", r"line 2 \(header\): missing column\(s\) z_m"),
+    ("missing-column", "# t\narm,q_m,x_m,y_m\n1,0,0,0\n", r"line 2 \(header\): missing column\(s\) z_m"),
     ("non-integer-arm", f"# t\n{CART_HEADER}\n{CART_OK}\n1.5,0.1,0,0,0\n", r"line 9, column 'arm': expected an integer arm number 1\.\.3, got '1\.5'"),
     ("arm-out-of-range", f"# t\n{CART_HEADER}\n4,0.1,0,0,0\n{CART_OK}\n", r"line 3, column 'arm': expected an integer arm number 1\.\.3, got '4'"),
     ("same-q-twice", f"# t\n{CART_HEADER}\n{CART_OK}\n2,0.5,1,0,0\n", r"line 9: duplicated row, the same arm and q_m as line 6"),

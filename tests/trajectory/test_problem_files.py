@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-from gtmodel.cli import EXIT_BAD_INPUT, EXIT_NOT_OPTIMAL, EXIT_OK, main
+from gtmodel.cli import EXIT_NOT_OPTIMAL, EXIT_OK, main
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem
 
