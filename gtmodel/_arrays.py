@@ -1,0 +1,225 @@
+"""Up-front argument checks for NumPy inputs (shapes, finiteness, rotations), in one place.
+
+Every check raises :class:`~gtmodel.errors.InputError` with a message naming the argument,
+what was expected and what was given (the SciPy style of argument checking). Library
+functions call these instead of writing their own ``np.asarray`` + shape tests.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from gtmodel.errors import InputError
+
+__all__ = ["as_rows", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int"]
+
+
+def as_rows(x: Any, name: str, width: int) -> tuple[np.ndarray, bool]:
+    """An ``(N, width)`` finite float array, and whether ``x`` was a single ``(width,)`` row.
+
+    Parameters
+    ----------
+    x : array_like, shape (width,) or (N, width)
+        The input (rows are samples).
+    name : str
+        Argument name for messages.
+    width : int
+        Number of columns.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, width)
+        The rows (N >= 1).
+    bool
+        True when ``x`` was one row of shape ``(width,)``.
+
+    Raises
+    ------
+    InputError
+        Not numeric, another shape, no rows, or a row that is not finite (named).
+    """
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected an array of shape ({width},) or (N, {width}), got {x!r}") from None
+    single = arr.ndim == 1
+    arr = arr[None, :] if single else arr
+    if arr.ndim != 2 or arr.shape[1] != width or arr.shape[0] == 0:
+        raise InputError(f"{name}: expected shape ({width},) or (N, {width}), got {np.shape(x)}")
+    bad = ~np.all(np.isfinite(arr), axis=1)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise InputError(f"{name}: row {k} is not finite: {arr[k].tolist()}")
+    return arr, single
+
+
+def as_array(x: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
+    """A finite float array of exactly ``shape``.
+
+    Parameters
+    ----------
+    x : array_like
+        The input.
+    shape : tuple of int
+        Required shape.
+    name : str
+        Argument name for messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        A new array (a copy of ``x``).
+
+    Raises
+    ------
+    InputError
+        Not numeric, another shape, or not finite.
+    """
+    try:
+        arr = np.array(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a numeric array of shape {shape}, got {x!r}") from None
+    if arr.shape != tuple(shape):
+        raise InputError(f"{name}: expected shape {tuple(shape)}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name}: expected finite values, got {arr.tolist()}")
+    return arr
+
+
+def as_finite(x: Any, name: str, positive: bool = False, nonnegative: bool = False) -> np.ndarray:
+    """A finite float array of any shape (a scalar gives a 0-d array).
+
+    Parameters
+    ----------
+    x : array_like
+        The input.
+    name : str
+        Argument name for messages.
+    positive, nonnegative : bool, optional
+        Also require every entry > 0 (or >= 0).
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    InputError
+        Not numeric, not finite, or of the wrong sign.
+    """
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected numbers, got {x!r}") from None
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name}: expected finite values, got {arr.tolist()}")
+    if positive and not np.all(arr > 0):
+        raise InputError(f"{name}: expected positive values, got {arr.tolist()}")
+    if nonnegative and not np.all(arr >= 0):
+        raise InputError(f"{name}: expected non-negative values, got {arr.tolist()}")
+    return arr
+
+
+def as_rotation(R: Any, name: str, tolerance: float) -> np.ndarray:
+    """One rotation matrix: ``R^T R = I`` within ``tolerance`` and ``det R = +1``.
+
+    Parameters
+    ----------
+    R : array_like, shape (3, 3)
+        The matrix.
+    name : str
+        Argument name for messages.
+    tolerance : float
+        Largest allowed entry of ``|R^T R - I|``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+
+    Raises
+    ------
+    InputError
+        Another shape, not finite, or not a rotation.
+    """
+    try:
+        Rm = np.asarray(R, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a 3x3 rotation matrix, got {R!r}") from None
+    if Rm.shape != (3, 3) or not np.all(np.isfinite(Rm)):
+        raise InputError(f"{name}: expected a finite 3x3 rotation matrix, got shape {Rm.shape}")
+    err = np.abs(Rm.T @ Rm - np.eye(3)).max()
+    if err > tolerance or np.linalg.det(Rm) < 0:
+        raise InputError(
+            f"{name}: expected a rotation matrix (R^T R = I within {tolerance}, det = +1), "
+            f"got max |R^T R - I| = {err:.3g}, det = {np.linalg.det(Rm):.6g}"
+        )
+    return Rm
+
+
+def as_rotations(R: Any, n: int, name: str, tolerance: float) -> np.ndarray:
+    """``n`` rotation matrices (one ``(3, 3)`` matrix is repeated ``n`` times).
+
+    Parameters
+    ----------
+    R : array_like, shape (3, 3) or (n, 3, 3)
+        The matrices.
+    n : int
+        How many are needed (e.g. the number of positions they go with).
+    name : str
+        Argument name for messages.
+    tolerance : float
+        Largest allowed entry of ``|R^T R - I|``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, 3, 3)
+
+    Raises
+    ------
+    InputError
+        Another shape, a matrix that is not finite or not a rotation (named by index).
+    """
+    try:
+        arr = np.asarray(R, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected rotation matrices of shape (3, 3) or (N, 3, 3), got {R!r}") from None
+    if arr.shape == (3, 3):
+        arr = np.broadcast_to(arr, (n, 3, 3))
+    if arr.shape != (n, 3, 3):
+        raise InputError(f"{name}: expected shape (3, 3) or ({n}, 3, 3) to match the positions, got {np.shape(R)}")
+    if not np.all(np.isfinite(arr)):
+        k = int(np.argmax(~np.all(np.isfinite(arr.reshape(n, 9)), axis=1)))
+        raise InputError(f"{name}: matrix {k} is not finite")
+    dev = np.abs(np.einsum("nji,njk->nik", arr, arr) - np.eye(3)).reshape(n, 9).max(axis=1)
+    det = np.linalg.det(arr)
+    bad = (dev > tolerance) | (det <= 0)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise InputError(f"{name}: matrix {k} is not a rotation (max |R^T R - I| = {dev[k]:.3g}, det = {det[k]:.6g})")
+    return arr
+
+
+def positive_int(value: Any, name: str) -> int:
+    """A positive integer (``bool`` is refused).
+
+    Parameters
+    ----------
+    value : Any
+        The input.
+    name : str
+        Argument name for messages.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    InputError
+        Not an integer, or below 1.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise InputError(f"{name}: expected a positive integer, got {value!r}")
+    return int(value)
