@@ -33,7 +33,7 @@ def read_toml(path: Path, error: type[GtModelError], what: str, origin: str | No
     Raises
     ------
     GtModelError
-        Of class ``error``: the file cannot be read or is not valid TOML.
+        Of class ``error``: the file cannot be read, is not UTF-8 or is not valid TOML.
     """
     origin = str(path) if origin is None else origin
     if text is None:
@@ -41,6 +41,8 @@ def read_toml(path: Path, error: type[GtModelError], what: str, origin: str | No
             text = Path(path).read_text(encoding="utf-8")
         except OSError as exc:
             raise error(f"{origin}: cannot read {what} ({exc.strerror})") from None
+        except UnicodeDecodeError as exc:
+            raise error(f"{origin}: {what} is not UTF-8 text (byte {exc.start}: {exc.reason})") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

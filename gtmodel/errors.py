@@ -19,6 +19,7 @@ __all__ = [
     "SolverError",
     "CodegenError",
     "CompilerNotFoundError",
+    "ResultWriteError",
 ]
 
 
@@ -64,3 +65,7 @@ class CodegenError(GtModelError, RuntimeError):
 
 class CompilerNotFoundError(CodegenError):
     """No C compiler was found; the message says how to install one."""
+
+
+class ResultWriteError(GtModelError, OSError):
+    """A result file or folder cannot be written; the message names the path (exit code 2)."""

@@ -1,0 +1,312 @@
+"""The problem layer's protocol: a :class:`ProblemKind` per problem kind, and the file context.
+
+A kind declares (rockit's split between declaring and transcribing):
+
+- ``name``: the ``kind = "..."`` of its files;
+- ``schema``: a :class:`~gtmodel.problems.schema.ProblemSchema` subclass (pydantic);
+- :meth:`ProblemKind.load`: the validated document -> the solver-level declaration
+  (semantic checks the schema cannot express: workspace, expressions, data files);
+- :meth:`ProblemKind.solve`: declaration -> solution (a result with ``status``);
+- :meth:`ProblemKind.write`: solution -> files in a result folder and summary fields;
+- ``columns``: what it contributes to a study's comparison table.
+
+Adding a kind is one class in :mod:`gtmodel.problems.kinds` and one line in
+:mod:`gtmodel.problems.registry`.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar, Collection, Mapping
+
+from gtmodel.errors import ProblemError
+from gtmodel.problems.schema import ProblemSchema
+from gtmodel.status import Status
+
+__all__ = ["ProblemFile", "Column", "ProblemKind", "Problem", "Written"]
+
+
+@dataclass(frozen=True)
+class ProblemFile:
+    """Where a problem file is, and the one rule for what it refers to.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The problem file.
+    """
+
+    path: Path
+
+    def fail(self, field: str, expected: str, got: Any = ...) -> ProblemError:
+        """An error naming the file and the (dotted) field.
+
+        Parameters
+        ----------
+        field : str
+            Dotted field name, e.g. ``"limits.force"``.
+        expected : str
+            What was expected.
+        got : Any, optional
+            The offending value (omitted from the message if not given).
+
+        Returns
+        -------
+        ProblemError
+            To be raised by the caller.
+        """
+        tail = "" if got is ... else f", got {got!r}"
+        return ProblemError(f"{self.path}: field '{field}': expected {expected}{tail}")
+
+    def wrap(self, field: str, error: Exception) -> ProblemError:
+        """An error from a lower layer, prefixed with the file and the field.
+
+        Parameters
+        ----------
+        field : str
+            Dotted field name.
+        error : Exception
+            What the lower layer said.
+
+        Returns
+        -------
+        ProblemError
+        """
+        return ProblemError(f"{self.path}: field '{field}': {error}")
+
+    def reference(self, field: str, ref: str, shipped: Collection[str] = ()) -> str | Path:
+        """Resolve a reference to a parameter set or model file.
+
+        The rule, the same for every kind: a value among ``shipped`` (a name without
+        ``/`` and without a file ending) is that shipped set; anything else is a file path,
+        absolute, or relative to the folder of the problem file.
+
+        Parameters
+        ----------
+        field : str
+            Dotted field name (for messages).
+        ref : str
+            The value written in the file.
+        shipped : collection of str, optional
+            Names of the shipped sets.
+
+        Returns
+        -------
+        str or pathlib.Path
+            The shipped name, or the resolved path.
+
+        Raises
+        ------
+        ProblemError
+            Neither a shipped name nor an existing file.
+        """
+        if ref in shipped:
+            return ref
+        target = Path(ref) if Path(ref).is_absolute() else (self.path.parent / ref).resolve()
+        if not target.is_file():
+            names = f"a shipped set ({', '.join(sorted(shipped))}) or " if shipped else ""
+            raise self.fail(field, f"{names}an existing file (relative to {self.path.parent})", ref)
+        return target
+
+    def data_file(self, field: str, ref: str) -> Path:
+        """Resolve a data file (CSV, ...) named in the problem file.
+
+        Parameters
+        ----------
+        field : str
+            Dotted field name.
+        ref : str
+            The path written in the file (absolute, or relative to the problem file).
+
+        Returns
+        -------
+        pathlib.Path
+
+        Raises
+        ------
+        ProblemError
+            The file does not exist.
+        """
+        return Path(self.reference(field, ref))
+
+
+@dataclass(frozen=True)
+class Column:
+    """A column a kind contributes to a study's comparison table.
+
+    Parameters
+    ----------
+    key : str
+        The summary field.
+    header : str
+        Column header with unit, e.g. ``"T_final [s]"``.
+    fmt : str, optional
+        Format of a value (``str.format`` spec).
+    """
+
+    key: str
+    header: str
+    fmt: str = "{:.6g}"
+
+
+@dataclass
+class Written:
+    """What :meth:`ProblemKind.write` produced.
+
+    Parameters
+    ----------
+    fields : dict
+        Summary fields of the kind (numbers, lists, strings).
+    files : list of str
+        File names written into the folder (``summary.json`` excluded).
+    """
+
+    fields: dict[str, Any] = field(default_factory=dict)
+    files: list[str] = field(default_factory=list)
+
+
+class ProblemKind(ABC):
+    """One kind of problem file: its schema, and how it is loaded, solved and written."""
+
+    #: The ``kind`` value of its files.
+    name: ClassVar[str]
+    #: The schema of its files.
+    schema: ClassVar[type[ProblemSchema]]
+    #: One line for ``gtmodel schema --list`` and the reference page.
+    title: ClassVar[str] = ""
+    #: Columns of a study table (after ``case`` and ``status``).
+    columns: ClassVar[tuple[Column, ...]] = ()
+    #: Summary fields that are None when a case failed before solving.
+    empty_fields: ClassVar[tuple[str, ...]] = ()
+
+    @abstractmethod
+    def load(self, doc: Any, file: ProblemFile, name: str) -> Any:
+        """Build the solver-level declaration from a validated document.
+
+        Parameters
+        ----------
+        doc : ProblemSchema
+            The validated document (an instance of :attr:`schema`).
+        file : ProblemFile
+            The file, for resolving references and naming fields in errors.
+        name : str
+            The problem name.
+
+        Returns
+        -------
+        Any
+            The declaration.
+
+        Raises
+        ------
+        ProblemError
+            A semantic error (outside the workspace, bad expression, unreadable data).
+        """
+
+    @abstractmethod
+    def solve(self, declaration: Any, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> Any:
+        """Solve a declaration.
+
+        Parameters
+        ----------
+        declaration : Any
+            From :meth:`load`.
+        verbose : bool, optional
+            Show the solver's progress.
+        previous : Any, optional
+            The previous solution of a sweep (reuse of a built NLP, where supported).
+        warm_start : bool, optional
+            Start from ``previous``.
+
+        Returns
+        -------
+        Any
+            The solution; :meth:`status` reads its status.
+        """
+
+    @abstractmethod
+    def write(self, declaration: Any, solution: Any, out: Path, plots: bool, name: str) -> Written:
+        """Write the data files and plots of a solution into a (new, empty) folder.
+
+        Parameters
+        ----------
+        declaration : Any
+            From :meth:`load`.
+        solution : Any
+            From :meth:`solve`.
+        out : pathlib.Path
+            The folder to write into.
+        plots : bool
+            Write PNG plots.
+        name : str
+            Problem name (plot titles).
+
+        Returns
+        -------
+        Written
+            Summary fields (``status`` and ``message`` among them) and file names.
+        """
+
+    def status(self, solution: Any) -> Status:
+        """The status of a solution (default: ``solution.status``).
+
+        Parameters
+        ----------
+        solution : Any
+            From :meth:`solve`.
+
+        Returns
+        -------
+        Status
+        """
+        return Status(solution.status)
+
+    def overlay(self, solutions: Mapping[str, Any], out: Path) -> list[str]:
+        """Overlay plots of a study's solved cases (default: none).
+
+        Parameters
+        ----------
+        solutions : Mapping[str, Any]
+            Case label -> solution (only cases with a usable solution).
+        out : pathlib.Path
+            The study folder.
+
+        Returns
+        -------
+        list of str
+            Written file names.
+        """
+        return []
+
+
+@dataclass
+class Problem:
+    """A validated problem file.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    name : str
+        Problem name.
+    kind : str
+        The kind's name.
+    description : str
+        Free text.
+    declaration : Any
+        The solver-level declaration built by the kind.
+    data : dict
+        The parsed file (after overrides), for sweeps.
+    overrides : dict
+        Fields replaced on load (``--sweep``), field -> value.
+    """
+
+    path: Path
+    name: str
+    kind: str
+    description: str
+    declaration: Any
+    data: dict = field(default_factory=dict, repr=False)
+    overrides: dict = field(default_factory=dict)

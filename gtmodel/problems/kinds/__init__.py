@@ -1,0 +1,1 @@
+"""One module per problem kind, each defining one :class:`~gtmodel.problems.base.ProblemKind`."""

@@ -1,0 +1,406 @@
+"""Kind ``point_to_point``: free-path time/energy-optimal motion between two poses.
+
+Dressler (2012), ch. 3.5, Table 3.1 "direct" rows. The objective and extra constraints
+are written in the problem language (:mod:`gtmodel.modeling.expressions`, documented in
+``docs/problem_language.md``). The field reference is ``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import casadi as ca
+import numpy as np
+from pydantic import Field
+
+from gtmodel.errors import InputError, ProblemError, UnreachablePoseError
+from gtmodel.modeling.expressions import parse_constraint, parse_objective
+from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.references import named_parameters, robot_parameters
+from gtmodel.problems.schema import (
+    MAX_FORCE_N,
+    MAX_LENGTH_M,
+    Expressions,
+    Flag,
+    NonEmptyText,
+    ProblemSchema,
+    Section,
+    choice,
+    integer,
+    number,
+    vector,
+)
+from gtmodel.report.trajectory import plot_forces, plot_overlay, plot_tcp_path
+from gtmodel.robots import GantryTau3Kinematics
+from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
+from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, check_holding_forces, solve_point_to_point
+from gtmodel.trajectory.export import write_c_header
+
+__all__ = ["PointToPointKind", "PointToPointFile", "AT_BOUND_RTOL", "trajectory_columns"]
+
+#: Relative tolerance on force limits when reporting the fraction of time at a bound.
+AT_BOUND_RTOL = 1e-3
+#: Longest final time accepted [s].
+MAX_TIME_S = 1.0e4
+
+
+class RobotSection(Section):
+    """``[robot]``: the parameter set and the dynamics options."""
+
+    parameters: NonEmptyText = Field(description="shipped parameter set (L1, D1, L1_ideal) or a TOML path relative to the problem file")
+    configuration: integer(0, 7, description="IK configuration") = 0
+    friction: choice(*FRICTION_FORMS, description="friction form of the dynamics") = "tanh"
+    friction_width: number(gt=0, le=10.0, unit="m/s", description="velocity scale of the smooth friction forms") = DEFAULT_FRICTION_WIDTH
+
+
+class MotionSection(Section):
+    """``[motion]``: rest-to-rest between two TCP positions."""
+
+    start: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the start")
+    end: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the end")
+
+
+class LimitsSection(Section):
+    """``[limits]``: actuator and TCP bounds."""
+
+    force: vector(3, positive=True, bound=MAX_FORCE_N, unit="N", description="|tau_i| <= force_i")
+    cart_velocity: vector(3, positive=True, bound=1e3, unit="m/s", description="|qd_i| <= cart_velocity_i") | None = None
+    cart_acceleration: vector(3, positive=True, bound=1e5, unit="m/s^2", description="|qdd_i| bound") | None = None
+    tcp_velocity: number(gt=0, le=1e3, unit="m/s", description="||T_dot|| bound") | None = None
+    joint_angle_deg: number(gt=0, lt=90, unit="deg", what="an angle below 90 degrees", description="spherical-joint angle limit (default: the robot's)") | None = None
+
+
+class FinalTimeSection(Section):
+    """``[optimization.final_time]``: free (with bounds) or fixed (with a value)."""
+
+    free: Flag = Field(description="free final time (needs bounds) or fixed (needs value)")
+    initial_guess: number(gt=0, le=MAX_TIME_S, unit="s", description="initial guess of a free final time") | None = None
+    bounds: vector(2, nonnegative=True, bound=MAX_TIME_S, unit="s", description="[lo, hi] of a free final time") | None = None
+    value: number(gt=0, le=MAX_TIME_S, unit="s", description="the fixed final time") | None = None
+
+
+class OptimizationSection(Section):
+    """``[optimization]``: the objective and constraints in the problem language."""
+
+    objective: NonEmptyText = Field(description='objective, e.g. "final_time + w * integral(tau1^2 + tau2^2 + tau3^2)"')
+    constraints: Expressions = Field(default_factory=list, description='extra path/point constraints, e.g. ["abs(qd1) <= 1.2"]')
+    start_time: number(ge=-MAX_TIME_S, le=MAX_TIME_S, unit="s") = 0.0
+    final_time: FinalTimeSection
+
+
+class InitialGuessSection(Section):
+    """``[initial_guess]``: how the NLP is started."""
+
+    method: choice("trapezoid", "bang_bang", "file") = "trapezoid"
+    file: NonEmptyText | None = Field(default=None, description='trajectory CSV when method = "file" (relative to the problem file)')
+
+
+class CollocationSection(Section):
+    """``[collocation]``: the transcription."""
+
+    elements: integer(1, 10000, description="finite elements") = 50
+    points: integer(1, 9, description="collocation points per element") = 3
+    scheme: choice("radau", "legendre") = "radau"
+
+
+class SolverSection(Section):
+    """``[solver]``: IPOPT settings."""
+
+    max_iter: integer(1, 10**6, description="IPOPT iteration limit") = 3000
+    tol: number(gt=0, le=1.0, description="IPOPT tolerance") = 1e-8
+
+
+class PointToPointFile(ProblemSchema):
+    """A ``point_to_point`` problem file."""
+
+    kind: Literal["point_to_point"]
+    robot: RobotSection
+    motion: MotionSection
+    limits: LimitsSection
+    parameters: dict[str, number()] = Field(default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001")
+    optimization: OptimizationSection
+    initial_guess: InitialGuessSection = InitialGuessSection()
+    collocation: CollocationSection = CollocationSection()
+    solver: SolverSection = SolverSection()
+
+
+#: Names the point-to-point model defines (see :func:`gtmodel.trajectory.problem_names`).
+MODEL_NAMES = (
+    {c + s for c in "xyz" for s in ("", "d", "dd")}
+    | {f"{n}{k}" for n in ("q", "qd", "qdd", "tau") for k in (1, 2, 3)}
+    | {"power", "time", "start_time", "final_time"}
+)
+
+
+def trajectory_columns() -> tuple[Column, ...]:
+    """Study-table columns of the motion kinds (Dressler (2012), Table 3.1).
+
+    Returns
+    -------
+    tuple of Column
+    """
+    return (
+        Column("final_time_s", "T_final [s]", "{:.4f}"),
+        Column("energy", "energy [N^2 s]", "{:.6g}"),
+        Column("iterations", "iterations", "{}"),
+        Column("solve_time_s", "solve time [s]", "{:.3f}"),
+    )
+
+
+class PointToPointKind(ProblemKind):
+    """Free-path time/energy-optimal motion (:class:`~gtmodel.trajectory.PointToPoint`)."""
+
+    name = "point_to_point"
+    schema = PointToPointFile
+    title = "free-path time/energy-optimal motion between two poses (Dressler (2012), ch. 3.5)"
+    columns = trajectory_columns()
+    empty_fields = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
+
+    def load(self, doc: PointToPointFile, file: ProblemFile, name: str) -> PointToPoint:
+        """Build the :class:`~gtmodel.trajectory.PointToPoint` declaration (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        doc : PointToPointFile
+            The validated file.
+        file : ProblemFile
+            The file.
+        name : str
+            Problem name.
+
+        Returns
+        -------
+        PointToPoint
+
+        Raises
+        ------
+        ProblemError
+            A pose outside the workspace, inconsistent final-time settings, force limits
+            that cannot hold the robot at rest, an invalid expression.
+        """
+        params = robot_parameters(file, "robot.parameters", doc.robot.parameters)
+        lim = doc.limits
+        joint = None if lim.joint_angle_deg is None else float(np.deg2rad(lim.joint_angle_deg))
+        named = named_parameters(file, doc.parameters, MODEL_NAMES)
+        if named.get("w", 0.0) < 0:
+            raise file.fail("parameters.w", "a non-negative energy weight", named["w"])
+        opt = doc.optimization
+        t0 = opt.start_time
+        ft, ftn = opt.final_time, "optimization.final_time"
+        if ft.free:
+            if ft.bounds is None:
+                raise file.fail(f"{ftn}.bounds", "bounds [lo, hi] for a free final time (free = true)")
+            bounds = np.array(ft.bounds)
+            if not t0 < bounds[0] < bounds[1]:
+                raise file.fail(f"{ftn}.bounds", f"[lo, hi] with start_time ({t0}) < lo < hi", bounds.tolist())
+            tf_guess = ft.initial_guess if ft.initial_guess is not None else float(np.clip(1.0, *bounds))
+            if not bounds[0] <= tf_guess <= bounds[1]:
+                raise file.fail(f"{ftn}.initial_guess", f"a time within {ftn}.bounds {bounds.tolist()}", tf_guess)
+            if ft.value is not None:
+                raise file.fail(f"{ftn}.value", "no fixed value when free = true (use initial_guess)")
+        else:
+            if ft.value is None:
+                raise file.fail(f"{ftn}.value", "the final time [s] when free = false")
+            tf_guess = ft.value
+            if not tf_guess > t0:
+                raise file.fail(f"{ftn}.value", f"a final time after start_time ({t0})", tf_guess)
+            bounds = np.array([tf_guess, tf_guess])
+        ig = doc.initial_guess
+        guess: Any = ig.method
+        if ig.method == "file":
+            if ig.file is None:
+                raise file.fail("initial_guess.file", 'a trajectory CSV when method = "file"')
+            guess = file.data_file("initial_guess.file", ig.file)
+        elif ig.file is not None:
+            raise file.fail("initial_guess.file", 'no file unless method = "file"')
+        start, end = np.array(doc.motion.start), np.array(doc.motion.end)
+        if np.linalg.norm(end - start) < 1e-9:
+            raise file.fail("motion.end", "a pose different from motion.start", end.tolist())
+        kin = GantryTau3Kinematics(params)
+        for key, pose in (("start", start), ("end", end)):
+            try:
+                kin.require_in_workspace(pose, doc.robot.configuration)
+            except UnreachablePoseError as exc:
+                raise file.wrap(f"motion.{key}", exc) from None
+        col = doc.collocation
+        try:
+            decl = PointToPoint(
+                robot=params,
+                start=start,
+                end=end,
+                force_limit=np.array(lim.force),
+                w=named.get("w", 0.0),
+                final_time_guess=float(tf_guess),
+                final_time_bounds=(float(bounds[0]), float(bounds[1])),
+                friction=doc.robot.friction,
+                friction_width=doc.robot.friction_width,
+                configuration=doc.robot.configuration,
+                elements=col.elements,
+                points=col.points,
+                scheme=col.scheme,
+                max_iter=doc.solver.max_iter,
+                tol=doc.solver.tol,
+                name=name,
+                objective=opt.objective,
+                constraints=tuple(opt.constraints),
+                named_parameters=named,
+                free_final_time=ft.free,
+                cart_velocity_limit=None if lim.cart_velocity is None else np.array(lim.cart_velocity),
+                cart_acceleration_limit=None if lim.cart_acceleration is None else np.array(lim.cart_acceleration),
+                tcp_velocity_limit=lim.tcp_velocity,
+                joint_angle_limit=joint,
+                guess=guess,
+                origin=str(file.path),
+                start_time=t0,
+            )
+        except InputError as exc:
+            raise ProblemError(f"{file.path}: {exc}") from None
+        try:
+            check_holding_forces(decl)
+        except InputError as exc:
+            raise file.wrap("limits.force", exc) from None
+        _check_expressions(decl)
+        return decl
+
+    def solve(self, declaration: PointToPoint, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> PointToPointSolution:
+        """Transcribe and solve (:func:`~gtmodel.trajectory.solve_point_to_point`).
+
+        Parameters
+        ----------
+        declaration : PointToPoint
+            From :meth:`load`.
+        verbose : bool, optional
+            IPOPT's iteration log.
+        previous : PointToPointSolution, optional
+            A sweep's previous solution (its NLP is reused).
+        warm_start : bool, optional
+            Start from ``previous``.
+
+        Returns
+        -------
+        PointToPointSolution
+        """
+        return solve_point_to_point(declaration, verbose=verbose, previous=previous, warm_start=warm_start)
+
+    def status(self, solution: PointToPointSolution) -> Any:
+        """The IPOPT status of the solve.
+
+        Parameters
+        ----------
+        solution : PointToPointSolution
+            From :meth:`solve`.
+
+        Returns
+        -------
+        Status
+        """
+        return super().status(solution.result)
+
+    def write(self, declaration: PointToPoint, solution: PointToPointSolution, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields; ``trajectory.csv``, ``trajectory.h`` and plots of a solution.
+
+        Nothing but the summary fields is produced for a failed solve (its last iterate
+        is not a trajectory).
+
+        Parameters
+        ----------
+        declaration : PointToPoint
+            The declaration.
+        solution : PointToPointSolution
+            Its solution.
+        out : pathlib.Path
+            The folder.
+        plots : bool
+            Write PNG plots.
+        name : str
+            Plot title.
+
+        Returns
+        -------
+        Written
+        """
+        written = Written(point_to_point_summary(declaration, solution))
+        if solution.result.status in ("optimal", "acceptable"):
+            traj = solution.trajectory()
+            solution.write_csv(out / "trajectory.csv")
+            write_c_header(traj, out / "trajectory.h", name=name)
+            written.files += ["trajectory.csv", "trajectory.h"]
+            if plots:
+                plot_tcp_path(traj, declaration.start, declaration.end, out / "tcp_path.png", title=name)
+                plot_forces(traj, declaration.force_limit, out / "forces.png", title=name)
+                written.files += ["tcp_path.png", "forces.png"]
+        return written
+
+    def overlay(self, solutions: dict[str, Any], out: Path) -> list[str]:
+        """TCP-path and force overlays of a study's cases.
+
+        Parameters
+        ----------
+        solutions : dict
+            Label -> solution.
+        out : pathlib.Path
+            The study folder.
+
+        Returns
+        -------
+        list of str
+        """
+        trajs = {label: sol.trajectory() for label, sol in solutions.items()}
+        return [p.name for p in plot_overlay(trajs, out)] if trajs else []
+
+
+def _check_expressions(decl: PointToPoint) -> None:
+    """Parse the objective and constraints now, so that a bad expression is bad input."""
+    names: dict[str, Any] = {n: ca.SX.sym(n) for n in MODEL_NAMES}
+    names["start_time"] = ca.SX(decl.start_time)
+    names.update({k: ca.SX.sym(k) for k in decl.named_parameters})
+    parse_objective(decl.objective, names, origin=decl.origin, key="optimization.objective", static=set(decl.named_parameters))
+    for k, text in enumerate(decl.constraints):
+        parse_constraint(text, names, origin=decl.origin, key=f"optimization.constraints[{k}]", static=set(decl.named_parameters))
+
+
+def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -> dict[str, Any]:
+    """The ``summary.json`` fields of a solved point-to-point problem.
+
+    Parameters
+    ----------
+    decl : PointToPoint
+        The declaration.
+    solution : PointToPointSolution
+        Its solution.
+
+    Returns
+    -------
+    dict
+        Status, final time, energy, iterations, solve time, objective, constraint
+        violation, force statistics and the problem's settings.
+    """
+    r = solution.result
+    summary: dict[str, Any] = {
+        "status": r.status,
+        "message": r.message,
+        "final_time_s": r.final_time,
+        "energy": solution.energy,
+        "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
+        "iterations": r.iterations,
+        "solve_time_s": r.solve_time,
+        "objective": r.objective,
+        "max_constraint_violation": r.max_constraint_violation,
+        "last_iterate": r.last_iterate,
+        "objective_expression": decl.objective,
+        "constraints": list(decl.constraints),
+        "parameters": dict(decl.named_parameters),
+        "w": decl.named_parameters.get("w"),
+        "free_final_time": decl.free_final_time,
+        "force_limit_N": decl.force_limit.tolist(),
+        "collocation": {"elements": decl.elements, "points": decl.points, "scheme": decl.scheme},
+        "robot": decl.parameters.name,
+    }
+    if r.status in ("optimal", "acceptable"):
+        traj = solution.trajectory()
+        tau = np.column_stack([traj["tau1"], traj["tau2"], traj["tau3"]])
+        summary["max_force_ratio"] = (np.abs(tau).max(axis=0) / decl.force_limit).tolist()
+        summary["fraction_at_force_bound"] = (np.abs(tau) >= (1 - AT_BOUND_RTOL) * decl.force_limit).mean(axis=0).tolist()
+        summary["sample_time_s"] = float(traj["t"][1] - traj["t"][0]) if len(traj["t"]) > 1 else None
+    return summary

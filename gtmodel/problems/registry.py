@@ -1,0 +1,43 @@
+"""The registry of problem kinds: ``kind = "..."`` in a file -> its :class:`ProblemKind`.
+
+Adding a kind is one class in :mod:`gtmodel.problems.kinds` and one line in
+:data:`_CLASSES`.
+"""
+
+from __future__ import annotations
+
+from gtmodel.errors import ProblemError
+from gtmodel.problems.base import ProblemKind
+from gtmodel.problems.kinds.point_to_point import PointToPointKind
+
+__all__ = ["KINDS", "get_kind"]
+
+_CLASSES: tuple[type[ProblemKind], ...] = (
+    PointToPointKind,
+)
+
+#: Kind name -> the kind (one instance each), in the order of the documentation.
+KINDS: dict[str, ProblemKind] = {cls.name: cls() for cls in _CLASSES}
+
+
+def get_kind(name: str) -> ProblemKind:
+    """The kind of a name.
+
+    Parameters
+    ----------
+    name : str
+        E.g. ``"point_to_point"``.
+
+    Returns
+    -------
+    ProblemKind
+
+    Raises
+    ------
+    ProblemError
+        Not a registered kind.
+    """
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise ProblemError(f"unknown problem kind {name!r}: expected one of {', '.join(KINDS)}") from None

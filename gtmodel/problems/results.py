@@ -1,0 +1,218 @@
+"""Result folders that are never stale and never half-written.
+
+A run writes into a new hidden folder beside the target (``.<name>.partial-<pid>``) and
+replaces the target only when everything, ``summary.json`` last, is written. The rule for
+an earlier run's folder: **every finished run replaces it whole**, whatever its outcome
+(optimal, infeasible, invalid input, interrupted). So after a failed run the folder holds
+the failed run's ``summary.json`` alone and no file of the earlier run can look current.
+A process killed outright (SIGKILL, power loss) never reaches the replacement: the earlier
+folder stays intact, and the orphaned partial folder is removed by the next run.
+
+``summary.json`` lists every file of its folder (``files``, itself included).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from gtmodel.errors import GtModelError, ResultWriteError
+from gtmodel.status import Status
+
+__all__ = ["ResultFolder", "json_safe", "write_json", "failure_summary"]
+
+
+def json_safe(value: Any) -> Any:
+    """A JSON-serialisable copy (non-finite numbers become ``null``, arrays lists).
+
+    Parameters
+    ----------
+    value : Any
+        Numbers, arrays, mappings, sequences, :class:`~gtmodel.status.Status`.
+
+    Returns
+    -------
+    Any
+    """
+    if isinstance(value, Status):
+        return value.value
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.ndarray):
+        return [json_safe(x) for x in value.tolist()]
+    if isinstance(value, Mapping):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def write_json(path: Path, data: Mapping[str, Any]) -> Path:
+    """Write a JSON file (through :func:`json_safe`).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        Target file.
+    data : Mapping[str, Any]
+        Content.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    ResultWriteError
+        The file cannot be written (names the path).
+    """
+    try:
+        path.write_text(json.dumps(json_safe(dict(data)), indent=2) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise ResultWriteError(f"cannot write {path}: {exc.strerror or exc}") from None
+    return path
+
+
+def failure_summary(problem: str | Path, error: BaseException | str, status: Status, kind: str | None = None,
+                    name: str | None = None, empty_fields: tuple[str, ...] = ()) -> dict[str, Any]:
+    """Summary of a run that produced no solution (bad input, internal error, interrupt).
+
+    Parameters
+    ----------
+    problem : str or pathlib.Path
+        The problem file.
+    error : BaseException or str
+        What went wrong.
+    status : Status
+        ``invalid_input``, ``internal_error``, ``interrupted`` or ``error``.
+    kind : str, optional
+        The problem kind, if known.
+    name : str, optional
+        The problem name, if known.
+    empty_fields : tuple of str, optional
+        The kind's numeric summary fields, written as null.
+
+    Returns
+    -------
+    dict
+    """
+    if isinstance(error, GtModelError) or isinstance(error, str):
+        message = str(error)
+    elif isinstance(error, KeyboardInterrupt):
+        message = "interrupted by the user"
+    else:
+        message = f"{type(error).__name__}: {error}"
+    out: dict[str, Any] = {"problem": str(problem), "name": name, "kind": kind, "status": Status(status), "message": message}
+    out.update({k: None for k in empty_fields})
+    return out
+
+
+class ResultFolder:
+    """A result folder being written: files go to a partial folder until :meth:`commit`.
+
+    Parameters
+    ----------
+    target : str or pathlib.Path
+        The folder the results end up in.
+
+    Raises
+    ------
+    ResultWriteError
+        The partial folder cannot be created (names the path).
+
+    Examples
+    --------
+    >>> folder = ResultFolder("results/x")                        # doctest: +SKIP
+    >>> (folder.path / "trajectory.csv").write_text("...")         # doctest: +SKIP
+    >>> folder.commit({"status": "optimal"})                       # doctest: +SKIP
+    """
+
+    def __init__(self, target: str | Path) -> None:
+        self.target = Path(target)
+        parent = self.target.parent
+        self.path = parent / f".{self.target.name}.partial-{os.getpid()}"
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            _remove_orphans(parent, self.target.name)
+            if self.path.exists():
+                shutil.rmtree(self.path)
+            self.path.mkdir()
+        except OSError as exc:
+            raise ResultWriteError(f"cannot create the result folder {self.target}: {exc.strerror or exc}") from None
+        self.committed = False
+
+    def commit(self, summary: Mapping[str, Any]) -> dict[str, Any]:
+        """Write ``summary.json`` (listing every file) and replace the target folder.
+
+        Parameters
+        ----------
+        summary : Mapping[str, Any]
+            The summary fields (``files`` is set here).
+
+        Returns
+        -------
+        dict
+            The summary as written.
+
+        Raises
+        ------
+        ResultWriteError
+            ``summary.json`` cannot be written or the target cannot be replaced (the
+            earlier folder is then left as it was).
+        """
+        files = sorted(p.name for p in self.path.iterdir() if p.name != "summary.json")
+        out = dict(summary)
+        out["files"] = ["summary.json", *files]
+        write_json(self.path / "summary.json", out)
+        old = self.target.parent / f".{self.target.name}.old-{os.getpid()}"
+        try:
+            if self.target.exists() or self.target.is_symlink():
+                if not self.target.is_dir():
+                    raise ResultWriteError(f"cannot write the result folder {self.target}: a file of that name is in the way")
+                os.replace(self.target, old)
+            os.replace(self.path, self.target)
+        except OSError as exc:
+            if old.exists() and not self.target.exists():
+                os.replace(old, self.target)
+            raise ResultWriteError(f"cannot replace the result folder {self.target}: {exc.strerror or exc}") from None
+        shutil.rmtree(old, ignore_errors=True)
+        self.committed = True
+        return out
+
+    def discard(self) -> None:
+        """Remove the partial folder (the target is left untouched)."""
+        shutil.rmtree(self.path, ignore_errors=True)
+
+
+def _remove_orphans(parent: Path, name: str) -> None:
+    """Partial and old folders of earlier runs whose process no longer exists."""
+    for prefix in (f".{name}.partial-", f".{name}.old-"):
+        for p in parent.glob(prefix + "*"):
+            try:
+                pid = int(p.name.rsplit("-", 1)[1])
+            except ValueError:
+                continue
+            if pid == os.getpid() or not _alive(pid):
+                shutil.rmtree(p, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

@@ -1,0 +1,281 @@
+"""Loading, solving and writing one problem file: the one path every kind goes through.
+
+:func:`load_problem` reads and validates a file against its kind's schema and builds the
+declaration; :func:`solve_problem` solves it (Ctrl-C swallowed by a solver still stops
+the run); :func:`run_problem` does both and writes the result folder, turning every
+outcome into a summary with one :class:`~gtmodel.status.Status`.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+from gtmodel._fields import apply_override
+from gtmodel._toml import read_toml
+from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
+from gtmodel.problems.base import Problem, ProblemFile
+from gtmodel.problems.registry import KINDS, get_kind
+from gtmodel.problems.results import ResultFolder, failure_summary
+from gtmodel.problems.runtime import Heartbeat, InterruptGuard
+from gtmodel.problems.schema import validate_document
+from gtmodel.status import Status
+
+__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "RunOutcome"]
+
+_log = logging.getLogger("gtmodel")
+
+
+def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
+    """Read and validate a problem file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The TOML problem file.
+    overrides : Mapping[str, Any], optional
+        Fields to replace before validation (dotted names; a bare name is looked up in
+        ``[parameters]`` first), e.g. ``{"w": 0.001}``.
+
+    Returns
+    -------
+    Problem
+        The validated problem, ready for :func:`solve_problem`.
+
+    Raises
+    ------
+    ProblemError
+        Unreadable or non-UTF-8 file, TOML syntax error, a missing, unknown or invalid
+        field (out of its physical range included), an invalid expression, a pose outside
+        the workspace, unreadable data files, an override of a field the file does not
+        have. The message names the file and the field.
+    """
+    path = Path(path)
+    data = read_toml(path, ProblemError, "problem file")
+    for key, value in (overrides or {}).items():
+        data = apply_override(data, key, value, path)
+    file = ProblemFile(path)
+    kind_name = data.get("kind")
+    if kind_name not in KINDS:
+        if "kind" not in data:
+            raise ProblemError(f"{path}: missing field 'kind'")
+        raise file.fail("kind", f"one of {', '.join(KINDS)}", kind_name)
+    kind = get_kind(kind_name)
+    doc = validate_document(kind.schema, data, path)
+    name = doc.name or path.stem
+    declaration = kind.load(doc, file, name)
+    return Problem(path=path, name=name, kind=kind_name, description=doc.description, declaration=declaration,
+                   data=data, overrides=dict(overrides or {}))
+
+
+def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> Any:
+    """Solve a loaded problem with its kind's solver.
+
+    Parameters
+    ----------
+    problem : Problem
+        From :func:`load_problem`.
+    verbose : bool, optional
+        Show the solver's iteration log.
+    previous : Any, optional
+        The solution of the previous case of a sweep (its NLP is reused when only named
+        parameters differ).
+    warm_start : bool, optional
+        Start from ``previous``'s solution.
+
+    Returns
+    -------
+    Any
+        The kind's solution; ``get_kind(problem.kind).status(solution)`` is its status.
+
+    Raises
+    ------
+    GtModelError
+        Bad input discovered while building or solving (e.g. degenerate data).
+    KeyboardInterrupt
+        Ctrl-C, SIGINT or SIGTERM during the solve (also when the solver swallowed it).
+    """
+    kind = get_kind(problem.kind)
+    with InterruptGuard() as guard:
+        solution = kind.solve(problem.declaration, verbose=verbose, previous=previous, warm_start=warm_start)
+        guard.check()
+    return solution
+
+
+def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True) -> dict[str, Any]:
+    """Write the result folder of a solved problem, replacing the folder only when complete.
+
+    Data files and plots are written only when the solver returned a solution, never
+    for a failed solve's last iterate; ``summary.json`` lists every file.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem.
+    solution : Any
+        Its solution from :func:`solve_problem`.
+    out_dir : str or pathlib.Path
+        Result folder (replaced whole; see :mod:`gtmodel.problems.results`).
+    plots : bool, optional
+        Write PNG plots (default True).
+
+    Returns
+    -------
+    dict
+        The summary that was written.
+
+    Raises
+    ------
+    ResultWriteError
+        A file or the folder cannot be written (names the path); the earlier folder is
+        left as it was.
+    """
+    kind = get_kind(problem.kind)
+    folder = ResultFolder(out_dir)
+    try:
+        written = kind.write(problem.declaration, solution, folder.path, plots, problem.name)
+        summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
+        if problem.overrides:
+            summary["overrides"] = dict(problem.overrides)
+        summary.update(written.fields)
+        summary["status"] = kind.status(solution)
+        return folder.commit(summary)
+    except OSError as exc:
+        raise ResultWriteError(f"cannot write into {folder.path}: {exc.strerror or exc}") from None
+    finally:
+        if not folder.committed:
+            folder.discard()
+
+
+@dataclass
+class RunOutcome:
+    """What :func:`run_problem` did.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The problem file.
+    out : pathlib.Path
+        The result folder.
+    status : Status
+        The outcome (also ``invalid_input``, ``internal_error``, ``interrupted``).
+    summary : dict
+        The summary as written (or as it would have been, if writing failed).
+    problem : Problem or None
+        The loaded problem (None when loading failed).
+    solution : Any
+        The kind's solution (None when there is none).
+    error : BaseException or None
+        The exception that ended the run early, if any.
+    written : bool
+        Whether the result folder was written.
+    """
+
+    path: Path
+    out: Path
+    status: Status
+    summary: dict
+    problem: Problem | None = None
+    solution: Any = None
+    error: BaseException | None = None
+    written: bool = True
+
+    @property
+    def exit_code(self) -> int:
+        """Exit code of the ``gtmodel`` command for this outcome."""
+        return self.status.exit_code
+
+
+def run_problem(
+    path: str | Path,
+    out: str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+    verbose: bool = False,
+    plots: bool = True,
+    previous: Any = None,
+    warm_start: bool = False,
+    heartbeat: bool = False,
+) -> RunOutcome:
+    """Load, solve and write one problem; every outcome becomes a status and a summary.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The problem file.
+    out : str or pathlib.Path, optional
+        Result folder (default ``results/<problem name>``).
+    overrides : Mapping[str, Any], optional
+        Field overrides (a sweep case).
+    verbose : bool, optional
+        Solver progress.
+    plots : bool, optional
+        Write PNG plots.
+    previous : Any, optional
+        Previous solution of a sweep.
+    warm_start : bool, optional
+        Start from ``previous``.
+    heartbeat : bool, optional
+        Log a line every few seconds while solving (when nothing else shows progress).
+
+    Returns
+    -------
+    RunOutcome
+        Never raises for bad input, solver failure or internal errors (their status says
+        so); a :class:`KeyboardInterrupt` is recorded as ``interrupted`` (the caller
+        decides whether to stop).
+    """
+    path = Path(path)
+    target = Path(out) if out is not None else Path("results") / path.stem
+    problem: Problem | None = None
+    try:
+        problem = load_problem(path, overrides)
+        target = Path(out) if out is not None else Path("results") / problem.name
+        label = f"solving {problem.name} ({problem.kind})"
+        _log.info("%s ...", label)
+        with Heartbeat(label, enabled=heartbeat):
+            solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
+        with InterruptGuard() as guard:
+            summary = write_results(problem, solution, target, plots=plots)
+            guard.check()
+        return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
+    except KeyboardInterrupt as exc:
+        return _failed(path, target, problem, exc, Status.INTERRUPTED)
+    except ResultWriteError as exc:
+        return _failed(path, target, problem, exc, Status.INVALID_INPUT, write=False)
+    except GtModelError as exc:
+        return _failed(path, target, problem, exc, Status.INVALID_INPUT)
+    except Exception as exc:  # noqa: BLE001 - a defect: reported with its status, never lost
+        _log.debug("internal error", exc_info=True)
+        return _failed(path, target, problem, exc, Status.INTERNAL_ERROR)
+
+
+def _failed(path: Path, target: Path, problem: Problem | None, error: BaseException, status: Status, write: bool = True) -> RunOutcome:
+    kind = get_kind(problem.kind) if problem is not None else None
+    summary = failure_summary(
+        path, error, status, kind=problem.kind if problem else _peek_kind(path), name=problem.name if problem else None,
+        empty_fields=kind.empty_fields if kind is not None else (),
+    )
+    written = False
+    if write:
+        try:
+            with InterruptGuard():
+                folder = ResultFolder(target)
+                try:
+                    summary = folder.commit(summary)
+                    written = True
+                finally:
+                    if not folder.committed:
+                        folder.discard()
+        except (ResultWriteError, KeyboardInterrupt) as exc:
+            _log.warning("gtmodel: could not write %s: %s", target / "summary.json", exc)
+    return RunOutcome(path, target, status, summary, problem, None, error, written)
+
+
+def _peek_kind(path: Path) -> str | None:
+    try:
+        kind = read_toml(path, ProblemError, "problem file").get("kind")
+    except GtModelError:
+        return None
+    return kind if isinstance(kind, str) and kind in KINDS else None
