@@ -1,40 +1,54 @@
 """The ``gtmodel`` command.
 
 ``gtmodel solve PROBLEM.toml [--out DIR]``
-    Load, validate and solve a problem file; write ``DIR/summary.json`` (always),
-    the data files of its kind and PNG plots. Exit code 0 only for an optimal solution,
-    1 for a non-optimal solver status, 2 for invalid input, 3 for an internal error,
-    130 when interrupted (Ctrl-C).
+    Load, validate and solve a problem file; write the result folder ``DIR`` (default
+    ``results/<problem name>``): ``summary.json`` (always, listing every file), the data
+    files of its kind and PNG plots. The folder is replaced only when the run is complete.
 ``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
     A study: every case in ``DIR/<case>/`` and a comparison table (``comparison.md``,
-    ``comparison.csv``) with overlay plots in ``DIR``. Exit code 0 only if every case is
-    optimal; otherwise the worst of the cases' codes.
+    ``comparison.csv``, columns from each kind) with overlay plots in ``DIR``.
+``gtmodel schema KIND [--out FILE]`` / ``gtmodel schema --list`` / ``gtmodel schema --docs DIR``
+    The JSON Schema of a kind's problem files; the kinds; the reference page and schemas.
 ``gtmodel codegen --robot L1 --out DIR [--check]``
     Generate C for the real-time kinematics and inverse dynamics (3-link sets, also a
     calibration's ``parameters.toml``; ``D1_six_link``; ``F1``); ``--check`` compiles it,
-    compares every function with the Python model on random and edge-case inputs and
-    prints the largest error and ns/call.
+    compares every function with the Python model on random and edge-case inputs, prints
+    the largest error and ns/call and runs the C unit tests.
+
+Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
+``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
+2 invalid input (also an output that cannot be written), 3 internal error, 130
+interrupted (Ctrl-C, SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import logging
+import signal
 import sys
+import threading
 import traceback
 from pathlib import Path
 from typing import Sequence
 
 from gtmodel import __version__
+from gtmodel._fields import parse_override
+from gtmodel.codegen import check, generate
 from gtmodel.errors import GtModelError
+from gtmodel.problems import KINDS, run_problem
+from gtmodel.problems.docs import json_schema, write_docs
+from gtmodel.problems.study import solve_study
+from gtmodel.status import Status, exit_code_table
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_OPTIMAL", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED"]
 
-EXIT_OK = 0
-EXIT_NOT_OPTIMAL = 1
-EXIT_BAD_INPUT = 2
-EXIT_INTERNAL = 3
-EXIT_INTERRUPTED = 130
+EXIT_OK = Status.OPTIMAL.exit_code
+EXIT_NOT_OPTIMAL = Status.ERROR.exit_code
+EXIT_BAD_INPUT = Status.INVALID_INPUT.exit_code
+EXIT_INTERNAL = Status.INTERNAL_ERROR.exit_code
+EXIT_INTERRUPTED = Status.INTERRUPTED.exit_code
 
 _log = logging.getLogger("gtmodel")
 
@@ -45,15 +59,20 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Parser with the sub-commands ``solve`` and ``codegen``.
+        Parser with the sub-commands ``solve``, ``schema`` and ``codegen``.
     """
-    parser = argparse.ArgumentParser(prog="gtmodel", description="Gantry-Tau modelling, optimal control and C code generation")
+    parser = argparse.ArgumentParser(
+        prog="gtmodel",
+        description="Gantry-Tau modelling, calibration, optimal control and C code generation",
+        epilog="exit codes (status -> code):\n" + exit_code_table(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--version", action="version", version=f"gtmodel {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     solve = sub.add_parser("solve", help="solve a problem file and write a result folder")
     solve.add_argument("problem", type=Path, nargs="+", help="problem file(s) (TOML), e.g. problems/l1_time_optimal.toml")
-    solve.add_argument("--out", type=Path, default=None, help="result folder (default: results/<problem name>)")
+    solve.add_argument("--out", type=Path, default=None, help="result folder (default: results/<problem name>), replaced when the run ends")
     solve.add_argument(
         "--sweep", default=None, metavar="FIELD=V1,V2,...", help="solve one file for several values of a field, e.g. w=0,0.001,0.01"
     )
@@ -64,6 +83,12 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
+    schema = sub.add_parser("schema", help="JSON Schema of a problem kind, the list of kinds, or the reference docs")
+    schema.add_argument("kind", nargs="?", default=None, help=f"one of {', '.join(KINDS)}")
+    schema.add_argument("--out", type=Path, default=None, help="write the schema to this file (default: standard output)")
+    schema.add_argument("--list", action="store_true", help="print the kinds, one per line")
+    schema.add_argument("--docs", type=Path, default=None, metavar="DIR", help="write DIR/problem_files.md and DIR/schemas/*.schema.json")
+
     cg = sub.add_parser("codegen", help="generate C for the real-time kinematics and inverse dynamics")
     cg.add_argument("--robot", default="L1", help="L1, D1, L1_ideal, D1_six_link, F1 or a parameter TOML path (default L1)")
     cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
@@ -72,7 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--newton-tolerance", type=float, default=None, help="tolerance of the Newton loops (default per function)")
     cg.add_argument("--max-iter", type=int, default=None, help="iteration limit of the Newton loops (default 20)")
     cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
-    cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function")
+    cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
     cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
     cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
@@ -89,16 +114,6 @@ def _setup_logging(quiet: bool) -> None:
     handler.setFormatter(logging.Formatter("%(message)s"))
     _log.addHandler(handler)
     _log.setLevel(logging.WARNING if quiet else logging.INFO)
-
-
-def _try_write_summary(write_summary, out: Path, summary: dict) -> None:
-    """Write an error summary; if even that fails, say so (the exit code is non-zero anyway)."""
-    try:
-        target = write_summary(out, summary)
-    except OSError as exc:
-        print(f"gtmodel: error: cannot write {out / 'summary.json'}: {exc.strerror}", file=sys.stderr)
-        return
-    print(f"gtmodel: wrote {target} (status error)", file=sys.stderr)
 
 
 def _print_summary(summary: dict, out: Path) -> None:
@@ -123,87 +138,52 @@ def _print_summary(summary: dict, out: Path) -> None:
     print("\n".join(lines))
 
 
-def _solve_one(args: argparse.Namespace, path: Path) -> int:
-    from gtmodel.problems import error_summary, load_problem, solve_problem, write_results, write_summary
+def _progress(args: argparse.Namespace) -> tuple[bool, bool]:
+    """(solver log shown, heartbeat lines): the log on a terminal or with -v, else a heartbeat."""
+    show = args.verbose or (not args.quiet and sys.stdout.isatty())
+    return show, not args.quiet and not show
 
-    out = args.out if args.out is not None else Path("results") / path.stem
-    kind = None
-    try:
-        problem = load_problem(path)
-        kind = problem.kind
-        out = args.out if args.out is not None else Path("results") / problem.name
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            print(f"gtmodel: error: --out {out}: cannot create the result folder ({exc.strerror})", file=sys.stderr)
-            return EXIT_BAD_INPUT
-        show_progress = args.verbose or (not args.quiet and sys.stdout.isatty())
-        _log.info("solving %s (%s) ...", problem.name, problem.kind)
-        solution = solve_problem(problem, verbose=show_progress)
-        summary = write_results(problem, solution, out, plots=not args.no_plots)
-    except GtModelError as exc:
-        print(f"gtmodel: error: {exc}", file=sys.stderr)
-        _try_write_summary(write_summary, out, error_summary(path, exc, kind))
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        _try_write_summary(write_summary, out, error_summary(path, RuntimeError("interrupted by the user"), kind))
+
+def _solve_one(args: argparse.Namespace, path: Path) -> int:
+    show, heartbeat = _progress(args)
+    outcome = run_problem(path, args.out, verbose=show, plots=not args.no_plots, heartbeat=heartbeat)
+    status = outcome.status
+    if status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except Exception as exc:  # noqa: BLE001 - reported, summarised, non-zero exit
-        _try_write_summary(write_summary, out, error_summary(path, exc, kind))
-        if args.debug:
-            traceback.print_exc()
-        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
-        return EXIT_INTERNAL
-    _print_summary(summary, out)
-    return EXIT_OK if summary["status"] == "optimal" else EXIT_NOT_OPTIMAL
+    elif status is Status.INTERNAL_ERROR:
+        if args.debug and outcome.error is not None:
+            traceback.print_exception(outcome.error)
+        print(f"gtmodel: internal error: {outcome.summary['message']} (rerun with --debug for the traceback)", file=sys.stderr)
+    elif status is Status.INVALID_INPUT:
+        print(f"gtmodel: error: {outcome.summary['message']}", file=sys.stderr)
+    else:
+        _print_summary(outcome.summary, outcome.out)
+        return status.exit_code
+    if outcome.written:
+        print(f"gtmodel: wrote {outcome.out / 'summary.json'} (status {status})", file=sys.stderr)
+    return status.exit_code
 
 
 def _solve_study(args: argparse.Namespace) -> int:
-    from gtmodel._fields import parse_override
-    from gtmodel.problems import solve_study
-
-    try:
-        sweep = parse_override(args.sweep) if args.sweep else None
-    except GtModelError as exc:
-        print(f"gtmodel: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if sweep is not None and len(args.problem) != 1:
-        print(f"gtmodel: error: --sweep needs exactly one problem file, got {len(args.problem)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    sweep = parse_override(args.sweep) if args.sweep else None
     default = args.problem[0].stem + ("_sweep_" + sweep[0].replace(".", "_") if sweep else "_study")
     out = args.out if args.out is not None else Path("results") / default
-    show_progress = args.verbose or (not args.quiet and sys.stdout.isatty())
-    codes: list[int] = []
+    show, heartbeat = _progress(args)
 
     def report(case) -> None:
-        s = case.summary
-        status = s.get("status")
-        if status == "error":
-            print(f"gtmodel: error: {case.label}: {s.get('message')}", file=sys.stderr)
-            codes.append(EXIT_BAD_INPUT)
-        else:
-            codes.append(EXIT_OK if status == "optimal" else EXIT_NOT_OPTIMAL)
-        _log.info("%s: %s", case.label, status)
+        if case.status in (Status.INVALID_INPUT, Status.INTERNAL_ERROR):
+            print(f"gtmodel: error: {case.label}: {case.summary.get('message')}", file=sys.stderr)
+        _log.info("%s: %s", case.label, case.status)
 
-    try:
-        solve_study(
-            args.problem, out, sweep=sweep, verbose=show_progress, plots=not args.no_plots, warm_start=args.warm_start, on_case=report
-        )
-    except GtModelError as exc:
-        print(f"gtmodel: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
+    result = solve_study(
+        args.problem, out, sweep=sweep, verbose=show, plots=not args.no_plots, warm_start=args.warm_start,
+        on_case=report, heartbeat=heartbeat,
+    )
+    if result.status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except Exception as exc:  # noqa: BLE001
-        if args.debug:
-            traceback.print_exc()
-        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
-        return EXIT_INTERNAL
     print((out / "comparison.md").read_text(encoding="utf-8"), end="")
-    print(f"results in   {out}/ (comparison.md, comparison.csv, one folder per case)")
-    return max(codes) if codes else EXIT_BAD_INPUT
+    print(f"results in   {out}/ (comparison.md, comparison.csv, summary.json, one folder per case)")
+    return result.exit_code
 
 
 def _solve(args: argparse.Namespace) -> int:
@@ -212,30 +192,45 @@ def _solve(args: argparse.Namespace) -> int:
     return _solve_study(args)
 
 
-def _codegen(args: argparse.Namespace) -> int:
-    from gtmodel.codegen import check, generate
+def _schema(args: argparse.Namespace) -> int:
+    if args.list:
+        print("\n".join(f"{name:<30} {kind.title}" for name, kind in KINDS.items()))
+        return EXIT_OK
+    if args.docs is not None:
+        for p in write_docs(args.docs):
+            print(f"wrote {p}")
+        return EXIT_OK
+    if args.kind is None:
+        raise GtModelError(f"schema: give a kind ({', '.join(KINDS)}), --list or --docs DIR")
+    text = json.dumps(json_schema(args.kind), indent=2) + "\n"
+    if args.out is None:
+        sys.stdout.write(text)
+    else:
+        try:
+            args.out.write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise GtModelError(f"--out {args.out}: cannot write ({exc.strerror or exc})") from None
+        print(f"wrote {args.out}")
+    return EXIT_OK
 
-    try:
-        functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
-        generated = generate(
-            robot=args.robot, out_dir=args.out, friction=args.friction, real=args.real,
-            newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions,
-        )
-        print(f"wrote {', '.join(str(p) for p in generated.files)}")
-        print(generated.version)
-        if not args.check:
-            return EXIT_OK
-        report = check(generated, n=args.samples, seed=args.seed, timing=True)
-    except GtModelError as exc:
-        print(f"gtmodel: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except Exception as exc:  # noqa: BLE001
-        if args.debug:
-            traceback.print_exc()
-        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
-        return EXIT_INTERNAL
+
+def _codegen(args: argparse.Namespace) -> int:
+    functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    generated = generate(
+        robot=args.robot, out_dir=args.out, friction=args.friction, real=args.real,
+        newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions,
+    )
+    print(f"wrote {', '.join(str(p) for p in generated.files)}")
+    print(generated.version)
+    if not args.check:
+        return EXIT_OK
+    report = check(generated, n=args.samples, seed=args.seed, timing=True)
     print("\n".join(report.summary_lines()))
     return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
+
+
+def _sigterm(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt("SIGTERM")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -249,14 +244,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        Exit code: 0 success (optimal / check passed), 1 not optimal / check failed,
-        2 invalid input, 3 internal error, 130 interrupted.
+        Exit code from :data:`gtmodel.status.EXIT_CODES`: 0 success (optimal / check
+        passed), 1 not optimal / check failed, 2 invalid input or unwritable output,
+        3 internal error, 130 interrupted.
     """
     args = build_parser().parse_args(argv)
     _setup_logging(getattr(args, "quiet", False))
-    if args.command == "solve":
-        return _solve(args)
-    return _codegen(args)
+    previous = signal.signal(signal.SIGTERM, _sigterm) if _main_thread() else None
+    try:
+        if args.command == "solve":
+            return _solve(args)
+        if args.command == "schema":
+            return _schema(args)
+        return _codegen(args)
+    except KeyboardInterrupt:
+        print("gtmodel: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except GtModelError as exc:
+        print(f"gtmodel: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except Exception as exc:  # noqa: BLE001 - reported, non-zero exit
+        if getattr(args, "debug", False):
+            traceback.print_exc()
+        print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
+        return EXIT_INTERNAL
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -110,7 +110,7 @@ def number(
     return Annotated[
         float,
         BeforeValidator(check),
-        Field(gt=gt, ge=ge, lt=lt, le=le, description=_describe(description, unit), json_schema_extra=_unit(unit)),
+        Field(description=_describe(description, unit), json_schema_extra=_bounds(unit, gt=gt, ge=ge, lt=lt, le=le)),
     ]
 
 
@@ -134,7 +134,7 @@ def integer(lo: int, hi: int, *, description: str = "") -> Any:
             raise _fail(f"an integer in {lo}..{hi}")
         return v
 
-    return Annotated[int, BeforeValidator(check), Field(ge=lo, le=hi, description=description)]
+    return Annotated[int, BeforeValidator(check), Field(description=description or None, json_schema_extra=_bounds("", ge=lo, le=hi))]
 
 
 def vector(
@@ -285,6 +285,15 @@ def _describe(description: str, unit: str) -> str | None:
 
 def _unit(unit: str) -> dict[str, Any] | None:
     return {"unit": unit} if unit else None
+
+
+def _bounds(unit: str, gt: float | None = None, ge: float | None = None, lt: float | None = None, le: float | None = None) -> dict[str, Any] | None:
+    """JSON Schema keywords of a range (the check itself is the field's validator)."""
+    out: dict[str, Any] = dict(_unit(unit) or {})
+    for key, value in (("exclusiveMinimum", gt), ("minimum", ge), ("exclusiveMaximum", lt), ("maximum", le)):
+        if value is not None:
+            out[key] = value
+    return out or None
 
 
 class Section(BaseModel):
