@@ -124,7 +124,7 @@ def test_bad_problem_gives_one_message_nonzero_exit_and_error_summary(tmp_path, 
     assert re.search(match, err)
     assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["status"] == "error"
+    assert summary["status"] == "invalid_input"
     assert re.search(match, summary["message"])
 
 
@@ -150,13 +150,16 @@ def test_codegen_check_from_cli(tmp_path, capsys):
     assert (tmp_path / "gt_L1.h").exists()
 
 
-def test_result_folder_that_is_a_file_fails_before_solving(tmp_path, capsys):
+def test_result_folder_that_is_a_file_is_an_io_error_naming_the_path(tmp_path, capsys):
     blocker = tmp_path / "taken"
     blocker.write_text("not a folder")
-    code = main(["solve", str(BASE), "--out", str(blocker), "--quiet"])
+    code = main(["solve", str(BASE), "--out", str(blocker), "--quiet", "--no-plots"])
     assert code == EXIT_BAD_INPUT
-    assert "cannot create the result folder" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"cannot write the result folder {blocker}" in err
+    assert "internal error" not in err
     assert blocker.read_text() == "not a folder"
+    assert [p.name for p in tmp_path.iterdir()] == ["taken"]
 
 
 def test_csv_forces_replayed_through_the_model_reproduce_the_path(solved):

@@ -1,0 +1,193 @@
+"""Result folders are never stale and never half-written; interrupts stop the whole run.
+
+Checked against the file system itself: what is in the folder after each kind of
+failure, after a SIGKILL mid-run (a real subprocess), and after SIGINT during IPOPT.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_NOT_OPTIMAL, main
+from gtmodel.errors import ResultWriteError
+from gtmodel.problems.results import ResultFolder
+from gtmodel.problems.runtime import Heartbeat, InterruptGuard
+
+from ..bad_problems import BASE
+from ..conftest import REPO
+
+
+def _files(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_commit_replaces_the_folder_and_lists_every_file(tmp_path):
+    target = tmp_path / "out"
+    target.mkdir()
+    (target / "old.csv").write_text("stale")
+    folder = ResultFolder(target)
+    (folder.path / "a.csv").write_text("1")
+    (folder.path / "b.png").write_bytes(b"x")
+    assert _files(target) == ["old.csv"]  # nothing visible before the commit
+    summary = folder.commit({"status": "optimal"})
+    assert _files(target) == ["a.csv", "b.png", "summary.json"]
+    assert json.loads((target / "summary.json").read_text())["files"] == ["summary.json", "a.csv", "b.png"]
+    assert summary["files"] == ["summary.json", "a.csv", "b.png"]
+    assert _files(tmp_path) == ["out"]  # no partial or old folder left behind
+
+
+def test_discard_leaves_the_earlier_folder_untouched(tmp_path):
+    target = tmp_path / "out"
+    target.mkdir()
+    (target / "trajectory.csv").write_text("earlier run")
+    folder = ResultFolder(target)
+    (folder.path / "half.csv").write_text("half")
+    folder.discard()
+    assert _files(tmp_path) == ["out"]
+    assert (target / "trajectory.csv").read_text() == "earlier run"
+
+
+def test_orphaned_partial_folder_of_a_dead_process_is_removed(tmp_path):
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True).stdout.strip()
+    orphan = tmp_path / f".out.partial-{dead}"
+    orphan.mkdir()
+    ResultFolder(tmp_path / "out").discard()
+    assert not orphan.exists()
+
+
+def test_a_file_in_place_of_the_folder_is_an_io_error_naming_it(tmp_path):
+    target = tmp_path / "out"
+    target.write_text("a file")
+    folder = ResultFolder(target)
+    with pytest.raises(ResultWriteError, match=f"cannot write the result folder {target}"):
+        folder.commit({"status": "optimal"})
+    folder.discard()
+    assert target.read_text() == "a file"
+
+
+@pytest.fixture(scope="module")
+def earlier_run(tmp_path_factory):
+    """A successful solve of the shipped minimum-time problem into a folder."""
+    out = tmp_path_factory.mktemp("earlier") / "out"
+    assert main(["solve", str(BASE), "--out", str(out), "--quiet"]) == 0
+    assert {"trajectory.csv", "trajectory.h", "tcp_path.png", "forces.png"} <= set(_files(out))
+    return out
+
+
+@pytest.mark.parametrize(
+    "edit, code, status, match",
+    [
+        (lambda t: t.replace("[limits]", "[limits"), EXIT_BAD_INPUT, "invalid_input", "invalid TOML"),
+        (lambda t: t.replace("force = [450.0, 450.0, 450.0]", "force = [1e308, 450.0, 450.0]"), EXIT_BAD_INPUT, "invalid_input", "limits.force"),
+        (
+            lambda t: t.replace("force = [450.0, 450.0, 450.0]", "force = [152.0, 152.0, 152.0]").replace("elements = 50 ", "elements = 10 "),
+            EXIT_NOT_OPTIMAL, None, "",
+        ),
+    ],
+    ids=["bad_toml", "force_1e308", "infeasible_force_limit"],
+)
+def test_failed_run_leaves_no_file_of_the_earlier_run(tmp_path, earlier_run, edit, code, status, match):
+    out = tmp_path / "out"
+    subprocess.run(["cp", "-r", str(earlier_run), str(out)], check=True)
+    broken = tmp_path / "broken.toml"
+    broken.write_text(edit(BASE.read_text()))
+    assert main(["solve", str(broken), "--out", str(out), "--quiet"]) == code
+    summary = json.loads((out / "summary.json").read_text())
+    assert _files(out) == ["summary.json"]
+    assert summary["files"] == ["summary.json"]
+    assert summary["status"] == status if status else summary["status"] in ("infeasible", "error", "max_iterations")
+    assert match in summary["message"]
+
+
+def _solve_process(out, *extra):
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(REPO))
+    return subprocess.Popen(
+        [sys.executable, "-m", "gtmodel.cli", "solve", str(BASE), "--out", str(out), "--no-plots", *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=REPO,
+    )
+
+
+def _wait_for(proc, text, timeout=120):
+    """Read stderr lines until one contains ``text`` (the solve has started)."""
+    t0 = time.monotonic()
+    lines = []
+    while time.monotonic() - t0 < timeout:
+        line = proc.stderr.readline()
+        lines.append(line)
+        if text in line:
+            return
+        if not line and proc.poll() is not None:
+            break
+    pytest.fail(f"never saw {text!r}: {lines}")
+
+
+def test_sigkill_mid_run_leaves_the_earlier_folder_intact(tmp_path, earlier_run):
+    out = tmp_path / "out"
+    subprocess.run(["cp", "-r", str(earlier_run), str(out)], check=True)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    proc = _solve_process(out, "-v")
+    _wait_for(proc, "solving")
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout=30)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_sigint_during_ipopt_stops_with_status_interrupted(tmp_path):
+    out = tmp_path / "out"
+    text = BASE.read_text().replace("elements = 50 ", "elements = 400 ")
+    slow = tmp_path / "slow.toml"
+    slow.write_text(text)
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(REPO))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gtmodel.cli", "solve", str(slow), "--out", str(out), "--no-plots", "-v"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=REPO,
+    )
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 120:  # wait for IPOPT's iteration log
+        line = proc.stdout.readline()
+        if line.lstrip().startswith("1 ") or "iter" in line:
+            break
+    proc.send_signal(signal.SIGINT)
+    code = proc.wait(timeout=120)
+    err = proc.stderr.read()
+    assert code == EXIT_INTERRUPTED, err
+    assert "interrupted" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    assert _files(out) == ["summary.json"]
+
+
+def test_interrupt_guard_turns_a_swallowed_sigint_into_keyboardinterrupt():
+    with pytest.raises(KeyboardInterrupt):
+        with InterruptGuard() as guard:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.1)
+            except KeyboardInterrupt:
+                pass  # what a solver does
+            guard.check()
+
+
+def test_heartbeat_logs_while_running(caplog):
+    caplog.set_level(logging.INFO, logger="gtmodel")
+    with Heartbeat("solving x", interval=0.05):
+        time.sleep(0.3)
+    lines = [r.getMessage() for r in caplog.records if "still running" in r.getMessage()]
+    assert len(lines) >= 3
+    assert lines[0].startswith("solving x: still running")
+
+
+def test_heartbeat_disabled_is_silent(caplog):
+    caplog.set_level(logging.INFO, logger="gtmodel")
+    with Heartbeat("solving x", interval=0.05, enabled=False):
+        time.sleep(0.2)
+    assert not [r for r in caplog.records if "still running" in r.getMessage()]

@@ -1,0 +1,80 @@
+"""The house rules, checked on the source: layers, module size, imports.
+
+Checked with import-linter (the layers contract in pyproject.toml) and with the
+standard library's ``ast`` on every module of gtmodel/.
+"""
+
+from __future__ import annotations
+
+import ast
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from .conftest import REPO
+
+PACKAGE = REPO / "gtmodel"
+MODULES = sorted(p for p in PACKAGE.rglob("*.py"))
+IDS = [str(p.relative_to(REPO)) for p in MODULES]
+#: Heavy optional dependencies that may be imported inside functions.
+LAZY_OK = ("matplotlib", "sklearn", "dask", "distributed")
+MAX_LINES = 900
+
+
+def _subpackage(module: str) -> str:
+    parts = module.split(".")
+    return ".".join(parts[:2])
+
+
+def _module_name(path) -> str:
+    rel = path.relative_to(REPO).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def test_layers_contract_is_kept():
+    exe = shutil.which("lint-imports") or shutil.which("lint-imports", path=str(REPO))
+    cmd = [exe] if exe else [sys.executable, "-m", "importlinter.cli"]
+    proc = subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "0 broken" in proc.stdout
+
+
+@pytest.mark.parametrize("path", MODULES, ids=IDS)
+def test_module_is_not_longer_than_900_lines(path):
+    assert len(path.read_text(encoding="utf-8").splitlines()) <= MAX_LINES
+
+
+@pytest.mark.parametrize("path", MODULES, ids=IDS)
+def test_imports_at_module_level_only_except_heavy_optional_ones(path):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    lazy = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for inner in ast.walk(node):
+                if isinstance(inner, ast.Import):
+                    names = [a.name for a in inner.names]
+                elif isinstance(inner, ast.ImportFrom):
+                    names = [inner.module or ""]
+                else:
+                    continue
+                lazy += [n for n in names if not n.startswith(LAZY_OK)]
+    assert not lazy, f"function-level imports of {lazy}"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=IDS)
+def test_no_private_name_imported_from_another_subpackage(path):
+    here = _subpackage(_module_name(path))
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    bad = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("gtmodel."):
+            if _subpackage(node.module) == here or node.module.split(".")[1].startswith("_"):
+                continue  # own subpackage, or a base module of the whole package
+            bad += [f"{node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
+            bad += [node.module] if any(p.startswith("_") for p in node.module.split(".")[2:]) else []
+    assert not bad, f"private names of other subpackages: {bad}"
