@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Sequence
 
 from gtmodel import __version__
-from gtmodel._fields import parse_override
+from gtmodel.problems.overrides import parse_override
 from gtmodel.codegen import check, generate
 from gtmodel.errors import GtModelError
 from gtmodel.problems import KINDS, run_problem

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from gtmodel._fields import apply_override
+from gtmodel.problems.overrides import apply_override
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
