@@ -66,7 +66,7 @@ def test_several_files_one_bad_records_the_error_and_exits_nonzero(tmp_path, cap
     err = capsys.readouterr().err
     assert "field 'kind'" in err and "invalid TOML" in err and "Traceback" not in err
     rows = list(csv.DictReader(open(out / "comparison.csv", newline="")))
-    assert [r["status"] for r in rows] == ["error", "error"]
+    assert [r["status"] for r in rows] == ["invalid_input", "invalid_input"]
 
 
 @pytest.mark.parametrize(
@@ -104,3 +104,32 @@ def test_free_path_is_faster_and_the_straight_line_uses_less_energy(tmp_path):
     free, line = rows["l1_time_optimal"], rows["l1_path_constrained"]
     assert float(free["final_time_s"]) < float(line["final_time_s"])
     assert float(line["energy"]) < float(free["energy"])
+
+
+def test_ctrl_c_in_a_sweep_stops_the_whole_study(tmp_path, capsys, monkeypatch):
+    """A KeyboardInterrupt in the second case ends the study: no third case, exit 130."""
+    from gtmodel.cli import EXIT_INTERRUPTED
+    from gtmodel.problems import get_kind
+
+    kind = get_kind("point_to_point")
+    calls = []
+    original = type(kind).solve
+
+    def solve(self, declaration, **kw):
+        calls.append(declaration)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return original(self, declaration, **kw)
+
+    monkeypatch.setattr(type(kind), "solve", solve)
+    text = BASE.read_text().replace("elements = 50 ", "elements = 10 ")
+    f = tmp_path / "p.toml"
+    f.write_text(text)
+    out = tmp_path / "sweep"
+    code = main(["solve", str(f), "--sweep", "w=0,0.001,0.01", "--out", str(out), "--quiet", "--no-plots"])
+    assert code == EXIT_INTERRUPTED
+    assert len(calls) == 2
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    assert [c["status"] for c in summary["cases"]] == ["optimal", "interrupted"]
+    assert "interrupted" in capsys.readouterr().err
