@@ -22,10 +22,11 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import AfterValidator, Field
+from pydantic_core import PydanticCustomError
 
 from gtmodel.calibration import DeflectionData, DeflectionNoise, calibrate_cp, calibrate_dpp, synthetic_deflections
 from gtmodel.calibration.joint_stiffness import (
@@ -86,6 +87,20 @@ def _stiffness(description: str) -> Any:
                   what=f"a stiffness in {MIN_JOINT_STIFFNESS:g}..{MAX_JOINT_STIFFNESS:g} N m/rad")
 
 
+def _at_least_min_stiffness(v: list[float]) -> list[float]:
+    if any(x < MIN_JOINT_STIFFNESS for x in v):
+        raise PydanticCustomError("gtmodel", "expected {expected}",
+                                  {"expected": f"stiffnesses in {MIN_JOINT_STIFFNESS:g}..{MAX_JOINT_STIFFNESS:g} N m/rad"})
+    return v
+
+
+#: Six joint stiffnesses [N m/rad] in the physical range.
+JointStiffnesses = Annotated[
+    vector(6, positive=True, bound=MAX_JOINT_STIFFNESS, unit="N m/rad", description="true joint stiffnesses (default: Table 2 DPP)"),
+    AfterValidator(_at_least_min_stiffness),
+]
+
+
 class ArmSection(Section):
     """``[arm]``: the serial arm (Jacobian source)."""
 
@@ -96,8 +111,7 @@ class ArmSection(Section):
 class TruthSection(Section):
     """``[truth]``: synthetic data on the Table 1 poses."""
 
-    k_theta: vector(6, positive=True, bound=MAX_JOINT_STIFFNESS, unit="N m/rad",
-                    description="true joint stiffnesses (default: Table 2 DPP)") = Field(default_factory=lambda: TABLE_2_K_THETA["DPP"].tolist())
+    k_theta: JointStiffnesses = Field(default_factory=lambda: TABLE_2_K_THETA["DPP"].tolist())
     scenario: choice("none", "table_2", description='"none": exact joint-spring model; "table_2": unmodelled rotation-only compliance') = "table_2"
     rotation_only_stiffness: _stiffness("stiffness of the unmodelled rotation-only compliance, scenario table_2 only "
                                         f"(default {TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS:g})") | None = None
