@@ -68,11 +68,12 @@ __all__ = [
 
 _log = logging.getLogger("gtmodel")
 
-#: Most samples of a synthetic log (``duration / sample_time``): 40 times the shipped
-#: 30 s at 4 ms, a few seconds of simulation and filtering, some 100 MB of regressor.
-MAX_SAMPLES = 300_000
-#: Largest log file read [bytes] (about as many rows as :data:`MAX_SAMPLES`).
-MAX_LOG_BYTES = 30_000_000
+#: Most samples of a log (synthetic: ``duration / sample_time``): 13 times the shipped
+#: 30 s at 4 ms; a few seconds of simulation, filtering and identification, about 250 MB
+#: (300 000 samples took 11 s of CPU and 670 MB).
+MAX_SAMPLES = 100_000
+#: Largest log file read [bytes] (100 000 rows of full-precision numbers).
+MAX_LOG_BYTES = 10_000_000
 #: Longest synthetic log or excitation period [s].
 MAX_DURATION_S = 1.0e4
 #: Largest cart speed or speed threshold [m/s] and acceleration [m/s^2] accepted.
@@ -265,11 +266,14 @@ def _read_log(file: ProblemFile, ref: str) -> tuple[Any, Path]:
     if size > MAX_LOG_BYTES:
         raise file.fail("data.file", f"a log file of at most {MAX_LOG_BYTES} bytes", f"{ref} ({size} bytes)")
     try:
-        return read_motion_log(path), path
+        log = read_motion_log(path)
     except GtModelError as exc:
         raise file.wrap("data.file", exc) from None
     except UnicodeDecodeError as exc:
         raise file.fail("data.file", f"a UTF-8 text file (byte {exc.start} is not)", ref) from None
+    if log.n_samples > MAX_SAMPLES:
+        raise file.fail("data.file", f"a log of at most {MAX_SAMPLES} samples", f"{ref} ({log.n_samples} samples)")
+    return log, path
 
 
 class DynamicIdentificationKind(ProblemKind):
