@@ -74,6 +74,8 @@ _log = logging.getLogger("gtmodel")
 MAX_SAMPLES = 100_000
 #: Largest log file read [bytes] (100 000 rows of full-precision numbers).
 MAX_LOG_BYTES = 10_000_000
+#: Header and comment lines allowed in a log beyond :data:`MAX_SAMPLES` rows.
+MAX_LOG_COMMENT_LINES = 1000
 #: Longest synthetic log or excitation period [s].
 MAX_DURATION_S = 1.0e4
 #: Largest cart speed or speed threshold [m/s] and acceleration [m/s^2] accepted.
@@ -265,6 +267,12 @@ def _read_log(file: ProblemFile, ref: str) -> tuple[Any, Path]:
     size = path.stat().st_size
     if size > MAX_LOG_BYTES:
         raise file.fail("data.file", f"a log file of at most {MAX_LOG_BYTES} bytes", f"{ref} ({size} bytes)")
+    try:
+        lines = path.read_bytes().count(b"\n")
+    except OSError as exc:
+        raise file.fail("data.file", f"a readable log file ({exc.strerror})", ref) from None
+    if lines > MAX_SAMPLES + MAX_LOG_COMMENT_LINES:  # counted before parsing, which is slow
+        raise file.fail("data.file", f"a log of at most {MAX_SAMPLES} samples", f"{ref} ({lines} lines)")
     try:
         log = read_motion_log(path)
     except GtModelError as exc:
