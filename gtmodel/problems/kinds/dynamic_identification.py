@@ -169,7 +169,29 @@ class IdentificationSection(Section):
 
 
 class DynamicIdentificationFile(ProblemSchema):
-    """A ``dynamic_identification`` problem file: exactly one of ``[data]`` and ``[truth]``."""
+    """A ``dynamic_identification`` problem file: exactly one of ``[data]`` and ``[truth]``.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"dynamic_identification"}
+        The kind.
+    description : str, optional
+        Free text.
+    robot : RobotSection
+        ``[robot]``: the model's parameter set.
+    data : DataSection, optional
+        ``[data]``: a measured log.
+    truth : TruthSection, optional
+        ``[truth]``: synthetic data.
+    excitation : ExcitationSection, optional
+        ``[excitation]``: the motion of synthetic data.
+    filter : FilterSection, optional
+        ``[filter]``: filtering and differentiation.
+    identification : IdentificationSection, optional
+        ``[identification]``: the variants.
+    """
 
     kind: Literal["dynamic_identification"]
     robot: RobotSection

@@ -143,7 +143,27 @@ class DataSection(Section):
 
 
 class JointStiffnessFile(ProblemSchema):
-    """A ``joint_stiffness_calibration`` problem file: exactly one of ``[truth]`` and ``[data]``."""
+    """A ``joint_stiffness_calibration`` problem file: exactly one of ``[truth]`` and ``[data]``.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"joint_stiffness_calibration"}
+        The kind.
+    description : str, optional
+        Free text.
+    arm : ArmSection, optional
+        ``[arm]``: the serial arm.
+    truth : TruthSection, optional
+        ``[truth]``: synthetic data on the Table 1 poses.
+    noise : NoiseSection, optional
+        ``[noise]``: noise of synthetic data.
+    calibration : CalibrationSection, optional
+        ``[calibration]``: method options.
+    data : DataSection, optional
+        ``[data]``: measured deflections.
+    """
 
     kind: Literal["joint_stiffness_calibration"]
     arm: ArmSection = ArmSection()
