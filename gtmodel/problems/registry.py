@@ -8,12 +8,16 @@ from __future__ import annotations
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems.base import ProblemKind
+from gtmodel.problems.kinds.dynamic_identification import DynamicIdentificationKind
+from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 
 __all__ = ["KINDS", "get_kind"]
 
 _CLASSES: tuple[type[ProblemKind], ...] = (
     PointToPointKind,
+    DynamicIdentificationKind,
+    JointStiffnessKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.

@@ -7,16 +7,19 @@ free, exact joint-spring model: every method must return them), and the thesis' 
 
 from __future__ import annotations
 
+import time
 import tomllib
 
 import numpy as np
 import pytest
 
-from gtmodel.calibration.joint_stiffness_problem_files import DATA_COLUMNS, METHODS
-from gtmodel.cli import EXIT_OK
+from gtmodel.errors import ProblemError
+from gtmodel.problems import load_problem, run_problem
+from gtmodel.problems.kinds.joint_stiffness_calibration import DATA_COLUMNS, METHODS
+from gtmodel.status import Status
 
-from ..conftest import PROBLEMS_DIR, SHARED_REFERENCE, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
-from ..conftest import replace_once as _edit
+from ...conftest import PROBLEMS_DIR, SHARED_REFERENCE, assert_bad_problem
+from ...conftest import replace_once as _edit
 
 FILE = PROBLEMS_DIR / "kr500_joint_stiffness.toml"
 #: Noise-free, exact-model data: identified / true stiffness within this relative error.
@@ -35,17 +38,27 @@ def _noise_free(text: str) -> str:
     return text
 
 
+#: A bad file must be refused within this time [s] (no solver, no LAPACK on inf).
+LOAD_TIME_LIMIT_S = 1.0
+
+
+def _solve(path, out) -> tuple:
+    """``run_problem`` with plots: (status, summary)."""
+    outcome = run_problem(path, out)
+    return outcome.status, outcome.summary
+
+
 @pytest.fixture(scope="module")
 def solved(tmp_path_factory):
     out = tmp_path_factory.mktemp("kr500js")
-    code, summary = solve_through_cli(FILE, out)
-    return code, out, summary
+    status, summary = _solve(FILE, out)
+    return status, out, summary
 
 
 def test_shipped_problem_is_optimal_with_the_required_summary(solved):
     """The shipped file solves; summary, CSV and plot hold what the kind promises."""
-    code, out, s = solved
-    assert code == EXIT_OK and s["status"] == "optimal"
+    status, out, s = solved
+    assert status == Status.OPTIMAL and s["status"] == "optimal"
     assert s["n_measurements"] == 60
     assert set(s["methods"]) == set(METHODS)
     for m in METHODS:
@@ -82,8 +95,8 @@ def test_noise_free_exact_model_recovers_the_truth(tmp_path):
     """Every method returns the generating stiffnesses on exact data."""
     f = tmp_path / "exact.toml"
     f.write_text(_noise_free(FILE.read_text()))
-    code, s = solve_through_cli(f, tmp_path / "out")
-    assert code == EXIT_OK and s["status"] == "optimal"
+    status, s = _solve(f, tmp_path / "out")
+    assert status == Status.OPTIMAL and s["status"] == "optimal"
     for m in METHODS:
         assert np.allclose(s["methods"][m]["ratio_to_truth"], 1.0, rtol=0, atol=EXACT_RTOL), m
 
@@ -96,15 +109,17 @@ def _write_csv(path, data) -> None:
 
 def _data_problem(tmp_path, csv_text_edit=None) -> tuple:
     """A [data] problem on the noise-free synthetic data written as CSV; returns (file, truth)."""
-    from gtmodel.problems import load_problem
-
     exact = tmp_path / "exact.toml"
     exact.write_text(_noise_free(FILE.read_text()))
     decl = load_problem(exact).declaration
     csv_path = tmp_path / "deflections.csv"
     _write_csv(csv_path, decl.data)
     if csv_text_edit is not None:
-        csv_path.write_text(csv_text_edit(csv_path.read_text()))
+        edited = csv_text_edit(csv_path.read_text())
+        if isinstance(edited, bytes):
+            csv_path.write_bytes(edited)
+        else:
+            csv_path.write_text(edited)
     text = FILE.read_text()
     text = text[: text.index("\n[truth]")] + '[data]\nfile = "deflections.csv"\n\n' + text[text.index("\n[calibration]"):]
     f = tmp_path / "measured.toml"
@@ -115,8 +130,8 @@ def _data_problem(tmp_path, csv_text_edit=None) -> tuple:
 def test_measured_csv_recovers_the_truth(tmp_path):
     """A [data] CSV of exact deflections gives back the stiffnesses that generated them."""
     f, k_true = _data_problem(tmp_path)
-    code, s = solve_through_cli(f, tmp_path / "out")
-    assert code == EXIT_OK and s["status"] == "optimal" and s["k_theta_true_Nm_per_rad"] is None
+    status, s = _solve(f, tmp_path / "out")
+    assert status == Status.OPTIMAL and s["status"] == "optimal" and s["k_theta_true_Nm_per_rad"] is None
     for m in METHODS:
         assert np.allclose(np.array(s["methods"][m]["k_theta_Nm_per_rad"]) / k_true, 1.0, rtol=0, atol=EXACT_RTOL), m
 
@@ -132,14 +147,15 @@ BAD_CSV = [
     ("not_a_number", lambda t: _first_cell(t, "x"), r"line 3, column 1 \(theta1_deg\): expected a finite number, got 'x'"),
     ("short_line", lambda t: t + "1,2,3\n", r"line 63: expected 18 columns, got 3"),
     ("bad_header", lambda t: t.replace("theta1_deg", "q1", 1), r"line 1: expected the header"),
+    ("empty", lambda t: "", r"expected the header .*the file is empty"),
+    ("header_only", lambda t: t.splitlines()[0] + "\n", r"expected at least 2 measurement lines, got 0"),
+    ("not_utf8", lambda t: t.replace("# a comment line", "# caf\xe9", 1).encode("latin-1"), r"cannot read the data file \(not UTF-8"),
+    ("infinite", lambda t: _first_cell(t, "inf"), r"line 3, column 1 \(theta1_deg\): expected a finite number, got 'inf'"),
 ]
 
 
 @pytest.mark.parametrize("case, edit, match", BAD_CSV, ids=[c[0] for c in BAD_CSV])
 def test_bad_data_file_names_line_and_column(tmp_path, case, edit, match):
-    from gtmodel.errors import ProblemError
-    from gtmodel.problems import load_problem
-
     f, _ = _data_problem(tmp_path, edit)
     with pytest.raises(ProblemError, match=r"field 'data\.file': .*deflections\.csv: " + match):
         load_problem(f)
@@ -156,7 +172,12 @@ BAD = [
     ("bad_weight", _edit("scaled_rotation_weight = 10.0", "scaled_rotation_weight = 0.0"), r"field 'calibration\.scaled_rotation_weight'"),
     ("unknown_arm", _edit('model = "serial_6r_illustrative"', 'model = "kr9"'), r"field 'arm\.model'"),
     ("truth_and_data", _edit("[calibration]", '[data]\nfile = "x.csv"\n\n[calibration]'), r"exactly one of the tables \[truth\]"),
-    ("missing_data_file", lambda t: t[: t.index("\n[truth]")] + '[data]\nfile = "nothing.csv"\n', r"field 'data\.file'.*cannot read"),
+    ("missing_data_file", lambda t: t[: t.index("\n[truth]")] + '[data]\nfile = "nothing.csv"\n',
+     r"field 'data\.file': expected an existing file .*nothing\.csv"),
+    ("noise_with_data", lambda t: t[: t.index("\n[truth]")] + '[data]\nfile = "x.csv"\n' + t[t.index("\n[noise]"):],
+     r"field 'noise': only for synthetic data"),
+    ("rotation_only_without_scenario", _edit('scenario = "table_2"', 'scenario = "none"'), r"field 'truth\.rotation_only_stiffness'"),
+    ("unknown_table", lambda t: t + "\n[solver]\nmax_iter = 3\n", r"unknown field 'solver'"),
 ]
 
 
@@ -165,6 +186,48 @@ def test_bad_files(tmp_path, case, edit, match):
     assert_bad_problem(tmp_path, FILE, case, edit, match)
 
 
-def test_bad_file_through_the_cli(tmp_path, capsys):
-    text = FILE.read_text().replace('scenario = "table_2"', 'scenario = "wobbly"')
-    assert_bad_problem_through_cli(tmp_path, capsys, text, r"truth\.scenario")
+#: Values out of their physical range (or of the wrong type): each is refused at load time,
+#: fast, naming the field (``moment = 1e308`` used to hang inside LAPACK on inf deflections).
+OUT_OF_RANGE = [
+    ("moment_1e308", "moment = 200.0", "moment = 1e308", r"field 'truth\.moment': expected a number <= 1e\+07"),
+    ("moment_inf", "moment = 200.0", "moment = inf", r"field 'truth\.moment': expected a finite number"),
+    ("moment_nan", "moment = 200.0", "moment = nan", r"field 'truth\.moment': expected a finite number"),
+    ("moment_zero", "moment = 200.0", "moment = 0", r"field 'truth\.moment': expected a positive number"),
+    ("moment_bool", "moment = 200.0", "moment = true", r"field 'truth\.moment': expected a finite number"),
+    ("force_1e308", "force = 1000.0", "force = 1e308", r"field 'truth\.force': expected a number <= 1e\+07"),
+    ("force_negative", "force = 1000.0", "force = -1", r"field 'truth\.force': expected a positive number"),
+    ("stiffness_1e308", "0.24e6, 0.16e6", "1e308, 0.16e6", r"field 'truth\.k_theta': expected numbers of magnitude <= 1e\+12"),
+    ("stiffness_tiny", "0.24e6, 0.16e6", "1e-300, 0.16e6", r"field 'truth\.k_theta'"),
+    ("stiffness_string", "k_theta = [", 'k_theta = "stiff" #', r"field 'truth\.k_theta': expected a list of 6 finite numbers"),
+    ("stiffness_empty", "k_theta = [", "k_theta = [] #", r"field 'truth\.k_theta': expected a list of 6 finite numbers"),
+    ("rotation_only_1e308", "rotation_only_stiffness = 0.3e6", "rotation_only_stiffness = 1e308", r"field 'truth\.rotation_only_stiffness'"),
+    ("rotation_only_tiny", "rotation_only_stiffness = 0.3e6", "rotation_only_stiffness = 1e-300", r"field 'truth\.rotation_only_stiffness'"),
+    ("position_std_1e308", "position_std = 15e-6", "position_std = 1e308", r"field 'noise\.position_std'"),
+    ("per_m_1e308", "position_std_per_m = 6e-6", "position_std_per_m = 1e308", r"field 'noise\.position_std_per_m'"),
+    ("rotation_std_1e308", "rotation_std = 2.6e-4", "rotation_std = 1e308", r"field 'noise\.rotation_std'"),
+    ("force_std_1e308", "force_relative_std = 0.0", "force_relative_std = 1e308", r"field 'noise\.force_relative_std'"),
+    ("weight_1e308", "scaled_rotation_weight = 10.0", "scaled_rotation_weight = 1e308", r"field 'calibration\.scaled_rotation_weight'"),
+    ("seed_negative", "seed = 0", "seed = -1", r"field 'truth\.seed': expected an integer"),
+    ("seed_float", "seed = 0", "seed = 0.5", r"field 'truth\.seed': expected an integer"),
+    ("scenario_list", 'scenario = "table_2"', "scenario = []", r"field 'truth\.scenario'"),
+    ("arm_number", 'model = "serial_6r_illustrative"', "model = 1", r"field 'arm\.model': expected a non-empty string"),
+    ("bounds_bool", 'bounds = "none"', "bounds = false", r"field 'calibration\.bounds'"),
+]
+
+
+@pytest.mark.parametrize("case, old, new, match", OUT_OF_RANGE, ids=[c[0] for c in OUT_OF_RANGE])
+def test_out_of_range_value_is_refused_fast(tmp_path, case, old, new, match):
+    t0 = time.perf_counter()
+    assert_bad_problem(tmp_path, FILE, case, _edit(old, new), match)
+    assert time.perf_counter() - t0 < LOAD_TIME_LIMIT_S
+
+
+def test_bad_file_gives_invalid_input_and_no_result_files(tmp_path):
+    """A bad file through run_problem: status invalid_input, the field in the message,
+    and a result folder holding the summary alone."""
+    f = tmp_path / "bad.toml"
+    f.write_text(FILE.read_text().replace('scenario = "table_2"', 'scenario = "wobbly"'))
+    outcome = run_problem(f, tmp_path / "out")
+    assert outcome.status == Status.INVALID_INPUT and outcome.exit_code != 0
+    assert "truth.scenario" in outcome.summary["message"]
+    assert outcome.summary["files"] == ["summary.json"]

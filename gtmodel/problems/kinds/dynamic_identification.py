@@ -1,0 +1,646 @@
+"""Kind ``dynamic_identification``: masses and friction from a servo log.
+
+Dressler (2012), ch. 6.2 and Table 6.3: a logged motion (``[data] file``, a CSV read by
+:func:`gtmodel.calibration.read_motion_log`, or synthetic data from a declared true robot,
+``[truth]``, along an optimised excitation trajectory, ``[excitation]``) is filtered and
+differentiated (``[filter]``), and one or several model variants are identified by least
+squares (``[identification]``); the first variant is the main result.
+
+The result folder holds ``summary.json`` (``status``, the first variant's parameters
+with standard deviations and, for synthetic data, the truth and ``|error| / std``,
+residual RMS per actuator and per speed bin, condition numbers, the excitation design
+and a ``variants`` table with the Table 6.3 rows next to the thesis'),
+``parameters.toml`` (a loadable parameter set with the first variant's ``[dynamics]``),
+``identification.csv`` (every variant's parameters) and ``residuals.png``. The field
+reference is ``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import BeforeValidator, Field
+from pydantic_core import PydanticCustomError
+
+from gtmodel.calibration import (
+    DynamicRegressor,
+    FourierTrajectory,
+    design_excitation,
+    identify_dynamics,
+    preprocess_log,
+    read_motion_log,
+    simulate_log,
+)
+from gtmodel.calibration.dynamic_identification import THESIS_TABLE_6_3, VARIANTS, StribeckTerm
+from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.schema import (
+    MAX_FORCE_N,
+    MAX_LENGTH_M,
+    Flag,
+    NonEmptyText,
+    ProblemSchema,
+    Section,
+    choice,
+    integer,
+    number,
+    vector,
+)
+from gtmodel.report.identification import plot_identification_residuals
+from gtmodel.robots import GantryTau3Kinematics, RobotParameters
+from gtmodel.status import Status
+
+__all__ = [
+    "DynamicIdentificationKind",
+    "DynamicIdentificationFile",
+    "DynamicIdentificationDeclaration",
+    "DynamicIdentificationOutcome",
+    "MAX_SAMPLES",
+    "MAX_LOG_BYTES",
+]
+
+_log = logging.getLogger("gtmodel")
+
+#: Most samples of a log (synthetic: ``duration / sample_time``): 13 times the shipped
+#: 30 s at 4 ms; a few seconds of simulation, filtering and identification, about 250 MB
+#: (300 000 samples took 11 s of CPU and 670 MB).
+MAX_SAMPLES = 100_000
+#: Largest log file read [bytes] (100 000 rows of full-precision numbers).
+MAX_LOG_BYTES = 10_000_000
+#: Header and comment lines allowed in a log beyond :data:`MAX_SAMPLES` rows.
+MAX_LOG_COMMENT_LINES = 1000
+#: Longest synthetic log or excitation period [s].
+MAX_DURATION_S = 1.0e4
+#: Largest cart speed or speed threshold [m/s] and acceleration [m/s^2] accepted.
+MAX_SPEED = 10.0
+MAX_ACCELERATION = 1.0e3
+
+
+def _variants(v: Any) -> Any:
+    expected = f"a non-empty list of distinct names from {', '.join(VARIANTS)}"
+    if not isinstance(v, list) or not v or not all(isinstance(x, str) and x in VARIANTS for x in v) or len(set(v)) != len(v):
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": expected})
+    return v
+
+
+def _stribeck(v: Any) -> Any:
+    expected = f"a list of 3 finite numbers of magnitude <= {MAX_FORCE_N:g} N, or [] for no Stribeck term"
+    if v == []:
+        return None
+    if (not isinstance(v, list) or len(v) != 3
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and abs(x) <= MAX_FORCE_N for x in v)):
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": expected})
+    return [float(x) for x in v]
+
+
+#: Names of Table 6.3 variants (``identification.variants``).
+Variants = Annotated[list[str], BeforeValidator(_variants)]
+#: The Stribeck amplitude: 3 forces, or ``[]`` (stored as None) for none.
+Stribeck = Annotated[list[float] | None, BeforeValidator(_stribeck)]
+
+
+class RobotSection(Section):
+    """``[robot]``: the model's parameter set."""
+
+    parameters: NonEmptyText = Field(description="shipped parameter set (L1, D1, L1_ideal) or a TOML path relative to the problem file: "
+                                                 "kinematics, gravity, Table 6.1 friction")
+    configuration: integer(0, 7, description="IK configuration") = 0
+
+
+class DataSection(Section):
+    """``[data]``: a measured motion log."""
+
+    file: NonEmptyText = Field(description="log CSV (t_s,q1_m,q2_m,q3_m,tau1_N,tau2_N,tau3_N), relative to the problem file")
+
+
+class TruthSection(Section):
+    """``[truth]``: synthetic data from a declared true robot (say so in the file)."""
+
+    parameters: NonEmptyText = Field(description="the true robot: shipped parameter set or a TOML path relative to the problem file")
+    duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of the log") = 30.0
+    sample_time: number(gt=0, le=1.0, unit="s", description="sampling interval") = 0.004
+    force_noise: number(ge=0, le=MAX_FORCE_N, unit="N", description="Gaussian force noise (std)") = 5.0
+    position_noise: number(ge=0, le=1.0, unit="m", description="Gaussian position noise (std)") = 1e-6
+    position_resolution: number(ge=0, le=1.0, unit="m", description="encoder quantisation (0: none)") = 1e-6
+    stribeck_amplitude: Stribeck = Field(default=[40.0, 40.0, 40.0],
+                                         description="f_s - f_c per actuator of a Stribeck term the model lacks [N]; [] for none")
+    stribeck_velocity: number(gt=0, le=MAX_SPEED, unit="m/s", description="Stribeck velocity") = 0.02
+    seed: integer(0, 2**31 - 1, description="noise seed") = 0
+
+
+class ExcitationSection(Section):
+    """``[excitation]``: the motion of synthetic data (a finite Fourier series)."""
+
+    optimize: Flag = Field(default=True, description="design the coefficients by IPOPT for a well-conditioned regressor, else random")
+    harmonics: integer(1, 20, description="harmonics of the Fourier series") = 4
+    period: number(gt=0, le=MAX_DURATION_S, unit="s", description="period of the motion") = 10.0
+    n_grid: integer(8, 1000, description="time grid of the design (at least 4 points per period of the highest harmonic)") = 60
+    max_velocity: number(gt=0, le=MAX_SPEED, unit="m/s", description="cart speed bound") = 0.5
+    max_acceleration: number(gt=0, le=MAX_ACCELERATION, unit="m/s^2", description="cart acceleration bound") = 3.0
+    T_center: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at the centre of the motion") = Field(
+        default_factory=lambda: [0.0, 2.9, -0.5])
+    seed: integer(0, 2**31 - 1, description="seed of the initial (or random) coefficients") = 0
+    max_iter: integer(1, 10000, description="IPOPT iteration limit of the design") = 150
+
+
+class FilterSection(Section):
+    """``[filter]``: zero-phase filtering and differentiation (:func:`gtmodel.calibration.preprocess_log`)."""
+
+    method: choice("butter", "savgol", description="Butterworth filtfilt or Savitzky-Golay") = "butter"
+    cutoff: number(gt=0, le=1e6, unit="Hz", description="cut-off frequency (below Nyquist)") = 10.0
+    order: integer(1, 10, description="filter order (polynomial order >= 2 for savgol)") = 4
+    decimate: integer(1, 10000, description="decimation factor (default round(fs / cutoff))") | None = None
+    trim: integer(0, 10**6, description="samples trimmed at both ends (default 2 fs / cutoff)") | None = None
+
+
+class IdentificationSection(Section):
+    """``[identification]``: the variants and the least-squares options."""
+
+    variants: Variants = Field(default_factory=lambda: ["model_2"], description="Table 6.3 variants to identify (the first is the main result)")
+    weighting: choice("actuator", "none", description="rows weighted by 1 / residual RMS per actuator (two-step) or not") = "actuator"
+    min_speed: number(ge=0, le=MAX_SPEED, unit="m/s", description="rows below this cart speed are not fitted") = 0.05
+
+
+class DynamicIdentificationFile(ProblemSchema):
+    """A ``dynamic_identification`` problem file: exactly one of ``[data]`` and ``[truth]``.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"dynamic_identification"}
+        The kind.
+    description : str, optional
+        Free text.
+    robot : RobotSection
+        ``[robot]``: the model's parameter set.
+    data : DataSection, optional
+        ``[data]``: a measured log.
+    truth : TruthSection, optional
+        ``[truth]``: synthetic data.
+    excitation : ExcitationSection, optional
+        ``[excitation]``: the motion of synthetic data.
+    filter : FilterSection, optional
+        ``[filter]``: filtering and differentiation.
+    identification : IdentificationSection, optional
+        ``[identification]``: the variants.
+    """
+
+    kind: Literal["dynamic_identification"]
+    robot: RobotSection
+    data: DataSection | None = None
+    truth: TruthSection | None = None
+    excitation: ExcitationSection | None = None
+    filter: FilterSection = FilterSection()
+    identification: IdentificationSection = IdentificationSection()
+
+
+@dataclass
+class DynamicIdentificationDeclaration:
+    """A validated dynamic-identification problem.
+
+    Parameters
+    ----------
+    robot : RobotParameters
+        The model's parameter set (kinematics, gravity, Table 6.1 friction).
+    configuration : int
+        IK configuration.
+    log : MotionLog or None
+        The measured log (``[data]``), or None for synthetic data.
+    truth : dict or None
+        Synthetic-data settings (``[truth]``), with the true parameter set under ``robot``.
+    excitation : dict
+        Excitation settings (synthetic data).
+    filter : dict
+        :func:`~gtmodel.calibration.preprocess_log` options.
+    variants : list of str
+        Variants to identify (the first is the main result).
+    weighting : str
+        Row weighting.
+    min_speed : float
+        Rows below this cart speed are not fitted [m/s].
+    source : str
+        Where the data come from.
+    """
+
+    robot: RobotParameters
+    configuration: int
+    log: Any
+    truth: dict | None
+    excitation: dict
+    filter: dict
+    variants: list
+    weighting: str
+    min_speed: float
+    source: str
+
+
+@dataclass
+class DynamicIdentificationOutcome:
+    """Results of a dynamic-identification problem.
+
+    Parameters
+    ----------
+    declaration : DynamicIdentificationDeclaration
+        The problem.
+    results : list
+        Per variant: ``(name, DynamicIdentificationResult or None, message)``.
+    samples : DynamicSamples
+        The filtered data.
+    log : MotionLog
+        The raw log.
+    design : ExcitationDesign or None
+        The optimised excitation (synthetic data with ``optimize = true``).
+    truth_theta : dict
+        Per variant the true parameter vector (synthetic data; models 1, 3, 4 differ from
+        the truth in structure, so only the shared parameters are compared).
+    solve_time : float
+        Total wall time [s].
+    """
+
+    declaration: DynamicIdentificationDeclaration
+    results: list
+    samples: Any
+    log: Any
+    design: Any = None
+    truth_theta: dict = field(default_factory=dict)
+    solve_time: float = 0.0
+
+    @property
+    def status(self) -> Status:
+        """``optimal`` if every variant was identified, else ``error``."""
+        return Status.OPTIMAL if all(r is not None and r.success for _, r, _ in self.results) else Status.ERROR
+
+    @property
+    def success(self) -> bool:
+        """True when every variant was identified."""
+        return self.status.success
+
+
+def _read_log(file: ProblemFile, ref: str) -> tuple[Any, Path]:
+    path = file.data_file("data.file", ref)
+    size = path.stat().st_size
+    if size > MAX_LOG_BYTES:
+        raise file.fail("data.file", f"a log file of at most {MAX_LOG_BYTES} bytes", f"{ref} ({size} bytes)")
+    try:
+        lines = path.read_bytes().count(b"\n")
+    except OSError as exc:
+        raise file.fail("data.file", f"a readable log file ({exc.strerror})", ref) from None
+    if lines > MAX_SAMPLES + MAX_LOG_COMMENT_LINES:  # counted before parsing, which is slow
+        raise file.fail("data.file", f"a log of at most {MAX_SAMPLES} samples", f"{ref} ({lines} lines)")
+    try:
+        log = read_motion_log(path)
+    except GtModelError as exc:
+        raise file.wrap("data.file", exc) from None
+    except UnicodeDecodeError as exc:
+        raise file.fail("data.file", f"a UTF-8 text file (byte {exc.start} is not)", ref) from None
+    if log.n_samples > MAX_SAMPLES:
+        raise file.fail("data.file", f"a log of at most {MAX_SAMPLES} samples", f"{ref} ({log.n_samples} samples)")
+    return log, path
+
+
+class DynamicIdentificationKind(ProblemKind):
+    """Masses and friction from a servo log, Table 6.3 variants (Dressler (2012), ch. 6.2)."""
+
+    name = "dynamic_identification"
+    schema = DynamicIdentificationFile
+    title = "masses and friction from a servo log, Table 6.3 model variants (Dressler (2012), ch. 6.2)"
+    columns = (
+        Column("max_z", "max |error|/std", "{:.3g}"),
+        Column("condition_number", "condition", "{:.4g}"),
+        Column("n_samples_used", "samples", "{}"),
+        Column("solve_time_s", "solve time [s]", "{:.3f}"),
+    )
+    empty_fields = ("n_samples_log", "n_samples_used", "condition_number", "max_z", "solve_time_s")
+
+    def load(self, doc: DynamicIdentificationFile, file: ProblemFile, name: str) -> DynamicIdentificationDeclaration:
+        """Resolve the parameter sets, read the log or check the synthetic setup (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        doc : DynamicIdentificationFile
+            The validated file.
+        file : ProblemFile
+            The file.
+        name : str
+            Problem name.
+
+        Returns
+        -------
+        DynamicIdentificationDeclaration
+
+        Raises
+        ------
+        ProblemError
+            Both or neither of ``[data]`` and ``[truth]``, ``[excitation]`` with ``[data]``,
+            too many samples, a motion centre outside the workspace, a too coarse design
+            grid, variants the parameter set cannot support, a malformed log file (the
+            message names the file and the line).
+        """
+        if (doc.data is None) == (doc.truth is None):
+            raise ProblemError(f"{file.path}: declare exactly one of '[data]' (a motion log) and '[truth]' (synthetic data)")
+        if doc.data is not None and doc.excitation is not None:
+            raise ProblemError(f"{file.path}: '[excitation]' is for synthetic data ('[truth]'); a log file brings its own motion")
+        robot = robot_parameters(file, "robot.parameters", doc.robot.parameters)
+        configuration = doc.robot.configuration
+        log = None
+        truth = None
+        excitation: dict[str, Any] = {}
+        if doc.data is not None:
+            log, path = _read_log(file, doc.data.file)
+            source = f"measured log {path}"
+        else:
+            tr = doc.truth
+            if tr.duration / tr.sample_time > MAX_SAMPLES:
+                raise file.fail("truth.sample_time", f"at most {MAX_SAMPLES} samples (duration / sample_time = {tr.duration:g} / sample_time)", tr.sample_time)
+            truth = {
+                "robot": robot_parameters(file, "truth.parameters", tr.parameters),
+                "duration": tr.duration,
+                "sample_time": tr.sample_time,
+                "force_noise": tr.force_noise,
+                "position_noise": tr.position_noise,
+                "position_resolution": tr.position_resolution,
+                "stribeck_amplitude": None if tr.stribeck_amplitude is None else np.array(tr.stribeck_amplitude),
+                "stribeck_velocity": tr.stribeck_velocity,
+                "seed": tr.seed,
+            }
+            ex = doc.excitation or ExcitationSection()
+            excitation = {k: getattr(ex, k) for k in ExcitationSection.model_fields}
+            excitation["T_center"] = np.array(ex.T_center)
+            try:
+                GantryTau3Kinematics(robot).require_in_workspace(excitation["T_center"], configuration)
+            except GtModelError as exc:
+                raise file.fail("excitation.T_center", f"a TCP position [m] inside the workspace of {robot.name} ({exc})", list(ex.T_center)) from None
+            if ex.n_grid < 4 * ex.harmonics:
+                raise file.fail("excitation.n_grid", f"at least 4 points per period of the highest harmonic ({4 * ex.harmonics})", ex.n_grid)
+            strib = truth["stribeck_amplitude"]
+            source = (f"SYNTHETIC: true robot {truth['robot'].name} ({truth['robot'].dynamics.source}), force noise {truth['force_noise']} N, "
+                      f"{'Stribeck term ' + str([float(x) for x in strib]) + ' N' if strib is not None else 'no Stribeck term'}")
+        fs = doc.filter
+        if fs.method == "savgol" and fs.order < 2:
+            raise file.fail("filter.order", "an integer >= 2 for method 'savgol'", fs.order)
+        filt = {"method": fs.method, "cutoff": fs.cutoff, "order": fs.order, "decimate": fs.decimate, "trim": fs.trim}
+        ident = doc.identification
+        for v in ident.variants:
+            if VARIANTS[v].asymmetric and robot.dynamics.asymmetric is None:
+                raise file.fail("identification.variants", f"variants the parameter set {robot.name} supports (it has no Table 6.1 friction for {v})",
+                                ident.variants)
+        return DynamicIdentificationDeclaration(robot, configuration, log, truth, excitation, filt, list(ident.variants), ident.weighting,
+                                                ident.min_speed, source)
+
+    def solve(self, declaration: DynamicIdentificationDeclaration, *, verbose: bool = False, previous: Any = None,
+              warm_start: bool = False) -> DynamicIdentificationOutcome:
+        """Design the excitation and simulate (synthetic data), filter, identify every variant.
+
+        Parameters
+        ----------
+        declaration : DynamicIdentificationDeclaration
+            The problem.
+        verbose : bool, optional
+            Log progress.
+        previous : Any, optional
+            Unused.
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        DynamicIdentificationOutcome
+            Never None; a variant that failed has ``None`` and the message.
+
+        Raises
+        ------
+        ProblemError
+            The data cannot be filtered (too short, non-uniform sampling, cut-off above
+            Nyquist) or the motion leaves the workspace.
+        """
+        decl = declaration
+        t0 = time.perf_counter()
+        design = None
+        truth_theta: dict[str, Any] = {}
+        try:
+            if decl.log is None:
+                tr, ex = decl.truth, decl.excitation
+                if ex["optimize"]:
+                    design = design_excitation(decl.robot, decl.variants[0] if decl.variants[0] in ("model_1", "model_2", "full") else "model_2",
+                                               harmonics=ex["harmonics"], period=ex["period"], n_grid=ex["n_grid"],
+                                               T_center=ex["T_center"], max_velocity=ex["max_velocity"], max_acceleration=ex["max_acceleration"],
+                                               configuration=decl.configuration, seed=ex["seed"], max_iter=ex["max_iter"])
+                    trajectory = design.trajectory
+                    if verbose:
+                        _log.info("excitation: %s, cond %.3g -> %.3g", design.message, design.condition_before, design.condition_after)
+                else:
+                    rng = np.random.default_rng(ex["seed"])
+                    q0 = GantryTau3Kinematics(decl.robot).require_in_workspace(ex["T_center"], decl.configuration)
+                    K = ex["harmonics"]
+                    trajectory = FourierTrajectory(q0, 0.06 * rng.standard_normal((3, K)), 0.06 * rng.standard_normal((3, K)), ex["period"])
+                strib = StribeckTerm(np.asarray(tr["stribeck_amplitude"]), tr["stribeck_velocity"]) if tr["stribeck_amplitude"] is not None else None
+                log, _ = simulate_log(trajectory, tr["duration"], tr["robot"], tr["sample_time"], tr["force_noise"], tr["position_noise"],
+                                      tr["position_resolution"], strib, tr["seed"], decl.configuration)
+            else:
+                log = decl.log
+            samples = preprocess_log(log, **decl.filter)
+        except GtModelError as exc:
+            raise ProblemError(f"dynamic identification: {exc}") from None
+        results = []
+        for v in decl.variants:
+            try:
+                reg = DynamicRegressor(decl.robot, v, decl.configuration)
+                res = identify_dynamics(samples, variant=v, weighting=decl.weighting, min_speed=decl.min_speed, rank_deficient="base", regressor=reg)
+                results.append((v, res, res.message))
+                if decl.truth is not None:
+                    truth_theta[v] = reg.theta_of(decl.truth["robot"].dynamics)
+            except GtModelError as exc:
+                results.append((v, None, str(exc)))
+            if verbose:
+                _log.info("variant %s: %s", v, results[-1][2])
+        return DynamicIdentificationOutcome(decl, results, samples, log, design, truth_theta, time.perf_counter() - t0)
+
+    def write(self, declaration: DynamicIdentificationDeclaration, solution: DynamicIdentificationOutcome, out: Path, plots: bool,
+              name: str) -> Written:
+        """Summary fields, ``parameters.toml``, ``identification.csv`` and ``residuals.png``.
+
+        The files are written only when every variant was identified (status
+        ``optimal``); a failed run has its summary alone.
+
+        Parameters
+        ----------
+        declaration : DynamicIdentificationDeclaration
+            The problem.
+        solution : DynamicIdentificationOutcome
+            Its results.
+        out : pathlib.Path
+            Result folder.
+        plots : bool
+            Write the PNG plot.
+        name : str
+            Problem name (titles).
+
+        Returns
+        -------
+        Written
+            ``status``, ``message``, the first variant's figures and a ``variants`` table.
+        """
+        decl = declaration
+        # a variant "has the truth's structure" when the simulated data come from it exactly:
+        # simulate_log uses symmetric friction and the truth's masses, so "full" always and
+        # "model_2" when the truth has no link masses (the L1 set: Table 6.3 model 2)
+        exact = {"full"}
+        if decl.truth is not None and not np.any(np.asarray(decl.truth["robot"].dynamics.m_a) != 0):
+            exact.add("model_2")
+        table = []
+        csv_rows: list[dict[str, Any]] = []
+        for v, res, msg in solution.results:
+            row: dict[str, Any] = {"variant": v, "description": VARIANTS[v].description, "status": "optimal" if res is not None else "error", "message": msg}
+            if res is not None:
+                truth = solution.truth_theta.get(v)
+                same = v in exact
+                prow = _parameter_rows(v, res, truth, same)
+                csv_rows += prow
+                row.update(
+                    parameters={r["parameter"]: {k: r[k] for k in ("estimate", "std", "unit", "truth", "z") if k in r} for r in prow},
+                    residual_rms_N=res.residual_rms.tolist(),
+                    residual_ss_N2=res.residual_ss.tolist(),
+                    condition_number=res.condition_number,
+                    condition_number_raw=res.condition_number_raw,
+                    rank=int(res.identifiability.rank),
+                    n_parameters=len(res.names),
+                    n_rows=res.n_rows,
+                    table_6_3_row=res.table_6_3_row().tolist(),
+                )
+                if v in THESIS_TABLE_6_3:
+                    row["thesis_table_6_3_row"] = list(THESIS_TABLE_6_3[v]["row"])
+                    row["thesis_residual_1e7"] = list(THESIS_TABLE_6_3[v]["residual"])
+                if v == "full":
+                    row["near_dependencies"] = res.near_dependencies
+                if truth is not None and same:
+                    z = np.array([r["z"] for r in prow])
+                    row["max_z"] = float(np.nanmax(z))
+                    row["n_within_3_std"] = int(np.sum(z <= 3.0))
+            table.append(row)
+        first_v, first, first_msg = solution.results[0]
+        fields: dict[str, Any] = {
+            "status": solution.status,
+            "message": first_msg if first is not None else f"variant {first_v}: {first_msg}",
+            "source": decl.source,
+            "variant": first_v,
+            "solve_time_s": solution.solve_time,
+            "n_samples_log": solution.log.n_samples,
+            "n_samples_used": solution.samples.n_samples,
+            "filter": solution.samples.info,
+        }
+        if first is not None:
+            fields.update(table[0])
+            low = next(b for b in first.residual_by_speed if b["v_min"] == 0.02)
+            high = [b for b in first.residual_by_speed if b["v_min"] >= 0.2]
+            fields["residual_rms_low_speed_N"] = low["rms"]
+            fields["residual_rms_high_speed_N"] = [float(np.sqrt(np.nanmean([b["rms"][i] ** 2 for b in high]))) for i in range(3)]
+            fields["residual_by_speed"] = first.residual_by_speed
+            fields["status"] = solution.status
+        if solution.design is not None:
+            d = solution.design
+            fields["excitation"] = {"status": d.status, "message": d.message, "condition_before": d.condition_before,
+                                    "condition_after": d.condition_after, "iterations": d.iterations, "solve_time_s": d.solve_time,
+                                    "max_violation": d.max_violation, **d.info}
+        fields["variants"] = table
+        written = Written(fields)
+        if not solution.status.success:  # a failed variant: no file that could look like a result
+            return written
+        if first is not None:
+            _write_parameters(out / "parameters.toml", decl, first_v, first, name)
+            written.files.append("parameters.toml")
+        if csv_rows:
+            cols = ["variant", "parameter", "estimate", "std", "unit", "truth", "z"]
+            lines = [",".join(cols)]
+            for r in csv_rows:
+                lines.append(",".join(str(r.get(c, "")) if not isinstance(r.get(c), float) else repr(r[c]) for c in cols))
+            (out / "identification.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+            written.files.append("identification.csv")
+        if plots and first is not None:
+            plot_identification_residuals(decl.robot, decl.configuration, first_v, solution.samples, first, out / "residuals.png", f"{name}: {first_v}")
+            written.files.append("residuals.png")
+        return written
+
+
+def _parameter_rows(name: str, res: Any, truth: np.ndarray | None, same_structure: bool) -> list[dict[str, Any]]:
+    rows = []
+    for k, (n, v, s) in enumerate(zip(res.names, res.theta, res.std)):
+        row: dict[str, Any] = {"variant": name, "parameter": n, "estimate": float(v), "std": float(s), "unit": _unit(n)}
+        if truth is not None:
+            row["truth"] = float(truth[k])
+            row["z"] = float(abs(v - truth[k]) / s) if same_structure and np.isfinite(s) and s > 0 else math.nan
+        rows.append(row)
+    return rows
+
+
+def _unit(n: str) -> str:
+    return "kg" if n.startswith("m_") else ("N s/m" if n.startswith("f_v") else "N")
+
+
+def _write_parameters(path: Path, decl: DynamicIdentificationDeclaration, variant: str, res: Any, name: str) -> None:
+    """A complete robot parameter set (loadable by ``load_parameters``) with the identified dynamics."""
+    p = res.parameters
+    robot = decl.robot
+    d, k, lim = robot.dynamics, robot.kinematics, robot.limits
+
+    def vec(prefix: str, default: Any) -> list[float]:
+        return [float(p.get(f"{prefix}{i + 1}", default[i])) for i in range(3)]
+
+    def arr(x: Any) -> str:
+        return str(np.asarray(x, dtype=float).tolist())
+
+    sym = not VARIANTS[variant].asymmetric
+    lines = [
+        f"# Identified by gtmodel ({name}), variant {variant}; {decl.source}",
+        "# Dressler (2012), eqs. 6.7-6.8, Table 6.3. SI units. Kinematics, limits and the parameters the",
+        f"# variant does not estimate are copied from the parameter set {robot.name} (link masses 0 unless estimated).",
+        f'name = "{robot.name}_identified"',
+        f'description = "{robot.name} with dynamics identified by gtmodel ({variant})"',
+        f'frame = "{robot.frame}"',
+        "",
+        "[kinematics]",
+        f'source = "copied from {robot.name}"',
+        f'model = "{k.model}"',
+        f"L = {arr(k.L)}",
+        f"As = {arr(k.As)}",
+        f"v = {arr(k.v[0]) if k.model == 'ideal' else arr(k.v)}",
+        "",
+        "[dynamics]",
+        f'source = "gtmodel dynamic identification {name}, variant {variant}"',
+        f"m_p = {float(p.get('m_p', d.m_p))!r}",
+        f"m_c = {vec('m_c', d.m_c)}",
+        f"m_a = {vec('m_a', np.zeros(3))}",
+        f"f_c = {vec('f_c', d.f_c) if sym else arr(d.f_c)}",
+        f"f_v = {vec('f_v', np.zeros(3) if variant == 'model_1' else d.f_v) if sym else arr(d.f_v)}",
+        f"g = {float(d.g)!r}",
+    ]
+    a = d.asymmetric
+    if a is not None:
+        lines += ["", "[dynamics.asymmetric_friction]", f'source = "copied from {robot.name}"' if sym else f'source = "gtmodel dynamic identification {name}, variant {variant}"']
+        for key in ("f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"):
+            default = getattr(a, key)
+            if variant == "model_4" and key.startswith("f_c"):
+                vals = vec("f_c", default)
+            elif sym:
+                vals = list(map(float, default))
+            else:
+                vals = vec(key, default)
+            lines.append(f"{key} = {vals}")
+    lines += [
+        "",
+        "[limits]",
+        f'source = "copied from {robot.name}"',
+        f"cart_travel = {arr(lim.cart_travel)}",
+        f"joint_angle_max_deg = {float(np.rad2deg(lim.joint_angle_max))!r}",
+        "",
+        "# standard deviations of the estimated parameters (least squares):",
+    ]
+    lines += [f"#   {n} = {float(s):.6g}" for n, s in zip(res.names, res.std)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")

@@ -1,0 +1,475 @@
+"""Kind ``joint_stiffness_calibration``: serial-arm joint stiffnesses, CP vs DPP.
+
+Cvitanic (2021), section 1, eqs. (3)-(5), Tables 1-2: the joint-spring model
+``dX = J K_theta^-1 J^T F`` calibrated from (wrench, deflection) pairs by the complete-pose
+method with rotation weight 1 (``CP``) and 10 (``CP_rotations_scaled_x10``) and by the
+decoupled partial-pose method (``DPP``) of :mod:`gtmodel.calibration.joint_stiffness`.
+The data are synthetic (``[truth]``, ``[noise]``: the Table 1 poses, six load cases each)
+or measured (``[data] file``, a CSV with the header :data:`DATA_COLUMNS`, one measurement
+per line, ``#`` starts a comment line; an error names the file, the line and the column).
+
+The result folder holds ``summary.json`` (``status``; per method the identified
+stiffnesses with standard deviations, the ratio to the truth, residual RMS and condition
+numbers; the thesis' Table 2 rows), ``stiffness.csv`` and ``joint_stiffness.png``. The
+field reference is ``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import AfterValidator, Field
+from pydantic_core import PydanticCustomError
+
+from gtmodel.calibration import DeflectionData, DeflectionNoise, calibrate_cp, calibrate_dpp, synthetic_deflections
+from gtmodel.calibration.joint_stiffness import (
+    TABLE_1_POSES_DEG,
+    TABLE_2_K_THETA,
+    TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS,
+    axis_wrenches,
+)
+from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError
+from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.schema import MAX_FORCE_N, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.report.stiffness_calibration import plot_joint_stiffness
+from gtmodel.robots import SerialArm, load_serial_arm
+from gtmodel.status import Status
+
+__all__ = [
+    "JointStiffnessKind",
+    "JointStiffnessFile",
+    "JointStiffnessDeclaration",
+    "JointStiffnessOutcome",
+    "DATA_COLUMNS",
+    "METHODS",
+    "SHIPPED_ARMS",
+    "MAX_MOMENT_NM",
+    "MAX_JOINT_STIFFNESS",
+    "read_deflection_csv",
+]
+
+_log = logging.getLogger("gtmodel")
+
+#: Header of a measured-data CSV (``[data] file``): joint angles [deg], wrench [N, N m],
+#: deflection screw [m, rad], base frame.
+DATA_COLUMNS = (
+    [f"theta{i}_deg" for i in range(1, 7)]
+    + ["fx_N", "fy_N", "fz_N", "mx_Nm", "my_Nm", "mz_Nm"]
+    + ["dx_m", "dy_m", "dz_m", "drx_rad", "dry_rad", "drz_rad"]
+)
+
+#: The calibrations run, named as the rows of Cvitanic (2021), Table 2.
+METHODS = ("CP", "CP_rotations_scaled_x10", "DPP")
+
+#: Serial-arm geometries shipped in ``gtmodel/robots/data`` (``[arm] model`` by name).
+SHIPPED_ARMS = ("serial_6r_illustrative",)
+
+#: Largest load-case moment [N m] (a moment of 1e308 made LAPACK hang on inf deflections).
+MAX_MOMENT_NM = 1.0e7
+#: Joint (and rotation-only) stiffness range [N m/rad]: from a very soft joint to a rigid one.
+MIN_JOINT_STIFFNESS = 1.0
+MAX_JOINT_STIFFNESS = 1.0e12
+#: Most measurement lines of a data CSV (each is 18 numbers; the fit is 6 parameters).
+MAX_MEASUREMENTS = 100_000
+#: Largest data CSV read [bytes].
+MAX_DATA_BYTES = 50_000_000
+
+
+def _stiffness(description: str) -> Any:
+    return number(ge=MIN_JOINT_STIFFNESS, le=MAX_JOINT_STIFFNESS, unit="N m/rad", description=description,
+                  what=f"a stiffness in {MIN_JOINT_STIFFNESS:g}..{MAX_JOINT_STIFFNESS:g} N m/rad")
+
+
+def _at_least_min_stiffness(v: list[float]) -> list[float]:
+    if any(x < MIN_JOINT_STIFFNESS for x in v):
+        raise PydanticCustomError("gtmodel", "expected {expected}",
+                                  {"expected": f"stiffnesses in {MIN_JOINT_STIFFNESS:g}..{MAX_JOINT_STIFFNESS:g} N m/rad"})
+    return v
+
+
+#: Six joint stiffnesses [N m/rad] in the physical range.
+JointStiffnesses = Annotated[
+    vector(6, positive=True, bound=MAX_JOINT_STIFFNESS, unit="N m/rad", description="true joint stiffnesses (default: Table 2 DPP)"),
+    AfterValidator(_at_least_min_stiffness),
+]
+
+
+class ArmSection(Section):
+    """``[arm]``: the serial arm (Jacobian source)."""
+
+    model: NonEmptyText = Field(default="serial_6r_illustrative",
+                                description="shipped DH file (serial_6r_illustrative, ILLUSTRATIVE geometry) or a TOML path relative to the problem file")
+
+
+class TruthSection(Section):
+    """``[truth]``: synthetic data on the Table 1 poses."""
+
+    k_theta: JointStiffnesses = Field(default_factory=lambda: TABLE_2_K_THETA["DPP"].tolist())
+    scenario: choice("none", "table_2", description='"none": exact joint-spring model; "table_2": unmodelled rotation-only compliance') = "table_2"
+    rotation_only_stiffness: _stiffness("stiffness of the unmodelled rotation-only compliance, scenario table_2 only "
+                                        f"(default {TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS:g})") | None = None
+    force: number(gt=0, le=MAX_FORCE_N, unit="N", description="force of each force load case") = 1000.0
+    moment: number(gt=0, le=MAX_MOMENT_NM, unit="N m", description="moment of each moment load case") = 200.0
+    seed: integer(0, 2**31 - 1, description="noise seed") = 0
+
+
+class NoiseSection(Section):
+    """``[noise]``: laser-tracker noise of synthetic data (Table 2 notes)."""
+
+    position_std: number(ge=0, le=1.0, unit="m", description="position noise (std)") = 15e-6
+    position_std_per_m: number(ge=0, le=1.0, unit="m/m", description="position noise per m of tracker distance") = 6e-6
+    rotation_std: number(ge=0, le=math.pi, unit="rad", description="rotation noise (std) per axis") = 2.6e-4
+    force_relative_std: number(ge=0, le=1.0, description="relative wrench noise (std)") = 0.0
+
+
+class CalibrationSection(Section):
+    """``[calibration]``: method options."""
+
+    scaled_rotation_weight: number(gt=0, le=1e6, unit="m/rad", description="rotation weight of the scaled CP variant (the thesis' x10)") = 10.0
+    bounds: choice("none", "positive", description='"positive": compliances c = 1/k >= 0') = "none"
+
+
+class DataSection(Section):
+    """``[data]``: measured deflections."""
+
+    file: NonEmptyText = Field(description="CSV of measurements (header DATA_COLUMNS), relative to the problem file")
+
+
+class JointStiffnessFile(ProblemSchema):
+    """A ``joint_stiffness_calibration`` problem file: exactly one of ``[truth]`` and ``[data]``.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"joint_stiffness_calibration"}
+        The kind.
+    description : str, optional
+        Free text.
+    arm : ArmSection, optional
+        ``[arm]``: the serial arm.
+    truth : TruthSection, optional
+        ``[truth]``: synthetic data on the Table 1 poses.
+    noise : NoiseSection, optional
+        ``[noise]``: noise of synthetic data.
+    calibration : CalibrationSection, optional
+        ``[calibration]``: method options.
+    data : DataSection, optional
+        ``[data]``: measured deflections.
+    """
+
+    kind: Literal["joint_stiffness_calibration"]
+    arm: ArmSection = ArmSection()
+    truth: TruthSection | None = None
+    noise: NoiseSection | None = None
+    calibration: CalibrationSection = CalibrationSection()
+    data: DataSection | None = None
+
+
+@dataclass
+class JointStiffnessDeclaration:
+    """A validated joint-stiffness calibration problem.
+
+    Parameters
+    ----------
+    arm : SerialArm
+        Nominal arm (Jacobian source; also generates synthetic data).
+    data : DeflectionData
+        Measurements (synthetic or read from a file).
+    k_true : numpy.ndarray or None, shape (6,)
+        True joint stiffnesses of synthetic data [N m/rad] (None for measured data).
+    scaled_rotation_weight : float
+        CP rotation weight of the scaled variant [m/rad] (the thesis' 10).
+    bounds : str
+        ``"none"`` or ``"positive"``.
+    source : str
+        Description of the data.
+    """
+
+    arm: SerialArm
+    data: DeflectionData
+    k_true: np.ndarray | None
+    scaled_rotation_weight: float
+    bounds: str
+    source: str
+
+
+@dataclass
+class JointStiffnessOutcome:
+    """Results of a joint-stiffness calibration problem.
+
+    Parameters
+    ----------
+    results : dict of str to JointStiffnessResult
+        One result per name of :data:`METHODS`.
+    solve_time : float
+        Wall time [s].
+    """
+
+    results: dict[str, Any]
+    solve_time: float
+
+    @property
+    def status(self) -> Status:
+        """Worst status of the calibrations."""
+        return Status.worst(Status(r.status) for r in self.results.values())
+
+
+def read_deflection_csv(path: Path) -> DeflectionData:
+    """Read measured (pose, wrench, deflection) rows, strictly validated.
+
+    Cvitanic (2021), eq. (3) data: the header must be :data:`DATA_COLUMNS` (in that order);
+    each further non-empty line that does not start with ``#`` is one measurement of 18
+    finite numbers. Joint angles are converted from degrees to rad.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The CSV file (UTF-8, at most :data:`MAX_DATA_BYTES` bytes and
+        :data:`MAX_MEASUREMENTS` measurements).
+
+    Returns
+    -------
+    DeflectionData
+        The measurements.
+
+    Raises
+    ------
+    ProblemError
+        Unreadable, too large or non-UTF-8 file, wrong header, wrong number of columns or
+        a non-number (the message names the file, the line and the column); fewer than 2
+        or more than :data:`MAX_MEASUREMENTS` measurements.
+    """
+    try:
+        if path.stat().st_size > MAX_DATA_BYTES:
+            raise ProblemError(f"{path}: expected a data file of at most {MAX_DATA_BYTES} bytes, got {path.stat().st_size}")
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ProblemError(f"{path}: cannot read the data file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ProblemError(f"{path}: cannot read the data file (not UTF-8 text: byte {exc.start})") from None
+    rows: list[list[float]] = []
+    header_seen = False
+    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
+        if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith("#"):
+            continue
+        cells = [c.strip() for c in fields]
+        if not header_seen:
+            if cells != DATA_COLUMNS:
+                raise ProblemError(f"{path}: line {lineno}: expected the header {','.join(DATA_COLUMNS)}, got {','.join(cells)}")
+            header_seen = True
+            continue
+        if len(cells) != len(DATA_COLUMNS):
+            raise ProblemError(f"{path}: line {lineno}: expected {len(DATA_COLUMNS)} columns, got {len(cells)}")
+        if len(rows) >= MAX_MEASUREMENTS:
+            raise ProblemError(f"{path}: line {lineno}: expected at most {MAX_MEASUREMENTS} measurement lines")
+        row = []
+        for col, (name, cell) in enumerate(zip(DATA_COLUMNS, cells), start=1):
+            try:
+                v = float(cell)
+            except ValueError:
+                v = math.nan
+            if not math.isfinite(v):
+                raise ProblemError(f"{path}: line {lineno}, column {col} ({name}): expected a finite number, got {cell!r}")
+            row.append(v)
+        rows.append(row)
+    if not header_seen:
+        raise ProblemError(f"{path}: expected the header {','.join(DATA_COLUMNS)}, the file is empty")
+    if len(rows) < 2:
+        raise ProblemError(f"{path}: expected at least 2 measurement lines, got {len(rows)}")
+    a = np.array(rows)
+    try:
+        return DeflectionData(np.radians(a[:, :6]), a[:, 6:12], a[:, 12:], f"measured: {path.name}, {len(rows)} rows")
+    except InputError as exc:
+        raise ProblemError(f"{path}: {exc}") from None
+
+
+def _finite(a: np.ndarray) -> list[float | None]:
+    return [float(x) if np.isfinite(x) else None for x in a]
+
+
+class JointStiffnessKind(ProblemKind):
+    """Joint stiffnesses of a serial arm by CP, CP with scaled rotations and DPP (Cvitanic (2021))."""
+
+    name = "joint_stiffness_calibration"
+    schema = JointStiffnessFile
+    title = "serial-arm joint stiffnesses by CP, CP x10 and DPP (Cvitanic (2021), eqs. (3)-(5), Table 2)"
+    columns = (
+        Column("n_measurements", "measurements", "{}"),
+        Column("solve_time_s", "solve time [s]", "{:.3f}"),
+    )
+    empty_fields = ("n_measurements", "solve_time_s")
+
+    def load(self, doc: JointStiffnessFile, file: ProblemFile, name: str) -> JointStiffnessDeclaration:
+        """Load the arm, and read or synthesise the data (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        doc : JointStiffnessFile
+            The validated file.
+        file : ProblemFile
+            The file.
+        name : str
+            Problem name.
+
+        Returns
+        -------
+        JointStiffnessDeclaration
+
+        Raises
+        ------
+        ProblemError
+            Both or neither of ``[truth]`` and ``[data]``, ``[noise]`` with ``[data]``, a
+            rotation-only stiffness with scenario "none", an unknown arm, a bad data file
+            (its line and column named).
+        """
+        ref = file.reference("arm.model", doc.arm.model, SHIPPED_ARMS)
+        try:
+            arm = load_serial_arm(ref)
+        except ParameterError as exc:
+            raise file.wrap("arm.model", exc) from None
+        cal = doc.calibration
+        if (doc.truth is None) == (doc.data is None):
+            raise ProblemError(f"{file.path}: expected exactly one of the tables [truth] (synthetic data) and [data] (measured CSV)")
+        if doc.data is not None:
+            if doc.noise is not None:
+                raise ProblemError(f"{file.path}: field 'noise': only for synthetic data ([truth]), not with [data]")
+            path = file.data_file("data.file", doc.data.file)
+            try:
+                data = read_deflection_csv(path)
+            except GtModelError as exc:
+                raise file.wrap("data.file", exc) from None
+            return JointStiffnessDeclaration(arm, data, None, cal.scaled_rotation_weight, cal.bounds, data.description)
+        tr = doc.truth
+        if tr.scenario == "none" and tr.rotation_only_stiffness is not None:
+            raise file.fail("truth.rotation_only_stiffness", "no value with scenario = \"none\" (the joint-spring model is exact)")
+        k_r = tr.rotation_only_stiffness if tr.rotation_only_stiffness is not None else TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS
+        nz = doc.noise or NoiseSection()
+        noise = DeflectionNoise(nz.position_std, nz.position_std_per_m, nz.rotation_std, nz.force_relative_std)
+        k = np.array(tr.k_theta)
+        idx, F = axis_wrenches(len(TABLE_1_POSES_DEG), tr.force, tr.moment)
+        try:
+            data = synthetic_deflections(
+                arm, np.radians(TABLE_1_POSES_DEG)[idx], F, k, noise=noise,
+                rotation_only_stiffness=k_r if tr.scenario == "table_2" else None, seed=tr.seed,
+            )
+        except InputError as exc:
+            raise file.wrap("truth", exc) from None
+        source = f"synthetic on the Table 1 poses ({arm.name}, scenario {tr.scenario!r}): {data.description}"
+        return JointStiffnessDeclaration(arm, data, k, cal.scaled_rotation_weight, cal.bounds, source)
+
+    def solve(self, declaration: JointStiffnessDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> JointStiffnessOutcome:
+        """Run the CP (weight 1), CP (scaled rotation weight) and DPP calibrations.
+
+        Cvitanic (2021), eqs. (3)-(5) and Table 2 (:func:`~gtmodel.calibration.calibrate_cp`,
+        :func:`~gtmodel.calibration.calibrate_dpp`).
+
+        Parameters
+        ----------
+        declaration : JointStiffnessDeclaration
+            The problem.
+        verbose : bool, optional
+            Log the identified stiffnesses.
+        previous : Any, optional
+            Unused (linear least squares need no warm start).
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        JointStiffnessOutcome
+            One result per method (each with its status).
+
+        Raises
+        ------
+        ProblemError
+            A calibration that cannot be posed (e.g. an arm without a spherical wrist for DPP).
+        """
+        decl = declaration
+        t0 = time.perf_counter()
+        try:
+            results = {
+                "CP": calibrate_cp(decl.arm, decl.data, 1.0, decl.bounds),
+                "CP_rotations_scaled_x10": calibrate_cp(decl.arm, decl.data, decl.scaled_rotation_weight, decl.bounds),
+                "DPP": calibrate_dpp(decl.arm, decl.data, decl.bounds),
+            }
+        except GtModelError as exc:
+            raise ProblemError(str(exc)) from None
+        if verbose:
+            for m, r in results.items():
+                _log.info("joint stiffness %s: k = %s MN m/rad (%s)", m, np.round(r.k_theta / 1e6, 3).tolist(), r.status)
+        return JointStiffnessOutcome(results, time.perf_counter() - t0)
+
+    def write(self, declaration: JointStiffnessDeclaration, solution: JointStiffnessOutcome, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields, ``stiffness.csv`` and ``joint_stiffness.png`` (Cvitanic (2021), Table 2).
+
+        Parameters
+        ----------
+        declaration : JointStiffnessDeclaration
+            The problem.
+        solution : JointStiffnessOutcome
+            Its results.
+        out : pathlib.Path
+            Result folder.
+        plots : bool
+            Write the PNG plot.
+        name : str
+            Problem name (title).
+
+        Returns
+        -------
+        Written
+            ``status``, per method the stiffnesses [N m/rad] with std, ratio to the truth,
+            residual RMS, condition numbers; the truth and the thesis' Table 2 rows. The
+            files are written only when every method succeeded.
+        """
+        decl = declaration
+        methods: dict[str, Any] = {}
+        lines = ["method,joint,k_theta_Nm_per_rad,std_Nm_per_rad,ratio_to_truth,thesis_table_2_Nm_per_rad"]
+        for m in METHODS:
+            r = solution.results[m]
+            ratio = r.k_theta / decl.k_true if decl.k_true is not None else None
+            methods[m] = {
+                "status": r.status,
+                "message": r.message,
+                "rotation_weight": r.rotation_weight,
+                "k_theta_Nm_per_rad": _finite(r.k_theta),
+                "std_k_theta_Nm_per_rad": _finite(r.std_k_theta),
+                "ratio_to_truth": _finite(ratio) if ratio is not None else None,
+                "rms_translation_m": r.rms_translation,
+                "rms_rotation_rad": r.rms_rotation,
+                "condition_number": r.condition,
+                **{k: float(v) for k, v in r.extra.items()},
+            }
+            for j in range(6):
+                cells = [m, str(j + 1), f"{r.k_theta[j]:.9g}", f"{r.std_k_theta[j]:.9g}",
+                         f"{ratio[j]:.9g}" if ratio is not None else "", f"{TABLE_2_K_THETA[m][j]:.9g}"]
+                lines.append(",".join(cells))
+        fields: dict[str, Any] = {
+            "status": solution.status,
+            "message": "; ".join(f"{m}: {solution.results[m].message.removeprefix(solution.results[m].method + ': ')}" for m in METHODS),
+            "source": decl.source,
+            "arm": decl.arm.name,
+            "n_measurements": int(decl.data.n),
+            "bounds": decl.bounds,
+            "k_theta_true_Nm_per_rad": decl.k_true.tolist() if decl.k_true is not None else None,
+            "methods": methods,
+            "thesis_table_2_Nm_per_rad": {m: TABLE_2_K_THETA[m].tolist() for m in METHODS},
+            "solve_time_s": solution.solve_time,
+        }
+        written = Written(fields)
+        if not solution.status.success:
+            return written
+        (out / "stiffness.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        written.files.append("stiffness.csv")
+        if plots:
+            plot_joint_stiffness(solution.results, METHODS, decl.k_true, out / "joint_stiffness.png", f"{name}: identified joint stiffnesses")
+            written.files.append("joint_stiffness.png")
+        return written
