@@ -28,7 +28,18 @@ __all__ = [
 
 
 def rot_x(a: Any) -> Any:
-    """Rotation about x by ``a`` [rad] (CasADi expression for any input)."""
+    """Rotation about x by ``a`` [rad].
+
+    Parameters
+    ----------
+    a : float or casadi.SX or casadi.MX
+        Angle [rad].
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM, shape (3, 3)
+        The rotation (a CasADi expression for any input).
+    """
     c, s = ca.cos(a), ca.sin(a)
     return ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c, -s), ca.horzcat(0, s, c))
 
@@ -102,13 +113,35 @@ def rotation_to_quaternion(R: np.typing.ArrayLike) -> np.ndarray:
 
 
 def rot_z(a: Any) -> Any:
-    """Rotation about z by ``a`` [rad] (CasADi expression for any input)."""
+    """Rotation about z by ``a`` [rad].
+
+    Parameters
+    ----------
+    a : float or casadi.SX or casadi.MX
+        Angle [rad].
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM, shape (3, 3)
+        The rotation (a CasADi expression for any input).
+    """
     c, s = ca.cos(a), ca.sin(a)
     return ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
 
 
 def rot_y(b: Any) -> Any:
-    """Rotation about y by ``b`` [rad] (CasADi expression for any input)."""
+    """Rotation about y by ``b`` [rad].
+
+    Parameters
+    ----------
+    b : float or casadi.SX or casadi.MX
+        Angle [rad].
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM, shape (3, 3)
+        The rotation (a CasADi expression for any input).
+    """
     c, s = ca.cos(b), ca.sin(b)
     return ca.vertcat(ca.horzcat(c, 0, s), ca.horzcat(0, 1, 0), ca.horzcat(-s, 0, c))
 

@@ -7,6 +7,7 @@ docstring). Public = listed in a module's ``__all__``.
 
 from __future__ import annotations
 
+import enum
 import importlib
 import inspect
 import pkgutil
@@ -48,7 +49,16 @@ def test_there_is_a_public_api():
     assert len(PUBLIC) > 50
 
 
+def _constructed_by_the_language(qualname: str) -> bool:
+    """Enums (built from their values) and Protocols (never instantiated) have no call
+    signature of their own to document."""
+    module, _, name = qualname.rpartition(".")
+    obj = getattr(importlib.import_module(module), name, None) if module in {m.__name__ for m in _modules()} else None
+    return inspect.isclass(obj) and (issubclass(obj, enum.Enum) or getattr(obj, "_is_protocol", False))
+
+
 @pytest.mark.parametrize("qualname", PUBLIC)
 def test_numpydoc(qualname):
-    errors = [e for e in numpydoc.validate.validate(qualname)["errors"] if e[0] in CHECKED_CODES]
+    codes = CHECKED_CODES - {"PR01"} if _constructed_by_the_language(qualname) else CHECKED_CODES
+    errors = [e for e in numpydoc.validate.validate(qualname)["errors"] if e[0] in codes]
     assert not errors, errors

@@ -306,6 +306,13 @@ class ProblemSchema(Section):
     """Top level of every problem file: ``name``, ``kind``, ``description``.
 
     Each kind subclasses it with ``kind: Literal["<kind>"]`` and its tables.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name without ``.toml``).
+    description : str, optional
+        Free text.
     """
 
     name: NonEmptyText | None = Field(default=None, description="problem name (default: the file name without .toml)")

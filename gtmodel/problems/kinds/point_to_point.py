@@ -112,7 +112,33 @@ class SolverSection(Section):
 
 
 class PointToPointFile(ProblemSchema):
-    """A ``point_to_point`` problem file."""
+    """A ``point_to_point`` problem file.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"point_to_point"}
+        The kind.
+    description : str, optional
+        Free text.
+    robot : RobotSection
+        ``[robot]``: parameter set, IK configuration, friction form.
+    motion : MotionSection
+        ``[motion]``: start and end TCP positions [m].
+    limits : LimitsSection
+        ``[limits]``: force [N], velocity and angle bounds.
+    parameters : dict of str to float, optional
+        ``[parameters]``: named numbers of the expressions.
+    optimization : OptimizationSection
+        ``[optimization]``: objective, constraints, final time.
+    initial_guess : InitialGuessSection, optional
+        ``[initial_guess]``: how the NLP starts.
+    collocation : CollocationSection, optional
+        ``[collocation]``: elements, points, scheme.
+    solver : SolverSection, optional
+        ``[solver]``: IPOPT settings.
+    """
 
     kind: Literal["point_to_point"]
     robot: RobotSection
