@@ -4,13 +4,13 @@ Dressler (2012), ch. 5: measured poses (:class:`MeasurementSet`, read from CSV f
 :func:`read_measurements`), cart surveys for the piecewise-linear actuator model
 (:class:`CartMeasurements`), and synthetic data of a "true" robot with actuator errors and
 device noise for studies and tests (:mod:`gtmodel.calibration.synthetic`); calibration
-from closure equations (:mod:`gtmodel.calibration.calibrate`), identifiability
+from closure equations (:mod:`gtmodel.calibration.kinematic`), identifiability
 (:mod:`gtmodel.calibration.identifiability`), pose selection
 (:mod:`gtmodel.calibration.pose_selection`) and accuracy reports
 (:mod:`gtmodel.calibration.evaluation`).
 """
 
-from gtmodel.calibration.calibrate import (
+from gtmodel.calibration.kinematic import (
     CalibrationProblem,
     CalibrationResult,
     ParameterSelection,
@@ -32,7 +32,7 @@ from gtmodel.calibration.dynamic_identification import (
     read_motion_log,
     simulate_log,
 )
-from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, plot_error_histogram
+from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, tcp_errors
 from gtmodel.calibration.excitation import FourierTrajectory, design_excitation
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian
 
@@ -89,7 +89,7 @@ __all__ = [
     "AccuracyReport",
     "evaluate",
     "parameter_sensitivity",
-    "plot_error_histogram",
+    "tcp_errors",
     "MeasurementSet",
     "CartMeasurements",
     "read_measurements",

@@ -68,13 +68,12 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
-from gtmodel.calibration.calibrate import (
+from gtmodel.calibration.kinematic import (
     DEFAULT_SOLVER,
     MAX_ITER,
     CalibrationProblem,
     CalibrationResult,
     ParameterSelection,
-    _worst_status,
     analyze_identifiability,
 )
 from gtmodel.calibration.evaluation import AccuracyReport, evaluate
@@ -82,6 +81,7 @@ from gtmodel.calibration.identifiability import IdentifiabilityReport
 from gtmodel.calibration.measurements import MeasurementSet
 from gtmodel.calibration.synthetic import LASER_TRACKER, DeviceNoise, device_noise
 from gtmodel.errors import InputError
+from gtmodel.status import Status
 from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
 from gtmodel.robots.stiffness import (
     GantryTau3Stiffness,
@@ -182,7 +182,7 @@ class ElastoGeometricClosure(ClosureModel):
 
         The cart positions, followed with ``per_pose_load`` by the pose's known plate load
         (:attr:`MeasurementSet.load <gtmodel.calibration.measurements.MeasurementSet>`).
-        The calibration (:class:`~gtmodel.calibration.calibrate.CalibrationProblem`) and
+        The calibration (:class:`~gtmodel.calibration.kinematic.CalibrationProblem`) and
         the evaluation (:func:`~gtmodel.calibration.evaluation.evaluate`, eq. 5.5) call it.
 
         Parameters
@@ -497,7 +497,7 @@ def calibrate_elasto_geometric(
 ) -> CalibrationResult:
     """Calibrate geometry and compliances from measured poses (eq. 2 in eqs. 5.1-5.4).
 
-    A :class:`~gtmodel.calibration.calibrate.CalibrationProblem` of the elasto-geometric
+    A :class:`~gtmodel.calibration.kinematic.CalibrationProblem` of the elasto-geometric
     closure model with the load fixed (:func:`compliance_selection`).
 
     Parameters
@@ -673,7 +673,7 @@ class ElastoGeometricStudy:
     @property
     def status(self) -> str:
         """Worse status of the two calibrations."""
-        return _worst_status((self.geometric.status, self.elasto.status))
+        return Status.worst((self.geometric.status, self.elasto.status))
 
     def compliance_table(self) -> list[dict[str, float]]:
         """Calibrated compliances against the truth.

@@ -135,9 +135,9 @@ class JointStiffnessOutcome:
     @property
     def status(self) -> str:
         """Worst status of the calibrations."""
-        from gtmodel.calibration.calibrate import _worst_status
+        from gtmodel.status import Status
 
-        return _worst_status(r.status for r in self.results.values())
+        return Status.worst(r.status for r in self.results.values())
 
 
 def read_deflection_csv(path: Path) -> Any:

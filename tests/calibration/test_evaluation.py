@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.calibration.evaluation import SENSITIVITY_STEP, AccuracyReport, evaluate, parameter_sensitivity, plot_error_histogram
+from gtmodel.calibration.evaluation import SENSITIVITY_STEP, AccuracyReport, evaluate, parameter_sensitivity
+from gtmodel.report.calibration import plot_error_histogram
 from gtmodel.calibration.measurements import MeasurementSet
 from gtmodel.calibration.synthetic import NO_NOISE, grid_poses, synthetic_measurements
 from gtmodel.errors import InputError

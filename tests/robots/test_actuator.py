@@ -18,7 +18,7 @@ import pytest
 
 from scipy.spatial.transform import Rotation
 
-from gtmodel.calibration.calibrate import CalibrationProblem
+from gtmodel.calibration.kinematic import CalibrationProblem
 from gtmodel.calibration.measurements import CartMeasurements
 from gtmodel.calibration.synthetic import (
     NO_NOISE,
