@@ -18,7 +18,6 @@ from gtmodel.calibration.kinematic import (
     calibrate,
 )
 from gtmodel.calibration.elasto_geometric import (
-    ElastoGeometricClosure,
     calibrate_elasto_geometric,
     compliant_measurements,
     elasto_geometric_study,
@@ -49,7 +48,6 @@ from gtmodel.calibration.synthetic import (
     NO_NOISE,
     STEREO_VISION,
     ActuatorErrors,
-    DeviatedClosure,
     DeviceNoise,
     device_noise,
     grid_poses,
@@ -101,7 +99,6 @@ __all__ = [
     "NO_NOISE",
     "device_noise",
     "ActuatorErrors",
-    "DeviatedClosure",
     "grid_poses",
     "random_poses",
     "synthetic_measurements",
@@ -112,7 +109,6 @@ __all__ = [
     "identify_state_space",
     "physical_from_state_space",
     "prbs",
-    "ElastoGeometricClosure",
     "calibrate_elasto_geometric",
     "compliant_measurements",
     "elasto_geometric_study",

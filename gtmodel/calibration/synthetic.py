@@ -31,7 +31,9 @@ from scipy.spatial.transform import Rotation
 
 from gtmodel.calibration.measurements import CartMeasurements, MeasurementSet
 from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
-from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure, rotation_to_quaternion
+from gtmodel._geometry import rotation_to_quaternion
+from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
+from gtmodel.robots.deviated import DeviatedClosure, guideway_axes, joint_point_functions
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import Limits, RobotParameters
 
@@ -42,8 +44,6 @@ __all__ = [
     "NO_NOISE",
     "device_noise",
     "ActuatorErrors",
-    "DeviatedClosure",
-    "guideway_axes",
     "line_fit_residuals",
     "link_angles",
     "grid_poses",
@@ -416,220 +416,6 @@ class ActuatorErrors:
         )
 
     __hash__ = None  # type: ignore[assignment]
-
-
-# ----------------------------------------------------------------------------- true robot
-def _point_functions(model: ClosureModel) -> tuple[ca.Function, ca.Function]:
-    """``A(p, q)`` (3 x n_links) and the guideway directions ``dA_ij/dq_i`` (3 x n_links)."""
-    p, q = ca.SX.sym("p", model.n_parameters), ca.SX.sym("q", model.n_q)
-    T, R = ca.SX.sym("T", 3), ca.SX.sym("R", 3, 3)
-    A, G = [], []
-    for i, arm in enumerate(model.links):
-        Ai = model.link_points(p, q, T, R, i)[0]
-        for j in range(len(arm)):
-            A.append(Ai[:, j])
-            G.append(ca.jacobian(Ai[:, j], q)[:, i])
-    return ca.Function("A", [p, q], [ca.horzcat(*A)]), ca.Function("dA_dq", [p, q], [ca.horzcat(*G)])
-
-
-def guideway_axes(model: ClosureModel, q: np.typing.ArrayLike | None = None) -> np.ndarray:
-    """Guideway frames of a model: ``e1`` along ``dA_i1/dq_i`` (by AD of its link points).
-
-    ``e2 = e_z x e1`` normalised (horizontal for a horizontal guideway; ``e_x x e1`` if the
-    guideway is within ~6 deg of vertical, as on the F1), ``e3 = e1 x e2``.
-
-    Parameters
-    ----------
-    model : ClosureModel
-        Any closure model; arm ``i`` is driven by the linear actuator ``q_i``.
-    q : array_like, shape (n_q,), optional
-        Where to take the derivative (default zeros).
-
-    Returns
-    -------
-    numpy.ndarray, shape (3, 3, 3)
-        ``axes[i]`` has columns ``e1, e2, e3`` of arm ``i``.
-
-    Raises
-    ------
-    InputError
-        If an arm's joint point does not move with its actuator.
-    """
-    q0 = np.zeros(model.n_q) if q is None else np.asarray(q, dtype=float).reshape(model.n_q)
-    _, fG = _point_functions(model)
-    G = np.array(fG(model.parameter_vector(), q0))
-    out = np.empty((3, 3, 3))
-    col = 0
-    for i, arm in enumerate(model.links):
-        g = G[:, col]
-        col += len(arm)
-        n = np.linalg.norm(g)
-        if not n > 0:
-            raise InputError(f"{model.name}: joint point of arm {i + 1} does not move with q{i + 1} (dA/dq = 0)")
-        e1 = g / n
-        e2 = np.cross([0.0, 0.0, 1.0], e1)
-        if np.linalg.norm(e2) < 0.1:
-            e2 = np.cross([1.0, 0.0, 0.0], e1)
-        e2 /= np.linalg.norm(e2)
-        out[i] = np.column_stack([e1, e2, np.cross(e1, e2)])
-    return out
-
-
-class DeviatedClosure(ClosureModel):
-    """A closure model whose actuator-side joint points carry actuator errors (the "true" robot).
-
-    ``A_ij(q) -> A_ij(q) + d_i(q_i, direction_i)`` for every link of arm ``i``, with ``d_i``
-    from :meth:`ActuatorErrors.deviation_expression` in the guideway frame of the arm (the
-    cart translates; its small rotations are neglected). Parameters, links and orientation
-    are those of the wrapped model.
-
-    Parameters
-    ----------
-    model : ClosureModel
-        The ideal (error-free) model.
-    errors : ActuatorErrors
-        The actuator errors.
-    direction : array_like, shape (3,), optional
-        Direction of the last motion per arm (+1 or -1), for the backlash.
-    axes : array_like, shape (3, 3, 3), optional
-        Guideway frames (default :func:`guideway_axes` of ``model``).
-
-    Raises
-    ------
-    InputError
-        If ``direction`` is not +-1 per arm or ``axes`` has the wrong shape.
-    """
-
-    def __init__(
-        self,
-        model: ClosureModel,
-        errors: ActuatorErrors,
-        direction: np.typing.ArrayLike = (1.0, 1.0, 1.0),
-        axes: np.typing.ArrayLike | None = None,
-    ) -> None:
-        d = np.asarray(direction, dtype=float).reshape(-1)
-        if d.shape != (3,) or not np.all(np.abs(d) == 1.0):
-            raise InputError(f"direction: expected +1 or -1 for each of the 3 arms, got {direction!r}")
-        self.model = model
-        self.errors = errors
-        self.direction = d
-        self.axes = guideway_axes(model) if axes is None else np.asarray(axes, dtype=float)
-        if self.axes.shape != (3, 3, 3):
-            raise InputError(f"axes: expected shape (3, 3, 3), got {self.axes.shape}")
-        self.name = f"{model.name}+actuator_errors"
-        self.n_q = model.n_q
-        self.orientation = model.orientation
-        self.links = model.links
-
-    def parameter_names(self) -> tuple[str, ...]:
-        """The wrapped model's parameter names.
-
-        Returns
-        -------
-        tuple of str
-        """
-        return self.model.parameter_names()
-
-    def parameter_vector(self) -> np.ndarray:
-        """The wrapped model's parameter values.
-
-        Returns
-        -------
-        numpy.ndarray, shape (n_parameters,)
-        """
-        return self.model.parameter_vector()
-
-    def quaternion_indices(self) -> list[tuple[int, int, int, int]]:
-        """The wrapped model's quaternion parameter indices.
-
-        Returns
-        -------
-        list of tuple of int
-        """
-        return self.model.quaternion_indices()
-
-    def link_points(self, p: ca.SX, q: ca.SX, T: ca.SX, R: ca.SX, arm: int) -> tuple[ca.SX, ca.SX, ca.SX]:
-        """The wrapped model's link points with the actuator error added to ``A``.
-
-        Parameters
-        ----------
-        p : casadi.SX, shape (n_parameters,)
-            Parameters.
-        q : casadi.SX, shape (n_q,)
-            Actuator values [m, rad].
-        T : casadi.SX, shape (3,)
-            TCP position [m].
-        R : casadi.SX, shape (3, 3)
-            Plate orientation.
-        arm : int
-            Arm index 0, 1, 2.
-
-        Returns
-        -------
-        A, B : casadi.SX, shape (3, n_links_of_arm)
-            Joint points [m].
-        L : casadi.SX, shape (n_links_of_arm,)
-            Link lengths [m].
-        """
-        A, B, L = self.model.link_points(p, q, T, R, arm)
-        d = self.errors.deviation_expression(arm, q[arm], float(self.direction[arm]), self.axes[arm])
-        return A + ca.repmat(d, 1, A.size2()), B, L
-
-    def with_parameters(self, p: np.typing.ArrayLike) -> "DeviatedClosure":
-        """The wrapped model with other parameters, same actuator errors and guideway frames.
-
-        Parameters
-        ----------
-        p : array_like, shape (n_parameters,)
-            Parameter values.
-
-        Returns
-        -------
-        DeviatedClosure
-        """
-        return DeviatedClosure(self.model.with_parameters(p), self.errors, self.direction, self.axes)
-
-    def transformed(self, R: np.typing.ArrayLike, t: np.typing.ArrayLike) -> "DeviatedClosure":
-        """The robot in another frame, ``x' = R x + t``; the guideway frames rotate with it.
-
-        Parameters
-        ----------
-        R : array_like, shape (3, 3)
-            Rotation.
-        t : array_like, shape (3,)
-            Translation [m].
-
-        Returns
-        -------
-        DeviatedClosure
-        """
-        Rm = np.asarray(R, dtype=float).reshape(3, 3)
-        return DeviatedClosure(self.model.transformed(Rm, t), self.errors, self.direction, Rm @ self.axes)
-
-    def fk(self, q: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """FK by Newton on the deviated closure equations, started from the wrapped model's FK.
-
-        Parameters
-        ----------
-        q : array_like, shape (n_q,) or (N, n_q)
-            Actuator values [m, rad].
-
-        Returns
-        -------
-        T : numpy.ndarray, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : numpy.ndarray, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-
-        Raises
-        ------
-        ConvergenceError
-            If Newton's method does not converge (names the pose).
-        UnreachablePoseError
-            If the wrapped model's FK finds no pose.
-        """
-        T0, R0 = self.model.fk(q)
-        return self.fk_newton(q, T0, R0)
 
 
 # ----------------------------------------------------------------------------- poses
@@ -1088,7 +874,7 @@ def synthetic_cart_measurements(
     if direction not in (1, -1, 1.0, -1.0):
         raise InputError(f"direction: expected +1 or -1, got {direction!r}")
     robot = true_model if actuator_errors is None else DeviatedClosure(true_model, actuator_errors, [direction] * 3)
-    fA, _ = _point_functions(robot)
+    fA, _ = joint_point_functions(robot)
     p = robot.parameter_vector()
     rng = np.random.default_rng(seed)
     qs, ps = [], []

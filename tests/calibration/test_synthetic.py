@@ -21,17 +21,16 @@ from gtmodel.calibration.synthetic import (
     STEREO_VISION,
     TABLE_4_1_MEAN_RESIDUAL_M,
     ActuatorErrors,
-    DeviatedClosure,
     DeviceNoise,
     backlash_directions,
     device_noise,
     grid_poses,
-    guideway_axes,
     link_angles,
     random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )
+from gtmodel.robots.deviated import DeviatedClosure, guideway_axes
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import ThreeLinkClosure, zyz_to_rotation
 from gtmodel.robots.kinematics import GantryTau3Kinematics
