@@ -43,6 +43,7 @@ from gtmodel.calibration.measurements import (
     read_measurements,
 )
 from gtmodel.calibration.pose_selection import select_poses, simulate_calibration
+from gtmodel.calibration.poses import grid_poses, random_poses
 from gtmodel.calibration.synthetic import (
     LASER_TRACKER,
     NO_NOISE,
@@ -50,8 +51,6 @@ from gtmodel.calibration.synthetic import (
     ActuatorErrors,
     DeviceNoise,
     device_noise,
-    grid_poses,
-    random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )

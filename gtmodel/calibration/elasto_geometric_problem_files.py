@@ -194,7 +194,7 @@ def load_elasto_geometric(f: FieldReader, name: str) -> ElastoGeometricDeclarati
     """
     from gtmodel.calibration.kinematic import SOLVERS
     from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES, compliance_selection
-    from gtmodel.calibration.synthetic import grid_poses
+    from gtmodel.calibration.poses import grid_poses
     from gtmodel.robots.closure import ThreeLinkClosure
     from gtmodel.robots.stiffness import GantryTau3Stiffness, load_stiffness
 

@@ -190,7 +190,8 @@ def load_calibration(f: FieldReader, name: str) -> CalibrationDeclaration:
     """
     from gtmodel.calibration.kinematic import SOLVERS, CalibrationProblem, ParameterSelection
     from gtmodel.calibration.measurements import read_cart_measurements, read_measurements
-    from gtmodel.calibration.synthetic import ActuatorErrors, device_noise, grid_poses, random_poses, synthetic_cart_measurements, synthetic_measurements
+    from gtmodel.calibration.synthetic import ActuatorErrors, device_noise, synthetic_cart_measurements, synthetic_measurements
+    from gtmodel.calibration.poses import grid_poses, random_poses
 
     f.check_unknown(CALIBRATION_SCHEMA)
     has_data, has_truth = f.has("data"), f.has("truth")

@@ -24,7 +24,8 @@ from gtmodel.calibration.elasto_geometric import (
 )
 from gtmodel.calibration.evaluation import evaluate
 from gtmodel.calibration.measurements import MeasurementSet, read_measurements
-from gtmodel.calibration.synthetic import NO_NOISE, grid_poses
+from gtmodel.calibration.poses import grid_poses
+from gtmodel.calibration.synthetic import NO_NOISE
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.robots.elasto_geometric import COMPLIANCE_NAMES, ElastoGeometricClosure

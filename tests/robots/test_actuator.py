@@ -24,10 +24,10 @@ from gtmodel.calibration.synthetic import (
     NO_NOISE,
     ActuatorErrors,
     line_fit_residuals,
-    random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )
+from gtmodel.calibration.poses import random_poses
 from gtmodel.robots.deviated import DeviatedClosure, guideway_axes
 from gtmodel.errors import InputError
 from gtmodel.robots.actuator import SIX_LINK_LAYOUT, PiecewiseActuatorClosure, piecewise_linear
