@@ -8,7 +8,7 @@ started from the ideal model of Table 5.1 -- the size of the thesis' L1 calibrat
 
 Printed, each as the median of ``--repeat`` runs in this process (machines are noisy):
 
-1. gtmodel's default solver (:data:`gtmodel.calibration.calibrate.DEFAULT_SOLVER`):
+1. gtmodel's default solver (:data:`gtmodel.calibration.kinematic.DEFAULT_SOLVER`):
    solve time (the solver runs, without the one-off CasADi build, which is printed
    separately) and the wall time of the whole ``CalibrationProblem.solve`` call (frame
    alignment, rank check, standard deviations and identifiability report included).
@@ -40,7 +40,7 @@ import casadi as ca  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy.optimize  # noqa: E402
 
-from gtmodel.calibration.calibrate import (  # noqa: E402
+from gtmodel.calibration.kinematic import (  # noqa: E402
     DEFAULT_SOLVER,
     LSQ_TOLERANCE,
     CalibrationProblem,

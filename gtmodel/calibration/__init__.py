@@ -4,13 +4,13 @@ Dressler (2012), ch. 5: measured poses (:class:`MeasurementSet`, read from CSV f
 :func:`read_measurements`), cart surveys for the piecewise-linear actuator model
 (:class:`CartMeasurements`), and synthetic data of a "true" robot with actuator errors and
 device noise for studies and tests (:mod:`gtmodel.calibration.synthetic`); calibration
-from closure equations (:mod:`gtmodel.calibration.calibrate`), identifiability
+from closure equations (:mod:`gtmodel.calibration.kinematic`), identifiability
 (:mod:`gtmodel.calibration.identifiability`), pose selection
 (:mod:`gtmodel.calibration.pose_selection`) and accuracy reports
 (:mod:`gtmodel.calibration.evaluation`).
 """
 
-from gtmodel.calibration.calibrate import (
+from gtmodel.calibration.kinematic import (
     CalibrationProblem,
     CalibrationResult,
     ParameterSelection,
@@ -18,7 +18,6 @@ from gtmodel.calibration.calibrate import (
     calibrate,
 )
 from gtmodel.calibration.elasto_geometric import (
-    ElastoGeometricClosure,
     calibrate_elasto_geometric,
     compliant_measurements,
     elasto_geometric_study,
@@ -32,7 +31,7 @@ from gtmodel.calibration.dynamic_identification import (
     read_motion_log,
     simulate_log,
 )
-from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, plot_error_histogram
+from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, tcp_errors
 from gtmodel.calibration.excitation import FourierTrajectory, design_excitation
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian
 
@@ -44,16 +43,14 @@ from gtmodel.calibration.measurements import (
     read_measurements,
 )
 from gtmodel.calibration.pose_selection import select_poses, simulate_calibration
+from gtmodel.calibration.poses import grid_poses, random_poses
 from gtmodel.calibration.synthetic import (
     LASER_TRACKER,
     NO_NOISE,
     STEREO_VISION,
     ActuatorErrors,
-    DeviatedClosure,
     DeviceNoise,
     device_noise,
-    grid_poses,
-    random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )
@@ -89,7 +86,7 @@ __all__ = [
     "AccuracyReport",
     "evaluate",
     "parameter_sensitivity",
-    "plot_error_histogram",
+    "tcp_errors",
     "MeasurementSet",
     "CartMeasurements",
     "read_measurements",
@@ -101,7 +98,6 @@ __all__ = [
     "NO_NOISE",
     "device_noise",
     "ActuatorErrors",
-    "DeviatedClosure",
     "grid_poses",
     "random_poses",
     "synthetic_measurements",
@@ -112,7 +108,6 @@ __all__ = [
     "identify_state_space",
     "physical_from_state_space",
     "prbs",
-    "ElastoGeometricClosure",
     "calibrate_elasto_geometric",
     "compliant_measurements",
     "elasto_geometric_study",

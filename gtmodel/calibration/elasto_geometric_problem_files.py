@@ -156,9 +156,9 @@ class ElastoGeometricOutcome:
     @property
     def status(self) -> str:
         """Worst status of the calibrations."""
-        from gtmodel.calibration.calibrate import _worst_status
+        from gtmodel.status import Status
 
-        return _worst_status([self.study.status] + ([self.single_load.status] if self.single_load is not None else []))
+        return Status.worst([self.study.status] + ([self.single_load.status] if self.single_load is not None else []))
 
 
 def _parameter_set(f: FieldReader, table: str, key: str) -> Any:
@@ -192,9 +192,9 @@ def load_elasto_geometric(f: FieldReader, name: str) -> ElastoGeometricDeclarati
         compliance pattern, unknown device or solver, a grid too coarse to hold enough
         poses); the message names the file and the field.
     """
-    from gtmodel.calibration.calibrate import SOLVERS
+    from gtmodel.calibration.kinematic import SOLVERS
     from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES, compliance_selection
-    from gtmodel.calibration.synthetic import grid_poses
+    from gtmodel.calibration.poses import grid_poses
     from gtmodel.robots.closure import ThreeLinkClosure
     from gtmodel.robots.stiffness import GantryTau3Stiffness, load_stiffness
 
@@ -348,7 +348,7 @@ def write_elasto_geometric(
     files : list of str
         Files written besides ``summary.json``.
     """
-    from gtmodel.calibration.evaluation import plot_error_histogram
+    from gtmodel.report.calibration import plot_error_histogram
     from gtmodel.robots.stiffness import plot_stiffness_map
 
     st = solution.study

@@ -11,21 +11,21 @@ parameter sensitivity of eq. 5.8 (Table 5.10) which parameters matter.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
 from gtmodel.calibration.measurements import MeasurementSet
 from gtmodel.errors import InputError
-from gtmodel.robots.closure import ClosureModel, rotation_to_zyz
+from gtmodel._geometry import rotation_to_zyz
+from gtmodel.robots.closure import ClosureModel
 
 __all__ = [
     "AccuracyReport",
     "SensitivityTable",
     "evaluate",
     "parameter_sensitivity",
-    "plot_error_histogram",
+    "tcp_errors",
     "SENSITIVITY_STEP",
 ]
 
@@ -277,38 +277,35 @@ def parameter_sensitivity(model: ClosureModel, measurements: MeasurementSet, ste
     return SensitivityTable(tuple(model.parameter_names()), pos, ori, dc, float(step))
 
 
-def plot_error_histogram(reports: Mapping[str, AccuracyReport], path: str | Path, bins: int = 30, title: str = "") -> Path:
-    """Histogram of TCP errors of one or several models (Dressler (2012), Fig. 3.8).
+def tcp_errors(model: ClosureModel, q: np.typing.ArrayLike, T: np.typing.ArrayLike) -> np.ndarray:
+    """TCP position errors ``e_k = ||T_k - fk(q_k)||``, Dressler (2012), eq. 5.5.
 
     Parameters
     ----------
-    reports : Mapping[str, AccuracyReport]
-        Label -> report.
-    path : str or pathlib.Path
-        PNG file.
-    bins : int, optional
-        Number of bins (shared edges).
-    title : str, optional
-        Figure title.
+    model : ClosureModel
+        The (calibrated) model, in the frame of ``T``.
+    q : array_like, shape (N, n_q)
+        Actuator values [m, rad].
+    T : array_like, shape (N, 3)
+        Measured TCP positions [m].
 
     Returns
     -------
-    pathlib.Path
-        The written file.
-    """
-    from matplotlib.figure import Figure
+    numpy.ndarray, shape (N,)
+        Errors [m].
 
-    fig = Figure(figsize=(7, 4), layout="constrained")
-    ax = fig.subplots()
-    top = max(r.max_error for r in reports.values()) * 1e6
-    edges = np.linspace(0.0, top, bins + 1)
-    for label, r in reports.items():
-        ax.hist(r.errors * 1e6, bins=edges, alpha=0.55, label=f"{label}: mean {r.mean_error * 1e6:.0f} um, max {r.max_error * 1e6:.0f} um")
-    ax.set_xlabel("TCP error [um]")
-    ax.set_ylabel("poses")
-    ax.grid(True)
-    ax.legend(fontsize="small")
-    fig.suptitle(title or "TCP error on the validation poses")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    Raises
+    ------
+    InputError
+        Mismatched shapes.
+    UnreachablePoseError
+        If the model's FK has no solution for some ``q``.
+    ConvergenceError
+        If an iterative FK does not converge.
+    """
+    qa = np.atleast_2d(np.asarray(q, dtype=float))
+    Ta = np.atleast_2d(np.asarray(T, dtype=float))
+    if Ta.shape != (qa.shape[0], 3):
+        raise InputError(f"T: expected shape ({qa.shape[0]}, 3) to match q, got {Ta.shape}")
+    # one implementation of eq. 5.5: the accuracy report's
+    return evaluate(model, MeasurementSet(q=qa, T=Ta)).errors

@@ -53,14 +53,13 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.csgraph
 
-from gtmodel.calibration.calibrate import (
+from gtmodel.calibration.kinematic import (
     DEFAULT_SOLVER,
     ParameterSelection,
-    _problem,
-    _selection_of,
     calibrate,
-    tcp_errors,
 )
+from gtmodel.calibration.evaluation import tcp_errors
+from gtmodel.calibration.kinematic.shortcuts import _problem, _selection_of
 from gtmodel.calibration.identifiability import RANK_TOLERANCE, analyze_jacobian, scale_columns
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.closure import ClosureModel, rotation_to_quaternion, rotation_vector_to_rotation

@@ -188,9 +188,10 @@ def load_calibration(f: FieldReader, name: str) -> CalibrationDeclaration:
         ``[truth]``; a malformed measurement file (the message names its row); fewer poses
         than the models need.
     """
-    from gtmodel.calibration.calibrate import SOLVERS, CalibrationProblem, ParameterSelection
+    from gtmodel.calibration.kinematic import SOLVERS, CalibrationProblem, ParameterSelection
     from gtmodel.calibration.measurements import read_cart_measurements, read_measurements
-    from gtmodel.calibration.synthetic import ActuatorErrors, device_noise, grid_poses, random_poses, synthetic_cart_measurements, synthetic_measurements
+    from gtmodel.calibration.synthetic import ActuatorErrors, device_noise, synthetic_cart_measurements, synthetic_measurements
+    from gtmodel.calibration.poses import grid_poses, random_poses
 
     f.check_unknown(CALIBRATION_SCHEMA)
     has_data, has_truth = f.has("data"), f.has("truth")
@@ -336,9 +337,9 @@ class CalibrationOutcome:
     @property
     def status(self) -> str:
         """Worst status over the models (``error`` if a model could not be calibrated)."""
-        from gtmodel.calibration.calibrate import _worst_status
+        from gtmodel.status import Status
 
-        return _worst_status(res.status if res is not None else ("optimal" if rep is not None else "error") for _, res, rep, _ in self.results)
+        return Status.worst(res.status if res is not None else ("optimal" if rep is not None else "error") for _, res, rep, _ in self.results)
 
     @property
     def success(self) -> bool:
@@ -367,7 +368,7 @@ def solve_calibration(decl: CalibrationDeclaration, verbose: bool = False) -> Ca
         Too few poses for a model's free parameters, or an unidentifiable request (the
         message lists the offending parameters and what they depend on).
     """
-    from gtmodel.calibration.calibrate import CalibrationProblem
+    from gtmodel.calibration.kinematic import CalibrationProblem
     from gtmodel.calibration.evaluation import evaluate
 
     t0 = time.perf_counter()
@@ -471,7 +472,7 @@ def write_calibration(decl: CalibrationDeclaration, outcome: CalibrationOutcome,
     files : list of str
         Files written besides ``summary.json``.
     """
-    from gtmodel.calibration.evaluation import plot_error_histogram
+    from gtmodel.report.calibration import plot_error_histogram
 
     rows = []
     for name, res, rep, msg in outcome.results:

@@ -7,9 +7,8 @@ the actuator-side joint points (:class:`DeviatedClosure`). Its TCP (and orientat
 from the generic Newton FK on its closure equations; the measuring device adds its noise
 (:class:`DeviceNoise`, ch. 5: laser tracker ~10 um, stereo vision ~1.7 mm).
 
-Poses are generated inside the workspace within cart travel and spherical-joint limits
-(:func:`grid_poses`, :func:`random_poses`; ch. 5.6), as actuator values ``q`` (what the
-robot is commanded to).
+Poses come from :mod:`gtmodel.calibration.poses` (inside the workspace, ch. 5.6), as
+actuator values ``q`` (what the robot is commanded to).
 
 Random numbers come from one :func:`numpy.random.default_rng` ``(seed)`` per call, drawn in
 a fixed order (position noise, orientation noise, then random backlash directions), so a
@@ -31,9 +30,9 @@ from scipy.spatial.transform import Rotation
 
 from gtmodel.calibration.measurements import CartMeasurements, MeasurementSet
 from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
-from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure, rotation_to_quaternion
-from gtmodel.robots.kinematics import GantryTau3Kinematics
-from gtmodel.robots.parameters import Limits, RobotParameters
+from gtmodel._geometry import rotation_to_quaternion
+from gtmodel.robots.closure import ClosureModel
+from gtmodel.robots.deviated import DeviatedClosure, guideway_axes, joint_point_functions
 
 __all__ = [
     "DeviceNoise",
@@ -42,12 +41,7 @@ __all__ = [
     "NO_NOISE",
     "device_noise",
     "ActuatorErrors",
-    "DeviatedClosure",
-    "guideway_axes",
     "line_fit_residuals",
-    "link_angles",
-    "grid_poses",
-    "random_poses",
     "backlash_directions",
     "synthetic_measurements",
     "synthetic_cart_measurements",
@@ -57,8 +51,6 @@ __all__ = [
     "CART_SURVEY_RANGE_M",
     "PINION_CIRCUMFERENCE_M",
     "BACKLASH_M",
-    "L1_GRID_STEP_M",
-    "RANDOM_POSE_MAX_ROUNDS",
 ]
 
 _log = logging.getLogger("gtmodel")
@@ -78,11 +70,6 @@ CART_SURVEY_RANGE_M = (-0.650, 0.700)
 PINION_CIRCUMFERENCE_M = 0.2
 #: Backlash of the drive train [m] (L2, similar drive train; Dressler (2012), ch. 4.2).
 BACKLASH_M = 40e-6
-#: Grid step [m] of :meth:`GantryTau3Kinematics.workspace_grid` that gives 778 L1 poses
-#: within the L1 limits (Table 5.1 used 779 laser-tracker poses).
-L1_GRID_STEP_M = 0.1153
-#: Rejection-sampling rounds of :func:`random_poses` before giving up.
-RANDOM_POSE_MAX_ROUNDS = 50
 
 
 # ----------------------------------------------------------------------------- device noise
@@ -418,476 +405,6 @@ class ActuatorErrors:
     __hash__ = None  # type: ignore[assignment]
 
 
-# ----------------------------------------------------------------------------- true robot
-def _point_functions(model: ClosureModel) -> tuple[ca.Function, ca.Function]:
-    """``A(p, q)`` (3 x n_links) and the guideway directions ``dA_ij/dq_i`` (3 x n_links)."""
-    p, q = ca.SX.sym("p", model.n_parameters), ca.SX.sym("q", model.n_q)
-    T, R = ca.SX.sym("T", 3), ca.SX.sym("R", 3, 3)
-    A, G = [], []
-    for i, arm in enumerate(model.links):
-        Ai = model.link_points(p, q, T, R, i)[0]
-        for j in range(len(arm)):
-            A.append(Ai[:, j])
-            G.append(ca.jacobian(Ai[:, j], q)[:, i])
-    return ca.Function("A", [p, q], [ca.horzcat(*A)]), ca.Function("dA_dq", [p, q], [ca.horzcat(*G)])
-
-
-def guideway_axes(model: ClosureModel, q: np.typing.ArrayLike | None = None) -> np.ndarray:
-    """Guideway frames of a model: ``e1`` along ``dA_i1/dq_i`` (by AD of its link points).
-
-    ``e2 = e_z x e1`` normalised (horizontal for a horizontal guideway; ``e_x x e1`` if the
-    guideway is within ~6 deg of vertical, as on the F1), ``e3 = e1 x e2``.
-
-    Parameters
-    ----------
-    model : ClosureModel
-        Any closure model; arm ``i`` is driven by the linear actuator ``q_i``.
-    q : array_like, shape (n_q,), optional
-        Where to take the derivative (default zeros).
-
-    Returns
-    -------
-    numpy.ndarray, shape (3, 3, 3)
-        ``axes[i]`` has columns ``e1, e2, e3`` of arm ``i``.
-
-    Raises
-    ------
-    InputError
-        If an arm's joint point does not move with its actuator.
-    """
-    q0 = np.zeros(model.n_q) if q is None else np.asarray(q, dtype=float).reshape(model.n_q)
-    _, fG = _point_functions(model)
-    G = np.array(fG(model.parameter_vector(), q0))
-    out = np.empty((3, 3, 3))
-    col = 0
-    for i, arm in enumerate(model.links):
-        g = G[:, col]
-        col += len(arm)
-        n = np.linalg.norm(g)
-        if not n > 0:
-            raise InputError(f"{model.name}: joint point of arm {i + 1} does not move with q{i + 1} (dA/dq = 0)")
-        e1 = g / n
-        e2 = np.cross([0.0, 0.0, 1.0], e1)
-        if np.linalg.norm(e2) < 0.1:
-            e2 = np.cross([1.0, 0.0, 0.0], e1)
-        e2 /= np.linalg.norm(e2)
-        out[i] = np.column_stack([e1, e2, np.cross(e1, e2)])
-    return out
-
-
-class DeviatedClosure(ClosureModel):
-    """A closure model whose actuator-side joint points carry actuator errors (the "true" robot).
-
-    ``A_ij(q) -> A_ij(q) + d_i(q_i, direction_i)`` for every link of arm ``i``, with ``d_i``
-    from :meth:`ActuatorErrors.deviation_expression` in the guideway frame of the arm (the
-    cart translates; its small rotations are neglected). Parameters, links and orientation
-    are those of the wrapped model.
-
-    Parameters
-    ----------
-    model : ClosureModel
-        The ideal (error-free) model.
-    errors : ActuatorErrors
-        The actuator errors.
-    direction : array_like, shape (3,), optional
-        Direction of the last motion per arm (+1 or -1), for the backlash.
-    axes : array_like, shape (3, 3, 3), optional
-        Guideway frames (default :func:`guideway_axes` of ``model``).
-
-    Raises
-    ------
-    InputError
-        If ``direction`` is not +-1 per arm or ``axes`` has the wrong shape.
-    """
-
-    def __init__(
-        self,
-        model: ClosureModel,
-        errors: ActuatorErrors,
-        direction: np.typing.ArrayLike = (1.0, 1.0, 1.0),
-        axes: np.typing.ArrayLike | None = None,
-    ) -> None:
-        d = np.asarray(direction, dtype=float).reshape(-1)
-        if d.shape != (3,) or not np.all(np.abs(d) == 1.0):
-            raise InputError(f"direction: expected +1 or -1 for each of the 3 arms, got {direction!r}")
-        self.model = model
-        self.errors = errors
-        self.direction = d
-        self.axes = guideway_axes(model) if axes is None else np.asarray(axes, dtype=float)
-        if self.axes.shape != (3, 3, 3):
-            raise InputError(f"axes: expected shape (3, 3, 3), got {self.axes.shape}")
-        self.name = f"{model.name}+actuator_errors"
-        self.n_q = model.n_q
-        self.orientation = model.orientation
-        self.links = model.links
-
-    def parameter_names(self) -> tuple[str, ...]:
-        """The wrapped model's parameter names.
-
-        Returns
-        -------
-        tuple of str
-        """
-        return self.model.parameter_names()
-
-    def parameter_vector(self) -> np.ndarray:
-        """The wrapped model's parameter values.
-
-        Returns
-        -------
-        numpy.ndarray, shape (n_parameters,)
-        """
-        return self.model.parameter_vector()
-
-    def quaternion_indices(self) -> list[tuple[int, int, int, int]]:
-        """The wrapped model's quaternion parameter indices.
-
-        Returns
-        -------
-        list of tuple of int
-        """
-        return self.model.quaternion_indices()
-
-    def link_points(self, p: ca.SX, q: ca.SX, T: ca.SX, R: ca.SX, arm: int) -> tuple[ca.SX, ca.SX, ca.SX]:
-        """The wrapped model's link points with the actuator error added to ``A``.
-
-        Parameters
-        ----------
-        p : casadi.SX, shape (n_parameters,)
-            Parameters.
-        q : casadi.SX, shape (n_q,)
-            Actuator values [m, rad].
-        T : casadi.SX, shape (3,)
-            TCP position [m].
-        R : casadi.SX, shape (3, 3)
-            Plate orientation.
-        arm : int
-            Arm index 0, 1, 2.
-
-        Returns
-        -------
-        A, B : casadi.SX, shape (3, n_links_of_arm)
-            Joint points [m].
-        L : casadi.SX, shape (n_links_of_arm,)
-            Link lengths [m].
-        """
-        A, B, L = self.model.link_points(p, q, T, R, arm)
-        d = self.errors.deviation_expression(arm, q[arm], float(self.direction[arm]), self.axes[arm])
-        return A + ca.repmat(d, 1, A.size2()), B, L
-
-    def with_parameters(self, p: np.typing.ArrayLike) -> "DeviatedClosure":
-        """The wrapped model with other parameters, same actuator errors and guideway frames.
-
-        Parameters
-        ----------
-        p : array_like, shape (n_parameters,)
-            Parameter values.
-
-        Returns
-        -------
-        DeviatedClosure
-        """
-        return DeviatedClosure(self.model.with_parameters(p), self.errors, self.direction, self.axes)
-
-    def transformed(self, R: np.typing.ArrayLike, t: np.typing.ArrayLike) -> "DeviatedClosure":
-        """The robot in another frame, ``x' = R x + t``; the guideway frames rotate with it.
-
-        Parameters
-        ----------
-        R : array_like, shape (3, 3)
-            Rotation.
-        t : array_like, shape (3,)
-            Translation [m].
-
-        Returns
-        -------
-        DeviatedClosure
-        """
-        Rm = np.asarray(R, dtype=float).reshape(3, 3)
-        return DeviatedClosure(self.model.transformed(Rm, t), self.errors, self.direction, Rm @ self.axes)
-
-    def fk(self, q: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """FK by Newton on the deviated closure equations, started from the wrapped model's FK.
-
-        Parameters
-        ----------
-        q : array_like, shape (n_q,) or (N, n_q)
-            Actuator values [m, rad].
-
-        Returns
-        -------
-        T : numpy.ndarray, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : numpy.ndarray, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-
-        Raises
-        ------
-        ConvergenceError
-            If Newton's method does not converge (names the pose).
-        UnreachablePoseError
-            If the wrapped model's FK finds no pose.
-        """
-        T0, R0 = self.model.fk(q)
-        return self.fk_newton(q, T0, R0)
-
-
-# ----------------------------------------------------------------------------- poses
-def _model_limits(model: ClosureModel, limits: Limits | None) -> Limits:
-    if limits is not None:
-        if not isinstance(limits, Limits):
-            raise InputError(f"limits: expected a gtmodel.robots.parameters.Limits, got {type(limits).__name__}")
-        return limits
-    for obj in (model, getattr(model, "model", None)):
-        robot = getattr(obj, "robot", None)
-        if isinstance(robot, RobotParameters):
-            return robot.limits
-        lim = getattr(obj, "limits", None)
-        if isinstance(lim, Limits):
-            return lim
-    raise InputError(f"{model.name}: no limits known; pass limits (cart travel and spherical-joint limit)")
-
-
-def _three_link_kinematics(model: ThreeLinkClosure, limits: Limits) -> GantryTau3Kinematics:
-    if model.robot is not None:
-        robot = dataclasses.replace(model.robot, kinematics=model.kinematics, limits=limits)
-    else:  # kinematics only: GantryTau3Kinematics's workspace methods read just name and limits
-        robot = RobotParameters(
-            name=model.name, description="kinematic parameters only", frame="", kinematics=model.kinematics,
-            dynamics=None, limits=limits,  # type: ignore[arg-type]
-        )
-    return GantryTau3Kinematics(robot)
-
-
-def _link_cosines(model: ClosureModel, q: np.ndarray, T: np.ndarray, R: np.ndarray | None) -> np.ndarray:
-    """Signed cosines of the angles between ``B_ij - A_ij`` and ``dA_ij/dq_i``, shape (N, n_links)."""
-    qa = np.atleast_2d(np.asarray(q, dtype=float))
-    Ta = np.atleast_2d(np.asarray(T, dtype=float))
-    N = qa.shape[0]
-    if qa.shape != (N, model.n_q) or Ta.shape != (N, 3):
-        raise InputError(f"link_angles: expected q ({N}, {model.n_q}) and T ({N}, 3), got {qa.shape} and {Ta.shape}")
-    Ra = np.broadcast_to(np.eye(3) if R is None else np.asarray(R, dtype=float), (N, 3, 3))
-    p, qs = ca.SX.sym("p", model.n_parameters), ca.SX.sym("q", model.n_q)
-    Ts, Rv = ca.SX.sym("T", 3), ca.SX.sym("R", 9)
-    Rs = ca.reshape(Rv, 3, 3)  # column-major vec(R)
-    cos = []
-    for i, arm in enumerate(model.links):
-        A, B, _ = model.link_points(p, qs, Ts, Rs, i)
-        for j in range(len(arm)):
-            g = ca.jacobian(A[:, j], qs)[:, i]
-            D = B[:, j] - A[:, j]
-            cos.append(ca.dot(D, g) / (ca.norm_2(D) * ca.norm_2(g)))
-    f = ca.Function("link_cos", [p, qs, Ts, Rv], [ca.vertcat(*cos)]).map(N)
-    Rcols = Ra.transpose(0, 2, 1).reshape(N, 9).T
-    return np.array(f(model.parameter_vector(), qa.T, Ta.T, Rcols)).T
-
-
-def link_angles(model: ClosureModel, q: np.typing.ArrayLike, T: np.typing.ArrayLike, R: np.typing.ArrayLike | None = None) -> np.ndarray:
-    """Angle between each link and its guideway, for any closure model.
-
-    The link vector is ``B_ij - A_ij`` and the guideway direction ``dA_ij/dq_i`` (CasADi
-    jacobian of the model's link points); the angle is taken of ``|cos|`` (0 = link along the
-    guideway either way), as the spherical-joint limit of :meth:`GantryTau3Kinematics.in_workspace`.
-
-    Parameters
-    ----------
-    model : ClosureModel
-        The model.
-    q : array_like, shape (N, n_q)
-        Actuator values [m, rad].
-    T : array_like, shape (N, 3)
-        TCP positions [m].
-    R : array_like, shape (N, 3, 3), optional
-        Plate orientations (identity by default).
-
-    Returns
-    -------
-    numpy.ndarray, shape (N, n_links)
-        Angles in [0, pi/2] [rad].
-
-    Raises
-    ------
-    InputError
-        If shapes disagree.
-    """
-    c = _link_cosines(model, np.asarray(q, dtype=float), np.asarray(T, dtype=float), None if R is None else np.asarray(R, dtype=float))
-    return np.arccos(np.clip(np.abs(c), 0.0, 1.0))
-
-
-def _fk_filter(model: ClosureModel, q: np.ndarray, limits: Limits, q_ref: np.ndarray) -> np.ndarray:
-    """Mask of poses whose FK exists and whose links respect the spherical-joint limit.
-
-    Each link must also point to the same side of its cart as at the reference pose
-    ``q_ref`` (the centre of travel): the nominal IK configuration (for the 3-link model
-    configuration 0, ``(T - A_i) . v_i > 0``).
-    """
-    ok = np.zeros(q.shape[0], dtype=bool)
-    T = np.full((q.shape[0], 3), np.nan)
-    R = np.broadcast_to(np.eye(3), (q.shape[0], 3, 3)).copy()
-    try:
-        T[:], R[:] = model.fk(q)
-        ok[:] = True
-    except (ConvergenceError, UnreachablePoseError):
-        for k in range(q.shape[0]):
-            try:
-                T[k], R[k] = model.fk(q[k])
-                ok[k] = True
-            except (ConvergenceError, UnreachablePoseError):
-                pass
-    if np.any(ok):
-        c = _link_cosines(model, q[ok], T[ok], R[ok])
-        ref = np.sign(_link_cosines(model, q_ref[None, :], *[x[None] for x in model.fk(q_ref)]))
-        keep = np.all(np.abs(c) >= np.cos(limits.joint_angle_max), axis=1) & np.all(np.sign(c) == ref, axis=1)
-        ok[np.flatnonzero(ok)] = keep
-    return ok
-
-
-def _q_box(model: ClosureModel, limits: Limits, rotary_travel: np.typing.ArrayLike | None) -> np.ndarray:
-    box = np.asarray(limits.cart_travel, dtype=float)
-    if model.n_q > 3:
-        if rotary_travel is None:
-            raise InputError(f"{model.name}: rotary_travel (range of q4..q{model.n_q} in rad) is needed for a model with n_q={model.n_q}")
-        rt = np.asarray(rotary_travel, dtype=float)
-        if rt.shape != (model.n_q - 3, 2) or np.any(rt[:, 0] >= rt[:, 1]):
-            raise InputError(f"rotary_travel: expected shape ({model.n_q - 3}, 2) with min < max, got {rt.tolist()}")
-        box = np.vstack([box, rt])
-    return box
-
-
-def grid_poses(
-    model: ClosureModel,
-    step: float,
-    limits: Limits | None = None,
-    rotary_travel: np.typing.ArrayLike | None = None,
-    rotary_step: float | None = None,
-) -> np.ndarray:
-    """Actuator values of a regular grid of poses inside the workspace (Dressler (2012), ch. 5.6).
-
-    - :class:`ThreeLinkClosure`: a regular TCP grid of spacing ``step``
-      (:meth:`GantryTau3Kinematics.workspace_grid`, IK configuration 0), kept where the
-      carts stay within travel and the links within the spherical-joint limit; returned as
-      its IK solutions.
-    - any other model: a regular grid in ``q`` over the cart travel (and ``rotary_travel``),
-      kept where the model's FK exists and every link is within the joint limit
-      (:func:`link_angles`).
-
-    Parameters
-    ----------
-    model : ClosureModel
-        The (nominal) model the poses are planned with.
-    step : float
-        Grid spacing [m] (TCP grid for the 3-link model, ``q`` grid otherwise).
-    limits : Limits, optional
-        Cart travel and joint-angle limit; default the model's parameter set's limits.
-    rotary_travel : array_like, shape (n_q - 3, 2), optional
-        Range of ``q4..`` [rad] (models with ``n_q > 3``).
-    rotary_step : float, optional
-        Grid spacing of ``q4..`` [rad] (models with ``n_q > 3``).
-
-    Returns
-    -------
-    numpy.ndarray, shape (N, n_q)
-        Actuator values [m, rad], N >= 1.
-
-    Raises
-    ------
-    InputError
-        If ``step`` is not positive, no limits are known, the rotary ranges are missing,
-        or no grid point lies in the workspace.
-    """
-    if not (np.isfinite(step) and step > 0):
-        raise InputError(f"step: expected a positive grid spacing [m], got {step!r}")
-    lim = _model_limits(model, limits)
-    if isinstance(model, ThreeLinkClosure):
-        kin = _three_link_kinematics(model, lim)
-        T = kin.workspace_grid(step)
-        if T.shape[0] == 0:
-            raise InputError(f"{model.name}: no grid point with step {step} m lies in the workspace")
-        return kin.ik(T, 0)
-    box = _q_box(model, lim, rotary_travel)
-    if model.n_q > 3 and not (rotary_step is not None and np.isfinite(rotary_step) and rotary_step > 0):
-        raise InputError(f"rotary_step: expected a positive spacing [rad] for q4..q{model.n_q}, got {rotary_step!r}")
-    steps = [step] * 3 + [rotary_step] * (model.n_q - 3)
-    axes = [np.arange(lo, hi + s / 2, s) for (lo, hi), s in zip(box, steps)]
-    q = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, model.n_q)
-    q = q[np.all(q <= box[:, 1] + 1e-12, axis=1)]
-    ok = _fk_filter(model, q, lim, box.mean(axis=1))
-    if not np.any(ok):
-        raise InputError(f"{model.name}: no grid point with step {step} lies in the workspace")
-    _log.info("%s: %d of %d grid poses in the workspace", model.name, int(ok.sum()), q.shape[0])
-    return q[ok]
-
-
-def random_poses(
-    model: ClosureModel,
-    n: int,
-    seed: int | None = 0,
-    limits: Limits | None = None,
-    rotary_travel: np.typing.ArrayLike | None = None,
-) -> np.ndarray:
-    """Actuator values of random poses inside the workspace (uniform, rejection sampling).
-
-    - :class:`ThreeLinkClosure`: TCP positions uniform in the workspace box, kept by
-      :meth:`GantryTau3Kinematics.in_workspace`, returned as IK solutions (configuration 0).
-    - any other model: ``q`` uniform in the cart travel (and ``rotary_travel``), kept where
-      FK exists and every link is within the joint limit (:func:`link_angles`).
-
-    Parameters
-    ----------
-    model : ClosureModel
-        The (nominal) model.
-    n : int
-        Number of poses.
-    seed : int or None, optional
-        Seed of :func:`numpy.random.default_rng`.
-    limits : Limits, optional
-        Cart travel and joint-angle limit; default the model's parameter set's limits.
-    rotary_travel : array_like, shape (n_q - 3, 2), optional
-        Range of ``q4..`` [rad] (models with ``n_q > 3``).
-
-    Returns
-    -------
-    numpy.ndarray, shape (n, n_q)
-        Actuator values [m, rad].
-
-    Raises
-    ------
-    InputError
-        If ``n`` is not a positive integer, no limits are known, or fewer than ``n`` poses
-        were found in :data:`RANDOM_POSE_MAX_ROUNDS` rounds of sampling.
-    """
-    if not isinstance(n, (int, np.integer)) or n < 1:
-        raise InputError(f"n: expected a positive number of poses, got {n!r}")
-    lim = _model_limits(model, limits)
-    rng = np.random.default_rng(seed)
-    batch = max(4 * int(n), 256)
-    found: list[np.ndarray] = []
-    count = 0
-    if isinstance(model, ThreeLinkClosure):
-        kin = _three_link_kinematics(model, lim)
-        box = kin.workspace_bounds()
-        for _ in range(RANDOM_POSE_MAX_ROUNDS):
-            T = rng.uniform(box[:, 0], box[:, 1], (batch, 3))
-            T = T[kin.in_workspace(T)]
-            if T.shape[0]:
-                found.append(kin.ik(T, 0))
-                count += T.shape[0]
-            if count >= n:
-                break
-    else:
-        box = _q_box(model, lim, rotary_travel)
-        for _ in range(RANDOM_POSE_MAX_ROUNDS):
-            q = rng.uniform(box[:, 0], box[:, 1], (batch, model.n_q))
-            q = q[_fk_filter(model, q, lim, box.mean(axis=1))]
-            found.append(q)
-            count += q.shape[0]
-            if count >= n:
-                break
-    if count < n:
-        raise InputError(f"{model.name}: found only {count} of {n} poses in the workspace after {RANDOM_POSE_MAX_ROUNDS} sampling rounds")
-    return np.vstack(found)[:n]
-
-
 # ----------------------------------------------------------------------------- measurements
 def backlash_directions(
     q: np.typing.ArrayLike, direction: str | np.typing.ArrayLike = "pose_order", seed: int | np.random.Generator | None = 0
@@ -1088,7 +605,7 @@ def synthetic_cart_measurements(
     if direction not in (1, -1, 1.0, -1.0):
         raise InputError(f"direction: expected +1 or -1, got {direction!r}")
     robot = true_model if actuator_errors is None else DeviatedClosure(true_model, actuator_errors, [direction] * 3)
-    fA, _ = _point_functions(robot)
+    fA, _ = joint_point_functions(robot)
     p = robot.parameter_vector()
     rng = np.random.default_rng(seed)
     qs, ps = [], []

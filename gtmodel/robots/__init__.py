@@ -11,6 +11,9 @@ from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_mode
 from gtmodel.robots.structural import PhysicalModel
 from gtmodel.robots.stiffness import GantryTau3Stiffness, StiffnessParameters, load_stiffness
 from gtmodel.robots.serial import SerialArm, load_serial_arm
+from gtmodel.robots.wrapped import WrappedClosure, guideway_frame
+from gtmodel.robots.deviated import DeviatedClosure, guideway_axes
+from gtmodel.robots.elasto_geometric import ElastoGeometricClosure
 from gtmodel.robots.dynamic_stiffness import DynamicStiffnessGP, fit_single_mode, simulate_single_mode, single_mode_frf
 
 __all__ = [
@@ -39,4 +42,9 @@ __all__ = [
     "fit_single_mode",
     "simulate_single_mode",
     "single_mode_frf",
+    "WrappedClosure",
+    "guideway_frame",
+    "DeviatedClosure",
+    "guideway_axes",
+    "ElastoGeometricClosure",
 ]

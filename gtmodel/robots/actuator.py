@@ -107,8 +107,11 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from scipy.spatial.transform import Rotation
 
 from gtmodel.errors import InputError
-from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure, rotation_to_zyz, rotation_vector_to_rotation, zyz_to_rotation
+from gtmodel._geometry import rotation_to_zyz, rotation_vector_to_rotation, zyz_to_rotation
+from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
 from gtmodel.robots.parameters import KinematicParameters
+from gtmodel.robots.six_link import estimate_nominal_orientation
+from gtmodel.robots.wrapped import WrappedClosure, guideway_frame
 
 __all__ = [
     "PiecewiseActuatorClosure",
@@ -213,7 +216,7 @@ def line_frame(q: np.typing.ArrayLike, points: np.typing.ArrayLike) -> np.ndarra
     ``e1`` is the principal direction of the centred points (SVD), pointing towards
     increasing ``q``; ``e2 = e_z x e1`` normalised (``e_x x e1`` if the line is within ~6 deg
     of the z axis), ``e3 = e1 x e2``; the same axes as
-    :func:`gtmodel.calibration.synthetic.guideway_axes`, in the frame of ``points``.
+    :func:`gtmodel.robots.deviated.guideway_axes` (:func:`~gtmodel.robots.wrapped.guideway_frame`), in the frame of ``points``.
 
     Parameters
     ----------
@@ -243,11 +246,7 @@ def line_frame(q: np.typing.ArrayLike, points: np.typing.ArrayLike) -> np.ndarra
     e1 = Vt[0]
     if e1 @ (Pc.T @ (qa - qa.mean())) < 0:
         e1 = -e1
-    e2 = np.cross([0.0, 0.0, 1.0], e1)
-    if np.linalg.norm(e2) < 0.1:
-        e2 = np.cross([1.0, 0.0, 0.0], e1)
-    e2 /= np.linalg.norm(e2)
-    return np.column_stack([e1, e2, np.cross(e1, e2)])
+    return guideway_frame(e1)
 
 
 def _minimal_rotation(u: np.ndarray, d: np.ndarray, fallback_axis: np.ndarray) -> np.ndarray:
@@ -260,7 +259,7 @@ def _minimal_rotation(u: np.ndarray, d: np.ndarray, fallback_axis: np.ndarray) -
     return np.eye(3) + Kx + Kx @ Kx / (1.0 + c)
 
 
-class PiecewiseActuatorClosure(ClosureModel):
+class PiecewiseActuatorClosure(WrappedClosure):
     """Closure model with piecewise-linear actuators, Dressler (2012), eq. 5.7 and Table 5.8.
 
     ``A_ij = R_i (P_i(q_i) - Pbar_i + a_ij) + c_i`` with ``P_i`` the linear interpolation
@@ -557,26 +556,19 @@ class PiecewiseActuatorClosure(ClosureModel):
         L = ca.vertcat(*[p[k] for k in d["L"]])
         return ca.horzcat(*A), ca.horzcat(*B), L
 
-    def with_parameters(self, p: np.typing.ArrayLike) -> "PiecewiseActuatorClosure":
-        """The model with other parameter values (same cart survey and constants).
-
-        Parameters
-        ----------
-        p : array_like, shape (n_parameters,)
-            Values in the order of :meth:`parameter_names`.
+    def quaternion_indices(self) -> list[tuple[int, int, int, int]]:
+        """No quaternion parameters (the frame rotations are rotation vectors).
 
         Returns
         -------
-        PiecewiseActuatorClosure
-
-        Raises
-        ------
-        InputError
-            If ``p`` has the wrong size or is not finite or a length is not positive.
+        list of tuple of int
+            Empty.
         """
-        pa = np.asarray(p, dtype=float).ravel()
-        if pa.size != self.n_parameters or not np.all(np.isfinite(pa)):
-            raise InputError(f"{self.name}: expected {self.n_parameters} finite parameters, got {pa.size}")
+        return []
+
+    def _with_parameters(self, pa: np.ndarray) -> "PiecewiseActuatorClosure":
+        """The model with other (checked) parameter values, same cart survey and constants;
+        an InputError if a length is not positive."""
         L, c, w = self.L.copy(), self.centre.copy(), self.frame_rotvec.copy()
         a, B0 = self.link_offsets.copy(), self.B0.copy()
         for i, d in enumerate(self._arm_slices()):
@@ -592,32 +584,17 @@ class PiecewiseActuatorClosure(ClosureModel):
             raise InputError(f"{self.name}: link lengths must be positive, got {L.tolist()}")
         return self._replace(L=L, centre=c, frame_rotvec=w, link_offsets=a, B0=B0)
 
-    def transformed(self, R: np.typing.ArrayLike, t: np.typing.ArrayLike) -> "PiecewiseActuatorClosure":
+    def _transformed(self, R: np.ndarray, t: Any) -> "PiecewiseActuatorClosure":
         """The model in another frame, ``x' = R x + t`` (Dressler (2012), eqs. 5.3-5.4).
 
         ``R_i' = R R_i`` (the anchors turn: ``F_i' = R F_i``, the parameters ``w_i`` are
         kept), ``c_i' = R c_i + t``, nominal plate orientation ``R R_T0``; ``a_ij`` (survey
         frame), ``B0_ij`` (plate frame) and ``L`` are unchanged. The anchors are constants of
         the closure equations, so a rotated model has other equations (a calibration
-        builds its graphs for it).
-
-        Parameters
-        ----------
-        R : array_like, shape (3, 3)
-            Rotation.
-        t : array_like, shape (3,)
-            Translation [m].
-
-        Returns
-        -------
-        PiecewiseActuatorClosure
-
-        Raises
-        ------
-        InputError
-            If ``R`` is not a rotation or the shapes are wrong.
+        builds its graphs for it). An InputError if ``R`` is not a rotation or the shapes
+        are wrong.
         """
-        Rm = np.asarray(R, dtype=float)
+        Rm = R
         tv = np.asarray(t, dtype=float)
         if Rm.shape != (3, 3) or tv.shape not in ((3,), (3, 1)):
             raise InputError(f"R, t: expected shapes (3, 3) and (3,), got {Rm.shape} and {tv.shape}")
@@ -723,12 +700,13 @@ class PiecewiseActuatorClosure(ClosureModel):
         L = np.array([self.L[self._first_link(i)] for i in range(3)])
         return ThreeLinkClosure(KinematicParameters(L=L, As=As, v=v, model="modified", source=f"chord of {self.name}"))
 
-    def fk(self, q: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """Forward kinematics: Newton on the closure equations from the chord 3-link model.
+    def fk_inputs(self, q: np.typing.ArrayLike) -> np.ndarray:
+        """Cart positions for :meth:`fk`, checked: finite, 3 columns, inside the surveyed ranges.
 
-        The start value is the closed-form FK of :meth:`linear_approximation` with the
-        plate at :attr:`plate_orientation`, refined by :meth:`ClosureModel.fk_newton`
-        (tolerance :data:`gtmodel.robots.closure.POSE_TOLERANCE`).
+        The FK (:meth:`~gtmodel.robots.wrapped.WrappedClosure.fk`) starts from the
+        closed-form FK of :meth:`linear_approximation` with the plate at
+        :attr:`plate_orientation`, refined by :meth:`ClosureModel.fk_newton` (tolerance
+        :data:`gtmodel.robots.closure.POSE_TOLERANCE`).
 
         Parameters
         ----------
@@ -737,29 +715,37 @@ class PiecewiseActuatorClosure(ClosureModel):
 
         Returns
         -------
-        T : numpy.ndarray, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : numpy.ndarray, shape (3, 3) or (N, 3, 3)
-            Plate orientations (identity for the 3-link layout).
+        numpy.ndarray, shape (3,) or (N, 3)
 
         Raises
         ------
         InputError
             If ``q`` has the wrong shape or lies outside a surveyed range.
-        UnreachablePoseError
-            If the start model admits no pose.
-        ConvergenceError
-            If Newton's method does not converge (names the pose).
         """
         qa = np.asarray(q, dtype=float)
-        single = qa.ndim == 1
         q2 = np.atleast_2d(qa)
         if q2.shape[1] != 3 or not np.all(np.isfinite(q2)):
             raise InputError(f"q must be finite with 3 columns, got shape {np.shape(q)}")
         self._check_range(q2)
-        T0, _ = self.linear_approximation().fk(q2)
-        T, R = self.fk_newton(q2, T0, self.plate_orientation if self.orientation else None)
-        return (T[0], R[0]) if single else (T, R)
+        return qa
+
+    def fk_start(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """Start of Newton's method: the chord 3-link model's FK, the nominal plate orientation.
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (3,) or (N, 3)
+            Cart positions [m].
+
+        Returns
+        -------
+        T0 : numpy.ndarray, shape (N, 3)
+            Start TCP positions [m].
+        R0 : numpy.ndarray, shape (3, 3), or None
+            :attr:`plate_orientation` (six-link layout), None (3-link layout).
+        """
+        T0, _ = self.linear_approximation().fk(np.atleast_2d(q))
+        return T0, (self.plate_orientation if self.orientation else None)
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -859,8 +845,6 @@ class PiecewiseActuatorClosure(ClosureModel):
         if six:
             R0 = getattr(model, "R0", None)
             if R0 is None or np.shape(R0) != (3, 3):
-                from gtmodel.robots.six_link import estimate_nominal_orientation
-
                 try:
                     R0, _ = estimate_nominal_orientation(np.array(fA(pv, np.zeros(3))).reshape(3, len(Lm)).T, B0m)
                 except InputError:

@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 import casadi as ca
 
-from gtmodel.calibration.calibrate import (
+from gtmodel.calibration.kinematic import (
     CalibrationProblem,
     ParameterSelection,
     calibrate,
     fit_rigid_transform,
-    tcp_errors,
 )
+from gtmodel.calibration.evaluation import tcp_errors
 from gtmodel.calibration.measurements import MeasurementSet
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import (

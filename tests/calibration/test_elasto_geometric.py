@@ -15,8 +15,6 @@ import numpy as np
 import pytest
 
 from gtmodel.calibration.elasto_geometric import (
-    COMPLIANCE_NAMES,
-    ElastoGeometricClosure,
     calibrate_elasto_geometric,
     compliance_identifiability,
     compliance_selection,
@@ -26,9 +24,11 @@ from gtmodel.calibration.elasto_geometric import (
 )
 from gtmodel.calibration.evaluation import evaluate
 from gtmodel.calibration.measurements import MeasurementSet, read_measurements
-from gtmodel.calibration.synthetic import NO_NOISE, grid_poses
+from gtmodel.calibration.poses import grid_poses
+from gtmodel.calibration.synthetic import NO_NOISE
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import ThreeLinkClosure
+from gtmodel.robots.elasto_geometric import COMPLIANCE_NAMES, ElastoGeometricClosure
 from gtmodel.robots.stiffness import GantryTau3Stiffness
 
 #: Payload of the compliant truth [kg] (a spindle: deflections ~100-200 um).

@@ -10,9 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.calibration.evaluation import SENSITIVITY_STEP, AccuracyReport, evaluate, parameter_sensitivity, plot_error_histogram
+from gtmodel.calibration.evaluation import SENSITIVITY_STEP, AccuracyReport, evaluate, parameter_sensitivity
+from gtmodel.report.calibration import plot_error_histogram
 from gtmodel.calibration.measurements import MeasurementSet
-from gtmodel.calibration.synthetic import NO_NOISE, grid_poses, synthetic_measurements
+from gtmodel.calibration.poses import grid_poses
+from gtmodel.calibration.synthetic import NO_NOISE, synthetic_measurements
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import ThreeLinkClosure
 

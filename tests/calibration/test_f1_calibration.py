@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gtmodel.calibration.calibrate import CalibrationProblem, ParameterSelection, analyze_identifiability
+from gtmodel.calibration.kinematic import CalibrationProblem, ParameterSelection, analyze_identifiability
 from gtmodel.calibration.evaluation import evaluate
 from gtmodel.calibration.synthetic import device_noise, synthetic_measurements
 from gtmodel.robots.f1 import load_f1

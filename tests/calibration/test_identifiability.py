@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from gtmodel.calibration.calibrate import analyze_identifiability, calibrate
+from gtmodel.calibration.kinematic import analyze_identifiability, calibrate
 from gtmodel.calibration.identifiability import (
     RANK_TOLERANCE,
     analyze_jacobian,

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from gtmodel.calibration.calibrate import CalibrationProblem
+from gtmodel.calibration.kinematic import CalibrationProblem
 from gtmodel.calibration.pose_selection import (
     ACCEPTANCE_LIMIT,
     _secular_roots,

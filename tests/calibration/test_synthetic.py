@@ -15,23 +15,19 @@ from scipy.spatial.transform import Rotation
 
 from gtmodel.calibration.synthetic import (
     BACKLASH_M,
-    L1_GRID_STEP_M,
     LASER_TRACKER,
     NO_NOISE,
     STEREO_VISION,
     TABLE_4_1_MEAN_RESIDUAL_M,
     ActuatorErrors,
-    DeviatedClosure,
     DeviceNoise,
     backlash_directions,
     device_noise,
-    grid_poses,
-    guideway_axes,
-    link_angles,
-    random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )
+from gtmodel.calibration.poses import L1_GRID_STEP_M, grid_poses, link_angles, random_poses
+from gtmodel.robots.deviated import DeviatedClosure, guideway_axes
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import ThreeLinkClosure, zyz_to_rotation
 from gtmodel.robots.kinematics import GantryTau3Kinematics

@@ -18,18 +18,17 @@ import pytest
 
 from scipy.spatial.transform import Rotation
 
-from gtmodel.calibration.calibrate import CalibrationProblem
+from gtmodel.calibration.kinematic import CalibrationProblem
 from gtmodel.calibration.measurements import CartMeasurements
 from gtmodel.calibration.synthetic import (
     NO_NOISE,
     ActuatorErrors,
-    DeviatedClosure,
-    guideway_axes,
     line_fit_residuals,
-    random_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )
+from gtmodel.calibration.poses import random_poses
+from gtmodel.robots.deviated import DeviatedClosure, guideway_axes
 from gtmodel.errors import InputError
 from gtmodel.robots.actuator import SIX_LINK_LAYOUT, PiecewiseActuatorClosure, piecewise_linear
 from gtmodel.robots.closure import ThreeLinkClosure, zyz_to_rotation
