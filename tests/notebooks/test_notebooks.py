@@ -1,4 +1,4 @@
-"""Execute every shipped notebook and check it is committed without outputs.
+"""Execute every shipped notebook and check it is committed without outputs and checks a result.
 
 Each notebook in ``notebooks/`` is copied to a temporary directory and executed there
 (kernel ``python3``, ``MPLBACKEND=Agg``), so nothing is written into the repository. A
@@ -8,6 +8,7 @@ the cell and the traceback.
 
 from __future__ import annotations
 
+import ast
 import shutil
 from pathlib import Path
 
@@ -31,6 +32,24 @@ def test_notebook_has_no_outputs(path: Path) -> None:
         if cell.cell_type == "code" and (cell.get("outputs") != [] or cell.get("execution_count") is not None)
     ]
     assert not dirty, f"{path.name}: code cells {dirty} have outputs or an execution count; clear them before committing"
+
+
+def _asserts(source: str) -> int:
+    """Number of ``assert`` statements in the source of one code cell."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:  # IPython magics or shell escapes: not plain Python
+        return 0
+    return sum(isinstance(node, ast.Assert) for node in ast.walk(tree))
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
+def test_notebook_asserts_a_result(path: Path) -> None:
+    # every notebook checks at least one key figure (against the thesis, a closed form or a
+    # second method) with an ``assert`` in a code cell, so that executing it tests something
+    nb = nbformat.read(path, as_version=4)
+    n = sum(_asserts(cell.source) for cell in nb.cells if cell.cell_type == "code")
+    assert n > 0, f"{path.name}: no assert statement in any code cell; check a key figure of the notebook"
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
