@@ -472,7 +472,8 @@ def _perturbed(model: Any, size: float, seed: int, keep: Any = ()) -> Any:
 
 def _axis_count(lo: float, hi: float, step: float) -> float:
     """Length of ``numpy.arange(lo, hi + step / 2, step)``, as a float (no allocation)."""
-    return max(0.0, math.ceil((hi - lo + step / 2) / step)) if math.isfinite((hi - lo) / step) else math.inf
+    n = (hi - lo + step / 2) / step
+    return max(0.0, float(math.ceil(n))) if math.isfinite(n) else math.inf
 
 
 def _grid_candidates(truth: Any, tkind: str, t: TruthSection) -> tuple[float, float]:

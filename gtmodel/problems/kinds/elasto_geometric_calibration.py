@@ -224,7 +224,7 @@ class ElastoGeometricOutcome:
 def _count(lo: float, hi: float, step: float) -> float:
     """Length of ``numpy.arange(lo, hi + step / 2, step)`` as a float (no allocation)."""
     n = (hi - lo + step / 2) / step
-    return max(0.0, math.ceil(n)) if math.isfinite(n) else math.inf
+    return max(0.0, float(math.ceil(n))) if math.isfinite(n) else math.inf
 
 
 class ElastoGeometricKind(ProblemKind):

@@ -149,3 +149,10 @@ def test_bad_file_gives_invalid_input(tmp_path):
     assert outcome.status == Status.INVALID_INPUT and outcome.exit_code == 2
     assert re.search(r"payloads_kg", outcome.summary["message"])
     assert outcome.summary["files"] == ["summary.json"]
+
+
+def test_grid_step_1e_300_is_bounded_up_front(tmp_path):
+    f = tmp_path / "tiny.toml"
+    f.write_text(_edit("grid_step = 0.1153", "grid_step = 1e-300")(FILE.read_text()))
+    with pytest.raises(ProblemError, match=r"field 'truth\.grid_step': expected a grid step giving at most"):
+        load_problem(f)
