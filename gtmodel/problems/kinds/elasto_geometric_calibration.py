@@ -63,7 +63,8 @@ from gtmodel.calibration.calibrate import SOLVERS
 from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES, compliance_selection
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.problems.base import ProblemFile, ProblemKind, Written
-from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, StringList, calibrated_tables, calibration_columns
+from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, StringList, calibration_columns
+from gtmodel.problems.kinds.calibration_results import calibrated_tables
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.robots import GantryTau3Kinematics, GantryTau3Stiffness, load_stiffness
