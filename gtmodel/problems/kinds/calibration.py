@@ -349,6 +349,11 @@ class CalibrationKind(ProblemKind):
         """
         if (doc.data is None) == (doc.truth is None):
             raise ProblemError(f"{file.path}: declare exactly one of '[data]' (a measurement file) and '[truth]' (synthetic data)")
+        for k, m in enumerate(doc.models):  # references first: a bad one fails before the data are built
+            if m.start != "truth":
+                file.reference(f"models[{k}].start", m.start, _SHIPPED)
+            elif doc.truth is None:
+                raise file.fail(f"models[{k}].start", "a parameter set (there is no [truth] with measured data)", m.start)
         truth = cart = noise_sigma = None
         if doc.data is not None:
             data, cart = _read_data(doc.data, file)

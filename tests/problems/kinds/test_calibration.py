@@ -134,6 +134,7 @@ F1_FUZZ = [
     ("f1_random_poses", _edit("grid_step = 0.25", "random_poses = 100"), r"field 'truth\.random_poses'"),
     ("rotary_travel_bad_shape", _edit("seed = 0", "seed = 0\nrotary_travel_deg = [1.0, 2.0]"), r"field 'truth\.rotary_travel_deg"),
     ("rotary_step_zero", _edit("seed = 0", "seed = 0\nrotary_step_deg = 0"), r"field 'truth\.rotary_step_deg': expected a positive number"),
+    ("start_no_such_set", _edit('start = "F1"', 'start = "str"'), r"field 'models\[0\]\.start': expected a shipped set"),
     ("pose_selection_bool", _edit("n = 185", "n = true"), r"field 'pose_selection\.n': expected an integer"),
 ]
 
