@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems.base import ProblemKind
+from gtmodel.problems.kinds.calibration import CalibrationKind
+from gtmodel.problems.kinds.elasto_geometric_calibration import ElastoGeometricKind
 from gtmodel.problems.kinds.dynamic_identification import DynamicIdentificationKind
 from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
@@ -16,6 +18,8 @@ __all__ = ["KINDS", "get_kind"]
 
 _CLASSES: tuple[type[ProblemKind], ...] = (
     PointToPointKind,
+    CalibrationKind,
+    ElastoGeometricKind,
     DynamicIdentificationKind,
     JointStiffnessKind,
 )

@@ -1,4 +1,4 @@
-"""``elasto_geometric_calibration`` problem files end to end, and their bad input.
+"""Kind ``elasto_geometric_calibration``: the shipped problem end to end, and bad input.
 
 Independent references: the synthetic truth's own validation error on the same noisy poses
 (the noise floor, as the L1 kinematic calibration test), the true compliances that
@@ -7,13 +7,18 @@ generated the data, and the D1's measured TCP stiffness (2-4 N/um, reference tab
 
 from __future__ import annotations
 
+import re
+import time
+
 import numpy as np
 import pytest
 
-from gtmodel.cli import EXIT_NOT_OPTIMAL, EXIT_OK
+from gtmodel.calibration.measurements import read_measurements
+from gtmodel.errors import ProblemError
+from gtmodel.problems import load_problem, run_problem
+from gtmodel.status import Status
 
-from ..conftest import PROBLEMS_DIR, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
-from ..conftest import replace_once as _edit
+from ...conftest import PROBLEMS_DIR, replace_once as _edit
 
 FILE = PROBLEMS_DIR / "l1_elasto_geometric.toml"
 #: Elasto-geometric validation mean error vs the noise floor (true model on the same poses).
@@ -24,18 +29,20 @@ IMPROVEMENT_RATIO = 3.0
 N_SIGMA = 3.0
 #: Load step between the payloads vs m g with g = 9.81 m/s^2 (the parameter set's g).
 PAYLOAD_WEIGHT_RTOL = 1e-9
+#: Longest accepted time to reject a bad file [s].
+REJECT_SECONDS = 5.0
 
 
 @pytest.fixture(scope="module")
 def solved(tmp_path_factory):
     out = tmp_path_factory.mktemp("l1eg")
-    code, summary = solve_through_cli(FILE, out)
-    return code, out, summary
+    outcome = run_problem(FILE, out)
+    return outcome.exit_code, out, outcome.summary
 
 
 def test_shipped_problem_is_optimal_with_the_required_summary(solved):
     code, out, s = solved
-    assert code == EXIT_OK
+    assert code == 0
     assert s["status"] == "optimal"
     for key in ("geometric_mean_error_m", "geometric_max_error_m", "elasto_geometric_mean_error_m",
                 "elasto_geometric_max_error_m", "noise_floor_mean_error_m", "noise_floor_max_error_m",
@@ -52,8 +59,9 @@ def test_stopped_calibration_writes_no_parameter_set(tmp_path):
     parameters.toml (a last iterate is not handed on as a calibrated robot)."""
     f = tmp_path / "stopped.toml"
     f.write_text(_edit("max_iter = 200", "max_iter = 1")(FILE.read_text()))
-    code, s = solve_through_cli(f, tmp_path / "out")
-    assert code == EXIT_NOT_OPTIMAL
+    outcome = run_problem(f, tmp_path / "out", plots=False)
+    code, s = outcome.exit_code, outcome.summary
+    assert code == 1
     assert s["status"] == "max_iterations"
     assert not (tmp_path / "out" / "parameters.toml").exists()
     assert "parameters.toml" not in s["files"]
@@ -70,8 +78,6 @@ def test_elasto_geometric_reaches_the_noise_floor_and_beats_the_geometric_model(
 def test_written_measurements_carry_the_plate_load(solved):
     """The calibration/validation CSV files read back with the load columns: two plate loads
     (without and with the declared payload), their difference the payload's weight (m g)."""
-    from gtmodel.calibration.measurements import read_measurements
-
     _, out, s = solved
     cal = read_measurements(out / "calibration_measurements.csv")
     val = read_measurements(out / "validation_measurements.csv")
@@ -109,14 +115,44 @@ BAD = [
     ("coarse_grid", _edit("grid_step = 0.1153", "grid_step = 0.9"), r"field 'truth\.grid_step'"),
     ("bad_parameter_set", _edit('parameters = "L1"', 'parameters = "L9"'), r"field 'truth\.parameters'"),
     ("negative_map_step", _edit("step = 0.05", "step = -0.05"), r"field 'stiffness_map\.step'"),
+    ("payloads_string", _edit("payloads_kg = [0.0, 40.0]", 'payloads_kg = "heavy"'), r"field 'truth\.payloads_kg'"),
+    ("payloads_huge", _edit("payloads_kg = [0.0, 40.0]", "payloads_kg = [0.0, 1e308]"), r"field 'truth\.payloads_kg'"),
+    ("payloads_empty", _edit("payloads_kg = [0.0, 40.0]", "payloads_kg = []"), r"field 'truth\.payloads_kg'"),
+    ("grid_step_tiny", _edit("grid_step = 0.1153", "grid_step = 1e-7"), r"field 'truth\.grid_step': expected a grid step giving at most"),
+    ("grid_step_fine", _edit("grid_step = 0.1153", "grid_step = 0.005"), r"field 'truth\.grid_step': expected a grid step giving at most"),
+    ("grid_step_nan", _edit("grid_step = 0.1153", "grid_step = nan"), r"field 'truth\.grid_step': expected a finite number"),
+    ("map_step_tiny", _edit("step = 0.05", "step = 1e-6"), r"field 'stiffness_map\.step': expected a step giving at most"),
+    ("map_x_outside", _edit("step = 0.05", "step = 0.05\nx = 100.0"), r"field 'stiffness_map\.x'"),
+    ("free_compliance_number", _edit('free_compliance = ["c_l*", "c_a*"]', "free_compliance = 1.0"), r"field 'calibration\.free_compliance': expected a list of strings"),
+    ("free_compliance_nested", _edit('free_compliance = ["c_l*", "c_a*"]', 'free_compliance = [["c_l*"]]'), r"field 'calibration\.free_compliance"),
+    ("seed_bool", _edit("seed = 0", "seed = true"), r"field 'truth\.seed': expected an integer"),
+    ("max_iter_huge", _edit("max_iter = 200", "max_iter = 1e308"), r"field 'calibration\.max_iter'"),
+    ("single_load_string", _edit("compare_single_load = true", 'compare_single_load = "yes"'), r"field 'calibration\.compare_single_load'"),
 ]
 
 
 @pytest.mark.parametrize("case, edit, match", BAD, ids=[c[0] for c in BAD])
 def test_bad_files(tmp_path, case, edit, match):
-    assert_bad_problem(tmp_path, FILE, case, edit, match)
+    f = tmp_path / f"{case}.toml"
+    f.write_text(edit(FILE.read_text()))
+    t0 = time.perf_counter()
+    with pytest.raises(ProblemError, match=match) as info:
+        load_problem(f)
+    assert time.perf_counter() - t0 < REJECT_SECONDS
+    assert str(f) in str(info.value).splitlines()[0]
 
 
-def test_bad_file_through_the_cli(tmp_path, capsys):
-    text = FILE.read_text().replace("payloads_kg = [0.0, 40.0]", 'payloads_kg = "heavy"')
-    assert_bad_problem_through_cli(tmp_path, capsys, text, r"payloads_kg")
+def test_bad_file_gives_invalid_input(tmp_path):
+    f = tmp_path / "bad.toml"
+    f.write_text(FILE.read_text().replace("payloads_kg = [0.0, 40.0]", 'payloads_kg = "heavy"'))
+    outcome = run_problem(f, tmp_path / "out", plots=False)
+    assert outcome.status == Status.INVALID_INPUT and outcome.exit_code == 2
+    assert re.search(r"payloads_kg", outcome.summary["message"])
+    assert outcome.summary["files"] == ["summary.json"]
+
+
+def test_grid_step_1e_300_is_bounded_up_front(tmp_path):
+    f = tmp_path / "tiny.toml"
+    f.write_text(_edit("grid_step = 0.1153", "grid_step = 1e-300")(FILE.read_text()))
+    with pytest.raises(ProblemError, match=r"field 'truth\.grid_step': expected a grid step giving at most"):
+        load_problem(f)

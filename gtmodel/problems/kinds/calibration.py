@@ -1,0 +1,674 @@
+"""Kind ``calibration``: kinematic calibration from closure equations.
+
+Dressler (2012), ch. 5: measured poses (a CSV file, or synthetic data from a declared
+"true" robot), one or several models calibrated on every second pose and evaluated on the
+others (eq. 5.5), with identifiability and parameter uncertainties::
+
+    name = "l1_calibration"
+    kind = "calibration"
+
+    [data]                          # either a measurement file ...
+    # file = "measurements.csv"     #   (format: gtmodel.calibration.measurements)
+    # cart_file = "carts.csv"       #   (cart surveys, for piecewise-linear actuator models)
+
+    [truth]                         # ... or synthetic measurements (say so in the file)
+    model = "three_link"            # "three_link" | "six_link" | "f1"
+    parameters = "L1"               # parameter set of the true robot
+    noise = "laser_tracker"         # "laser_tracker" (10 um) | "stereo_vision" (1.7 mm) | "none"
+    actuator_errors = "none"        # "none" | "table_4_1" (cyclic error, straightness, backlash)
+    grid_step = 0.1153              # m, regular grid in the workspace ...
+    # random_poses = 400            # ... or this many random poses
+    seed = 0
+
+    [[models]]                      # one table per model to calibrate and compare
+    name = "modified"
+    type = "three_link"             # "three_link" | "three_link_piecewise" | "six_link"
+                                    # | "six_link_piecewise" | "f1"
+    parametrisation = "modified"    # three_link only: "ideal" (15) | "modified" (21)
+    start = "L1_ideal"              # start parameters: a set name/path, or "truth"
+    perturbation = 0.0              # m, random start perturbation of every length/point
+    fixed = []                      # parameter names or patterns kept at the start
+    ties = []                       # e.g. ["Abj_2b_z = Abj_2a_z"]
+
+    [calibration]                   # optional
+    solver = "lm"                   # "lm" | "trf" | "ipopt" | "ipopt-gn"
+    max_iter = 200
+    align = true                    # move the start model into the measurement frame (5.3)-(5.4)
+
+    [pose_selection]                # optional: choose poses from the candidates by eq. 5.9
+    n = 185
+
+The synthetic pose grid is bounded up front: the number of grid points a step would
+examine is computed from the workspace box and the step before any pose is built, and a
+step giving more than :data:`MAX_GRID_CANDIDATES` of them is an error naming the field.
+
+The result folder holds ``summary.json`` (``status``, ``mean_error_m``, ``max_error_m``,
+``rms_error_m``, ``n_calibration``, ``n_validation``, ``rank``, ``n_parameters``,
+``non_identifiable``, ``iterations``, ``solve_time_s`` of the first model, and a ``models``
+table for all), ``parameters.toml`` (the first model's calibrated parameters; a 3-link
+result is a complete robot parameter set), ``errors.csv`` and ``error_histogram.png``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+from fnmatch import fnmatchcase
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import BeforeValidator, Field
+from pydantic_core import PydanticCustomError
+
+from gtmodel.calibration import (
+    AccuracyReport,
+    ActuatorErrors,
+    CalibrationProblem,
+    ParameterSelection,
+    device_noise,
+    evaluate,
+    grid_poses,
+    random_poses,
+    read_cart_measurements,
+    read_measurements,
+    select_poses,
+    synthetic_cart_measurements,
+    synthetic_measurements,
+)
+from gtmodel.calibration.kinematic import SOLVERS
+from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.calibration_results import write_calibration
+from gtmodel.problems.schema import (
+    MAX_LENGTH_M,
+    Flag,
+    NonEmptyText,
+    ProblemSchema,
+    Section,
+    choice,
+    integer,
+    matrix,
+    number,
+)
+from gtmodel.robots import GantryTau3Kinematics, available_parameter_sets, load_f1, load_six_link
+from gtmodel.robots.actuator import PiecewiseActuatorClosure
+from gtmodel.robots.closure import ThreeLinkClosure
+from gtmodel.status import Status
+
+__all__ = [
+    "CalibrationKind",
+    "CalibrationFile",
+    "CalibrationDeclaration",
+    "CalibrationOutcome",
+    "MODEL_TYPES",
+    "MAX_GRID_CANDIDATES",
+    "MAX_RANDOM_POSES",
+    "MAX_PERTURBATION_M",
+    "calibration_columns",
+]
+
+_log = logging.getLogger("gtmodel")
+
+#: Model types a calibration problem can declare.
+MODEL_TYPES = ("three_link", "three_link_piecewise", "six_link", "six_link_piecewise", "f1")
+#: Largest random perturbation of a parameter set [m] (built tolerances are millimetres).
+MAX_PERTURBATION_M = 0.1
+#: Largest number of grid points a synthetic grid may examine, per truth model (each
+#: costs an inverse or forward kinematics: about 10 us for the 3-link model's TCP grid,
+#: 250 us for the six-link ``q`` grid, 40 us for the F1's 6-D grid; the bounds keep the
+#: loading of a file within a few seconds).
+MAX_GRID_CANDIDATES = {"three_link": 400_000, "six_link": 25_000, "f1": 300_000}
+#: Largest number of random poses, per truth model (rejection sampling with IK or FK).
+MAX_RANDOM_POSES = {"three_link": 10_000, "six_link": 2_000}
+#: Shipped parameter files (``gtmodel/robots/data``): the names a ``parameters`` or
+#: ``start`` field may give instead of a path.
+_SHIPPED = tuple(sorted(
+    {p.name[: -len(".toml")] for p in resources.files("gtmodel.robots").joinpath("data").iterdir() if p.name.endswith(".toml")}
+    | set(available_parameter_sets())
+))
+
+
+def _string_list(v: Any) -> Any:
+    if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "a list of strings"})
+    return v
+
+
+#: A list of strings (parameter names, patterns, ties).
+StringList = Annotated[list[str], BeforeValidator(_string_list)]
+
+
+class DataSection(Section):
+    """``[data]``: measured poses."""
+
+    file: NonEmptyText = Field(description="measurement CSV (gtmodel.calibration.measurements), relative to the problem file")
+    cart_file: NonEmptyText | None = Field(default=None, description="cart surveys CSV for piecewise-linear actuator models")
+
+
+class TruthSection(Section):
+    """``[truth]``: synthetic measurements of a declared true robot."""
+
+    model: choice("three_link", "six_link", "f1", description="model of the true robot")
+    parameters: NonEmptyText = Field(description="parameter set of the true robot: a shipped name or a TOML path relative to the problem file")
+    perturbation: number(ge=0, le=MAX_PERTURBATION_M, unit="m", description="random change of every length/point of the true robot (built tolerances)") = 0.0
+    noise: choice("laser_tracker", "stereo_vision", "none", description="measurement device (noise)") = "laser_tracker"
+    actuator_errors: choice("none", "table_4_1", description="actuator errors of the data (Table 4.1)") = "none"
+    grid_step: number(gt=0, le=MAX_LENGTH_M, unit="m", description="spacing of a regular pose grid in the workspace") | None = None
+    grid_step_deg: number(gt=0, le=90, unit="deg", description="orientation spacing of the F1's 6-D grid") = 10.0
+    random_poses: integer(2, max(MAX_RANDOM_POSES.values()), description="number of random poses (without grid_step)") | None = None
+    seed: integer(0, 2**31 - 1, description="seed of the poses and the noise") = 0
+    rotary_travel_deg: matrix(2, bound=360.0, unit="deg", description="[min, max] of each rotary actuator q4.. (models with more than 3 actuators)") | None = None
+    rotary_step_deg: number(gt=0, le=360, unit="deg", description="grid spacing of the rotary actuators") = 10.0
+
+
+class ModelSection(Section):
+    """``[[models]]``: a model to calibrate."""
+
+    name: NonEmptyText | None = Field(default=None, description="label (default: the type)")
+    type: choice(*MODEL_TYPES, description="model type")
+    parametrisation: choice("ideal", "modified", description="three_link only: ideal (15) or modified (21 parameters)") = "modified"
+    start: NonEmptyText = Field(default="truth", description='start parameters: a shipped name, a TOML path, or "truth"')
+    perturbation: number(ge=0, le=MAX_PERTURBATION_M, unit="m", description="random start perturbation of every length/point") = 0.0
+    fixed: StringList = Field(default_factory=list, description="parameter names or patterns kept at the start")
+    ties: StringList = Field(default_factory=list, description='equalities, e.g. ["Abj_2b_z = Abj_2a_z"]')
+
+
+def _model_tables(v: Any) -> Any:
+    if not isinstance(v, list) or not v or not all(isinstance(m, dict) for m in v):
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "one or more [[models]] tables"})
+    return v
+
+
+class CalibrationSection(Section):
+    """``[calibration]``: solver options."""
+
+    solver: choice(*SOLVERS, description="least-squares solver") = "lm"
+    max_iter: integer(1, 10**6, description="iteration limit") = 200
+    align: Flag = Field(default=True, description="move the start model into the measurement frame (eqs. 5.3-5.4)")
+
+
+class PoseSelectionSection(Section):
+    """``[pose_selection]``: choose poses from the candidates (eq. 5.9)."""
+
+    n: integer(2, 10**6, description="number of poses to select")
+
+
+class CalibrationFile(ProblemSchema):
+    """A ``calibration`` problem file."""
+
+    kind: Literal["calibration"]
+    data: DataSection | None = None
+    truth: TruthSection | None = None
+    models: Annotated[list[ModelSection], BeforeValidator(_model_tables), Field(min_length=1)]
+    calibration: CalibrationSection = CalibrationSection()
+    pose_selection: PoseSelectionSection | None = None
+
+
+@dataclass
+class CalibrationDeclaration:
+    """A validated calibration problem.
+
+    Parameters
+    ----------
+    measurements : MeasurementSet
+        All poses (before the calibration/validation split).
+    cart : CartMeasurements or None
+        Cart surveys (piecewise-linear actuator models).
+    models : list of dict
+        Per model: ``name``, ``type``, ``model`` (start ClosureModel), ``selection``.
+    truth : ClosureModel or None
+        The true robot of synthetic data (for the noise floor and parameter checks).
+    noise_sigma : float or None
+        Position noise of synthetic data [m].
+    solver : str
+        Calibration solver.
+    max_iter : int
+        Iteration limit.
+    align : bool
+        Frame alignment.
+    source : str
+        Where the data come from.
+    pose_selection : int or None
+        Number of poses to select (eq. 5.9) before splitting.
+    truth_exact : bool
+        The synthetic data come from ``truth`` exactly (no actuator errors), so its error on
+        the data is the noise floor.
+    """
+
+    measurements: Any
+    cart: Any
+    models: list
+    truth: Any
+    noise_sigma: float | None
+    solver: str
+    max_iter: int
+    align: bool
+    source: str
+    pose_selection: int | None = None
+    truth_exact: bool = True
+
+
+@dataclass
+class CalibrationOutcome:
+    """Results of a calibration problem: one calibration and evaluation per model.
+
+    Parameters
+    ----------
+    declaration : CalibrationDeclaration
+        The problem.
+    calibration : MeasurementSet
+        The poses used to calibrate.
+    validation : MeasurementSet
+        The poses used to evaluate.
+    results : list
+        Per model: ``(name, CalibrationResult or None, AccuracyReport or None, message)``.
+    noise_floor : AccuracyReport or None
+        The true robot's errors on the validation poses (synthetic data only): what a
+        perfect model achieves on the same noise.
+    selected : numpy.ndarray or None
+        Indices of the selected poses (pose selection).
+    solve_time : float
+        Total wall time [s].
+    extra : dict
+        Further figures for reports.
+    """
+
+    declaration: CalibrationDeclaration
+    calibration: Any
+    validation: Any
+    results: list
+    noise_floor: Any = None
+    selected: Any = None
+    solve_time: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def status(self) -> Status:
+        """Worst status over the models (``error`` if a model could not be calibrated)."""
+        return Status.worst(res.status if res is not None else ("optimal" if rep is not None else "error") for _, res, rep, _ in self.results)
+
+    @property
+    def success(self) -> bool:
+        """True when every model calibrated to an optimal solution."""
+        return self.status == Status.OPTIMAL
+
+
+def calibration_columns() -> tuple[Column, ...]:
+    """Study-table columns of the calibration kinds (validation errors, eq. 5.5).
+
+    Returns
+    -------
+    tuple of Column
+    """
+    return (
+        Column("mean_error_m", "mean error [m]", "{:.3e}"),
+        Column("max_error_m", "max error [m]", "{:.3e}"),
+        Column("solve_time_s", "solve time [s]", "{:.3f}"),
+    )
+
+
+class CalibrationKind(ProblemKind):
+    """Kinematic calibration of one or several closure models (Dressler (2012), ch. 5)."""
+
+    name = "calibration"
+    schema = CalibrationFile
+    title = "kinematic calibration from closure equations, models compared on validation poses (Dressler (2012), ch. 5)"
+    columns = calibration_columns()
+    empty_fields = ("mean_error_m", "max_error_m", "rms_error_m", "n_calibration", "n_validation", "rank", "n_parameters",
+                    "iterations", "solve_time_s")
+
+    def load(self, doc: CalibrationFile, file: ProblemFile, name: str) -> CalibrationDeclaration:
+        """Validate the semantics, read or generate the data and build the start models.
+
+        Synthetic data are generated here (seeded, so a file always gives the same data).
+
+        Parameters
+        ----------
+        doc : CalibrationFile
+            The validated file.
+        file : ProblemFile
+            The file.
+        name : str
+            Problem name.
+
+        Returns
+        -------
+        CalibrationDeclaration
+
+        Raises
+        ------
+        ProblemError
+            Both or neither of ``[data]`` and ``[truth]``; a bad parameter set; a grid
+            with too many poses; a malformed measurement file (the message names its
+            row); unknown fixed/tied parameters; a model that does not fit the data.
+        """
+        if (doc.data is None) == (doc.truth is None):
+            raise ProblemError(f"{file.path}: declare exactly one of '[data]' (a measurement file) and '[truth]' (synthetic data)")
+        for k, m in enumerate(doc.models):  # references first: a bad one fails before the data are built
+            if m.start != "truth":
+                file.reference(f"models[{k}].start", m.start, _SHIPPED)
+            elif doc.truth is None:
+                raise file.fail(f"models[{k}].start", "a parameter set (there is no [truth] with measured data)", m.start)
+        truth = cart = noise_sigma = None
+        if doc.data is not None:
+            data, cart = _read_data(doc.data, file)
+            source = f"measurements from {doc.data.file}"
+        else:
+            data, cart, truth, noise_sigma, source = _synthetic_data(doc, file)
+        models = [_start_model(k, m, doc, file, truth, cart, data.n_q) for k, m in enumerate(doc.models)]
+        n_sel = doc.pose_selection.n if doc.pose_selection is not None else None
+        if n_sel is not None and n_sel >= data.n_poses:
+            raise file.fail("pose_selection.n", f"fewer poses than the {data.n_poses} candidates", n_sel)
+        exact = truth is not None and doc.truth.actuator_errors == "none"
+        cal = doc.calibration
+        return CalibrationDeclaration(data, cart, models, truth, noise_sigma, cal.solver, cal.max_iter, cal.align, source, n_sel, exact)
+
+    def solve(self, declaration: CalibrationDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> CalibrationOutcome:
+        """Calibrate every declared model on every second pose and evaluate on the others.
+
+        Parameters
+        ----------
+        declaration : CalibrationDeclaration
+            From :meth:`load`.
+        verbose : bool, optional
+            Log progress per model.
+        previous : Any, optional
+            Unused (no reuse between cases).
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        CalibrationOutcome
+            A model whose calibration failed has ``None`` results and a message.
+
+        Raises
+        ------
+        ProblemError
+            Too few poses for a model's free parameters, or an unidentifiable request.
+        """
+        return _solve(declaration)
+
+    def write(self, declaration: CalibrationDeclaration, solution: CalibrationOutcome, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields, ``parameters.toml``, ``errors.csv`` and the error histogram.
+
+        ``parameters.toml`` is written only when the first model converged.
+
+        Parameters
+        ----------
+        declaration : CalibrationDeclaration
+            The problem.
+        solution : CalibrationOutcome
+            Its results.
+        out : pathlib.Path
+            The folder.
+        plots : bool
+            Write the PNG histogram.
+        name : str
+            Plot title.
+
+        Returns
+        -------
+        Written
+        """
+        return write_calibration(declaration, solution, out, plots, name)
+
+
+# ------------------------------------------------------------------ loading
+
+
+def _read_data(section: DataSection, file: ProblemFile) -> tuple[Any, Any]:
+    path = file.data_file("data.file", section.file)
+    try:
+        data = read_measurements(path)
+    except GtModelError as exc:
+        raise file.wrap("data.file", exc) from None
+    cart = None
+    if section.cart_file is not None:
+        cpath = file.data_file("data.cart_file", section.cart_file)
+        try:
+            cart = read_cart_measurements(cpath)
+        except GtModelError as exc:
+            raise file.wrap("data.cart_file", exc) from None
+    return data, cart
+
+
+def _base_type(mtype: str) -> str:
+    return "three_link" if mtype.startswith("three_link") else "six_link" if mtype.startswith("six_link") else "f1"
+
+
+def _closure(base: str, ref: str, file: ProblemFile, field_name: str, parametrisation: str = "modified") -> Any:
+    """A ClosureModel of a base type from a parameter-set reference (shipped name or path)."""
+    target = file.reference(field_name, ref, _SHIPPED)
+    try:
+        if base == "three_link":
+            return ThreeLinkClosure(str(target), model=parametrisation)
+        if base == "six_link":
+            return load_six_link(str(target))
+        return load_f1(str(target))
+    except GtModelError as exc:
+        raise file.wrap(field_name, exc) from None
+
+
+def _perturbed(model: Any, size: float, seed: int, keep: Any = ()) -> Any:
+    """Start model with every parameter moved by up to ``size`` (lengths/points) at random.
+
+    Direction-like parameters (guideway ``v`` and quaternions) are perturbed by ``size``
+    relative to their unit size, so the start error stays of the order of ``size`` [m].
+    Parameters matching a pattern in ``keep`` (fixed ones, tie targets) are not moved:
+    a calibration cannot recover a value it holds fixed.
+    """
+    if size == 0.0:
+        return model
+    rng = np.random.default_rng(seed)
+    p = model.parameter_vector().copy()
+    step = rng.uniform(-size, size, p.size)
+    names = model.parameter_names()
+    held = [any(fnmatchcase(n, k) or n.startswith(k + "_") for k in keep) for n in names]
+    p += np.where(held, 0.0, step)
+    return model.with_parameters(p)
+
+
+def _axis_count(lo: float, hi: float, step: float) -> float:
+    """Length of ``numpy.arange(lo, hi + step / 2, step)``, as a float (no allocation)."""
+    n = (hi - lo + step / 2) / step
+    return max(0.0, float(math.ceil(n))) if math.isfinite(n) else math.inf
+
+
+def _grid_candidates(truth: Any, tkind: str, t: TruthSection) -> tuple[float, float]:
+    """Grid points a synthetic grid would examine: ``(total, orientation factor)``.
+
+    - 3-link: the TCP grid over the workspace box (:meth:`GantryTau3Kinematics.workspace_bounds`);
+    - six-link: the ``q`` grid over the cart travel (and the rotary ranges);
+    - F1: positions in the box within reach of every guideway segment (an upper bound of
+      the positions the F1's own 6-D grid examines) times the orientations within the
+      reorientation range.
+    """
+    step = t.grid_step
+    if tkind == "three_link":
+        if truth.robot is None:
+            return 0.0, 1.0  # no limits: grid_poses says so
+        kin = GantryTau3Kinematics(dataclasses.replace(truth.robot, kinematics=truth.kinematics))
+        return math.prod(_axis_count(lo, hi, step) for lo, hi in kin.workspace_bounds()), 1.0
+    if tkind == "six_link":
+        lim = getattr(truth, "limits", None)
+        if lim is None:
+            return 0.0, 1.0
+        n = math.prod(_axis_count(lo, hi, step) for lo, hi in np.asarray(lim.cart_travel, dtype=float))
+        rot = 1.0
+        if truth.n_q > 3 and t.rotary_travel_deg is not None:
+            rot = math.prod(_axis_count(lo, hi, t.rotary_step_deg) for lo, hi in t.rotary_travel_deg)
+        return n * rot, rot
+    lim = truth.limits
+    if lim is None:
+        return 0.0, 1.0
+    lo, hi = _f1_position_box(truth, lim)
+    positions = math.prod(math.floor((h - l) / step) + 1.0 if math.isfinite((h - l) / step) else math.inf for l, h in zip(lo, hi))
+    ratio = [r / t.grid_step_deg for r in np.degrees(lim.reorientation_range)]
+    rot = math.prod(2.0 * math.floor(x + 1e-9) + 1.0 if math.isfinite(x) else math.inf for x in ratio)
+    return positions * rot, rot
+
+
+def _f1_position_box(truth: Any, lim: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A box containing every F1 TCP position whose joints ``B_ij`` are within reach.
+
+    Per link ``ij``: the cart's travel segment ``A0_i + [q_min, q_max] v_i`` grown by
+    ``L_ij`` (plus the joint-plate offset ``|Abj_ij|`` on arms 2 and 3 and ``|r3|`` on arm
+    3) and ``|B0_ij|``; the box is the intersection over the links (the box the F1's own
+    workspace grid fills, from the parameter names of Dressler (2012), Table 5.4).
+    """
+    p = dict(zip(truth.parameter_names(), truth.parameter_vector()))
+
+    def vec(name: str) -> np.ndarray:
+        return np.array([p[f"{name}_{c}"] for c in "xyz"])
+
+    lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+    for arm, links in enumerate(truth.links):
+        seg = np.array([vec(f"A0_{arm + 1}") + lim.cart_travel[arm, k] * vec(f"v{arm + 1}") for k in range(2)])
+        for n in links:
+            reach = p[f"L_{n}"] + (np.linalg.norm(vec(f"Abj_{n}")) if arm > 0 else 0.0) + (np.linalg.norm(vec("r3")) if arm == 2 else 0.0)
+            grow = reach + np.linalg.norm(vec(f"B0_{n}"))
+            lo, hi = np.maximum(lo, seg.min(axis=0) - grow), np.minimum(hi, seg.max(axis=0) + grow)
+    return lo, hi
+
+
+def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile) -> np.ndarray:
+    """The pose grid or random poses of the truth, bounded before anything is built."""
+    rotary = None if t.rotary_travel_deg is None else np.deg2rad(np.asarray(t.rotary_travel_deg, dtype=float))
+    if rotary is not None and np.any(rotary[:, 0] >= rotary[:, 1]):
+        raise file.fail("truth.rotary_travel_deg", "rows [min, max] with min < max", t.rotary_travel_deg)
+    rot_step = float(np.deg2rad(t.rotary_step_deg))
+    if t.grid_step is not None:
+        if t.random_poses is not None:
+            raise file.fail("truth.random_poses", "either grid_step or random_poses, not both", t.random_poses)
+        cap = MAX_GRID_CANDIDATES[tkind]
+        count, angular = _grid_candidates(truth, tkind, t)
+        if angular > cap:
+            key = "truth.grid_step_deg" if tkind == "f1" else "truth.rotary_step_deg"
+            raise file.fail(key, f"an angular step giving at most {cap} grid poses (this one gives {angular:.3g} orientations)",
+                            t.grid_step_deg if tkind == "f1" else t.rotary_step_deg)
+        if count > cap:
+            raise file.fail("truth.grid_step", f"a grid step giving at most {cap} grid poses (this one gives {count:.3g})", t.grid_step)
+        if tkind == "f1":
+            # the F1's own 6-D workspace grid (position and orientation steps)
+            _, _, q = truth.workspace_grid(step_m=t.grid_step, step_deg=t.grid_step_deg, return_q=True)
+            return q
+        return grid_poses(truth, t.grid_step, rotary_travel=rotary, rotary_step=rot_step)
+    if tkind not in MAX_RANDOM_POSES:
+        raise file.fail("truth.random_poses", f"grid_step for a truth of model {tkind} (random poses need a 3-link or six-link truth)")
+    n = t.random_poses if t.random_poses is not None else 400
+    if n > MAX_RANDOM_POSES[tkind]:
+        raise file.fail("truth.random_poses", f"at most {MAX_RANDOM_POSES[tkind]} random poses for a {tkind} truth", n)
+    return random_poses(truth, n, seed=t.seed, rotary_travel=rotary)
+
+
+def _synthetic_data(doc: CalibrationFile, file: ProblemFile) -> tuple[Any, Any, Any, float, str]:
+    t = doc.truth
+    truth = _closure(t.model, t.parameters, file, "truth.parameters")
+    # a robot that differs from its parameter set (built tolerances): every parameter moved
+    truth = _perturbed(truth, t.perturbation, 7)
+    noise = device_noise(t.noise)
+    errors = ActuatorErrors.table_4_1() if t.actuator_errors == "table_4_1" else None
+    cart = None
+    try:
+        q = _truth_poses(truth, t.model, t, file)
+        data = synthetic_measurements(truth, q, noise=noise, actuator_errors=errors, seed=t.seed)
+        if any(m.type.endswith("_piecewise") for m in doc.models):
+            cart = synthetic_cart_measurements(truth, errors, noise=noise, seed=t.seed + 1)
+    except ProblemError:
+        raise
+    except GtModelError as exc:
+        raise ProblemError(f"{file.path}: field 'truth': cannot generate the synthetic data: {exc}") from None
+    source = (f"synthetic: truth {t.model} '{t.parameters}', {t.noise} noise, actuator errors {t.actuator_errors}, "
+              f"seed {t.seed}, {data.n_poses} poses")
+    return data, cart, truth, noise.position_sigma_m, source
+
+
+def _start_model(k: int, m: ModelSection, doc: CalibrationFile, file: ProblemFile, truth: Any, cart: Any, n_q: int) -> dict[str, Any]:
+    key = f"models[{k}]"
+    mname = m.name if m.name is not None else m.type
+    base = _base_type(m.type)
+    if m.start == "truth":
+        if truth is None:
+            raise file.fail(f"{key}.start", "a parameter set (there is no [truth] with measured data)", m.start)
+        start = _closure(base, doc.truth.parameters, file, f"{key}.start", m.parametrisation)
+    else:
+        start = _closure(base, m.start, file, f"{key}.start", m.parametrisation)
+    held = [*m.fixed, *(t.split("=")[0].strip() for t in m.ties)]
+    start = _perturbed(start, m.perturbation, 1000 + k, keep=held)
+    if m.type.endswith("_piecewise"):
+        if cart is None:
+            raise file.fail("data.cart_file", f"cart surveys for the piecewise-linear model '{mname}'")
+        try:
+            start = PiecewiseActuatorClosure.from_model(start, cart, extrapolate=True)
+        except GtModelError as exc:
+            raise file.wrap(key, exc) from None
+    try:
+        selection = ParameterSelection(fixed=tuple(m.fixed), ties=tuple(m.ties))
+        CalibrationProblem(start, selection)  # resolves names and ties (errors name them)
+    except GtModelError as exc:
+        raise file.wrap(key, exc) from None
+    if start.n_q != n_q:
+        raise file.fail(f"{key}.type", f"a model with {n_q} actuator values per pose (the data's)", m.type)
+    return {"name": mname, "type": m.type, "model": start, "selection": selection}
+
+
+# ------------------------------------------------------------------ solving
+
+
+def _solve(decl: CalibrationDeclaration) -> CalibrationOutcome:
+    t0 = time.perf_counter()
+    data = decl.measurements
+    selected = None
+    if decl.pose_selection is not None:
+        first = decl.models[0]
+        sel = select_poses(first["model"], data.q, decl.pose_selection, T=data.T, quat=data.quat, selection=first["selection"])
+        selected = np.asarray(sel.indices)
+        data = data.subset(np.sort(selected))
+    cal, val = data.split_alternate()
+    results = []
+    starts: dict[str, Any] = {}
+    for spec in decl.models:
+        _log.info("calibrating %s (%s) on %d poses ...", spec["name"], spec["type"], cal.n_poses)
+        try:
+            res = CalibrationProblem(spec["model"], spec["selection"]).solve(cal, solver=decl.solver, align=decl.align, max_iter=decl.max_iter)
+        except GtModelError as exc:
+            raise ProblemError(f"model '{spec['name']}': {exc}") from None
+        try:
+            report = evaluate(res.model, val, label=spec["name"]) if res.success else None
+            msg = res.message
+        except GtModelError as exc:
+            report, msg = None, f"evaluation failed: {exc}"
+        starts[spec["name"]] = _start_report(spec["model"].transformed(res.rotation, res.translation), val)
+        results.append((spec["name"], res, report, msg))
+    floor = None
+    if decl.truth is not None:
+        try:
+            floor = evaluate(decl.truth, val, label="true robot (noise floor)")
+        except GtModelError:
+            floor = None
+    return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts})
+
+
+def _start_report(model: Any, val: Any) -> Any:
+    """The uncalibrated start on the validation poses; poses where it cannot assemble are skipped."""
+    try:
+        return evaluate(model, val, label="start")
+    except GtModelError:
+        pass
+    reps = []
+    for k in range(val.n_poses):
+        try:
+            reps.append(evaluate(model, val.subset([k]), label="start"))
+        except GtModelError:
+            continue
+    if not reps:
+        return None
+    rep = AccuracyReport(np.vstack([r.error_vectors for r in reps]), label="start")
+    rep.skipped = val.n_poses - len(reps)
+    return rep

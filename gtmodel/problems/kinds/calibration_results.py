@@ -1,0 +1,207 @@
+"""Result files of the kinematic calibration kinds: summary rows, ``errors.csv``, ``parameters.toml``.
+
+``parameters.toml`` of a 3-link result is a complete robot parameter set (Dressler (2012),
+Table 5.1 layout); other models get ``[calibrated]`` and ``[standard_deviation]`` tables
+(:func:`calibrated_tables`, shared with the elasto-geometric kind).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gtmodel.report.calibration import plot_error_histogram
+from gtmodel.problems.base import Written
+from gtmodel.robots.closure import ThreeLinkClosure
+
+__all__ = ["write_calibration", "calibrated_tables"]
+
+
+def _within_3_std(res: Any, truth: Any) -> dict[str, Any] | None:
+    """How many calibrated parameters lie within 3 reported standard deviations of the truth."""
+    if truth is None or type(truth) is not type(res.model) or tuple(truth.parameter_names()) != tuple(res.model.parameter_names()):
+        return None
+    true = dict(zip(truth.parameter_names(), truth.parameter_vector()))
+    n_free = n_in = 0
+    worst = 0.0
+    for k, v in res.parameters.items():
+        s = res.std.get(k, 0.0)
+        if s and np.isfinite(s) and s > 0:
+            n_free += 1
+            z = abs(v - true[k]) / s
+            worst = max(worst, z)
+            n_in += int(z <= 3.0)
+    return {"n_free": n_free, "n_within_3_std": n_in, "max_z": worst}
+
+
+def _model_row(name: str, res: Any, rep: Any, msg: str, decl: Any, start: Any) -> dict[str, Any]:
+    row: dict[str, Any] = {"name": name, "status": res.status if res else ("optimal" if rep is not None else "error"), "message": msg}
+    if res is not None:
+        ident = res.identifiability
+        row.update(
+            rank=int(ident.rank),
+            n_parameters=int(ident.n_parameters),
+            non_identifiable=sorted(ident.non_identifiable),
+            iterations=int(res.iterations),
+            solve_time_s=float(res.solve_time),
+            cost=float(res.cost),
+            quaternion_norms=res.quaternion_norms,
+        )
+        check = _within_3_std(res, decl.truth)
+        if check is not None:
+            row["parameters_vs_truth"] = check
+    if rep is not None:
+        row.update(rep.to_dict())
+    if start is not None:
+        row["start_mean_error_m"] = start.mean_error
+        row["start_max_error_m"] = start.max_error
+        row["start_poses_without_assembly"] = int(getattr(start, "skipped", 0))
+        if start.angle_errors is not None:
+            row["start_max_angle_error_deg"] = float(np.rad2deg(start.angle_errors.max()))
+    return row
+
+
+def write_calibration(decl: Any, outcome: Any, out: Path, plots: bool, title: str) -> Written:
+    """Summary fields, ``parameters.toml``, ``errors.csv`` and the histogram of a calibration.
+
+    Parameters
+    ----------
+    decl : CalibrationDeclaration
+        The problem.
+    outcome : CalibrationOutcome
+        Its results.
+    out : pathlib.Path
+        Result folder (exists).
+    plots : bool
+        Write the PNG histogram.
+    title : str
+        Problem name (titles, the name of the calibrated parameter set).
+
+    Returns
+    -------
+    Written
+        The required figures of the first model and a ``models`` table of all; the files.
+    """
+    starts = outcome.extra.get("start_reports", {})
+    rows = [_model_row(name, res, rep, msg, decl, starts.get(name)) for name, res, rep, msg in outcome.results]
+    first = rows[0]
+    summary: dict[str, Any] = {
+        "status": outcome.status,
+        "message": first.get("message", ""),
+        "source": decl.source,
+        "mean_error_m": first.get("mean_error_m"),
+        "max_error_m": first.get("max_error_m"),
+        "rms_error_m": first.get("rms_error_m"),
+        "n_calibration": outcome.calibration.n_poses,
+        "n_validation": outcome.validation.n_poses,
+        "rank": first.get("rank"),
+        "n_parameters": first.get("n_parameters"),
+        "non_identifiable": first.get("non_identifiable"),
+        "iterations": first.get("iterations"),
+        "solve_time_s": outcome.solve_time,
+        "solver": decl.solver,
+        "models": rows,
+    }
+    if outcome.noise_floor is not None:
+        # the true robot on the same noisy poses: the noise floor when the data come from it
+        # exactly; with actuator errors, what the linear-actuator truth misses
+        key = "noise_floor" if decl.truth_exact else "truth_without_actuator_errors"
+        summary[f"{key}_mean_error_m"] = outcome.noise_floor.mean_error
+        summary[f"{key}_max_error_m"] = outcome.noise_floor.max_error
+    if outcome.selected is not None:
+        summary["selected_poses"] = int(outcome.selected.size)
+    written = Written(summary)
+    reports = {name: rep for name, _, rep, _ in outcome.results if rep is not None}
+    res0 = outcome.results[0][1]
+    if res0 is not None and res0.success:
+        _write_parameters(res0, out / "parameters.toml", decl, title)
+        written.files.append("parameters.toml")
+    if reports:
+        cols = {"pose": np.arange(outcome.validation.n_poses)}
+        for name, rep in reports.items():
+            cols[f"error_m[{name}]"] = rep.errors
+        np.savetxt(out / "errors.csv", np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="", fmt="%.9g")
+        written.files.append("errors.csv")
+        if plots:
+            plot_error_histogram(reports, out / "error_histogram.png", title=f"{title}: TCP error on {outcome.validation.n_poses} validation poses")
+            written.files.append("error_histogram.png")
+    return written
+
+
+def _write_parameters(res: Any, path: Path, decl: Any, title: str) -> None:
+    """Calibrated parameters as TOML; a 3-link result is a complete robot parameter set."""
+    model = res.model
+    lines = [
+        f"# Calibrated by gtmodel ({title}), {decl.solver}, {res.n_poses} poses; {decl.source}",
+        "# Frame: the measurement frame (Dressler (2012), eqs. 5.3-5.4). SI units.",
+    ]
+    if isinstance(model, ThreeLinkClosure):
+        k = model.kinematics
+        robot = model.robot
+        lines += [
+            f'name = "{title}_calibrated"',
+            f'description = "calibrated {model.model} 3-link model"',
+            "",
+            "[kinematics]",
+            f'source = "gtmodel calibration {title}"',
+            f'model = "{model.model}"',
+            f"L = {np.array2string(k.L, separator=', ', precision=10, max_line_width=200)}",
+            f"As = {np.array2string(k.As, separator=', ', precision=10, max_line_width=400)}".replace("\n", ""),
+            f"v = {np.array2string(k.v, separator=', ', precision=10, max_line_width=400)}".replace("\n", ""),
+        ]
+        if robot is not None:
+            d, lim = robot.dynamics, robot.limits
+            lines += [
+                "",
+                "[dynamics]",
+                f'source = "copied from the start parameter set {robot.name}"',
+                f"m_p = {d.m_p!r}",
+                f"m_c = {list(map(float, d.m_c))}",
+                f"m_a = {list(map(float, d.m_a))}",
+                f"f_c = {list(map(float, d.f_c))}",
+                f"f_v = {list(map(float, d.f_v))}",
+                f"g = {d.g!r}",
+                "",
+                "[limits]",
+                f'source = "copied from the start parameter set {robot.name}"',
+                f"cart_travel = {lim.cart_travel.tolist()}",
+                f"joint_angle_max_deg = {float(np.rad2deg(lim.joint_angle_max))!r}",
+            ]
+        # the parameter-set schema has no table for them: comments
+        lines += ["", "# standard deviations (from the Jacobian and the residual variance):"]
+        lines += [f"#   {n} = {float(s):.3e}" for n, s in res.std.items()]
+    else:
+        lines += [f'model = "{model.name}"', ""]
+        lines += calibrated_tables(res.parameters, res.std, "  # name = value [m, rad, 1]", "  # from the Jacobian and the residual variance")
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def calibrated_tables(parameters: dict[str, float], std: dict[str, float], comment: str = "", std_comment: str = "") -> list[str]:
+    """TOML lines of the ``[calibrated]`` values and their ``[standard_deviation]``.
+
+    Shared by the result files (``parameters.toml``) of the calibration kinds.
+
+    Parameters
+    ----------
+    parameters : dict of str to float
+        Calibrated values by name.
+    std : dict of str to float
+        Standard deviations by name (``nan`` when not finite).
+    comment : str, optional
+        Text after the ``[calibrated]`` header.
+    std_comment : str, optional
+        Text after the ``[standard_deviation]`` header.
+
+    Returns
+    -------
+    list of str
+        The lines, without newlines.
+    """
+    return (
+        [f"[calibrated]{comment}"]
+        + [f'"{n}" = {v!r}' for n, v in parameters.items()]
+        + ["", f"[standard_deviation]{std_comment}"]
+        + [f'"{n}" = {float(s)!r}' if np.isfinite(s) else f'"{n}" = nan' for n, s in std.items()]
+    )
