@@ -43,13 +43,13 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from gtmodel.calibration.dynamic_identification import (  # noqa: E402
+from gtmodel.calibration.identification import (  # noqa: E402
     DynamicRegressor,
+    FourierTrajectory,
     identify_dynamics,
     preprocess_log,
     simulate_log,
 )
-from gtmodel.calibration.excitation import FourierTrajectory  # noqa: E402
 
 AGREEMENT = 1e-10  # relative, per parameter
 MIN_SPEED = 0.05  # m/s, rows fitted

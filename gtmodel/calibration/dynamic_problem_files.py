@@ -156,7 +156,7 @@ def load_dynamic_identification(f: FieldReader, name: str) -> DynamicIdentificat
         ``[truth]``, ``[excitation]`` with ``[data]``, or a malformed log file (the message
         names the file and the line).
     """
-    from gtmodel.calibration.dynamic_identification import VARIANTS, read_motion_log
+    from gtmodel.calibration.identification import VARIANTS, read_motion_log
     from gtmodel.robots.parameters import load_parameters
 
     f.check_unknown(DYNAMIC_IDENTIFICATION_SCHEMA)
@@ -311,14 +311,14 @@ def solve_dynamic_identification(decl: DynamicIdentificationDeclaration, verbose
         The data cannot be filtered (too short, non-uniform sampling, cut-off above
         Nyquist) or the motion leaves the workspace.
     """
-    from gtmodel.calibration.dynamic_identification import (
+    from gtmodel.calibration.identification import (
         DynamicRegressor,
         StribeckTerm,
         identify_dynamics,
         preprocess_log,
         simulate_log,
     )
-    from gtmodel.calibration.excitation import FourierTrajectory, design_excitation
+    from gtmodel.calibration.identification import FourierTrajectory, design_excitation
 
     t0 = time.perf_counter()
     design = None
@@ -402,7 +402,7 @@ def write_dynamic_identification(decl: DynamicIdentificationDeclaration, solutio
     files : list of str
         Files written besides ``summary.json``.
     """
-    from gtmodel.calibration.dynamic_identification import THESIS_TABLE_6_3, VARIANTS
+    from gtmodel.calibration.identification import THESIS_TABLE_6_3, VARIANTS
 
     # a variant "has the truth's structure" when the simulated data come from it exactly:
     # simulate_log uses symmetric friction and the truth's masses, so "full" always and
@@ -545,7 +545,7 @@ def _write_parameters(path: Path, decl: DynamicIdentificationDeclaration, varian
 
 
 def _variant_asymmetric(variant: str) -> bool:
-    from gtmodel.calibration.dynamic_identification import VARIANTS
+    from gtmodel.calibration.identification import VARIANTS
 
     return VARIANTS[variant].asymmetric
 
@@ -556,7 +556,7 @@ def _plot_residuals(solution: DynamicIdentificationOutcome, variant: str, path: 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from gtmodel.calibration.dynamic_identification import DynamicRegressor
+    from gtmodel.calibration.identification import DynamicRegressor
 
     res = next(r for v, r, _ in solution.results if v == variant)
     s = solution.samples

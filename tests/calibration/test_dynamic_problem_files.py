@@ -8,8 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from gtmodel.calibration.dynamic_identification import simulate_log
-from gtmodel.calibration.excitation import FourierTrajectory
+from gtmodel.calibration.identification import FourierTrajectory, simulate_log
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem, solve_problem, write_results
 from gtmodel.robots.parameters import load_parameters

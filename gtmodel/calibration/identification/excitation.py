@@ -17,7 +17,7 @@ must intersect and every link stays within the spherical-joint angle) on a time 
 Choice of the NLP formulation: the decision variables are the ``3 (2K + 1)`` Fourier
 coefficients, a static NLP without dynamics or collocation, so it is written with
 :func:`casadi.nlpsol` directly on the symbolic regressor of
-:class:`~gtmodel.calibration.dynamic_identification.DynamicRegressor` (mapped over the
+:class:`~gtmodel.calibration.identification.DynamicRegressor` (mapped over the
 grid) rather than through :mod:`gtmodel.modeling`, whose Model/Optimization layer is
 made for optimal control. The regressor uses the smooth ``tanh`` sign (gradients) and
 the design is then assessed with the exact sign.
@@ -47,10 +47,11 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
-from gtmodel.calibration.dynamic_identification import DynamicRegressor, ModelVariant
+from gtmodel.calibration.identification.regressor import DynamicRegressor
+from gtmodel.calibration.identification.variants import ModelVariant
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.modeling.result import normalize_ipopt_status
-from gtmodel.robots.kinematics import fk_expression, link_cosines_expression
+from gtmodel.robots.kinematics import GantryTau3Kinematics, fk_expression, link_cosines_expression
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 
 __all__ = ["FourierTrajectory", "ExcitationDesign", "design_excitation", "regressor_condition"]
@@ -378,8 +379,6 @@ def design_excitation(
     p = design_reg.n_parameters
     scale = np.abs(exact_reg.theta_of())
     scale = np.where(scale > 0, scale, 1.0)
-
-    from gtmodel.robots.kinematics import GantryTau3Kinematics
 
     kin = GantryTau3Kinematics(robot)
     q_center = kin.require_in_workspace(np.asarray(T_center, dtype=float), configuration)

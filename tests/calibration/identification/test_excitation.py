@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.calibration.dynamic_identification import DynamicRegressor
-from gtmodel.calibration.excitation import FourierTrajectory, design_excitation, regressor_condition
+from gtmodel.calibration.identification import DynamicRegressor, FourierTrajectory, design_excitation, regressor_condition
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import load_parameters

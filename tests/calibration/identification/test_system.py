@@ -17,7 +17,7 @@ import control
 import numpy as np
 import pytest
 
-from gtmodel.calibration.system_identification import (
+from gtmodel.calibration.identification import (
     discrete_to_continuous,
     identify_actuator,
     identify_state_space,
@@ -28,7 +28,7 @@ from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.actuator_dynamics import actuator_models, simulate
 from gtmodel.robots.structural import PhysicalModel
 
-REFERENCE = Path(__file__).parents[1] / "reference" / "gantry_tau_L1.toml"
+REFERENCE = Path(__file__).parents[2] / "reference" / "gantry_tau_L1.toml"
 
 #: Modes of the identified model against the thesis / generating model.
 MODE_TOLERANCE_HZ = 0.5

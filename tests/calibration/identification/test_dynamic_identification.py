@@ -10,13 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gtmodel.calibration.dynamic_identification import (
+from gtmodel.calibration.identification import (
     TABLE_6_3_COLUMNS,
     THESIS_TABLE_6_3,
     VARIANTS,
     ConstantVelocityData,
     DynamicRegressor,
     DynamicSamples,
+    FourierTrajectory,
     MotionLog,
     StribeckTerm,
     accumulated_gravity_forces,
@@ -30,12 +31,11 @@ from gtmodel.calibration.dynamic_identification import (
     subtract_gravity,
     two_direction_friction,
 )
-from gtmodel.calibration.excitation import FourierTrajectory
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.parameters import load_parameters
 
-REFERENCE = Path(__file__).parents[1] / "reference" / "gantry_tau_L1.toml"
+REFERENCE = Path(__file__).parents[2] / "reference" / "gantry_tau_L1.toml"
 
 #: Y theta + tau0 against the model's inverse dynamics: round-off of the same graph [N].
 FORCE_TOLERANCE_N = 1e-8
@@ -515,7 +515,7 @@ def _compiler_available() -> bool:
 @pytest.fixture
 def compile_everything(monkeypatch, tmp_path):
     """Compile from the first sample, into an empty cache folder."""
-    import gtmodel.calibration.dynamic_identification as di
+    import gtmodel.calibration.identification.regressor as di
 
     monkeypatch.setattr(di, "_COMPILE_MIN_SAMPLES", 1)
     monkeypatch.setenv("GTMODEL_CACHE_DIR", str(tmp_path))
