@@ -53,6 +53,7 @@ from gtmodel.errors import GtModelError, InputError
 from gtmodel.modeling.result import normalize_ipopt_status
 from gtmodel.robots.kinematics import GantryTau3Kinematics, fk_expression, link_cosines_expression
 from gtmodel.robots.parameters import RobotParameters, load_parameters
+from gtmodel.status import Status, StatusResult
 
 __all__ = ["FourierTrajectory", "ExcitationDesign", "design_excitation", "regressor_condition"]
 
@@ -238,7 +239,7 @@ def regressor_condition(regressor: DynamicRegressor, trajectory: FourierTrajecto
 
 
 @dataclass
-class ExcitationDesign:
+class ExcitationDesign(StatusResult):
     """An optimised excitation trajectory (Swevers et al. 1997; Dressler (2012), ch. 6.2).
 
     Parameters
@@ -252,8 +253,8 @@ class ExcitationDesign:
         ``min_speed``) along the start and the optimised motion.
     objective_before, objective_after : float
         The NLP objective at the start and the solution.
-    status : str
-        ``"optimal"``, ``"acceptable"``, ``"max_iterations"``, ``"infeasible"`` or ``"error"``.
+    status : Status
+        ``optimal``, ``acceptable``, ``max_iterations``, ``infeasible`` or ``error``.
     message : str
         IPOPT's return status.
     iterations : int
@@ -273,8 +274,6 @@ class ExcitationDesign:
     condition_after: float
     objective_before: float
     objective_after: float
-    status: str
-    message: str
     iterations: int
     solve_time: float
     max_violation: float
@@ -282,8 +281,9 @@ class ExcitationDesign:
 
     @property
     def success(self) -> bool:
-        """True for an optimal or acceptable IPOPT solution."""
-        return self.status in ("optimal", "acceptable")
+        """True for an optimal or acceptable IPOPT solution (a design stopped at IPOPT's
+        "acceptable" level is still a motion to use)."""
+        return self.status in (Status.OPTIMAL, Status.ACCEPTABLE)
 
 
 def design_excitation(
@@ -437,7 +437,7 @@ def design_excitation(
         status = normalize_ipopt_status(message)
         iterations = int(stats.get("iter_count", 0))
     except RuntimeError as exc:  # pragma: no cover - IPOPT aborts (e.g. NaN in evaluation)
-        x, message, status, iterations = start.coefficients, f"IPOPT failed: {exc}", "error", 0
+        x, message, status, iterations = start.coefficients, f"IPOPT failed: {exc}", Status.ERROR, 0
     solve_time = time.perf_counter() - t0
     best = FourierTrajectory.from_coefficients(x, K, period)
     # limits on a 10x finer grid (unit of each constraint)

@@ -45,7 +45,7 @@ SPEED_BINS = (0.0, 0.02, 0.05, 0.1, 0.2, 0.5, math.inf)
 
 
 @dataclass
-class DynamicIdentificationResult:
+class DynamicIdentificationResult(StatusResult):
     """Identified rigid-body and friction parameters (Dressler (2012), ch. 6.2, Table 6.3).
 
     Parameters
@@ -85,8 +85,9 @@ class DynamicIdentificationResult:
         Samples used.
     n_rows : int
         Equations fitted (samples x actuators above ``min_speed``).
-    status : str
-        ``"optimal"`` or ``"error"``.
+    status : Status
+        ``optimal`` (the least-squares optimum; an identification that cannot be posed
+        raises instead).
     message : str
         What happened.
     solve_time : float
@@ -113,15 +114,8 @@ class DynamicIdentificationResult:
     weights: np.ndarray
     n_samples: int
     n_rows: int
-    status: str = "optimal"
-    message: str = ""
     solve_time: float = 0.0
     info: dict = field(default_factory=dict)
-
-    @property
-    def success(self) -> bool:
-        """True when the estimate is the least-squares optimum."""
-        return self.status == "optimal"
 
     @property
     def parameters(self) -> dict[str, float]:
@@ -479,7 +473,7 @@ def identify_dynamics(
     near = _near_dependencies(R, [names[j] for j in ident], count=min(3, k - 1))
     by_speed = _speed_bins(q_dot, r_all)
     t_ls = time.perf_counter() - t_ls
-    status = "optimal"
+    status = Status.OPTIMAL
     message = f"{m} rows ({n_used} samples), rank {report.rank}/{p}"
     if not report.full_rank:
         message += f"; base parameters only: {report.describe()}"
