@@ -287,12 +287,13 @@ class ExcitationDesign(StatusResult):
 
 
 def design_excitation(
-    parameters: RobotParameters | str | Path = "L1",
+    parameters: RobotParameters | str | Path,
     variant: str | ModelVariant = "model_2",
+    *,
+    T_center: Sequence[float],
     harmonics: int = 4,
     period: float = 10.0,
     n_grid: int = 60,
-    T_center: Sequence[float] = (0.0, 2.9, -0.5),
     max_velocity: float = 0.5,
     max_acceleration: float = 3.0,
     travel_margin: float = 0.05,
@@ -314,18 +315,20 @@ def design_excitation(
 
     Parameters
     ----------
-    parameters : RobotParameters or str or pathlib.Path, optional
-        Parameter set (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        Parameter set (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML
+        file or the parameters).
     variant : str or ModelVariant, optional
         The regressor to condition (default ``"model_2"``).
+    T_center : sequence of float, shape (3,)
+        TCP position [m] whose cart positions are the initial offsets ``q0`` (keyword
+        only; e.g. ``(0.0, 2.9, -0.5)`` in the L1 workspace).
     harmonics : int, optional
         Number of harmonics K (default 4).
     period : float, optional
         Period [s] (default 10 s).
     n_grid : int, optional
         Constraint and objective grid points per period (default 60).
-    T_center : sequence of float, optional
-        TCP position [m] whose cart positions are the initial offsets ``q0``.
     max_velocity : float, optional
         Cart speed limit [m/s] (default 0.5).
     max_acceleration : float, optional

@@ -123,7 +123,7 @@ def _gravity_model(parameters: RobotParameters, accumulated_mass: float) -> Gant
     return GantryTau3Dynamics(robot)
 
 
-def accumulated_gravity_forces(T: np.typing.ArrayLike, parameters: RobotParameters | str | Path = "L1", accumulated_mass: float | None = None, configuration: int | Sequence[int] = 0) -> np.ndarray:
+def accumulated_gravity_forces(T: np.typing.ArrayLike, parameters: RobotParameters | str | Path, accumulated_mass: float | None = None, configuration: int | Sequence[int] = 0) -> np.ndarray:
     """Gravity forces ``J^T G`` on the carts for the accumulated mass (Dressler (2012), eq. 6.9, Table 6.2).
 
     ``G = g (0, 0, m_acc)`` with ``m_acc = m_p + sum m_a/2`` carried by the plate (eq. 6.7),
@@ -134,8 +134,8 @@ def accumulated_gravity_forces(T: np.typing.ArrayLike, parameters: RobotParamete
     ----------
     T : array_like, shape (3,) or (N, 3)
         TCP positions [m].
-    parameters : RobotParameters or str or pathlib.Path, optional
-        Parameter set (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        Parameter set (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters).
     accumulated_mass : float, optional
         ``m_acc`` [kg] (default: the parameter set's ``m_p + sum m_a/2``; the thesis'
         friction experiment used 22.38 kg).
@@ -160,22 +160,24 @@ def accumulated_gravity_forces(T: np.typing.ArrayLike, parameters: RobotParamete
     return _gravity_model(robot, accumulated_mass).gravity_forces(T, configuration)
 
 
-def subtract_gravity(data: ConstantVelocityData, parameters: RobotParameters | str | Path = "L1", accumulated_mass: float = 22.38, configuration: int | Sequence[int] = 0) -> ConstantVelocityData:
+def subtract_gravity(data: ConstantVelocityData, parameters: RobotParameters | str | Path, accumulated_mass: float | None = None, configuration: int | Sequence[int] = 0) -> ConstantVelocityData:
     """Remove the model's gravity ``J^T G`` from constant-velocity forces (eq. 6.9).
 
     With runs in one direction only, ``tau = J^T G + f_c + f_v v`` at one pose cannot tell
     the gravity from the Coulomb friction: a straight-line fit of ``tau`` over ``v`` puts
     ``J^T G`` into ``f_c`` (Dressler (2012), Fig. 6.2). Subtracting the model's gravity
-    with the accumulated mass (22.38 kg in the thesis) first leaves friction only.
+    with the accumulated mass (22.38 kg in the thesis' experiment) first leaves friction
+    only.
 
     Parameters
     ----------
     data : ConstantVelocityData
         The runs.
-    parameters : RobotParameters or str or pathlib.Path, optional
-        Parameter set (kinematics, gravity) (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        Parameter set (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters): kinematics, gravity.
     accumulated_mass : float, optional
-        ``m_p + sum m_a/2`` [kg] (default 22.38 kg, ch. 6.2).
+        ``m_p + sum m_a/2`` [kg] (default: the parameter set's; the thesis' experiment,
+        ch. 6.2, used 22.38 kg).
     configuration : int or sequence of int, optional
         IK configuration (default 0).
 
@@ -263,7 +265,7 @@ def fit_friction(data: ConstantVelocityData, asymmetric: bool = True, min_speed:
     return FrictionFit(**out, std=std, method="asymmetric lines per direction" if asymmetric else "symmetric f_c sign(v) + f_v v")
 
 
-def two_direction_friction(data: ConstantVelocityData, parameters: RobotParameters | str | Path | None = "L1", configuration: int | Sequence[int] = 0, min_speed: float = 1e-3) -> FrictionFit:
+def two_direction_friction(data: ConstantVelocityData, parameters: RobotParameters | str | Path | None, configuration: int | Sequence[int] = 0, min_speed: float = 1e-3) -> FrictionFit:
     """Gravity and friction separated by runs in both directions (Dressler (2012), eq. 6.9, Fig. 6.2).
 
     At one pose and speed ``|v|`` the runs in both directions give
@@ -282,9 +284,9 @@ def two_direction_friction(data: ConstantVelocityData, parameters: RobotParamete
     data : ConstantVelocityData
         Runs in both directions at the same poses, paired by ``pose`` and the closest
         ``|v|`` (within :data:`SPEED_MATCH_TOLERANCE`).
-    parameters : RobotParameters or str or pathlib.Path or None, optional
-        Parameter set for the gravity direction ``J^T e_z`` (default ``"L1"``); None:
-        symmetric friction assumed, no mass estimate.
+    parameters : RobotParameters or str or pathlib.Path or None
+        Parameter set for the gravity direction ``J^T e_z`` (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters); None: symmetric
+        friction assumed, no mass estimate.
     configuration : int or sequence of int, optional
         IK configuration (default 0).
     min_speed : float, optional

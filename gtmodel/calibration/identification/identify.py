@@ -311,7 +311,7 @@ def _stacked_factor(S: np.ndarray, w: np.ndarray, cols: Sequence[int]) -> np.nda
 
 def identify_dynamics(
     samples: DynamicSamples,
-    parameters: RobotParameters | str | Path = "L1",
+    parameters: RobotParameters | str | Path | None = None,
     variant: str | ModelVariant = "model_2",
     weighting: str | Sequence[float] = "actuator",
     min_speed: float = 0.05,
@@ -338,7 +338,8 @@ def identify_dynamics(
     samples : DynamicSamples
         Filtered motion and forces (see :func:`preprocess_log`).
     parameters : RobotParameters or str or pathlib.Path, optional
-        Parameter set (kinematics, gravity, Table 6.1 friction) (default ``"L1"``).
+        Parameter set (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters): kinematics, gravity, Table 6.1 friction; required unless
+        ``regressor`` is given.
     variant : str or ModelVariant, optional
         Which parameters are estimated (default ``"model_2"``, :data:`VARIANTS`).
     weighting : {"actuator", "none"} or sequence of 3 float, optional
@@ -370,7 +371,8 @@ def identify_dynamics(
     Raises
     ------
     InputError
-        Invalid options or data, or fewer fitted rows than parameters.
+        Invalid options or data, neither ``parameters`` nor ``regressor``, or fewer
+        fitted rows than parameters.
     ModelError
         Rank-deficient regressor with ``rank_deficient="raise"`` (names the parameters
         and their dependencies).
@@ -392,6 +394,8 @@ def identify_dynamics(
         fixed_w = np.asarray(weighting, dtype=float).ravel()
         if fixed_w.size != 3 or not np.all(np.isfinite(fixed_w)) or np.any(fixed_w <= 0):
             raise InputError(f"weighting: expected three positive finite weights, got {list(np.ravel(weighting))!r}")
+    if regressor is None and parameters is None:
+        raise InputError("parameters: expected a parameter set (name, TOML file or RobotParameters) when no regressor is given")
     reg = regressor if regressor is not None else DynamicRegressor(parameters, variant, configuration, solution)
     names = reg.names
     p = len(names)

@@ -67,9 +67,9 @@ class DynamicRegressor:
 
     Parameters
     ----------
-    parameters : RobotParameters or str or pathlib.Path, optional
-        Parameter set: kinematics, gravity and the Table 6.1 friction of the variants that
-        subtract it (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        Parameter set (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters): kinematics, gravity and the Table 6.1 friction of the
+        variants that subtract it.
     variant : str or ModelVariant, optional
         Which parameters are estimated (default ``"model_2"``; see :data:`VARIANTS`).
     configuration : int or sequence of int, optional
@@ -90,7 +90,7 @@ class DynamicRegressor:
 
     def __init__(
         self,
-        parameters: RobotParameters | str | Path = "L1",
+        parameters: RobotParameters | str | Path,
         variant: str | ModelVariant = "model_2",
         configuration: int | Sequence[int] = 0,
         solution: int = 1,

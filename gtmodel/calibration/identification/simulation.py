@@ -71,7 +71,7 @@ class StribeckTerm:
 def simulate_log(
     trajectory: Any,
     duration: float,
-    parameters: RobotParameters | str | Path = "L1",
+    parameters: RobotParameters | str | Path,
     sample_time: float = 0.004,
     force_noise: float = 5.0,
     position_noise: float = 1e-6,
@@ -94,8 +94,8 @@ def simulate_log(
         :class:`gtmodel.calibration.identification.FourierTrajectory`.
     duration : float
         Length of the log [s].
-    parameters : RobotParameters or str or pathlib.Path, optional
-        The true robot (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        The true robot (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters).
     sample_time : float, optional
         Sampling interval [s] (default 4 ms, the L1 servo rate).
     force_noise : float, optional
@@ -156,7 +156,7 @@ def simulate_log(
 def simulate_constant_velocity(
     poses: np.typing.ArrayLike,
     speeds: np.typing.ArrayLike,
-    parameters: RobotParameters | str | Path = "L1",
+    parameters: RobotParameters | str | Path,
     force_noise: float = 2.0,
     directions: str = "both",
     asymmetric: bool = True,
@@ -175,8 +175,8 @@ def simulate_constant_velocity(
         TCP positions [m].
     speeds : array_like, shape (S,)
         Positive TCP speeds [m/s] (the thesis: 15 speeds up to 1 m/s).
-    parameters : RobotParameters or str or pathlib.Path, optional
-        The true robot (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        The true robot (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML file or the parameters).
     force_noise : float, optional
         Standard deviation of each mean force [N] (default 2 N).
     directions : {"both", "positive", "negative"}, optional

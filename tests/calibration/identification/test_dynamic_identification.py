@@ -87,7 +87,7 @@ def motion():
 
 @pytest.fixture(scope="module")
 def noisy_log():
-    log, truth = simulate_log(TRAJECTORY, 30.0, force_noise=FORCE_NOISE_N, seed=3)
+    log, truth = simulate_log(TRAJECTORY, 30.0, "L1", force_noise=FORCE_NOISE_N, seed=3)
     return log, truth
 
 
@@ -137,9 +137,9 @@ def test_table_6_3_constant_matches_the_reference_file(reference):
 def test_noise_free_identification_recovers_the_parameters_exactly():
     """Exact motion and forces (no noise, no filter): least squares returns the generating
     Table 6.3 model 2 parameters to round-off."""
-    log, truth = simulate_log(TRAJECTORY, 10.0, force_noise=0.0, position_noise=0.0, position_resolution=0.0, sample_time=0.02)
+    log, truth = simulate_log(TRAJECTORY, 10.0, "L1", force_noise=0.0, position_noise=0.0, position_resolution=0.0, sample_time=0.02)
     s = DynamicSamples(truth["t"], truth["q"], truth["q_dot"], truth["q_ddot"], truth["tau"])
-    res = identify_dynamics(s, variant="model_2", weighting="none")
+    res = identify_dynamics(s, "L1", variant="model_2", weighting="none")
     reg = DynamicRegressor("L1", "model_2")
     np.testing.assert_allclose(res.theta, reg.theta_of(), rtol=EXACT_RELATIVE_TOLERANCE)
     assert res.success and res.status == "optimal"
@@ -167,7 +167,7 @@ def test_tcp_position_log_gives_the_same_parameters(noisy_log, regressor):
     log, _ = noisy_log
     T = regressor.model.kinematics.fk(log.q)
     tcp_log = MotionLog(t=log.t, tau=log.tau, T=T)
-    res = identify_dynamics(preprocess_log(tcp_log), variant="model_2")
+    res = identify_dynamics(preprocess_log(tcp_log), "L1", variant="model_2")
     assert tcp_log.coordinates == "tcp"
     assert np.all(res.z_scores(regressor.theta_of()) <= Z_LIMIT)
 
@@ -176,7 +176,7 @@ def test_stribeck_term_shows_as_low_speed_residual(regressor):
     """A Stribeck term the model lacks (40 N, v_s = 0.02 m/s) leaves the parameters within
     3 std (rows below 0.05 m/s are not fitted) and a residual at 0.02-0.05 m/s far above
     the one at high speed -- the low-speed residual of Dressler (2012), ch. 6.2."""
-    log, _ = simulate_log(TRAJECTORY, 30.0, force_noise=FORCE_NOISE_N, stribeck=StribeckTerm(), seed=3)
+    log, _ = simulate_log(TRAJECTORY, 30.0, "L1", force_noise=FORCE_NOISE_N, stribeck=StribeckTerm(), seed=3)
     res = identify_dynamics(preprocess_log(log), regressor=regressor)
     assert np.all(res.z_scores(regressor.theta_of()) <= Z_LIMIT)
     low = next(b for b in res.residual_by_speed if b["v_min"] == 0.02)["rms"]
@@ -189,7 +189,7 @@ def test_table_6_3_rows_have_the_thesis_layout(noisy_log, reference):
     from Table 6.1) and 0 for model 1's viscous friction."""
     s = preprocess_log(noisy_log[0])
     for v in ("model_1", "model_2", "model_3", "model_4"):
-        row = identify_dynamics(s, variant=v).table_6_3_row()
+        row = identify_dynamics(s, "L1", variant=v).table_6_3_row()
         ref = np.array(reference["table_6_3"][v], dtype=float)
         np.testing.assert_array_equal(np.isnan(row), np.isnan(ref))
         assert len(row) == len(TABLE_6_3_COLUMNS)
@@ -203,8 +203,8 @@ def test_link_masses_are_poorly_identifiable(noisy_log):
     column; in motion the pivoted QR puts the m_a last, their std is several times that of
     the cart masses of model 2, and adding them inflates the std of m_p tenfold."""
     s = preprocess_log(noisy_log[0])
-    res = identify_dynamics(s, variant="full")
-    base = identify_dynamics(s, variant="model_2")
+    res = identify_dynamics(s, "L1", variant="full")
+    base = identify_dynamics(s, "L1", variant="model_2")
     std = dict(zip(res.names, res.std))
     std2 = dict(zip(base.names, base.std))
     assert min(std[f"m_a{i}"] for i in (1, 2, 3)) > 3 * max(std2[f"m_c{i}"] for i in (1, 2, 3))
@@ -231,8 +231,8 @@ def test_rank_deficient_regressor_raises_model_error_or_gives_base_parameters():
     tau = GantryTau3Dynamics("L1").inverse_dynamics(T, zero, zero)
     s = DynamicSamples(np.arange(60) * 0.1, T, zero, zero, tau, coordinates="tcp")
     with pytest.raises(ModelError, match=r"rank-deficient \(rank 4 of 10\): f_c1 \(does not affect"):
-        identify_dynamics(s, variant="model_2", min_speed=0.0)
-    res = identify_dynamics(s, variant="model_2", min_speed=0.0, rank_deficient="base")
+        identify_dynamics(s, "L1", variant="model_2", min_speed=0.0)
+    res = identify_dynamics(s, "L1", variant="model_2", min_speed=0.0, rank_deficient="base")
     assert not res.identifiability.full_rank
     assert np.all(np.isinf(res.std[4:])) and np.all(np.isfinite(res.std[:4]))
 
@@ -303,7 +303,7 @@ def test_bad_preprocess_input(case, call, match):
 
 
 def _samples():
-    return preprocess_log(simulate_log(TRAJECTORY, 6.0, seed=0)[0])
+    return preprocess_log(simulate_log(TRAJECTORY, 6.0, "L1", seed=0)[0])
 
 
 BAD_IDENTIFY = [
@@ -320,7 +320,14 @@ BAD_IDENTIFY = [
 def test_bad_identify_options(case, kwargs, match):
     """Invalid identification options give an InputError naming the argument."""
     with pytest.raises(InputError, match=match):
-        identify_dynamics(_samples(), **kwargs)
+        identify_dynamics(_samples(), "L1", **kwargs)
+
+
+def test_parameters_or_regressor_required():
+    """Without a parameter set and without a prepared regressor there is no model to fit:
+    an InputError naming ``parameters`` (no robot is assumed)."""
+    with pytest.raises(InputError, match="parameters: expected a parameter set"):
+        identify_dynamics(_samples())
 
 
 def test_samples_must_be_dynamic_samples():
@@ -399,8 +406,8 @@ def test_two_direction_runs_separate_gravity_and_asymmetric_friction():
     recovers f_c+-, f_v+- of Table 6.1 and the accumulated mass (9.13 kg for the L1 set)
     within 3 std."""
     robot = load_parameters("L1")
-    data = simulate_constant_velocity(POSES, SPEEDS, force_noise=2.0, seed=0)
-    fit = two_direction_friction(data)
+    data = simulate_constant_velocity(POSES, SPEEDS, "L1", force_noise=2.0, seed=0)
+    fit = two_direction_friction(data, "L1")
     a = robot.dynamics.asymmetric
     for key in ("f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"):
         z = np.abs(getattr(fit, key) - getattr(a, key)) / fit.std[key]
@@ -413,7 +420,7 @@ def test_one_direction_fit_absorbs_gravity_into_coulomb_friction():
     """Fig. 6.2 ambiguity: with positive runs only, a straight line puts J^T G into f_c+;
     subtracting the model's gravity with the true accumulated mass recovers Table 6.1."""
     robot = load_parameters("L1")
-    data = simulate_constant_velocity(POSES[:1], SPEEDS, force_noise=2.0, directions="positive", seed=1)
+    data = simulate_constant_velocity(POSES[:1], SPEEDS, "L1", force_noise=2.0, directions="positive", seed=1)
     naive = fit_friction(data)
     G = accumulated_gravity_forces(POSES[0], "L1", robot.dynamics.m_p)
     np.testing.assert_allclose(naive.f_c_plus - robot.dynamics.asymmetric.f_c_plus, G, atol=Z_LIMIT * naive.std["f_c_plus"].max())
@@ -426,19 +433,19 @@ def test_one_direction_fit_absorbs_gravity_into_coulomb_friction():
 def test_two_direction_pairs_runs_with_measured_speeds():
     """Measured velocities differ a little between the + and - runs (1 %): runs are paired
     by the closest speed and the friction estimate is unchanged within its std."""
-    data = simulate_constant_velocity(POSES, SPEEDS, force_noise=2.0, seed=0)
-    ref = two_direction_friction(data)
+    data = simulate_constant_velocity(POSES, SPEEDS, "L1", force_noise=2.0, seed=0)
+    ref = two_direction_friction(data, "L1")
     rng = np.random.default_rng(5)
     noisy = ConstantVelocityData(data.T, data.q_dot * (1 + 0.01 * rng.uniform(-1, 1, (len(data.pose), 1))), data.tau, data.pose)
-    fit = two_direction_friction(noisy)
+    fit = two_direction_friction(noisy, "L1")
     assert np.all(np.abs(fit.f_c_plus - ref.f_c_plus) <= Z_LIMIT * ref.std["f_c_plus"])
 
 
 def test_two_direction_needs_partner_runs():
     """A run without its opposite-direction partner is named in an InputError."""
-    data = simulate_constant_velocity(POSES[:1], SPEEDS[:3], directions="positive")
+    data = simulate_constant_velocity(POSES[:1], SPEEDS[:3], "L1", directions="positive")
     with pytest.raises(InputError, match="needs a partner run in the opposite direction"):
-        two_direction_friction(data)
+        two_direction_friction(data, "L1")
 
 
 def test_constant_velocity_data_validates_lengths():
