@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import scipy.signal
 
+from gtmodel._arrays import positive_int
 from gtmodel.calibration.measurements import _parse_rows, _read_table, _write_csv
 from gtmodel.errors import InputError
 
@@ -261,8 +262,7 @@ class DynamicSamples:
     smoother: Any = None
 
     def __post_init__(self) -> None:
-        if isinstance(self.decimate, bool) or not isinstance(self.decimate, (int, np.integer)) or self.decimate < 1:
-            raise InputError(f"decimate: expected a positive integer, got {self.decimate!r}")
+        self.decimate = positive_int(self.decimate, "decimate")
         if self.smoother is not None and not callable(self.smoother):
             raise InputError("smoother: expected a callable filter (array (N, ...) -> array (N, ...)) or None")
         if self.coordinates not in ("cart", "tcp"):
@@ -371,8 +371,7 @@ def preprocess_log(
         raise InputError(f"order: expected an integer in 1..10 (>= 2 for savgol), got {order!r}")
     if decimate is None:
         decimate = max(1, int(round(fs / cutoff)))
-    if isinstance(decimate, bool) or not isinstance(decimate, (int, np.integer)) or decimate < 1:
-        raise InputError(f"decimate: expected a positive integer, got {decimate!r}")
+    decimate = positive_int(decimate, "decimate")
     if trim is None:
         trim = int(math.ceil(2 * fs / cutoff))
     if isinstance(trim, bool) or not isinstance(trim, (int, np.integer)) or trim < 0:
