@@ -113,24 +113,25 @@ def test_cart_coordinates_regressor_equals_tcp_regressor(motion, regressor):
     np.testing.assert_allclose(vc, vt, atol=1e-12)
 
 
-def test_regressor_is_the_jacobian_of_the_forces(motion, regressor):
+@pytest.mark.parametrize("j", [0, 4, 9], ids=["m_p", "f_c1", "f_v3"])
+def test_regressor_is_the_jacobian_of_the_forces(motion, regressor, j):
     """Linearity in theta: tau(theta + d e_j) - tau(theta) = d Y[:, j] (finite difference)."""
     T, Td, Tdd = motion
     th = regressor.theta_of()
     Y, _, _ = regressor.evaluate(T, Td, Tdd, "tcp")
-    for j in (0, 4, 9):
-        e = np.zeros_like(th)
-        e[j] = 1.0
-        diff = regressor.forces(th + e, T, Td, Tdd, "tcp") - regressor.forces(th, T, Td, Tdd, "tcp")
-        np.testing.assert_allclose(diff, Y[:, :, j], atol=1e-8)
+    e = np.zeros_like(th)
+    e[j] = 1.0
+    diff = regressor.forces(th + e, T, Td, Tdd, "tcp") - regressor.forces(th, T, Td, Tdd, "tcp")
+    np.testing.assert_allclose(diff, Y[:, :, j], atol=1e-8)
 
 
-def test_table_6_3_constant_matches_the_reference_file(reference):
+@pytest.mark.parametrize("model", sorted(THESIS_TABLE_6_3))
+def test_table_6_3_constant_matches_the_reference_file(reference, model):
     """THESIS_TABLE_6_3 reproduces the reference figures (nan where the thesis took Table 6.1)."""
     t = reference["table_6_3"]
-    for k, v in THESIS_TABLE_6_3.items():
-        np.testing.assert_array_equal(np.array(v["row"]), np.array(t[k], dtype=float))
-        np.testing.assert_array_equal(np.array(v["residual"]), np.array(t["residual_1e7_Nm2"][k]))
+    v = THESIS_TABLE_6_3[model]
+    np.testing.assert_array_equal(np.array(v["row"]), np.array(t[model], dtype=float))
+    np.testing.assert_array_equal(np.array(v["residual"]), np.array(t["residual_1e7_Nm2"][model]))
 
 
 # ----------------------------------------------------------------------------- identification
@@ -184,17 +185,17 @@ def test_stribeck_term_shows_as_low_speed_residual(regressor):
     assert np.all(np.array(low) > 2.5 * np.array(high))
 
 
-def test_table_6_3_rows_have_the_thesis_layout(noisy_log, reference):
+@pytest.mark.parametrize("v", ["model_1", "model_2", "model_3", "model_4"])
+def test_table_6_3_rows_have_the_thesis_layout(noisy_log, reference, v):
     """table_6_3_row puts nan exactly where the thesis' Table 6.3 has nan (friction taken
     from Table 6.1) and 0 for model 1's viscous friction."""
     s = preprocess_log(noisy_log[0])
-    for v in ("model_1", "model_2", "model_3", "model_4"):
-        row = identify_dynamics(s, "L1", variant=v).table_6_3_row()
-        ref = np.array(reference["table_6_3"][v], dtype=float)
-        np.testing.assert_array_equal(np.isnan(row), np.isnan(ref))
-        assert len(row) == len(TABLE_6_3_COLUMNS)
-        if v == "model_1":
-            np.testing.assert_array_equal(row[7:], 0.0)
+    row = identify_dynamics(s, "L1", variant=v).table_6_3_row()
+    ref = np.array(reference["table_6_3"][v], dtype=float)
+    np.testing.assert_array_equal(np.isnan(row), np.isnan(ref))
+    assert len(row) == len(TABLE_6_3_COLUMNS)
+    if v == "model_1":
+        np.testing.assert_array_equal(row[7:], 0.0)
 
 
 def test_link_masses_are_poorly_identifiable(noisy_log):
@@ -212,13 +213,17 @@ def test_link_masses_are_poorly_identifiable(noisy_log):
     weakest = {d["parameter"] for d in res.near_dependencies[:2]}
     assert weakest <= {"m_a1", "m_a2", "m_a3", "m_p"} and weakest & {"m_a1", "m_a2", "m_a3"}
     assert res.near_dependencies[0]["r_ratio"] < 0.05
+
+
+@pytest.mark.parametrize("i", [1, 2, 3])
+def test_link_mass_column_is_half_the_plate_column_at_rest(i):
+    """At rest the m_a,i column of Y is 1/2 of the m_p column (eq. 6.7: m_p + sum m_a/2 in G)."""
     reg = DynamicRegressor("L1", "full")
     q, _, _ = TRAJECTORY.evaluate(np.linspace(0, 10, 50))
     Y0, _, _ = reg.evaluate(q, np.zeros_like(q), np.zeros_like(q))
-    for i in (1, 2, 3):
-        dep = column_dependency(Y0, reg.names, f"m_a{i}", on=("m_p",))
-        assert dep["coefficients"]["m_p"] == pytest.approx(0.5, abs=0.01)
-        assert dep["relative_residual"] < 0.01
+    dep = column_dependency(Y0, reg.names, f"m_a{i}", on=("m_p",))
+    assert dep["coefficients"]["m_p"] == pytest.approx(0.5, abs=0.01)
+    assert dep["relative_residual"] < 0.01
 
 
 def test_rank_deficient_regressor_raises_model_error_or_gives_base_parameters():
@@ -401,17 +406,27 @@ def test_gravity_forces_balance_along_the_guideways(reference):
     assert np.all(G[:, 0] < 0) and np.all(G[:, 2] > 0)
 
 
-def test_two_direction_runs_separate_gravity_and_asymmetric_friction():
-    """Runs in both directions at five poses (Table 6.1 friction, 2 N noise): the estimator
-    recovers f_c+-, f_v+- of Table 6.1 and the accumulated mass (9.13 kg for the L1 set)
-    within 3 std."""
-    robot = load_parameters("L1")
+@pytest.fixture(scope="module")
+def two_direction_fit():
     data = simulate_constant_velocity(POSES, SPEEDS, "L1", force_noise=2.0, seed=0)
-    fit = two_direction_friction(data, "L1")
-    a = robot.dynamics.asymmetric
-    for key in ("f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"):
-        z = np.abs(getattr(fit, key) - getattr(a, key)) / fit.std[key]
-        assert np.all(z <= Z_LIMIT), (key, z)
+    return two_direction_friction(data, "L1")
+
+
+@pytest.mark.parametrize("key", ["f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"])
+def test_two_direction_runs_recover_the_asymmetric_friction(two_direction_fit, key):
+    """Runs in both directions at five poses (Table 6.1 friction, 2 N noise): the estimator
+    recovers f_c+-, f_v+- of Table 6.1 within 3 std."""
+    fit = two_direction_fit
+    a = load_parameters("L1").dynamics.asymmetric
+    z = np.abs(getattr(fit, key) - getattr(a, key)) / fit.std[key]
+    assert np.all(z <= Z_LIMIT), (key, z)
+
+
+def test_two_direction_runs_separate_gravity_and_asymmetric_friction(two_direction_fit):
+    """Runs in both directions at five poses: the accumulated mass (9.13 kg for the L1 set)
+    within 3 std, and the gravity of the model with that mass."""
+    robot = load_parameters("L1")
+    fit = two_direction_fit
     assert abs(fit.accumulated_mass - robot.dynamics.m_p) <= Z_LIMIT * fit.accumulated_mass_std
     np.testing.assert_allclose(fit.gravity, accumulated_gravity_forces(POSES, "L1", fit.accumulated_mass), atol=1e-9)
 
@@ -483,12 +498,11 @@ def test_least_squares_equals_numpy_lstsq(noisy_log, regressor, weighting):
     fitted = np.abs(v) >= res.info["min_speed"]
     ss = [np.sum(r_all[fitted[:, i], i] ** 2) for i in range(3)]
     np.testing.assert_allclose(res.residual_ss, ss, rtol=1e-12)
-    for row in res.residual_by_speed:
-        for i in range(3):
-            sel = (np.abs(v[:, i]) >= row["v_min"]) & (np.abs(v[:, i]) < row["v_max"])
-            assert row["n"][i] == int(sel.sum())
-            if sel.any():
-                assert row["rms"][i] == pytest.approx(math.sqrt(np.mean(r_all[sel, i] ** 2)), rel=1e-12)
+    sel = [[(np.abs(v[:, i]) >= row["v_min"]) & (np.abs(v[:, i]) < row["v_max"]) for i in range(3)] for row in res.residual_by_speed]
+    counts = np.array([[int(s_i.sum()) for s_i in s_b] for s_b in sel])
+    rms = np.array([[math.sqrt(np.mean(r_all[s_i, i] ** 2)) if s_i.any() else math.nan for i, s_i in enumerate(s_b)] for s_b in sel])
+    np.testing.assert_array_equal(np.array([row["n"] for row in res.residual_by_speed]), counts)
+    np.testing.assert_allclose(np.array([row["rms"] for row in res.residual_by_speed]), rms, rtol=1e-12, equal_nan=True)
 
 
 def test_actuator_weighting_equals_lstsq_on_weighted_rows(noisy_log, regressor):
