@@ -43,13 +43,13 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from gtmodel.calibration.dynamic_identification import (  # noqa: E402
+from gtmodel.calibration.identification import (  # noqa: E402
     DynamicRegressor,
+    FourierTrajectory,
     identify_dynamics,
     preprocess_log,
     simulate_log,
 )
-from gtmodel.calibration.excitation import FourierTrajectory  # noqa: E402
 
 AGREEMENT = 1e-10  # relative, per parameter
 MIN_SPEED = 0.05  # m/s, rows fitted
@@ -94,7 +94,7 @@ def main() -> None:
 
     tr = FourierTrajectory.from_coefficients(COEFFICIENTS, 4, 10.0)
     t0 = time.perf_counter()
-    log, _ = simulate_log(tr, (n - 1) * 0.004, force_noise=5.0, seed=0)
+    log, _ = simulate_log(tr, (n - 1) * 0.004, "L1", force_noise=5.0, seed=0)
     print(f"simulated log: {log.n_samples} samples (4 ms) in {time.perf_counter() - t0:.2f} s")
     t_pre, samples = timed(lambda: preprocess_log(log, cutoff=10.0, decimate=1, trim=50), args.repeat)
     N = samples.n_samples

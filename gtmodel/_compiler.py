@@ -2,7 +2,7 @@
 
 Base-layer utilities (no gtmodel imports above :mod:`gtmodel.errors`), used by the C code
 generator (:mod:`gtmodel.codegen.build`) and by numeric code that evaluates a CasADi graph
-on many samples (:mod:`gtmodel.calibration.dynamic_identification`). The compiled code
+on many samples (:mod:`gtmodel.calibration.identification`). The compiled code
 is generated from the one CasADi graph by :class:`casadi.CodeGenerator`; it is never a
 second model.
 """

@@ -22,7 +22,7 @@ from gtmodel.calibration.elasto_geometric import (
     compliant_measurements,
     elasto_geometric_study,
 )
-from gtmodel.calibration.dynamic_identification import (
+from gtmodel.calibration.identification import (
     DynamicIdentificationResult,
     DynamicRegressor,
     MotionLog,
@@ -32,7 +32,7 @@ from gtmodel.calibration.dynamic_identification import (
     simulate_log,
 )
 from gtmodel.calibration.evaluation import AccuracyReport, evaluate, parameter_sensitivity, tcp_errors
-from gtmodel.calibration.excitation import FourierTrajectory, design_excitation
+from gtmodel.calibration.identification import FourierTrajectory, design_excitation
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian
 
 from gtmodel.calibration.measurements import (
@@ -54,7 +54,7 @@ from gtmodel.calibration.synthetic import (
     synthetic_cart_measurements,
     synthetic_measurements,
 )
-from gtmodel.calibration.system_identification import (
+from gtmodel.calibration.identification import (
     ActuatorIdentification,
     StateSpaceIdentification,
     identify_actuator,

@@ -48,6 +48,7 @@ import scipy.optimize
 
 from gtmodel.errors import InputError
 from gtmodel.robots.serial import SerialArm
+from gtmodel.status import Status, StatusResult
 
 __all__ = [
     "TABLE_1_POSES_DEG",
@@ -205,16 +206,15 @@ class DeflectionNoise:
 
 
 @dataclass
-class JointStiffnessResult:
+class JointStiffnessResult(StatusResult):
     """Result of a joint-stiffness calibration (status, never None).
 
     Parameters
     ----------
-    success : bool
-        True if the regressor has full rank and every compliance is positive.
-    status : str
-        ``"optimal"``, or ``"error"`` (rank-deficient regressor or a non-positive
-        compliance, see ``message``).
+    status : Status
+        ``optimal`` (``success``: the regressor has full rank and every compliance is
+        positive), or ``error`` (rank-deficient regressor or a non-positive compliance,
+        see ``message``).
     message : str
         What happened, naming the offending joints.
     method : str
@@ -245,9 +245,6 @@ class JointStiffnessResult:
         Method-specific details (DPP: ``condition_step1``, ``condition_step2``).
     """
 
-    success: bool
-    status: str
-    message: str
     method: str
     k_theta: np.ndarray
     compliance: np.ndarray
@@ -497,8 +494,7 @@ def _result(method: str, c: np.ndarray, std: np.ndarray, cond: float, problems: 
     if problems:
         _log.warning("joint stiffness %s: %s", method, msg)
     return JointStiffnessResult(
-        success=ok,
-        status="optimal" if ok else "error",
+        status=Status.OPTIMAL if ok else Status.ERROR,
         message=msg,
         method=method,
         k_theta=k,

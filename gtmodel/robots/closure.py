@@ -186,7 +186,7 @@ class ClosureModel(ABC):
 
         The actuator values ``q``. A model with further known per-pose inputs overrides
         this (the elasto-geometric closure appends the plate load). The calibration
-        (:class:`~gtmodel.calibration.calibrate.CalibrationProblem`) and the evaluation
+        (:class:`~gtmodel.calibration.kinematic.CalibrationProblem`) and the evaluation
         (:func:`~gtmodel.calibration.evaluation.evaluate`, eq. 5.5) call it.
 
         Parameters

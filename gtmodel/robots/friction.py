@@ -132,7 +132,7 @@ def friction_force(q_dot: ca.SX | ca.MX, dynamics: DynamicParameters, form: str 
 
 def _coefficients(x):
     """Friction coefficients as a CasADi column: numbers become ``DM``; symbols (``SX``/``MX``,
-    e.g. the parameters of a regressor, :mod:`gtmodel.calibration.dynamic_identification`)
+    e.g. the parameters of a regressor, :mod:`gtmodel.calibration.identification`)
     pass through unchanged."""
     if isinstance(x, (ca.SX, ca.MX)):
         return x

@@ -81,32 +81,47 @@ def loads():
     return np.radians(TABLE_1_POSES_DEG)[idx], F
 
 
-def test_tables_match_reference():
-    """Table 1 poses and Table 2 stiffnesses equal the transcribed reference (degrees -> rad at the boundary)."""
+#: The three calibrations of Table 2: CP (rotation weight 1 and 10) and DPP.
+CALIBRATIONS = {
+    "CP": lambda arm, data, **kw: calibrate_cp(arm, data, **kw),
+    "CP_x10": lambda arm, data, **kw: calibrate_cp(arm, data, rotation_weight=10.0, **kw),
+    "DPP": lambda arm, data, **kw: calibrate_dpp(arm, data, **kw),
+}
+
+
+def test_table_1_matches_reference():
+    """Table 1 poses equal the transcribed reference (degrees -> rad at the boundary)."""
     ref = tomllib.loads((SHARED_REFERENCE / "serial_kr500.toml").read_text())["static_stiffness"]
     np.testing.assert_array_equal(TABLE_1_POSES_DEG, ref["calibration_poses_deg"]["theta"])
-    for key in ("CP", "DPP", "CP_rotations_scaled_x10"):
-        np.testing.assert_allclose(TABLE_2_K_THETA[key], np.array(ref[key]) * 1e6, rtol=1e-15)
 
 
+@pytest.mark.parametrize("key", ["CP", "DPP", "CP_rotations_scaled_x10"])
+def test_table_2_matches_reference(key):
+    """Table 2 stiffnesses equal the transcribed reference (MN m/rad -> N m/rad)."""
+    ref = tomllib.loads((SHARED_REFERENCE / "serial_kr500.toml").read_text())["static_stiffness"]
+    np.testing.assert_allclose(TABLE_2_K_THETA[key], np.array(ref[key]) * 1e6, rtol=1e-15)
+
+
+@pytest.mark.parametrize("method", list(CALIBRATIONS))
 @pytest.mark.parametrize("table", ["CP", "DPP", "CP_rotations_scaled_x10"])
-def test_exact_data_round_trip(arm, loads, table):
+def test_exact_data_round_trip(arm, loads, table, method):
     """Noise-free data: CP (weights 1 and 10) and DPP recover the generating Table 2 values."""
     th, F = loads
     k = TABLE_2_K_THETA[table]
     data = synthetic_deflections(arm, th, F, k, noise=DeflectionNoise(0, 0, 0))
-    for res in (calibrate_cp(arm, data), calibrate_cp(arm, data, rotation_weight=10.0), calibrate_dpp(arm, data)):
-        assert res.success and res.status == "optimal", res.message
-        np.testing.assert_allclose(res.k_theta, k, rtol=EXACT_RELATIVE)
+    res = CALIBRATIONS[method](arm, data)
+    assert res.success and res.status == "optimal", res.message
+    np.testing.assert_allclose(res.k_theta, k, rtol=EXACT_RELATIVE)
 
 
-def test_positive_bounds_round_trip(arm, loads):
+@pytest.mark.parametrize("method", ["CP", "DPP"])
+def test_positive_bounds_round_trip(arm, loads, method):
     """bounds='positive' (scipy lsq_linear, c >= 0) returns the truth on exact data too."""
     th, F = loads
     data = synthetic_deflections(arm, th, F, K_TRUE, noise=DeflectionNoise(0, 0, 0))
-    for res in (calibrate_cp(arm, data, bounds="positive"), calibrate_dpp(arm, data, bounds="positive")):
-        assert res.success
-        np.testing.assert_allclose(res.k_theta, K_TRUE, rtol=1e-6)
+    res = CALIBRATIONS[method](arm, data, bounds="positive")
+    assert res.success
+    np.testing.assert_allclose(res.k_theta, K_TRUE, rtol=1e-6)
 
 
 @pytest.fixture(scope="module")
@@ -209,7 +224,8 @@ def test_table_2_scenario_dpp_is_not_closer_to_truth(table_2_study):
     assert np.all(dpp[:2] > cp1[:2]), (cp1, dpp)
 
 
-def test_residual_in_mm_and_rad_hides_the_mechanism(table_2_study):
+@pytest.mark.parametrize("scale", [1, 10], ids=["mm_rad", "mm_rad_x10"])
+def test_residual_in_mm_and_rad_hides_the_mechanism(table_2_study, scale):
     """Same data, CP residual in mm and rad (rotation weight 1e-3 in SI) and its x10: 30 seeds.
 
     Reference: with rotations weighing 1000x less the fit is translation-only, and the
@@ -218,12 +234,13 @@ def test_residual_in_mm_and_rad_hides_the_mechanism(table_2_study):
     pattern needs a residual in which rotations weigh like m against rad.
     """
     mm_rad = ROTATION_WEIGHT_FOR_UNITS["mm_rad"]
-    for w in (mm_rad, 10 * mm_rad):
-        ratio = np.median(table_2_study[f"CP w={w:g}"], axis=0)
-        assert np.all(np.abs(ratio - 1) < UNIT_WEIGHT_BIAS), (w, ratio)
+    w = scale * mm_rad
+    ratio = np.median(table_2_study[f"CP w={w:g}"], axis=0)
+    assert np.all(np.abs(ratio - 1) < UNIT_WEIGHT_BIAS), (w, ratio)
 
 
-def test_complementary_stiffness_does_not_explain_table_2(arm):
+@pytest.mark.parametrize("method", list(CALIBRATIONS))
+def test_complementary_stiffness_does_not_explain_table_2(arm, method):
     """Truth with K_c = d(J^T F)/d theta of eq. (2) at 5 kN / 1 kN m loads, noise-free.
 
     Reference: exact data of the model with K_c kept; the calibrations (eq. (3), K_c
@@ -231,21 +248,27 @@ def test_complementary_stiffness_does_not_explain_table_2(arm):
     of Table 2: the well-conditioned poses make K_c negligible, as the thesis assumed.
     """
     d = table_2_scenario(arm, 0, None, noise=DeflectionNoise(0, 0, 0), force=5000.0, moment=1000.0, complementary=True)
-    for res in (calibrate_cp(arm, d), calibrate_cp(arm, d, rotation_weight=10.0), calibrate_dpp(arm, d)):
-        assert np.all(np.abs(res.k_theta / K_TRUE - 1) < KC_BIAS), res.k_theta / K_TRUE
+    res = CALIBRATIONS[method](arm, d)
+    assert np.all(np.abs(res.k_theta / K_TRUE - 1) < KC_BIAS), res.k_theta / K_TRUE
 
 
-def test_force_noise_dilution_is_small(arm):
+@pytest.fixture(scope="module")
+def force_noise_study(arm):
+    noise = DeflectionNoise(force_relative_std=0.10)
+    return cp_dpp_study(arm, lambda s: table_2_scenario(arm, s, None, noise=noise), K_TRUE, seeds=N_SEEDS, rotation_weights=(1.0,))
+
+
+@pytest.mark.parametrize("method", ["CP w=1", "DPP"])
+def test_force_noise_dilution_is_small(force_noise_study, method):
     """Errors in variables: 10 % relative force noise on the regressor, 30 seeds.
 
     Reference: regression dilution biases compliances towards zero by about
     1 / (1 + 0.1^2), i.e. stiffness up by ~1 %: the medians stay within FORCE_NOISE_BIAS,
     far below Table 2's CP/DPP gap.
     """
-    noise = DeflectionNoise(force_relative_std=0.10)
-    study = cp_dpp_study(arm, lambda s: table_2_scenario(arm, s, None, noise=noise), K_TRUE, seeds=N_SEEDS, rotation_weights=(1.0,))
-    for ratios in study.values():
-        assert np.all(np.abs(np.median(ratios, axis=0) - 1) < FORCE_NOISE_BIAS), np.median(ratios, axis=0)
+    assert set(force_noise_study) == {"CP w=1", "DPP"}
+    ratios = force_noise_study[method]
+    assert np.all(np.abs(np.median(ratios, axis=0) - 1) < FORCE_NOISE_BIAS), np.median(ratios, axis=0)
 
 
 @pytest.mark.parametrize("side, overestimates", [(+1.0, True), (-1.0, False)], ids=["+x", "-x"])

@@ -37,7 +37,7 @@ from gtmodel.calibration import (
     read_motion_log,
     simulate_log,
 )
-from gtmodel.calibration.dynamic_identification import THESIS_TABLE_6_3, VARIANTS, StribeckTerm
+from gtmodel.calibration.identification import THESIS_TABLE_6_3, VARIANTS, StribeckTerm
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.references import robot_parameters

@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.calibration.dynamic_identification import DynamicRegressor
-from gtmodel.calibration.excitation import FourierTrajectory, design_excitation, regressor_condition
+from gtmodel.calibration.identification import DynamicRegressor, FourierTrajectory, design_excitation, regressor_condition
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import load_parameters
@@ -17,11 +16,13 @@ DERIVATIVE_TOLERANCE = 1e-4
 CONDITION_IMPROVEMENT = 2.0
 #: Limits checked on a 10x finer grid than the NLP's: allowed violation (m, m/s, m/s^2, cos).
 VIOLATION_TOLERANCE = 0.02
+#: TCP position in the L1 workspace about which the excitation is designed [m].
+T_CENTER_L1 = (0.0, 2.9, -0.5)
 
 
 @pytest.fixture(scope="module")
 def design():
-    return design_excitation("L1", "model_2", harmonics=3, period=8.0, n_grid=40, seed=0, max_iter=80)
+    return design_excitation("L1", "model_2", T_center=T_CENTER_L1, harmonics=3, period=8.0, n_grid=40, seed=0, max_iter=80)
 
 
 def test_fourier_derivatives_match_finite_differences():
@@ -80,7 +81,7 @@ BAD = [
 def test_bad_design_input(case, kwargs, err, match):
     """Invalid design options give an error naming the argument before any solve."""
     with pytest.raises(err, match=match):
-        design_excitation(**kwargs)
+        design_excitation(**{"parameters": "L1", "T_center": T_CENTER_L1, **kwargs})
 
 
 @pytest.mark.parametrize("args, match", [

@@ -10,13 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gtmodel.calibration.dynamic_identification import (
+from gtmodel.calibration.identification import (
     TABLE_6_3_COLUMNS,
     THESIS_TABLE_6_3,
     VARIANTS,
     ConstantVelocityData,
     DynamicRegressor,
     DynamicSamples,
+    FourierTrajectory,
     MotionLog,
     StribeckTerm,
     accumulated_gravity_forces,
@@ -30,12 +31,11 @@ from gtmodel.calibration.dynamic_identification import (
     subtract_gravity,
     two_direction_friction,
 )
-from gtmodel.calibration.excitation import FourierTrajectory
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.parameters import load_parameters
 
-REFERENCE = Path(__file__).parents[1] / "reference" / "gantry_tau_L1.toml"
+REFERENCE = Path(__file__).parents[2] / "reference" / "gantry_tau_L1.toml"
 
 #: Y theta + tau0 against the model's inverse dynamics: round-off of the same graph [N].
 FORCE_TOLERANCE_N = 1e-8
@@ -87,7 +87,7 @@ def motion():
 
 @pytest.fixture(scope="module")
 def noisy_log():
-    log, truth = simulate_log(TRAJECTORY, 30.0, force_noise=FORCE_NOISE_N, seed=3)
+    log, truth = simulate_log(TRAJECTORY, 30.0, "L1", force_noise=FORCE_NOISE_N, seed=3)
     return log, truth
 
 
@@ -113,33 +113,34 @@ def test_cart_coordinates_regressor_equals_tcp_regressor(motion, regressor):
     np.testing.assert_allclose(vc, vt, atol=1e-12)
 
 
-def test_regressor_is_the_jacobian_of_the_forces(motion, regressor):
+@pytest.mark.parametrize("j", [0, 4, 9], ids=["m_p", "f_c1", "f_v3"])
+def test_regressor_is_the_jacobian_of_the_forces(motion, regressor, j):
     """Linearity in theta: tau(theta + d e_j) - tau(theta) = d Y[:, j] (finite difference)."""
     T, Td, Tdd = motion
     th = regressor.theta_of()
     Y, _, _ = regressor.evaluate(T, Td, Tdd, "tcp")
-    for j in (0, 4, 9):
-        e = np.zeros_like(th)
-        e[j] = 1.0
-        diff = regressor.forces(th + e, T, Td, Tdd, "tcp") - regressor.forces(th, T, Td, Tdd, "tcp")
-        np.testing.assert_allclose(diff, Y[:, :, j], atol=1e-8)
+    e = np.zeros_like(th)
+    e[j] = 1.0
+    diff = regressor.forces(th + e, T, Td, Tdd, "tcp") - regressor.forces(th, T, Td, Tdd, "tcp")
+    np.testing.assert_allclose(diff, Y[:, :, j], atol=1e-8)
 
 
-def test_table_6_3_constant_matches_the_reference_file(reference):
+@pytest.mark.parametrize("model", sorted(THESIS_TABLE_6_3))
+def test_table_6_3_constant_matches_the_reference_file(reference, model):
     """THESIS_TABLE_6_3 reproduces the reference figures (nan where the thesis took Table 6.1)."""
     t = reference["table_6_3"]
-    for k, v in THESIS_TABLE_6_3.items():
-        np.testing.assert_array_equal(np.array(v["row"]), np.array(t[k], dtype=float))
-        np.testing.assert_array_equal(np.array(v["residual"]), np.array(t["residual_1e7_Nm2"][k]))
+    v = THESIS_TABLE_6_3[model]
+    np.testing.assert_array_equal(np.array(v["row"]), np.array(t[model], dtype=float))
+    np.testing.assert_array_equal(np.array(v["residual"]), np.array(t["residual_1e7_Nm2"][model]))
 
 
 # ----------------------------------------------------------------------------- identification
 def test_noise_free_identification_recovers_the_parameters_exactly():
     """Exact motion and forces (no noise, no filter): least squares returns the generating
     Table 6.3 model 2 parameters to round-off."""
-    log, truth = simulate_log(TRAJECTORY, 10.0, force_noise=0.0, position_noise=0.0, position_resolution=0.0, sample_time=0.02)
+    log, truth = simulate_log(TRAJECTORY, 10.0, "L1", force_noise=0.0, position_noise=0.0, position_resolution=0.0, sample_time=0.02)
     s = DynamicSamples(truth["t"], truth["q"], truth["q_dot"], truth["q_ddot"], truth["tau"])
-    res = identify_dynamics(s, variant="model_2", weighting="none")
+    res = identify_dynamics(s, "L1", variant="model_2", weighting="none")
     reg = DynamicRegressor("L1", "model_2")
     np.testing.assert_allclose(res.theta, reg.theta_of(), rtol=EXACT_RELATIVE_TOLERANCE)
     assert res.success and res.status == "optimal"
@@ -167,7 +168,7 @@ def test_tcp_position_log_gives_the_same_parameters(noisy_log, regressor):
     log, _ = noisy_log
     T = regressor.model.kinematics.fk(log.q)
     tcp_log = MotionLog(t=log.t, tau=log.tau, T=T)
-    res = identify_dynamics(preprocess_log(tcp_log), variant="model_2")
+    res = identify_dynamics(preprocess_log(tcp_log), "L1", variant="model_2")
     assert tcp_log.coordinates == "tcp"
     assert np.all(res.z_scores(regressor.theta_of()) <= Z_LIMIT)
 
@@ -176,7 +177,7 @@ def test_stribeck_term_shows_as_low_speed_residual(regressor):
     """A Stribeck term the model lacks (40 N, v_s = 0.02 m/s) leaves the parameters within
     3 std (rows below 0.05 m/s are not fitted) and a residual at 0.02-0.05 m/s far above
     the one at high speed -- the low-speed residual of Dressler (2012), ch. 6.2."""
-    log, _ = simulate_log(TRAJECTORY, 30.0, force_noise=FORCE_NOISE_N, stribeck=StribeckTerm(), seed=3)
+    log, _ = simulate_log(TRAJECTORY, 30.0, "L1", force_noise=FORCE_NOISE_N, stribeck=StribeckTerm(), seed=3)
     res = identify_dynamics(preprocess_log(log), regressor=regressor)
     assert np.all(res.z_scores(regressor.theta_of()) <= Z_LIMIT)
     low = next(b for b in res.residual_by_speed if b["v_min"] == 0.02)["rms"]
@@ -184,17 +185,17 @@ def test_stribeck_term_shows_as_low_speed_residual(regressor):
     assert np.all(np.array(low) > 2.5 * np.array(high))
 
 
-def test_table_6_3_rows_have_the_thesis_layout(noisy_log, reference):
+@pytest.mark.parametrize("v", ["model_1", "model_2", "model_3", "model_4"])
+def test_table_6_3_rows_have_the_thesis_layout(noisy_log, reference, v):
     """table_6_3_row puts nan exactly where the thesis' Table 6.3 has nan (friction taken
     from Table 6.1) and 0 for model 1's viscous friction."""
     s = preprocess_log(noisy_log[0])
-    for v in ("model_1", "model_2", "model_3", "model_4"):
-        row = identify_dynamics(s, variant=v).table_6_3_row()
-        ref = np.array(reference["table_6_3"][v], dtype=float)
-        np.testing.assert_array_equal(np.isnan(row), np.isnan(ref))
-        assert len(row) == len(TABLE_6_3_COLUMNS)
-        if v == "model_1":
-            np.testing.assert_array_equal(row[7:], 0.0)
+    row = identify_dynamics(s, "L1", variant=v).table_6_3_row()
+    ref = np.array(reference["table_6_3"][v], dtype=float)
+    np.testing.assert_array_equal(np.isnan(row), np.isnan(ref))
+    assert len(row) == len(TABLE_6_3_COLUMNS)
+    if v == "model_1":
+        np.testing.assert_array_equal(row[7:], 0.0)
 
 
 def test_link_masses_are_poorly_identifiable(noisy_log):
@@ -203,8 +204,8 @@ def test_link_masses_are_poorly_identifiable(noisy_log):
     column; in motion the pivoted QR puts the m_a last, their std is several times that of
     the cart masses of model 2, and adding them inflates the std of m_p tenfold."""
     s = preprocess_log(noisy_log[0])
-    res = identify_dynamics(s, variant="full")
-    base = identify_dynamics(s, variant="model_2")
+    res = identify_dynamics(s, "L1", variant="full")
+    base = identify_dynamics(s, "L1", variant="model_2")
     std = dict(zip(res.names, res.std))
     std2 = dict(zip(base.names, base.std))
     assert min(std[f"m_a{i}"] for i in (1, 2, 3)) > 3 * max(std2[f"m_c{i}"] for i in (1, 2, 3))
@@ -212,13 +213,17 @@ def test_link_masses_are_poorly_identifiable(noisy_log):
     weakest = {d["parameter"] for d in res.near_dependencies[:2]}
     assert weakest <= {"m_a1", "m_a2", "m_a3", "m_p"} and weakest & {"m_a1", "m_a2", "m_a3"}
     assert res.near_dependencies[0]["r_ratio"] < 0.05
+
+
+@pytest.mark.parametrize("i", [1, 2, 3])
+def test_link_mass_column_is_half_the_plate_column_at_rest(i):
+    """At rest the m_a,i column of Y is 1/2 of the m_p column (eq. 6.7: m_p + sum m_a/2 in G)."""
     reg = DynamicRegressor("L1", "full")
     q, _, _ = TRAJECTORY.evaluate(np.linspace(0, 10, 50))
     Y0, _, _ = reg.evaluate(q, np.zeros_like(q), np.zeros_like(q))
-    for i in (1, 2, 3):
-        dep = column_dependency(Y0, reg.names, f"m_a{i}", on=("m_p",))
-        assert dep["coefficients"]["m_p"] == pytest.approx(0.5, abs=0.01)
-        assert dep["relative_residual"] < 0.01
+    dep = column_dependency(Y0, reg.names, f"m_a{i}", on=("m_p",))
+    assert dep["coefficients"]["m_p"] == pytest.approx(0.5, abs=0.01)
+    assert dep["relative_residual"] < 0.01
 
 
 def test_rank_deficient_regressor_raises_model_error_or_gives_base_parameters():
@@ -231,8 +236,8 @@ def test_rank_deficient_regressor_raises_model_error_or_gives_base_parameters():
     tau = GantryTau3Dynamics("L1").inverse_dynamics(T, zero, zero)
     s = DynamicSamples(np.arange(60) * 0.1, T, zero, zero, tau, coordinates="tcp")
     with pytest.raises(ModelError, match=r"rank-deficient \(rank 4 of 10\): f_c1 \(does not affect"):
-        identify_dynamics(s, variant="model_2", min_speed=0.0)
-    res = identify_dynamics(s, variant="model_2", min_speed=0.0, rank_deficient="base")
+        identify_dynamics(s, "L1", variant="model_2", min_speed=0.0)
+    res = identify_dynamics(s, "L1", variant="model_2", min_speed=0.0, rank_deficient="base")
     assert not res.identifiability.full_rank
     assert np.all(np.isinf(res.std[4:])) and np.all(np.isfinite(res.std[:4]))
 
@@ -303,7 +308,7 @@ def test_bad_preprocess_input(case, call, match):
 
 
 def _samples():
-    return preprocess_log(simulate_log(TRAJECTORY, 6.0, seed=0)[0])
+    return preprocess_log(simulate_log(TRAJECTORY, 6.0, "L1", seed=0)[0])
 
 
 BAD_IDENTIFY = [
@@ -320,7 +325,14 @@ BAD_IDENTIFY = [
 def test_bad_identify_options(case, kwargs, match):
     """Invalid identification options give an InputError naming the argument."""
     with pytest.raises(InputError, match=match):
-        identify_dynamics(_samples(), **kwargs)
+        identify_dynamics(_samples(), "L1", **kwargs)
+
+
+def test_parameters_or_regressor_required():
+    """Without a parameter set and without a prepared regressor there is no model to fit:
+    an InputError naming ``parameters`` (no robot is assumed)."""
+    with pytest.raises(InputError, match="parameters: expected a parameter set"):
+        identify_dynamics(_samples())
 
 
 def test_samples_must_be_dynamic_samples():
@@ -394,17 +406,27 @@ def test_gravity_forces_balance_along_the_guideways(reference):
     assert np.all(G[:, 0] < 0) and np.all(G[:, 2] > 0)
 
 
-def test_two_direction_runs_separate_gravity_and_asymmetric_friction():
+@pytest.fixture(scope="module")
+def two_direction_fit():
+    data = simulate_constant_velocity(POSES, SPEEDS, "L1", force_noise=2.0, seed=0)
+    return two_direction_friction(data, "L1")
+
+
+@pytest.mark.parametrize("key", ["f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"])
+def test_two_direction_runs_recover_the_asymmetric_friction(two_direction_fit, key):
     """Runs in both directions at five poses (Table 6.1 friction, 2 N noise): the estimator
-    recovers f_c+-, f_v+- of Table 6.1 and the accumulated mass (9.13 kg for the L1 set)
-    within 3 std."""
+    recovers f_c+-, f_v+- of Table 6.1 within 3 std."""
+    fit = two_direction_fit
+    a = load_parameters("L1").dynamics.asymmetric
+    z = np.abs(getattr(fit, key) - getattr(a, key)) / fit.std[key]
+    assert np.all(z <= Z_LIMIT), (key, z)
+
+
+def test_two_direction_runs_separate_gravity_and_asymmetric_friction(two_direction_fit):
+    """Runs in both directions at five poses: the accumulated mass (9.13 kg for the L1 set)
+    within 3 std, and the gravity of the model with that mass."""
     robot = load_parameters("L1")
-    data = simulate_constant_velocity(POSES, SPEEDS, force_noise=2.0, seed=0)
-    fit = two_direction_friction(data)
-    a = robot.dynamics.asymmetric
-    for key in ("f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"):
-        z = np.abs(getattr(fit, key) - getattr(a, key)) / fit.std[key]
-        assert np.all(z <= Z_LIMIT), (key, z)
+    fit = two_direction_fit
     assert abs(fit.accumulated_mass - robot.dynamics.m_p) <= Z_LIMIT * fit.accumulated_mass_std
     np.testing.assert_allclose(fit.gravity, accumulated_gravity_forces(POSES, "L1", fit.accumulated_mass), atol=1e-9)
 
@@ -413,7 +435,7 @@ def test_one_direction_fit_absorbs_gravity_into_coulomb_friction():
     """Fig. 6.2 ambiguity: with positive runs only, a straight line puts J^T G into f_c+;
     subtracting the model's gravity with the true accumulated mass recovers Table 6.1."""
     robot = load_parameters("L1")
-    data = simulate_constant_velocity(POSES[:1], SPEEDS, force_noise=2.0, directions="positive", seed=1)
+    data = simulate_constant_velocity(POSES[:1], SPEEDS, "L1", force_noise=2.0, directions="positive", seed=1)
     naive = fit_friction(data)
     G = accumulated_gravity_forces(POSES[0], "L1", robot.dynamics.m_p)
     np.testing.assert_allclose(naive.f_c_plus - robot.dynamics.asymmetric.f_c_plus, G, atol=Z_LIMIT * naive.std["f_c_plus"].max())
@@ -426,19 +448,19 @@ def test_one_direction_fit_absorbs_gravity_into_coulomb_friction():
 def test_two_direction_pairs_runs_with_measured_speeds():
     """Measured velocities differ a little between the + and - runs (1 %): runs are paired
     by the closest speed and the friction estimate is unchanged within its std."""
-    data = simulate_constant_velocity(POSES, SPEEDS, force_noise=2.0, seed=0)
-    ref = two_direction_friction(data)
+    data = simulate_constant_velocity(POSES, SPEEDS, "L1", force_noise=2.0, seed=0)
+    ref = two_direction_friction(data, "L1")
     rng = np.random.default_rng(5)
     noisy = ConstantVelocityData(data.T, data.q_dot * (1 + 0.01 * rng.uniform(-1, 1, (len(data.pose), 1))), data.tau, data.pose)
-    fit = two_direction_friction(noisy)
+    fit = two_direction_friction(noisy, "L1")
     assert np.all(np.abs(fit.f_c_plus - ref.f_c_plus) <= Z_LIMIT * ref.std["f_c_plus"])
 
 
 def test_two_direction_needs_partner_runs():
     """A run without its opposite-direction partner is named in an InputError."""
-    data = simulate_constant_velocity(POSES[:1], SPEEDS[:3], directions="positive")
+    data = simulate_constant_velocity(POSES[:1], SPEEDS[:3], "L1", directions="positive")
     with pytest.raises(InputError, match="needs a partner run in the opposite direction"):
-        two_direction_friction(data)
+        two_direction_friction(data, "L1")
 
 
 def test_constant_velocity_data_validates_lengths():
@@ -476,12 +498,11 @@ def test_least_squares_equals_numpy_lstsq(noisy_log, regressor, weighting):
     fitted = np.abs(v) >= res.info["min_speed"]
     ss = [np.sum(r_all[fitted[:, i], i] ** 2) for i in range(3)]
     np.testing.assert_allclose(res.residual_ss, ss, rtol=1e-12)
-    for row in res.residual_by_speed:
-        for i in range(3):
-            sel = (np.abs(v[:, i]) >= row["v_min"]) & (np.abs(v[:, i]) < row["v_max"])
-            assert row["n"][i] == int(sel.sum())
-            if sel.any():
-                assert row["rms"][i] == pytest.approx(math.sqrt(np.mean(r_all[sel, i] ** 2)), rel=1e-12)
+    sel = [[(np.abs(v[:, i]) >= row["v_min"]) & (np.abs(v[:, i]) < row["v_max"]) for i in range(3)] for row in res.residual_by_speed]
+    counts = np.array([[int(s_i.sum()) for s_i in s_b] for s_b in sel])
+    rms = np.array([[math.sqrt(np.mean(r_all[s_i, i] ** 2)) if s_i.any() else math.nan for i, s_i in enumerate(s_b)] for s_b in sel])
+    np.testing.assert_array_equal(np.array([row["n"] for row in res.residual_by_speed]), counts)
+    np.testing.assert_allclose(np.array([row["rms"] for row in res.residual_by_speed]), rms, rtol=1e-12, equal_nan=True)
 
 
 def test_actuator_weighting_equals_lstsq_on_weighted_rows(noisy_log, regressor):
@@ -515,7 +536,7 @@ def _compiler_available() -> bool:
 @pytest.fixture
 def compile_everything(monkeypatch, tmp_path):
     """Compile from the first sample, into an empty cache folder."""
-    import gtmodel.calibration.dynamic_identification as di
+    import gtmodel.calibration.identification.regressor as di
 
     monkeypatch.setattr(di, "_COMPILE_MIN_SAMPLES", 1)
     monkeypatch.setenv("GTMODEL_CACHE_DIR", str(tmp_path))

@@ -57,6 +57,7 @@ import scipy.signal
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.actuator_dynamics import actuator_tf
 from gtmodel.robots.structural import CONVENTIONS, PhysicalModel
+from gtmodel.status import Status, StatusResult
 
 __all__ = [
     "ActuatorIdentification",
@@ -195,7 +196,7 @@ def prbs(n_samples: int, bits: int = 10, hold: int = 1, amplitude: float = 1.0, 
 
 # ----------------------------------------------------------------------------- actuator
 @dataclass
-class ActuatorIdentification:
+class ActuatorIdentification(StatusResult):
     """Result of :func:`identify_actuator`, Dressler (2012), eq. 6.11.
 
     Parameters
@@ -212,10 +213,9 @@ class ActuatorIdentification:
         Root-mean-square one-step prediction error (output unit).
     n_rows : int
         Number of regression rows used.
-    status : str
-        ``"optimal"`` (unique least-squares solution, stable pole) or ``"error"``.
-    success : bool
-        ``status == "optimal"``.
+    status : Status
+        ``optimal`` (unique least-squares solution, stable pole) or ``error``
+        (``success`` is True for ``optimal``).
     message : str
         Human-readable outcome.
     residuals_by_delay : dict of int to float
@@ -230,9 +230,6 @@ class ActuatorIdentification:
     std_b: float
     rms_residual: float
     n_rows: int
-    status: str
-    success: bool
-    message: str
     residuals_by_delay: dict[int, float] = field(default_factory=dict)
 
     def transfer_function(self) -> control.TransferFunction:
@@ -328,9 +325,9 @@ def identify_actuator(
     cov = sigma2 * np.linalg.inv(phi.T @ phi)
     a, b = float(theta[0]), float(theta[1])
     if abs(a) < 1.0:
-        status, message = "optimal", f"least squares, {rows} rows, delay {best} samples"
+        status, message = Status.OPTIMAL, f"least squares, {rows} rows, delay {best} samples"
     else:
-        status, message = "error", f"identified pole a = {a:.6g} is not stable (|a| >= 1): no first-order lag fits these data"
+        status, message = Status.ERROR, f"identified pole a = {a:.6g} is not stable (|a| >= 1): no first-order lag fits these data"
     _log.debug("identify_actuator: a=%.6g b=%.6g delay=%d rms=%.3g", a, b, best, rms[best])
     return ActuatorIdentification(
         a=a,
@@ -342,7 +339,6 @@ def identify_actuator(
         rms_residual=rms[best],
         n_rows=rows,
         status=status,
-        success=status == "optimal",
         message=message,
         residuals_by_delay=rms,
     )
@@ -350,7 +346,7 @@ def identify_actuator(
 
 # ----------------------------------------------------------------------------- black box
 @dataclass
-class StateSpaceIdentification:
+class StateSpaceIdentification(StatusResult):
     """Result of :func:`identify_state_space`, Dressler (2012), ch. 6.3 (model of eq. 6.14).
 
     Parameters
@@ -363,11 +359,9 @@ class StateSpaceIdentification:
         RMS one-step prediction error of the ARX model per output.
     arx_order : int
         ARX order used.
-    status : str
-        ``"optimal"`` (stable model) or ``"error"`` (an identified pole outside the unit
-        circle).
-    success : bool
-        ``status == "optimal"``.
+    status : Status
+        ``optimal`` (stable model) or ``error`` (an identified pole outside the unit
+        circle); ``success`` is True for ``optimal``.
     message : str
         Human-readable outcome.
     """
@@ -376,9 +370,6 @@ class StateSpaceIdentification:
     hankel_singular_values: np.ndarray
     arx_rms_residual: np.ndarray
     arx_order: int
-    status: str
-    success: bool
-    message: str
 
     def to_physical(self, B: Any = None, convention: str = "thesis") -> PhysicalModel:
         """The identified model in physical form (6.14); see :func:`physical_from_state_space`.
@@ -496,16 +487,15 @@ def identify_state_space(
     sys = control.ss(era.A, era.B, era.C, era.D, dt)
     radius = float(np.max(np.abs(sys.poles())))
     if radius < 1.0:
-        status, message = "optimal", f"ARX({arx_order}) + ERA, order {order}, largest pole radius {radius:.6f}"
+        status, message = Status.OPTIMAL, f"ARX({arx_order}) + ERA, order {order}, largest pole radius {radius:.6f}"
     else:
-        status, message = "error", f"identified model unstable: pole radius {radius:.6f} >= 1 (try another arx_order or more data)"
+        status, message = Status.ERROR, f"identified model unstable: pole radius {radius:.6f} >= 1 (try another arx_order or more data)"
     return StateSpaceIdentification(
         sys=sys,
         hankel_singular_values=np.asarray(S),
         arx_rms_residual=arx_rms,
         arx_order=arx_order,
         status=status,
-        success=status == "optimal",
         message=message,
     )
 

@@ -17,7 +17,7 @@ must intersect and every link stays within the spherical-joint angle) on a time 
 Choice of the NLP formulation: the decision variables are the ``3 (2K + 1)`` Fourier
 coefficients, a static NLP without dynamics or collocation, so it is written with
 :func:`casadi.nlpsol` directly on the symbolic regressor of
-:class:`~gtmodel.calibration.dynamic_identification.DynamicRegressor` (mapped over the
+:class:`~gtmodel.calibration.identification.DynamicRegressor` (mapped over the
 grid) rather than through :mod:`gtmodel.modeling`, whose Model/Optimization layer is
 made for optimal control. The regressor uses the smooth ``tanh`` sign (gradients) and
 the design is then assessed with the exact sign.
@@ -47,11 +47,13 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
-from gtmodel.calibration.dynamic_identification import DynamicRegressor, ModelVariant
+from gtmodel.calibration.identification.regressor import DynamicRegressor
+from gtmodel.calibration.identification.variants import ModelVariant
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.modeling.result import normalize_ipopt_status
-from gtmodel.robots.kinematics import fk_expression, link_cosines_expression
+from gtmodel.robots.kinematics import GantryTau3Kinematics, fk_expression, link_cosines_expression
 from gtmodel.robots.parameters import RobotParameters, load_parameters
+from gtmodel.status import Status, StatusResult
 
 __all__ = ["FourierTrajectory", "ExcitationDesign", "design_excitation", "regressor_condition"]
 
@@ -237,7 +239,7 @@ def regressor_condition(regressor: DynamicRegressor, trajectory: FourierTrajecto
 
 
 @dataclass
-class ExcitationDesign:
+class ExcitationDesign(StatusResult):
     """An optimised excitation trajectory (Swevers et al. 1997; Dressler (2012), ch. 6.2).
 
     Parameters
@@ -251,8 +253,8 @@ class ExcitationDesign:
         ``min_speed``) along the start and the optimised motion.
     objective_before, objective_after : float
         The NLP objective at the start and the solution.
-    status : str
-        ``"optimal"``, ``"acceptable"``, ``"max_iterations"``, ``"infeasible"`` or ``"error"``.
+    status : Status
+        ``optimal``, ``acceptable``, ``max_iterations``, ``infeasible`` or ``error``.
     message : str
         IPOPT's return status.
     iterations : int
@@ -272,8 +274,6 @@ class ExcitationDesign:
     condition_after: float
     objective_before: float
     objective_after: float
-    status: str
-    message: str
     iterations: int
     solve_time: float
     max_violation: float
@@ -281,17 +281,19 @@ class ExcitationDesign:
 
     @property
     def success(self) -> bool:
-        """True for an optimal or acceptable IPOPT solution."""
-        return self.status in ("optimal", "acceptable")
+        """True for an optimal or acceptable IPOPT solution (a design stopped at IPOPT's
+        "acceptable" level is still a motion to use)."""
+        return self.status in (Status.OPTIMAL, Status.ACCEPTABLE)
 
 
 def design_excitation(
-    parameters: RobotParameters | str | Path = "L1",
+    parameters: RobotParameters | str | Path,
     variant: str | ModelVariant = "model_2",
+    *,
+    T_center: Sequence[float],
     harmonics: int = 4,
     period: float = 10.0,
     n_grid: int = 60,
-    T_center: Sequence[float] = (0.0, 2.9, -0.5),
     max_velocity: float = 0.5,
     max_acceleration: float = 3.0,
     travel_margin: float = 0.05,
@@ -313,18 +315,20 @@ def design_excitation(
 
     Parameters
     ----------
-    parameters : RobotParameters or str or pathlib.Path, optional
-        Parameter set (default ``"L1"``).
+    parameters : RobotParameters or str or pathlib.Path
+        Parameter set (a name of :func:`gtmodel.robots.available_parameter_sets`, a TOML
+        file or the parameters).
     variant : str or ModelVariant, optional
         The regressor to condition (default ``"model_2"``).
+    T_center : sequence of float, shape (3,)
+        TCP position [m] whose cart positions are the initial offsets ``q0`` (keyword
+        only; e.g. ``(0.0, 2.9, -0.5)`` in the L1 workspace).
     harmonics : int, optional
         Number of harmonics K (default 4).
     period : float, optional
         Period [s] (default 10 s).
     n_grid : int, optional
         Constraint and objective grid points per period (default 60).
-    T_center : sequence of float, optional
-        TCP position [m] whose cart positions are the initial offsets ``q0``.
     max_velocity : float, optional
         Cart speed limit [m/s] (default 0.5).
     max_acceleration : float, optional
@@ -378,8 +382,6 @@ def design_excitation(
     p = design_reg.n_parameters
     scale = np.abs(exact_reg.theta_of())
     scale = np.where(scale > 0, scale, 1.0)
-
-    from gtmodel.robots.kinematics import GantryTau3Kinematics
 
     kin = GantryTau3Kinematics(robot)
     q_center = kin.require_in_workspace(np.asarray(T_center, dtype=float), configuration)
@@ -438,7 +440,7 @@ def design_excitation(
         status = normalize_ipopt_status(message)
         iterations = int(stats.get("iter_count", 0))
     except RuntimeError as exc:  # pragma: no cover - IPOPT aborts (e.g. NaN in evaluation)
-        x, message, status, iterations = start.coefficients, f"IPOPT failed: {exc}", "error", 0
+        x, message, status, iterations = start.coefficients, f"IPOPT failed: {exc}", Status.ERROR, 0
     solve_time = time.perf_counter() - t0
     best = FourierTrajectory.from_coefficients(x, K, period)
     # limits on a 10x finer grid (unit of each constraint)
