@@ -89,7 +89,7 @@ def test_problem_with_a_log_file(tmp_path):
     """A [data] log written by MotionLog.to_csv is identified like synthetic data."""
     rng = np.random.default_rng(0)
     tr = FourierTrajectory([0.0, 0.0, 0.0], 0.12 * rng.standard_normal((3, 3)), 0.12 * rng.standard_normal((3, 3)), 6.0)
-    log, _ = simulate_log(tr, 12.0, force_noise=2.0, seed=2)
+    log, _ = simulate_log(tr, 12.0, "L1", force_noise=2.0, seed=2)
     log.to_csv(tmp_path / "log.csv")
     (tmp_path / "p.toml").write_text(LOG_PROBLEM)
     problem = load_problem(tmp_path / "p.toml")
