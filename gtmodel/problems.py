@@ -458,7 +458,7 @@ def write_comparison(cases: Sequence[StudyCase], out_dir: str | Path, plots: boo
     (out_dir / "comparison.md").write_text("\n".join(md) + "\n", encoding="utf-8")
     files = [out_dir / "comparison.csv", out_dir / "comparison.md"]
     if plots:
-        from gtmodel.trajectory.plots import plot_overlay
+        from gtmodel.report.trajectory import plot_overlay
 
         from gtmodel.trajectory.problem_files import path_trajectory_columns
 

@@ -349,7 +349,7 @@ def write_elasto_geometric(
         Files written besides ``summary.json``.
     """
     from gtmodel.calibration.evaluation import plot_error_histogram
-    from gtmodel.robots.stiffness import plot_stiffness_map
+    from gtmodel.report.stiffness import plot_stiffness_map
 
     st = solution.study
     fields = _study_fields(st)

@@ -32,6 +32,7 @@ from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
 from gtmodel.robots.kinematics import cart_acceleration_expression, configuration_signs, link_cosines_expression
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
+from gtmodel.status import Status
 
 __all__ = [
     "PointToPoint",
@@ -522,6 +523,16 @@ class PointToPointSolution:
     def success(self) -> bool:
         """True only for an optimal solution."""
         return self.result.success
+
+    @property
+    def status(self) -> Status:
+        """The status of :attr:`result` (:class:`gtmodel.status.SolverResult` protocol)."""
+        return self.result.status
+
+    @property
+    def message(self) -> str:
+        """The solver's message of :attr:`result`."""
+        return self.result.message
 
     def trajectory(self, dt: float = SAMPLE_TIME) -> dict[str, np.ndarray]:
         """The solution resampled on a uniform grid (controller sample time by default).

@@ -20,12 +20,13 @@ import scipy.optimize
 from gtmodel.errors import InputError, ParameterError, UnreachablePoseError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import available_parameter_sets
+from gtmodel.report.stiffness import plot_stiffness_map
 from gtmodel.robots.stiffness import (
     N_PER_UM,
     GantryTau3Stiffness,
     StiffnessParameters,
+    closure_stiffness,
     load_stiffness,
-    plot_stiffness_map,
 )
 
 from ..conftest import SHARED_REFERENCE
@@ -255,8 +256,6 @@ def test_condensed_three_link_closure_equals_the_series_formula(d1, poses):
     """Third method: differentiate the closure link lengths w.r.t. TCP and cart displacements,
     condense the carts (K_xx - K_xs K_ss^-1 K_sx): equals eqs. 1-2 (series arm compliance)."""
     from gtmodel.robots.closure import ThreeLinkClosure
-    from gtmodel.robots.stiffness import closure_stiffness
-
     model = ThreeLinkClosure(d1.parameters)
     for T in poses[:3]:
         cs = closure_stiffness(model, d1.kinematics.ik(T), d1.stiffness)
@@ -268,8 +267,6 @@ def test_six_link_plate_rotation_lowers_the_stiffness(d1, poses):
     """Six-link D1 (Table 5.9 geometry): with the rotation held it is the translational model;
     letting the plate rotate under a TCP force can only soften it (K_locked - K_free >= 0)."""
     from gtmodel.robots.six_link import load_six_link
-    from gtmodel.robots.stiffness import closure_stiffness
-
     six = load_six_link("D1_six_link")
     T = poses[0]
     cs = closure_stiffness(six, d1.kinematics.ik(T), d1.stiffness)
@@ -281,7 +278,5 @@ def test_six_link_plate_rotation_lowers_the_stiffness(d1, poses):
 
 
 def test_closure_stiffness_refuses_other_models():
-    from gtmodel.robots.stiffness import closure_stiffness
-
     with pytest.raises(InputError, match="3 linear actuators"):
         closure_stiffness("L1", [0.0, 0.0, 0.0])

@@ -17,7 +17,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.linalg
-from matplotlib.figure import Figure
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.structural import PhysicalModel
@@ -125,15 +124,6 @@ def test_wrong_convention_is_reported():
     """The thesis' matrices read as the textbook form have no oscillatory mode."""
     with pytest.raises(ModelError, match="sign convention"):
         PhysicalModel(*_ref_matrices(), convention="standard").modes()
-
-
-def test_plots_return_figures():
-    """Bode and impulse plots are matplotlib Figures (Agg-safe, no pyplot)."""
-    p = PhysicalModel.from_file()
-    fig = p.plot_bode()
-    assert isinstance(fig, Figure) and len(fig.axes) == 2
-    fig = p.plot_impulse(duration=0.3)
-    assert isinstance(fig, Figure) and len(fig.axes) == 2
 
 
 def test_impulse_response_shape_and_decay():
