@@ -149,15 +149,16 @@ class PhysicalModel:
         self.name = name
 
     @classmethod
-    def from_file(cls, source: Any = "L1_dynamics_models") -> "PhysicalModel":
+    def from_file(cls, source: Any) -> "PhysicalModel":
         """The structural model of a dynamics-models file (table ``[compliance]``).
 
-        Dressler (2012), eq. 6.14, the thesis' identified L1 matrices by default.
+        Dressler (2012), eq. 6.14 (``"L1_dynamics_models"``: the thesis' identified L1
+        matrices).
 
         Parameters
         ----------
-        source : str, pathlib.Path or DynamicsModels, optional
-            Shipped name (default ``"L1_dynamics_models"``), path or loaded models.
+        source : str, pathlib.Path or DynamicsModels
+            Shipped name (e.g. ``"L1_dynamics_models"``), path or loaded models.
 
         Returns
         -------

@@ -26,6 +26,7 @@ import numpy as np
 
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
+from gtmodel.modeling.expressions import parse_constraint, parse_objective
 from gtmodel.modeling.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
@@ -370,8 +371,6 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     collocation points, as in any direct collocation; between them the polynomials are not
     bounded.
     """
-    from gtmodel.modeling.expressions import parse_constraint, parse_objective
-
     p = problem.parameters
     model = gantry_tau_model(
         p, states="tcp", friction=problem.friction, friction_width=problem.friction_width, configuration=problem.configuration
