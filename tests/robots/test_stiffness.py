@@ -12,7 +12,6 @@ D1's measured TCP stiffness of 2-4 N/um (reference table) for the stated values.
 from __future__ import annotations
 
 import tomllib
-
 from importlib import resources
 
 import numpy as np
