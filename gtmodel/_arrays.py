@@ -13,7 +13,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["as_rows", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int"]
+__all__ = ["as_rows", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int", "positive_float"]
 
 
 def as_rows(x: Any, name: str, width: int) -> tuple[np.ndarray, bool]:
@@ -223,3 +223,31 @@ def positive_int(value: Any, name: str) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise InputError(f"{name}: expected a positive integer, got {value!r}")
     return int(value)
+
+
+def positive_float(value: Any, name: str) -> float:
+    """A finite number > 0, as a ``float``.
+
+    Parameters
+    ----------
+    value : Any
+        The input (a scalar).
+    name : str
+        Argument name for messages.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Not a number, not finite, or not above 0.
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a number > 0, got {value!r}") from None
+    if not np.isfinite(v) or v <= 0:
+        raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
+    return v

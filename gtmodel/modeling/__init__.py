@@ -10,7 +10,8 @@
 from __future__ import annotations
 
 from gtmodel.modeling.collocation import CollocationTranscription, solve
-from gtmodel.modeling.model import FlatDAE, Model, SimulationResult
+from gtmodel.modeling.dae import FlatDAE, SimulationResult
+from gtmodel.modeling.model import Model
 from gtmodel.modeling.optimization import Optimization
 from gtmodel.modeling.result import OptimizationResult
 from gtmodel.modeling.expressions import (

@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, SolverError
-from gtmodel.modeling.model import FlatDAE, _eval_outputs, _unpack, _vector_value
+from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, _vector_value
 from gtmodel.modeling.optimization import Optimization
 from gtmodel.modeling.result import (
     CollocationData,
@@ -42,6 +42,7 @@ from gtmodel.modeling.result import (
     lagrange_basis,
     normalize_ipopt_status,
 )
+from gtmodel.status import Status
 
 __all__ = ["CollocationTranscription", "solve"]
 
@@ -621,9 +622,9 @@ class CollocationTranscription:
         solve_time = _time.perf_counter() - t_start
         stats = dict(self.solver.stats())
         message = error_msg or str(stats.get("return_status", "unknown"))
-        status = "error" if error_msg else normalize_ipopt_status(message)
+        status = Status.ERROR if error_msg else normalize_ipopt_status(message)
         if not np.all(np.isfinite(w_opt)):
-            status = "error"
+            status = Status.ERROR
         return self._result(w_opt, pvec, status, message, stats, solve_time)
 
     def _result(
@@ -670,7 +671,6 @@ class CollocationTranscription:
         if status != "optimal":
             _log.warning("collocation solve of %s ended with status %s (%s)", dae.name, status, message)
         return OptimizationResult(
-            success=status == "optimal",
             status=status,
             message=message,
             iterations=iterations,

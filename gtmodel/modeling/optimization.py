@@ -19,7 +19,8 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.model import FlatDAE, Model, _as_sx, _vector_value
+from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
+from gtmodel.modeling.model import Model
 
 __all__ = ["Optimization", "Constraint"]
 

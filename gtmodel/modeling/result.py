@@ -19,24 +19,25 @@ from typing import Any
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.modeling.model import FlatDAE, _eval_outputs, _frame, _unpack
+from gtmodel.status import Status, StatusResult
+from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _frame, _unpack
 
 __all__ = ["OptimizationResult", "CollocationData", "normalize_ipopt_status", "lagrange_basis"]
 
 _log = logging.getLogger("gtmodel")
 
 _IPOPT_STATUS = {
-    "Solve_Succeeded": "optimal",
-    "Solved_To_Acceptable_Level": "acceptable",
-    "Feasible_Point_Found": "acceptable",
-    "Infeasible_Problem_Detected": "infeasible",
-    "Maximum_Iterations_Exceeded": "max_iterations",
-    "Maximum_CpuTime_Exceeded": "max_iterations",
-    "Maximum_WallTime_Exceeded": "max_iterations",
+    "Solve_Succeeded": Status.OPTIMAL,
+    "Solved_To_Acceptable_Level": Status.ACCEPTABLE,
+    "Feasible_Point_Found": Status.ACCEPTABLE,
+    "Infeasible_Problem_Detected": Status.INFEASIBLE,
+    "Maximum_Iterations_Exceeded": Status.MAX_ITERATIONS,
+    "Maximum_CpuTime_Exceeded": Status.MAX_ITERATIONS,
+    "Maximum_WallTime_Exceeded": Status.MAX_ITERATIONS,
 }
 
 
-def normalize_ipopt_status(return_status: str) -> str:
+def normalize_ipopt_status(return_status: str) -> Status:
     """Map an IPOPT ``return_status`` string to a gtmodel status.
 
     Parameters
@@ -46,14 +47,14 @@ def normalize_ipopt_status(return_status: str) -> str:
 
     Returns
     -------
-    str
+    Status
         One of ``"optimal"`` (Solve_Succeeded), ``"acceptable"``
         (Solved_To_Acceptable_Level, Feasible_Point_Found), ``"infeasible"``
         (Infeasible_Problem_Detected), ``"max_iterations"`` (iteration, CPU- or
         wall-time limit) and ``"error"`` for everything else (Restoration_Failed,
         Invalid_Number_Detected, Search_Direction_Becomes_Too_Small, exceptions, ...).
     """
-    return _IPOPT_STATUS.get(str(return_status), "error")
+    return _IPOPT_STATUS.get(str(return_status), Status.ERROR)
 
 
 def lagrange_basis(nodes: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -172,18 +173,19 @@ class CollocationData:
 
 
 @dataclass
-class OptimizationResult:
+class OptimizationResult(StatusResult):
     """Result of an optimal control solve.
+
+    Implements :class:`gtmodel.status.SolverResult`: :attr:`success` is True only if
+    ``status == "optimal"``.
 
     Parameters
     ----------
-    success : bool
-        True only if ``status == "optimal"``.
-    status : str
+    status : Status
         ``"optimal"``, ``"acceptable"``, ``"infeasible"``, ``"max_iterations"`` or
-        ``"error"`` (see :func:`normalize_ipopt_status`).
+        ``"error"`` (see :func:`normalize_ipopt_status`); keyword only.
     message : str
-        IPOPT's ``return_status`` text, or the exception message on errors.
+        IPOPT's ``return_status`` text, or the exception message on errors; keyword only.
     iterations : int
         IPOPT iterations.
     solve_time : float
@@ -216,9 +218,6 @@ class OptimizationResult:
         Identifies the transcription that produced ``w``.
     """
 
-    success: bool
-    status: str
-    message: str
     iterations: int
     solve_time: float
     objective: float

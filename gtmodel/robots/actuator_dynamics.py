@@ -56,7 +56,8 @@ __all__ = [
 ]
 
 _log = logging.getLogger("gtmodel")
-_DEFAULT_FILE = "L1_dynamics_models"
+#: The shipped dynamics-models file (named in the message for an unknown name).
+_SHIPPED_FILE = "L1_dynamics_models"
 _CONVENTIONS = ("thesis", "standard")
 
 
@@ -246,16 +247,16 @@ def dynamics_models_from_mapping(data: Mapping[str, Any], origin: str = "<mappin
     )
 
 
-def load_dynamics_models(name_or_path: str | Path = _DEFAULT_FILE) -> DynamicsModels:
+def load_dynamics_models(name_or_path: str | Path) -> DynamicsModels:
     """Load and validate a dynamics-models file by shipped name or path.
 
     Dressler (2012), eqs. 6.11 and 6.14-6.15 (the shipped ``L1_dynamics_models``).
 
     Parameters
     ----------
-    name_or_path : str or pathlib.Path, optional
-        ``"L1_dynamics_models"`` (default, shipped) or the path of a TOML file in the
-        same format.
+    name_or_path : str or pathlib.Path
+        A shipped name (``"L1_dynamics_models"``) or the path of a TOML file in the same
+        format.
 
     Returns
     -------
@@ -269,7 +270,7 @@ def load_dynamics_models(name_or_path: str | Path = _DEFAULT_FILE) -> DynamicsMo
         names the file and the field).
     """
     data, origin, path = _read_data_file(
-        name_or_path, "dynamics-models file", f"not a shipped name ({_DEFAULT_FILE}) and no such file", any_suffix_must_exist=True
+        name_or_path, "dynamics-models file", f"not a shipped name ({_SHIPPED_FILE}) and no such file", any_suffix_must_exist=True
     )
     return dynamics_models_from_mapping(data, origin=origin, path=path)
 
@@ -326,15 +327,15 @@ def actuator_tf(a: float, b: float, dt: float = 0.004, delay: int = 5) -> contro
     return control.tf([float(b)], den, dt)
 
 
-def actuator_models(source: str | Path | DynamicsModels = _DEFAULT_FILE) -> list[control.TransferFunction]:
+def actuator_models(source: str | Path | DynamicsModels) -> list[control.TransferFunction]:
     """The closed-loop actuator models of every axis as discrete transfer functions.
 
     Dressler (2012), eq. 6.11, with ``Ts`` and the delay from the data file.
 
     Parameters
     ----------
-    source : str, pathlib.Path or DynamicsModels, optional
-        Shipped name (default ``"L1_dynamics_models"``), file path or loaded models.
+    source : str, pathlib.Path or DynamicsModels
+        Shipped name (e.g. ``"L1_dynamics_models"``), file path or loaded models.
 
     Returns
     -------

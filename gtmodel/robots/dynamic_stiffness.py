@@ -33,7 +33,9 @@ import scipy.optimize
 import scipy.signal
 
 from gtmodel._docstrings import fill_doc
+from gtmodel._arrays import positive_float
 from gtmodel.errors import InputError
+from gtmodel.status import Status, StatusResult
 
 __all__ = [
     "DIRECTIONS",
@@ -66,16 +68,6 @@ _mck_doc = fill_doc(
 )
 
 
-def _positive(value: Any, name: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a number > 0, got {value!r}") from None
-    if not np.isfinite(v) or v <= 0:
-        raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
-    return v
-
-
 @_mck_doc
 def single_mode_tf(m: float, c: float, k: float) -> control.TransferFunction:
     """Compliance transfer function ``X/F = 1/(m s^2 + c s + k)``, Cvitanic (2021), eq. (8).
@@ -92,7 +84,7 @@ def single_mode_tf(m: float, c: float, k: float) -> control.TransferFunction:
     InputError
         A non-positive or non-finite parameter.
     """
-    m, c, k = _positive(m, "m"), _positive(c, "c"), _positive(k, "k")
+    m, c, k = positive_float(m, "m"), positive_float(c, "c"), positive_float(k, "k")
     return control.tf([1.0], [m, c, k])
 
 
@@ -138,17 +130,18 @@ def single_mode_frf(m: float, c: float, k: float, freq_hz: Any) -> np.ndarray:
 
 
 @dataclass
-class ModeFitResult:
+class ModeFitResult(StatusResult):
     """Result of a single-mode FRF fit (status, never None).
+
+    Implements :class:`gtmodel.status.SolverResult`: :attr:`success` is True if the
+    least-squares solver converged.
 
     Parameters
     ----------
-    success : bool
-        True if the least-squares solver converged.
-    status : str
-        ``"optimal"`` or ``"error"``.
+    status : Status
+        ``"optimal"`` or ``"error"``; keyword only.
     message : str
-        Solver message.
+        Solver message; keyword only.
     m : float
         Modal mass [kg].
     c : float
@@ -167,9 +160,6 @@ class ModeFitResult:
         Linear least-squares start ``(m, c, k)``.
     """
 
-    success: bool
-    status: str
-    message: str
     m: float
     c: float
     k: float
@@ -248,8 +238,7 @@ def fit_single_mode(freq_hz: Any, H: Any) -> ModeFitResult:
         std = np.full(3, np.inf)
     ok = bool(sol.success)
     return ModeFitResult(
-        success=ok,
-        status="optimal" if ok else "error",
+        status=Status.OPTIMAL if ok else Status.ERROR,
         message=str(sol.message),
         m=float(m),
         c=float(c),
@@ -296,7 +285,7 @@ def simulate_single_mode(m: Any, c: Any, k: Any, t: Any, F: Any) -> np.ndarray:
         if arr.shape != (3,):
             raise InputError(f"{name}: expected shape (3,) (x, y, z), got {arr.shape}")
         for i in range(3):
-            _positive(arr[i], f"{name}[{i}]")
+            positive_float(arr[i], f"{name}[{i}]")
         pars.append(arr)
     tt = np.asarray(t, dtype=float)
     if tt.ndim != 1 or tt.size < 3 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
@@ -366,7 +355,7 @@ class DynamicStiffnessGP:
             if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
                 raise InputError(f"{name}: expected finite positive values")
             data[name] = arr
-        noise_level = _positive(noise_level, "noise_level")
+        noise_level = positive_float(noise_level, "noise_level")
         self._mu = Xa.mean(axis=0)
         sd = Xa.std(axis=0)
         self._sd = np.where(sd > 0, sd, 1.0)

@@ -37,6 +37,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._docstrings import fill_doc
+from gtmodel._geometry import rot_x, rot_y, rot_z
 from gtmodel.errors import ConvergenceError, InputError, ParameterError, SingularConfigurationError
 from gtmodel.robots.parameters import _read_data_file
 
@@ -153,11 +154,7 @@ def rotation_rpy(rpy: Any) -> np.ndarray:
         Wrong shape or non-finite values.
     """
     r, p, y = _vector(rpy, 3, "rpy")
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1.0]])
-    ry = np.array([[cp, 0, sp], [0, 1.0, 0], [-sp, 0, cp]])
-    rx = np.array([[1.0, 0, 0], [0, cr, -sr], [0, sr, cr]])
-    return rz @ ry @ rx
+    return np.array(rot_z(y)) @ np.array(rot_y(p)) @ np.array(rot_x(r))
 
 
 def _dh_sx(theta: ca.SX, a: float, alpha: float, d: float) -> ca.SX:

@@ -48,6 +48,7 @@ import numpy as np
 import scipy.linalg
 
 from gtmodel.errors import InputError, ModelError
+from gtmodel.robots.actuator_dynamics import DynamicsModels, load_dynamics_models
 
 __all__ = ["Modes", "PhysicalModel", "CONVENTIONS"]
 
@@ -148,15 +149,16 @@ class PhysicalModel:
         self.name = name
 
     @classmethod
-    def from_file(cls, source: Any = "L1_dynamics_models") -> "PhysicalModel":
+    def from_file(cls, source: Any) -> "PhysicalModel":
         """The structural model of a dynamics-models file (table ``[compliance]``).
 
-        Dressler (2012), eq. 6.14, the thesis' identified L1 matrices by default.
+        Dressler (2012), eq. 6.14 (``"L1_dynamics_models"``: the thesis' identified L1
+        matrices).
 
         Parameters
         ----------
-        source : str, pathlib.Path or DynamicsModels, optional
-            Shipped name (default ``"L1_dynamics_models"``), path or loaded models.
+        source : str, pathlib.Path or DynamicsModels
+            Shipped name (e.g. ``"L1_dynamics_models"``), path or loaded models.
 
         Returns
         -------
@@ -168,8 +170,6 @@ class PhysicalModel:
         ParameterError
             The file is invalid.
         """
-        from gtmodel.robots.actuator_dynamics import DynamicsModels, load_dynamics_models
-
         models = source if isinstance(source, DynamicsModels) else load_dynamics_models(source)
         c = models.compliance
         return cls(c.M, c.D, c.K, c.B, convention=c.convention, name=models.name)
@@ -340,84 +340,6 @@ class PhysicalModel:
             raise InputError(f"n_points: expected an integer >= 10, got {n_points!r}")
         t = np.linspace(0.0, float(duration), n_points)
         return control.impulse_response(self.to_state_space(), t, squeeze=False)
-
-    def plot_bode(self, freqs_hz: Any = None, title: str = "") -> Any:
-        """Bode plot (magnitude and phase of every input-output pair) with the modes marked.
-
-        Dressler (2012), eqs. 6.14-6.15. Draws on a :class:`matplotlib.figure.Figure`
-        (no pyplot state, safe under the Agg backend).
-
-        Parameters
-        ----------
-        freqs_hz : array_like, optional
-            Frequencies [Hz] (default 200 points, 1-1000 Hz, logarithmic).
-        title : str, optional
-            Figure title.
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            Two axes: magnitude [dB] and phase [deg] over frequency [Hz].
-        """
-        from matplotlib.figure import Figure
-
-        f = np.logspace(0, 3, 400) if freqs_hz is None else np.asarray(freqs_hz, dtype=float)
-        resp = self.frequency_response(f)
-        fig = Figure(figsize=(7, 5), layout="constrained")
-        ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
-        for i in range(resp.magnitude.shape[0]):
-            for j in range(resp.magnitude.shape[1]):
-                label = f"x{i + 1}/u{j + 1}"
-                ax_mag.semilogx(f, 20.0 * np.log10(resp.magnitude[i, j]), label=label)
-                ax_ph.semilogx(f, np.degrees(np.unwrap(resp.phase[i, j])), label=label)
-        try:
-            for k, fm in enumerate(self.modes().frequencies_hz):
-                for ax in (ax_mag, ax_ph):
-                    ax.axvline(fm, color="0.5", ls="--", lw=0.8, label=f"mode (6.15) {fm:.1f} Hz" if ax is ax_mag else None)
-        except ModelError:
-            pass
-        ax_mag.set_ylabel("magnitude [dB]")
-        ax_ph.set_ylabel("phase [deg]")
-        ax_ph.set_xlabel("frequency [Hz]")
-        ax_mag.legend(fontsize="small", ncol=2)
-        for ax in (ax_mag, ax_ph):
-            ax.grid(True, which="both", alpha=0.3)
-        fig.suptitle(title or f"Bode plot {self.name}".strip())
-        return fig
-
-    def plot_impulse(self, duration: float = 0.5, title: str = "") -> Any:
-        """Impulse responses, one axis per input, one line per coordinate.
-
-        Dressler (2012), eq. 6.14. Draws on a :class:`matplotlib.figure.Figure` (Agg-safe).
-
-        Parameters
-        ----------
-        duration : float, optional
-            Length [s] (default 0.5).
-        title : str, optional
-            Figure title.
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            One axis per input.
-        """
-        from matplotlib.figure import Figure
-
-        resp = self.impulse_response(duration)
-        y = np.asarray(resp.outputs)
-        m = y.shape[1]
-        fig = Figure(figsize=(7, 2.6 * m), layout="constrained")
-        axes = np.atleast_1d(fig.subplots(m, 1, sharex=True))
-        for j in range(m):
-            for i in range(y.shape[0]):
-                axes[j].plot(resp.time, y[i, j], label=f"x{i + 1}")
-            axes[j].set_ylabel(f"impulse on u{j + 1}")
-            axes[j].grid(True, alpha=0.3)
-            axes[j].legend(fontsize="small")
-        axes[-1].set_xlabel("time [s]")
-        fig.suptitle(title or f"Impulse responses {self.name}".strip())
-        return fig
 
     def __repr__(self) -> str:
         return f"PhysicalModel(n={self.n}, m={self.B.shape[1]}, convention={self.convention!r}, name={self.name!r})"

@@ -42,9 +42,12 @@ from typing import Any, Callable
 import casadi as ca
 import numpy as np
 
+from gtmodel._arrays import positive_float
+from gtmodel._geometry import rot_z
 from gtmodel.errors import ConvergenceError, InputError, SingularConfigurationError
-from gtmodel.robots.dynamic_stiffness import DynamicStiffnessGP, _positive, simulate_single_mode
+from gtmodel.robots.dynamic_stiffness import DynamicStiffnessGP, simulate_single_mode
 from gtmodel.robots.serial import SerialArm
+from gtmodel.status import Status, StatusResult
 
 __all__ = [
     "MillingCoefficients",
@@ -140,9 +143,9 @@ class MillingProcess:
         if isinstance(n_teeth, bool) or not isinstance(n_teeth, (int, np.integer)) or n_teeth < 1:
             raise InputError(f"n_teeth: expected an integer >= 1, got {n_teeth!r}")
         self.n_teeth = int(n_teeth)
-        self.spindle_speed_rpm = _positive(spindle_speed_rpm, "spindle_speed_rpm")
-        self.feed_per_tooth = _positive(feed_per_tooth, "feed_per_tooth")
-        self.axial_depth = _positive(axial_depth, "axial_depth")
+        self.spindle_speed_rpm = positive_float(spindle_speed_rpm, "spindle_speed_rpm")
+        self.feed_per_tooth = positive_float(feed_per_tooth, "feed_per_tooth")
+        self.axial_depth = positive_float(axial_depth, "axial_depth")
         st, ex = float(entry_angle), float(exit_angle)
         if not (math.isfinite(st) and math.isfinite(ex) and 0.0 <= st < ex <= math.pi):
             raise InputError(f"entry_angle, exit_angle: expected 0 <= entry < exit <= pi [rad], got {entry_angle!r}, {exit_angle!r}")
@@ -227,7 +230,7 @@ class MillingProcess:
         InputError
             Out-of-range arguments.
         """
-        n_revolutions = _positive(n_revolutions, "n_revolutions")
+        n_revolutions = positive_float(n_revolutions, "n_revolutions")
         if int(samples_per_revolution) != samples_per_revolution or samples_per_revolution < 8:
             raise InputError(f"samples_per_revolution: expected an integer >= 8, got {samples_per_revolution!r}")
         n = int(round(n_revolutions * samples_per_revolution))
@@ -235,17 +238,19 @@ class MillingProcess:
 
 
 @dataclass
-class SpindleAngleResult:
+class SpindleAngleResult(StatusResult):
     """Result of the spindle-angle search (status, never None).
+
+    Implements :class:`gtmodel.status.SolverResult`: :attr:`success` is True if at least
+    one grid angle is feasible.
 
     Parameters
     ----------
-    success : bool
-        True if at least one grid angle is feasible.
-    status : str
-        ``"optimal"`` (best grid point found) or ``"infeasible"`` (no feasible angle).
+    status : Status
+        ``"optimal"`` (best grid point found) or ``"infeasible"`` (no feasible angle);
+        keyword only.
     message : str
-        Summary (number of infeasible angles and why).
+        Summary (number of infeasible angles and why); keyword only.
     A_deg : numpy.ndarray, shape (n,)
         Grid of spindle angles [deg] (user boundary).
     theta : numpy.ndarray, shape (n, 6)
@@ -267,9 +272,6 @@ class SpindleAngleResult:
         (n, 3)).
     """
 
-    success: bool
-    status: str
-    message: str
     A_deg: np.ndarray
     theta: np.ndarray
     feasible: np.ndarray
@@ -279,11 +281,6 @@ class SpindleAngleResult:
     best_dynamic_deg: float
     F_peak: np.ndarray
     extra: dict[str, Any] = field(default_factory=dict)
-
-
-def _rot_z(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def spindle_angle_poses(arm: SerialArm, T_nominal: Any, theta0: Any, A_deg: Any, theta_limits: Any = None) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -340,7 +337,7 @@ def spindle_angle_poses(arm: SerialArm, T_nominal: Any, theta0: Any, A_deg: Any,
         seed = th0 if order.start == i0 else (theta[i0] if feasible[i0] else th0)
         for i in order:
             T = Tn.copy()
-            T[:3, :3] = Tn[:3, :3] @ _rot_z(math.radians(A[i]))
+            T[:3, :3] = Tn[:3, :3] @ np.array(rot_z(math.radians(A[i])))
             try:
                 th = arm.ik(T, seed)
             except (ConvergenceError, SingularConfigurationError) as exc:
@@ -476,8 +473,7 @@ def optimise_spindle_angle(
     if reasons:
         msg += f"; {n_bad} infeasible, e.g. {reasons[0]}"
     return SpindleAngleResult(
-        success=ok,
-        status="optimal" if ok else "infeasible",
+        status=Status.OPTIMAL if ok else Status.INFEASIBLE,
         message=msg,
         A_deg=A,
         theta=theta,

@@ -26,12 +26,14 @@ import numpy as np
 
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
+from gtmodel.modeling.expressions import parse_constraint, parse_objective
 from gtmodel.modeling.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
 from gtmodel.robots.kinematics import cart_acceleration_expression, configuration_signs, link_cosines_expression
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
+from gtmodel.status import Status
 
 __all__ = [
     "PointToPoint",
@@ -369,8 +371,6 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     collocation points, as in any direct collocation; between them the polynomials are not
     bounded.
     """
-    from gtmodel.modeling.expressions import parse_constraint, parse_objective
-
     p = problem.parameters
     model = gantry_tau_model(
         p, states="tcp", friction=problem.friction, friction_width=problem.friction_width, configuration=problem.configuration
@@ -522,6 +522,16 @@ class PointToPointSolution:
     def success(self) -> bool:
         """True only for an optimal solution."""
         return self.result.success
+
+    @property
+    def status(self) -> Status:
+        """The status of :attr:`result` (:class:`gtmodel.status.SolverResult` protocol)."""
+        return self.result.status
+
+    @property
+    def message(self) -> str:
+        """The solver's message of :attr:`result`."""
+        return self.result.message
 
     def trajectory(self, dt: float = SAMPLE_TIME) -> dict[str, np.ndarray]:
         """The solution resampled on a uniform grid (controller sample time by default).

@@ -400,7 +400,7 @@ def write_point_to_point(decl: PointToPoint, solution: PointToPointSolution, out
         write_c_header(traj, out / "trajectory.h", name=title)
         files += ["trajectory.csv", "trajectory.h"]
         if plots:
-            from gtmodel.trajectory.plots import plot_forces, plot_tcp_path
+            from gtmodel.report.trajectory import plot_forces, plot_tcp_path
 
             plot_tcp_path(traj, decl.start, decl.end, out / "tcp_path.png", title=title)
             plot_forces(traj, decl.force_limit, out / "forces.png", title=title)
@@ -677,7 +677,7 @@ def write_path_constrained(decl: PathConstrainedDeclaration, solution: Any, out:
         write_c_header(cols, out / "trajectory.h", name=title)
         files += ["trajectory.csv", "trajectory.h"]
         if plots:
-            from gtmodel.trajectory.plots import plot_forces, plot_path_profile, plot_tcp_path
+            from gtmodel.report.trajectory import plot_forces, plot_path_profile, plot_tcp_path
 
             plot_tcp_path(cols, decl.path.start, decl.path.end, out / "tcp_path.png", title=title)
             if decl.constraints.force_limit is not None:

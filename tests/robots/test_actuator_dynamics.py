@@ -54,7 +54,7 @@ def _closed_form_bandwidth_hz(a: float, ts: float, dbdrop: float = -3.0) -> floa
 def test_data_file_carries_the_thesis_numbers():
     """The data file's [actuators] equal the reference transcription of (6.11)."""
     ref = _reference()
-    act = load_dynamics_models().actuators
+    act = load_dynamics_models("L1_dynamics_models").actuators
     np.testing.assert_array_equal(act.a, ref["a"])
     np.testing.assert_array_equal(act.b, ref["b"])
     assert act.sample_time == ref["sample_time_s"]
@@ -71,7 +71,7 @@ def test_data_file_is_not_a_robot_parameter_set():
 def test_transfer_function_is_first_order_with_five_sample_delay(axis):
     """TF coefficients are b / (z^5 - a z^4), dt = 4 ms (eq. 6.11 in z)."""
     ref = _reference()
-    G = actuator_models()[axis]
+    G = actuator_models("L1_dynamics_models")[axis]
     assert G.dt == 0.004
     num = np.asarray(G.num[0][0], dtype=float)
     den = np.asarray(G.den[0][0], dtype=float)
@@ -91,14 +91,14 @@ def test_simulation_matches_difference_equation(axis):
     for k in range(n):
         y[k] = (a * y[k - 1] if k >= 1 else 0.0) + (b * u[k - 5] if k >= 5 else 0.0)
     t = np.arange(n) * 0.004
-    out = simulate(actuator_models()[axis], t, u).outputs
+    out = simulate(actuator_models("L1_dynamics_models")[axis], t, u).outputs
     np.testing.assert_allclose(out, y, atol=SIM_TOLERANCE)
 
 
 def test_step_response_has_dead_time_and_dc_gain():
     """Step: zero for the first 5 samples, b at sample 5, final value b / (1 - a)."""
     ref = _reference()
-    G = actuator_models()[2]
+    G = actuator_models("L1_dynamics_models")[2]
     r = step(G, duration=4.0)
     y = np.asarray(r.outputs)
     assert np.all(y[:5] == 0.0)
@@ -110,14 +110,14 @@ def test_step_response_has_dead_time_and_dc_gain():
 def test_bandwidth_matches_closed_form(axis):
     """bandwidth() of each axis equals the closed form of a discrete first-order lag."""
     ref = _reference()
-    bw = bandwidth(actuator_models()[axis])
+    bw = bandwidth(actuator_models("L1_dynamics_models")[axis])
     assert bw == pytest.approx(_closed_form_bandwidth_hz(ref["a"][axis], 0.004), abs=BANDWIDTH_TOLERANCE_HZ)
     assert bw == pytest.approx(-math.log(ref["a"][axis]) / (2 * math.pi * 0.004), abs=POLE_ESTIMATE_TOLERANCE_HZ)
 
 
 def test_bandwidths_against_thesis_statement():
     """Thesis: 'about 1.1 Hz'. Axis 3 is 1.09 Hz; axes 1 and 2 are about 1.4 Hz (reported honestly)."""
-    bws = [bandwidth(G) for G in actuator_models()]
+    bws = [bandwidth(G) for G in actuator_models("L1_dynamics_models")]
     assert bws[2] == pytest.approx(_reference()["bandwidth_hz_approx"], abs=THESIS_BANDWIDTH_TOLERANCE_HZ)
     assert 1.35 < bws[0] < 1.45 and 1.35 < bws[1] < 1.45
 
@@ -130,7 +130,7 @@ def test_bandwidth_continuous_uses_control_bandwidth():
 
 def test_bandwidth_dbdrop():
     """A -6 dB drop gives the closed form with g = 10^0.6."""
-    G = actuator_models()[0]
+    G = actuator_models("L1_dynamics_models")[0]
     a = _reference()["a"][0]
     assert bandwidth(G, dbdrop=-6.0) == pytest.approx(_closed_form_bandwidth_hz(a, 0.004, -6.0), abs=BANDWIDTH_TOLERANCE_HZ)
 
@@ -140,17 +140,17 @@ def test_bandwidth_dbdrop():
     [
         (lambda: bandwidth(control.tf([1.0], [1.0, 0.0])), "DC gain"),
         (lambda: bandwidth(control.ss(-np.eye(2), np.eye(2), np.eye(2), 0)), "SISO"),
-        (lambda: bandwidth(actuator_models()[0], dbdrop=3.0), "dbdrop"),
+        (lambda: bandwidth(actuator_models("L1_dynamics_models")[0], dbdrop=3.0), "dbdrop"),
         (lambda: actuator_tf(1.0, 0.03), "a: expected a stable pole"),
         (lambda: actuator_tf(float("nan"), 0.03), "a: expected a finite"),
         (lambda: actuator_tf(0.9, 0.0), "b: expected a non-zero"),
         (lambda: actuator_tf(0.9, 0.03, dt=0.0), "dt"),
         (lambda: actuator_tf(0.9, 0.03, delay=-1), "delay"),
-        (lambda: simulate(actuator_models()[0], np.arange(10) * 0.004, np.ones(9)), "u: expected shape"),
-        (lambda: simulate(actuator_models()[0], np.arange(10) * 0.004, np.r_[np.ones(9), np.nan]), "u: non-finite"),
-        (lambda: simulate(actuator_models()[0], np.r_[0.0, 0.008, 0.004, 0.012], np.ones(4)), "t: times must increase"),
-        (lambda: simulate(actuator_models()[0], np.arange(10) * 0.005, np.ones(10)), "equally spaced"),
-        (lambda: step(actuator_models()[0], duration=-1.0), "duration"),
+        (lambda: simulate(actuator_models("L1_dynamics_models")[0], np.arange(10) * 0.004, np.ones(9)), "u: expected shape"),
+        (lambda: simulate(actuator_models("L1_dynamics_models")[0], np.arange(10) * 0.004, np.r_[np.ones(9), np.nan]), "u: non-finite"),
+        (lambda: simulate(actuator_models("L1_dynamics_models")[0], np.r_[0.0, 0.008, 0.004, 0.012], np.ones(4)), "t: times must increase"),
+        (lambda: simulate(actuator_models("L1_dynamics_models")[0], np.arange(10) * 0.005, np.ones(10)), "equally spaced"),
+        (lambda: step(actuator_models("L1_dynamics_models")[0], duration=-1.0), "duration"),
     ],
 )
 def test_bad_input(call, match):

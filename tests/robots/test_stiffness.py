@@ -12,20 +12,24 @@ D1's measured TCP stiffness of 2-4 N/um (reference table) for the stated values.
 from __future__ import annotations
 
 import tomllib
+from importlib import resources
 
 import numpy as np
 import pytest
 import scipy.optimize
 
 from gtmodel.errors import InputError, ParameterError, UnreachablePoseError
+from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import available_parameter_sets
+from gtmodel.robots.six_link import load_six_link
+from gtmodel.report.stiffness import plot_stiffness_map
 from gtmodel.robots.stiffness import (
     N_PER_UM,
     GantryTau3Stiffness,
     StiffnessParameters,
+    closure_stiffness,
     load_stiffness,
-    plot_stiffness_map,
 )
 
 from ..conftest import SHARED_REFERENCE
@@ -43,6 +47,8 @@ MEASURED_BAND_FACTOR = 1.5
 #: Payload of the deflection checks [kg] (a spindle; stated in the problem file).
 PAYLOAD_KG = 40.0
 SEED = 3
+#: Number of random workspace poses of the checks.
+N_POSES = 6
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +60,7 @@ def d1():
 def poses(d1):
     T = d1.kinematics.workspace_grid(0.1)
     rng = np.random.default_rng(SEED)
-    return T[rng.choice(len(T), 6, replace=False)]
+    return T[rng.choice(len(T), N_POSES, replace=False)]
 
 
 # ------------------------------------------------------------------ stated values
@@ -68,15 +74,18 @@ def test_shipped_values_carry_their_sources():
     assert "stiffness" not in available_parameter_sets()
 
 
-def test_arm_compliance_is_series_and_parallel_springs(d1):
+@pytest.mark.parametrize("i, n", enumerate((1, 2, 3)))
+def test_arm_compliance_is_series_and_parallel_springs(d1, i, n):
     """Closed form: cluster of n parallel links, each a tube E A / L in series with two joints."""
     s = d1.stiffness
     A = np.pi / 4 * (s.outer_diameter**2 - s.inner_diameter**2)
-    for i, n in enumerate((1, 2, 3)):
-        k_link = s.E * A / d1.L[i]
-        expected = (1 / k_link + 2 / s.k_joint) / n
-        assert d1.c_link[i] == pytest.approx(expected, rel=EXACT_RTOL)
-    np.testing.assert_allclose(d1.c_act, 1 / s.k_actuator, rtol=EXACT_RTOL)
+    k_link = s.E * A / d1.L[i]
+    expected = (1 / k_link + 2 / s.k_joint) / n
+    assert d1.c_link[i] == pytest.approx(expected, rel=EXACT_RTOL)
+
+
+def test_actuator_compliance_is_the_inverse_stiffness(d1):
+    np.testing.assert_allclose(d1.c_act, 1 / d1.stiffness.k_actuator, rtol=EXACT_RTOL)
 
 
 # ------------------------------------------------------------------ K_x: second methods
@@ -105,18 +114,20 @@ def _nonlinear_plate_force(model: GantryTau3Stiffness, T: np.ndarray, dT: np.nda
     return F
 
 
-def test_cartesian_stiffness_matches_finite_differences_of_the_nonlinear_equilibrium(d1, poses):
+@pytest.mark.parametrize("n", range(N_POSES))
+def test_cartesian_stiffness_matches_finite_differences_of_the_nonlinear_equilibrium(d1, poses, n):
     """K_x (eq. 1) equals d F / d T of the nonlinear elastic equilibrium (central differences)."""
-    for T in poses:
-        K = d1.cartesian_stiffness(T)
-        K_fd = np.column_stack(
-            [(_nonlinear_plate_force(d1, T, FD_STEP * e) - _nonlinear_plate_force(d1, T, -FD_STEP * e)) / (2 * FD_STEP) for e in np.eye(3)]
-        )
-        np.testing.assert_allclose(K, K_fd, rtol=FD_RTOL, atol=FD_RTOL * np.abs(K).max())
-        np.testing.assert_allclose(K, K.T, rtol=EXACT_RTOL)
+    T = poses[n]
+    K = d1.cartesian_stiffness(T)
+    K_fd = np.column_stack(
+        [(_nonlinear_plate_force(d1, T, FD_STEP * e) - _nonlinear_plate_force(d1, T, -FD_STEP * e)) / (2 * FD_STEP) for e in np.eye(3)]
+    )
+    np.testing.assert_allclose(K, K_fd, rtol=FD_RTOL, atol=FD_RTOL * np.abs(K).max())
+    np.testing.assert_allclose(K, K.T, rtol=EXACT_RTOL)
 
 
-def test_cartesian_stiffness_is_the_inverse_jacobian_form(d1, poses):
+@pytest.mark.parametrize("n", range(N_POSES))
+def test_cartesian_stiffness_is_the_inverse_jacobian_form(d1, poses, n):
     """K_x = J^-T diag(k_i (u_i . v_i)^2) J^-1 with J^-1 of eq. 6.5 (kinematics module)."""
     kin: GantryTau3Kinematics = d1.kinematics
     Jinv = kin.jacobian_inverse(poses)
@@ -124,9 +135,8 @@ def test_cartesian_stiffness_is_the_inverse_jacobian_form(d1, poses):
     k = d1.arm_stiffness(poses)
     uv = cos * np.linalg.norm(d1.v, axis=1)
     K = d1.cartesian_stiffness(poses)
-    for n in range(len(poses)):
-        expected = Jinv[n].T @ np.diag(k[n] * uv[n] ** 2) @ Jinv[n]
-        np.testing.assert_allclose(K[n], expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+    expected = Jinv[n].T @ np.diag(k[n] * uv[n] ** 2) @ Jinv[n]
+    np.testing.assert_allclose(K[n], expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
 
 
 def test_trace_is_the_sum_of_arm_stiffnesses(d1, poses):
@@ -141,15 +151,16 @@ def test_arm_stiffness_depends_on_the_link_angle_through_the_actuator(d1, poses)
 
 
 # ------------------------------------------------------------------ loads and deflections
-def test_link_forces_balance_the_plate_load(d1, poses):
+@pytest.mark.parametrize("n", range(N_POSES))
+def test_link_forces_balance_the_plate_load(d1, poses, n):
     """sum_i f_i u_i = F (statics of the plate); u_i from the IK of eq. 4.9."""
     F = np.array([120.0, -50.0, -300.0])
     f = d1.link_forces(poses, F)
     q = d1.kinematics.ik(poses)
-    for n, T in enumerate(poses):
-        A = d1.As + q[n][:, None] * d1.v
-        U = (T - A) / np.linalg.norm(T - A, axis=1)[:, None]
-        np.testing.assert_allclose(U.T @ f[n], F, rtol=1e-10, atol=1e-9)
+    T = poses[n]
+    A = d1.As + q[n][:, None] * d1.v
+    U = (T - A) / np.linalg.norm(T - A, axis=1)[:, None]
+    np.testing.assert_allclose(U.T @ f[n], F, rtol=1e-10, atol=1e-9)
 
 
 def test_deflection_is_linear_and_solves_K_dT_equals_F(d1, poses):
@@ -216,8 +227,6 @@ def test_bad_stiffness_values(kw, match):
 
 
 def test_bad_stiffness_file_names_the_field(tmp_path):
-    from importlib import resources
-
     text = (resources.files("gtmodel.robots") / "data" / "stiffness.toml").read_text()
     f = tmp_path / "s.toml"
     f.write_text(text.replace("k_joint = 1.15e8", "k_joint = -1.0"))
@@ -251,25 +260,20 @@ def test_bad_input(d1, call, err, match):
 SIX_LINK_RTOL = 0.05
 
 
-def test_condensed_three_link_closure_equals_the_series_formula(d1, poses):
+@pytest.mark.parametrize("n", range(3))
+def test_condensed_three_link_closure_equals_the_series_formula(d1, poses, n):
     """Third method: differentiate the closure link lengths w.r.t. TCP and cart displacements,
     condense the carts (K_xx - K_xs K_ss^-1 K_sx): equals eqs. 1-2 (series arm compliance)."""
-    from gtmodel.robots.closure import ThreeLinkClosure
-    from gtmodel.robots.stiffness import closure_stiffness
-
     model = ThreeLinkClosure(d1.parameters)
-    for T in poses[:3]:
-        cs = closure_stiffness(model, d1.kinematics.ik(T), d1.stiffness)
-        np.testing.assert_allclose(cs.T, T, atol=1e-9)
-        np.testing.assert_allclose(cs.K, d1.cartesian_stiffness(T), rtol=1e-9, atol=1e-9 * np.abs(cs.K).max())
+    T = poses[n]
+    cs = closure_stiffness(model, d1.kinematics.ik(T), d1.stiffness)
+    np.testing.assert_allclose(cs.T, T, atol=1e-9)
+    np.testing.assert_allclose(cs.K, d1.cartesian_stiffness(T), rtol=1e-9, atol=1e-9 * np.abs(cs.K).max())
 
 
 def test_six_link_plate_rotation_lowers_the_stiffness(d1, poses):
     """Six-link D1 (Table 5.9 geometry): with the rotation held it is the translational model;
     letting the plate rotate under a TCP force can only soften it (K_locked - K_free >= 0)."""
-    from gtmodel.robots.six_link import load_six_link
-    from gtmodel.robots.stiffness import closure_stiffness
-
     six = load_six_link("D1_six_link")
     T = poses[0]
     cs = closure_stiffness(six, d1.kinematics.ik(T), d1.stiffness)
@@ -281,7 +285,5 @@ def test_six_link_plate_rotation_lowers_the_stiffness(d1, poses):
 
 
 def test_closure_stiffness_refuses_other_models():
-    from gtmodel.robots.stiffness import closure_stiffness
-
     with pytest.raises(InputError, match="3 linear actuators"):
         closure_stiffness("L1", [0.0, 0.0, 0.0])

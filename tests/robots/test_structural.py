@@ -17,7 +17,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.linalg
-from matplotlib.figure import Figure
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.structural import PhysicalModel
@@ -42,7 +41,7 @@ def _ref_matrices():
 def test_data_file_carries_the_thesis_matrices():
     """PhysicalModel.from_file has the reference M, D, K (copied, not computed)."""
     M, D, K = _ref_matrices()
-    p = PhysicalModel.from_file()
+    p = PhysicalModel.from_file("L1_dynamics_models")
     np.testing.assert_array_equal(p.M, M)
     np.testing.assert_array_equal(p.D, D)
     np.testing.assert_array_equal(p.K, K)
@@ -127,18 +126,9 @@ def test_wrong_convention_is_reported():
         PhysicalModel(*_ref_matrices(), convention="standard").modes()
 
 
-def test_plots_return_figures():
-    """Bode and impulse plots are matplotlib Figures (Agg-safe, no pyplot)."""
-    p = PhysicalModel.from_file()
-    fig = p.plot_bode()
-    assert isinstance(fig, Figure) and len(fig.axes) == 2
-    fig = p.plot_impulse(duration=0.3)
-    assert isinstance(fig, Figure) and len(fig.axes) == 2
-
-
 def test_impulse_response_shape_and_decay():
     """Impulse responses (n, m, T) start at 0 and decay (stable model)."""
-    r = PhysicalModel.from_file().impulse_response(duration=3.0, n_points=3001)
+    r = PhysicalModel.from_file("L1_dynamics_models").impulse_response(duration=3.0, n_points=3001)
     y = np.asarray(r.outputs)
     assert y.shape == (2, 2, 3001)
     np.testing.assert_allclose(y[:, :, 0], 0.0, atol=1e-12)
@@ -179,4 +169,4 @@ def test_bad_model(kwargs, match):
 def test_bad_arguments(call, match):
     """Bad method arguments raise InputError naming the argument."""
     with pytest.raises(InputError, match=match):
-        call(PhysicalModel.from_file())
+        call(PhysicalModel.from_file("L1_dynamics_models"))

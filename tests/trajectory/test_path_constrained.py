@@ -23,6 +23,7 @@ from gtmodel.trajectory.path_constrained import (
     solve_path_convex,
     uniform_grid,
 )
+from gtmodel.trajectory.path_constrained.reachability import _interval, _intervals
 
 # analytic trapezoid: the gridded optimum converges to T* = 1 s like ds^2
 TRAPEZOID_TOL = {100: 1e-4, 500: 5e-6}
@@ -292,8 +293,6 @@ def test_interval_closed_forms_match_brute_force():
 
     The returned set is ``[lo, hi]``, plus ``[b2, inf)`` where the set splits in two (then
     ``[lo, hi]`` is the part that contains rest); the scalar and vectorised forms agree."""
-    from gtmodel.trajectory.path_constrained import _interval, _intervals
-
     rng = np.random.default_rng(7)
     P = rng.normal(size=400) * (rng.random(400) > 0.1)  # some exact zeros
     Q = rng.normal(size=400) * 3 * (rng.random(400) > 0.2)
@@ -302,16 +301,19 @@ def test_interval_closed_forms_match_brute_force():
     b = x**2
     lo_v, hi_v, b2_v = _intervals(P, Q, R)
     assert np.sum(np.isfinite(b2_v)) >= 10 and np.sum(lo_v > hi_v) >= 10  # split and empty sets are covered
-    for k in range(P.size):
-        lo, hi, b2 = _interval(float(P[k]), float(Q[k]), float(R[k]))
-        assert (lo > hi) == (lo_v[k] > hi_v[k])  # empty in both forms
-        if lo <= hi:
-            assert (lo, hi) == pytest.approx((lo_v[k], hi_v[k]), rel=1e-12, abs=1e-12)
-        assert b2 == pytest.approx(b2_v[k], rel=1e-12)
-        inside = P[k] * b + Q[k] * x + R[k] <= 0
-        claimed = (b >= lo) & (b <= hi) | (b >= b2)
-        # away from the boundary points (rounding) membership must agree
-        margin = np.abs(P[k] * b + Q[k] * x + R[k]) > 1e-9 * (1 + np.abs(P[k]) * b + np.abs(Q[k]) * x + abs(R[k]))
-        assert np.all(inside[margin] == claimed[margin]), (P[k], Q[k], R[k], lo, hi, b2)
-        if np.isfinite(b2):
-            assert lo == 0.0 and hi < b2
+    lo, hi, b2 = np.array([_interval(float(p), float(q), float(r)) for p, q, r in zip(P, Q, R)]).T
+    np.testing.assert_array_equal(lo > hi, lo_v > hi_v)  # empty in both forms
+    full = lo <= hi
+    assert lo[full] == pytest.approx(lo_v[full], rel=1e-12, abs=1e-12)
+    assert hi[full] == pytest.approx(hi_v[full], rel=1e-12, abs=1e-12)
+    assert b2 == pytest.approx(b2_v, rel=1e-12)
+    val = P[:, None] * b + Q[:, None] * x + R[:, None]
+    inside = val <= 0
+    claimed = (b >= lo[:, None]) & (b <= hi[:, None]) | (b >= b2[:, None])
+    # away from the boundary points (rounding) membership must agree
+    margin = np.abs(val) > 1e-9 * (1 + np.abs(P)[:, None] * b + np.abs(Q)[:, None] * x + np.abs(R)[:, None])
+    disagree = np.flatnonzero(np.any(margin & (inside != claimed), axis=1))
+    assert disagree.size == 0, [(P[k], Q[k], R[k], lo[k], hi[k], b2[k]) for k in disagree]
+    split = np.isfinite(b2)
+    np.testing.assert_array_equal(lo[split], 0.0)
+    assert np.all(hi[split] < b2[split])

@@ -70,7 +70,7 @@ from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.robots import GantryTau3Kinematics, GantryTau3Stiffness, load_stiffness
 from gtmodel.robots.closure import ThreeLinkClosure
-from gtmodel.robots.stiffness import plot_stiffness_map
+from gtmodel.report.stiffness import plot_stiffness_map
 from gtmodel.status import Status
 
 __all__ = [

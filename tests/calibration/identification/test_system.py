@@ -67,7 +67,7 @@ def _structural_data(noise: float, seed: int = SEED):
 def _actuator_data(axis: int, kind: str, noise: float = 0.0, n: int = 2000):
     t = np.arange(n) * 0.004
     u = prbs(n, bits=8, hold=25) if kind == "prbs" else np.where(t >= 0.1, 1.0, 0.0)
-    y = np.asarray(simulate(actuator_models()[axis], t, u).outputs)
+    y = np.asarray(simulate(actuator_models("L1_dynamics_models")[axis], t, u).outputs)
     if noise:
         y = y + noise * np.random.default_rng(SEED + axis).standard_normal(n)
     return t, u, y
@@ -126,7 +126,7 @@ def test_actuator_delay_estimation():
 def test_identified_actuator_transfer_function():
     """The identified TF has the generating bandwidth and the same impulse response."""
     r = identify_actuator(*_actuator_data(0, "prbs"))
-    G, G0 = r.transfer_function(), actuator_models()[0]
+    G, G0 = r.transfer_function(), actuator_models("L1_dynamics_models")[0]
     t = np.arange(200) * 0.004
     np.testing.assert_allclose(control.impulse_response(G, t).outputs, control.impulse_response(G0, t).outputs, atol=1e-9)
 

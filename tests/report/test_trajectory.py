@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gtmodel.trajectory.plots import plot_forces, plot_tcp_path
+from gtmodel.report.trajectory import plot_forces, plot_tcp_path
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -1,0 +1,147 @@
+"""Constraint coefficients from the symbolic model: one CasADi Function per robot and limit kinds, cached.
+
+``rows(T, dT, ddT, sg) -> (m, c, d, g, q, dq, ddq, disc, cos)`` maps path samples to the
+coefficients of every row ``m a + c b + d sqrt(b) + g`` (``a = s_ddot``, ``b = s_dot^2``),
+extracted from the inverse dynamics with ``casadi.jacobian`` (see the package docstring).
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.robots.dynamics import GantryTau3Dynamics
+from gtmodel.robots.kinematics import link_cosines_expression
+
+__all__: list[str] = []
+
+
+def _exact_dynamics(robot: Any) -> GantryTau3Dynamics:
+    """Dynamics with the exact Coulomb sign (the path projection fixes its argument)."""
+    if isinstance(robot, GantryTau3Dynamics):
+        if robot.friction == "exact":
+            return robot
+        return GantryTau3Dynamics(robot.parameters, friction="exact", asymmetric=robot.asymmetric, gravity=robot.gravity)
+    return GantryTau3Dynamics(robot, friction="exact")
+
+
+_FUNCTION_CACHE: OrderedDict = OrderedDict()
+_FUNCTION_CACHE_SIZE = 16
+
+
+def _cache_key(robot: Any) -> Any:
+    if robot is None:
+        return None
+    if isinstance(robot, str):
+        return ("name", robot)
+    return ("object", id(robot))
+
+
+def _rows_function(dyn: GantryTau3Dynamics | None, kinds: tuple[str, ...], viscous: bool) -> ca.Function:
+    """CasADi Function ``rows(T, dT, ddT, sg) -> (m, c, d, g, q, dq, ddq, disc, cos)``.
+
+    Rows in the order of :meth:`PathConstraints.bounds`; ``dq = q'(s)``, ``ddq = q''(s)``.
+    """
+    T, dT, ddT, sg = (ca.SX.sym(n, 3) for n in ("T", "dT", "ddT", "sg"))
+    M: list[ca.SX] = []
+    C: list[ca.SX] = []
+    D: list[ca.SX] = []
+    G: list[ca.SX] = []
+    zero3 = ca.SX.zeros(3)
+    if dyn is not None:
+        kin = dyn.kinematics
+        q, disc = kin.ik_function(T, sg)
+        dq, ddq = kin.cart_acceleration_function(T, dT, ddT, sg)
+        cos = link_cosines_expression(T, q, kin.As, kin.v)
+    else:
+        q = dq = ddq = disc = cos = ca.SX(0, 1)
+    for kind in kinds:
+        if kind == "force_limit":
+            sd, sdd = ca.SX.sym("sd"), ca.SX.sym("sdd")
+            tau = dyn.inverse_dynamics_function(T, dT * sd, ddT * sd**2 + dT * sdd, sg)[0]
+            m = ca.jacobian(tau, sdd)
+            J1 = ca.jacobian(tau, sd)
+            H = ca.jacobian(J1, sd)
+            m, J1, H, tau1 = (ca.substitute(e, ca.vertcat(sd, sdd), ca.DM([1.0, 0.0])) for e in (m, J1, H, tau))
+            c = H / 2
+            d = J1 - H
+            g = tau1 - J1 + H / 2
+            M.append(m)
+            C.append(c)
+            D.append(d if viscous else zero3)
+            G.append(g)
+        elif kind == "cart_velocity_limit":
+            M.append(zero3)
+            C.append(dq**2)
+            D.append(zero3)
+            G.append(zero3)
+        elif kind == "cart_acceleration_limit":
+            M.append(dq)
+            C.append(ddq)
+            D.append(zero3)
+            G.append(zero3)
+        elif kind == "tcp_velocity_limit":
+            M.append(zero3)
+            C.append(dT**2)
+            D.append(zero3)
+            G.append(zero3)
+        elif kind == "tcp_speed_limit":
+            M.append(ca.SX(0))
+            C.append(ca.sumsqr(dT))
+            D.append(ca.SX(0))
+            G.append(ca.SX(0))
+        elif kind == "tcp_acceleration_limit":
+            M.append(dT)
+            C.append(ddT)
+            D.append(zero3)
+            G.append(zero3)
+    outs = [ca.vertcat(*X) for X in (M, C, D, G)] + [q, dq, ddq, disc, cos]
+    names = ["m", "c", "d", "g", "q", "dq", "ddq", "disc", "cos"]
+    return ca.Function("path_rows", [T, dT, ddT, sg], outs, ["T", "dT", "ddT", "sg"], names)
+
+
+def _cached_rows_function(robot: Any, dyn: GantryTau3Dynamics | None, kinds: tuple[str, ...], viscous: bool) -> ca.Function:
+    key = ("rows", _cache_key(robot), kinds, viscous)
+    hit = _FUNCTION_CACHE.get(key)
+    if hit is not None and (robot is None or isinstance(robot, str) or hit[0] is robot):  # id() may be reused
+        _FUNCTION_CACHE.move_to_end(key)
+        return hit[1]
+    f = _rows_function(dyn, kinds, viscous)
+    _FUNCTION_CACHE[key] = (robot, f, dyn)
+    if len(_FUNCTION_CACHE) > _FUNCTION_CACHE_SIZE:
+        _FUNCTION_CACHE.popitem(last=False)
+    return f
+
+
+def _cached_dynamics(robot: Any) -> GantryTau3Dynamics:
+    if isinstance(robot, GantryTau3Dynamics) and robot.friction == "exact":
+        return robot
+    key = ("dynamics", _cache_key(robot))
+    hit = _FUNCTION_CACHE.get(key)
+    if hit is not None and (isinstance(robot, str) or hit[0] is robot):
+        _FUNCTION_CACHE.move_to_end(key)
+        return hit[2]
+    dyn = _exact_dynamics(robot)
+    _FUNCTION_CACHE[key] = (robot, None, dyn)
+    if len(_FUNCTION_CACHE) > _FUNCTION_CACHE_SIZE:
+        _FUNCTION_CACHE.popitem(last=False)
+    return dyn
+
+
+class _MapCache:
+    """Evaluate a Function on N samples (columns), one ``map`` per N."""
+
+    def __init__(self, f: ca.Function) -> None:
+        self.f = f
+        self.maps: dict[int, ca.Function] = {}
+
+    def __call__(self, n: int, *args: np.ndarray) -> list[np.ndarray]:
+        if n not in self.maps:
+            self.maps[n] = self.f.map(n)
+        out = self.maps[n](*args)
+        if not isinstance(out, (list, tuple)):
+            out = [out]
+        return [np.asarray(o) for o in out]
