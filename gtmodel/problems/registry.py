@@ -8,12 +8,14 @@ from __future__ import annotations
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems.base import ProblemKind
+from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 
 __all__ = ["KINDS", "get_kind"]
 
 _CLASSES: tuple[type[ProblemKind], ...] = (
     PointToPointKind,
+    PathConstrainedKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.
