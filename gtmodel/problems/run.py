@@ -58,7 +58,7 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
         data = apply_override(data, key, value, path)
     file = ProblemFile(path)
     kind_name = data.get("kind")
-    if kind_name not in KINDS:
+    if not isinstance(kind_name, str) or kind_name not in KINDS:
         if "kind" not in data:
             raise ProblemError(f"{path}: missing field 'kind'")
         raise file.fail("kind", f"one of {', '.join(KINDS)}", kind_name)
