@@ -69,6 +69,8 @@ MAX_VIA_POINTS = 1000
 MIN_VELOCITY_M_S = 1e-2
 #: Smallest acceleration limit accepted [m/s^2] (same reason).
 MIN_ACCELERATION_M_S2 = 1e-2
+#: Shortest duration accepted [s] (the guess and bounds of method "collocation").
+MIN_TIME_S = 1e-3
 #: Largest energy weight accepted [1/N^2] (w = 1 already makes the duration irrelevant).
 MAX_ENERGY_WEIGHT = 1e3
 
@@ -132,8 +134,10 @@ class MethodSection(Section):
     name: choice(*PATH_METHODS, description='"convex" (Verscheure et al. 2009) or "collocation" (Dressler 2012, IPOPT)') = "convex"
     grid: integer(2, MAX_GRID_POINTS, description='grid points of method "convex"') = 500
     w: number(ge=0, le=MAX_ENERGY_WEIGHT, unit="1/N^2", description='energy weight of method "collocation": final_time + w * sum_i integral tau_i^2 dt') = 0.0
-    final_time_guess: number(gt=0, le=MAX_TIME_S, unit="s", description='initial guess of the duration (method "collocation")') = 1.0
-    final_time_bounds: vector(2, positive=True, bound=MAX_TIME_S, unit="s", description='[lo, hi] of the duration (method "collocation")') = [0.05, 10.0]
+    final_time_guess: number(ge=MIN_TIME_S, le=MAX_TIME_S, unit="s", description='initial guess of the duration, within final_time_bounds (method "collocation")') = 1.0
+    final_time_bounds: Annotated[
+        vector(2, positive=True, bound=MAX_TIME_S, unit="s", description='[lo, hi] of the duration (method "collocation")'), _at_least(MIN_TIME_S, "s")
+    ] = [0.05, 10.0]
 
 
 class PathConstrainedFile(ProblemSchema):
@@ -280,6 +284,8 @@ class PathConstrainedKind(ProblemKind):
         lo, hi = method.final_time_bounds
         if not lo < hi:
             raise file.fail("method.final_time_bounds", "[lo, hi] with 0 < lo < hi", [lo, hi])
+        if method.name == "collocation" and not lo <= method.final_time_guess <= hi:
+            raise file.fail("method.final_time_guess", f"a time within method.final_time_bounds {[lo, hi]}", method.final_time_guess)
         lim = doc.limits
         given = [key for key, value in lim if value is not None]
         if not given:
