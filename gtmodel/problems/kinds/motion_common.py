@@ -33,21 +33,45 @@ MAX_TIME_S = 1.0e4
 
 
 class RobotReference(Section):
-    """``[robot]``: the parameter set and the IK configuration (each kind adds its dynamics options)."""
+    """``[robot]``: the parameter set and the IK configuration (each kind adds its dynamics options).
+
+    Parameters
+    ----------
+    parameters : str
+        Shipped parameter set name or a TOML path relative to the problem file.
+    configuration : int
+        IK configuration, 0..7.
+    """
 
     parameters: NonEmptyText = Field(description="shipped parameter set (L1, D1, L1_ideal) or a TOML path relative to the problem file")
     configuration: integer(0, 7, description="IK configuration") = 0
 
 
 class MotionSection(Section):
-    """``[motion]``: rest-to-rest between two TCP positions."""
+    """``[motion]``: rest-to-rest between two TCP positions.
+
+    Parameters
+    ----------
+    start, end : list of float, shape (3,)
+        TCP positions at rest [m].
+    """
 
     start: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the start")
     end: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the end")
 
 
 class CollocationSection(Section):
-    """``[collocation]``: the transcription."""
+    """``[collocation]``: the transcription.
+
+    Parameters
+    ----------
+    elements : int
+        Finite elements, 1..10000.
+    points : int
+        Collocation points per element, 1..9.
+    scheme : str
+        ``"radau"`` or ``"legendre"``.
+    """
 
     elements: integer(1, 10000, description="finite elements") = 50
     points: integer(1, 9, description="collocation points per element") = 3
@@ -55,7 +79,15 @@ class CollocationSection(Section):
 
 
 class SolverSection(Section):
-    """``[solver]``: IPOPT settings."""
+    """``[solver]``: IPOPT settings.
+
+    Parameters
+    ----------
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    """
 
     max_iter: integer(1, 10**6, description="IPOPT iteration limit") = 3000
     tol: number(gt=0, le=1.0, description="IPOPT tolerance") = 1e-8

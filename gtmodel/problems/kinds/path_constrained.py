@@ -141,7 +141,31 @@ class MethodSection(Section):
 
 
 class PathConstrainedFile(ProblemSchema):
-    """A ``path_constrained`` problem file."""
+    """A ``path_constrained`` problem file.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name without ``.toml``).
+    description : str, optional
+        Free text.
+    kind : str
+        ``"path_constrained"``.
+    robot : RobotSection
+        ``[robot]``: parameter set, IK configuration, viscous friction.
+    motion : MotionSection
+        ``[motion]``: start and end positions [m].
+    path : PathSection
+        ``[path]``: shape and via points.
+    limits : LimitsSection
+        ``[limits]``: bounds along the path.
+    method : MethodSection
+        ``[method]``: convex or collocation and their settings.
+    collocation : CollocationSection
+        ``[collocation]``: mesh of method ``"collocation"``.
+    solver : SolverSection
+        ``[solver]``: IPOPT settings.
+    """
 
     kind: Literal["path_constrained"]
     robot: RobotSection

@@ -90,7 +90,33 @@ class InitialGuessSection(Section):
 
 
 class PointToPointFile(ProblemSchema):
-    """A ``point_to_point`` problem file."""
+    """A ``point_to_point`` problem file.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name without ``.toml``).
+    description : str, optional
+        Free text.
+    kind : str
+        ``"point_to_point"``.
+    robot : RobotSection
+        ``[robot]``: parameter set, IK configuration, friction model.
+    motion : MotionSection
+        ``[motion]``: start and end positions [m].
+    limits : LimitsSection
+        ``[limits]``: actuator and TCP bounds.
+    parameters : dict of str to float
+        ``[parameters]``: named numbers of the expressions.
+    optimization : OptimizationSection
+        ``[optimization]``: objective, constraints, final time.
+    initial_guess : InitialGuessSection
+        ``[initial_guess]``: how the NLP is started.
+    collocation : CollocationSection
+        ``[collocation]``: the transcription.
+    solver : SolverSection
+        ``[solver]``: IPOPT settings.
+    """
 
     kind: Literal["point_to_point"]
     robot: RobotSection
