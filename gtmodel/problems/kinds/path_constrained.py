@@ -98,7 +98,7 @@ def _via_list(v: Any) -> Any:
 
 #: Via points of a path: ``[[x, y, z], ...]`` [m].
 ViaPoints = Annotated[
-    list[vector(3, bound=MAX_LENGTH_M, unit="m")],
+    list[vector(3, bound=MAX_LENGTH_M, unit="m", description="a via point [x, y, z]")],
     BeforeValidator(_via_list),
     Field(max_length=MAX_VIA_POINTS, description='points between motion.start and motion.end, e.g. [[0.0, 2.9, -0.5]] [m]'),
 ]
