@@ -104,8 +104,12 @@ class ProblemFile:
         """
         if ref in shipped:
             return ref
-        target = Path(ref) if Path(ref).is_absolute() else (self.path.parent / ref).resolve()
-        if not target.is_file():
+        try:
+            target = Path(ref) if Path(ref).is_absolute() else (self.path.parent / ref).resolve()
+            found = target.is_file()
+        except (OSError, ValueError):  # a name too long, a NUL byte, ...
+            found = False
+        if not found:
             names = f"a shipped set ({', '.join(sorted(shipped))}) or " if shipped else ""
             raise self.fail(field, f"{names}an existing file (relative to {self.path.parent})", ref)
         return target

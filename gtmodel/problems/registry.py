@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems.base import ProblemKind
+from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
 from gtmodel.problems.kinds.calibration import CalibrationKind
 from gtmodel.problems.kinds.elasto_geometric_calibration import ElastoGeometricKind
 from gtmodel.problems.kinds.dynamic_identification import DynamicIdentificationKind
@@ -18,6 +19,7 @@ __all__ = ["KINDS", "get_kind"]
 
 _CLASSES: tuple[type[ProblemKind], ...] = (
     PointToPointKind,
+    PathConstrainedKind,
     CalibrationKind,
     ElastoGeometricKind,
     DynamicIdentificationKind,

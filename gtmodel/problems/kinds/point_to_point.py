@@ -16,18 +16,25 @@ from pydantic import Field
 
 from gtmodel.errors import InputError, ProblemError, UnreachablePoseError
 from gtmodel.modeling.expressions import parse_constraint, parse_objective
-from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.base import ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.motion_common import (
+    MAX_TIME_S,
+    CollocationSection,
+    MotionSection,
+    RobotReference,
+    SolverSection,
+    force_statistics,
+    trajectory_columns,
+)
 from gtmodel.problems.references import named_parameters, robot_parameters
 from gtmodel.problems.schema import (
     MAX_FORCE_N,
-    MAX_LENGTH_M,
     Expressions,
     Flag,
     NonEmptyText,
     ProblemSchema,
     Section,
     choice,
-    integer,
     number,
     vector,
 )
@@ -37,28 +44,14 @@ from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, check_holding_forces, solve_point_to_point
 from gtmodel.trajectory.export import write_c_header
 
-__all__ = ["PointToPointKind", "PointToPointFile", "AT_BOUND_RTOL", "trajectory_columns"]
-
-#: Relative tolerance on force limits when reporting the fraction of time at a bound.
-AT_BOUND_RTOL = 1e-3
-#: Longest final time accepted [s].
-MAX_TIME_S = 1.0e4
+__all__ = ["PointToPointKind", "PointToPointFile", "point_to_point_summary"]
 
 
-class RobotSection(Section):
+class RobotSection(RobotReference):
     """``[robot]``: the parameter set and the dynamics options."""
 
-    parameters: NonEmptyText = Field(description="shipped parameter set (L1, D1, L1_ideal) or a TOML path relative to the problem file")
-    configuration: integer(0, 7, description="IK configuration") = 0
     friction: choice(*FRICTION_FORMS, description="friction form of the dynamics") = "tanh"
     friction_width: number(gt=0, le=10.0, unit="m/s", description="velocity scale of the smooth friction forms") = DEFAULT_FRICTION_WIDTH
-
-
-class MotionSection(Section):
-    """``[motion]``: rest-to-rest between two TCP positions."""
-
-    start: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the start")
-    end: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the end")
 
 
 class LimitsSection(Section):
@@ -96,47 +89,32 @@ class InitialGuessSection(Section):
     file: NonEmptyText | None = Field(default=None, description='trajectory CSV when method = "file" (relative to the problem file)')
 
 
-class CollocationSection(Section):
-    """``[collocation]``: the transcription."""
-
-    elements: integer(1, 10000, description="finite elements") = 50
-    points: integer(1, 9, description="collocation points per element") = 3
-    scheme: choice("radau", "legendre") = "radau"
-
-
-class SolverSection(Section):
-    """``[solver]``: IPOPT settings."""
-
-    max_iter: integer(1, 10**6, description="IPOPT iteration limit") = 3000
-    tol: number(gt=0, le=1.0, description="IPOPT tolerance") = 1e-8
-
-
 class PointToPointFile(ProblemSchema):
     """A ``point_to_point`` problem file.
 
     Parameters
     ----------
     name : str, optional
-        Problem name (default: the file name).
-    kind : {"point_to_point"}
-        The kind.
+        Problem name (default: the file name without ``.toml``).
     description : str, optional
         Free text.
+    kind : str
+        ``"point_to_point"``.
     robot : RobotSection
-        ``[robot]``: parameter set, IK configuration, friction form.
+        ``[robot]``: parameter set, IK configuration, friction model.
     motion : MotionSection
-        ``[motion]``: start and end TCP positions [m].
+        ``[motion]``: start and end positions [m].
     limits : LimitsSection
-        ``[limits]``: force [N], velocity and angle bounds.
-    parameters : dict of str to float, optional
+        ``[limits]``: actuator and TCP bounds.
+    parameters : dict of str to float
         ``[parameters]``: named numbers of the expressions.
     optimization : OptimizationSection
         ``[optimization]``: objective, constraints, final time.
-    initial_guess : InitialGuessSection, optional
-        ``[initial_guess]``: how the NLP starts.
-    collocation : CollocationSection, optional
-        ``[collocation]``: elements, points, scheme.
-    solver : SolverSection, optional
+    initial_guess : InitialGuessSection
+        ``[initial_guess]``: how the NLP is started.
+    collocation : CollocationSection
+        ``[collocation]``: the transcription.
+    solver : SolverSection
         ``[solver]``: IPOPT settings.
     """
 
@@ -157,21 +135,6 @@ MODEL_NAMES = (
     | {f"{n}{k}" for n in ("q", "qd", "qdd", "tau") for k in (1, 2, 3)}
     | {"power", "time", "start_time", "final_time"}
 )
-
-
-def trajectory_columns() -> tuple[Column, ...]:
-    """Study-table columns of the motion kinds (Dressler (2012), Table 3.1).
-
-    Returns
-    -------
-    tuple of Column
-    """
-    return (
-        Column("final_time_s", "T_final [s]", "{:.4f}"),
-        Column("energy", "energy [N^2 s]", "{:.6g}"),
-        Column("iterations", "iterations", "{}"),
-        Column("solve_time_s", "solve time [s]", "{:.3f}"),
-    )
 
 
 class PointToPointKind(ProblemKind):
@@ -425,8 +388,6 @@ def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -
     }
     if r.status in ("optimal", "acceptable"):
         traj = solution.trajectory()
-        tau = np.column_stack([traj["tau1"], traj["tau2"], traj["tau3"]])
-        summary["max_force_ratio"] = (np.abs(tau).max(axis=0) / decl.force_limit).tolist()
-        summary["fraction_at_force_bound"] = (np.abs(tau) >= (1 - AT_BOUND_RTOL) * decl.force_limit).mean(axis=0).tolist()
+        summary.update(force_statistics(traj, decl.force_limit))
         summary["sample_time_s"] = float(traj["t"][1] - traj["t"][0]) if len(traj["t"]) > 1 else None
     return summary

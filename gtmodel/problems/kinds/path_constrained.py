@@ -1,0 +1,486 @@
+"""Kind ``path_constrained``: time-optimal (or energy-weighted) motion along a given TCP path.
+
+Dressler (2012), ch. 3.5, Table 3.1 "path constrained" rows: the TCP is restricted to a
+path (a line, a polyline or a spline through via points), the states reduce to the path
+coordinate ``s`` and its rate. Two methods (:data:`PATH_METHODS`): ``"convex"``, the convex
+reformulation of Verscheure et al. (2009) solved to the exact optimum of the gridded
+problem (:func:`~gtmodel.trajectory.solve_path_convex`), and ``"collocation"``, the
+thesis' projection solved by collocation (:func:`~gtmodel.trajectory.solve_path_collocation`).
+The field reference is ``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Literal, Mapping
+
+import numpy as np
+from pydantic import AfterValidator, BeforeValidator, Field
+from pydantic_core import PydanticCustomError
+
+from gtmodel.errors import InputError, UnreachablePoseError
+from gtmodel.problems.base import ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.motion_common import (
+    MAX_TIME_S,
+    CollocationSection,
+    MotionSection,
+    RobotReference,
+    SolverSection,
+    force_statistics,
+    trajectory_columns,
+)
+from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.schema import MAX_FORCE_N, MAX_LENGTH_M, Flag, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.report.trajectory import plot_forces, plot_overlay, plot_path_profile, plot_tcp_path
+from gtmodel.robots import RobotParameters
+from gtmodel.trajectory import (
+    Path as TcpPath,
+    PathConstraints,
+    PathSolution,
+    Polyline,
+    SplinePath,
+    StraightLine,
+    solve_path_collocation,
+    solve_path_convex,
+)
+from gtmodel.trajectory.export import write_c_header
+
+__all__ = [
+    "PATH_METHODS",
+    "MAX_GRID_POINTS",
+    "MAX_VIA_POINTS",
+    "PathConstrainedFile",
+    "PathConstrainedDeclaration",
+    "PathConstrainedKind",
+    "path_trajectory_columns",
+]
+
+#: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
+#: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection
+#: solved by collocation (Dressler (2012), ch. 3.5).
+PATH_METHODS = ("convex", "collocation")
+#: Most grid points of the convex method (20000 solve in about a second, 250 MB).
+MAX_GRID_POINTS = 20000
+#: Most via points of a path.
+MAX_VIA_POINTS = 1000
+#: Smallest velocity limit accepted [m/s]: slower limits make motions of hours, whose
+#: 4 ms samples would not fit in memory.
+MIN_VELOCITY_M_S = 1e-2
+#: Smallest acceleration limit accepted [m/s^2] (same reason).
+MIN_ACCELERATION_M_S2 = 1e-2
+#: Shortest duration accepted [s] (the guess and bounds of method "collocation").
+MIN_TIME_S = 1e-3
+#: Largest energy weight accepted [1/N^2] (w = 1 already makes the duration irrelevant).
+MAX_ENERGY_WEIGHT = 1e3
+
+
+def _at_least(minimum: float, unit: str) -> AfterValidator:
+    """Every entry of a (validated) vector at least ``minimum``."""
+
+    def check(v: list[float]) -> list[float]:
+        if any(x < minimum for x in v):
+            raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": f"numbers >= {minimum:g} {unit}"})
+        return v
+
+    return AfterValidator(check)
+
+
+def _limit(unit: str, minimum: float, bound: float, description: str) -> Any:
+    return Annotated[vector(3, positive=True, bound=bound, unit=unit, description=description), _at_least(minimum, unit)]
+
+
+def _via_list(v: Any) -> Any:
+    if not isinstance(v, list) or len(v) > MAX_VIA_POINTS:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": f"a list of at most {MAX_VIA_POINTS} [x, y, z] points [m]"})
+    return v
+
+
+#: Via points of a path: ``[[x, y, z], ...]`` [m].
+ViaPoints = Annotated[
+    list[vector(3, bound=MAX_LENGTH_M, unit="m", description="a via point [x, y, z]")],
+    BeforeValidator(_via_list),
+    Field(max_length=MAX_VIA_POINTS, description='points between motion.start and motion.end, e.g. [[0.0, 2.9, -0.5]] [m]'),
+]
+
+
+class RobotSection(RobotReference):
+    """``[robot]``: the parameter set and the friction model (exact Coulomb friction always)."""
+
+    viscous_friction: Flag = Field(default=True, description="include viscous friction")
+
+
+class PathSection(Section):
+    """``[path]``: the TCP path from motion.start to motion.end."""
+
+    shape: choice("line", "polyline", "spline", description='"line", or a "polyline"/"spline" through via points') = "line"
+    via: ViaPoints = []
+
+
+class LimitsSection(Section):
+    """``[limits]``: bounds along the path (at least one; method "collocation": force only)."""
+
+    force: vector(3, positive=True, bound=MAX_FORCE_N, unit="N", description="|tau_i| <= force_i") | None = None
+    cart_velocity: _limit("m/s", MIN_VELOCITY_M_S, 1e3, "|qd_i| <= cart_velocity_i") | None = None
+    cart_acceleration: _limit("m/s^2", MIN_ACCELERATION_M_S2, 1e5, "|qdd_i| <= cart_acceleration_i") | None = None
+    tcp_velocity: _limit("m/s", MIN_VELOCITY_M_S, 1e3, "per axis |T_dot_j| <= tcp_velocity_j") | None = None
+    tcp_speed: number(ge=MIN_VELOCITY_M_S, le=1e3, unit="m/s", description="||T_dot|| <= tcp_speed") | None = None
+    tcp_acceleration: _limit("m/s^2", MIN_ACCELERATION_M_S2, 1e5, "per axis |T_ddot_j| <= tcp_acceleration_j") | None = None
+
+
+class MethodSection(Section):
+    """``[method]``: how the problem is solved."""
+
+    name: choice(*PATH_METHODS, description='"convex" (Verscheure et al. 2009) or "collocation" (Dressler 2012, IPOPT)') = "convex"
+    grid: integer(2, MAX_GRID_POINTS, description='grid points of method "convex"') = 500
+    w: number(ge=0, le=MAX_ENERGY_WEIGHT, unit="1/N^2", description='energy weight of method "collocation": final_time + w * sum_i integral tau_i^2 dt') = 0.0
+    final_time_guess: number(ge=MIN_TIME_S, le=MAX_TIME_S, unit="s", description='initial guess of the duration, within final_time_bounds (method "collocation")') = 1.0
+    final_time_bounds: Annotated[
+        vector(2, positive=True, bound=MAX_TIME_S, unit="s", description='[lo, hi] of the duration (method "collocation")'), _at_least(MIN_TIME_S, "s")
+    ] = [0.05, 10.0]
+
+
+class PathConstrainedFile(ProblemSchema):
+    """A ``path_constrained`` problem file.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name without ``.toml``).
+    description : str, optional
+        Free text.
+    kind : str
+        ``"path_constrained"``.
+    robot : RobotSection
+        ``[robot]``: parameter set, IK configuration, viscous friction.
+    motion : MotionSection
+        ``[motion]``: start and end positions [m].
+    path : PathSection
+        ``[path]``: shape and via points.
+    limits : LimitsSection
+        ``[limits]``: bounds along the path.
+    method : MethodSection
+        ``[method]``: convex or collocation and their settings.
+    collocation : CollocationSection
+        ``[collocation]``: mesh of method ``"collocation"``.
+    solver : SolverSection
+        ``[solver]``: IPOPT settings.
+    """
+
+    kind: Literal["path_constrained"]
+    robot: RobotSection
+    motion: MotionSection
+    path: PathSection = PathSection()
+    limits: LimitsSection
+    method: MethodSection = MethodSection()
+    collocation: CollocationSection = CollocationSection()
+    solver: SolverSection = SolverSection()
+
+
+@dataclass(frozen=True)
+class PathConstrainedDeclaration:
+    """A validated ``path_constrained`` problem.
+
+    Parameters
+    ----------
+    path : gtmodel.trajectory.Path
+        The TCP path (checked inside the workspace).
+    robot : RobotParameters
+        Parameter set.
+    constraints : gtmodel.trajectory.PathConstraints
+        Limits along the path.
+    method : str
+        One of :data:`PATH_METHODS`.
+    grid : int
+        Grid points of the convex method.
+    w : float
+        Energy weight of the collocation method's objective
+        ``final_time + w * sum_i integral tau_i^2 dt`` [1/N^2].
+    configuration : int
+        IK configuration.
+    viscous_friction : bool
+        Include viscous friction.
+    elements, points : int
+        Collocation mesh (method ``"collocation"``).
+    scheme : str
+        ``"radau"`` or ``"legendre"``.
+    final_time_guess : float
+        Initial guess of the duration [s] (method ``"collocation"``).
+    final_time_bounds : tuple of float
+        Bounds of the duration [s] (method ``"collocation"``).
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    """
+
+    path: TcpPath
+    robot: RobotParameters
+    constraints: PathConstraints
+    method: str
+    grid: int
+    w: float
+    configuration: int
+    viscous_friction: bool
+    elements: int = 50
+    points: int = 3
+    scheme: str = "radau"
+    final_time_guess: float = 1.0
+    final_time_bounds: tuple[float, float] = (0.05, 10.0)
+    max_iter: int = 3000
+    tol: float = 1e-8
+
+
+def path_trajectory_columns(solution: PathSolution) -> dict[str, np.ndarray]:
+    """The 4 ms table of a path-constrained solution, with the columns of the free-path CSV.
+
+    Parameters
+    ----------
+    solution : gtmodel.trajectory.PathSolution
+        A solved problem.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``t, x, y, z, q1..q3, qd1..qd3, tau1..tau3, xd, yd, zd, s, s_dot, s_ddot``, each (K,).
+
+    Raises
+    ------
+    SolverError
+        The solution has no motion (not solved).
+    """
+    tr = solution.trajectory()
+    cols: dict[str, np.ndarray] = {"t": tr["t"]}
+    for k, c in enumerate("xyz"):
+        cols[c] = tr["T"][:, k]
+    for name, key in (("q", "q"), ("qd", "q_dot"), ("tau", "tau")):
+        for k in range(3):
+            cols[f"{name}{k + 1}"] = tr[key][:, k]
+    for k, c in enumerate("xyz"):
+        cols[f"{c}d"] = tr["T_dot"][:, k]
+    for key in ("s", "s_dot", "s_ddot"):
+        cols[key] = tr[key]
+    return cols
+
+
+class PathConstrainedKind(ProblemKind):
+    """Motion along a given TCP path (:func:`~gtmodel.trajectory.solve_path_convex`, :func:`~gtmodel.trajectory.solve_path_collocation`)."""
+
+    name = "path_constrained"
+    schema = PathConstrainedFile
+    title = "time-optimal motion along a given TCP path (Dressler (2012), ch. 3.5; Verscheure et al. (2009))"
+    columns = trajectory_columns()
+    empty_fields = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
+
+    def load(self, doc: PathConstrainedFile, file: ProblemFile, name: str) -> PathConstrainedDeclaration:
+        """Build the path, the limits and the solver settings (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        doc : PathConstrainedFile
+            The validated file.
+        file : ProblemFile
+            The file.
+        name : str
+            Problem name.
+
+        Returns
+        -------
+        PathConstrainedDeclaration
+
+        Raises
+        ------
+        ProblemError
+            Via points inconsistent with the shape, coinciding consecutive points, no
+            limit, a limit or weight the method does not support, a path outside the
+            workspace (naming the path coordinate ``s``).
+        """
+        params = robot_parameters(file, "robot.parameters", doc.robot.parameters)
+        configuration = doc.robot.configuration
+        shape, via = doc.path.shape, doc.path.via
+        if shape == "line" and via:
+            raise file.fail("path.via", 'no via points for shape = "line" (use "polyline" or "spline")', via)
+        if shape != "line" and not via:
+            raise file.fail("path.via", f"at least one via point for shape = {shape!r}", via)
+        method = doc.method
+        if method.name == "convex" and method.w != 0.0:
+            raise file.fail("method.w", 'w = 0 for method "convex" (time-optimal); use method "collocation" for an energy weight', method.w)
+        lo, hi = method.final_time_bounds
+        if not lo < hi:
+            raise file.fail("method.final_time_bounds", "[lo, hi] with 0 < lo < hi", [lo, hi])
+        if method.name == "collocation" and not lo <= method.final_time_guess <= hi:
+            raise file.fail("method.final_time_guess", f"a time within method.final_time_bounds {[lo, hi]}", method.final_time_guess)
+        lim = doc.limits
+        given = [key for key, value in lim if value is not None]
+        if not given:
+            raise file.fail("limits", "at least one limit (force, cart_velocity, cart_acceleration, tcp_velocity, tcp_speed, tcp_acceleration)")
+        if method.name == "collocation":
+            if lim.force is None:
+                raise file.fail("limits.force", 'force limits for method "collocation"')
+            other = [key for key in given if key != "force"]
+            if other:
+                raise file.fail(f"limits.{other[0]}", 'only force limits with method "collocation" (use method "convex" for the others)', getattr(lim, other[0]))
+        try:
+            cons = PathConstraints(
+                force_limit=lim.force,
+                cart_velocity_limit=lim.cart_velocity,
+                cart_acceleration_limit=lim.cart_acceleration,
+                tcp_velocity_limit=lim.tcp_velocity,
+                tcp_speed_limit=lim.tcp_speed,
+                tcp_acceleration_limit=lim.tcp_acceleration,
+            )
+        except InputError as exc:
+            raise file.wrap("limits", exc) from None
+        start, end = np.array(doc.motion.start), np.array(doc.motion.end)
+        points = [start, *(np.array(p) for p in via), end]
+        names = ["motion.start", *(f"path.via[{k}]" for k in range(len(via))), "motion.end"]
+        for k in range(len(points) - 1):
+            if np.linalg.norm(points[k + 1] - points[k]) < 1e-9:
+                raise file.fail(names[k + 1], f"a point different from {names[k]}", points[k + 1].tolist())
+        try:
+            if shape == "line":
+                path = StraightLine(start, end, robot=params, configuration=configuration)
+            elif shape == "polyline":
+                path = Polyline(points, robot=params, configuration=configuration)
+            else:
+                path = SplinePath(points, robot=params, configuration=configuration)
+        except UnreachablePoseError as exc:
+            raise file.wrap("path", exc) from None
+        except InputError as exc:
+            raise file.wrap("path", exc) from None
+        col, sol = doc.collocation, doc.solver
+        return PathConstrainedDeclaration(
+            path=path,
+            robot=params,
+            constraints=cons,
+            method=method.name,
+            grid=method.grid,
+            w=method.w,
+            configuration=configuration,
+            viscous_friction=doc.robot.viscous_friction,
+            elements=col.elements,
+            points=col.points,
+            scheme=col.scheme,
+            final_time_guess=method.final_time_guess,
+            final_time_bounds=(float(lo), float(hi)),
+            max_iter=sol.max_iter,
+            tol=sol.tol,
+        )
+
+    def solve(self, declaration: PathConstrainedDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> PathSolution:
+        """Solve with the declared method.
+
+        Parameters
+        ----------
+        declaration : PathConstrainedDeclaration
+            From :meth:`load`.
+        verbose : bool, optional
+            IPOPT's iteration log (method ``"collocation"``).
+        previous : Any, optional
+            Unused (each case is solved afresh).
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        PathSolution
+            Always returned; its ``status`` says whether it is optimal.
+        """
+        d = declaration
+        if d.method == "convex":
+            return solve_path_convex(d.path, d.constraints, robot=d.robot, grid=d.grid, configuration=d.configuration, viscous_friction=d.viscous_friction)
+        return solve_path_collocation(
+            d.path,
+            d.robot,
+            d.constraints.force_limit,
+            w=d.w,
+            configuration=d.configuration,
+            viscous_friction=d.viscous_friction,
+            elements=d.elements,
+            points=d.points,
+            scheme=d.scheme,
+            final_time_guess=d.final_time_guess,
+            final_time_bounds=d.final_time_bounds,
+            max_iter=d.max_iter,
+            tol=d.tol,
+            verbose=verbose,
+        )
+
+    def write(self, declaration: PathConstrainedDeclaration, solution: PathSolution, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields; ``trajectory.csv``, ``trajectory.h`` and plots of a solution.
+
+        Nothing but the summary fields is produced unless the solve is optimal or
+        acceptable.
+
+        Parameters
+        ----------
+        declaration : PathConstrainedDeclaration
+            The declaration.
+        solution : PathSolution
+            Its solution.
+        out : pathlib.Path
+            The folder.
+        plots : bool
+            Write PNG plots (``tcp_path.png``, ``profile.png``, ``forces.png`` with force limits).
+        name : str
+            Plot title.
+
+        Returns
+        -------
+        Written
+            Status, final time, energy, iterations, solve time, method, grid and force figures.
+        """
+        d = declaration
+        written = Written({
+            "status": solution.status,
+            "message": solution.message,
+            "final_time_s": solution.final_time if solution.success else None,
+            "energy": solution.energy if solution.success else None,
+            "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
+            "iterations": solution.iterations,
+            "solve_time_s": solution.solve_time,
+            "objective": solution.final_time if solution.success else None,
+            "max_constraint_violation": None,
+            "method": solution.method,
+            "grid_points": int(np.size(solution.s)) if solution.s is not None else None,
+            "w": d.w,
+            "robot": d.robot.name,
+        })
+        if solution.status not in ("optimal", "acceptable"):
+            return written
+        cols = path_trajectory_columns(solution)
+        force_limit = d.constraints.force_limit
+        if force_limit is not None:
+            written.fields["force_limit_N"] = np.asarray(force_limit).tolist()
+            written.fields.update(force_statistics(cols, force_limit))
+        written.fields["sample_time_s"] = float(cols["t"][1] - cols["t"][0]) if cols["t"].size > 1 else None
+        data = np.column_stack(list(cols.values()))
+        np.savetxt(out / "trajectory.csv", data, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+        write_c_header(cols, out / "trajectory.h", name=name)
+        written.files += ["trajectory.csv", "trajectory.h"]
+        if plots:
+            plot_tcp_path(cols, d.path.start, d.path.end, out / "tcp_path.png", title=name)
+            if force_limit is not None:
+                plot_forces(cols, force_limit, out / "forces.png", title=name)
+                written.files.append("forces.png")
+            plot_path_profile(solution, out / "profile.png", title=name)
+            written.files += ["tcp_path.png", "profile.png"]
+        return written
+
+    def overlay(self, solutions: Mapping[str, PathSolution], out: Path) -> list[str]:
+        """TCP-path and force overlays of a study's cases (the columns of :func:`path_trajectory_columns`).
+
+        Parameters
+        ----------
+        solutions : Mapping[str, PathSolution]
+            Label -> solved solution.
+        out : pathlib.Path
+            The study folder.
+
+        Returns
+        -------
+        list of str
+            ``overlay_forces.png``, ``overlay_tcp.png`` (none without solutions).
+        """
+        trajs = {label: path_trajectory_columns(sol) for label, sol in solutions.items()}
+        return [p.name for p in plot_overlay(trajs, out)] if trajs else []
