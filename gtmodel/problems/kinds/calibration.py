@@ -199,7 +199,27 @@ class PoseSelectionSection(Section):
 
 
 class CalibrationFile(ProblemSchema):
-    """A ``calibration`` problem file."""
+    """A ``calibration`` problem file: exactly one of ``[data]`` and ``[truth]``.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"calibration"}
+        The kind.
+    description : str, optional
+        Free text.
+    data : DataSection, optional
+        ``[data]``: measurement file(s).
+    truth : TruthSection, optional
+        ``[truth]``: synthetic measurements of a deviated robot.
+    models : list of ModelSection
+        ``[[models]]``: the models to calibrate, each with its parameter selection.
+    calibration : CalibrationSection, optional
+        ``[calibration]``: solver, iteration limit, alignment.
+    pose_selection : PoseSelectionSection, optional
+        ``[pose_selection]``: choose a subset of the poses.
+    """
 
     kind: Literal["calibration"]
     data: DataSection | None = None

@@ -132,7 +132,25 @@ class StiffnessMapSection(Section):
 
 
 class ElastoGeometricFile(ProblemSchema):
-    """An ``elasto_geometric_calibration`` problem file."""
+    """An ``elasto_geometric_calibration`` problem file.
+
+    Parameters
+    ----------
+    name : str, optional
+        Problem name (default: the file name).
+    kind : {"elasto_geometric_calibration"}
+        The kind.
+    description : str, optional
+        Free text.
+    truth : TruthSection
+        ``[truth]``: the true robot, stiffness, payloads and noise.
+    start : StartSection
+        ``[start]``: the model calibrated and its starting compliances.
+    calibration : CalibrationSection, optional
+        ``[calibration]``: solver settings and free compliances.
+    stiffness_map : StiffnessMapSection, optional
+        ``[stiffness_map]``: the stiffness map written with the result.
+    """
 
     kind: Literal["elasto_geometric_calibration"]
     truth: TruthSection
