@@ -16,6 +16,7 @@ Independent references used below:
 from __future__ import annotations
 
 import tomllib
+from importlib import resources
 
 import casadi as ca
 import numpy as np
@@ -361,10 +362,7 @@ def test_unreachable_pose_names_row_and_link(d1, grid_fk):
 
 
 def _tmp_file(tmp_path, replace: tuple[str, str] | None = None, drop: str | None = None):
-    import gtmodel.robots.six_link as mod
-    from importlib import resources
-
-    text = (resources.files(mod.__package__) / "data" / "D1_six_link.toml").read_text()
+    text = (resources.files("gtmodel.robots") / "data" / "D1_six_link.toml").read_text()
     if replace is not None:
         assert replace[0] in text
         text = text.replace(replace[0], replace[1], 1)
