@@ -15,6 +15,7 @@ it times every function in a small C program linked against the library (ns/call
 from __future__ import annotations
 
 import logging
+import shutil
 import subprocess
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -26,17 +27,19 @@ import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.generate import GeneratedCode
-from gtmodel.codegen.specs import (
+from gtmodel.codegen.declarations import (
     FK_TOLERANCE,
     IK_TOLERANCE,
     INVERSE_DYNAMICS_TOLERANCE,
     JACOBIAN_TOLERANCE,
     STATUS_CODES,
     FunctionSpec,
-    RobotModel,
 )
+from gtmodel.codegen.robot import RobotModel
+from gtmodel.codegen.specs import SPECS_BY_KIND
 from gtmodel.errors import CodegenError, InputError, SingularConfigurationError
-from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, configuration_signs
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, GantryTau3Kinematics, configuration_signs
+from gtmodel.robots.parameters import available_parameter_sets
 
 __all__ = [
     "IK_TOLERANCE",
@@ -279,9 +282,6 @@ def _three_link_inputs(generated: GeneratedCode, model: RobotModel, n: int, rng:
 
 
 def _six_link_inputs(generated: GeneratedCode, model: RobotModel, n: int, rng: np.random.Generator) -> dict[str, dict[str, np.ndarray]]:
-    from gtmodel.robots.kinematics import GantryTau3Kinematics
-    from gtmodel.robots.parameters import available_parameter_sets
-
     six = model.closure
     base = "D1" if "D1" in available_parameter_sets() else None
     k3 = GantryTau3Kinematics(base)
@@ -332,8 +332,6 @@ def _f1_inputs(generated: GeneratedCode, model: RobotModel, n: int, rng: np.rand
 
 def _model_reference(model: RobotModel, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Python evaluation of the declared function ``name`` of the model's kind (NaN rows: refused)."""
-    from gtmodel.codegen.specs import SPECS_BY_KIND
-
     return SPECS_BY_KIND[model.kind][name].reference(model, inputs)
 
 
@@ -713,8 +711,6 @@ def run_harness_unit_tests(generated: GeneratedCode, build_dir: str | Path) -> t
         Verdict and the program's last output line; None if the harness is not available
         (no source checkout, no ``make``) or the library is not a complete 3-link one.
     """
-    import shutil
-
     if (
         generated.kind != "three_link" or generated.real != "double"
         or not set(HARNESS_FUNCTIONS) <= set(generated.functions)

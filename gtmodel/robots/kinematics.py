@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
+from gtmodel.robots.mapped import MappedFunction
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
 
 __all__ = [
@@ -337,26 +338,6 @@ def _solution_sign(solution: int) -> float:
     return float(solution)
 
 
-class _Mapped:
-    """Evaluate a CasADi Function column-wise on N samples, caching ``map`` per N."""
-
-    def __init__(self, f: ca.Function) -> None:
-        self.f = f
-        self._maps: dict[int, ca.Function] = {}
-
-    def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
-        n = max(a.shape[1] for a in args)
-        if n == 1:
-            out = self.f(*args)
-        else:
-            if n not in self._maps:
-                self._maps[n] = self.f.map(n)
-            out = self._maps[n](*args)
-        if not isinstance(out, (list, tuple)):
-            out = [out]
-        return [np.asarray(o) for o in out]
-
-
 class GantryTau3Kinematics:
     """Kinematics of a 3-link Gantry-Tau (nominal "ideal" or "modified" model).
 
@@ -429,8 +410,8 @@ class GantryTau3Kinematics:
         return ca.Function("link_cosines", [T, s], [c, q, disc], ["T", "s"], ["cos", "q", "disc"])
 
     @cached_property
-    def _cos(self) -> _Mapped:
-        return _Mapped(self.link_cosines_function)
+    def _cos(self) -> MappedFunction:
+        return MappedFunction(self.link_cosines_function)
 
     @cached_property
     def acceleration_function(self) -> ca.Function:
@@ -453,24 +434,24 @@ class GantryTau3Kinematics:
         )
 
     @cached_property
-    def _ik(self) -> _Mapped:
-        return _Mapped(self.ik_function)
+    def _ik(self) -> MappedFunction:
+        return MappedFunction(self.ik_function)
 
     @cached_property
-    def _fk(self) -> _Mapped:
-        return _Mapped(self.fk_function)
+    def _fk(self) -> MappedFunction:
+        return MappedFunction(self.fk_function)
 
     @cached_property
-    def _jac(self) -> _Mapped:
-        return _Mapped(self.jacobian_function)
+    def _jac(self) -> MappedFunction:
+        return MappedFunction(self.jacobian_function)
 
     @cached_property
-    def _acc(self) -> _Mapped:
-        return _Mapped(self.acceleration_function)
+    def _acc(self) -> MappedFunction:
+        return MappedFunction(self.acceleration_function)
 
     @cached_property
-    def _cacc(self) -> _Mapped:
-        return _Mapped(self.cart_acceleration_function)
+    def _cacc(self) -> MappedFunction:
+        return MappedFunction(self.cart_acceleration_function)
 
     # --------------------------------------------------------------- checks
     def _check_reach(self, disc: np.ndarray, T: np.ndarray) -> None:

@@ -70,11 +70,11 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel._docstrings import fill_doc
 from gtmodel._toml import read_toml
 from gtmodel.errors import InputError, ParameterError, SingularConfigurationError, UnreachablePoseError
+from gtmodel.robots.mapped import MappedFunction as _Mapped
 from gtmodel.robots.kinematics import (
     SINGULARITY_TOLERANCE,
     GantryTau3Kinematics,
     _as_points,
-    _Mapped,
     configuration_signs,
     ik_expression,
 )

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from gtmodel.cli import main
-from gtmodel.codegen import generate
+from gtmodel.codegen import check, generate
 
 HARNESS = Path(__file__).resolve().parents[2] / "codegen"
 PROBLEM = Path(__file__).resolve().parents[2] / "problems" / "l1_time_optimal.toml"
@@ -167,8 +167,6 @@ def test_cli_check_prints_error_and_time_per_function(tmp_path, capsys):
 
 def test_single_precision_code_compiles_strictly_and_matches(tmp_path):
     """``real="float"``: float API, compiled with -Werror, within FLOAT_RELATIVE_TOLERANCE of Python."""
-    from gtmodel.codegen import check
-
     gen = generate("L1", tmp_path / "gen", real="float", functions=("ik", "jacobian", "inverse_dynamics"))
     assert "int gt_L1_ik(const float T[3], int configuration, float q[3]);" in gen.header.read_text()
     report = check(gen, n=300, build_dir=tmp_path / "build")

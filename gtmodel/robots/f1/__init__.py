@@ -63,6 +63,7 @@ from gtmodel.robots.f1.layout import (
     GRID_FK_TOLERANCE,
     IK_MAX_ITER,
     IK_TOLERANCE,
+    NEWTON_CHUNK,
     ROTATION_TOLERANCE,
     START_NEWTON_STEPS,
     START_SUBSTEPS,
@@ -85,5 +86,6 @@ __all__ = [
     "START_NEWTON_STEPS",
     "GRID_FK_TOLERANCE",
     "ROTATION_TOLERANCE",
+    "NEWTON_CHUNK",
 ]
 

@@ -293,3 +293,94 @@ class F1Graphs:
         )
 
     # -------------------------------------------------------------- numeric API
+    # -------------------------------------------------------------- the public graph interface
+    @cached_property
+    def arm1_function(self) -> ca.Function:
+        """CasADi Function ``ik_arm1(T[3], R_T[3x3]) -> (q1, disc1)``: arm 1 in closed form.
+
+        Eq. 4.20, the ``+`` root (cart joint above the plate joint along ``v1``); ``q1`` [m],
+        ``disc1`` [m^2] the discriminant, negative where arm 1 cannot reach the pose.
+
+        Returns
+        -------
+        casadi.Function
+        """
+        T = ca.SX.sym("T", 3)
+        R = ca.SX.sym("R_T", 3, 3)
+        return ca.Function("f1_ik_arm1", [T, R], list(self._arm1_closed_form(T, R)), ["T", "R_T"], ["q1", "disc1"])
+
+    @cached_property
+    def ik_step_function(self) -> ca.Function:
+        """CasADi Function ``ik_step(x[5], T[3], R[3x3]) -> (x_next[5], residual)``: one IK Newton step.
+
+        One Newton step of arms 2 and 3 at once on ``e = L^2 - ||B - A(Q)||^2``
+        (Dressler (2012), eqs. 4.27-4.29), the iterate packed as ``x = (q2, q4, q3, q5,
+        q6)`` [m, rad]; ``residual = max |e|`` [m^2] at ``x`` (before the step). Arm 1 is
+        in closed form (:attr:`arm1_function`). :meth:`ik` runs exactly these steps.
+
+        Returns
+        -------
+        casadi.Function
+        """
+        step2, step3 = self._ik_steps
+        x, T, R = ca.SX.sym("x", 5), ca.SX.sym("T", 3), ca.SX.sym("R", 3, 3)
+        x2n, e2 = step2(x[0:2], T, R)
+        x3n, e3 = step3(x[2:5], T, R)
+        return ca.Function(
+            "f1_ik_step", [x, T, R], [ca.vertcat(x2n, x3n), ca.mmax(ca.fabs(ca.vertcat(e2, e3)))],
+            ["x", "T", "R"], ["x_next", "residual"],
+        )
+
+    @cached_property
+    def fk_step_function(self) -> ca.Function:
+        """CasADi Function ``fk_step(x[12], q[6]) -> (x_next[12], residual)``: one FK Newton step.
+
+        One Newton step on the link lengths (Dressler (2012), eqs. 4.30-4.31) with the
+        multiplicative orientation update; the iterate packed as ``x = (T [m], vec(R_T))``
+        (``R_T`` column-major); ``residual = max | ||B - A|| - L |`` [m] at ``x`` (before the
+        step). :meth:`fk` runs exactly these steps.
+
+        Returns
+        -------
+        casadi.Function
+        """
+        x, q = ca.SX.sym("x", 12), ca.SX.sym("q", 6)
+        T_n, R_n, e = self._fk_step(x[:3], ca.reshape(x[3:], 3, 3), q)
+        return ca.Function(
+            "f1_fk_step", [x, q], [ca.vertcat(T_n, ca.vec(R_n)), ca.mmax(ca.fabs(e))], ["x", "q"], ["x_next", "residual"]
+        )
+
+    def graphs(self) -> dict[str, ca.Function]:
+        """The CasADi Functions of the model used by solvers and the code generator, by name.
+
+        Parameters are embedded as constants. Besides the closure Functions of
+        :meth:`ClosureModel.graphs <gtmodel.robots.closure.ClosureModel.graphs>`:
+
+        ``"ik_start"``
+            :attr:`ik_start_function`: ``(T[3] [m], R_T[3x3]) -> (q0[6] [m, rad], disc1 [m^2])``.
+        ``"ik_arm1"``
+            :attr:`arm1_function`: ``(T, R_T) -> (q1 [m], disc1 [m^2])``.
+        ``"ik_step"``
+            :attr:`ik_step_function`: ``(x[5], T, R) -> (x_next[5], residual [m^2])``,
+            ``x = (q2, q4, q3, q5, q6)``.
+        ``"fk_start"``
+            :attr:`fk_start_function`: ``q[6] -> (T0[3] [m], R0[3x3])``.
+        ``"fk_step"``
+            :attr:`fk_step_function`: ``(x[12], q[6]) -> (x_next[12], residual [m])``,
+            ``x = (T, vec(R_T))``.
+        ``"jacobian"``
+            :attr:`jacobian_function`: ``(T, R_T, q) -> (J_X[6x6], J_q[6x6])``.
+
+        Returns
+        -------
+        dict of str to casadi.Function
+        """
+        return {
+            **super().graphs(),  # type: ignore[misc]
+            "ik_start": self.ik_start_function,
+            "ik_arm1": self.arm1_function,
+            "ik_step": self.ik_step_function,
+            "fk_start": self.fk_start_function,
+            "fk_step": self.fk_step_function,
+            "jacobian": self.jacobian_function,
+        }

@@ -36,10 +36,10 @@ START_NEWTON_STEPS = 2
 #: pose whose continuation from the home pose fails is reached from the nearest converged
 #: pose of the same call in this many equal steps.
 FK_CONTINUATION_STEPS = 8
-#: Newton steps per evaluation in the NumPy methods: :meth:`F1Closure.ik` and
+#: Newton steps per evaluation (the block size) in the NumPy methods: :meth:`F1Closure.ik` and
 #: :meth:`F1Closure.fk` run chunks of this many unrolled steps on the poses not yet
 #: converged (the same iterates as one unrolled run of ``max_iter`` steps).
-_CHUNK = 4
+NEWTON_CHUNK = 4
 #: Largest distance [m] (and rotation-matrix entry difference) between a grid pose and the
 #: FK of its IK solution for :meth:`F1Closure.workspace_grid` to keep it.
 GRID_FK_TOLERANCE = 1e-9

@@ -14,12 +14,12 @@ import numpy as np
 from gtmodel._arrays import as_rotations, as_rows, positive_int
 from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
 from gtmodel.robots.f1.layout import (
-    _CHUNK,
     FK_CONTINUATION_STEPS,
     FK_MAX_ITER,
     FK_TOLERANCE,
     IK_MAX_ITER,
     IK_TOLERANCE,
+    NEWTON_CHUNK,
     ROTATION_TOLERANCE,
 )
 from gtmodel.robots.mapped import MappedFunction
@@ -48,7 +48,7 @@ class F1Solvers:
         it, ok, disc = np.zeros(N, dtype=int), np.zeros(N, dtype=bool), np.zeros(N)
         active, done = np.arange(N), 0
         while active.size and done < max_iter:
-            k = min(_CHUNK, max_iter - done)
+            k = min(NEWTON_CHUNK, max_iter - done)
             cols = np.concatenate([np.arange(3 * j, 3 * j + 3) for j in active]) if active.size < N else slice(None)
             qn, en, itn, okn, dn = self._mapped_ik(k)(T[:, active], Rc[:, cols], q[:, active], n=active.size)
             q[:, active], e[:, active], disc[active] = qn, en, dn.ravel()
@@ -65,7 +65,7 @@ class F1Solvers:
         it, ok = np.zeros(N, dtype=int), np.zeros(N, dtype=bool)
         active, done = np.arange(N), 0
         while active.size and done < max_iter:
-            k = min(_CHUNK, max_iter - done)
+            k = min(NEWTON_CHUNK, max_iter - done)
             cols = np.concatenate([np.arange(3 * j, 3 * j + 3) for j in active]) if active.size < N else slice(None)
             Tn, Rn, en, itn, okn = self._mapped_fk(k)(q[:, active], T[:, active], Rc[:, cols], n=active.size)
             T[:, active], e[:, active] = Tn, en
@@ -352,3 +352,56 @@ class F1Solvers:
         J_X = np.asarray(J_X).reshape(6, N, 6).transpose(1, 0, 2)
         J_q = np.asarray(J_q).reshape(6, N, 6).transpose(1, 0, 2)
         return (J_X[0], J_q[0]) if single else (J_X, J_q)
+
+    def ik_converged(self, T: np.ndarray, R: np.ndarray, q0: np.ndarray | None = None) -> np.ndarray:
+        """Which poses one pass of the Newton IK solves, without raising.
+
+        The start values and Newton steps of :meth:`ik` (from ``q0`` or the default start),
+        :data:`IK_MAX_ITER` steps in blocks of :data:`NEWTON_CHUNK`; :meth:`ik` raises on the
+        first failing row, this tells which rows fail.
+
+        Parameters
+        ----------
+        T : numpy.ndarray, shape (N, 3)
+            TCP positions [m].
+        R : numpy.ndarray, shape (N, 3, 3)
+            Plate orientations (not checked to be rotations).
+        q0 : numpy.ndarray, shape (N, 6), optional
+            Start values [m, rad]; default the start of :attr:`ik_start_function`.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+        """
+        Tc = np.asarray(T, dtype=float).T
+        n = Tc.shape[1]
+        Rc = self._R_cols(np.asarray(R, dtype=float))
+        q0c = np.asarray(q0, dtype=float).T if q0 is not None else self._ik_start_mapped(Tc, Rc, n=n)[0]
+        return self._run_ik(IK_MAX_ITER, Tc, Rc, q0c)[3]
+
+    def fk_converged(self, q: np.ndarray, T0: np.ndarray | None = None, R0: np.ndarray | None = None) -> np.ndarray:
+        """Which actuator values one pass of the Newton FK solves, without raising.
+
+        The start values and Newton steps of :meth:`fk` (from ``(T0, R0)`` or the default
+        start, without its second start for failing rows), :data:`FK_MAX_ITER` steps in
+        blocks of :data:`NEWTON_CHUNK`.
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (N, 6)
+            Actuator values [m, rad].
+        T0 : numpy.ndarray, shape (N, 3), optional
+            Start positions [m]; given together with ``R0``.
+        R0 : numpy.ndarray, shape (N, 3, 3), optional
+            Start orientations.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+        """
+        qc = np.asarray(q, dtype=float).T
+        if T0 is None or R0 is None:
+            T0c, R0c = self._fk_start_mapped(qc, n=qc.shape[1])
+        else:
+            T0c, R0c = np.asarray(T0, dtype=float).T, self._R_cols(np.asarray(R0, dtype=float))
+        return self._run_fk(FK_MAX_ITER, qc, T0c, R0c)[4]

@@ -298,9 +298,7 @@ class F1Workspace:
 
     @cached_property
     def _arm1_mapped(self) -> MappedFunction:
-        T = ca.SX.sym("T", 3)
-        R = ca.SX.sym("R_T", 3, 3)
-        return MappedFunction(ca.Function("f1_ik_arm1", [T, R], list(self._arm1_closed_form(T, R)), ["T", "R_T"], ["q1", "disc1"]))
+        return MappedFunction(self.arm1_function)
 
     @cached_property
     def _reach_mapped(self) -> MappedFunction:

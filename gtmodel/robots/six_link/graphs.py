@@ -210,3 +210,46 @@ class SixLinkGraphs:
             "fk_six_link", ins, [X[:3], R, X, residual, status], names, ["T", "R", "X", "residual", "status"]
         )
 
+
+    # -------------------------------------------------------------- the public graph interface
+    @cached_property
+    def _public_graphs(self) -> dict[str, ca.Function]:
+        p, R_ref, R0 = self._p_num, ca.DM(_vec(self.R_ref)), ca.DM(_vec(self.R0))
+        T, R, s = ca.SX.sym("T", 3), ca.SX.sym("R", 3, 3), ca.SX.sym("s", 3)
+        q_links, disc, cos = self._ik_graph(T, R, s, p)
+        ik = ca.Function("ik_links", [T, R, s], [q_links, disc, cos], ["T", "R", "s"], ["q", "disc", "cos"])
+        X, q, sol = ca.SX.sym("X", 6), ca.SX.sym("q", 3), ca.SX.sym("solution")
+        X_next, residual, disc_min = self._step_graph(X, q, s, p, R_ref)
+        step = ca.Function("fk_step", [X, q, s], [X_next, residual, disc_min], ["x", "q", "s"], ["x_next", "residual", "valid"])
+        X0, h2 = self._start_graph(q, sol, p, R0)
+        start = ca.Function("fk_start", [q, sol], [X0, h2], ["q", "solution"], ["x0", "h2"])
+        orientation = ca.Function("orientation", [X], [self._orientation_graph(X, R_ref)], ["x"], ["R"])
+        return {"ik_links": ik, "fk_start": start, "fk_step": step, "orientation": orientation}
+
+    def graphs(self) -> dict[str, ca.Function]:
+        """The CasADi Functions of the model used by solvers and the code generator, by name.
+
+        Parameters, the nominal orientation ``R0`` and ``R_ref = R0 Ry(-pi/2)`` are embedded
+        as constants. Besides the closure Functions of :meth:`ClosureModel.graphs
+        <gtmodel.robots.closure.ClosureModel.graphs>`:
+
+        ``"ik_links"``
+            ``(T[3] [m], R[3x3], s[3]) -> (q[6] [m], disc[6] [m^2], cos[6])``: the per-link
+            IK of eq. 4.14 (links ``1, 2a, 2b, 3a, 3b, 3c``; ``s`` the root sign per arm;
+            ``disc < 0``: the link cannot reach; ``cos`` of the link-guideway angles).
+        ``"fk_start"``
+            ``(q[3] [m], solution) -> (x0[6], h2 [m^2])``: the FK start, 3-link
+            trilateration of links ``1, 2a, 3a`` at ``R0`` (eq. 4.9; ``h2 < 0``: the
+            spheres do not meet); ``x = (T [m], ZYZ angles relative to R_ref [rad])``.
+        ``"fk_step"``
+            ``(x[6], q[3], s[3]) -> (x_next[6], residual [m], valid [m^2])``: one Newton
+            step of eq. 4.15; ``residual = max |q_i - f_ik,ij(x)|`` and ``valid`` the
+            smallest discriminant, both at ``x`` (before the step).
+        ``"orientation"``
+            ``x[6] -> R[3x3]``: ``R_T = R_ref Rzyz(alpha, beta, gamma)``.
+
+        Returns
+        -------
+        dict of str to casadi.Function
+        """
+        return {**super().graphs(), **self._public_graphs}  # type: ignore[misc]
