@@ -35,6 +35,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.mapped import MappedFunction
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
+from gtmodel.robots.workspace import within_limits
 
 __all__ = [
     "closure_residual",
@@ -748,12 +749,11 @@ class GantryTau3Kinematics:
         Tn, single = _as_points(T, "T")
         s = configuration_signs(configuration)
         c, q, disc = self._cos(Tn.T, s[:, None])
-        ok = np.all(disc >= 0, axis=0)
         if limits:
             lim = self.parameters.limits
-            q = q.T
-            ok &= np.all((q >= lim.cart_travel[:, 0]) & (q <= lim.cart_travel[:, 1]), axis=1)
-            ok &= np.all(np.abs(c) >= np.cos(lim.joint_angle_max), axis=0)
+            ok = within_limits(q.T, disc.T, c.T, lim.cart_travel, lim.joint_angle_max)
+        else:
+            ok = within_limits(q.T, disc.T)
         return bool(ok[0]) if single else ok
 
     def require_in_workspace(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:

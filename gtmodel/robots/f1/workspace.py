@@ -25,6 +25,7 @@ from gtmodel.robots.f1.layout import (
     _get,
 )
 from gtmodel.robots.mapped import MappedFunction
+from gtmodel.robots.workspace import in_ranges
 
 __all__ = ["F1Workspace"]
 
@@ -256,8 +257,7 @@ class F1Workspace:
         if Ta.shape[0] != N:
             raise InputError(f"T: expected {N} rows to match q, got {Ta.shape[0]}")
         Ra = as_rotations(R, N, "R", ROTATION_TOLERANCE)
-        rng = np.vstack([lim.cart_travel, lim.joint_plate_range])
-        ok = np.all((qa >= rng[:, 0]) & (qa <= rng[:, 1]), axis=1)
+        ok = in_ranges(qa, np.vstack([lim.cart_travel, lim.joint_plate_range]))
         T_h, R_h = self.home
         home_signs = self.aspect_signs(T_h, R_h, self.q_home)
         # the criteria in order of cost, each on the poses still in

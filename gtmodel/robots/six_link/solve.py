@@ -21,6 +21,7 @@ from gtmodel.robots.six_link.layout import (
     SixLinkFKResult,
     _vec,
 )
+from gtmodel.robots.workspace import within_limits
 
 __all__ = ["SixLinkSolvers"]
 
@@ -301,12 +302,10 @@ class SixLinkSolvers:
         f = self._ik_graph.map(N) if N > 1 else self._ik_graph
         q, disc, cos = f(Tn.T, np.ascontiguousarray(Ra.transpose(1, 0, 2).reshape(3, 3 * N)), s, self._p_num)
         q, disc, cos = np.array(q).T, np.array(disc).T, np.array(cos).T
-        ok = np.all(disc >= 0, axis=1)
         qa = q[:, list(_FIRST_LINK)]
+        ok = within_limits(qa, disc, cos, self.limits.cart_travel, self.limits.joint_angle_max)
+        # the links of each arm agree on their cart's position (the pose is an assembly)
         ok &= np.all(np.abs(q - qa[:, list(_ARM_OF_LINK)]) <= _ASSEMBLY_TOLERANCE, axis=1)
-        lim = self.limits.cart_travel
-        ok &= np.all((qa >= lim[:, 0]) & (qa <= lim[:, 1]), axis=1)
-        ok &= np.all(np.abs(cos) >= np.cos(self.limits.joint_angle_max), axis=1)
         return bool(ok[0]) if single else ok
 
 
