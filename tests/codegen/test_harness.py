@@ -8,7 +8,9 @@ the compiled code itself.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import io
 import re
 import shutil
 import subprocess
@@ -161,12 +163,26 @@ def test_valgrind_memcheck_clean_and_no_allocation_in_the_loop(harness):
     assert allocs[0] == allocs[1]
 
 
-def test_cli_check_prints_error_and_time_per_function(tmp_path, capsys):
-    code = main(["codegen", "--robot", "L1", "--out", str(tmp_path / "gen"), "--check", "-n", "300"])
-    out = capsys.readouterr().out
+@pytest.fixture(scope="module")
+def cli_check_output(tmp_path_factory):
+    """Exit code and printed output of ``gtmodel codegen --robot L1 --check``."""
+    out_dir = tmp_path_factory.mktemp("cli_check") / "gen"
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        code = main(["codegen", "--robot", "L1", "--out", str(out_dir), "--check", "-n", "300"])
+    return code, buffer.getvalue()
+
+
+@pytest.mark.parametrize("name", ["ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity"])
+def test_cli_check_prints_error_and_time_per_function(cli_check_output, name):
+    code, out = cli_check_output
     assert code == 0, out
-    for name in ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity"):
-        assert re.search(rf"^{name}: max \|C - Python\| = \S+ .*\d+ ns/call .*OK$", out, re.M), out
+    assert re.search(rf"^{name}: max \|C - Python\| = \S+ .*\d+ ns/call .*OK$", out, re.M), out
+
+
+def test_cli_check_runs_the_packaged_c_unit_tests(cli_check_output):
+    code, out = cli_check_output
+    assert code == 0, out
     unit_test = re.escape(str(harness_dir() / "unit_test.c"))
     assert re.search(rf"^C unit tests: ran {unit_test}: unit_test: \d+ checks, 0 failures$", out, re.M), out
     assert out.rstrip().endswith("PASSED")

@@ -185,14 +185,14 @@ def test_fk_of_ik_round_trip(d1, grid_fk):
     np.testing.assert_allclose(R, grid_fk.R, atol=ROUND_TRIP_TOL, rtol=0)
 
 
-def test_closure_residuals_vanish_at_fk(d1, grid_q, grid_fk):
+@pytest.mark.parametrize("arm", range(3))
+def test_closure_residuals_vanish_at_fk(d1, grid_q, grid_fk, arm):
     p = d1.parameter_vector()
     quat = rotation_to_quaternion(grid_fk.R)
     N = len(grid_q)
-    for arm in range(3):
-        r = np.asarray(d1.closure_function(arm).map(N)(p, grid_q.T, grid_fk.T.T, quat.T))
-        assert r.shape == (len(SIX_LINKS[arm]), N)
-        assert np.abs(r).max() < CLOSURE_TOL
+    r = np.asarray(d1.closure_function(arm).map(N)(p, grid_q.T, grid_fk.T.T, quat.T))
+    assert r.shape == (len(SIX_LINKS[arm]), N)
+    assert np.abs(r).max() < CLOSURE_TOL
 
 
 def test_fk_agrees_with_generic_closure_newton(d1, three_link, grid_q, grid_fk):
@@ -293,13 +293,14 @@ def test_parallelogram_model_is_the_three_link_model(R_T0, start, v_per_arm, gri
 
 
 # ------------------------------------------------------------------ interface pieces
-def test_arm_parameters_follow_the_links(d1):
+@pytest.mark.parametrize("arm", range(3))
+def test_arm_parameters_follow_the_links(d1, arm):
     names = np.array(d1.parameter_names())
-    for arm, links in enumerate(SIX_LINKS):
-        got = set(names[d1.arm_parameter_indices(arm)])
-        expected = {f"{k}_{l}{c}" for l in links for k in ("A0", "v", "B0") for c in ("_x", "_y", "_z")}
-        expected |= {f"L_{l}" for l in links}
-        assert got == expected
+    links = SIX_LINKS[arm]
+    got = set(names[d1.arm_parameter_indices(arm)])
+    expected = {f"{k}_{l}{c}" for l in links for k in ("A0", "v", "B0") for c in ("_x", "_y", "_z")}
+    expected |= {f"L_{l}" for l in links}
+    assert got == expected
 
 
 def test_v_per_arm_parameter_names():
