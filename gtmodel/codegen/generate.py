@@ -370,7 +370,7 @@ def generate(
         The robot: a 3-link parameter set (shipped name ``"L1"``, ``"D1"``, ``"L1_ideal"``
         or a TOML path, e.g. a calibration's ``parameters.toml``), the six-link error model
         (``"D1_six_link"``) or the F1 (``"F1"``); see
-        :func:`gtmodel.codegen.specs.load_robot`. Its values are embedded as constants.
+        :func:`gtmodel.codegen.robot.load_robot`. Its values are embedded as constants.
     out_dir : str or pathlib.Path, optional
         Folder to write into (created if missing; existing files of the same names are
         overwritten).

@@ -25,7 +25,20 @@ __all__ = ["FUNCTION_SPECS", "DEFAULT_FUNCTIONS", "by_configuration", "T_ARG", "
 
 # ----------------------------------------------------------------------------- 3-link references
 def by_configuration(inputs: Mapping[str, np.ndarray], evaluate: Callable[[np.ndarray, int], np.ndarray]) -> np.ndarray:
-    """Evaluate ``evaluate(rows, configuration)`` per configuration group; rows in input order."""
+    """Evaluate ``evaluate(rows, configuration)`` per configuration group; rows in input order.
+
+    Parameters
+    ----------
+    inputs : mapping of str to numpy.ndarray
+        Sampled inputs of a function, with the ``"configuration"`` column (N,).
+    evaluate : callable
+        ``evaluate(rows, configuration) -> array`` of the reference for those rows.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, n)
+        The references, rows in input order.
+    """
     conf = np.asarray(inputs["configuration"], dtype=int)
     out = None
     for c in np.unique(conf):
