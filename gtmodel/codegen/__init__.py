@@ -12,9 +12,10 @@ from __future__ import annotations
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.check import CheckReport, FunctionCheck, StatusProbe, check
-
-from gtmodel.codegen.generate import GeneratedCode, generate, parameter_hash
-from gtmodel.codegen.specs import FUNCTION_SPECS, FunctionSpec, NewtonLoop, load_robot
+from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
+from gtmodel.codegen.generate import GeneratedCode, generate
+from gtmodel.codegen.robot import load_robot, parameter_hash
+from gtmodel.codegen.specs import FUNCTION_SPECS
 
 __all__ = [
     "generate",

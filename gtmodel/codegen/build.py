@@ -19,7 +19,7 @@ import numpy as np
 from gtmodel._compiler import find_compiler
 from gtmodel._compiler import run_compiler as _run
 from gtmodel.codegen.generate import GeneratedCode
-from gtmodel.codegen.specs import FunctionSpec
+from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.errors import CodegenError
 
 __all__ = [

@@ -15,9 +15,11 @@ it times every function in a small C program linked against the library (ns/call
 from __future__ import annotations
 
 import logging
+import shutil
 import subprocess
 from dataclasses import dataclass, field
 from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -26,17 +28,19 @@ import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.generate import GeneratedCode
-from gtmodel.codegen.specs import (
+from gtmodel.codegen.declarations import (
     FK_TOLERANCE,
     IK_TOLERANCE,
     INVERSE_DYNAMICS_TOLERANCE,
     JACOBIAN_TOLERANCE,
     STATUS_CODES,
     FunctionSpec,
-    RobotModel,
 )
+from gtmodel.codegen.robot import RobotModel
+from gtmodel.codegen.specs import SPECS_BY_KIND
 from gtmodel.errors import CodegenError, InputError, SingularConfigurationError
-from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, configuration_signs
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, GantryTau3Kinematics, configuration_signs
+from gtmodel.robots.parameters import available_parameter_sets
 
 __all__ = [
     "IK_TOLERANCE",
@@ -52,6 +56,9 @@ __all__ = [
     "timed_rows",
     "time_functions",
     "run_harness_unit_tests",
+    "harness_dir",
+    "harness_applies",
+    "HARNESS_FILES",
     "check",
 ]
 
@@ -170,7 +177,9 @@ class CheckReport:
     timings : dict
         Extra C timings [ns/call], e.g. ``{"fk (default start)": 25000.0}``.
     harness : str
-        Last line of the C unit-test program of ``codegen/`` (empty if not run).
+        What the C unit tests of the harness (:func:`run_harness_unit_tests`) did: the
+        program run and its last output line, why they could not run, or why they do
+        not apply (empty if not attempted).
     harness_passed : bool or None
         Its verdict (None if not run).
     """
@@ -225,7 +234,7 @@ class CheckReport:
                 touched = "" if p.untouched else ", outputs WRITTEN or wrong"
                 lines.append(f"  FAILED {p.function} on {p.case}: expected {p.expected}, got {got}{touched}")
         if self.harness:
-            lines.append(f"C unit tests (codegen/unit_test.c): {self.harness}")
+            lines.append(f"C unit tests: {self.harness}")
         lines.append("PASSED" if self.passed else "FAILED")
         return lines
 
@@ -279,9 +288,6 @@ def _three_link_inputs(generated: GeneratedCode, model: RobotModel, n: int, rng:
 
 
 def _six_link_inputs(generated: GeneratedCode, model: RobotModel, n: int, rng: np.random.Generator) -> dict[str, dict[str, np.ndarray]]:
-    from gtmodel.robots.kinematics import GantryTau3Kinematics
-    from gtmodel.robots.parameters import available_parameter_sets
-
     six = model.closure
     base = "D1" if "D1" in available_parameter_sets() else None
     k3 = GantryTau3Kinematics(base)
@@ -332,8 +338,6 @@ def _f1_inputs(generated: GeneratedCode, model: RobotModel, n: int, rng: np.rand
 
 def _model_reference(model: RobotModel, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Python evaluation of the declared function ``name`` of the model's kind (NaN rows: refused)."""
-    from gtmodel.codegen.specs import SPECS_BY_KIND
-
     return SPECS_BY_KIND[model.kind][name].reference(model, inputs)
 
 
@@ -690,44 +694,84 @@ def time_functions(generated: GeneratedCode, library: Path, samples: Mapping[str
 
 
 # ----------------------------------------------------------------------------- harness
-#: The hand-written harness (``codegen/`` at the top of a source checkout).
-HARNESS_DIR = Path(__file__).resolve().parents[2] / "codegen"
 #: Functions the C unit-test program calls.
 HARNESS_FUNCTIONS = ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity")
+#: Files of the hand-written harness shipped as package data in ``gtmodel/codegen/harness/``.
+HARNESS_FILES = ("Makefile", "unit_test.c", "loop.c")
 
 
-def run_harness_unit_tests(generated: GeneratedCode, build_dir: str | Path) -> tuple[bool, str] | None:
-    """Build and run the C unit-test program of ``codegen/`` against the generated code.
+def harness_dir() -> Path:
+    """The folder of the hand-written C harness shipped with the package.
+
+    ``gtmodel/codegen/harness/`` (package data: the Makefile rules, ``unit_test.c``,
+    ``loop.c``), in a source checkout and after ``pip install .`` alike; ``codegen/Makefile``
+    of a source checkout includes its Makefile.
+
+    Returns
+    -------
+    pathlib.Path
+        The folder (it may lack files in a broken installation: see
+        :func:`run_harness_unit_tests`).
+    """
+    return Path(str(resources.files("gtmodel.codegen") / "harness"))
+
+
+def harness_applies(generated: GeneratedCode) -> bool:
+    """Whether the C unit-test program applies to a generated library.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        The generated code.
+
+    Returns
+    -------
+    bool
+        True for a 3-link library in double precision with every function of
+        :data:`HARNESS_FUNCTIONS` (the program calls them all).
+    """
+    return (
+        generated.kind == "three_link" and generated.real == "double"
+        and set(HARNESS_FUNCTIONS) <= set(generated.functions)
+    )
+
+
+def run_harness_unit_tests(generated: GeneratedCode, build_dir: str | Path, harness: str | Path | None = None) -> tuple[bool, str] | None:
+    """Build and run the C unit-test program of the harness against the generated code.
 
     Parameters
     ----------
     generated : GeneratedCode
         A 3-link library with every function of :data:`HARNESS_FUNCTIONS` in double
-        precision.
+        precision (:func:`harness_applies`).
     build_dir : str or pathlib.Path
         Build folder of the harness (``make BUILD=...``).
+    harness : str or pathlib.Path or None, optional
+        Folder of the harness sources; default :func:`harness_dir`.
 
     Returns
     -------
     tuple of (bool, str) or None
-        Verdict and the program's last output line; None if the harness is not available
-        (no source checkout, no ``make``) or the library is not a complete 3-link one.
+        Verdict and a line saying what ran (the program's last output line) or why the
+        tests could not run (harness files missing, no ``make``, build failure): then the
+        verdict is False. None if the tests do not apply to this library
+        (:func:`harness_applies`).
     """
-    import shutil
-
-    if (
-        generated.kind != "three_link" or generated.real != "double"
-        or not set(HARNESS_FUNCTIONS) <= set(generated.functions)
-        or not (HARNESS_DIR / "Makefile").exists() or shutil.which("make") is None
-    ):
+    if not harness_applies(generated):
         return None
+    folder = Path(harness) if harness is not None else harness_dir()
+    missing = [f for f in HARNESS_FILES if not (folder / f).is_file()]
+    if missing:
+        return False, f"not run: harness files {missing} missing in {folder} (broken installation)"
+    if shutil.which("make") is None:
+        return False, "not run: no 'make' program on PATH"
     model = generated.model()
     grid = model.kinematics.workspace_grid(0.1)
     T = grid[len(grid) // 2]
     build = Path(build_dir).resolve()
     target = build / "unit_test"
     cmd = [
-        "make", "-s", "-C", str(HARNESS_DIR), f"BUILD={build}", f"GEN={generated.out_dir.resolve()}",
+        "make", "-s", "-C", str(folder), f"BUILD={build}", f"GEN={generated.out_dir.resolve()}",
         f"PREFIX={generated.prefix}", f"TEST_T={{{', '.join(repr(float(x)) for x in T)}}}", str(target),
     ]
     proc = subprocess.run(cmd, capture_output=True, text=True)
@@ -735,7 +779,7 @@ def run_harness_unit_tests(generated: GeneratedCode, build_dir: str | Path) -> t
         return False, f"build failed: {(proc.stderr or proc.stdout).strip().splitlines()[-1:]}"
     run = subprocess.run([str(target)], capture_output=True, text=True, timeout=120)
     last = run.stdout.strip().splitlines()[-1] if run.stdout.strip() else f"exit {run.returncode}"
-    return run.returncode == 0, last
+    return run.returncode == 0, f"ran {folder / 'unit_test.c'}: {last}"
 
 
 # ----------------------------------------------------------------------------- API
@@ -763,8 +807,9 @@ def check(
         Build folder when compiling or timing (default ``<out_dir>/build``).
     timing : bool, optional
         Also time every function in a C loop (ns/call, :func:`time_functions`) and build
-        and run the C unit-test program of ``codegen/`` when available
-        (:func:`run_harness_unit_tests`).
+        and run the C unit-test program of the harness shipped with the package
+        (:func:`run_harness_unit_tests`; a harness that applies but cannot run fails the
+        check).
 
     Returns
     -------
@@ -808,6 +853,9 @@ def check(
         ]
         extra = {k: v for k, v in times.items() if k not in generated.functions}
     harness = run_harness_unit_tests(generated, build / "harness") if timing else None
+    if timing and harness is None:
+        harness = (None, "not applicable (the harness tests a 3-link library in double precision with all of "
+                   + ", ".join(HARNESS_FUNCTIONS) + ")")
     report = CheckReport(
         robot=generated.robot_name,
         prefix=generated.prefix,

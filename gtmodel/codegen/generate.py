@@ -29,8 +29,6 @@ The C functions are reentrant (no static or global mutable state) and thus threa
 from __future__ import annotations
 
 import dataclasses
-import hashlib
-import json
 import logging
 import re
 from dataclasses import dataclass, field
@@ -42,19 +40,13 @@ import numpy as np
 
 import gtmodel
 from gtmodel.errors import CodegenError, InputError
-from gtmodel.codegen.specs import (
-    SPECS_BY_KIND,
-    STATUS_CODES,
-    THRESHOLD_MACROS,
-    FunctionSpec,
-    RobotModel,
-    StatusCheck,
-    default_functions,
-    load_robot,
-)
-from gtmodel.robots.parameters import RobotParameters
+from gtmodel.codegen.c_text import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
+from gtmodel.codegen.declarations import FunctionSpec
+from gtmodel.codegen.robot import RobotModel, load_robot
+from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
+from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
 
-__all__ = ["GeneratedCode", "generate", "parameter_hash", "REAL_TYPES"]
+__all__ = ["GeneratedCode", "generate", "REAL_TYPES"]
 
 log = logging.getLogger("gtmodel")
 
@@ -174,36 +166,6 @@ class GeneratedCode:
 
 
 # ----------------------------------------------------------------------------- helpers
-def _canonical(obj):
-    if dataclasses.is_dataclass(obj):
-        return {f.name: _canonical(getattr(obj, f.name)) for f in dataclasses.fields(obj) if f.name not in ("path",)}
-    if isinstance(obj, np.ndarray):
-        return [_canonical(x) for x in obj.tolist()] if obj.ndim else float(obj)
-    if isinstance(obj, (list, tuple)):
-        return [_canonical(x) for x in obj]
-    if isinstance(obj, float):
-        return float.hex(obj)  # exact
-    return obj
-
-
-def parameter_hash(parameters: RobotParameters) -> str:
-    """Short hash identifying the numbers of a parameter set.
-
-    Parameters
-    ----------
-    parameters : RobotParameters
-        The parameter set.
-
-    Returns
-    -------
-    str
-        First 16 hex digits of the SHA-256 of a canonical (exact, order-fixed) encoding
-        of every field except the file path.
-    """
-    text = json.dumps(_canonical(parameters), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-
 def _resolve_specs(functions: Iterable[str | FunctionSpec], kind: str) -> tuple[FunctionSpec, ...]:
     table = SPECS_BY_KIND[kind]
     if isinstance(functions, (str, FunctionSpec)):
@@ -227,11 +189,6 @@ def _resolve_specs(functions: Iterable[str | FunctionSpec], kind: str) -> tuple[
         if s.kind != kind:
             raise InputError(f"functions: {s.name!r} is declared for a {s.kind} robot, not a {kind} robot")
     return tuple(specs)
-
-
-def _c_float(x: float) -> str:
-    r = repr(float(x))
-    return r if any(ch in r for ch in ".eE") else r + ".0"
 
 
 def _check_arg_input(spec: FunctionSpec, f: ca.Function, a, where: str) -> None:
@@ -303,11 +260,6 @@ def _prepare_part(spec: FunctionSpec, part: str, f: ca.Function, cname: str, siz
         if name not in f.name_out():
             raise CodegenError(f"{spec.name}: newton.{part} has no output {name!r} (outputs: {f.name_out()})")
     return _renamed(f, cname)
-
-
-def _check_every(nl, newton_check_every: int | None) -> int:
-    """Steps between convergence tests of a Newton loop (generation option, else the declaration's)."""
-    return newton_check_every if newton_check_every is not None else nl.check_every
 
 
 def _hoist_invariants(parts: dict[str, ca.Function], cname: str) -> dict[str, ca.Function]:
@@ -398,442 +350,6 @@ def _void_unused_parameters(text: str) -> str:
     return _FUNC_DEF.sub(add, text)
 
 
-# ----------------------------------------------------------------------------- C text
-def _arg_size(spec: FunctionSpec, funcs: dict, a) -> int:
-    """Number of values of an array argument (0 for ``int`` arguments)."""
-    if a.kind not in ("vector", "matrix"):
-        return 0
-    for f in _parts(spec, funcs):
-        if a.casadi_input in f.name_in():
-            return f.numel_in(a.casadi_input)
-    raise CodegenError(f"{spec.name}: argument {a.name!r} feeds no CasADi Function")  # pragma: no cover
-
-
-def _out_function(spec: FunctionSpec, funcs: dict) -> ca.Function:
-    """The Function whose outputs are published (the finish Function of a Newton loop)."""
-    return funcs[spec.name]["finish"] if spec.newton is not None else funcs[spec.name]
-
-
-def _parts(spec: FunctionSpec, funcs: dict) -> list[ca.Function]:
-    v = funcs[spec.name]
-    return list(v.values()) if isinstance(v, dict) else [v]
-
-
-def _c_params(spec: FunctionSpec, funcs: dict, real: str) -> str:
-    parts = []
-    fo = _out_function(spec, funcs)
-    for a in spec.args:
-        if a.kind in ("vector", "matrix"):
-            parts.append(f"const {real} {a.name}[{_arg_size(spec, funcs, a)}]")
-        else:
-            parts.append(f"int {a.name}")
-    for o in spec.outputs:
-        parts.append(f"{real} {o.name}[{fo.numel_out(o.casadi_output)}]")
-    if spec.newton is not None:
-        parts.append("int *iterations")
-    return ", ".join(parts)
-
-
-def _comment_block(lines: Sequence[str], indent: str = "") -> str:
-    out = [f"{indent}/*"]
-    out += [f"{indent} *{(' ' + l) if l else ''}" for l in lines]
-    out.append(f"{indent} */")
-    return "\n".join(out)
-
-
-def _statuses(spec: FunctionSpec) -> list[str]:
-    checks = list(spec.checks) + (list(spec.newton.start_checks) if spec.newton else [])
-    out = ["GT_OK"] + list(dict.fromkeys(c.status for c in checks)) + ["GT_BAD_ARGUMENT", "GT_NUMERIC_ERROR"]
-    if spec.newton is not None:
-        out.append("GT_NOT_CONVERGED")
-    return list(dict.fromkeys(out))
-
-
-def _doc_lines(spec: FunctionSpec, funcs: dict, P: str, sizes: tuple[int, int, int, int]) -> list[str]:
-    import textwrap
-
-    fo = _out_function(spec, funcs)
-    lines = textwrap.wrap(spec.doc, 88) + ["", "Inputs:"]
-    for a in spec.args:
-        null = " (may be NULL)" if a.optional else ""
-        if a.kind in ("vector", "matrix"):
-            lines.append(f"  {a.name}[{_arg_size(spec, funcs, a)}]{null}: {a.doc}")
-        else:
-            lines.append(f"  {a.name}: {a.doc}")
-    lines.append("Outputs (written only when GT_OK is returned):")
-    for o in spec.outputs:
-        lines.append(f"  {o.name}[{fo.numel_out(o.casadi_output)}]: {o.doc}")
-    if spec.newton is not None:
-        nl = spec.newton
-        N = f"{P}_{spec.name.upper()}"
-        if nl.warm:
-            lines.append(f"  Start: {' and '.join(nl.warm)} if non-NULL, else the default start.")
-        lines += [
-            "  iterations (may be NULL): Newton steps taken (written on every return after the",
-            "    argument checks, also on GT_NOT_CONVERGED).",
-            f"Newton loop: at most {N}_MAX_ITER + 1 step evaluations, converged when the residual,",
-            f"  {nl.residual_unit}, is <= {N}_TOLERANCE.",
-        ]
-    lines.append("Returns: " + ", ".join(_statuses(spec)) + ".")
-    sa, sr, siw, sw = sizes
-    lines.append(f"Stack use: about {8 * (sw + 64) + 8 * (sa + sr) + 8 * siw} bytes of work arrays; no heap.")
-    return lines
-
-
-def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str, model: RobotModel, friction: str, real: str, newton: dict) -> str:
-    P = gen_prefix.upper()
-    out = [
-        f"/* {gen_prefix}.h: C API of the {model.name} Gantry-Tau model.",
-        " *",
-        " * Generated by gtmodel from the CasADi model; do not edit.",
-        f" * {version}",
-        f" * Robot: {model.description}",
-        f" * Friction form of the dynamics: {friction}" if model.kind == "three_link" else " * Kinematics only.",
-        f" * Floating-point type: {real}",
-        " *",
-        " * Conventions: SI units (m, rad, m/s, m/s^2, N); arrays of fixed size as declared;",
-        " * matrices ROW-MAJOR (element (r, c) of a 3x3 matrix at index 3*r + c).",
-        " * Every function returns a status code (GT_OK = 0). On any other status the",
-        " * output arrays are NOT written (left untouched), so no NaN is ever written.",
-        " * Memory: work arrays are automatic (stack) arrays whose sizes are fixed at",
-        " * generation time; no heap allocation, no static or global mutable state. The",
-        " * functions are reentrant and thread-safe; the only memory they touch is their",
-        " * stack frame and the caller's arrays.",
-        " */",
-        f"#ifndef {P}_H",
-        f"#define {P}_H",
-        "",
-        "#ifdef __cplusplus",
-        'extern "C" {',
-        "#endif",
-        "",
-        "/* Status codes, shared by every gtmodel-generated library. */",
-        "#ifndef GT_STATUS_CODES",
-        "#define GT_STATUS_CODES",
-    ]
-    for macro, (value, doc) in STATUS_CODES.items():
-        out.append(f"#define {macro} {value} /* {doc} */")
-    out += [
-        "#endif",
-        "",
-        f'#define {P}_VERSION "{version}"',
-        f'#define {P}_PARAMETER_HASH "{phash}"',
-        f'#define {P}_ROBOT "{model.name}"',
-        "/* Floating-point type of every array argument. */",
-        f"typedef {real} {gen_prefix}_real;",
-        f"#define {P}_REAL_IS_FLOAT {1 if real == 'float' else 0}",
-        "/* Smallest accepted |cos| of the link-to-guideway angle; below it GT_SINGULAR. */",
-        f"#define {P}_SINGULARITY_TOLERANCE {_c_float(THRESHOLD_MACROS['SINGULARITY_TOLERANCE'])}",
-        "/* Smallest accepted distance [m] of sphere centre 3 from the line through 1 and 2 (FK). */",
-        f"#define {P}_DEGENERACY_TOLERANCE {_c_float(THRESHOLD_MACROS['DEGENERACY_TOLERANCE'])}",
-    ]
-    for name, (tol, max_iter) in newton.items():
-        N = f"{P}_{name.upper()}"
-        out += [
-            f"/* Newton loop of {gen_prefix}_{name}: convergence tolerance and iteration limit (generation options). */",
-            f"#define {N}_TOLERANCE {_c_float(tol)}",
-            f"#define {N}_MAX_ITER {int(max_iter)}",
-        ]
-    out += [
-        "",
-        "/* Version string: gtmodel and CasADi versions and the parameter-set hash. */",
-        f"const char *{gen_prefix}_version(void);",
-        "",
-        "/* Name of a status code, e.g. \"GT_UNREACHABLE\" (\"unknown\" for others). */",
-        f"const char *{gen_prefix}_status_string(int status);",
-        "",
-    ]
-    for spec in specs:
-        out.append(_comment_block(_doc_lines(spec, funcs, P, sizes[spec.name])))
-        out.append(f"int {gen_prefix}_{spec.name}({_c_params(spec, funcs, real)});")
-        out.append("")
-    out += ["#ifdef __cplusplus", '} /* extern "C" */', "#endif", "", f"#endif /* {P}_H */", ""]
-    return "\n".join(out)
-
-
-def _helpers(gp: str, specs) -> list[str]:
-    kinds = {a.kind for s in specs for a in s.args}
-    out = [
-        "/* 1 if all n values are finite. */",
-        f"static int {gp}_finite(const casadi_real *x, int n)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < n; ++i) {",
-        "        if (!isfinite(x[i])) return 0;",
-        "    }",
-        "    return 1;",
-        "}",
-        "",
-        "/* 1 if x[i] op t for all i (NaN fails); op 0: >=, 1: >. */",
-        f"static int {gp}_all(const casadi_real *x, int n, double t, int strict)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < n; ++i) {",
-        "        if (strict ? !(x[i] > t) : !(x[i] >= t)) return 0;",
-        "    }",
-        "    return 1;",
-        "}",
-        "",
-        "/* dst = src (n values). */",
-        f"static void {gp}_copy(casadi_real *dst, const casadi_real *src, int n)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < n; ++i) dst[i] = src[i];",
-        "}",
-        "",
-    ]
-    out += [
-        "/* dst (column-major, CasADi) = src (row-major, API) for an r x c matrix, or back (swap r, c). */",
-        f"static void {gp}_transpose(casadi_real *dst, const casadi_real *src, int r, int c)",
-        "{",
-        "    int i;",
-        "    for (i = 0; i < r * c; ++i) dst[(i % c) * r + i / c] = src[i];",
-        "}",
-        "",
-    ]
-    if "configuration" in kinds:
-        out += [
-            "/* IK root signs of configuration c (bit i set: +1, clear: -1); 0 if c is valid. */",
-            f"static int {gp}_signs(int c, casadi_real s[3])",
-            "{",
-            "    int i;",
-            "    if (c < 0 || c > 7) return 1;",
-            "    for (i = 0; i < 3; ++i) s[i] = ((c >> i) & 1) ? 1.0 : -1.0;",
-            "    return 0;",
-            "}",
-            "",
-        ]
-    return out
-
-
-def _drop_function(lines: list[str], name: str) -> list[str]:
-    """Remove a static helper (comment line, definition, blank line) from ``lines``."""
-    start = next(i for i, l in enumerate(lines) if name + "(" in l and l.startswith("static"))
-    end = lines.index("}", start)
-    return lines[: start - 1] + lines[end + 2 :]
-
-
-def _arg_prologue(gp: str, spec: FunctionSpec, funcs: dict) -> tuple[list[str], list[str], dict[str, str]]:
-    """Declarations, validation statements and the C expression feeding each CasADi input."""
-    decl, body, feed = [], [], {}
-    ptrs = [a.name for a in spec.args if a.kind in ("vector", "matrix") and not a.optional] + [o.name for o in spec.outputs]
-    if ptrs:
-        body.append("    if (" + " || ".join(f"{p} == NULL" for p in ptrs) + ") return GT_BAD_ARGUMENT;")
-    for a in spec.args:
-        n = _arg_size(spec, funcs, a)
-        guard = f"{a.name} != NULL && " if a.optional else ""
-        if a.kind == "vector":
-            body.append(f"    if ({guard}!{gp}_finite({a.name}, {n})) return GT_BAD_ARGUMENT;")
-            feed[a.casadi_input] = a.name
-        elif a.kind == "matrix":
-            decl.append(f"    casadi_real in_{a.name}[{n}];")
-            body.append(f"    if ({guard}!{gp}_finite({a.name}, {n})) return GT_BAD_ARGUMENT;")
-            if a.optional:
-                body.append(f"    if ({a.name} != NULL) {gp}_transpose(in_{a.name}, {a.name}, 3, 3);")
-            else:
-                body.append(f"    {gp}_transpose(in_{a.name}, {a.name}, 3, 3);")
-            feed[a.casadi_input] = f"in_{a.name}"
-        elif a.kind == "configuration":
-            decl.append(f"    casadi_real in_{a.name}[3];")
-            body.append(f"    if ({gp}_signs({a.name}, in_{a.name}) != 0) return GT_BAD_ARGUMENT;")
-            feed[a.casadi_input] = f"in_{a.name}"
-        else:
-            decl.append(f"    casadi_real in_{a.name}[1];")
-            body.append(f"    if ({a.name} != 1 && {a.name} != -1) return GT_BAD_ARGUMENT;")
-            body.append(f"    in_{a.name}[0] = (casadi_real){a.name};")
-            feed[a.casadi_input] = f"in_{a.name}"
-    return decl, body, feed
-
-
-def _call(f: ca.Function, cname: str, N: str, feed: dict[str, str], results: dict[str, str], indent: str = "    ") -> list[str]:
-    """Statements setting arg/res and calling ``cname``; evaluates to the CasADi return code in ``flag``."""
-    out = [f"{indent}for (i = 0; i < {N}_SZ_ARG; ++i) arg[i] = NULL;", f"{indent}for (i = 0; i < {N}_SZ_RES; ++i) res[i] = NULL;"]
-    for k, name in enumerate(f.name_in()):
-        out.append(f"{indent}arg[{k}] = {feed[name]};")
-    for k, name in enumerate(f.name_out()):
-        if name in results:
-            out.append(f"{indent}res[{k}] = {results[name]};")
-    out.append(f"{indent}flag = {cname}(arg, res, iw, w, 0);")
-    return out
-
-
-def _check_lines(gp: str, P: str, f: ca.Function, checks: Sequence[StatusCheck], prefix: str = "out_", indent: str = "    ") -> list[str]:
-    out = []
-    for c in checks:
-        strict = 1 if c.op == ">" else 0
-        thr = f"{P}_{c.threshold}" if c.threshold in THRESHOLD_MACROS else c.threshold
-        out.append(f"{indent}if (!{gp}_all({prefix}{c.casadi_output}, {f.numel_out(c.casadi_output)}, {thr}, {strict})) return {c.status};")
-    return out
-
-
-def _publish_lines(gp: str, spec: FunctionSpec, f: ca.Function) -> list[str]:
-    out = []
-    for o in spec.outputs:
-        out.append(f"    if (!{gp}_finite(out_{o.casadi_output}, {f.numel_out(o.casadi_output)})) return GT_NUMERIC_ERROR;")
-    for o in spec.outputs:
-        sp = f.sparsity_out(o.casadi_output)
-        nr, nc = sp.size1(), sp.size2()
-        if nc == 1 or nr == 1:
-            out.append(f"    {gp}_copy({o.name}, out_{o.casadi_output}, {nr * nc});")
-        else:  # CasADi is column-major; the C API is row-major
-            out.append(f"    {gp}_transpose({o.name}, out_{o.casadi_output}, {nc}, {nr});")
-    return out
-
-
-def _function_head(gp: str, P: str, spec: FunctionSpec, funcs: dict, real: str) -> tuple[str, list[str], list[str], list[str], dict[str, str]]:
-    """Start of a wrapper: ``(macro stem, used CasADi outputs, signature and declarations, argument checks, feed)``."""
-    N = f"{P}_{spec.name.upper()}"
-    used_out = list(dict.fromkeys([o.casadi_output for o in spec.outputs] + [c.casadi_output for c in spec.checks]))
-    decl, valid, feed = _arg_prologue(gp, spec, funcs)
-    head = [
-        f"int {gp}_{spec.name}({_c_params(spec, funcs, real)})",
-        "{",
-        f"    const casadi_real *arg[{N}_SZ_ARG];",
-        f"    casadi_real *res[{N}_SZ_RES];",
-        f"    casadi_int iw[{N}_SZ_IW];",
-        f"    casadi_real w[{N}_SZ_W];",
-        *decl,
-    ]
-    return N, used_out, head, valid, feed
-
-
-def _closed_form_body(gp: str, P: str, spec: FunctionSpec, f: ca.Function, cname: str, real: str, funcs: dict) -> list[str]:
-    N, used_out, body, valid, feed = _function_head(gp, P, spec, funcs, real)
-    for name in used_out:
-        body.append(f"    casadi_real out_{name}[{f.numel_out(name)}];")
-    body += ["    int i, flag;", *valid]
-    body += _call(f, cname, N, feed, {n: f"out_{n}" for n in used_out})
-    body.append("    if (flag != 0) return GT_NUMERIC_ERROR;")
-    body += _check_lines(gp, P, f, spec.checks)
-    body += _publish_lines(gp, spec, f)
-    body += ["    return GT_OK;", "}", ""]
-    return body
-
-
-def _newton_body(gp: str, P: str, spec: FunctionSpec, parts: dict, cnames: dict, real: str, funcs: dict, newton_check_every: int | None) -> list[str]:
-    nl = spec.newton
-    n = nl.size
-    fs, fst, ff = parts["start"], parts["step"], parts["finish"]
-    N, used_out, body, valid, feed = _function_head(gp, P, spec, funcs, real)
-    body.append(f"    casadi_real x[{n}], x_next[{n}], residual[1]{', valid[1]' if 'valid' in fst.name_out() else ''};")
-    start_out = [c.casadi_output for c in nl.start_checks]
-    for name in start_out:
-        body.append(f"    casadi_real st_{name}[{fs.numel_out(name)}];")
-    for name in used_out:
-        body.append(f"    casadi_real out_{name}[{ff.numel_out(name)}];")
-    body += ["    int i, k, flag, converged = 0;", *valid]
-    feed_x = dict(feed, x="x")
-    start_call = _call(fs, cnames["start"], N, feed, dict({"x0": "x"}, **{s: f"st_{s}" for s in start_out}), "        ")
-    start_call += ["        if (flag != 0) return GT_NUMERIC_ERROR;"]
-    start_call += _check_lines(gp, P, fs, nl.start_checks, "st_", "        ")
-    if nl.warm:
-        cond = " && ".join(f"{w} != NULL" for w in nl.warm)
-        body.append(f"    if ({cond}) {{")
-        body += _call(parts["warm"], cnames["warm"], N, feed, {"x0": "x"}, "        ")
-        body += ["        if (flag != 0) return GT_NUMERIC_ERROR;", "    } else {"]
-        body += start_call
-        body.append("    }")
-    else:
-        body.append("    {")
-        body += start_call
-        body.append("    }")
-    if "invariant" in parts:  # the step's subexpressions of the fixed inputs, once
-        body.insert(body.index("    int i, k, flag, converged = 0;"), f"    casadi_real pre[{parts['invariant'].numel_out('pre')}];")
-        body += _call(parts["invariant"], cnames["invariant"], N, feed, {"pre": "pre"})
-        body.append("    if (flag != 0) return GT_NUMERIC_ERROR;")
-        feed_x["pre"] = "pre"
-    has_valid = "valid" in fst.name_out()
-    conv = f"residual[0] <= {N}_TOLERANCE" + (" && valid[0] >= 0" if has_valid else "")
-    every = _check_every(nl, newton_check_every)
-    tested = {"residual": "residual", "valid": "valid"}
-    body += [
-        f"    for (k = 0; k <= {N}_MAX_ITER; ++k) {{  /* bounded: at most MAX_ITER + 1 steps */",
-    ]
-    if every == 1:  # the step returns the residual of x_k with x_{k+1}: test every step
-        body += _call(fst, cnames["step"], N, feed_x, {"x_next": "x_next", **tested}, "        ")
-        body += ["        if (flag != 0) break;", f"        if ({conv}) {{", "            converged = 1;"]
-        if nl.accept == "next":
-            body.append(f"            if ({gp}_finite(x_next, {n})) {gp}_copy(x, x_next, {n});")
-        body += ["            break;", "        }", f"        if (k == {N}_MAX_ITER) break;"]
-    else:  # test x_k only at k = every, 2 every, ...: the residual alone there, no step
-        if nl.accept != "current":
-            raise CodegenError(f"{spec.name}: newton.check_every > 1 needs accept='current'")
-        body.append(f"        if (k > 0 && k % {every} == 0) {{")
-        body += _call(parts["residual"], cnames["residual"], N, feed_x, tested, "            ")
-        body += [
-            "            if (flag != 0) break;",
-            f"            if ({conv}) {{",
-            "                converged = 1;",
-            "                break;",
-            "            }",
-            "        }",
-            f"        if (k == {N}_MAX_ITER) break;",
-        ]
-        body += _call(fst, cnames["step"], N, feed_x, {"x_next": "x_next"}, "        ")
-        body.append("        if (flag != 0) break;")
-    body += [
-        f"        if (!{gp}_finite(x_next, {n})) break;",
-        f"        {gp}_copy(x, x_next, {n});",
-        "    }",
-        f"    if (iterations != NULL) *iterations = k > {N}_MAX_ITER ? {N}_MAX_ITER : k;",
-    ]
-    body += _call(ff, cnames["finish"], N, feed_x, {n_: f"out_{n_}" for n_ in used_out})
-    body.append("    if (flag != 0) return GT_NUMERIC_ERROR;")
-    body += _check_lines(gp, P, ff, spec.checks)
-    body.append("    if (!converged) return GT_NOT_CONVERGED;")
-    body += _publish_lines(gp, spec, ff)
-    body += ["    return GT_OK;", "}", ""]
-    return body
-
-
-def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newton_check_every: int | None = None) -> str:
-    P = gen_prefix.upper()
-    out = [
-        f"/* {gen_prefix}.c: plain-C wrappers of the CasADi-generated model functions.",
-        " * Generated by gtmodel; do not edit. See the header for the API. */",
-        f'#include "{gen_prefix}.h"',
-        f'#include "{gen_prefix}_casadi.h"',
-        "",
-        "#include <math.h>",
-        "#include <stddef.h>",
-        "",
-        "/* Stack work-array sizes, from the generated *_work functions (at least 1). */",
-    ]
-    for spec in specs:
-        N = f"{P}_{spec.name.upper()}"
-        sa, sr, siw, sw = sizes[spec.name]
-        out += [
-            f"#define {N}_SZ_ARG {max(sa, 1)}",
-            f"#define {N}_SZ_RES {max(sr, 1)}",
-            f"#define {N}_SZ_IW {max(siw, 1)}",
-            f"#define {N}_SZ_W {max(sw, 1)}",
-        ]
-    out += [
-        "",
-        f"const char *{gen_prefix}_version(void) {{ return {P}_VERSION; }}",
-        "",
-        f"const char *{gen_prefix}_status_string(int status)",
-        "{",
-        "    switch (status) {",
-    ]
-    for macro in STATUS_CODES:
-        out.append(f'    case {macro}: return "{macro}";')
-    out += ["    default: return \"unknown\";", "    }", "}", ""]
-    bodies: list[str] = []
-    for spec in specs:
-        if spec.newton is None:
-            bodies += _closed_form_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs)
-        else:
-            bodies += _newton_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs, newton_check_every)
-    helpers = _helpers(gen_prefix, specs)
-    used = "\n".join(bodies)
-    for h in ("finite", "all", "copy", "transpose", "signs"):
-        name = f"{gen_prefix}_{h}"
-        if any(name + "(" in line for line in helpers) and name + "(" not in used:  # unused helper: drop it (-Werror)
-            helpers = _drop_function(helpers, name)
-    return "\n".join(out + helpers + bodies)
-
-
 # ----------------------------------------------------------------------------- API
 def generate(
     robot: Any = "L1",
@@ -854,7 +370,7 @@ def generate(
         The robot: a 3-link parameter set (shipped name ``"L1"``, ``"D1"``, ``"L1_ideal"``
         or a TOML path, e.g. a calibration's ``parameters.toml``), the six-link error model
         (``"D1_six_link"``) or the F1 (``"F1"``); see
-        :func:`gtmodel.codegen.specs.load_robot`. Its values are embedded as constants.
+        :func:`gtmodel.codegen.robot.load_robot`. Its values are embedded as constants.
     out_dir : str or pathlib.Path, optional
         Folder to write into (created if missing; existing files of the same names are
         overwritten).
@@ -902,7 +418,6 @@ def generate(
         prefix = "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", model.name)
     if not isinstance(prefix, str) or not _IDENT.match(prefix):
         raise InputError(f"prefix: expected a C identifier such as 'gt_L1', got {prefix!r}")
-    from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
 
     check_friction_form(friction, DEFAULT_FRICTION_WIDTH)
     if real not in REAL_TYPES:

@@ -278,6 +278,22 @@ class ClosureModel(ABC):
         r, syms = self.closure_expression(arm)
         return ca.Function(f"closure_arm{arm + 1}", list(syms), [r], ["p", "q", "T", "quat"], ["r"])
 
+    def graphs(self) -> dict[str, ca.Function]:
+        """The CasADi Functions of the model used by solvers and the code generator, by name.
+
+        The public graph interface of a closure model: the code generator
+        (:mod:`gtmodel.codegen`) and the solvers use these Functions and public members
+        only. Here the closure equations of each arm, ``"closure_arm1"`` ..
+        ``"closure_arm3"`` (:meth:`closure_function`: ``(p, q, T [m], quat) -> r [m^2]``);
+        models add their own (inverse and forward kinematics, Newton steps, Jacobians;
+        see their ``graphs``).
+
+        Returns
+        -------
+        dict of str to casadi.Function
+        """
+        return {f"closure_arm{arm + 1}": self.closure_function(arm) for arm in range(len(self.links))}
+
     def arm_parameter_indices(self, arm: int) -> np.ndarray:
         """Indices of the parameters the closure equations of an arm depend on.
 

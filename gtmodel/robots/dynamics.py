@@ -36,11 +36,11 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import InputError, SingularConfigurationError
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form, friction_force
+from gtmodel.robots.mapped import MappedFunction as _Mapped
 from gtmodel.robots.kinematics import (
     SINGULARITY_TOLERANCE,
     GantryTau3Kinematics,
     _as_points,
-    _Mapped,
     configuration_signs,
     fk_expression,
     ik_expression,

@@ -33,7 +33,9 @@ import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
+from gtmodel.robots.mapped import MappedFunction
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
+from gtmodel.robots.workspace import within_limits
 
 __all__ = [
     "closure_residual",
@@ -337,26 +339,6 @@ def _solution_sign(solution: int) -> float:
     return float(solution)
 
 
-class _Mapped:
-    """Evaluate a CasADi Function column-wise on N samples, caching ``map`` per N."""
-
-    def __init__(self, f: ca.Function) -> None:
-        self.f = f
-        self._maps: dict[int, ca.Function] = {}
-
-    def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
-        n = max(a.shape[1] for a in args)
-        if n == 1:
-            out = self.f(*args)
-        else:
-            if n not in self._maps:
-                self._maps[n] = self.f.map(n)
-            out = self._maps[n](*args)
-        if not isinstance(out, (list, tuple)):
-            out = [out]
-        return [np.asarray(o) for o in out]
-
-
 class GantryTau3Kinematics:
     """Kinematics of a 3-link Gantry-Tau (nominal "ideal" or "modified" model).
 
@@ -429,8 +411,8 @@ class GantryTau3Kinematics:
         return ca.Function("link_cosines", [T, s], [c, q, disc], ["T", "s"], ["cos", "q", "disc"])
 
     @cached_property
-    def _cos(self) -> _Mapped:
-        return _Mapped(self.link_cosines_function)
+    def _cos(self) -> MappedFunction:
+        return MappedFunction(self.link_cosines_function)
 
     @cached_property
     def acceleration_function(self) -> ca.Function:
@@ -453,24 +435,24 @@ class GantryTau3Kinematics:
         )
 
     @cached_property
-    def _ik(self) -> _Mapped:
-        return _Mapped(self.ik_function)
+    def _ik(self) -> MappedFunction:
+        return MappedFunction(self.ik_function)
 
     @cached_property
-    def _fk(self) -> _Mapped:
-        return _Mapped(self.fk_function)
+    def _fk(self) -> MappedFunction:
+        return MappedFunction(self.fk_function)
 
     @cached_property
-    def _jac(self) -> _Mapped:
-        return _Mapped(self.jacobian_function)
+    def _jac(self) -> MappedFunction:
+        return MappedFunction(self.jacobian_function)
 
     @cached_property
-    def _acc(self) -> _Mapped:
-        return _Mapped(self.acceleration_function)
+    def _acc(self) -> MappedFunction:
+        return MappedFunction(self.acceleration_function)
 
     @cached_property
-    def _cacc(self) -> _Mapped:
-        return _Mapped(self.cart_acceleration_function)
+    def _cacc(self) -> MappedFunction:
+        return MappedFunction(self.cart_acceleration_function)
 
     # --------------------------------------------------------------- checks
     def _check_reach(self, disc: np.ndarray, T: np.ndarray) -> None:
@@ -767,12 +749,11 @@ class GantryTau3Kinematics:
         Tn, single = _as_points(T, "T")
         s = configuration_signs(configuration)
         c, q, disc = self._cos(Tn.T, s[:, None])
-        ok = np.all(disc >= 0, axis=0)
         if limits:
             lim = self.parameters.limits
-            q = q.T
-            ok &= np.all((q >= lim.cart_travel[:, 0]) & (q <= lim.cart_travel[:, 1]), axis=1)
-            ok &= np.all(np.abs(c) >= np.cos(lim.joint_angle_max), axis=0)
+            ok = within_limits(q.T, disc.T, c.T, lim.cart_travel, lim.joint_angle_max)
+        else:
+            ok = within_limits(q.T, disc.T)
         return bool(ok[0]) if single else ok
 
     def require_in_workspace(self, T: np.typing.ArrayLike, configuration: int | Sequence[int] = 0) -> np.ndarray:

@@ -9,6 +9,7 @@ Every field is validated on load; an error names the file and the field.
 from __future__ import annotations
 
 import math
+import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -408,8 +409,6 @@ def available_parameter_sets() -> list[str]:
     list of str
         E.g. ``["D1", "L1", "L1_ideal"]``.
     """
-    import tomllib
-
     folder = resources.files(_DATA_PACKAGE) / "data"
     names = []
     for p in folder.iterdir():

@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from gtmodel.codegen import check
+from gtmodel.codegen import check, generate
 from gtmodel.codegen.check import (
     FK_TOLERANCE,
     IK_TOLERANCE,
@@ -20,7 +20,7 @@ from gtmodel.codegen.check import (
     JACOBIAN_TOLERANCE,
     SENTINEL,
 )
-from gtmodel.codegen.specs import RobotModel
+from gtmodel.codegen.robot import RobotModel
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.kinematics import GantryTau3Kinematics
@@ -141,8 +141,6 @@ def test_check_detects_a_difference(built):
 
 def test_check_uses_the_requested_friction_form(tmp_path):
     """The smooth (tanh) friction model is generated and checked as well."""
-    from gtmodel.codegen import generate
-
     gen = generate("L1", tmp_path / "src", functions=("inverse_dynamics",), friction="tanh")
     assert "friction tanh" in gen.version
     report = check(gen, n=100, build_dir=tmp_path / "build")

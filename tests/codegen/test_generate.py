@@ -15,7 +15,11 @@ import pytest
 
 import gtmodel
 from gtmodel.codegen import FUNCTION_SPECS, FunctionSpec, check, compile_shared, generate, load_library, parameter_hash
-from gtmodel.codegen.specs import ArgSpec, OutputSpec
+from gtmodel.codegen.check import SENTINEL
+from gtmodel.codegen.declarations import ArgSpec, OutputSpec
+from gtmodel.codegen.generate import _hoist_invariants, _renamed, _residual_part
+from gtmodel.codegen.robot import RobotModel, load_robot
+from gtmodel.codegen.specs import F1_SPECS
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.robots.parameters import load_parameters
 
@@ -186,8 +190,6 @@ def test_cse_hoisting_and_residual_part_keep_every_value(name):
     Reference: the declared step Function (the Python model's own step graph) evaluated by
     CasADi's virtual machine on random iterates near the home pose.
     """
-    from gtmodel.codegen.generate import _hoist_invariants, _renamed, _residual_part
-    from gtmodel.codegen.specs import F1_SPECS, RobotModel, load_robot
 
     model = RobotModel(load_robot("F1"))
     nl = F1_SPECS[name].newton
@@ -218,7 +220,6 @@ def test_non_convergence_gives_status_and_leaves_outputs(tmp_path):
 
     Reference: the Python FK needs 2 iterations on the D1 workspace (tests/robots/test_six_link.py).
     """
-    from gtmodel.codegen.check import SENTINEL
     from gtmodel.robots.kinematics import GantryTau3Kinematics
 
     gen = generate("D1_six_link", tmp_path / "src", functions=("fk",), max_iter=1)

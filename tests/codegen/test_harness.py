@@ -8,19 +8,27 @@ the compiled code itself.
 
 from __future__ import annotations
 
+import contextlib
+import importlib
+import io
 import re
 import shutil
 import subprocess
 import time
+import tomllib
 from pathlib import Path
 
 import pytest
 
+import gtmodel.codegen
 from gtmodel.cli import main
-from gtmodel.codegen import generate
+from gtmodel.codegen import check, generate
+from gtmodel.codegen.check import HARNESS_FILES, harness_dir, run_harness_unit_tests
 
-HARNESS = Path(__file__).resolve().parents[2] / "codegen"
-PROBLEM = Path(__file__).resolve().parents[2] / "problems" / "l1_time_optimal.toml"
+check_module = importlib.import_module("gtmodel.codegen.check")
+ROOT = Path(__file__).resolve().parents[2]
+HARNESS = ROOT / "codegen"
+PROBLEM = ROOT / "problems" / "l1_time_optimal.toml"
 #: Flags the issue requires for the generated code.
 REQUIRED_FLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror")
 #: Measure-only cycles of the acceptance run (the issue: 10^5).
@@ -155,20 +163,67 @@ def test_valgrind_memcheck_clean_and_no_allocation_in_the_loop(harness):
     assert allocs[0] == allocs[1]
 
 
-def test_cli_check_prints_error_and_time_per_function(tmp_path, capsys):
-    code = main(["codegen", "--robot", "L1", "--out", str(tmp_path / "gen"), "--check", "-n", "300"])
-    out = capsys.readouterr().out
+@pytest.fixture(scope="module")
+def cli_check_output(tmp_path_factory):
+    """Exit code and printed output of ``gtmodel codegen --robot L1 --check``."""
+    out_dir = tmp_path_factory.mktemp("cli_check") / "gen"
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        code = main(["codegen", "--robot", "L1", "--out", str(out_dir), "--check", "-n", "300"])
+    return code, buffer.getvalue()
+
+
+@pytest.mark.parametrize("name", ["ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity"])
+def test_cli_check_prints_error_and_time_per_function(cli_check_output, name):
+    code, out = cli_check_output
     assert code == 0, out
-    for name in ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity"):
-        assert re.search(rf"^{name}: max \|C - Python\| = \S+ .*\d+ ns/call .*OK$", out, re.M), out
-    assert re.search(r"^C unit tests \(codegen/unit_test.c\): unit_test: \d+ checks, 0 failures$", out, re.M), out
+    assert re.search(rf"^{name}: max \|C - Python\| = \S+ .*\d+ ns/call .*OK$", out, re.M), out
+
+
+def test_cli_check_runs_the_packaged_c_unit_tests(cli_check_output):
+    code, out = cli_check_output
+    assert code == 0, out
+    unit_test = re.escape(str(harness_dir() / "unit_test.c"))
+    assert re.search(rf"^C unit tests: ran {unit_test}: unit_test: \d+ checks, 0 failures$", out, re.M), out
     assert out.rstrip().endswith("PASSED")
+
+
+def test_the_harness_ships_with_the_package():
+    """The harness sources are package data of gtmodel.codegen (found after ``pip install .``)."""
+    folder = harness_dir()
+    assert folder == Path(gtmodel.codegen.__file__).resolve().parent / "harness"
+    assert all((folder / name).is_file() for name in HARNESS_FILES)
+    package_data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    assert package_data["gtmodel.codegen"] == ["harness/Makefile", "harness/*.c"]
+    assert "include ../gtmodel/codegen/harness/Makefile" in (HARNESS / "Makefile").read_text()
+
+
+@pytest.mark.parametrize("missing", ["folder", "unit_test.c"])
+def test_a_missing_harness_fails_the_check(tmp_path, monkeypatch, missing):
+    """A harness that applies but cannot run makes the check FAIL and says why (never PASSED)."""
+    broken = tmp_path / "harness"
+    if missing != "folder":
+        shutil.copytree(harness_dir(), broken)
+        (broken / missing).unlink()
+    monkeypatch.setattr(check_module, "harness_dir", lambda: broken)
+    gen = generate("L1", tmp_path / "gen")
+    report = check(gen, n=20, build_dir=tmp_path / "build", timing=True)
+    assert report.harness_passed is False
+    assert not report.passed
+    lines = report.summary_lines()
+    assert re.fullmatch(r"C unit tests: not run: harness files \[.*'unit_test.c'.*\] missing in .*", lines[-2]), lines
+    assert lines[-1] == "FAILED"
+
+
+def test_no_make_fails_the_check(tmp_path, monkeypatch):
+    """Without ``make`` the C unit tests cannot run: the verdict says so and is a failure."""
+    gen = generate("L1", tmp_path / "gen")
+    monkeypatch.setattr(check_module.shutil, "which", lambda name: None)
+    assert run_harness_unit_tests(gen, tmp_path / "build") == (False, "not run: no 'make' program on PATH")
 
 
 def test_single_precision_code_compiles_strictly_and_matches(tmp_path):
     """``real="float"``: float API, compiled with -Werror, within FLOAT_RELATIVE_TOLERANCE of Python."""
-    from gtmodel.codegen import check
-
     gen = generate("L1", tmp_path / "gen", real="float", functions=("ik", "jacobian", "inverse_dynamics"))
     assert "int gt_L1_ik(const float T[3], int configuration, float q[3]);" in gen.header.read_text()
     report = check(gen, n=300, build_dir=tmp_path / "build")

@@ -16,6 +16,7 @@ Independent references used below:
 from __future__ import annotations
 
 import tomllib
+from importlib import resources
 
 import casadi as ca
 import numpy as np
@@ -184,14 +185,14 @@ def test_fk_of_ik_round_trip(d1, grid_fk):
     np.testing.assert_allclose(R, grid_fk.R, atol=ROUND_TRIP_TOL, rtol=0)
 
 
-def test_closure_residuals_vanish_at_fk(d1, grid_q, grid_fk):
+@pytest.mark.parametrize("arm", range(3))
+def test_closure_residuals_vanish_at_fk(d1, grid_q, grid_fk, arm):
     p = d1.parameter_vector()
     quat = rotation_to_quaternion(grid_fk.R)
     N = len(grid_q)
-    for arm in range(3):
-        r = np.asarray(d1.closure_function(arm).map(N)(p, grid_q.T, grid_fk.T.T, quat.T))
-        assert r.shape == (len(SIX_LINKS[arm]), N)
-        assert np.abs(r).max() < CLOSURE_TOL
+    r = np.asarray(d1.closure_function(arm).map(N)(p, grid_q.T, grid_fk.T.T, quat.T))
+    assert r.shape == (len(SIX_LINKS[arm]), N)
+    assert np.abs(r).max() < CLOSURE_TOL
 
 
 def test_fk_agrees_with_generic_closure_newton(d1, three_link, grid_q, grid_fk):
@@ -292,13 +293,14 @@ def test_parallelogram_model_is_the_three_link_model(R_T0, start, v_per_arm, gri
 
 
 # ------------------------------------------------------------------ interface pieces
-def test_arm_parameters_follow_the_links(d1):
+@pytest.mark.parametrize("arm", range(3))
+def test_arm_parameters_follow_the_links(d1, arm):
     names = np.array(d1.parameter_names())
-    for arm, links in enumerate(SIX_LINKS):
-        got = set(names[d1.arm_parameter_indices(arm)])
-        expected = {f"{k}_{l}{c}" for l in links for k in ("A0", "v", "B0") for c in ("_x", "_y", "_z")}
-        expected |= {f"L_{l}" for l in links}
-        assert got == expected
+    links = SIX_LINKS[arm]
+    got = set(names[d1.arm_parameter_indices(arm)])
+    expected = {f"{k}_{l}{c}" for l in links for k in ("A0", "v", "B0") for c in ("_x", "_y", "_z")}
+    expected |= {f"L_{l}" for l in links}
+    assert got == expected
 
 
 def test_v_per_arm_parameter_names():
@@ -361,10 +363,7 @@ def test_unreachable_pose_names_row_and_link(d1, grid_fk):
 
 
 def _tmp_file(tmp_path, replace: tuple[str, str] | None = None, drop: str | None = None):
-    import gtmodel.robots.six_link as mod
-    from importlib import resources
-
-    text = (resources.files(mod.__package__) / "data" / "D1_six_link.toml").read_text()
+    text = (resources.files("gtmodel.robots") / "data" / "D1_six_link.toml").read_text()
     if replace is not None:
         assert replace[0] in text
         text = text.replace(replace[0], replace[1], 1)

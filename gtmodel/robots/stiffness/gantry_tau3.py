@@ -18,10 +18,10 @@ from gtmodel.robots.kinematics import (
     SINGULARITY_TOLERANCE,
     GantryTau3Kinematics,
     _as_points,
-    _Mapped,
     configuration_signs,
     ik_expression,
 )
+from gtmodel.robots.mapped import MappedFunction as _Mapped
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.robots.stiffness.expressions import (
     arm_compliance_expression,
