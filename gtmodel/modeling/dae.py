@@ -13,6 +13,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+import pandas as pd
 
 from gtmodel.errors import InputError
 
@@ -215,7 +216,6 @@ def _unpack(vars_: Mapping[str, slice], data: np.ndarray) -> dict[str, np.ndarra
 
 def _frame(t: np.ndarray, *groups: Mapping[str, np.ndarray]) -> Any:
     """Build a pandas DataFrame with a ``t`` column and one column per scalar element."""
-    import pandas as pd
 
     cols: dict[str, np.ndarray] = {"t": np.asarray(t, dtype=float)}
     for group in groups:
