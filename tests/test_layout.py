@@ -78,3 +78,25 @@ def test_no_private_name_imported_from_another_subpackage(path):
             bad += [f"{node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
             bad += [node.module] if any(p.startswith("_") for p in node.module.split(".")[2:]) else []
     assert not bad, f"private names of other subpackages: {bad}"
+
+
+def _assertions_inside_loops() -> list[str]:
+    """``path:function:line`` of every ``for``/``while`` loop holding an ``assert`` in a test function."""
+    found = []
+    for p in sorted((REPO / "tests").rglob("*.py")):
+        tree = ast.parse(p.read_text(encoding="utf-8"))
+        tests = (n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name.startswith("test"))
+        found += [
+            f"{p.relative_to(REPO)}:{fn.name}:{n.lineno}"
+            for fn in tests
+            for n in ast.walk(fn)
+            if isinstance(n, (ast.For, ast.While)) and any(isinstance(x, ast.Assert) for x in ast.walk(n))
+        ]
+    return found
+
+
+def test_no_assertion_inside_a_loop():
+    """A loop of asserts stops at the first failure and hides the rest: such cases are
+    parametrized, or checked by one assertion that lists every failing element."""
+    offenders = _assertions_inside_loops()
+    assert not offenders, "assertions inside loops (parametrize, or assert once over a list):\n" + "\n".join(offenders)

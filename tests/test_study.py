@@ -47,12 +47,19 @@ def test_larger_weight_gives_longer_time_and_less_energy(sweep):
 
 def test_comparison_rows_equal_the_case_summaries(sweep):
     _, out, rows = sweep
-    for r in rows:
-        folder = out / r["case"].replace("[", "_").replace("]", "")
-        summary = json.loads((folder / "summary.json").read_text())
-        assert summary["status"] == r["status"]
-        assert summary["final_time_s"] == pytest.approx(float(r["final_time_s"]), rel=1e-12)
-        assert summary["overrides"] == {"w": float(r["case"].split("w=")[1].rstrip("]"))}
+    summaries = {r["case"]: json.loads((out / r["case"].replace("[", "_").replace("]", "") / "summary.json").read_text())
+                 for r in rows}
+    bad = [
+        (r["case"], field)
+        for r in rows
+        for field, ok in (
+            ("status", summaries[r["case"]]["status"] == r["status"]),
+            ("final_time_s", summaries[r["case"]]["final_time_s"] == pytest.approx(float(r["final_time_s"]), rel=1e-12)),
+            ("overrides", summaries[r["case"]]["overrides"] == {"w": float(r["case"].split("w=")[1].rstrip("]"))}),
+        )
+        if not ok
+    ]
+    assert not bad, bad  # (case, field) where the comparison row and the case summary differ
 
 
 def test_several_files_one_bad_records_the_error_and_exits_nonzero(tmp_path, capsys):

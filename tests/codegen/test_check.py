@@ -53,11 +53,14 @@ def test_check_passes_on_10000_random_reachable_poses(built, robot):
     # every generated function was probed with unreachable, boundary and bad inputs
     probed = {(p.function, p.expected) for p in report.probes}
     cases = {(p.function, p.case) for p in report.probes}
-    for name in gen.functions:
-        assert (name, "GT_UNREACHABLE") in probed and (name, "GT_BAD_ARGUMENT") in probed
-    for name in ("ik", "jacobian", "inverse_dynamics", "gravity"):
-        assert (name, "on the workspace boundary (arm stretched)") in cases
-        assert (name, "just beyond the workspace boundary") in cases
+    missing = [(n, e) for n in gen.functions for e in ("GT_UNREACHABLE", "GT_BAD_ARGUMENT") if (n, e) not in probed]
+    missing += [
+        (n, c)
+        for n in ("ik", "jacobian", "inverse_dynamics", "gravity")
+        for c in ("on the workspace boundary (arm stretched)", "just beyond the workspace boundary")
+        if (n, c) not in cases
+    ]
+    assert not missing, missing
     assert ("jacobian", "GT_SINGULAR") in probed and ("inverse_dynamics", "GT_SINGULAR") in probed
     assert lines[1].startswith("ik: max |C - Python| = ") and lines[1].endswith(" m (tol 1e-12) OK")
     assert lines[-1] == "PASSED"
@@ -74,10 +77,17 @@ def test_newton_functions_match_python(built, robot):
     report = check(gen, n=N_POSES, seed=1, library=lib)
     assert report.passed, "\n".join(report.summary_lines())
     assert report.n == N_POSES
-    for f in report.functions:
-        assert f.max_abs_diff <= REQUIRED[f.name]
-        assert f.n_not_ok == 0 and f.n + f.n_refused == N_POSES
-        assert f.n >= (1 - MAX_REFUSED_FRACTION) * N_POSES
+    bad = [
+        (f.name, f.max_abs_diff, f.n_not_ok, f.n, f.n_refused)
+        for f in report.functions
+        if not (
+            f.max_abs_diff <= REQUIRED[f.name]
+            and f.n_not_ok == 0
+            and f.n + f.n_refused == N_POSES
+            and f.n >= (1 - MAX_REFUSED_FRACTION) * N_POSES
+        )
+    ]
+    assert not bad, bad  # (function, max |C - Python|, not ok, compared, refused)
     expected = {(p.function, p.expected) for p in report.probes}
     assert all((name, "GT_BAD_ARGUMENT") in expected for name in gen.functions)
 
@@ -89,10 +99,9 @@ def test_c_matches_python_on_a_workspace_pose_directly(built):
     dyn = GantryTau3Dynamics("L1", friction="exact")
     T = k.workspace_grid(0.1)[17]
     Td, Tdd = np.array([0.3, -0.2, 0.1]), np.array([1.0, 2.0, -3.0])
-    for c in range(8):
-        status, (q,) = lib["ik"](T, c)
-        assert status == 0
-        np.testing.assert_allclose(q, k.ik(T, c), rtol=0, atol=IK_TOLERANCE)
+    ik = [lib["ik"](T, c) for c in range(8)]  # every configuration
+    assert [status for status, _ in ik] == [0] * 8
+    np.testing.assert_allclose([q for _, (q,) in ik], [k.ik(T, c) for c in range(8)], rtol=0, atol=IK_TOLERANCE)
     status, (J,) = lib["jacobian"](T, 0)
     assert status == 0
     np.testing.assert_allclose(J.reshape(3, 3), k.jacobian(T, 0), rtol=0, atol=JACOBIAN_TOLERANCE)  # row-major
@@ -155,10 +164,9 @@ def test_call_rows_equals_single_calls(built):
     T = np.vstack([k.workspace_grid(0.1)[:5], k.workspace_bounds()[:, 1] + 5.0])  # last row unreachable
     conf = np.array([0, 1, 2, 3, 7, 0])
     status, (q,) = lib["ik"].call_rows(T, conf, fill=SENTINEL)
-    for i in range(len(T)):
-        s_i, (q_i,) = lib["ik"](T[i], int(conf[i]), out=[np.full(3, SENTINEL)])
-        assert status[i] == s_i
-        np.testing.assert_array_equal(q[i], q_i)
+    single = [lib["ik"](T[i], int(conf[i]), out=[np.full(3, SENTINEL)]) for i in range(len(T))]
+    assert list(status) == [s_i for s_i, _ in single]
+    np.testing.assert_array_equal(q, [q_i for _, (q_i,) in single])
     assert list(status) == [0, 0, 0, 0, 0, 1] and np.all(q[-1] == SENTINEL)
 
 

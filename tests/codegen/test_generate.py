@@ -44,16 +44,17 @@ def test_files_exist_and_header_declares_all_functions(built):
     gen, _ = built("L1")
     assert gen.prefix == "gt_L1"
     assert gen.functions == ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity")
-    for p in gen.files:
-        assert p.exists() and p.stat().st_size > 0, p
+    empty = [p for p in gen.files if not (p.exists() and p.stat().st_size > 0)]
+    assert not empty, empty
     assert gen.header.name == "gt_L1.h" and gen.source.name == "gt_L1.c"
     header = gen.header.read_text()
-    for sig in EXPECTED_SIGNATURES:
-        assert sig in header, sig
-    for macro, value in [
+    missing = [sig for sig in EXPECTED_SIGNATURES if sig not in header]
+    assert not missing, missing
+    macros = [
         ("GT_OK", 0), ("GT_UNREACHABLE", 1), ("GT_SINGULAR", 2), ("GT_DEGENERATE", 3), ("GT_BAD_ARGUMENT", 4), ("GT_NOT_CONVERGED", 6)
-    ]:
-        assert re.search(rf"#define {macro} {value}\b", header), macro
+    ]
+    missing = [macro for macro, value in macros if not re.search(rf"#define {macro} {value}\b", header)]
+    assert not missing, missing
     assert "ROW-MAJOR" in header
     # the public header is plain C: no CasADi types
     assert "casadi_real" not in header and "casadi_int" not in header and "#include" not in header
@@ -80,9 +81,10 @@ def test_wrapper_uses_fixed_stack_arrays_only(built):
     gen, _ = built("L1")
     src = gen.source.read_text()
     assert "malloc" not in src and "static double" not in src
-    for name in gen.functions:
-        assert f"#define GT_L1_{name.upper()}_SZ_W " in src
-        assert name in gen.work_sizes
+    missing = [
+        name for name in gen.functions if not (f"#define GT_L1_{name.upper()}_SZ_W " in src and name in gen.work_sizes)
+    ]
+    assert not missing, missing
 
 
 def test_subset_and_custom_prefix_compile_warning_free(tmp_path):
@@ -157,28 +159,37 @@ def test_header_documents_units_sizes_statuses_and_newton_bounds(built):
     assert "typedef double gt_F1_real;" in header and "no heap allocation" in header
 
 
-def test_newton_loops_are_bounded(built):
+@pytest.mark.parametrize("robot", ["D1_six_link", "F1"])
+def test_newton_loops_are_bounded(built, robot):
     """No unbounded branch: no while loop; every Newton loop runs k = 0 .. MAX_ITER."""
-    for robot in ("D1_six_link", "F1"):
-        gen, _ = built(robot)
-        src = gen.source.read_text()
-        assert "while" not in src and "goto" not in src
-        for name, (tol, max_iter) in gen.newton.items():
-            assert f"for (k = 0; k <= {gen.prefix.upper()}_{name.upper()}_MAX_ITER; ++k)" in src
-            assert max_iter == 20 and tol > 0
+    gen, _ = built(robot)
+    src = gen.source.read_text()
+    assert "while" not in src and "goto" not in src
+    bad = [
+        (name, tol, max_iter)
+        for name, (tol, max_iter) in gen.newton.items()
+        if not (
+            f"for (k = 0; k <= {gen.prefix.upper()}_{name.upper()}_MAX_ITER; ++k)" in src and max_iter == 20 and tol > 0
+        )
+    ]
+    assert not bad, bad
 
 
-def test_f1_loop_hoists_invariants_and_tests_the_residual_alone(built):
+@pytest.mark.parametrize("name", ["ik", "fk"])
+def test_f1_loop_hoists_invariants_and_tests_the_residual_alone(built, name):
     """F1 loops: the fixed-input part once before the loop, the residual alone at the tests."""
     gen, _ = built("F1")
     src = gen.source.read_text()
-    for name in ("ik", "fk"):
-        body = src[src.index(f"int gt_F1_{name}(") :]
-        body = body[: body.index("\n}\n")]
-        loop = body.index("for (k = 0;")
-        assert 0 < body.index(f"gt_F1_cg_{name}_invariant(") < loop
-        assert body.index(f"gt_F1_cg_{name}_residual(") > loop
-        assert f"k % {F1_BLOCK} == 0" in body
+    body = src[src.index(f"int gt_F1_{name}(") :]
+    body = body[: body.index("\n}\n")]
+    loop = body.index("for (k = 0;")
+    assert 0 < body.index(f"gt_F1_cg_{name}_invariant(") < loop
+    assert body.index(f"gt_F1_cg_{name}_residual(") > loop
+    assert f"k % {F1_BLOCK} == 0" in body
+
+
+def test_f1_casadi_helpers_are_inlined(built):
+    gen, _ = built("F1")
     casadi_src = gen.casadi_source.read_text()
     assert "static casadi_real casadi_sq(" in casadi_src  # inlined helper, not a PLT call
 

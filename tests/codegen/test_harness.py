@@ -73,9 +73,8 @@ def test_makefile_builds_static_and_shared_library_with_strict_flags(harness):
     assert (build / "libgt_L1.a").exists() and (build / "libgt_L1.so").exists()
     compile_lines = [l for l in log.splitlines() if " -c " in l]
     assert len(compile_lines) == 2  # CasADi part and wrapper
-    for line in compile_lines:
-        for flag in REQUIRED_FLAGS:
-            assert flag in line.split(), (flag, line)
+    missing = [(flag, line) for line in compile_lines for flag in REQUIRED_FLAGS if flag not in line.split()]
+    assert not missing, missing
 
 
 @needs_make
@@ -128,39 +127,64 @@ def test_generated_objects_call_no_heap_functions(harness, built):
     build, _ = harness
     objects = list(build.glob("*.o")) + list(built("D1_six_link")[1].path.parent.glob("*.o"))
     assert len(objects) >= 4
-    for obj in objects:
-        undefined = _run(["nm", "-u", obj]).stdout.split()
-        assert not set(undefined) & set(HEAP_FUNCTIONS), (obj, undefined)
+    undefined = {obj: set(_run(["nm", "-u", obj]).stdout.split()) for obj in objects}
+    heap = {obj: sorted(u & set(HEAP_FUNCTIONS)) for obj, u in undefined.items() if u & set(HEAP_FUNCTIONS)}
+    assert not heap, heap
 
 
 @needs_make
 def test_generated_objects_have_no_mutable_global_state(harness, built):
     """``nm``: no data/bss symbols (B, D, C): only code and read-only constants."""
     build, _ = harness
-    for obj in list(build.glob("gt_*.o")) + list(built("D1_six_link")[1].path.parent.glob("*.o")):
-        lines = _run(["nm", obj]).stdout.splitlines()
-        mutable = [l for l in lines if re.search(r" [BbDdC] ", l)]
-        assert not mutable, (obj, mutable)
+    objects = list(build.glob("gt_*.o")) + list(built("D1_six_link")[1].path.parent.glob("*.o"))
+    symbols = {obj: _run(["nm", obj]).stdout.splitlines() for obj in objects}
+    mutable = {obj: [l for l in lines if re.search(r" [BbDdC] ", l)] for obj, lines in symbols.items()}
+    mutable = {obj: m for obj, m in mutable.items() if m}
+    assert not mutable, mutable
+
+
+needs_valgrind = pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind not on PATH")
+#: The two valgrind runs (half and full length): their heap allocations must be equal.
+VALGRIND_RUNS = (VALGRIND_CYCLES // 2, VALGRIND_CYCLES)
+
+
+@pytest.fixture(scope="module")
+def valgrind_runs(harness):
+    """The loop under memcheck, once per length of ``VALGRIND_RUNS``: ``{cycles: process}``."""
+    build, _ = harness
+    return {
+        cycles: _run(["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full",
+                      build / "loop", "--mode", "measure", "--cycles", cycles])
+        for cycles in VALGRIND_RUNS
+    }
+
+
+def _heap_allocs(proc) -> int:
+    m = re.search(r"total heap usage: ([\d,]+) allocs", proc.stderr)
+    assert m, proc.stderr[-2000:]
+    return int(m.group(1).replace(",", ""))
 
 
 @needs_make
-@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind not on PATH")
-def test_valgrind_memcheck_clean_and_no_allocation_in_the_loop(harness):
-    """memcheck: no errors; the number of heap allocations does not grow with the cycles."""
-    build, _ = harness
-    allocs = []
-    for cycles in (VALGRIND_CYCLES // 2, VALGRIND_CYCLES):
-        proc = _run(["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full",
-                     build / "loop", "--mode", "measure", "--cycles", cycles])
-        # exit 99 = memcheck errors; a deadline miss under valgrind's ~50x slow-down is no error here
-        assert proc.returncode in (0, 1), proc.stderr[-2000:]
-        assert "ERROR SUMMARY: 0 errors" in proc.stderr
-        assert _field(proc.stdout, "heap allocations in the loop") == 0
-        assert _field(proc.stdout, "non-OK status") == 0
-        m = re.search(r"total heap usage: ([\d,]+) allocs", proc.stderr)
-        assert m, proc.stderr[-2000:]
-        allocs.append(int(m.group(1).replace(",", "")))
-    assert allocs[0] == allocs[1]
+@needs_valgrind
+@pytest.mark.parametrize("cycles", VALGRIND_RUNS, ids=lambda c: f"{c}_cycles")
+def test_valgrind_memcheck_clean(valgrind_runs, cycles):
+    """memcheck: no errors, every call OK, no allocation counted inside the loop."""
+    proc = valgrind_runs[cycles]
+    # exit 99 = memcheck errors; a deadline miss under valgrind's ~50x slow-down is no error here
+    assert proc.returncode in (0, 1), proc.stderr[-2000:]
+    assert "ERROR SUMMARY: 0 errors" in proc.stderr
+    assert _field(proc.stdout, "heap allocations in the loop") == 0
+    assert _field(proc.stdout, "non-OK status") == 0
+    _heap_allocs(proc)
+
+
+@needs_make
+@needs_valgrind
+def test_valgrind_no_allocation_in_the_loop(valgrind_runs):
+    """The number of heap allocations does not grow with the cycles."""
+    allocs = [_heap_allocs(valgrind_runs[cycles]) for cycles in VALGRIND_RUNS]
+    assert allocs[0] == allocs[1], dict(zip(VALGRIND_RUNS, allocs))
 
 
 @pytest.fixture(scope="module")

@@ -86,24 +86,24 @@ def test_parameter_file_is_table_5_5_in_si_units(model, ref):
     """Loaded values equal Table 5.5 (mm) divided by 1000; quaternions are the printed ones normalised."""
     mm = 1e-3
     links = ref["links"]
+    expected = {}  # parameter name -> Table 5.5 value in SI units
     for j, n in enumerate(links):
-        assert _value(model, f"L_{n}") == pytest.approx(ref["L"][j] * mm, abs=TABLE_TOL)
-        for c, comp in enumerate("xyz"):
-            assert _value(model, f"B0_{n}_{comp}") == pytest.approx(ref["B0"][n][c] * mm, abs=TABLE_TOL)
+        expected[f"L_{n}"] = ref["L"][j] * mm
+        expected.update({f"B0_{n}_{comp}": ref["B0"][n][c] * mm for c, comp in enumerate("xyz")})
     for n, xyz in ref["Abj"].items():
-        for c, comp in enumerate("xyz"):
-            assert _value(model, f"Abj_{n}_{comp}") == pytest.approx(xyz[c] * mm, abs=TABLE_TOL)
+        expected.update({f"Abj_{n}_{comp}": xyz[c] * mm for c, comp in enumerate("xyz")})
     for i in (1, 2, 3):
-        for c, comp in enumerate("xyz"):
-            assert _value(model, f"A0_{i}_{comp}") == pytest.approx(ref["A0"][f"arm{i}"][c] * mm, abs=TABLE_TOL)
-            assert _value(model, f"v{i}_{comp}") == pytest.approx(ref["v"][f"arm{i}"][c], abs=TABLE_TOL)  # kept as printed
-    for c, comp in enumerate("xyz"):
-        assert _value(model, f"r3_{comp}") == pytest.approx(ref["r3"][c] * mm, abs=TABLE_TOL)
+        expected.update({f"A0_{i}_{comp}": ref["A0"][f"arm{i}"][c] * mm for c, comp in enumerate("xyz")})
+        expected.update({f"v{i}_{comp}": ref["v"][f"arm{i}"][c] for c, comp in enumerate("xyz")})  # kept as printed
+    expected.update({f"r3_{comp}": ref["r3"][c] * mm for c, comp in enumerate("xyz")})
+    bad = {n: (_value(model, n), v) for n, v in expected.items() if _value(model, n) != pytest.approx(v, abs=TABLE_TOL)}
+    assert not bad, bad  # name: (loaded, table)
     p = model.parameter_vector()
-    for idx, name in zip(model.quaternion_indices(), ("q1u2", "q1u3", "q2u3")):
-        printed = np.array(ref[name])
-        assert np.linalg.norm(p[list(idx)]) == pytest.approx(1.0, abs=TABLE_TOL)
-        np.testing.assert_allclose(p[list(idx)], printed / np.linalg.norm(printed), atol=TABLE_TOL)
+    names = ("q1u2", "q1u3", "q2u3")
+    loaded = np.array([p[list(idx)] for idx in model.quaternion_indices()])
+    printed = np.array([ref[name] for name in names], dtype=float)
+    np.testing.assert_allclose(np.linalg.norm(loaded, axis=1), 1.0, rtol=0, atol=TABLE_TOL)
+    np.testing.assert_allclose(loaded, printed / np.linalg.norm(printed, axis=1, keepdims=True), atol=TABLE_TOL)
     lim = model.limits
     assert lim.ball_joint_angle_max == pytest.approx(np.radians(ref["ball_joint_limit_deg"]))
     assert np.all(np.abs(lim.cart_travel) < 2.0)  # metres, not millimetres
@@ -169,10 +169,12 @@ def test_closure_residuals_vanish_at_ik_solutions(model, grid):
     T, R, q = grid
     quat = rotation_to_quaternion(R)
     p = model.parameter_vector()
+    worst = {}
     for arm in range(3):
         f = model.closure_function(arm).map(len(T))
-        r = np.asarray(f(np.repeat(p[:, None], len(T), axis=1), q.T, T.T, quat.T))
-        assert np.max(np.abs(r)) <= CLOSURE_TOL, f"arm {arm + 1}"
+        worst[f"arm {arm + 1}"] = np.max(np.abs(np.asarray(f(np.repeat(p[:, None], len(T), axis=1), q.T, T.T, quat.T))))
+    bad = {arm: r for arm, r in worst.items() if not r <= CLOSURE_TOL}
+    assert not bad, bad
 
 
 def test_ik_of_arm_1_equals_the_closed_form(model, grid):
