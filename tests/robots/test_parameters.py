@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gtmodel.errors import GtModelError, ParameterError
+from gtmodel.errors import ParameterError
 from gtmodel.robots.parameters import available_parameter_sets, load_parameters
 
 from ..conftest import SHARED_REFERENCE
@@ -111,8 +111,7 @@ def test_bad_files_name_file_and_field(tmp_path, case, edit, match):
     f.write_text(edit(_l1_text()))
     with pytest.raises(ParameterError, match=match) as info:
         load_parameters(f)
-    assert str(f) in str(info.value)
-    assert isinstance(info.value, (GtModelError, ValueError))
+    assert str(info.value).startswith(str(f))
 
 
 def test_unknown_name():
