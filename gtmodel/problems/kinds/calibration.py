@@ -85,6 +85,7 @@ from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.calibration_results import write_calibration
 from gtmodel.problems.schema import (
+    axis_count,
     MAX_LENGTH_M,
     Flag,
     NonEmptyText,
@@ -494,12 +495,6 @@ def _perturbed(model: Any, size: float, seed: int, keep: Any = ()) -> Any:
     return model.with_parameters(p)
 
 
-def _axis_count(lo: float, hi: float, step: float) -> float:
-    """Length of ``numpy.arange(lo, hi + step / 2, step)``, as a float (no allocation)."""
-    n = (hi - lo + step / 2) / step
-    return max(0.0, float(math.ceil(n))) if math.isfinite(n) else math.inf
-
-
 def _grid_candidates(truth: Any, tkind: str, t: TruthSection) -> tuple[float, float]:
     """Grid points a synthetic grid would examine: ``(total, orientation factor)``.
 
@@ -514,22 +509,23 @@ def _grid_candidates(truth: Any, tkind: str, t: TruthSection) -> tuple[float, fl
         if truth.robot is None:
             return 0.0, 1.0  # no limits: grid_poses says so
         kin = GantryTau3Kinematics(dataclasses.replace(truth.robot, kinematics=truth.kinematics))
-        return math.prod(_axis_count(lo, hi, step) for lo, hi in kin.workspace_bounds()), 1.0
+        return math.prod(axis_count(lo, hi, step) for lo, hi in kin.workspace_bounds()), 1.0
     if tkind == "six_link":
         lim = getattr(truth, "limits", None)
         if lim is None:
             return 0.0, 1.0
-        n = math.prod(_axis_count(lo, hi, step) for lo, hi in np.asarray(lim.cart_travel, dtype=float))
+        n = math.prod(axis_count(lo, hi, step) for lo, hi in np.asarray(lim.cart_travel, dtype=float))
         rot = 1.0
         if truth.n_q > 3 and t.rotary_travel_deg is not None:
-            rot = math.prod(_axis_count(lo, hi, t.rotary_step_deg) for lo, hi in t.rotary_travel_deg)
+            rot = math.prod(axis_count(lo, hi, t.rotary_step_deg) for lo, hi in t.rotary_travel_deg)
         return n * rot, rot
     lim = truth.limits
     if lim is None:
         return 0.0, 1.0
     lo, hi = _f1_position_box(truth, lim)
-    positions = math.prod(math.floor((h - l) / step) + 1.0 if math.isfinite((h - l) / step) else math.inf for l, h in zip(lo, hi))
-    ratio = [r / t.grid_step_deg for r in np.degrees(lim.reorientation_range)]
+    spans = [(float(h) - float(l)) / float(step) for l, h in zip(lo, hi)]
+    positions = math.prod(math.floor(x) + 1.0 if math.isfinite(x) else math.inf for x in spans)
+    ratio = [float(r) / float(t.grid_step_deg) for r in np.degrees(lim.reorientation_range)]
     rot = math.prod(2.0 * math.floor(x + 1e-9) + 1.0 if math.isfinite(x) else math.inf for x in ratio)
     return positions * rot, rot
 

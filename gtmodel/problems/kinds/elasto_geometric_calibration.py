@@ -67,7 +67,7 @@ from gtmodel.problems.base import ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, StringList, calibration_columns
 from gtmodel.problems.kinds.calibration_results import calibrated_tables
 from gtmodel.problems.references import robot_parameters
-from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.schema import MAX_LENGTH_M, axis_count, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.robots import GantryTau3Kinematics, GantryTau3Stiffness, load_stiffness
 from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.report.stiffness import plot_stiffness_map
@@ -241,12 +241,6 @@ class ElastoGeometricOutcome:
         return Status.worst([self.study.status] + ([self.single_load.status] if self.single_load is not None else []))
 
 
-def _count(lo: float, hi: float, step: float) -> float:
-    """Length of ``numpy.arange(lo, hi + step / 2, step)`` as a float (no allocation)."""
-    n = (hi - lo + step / 2) / step
-    return max(0.0, float(math.ceil(n))) if math.isfinite(n) else math.inf
-
-
 class ElastoGeometricKind(ProblemKind):
     """Geometric-only vs elasto-geometric calibration of a compliant robot (Dressler (2012), ch. 5.3, 6.3)."""
 
@@ -298,10 +292,10 @@ class ElastoGeometricKind(ProblemKind):
             raise file.wrap("calibration.free_compliance", exc) from None
         box = GantryTau3Kinematics(robot).workspace_bounds()
         cap = MAX_GRID_CANDIDATES["three_link"]
-        count = math.prod(_count(lo, hi, t.grid_step) for lo, hi in box)
+        count = math.prod(axis_count(lo, hi, t.grid_step) for lo, hi in box)
         if count > cap:
             raise file.fail("truth.grid_step", f"a grid step giving at most {cap} grid poses (this one gives {count:.3g})", t.grid_step)
-        points = _count(*box[1], m.step) * _count(*box[2], m.step)
+        points = axis_count(*box[1], m.step) * axis_count(*box[2], m.step)
         if points > MAX_MAP_POINTS:
             raise file.fail("stiffness_map.step", f"a step giving at most {MAX_MAP_POINTS} section points (this one gives {points:.3g})", m.step)
         if m.x is not None and not box[0, 0] <= m.x <= box[0, 1]:
