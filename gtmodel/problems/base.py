@@ -25,7 +25,28 @@ from gtmodel.errors import ProblemError
 from gtmodel.problems.schema import ProblemSchema
 from gtmodel.status import Status
 
-__all__ = ["ProblemFile", "Column", "ProblemKind", "Problem", "Written"]
+__all__ = ["ProblemFile", "Column", "ProblemKind", "Problem", "Written", "KIND_DOCS"]
+
+#: Docstring sections shared by every kind (inserted by :func:`fill_doc`): the arguments of
+#: :meth:`ProblemKind.load` and the top-level fields of every problem file.
+KIND_DOCS = {
+    "load_args": """
+        doc : ProblemSchema
+            The validated file (an instance of the kind's ``schema``).
+        file : ProblemFile
+            The file, for references and error messages.
+        name : str
+            Problem name.
+    """,
+    "header_fields": """
+        name : str, optional
+            Problem name (default: the file name without ``.toml``).
+        kind : str
+            The kind, ``kind = "..."`` in the file.
+        description : str, optional
+            Free text.
+    """,
+}
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,8 @@ from gtmodel.calibration import (
 )
 from gtmodel.calibration.kinematic import SOLVERS
 from gtmodel.errors import GtModelError, ProblemError
-from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel._docstrings import fill_doc
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.calibration_results import write_calibration
 from gtmodel.problems.schema import (
     axis_count,
@@ -199,17 +200,13 @@ class PoseSelectionSection(Section):
     n: integer(2, 10**6, description="number of poses to select")
 
 
+@fill_doc(**KIND_DOCS)
 class CalibrationFile(ProblemSchema):
     """A ``calibration`` problem file: exactly one of ``[data]`` and ``[truth]``.
 
     Parameters
     ----------
-    name : str, optional
-        Problem name (default: the file name).
-    kind : {"calibration"}
-        The kind.
-    description : str, optional
-        Free text.
+    {header_fields}
     data : DataSection, optional
         ``[data]``: measurement file(s).
     truth : TruthSection, optional
@@ -343,6 +340,7 @@ class CalibrationKind(ProblemKind):
     empty_fields = ("mean_error_m", "max_error_m", "rms_error_m", "n_calibration", "n_validation", "rank", "n_parameters",
                     "iterations", "solve_time_s")
 
+    @fill_doc(**KIND_DOCS)
     def load(self, doc: CalibrationFile, file: ProblemFile, name: str) -> CalibrationDeclaration:
         """Validate the semantics, read or generate the data and build the start models.
 
@@ -350,12 +348,7 @@ class CalibrationKind(ProblemKind):
 
         Parameters
         ----------
-        doc : CalibrationFile
-            The validated file.
-        file : ProblemFile
-            The file.
-        name : str
-            Problem name.
+        {load_args}
 
         Returns
         -------

@@ -39,7 +39,8 @@ from gtmodel.calibration import (
 )
 from gtmodel.calibration.identification import THESIS_TABLE_6_3, VARIANTS, StribeckTerm
 from gtmodel.errors import GtModelError, ProblemError
-from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel._docstrings import fill_doc
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.schema import (
     MAX_FORCE_N,
@@ -168,17 +169,13 @@ class IdentificationSection(Section):
     min_speed: number(ge=0, le=MAX_SPEED, unit="m/s", description="rows below this cart speed are not fitted") = 0.05
 
 
+@fill_doc(**KIND_DOCS)
 class DynamicIdentificationFile(ProblemSchema):
     """A ``dynamic_identification`` problem file: exactly one of ``[data]`` and ``[truth]``.
 
     Parameters
     ----------
-    name : str, optional
-        Problem name (default: the file name).
-    kind : {"dynamic_identification"}
-        The kind.
-    description : str, optional
-        Free text.
+    {header_fields}
     robot : RobotSection
         ``[robot]``: the model's parameter set.
     data : DataSection, optional
@@ -320,17 +317,13 @@ class DynamicIdentificationKind(ProblemKind):
     )
     empty_fields = ("n_samples_log", "n_samples_used", "condition_number", "max_z", "solve_time_s")
 
+    @fill_doc(**KIND_DOCS)
     def load(self, doc: DynamicIdentificationFile, file: ProblemFile, name: str) -> DynamicIdentificationDeclaration:
         """Resolve the parameter sets, read the log or check the synthetic setup (see :meth:`ProblemKind.load`).
 
         Parameters
         ----------
-        doc : DynamicIdentificationFile
-            The validated file.
-        file : ProblemFile
-            The file.
-        name : str
-            Problem name.
+        {load_args}
 
         Returns
         -------

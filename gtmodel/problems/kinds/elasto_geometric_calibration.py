@@ -63,7 +63,8 @@ from gtmodel.report.calibration import plot_error_histogram
 from gtmodel.calibration.kinematic import SOLVERS
 from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES, compliance_selection
 from gtmodel.errors import GtModelError, ProblemError
-from gtmodel.problems.base import ProblemFile, ProblemKind, Written
+from gtmodel._docstrings import fill_doc
+from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, StringList, calibration_columns
 from gtmodel.problems.kinds.calibration_results import calibrated_tables
 from gtmodel.problems.references import robot_parameters
@@ -131,17 +132,13 @@ class StiffnessMapSection(Section):
     x: number(ge=-MAX_LENGTH_M, le=MAX_LENGTH_M, unit="m", description="section coordinate (default: the workspace median)") | None = None
 
 
+@fill_doc(**KIND_DOCS)
 class ElastoGeometricFile(ProblemSchema):
     """An ``elasto_geometric_calibration`` problem file.
 
     Parameters
     ----------
-    name : str, optional
-        Problem name (default: the file name).
-    kind : {"elasto_geometric_calibration"}
-        The kind.
-    description : str, optional
-        Free text.
+    {header_fields}
     truth : TruthSection
         ``[truth]``: the true robot, stiffness, payloads and noise.
     start : StartSection
@@ -252,17 +249,13 @@ class ElastoGeometricKind(ProblemKind):
                     "elasto_geometric_max_error_m", "noise_floor_mean_error_m", "noise_floor_max_error_m", "n_calibration",
                     "n_validation", "iterations", "solve_time_s")
 
+    @fill_doc(**KIND_DOCS)
     def load(self, doc: ElastoGeometricFile, file: ProblemFile, name: str) -> ElastoGeometricDeclaration:
         """Resolve the parameter sets, check the compliance patterns and build the pose grid.
 
         Parameters
         ----------
-        doc : ElastoGeometricFile
-            The validated file.
-        file : ProblemFile
-            The file.
-        name : str
-            Problem name.
+        {load_args}
 
         Returns
         -------

@@ -36,7 +36,8 @@ from gtmodel.calibration.joint_stiffness import (
     axis_wrenches,
 )
 from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError
-from gtmodel.problems.base import Column, ProblemFile, ProblemKind, Written
+from gtmodel._docstrings import fill_doc
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import MAX_FORCE_N, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.stiffness_calibration import plot_joint_stiffness
 from gtmodel.robots import SerialArm, load_serial_arm
@@ -142,17 +143,13 @@ class DataSection(Section):
     file: NonEmptyText = Field(description="CSV of measurements (header DATA_COLUMNS), relative to the problem file")
 
 
+@fill_doc(**KIND_DOCS)
 class JointStiffnessFile(ProblemSchema):
     """A ``joint_stiffness_calibration`` problem file: exactly one of ``[truth]`` and ``[data]``.
 
     Parameters
     ----------
-    name : str, optional
-        Problem name (default: the file name).
-    kind : {"joint_stiffness_calibration"}
-        The kind.
-    description : str, optional
-        Free text.
+    {header_fields}
     arm : ArmSection, optional
         ``[arm]``: the serial arm.
     truth : TruthSection, optional
@@ -307,17 +304,13 @@ class JointStiffnessKind(ProblemKind):
     )
     empty_fields = ("n_measurements", "solve_time_s")
 
+    @fill_doc(**KIND_DOCS)
     def load(self, doc: JointStiffnessFile, file: ProblemFile, name: str) -> JointStiffnessDeclaration:
         """Load the arm, and read or synthesise the data (see :meth:`ProblemKind.load`).
 
         Parameters
         ----------
-        doc : JointStiffnessFile
-            The validated file.
-        file : ProblemFile
-            The file.
-        name : str
-            Problem name.
+        {load_args}
 
         Returns
         -------

@@ -20,7 +20,8 @@ from pydantic import AfterValidator, BeforeValidator, Field
 from pydantic_core import PydanticCustomError
 
 from gtmodel.errors import InputError, UnreachablePoseError
-from gtmodel.problems.base import ProblemFile, ProblemKind, Written
+from gtmodel._docstrings import fill_doc
+from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (
     MAX_TIME_S,
     CollocationSection,
@@ -272,17 +273,13 @@ class PathConstrainedKind(ProblemKind):
     columns = trajectory_columns()
     empty_fields = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
 
+    @fill_doc(**KIND_DOCS)
     def load(self, doc: PathConstrainedFile, file: ProblemFile, name: str) -> PathConstrainedDeclaration:
         """Build the path, the limits and the solver settings (see :meth:`ProblemKind.load`).
 
         Parameters
         ----------
-        doc : PathConstrainedFile
-            The validated file.
-        file : ProblemFile
-            The file.
-        name : str
-            Problem name.
+        {load_args}
 
         Returns
         -------

@@ -16,7 +16,8 @@ from pydantic import Field
 
 from gtmodel.errors import InputError, ProblemError, UnreachablePoseError
 from gtmodel.modeling.expressions import parse_constraint, parse_objective
-from gtmodel.problems.base import ProblemFile, ProblemKind, Written
+from gtmodel._docstrings import fill_doc
+from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (
     MAX_TIME_S,
     CollocationSection,
@@ -146,17 +147,13 @@ class PointToPointKind(ProblemKind):
     columns = trajectory_columns()
     empty_fields = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
 
+    @fill_doc(**KIND_DOCS)
     def load(self, doc: PointToPointFile, file: ProblemFile, name: str) -> PointToPoint:
         """Build the :class:`~gtmodel.trajectory.PointToPoint` declaration (see :meth:`ProblemKind.load`).
 
         Parameters
         ----------
-        doc : PointToPointFile
-            The validated file.
-        file : ProblemFile
-            The file.
-        name : str
-            Problem name.
+        {load_args}
 
         Returns
         -------
