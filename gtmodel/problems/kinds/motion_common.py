@@ -16,6 +16,7 @@ from gtmodel.problems.base import Column
 from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, Section, choice, integer, number, vector
 
 __all__ = [
+    "MOTION_EMPTY_FIELDS",
     "AT_BOUND_RTOL",
     "MAX_TIME_S",
     "RobotReference",
@@ -91,6 +92,10 @@ class SolverSection(Section):
 
     max_iter: integer(1, 10**6, description="IPOPT iteration limit") = 3000
     tol: number(gt=0, le=1.0, description="IPOPT tolerance") = 1e-8
+
+
+#: Summary fields of the motion kinds that are null when a run ends before a solution.
+MOTION_EMPTY_FIELDS = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
 
 
 def trajectory_columns() -> tuple[Column, ...]:

@@ -23,6 +23,7 @@ from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (
+    MOTION_EMPTY_FIELDS,
     MAX_TIME_S,
     CollocationSection,
     MotionSection,
@@ -271,7 +272,7 @@ class PathConstrainedKind(ProblemKind):
     schema = PathConstrainedFile
     title = "time-optimal motion along a given TCP path (Dressler (2012), ch. 3.5; Verscheure et al. (2009))"
     columns = trajectory_columns()
-    empty_fields = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
+    empty_fields = MOTION_EMPTY_FIELDS
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: PathConstrainedFile, file: ProblemFile, name: str) -> PathConstrainedDeclaration:

@@ -19,6 +19,7 @@ from gtmodel.modeling.expressions import parse_constraint, parse_objective
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (
+    MOTION_EMPTY_FIELDS,
     MAX_TIME_S,
     CollocationSection,
     MotionSection,
@@ -145,7 +146,7 @@ class PointToPointKind(ProblemKind):
     schema = PointToPointFile
     title = "free-path time/energy-optimal motion between two poses (Dressler (2012), ch. 3.5)"
     columns = trajectory_columns()
-    empty_fields = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
+    empty_fields = MOTION_EMPTY_FIELDS
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: PointToPointFile, file: ProblemFile, name: str) -> PointToPoint:
