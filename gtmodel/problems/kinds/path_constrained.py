@@ -142,17 +142,13 @@ class MethodSection(Section):
     ] = [0.05, 10.0]
 
 
+@fill_doc(**KIND_DOCS)
 class PathConstrainedFile(ProblemSchema):
     """A ``path_constrained`` problem file.
 
     Parameters
     ----------
-    name : str, optional
-        Problem name (default: the file name without ``.toml``).
-    description : str, optional
-        Free text.
-    kind : str
-        ``"path_constrained"``.
+    {header_fields}
     robot : RobotSection
         ``[robot]``: parameter set, IK configuration, viscous friction.
     motion : MotionSection

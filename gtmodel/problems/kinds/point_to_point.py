@@ -91,17 +91,13 @@ class InitialGuessSection(Section):
     file: NonEmptyText | None = Field(default=None, description='trajectory CSV when method = "file" (relative to the problem file)')
 
 
+@fill_doc(**KIND_DOCS)
 class PointToPointFile(ProblemSchema):
     """A ``point_to_point`` problem file.
 
     Parameters
     ----------
-    name : str, optional
-        Problem name (default: the file name without ``.toml``).
-    description : str, optional
-        Free text.
-    kind : str
-        ``"point_to_point"``.
+    {header_fields}
     robot : RobotSection
         ``[robot]``: parameter set, IK configuration, friction model.
     motion : MotionSection
