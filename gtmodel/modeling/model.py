@@ -31,9 +31,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
-from gtmodel.modeling.simulation import simulate_model
+from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
 
 __all__ = ["Model"]
 
@@ -602,6 +603,7 @@ class Model:
         )
 
     # ------------------------------------------------------------------ simulation
+    @fill_doc(**SIMULATE_DOCS)
     def simulate(
         self,
         t_grid: Any,
@@ -617,40 +619,8 @@ class Model:
 
         Parameters
         ----------
-        t_grid : array_like
-            Strictly increasing output times, shape ``(N,)`` with ``N >= 2``, s.
-            Integration starts at ``t_grid[0]``.
-        x0 : array_like or mapping, optional
-            Initial state, shape ``(nx,)``, or a mapping from state names to values;
-            default the declared start values.
-        u : float, array_like or callable, optional
-            Inputs, held piecewise constant on the grid: a constant ``(nu,)``; an array
-            ``(N-1, nu)`` or ``(N, nu)`` whose row ``k`` applies on ``[t_k, t_{k+1})``
-            (a 1-D array is accepted when ``nu == 1``); or a callable ``u(t) -> (nu,)``
-            sampled at the start of each interval (zero-order hold). Default: the
-            declared input start values.
-        p : mapping of str to float or array_like, optional
-            Parameter overrides by name.
-        integrator : {"idas", "cvodes"}, optional
-            SUNDIALS integrator; CVODES only for models without algebraic variables.
-        rtol, atol : float, optional
-            Relative and absolute tolerances.
-        z0 : array_like, optional
-            Guess for the algebraic variables at ``t_grid[0]``, shape ``(nz,)``;
-            default the declared start values. IDAS computes consistent values.
+        {simulate_args}
 
-        Returns
-        -------
-        SimulationResult
-            Trajectories on ``t_grid``.
-
-        Raises
-        ------
-        InputError
-            On malformed arguments.
-        ModelError
-            If the model cannot be flattened.
-        ConvergenceError
-            If the integrator fails or returns non-finite values.
+        {simulate_returns}
         """
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)

@@ -9,14 +9,61 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value
 
-__all__ = ["simulate_model"]
+__all__ = ["simulate_model", "SIMULATE_DOCS"]
+
+#: The arguments, returns and errors of a simulation, shared by :func:`simulate_model` and
+#: :meth:`gtmodel.modeling.Model.simulate` (inserted by :func:`~gtmodel._docstrings.fill_doc`).
+SIMULATE_DOCS = {
+    "simulate_args": """
+        t_grid : array_like
+            Strictly increasing output times, shape ``(N,)`` with ``N >= 2``, s.
+            Integration starts at ``t_grid[0]``.
+        x0 : array_like or mapping, optional
+            Initial state, shape ``(nx,)``, or a mapping from state names to values;
+            default the declared start values.
+        u : float, array_like or callable, optional
+            Inputs, held piecewise constant on the grid: a constant ``(nu,)``; an array
+            ``(N-1, nu)`` or ``(N, nu)`` whose row ``k`` applies on ``[t_k, t_{k+1})``
+            (a 1-D array is accepted when ``nu == 1``); or a callable ``u(t) -> (nu,)``
+            sampled at the start of each interval (zero-order hold). Default: the
+            declared input start values.
+        p : mapping of str to float or array_like, optional
+            Parameter overrides by name.
+        integrator : {"idas", "cvodes"}, optional
+            SUNDIALS integrator; CVODES only for models without algebraic variables.
+        rtol, atol : float, optional
+            Relative and absolute tolerances.
+        z0 : array_like, optional
+            Guess for the algebraic variables at ``t_grid[0]``, shape ``(nz,)``;
+            default the declared start values. IDAS computes consistent values.
+
+    """,
+    "simulate_returns": """
+        Returns
+        -------
+        SimulationResult
+            Trajectories on ``t_grid``.
+
+        Raises
+        ------
+        InputError
+            On malformed arguments.
+        ModelError
+            If the model cannot be flattened.
+        ConvergenceError
+            If the integrator fails or returns non-finite values.
+    """,
+}
+
 
 _log = logging.getLogger("gtmodel")
 
 
+@fill_doc(**SIMULATE_DOCS)
 def simulate_model(
     model: Any,
     t_grid: Any,
@@ -34,41 +81,9 @@ def simulate_model(
     ----------
     model : Model
         The model (flattened here); :meth:`gtmodel.modeling.Model.simulate` calls this.
-    t_grid : array_like
-        Strictly increasing output times, shape ``(N,)`` with ``N >= 2``, s.
-        Integration starts at ``t_grid[0]``.
-    x0 : array_like or mapping, optional
-        Initial state, shape ``(nx,)``, or a mapping from state names to values;
-        default the declared start values.
-    u : float, array_like or callable, optional
-        Inputs, held piecewise constant on the grid: a constant ``(nu,)``; an array
-        ``(N-1, nu)`` or ``(N, nu)`` whose row ``k`` applies on ``[t_k, t_{k+1})``
-        (a 1-D array is accepted when ``nu == 1``); or a callable ``u(t) -> (nu,)``
-        sampled at the start of each interval (zero-order hold). Default: the
-        declared input start values.
-    p : mapping of str to float or array_like, optional
-        Parameter overrides by name.
-    integrator : {"idas", "cvodes"}, optional
-        SUNDIALS integrator; CVODES only for models without algebraic variables.
-    rtol, atol : float, optional
-        Relative and absolute tolerances.
-    z0 : array_like, optional
-        Guess for the algebraic variables at ``t_grid[0]``, shape ``(nz,)``;
-        default the declared start values. IDAS computes consistent values.
+    {simulate_args}
 
-    Returns
-    -------
-    SimulationResult
-        Trajectories on ``t_grid``.
-
-    Raises
-    ------
-    InputError
-        On malformed arguments.
-    ModelError
-        If the model cannot be flattened.
-    ConvergenceError
-        If the integrator fails or returns non-finite values.
+    {simulate_returns}
     """
     dae = model.flatten()
     t = np.asarray(t_grid, dtype=float).reshape(-1)
