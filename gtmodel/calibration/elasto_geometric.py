@@ -81,7 +81,7 @@ from gtmodel.calibration.measurements import MeasurementSet
 from gtmodel.calibration.synthetic import LASER_TRACKER, DeviceNoise, device_noise
 from gtmodel.errors import InputError
 from gtmodel.status import Status
-from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
+from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.robots.elasto_geometric import COMPLIANCE_NAMES, LOAD_NAMES, ElastoGeometricClosure
 from gtmodel.robots.stiffness import GantryTau3Stiffness
 

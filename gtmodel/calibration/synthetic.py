@@ -29,7 +29,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from scipy.spatial.transform import Rotation
 
 from gtmodel.calibration.measurements import CartMeasurements, MeasurementSet
-from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
+from gtmodel.errors import InputError
 from gtmodel._geometry import rotation_to_quaternion
 from gtmodel.robots.closure import ClosureModel
 from gtmodel.robots.deviated import DeviatedClosure, guideway_axes, joint_point_functions

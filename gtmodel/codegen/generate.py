@@ -28,7 +28,6 @@ The C functions are reentrant (no static or global mutable state) and thus threa
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import re
 from dataclasses import dataclass, field

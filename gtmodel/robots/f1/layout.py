@@ -12,6 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._arrays import as_rotations, as_rows
+from gtmodel.errors import InputError
+
 #: Link names per arm.
 F1_LINKS: tuple[tuple[str, ...], ...] = (("1",), ("2a", "2b"), ("3a", "3b", "3c"))
 #: Parameters fixed for identifiability in Dressler (2012), Table 5.4 (names of
@@ -110,3 +113,55 @@ class F1Limits:
     joint_plate_amplification_max: float
     source: str = ""
 
+
+#: Docstring sections of the F1 methods that take poses ``(T, R, q)`` (inserted by
+#: :func:`~gtmodel._docstrings.fill_doc`).
+POSE_DOCS = {
+    "pose_args": """
+        T : array_like, shape (3,) or (N, 3)
+            TCP positions [m].
+        R : array_like, shape (3, 3) or (N, 3, 3)
+            Plate orientations.
+        q : array_like, shape (6,) or (N, 6)
+            Actuator values of the poses [m, rad].
+    """,
+    "pose_raises": """
+        Raises
+        ------
+        InputError
+            Wrong shapes, non-finite values or ``R`` not a rotation.
+    """,
+}
+
+
+def pose_rows(T: np.typing.ArrayLike, R: np.typing.ArrayLike, q: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Checked poses ``(T, R, q)`` of the F1 as rows.
+
+    Parameters
+    ----------
+    T : array_like, shape (3,) or (N, 3)
+        TCP positions [m].
+    R : array_like, shape (3, 3) or (N, 3, 3)
+        Plate orientations (one matrix is used for every position).
+    q : array_like, shape (6,) or (N, 6)
+        Actuator values [m, rad].
+
+    Returns
+    -------
+    T : numpy.ndarray, shape (N, 3)
+    R : numpy.ndarray, shape (N, 3, 3)
+    q : numpy.ndarray, shape (N, 6)
+    single : bool
+        True when ``T`` was one position.
+
+    Raises
+    ------
+    InputError
+        Wrong shapes, non-finite values, ``q`` rows not matching ``T``, ``R`` not a rotation.
+    """
+    Ta, single = as_rows(T, "T", 3)
+    N = Ta.shape[0]
+    qa, _ = as_rows(q, "q", 6)
+    if qa.shape[0] != N:
+        raise InputError(f"q: expected {N} rows to match T, got {qa.shape[0]}")
+    return Ta, as_rotations(R, N, "R", ROTATION_TOLERANCE), qa, single

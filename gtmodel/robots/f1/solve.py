@@ -12,8 +12,11 @@ from functools import cached_property
 import numpy as np
 
 from gtmodel._arrays import as_rotations, as_rows, positive_int
+from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
 from gtmodel.robots.f1.layout import (
+    POSE_DOCS,
+    pose_rows,
     FK_CONTINUATION_STEPS,
     FK_MAX_ITER,
     FK_TOLERANCE,
@@ -318,17 +321,13 @@ class F1Solvers:
         out = (q[0], it[0]) if single else (q, it)
         return out if return_iterations else out[0]
 
+    @fill_doc(**POSE_DOCS)
     def jacobians(self, T: np.typing.ArrayLike, R: np.typing.ArrayLike, q: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Jacobians of the link lengths w.r.t. the pose and the actuators, eq. 4.31.
 
         Parameters
         ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : array_like, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-        q : array_like, shape (6,) or (N, 6)
-            Actuator values of the poses [m, rad].
+        {pose_args}
 
         Returns
         -------
@@ -338,17 +337,11 @@ class F1Solvers:
         J_q : numpy.ndarray, shape (6, 6) or (N, 6, 6)
             Link-length rates per actuator rate (see :attr:`jacobian_function`).
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or ``R`` not a rotation.
+        {pose_raises}
         """
-        Ta, single = as_rows(T, "T", 3)
+        Ta, Rs, qa, single = pose_rows(T, R, q)
         N = Ta.shape[0]
-        qa, _ = as_rows(q, "q", 6)
-        if qa.shape[0] != N:
-            raise InputError(f"q: expected {N} rows to match T, got {qa.shape[0]}")
-        J_X, J_q = self._jac_mapped(Ta.T, self._R_cols(as_rotations(R, N, "R", ROTATION_TOLERANCE)), qa.T, n=N)
+        J_X, J_q = self._jac_mapped(Ta.T, self._R_cols(Rs), qa.T, n=N)
         J_X = np.asarray(J_X).reshape(6, N, 6).transpose(1, 0, 2)
         J_q = np.asarray(J_q).reshape(6, N, 6).transpose(1, 0, 2)
         return (J_X[0], J_q[0]) if single else (J_X, J_q)

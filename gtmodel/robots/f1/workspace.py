@@ -14,8 +14,11 @@ import numpy as np
 
 from gtmodel._arrays import as_rotations, as_rows
 from gtmodel._geometry import rot_x, rot_y, rot_z
+from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError
 from gtmodel.robots.f1.layout import (
+    POSE_DOCS,
+    pose_rows,
     F1_LINKS,
     FK_MAX_ITER,
     GRID_FK_TOLERANCE,
@@ -66,6 +69,7 @@ class F1Workspace:
     def _ball_mapped(self) -> MappedFunction:
         return MappedFunction(self._ball_axes)
 
+    @fill_doc(**POSE_DOCS)
     def ball_joint_angles(self, T: np.typing.ArrayLike, R: np.typing.ArrayLike, q: np.typing.ArrayLike) -> np.ndarray:
         """Angles of the links to their ball-joint axes [rad].
 
@@ -77,12 +81,7 @@ class F1Workspace:
 
         Parameters
         ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : array_like, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-        q : array_like, shape (6,) or (N, 6)
-            Actuator values of the poses [m, rad].
+        {pose_args}
 
         Returns
         -------
@@ -90,17 +89,11 @@ class F1Workspace:
             Row 0: actuator-side joints, row 1: plate-side joints; columns links 1, 2a,
             2b, 3a, 3b, 3c.
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or ``R`` not a rotation.
+        {pose_raises}
         """
-        Ta, single = as_rows(T, "T", 3)
+        Ta, Rs, qa, single = pose_rows(T, R, q)
         N = Ta.shape[0]
-        qa, _ = as_rows(q, "q", 6)
-        if qa.shape[0] != N:
-            raise InputError(f"q: expected {N} rows to match T, got {qa.shape[0]}")
-        (ang,) = self._ball_mapped(Ta.T, self._R_cols(as_rotations(R, N, "R", ROTATION_TOLERANCE)), qa.T, n=N)
+        (ang,) = self._ball_mapped(Ta.T, self._R_cols(Rs), qa.T, n=N)
         ang = np.asarray(ang).reshape(2, N, 6).transpose(1, 0, 2)
         return ang[0] if single else ang
 
@@ -109,17 +102,13 @@ class F1Workspace:
             raise InputError(f"{what}: the model has no limits (load it with load_f1 or pass limits=F1Limits(...))")
         return self.limits
 
+    @fill_doc(**POSE_DOCS)
     def aspect_signs(self, T: np.typing.ArrayLike, R: np.typing.ArrayLike, q: np.typing.ArrayLike) -> np.ndarray:
         """Signs of the Jacobian determinants that separate assembly modes and IK branches.
 
         Parameters
         ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : array_like, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-        q : array_like, shape (6,) or (N, 6)
-            Actuator values of the poses [m, rad].
+        {pose_args}
 
         Returns
         -------
@@ -129,10 +118,7 @@ class F1Workspace:
             q6``) (IK, type-I singularities). Poses with the signs of the home pose lie
             in its aspect.
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or ``R`` not a rotation.
+        {pose_raises}
         """
         J_X, J_q = self.jacobians(T, R, q)
         single = J_X.ndim == 2
@@ -145,6 +131,7 @@ class F1Workspace:
         sg = np.sign(d)
         return sg[0] if single else sg
 
+    @fill_doc(**POSE_DOCS)
     def error_amplification(self, T: np.typing.ArrayLike, R: np.typing.ArrayLike, q: np.typing.ArrayLike) -> np.ndarray:
         """Largest TCP errors per link-length error (distance to the FK singularities).
 
@@ -155,12 +142,7 @@ class F1Workspace:
 
         Parameters
         ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : array_like, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-        q : array_like, shape (6,) or (N, 6)
-            Actuator values of the poses [m, rad].
+        {pose_args}
 
         Returns
         -------
@@ -168,10 +150,7 @@ class F1Workspace:
             Position amplification [m/m] and orientation amplification [rad/m]
             (``inf`` at a singular Jacobian).
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or ``R`` not a rotation.
+        {pose_raises}
         """
         J = self.jacobians(T, R, q)[0]
         single = J.ndim == 2
@@ -183,6 +162,7 @@ class F1Workspace:
             out[regular] = np.column_stack([np.linalg.norm(Ji[:, :3], 2, axis=(1, 2)), np.linalg.norm(Ji[:, 3:], 2, axis=(1, 2))])
         return out[0] if single else out
 
+    @fill_doc(**POSE_DOCS)
     def joint_plate_amplification(self, T: np.typing.ArrayLike, R: np.typing.ArrayLike, q: np.typing.ArrayLike) -> np.ndarray:
         """Largest joint-plate rotation per plate rotation (distance to the IK singularities).
 
@@ -192,22 +172,14 @@ class F1Workspace:
 
         Parameters
         ----------
-        T : array_like, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : array_like, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-        q : array_like, shape (6,) or (N, 6)
-            Actuator values of the poses [m, rad].
+        {pose_args}
 
         Returns
         -------
         float or numpy.ndarray, shape (N,)
             [rad/rad]; ``inf`` at a singular ``J_q``.
 
-        Raises
-        ------
-        InputError
-            Wrong shapes, non-finite values or ``R`` not a rotation.
+        {pose_raises}
         """
         J_X, J_q = self.jacobians(T, R, q)
         single = J_X.ndim == 2

@@ -13,7 +13,7 @@ import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel._docstrings import fill_doc
-from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
+from gtmodel.errors import InputError, SingularConfigurationError
 from gtmodel.robots.kinematics import (
     SINGULARITY_TOLERANCE,
     GantryTau3Kinematics,
