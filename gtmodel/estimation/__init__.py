@@ -1,0 +1,8 @@
+"""Filters, learning control and closed-loop simulation of the 4 ms loop (Dressler (2012), ch. 7).
+
+Tool-position estimators (complementary filter, stationary Kalman filter), iterative
+learning control with its lifted-system stability checks, and the closed-loop tracking
+simulation of the L1 at 4 ms. Lower layers only: robots, modeling and the base modules.
+"""
+
+__all__: list[str] = []
