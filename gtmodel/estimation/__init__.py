@@ -5,4 +5,9 @@ learning control with its lifted-system stability checks, and the closed-loop tr
 simulation of the L1 at 4 ms. Lower layers only: robots, modeling and the base modules.
 """
 
+from gtmodel.estimation.ilc import ILCResult, error_measure, ilc_correction_function, run_ilc
+from gtmodel.estimation.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
+
 __all__: list[str] = []
+__all__ += ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
+__all__ += ["error_measure", "ILCResult", "run_ilc", "ilc_correction_function"]
