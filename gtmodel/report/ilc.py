@@ -1,0 +1,202 @@
+"""Plots of iterative learning control runs (Dressler (2012), Figs. 7.7-7.11 style).
+
+Every function takes plain arrays or mappings of arrays (not result objects), draws on a
+:class:`matplotlib.figure.Figure` (no pyplot state, safe under Agg) and writes a PNG:
+
+- :func:`plot_error_measure`: error measure (7.25) per iteration, log scale, one panel per
+  case, one line per actuator or tool direction (Figs. 7.7-7.10);
+- :func:`plot_tool_path`: tool path in the xy plane, reference vs iteration 0 vs the
+  last iteration (Fig. 7.11);
+- :func:`plot_iteration_errors`: the error over time of chosen iterations.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from gtmodel.errors import InputError
+
+__all__ = ["plot_error_measure", "plot_tool_path", "plot_iteration_errors"]
+
+
+def _columns(x: Any, name: str) -> np.ndarray:
+    arr = np.asarray(x, dtype=float)
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[0] == 0:
+        raise InputError(f"{name}: expected shape (K+1,) or (K+1, d), got {np.shape(x)}")
+    return arr
+
+
+def plot_error_measure(
+    measures: Mapping[str, Any],
+    path: str | Path,
+    labels: Sequence[str] | None = None,
+    relative: bool = True,
+    title: str = "",
+) -> Path:
+    """Error measure (7.25) per iteration, log scale, one panel per case (Figs. 7.7-7.10).
+
+    Parameters
+    ----------
+    measures : Mapping[str, array_like]
+        Case name -> measure per iteration, shape ``(K+1,)`` or ``(K+1, d)`` (one line per
+        column, e.g. actuators 1-3 or tool x, y) [m].
+    path : str or pathlib.Path
+        PNG file to write.
+    labels : sequence of str, optional
+        Column names (default ``"1", "2", ...``).
+    relative : bool, optional
+        Plot relative to iteration 0 (default True) instead of absolute values [m].
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    InputError
+        No case, or a measure of another shape.
+    """
+    if not measures:
+        raise InputError("measures: expected at least one case")
+    data = {name: _columns(m, f"measures[{name!r}]") for name, m in measures.items()}
+    fig = Figure(figsize=(4.2 * len(data), 3.6), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(data), sharey=True))
+    for ax, (name, m) in zip(axes, data.items()):
+        cols = labels if labels is not None else [str(j + 1) for j in range(m.shape[1])]
+        values = m / np.where(m[0] > 0, m[0], 1.0) if relative else m
+        for j in range(m.shape[1]):
+            ax.semilogy(np.arange(m.shape[0]), values[:, j], "o-", ms=3, label=cols[j] if j < len(cols) else str(j + 1))
+        ax.set_title(name)
+        ax.set_xlabel("iteration")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize="small")
+    axes[0].set_ylabel("error measure relative to iteration 0" if relative else "error measure [m]")
+    fig.suptitle(title or "ILC error measure (7.25)")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def plot_tool_path(
+    reference: Any,
+    paths: Mapping[str, Any],
+    path: str | Path,
+    title: str = "",
+) -> Path:
+    """Tool path in the xy plane: reference and chosen iterations (Fig. 7.11).
+
+    Coordinates are drawn in mm relative to the first reference sample.
+
+    Parameters
+    ----------
+    reference : array_like, shape (N, 2) or (N, 3)
+        Reference tool positions (x, y[, z]) [m].
+    paths : Mapping[str, array_like]
+        Label (e.g. ``"iteration 0"``, ``"iteration 10"``) -> tool positions, same shape
+        as ``reference`` [m].
+    path : str or pathlib.Path
+        PNG file to write.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    InputError
+        Arrays of the wrong shape.
+    """
+    ref = np.asarray(reference, dtype=float)
+    if ref.ndim != 2 or ref.shape[1] < 2 or ref.shape[0] == 0:
+        raise InputError(f"reference: expected shape (N, 2) or (N, 3), got {ref.shape}")
+    origin = ref[0, :2]
+    fig = Figure(figsize=(5.5, 5.0), layout="constrained")
+    ax = fig.subplots()
+    ax.plot(*(1e3 * (ref[:, :2] - origin)).T, "k--", lw=1.0, label="reference")
+    for label, p in paths.items():
+        arr = np.asarray(p, dtype=float)
+        if arr.shape != ref.shape:
+            raise InputError(f"paths[{label!r}]: expected shape {ref.shape} like reference, got {arr.shape}")
+        ax.plot(*(1e3 * (arr[:, :2] - origin)).T, lw=1.2, label=label)
+    ax.set_xlabel("x [mm]")
+    ax.set_ylabel("y [mm]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.suptitle(title or "tool path")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
+
+
+def plot_iteration_errors(
+    eps: Any,
+    dt: float,
+    path: str | Path,
+    iterations: Sequence[int] | None = None,
+    labels: Sequence[str] | None = None,
+    title: str = "",
+) -> Path:
+    """Error over time of chosen iterations, one panel per column (actuator or direction).
+
+    Parameters
+    ----------
+    eps : array_like, shape (K+1, N, d)
+        Error of every iteration [m] (e.g. :attr:`gtmodel.estimation.ILCResult.eps`).
+    dt : float
+        Sample time [s].
+    path : str or pathlib.Path
+        PNG file to write.
+    iterations : sequence of int, optional
+        Iterations to draw (default the first and the last).
+    labels : sequence of str, optional
+        Column names (default ``"1", "2", ...``).
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    InputError
+        ``eps`` not three-dimensional, a non-positive ``dt`` or an iteration out of range.
+    """
+    e = np.asarray(eps, dtype=float)
+    if e.ndim != 3 or 0 in e.shape:
+        raise InputError(f"eps: expected shape (K+1, N, d), got {e.shape}")
+    if not np.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt: expected a positive sample time in s, got {dt!r}")
+    its = [0, e.shape[0] - 1] if iterations is None else list(iterations)
+    if any(not 0 <= k < e.shape[0] for k in its):
+        raise InputError(f"iterations: expected indices in [0, {e.shape[0] - 1}], got {its}")
+    d = e.shape[2]
+    cols = labels if labels is not None else [str(j + 1) for j in range(d)]
+    t = np.arange(e.shape[1]) * dt
+    fig = Figure(figsize=(7, 1.9 * d + 0.8), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(d, 1, sharex=True))
+    for j, ax in enumerate(axes):
+        for k in its:
+            ax.plot(t, 1e3 * e[k, :, j], lw=1.0, label=f"iteration {k}")
+        ax.set_ylabel(f"{cols[j] if j < len(cols) else j + 1} [mm]")
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize="small")
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(title or "ILC error per iteration")
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    return path
