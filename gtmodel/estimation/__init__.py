@@ -7,7 +7,9 @@ simulation of the L1 at 4 ms. Lower layers only: robots, modeling and the base m
 
 from gtmodel.estimation.ilc import ILCResult, error_measure, ilc_correction_function, run_ilc
 from gtmodel.estimation.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
+from gtmodel.estimation.plant import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
 
 __all__: list[str] = []
 __all__ += ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
 __all__ += ["error_measure", "ILCResult", "run_ilc", "ilc_correction_function"]
+__all__ += ["ToolStructure", "SensorModel", "TrackingPlant", "TrackingResponse"]

@@ -14,6 +14,7 @@ from gtmodel.problems.kinds.elasto_geometric_calibration import ElastoGeometricK
 from gtmodel.problems.kinds.dynamic_identification import DynamicIdentificationKind
 from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
+from gtmodel.problems.kinds.tracking import TrackingKind
 
 __all__ = ["KINDS", "get_kind"]
 
@@ -24,6 +25,7 @@ _CLASSES: tuple[type[ProblemKind], ...] = (
     ElastoGeometricKind,
     DynamicIdentificationKind,
     JointStiffnessKind,
+    TrackingKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.

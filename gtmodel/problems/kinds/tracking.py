@@ -1,0 +1,438 @@
+"""Kind ``tracking``: replay a planned trajectory through the closed-loop L1 at 4 ms.
+
+Dressler (2012), ch. 7.3, with the plant of :mod:`gtmodel.estimation.plant` (actuators
+(6.11), fk, structure (6.14) at the ILC operating point: 7.4 Hz in x, 11.5 Hz in y,
+sensors). The trajectory is a ``trajectory.csv`` of kind ``point_to_point`` or
+``path_constrained`` (columns ``t, x, y, z, q1, q2, q3``, 4 ms samples), given either as
+
+- ``[trajectory] problem = "l1_time_optimal.toml"``: that problem file is loaded (on
+  load), solved (on solve) with its own kind and written into a temporary folder, and its
+  ``trajectory.csv`` is read, so the replayed file is exactly what
+  ``gtmodel solve l1_time_optimal.toml`` writes; or
+- ``[trajectory] file = "results/l1_time_optimal/trajectory.csv"``: a file already written.
+
+The samples must be ``dt = 0.004`` s apart (within 1e-9 s); the last step may be shorter
+(the final time of a ``point_to_point`` trajectory, where the motion is at rest): that
+last row is the rest position, placed on the next 4 ms sample. After the motion the
+reference is held for ``settle_time``. The actuator references are the columns
+``q1..q3``; the tool reference is ``fk(q_ref)``, checked against the file's ``x, y, z``
+(within 1 um: a trajectory of another robot is refused). The field reference is
+``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from gtmodel._docstrings import fill_doc
+from gtmodel._toml import read_toml
+from gtmodel.errors import GtModelError, ParameterError, ProblemError
+from gtmodel.estimation import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
+from gtmodel.estimation.plant import DT, STANDARD_GRAVITY
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.motion_common import RobotReference
+from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
+from gtmodel.problems.kinds.point_to_point import PointToPointKind
+from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, integer, number, validate_document, vector
+from gtmodel.report.tracking import plot_actuator_error, plot_deflection, plot_tool_error, plot_tool_path
+from gtmodel.robots import GantryTau3Kinematics
+from gtmodel.robots.actuator_dynamics import DynamicsModels, actuator_models, load_dynamics_models
+from gtmodel.status import Status, StatusResult
+
+__all__ = ["TrackingFile", "TrackingDeclaration", "TrackingSolution", "TrackingKind", "read_trajectory", "REQUIRED_COLUMNS"]
+
+#: Columns a replayed trajectory must have.
+REQUIRED_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3")
+#: Tolerance on every sample step [s].
+DT_TOLERANCE = 1e-9
+#: Largest accepted ``|fk(q) - (x, y, z)|`` of a trajectory file [m].
+FK_TOLERANCE = 1e-6
+#: Longest accepted settling time [s].
+MAX_SETTLE_S = 60.0
+#: Most samples of a replayed trajectory (one hour at 4 ms).
+MAX_SAMPLES = 900_000
+#: Kinds whose ``trajectory.csv`` can be replayed.
+SOURCE_KINDS = {"point_to_point": PointToPointKind(), "path_constrained": PathConstrainedKind()}
+#: Shipped dynamics-models files.
+SHIPPED_DYNAMICS = ("L1_dynamics_models",)
+
+
+class TrajectorySection(Section):
+    """``[trajectory]``: what is replayed (exactly one of ``problem`` and ``file``)."""
+
+    problem: NonEmptyText | None = Field(default=None, description="a point_to_point or path_constrained problem file (relative to this file), solved first; its trajectory.csv is replayed")
+    file: NonEmptyText | None = Field(default=None, description="a trajectory.csv written by point_to_point or path_constrained (relative to this file)")
+    settle_time: number(ge=0, le=MAX_SETTLE_S, unit="s", description="the reference is held at its last value this long after the motion") = 1.0
+
+
+class RobotSection(RobotReference):
+    """``[robot]``: parameter set, IK configuration and the closed-loop actuator models."""
+
+    dynamics_models: NonEmptyText = Field(default="L1_dynamics_models", description="closed-loop actuator models (6.11): shipped name or a TOML path relative to this file")
+
+
+class StructureSection(Section):
+    """``[structure]``: one mode per direction x, y (Dressler (2012), eq. 6.14; defaults: the ILC operating point)."""
+
+    frequencies_hz: vector(2, positive=True, bound=1e4, unit="Hz", description="resonance in x, y (thesis, Table 6.4, with wrist: 7.4, 11.5)") = [7.4, 11.5]
+    stiffness: vector(2, positive=True, bound=1e12, unit="N/m", description="static TCP stiffness in x, y (thesis: 2-4 N/um, stiffer in x)") = [4.0e6, 2.0e6]
+    damping: vector(2, positive=True, bound=0.999, description="damping ratios in x, y (below 1)") = [0.05, 0.05]
+    mass: number(gt=0, le=1e5, unit="kg", description="inertial load m_acc (thesis: m_p + sum m_a/2 = 22.38 kg)") = 22.38
+
+
+class SensorsSection(Section):
+    """``[sensors]``: tool accelerometer and position gauge (Dressler (2012), ch. 7.3)."""
+
+    accelerometer_noise: number(ge=0, le=1e3, unit="m/s^2", description="standard deviation of the accelerometer noise") = 0.07
+    accelerometer_range: number(gt=0, le=1e4, unit="m/s^2", description="measuring range (clipped), default 1.5 g") = 1.5 * STANDARD_GRAVITY
+    gauge_noise: number(ge=0, le=1.0, unit="m", description="standard deviation of the position gauge noise") = 1e-6
+    seed: integer(0, 2**31 - 1, description="seed of the sensor noise") = 0
+
+
+@fill_doc(**KIND_DOCS)
+class TrackingFile(ProblemSchema):
+    """A ``tracking`` problem file.
+
+    Parameters
+    ----------
+    {header_fields}
+    trajectory : TrajectorySection
+        ``[trajectory]``: the replayed trajectory and the settling time.
+    robot : RobotSection
+        ``[robot]``: parameter set, IK configuration, actuator models.
+    structure : StructureSection
+        ``[structure]``: the structural modes.
+    sensors : SensorsSection
+        ``[sensors]``: noise and range.
+    """
+
+    kind: Literal["tracking"]
+    trajectory: TrajectorySection
+    robot: RobotSection
+    structure: StructureSection = StructureSection()
+    sensors: SensorsSection = SensorsSection()
+
+
+@dataclass(frozen=True)
+class TrackingDeclaration:
+    """A validated ``tracking`` problem.
+
+    Parameters
+    ----------
+    plant : TrackingPlant
+        The closed-loop plant.
+    settle_time : float
+        Hold after the motion [s].
+    source : pathlib.Path
+        The referenced problem file or trajectory file.
+    columns : dict or None
+        The trajectory's columns (``file``), or None (``problem``: read after solving).
+    source_problem : tuple or None
+        ``(kind, declaration, name)`` of a referenced problem, or None.
+    origin : ProblemFile
+        The tracking problem file (for error messages at solve time).
+    """
+
+    plant: TrackingPlant
+    settle_time: float
+    source: Path
+    columns: dict[str, np.ndarray] | None
+    source_problem: tuple[Any, Any, str] | None
+    origin: ProblemFile
+
+
+@dataclass
+class TrackingSolution(StatusResult):
+    """The outcome of a ``tracking`` problem.
+
+    Parameters
+    ----------
+    status : Status
+        ``"optimal"`` when the replay ran; the referenced problem's status when it did not
+        solve (keyword only).
+    message : str
+        What happened (keyword only).
+    response : TrackingResponse or None
+        The simulated run.
+    motion_samples : int
+        Samples of the motion (before the settling hold).
+    source_status : str
+        Status of the referenced problem (``"file"`` for a trajectory file).
+    """
+
+    response: TrackingResponse | None = None
+    motion_samples: int = 0
+    source_status: str = "file"
+
+
+def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float = DT) -> dict[str, np.ndarray]:
+    """Read and check a ``trajectory.csv`` (header line, comma separated, 4 ms samples).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The CSV file.
+    origin : ProblemFile
+        The problem file (named in errors).
+    field_name : str
+        The field that names the trajectory (named in errors).
+    dt : float, optional
+        Required sample time [s] (default 0.004).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Every column, each (K,).
+
+    Raises
+    ------
+    ProblemError
+        Unreadable file, missing columns (named), fewer than 2 or more than
+        :data:`MAX_SAMPLES` rows, non-finite values, a sample step other than ``dt``
+        (within :data:`DT_TOLERANCE`; the last step may be shorter), decreasing times.
+    """
+    where = f"the trajectory file {path}"
+    try:
+        with open(path, encoding="utf-8") as fh:
+            header = fh.readline().strip().split(",")
+            data = np.loadtxt(fh, delimiter=",", ndmin=2, max_rows=MAX_SAMPLES + 1)
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise origin.fail(field_name, f"a readable CSV file with a header line ({where}: {exc})") from None
+    missing = [c for c in REQUIRED_COLUMNS if c not in header]
+    if missing:
+        raise origin.fail(field_name, f"the columns {', '.join(REQUIRED_COLUMNS)} ({where} lacks {', '.join(missing)})")
+    if data.shape[1] != len(header):
+        raise origin.fail(field_name, f"{len(header)} values per row like the header ({where} has {data.shape[1]})")
+    if not 2 <= data.shape[0] <= MAX_SAMPLES:
+        raise origin.fail(field_name, f"2 to {MAX_SAMPLES} samples ({where} has {data.shape[0]})")
+    if not np.all(np.isfinite(data)):
+        row = int(np.nonzero(~np.all(np.isfinite(data), axis=1))[0][0])
+        raise origin.fail(field_name, f"finite numbers ({where}: row {row + 1} is not finite)")
+    cols = {name: data[:, k] for k, name in enumerate(header)}
+    steps = np.diff(cols["t"])
+    body, last = steps[:-1], steps[-1]
+    bad = np.nonzero(np.abs(body - dt) > DT_TOLERANCE)[0]
+    if bad.size or not 0 < last <= dt + DT_TOLERANCE:
+        k = int(bad[0]) if bad.size else steps.size - 1
+        raise origin.fail(field_name, f"samples dt = {dt} s apart, column t ({where}: step {steps[k]:.9g} s after row {k + 1})")
+    return cols
+
+
+class TrackingKind(ProblemKind):
+    """Replay of a planned trajectory through the closed-loop L1 (:class:`~gtmodel.estimation.TrackingPlant`)."""
+
+    name = "tracking"
+    schema = TrackingFile
+    title = "closed-loop tracking of a planned trajectory at 4 ms: actuators, structure, sensors (Dressler (2012), ch. 7.3)"
+    columns = (
+        Column("actuator_error_max_abs_m", "max |q - q_ref| [m]", "{:.3e}"),
+        Column("tool_error_max_abs_m", "max |z - T_ref| [m]", "{:.3e}"),
+        Column("deflection_max_abs_m", "max |d| [m]", "{:.3e}"),
+    )
+    empty_fields = ("actuator_error_max_abs_m", "tool_error_max_abs_m", "deflection_max_abs_m")
+
+    @fill_doc(**KIND_DOCS)
+    def load(self, doc: TrackingFile, file: ProblemFile, name: str) -> TrackingDeclaration:
+        """Build the plant and read (or load the problem of) the trajectory (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        {load_args}
+
+        Returns
+        -------
+        TrackingDeclaration
+
+        Raises
+        ------
+        ProblemError
+            Neither or both of ``trajectory.problem`` and ``trajectory.file``; a missing or
+            unreadable file; a referenced problem of another kind or invalid itself; a
+            trajectory without the required columns, with another sample time, or not of
+            this robot; actuator models of another sample time.
+        """
+        tr = doc.trajectory
+        if (tr.problem is None) == (tr.file is None):
+            raise file.fail("trajectory", "exactly one of trajectory.problem (a problem file) and trajectory.file (a trajectory.csv)")
+        params = robot_parameters(file, "robot.parameters", doc.robot.parameters)
+        plant = self._plant(doc, file, GantryTau3Kinematics(params))
+        if tr.file is not None:
+            source = file.data_file("trajectory.file", tr.file)
+            columns = read_trajectory(source, file, "trajectory.file")
+            self._check_robot(plant, columns, file, "trajectory.file")
+            return TrackingDeclaration(plant, tr.settle_time, source, columns, None, file)
+        source = file.data_file("trajectory.problem", tr.problem)
+        try:
+            data = read_toml(source, ProblemError, "problem file")
+        except ProblemError as exc:
+            raise file.wrap("trajectory.problem", exc) from None
+        kind = SOURCE_KINDS.get(data.get("kind"))
+        if kind is None:
+            raise file.fail("trajectory.problem", f"a problem file of kind {' or '.join(SOURCE_KINDS)} ({source} is of kind {data.get('kind')!r})")
+        try:
+            sdoc = validate_document(kind.schema, data, source)
+            sname = sdoc.name or source.stem
+            declaration = kind.load(sdoc, ProblemFile(source), sname)
+        except GtModelError as exc:
+            raise file.wrap("trajectory.problem", exc) from None
+        return TrackingDeclaration(plant, tr.settle_time, source, None, (kind, declaration, sname), file)
+
+    @staticmethod
+    def _plant(doc: TrackingFile, file: ProblemFile, kinematics: GantryTau3Kinematics) -> TrackingPlant:
+        ref = file.reference("robot.dynamics_models", doc.robot.dynamics_models, SHIPPED_DYNAMICS)
+        try:
+            models: DynamicsModels = load_dynamics_models(ref)
+        except ParameterError as exc:
+            raise file.wrap("robot.dynamics_models", exc) from None
+        if abs(models.actuators.sample_time - DT) > DT_TOLERANCE or models.actuators.a.size != 3:
+            raise file.fail("robot.dynamics_models", f"3 actuator models with sample_time_s = {DT}", f"{models.actuators.a.size} at {models.actuators.sample_time} s")
+        s, n = doc.structure, doc.sensors
+        structure = ToolStructure(tuple(s.frequencies_hz), tuple(s.stiffness), tuple(s.damping), s.mass)
+        sensors = SensorModel(n.accelerometer_noise, n.accelerometer_range, n.gauge_noise, n.seed)
+        return TrackingPlant(kinematics, actuator_models(models), structure, sensors, DT, doc.robot.configuration)
+
+    @staticmethod
+    def _check_robot(plant: TrackingPlant, cols: dict[str, np.ndarray], file: ProblemFile, field_name: str) -> None:
+        q = np.column_stack([cols[f"q{i}"] for i in (1, 2, 3)])
+        T = np.column_stack([cols[c] for c in "xyz"])
+        try:
+            dev = np.linalg.norm(plant.kinematics.fk(q, plant.solution) - T, axis=1)
+        except GtModelError as exc:
+            raise file.wrap(field_name, exc) from None
+        if dev.max() > FK_TOLERANCE:
+            k = int(np.argmax(dev))
+            raise file.fail(field_name, f"x, y, z = fk(q1, q2, q3) of robot.parameters within {FK_TOLERANCE} m (row {k + 1} is {dev[k]:.3g} m off: another robot?)")
+
+    def solve(self, declaration: TrackingDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> TrackingSolution:
+        """Solve the referenced problem (if any), then simulate the replay.
+
+        Parameters
+        ----------
+        declaration : TrackingDeclaration
+            From :meth:`load`.
+        verbose : bool, optional
+            Solver progress of the referenced problem.
+        previous : Any, optional
+            Unused.
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        TrackingSolution
+            Status ``"optimal"`` with the response, or the referenced problem's status.
+
+        Raises
+        ------
+        ProblemError
+            The referenced problem's trajectory fails the checks of :func:`read_trajectory`.
+        """
+        d = declaration
+        cols, source_status = d.columns, "file"
+        if d.source_problem is not None:
+            kind, sdecl, sname = d.source_problem
+            ssol = kind.solve(sdecl, verbose=verbose)
+            source_status = str(kind.status(ssol))
+            if source_status not in ("optimal", "acceptable"):
+                return TrackingSolution(status=kind.status(ssol), message=f"the referenced problem {d.source} ended with status {source_status}: {ssol.message}", source_status=source_status)
+            with tempfile.TemporaryDirectory(prefix="gtmodel-tracking-") as tmp:
+                kind.write(sdecl, ssol, Path(tmp), False, sname)
+                cols = read_trajectory(Path(tmp) / "trajectory.csv", d.origin, "trajectory.problem")
+            self._check_robot(d.plant, cols, d.origin, "trajectory.problem")
+        q = np.column_stack([cols[f"q{i}"] for i in (1, 2, 3)])
+        settle = int(math.ceil(d.settle_time / DT - 1e-9))
+        q_ref = np.vstack([q, np.repeat(q[-1:], settle, axis=0)])
+        response = d.plant.simulate(q_ref)
+        return TrackingSolution(
+            status=response.status, message=f"replayed {q.shape[0]} samples of {d.source.name} and {settle} settling samples",
+            response=response, motion_samples=q.shape[0], source_status=source_status,
+        )
+
+    def write(self, declaration: TrackingDeclaration, solution: TrackingSolution, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields, ``tracking.csv`` and plots of a replay.
+
+        Parameters
+        ----------
+        declaration : TrackingDeclaration
+            The declaration.
+        solution : TrackingSolution
+            Its solution.
+        out : pathlib.Path
+            The folder.
+        plots : bool
+            Write ``actuator_error.png``, ``tool_error.png``, ``deflection.png``, ``tool_path.png``.
+        name : str
+            Plot title.
+
+        Returns
+        -------
+        Written
+            Status; max and RMS actuator error per actuator and tool error per direction
+            [m] (over the motion and the settling hold), final errors, largest deflection,
+            the structure's modes, accelerometer clipping.
+        """
+        d = declaration
+        plant = d.plant
+        modes = plant.structure.modes()
+        fields: dict[str, Any] = {
+            "status": solution.status,
+            "message": solution.message,
+            "trajectory_source": str(d.source),
+            "source_status": solution.source_status,
+            "sample_time_s": DT,
+            "settle_time_s": d.settle_time,
+            "structure_modes_hz": modes.natural_frequencies_hz.tolist(),
+            "structure_damping": modes.damping_ratios.tolist(),
+            "static_deflection_m_per_m_s2": plant.structure.static_deflection().tolist(),
+            "actuator_dc_gains": [float(np.squeeze(g.dcgain())) for g in plant.actuators],
+        }
+        written = Written(fields)
+        r = solution.response
+        if r is None:
+            fields.update({k: None for k in self.empty_fields})
+            return written
+        e_q, e_T = r.actuator_error, r.tool_error
+        n = solution.motion_samples
+        end_time = float(r.t[n - 1])
+        fields.update({
+            "samples": int(r.t.size),
+            "motion_samples": n,
+            "duration_s": float(r.t[-1]),
+            "motion_end_s": end_time,
+            "actuator_error_max_m": np.abs(e_q).max(axis=0).tolist(),
+            "actuator_error_rms_m": np.sqrt(np.mean(e_q**2, axis=0)).tolist(),
+            "actuator_error_final_m": e_q[-1].tolist(),
+            "tool_error_max_m": np.abs(e_T).max(axis=0).tolist(),
+            "tool_error_rms_m": np.sqrt(np.mean(e_T**2, axis=0)).tolist(),
+            "tool_error_final_m": e_T[-1].tolist(),
+            "deflection_max_m": np.abs(r.d[:, :2]).max(axis=0).tolist(),
+            "tool_acceleration_max_m_s2": np.abs(r.a).max(axis=0).tolist(),
+            "accelerometer_clipped_samples": int(np.sum(np.any(np.abs(r.a_m) >= plant.sensors.accelerometer_range, axis=1))),
+            "actuator_error_max_abs_m": float(np.abs(e_q).max()),
+            "tool_error_max_abs_m": float(np.abs(e_T).max()),
+            "deflection_max_abs_m": float(np.abs(r.d).max()),
+        })
+        table = {"t": r.t}
+        for key, prefix in (("q_ref", "q_ref"), ("q", "q")):
+            for i in range(3):
+                table[f"{prefix}{i + 1}"] = getattr(r, key)[:, i]
+        for key, suffix in (("T_ref", "_ref"), ("T_kin", "_kin"), ("d", "_d"), ("z", ""), ("a_kin", "_acc_kin"), ("a", "_acc"), ("a_m", "_acc_m"), ("z_m", "_m")):
+            for i, c in enumerate("xyz"):
+                table[f"{c}{suffix}"] = getattr(r, key)[:, i]
+        np.savetxt(out / "tracking.csv", np.column_stack(list(table.values())), delimiter=",", header=",".join(table), comments="", fmt="%.10g")
+        written.files.append("tracking.csv")
+        if plots:
+            plot_actuator_error(r.t, e_q, out / "actuator_error.png", title=name, end_time=end_time)
+            plot_tool_error(r.t, e_T, out / "tool_error.png", title=name, end_time=end_time)
+            plot_deflection(r.t, r.d, out / "deflection.png", title=name, end_time=end_time)
+            plot_tool_path(r.T_ref, r.z, out / "tool_path.png", title=name)
+            written.files += ["actuator_error.png", "tool_error.png", "deflection.png", "tool_path.png"]
+        return written
