@@ -68,4 +68,4 @@ def assert_bad_problem_through_cli(tmp_path: Path, capsys, text: str, match: str
     err = capsys.readouterr().err
     assert code == EXIT_BAD_INPUT and "Traceback" not in err, err
     assert re.search(match, err), err
-    assert summary["status"] == "error"
+    assert summary["status"] == "invalid_input"

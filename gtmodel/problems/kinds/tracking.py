@@ -33,18 +33,15 @@ from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel._toml import read_toml
-from gtmodel.errors import GtModelError, ParameterError, ProblemError
-from gtmodel.estimation import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
-from gtmodel.estimation.plant import DT, STANDARD_GRAVITY
+from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.estimation import TrackingPlant, TrackingResponse
+from gtmodel.estimation.plant import DT
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
-from gtmodel.problems.kinds.motion_common import RobotReference
+from gtmodel.problems.kinds.closed_loop_common import RobotSection, SensorsSection, StructureSection, build_plant
 from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
-from gtmodel.problems.references import robot_parameters
-from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, integer, number, validate_document, vector
+from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, number, validate_document
 from gtmodel.report.tracking import plot_actuator_error, plot_deflection, plot_tool_error, plot_tool_path
-from gtmodel.robots import GantryTau3Kinematics
-from gtmodel.robots.actuator_dynamics import DynamicsModels, actuator_models, load_dynamics_models
 from gtmodel.status import Status, StatusResult
 
 __all__ = ["TrackingFile", "TrackingDeclaration", "TrackingSolution", "TrackingKind", "read_trajectory", "REQUIRED_COLUMNS"]
@@ -61,8 +58,6 @@ MAX_SETTLE_S = 60.0
 MAX_SAMPLES = 900_000
 #: Kinds whose ``trajectory.csv`` can be replayed.
 SOURCE_KINDS = {"point_to_point": PointToPointKind(), "path_constrained": PathConstrainedKind()}
-#: Shipped dynamics-models files.
-SHIPPED_DYNAMICS = ("L1_dynamics_models",)
 
 
 class TrajectorySection(Section):
@@ -71,30 +66,6 @@ class TrajectorySection(Section):
     problem: NonEmptyText | None = Field(default=None, description="a point_to_point or path_constrained problem file (relative to this file), solved first; its trajectory.csv is replayed")
     file: NonEmptyText | None = Field(default=None, description="a trajectory.csv written by point_to_point or path_constrained (relative to this file)")
     settle_time: number(ge=0, le=MAX_SETTLE_S, unit="s", description="the reference is held at its last value this long after the motion") = 1.0
-
-
-class RobotSection(RobotReference):
-    """``[robot]``: parameter set, IK configuration and the closed-loop actuator models."""
-
-    dynamics_models: NonEmptyText = Field(default="L1_dynamics_models", description="closed-loop actuator models (6.11): shipped name or a TOML path relative to this file")
-
-
-class StructureSection(Section):
-    """``[structure]``: one mode per direction x, y (Dressler (2012), eq. 6.14; defaults: the ILC operating point)."""
-
-    frequencies_hz: vector(2, positive=True, bound=1e4, unit="Hz", description="resonance in x, y (thesis, Table 6.4, with wrist: 7.4, 11.5)") = [7.4, 11.5]
-    stiffness: vector(2, positive=True, bound=1e12, unit="N/m", description="static TCP stiffness in x, y (thesis: 2-4 N/um, stiffer in x)") = [4.0e6, 2.0e6]
-    damping: vector(2, positive=True, bound=0.999, description="damping ratios in x, y (below 1)") = [0.05, 0.05]
-    mass: number(gt=0, le=1e5, unit="kg", description="inertial load m_acc (thesis: m_p + sum m_a/2 = 22.38 kg)") = 22.38
-
-
-class SensorsSection(Section):
-    """``[sensors]``: tool accelerometer and position gauge (Dressler (2012), ch. 7.3)."""
-
-    accelerometer_noise: number(ge=0, le=1e3, unit="m/s^2", description="standard deviation of the accelerometer noise") = 0.07
-    accelerometer_range: number(gt=0, le=1e4, unit="m/s^2", description="measuring range (clipped), default 1.5 g") = 1.5 * STANDARD_GRAVITY
-    gauge_noise: number(ge=0, le=1.0, unit="m", description="standard deviation of the position gauge noise") = 1e-6
-    seed: integer(0, 2**31 - 1, description="seed of the sensor noise") = 0
 
 
 @fill_doc(**KIND_DOCS)
@@ -262,8 +233,7 @@ class TrackingKind(ProblemKind):
         tr = doc.trajectory
         if (tr.problem is None) == (tr.file is None):
             raise file.fail("trajectory", "exactly one of trajectory.problem (a problem file) and trajectory.file (a trajectory.csv)")
-        params = robot_parameters(file, "robot.parameters", doc.robot.parameters)
-        plant = self._plant(doc, file, GantryTau3Kinematics(params))
+        plant = build_plant(doc.robot, doc.structure, doc.sensors, file)
         if tr.file is not None:
             source = file.data_file("trajectory.file", tr.file)
             columns = read_trajectory(source, file, "trajectory.file")
@@ -284,20 +254,6 @@ class TrackingKind(ProblemKind):
         except GtModelError as exc:
             raise file.wrap("trajectory.problem", exc) from None
         return TrackingDeclaration(plant, tr.settle_time, source, None, (kind, declaration, sname), file)
-
-    @staticmethod
-    def _plant(doc: TrackingFile, file: ProblemFile, kinematics: GantryTau3Kinematics) -> TrackingPlant:
-        ref = file.reference("robot.dynamics_models", doc.robot.dynamics_models, SHIPPED_DYNAMICS)
-        try:
-            models: DynamicsModels = load_dynamics_models(ref)
-        except ParameterError as exc:
-            raise file.wrap("robot.dynamics_models", exc) from None
-        if abs(models.actuators.sample_time - DT) > DT_TOLERANCE or models.actuators.a.size != 3:
-            raise file.fail("robot.dynamics_models", f"3 actuator models with sample_time_s = {DT}", f"{models.actuators.a.size} at {models.actuators.sample_time} s")
-        s, n = doc.structure, doc.sensors
-        structure = ToolStructure(tuple(s.frequencies_hz), tuple(s.stiffness), tuple(s.damping), s.mass)
-        sensors = SensorModel(n.accelerometer_noise, n.accelerometer_range, n.gauge_noise, n.seed)
-        return TrackingPlant(kinematics, actuator_models(models), structure, sensors, DT, doc.robot.configuration)
 
     @staticmethod
     def _check_robot(plant: TrackingPlant, cols: dict[str, np.ndarray], file: ProblemFile, field_name: str) -> None:

@@ -1,0 +1,95 @@
+"""Tables shared by the closed-loop kinds ``tracking`` and ``ilc``: the simulated L1 plant.
+
+Dressler (2012), ch. 6.3 and 7.3: ``[robot]`` (kinematics and the closed-loop actuator
+models (6.11)), ``[structure]`` (one mode per direction x, y of the tool structure, physical
+form (6.14)) and ``[sensors]`` (tool accelerometer and position gauge). :func:`build_plant`
+turns them into a :class:`~gtmodel.estimation.TrackingPlant`.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from gtmodel.errors import GtModelError, ParameterError
+from gtmodel.estimation import SensorModel, ToolStructure, TrackingPlant
+from gtmodel.estimation.plant import DT, STANDARD_GRAVITY
+from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.kinds.motion_common import RobotReference
+from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.schema import NonEmptyText, Section, integer, number, vector
+from gtmodel.robots import GantryTau3Kinematics
+from gtmodel.robots.actuator_dynamics import DynamicsModels, actuator_models, load_dynamics_models
+
+__all__ = ["RobotSection", "StructureSection", "SensorsSection", "build_plant", "NYQUIST_HZ", "SHIPPED_DYNAMICS"]
+
+#: Nyquist frequency of the 4 ms loop [Hz].
+NYQUIST_HZ = 0.5 / DT
+#: Shipped dynamics-models files.
+SHIPPED_DYNAMICS = ("L1_dynamics_models",)
+#: Tolerance on the actuator models' sample time [s].
+_DT_TOLERANCE = 1e-9
+
+
+class RobotSection(RobotReference):
+    """``[robot]``: parameter set, IK configuration and the closed-loop actuator models."""
+
+    dynamics_models: NonEmptyText = Field(default="L1_dynamics_models", description="closed-loop actuator models (6.11): shipped name or a TOML path relative to this file")
+
+
+class StructureSection(Section):
+    """``[structure]``: one mode per direction x, y (Dressler (2012), eq. 6.14; defaults: the ILC operating point)."""
+
+    frequencies_hz: vector(2, positive=True, bound=1e4, unit="Hz", description="resonance in x, y (thesis, Table 6.4, with wrist: 7.4, 11.5)") = [7.4, 11.5]
+    stiffness: vector(2, positive=True, bound=1e12, unit="N/m", description="static TCP stiffness in x, y (thesis: 2-4 N/um, stiffer in x)") = [4.0e6, 2.0e6]
+    damping: vector(2, positive=True, bound=0.999, description="damping ratios in x, y (below 1)") = [0.05, 0.05]
+    mass: number(gt=0, le=1e5, unit="kg", description="inertial load m_acc (thesis: m_p + sum m_a/2 = 22.38 kg)") = 22.38
+
+
+class SensorsSection(Section):
+    """``[sensors]``: tool accelerometer and position gauge (Dressler (2012), ch. 7.3)."""
+
+    accelerometer_noise: number(ge=0, le=1e3, unit="m/s^2", description="standard deviation of the accelerometer noise") = 0.07
+    accelerometer_range: number(gt=0, le=1e4, unit="m/s^2", description="measuring range (clipped), default 1.5 g") = 1.5 * STANDARD_GRAVITY
+    gauge_noise: number(ge=0, le=1.0, unit="m", description="standard deviation of the position gauge noise") = 1e-6
+    seed: integer(0, 2**31 - 1, description="seed of the sensor noise") = 0
+
+
+def build_plant(robot: RobotSection, structure: StructureSection, sensors: SensorsSection, file: ProblemFile) -> TrackingPlant:
+    """The closed-loop L1 plant of Dressler (2012), ch. 7.3, from validated tables.
+
+    Parameters
+    ----------
+    robot : RobotSection
+        ``[robot]``.
+    structure : StructureSection
+        ``[structure]``.
+    sensors : SensorsSection
+        ``[sensors]``.
+    file : ProblemFile
+        The problem file (references, messages).
+
+    Returns
+    -------
+    TrackingPlant
+
+    Raises
+    ------
+    ProblemError
+        An unknown parameter set or dynamics-models file, actuator models of another sample
+        time or count, or a plant the models reject (the message names the field).
+    """
+    params = robot_parameters(file, "robot.parameters", robot.parameters)
+    ref = file.reference("robot.dynamics_models", robot.dynamics_models, SHIPPED_DYNAMICS)
+    try:
+        models: DynamicsModels = load_dynamics_models(ref)
+    except ParameterError as exc:
+        raise file.wrap("robot.dynamics_models", exc) from None
+    if abs(models.actuators.sample_time - DT) > _DT_TOLERANCE or models.actuators.a.size != 3:
+        raise file.fail("robot.dynamics_models", f"3 actuator models with sample_time_s = {DT}",
+                        f"{models.actuators.a.size} at {models.actuators.sample_time} s")
+    try:
+        tool = ToolStructure(tuple(structure.frequencies_hz), tuple(structure.stiffness), tuple(structure.damping), structure.mass)
+        sensor_model = SensorModel(sensors.accelerometer_noise, sensors.accelerometer_range, sensors.gauge_noise, sensors.seed)
+        return TrackingPlant(GantryTau3Kinematics(params), actuator_models(models), tool, sensor_model, DT, robot.configuration)
+    except GtModelError as exc:
+        raise file.wrap("structure", exc) from None
