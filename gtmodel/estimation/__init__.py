@@ -5,4 +5,7 @@ learning control with its lifted-system stability checks, and the closed-loop tr
 simulation of the L1 at 4 ms. Lower layers only: robots, modeling and the base modules.
 """
 
+from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
+
 __all__: list[str] = []
+__all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
