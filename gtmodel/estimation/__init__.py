@@ -6,6 +6,8 @@ simulation of the L1 at 4 ms. Lower layers only: robots, modeling and the base m
 """
 
 from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
+from gtmodel.estimation.kalman import StationaryKalman, tune_position_noise
 
 __all__: list[str] = []
 __all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
+__all__ += ["StationaryKalman", "tune_position_noise"]
