@@ -44,8 +44,8 @@ Noise choices (a decision; the thesis gives the model and the accelerometer nois
   a 20 um RMS deflection concentrated in ~2 Hz has the density of white noise of
   ~0.16 mm RMS over the 125 Hz band). It is tuned (:func:`tune_position_noise`) so that
   the filter's crossover, the -3 dB frequency of the ``z_kin`` path (as for the
-  complementary filter), is at the complementary cut-offs: 0.358 mm (x, 4.49 Hz) and
-  1.064 mm (y, 2.64 Hz) (:data:`DEFAULT_POSITION_NOISE`). With them the estimator is nearly
+  complementary filter), is at the complementary cut-offs: 0.358 mm (x, 4.502 Hz) and
+  1.064 mm (y, 2.630 Hz) (:data:`DEFAULT_POSITION_NOISE`). With them the estimator is nearly
   complementary: a consistent motion (``z_kin = z``, ``a_m = z''``) is lost by 0.4 % at
   7.4 Hz (x) and 0.9 % at 11.5 Hz (y), and 42 % (x, 7.4 Hz) and 16 % (y, 11.5 Hz) of a
   deflection the kinematic position misses remain in the estimate (``|T_kin|``).
