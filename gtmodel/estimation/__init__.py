@@ -1,15 +1,22 @@
 """Filters, learning control and closed-loop simulation of the 4 ms loop (Dressler (2012), ch. 7).
 
 Tool-position estimators (complementary filter, stationary Kalman filter), iterative
-learning control with its lifted-system stability checks, and the closed-loop tracking
-simulation of the L1 at 4 ms. Lower layers only: robots, modeling and the base modules.
+learning control with its lifted-system stability checks, the closed-loop tracking
+simulation of the L1 at 4 ms and the ILC experiment of section 7.3. Lower layers only:
+robots, modeling and the base modules.
 """
 
+from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
 from gtmodel.estimation.ilc import ILCResult, error_measure, ilc_correction_function, run_ilc
+from gtmodel.estimation.kalman import StationaryKalman, tune_position_noise
 from gtmodel.estimation.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
 from gtmodel.estimation.plant import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
+from gtmodel.estimation.experiment import REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
 
 __all__: list[str] = []
 __all__ += ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
 __all__ += ["error_measure", "ILCResult", "run_ilc", "ilc_correction_function"]
 __all__ += ["ToolStructure", "SensorModel", "TrackingPlant", "TrackingResponse"]
+__all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
+__all__ += ["StationaryKalman", "tune_position_noise"]
+__all__ += ["SIGNALS", "REQUIREMENTS", "ILCCase", "ILCReference", "ILCCaseResult", "ILCExperiment"]
