@@ -15,6 +15,7 @@ from gtmodel.problems.kinds.dynamic_identification import DynamicIdentificationK
 from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 from gtmodel.problems.kinds.tracking import TrackingKind
+from gtmodel.problems.kinds.ilc import ILCKind
 
 __all__ = ["KINDS", "get_kind"]
 
@@ -26,6 +27,7 @@ _CLASSES: tuple[type[ProblemKind], ...] = (
     DynamicIdentificationKind,
     JointStiffnessKind,
     TrackingKind,
+    ILCKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.

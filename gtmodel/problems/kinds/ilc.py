@@ -1,0 +1,550 @@
+"""Kind ``ilc``: the ILC experiment of Dressler (2012), section 7.3, on the simulated L1.
+
+The reference is a square in the xy plane (``[reference]``: first corner, side, nominal
+speed, acceleration limit) planned by gtmodel's own path-constrained solver (a
+:class:`~gtmodel.trajectory.Polyline` through the corners, which it traverses with zero
+velocity at each corner, under a TCP speed and per-axis acceleration limit), sampled at
+4 ms, mapped to actuator references by IK and framed by a lead-in and a lead-out at rest.
+The plant is the closed-loop L1 (``[robot]``, ``[structure]``, ``[sensors]``, see
+:mod:`gtmodel.problems.kinds.closed_loop_common`); the learning law is
+``u_{k+1} = Q (u_k + L eps_k)`` (7.2) with ``L = gamma q^delta`` and Q a zero-phase
+Butterworth low-pass with the Tukey time window (``[ilc]``); the cases (``[[cases]]``)
+choose the learning signal (:data:`~gtmodel.estimation.SIGNALS`) and Q's cut-off, and may
+require the lifted check (7.15)/(7.16) to hold before they run: a design that fails it is
+a load-time error naming the case.
+
+The result folder holds ``summary.json`` (per case ``rho`` and ``sigma_max`` per channel,
+the error measure (7.25) per iteration on the actuator and the tool side, the Table 7.2
+figures), ``table_7_2.md``/``.csv`` (mean of iterations 5-10 relative to iteration 0),
+``ilc_iterations.csv`` and the plots ``ilc_actuator_errors.png``, ``ilc_tool_errors.png``
+(Figs. 7.7-7.10) and ``ilc_tool_path_case_<name>.png`` (Fig. 7.11). The field reference is ``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from gtmodel._docstrings import fill_doc
+from gtmodel.errors import GtModelError, ProblemError, SolverError, UnreachablePoseError
+from gtmodel.estimation import (
+    REQUIREMENTS,
+    SIGNALS,
+    ComplementaryFilter,
+    ILCCase,
+    ILCCaseResult,
+    ILCExperiment,
+    ILCReference,
+    LearningFilter,
+    StationaryKalman,
+    time_window,
+)
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.estimation.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
+from gtmodel.estimation.plant import DT as SAMPLE_TIME_S
+from gtmodel.problems.kinds.closed_loop_common import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection, build_plant
+from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.report.ilc import plot_error_measure, plot_tool_path
+from gtmodel.status import Status
+from gtmodel.trajectory import PathConstraints, Polyline, solve_path_convex
+
+__all__ = [
+    "ILCFile",
+    "ILCDeclaration",
+    "ILCOutcome",
+    "ILCKind",
+    "THESIS_TABLE_7_2",
+    "plan_square",
+]
+
+_log = logging.getLogger("gtmodel")
+
+#: The thesis' figures quoted in the issue and the spec for Case 1 (Dressler (2012), ch. 7.3):
+#: largest singular values (7.16) per actuator and the actuator-side error after 5 iterations
+#: relative to iteration 0. The other cells of Table 7.2 are not in the shipped reference data.
+THESIS_TABLE_7_2 = {
+    "1": {"sigma_max": [0.90, 0.91, 0.93], "actuator_relative_error": 0.02},
+}
+
+#: Most samples of a reference (lead-in, motion and lead-out); bounds the lifted matrices.
+MAX_SAMPLES = 4000
+#: Most ILC iterations.
+MAX_ITERATIONS = 100
+
+
+def _cutoff(description: str) -> Any:
+    return number(gt=0, lt=NYQUIST_HZ, unit="Hz", description=description,
+                  what=f"a cut-off frequency in (0, {NYQUIST_HZ:g}) Hz (below the Nyquist frequency of the 4 ms loop)")
+
+
+class ReferenceSection(Section):
+    """``[reference]``: the square of section 7.3.
+
+    Parameters
+    ----------
+    corner : list of float, shape (3,)
+        First corner [m]; the square runs +x, +y, -x, -y from it.
+    side : float
+        Side length [m].
+    speed : float
+        Nominal TCP speed [m/s] (the speed limit of the planner).
+    acceleration : float
+        TCP acceleration limit per axis [m/s^2].
+    lead : int
+        Lead-in and lead-out at rest [samples].
+    grid : int
+        Grid points of the path-constrained solver.
+    """
+
+    corner: vector(3, bound=MAX_LENGTH_M, unit="m", description="first corner of the square (it runs +x, +y, -x, -y)")
+    side: number(gt=0, le=1.0, unit="m", description="side of the square (the thesis: 10 mm)") = 0.010
+    speed: number(gt=0, le=10.0, unit="m/s", description="nominal TCP speed (the thesis: 100 mm/s)") = 0.100
+    acceleration: number(gt=0, le=1000.0, unit="m/s^2", description="TCP acceleration limit per axis") = 2.0
+    lead: integer(0, 1000, description="lead-in and lead-out at rest, in samples (the thesis: 100)") = 100
+    grid: integer(20, 5000, description="grid points of the path-constrained solver") = 400
+
+
+class ILCSection(Section):
+    """``[ilc]``: the learning law (7.2) and Q's time window.
+
+    Parameters
+    ----------
+    iterations : int
+        Iterations after the first trial.
+    gamma : float
+        Learning gain.
+    delta : int
+        Time shift of L [samples].
+    tukey_points : int
+        Length of the Tukey window whose halves weight the lead-in and lead-out.
+    tukey_alpha : float
+        Tukey shape parameter.
+    """
+
+    iterations: integer(1, MAX_ITERATIONS, description="ILC iterations after the first trial") = 10
+    gamma: number(gt=0, le=100.0, description="learning gain of L = gamma q^delta (the thesis: 0.9)") = 0.9
+    delta: integer(0, 100, description="time shift of L in samples (the thesis: 5)") = 5
+    tukey_points: integer(2, 2000, description="Tukey window length (the thesis: 200)") = 200
+    tukey_alpha: number(ge=0, le=1.0, description="Tukey window shape (the thesis: 0.95)") = 0.95
+
+
+class EstimatorsSection(Section):
+    """``[estimators]``: the tool-position estimators of Cases 2A and 2B.
+
+    Parameters
+    ----------
+    complementary_cutoff_hz : list of float, shape (2,)
+        Complementary filter cut-offs in x and y [Hz] (7.17).
+    kalman_position_noise : list of float, shape (2,)
+        Kalman filter: std of the kinematic position as a tool-position measurement [m].
+    kalman_jerk_noise : list of float, shape (2,)
+        Kalman filter: std of the white jerk driving the model [m/s^3].
+    """
+
+    complementary_cutoff_hz: vector(2, positive=True, bound=NYQUIST_HZ, unit="Hz",
+                                    description="complementary filter cut-offs in x and y (the thesis: 4.50, 2.63)") = Field(
+        default_factory=lambda: [4.50, 2.63])
+    kalman_position_noise: vector(2, positive=True, bound=1.0, unit="m",
+                                  description="Kalman: std of fk(q_m) as a tool-position measurement in x, y "
+                                              "(default: crossover at the complementary cut-offs)") = Field(
+        default_factory=lambda: list(DEFAULT_POSITION_NOISE))
+    kalman_jerk_noise: vector(2, positive=True, bound=1e6, unit="m/s^3", description="Kalman: std of the white jerk of the model in x, y") = Field(
+        default_factory=lambda: list(DEFAULT_JERK_NOISE))
+
+
+class CaseSection(Section):
+    """``[[cases]]``: one ILC case.
+
+    Parameters
+    ----------
+    name : str
+        Label (e.g. ``"1"``, ``"2A"``).
+    signal : str
+        Learning signal: actuator, complementary, kalman or tool.
+    q_cutoff_hz : float or None
+        Cut-off of Q's zero-phase Butterworth low-pass [Hz]; omitted: no low-pass.
+    q_order : int
+        Butterworth order.
+    require : str
+        monotone (7.16), stable (7.15) or none.
+    """
+
+    name: NonEmptyText = Field(description="case label")
+    signal: choice(*SIGNALS, description="learning signal: actuator positions (Case 1), the complementary (2A) or Kalman (2B) "
+                                         "tool estimate, or the measured tool position (3)")
+    q_cutoff_hz: _cutoff("cut-off of Q's zero-phase Butterworth low-pass (omit for none)") | None = None
+    q_order: integer(1, 8, description="order of Q's Butterworth low-pass") = 2
+    require: choice(*REQUIREMENTS, description="lifted check that must hold before the case runs: "
+                                               "monotone (sigma_max < 1, 7.16), stable (rho < 1, 7.15) or none") = "monotone"
+
+
+@fill_doc(**KIND_DOCS)
+class ILCFile(ProblemSchema):
+    """An ``ilc`` problem file.
+
+    Parameters
+    ----------
+    {header_fields}
+    robot : RobotSection
+        ``[robot]``: kinematics and actuator models.
+    reference : ReferenceSection
+        ``[reference]``: the square.
+    structure : StructureSection, optional
+        ``[structure]``: the tool structure.
+    sensors : SensorsSection, optional
+        ``[sensors]``: accelerometer and gauge.
+    ilc : ILCSection, optional
+        ``[ilc]``: the learning law.
+    estimators : EstimatorsSection, optional
+        ``[estimators]``: complementary and Kalman filter settings.
+    cases : list of CaseSection
+        ``[[cases]]``: the cases, in order.
+    """
+
+    kind: Literal["ilc"]
+    robot: RobotSection
+    reference: ReferenceSection
+    structure: StructureSection = StructureSection()
+    sensors: SensorsSection = SensorsSection()
+    ilc: ILCSection = ILCSection()
+    estimators: EstimatorsSection = EstimatorsSection()
+    cases: list[CaseSection] = Field(min_length=1, max_length=20, description="the ILC cases")
+
+
+@dataclass
+class ILCDeclaration:
+    """A validated ILC experiment.
+
+    Parameters
+    ----------
+    experiment : ILCExperiment
+        Plant, reference, learning law and estimators.
+    cases : list of ILCCase
+        The cases, in file order.
+    checks : dict
+        Per case name the lifted check computed at load (7.15), (7.16).
+    final_time : float
+        Duration of the square motion (without lead-in/out) [s].
+    """
+
+    experiment: ILCExperiment
+    cases: list[ILCCase]
+    checks: dict[str, Any]
+    final_time: float
+
+
+@dataclass
+class ILCOutcome:
+    """Results of the ILC cases.
+
+    Parameters
+    ----------
+    results : dict of str to ILCCaseResult
+        Per case name.
+    solve_time : float
+        Wall time [s].
+    """
+
+    results: dict[str, ILCCaseResult]
+    solve_time: float
+
+    @property
+    def status(self) -> Status:
+        """Worst status of the cases."""
+        return Status.worst(Status(r.status) for r in self.results.values())
+
+
+def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceleration: float, lead: int, grid: int,
+                configuration: int, dt: float = SAMPLE_TIME_S) -> tuple[np.ndarray, np.ndarray, float]:
+    """Time-optimal square in the xy plane, corners at rest, sampled at ``dt``, with lead-in/out.
+
+    Dressler (2012), section 7.3: the path is a :class:`~gtmodel.trajectory.Polyline`
+    through the corners, solved by :func:`~gtmodel.trajectory.solve_path_convex` under a TCP
+    speed limit ``speed`` and a per-axis acceleration limit ``acceleration``; samples at
+    ``k dt`` up to the final time, then the end pose held for ``lead`` samples (and the
+    start pose for ``lead`` samples before).
+
+    Parameters
+    ----------
+    kinematics : GantryTau3Kinematics
+        The robot (workspace check and IK).
+    corner : array_like, shape (3,)
+        First corner [m].
+    side : float
+        Side [m].
+    speed : float
+        TCP speed limit [m/s].
+    acceleration : float
+        TCP acceleration limit per axis [m/s^2].
+    lead : int
+        Lead-in and lead-out [samples].
+    grid : int
+        Grid points of the solver.
+    configuration : int
+        IK configuration.
+    dt : float, optional
+        Sample time [s].
+
+    Returns
+    -------
+    T : numpy.ndarray, shape (N, 3)
+        Tool reference [m].
+    q : numpy.ndarray, shape (N, 3)
+        Actuator references [m].
+    final_time : float
+        Duration of the motion [s].
+
+    Raises
+    ------
+    UnreachablePoseError
+        The square leaves the workspace.
+    SolverError
+        The planner found no motion.
+    """
+    c = np.asarray(corner, dtype=float)
+    pts = c + side * np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]], dtype=float)
+    path = Polyline(pts, robot=kinematics, configuration=configuration)
+    sol = solve_path_convex(path, PathConstraints(tcp_speed_limit=speed, tcp_acceleration_limit=acceleration), grid=grid)
+    if not sol.success:
+        raise SolverError(f"square: the path-constrained planner ended with status {sol.status} ({sol.message})")
+    t = np.arange(0.0, sol.final_time, dt)
+    T = sol.sample(t)["T"]
+    T = np.vstack([np.repeat(pts[:1], lead, axis=0), T, np.repeat(pts[-1:], lead + 1, axis=0)])
+    q = kinematics.ik(T, configuration)
+    return T, q, float(sol.final_time)
+
+
+def _channels(checks: dict[str, Any]) -> dict[str, dict[str, float | bool]]:
+    return {ch: {"rho": float(c.rho), "sigma_max": float(c.sigma_max), "stable": bool(c.stable), "monotone": bool(c.monotone)}
+            for ch, c in checks.items()}
+
+
+class ILCKind(ProblemKind):
+    """The ILC experiment of Dressler (2012), section 7.3: four learning signals on the simulated L1."""
+
+    name = "ilc"
+    schema = ILCFile
+    title = "iterative learning control on the simulated L1 (Dressler (2012), section 7.3, eqs. 7.2-7.25, Table 7.2)"
+    columns = (
+        Column("worst_sigma_max", "worst sigma_max", "{:.3f}"),
+        Column("solve_time_s", "solve time [s]", "{:.2f}"),
+    )
+    empty_fields = ("worst_sigma_max", "solve_time_s")
+
+    @fill_doc(**KIND_DOCS)
+    def load(self, doc: ILCFile, file: ProblemFile, name: str) -> ILCDeclaration:
+        """Plan the square, build the plant and estimators, check each case's design.
+
+        Parameters
+        ----------
+        {load_args}
+
+        Returns
+        -------
+        ILCDeclaration
+
+        Raises
+        ------
+        ProblemError
+            The square leaves the workspace (``reference.corner``), the planner fails, two
+            cases share a name, the window is longer than the reference, or a case's design
+            fails the check it requires (``cases[i].require``, naming the channel and the
+            figure).
+        """
+        plant = build_plant(doc.robot, doc.structure, doc.sensors, file)
+        ref = doc.reference
+        try:
+            T, q, final_time = plan_square(plant.kinematics, ref.corner, ref.side, ref.speed, ref.acceleration, ref.lead,
+                                           ref.grid, doc.robot.configuration)
+        except UnreachablePoseError as exc:
+            raise file.fail("reference.corner", "a square inside the workspace", f"{ref.corner} ({exc})") from None
+        except GtModelError as exc:
+            raise file.wrap("reference", exc) from None
+        n = len(T)
+        if n > MAX_SAMPLES:
+            raise file.fail("reference", f"a reference of at most {MAX_SAMPLES} samples (lead-in, square, lead-out)", f"{n} samples")
+        il = doc.ilc
+        try:
+            window = time_window(n, lead=ref.lead, tukey_points=il.tukey_points, alpha=il.tukey_alpha)
+        except GtModelError as exc:
+            raise file.wrap("ilc.tukey_points", exc) from None
+        est = doc.estimators
+        try:
+            estimators = {
+                "complementary": ComplementaryFilter(est.complementary_cutoff_hz, dt=SAMPLE_TIME_S),
+                "kalman": StationaryKalman(dt=SAMPLE_TIME_S, accelerometer_noise=max(doc.sensors.accelerometer_noise, 1e-6),
+                                           position_noise=tuple(est.kalman_position_noise), jerk_noise=tuple(est.kalman_jerk_noise), d=2),
+            }
+        except GtModelError as exc:
+            raise file.wrap("estimators", exc) from None
+        kin = plant.kinematics
+        configuration = doc.robot.configuration
+        experiment = ILCExperiment(
+            plant, ILCReference(np.arange(n) * SAMPLE_TIME_S, T, q, window), LearningFilter(il.gamma, il.delta), il.iterations,
+            estimators, lambda X: kin.ik(X, configuration), ref.corner,
+        )
+        cases: list[ILCCase] = []
+        checks: dict[str, Any] = {}
+        for i, c in enumerate(doc.cases):
+            if c.name in checks:
+                raise file.fail(f"cases[{i}].name", "a name not used by an earlier case", c.name)
+            case = ILCCase(c.name, c.signal, c.q_cutoff_hz, c.q_order, c.require)
+            checks[c.name] = experiment.check(case)
+            if c.require != "none":
+                key = "monotone" if c.require == "monotone" else "stable"
+                figure = "sigma_max" if key == "monotone" else "rho"
+                bad = {ch: getattr(r, figure) for ch, r in checks[c.name].items() if not getattr(r, key)}
+                if bad:
+                    ch, value = next(iter(bad.items()))
+                    eq = "7.16" if key == "monotone" else "7.15"
+                    raise file.fail(f"cases[{i}].require",
+                                    f"a {key} design ({figure} < 1, Dressler (2012) eq. {eq}) for case {c.name!r}",
+                                    f"{figure} = {value:.4g} on channel {ch}; lower gamma or the Q cut-off, or require = \"none\"")
+            cases.append(case)
+        return ILCDeclaration(experiment, cases, checks, final_time)
+
+    def solve(self, declaration: ILCDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> ILCOutcome:
+        """Run every case's ILC iterations (Dressler (2012), eqs. 7.2-7.16).
+
+        Parameters
+        ----------
+        declaration : ILCDeclaration
+            The experiment.
+        verbose : bool, optional
+            Log each case's outcome at INFO.
+        previous : Any, optional
+            Unused.
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        ILCOutcome
+            One result per case, each with its status.
+        """
+        t0 = time.perf_counter()
+        results = {}
+        for case in declaration.cases:
+            results[case.name] = declaration.experiment.run(case)
+            if verbose:
+                r = results[case.name]
+                _log.info("ILC case %s: %s, tool error x/y relative %s", case.name, r.status,
+                          np.round(r.relative("tool")[:2], 4).tolist())
+        return ILCOutcome(results, time.perf_counter() - t0)
+
+    def status(self, solution: ILCOutcome) -> Status:
+        """Worst status of the cases.
+
+        Parameters
+        ----------
+        solution : ILCOutcome
+            The results.
+
+        Returns
+        -------
+        Status
+        """
+        return solution.status
+
+    def write(self, declaration: ILCDeclaration, solution: ILCOutcome, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields, ``table_7_2.md``/``.csv``, ``ilc_iterations.csv`` and the plots.
+
+        Dressler (2012), Table 7.2 (mean of iterations 5-10 relative to iteration 0) and
+        Figs. 7.7-7.11.
+
+        Parameters
+        ----------
+        declaration : ILCDeclaration
+            The experiment.
+        solution : ILCOutcome
+            Its results.
+        out : pathlib.Path
+            Result folder.
+        plots : bool
+            Write the PNG plots.
+        name : str
+            Problem name (titles).
+
+        Returns
+        -------
+        Written
+            ``status``; per case the checks per channel, the error measures per iteration
+            [m] and the Table 7.2 figures; the thesis' figures beside them.
+        """
+        cases: dict[str, Any] = {}
+        rows = []
+        for case in declaration.cases:
+            r = solution.results[case.name]
+            entry: dict[str, Any] = {
+                "status": r.status, "message": r.message, "signal": case.signal, "q_cutoff_hz": case.q_cutoff_hz,
+                "q_order": case.q_order, "require": case.require, "checks": _channels(r.stability),
+                "actuator_error_m": r.actuator_error.tolist(), "tool_error_m": r.tool_error.tolist(),
+                "solve_time_s": r.solve_time,
+            }
+            if r.learning_error is not None:
+                entry["learning_error"] = np.asarray(r.learning_error).tolist()
+            if len(r.actuator_error) > 1:
+                act, tool = r.relative("actuator"), r.relative("tool")
+                entry["table_7_2"] = {"actuator": act.tolist(), "tool_x": float(tool[0]), "tool_y": float(tool[1])}
+                rows.append((case, r, act, tool))
+            cases[case.name] = entry
+        worst = max((c.sigma_max for r in solution.results.values() for c in r.stability.values()), default=float("nan"))
+        fields: dict[str, Any] = {
+            "status": solution.status,
+            "message": "; ".join(r.message for r in solution.results.values()),
+            "sample_time_s": SAMPLE_TIME_S,
+            "samples": declaration.experiment.reference.n,
+            "square_final_time_s": declaration.final_time,
+            "iterations": declaration.experiment.iterations,
+            "error_measure": "RMS of the error over the fully corrected samples (time window 1), eq. 7.25",
+            "table_7_2_definition": "mean of the error measure over iterations 5-10 relative to iteration 0",
+            "cases": cases,
+            "worst_sigma_max": float(worst),
+            "thesis": THESIS_TABLE_7_2,
+            "solve_time_s": solution.solve_time,
+        }
+        written = Written(fields)
+        if not rows:
+            return written
+        header = ["case", "signal", "actuator_1", "actuator_2", "actuator_3", "tool_x", "tool_y", "sigma_max_worst", "rho_worst"]
+        lines = [",".join(header)]
+        md = ["| case | signal | actuator 1 | actuator 2 | actuator 3 | tool x | tool y | worst sigma_max | worst rho | thesis |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+        for case, r, act, tool in rows:
+            smax = max(c.sigma_max for c in r.stability.values())
+            rho = max(c.rho for c in r.stability.values())
+            cells = [f"{v:.4f}" for v in (*act, tool[0], tool[1])]
+            lines.append(",".join([case.name, case.signal, *cells, f"{smax:.4f}", f"{rho:.4f}"]))
+            th = THESIS_TABLE_7_2.get(case.name)
+            thesis = (f"sigma_max {th['sigma_max']}, actuator about {th['actuator_relative_error']:.0%}" if th else "not in the reference data")
+            md.append(f"| {case.name} | {case.signal} | " + " | ".join(cells) + f" | {smax:.3f} | {rho:.3f} | {thesis} |")
+        (out / "table_7_2.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        (out / "table_7_2.md").write_text(
+            f"# {name}: Table 7.2 layout (Dressler (2012))\n\nError measure (7.25), mean of iterations 5-10 relative to "
+            "iteration 0 (1 = no improvement).\n\n" + "\n".join(md) + "\n", encoding="utf-8")
+        it = ["case,iteration,actuator_1_m,actuator_2_m,actuator_3_m,tool_x_m,tool_y_m,tool_z_m"]
+        for case, r, _, _ in rows:
+            for k, (a, t) in enumerate(zip(r.actuator_error, r.tool_error)):
+                it.append(",".join([case.name, str(k), *(f"{v:.9g}" for v in (*a, *t))]))
+        (out / "ilc_iterations.csv").write_text("\n".join(it) + "\n", encoding="utf-8")
+        written.files += ["table_7_2.md", "table_7_2.csv", "ilc_iterations.csv"]
+        if plots:
+            plot_error_measure({c.name: r.actuator_error for c, r, _, _ in rows}, out / "ilc_actuator_errors.png",
+                               labels=["actuator 1", "actuator 2", "actuator 3"],
+                               title=f"{name}: actuator-side error measure (7.25) per iteration")
+            plot_error_measure({c.name: r.tool_error[:, :2] for c, r, _, _ in rows}, out / "ilc_tool_errors.png",
+                               labels=["x", "y"], title=f"{name}: tool-side error measure (7.25) per iteration")
+            written.files += ["ilc_actuator_errors.png", "ilc_tool_errors.png"]
+            ref_T = declaration.experiment.reference.T
+            for c, r, _, _ in rows:
+                paths = {f"iteration {k}": z for k, z in sorted(r.tool_paths.items())}
+                plot_tool_path(ref_T, paths, out / f"ilc_tool_path_case_{c.name}.png",
+                               title=f"{name}, case {c.name} ({c.signal}): tool path")
+                written.files.append(f"ilc_tool_path_case_{c.name}.png")
+        return written
