@@ -63,7 +63,33 @@ _BAD = STATUS_CODES["GT_BAD_ARGUMENT"][0]
 
 @dataclass(frozen=True)
 class ControllerCheckReport(CheckReport):
-    """Result of :func:`check_controller` (a :class:`~gtmodel.codegen.check.CheckReport`; ``n`` = cycles of the run)."""
+    """Result of :func:`check_controller`: a :class:`~gtmodel.codegen.check.CheckReport` of the controller.
+
+    Parameters
+    ----------
+    robot : str
+        Robot of the library.
+    prefix : str
+        C prefix of the library.
+    n : int
+        Cycles of the run.
+    seed : int
+        Seed of the sensor noise of the run.
+    functions : tuple of FunctionCheck
+        ``kalman_step``, ``kalman_update``, ``ilc_correction`` (those generated).
+    probes : tuple of StatusProbe
+        Status-code probes.
+    version : str
+        Version string reported by the compiled library.
+    library : pathlib.Path
+        The shared library checked.
+    timings : dict
+        Unused (the times are in ``functions``).
+    harness : str
+        Unused (empty).
+    harness_passed : bool or None
+        Unused (None).
+    """
 
     def summary_lines(self) -> list[str]:
         """Printable lines: one per function, the status probes and the verdict.
