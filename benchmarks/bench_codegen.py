@@ -10,9 +10,18 @@ prints, per function and for the per-cycle bundles of the 4 ms loop,
 * the ratio Python/C,
 * instructions per call counted by valgrind's callgrind (if valgrind is on PATH).
 
+Controller of the 4 ms loop (Dressler (2012), ch. 7): ns per step of the generated
+``kalman_step`` (state fed back), ``kalman_update`` (state struct) and ``ilc_correction``
+over a 400-cycle run, next to the same CasADi Function called from Python and a NumPy
+equivalent (Kalman: ``Mx @ x + My @ y`` with the Function's Jacobians, exact for the linear
+step; ILC: ``table[k]``). The controller comes from ``--controller FILE`` (a controller file,
+:mod:`gtmodel.codegen.controller_file`) or, by default, the stand-ins of
+``tests/codegen/controller_stand_ins.py`` (until gtmodel.estimation provides the real ones).
+
 Bundles: L1 = ik + jacobian + inverse_dynamics (aim < 1 us), F1 = ik + fk, both
 warm-started from the previous sample (aim < 10 us); the F1 default starts (continuation
-from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py``
+from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py`` (``--json``: one JSON document instead of the
+tables; ``--robots ""``: the controller only)
 (``--cflags "-O3 -march=native"``: optional extra flags for the libraries, to see what
 the target's instruction set gains; the generated code needs only ``-std=c99 -O2``).
 """
@@ -20,6 +29,8 @@ the target's instruction set gains; the generated code needs only ``-std=c99 -O2
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 import shutil
 import subprocess
 import tempfile
@@ -28,8 +39,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gtmodel.codegen import compile_shared, find_compiler, generate, load_library
+import casadi as ca
+
+from gtmodel.codegen import Controller, check_controller, compile_shared, find_compiler, generate, load_controller, load_library
 from gtmodel.codegen.check import _c_call, sample_inputs, time_functions, timed_rows
+from gtmodel.codegen.controller_check import ILC_MARGIN, run_inputs
 from gtmodel.robots.kinematics import configuration_signs
 
 BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}
@@ -110,8 +124,47 @@ def python_times(gen, rows, n: int) -> dict[str, float]:
     return out
 
 
+def stand_in_controller() -> Controller:
+    """The test stand-ins (Kalman step for 3 directions, a 400-cycle learned table)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from tests.codegen.controller_stand_ins import ilc_correction_function, kalman_step_function, learned_table  # noqa: E402
+
+    table = learned_table(400, 3)
+    return Controller(kalman_step=kalman_step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table)
+
+
+def controller_rows(controller: Controller, root: Path, n: int, cflags: str) -> dict[str, dict[str, float]]:
+    """ns per step: generated C (C loop over the run), CasADi from Python, NumPy equivalent."""
+    gen = generate("L1", root / "src", functions=("ik",), controller=controller)
+    lib = load_library(gen, compile_shared(gen, root / "build", extra_flags=cflags.split()))
+    report = check_controller(gen, library=lib, build_dir=root / "build", timing=True)
+    if not report.passed:
+        raise SystemExit("controller check failed:\n" + "\n".join(report.summary_lines()))
+    c_ns = {f.name: f.ns_per_call for f in report.functions}
+    inp = run_inputs(controller, 400, 0)
+    rows: dict[str, dict[str, float]] = {}
+    if controller.kalman_step is not None:
+        f = controller.kalman_step
+        x0, y0 = inp["x0"], inp["y"][0]
+        xs, ys = ca.SX.sym("x", x0.size), ca.SX.sym("y", y0.size)
+        fe = f if f.is_a("SXFunction") else f.expand()
+        xn, zh = fe(xs, ys)
+        linear = ca.Function("kalman_linear", [xs, ys], [ca.jacobian(xn, xs), ca.jacobian(xn, ys), ca.jacobian(zh, xs)])
+        Mx, My, H = (np.asarray(v) for v in linear(x0, y0))  # the step is linear: exact
+        py = _py_time(f, (x0, y0), n)
+        npy = _py_time(lambda x, y: (Mx @ x + My @ y, H @ x), (x0, y0), n)
+        for name in ("kalman_step", "kalman_update"):
+            rows[name] = {"c_ns": c_ns[name], "casadi_python_ns": py, "numpy_ns": npy}
+    if controller.ilc_correction is not None:
+        table, zero = controller.ilc_table, np.zeros(controller.ilc_d)
+        py = _py_time(controller.ilc_correction, (17.0,), n)
+        npy = _py_time(lambda k: table[k] if 0 <= k < len(table) else zero, (17,), n)
+        rows["ilc_correction"] = {"c_ns": c_ns["ilc_correction"], "casadi_python_ns": py, "numpy_ns": npy}
+    return rows
+
+
 def main(argv: list[str] | None = None) -> None:
-    """Run the benchmark and print one table per robot."""
+    """Run the benchmark and print one table per robot and one for the controller (or JSON)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--robots", default="L1,F1", help="comma-separated robots (default L1,F1)")
     ap.add_argument("--python-calls", type=int, default=2000, help="calls per function from Python")
@@ -120,9 +173,17 @@ def main(argv: list[str] | None = None) -> None:
                     "(optional; the generated code needs only -std=c99 -O2)")
     ap.add_argument("--newton-check-every", type=int, default=None,
                     help="test Newton convergence every k steps (default: the declaration's; F1: 4 like Python)")
+    ap.add_argument("--controller", type=Path, default=None, metavar="FILE",
+                    help="controller file for the controller rows (default: the test stand-ins)")
+    ap.add_argument("--no-controller", action="store_true", help="skip the controller rows")
+    ap.add_argument("--json", action="store_true", help="print one JSON document (ns per call per function) instead of tables")
     args = ap.parse_args(argv)
+    doc: dict = {"robots": {}, "controller": {}}
+    out = sys.stdout
+    if args.json:
+        sys.stdout = sys.stderr  # the tables go to stderr, the JSON document to stdout
     with tempfile.TemporaryDirectory(prefix="gt_bench_") as tmp:
-        for robot in args.robots.split(","):
+        for robot in [r for r in args.robots.split(",") if r]:
             root = Path(tmp) / robot
             gen = generate(robot, root / "src", newton_check_every=args.newton_check_every)
             lib = compile_shared(gen, root / "build", extra_flags=args.cflags.split())
@@ -136,6 +197,7 @@ def main(argv: list[str] | None = None) -> None:
             hdr = f"{'function':<38}{'C ns/call':>11}{'Python ns/call':>16}{'Py/C':>8}{'instr/call':>12}"
             print(hdr)
             print("-" * len(hdr))
+            doc["robots"][robot] = {label: {"c_ns": c[label], "python_ns": py[label], "instructions": ir.get(label)} for label in rows}
             for label in rows:
                 ins = f"{ir[label]:>12.0f}" if label in ir else f"{'-':>12}"
                 print(f"{label:<38}{c[label]:>11.0f}{py[label]:>16.0f}{py[label] / c[label]:>8.0f}{ins}")
@@ -146,8 +208,23 @@ def main(argv: list[str] | None = None) -> None:
                 aim = 1000 if robot == "L1" else 10000
                 print(f"{'bundle ' + '+'.join(bundle):<38}{tc:>11.0f}{tp:>16.0f}{tp / tc:>8.0f}{ins}   (aim < {aim} ns: "
                       f"{'met' if tc < aim else 'NOT met'})")
+        if not args.no_controller:
+            controller = load_controller(args.controller) if args.controller else stand_in_controller()
+            rows = controller_rows(controller, Path(tmp) / "controller", args.python_calls, args.cflags)
+            doc["controller"] = rows
+            print(f"\ncontroller ({args.controller or 'test stand-ins'}): ns per step over a 400-cycle run "
+                  f"(ILC: k = -{ILC_MARGIN} .. N + {ILC_MARGIN - 1})")
+            hdr = f"{'function':<20}{'C ns':>10}{'CasADi/Python ns':>18}{'NumPy ns':>10}{'CasADi/C':>10}{'NumPy/C':>9}"
+            print(hdr)
+            print("-" * len(hdr))
+            for name, r in rows.items():
+                print(f"{name:<20}{r['c_ns']:>10.0f}{r['casadi_python_ns']:>18.0f}{r['numpy_ns']:>10.0f}"
+                      f"{r['casadi_python_ns'] / r['c_ns']:>10.0f}{r['numpy_ns'] / r['c_ns']:>9.0f}")
     print("\nC: mean over a C loop of one input (warm start = a nearby sample); Python: the CasADi Function called "
           "with NumPy inputs, or for the F1 Newton functions the Python model's method (same step Functions).")
+    if args.json:
+        sys.stdout = out
+        print(json.dumps(doc, indent=1))
 
 
 if __name__ == "__main__":

@@ -13,7 +13,9 @@
     Generate C for the real-time kinematics and inverse dynamics (3-link sets, also a
     calibration's ``parameters.toml``; ``D1_six_link``; ``F1``); ``--check`` compiles it,
     compares every function with the Python model on random and edge-case inputs, prints
-    the largest error and ns/call and runs the C unit tests.
+    the largest error and ns/call and runs the C unit tests. ``--controller FILE`` adds the
+    controller of the 4 ms loop (Kalman step, ILC correction) from a controller file
+    (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
@@ -35,7 +37,7 @@ from typing import Sequence
 
 from gtmodel import __version__
 from gtmodel.problems.overrides import parse_override
-from gtmodel.codegen import check, generate
+from gtmodel.codegen import check, check_controller, generate, load_controller
 from gtmodel.errors import GtModelError
 from gtmodel.problems import KINDS, run_problem
 from gtmodel.problems.docs import json_schema, write_docs
@@ -97,6 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--newton-tolerance", type=float, default=None, help="tolerance of the Newton loops (default per function)")
     cg.add_argument("--max-iter", type=int, default=None, help="iteration limit of the Newton loops (default 20)")
     cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
+    cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
+                    help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
     cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
@@ -216,9 +220,10 @@ def _schema(args: argparse.Namespace) -> int:
 
 def _codegen(args: argparse.Namespace) -> int:
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    controller = load_controller(args.controller) if args.controller is not None else None
     generated = generate(
         robot=args.robot, out_dir=args.out, friction=args.friction, real=args.real,
-        newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions,
+        newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions, controller=controller,
     )
     print(f"wrote {', '.join(str(p) for p in generated.files)}")
     print(generated.version)
@@ -226,7 +231,12 @@ def _codegen(args: argparse.Namespace) -> int:
         return EXIT_OK
     report = check(generated, n=args.samples, seed=args.seed, timing=True)
     print("\n".join(report.summary_lines()))
-    return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
+    passed = report.passed
+    if controller is not None:
+        controller_report = check_controller(generated, seed=args.seed, timing=True)
+        print("\n".join(controller_report.summary_lines()))
+        passed = passed and controller_report.passed
+    return EXIT_OK if passed else EXIT_NOT_OPTIMAL
 
 
 def _sigterm(signum: int, frame: object) -> None:

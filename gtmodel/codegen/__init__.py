@@ -2,7 +2,9 @@
 
 ``generate`` writes C and a header for the model functions of a robot (3-link sets: ``ik``,
 ``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
-``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``); ``compile_shared``
+``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``) and, with a
+``Controller``, the controller of the 4 ms loop (Kalman step, ILC correction);
+``compile_shared``
 builds a shared library with the system C compiler; ``check`` compares the compiled C with
 the Python evaluation, probes the edge cases and times every function. The hand-written
 harness (Makefile, 4 ms loop, C unit tests) is in ``codegen/`` at the top of the repository.
@@ -12,6 +14,9 @@ from __future__ import annotations
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.check import CheckReport, FunctionCheck, StatusProbe, check
+from gtmodel.codegen.controller import Controller
+from gtmodel.codegen.controller_check import ControllerCheckReport, check_controller
+from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate
 from gtmodel.codegen.robot import load_robot, parameter_hash
@@ -23,6 +28,11 @@ __all__ = [
     "find_compiler",
     "load_library",
     "check",
+    "Controller",
+    "check_controller",
+    "ControllerCheckReport",
+    "load_controller",
+    "save_controller",
     "GeneratedCode",
     "CheckReport",
     "FunctionCheck",

@@ -107,7 +107,8 @@ def _doc_lines(spec: FunctionSpec, funcs: dict, P: str, sizes: tuple[int, int, i
     return lines
 
 
-def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str, model: RobotModel, friction: str, real: str, newton: dict) -> str:
+def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str, model: RobotModel, friction: str, real: str, newton: dict,
+                 extra: Sequence[str] = ()) -> str:
     P = gen_prefix.upper()
     out = [
         f"/* {gen_prefix}.h: C API of the {model.name} Gantry-Tau model.",
@@ -174,7 +175,7 @@ def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str,
         out.append(_comment_block(_doc_lines(spec, funcs, P, sizes[spec.name])))
         out.append(f"int {gen_prefix}_{spec.name}({_c_params(spec, funcs, real)});")
         out.append("")
-    out += ["#ifdef __cplusplus", '} /* extern "C" */', "#endif", "", f"#endif /* {P}_H */", ""]
+    out += [*extra, "#ifdef __cplusplus", '} /* extern "C" */', "#endif", "", f"#endif /* {P}_H */", ""]
     return "\n".join(out)
 
 
@@ -263,6 +264,10 @@ def _arg_prologue(gp: str, spec: FunctionSpec, funcs: dict) -> tuple[list[str], 
         elif a.kind == "configuration":
             decl.append(f"    casadi_real in_{a.name}[3];")
             body.append(f"    if ({gp}_signs({a.name}, in_{a.name}) != 0) return GT_BAD_ARGUMENT;")
+            feed[a.casadi_input] = f"in_{a.name}"
+        elif a.kind == "index":
+            decl.append(f"    casadi_real in_{a.name}[1];")
+            body.append(f"    in_{a.name}[0] = (casadi_real){a.name};")
             feed[a.casadi_input] = f"in_{a.name}"
         else:
             decl.append(f"    casadi_real in_{a.name}[1];")
@@ -413,7 +418,8 @@ def _newton_body(gp: str, P: str, spec: FunctionSpec, parts: dict, cnames: dict,
     return body
 
 
-def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newton_check_every: int | None = None) -> str:
+def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newton_check_every: int | None = None,
+                  extra: Sequence[str] = ()) -> str:
     P = gen_prefix.upper()
     out = [
         f"/* {gen_prefix}.c: plain-C wrappers of the CasADi-generated model functions.",
@@ -458,6 +464,6 @@ def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newto
         name = f"{gen_prefix}_{h}"
         if any(name + "(" in line for line in helpers) and name + "(" not in used:  # unused helper: drop it (-Werror)
             helpers = _drop_function(helpers, name)
-    return "\n".join(out + helpers + bodies)
+    return "\n".join(out + helpers + bodies + list(extra))
 
 

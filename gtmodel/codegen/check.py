@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
+from gtmodel.codegen.controller import robot_part
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.codegen.declarations import (
     FK_TOLERANCE,
@@ -814,7 +815,9 @@ def check(
     Returns
     -------
     CheckReport
-        Per function the largest ``|C - Python|`` against its tolerance (``IK_TOLERANCE``,
+        Per robot-model function (the controller functions of a library generated with
+        ``controller=`` are checked by
+        :func:`~gtmodel.codegen.controller_check.check_controller`) the largest ``|C - Python|`` against its tolerance (``IK_TOLERANCE``,
         ``FK_TOLERANCE`` = 1e-12 m, ``JACOBIAN_TOLERANCE`` = 1e-12,
         ``INVERSE_DYNAMICS_TOLERANCE`` = 1e-9 N or 1e-9 relative; single precision:
         ``FLOAT_RELATIVE_TOLERANCE``), the edge-case probes and the timings. A failed
@@ -832,6 +835,7 @@ def check(
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InputError(f"n: expected a positive number of poses, got {n!r}")
     build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
+    generated = robot_part(generated)  # the controller functions: controller_check.check_controller
     if library is None:
         library = load_library(generated, compile_shared(generated, build))
     model = generated.model()

@@ -83,7 +83,8 @@ class ArgSpec:
         ``"vector"``: ``const double name[n]`` passed as the CasADi input of the same size;
         ``"matrix"``: ``const double name[9]`` a ROW-MAJOR 3x3 matrix (transposed into
         CasADi's column-major input); ``"configuration"``: ``int`` 0-7 turned into the three
-        IK root signs; ``"solution"``: ``int`` +1/-1 passed as a scalar.
+        IK root signs; ``"solution"``: ``int`` +1/-1 passed as a scalar; ``"index"``: ``int``
+        (any value, e.g. a cycle count) passed as a scalar (exact in double precision).
     casadi_input : str
         Name of the CasADi input it feeds.
     doc : str

@@ -40,6 +40,7 @@ import numpy as np
 import gtmodel
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.codegen.c_text import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
+from gtmodel.codegen.controller import Controller, controller_header_lines, controller_source_lines
 from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
@@ -95,6 +96,9 @@ class GeneratedCode:
         Robot kind (``"three_link"``, ``"six_link"``, ``"f1"``).
     newton : dict
         ``{name: (tolerance, max_iter)}`` of the Newton functions.
+    controller : Controller or None
+        The controller functions generated with the model's (``kalman_step``,
+        ``ilc_correction``; see :mod:`gtmodel.codegen.controller`), or None.
     """
 
     out_dir: Path
@@ -114,6 +118,7 @@ class GeneratedCode:
     real: str = "double"
     kind: str = "three_link"
     newton: dict[str, tuple[float, int]] = field(default_factory=dict, repr=False)
+    controller: Controller | None = field(default=None, repr=False)
 
     @property
     def c_sources(self) -> tuple[Path, Path]:
@@ -203,9 +208,9 @@ def _check_arg_input(spec: FunctionSpec, f: ca.Function, a, where: str) -> None:
         raise CodegenError(f"{spec.name}: {where} input {a.casadi_input!r} must be a dense column vector")
     if a.kind == "configuration" and n != 3:
         raise CodegenError(f"{spec.name}: configuration input {a.casadi_input!r} must have 3 elements, has {n}")
-    if a.kind == "solution" and n != 1:
-        raise CodegenError(f"{spec.name}: solution input {a.casadi_input!r} must be scalar, has {n}")
-    if a.kind not in ("vector", "configuration", "solution"):
+    if a.kind in ("solution", "index") and n != 1:
+        raise CodegenError(f"{spec.name}: {a.kind} input {a.casadi_input!r} must be scalar, has {n}")
+    if a.kind not in ("vector", "configuration", "solution", "index"):
         raise CodegenError(f"{spec.name}: unknown argument kind {a.kind!r}")
 
 
@@ -360,6 +365,7 @@ def generate(
     newton_tolerance: float | None = None,
     max_iter: int | None = None,
     newton_check_every: int | None = None,
+    controller: Controller | None = None,
 ) -> GeneratedCode:
     """Generate C source and a public header for the model functions of a robot.
 
@@ -396,6 +402,14 @@ def generate(
     newton_check_every : int or None, optional
         Test convergence every this many Newton steps; default the declaration's (F1: 4,
         the block size of the Python model, for identical results; 1 exits earliest).
+    controller : Controller or None, optional
+        Controller functions of the 4 ms loop to add to the library
+        (:class:`~gtmodel.codegen.controller.Controller`: the stationary Kalman step
+        ``<prefix>_kalman_step`` with its state struct, ``<prefix>_kalman_init`` and
+        ``<prefix>_kalman_update``, and the ILC correction lookup
+        ``<prefix>_ilc_correction``), e.g. from
+        :func:`~gtmodel.codegen.controller_file.load_controller`; checked by
+        :func:`~gtmodel.codegen.controller_check.check_controller`.
 
     Returns
     -------
@@ -406,7 +420,7 @@ def generate(
     ------
     InputError
         Unknown function name, invalid prefix, friction form, real type, tolerance or
-        iteration limit.
+        iteration limit; ``controller`` not a Controller.
     ParameterError
         Unknown or invalid robot / parameter set.
     CodegenError
@@ -433,6 +447,13 @@ def generate(
     ):
         raise InputError(f"newton_check_every: expected an integer from 1 to 100, got {newton_check_every!r}")
     specs = _resolve_specs(default_functions(model.kind) if functions is None else functions, model.kind)
+    if controller is not None:
+        if not isinstance(controller, Controller):
+            raise InputError(f"controller: expected a gtmodel.codegen.Controller, got {type(controller).__name__}")
+        clash = [s.name for s in specs if s.name in controller.functions]
+        if clash:
+            raise InputError(f"functions: {clash} clash with the controller's functions")
+        specs = specs + controller.specs()
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -510,8 +531,10 @@ def generate(
     header = out / f"{prefix}.h"
     source = out / f"{prefix}.c"
     try:
-        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton))
-        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every))
+        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton,
+                                       controller_header_lines(prefix, controller, real) if controller else ()))
+        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every,
+                                        controller_source_lines(prefix, controller, real) if controller else ()))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)
@@ -540,4 +563,5 @@ def generate(
         real=real,
         kind=model.kind,
         newton=newton,
+        controller=controller,
     )

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from gtmodel.codegen import compile_shared, generate, load_library
+from gtmodel.codegen import Controller, compile_shared, generate, load_library
+
+from .controller_stand_ins import ilc_correction_function, kalman_step_function, learned_table
 
 
 @pytest.fixture(scope="session")
@@ -21,3 +23,17 @@ def built(tmp_path_factory):
         return cache[robot]
 
     return get
+
+
+@pytest.fixture(scope="session")
+def controller_built(tmp_path_factory):
+    """An L1 library (ik, jacobian, inverse_dynamics) with the stand-in controller: ``(GeneratedCode, CompiledLibrary)``.
+
+    The controller: the stand-in Kalman step for 3 directions and a learned table of 400
+    cycles (:mod:`tests.codegen.controller_stand_ins`), compiled with -Werror.
+    """
+    table = learned_table()
+    controller = Controller(kalman_step=kalman_step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table)
+    out = tmp_path_factory.mktemp("codegen_controller")
+    gen = generate("L1", out / "src", functions=("ik", "jacobian", "inverse_dynamics"), controller=controller)
+    return gen, load_library(gen, compile_shared(gen, out / "build", werror=True))

@@ -28,7 +28,20 @@
  * malloc/calloc/realloc/free from this program and the generated library are counted
  * through the linker's --wrap option).
  *
- * Build: see the Makefile (defines GT_HEADER, GT_PREFIX, TRAJ_HEADER, TRAJ_NAME).
+ * With GT_CONTROLLER defined (make CONTROLLER=controller.json: the library generated with
+ * `gtmodel codegen --controller`), every cycle also runs the controller side of
+ * Dressler (2012), ch. 7: the learned ILC correction u_k of the cycle (k = the sample index
+ * of the trial; 0 outside the table) added to the cart references, q_cmd = q + u_k
+ * (actuator-side ILC, Case 1), and one step of the stationary Kalman filter on the
+ * measurements [z_kin - T0; a_m] (deviations from the first sample T0; here the table's TCP
+ * position and acceleration stand in for FK(q_m) and the accelerometer), its state in a
+ * caller-owned struct; z_hat + T0 estimates the tool position. The controller needs
+ * ILC_D = 3, KALMAN_NY = 6 and KALMAN_NZ = 3. The program then also prints the largest
+ * |u_k| and |z_hat + T0 - T| (first pass of the table; the replay then jumps back to the
+ * start, a step the filter follows with a lag), and the comparison of the cart references subtracts u_k.
+ *
+ * Build: see the Makefile (defines GT_HEADER, GT_PREFIX, TRAJ_HEADER, TRAJ_NAME; with a
+ * controller also GT_CONTROLLER and GT_MACRO, the upper-case prefix of the header's macros).
  */
 #define _POSIX_C_SOURCE 200112L
 #include <math.h>
@@ -50,6 +63,13 @@
 
 /* cart references must equal the table's (same model) within this [m] */
 #define Q_TOLERANCE 1e-9
+
+#ifdef GT_CONTROLLER
+#define GM(name) CAT(GT_MACRO, CAT(_, name))
+#if GM(ILC_D) != 3 || GM(KALMAN_NY) != 6 || GM(KALMAN_NZ) != 3
+#error "loop.c: the controller must have ILC_D = 3, KALMAN_NY = 6 ([z_kin; a_m]) and KALMAN_NZ = 3"
+#endif
+#endif
 
 /* ---- heap-allocation counter (link with -Wl,--wrap=malloc,...) ---- */
 static long heap_calls = 0; /* counts calls made while heap_watch is set */
@@ -80,6 +100,11 @@ int main(int argc, char **argv)
     int realtime = 0, i, a;
     double max_ns = 0.0, sum_ns = 0.0, max_dq = 0.0, max_late = 0.0, max_cpu_ns = 0.0;
     double sink = 0.0;
+#ifdef GT_CONTROLLER
+    GT(kalman_state) kf; /* the filter state: caller-owned, on the stack */
+    const double T0[3] = {TR(x)[0], TR(y)[0], TR(z)[0]};
+    double max_u = 0.0, max_dz = 0.0;
+#endif
     struct timespec next, t0, t1, c0, c1;
     const long n = TRAJ_LEN;
     const double dt = TR(t)[1] - TR(t)[0];
@@ -118,6 +143,17 @@ int main(int argc, char **argv)
         if ((GT(ik)(T, 0, q) | GT(jacobian)(T, 0, J) | GT(inverse_dynamics)(T, zero, zero, 0, tau)) != GT_OK) {
             printf("warm-up: the first trajectory sample gives a non-OK status\n");
         }
+#ifdef GT_CONTROLLER
+        {
+            const double y[6] = {T[0], T[1], T[2], 0.0, 0.0, 0.0};
+            double u[3], z_hat[3];
+            if ((GT(ilc_correction)(0, u) | GT(kalman_init)(&kf, NULL) | GT(kalman_update)(&kf, y, z_hat)) != GT_OK) {
+                printf("warm-up: the controller gives a non-OK status\n");
+            }
+        }
+        /* the filter runs on deviations from the first sample, at rest there: state zero */
+        if (GT(kalman_init)(&kf, NULL) != GT_OK) printf("kalman_init: non-OK status\n");
+#endif
     }
     clock_gettime(CLOCK_MONOTONIC, &next);
     heap_watch = 1;
@@ -125,6 +161,9 @@ int main(int argc, char **argv)
         const long s = k % n;
         const long sp = s + 1 < n ? s + 1 : s, sm = s > 0 ? s - 1 : s;
         double T[3], T_dot[3], T_ddot[3], q[3], J[9], tau[3];
+#ifdef GT_CONTROLLER
+        double u[3], y[6], z_hat[3];
+#endif
         int status = 0;
         if (realtime) {
             add_ns(&next, period_ns);
@@ -145,6 +184,16 @@ int main(int argc, char **argv)
         status |= GT(ik)(T, 0, q);
         status |= GT(jacobian)(T, 0, J);
         status |= GT(inverse_dynamics)(T, T_dot, T_ddot, 0, tau);
+#ifdef GT_CONTROLLER
+        /* --- controller: ILC correction of cycle k of the trial, Kalman step --- */
+        status |= GT(ilc_correction)((int)s, u);
+        for (i = 0; i < 3; ++i) q[i] += u[i]; /* q_cmd = q_ff + u_k */
+        for (i = 0; i < 3; ++i) {
+            y[i] = T[i] - T0[i];  /* z_kin - T0: FK(q_m) - T0 on a robot */
+            y[3 + i] = T_ddot[i]; /* a_m: the accelerometer on a robot */
+        }
+        status |= GT(kalman_update)(&kf, y, z_hat);
+#endif
         clock_gettime(CLOCK_MONOTONIC, &t1);
         if (!realtime) clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
         /* --- bookkeeping (outside the timed part) --- */
@@ -170,6 +219,12 @@ int main(int argc, char **argv)
         {
             const double qt[3] = {TR(q1)[s], TR(q2)[s], TR(q3)[s]};
             for (i = 0; i < 3; ++i) {
+#ifdef GT_CONTROLLER
+                q[i] -= u[i]; /* compare the feedforward part */
+                if (fabs(u[i]) > max_u) max_u = fabs(u[i]);
+                if (k < n && fabs(z_hat[i] + T0[i] - T[i]) > max_dz) max_dz = fabs(z_hat[i] + T0[i] - T[i]);
+                sink += z_hat[i];
+#endif
                 if (fabs(q[i] - qt[i]) > max_dq) max_dq = fabs(q[i] - qt[i]);
             }
         }
@@ -184,6 +239,9 @@ int main(int argc, char **argv)
     else printf("largest CPU time of a cycle %.0f ns; stalled cycles (wall clock > period, CPU time below) %ld\n",
                 max_cpu_ns, stalls);
     printf("max |q - q_table| %.3g m\n", max_dq);
+#ifdef GT_CONTROLLER
+    printf("controller: ILC table %d cycles, max |u_k| %.3g m; Kalman max |z_hat + T0 - T| %.3g m (first pass)\n", GM(ILC_LENGTH), max_u, max_dz);
+#endif
     printf("heap allocations in the loop %ld\n", heap_calls);
     if (!isfinite(sink)) printf("non-finite feedforward\n");
     return (misses == 0 && bad_status == 0 && max_dq <= Q_TOLERANCE && heap_calls == 0 && isfinite(sink)) ? 0 : 1;

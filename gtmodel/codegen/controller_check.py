@@ -1,0 +1,490 @@
+"""Self-check of the generated controller functions over a whole run of the 4 ms loop.
+
+:func:`check_controller` compares the compiled Kalman step and ILC correction with the
+Python evaluation of the very CasADi Functions they were generated from, over every cycle
+of a run (default 400 cycles, 1.6 s):
+
+- ``kalman_step`` (the array function) on every ``(x_k, y_k)`` of the Python run, and
+  ``kalman_update`` (the state struct) run in C from ``x_0`` over the whole measurement
+  sequence, its state fed back by the C code: every ``x_k`` and ``z_hat_k`` against the
+  Python run ``kalman_step.mapaccum`` (the form the Python estimation uses);
+- ``ilc_correction`` at every cycle ``k = -10 .. N + 9`` (the whole table and beyond
+  both ends, where it must give 0 and ``GT_OK``);
+
+then probes the status contract (NULL pointers, NaN/Inf inputs or state: ``GT_BAD_ARGUMENT``
+with the outputs and the state untouched) and, with ``timing=True``, times each function
+in a C loop over the run (ns per call).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import subprocess
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
+from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, SENTINEL, CheckReport, FunctionCheck, StatusProbe
+from gtmodel.codegen.controller import Controller, controller_part
+from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.errors import CodegenError, InputError
+
+__all__ = [
+    "RUN_CYCLES",
+    "ILC_MARGIN",
+    "POSITION_AMPLITUDE",
+    "ControllerCheckReport",
+    "run_inputs",
+    "python_run",
+    "check_controller",
+]
+
+log = logging.getLogger("gtmodel")
+
+#: Cycles of the default run (1.6 s at 4 ms).
+RUN_CYCLES = 400
+#: Cycles checked before and after the ILC table (the correction must be 0 there).
+ILC_MARGIN = 10
+#: Amplitude of the tool motion of the run [m] per direction (the 10 mm square of ch. 7.3).
+POSITION_AMPLITUDE = 0.010
+#: Structural ripple on the kinematic position [m] and its frequency [Hz] (the x resonance).
+RIPPLE, RIPPLE_HZ = 20e-6, 7.4
+#: Sensor figures of Dressler (2012), ch. 7.3: gauge-like position noise [m], accelerometer noise [m/s^2], range [m/s^2].
+POSITION_NOISE, ACCELEROMETER_NOISE, ACCELEROMETER_RANGE = 1e-6, 0.07, 1.5 * 9.80665
+
+_OK = STATUS_CODES["GT_OK"][0]
+_BAD = STATUS_CODES["GT_BAD_ARGUMENT"][0]
+
+
+@dataclass(frozen=True)
+class ControllerCheckReport(CheckReport):
+    """Result of :func:`check_controller`: a :class:`~gtmodel.codegen.check.CheckReport` of the controller.
+
+    Parameters
+    ----------
+    robot : str
+        Robot of the library.
+    prefix : str
+        C prefix of the library.
+    n : int
+        Cycles of the run.
+    seed : int
+        Seed of the sensor noise of the run.
+    functions : tuple of FunctionCheck
+        ``kalman_step``, ``kalman_update``, ``ilc_correction`` (those generated).
+    probes : tuple of StatusProbe
+        Status-code probes.
+    version : str
+        Version string reported by the compiled library.
+    library : pathlib.Path
+        The shared library checked.
+    timings : dict
+        Unused (the times are in ``functions``).
+    harness : str
+        Unused (empty).
+    harness_passed : bool or None
+        Unused (None).
+    """
+
+    def summary_lines(self) -> list[str]:
+        """Printable lines: one per function, the status probes and the verdict.
+
+        Returns
+        -------
+        list of str
+            E.g. ``"kalman_update: max |C - Python| = 0.0e+00 m, m/s, m/s^2 (tol 1e-12), 60 ns/call OK"``.
+        """
+        lines = super().summary_lines()
+        lines[0] = (f"check of the controller of {self.prefix} over a run of {self.n} cycles "
+                    f"(every cycle; ILC table +-{ILC_MARGIN} cycles; seed {self.seed}):")
+        return lines
+
+
+def run_inputs(controller: Controller, cycles: int = RUN_CYCLES, seed: int = 0) -> dict[str, np.ndarray]:
+    """A realistic input sequence of the loop for the controller functions.
+
+    Parameters
+    ----------
+    controller : Controller
+        The controller (sizes).
+    cycles : int, optional
+        Cycles of the run.
+    seed : int, optional
+        Seed of :func:`numpy.random.default_rng` (sensor noise).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``"y"`` ``(cycles, ny)``: when ``ny = 2 nz`` the measurements ``[z_kin; a_m]`` of a
+        tool moving per direction ``j`` as ``p_j(t) = POSITION_AMPLITUDE (1 - cos(2 pi f_j t)) / 2``
+        (``f_j`` = 1.25, 1.0, 0.75 Hz, ...) with a ``RIPPLE`` (20 um) structural ripple at 7.4 Hz
+        and 1 um noise on ``z_kin``, the exact acceleration plus 0.07 m/s^2 noise, clipped to
+        1.5 g, on ``a_m`` (Dressler (2012), ch. 7.3 sensors); other sizes: sinusoids of
+        10 mm with the same noise; ``"x0"`` ``(nx,)`` zeros (the filter at rest);
+        ``"k"`` ``(N + 2 ILC_MARGIN,)`` the cycles ``-ILC_MARGIN .. N + ILC_MARGIN - 1``.
+        Missing functions give empty arrays.
+    """
+    rng = np.random.default_rng(seed)
+    nx, ny, nz = controller.kalman_sizes
+    t = np.arange(cycles) * controller.dt
+    y = np.zeros((cycles, ny))
+    if ny:
+        half = ny // 2 if ny == 2 * nz else ny
+        f = np.maximum(1.25 - 0.25 * np.arange(half), 0.25)
+        w = 2 * np.pi * f
+        p = POSITION_AMPLITUDE * (1 - np.cos(w * t[:, None])) / 2
+        p += RIPPLE * np.sin(2 * np.pi * RIPPLE_HZ * t[:, None]) + rng.normal(0.0, POSITION_NOISE, p.shape)
+        y[:, :half] = p
+        if ny == 2 * nz:
+            a = POSITION_AMPLITUDE * w**2 * np.cos(w * t[:, None]) / 2
+            y[:, half:] = np.clip(a + rng.normal(0.0, ACCELEROMETER_NOISE, a.shape), -ACCELEROMETER_RANGE, ACCELEROMETER_RANGE)
+    k = np.arange(-ILC_MARGIN, controller.ilc_length + ILC_MARGIN) if controller.ilc_correction is not None else np.zeros(0, int)
+    return {"y": y, "x0": np.zeros(nx), "k": k}
+
+
+def python_run(controller: Controller, y: np.ndarray, x0: np.ndarray, k: np.ndarray) -> dict[str, np.ndarray]:
+    """The Python evaluation of a run: the given CasADi Functions called from Python.
+
+    Parameters
+    ----------
+    controller : Controller
+        The Functions.
+    y : numpy.ndarray, shape (N, ny)
+        Measurements per cycle.
+    x0 : numpy.ndarray, shape (nx,)
+        Initial filter state.
+    k : numpy.ndarray, shape (M,)
+        Cycle counts for the ILC correction.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        ``"x"`` ``(N + 1, nx)`` the states ``x_0 .. x_N`` (``kalman_step.mapaccum``),
+        ``"z_hat"`` ``(N, nz)``, ``"u"`` ``(M, d)`` (``ilc_correction.map``).
+    """
+    out: dict[str, np.ndarray] = {}
+    if controller.kalman_step is not None and len(y):
+        run = controller.kalman_step.mapaccum("run", len(y))
+        xs, zs = run(x0, y.T)
+        out["x"] = np.vstack([x0, np.asarray(ca.DM(xs)).T])
+        out["z_hat"] = np.asarray(ca.DM(zs)).T
+    if controller.ilc_correction is not None and len(k):
+        out["u"] = np.asarray(ca.DM(controller.ilc_correction.map(len(k))(np.asarray(k, float)[None, :]))).T
+    return out
+
+
+def _within(c: np.ndarray, r: np.ndarray, real: str, tol: float) -> tuple[float, bool]:
+    d = np.abs(np.asarray(c, float) - r)
+    if not np.all(np.isfinite(d)):
+        return float("inf"), False
+    worst = float(d.max()) if d.size else 0.0
+    ok = bool(np.all(d <= (FLOAT_RELATIVE_TOLERANCE * (1 + np.abs(r)) if real == "float" else tol)))
+    return worst, ok
+
+
+def _raw(library: CompiledLibrary, name: str, nargs: int, int_first: bool = False):
+    f = getattr(library.cdll, f"{library.generated.prefix}_{name}")
+    f.restype = ctypes.c_int
+    f.argtypes = ([ctypes.c_int] if int_first else [ctypes.c_void_p]) + [ctypes.c_void_p] * (nargs - 1)
+    return f
+
+
+def _ptr(a: np.ndarray | None):
+    return None if a is None else a.ctypes.data
+
+
+def _c_kalman_run(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The whole run in C through ``kalman_init``/``kalman_update``: statuses, states, estimates."""
+    init, update = _raw(library, "kalman_init", 2), _raw(library, "kalman_update", 3)
+    state = np.full(x0.size, SENTINEL, dtype=dtype)
+    x0c = np.ascontiguousarray(x0, dtype=dtype)
+    ys = np.ascontiguousarray(y, dtype=dtype)
+    xs = np.zeros((len(y) + 1, x0.size))
+    zs = np.zeros((len(y), library["kalman_step"].sizes_out[1]))
+    z = np.zeros(zs.shape[1], dtype=dtype)
+    status = np.zeros(len(y) + 1, dtype=int)
+    status[0] = init(_ptr(state), _ptr(x0c))
+    xs[0] = state
+    for i in range(len(y)):
+        status[i + 1] = update(_ptr(state), _ptr(ys[i]), _ptr(z))
+        xs[i + 1], zs[i] = state, z
+    return status, xs, zs
+
+
+def _kalman_checks(library: CompiledLibrary, controller: Controller, ref: dict, y: np.ndarray, x0: np.ndarray, real: str) -> list[FunctionCheck]:
+    cf = library["kalman_step"]
+    spec = cf.spec
+    status, (xn, zh) = cf.call_rows(ref["x"][:-1], y, fill=SENTINEL)
+    good = status == _OK
+    e1, ok1 = _within(np.hstack([xn, zh])[good], np.hstack([ref["x"][1:], ref["z_hat"]])[good], real, spec.tolerance)
+    st, xs, zs = _c_kalman_run(library, y, x0, cf.dtype)
+    e2, ok2 = _within(np.hstack([xs[1:], zs]), np.hstack([ref["x"][1:], ref["z_hat"]]), real, spec.tolerance)
+    e0, ok0 = _within(xs[0], ref["x"][0], real, spec.tolerance)
+    tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else spec.tolerance
+    n = len(y)
+    return [
+        FunctionCheck("kalman_step", n, e1, tol, spec.unit, int(np.sum(~good)), bool(ok1 and good.all())),
+        FunctionCheck("kalman_update", n, max(e0, e2), tol, spec.unit, int(np.sum(st != _OK)), bool(ok0 and ok2 and np.all(st == _OK))),
+    ]
+
+
+def _probe(function: str, case: str, expected: str, status: int, untouched: bool) -> StatusProbe:
+    return StatusProbe(function, case, expected, int(status), bool(untouched), bool(status == STATUS_CODES[expected][0] and untouched))
+
+
+def _kalman_probes(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray) -> list[StatusProbe]:
+    cf = library["kalman_step"]
+    dt = cf.dtype
+    nx, ny = cf.sizes_in
+    nz = cf.sizes_out[1]
+    step = _raw(library, "kalman_step", 4)
+    init, update = _raw(library, "kalman_init", 2), _raw(library, "kalman_update", 3)
+    good_x, good_y = np.ascontiguousarray(x0, dt), np.ascontiguousarray(y[0], dt)
+    probes = []
+
+    def fresh():
+        return np.full(nx, SENTINEL, dt), np.full(nz, SENTINEL, dt)
+
+    def clean(*arrays):
+        return all(a is None or np.all(a == np.asarray(SENTINEL, dt)) for a in arrays)
+
+    for what, bad in (("NaN", np.nan), ("Inf", np.inf)):
+        for arg in ("x", "y"):
+            x_in, y_in = good_x.copy(), good_y.copy()
+            (x_in if arg == "x" else y_in)[0] = bad
+            xo, zo = fresh()
+            s = step(_ptr(x_in), _ptr(y_in), _ptr(xo), _ptr(zo))
+            probes.append(_probe("kalman_step", f"{what} in {arg}", "GT_BAD_ARGUMENT", s, clean(xo, zo)))
+    for i, arg in enumerate(("x", "y", "x_next", "z_hat")):
+        xo, zo = fresh()
+        ptrs = [_ptr(good_x), _ptr(good_y), _ptr(xo), _ptr(zo)]
+        ptrs[i] = None
+        s = step(*ptrs)
+        probes.append(_probe("kalman_step", f"NULL {arg}", "GT_BAD_ARGUMENT", s, clean(xo if i != 2 else None, zo if i != 3 else None)))
+    state, zo = fresh()
+    probes.append(_probe("kalman_init", "NULL state", "GT_BAD_ARGUMENT", init(None, _ptr(good_x)), True))
+    bad_x = good_x.copy()
+    bad_x[-1] = np.nan
+    probes.append(_probe("kalman_init", "NaN in x0", "GT_BAD_ARGUMENT", init(_ptr(state), _ptr(bad_x)), clean(state)))
+    s = init(_ptr(state), None)
+    probes.append(_probe("kalman_init", "x0 NULL (zeros)", "GT_OK", s, bool(np.all(state == 0))))
+    for case, y_in, z_ptr in (("NULL y", None, zo), ("NULL z_hat", good_y, None), ("NaN in y", np.full(ny, np.nan, dt), zo)):
+        st = np.full(nx, SENTINEL, dt)
+        s = update(_ptr(st), _ptr(y_in), _ptr(z_ptr))
+        probes.append(_probe("kalman_update", case, "GT_BAD_ARGUMENT", s, clean(st, z_ptr)))
+    probes.append(_probe("kalman_update", "NULL state", "GT_BAD_ARGUMENT", update(None, _ptr(good_y), _ptr(zo)), clean(zo)))
+    st = np.full(nx, np.nan, dt)
+    s = update(_ptr(st), _ptr(good_y), _ptr(zo))
+    probes.append(_probe("kalman_update", "NaN in the state", "GT_BAD_ARGUMENT", s, bool(np.all(np.isnan(st))) and clean(zo)))
+    return probes
+
+
+def _ilc(library: CompiledLibrary, controller: Controller, ref: dict, k: np.ndarray, real: str) -> tuple[FunctionCheck, list[StatusProbe]]:
+    cf = library["ilc_correction"]
+    status, (u,) = cf.call_rows(k, fill=SENTINEL)
+    good = status == _OK
+    err, ok = _within(u[good], ref["u"][good], real, cf.spec.tolerance)
+    tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else cf.spec.tolerance
+    check = FunctionCheck("ilc_correction", len(k), err, tol, cf.spec.unit, int(np.sum(~good)), bool(ok and good.all()))
+    raw = _raw(library, "ilc_correction", 2, int_first=True)
+    probes = []
+    n = controller.ilc_length
+    for case, kk in (("k = -1 (before the table)", -1), ("k = N (after the table)", n), ("k = INT_MIN", -(2**31)), ("k = INT_MAX", 2**31 - 1)):
+        out = np.full(cf.sizes_out[0], SENTINEL, cf.dtype)
+        s = raw(kk, _ptr(out))
+        probes.append(_probe("ilc_correction", case + ": zero", "GT_OK", s, bool(np.all(out == 0))))
+    probes.append(_probe("ilc_correction", "NULL u", "GT_BAD_ARGUMENT", raw(0, None), True))
+    return check, probes
+
+
+_TIMER = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <time.h>
+#include "{header}"
+
+static double now_ns(void)
+{{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
+}}
+
+#define CYCLES {cycles}
+static const {real} Y[CYCLES > 0 ? CYCLES : 1][{ny}] = {{{y}}};
+
+int main(void)
+{{
+    volatile double sink = 0.0;
+    int status = 0;
+    long i, n;
+    double t0, t1;
+{blocks}
+    return status != 0;
+}}
+"""
+
+
+def _timing_block(label: str, init: str, call: str, budget_s: float) -> str:
+    return "\n".join([
+        "    {",
+        f"        {init}",
+        f"        t0 = now_ns(); for (i = 0; i < 1000; ++i) {{ status |= {call}; }} t1 = now_ns();",
+        f"        n = (long)({budget_s * 1e9} / ((t1 - t0) / 1000.0 + 1.0)); if (n < 1000) n = 1000;",
+        f"        t0 = now_ns(); for (i = 0; i < n; ++i) {{ status |= {call}; }} t1 = now_ns();",
+        f'        printf("{label}\\t%.3f\\n", (t1 - t0) / (double)n);',
+        "    }",
+    ])
+
+
+def time_controller(generated: GeneratedCode, library: Path, inputs: dict[str, np.ndarray], build_dir: str | Path, budget_s: float = 0.05) -> dict[str, float]:
+    """Time the controller functions in a C loop over the run (ns per call).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        A library generated with ``controller=``.
+    library : pathlib.Path
+        Its shared library.
+    inputs : dict
+        The run (:func:`run_inputs`): ``y`` replayed cyclically, ``k`` swept.
+    build_dir : str or pathlib.Path
+        Folder for the timing program.
+    budget_s : float, optional
+        About this many seconds per function.
+
+    Returns
+    -------
+    dict of str to float
+        ``kalman_step`` (state fed back in place), ``kalman_update`` (the state struct),
+        ``ilc_correction`` -> ns per call.
+
+    Raises
+    ------
+    CodegenError
+        The program failed to build or a call returned a non-OK status.
+    """
+    c = generated.controller
+    p, real = generated.prefix, generated.real
+    nx, ny, nz = c.kalman_sizes
+    y = inputs["y"] if c.kalman_step is not None else np.zeros((1, 1))
+    ytext = ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in y)
+    blocks = []
+    if c.kalman_step is not None:
+        blocks.append(_timing_block("kalman_step", f"{real} x[{nx}] = {{0}}, z[{nz}];",
+                                    f"{p}_kalman_step(x, Y[i % CYCLES], x, z); sink += z[0]", budget_s))
+        blocks.append(_timing_block("kalman_update", f"{p}_kalman_state s; {real} z[{nz}]; status |= {p}_kalman_init(&s, NULL);",
+                                    f"{p}_kalman_update(&s, Y[i % CYCLES], z); sink += z[0]", budget_s))
+    if c.ilc_correction is not None:
+        m = c.ilc_length + 2 * ILC_MARGIN
+        blocks.append(_timing_block("ilc_correction", f"{real} u[{c.ilc_d}];",
+                                    f"{p}_ilc_correction((int)(i % {m}) - {ILC_MARGIN}, u); sink += u[0]", budget_s))
+    build = Path(build_dir)
+    build.mkdir(parents=True, exist_ok=True)
+    src = build / f"{p}_controller_timing.c"
+    src.write_text(_TIMER.format(header=generated.header.name, cycles=len(y), real=real, ny=y.shape[1], y=ytext, blocks="\n".join(blocks)))
+    exe = build / f"{p}_controller_timing"
+    proc = subprocess.run([*find_compiler(), "-std=c99", "-O2", "-Wall", "-Wextra", "-I", str(generated.out_dir), str(src), "-o", str(exe),
+                           "-L", str(library.parent), f"-l{p}", f"-Wl,-rpath,{library.parent}", "-lm"], capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise CodegenError(f"controller timing program failed to build:\n{proc.stderr.strip()}")
+    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600)
+    if run.returncode != 0:
+        raise CodegenError("controller timing program: a timed call returned a non-OK status")
+    return {k: float(v) for k, v in (line.split("\t") for line in run.stdout.strip().splitlines())}
+
+
+def check_controller(
+    generated: GeneratedCode,
+    cycles: int = RUN_CYCLES,
+    seed: int = 0,
+    library: CompiledLibrary | None = None,
+    build_dir: str | Path | None = None,
+    timing: bool = False,
+    y: np.ndarray | None = None,
+    x0: np.ndarray | None = None,
+) -> ControllerCheckReport:
+    """Compare the generated controller functions with Python over every cycle of a run.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        A library generated with ``controller=`` (:func:`gtmodel.codegen.generate`).
+    cycles : int, optional
+        Cycles of the run (default 400); ignored when ``y`` is given.
+    seed : int, optional
+        Seed of the sensor noise of :func:`run_inputs`.
+    library : CompiledLibrary or None, optional
+        An already loaded library; compiled with :func:`compile_shared` if None.
+    build_dir : str or pathlib.Path or None, optional
+        Build folder (default ``<out_dir>/build``).
+    timing : bool, optional
+        Also time each function in a C loop over the run (:func:`time_controller`).
+    y : numpy.ndarray or None, optional
+        Measurements ``(N, ny)`` of a run to replay instead of :func:`run_inputs`' (e.g.
+        the logged ``[z_kin, a_m]`` of an ILC trial).
+    x0 : numpy.ndarray or None, optional
+        Initial filter state ``(nx,)`` (default zeros).
+
+    Returns
+    -------
+    ControllerCheckReport
+        ``kalman_step``, ``kalman_update`` and ``ilc_correction`` each with the largest
+        ``|C - Python|`` over the run against 1e-12 (single precision:
+        ``FLOAT_RELATIVE_TOLERANCE``), the status probes and the timings. A failed check
+        is a report with ``passed == False``, not an exception.
+
+    Raises
+    ------
+    InputError
+        No controller in ``generated``; ``cycles`` not a positive integer; ``y`` or
+        ``x0`` of the wrong shape or not finite.
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        Compilation failed.
+    """
+    c = generated.controller
+    if c is None:
+        raise InputError("generated: the library has no controller functions (generate(..., controller=...))")
+    if isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 1:
+        raise InputError(f"cycles: expected a positive number of cycles, got {cycles!r}")
+    inputs = run_inputs(c, int(cycles), seed)
+    nx, ny, _ = c.kalman_sizes
+    if y is not None:
+        y = np.asarray(y, dtype=float)
+        if y.ndim != 2 or y.shape[1] != ny or len(y) < 1 or not np.all(np.isfinite(y)):
+            raise InputError(f"y: expected finite measurements of shape (N, {ny}), got {y.shape}")
+        inputs["y"] = y
+    if x0 is not None:
+        x0 = np.asarray(x0, dtype=float)
+        if x0.shape != (nx,) or not np.all(np.isfinite(x0)):
+            raise InputError(f"x0: expected a finite state of shape ({nx},), got {x0.shape}")
+        inputs["x0"] = x0
+    build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
+    if library is None:
+        library = load_library(generated, compile_shared(generated, build))
+    ref = python_run(c, inputs["y"], inputs["x0"], inputs["k"])
+    results: list[FunctionCheck] = []
+    probes: list[StatusProbe] = []
+    if c.kalman_step is not None:
+        results += _kalman_checks(library, c, ref, inputs["y"], inputs["x0"], generated.real)
+        probes += _kalman_probes(library, inputs["y"], inputs["x0"])
+    if c.ilc_correction is not None:
+        check, p = _ilc(library, c, ref, inputs["k"], generated.real)
+        results.append(check)
+        probes += p
+    if timing:
+        times = time_controller(controller_part(generated), library.path, inputs, build)
+        results = [FunctionCheck(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]
+    report = ControllerCheckReport(
+        robot=generated.robot_name, prefix=generated.prefix, n=len(inputs["y"]) if c.kalman_step is not None else len(inputs["k"]),
+        seed=seed, functions=tuple(results), probes=tuple(probes), version=library.version(), library=library.path,
+    )
+    log.info("codegen controller check of %s: %s", generated.prefix, "passed" if report.passed else "FAILED")
+    return report
