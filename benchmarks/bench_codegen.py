@@ -15,8 +15,7 @@ Controller of the 4 ms loop (Dressler (2012), ch. 7): ns per step of the generat
 over a 400-cycle run, next to the same CasADi Function called from Python and a NumPy
 equivalent (Kalman: ``Mx @ x + My @ y`` with the Function's Jacobians, exact for the linear
 step; ILC: ``table[k]``). The controller comes from ``--controller FILE`` (a controller file,
-:mod:`gtmodel.codegen.controller_file`) or, by default, the stand-ins of
-``tests/codegen/controller_stand_ins.py`` (until gtmodel.estimation provides the real ones).
+:mod:`gtmodel.codegen.controller_file`) or, by default, gtmodel.estimation's L1 Kalman step (x, y) and a 400-cycle learned table.
 
 Bundles: L1 = ik + jacobian + inverse_dynamics (aim < 1 us), F1 = ik + fk, both
 warm-started from the previous sample (aim < 10 us); the F1 default starts (continuation
@@ -38,12 +37,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+import scipy.signal
 
 import casadi as ca
 
 from gtmodel.codegen import Controller, check_controller, compile_shared, find_compiler, generate, load_controller, load_library
 from gtmodel.codegen.check import _c_call, sample_inputs, time_functions, timed_rows
 from gtmodel.codegen.controller_check import ILC_MARGIN, run_inputs
+from gtmodel.estimation import StationaryKalman, ilc_correction_function
 from gtmodel.robots.kinematics import configuration_signs
 
 BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}
@@ -125,12 +126,10 @@ def python_times(gen, rows, n: int) -> dict[str, float]:
 
 
 def stand_in_controller() -> Controller:
-    """The test stand-ins (Kalman step for 3 directions, a 400-cycle learned table)."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    from tests.codegen.controller_stand_ins import ilc_correction_function, kalman_step_function, learned_table  # noqa: E402
-
-    table = learned_table(400, 3)
-    return Controller(kalman_step=kalman_step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table)
+    """gtmodel.estimation's controller: the L1 Kalman step (x, y) and a 400-cycle learned table (3 actuators)."""
+    n = np.arange(400)
+    table = 20e-6 * np.sin(2 * np.pi * n / 160.0)[:, None] * scipy.signal.windows.tukey(400, 0.5)[:, None] * np.ones(3)
+    return Controller(kalman_step=StationaryKalman().step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table)
 
 
 def controller_rows(controller: Controller, root: Path, n: int, cflags: str) -> dict[str, dict[str, float]]:

@@ -219,10 +219,16 @@ def _renamed(f: ca.Function, cname: str) -> ca.Function:
 
     ``ca.cse`` only merges structurally identical subexpressions: every output is computed
     by the same operations on the same operands, so the values are bit-identical to the
-    ones of ``f`` (fewer instructions, shorter source, faster compilation).
+    ones of ``f`` (fewer instructions, shorter source, faster compilation). A Function with
+    MX-only operations (e.g. a table lookup by a parametric index, as the ILC correction)
+    cannot be expanded: it is kept as an MX Function, renamed, with dense outputs.
     """
     if not f.is_a("SXFunction"):
-        f = f.expand()
+        try:
+            f = f.expand()
+        except RuntimeError:
+            ins = f.mx_in()
+            return ca.Function(cname, ins, [ca.densify(o) for o in f.call(ins)], f.name_in(), f.name_out())
     ins = f.sx_in()
     outs = ca.cse([ca.densify(o) for o in f.call(ins)])
     return ca.Function(cname, ins, outs, f.name_in(), f.name_out())

@@ -147,7 +147,8 @@ class ILCCaseResult(StatusResult):
     tool_paths : dict of int to numpy.ndarray
         True tool positions ``z`` (N, 3) at iteration 0 and at the last iteration.
     correction : numpy.ndarray, shape (N, 3)
-        The learned correction of the last iteration (actuator [m] or tool offset [m]).
+        The learned correction for the next trial, ``Q (u_K + L eps_K)`` (actuator [m] or
+        tool offset [m]).
     solve_time : float
         Wall time [s].
     """
@@ -385,5 +386,5 @@ class ILCExperiment:
         return ILCCaseResult(
             status=Status(result.status), message=f"case {case.name}: {result.message}", case=case, stability=checks,
             actuator_error=act, tool_error=tool, learning_error=learn, tool_paths=paths,
-            correction=np.asarray(result.u)[-1], solve_time=time.perf_counter() - t0,
+            correction=np.asarray(result.next_u if result.next_u is not None else result.u[-1]), solve_time=time.perf_counter() - t0,
         )

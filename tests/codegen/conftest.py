@@ -6,7 +6,7 @@ import pytest
 
 from gtmodel.codegen import Controller, compile_shared, generate, load_library
 
-from .controller_stand_ins import ilc_correction_function, kalman_step_function, learned_table
+from .controller_functions import ilc_correction_function, kalman_step_function, learned_table
 
 
 @pytest.fixture(scope="session")
@@ -29,8 +29,8 @@ def built(tmp_path_factory):
 def controller_built(tmp_path_factory):
     """An L1 library (ik, jacobian, inverse_dynamics) with the stand-in controller: ``(GeneratedCode, CompiledLibrary)``.
 
-    The controller: the stand-in Kalman step for 3 directions and a learned table of 400
-    cycles (:mod:`tests.codegen.controller_stand_ins`), compiled with -Werror.
+    The controller: the Kalman step of gtmodel.estimation for 3 directions and a learned table of 400
+    cycles (:mod:`tests.codegen.controller_functions`), compiled with -Werror.
     """
     table = learned_table()
     controller = Controller(kalman_step=kalman_step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table)

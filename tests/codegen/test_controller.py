@@ -1,8 +1,7 @@
 """Controller declarations: the Kalman step and the ILC correction as generated C functions.
 
-Independent references: the CasADi Functions evaluated from Python (the stand-ins of
-``controller_stand_ins``: a predictor-corrector with a python-control ``dlqe`` gain, a table
-lookup); the issue's contract (state in a caller-owned struct, status codes, no heap).
+Independent references: the CasADi Functions evaluated from Python (gtmodel.estimation's
+stationary Kalman step and ILC correction lookup, via ``controller_functions``); the issue's contract (state in a caller-owned struct, status codes, no heap).
 """
 
 from __future__ import annotations
@@ -17,7 +16,7 @@ from gtmodel.codegen import Controller, generate
 from gtmodel.codegen.controller import CONTROLLER_KIND, controller_part, robot_part
 from gtmodel.errors import InputError
 
-from .controller_stand_ins import ilc_correction_function, kalman_matrices, kalman_step_function, learned_table
+from .controller_functions import ilc_correction_function, kalman_step_function, learned_table
 
 TABLE = learned_table(50, 3)
 
@@ -65,17 +64,6 @@ def test_controller_sizes_follow_the_functions(d):
     assert (c.ilc_length, c.ilc_d) == (20, d)
     assert [s.name for s in c.specs()] == ["kalman_step", "ilc_correction"]
     assert {s.kind for s in c.specs()} == {CONTROLLER_KIND}
-
-
-def test_stand_in_kalman_step_is_the_stationary_predictor_corrector():
-    """x_next = A x + K (y - C A x) with the dlqe gain (a second evaluation with NumPy)."""
-    A, C, K, H = kalman_matrices(3)
-    rng = np.random.default_rng(1)
-    x, y = rng.normal(size=9), rng.normal(size=6)
-    x_next, z_hat = (np.asarray(v).ravel() for v in kalman_step_function()(x, y))
-    ref = A @ x + K @ (y - C @ A @ x)
-    np.testing.assert_allclose(x_next, ref, rtol=0, atol=1e-13)
-    np.testing.assert_allclose(z_hat, H @ ref, rtol=0, atol=1e-13)
 
 
 EXPECTED_DECLARATIONS = [

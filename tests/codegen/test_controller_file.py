@@ -18,7 +18,7 @@ from gtmodel.codegen import Controller, load_controller, save_controller
 from gtmodel.codegen.controller_file import CONTROLLER_FORMAT
 from gtmodel.errors import InputError
 
-from .controller_stand_ins import ilc_correction_function, kalman_step_function, learned_table
+from .controller_functions import ilc_correction_function, kalman_step_function, learned_table
 
 TABLE = learned_table(30, 3)
 

@@ -16,7 +16,9 @@ a load-time error naming the case.
 The result folder holds ``summary.json`` (per case ``rho`` and ``sigma_max`` per channel,
 the error measure (7.25) per iteration on the actuator and the tool side, the Table 7.2
 figures), ``table_7_2.md``/``.csv`` (mean of iterations 5-10 relative to iteration 0),
-``ilc_iterations.csv`` and the plots ``ilc_actuator_errors.png``, ``ilc_tool_errors.png``
+``ilc_iterations.csv``, ``controller.json`` (the stationary Kalman step and the learned
+actuator correction of the first case when it learns on the actuators, for
+``gtmodel codegen --controller``) and the plots ``ilc_actuator_errors.png``, ``ilc_tool_errors.png``
 (Figs. 7.7-7.10) and ``ilc_tool_path_case_<name>.png`` (Fig. 7.11). The field reference is ``docs/problem_files.md``.
 """
 
@@ -46,6 +48,8 @@ from gtmodel.estimation import (
     time_window,
 )
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.codegen import Controller, save_controller
+from gtmodel.estimation import ilc_correction_function
 from gtmodel.estimation.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
 from gtmodel.estimation.plant import DT as SAMPLE_TIME_S
 from gtmodel.problems.kinds.closed_loop_common import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection, build_plant
@@ -453,7 +457,9 @@ class ILCKind(ProblemKind):
         return solution.status
 
     def write(self, declaration: ILCDeclaration, solution: ILCOutcome, out: Path, plots: bool, name: str) -> Written:
-        """Summary fields, ``table_7_2.md``/``.csv``, ``ilc_iterations.csv`` and the plots.
+        """Summary fields, ``table_7_2.md``/``.csv``, ``ilc_iterations.csv``, ``controller.json`` (the stationary Kalman step and the learned
+actuator correction of the first case when it learns on the actuators, for
+``gtmodel codegen --controller``) and the plots.
 
         Dressler (2012), Table 7.2 (mean of iterations 5-10 relative to iteration 0) and
         Figs. 7.7-7.11.
@@ -534,6 +540,17 @@ class ILCKind(ProblemKind):
                 it.append(",".join([case.name, str(k), *(f"{v:.9g}" for v in (*a, *t))]))
         (out / "ilc_iterations.csv").write_text("\n".join(it) + "\n", encoding="utf-8")
         written.files += ["table_7_2.md", "table_7_2.csv", "ilc_iterations.csv"]
+        first = rows[0][1]
+        if first.success and first.case.signal == "actuator":
+            table = np.asarray(first.correction)
+            kalman = declaration.experiment.estimators["kalman"]
+            save_controller(out / "controller.json",
+                            Controller(kalman_step=kalman.step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table,
+                                       dt=SAMPLE_TIME_S),
+                            description=f"{name}: stationary Kalman step (x, y) and the learned actuator correction of case "
+                                        f"{first.case.name}; gtmodel codegen --robot L1 --controller controller.json")
+            written.files.append("controller.json")
+            fields["controller"] = {"file": "controller.json", "ilc_case": first.case.name, "ilc_table_samples": int(table.shape[0])}
         if plots:
             plot_error_measure({c.name: r.actuator_error for c, r, _, _ in rows}, out / "ilc_actuator_errors.png",
                                labels=["actuator 1", "actuator 2", "actuator 3"],
