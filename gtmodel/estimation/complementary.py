@@ -57,6 +57,9 @@ __all__ = ["ComplementaryFilter", "THESIS_CUTOFFS_HZ", "PAD_DECAY", "forward_bac
 
 #: Cut-off frequencies [Hz] of the thesis' complementary filter, x and y (Dressler (2012), ch. 7.3).
 THESIS_CUTOFFS_HZ = (4.50, 2.63)
+#: Lowest cut-off as a fraction of the sample rate ``1/dt`` (0.025 Hz at 4 ms): below it the
+#: Butterworth design is numerically degenerate (badly conditioned, singular initial state).
+MIN_CUTOFF_FRACTION = 1e-4
 #: Relative size to which the padding's start-up transient decays before the record begins.
 PAD_DECAY = 1e-9
 
@@ -92,8 +95,10 @@ def forward_backward_design_hz(cutoff_hz: float, dt: float, order: int) -> float
     order = positive_int(order, "order")
     nyquist = 0.5 / dt
     fc = float(cutoff_hz)
-    if not (0.0 < fc < nyquist):
-        raise InputError(f"cutoff_hz: expected a frequency in (0, {nyquist:g}) Hz (below Nyquist for dt = {dt:g} s), got {cutoff_hz!r}")
+    lowest = MIN_CUTOFF_FRACTION / dt
+    if not (lowest <= fc < nyquist):
+        raise InputError(f"cutoff_hz: expected a frequency in [{lowest:g}, {nyquist:g}) Hz (below Nyquist for dt = {dt:g} s; "
+                         f"lower cut-offs give a numerically degenerate filter), got {cutoff_hz!r}")
     rho = (math.sqrt(2.0) - 1.0) ** (1.0 / (2 * order))
     return math.atan(math.tan(math.pi * fc * dt) / rho) / (math.pi * dt)
 

@@ -45,6 +45,8 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
+from gtmodel.estimation.complementary import MIN_CUTOFF_FRACTION
+
 from gtmodel._arrays import as_finite, positive_float, positive_int
 from gtmodel.errors import InputError
 
@@ -200,8 +202,10 @@ class QFilter:
             self._sos = None
         else:
             c = as_finite(cutoff_hz, "cutoff_hz")
-            if c.ndim != 0 or not 0.0 < float(c) < nyquist:
-                raise InputError(f"cutoff_hz: expected a cut-off in (0, {nyquist:g}) Hz (below the Nyquist frequency of dt = {self.dt:g} s), got {cutoff_hz!r}")
+            lowest = MIN_CUTOFF_FRACTION / self.dt
+            if c.ndim != 0 or not lowest <= float(c) < nyquist:
+                raise InputError(f"cutoff_hz: expected a cut-off in [{lowest:g}, {nyquist:g}) Hz (below the Nyquist frequency of "
+                                 f"dt = {self.dt:g} s; lower cut-offs give a numerically degenerate filter), got {cutoff_hz!r}")
             self.cutoff_hz = float(c)
             self._sos = scipy.signal.butter(self.order, self.cutoff_hz, btype="low", output="sos", fs=1.0 / self.dt)
         if window is None:

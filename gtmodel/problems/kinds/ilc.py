@@ -50,6 +50,7 @@ from gtmodel.estimation import (
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.codegen import Controller, save_controller
 from gtmodel.estimation import ilc_correction_function
+from gtmodel.estimation.complementary import MIN_CUTOFF_FRACTION
 from gtmodel.estimation.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
 from gtmodel.estimation.plant import DT as SAMPLE_TIME_S
 from gtmodel.problems.kinds.closed_loop_common import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection, build_plant
@@ -82,9 +83,13 @@ MAX_SAMPLES = 4000
 MAX_ITERATIONS = 100
 
 
+#: Lowest filter cut-off [Hz] (below it the Butterworth design is numerically degenerate).
+MIN_CUTOFF_HZ = MIN_CUTOFF_FRACTION / SAMPLE_TIME_S
+
+
 def _cutoff(description: str) -> Any:
-    return number(gt=0, lt=NYQUIST_HZ, unit="Hz", description=description,
-                  what=f"a cut-off frequency in (0, {NYQUIST_HZ:g}) Hz (below the Nyquist frequency of the 4 ms loop)")
+    return number(ge=MIN_CUTOFF_HZ, lt=NYQUIST_HZ, unit="Hz", description=description,
+                  what=f"a cut-off frequency in [{MIN_CUTOFF_HZ:g}, {NYQUIST_HZ:g}) Hz (below the Nyquist frequency of the 4 ms loop)")
 
 
 class ReferenceSection(Section):
@@ -380,13 +385,15 @@ class ILCKind(ProblemKind):
             raise file.wrap("ilc.tukey_points", exc) from None
         est = doc.estimators
         try:
-            estimators = {
-                "complementary": ComplementaryFilter(est.complementary_cutoff_hz, dt=SAMPLE_TIME_S),
-                "kalman": StationaryKalman(dt=SAMPLE_TIME_S, accelerometer_noise=max(doc.sensors.accelerometer_noise, 1e-6),
-                                           position_noise=tuple(est.kalman_position_noise), jerk_noise=tuple(est.kalman_jerk_noise), d=2),
-            }
+            complementary = ComplementaryFilter(est.complementary_cutoff_hz, dt=SAMPLE_TIME_S)
         except GtModelError as exc:
-            raise file.wrap("estimators", exc) from None
+            raise file.wrap("estimators.complementary_cutoff_hz", exc) from None
+        try:
+            kalman = StationaryKalman(dt=SAMPLE_TIME_S, accelerometer_noise=max(doc.sensors.accelerometer_noise, 1e-6),
+                                      position_noise=tuple(est.kalman_position_noise), jerk_noise=tuple(est.kalman_jerk_noise), d=2)
+        except (GtModelError, ValueError, np.linalg.LinAlgError) as exc:  # a Riccati equation without a stabilising solution
+            raise file.fail("estimators", "Kalman noise figures with a stationary solution of the Riccati equation", str(exc)) from None
+        estimators = {"complementary": complementary, "kalman": kalman}
         kin = plant.kinematics
         configuration = doc.robot.configuration
         experiment = ILCExperiment(
