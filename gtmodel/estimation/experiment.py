@@ -133,6 +133,10 @@ class ILCCaseResult(StatusResult):
 
     Parameters
     ----------
+    status : Status
+        ``converged``, or ``error`` when the learning error diverged.
+    message : str
+        What happened (iterations, final relative error measure).
     case : ILCCase
         The case.
     stability : dict of str to ILCStability

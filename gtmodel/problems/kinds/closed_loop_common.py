@@ -31,13 +31,35 @@ _DT_TOLERANCE = 1e-9
 
 
 class RobotSection(RobotReference):
-    """``[robot]``: parameter set, IK configuration and the closed-loop actuator models."""
+    """``[robot]``: parameter set, IK configuration and the closed-loop actuator models.
+
+    Parameters
+    ----------
+    parameters : str
+        Shipped parameter set name or a TOML path relative to the problem file.
+    configuration : int
+        IK configuration, 0..7.
+    dynamics_models : str
+        Closed-loop actuator models (6.11): a shipped dynamics-models file or a TOML path.
+    """
 
     dynamics_models: NonEmptyText = Field(default="L1_dynamics_models", description="closed-loop actuator models (6.11): shipped name or a TOML path relative to this file")
 
 
 class StructureSection(Section):
-    """``[structure]``: one mode per direction x, y (Dressler (2012), eq. 6.14; defaults: the ILC operating point)."""
+    """``[structure]``: one mode per direction x, y (Dressler (2012), eq. 6.14; defaults: the ILC operating point).
+
+    Parameters
+    ----------
+    frequencies_hz : list of float, shape (2,)
+        Resonances in x and y [Hz].
+    stiffness : list of float, shape (2,)
+        Static TCP stiffness in x and y [N/m].
+    damping : list of float, shape (2,)
+        Damping ratios in x and y.
+    mass : float
+        Inertial load ``m_acc`` [kg].
+    """
 
     frequencies_hz: vector(2, positive=True, bound=1e4, unit="Hz", description="resonance in x, y (thesis, Table 6.4, with wrist: 7.4, 11.5)") = [7.4, 11.5]
     stiffness: vector(2, positive=True, bound=1e12, unit="N/m", description="static TCP stiffness in x, y (thesis: 2-4 N/um, stiffer in x)") = [4.0e6, 2.0e6]
@@ -46,7 +68,19 @@ class StructureSection(Section):
 
 
 class SensorsSection(Section):
-    """``[sensors]``: tool accelerometer and position gauge (Dressler (2012), ch. 7.3)."""
+    """``[sensors]``: tool accelerometer and position gauge (Dressler (2012), ch. 7.3).
+
+    Parameters
+    ----------
+    accelerometer_noise : float
+        Accelerometer noise (std) [m/s^2].
+    accelerometer_range : float
+        Measuring range, readings clipped [m/s^2].
+    gauge_noise : float
+        Position gauge noise (std) [m].
+    seed : int
+        Noise seed.
+    """
 
     accelerometer_noise: number(ge=0, le=1e3, unit="m/s^2", description="standard deviation of the accelerometer noise") = 0.07
     accelerometer_range: number(gt=0, le=1e4, unit="m/s^2", description="measuring range (clipped), default 1.5 g") = 1.5 * STANDARD_GRAVITY
