@@ -52,6 +52,7 @@ import scipy.signal
 
 from gtmodel._arrays import as_finite, positive_float, positive_int
 from gtmodel.errors import InputError
+from gtmodel.estimation._signals import signal_rows
 
 __all__ = ["ComplementaryFilter", "THESIS_CUTOFFS_HZ", "PAD_DECAY", "forward_backward_design_hz"]
 
@@ -101,22 +102,6 @@ def forward_backward_design_hz(cutoff_hz: float, dt: float, order: int) -> float
                          f"lower cut-offs give a numerically degenerate filter), got {cutoff_hz!r}")
     rho = (math.sqrt(2.0) - 1.0) ** (1.0 / (2 * order))
     return math.atan(math.tan(math.pi * fc * dt) / rho) / (math.pi * dt)
-
-
-def _signal(x: Any, name: str, d: int, n: int | None = None) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of numbers of shape (N, {d})") from None
-    if arr.ndim != 2 or arr.shape[1] != d or arr.shape[0] < 1:
-        raise InputError(f"{name}: expected shape (N, {d}) with N >= 1, got {arr.shape}")
-    if n is not None and arr.shape[0] != n:
-        raise InputError(f"{name}: expected {n} samples (as many as z_kin), got {arr.shape[0]}")
-    bad = ~np.isfinite(arr)
-    if np.any(bad):
-        k, j = (int(v) for v in np.argwhere(bad)[0])
-        raise InputError(f"{name}: sample {k}, column {j} is not finite ({arr[k, j]!r})")
-    return arr
 
 
 class ComplementaryFilter:
@@ -224,7 +209,7 @@ class ComplementaryFilter:
         InputError
             Not of shape ``(N, d)`` or not finite.
         """
-        arr = _signal(x, "x", self.d)
+        arr = signal_rows(x, "x", self.d)
         return np.column_stack([self._lp(j, arr[:, j]) for j in range(self.d)])
 
     def high_pass(self, x: Any) -> np.ndarray:
@@ -245,7 +230,7 @@ class ComplementaryFilter:
         InputError
             Not of shape ``(N, d)`` or not finite.
         """
-        arr = _signal(x, "x", self.d)
+        arr = signal_rows(x, "x", self.d)
         return arr - self.low_pass(arr)
 
     def double_integral(self, a_m: Any) -> np.ndarray:
@@ -270,7 +255,7 @@ class ComplementaryFilter:
         InputError
             Not of shape ``(N, d)`` or not finite.
         """
-        return self._integral(_signal(a_m, "a_m", self.d))
+        return self._integral(signal_rows(a_m, "a_m", self.d))
 
     def estimate(self, z_kin: Any, a_m: Any) -> np.ndarray:
         """Tool-position estimate ``z_hat = LP(z_kin) + HP(I(a_m))`` (Dressler (2012), eq. 7.17).
@@ -292,8 +277,8 @@ class ComplementaryFilter:
         InputError
             A signal not of shape ``(N, d)``, of another length than ``z_kin``, or not finite.
         """
-        zk = _signal(z_kin, "z_kin", self.d)
-        am = _signal(a_m, "a_m", self.d, zk.shape[0])
+        zk = signal_rows(z_kin, "z_kin", self.d)
+        am = signal_rows(a_m, "a_m", self.d, zk.shape[0])
         acc = self._integral(am)
         return np.column_stack([self._lp(j, zk[:, j]) + acc[:, j] - self._lp(j, acc[:, j]) for j in range(self.d)])
 

@@ -74,6 +74,7 @@ import scipy.optimize
 
 from gtmodel._arrays import as_finite, positive_float, positive_int
 from gtmodel.errors import InputError
+from gtmodel.estimation._signals import signal_rows
 
 __all__ = [
     "StationaryKalman",
@@ -101,22 +102,6 @@ def _per_direction(value: Any, name: str, d: int) -> np.ndarray:
         raise InputError(f"{name}: expected a number or shape ({d},) (one per direction), got shape {arr.shape}")
     if np.any(arr <= 0):
         raise InputError(f"{name}: expected standard deviations > 0, got {arr.tolist()}")
-    return arr
-
-
-def _signal(x: Any, name: str, d: int, n: int | None = None) -> np.ndarray:
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of numbers of shape (N, {d})") from None
-    if arr.ndim != 2 or arr.shape[1] != d or arr.shape[0] < 1:
-        raise InputError(f"{name}: expected shape (N, {d}) with N >= 1, got {arr.shape}")
-    if n is not None and arr.shape[0] != n:
-        raise InputError(f"{name}: expected {n} samples (as many as z_kin), got {arr.shape[0]}")
-    bad = ~np.isfinite(arr)
-    if np.any(bad):
-        k, j = (int(v) for v in np.argwhere(bad)[0])
-        raise InputError(f"{name}: sample {k}, column {j} is not finite ({arr[k, j]!r})")
     return arr
 
 
@@ -259,8 +244,8 @@ class StationaryKalman:
         InputError
             Another shape or not finite.
         """
-        z0 = _signal(np.reshape(z_kin0, (1, -1)) if np.ndim(z_kin0) == 1 else z_kin0, "z_kin0", self.d, 1)[0]
-        a0 = _signal(np.reshape(a_m0, (1, -1)) if np.ndim(a_m0) == 1 else a_m0, "a_m0", self.d, 1)[0]
+        z0 = signal_rows(np.reshape(z_kin0, (1, -1)) if np.ndim(z_kin0) == 1 else z_kin0, "z_kin0", self.d, 1)[0]
+        a0 = signal_rows(np.reshape(a_m0, (1, -1)) if np.ndim(a_m0) == 1 else a_m0, "a_m0", self.d, 1)[0]
         return np.concatenate([z0, np.zeros(self.d), a0])
 
     def run(self, z_kin: Any, a_m: Any, x0: Any = None) -> tuple[np.ndarray, np.ndarray]:
@@ -287,8 +272,8 @@ class StationaryKalman:
         InputError
             Signals of another shape or length, or not finite; ``x0`` not of shape ``(3d,)``.
         """
-        zk = _signal(z_kin, "z_kin", self.d)
-        am = _signal(a_m, "a_m", self.d, zk.shape[0])
+        zk = signal_rows(z_kin, "z_kin", self.d)
+        am = signal_rows(a_m, "a_m", self.d, zk.shape[0])
         if x0 is None:
             x_init = self.initial_state(zk[0], am[0])
         else:
