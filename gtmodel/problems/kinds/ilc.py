@@ -488,7 +488,8 @@ actuator correction of the first case when it learns on the actuators, for
         -------
         Written
             ``status``; per case the checks per channel, the error measures per iteration
-            [m] and the Table 7.2 figures; the thesis' figures beside them.
+            [m] and the Table 7.2 figures; the thesis' figures beside them. The tables,
+            plots and ``controller.json`` are written only when every case converged.
         """
         cases: dict[str, Any] = {}
         rows = []
@@ -523,8 +524,8 @@ actuator correction of the first case when it learns on the actuators, for
             "solve_time_s": solution.solve_time,
         }
         written = Written(fields)
-        if not rows:
-            return written
+        if not rows or not solution.status.success:
+            return written  # a diverged case: the summary (errors per iteration) only, no table that looks like a result
         header = ["case", "signal", "actuator_1", "actuator_2", "actuator_3", "tool_x", "tool_y", "sigma_max_worst", "rho_worst"]
         lines = [",".join(header)]
         md = ["| case | signal | actuator 1 | actuator 2 | actuator 3 | tool x | tool y | worst sigma_max | worst rho | thesis |",

@@ -129,6 +129,7 @@ def test_a_design_the_criterion_calls_unstable_diverges(tmp_path):
     assert outcome.status == Status.ERROR
     e = np.array(outcome.summary["cases"]["1"]["actuator_error_m"])
     assert e[-1, 0] > e[0, 0]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["summary.json"]  # no table that looks like a result
 
 
 BAD = [
