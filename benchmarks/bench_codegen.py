@@ -125,7 +125,7 @@ def python_times(gen, rows, n: int) -> dict[str, float]:
     return out
 
 
-def stand_in_controller() -> Controller:
+def default_controller() -> Controller:
     """gtmodel.estimation's controller: the L1 Kalman step (x, y) and a 400-cycle learned table (3 actuators)."""
     n = np.arange(400)
     table = 20e-6 * np.sin(2 * np.pi * n / 160.0)[:, None] * scipy.signal.windows.tukey(400, 0.5)[:, None] * np.ones(3)
@@ -173,7 +173,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--newton-check-every", type=int, default=None,
                     help="test Newton convergence every k steps (default: the declaration's; F1: 4 like Python)")
     ap.add_argument("--controller", type=Path, default=None, metavar="FILE",
-                    help="controller file for the controller rows (default: the test stand-ins)")
+                    help="controller file for the controller rows (default: gtmodel.estimation's L1 Kalman step and a 400-cycle table)")
     ap.add_argument("--no-controller", action="store_true", help="skip the controller rows")
     ap.add_argument("--json", action="store_true", help="print one JSON document (ns per call per function) instead of tables")
     args = ap.parse_args(argv)
@@ -208,10 +208,10 @@ def main(argv: list[str] | None = None) -> None:
                 print(f"{'bundle ' + '+'.join(bundle):<38}{tc:>11.0f}{tp:>16.0f}{tp / tc:>8.0f}{ins}   (aim < {aim} ns: "
                       f"{'met' if tc < aim else 'NOT met'})")
         if not args.no_controller:
-            controller = load_controller(args.controller) if args.controller else stand_in_controller()
+            controller = load_controller(args.controller) if args.controller else default_controller()
             rows = controller_rows(controller, Path(tmp) / "controller", args.python_calls, args.cflags)
             doc["controller"] = rows
-            print(f"\ncontroller ({args.controller or 'test stand-ins'}): ns per step over a 400-cycle run "
+            print(f"\ncontroller ({args.controller or 'gtmodel.estimation, L1 defaults'}): ns per step over a 400-cycle run "
                   f"(ILC: k = -{ILC_MARGIN} .. N + {ILC_MARGIN - 1})")
             hdr = f"{'function':<20}{'C ns':>10}{'CasADi/Python ns':>18}{'NumPy ns':>10}{'CasADi/C':>10}{'NumPy/C':>9}"
             print(hdr)
