@@ -16,6 +16,10 @@
     the largest error and ns/call and runs the C unit tests. ``--controller FILE`` adds the
     controller of the 4 ms loop (Kalman step, ILC correction) from a controller file
     (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
+``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
+    Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
+    algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
+    ``-Werror`` and compares it with the model evaluated from Python.
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
@@ -38,6 +42,8 @@ from typing import Sequence
 from gtmodel import __version__
 from gtmodel.problems.overrides import parse_override
 from gtmodel.codegen import check, check_controller, generate, load_controller
+from gtmodel.codegen.model_code import check_model, generate_model
+from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.errors import GtModelError
 from gtmodel.problems import KINDS, run_problem
 from gtmodel.problems.docs import json_schema, write_docs
@@ -93,6 +99,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cg = sub.add_parser("codegen", help="generate C for the real-time kinematics and inverse dynamics")
     cg.add_argument("--robot", default="L1", help="L1, D1, L1_ideal, D1_six_link, F1 or a parameter TOML path (default L1)")
+    cg.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model instead of a robot, e.g. models/cart_pendulum.py:CartPendulum")
     cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
     cg.add_argument("--friction", default="exact", choices=("exact", "tanh", "piecewise"), help="friction form in inverse_dynamics")
     cg.add_argument("--real", default="double", choices=("double", "float"), help="floating-point type (default double)")
@@ -220,6 +227,8 @@ def _schema(args: argparse.Namespace) -> int:
 
 def _codegen(args: argparse.Namespace) -> int:
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    if args.model is not None:
+        return _codegen_model(args, functions)
     controller = load_controller(args.controller) if args.controller is not None else None
     generated = generate(
         robot=args.robot, out_dir=args.out, friction=args.friction, real=args.real,
@@ -237,6 +246,19 @@ def _codegen(args: argparse.Namespace) -> int:
         print("\n".join(controller_report.summary_lines()))
         passed = passed and controller_report.passed
     return EXIT_OK if passed else EXIT_NOT_OPTIMAL
+
+
+def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int:
+    if args.controller is not None:
+        raise GtModelError("--controller applies to a robot's library, not to --model")
+    generated = generate_model(load_user_model(*split_model_reference(args.model)), args.out, functions=functions, real=args.real)
+    print(f"wrote {', '.join(str(p) for p in generated.files)}")
+    print(generated.version)
+    if not args.check:
+        return EXIT_OK
+    report = check_model(generated, n=args.samples, seed=args.seed, timing=True)
+    print("\n".join(report.summary_lines()))
+    return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
 
 
 def _sigterm(signum: int, frame: object) -> None:
