@@ -46,4 +46,4 @@ class CartPendulum(Model):
         self.output("tip_x", s + l * ca.sin(theta))  # m
         self.output("tip_y", -l * ca.cos(theta))  # m, hinge height 0
         kinetic = 0.5 * m_cart * v**2 + 0.5 * m_pole * ((v + l * omega * ca.cos(theta)) ** 2 + (l * omega * ca.sin(theta)) ** 2)
-        self.output("energy", kinetic - m_pole * g * l * ca.cos(theta))  # J, zero at rest hanging... minus m g l
+        self.output("energy", kinetic - m_pole * g * l * ca.cos(theta))  # J, potential zero at the hinge height
