@@ -142,6 +142,8 @@ class OptimalControlFile(ProblemSchema):
         ``[boundary]``: start and final values.
     bounds : dict of str to list of float
         ``[bounds]``: ``name = [lo, hi]`` for states, inputs, algebraics.
+    free_parameters : dict of str to list of float
+        ``[free_parameters]``: ``name = [lo, hi]``, model parameters optimised too.
     nominal : dict of str to float
         ``[nominal]``: magnitudes for scaling (variables, ``final_time``).
     initial_guess : InitialGuessSection
@@ -158,6 +160,7 @@ class OptimalControlFile(ProblemSchema):
     optimization: OptimizationSection
     boundary: BoundarySection = BoundarySection()
     bounds: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's)")
+    free_parameters: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
     nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
@@ -309,6 +312,12 @@ class OptimalControlKind(ProblemKind):
             if params[key].numel() != 1:
                 raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[key].numel()} elements)")
             opt.set_parameter(key, value)
+        for key, (lo, hi) in doc.free_parameters.items():
+            if key not in params:
+                raise _unknown(file, f"free_parameters.{key}", key, params)
+            if lo > hi:
+                raise file.fail(f"free_parameters.{key}", "[lo, hi] with lo <= hi", [lo, hi])
+            opt.free_parameter(key, lo, hi)
         variables = _scalar_variables(model)
         bounds: dict[str, tuple[float, float]] = {}
         for key, (lo, hi) in doc.bounds.items():
@@ -405,6 +414,7 @@ class OptimalControlKind(ProblemKind):
             "constraints": list(d.constraints),
             "parameters": dict(d.named_parameters),
             "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name},
+            "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
             "collocation": {"elements": d.elements, "points": d.points, "scheme": d.scheme},

@@ -87,6 +87,7 @@ BAD = [
     ("free_time_without_bounds", "bounds = [0.5, 5.0]", "", r"field 'optimization\.final_time\.bounds': expected bounds"),
     ("parameter_huge", "m_pole = 0.3 ", "m_pole = 1e308 ", r"field 'model\.parameters\.m_pole': expected a number <= 1e\+09"),
     ("class_missing", 'class = "CartPendulum"', "", r"missing field 'model\.class'"),
+    ("free_parameter_unknown", "[initial_guess]", "[free_parameters]\nlength = [0.3, 0.8]\n\n[initial_guess]", r"field 'free_parameters\.length': expected one of the model's names"),
 ]
 HELPERS = {
     "broken.py": "from gtmodel.modeling import Model\nclass CartPendulum(Model:\n    pass\n",
@@ -103,6 +104,19 @@ def test_bad_optimal_control_problem_through_cli(tmp_path, capsys, case, old, ne
         (tmp_path / name).write_text(text)
     text = _edit(old, new)(BASE.read_text()).replace("../models/", "models/")
     assert_bad_problem_through_cli(tmp_path, capsys, text, match)
+
+
+def test_free_parameter_from_the_problem_file(tmp_path):
+    # the pole length free in [0.3, 0.8] m: a shorter pendulum is faster (natural frequency
+    # sqrt(g / l)), so the minimum-time optimum is at the lower bound, faster than l = 0.5 m
+    f = tmp_path / "free.toml"
+    text = BASE.read_text().replace("../models/", str(MODEL.parent) + "/").replace("elements = 50", "elements = 20")
+    f.write_text(text + "\n[free_parameters]\nl = [0.3, 0.8]\n")
+    outcome = run_problem(f, tmp_path / "out", plots=False)
+    assert outcome.status == Status.OPTIMAL
+    assert outcome.summary["free_parameters"] == ["l"]
+    assert outcome.summary["model_parameters"]["l"] == pytest.approx(0.3, abs=1e-6)
+    assert outcome.summary["final_time_s"] < 1.09  # l = 0.5 m: 1.0929 s (test_result_folder_of_the_swing_up)
 
 
 def test_model_file_relative_to_the_problem_file(tmp_path):
