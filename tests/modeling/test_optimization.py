@@ -300,3 +300,36 @@ def test_free_parameter_bound_size_is_an_input_error():
     m, *_ = _damped_oscillator()
     with pytest.raises(InputError, match="free parameter 'c' lb"):
         Optimization(m).free_parameter("c", lb=[0.0, 1.0])
+
+
+def _free_parameter_problem():
+    """Free final time, two free parameters (one scaled), in the dynamics, constraints and both objective terms."""
+    m = Model("damped_nonlinear")
+    c = m.parameter("c", 0.1)
+    k = m.parameter("k", 4.0)
+    x = m.state("x", start=1.0)
+    v = m.state("v")
+    u = m.input("u")
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), -k * x - c * v * x**2 + u)
+    opt = Optimization(m, free_final_time=True, final_time_bounds=(1.0, 3.0))
+    opt.free_parameter("c", 0.0, 2.0)
+    opt.free_parameter("k", 1.0, 9.0)
+    opt.add_point_constraint(x * c, at="final", lb=0.2, ub=0.2)
+    opt.add_path_constraint(v * k + c**2, ub=5.0)
+    opt.set_objective(mayer=c * k * x, lagrange=c * (x - ca.sin(m.time)) ** 2 + u**2)
+    return opt
+
+
+@pytest.mark.parametrize("function", ["nlp_jac_g", "nlp_hess_l"])
+def test_assembled_derivatives_with_free_parameters_equal_casadis(function):
+    # second method: CasADi differentiating the whole NLP graph, at a random point
+    a, b = (CollocationTranscription(_free_parameter_problem(), elements=3, points=2, derivatives=d, nominal={"c": 0.5})
+            for d in ("assembled", "casadi"))
+    rng = np.random.default_rng(0)
+    args = [rng.uniform(0.5, 1.5, a._lbw.size), a.dae.p_value]
+    if function == "nlp_hess_l":
+        args += [1.3, rng.standard_normal(a._lbg.size)]
+    va, vb = a.solver.get_function(function)(*args), b.solver.get_function(function)(*args)
+    va, vb = (np.array(ca.DM(v[-1] if isinstance(v, (list, tuple)) else v)) for v in (va, vb))
+    np.testing.assert_allclose(va, vb, rtol=0, atol=1e-12)
