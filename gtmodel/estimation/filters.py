@@ -173,11 +173,12 @@ def cholesky_pivots(A: Any) -> tuple[Any, Any]:
         for k in range(j):
             s = s - L[j][k] * L[j][k]
         L[j][j] = ca.sqrt(s)
+        inv = 1 / L[j][j]
         for i in range(j + 1, n):
             s = A[i, j]
             for k in range(j):
                 s = s - L[i][k] * L[j][k]
-            L[i][j] = s / L[j][j]
+            L[i][j] = s * inv
     lmat = ca.vertcat(*[ca.horzcat(*row) for row in L])
     return lmat, ca.vertcat(*[L[j][j] for j in range(n)])
 
@@ -199,6 +200,7 @@ def _symmetric_product(A: Any, B: Any, C: Any = None) -> Any:
 def _triangular_solves(L: Any, B: Any) -> Any:
     """``(L L^T)^-1 B`` by forward and back substitution (SX, column by column)."""
     n, m = B.shape
+    inv = [1 / L[i, i] for i in range(n)]
     cols = []
     for c in range(m):
         y = []
@@ -206,13 +208,13 @@ def _triangular_solves(L: Any, B: Any) -> Any:
             s = B[i, c]
             for k in range(i):
                 s = s - L[i, k] * y[k]
-            y.append(s / L[i, i])
+            y.append(s * inv[i])
         xs: list[Any] = [None] * n
         for i in reversed(range(n)):
             s = y[i]
             for k in range(i + 1, n):
                 s = s - L[k, i] * xs[k]
-            xs[i] = s / L[i, i]
+            xs[i] = s * inv[i]
         cols.append(ca.vertcat(*xs))
     return ca.horzcat(*cols)
 
@@ -312,10 +314,11 @@ class _GaussianFilter:
         if qs is not None:
             quat = x_upd[qs] / ca.norm_2(x_upd[qs])
             x_upd = ca.vertcat(x_upd[: qs.start], quat, x_upd[qs.stop :])
-        # Joseph form (I - K H) P- (I - K H)^T + K R K^T, grouped as A - (A H^T) K^T + (K R) K^T with
-        # A = (I - K H) P- = P- - K (H P-); the lower triangle is computed and mirrored (symmetric P).
+        # Joseph form (I - K H) P- (I - K H)^T + K R K^T, evaluated as A + (K R - A H^T) K^T with
+        # A = (I - K H) P- = P- - K (H P-) (the same terms, grouped: one product with K^T instead of
+        # two); the lower triangle is computed and mirrored, so P_next is exactly symmetric.
         A = P_pred - ca.mtimes(K, HP)
-        P_upd = _symmetric_product(ca.mtimes(A, H.T), -K, A) + _symmetric_product(ca.mtimes(K, ca.sparsify(ca.DM(self.R))), K)
+        P_upd = _symmetric_product(ca.mtimes(K, ca.sparsify(ca.DM(self.R))) - ca.mtimes(A, H.T), K, A)
         _, piv_p = cholesky_pivots(P_upd)
         return ca.Function(
             f"{self._name}_step",
