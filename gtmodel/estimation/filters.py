@@ -10,7 +10,9 @@ Jacobians. On the linear translation-only model the same graph is the Kalman fil
     z^ = h(x-), H = dh/dx(x-), S = H P- H^T + R                      (innovation covariance)
     K  = P- H^T S^-1                                                 (Cholesky of S, triangular solves)
     x+ = x- + K (z - z^)                                             (quaternion renormalised)
-    P+ = (I - K H) P- (I - K H)^T + K R K^T,  symmetrised            (Joseph form)
+    P+ = (I - K H) P- (I - K H)^T + K R K^T                          (Joseph form)
+
+``P-``, ``S`` and ``P+`` are symmetrised: their lower triangles are computed and mirrored.
 
 Before the innovation the measured quaternion is sign-aligned with the predicted one
 (``quat`` and ``-quat`` are the same orientation). The step also returns the Cholesky

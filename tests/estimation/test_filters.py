@@ -243,6 +243,23 @@ def test_nees_of_a_pure_rotation_error_closed_form():
     np.testing.assert_allclose(run.nees(x_true[None]), [dtheta @ dtheta / sigma**2], rtol=1e-12)
 
 
+@pytest.mark.parametrize("kind, nx, nz", [("kf", 9, 6), ("ekf", 19, 13)])
+def test_step_function_signature(kind, nx, nz):
+    """The interface of FUSION_DESIGN.md: "<kind>_step"(x[nx], P[nx, nx], z[nz]) -> (x_next, P_next, pivots[nz + nx]), cached."""
+    model = _models()[0 if kind == "kf" else 1]
+    filt = KalmanFilter(model, **_kf(model)) if kind == "kf" else ExtendedKalmanFilter(model, **_ekf_args(model))
+    step = filt.step_function()
+    got = (
+        step.name(),
+        step.name_in(),
+        step.name_out(),
+        [step.size_in(i) for i in range(3)],
+        [step.size_out(i) for i in range(3)],
+        step is filt.step_function(),
+    )
+    assert got == (f"{kind}_step", ["x", "P", "z"], ["x_next", "P_next", "pivots"], [(nx, 1), (nx, nx), (nz, 1)], [(nx, 1), (nx, nx), (nz + nx, 1)], True)
+
+
 # -- the positive-definiteness test in the graph ----------------------------------------------------
 
 
