@@ -260,6 +260,17 @@ def test_step_function_signature(kind, nx, nz):
     assert got == (f"{kind}_step", ["x", "P", "z"], ["x_next", "P_next", "pivots"], [(nx, 1), (nx, nx), (nz, 1)], [(nx, 1), (nx, nx), (nz + nx, 1)], True)
 
 
+def test_compiled_run_equals_the_interpreter(monkeypatch, tmp_path):
+    """compiled=True: C generated from the same graph (cached library) gives the interpreter's run to 1e-12."""
+    monkeypatch.setenv("GTMODEL_CACHE_DIR", str(tmp_path))
+    model = _models()[0]
+    args = _kf(model)
+    _, z = _simulate(model, args["Q"], args["R"], args["x0"], args["P0"], 500, np.random.default_rng(5))
+    ref, fast = KalmanFilter(model, **args).run(z), KalmanFilter(model, **args, compiled=True).run(z)
+    np.testing.assert_allclose(fast.x, ref.x, rtol=1e-12, atol=1e-12 * np.abs(ref.x).max())
+    np.testing.assert_allclose(fast.P, ref.P, rtol=1e-12, atol=1e-12 * np.abs(ref.P).max())
+
+
 # -- the positive-definiteness test in the graph ----------------------------------------------------
 
 
@@ -353,6 +364,7 @@ def _x0_zero_quaternion():
         (lambda: _bad_kf(P0=np.ones((9, 9))), "P0: expected a positive definite"),
         (lambda: _bad_kf(P0=np.eye(9)[:, :8]), r"P0: expected shape \(9, 9\)"),
         (lambda: _bad_kf(P0="identity"), "P0: expected a numeric"),
+        (lambda: KalmanFilter(_models()[0], **_kf(), compiled="yes"), "compiled: expected True or False"),
         (lambda: KalmanFilter(_models()[1], **_ekf_args(_models()[1])), "model: expected a linear model"),
         (lambda: ExtendedKalmanFilter("model", **_kf()), "model: expected an EndEffectorModel"),
         (lambda: _bad_kf().run(np.zeros((10, 5))), r"z: expected shape \(N, 6\)"),
