@@ -51,6 +51,9 @@ Transition over one sample ``dt`` (21)-(28)
   ``phi = w dt + alpha dt^2 / 2`` (exact for a constant rate direction; the commutator term
   ``dt^3 w x alpha / 12`` is neglected), then normalised (``quat / |quat|``). ``exp`` is
   :func:`quaternion_from_rotation_vector` (smooth at ``phi = 0``, so the AD Jacobian is finite).
+  The thesis' exact discrete form of (28) is not in the shipped spec: this is our reading; it
+  agrees with the first-order form ``quat + dt/2 quat (x) (0, w)`` followed by the normalisation
+  to ``O(|w dt|^3)`` per sample (5e-11 rad at 1 rad/s and 1 kHz).
 
 Process noise (:meth:`EndEffectorModel.process_noise`): piecewise-constant white jerk per sample on
 each translation axis, ``Q = sigma_j^2 G G^T`` with ``G = [dt^3/6, dt^2/2, dt]`` (the
