@@ -11,6 +11,8 @@ from gtmodel.estimation.ilc import ILCResult, error_measure, ilc_correction_func
 from gtmodel.estimation.kalman import StationaryKalman, tune_position_noise
 from gtmodel.estimation.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
 from gtmodel.estimation.plant import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
+from gtmodel.estimation.correction import OffsetResponseModel, equivalent_force, fit_offset_response, truth_model
+from gtmodel.estimation.correction_loop import CorrectionStudy, GainScan, LoopSimulation, correction_study, largest_stable_gain, simulate_loop
 from gtmodel.estimation.experiment import REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
 
 __all__: list[str] = []
@@ -20,3 +22,5 @@ __all__ += ["ToolStructure", "SensorModel", "TrackingPlant", "TrackingResponse"]
 __all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
 __all__ += ["StationaryKalman", "tune_position_noise"]
 __all__ += ["SIGNALS", "REQUIREMENTS", "ILCCase", "ILCReference", "ILCCaseResult", "ILCExperiment"]
+__all__ += ["equivalent_force", "OffsetResponseModel", "truth_model", "fit_offset_response"]
+__all__ += ["LoopSimulation", "GainScan", "CorrectionStudy", "simulate_loop", "largest_stable_gain", "correction_study"]

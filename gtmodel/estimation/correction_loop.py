@@ -48,6 +48,7 @@ from gtmodel.estimation.correction import (
     CYCLE_TIME_S,
     DELAY_CYCLES,
     VALIDATION_POSES_DEG,
+    WRIST_JOINTS_DEG,
     OffsetResponseModel,
     fit_offset_response,
     offset_response_gp,
@@ -387,7 +388,8 @@ class GainScan(StatusResult):
 
 
 def largest_stable_gain(model: OffsetResponseModel, resolution: float, method: str = "simulation", max_gain: float = 2.0,
-                        delay_cycles: int = DELAY_CYCLES, duration: float = 10.0, reference: Any = None) -> GainScan:
+                        delay_cycles: int = DELAY_CYCLES, duration: float = 10.0, reference: Any = None,
+                        period_cycles: int | None = None) -> GainScan:
     """Scan ``K = resolution, 2 resolution, ...`` up to the first unstable gain, Cvitanic (2021), section 5.
 
     Parameters
@@ -407,6 +409,8 @@ def largest_stable_gain(model: OffsetResponseModel, resolution: float, method: s
         Simulated time [s] (method ``"simulation"``), at least two path periods.
     reference : array_like, optional
         Reference per cycle [m] (default :func:`sine_reference` over ``duration``).
+    period_cycles : int, optional
+        Window of the growth criterion [cycles] (default: the thesis' path period).
 
     Returns
     -------
@@ -428,7 +432,7 @@ def largest_stable_gain(model: OffsetResponseModel, resolution: float, method: s
     if method == "simulation":
         if reference is None:
             reference = sine_reference(int(round(positive_float(duration, "duration") / model.dt)), model.dt)
-        r, w = _reference(model, reference, None)
+        r, w = _reference(model, reference, period_cycles)
         loop = _step_function(loop_plant(model, delay_cycles), r.size)
     gains, flags, measure = [], [], []
     for j in range(1, n_grid + 1):
@@ -571,7 +575,8 @@ class CorrectionStudy(StatusResult):
 def correction_study(arm: SerialArm, calibration_poses_deg: Any = CALIBRATION_POSES_DEG, validation_poses_deg: Any = VALIDATION_POSES_DEG,
                      directions: tuple[str, ...] = ("x", "y"), resolutions: dict[str, float] | None = None, offset: float = 1e-4,
                      response_cycles: int = 250, delay_cycles: int = DELAY_CYCLES, duration: float = 10.0, max_gain: float = 2.0,
-                     seed: int = 0) -> CorrectionStudy:
+                     seed: int = 0, path: tuple[float, float, float] = (SINE_AMPLITUDE_M, FEED_RATE_M_S, SINE_SPATIAL_FREQUENCY_PER_M),
+                     wrist_deg: Any = WRIST_JOINTS_DEG) -> CorrectionStudy:
     """Cvitanic (2021), section 5 end to end: truth, one-offset fits, GPR over ``(j2, j3)``, gains.
 
     1. At each calibration pose the truth (:func:`~gtmodel.estimation.correction.truth_model`)
@@ -607,6 +612,10 @@ def correction_study(arm: SerialArm, calibration_poses_deg: Any = CALIBRATION_PO
         Largest gain scanned [-].
     seed : int, optional
         Seed of the GPR optimiser.
+    path : tuple of float, optional
+        Test path ``(amplitude [m], feed rate [m/s], spatial frequency [1/m])`` (default the thesis').
+    wrist_deg : array_like, shape (4,), optional
+        Joints 1, 4, 5, 6 of every pose [deg] (default :data:`~gtmodel.estimation.correction.WRIST_JOINTS_DEG`).
 
     Returns
     -------
@@ -626,13 +635,17 @@ def correction_study(arm: SerialArm, calibration_poses_deg: Any = CALIBRATION_PO
     n_resp = positive_int(response_cycles, "response_cycles")
     calib = np.atleast_2d(np.asarray(calibration_poses_deg, dtype=float))
     valid = np.atleast_2d(np.asarray(validation_poses_deg, dtype=float))
-    cal_truth = truth_model(arm, calib)
+    amplitude, feed, spatial = path
+    n_sim = int(round(positive_float(duration, "duration") / CYCLE_TIME_S))
+    reference = sine_reference(n_sim, CYCLE_TIME_S, amplitude, feed, spatial)
+    window = int(round(path_period(feed, spatial) / CYCLE_TIME_S))
+    cal_truth = truth_model(arm, calib, wrist_deg)
     fits = []
     for models in cal_truth:
         fits.append({d: fit_offset_response(models[d].offset_response(offset, n_resp)[1], offset, models[d].mass, models[d].dt) for d in DIRECTIONS})
     gp = offset_response_gp(calib, fits, seed=seed)
     pred = gp.predict(np.radians(valid))
-    truth = truth_model(arm, valid)
+    truth = truth_model(arm, valid, wrist_deg)
     predicted = [{d: OffsetResponseModel((pred["m"][v, i],), (pred["c"][v, i],), (pred["k"][v, i],), truth[v][d].mass, truth[v][d].dt)
                   for i, d in enumerate(DIRECTIONS)} for v in range(valid.shape[0])]
     shape = (valid.shape[0], len(dirs))
@@ -642,7 +655,7 @@ def correction_study(arm: SerialArm, calibration_poses_deg: Any = CALIBRATION_PO
     for v in range(valid.shape[0]):
         for j, d in enumerate(dirs):
             for which, model, ks, ke, kc in (("predicted", predicted[v][d], "ps", "pe", "pc"), ("simulated", truth[v][d], "ss", "se", "sc")):
-                scan = largest_stable_gain(model, res[d], "simulation", max_gain, delay_cycles, duration)
+                scan = largest_stable_gain(model, res[d], "simulation", max_gain, delay_cycles, reference=reference, period_cycles=window)
                 eig = largest_stable_gain(model, res[d], "eigenvalues", max_gain, delay_cycles)
                 scans[(which, v, d)] = scan
                 statuses += [scan.status, eig.status]
