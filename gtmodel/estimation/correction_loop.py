@@ -40,6 +40,7 @@ from typing import Any
 import casadi as ca
 import control
 import numpy as np
+from threadpoolctl import threadpool_limits  # a dependency of scikit-learn
 
 from gtmodel._arrays import positive_float, positive_int
 from gtmodel.errors import InputError
@@ -626,6 +627,15 @@ def correction_study(arm: SerialArm, calibration_poses_deg: Any = CALIBRATION_PO
     InputError
         Bad poses (outside the joint limits: named), unknown directions, bad numbers.
     """
+    with threadpool_limits(limits=1, user_api="blas"):  # 2x2..20x20 matrices: BLAS threads only cost (10x on a busy machine)
+        return _study(arm, calibration_poses_deg, validation_poses_deg, directions, resolutions, offset, response_cycles, delay_cycles,
+                      duration, max_gain, seed, path, wrist_deg)
+
+
+def _study(arm: SerialArm, calibration_poses_deg: Any, validation_poses_deg: Any, directions: tuple[str, ...], resolutions: dict[str, float] | None,
+           offset: float, response_cycles: int, delay_cycles: int, duration: float, max_gain: float, seed: int,
+           path: tuple[float, float, float], wrist_deg: Any) -> CorrectionStudy:
+    """The body of :func:`correction_study` (same arguments)."""
     dirs = tuple(directions)
     if not dirs or any(d not in DIRECTIONS for d in dirs) or len(set(dirs)) != len(dirs):
         raise InputError(f"directions: expected distinct entries of {DIRECTIONS}, got {directions!r}")
