@@ -32,7 +32,7 @@ def _gains(values: Any, name: str, shape: tuple[int, int]) -> np.ndarray:
 
 
 def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Mapping[str, float], predicted: Any, simulated: Any,
-                     out: str | Path, stem: str = "table_14", title: str = "") -> list[str]:
+                     out: str | Path, stem: str = "table_14", title: str = "", note: str = "") -> list[str]:
     """Write the Table 14 layout: per validation pose, predicted and simulated gain per direction.
 
     Parameters
@@ -53,6 +53,8 @@ def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Map
         File name without suffix (default ``"table_14"``).
     title : str, optional
         Heading of the Markdown file.
+    note : str, optional
+        A paragraph after the table (e.g. the thesis' figures beside ours).
 
     Returns
     -------
@@ -88,7 +90,7 @@ def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Map
              f"Largest stable proportional gain per validation pose, predicted (single mode fitted to one offset "
              f"command, GPR over (j2, j3)) and simulated (the richer two-mode simulation); resolution {res}. "
              f"Within one increment at {int(within.all(axis=1).sum())} of {q.shape[0]} poses.\n\n")
-    (folder / f"{stem}.md").write_text(intro + "\n".join(md) + "\n", encoding="utf-8")
+    (folder / f"{stem}.md").write_text(intro + "\n".join(md) + "\n" + (f"\n{note}\n" if note else ""), encoding="utf-8")
     return [f"{stem}.md", f"{stem}.csv"]
 
 
@@ -235,7 +237,7 @@ def plot_gains(directions: Sequence[str], predicted: Any, simulated: Any, path: 
         ax.set_xticks(pose)
         ax.grid(True, axis="y", alpha=0.3)
     axes[0].set_ylabel("largest stable P gain [-]")
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=8, loc="lower right", framealpha=0.9)
     if title:
         fig.suptitle(title)
     fig.savefig(path, dpi=110)
