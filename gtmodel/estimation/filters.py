@@ -182,6 +182,20 @@ def cholesky_pivots(A: Any) -> tuple[Any, Any]:
     return lmat, ca.vertcat(*[L[j][j] for j in range(n)])
 
 
+def _symmetric_product(A: Any, B: Any, C: Any = None) -> Any:
+    """``A B^T (+ C)`` when it is symmetric: the lower triangle computed, mirrored (SX)."""
+    n = A.shape[0]
+    out = ca.SX.zeros(n, n)
+    for i in range(n):
+        for j in range(i + 1):
+            v = ca.dot(A[i, :], B[j, :])
+            if C is not None:
+                v = v + C[i, j]
+            out[i, j] = v
+            out[j, i] = v
+    return out
+
+
 def _triangular_solves(L: Any, B: Any) -> Any:
     """``(L L^T)^-1 B`` by forward and back substitution (SX, column by column)."""
     n, m = B.shape
@@ -282,25 +296,26 @@ class _GaussianFilter:
         z = z_sym
         x_pred = m.transition(x)
         F = m.transition_jacobian(x)
-        P_pred = ca.mtimes([F, P, F.T]) + ca.DM(self.Q)
+        P_pred = _symmetric_product(ca.mtimes(F, P), F, ca.sparsify(ca.DM(self.Q)))  # F P F^T + Q
         z_hat = m.measurement(x_pred)
         H = m.measurement_jacobian(x_pred)
         qz = m.measurement_slices.get("quaternion")
         if qz is not None:  # sign alignment: quat and -quat are one orientation
             sign = ca.if_else(ca.dot(z[qz], z_hat[qz]) < 0, -1.0, 1.0)
             z = ca.vertcat(z[: qz.start], sign * z[qz], z[qz.stop :])
-        S = ca.mtimes([H, P_pred, H.T]) + ca.DM(self.R)
-        S = 0.5 * (S + S.T)
+        HP = ca.mtimes(H, P_pred)
+        S = _symmetric_product(HP, H, ca.sparsify(ca.DM(self.R)))  # H P- H^T + R
         L_s, piv_s = cholesky_pivots(S)
-        K = _triangular_solves(L_s, ca.mtimes(H, P_pred)).T  # P- H^T S^-1
+        K = _triangular_solves(L_s, HP).T  # P- H^T S^-1
         x_upd = x_pred + ca.mtimes(K, z - z_hat)
         qs = m.state_slices.get("quaternion")
         if qs is not None:
             quat = x_upd[qs] / ca.norm_2(x_upd[qs])
             x_upd = ca.vertcat(x_upd[: qs.start], quat, x_upd[qs.stop :])
-        I_KH = ca.DM.eye(self.nx) - ca.mtimes(K, H)
-        P_upd = ca.mtimes([I_KH, P_pred, I_KH.T]) + ca.mtimes([K, ca.DM(self.R), K.T])
-        P_upd = 0.5 * (P_upd + P_upd.T)
+        # Joseph form (I - K H) P- (I - K H)^T + K R K^T, grouped as A - (A H^T) K^T + (K R) K^T with
+        # A = (I - K H) P- = P- - K (H P-); the lower triangle is computed and mirrored (symmetric P).
+        A = P_pred - ca.mtimes(K, HP)
+        P_upd = _symmetric_product(ca.mtimes(A, H.T), -K, A) + _symmetric_product(ca.mtimes(K, ca.sparsify(ca.DM(self.R))), K)
         _, piv_p = cholesky_pivots(P_upd)
         return ca.Function(
             f"{self._name}_step",
