@@ -145,6 +145,12 @@ def test_particle_filter_nees_is_close_to_the_ekf_nees(rotation):
     assert pf.nees(x_true).mean() <= 1.25 * ekf.nees(x_true).mean()
 
 
+def test_gaussian_start_draws_the_first_cloud_around_the_ukf_update(rotation):
+    """Second method: the UKF's sample-0 posterior; the cloud mean is within 6 Monte-Carlo sigmas (sd / sqrt(1000))."""
+    pf, ukf = rotation["pf"], rotation["ukf"]
+    assert np.all(np.abs(pf.x[0] - ukf.x[0]) <= 6.0 * _std(ukf)[0] / np.sqrt(1000))
+
+
 @pytest.mark.parametrize("threshold", [0.5, 0.2])
 def test_resampling_is_triggered_by_the_effective_sample_size(rotation, threshold):
     """The run's own record: resampled exactly where ESS < threshold * n_particles, and sometimes."""
@@ -218,6 +224,7 @@ def test_time_per_step_is_measured(rotation, name):
         (ParticleFilter, {"x0": np.zeros(19)}, "x0: expected a quaternion .* of norm > 0"),
         (UnscentedKalmanFilter, {"P0": np.diag(np.r_[np.ones(18), 0.0])}, "P0: expected a positive definite"),
         (UnscentedKalmanFilter, {"model": "ekf"}, "model: expected an EndEffectorModel"),
+        (ParticleFilter, {"gaussian_start": "yes"}, "gaussian_start: expected True or False"),
     ],
     ids=lambda v: v.__name__ if isinstance(v, type) else None,
 )
