@@ -602,22 +602,6 @@ class ParticleFilter:
         rw = r @ white.T  # whitened: |L^-1 r|^2 = r^T S^-1 r
         return new, np.einsum("ij,ij->i", rw, rw)
 
-    def _failed_start(self, n: int) -> ParticleRun:
-        message = "pf: step 0: the Gaussian start (UKF update of x0, P0 with z[0]) failed: covariance not positive definite or not finite"
-        _LOG.warning(message)
-        nx = self.model.nx
-        return ParticleRun(
-            name=self.name,
-            x=np.empty((0, nx)),
-            P=np.empty((0, nx, nx)),
-            status=Status.ERROR,
-            message=message,
-            quaternion_slice=self._qs,
-            ess=np.full(1, np.nan),
-            resampled=np.zeros(1, bool),
-            min_d2=np.full(1, np.nan),
-        )
-
     def _residuals(self, z: np.ndarray, zs: np.ndarray) -> np.ndarray:
         """``z - zs`` per row, the quaternion of ``z`` sign-aligned with each row's."""
         r = z - zs
@@ -677,22 +661,25 @@ class ParticleFilter:
             try:
                 with np.errstate(over="ignore", invalid="ignore"):
                     x_start, p_start = self._ukf.step(self.x0, self.P0, zz[0])
-                ok = np.all(np.isfinite(x_start)) and np.all(np.isfinite(p_start))
             except (scipy.linalg.LinAlgError, ValueError):
-                ok = False
-            if not ok:
-                return self._failed_start(zz.shape[0])
+                x_start = p_start = np.full(1, np.nan)
             first = 1
-        particles = self._normalised(x_start + rng.standard_normal((npart, nx)) @ _square_root(p_start).T)
-        if self._qs is not None:
-            particles[:, self._qs] = _aligned(particles[:, self._qs], x_start[self._qs])
-        log_w = np.full(npart, -np.log(npart))
-        ref = x_start[self._qs] if self._qs is not None else None
-        if first:
-            xs[0], aligned = _weighted_mean(particles, np.exp(log_w), self._qs, ref)
-            ps[0] = (aligned - xs[0]).T @ (aligned - xs[0]) / npart
-            ess[0], min_d2[0] = npart, float(self._distances(zz[0], self._h(particles), self._r_white).min())
-        k = first
+        if not (np.all(np.isfinite(x_start)) and np.all(np.isfinite(p_start))):
+            status, message, n = Status.ERROR, "pf: step 0: the Gaussian start (UKF update of x0, P0 with z[0]) failed", 0
+        else:
+            particles = self._normalised(x_start + rng.standard_normal((npart, nx)) @ _square_root(p_start).T)
+            if self._qs is not None:
+                particles[:, self._qs] = _aligned(particles[:, self._qs], x_start[self._qs])
+            log_w = np.full(npart, -np.log(npart))
+            ref = x_start[self._qs] if self._qs is not None else None
+            if first:
+                with np.errstate(over="ignore", invalid="ignore"):
+                    xs[0], aligned = _weighted_mean(particles, np.exp(log_w), self._qs, ref)
+                    ps[0] = (aligned - xs[0]).T @ (aligned - xs[0]) / npart
+                    ess[0], min_d2[0] = npart, float(self._distances(zz[0], self._h(particles), self._r_white).min())
+                if not (np.all(np.isfinite(xs[0])) and np.all(np.isfinite(ps[0]))):
+                    status, message, n = Status.ERROR, "pf: step 0: the Gaussian start's cloud is not finite", 0
+        k = min(first, n)
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is a lost measurement, checked below
             for k in range(first, n):
                 try:
