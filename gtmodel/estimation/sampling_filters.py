@@ -4,7 +4,9 @@ Both filters run the ONE model of :mod:`gtmodel.estimation.end_effector`: the si
 and the particles go through the model's CasADi Functions ``transition`` (eqs. (21)-(28))
 and ``measurement`` (incl. the lever arm (29)), each mapped over all points at once
 (:meth:`casadi.Function.map`, evaluated in place through :meth:`casadi.Function.buffer`:
-no copies between NumPy and CasADi). Nothing of the model is written again here.
+no copies between NumPy and CasADi; ``compiled=True``: the two Functions as C generated from
+the same graph, :func:`gtmodel._compiler.compiled_function`). Nothing of the model is
+written again here.
 
 Library (a decision): filterpy 2.0.0 gives the sigma points and weights
 (:class:`filterpy.kalman.MerweScaledSigmaPoints`, Van der Merwe (2004)) and the
@@ -116,6 +118,7 @@ from filterpy.kalman import MerweScaledSigmaPoints
 from filterpy.monte_carlo import systematic_resample
 
 from gtmodel._arrays import as_array, as_finite, positive_int
+from gtmodel._compiler import compiled_function
 from gtmodel.errors import InputError
 from gtmodel.estimation._signals import signal_rows
 from gtmodel.estimation.end_effector import EndEffectorModel
@@ -125,6 +128,8 @@ from gtmodel.status import Status
 __all__ = ["UnscentedKalmanFilter", "ParticleFilter", "ParticleRun"]
 
 _LOG = logging.getLogger("gtmodel")
+#: Flags of the optional compiled evaluation (as the EKF's compiled run).
+_COMPILE_FLAGS = ("-O1", "-fPIC", "-shared")
 #: Relative asymmetry accepted in a covariance argument.
 _SYMMETRY_TOLERANCE = 1e-9
 #: ESS at or below 1 + this: the whole posterior on one particle (degenerate).
@@ -173,6 +178,21 @@ def _covariance(value: Any, n: int, name: str, definite: bool) -> np.ndarray:
         if low < -1e-12 * scale:
             raise InputError(f"{name}: expected a positive semi-definite matrix, got smallest eigenvalue {low:.3g}")
     return c
+
+
+def _flag(value: Any, name: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name}: expected True or False, got {value!r}")
+    return bool(value)
+
+
+def _evaluator(f: ca.Function, compiled: bool) -> ca.Function:
+    """``f``, or ``f`` compiled to C from the same graph (cached; ``f`` itself when no compiler builds)."""
+    if not compiled:
+        return f
+    g, how = compiled_function(f, _COMPILE_FLAGS, "sampling_filters")
+    _LOG.info("%s: %s", f.name(), how)
+    return g
 
 
 def _model(model: Any) -> EndEffectorModel:
@@ -261,10 +281,14 @@ class UnscentedKalmanFilter:
         Prior-knowledge weight of the centre point in the covariance (2 for a Gaussian), ``>= 0``.
     kappa : float, optional
         Secondary scaling, ``nx + kappa > 0``.
+    compiled : bool, optional
+        Evaluate ``transition`` and ``measurement`` as C compiled from the same graph
+        (:func:`gtmodel._compiler.compiled_function`, cached; the CasADi interpreter when no
+        compiler builds), as the EKF's ``compiled`` run.
 
     Attributes
     ----------
-    model, Q, R, x0, P0
+    model, Q, R, x0, P0, compiled
         The arguments (checked, covariances symmetrised).
     points : filterpy.kalman.MerweScaledSigmaPoints
         Sigma points and weights ``Wm``, ``Wc``.
@@ -274,12 +298,14 @@ class UnscentedKalmanFilter:
     InputError
         ``model`` not an :class:`EndEffectorModel`; a matrix of another shape, not finite,
         not symmetric or not (semi-)definite; ``x0`` of another shape or with a zero
-        quaternion; ``alpha``, ``beta`` or ``kappa`` out of range.
+        quaternion; ``alpha``, ``beta`` or ``kappa`` out of range; ``compiled`` not a bool.
     """
 
     name = "ukf"
 
-    def __init__(self, model: Any, Q: Any, R: Any, x0: Any, P0: Any, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0) -> None:
+    def __init__(
+        self, model: Any, Q: Any, R: Any, x0: Any, P0: Any, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0, compiled: bool = False
+    ) -> None:
         self.model = _model(model)
         nx, nz = self.model.nx, self.model.nz
         self.Q = _covariance(Q, nx, "Q", definite=False)
@@ -295,8 +321,9 @@ class UnscentedKalmanFilter:
             raise InputError(f"kappa: expected nx + kappa > 0 (nx = {nx}), got {kappa!r}")
         self.points = MerweScaledSigmaPoints(nx, a, b, k, sqrt_method=_upper_cholesky)
         m = self.points.num_sigmas()
-        self._f = _Mapped(self.model.transition, m)
-        self._h = _Mapped(self.model.measurement, m)
+        self.compiled = _flag(compiled, "compiled")
+        self._f = _Mapped(_evaluator(self.model.transition, self.compiled), m)
+        self._h = _Mapped(_evaluator(self.model.measurement, self.compiled), m)
         self._qs = self.model.state_slices.get("quaternion")
         self._zqs = self.model.measurement_slices.get("quaternion")
 
@@ -488,10 +515,12 @@ class ParticleFilter:
     gaussian_start : bool, optional
         Draw the cloud of sample 0 from the UKF's Gaussian posterior of ``(x0, P0)`` updated
         with ``z[0]`` (True), or from ``N(x0, P0)`` propagated and weighted like any sample.
+    compiled : bool, optional
+        Evaluate ``transition`` and ``measurement`` as compiled C (see :class:`UnscentedKalmanFilter`).
 
     Attributes
     ----------
-    model, Q, R, x0, P0, n_particles, seed, resample_threshold, bandwidth, proposal, lost_probability, gaussian_start
+    model, Q, R, x0, P0, n_particles, seed, resample_threshold, bandwidth, proposal, lost_probability, gaussian_start, compiled
         The arguments (checked).
 
     Raises
@@ -518,6 +547,7 @@ class ParticleFilter:
         proposal: str = "linearised",
         lost_probability: float = 1e-9,
         gaussian_start: bool = True,
+        compiled: bool = False,
     ) -> None:
         self.model = _model(model)
         nx, nz = self.model.nx, self.model.nz
@@ -543,13 +573,12 @@ class ParticleFilter:
         if proposal not in ("prior", "linearised"):
             raise InputError(f"proposal: expected 'prior' or 'linearised', got {proposal!r}")
         self.proposal = proposal
-        if not isinstance(gaussian_start, (bool, np.bool_)):
-            raise InputError(f"gaussian_start: expected True or False, got {gaussian_start!r}")
-        self.gaussian_start = bool(gaussian_start)
-        self._ukf = UnscentedKalmanFilter(self.model, self.Q, self.R, self.x0, self.P0) if self.gaussian_start else None
+        self.gaussian_start = _flag(gaussian_start, "gaussian_start")
+        self.compiled = _flag(compiled, "compiled")
+        self._ukf = UnscentedKalmanFilter(self.model, self.Q, self.R, self.x0, self.P0, compiled=self.compiled) if self.gaussian_start else None
         self._lost_d2 = float(scipy.stats.chi2.isf(self.lost_probability, nz))
-        self._f = _Mapped(self.model.transition, self.n_particles)
-        self._h = _Mapped(self.model.measurement, self.n_particles)
+        self._f = _Mapped(_evaluator(self.model.transition, self.compiled), self.n_particles)
+        self._h = _Mapped(_evaluator(self.model.measurement, self.compiled), self.n_particles)
         self._qs = self.model.state_slices.get("quaternion")
         self._zqs = self.model.measurement_slices.get("quaternion")
         self._q_root = _square_root(self.Q)
