@@ -9,6 +9,8 @@ robots, modeling and the base modules.
 from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
 from gtmodel.estimation.ilc import ILCResult, error_measure, ilc_correction_function, run_ilc
 from gtmodel.estimation.kalman import StationaryKalman, tune_position_noise
+from gtmodel.estimation.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
+from gtmodel.estimation.filters import ExtendedKalmanFilter, FilterRun, KalmanFilter
 from gtmodel.estimation.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
 from gtmodel.estimation.plant import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
 from gtmodel.estimation.experiment import REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
@@ -19,4 +21,6 @@ __all__ += ["error_measure", "ILCResult", "run_ilc", "ilc_correction_function"]
 __all__ += ["ToolStructure", "SensorModel", "TrackingPlant", "TrackingResponse"]
 __all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
 __all__ += ["StationaryKalman", "tune_position_noise"]
+__all__ += ["EndEffectorModel", "constant_acceleration", "IMU_TRANSLATION_M", "IMU_ROTATION"]
+__all__ += ["FilterRun", "KalmanFilter", "ExtendedKalmanFilter"]
 __all__ += ["SIGNALS", "REQUIREMENTS", "ILCCase", "ILCReference", "ILCCaseResult", "ILCExperiment"]
