@@ -34,6 +34,7 @@ from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.errors import CodegenError, InputError
+from gtmodel.estimation.end_effector import EndEffectorModel
 
 __all__ = [
     "FILTER_CYCLES",
@@ -108,13 +109,14 @@ def filter_record(controller: Controller, name: str, cycles: int = FILTER_CYCLES
     Returns
     -------
     dict of str to numpy.ndarray
-        ``"z"`` ``(cycles, nz)``: the tracker position ``p_j = 10 mm sin(2 pi f_j t)``
-        (``f_j`` = 1, 0.8, 0.6 Hz) + 6.4 um noise, then (19-D: ``nz = 13``) the target
-        orientation, a rotation of ``0.1 sin(pi t)`` rad about ``(1, 1, 1)/sqrt 3``, + 1e-5
-        noise, the gyro (the body rate) + 1e-3 rad/s noise, and last the accelerometer
-        (the exact acceleration in the target frame) + 0.012 m/s^2 noise (Table 7 order of
-        magnitude; the IMU is placed at the target: the record only has to be realistic,
-        C and Python get the same one). ``"x0"`` ``(nx,)`` the true state at ``t = 0``;
+        ``"z"`` ``(cycles, nz)``: the measurement Function of
+        :class:`~gtmodel.estimation.end_effector.EndEffectorModel` (``dt``, the default
+        IMU-to-target transform; the one graph of the filters) of a true motion, plus noise:
+        the target on ``p_j = 10 mm sin(2 pi f_j t)`` (``f_j`` = 1, 0.8, 0.6 Hz) and (19-D)
+        rotating by ``0.1 sin(pi t)`` rad about ``(1, 1, 1)/sqrt 3``; noise 6.4 um on the
+        tracker position, 1e-5 per quaternion component (then normalised), 1e-3 rad/s on the
+        gyro, 0.012 m/s^2 on the accelerometer (Table 7 order of magnitude at 1 kHz).
+        ``"x0"`` ``(nx,)`` the true state at ``t = 0``;
         ``"P0"`` ``(nx, nx)`` diagonal: (0.1 mm)^2, (10 mm/s)^2, (0.1 m/s^2)^2, then
         (1e-3)^2, (0.01 rad/s)^2, (0.1 rad/s^2)^2.
 
@@ -133,25 +135,22 @@ def filter_record(controller: Controller, name: str, cycles: int = FILTER_CYCLES
     rng = np.random.default_rng(seed)
     t = np.arange(cycles + 1)[:, None] * controller.dt
     w = 2 * np.pi * np.array([1.0, 0.8, 0.6])
-    p, v, a = 0.01 * np.sin(w * t), 0.01 * w * np.cos(w * t), -0.01 * w**2 * np.sin(w * t)
-    x = [p, v, a]
+    x = [0.01 * np.sin(w * t), 0.01 * w * np.cos(w * t), -0.01 * w**2 * np.sin(w * t)]
     if nx == 19:
-        u = np.ones(3) / np.sqrt(3.0)
+        u = np.ones(3) / np.sqrt(3.0)  # a rotation about a fixed axis: body rate = world rate = u theta'
         th, thd, thdd = 0.1 * np.sin(np.pi * t), 0.1 * np.pi * np.cos(np.pi * t), -0.1 * np.pi**2 * np.sin(np.pi * t)
-        quat = np.hstack([np.cos(th / 2), np.sin(th / 2) * u])
-        x += [quat, thd * u, thdd * u]
+        x += [np.hstack([np.cos(th / 2), np.sin(th / 2) * u]), thd * u, thdd * u]
     x = np.hstack(x)
-    z = [p[1:] + rng.normal(0, POSITION_NOISE, p[1:].shape)]
-    if nx == 19:
-        qm = quat[1:] + rng.normal(0, QUATERNION_NOISE, quat[1:].shape)
-        z += [qm / np.linalg.norm(qm, axis=1, keepdims=True), thd[1:] * u + rng.normal(0, GYRO_NOISE, (cycles, 3))]
-        c, s = np.cos(th[1:]), np.sin(th[1:])  # a_body = R^T a (Rodrigues, rotation about u by th)
-        ab = a[1:] * c + np.cross(a[1:], u) * s + np.outer(a[1:] @ u, u) * (1 - c)
-        z.append(ab + rng.normal(0, ACCELEROMETER_NOISE, (cycles, 3)))
-    else:
-        z.append(a[1:] + rng.normal(0, ACCELEROMETER_NOISE, (cycles, 3)))
+    model = EndEffectorModel(controller.dt, rotation=nx == 19)
+    z = np.asarray(model.measurement.map(cycles)(x[1:].T)).T
+    std = {"position": POSITION_NOISE, "quaternion": QUATERNION_NOISE, "gyro": GYRO_NOISE, "accelerometer": ACCELEROMETER_NOISE}
+    for key, sl in model.measurement_slices.items():
+        z[:, sl] += rng.normal(0.0, std[key], (cycles, sl.stop - sl.start))
+    if "quaternion" in model.measurement_slices:  # the tracker reports a unit quaternion
+        sl = model.measurement_slices["quaternion"]
+        z[:, sl] /= np.linalg.norm(z[:, sl], axis=1, keepdims=True)
     var = [1e-4**2] * 3 + [1e-2**2] * 3 + [0.1**2] * 3 + ([1e-3**2] * 4 + [1e-2**2] * 3 + [0.1**2] * 3 if nx == 19 else [])
-    return {"z": np.hstack(z), "x0": x[0], "P0": np.diag(var)}
+    return {"z": z, "x0": x[0], "P0": np.diag(var)}
 
 
 def python_filter_run(f: ca.Function, z: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> FilterRun:
@@ -389,7 +388,11 @@ def filter_probes(library: CompiledLibrary, name: str, record: dict[str, np.ndar
     return probes
 
 
-def _c_array(values: np.ndarray) -> str:
+def _c_array(values: np.ndarray, rows: bool = False) -> str:
+    """C initialiser of the values (flattened), or with ``rows`` of a 2-D table with a brace per row."""
+    values = np.asarray(values, dtype=float)
+    if rows:
+        return ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in values)
     return ", ".join(f"{float(v)!r}" for v in np.ravel(values))
 
 
@@ -452,7 +455,7 @@ def time_filters(generated: GeneratedCode, library: Path, records: dict[str, dic
     for name, rec in records.items():
         stem, N = name[:-5], len(rec["z"])
         nx, nz = rec["x0"].size, rec["z"].shape[1]
-        tables += [f"static const {real} Z_{stem}[{N}][{nz}] = {{{_c_array(rec['z'])}}};",
+        tables += [f"static const {real} Z_{stem}[{N}][{nz}] = {{{_c_array(rec['z'], rows=True)}}};",
                    f"static const {real} X0_{stem}[{nx}] = {{{_c_array(rec['x0'])}}};",
                    f"static const {real} P0_{stem}[{nx * nx}] = {{{_c_array(rec['P0'])}}};"]
         for label, call in ((name, f"{p}_{name}(s.x, s.P, Z_{stem}[i % {N}], s.x, s.P)"), (f"{stem}_update", f"{p}_{stem}_update(&s, Z_{stem}[i % {N}])")):
@@ -548,7 +551,8 @@ int main(int argc, char **argv)
 """
 
 
-def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, np.ndarray], build_dir: str | Path) -> Path:
+def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, np.ndarray], build_dir: str | Path,
+                         objects: tuple[Path, ...] | None = None) -> Path:
     """Build the stand-alone filter run program with :data:`STRICT_FLAGS` (library objects included).
 
     Parameters
@@ -561,6 +565,11 @@ def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, 
         ``z``, ``x0``, ``P0``, compiled into the program as constant tables.
     build_dir : str or pathlib.Path
         Folder for the objects and the program.
+    objects : tuple of pathlib.Path or None, optional
+        Objects of the generated sources already compiled (e.g. by
+        :func:`~gtmodel.codegen.build.compile_shared` with ``werror=True,
+        extra_flags=("-pedantic",)``: the same flags plus ``-fPIC``); None: compile them
+        here with :data:`STRICT_FLAGS`.
 
     Returns
     -------
@@ -580,10 +589,10 @@ def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, 
     build.mkdir(parents=True, exist_ok=True)
     src = build / f"{p}_{stem}_run.c"
     src.write_text(_PROGRAM.format(p=p, stem=stem, header=generated.header.name, n=len(record["z"]), real=generated.real, nx=nx,
-                                   nz=nz, nx2=nx * nx, z=_c_array(record["z"]), x0=_c_array(record["x0"]), P0=_c_array(record["P0"])))
+                                   nz=nz, nx2=nx * nx, z=_c_array(record["z"], rows=True), x0=_c_array(record["x0"]), P0=_c_array(record["P0"])))
     cc = find_compiler()
-    objects = []
-    for c_file in (*generated.c_sources, src):
+    objects = list(objects) if objects is not None else []
+    for c_file in (src,) if objects else (*generated.c_sources, src):
         obj = build / (c_file.stem + ".strict.o")
         proc = subprocess.run([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-c", str(c_file), "-o", str(obj)], capture_output=True, text=True)
         if proc.returncode != 0:

@@ -415,7 +415,9 @@ def generate(
         (:class:`~gtmodel.codegen.controller.Controller`: the stationary Kalman step
         ``<prefix>_kalman_step`` with its state struct, ``<prefix>_kalman_init`` and
         ``<prefix>_kalman_update``, and the ILC correction lookup
-        ``<prefix>_ilc_correction``), e.g. from
+        ``<prefix>_ilc_correction``; the KF/EKF steps of the tracker + IMU fusion
+        ``<prefix>_kf_step``/``<prefix>_ekf_step`` with ``<prefix>_kf_state`` ... of
+        :mod:`~gtmodel.codegen.filter_step`), e.g. from
         :func:`~gtmodel.codegen.controller_file.load_controller`; checked by
         :func:`~gtmodel.codegen.controller_check.check_controller`.
 
