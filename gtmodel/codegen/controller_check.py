@@ -105,8 +105,11 @@ class ControllerCheckReport(CheckReport):
             E.g. ``"kalman_update: max |C - Python| = 0.0e+00 m, m/s, m/s^2 (tol 1e-12), 60 ns/call OK"``.
         """
         lines = super().summary_lines()
+        names = {f.name for f in self.functions}
+        ilc = f"; ILC table +-{ILC_MARGIN} cycles" if "ilc_correction" in names else ""
+        filters = ", filters over their whole record" if names & {"kf_update", "ekf_update"} else ""
         lines[0] = (f"check of the controller of {self.prefix} over a run of {self.n} cycles "
-                    f"(every cycle; ILC table +-{ILC_MARGIN} cycles; seed {self.seed}):")
+                    f"(every cycle{ilc}{filters}; seed {self.seed}):")
         return lines
 
 
