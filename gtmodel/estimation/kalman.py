@@ -7,7 +7,8 @@ acceleration states, driven by white jerk (7.19)::
     y_j = [z_kin, a_m] = C1 x_j + e_j,  e_j ~ N(0, diag(position_noise_j^2, accelerometer_noise_j^2))
 
 ``A1, G1`` are the zero-order-hold discretisation (:func:`control.c2d`) of the triple
-integrator ``p' = v, v' = a, a' = jerk`` (jerk constant over a sample), so
+integrator (:func:`~gtmodel.estimation.end_effector.constant_acceleration`, shared with the
+19-D end-effector model of the laser tracker + IMU fusion) ``p' = v, v' = a, a' = jerk`` (jerk constant over a sample), so
 ``A1 = [[1, dt, dt^2/2], [0, 1, dt], [0, 0, 1]]``, ``G1 = [dt^3/6, dt^2/2, dt]``;
 ``C1 = [[1, 0, 0], [0, 0, 1]]``. The ``d`` directions are stacked as
 ``x = [p_1..p_d, v_1..v_d, a_1..a_d]`` (3d) and ``y = [z_kin_1..z_kin_d, a_m_1..a_m_d]`` (2d):
@@ -75,6 +76,7 @@ import scipy.optimize
 from gtmodel._arrays import as_finite, positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation._signals import signal_rows
+from gtmodel.estimation.end_effector import constant_acceleration
 
 __all__ = [
     "StationaryKalman",
@@ -103,13 +105,6 @@ def _per_direction(value: Any, name: str, d: int) -> np.ndarray:
     if np.any(arr <= 0):
         raise InputError(f"{name}: expected standard deviations > 0, got {arr.tolist()}")
     return arr
-
-
-def _triple_integrator(dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """ZOH discretisation of p' = v, v' = a, a' = jerk: (A1 (3, 3), G1 (3, 1))."""
-    sysc = control.ss([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]], [[0.0], [0.0], [1.0]], np.eye(3), np.zeros((3, 1)))
-    sysd = control.c2d(sysc, dt, "zoh")
-    return np.asarray(sysd.A), np.asarray(sysd.B)
 
 
 class StationaryKalman:
@@ -179,10 +174,8 @@ class StationaryKalman:
         self.accelerometer_noise = _per_direction(accelerometer_noise, "accelerometer_noise", self.d)
         self.position_noise = _per_direction(position_noise, "position_noise", self.d)
         self.jerk_noise = _per_direction(jerk_noise, "jerk_noise", self.d)
-        a1, g1 = _triple_integrator(self.dt)
+        self.A, self.G = constant_acceleration(self.dt, self.d)  # kron(A1, I_d), kron(G1, I_d): shared with the 19-D model
         eye = np.eye(self.d)
-        self.A = np.kron(a1, eye)
-        self.G = np.kron(g1, eye)
         self.C = np.kron(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), eye)
         self.H = np.kron(np.array([[1.0, 0.0, 0.0]]), eye)
         q = (self.G * self.jerk_noise**2) @ self.G.T
