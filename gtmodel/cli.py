@@ -256,8 +256,8 @@ def _codegen(args: argparse.Namespace) -> int:
 
 
 def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int:
-    if args.controller is not None:
-        raise GtModelError("--controller applies to a robot's library, not to --model")
+    if args.controller is not None or args.robot is not None:
+        raise GtModelError("--model generates a user model's library: give it without --robot and --controller")
     generated = generate_model(load_user_model(*split_model_reference(args.model)), args.out, functions=functions, real=args.real)
     print(f"wrote {', '.join(str(p) for p in generated.files)}")
     print(generated.version)
