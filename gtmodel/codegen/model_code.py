@@ -68,9 +68,19 @@ _RESERVED = frozenset(
 )
 
 
-def _c_name(name: str) -> str:
-    """The C parameter name of an output: its own name, or ``y_<name>`` if that is reserved."""
-    return f"y_{name}" if name in _RESERVED or name.startswith(("in_", "out_", "st_")) else name
+def _c_names(names: Sequence[str]) -> dict[str, str]:
+    """C parameter names of outputs: the name with non-identifier characters as ``_``
+    (``"mass.a"`` of a composed model: ``mass_a``), ``y_<name>`` if reserved, unique."""
+    out: dict[str, str] = {}
+    for name in names:
+        c = re.sub(r"[^A-Za-z0-9_]", "_", name)
+        if c in _RESERVED or c.startswith(("in_", "out_", "st_")) or c[0].isdigit():
+            c = f"y_{c}"
+        base, k = c, 1
+        while c in out.values():
+            c, k = f"{base}_{k}", k + 1
+        out[name] = c
+    return out
 
 
 @dataclass(frozen=True)
@@ -172,8 +182,10 @@ def model_specs(dae: FlatDAE) -> tuple[FunctionSpec, ...]:
         specs.append(FunctionSpec("alg", function("alg", {"g": dae.alg_expr}), reference=reference("alg", {"g": "g"}), outputs=(OutputSpec("g", "g", "algebraic residual, zero on the solution"),),
                                   doc=f"Algebraic residual 0 = g(t, x, z, u) of the flattened model {dae.name}.", **common))
     if dae.output_exprs:
-        outs = {k: v for k, v in dae.output_exprs.items()}
-        specs.append(FunctionSpec("outputs", function("outputs", outs), reference=reference("outputs", {k: _c_name(k) for k in outs}), outputs=tuple(OutputSpec(_c_name(k), k, f"output {k}") for k in outs),
+        names = _c_names(list(dae.output_exprs))
+        outs = {names[k]: v for k, v in dae.output_exprs.items()}
+        specs.append(FunctionSpec("outputs", function("outputs", outs), reference=reference("outputs", names),
+                                  outputs=tuple(OutputSpec(c, c, f"output {k}") for k, c in names.items()),
                                   doc=f"The declared outputs of the model {dae.name}.", **common))
     return tuple(specs)
 

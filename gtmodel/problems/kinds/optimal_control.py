@@ -6,7 +6,10 @@
 file is the user's own code, imported as such. Everything else in the problem file is
 data: parameter overrides, boundary conditions, bounds, and the objective and constraints
 in the problem language over the model's variable names (:mod:`gtmodel.modeling.expressions`,
-``docs/problem_language.md``: parsed, never evaluated). The problem is declared as a
+``docs/problem_language.md``: parsed, never evaluated). A composed model's hierarchical
+names (``mass.s``, ``spring.c``) are written with ``_`` for ``.`` in expressions
+(``mass_s``; the language has no attribute access) and may be written either way as keys
+of the tables (``"mass.s" = 0.0`` or ``mass_s = 0.0``). The problem is declared as a
 :class:`~gtmodel.modeling.Optimization` and solved by direct collocation
 (:class:`~gtmodel.modeling.CollocationTranscription`, IPOPT).
 """
@@ -16,6 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
+
+import re
 
 import casadi as ca
 import numpy as np
@@ -257,6 +262,15 @@ def _final_time(file: ProblemFile, opt: OptimizationSection) -> dict[str, Any]:
     return {"start_time": t0, "final_time": guess, "free_final_time": True, "final_time_bounds": (lo, hi)}
 
 
+def _aliases(names: Any) -> dict[str, str]:
+    """Key -> declared name: every name, and a hierarchical one (``mass.s``) also as ``mass_s`` (if not taken)."""
+    out = {n: n for n in names}
+    for n in names:
+        alias = re.sub(r"[^A-Za-z0-9_]", "_", n)
+        out.setdefault(alias, n)
+    return out
+
+
 def _unknown(file: ProblemFile, field_: str, name: str, known: Any) -> Exception:
     return file.fail(field_, f"one of the model's names ({', '.join(sorted(known)) or 'none'})", name)
 
@@ -306,47 +320,51 @@ class OptimalControlKind(ProblemKind):
         except GtModelError as exc:
             raise file.wrap("optimization.final_time", exc) from None
         params = model.variables("parameter")
+        pkeys = _aliases(params)
         for key, value in doc.model.parameters.items():
-            if key not in params:
+            if key not in pkeys:
                 raise _unknown(file, f"model.parameters.{key}", key, params)
-            if params[key].numel() != 1:
-                raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[key].numel()} elements)")
-            opt.set_parameter(key, value)
+            if params[pkeys[key]].numel() != 1:
+                raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[pkeys[key]].numel()} elements)")
+            opt.set_parameter(pkeys[key], value)
         for key, (lo, hi) in doc.free_parameters.items():
-            if key not in params:
+            if key not in pkeys:
                 raise _unknown(file, f"free_parameters.{key}", key, params)
             if lo > hi:
                 raise file.fail(f"free_parameters.{key}", "[lo, hi] with lo <= hi", [lo, hi])
-            opt.free_parameter(key, lo, hi)
+            opt.free_parameter(pkeys[key], lo, hi)
         variables = _scalar_variables(model)
+        vkeys = _aliases(variables)
         bounds: dict[str, tuple[float, float]] = {}
         for key, (lo, hi) in doc.bounds.items():
-            if key not in variables:
+            if key not in vkeys:
                 raise _unknown(file, f"bounds.{key}", key, variables)
             if lo > hi:
                 raise file.fail(f"bounds.{key}", "[lo, hi] with lo <= hi", [lo, hi])
-            opt.set_bounds(variables[key][1], lo, hi)
-            bounds[key] = (lo, hi)
+            opt.set_bounds(variables[vkeys[key]][1], lo, hi)
+            bounds[vkeys[key]] = (lo, hi)
+        boundary = {at: {vkeys.get(k, k): v for k, v in getattr(doc.boundary, at).items()} for at in ("start", "final")}
         for at in ("start", "final"):
             for key, value in getattr(doc.boundary, at).items():
-                if key not in variables:
+                if key not in vkeys:
                     raise _unknown(file, f"boundary.{at}.{key}", key, variables)
-                opt.add_point_constraint(variables[key][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
-        names = optimization_names(opt, origin=str(file.path))
-        named = named_parameters(file, doc.parameters, set(names) | {"pi"})
-        apply_to(opt, doc.optimization.objective, doc.optimization.constraints, parameters=named,
-                 origin=str(file.path), prefix="optimization.")
-        known = set(variables) | {"final_time"} | set(opt.free_parameters)
+                opt.add_point_constraint(variables[vkeys[key]][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
+        origin = str(file.path)
+        named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
+        table = optimization_names(opt, named, origin=origin)
+        table = {k: table[n] for k, n in _aliases(table).items() if k.isidentifier()}
+        apply_to(opt, doc.optimization.objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.")
+        nkeys = {**vkeys, "final_time": "final_time", **{k: n for k, n in pkeys.items() if n in opt.free_parameters}}
         for key in doc.nominal:
-            if key not in known:
-                raise _unknown(file, f"nominal.{key}", key, known)
+            if key not in nkeys:
+                raise _unknown(file, f"nominal.{key}", key, set(variables) | {"final_time"} | set(opt.free_parameters))
         if doc.initial_guess.method == "linear":
-            _linear_guess(opt, doc.boundary, variables)
+            _linear_guess(opt, boundary, variables)
         col = doc.collocation
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
             elements=col.elements, points=col.points, scheme=col.scheme,
-            max_iter=doc.solver.max_iter, tol=doc.solver.tol, nominal=dict(doc.nominal),
+            max_iter=doc.solver.max_iter, tol=doc.solver.tol, nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
         )
@@ -432,11 +450,12 @@ class OptimalControlKind(ProblemKind):
         return written
 
 
-def _linear_guess(opt: Optimization, boundary: BoundarySection, variables: dict[str, tuple[str, ca.SX]]) -> None:
-    """Initial guesses linear in time between the start and final boundary values."""
+def _linear_guess(opt: Optimization, boundary: dict[str, dict[str, float]], variables: dict[str, tuple[str, ca.SX]]) -> None:
+    """Initial guesses linear in time between the start and final boundary values (by declared name)."""
     t0, tf = opt.start_time, opt.final_time_guess
+    start, final = boundary["start"], boundary["final"]
     for key, (kind, sym) in variables.items():
-        if key in boundary.start and key in boundary.final:
-            opt.set_initial_guess(sym, ([t0, tf], [boundary.start[key], boundary.final[key]]))
-        elif key in boundary.start or key in boundary.final:
-            opt.set_initial_guess(sym, boundary.start.get(key, boundary.final.get(key)))
+        if key in start and key in final:
+            opt.set_initial_guess(sym, ([t0, tf], [start[key], final[key]]))
+        elif key in start or key in final:
+            opt.set_initial_guess(sym, start.get(key, final.get(key)))
