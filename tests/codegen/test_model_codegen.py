@@ -142,3 +142,20 @@ def test_robot_generate_is_unchanged_by_the_model_path(tmp_path):
     # the robot generator keeps its own hash: the L1 parameter hash, not a model hash
     gen = generate("L1", tmp_path, functions=["ik"])
     assert gen.parameter_hash == parameter_hash(load_parameters("L1"))
+
+
+def test_composed_model_code_equals_python(tmp_path):
+    # a component model: hierarchical output names become C identifiers (mass.a -> mass_a)
+    pytest.importorskip("gtmodel.modeling.components")
+    f = tmp_path / "osc.py"
+    f.write_text(
+        "from gtmodel.modeling.components import Component, connect\n"
+        "from gtmodel.modeling.library.translational import Fixed, Force, Mass, Spring\n\n\n"
+        "class Oscillator(Component):\n    fixed = Fixed()\n    spring = Spring(c=4.0)\n    mass = Mass(m=1.0)\n    force = Force()\n\n"
+        "    def equations(self):\n        connect(self.fixed.flange, self.spring.flange_a)\n"
+        "        connect(self.spring.flange_b, self.mass.flange_a)\n        connect(self.force.flange, self.mass.flange_b)\n"
+    )
+    gen = generate_model(load_user_model(f, "Oscillator"), tmp_path / "src")
+    report = check_model(gen, n=200)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert "double mass_a[1]" in gen.header.read_text()

@@ -14,6 +14,7 @@ import shutil
 
 import numpy as np
 import pytest
+from scipy.linalg import expm as scipy_expm
 
 from gtmodel.problems import load_problem, run_problem
 from gtmodel.problems.kinds.optimal_control import OptimalControl
@@ -126,3 +127,58 @@ def test_model_file_relative_to_the_problem_file(tmp_path):
     f = tmp_path / "sub" / "p.toml"
     f.write_text(BASE.read_text().replace("../models/cart_pendulum.py", "pendulum.py"))
     assert load_problem(f).declaration.model_file == (tmp_path / "sub" / "pendulum.py").resolve()
+
+
+COMPOSED = '''
+from gtmodel.modeling.components import Component, connect
+from gtmodel.modeling.library.translational import Fixed, Force, Mass, Spring
+
+
+class Oscillator(Component):
+    fixed = Fixed()
+    spring = Spring(c=4.0)
+    mass = Mass(m=1.0, s=0.1)
+    force = Force()
+
+    def equations(self):
+        connect(self.fixed.flange, self.spring.flange_a)
+        connect(self.spring.flange_b, self.mass.flange_a)
+        connect(self.force.flange, self.mass.flange_b)
+'''
+COMPOSED_PROBLEM = '''
+kind = "optimal_control"
+[model]
+file = "osc.py"
+class = "Oscillator"
+[model.parameters]
+"spring.c" = 4.0
+mass_m = 1.0
+[optimization]
+objective = "integral(force_f^2)"
+[optimization.final_time]
+free = false
+value = 2.0
+[boundary.start]
+"mass.s" = 0.1
+mass_v = 0.0
+[boundary.final]
+mass_s = 0.5
+mass_v = 0.0
+'''
+
+
+def test_composed_model_with_hierarchical_names(tmp_path):
+    # a component model (to_model()); hierarchical names as quoted keys or with _ for .;
+    # checked against the closed form: minimum-energy transfer of x'' + 4 x = f over 2 s
+    # (the Gramian solution), objective = d^T W^-1 d
+    pytest.importorskip("gtmodel.modeling.components")
+    (tmp_path / "osc.py").write_text(COMPOSED)
+    (tmp_path / "osc.toml").write_text(COMPOSED_PROBLEM)
+    outcome = run_problem(tmp_path / "osc.toml", tmp_path / "out", plots=False)
+    assert outcome.status == Status.OPTIMAL
+    A, B, T = np.array([[0.0, 1.0], [-4.0, 0.0]]), np.array([0.0, 1.0]), 2.0
+    tau = np.linspace(0.0, T, 4001)
+    expm = [scipy_expm(A * (T - s)) @ B for s in tau]
+    W = np.trapezoid([np.outer(e, e) for e in expm], tau, axis=0)
+    d = np.array([0.5, 0.0]) - scipy_expm(A * T) @ np.array([0.1, 0.0])
+    assert outcome.summary["objective"] == pytest.approx(d @ np.linalg.solve(W, d), rel=1e-5)
