@@ -10,6 +10,7 @@ from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFil
 from gtmodel.estimation.ilc import ILCResult, error_measure, ilc_correction_function, run_ilc
 from gtmodel.estimation.kalman import StationaryKalman, tune_position_noise
 from gtmodel.estimation.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
+from gtmodel.estimation.filters import ExtendedKalmanFilter, FilterRun, KalmanFilter
 from gtmodel.estimation.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
 from gtmodel.estimation.plant import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
 from gtmodel.estimation.experiment import REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
@@ -21,4 +22,5 @@ __all__ += ["ToolStructure", "SensorModel", "TrackingPlant", "TrackingResponse"]
 __all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
 __all__ += ["StationaryKalman", "tune_position_noise"]
 __all__ += ["EndEffectorModel", "constant_acceleration", "IMU_TRANSLATION_M", "IMU_ROTATION"]
+__all__ += ["FilterRun", "KalmanFilter", "ExtendedKalmanFilter"]
 __all__ += ["SIGNALS", "REQUIREMENTS", "ILCCase", "ILCReference", "ILCCaseResult", "ILCExperiment"]
