@@ -39,14 +39,22 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import scipy.signal
 import scipy.stats
 
 from gtmodel._arrays import as_array, as_finite, positive_float, positive_int
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel
+from gtmodel.estimation.end_effector import (
+    IMU_ROTATION,
+    IMU_TRANSLATION_M,
+    EndEffectorModel,
+    quaternion_from_rotation_vector,
+    quaternion_multiply,
+)
 from gtmodel.estimation.filters import ExtendedKalmanFilter, FilterRun, KalmanFilter
+from gtmodel.estimation.sampling_filters import ParticleFilter, UnscentedKalmanFilter
 from gtmodel.estimation.tracker_imu import (
     SWEEP_PARAMETERS,
     TABLE_7,
@@ -99,21 +107,12 @@ QUANTITIES = {
     "angular_velocity_deg_s": ("angular_velocity", math.degrees(1.0), True),
     "angular_acceleration_deg_s2": ("angular_acceleration", math.degrees(1.0), True),
 }
-#: Filters of the comparison (UKF and PF when gtmodel.estimation.sampling_filters is present).
+#: Filters of the comparison.
 FILTERS = ("kf", "ekf", "ukf", "pf")
 #: Floor of the path-derived jerk standard deviations [m/s^3, rad/s^3] (a straight path has none).
 MIN_JERK_STD = 1e-3
 #: Fraction of the largest |alpha| above which a sample is "at a sine peak".
 PEAK_FRACTION = 0.9
-
-
-def _sampling_filters() -> dict[str, Any]:
-    """The UKF and PF classes if the sampling-filter module is available."""
-    try:
-        from gtmodel.estimation import sampling_filters  # noqa: PLC0415 - optional sibling module
-    except ImportError:  # pragma: no cover - before the merge of the sampling filters
-        return {}
-    return {"ukf": sampling_filters.UnscentedKalmanFilter, "pf": sampling_filters.ParticleFilter}
 
 
 def nees_test(nees: Any, dof: int, level: float = 0.95) -> dict[str, Any]:
@@ -230,6 +229,36 @@ class FusionRun(StatusResult):
     errors: dict[str, dict[str, float]] = field(default_factory=dict)
     step_time_us: float = float("nan")
 
+    @property
+    def end(self) -> int:
+        """One past the last filtered sample (the run's row ``j`` is sample ``j + 1``; fewer after a divergence)."""
+        return self.run.x.shape[0] + 1
+
+    def fused(self, name: str, k: Any) -> np.ndarray:
+        """The filter's estimate of a state part at samples ``k`` (each in ``1 .. end - 1``).
+
+        Parameters
+        ----------
+        name : str
+            A state slice name (``"position"``, ..., ``"angular_acceleration"``).
+        k : array_like of int
+            Sample indices.
+
+        Returns
+        -------
+        numpy.ndarray, shape (len(k), 3 or 4)
+        """
+        return self.run.x[np.asarray(k) - 1][:, _SLICES_19[name]]
+
+    def nees(self) -> np.ndarray:
+        """NEES of the filtered samples from :attr:`first` on (:meth:`FilterRun.nees` against the truth).
+
+        Returns
+        -------
+        numpy.ndarray, shape (end - first,)
+        """
+        return self.run.nees(self.truth.x[1 : self.end])[self.first - 1 :]
+
     def series(self, quantity: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per-sample error norms of one quantity (thesis units), over the metric's samples.
 
@@ -255,11 +284,10 @@ class FusionRun(StatusResult):
         if quantity not in QUANTITIES or (QUANTITIES[quantity][2] and not self.truth.rotation):
             raise InputError(f"quantity: expected one of {', '.join(self.errors)}, got {quantity!r}")
         name, scale, _ = QUANTITIES[quantity]
-        n = self.run.x.shape[0]
-        k = np.arange(self.first, n)
+        k = np.arange(self.first, self.end)
         truth = getattr(self.truth, name)[k]
         sensor = getattr(self.sensor, name)[k - self.sensor.first]
-        fused = self.run.x[k][:, _state_slice(name)] if name in _SLICES_19 else None
+        fused = self.fused(name, k)
         if name == "quaternion":
             return self.truth.t[k], scale * orientation_error(sensor, truth), scale * orientation_error(fused, truth)
         return self.truth.t[k], scale * np.linalg.norm(sensor - truth, axis=1), scale * np.linalg.norm(fused - truth, axis=1)
@@ -267,10 +295,6 @@ class FusionRun(StatusResult):
 
 _SLICES_19 = {"position": slice(0, 3), "velocity": slice(3, 6), "acceleration": slice(6, 9), "quaternion": slice(9, 13),
               "angular_velocity": slice(13, 16), "angular_acceleration": slice(16, 19)}
-
-
-def _state_slice(name: str) -> slice:
-    return _SLICES_19[name]
 
 
 @dataclass(kw_only=True)
@@ -409,6 +433,7 @@ class FusionStudy:
     particles: int = 1000
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "_cache", {})
         if not isinstance(self.spec, SensorSpec):
             raise InputError(f"spec: expected a SensorSpec, got {type(self.spec).__name__}")
         cov = as_finite(self.initial_covariance, "initial_covariance")
@@ -495,24 +520,27 @@ class FusionStudy:
         sa = self.angular_jerk_std if self.angular_jerk_std is not None else max(MIN_JERK_STD, float(np.linalg.norm(truth.angular_jerk, axis=1).max()))
         return sj, sa
 
-    def _initial(self, truth: Truth, rng: np.random.Generator, model: EndEffectorModel) -> tuple[np.ndarray, np.ndarray]:
+    def _initial(self, truth: Truth, rng: np.random.Generator, model: EndEffectorModel, P0: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        if P0 is not None:  # a given prior: the truth plus a draw from it, the quaternion renormalised
+            P0 = as_array(P0, (model.nx, model.nx), "P0")
+            x0 = truth.x[0] + rng.multivariate_normal(np.zeros(model.nx), P0, method="eigh")
+            if model.rotation:
+                x0[9:13] /= np.linalg.norm(x0[9:13])
+            return x0, P0
         var = np.repeat(np.asarray(self.initial_covariance), 3)  # per axis: p, v, a, theta, w, alpha
         x0 = truth.x[0].copy()
         draw = rng.normal(0.0, np.sqrt(var))
         x0[0:9] += draw[0:9]
         if not model.rotation:
             return x0, np.diag(var[0:9])
-        # orientation: the true quaternion turned by a drawn rotation vector (half-angle per component)
-        half = draw[9:12] / 2.0
-        dq = np.r_[math.cos(float(np.linalg.norm(half))), np.sinc(float(np.linalg.norm(half)) / math.pi) * half]
-        q = x0[9:13]
-        x0[9:13] = np.r_[q[0] * dq[0] - q[1:] @ dq[1:], q[0] * dq[1:] + dq[0] * q[1:] + np.cross(q[1:], dq[1:])]
+        # orientation: the true quaternion turned by the drawn rotation vector, quat (x) exp(theta / 2)
+        x0[9:13] = np.asarray(quaternion_multiply(ca.DM(x0[9:13]), quaternion_from_rotation_vector(ca.DM(draw[9:12])))).ravel()
         x0[13:19] += draw[12:18]
         p0 = np.diag(np.r_[var[0:9], np.full(4, var[9] / 4.0), var[12:18]])
         return x0, p0
 
     def run_case(self, rotation: bool, spec: SensorSpec | None = None, filter_name: str | None = None, *,
-                 q_diag: Any = None, duration: float | None = None, label: str = "") -> FusionRun:
+                 q_diag: Any = None, duration: float | None = None, label: str = "", P0: Any = None) -> FusionRun:
         """Simulate, filter and score one case.
 
         Parameters
@@ -529,6 +557,9 @@ class FusionStudy:
             Record length [s] (default :attr:`duration`).
         label : str, optional
             Case label.
+        P0 : array_like, shape (nx, nx), optional
+            The initial covariance (default: :attr:`initial_covariance`); the initial state is
+            the truth plus a draw from it.
 
         Returns
         -------
@@ -553,16 +584,16 @@ class FusionStudy:
         sj, sa = self.process_noise(path, dt)
         Q = np.diag(as_array(q_diag, (model.nx,), "q_diag")) if q_diag is not None else model.process_noise(sj, sa, self.quaternion_std)
         R = model.measurement_noise(spec.position_std, spec.accel_std, spec.orientation_std, spec.gyro_std)
-        x0, P0 = self._initial(truth, rng, model)
-        filt = self._filter(filter_name, model, Q, R, x0, P0)
+        x0, P0 = self._initial(truth, rng, model, P0)
+        filt = self._filter(filter_name, model, Q, R, x0, P0, path.orientation)
         t0 = time.perf_counter()
-        run = filt.run(meas.z)
+        run = filt.run(meas.z[1:])  # (x0, P0) is the posterior of sample 0: the filters predict to sample 1 first
         _log.debug("%s: %s %d samples in %.2f s", label, filter_name, truth.t.size, time.perf_counter() - t0)
         sensor = sensor_only(meas, model)
         first = max(sensor.first, int(math.ceil(self.warmup / dt - 1e-9)))
         out = FusionRun(status=run.status, message=run.message, label=label, filter_name=filter_name, spec=spec, truth=truth,
                         measurements=meas, sensor=sensor, run=run, first=first, step_time_us=1e6 * run.step_time_s)
-        if run.x.shape[0] <= first + 1:
+        if out.end <= first + 1:
             return out
         for q, (_, _, needs_rotation) in QUANTITIES.items():
             if needs_rotation and not rotation:
@@ -571,17 +602,21 @@ class FusionStudy:
             out.errors[q] = {"sensor": float(np.mean(s)), "fusion": float(np.mean(f))}
         return out
 
-    def _filter(self, name: str, model: EndEffectorModel, Q: np.ndarray, R: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> Any:
-        if name == "kf":
-            return KalmanFilter(model, Q, R, x0, P0)
-        if name == "ekf":
-            return ExtendedKalmanFilter(model, Q, R, x0, P0)
-        classes = _sampling_filters()
-        if name not in classes:
-            raise InputError(f"filter_name: the {name.upper()} is not available (gtmodel.estimation.sampling_filters missing)")
+    def _filter(self, name: str, model: EndEffectorModel, Q: np.ndarray, R: np.ndarray, x0: np.ndarray, P0: np.ndarray, orientation: Any) -> Any:
+        if name in ("kf", "ekf"):
+            # The KF/EKF step is a CasADi graph with Q and R built in (about 1 s to build for 19-D):
+            # one filter per (model, Q, R, x0, P0) is kept and reused (e.g. by the bias sweeps, which
+            # change only the measurements).
+            key = (name, model.dt, model.rotation, model.imu_translation.tobytes(), model.imu_rotation.tobytes(),
+                   np.asarray(orientation).tobytes(), Q.tobytes(), R.tobytes(), x0.tobytes(), P0.tobytes())
+            if key not in self._cache:
+                self._cache[key] = (KalmanFilter if name == "kf" else ExtendedKalmanFilter)(model, Q, R, x0, P0)
+            return self._cache[key]
         if name == "pf":
-            return classes[name](model, Q, R, x0, P0, n_particles=self.particles, seed=self.seed)
-        return classes[name](model, Q, R, x0, P0)
+            return ParticleFilter(model, Q, R, x0, P0, n_particles=self.particles, seed=self.seed)
+        if name == "ukf":
+            return UnscentedKalmanFilter(model, Q, R, x0, P0)
+        raise InputError(f"filter_name: expected one of {', '.join(FILTERS)}, got {name!r}")
 
     # -- the tables ----------------------------------------------------------------------------
     def run(self, table_10: bool = True, comparison: bool = True) -> FusionStudyResult:
@@ -617,15 +652,14 @@ class FusionStudy:
             v = base.errors.get("velocity_mm_s", {})
             res.velocity_mean_error_mm_s[motion] = {"tracker": v.get("sensor"), "fusion": v.get("fusion"),
                                                     "improvement_percent": _improvement(v.get("sensor", 0.0), v.get("fusion", 0.0)) if v else None}
-            if base.run.x.shape[0] > base.first + 1:
-                nees = base.run.nees(base.truth.x)[base.first :]
-                res.nees[motion] = {"filter": base.filter_name, **nees_test(nees, base.run.dof)}
+            if base.end > base.first + 2:
+                res.nees[motion] = {"filter": base.filter_name, **nees_test(base.nees(), base.run.dof)}
             if rotation:
                 res.angular_acceleration = self._angular_acceleration(base)
         if table_10:
             res.table_10 = self._table_10()
         if comparison:
-            res.filter_comparison = self._comparison(res.notes)
+            res.filter_comparison = self._comparison({m: res.runs[m].run.P[-1] for m in MOTIONS if res.runs[m].run.P.shape[0]})
         statuses = [r.status for r in res.runs.values()] + [row["status"] for row in res.table_10 + res.filter_comparison]
         res.status = Status.worst(statuses)
         res.message = f"{len(res.runs)} baseline runs, {len(res.table_10)} sweep runs, {len(res.filter_comparison)} comparison runs"
@@ -695,19 +729,21 @@ class FusionStudy:
         row["stops_paying"] = stops
         return row
 
-    def _comparison(self, notes: list[str]) -> list[dict[str, Any]]:
+    def _comparison(self, priors: dict[str, np.ndarray]) -> list[dict[str, Any]]:
+        """Every filter from the same prior: the baseline run's last posterior covariance (a steady state).
+
+        The default initial covariance is wider than one sample's measurement noise; the particle
+        filter's linearised proposal then finds no particle that explains the first measurement
+        (measured: "measurement lost" at step 0), so the comparison starts all filters settled.
+        """
         rows = []
-        available = {"kf", "ekf", *_sampling_filters()}
         for motion, rotation in MOTIONS.items():
             for name in self.comparison_filters:
                 if name == "kf" and rotation:
                     continue
-                if name not in available:
-                    notes.append(f"filter comparison: the {name.upper()} is not available (gtmodel.estimation.sampling_filters missing)")
-                    continue
-                case = self.run_case(rotation, filter_name=name, duration=self.comparison_duration, label=f"{motion} {name}")
+                case = self.run_case(rotation, filter_name=name, duration=self.comparison_duration, label=f"{motion} {name}", P0=priors.get(motion))
                 row = {"motion": motion, "filter": name, "status": str(case.status), "message": case.message,
-                       "samples": int(case.run.x.shape[0]), "step_time_us": case.step_time_us}
+                       "samples": int(case.end), "step_time_us": case.step_time_us}
                 row.update({q: e["fusion"] for q, e in case.errors.items()})
                 row["velocity_tracker_mm_s"] = case.errors.get("velocity_mm_s", {}).get("sensor")
                 rows.append(row)

@@ -16,6 +16,7 @@ from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKin
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 from gtmodel.problems.kinds.tracking import TrackingKind
 from gtmodel.problems.kinds.ilc import ILCKind
+from gtmodel.problems.kinds.state_estimation import StateEstimationKind
 
 __all__ = ["KINDS", "get_kind"]
 
@@ -28,6 +29,7 @@ _CLASSES: tuple[type[ProblemKind], ...] = (
     JointStiffnessKind,
     TrackingKind,
     ILCKind,
+    StateEstimationKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.
