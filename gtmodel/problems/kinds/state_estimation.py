@@ -108,7 +108,7 @@ class SensorsSection(Section):
     gyro_noise_deg_s_rtHz: number(gt=0, le=100.0, unit="deg/s/rtHz", description="gyro noise density (Table 7: 0.0016)") = _baseline("gyro_noise_deg_s_rtHz")
     accel_bias_m_s2: number(ge=-100.0, le=100.0, unit="m/s^2", description="accelerometer bias on every IMU axis (Table 7: 0.00025)") = _baseline("accel_bias_m_s2")
     accel_noise_m_s2_rtHz: number(gt=0, le=100.0, unit="m/s^2/rtHz", description="accelerometer noise density (Table 7: 0.00039)") = _baseline("accel_noise_m_s2_rtHz")
-    sample_time_s: number(gt=0, le=1.0, unit="s", description="sample time of every sensor (Table 7: 0.001)") = _baseline("sample_time_s")
+    sample_time_s: number(gt=0, le=MAX_DURATION_S, unit="s", description="sample time of every sensor (Table 7: 0.001)") = _baseline("sample_time_s")
     feed_rate_mm_s: number(gt=0, le=1e4, unit="mm/s", description="feed rate along x (Table 7: 42.33)") = _baseline("feed_rate_mm_s")
     transform_translation_error_mm: number(ge=-1e3, le=1e3, unit="mm", description="error of the believed IMU-to-target translation") = 0.0
     transform_orientation_error_deg: number(ge=-180.0, le=180.0, unit="deg", description="error of the believed IMU-to-target rotation") = 0.0
