@@ -10,9 +10,10 @@ loop bounded by a maximum iteration count with an early exit on convergence.
 
 Adding a function to the generated library is one more entry in the table of its robot
 kind (:data:`FUNCTION_SPECS` for 3-link parameter sets, :data:`SIX_LINK_SPECS`,
-:data:`F1_SPECS`; all in :data:`SPECS_BY_KIND`). The estimation work of Dressler (2012),
-ch. 7 (stationary Kalman filter step, ILC correction lookup) does not exist in gtmodel
-yet; once it provides CasADi Functions, each is one such entry.
+:data:`F1_SPECS`; all in :data:`SPECS_BY_KIND`). The robot-independent controller
+functions (the Kalman step and the ILC correction of Dressler (2012), ch. 7) are declared
+by :mod:`gtmodel.codegen.controller` from the CasADi Functions a
+:class:`~gtmodel.codegen.controller.Controller` carries.
 """
 
 from __future__ import annotations

@@ -10,7 +10,9 @@ Jacobians. On the linear translation-only model the same graph is the Kalman fil
     z^ = h(x-), H = dh/dx(x-), S = H P- H^T + R                      (innovation covariance)
     K  = P- H^T S^-1                                                 (Cholesky of S, triangular solves)
     x+ = x- + K (z - z^)                                             (quaternion renormalised)
-    P+ = (I - K H) P- (I - K H)^T + K R K^T,  symmetrised            (Joseph form)
+    P+ = (I - K H) P- (I - K H)^T + K R K^T                          (Joseph form)
+
+``P-``, ``S`` and ``P+`` are symmetrised: their lower triangles are computed and mirrored.
 
 Before the innovation the measured quaternion is sign-aligned with the predicted one
 (``quat`` and ``-quat`` are the same orientation). The step also returns the Cholesky
@@ -31,6 +33,7 @@ import casadi as ca
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from gtmodel._compiler import compiled_function
 from gtmodel.errors import InputError
 from gtmodel.estimation._signals import signal_rows
 from gtmodel.estimation.end_effector import EndEffectorModel, quaternion_conjugate, quaternion_multiply
@@ -40,6 +43,8 @@ __all__ = ["FilterRun", "KalmanFilter", "ExtendedKalmanFilter", "cholesky_pivots
 
 logger = logging.getLogger("gtmodel")
 
+#: Flags of the optional compiled run (-O1: straight-line code, a third of -O2's build time, as fast).
+_COMPILE_FLAGS = ("-O1", "-fPIC", "-shared")
 _SYMMETRY_TOLERANCE = 1e-10
 _PSD_TOLERANCE = 1e-12
 
@@ -173,11 +178,12 @@ def cholesky_pivots(A: Any) -> tuple[Any, Any]:
         for k in range(j):
             s = s - L[j][k] * L[j][k]
         L[j][j] = ca.sqrt(s)
+        inv = 1 / L[j][j]
         for i in range(j + 1, n):
             s = A[i, j]
             for k in range(j):
                 s = s - L[i][k] * L[j][k]
-            L[i][j] = s / L[j][j]
+            L[i][j] = s * inv
     lmat = ca.vertcat(*[ca.horzcat(*row) for row in L])
     return lmat, ca.vertcat(*[L[j][j] for j in range(n)])
 
@@ -199,6 +205,7 @@ def _symmetric_product(A: Any, B: Any, C: Any = None) -> Any:
 def _triangular_solves(L: Any, B: Any) -> Any:
     """``(L L^T)^-1 B`` by forward and back substitution (SX, column by column)."""
     n, m = B.shape
+    inv = [1 / L[i, i] for i in range(n)]
     cols = []
     for c in range(m):
         y = []
@@ -206,13 +213,13 @@ def _triangular_solves(L: Any, B: Any) -> Any:
             s = B[i, c]
             for k in range(i):
                 s = s - L[i, k] * y[k]
-            y.append(s / L[i, i])
+            y.append(s * inv[i])
         xs: list[Any] = [None] * n
         for i in reversed(range(n)):
             s = y[i]
             for k in range(i + 1, n):
                 s = s - L[k, i] * xs[k]
-            xs[i] = s / L[i, i]
+            xs[i] = s * inv[i]
         cols.append(ca.vertcat(*xs))
     return ca.horzcat(*cols)
 
@@ -247,7 +254,7 @@ class _GaussianFilter:
 
     _name = "ekf"
 
-    def __init__(self, model: EndEffectorModel, Q: Any, R: Any, x0: Any, P0: Any) -> None:
+    def __init__(self, model: EndEffectorModel, Q: Any, R: Any, x0: Any, P0: Any, compiled: bool = False) -> None:
         if not isinstance(model, EndEffectorModel):
             raise InputError(f"model: expected an EndEffectorModel, got {type(model).__name__}")
         self.model = model
@@ -268,6 +275,10 @@ class _GaussianFilter:
                 raise InputError(f"x0: the quaternion x0[{qs.start}:{qs.stop}] has zero norm, got {x[qs].tolist()}")
             x[qs] /= norm
         self.x0 = x
+        if not isinstance(compiled, (bool, np.bool_)):
+            raise InputError(f"compiled: expected True or False, got {compiled!r}")
+        self.compiled = bool(compiled)
+        self._evaluator: ca.Function | None = None
         self._step: ca.Function | None = None
         self._runners: dict[int, ca.Function] = {}
 
@@ -312,10 +323,11 @@ class _GaussianFilter:
         if qs is not None:
             quat = x_upd[qs] / ca.norm_2(x_upd[qs])
             x_upd = ca.vertcat(x_upd[: qs.start], quat, x_upd[qs.stop :])
-        # Joseph form (I - K H) P- (I - K H)^T + K R K^T, grouped as A - (A H^T) K^T + (K R) K^T with
-        # A = (I - K H) P- = P- - K (H P-); the lower triangle is computed and mirrored (symmetric P).
+        # Joseph form (I - K H) P- (I - K H)^T + K R K^T, evaluated as A + (K R - A H^T) K^T with
+        # A = (I - K H) P- = P- - K (H P-) (the same terms, grouped: one product with K^T instead of
+        # two); the lower triangle is computed and mirrored, so P_next is exactly symmetric.
         A = P_pred - ca.mtimes(K, HP)
-        P_upd = _symmetric_product(ca.mtimes(A, H.T), -K, A) + _symmetric_product(ca.mtimes(K, ca.sparsify(ca.DM(self.R))), K)
+        P_upd = _symmetric_product(ca.mtimes(K, ca.sparsify(ca.DM(self.R))) - ca.mtimes(A, H.T), K, A)
         _, piv_p = cholesky_pivots(P_upd)
         return ca.Function(
             f"{self._name}_step",
@@ -348,9 +360,14 @@ class _GaussianFilter:
         """
         zz = signal_rows(z, "z", self.nz)
         n = zz.shape[0]
+        if self._evaluator is None:
+            self._evaluator = self.step_function()
+            if self.compiled:  # the same graph as C (cached shared library), or the interpreter if none builds
+                self._evaluator, how = compiled_function(self._evaluator, _COMPILE_FLAGS, "filters")
+                logger.info("%s run: %s", self._name, how)
         runner = self._runners.get(n)
         if runner is None:
-            runner = self._runners[n] = self.step_function().mapaccum(f"{self._name}_run", n, 2)
+            runner = self._runners[n] = self._evaluator.mapaccum(f"{self._name}_run", n, 2)
         t0 = time.perf_counter()
         xs, ps, pivots = runner(self.x0, self.P0, zz.T)
         elapsed = time.perf_counter() - t0
@@ -395,6 +412,11 @@ class ExtendedKalmanFilter(_GaussianFilter):
         is normalised.
     P0 : array_like, shape (nx, nx)
         Its covariance, symmetric positive definite.
+    compiled : bool, optional
+        :meth:`run` evaluates the step as C compiled from the same graph
+        (:func:`gtmodel._compiler.compiled_function`: cached; the CasADi interpreter when no
+        compiler is found or ``GTMODEL_COMPILE=0``). The first run of a graph builds it
+        (seconds); :meth:`step_function` is the CasADi Function either way.
 
     Attributes
     ----------
@@ -403,13 +425,14 @@ class ExtendedKalmanFilter(_GaussianFilter):
     Q, R, P0 : numpy.ndarray
         The covariances (symmetrised).
     x0 : numpy.ndarray, shape (nx,)
+    compiled : bool
 
     Raises
     ------
     InputError
         ``model`` not an EndEffectorModel; a matrix of another shape, not finite, not symmetric,
         ``Q`` not positive semi-definite, ``R`` or ``P0`` not positive definite; ``x0`` of another
-        shape, not finite, or with a quaternion of zero norm.
+        shape, not finite, or with a quaternion of zero norm; ``compiled`` not a bool.
     """
 
     _name = "ekf"
@@ -463,6 +486,8 @@ class KalmanFilter(_GaussianFilter):
         Initial estimate.
     P0 : array_like, shape (nx, nx)
         Its covariance, symmetric positive definite.
+    compiled : bool, optional
+        Evaluate :meth:`run` as compiled C (see :class:`ExtendedKalmanFilter`).
 
     Attributes
     ----------
@@ -470,6 +495,7 @@ class KalmanFilter(_GaussianFilter):
     nx, nz : int
     Q, R, P0 : numpy.ndarray
     x0 : numpy.ndarray, shape (nx,)
+    compiled : bool
 
     Raises
     ------
@@ -479,10 +505,10 @@ class KalmanFilter(_GaussianFilter):
 
     _name = "kf"
 
-    def __init__(self, model: EndEffectorModel, Q: Any, R: Any, x0: Any, P0: Any) -> None:
+    def __init__(self, model: EndEffectorModel, Q: Any, R: Any, x0: Any, P0: Any, compiled: bool = False) -> None:
         if isinstance(model, EndEffectorModel) and not model.is_linear:
             raise InputError("model: expected a linear model (EndEffectorModel(rotation=False)) for the Kalman filter; use ExtendedKalmanFilter")
-        super().__init__(model, Q, R, x0, P0)
+        super().__init__(model, Q, R, x0, P0, compiled)
 
     def step_function(self) -> ca.Function:
         """The KF step ``"kf_step"(x[nx], P[nx, nx], z[nz]) -> (x_next, P_next, pivots[nz + nx])``.
