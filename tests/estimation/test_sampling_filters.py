@@ -145,6 +145,12 @@ def test_particle_filter_nees_is_close_to_the_ekf_nees(rotation):
     assert pf.nees(x_true).mean() <= 1.25 * ekf.nees(x_true).mean()
 
 
+def test_gaussian_start_draws_the_first_cloud_around_the_ukf_update(rotation):
+    """Second method: the UKF's sample-0 posterior; the cloud mean is within 6 Monte-Carlo sigmas (sd / sqrt(1000))."""
+    pf, ukf = rotation["pf"], rotation["ukf"]
+    assert np.all(np.abs(pf.x[0] - ukf.x[0]) <= 6.0 * _std(ukf)[0] / np.sqrt(1000))
+
+
 @pytest.mark.parametrize("threshold", [0.5, 0.2])
 def test_resampling_is_triggered_by_the_effective_sample_size(rotation, threshold):
     """The run's own record: resampled exactly where ESS < threshold * n_particles, and sometimes."""
@@ -187,6 +193,16 @@ def test_particle_filter_is_reproducible_and_leaves_the_global_random_state_alon
     assert np.random.random() == expected
 
 
+@pytest.mark.parametrize("cls", [UnscentedKalmanFilter, ParticleFilter])
+def test_compiled_evaluation_gives_the_same_run(rotation, cls):
+    """Second method: the CasADi interpreter (the compiled C of the same graph, or the interpreter itself without a compiler)."""
+    kwargs = {"n_particles": 100} if cls is ParticleFilter else {}
+    z = rotation["z"][:30]
+    plain, compiled = cls(*rotation["args"], **kwargs).run(z), cls(*rotation["args"], compiled=True, **kwargs).run(z)
+    assert compiled.success
+    np.testing.assert_allclose(compiled.x, plain.x, rtol=1e-9, atol=1e-12)
+
+
 @pytest.mark.parametrize("name", ["ekf", "ukf", "pf"])
 def test_time_per_step_is_measured(rotation, name):
     """FilterRun.step_time_s: wall time per step, positive and finite (figures in the final note)."""
@@ -218,6 +234,8 @@ def test_time_per_step_is_measured(rotation, name):
         (ParticleFilter, {"x0": np.zeros(19)}, "x0: expected a quaternion .* of norm > 0"),
         (UnscentedKalmanFilter, {"P0": np.diag(np.r_[np.ones(18), 0.0])}, "P0: expected a positive definite"),
         (UnscentedKalmanFilter, {"model": "ekf"}, "model: expected an EndEffectorModel"),
+        (ParticleFilter, {"gaussian_start": "yes"}, "gaussian_start: expected True or False"),
+        (UnscentedKalmanFilter, {"compiled": 1}, "compiled: expected True or False"),
     ],
     ids=lambda v: v.__name__ if isinstance(v, type) else None,
 )
