@@ -9,17 +9,33 @@ tracker); the errors recomputed from the runs' series (a second reading).
 
 from __future__ import annotations
 
+import math
+import tomllib
+
 import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.estimation.fusion_runs import nees_test
-from gtmodel.estimation.fusion_study import APPENDIX_B, FusionStudy
+from gtmodel.estimation.fusion_study import APPENDIX_B, THESIS_TABLE_11, THESIS_TABLE_8, FusionStudy
 from gtmodel.estimation.tracker_imu import SensorSpec
 from gtmodel.status import Status
 
+from ..conftest import SHARED_REFERENCE
+
+REFERENCE = tomllib.loads((SHARED_REFERENCE / "serial_kr500.toml").read_text())["state_estimation"]
 #: The judged velocity improvement over the four-point regression [%].
 VELOCITY_IMPROVEMENT = 30.0
+
+
+def test_thesis_figures_are_the_reference_data():
+    # Appendix B, Tables 8 and 11 as transcribed in the reference file (nan: no entry)
+    assert list(APPENDIX_B["Q_diag"]) == REFERENCE["Q_diag"] and list(APPENDIX_B["R_diag"]) == REFERENCE["R_diag"]
+    ref8 = {k.replace("mean_error_", ""): v for k, v in REFERENCE["table_8"].items()}
+    ours8 = {k: {w: [math.nan if x is None else x for x in v[w]] for w in v} for k, v in THESIS_TABLE_8.items()}
+    assert set(ours8) == set(ref8)
+    np.testing.assert_array_equal([ours8[k][w] for k in ours8 for w in ("sensor", "fusion")], [ref8[k][w] for k in ours8 for w in ("sensor", "fusion")])
+    assert {k: {w: list(x) for w, x in v.items()} for k, v in THESIS_TABLE_11.items() if k != "feed_rates_mm_s"} == REFERENCE["table_11"]
 
 
 @pytest.fixture(scope="module")
