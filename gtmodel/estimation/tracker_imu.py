@@ -62,6 +62,7 @@ __all__ = [
     "Measurements",
     "measure",
     "four_point_derivative",
+    "four_point_velocity",
     "sensor_only",
     "SensorEstimate",
     "mean_error",
@@ -451,6 +452,29 @@ def four_point_derivative(y: Any, dt: float) -> np.ndarray:
     return windows @ c
 
 
+def four_point_velocity(positions: Any, dt: float) -> np.ndarray:
+    """The tracker-only velocity baseline: :func:`four_point_derivative` of the tracker positions.
+
+    Parameters
+    ----------
+    positions : array_like, shape (N, 3)
+        Tracker positions [m], ``N >= 4``.
+    dt : float
+        Sample time [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (N - 3, 3)
+        Velocity [m/s] at samples ``3 .. N-1``.
+
+    Raises
+    ------
+    InputError
+        See :func:`four_point_derivative`.
+    """
+    return four_point_derivative(positions, dt)
+
+
 @dataclass(frozen=True)
 class SensorEstimate:
     """Sensor-only estimates of the target's state (rows are samples 3 .. N-1: the regression's).
@@ -514,7 +538,7 @@ def sensor_only(meas: Measurements, model: EndEffectorModel) -> SensorEstimate:
     dt, k0 = model.dt, WINDOW - 1
     n = meas.t.size - k0
     r_ti = model.imu_rotation
-    velocity = four_point_derivative(meas.position, dt)
+    velocity = four_point_velocity(meas.position, dt)
     if model.rotation:
         gyro = meas.gyro[k0:]
         alpha_i = four_point_derivative(meas.gyro, dt)

@@ -25,6 +25,7 @@ from gtmodel.estimation.tracker_imu import (
     SinePath,
     believed_transform,
     four_point_derivative,
+    four_point_velocity,
     mean_error,
     measure,
     orientation_error,
@@ -125,6 +126,7 @@ def test_four_point_regression_closed_forms():
     t = np.arange(20) * DT
     line = np.column_stack([2.0 + 3.0 * t, -t])
     np.testing.assert_allclose(four_point_derivative(line, DT), [[3.0, -1.0]] * 17, rtol=1e-12)
+    np.testing.assert_array_equal(four_point_velocity(line, DT), four_point_derivative(line, DT))
     e = np.zeros((4, 1))
     e[3] = 1.0
     assert four_point_derivative(e, DT)[0, 0] == pytest.approx(3 / (10 * DT))
