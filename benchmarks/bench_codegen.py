@@ -17,6 +17,16 @@ equivalent (Kalman: ``Mx @ x + My @ y`` with the Function's Jacobians, exact for
 step; ILC: ``table[k]``). The controller comes from ``--controller FILE`` (a controller file,
 :mod:`gtmodel.codegen.controller_file`) or, by default, gtmodel.estimation's L1 Kalman step (x, y) and a 400-cycle learned table.
 
+Filters of the laser tracker + IMU fusion (Cvitanic (2021), ch. 4; aim: EKF step < 20 us,
+under 2 % of the 1 ms sample): ns per step of the generated ``kf_step`` (3-axis, nx 9) and
+``ekf_step`` (19-D) and of their ``_update`` (state struct) over a 3000-step measurement
+record, next to the same CasADi step Function called from Python (one call per step) and
+per step of its ``mapaccum`` over the record (the Python filters' ``run``). The filters come
+from ``--controller FILE`` when it holds them, else gtmodel.estimation's ``KalmanFilter`` /
+``ExtendedKalmanFilter`` at 1 kHz. ``--json`` keys ``kf_step_ns``, ``ekf_step_ns``,
+``python_kf_step_ns``, ``python_ekf_step_ns`` (and the details under ``filters``).
+``python benchmarks/bench_codegen.py --robots "" --no-controller`` runs the filter rows alone.
+
 Bundles: L1 = ik + jacobian + inverse_dynamics (aim < 1 us), F1 = ik + fk, both
 warm-started from the previous sample (aim < 10 us); the F1 default starts (continuation
 from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py`` (``--json``: one JSON document instead of the
@@ -29,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import shutil
 import subprocess
@@ -44,7 +55,10 @@ import casadi as ca
 from gtmodel.codegen import Controller, check_controller, compile_shared, find_compiler, generate, load_controller, load_library
 from gtmodel.codegen.check import _c_call, sample_inputs, time_functions, timed_rows
 from gtmodel.codegen.controller_check import ILC_MARGIN, run_inputs
+from gtmodel.codegen.filter_check import FILTER_CYCLES, TIMING_BLOCK, filter_record, python_filter_run, time_filters
 from gtmodel.estimation import StationaryKalman, ilc_correction_function
+from gtmodel.estimation.end_effector import EndEffectorModel
+from gtmodel.estimation.filters import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.robots.kinematics import configuration_signs
 
 BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}
@@ -162,6 +176,46 @@ def controller_rows(controller: Controller, root: Path, n: int, cflags: str) -> 
     return rows
 
 
+def default_filters(dt: float = 0.001) -> Controller:
+    """gtmodel.estimation's KF (3-axis) and EKF (19-D) at 1 kHz: white jerk 5 m/s^3 (5 rad/s^3), Table 7-like noise."""
+    steps = {}
+    for name, rotation, cls in (("kf_step", False, KalmanFilter), ("ekf_step", True, ExtendedKalmanFilter)):
+        m = EndEffectorModel(dt, rotation=rotation)
+        R = m.measurement_noise(6.4e-6, 0.012, 2e-5, 1e-3) if rotation else m.measurement_noise(6.4e-6, 0.012)
+        x0 = np.zeros(m.nx)
+        if rotation:
+            x0[9] = 1.0  # the identity quaternion
+        steps[name] = cls(m, m.process_noise(5.0, 5.0 if rotation else 0.0), R, x0, 1e-4 * np.eye(m.nx)).step_function()
+    return Controller(dt=dt, **steps)
+
+
+def filter_rows(controller: Controller, root: Path, n: int, cflags: str) -> dict[str, dict[str, float]]:
+    """ns per step of the filters: generated C (step and update over the record), the Function from Python, its mapaccum."""
+    filters = Controller(dt=controller.dt, kf_step=controller.kf_step, ekf_step=controller.ekf_step)
+    gen = generate("L1", root / "src", functions=(), prefix="gt_fusion", controller=filters)
+    lib = load_library(gen, compile_shared(gen, root / "build", extra_flags=cflags.split()))
+    report = check_controller(gen, library=lib, build_dir=root / "build")
+    if not report.passed:
+        raise SystemExit("filter check failed:\n" + "\n".join(report.summary_lines()))
+    records = {name: filter_record(filters, name, FILTER_CYCLES) for name in filters.filter_sizes}
+    times = time_filters(gen, lib.path, records, root / "build", budget_s=0.3)
+    rows: dict[str, dict[str, float]] = {}
+    for name in filters.filter_sizes:
+        f = getattr(filters, name)
+        rec = records[name]
+        run = python_filter_run(f, rec["z"], rec["x0"], rec["P0"])
+        k = FILTER_CYCLES // 2
+        py = _py_time(f, (run.x[k], run.P[k], rec["z"][k]), max(n // 4, 50))
+        acc = f.mapaccum("run", FILTER_CYCLES, 2)
+        t0 = time.perf_counter()
+        acc(rec["x0"], rec["P0"], rec["z"].T)
+        mapaccum_ns = (time.perf_counter() - t0) / FILTER_CYCLES * 1e9
+        rows[name] = {"c_ns": times[f"{name} best"], "c_mean_ns": times[name], "c_update_ns": times[f"{name[:-5]}_update best"],
+                      "c_update_mean_ns": times[f"{name[:-5]}_update"], "casadi_python_ns": py,
+                      "casadi_mapaccum_ns": mapaccum_ns, "max_abs_diff": max(c.max_abs_diff for c in report.functions if c.name.startswith(name[:-5]))}
+    return rows
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the benchmark and print one table per robot and one for the controller (or JSON)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -174,10 +228,11 @@ def main(argv: list[str] | None = None) -> None:
                     help="test Newton convergence every k steps (default: the declaration's; F1: 4 like Python)")
     ap.add_argument("--controller", type=Path, default=None, metavar="FILE",
                     help="controller file for the controller rows (default: gtmodel.estimation's L1 Kalman step and a 400-cycle table)")
-    ap.add_argument("--no-controller", action="store_true", help="skip the controller rows")
+    ap.add_argument("--no-controller", action="store_true", help="skip the controller rows (Kalman step, ILC)")
+    ap.add_argument("--no-filters", action="store_true", help="skip the KF/EKF rows of the tracker + IMU fusion")
     ap.add_argument("--json", action="store_true", help="print one JSON document (ns per call per function) instead of tables")
     args = ap.parse_args(argv)
-    doc: dict = {"robots": {}, "controller": {}}
+    doc: dict = {"robots": {}, "controller": {}, "filters": {}}
     out = sys.stdout
     if args.json:
         sys.stdout = sys.stderr  # the tables go to stderr, the JSON document to stdout
@@ -207,8 +262,11 @@ def main(argv: list[str] | None = None) -> None:
                 aim = 1000 if robot == "L1" else 10000
                 print(f"{'bundle ' + '+'.join(bundle):<38}{tc:>11.0f}{tp:>16.0f}{tp / tc:>8.0f}{ins}   (aim < {aim} ns: "
                       f"{'met' if tc < aim else 'NOT met'})")
-        if not args.no_controller:
-            controller = load_controller(args.controller) if args.controller else default_controller()
+        loaded = load_controller(args.controller) if args.controller else None
+        if not args.no_controller and (loaded is None or loaded.kalman_step is not None or loaded.ilc_correction is not None):
+            controller = loaded if loaded is not None and (loaded.kalman_step or loaded.ilc_correction) else default_controller()
+            controller = Controller(kalman_step=controller.kalman_step, ilc_correction=controller.ilc_correction,
+                                    ilc_table=controller.ilc_table, dt=controller.dt)
             rows = controller_rows(controller, Path(tmp) / "controller", args.python_calls, args.cflags)
             doc["controller"] = rows
             print(f"\ncontroller ({args.controller or 'gtmodel.estimation, L1 defaults'}): ns per step over a 400-cycle run "
@@ -219,6 +277,27 @@ def main(argv: list[str] | None = None) -> None:
             for name, r in rows.items():
                 print(f"{name:<20}{r['c_ns']:>10.0f}{r['casadi_python_ns']:>18.0f}{r['numpy_ns']:>10.0f}"
                       f"{r['casadi_python_ns'] / r['c_ns']:>10.0f}{r['numpy_ns'] / r['c_ns']:>9.0f}")
+        if not args.no_filters:
+            filters = loaded if loaded is not None and loaded.filter_sizes else default_filters()
+            rows = filter_rows(filters, Path(tmp) / "filters", args.python_calls, args.cflags)
+            doc["filters"] = rows
+            for name, r in rows.items():
+                doc[f"{name}_ns"], doc[f"python_{name}_ns"] = r["c_ns"], r["casadi_python_ns"]
+            print(f"\nfilters of the tracker + IMU fusion ({args.controller if loaded is not None and loaded.filter_sizes else 'gtmodel.estimation, 1 kHz'}): "
+                  f"ns per step over a {FILTER_CYCLES}-step record" + (f"; extra flags {args.cflags}" if args.cflags else "")
+                  + f"; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
+            hdr = (f"{'function':<12}{'C ns':>9}{'C mean':>9}{'update':>9}{'upd mean':>10}{'CasADi/Python ns':>18}{'mapaccum ns':>13}"
+                   f"{'Python/C':>10}{'max |C - Py|':>14}")
+            print(hdr)
+            print("-" * len(hdr))
+            for name, r in rows.items():
+                print(f"{name:<12}{r['c_ns']:>9.0f}{r['c_mean_ns']:>9.0f}{r['c_update_ns']:>9.0f}{r['c_update_mean_ns']:>10.0f}"
+                      f"{r['casadi_python_ns']:>18.0f}{r['casadi_mapaccum_ns']:>13.0f}{r['casadi_python_ns'] / r['c_ns']:>10.0f}{r['max_abs_diff']:>14.1e}")
+            print(f"C ns: the fastest block of {TIMING_BLOCK} consecutive steps (the step's own time); C mean: over the whole loop "
+                  "(includes the preemptions of a loaded machine); update: the state-struct function.")
+            if "ekf_step" in rows:
+                c = rows["ekf_step"]["c_ns"]
+                print(f"EKF step {c / 1000:.1f} us = {c / 1e4:.2f} % of the 1 ms sample (aim < 20 us: {'met' if c < 20000 else 'NOT met'})")
     print("\nC: mean over a C loop of one input (warm start = a nearby sample); Python: the CasADi Function called "
           "with NumPy inputs, or for the F1 Newton functions the Python model's method (same step Functions).")
     if args.json:

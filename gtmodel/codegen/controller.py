@@ -45,6 +45,9 @@ import numpy as np
 
 from gtmodel.codegen.c_text import _c_float
 from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
+from gtmodel.codegen.filter_step import (
+    FILTER_FUNCTIONS, check_filter_function, filter_header_lines, filter_sizes, filter_source_lines, filter_spec,
+)
 from gtmodel.errors import InputError
 
 if TYPE_CHECKING:  # annotations only
@@ -65,7 +68,7 @@ __all__ = [
 #: ``FunctionSpec.kind`` of the controller declarations (robot-independent functions).
 CONTROLLER_KIND = "controller"
 #: Names of the controller functions (the C symbols are ``<prefix>_<name>``).
-CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction")
+CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction", *FILTER_FUNCTIONS)
 #: Sample time of the loop [s] (Dressler (2012), ch. 3.2).
 DEFAULT_DT = 0.004
 #: Largest accepted ``|ilc_correction(k) - table[k]| / (1 + |table[k]|)`` when a Controller is built.
@@ -117,14 +120,25 @@ class Controller:
         relative) and ``u(-1) = u(N) = 0``.
     dt : float, optional
         Sample time of the loop [s] (default 0.004); the header's
-        ``<PREFIX>_CONTROLLER_DT``.
+        ``<PREFIX>_CONTROLLER_DT``. For the filters of the tracker + IMU fusion the
+        sensors' sample time (0.001 at 1 kHz): the self-check's measurement record uses it.
+    kf_step : casadi.Function or None, optional
+        ``"kf_step"(x[nx], P[nx,nx], z[nz]) -> (x_next[nx], P_next[nx,nx], pivots[nz+nx])``:
+        one step of the Kalman filter of the 3-axis (translation-only) end-effector model,
+        Cvitanic (2021), eqs. (21)-(26); e.g. ``KalmanFilter(...).step_function()`` of
+        :mod:`gtmodel.estimation.filters` (nx 9, nz 6). Generated as ``<prefix>_kf_step``
+        with the state struct ``<prefix>_kf_state`` (:mod:`gtmodel.codegen.filter_step`).
+    ekf_step : casadi.Function or None, optional
+        The same signature for the extended Kalman filter of the 19-D model, eqs. (21)-(29)
+        (nx 19, nz 13; ``ExtendedKalmanFilter(...).step_function()``); ``<prefix>_ekf_step``.
 
     Raises
     ------
     InputError
         No function given; a Function is not a ``casadi.Function`` or has another
         signature (names, dense column vectors, ``nx`` of ``x`` and ``x_next`` equal,
-        ``k`` scalar); ``ilc_correction`` without ``ilc_table`` or the reverse; a table
+        ``k`` scalar; the filter steps: ``P`` and ``P_next`` ``nx x nx``, ``pivots`` of
+        ``nz + nx``); ``ilc_correction`` without ``ilc_table`` or the reverse; a table
         that is not ``(N, d)`` finite with ``d`` the size of ``u``, or does not match the
         Function; ``dt`` not positive and finite.
     """
@@ -133,10 +147,15 @@ class Controller:
     ilc_correction: ca.Function | None = field(default=None, repr=False)
     ilc_table: np.ndarray | None = field(default=None, repr=False, compare=False)
     dt: float = DEFAULT_DT
+    kf_step: ca.Function | None = field(default=None, repr=False)
+    ekf_step: ca.Function | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
-        if self.kalman_step is None and self.ilc_correction is None:
-            raise InputError("controller: expected at least one of kalman_step and ilc_correction")
+        if all(getattr(self, n) is None for n in CONTROLLER_FUNCTIONS):
+            raise InputError(f"controller: expected at least one of {', '.join(CONTROLLER_FUNCTIONS)}")
+        for name in FILTER_FUNCTIONS:
+            if getattr(self, name) is not None:
+                check_filter_function(getattr(self, name), name)
         if isinstance(self.dt, bool) or not isinstance(self.dt, (int, float, np.floating)) or not (np.isfinite(self.dt) and self.dt > 0):
             raise InputError(f"dt: expected a positive sample time [s], got {self.dt!r}")
         object.__setattr__(self, "dt", float(self.dt))
@@ -187,6 +206,11 @@ class Controller:
         return (f.numel_in("x"), f.numel_in("y"), f.numel_out("z_hat")) if f is not None else (0, 0, 0)
 
     @property
+    def filter_sizes(self) -> dict[str, tuple[int, int]]:
+        """``{"kf_step": (nx, nz), "ekf_step": (nx, nz)}`` of the given filter steps."""
+        return {n: filter_sizes(getattr(self, n)) for n in FILTER_FUNCTIONS if getattr(self, n) is not None}
+
+    @property
     def ilc_length(self) -> int:
         """Number of cycles ``N`` of the learned table (0 without it)."""
         return 0 if self.ilc_table is None else int(len(self.ilc_table))
@@ -202,7 +226,7 @@ class Controller:
         Returns
         -------
         tuple of FunctionSpec
-            ``kalman_step`` and/or ``ilc_correction``, each wrapping the given Function
+            ``kalman_step``, ``ilc_correction``, ``kf_step``, ``ekf_step`` (those given), each wrapping the given Function
             (the self-check compares with that Function evaluated from Python).
         """
         out = []
@@ -241,6 +265,7 @@ class Controller:
                 unit="m",
                 kind=CONTROLLER_KIND,
             ))
+        out += [filter_spec(n, getattr(self, n), CONTROLLER_KIND) for n in self.filter_sizes]
         return tuple(out)
 
 
@@ -338,6 +363,8 @@ def controller_header_lines(prefix: str, controller: Controller, real: str) -> l
             f"#define {P}_ILC_D {controller.ilc_d}",
             "",
         ]
+    for name in controller.filter_sizes:
+        out += filter_header_lines(prefix, name, getattr(controller, name), real)
     return out
 
 
@@ -356,10 +383,13 @@ def controller_source_lines(prefix: str, controller: Controller, real: str) -> l
     Returns
     -------
     list of str
-        C lines appended to the wrapper source (empty without ``kalman_step``).
+        C lines appended to the wrapper source (empty without ``kalman_step`` and filters):
+        also ``<prefix>_kf_init``/``_update`` and ``<prefix>_ekf_init``/``_update``.
     """
+    filters = [line for name in controller.filter_sizes
+               for line in filter_source_lines(prefix, name, getattr(controller, name), real)]
     if controller.kalman_step is None:
-        return []
+        return filters
     nx = controller.kalman_sizes[0]
     st = f"{prefix}_kalman_state"
     return [
@@ -387,4 +417,5 @@ def controller_source_lines(prefix: str, controller: Controller, real: str) -> l
         "    return GT_OK;",
         "}",
         "",
+        *filters,
     ]

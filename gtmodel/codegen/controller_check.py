@@ -13,7 +13,10 @@ of a run (default 400 cycles, 1.6 s):
 
 then probes the status contract (NULL pointers, NaN/Inf inputs or state: ``GT_BAD_ARGUMENT``
 with the outputs and the state untouched) and, with ``timing=True``, times each function
-in a C loop over the run (ns per call).
+in a C loop over the run (ns per call). The KF/EKF steps of the tracker + IMU fusion
+(``kf_step``, ``ekf_step``) are checked over a measurement record of a few thousand steps
+by :mod:`gtmodel.codegen.filter_check` (every state and covariance; the quaternion norm;
+a covariance that is not positive definite gives ``GT_NUMERIC_ERROR``).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler
 from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, SENTINEL, CheckReport, FunctionCheck, StatusProbe
 from gtmodel.codegen.controller import Controller, controller_part
 from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.codegen.filter_check import FILTER_CYCLES, filter_checks, filter_probes, filter_record, time_filters
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.errors import CodegenError, InputError
 
@@ -76,7 +80,8 @@ class ControllerCheckReport(CheckReport):
     seed : int
         Seed of the sensor noise of the run.
     functions : tuple of FunctionCheck
-        ``kalman_step``, ``kalman_update``, ``ilc_correction`` (those generated).
+        ``kalman_step``, ``kalman_update``, ``ilc_correction``, ``kf_update``, ``kf_step``,
+        ``ekf_update``, ``ekf_step``, ``ekf_update quaternion norm`` (those generated).
     probes : tuple of StatusProbe
         Status-code probes.
     version : str
@@ -100,8 +105,11 @@ class ControllerCheckReport(CheckReport):
             E.g. ``"kalman_update: max |C - Python| = 0.0e+00 m, m/s, m/s^2 (tol 1e-12), 60 ns/call OK"``.
         """
         lines = super().summary_lines()
+        names = {f.name for f in self.functions}
+        ilc = f"; ILC table +-{ILC_MARGIN} cycles" if "ilc_correction" in names else ""
+        filters = ", filters over their whole record" if names & {"kf_update", "ekf_update"} else ""
         lines[0] = (f"check of the controller of {self.prefix} over a run of {self.n} cycles "
-                    f"(every cycle; ILC table +-{ILC_MARGIN} cycles; seed {self.seed}):")
+                    f"(every cycle{ilc}{filters}; seed {self.seed}):")
         return lines
 
 
@@ -399,6 +407,30 @@ def time_controller(generated: GeneratedCode, library: Path, inputs: dict[str, n
     return {k: float(v) for k, v in (line.split("\t") for line in run.stdout.strip().splitlines())}
 
 
+def _records(c: Controller, cycles: int, seed: int, given: dict | None) -> dict[str, dict[str, np.ndarray]]:
+    """The measurement record and prior of every filter step: ``given`` ones validated, else :func:`filter_record`."""
+    given = {} if given is None else dict(given)
+    unknown = [k for k in given if k not in c.filter_sizes]
+    if unknown:
+        raise InputError(f"records: {unknown[0]!r} is not a filter of the controller ({', '.join(c.filter_sizes) or 'none'})")
+    out = {}
+    for name, (nx, nz) in c.filter_sizes.items():
+        if name not in given:
+            out[name] = filter_record(c, name, cycles, seed)
+            continue
+        r = given[name]
+        shapes = {"z": (None, nz), "x0": (nx,), "P0": (nx, nx)}
+        rec = {}
+        for key, shape in shapes.items():
+            v = np.asarray(r.get(key, np.zeros(0)) if isinstance(r, dict) else np.zeros(0), dtype=float)
+            if v.ndim != len(shape) or any(a is not None and a != b for a, b in zip(shape, v.shape)) or v.size == 0 or not np.all(np.isfinite(v)):
+                want = "(N, %d)" % nz if key == "z" else str(shape)
+                raise InputError(f"records[{name!r}][{key!r}]: expected finite values of shape {want}, got {v.shape}")
+            rec[key] = v
+        out[name] = rec
+    return out
+
+
 def check_controller(
     generated: GeneratedCode,
     cycles: int = RUN_CYCLES,
@@ -408,6 +440,8 @@ def check_controller(
     timing: bool = False,
     y: np.ndarray | None = None,
     x0: np.ndarray | None = None,
+    filter_cycles: int = FILTER_CYCLES,
+    records: dict[str, dict[str, np.ndarray]] | None = None,
 ) -> ControllerCheckReport:
     """Compare the generated controller functions with Python over every cycle of a run.
 
@@ -430,6 +464,13 @@ def check_controller(
         the logged ``[z_kin, a_m]`` of an ILC trial).
     x0 : numpy.ndarray or None, optional
         Initial filter state ``(nx,)`` (default zeros).
+    filter_cycles : int, optional
+        Measurements of the default record of each KF/EKF step
+        (:func:`~gtmodel.codegen.filter_check.filter_record`; default 3000).
+    records : dict or None, optional
+        ``{"kf_step" | "ekf_step": {"z": (N, nz), "x0": (nx,), "P0": (nx, nx)}}``: a
+        measurement record and prior to replay instead of the default one (e.g. a
+        simulated tracker + IMU run of the fusion study).
 
     Returns
     -------
@@ -442,8 +483,8 @@ def check_controller(
     Raises
     ------
     InputError
-        No controller in ``generated``; ``cycles`` not a positive integer; ``y`` or
-        ``x0`` of the wrong shape or not finite.
+        No controller in ``generated``; ``cycles`` or ``filter_cycles`` not a positive
+        integer; ``y``, ``x0`` or a record of the wrong shape or not finite.
     CompilerNotFoundError
         No C compiler.
     CodegenError
@@ -454,6 +495,8 @@ def check_controller(
         raise InputError("generated: the library has no controller functions (generate(..., controller=...))")
     if isinstance(cycles, bool) or not isinstance(cycles, (int, np.integer)) or cycles < 1:
         raise InputError(f"cycles: expected a positive number of cycles, got {cycles!r}")
+    if isinstance(filter_cycles, bool) or not isinstance(filter_cycles, (int, np.integer)) or filter_cycles < 1:
+        raise InputError(f"filter_cycles: expected a positive number of measurements, got {filter_cycles!r}")
     inputs = run_inputs(c, int(cycles), seed)
     nx, ny, _ = c.kalman_sizes
     if y is not None:
@@ -479,11 +522,18 @@ def check_controller(
         check, p = _ilc(library, c, ref, inputs["k"], generated.real)
         results.append(check)
         probes += p
+    recs = _records(c, filter_cycles, seed, records)
+    for name, rec in recs.items():
+        results += filter_checks(library, c, name, rec, generated.real)[0]
+        probes += filter_probes(library, name, rec)
     if timing:
-        times = time_controller(controller_part(generated), library.path, inputs, build)
+        times = time_controller(controller_part(generated), library.path, inputs, build) if c.kalman_step or c.ilc_correction else {}
+        if recs:
+            times.update(time_filters(controller_part(generated), library.path, recs, build))
         results = [FunctionCheck(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]
+    n = len(inputs["y"]) if c.kalman_step is not None else (len(inputs["k"]) if c.ilc_correction is not None else max(len(r["z"]) for r in recs.values()))
     report = ControllerCheckReport(
-        robot=generated.robot_name, prefix=generated.prefix, n=len(inputs["y"]) if c.kalman_step is not None else len(inputs["k"]),
+        robot=generated.robot_name, prefix=generated.prefix, n=n,
         seed=seed, functions=tuple(results), probes=tuple(probes), version=library.version(), library=library.path,
     )
     log.info("codegen controller check of %s: %s", generated.prefix, "passed" if report.passed else "FAILED")

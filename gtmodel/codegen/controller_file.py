@@ -18,14 +18,26 @@ key                       value                                                 
                           serialised (string; ``ilc_correction_function(table)``)   ``ilc_table``
 ``ilc_table``             the learned correction ``(N, d)`` [m] the Function        with
                           looks up (JSON: a list of N rows of d numbers)            ``ilc_correction``
+``kf_step``               the KF step of the tracker + IMU fusion ``"kf_step"(x,    no
+                          P, z) -> (x_next, P_next, pivots)`` serialised
+                          (``KalmanFilter(...).step_function()``)
+``ekf_step``              the EKF step of the 19-D model, same signature            no
+                          (``ExtendedKalmanFilter(...).step_function()``)
 ``description``           free text (what run, which case)                          no
 ========================  ========================================================  ===========
 
-At least one of ``kalman_step`` and ``ilc_correction`` must be present. The Functions are
+At least one of ``kalman_step``, ``ilc_correction``, ``kf_step`` and ``ekf_step`` must be
+present. For the filters ``dt`` is the sensors' sample time (0.001 at 1 kHz). The Functions are
 stored themselves, not rebuilt from matrices: the C is generated from the very graph the
 Python estimation ran (the serialisation is CasADi's; a file written by another CasADi
 version may not load: regenerate it). On loading every key is validated; an error names
 the file and the key.
+
+Writing the filters of the fusion (``gtmodel codegen --controller fusion.json --out DIR``
+then generates them alone, without robot functions)::
+
+    save_controller("fusion.json", Controller(kf_step=kf.step_function(),
+                                              ekf_step=ekf.step_function(), dt=0.001))
 
 Writing from an ILC run (the ``ilc`` problem kind)::
 
@@ -52,7 +64,9 @@ __all__ = ["CONTROLLER_FORMAT", "CONTROLLER_KEYS", "save_controller", "load_cont
 #: Value of the ``format`` key.
 CONTROLLER_FORMAT = "gtmodel.controller/1"
 #: Every key a controller file may hold.
-CONTROLLER_KEYS = ("format", "dt", "kalman_step", "ilc_correction", "ilc_table", "description")
+CONTROLLER_KEYS = ("format", "dt", "kalman_step", "ilc_correction", "ilc_table", "kf_step", "ekf_step", "description")
+#: Keys holding a serialised CasADi Function.
+_FUNCTION_KEYS = ("kalman_step", "ilc_correction", "kf_step", "ekf_step")
 _SUFFIXES = (".json", ".npz")
 
 
@@ -89,8 +103,9 @@ def save_controller(path: str | Path, controller: Controller, description: str =
     if not isinstance(controller, Controller):
         raise InputError(f"controller: expected a gtmodel.codegen.Controller, got {type(controller).__name__}")
     data: dict[str, Any] = {"format": CONTROLLER_FORMAT, "dt": controller.dt}
-    if controller.kalman_step is not None:
-        data["kalman_step"] = controller.kalman_step.serialize()
+    for key in ("kalman_step", "kf_step", "ekf_step"):
+        if getattr(controller, key) is not None:
+            data[key] = getattr(controller, key).serialize()
     if controller.ilc_correction is not None:
         data["ilc_correction"] = controller.ilc_correction.serialize()
         data["ilc_table"] = np.asarray(controller.ilc_table, dtype=float)
@@ -183,16 +198,17 @@ def load_controller(path: str | Path) -> Controller:
     dt = dt.item() if isinstance(dt, np.ndarray) and dt.ndim == 0 and dt.dtype.kind in "fi" else dt
     if isinstance(dt, bool) or not isinstance(dt, (int, float)) or not (math.isfinite(dt) and dt > 0):
         raise InputError(f"controller file {path}: key 'dt': expected a positive sample time [s], got {dt!r}")
-    if "kalman_step" not in data and "ilc_correction" not in data:
-        raise InputError(f"controller file {path}: expected at least one of the keys 'kalman_step' and 'ilc_correction'")
+    if not any(k in data for k in _FUNCTION_KEYS):
+        raise InputError(f"controller file {path}: expected at least one of the keys {', '.join(map(repr, _FUNCTION_KEYS))}")
     for a, b in (("ilc_correction", "ilc_table"), ("ilc_table", "ilc_correction")):
         if a in data and b not in data:
             raise InputError(f"controller file {path}: key {a!r} needs the key {b!r}")
     if "description" in data:
         _string(path, data, "description")
     kw: dict[str, Any] = {"dt": float(dt)}
-    if "kalman_step" in data:
-        kw["kalman_step"] = _function(path, data, "kalman_step")
+    for key in ("kalman_step", "kf_step", "ekf_step"):
+        if key in data:
+            kw[key] = _function(path, data, key)
     if "ilc_correction" in data:
         kw["ilc_correction"] = _function(path, data, "ilc_correction")
         try:

@@ -390,7 +390,9 @@ def generate(
         :data:`gtmodel.codegen.specs.SPECS_BY_KIND` or declarations; default all of
         :func:`gtmodel.codegen.specs.default_functions` (3-link: ``ik``, ``fk``,
         ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
-        ``gravity``; six-link: ``fk``, ``ik``; F1: ``ik``, ``fk``).
+        ``gravity``; six-link: ``fk``, ``ik``; F1: ``ik``, ``fk``). Empty with a
+        ``controller``: the controller functions alone (the robot then only names the
+        default prefix and the version string), e.g. the KF/EKF steps of the fusion.
     prefix : str or None, optional
         C symbol prefix; default ``"gt_<robot name>"``, e.g. ``gt_L1`` (giving
         ``gt_L1_ik``, header ``gt_L1.h``).
@@ -413,7 +415,9 @@ def generate(
         (:class:`~gtmodel.codegen.controller.Controller`: the stationary Kalman step
         ``<prefix>_kalman_step`` with its state struct, ``<prefix>_kalman_init`` and
         ``<prefix>_kalman_update``, and the ILC correction lookup
-        ``<prefix>_ilc_correction``), e.g. from
+        ``<prefix>_ilc_correction``; the KF/EKF steps of the tracker + IMU fusion
+        ``<prefix>_kf_step``/``<prefix>_ekf_step`` with ``<prefix>_kf_state`` ... of
+        :mod:`~gtmodel.codegen.filter_step`), e.g. from
         :func:`~gtmodel.codegen.controller_file.load_controller`; checked by
         :func:`~gtmodel.codegen.controller_check.check_controller`.
 
@@ -452,7 +456,8 @@ def generate(
         isinstance(newton_check_every, bool) or not isinstance(newton_check_every, (int, np.integer)) or not 1 <= newton_check_every <= 100
     ):
         raise InputError(f"newton_check_every: expected an integer from 1 to 100, got {newton_check_every!r}")
-    specs = _resolve_specs(default_functions(model.kind) if functions is None else functions, model.kind)
+    only_controller = controller is not None and functions is not None and not isinstance(functions, (str, FunctionSpec)) and len(functions) == 0
+    specs = () if only_controller else _resolve_specs(default_functions(model.kind) if functions is None else functions, model.kind)
     if controller is not None:
         if not isinstance(controller, Controller):
             raise InputError(f"controller: expected a gtmodel.codegen.Controller, got {type(controller).__name__}")

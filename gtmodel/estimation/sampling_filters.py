@@ -459,7 +459,9 @@ class ParticleRun(FilterRun):
     quaternion_slice : slice or None
         The quaternion's columns of ``x``.
     ess : numpy.ndarray, shape (N,)
-        Effective sample size ``1 / sum w_i^2`` after each sample's weighting [particles].
+        Effective sample size ``1 / sum w_i^2`` after each sample's weighting [particles]
+        (``n_particles`` at sample 0 with the Gaussian start; NaN at a sample that lost the
+        measurement before its weighting).
     resampled : numpy.ndarray, shape (N,), bool
         Whether the sample ended with a resampling.
     min_d2 : numpy.ndarray, shape (N,)

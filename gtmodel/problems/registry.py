@@ -17,6 +17,7 @@ from gtmodel.problems.kinds.point_to_point import PointToPointKind
 from gtmodel.problems.kinds.tracking import TrackingKind
 from gtmodel.problems.kinds.ilc import ILCKind
 from gtmodel.problems.kinds.state_estimation import StateEstimationKind
+from gtmodel.problems.kinds.correction_stability import CorrectionStabilityKind
 
 __all__ = ["KINDS", "get_kind"]
 
@@ -30,6 +31,7 @@ _CLASSES: tuple[type[ProblemKind], ...] = (
     TrackingKind,
     ILCKind,
     StateEstimationKind,
+    CorrectionStabilityKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.

@@ -33,7 +33,7 @@ import scipy.optimize
 import scipy.signal
 
 from gtmodel._docstrings import fill_doc
-from gtmodel._arrays import positive_float
+from gtmodel._arrays import positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
 
@@ -308,8 +308,10 @@ def simulate_single_mode(m: Any, c: Any, k: Any, t: Any, F: Any) -> np.ndarray:
 class DynamicStiffnessGP:
     """Nine Gaussian-process models of ``(m, c, k)`` per direction over poses, eqs. (9)-(11).
 
-    Input per pose: TCP position ``(x, y, z)`` [m] and the redundant angle ``A`` [rad]
-    (4 columns). Each of the 9 outputs (direction x parameter) gets a scikit-learn
+    Input per pose: by default TCP position ``(x, y, z)`` [m] and the redundant angle ``A``
+    [rad] (4 columns, eqs. (9)-(11)); any other pose description of ``n_inputs`` columns
+    works the same way (e.g. joint angles 2 and 3 [rad] for the closed-loop study of
+    Cvitanic (2021), section 5: ``n_inputs=2``). Each of the 9 outputs (direction x parameter) gets a scikit-learn
     ``GaussianProcessRegressor`` on ``log(value)`` with an anisotropic RBF kernel plus a
     white-noise term (hyperparameters by maximum likelihood, inputs standardised, length
     scales bounded to 0.1-100 standard deviations of the inputs: without the lower bound
@@ -317,8 +319,8 @@ class DynamicStiffnessGP:
 
     Parameters
     ----------
-    X : array_like, shape (N, 4)
-        Training inputs: TCP position [m] and angle A [rad]; N >= 3 distinct rows.
+    X : array_like, shape (N, n_inputs)
+        Training inputs (default: TCP position [m] and angle A [rad]); N >= 3 distinct rows.
     m : array_like, shape (N, 3)
         Modal masses [kg] per direction (x, y, z), > 0.
     c : array_like, shape (N, 3)
@@ -331,6 +333,8 @@ class DynamicStiffnessGP:
         Seed of the optimiser restarts.
     n_restarts : int, optional
         Restarts of the hyperparameter optimiser per model (default 0).
+    n_inputs : int, optional
+        Columns of ``X`` (default 4: TCP position and angle A).
 
     Raises
     ------
@@ -338,13 +342,15 @@ class DynamicStiffnessGP:
         Wrong shapes, non-finite values, non-positive parameters or fewer than 3 poses.
     """
 
-    def __init__(self, X: Any, m: Any, c: Any, k: Any, noise_level: float = 1e-4, seed: int = 0, n_restarts: int = 0) -> None:
+    def __init__(self, X: Any, m: Any, c: Any, k: Any, noise_level: float = 1e-4, seed: int = 0, n_restarts: int = 0, n_inputs: int = 4) -> None:
         from sklearn.gaussian_process import GaussianProcessRegressor
         from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 
+        self.n_inputs = positive_int(n_inputs, "n_inputs")
+        what = " (TCP x, y, z [m], A [rad])" if self.n_inputs == 4 else ""
         Xa = np.asarray(X, dtype=float)
-        if Xa.ndim != 2 or Xa.shape[1] != 4 or Xa.shape[0] < 3:
-            raise InputError(f"X: expected shape (N, 4) (TCP x, y, z [m], A [rad]) with N >= 3, got {Xa.shape}")
+        if Xa.ndim != 2 or Xa.shape[1] != self.n_inputs or Xa.shape[0] < 3:
+            raise InputError(f"X: expected shape (N, {self.n_inputs}){what} with N >= 3, got {Xa.shape}")
         if not np.all(np.isfinite(Xa)):
             raise InputError("X: non-finite value")
         data = {}
@@ -363,7 +369,7 @@ class DynamicStiffnessGP:
         self.models: dict[tuple[str, str], Any] = {}
         for name in ("m", "c", "k"):
             for i, d in enumerate(DIRECTIONS):
-                kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.ones(4), (1e-1, 1e2)) + WhiteKernel(noise_level, (1e-10, 1e-1))
+                kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.ones(self.n_inputs), (1e-1, 1e2)) + WhiteKernel(noise_level, (1e-10, 1e-1))
                 gp = GaussianProcessRegressor(kernel=kernel, normalize_y=True, n_restarts_optimizer=int(n_restarts), random_state=seed)
                 gp.fit(Z, np.log(data[name][:, i]))
                 self.models[(d, name)] = gp
@@ -374,8 +380,8 @@ class DynamicStiffnessGP:
 
         Parameters
         ----------
-        X : array_like, shape (N, 4) or (4,)
-            TCP position [m] and angle A [rad].
+        X : array_like, shape (N, n_inputs) or (n_inputs,)
+            Poses, the columns of the training inputs (default: TCP position [m] and angle A [rad]).
         return_std : bool, optional
             Also return the standard deviations of ``log(value)`` [-].
 
@@ -393,8 +399,8 @@ class DynamicStiffnessGP:
         Xa = np.asarray(X, dtype=float)
         if Xa.ndim == 1:
             Xa = Xa.reshape(1, -1)
-        if Xa.ndim != 2 or Xa.shape[1] != 4:
-            raise InputError(f"X: expected shape (N, 4) or (4,), got {np.asarray(X).shape}")
+        if Xa.ndim != 2 or Xa.shape[1] != self.n_inputs:
+            raise InputError(f"X: expected shape (N, {self.n_inputs}) or ({self.n_inputs},), got {np.asarray(X).shape}")
         if not np.all(np.isfinite(Xa)):
             raise InputError("X: non-finite value")
         Z = (Xa - self._mu) / self._sd

@@ -22,7 +22,8 @@ rotation vector [rad]) is::
 eq. (3) is linear: ``dX = sum_i c_i J_i (J_i^T F)`` (:meth:`SerialArm.compliance_regressor`).
 
 The only shipped geometry, ``serial_6r_illustrative``, is an ILLUSTRATIVE KR 500-like arm:
-the thesis gives no DH table for its KUKA KR 500-3, so its values are assumptions.
+the thesis gives no DH table for its KUKA KR 500-3, so its values are assumptions; so are
+its joint limits (``[joint_limits]``, :meth:`SerialArm.check_joint_limits`).
 """
 
 from __future__ import annotations
@@ -190,11 +191,15 @@ class SerialArm:
         Name of the arm.
     description : str, optional
         What the geometry is (and whether it is illustrative).
+    joint_limits : array_like, shape (6, 2), optional
+        Lower and upper limit per joint [rad] (default None: no limits); checked by
+        :meth:`check_joint_limits`.
 
     Raises
     ------
     InputError
-        Wrong shapes, non-finite values, or a ``tool``/``base`` that is not a rigid transform.
+        Wrong shapes, non-finite values, a ``tool``/``base`` that is not a rigid transform,
+        or joint limits with a lower limit not below the upper one.
 
     Notes
     -----
@@ -215,6 +220,7 @@ class SerialArm:
         base: Any = None,
         name: str = "serial_arm",
         description: str = "",
+        joint_limits: Any = None,
     ) -> None:
         self.a = _vector(a, 6, "a")
         self.alpha = _vector(alpha, 6, "alpha")
@@ -224,6 +230,55 @@ class SerialArm:
         self.base = self._transform(base, "base")
         self.name = str(name)
         self.description = str(description)
+        self.joint_limits = None if joint_limits is None else self._limits(joint_limits)
+
+    @staticmethod
+    def _limits(value: Any) -> np.ndarray:
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"joint_limits: expected an array of shape (6, 2) [rad], got {value!r}") from None
+        if arr.shape != (6, 2) or not np.all(np.isfinite(arr)):
+            raise InputError(f"joint_limits: expected a finite array of shape (6, 2) [rad], got shape {arr.shape}")
+        bad = np.flatnonzero(arr[:, 0] >= arr[:, 1])
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(f"joint_limits: expected lower < upper limit, joint {i + 1} has {arr[i].tolist()} rad")
+        return arr
+
+    def check_joint_limits(self, theta: Any, name: str = "theta") -> np.ndarray:
+        """Refuse joint angles outside the arm's joint limits (none if ``joint_limits`` is None).
+
+        Parameters
+        ----------
+        theta : array_like, shape (6,) or (N, 6)
+            Joint angles [rad].
+        name : str, optional
+            Argument name used in the message.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 6)
+            The angles as rows.
+
+        Raises
+        ------
+        InputError
+            Wrong shape, a non-finite angle, or an angle outside its limits: the message
+            names the row, the joint and its limits in degrees.
+        """
+        th, _ = _rows(theta, 6, name)
+        if self.joint_limits is None:
+            return th
+        lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
+        out = (th < lo) | (th > hi)
+        if np.any(out):
+            r, j = (int(v[0]) for v in np.nonzero(out))
+            raise InputError(
+                f"{name}: row {r}: joint {j + 1} = {math.degrees(th[r, j]):.6g} deg is outside the joint limits "
+                f"{math.degrees(lo[j]):.6g}..{math.degrees(hi[j]):.6g} deg of {self.name}"
+            )
+        return th
 
     @staticmethod
     def _transform(value: Any, name: str) -> np.ndarray:
@@ -569,6 +624,17 @@ def _arm_from_mapping(data: Mapping[str, Any], origin: str) -> SerialArm:
     tool = np.eye(4)
     tool[:3, :3] = rotation_rpy(np.radians(rpy))
     tool[:3, 3] = t
+    limits = None
+    lim_tab = data.get("joint_limits")
+    if lim_tab is not None:
+        if not isinstance(lim_tab, Mapping):
+            raise ParameterError(f"{origin}: joint_limits: expected a table with lower_deg and upper_deg")
+        try:
+            lo = _vector(lim_tab.get("lower_deg"), 6, "joint_limits.lower_deg")
+            hi = _vector(lim_tab.get("upper_deg"), 6, "joint_limits.upper_deg")
+            limits = SerialArm._limits(np.radians(np.column_stack([lo, hi])))
+        except InputError as exc:
+            raise ParameterError(f"{origin}: {exc}") from None
     return SerialArm(
         values["a"],
         np.radians(values["alpha_deg"]),
@@ -577,6 +643,7 @@ def _arm_from_mapping(data: Mapping[str, Any], origin: str) -> SerialArm:
         tool=tool,
         name=str(data.get("name", origin)),
         description=str(data.get("description", "")),
+        joint_limits=limits,
     )
 
 

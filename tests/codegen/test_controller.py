@@ -28,7 +28,7 @@ def _f(name, ins, outs, sizes_in, sizes_out):
 
 
 BAD_CONTROLLERS = [
-    ({}, r"at least one of kalman_step and ilc_correction"),
+    ({}, r"at least one of kalman_step, ilc_correction, kf_step, ekf_step"),
     ({"kalman_step": "not a function"}, r"kalman_step: expected a casadi.Function, got str"),
     ({"kalman_step": _f("k", ("x", "z"), ("x_next", "z_hat"), (9, 6), (9, 3))}, r"kalman_step: expected .*\(x, y\) -> \(x_next, z_hat\), got \(x, z\)"),
     ({"kalman_step": _f("k", ("x", "y"), ("x_next", "z_hat"), (9, 6), (8, 3))}, r"kalman_step: x has 9 elements but x_next has 8"),

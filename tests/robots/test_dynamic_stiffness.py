@@ -126,6 +126,8 @@ H_OK = single_mode_frf(200, 3000, 2e6, F_OK)
         (lambda: simulate_single_mode([1, 1, 1], [1, 1, 1], [1, 1, 1], np.r_[0, 1, 3.0], np.zeros((3, 3))), "equally spaced"),
         (lambda: simulate_single_mode([1, 1, 1], [1, 1, 1], [1, 1, 1], np.arange(5.0), np.zeros((5, 2))), r"F: expected shape \(5, 3\)"),
         (lambda: DynamicStiffnessGP(np.zeros((5, 3)), np.ones((5, 3)), np.ones((5, 3)), np.ones((5, 3))), r"X: expected shape \(N, 4\)"),
+        (lambda: DynamicStiffnessGP(np.zeros((5, 3)), np.ones((5, 3)), np.ones((5, 3)), np.ones((5, 3)), n_inputs=2), r"X: expected shape \(N, 2\) with"),
+        (lambda: DynamicStiffnessGP(np.zeros((5, 2)), np.ones((5, 3)), np.ones((5, 3)), np.ones((5, 3)), n_inputs=0), "n_inputs: expected a positive integer"),
         (lambda: DynamicStiffnessGP(np.random.default_rng(0).random((5, 4)), np.ones((5, 3)), np.ones((5, 3)), -np.ones((5, 3))), "k: expected finite positive"),
     ],
 )

@@ -9,6 +9,8 @@ equilibrium ``K_theta dtheta = J(theta + dtheta)^T F`` solved by fixed-point ite
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -16,6 +18,7 @@ from gtmodel.errors import InputError, ParameterError, SingularConfigurationErro
 from gtmodel.robots.parameters import available_parameter_sets
 from gtmodel.robots.serial import SerialArm, load_serial_arm
 
+REPO_DATA = Path(__file__).resolve().parents[2] / "gtmodel" / "robots" / "data"
 FD_STEP = 1e-6  # rad
 FD_TOLERANCE = 1e-7  # m/rad, rad/rad
 GEOMETRY_TOLERANCE = 1e-12  # m
@@ -192,3 +195,36 @@ def test_unknown_arm():
     """An unknown name is refused."""
     with pytest.raises(ParameterError, match="unknown serial arm"):
         load_serial_arm("no_such_arm")
+
+
+def test_shipped_joint_limits_contain_the_thesis_poses(arm):
+    """The assumed limits hold every pose of Cvitanic (2021), Tables 1, 12 and 13 (joints 1, 4-6 of Tables 12-13 as the correction study's)."""
+    from gtmodel.estimation.correction import CALIBRATION_POSES_DEG, VALIDATION_POSES_DEG, joint_angles
+
+    assert arm.joint_limits.shape == (6, 2)
+    arm.check_joint_limits(np.radians([[19.67, -52.14, 117.9, 11.86, -66.08, -4.84], [42.99, -40.39, 97.42, -177.38, 72.1, -179.8]]))
+    arm.check_joint_limits(joint_angles(np.vstack([CALIBRATION_POSES_DEG, VALIDATION_POSES_DEG])))
+
+
+@pytest.mark.parametrize(
+    "theta_deg, match",
+    [
+        ([0, -131, 90, 0, 30, 0], r"theta: row 0: joint 2 = -131 deg is outside the joint limits -130\.\.20 deg"),
+        ([0, -40, 90, 0, 119, 0], r"joint 5 = 119 deg is outside the joint limits -118\.\.118 deg"),
+    ],
+)
+def test_pose_outside_the_joint_limits(arm, theta_deg, match):
+    """A pose outside the limits names the joint and its limits."""
+    with pytest.raises(InputError, match=match):
+        arm.check_joint_limits(np.radians(theta_deg))
+
+
+def test_bad_joint_limits(tmp_path):
+    """Joint limits with lower >= upper are refused, naming the joint (argument) or the file and field."""
+    with pytest.raises(InputError, match="joint_limits: expected lower < upper limit, joint 3"):
+        SerialArm(np.zeros(6), np.zeros(6), np.zeros(6), joint_limits=[[-1, 1], [-1, 1], [1, -1], [-1, 1], [-1, 1], [-1, 1]])
+    p = tmp_path / "arm.toml"
+    text = (REPO_DATA / "serial_6r_illustrative.toml").read_text()
+    p.write_text(text.replace("lower_deg = [-185.0,", "lower_deg = [-185.0, 0.0,"))
+    with pytest.raises(ParameterError, match=r"joint_limits\.lower_deg: expected shape \(6,\)"):
+        load_serial_arm(p)
