@@ -16,6 +16,7 @@ from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKin
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 from gtmodel.problems.kinds.tracking import TrackingKind
 from gtmodel.problems.kinds.ilc import ILCKind
+from gtmodel.problems.kinds.state_estimation import StateEstimationKind
 from gtmodel.problems.kinds.correction_stability import CorrectionStabilityKind
 from gtmodel.problems.kinds.optimal_control import OptimalControlKind
 
@@ -30,6 +31,7 @@ _CLASSES: tuple[type[ProblemKind], ...] = (
     JointStiffnessKind,
     TrackingKind,
     ILCKind,
+    StateEstimationKind,
     CorrectionStabilityKind,
     OptimalControlKind,
 )

@@ -1,0 +1,484 @@
+"""Kind ``state_estimation``: the laser tracker + IMU fusion study of Cvitanic (2021), sections 4.2-4.3.
+
+The sine path (``[path]``, 3-axis and 5-axis), the Table 7 sensors (``[sensors]``, the thesis'
+baseline by default), the filters' tuning (``[filter]``) and the study's extent (``[study]``: the
+10x-noisier tracker of Table 9, the Table 10 sweeps, the filter comparison) run through
+:class:`~gtmodel.estimation.fusion_study.FusionStudy`. The result folder holds ``summary.json``
+(fields ``table_8``, ``table_9``, ``table_10``, ``velocity_mean_error_mm_s`` per motion,
+``angular_acceleration``, ``filter_comparison``, ``nees``, ``process_noise``, ``checks``),
+``table_8.md/.csv``, ``table_9.md/.csv``, ``table_10.md/.csv``, ``filter_comparison.md/.csv``
+(the thesis' figures beside ours where the reference data has them), ``fusion_baseline.csv``
+(the baseline runs' truth and estimates) and the plots ``velocity_3_axis.png``,
+``velocity_5_axis.png`` (style of Fig. 24), ``angular_acceleration.png`` (Fig. 25) and
+``table_10.png`` (Fig. 26). The field reference is ``docs/problem_files.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from gtmodel._docstrings import fill_doc
+from gtmodel.errors import InputError
+from gtmodel.estimation.fusion_study import (
+    APPENDIX_B,
+    DEFAULT_INITIAL_COVARIANCE,
+    FILTERS,
+    PEAK_FRACTION,
+    THESIS_TABLE_11,
+    FusionStudy,
+    FusionStudyResult,
+)
+from gtmodel.estimation.tracker_imu import MAX_SAMPLES, MIN_SAMPLES, SINE_PATH, TABLE_7, SensorSpec
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.schema import ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.report.fusion import plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables
+
+__all__ = ["StateEstimationFile", "StateEstimationKind", "PathSection", "SensorsSection", "FilterSection", "StudySection", "SweepSection"]
+
+#: Longest record [s].
+MAX_DURATION_S = 60.0
+
+
+def _baseline(name: str) -> float:
+    return TABLE_7[name]["baseline"]
+
+
+class PathSection(Section):
+    """``[path]``: the sine path ``y = A sin(2 pi f x)``, x at the feed rate; the 5-axis rotation.
+
+    Parameters
+    ----------
+    duration : float
+        Length of every baseline run [s].
+    amplitude : float
+        Sine amplitude [m].
+    spatial_frequency : float
+        Cycles per metre of x.
+    start : list of float, shape (3,)
+        Target position at t = 0 [m].
+    rotation_amplitude_deg : float
+        5-axis: amplitude of the angle about the body axis [deg].
+    rotation_axis : list of float, shape (3,)
+        5-axis: the body rotation axis (normalised; nonzero).
+    initial_orientation : list of float, shape (4,)
+        Orientation quaternion ``[w, x, y, z]`` at t = 0 (normalised; nonzero).
+    """
+
+    duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of every baseline run") = 3.0
+    amplitude: number(ge=0, le=1.0, unit="m", description="sine amplitude (reference: 76.2 mm)") = SINE_PATH["amplitude_m"]
+    spatial_frequency: number(gt=0, le=1e3, unit="1/m", description="cycles per metre of x (reference: 19.685)") = SINE_PATH["spatial_frequency_cycles_per_m"]
+    start: vector(3, bound=100.0, unit="m", description="target position at t = 0") = Field(default_factory=lambda: [1.5, 0.0, 1.0])
+    rotation_amplitude_deg: number(ge=0, le=90.0, unit="deg", description="5-axis: amplitude of the rotation angle theta_0 sin(omega t) about the body axis") = 10.0
+    rotation_axis: vector(3, bound=10.0, description="5-axis: body rotation axis (normalised, nonzero)") = Field(
+        default_factory=lambda: [0.5, 0.0, math.sqrt(3.0) / 2.0])
+    initial_orientation: vector(4, bound=10.0, description="orientation quaternion [w, x, y, z] at t = 0 (normalised, nonzero norm)") = Field(
+        default_factory=lambda: [1.0, 0.0, 0.0, 0.0])
+
+
+class SensorsSection(Section):
+    """``[sensors]``: the Table 7 figures of the baseline run (defaults: the thesis' baseline).
+
+    Parameters
+    ----------
+    position_noise_mm : float
+        Tracker position noise per axis and sample [mm].
+    orientation_noise_deg : float
+        Tracker orientation noise per axis and sample [deg].
+    gyro_bias_deg_s : float
+        Gyro bias per axis [deg/s].
+    gyro_noise_deg_s_rtHz : float
+        Gyro noise density [deg/s/rtHz].
+    accel_bias_m_s2 : float
+        Accelerometer bias per axis [m/s^2].
+    accel_noise_m_s2_rtHz : float
+        Accelerometer noise density [m/s^2/rtHz].
+    sample_time_s : float
+        Sample time of all sensors [s].
+    feed_rate_mm_s : float
+        Feed rate along x [mm/s].
+    transform_translation_error_mm : float
+        Error of the filter's believed IMU-to-target translation [mm].
+    transform_orientation_error_deg : float
+        Error of the filter's believed IMU-to-target rotation [deg].
+    seed : int
+        Seed of the sensor noise and the initial-state draw.
+    """
+
+    position_noise_mm: number(gt=0, le=100.0, unit="mm", description="tracker position noise per axis and sample (Table 7: 0.0064)") = _baseline("position_noise_mm")
+    orientation_noise_deg: number(gt=0, le=30.0, unit="deg", description="tracker orientation noise per axis and sample (Table 7: 0.015)") = _baseline("orientation_noise_deg")
+    gyro_bias_deg_s: number(ge=-100.0, le=100.0, unit="deg/s", description="gyro bias on every IMU axis (Table 7: 0.0008)") = _baseline("gyro_bias_deg_s")
+    gyro_noise_deg_s_rtHz: number(gt=0, le=100.0, unit="deg/s/rtHz", description="gyro noise density (Table 7: 0.0016)") = _baseline("gyro_noise_deg_s_rtHz")
+    accel_bias_m_s2: number(ge=-100.0, le=100.0, unit="m/s^2", description="accelerometer bias on every IMU axis (Table 7: 0.00025)") = _baseline("accel_bias_m_s2")
+    accel_noise_m_s2_rtHz: number(gt=0, le=100.0, unit="m/s^2/rtHz", description="accelerometer noise density (Table 7: 0.00039)") = _baseline("accel_noise_m_s2_rtHz")
+    sample_time_s: number(gt=0, le=MAX_DURATION_S, unit="s", description="sample time of every sensor (Table 7: 0.001)") = _baseline("sample_time_s")
+    feed_rate_mm_s: number(gt=0, le=1e4, unit="mm/s", description="feed rate along x (Table 7: 42.33)") = _baseline("feed_rate_mm_s")
+    transform_translation_error_mm: number(ge=-1e3, le=1e3, unit="mm", description="error of the believed IMU-to-target translation") = 0.0
+    transform_orientation_error_deg: number(ge=-180.0, le=180.0, unit="deg", description="error of the believed IMU-to-target rotation") = 0.0
+    seed: integer(0, 2**31 - 1, description="seed of the sensor noise and of the initial-state draw") = 1
+
+
+class FilterSection(Section):
+    """``[filter]``: the filters' tuning.
+
+    Parameters
+    ----------
+    jerk_std : float or None
+        White-jerk standard deviation per axis and sample [m/s^3]; omitted: the path's largest |jerk|.
+    angular_jerk_std : float or None
+        White angular-jerk standard deviation [rad/s^3]; omitted: the path's largest |angular jerk|.
+    quaternion_std : float
+        Quaternion term of Q per component and sample.
+    initial_covariance : list of float, shape (6,)
+        Initial variances of position, velocity, acceleration, orientation, angular velocity and
+        angular acceleration (per axis; positive definite: all > 0).
+    appendix_b_q_diag : list of float, shape (9,)
+        Diagonal Q of the thesis' 3-axis KF (Appendix B), run beside ours (all > 0).
+    warmup : float
+        Samples before this time are left out of the metrics [s].
+    """
+
+    jerk_std: number(gt=0, le=1e6, unit="m/s^3", description="white-jerk std per axis and sample (omit: the path's largest |jerk|)") | None = None
+    angular_jerk_std: number(gt=0, le=1e6, unit="rad/s^3", description="white angular-jerk std (omit: the path's largest |angular jerk|)") | None = None
+    quaternion_std: number(gt=0, le=1.0, description="quaternion term of Q per component and sample") = 1e-6
+    initial_covariance: vector(6, bound=1e6, description="initial variances per axis of position [m^2], velocity [(m/s)^2], acceleration [(m/s^2)^2], "
+                                                         "orientation [rad^2], angular velocity [(rad/s)^2], angular acceleration [(rad/s^2)^2]; "
+                                                         "positive definite (all > 0)") = Field(default_factory=lambda: list(DEFAULT_INITIAL_COVARIANCE))
+    appendix_b_q_diag: vector(9, bound=1e6, description="diagonal Q of the thesis' 3-axis KF (Appendix B), run beside ours; positive definite (all > 0)") = Field(
+        default_factory=lambda: list(APPENDIX_B["Q_diag"]))
+    warmup: number(ge=0, le=MAX_DURATION_S, unit="s", description="samples before this time are left out of every metric") = 0.1
+
+
+def _sweep_field(name: str) -> Any:
+    return Field(default_factory=lambda: list(TABLE_7[name]["offsets"]))
+
+
+def _sweep_type(unit: str) -> Any:
+    return vector(None, min_length=0, max_length=10, bound=1e4, unit=unit, description="swept values (default: the Table 7 offsets; [] skips)")
+
+
+class SweepSection(Section):
+    """``[study.sweep]``: the Table 10 values of each Table 7 parameter (default: the thesis' offsets; ``[]`` skips one).
+
+    Parameters
+    ----------
+    position_noise_mm, orientation_noise_deg, gyro_bias_deg_s, gyro_noise_deg_s_rtHz, accel_bias_m_s2, accel_noise_m_s2_rtHz, sample_time_s, feed_rate_mm_s, transform_translation_error_mm, transform_orientation_error_deg : list of float
+        The values of that parameter, each run with the others at the baseline.
+    """
+
+    position_noise_mm: _sweep_type("mm") = _sweep_field("position_noise_mm")
+    orientation_noise_deg: _sweep_type("deg") = _sweep_field("orientation_noise_deg")
+    gyro_bias_deg_s: _sweep_type("deg/s") = _sweep_field("gyro_bias_deg_s")
+    gyro_noise_deg_s_rtHz: _sweep_type("deg/s/rtHz") = _sweep_field("gyro_noise_deg_s_rtHz")
+    accel_bias_m_s2: _sweep_type("m/s^2") = _sweep_field("accel_bias_m_s2")
+    accel_noise_m_s2_rtHz: _sweep_type("m/s^2/rtHz") = _sweep_field("accel_noise_m_s2_rtHz")
+    sample_time_s: _sweep_type("s") = _sweep_field("sample_time_s")
+    feed_rate_mm_s: _sweep_type("mm/s") = _sweep_field("feed_rate_mm_s")
+    transform_translation_error_mm: _sweep_type("mm") = _sweep_field("transform_translation_error_mm")
+    transform_orientation_error_deg: _sweep_type("deg") = _sweep_field("transform_orientation_error_deg")
+
+
+class StudySection(Section):
+    """``[study]``: Table 9, the Table 10 sweeps and the filter comparison.
+
+    Parameters
+    ----------
+    noisy_tracker_factor : float
+        Table 9: the tracker's position and orientation noise times this.
+    sweep_duration : float
+        Length of each Table 10 run [s].
+    sweep : SweepSection
+        ``[study.sweep]``: the swept values.
+    comparison_filters : list of str
+        Filters compared (kf, ekf, ukf, pf).
+    comparison_duration : float
+        Length of each comparison run [s].
+    particles : int
+        Particles of the particle filter.
+    """
+
+    noisy_tracker_factor: number(gt=0, le=1e4, description="Table 9: the tracker's noise times this (the thesis: 10)") = 10.0
+    sweep_duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of each Table 10 run") = 3.0
+    sweep: SweepSection = SweepSection()
+    comparison_filters: list[choice(*FILTERS, description="a filter")] = Field(default_factory=lambda: list(FILTERS), max_length=4,
+                                                                              description="filters compared: kf, ekf, ukf, pf")
+    comparison_duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of each comparison run") = 1.0
+    particles: integer(1, 100_000, description="particles of the particle filter (the thesis' real-time limit: 1000)") = 1000
+
+
+@fill_doc(**KIND_DOCS)
+class StateEstimationFile(ProblemSchema):
+    """A ``state_estimation`` problem file.
+
+    Parameters
+    ----------
+    {header_fields}
+    path : PathSection
+        ``[path]``: the sine path and the 5-axis rotation.
+    sensors : SensorsSection
+        ``[sensors]``: the Table 7 baseline.
+    filter : FilterSection
+        ``[filter]``: the filters' tuning.
+    study : StudySection
+        ``[study]``: Table 9, Table 10, the comparison.
+    """
+
+    kind: Literal["state_estimation"]
+    path: PathSection = PathSection()
+    sensors: SensorsSection = SensorsSection()
+    filter: FilterSection = FilterSection()
+    study: StudySection = StudySection()
+
+
+@dataclass(frozen=True)
+class StateEstimationDeclaration:
+    """A validated fusion study.
+
+    Parameters
+    ----------
+    study : FusionStudy
+        The study.
+    origin : ProblemFile
+        The problem file.
+    """
+
+    study: FusionStudy
+    origin: ProblemFile
+
+
+def _nonzero(file: ProblemFile, field: str, value: list[float], what: str) -> None:
+    if not math.fsum(v * v for v in value) > 1e-18:
+        raise file.fail(field, f"{what} of nonzero norm", value)
+
+
+def _positive_definite(file: ProblemFile, field: str, value: list[float], n: int) -> None:
+    bad = [i for i, v in enumerate(value) if not v > 0]
+    if bad:
+        raise file.fail(field, f"a positive definite covariance: {n} variances > 0 (entry {bad[0]} is {value[bad[0]]!r})")
+
+
+def _samples(file: ProblemFile, field: str, dt: float, duration: float, where: str) -> None:
+    n = math.floor(duration / dt + 1e-9) + 1
+    if n < MIN_SAMPLES:
+        raise file.fail(field, f"a sample time giving at least {MIN_SAMPLES} samples over {where} = {duration:g} s "
+                               f"(at most {duration / (MIN_SAMPLES - 1):.6g} s; a sample time longer than the path has none)", dt)
+    if n > MAX_SAMPLES:
+        raise file.fail(field, f"at most {MAX_SAMPLES} samples over {where} = {duration:g} s (a sample time of at least {duration / (MAX_SAMPLES - 1):.3g} s)", dt)
+
+
+class StateEstimationKind(ProblemKind):
+    """The laser tracker + IMU fusion study (:class:`~gtmodel.estimation.fusion_study.FusionStudy`)."""
+
+    name = "state_estimation"
+    schema = StateEstimationFile
+    title = "laser tracker + IMU state estimation: KF/EKF/UKF/PF fusion vs sensors, Tables 8-10 (Cvitanic (2021), sec. 4.2-4.3)"
+    columns = (
+        Column("velocity_fusion_3_axis_mm_s", "v fused 3-axis [mm/s]", "{:.4g}"),
+        Column("velocity_fusion_5_axis_mm_s", "v fused 5-axis [mm/s]", "{:.4g}"),
+    )
+    empty_fields = ("velocity_fusion_3_axis_mm_s", "velocity_fusion_5_axis_mm_s")
+
+    @fill_doc(**KIND_DOCS)
+    def load(self, doc: StateEstimationFile, file: ProblemFile, name: str) -> StateEstimationDeclaration:
+        """Check the fields the schema cannot and build the study (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        {load_args}
+
+        Returns
+        -------
+        StateEstimationDeclaration
+
+        Raises
+        ------
+        ProblemError
+            A quaternion or rotation axis of zero norm; a covariance that is not positive
+            definite; a sample time (baseline or swept) giving fewer than 10 or more than
+            200000 samples over the path (e.g. longer than the path); a swept value the
+            sensor model refuses (a non-positive noise, sample time or feed rate).
+        """
+        p, s, f, st = doc.path, doc.sensors, doc.filter, doc.study
+        _nonzero(file, "path.initial_orientation", p.initial_orientation, "a quaternion [w, x, y, z]")
+        _nonzero(file, "path.rotation_axis", p.rotation_axis, "a rotation axis")
+        _positive_definite(file, "filter.initial_covariance", f.initial_covariance, 6)
+        _positive_definite(file, "filter.appendix_b_q_diag", f.appendix_b_q_diag, 9)
+        _samples(file, "sensors.sample_time_s", s.sample_time_s, p.duration, "path.duration")
+        for dt in st.sweep.sample_time_s:
+            if dt > 0:
+                _samples(file, "study.sweep.sample_time_s", dt, st.sweep_duration, "study.sweep_duration")
+        if math.floor(st.comparison_duration / s.sample_time_s + 1e-9) + 1 < MIN_SAMPLES:
+            raise file.fail("study.comparison_duration", f"at least {MIN_SAMPLES - 1} sample times (sensors.sample_time_s = {s.sample_time_s:g} s)", st.comparison_duration)
+        if st.sweep.feed_rate_mm_s or st.sweep_duration < s.sample_time_s * (MIN_SAMPLES - 1):
+            _samples(file, "study.sweep_duration", s.sample_time_s, st.sweep_duration, "study.sweep_duration")
+        if f.warmup >= p.duration:
+            raise file.fail("filter.warmup", f"a warm-up shorter than path.duration = {p.duration:g} s", f.warmup)
+        values = {k: getattr(s, k) for k in TABLE_7}
+        try:
+            spec = SensorSpec(**values)
+        except InputError as exc:
+            raise file.wrap("sensors", exc) from None
+        sweep = {}
+        for key in TABLE_7:
+            vals = getattr(st.sweep, key)
+            for v in vals:
+                try:
+                    spec.replace(**{key: v})
+                except InputError:
+                    raise file.fail(f"study.sweep.{key}", "values the sensor model accepts (noises, sample time and feed rate > 0)", v) from None
+            if vals:
+                sweep[key] = list(vals)
+        try:
+            study = FusionStudy(
+                spec=spec, duration=p.duration, amplitude=p.amplitude, spatial_frequency=p.spatial_frequency, start=p.start,
+                rotation_amplitude=math.radians(p.rotation_amplitude_deg), rotation_axis=p.rotation_axis, orientation=p.initial_orientation,
+                seed=s.seed, warmup=f.warmup, jerk_std=f.jerk_std, angular_jerk_std=f.angular_jerk_std, quaternion_std=f.quaternion_std,
+                initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
+                sweep=sweep, sweep_duration=st.sweep_duration, comparison_filters=tuple(st.comparison_filters),
+                comparison_duration=st.comparison_duration, particles=st.particles,
+            )
+        except InputError as exc:
+            raise file.wrap("path", exc) from None
+        return StateEstimationDeclaration(study, file)
+
+    def solve(self, declaration: StateEstimationDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> FusionStudyResult:
+        """Run the study.
+
+        Parameters
+        ----------
+        declaration : StateEstimationDeclaration
+            From :meth:`load`.
+        verbose : bool, optional
+            Unused.
+        previous : Any, optional
+            Unused.
+        warm_start : bool, optional
+            Unused.
+
+        Returns
+        -------
+        FusionStudyResult
+            Status ``"optimal"``, or ``"error"`` when a filter diverged (its row says which).
+        """
+        return declaration.study.run()
+
+    def write(self, declaration: StateEstimationDeclaration, solution: FusionStudyResult, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields, the tables (.md/.csv), ``fusion_baseline.csv`` and the plots.
+
+        Parameters
+        ----------
+        declaration : StateEstimationDeclaration
+            The declaration.
+        solution : FusionStudyResult
+            Its result.
+        out : pathlib.Path
+            The folder.
+        plots : bool
+            Write the PNG plots.
+        name : str
+            Title.
+
+        Returns
+        -------
+        Written
+            ``table_8``, ``table_9``, ``table_10``, ``velocity_mean_error_mm_s`` (with the thesis'
+            hardware Table 11 beside it, ``thesis_velocity``),
+            ``angular_acceleration``, ``filter_comparison``, ``nees``, ``process_noise``,
+            ``checks`` (the judged structure, each a boolean with its figures), ``notes``.
+        """
+        r = solution
+        vel = r.velocity_mean_error_mm_s
+        fields: dict[str, Any] = {
+            "status": r.status,
+            "message": r.message,
+            "error_metric": "mean over the samples after filter.warmup of the Euclidean norm of the error (orientation: rotation angle)",
+            "sample_time_s": declaration.study.spec.dt,
+            "samples": {k: int(v.truth.t.size) for k, v in r.runs.items()},
+            "table_8": r.table_8,
+            "table_9": r.table_9,
+            "velocity_mean_error_mm_s": vel,
+            "thesis_velocity": {"simulation": "up to 95 % better than the robot/tracker estimate (section 4.3)",
+                                "hardware_table_11_mm_s": THESIS_TABLE_11},
+            "angular_acceleration": r.angular_acceleration,
+            "table_10": r.table_10,
+            "filter_comparison": r.filter_comparison,
+            "nees": r.nees,
+            "process_noise": r.process_noise,
+            "checks": _checks(r),
+            "notes": r.notes,
+            "velocity_fusion_3_axis_mm_s": (vel.get("3-axis") or {}).get("fusion"),
+            "velocity_fusion_5_axis_mm_s": (vel.get("5-axis") or {}).get("fusion"),
+        }
+        written = Written(fields)
+        written.files += write_fusion_tables(out, name, r.table_8, r.table_9, r.table_10, r.filter_comparison)
+        written.files += _baseline_csv(r, out)
+        if plots:
+            written.files += _plots(r, out, name)
+        return written
+
+
+def _checks(r: FusionStudyResult) -> dict[str, Any]:
+    """The judged structure of the issue, each with the figures it rests on."""
+    out: dict[str, Any] = {}
+    for motion, v in r.velocity_mean_error_mm_s.items():
+        t8 = r.table_8.get(motion, {}).get("position_mm", {})
+        t9 = r.table_9.get(motion, {}).get("position_mm", {})
+        ratio = t8["fusion"] / t8["sensor"] if t8 else None
+        out[motion] = {
+            "velocity_fusion_30_percent_below_tracker": bool(v.get("improvement_percent") is not None and v["improvement_percent"] >= 30.0),
+            "position_fusion_over_tracker": ratio,
+            "position_fusion_within_10_percent_of_tracker": bool(ratio is not None and abs(ratio - 1.0) <= 0.10),
+            "position_fusion_not_worse_than_1_1_tracker": bool(ratio is not None and ratio <= 1.10),
+            "table_9_structure": bool(t9 and t9["fusion_below_sensor"] and t9["fusion_above_baseline_sensor"]),
+            "nees_in_95_percent_band": bool(r.nees.get(motion, {}).get("passed", False)),
+        }
+    return out
+
+
+def _baseline_csv(r: FusionStudyResult, out: Path) -> list[str]:
+    files = []
+    for motion, run in ((m, r.runs.get(m)) for m in ("3-axis", "5-axis")):
+        if run is None or run.end <= run.first:
+            continue
+        k = np.arange(run.first, run.end)
+        cols = {"t": run.truth.t[k]}
+        names = ("position", "velocity", "acceleration") + (("angular_velocity", "angular_acceleration") if run.truth.rotation else ())
+        for q in names:
+            for i, c in enumerate("xyz"):
+                cols[f"{q}_{c}_true"] = getattr(run.truth, q)[k, i]
+                cols[f"{q}_{c}_sensor"] = getattr(run.sensor, q)[k - run.sensor.first, i]
+                cols[f"{q}_{c}_fusion"] = run.fused(q, k)[:, i]
+        fname = f"fusion_baseline_{motion.replace('-', '_')}.csv"
+        np.savetxt(out / fname, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+        files.append(fname)
+    return files
+
+
+def _plots(r: FusionStudyResult, out: Path, name: str) -> list[str]:
+    files = []
+    for motion in ("3-axis", "5-axis"):
+        run = r.runs.get(motion)
+        if run is None or run.end <= run.first:
+            continue
+        k = np.arange(run.first, run.end)
+        fname = f"velocity_{motion.replace('-', '_')}.png"
+        plot_velocity(run.truth.t[k], run.truth.velocity[k], run.sensor.velocity[k - run.sensor.first], run.fused("velocity", k), out / fname,
+                      title=f"{name} ({motion})")
+        files.append(fname)
+        if run.truth.rotation:
+            alpha = run.truth.angular_acceleration[k]
+            norm = np.linalg.norm(alpha, axis=1)
+            peaks = norm >= PEAK_FRACTION * norm.max() if norm.max() > 0 else np.zeros(k.size, bool)
+            plot_angular_acceleration(run.truth.t[k], alpha, run.sensor.angular_acceleration[k - run.sensor.first], run.fused("angular_acceleration", k), peaks,
+                                      out / "angular_acceleration.png", title=f"{name} ({motion})")
+            files.append("angular_acceleration.png")
+    rows = [row for row in r.table_10 if "position_mm" in row]
+    if rows:
+        plot_sweep(rows, out / "table_10.png", title=name)
+        files.append("table_10.png")
+    return files
