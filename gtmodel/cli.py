@@ -18,6 +18,10 @@
     (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
     A controller of the fusion filters only (KF/EKF steps) and no ``--robot``: the library
     holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``).
+``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
+    Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
+    algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
+    ``-Werror`` and compares it with the model evaluated from Python.
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
@@ -40,6 +44,8 @@ from typing import Sequence
 from gtmodel import __version__
 from gtmodel.problems.overrides import parse_override
 from gtmodel.codegen import check, check_controller, generate, load_controller
+from gtmodel.codegen.model_code import check_model, generate_model
+from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.errors import GtModelError
 from gtmodel.problems import KINDS, run_problem
 from gtmodel.problems.docs import json_schema, write_docs
@@ -96,6 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
     cg = sub.add_parser("codegen", help="generate C for the real-time kinematics and inverse dynamics")
     cg.add_argument("--robot", default=None, help="L1, D1, L1_ideal, D1_six_link, F1 or a parameter TOML path (default L1; "
                     "none with a --controller of the KF/EKF filters only)")
+    cg.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model instead of a robot, e.g. models/cart_pendulum.py:CartPendulum")
     cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
     cg.add_argument("--friction", default="exact", choices=("exact", "tanh", "piecewise"), help="friction form in inverse_dynamics")
     cg.add_argument("--real", default="double", choices=("double", "float"), help="floating-point type (default double)")
@@ -223,6 +230,8 @@ def _schema(args: argparse.Namespace) -> int:
 
 def _codegen(args: argparse.Namespace) -> int:
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    if args.model is not None:
+        return _codegen_model(args, functions)
     controller = load_controller(args.controller) if args.controller is not None else None
     if args.robot is None and functions is None and controller is not None and controller.kalman_step is None and controller.ilc_correction is None:
         functions = []  # the fusion filters need no robot: the controller alone, prefix gt_fusion
@@ -244,6 +253,19 @@ def _codegen(args: argparse.Namespace) -> int:
         print("\n".join(controller_report.summary_lines()))
         passed = passed and controller_report.passed
     return EXIT_OK if passed else EXIT_NOT_OPTIMAL
+
+
+def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int:
+    if args.controller is not None or args.robot is not None:
+        raise GtModelError("--model generates a user model's library: give it without --robot and --controller")
+    generated = generate_model(load_user_model(*split_model_reference(args.model)), args.out, functions=functions, real=args.real)
+    print(f"wrote {', '.join(str(p) for p in generated.files)}")
+    print(generated.version)
+    if not args.check:
+        return EXIT_OK
+    report = check_model(generated, n=args.samples, seed=args.seed, timing=True)
+    print("\n".join(report.summary_lines()))
+    return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
 
 
 def _sigterm(signum: int, frame: object) -> None:

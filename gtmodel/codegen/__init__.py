@@ -20,11 +20,14 @@ from gtmodel.codegen.controller_check import ControllerCheckReport, check_contro
 from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate
+from gtmodel.codegen.model_code import check_model, generate_model
 from gtmodel.codegen.robot import load_robot, parameter_hash
 from gtmodel.codegen.specs import FUNCTION_SPECS
 
 __all__ = [
     "generate",
+    "generate_model",
+    "check_model",
     "compile_shared",
     "find_compiler",
     "load_library",

@@ -20,7 +20,9 @@ Conventions:
 * The Lagrange term uses the quadrature of the collocation points.
 
 Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
-solved repeatedly for new parameter values and initial guesses.
+solved repeatedly for new parameter values and initial guesses. Free parameters
+(:meth:`Optimization.free_parameter`) are NLP variables instead, one per scalar element,
+shared by all collocation points (like a free final time).
 """
 
 from __future__ import annotations
@@ -147,8 +149,8 @@ class CollocationTranscription:
         ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings)
         unless ``verbose``.
     nominal : mapping of str to float or array_like, optional
-        Nominal magnitudes of states, inputs, algebraic variables (by name) and of
-        ``"final_time"``: the NLP works with ``variable / nominal`` (Modelica's
+        Nominal magnitudes of states, inputs, algebraic variables, free parameters
+        (by name) and of ``"final_time"``: the NLP works with ``variable / nominal`` (Modelica's
         ``nominal`` attribute, JModelica's variable scaling), so that variables of
         different units (forces in hundreds of N, positions in m) are of order one.
         Results, guesses and bounds stay in the model's units. Default: no scaling.
@@ -205,14 +207,16 @@ class CollocationTranscription:
     def _nominal_values(self, nominal: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
         """Per-kind scale vectors ``{"x", "z", "u", "tf"}`` from the ``nominal`` mapping."""
         dae = self.dae
-        out = {"x": np.ones(dae.nx), "z": np.ones(dae.nz), "u": np.ones(dae.nu), "tf": np.ones(1)}
+        free = self._free_slices()
+        npf = sum(sl.stop - sl.start for sl in free.values())
+        out = {"x": np.ones(dae.nx), "z": np.ones(dae.nz), "u": np.ones(dae.nu), "tf": np.ones(1), "pf": np.ones(npf)}
         known = {"final_time": ("tf", slice(0, 1))}
-        for kind, vars_ in (("x", dae.x_vars), ("z", dae.z_vars), ("u", dae.u_vars)):
+        for kind, vars_ in (("x", dae.x_vars), ("z", dae.z_vars), ("u", dae.u_vars), ("pf", free)):
             for name, sl in vars_.items():
                 known[name] = (kind, sl)
         for name, value in (nominal or {}).items():
             if name not in known:
-                raise InputError(f"nominal: {name!r} is not a state, input, algebraic variable or 'final_time'")
+                raise InputError(f"nominal: {name!r} is not a state, input, algebraic variable, free parameter or 'final_time'")
             kind, sl = known[name]
             n = sl.stop - sl.start
             try:
@@ -223,6 +227,31 @@ class CollocationTranscription:
                 raise InputError(f"nominal of {name!r}: expected positive finite values, got {value!r}")
             out[kind][sl] = v
         return out
+
+    def _free_slices(self) -> dict[str, slice]:
+        """Free parameter name -> its slice in the vector of free parameter elements."""
+        out, k = {}, 0
+        for name in self.optimization.free_parameters:
+            n = self.dae.p_vars[name].stop - self.dae.p_vars[name].start
+            out[name] = slice(k, k + n)
+            k += n
+        return out
+
+    def _free_index(self) -> np.ndarray:
+        """Indices in the model parameter vector of the free parameter elements, in order."""
+        p_vars = self.dae.p_vars
+        idx = [np.arange(p_vars[n].start, p_vars[n].stop) for n in self.optimization.free_parameters]
+        return np.concatenate(idx).astype(int) if idx else np.zeros(0, dtype=int)
+
+    def _with_free(self, p_nlp: ca.SX, pf: ca.SX) -> ca.SX:
+        """The model parameter vector: ``p_nlp`` with the free elements replaced by ``pf * nominal``."""
+        idx = self._free_index()
+        if idx.size == 0:
+            return p_nlp
+        elems = [p_nlp[i] for i in range(int(p_nlp.numel()))]
+        for k, i in enumerate(idx):
+            elems[int(i)] = pf[k] * float(self.nominal["pf"][k])
+        return ca.vertcat(*elems)
 
     # ------------------------------------------------------------------ build
     def _build(self) -> None:
@@ -261,7 +290,10 @@ class CollocationTranscription:
         point_call = ca.Function("point_call", args, point_out, {"never_inline": True}) if assembled else point_fn
         npath = int(path_expr.numel())
 
-        P = dae.p
+        P_nlp = dae.p  # nlpsol's parameters: the model parameter values
+        npf = int(self._free_index().size)
+        PF_sym = ca.SX.sym("pf", npf)
+        P = self._with_free(P_nlp, PF_sym)  # free elements are NLP variables
         free = opt.free_final_time
         noms = self.nominal
         tf_nom = float(noms["tf"][0])
@@ -344,6 +376,16 @@ class CollocationTranscription:
             ubw.append(np.array([opt.final_time_bounds[1]]) / tf_nom)
             scale.append(np.array([tf_nom]))
             blocks.append(("tf", 0, 0))
+        if npf:
+            pf_lb = np.concatenate([lb for lb, _, _ in opt.free_parameters.values()])
+            pf_ub = np.concatenate([ub for _, ub, _ in opt.free_parameters.values()])
+            offsets[("pf", 0, 0)] = n_w[0]
+            n_w[0] += npf
+            w.append(PF_sym)
+            lbw.append(pf_lb / noms["pf"])
+            ubw.append(pf_ub / noms["pf"])
+            scale.append(noms["pf"])
+            blocks.append(("pf", 0, 0))
 
         def extrap(vals: list[ca.SX], weights: np.ndarray, n: int) -> ca.SX:
             if n == 0:
@@ -371,22 +413,22 @@ class CollocationTranscription:
         self._ubw = np.concatenate(ubw) if ubw else np.zeros(0)
         self._lbg = np.concatenate(lbg) if lbg else np.zeros(0)
         self._ubg = np.concatenate(ubg) if ubg else np.zeros(0)
-        self._fg = ca.Function("fg", [wv, P], [J, gv])
+        self._fg = ca.Function("fg", [wv, P_nlp], [J, gv])
         xc = ca.horzcat(*[ca.horzcat(*Xk) for Xk in Xs])
         uc = ca.horzcat(*[ca.horzcat(*Uk) for Uk in Us]) if nu else ca.SX(0, N * d)
         zc = ca.horzcat(*[ca.horzcat(*Zk) for Zk in Zs]) if nz else ca.SX(0, N * d)
-        self._extract = ca.Function("extract", [wv], [xc, uc, zc, XN, ca.vertcat(T)])
+        self._extract = ca.Function("extract", [wv, P_nlp], [xc, uc, zc, XN, ca.vertcat(T), P])
         self.key = (id(self), N, d, self.scheme, int(wv.numel()))
         nlp_options = dict(self.options)
         if assembled:
             nlp_options["jac_g"], nlp_options["hess_lag"] = self._assembled_derivatives(
-                wv, gv, P, point_fn, lagr_fn, offsets, rows_point, rows_cont, ends, mayer, t0, tf_nom, npath
+                wv, gv, P_nlp, point_fn, lagr_fn, offsets, rows_point, rows_cont, ends, mayer, t0, tf_nom, npath
             )
         try:
             self.solver = ca.nlpsol(
                 f"{dae.name}_collocation",
                 "ipopt",
-                {"x": wv, "p": P, "f": J, "g": gv},
+                {"x": wv, "p": P_nlp, "f": J, "g": gv},
                 nlp_options,
             )
         except RuntimeError as exc:
@@ -429,22 +471,25 @@ class CollocationTranscription:
         nw, ng = int(wv.numel()), int(gv.numel())
         nr = nx + nz + npath
 
-        # local functions of the scaled point variables v = (x, z, u[, tf])
+        # local functions of the scaled point variables v = (x, z, u[, tf][, free parameters])
         xs, zs, us = ca.SX.sym("xs", nx), ca.SX.sym("zs", nz), ca.SX.sym("us", nu)
         ts = ca.SX.sym("ts") if free else ca.SX(0, 1)
+        npf = int(self._free_index().size)
+        ps = ca.SX.sym("ps", npf)
+        P_loc = self._with_free(P, ps)
         c, b, lam_f = ca.SX.sym("c"), ca.SX.sym("b"), ca.SX.sym("lam_f")
         lam_r = ca.SX.sym("lam_r", nr)
         T = ts * tf_nom if free else ca.SX(opt.final_time_value)
         h = (T - t0) / N
         t = t0 + c * h
         x, z, u = xs * ca.DM(noms["x"]), zs * ca.DM(noms["z"]), us * ca.DM(noms["u"])
-        f, a, p = point_fn(t, x, z, u, P, T)
+        f, a, p = point_fn(t, x, z, u, P_loc, T)
         r = ca.vertcat(h * f, a, p)
-        v = ca.vertcat(xs, zs, us, ts)
+        v = ca.vertcat(xs, zs, us, ts, ps)
         jac_r = ca.jacobian(r, v)
-        lag = ca.dot(lam_r, r) + lam_f * b * h * lagr_fn(t, x, z, u, P, T)
+        lag = ca.dot(lam_r, r) + lam_f * b * h * lagr_fn(t, x, z, u, P_loc, T)
         hess_r = ca.triu(ca.hessian(lag, v)[0])
-        local_in = [xs, zs, us, ts, P, c]
+        local_in = [xs, zs, us, ts, ps, P, c]
         jac_fn = ca.Function("point_jac", local_in, [jac_r], {"never_inline": True})
         hess_fn = ca.Function("point_hess", local_in + [b, lam_f, lam_r], [hess_r], {"never_inline": True})
         jr, jc = jac_r.sparsity().get_triplet()
@@ -454,6 +499,8 @@ class CollocationTranscription:
         lam_g = ca.SX.sym("lam_g", ng)
         tf_index = [offsets[("tf", 0, 0)]] if free else []
         tf_arg = wv[tf_index[0]] if free else ca.SX(0, 1)
+        pf_index = list(offsets[("pf", 0, 0)] + np.arange(npf)) if npf else []
+        pf_arg = wv[offsets[("pf", 0, 0)]:offsets[("pf", 0, 0)] + npf] if npf else ca.SX(0, 1)
         jac: dict[tuple[int, int], list] = {}
         hess: dict[tuple[int, int], list] = {}
 
@@ -462,8 +509,8 @@ class CollocationTranscription:
 
         for k, j, first in rows_point:
             ox, oz, ou = offsets[("x", k, j)], offsets[("z", k, j)], offsets[("u", k, j)]
-            cols = np.concatenate([ox + np.arange(nx), oz + np.arange(nz), ou + np.arange(nu), tf_index]).astype(int)
-            arg = [wv[ox:ox + nx], wv[oz:oz + nz], wv[ou:ou + nu], tf_arg, P, k + co["root"][j]]
+            cols = np.concatenate([ox + np.arange(nx), oz + np.arange(nz), ou + np.arange(nu), tf_index, pf_index]).astype(int)
+            arg = [wv[ox:ox + nx], wv[oz:oz + nz], wv[ou:ou + nu], tf_arg, pf_arg, P, k + co["root"][j]]
             for value, rr, cc in zip(jac_fn(*arg).nonzeros(), jr, jc):
                 add(jac, first + rr, int(cols[cc]), value)
             # collocation polynomial: - sum_r C[r, j] x_{k,r} (scaled variables)
@@ -514,7 +561,7 @@ class CollocationTranscription:
 
 
     # ------------------------------------------------------------------ guesses
-    def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float) -> np.ndarray:
+    def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
         opt, dae, co = self.optimization, self.dae, self._co
         N, t0 = self.elements, opt.start_time
         h = (tf_guess - t0) / N
@@ -533,6 +580,9 @@ class CollocationTranscription:
             if kind == "tf":
                 w0.append(np.array([tf_guess]))
                 continue
+            if kind == "pf":
+                w0.append(self._free_start(pvec))
+                continue
             t = t0 + (k + co["root"][j]) * h
             vals = np.zeros(size)
             for (cat, _name), (sl, f) in fns.items():
@@ -542,6 +592,13 @@ class CollocationTranscription:
         w = np.concatenate(w0) if w0 else np.zeros(0)
         lo, hi = self._lbw, self._ubw
         return np.clip(w / self._scale, lo, hi)  # the NLP works with variable / nominal
+
+    def _free_start(self, pvec: np.ndarray) -> np.ndarray:
+        """Initial guess of the free parameter elements: their start, else the value clipped into the bounds."""
+        out = []
+        for name, (lb, ub, start) in self.optimization.free_parameters.items():
+            out.append(start if start is not None else np.clip(pvec[self.dae.p_vars[name]], lb, ub))
+        return np.concatenate(out) if out else np.zeros(0)
 
     # ------------------------------------------------------------------ solve
     def solve(
@@ -609,7 +666,7 @@ class CollocationTranscription:
         elif initial_guess is not None:
             raise InputError("initial_guess must be an OptimizationResult or a mapping")
         if w0 is None:
-            w0 = self._initial_w(guesses, tf_guess)
+            w0 = self._initial_w(guesses, tf_guess, pvec)
 
         t_start = _time.perf_counter()
         error_msg = None
@@ -647,8 +704,9 @@ class CollocationTranscription:
         if w.size:
             viol.append(float(np.max(np.maximum(self._lbw - w, w - self._ubw) * self._scale)))
         max_viol = float(max(viol)) if np.all(np.isfinite(g_val)) else float("nan")
-        xc, uc, zc, _xn, T = self._extract(w)
+        xc, uc, zc, _xn, T, p_all = self._extract(w, pvec)
         tf = float(T)
+        pvec = np.array(p_all, dtype=float).reshape(-1)  # free parameters at their optimal values
         colloc = CollocationData(
             t0=opt.start_time,
             tf=tf,

@@ -4,6 +4,9 @@ An :class:`Optimization` wraps a :class:`~gtmodel.modeling.model.Model` and decl
 time horizon (fixed or free final time), the objective (Mayer term at the final time and
 Lagrange integrand), path and point constraints, variable bounds, parameter values and
 initial guesses. Transcription to an NLP lives in :mod:`gtmodel.modeling.collocation`.
+A model parameter declared free (:meth:`Optimization.free_parameter`) is a decision
+variable of the problem (constant in time, within bounds): parameter estimation from data
+is an optimisation with free parameters and a data-fit objective.
 
 Expressions may use every symbol the model declared (``time``, states, ``der()`` of
 states, algebraics, inputs, parameters) and :attr:`Optimization.final_time`.
@@ -126,6 +129,7 @@ class Optimization:
         self.bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.initial_guesses: dict[str, Any] = {}
         self.parameters: dict[str, np.ndarray] = {}
+        self.free_parameters: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray | None]] = {}
         self._flat: FlatDAE | None = None
 
     # ------------------------------------------------------------------ helpers
@@ -368,6 +372,54 @@ class Optimization:
         if name not in params:
             raise ModelError(f"set_parameter: model {self.model.name!r} has no parameter {name!r}")
         self.parameters[name] = _vector_value(value, int(params[name].numel()), f"parameter {name!r}")
+
+    def free_parameter(self, name: str, lb: Any = -np.inf, ub: Any = np.inf, start: Any = None) -> ca.SX:
+        """Make a model parameter a decision variable (constant in time) of the problem.
+
+        The transcription optimises it together with the trajectories, within
+        ``lb <= p <= ub``; the result's ``parameters`` hold its optimal value. With a
+        data-fit objective, e.g. ``integral((x - pw_lin(time, t_data, y_data))^2)``,
+        this estimates the parameter from data (output-error estimation, as
+        JModelica.org's parameter estimation with free parameters).
+
+        Parameters
+        ----------
+        name : str
+            Declared parameter name.
+        lb, ub : float or array_like, optional
+            Bounds (scalar or one per element); default unbounded.
+        start : float or array_like, optional
+            Initial guess; default the parameter's value (model default or
+            :meth:`set_parameter`) clipped into the bounds.
+
+        Returns
+        -------
+        casadi.SX
+            The parameter symbol, for use in expressions.
+
+        Raises
+        ------
+        ModelError
+            If ``name`` is not a parameter of the model, ``lb > ub`` or ``start`` is
+            outside the bounds.
+        InputError
+            If bounds or start have the wrong size or are NaN.
+        """
+        params = self.model.variables("parameter")
+        if name not in params:
+            raise ModelError(
+                f"free_parameter: model {self.model.name!r} has no parameter {name!r} "
+                f"(parameters: {sorted(params)})"
+            )
+        size = int(params[name].numel())
+        lbv, ubv = self._bounds(lb, ub, size, f"free parameter {name!r}")
+        startv = None
+        if start is not None:
+            startv = _vector_value(start, size, f"free parameter {name!r} start")
+            if not np.all(np.isfinite(startv)) or np.any(startv < lbv) or np.any(startv > ubv):
+                raise ModelError(f"free parameter {name!r}: start {startv.tolist()} is not within its bounds")
+        self.free_parameters[name] = (lbv, ubv, startv)
+        return params[name]
 
     # ------------------------------------------------------------------ evaluation helpers
     def bounds_vectors(self, dae: FlatDAE, kind: str) -> tuple[np.ndarray, np.ndarray]:

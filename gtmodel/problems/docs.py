@@ -84,7 +84,8 @@ def _range(prop: dict[str, Any]) -> str:
 def _rows(model: type[BaseModel], prefix: str, defs: dict[str, Any], schema: dict[str, Any], out: list[str], tables: list[tuple[str, type[BaseModel]]]) -> None:
     props = schema.get("properties", {})
     required = set(schema.get("required", []))
-    for name, info in model.model_fields.items():
+    for field_name, info in model.model_fields.items():
+        name = info.alias or field_name  # the key in the file (``class`` for ``class_``)
         prop = props.get(name, {})
         sub = _submodel(info.annotation)
         dotted = f"{prefix}{name}"

@@ -18,6 +18,7 @@ from gtmodel.problems.kinds.tracking import TrackingKind
 from gtmodel.problems.kinds.ilc import ILCKind
 from gtmodel.problems.kinds.state_estimation import StateEstimationKind
 from gtmodel.problems.kinds.correction_stability import CorrectionStabilityKind
+from gtmodel.problems.kinds.optimal_control import OptimalControlKind
 
 __all__ = ["KINDS", "get_kind"]
 
@@ -32,6 +33,7 @@ _CLASSES: tuple[type[ProblemKind], ...] = (
     ILCKind,
     StateEstimationKind,
     CorrectionStabilityKind,
+    OptimalControlKind,
 )
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.

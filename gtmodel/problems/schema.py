@@ -341,7 +341,7 @@ def _allowed(schema: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
         if info is None:
             return []
         model = _section_type(info.annotation)
-    return sorted(getattr(model, "model_fields", {}))
+    return sorted(info.alias or name for name, info in getattr(model, "model_fields", {}).items())
 
 
 def _section_type(annotation: Any) -> Any:

@@ -102,7 +102,9 @@ def _peak_mb() -> float:
 @pytest.mark.parametrize("shipped", SHIPPED, ids=[p.name for p in SHIPPED])
 def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, tmp_path_factory):
     text = shipped.read_text(encoding="utf-8")
-    folder = tmp_path_factory.mktemp(shipped.stem)
+    folder = tmp_path_factory.mktemp(shipped.stem) / "problems"  # beside ../models/, as in the repository
+    folder.mkdir()
+    (folder.parent / "models").symlink_to(PROBLEMS_DIR.parent / "models")  # user models (kind optimal_control)
     # the mutated file sits beside copies of what the shipped file refers to
     for extra in PROBLEMS_DIR.iterdir():
         if extra.is_dir() or (extra.suffix == ".toml" and extra.name != shipped.name):  # a tracking file refers to a problem file

@@ -1,0 +1,461 @@
+"""Kind ``optimal_control``: an optimal control problem on the user's own model.
+
+``[model] file = "models/cart_pendulum.py"`` (relative to the problem file) and
+``class = "CartPendulum"`` name a class whose instance is, or builds, a
+:class:`gtmodel.modeling.Model` (the protocol: :mod:`gtmodel.problems.user_model`); the
+file is the user's own code, imported as such. Everything else in the problem file is
+data: parameter overrides, boundary conditions, bounds, and the objective and constraints
+in the problem language over the model's variable names (:mod:`gtmodel.modeling.expressions`,
+``docs/problem_language.md``: parsed, never evaluated). A composed model's hierarchical
+names (``mass.s``, ``spring.c``) are written with ``_`` for ``.`` in expressions
+(``mass_s``; the language has no attribute access) and may be written either way as keys
+of the tables (``"mass.s" = 0.0`` or ``mass_s = 0.0``). The problem is declared as a
+:class:`~gtmodel.modeling.Optimization` and solved by direct collocation
+(:class:`~gtmodel.modeling.CollocationTranscription`, IPOPT).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import re
+
+import casadi as ca
+import numpy as np
+from pydantic import Field
+
+from gtmodel._docstrings import fill_doc
+from gtmodel.errors import GtModelError
+from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult, apply_to, optimization_names
+from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.motion_common import MAX_TIME_S, CollocationSection, SolverSection
+from gtmodel.problems.references import named_parameters
+from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
+from gtmodel.problems.user_model import ModelFileError, load_user_model
+from gtmodel.report.model_trajectory import plot_signals
+
+__all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
+
+#: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
+#: (SI units; keeps 1e308 out of the solver).
+MAX_VALUE = 1.0e9
+
+
+class ModelSection(Section):
+    """``[model]``: the user's model file, its class and parameter overrides.
+
+    Parameters
+    ----------
+    file : str
+        Python file, relative to the problem file.
+    class_ : str
+        ``class`` in the file: the class whose instance is, or builds, a Model.
+    parameters : dict of str to float
+        Overrides of the model's (scalar) parameters by name.
+    """
+
+    file: NonEmptyText = Field(description='Python file of the model, relative to the problem file, e.g. "../models/cart_pendulum.py"')
+    class_: NonEmptyText = Field(alias="class", description="class in the file whose instance is, or builds (build()/to_model()), a gtmodel.modeling.Model")
+    parameters: dict[str, number(ge=-MAX_VALUE, le=MAX_VALUE)] = Field(default_factory=dict, description="overrides of model parameters by name, e.g. m_pole = 0.3")
+
+
+class FinalTimeSection(Section):
+    """``[optimization.final_time]``: free (with bounds) or fixed (with a value).
+
+    Parameters
+    ----------
+    free : bool
+        Free final time (needs ``bounds``) or fixed (needs ``value``).
+    initial_guess : float, optional
+        Guess of a free final time [s].
+    bounds : list of float, shape (2,), optional
+        ``[lo, hi]`` of a free final time [s].
+    value : float, optional
+        The fixed final time [s].
+    """
+
+    free: Flag = Field(description="free final time (needs bounds) or fixed (needs value)")
+    initial_guess: number(gt=0, le=MAX_TIME_S, unit="s", description="initial guess of a free final time") | None = None
+    bounds: vector(2, nonnegative=True, bound=MAX_TIME_S, unit="s", description="[lo, hi] of a free final time") | None = None
+    value: number(gt=0, le=MAX_TIME_S, unit="s", description="the fixed final time") | None = None
+
+
+class OptimizationSection(Section):
+    """``[optimization]``: objective and constraints in the problem language, the horizon.
+
+    Parameters
+    ----------
+    objective : str
+        Objective over the model's names.
+    constraints : list of str
+        Path and point constraints.
+    start_time : float
+        Start time [s].
+    final_time : FinalTimeSection
+        Fixed or free final time.
+    """
+
+    objective: NonEmptyText = Field(description='objective over the model\'s names, e.g. "final_time + w * integral(F^2)"')
+    constraints: Expressions = Field(default_factory=list, description='path/point constraints, e.g. ["abs(s) <= 1", "theta(final_time) == pi"]')
+    start_time: number(ge=-MAX_TIME_S, le=MAX_TIME_S, unit="s") = 0.0
+    final_time: FinalTimeSection
+
+
+class BoundarySection(Section):
+    """``[boundary]``: values of states (inputs, algebraics) at the start and final time.
+
+    Parameters
+    ----------
+    start, final : dict of str to float
+        Variable name -> value (each an equality point constraint).
+    """
+
+    start: dict[str, number(ge=-MAX_VALUE, le=MAX_VALUE)] = Field(default_factory=dict, description="name -> value at the start time, e.g. theta = 0.0")
+    final: dict[str, number(ge=-MAX_VALUE, le=MAX_VALUE)] = Field(default_factory=dict, description="name -> value at the final time, e.g. theta = 3.141592653589793")
+
+
+class InitialGuessSection(Section):
+    """``[initial_guess]``: how the NLP is started.
+
+    Parameters
+    ----------
+    method : str
+        ``"linear"``: states (and other variables with both boundary values) interpolated
+        linearly between their start and final values, others at their start values;
+        ``"start"``: every variable at the model's start value.
+    """
+
+    method: choice("linear", "start", description="linear between the boundary values, or the model's start values") = "linear"
+
+
+@fill_doc(**KIND_DOCS)
+class OptimalControlFile(ProblemSchema):
+    """An ``optimal_control`` problem file.
+
+    Parameters
+    ----------
+    {header_fields}
+    model : ModelSection
+        ``[model]``: file, class, parameter overrides.
+    parameters : dict of str to float
+        ``[parameters]``: named numbers of the expressions.
+    optimization : OptimizationSection
+        ``[optimization]``: objective, constraints, horizon.
+    boundary : BoundarySection
+        ``[boundary]``: start and final values.
+    bounds : dict of str to list of float
+        ``[bounds]``: ``name = [lo, hi]`` for states, inputs, algebraics.
+    free_parameters : dict of str to list of float
+        ``[free_parameters]``: ``name = [lo, hi]``, model parameters optimised too.
+    nominal : dict of str to float
+        ``[nominal]``: magnitudes for scaling (variables, ``final_time``).
+    initial_guess : InitialGuessSection
+        ``[initial_guess]``: how the NLP is started.
+    collocation : CollocationSection
+        ``[collocation]``: the transcription.
+    solver : SolverSection
+        ``[solver]``: IPOPT settings.
+    """
+
+    kind: Literal["optimal_control"]
+    model: ModelSection
+    parameters: dict[str, number()] = Field(default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001")
+    optimization: OptimizationSection
+    boundary: BoundarySection = BoundarySection()
+    bounds: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's)")
+    free_parameters: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
+    nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
+    initial_guess: InitialGuessSection = InitialGuessSection()
+    collocation: CollocationSection = CollocationSection()
+    solver: SolverSection = SolverSection()
+
+
+@dataclass
+class OptimalControl:
+    """The declaration of an ``optimal_control`` problem.
+
+    Parameters
+    ----------
+    name : str
+        Problem name.
+    model_file : pathlib.Path
+        The model's Python file.
+    class_name : str
+        The class in it.
+    optimization : Optimization
+        The declared problem (objective, constraints, bounds, boundary values, guesses).
+    elements, points : int
+        Collocation elements and points per element.
+    scheme : str
+        ``"radau"`` or ``"legendre"``.
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    nominal : dict of str to float
+        Nominal magnitudes (scaling).
+    objective : str
+        The objective text.
+    constraints : tuple of str
+        The constraint texts.
+    named_parameters : dict of str to float
+        The ``[parameters]`` table.
+    bounds : dict of str to tuple of float
+        Bounds per scalar variable name (for the plots).
+    """
+
+    name: str
+    model_file: Path
+    class_name: str
+    optimization: Optimization
+    elements: int
+    points: int
+    scheme: str
+    max_iter: int
+    tol: float
+    nominal: dict[str, float] = field(default_factory=dict)
+    objective: str = ""
+    constraints: tuple[str, ...] = ()
+    named_parameters: dict[str, float] = field(default_factory=dict)
+    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    @property
+    def model(self) -> Model:
+        """The user's model."""
+        return self.optimization.model
+
+
+def _scalar_variables(model: Model) -> dict[str, tuple[str, ca.SX]]:
+    """Scalar states, inputs and algebraics by name: ``name -> (kind, symbol)``."""
+    out = {}
+    for kind in ("state", "input", "algebraic"):
+        for name, sym in model.variables(kind).items():
+            if sym.numel() == 1:
+                out[name] = (kind, sym)
+    return out
+
+
+def _final_time(file: ProblemFile, opt: OptimizationSection) -> dict[str, Any]:
+    """Keyword arguments of :class:`Optimization` for the horizon, checked."""
+    t0, ft, ftn = opt.start_time, opt.final_time, "optimization.final_time"
+    if not ft.free:
+        if ft.value is None:
+            raise file.fail(f"{ftn}.value", "the final time [s] when free = false")
+        if not ft.value > t0:
+            raise file.fail(f"{ftn}.value", f"a final time after start_time ({t0})", ft.value)
+        for key in ("bounds", "initial_guess"):
+            if getattr(ft, key) is not None:
+                raise file.fail(f"{ftn}.{key}", "no bounds or initial guess when free = false (the final time is value)")
+        return {"start_time": t0, "final_time": ft.value}
+    if ft.bounds is None:
+        raise file.fail(f"{ftn}.bounds", "bounds [lo, hi] for a free final time (free = true)")
+    lo, hi = ft.bounds
+    if not t0 < lo <= hi:
+        raise file.fail(f"{ftn}.bounds", f"[lo, hi] with start_time ({t0}) < lo <= hi", ft.bounds)
+    if ft.value is not None:
+        raise file.fail(f"{ftn}.value", "no fixed value when free = true (use initial_guess)")
+    guess = ft.initial_guess if ft.initial_guess is not None else 0.5 * (lo + hi)
+    if not lo <= guess <= hi:
+        raise file.fail(f"{ftn}.initial_guess", f"a time within {ftn}.bounds {ft.bounds}", guess)
+    return {"start_time": t0, "final_time": guess, "free_final_time": True, "final_time_bounds": (lo, hi)}
+
+
+def _aliases(names: Any) -> dict[str, str]:
+    """Key -> declared name: every name, and a hierarchical one (``mass.s``) also as ``mass_s`` (if not taken)."""
+    out = {n: n for n in names}
+    for n in names:
+        alias = re.sub(r"[^A-Za-z0-9_]", "_", n)
+        out.setdefault(alias, n)
+    return out
+
+
+def _unknown(file: ProblemFile, field_: str, name: str, known: Any) -> Exception:
+    return file.fail(field_, f"one of the model's names ({', '.join(sorted(known)) or 'none'})", name)
+
+
+class OptimalControlKind(ProblemKind):
+    """Optimal control of a user's model (:class:`~gtmodel.modeling.Optimization`, collocation)."""
+
+    name = "optimal_control"
+    schema = OptimalControlFile
+    title = "optimal control of the user's own model ([model] file and class), by direct collocation"
+    columns = (
+        Column("final_time_s", "T_final [s]", "{:.4f}"),
+        Column("objective", "objective", "{:.6g}"),
+        Column("iterations", "iterations", "{}"),
+        Column("solve_time_s", "solve time [s]", "{:.3f}"),
+    )
+    empty_fields = ("final_time_s", "objective", "iterations", "solve_time_s", "max_constraint_violation")
+
+    @fill_doc(**KIND_DOCS)
+    def load(self, doc: OptimalControlFile, file: ProblemFile, name: str) -> OptimalControl:
+        """Import the model and declare the :class:`~gtmodel.modeling.Optimization` (see :meth:`ProblemKind.load`).
+
+        Parameters
+        ----------
+        {load_args}
+
+        Returns
+        -------
+        OptimalControl
+
+        Raises
+        ------
+        ProblemError
+            The model file is missing or fails (syntax error, no such class, not a
+            Model), an unknown parameter or variable name, inconsistent final-time
+            settings, an invalid expression; the message names the file and the field.
+        """
+        path = Path(file.reference("model.file", doc.model.file))
+        try:
+            model = load_user_model(path, doc.model.class_)
+        except ModelFileError as exc:
+            raise file.wrap("model.file", exc) from None
+        except GtModelError as exc:
+            raise file.wrap("model.class", exc) from None
+        try:
+            opt = Optimization(model, **_final_time(file, doc.optimization))
+        except GtModelError as exc:
+            raise file.wrap("optimization.final_time", exc) from None
+        params = model.variables("parameter")
+        pkeys = _aliases(params)
+        for key, value in doc.model.parameters.items():
+            if key not in pkeys:
+                raise _unknown(file, f"model.parameters.{key}", key, params)
+            if params[pkeys[key]].numel() != 1:
+                raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[pkeys[key]].numel()} elements)")
+            opt.set_parameter(pkeys[key], value)
+        for key, (lo, hi) in doc.free_parameters.items():
+            if key not in pkeys:
+                raise _unknown(file, f"free_parameters.{key}", key, params)
+            if lo > hi:
+                raise file.fail(f"free_parameters.{key}", "[lo, hi] with lo <= hi", [lo, hi])
+            opt.free_parameter(pkeys[key], lo, hi)
+        variables = _scalar_variables(model)
+        vkeys = _aliases(variables)
+        bounds: dict[str, tuple[float, float]] = {}
+        for key, (lo, hi) in doc.bounds.items():
+            if key not in vkeys:
+                raise _unknown(file, f"bounds.{key}", key, variables)
+            if lo > hi:
+                raise file.fail(f"bounds.{key}", "[lo, hi] with lo <= hi", [lo, hi])
+            opt.set_bounds(variables[vkeys[key]][1], lo, hi)
+            bounds[vkeys[key]] = (lo, hi)
+        boundary = {at: {vkeys.get(k, k): v for k, v in getattr(doc.boundary, at).items()} for at in ("start", "final")}
+        for at in ("start", "final"):
+            for key, value in getattr(doc.boundary, at).items():
+                if key not in vkeys:
+                    raise _unknown(file, f"boundary.{at}.{key}", key, variables)
+                opt.add_point_constraint(variables[vkeys[key]][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
+        origin = str(file.path)
+        named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
+        table = optimization_names(opt, named, origin=origin)
+        table = {k: table[n] for k, n in _aliases(table).items() if k.isidentifier()}
+        apply_to(opt, doc.optimization.objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.")
+        nkeys = {**vkeys, "final_time": "final_time", **{k: n for k, n in pkeys.items() if n in opt.free_parameters}}
+        for key in doc.nominal:
+            if key not in nkeys:
+                raise _unknown(file, f"nominal.{key}", key, set(variables) | {"final_time"} | set(opt.free_parameters))
+        if doc.initial_guess.method == "linear":
+            _linear_guess(opt, boundary, variables)
+        col = doc.collocation
+        return OptimalControl(
+            name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
+            elements=col.elements, points=col.points, scheme=col.scheme,
+            max_iter=doc.solver.max_iter, tol=doc.solver.tol, nominal={nkeys[k]: v for k, v in doc.nominal.items()},
+            objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
+            named_parameters=named, bounds=bounds,
+        )
+
+    def solve(self, declaration: OptimalControl, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> OptimizationResult:
+        """Transcribe by collocation and solve with IPOPT.
+
+        Parameters
+        ----------
+        declaration : OptimalControl
+            From :meth:`load`.
+        verbose : bool, optional
+            IPOPT's iteration log.
+        previous : OptimizationResult, optional
+            A sweep's previous solution.
+        warm_start : bool, optional
+            Start from ``previous`` (sampled onto the new mesh).
+
+        Returns
+        -------
+        OptimizationResult
+        """
+        d = declaration
+        tr = CollocationTranscription(
+            d.optimization, elements=d.elements, points=d.points, scheme=d.scheme, verbose=verbose,
+            solver_options={"max_iter": d.max_iter, "tol": d.tol}, nominal=d.nominal,
+        )
+        guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
+        return tr.solve(initial_guess=guess)
+
+    def write(self, declaration: OptimalControl, solution: OptimizationResult, out: Path, plots: bool, name: str) -> Written:
+        """Summary fields; ``trajectories.csv`` and plots of the states and inputs.
+
+        Nothing but the summary fields is written for a failed solve (its last iterate
+        is not a trajectory).
+
+        Parameters
+        ----------
+        declaration : OptimalControl
+            The declaration.
+        solution : OptimizationResult
+            Its solution.
+        out : pathlib.Path
+            The folder.
+        plots : bool
+            Write PNG plots.
+        name : str
+            Plot title.
+
+        Returns
+        -------
+        Written
+        """
+        d, r = declaration, solution
+        written = Written({
+            "status": r.status,
+            "message": r.message,
+            "objective": r.objective,
+            "final_time_s": r.final_time,
+            "iterations": r.iterations,
+            "solve_time_s": r.solve_time,
+            "max_constraint_violation": r.max_constraint_violation,
+            "last_iterate": r.last_iterate,
+            "objective_expression": d.objective,
+            "constraints": list(d.constraints),
+            "parameters": dict(d.named_parameters),
+            "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name},
+            "free_parameters": sorted(d.optimization.free_parameters),
+            "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
+            "free_final_time": d.optimization.free_final_time,
+            "collocation": {"elements": d.elements, "points": d.points, "scheme": d.scheme},
+        })
+        if r.status not in ("optimal", "acceptable"):
+            return written
+        r.to_csv(out / "trajectories.csv")
+        written.files.append("trajectories.csv")
+        if plots:
+            for group, fname in (("states", "states.png"), ("inputs", "inputs.png")):
+                signals = {k: v for k, v in getattr(r, group).items() if np.ndim(v) == 1}
+                if signals:
+                    plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds)
+                    written.files.append(fname)
+        return written
+
+
+def _linear_guess(opt: Optimization, boundary: dict[str, dict[str, float]], variables: dict[str, tuple[str, ca.SX]]) -> None:
+    """Initial guesses linear in time between the start and final boundary values (by declared name)."""
+    t0, tf = opt.start_time, opt.final_time_guess
+    start, final = boundary["start"], boundary["final"]
+    for key, (kind, sym) in variables.items():
+        if key in start and key in final:
+            opt.set_initial_guess(sym, ([t0, tf], [start[key], final[key]]))
+        elif key in start or key in final:
+            opt.set_initial_guess(sym, start.get(key, final.get(key)))

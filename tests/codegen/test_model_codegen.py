@@ -1,0 +1,161 @@
+"""``gtmodel codegen --model FILE:CLASS``: C for a user model, compiled with -Werror, equal to Python.
+
+Checked against the model's own CasADi Functions evaluated from Python (``FlatDAE.ode``,
+``alg``, ``outputs``, parameters as an input) to 1e-12, and against the closed form of
+the cart-pendulum's accelerations (Lagrange's equations solved by hand for s'', theta'').
+"""
+
+from __future__ import annotations
+
+import re
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from gtmodel.codegen import compile_shared, generate, load_library, parameter_hash
+from gtmodel.codegen.model_code import MODEL_TOLERANCE, check_model, generate_model, model_parameter_hash
+from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling import Model
+from gtmodel.problems.user_model import load_user_model
+from gtmodel.robots import load_parameters
+
+from ..conftest import REPO
+
+MODEL_FILE = REPO / "models" / "cart_pendulum.py"
+
+
+@pytest.fixture(scope="module")
+def cart_pendulum(tmp_path_factory):
+    model = load_user_model(MODEL_FILE, "CartPendulum")
+    gen = generate_model(model, tmp_path_factory.mktemp("cp") / "src")
+    return model, gen, check_model(gen, n=500)
+
+
+def _dae_model() -> Model:
+    """An index-1 DAE with an algebraic variable, a vector state and an output named like a C local."""
+    m = Model("rc_dae")
+    a = m.parameter("a", 2.0)
+    q = m.state("q", 2, start=[1.0, -0.5])
+    y = m.algebraic("y")
+    u = m.input("u")
+    m.equation(m.der(q), ca.vertcat(-a * q[0] + y, -q[1] + u))
+    m.equation(y, q[0] * q[1] + 0.1 * m.time)
+    m.output("w", q[0] ** 2 + y)  # "w" is the wrapper's work array: the C parameter is y_w
+    m.output("pos", ca.vertcat(q[0], q[1], y))
+    return m
+
+
+def test_cart_pendulum_code_equals_python(cart_pendulum):
+    _, gen, report = cart_pendulum
+    assert gen.functions == ("ode", "outputs")
+    assert report.passed, "\n".join(report.summary_lines())
+    assert max(f.max_abs_diff for f in report.functions) <= MODEL_TOLERANCE
+
+
+def test_header_has_the_models_own_hash_and_no_robot_macros(cart_pendulum):
+    model, gen, _ = cart_pendulum
+    text = gen.header.read_text()
+    assert gen.parameter_hash == model_parameter_hash(model.flatten()) != parameter_hash(load_parameters("L1"))
+    assert f'GT_CART_PENDULUM_PARAMETER_HASH "{gen.parameter_hash}"' in text
+    assert not any(word in text for word in ("ROBOT", "SINGULARITY_TOLERANCE", "Gantry-Tau", "friction"))
+
+
+def test_parameter_hash_changes_with_a_parameter_value(tmp_path):
+    other = tmp_path / "heavier.py"
+    other.write_text(MODEL_FILE.read_text().replace('"m_pole", 0.3)', '"m_pole", 0.31)'))
+    a, b = load_user_model(MODEL_FILE, "CartPendulum"), load_user_model(other, "CartPendulum")
+    assert model_parameter_hash(a.flatten()) == model_parameter_hash(load_user_model(MODEL_FILE, "CartPendulum").flatten())
+    assert model_parameter_hash(a.flatten()) != model_parameter_hash(b.flatten())
+
+
+def test_ode_equals_the_closed_form_accelerations(cart_pendulum):
+    # Lagrange's equations of the cart-pole solved by hand (Tedrake, Underactuated Robotics, ch. 3):
+    # s'' = (F + m sin(th) (l om^2 + g cos(th))) / (M + m sin^2(th)),  th'' = -(s'' cos(th) + g sin(th)) / l
+    _, gen, _ = cart_pendulum
+    lib = load_library(gen, compile_shared(gen, gen.out_dir / "build2", werror=True))
+    rng = np.random.default_rng(1)
+    x = rng.uniform(-3, 3, (50, 4))
+    F = rng.uniform(-20, 20, (50, 1))
+    status, (xdot,) = lib["ode"].call_rows(np.zeros((50, 1)), x, F)
+    M, m, l, g = 1.0, 0.3, 0.5, 9.81
+    th, om = x[:, 2], x[:, 3]
+    sdd = (F[:, 0] + m * np.sin(th) * (l * om**2 + g * np.cos(th))) / (M + m * np.sin(th) ** 2)
+    thdd = -(sdd * np.cos(th) + g * np.sin(th)) / l
+    assert np.all(status == 0)
+    np.testing.assert_allclose(xdot, np.column_stack([x[:, 1], sdd, om, thdd]), rtol=1e-12, atol=1e-12)
+
+
+def test_dae_model_residual_and_vector_outputs(tmp_path):
+    gen = generate_model(_dae_model(), tmp_path / "src")
+    report = check_model(gen, n=300)
+    assert gen.functions == ("ode", "alg", "outputs")
+    assert report.passed, "\n".join(report.summary_lines())
+    assert "double y_w[1], double pos[3]" in gen.header.read_text()
+
+
+def test_cli_codegen_model_check_passes(tmp_path, capsys):
+    code = main(["codegen", "--model", f"{MODEL_FILE}:CartPendulum", "--out", str(tmp_path / "c"), "--check", "-n", "200"])
+    out = capsys.readouterr().out
+    assert code == EXIT_OK, out
+    assert "PASSED" in out and "model cart_pendulum sha256:" in out
+
+
+@pytest.mark.parametrize(
+    "ref, match",
+    [
+        (f"{MODEL_FILE}:CartPole", r"cart_pendulum\.py: defines no class 'CartPole'"),
+        (f"{REPO / 'models' / 'nope.py'}:CartPendulum", r"nope\.py: no such model file"),
+        (str(MODEL_FILE), r"--model: expected FILE:CLASS"),
+    ],
+    ids=["class_not_defined", "file_missing", "no_class"],
+)
+def test_cli_codegen_model_bad_input(tmp_path, capsys, ref, match):
+    code = main(["codegen", "--model", ref, "--out", str(tmp_path / "c")])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err and re.search(match, err), err
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        ({"functions": ["alg"]}, InputError, r"functions: \['alg'\] not among the model's functions \(ode, outputs\)"),
+        ({"prefix": "1bad"}, InputError, "prefix: expected a C identifier"),
+        ({"real": "long double"}, InputError, "real: expected 'double' or 'float'"),
+    ],
+    ids=["absent_function", "bad_prefix", "bad_real"],
+)
+def test_generate_model_bad_arguments(tmp_path, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        generate_model(load_user_model(MODEL_FILE, "CartPendulum"), tmp_path, **kwargs)
+
+
+def test_generate_model_refuses_a_model_that_does_not_flatten(tmp_path):
+    m = Model("underdetermined")
+    m.state("x")
+    with pytest.raises(ModelError, match="0 scalar equations but 1 states"):
+        generate_model(m, tmp_path)
+
+
+def test_robot_generate_is_unchanged_by_the_model_path(tmp_path):
+    # the robot generator keeps its own hash: the L1 parameter hash, not a model hash
+    gen = generate("L1", tmp_path, functions=["ik"])
+    assert gen.parameter_hash == parameter_hash(load_parameters("L1"))
+
+
+def test_composed_model_code_equals_python(tmp_path):
+    # a component model: hierarchical output names become C identifiers (mass.a -> mass_a)
+    pytest.importorskip("gtmodel.modeling.components")
+    f = tmp_path / "osc.py"
+    f.write_text(
+        "from gtmodel.modeling.components import Component, connect\n"
+        "from gtmodel.modeling.library.translational import Fixed, Force, Mass, Spring\n\n\n"
+        "class Oscillator(Component):\n    fixed = Fixed()\n    spring = Spring(c=4.0)\n    mass = Mass(m=1.0)\n    force = Force()\n\n"
+        "    def equations(self):\n        connect(self.fixed.flange, self.spring.flange_a)\n"
+        "        connect(self.spring.flange_b, self.mass.flange_a)\n        connect(self.force.flange, self.mass.flange_b)\n"
+    )
+    gen = generate_model(load_user_model(f, "Oscillator"), tmp_path / "src")
+    report = check_model(gen, n=200)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert "double mass_a[1]" in gen.header.read_text()
