@@ -37,6 +37,7 @@ file (:mod:`gtmodel.codegen.controller_file`) for ``gtmodel codegen --controller
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -44,7 +45,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.codegen.c_text import _c_float
-from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
+from gtmodel.codegen.declarations import CONTROLLER_KIND, ArgSpec, FunctionSpec, OutputSpec
 from gtmodel.codegen.filter_step import (
     FILTER_FUNCTIONS, check_filter_function, filter_header_lines, filter_sizes, filter_source_lines, filter_spec,
 )
@@ -65,8 +66,6 @@ __all__ = [
     "controller_source_lines",
 ]
 
-#: ``FunctionSpec.kind`` of the controller declarations (robot-independent functions).
-CONTROLLER_KIND = "controller"
 #: Names of the controller functions (the C symbols are ``<prefix>_<name>``).
 CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction", *FILTER_FUNCTIONS)
 #: Sample time of the loop [s] (Dressler (2012), ch. 3.2).
@@ -193,6 +192,23 @@ class Controller:
                 f"ilc_correction: u(k={int(k[i])}) = {u[i].tolist()} differs from "
                 + (f"ilc_table[{int(k[i])}] = {ref[i].tolist()}" if 0 <= k[i] < n else "0 (outside the table)")
             )
+
+    def content_hash(self) -> str:
+        """SHA-256 of what the generated C computes: the Functions (CasADi serialisation), the table and ``dt``.
+
+        The hash a controller-only library carries instead of a robot's parameter hash.
+
+        Returns
+        -------
+        str
+            64 hexadecimal digits.
+        """
+        h = hashlib.sha256(repr(self.dt).encode())
+        for name in self.functions:
+            h.update(name.encode() + b"\0" + getattr(self, name).serialize().encode())
+        if self.ilc_table is not None:
+            h.update(np.ascontiguousarray(self.ilc_table).tobytes())
+        return h.hexdigest()
 
     @property
     def functions(self) -> tuple[str, ...]:

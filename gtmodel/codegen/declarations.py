@@ -25,6 +25,7 @@ if TYPE_CHECKING:  # annotations only
     from gtmodel.codegen.robot import RobotModel
 
 __all__ = [
+    "CONTROLLER_KIND",
     "STATUS_CODES",
     "IK_TOLERANCE",
     "FK_TOLERANCE",
@@ -41,6 +42,9 @@ __all__ = [
 ]
 
 #: Status codes returned by every generated C function (also ``#define``\ d in the header).
+#: ``FunctionSpec.kind`` of the controller declarations (robot-independent functions).
+CONTROLLER_KIND = "controller"
+
 STATUS_CODES: dict[str, tuple[int, str]] = {
     "GT_OK": (0, "success; outputs written"),
     "GT_UNREACHABLE": (1, "pose unreachable (an arm cannot reach T, or the link spheres do not meet); outputs untouched"),

@@ -392,7 +392,8 @@ def generate(
         ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
         ``gravity``; six-link: ``fk``, ``ik``; F1: ``ik``, ``fk``). Empty with a
         ``controller``: the controller functions alone (the robot then only names the
-        default prefix and the version string), e.g. the KF/EKF steps of the fusion.
+        default prefix; the header names no robot and the version carries the controller's
+        :meth:`~gtmodel.codegen.controller.Controller.content_hash`), e.g. the KF/EKF steps of the fusion.
     prefix : str or None, optional
         C symbol prefix; default ``"gt_<robot name>"``, e.g. ``gt_L1`` (giving
         ``gt_L1_ik``, header ``gt_L1.h``).
@@ -534,11 +535,15 @@ def generate(
         + _static_helpers(_void_unused_parameters(casadi_text))
     )
 
-    phash = model.parameter_hash()
-    version = (
-        f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; "
-        f"parameters {model.name} sha256:{phash}; friction {friction}; real {real}"
-    )
+    if only_controller:  # no robot function: the controller's own hash, no robot in the version
+        phash = controller.content_hash()
+        version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; controller sha256:{phash}; real {real}"
+    else:
+        phash = model.parameter_hash()
+        version = (
+            f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; "
+            f"parameters {model.name} sha256:{phash}; friction {friction}; real {real}"
+        )
     header = out / f"{prefix}.h"
     source = out / f"{prefix}.c"
     try:

@@ -92,6 +92,15 @@ def test_header_declares_sizes_struct_init_update(built, name):
     assert gen.functions == (name,)  # the controller alone: no robot function
 
 
+def test_a_filter_only_header_names_no_robot_and_carries_the_controller_hash(built):
+    gen, _, _ = built("kf_step")
+    header = gen.header.read_text()
+    controller = Controller(dt=FILTER_DT, kf_step=fusion_filter(False).step_function())
+    assert "L1" not in header and "_ROBOT" not in header and "SINGULARITY_TOLERANCE" not in header
+    assert f'#define GT_FUSION_PARAMETER_HASH "{controller.content_hash()}"' in header
+    assert gen.version.endswith(f"controller sha256:{controller.content_hash()}; real double")
+
+
 # ----------------------------------------------------------------------------- whole run
 @pytest.mark.parametrize("name", NAMES)
 def test_check_passes_over_a_whole_record(report, name):
