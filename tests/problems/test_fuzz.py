@@ -116,9 +116,6 @@ def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, 
     limit = max(MAX_SECONDS, 3.0 * (time.monotonic() - t0))
     start_mb = _peak_mb()
 
-    @settings(max_examples=CASES_PER_FILE, deadline=None, derandomize=True, database=None,
-              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large])
-    @given(mutations(text))
     def load_timed() -> float:
         t0 = time.monotonic()
         try:
@@ -130,6 +127,9 @@ def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, 
             assert any(w in message for w in ("field '", "'[", "[truth]", "invalid TOML", "not UTF-8")), message
         return time.monotonic() - t0
 
+    @settings(max_examples=CASES_PER_FILE, deadline=None, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large])
+    @given(mutations(text))
     def case(content: bytes) -> None:
         target.write_bytes(content)
         elapsed = load_timed()
