@@ -37,6 +37,7 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
+from gtmodel._arrays import as_array
 from gtmodel._docstrings import fill_doc
 from gtmodel._geometry import rot_x, rot_y, rot_z
 from gtmodel.errors import ConvergenceError, InputError, ParameterError, SingularConfigurationError
@@ -234,12 +235,7 @@ class SerialArm:
 
     @staticmethod
     def _limits(value: Any) -> np.ndarray:
-        try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"joint_limits: expected an array of shape (6, 2) [rad], got {value!r}") from None
-        if arr.shape != (6, 2) or not np.all(np.isfinite(arr)):
-            raise InputError(f"joint_limits: expected a finite array of shape (6, 2) [rad], got shape {arr.shape}")
+        arr = as_array(value, (6, 2), "joint_limits")  # [rad], rows (lower, upper)
         bad = np.flatnonzero(arr[:, 0] >= arr[:, 1])
         if bad.size:
             i = int(bad[0])
