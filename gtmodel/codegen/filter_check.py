@@ -42,7 +42,7 @@ __all__ = [
     "QUATERNION_NORM_TOLERANCE",
     "STRICT_FLAGS",
     "TIMING_BLOCK",
-    "FilterRun",
+    "FilterTrace",
     "filter_record",
     "python_filter_run",
     "c_filter_run",
@@ -71,7 +71,7 @@ _OK = STATUS_CODES["GT_OK"][0]
 
 
 @dataclass(frozen=True)
-class FilterRun:
+class FilterTrace:
     """States and covariances of a filter run: the prior and one posterior per measurement.
 
     Parameters
@@ -156,7 +156,7 @@ def filter_record(controller: Controller, name: str, cycles: int = FILTER_CYCLES
     return {"z": z, "x0": x[0], "P0": np.diag(var)}
 
 
-def python_filter_run(f: ca.Function, z: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> FilterRun:
+def python_filter_run(f: ca.Function, z: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> FilterTrace:
     """The Python run of a filter step Function over a record (``mapaccum``, as one evaluation).
 
     Parameters
@@ -172,14 +172,14 @@ def python_filter_run(f: ca.Function, z: np.ndarray, x0: np.ndarray, P0: np.ndar
 
     Returns
     -------
-    FilterRun
+    FilterTrace
         ``x``, ``P`` of the prior and every posterior; ``status`` zeros.
     """
     n, nx = len(z), x0.size
     xs, Ps, _ = f.mapaccum("run", n, 2)(x0, P0, np.asarray(z, float).T)
     x = np.vstack([x0, np.asarray(ca.DM(xs)).T])
     P = np.concatenate([P0[None], np.asarray(ca.DM(Ps)).reshape(nx, n, nx).transpose(1, 0, 2)])
-    return FilterRun(np.zeros(n + 1, dtype=int), x, P)
+    return FilterTrace(np.zeros(n + 1, dtype=int), x, P)
 
 
 def _raw(library: CompiledLibrary, name: str, nargs: int):
@@ -193,7 +193,7 @@ def _ptr(a: np.ndarray | None):
     return None if a is None else a.ctypes.data
 
 
-def c_filter_run(library: CompiledLibrary, name: str, z: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> FilterRun:
+def c_filter_run(library: CompiledLibrary, name: str, z: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> FilterTrace:
     """The C run over a record through ``<prefix>_<stem>_init`` / ``_update`` (state in a struct).
 
     Parameters
@@ -211,7 +211,7 @@ def c_filter_run(library: CompiledLibrary, name: str, z: np.ndarray, x0: np.ndar
 
     Returns
     -------
-    FilterRun
+    FilterTrace
         Statuses and the struct's state after ``_init`` and after every ``_update``.
     """
     stem = name[:-5]
@@ -228,7 +228,7 @@ def c_filter_run(library: CompiledLibrary, name: str, z: np.ndarray, x0: np.ndar
     for i in range(len(z)):
         status[i + 1] = update(_ptr(state), _ptr(zs[i]))
         out[i + 1] = state
-    return FilterRun(status, out[:, :nx], out[:, nx:].reshape(-1, nx, nx))
+    return FilterTrace(status, out[:, :nx], out[:, nx:].reshape(-1, nx, nx))
 
 
 def _within(c: np.ndarray, r: np.ndarray, real: str, tol: float) -> tuple[float, bool]:
@@ -240,7 +240,7 @@ def _within(c: np.ndarray, r: np.ndarray, real: str, tol: float) -> tuple[float,
 
 
 def filter_checks(library: CompiledLibrary, controller: Controller, name: str, record: dict[str, np.ndarray],
-                  real: str = "double") -> tuple[list[FunctionCheck], FilterRun, FilterRun]:
+                  real: str = "double") -> tuple[list[FunctionCheck], FilterTrace, FilterTrace]:
     """Compare the C filter with Python over a record: update chain, step on every Python state, quaternion norm.
 
     Parameters
@@ -261,7 +261,7 @@ def filter_checks(library: CompiledLibrary, controller: Controller, name: str, r
     checks : list of FunctionCheck
         ``<stem>_update`` (every state and covariance of the C run), ``<name>`` (each step
         from the Python states) and, for a 19-D state, ``<stem>_update quaternion norm``.
-    c_run, python_run : FilterRun
+    c_run, python_run : FilterTrace
         The two runs.
     """
     f = getattr(controller, name)
@@ -620,7 +620,7 @@ def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, 
 
 
 def run_filter_program(program: str | Path, out_file: str | Path, nx: int, valgrind: bool = False,
-                       timeout: float = 600) -> tuple[subprocess.CompletedProcess, FilterRun]:
+                       timeout: float = 600) -> tuple[subprocess.CompletedProcess, FilterTrace]:
     """Run the program of :func:`build_filter_program` (optionally under valgrind's memcheck) and read its run.
 
     Parameters
@@ -640,7 +640,7 @@ def run_filter_program(program: str | Path, out_file: str | Path, nx: int, valgr
     -------
     proc : subprocess.CompletedProcess
         Exit code, stdout (the counts) and stderr (valgrind's report).
-    run : FilterRun
+    run : FilterTrace
         Statuses, states and covariances written by the program (empty if none).
     """
     cmd = [str(program), str(out_file)]
@@ -650,4 +650,4 @@ def run_filter_program(program: str | Path, out_file: str | Path, nx: int, valgr
     width = 1 + nx + nx * nx
     data = np.fromfile(out_file, dtype=np.float64) if Path(out_file).is_file() else np.zeros(0)
     data = data[: data.size // width * width].reshape(-1, width)
-    return proc, FilterRun(data[:, 0].astype(int), data[:, 1:1 + nx], data[:, 1 + nx:].reshape(-1, nx, nx))
+    return proc, FilterTrace(data[:, 0].astype(int), data[:, 1:1 + nx], data[:, 1 + nx:].reshape(-1, nx, nx))
