@@ -64,7 +64,7 @@ from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.structural import Modes, PhysicalModel
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["DT", "STANDARD_GRAVITY", "ToolStructure", "SensorModel", "TrackingResponse", "TrackingPlant"]
+__all__ = ["DT", "STANDARD_GRAVITY", "MIN_FREQUENCY_HZ", "ToolStructure", "SensorModel", "TrackingResponse", "TrackingPlant"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -83,6 +83,10 @@ def _pair(value: Any, name: str) -> tuple[float, float]:
     return (float(arr[0]), float(arr[1]))
 
 
+#: Lowest accepted structural resonance [Hz] (a structure mode, not a drift; keeps the modal mass finite).
+MIN_FREQUENCY_HZ = 0.01
+
+
 @dataclass(frozen=True)
 class ToolStructure:
     """One structural mode per direction (x, y) between kinematic and true tool position.
@@ -95,7 +99,8 @@ class ToolStructure:
     Parameters
     ----------
     frequencies_hz : tuple of float, shape (2,), optional
-        Undamped resonance in x and y [Hz] (default 7.4, 11.5: Table 6.4, with wrist).
+        Undamped resonance in x and y [Hz] (default 7.4, 11.5: Table 6.4, with wrist), at
+        least :data:`MIN_FREQUENCY_HZ`.
     stiffness : tuple of float, shape (2,), optional
         Static TCP stiffness in x and y [N/m] (default 4e6, 2e6: 4 and 2 N/um).
     damping : tuple of float, shape (2,), optional
@@ -106,8 +111,9 @@ class ToolStructure:
     Raises
     ------
     InputError
-        A field is not 2 positive finite numbers (``mass``: not a positive number), or a
-        damping ratio is 1 or more (no oscillating mode).
+        A field is not 2 positive finite numbers (``mass``: not a positive number), a
+        resonance below :data:`MIN_FREQUENCY_HZ` (its modal mass ``stiffness / w^2`` would
+        overflow), or a damping ratio is 1 or more (no oscillating mode).
     """
 
     frequencies_hz: tuple[float, float] = (7.4, 11.5)
@@ -118,6 +124,8 @@ class ToolStructure:
     def __post_init__(self) -> None:
         for name in ("frequencies_hz", "stiffness", "damping"):
             object.__setattr__(self, name, _pair(getattr(self, name), name))
+        if min(self.frequencies_hz) < MIN_FREQUENCY_HZ:
+            raise InputError(f"frequencies_hz: expected resonances of at least {MIN_FREQUENCY_HZ} Hz, got {self.frequencies_hz!r}")
         if max(self.damping) >= 1.0:
             raise InputError(f"damping: expected damping ratios below 1 (oscillating modes), got {self.damping!r}")
         object.__setattr__(self, "mass", positive_float(self.mass, "mass"))

@@ -188,6 +188,7 @@ def _acts(dt=DT):
 
 BAD = [
     ("frequencies_short", lambda: ToolStructure(frequencies_hz=(7.4,)), InputError, r"frequencies_hz: expected 2 positive"),
+    ("frequency_tiny", lambda: ToolStructure(frequencies_hz=(1e-300, 11.5)), InputError, r"frequencies_hz: expected resonances of at least 0.01 Hz"),  # fuzz: overflowed k / w^2
     ("stiffness_negative", lambda: ToolStructure(stiffness=(4e6, -1.0)), InputError, r"stiffness: expected 2 positive"),
     ("damping_one", lambda: ToolStructure(damping=(1.0, 0.05)), InputError, r"damping: expected damping ratios below 1"),
     ("damping_nan", lambda: ToolStructure(damping=(math.nan, 0.05)), InputError, r"damping: expected 2 positive finite"),

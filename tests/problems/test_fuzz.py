@@ -31,7 +31,7 @@ from ..conftest import PROBLEMS_DIR  # noqa: E402
 
 SHIPPED = sorted(PROBLEMS_DIR.glob("*.toml"))
 CASES_PER_FILE = 100
-MAX_SECONDS = 5.0  # per case, or 3x the shipped file's own load time if that is longer
+MAX_SECONDS = 10.0  # per case, or 3x the shipped file's own load time if that is longer (the defects it guards against took 28 s and more)
 MAX_MB = 400
 
 BAD_VALUES = [
