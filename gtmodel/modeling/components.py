@@ -42,6 +42,7 @@ eliminate.
 
 from __future__ import annotations
 
+import inspect
 import logging
 import re
 from dataclasses import dataclass, field
@@ -322,6 +323,19 @@ class Component:
     >>> model.variables("parameter")["spring.c"].shape
     (1, 1)
     """
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Give each component class a signature: its parameters (with defaults), then ``**modifiers``."""
+        super().__init_subclass__(**kwargs)
+        params = [
+            inspect.Parameter(
+                name, inspect.Parameter.KEYWORD_ONLY, default=float(d.default[0]) if d.size == 1 else d.default.tolist()
+            )
+            for name, d in _declarations(cls).items()
+            if isinstance(d, Parameter)
+        ]
+        params.append(inspect.Parameter("modifiers", inspect.Parameter.VAR_KEYWORD))
+        cls.__signature__ = inspect.Signature(params)
 
     def __init__(self, **modifiers: Any) -> None:
         cls = type(self)
