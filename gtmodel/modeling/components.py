@@ -20,6 +20,13 @@ own symbols (``self.c``, ``self.flange_a.s``, ``self.der(self.v)``) and the conn
             super().equations()                     # the base class's equations (extends)
             self.equation(self.f, self.c * self.s_rel)
 
+A sub-component's parameter can be bound to a parameter of the enclosing class
+(Modelica ``IdealGear gear(ratio=n)``)::
+
+    class Axis(Component):
+        n = Parameter(10.0, unit="1", description="gear ratio")
+        gear = IdealGear(ratio=n)          # one model parameter "n", no "gear.ratio"
+
 Instantiation with keyword arguments is a modifier (``Spring(c=2e5)``; a state's start
 value ``Mass(s=0.1)`` or ``Mass(s={"start": 0.1, "lb": 0})``; a sub-component's
 modifiers ``Axis(belt={"c": 2e5})`` or a replacement ``Axis(belt=SpringDamper(...))``).
@@ -85,9 +92,10 @@ class Component:
     Parameters
     ----------
     **modifiers
-        ``name=value`` per declared parameter (value), variable (start value or mapping
-        with ``start``, ``lb``, ``ub``) or sub-component (mapping of its modifiers, or a
-        component instance replacing it, which must have the same connectors).
+        ``name=value`` per declared parameter (value, or a :class:`Parameter` declared by
+        the enclosing class: a binding), variable (start value or mapping with ``start``,
+        ``lb``, ``ub``) or sub-component (mapping of its modifiers, or a component
+        instance replacing it, which must have the same connectors).
 
     Raises
     ------
@@ -143,7 +151,13 @@ class Component:
         for name, decl in decls.items():
             where = f"{cls.__name__}.{name}"
             if isinstance(decl, Parameter):
-                self._values[name] = decl.validate(modifiers.get(name, decl.default), where)
+                value = modifiers.get(name, decl.default)
+                if isinstance(value, Parameter):  # binding to a parameter of the enclosing class
+                    if value.size != decl.size:
+                        raise InputError(f"{where}: bound to a parameter of {value.size} value(s), expected {decl.size}")
+                    self._values[name] = value
+                else:
+                    self._values[name] = decl.validate(value, where)
             elif isinstance(decl, Variable):
                 self._attributes[name] = decl.modify(modifiers[name], where) if name in modifiers else dict(decl.attributes)
             elif isinstance(decl, Connector):
@@ -176,10 +190,19 @@ class Component:
         dict of str to numpy.ndarray
             Hierarchical name relative to this component (``"belt.c"``) -> value.
         """
-        out = {k: v.copy() for k, v in self._values.items()}
+        out = {k: self._value(k) for k in self._values}
         for name, sub in self.components().items():
             out.update({f"{name}.{k}": v for k, v in sub.parameter_values().items()})
         return out
+
+    def _value(self, name: str) -> np.ndarray:
+        value = self._values[name]
+        if isinstance(value, Parameter):
+            parent = self.parent
+            if parent is None or value.name not in parent._values:
+                return value.default.copy()
+            return parent._value(value.name)
+        return value.copy()
 
     def components(self) -> dict[str, "Component"]:
         """Direct sub-components of this instance.
@@ -440,7 +463,17 @@ class _Flattening:
         try:
             for name, decl in _declarations(type(comp)).items():
                 if isinstance(decl, Parameter):
-                    comp._symbols[name] = self._declare(pre + name, "parameter", decl.size, value=comp._values[name])
+                    value = comp._values[name]
+                    if isinstance(value, Parameter):
+                        owner = comp.parent
+                        if owner is None or _declarations(type(owner)).get(value.name) is not value:
+                            raise ModelError(
+                                f"parameter {name!r} is bound to a Parameter ({value.name or 'unnamed'}) that is not "
+                                "declared by the enclosing component"
+                            )
+                        comp._symbols[name] = owner._symbols[value.name]
+                    else:
+                        comp._symbols[name] = self._declare(pre + name, "parameter", decl.size, value=value)
                 elif isinstance(decl, Variable):
                     comp._symbols[name] = self._declare(pre + name, decl.kind, decl.size, **comp._attributes[name])
             for cname, conn in comp.connectors().items():
