@@ -153,6 +153,25 @@ def test_flattened_model_is_a_plain_model():
     assert model.outputs.keys() == {"mass.a"}
 
 
+def test_model_call_reaches_the_flattened_model():
+    # a component declares an extra algebraic variable and an output through the Model API;
+    # closed form: the spring force of the oscillator, -c x = -4 * 0.1 cos(2 t)
+    class Probe(Component):
+        osc = Oscillator()
+
+        def equations(self):
+            force = self.model_call("algebraic", "probe_force")
+            self.equation(force, -self.osc.spring.f)
+            self.model_call("output", "probe_double", 2.0 * force)
+
+    model = Probe().to_model()
+    assert "probe_force" in model.variables("algebraic")
+    t = np.linspace(0.0, 1.0, 11)
+    res = model.simulate(t)
+    np.testing.assert_allclose(res.z["probe_force"], -0.4 * np.cos(2.0 * t), atol=SIM_TOL)
+    np.testing.assert_allclose(res.outputs["probe_double"], -0.8 * np.cos(2.0 * t), atol=SIM_TOL)
+
+
 # ---------------------------------------------------------------------- connection semantics
 def _residuals(model: Model) -> dict[str, ca.SX]:
     return {label: res for label, res in model._equations}
@@ -359,6 +378,8 @@ BAD = [
      ModelError, r"component gear \(IdealGear\): parameter 'ratio' is bound to a Parameter \(unnamed\) that is not declared"),
     ("binding size", lambda: rot.IdealGear(ratio=Parameter([1.0, 2.0])), InputError,
      r"IdealGear\.ratio: bound to a parameter of 2 value\(s\), expected 1"),
+    ("model_call", lambda: _flatten_with(lambda c: c.model_call("_vars")), ModelError,
+     r"model_call: '_vars' is not a public method of Model"),
     ("inner connection", _composite_without_inner_connection, ModelError,
      r"component h \(Hollow\): its connector h\.flange is connected to nothing inside it"),
     ("unbalanced", lambda: _flatten_with(lambda c: c.equation(c.mass.s, 1.0)).flatten(), ModelError,
