@@ -65,9 +65,11 @@ class _Flattening:
     pairs: dict[int, list[tuple[Connector, Connector]]] = field(default_factory=dict)
     nodes: list[_ComponentBase] = field(default_factory=list)
     calls: list[tuple[_ComponentBase, str, tuple, dict, Any]] = field(default_factory=list)
+    known: set[int] = field(default_factory=set)
 
     def __post_init__(self) -> None:
         self.scratch = Model(self.name)
+        self.known.add(self.scratch.time.element_hash())
 
     # -------------------------------------------------------------- declarations
     def _declare(self, full: str, kind: str, size: int, **attrs: Any) -> ca.SX:
@@ -77,6 +79,10 @@ class _Flattening:
         else:
             sym = getattr(m, kind)(full, shape=size, start=attrs.get("start"), lb=attrs.get("lb"), ub=attrs.get("ub"))
         self.declared.append(_Declared(full, kind, sym, size, **attrs))
+        self.known.update(sym[i].element_hash() for i in range(size))
+        if kind == "state":
+            der = self.scratch.der(sym)
+            self.known.update(der[i].element_hash() for i in range(size))
         return sym
 
     def _walk(self, comp: _ComponentBase, path: str) -> None:
@@ -115,13 +121,19 @@ class _Flattening:
         if a.numel() != b.numel() and a.numel() != 1 and b.numel() != 1:
             raise InputError(f"component {comp._label()}: equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}")
         res = a - b
-        self.scratch.check_symbols(res, f"component {comp._label()}: equation {label!r}")
+        self._check_symbols(res, f"component {comp._label()}: equation {label!r}")
         self.equations.append((comp, label, res))
+
+    def _check_symbols(self, expr: ca.SX, what: str) -> None:
+        """Like :meth:`Model.check_symbols`, by element hashes (O(1) per symbol)."""
+        if any(v.element_hash() not in self.known for v in ca.symvar(expr)):
+            # symbols declared on the scratch model by other means (model_call, event passes)
+            self.scratch.check_symbols(expr, what)
 
     def output(self, comp: _ComponentBase, name: str, expr: Any) -> None:
         full = f"{comp.path}.{name}" if comp.path else name
         e = _as_sx(expr, f"output {full!r}")
-        self.scratch.check_symbols(e, f"component {comp._label()}: output {full!r}")
+        self._check_symbols(e, f"component {comp._label()}: output {full!r}")
         if any(n == full for n, _ in self.outputs):
             raise ModelError(f"component {comp._label()}: output {full!r} is declared twice")
         self.outputs.append((full, e))
