@@ -58,11 +58,11 @@ import numpy as np
 
 from gtmodel.errors import GtModelError, InputError, ModelError
 from gtmodel.modeling.connectors import Connector
-from gtmodel.modeling.declarations import Input, Parameter, State, Variable, _ComponentBase, _declarations
+from gtmodel.modeling.declarations import Input, Parameter, State, Structural, Variable, _ComponentBase, _declarations
 from gtmodel.modeling.flattening import _ACTIVE, _Flattening
 from gtmodel.modeling.model import Model
 
-__all__ = ["Parameter", "Variable", "State", "Input", "Component", "connect"]
+__all__ = ["Parameter", "Variable", "State", "Input", "Structural", "Component", "connect"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -111,6 +111,11 @@ class Component(_ComponentBase):
             for name, d in _declarations(cls).items()
             if isinstance(d, Parameter)
         ]
+        params += [
+            inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=d.default)
+            for name, d in _declarations(cls).items()
+            if isinstance(d, Structural)
+        ]
         params.append(inspect.Parameter("modifiers", inspect.Parameter.VAR_KEYWORD))
         cls.__signature__ = inspect.Signature(params)
 
@@ -139,6 +144,8 @@ class Component(_ComponentBase):
                     self._values[name] = value
                 else:
                     self._values[name] = decl.validate(value, where)
+            elif isinstance(decl, Structural):
+                self._values[name] = decl.validate(modifiers.get(name, decl.default), where)
             elif isinstance(decl, Variable):
                 self._attributes[name] = decl.modify(modifiers[name], where) if name in modifiers else dict(decl.attributes)
             elif isinstance(decl, Connector):
@@ -171,7 +178,8 @@ class Component(_ComponentBase):
         dict of str to numpy.ndarray
             Hierarchical name relative to this component (``"belt.c"``) -> value.
         """
-        out = {k: self._value(k) for k in self._values}
+        decls = _declarations(type(self))
+        out = {k: self._value(k) for k in self._values if isinstance(decls.get(k), Parameter)}
         for name, sub in self.components().items():
             out.update({f"{name}.{k}": v for k, v in sub.parameter_values().items()})
         return out
