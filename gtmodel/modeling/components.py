@@ -6,6 +6,8 @@ whose class attributes declare
 * parameters with defaults, units and descriptions: ``c = Parameter(1e5, unit="N/m")``;
 * variables: ``s = State(unit="m")`` (differentiated, ``der(s)`` allowed),
   ``f = Variable(unit="N")`` (algebraic), ``u = Input(unit="N")`` (input of the model);
+* structural parameters (plain Python values that choose equations):
+  ``stateSelect = Structural("default", choices=("default", "never"))``;
 * connectors: ``flange_a = Flange_a()`` (:mod:`gtmodel.modeling.connectors`);
 * sub-components: ``belt = SpringDamper(c=2e5)``, named hierarchically (``"axis1.belt.c"``),
 
@@ -42,9 +44,11 @@ nothing at its parent's level is zero (and so is the flow of the flattened compo
 own connectors: free ends). A potential variable that no component equation or output
 uses in its whole (cross-level) connection class is dropped with its equalities: so the
 velocity of a massless node between two springs does not make the model
-under-determined. Every connector variable that is kept is an algebraic variable of the
-model; the connection equalities are alias equations that the structural passes may
-eliminate.
+under-determined. A component whose ``stateSelect`` is ``"never"`` declares its states
+as algebraic variables (Modelica ``StateSelect.never``). Every connector variable that
+is kept is an algebraic variable of the model; the connection equalities are alias
+equations that the structural passes may eliminate. Components reach the rest of the
+:class:`Model` API (initial equations, events) through :meth:`Component.model_call`.
 """
 
 from __future__ import annotations
