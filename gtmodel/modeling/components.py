@@ -400,7 +400,7 @@ def _instantiate(template: Component, modifier: Any, where: str) -> Component:
     if modifier is None:
         return type(template)(**template._modifiers)
     if isinstance(modifier, dict):
-        return type(template)(**{**template._modifiers, **modifier})
+        return type(template)(**_merge(template._modifiers, modifier))
     if isinstance(modifier, Component):
         need = {k: c.signature() for k, c in template.connectors().items()}
         have = {k: c.signature() for k, c in modifier.connectors().items()}
@@ -412,6 +412,17 @@ def _instantiate(template: Component, modifier: Any, where: str) -> Component:
             )
         return type(modifier)(**modifier._modifiers)
     raise InputError(f"{where}: a sub-component modifier must be a dict of modifiers or a Component, got {modifier!r}")
+
+
+def _merge(inner: dict, outer: dict) -> dict:
+    """Nested modifiers: the outer ones win per name, dicts of sub-components merge (Modelica)."""
+    out = dict(inner)
+    for key, value in outer.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and key in out:
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
 
 
 def connect(a: Connector, b: Connector) -> None:
