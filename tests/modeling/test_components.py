@@ -86,6 +86,15 @@ def test_nested_modifiers_merge_with_the_class_ones():
     assert values["axis1.cart.m"][0] == 5.0 and values["axis1.belt.c"][0] == 1e4
 
 
+def test_describe_lists_the_declarations():
+    table = Oscillator(spring={"c": 9.0}).describe()
+    row = table.set_index("name").loc["spring.c"]
+    assert (row["kind"], row["value"], row["unit"]) == ("parameter", 9.0, "N/m")
+    assert table.set_index("name").loc["mass.s", "kind"] == "state"
+    assert table.set_index("name").loc["mass.flange_a.f", "kind"] == "flow"
+    assert RigidGear().describe().set_index("name").loc["load.w", "kind"] == "algebraic"
+
+
 def test_class_template_is_not_shared_between_instances():
     a, b = Oscillator(spring={"c": 9.0}), Oscillator()
     assert a.spring is not b.spring
