@@ -35,6 +35,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
+from gtmodel.modeling.structured_simulation import simulate_structured
 
 __all__ = ["Model"]
 
@@ -92,6 +93,7 @@ class Model:
         self._time = ca.SX.sym("time")
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
+        self._initial_equations: list[tuple[str, ca.SX]] = []
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -365,6 +367,39 @@ class Model:
             )
         self._equations.append((label, res))
 
+    def initial_equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+        """Add the initial equation ``lhs == rhs`` (Modelica's ``initial equation``).
+
+        Holds at the start time only; :meth:`simulate` then solves the consistent
+        initialisation (:mod:`gtmodel.modeling.initialization`) instead of fixing every
+        state at its start value.
+
+        Parameters
+        ----------
+        lhs, rhs : casadi.SX or float or array_like
+            Expressions of declared symbols, ``der()`` symbols and time; same size (or one
+            of them scalar).
+        name : str, optional
+            Label used in error messages; default ``"init<k>"``.
+
+        Raises
+        ------
+        InputError
+            If sizes do not match or MX expressions are passed.
+        ModelError
+            If the equation contains unknown symbols.
+        """
+        label = name or f"init{len(self._initial_equations)}"
+        a = _as_sx(lhs, f"initial equation {label!r} lhs")
+        b = _as_sx(rhs, f"initial equation {label!r} rhs")
+        if a.numel() != b.numel() and a.numel() != 1 and b.numel() != 1:
+            raise InputError(f"initial equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}")
+        res = a - b
+        if res.numel() == 0:
+            raise InputError(f"initial equation {label!r} is empty")
+        self.check_symbols(res, f"initial equation {label!r}")
+        self._initial_equations.append((label, res))
+
     def output(self, name: str, expr: Any) -> ca.SX:
         """Declare a named derived variable (energy, force, ...).
 
@@ -550,7 +585,8 @@ class Model:
                 no_z = [z_names[j] for j in range(nz) if Jz[:, j].nnz() == 0]
                 raise ModelError(
                     f"model {self.name!r}: the algebraic equations are not solvable for the algebraic "
-                    f"variables {no_z or z_names} (not index 1); high-index DAEs are not supported"
+                    f"variables {no_z or z_names} (not index 1); flatten() needs an index-1 DAE: "
+                    "reduce it with gtmodel.modeling.structural_simplify(model) (simulate() does)"
                 )
         elif res_a.numel():
             # unreachable by the count check, kept for safety
@@ -623,4 +659,14 @@ class Model:
 
         {simulate_returns}
         """
+        if self._initial_equations or not self._flattens():
+            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+
+    def _flattens(self) -> bool:
+        """Whether :meth:`flatten` accepts the model as it is (else simulate reduces it)."""
+        try:
+            self.flatten()
+        except ModelError:
+            return False
+        return True
