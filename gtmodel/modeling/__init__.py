@@ -5,6 +5,8 @@
 * :class:`Optimization` declares an optimal control problem over a model.
 * :func:`solve` / :class:`CollocationTranscription` transcribe it by direct collocation
   and solve it with IPOPT, giving an :class:`OptimizationResult`.
+* :func:`structural_simplify` / :func:`check_structure`: alias elimination, structural check
+  and index reduction (Pantelides, dummy derivatives) to an index-1 model.
 """
 
 from __future__ import annotations
@@ -13,6 +15,8 @@ from gtmodel.modeling.collocation import CollocationTranscription, solve
 from gtmodel.modeling.dae import FlatDAE, SimulationResult
 from gtmodel.modeling.model import Model
 from gtmodel.modeling.optimization import Optimization
+from gtmodel.modeling.index_reduction import structural_simplify
+from gtmodel.modeling.structure import check_structure
 from gtmodel.modeling.result import OptimizationResult
 from gtmodel.modeling.expressions import (
     Objective,
@@ -29,6 +33,8 @@ __all__ = [
     "FlatDAE",
     "SimulationResult",
     "Optimization",
+    "structural_simplify",
+    "check_structure",
     "OptimizationResult",
     "CollocationTranscription",
     "solve",

@@ -141,13 +141,20 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
         "t": s.t, "x": _cat([aug.syms[v] for v in states]), "z": _cat([aug.syms[v] for v in algs]),
         "u": s.u, "p": s.p, "ode": _cat([aug.syms[aug.diff[v]] for v in states]), "alg": _cat(aug.res),
     }
+    # the values are consistent (solve_initial, or the previous segment): give IDACalcIC the
+    # state derivatives too, else its line search can fail from xdot = 0 on restarts
     opts = {"reltol": float(rtol), "abstol": float(atol), "show_eval_warnings": False,
-            "disable_internal_warnings": True}
+            "disable_internal_warnings": True,
+            "init_xdot": [float(v0[aug.diff[v]]) for v in states]}
     n = tf.size
     u_cas = np.vstack([uf[:1], uf]).T if s.u.numel() else np.zeros((0, n))
+    x0 = v0[states]
+    if not states:  # purely algebraic after reduction: IDAS needs a state, add a constant one
+        dae["x"], dae["ode"], x0 = ca.SX.sym("_none"), ca.SX(0), np.zeros(1)
+        opts["init_xdot"] = [0.0]
     try:
         F = ca.integrator(f"{s.name}_dd", "idas", dae, float(tf[0]), list(tf), opts)
-        out = F(x0=v0[states], z0=v0[algs], p=pv, u=u_cas)
+        out = F(x0=x0, z0=v0[algs], p=pv, u=u_cas)
     except RuntimeError as exc:
         lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
         raise ConvergenceError(
@@ -156,7 +163,8 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
             f"{lines[0].strip() if lines else exc}"
         ) from exc
     vals = np.empty((n, len(aug.syms)))
-    vals[:, states] = np.array(out["xf"]).reshape(len(states), n).T
+    if states:
+        vals[:, states] = np.array(out["xf"]).reshape(len(states), n).T
     vals[:, algs] = np.array(out["zf"]).reshape(len(algs), n).T
     if not np.all(np.isfinite(vals)):
         raise ConvergenceError(f"simulation of model {s.name!r} produced non-finite values")
