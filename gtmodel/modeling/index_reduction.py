@@ -448,8 +448,9 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
         If the model is structurally singular (one message naming the equations and
         variables) or cannot be reduced.
     """
-    system = eliminate_aliases(scalarize(model))
-    check_structure(system)
+    full = scalarize(model)
+    check_structure(full)  # on the user's own equations, so that the message names them
+    system = eliminate_aliases(full)
     if not system.aliases:
         try:
             model.flatten()
@@ -460,12 +461,25 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
     if point is None:
         v0 = np.concatenate([system.start, np.zeros(len(aug.syms) - system.n_vars)])
         point = (0.0, v0, system.u_start, system.p_value)
+    values = np.asarray(point[1], dtype=float)
+    if aug.n_differentiated == 0:
+        states = [v for v in range(system.n_vars) if aug.diff[v] is not None]
+        algs = [v for v in range(system.n_vars) if aug.diff[v] is None]
+        new = build_model(model, aug, Selection(()), states, algs, values, direct=True)
+        try:
+            new.flatten()
+            return new
+        except ModelError:
+            pass
     sel = select_dummies(aug, point)
     states, algs = reduced_system(aug, sel)
-    return build_model(model, aug, sel, states, algs, np.asarray(point[1], dtype=float))
+    return build_model(model, aug, sel, states, algs, values)
 
 
-def build_model(model: Any, aug: AugmentedDAE, sel: Selection, states: list[int], algs: list[int], values: np.ndarray) -> Any:
+def build_model(
+    model: Any, aug: AugmentedDAE, sel: Selection, states: list[int], algs: list[int], values: np.ndarray,
+    direct: bool = False,
+) -> Any:
     """Declare the reduced DAE as a new model of ``type(model)`` (see :func:`structural_simplify`).
 
     Parameters
@@ -480,6 +494,9 @@ def build_model(model: Any, aug: AugmentedDAE, sel: Selection, states: list[int]
         From :func:`reduced_system`.
     values : numpy.ndarray
         Start values of all variables of ``aug``.
+    direct : bool, optional
+        Without differentiated equations: declare only the unknowns (``algs`` without the
+        ``der()`` variables) and keep ``der()`` in the equations (default False).
 
     Returns
     -------
@@ -517,22 +534,29 @@ def build_model(model: Any, aug: AugmentedDAE, sel: Selection, states: list[int]
                 sym = decl(cand, start=values[v], lb=lb, ub=ub)
             taken.update(new._vars)
             new_syms[v] = sym
+    if direct:  # no dummy: the der() of the states stay der() of the new model
+        for v in states:
+            new_syms[aug.diff[v]] = new.der(new_syms[v])
     old.append(_cat(aug.syms))
     rep.append(_cat([new_syms[v] for v in range(len(aug.syms))]))
 
     def sub(e: ca.SX) -> ca.SX:
         return ca.substitute(e, _cat([ca.vec(o) for o in old]), _cat([ca.vec(r) for r in rep]))
 
-    for v in states:
+    for v in [] if direct else states:
         new.equation(new.der(new_syms[v]), new_syms[aug.diff[v]], name=f"der_{_ident(aug.names[v])}")
     for r, nm in zip(aug.res, aug.eq_names):
         new.equation(sub(r), 0.0, name=nm)
     for nm, e in aug.system.outputs.items():
         new.output(nm, sub(e))
-    for nm, (sign, keep) in aug.system.aliases.items():
-        oname = _ident(nm)
-        if oname not in new._vars and oname not in new._outputs:
-            new.output(oname, sub(aug.system.observed[nm]))
+    for nm in aug.system.aliases:
+        for oname in (nm, _ident(nm)):
+            if oname not in new._vars and oname not in new._outputs:
+                try:
+                    new.output(oname, sub(aug.system.observed[nm]))
+                    break
+                except InputError:
+                    continue
     for r, nm in zip(aug.system.init_res, aug.system.init_names):
         new.initial_equation(sub(r), 0.0, name=nm)
     _log.debug(

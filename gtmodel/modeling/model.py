@@ -603,7 +603,8 @@ class Model:
         ode = ca.Function(f"{self.name}_ode", args, [f], argn, ["xdot"])
         alg = ca.Function(f"{self.name}_alg", args, [g], argn, ["g"])
         outputs = ca.Function(
-            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys())
+            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
+            {"allow_duplicate_io_names": True},  # an output may be called x, z, u, p or t
         )
         return FlatDAE(
             name=self.name,

@@ -244,8 +244,9 @@ def simulate_structured(
         raise InputError("t_grid must be finite, strictly increasing, with at least 2 points")
     if integrator not in ("idas", "cvodes"):
         raise InputError(f"integrator must be 'idas' or 'cvodes', got {integrator!r}")
-    system = eliminate_aliases(scalarize(model))
-    check_structure(system)
+    full = scalarize(model)
+    check_structure(full)  # on the user's own equations, so that the message names them
+    system = eliminate_aliases(full)
     aug = pantelides(system)
     pv, p_slices = _parameter_vector(model, p)
     u_int = input_intervals(u, t, int(system.u.numel()), system.u_start)
