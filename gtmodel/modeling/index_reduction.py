@@ -540,25 +540,29 @@ def build_model(
     old.append(_cat(aug.syms))
     rep.append(_cat([new_syms[v] for v in range(len(aug.syms))]))
 
-    def sub(e: ca.SX) -> ca.SX:
-        return ca.substitute(e, _cat([ca.vec(o) for o in old]), _cat([ca.vec(r) for r in rep]))
+    src = _cat([ca.vec(o) for o in old])
+    dst = _cat([ca.vec(r) for r in rep])
+
+    def sub(items: list[ca.SX]) -> list[ca.SX]:
+        return list(ca.substitute([ca.vec(e) for e in items], [src], [dst])) if items else []
 
     for v in [] if direct else states:
         new.equation(new.der(new_syms[v]), new_syms[aug.diff[v]], name=f"der_{_ident(aug.names[v])}")
-    for r, nm in zip(aug.res, aug.eq_names):
-        new.equation(sub(r), 0.0, name=nm)
-    for nm, e in aug.system.outputs.items():
-        new.output(nm, sub(e))
-    for nm in aug.system.aliases:
+    for r, nm in zip(sub(aug.res), aug.eq_names):
+        new.equation(r, 0.0, name=nm)
+    s = aug.system
+    for nm, e in zip(s.outputs, sub(list(s.outputs.values()))):
+        new.output(nm, e)
+    for nm, e in zip(s.aliases, sub([s.observed[nm] for nm in s.aliases])):
         for oname in (nm, _ident(nm)):
             if oname not in new._vars and oname not in new._outputs:
                 try:
-                    new.output(oname, sub(aug.system.observed[nm]))
+                    new.output(oname, e)
                     break
                 except InputError:
                     continue
-    for r, nm in zip(aug.system.init_res, aug.system.init_names):
-        new.initial_equation(sub(r), 0.0, name=nm)
+    for r, nm in zip(sub(s.init_res), s.init_names):
+        new.initial_equation(r, 0.0, name=nm)
     _log.debug(
         "structural_simplify %s: %d states, %d algebraic, dummies %s",
         model.name, len(states), len(algs), sorted(aug.names[v] for v in sel.dummies),

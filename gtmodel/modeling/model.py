@@ -96,6 +96,7 @@ class Model:
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
         self._initial_equations: list[tuple[str, ca.SX]] = []
+        self._hashes: set[int] = {self._time.element_hash()}  # of every declared symbol element
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -127,6 +128,8 @@ class Model:
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
+        for s in (sym, var.der) if var.der is not None else (sym,):
+            self._hashes.update(s[i].element_hash() for i in range(size))
         return sym
 
     def parameter(self, name: str, value: Any, shape: Any = None) -> ca.SX:
@@ -321,8 +324,10 @@ class Model:
         ModelError
             Naming the unknown symbols.
         """
-        known = ca.vertcat(*[ca.vec(s) for s in list(self._known_symbols()) + list(extra)])
-        unknown = [s for s in ca.symvar(expr) if not ca.depends_on(s, known)]
+        # element hashes identify SX symbols (O(1) per symbol; many-component models check
+        # thousands of equations)
+        known = self._hashes | {s[i].element_hash() for s in extra for i in range(s.numel())}
+        unknown = [s for s in ca.symvar(expr) if s.element_hash() not in known]
         if unknown:
             raise ModelError(
                 f"{what}: unknown symbol(s) {_symbol_names(unknown)} not declared by model {self.name!r}"

@@ -160,8 +160,8 @@ def test_alias_between_states_replaces_their_derivatives():
     m.equation(1.0 * m.der(v1), -4.0 * x1 + f)
     m.equation(3.0 * m.der(v2), -f)
     red = eliminate_aliases(scalarize(m))
-    assert red.aliases == {"x1": (1.0, "x2")}
-    assert "der(x2)" in str(red.eq_res[0])  # der(x1) replaced
+    assert red.aliases == {"x2": (1.0, "x1")}
+    assert "der(x1)" in str(red.eq_res[1])  # der(x2) replaced
     t = np.linspace(0.0, 5.0, 51)
     res = m.simulate(t, rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(res.x["x1"], np.cos(t), atol=1e-6)
