@@ -35,7 +35,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import expand_names
+from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure import (
     ScalarDAE,
     check_structure,
@@ -444,6 +444,8 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
 
     Raises
     ------
+    InputError
+        If ``model`` is not a model or ``point`` is malformed.
     ModelError
         If the model is structurally singular (one message naming the equations and
         variables) or cannot be reduced.
@@ -458,9 +460,20 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
         except ModelError:
             pass
     aug = pantelides(system)
+    nv = len(aug.syms)
     if point is None:
-        v0 = np.concatenate([system.start, np.zeros(len(aug.syms) - system.n_vars)])
+        v0 = np.concatenate([system.start, np.zeros(nv - system.n_vars)])
         point = (0.0, v0, system.u_start, system.p_value)
+    elif not isinstance(point, (tuple, list)) or len(point) != 4:
+        raise InputError(f"point must be a tuple (t, v, u, p), got {point!r}")
+    else:
+        t0 = float(_vector_value(point[0], 1, "point t")[0])
+        point = (
+            t0,
+            _vector_value(point[1], nv, f"point v ({[aug.names[k] for k in range(nv)]})"),
+            _vector_value(point[2], int(system.u.numel()), "point u"),
+            _vector_value(point[3], int(system.p.numel()), "point p"),
+        )
     values = np.asarray(point[1], dtype=float)
     if aug.n_differentiated == 0:
         states = [v for v in range(system.n_vars) if aug.diff[v] is not None]

@@ -661,6 +661,16 @@ class Model:
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
+        A model that :meth:`flatten` accepts and that has no initial equations is simulated
+        as it is. Otherwise the structural passes run first
+        (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
+        check (one error naming the equations and variables), alias elimination, index
+        reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
+        selection turns singular), and the consistent initialisation with the
+        :meth:`initial_equation` s. For a high-index model without initial equations, the
+        ``x0``/start values of the states picked by the dummy selection are kept and the
+        others are computed (their values are guesses).
+
         Parameters
         ----------
         {simulate_args}

@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sps
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-from gtmodel.errors import ModelError
+from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import expand_names
 
 __all__ = [
@@ -154,7 +154,14 @@ def scalarize(model: Any) -> ScalarDAE:
     -------
     ScalarDAE
         One residual per scalar equation and one symbol per scalar unknown.
+
+    Raises
+    ------
+    InputError
+        If ``model`` is not a :class:`~gtmodel.modeling.Model`.
     """
+    if not all(hasattr(model, a) for a in ("_vars", "_equations", "_outputs", "_time")):
+        raise InputError(f"model must be a gtmodel.modeling.Model, got {type(model).__name__}")
     vars_ = list(model._vars.values())
     syms, names, kinds, starts, ders = [], [], [], [], {}
     for kind in ("state", "algebraic"):
