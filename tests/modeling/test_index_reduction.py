@@ -58,6 +58,19 @@ def test_pendulum_keeps_length_and_energy_over_10_s(pendulum_run):
     assert np.any(res.x["x"] > 0.5) and np.any(res.x["x"] < -0.5)  # it swings over x = 0 (dummy switches)
 
 
+def test_pendulum_switches_dummies_where_the_selection_turns_singular(caplog):
+    # reference: from theta0 = 2 the first selection (x dummy, det ~ 2 x) is singular at x = 0,
+    # which the pendulum crosses near t = 0.75 s (angle ODE); the switch must come before it
+    caplog.set_level("DEBUG", logger="gtmodel")
+    t = np.linspace(0.0, 1.2, 61)
+    res = cartesian_pendulum(theta0=2.0).simulate(t, rtol=RTOL, atol=ATOL)
+    msgs = [r.getMessage() for r in caplog.records if "switched at" in r.getMessage()]
+    assert len(msgs) == 1
+    first = float(msgs[0].split("[")[1].split(",")[0].rstrip("] s"))
+    crossing = t[np.nonzero(np.diff(np.sign(res.x["x"])))[0][0]]
+    assert 0.3 < first < crossing
+
+
 def test_pendulum_matches_minimal_coordinates(pendulum_run):
     # reference: theta'' = -(g/L) sin(theta) integrated as an ODE (a second formulation)
     t, res = pendulum_run
@@ -75,6 +88,15 @@ def test_slider_crank_matches_minimal_coordinates_and_conserves_energy():
     np.testing.assert_allclose(res.x["s"], ref.outputs["s"], atol=1e-7)
     e = res.outputs["energy"]
     assert np.max(np.abs(e - e[0])) / e[0] < 1e-6
+
+
+def test_slider_crank_driven_by_an_input_torque():
+    # reference: the work-energy theorem, E(t) - E(0) = tau (theta(t) - theta(0)) for a constant tau
+    t = np.linspace(0.0, 1.0, 101)
+    res = slider_crank(torque=True).simulate(t, u=0.05, rtol=RTOL, atol=ATOL)
+    e, th = res.outputs["energy"], res.x["theta"]
+    np.testing.assert_allclose(e - e[0], 0.05 * (th - th[0]), atol=1e-8)
+    np.testing.assert_allclose(res.u["tau"], 0.05)
 
 
 def test_structural_simplify_gives_an_index1_model():
