@@ -255,11 +255,6 @@ def _jacobian_function(aug: AugmentedDAE, eqs: list[int], cand: list[int]) -> ca
     return ca.Function("dd_jac", aug.args, [ca.densify(ca.jacobian(g, z))])
 
 
-def _point_args(aug: AugmentedDAE, point: tuple[float, np.ndarray, np.ndarray, np.ndarray]) -> list[Any]:
-    t, v, u, p = point
-    return [t, v, u, p]
-
-
 def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
     """Choose the dummy derivatives, numerically at a point or structurally.
 
@@ -296,13 +291,18 @@ def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
     while g:
         chosen = None
         if point is not None:
-            G = np.array(_jacobian_function(aug, g, cand)(*_point_args(aug, point)))
+            G = np.array(_jacobian_function(aug, g, cand)(*point))
             if G.size and np.all(np.isfinite(G)):
                 _, R, piv = sla.qr(G, pivoting=True, mode="economic")
                 d = np.abs(np.diag(R))
                 if len(d) >= len(g) and d[len(g) - 1] > 1e-10 * max(d[0], 1e-300):
                     chosen = sorted(cand[k] for k in piv[: len(g)])
         if chosen is None:
+            if point is not None:
+                _log.warning(
+                    "model %s: the dummy-derivative block of %s is singular at the given point; "
+                    "choosing structurally", aug.system.name, [aug.eq_names[e] for e in g],
+                )
             pat = sparsity_pattern([aug.res[e] for e in g], [aug.syms[v] for v in cand])
             eq_to_var, _ = matching(pat)
             if np.any(eq_to_var < 0):

@@ -379,7 +379,9 @@ class Model:
 
         Holds at the start time only; :meth:`simulate` then solves the consistent
         initialisation (:mod:`gtmodel.modeling.initialization`) instead of fixing every
-        state at its start value.
+        state at its start value: the initial equations and the states named in an ``x0``
+        mapping must together fix the model's degrees of freedom. :meth:`flatten` (and so
+        ``Optimization``, which states its own point constraints) ignores them.
 
         Parameters
         ----------
