@@ -10,7 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.errors import ModelError
+from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Model, Optimization, solve, structural_simplify
 from gtmodel.modeling.index_reduction import pantelides, reduced_system, select_dummies
 from gtmodel.modeling.structure import scalarize
@@ -175,3 +175,18 @@ def _singular():
 def test_reduction_errors(build, match):
     with pytest.raises(ModelError, match=match):
         build()
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: cartesian_pendulum().simulate([0.0, 1.0], integrator="cvodes"), "use integrator 'idas'"),
+        (lambda: cartesian_pendulum().simulate([0.0, 1.0], x0={"lam": 1.0}), "'lam' is not a state"),
+        (lambda: cartesian_pendulum().simulate([0.0, 1.0], p={"mass": 1.0}), "no parameter 'mass'"),
+        (lambda: cartesian_pendulum().simulate([1.0, 0.0]), "strictly increasing"),
+    ],
+    ids=["cvodes", "x0_not_state", "parameter_name", "grid"],
+)
+def test_reduced_simulation_bad_arguments(call, match):
+    with pytest.raises(InputError, match=match):
+        call()
