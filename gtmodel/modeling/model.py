@@ -34,6 +34,7 @@ import numpy as np
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
+from gtmodel.modeling.events import EventSpec, declare_mode, declare_when, simulate_events
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
 
 __all__ = ["Model"]
@@ -92,6 +93,8 @@ class Model:
         self._time = ca.SX.sym("time")
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
+        self._events: EventSpec | None = None  # modes and when-clauses (gtmodel.modeling.events)
+        self._der_substituted: set[int] = set()  # equations whose der() stands for the ODE rhs
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -328,7 +331,9 @@ class Model:
         ders = [v.der for v in self._vars.values() if v.kind == "state"]
         return ca.vertcat(*ders) if ders else ca.SX(0, 1)
 
-    def equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+    def equation(
+        self, lhs: Any, rhs: Any = 0.0, name: str | None = None, substitute_der: bool = False
+    ) -> None:
         """Add the equation ``lhs == rhs`` (residual ``lhs - rhs``).
 
         Parameters
@@ -338,6 +343,12 @@ class Model:
             of them scalar). The residual must be linear in the ``der()`` symbols.
         name : str, optional
             Label used in error messages; default ``"eq<k>"``.
+        substitute_der : bool, optional
+            If true, ``der()`` in this equation stands for the ODE right-hand side
+            ``f(t, x, z, u, p)`` obtained from the other equations (substituted on
+            flattening), so the equation is algebraic: e.g. the locked mode of a
+            friction element, relative acceleration zero, which determines the friction
+            force (Otter, Elmqvist and Mattsson (1999)). Default false.
 
         Raises
         ------
@@ -363,6 +374,8 @@ class Model:
                 f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
                 "only equations linear in der() are supported"
             )
+        if substitute_der:
+            self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
 
     def output(self, name: str, expr: Any) -> ca.SX:
@@ -508,7 +521,11 @@ class Model:
                 f"model {self.name!r} has {neq} scalar equations but {nx} states + {nz} "
                 f"algebraic variables = {nx + nz} unknowns"
             )
-        diff_rows = [i for i in range(neq) if nx and ca.depends_on(res[i], xdot)]
+        subst_rows = {  # scalar rows of the substitute_der equations
+            k for j, (lo, hi) in enumerate(_row_ranges(self._equations)) if j in self._der_substituted
+            for k in range(lo, hi)
+        }
+        diff_rows = [i for i in range(neq) if nx and i not in subst_rows and ca.depends_on(res[i], xdot)]
         alg_rows = [i for i in range(neq) if i not in set(diff_rows)]
         res_d = res[diff_rows] if diff_rows else ca.SX(0, 1)
         res_a = res[alg_rows] if alg_rows else ca.SX(0, 1)
@@ -542,6 +559,8 @@ class Model:
             f = ca.simplify(f) if f.numel() < 50 else f
         else:
             f = ca.SX(0, 1)
+        if subst_rows and nx:
+            res_a = ca.substitute(res_a, xdot, f)
 
         # --- algebraic part: index-1 check
         if nz:
@@ -623,4 +642,66 @@ class Model:
 
         {simulate_returns}
         """
+        if self._events is not None and self._events.whens:
+            return simulate_events(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+
+    # ------------------------------------------------------------------ events
+    def mode(self, name: str, start: float = 0.0) -> ca.SX:
+        """Declare a discrete mode variable, constant between events (Modelica ``discrete``).
+
+        See :func:`gtmodel.modeling.events.declare_mode` (it is stored as a parameter,
+        changed only by the ``assign`` of a :meth:`when` clause during simulation).
+
+        Parameters
+        ----------
+        name : str
+            Identifier, unique in the model.
+        start : float, optional
+            Value at the start of a simulation; default 0.
+
+        Returns
+        -------
+        casadi.SX
+            Mode symbol, ``(1, 1)``.
+        """
+        return declare_mode(self, name, start)
+
+    def when(
+        self,
+        condition: Any,
+        reinit: Any = None,
+        assign: Any = None,
+        direction: int = 1,
+        name: str | None = None,
+        initial: bool = False,
+    ) -> None:
+        """Declare a zero-crossing state event (Modelica ``when condition > 0 then ...``).
+
+        See :func:`gtmodel.modeling.events.declare_when` for the semantics and errors.
+
+        Parameters
+        ----------
+        condition : casadi.SX
+            Scalar zero-crossing function of the model's variables.
+        reinit : mapping or sequence of pairs, optional
+            ``state symbol -> new value`` (Modelica ``reinit``).
+        assign : mapping or sequence of pairs, optional
+            ``mode symbol -> new value``.
+        direction : {1, -1, 0}, optional
+            Crossing direction: 1 rising (default), -1 falling, 0 both.
+        name : str, optional
+            Event name in :attr:`SimulationResult.events`; default ``"when<k>"``.
+        initial : bool, optional
+            Also fire at the start if the condition is positive there; default false.
+        """
+        declare_when(self, condition, reinit, assign, direction, name, initial)
+
+
+def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:
+    """Scalar row range ``[lo, hi)`` of each equation in the stacked residual."""
+    out, k = [], 0
+    for _, r in equations:
+        out.append((k, k + int(r.numel())))
+        k += int(r.numel())
+    return out

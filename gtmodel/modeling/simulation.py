@@ -13,7 +13,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value
 
-__all__ = ["simulate_model", "SIMULATE_DOCS"]
+__all__ = ["simulate_model", "simulation_inputs", "SIMULATE_DOCS"]
 
 #: The arguments, returns and errors of a simulation, shared by :func:`simulate_model` and
 #: :meth:`gtmodel.modeling.Model.simulate` (inserted by :func:`~gtmodel._docstrings.fill_doc`).
@@ -86,6 +86,72 @@ def simulate_model(
     {simulate_returns}
     """
     dae = model.flatten()
+    t, x0v, z0v, pv, u_int = simulation_inputs(model, dae, t_grid, x0, u, p, integrator, z0)
+    n = t.size
+    # CasADi's integrator holds u[:, k] on (tout[k-1], tout[k]]; tout[0] = t0
+    u_cas = np.vstack([u_int[:1], u_int]).T if dae.nu else np.zeros((0, n))
+
+    ddict: dict[str, Any] = {"t": dae.t, "x": dae.x, "u": dae.u, "p": dae.p, "ode": dae.ode_expr}
+    if dae.nz:
+        ddict["z"] = dae.z
+        ddict["alg"] = dae.alg_expr
+    opts = {
+        "reltol": float(rtol),
+        "abstol": float(atol),
+        "show_eval_warnings": False,
+        "disable_internal_warnings": True,
+    }
+    try:
+        F = ca.integrator(f"{model.name}_sim", integrator, ddict, float(t[0]), list(t), opts)
+        res = F(x0=x0v, z0=z0v, p=pv, u=u_cas)
+    except RuntimeError as exc:
+        lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
+        raise ConvergenceError(
+            f"simulation of model {model.name!r} with {integrator} failed: "
+            f"{lines[0].strip() if lines else exc}"
+        ) from exc
+    xs = np.array(res["xf"]).reshape(dae.nx, n).T
+    zs = np.array(res["zf"]).reshape(dae.nz, n).T
+    if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(zs))):
+        raise ConvergenceError(f"simulation of model {model.name!r} produced non-finite values")
+    us = np.vstack([u_int, u_int[-1:]])
+    outs = _eval_outputs(dae, t, xs, zs, us, pv)
+    _log.debug("simulated model %s on %d points with %s", model.name, n, integrator)
+    return SimulationResult(
+        t=t,
+        x=_unpack(dae.x_vars, xs),
+        z=_unpack(dae.z_vars, zs),
+        u=_unpack(dae.u_vars, us),
+        outputs=outs,
+        p={k: pv[s].copy() for k, s in dae.p_vars.items()},
+    )
+
+
+def simulation_inputs(
+    model: Any, dae: Any, t_grid: Any, x0: Any, u: Any, p: Any, integrator: str, z0: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Check and convert the arguments of a simulation (shared with the event simulation).
+
+    Parameters
+    ----------
+    model : Model
+        The model, for its name and declared input start values.
+    dae : FlatDAE
+        Its flattened DAE.
+    t_grid, x0, u, p, integrator, z0
+        As for :func:`simulate_model`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(t, x0, z0, p, u)``: the grid ``(N,)``, initial state ``(nx,)``, algebraic guess
+        ``(nz,)``, parameter vector ``(npar,)`` and inputs per interval ``(N-1, nu)``.
+
+    Raises
+    ------
+    InputError
+        On malformed arguments.
+    """
     t = np.asarray(t_grid, dtype=float).reshape(-1)
     if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
         raise InputError("t_grid must be finite, strictly increasing, with at least 2 points")
@@ -132,40 +198,4 @@ def simulate_model(
     u_int = np.asarray(u_int, dtype=float).reshape(n - 1, dae.nu)
     if not np.all(np.isfinite(u_int)):
         raise InputError("u contains non-finite values")
-    # CasADi's integrator holds u[:, k] on (tout[k-1], tout[k]]; tout[0] = t0
-    u_cas = np.vstack([u_int[:1], u_int]).T if dae.nu else np.zeros((0, n))
-
-    ddict: dict[str, Any] = {"t": dae.t, "x": dae.x, "u": dae.u, "p": dae.p, "ode": dae.ode_expr}
-    if dae.nz:
-        ddict["z"] = dae.z
-        ddict["alg"] = dae.alg_expr
-    opts = {
-        "reltol": float(rtol),
-        "abstol": float(atol),
-        "show_eval_warnings": False,
-        "disable_internal_warnings": True,
-    }
-    try:
-        F = ca.integrator(f"{model.name}_sim", integrator, ddict, float(t[0]), list(t), opts)
-        res = F(x0=x0v, z0=z0v, p=pv, u=u_cas)
-    except RuntimeError as exc:
-        lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
-        raise ConvergenceError(
-            f"simulation of model {model.name!r} with {integrator} failed: "
-            f"{lines[0].strip() if lines else exc}"
-        ) from exc
-    xs = np.array(res["xf"]).reshape(dae.nx, n).T
-    zs = np.array(res["zf"]).reshape(dae.nz, n).T
-    if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(zs))):
-        raise ConvergenceError(f"simulation of model {model.name!r} produced non-finite values")
-    us = np.vstack([u_int, u_int[-1:]])
-    outs = _eval_outputs(dae, t, xs, zs, us, pv)
-    _log.debug("simulated model %s on %d points with %s", model.name, n, integrator)
-    return SimulationResult(
-        t=t,
-        x=_unpack(dae.x_vars, xs),
-        z=_unpack(dae.z_vars, zs),
-        u=_unpack(dae.u_vars, us),
-        outputs=outs,
-        p={k: pv[s].copy() for k, s in dae.p_vars.items()},
-    )
+    return t, x0v, z0v, pv, u_int

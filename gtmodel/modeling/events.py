@@ -1,0 +1,573 @@
+"""Zero-crossing state events on a :class:`~gtmodel.modeling.Model`: modes, when-clauses, reinit.
+
+A hybrid model in the Modelica sense (Modelica Language Specification 3.6, sections 8.3.5
+"when-equations" and 8.5 "Events and synchronization"; Otter, Elmqvist and Mattsson (1999),
+"Hybrid modeling in Modelica based on the synchronous data flow principle"):
+
+* a **mode** (:meth:`Model.mode`) is a discrete variable, constant between events; the
+  equations may switch on it (``casadi.if_else(mode == 0, ...)``). It is stored as a
+  parameter of the flat DAE whose value the simulation changes at events.
+* a **when-clause** (:meth:`Model.when`) is a scalar zero-crossing function ``c(t, x, z, u,
+  p)`` of the model's variables; an event occurs when ``c`` crosses zero (rising: from
+  ``c <= 0`` to ``c > 0``, like Modelica's ``when c > 0``; or falling, or both). At the event
+  the clause's actions run: ``reinit`` of states and ``assign`` of modes, their right-hand
+  sides evaluated with the values just before the event (Modelica's ``pre()``).
+* **event iteration**: after the actions, the algebraic variables are made consistent and
+  every condition is evaluated again; a clause whose condition crossed zero through the
+  actions (a mode change, a reinit), to beyond a hysteresis of 1e-9, fires at the same instant, until none does (Modelica's
+  event iteration until ``pre(m) == m``). This is how a friction state machine goes from
+  sliding through stuck to sliding the other way at one instant.
+
+The simulation (:func:`simulate_events`) is a root-finding restart loop around SUNDIALS:
+
+1. Integrate (IDAS or CVODES through ``casadi.integrator``, time scaled to ``[0, 1]`` so
+   that one integrator serves every interval) over the next output interval, sampling the
+   conditions at sub-steps of at most ``event_step``.
+2. At the first sub-step where a condition crossed zero, find the event time with
+   :func:`scipy.optimize.brentq` on the condition along the re-integrated trajectory
+   (``xtol = event_tol``); its accuracy is the integration accuracy divided by the slope
+   of the condition.
+3. Run the actions and the event iteration, record an :class:`EventRecord`, restart the
+   integrator from the post-event state.
+
+A condition that goes positive and back within one sub-step is missed (as with SciPy's
+``solve_ivp``, which checks once per step); make ``event_step`` smaller than the shortest
+phase. A condition already positive at the start does not fire (edge semantics).
+
+Why not CasADi's own event support (DAE field ``"zero"`` with option ``"transition"``,
+experimental in 3.8): measured on ``x'' = -x`` with ``zero = x`` in casadi 3.8.2 (the
+script is in the commit message of this module), it stops with ``CV_ILL_INPUT`` /
+``IDA_ILL_INPUT`` ("tout too far back in direction of integration") whenever an output
+interval holds more than a few steps (10 s in one or ten intervals), fires only on
+positive-to-negative crossings (casadi issue #4393), and on a 1001-point grid at
+``reltol = 1e-10`` places the event 2e-8 s off, where the loop here is within 1e-11 s.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import brentq
+
+from gtmodel._arrays import positive_float, positive_int
+from gtmodel.errors import ConvergenceError, InputError, ModelError
+from gtmodel.modeling.dae import SimulationResult, _as_sx, _eval_outputs, _unpack
+from gtmodel.modeling.simulation import simulation_inputs
+
+__all__ = ["EventRecord", "EventSpec", "declare_mode", "declare_when", "simulate_events"]
+
+_log = logging.getLogger("gtmodel")
+
+#: In the event iteration a condition must exceed this (in its own units) to fire: the
+#: relation hysteresis of Modelica tools, so that a velocity that is zero up to the
+#: integration error when a stuck friction element starts sliding does not count as a
+#: crossing (it would switch the element back to stuck at once).
+_HYSTERESIS = 1e-9
+
+
+@dataclass
+class EventRecord:
+    """One state event of a simulation.
+
+    Parameters
+    ----------
+    t : float
+        Event time, s.
+    name : str
+        Name of the when-clause that fired.
+    modes : dict of str to float
+        Values of all modes after the event (after the event iteration step of this clause).
+    x : dict of str to numpy.ndarray
+        States after the event (after its reinit), declared name -> value.
+    """
+
+    t: float
+    name: str
+    modes: dict[str, float] = field(default_factory=dict)
+    x: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass
+class _When:
+    """A declared when-clause (internal record)."""
+
+    name: str
+    condition: ca.SX
+    direction: int
+    reinit: list[tuple[str, list[int], ca.SX]]
+    assign: list[tuple[str, ca.SX]]
+    initial: bool = False
+
+
+@dataclass
+class EventSpec:
+    """The modes and when-clauses declared on one model (held by :class:`Model`).
+
+    Parameters
+    ----------
+    modes : list of str
+        Names of the mode variables (parameters changed at events), in declaration order.
+    whens : list
+        The when-clauses, in declaration order.
+    """
+
+    modes: list[str] = field(default_factory=list)
+    whens: list[_When] = field(default_factory=list)
+
+
+def _spec(model: Any) -> EventSpec:
+    if model._events is None:
+        model._events = EventSpec()
+    return model._events
+
+
+def declare_mode(model: Any, name: str, start: float = 0.0) -> ca.SX:
+    """Declare a discrete mode variable on a model (what :meth:`Model.mode` calls).
+
+    A mode is a scalar that the equations may switch on and that only changes at events,
+    by the ``assign`` of a when-clause. It is stored as a parameter of the flat DAE (so
+    it can be overridden in ``p=`` of a simulation as its start value).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    name : str
+        Identifier, unique in the model.
+    start : float, optional
+        Value at the start of a simulation; default 0.
+
+    Returns
+    -------
+    casadi.SX
+        The mode symbol, ``(1, 1)``.
+
+    Raises
+    ------
+    InputError
+        If the name is not an identifier or ``start`` is not one finite number.
+    ModelError
+        If the name is already declared.
+    """
+    if np.size(start) != 1:
+        raise InputError(f"mode {name!r}: start must be one number, got {start!r}")
+    sym = model.parameter(name, start)
+    _spec(model).modes.append(name)
+    return sym
+
+
+def _pairs(value: Any, what: str) -> list[tuple[Any, Any]]:
+    if value is None:
+        return []
+    if isinstance(value, Mapping):
+        return list(value.items())
+    try:
+        pairs = [tuple(item) for item in value]
+    except TypeError as exc:
+        raise InputError(f"{what}: expected a mapping or a sequence of (target, value) pairs") from exc
+    if any(len(pr) != 2 for pr in pairs):
+        raise InputError(f"{what}: expected a mapping or a sequence of (target, value) pairs")
+    return pairs
+
+
+def _time_varying(model: Any, expr: ca.SX) -> bool:
+    """True if ``expr`` depends on time or on a state, algebraic variable, input, der() or mode."""
+    syms = [model.time]
+    modes = _spec(model).modes
+    for var in model._vars.values():
+        if var.kind in ("state", "algebraic", "input") or var.name in modes:
+            syms.append(var.sym)
+        if var.der is not None:
+            syms.append(var.der)
+    return bool(ca.depends_on(expr, ca.vertcat(*[ca.vec(s) for s in syms])))
+
+
+def declare_when(
+    model: Any,
+    condition: Any,
+    reinit: Any = None,
+    assign: Any = None,
+    direction: int = 1,
+    name: str | None = None,
+    initial: bool = False,
+) -> None:
+    """Declare a zero-crossing state event on a model (what :meth:`Model.when` calls).
+
+    Modelica ``when c > 0 then reinit(x, ...); m := ...; end when;`` is
+    ``model.when(c, reinit={x: ...}, assign={m: ...})``.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    condition : casadi.SX
+        Scalar zero-crossing function of time, states, algebraic variables, inputs,
+        ``der()`` (replaced by the ODE right-hand side), parameters and modes.
+    reinit : mapping or sequence of pairs, optional
+        ``state symbol (or elements of one) -> new value``, evaluated with the values
+        just before the event.
+    assign : mapping or sequence of pairs, optional
+        ``mode symbol -> new value``, evaluated with the values just before the event.
+        Clauses firing at the same instant run in declaration order (a later assignment
+        of the same mode wins).
+    direction : {1, -1, 0}, optional
+        1: event when ``condition`` goes from ``<= 0`` to ``> 0`` (default); -1: from
+        ``>= 0`` to ``< 0``; 0: either sign change.
+    name : str, optional
+        Event name in :attr:`SimulationResult.events`; default ``"when<k>"``.
+    initial : bool, optional
+        Also fire at the start of a simulation if the condition is positive there
+        (Modelica ``when {initial(), c > 0}``); default false (edge only).
+
+    Raises
+    ------
+    InputError
+        If the condition is not a scalar SX expression or depends on no time-varying
+        variable or mode (it could never cross zero), a reinit/assign value has the wrong size,
+        ``direction`` is not 1, -1 or 0, or the name is not a string.
+    ModelError
+        If the condition or a value contains symbols not declared by the model, a reinit
+        target is not a state, an assign target is not a mode, or the name is taken.
+    """
+    spec = _spec(model)
+    label = f"when{len(spec.whens)}" if name is None else name
+    if not isinstance(label, str) or not label:
+        raise InputError(f"when-clause name must be a non-empty string, got {name!r}")
+    if any(w.name == label for w in spec.whens):
+        raise ModelError(f"model {model.name!r}: when-clause name {label!r} is already used")
+    what = f"when-clause {label!r}"
+    if not isinstance(condition, (ca.SX, ca.MX, int, float, np.ndarray, np.number)) or isinstance(condition, bool):
+        raise InputError(f"{what}: condition must be a scalar CasADi SX expression, got {type(condition).__name__}")
+    cond = _as_sx(condition, f"{what} condition")
+    if cond.numel() != 1:
+        raise InputError(f"{what}: condition must be a scalar expression, got {cond.numel()} elements")
+    model.check_symbols(cond, f"{what} condition")
+    if not _time_varying(model, cond):
+        raise InputError(
+            f"{what}: condition {cond} depends on no time, state, algebraic variable or input, "
+            "so it can never cross zero"
+        )
+    if isinstance(direction, bool) or direction not in (1, -1, 0):
+        raise InputError(f"{what}: direction must be 1 (rising), -1 (falling) or 0 (both), got {direction!r}")
+    reinits = []
+    for target, value in _pairs(reinit, f"{what} reinit"):
+        kind, vname, idx = model.locate(target)
+        if kind != "state":
+            raise ModelError(f"{what}: reinit target {vname!r} is a {kind}, not a state")
+        val = _as_sx(value, f"{what} reinit({vname})")
+        if val.numel() not in (1, len(idx)):
+            raise InputError(f"{what}: reinit({vname}) needs 1 or {len(idx)} values, got {val.numel()}")
+        model.check_symbols(val, f"{what} reinit({vname})")
+        reinits.append((vname, idx, val))
+    assigns = []
+    for target, value in _pairs(assign, f"{what} assign"):
+        kind, vname, _ = model.locate(target)
+        if vname not in spec.modes:
+            raise ModelError(f"{what}: assign target {vname!r} is a {kind}, not a mode (declare it with Model.mode)")
+        val = _as_sx(value, f"{what} assign({vname})")
+        if val.numel() != 1:
+            raise InputError(f"{what}: assign({vname}) needs 1 value, got {val.numel()}")
+        model.check_symbols(val, f"{what} assign({vname})")
+        assigns.append((vname, val))
+    spec.whens.append(_When(label, cond, int(direction), reinits, assigns, bool(initial)))
+
+
+# ---------------------------------------------------------------------------- simulation
+def _crossed(c0: np.ndarray, c1: np.ndarray, direction: np.ndarray, eps: float = 0.0) -> np.ndarray:
+    """Which conditions crossed zero from ``c0`` to ``c1`` in their direction (to beyond ``eps``)."""
+    rising = (c0 <= 0.0) & (c1 > eps)
+    falling = (c0 >= 0.0) & (c1 < -eps)
+    both = ((c0 < 0.0) & (c1 > eps)) | ((c0 > 0.0) & (c1 < -eps))
+    return np.where(direction > 0, rising, np.where(direction < 0, falling, both))
+
+
+class _EventSimulator:
+    """The functions of one event simulation and its restart loop (internal)."""
+
+    def __init__(self, model: Any, dae: Any, integrator: str, rtol: float, atol: float) -> None:
+        self.model, self.dae, self.plugin = model, dae, integrator
+        spec = model._events
+        self.whens = spec.whens
+        self.modes = spec.modes
+        self.direction = np.array([w.direction for w in self.whens])
+        args = [dae.t, dae.x, dae.z, dae.u, dae.p]
+        argn = ["t", "x", "z", "u", "p"]
+
+        def rhs(e: ca.SX) -> ca.SX:  # der() -> ODE right-hand side
+            return ca.substitute(e, dae.xdot, dae.ode_expr) if dae.nx else e
+
+        conds = ca.vertcat(*[rhs(w.condition) for w in self.whens])
+        self.cond = ca.Function("event_conditions", args, [conds], argn, ["c"])
+        self.actions = []
+        for w in self.whens:
+            xn, pn = ca.SX(dae.x), ca.SX(dae.p)
+            for vname, idx, val in w.reinit:
+                base = dae.x_vars[vname].start
+                for k, i in enumerate(idx):
+                    xn[base + i] = rhs(val[k if val.numel() > 1 else 0])
+            for vname, val in w.assign:
+                pn[dae.p_vars[vname].start] = rhs(val)
+            self.actions.append(ca.Function(f"when_action{len(self.actions)}", args, [xn, pn], argn, ["x_post", "p_post"]))
+        if dae.nz:
+            tz, xz, uz, pz = dae.t, dae.x, dae.u, dae.p
+            gz = ca.Function("g", [dae.z, ca.vertcat(tz, xz, uz, pz)], [dae.alg_expr])
+            self.zsolve = ca.rootfinder("event_zsolve", "newton", gz, {"error_on_fail": False})
+        # time-scaled DAE: t = t0 + tau h, tau in [0, 1]
+        tau, t0, h = ca.SX.sym("tau"), ca.SX.sym("t0"), ca.SX.sym("h")
+        tt = t0 + tau * h
+        self.ddict: dict[str, Any] = {
+            "t": tau,
+            "x": dae.x,
+            "u": dae.u,
+            "p": ca.vertcat(dae.p, t0, h),
+            "ode": h * ca.substitute(dae.ode_expr, dae.t, tt),
+        }
+        if dae.nz:
+            self.ddict["z"] = dae.z
+            self.ddict["alg"] = ca.substitute(dae.alg_expr, dae.t, tt)
+        self.opts = {
+            "reltol": float(rtol),
+            "abstol": float(atol),
+            "show_eval_warnings": False,
+            "disable_internal_warnings": True,
+        }
+        self._integrators: dict[int, ca.Function] = {}
+        self._cond_maps: dict[int, ca.Function] = {}
+
+    # -------------------------------------------------------------- numeric helpers
+    def integrate(self, k: int, tc: float, h: float, x: np.ndarray, z: np.ndarray, p: np.ndarray, u: np.ndarray):
+        """States and algebraics at ``tc + h * i / k``, ``i = 1..k``: arrays ``(nx, k)``, ``(nz, k)``."""
+        if k not in self._integrators:
+            grid = list(np.linspace(0.0, 1.0, k + 1)[1:])
+            self._integrators[k] = ca.integrator(
+                f"event_integrator{k}", self.plugin, self.ddict, 0.0, grid, self.opts
+            )
+        try:
+            res = self._integrators[k](x0=x, z0=z, p=np.concatenate([p, [tc, h]]), u=u)
+        except RuntimeError as exc:
+            lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
+            raise ConvergenceError(
+                f"simulation of model {self.model.name!r} with {self.plugin} failed on "
+                f"[{tc:.9g}, {tc + h:.9g}] s: {lines[0].strip() if lines else exc}"
+            ) from exc
+        xs = np.array(res["xf"]).reshape(self.dae.nx, k)
+        zs = np.array(res["zf"]).reshape(self.dae.nz, k)
+        if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(zs))):
+            raise ConvergenceError(
+                f"simulation of model {self.model.name!r} produced non-finite values on [{tc:.9g}, {tc + h:.9g}] s"
+            )
+        return xs, zs
+
+    def conditions(self, t: np.ndarray, xs: np.ndarray, zs: np.ndarray, u: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Conditions at ``k`` samples: ``(nc, k)``."""
+        k = t.size
+        if k not in self._cond_maps:
+            self._cond_maps[k] = self.cond.map(k)
+        c = self._cond_maps[k](t.reshape(1, -1), xs, zs, np.tile(u.reshape(-1, 1), (1, k)), np.tile(p.reshape(-1, 1), (1, k)))
+        return np.array(c).reshape(len(self.whens), k)
+
+    def consistent_z(self, t: float, x: np.ndarray, z: np.ndarray, u: np.ndarray, p: np.ndarray, why: str) -> np.ndarray:
+        """Algebraic variables solving ``g = 0`` at ``(t, x, u, p)`` (Newton from ``z``)."""
+        if not self.dae.nz:
+            return z
+        zn = np.array(self.zsolve(z, np.concatenate([[t], x, u, p]))).reshape(-1)
+        g = np.array(self.dae.alg(t, x, zn, u, p)).reshape(-1)
+        if not (np.all(np.isfinite(zn)) and np.linalg.norm(g, np.inf) <= 1e-8 * (1.0 + np.linalg.norm(zn, np.inf))):
+            raise ConvergenceError(
+                f"model {self.model.name!r}: no consistent algebraic variables {self.dae.z_names} {why} "
+                f"(residual {np.linalg.norm(g, np.inf):.3g})"
+            )
+        return zn
+
+    def record(self, t: float, name: str, x: np.ndarray, p: np.ndarray) -> EventRecord:
+        modes = {m: float(p[self.dae.p_vars[m].start]) for m in self.modes}
+        states = {k: (x[s].copy() if s.stop - s.start > 1 else np.array(float(x[s.start]))) for k, s in self.dae.x_vars.items()}
+        return EventRecord(t=float(t), name=name, modes=modes, x=states)
+
+    # -------------------------------------------------------------- one event
+    def locate(self, ta: float, tb: float, xa, za, p, u, ca_, i: int, tol: float) -> float:
+        """Time of the zero crossing of condition ``i`` in ``(ta, tb]`` (Brent's method)."""
+        sign = 1.0 if (self.direction[i] > 0 or (self.direction[i] == 0 and ca_[i] < 0)) else -1.0
+
+        def phi(s: float) -> float:
+            if s <= ta:
+                return sign * ca_[i]
+            xs, zs = self.integrate(1, ta, s - ta, xa, za, p, u)
+            return sign * float(self.conditions(np.array([s]), xs, zs, u, p)[i, 0])
+
+        fb = phi(tb)
+        if sign * ca_[i] > 0.0 or fb <= 0.0:  # crossed exactly at ta, or not seen again
+            return ta if sign * ca_[i] > 0.0 else tb
+        root = float(brentq(phi, ta, tb, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
+        step = tol
+        while root < tb and phi(root) <= 0.0:  # the event is at the right limit: crossed
+            root, step = min(root + step, tb), 2.0 * step
+        return root
+
+    def fire(self, t: float, x, z, p, u, fired: list[int], max_iter: int) -> tuple:
+        """Run the actions of ``fired`` and the event iteration at ``t``; returns ``(x, z, p, c, records)``."""
+        records = []
+        for _ in range(max_iter):
+            c_pre = self.conditions(np.array([t]), x.reshape(-1, 1), z.reshape(-1, 1), u, p)[:, 0]
+            xn, pn = x.copy(), p.copy()
+            for i in fired:  # all evaluated with the pre-event values, applied in declaration order
+                xi, pi = self.actions[i](t, x, z, u, p)
+                xi, pi = np.array(xi).reshape(-1), np.array(pi).reshape(-1)
+                w = self.whens[i]
+                for vname, idx, _ in w.reinit:
+                    sl = [self.dae.x_vars[vname].start + j for j in idx]
+                    xn[sl] = xi[sl]
+                for vname, _ in w.assign:
+                    j = self.dae.p_vars[vname].start
+                    pn[j] = pi[j]
+            names = [self.whens[i].name for i in fired]
+            zn = self.consistent_z(t, xn, z, u, pn, f"after event {names} at t = {t:.12g} s")
+            records += [self.record(t, self.whens[i].name, xn, pn) for i in fired]
+            c_post = self.conditions(np.array([t]), xn.reshape(-1, 1), zn.reshape(-1, 1), u, pn)[:, 0]
+            x, z, p = xn, zn, pn
+            fired = [int(j) for j in np.nonzero(_crossed(c_pre, c_post, self.direction, _HYSTERESIS))[0]]
+            if not fired:
+                return x, z, p, c_post, records
+        raise ConvergenceError(
+            f"model {self.model.name!r}: the event iteration at t = {t:.12g} s did not settle in {max_iter} "
+            f"rounds; clauses still firing: {[self.whens[i].name for i in fired]}"
+        )
+
+
+def simulate_events(
+    model: Any,
+    t_grid: Any,
+    x0: Any = None,
+    u: Any = None,
+    p: Mapping[str, Any] | None = None,
+    integrator: str = "idas",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    z0: Any = None,
+    event_step: float | None = None,
+    event_tol: float = 1e-12,
+    max_events: int = 10000,
+    max_event_iter: int = 20,
+) -> SimulationResult:
+    """Integrate a model with when-clauses on a time grid, stopping and restarting at events.
+
+    :meth:`Model.simulate` calls this with the default event options when the model has
+    when-clauses. The algorithm (a root-finding restart loop around SUNDIALS) and the
+    semantics are in the module docstring.
+
+    Parameters
+    ----------
+    model : Model
+        The model, with modes and when-clauses.
+    t_grid : array_like
+        Strictly increasing output times, shape ``(N,)`` with ``N >= 2``, s.
+    x0 : array_like or mapping, optional
+        Initial state ``(nx,)`` or state name -> value; default the declared starts.
+    u : float, array_like or callable, optional
+        Inputs, piecewise constant on the grid, as for :meth:`Model.simulate`.
+    p : mapping of str to float or array_like, optional
+        Parameter overrides by name; a mode's value here is its start value.
+    integrator : {"idas", "cvodes"}, optional
+        SUNDIALS integrator; CVODES only without algebraic variables.
+    rtol, atol : float, optional
+        Relative and absolute integration tolerances.
+    z0 : array_like, optional
+        Guess for the algebraic variables at ``t_grid[0]``, ``(nz,)``.
+    event_step : float, optional
+        Longest interval between two samples of the conditions, s; default
+        ``(t_grid[-1] - t_grid[0]) / 1000``. The output grid points are always samples.
+    event_tol : float, optional
+        Absolute tolerance of the event time in Brent's method, s; default 1e-12.
+    max_events : int, optional
+        Most events allowed (a guard against chattering and Zeno behaviour); default 10000.
+    max_event_iter : int, optional
+        Most rounds of the event iteration at one instant; default 20.
+
+    Returns
+    -------
+    SimulationResult
+        Trajectories on ``t_grid`` (at a grid point that is also an event time, the
+        post-event values) and :attr:`SimulationResult.events` in time order.
+
+    Raises
+    ------
+    InputError
+        On malformed arguments.
+    ModelError
+        If the model cannot be flattened.
+    ConvergenceError
+        If the integrator fails, the algebraic variables cannot be made consistent after
+        an event, the event iteration does not settle, or more than ``max_events`` events
+        occur (the message names the last clauses).
+    """
+    dae = model.flatten()
+    t, xv, zv, pv, u_int = simulation_inputs(model, dae, t_grid, x0, u, p, integrator, z0)
+    span = float(t[-1] - t[0])
+    step = span / 1000.0 if event_step is None else positive_float(event_step, "event_step")
+    tol = positive_float(event_tol, "event_tol")
+    max_events = positive_int(max_events, "max_events")
+    max_event_iter = positive_int(max_event_iter, "max_event_iter")
+    if model._events is None or not model._events.whens:
+        raise InputError(f"model {model.name!r} declares no when-clause; use Model.simulate")
+    sim = _EventSimulator(model, dae, integrator, rtol, atol)
+    n = t.size
+    xs, zs, ps = np.zeros((n, dae.nx)), np.zeros((n, dae.nz)), np.zeros((n, dae.npar))
+    zv = sim.consistent_z(float(t[0]), xv, zv, u_int[0], pv, f"at the start t = {t[0]:.12g} s")
+    xs[0], zs[0], ps[0] = xv, zv, pv
+    c_prev = sim.conditions(t[:1], xv.reshape(-1, 1), zv.reshape(-1, 1), u_int[0], pv)[:, 0]
+    events: list[EventRecord] = []
+    first = [i for i, w in enumerate(sim.whens) if w.initial and c_prev[i] > _HYSTERESIS]
+    if first:  # Modelica initial(): clauses already active at the start
+        xv, zv, pv, c_prev, events = sim.fire(float(t[0]), xv, zv, pv, u_int[0], first, max_event_iter)
+        xs[0], zs[0] = xv, zv
+    for j in range(n - 1):
+        tc, te, uj = float(t[j]), float(t[j + 1]), u_int[j]
+        while te - tc > tol:
+            k = max(1, math.ceil((te - tc) / step - 1e-9))
+            xk, zk = sim.integrate(k, tc, te - tc, xv, zv, pv, uj)
+            tk = tc + (te - tc) * np.arange(1, k + 1) / k
+            ck = sim.conditions(tk, xk, zk, uj, pv)
+            prev = np.column_stack([c_prev, ck[:, :-1]])
+            hit = _crossed(prev, ck, sim.direction[:, None])
+            if not hit.any():
+                xv, zv, c_prev, tc = xk[:, -1], zk[:, -1], ck[:, -1], te
+                break
+            s = int(np.nonzero(hit.any(axis=0))[0][0])  # first sub-step with a crossing
+            ta = tc if s == 0 else float(tk[s - 1])
+            xa, za = (xv, zv) if s == 0 else (xk[:, s - 1], zk[:, s - 1])
+            roots = {int(i): sim.locate(ta, float(tk[s]), xa, za, pv, uj, prev[:, s], int(i), tol) for i in np.nonzero(hit[:, s])[0]}
+            t_ev = min(roots.values())
+            fired = sorted(i for i, r in roots.items() if r <= t_ev + tol)
+            if t_ev > ta:
+                xe, ze = sim.integrate(1, ta, t_ev - ta, xa, za, pv, uj)
+                xv, zv = xe[:, 0], ze[:, 0]
+            else:
+                xv, zv = xa, za
+            xv, zv, pv, c_prev, recs = sim.fire(t_ev, xv, zv, pv, uj, fired, max_event_iter)
+            events += recs
+            _log.debug("model %s: events %s at t = %.12g s", model.name, [r.name for r in recs], t_ev)
+            if len(events) > max_events:
+                raise ConvergenceError(
+                    f"model {model.name!r}: more than max_events = {max_events} events by t = {t_ev:.12g} s "
+                    f"(the last: {[r.name for r in events[-4:]]}); chattering or Zeno behaviour?"
+                )
+            tc = t_ev
+        xs[j + 1], zs[j + 1], ps[j + 1] = xv, zv, pv
+    us = np.vstack([u_int, u_int[-1:]])
+    outs = _eval_outputs(dae, t, xs, zs, us, ps)
+    _log.debug("simulated model %s with %d events on %d points", model.name, len(events), n)
+    return SimulationResult(
+        t=t,
+        x=_unpack(dae.x_vars, xs),
+        z=_unpack(dae.z_vars, zs),
+        u=_unpack(dae.u_vars, us),
+        outputs=outs,
+        p={k: ps[0][s].copy() for k, s in dae.p_vars.items()},
+        events=events,
+    )
