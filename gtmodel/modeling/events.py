@@ -36,7 +36,7 @@ phase. A condition already positive at the start does not fire (edge semantics).
 
 Why not CasADi's own event support (DAE field ``"zero"`` with option ``"transition"``,
 experimental in 3.8): measured on ``x'' = -x`` with ``zero = x`` in casadi 3.8.2 (the
-script is in the commit message of this module), it stops with ``CV_ILL_INPUT`` /
+script is described in the final report of this change), it stops with ``CV_ILL_INPUT`` /
 ``IDA_ILL_INPUT`` ("tout too far back in direction of integration") whenever an output
 interval holds more than a few steps (10 s in one or ten intervals), fires only on
 positive-to-negative crossings (casadi issue #4393), and on a 1001-point grid at

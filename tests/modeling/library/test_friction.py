@@ -1,0 +1,142 @@
+"""Tests of the MSL-named friction with stiction and hard stops (gtmodel.modeling.library.friction).
+
+References: closed forms (stick-slip on a belt: piecewise harmonic motion; a sliding cart
+under Coulomb friction: uniform deceleration; impacts on a stop under a constant force:
+uniformly accelerated flights shortened by the restitution e), stated per test.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.errors import ConvergenceError, InputError, ModelError
+from gtmodel.modeling import Model
+from gtmodel.modeling.library.friction import Stribeck, add_friction, mass_with_stop_and_friction
+
+K, V_B, F_S, F_K = 4.0, 0.5, 1.0, 0.6  # N/m, m/s, N, N; mass 1 kg
+EVENT_TOL = 1e-6  # s
+TIGHT = {"rtol": 1e-10, "atol": 1e-12}
+MU_G = 0.3 * 9.81  # Coulomb deceleration of the cart, m/s^2
+
+
+def belt_with_library_friction():
+    """Mass on a spring to the wall, on a belt at v_b: the friction of the library on v - v_b."""
+    m = Model("belt")
+    x = m.state("x")
+    v = m.state("v", start=V_B)
+    f = m.algebraic("f")
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), -K * x - f)
+    coulomb = Stribeck(F_prop=0.0, F_Coulomb=F_K, F_Stribeck=0.0, fexp=0.0, peak=F_S / F_K)
+    add_friction(m, v - V_B, f, coulomb, a_rel=m.der(v))
+    return m
+
+
+def test_belt_stick_slip_matches_closed_form():
+    # reference: stuck until k x = F_s (t1 = F_s/(k v_b)); slipping: harmonic about F_k/k for
+    # 2 (pi - phi)/w, tan(phi) = w (F_s - F_k)/(k v_b); stuck again for 2 (F_s - F_k)/(k v_b)
+    res = belt_with_library_friction().simulate(np.linspace(0.0, 10.0, 1001), **TIGHT)
+    w = np.sqrt(K)
+    phi = np.arctan2(w * (F_S - F_K) / K, V_B)
+    t_slip, t_stick = 2.0 * (np.pi - phi) / w, 2.0 * (F_S - F_K) / (K * V_B)
+    t1 = F_S / (K * V_B)
+    ref = [t1, t1 + t_slip, t1 + t_slip + t_stick, t1 + 2 * t_slip + t_stick, t1 + 2 * (t_slip + t_stick),
+           t1 + 3 * t_slip + 2 * t_stick, t1 + 3 * (t_slip + t_stick)]
+    names = ["friction.start_backward", "friction.stuck_backward"] * 3 + ["friction.start_backward"]
+    assert [e.name for e in res.events] == names
+    np.testing.assert_allclose([e.t for e in res.events], ref, rtol=0, atol=EVENT_TOL)
+
+
+def coulomb_cart_with_sign():
+    m = Model("cart")
+    x = m.state("x")
+    v = m.state("v", start=1.0)
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), -MU_G * ca.sign(v))
+    return m
+
+
+def test_sign_coulomb_friction_fails_without_events():
+    # reference: the issue's observation, kept as the motivation of the event version below
+    with pytest.raises(ConvergenceError, match="IDA_TOO_MUCH_WORK"):
+        coulomb_cart_with_sign().simulate(np.linspace(0.0, 10.0, 101))
+
+
+def test_exact_coulomb_cart_stops_and_sticks_with_events():
+    # reference: v = 1 - mu g t until t_stop = 1/(mu g), x_stop = 1/(2 mu g); then stuck for good
+    m = Model("cart")
+    mass_with_stop_and_friction(m, "cart", 0.0, Stribeck(0.0, MU_G, 0.0, 0.0), m=1.0, v_start=1.0)
+    t = np.linspace(0.0, 10.0, 1001)
+    res = m.simulate(t)
+    t_stop = 1.0 / MU_G
+    assert [e.name for e in res.events] == ["cart_friction.stuck_forward"]
+    assert abs(res.events[0].t - t_stop) < EVENT_TOL
+    np.testing.assert_allclose(res.x["cart_v"], np.where(t < t_stop, 1.0 - MU_G * t, 0.0), atol=1e-7)
+    np.testing.assert_allclose(res.x["cart_s"][-1], 0.5 / MU_G, atol=1e-7)
+
+
+@pytest.mark.parametrize("e, t_end", [(0.5, 2.9), (0.8, 4.0)])
+def test_hard_stop_impacts_match_closed_form(e, t_end):
+    # reference: constant force F = 2 N on 1 kg from rest 1 m before the stop: first impact at
+    # sqrt(2 d / a), then flights 2 e^k v1 / a with v1 = sqrt(2 a d) (Newton's impact law);
+    # t_end before the Zeno time 1 + 2 e / (1 - e) s of the infinitely many impacts
+    a, d = 2.0, 1.0
+    m = Model("stop")
+    mass_with_stop_and_friction(m, "mass", a, Stribeck(0.0, 0.0, 0.0, 0.0), m=1.0, L=0.2, smax=1.1, e=e)
+    res = m.simulate(np.linspace(0.0, t_end, 291), **TIGHT)
+    v1 = np.sqrt(2.0 * a * d)
+    ref = np.sqrt(2.0 * d / a) + np.concatenate([[0.0], np.cumsum([2.0 * e**k * v1 / a for k in range(1, 30)])])
+    impacts = np.array([ev.t for ev in res.events if ev.name == "mass.stop_max"])
+    assert impacts.size == np.sum(ref < t_end)
+    np.testing.assert_allclose(impacts, ref[: impacts.size], rtol=0, atol=EVENT_TOL)
+    assert np.all(res.x["mass_s"] <= 1.0 + 1e-9)
+
+
+def test_hard_stop_without_restitution_stays_at_the_stop():
+    # reference: e = 0 (MSL): the mass stops at smax - L/2 = 1 m at t = 1 s (d = 1 m, a = 2 m/s^2) and stays
+    m = Model("stop")
+    mass_with_stop_and_friction(m, "mass", 2.0, Stribeck(0.0, 0.5, 0.0, 0.0), m=1.0, L=0.2, smax=1.1)
+    res = m.simulate(np.linspace(0.0, 3.0, 301))
+    t_hit = np.sqrt(2.0 * 1.0 / 1.5)  # net acceleration 2 - 0.5 = 1.5 m/s^2
+    assert [e.name for e in res.events] == ["mass_friction.start_forward", "mass.stop_max"]
+    assert abs(res.events[1].t - t_hit) < EVENT_TOL
+    after = res.t > t_hit + 1e-6
+    np.testing.assert_allclose(res.x["mass_s"][after], 1.0, atol=1e-9)
+    np.testing.assert_allclose(res.x["mass_v"][after], 0.0, atol=1e-9)
+
+
+# --------------------------------------------------------------------------- bad inputs
+def _cart(**kw):
+    m = Model("m")
+    args = {"force": 0.0, "friction": Stribeck()} | kw
+    mass_with_stop_and_friction(m, "cart", **args)
+
+
+def _friction_on_state():
+    m = Model("m")
+    v = m.state("v")
+    m.equation(m.der(v), 0.0)
+    add_friction(m, v, v, Stribeck())
+
+
+@pytest.mark.parametrize(
+    "call, error, match",
+    [
+        (lambda: Stribeck(F_Coulomb=-1.0), InputError, "F_Coulomb must be a finite number >= 0"),
+        (lambda: Stribeck(fexp=np.inf), InputError, "fexp must be a finite number"),
+        (lambda: Stribeck(peak=0.5), InputError, "peak must be >= 1"),
+        (lambda: _cart(friction=5.0), InputError, "friction must be a Stribeck"),
+        (lambda: _cart(m=0.0), InputError, "need m > 0"),
+        (lambda: _cart(e=1.5), InputError, r"restitution e must be in \[0, 1\]"),
+        (lambda: _cart(s_start=30.0), InputError, "outside the stops"),
+        (lambda: _cart(smin=1.0, smax=0.0), InputError, "leave no room"),
+        (lambda: _cart(L="1"), InputError, "L must be a finite number"),
+        (_friction_on_state, ModelError, "scalar algebraic variable, got state 'v'"),
+    ],
+    ids=["negative", "inf", "peak", "friction_type", "mass", "restitution", "start", "stops", "length", "force_state"],
+)
+def test_bad_inputs(call, error, match):
+    with pytest.raises(error, match=match):
+        call()
