@@ -3,6 +3,8 @@
 * :class:`Model` declares parameters, states, algebraic variables, inputs, ``der()``
   equations and outputs (CasADi SX), flattens to a :class:`FlatDAE` and simulates.
 * :class:`Optimization` declares an optimal control problem over a model.
+* :class:`Component`, :func:`connect` and :mod:`gtmodel.modeling.library`: acausal
+  components with connectors (Modelica style), flattened into a :class:`Model`.
 * :func:`solve` / :class:`CollocationTranscription` transcribe it by direct collocation
   and solve it with IPOPT, giving an :class:`OptimizationResult`.
 """
@@ -10,6 +12,8 @@
 from __future__ import annotations
 
 from gtmodel.modeling.collocation import CollocationTranscription, solve
+from gtmodel.modeling.components import Component, Input, Parameter, State, Variable, connect
+from gtmodel.modeling.connectors import Connector, Flow, Potential
 from gtmodel.modeling.dae import FlatDAE, SimulationResult
 from gtmodel.modeling.model import Model
 from gtmodel.modeling.optimization import Optimization
@@ -39,4 +43,13 @@ __all__ = [
     "parse_constraint",
     "optimization_names",
     "apply_to",
+    "Component",
+    "Parameter",
+    "Variable",
+    "State",
+    "Input",
+    "connect",
+    "Connector",
+    "Potential",
+    "Flow",
 ]

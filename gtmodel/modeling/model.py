@@ -41,7 +41,9 @@ __all__ = ["Model"]
 
 _log = logging.getLogger("gtmodel")
 
-_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: Identifiers, or dotted paths of identifiers for the hierarchical names of composed
+#: models (``"axis1.belt.c"``, :mod:`gtmodel.modeling.components`).
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 _KINDS = ("parameter", "state", "algebraic", "input")
 
 
@@ -111,7 +113,7 @@ class Model:
         lb: Any = None,
         ub: Any = None,
     ) -> ca.SX:
-        if not isinstance(name, str) or not _NAME_RE.match(name) or keyword.iskeyword(name):
+        if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
         if name in self._vars or name in self._outputs or name in ("time", "t", "final_time"):
             raise ModelError(f"model {self.name!r}: name {name!r} is already declared or reserved")
