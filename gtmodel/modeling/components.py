@@ -53,6 +53,7 @@ import numpy as np
 from gtmodel.errors import GtModelError, InputError, ModelError
 from gtmodel.modeling.connectors import Connector
 from gtmodel.modeling.dae import _as_sx, _shape_to_size, _vector_value
+from gtmodel.modeling.events import transfer_events
 from gtmodel.modeling.model import Model
 
 __all__ = ["Parameter", "Variable", "State", "Input", "Component", "connect"]
@@ -814,7 +815,7 @@ class _Flattening:
             if d.kind == "state":
                 old.append(self.scratch.der(d.sym))
                 new.append(model.der(sym))
-        o, n = ca.vertcat(*old), ca.vertcat(*new)
+        o, n = transfer_events(self.scratch, model, ca.vertcat(*old), ca.vertcat(*new))  # modes, when-clauses
         exprs = ca.substitute([r for _, r in eqs] + [e for _, e in self.outputs], [o], [n])
         for (label, _), res in zip(eqs, exprs[: len(eqs)]):
             model.equation(res, 0.0, name=label)

@@ -376,7 +376,7 @@ class Model:
                 f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
                 "only equations linear in der() are supported"
             )
-        if substitute_der:
+        if substitute_der or (self._events is not None and label in self._events.der_labels):
             self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
 

@@ -22,15 +22,16 @@ chattering; events here are located by root finding); the friction force is cont
 at breakaway only when ``peak = 1`` (as in the MSL); the MSL's friction table ``f_pos``
 of ``SupportFriction`` is replaced by the Stribeck curve of ``MassWithStopAndFriction``.
 
-Hard stops (:func:`mass_with_stop_and_friction`): an impact at ``smin``/``smax`` reverses the velocity
+Hard stops (:class:`MassWithStopAndFriction`): an impact at ``smin``/``smax`` reverses the velocity
 with a coefficient of restitution ``e`` (Newton's impact law ``v+ = -e v-``). With
 ``e = 0`` (the MSL) the mass stops at the stop and stays stuck (friction mode ``0``)
 until the force pulls it away from the stop.
 
-The translational components of the library (``Mass``, ``Spring``, ...) are components of
-:mod:`gtmodel.modeling.components`; the friction here is declared on a
-:class:`~gtmodel.modeling.Model` (:func:`add_friction`, :func:`mass_with_stop_and_friction`)
-because modes and when-clauses are model-level declarations.
+:class:`MassWithStopAndFriction` is a component on the translational flanges of
+:mod:`gtmodel.modeling.library.translational` (its modes and when-clauses reach the
+flattened model through :func:`gtmodel.modeling.events.transfer_events`);
+:func:`add_friction` declares the same state machine on a plain
+:class:`~gtmodel.modeling.Model` for any relative velocity.
 """
 
 from __future__ import annotations
@@ -42,9 +43,12 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling.components import Parameter, State, Variable
+from gtmodel.modeling.events import declare_mode, declare_when, mark_der_substituted
+from gtmodel.modeling.library.translational import PartialTwoFlanges
 from gtmodel.modeling.model import Model
 
-__all__ = ["Stribeck", "FrictionSymbols", "add_friction", "mass_with_stop_and_friction"]
+__all__ = ["Stribeck", "FrictionSymbols", "stribeck_force", "add_friction", "MassWithStopAndFriction"]
 
 
 @dataclass(frozen=True)
@@ -107,7 +111,29 @@ class Stribeck:
         casadi.SX or float
             ``F_prop v + direction (F_Coulomb + F_Stribeck exp(-fexp |v|))``.
         """
-        return self.F_prop * v + direction * (self.F_Coulomb + self.F_Stribeck * ca.exp(-self.fexp * ca.fabs(v)))
+        return stribeck_force(v, direction, self.F_prop, self.F_Coulomb, self.F_Stribeck, self.fexp)
+
+
+def stribeck_force(v: Any, direction: Any, F_prop: Any, F_Coulomb: Any, F_Stribeck: Any, fexp: Any) -> Any:
+    """Sliding friction force of MSL ``MassWithStopAndFriction``, N.
+
+    ``F_prop v + direction (F_Coulomb + F_Stribeck exp(-fexp |v|))``.
+
+    Parameters
+    ----------
+    v : casadi.SX or float
+        Relative velocity, m/s.
+    direction : casadi.SX or float
+        Sliding direction (the friction mode), ``1`` or ``-1``.
+    F_prop, F_Coulomb, F_Stribeck, fexp : casadi.SX or float
+        Viscous coefficient [N s/m], Coulomb force [N], Stribeck force [N], decay [s/m].
+
+    Returns
+    -------
+    casadi.SX or float
+        The force, positive when it opposes a positive ``v``.
+    """
+    return F_prop * v + direction * (F_Coulomb + F_Stribeck * ca.exp(-fexp * ca.fabs(v)))
 
 
 @dataclass
@@ -120,14 +146,27 @@ class FrictionSymbols:
         Friction mode (``1`` forward, ``0`` stuck, ``-1`` backward).
     f : casadi.SX
         Friction force, N (positive when opposing a positive relative velocity).
-    s, v : casadi.SX or None
-        Position [m] and velocity [m/s] of the sliding mass (``None`` for :func:`add_friction`).
     """
 
     mode: ca.SX
     f: ca.SX
-    s: ca.SX | None = None
-    v: ca.SX | None = None
+
+
+def _state_machine(
+    model: Model, law: Any, prefix: str, mode_name: str, v: ca.SX, acc: ca.SX, f: ca.SX,
+    sliding: Any, f0_max: Any, can_start: Any, mode_start: float,
+) -> ca.SX:
+    """Mode, friction law and the four when-clauses of the MSL friction state machine (module docstring)."""
+    fwd, bwd = (1.0, 1.0) if can_start is None else can_start
+    mode = declare_mode(model, mode_name, float(mode_start))
+    law(ca.if_else(mode == 0, acc, f - sliding(v, mode)))
+    declare_when(model, ca.if_else(mode == 1, -v, -1.0), assign={mode: 0.0}, name=f"{prefix}stuck_forward")
+    declare_when(model, ca.if_else(mode == -1, v, -1.0), assign={mode: 0.0}, name=f"{prefix}stuck_backward")
+    start_fwd = ca.if_else(ca.logic_and(mode == 0, fwd > 0), f - f0_max, -1.0)
+    start_bwd = ca.if_else(ca.logic_and(mode == 0, bwd > 0), -f - f0_max, -1.0)
+    declare_when(model, start_fwd, assign={mode: 1.0}, name=f"{prefix}start_forward", initial=True)
+    declare_when(model, start_bwd, assign={mode: -1.0}, name=f"{prefix}start_backward", initial=True)
+    return mode
 
 
 def add_friction(
@@ -138,14 +177,13 @@ def add_friction(
     name: str = "friction",
     a_rel: Any = None,
     mode_start: float = 0.0,
-    can_start: Any = None,
 ) -> FrictionSymbols:
-    """Declare the MSL friction state machine for a relative velocity on a model.
+    """Declare the MSL friction state machine for a relative velocity on a plain model.
 
-    Adds the mode ``<name>_mode``, the friction equation (sliding law or, stuck,
-    ``a_rel = 0`` with ``der()`` replaced by the ODE right-hand side) and the four
-    when-clauses ``<name>.stuck_forward``, ``<name>.stuck_backward``, ``<name>.start_forward``,
-    ``<name>.start_backward`` (module docstring).
+    Adds the mode ``<name>_mode``, the friction equation ``<name>.law`` (sliding law or,
+    stuck, ``a_rel = 0`` with ``der()`` replaced by the ODE right-hand side) and the
+    when-clauses ``<name>.stuck_forward``, ``<name>.stuck_backward``,
+    ``<name>.start_forward``, ``<name>.start_backward`` (module docstring).
 
     Parameters
     ----------
@@ -163,10 +201,8 @@ def add_friction(
         Relative acceleration, an expression with ``der()``; default ``der(v_rel)`` (then
         ``v_rel`` must be a state).
     mode_start : {0, 1, -1}, optional
-        Mode at the start of a simulation (``0``: stuck; match the initial ``v_rel``).
-    can_start : tuple of casadi.SX, optional
-        ``(forward, backward)`` expressions that must be positive for the stuck element to
-        start sliding that way (used by hard stops); default always.
+        Mode at the start of a simulation; default 0 (stuck; it starts sliding at once,
+        by an initial event, if the force exceeds the static friction).
 
     Returns
     -------
@@ -177,117 +213,122 @@ def add_friction(
     ------
     InputError
         If ``friction`` is not a :class:`Stribeck`, ``mode_start`` not -1, 0 or 1, or
-        ``v_rel``/``a_rel`` are not scalar expressions.
+        ``v_rel``/``a_rel`` are not scalar SX expressions.
     ModelError
         If ``f`` is not an algebraic variable of the model, or ``a_rel`` is omitted and
         ``v_rel`` is not a state.
     """
     if not isinstance(friction, Stribeck):
-        raise InputError(f"friction must be a Stribeck, got {type(friction).__name__}")
-    if mode_start not in (-1, 0, 1) or isinstance(mode_start, bool):
+        raise InputError(f"{name}: friction must be a Stribeck, got {type(friction).__name__}")
+    if isinstance(mode_start, bool) or mode_start not in (-1, 0, 1):
         raise InputError(f"{name}: mode_start must be -1, 0 or 1, got {mode_start!r}")
     kind, fname, _ = model.locate(f)
     if kind != "algebraic" or ca.SX(f).numel() != 1:
         raise ModelError(f"{name}: the friction force must be a scalar algebraic variable, got {kind} {fname!r}")
-    v = ca.SX(v_rel) if isinstance(v_rel, (ca.SX, int, float)) else None
-    if v is None or v.numel() != 1:
+    if not isinstance(v_rel, ca.SX) or v_rel.numel() != 1:
         raise InputError(f"{name}: v_rel must be a scalar SX expression, got {v_rel!r}")
-    acc = model.der(v) if a_rel is None else ca.SX(a_rel)
-    if acc.numel() != 1:
-        raise InputError(f"{name}: a_rel must be a scalar SX expression")
-    fwd, bwd = (1.0, 1.0) if can_start is None else can_start
-    mode = model.mode(f"{name}_mode", float(mode_start))
-    model.equation(
-        ca.if_else(mode == 0, acc, f - friction.sliding(v, mode)), name=f"{name}.law", substitute_der=True
+    acc = model.der(v_rel) if a_rel is None else a_rel
+    if not isinstance(acc, ca.SX) or acc.numel() != 1:
+        raise InputError(f"{name}: a_rel must be a scalar SX expression, got {a_rel!r}")
+
+    def law(expr: ca.SX) -> None:
+        model.equation(expr, name=f"{name}.law", substitute_der=True)
+
+    mode = _state_machine(
+        model, law, f"{name}.", f"{name}_mode", v_rel, acc, ca.SX(f), friction.sliding, friction.f0_max, None, mode_start
     )
-    f0 = friction.f0_max
-    model.when(ca.if_else(mode == 1, -v, -1.0), assign={mode: 0.0}, name=f"{name}.stuck_forward")
-    model.when(ca.if_else(mode == -1, v, -1.0), assign={mode: 0.0}, name=f"{name}.stuck_backward")
-    model.when(ca.if_else(ca.logic_and(mode == 0, fwd > 0), f - f0, -1.0), assign={mode: 1.0}, name=f"{name}.start_forward", initial=True)
-    model.when(ca.if_else(ca.logic_and(mode == 0, bwd > 0), -f - f0, -1.0), assign={mode: -1.0}, name=f"{name}.start_backward", initial=True)
     return FrictionSymbols(mode=mode, f=ca.SX(f))
 
 
-def mass_with_stop_and_friction(
-    model: Model,
-    name: str,
-    force: Any,
-    friction: Stribeck,
-    m: float = 1.0,
-    L: float = 0.0,
-    smin: float = -25.0,
-    smax: float = 25.0,
-    e: float = 0.0,
-    s_start: float = 0.0,
-    v_start: float = 0.0,
-) -> FrictionSymbols:
-    """MSL ``MassWithStopAndFriction``: a sliding mass with Stribeck friction to the ground and hard stops.
+class MassWithStopAndFriction(PartialTwoFlanges):
+    """Sliding mass with hard stops and Stribeck friction (MSL ``Translational.Components.MassWithStopAndFriction``).
 
-    ``der(s) = v``, ``m der(v) = force - f`` with the friction force ``f`` of
-    :func:`add_friction` (relative velocity ``v``); stops at ``smin + L/2 <= s <= smax - L/2``
-    with Newton's impact law ``v+ = -e v-`` (clauses ``<name>.stop_min``, ``<name>.stop_max``).
-    With ``e = 0`` (the MSL) the mass stays at the stop, stuck, until the force pulls it
-    away with more than the static friction.
+    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2``, ``v = der(s)``,
+    ``m der(v) = flange_a.f + flange_b.f - f`` with the friction force ``f`` of the MSL
+    state machine on ``v_rel = v - v_support`` (module docstring); hard stops at
+    ``smin + L/2 <= s <= smax - L/2`` with Newton's impact law ``v+ = -e v-``. Declared
+    mode ``<path>.mode``, when-clauses ``<path>.stuck_forward``, ``<path>.stuck_backward``,
+    ``<path>.start_forward``, ``<path>.start_backward``, ``<path>.stop_max``,
+    ``<path>.stop_min``. Additions to the MSL, documented: ``peak`` (static over sliding
+    friction at rest, from the MSL's ``SupportFriction``), ``e`` (the MSL stops the mass:
+    ``e = 0``) and ``v_support`` (velocity of the surface, e.g. a belt; the MSL's is 0).
+    With ``e = 0`` the support is assumed at rest at the stops.
 
     Parameters
     ----------
-    model : Model
-        The model to declare on.
-    name : str
-        Prefix of the declared names: states ``<name>_s`` [m], ``<name>_v`` [m/s],
-        algebraic ``<name>_f`` [N], mode ``<name>_friction_mode``.
-    force : casadi.SX or float
-        Sum of the external forces on the mass (MSL ``flange_a.f + flange_b.f``), N, an
-        expression of the model's variables (e.g. an input or a spring force).
-    friction : Stribeck
-        Friction characteristic.
     m : float, optional
-        Mass, kg, > 0; default 1.
+        Mass [kg], > 0 (default 1).
     L : float, optional
-        Length of the mass, m, ``>= 0``; default 0.
-    smin, smax : float, optional
-        Left and right stop, m; default -25 and 25 (MSL start values).
+        Length [m], >= 0 (default 0).
+    smax, smin : float, optional
+        Right and left stop [m] (default 25 and -25, MSL start values).
+    F_prop : float, optional
+        Velocity-dependent friction [N s/m], >= 0 (default 1).
+    F_Coulomb : float, optional
+        Coulomb friction force [N], >= 0 (default 5).
+    F_Stribeck : float, optional
+        Stribeck effect [N], >= 0 (default 10).
+    fexp : float, optional
+        Exponential decay [s/m], >= 0 (default 2).
+    peak : float, optional
+        Maximum static friction over ``F_Coulomb + F_Stribeck``, >= 1 (default 1).
     e : float, optional
-        Coefficient of restitution, ``0 <= e <= 1``; default 0 (MSL: the mass stops).
-    s_start, v_start : float, optional
-        Initial position [m] (within the stops) and velocity [m/s]; the friction starts
-        stuck for ``v_start = 0``, else sliding in the direction of ``v_start``.
-
-    Returns
-    -------
-    FrictionSymbols
-        The mode, friction force, position and velocity.
-
-    Raises
-    ------
-    InputError
-        If ``m <= 0``, ``L < 0``, ``smin + L/2 > smax - L/2``, ``e`` is outside ``[0, 1]``,
-        or ``s_start`` is outside the stops.
-    ModelError
-        If a declared name is taken.
+        Coefficient of restitution at the stops, in [0, 1] (default 0).
+    v_support : float, optional
+        Velocity of the friction surface [m/s] (default 0).
     """
-    vals = {"m": m, "L": L, "smin": smin, "smax": smax, "e": e, "s_start": s_start, "v_start": v_start}
-    for key, val in vals.items():
-        if isinstance(val, bool) or not isinstance(val, (int, float, np.number)) or not np.isfinite(val):
-            raise InputError(f"{name}: {key} must be a finite number, got {val!r}")
-    if m <= 0 or L < 0:
-        raise InputError(f"{name}: need m > 0 and L >= 0, got m = {m!r}, L = {L!r}")
-    lo, hi = smin + L / 2.0, smax - L / 2.0
-    if lo > hi:
-        raise InputError(f"{name}: the stops leave no room: smin + L/2 = {lo} > smax - L/2 = {hi}")
-    if not 0.0 <= e <= 1.0:
-        raise InputError(f"{name}: the coefficient of restitution e must be in [0, 1], got {e!r}")
-    if not lo <= s_start <= hi:
-        raise InputError(f"{name}: s_start = {s_start} is outside the stops [{lo}, {hi}]")
-    s = model.state(f"{name}_s", start=float(s_start))
-    v = model.state(f"{name}_v", start=float(v_start))
-    f = model.algebraic(f"{name}_f")
-    model.equation(model.der(s), v, name=f"{name}.v")
-    model.equation(m * model.der(v), force - f, name=f"{name}.newton")
-    sym = add_friction(
-        model, v, f, friction, name=f"{name}_friction", mode_start=float(np.sign(v_start)), can_start=(hi - s, s - lo)
-    )
-    after = 0.0 if e == 0.0 else -sym.mode  # bounce: sliding the other way; e = 0: stuck at the stop
-    model.when(s - hi, reinit={s: hi, v: -e * v}, assign={sym.mode: after}, name=f"{name}.stop_max")
-    model.when(lo - s, reinit={s: lo, v: -e * v}, assign={sym.mode: after}, name=f"{name}.stop_min")
-    return FrictionSymbols(mode=sym.mode, f=sym.f, s=s, v=v)
+
+    m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=1e-300)
+    L = Parameter(0.0, unit="m", description="length of the component, flange_a to flange_b", lb=0.0)
+    smax = Parameter(25.0, unit="m", description="right stop for (right end of) sliding mass")
+    smin = Parameter(-25.0, unit="m", description="left stop for (left end of) sliding mass")
+    F_prop = Parameter(1.0, unit="N.s/m", description="velocity dependent friction", lb=0.0)
+    F_Coulomb = Parameter(5.0, unit="N", description="constant friction: Coulomb force", lb=0.0)
+    F_Stribeck = Parameter(10.0, unit="N", description="Stribeck effect", lb=0.0)
+    fexp = Parameter(2.0, unit="s/m", description="exponential decay", lb=0.0)
+    peak = Parameter(1.0, unit="1", description="maximum static friction / (F_Coulomb + F_Stribeck)", lb=1.0)
+    e = Parameter(0.0, unit="1", description="coefficient of restitution at the stops", lb=0.0, ub=1.0)
+    v_support = Parameter(0.0, unit="m/s", description="velocity of the friction surface (belt)")
+    s = State(unit="m", description="absolute position of the centre of the component")
+    v = State(unit="m/s", description="absolute velocity of the component")
+    f = Variable(unit="N", description="friction force, positive if opposing a positive relative velocity")
+
+    def equations(self) -> None:
+        """Rigid flanges, Newton's law with friction, the friction state machine and the stops."""
+        self.equation(self.flange_a.s, self.s - self.L / 2, name="s_a")
+        self.equation(self.flange_b.s, self.s + self.L / 2, name="s_b")
+        self.equation(self.flange_a.v, self.v, name="v_a")
+        self.equation(self.flange_b.v, self.v, name="v_b")
+        self.equation(self.der(self.s), self.v, name="kinematics")
+        self.equation(self.m * self.der(self.v), self.flange_a.f + self.flange_b.f - self.f, name="newton")
+        lo, hi = float(self._values["smin"][0] + self._values["L"][0] / 2), float(self._values["smax"][0] - self._values["L"][0] / 2)
+        if lo > hi:
+            raise InputError(f"the stops leave no room: smin + L/2 = {lo} > smax - L/2 = {hi}")
+        start = self._attributes["s"]["start"]
+        s0 = 0.0 if start is None else float(start[0])
+        if not lo <= s0 <= hi:
+            raise InputError(f"the start position s = {s0} is outside the stops [{lo}, {hi}]")
+        vstart = self._attributes["v"]["start"]
+        v_rel0 = (0.0 if vstart is None else float(vstart[0])) - float(self._values["v_support"][0])
+        pre = f"{self.path}." if self.path else ""
+        scratch = self._context().scratch
+
+        def law(expr: ca.SX) -> None:
+            self.equation(expr, 0.0, name="friction")
+            mark_der_substituted(scratch, f"{pre}friction")
+
+        def sliding(v: ca.SX, direction: ca.SX) -> ca.SX:
+            return stribeck_force(v, direction, self.F_prop, self.F_Coulomb, self.F_Stribeck, self.fexp)
+
+        s_lo, s_hi = self.smin + self.L / 2, self.smax - self.L / 2
+        f0_max = self.peak * (self.F_Coulomb + self.F_Stribeck)
+        v_rel = self.v - self.v_support
+        mode = _state_machine(
+            scratch, law, pre, f"{pre}mode", v_rel, self.der(self.v), self.f, sliding, f0_max,
+            (s_hi - self.s, self.s - s_lo), float(np.sign(v_rel0)),
+        )
+        v_post = -self.e * self.v
+        after = ca.sign(v_post - self.v_support)  # e = 0, support at rest: 0, stuck at the stop
+        declare_when(scratch, self.s - s_hi, reinit={self.s: s_hi, self.v: v_post}, assign={mode: after}, name=f"{pre}stop_max")
+        declare_when(scratch, s_lo - self.s, reinit={self.s: s_lo, self.v: v_post}, assign={mode: after}, name=f"{pre}stop_min")
+        self.output("a", self.der(self.v))
