@@ -166,6 +166,9 @@ class PositionServo(Component):
         Speed-loop gain [N m s/rad], >= 0.
     T : float, optional
         Reference filter time constant [s], > 0.
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     kp = Parameter(10.0, unit="N.m/rad", description="position-loop stiffness Kv*Kp", lb=0.0)

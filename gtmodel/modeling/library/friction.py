@@ -276,6 +276,9 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         Coefficient of restitution at the stops, in [0, 1] (default 0).
     v_support : float, optional
         Velocity of the friction surface [m/s] (default 0).
+    **modifiers
+        Further modifiers (start values of the states ``s``, ``v``), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=1e-300)
