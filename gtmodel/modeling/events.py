@@ -103,6 +103,7 @@ class _When:
     reinit: list[tuple[str, list[int], ca.SX]]
     assign: list[tuple[str, ca.SX]]
     initial: bool = False
+    assume: dict[str, float] = field(default_factory=dict)  # algebraic name -> value in ``assign``
 
 
 @dataclass
@@ -378,8 +379,11 @@ class _EventSimulator:
                 base = dae.x_vars[vname].start
                 for k, i in enumerate(idx):
                     xn[base + i] = rhs(val[k if val.numel() > 1 else 0])
+            hypo = [(dae.z[dae.z_vars[k].start], v) for k, v in w.assume.items()]
             for vname, val in w.assign:
-                pn[dae.p_vars[vname].start] = rhs(val)
+                pn[dae.p_vars[vname].start] = ca.substitute(
+                    rhs(val), ca.vertcat(*[h for h, _ in hypo]), ca.vertcat(*[v for _, v in hypo])
+                ) if hypo else rhs(val)
             self.actions.append(ca.Function(f"when_action{len(self.actions)}", args, [xn, pn], argn, ["x_post", "p_post"]))
         if dae.nz:
             tz, xz, uz, pz = dae.t, dae.x, dae.u, dae.p

@@ -34,6 +34,7 @@ import numpy as np
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
+from gtmodel.modeling.discontinuities import sign_modes
 from gtmodel.modeling.events import EventSpec, declare_mode, declare_when, simulate_events
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
 
@@ -644,8 +645,9 @@ class Model:
 
         {simulate_returns}
         """
-        if self._events is not None and self._events.whens:
-            return simulate_events(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+        model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
+        if model._events is not None and model._events.whens:
+            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
 
     # ------------------------------------------------------------------ events

@@ -11,7 +11,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.errors import ConvergenceError, InputError, ModelError
+from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Component, Model, connect
 from gtmodel.modeling.library import translational as tr
 from gtmodel.modeling.library.friction import MassWithStopAndFriction, Stribeck, add_friction
@@ -48,21 +48,6 @@ def test_belt_stick_slip_matches_closed_form():
     names = ["friction.start_backward", "friction.stuck_backward"] * 3 + ["friction.start_backward"]
     assert [e.name for e in res.events] == names
     np.testing.assert_allclose([e.t for e in res.events], ref, rtol=0, atol=EVENT_TOL)
-
-
-def coulomb_cart_with_sign():
-    m = Model("cart")
-    x = m.state("x")
-    v = m.state("v", start=1.0)
-    m.equation(m.der(x), v)
-    m.equation(m.der(v), -MU_G * ca.sign(v))
-    return m
-
-
-def test_sign_coulomb_friction_fails_without_events():
-    # reference: the observation, kept as the motivation of the event version below
-    with pytest.raises(ConvergenceError, match="IDA_TOO_MUCH_WORK"):
-        coulomb_cart_with_sign().simulate(np.linspace(0.0, 10.0, 101))
 
 
 def test_exact_coulomb_cart_stops_and_sticks_with_events():
