@@ -21,8 +21,10 @@ A hybrid model in the Modelica sense (Modelica Language Specification 3.6, secti
 The simulation (:func:`simulate_events`) is a root-finding restart loop around SUNDIALS:
 
 1. Integrate (IDAS or CVODES through ``casadi.integrator``, time scaled to ``[0, 1]`` so
-   that one integrator serves every interval) over the next output interval, sampling the
-   conditions at sub-steps of at most ``event_step``.
+   that one integrator serves every window with the same layout of output times) over the
+   following output intervals with the same input, in one run (a restart at every output
+   time would cost accuracy: 3e-6 s instead of 1e-7 s on the stick-slip test at
+   ``rtol = 1e-8``), sampling the conditions at least every ``event_step``.
 2. At the first sub-step where a condition crossed zero, find the event time with
    :func:`scipy.optimize.brentq` on the condition along the re-integrated trajectory
    (``xtol = event_tol``); its accuracy is the integration accuracy divided by the slope
@@ -32,15 +34,19 @@ The simulation (:func:`simulate_events`) is a root-finding restart loop around S
 
 A condition that goes positive and back within one sub-step is missed (as with SciPy's
 ``solve_ivp``, which checks once per step); make ``event_step`` smaller than the shortest
-phase. A condition already positive at the start does not fire (edge semantics).
+phase. A condition already positive at the start does not fire (edge semantics) unless
+its clause is declared ``initial=True``. ``sign()`` in the equations is switched by events
+too (:mod:`gtmodel.modeling.discontinuities`, applied by :meth:`Model.simulate`).
 
 Why not CasADi's own event support (DAE field ``"zero"`` with option ``"transition"``,
-experimental in 3.8): measured on ``x'' = -x`` with ``zero = x`` in casadi 3.8.2 (the
-script is described in the final report of this change), it stops with ``CV_ILL_INPUT`` /
-``IDA_ILL_INPUT`` ("tout too far back in direction of integration") whenever an output
-interval holds more than a few steps (10 s in one or ten intervals), fires only on
-positive-to-negative crossings (casadi issue #4393), and on a 1001-point grid at
-``reltol = 1e-10`` places the event 2e-8 s off, where the loop here is within 1e-11 s.
+experimental in 3.8): measured in casadi 3.8.2 on ``x'' = -x``, ``x(0) = 1``, ``zero = x``
+over 10 s (event times ``pi/2 + k pi``), with CVODES and IDAS alike, it stops with
+``CV_ILL_INPUT`` / ``IDA_ILL_INPUT`` ("tout too far back in direction of integration")
+when the 10 s are one or ten output intervals, and runs only on a fine output grid (1001
+points), where it places the event at ``5 pi / 2`` 2e-8 s off at ``reltol = 1e-10``; it fires on
+positive-to-negative crossings only (casadi issue #4393). The loop here, on the same
+problem (``when(-x)``, CVODES, ``rtol = 1e-10``), is within 7e-10 s on 2, 11 or 1001
+output points.
 """
 
 from __future__ import annotations
@@ -412,15 +418,17 @@ class _EventSimulator:
         self._cond_maps: dict[int, ca.Function] = {}
 
     # -------------------------------------------------------------- numeric helpers
-    def integrate(self, k: int, tc: float, h: float, x: np.ndarray, z: np.ndarray, p: np.ndarray, u: np.ndarray):
-        """States and algebraics at ``tc + h * i / k``, ``i = 1..k``: arrays ``(nx, k)``, ``(nz, k)``."""
-        if k not in self._integrators:
-            grid = list(np.linspace(0.0, 1.0, k + 1)[1:])
-            self._integrators[k] = ca.integrator(
-                f"event_integrator{k}", self.plugin, self.ddict, 0.0, grid, self.opts
-            )
+    def integrate(self, fracs: tuple[float, ...], tc: float, h: float, x: np.ndarray, z: np.ndarray, p: np.ndarray, u: np.ndarray):
+        """States and algebraics at ``tc + h * fracs`` (increasing, last 1): ``(nx, k)``, ``(nz, k)``."""
+        F = self._integrators.get(fracs)
+        if F is None:  # one integrator per output layout (a uniform grid needs one), last 64 kept
+            if len(self._integrators) >= 64:
+                self._integrators.pop(next(iter(self._integrators)))
+            F = ca.integrator("event_integrator", self.plugin, self.ddict, 0.0, list(fracs), self.opts)
+            self._integrators[fracs] = F
+        k = len(fracs)
         try:
-            res = self._integrators[k](x0=x, z0=z, p=np.concatenate([p, [tc, h]]), u=u)
+            res = F(x0=x, z0=z, p=np.concatenate([p, [tc, h]]), u=u)
         except RuntimeError as exc:
             lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
             raise ConvergenceError(
@@ -469,7 +477,7 @@ class _EventSimulator:
         def phi(s: float) -> float:
             if s <= ta:
                 return sign * ca_[i]
-            xs, zs = self.integrate(1, ta, s - ta, xa, za, p, u)
+            xs, zs = self.integrate((1.0,), ta, s - ta, xa, za, p, u)
             return sign * float(self.conditions(np.array([s]), xs, zs, u, p)[i, 0])
 
         fb = phi(tb)
@@ -597,39 +605,56 @@ def simulate_events(
     if first:  # Modelica initial(): clauses already active at the start
         xv, zv, pv, c_prev, events = sim.fire(float(t[0]), xv, zv, pv, u_int[0], first, max_event_iter)
         xs[0], zs[0] = xv, zv
-    for j in range(n - 1):
-        tc, te, uj = float(t[j]), float(t[j + 1]), u_int[j]
-        while te - tc > tol:
-            k = max(1, math.ceil((te - tc) / step - 1e-9))
-            xk, zk = sim.integrate(k, tc, te - tc, xv, zv, pv, uj)
-            tk = tc + (te - tc) * np.arange(1, k + 1) / k
-            ck = sim.conditions(tk, xk, zk, uj, pv)
-            prev = np.column_stack([c_prev, ck[:, :-1]])
-            hit = _crossed(prev, ck, sim.direction[:, None])
-            if not hit.any():
-                xv, zv, c_prev, tc = xk[:, -1], zk[:, -1], ck[:, -1], te
-                break
-            s = int(np.nonzero(hit.any(axis=0))[0][0])  # first sub-step with a crossing
-            ta = tc if s == 0 else float(tk[s - 1])
-            xa, za = (xv, zv) if s == 0 else (xk[:, s - 1], zk[:, s - 1])
-            roots = {int(i): sim.locate(ta, float(tk[s]), xa, za, pv, uj, prev[:, s], int(i), tol) for i in np.nonzero(hit[:, s])[0]}
-            t_ev = min(roots.values())
-            fired = sorted(i for i, r in roots.items() if r <= t_ev + tol)
-            if t_ev > ta:
-                xe, ze = sim.integrate(1, ta, t_ev - ta, xa, za, pv, uj)
-                xv, zv = xe[:, 0], ze[:, 0]
-            else:
-                xv, zv = xa, za
-            xv, zv, pv, c_prev, recs = sim.fire(t_ev, xv, zv, pv, uj, fired, max_event_iter)
-            events += recs
-            _log.debug("model %s: events %s at t = %.12g s", model.name, [r.name for r in recs], t_ev)
-            if len(events) > max_events:
-                raise ConvergenceError(
-                    f"model {model.name!r}: more than max_events = {max_events} events by t = {t_ev:.12g} s "
-                    f"(the last: {[r.name for r in events[-4:]]}); chattering or Zeno behaviour?"
-                )
-            tc = t_ev
-        xs[j + 1], zs[j + 1], ps[j + 1] = xv, zv, pv
+    j, tc = 0, float(t[0])  # grid points 0..j are stored; tc in [t[j], t[j+1])
+    while j < n - 1:
+        # one window: the following grid intervals with the same input (one integrator run,
+        # no restarts at the output times), conditions sampled at least every `step`
+        big = j + 1
+        while big < n - 1 and np.array_equal(u_int[big], u_int[j]):
+            big += 1
+        uj, pts, at = u_int[j], [], {}
+        lo = tc
+        for i in range(j + 1, big + 1):
+            k = max(1, math.ceil((t[i] - lo) / step - 1e-9))
+            pts.extend(lo + (t[i] - lo) * np.arange(1, k + 1) / k)
+            at[i], lo = len(pts) - 1, float(t[i])
+        tk, h = np.array(pts), float(t[big]) - tc
+        fracs = tuple(np.round((tk[:-1] - tc) / h, 14)) + (1.0,)
+        xk, zk = sim.integrate(fracs, tc, h, xv, zv, pv, uj)
+        ck = sim.conditions(tk, xk, zk, uj, pv)
+        prev = np.column_stack([c_prev, ck[:, :-1]])
+        hit = _crossed(prev, ck, sim.direction[:, None])
+        s = int(np.nonzero(hit.any(axis=0))[0][0]) if hit.any() else len(tk)  # first sample past a crossing
+        for i, idx in at.items():
+            if idx < s:
+                xs[i], zs[i], ps[i] = xk[:, idx], zk[:, idx], pv
+                j = i
+        if s == len(tk):
+            xv, zv, c_prev, tc = xk[:, -1], zk[:, -1], ck[:, -1], float(t[big])
+            continue
+        ta = tc if s == 0 else float(tk[s - 1])
+        xa, za = (xv, zv) if s == 0 else (xk[:, s - 1], zk[:, s - 1])
+        roots = {int(i): sim.locate(ta, float(tk[s]), xa, za, pv, uj, prev[:, s], int(i), tol) for i in np.nonzero(hit[:, s])[0]}
+        t_ev = min(roots.values())
+        fired = sorted(i for i, r in roots.items() if r <= t_ev + tol)
+        if t_ev > ta:
+            xe, ze = sim.integrate((1.0,), ta, t_ev - ta, xa, za, pv, uj)
+            xv, zv = xe[:, 0], ze[:, 0]
+        else:
+            xv, zv = xa, za
+        xv, zv, pv, c_prev, recs = sim.fire(t_ev, xv, zv, pv, uj, fired, max_event_iter)
+        events += recs
+        _log.debug("model %s: events %s at t = %.12g s", model.name, [r.name for r in recs], t_ev)
+        if len(events) > max_events:
+            raise ConvergenceError(
+                f"model {model.name!r}: more than max_events = {max_events} events by t = {t_ev:.12g} s "
+                f"(the last: {[r.name for r in events[-4:]]}); chattering or Zeno behaviour?"
+            )
+        tc = t_ev
+        while j < n - 1 and t[j + 1] <= t_ev + tol:  # a grid point at the event: post-event values
+            j += 1
+            xs[j], zs[j], ps[j] = xv, zv, pv
+            tc = max(tc, float(t[j]))
     us = np.vstack([u_int, u_int[-1:]])
     outs = _eval_outputs(dae, t, xs, zs, us, ps)
     _log.debug("simulated model %s with %d events on %d points", model.name, len(events), n)

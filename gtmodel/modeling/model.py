@@ -639,6 +639,11 @@ class Model:
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
+        A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
+        integrated with events (:func:`gtmodel.modeling.events.simulate_events`,
+        :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
+        :attr:`SimulationResult.events`.
+
         Parameters
         ----------
         {simulate_args}
