@@ -35,7 +35,8 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
 from gtmodel.modeling.discontinuities import sign_modes
-from gtmodel.modeling.events import EventSpec, declare_mode, declare_when, simulate_events
+from gtmodel.modeling.event_simulation import simulate_events
+from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
 
 __all__ = ["Model"]
@@ -65,7 +66,7 @@ class _Var:
         return int(self.sym.numel())
 
 
-class Model:
+class Model(EventsMixin):
     """An equation-based model (Modelica-inspired) built from CasADi SX symbols.
 
     Parameters
@@ -654,57 +655,6 @@ class Model:
         if model._events is not None and model._events.whens:
             return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
-
-    # ------------------------------------------------------------------ events
-    def mode(self, name: str, start: float = 0.0) -> ca.SX:
-        """Declare a discrete mode variable, constant between events (Modelica ``discrete``).
-
-        See :func:`gtmodel.modeling.events.declare_mode` (it is stored as a parameter,
-        changed only by the ``assign`` of a :meth:`when` clause during simulation).
-
-        Parameters
-        ----------
-        name : str
-            Identifier, unique in the model.
-        start : float, optional
-            Value at the start of a simulation; default 0.
-
-        Returns
-        -------
-        casadi.SX
-            Mode symbol, ``(1, 1)``.
-        """
-        return declare_mode(self, name, start)
-
-    def when(
-        self,
-        condition: Any,
-        reinit: Any = None,
-        assign: Any = None,
-        direction: int = 1,
-        name: str | None = None,
-        initial: bool = False,
-    ) -> None:
-        """Declare a zero-crossing state event (Modelica ``when condition > 0 then ...``).
-
-        See :func:`gtmodel.modeling.events.declare_when` for the semantics and errors.
-
-        Parameters
-        ----------
-        condition : casadi.SX
-            Scalar zero-crossing function of the model's variables.
-        reinit : mapping or sequence of pairs, optional
-            ``state symbol -> new value`` (Modelica ``reinit``).
-        assign : mapping or sequence of pairs, optional
-            ``mode symbol -> new value``.
-        direction : {1, -1, 0}, optional
-            Crossing direction: 1 rising (default), -1 falling, 0 both.
-        name : str, optional
-            Event name in :attr:`SimulationResult.events`; default ``"when<k>"``.
-        initial : bool, optional
-            Also fire at the start if the condition is positive there; default false.
-        """
-        declare_when(self, condition, reinit, assign, direction, name, initial)
 
 
 def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:

@@ -13,7 +13,7 @@ import pytest
 from gtmodel.errors import ConvergenceError
 from gtmodel.modeling import Model
 from gtmodel.modeling.discontinuities import sign_modes
-from gtmodel.modeling.events import simulate_events
+from gtmodel.modeling.event_simulation import simulate_events
 from gtmodel.modeling.simulation import simulate_model
 
 MU_G = 0.3 * 9.81  # Coulomb deceleration, m/s^2
