@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling.connectors import Connector
 from gtmodel.modeling.dae import _shape_to_size, _vector_value
 
 __all__ = ["Parameter", "Variable", "State", "Input"]
@@ -236,3 +237,22 @@ class Input(Variable):
     """
 
     kind = "input"
+
+
+class _ComponentBase:
+    """Marker base of :class:`~gtmodel.modeling.components.Component` (internal)."""
+
+
+_DECLARATIONS = (Parameter, Variable, Connector, _ComponentBase)
+
+
+def _declarations(cls: type) -> dict[str, Any]:
+    """Declarations of a component class (base classes first; a redeclaration replaces)."""
+    found: dict[str, Any] = {}
+    for klass in reversed(cls.__mro__):
+        for name, value in vars(klass).items():
+            if isinstance(value, _DECLARATIONS):
+                found[name] = value
+            elif name in found and not name.startswith("__"):
+                found.pop(name)  # redefined as something else by a subclass
+    return found

@@ -109,7 +109,7 @@ def sign_modes(model: Any, sliding: bool = True) -> Any | None:
     new._outputs = dict(model._outputs)
     new._der_substituted = set(model._der_substituted)
     spec = model._events
-    new._events = EventSpec(list(spec.modes), list(spec.whens), set(spec.der_labels)) if spec else None
+    new._events = EventSpec(list(spec.modes), list(spec.whens)) if spec else None
     new._equations = list(zip(labels, new_exprs[: len(labels)]))
     states = [v for v in model._vars.values() if v.kind == "state"]
     x = ca.vertcat(*[v.sym for v in states]) if states else ca.SX(0, 1)

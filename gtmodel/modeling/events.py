@@ -39,8 +39,6 @@ __all__ = [
     "EventsMixin",
     "declare_mode",
     "declare_when",
-    "mark_der_substituted",
-    "transfer_events",
 ]
 
 
@@ -89,14 +87,10 @@ class EventSpec:
         Names of the mode variables (parameters changed at events), in declaration order.
     whens : list
         The when-clauses, in declaration order.
-    der_labels : set of str
-        Labels of equations declared by components with ``der()`` standing for the ODE
-        right-hand side: :meth:`Model.equation` with such a label is ``substitute_der``.
     """
 
     modes: list[str] = field(default_factory=list)
     whens: list[_When] = field(default_factory=list)
-    der_labels: set[str] = field(default_factory=set)
 
 
 def _spec(model: Any) -> EventSpec:
@@ -254,69 +248,6 @@ def declare_when(
         model.check_symbols(val, f"{what} assign({vname})")
         assigns.append((vname, val))
     spec.whens.append(_When(label, cond, int(direction), reinits, assigns, bool(initial)))
-
-
-def mark_der_substituted(model: Any, label: str) -> None:
-    """Mark the equation labelled ``label`` as ``substitute_der`` when events are transferred.
-
-    A component declares its equations on a scratch model and the final model is built
-    later (:func:`transfer_events`); this records the label until then.
-
-    Parameters
-    ----------
-    model : Model
-        The scratch model of a component flattening.
-    label : str
-        The full label of the equation (``"path.name"``).
-    """
-    _spec(model).der_labels.add(label)
-
-
-def transfer_events(source: Any, target: Any, old: ca.SX, new: ca.SX) -> tuple[ca.SX, ca.SX]:
-    """Re-declare the modes, when-clauses and ``substitute_der`` labels of one model on another.
-
-    Used when components are flattened (:mod:`gtmodel.modeling.components`): their events
-    are declared on the scratch model, and the final model has new symbols. Call it after
-    the variables and before the equations are declared on ``target``.
-
-    Parameters
-    ----------
-    source : Model
-        The model the events were declared on.
-    target : Model
-        The model receiving them, with the variables (but not yet the equations) declared.
-    old, new : casadi.SX
-        Column vectors of ``source`` symbols (including ``der()`` symbols) and the
-        ``target`` symbols that replace them, element by element.
-
-    Returns
-    -------
-    tuple of casadi.SX
-        ``(old, new)`` extended by the mode symbols, for substituting the equations.
-
-    Raises
-    ------
-    ModelError
-        If a name is already declared on ``target``.
-    """
-    spec = source._events
-    if spec is None:
-        return old, new
-    olds, news = [old], [new]
-    for name in spec.modes:
-        olds.append(source._vars[name].sym)
-        news.append(declare_mode(target, name, float(source._vars[name].start[0])))
-    o, n = ca.vertcat(*olds), ca.vertcat(*news)
-
-    def sub(e: ca.SX) -> ca.SX:
-        return ca.substitute(e, o, n)
-
-    for w in spec.whens:
-        reinit = [(sub(source._vars[v].sym[idx]), sub(val)) for v, idx, val in w.reinit]
-        assign = [(sub(source._vars[v].sym), sub(val)) for v, val in w.assign]
-        declare_when(target, sub(w.condition), reinit, assign, w.direction, w.name, w.initial)
-    _spec(target).der_labels |= spec.der_labels
-    return o, n
 
 
 class EventsMixin:

@@ -378,7 +378,7 @@ class Model(EventsMixin):
                 f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
                 "only equations linear in der() are supported"
             )
-        if substitute_der or (self._events is not None and label in self._events.der_labels):
+        if substitute_der:
             self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
 

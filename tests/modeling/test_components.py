@@ -117,6 +117,28 @@ def test_extends_inherits_declarations_and_equations():
     np.testing.assert_allclose(res.z["spring.energy"], 4.5 * (0.1 * np.cos(3.0 * t)) ** 2, atol=SIM_TOL)
 
 
+def test_parameter_bound_to_the_enclosing_component():
+    # closed form: inertia J behind a gear n on a spring c: w = sqrt(c / (n^2 J))
+    class Geared(Component):
+        n = Parameter(5.0, unit="1", description="gear ratio")
+        motor = rot.Inertia(J=0.01, phi=1.0)
+        gear = rot.IdealGear(ratio=n)
+        spring = rot.Spring(c=50.0)
+        fixed = rot.Fixed()
+
+        def equations(self):
+            connect(self.motor.flange_b, self.gear.flange_a)
+            connect(self.gear.flange_b, self.spring.flange_a)
+            connect(self.spring.flange_b, self.fixed.flange)
+
+    model = Geared(n=2.0).to_model()
+    assert "n" in model.variables("parameter") and "gear.ratio" not in model.variables("parameter")
+    assert Geared(n=2.0).parameter_values()["gear.ratio"][0] == 2.0
+    t = np.linspace(0.0, 1.0, 11)
+    res = model.simulate(t, p={"n": 4.0})
+    np.testing.assert_allclose(res.x["motor.phi"], np.cos(np.sqrt(50.0 / (16.0 * 0.01)) * t), atol=SIM_TOL)
+
+
 def test_replacing_a_sub_component():
     # closed form: a spring-damper instead of the spring, d = 0 gives the same cos(3 t)
     osc = Oscillator(spring=tr.SpringDamper(c=9.0, d=0.0))
@@ -129,6 +151,25 @@ def test_flattened_model_is_a_plain_model():
     model = Oscillator().to_model("osc")
     assert isinstance(model, Model) and model.name == "osc"
     assert model.outputs.keys() == {"mass.a"}
+
+
+def test_model_call_reaches_the_flattened_model():
+    # a component declares an extra algebraic variable and an output through the Model API;
+    # closed form: the spring force of the oscillator, -c x = -4 * 0.1 cos(2 t)
+    class Probe(Component):
+        osc = Oscillator()
+
+        def equations(self):
+            force = self.model_call("algebraic", "probe_force")
+            self.equation(force, -self.osc.spring.f)
+            self.model_call("output", "probe_double", 2.0 * force)
+
+    model = Probe().to_model()
+    assert "probe_force" in model.variables("algebraic")
+    t = np.linspace(0.0, 1.0, 11)
+    res = model.simulate(t)
+    np.testing.assert_allclose(res.z["probe_force"], -0.4 * np.cos(2.0 * t), atol=SIM_TOL)
+    np.testing.assert_allclose(res.outputs["probe_double"], -0.8 * np.cos(2.0 * t), atol=SIM_TOL)
 
 
 # ---------------------------------------------------------------------- connection semantics
@@ -333,6 +374,12 @@ BAD = [
      r"component <root> \(BadCase\): error in equations\(\): Matrix product with incompatible dimensions"),
     ("python error", lambda: _flatten_with(lambda c: c.equation(c.mass.nothing, 0.0)), ModelError,
      r"component <root> \(BadCase\): error in equations\(\): 'Mass' object has no attribute 'nothing'"),
+    ("foreign binding", lambda: type("Loose", (Component,), {"gear": rot.IdealGear(ratio=Parameter(2.0))})().to_model(),
+     ModelError, r"component gear \(IdealGear\): parameter 'ratio' is bound to a Parameter \(unnamed\) that is not declared"),
+    ("binding size", lambda: rot.IdealGear(ratio=Parameter([1.0, 2.0])), InputError,
+     r"IdealGear\.ratio: bound to a parameter of 2 value\(s\), expected 1"),
+    ("model_call", lambda: _flatten_with(lambda c: c.model_call("_vars")), ModelError,
+     r"model_call: '_vars' is not a public method of Model"),
     ("inner connection", _composite_without_inner_connection, ModelError,
      r"component h \(Hollow\): its connector h\.flange is connected to nothing inside it"),
     ("unbalanced", lambda: _flatten_with(lambda c: c.equation(c.mass.s, 1.0)).flatten(), ModelError,

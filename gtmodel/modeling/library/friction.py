@@ -28,8 +28,8 @@ with a coefficient of restitution ``e`` (Newton's impact law ``v+ = -e v-``). Wi
 until the force pulls it away from the stop.
 
 :class:`MassWithStopAndFriction` is a component on the translational flanges of
-:mod:`gtmodel.modeling.library.translational` (its modes and when-clauses reach the
-flattened model through :func:`gtmodel.modeling.events.transfer_events`);
+:mod:`gtmodel.modeling.library.translational` (its mode, friction law and when-clauses reach the
+flattened model through :meth:`~gtmodel.modeling.components.Component.model_call`);
 :func:`add_friction` declares the same state machine on a plain
 :class:`~gtmodel.modeling.Model` for any relative velocity.
 """
@@ -44,7 +44,6 @@ import numpy as np
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.components import Parameter, State, Variable
-from gtmodel.modeling.events import declare_mode, declare_when, mark_der_substituted
 from gtmodel.modeling.library.translational import PartialTwoFlanges
 from gtmodel.modeling.model import Model
 
@@ -153,19 +152,23 @@ class FrictionSymbols:
 
 
 def _state_machine(
-    model: Model, law: Any, prefix: str, mode_name: str, v: ca.SX, acc: ca.SX, f: ca.SX,
+    declare: Any, prefix: str, mode_name: str, v: ca.SX, acc: ca.SX, f: ca.SX,
     sliding: Any, f0_max: Any, can_start: Any, mode_start: float,
 ) -> ca.SX:
-    """Mode, friction law and the four when-clauses of the MSL friction state machine (module docstring)."""
+    """Mode, friction law and the four when-clauses of the MSL friction state machine (module docstring).
+
+    ``declare(method, *args, **kwargs)`` calls a :class:`Model` method (directly, or through
+    :meth:`Component.model_call`).
+    """
     fwd, bwd = (1.0, 1.0) if can_start is None else can_start
-    mode = declare_mode(model, mode_name, float(mode_start))
-    law(ca.if_else(mode == 0, acc, f - sliding(v, mode)))
-    declare_when(model, ca.if_else(mode == 1, -v, -1.0), assign={mode: 0.0}, name=f"{prefix}stuck_forward")
-    declare_when(model, ca.if_else(mode == -1, v, -1.0), assign={mode: 0.0}, name=f"{prefix}stuck_backward")
+    mode = declare("mode", mode_name, float(mode_start))
+    declare("equation", ca.if_else(mode == 0, acc, f - sliding(v, mode)), 0.0, name=f"{prefix}law", substitute_der=True)
+    declare("when", ca.if_else(mode == 1, -v, -1.0), assign=[(mode, 0.0)], name=f"{prefix}stuck_forward")
+    declare("when", ca.if_else(mode == -1, v, -1.0), assign=[(mode, 0.0)], name=f"{prefix}stuck_backward")
     start_fwd = ca.if_else(ca.logic_and(mode == 0, fwd > 0), f - f0_max, -1.0)
     start_bwd = ca.if_else(ca.logic_and(mode == 0, bwd > 0), -f - f0_max, -1.0)
-    declare_when(model, start_fwd, assign={mode: 1.0}, name=f"{prefix}start_forward", initial=True)
-    declare_when(model, start_bwd, assign={mode: -1.0}, name=f"{prefix}start_backward", initial=True)
+    declare("when", start_fwd, assign=[(mode, 1.0)], name=f"{prefix}start_forward", initial=True)
+    declare("when", start_bwd, assign=[(mode, -1.0)], name=f"{prefix}start_backward", initial=True)
     return mode
 
 
@@ -231,11 +234,11 @@ def add_friction(
     if not isinstance(acc, ca.SX) or acc.numel() != 1:
         raise InputError(f"{name}: a_rel must be a scalar SX expression, got {a_rel!r}")
 
-    def law(expr: ca.SX) -> None:
-        model.equation(expr, name=f"{name}.law", substitute_der=True)
+    def declare(method: str, *args: Any, **kwargs: Any) -> Any:
+        return getattr(model, method)(*args, **kwargs)
 
     mode = _state_machine(
-        model, law, f"{name}.", f"{name}_mode", v_rel, acc, ca.SX(f), friction.sliding, friction.f0_max, None, mode_start
+        declare, f"{name}.", f"{name}_mode", v_rel, acc, ca.SX(f), friction.sliding, friction.f0_max, None, mode_start
     )
     return FrictionSymbols(mode=mode, f=ca.SX(f))
 
@@ -314,11 +317,6 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         vstart = self._attributes["v"]["start"]
         v_rel0 = (0.0 if vstart is None else float(vstart[0])) - float(self._values["v_support"][0])
         pre = f"{self.path}." if self.path else ""
-        scratch = self._context().scratch
-
-        def law(expr: ca.SX) -> None:
-            self.equation(expr, 0.0, name="friction")
-            mark_der_substituted(scratch, f"{pre}friction")
 
         def sliding(v: ca.SX, direction: ca.SX) -> ca.SX:
             return stribeck_force(v, direction, self.F_prop, self.F_Coulomb, self.F_Stribeck, self.fexp)
@@ -327,11 +325,12 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         f0_max = self.peak * (self.F_Coulomb + self.F_Stribeck)
         v_rel = self.v - self.v_support
         mode = _state_machine(
-            scratch, law, pre, f"{pre}mode", v_rel, self.der(self.v), self.f, sliding, f0_max,
+            self.model_call, pre, f"{pre}mode", v_rel, self.der(self.v), self.f, sliding, f0_max,
             (s_hi - self.s, self.s - s_lo), float(np.sign(v_rel0)),
         )
         v_post = -self.e * self.v
         after = ca.sign(v_post - self.v_support)  # e = 0, support at rest: 0, stuck at the stop
-        declare_when(scratch, self.s - s_hi, reinit={self.s: s_hi, self.v: v_post}, assign={mode: after}, name=f"{pre}stop_max")
-        declare_when(scratch, s_lo - self.s, reinit={self.s: s_lo, self.v: v_post}, assign={mode: after}, name=f"{pre}stop_min")
+        for name, cond, stop in (("stop_max", self.s - s_hi, s_hi), ("stop_min", s_lo - self.s, s_lo)):
+            reinit = [(self.s, stop), (self.v, v_post)]
+            self.model_call("when", cond, reinit=reinit, assign=[(mode, after)], name=f"{pre}{name}")
         self.output("a", self.der(self.v))

@@ -69,6 +69,27 @@ def test_damper_speed_decays(cls, kw):
     np.testing.assert_allclose(res.x["wheel.w"], 10.0 * np.exp(-2.0 * res.t), atol=SIM_TOL)
 
 
+def test_torsional_spring_damper_matches_damped_oscillator():
+    # closed form: underdamped J phi'' + d phi' + c phi = 0, phi(0) = 1, phi'(0) = 0
+    c, d, J = 4.0, 0.4, 2.0
+
+    class Torsion(Component):
+        fixed = rot.Fixed()
+        shaft = rot.SpringDamper(c=c, d=d)
+        disc = rot.Inertia(J=J, phi=1.0)
+
+        def equations(self):
+            connect(self.fixed.flange, self.shaft.flange_a)
+            connect(self.shaft.flange_b, self.disc.flange_a)
+
+    t = np.linspace(0.0, 10.0, 101)
+    res = Torsion().to_model().simulate(t)
+    w0, zeta = np.sqrt(c / J), d / (2.0 * np.sqrt(c * J))
+    wd = w0 * np.sqrt(1.0 - zeta**2)
+    phi = np.exp(-zeta * w0 * t) * (np.cos(wd * t) + zeta * w0 / wd * np.sin(wd * t))
+    np.testing.assert_allclose(res.x["disc.phi"], phi, atol=SIM_TOL)
+
+
 def test_rolling_wheel_converts_torque_to_force():
     # closed form: torque tau on a pulley of radius r pulls the mass with tau / r: s = tau t^2 / (2 r m)
     class Belt(Component):
