@@ -6,6 +6,8 @@ whose class attributes declare
 * parameters with defaults, units and descriptions: ``c = Parameter(1e5, unit="N/m")``;
 * variables: ``s = State(unit="m")`` (differentiated, ``der(s)`` allowed),
   ``f = Variable(unit="N")`` (algebraic), ``u = Input(unit="N")`` (input of the model);
+* structural parameters (plain Python values that choose equations):
+  ``stateSelect = Structural("default", choices=("default", "never"))``;
 * connectors: ``flange_a = Flange_a()`` (:mod:`gtmodel.modeling.connectors`);
 * sub-components: ``belt = SpringDamper(c=2e5)``, named hierarchically (``"axis1.belt.c"``),
 
@@ -42,9 +44,11 @@ nothing at its parent's level is zero (and so is the flow of the flattened compo
 own connectors: free ends). A potential variable that no component equation or output
 uses in its whole (cross-level) connection class is dropped with its equalities: so the
 velocity of a massless node between two springs does not make the model
-under-determined. Every connector variable that is kept is an algebraic variable of the
-model; the connection equalities are alias equations that the structural passes may
-eliminate.
+under-determined. A component whose ``stateSelect`` is ``"never"`` declares its states
+as algebraic variables (Modelica ``StateSelect.never``). Every connector variable that
+is kept is an algebraic variable of the model; the connection equalities are alias
+equations that the structural passes may eliminate. Components reach the rest of the
+:class:`Model` API (initial equations, events) through :meth:`Component.model_call`.
 """
 
 from __future__ import annotations
@@ -58,11 +62,11 @@ import numpy as np
 
 from gtmodel.errors import GtModelError, InputError, ModelError
 from gtmodel.modeling.connectors import Connector
-from gtmodel.modeling.declarations import Input, Parameter, State, Variable, _ComponentBase, _declarations
+from gtmodel.modeling.declarations import Input, Parameter, State, Structural, Variable, _ComponentBase, _declarations
 from gtmodel.modeling.flattening import _ACTIVE, _Flattening
 from gtmodel.modeling.model import Model
 
-__all__ = ["Parameter", "Variable", "State", "Input", "Component", "connect"]
+__all__ = ["Parameter", "Variable", "State", "Input", "Structural", "Component", "connect"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -111,6 +115,11 @@ class Component(_ComponentBase):
             for name, d in _declarations(cls).items()
             if isinstance(d, Parameter)
         ]
+        params += [
+            inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=d.default)
+            for name, d in _declarations(cls).items()
+            if isinstance(d, Structural)
+        ]
         params.append(inspect.Parameter("modifiers", inspect.Parameter.VAR_KEYWORD))
         cls.__signature__ = inspect.Signature(params)
 
@@ -139,6 +148,8 @@ class Component(_ComponentBase):
                     self._values[name] = value
                 else:
                     self._values[name] = decl.validate(value, where)
+            elif isinstance(decl, Structural):
+                self._values[name] = decl.validate(modifiers.get(name, decl.default), where)
             elif isinstance(decl, Variable):
                 self._attributes[name] = decl.modify(modifiers[name], where) if name in modifiers else dict(decl.attributes)
             elif isinstance(decl, Connector):
@@ -171,7 +182,8 @@ class Component(_ComponentBase):
         dict of str to numpy.ndarray
             Hierarchical name relative to this component (``"belt.c"``) -> value.
         """
-        out = {k: self._value(k) for k in self._values}
+        decls = _declarations(type(self))
+        out = {k: self._value(k) for k in self._values if isinstance(decls.get(k), Parameter)}
         for name, sub in self.components().items():
             out.update({f"{name}.{k}": v for k, v in sub.parameter_values().items()})
         return out

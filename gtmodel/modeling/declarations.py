@@ -23,7 +23,7 @@ from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.connectors import Connector
 from gtmodel.modeling.dae import _shape_to_size, _vector_value
 
-__all__ = ["Parameter", "Variable", "State", "Input"]
+__all__ = ["Parameter", "Variable", "State", "Input", "Structural"]
 
 
 class Parameter:
@@ -239,11 +239,76 @@ class Input(Variable):
     kind = "input"
 
 
+class Structural:
+    """A structural parameter: a Python value fixed when the model is built (MTK ``@structural_parameters``).
+
+    Unlike a :class:`Parameter` it is no symbol of the model: ``equations()`` reads the
+    plain value (e.g. to choose equations). The library's ``stateSelect`` is one
+    (Modelica's ``StateSelect``: ``"never"`` makes a mass or inertia stateless, for
+    rigid couplings).
+
+    Parameters
+    ----------
+    default : object
+        Default value.
+    choices : sequence, optional
+        Allowed values (default: any value of the default's type).
+    description : str, optional
+        One-line description.
+
+    Raises
+    ------
+    InputError
+        If the default is not among the choices.
+    """
+
+    def __init__(self, default: Any, choices: Any = None, description: str = "") -> None:
+        self.name = ""
+        self.choices = tuple(choices) if choices is not None else None
+        self.description = description
+        self.default = self.validate(default, "Structural default")
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, instance: Any, owner: type) -> Any:
+        if instance is None:
+            return self
+        return instance._values[self.name]
+
+    def validate(self, value: Any, where: str) -> Any:
+        """Check a value of this structural parameter.
+
+        Parameters
+        ----------
+        value : object
+            Candidate value.
+        where : str
+            Name used in the message.
+
+        Returns
+        -------
+        object
+            ``value``.
+
+        Raises
+        ------
+        InputError
+            If ``value`` is not one of the choices (or not of the default's type).
+        """
+        if self.choices is not None:
+            if value not in self.choices:
+                raise InputError(f"{where}: expected one of {list(self.choices)}, got {value!r}")
+        elif hasattr(self, "default") and not isinstance(value, type(self.default)):
+            raise InputError(f"{where}: expected a {type(self.default).__name__}, got {value!r}")
+        return value
+
+
 class _ComponentBase:
     """Marker base of :class:`~gtmodel.modeling.components.Component` (internal)."""
 
 
-_DECLARATIONS = (Parameter, Variable, Connector, _ComponentBase)
+_DECLARATIONS = (Parameter, Variable, Structural, Connector, _ComponentBase)
 
 
 def _declarations(cls: type) -> dict[str, Any]:

@@ -150,7 +150,7 @@ def test_replacing_a_sub_component():
 def test_flattened_model_is_a_plain_model():
     model = Oscillator().to_model("osc")
     assert isinstance(model, Model) and model.name == "osc"
-    assert model.outputs.keys() == {"mass.a"}
+    assert "mass.a" in model.variables("algebraic") and not model.outputs
 
 
 def test_model_call_reaches_the_flattened_model():
@@ -170,6 +170,46 @@ def test_model_call_reaches_the_flattened_model():
     res = model.simulate(t)
     np.testing.assert_allclose(res.z["probe_force"], -0.4 * np.cos(2.0 * t), atol=SIM_TOL)
     np.testing.assert_allclose(res.outputs["probe_double"], -0.8 * np.cos(2.0 * t), atol=SIM_TOL)
+
+
+class RigidGear(Component):
+    """Torque -- inertia -- gear -- inertia, the second one stateless (rigid coupling)."""
+
+    torque = rot.Torque()
+    motor = rot.Inertia(J=1.0)
+    gear = rot.IdealGear(ratio=4.0)
+    load = rot.Inertia(J=32.0, stateSelect="never")
+
+    def equations(self):
+        connect(self.torque.flange, self.motor.flange_a)
+        connect(self.motor.flange_b, self.gear.flange_a)
+        connect(self.gear.flange_b, self.load.flange_a)
+
+
+def test_rigid_coupling_with_a_stateless_inertia_is_index_1():
+    # closed form: the load reflected to the motor is J2 / ratio^2 = 2: w1 = tau t / (J1 + 2)
+    model = RigidGear().to_model()
+    assert set(model.variables("state")) == {"motor.phi", "motor.w"}
+    res = model.simulate(np.linspace(0.0, 1.0, 5), u=3.0)
+    np.testing.assert_allclose(res.x["motor.w"], 3.0 * res.t / 3.0, atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["load.w"], res.x["motor.w"] / 4.0, atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["load.a"], 0.25, atol=SIM_TOL)
+
+
+def test_rigid_masses_with_a_stateless_mass():
+    # closed form: two masses moved together by F: a = F / (m1 + m2)
+    class Rigid(Component):
+        push = tr.Force()
+        m1 = tr.Mass(m=1.0, L=0.2)
+        m2 = tr.Mass(m=3.0, L=0.2, stateSelect="never")
+
+        def equations(self):
+            connect(self.push.flange, self.m1.flange_a)
+            connect(self.m1.flange_b, self.m2.flange_a)
+
+    res = Rigid().to_model().simulate(np.linspace(0.0, 1.0, 5), u=2.0)
+    np.testing.assert_allclose(res.x["m1.s"], 0.5 * 0.5 * res.t**2, atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["m2.s"], res.x["m1.s"] + 0.2, atol=SIM_TOL)
 
 
 # ---------------------------------------------------------------------- connection semantics
@@ -340,7 +380,7 @@ def _composite_without_inner_connection():
 
 BAD = [
     ("incompatible", lambda: _flatten_with(lambda c: connect(c.mass.flange_a, c.shaft.flange_a)), ModelError,
-     r"incompatible connectors mass\.flange_a \(Flange_a: s, v, f\) and shaft\.flange_a \(Flange_a: phi, w, tau\)"),
+     r"incompatible connectors mass\.flange_a \(Flange_a: s, v, a, f\) and shaft\.flange_a \(Flange_a: phi, w, a, tau\)"),
     ("self", lambda: _flatten_with(lambda c: connect(c.mass.flange_a, c.mass.flange_a)), ModelError,
      r"connect\(mass\.flange_a, mass\.flange_a\): a connector cannot be connected to itself"),
     ("not a connector", lambda: _flatten_with(lambda c: connect(c.mass, c.fixed.flange)), ModelError,
@@ -380,6 +420,10 @@ BAD = [
      r"IdealGear\.ratio: bound to a parameter of 2 value\(s\), expected 1"),
     ("model_call", lambda: _flatten_with(lambda c: c.model_call("_vars")), ModelError,
      r"model_call: '_vars' is not a public method of Model"),
+    ("state select", lambda: tr.Mass(stateSelect="always"), InputError,
+     r"Mass\.stateSelect: expected one of \['default', 'never'\], got 'always'"),
+    ("rigid states", lambda: RigidGear(load={"stateSelect": "default"}).to_model().flatten(), ModelError,
+     r"scalar equations but .* unknowns"),
     ("inner connection", _composite_without_inner_connection, ModelError,
      r"component h \(Hollow\): its connector h\.flange is connected to nothing inside it"),
     ("unbalanced", lambda: _flatten_with(lambda c: c.equation(c.mass.s, 1.0)).flatten(), ModelError,
