@@ -246,8 +246,9 @@ def add_friction(
 class MassWithStopAndFriction(PartialTwoFlanges):
     """Sliding mass with hard stops and Stribeck friction (MSL ``Translational.Components.MassWithStopAndFriction``).
 
-    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2``, ``v = der(s)``,
-    ``m der(v) = flange_a.f + flange_b.f - f`` with the friction force ``f`` of the MSL
+    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2`` (and the velocities and
+    accelerations), ``v = der(s)``, ``a = der(v)``, ``m a = flange_a.f + flange_b.f - f``
+    with the friction force ``f`` of the MSL
     state machine on ``v_rel = v - v_support`` (module docstring); hard stops at
     ``smin + L/2 <= s <= smax - L/2`` with Newton's impact law ``v+ = -e v-``. Declared
     mode ``<path>.mode``, when-clauses ``<path>.stuck_forward``, ``<path>.stuck_backward``,
@@ -297,6 +298,7 @@ class MassWithStopAndFriction(PartialTwoFlanges):
     v_support = Parameter(0.0, unit="m/s", description="velocity of the friction surface (belt)")
     s = State(unit="m", description="absolute position of the centre of the component")
     v = State(unit="m/s", description="absolute velocity of the component")
+    a = Variable(unit="m/s2", description="absolute acceleration of the component")
     f = Variable(unit="N", description="friction force, positive if opposing a positive relative velocity")
 
     def equations(self) -> None:
@@ -305,8 +307,11 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         self.equation(self.flange_b.s, self.s + self.L / 2, name="s_b")
         self.equation(self.flange_a.v, self.v, name="v_a")
         self.equation(self.flange_b.v, self.v, name="v_b")
-        self.equation(self.der(self.s), self.v, name="kinematics")
-        self.equation(self.m * self.der(self.v), self.flange_a.f + self.flange_b.f - self.f, name="newton")
+        self.equation(self.flange_a.a, self.a, name="a_a")
+        self.equation(self.flange_b.a, self.a, name="a_b")
+        self.equation(self.der(self.s), self.v, name="velocity")
+        self.equation(self.der(self.v), self.a, name="acceleration")
+        self.equation(self.m * self.a, self.flange_a.f + self.flange_b.f - self.f, name="newton")
         lo, hi = float(self._values["smin"][0] + self._values["L"][0] / 2), float(self._values["smax"][0] - self._values["L"][0] / 2)
         if lo > hi:
             raise InputError(f"the stops leave no room: smin + L/2 = {lo} > smax - L/2 = {hi}")
@@ -325,7 +330,7 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         f0_max = self.peak * (self.F_Coulomb + self.F_Stribeck)
         v_rel = self.v - self.v_support
         mode = _state_machine(
-            self.model_call, pre, f"{pre}mode", v_rel, self.der(self.v), self.f, sliding, f0_max,
+            self.model_call, pre, f"{pre}mode", v_rel, self.a, self.f, sliding, f0_max,
             (s_hi - self.s, self.s - s_lo), float(np.sign(v_rel0)),
         )
         v_post = -self.e * self.v
@@ -333,4 +338,3 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         for name, cond, stop in (("stop_max", self.s - s_hi, s_hi), ("stop_min", s_lo - self.s, s_lo)):
             reinit = [(self.s, stop), (self.v, v_post)]
             self.model_call("when", cond, reinit=reinit, assign=[(mode, after)], name=f"{pre}{name}")
-        self.output("a", self.der(self.v))

@@ -188,3 +188,19 @@ def _friction_on_state():
 def test_bad_inputs(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+def test_rigidly_coupled_mass_adds_inertia():
+    # reference: a stateless Mass (1 kg) rigidly on the 1 kg sliding mass: Coulomb deceleration
+    # F_c / 2 kg, so v = 1 - (F_c / 2) t until 2 / F_c (the flanges carry the acceleration)
+    class Coupled(Component):
+        body = MassWithStopAndFriction(F_prop=0.0, F_Coulomb=MU_G, F_Stribeck=0.0, fexp=0.0, v=1.0)
+        load = tr.Mass(m=1.0, stateSelect="never")
+
+        def equations(self):
+            connect(self.body.flange_b, self.load.flange_a)
+
+    res = Coupled().to_model().simulate(np.linspace(0.0, 2.0, 201))
+    assert [e.name for e in res.events] == ["body.stuck_forward"]
+    assert abs(res.events[0].t - 2.0 / MU_G) < EVENT_TOL
+    np.testing.assert_allclose(res.z["load.a"][res.t < 0.6], -MU_G / 2.0, atol=1e-8)
