@@ -121,18 +121,19 @@ class _EventSimulator:
             "show_eval_warnings": False,
             "disable_internal_warnings": True,
         }
-        self._integrators: dict[int, ca.Function] = {}
+        self._integrators: dict[tuple[float, ...], ca.Function] = {}
         self._cond_maps: dict[int, ca.Function] = {}
 
     # -------------------------------------------------------------- numeric helpers
     def integrate(self, fracs: tuple[float, ...], tc: float, h: float, x: np.ndarray, z: np.ndarray, p: np.ndarray, u: np.ndarray):
         """States and algebraics at ``tc + h * fracs`` (increasing, last 1): ``(nx, k)``, ``(nz, k)``."""
-        F = self._integrators.get(fracs)
+        key = tuple(np.round(fracs, 13))
+        F = self._integrators.get(key)
         if F is None:  # one integrator per output layout (a uniform grid needs one), last 64 kept
             if len(self._integrators) >= 64:
                 self._integrators.pop(next(iter(self._integrators)))
             F = ca.integrator("event_integrator", self.plugin, self.ddict, 0.0, list(fracs), self.opts)
-            self._integrators[fracs] = F
+            self._integrators[key] = F
         k = len(fracs)
         try:
             res = F(x0=x, z0=z, p=np.concatenate([p, [tc, h]]), u=u)
@@ -326,8 +327,7 @@ def simulate_events(
             pts.extend(lo + (t[i] - lo) * np.arange(1, k + 1) / k)
             at[i], lo = len(pts) - 1, float(t[i])
         tk, h = np.array(pts), float(t[big]) - tc
-        fracs = tuple(np.round((tk[:-1] - tc) / h, 14)) + (1.0,)
-        xk, zk = sim.integrate(fracs, tc, h, xv, zv, pv, uj)
+        xk, zk = sim.integrate(tuple((tk[:-1] - tc) / h) + (1.0,), tc, h, xv, zv, pv, uj)
         ck = sim.conditions(tk, xk, zk, uj, pv)
         prev = np.column_stack([c_prev, ck[:, :-1]])
         hit = _crossed(prev, ck, sim.direction[:, None])
