@@ -641,7 +641,7 @@ class Model(EventsMixin):
         """Integrate the model on a time grid.
 
         A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
-        integrated with events (:func:`gtmodel.modeling.events.simulate_events`,
+        integrated with events (:func:`gtmodel.modeling.event_simulation.simulate_events`,
         :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
         :attr:`SimulationResult.events`.
 
