@@ -59,6 +59,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+import pandas as pd
 
 from gtmodel.errors import GtModelError, InputError, ModelError
 from gtmodel.modeling.connectors import Connector
@@ -187,6 +188,44 @@ class Component(_ComponentBase):
         for name, sub in self.components().items():
             out.update({f"{name}.{k}": v for k, v in sub.parameter_values().items()})
         return out
+
+    def describe(self) -> pd.DataFrame:
+        """A table of the declarations of this component and its sub-components.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per parameter, structural parameter, variable and connector variable,
+            columns ``name`` (hierarchical, relative to this component), ``kind``
+            (``parameter``, ``structural``, ``state``, ``algebraic``, ``input``,
+            ``potential``, ``flow``), ``value`` (parameter value or variable start,
+            ``None`` for connector variables), ``unit`` and ``description``.
+        """
+        rows: list[dict[str, Any]] = []
+
+        def walk(comp: Component, pre: str) -> None:
+            for name, decl in _declarations(type(comp)).items():
+                if isinstance(decl, Parameter):
+                    value = comp._value(name)
+                    rows.append(dict(name=pre + name, kind="parameter", value=value[0] if value.size == 1 else value,
+                                     unit=decl.unit, description=decl.description))
+                elif isinstance(decl, Structural):
+                    rows.append(dict(name=pre + name, kind="structural", value=comp._values[name], unit="",
+                                     description=decl.description))
+                elif isinstance(decl, Variable):
+                    start = comp._attributes[name]["start"]
+                    value = None if start is None else (start[0] if start.size == 1 else start)
+                    kind = "algebraic" if decl.kind == "state" and comp._values.get("stateSelect") == "never" else decl.kind
+                    rows.append(dict(name=pre + name, kind=kind, value=value, unit=decl.unit, description=decl.description))
+            for cname, conn in comp.connectors().items():
+                for var in conn.variables():
+                    rows.append(dict(name=f"{pre}{cname}.{var.name}", kind="flow" if var.is_flow else "potential",
+                                     value=None, unit=var.unit, description=var.description))
+            for sname, sub in comp.components().items():
+                walk(sub, f"{pre}{sname}.")
+
+        walk(self, "")
+        return pd.DataFrame(rows, columns=["name", "kind", "value", "unit", "description"])
 
     def _value(self, name: str) -> np.ndarray:
         value = self._values[name]
@@ -400,7 +439,7 @@ def _instantiate(template: Component, modifier: Any, where: str) -> Component:
     if modifier is None:
         return type(template)(**template._modifiers)
     if isinstance(modifier, dict):
-        return type(template)(**{**template._modifiers, **modifier})
+        return type(template)(**_merge(template._modifiers, modifier))
     if isinstance(modifier, Component):
         need = {k: c.signature() for k, c in template.connectors().items()}
         have = {k: c.signature() for k, c in modifier.connectors().items()}
@@ -412,6 +451,17 @@ def _instantiate(template: Component, modifier: Any, where: str) -> Component:
             )
         return type(modifier)(**modifier._modifiers)
     raise InputError(f"{where}: a sub-component modifier must be a dict of modifiers or a Component, got {modifier!r}")
+
+
+def _merge(inner: dict, outer: dict) -> dict:
+    """Nested modifiers: the outer ones win per name, dicts of sub-components merge (Modelica)."""
+    out = dict(inner)
+    for key, value in outer.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and key in out:
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
 
 
 def connect(a: Connector, b: Connector) -> None:

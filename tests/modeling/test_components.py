@@ -79,6 +79,22 @@ def test_modifier_sets_parameter_and_start_values():
     assert dae.x_lb[dae.x_vars["mass.s"]][0] == -1.0
 
 
+def test_nested_modifiers_merge_with_the_class_ones():
+    # Modelica: Machine(axis2(belt(d=...))) keeps the class modifier belt(c=4e4) of axis2
+    values = Machine(axis2={"belt": {"s_rel0": 0.1}}, axis1={"cart": {"m": 5.0}}).parameter_values()
+    assert values["axis2.belt.c"][0] == 4e4 and values["axis2.belt.s_rel0"][0] == 0.1
+    assert values["axis1.cart.m"][0] == 5.0 and values["axis1.belt.c"][0] == 1e4
+
+
+def test_describe_lists_the_declarations():
+    table = Oscillator(spring={"c": 9.0}).describe()
+    row = table.set_index("name").loc["spring.c"]
+    assert (row["kind"], row["value"], row["unit"]) == ("parameter", 9.0, "N/m")
+    assert table.set_index("name").loc["mass.s", "kind"] == "state"
+    assert table.set_index("name").loc["mass.flange_a.f", "kind"] == "flow"
+    assert RigidGear().describe().set_index("name").loc["load.w", "kind"] == "algebraic"
+
+
 def test_class_template_is_not_shared_between_instances():
     a, b = Oscillator(spring={"c": 9.0}), Oscillator()
     assert a.spring is not b.spring

@@ -64,6 +64,16 @@ def test_damping_ratios_of_the_thesis_poles(thesis, axis):
     np.testing.assert_allclose(-up.real / np.abs(up), thesis.damping_ratios, rtol=0.02)
 
 
+@pytest.mark.xfail(strict=True, reason=(
+    "the thesis' identified D is not symmetric: its damped poles (14.21, 100.56 Hz) lie off its undamped "
+    "modes (13.83, 103.34 Hz); a physical chain with the same modes and damping ratios has |p| at 13.83 "
+    "and 103.32 Hz, 2.8 Hz from the second damped pole"))
+def test_damped_natural_frequencies_of_the_thesis_poles(thesis, axis):
+    # reference: |p| / (2 pi) of the thesis' damped poles, 14.21 and 100.56 Hz
+    poles = linearize(axis.to_model("axis")).poles()
+    np.testing.assert_allclose(_oscillatory_hz(poles), thesis.natural_frequencies_hz, atol=0.5)
+
+
 def test_composed_axis_equals_hand_written_two_mass_model(axis):
     # reference: M x'' + C x' + K x = 0 written by hand (PhysicalModel, standard convention) in
     # the cart coordinate; the composed model adds the reference filter's pole -1/T
