@@ -7,6 +7,8 @@
   components with connectors (Modelica style), flattened into a :class:`Model`.
 * :func:`solve` / :class:`CollocationTranscription` transcribe it by direct collocation
   and solve it with IPOPT, giving an :class:`OptimizationResult`.
+* :func:`structural_simplify` / :func:`check_structure`: alias elimination, structural check
+  and index reduction (Pantelides, dummy derivatives) to an index-1 model.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ from gtmodel.modeling.connectors import Connector, Flow, Potential
 from gtmodel.modeling.dae import FlatDAE, SimulationResult
 from gtmodel.modeling.model import Model
 from gtmodel.modeling.optimization import Optimization
+from gtmodel.modeling.index_reduction import structural_simplify
+from gtmodel.modeling.structure import check_structure
 from gtmodel.modeling.result import OptimizationResult
 from gtmodel.modeling.expressions import (
     Objective,
@@ -33,6 +37,8 @@ __all__ = [
     "FlatDAE",
     "SimulationResult",
     "Optimization",
+    "structural_simplify",
+    "check_structure",
     "OptimizationResult",
     "CollocationTranscription",
     "solve",

@@ -105,9 +105,9 @@ def sign_modes(model: Any, sliding: bool = True) -> Any | None:
     if not args:
         return None
     new = copy.copy(model)
-    new._vars = dict(model._vars)
-    new._outputs = dict(model._outputs)
-    new._der_substituted = set(model._der_substituted)
+    for key, value in vars(model).items():  # the copy's declarations must not reach the model
+        if isinstance(value, (list, dict, set)):
+            setattr(new, key, copy.copy(value))
     spec = model._events
     new._events = EventSpec(list(spec.modes), list(spec.whens)) if spec else None
     new._equations = list(zip(labels, new_exprs[: len(labels)]))

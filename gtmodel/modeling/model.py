@@ -38,6 +38,7 @@ from gtmodel.modeling.discontinuities import sign_modes
 from gtmodel.modeling.event_simulation import simulate_events
 from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
+from gtmodel.modeling.structured_simulation import simulate_structured
 
 __all__ = ["Model"]
 
@@ -99,6 +100,8 @@ class Model(EventsMixin):
         self._outputs: dict[str, ca.SX] = {}
         self._events: EventSpec | None = None  # modes and when-clauses (gtmodel.modeling.events)
         self._der_substituted: set[int] = set()  # equations whose der() stands for the ODE rhs
+        self._initial_equations: list[tuple[str, ca.SX]] = []
+        self._hashes: set[int] = {self._time.element_hash()}  # of every declared symbol element
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -130,6 +133,8 @@ class Model(EventsMixin):
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
+        for s in (sym, var.der) if var.der is not None else (sym,):
+            self._hashes.update(s[i].element_hash() for i in range(size))
         return sym
 
     def parameter(self, name: str, value: Any, shape: Any = None) -> ca.SX:
@@ -324,8 +329,10 @@ class Model(EventsMixin):
         ModelError
             Naming the unknown symbols.
         """
-        known = ca.vertcat(*[ca.vec(s) for s in list(self._known_symbols()) + list(extra)])
-        unknown = [s for s in ca.symvar(expr) if not ca.depends_on(s, known)]
+        # element hashes identify SX symbols (O(1) per symbol; many-component models check
+        # thousands of equations)
+        known = self._hashes | {s[i].element_hash() for s in extra for i in range(s.numel())}
+        unknown = [s for s in ca.symvar(expr) if s.element_hash() not in known]
         if unknown:
             raise ModelError(
                 f"{what}: unknown symbol(s) {_symbol_names(unknown)} not declared by model {self.name!r}"
@@ -381,6 +388,41 @@ class Model(EventsMixin):
         if substitute_der:
             self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
+
+    def initial_equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+        """Add the initial equation ``lhs == rhs`` (Modelica's ``initial equation``).
+
+        Holds at the start time only; :meth:`simulate` then solves the consistent
+        initialisation (:mod:`gtmodel.modeling.initialization`) instead of fixing every
+        state at its start value: the initial equations and the states named in an ``x0``
+        mapping must together fix the model's degrees of freedom. :meth:`flatten` (and so
+        ``Optimization``, which states its own point constraints) ignores them.
+
+        Parameters
+        ----------
+        lhs, rhs : casadi.SX or float or array_like
+            Expressions of declared symbols, ``der()`` symbols and time; same size (or one
+            of them scalar).
+        name : str, optional
+            Label used in error messages; default ``"init<k>"``.
+
+        Raises
+        ------
+        InputError
+            If sizes do not match or MX expressions are passed.
+        ModelError
+            If the equation contains unknown symbols.
+        """
+        label = name or f"init{len(self._initial_equations)}"
+        a = _as_sx(lhs, f"initial equation {label!r} lhs")
+        b = _as_sx(rhs, f"initial equation {label!r} rhs")
+        if a.numel() != b.numel() and a.numel() != 1 and b.numel() != 1:
+            raise InputError(f"initial equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}")
+        res = a - b
+        if res.numel() == 0:
+            raise InputError(f"initial equation {label!r} is empty")
+        self.check_symbols(res, f"initial equation {label!r}")
+        self._initial_equations.append((label, res))
 
     def output(self, name: str, expr: Any) -> ca.SX:
         """Declare a named derived variable (energy, force, ...).
@@ -573,7 +615,8 @@ class Model(EventsMixin):
                 no_z = [z_names[j] for j in range(nz) if Jz[:, j].nnz() == 0]
                 raise ModelError(
                     f"model {self.name!r}: the algebraic equations are not solvable for the algebraic "
-                    f"variables {no_z or z_names} (not index 1); high-index DAEs are not supported"
+                    f"variables {no_z or z_names} (not index 1); flatten() needs an index-1 DAE: "
+                    "reduce it with gtmodel.modeling.structural_simplify(model) (simulate() does)"
                 )
         elif res_a.numel():
             # unreachable by the count check, kept for safety
@@ -588,7 +631,8 @@ class Model(EventsMixin):
         ode = ca.Function(f"{self.name}_ode", args, [f], argn, ["xdot"])
         alg = ca.Function(f"{self.name}_alg", args, [g], argn, ["g"])
         outputs = ca.Function(
-            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys())
+            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
+            {"allow_duplicate_io_names": True},  # an output may be called x, z, u, p or t
         )
         return FlatDAE(
             name=self.name,
@@ -643,7 +687,16 @@ class Model(EventsMixin):
         A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
         integrated with events (:func:`gtmodel.modeling.event_simulation.simulate_events`,
         :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
-        :attr:`SimulationResult.events`.
+        :attr:`SimulationResult.events`. Otherwise, a model that :meth:`flatten` accepts
+        and that has no initial equations is simulated as it is. Otherwise the structural
+        passes run first
+        (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
+        check (one error naming the equations and variables), alias elimination, index
+        reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
+        selection turns singular), and the consistent initialisation with the
+        :meth:`initial_equation` s. For a high-index model without initial equations, the
+        ``x0``/start values of the states picked by the dummy selection are kept and the
+        others are computed (their values are guesses).
 
         Parameters
         ----------
@@ -654,7 +707,17 @@ class Model(EventsMixin):
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
             return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
+        if self._initial_equations or not self._flattens():
+            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+
+    def _flattens(self) -> bool:
+        """Whether :meth:`flatten` accepts the model as it is (else simulate reduces it)."""
+        try:
+            self.flatten()
+        except ModelError:
+            return False
+        return True
 
 
 def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:
