@@ -34,6 +34,9 @@ import numpy as np
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
+from gtmodel.modeling.discontinuities import sign_modes
+from gtmodel.modeling.event_simulation import simulate_events
+from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
 from gtmodel.modeling.structured_simulation import simulate_structured
 
@@ -64,7 +67,7 @@ class _Var:
         return int(self.sym.numel())
 
 
-class Model:
+class Model(EventsMixin):
     """An equation-based model (Modelica-inspired) built from CasADi SX symbols.
 
     Parameters
@@ -95,6 +98,8 @@ class Model:
         self._time = ca.SX.sym("time")
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
+        self._events: EventSpec | None = None  # modes and when-clauses (gtmodel.modeling.events)
+        self._der_substituted: set[int] = set()  # equations whose der() stands for the ODE rhs
         self._initial_equations: list[tuple[str, ca.SX]] = []
         self._hashes: set[int] = {self._time.element_hash()}  # of every declared symbol element
 
@@ -337,7 +342,9 @@ class Model:
         ders = [v.der for v in self._vars.values() if v.kind == "state"]
         return ca.vertcat(*ders) if ders else ca.SX(0, 1)
 
-    def equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+    def equation(
+        self, lhs: Any, rhs: Any = 0.0, name: str | None = None, substitute_der: bool = False
+    ) -> None:
         """Add the equation ``lhs == rhs`` (residual ``lhs - rhs``).
 
         Parameters
@@ -347,6 +354,12 @@ class Model:
             of them scalar). The residual must be linear in the ``der()`` symbols.
         name : str, optional
             Label used in error messages; default ``"eq<k>"``.
+        substitute_der : bool, optional
+            If true, ``der()`` in this equation stands for the ODE right-hand side
+            ``f(t, x, z, u, p)`` obtained from the other equations (substituted on
+            flattening), so the equation is algebraic: e.g. the locked mode of a
+            friction element, relative acceleration zero, which determines the friction
+            force (Otter, Elmqvist and Mattsson (1999)). Default false.
 
         Raises
         ------
@@ -372,6 +385,8 @@ class Model:
                 f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
                 "only equations linear in der() are supported"
             )
+        if substitute_der:
+            self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
 
     def initial_equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
@@ -552,7 +567,11 @@ class Model:
                 f"model {self.name!r} has {neq} scalar equations but {nx} states + {nz} "
                 f"algebraic variables = {nx + nz} unknowns"
             )
-        diff_rows = [i for i in range(neq) if nx and ca.depends_on(res[i], xdot)]
+        subst_rows = {  # scalar rows of the substitute_der equations
+            k for j, (lo, hi) in enumerate(_row_ranges(self._equations)) if j in self._der_substituted
+            for k in range(lo, hi)
+        }
+        diff_rows = [i for i in range(neq) if nx and i not in subst_rows and ca.depends_on(res[i], xdot)]
         alg_rows = [i for i in range(neq) if i not in set(diff_rows)]
         res_d = res[diff_rows] if diff_rows else ca.SX(0, 1)
         res_a = res[alg_rows] if alg_rows else ca.SX(0, 1)
@@ -586,6 +605,8 @@ class Model:
             f = ca.simplify(f) if f.numel() < 50 else f
         else:
             f = ca.SX(0, 1)
+        if subst_rows and nx:
+            res_a = ca.substitute(res_a, xdot, f)
 
         # --- algebraic part: index-1 check
         if nz:
@@ -663,8 +684,12 @@ class Model:
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
-        A model that :meth:`flatten` accepts and that has no initial equations is simulated
-        as it is. Otherwise the structural passes run first
+        A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
+        integrated with events (:func:`gtmodel.modeling.event_simulation.simulate_events`,
+        :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
+        :attr:`SimulationResult.events`. Otherwise, a model that :meth:`flatten` accepts
+        and that has no initial equations is simulated as it is. Otherwise the structural
+        passes run first
         (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
         check (one error naming the equations and variables), alias elimination, index
         reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
@@ -679,6 +704,9 @@ class Model:
 
         {simulate_returns}
         """
+        model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
+        if model._events is not None and model._events.whens:
+            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
         if self._initial_equations or not self._flattens():
             return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
@@ -690,3 +718,12 @@ class Model:
         except ModelError:
             return False
         return True
+
+
+def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:
+    """Scalar row range ``[lo, hi)`` of each equation in the stacked residual."""
+    out, k = [], 0
+    for _, r in equations:
+        out.append((k, k + int(r.numel())))
+        k += int(r.numel())
+    return out

@@ -13,7 +13,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value
 
-__all__ = ["simulate_model", "input_intervals", "SIMULATE_DOCS"]
+__all__ = ["simulate_model", "simulation_inputs", "input_intervals", "SIMULATE_DOCS"]
 
 #: The arguments, returns and errors of a simulation, shared by :func:`simulate_model` and
 #: :meth:`gtmodel.modeling.Model.simulate` (inserted by :func:`~gtmodel._docstrings.fill_doc`).
@@ -86,32 +86,8 @@ def simulate_model(
     {simulate_returns}
     """
     dae = model.flatten()
-    t = np.asarray(t_grid, dtype=float).reshape(-1)
-    if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        raise InputError("t_grid must be finite, strictly increasing, with at least 2 points")
-    if integrator not in ("idas", "cvodes"):
-        raise InputError(f"integrator must be 'idas' or 'cvodes', got {integrator!r}")
-    if integrator == "cvodes" and dae.nz:
-        raise InputError("integrator 'cvodes' cannot handle algebraic variables; use 'idas'")
+    t, x0v, z0v, pv, u_int = simulation_inputs(model, dae, t_grid, x0, u, p, integrator, z0)
     n = t.size
-    # initial state
-    if x0 is None:
-        x0v = dae.x_start.copy()
-    elif isinstance(x0, Mapping):
-        x0v = dae.x_start.copy()
-        for name, val in x0.items():
-            if name not in dae.x_vars:
-                raise InputError(f"x0: {name!r} is not a state of model {model.name!r}")
-            sl = dae.x_vars[name]
-            x0v[sl] = _vector_value(val, sl.stop - sl.start, f"x0[{name!r}]")
-    else:
-        x0v = _vector_value(x0, dae.nx, "x0")
-    z0v = dae.z_start.copy() if z0 is None else _vector_value(z0, dae.nz, "z0")
-    pv = dae.parameter_vector(p)
-    u_default = np.concatenate(
-        [v.start for v in model._vars.values() if v.kind == "input"]
-    ) if dae.nu else np.zeros(0)
-    u_int = input_intervals(u, t, dae.nu, u_default)
     # CasADi's integrator holds u[:, k] on (tout[k-1], tout[k]]; tout[0] = t0
     u_cas = np.vstack([u_int[:1], u_int]).T if dae.nu else np.zeros((0, n))
 
@@ -197,3 +173,56 @@ def input_intervals(u: Any, t: np.ndarray, nu: int, u_default: np.ndarray) -> np
     if not np.all(np.isfinite(u_int)):
         raise InputError("u contains non-finite values")
     return u_int
+
+
+def simulation_inputs(
+    model: Any, dae: Any, t_grid: Any, x0: Any, u: Any, p: Any, integrator: str, z0: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Check and convert the arguments of a simulation (shared with the event simulation).
+
+    Parameters
+    ----------
+    model : Model
+        The model, for its name and declared input start values.
+    dae : FlatDAE
+        Its flattened DAE.
+    t_grid, x0, u, p, integrator, z0
+        As for :func:`simulate_model`.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(t, x0, z0, p, u)``: the grid ``(N,)``, initial state ``(nx,)``, algebraic guess
+        ``(nz,)``, parameter vector ``(npar,)`` and inputs per interval ``(N-1, nu)``.
+
+    Raises
+    ------
+    InputError
+        On malformed arguments.
+    """
+    t = np.asarray(t_grid, dtype=float).reshape(-1)
+    if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InputError("t_grid must be finite, strictly increasing, with at least 2 points")
+    if integrator not in ("idas", "cvodes"):
+        raise InputError(f"integrator must be 'idas' or 'cvodes', got {integrator!r}")
+    if integrator == "cvodes" and dae.nz:
+        raise InputError("integrator 'cvodes' cannot handle algebraic variables; use 'idas'")
+    # initial state
+    if x0 is None:
+        x0v = dae.x_start.copy()
+    elif isinstance(x0, Mapping):
+        x0v = dae.x_start.copy()
+        for name, val in x0.items():
+            if name not in dae.x_vars:
+                raise InputError(f"x0: {name!r} is not a state of model {model.name!r}")
+            sl = dae.x_vars[name]
+            x0v[sl] = _vector_value(val, sl.stop - sl.start, f"x0[{name!r}]")
+    else:
+        x0v = _vector_value(x0, dae.nx, "x0")
+    z0v = dae.z_start.copy() if z0 is None else _vector_value(z0, dae.nz, "z0")
+    pv = dae.parameter_vector(p)
+    u_default = np.concatenate(
+        [v.start for v in model._vars.values() if v.kind == "input"]
+    ) if dae.nu else np.zeros(0)
+    u_int = input_intervals(u, t, dae.nu, u_default)
+    return t, x0v, z0v, pv, u_int
