@@ -246,8 +246,9 @@ def add_friction(
 class MassWithStopAndFriction(PartialTwoFlanges):
     """Sliding mass with hard stops and Stribeck friction (MSL ``Translational.Components.MassWithStopAndFriction``).
 
-    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2`` (and the velocities and
-    accelerations), ``v = der(s)``, ``a = der(v)``, ``m a = flange_a.f + flange_b.f - f``
+    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2``, ``v = der(s)``, ``a = der(v)``,
+    ``m a = flange_a.f + flange_b.f - f`` (the velocity is the component's own, as in the
+    MSL: the flanges carry position and force only)
     with the friction force ``f`` of the MSL
     state machine on ``v_rel = v - v_support`` (module docstring); hard stops at
     ``smin + L/2 <= s <= smax - L/2`` with Newton's impact law ``v+ = -e v-``. Declared
@@ -305,10 +306,6 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         """Rigid flanges, Newton's law with friction, the friction state machine and the stops."""
         self.equation(self.flange_a.s, self.s - self.L / 2, name="s_a")
         self.equation(self.flange_b.s, self.s + self.L / 2, name="s_b")
-        self.equation(self.flange_a.v, self.v, name="v_a")
-        self.equation(self.flange_b.v, self.v, name="v_b")
-        self.equation(self.flange_a.a, self.a, name="a_a")
-        self.equation(self.flange_b.a, self.a, name="a_b")
         self.equation(self.der(self.s), self.v, name="velocity")
         self.equation(self.der(self.v), self.a, name="acceleration")
         self.equation(self.m * self.a, self.flange_a.f + self.flange_b.f - self.f, name="newton")
