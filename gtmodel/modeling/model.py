@@ -35,7 +35,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
 from gtmodel.modeling.discontinuities import sign_modes
-from gtmodel.modeling.event_simulation import simulate_events
+from gtmodel.modeling.event_simulation import simulate_events, simulate_events_reduced
 from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
 from gtmodel.modeling.structured_simulation import simulate_structured
@@ -706,6 +706,15 @@ class Model(EventsMixin):
         """
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
+            if self._initial_equations:
+                raise ModelError(
+                    f"model {self.name!r}: initial equations {[nm for nm, _ in self._initial_equations]} together with "
+                    "when-clauses are not supported by simulate; give the start values (x0) instead"
+                )
+            if not model._flattens():  # aliases or high index: reduced once (event_simulation)
+                if z0 is not None:
+                    raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
+                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)
             return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
         if self._initial_equations or not self._flattens():
             return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)

@@ -195,7 +195,7 @@ def test_rigidly_coupled_mass_adds_inertia():
     # F_c / 2 kg, so v = 1 - (F_c / 2) t until 2 / F_c (the flanges carry the acceleration)
     class Coupled(Component):
         body = MassWithStopAndFriction(F_prop=0.0, F_Coulomb=MU_G, F_Stribeck=0.0, fexp=0.0, v=1.0)
-        load = tr.Mass(m=1.0, stateSelect="never")
+        load = tr.Mass(m=1.0)
 
         def equations(self):
             connect(self.body.flange_b, self.load.flange_a)
