@@ -687,7 +687,11 @@ class Model(EventsMixin):
         A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
         integrated with events (:func:`gtmodel.modeling.event_simulation.simulate_events`,
         :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
-        :attr:`SimulationResult.events`. Otherwise, a model that :meth:`flatten` accepts
+        :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
+        is reduced once first, keeping the reinit targets as states
+        (:func:`~gtmodel.modeling.event_simulation.simulate_events_reduced`: ``x0`` a
+        mapping, no ``z0``); initial equations together with when-clauses are refused
+        (ModelError). Otherwise, a model that :meth:`flatten` accepts
         and that has no initial equations is simulated as it is. Otherwise the structural
         passes run first
         (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
