@@ -386,6 +386,7 @@ def simulate_events_reduced(
     integrator: str = "idas",
     rtol: float = 1e-8,
     atol: float = 1e-10,
+    consistent: bool = False,
 ) -> SimulationResult:
     """Simulate a model with when-clauses that ``flatten()`` refuses (aliases, high index).
 
@@ -417,6 +418,10 @@ def simulate_events_reduced(
         SUNDIALS integrator.
     rtol, atol : float, optional
         Relative and absolute integration tolerances.
+    consistent : bool, optional
+        ``x0`` holds consistent values of all states (from
+        :func:`~gtmodel.modeling.structured_simulation.consistent_start`): the dummies'
+        are dropped instead of refused; default false.
 
     Returns
     -------
@@ -438,6 +443,11 @@ def simulate_events_reduced(
         for i in idx
     )
     reduced = structural_simplify(model, keep_states=keep)
+    if consistent and isinstance(x0, Mapping):  # scalar states of the reduced model
+        x0 = {
+            nm: float(val) for k, vals in x0.items() for nm, val in zip(expand_names(k, np.size(vals)), np.ravel(vals))
+            if nm in reduced._vars and reduced._vars[nm].kind == "state"
+        }
     if x0 is not None:
         if not isinstance(x0, Mapping):
             raise InputError(f"model {model.name!r} is index-reduced for the event simulation: give x0 as a mapping name -> value")

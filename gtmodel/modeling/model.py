@@ -38,7 +38,7 @@ from gtmodel.modeling.discontinuities import sign_modes
 from gtmodel.modeling.event_simulation import simulate_events, simulate_events_reduced
 from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
-from gtmodel.modeling.structured_simulation import simulate_structured
+from gtmodel.modeling.structured_simulation import consistent_start, simulate_structured
 
 __all__ = ["Model"]
 
@@ -690,8 +690,9 @@ class Model(EventsMixin):
         :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
         is reduced once first, keeping the reinit targets as states
         (:func:`~gtmodel.modeling.event_simulation.simulate_events_reduced`: ``x0`` a
-        mapping, no ``z0``); initial equations together with when-clauses are refused
-        (ModelError). Otherwise, a model that :meth:`flatten` accepts
+        mapping, no ``z0``); with initial equations the consistent start is solved first
+        (:func:`~gtmodel.modeling.structured_simulation.consistent_start`, the modes at their
+        start values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten` accepts
         and that has no initial equations is simulated as it is. Otherwise the structural
         passes run first
         (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
@@ -710,12 +711,14 @@ class Model(EventsMixin):
         """
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
-            if self._initial_equations:
-                raise ModelError(
-                    f"model {self.name!r}: initial equations {[nm for nm, _ in self._initial_equations]} together with "
-                    "when-clauses are not supported by simulate; give the start values (x0) instead"
-                )
-            if not model._flattens():  # aliases or high index: reduced once (event_simulation)
+            flat = model._flattens()
+            if model._initial_equations:  # consistent start (structured_simulation), then events
+                start = consistent_start(model, t_grid, x0, u, p, z0)
+                x0 = {k: v for k, v in start.items() if model._vars[k].kind == "state"}
+                z0 = np.concatenate([v for k, v in start.items() if model._vars[k].kind == "algebraic"] or [np.zeros(0)])
+                if not flat:
+                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True)
+            if not flat:  # aliases or high index: reduced once (event_simulation)
                 if z0 is not None:
                     raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
                 return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)

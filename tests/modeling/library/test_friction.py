@@ -280,7 +280,37 @@ def _pair(**kw):
     rigid_pair_pushed(0.5).simulate(np.linspace(0.0, 1.0, 11), u=2.0, **kw)
 
 
-def _initial_equation_with_friction():
+def test_initial_equation_with_friction_events():
+    # reference: as test_exact_coulomb_cart_stops_and_sticks_with_events, started at s = 0.5 m by
+    # an initial equation (v = 1 m/s fixed by x0; its start value sets the initial friction
+    # mode): stops at 1/(mu g) s, at 0.5 + 1/(2 mu g) m
+    m = MassWithStopAndFriction(F_prop=0.0, F_Coulomb=MU_G, F_Stribeck=0.0, fexp=0.0, v=1.0).to_model("cart")
+    m.initial_equation(m.variables("state")["s"], 0.5)
+    res = m.simulate(np.linspace(0.0, 1.0, 101), x0={"v": 1.0})
+    assert [e.name for e in res.events] == ["stuck_forward"]
+    assert abs(res.events[0].t - 1.0 / MU_G) < EVENT_TOL
+    np.testing.assert_allclose(res.x["s"][[0, -1]], [0.5, 0.5 + 0.5 / MU_G], atol=1e-7)
+
+
+def test_initial_equations_on_the_dummies_of_a_rigid_pair():
+    # reference: the load (a dummy after index reduction) placed at 0.2 m at rest by initial
+    # equations, so the friction mass starts at 0.3 m, d = 0.7 m before the stop; a = 1 m/s^2:
+    # first impact at sqrt(2 d / a), then flights 2 e^k v1 / a (e = 0.5)
+    model = rigid_pair_pushed(0.5)
+    states = model.variables("state")
+    model.initial_equation(states["load.s"], 0.2)
+    model.initial_equation(states["load.v"], 0.0)
+    res = model.simulate(np.linspace(0.0, 3.0, 301), u=2.0, **TIGHT)
+    d, a, e = 0.7, 1.0, 0.5
+    v1 = np.sqrt(2.0 * a * d)
+    ref = np.sqrt(2.0 * d / a) + np.concatenate([[0.0], np.cumsum([2.0 * e**k * v1 / a for k in range(1, 30)])])
+    impacts = np.array([ev.t for ev in res.events if ev.name == "mass.stop_max"])
+    assert impacts.size == np.sum(ref < 3.0)
+    np.testing.assert_allclose(impacts, ref[: impacts.size], rtol=0, atol=EVENT_TOL)
+    np.testing.assert_allclose([res.x["load.s"][0], res.x["mass.s"][0]], [0.2, 0.3], atol=1e-12)
+
+
+def _initial_underdetermined():
     m = MassWithStopAndFriction(v=1.0).to_model("cart")
     m.initial_equation(m.variables("state")["s"], 0.5)
     m.simulate(np.linspace(0.0, 1.0, 11))
@@ -293,9 +323,9 @@ def _initial_equation_with_friction():
         (lambda: _pair(x0=[0.0, 0.0]), InputError, "give x0 as a mapping"),
         (lambda: _pair(x0={"load.s": 0.0}), InputError, r"\['load.s'\] .* not states after index reduction"),
         (lambda: _pair(z0=np.zeros(3)), InputError, "z0 is not supported"),
-        (_initial_equation_with_friction, ModelError, r"initial equations \['init0'\] together with when-clauses"),
+        (_initial_underdetermined, ModelError, "under-determined"),
     ],
-    ids=["reinit_dummy", "x0_vector", "x0_dummy", "z0", "initial_equations"],
+    ids=["reinit_dummy", "x0_vector", "x0_dummy", "z0", "initial_underdetermined"],
 )
 def test_unsupported_event_simulations(call, error, match):
     with pytest.raises(error, match=match):
