@@ -20,6 +20,14 @@ phase. A condition already positive at the start does not fire (edge semantics) 
 its clause is declared ``initial=True``. ``sign()`` in the equations is switched by events
 too (:mod:`gtmodel.modeling.discontinuities`, applied by :meth:`Model.simulate`).
 
+A model with events that ``flatten()`` refuses (aliases, a rigid coupling, a closed chain)
+is reduced once by :func:`~gtmodel.modeling.index_reduction.structural_simplify` before the
+loop (:func:`simulate_events_reduced`): its when-clauses are carried over and the reinit
+targets kept as states. The dummy selection made at the start is not re-made between
+events, so a constraint whose selection turns singular on the way (a Cartesian pendulum
+passing ``x = 0``) stops with a ConvergenceError (a strict xfail in
+tests/modeling/test_events.py); linear couplings (rigidly joined masses) are exact.
+
 Why not CasADi's own event support (DAE field ``"zero"`` with option ``"transition"``,
 experimental in 3.8): measured in casadi 3.8.2 on ``x'' = -x``, ``x(0) = 1``, ``zero = x``
 over 10 s (event times ``pi/2 + k pi``), with CVODES and IDAS alike, it stops with

@@ -257,7 +257,11 @@ class MassWithStopAndFriction(PartialTwoFlanges):
     ``<path>.stop_min``. Additions to the MSL, documented: ``peak`` (static over sliding
     friction at rest, from the MSL's ``SupportFriction``), ``e`` (the MSL stops the mass:
     ``e = 0``) and ``v_support`` (velocity of the surface, e.g. a belt; the MSL's is 0).
-    With ``e = 0`` the support is assumed at rest at the stops.
+    With ``e = 0`` the support is assumed at rest at the stops. The initial friction mode
+    follows the start value of ``v`` (the ``v`` modifier), not an ``x0`` of the simulation.
+    Rigidly coupled to another mass (a model of higher index), ``Model.simulate`` reduces
+    the model keeping ``s`` and ``v`` of this component as states (they are reinit targets);
+    two of them rigidly coupled are refused (ModelError).
 
     Parameters
     ----------
