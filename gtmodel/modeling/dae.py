@@ -242,7 +242,10 @@ class SimulationResult:
         vector variables. ``u`` holds the input applied on ``[t[k], t[k+1])`` at row
         ``k`` (the last row repeats the last interval).
     p : dict of str to numpy.ndarray
-        Parameter values used.
+        Parameter values used (for a mode of :meth:`Model.mode`: its start value).
+    events : list of EventRecord
+        State events in time order (:mod:`gtmodel.modeling.events`): time, when-clause
+        name and mode values after it; empty for a model without when-clauses.
     """
 
     t: np.ndarray
@@ -251,6 +254,7 @@ class SimulationResult:
     u: dict[str, np.ndarray]
     outputs: dict[str, np.ndarray]
     p: dict[str, np.ndarray] = field(default_factory=dict)
+    events: list[Any] = field(default_factory=list)
 
     def to_dataframe(self) -> Any:
         """Return all trajectories as a pandas DataFrame.
@@ -277,7 +281,8 @@ def _eval_outputs(
         return {}
     n = t.size
     fmap = dae.outputs.map(n)
-    vals = fmap(t.reshape(1, -1), xs.T, zs.T, us.T, np.tile(pv.reshape(-1, 1), (1, n)))
+    ps = np.tile(pv.reshape(-1, 1), (1, n)) if pv.ndim == 1 else pv.T  # (npar,) or (N, npar)
+    vals = fmap(t.reshape(1, -1), xs.T, zs.T, us.T, ps)
     if not isinstance(vals, (list, tuple)):
         vals = [vals]
     out = {}

@@ -34,13 +34,19 @@ import numpy as np
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
+from gtmodel.modeling.discontinuities import sign_modes
+from gtmodel.modeling.event_simulation import simulate_events, simulate_events_reduced
+from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
+from gtmodel.modeling.structured_simulation import consistent_start, simulate_structured
 
 __all__ = ["Model"]
 
 _log = logging.getLogger("gtmodel")
 
-_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: Identifiers, or dotted paths of identifiers for the hierarchical names of composed
+#: models (``"axis1.belt.c"``, :mod:`gtmodel.modeling.components`).
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 _KINDS = ("parameter", "state", "algebraic", "input")
 
 
@@ -61,7 +67,7 @@ class _Var:
         return int(self.sym.numel())
 
 
-class Model:
+class Model(EventsMixin):
     """An equation-based model (Modelica-inspired) built from CasADi SX symbols.
 
     Parameters
@@ -92,6 +98,10 @@ class Model:
         self._time = ca.SX.sym("time")
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
+        self._events: EventSpec | None = None  # modes and when-clauses (gtmodel.modeling.events)
+        self._der_substituted: set[int] = set()  # equations whose der() stands for the ODE rhs
+        self._initial_equations: list[tuple[str, ca.SX]] = []
+        self._hashes: set[int] = {self._time.element_hash()}  # of every declared symbol element
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -108,7 +118,7 @@ class Model:
         lb: Any = None,
         ub: Any = None,
     ) -> ca.SX:
-        if not isinstance(name, str) or not _NAME_RE.match(name) or keyword.iskeyword(name):
+        if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
         if name in self._vars or name in self._outputs or name in ("time", "t", "final_time"):
             raise ModelError(f"model {self.name!r}: name {name!r} is already declared or reserved")
@@ -123,6 +133,8 @@ class Model:
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
+        for s in (sym, var.der) if var.der is not None else (sym,):
+            self._hashes.update(s[i].element_hash() for i in range(size))
         return sym
 
     def parameter(self, name: str, value: Any, shape: Any = None) -> ca.SX:
@@ -317,8 +329,10 @@ class Model:
         ModelError
             Naming the unknown symbols.
         """
-        known = ca.vertcat(*[ca.vec(s) for s in list(self._known_symbols()) + list(extra)])
-        unknown = [s for s in ca.symvar(expr) if not ca.depends_on(s, known)]
+        # element hashes identify SX symbols (O(1) per symbol; many-component models check
+        # thousands of equations)
+        known = self._hashes | {s[i].element_hash() for s in extra for i in range(s.numel())}
+        unknown = [s for s in ca.symvar(expr) if s.element_hash() not in known]
         if unknown:
             raise ModelError(
                 f"{what}: unknown symbol(s) {_symbol_names(unknown)} not declared by model {self.name!r}"
@@ -328,7 +342,9 @@ class Model:
         ders = [v.der for v in self._vars.values() if v.kind == "state"]
         return ca.vertcat(*ders) if ders else ca.SX(0, 1)
 
-    def equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+    def equation(
+        self, lhs: Any, rhs: Any = 0.0, name: str | None = None, substitute_der: bool = False
+    ) -> None:
         """Add the equation ``lhs == rhs`` (residual ``lhs - rhs``).
 
         Parameters
@@ -338,6 +354,12 @@ class Model:
             of them scalar). The residual must be linear in the ``der()`` symbols.
         name : str, optional
             Label used in error messages; default ``"eq<k>"``.
+        substitute_der : bool, optional
+            If true, ``der()`` in this equation stands for the ODE right-hand side
+            ``f(t, x, z, u, p)`` obtained from the other equations (substituted on
+            flattening), so the equation is algebraic: e.g. the locked mode of a
+            friction element, relative acceleration zero, which determines the friction
+            force (Otter, Elmqvist and Mattsson (1999)). Default false.
 
         Raises
         ------
@@ -363,7 +385,44 @@ class Model:
                 f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
                 "only equations linear in der() are supported"
             )
+        if substitute_der:
+            self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
+
+    def initial_equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+        """Add the initial equation ``lhs == rhs`` (Modelica's ``initial equation``).
+
+        Holds at the start time only; :meth:`simulate` then solves the consistent
+        initialisation (:mod:`gtmodel.modeling.initialization`) instead of fixing every
+        state at its start value: the initial equations and the states named in an ``x0``
+        mapping must together fix the model's degrees of freedom. :meth:`flatten` (and so
+        ``Optimization``, which states its own point constraints) ignores them.
+
+        Parameters
+        ----------
+        lhs, rhs : casadi.SX or float or array_like
+            Expressions of declared symbols, ``der()`` symbols and time; same size (or one
+            of them scalar).
+        name : str, optional
+            Label used in error messages; default ``"init<k>"``.
+
+        Raises
+        ------
+        InputError
+            If sizes do not match or MX expressions are passed.
+        ModelError
+            If the equation contains unknown symbols.
+        """
+        label = name or f"init{len(self._initial_equations)}"
+        a = _as_sx(lhs, f"initial equation {label!r} lhs")
+        b = _as_sx(rhs, f"initial equation {label!r} rhs")
+        if a.numel() != b.numel() and a.numel() != 1 and b.numel() != 1:
+            raise InputError(f"initial equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}")
+        res = a - b
+        if res.numel() == 0:
+            raise InputError(f"initial equation {label!r} is empty")
+        self.check_symbols(res, f"initial equation {label!r}")
+        self._initial_equations.append((label, res))
 
     def output(self, name: str, expr: Any) -> ca.SX:
         """Declare a named derived variable (energy, force, ...).
@@ -508,7 +567,11 @@ class Model:
                 f"model {self.name!r} has {neq} scalar equations but {nx} states + {nz} "
                 f"algebraic variables = {nx + nz} unknowns"
             )
-        diff_rows = [i for i in range(neq) if nx and ca.depends_on(res[i], xdot)]
+        subst_rows = {  # scalar rows of the substitute_der equations
+            k for j, (lo, hi) in enumerate(_row_ranges(self._equations)) if j in self._der_substituted
+            for k in range(lo, hi)
+        }
+        diff_rows = [i for i in range(neq) if nx and i not in subst_rows and ca.depends_on(res[i], xdot)]
         alg_rows = [i for i in range(neq) if i not in set(diff_rows)]
         res_d = res[diff_rows] if diff_rows else ca.SX(0, 1)
         res_a = res[alg_rows] if alg_rows else ca.SX(0, 1)
@@ -542,6 +605,8 @@ class Model:
             f = ca.simplify(f) if f.numel() < 50 else f
         else:
             f = ca.SX(0, 1)
+        if subst_rows and nx:
+            res_a = ca.substitute(res_a, xdot, f)
 
         # --- algebraic part: index-1 check
         if nz:
@@ -550,7 +615,8 @@ class Model:
                 no_z = [z_names[j] for j in range(nz) if Jz[:, j].nnz() == 0]
                 raise ModelError(
                     f"model {self.name!r}: the algebraic equations are not solvable for the algebraic "
-                    f"variables {no_z or z_names} (not index 1); high-index DAEs are not supported"
+                    f"variables {no_z or z_names} (not index 1); flatten() needs an index-1 DAE: "
+                    "reduce it with gtmodel.modeling.structural_simplify(model) (simulate() does)"
                 )
         elif res_a.numel():
             # unreachable by the count check, kept for safety
@@ -565,7 +631,8 @@ class Model:
         ode = ca.Function(f"{self.name}_ode", args, [f], argn, ["xdot"])
         alg = ca.Function(f"{self.name}_alg", args, [g], argn, ["g"])
         outputs = ca.Function(
-            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys())
+            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
+            {"allow_duplicate_io_names": True},  # an output may be called x, z, u, p or t
         )
         return FlatDAE(
             name=self.name,
@@ -617,10 +684,62 @@ class Model:
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
+        A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
+        integrated with events (:func:`gtmodel.modeling.event_simulation.simulate_events`,
+        :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
+        :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
+        is reduced once first, keeping the reinit targets as states
+        (:func:`~gtmodel.modeling.event_simulation.simulate_events_reduced`: ``x0`` a
+        mapping, no ``z0``); with initial equations the consistent start is solved first
+        (:func:`~gtmodel.modeling.structured_simulation.consistent_start`, the modes at their
+        start values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten` accepts
+        and that has no initial equations is simulated as it is. Otherwise the structural
+        passes run first
+        (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
+        check (one error naming the equations and variables), alias elimination, index
+        reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
+        selection turns singular), and the consistent initialisation with the
+        :meth:`initial_equation` s. For a high-index model without initial equations, the
+        ``x0``/start values of the states picked by the dummy selection are kept and the
+        others are computed (their values are guesses).
+
         Parameters
         ----------
         {simulate_args}
 
         {simulate_returns}
         """
+        model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
+        if model._events is not None and model._events.whens:
+            flat = model._flattens()
+            if model._initial_equations:  # consistent start (structured_simulation), then events
+                start = consistent_start(model, t_grid, x0, u, p, z0)
+                x0 = {k: v for k, v in start.items() if model._vars[k].kind == "state"}
+                z0 = np.concatenate([v for k, v in start.items() if model._vars[k].kind == "algebraic"] or [np.zeros(0)])
+                if not flat:
+                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True)
+            if not flat:  # aliases or high index: reduced once (event_simulation)
+                if z0 is not None:
+                    raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
+                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)
+            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
+        if self._initial_equations or not self._flattens():
+            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+
+    def _flattens(self) -> bool:
+        """Whether :meth:`flatten` accepts the model as it is (else simulate reduces it)."""
+        try:
+            self.flatten()
+        except ModelError:
+            return False
+        return True
+
+
+def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:
+    """Scalar row range ``[lo, hi)`` of each equation in the stacked residual."""
+    out, k = [], 0
+    for _, r in equations:
+        out.append((k, k + int(r.numel())))
+        k += int(r.numel())
+    return out
