@@ -35,12 +35,15 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
+from gtmodel.modeling.structured_simulation import simulate_structured
 
 __all__ = ["Model"]
 
 _log = logging.getLogger("gtmodel")
 
-_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+#: Identifiers, or dotted paths of identifiers for the hierarchical names of composed
+#: models (``"axis1.belt.c"``, :mod:`gtmodel.modeling.components`).
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 _KINDS = ("parameter", "state", "algebraic", "input")
 
 
@@ -92,6 +95,7 @@ class Model:
         self._time = ca.SX.sym("time")
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
+        self._initial_equations: list[tuple[str, ca.SX]] = []
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -108,7 +112,7 @@ class Model:
         lb: Any = None,
         ub: Any = None,
     ) -> ca.SX:
-        if not isinstance(name, str) or not _NAME_RE.match(name) or keyword.iskeyword(name):
+        if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
         if name in self._vars or name in self._outputs or name in ("time", "t", "final_time"):
             raise ModelError(f"model {self.name!r}: name {name!r} is already declared or reserved")
@@ -365,6 +369,39 @@ class Model:
             )
         self._equations.append((label, res))
 
+    def initial_equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
+        """Add the initial equation ``lhs == rhs`` (Modelica's ``initial equation``).
+
+        Holds at the start time only; :meth:`simulate` then solves the consistent
+        initialisation (:mod:`gtmodel.modeling.initialization`) instead of fixing every
+        state at its start value.
+
+        Parameters
+        ----------
+        lhs, rhs : casadi.SX or float or array_like
+            Expressions of declared symbols, ``der()`` symbols and time; same size (or one
+            of them scalar).
+        name : str, optional
+            Label used in error messages; default ``"init<k>"``.
+
+        Raises
+        ------
+        InputError
+            If sizes do not match or MX expressions are passed.
+        ModelError
+            If the equation contains unknown symbols.
+        """
+        label = name or f"init{len(self._initial_equations)}"
+        a = _as_sx(lhs, f"initial equation {label!r} lhs")
+        b = _as_sx(rhs, f"initial equation {label!r} rhs")
+        if a.numel() != b.numel() and a.numel() != 1 and b.numel() != 1:
+            raise InputError(f"initial equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}")
+        res = a - b
+        if res.numel() == 0:
+            raise InputError(f"initial equation {label!r} is empty")
+        self.check_symbols(res, f"initial equation {label!r}")
+        self._initial_equations.append((label, res))
+
     def output(self, name: str, expr: Any) -> ca.SX:
         """Declare a named derived variable (energy, force, ...).
 
@@ -550,7 +587,8 @@ class Model:
                 no_z = [z_names[j] for j in range(nz) if Jz[:, j].nnz() == 0]
                 raise ModelError(
                     f"model {self.name!r}: the algebraic equations are not solvable for the algebraic "
-                    f"variables {no_z or z_names} (not index 1); high-index DAEs are not supported"
+                    f"variables {no_z or z_names} (not index 1); flatten() needs an index-1 DAE: "
+                    "reduce it with gtmodel.modeling.structural_simplify(model) (simulate() does)"
                 )
         elif res_a.numel():
             # unreachable by the count check, kept for safety
@@ -565,7 +603,8 @@ class Model:
         ode = ca.Function(f"{self.name}_ode", args, [f], argn, ["xdot"])
         alg = ca.Function(f"{self.name}_alg", args, [g], argn, ["g"])
         outputs = ca.Function(
-            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys())
+            f"{self.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
+            {"allow_duplicate_io_names": True},  # an output may be called x, z, u, p or t
         )
         return FlatDAE(
             name=self.name,
@@ -623,4 +662,14 @@ class Model:
 
         {simulate_returns}
         """
+        if self._initial_equations or not self._flattens():
+            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+
+    def _flattens(self) -> bool:
+        """Whether :meth:`flatten` accepts the model as it is (else simulate reduces it)."""
+        try:
+            self.flatten()
+        except ModelError:
+            return False
+        return True

@@ -13,7 +13,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value
 
-__all__ = ["simulate_model", "SIMULATE_DOCS"]
+__all__ = ["simulate_model", "input_intervals", "SIMULATE_DOCS"]
 
 #: The arguments, returns and errors of a simulation, shared by :func:`simulate_model` and
 #: :meth:`gtmodel.modeling.Model.simulate` (inserted by :func:`~gtmodel._docstrings.fill_doc`).
@@ -108,30 +108,10 @@ def simulate_model(
         x0v = _vector_value(x0, dae.nx, "x0")
     z0v = dae.z_start.copy() if z0 is None else _vector_value(z0, dae.nz, "z0")
     pv = dae.parameter_vector(p)
-    # inputs per interval: (n-1, nu)
     u_default = np.concatenate(
         [v.start for v in model._vars.values() if v.kind == "input"]
     ) if dae.nu else np.zeros(0)
-    if u is None:
-        u_int = np.tile(u_default, (n - 1, 1))
-    elif callable(u):
-        u_int = np.array([_vector_value(u(tk), dae.nu, f"u({tk})") for tk in t[:-1]])
-    else:
-        ua = np.asarray(u, dtype=float)
-        if ua.size == dae.nu and not (dae.nu == 1 and ua.ndim == 1 and ua.size in (n - 1, n) and ua.size > 1):
-            u_int = np.tile(ua.reshape(-1), (n - 1, 1))
-        else:
-            if ua.ndim == 1 and dae.nu == 1:
-                ua = ua.reshape(-1, 1)
-            if ua.ndim != 2 or ua.shape[1] != dae.nu or ua.shape[0] not in (n - 1, n):
-                raise InputError(
-                    f"u: expected a constant of {dae.nu} values or an array of shape "
-                    f"({n - 1}, {dae.nu}) or ({n}, {dae.nu}), got shape {np.shape(u)}"
-                )
-            u_int = ua[: n - 1]
-    u_int = np.asarray(u_int, dtype=float).reshape(n - 1, dae.nu)
-    if not np.all(np.isfinite(u_int)):
-        raise InputError("u contains non-finite values")
+    u_int = input_intervals(u, t, dae.nu, u_default)
     # CasADi's integrator holds u[:, k] on (tout[k-1], tout[k]]; tout[0] = t0
     u_cas = np.vstack([u_int[:1], u_int]).T if dae.nu else np.zeros((0, n))
 
@@ -169,3 +149,51 @@ def simulate_model(
         outputs=outs,
         p={k: pv[s].copy() for k, s in dae.p_vars.items()},
     )
+
+
+def input_intervals(u: Any, t: np.ndarray, nu: int, u_default: np.ndarray) -> np.ndarray:
+    """Inputs held on the grid intervals, shape ``(N-1, nu)`` (the ``u`` forms of :func:`simulate_model`).
+
+    Parameters
+    ----------
+    u : None, float, array_like or callable
+        As the ``u`` argument of :func:`simulate_model`.
+    t : numpy.ndarray
+        The checked time grid, shape ``(N,)``, s.
+    nu : int
+        Number of scalar inputs.
+    u_default : numpy.ndarray
+        Input start values, shape ``(nu,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Row ``k`` applies on ``[t_k, t_{k+1})``.
+
+    Raises
+    ------
+    InputError
+        If ``u`` has the wrong shape or non-finite values.
+    """
+    n = t.size
+    if u is None:
+        u_int = np.tile(u_default, (n - 1, 1))
+    elif callable(u):
+        u_int = np.array([_vector_value(u(tk), nu, f"u({tk})") for tk in t[:-1]])
+    else:
+        ua = np.asarray(u, dtype=float)
+        if ua.size == nu and not (nu == 1 and ua.ndim == 1 and ua.size in (n - 1, n) and ua.size > 1):
+            u_int = np.tile(ua.reshape(-1), (n - 1, 1))
+        else:
+            if ua.ndim == 1 and nu == 1:
+                ua = ua.reshape(-1, 1)
+            if ua.ndim != 2 or ua.shape[1] != nu or ua.shape[0] not in (n - 1, n):
+                raise InputError(
+                    f"u: expected a constant of {nu} values or an array of shape "
+                    f"({n - 1}, {nu}) or ({n}, {nu}), got shape {np.shape(u)}"
+                )
+            u_int = ua[: n - 1]
+    u_int = np.asarray(u_int, dtype=float).reshape(n - 1, nu)
+    if not np.all(np.isfinite(u_int)):
+        raise InputError("u contains non-finite values")
+    return u_int

@@ -1,0 +1,20 @@
+"""A small standard library of components, named as the Modelica Standard Library.
+
+* :mod:`~gtmodel.modeling.library.translational` (``Modelica.Mechanics.Translational``):
+  Mass, Spring, Damper, SpringDamper, Force, Fixed;
+* :mod:`~gtmodel.modeling.library.rotational` (``Modelica.Mechanics.Rotational``):
+  Inertia, IdealGear, Spring, Damper, SpringDamper, Torque, Fixed, IdealRollingWheel;
+* :mod:`~gtmodel.modeling.library.electrical` (``Modelica.Electrical.Analog``):
+  Resistor, Inductor, Capacitor, EMF, SignalVoltage, ConstantVoltage, Ground;
+* :mod:`~gtmodel.modeling.library.drive`: a compliant drive axis (servo, motor, gear,
+  belt, cart) composed from them.
+
+The domains share class names (``translational.Spring``, ``rotational.Spring``), as in
+the MSL: import the domain module and qualify.
+"""
+
+from __future__ import annotations
+
+from gtmodel.modeling.library import electrical, rotational, translational
+
+__all__ = ["translational", "rotational", "electrical"]

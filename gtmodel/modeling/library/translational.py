@@ -1,0 +1,235 @@
+"""1-D translational mechanics, named as ``Modelica.Mechanics.Translational``.
+
+Connector: :class:`Flange_a` / :class:`Flange_b` with the position ``s`` [m], the
+velocity ``v = der(s)`` [m/s] (potential variables) and the cut force ``f`` [N] (flow,
+positive into the component). The velocity is carried in the connector (as in
+ModelingToolkitStandardLibrary's mechanical ports) so that dampers need no ``der()`` of
+an algebraic position and compliant chains flatten to index-1 DAEs.
+
+Components (Modelica Standard Library 4.0 names and equations):
+:class:`Mass`, :class:`Spring`, :class:`Damper`, :class:`SpringDamper`, :class:`Force`,
+:class:`Fixed`; the partial bases :class:`PartialTwoFlanges`, :class:`PartialCompliant`.
+The optional ``support`` flanges of the MSL sources are omitted (support fixed).
+"""
+
+from __future__ import annotations
+
+from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
+from gtmodel.modeling.connectors import Connector, Flow, Potential
+
+__all__ = [
+    "Flange",
+    "Flange_a",
+    "Flange_b",
+    "PartialTwoFlanges",
+    "PartialCompliant",
+    "Mass",
+    "Spring",
+    "Damper",
+    "SpringDamper",
+    "Force",
+    "Fixed",
+]
+
+
+class Flange(Connector):
+    """Translational flange: position ``s`` [m], velocity ``v`` [m/s], cut force ``f`` [N].
+
+    ``Modelica.Mechanics.Translational.Interfaces.Flange`` plus the velocity ``v = der(s)``.
+
+    Parameters
+    ----------
+    description : str, optional
+        Description of this connector instance.
+    """
+
+    s = Potential(unit="m", description="absolute position of the flange")
+    v = Potential(unit="m/s", description="absolute velocity of the flange, der(s)")
+    f = Flow(unit="N", description="cut force directed into the flange")
+
+
+class Flange_a(Flange):  # noqa: N801 - Modelica Standard Library name
+    """Left translational flange (identical to :class:`Flange_b`, MSL naming).
+
+    Parameters
+    ----------
+    description : str, optional
+        Description of this connector instance.
+    """
+
+
+class Flange_b(Flange):  # noqa: N801 - Modelica Standard Library name
+    """Right translational flange (identical to :class:`Flange_a`, MSL naming).
+
+    Parameters
+    ----------
+    description : str, optional
+        Description of this connector instance.
+    """
+
+
+class PartialTwoFlanges(Component):
+    """Base of components with two translational flanges ``flange_a``, ``flange_b``.
+
+    Parameters
+    ----------
+    **modifiers
+        See :class:`~gtmodel.modeling.components.Component`.
+    """
+
+    flange_a = Flange_a("left flange")
+    flange_b = Flange_b("right flange")
+
+
+class PartialCompliant(PartialTwoFlanges):
+    """Compliant connection of two flanges (no inertia): ``s_rel``, force ``f``.
+
+    MSL ``PartialCompliant``: ``s_rel = flange_b.s - flange_a.s``, ``flange_b.f = f``,
+    ``flange_a.f = -f``.
+
+    Parameters
+    ----------
+    **modifiers
+        See :class:`~gtmodel.modeling.components.Component`.
+    """
+
+    s_rel = Variable(unit="m", description="relative distance flange_b.s - flange_a.s")
+    f = Variable(unit="N", description="force between the flanges, positive in the flange axis direction")
+
+    def equations(self) -> None:
+        """``s_rel = flange_b.s - flange_a.s``, ``flange_b.f = f``, ``flange_a.f = -f``."""
+        self.equation(self.s_rel, self.flange_b.s - self.flange_a.s, name="s_rel")
+        self.equation(self.flange_b.f, self.f, name="f_b")
+        self.equation(self.flange_a.f, -self.f, name="f_a")
+
+
+class Spring(PartialCompliant):
+    """Linear spring: ``f = c (s_rel - s_rel0)`` (MSL ``Translational.Components.Spring``).
+
+    Parameters
+    ----------
+    c : float, optional
+        Spring constant [N/m], >= 0 (default 1).
+    s_rel0 : float, optional
+        Unstretched length [m] (default 0).
+    """
+
+    c = Parameter(1.0, unit="N/m", description="spring constant", lb=0.0)
+    s_rel0 = Parameter(0.0, unit="m", description="unstretched spring length")
+
+    def equations(self) -> None:
+        """Hooke's law, plus :class:`PartialCompliant`'s equations."""
+        super().equations()
+        self.equation(self.f, self.c * (self.s_rel - self.s_rel0), name="hooke")
+
+
+class Damper(PartialCompliant):
+    """Linear damper: ``f = d v_rel`` (MSL ``Translational.Components.Damper``).
+
+    Parameters
+    ----------
+    d : float, optional
+        Damping constant [N s/m], >= 0 (default 0).
+    """
+
+    d = Parameter(0.0, unit="N.s/m", description="damping constant", lb=0.0)
+    v_rel = Variable(unit="m/s", description="relative velocity flange_b.v - flange_a.v")
+
+    def equations(self) -> None:
+        """``v_rel = flange_b.v - flange_a.v``, ``f = d v_rel``, plus the base's."""
+        super().equations()
+        self.equation(self.v_rel, self.flange_b.v - self.flange_a.v, name="v_rel")
+        self.equation(self.f, self.d * self.v_rel, name="damping")
+
+
+class SpringDamper(PartialCompliant):
+    """Spring and damper in parallel: ``f = c (s_rel - s_rel0) + d v_rel`` (MSL ``SpringDamper``).
+
+    Parameters
+    ----------
+    c : float, optional
+        Spring constant [N/m], >= 0 (default 1).
+    d : float, optional
+        Damping constant [N s/m], >= 0 (default 1).
+    s_rel0 : float, optional
+        Unstretched length [m] (default 0).
+    """
+
+    c = Parameter(1.0, unit="N/m", description="spring constant", lb=0.0)
+    d = Parameter(1.0, unit="N.s/m", description="damping constant", lb=0.0)
+    s_rel0 = Parameter(0.0, unit="m", description="unstretched spring length")
+    v_rel = Variable(unit="m/s", description="relative velocity flange_b.v - flange_a.v")
+
+    def equations(self) -> None:
+        """``v_rel = flange_b.v - flange_a.v``, ``f = c (s_rel - s_rel0) + d v_rel``, plus the base's."""
+        super().equations()
+        self.equation(self.v_rel, self.flange_b.v - self.flange_a.v, name="v_rel")
+        self.equation(self.f, self.c * (self.s_rel - self.s_rel0) + self.d * self.v_rel, name="force")
+
+
+class Mass(PartialTwoFlanges):
+    """Sliding mass with inertia (MSL ``Translational.Components.Mass``).
+
+    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2``, ``v = der(s)``,
+    ``m der(v) = flange_a.f + flange_b.f``; output ``a = der(v)``. States ``s``, ``v``
+    (modifiers set their start values: ``Mass(m=2, s=0.1, v=0)``).
+
+    Parameters
+    ----------
+    m : float, optional
+        Mass [kg], >= 0 (default 1).
+    L : float, optional
+        Length [m] between the flanges (default 0).
+    """
+
+    m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=0.0)
+    L = Parameter(0.0, unit="m", description="length of the component, flange_a to flange_b")
+    s = State(unit="m", description="absolute position of the centre of the component")
+    v = State(unit="m/s", description="absolute velocity of the component")
+
+    def equations(self) -> None:
+        """Rigid flanges, kinematics and Newton's second law."""
+        self.equation(self.flange_a.s, self.s - self.L / 2, name="s_a")
+        self.equation(self.flange_b.s, self.s + self.L / 2, name="s_b")
+        self.equation(self.flange_a.v, self.v, name="v_a")
+        self.equation(self.flange_b.v, self.v, name="v_b")
+        self.equation(self.der(self.s), self.v, name="kinematics")
+        self.equation(self.m * self.der(self.v), self.flange_a.f + self.flange_b.f, name="newton")
+        self.output("a", self.der(self.v))
+
+
+class Force(Component):
+    """External force from an input signal (MSL ``Translational.Sources.Force``, support fixed).
+
+    ``flange.f = -f``: ``f`` [N] (model input) accelerates the flange in its positive direction.
+
+    Parameters
+    ----------
+    **modifiers
+        ``f`` sets the input's nominal value.
+    """
+
+    flange = Flange_b("flange the force acts on")
+    f = Input(unit="N", description="driving force, positive in the flange axis direction")
+
+    def equations(self) -> None:
+        """``flange.f = -f``."""
+        self.equation(self.flange.f, -self.f, name="force")
+
+
+class Fixed(Component):
+    """Flange fixed in the housing at ``s0`` (MSL ``Translational.Components.Fixed``).
+
+    Parameters
+    ----------
+    s0 : float, optional
+        Fixed position [m] (default 0).
+    """
+
+    s0 = Parameter(0.0, unit="m", description="fixed offset position of the housing")
+    flange = Flange_b("fixed flange")
+
+    def equations(self) -> None:
+        """``flange.s = s0``, ``flange.v = 0``."""
+        self.equation(self.flange.s, self.s0, name="position")
+        self.equation(self.flange.v, 0.0, name="velocity")
