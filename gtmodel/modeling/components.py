@@ -42,7 +42,9 @@ eliminate.
 
 from __future__ import annotations
 
+import inspect
 import logging
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -321,6 +323,19 @@ class Component:
     >>> model.variables("parameter")["spring.c"].shape
     (1, 1)
     """
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Give each component class a signature: its parameters (with defaults), then ``**modifiers``."""
+        super().__init_subclass__(**kwargs)
+        params = [
+            inspect.Parameter(
+                name, inspect.Parameter.KEYWORD_ONLY, default=float(d.default[0]) if d.size == 1 else d.default.tolist()
+            )
+            for name, d in _declarations(cls).items()
+            if isinstance(d, Parameter)
+        ]
+        params.append(inspect.Parameter("modifiers", inspect.Parameter.VAR_KEYWORD))
+        cls.__signature__ = inspect.Signature(params)
 
     def __init__(self, **modifiers: Any) -> None:
         cls = type(self)
@@ -700,8 +715,7 @@ class _Flattening:
                 except GtModelError as exc:
                     raise type(exc)(str(exc) if comp._label() in str(exc) else f"component {comp._label()}: {exc}") from None
                 except (RuntimeError, TypeError, ValueError, NotImplementedError, AttributeError) as exc:
-                    first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-                    raise ModelError(f"component {comp._label()}: error in equations(): {first}") from None
+                    raise ModelError(f"component {comp._label()}: error in equations(): {_short(exc)}") from None
                 finally:
                     _ACTIVE.pop()
             return self._build()
@@ -759,8 +773,6 @@ class _Flattening:
         inside_connected: set[int] = set()
         for comp in self.nodes:
             pairs = self.pairs.get(id(comp), [])
-            if not pairs:
-                continue
             groups: list[list[Connector]] = []
             for a, b in pairs:
                 ga = next((g for g in groups if any(c is a for c in g)), None)
@@ -827,6 +839,14 @@ class _Flattening:
             self.name, len(self.declared) - len(dropped), len(dropped), len(eqs),
         )
         return model
+
+
+def _short(exc: Exception) -> str:
+    """The informative line of an exception message (CasADi's last line, without its source path)."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    if not lines:
+        return type(exc).__name__
+    return re.sub(r"^\.\.\./\S+:\d+:\s*", "", lines[-1])
 
 
 def _element_names(sym: ca.SX) -> list[str]:

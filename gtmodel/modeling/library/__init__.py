@@ -15,6 +15,6 @@ the MSL: import the domain module and qualify.
 
 from __future__ import annotations
 
-from gtmodel.modeling.library import electrical, rotational, translational
+from gtmodel.modeling.library import drive, electrical, rotational, translational
 
-__all__ = ["translational", "rotational", "electrical"]
+__all__ = ["translational", "rotational", "electrical", "drive"]

@@ -93,6 +93,9 @@ class Resistor(OnePort):
     ----------
     R : float, optional
         Resistance [Ohm] (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     R = Parameter(1.0, unit="Ohm", description="resistance")
@@ -110,6 +113,9 @@ class Inductor(OnePort):
     ----------
     L : float, optional
         Inductance [H], > 0 (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     L = Parameter(1.0, unit="H", description="inductance", lb=0.0)
@@ -128,6 +134,9 @@ class Capacitor(OnePort):
     ----------
     C : float, optional
         Capacitance [F], > 0 (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     C = Parameter(1.0, unit="F", description="capacitance", lb=0.0)
@@ -149,6 +158,9 @@ class EMF(Component):
     ----------
     k : float, optional
         Transformation coefficient [N m/A] (= V s/rad) (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     k = Parameter(1.0, unit="N.m/A", description="transformation coefficient")
@@ -190,6 +202,9 @@ class ConstantVoltage(OnePort):
     ----------
     V : float, optional
         Voltage [V] (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     V = Parameter(1.0, unit="V", description="value of the constant voltage")

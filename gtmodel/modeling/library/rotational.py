@@ -113,6 +113,9 @@ class Spring(PartialCompliant):
         Spring constant [N m/rad], >= 0 (default 1e5).
     phi_rel0 : float, optional
         Unstretched angle [rad] (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     c = Parameter(1e5, unit="N.m/rad", description="spring constant", lb=0.0)
@@ -131,6 +134,9 @@ class Damper(PartialCompliant):
     ----------
     d : float, optional
         Damping constant [N m s/rad], >= 0 (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     d = Parameter(0.0, unit="N.m.s/rad", description="damping constant", lb=0.0)
@@ -156,6 +162,9 @@ class SpringDamper(PartialCompliant):
         Damping constant [N m s/rad], >= 0 (default 0).
     phi_rel0 : float, optional
         Unstretched angle [rad] (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     c = Parameter(1e5, unit="N.m/rad", description="spring constant", lb=0.0)
@@ -180,6 +189,9 @@ class Inertia(PartialTwoFlanges):
     ----------
     J : float, optional
         Moment of inertia [kg m^2], >= 0 (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     J = Parameter(1.0, unit="kg.m2", description="moment of inertia", lb=0.0)
@@ -207,6 +219,9 @@ class IdealGear(PartialTwoFlanges):
     ----------
     ratio : float, optional
         Transmission ratio ``flange_a.phi / flange_b.phi`` [1], non-zero (default 1).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     ratio = Parameter(1.0, unit="1", description="transmission ratio flange_a.phi / flange_b.phi")
@@ -244,6 +259,9 @@ class Fixed(Component):
     ----------
     phi0 : float, optional
         Fixed angle [rad] (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     phi0 = Parameter(0.0, unit="rad", description="fixed offset angle of the housing")
@@ -265,6 +283,9 @@ class IdealRollingWheel(Component):
     ----------
     radius : float, optional
         Wheel (pulley) radius [m], > 0 (default 0.3).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     radius = Parameter(0.3, unit="m", description="radius of the wheel", lb=0.0)

@@ -112,6 +112,9 @@ class Spring(PartialCompliant):
         Spring constant [N/m], >= 0 (default 1).
     s_rel0 : float, optional
         Unstretched length [m] (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     c = Parameter(1.0, unit="N/m", description="spring constant", lb=0.0)
@@ -130,6 +133,9 @@ class Damper(PartialCompliant):
     ----------
     d : float, optional
         Damping constant [N s/m], >= 0 (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     d = Parameter(0.0, unit="N.s/m", description="damping constant", lb=0.0)
@@ -153,6 +159,9 @@ class SpringDamper(PartialCompliant):
         Damping constant [N s/m], >= 0 (default 1).
     s_rel0 : float, optional
         Unstretched length [m] (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     c = Parameter(1.0, unit="N/m", description="spring constant", lb=0.0)
@@ -180,6 +189,9 @@ class Mass(PartialTwoFlanges):
         Mass [kg], >= 0 (default 1).
     L : float, optional
         Length [m] between the flanges (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=0.0)
@@ -224,6 +236,9 @@ class Fixed(Component):
     ----------
     s0 : float, optional
         Fixed position [m] (default 0).
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
     """
 
     s0 = Parameter(0.0, unit="m", description="fixed offset position of the housing")

@@ -1,0 +1,349 @@
+"""Tests of components, connectors, connect(), modifiers, extends and flattening into a Model.
+
+References: closed forms of small mechanical systems (stated per test), the Modelica
+connection semantics (Modelica Language Specification 3.6, section 9.2), and the
+minimum-energy double integrator (u(t) = 6 - 12 t for a unit move in 1 s).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.errors import GtModelError, InputError, ModelError
+from gtmodel.modeling import (
+    Component,
+    Connector,
+    Flow,
+    Input,
+    Model,
+    Optimization,
+    Parameter,
+    Potential,
+    State,
+    Variable,
+    connect,
+    solve,
+)
+from gtmodel.modeling.library import rotational as rot
+from gtmodel.modeling.library import translational as tr
+
+SIM_TOL = 1e-6  # absolute, IDAS at rtol 1e-8 / atol 1e-10 against a closed form
+
+
+class Oscillator(Component):
+    """Fixed -- spring -- mass."""
+
+    fixed = tr.Fixed()
+    spring = tr.Spring(c=4.0)
+    mass = tr.Mass(m=1.0, s=0.1)
+
+    def equations(self):
+        connect(self.fixed.flange, self.spring.flange_a)
+        connect(self.spring.flange_b, self.mass.flange_a)
+
+
+class Axis(Component):
+    """A composite with its own (outside) connector: spring -- mass -- flange."""
+
+    ground = tr.Fixed()
+    belt = tr.Spring(c=1e4)
+    cart = tr.Mass(m=2.0)
+    flange = tr.Flange_b("free side of the cart")
+
+    def equations(self):
+        connect(self.ground.flange, self.belt.flange_a)
+        connect(self.belt.flange_b, self.cart.flange_a)
+        connect(self.cart.flange_b, self.flange)
+
+
+class Machine(Component):
+    """Two axes, the first pushed by a force through its outside connector."""
+
+    axis1 = Axis()
+    axis2 = Axis(belt={"c": 4e4})
+    push = tr.Force()
+
+    def equations(self):
+        connect(self.push.flange, self.axis1.flange)
+
+
+# ---------------------------------------------------------------------- modifiers, extends, names
+def test_modifier_sets_parameter_and_start_values():
+    osc = Oscillator(spring={"c": 9.0}, mass={"m": 2.0, "s": {"start": 0.2, "lb": -1.0}})
+    values = osc.parameter_values()
+    assert values["spring.c"][0] == 9.0 and values["mass.m"][0] == 2.0
+    dae = osc.to_model().flatten()
+    assert dae.x_start[dae.x_vars["mass.s"]][0] == 0.2
+    assert dae.x_lb[dae.x_vars["mass.s"]][0] == -1.0
+
+
+def test_class_template_is_not_shared_between_instances():
+    a, b = Oscillator(spring={"c": 9.0}), Oscillator()
+    assert a.spring is not b.spring
+    assert b.parameter_values()["spring.c"][0] == 4.0
+
+
+def test_hierarchical_names_in_the_flat_model():
+    model = Machine().to_model("machine")
+    params = model.variables("parameter")
+    assert {"axis1.belt.c", "axis2.belt.c", "axis1.cart.m"} <= set(params)
+    assert "axis1.cart.s" in model.variables("state")
+    assert "push.f" in model.variables("input")
+
+
+def test_extends_inherits_declarations_and_equations():
+    class StiffSpring(tr.Spring):
+        c = Parameter(1e6, unit="N/m", description="stiffer default", lb=0.0)
+        energy = Variable(unit="J")
+
+        def equations(self):
+            super().equations()
+            self.equation(self.energy, 0.5 * self.c * self.s_rel**2)
+
+    decl = StiffSpring.declarations()
+    assert {"flange_a", "flange_b", "s_rel", "f", "c", "s_rel0", "energy"} <= set(decl)
+    assert StiffSpring().parameter_values()["c"][0] == 1e6
+    assert StiffSpring(c=5.0).parameter_values()["c"][0] == 5.0
+
+    class Osc(Oscillator):
+        spring = StiffSpring(c=9.0)
+
+    # closed form: x = 0.1 cos(3 t) for c = 9, m = 1; energy = c x^2 / 2
+    t = np.linspace(0.0, 2.0, 21)
+    res = Osc().to_model().simulate(t)
+    np.testing.assert_allclose(res.x["mass.s"], 0.1 * np.cos(3.0 * t), atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["spring.energy"], 4.5 * (0.1 * np.cos(3.0 * t)) ** 2, atol=SIM_TOL)
+
+
+def test_replacing_a_sub_component():
+    # closed form: a spring-damper instead of the spring, d = 0 gives the same cos(3 t)
+    osc = Oscillator(spring=tr.SpringDamper(c=9.0, d=0.0))
+    assert isinstance(osc.spring, tr.SpringDamper)
+    t = np.linspace(0.0, 1.0, 11)
+    np.testing.assert_allclose(osc.to_model().simulate(t).x["mass.s"], 0.1 * np.cos(3.0 * t), atol=SIM_TOL)
+
+
+def test_flattened_model_is_a_plain_model():
+    model = Oscillator().to_model("osc")
+    assert isinstance(model, Model) and model.name == "osc"
+    assert model.outputs.keys() == {"mass.a"}
+
+
+# ---------------------------------------------------------------------- connection semantics
+def _residuals(model: Model) -> dict[str, ca.SX]:
+    return {label: res for label, res in model._equations}
+
+
+def test_connection_set_of_three_gives_one_flow_sum():
+    class Three(Component):
+        fixed = tr.Fixed()
+        s1 = tr.Spring(c=1.0)
+        s2 = tr.Spring(c=2.0)
+        mass = tr.Mass()
+
+        def equations(self):
+            connect(self.fixed.flange, self.s1.flange_a)
+            connect(self.s1.flange_a, self.s2.flange_a)  # set {fixed, s1.a, s2.a}
+            connect(self.s1.flange_b, self.mass.flange_a)
+            connect(self.s2.flange_b, self.mass.flange_a)
+
+    eqs = _residuals(Three().to_model())
+    flow = [k for k in eqs if k.startswith("connect(fixed.flange") and k.endswith(".f")]
+    assert len(flow) == 1
+    names = {str(s) for s in ca.symvar(eqs[flow[0]])}
+    assert names == {"fixed.flange.f", "s1.flange_a.f", "s2.flange_a.f"}
+    # closed form: springs in parallel, frequency sqrt(3 / 1)
+    res = Three(mass={"s": 0.1}).to_model().simulate(np.linspace(0.0, 1.0, 11))
+    np.testing.assert_allclose(res.x["mass.s"], 0.1 * np.cos(np.sqrt(3.0) * res.t), atol=SIM_TOL)
+
+
+def test_unconnected_flow_is_zero():
+    eqs = _residuals(Oscillator().to_model())
+    assert "mass.flange_b.f (unconnected)" in eqs
+    assert str(eqs["mass.flange_b.f (unconnected)"]) == "mass.flange_b.f"
+
+
+def test_outside_connector_flow_enters_with_minus_sign():
+    # Modelica: connect(cart.flange_b, flange) inside Axis gives cart.flange_b.f - flange.f = 0
+    eqs = _residuals(Machine().to_model())
+    res = eqs["connect(axis1.cart.flange_b, axis1.flange).f"]
+    jac = ca.jacobian(res, ca.vertcat(*ca.symvar(res)))
+    coeff = {str(s): float(ca.DM(jac[0, i])) for i, s in enumerate(ca.symvar(res))}
+    assert coeff == {"axis1.cart.flange_b.f": 1.0, "axis1.flange.f": -1.0}
+
+
+def test_force_through_hierarchy_matches_closed_form():
+    # closed form: constant force F on the cart (m = 2) held by the belt (c = 1e4):
+    # s(t) = F / c (1 - cos(w t)), w = sqrt(c / m); the second axis stays at rest
+    t = np.linspace(0.0, 0.2, 41)
+    res = Machine().to_model().simulate(t, u=50.0)
+    w = np.sqrt(1e4 / 2.0)
+    np.testing.assert_allclose(res.x["axis1.cart.s"], 50.0 / 1e4 * (1.0 - np.cos(w * t)), atol=SIM_TOL)
+    np.testing.assert_allclose(res.x["axis2.cart.s"], 0.0, atol=SIM_TOL)
+
+
+def test_unused_velocity_of_a_massless_node_is_dropped():
+    # springs in series: the node velocity is used by no equation, so it is not a variable;
+    # closed form: c = c1 c2 / (c1 + c2) = 2, x = 0.1 cos(sqrt(2) t)
+    class Series(Component):
+        fixed = tr.Fixed()
+        s1 = tr.Spring(c=4.0)
+        s2 = tr.Spring(c=4.0)
+        mass = tr.Mass(s=0.1)
+
+        def equations(self):
+            connect(self.fixed.flange, self.s1.flange_a)
+            connect(self.s1.flange_b, self.s2.flange_a)
+            connect(self.s2.flange_b, self.mass.flange_a)
+
+    model = Series().to_model()
+    alg = model.variables("algebraic")
+    assert "s1.flange_b.v" not in alg and "s2.flange_a.v" not in alg
+    assert "s1.flange_b.s" in alg
+    res = model.simulate(np.linspace(0.0, 2.0, 21))
+    np.testing.assert_allclose(res.x["mass.s"], 0.1 * np.cos(np.sqrt(2.0) * res.t), atol=SIM_TOL)
+
+
+def test_user_connector_and_vector_variables():
+    class Port(Connector):
+        p = Potential(unit="m", shape=2)
+        q = Flow(unit="N", shape=2)
+
+    class Anchor(Component):
+        port = Port()
+        where = Parameter([1.0, 2.0], unit="m")
+
+        def equations(self):
+            self.equation(self.port.p, self.where)
+
+    class Body(Component):
+        port = Port()
+        k = Parameter(3.0, unit="N/m")
+        x = State(unit="m", shape=2)
+
+        def equations(self):
+            self.equation(self.der(self.x), self.port.q / self.k)
+            self.equation(self.port.q, self.k * (self.port.p - self.x))
+
+    class Pair(Component):
+        anchor = Anchor()
+        body = Body()
+
+        def equations(self):
+            connect(self.anchor.port, self.body.port)
+
+    # closed form: x' = p - x from x(0) = 0: x = p (1 - exp(-t))
+    t = np.linspace(0.0, 1.0, 11)
+    res = Pair().to_model().simulate(t)
+    np.testing.assert_allclose(res.x["body.x"], np.outer(1.0 - np.exp(-t), [1.0, 2.0]), atol=SIM_TOL)
+
+
+# ---------------------------------------------------------------------- downstream: optimisation
+def test_optimization_on_a_composed_model():
+    # closed form: minimum-energy unit move of a unit mass in 1 s, F(t) = 6 - 12 t
+    class Slider(Component):
+        push = tr.Force()
+        body = tr.Mass(m=1.0)
+
+        def equations(self):
+            connect(self.push.flange, self.body.flange_a)
+
+    model = Slider().to_model()
+    s, v = model.variables("state")["body.s"], model.variables("state")["body.v"]
+    f = model.variables("input")["push.f"]
+    opt = Optimization(model, final_time=1.0)
+    opt.set_objective(lagrange=f**2)
+    for expr, at, value in ((s, "start", 0.0), (v, "start", 0.0), (s, "final", 1.0), (v, "final", 0.0)):
+        opt.add_point_constraint(expr, at=at, lb=value, ub=value)
+    result = solve(opt, elements=10, points=3, scheme="radau")
+    assert result.status == "optimal"
+    assert result.objective == pytest.approx(12.0, abs=1e-6)
+    np.testing.assert_allclose(result.inputs["push.f"], 6.0 - 12.0 * result.t, atol=1e-5)
+
+
+# ---------------------------------------------------------------------- bad input
+class _Bad(Component):
+    """Helper composite whose equations() runs a given callable."""
+
+    fixed = tr.Fixed()
+    mass = tr.Mass()
+    shaft = rot.Inertia()
+
+    action = None
+
+    def equations(self):
+        type(self).action(self)
+
+
+def _flatten_with(action):
+    cls = type("BadCase", (_Bad,), {"action": staticmethod(action)})
+    return cls().to_model()
+
+
+def _composite_without_inner_connection():
+    class Hollow(Component):
+        mass = tr.Mass()
+        flange = tr.Flange_b()
+
+    class Outer(Component):
+        h = Hollow()
+        fixed = tr.Fixed()
+
+        def equations(self):
+            connect(self.fixed.flange, self.h.flange)
+
+    return Outer().to_model()
+
+
+BAD = [
+    ("incompatible", lambda: _flatten_with(lambda c: connect(c.mass.flange_a, c.shaft.flange_a)), ModelError,
+     r"incompatible connectors mass\.flange_a \(Flange_a: s, v, f\) and shaft\.flange_a \(Flange_a: phi, w, tau\)"),
+    ("self", lambda: _flatten_with(lambda c: connect(c.mass.flange_a, c.mass.flange_a)), ModelError,
+     r"connect\(mass\.flange_a, mass\.flange_a\): a connector cannot be connected to itself"),
+    ("not a connector", lambda: _flatten_with(lambda c: connect(c.mass, c.fixed.flange)), ModelError,
+     r"is not a connector \(got Mass\)"),
+    ("foreign", lambda: _flatten_with(lambda c: connect(tr.Mass().flange_a, c.fixed.flange)), ModelError,
+     r"belongs neither to <root> nor to one of its direct sub-components"),
+    ("outside equations", lambda: connect(tr.Mass().flange_a, tr.Mass().flange_b), ModelError,
+     r"must be called inside a component's equations\(\)"),
+    ("unknown modifier", lambda: tr.Spring(k=2e5), ModelError,
+     r"Spring: unknown modifier\(s\) \['k'\]; allowed: \['c', 'f', 's_rel', 's_rel0'\]"),
+    ("modifier of a connector", lambda: tr.Spring(flange_a=1.0), ModelError, r"Spring: unknown modifier\(s\) \['flange_a'\]"),
+    ("wrong type", lambda: tr.Spring(c="stiff"), InputError, r"Spring\.c: expected a real number, got str 'stiff'"),
+    ("bool parameter", lambda: tr.Mass(m=True), InputError, r"Mass\.m: expected a real number, got bool"),
+    ("out of bounds", lambda: tr.Spring(c=-1.0), InputError, r"Spring\.c: must be >= 0\.0"),
+    ("wrong size", lambda: tr.Spring(c=[1.0, 2.0]), InputError, r"Spring\.c: expected 1 value\(s\), got 2"),
+    ("not finite", lambda: rot.Inertia(J=float("nan")), InputError, r"Inertia\.J: expected finite numbers"),
+    ("start attribute", lambda: tr.Mass(s={"begin": 1.0}), ModelError, r"Mass\.s: unknown attribute\(s\) \['begin'\]"),
+    ("start type", lambda: tr.Mass(s="up"), InputError, r"Mass\.s: start of variable 's' must be numbers"),
+    ("nested unknown", lambda: Oscillator(spring={"k": 1.0}), ModelError, r"Spring: unknown modifier\(s\) \['k'\]"),
+    ("sub-component value", lambda: Oscillator(spring=5.0), InputError,
+     r"Oscillator\.spring: a sub-component modifier must be a dict of modifiers or a Component"),
+    ("replacement", lambda: Oscillator(spring=rot.Spring()), ModelError,
+     r"Oscillator\.spring: replacement Spring lacks connector\(s\) \['flange_a', 'flange_b'\]"),
+    ("symbol outside", lambda: tr.Spring().c, ModelError, r"'c' has a symbol only while the component is flattened"),
+    ("equation outside", lambda: tr.Spring().equation(1.0, 2.0), ModelError, r"work only inside equations\(\)"),
+    ("der of non-state", lambda: _flatten_with(lambda c: c.equation(c.der(c.mass.flange_a.s), 0.0)), ModelError,
+     r"component <root> \(BadCase\): .*der\(\) needs a declared state, got mass\.flange_a\.s"),
+    ("size mismatch", lambda: _flatten_with(lambda c: c.equation(ca.vertcat(c.mass.s, c.mass.v), ca.DM([1, 2, 3]))),
+     InputError, r"component <root> \(BadCase\): equation 'eq0': lhs has 2 elements but rhs has 3"),
+    ("casadi error", lambda: _flatten_with(lambda c: c.equation(ca.mtimes(ca.DM.ones(2, 3), ca.vertcat(c.mass.s, c.mass.v)), 0.0)), ModelError,
+     r"component <root> \(BadCase\): error in equations\(\): Matrix product with incompatible dimensions"),
+    ("python error", lambda: _flatten_with(lambda c: c.equation(c.mass.nothing, 0.0)), ModelError,
+     r"component <root> \(BadCase\): error in equations\(\): 'Mass' object has no attribute 'nothing'"),
+    ("inner connection", _composite_without_inner_connection, ModelError,
+     r"component h \(Hollow\): its connector h\.flange is connected to nothing inside it"),
+    ("unbalanced", lambda: _flatten_with(lambda c: c.equation(c.mass.s, 1.0)).flatten(), ModelError,
+     r"scalar equations but .* unknowns"),
+]
+
+
+@pytest.mark.parametrize("make, error, match", [b[1:] for b in BAD], ids=[b[0] for b in BAD])
+def test_bad_input_gives_one_named_error(make, error, match):
+    with pytest.raises(error, match=match) as info:
+        make()
+    assert isinstance(info.value, GtModelError)
+    # no CasADi traceback chained to the message
+    assert not isinstance(info.value.__cause__, RuntimeError)
