@@ -1,32 +1,40 @@
 """Inverse models: the inputs (forces) that produce a prescribed motion, from a model's equations.
 
 Modelica's "inverse model" idea (Looye, Thuemmel, Kurze, Otter, Bals (2005), "Nonlinear
-inverse models for control", 4th Modelica Conference; Thuemmel et al. (2005)): declare
-which variables are known (the prescribed motion: positions, velocities, accelerations)
-and which are wanted (the actuator inputs); the same acausal equations, differentiated
-where the index requires it, are solved for the wanted ones. For mechanical models with
-the motion prescribed, the equations are linear in the forces and the constraint
-multipliers, so the inverse model is a closed-form CasADi expression.
+inverse models for control", Proc. 4th International Modelica Conference): declare which
+variables are known (the prescribed motion: positions, velocities, accelerations) and
+which are wanted (the actuator inputs); the same acausal equations, differentiated where
+the index requires it, are solved for the wanted ones. For mechanical models with the
+motion prescribed, the equations are linear in the forces and the constraint multipliers,
+so the inverse model is a closed-form CasADi expression.
 
-:func:`inverse_model` does it in four steps:
+:func:`inverse_model` does it in five steps:
 
 1. the model's scalar equations, differentiated by Pantelides' algorithm
    (:func:`~gtmodel.modeling.index_reduction.pantelides`) so that every variable's
    derivatives up to the needed order are variables of an augmented system
    (``der(der(x))`` of a position is a variable, or ``der(v)`` where ``der(x) = v``);
-2. the known variables substituted; every other variable (and the inputs named unknown)
-   must be determined: a full matching of the remaining unknowns to the equations
-   (minimum weight, ``scipy.sparse.csgraph.min_weight_full_bipartite_matching``, so that
-   an unknown is preferably computed from an equation linear in it with a coefficient that
-   depends on known values only); without one, ONE :class:`~gtmodel.errors.ModelError`
-   names the undetermined variables and their equations (the under-determined part of the
+2. the known variables substituted (and the parameter values, unless they stay an input);
+   every other variable (and the inputs named unknown) must be determined: a full
+   matching of the remaining unknowns to the equations (minimum weight,
+   ``scipy.sparse.csgraph.min_weight_full_bipartite_matching``, so that an unknown is
+   preferably computed from an equation linear in it with a coefficient that depends on
+   known values only); without one, ONE :class:`~gtmodel.errors.ModelError` names the
+   undetermined variables and their equations (the under-determined part of the
    Dulmage-Mendelsohn decomposition);
 3. the block lower-triangular form of the matched system (strongly connected components,
-   Tarjan's BLT as in Modelica tools); each block must be linear in its unknowns once the
-   earlier blocks are solved, and is solved symbolically (``casadi.solve``);
-4. the equations left unmatched (e.g. the position-level closure constraints when the
+   the BLT of Modelica tools); every block must be linear in its own unknowns;
+4. the blocks grouped in layers, each linear in all its unknowns once the earlier layers
+   are known (for a mechanism: positions, velocities, accelerations with the forces), and
+   each layer solved symbolically (``casadi.solve``);
+5. the equations left unmatched (e.g. the position-level closure constraints when the
    cart positions and the TCP are both prescribed) are consistency conditions of the
-   prescribed motion: they are returned as the output ``residual``.
+   prescribed motion, returned as the output ``residual``. Where they are linear in a
+   layer's unknowns (the motion over-prescribed: more known accelerations than degrees of
+   freedom), they are solved with that layer in the least-squares sense, so that the
+   result does not depend on which rows the structural matching picked (a picked row
+   may degenerate at a configuration, e.g. a rod direction component passing zero); the
+   layer's rows are then all reported in ``residual``.
 """
 
 from __future__ import annotations
@@ -73,8 +81,8 @@ class InverseModel:
         The names of the inputs and outputs.
     residual_names : list of str
         Labels of the equations in ``residual`` (``"der(link1.length)"`` ...).
-    block_sizes : list of int
-        Sizes of the blocks of the block-triangular solution, in solution order.
+    layer_sizes : list of int
+        Numbers of scalar unknowns of the layers solved one after the other.
     p_names : list of str
         Expanded parameter names (the order of the ``p`` input, if any).
     p_value : numpy.ndarray
@@ -85,7 +93,7 @@ class InverseModel:
     known: list[str]
     unknown: list[str]
     residual_names: list[str]
-    block_sizes: list[int]
+    layer_sizes: list[int]
     p_names: list[str]
     p_value: np.ndarray
 
@@ -231,8 +239,8 @@ def _undetermined_message(model: Any, pattern: sps.csr_matrix, eq_names: list[st
     )
 
 
-def _blocks(weights: sps.csr_matrix, eq_of: np.ndarray) -> list[list[int]]:
-    """Unknowns grouped in strongly connected blocks, in a solvable (topological) order."""
+def _blocks(weights: sps.csr_matrix, eq_of: np.ndarray) -> tuple[list[list[int]], list[set[int]]]:
+    """Unknowns grouped in strongly connected blocks in a topological order, and each block's predecessors."""
     m = weights.shape[1]
     pat = weights.tocsr()
     src, dst = [], []
@@ -248,21 +256,115 @@ def _blocks(weights: sps.csr_matrix, eq_of: np.ndarray) -> list[list[int]]:
     for v in range(m):
         members[label[v]].append(v)
     succ: list[set[int]] = [set() for _ in range(ncomp)]
-    indeg = np.zeros(ncomp, dtype=int)
+    pred: list[set[int]] = [set() for _ in range(ncomp)]
     for a, b in zip(src, dst):
-        la, lb = label[a], label[b]
-        if la != lb and lb not in succ[la]:
+        la, lb = int(label[a]), int(label[b])
+        if la != lb:
             succ[la].add(lb)
-            indeg[lb] += 1
+            pred[lb].add(la)
+    indeg = [len(p) for p in pred]
     order, ready = [], [c for c in range(ncomp) if indeg[c] == 0]
     while ready:
         c = ready.pop()
-        order.append(members[c])
+        order.append(c)
         for d in succ[c]:
             indeg[d] -= 1
             if indeg[d] == 0:
                 ready.append(d)
-    return order
+    pos = {c: k for k, c in enumerate(order)}
+    return [members[c] for c in order], [{pos[p] for p in pred[c]} for c in order]
+
+
+def _layers(blocks: list[list[int]], preds: list[set[int]], rows: list[ca.SX], unknowns: list[ca.SX],
+            pattern: sps.csr_matrix, eq_of: np.ndarray) -> list[list[int]]:
+    """Group the blocks into layers, each linear in all its unknowns (greedy, in topological order).
+
+    A block joins the current layer when its predecessors are solved or in the layer and its
+    equations stay linear in the layer's unknowns (the rows of the blocks already in the
+    layer cannot use its unknowns): for a mechanism, the positions, then the velocities,
+    then the accelerations with the forces. Raises ``ValueError(k)`` for a block ``k``
+    that is not linear in its own unknowns.
+    """
+    block_of = {v: k for k, block in enumerate(blocks) for v in block}
+    cols_of = [{int(c) for v in block for c in pattern.indices[pattern.indptr[eq_of[v]]:pattern.indptr[eq_of[v] + 1]]}
+               for block in blocks]
+    exprs = [_cat([rows[eq_of[v]] for v in block]) for block in blocks]
+    done: set[int] = set()
+    remaining = list(range(len(blocks)))
+    layers = []
+    while remaining:
+        layer: set[int] = set()
+        changed = True
+        while changed:
+            changed = False
+            for k in list(remaining):
+                if not preds[k] <= done | layer:
+                    continue
+                inside = [c for c in cols_of[k] if block_of[c] in layer or block_of[c] == k]
+                if ca.is_linear(exprs[k], _cat([unknowns[c] for c in inside])):
+                    layer.add(k)
+                    remaining.remove(k)
+                    changed = True
+                elif not layer:
+                    raise ValueError(k)  # ready, alone, and nonlinear in its own unknowns
+        done |= layer
+        layers.append(sorted(layer))
+    return layers
+
+
+def _solve_block(rs: ca.SX, rx: ca.SX, xs: ca.SX) -> ca.SX:
+    """Solution of the linear block ``rs(xs) = 0``; with redundant rows ``rx``, in the least-squares sense.
+
+    The redundant rows (equations left unmatched whose unknowns are all known after this
+    block) make the solution independent of which rows the structural matching picked:
+    where a picked row degenerates (e.g. a component of a rod direction passing zero),
+    the others still determine the unknowns. Least squares by QR (``casadi.qr``,
+    modified Gram-Schmidt) of the stacked rows, exact for a consistent prescribed motion.
+    """
+    n = int(xs.numel())
+    zeros = ca.SX.zeros(n)
+    if rx.numel() == 0:
+        A = ca.jacobian(rs, xs)
+        b = ca.substitute(rs, xs, zeros)
+        return -b / A if n == 1 else ca.solve(A, -b)
+    r = ca.vertcat(rs, rx)
+    A = ca.jacobian(r, xs)
+    b = ca.substitute(r, xs, zeros)
+    Q, R = ca.qr(ca.densify(A))
+    return ca.solve(R, -(Q.T @ b))
+
+
+def _solve_layers(
+    rows: list[ca.SX], unknowns: list[ca.SX], blocks: list[list[int]], layers: list[list[int]], eq_of: np.ndarray,
+    pattern: sps.csr_matrix, matched: set[int],
+) -> tuple[list[ca.SX], list[ca.SX], list[int], list[int]]:
+    """Solve the layers in order; the solutions in known values, sizes, and the rows to report as residual."""
+    block_of = {v: k for k, block in enumerate(blocks) for v in block}
+    layer_of = {k: j for j, layer in enumerate(layers) for k in layer}
+    extra: dict[int, list[int]] = {}
+    for e in sorted(set(range(len(rows))) - matched):  # redundant rows: with the layer that completes them
+        cols = pattern.indices[pattern.indptr[e]:pattern.indptr[e + 1]]
+        if len(cols):
+            extra.setdefault(max(layer_of[block_of[int(c)]] for c in cols), []).append(e)
+    solved_from: list[ca.SX] = []
+    solved_to: list[ca.SX] = []
+    sizes: list[int] = []
+    least_squares: set[int] = set()
+    for j, layer in enumerate(layers):
+        vs = [v for k in layer for v in blocks[k]]
+        xs = _cat([unknowns[v] for v in vs])
+        rs = _cat([rows[eq_of[v]] for v in vs])
+        rx = _cat([rows[e] for e in extra.get(j, [])])
+        if solved_from:  # the earlier solutions hold known values only: so will this one
+            rs, rx = ca.substitute([rs, rx], [_cat(solved_from)], [_cat(solved_to)])
+        linear = [i for i in range(int(rx.numel())) if ca.is_linear(rx[i], xs)]
+        if linear:  # least squares: the matched rows may not hold exactly either, report them too
+            least_squares.update(int(eq_of[v]) for v in vs)
+        solved_from.append(xs)
+        solved_to.append(_solve_block(rs, _cat([rx[i] for i in linear]), xs))
+        sizes.append(len(vs))
+    checked = [i for i in range(len(rows)) if i not in matched or i in least_squares]
+    return solved_from, solved_to, sizes, checked
 
 
 def inverse_model(
@@ -276,7 +378,7 @@ def inverse_model(
 
     Modelica's inverse-model idea (see the module docstring): with the motion prescribed
     (``known``), the model's equations and their derivatives (Pantelides' algorithm) are
-    solved block by block for every other variable; the ones named in ``unknown`` are
+    solved layer by layer for every other variable; the ones named in ``unknown`` are
     returned. Typical use: the actuator forces of a mechanism for a prescribed trajectory
     (inverse dynamics).
 
@@ -308,7 +410,7 @@ def inverse_model(
     -------
     InverseModel
         The Function ``(known..., [p]) -> (unknown..., residual)`` and its description.
-        Where a block of the solution is singular (a singular configuration) the outputs
+        Where a layer of the solution is singular (a singular configuration) the outputs
         are not finite.
 
     Raises
@@ -394,39 +496,29 @@ def inverse_model(
     matched_eqs = set(int(e) for e in eq_idx)
 
     res_list = [res_all[i] for i in range(n_eq)]
-    solved_from: list[ca.SX] = []
-    solved_to: list[ca.SX] = []
-    sizes = []
-    for block in _blocks(weights, eq_of):
-        xs = _cat([unknowns[v] for v in block])
-        rs = _cat([res_list[eq_of[v]] for v in block])
-        if solved_from:
-            rs = ca.substitute(rs, _cat(solved_from), _cat(solved_to))
-        if not ca.is_linear(rs, xs):
-            raise ModelError(
-                f"inverse model of model {model.name!r}: equations {_quote([eq_names[eq_of[v]] for v in block])} "
-                f"are not linear in the variables {_quote([var_names[v] for v in block])} they determine; "
-                "prescribe these (or more of the motion) as known"
-            )
-        A = ca.jacobian(rs, xs)
-        b = ca.substitute(rs, xs, ca.SX.zeros(xs.numel()))
-        sol = -b / A if len(block) == 1 else ca.solve(A, -b)
-        solved_from.append(xs)
-        solved_to.append(sol)
-        sizes.append(len(block))
-    res_names = [eq_names[i] for i in range(n_eq) if i not in matched_eqs]
-    residual = _cat([res_list[i] for i in range(n_eq) if i not in matched_eqs])
+    blocks, preds = _blocks(weights, eq_of)
+    try:
+        layers = _layers(blocks, preds, res_list, unknowns, pattern, eq_of)
+    except ValueError as exc:
+        block = blocks[exc.args[0]]
+        raise ModelError(
+            f"inverse model of model {model.name!r}: equations {_quote([eq_names[eq_of[v]] for v in block])} "
+            f"are not linear in the variables {_quote([var_names[v] for v in block])} they determine; "
+            "prescribe these (or more of the motion) as known"
+        ) from None
+    solved_from, solved_to, sizes, checked = _solve_layers(res_list, unknowns, blocks, layers, eq_of, pattern, matched_eqs)
+    res_names = [eq_names[i] for i in checked]
+    residual = _cat([res_list[i] for i in checked])
     outs = [_cat([sign * s for s, sign in zip(syms, signs)]) for syms, signs in out_syms]
-    # each block was solved with the earlier ones substituted: the solutions hold known values only
     exprs = ca.substitute(outs + [residual], [_cat(solved_from)], [_cat(solved_to)]) if solved_from else outs + [residual]
     ins = list(known_in) + ([p_sym] if parameter_input else [])
     in_names = list(known) + (["p"] if parameter_input else [])
     fn = ca.Function(f"{model.name}_inverse", ins, exprs, in_names, list(unknown) + ["residual"])
     free = ca.symvar(_cat([ca.vec(e) for e in exprs])) if exprs else []
-    allowed = _cat([ca.vec(i) for i in ins] + [system.t])
-    stray = [str(s.name()) for s in free if not ca.depends_on(s, allowed)]
+    allowed = {str(s.name()) for i in ins for s in ca.symvar(i)} | {"time"}
+    stray = [str(s.name()) for s in free if str(s.name()) not in allowed]
     if stray:  # cannot happen after a full matching; kept as a guard against silent zeros
         raise ModelError(f"inverse model of model {model.name!r}: the outputs still depend on {_quote(stray)}")
-    _log.debug("inverse model of %s: %d blocks (largest %d), %d residuals", model.name, len(sizes),
+    _log.debug("inverse model of %s: %d layers (largest %d), %d residuals", model.name, len(sizes),
                max(sizes, default=0), len(res_names))
     return InverseModel(fn, known, unknown, res_names, sizes, p_names, p_value)
