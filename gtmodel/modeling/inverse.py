@@ -358,11 +358,18 @@ def _solve_layers(
         if solved_from:  # the earlier solutions hold known values only: so will this one
             rs, rx = ca.substitute([rs, rx], [_cat(solved_from)], [_cat(solved_to)])
         linear = [i for i in range(int(rx.numel())) if ca.is_linear(rx[i], xs)]
+        sizes.append(len(vs))
         if linear:  # least squares: the matched rows may not hold exactly either, report them too
             least_squares.update(int(eq_of[v]) for v in vs)
-        solved_from.append(xs)
-        solved_to.append(_solve_block(rs, _cat([rx[i] for i in linear]), xs))
-        sizes.append(len(vs))
+            solved_from.append(xs)
+            solved_to.append(_solve_block(rs, _cat([rx[i] for i in linear]), xs))
+            continue
+        for k in layer:  # square: block by block (smaller, better conditioned systems)
+            xb = _cat([unknowns[v] for v in blocks[k]])
+            rb = _cat([rows[eq_of[v]] for v in blocks[k]])
+            solved_to.append(_solve_block(ca.substitute(rb, _cat(solved_from), _cat(solved_to)) if solved_from else rb,
+                                          ca.SX(0, 1), xb))
+            solved_from.append(xb)
     checked = [i for i in range(len(rows)) if i not in matched or i in least_squares]
     return solved_from, solved_to, sizes, checked
 
