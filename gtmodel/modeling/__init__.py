@@ -14,7 +14,7 @@
 from __future__ import annotations
 
 from gtmodel.modeling.collocation import CollocationTranscription, solve
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable, connect
+from gtmodel.modeling.components import Component, Input, Parameter, State, Structural, Variable, connect
 from gtmodel.modeling.connectors import Connector, Flow, Potential
 from gtmodel.modeling.dae import FlatDAE, SimulationResult
 from gtmodel.modeling.model import Model
@@ -57,6 +57,7 @@ __all__ = [
     "Variable",
     "State",
     "Input",
+    "Structural",
     "connect",
     "Connector",
     "Potential",

@@ -35,7 +35,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import expand_names
+from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure import (
     ScalarDAE,
     check_structure,
@@ -255,11 +255,6 @@ def _jacobian_function(aug: AugmentedDAE, eqs: list[int], cand: list[int]) -> ca
     return ca.Function("dd_jac", aug.args, [ca.densify(ca.jacobian(g, z))])
 
 
-def _point_args(aug: AugmentedDAE, point: tuple[float, np.ndarray, np.ndarray, np.ndarray]) -> list[Any]:
-    t, v, u, p = point
-    return [t, v, u, p]
-
-
 def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
     """Choose the dummy derivatives, numerically at a point or structurally.
 
@@ -296,13 +291,18 @@ def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
     while g:
         chosen = None
         if point is not None:
-            G = np.array(_jacobian_function(aug, g, cand)(*_point_args(aug, point)))
+            G = np.array(_jacobian_function(aug, g, cand)(*point))
             if G.size and np.all(np.isfinite(G)):
                 _, R, piv = sla.qr(G, pivoting=True, mode="economic")
                 d = np.abs(np.diag(R))
                 if len(d) >= len(g) and d[len(g) - 1] > 1e-10 * max(d[0], 1e-300):
                     chosen = sorted(cand[k] for k in piv[: len(g)])
         if chosen is None:
+            if point is not None:
+                _log.warning(
+                    "model %s: the dummy-derivative block of %s is singular at the given point; "
+                    "choosing structurally", aug.system.name, [aug.eq_names[e] for e in g],
+                )
             pat = sparsity_pattern([aug.res[e] for e in g], [aug.syms[v] for v in cand])
             eq_to_var, _ = matching(pat)
             if np.any(eq_to_var < 0):
@@ -444,6 +444,8 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
 
     Raises
     ------
+    InputError
+        If ``model`` is not a model or ``point`` is malformed.
     ModelError
         If the model is structurally singular (one message naming the equations and
         variables) or cannot be reduced.
@@ -458,9 +460,20 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
         except ModelError:
             pass
     aug = pantelides(system)
+    nv = len(aug.syms)
     if point is None:
-        v0 = np.concatenate([system.start, np.zeros(len(aug.syms) - system.n_vars)])
+        v0 = np.concatenate([system.start, np.zeros(nv - system.n_vars)])
         point = (0.0, v0, system.u_start, system.p_value)
+    elif not isinstance(point, (tuple, list)) or len(point) != 4:
+        raise InputError(f"point must be a tuple (t, v, u, p), got {point!r}")
+    else:
+        t0 = float(_vector_value(point[0], 1, "point t")[0])
+        point = (
+            t0,
+            _vector_value(point[1], nv, f"point v ({[aug.names[k] for k in range(nv)]})"),
+            _vector_value(point[2], int(system.u.numel()), "point u"),
+            _vector_value(point[3], int(system.p.numel()), "point p"),
+        )
     values = np.asarray(point[1], dtype=float)
     if aug.n_differentiated == 0:
         states = [v for v in range(system.n_vars) if aug.diff[v] is not None]
@@ -540,25 +553,29 @@ def build_model(
     old.append(_cat(aug.syms))
     rep.append(_cat([new_syms[v] for v in range(len(aug.syms))]))
 
-    def sub(e: ca.SX) -> ca.SX:
-        return ca.substitute(e, _cat([ca.vec(o) for o in old]), _cat([ca.vec(r) for r in rep]))
+    src = _cat([ca.vec(o) for o in old])
+    dst = _cat([ca.vec(r) for r in rep])
+
+    def sub(items: list[ca.SX]) -> list[ca.SX]:
+        return list(ca.substitute([ca.vec(e) for e in items], [src], [dst])) if items else []
 
     for v in [] if direct else states:
         new.equation(new.der(new_syms[v]), new_syms[aug.diff[v]], name=f"der_{_ident(aug.names[v])}")
-    for r, nm in zip(aug.res, aug.eq_names):
-        new.equation(sub(r), 0.0, name=nm)
-    for nm, e in aug.system.outputs.items():
-        new.output(nm, sub(e))
-    for nm in aug.system.aliases:
+    for r, nm in zip(sub(aug.res), aug.eq_names):
+        new.equation(r, 0.0, name=nm)
+    s = aug.system
+    for nm, e in zip(s.outputs, sub(list(s.outputs.values()))):
+        new.output(nm, e)
+    for nm, e in zip(s.aliases, sub([s.observed[nm] for nm in s.aliases])):
         for oname in (nm, _ident(nm)):
             if oname not in new._vars and oname not in new._outputs:
                 try:
-                    new.output(oname, sub(aug.system.observed[nm]))
+                    new.output(oname, e)
                     break
                 except InputError:
                     continue
-    for r, nm in zip(aug.system.init_res, aug.system.init_names):
-        new.initial_equation(sub(r), 0.0, name=nm)
+    for r, nm in zip(sub(s.init_res), s.init_names):
+        new.initial_equation(r, 0.0, name=nm)
     _log.debug(
         "structural_simplify %s: %d states, %d algebraic, dummies %s",
         model.name, len(states), len(algs), sorted(aug.names[v] for v in sel.dummies),

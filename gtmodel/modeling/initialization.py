@@ -66,7 +66,9 @@ def initial_system(aug: AugmentedDAE, fixed: Mapping[int, float]) -> tuple[list[
     msg = structure_message(inc, f"initialisation of model {s.name!r}")
     if msg:
         dm = dulmage_mendelsohn(pat)
-        states = [aug.names[v] for v in dm["under_vars"] if aug.diff[v] is not None and v not in fixed]
+        states = [
+            aug.names[v] for v in dm["under_vars"] if aug.diff[v] is not None and aug.order[v] == 0 and v not in fixed
+        ]
         if dm["unmatched_vars"]:
             msg += (
                 f"; add initial equations (Model.initial_equation) or x0 values for "

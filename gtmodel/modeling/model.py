@@ -96,6 +96,7 @@ class Model:
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
         self._initial_equations: list[tuple[str, ca.SX]] = []
+        self._hashes: set[int] = {self._time.element_hash()}  # of every declared symbol element
 
     # ------------------------------------------------------------------ declarations
     @property
@@ -127,6 +128,8 @@ class Model:
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
+        for s in (sym, var.der) if var.der is not None else (sym,):
+            self._hashes.update(s[i].element_hash() for i in range(size))
         return sym
 
     def parameter(self, name: str, value: Any, shape: Any = None) -> ca.SX:
@@ -321,8 +324,10 @@ class Model:
         ModelError
             Naming the unknown symbols.
         """
-        known = ca.vertcat(*[ca.vec(s) for s in list(self._known_symbols()) + list(extra)])
-        unknown = [s for s in ca.symvar(expr) if not ca.depends_on(s, known)]
+        # element hashes identify SX symbols (O(1) per symbol; many-component models check
+        # thousands of equations)
+        known = self._hashes | {s[i].element_hash() for s in extra for i in range(s.numel())}
+        unknown = [s for s in ca.symvar(expr) if s.element_hash() not in known]
         if unknown:
             raise ModelError(
                 f"{what}: unknown symbol(s) {_symbol_names(unknown)} not declared by model {self.name!r}"
@@ -374,7 +379,9 @@ class Model:
 
         Holds at the start time only; :meth:`simulate` then solves the consistent
         initialisation (:mod:`gtmodel.modeling.initialization`) instead of fixing every
-        state at its start value.
+        state at its start value: the initial equations and the states named in an ``x0``
+        mapping must together fix the model's degrees of freedom. :meth:`flatten` (and so
+        ``Optimization``, which states its own point constraints) ignores them.
 
         Parameters
         ----------
@@ -655,6 +662,16 @@ class Model:
         z0: Any = None,
     ) -> SimulationResult:
         """Integrate the model on a time grid.
+
+        A model that :meth:`flatten` accepts and that has no initial equations is simulated
+        as it is. Otherwise the structural passes run first
+        (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
+        check (one error naming the equations and variables), alias elimination, index
+        reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
+        selection turns singular), and the consistent initialisation with the
+        :meth:`initial_equation` s. For a high-index model without initial equations, the
+        ``x0``/start values of the states picked by the dummy selection are kept and the
+        others are computed (their values are guesses).
 
         Parameters
         ----------

@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sps
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-from gtmodel.errors import ModelError
+from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import expand_names
 
 __all__ = [
@@ -154,7 +154,14 @@ def scalarize(model: Any) -> ScalarDAE:
     -------
     ScalarDAE
         One residual per scalar equation and one symbol per scalar unknown.
+
+    Raises
+    ------
+    InputError
+        If ``model`` is not a :class:`~gtmodel.modeling.Model`.
     """
+    if not all(hasattr(model, a) for a in ("_vars", "_equations", "_outputs", "_time")):
+        raise InputError(f"model must be a gtmodel.modeling.Model, got {type(model).__name__}")
     vars_ = list(model._vars.values())
     syms, names, kinds, starts, ders = [], [], [], [], {}
     for kind in ("state", "algebraic"):
@@ -415,13 +422,9 @@ def check_structure(system: ScalarDAE | Any) -> Incidence:
     return inc
 
 
-def _alias_of(res: ca.SX, unknown: ca.SX) -> tuple[int, int, float] | None:
-    """``(i, j, sign)`` if ``res`` is ``c (v_i - sign v_j)`` for two unknowns, else None."""
-    deps = [int(k) for k in ca.jacobian(res, unknown).sparsity().get_col()]
-    if len(deps) != 2:
-        return None
-    pair = ca.vertcat(unknown[deps[0]], unknown[deps[1]])
-    others = [s for s in ca.symvar(res) if not ca.depends_on(s, pair)]
+def _alias_of(res: ca.SX, pair: ca.SX) -> float | None:
+    """``sign`` if ``res`` is ``c (pair[0] - sign pair[1])`` with ``sign = +-1``, else None."""
+    others = [v for v in ca.symvar(res) if not ca.depends_on(v, pair)]
     if others or not ca.is_linear(res, pair):
         return None
     jac = ca.jacobian(res, pair)
@@ -429,18 +432,21 @@ def _alias_of(res: ca.SX, unknown: ca.SX) -> tuple[int, int, float] | None:
         return None
     a, b = (float(v) for v in np.array(ca.DM(jac)).ravel())
     const = ca.substitute(res, pair, ca.SX.zeros(2))
-    if not const.is_constant() or abs(float(ca.DM(const))) > 0.0 or a == 0.0 or abs(abs(a) - abs(b)) > 0.0:
+    if not const.is_constant() or float(ca.DM(const)) != 0.0 or a == 0.0 or abs(a) != abs(b):
         return None
-    return deps[0], deps[1], -b / a
+    return -b / a
 
 
 def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
     """Remove alias equations ``a = b`` / ``a = -b`` between unknowns (MTK's alias elimination).
 
-    An algebraic variable is eliminated before a state; if both are states, ``der(a)`` is
-    replaced by ``+-der(b)`` as well. The eliminated variables stay available through
-    ``observed`` (for results and outputs); their start values are dropped (the kept
-    variable's start wins).
+    The alias equations (exactly two unknowns, linear with opposite or equal constant
+    coefficients, nothing else) join the unknowns into classes (union-find with signs); each
+    class keeps one representative — its first state, else its first variable — and every
+    other member is replaced by ``+-`` the representative (``der()`` too for states). An alias
+    equation closing a cycle in a class is kept as an equation. The eliminated variables stay
+    available through ``observed`` (for results and outputs); their start values are dropped
+    (the representative's start wins).
 
     Parameters
     ----------
@@ -452,60 +458,91 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
     ScalarDAE
         A new scalar DAE without the alias equations and the eliminated unknowns.
     """
-    syms = list(system.var_syms)
-    alive = [True] * len(syms)
-    subs_from: list[ca.SX] = []
-    subs_to: list[ca.SX] = []
+    n = system.n_vars
+    pat = sparsity_pattern(system.eq_res, system.var_syms)
+    parent = list(range(n))
+    sign_to_parent = [1.0] * n
+
+    def find(v: int) -> tuple[int, float]:
+        s = 1.0
+        while parent[v] != v:
+            s *= sign_to_parent[v]
+            v = parent[v]
+        return v, s
+
     kept_res, kept_names = [], []
-    aliases: dict[str, tuple[float, str]] = {}
-
-    def subst(e: ca.SX) -> ca.SX:
-        return ca.substitute(e, _cat(subs_from), _cat(subs_to)) if subs_from else e
-
-    for res, name in zip(system.eq_res, system.eq_names):
-        r = subst(res)
-        live = [k for k in range(len(syms)) if alive[k]]
-        hit = _alias_of(r, _cat([syms[k] for k in live])) if live else None
-        if hit is None:
-            kept_res.append(r)
+    for e, (res, name) in enumerate(zip(system.eq_res, system.eq_names)):
+        cols = pat.indices[pat.indptr[e]:pat.indptr[e + 1]]
+        sign = None
+        if len(cols) == 2:
+            i, j = int(cols[0]), int(cols[1])
+            sign = _alias_of(res, ca.vertcat(system.var_syms[i], system.var_syms[j]))
+        if sign is None:
+            kept_res.append(res)
             kept_names.append(name)
             continue
-        i, j, sign = live[hit[0]], live[hit[1]], hit[2]
-        ki, kj = system.var_kinds[i], system.var_kinds[j]
-        if ki == "state" and kj == "algebraic":
-            i, j = j, i  # eliminate the algebraic one: v_j = sign v_i  <=>  v_i = sign v_j
-        elim, keep = i, j
-        new_from = [syms[elim]]
-        new_to = [sign * syms[keep]]
-        if system.var_kinds[elim] == "state":
-            new_from.append(system.der_syms[elim])
-            new_to.append(sign * system.der_syms[keep])
-        subs_to = [ca.substitute(e, _cat(new_from), _cat(new_to)) for e in subs_to]
-        subs_from += new_from
-        subs_to += new_to
-        alive[elim] = False
-        aliases[system.var_names[elim]] = (sign, system.var_names[keep])
-        _log.debug("alias elimination in %s: %s = %+g %s", system.name, system.var_names[elim], sign, system.var_names[keep])
-    keep_idx = [k for k in range(len(syms)) if alive[k]]
+        (ri, si), (rj, sj) = find(i), find(j)
+        if ri == rj:  # a cycle: keep the equation
+            kept_res.append(res)
+            kept_names.append(name)
+            continue
+        # v_i = sign v_j, v_i = si r_i, v_j = sj r_j  =>  r_i = si sign sj r_j
+        parent[ri] = rj
+        sign_to_parent[ri] = si * sign * sj
+    classes: dict[int, list[int]] = {}
+    for v in range(n):
+        classes.setdefault(find(v)[0], []).append(v)
+    rep_of: dict[int, tuple[int, float]] = {}
+    for root, members in classes.items():
+        states = [v for v in members if system.var_kinds[v] == "state"]
+        rep = states[0] if states else members[0]
+        s_rep = find(rep)[1]
+        for v in members:
+            rep_of[v] = (rep, find(v)[1] * s_rep)  # v = s_v root = s_v s_rep rep (s_rep = +-1)
+    subs_from, subs_to = [], []
+    aliases: dict[str, tuple[float, str]] = {}
+    for v in range(n):
+        rep, sg = rep_of[v]
+        if rep == v:
+            continue
+        subs_from.append(system.var_syms[v])
+        subs_to.append(sg * system.var_syms[rep])
+        if system.var_kinds[v] == "state":
+            subs_from.append(system.der_syms[v])
+            subs_to.append(sg * system.der_syms[rep])
+        aliases[system.var_names[v]] = (sg, system.var_names[rep])
+    src, dst = _cat(subs_from), _cat(subs_to)
+
+    def subst(items: list[ca.SX]) -> list[ca.SX]:
+        if not subs_from or not items:
+            return list(items)
+        out = ca.substitute([ca.vec(e) for e in items], [src], [dst])
+        return [ca.reshape(o, e.shape) for o, e in zip(out, items)]
+
+    keep_idx = [v for v in range(n) if rep_of[v][0] == v]
     remap = {old: new for new, old in enumerate(keep_idx)}
+    out_names = list(system.outputs)
+    obs_names = list(system.observed)
+    if aliases:
+        _log.debug("alias elimination in %s: %d aliases", system.name, len(aliases))
     return ScalarDAE(
         name=system.name,
         t=system.t,
-        var_syms=[syms[k] for k in keep_idx],
+        var_syms=[system.var_syms[k] for k in keep_idx],
         var_names=[system.var_names[k] for k in keep_idx],
         var_kinds=[system.var_kinds[k] for k in keep_idx],
-        der_syms={remap[k]: d for k, d in system.der_syms.items() if alive[k]},
+        der_syms={remap[k]: d for k, d in system.der_syms.items() if k in remap},
         start=system.start[keep_idx],
-        eq_res=[subst(r) for r in kept_res],
+        eq_res=subst(kept_res),
         eq_names=kept_names,
-        init_res=[subst(r) for r in system.init_res],
+        init_res=subst(system.init_res),
         init_names=list(system.init_names),
         p=system.p,
         u=system.u,
         p_value=system.p_value,
         u_start=system.u_start,
         u_names=list(system.u_names),
-        outputs={k: subst(e) for k, e in system.outputs.items()},
-        observed={k: subst(e) for k, e in system.observed.items()},
+        outputs=dict(zip(out_names, subst([system.outputs[k] for k in out_names]))),
+        observed=dict(zip(obs_names, subst([system.observed[k] for k in obs_names]))),
         aliases={**system.aliases, **aliases},
     )

@@ -185,7 +185,7 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
             _log.debug("%s: dummy derivatives %s at t = %g s", aug.system.name,
                        sorted(aug.names[v] for v in sel.dummies), tf[k])
         current = sel
-        kend = min(k + chunk, n - 1)
+        kend = min(k + chunk, n - 1) if sel.levels else n - 1  # nothing to re-select: one run
         try:
             seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, rtol, atol)
         except ConvergenceError:

@@ -45,11 +45,12 @@ def angle_pendulum(theta0: float = 2.0, length: float = 1.0) -> Model:
 SLIDER = {"r": 0.1, "l": 0.3, "J1": 0.01, "J2": 0.005, "m3": 0.5}
 
 
-def slider_crank(theta0: float = 0.3, w0: float = 5.0) -> Model:
+def slider_crank(theta0: float = 0.3, w0: float = 5.0, torque: bool = False) -> Model:
     """Crank (angle theta), rod (angle phi), slider (s) with two loop-closure constraints: index 3.
 
     Generalised coordinates q = (theta, phi, s), constraint C(q) = 0, equations of motion
-    M q'' = -C_q^T lam (C_q by CasADi AD), no external force: energy is conserved.
+    M q'' = Q - C_q^T lam (C_q by CasADi AD); Q = (tau, 0, 0) with an input crank torque
+    ``tau`` if ``torque``, else no external force (energy is conserved).
     """
     r, l, J1, J2, m3 = (SLIDER[k] for k in ("r", "l", "J1", "J2", "m3"))
     m = Model("slider_crank")
@@ -64,7 +65,8 @@ def slider_crank(theta0: float = 0.3, w0: float = 5.0) -> Model:
     C = ca.vertcat(r * ca.cos(th) + l * ca.cos(ph) - s, r * ca.sin(th) - l * ca.sin(ph))
     M = ca.diag(ca.vertcat(J1, J2, m3))
     m.equation(m.der(q), qd, name="kinematics")
-    m.equation(M @ m.der(qd), -ca.jacobian(C, q).T @ lam, name="motion")
+    Q = ca.vertcat(m.input("tau"), 0.0, 0.0) if torque else ca.SX.zeros(3)
+    m.equation(M @ m.der(qd), Q - ca.jacobian(C, q).T @ lam, name="motion")
     m.equation(C, 0.0, name="loop")
     m.output("energy", 0.5 * (J1 * w**2 + J2 * wp**2 + m3 * vs**2))
     return m

@@ -79,6 +79,22 @@ def test_modifier_sets_parameter_and_start_values():
     assert dae.x_lb[dae.x_vars["mass.s"]][0] == -1.0
 
 
+def test_nested_modifiers_merge_with_the_class_ones():
+    # Modelica: Machine(axis2(belt(d=...))) keeps the class modifier belt(c=4e4) of axis2
+    values = Machine(axis2={"belt": {"s_rel0": 0.1}}, axis1={"cart": {"m": 5.0}}).parameter_values()
+    assert values["axis2.belt.c"][0] == 4e4 and values["axis2.belt.s_rel0"][0] == 0.1
+    assert values["axis1.cart.m"][0] == 5.0 and values["axis1.belt.c"][0] == 1e4
+
+
+def test_describe_lists_the_declarations():
+    table = Oscillator(spring={"c": 9.0}).describe()
+    row = table.set_index("name").loc["spring.c"]
+    assert (row["kind"], row["value"], row["unit"]) == ("parameter", 9.0, "N/m")
+    assert table.set_index("name").loc["mass.s", "kind"] == "state"
+    assert table.set_index("name").loc["mass.flange_a.f", "kind"] == "flow"
+    assert RigidGear().describe().set_index("name").loc["load.w", "kind"] == "algebraic"
+
+
 def test_class_template_is_not_shared_between_instances():
     a, b = Oscillator(spring={"c": 9.0}), Oscillator()
     assert a.spring is not b.spring
@@ -117,6 +133,28 @@ def test_extends_inherits_declarations_and_equations():
     np.testing.assert_allclose(res.z["spring.energy"], 4.5 * (0.1 * np.cos(3.0 * t)) ** 2, atol=SIM_TOL)
 
 
+def test_parameter_bound_to_the_enclosing_component():
+    # closed form: inertia J behind a gear n on a spring c: w = sqrt(c / (n^2 J))
+    class Geared(Component):
+        n = Parameter(5.0, unit="1", description="gear ratio")
+        motor = rot.Inertia(J=0.01, phi=1.0)
+        gear = rot.IdealGear(ratio=n)
+        spring = rot.Spring(c=50.0)
+        fixed = rot.Fixed()
+
+        def equations(self):
+            connect(self.motor.flange_b, self.gear.flange_a)
+            connect(self.gear.flange_b, self.spring.flange_a)
+            connect(self.spring.flange_b, self.fixed.flange)
+
+    model = Geared(n=2.0).to_model()
+    assert "n" in model.variables("parameter") and "gear.ratio" not in model.variables("parameter")
+    assert Geared(n=2.0).parameter_values()["gear.ratio"][0] == 2.0
+    t = np.linspace(0.0, 1.0, 11)
+    res = model.simulate(t, p={"n": 4.0})
+    np.testing.assert_allclose(res.x["motor.phi"], np.cos(np.sqrt(50.0 / (16.0 * 0.01)) * t), atol=SIM_TOL)
+
+
 def test_replacing_a_sub_component():
     # closed form: a spring-damper instead of the spring, d = 0 gives the same cos(3 t)
     osc = Oscillator(spring=tr.SpringDamper(c=9.0, d=0.0))
@@ -128,7 +166,66 @@ def test_replacing_a_sub_component():
 def test_flattened_model_is_a_plain_model():
     model = Oscillator().to_model("osc")
     assert isinstance(model, Model) and model.name == "osc"
-    assert model.outputs.keys() == {"mass.a"}
+    assert "mass.a" in model.variables("algebraic") and not model.outputs
+
+
+def test_model_call_reaches_the_flattened_model():
+    # a component declares an extra algebraic variable and an output through the Model API;
+    # closed form: the spring force of the oscillator, -c x = -4 * 0.1 cos(2 t)
+    class Probe(Component):
+        osc = Oscillator()
+
+        def equations(self):
+            force = self.model_call("algebraic", "probe_force")
+            self.equation(force, -self.osc.spring.f)
+            self.model_call("output", "probe_double", 2.0 * force)
+
+    model = Probe().to_model()
+    assert "probe_force" in model.variables("algebraic")
+    t = np.linspace(0.0, 1.0, 11)
+    res = model.simulate(t)
+    np.testing.assert_allclose(res.z["probe_force"], -0.4 * np.cos(2.0 * t), atol=SIM_TOL)
+    np.testing.assert_allclose(res.outputs["probe_double"], -0.8 * np.cos(2.0 * t), atol=SIM_TOL)
+
+
+class RigidGear(Component):
+    """Torque -- inertia -- gear -- inertia, the second one stateless (rigid coupling)."""
+
+    torque = rot.Torque()
+    motor = rot.Inertia(J=1.0)
+    gear = rot.IdealGear(ratio=4.0)
+    load = rot.Inertia(J=32.0, stateSelect="never")
+
+    def equations(self):
+        connect(self.torque.flange, self.motor.flange_a)
+        connect(self.motor.flange_b, self.gear.flange_a)
+        connect(self.gear.flange_b, self.load.flange_a)
+
+
+def test_rigid_coupling_with_a_stateless_inertia_is_index_1():
+    # closed form: the load reflected to the motor is J2 / ratio^2 = 2: w1 = tau t / (J1 + 2)
+    model = RigidGear().to_model()
+    assert set(model.variables("state")) == {"motor.phi", "motor.w"}
+    res = model.simulate(np.linspace(0.0, 1.0, 5), u=3.0)
+    np.testing.assert_allclose(res.x["motor.w"], 3.0 * res.t / 3.0, atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["load.w"], res.x["motor.w"] / 4.0, atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["load.a"], 0.25, atol=SIM_TOL)
+
+
+def test_rigid_masses_with_a_stateless_mass():
+    # closed form: two masses moved together by F: a = F / (m1 + m2)
+    class Rigid(Component):
+        push = tr.Force()
+        m1 = tr.Mass(m=1.0, L=0.2)
+        m2 = tr.Mass(m=3.0, L=0.2, stateSelect="never")
+
+        def equations(self):
+            connect(self.push.flange, self.m1.flange_a)
+            connect(self.m1.flange_b, self.m2.flange_a)
+
+    res = Rigid().to_model().simulate(np.linspace(0.0, 1.0, 5), u=2.0)
+    np.testing.assert_allclose(res.x["m1.s"], 0.5 * 0.5 * res.t**2, atol=SIM_TOL)
+    np.testing.assert_allclose(res.z["m2.s"], res.x["m1.s"] + 0.2, atol=SIM_TOL)
 
 
 # ---------------------------------------------------------------------- connection semantics
@@ -299,7 +396,7 @@ def _composite_without_inner_connection():
 
 BAD = [
     ("incompatible", lambda: _flatten_with(lambda c: connect(c.mass.flange_a, c.shaft.flange_a)), ModelError,
-     r"incompatible connectors mass\.flange_a \(Flange_a: s, v, f\) and shaft\.flange_a \(Flange_a: phi, w, tau\)"),
+     r"incompatible connectors mass\.flange_a \(Flange_a: s, v, a, f\) and shaft\.flange_a \(Flange_a: phi, w, a, tau\)"),
     ("self", lambda: _flatten_with(lambda c: connect(c.mass.flange_a, c.mass.flange_a)), ModelError,
      r"connect\(mass\.flange_a, mass\.flange_a\): a connector cannot be connected to itself"),
     ("not a connector", lambda: _flatten_with(lambda c: connect(c.mass, c.fixed.flange)), ModelError,
@@ -333,6 +430,16 @@ BAD = [
      r"component <root> \(BadCase\): error in equations\(\): Matrix product with incompatible dimensions"),
     ("python error", lambda: _flatten_with(lambda c: c.equation(c.mass.nothing, 0.0)), ModelError,
      r"component <root> \(BadCase\): error in equations\(\): 'Mass' object has no attribute 'nothing'"),
+    ("foreign binding", lambda: type("Loose", (Component,), {"gear": rot.IdealGear(ratio=Parameter(2.0))})().to_model(),
+     ModelError, r"component gear \(IdealGear\): parameter 'ratio' is bound to a Parameter \(unnamed\) that is not declared"),
+    ("binding size", lambda: rot.IdealGear(ratio=Parameter([1.0, 2.0])), InputError,
+     r"IdealGear\.ratio: bound to a parameter of 2 value\(s\), expected 1"),
+    ("model_call", lambda: _flatten_with(lambda c: c.model_call("_vars")), ModelError,
+     r"model_call: '_vars' is not a public method of Model"),
+    ("state select", lambda: tr.Mass(stateSelect="always"), InputError,
+     r"Mass\.stateSelect: expected one of \['default', 'never'\], got 'always'"),
+    ("rigid states", lambda: RigidGear(load={"stateSelect": "default"}).to_model().flatten(), ModelError,
+     r"scalar equations but .* unknowns"),
     ("inner connection", _composite_without_inner_connection, ModelError,
      r"component h \(Hollow\): its connector h\.flange is connected to nothing inside it"),
     ("unbalanced", lambda: _flatten_with(lambda c: c.equation(c.mass.s, 1.0)).flatten(), ModelError,

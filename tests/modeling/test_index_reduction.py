@@ -10,10 +10,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.errors import ModelError
-from gtmodel.modeling import Model, structural_simplify
+from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling import Model, Optimization, solve, structural_simplify
 from gtmodel.modeling.index_reduction import pantelides, reduced_system, select_dummies
-from gtmodel.modeling.structure import eliminate_aliases, scalarize
+from gtmodel.modeling.structure import scalarize
 
 from ._dae_builders import angle_pendulum, cartesian_pendulum, slider_crank, slider_crank_minimal
 
@@ -58,6 +58,19 @@ def test_pendulum_keeps_length_and_energy_over_10_s(pendulum_run):
     assert np.any(res.x["x"] > 0.5) and np.any(res.x["x"] < -0.5)  # it swings over x = 0 (dummy switches)
 
 
+def test_pendulum_switches_dummies_where_the_selection_turns_singular(caplog):
+    # reference: from theta0 = 2 the first selection (x dummy, det ~ 2 x) is singular at x = 0,
+    # which the pendulum crosses near t = 0.75 s (angle ODE); the switch must come before it
+    caplog.set_level("DEBUG", logger="gtmodel")
+    t = np.linspace(0.0, 1.2, 61)
+    res = cartesian_pendulum(theta0=2.0).simulate(t, rtol=RTOL, atol=ATOL)
+    msgs = [r.getMessage() for r in caplog.records if "switched at" in r.getMessage()]
+    assert len(msgs) == 1
+    first = float(msgs[0].split("[")[1].split(",")[0].rstrip("] s"))
+    crossing = t[np.nonzero(np.diff(np.sign(res.x["x"])))[0][0]]
+    assert 0.3 < first < crossing
+
+
 def test_pendulum_matches_minimal_coordinates(pendulum_run):
     # reference: theta'' = -(g/L) sin(theta) integrated as an ODE (a second formulation)
     t, res = pendulum_run
@@ -77,6 +90,15 @@ def test_slider_crank_matches_minimal_coordinates_and_conserves_energy():
     assert np.max(np.abs(e - e[0])) / e[0] < 1e-6
 
 
+def test_slider_crank_driven_by_an_input_torque():
+    # reference: the work-energy theorem, E(t) - E(0) = tau (theta(t) - theta(0)) for a constant tau
+    t = np.linspace(0.0, 1.0, 101)
+    res = slider_crank(torque=True).simulate(t, u=0.05, rtol=RTOL, atol=ATOL)
+    e, th = res.outputs["energy"], res.x["theta"]
+    np.testing.assert_allclose(e - e[0], 0.05 * (th - th[0]), atol=1e-8)
+    np.testing.assert_allclose(res.u["tau"], 0.05)
+
+
 def test_structural_simplify_gives_an_index1_model():
     # reference: the pendulum's own invariants over 0.5 s (no dummy switch needed from theta0 = 2)
     red = structural_simplify(cartesian_pendulum(theta0=2.0))
@@ -85,6 +107,22 @@ def test_structural_simplify_gives_an_index1_model():
     assert {"x", "u", "lam", "der_x", "der2_x"} <= set(flat.z_names)
     res = red.simulate(np.linspace(0.0, 0.3, 31), rtol=RTOL, atol=ATOL)
     assert np.max(np.abs(res.z["x"] ** 2 + res.x["y"] ** 2 - 1.0)) < 1e-9
+
+
+def test_simplified_model_feeds_the_collocation():
+    # reference: the angle ODE theta'' = -(g/L) sin(theta) from rest at theta0 = 0.5 (second
+    # formulation); Radau collocation with 40 elements is accurate to ~1e-5 here
+    red = structural_simplify(cartesian_pendulum(theta0=0.5))
+    states = red.variables("state")
+    assert list(states) == ["x", "u"]
+    opt = Optimization(red, start_time=0.0, final_time=1.0)
+    opt.add_point_constraint(states["x"], at="start", lb=np.sin(0.5), ub=np.sin(0.5))
+    opt.add_point_constraint(states["u"], at="start", lb=0.0, ub=0.0)
+    opt.set_objective(mayer=0 * states["x"])
+    res = solve(opt, elements=40, points=3, scheme="radau")
+    assert res.status.name.lower() == "optimal"
+    ref = angle_pendulum(theta0=0.5).simulate(res.t, rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(res.states["x"], ref.outputs["pos_x"], atol=1e-4)
 
 
 def test_index1_model_is_returned_unchanged():
@@ -119,11 +157,10 @@ def _singular():
     m = Model("m")
     x = m.state("x")
     y = m.algebraic("y")
-    z = m.algebraic("z")
+    m.algebraic("z")  # in no equation
     m.equation(m.der(x), y)
     m.equation(y, ca.sin(x), name="e1")
     m.equation(2 * y, x, name="e2")
-    z  # noqa: B018 - z appears in no equation
     structural_simplify(m)
 
 
@@ -138,3 +175,18 @@ def _singular():
 def test_reduction_errors(build, match):
     with pytest.raises(ModelError, match=match):
         build()
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: cartesian_pendulum().simulate([0.0, 1.0], integrator="cvodes"), "use integrator 'idas'"),
+        (lambda: cartesian_pendulum().simulate([0.0, 1.0], x0={"lam": 1.0}), "'lam' is not a state"),
+        (lambda: cartesian_pendulum().simulate([0.0, 1.0], p={"mass": 1.0}), "no parameter 'mass'"),
+        (lambda: cartesian_pendulum().simulate([1.0, 0.0]), "strictly increasing"),
+    ],
+    ids=["cvodes", "x0_not_state", "parameter_name", "grid"],
+)
+def test_reduced_simulation_bad_arguments(call, match):
+    with pytest.raises(InputError, match=match):
+        call()

@@ -1,9 +1,10 @@
 """1-D rotational mechanics, named as ``Modelica.Mechanics.Rotational``.
 
 Connector: :class:`Flange_a` / :class:`Flange_b` with the angle ``phi`` [rad], the angular
-velocity ``w = der(phi)`` [rad/s] (potential variables) and the cut torque ``tau``
-[N m] (flow, positive into the component); the velocity is carried in the connector for
-the reason given in :mod:`gtmodel.modeling.library.translational`.
+velocity ``w = der(phi)`` [rad/s], the angular acceleration ``a = der(w)`` [rad/s^2]
+(potential variables) and the cut torque ``tau`` [N m] (flow, positive into the
+component); velocity and acceleration are carried in the connector for the reasons given
+in :mod:`gtmodel.modeling.library.translational` (rigid couplings: ``stateSelect``).
 
 Components (Modelica Standard Library 4.0 names and equations, support flanges fixed):
 :class:`Inertia`, :class:`IdealGear`, :class:`Spring`, :class:`Damper`,
@@ -13,7 +14,7 @@ Components (Modelica Standard Library 4.0 names and equations, support flanges f
 
 from __future__ import annotations
 
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
+from gtmodel.modeling.components import Component, Input, Parameter, State, Structural, Variable
 from gtmodel.modeling.connectors import Connector, Flow, Potential
 from gtmodel.modeling.library import translational
 
@@ -35,9 +36,10 @@ __all__ = [
 
 
 class Flange(Connector):
-    """Rotational flange: angle ``phi`` [rad], speed ``w`` [rad/s], cut torque ``tau`` [N m].
+    """Rotational flange: angle ``phi`` [rad], speed ``w``, acceleration ``a``, cut torque ``tau`` [N m].
 
-    ``Modelica.Mechanics.Rotational.Interfaces.Flange`` plus ``w = der(phi)``.
+    ``Modelica.Mechanics.Rotational.Interfaces.Flange`` plus ``w = der(phi)`` [rad/s] and
+    ``a = der(w)`` [rad/s^2].
 
     Parameters
     ----------
@@ -47,6 +49,7 @@ class Flange(Connector):
 
     phi = Potential(unit="rad", description="absolute rotation angle of the flange")
     w = Potential(unit="rad/s", description="absolute angular velocity of the flange, der(phi)")
+    a = Potential(unit="rad/s2", description="absolute angular acceleration of the flange, der(w)")
     tau = Flow(unit="N.m", description="cut torque in the flange")
 
 
@@ -182,31 +185,40 @@ class SpringDamper(PartialCompliant):
 class Inertia(PartialTwoFlanges):
     """Rotational inertia (MSL ``Rotational.Components.Inertia``).
 
-    ``phi = flange_a.phi = flange_b.phi``, ``w = der(phi)``,
-    ``J der(w) = flange_a.tau + flange_b.tau``; output ``a = der(w)``. States ``phi``, ``w``.
+    ``phi = flange_a.phi = flange_b.phi`` (and speeds, accelerations), ``w = der(phi)``,
+    ``a = der(w)``, ``J a = flange_a.tau + flange_b.tau``. States ``phi``, ``w``; with
+    ``stateSelect="never"`` none (for an inertia rigidly coupled to one with states, see
+    :mod:`gtmodel.modeling.library.translational`).
 
     Parameters
     ----------
     J : float, optional
         Moment of inertia [kg m^2], >= 0 (default 1).
+    stateSelect : {"default", "never"}, optional
+        ``"never"``: ``phi`` and ``w`` are algebraic (Modelica ``StateSelect.never``).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
         :class:`~gtmodel.modeling.components.Component`.
     """
 
     J = Parameter(1.0, unit="kg.m2", description="moment of inertia", lb=0.0)
+    stateSelect = Structural("default", choices=("default", "never"), description="never: no states (rigid coupling)")  # noqa: N815
     phi = State(unit="rad", description="absolute rotation angle of the component")
     w = State(unit="rad/s", description="absolute angular velocity of the component")
+    a = Variable(unit="rad/s2", description="absolute angular acceleration of the component")
 
     def equations(self) -> None:
-        """Rigid flanges, kinematics and Euler's law."""
+        """Rigid flanges, kinematics (unless stateless) and Euler's law."""
         self.equation(self.flange_a.phi, self.phi, name="phi_a")
         self.equation(self.flange_b.phi, self.phi, name="phi_b")
         self.equation(self.flange_a.w, self.w, name="w_a")
         self.equation(self.flange_b.w, self.w, name="w_b")
-        self.equation(self.der(self.phi), self.w, name="kinematics")
-        self.equation(self.J * self.der(self.w), self.flange_a.tau + self.flange_b.tau, name="euler")
-        self.output("a", self.der(self.w))
+        self.equation(self.flange_a.a, self.a, name="a_a")
+        self.equation(self.flange_b.a, self.a, name="a_b")
+        if self.stateSelect != "never":
+            self.equation(self.der(self.phi), self.w, name="velocity")
+            self.equation(self.der(self.w), self.a, name="acceleration")
+        self.equation(self.J * self.a, self.flange_a.tau + self.flange_b.tau, name="euler")
 
 
 class IdealGear(PartialTwoFlanges):
@@ -230,6 +242,7 @@ class IdealGear(PartialTwoFlanges):
         """Kinematic and torque relations of the gear."""
         self.equation(self.flange_a.phi, self.ratio * self.flange_b.phi, name="angle")
         self.equation(self.flange_a.w, self.ratio * self.flange_b.w, name="speed")
+        self.equation(self.flange_a.a, self.ratio * self.flange_b.a, name="acceleration")
         self.equation(self.ratio * self.flange_a.tau + self.flange_b.tau, 0.0, name="torque")
 
 
@@ -268,9 +281,10 @@ class Fixed(Component):
     flange = Flange_b("fixed flange")
 
     def equations(self) -> None:
-        """``flange.phi = phi0``, ``flange.w = 0``."""
+        """``flange.phi = phi0``, ``flange.w = 0``, ``flange.a = 0``."""
         self.equation(self.flange.phi, self.phi0, name="angle")
         self.equation(self.flange.w, 0.0, name="speed")
+        self.equation(self.flange.a, 0.0, name="acceleration")
 
 
 class IdealRollingWheel(Component):
@@ -296,4 +310,5 @@ class IdealRollingWheel(Component):
         """Rolling without slip and the force/torque balance."""
         self.equation(self.flangeR.phi * self.radius, self.flangeT.s, name="position")
         self.equation(self.flangeR.w * self.radius, self.flangeT.v, name="speed")
+        self.equation(self.flangeR.a * self.radius, self.flangeT.a, name="acceleration")
         self.equation(self.radius * self.flangeT.f + self.flangeR.tau, 0.0, name="force")

@@ -1,10 +1,19 @@
 """1-D translational mechanics, named as ``Modelica.Mechanics.Translational``.
 
 Connector: :class:`Flange_a` / :class:`Flange_b` with the position ``s`` [m], the
-velocity ``v = der(s)`` [m/s] (potential variables) and the cut force ``f`` [N] (flow,
-positive into the component). The velocity is carried in the connector (as in
-ModelingToolkitStandardLibrary's mechanical ports) so that dampers need no ``der()`` of
-an algebraic position and compliant chains flatten to index-1 DAEs.
+velocity ``v = der(s)`` [m/s], the acceleration ``a = der(v)`` [m/s^2] (potential
+variables) and the cut force ``f`` [N] (flow, positive into the component). Velocity and
+acceleration are carried in the connector (as ModelingToolkitStandardLibrary's
+mechanical ports carry ``v``, and the MSL ``Move`` source ``s, v, a``) so that dampers
+need no ``der()`` of an algebraic position and compliant chains flatten to index-1 DAEs
+with today's :meth:`~gtmodel.modeling.Model.flatten`; unused ones are dropped (see
+:mod:`gtmodel.modeling.components`).
+
+Rigid couplings: a mass (or inertia) rigidly connected to another one that owns states
+must be declared stateless, ``Mass(stateSelect="never")`` (Modelica ``StateSelect``):
+it then takes ``s, v, a`` from its neighbour and the model stays index 1. Two
+state-owning masses rigidly coupled are over-determined (the position, velocity and
+acceleration constraints are all explicit), and index reduction does not repair that.
 
 Components (Modelica Standard Library 4.0 names and equations):
 :class:`Mass`, :class:`Spring`, :class:`Damper`, :class:`SpringDamper`, :class:`Force`,
@@ -14,7 +23,7 @@ The optional ``support`` flanges of the MSL sources are omitted (support fixed).
 
 from __future__ import annotations
 
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
+from gtmodel.modeling.components import Component, Input, Parameter, State, Structural, Variable
 from gtmodel.modeling.connectors import Connector, Flow, Potential
 
 __all__ = [
@@ -33,9 +42,10 @@ __all__ = [
 
 
 class Flange(Connector):
-    """Translational flange: position ``s`` [m], velocity ``v`` [m/s], cut force ``f`` [N].
+    """Translational flange: position ``s`` [m], velocity ``v``, acceleration ``a``, cut force ``f`` [N].
 
-    ``Modelica.Mechanics.Translational.Interfaces.Flange`` plus the velocity ``v = der(s)``.
+    ``Modelica.Mechanics.Translational.Interfaces.Flange`` plus ``v = der(s)`` [m/s] and
+    ``a = der(v)`` [m/s^2] (as the MSL ``Move`` source carries them).
 
     Parameters
     ----------
@@ -45,6 +55,7 @@ class Flange(Connector):
 
     s = Potential(unit="m", description="absolute position of the flange")
     v = Potential(unit="m/s", description="absolute velocity of the flange, der(s)")
+    a = Potential(unit="m/s2", description="absolute acceleration of the flange, der(v)")
     f = Flow(unit="N", description="cut force directed into the flange")
 
 
@@ -179,9 +190,11 @@ class SpringDamper(PartialCompliant):
 class Mass(PartialTwoFlanges):
     """Sliding mass with inertia (MSL ``Translational.Components.Mass``).
 
-    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2``, ``v = der(s)``,
-    ``m der(v) = flange_a.f + flange_b.f``; output ``a = der(v)``. States ``s``, ``v``
-    (modifiers set their start values: ``Mass(m=2, s=0.1, v=0)``).
+    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2`` (and the velocities and
+    accelerations), ``v = der(s)``, ``a = der(v)``, ``m a = flange_a.f + flange_b.f``.
+    States ``s``, ``v`` (modifiers set their start values: ``Mass(m=2, s=0.1, v=0)``);
+    with ``stateSelect="never"`` the mass owns no states and takes its motion from what it
+    is rigidly connected to (a rigid coupling of two masses is otherwise over-determined).
 
     Parameters
     ----------
@@ -189,6 +202,8 @@ class Mass(PartialTwoFlanges):
         Mass [kg], >= 0 (default 1).
     L : float, optional
         Length [m] between the flanges (default 0).
+    stateSelect : {"default", "never"}, optional
+        ``"never"``: ``s`` and ``v`` are algebraic (Modelica ``StateSelect.never``).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
         :class:`~gtmodel.modeling.components.Component`.
@@ -196,18 +211,23 @@ class Mass(PartialTwoFlanges):
 
     m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=0.0)
     L = Parameter(0.0, unit="m", description="length of the component, flange_a to flange_b")
+    stateSelect = Structural("default", choices=("default", "never"), description="never: no states (rigid coupling)")  # noqa: N815
     s = State(unit="m", description="absolute position of the centre of the component")
     v = State(unit="m/s", description="absolute velocity of the component")
+    a = Variable(unit="m/s2", description="absolute acceleration of the component")
 
     def equations(self) -> None:
-        """Rigid flanges, kinematics and Newton's second law."""
+        """Rigid flanges, kinematics (unless stateless) and Newton's second law."""
         self.equation(self.flange_a.s, self.s - self.L / 2, name="s_a")
         self.equation(self.flange_b.s, self.s + self.L / 2, name="s_b")
         self.equation(self.flange_a.v, self.v, name="v_a")
         self.equation(self.flange_b.v, self.v, name="v_b")
-        self.equation(self.der(self.s), self.v, name="kinematics")
-        self.equation(self.m * self.der(self.v), self.flange_a.f + self.flange_b.f, name="newton")
-        self.output("a", self.der(self.v))
+        self.equation(self.flange_a.a, self.a, name="a_a")
+        self.equation(self.flange_b.a, self.a, name="a_b")
+        if self.stateSelect != "never":
+            self.equation(self.der(self.s), self.v, name="velocity")
+            self.equation(self.der(self.v), self.a, name="acceleration")
+        self.equation(self.m * self.a, self.flange_a.f + self.flange_b.f, name="newton")
 
 
 class Force(Component):
@@ -245,6 +265,7 @@ class Fixed(Component):
     flange = Flange_b("fixed flange")
 
     def equations(self) -> None:
-        """``flange.s = s0``, ``flange.v = 0``."""
+        """``flange.s = s0``, ``flange.v = 0``, ``flange.a = 0``."""
         self.equation(self.flange.s, self.s0, name="position")
         self.equation(self.flange.v, 0.0, name="velocity")
+        self.equation(self.flange.a, 0.0, name="acceleration")

@@ -61,12 +61,12 @@ def test_spring_damper_matches_damped_oscillator():
 
 @pytest.mark.parametrize("force", [1.0, -2.5])
 def test_force_accelerates_mass(force):
-    # closed form: s = F t^2 / (2 m), acceleration output a = F / m
+    # closed form: s = F t^2 / (2 m), acceleration a = F / m
     comp = chain(tr.Force(), tr.Mass(m=2.0))
     t = np.linspace(0.0, 1.0, 11)
     res = comp.to_model().simulate(t, u=force)
     np.testing.assert_allclose(res.x["p1.s"], force * t**2 / 4.0, atol=SIM_TOL)
-    np.testing.assert_allclose(res.outputs["p1.a"], force / 2.0, atol=1e-12)
+    np.testing.assert_allclose(res.z["p1.a"], force / 2.0, atol=1e-12)
 
 
 def test_fixed_holds_position_and_takes_the_reaction_force():
