@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from gtmodel.modeling.components import Component, Parameter, State, Variable, connect
+from gtmodel.modeling.components import Component, Parameter, State, Structural, Variable, connect
 from gtmodel.modeling.connectors import Frame_a, Frame_b
 from gtmodel.modeling.library import translational
 
@@ -74,14 +74,16 @@ class Cart(Component):
     forces along ``q`` (the guideway takes the force normal to it)::
 
         m |v|^2 der(q_dot) = flange.f + v . frame_b.f + m v . g - f_fric
-        f_fric = f_c tanh(q_dot / friction_width) + f_v q_dot                (eq. (6.8))
+        f_fric = f_c sigma(q_dot) + f_v q_dot                                (eq. (6.8))
 
-    ``flange`` (a translational flange, ``s = q``, ``v = q_dot``) takes the actuator force
-    ``flange.f`` [N] (generalised force along ``q``; with ``|v| != 1`` the gear-ratio
-    correction of the modified nominal model). Friction is off by default (``f_c = f_v =
-    0``); the smooth sign is the ``"tanh"`` form of ``gtmodel.robots.friction``. Exact
-    Coulomb friction with stiction: leave ``f_c = 0`` and connect an event-driven friction
-    element to ``flange``.
+    ``flange`` (a translational flange, ``s = q``, ``v = q_dot``, ``a = der(q_dot)``) takes
+    the actuator force ``flange.f`` [N] (generalised force along ``q``; with ``|v| != 1``
+    the gear-ratio correction of the modified nominal model). Friction is off by default
+    (``f_c = f_v = 0``); ``sigma`` is the sign in the form ``friction`` of
+    ``gtmodel.robots.friction``: ``"tanh"`` (default, ``tanh(q_dot / friction_width)``),
+    ``"piecewise"`` (linear on ``|q_dot| < friction_width``) or ``"exact"`` (``sign``: for
+    inverse dynamics; a simulation needs events). Coulomb friction with stiction: leave
+    ``f_c = 0`` and connect an event-driven friction element to ``flange``.
 
     Parameters
     ----------
@@ -98,7 +100,9 @@ class Cart(Component):
     f_v : float, optional
         Viscous friction [N s/m], >= 0 (default 0).
     friction_width : float, optional
-        Velocity width of the smooth sign ``tanh(q_dot / width)`` [m/s], > 0 (default 0.01).
+        Velocity width of the smooth forms of the sign [m/s], > 0 (default 0.01).
+    friction : {"tanh", "piecewise", "exact"}, optional
+        Form of the sign in the Coulomb term (structural, default ``"tanh"``).
     **modifiers
         Start values of the states ``q`` [m] and ``q_dot`` [m/s], see
         :class:`~gtmodel.modeling.components.Component`.
@@ -111,18 +115,22 @@ class Cart(Component):
     f_c = Parameter(0.0, unit="N", description="Coulomb friction", lb=0.0)
     f_v = Parameter(0.0, unit="N.s/m", description="viscous friction", lb=0.0)
     friction_width = Parameter(0.01, unit="m/s", description="velocity width of the smooth sign", lb=1e-12)
+    friction = Structural("tanh", choices=("tanh", "piecewise", "exact"), description="form of the Coulomb sign")
     q = State(unit="m", description="cart position along the guideway")
     q_dot = State(unit="m/s", description="cart velocity")
     frame_b = Frame_b("spherical-joint point A = As + q v")
-    flange = translational.Flange_a("actuator flange: s = q, v = q_dot, f = actuator force")
+    flange = translational.Flange_a("actuator flange: s = q, v = q_dot, a = der(q_dot), f = actuator force")
 
     def equations(self) -> None:
         """Prismatic joint, kinematics and the force balance along the guideway (eqs. (4.9), (6.8))."""
         v = self.v
-        f_fric = self.f_c * ca.tanh(self.q_dot / self.friction_width) + self.f_v * self.q_dot
+        x = self.q_dot / self.friction_width
+        sigma = {"tanh": ca.tanh(x), "piecewise": ca.fmin(ca.fmax(x, -1), 1), "exact": ca.sign(self.q_dot)}[self.friction]
+        f_fric = self.f_c * sigma + self.f_v * self.q_dot
         self.equation(self.frame_b.r, self.As + self.q * v, name="prismatic")
         self.equation(self.flange.s, self.q, name="flange_s")
         self.equation(self.flange.v, self.q_dot, name="flange_v")
+        self.equation(self.flange.a, self.der(self.q_dot), name="flange_a")
         self.equation(self.der(self.q), self.q_dot, name="kinematics")
         self.equation(
             self.m * ca.dot(v, v) * self.der(self.q_dot),

@@ -36,7 +36,7 @@ def l1_parameters(link_masses=None) -> RobotParameters:
     return dataclasses.replace(params, dynamics=dataclasses.replace(params.dynamics, m_a=np.asarray(link_masses, float)))
 
 
-def l1_component(params: RobotParameters, friction: bool = False, T0=None) -> GantryTau3:
+def l1_component(params: RobotParameters, friction: str | None = None, T0=None) -> GantryTau3:
     """GantryTau3 with the numbers of ``params`` as modifiers (start values from the IK at ``T0``)."""
     k, d = params.kinematics, params.dynamics
     g = [0.0, 0.0, -d.g]
@@ -46,7 +46,7 @@ def l1_component(params: RobotParameters, friction: bool = False, T0=None) -> Ga
         A = k.As[i] + q0[i] * k.v[i]
         mods[f"cart{i + 1}"] = {"As": k.As[i], "v": k.v[i], "m": d.m_c[i], "g": g, "q": q0[i]}
         if friction:
-            mods[f"cart{i + 1}"].update(f_c=d.f_c[i], f_v=d.f_v[i], friction_width=WIDTH)
+            mods[f"cart{i + 1}"].update(f_c=d.f_c[i], f_v=d.f_v[i], friction_width=WIDTH, friction=friction)
         mods[f"link{i + 1}"] = {"L": k.L[i], "m": d.m_a[i], "g": g}
         if T0 is not None:
             mods[f"link{i + 1}"]["r_mid"] = (A + T0) / 2
@@ -83,8 +83,9 @@ def random_states(params: RobotParameters, n: int, seed: int):
 
 # ----------------------------------------------------------------------------- the L1
 CASES = {
-    "L1 as identified (Table 6.3: link masses 0), friction off": (None, False),
-    "L1 with link masses 1, 2, 3 kg, tanh friction on both": ([1.0, 2.0, 3.0], True),
+    "L1 as identified (Table 6.3: link masses 0), friction off": (None, None),
+    "L1 with link masses 1, 2, 3 kg, tanh friction on both": ([1.0, 2.0, 3.0], "tanh"),
+    "L1 as identified, exact Coulomb + viscous friction on both": (None, "exact"),
 }
 
 
@@ -97,14 +98,14 @@ def test_l1_inverse_dynamics_equals_gantry_tau3_dynamics(case):
     model = l1_component(params, friction=friction).to_model()
     inv = inverse_model(model, known=INVERSE_KNOWN, unknown=INVERSE_UNKNOWN)
     T, Td, Tdd = random_states(params, N_STATES, seed=15)
-    dyn = GantryTau3Dynamics(params, friction="tanh", friction_width=WIDTH)
+    dyn = GantryTau3Dynamics(params, friction=friction or "exact", friction_width=WIDTH)
     q = dyn.kinematics.ik(T)
     *forces, residual = inv.function.map(N_STATES)(T.T, Td.T, Tdd.T, q[:, 0], q[:, 1], q[:, 2])
     tau = np.vstack([np.array(f).ravel() for f in forces]).T
     ref = dyn.inverse_dynamics(T, Td, Tdd)
-    if not friction:
+    if friction is None:
         q_dot = np.einsum("nij,nj->ni", dyn.kinematics.jacobian_inverse(T), Td)
-        ref = ref - (params.dynamics.f_c * np.tanh(q_dot / WIDTH) + params.dynamics.f_v * q_dot)
+        ref = ref - (params.dynamics.f_c * np.sign(q_dot) + params.dynamics.f_v * q_dot)
     rel = np.max(np.abs(tau - ref), axis=1) / np.max(np.abs(ref), axis=1)
     assert np.max(rel) < 1e-9
     # the position-level closure constraints are the consistency conditions of (T, q from the IK)
@@ -117,7 +118,7 @@ def test_l1_simulates_with_the_closure_kept():
     # method: TCP coordinates, no constraint); the closure |A_i - T| = L_i to 1e-8 m
     params = l1_parameters([1.0, 2.0, 3.0])
     T0 = np.array([0.2, 3.0, -0.8])
-    model = l1_component(params, friction=True, T0=T0).to_model()
+    model = l1_component(params, friction="tanh", T0=T0).to_model()
     dyn = GantryTau3Dynamics(params, friction="tanh", friction_width=WIDTH)
     u = dyn.inverse_dynamics(T0, np.zeros(3), np.zeros(3)) + np.array([300.0, -200.0, 250.0])
     t = np.linspace(0.0, 0.2, 21)
@@ -196,6 +197,7 @@ def test_link_and_plate_as_a_compound_pendulum(theta, omega):
         (lambda: Cart(As=[1.0, 2.0]), InputError, r"Cart.As: expected 3 value\(s\)"),
         (lambda: Link(L=-1.0), InputError, r"Link.L: must be >="),
         (lambda: Plate(m="heavy"), InputError, r"Plate.m: expected a real number"),
+        (lambda: Cart(friction="coulomb"), InputError, r"Cart.friction: expected one of \['tanh', 'piecewise', 'exact'\]"),
         (lambda: GantryTau3(link4={"L": 1.0}), ModelError, r"GantryTau3: unknown modifier\(s\) \['link4'\]"),
     ],
 )
