@@ -137,22 +137,53 @@ def test_l1_simulates_with_the_closure_kept():
 
 
 # ----------------------------------------------------------------------------- the parts
-class DrivenCart(Component):
-    """A Force on a cart whose joint frame is free."""
+def driven_cart(friction: str) -> Component:
+    """A Force on a cart on an inclined guideway whose joint frame is free."""
 
-    force = tr.Force()
-    cart = Cart(As=[0.1, 0.2, 0.3], v=[0.8, 0.0, 0.6], m=5.0, f_c=20.0, f_v=30.0, friction_width=0.05)
+    class DrivenCart(Component):
+        force = tr.Force()
+        cart = Cart(As=[0.1, 0.2, 0.3], v=[0.8, 0.0, 0.6], m=5.0, f_c=20.0, f_v=30.0, friction_width=0.05,
+                    friction=friction)
 
-    def equations(self):
-        connect(self.force.flange, self.cart.flange)
+        def equations(self):
+            connect(self.force.flange, self.cart.flange)
+
+    return DrivenCart()
 
 
-def test_cart_force_on_an_inclined_guideway():
-    # closed form: f = m |v|^2 a - m v.g + f_c tanh(q_dot / w) + f_v q_dot (v = (0.8, 0, 0.6), |v| = 1)
-    inv = inverse_model(DrivenCart().to_model(), known=["cart.q", "cart.q_dot", "der(cart.q_dot)"], unknown=["force.f"])
-    f, _ = inv.function(0.4, 0.03, 2.0)
-    expected = 5.0 * 2.0 + 5.0 * 0.6 * G + 20.0 * np.tanh(0.03 / 0.05) + 30.0 * 0.03
-    assert float(f) == pytest.approx(expected, abs=1e-12)
+@pytest.mark.parametrize(
+    "friction, q_dot, sigma",
+    [("tanh", 0.03, np.tanh(0.03 / 0.05)), ("piecewise", 0.03, 0.6), ("piecewise", -0.2, -1.0),
+     ("exact", 0.03, 1.0), ("exact", 0.0, 0.0)],
+)
+def test_cart_force_on_an_inclined_guideway(friction, q_dot, sigma):
+    # closed form: f = m |v|^2 a - m v.g + f_c sigma(q_dot) + f_v q_dot (v = (0.8, 0, 0.6), |v| = 1)
+    model = driven_cart(friction).to_model()
+    inv = inverse_model(model, known=["cart.q", "cart.q_dot", "der(cart.q_dot)"], unknown=["force.f"])
+    f, _ = inv.function(0.4, q_dot, 2.0)
+    assert float(f) == pytest.approx(5.0 * 2.0 + 5.0 * 0.6 * G + 20.0 * sigma + 30.0 * q_dot, abs=1e-12)
+
+
+def test_l1_inverse_dynamics_with_the_masses_as_input():
+    # reference: GantryTau3Dynamics with the masses of p (the inverse model stays symbolic in
+    # the parameters: the identification regressor of Dressler (2012), ch. 6.2, by AD)
+    params = l1_parameters()
+    inv = inverse_model(l1_component(params).to_model(), known=INVERSE_KNOWN, unknown=INVERSE_UNKNOWN,
+                        parameter_input=True)
+    masses = {"plate.m": 12.0, "cart1.m": 20.0, "cart2.m": 15.0, "cart3.m": 30.0, "link1.m": 1.0, "link2.m": 2.5,
+              "link3.m": 4.0}
+    p = inv.p_value.copy()
+    for name, value in masses.items():
+        p[inv.p_names.index(name)] = value
+    d = params.dynamics
+    other = dataclasses.replace(params, dynamics=dataclasses.replace(
+        d, m_p=12.0, m_c=np.array([20.0, 15.0, 30.0]), m_a=np.array([1.0, 2.5, 4.0]), f_c=np.zeros(3), f_v=np.zeros(3)))
+    T, Td, Tdd = random_states(params, 50, seed=16)
+    q = GantryTau3Dynamics(params).kinematics.ik(T)
+    *forces, _ = inv.function.map(50)(T.T, Td.T, Tdd.T, q[:, 0], q[:, 1], q[:, 2], np.tile(p[:, None], (1, 50)))
+    tau = np.vstack([np.array(f).ravel() for f in forces]).T
+    ref = GantryTau3Dynamics(other).inverse_dynamics(T, Td, Tdd)
+    assert np.max(np.abs(tau - ref) / np.max(np.abs(ref), axis=1, keepdims=True)) < 1e-9
 
 
 class CompoundPendulum(Component):
