@@ -147,23 +147,24 @@ class _Resolver:
 
     @staticmethod
     def _kinematic_pairs(aug: Any) -> dict[str, tuple[float, str]]:
-        """``a der(x) + b w = 0`` equations (x, w states): ``"der(x)"`` -> ``(-b/a, "w")``."""
+        """``a der(x) + b w = 0`` equations (x, w states): ``"der(x)"`` -> ``(-b/a, "w")`` (element names)."""
         s = aug.system
-        states = {s.var_names[k] for k in s.der_syms}
+        display = {str(s.var_syms[k].name()): s.var_names[k] for k in s.der_syms}
+        ders = {str(d.name()): f"der({s.var_names[k]})" for k, d in s.der_syms.items()}
         out: dict[str, tuple[float, str]] = {}
         for res in s.eq_res:
             syms = ca.symvar(res)
-            names = [str(sym.name()) for sym in syms]
             if len(syms) != 2 or not ca.is_linear(res, _cat(syms)):
                 continue
-            ders = [k for k, n in enumerate(names) if n.startswith("der(") and n[4:-1] in states]
-            plain = [k for k, n in enumerate(names) if n in states]
+            names = [str(sym.name()) for sym in syms]
+            d = [k for k, n in enumerate(names) if n in ders]
+            w = [k for k, n in enumerate(names) if n in display]
             jac = ca.jacobian(res, _cat(syms))
             const = ca.substitute(res, _cat(syms), ca.SX.zeros(2))
-            if len(ders) != 1 or len(plain) != 1 or not jac.is_constant() or not (const.is_constant() and float(ca.DM(const)) == 0.0):
+            if len(d) != 1 or len(w) != 1 or not jac.is_constant() or not (const.is_constant() and float(ca.DM(const)) == 0.0):
                 continue
             coef = np.array(ca.DM(jac)).ravel()
-            out[names[ders[0]]] = (-coef[plain[0]] / coef[ders[0]], names[plain[0]])
+            out[ders[names[d[0]]]] = (-coef[w[0]] / coef[d[0]], display[names[w[0]]])
         return out
 
     def scalar(self, name: str, what: str) -> tuple[ca.SX, float]:
@@ -486,7 +487,9 @@ def inverse_model(
     unknowns = [s for s in aug.syms if s.name() not in known_ids] + [
         u for u in resolver.inputs.values() if u.name() in unknown_inputs
     ]
-    var_names = [str(s.name()) for s in unknowns]
+    display = {str(sym.name()): nm for sym, nm in zip(aug.syms, aug.names)}
+    display.update({str(u.name()): nm for nm, u in resolver.inputs.items()})
+    var_names = [display[str(s.name())] for s in unknowns]
     eq_names = list(aug.eq_names)
     w_all = _cat(unknowns)
     weights = _weights(res_all, w_all)

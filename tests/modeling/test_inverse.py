@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling import Component, Model, connect, inverse_model
+from gtmodel.modeling import Component, Input, Model, Parameter, State, connect, inverse_model
 from gtmodel.modeling.library import translational as tr
 
 G = 9.81
@@ -121,6 +121,7 @@ def test_function_is_differentiable_and_mappable():
         (forced_pendulum, ["x", "y"], ["F"], {}, ModelError, r"not determined.*'u'|not determined"),
         (forced_pendulum, ["x", "u", "der(u)"], ["F"], {}, ModelError, r"not linear in the variables \['y'\]"),
         (forced_pendulum, ["x", "y", "u", "der(u)"], ["G"], {}, ModelError, r"'G' names no state"),
+        (forced_pendulum, ["x", "y", "u", "der(u)"], ["F", "lam[0]"], {}, ModelError, r"'lam\[0\]' is not a variable"),
         (forced_pendulum, ["x", "y", "u", "der(u)"], ["lam"], {}, ModelError, r"input\(s\) \['F'\] are neither known nor unknown"),
         (forced_pendulum, ["x", "y", "u", "der(u)", "der(F)"], ["lam"], {}, ModelError, r"derivatives of the input 'F'"),
         (forced_pendulum, ["x", "y", "u", "der(u)"], [], {}, InputError, "at least one variable"),
@@ -146,3 +147,31 @@ def test_time_must_be_known_when_the_equations_use_it():
     inv = inverse_model(m, known=["x", "der(x)", "time"], unknown=["f"])
     # closed form: f = der(x) - sin(t)
     assert float(inv.function(0.0, 1.0, 0.5)[0]) == pytest.approx(1.0 - np.sin(0.5), abs=TOL)
+
+
+class Point(Component):
+    """A point mass in the plane driven by a force input (an ODE)."""
+
+    m = Parameter(2.0)
+    r = State(shape=2)
+    v = State(shape=2)
+    f = Input(shape=2)
+
+    def equations(self):
+        self.equation(self.der(self.r), self.v)
+        self.equation(self.m * self.der(self.v), self.f)
+
+
+@pytest.mark.parametrize("accel_name", ["der(v)", "der(der(r))"])
+def test_second_derivative_of_a_vector_state_by_name(accel_name):
+    # closed form: f = m a; der(der(r)) is der(v) through the equation der(r) = v
+    inv = inverse_model(Point().to_model(), known=["r", "v", accel_name], unknown=["f"])
+    f, _ = inv.function([0.0, 0.0], [0.0, 0.0], [1.0, -3.0])
+    np.testing.assert_allclose(np.array(f).ravel(), [2.0, -6.0], atol=TOL)
+
+
+def test_single_elements_by_name():
+    # closed form: f[1] = m a[1], with r[1] and v[1] known by element
+    inv = inverse_model(Point().to_model(), known=["r", "v", "der(v[0])", "der(v[1])"], unknown=["f[1]", "f[0]"])
+    f1, f0, _ = inv.function([0.0, 0.0], [0.0, 0.0], 1.0, -3.0)
+    assert (float(f1), float(f0)) == pytest.approx((-6.0, 2.0), abs=TOL)
