@@ -8,9 +8,9 @@ counterparts in ``Modelica.Mechanics.MultiBody``:
 * :class:`Fixed` — a frame fixed in the world;
 * :class:`Cart` — a cart on a linear guideway: a prismatic joint along ``v`` from ``As``
   (``A = As + q v``, the actuator side of the closure equation (4.9)), a point mass ``m``
-  and optional Coulomb (smooth) + viscous friction (eq. (6.8)); the actuator force acts on
-  a translational flange (connect a :class:`~gtmodel.modeling.library.translational.Force`,
-  a drive axis or a friction element);
+  and optional Coulomb (sign, tanh or piecewise-linear) + viscous friction (eq. (6.8)); the
+  actuator force acts on a translational flange (connect a
+  :class:`~gtmodel.modeling.library.translational.Force`, a drive axis or a friction element);
 * :class:`Link` — a link cluster: a rod of fixed length ``L`` between two spherical joints
   with a point mass ``m`` at its midpoint (``Modelica.Mechanics.MultiBody.Joints.
   SphericalSpherical`` with its rod mass);
@@ -20,7 +20,12 @@ counterparts in ``Modelica.Mechanics.MultiBody``:
 * :class:`GantryTau3` — the three-link robot (three forces, carts, links and the plate,
   connected): a closed kinematic chain, index 3; ``Model.simulate`` reduces it
   (Pantelides + dummy derivatives, :mod:`gtmodel.modeling.index_reduction`) and
-  :func:`~gtmodel.modeling.inverse.inverse_model` gives its inverse dynamics.
+  :func:`~gtmodel.modeling.inverse.inverse_model` gives its inverse dynamics::
+
+      inv = inverse_model(GantryTau3(...).to_model(),
+                          known=["plate.r", "plate.v", "der(plate.v)", "cart1.q", "cart2.q", "cart3.q"],
+                          unknown=["force1.f", "force2.f", "force3.f"])
+      tau1, tau2, tau3, closure = inv.function(T, T_dot, T_ddot, q1, q2, q3)
 
 With the same masses these equations are Lagrange's equations of the point masses of
 ``gtmodel.robots.dynamics.GantryTau3Dynamics`` written in redundant coordinates with the
