@@ -30,6 +30,17 @@ def forced_pendulum(length: float = 1.5, mass: float = 2.0) -> Model:
     return m
 
 
+def singular() -> Model:
+    """x determined twice, y not at all: structurally singular."""
+    m = Model("singular")
+    x = m.state("x")
+    m.algebraic("y")
+    f = m.input("F")
+    m.equation(m.der(x), f, name="a")
+    m.equation(x, 1.0, name="b")
+    return m
+
+
 class Oscillator(Component):
     """Force -> mass -- spring-damper -- fixed (an ODE after flattening)."""
 
@@ -125,6 +136,7 @@ def test_function_is_differentiable_and_mappable():
         (forced_pendulum, ["x", "y", "u", "der(u)"], ["lam"], {}, ModelError, r"input\(s\) \['F'\] are neither known nor unknown"),
         (forced_pendulum, ["x", "y", "u", "der(u)", "der(F)"], ["lam"], {}, ModelError, r"derivatives of the input 'F'"),
         (forced_pendulum, ["x", "y", "u", "der(u)"], [], {}, InputError, "at least one variable"),
+        (singular, ["x"], ["F"], {}, ModelError, r"model 'singular' is structurally singular.*\['y'\]"),
         (forced_pendulum, ["x", "y", "u", "der(u)"], ["x"], {}, InputError, r"overlap: \['x'\]"),
         (forced_pendulum, ["x", "x"], ["F"], {}, InputError, "listed twice"),
         (forced_pendulum, "x", ["F"], {}, InputError, "list of variable names"),
