@@ -7,7 +7,7 @@ whose class attributes declare
 * variables: ``s = State(unit="m")`` (differentiated, ``der(s)`` allowed),
   ``f = Variable(unit="N")`` (algebraic), ``u = Input(unit="N")`` (input of the model);
 * structural parameters (plain Python values that choose equations):
-  ``stateSelect = Structural("default", choices=("default", "never"))``;
+  ``exact = Structural(True, description="...")``;
 * connectors: ``flange_a = Flange_a()`` (:mod:`gtmodel.modeling.connectors`);
 * sub-components: ``belt = SpringDamper(c=2e5)``, named hierarchically (``"axis1.belt.c"``),
 
@@ -43,11 +43,12 @@ the hierarchy) it writes the Modelica connection equations: equal potentials, an
 nothing at its parent's level is zero (and so is the flow of the flattened component's
 own connectors: free ends). A potential variable that no component equation or output
 uses in its whole (cross-level) connection class is dropped with its equalities: so the
-velocity of a massless node between two springs does not make the model
-under-determined. A component whose ``stateSelect`` is ``"never"`` declares its states
-as algebraic variables (Modelica ``StateSelect.never``). Every connector variable that
-is kept is an algebraic variable of the model; the connection equalities are alias
-equations that the structural passes may eliminate. Components reach the rest of the
+potential of a connector that nothing uses does not make the model under-determined.
+Every connector variable that is kept is an algebraic variable of the model; the
+connection equalities are alias equations that the structural passes
+(:mod:`gtmodel.modeling.index_reduction`) eliminate. Declared states need not be
+independent: a damper's relative position (a state, as in the MSL) or two rigidly
+joined masses make a higher-index model, which ``Model.simulate`` reduces. Components reach the rest of the
 :class:`Model` API (initial equations, events) through :meth:`Component.model_call`.
 """
 
@@ -215,8 +216,7 @@ class Component(_ComponentBase):
                 elif isinstance(decl, Variable):
                     start = comp._attributes[name]["start"]
                     value = None if start is None else (start[0] if start.size == 1 else start)
-                    kind = "algebraic" if decl.kind == "state" and comp._values.get("stateSelect") == "never" else decl.kind
-                    rows.append(dict(name=pre + name, kind=kind, value=value, unit=decl.unit, description=decl.description))
+                    rows.append(dict(name=pre + name, kind=decl.kind, value=value, unit=decl.unit, description=decl.description))
             for cname, conn in comp.connectors().items():
                 for var in conn.variables():
                     rows.append(dict(name=f"{pre}{cname}.{var.name}", kind="flow" if var.is_flow else "potential",

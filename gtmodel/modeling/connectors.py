@@ -14,13 +14,8 @@ Two connectors can be connected when they declare the same variables (names, kin
 sizes and units), whatever their class names: ``Flange_a`` and ``Flange_b`` are
 compatible, as in the Modelica Standard Library where they differ only in the icon.
 
-Mechanical connectors of the library carry the velocity and the acceleration as further
-potential variables (``v = der(s)``, ``a = der(v)``), as ModelingToolkitStandardLibrary's
-mechanical ports carry ``v`` and the MSL ``Move`` source ``s, v, a``: dampers then need
-no ``der()`` of an algebraic variable, so compliant chains flatten to index-1 DAEs
-without index reduction, and a stateless mass (``stateSelect="never"``) rigidly coupled
-to another one takes its acceleration from the connector (see
-:mod:`gtmodel.modeling.components` for the rule that drops unused potentials).
+The library's mechanical connectors are those of the MSL (position and cut force; angle
+and cut torque): velocities are component-internal, ``v = der(s)``.
 
 Connector instances are declared as class attributes of components
 (``flange_a = Flange_a()``); each component instance gets its own copies, whose

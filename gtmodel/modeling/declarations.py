@@ -199,8 +199,11 @@ class Variable:
 class State(Variable):
     """A differentiated variable: ``der()`` of it may appear in the equations.
 
-    Today's :meth:`~gtmodel.modeling.Model.flatten` needs index 1: declare as states the
-    variables whose derivatives the component writes (a mass's ``s`` and ``v``).
+    Declare as states the variables whose derivatives the component writes (a mass's
+    ``s`` and ``v``, a damper's ``s_rel``). States of different components may be
+    dependent (a damper's ``s_rel`` and the positions of the masses it joins); the
+    structural passes then choose the states (``Model.simulate`` does). Give such states
+    consistent start values, or an initial equation.
 
     Parameters
     ----------
@@ -243,9 +246,8 @@ class Structural:
     """A structural parameter: a Python value fixed when the model is built (MTK ``@structural_parameters``).
 
     Unlike a :class:`Parameter` it is no symbol of the model: ``equations()`` reads the
-    plain value (e.g. to choose equations). The library's ``stateSelect`` is one
-    (Modelica's ``StateSelect``: ``"never"`` makes a mass or inertia stateless, for
-    rigid couplings).
+    plain value (e.g. to choose equations, as Modelica's ``parameter Boolean`` in
+    ``if`` clauses).
 
     Parameters
     ----------

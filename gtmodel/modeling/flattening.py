@@ -104,10 +104,7 @@ class _Flattening:
                     else:
                         comp._symbols[name] = self._declare(pre + name, "parameter", decl.size, value=value)
                 elif isinstance(decl, Variable):
-                    kind = decl.kind
-                    if kind == "state" and comp._values.get("stateSelect") == "never":
-                        kind = "algebraic"  # Modelica StateSelect.never: the component owns no states
-                    comp._symbols[name] = self._declare(pre + name, kind, decl.size, **comp._attributes[name])
+                    comp._symbols[name] = self._declare(pre + name, decl.kind, decl.size, **comp._attributes[name])
             for cname, conn in comp.connectors().items():
                 conn._symbols = {v.name: self._declare(f"{pre}{cname}.{v.name}", "algebraic", v.size) for v in conn.variables()}
         except GtModelError as exc:

@@ -24,6 +24,7 @@ import numpy as np
 
 from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _vector_value
+from gtmodel.modeling.index_reduction import structural_simplify
 from gtmodel.modeling.model import Model
 
 __all__ = ["Linearization", "linearize"]
@@ -126,9 +127,12 @@ def linearize(
     Parameters
     ----------
     model : Model
-        The model (flattened here).
+        The model (flattened here; a model that does not flatten, e.g. of higher index,
+        is first reduced by :func:`~gtmodel.modeling.index_reduction.structural_simplify`,
+        whose state selection then gives the states, at the start values).
     x : array_like or mapping, optional
-        States, shape ``(nx,)``, or state name -> value; default the start values.
+        States, shape ``(nx,)``, or state name -> value (of the reduced model when it
+        was reduced); default the start values.
     u : array_like, optional
         Inputs, shape ``(nu,)``; default the inputs' start values.
     p : mapping of str to float or array_like, optional
@@ -157,7 +161,13 @@ def linearize(
     """
     if not isinstance(model, Model):
         raise InputError(f"model must be a gtmodel.modeling.Model, got {type(model).__name__}")
-    dae = model.flatten()
+    try:
+        dae = model.flatten()
+    except ModelError:
+        # higher index or aliases: the index-1 model of the structural passes (its states
+        # may differ; A is the same up to a change of coordinates)
+        model = structural_simplify(model)
+        dae = model.flatten()
     if isinstance(x, Mapping):
         xv = dae.x_start.copy()
         for name, val in x.items():

@@ -190,7 +190,7 @@ def test_composed_model_connection_aliases_are_eliminated():
     model = Chain().to_model("chain")
     full = scalarize(model)
     red = eliminate_aliases(full)
-    assert (full.n_vars, red.n_vars, len(red.aliases)) == (35, 15, 20)
+    assert (full.n_vars, red.n_vars, len(red.aliases)) == (28, 16, 12)
     simple = structural_simplify(model)
     assert simple.flatten().x_names == ["m1.s", "m1.v", "m2.s", "m2.v"]
     t = np.linspace(0.0, 5.0, 51)

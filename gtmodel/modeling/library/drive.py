@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.modeling.components import Component, Input, Parameter, State, connect
+from gtmodel.modeling.components import Component, Input, Parameter, State, Variable, connect
 from gtmodel.modeling.library import rotational, translational
 
 __all__ = ["PositionServo", "CompliantDriveAxis", "TwoMassParameters", "two_mass_parameters", "drive_axis_from_modes"]
@@ -162,8 +162,9 @@ def two_mass_parameters(
 class PositionServo(Component):
     """Cascaded P position / P speed servo on a motor angle, with a first-order reference filter.
 
-    ``T der(phi_f) = phi_ref - phi_f`` and the torque on the motor
-    ``kp (phi_f - flange.phi) - kv flange.w`` (``flange.tau`` is its negative): the
+    ``T der(phi_f) = phi_ref - phi_f``, the measured angle ``phi = flange.phi`` and speed
+    ``w = der(phi)``, and the torque on the motor ``kp (phi_f - phi) - kv w``
+    (``flange.tau`` is its negative): the
     mechanical form of ``tau = Kv (Kp (phi_f - phi) - w)`` with ``kp = Kv Kp``,
     ``kv = Kv``. Input ``phi_ref`` [rad], motor-angle reference.
 
@@ -185,12 +186,16 @@ class PositionServo(Component):
     T = Parameter(0.145, unit="s", description="time constant of the reference filter", lb=1e-9)
     phi_ref = Input(unit="rad", description="motor-angle reference")
     phi_f = State(unit="rad", description="filtered motor-angle reference")
+    phi = State(unit="rad", description="measured motor angle")
+    w = Variable(unit="rad/s", description="measured motor speed, der(phi)")
     flange = rotational.Flange_b("flange on the motor shaft")
 
     def equations(self) -> None:
-        """Reference filter and the control torque."""
+        """Reference filter, the measured angle and speed, and the control torque."""
         self.equation(self.T * self.der(self.phi_f), self.phi_ref - self.phi_f, name="filter")
-        self.equation(-self.flange.tau, self.kp * (self.phi_f - self.flange.phi) - self.kv * self.flange.w, name="control")
+        self.equation(self.phi, self.flange.phi, name="angle")
+        self.equation(self.w, self.der(self.phi), name="speed")
+        self.equation(-self.flange.tau, self.kp * (self.phi_f - self.phi) - self.kv * self.w, name="control")
 
 
 # Defaults: the L1 (Dressler (2012)): modes 13.826 / 103.337 Hz and damping ratios

@@ -151,8 +151,8 @@ class Capacitor(OnePort):
 class EMF(Component):
     """Electro-mechanical converter (MSL ``Basic.EMF``, support fixed): DC motor torque constant.
 
-    ``v = p.v - n.v``, ``0 = p.i + n.i``, ``i = p.i``, ``w = flange.w``, ``k w = v``,
-    ``flange.tau = -k i``.
+    ``v = p.v - n.v``, ``0 = p.i + n.i``, ``i = p.i``, ``phi = flange.phi``,
+    ``w = der(phi)``, ``k w = v``, ``flange.tau = -k i``.
 
     Parameters
     ----------
@@ -169,14 +169,16 @@ class EMF(Component):
     flange = rotational.Flange_b("flange of the motor shaft")
     v = Variable(unit="V", description="voltage drop p.v - n.v")
     i = Variable(unit="A", description="current from p to n")
-    w = Variable(unit="rad/s", description="angular velocity of the flange")
+    phi = State(unit="rad", description="angle of the flange")
+    w = Variable(unit="rad/s", description="angular velocity of the flange, der(phi)")
 
     def equations(self) -> None:
         """The electrical port, the back-EMF and the motor torque."""
         self.equation(self.v, self.p.v - self.n.v, name="voltage")
         self.equation(self.p.i + self.n.i, 0.0, name="current_balance")
         self.equation(self.i, self.p.i, name="current")
-        self.equation(self.w, self.flange.w, name="speed")
+        self.equation(self.phi, self.flange.phi, name="angle")
+        self.equation(self.w, self.der(self.phi), name="speed")
         self.equation(self.k * self.w, self.v, name="back_emf")
         self.equation(self.flange.tau, -self.k * self.i, name="torque")
 

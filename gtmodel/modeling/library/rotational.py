@@ -1,10 +1,9 @@
 """1-D rotational mechanics, named as ``Modelica.Mechanics.Rotational``.
 
-Connector: :class:`Flange_a` / :class:`Flange_b` with the angle ``phi`` [rad], the angular
-velocity ``w = der(phi)`` [rad/s], the angular acceleration ``a = der(w)`` [rad/s^2]
-(potential variables) and the cut torque ``tau`` [N m] (flow, positive into the
-component); velocity and acceleration are carried in the connector for the reasons given
-in :mod:`gtmodel.modeling.library.translational` (rigid couplings: ``stateSelect``).
+Connector: :class:`Flange_a` / :class:`Flange_b` with the angle ``phi`` [rad] (potential)
+and the cut torque ``tau`` [N m] (flow, positive into the component), as in the MSL;
+speeds are component-internal (``w = der(phi)``; see
+:mod:`gtmodel.modeling.library.translational` for the index of the resulting models).
 
 Components (Modelica Standard Library 4.0 names and equations, support flanges fixed):
 :class:`Inertia`, :class:`IdealGear`, :class:`Spring`, :class:`Damper`,
@@ -14,7 +13,7 @@ Components (Modelica Standard Library 4.0 names and equations, support flanges f
 
 from __future__ import annotations
 
-from gtmodel.modeling.components import Component, Input, Parameter, State, Structural, Variable
+from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
 from gtmodel.modeling.connectors import Connector, Flow, Potential
 from gtmodel.modeling.library import translational
 
@@ -24,6 +23,7 @@ __all__ = [
     "Flange_b",
     "PartialTwoFlanges",
     "PartialCompliant",
+    "PartialCompliantWithRelativeStates",
     "Inertia",
     "IdealGear",
     "Spring",
@@ -36,10 +36,7 @@ __all__ = [
 
 
 class Flange(Connector):
-    """Rotational flange: angle ``phi`` [rad], speed ``w``, acceleration ``a``, cut torque ``tau`` [N m].
-
-    ``Modelica.Mechanics.Rotational.Interfaces.Flange`` plus ``w = der(phi)`` [rad/s] and
-    ``a = der(w)`` [rad/s^2].
+    """Rotational flange: angle ``phi`` [rad], cut torque ``tau`` [N m] (MSL ``Interfaces.Flange``).
 
     Parameters
     ----------
@@ -48,8 +45,6 @@ class Flange(Connector):
     """
 
     phi = Potential(unit="rad", description="absolute rotation angle of the flange")
-    w = Potential(unit="rad/s", description="absolute angular velocity of the flange, der(phi)")
-    a = Potential(unit="rad/s2", description="absolute angular acceleration of the flange, der(w)")
     tau = Flow(unit="N.m", description="cut torque in the flange")
 
 
@@ -130,7 +125,28 @@ class Spring(PartialCompliant):
         self.equation(self.tau, self.c * (self.phi_rel - self.phi_rel0), name="hooke")
 
 
-class Damper(PartialCompliant):
+class PartialCompliantWithRelativeStates(PartialCompliant):
+    """Compliant connection with the relative angle as a state (MSL base of dampers).
+
+    :class:`PartialCompliant`'s equations with ``phi_rel`` a state and ``w_rel = der(phi_rel)``.
+
+    Parameters
+    ----------
+    **modifiers
+        Further modifiers (start values of variables, sub-components), see
+        :class:`~gtmodel.modeling.components.Component`.
+    """
+
+    phi_rel = State(unit="rad", description="relative rotation angle flange_b.phi - flange_a.phi")
+    w_rel = Variable(unit="rad/s", description="relative angular velocity der(phi_rel)")
+
+    def equations(self) -> None:
+        """:class:`PartialCompliant`'s equations and ``w_rel = der(phi_rel)``."""
+        super().equations()
+        self.equation(self.w_rel, self.der(self.phi_rel), name="w_rel")
+
+
+class Damper(PartialCompliantWithRelativeStates):
     """Linear torsional damper: ``tau = d w_rel`` (MSL ``Rotational.Components.Damper``).
 
     Parameters
@@ -143,16 +159,14 @@ class Damper(PartialCompliant):
     """
 
     d = Parameter(0.0, unit="N.m.s/rad", description="damping constant", lb=0.0)
-    w_rel = Variable(unit="rad/s", description="relative angular velocity flange_b.w - flange_a.w")
 
     def equations(self) -> None:
-        """``w_rel = flange_b.w - flange_a.w``, ``tau = d w_rel``, plus the base's."""
+        """``tau = d w_rel``, plus the base's equations."""
         super().equations()
-        self.equation(self.w_rel, self.flange_b.w - self.flange_a.w, name="w_rel")
         self.equation(self.tau, self.d * self.w_rel, name="damping")
 
 
-class SpringDamper(PartialCompliant):
+class SpringDamper(PartialCompliantWithRelativeStates):
     """Torsional spring and damper in parallel (MSL ``Rotational.Components.SpringDamper``).
 
     ``tau = c (phi_rel - phi_rel0) + d w_rel``.
@@ -173,58 +187,46 @@ class SpringDamper(PartialCompliant):
     c = Parameter(1e5, unit="N.m/rad", description="spring constant", lb=0.0)
     d = Parameter(0.0, unit="N.m.s/rad", description="damping constant", lb=0.0)
     phi_rel0 = Parameter(0.0, unit="rad", description="unstretched spring angle")
-    w_rel = Variable(unit="rad/s", description="relative angular velocity flange_b.w - flange_a.w")
 
     def equations(self) -> None:
-        """``w_rel = flange_b.w - flange_a.w``, ``tau = c (phi_rel - phi_rel0) + d w_rel``."""
+        """``tau = c (phi_rel - phi_rel0) + d w_rel``, plus the base's equations."""
         super().equations()
-        self.equation(self.w_rel, self.flange_b.w - self.flange_a.w, name="w_rel")
         self.equation(self.tau, self.c * (self.phi_rel - self.phi_rel0) + self.d * self.w_rel, name="torque")
 
 
 class Inertia(PartialTwoFlanges):
     """Rotational inertia (MSL ``Rotational.Components.Inertia``).
 
-    ``phi = flange_a.phi = flange_b.phi`` (and speeds, accelerations), ``w = der(phi)``,
-    ``a = der(w)``, ``J a = flange_a.tau + flange_b.tau``. States ``phi``, ``w``; with
-    ``stateSelect="never"`` none (for an inertia rigidly coupled to one with states, see
-    :mod:`gtmodel.modeling.library.translational`).
+    ``phi = flange_a.phi = flange_b.phi``, ``w = der(phi)``, ``a = der(w)``,
+    ``J a = flange_a.tau + flange_b.tau``. States ``phi``, ``w``.
 
     Parameters
     ----------
     J : float, optional
         Moment of inertia [kg m^2], >= 0 (default 1).
-    stateSelect : {"default", "never"}, optional
-        ``"never"``: ``phi`` and ``w`` are algebraic (Modelica ``StateSelect.never``).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
         :class:`~gtmodel.modeling.components.Component`.
     """
 
     J = Parameter(1.0, unit="kg.m2", description="moment of inertia", lb=0.0)
-    stateSelect = Structural("default", choices=("default", "never"), description="never: no states (rigid coupling)")  # noqa: N815
     phi = State(unit="rad", description="absolute rotation angle of the component")
     w = State(unit="rad/s", description="absolute angular velocity of the component")
     a = Variable(unit="rad/s2", description="absolute angular acceleration of the component")
 
     def equations(self) -> None:
-        """Rigid flanges, kinematics (unless stateless) and Euler's law."""
+        """Rigid flanges, kinematics and Euler's law."""
         self.equation(self.flange_a.phi, self.phi, name="phi_a")
         self.equation(self.flange_b.phi, self.phi, name="phi_b")
-        self.equation(self.flange_a.w, self.w, name="w_a")
-        self.equation(self.flange_b.w, self.w, name="w_b")
-        self.equation(self.flange_a.a, self.a, name="a_a")
-        self.equation(self.flange_b.a, self.a, name="a_b")
-        if self.stateSelect != "never":
-            self.equation(self.der(self.phi), self.w, name="velocity")
-            self.equation(self.der(self.w), self.a, name="acceleration")
+        self.equation(self.der(self.phi), self.w, name="velocity")
+        self.equation(self.der(self.w), self.a, name="acceleration")
         self.equation(self.J * self.a, self.flange_a.tau + self.flange_b.tau, name="euler")
 
 
 class IdealGear(PartialTwoFlanges):
     """Ideal gear without inertia (MSL ``Rotational.Components.IdealGear``, support fixed).
 
-    ``flange_a.phi = ratio flange_b.phi`` (and speeds),
+    ``flange_a.phi = ratio flange_b.phi``,
     ``0 = ratio flange_a.tau + flange_b.tau``.
 
     Parameters
@@ -241,8 +243,6 @@ class IdealGear(PartialTwoFlanges):
     def equations(self) -> None:
         """Kinematic and torque relations of the gear."""
         self.equation(self.flange_a.phi, self.ratio * self.flange_b.phi, name="angle")
-        self.equation(self.flange_a.w, self.ratio * self.flange_b.w, name="speed")
-        self.equation(self.flange_a.a, self.ratio * self.flange_b.a, name="acceleration")
         self.equation(self.ratio * self.flange_a.tau + self.flange_b.tau, 0.0, name="torque")
 
 
@@ -281,16 +281,14 @@ class Fixed(Component):
     flange = Flange_b("fixed flange")
 
     def equations(self) -> None:
-        """``flange.phi = phi0``, ``flange.w = 0``, ``flange.a = 0``."""
+        """``flange.phi = phi0``."""
         self.equation(self.flange.phi, self.phi0, name="angle")
-        self.equation(self.flange.w, 0.0, name="speed")
-        self.equation(self.flange.a, 0.0, name="acceleration")
 
 
 class IdealRollingWheel(Component):
     """Rotation to translation without slip (MSL ``Rotational.Components.IdealRollingWheel``).
 
-    ``flangeR.phi radius = flangeT.s`` (and speeds), ``0 = radius flangeT.f + flangeR.tau``:
+    ``flangeR.phi radius = flangeT.s``, ``0 = radius flangeT.f + flangeR.tau``:
     a belt pulley or pinion of radius ``radius``.
 
     Parameters
@@ -309,6 +307,4 @@ class IdealRollingWheel(Component):
     def equations(self) -> None:
         """Rolling without slip and the force/torque balance."""
         self.equation(self.flangeR.phi * self.radius, self.flangeT.s, name="position")
-        self.equation(self.flangeR.w * self.radius, self.flangeT.v, name="speed")
-        self.equation(self.flangeR.a * self.radius, self.flangeT.a, name="acceleration")
         self.equation(self.radius * self.flangeT.f + self.flangeR.tau, 0.0, name="force")
