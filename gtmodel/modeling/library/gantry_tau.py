@@ -81,9 +81,9 @@ class Cart(Component):
         m |v|^2 der(q_dot) = flange.f + v . frame_b.f + m v . g - f_fric
         f_fric = f_c sigma(q_dot) + f_v q_dot                                (eq. (6.8))
 
-    ``flange`` (a translational flange, ``s = q``, ``v = q_dot``, ``a = der(q_dot)``) takes
-    the actuator force ``flange.f`` [N] (generalised force along ``q``; with ``|v| != 1``
-    the gear-ratio correction of the modified nominal model). Friction is off by default
+    ``flange`` (a translational flange, ``s = q``) takes the actuator force ``flange.f`` [N]
+    (generalised force along ``q``; with ``|v| != 1`` the gear-ratio correction of the
+    modified nominal model). Friction is off by default
     (``f_c = f_v = 0``); ``sigma`` is the sign in the form ``friction`` of
     ``gtmodel.robots.friction``: ``"tanh"`` (default, ``tanh(q_dot / friction_width)``),
     ``"piecewise"`` (linear on ``|q_dot| < friction_width``) or ``"exact"`` (``sign``: for
@@ -124,7 +124,7 @@ class Cart(Component):
     q = State(unit="m", description="cart position along the guideway")
     q_dot = State(unit="m/s", description="cart velocity")
     frame_b = Frame_b("spherical-joint point A = As + q v")
-    flange = translational.Flange_a("actuator flange: s = q, v = q_dot, a = der(q_dot), f = actuator force")
+    flange = translational.Flange_a("actuator flange: s = q, f = actuator force along the guideway")
 
     def equations(self) -> None:
         """Prismatic joint, kinematics and the force balance along the guideway (eqs. (4.9), (6.8))."""
@@ -134,8 +134,6 @@ class Cart(Component):
         f_fric = self.f_c * sigma + self.f_v * self.q_dot
         self.equation(self.frame_b.r, self.As + self.q * v, name="prismatic")
         self.equation(self.flange.s, self.q, name="flange_s")
-        self.equation(self.flange.v, self.q_dot, name="flange_v")
-        self.equation(self.flange.a, self.der(self.q_dot), name="flange_a")
         self.equation(self.der(self.q), self.q_dot, name="kinematics")
         self.equation(
             self.m * ca.dot(v, v) * self.der(self.q_dot),
