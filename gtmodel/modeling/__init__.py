@@ -20,6 +20,7 @@ from gtmodel.modeling.dae import FlatDAE, SimulationResult
 from gtmodel.modeling.model import Model
 from gtmodel.modeling.optimization import Optimization
 from gtmodel.modeling.index_reduction import structural_simplify
+from gtmodel.modeling.inverse import InverseModel, inverse_model
 from gtmodel.modeling.structure import check_structure
 from gtmodel.modeling.result import OptimizationResult
 from gtmodel.modeling.expressions import (
@@ -39,6 +40,8 @@ __all__ = [
     "Optimization",
     "structural_simplify",
     "check_structure",
+    "inverse_model",
+    "InverseModel",
     "OptimizationResult",
     "CollocationTranscription",
     "solve",

@@ -7,7 +7,9 @@
 * :mod:`~gtmodel.modeling.library.electrical` (``Modelica.Electrical.Analog``):
   Resistor, Inductor, Capacitor, EMF, SignalVoltage, ConstantVoltage, Ground;
 * :mod:`~gtmodel.modeling.library.drive`: a compliant drive axis (servo, motor, gear,
-  belt, cart) composed from them.
+  belt, cart) composed from them;
+* :mod:`~gtmodel.modeling.library.gantry_tau`: the Gantry-Tau parts on the 3-D frame
+  (Fixed, Cart, Link, Plate) and the 3-link robot GantryTau3.
 
 The domains share class names (``translational.Spring``, ``rotational.Spring``), as in
 the MSL: import the domain module and qualify.
@@ -15,6 +17,6 @@ the MSL: import the domain module and qualify.
 
 from __future__ import annotations
 
-from gtmodel.modeling.library import drive, electrical, rotational, translational
+from gtmodel.modeling.library import drive, electrical, gantry_tau, rotational, translational
 
-__all__ = ["translational", "rotational", "electrical", "drive"]
+__all__ = ["translational", "rotational", "electrical", "drive", "gantry_tau"]
