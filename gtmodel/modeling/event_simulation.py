@@ -20,6 +20,14 @@ phase. A condition already positive at the start does not fire (edge semantics) 
 its clause is declared ``initial=True``. ``sign()`` in the equations is switched by events
 too (:mod:`gtmodel.modeling.discontinuities`, applied by :meth:`Model.simulate`).
 
+A model with events that ``flatten()`` refuses (aliases, a rigid coupling, a closed chain)
+is reduced once by :func:`~gtmodel.modeling.index_reduction.structural_simplify` before the
+loop (:func:`simulate_events_reduced`): its when-clauses are carried over and the reinit
+targets kept as states. The dummy selection made at the start is not re-made between
+events, so a constraint whose selection turns singular on the way (a Cartesian pendulum
+passing ``x = 0``) stops with a ConvergenceError (a strict xfail in
+tests/modeling/test_events.py); linear couplings (rigidly joined masses) are exact.
+
 Why not CasADi's own event support (DAE field ``"zero"`` with option ``"transition"``,
 experimental in 3.8): measured in casadi 3.8.2 on ``x'' = -x``, ``x(0) = 1``, ``zero = x``
 over 10 s (event times ``pi/2 + k pi``), with CVODES and IDAS alike, it stops with
@@ -44,11 +52,12 @@ from scipy.optimize import brentq
 
 from gtmodel._arrays import positive_float, positive_int
 from gtmodel.errors import ConvergenceError, InputError
-from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack
+from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, expand_names
 from gtmodel.modeling.events import EventRecord
+from gtmodel.modeling.index_reduction import _ident, structural_simplify
 from gtmodel.modeling.simulation import simulation_inputs
 
-__all__ = ["simulate_events"]
+__all__ = ["simulate_events", "simulate_events_reduced"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -374,3 +383,101 @@ def simulate_events(
         p={k: ps[0][s].copy() for k, s in dae.p_vars.items()},
         events=events,
     )
+
+
+def simulate_events_reduced(
+    model: Any,
+    t_grid: Any,
+    x0: Any = None,
+    u: Any = None,
+    p: Mapping[str, Any] | None = None,
+    integrator: str = "idas",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    consistent: bool = False,
+) -> SimulationResult:
+    """Simulate a model with when-clauses that ``flatten()`` refuses (aliases, high index).
+
+    :meth:`Model.simulate` calls this. The model is reduced once by
+    :func:`~gtmodel.modeling.index_reduction.structural_simplify` (alias elimination,
+    Pantelides, dummy derivatives selected at the start values, keeping the reinit targets
+    as states where the selection allows), its modes and when-clauses carried over, and
+    simulated by :func:`simulate_events`; the result holds the declared states and
+    algebraic variables of ``model``. Limits: the dummy selection is not re-made during
+    the simulation (a constraint whose selection turns singular, e.g. a pendulum passing
+    ``x = 0``, fails with a ConvergenceError; linear couplings such as rigidly joined
+    masses are exact), and the states the reduction made dummies take their values from
+    the constraints (their ``x0``/start values are not used).
+
+    Parameters
+    ----------
+    model : Model
+        The model, with when-clauses.
+    t_grid : array_like
+        Strictly increasing output times, shape ``(N,)`` with ``N >= 2``, s.
+    x0 : mapping of str to float or array_like, optional
+        Start values of states that stay states after the reduction, by name; default the
+        declared starts.
+    u : float, array_like or callable, optional
+        Inputs, as for :meth:`Model.simulate`.
+    p : mapping of str to float or array_like, optional
+        Parameter overrides by name.
+    integrator : {"idas", "cvodes"}, optional
+        SUNDIALS integrator.
+    rtol, atol : float, optional
+        Relative and absolute integration tolerances.
+    consistent : bool, optional
+        ``x0`` holds consistent values of all states (from
+        :func:`~gtmodel.modeling.structured_simulation.consistent_start`): the dummies'
+        are dropped instead of refused; default false.
+
+    Returns
+    -------
+    SimulationResult
+        As :func:`simulate_events`, under the names of ``model``.
+
+    Raises
+    ------
+    InputError
+        If ``x0`` is not a mapping or names a state that the reduction made a dummy.
+    ModelError
+        If the model is structurally singular, cannot be reduced, or a reinit target cannot
+        stay a state.
+    ConvergenceError
+        As :func:`simulate_events`.
+    """
+    keep = tuple(
+        expand_names(vname, len(model._vars[vname].start))[i] for w in model._events.whens for vname, idx, _ in w.reinit
+        for i in idx
+    )
+    reduced = structural_simplify(model, keep_states=keep)
+    if consistent and isinstance(x0, Mapping):  # scalar states of the reduced model
+        x0 = {
+            nm: float(val) for k, vals in x0.items() for nm, val in zip(expand_names(k, np.size(vals)), np.ravel(vals))
+            if nm in reduced._vars and reduced._vars[nm].kind == "state"
+        }
+    if x0 is not None:
+        if not isinstance(x0, Mapping):
+            raise InputError(f"model {model.name!r} is index-reduced for the event simulation: give x0 as a mapping name -> value")
+        dummies = [k for k in x0 if k not in reduced._vars or reduced._vars[k].kind != "state"]
+        if dummies:
+            raise InputError(
+                f"x0: {dummies} of model {model.name!r} are not states after index reduction (dummy derivatives: "
+                f"their values follow from the constraints); states: {[v.name for v in reduced._vars.values() if v.kind == 'state']}"
+            )
+    res = simulate_events(reduced, t_grid, x0, u, p, integrator, rtol, atol)
+    found = {**res.outputs, **res.z, **res.x}
+
+    def column(nm: str) -> np.ndarray:
+        return found[nm] if nm in found else found[_ident(nm)]
+
+    def group(kind: str) -> dict[str, np.ndarray]:
+        out = {}
+        for v in model._vars.values():
+            if v.kind == kind:
+                cols = [column(nm) for nm in expand_names(v.name, v.size)]
+                out[v.name] = cols[0] if v.size == 1 else np.column_stack(cols)
+        return out
+
+    outputs = {k: res.outputs[k] for k in model._outputs}
+    return SimulationResult(t=res.t, x=group("state"), z=group("algebraic"), u=res.u, outputs=outputs, p=res.p, events=res.events)

@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import _as_sx
+from gtmodel.modeling.dae import _as_sx, expand_names
 
 __all__ = [
     "EventRecord",
@@ -39,6 +39,7 @@ __all__ = [
     "EventsMixin",
     "declare_mode",
     "declare_when",
+    "transfer_events",
 ]
 
 
@@ -248,6 +249,59 @@ def declare_when(
         model.check_symbols(val, f"{what} assign({vname})")
         assigns.append((vname, val))
     spec.whens.append(_When(label, cond, int(direction), reinits, assigns, bool(initial)))
+
+
+def transfer_events(source: Any, target: Any, old: ca.SX, new: ca.SX, names: Mapping[str, str]) -> None:
+    """Declare the modes and when-clauses of ``source`` on ``target`` in ``target``'s symbols.
+
+    Used by :func:`gtmodel.modeling.index_reduction.structural_simplify`: the reduced model
+    has new symbols, and its states are a subset of the original ones (the dummy
+    derivatives became algebraic).
+
+    Parameters
+    ----------
+    source : Model
+        The model the events were declared on.
+    target : Model
+        The model receiving them, with the variables, equations and the modes (as
+        parameters of the same names) declared.
+    old, new : casadi.SX
+        Column vectors: the ``source`` symbols (time, parameters, inputs, variables and
+        ``der()`` symbols) and the ``target`` expressions replacing them, element by element.
+    names : mapping of str to str
+        Scalar variable name in ``source`` -> the name of its variable in ``target``.
+
+    Raises
+    ------
+    ModelError
+        If a reinit target is not a state of ``target`` (index reduction made it a dummy
+        derivative: reinit needs a state, as in Modelica).
+    """
+    spec = source._events
+    if spec is None:
+        return
+    tspec = _spec(target)
+    tspec.modes.extend(m for m in spec.modes if m not in tspec.modes)
+
+    def sub(e: ca.SX) -> ca.SX:
+        return ca.substitute(e, old, new)
+
+    for w in spec.whens:
+        reinit = []
+        for vname, idx, val in w.reinit:
+            scalars = expand_names(vname, len(source._vars[vname].start))
+            for k, i in enumerate(idx):
+                tname = names.get(scalars[i])
+                var = target._vars.get(tname) if tname is not None else None
+                if var is None or var.kind != "state":
+                    raise ModelError(
+                        f"model {source.name!r}: when-clause {w.name!r} reinitialises {scalars[i]!r}, which index "
+                        "reduction made a dummy derivative (not a state); a reinit target must stay a state "
+                        "(the dummy selection could not keep it)"
+                    )
+                reinit.append((var.sym, sub(val[k if val.numel() > 1 else 0])))
+        assign = [(target._vars[m].sym, sub(val)) for m, val in w.assign]
+        declare_when(target, sub(w.condition), reinit, assign, w.direction, w.name, w.initial)
 
 
 class EventsMixin:

@@ -36,6 +36,7 @@ import scipy.linalg as sla
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import _vector_value, expand_names
+from gtmodel.modeling.events import transfer_events
 from gtmodel.modeling.structure import (
     ScalarDAE,
     check_structure,
@@ -255,7 +256,7 @@ def _jacobian_function(aug: AugmentedDAE, eqs: list[int], cand: list[int]) -> ca
     return ca.Function("dd_jac", aug.args, [ca.densify(ca.jacobian(g, z))])
 
 
-def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
+def select_dummies(aug: AugmentedDAE, point: tuple | None = None, avoid: frozenset[int] = frozenset()) -> Selection:
     """Choose the dummy derivatives, numerically at a point or structurally.
 
     Mattsson & Soederlind (1993), "Index reduction in differential-algebraic equations using
@@ -273,6 +274,10 @@ def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
         parameters; columns are then chosen by column-pivoted QR (the best-conditioned
         block, greedily). Without it (or if the block is singular there) the choice is a
         structural matching.
+    avoid : frozenset of int, optional
+        Candidate variables to leave out of the numeric choice when the others give a
+        nonsingular block (Modelica's ``stateSelect = prefer`` for their antiderivatives:
+        e.g. the states a when-clause reinitialises); default none.
 
     Returns
     -------
@@ -293,10 +298,15 @@ def select_dummies(aug: AugmentedDAE, point: tuple | None = None) -> Selection:
         if point is not None:
             G = np.array(_jacobian_function(aug, g, cand)(*point))
             if G.size and np.all(np.isfinite(G)):
-                _, R, piv = sla.qr(G, pivoting=True, mode="economic")
-                d = np.abs(np.diag(R))
-                if len(d) >= len(g) and d[len(g) - 1] > 1e-10 * max(d[0], 1e-300):
-                    chosen = sorted(cand[k] for k in piv[: len(g)])
+                cols = [k for k, v in enumerate(cand) if v not in avoid]
+                for pool in ([cols] if len(cols) < len(cand) else []) + [list(range(len(cand)))]:
+                    if len(pool) < len(g):
+                        continue
+                    _, R, piv = sla.qr(G[:, pool], pivoting=True, mode="economic")
+                    d = np.abs(np.diag(R))
+                    if len(d) >= len(g) and d[len(g) - 1] > 1e-10 * max(d[0], 1e-300):
+                        chosen = sorted(cand[pool[k]] for k in piv[: len(g)])
+                        break
         if chosen is None:
             if point is not None:
                 _log.warning(
@@ -416,7 +426,7 @@ def _ident(name: str) -> str:
     return base if k == 0 else f"der{k if k > 1 else ''}_{base}"
 
 
-def structural_simplify(model: Any, point: tuple | None = None) -> Any:
+def structural_simplify(model: Any, point: tuple | None = None, keep_states: tuple[str, ...] = ()) -> Any:
     """Alias elimination, structural check and index reduction: an index-1 model (MTK's name).
 
     Returns ``model`` itself when it has no alias equation and already flattens.
@@ -427,7 +437,8 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
     differentiated equations, the same parameters and inputs, and as outputs the declared
     outputs and the eliminated aliases. The dummy selection is fixed (made at ``point`` or at
     the start values); ``Model.simulate`` re-selects when it becomes singular,
-    this model does not.
+    this model does not. The modes, when-clauses and ``substitute_der`` marks of the
+    model (:mod:`gtmodel.modeling.events`) are carried over to the new model.
 
     Parameters
     ----------
@@ -436,6 +447,9 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
     point : tuple, optional
         ``(t, v, u, p)`` values for the numeric dummy selection (see
         :func:`select_dummies`); default the start values (derivatives 0).
+    keep_states : tuple of str, optional
+        Scalar names of states to keep as states when the dummy selection allows it (their
+        ``der()`` are ``avoid`` ed in :func:`select_dummies`), e.g. reinit targets.
 
     Returns
     -------
@@ -484,7 +498,9 @@ def structural_simplify(model: Any, point: tuple | None = None) -> Any:
             return new
         except ModelError:
             pass
-    sel = select_dummies(aug, point)
+    keep = {system.aliases.get(nm, (1.0, nm))[1] for nm in keep_states}
+    avoid = frozenset(aug.diff[v] for v in range(system.n_vars) if aug.names[v] in keep and aug.diff[v] is not None)
+    sel = select_dummies(aug, point, avoid)  # a state stays one while its der() is no dummy
     states, algs = reduced_system(aug, sel)
     return build_model(model, aug, sel, states, algs, values)
 
@@ -561,8 +577,9 @@ def build_model(
 
     for v in [] if direct else states:
         new.equation(new.der(new_syms[v]), new_syms[aug.diff[v]], name=f"der_{_ident(aug.names[v])}")
+    subst = {model._equations[j][0] for j in getattr(model, "_der_substituted", ())}
     for r, nm in zip(sub(aug.res), aug.eq_names):
-        new.equation(r, 0.0, name=nm)
+        new.equation(r, 0.0, name=nm, substitute_der=re.sub(r"\[\d+\]$", "", nm) in subst)
     s = aug.system
     for nm, e in zip(s.outputs, sub(list(s.outputs.values()))):
         new.output(nm, e)
@@ -576,6 +593,19 @@ def build_model(
                     continue
     for r, nm in zip(sub(s.init_res), s.init_names):
         new.initial_equation(r, 0.0, name=nm)
+    if getattr(model, "_events", None) is not None:  # the declared variables in the new symbols
+        olds, exprs = [], []
+        for var in model._vars.values():
+            for j, nm in enumerate(expand_names(var.name, var.size) if var.kind in ("state", "algebraic") else []):
+                olds.append(var.sym[j])
+                exprs.append(s.observed[nm])
+                if var.kind == "state":
+                    olds.append(var.der[j])
+                    exprs.append(s.observed[f"der({nm})"])
+        names = {aug.names[v]: new.locate(new_syms[v])[1] for v in states + algs}
+        transfer_events(
+            model, new, _cat([ca.vec(o) for o in old[:-1]] + olds), _cat([ca.vec(r) for r in rep[:-1]] + sub(exprs)), names
+        )
     _log.debug(
         "structural_simplify %s: %d states, %d algebraic, dummies %s",
         model.name, len(states), len(algs), sorted(aug.names[v] for v in sel.dummies),

@@ -35,10 +35,10 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value, expand_names
 from gtmodel.modeling.discontinuities import sign_modes
-from gtmodel.modeling.event_simulation import simulate_events
+from gtmodel.modeling.event_simulation import simulate_events, simulate_events_reduced
 from gtmodel.modeling.events import EventsMixin, EventSpec
 from gtmodel.modeling.simulation import SIMULATE_DOCS, simulate_model
-from gtmodel.modeling.structured_simulation import simulate_structured
+from gtmodel.modeling.structured_simulation import consistent_start, simulate_structured
 
 __all__ = ["Model"]
 
@@ -687,7 +687,12 @@ class Model(EventsMixin):
         A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
         integrated with events (:func:`gtmodel.modeling.event_simulation.simulate_events`,
         :func:`gtmodel.modeling.discontinuities.sign_modes`), its events reported in
-        :attr:`SimulationResult.events`. Otherwise, a model that :meth:`flatten` accepts
+        :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
+        is reduced once first, keeping the reinit targets as states
+        (:func:`~gtmodel.modeling.event_simulation.simulate_events_reduced`: ``x0`` a
+        mapping, no ``z0``); with initial equations the consistent start is solved first
+        (:func:`~gtmodel.modeling.structured_simulation.consistent_start`, the modes at their
+        start values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten` accepts
         and that has no initial equations is simulated as it is. Otherwise the structural
         passes run first
         (:func:`~gtmodel.modeling.structured_simulation.simulate_structured`): the structural
@@ -706,6 +711,17 @@ class Model(EventsMixin):
         """
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
+            flat = model._flattens()
+            if model._initial_equations:  # consistent start (structured_simulation), then events
+                start = consistent_start(model, t_grid, x0, u, p, z0)
+                x0 = {k: v for k, v in start.items() if model._vars[k].kind == "state"}
+                z0 = np.concatenate([v for k, v in start.items() if model._vars[k].kind == "algebraic"] or [np.zeros(0)])
+                if not flat:
+                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True)
+            if not flat:  # aliases or high index: reduced once (event_simulation)
+                if z0 is not None:
+                    raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
+                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)
             return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
         if self._initial_equations or not self._flattens():
             return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)

@@ -46,7 +46,7 @@ from gtmodel.modeling.initialization import solve_initial
 from gtmodel.modeling.simulation import SIMULATE_DOCS, input_intervals, simulate_model
 from gtmodel.modeling.structure import check_structure, eliminate_aliases, scalarize
 
-__all__ = ["simulate_structured", "SWITCH_RATIO", "CHECK_POINTS"]
+__all__ = ["simulate_structured", "consistent_start", "SWITCH_RATIO", "CHECK_POINTS"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -211,6 +211,75 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
     return vals, switches
 
 
+def _check_grid(t_grid: Any, integrator: str) -> np.ndarray:
+    t = np.asarray(t_grid, dtype=float).reshape(-1)
+    if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InputError("t_grid must be finite, strictly increasing, with at least 2 points")
+    if integrator not in ("idas", "cvodes"):
+        raise InputError(f"integrator must be 'idas' or 'cvodes', got {integrator!r}")
+    return t
+
+
+def _initial_point(model: Any, t: np.ndarray, x0: Any, u: Any, p: Mapping[str, Any] | None, z0: Any) -> tuple:
+    """Structural passes and the consistent initial values (steps 1-3 of the module docstring)."""
+    full = scalarize(model)
+    check_structure(full)  # on the user's own equations, so that the message names them
+    system = eliminate_aliases(full)
+    aug = pantelides(system)
+    pv, p_slices = _parameter_vector(model, p)
+    u_int = input_intervals(u, t, int(system.u.numel()), system.u_start)
+    guess, fixed = _guess_and_fixed(model, aug, x0, z0)
+    u0 = u_int[0]
+    if not system.init_res:
+        sel0 = select_dummies(aug, (t[0], guess, u0, pv))
+        fixed = {v: guess[v] for v in reduced_system(aug, sel0)[0]}
+    v0 = solve_initial(aug, float(t[0]), u0, pv, guess, fixed)
+    obs_names = [nm for v in model._vars.values() if v.kind in ("state", "algebraic")
+                 for nm in expand_names(v.name, v.size)]
+    obs = ca.Function("observed", [_cat(aug.syms)], [_cat([system.observed[nm] for nm in obs_names])])
+    return system, aug, pv, p_slices, u_int, v0, obs, obs_names
+
+
+def consistent_start(
+    model: Any, t_grid: Any, x0: Any = None, u: Any = None, p: Mapping[str, Any] | None = None, z0: Any = None,
+) -> dict[str, np.ndarray]:
+    """Consistent values of the declared states and algebraic variables at ``t_grid[0]``.
+
+    Steps 1-3 of the module docstring (structural check, alias elimination, Pantelides, the
+    consistent initialisation with the :meth:`~gtmodel.modeling.Model.initial_equation` s
+    and the states named in an ``x0`` mapping fixed), as :func:`simulate_structured` does
+    before integrating. :meth:`Model.simulate` uses it for a model with when-clauses.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    t_grid : array_like
+        Output times, ``(N,)``, s; the values are at ``t_grid[0]`` (inputs of the first interval).
+    x0, u, p, z0 : optional
+        As for :meth:`Model.simulate` (``x0`` values are guesses unless given as a mapping).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Declared state and algebraic variable name -> value, ``(size,)``.
+
+    Raises
+    ------
+    InputError
+        On malformed arguments.
+    ModelError
+        If the model is structurally singular or the initialisation is not square.
+    ConvergenceError
+        If the initialisation does not converge.
+    """
+    t = _check_grid(t_grid, "idas")
+    *_, v0, obs, obs_names = _initial_point(model, t, x0, u, p, z0)
+    ov = dict(zip(obs_names, np.array(obs(v0)).ravel()))
+    return {v.name: np.array([ov[nm] for nm in expand_names(v.name, v.size)])
+            for v in model._vars.values() if v.kind in ("state", "algebraic")}
+
+
 @fill_doc(**SIMULATE_DOCS)
 def simulate_structured(
     model: Any,
@@ -239,26 +308,8 @@ def simulate_structured(
 
     {simulate_returns}
     """
-    t = np.asarray(t_grid, dtype=float).reshape(-1)
-    if t.size < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        raise InputError("t_grid must be finite, strictly increasing, with at least 2 points")
-    if integrator not in ("idas", "cvodes"):
-        raise InputError(f"integrator must be 'idas' or 'cvodes', got {integrator!r}")
-    full = scalarize(model)
-    check_structure(full)  # on the user's own equations, so that the message names them
-    system = eliminate_aliases(full)
-    aug = pantelides(system)
-    pv, p_slices = _parameter_vector(model, p)
-    u_int = input_intervals(u, t, int(system.u.numel()), system.u_start)
-    guess, fixed = _guess_and_fixed(model, aug, x0, z0)
-    u0 = u_int[0]
-    if not system.init_res:
-        sel0 = select_dummies(aug, (t[0], guess, u0, pv))
-        fixed = {v: guess[v] for v in reduced_system(aug, sel0)[0]}
-    v0 = solve_initial(aug, float(t[0]), u0, pv, guess, fixed)
-    obs_names = [nm for v in model._vars.values() if v.kind in ("state", "algebraic")
-                 for nm in expand_names(v.name, v.size)]
-    obs = ca.Function("observed", [_cat(aug.syms)], [_cat([system.observed[nm] for nm in obs_names])])
+    t = _check_grid(t_grid, integrator)
+    system, aug, pv, p_slices, u_int, v0, obs, obs_names = _initial_point(model, t, x0, u, p, z0)
     if aug.n_differentiated == 0 and not system.aliases and model._flattens():
         ov = np.array(obs(v0)).ravel()
         nx = sum(v.size for v in model._vars.values() if v.kind == "state")

@@ -145,17 +145,19 @@ def test_robot_generate_is_unchanged_by_the_model_path(tmp_path):
 
 
 def test_composed_model_code_equals_python(tmp_path):
-    # a component model: hierarchical output names become C identifiers (mass.a -> mass_a)
+    # a component model: hierarchical output names become C identifiers (mass.acc -> mass_acc;
+    # the MSL-like Mass has its acceleration as a variable, the output is declared here)
     pytest.importorskip("gtmodel.modeling.components")
     f = tmp_path / "osc.py"
     f.write_text(
         "from gtmodel.modeling.components import Component, connect\n"
         "from gtmodel.modeling.library.translational import Fixed, Force, Mass, Spring\n\n\n"
-        "class Oscillator(Component):\n    fixed = Fixed()\n    spring = Spring(c=4.0)\n    mass = Mass(m=1.0)\n    force = Force()\n\n"
+        "class MassAcc(Mass):\n    def equations(self):\n        super().equations()\n        self.output('acc', self.a)\n\n\n"
+        "class Oscillator(Component):\n    fixed = Fixed()\n    spring = Spring(c=4.0)\n    mass = MassAcc(m=1.0)\n    force = Force()\n\n"
         "    def equations(self):\n        connect(self.fixed.flange, self.spring.flange_a)\n"
         "        connect(self.spring.flange_b, self.mass.flange_a)\n        connect(self.force.flange, self.mass.flange_b)\n"
     )
     gen = generate_model(load_user_model(f, "Oscillator"), tmp_path / "src")
     report = check_model(gen, n=200)
     assert report.passed, "\n".join(report.summary_lines())
-    assert "double mass_a[1]" in gen.header.read_text()
+    assert "double mass_acc[1]" in gen.header.read_text()

@@ -246,8 +246,9 @@ def add_friction(
 class MassWithStopAndFriction(PartialTwoFlanges):
     """Sliding mass with hard stops and Stribeck friction (MSL ``Translational.Components.MassWithStopAndFriction``).
 
-    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2`` (and the velocities and
-    accelerations), ``v = der(s)``, ``a = der(v)``, ``m a = flange_a.f + flange_b.f - f``
+    ``flange_a.s = s - L/2``, ``flange_b.s = s + L/2``, ``v = der(s)``, ``a = der(v)``,
+    ``m a = flange_a.f + flange_b.f - f`` (the velocity is the component's own, as in the
+    MSL: the flanges carry position and force only)
     with the friction force ``f`` of the MSL
     state machine on ``v_rel = v - v_support`` (module docstring); hard stops at
     ``smin + L/2 <= s <= smax - L/2`` with Newton's impact law ``v+ = -e v-``. Declared
@@ -256,7 +257,11 @@ class MassWithStopAndFriction(PartialTwoFlanges):
     ``<path>.stop_min``. Additions to the MSL, documented: ``peak`` (static over sliding
     friction at rest, from the MSL's ``SupportFriction``), ``e`` (the MSL stops the mass:
     ``e = 0``) and ``v_support`` (velocity of the surface, e.g. a belt; the MSL's is 0).
-    With ``e = 0`` the support is assumed at rest at the stops.
+    With ``e = 0`` the support is assumed at rest at the stops. The initial friction mode
+    follows the start value of ``v`` (the ``v`` modifier), not an ``x0`` of the simulation.
+    Rigidly coupled to another mass (a model of higher index), ``Model.simulate`` reduces
+    the model keeping ``s`` and ``v`` of this component as states (they are reinit targets);
+    two of them rigidly coupled are refused (ModelError).
 
     Parameters
     ----------
@@ -305,10 +310,6 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         """Rigid flanges, Newton's law with friction, the friction state machine and the stops."""
         self.equation(self.flange_a.s, self.s - self.L / 2, name="s_a")
         self.equation(self.flange_b.s, self.s + self.L / 2, name="s_b")
-        self.equation(self.flange_a.v, self.v, name="v_a")
-        self.equation(self.flange_b.v, self.v, name="v_b")
-        self.equation(self.flange_a.a, self.a, name="a_a")
-        self.equation(self.flange_b.a, self.a, name="a_b")
         self.equation(self.der(self.s), self.v, name="velocity")
         self.equation(self.der(self.v), self.a, name="acceleration")
         self.equation(self.m * self.a, self.flange_a.f + self.flange_b.f - self.f, name="newton")

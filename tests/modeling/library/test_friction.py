@@ -191,11 +191,12 @@ def test_bad_inputs(call, error, match):
 
 
 def test_rigidly_coupled_mass_adds_inertia():
-    # reference: a stateless Mass (1 kg) rigidly on the 1 kg sliding mass: Coulomb deceleration
-    # F_c / 2 kg, so v = 1 - (F_c / 2) t until 2 / F_c (the flanges carry the acceleration)
+    # reference: a Mass (1 kg) rigidly on the 1 kg sliding mass (index 3: Model.simulate reduces
+    # it, the friction mass keeps its states): Coulomb deceleration F_c / 2 kg, so
+    # v = 1 - (F_c / 2) t until 2 / F_c
     class Coupled(Component):
         body = MassWithStopAndFriction(F_prop=0.0, F_Coulomb=MU_G, F_Stribeck=0.0, fexp=0.0, v=1.0)
-        load = tr.Mass(m=1.0, stateSelect="never")
+        load = tr.Mass(m=1.0)
 
         def equations(self):
             connect(self.body.flange_b, self.load.flange_a)
@@ -204,3 +205,128 @@ def test_rigidly_coupled_mass_adds_inertia():
     assert [e.name for e in res.events] == ["body.stuck_forward"]
     assert abs(res.events[0].t - 2.0 / MU_G) < EVENT_TOL
     np.testing.assert_allclose(res.z["load.a"][res.t < 0.6], -MU_G / 2.0, atol=1e-8)
+    np.testing.assert_allclose(res.x["load.v"], res.x["body.v"], atol=1e-12)
+
+
+def rigid_pair_pushed(e):
+    """Force -- Mass (1 kg) rigidly joined to a frictionless MassWithStopAndFriction (1 kg, stop e)."""
+
+    class PushedPair(Component):
+        push = tr.Force()
+        load = tr.Mass(m=1.0)
+        mass = MassWithStopAndFriction(F_prop=0.0, F_Coulomb=0.0, F_Stribeck=0.0, fexp=0.0, L=0.2, smax=1.1, e=e)
+
+        def equations(self):
+            connect(self.push.flange, self.load.flange_a)
+            connect(self.load.flange_b, self.mass.flange_a)
+
+    return PushedPair().to_model("pair")
+
+
+@pytest.mark.parametrize("e, t_end", [(0.5, 3.9), (0.8, 5.0)])
+def test_rigid_pair_hard_stop_impacts_match_closed_form(e, t_end):
+    # reference: F = 2 N on the rigid pair (2 kg): a = 1 m/s^2 from rest 1 m before the stop;
+    # impacts at sqrt(2 d / a) + sum 2 e^k v1 / a, v1 = sqrt(2 a d) (Newton's impact law); the
+    # reinit of the friction mass moves the rigidly joined load with it (index reduction
+    # keeps the reinit targets as states, the load's are dummies)
+    a, d = 1.0, 1.0
+    res = rigid_pair_pushed(e).simulate(np.linspace(0.0, t_end, 391), u=2.0, **TIGHT)
+    v1 = np.sqrt(2.0 * a * d)
+    ref = np.sqrt(2.0 * d / a) + np.concatenate([[0.0], np.cumsum([2.0 * e**k * v1 / a for k in range(1, 30)])])
+    impacts = np.array([ev.t for ev in res.events if ev.name == "mass.stop_max"])
+    assert impacts.size == np.sum(ref < t_end)
+    np.testing.assert_allclose(impacts, ref[: impacts.size], rtol=0, atol=EVENT_TOL)
+    np.testing.assert_allclose(res.x["load.s"], res.x["mass.s"] - 0.1, atol=1e-12)
+    np.testing.assert_allclose(res.x["load.v"], res.x["mass.v"], atol=1e-12)
+
+
+def test_rigid_pair_with_friction_on_a_belt_matches_closed_form():
+    # reference: as test_belt_stick_slip_matches_closed_form with the 1 kg split into two rigidly
+    # joined 0.5 kg masses (Fixed -- Spring -- Mass -- MassWithStopAndFriction): same closed form
+    class Belt(Component):
+        wall = tr.Fixed()
+        spring = tr.Spring(c=K)
+        load = tr.Mass(m=0.5)
+        mass = MassWithStopAndFriction(
+            m=0.5, v_support=V_B, v=V_B, F_prop=0.0, F_Coulomb=F_K, F_Stribeck=0.0, fexp=0.0, peak=F_S / F_K
+        )
+
+        def equations(self):
+            connect(self.wall.flange, self.spring.flange_a)
+            connect(self.spring.flange_b, self.load.flange_a)
+            connect(self.load.flange_b, self.mass.flange_a)
+
+    res = Belt().to_model("belt").simulate(np.linspace(0.0, 10.0, 1001), **TIGHT)
+    w = np.sqrt(K)
+    phi = np.arctan2(w * (F_S - F_K) / K, V_B)
+    t_slip, t_stick = 2.0 * (np.pi - phi) / w, 2.0 * (F_S - F_K) / (K * V_B)
+    ref = np.cumsum([F_S / (K * V_B), t_slip, t_stick, t_slip, t_stick, t_slip, t_stick])
+    assert [e.name for e in res.events] == ["mass.start_backward", "mass.stuck_backward"] * 3 + ["mass.start_backward"]
+    np.testing.assert_allclose([e.t for e in res.events], ref, rtol=0, atol=EVENT_TOL)
+
+
+def _two_friction_masses():
+    class Two(Component):
+        a = MassWithStopAndFriction(v=1.0)
+        b = MassWithStopAndFriction(v=1.0)
+
+        def equations(self):
+            connect(self.a.flange_b, self.b.flange_a)
+
+    Two().to_model().simulate(np.linspace(0.0, 1.0, 11))
+
+
+def _pair(**kw):
+    rigid_pair_pushed(0.5).simulate(np.linspace(0.0, 1.0, 11), u=2.0, **kw)
+
+
+def test_initial_equation_with_friction_events():
+    # reference: as test_exact_coulomb_cart_stops_and_sticks_with_events, started at s = 0.5 m by
+    # an initial equation (v = 1 m/s fixed by x0; its start value sets the initial friction
+    # mode): stops at 1/(mu g) s, at 0.5 + 1/(2 mu g) m
+    m = MassWithStopAndFriction(F_prop=0.0, F_Coulomb=MU_G, F_Stribeck=0.0, fexp=0.0, v=1.0).to_model("cart")
+    m.initial_equation(m.variables("state")["s"], 0.5)
+    res = m.simulate(np.linspace(0.0, 1.0, 101), x0={"v": 1.0})
+    assert [e.name for e in res.events] == ["stuck_forward"]
+    assert abs(res.events[0].t - 1.0 / MU_G) < EVENT_TOL
+    np.testing.assert_allclose(res.x["s"][[0, -1]], [0.5, 0.5 + 0.5 / MU_G], atol=1e-7)
+
+
+def test_initial_equations_on_the_dummies_of_a_rigid_pair():
+    # reference: the load (a dummy after index reduction) placed at 0.2 m at rest by initial
+    # equations, so the friction mass starts at 0.3 m, d = 0.7 m before the stop; a = 1 m/s^2:
+    # first impact at sqrt(2 d / a), then flights 2 e^k v1 / a (e = 0.5)
+    model = rigid_pair_pushed(0.5)
+    states = model.variables("state")
+    model.initial_equation(states["load.s"], 0.2)
+    model.initial_equation(states["load.v"], 0.0)
+    res = model.simulate(np.linspace(0.0, 3.0, 301), u=2.0, **TIGHT)
+    d, a, e = 0.7, 1.0, 0.5
+    v1 = np.sqrt(2.0 * a * d)
+    ref = np.sqrt(2.0 * d / a) + np.concatenate([[0.0], np.cumsum([2.0 * e**k * v1 / a for k in range(1, 30)])])
+    impacts = np.array([ev.t for ev in res.events if ev.name == "mass.stop_max"])
+    assert impacts.size == np.sum(ref < 3.0)
+    np.testing.assert_allclose(impacts, ref[: impacts.size], rtol=0, atol=EVENT_TOL)
+    np.testing.assert_allclose([res.x["load.s"][0], res.x["mass.s"][0]], [0.2, 0.3], atol=1e-12)
+
+
+def _initial_underdetermined():
+    m = MassWithStopAndFriction(v=1.0).to_model("cart")
+    m.initial_equation(m.variables("state")["s"], 0.5)
+    m.simulate(np.linspace(0.0, 1.0, 11))
+
+
+@pytest.mark.parametrize(
+    "call, error, match",
+    [
+        (_two_friction_masses, ModelError, "'a.stop_max' reinitialises 'a.s', which index reduction made a dummy"),
+        (lambda: _pair(x0=[0.0, 0.0]), InputError, "give x0 as a mapping"),
+        (lambda: _pair(x0={"load.s": 0.0}), InputError, r"\['load.s'\] .* not states after index reduction"),
+        (lambda: _pair(z0=np.zeros(3)), InputError, "z0 is not supported"),
+        (_initial_underdetermined, ModelError, "under-determined"),
+    ],
+    ids=["reinit_dummy", "x0_vector", "x0_dummy", "z0", "initial_underdetermined"],
+)
+def test_unsupported_event_simulations(call, error, match):
+    with pytest.raises(error, match=match):
+        call()
