@@ -280,7 +280,7 @@ class _Flattening:
 
     def _final_model(self, eqs: list[tuple[str, ca.SX]], dropped: set[str]) -> Model:
         model = Model(self.name)
-        old, new = [], []
+        old, new = [self.scratch.time], [model.time]  # a component may use time in its equations
         for d in self.declared:
             if d.name in dropped:
                 continue

@@ -491,3 +491,16 @@ def test_bad_input_gives_one_named_error(make, error, match):
     assert isinstance(info.value, GtModelError)
     # no CasADi traceback chained to the message
     assert not isinstance(info.value.__cause__, RuntimeError)
+
+
+def test_a_component_may_use_time_in_its_equations():
+    # closed form: x' = cos(t), x(0) = 0 gives x = sin(t)
+    class Driven(Component):
+        x = State(start=0.0, unit="m", description="position")
+
+        def equations(self) -> None:
+            self.equation(self.der(self.x), ca.cos(self.time))
+
+    t = np.linspace(0.0, 2.0, 21)
+    res = Driven().to_model("driven").simulate(t)
+    np.testing.assert_allclose(res.x["x"], np.sin(t), atol=1e-7)
