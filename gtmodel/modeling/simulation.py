@@ -87,36 +87,29 @@ def simulate_model(
     """
     dae = model.flatten()
     t, x0v, z0v, pv, u_int = simulation_inputs(model, dae, t_grid, x0, u, p, integrator, z0)
-    n = t.size
-    # CasADi's integrator holds u[:, k] on (tout[k-1], tout[k]]; tout[0] = t0
-    u_cas = np.vstack([u_int[:1], u_int]).T if dae.nu else np.zeros((0, n))
-
-    ddict: dict[str, Any] = {"t": dae.t, "x": dae.x, "u": dae.u, "p": dae.p, "ode": dae.ode_expr}
-    if dae.nz:
-        ddict["z"] = dae.z
-        ddict["alg"] = dae.alg_expr
     opts = {
         "reltol": float(rtol),
         "abstol": float(atol),
         "show_eval_warnings": False,
         "disable_internal_warnings": True,
     }
+    starts = input_segments(u_int) if dae.nz and ca.depends_on(dae.alg_expr, dae.u) else np.zeros(1, int)
     try:
-        F = ca.integrator(f"{model.name}_sim", integrator, ddict, float(t[0]), list(t), opts)
-        res = F(x0=x0v, z0=z0v, p=pv, u=u_cas)
+        if starts.size == 1:  # one run over the whole grid
+            xs, zs = _integrate_once(model.name, dae, integrator, opts, t, x0v, z0v, pv, u_int)
+        else:  # algebraic variables that jump with the input: restart at each change
+            xs, zs = _integrate_segments(model.name, dae, integrator, opts, t, starts, x0v, z0v, pv, u_int)
     except RuntimeError as exc:
         lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
         raise ConvergenceError(
             f"simulation of model {model.name!r} with {integrator} failed: "
             f"{lines[0].strip() if lines else exc}"
         ) from exc
-    xs = np.array(res["xf"]).reshape(dae.nx, n).T
-    zs = np.array(res["zf"]).reshape(dae.nz, n).T
     if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(zs))):
         raise ConvergenceError(f"simulation of model {model.name!r} produced non-finite values")
     us = np.vstack([u_int, u_int[-1:]])
     outs = _eval_outputs(dae, t, xs, zs, us, pv)
-    _log.debug("simulated model %s on %d points with %s", model.name, n, integrator)
+    _log.debug("simulated model %s on %d points with %s in %d run(s)", model.name, t.size, integrator, starts.size)
     return SimulationResult(
         t=t,
         x=_unpack(dae.x_vars, xs),
@@ -125,6 +118,68 @@ def simulate_model(
         outputs=outs,
         p={k: pv[s].copy() for k, s in dae.p_vars.items()},
     )
+
+
+def input_segments(u_int: np.ndarray) -> np.ndarray:
+    """Start indices of the runs of equal inputs, shape ``(S,)`` (``0`` first).
+
+    Parameters
+    ----------
+    u_int : numpy.ndarray
+        Inputs per grid interval, ``(N-1, nu)``, as from :func:`input_intervals`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Interval indices ``k`` where ``u_int[k] != u_int[k-1]``, after ``0``; segment ``s``
+        covers the grid points ``starts[s] .. starts[s+1]`` (the last ends at ``N-1``).
+    """
+    change = np.any(u_int[1:] != u_int[:-1], axis=1) if u_int.shape[1] else np.zeros(len(u_int) - 1, bool)
+    return np.concatenate([[0], 1 + np.nonzero(change)[0]]).astype(int)
+
+
+def _integrate_once(name: str, dae: Any, plugin: str, opts: dict, t: np.ndarray, x0: np.ndarray,
+                    z0: np.ndarray, pv: np.ndarray, u_int: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One SUNDIALS run over the whole grid; states ``(N, nx)`` and algebraics ``(N, nz)``."""
+    n = t.size
+    # CasADi's integrator holds u[:, k] on (tout[k-1], tout[k]]; tout[0] = t0
+    u_cas = np.vstack([u_int[:1], u_int]).T if dae.nu else np.zeros((0, n))
+    ddict: dict[str, Any] = {"t": dae.t, "x": dae.x, "u": dae.u, "p": dae.p, "ode": dae.ode_expr}
+    if dae.nz:
+        ddict["z"] = dae.z
+        ddict["alg"] = dae.alg_expr
+    F = ca.integrator(f"{name}_sim", plugin, ddict, float(t[0]), list(t), opts)
+    res = F(x0=x0, z0=z0, p=pv, u=u_cas)
+    return np.array(res["xf"]).reshape(dae.nx, n).T, np.array(res["zf"]).reshape(dae.nz, n).T
+
+
+def _integrate_segments(name: str, dae: Any, plugin: str, opts: dict, t: np.ndarray, starts: np.ndarray,
+                        x0: np.ndarray, z0: np.ndarray, pv: np.ndarray,
+                        u_int: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One run per segment of constant input, restarted from the last state (module docstring)."""
+    tau, t0, h = ca.SX.sym("tau"), ca.SX.sym("t0"), ca.SX.sym("h")
+    tt = t0 + tau * h  # time-scaled DAE: one integrator serves every segment of one output layout
+    ddict = {"t": tau, "x": dae.x, "z": dae.z, "u": dae.u, "p": ca.vertcat(dae.p, t0, h),
+             "ode": h * ca.substitute(dae.ode_expr, dae.t, tt), "alg": ca.substitute(dae.alg_expr, dae.t, tt)}
+    cache: dict[tuple[float, ...], ca.Function] = {}
+    n = t.size
+    xs, zs = np.empty((n, dae.nx)), np.empty((n, dae.nz))
+    xv, zv = x0, z0
+    ends = np.append(starts[1:], n - 1)
+    for a, b in zip(starts, ends):
+        h_s = float(t[b] - t[a])
+        first = int(a == 0)  # the first run also reports the consistent values at t[0]
+        fracs = tuple(np.round(np.append((t[a + 1 - first:b] - t[a]) / h_s, 1.0), 13))
+        F = cache.get(fracs)
+        if F is None:  # a uniform grid needs one per segment length
+            if len(cache) >= 64:
+                cache.pop(next(iter(cache)))
+            F = cache[fracs] = ca.integrator(f"{name}_segment", plugin, ddict, 0.0, list(fracs), opts)
+        res = F(x0=xv, z0=zv, p=np.concatenate([pv, [t[a], h_s]]), u=u_int[a])
+        xs[a + 1 - first:b + 1] = np.array(res["xf"]).reshape(dae.nx, len(fracs)).T
+        zs[a + 1 - first:b + 1] = np.array(res["zf"]).reshape(dae.nz, len(fracs)).T
+        xv, zv = xs[b], zs[b]
+    return xs, zs
 
 
 def input_intervals(u: Any, t: np.ndarray, nu: int, u_default: np.ndarray) -> np.ndarray:

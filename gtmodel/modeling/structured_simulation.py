@@ -43,7 +43,7 @@ from gtmodel.modeling.index_reduction import (
     selection_quality,
 )
 from gtmodel.modeling.initialization import solve_initial
-from gtmodel.modeling.simulation import SIMULATE_DOCS, input_intervals, simulate_model
+from gtmodel.modeling.simulation import SIMULATE_DOCS, input_intervals, input_segments, simulate_model
 from gtmodel.modeling.structure import check_structure, eliminate_aliases, scalarize
 
 __all__ = ["simulate_structured", "consistent_start", "SWITCH_RATIO", "CHECK_POINTS"]
@@ -178,6 +178,9 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
     vals = np.empty((n, len(aug.syms)))
     vals[0] = v0
     k, switches, current, chunk = 0, [], None, CHUNK
+    # algebraic variables that jump with the input: IDAS restarts at each change (consistent there)
+    jumps = input_segments(uf) if uf.size and ca.depends_on(_cat(aug.res), aug.system.u) else np.zeros(1, int)
+    cuts = np.append(jumps[1:], n - 1)
     while k < n - 1:
         sel = select_dummies(aug, (tf[k], vals[k], uf[min(k, n - 2)], pv))
         if current is not None and sel.dummies != current.dummies:
@@ -186,6 +189,7 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
                        sorted(aug.names[v] for v in sel.dummies), tf[k])
         current = sel
         kend = min(k + chunk, n - 1) if sel.levels else n - 1  # nothing to re-select: one run
+        kend = min(kend, int(cuts[np.searchsorted(cuts, k, side="right")]))
         try:
             seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, rtol, atol)
         except ConvergenceError:
