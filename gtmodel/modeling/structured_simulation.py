@@ -12,7 +12,9 @@ initial equations or ``flatten()`` refuses it. The steps:
    and from the first point where it drops below ``SWITCH_RATIO`` the selection is remade
    there and integration restarts from the (consistent) values at that point — the
    dummy-state switch of Mattsson & Soederlind (1993), section 5 (a Cartesian pendulum
-   passing ``x = 0`` switches between ``x`` and ``y`` as dummies);
+   passing ``x = 0`` switches between ``x`` and ``y`` as dummies); a chunk also ends where
+   the input changes if the residuals depend on the input (the algebraic variables jump:
+   IDAS restarts there, as in :mod:`gtmodel.modeling.simulation`);
 5. the values mapped back to the declared variables and outputs, as in a
    :class:`~gtmodel.modeling.SimulationResult` of an index-1 model.
 
@@ -210,6 +212,8 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
                 if selection_quality(sel, pts) < SWITCH_RATIO:
                     stop = k + 1 + j
                     break
+        if k in jumps:  # at an input change: the right limit (consistent with the new input)
+            vals[k] = seg[0]
         vals[k + 1:stop + 1] = seg[1:stop - k + 1]
         k = stop
     return vals, switches
