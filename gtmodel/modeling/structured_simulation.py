@@ -212,7 +212,7 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
                 if selection_quality(sel, pts) < SWITCH_RATIO:
                     stop = k + 1 + j
                     break
-        if k in jumps:  # at an input change: the right limit (consistent with the new input)
+        if k in jumps[1:]:  # at an input change: the right limit (consistent with the new input)
             vals[k] = seg[0]
         vals[k + 1:stop + 1] = seg[1:stop - k + 1]
         k = stop
