@@ -17,8 +17,8 @@ codes, stack work arrays, no heap, reentrant) and a header of its own: the model
 name, variables and units as declared, and its OWN parameter hash
 (:func:`model_parameter_hash`, of the flattened model), no robot or Gantry-Tau macros.
 The parameter values (the model's defaults) are embedded as constants, as a robot's
-are. :func:`check_model` compiles the code with ``-Werror`` under the robot code's
-flags and compares every function with the CasADi evaluation from Python on random
+are. :func:`check_model` compiles the code under the robot code's strict flags
+(``-std=c99 -Wall -Wextra -Werror -pedantic``) and compares every function with the CasADi evaluation from Python on random
 inputs (1e-12, absolute or relative) and probes non-finite inputs; the Python side is
 the model's own CasADi Functions (``FlatDAE.ode``, ``alg``, ``outputs``, which simulation
 and the transcriptions use) with the parameter values as an input.
@@ -46,7 +46,7 @@ from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare, _stati
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.modeling import FlatDAE, Model
 
-__all__ = ["MODEL_KIND", "MODEL_FUNCTIONS", "MODEL_TOLERANCE", "ModelSource", "model_parameter_hash", "model_specs",
+__all__ = ["MODEL_KIND", "MODEL_FUNCTIONS", "MODEL_TOLERANCE", "STRICT_EXTRA", "ModelSource", "model_parameter_hash", "model_specs",
            "generate_model", "check_model"]
 
 log = logging.getLogger("gtmodel")
@@ -57,6 +57,9 @@ MODEL_KIND = "model"
 MODEL_FUNCTIONS = ("ode", "alg", "outputs")
 #: Largest accepted ``|C - Python|`` of a model function (absolute, or relative to ``|Python|``).
 MODEL_TOLERANCE = 1e-12
+#: Flags :func:`check_model` adds to :func:`~gtmodel.codegen.build.compile_shared`'s
+#: ``-std=c99 -O2 -Wall -Wextra -Werror``: the robot code's strict set (ISO C, no extensions).
+STRICT_EXTRA = ("-pedantic",)
 #: Range of the random time samples of the check [s].
 TIME_RANGE = 10.0
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -347,7 +350,7 @@ def check_model(
     build_dir: str | Path | None = None,
     timing: bool = False,
 ) -> CheckReport:
-    """Compile a model's generated C (``-Werror``) and compare it with the model evaluated from Python.
+    """Compile a model's generated C (``-std=c99 -Wall -Wextra -Werror -pedantic``) and compare it with Python.
 
     Parameters
     ----------
@@ -387,7 +390,7 @@ def check_model(
         raise InputError(f"n: expected a positive number of samples, got {n!r}")
     build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
     if library is None:
-        library = load_library(generated, compile_shared(generated, build, werror=True))
+        library = load_library(generated, compile_shared(generated, build, werror=True, extra_flags=STRICT_EXTRA))
     source: ModelSource = generated.parameters
     rng = np.random.default_rng(seed)
     data = _sample(source.dae, int(n), rng)

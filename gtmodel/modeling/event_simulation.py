@@ -6,7 +6,9 @@ The simulation (:func:`simulate_events`) is a root-finding restart loop around S
    that one integrator serves every window with the same layout of output times) over the
    following output intervals with the same input, in one run (a restart at every output
    time would cost accuracy: 3e-6 s instead of 1e-7 s on the stick-slip test at
-   ``rtol = 1e-8``), sampling the conditions at least every ``event_step``.
+   ``rtol = 1e-8``), sampling the conditions at least every ``event_step``. Where the
+   input changes, the algebraic variables are first made consistent with the new input
+   (Newton; the grid point reports them, as :func:`~gtmodel.modeling.Model.simulate` does).
 2. At the first sub-step where a condition crossed zero, find the event time with
    :func:`scipy.optimize.brentq` on the condition along the re-integrated trajectory
    (``xtol = event_tol``); its accuracy is the integration accuracy divided by the slope
@@ -324,6 +326,10 @@ def simulate_events(
         xs[0], zs[0] = xv, zv
     j, tc = 0, float(t[0])  # grid points 0..j are stored; tc in [t[j], t[j+1])
     while j < n - 1:
+        if dae.nz and j and tc == t[j] and not np.array_equal(u_int[j], u_int[j - 1]):
+            # the input changes: algebraic variables consistent with the new input (the right
+            # limit is reported, as by simulate_model; IDAS starts the window from them)
+            zv = zs[j] = sim.consistent_z(tc, xv, zv, u_int[j], pv, f"where the input changes at t = {tc:.12g} s")
         # one window: the following grid intervals with the same input (one integrator run,
         # no restarts at the output times), conditions sampled at least every `step`
         big = j + 1

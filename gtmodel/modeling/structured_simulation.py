@@ -12,7 +12,9 @@ initial equations or ``flatten()`` refuses it. The steps:
    and from the first point where it drops below ``SWITCH_RATIO`` the selection is remade
    there and integration restarts from the (consistent) values at that point — the
    dummy-state switch of Mattsson & Soederlind (1993), section 5 (a Cartesian pendulum
-   passing ``x = 0`` switches between ``x`` and ``y`` as dummies);
+   passing ``x = 0`` switches between ``x`` and ``y`` as dummies); a chunk also ends where
+   the input changes if the residuals depend on the input (the algebraic variables jump:
+   IDAS restarts there, as in :mod:`gtmodel.modeling.simulation`);
 5. the values mapped back to the declared variables and outputs, as in a
    :class:`~gtmodel.modeling.SimulationResult` of an index-1 model.
 
@@ -43,7 +45,7 @@ from gtmodel.modeling.index_reduction import (
     selection_quality,
 )
 from gtmodel.modeling.initialization import solve_initial
-from gtmodel.modeling.simulation import SIMULATE_DOCS, input_intervals, simulate_model
+from gtmodel.modeling.simulation import SIMULATE_DOCS, input_intervals, input_segments, simulate_model
 from gtmodel.modeling.structure import check_structure, eliminate_aliases, scalarize
 
 __all__ = ["simulate_structured", "consistent_start", "SWITCH_RATIO", "CHECK_POINTS"]
@@ -178,6 +180,9 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
     vals = np.empty((n, len(aug.syms)))
     vals[0] = v0
     k, switches, current, chunk = 0, [], None, CHUNK
+    # algebraic variables that jump with the input: IDAS restarts at each change (consistent there)
+    jumps = input_segments(uf) if uf.size and ca.depends_on(_cat(aug.res), aug.system.u) else np.zeros(1, int)
+    cuts = np.append(jumps[1:], n - 1)
     while k < n - 1:
         sel = select_dummies(aug, (tf[k], vals[k], uf[min(k, n - 2)], pv))
         if current is not None and sel.dummies != current.dummies:
@@ -186,6 +191,7 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
                        sorted(aug.names[v] for v in sel.dummies), tf[k])
         current = sel
         kend = min(k + chunk, n - 1) if sel.levels else n - 1  # nothing to re-select: one run
+        kend = min(kend, int(cuts[np.searchsorted(cuts, k, side="right")]))
         try:
             seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, rtol, atol)
         except ConvergenceError:
@@ -206,6 +212,8 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
                 if selection_quality(sel, pts) < SWITCH_RATIO:
                     stop = k + 1 + j
                     break
+        if k in jumps[1:]:  # at an input change: the right limit (consistent with the new input)
+            vals[k] = seg[0]
         vals[k + 1:stop + 1] = seg[1:stop - k + 1]
         k = stop
     return vals, switches

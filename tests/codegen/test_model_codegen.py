@@ -8,6 +8,7 @@ the cart-pendulum's accelerations (Lagrange's equations solved by hand for s'', 
 from __future__ import annotations
 
 import re
+import subprocess
 
 import casadi as ca
 import numpy as np
@@ -15,7 +16,8 @@ import pytest
 
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen import compile_shared, generate, load_library, parameter_hash
-from gtmodel.codegen.model_code import MODEL_TOLERANCE, check_model, generate_model, model_parameter_hash
+from gtmodel.codegen.build import find_compiler
+from gtmodel.codegen.model_code import MODEL_TOLERANCE, STRICT_EXTRA, check_model, generate_model, model_parameter_hash
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Model
 from gtmodel.problems.user_model import load_user_model
@@ -161,3 +163,74 @@ def test_composed_model_code_equals_python(tmp_path):
     report = check_model(gen, n=200)
     assert report.passed, "\n".join(report.summary_lines())
     assert "double mass_acc[1]" in gen.header.read_text()
+
+
+COMPOSED_FILE = '''
+from gtmodel.modeling import Component, connect
+from gtmodel.modeling.index_reduction import structural_simplify
+from gtmodel.modeling.library import translational as tr
+from gtmodel.modeling.library.drive import CompliantDriveAxis
+
+
+class Axis:
+    """The library's compliant drive axis, of higher index: reduced before flattening."""
+
+    def build(self):
+        return structural_simplify(CompliantDriveAxis().to_model("axis"))
+
+
+class PushedTwoMass(Component):
+    """Force -> mass -- spring -- mass: index 1, 18 algebraic variables (the connectors)."""
+
+    push = tr.Force()
+    m1 = tr.Mass(m=1.0)
+    spring = tr.Spring(c=100.0)
+    m2 = tr.Mass(m=2.0)
+
+    def equations(self):
+        connect(self.push.flange, self.m1.flange_a)
+        connect(self.m1.flange_b, self.spring.flange_a)
+        connect(self.spring.flange_b, self.m2.flange_a)
+'''
+#: The robot wrapper's strict set (tests/codegen/test_build.py); the CasADi part without
+#: -Wshadow -Wconversion, as the robot's.
+STRICT = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
+
+
+@pytest.mark.parametrize(
+    "cls, functions",
+    [("Axis", ("ode", "alg", "outputs")), ("PushedTwoMass", ("ode", "alg"))],
+)
+def test_composed_library_models_compile_strictly_and_equal_python(tmp_path, cls, functions):
+    # reference: the model's own CasADi Functions from Python (check_model, 1e-12); the sources
+    # compiled one by one with the robot code's strict flags
+    f = tmp_path / "composed.py"
+    f.write_text(COMPOSED_FILE)
+    gen = generate_model(load_user_model(f, cls), tmp_path / "src")
+    assert gen.functions == functions
+    cc = find_compiler()
+    procs = {
+        src.name: subprocess.run([*cc, *STRICT, *extra, "-I", str(gen.out_dir), "-c", str(src), "-o", str(tmp_path / "x.o")],
+                                 capture_output=True, text=True)
+        for src, extra in ((gen.source, ("-Wshadow", "-Wconversion")), (gen.casadi_source, ()))
+    }
+    failed = {name: p.stderr for name, p in procs.items() if p.returncode != 0}
+    assert not failed, failed
+    report = check_model(gen, n=200)  # compiles with -Werror -pedantic too (STRICT_EXTRA)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert max(r.max_abs_diff for r in report.functions) <= MODEL_TOLERANCE
+
+
+def test_cli_codegen_composed_axis_check_passes(tmp_path, capsys):
+    # reference: check_model's comparison with Python (1e-12), through the command line
+    f = tmp_path / "composed.py"
+    f.write_text(COMPOSED_FILE)
+    code = main(["codegen", "--model", f"{f}:Axis", "--out", str(tmp_path / "c"), "--check", "-n", "100"])
+    out = capsys.readouterr().out
+    assert code == EXIT_OK, out
+    assert "PASSED" in out and "model axis sha256:" in out
+
+
+def test_check_model_compiles_pedantically():
+    # reference: the robot code's strict set (filter_check.STRICT_FLAGS = compile_shared's + -pedantic)
+    assert STRICT_EXTRA == ("-pedantic",)
