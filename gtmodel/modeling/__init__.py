@@ -8,7 +8,12 @@
 * :func:`solve` / :class:`CollocationTranscription` transcribe it by direct collocation
   and solve it with IPOPT, giving an :class:`OptimizationResult`.
 * :func:`structural_simplify` / :func:`check_structure`: alias elimination, structural check
-  and index reduction (Pantelides, dummy derivatives) to an index-1 model.
+  and index reduction (Pantelides, dummy derivatives) to an index-1 model;
+  ``Model.initial_equation`` for a consistent initialisation.
+* ``Model.when`` / ``Model.mode``: zero-crossing state events (``sign()`` becomes
+  event-switched modes); the event times are in ``SimulationResult.events``.
+* :func:`inverse_model`: forces from a prescribed motion (Modelica's inverse model);
+  :func:`gtmodel.modeling.linear.linearize`: the linearisation of a model.
 """
 
 from __future__ import annotations
