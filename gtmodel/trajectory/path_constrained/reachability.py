@@ -215,7 +215,10 @@ def _reachability(
     code = np.where(Pb == 0, 5, code)
     code = np.where(Qb != 0, 6, code)
     code = np.where(pa == 0, 4, code)
-    table = np.stack([code, alpha, beta, Pb, Qb, Eb, pa], axis=2).tolist()
+    # one (N, M', 7) array; each step converts only its own rows to Python floats, so no
+    # grid-sized tree of Python lists lives through the loop (it made the garbage collector's
+    # full collections, and so the time per grid point, grow with N)
+    table = np.stack([code, alpha, beta, Pb, Qb, Eb, pa], axis=2)
     K_lo = [0.0] * (N + 1)
     K_hi = [0.0] * (N + 1)
     slo, shi, shull = S_lo.tolist(), S_hi.tolist(), S_hull.tolist()
@@ -227,7 +230,7 @@ def _reachability(
         lo, hi = slo[k], shi[k]
         hull = shull[k]
         upper = None
-        for cd, al, be, P, Q, E, pp in table[k]:
+        for cd, al, be, P, Q, E, pp in table[k].tolist():
             if cd == 1.0:
                 v = al + be * klo
                 if v < hi:
@@ -286,17 +289,17 @@ def _reachability(
     bk = 0.0
     sqrt = math.sqrt
     viscous = bool(np.any(wp != 0))
-    ftable = (np.stack([rp, wp, ep], axis=2) if viscous else np.stack([rp, ep], axis=2)).tolist()
+    ftable = np.stack([rp, wp, ep], axis=2) if viscous else np.stack([rp, ep], axis=2)
     for k in range(N):
         amax = _INF
         if viscous:
             x = sqrt(bk)
-            for rr, ww, ee in ftable[k]:
+            for rr, ww, ee in ftable[k].tolist():
                 v = -(rr * bk + ww * x + ee)
                 if v < amax:
                     amax = v
         else:
-            for rr, ee in ftable[k]:
+            for rr, ee in ftable[k].tolist():
                 v = -(rr * bk + ee)
                 if v < amax:
                     amax = v
