@@ -1,7 +1,8 @@
 """Today's (pre issue 17) reachability pass, kept verbatim as the reference of the per-step rewrite.
 
 The pure-Python loops over ``.tolist()`` tables of the whole grid, as they were before the
-rewrite of :func:`gtmodel.trajectory.path_constrained.reachability._reachability`; the
+rewrite of :func:`gtmodel.trajectory.path_constrained.reachability._reachability`
+(and the stage sets before their one-call ``_intervals``); the
 test compares the two bit for bit (to 1e-12 relative) on random feasible instances.
 """
 
@@ -17,10 +18,42 @@ from gtmodel.trajectory.path_constrained.reachability import (
     _Pass,
     _empty_message,
     _interval,
+    _intervals,
     _rows_of,
-    _stage_sets,
     _uncertified_stages,
 )
+
+
+def _old_stage_sets(p: np.ndarray, r: np.ndarray, w: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Sets of ``b`` admitting some ``a`` at every grid point (Fourier-Motzkin on ``a``).
+
+    Returns ``lo, hi`` (N + 1,), the codes of the one-sided rows (``j < M``) or pairs
+    (``M + i M + j``) that set each end, the upper end ignoring the upper bounds of split
+    sets (N + 1,), and the number of split sets whose upper part meets the others.
+    """
+    n, M = p.shape
+    zero = p == 0
+    lo1, hi1, sp1 = _intervals(np.where(zero, r, 0.0), np.where(zero, w, 0.0), np.where(zero, e, -1.0))
+    # pairs (i: p > 0, j: p < 0): p_i row_j - p_j row_i eliminates a
+    ci = np.flatnonzero(np.any(p > 0, axis=0))
+    cj = np.flatnonzero(np.any(p < 0, axis=0))
+    pi, pj = p[:, ci, None], p[:, None, cj]
+    valid = (pi > 0) & (pj < 0)
+    P = np.where(valid, pi * r[:, None, cj] - pj * r[:, ci, None], 0.0)
+    Q = np.where(valid, pi * w[:, None, cj] - pj * w[:, ci, None], 0.0)
+    R = np.where(valid, pi * e[:, None, cj] - pj * e[:, ci, None], -1.0)
+    lo2, hi2, sp2 = _intervals(P, Q, R)
+    codes = M + (ci[:, None] * M + cj[None, :]).ravel()
+    lo_all = np.concatenate([lo1, lo2.reshape(n, -1)], axis=1)
+    hi_all = np.concatenate([hi1, hi2.reshape(n, -1)], axis=1)
+    code_all = np.concatenate([np.arange(M), codes])
+    arg_lo = np.argmax(lo_all, axis=1)
+    arg_hi = np.argmin(hi_all, axis=1)
+    idx = np.arange(n)
+    split_all = np.concatenate([sp1, sp2.reshape(n, -1)], axis=1)
+    hull_hi = np.min(np.where(np.isfinite(split_all), _INF, hi_all), axis=1)
+    nsplit = np.sum(np.isfinite(split_all) & (split_all <= hull_hi[:, None]), axis=1)
+    return lo_all[idx, arg_lo], hi_all[idx, arg_hi], code_all[arg_lo], code_all[arg_hi], hull_hi, nsplit
 
 
 def reference_reachability(
@@ -33,7 +66,7 @@ def reference_reachability(
     """
     N = s.size - 1
     M = p.shape[1]
-    S_lo, S_hi, arg_lo, arg_hi, S_hull, nsplit = _stage_sets(p, r, w, e)
+    S_lo, S_hi, arg_lo, arg_hi, S_hull, nsplit = _old_stage_sets(p, r, w, e)
     splits = int(nsplit.sum())
     tol = _EMPTY_TOLERANCE * np.maximum(1.0, np.where(np.isfinite(S_hi), np.abs(S_hi), 0.0))
     bad = S_lo > S_hi + tol
