@@ -1,6 +1,6 @@
 """Path-constrained time-optimal motion: gtmodel's reachability solver against TOPP-RA.
 
-Usage: python benchmarks/bench_path_constrained.py [--repeat 7]
+Usage: python benchmarks/bench_path_constrained.py [--repeat 7] [--json] [--nlp-max 10000]
 
 TOPP-RA (``pip install toppra``, Pham & Pham 2018) is the reference implementation of the
 reachability method (Cython LP solver "seidel"). Both solve the same gridded problem, on
@@ -31,11 +31,20 @@ of ``--repeat`` runs: these machines are shared and noisy) and the time ratio
 gtmodel / TOPP-RA. "gt total" is path evaluation + solve (what a caller pays), "gt solve"
 the two passes alone. TOPP-RA's time is instance construction (its constraint
 evaluation) + ``compute_parameterization``. No assertions: timings depend on the machine.
+
+``--json``: only case 1, on N = 100, 500, 2000, 10^4 and 10^5 points, then ONE JSON object on
+the last line of stdout: ``ratio_to_toppra`` (gt total / TOPP-RA, both setup + solve, best of
+``--repeat``), the wall times, the durations of both, and the exact gridded optimum from
+IPOPT (:meth:`PathConstrainedProblem.solve_nlp`, tol 1e-10) for N <= ``--nlp-max``, with
+gtmodel's distance to it in ppm. Without TOPP-RA the ratios are ``null`` and ``"toppra"``
+says it is missing (``pip install toppra``: a benchmark-only dependency, not in pyproject).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
+import json
 import logging
 import sys
 import time
@@ -46,17 +55,20 @@ from gtmodel.trajectory.path import StraightLine
 from gtmodel.trajectory.path_constrained import GriddedPathProblem, PathConstrainedProblem, PathConstraints
 
 GRIDS = (100, 500, 2000)
+JSON_GRIDS = (100, 500, 2000, 10_000, 100_000)
 
 
-def _toppra():
+def _toppra(required: bool = True):
     try:
         import toppra
         import toppra.algorithm
         import toppra.constraint
         from toppra.interpolator import AbstractGeometricPath
     except ImportError as exc:  # pragma: no cover
-        print(f"toppra is not installed ({exc}); pip install toppra")
-        sys.exit(1)
+        print(f"TOPP-RA MISSING: toppra is not installed ({exc}); pip install toppra (benchmark-only, not a gtmodel dependency)")
+        if required:
+            sys.exit(1)
+        return None, None
     logging.getLogger("toppra").setLevel(logging.ERROR)
     return toppra, AbstractGeometricPath
 
@@ -120,7 +132,13 @@ def duration(sd: np.ndarray, s: np.ndarray) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--json", action="store_true", help="case 1 on 100 ... 10^5 points, one JSON object on the last line")
+    ap.add_argument("--grids", type=int, nargs="+", default=list(JSON_GRIDS), help="grid sizes of --json (default 100 500 2000 10000 100000)")
+    ap.add_argument("--nlp-max", type=int, default=10_000, help="largest N cross-checked with IPOPT in --json mode")
     args = ap.parse_args()
+    if args.json:
+        json_main(args)
+        return
     toppra, AbstractGeometricPath = _toppra()
     import toppra.algorithm as algo
     import toppra.constraint as constraint
@@ -199,6 +217,59 @@ def main() -> None:
           f"{r.iterations} IPOPT iterations ({r.iterations / THESIS_ITERATIONS:.2f} x the thesis' {THESIS_ITERATIONS}), "
           f"solve {r.solve_time:.2f} s, build + solve {total:.2f} s; path-constrained on the same poses "
           f"{line_sol.final_time:.4f} s in {line_sol.solve_time * 1e3:.1f} ms (ratio {r.solve_time / line_sol.solve_time:.0f})")
+
+
+def json_main(args) -> None:
+    """Case 1 on ``args.grids`` (default :data:`JSON_GRIDS`); the figures as one JSON object on the last line."""
+    toppra, AbstractGeometricPath = _toppra(required=False)
+    version = importlib.metadata.version("toppra") if toppra is not None else None
+    line = StraightLine([0.0, 0.0, 0.0], [0.8, 0.3, -0.2])
+    kin = PathConstrainedProblem(line, PathConstraints(tcp_velocity_limit=1.0, tcp_acceleration_limit=5.0), constrain_end=False)
+    vlim = np.array([[-1.0, 1.0]] * 3)
+    alim = np.array([[-5.0, 5.0]] * 3)
+    out = {"case": "straight line (0,0,0)->(0.8,0.3,-0.2) m, |v_i| <= 1 m/s, |a_i| <= 5 m/s^2, T* = 1 s",
+           "toppra": f"toppra {version}, seidel, collocation" if version else "MISSING (pip install toppra)",
+           "repeat": args.repeat, "timing": f"best of {args.repeat} runs on a shared machine",
+           "ratio_to_toppra": {}, "gt_total_ms": {}, "gt_solve_ms": {}, "toppra_ms": {},
+           "duration_s": {}, "toppra_duration_s": {}, "nlp_duration_s": {}, "duration_vs_nlp_ppm": {}}
+    print(f"{'points':>7s} {'T gtmodel [s]':>15s} {'T ipopt [s]':>15s} {'dT [ppm]':>9s} {'gt total':>9s} {'toppra':>9s} {'ratio':>6s}")
+    for n in args.grids:
+        key = str(n)
+        t_total, sol = best_of(lambda: kin.solve(n), args.repeat)
+        gp = kin.gridded(n)
+        t_solve = min(kin.solve(gp).solve_time for _ in range(args.repeat))
+        t_tp = T_tp = None
+        if toppra is not None:
+            import toppra.algorithm as algo
+            import toppra.constraint as constraint
+
+            tp_path = make_toppra_path(line, AbstractGeometricPath)
+
+            def run_toppra():
+                inst = algo.TOPPRA(
+                    [constraint.JointVelocityConstraint(vlim), constraint.JointAccelerationConstraint(alim, discretization_scheme=constraint.DiscretizationType.Collocation)],
+                    tp_path, gridpoints=gp.s, solver_wrapper="seidel", parametrizer="ParametrizeConstAccel",
+                )
+                return inst.compute_parameterization(0, 0)
+
+            t_tp, (_, sd, _) = best_of(run_toppra, args.repeat)
+            T_tp = duration(sd, gp.s)
+        T_nlp = None
+        if n <= args.nlp_max:
+            nlp = kin.solve_nlp(gp)
+            T_nlp = nlp.final_time if nlp.status == "optimal" else None
+        ppm = (sol.final_time - T_nlp) / T_nlp * 1e6 if T_nlp else None
+        out["ratio_to_toppra"][key] = t_total / t_tp if t_tp else None
+        out["gt_total_ms"][key] = t_total * 1e3
+        out["gt_solve_ms"][key] = t_solve * 1e3
+        out["toppra_ms"][key] = t_tp * 1e3 if t_tp else None
+        out["duration_s"][key] = sol.final_time
+        out["toppra_duration_s"][key] = T_tp
+        out["nlp_duration_s"][key] = T_nlp
+        out["duration_vs_nlp_ppm"][key] = ppm
+        print(f"{n:7d} {sol.final_time:15.10f} {T_nlp or float('nan'):15.10f} {ppm if ppm is not None else float('nan'):9.2e} "
+              f"{t_total * 1e3:9.2f} {t_tp * 1e3 if t_tp else float('nan'):9.2f} {t_total / t_tp if t_tp else float('nan'):6.2f}", flush=True)
+    print(json.dumps(out))
 
 
 if __name__ == "__main__":

@@ -137,6 +137,7 @@ class _MapCache:
     def __init__(self, f: ca.Function) -> None:
         self.f = f
         self.maps: dict[int, ca.Function] = {}
+        self.buffers: dict[int, tuple] = {}
 
     def __call__(self, n: int, *args: np.ndarray) -> list[np.ndarray]:
         if n not in self.maps:
@@ -145,3 +146,25 @@ class _MapCache:
         if not isinstance(out, (list, tuple)):
             out = [out]
         return [np.asarray(o) for o in out]
+
+    def rows(self, n: int, *args: np.ndarray) -> list[np.ndarray]:
+        """The same evaluation on sample-major arrays ``(n, k)``, returning ``(n, rows)`` arrays.
+
+        Through the map's zero-copy buffer (:meth:`casadi.Function.buffer`): a C-ordered
+        ``(n, k)`` array is the column-major ``(k, n)`` matrix CasADi expects, so neither the
+        inputs nor the outputs pass through per-element Python objects (``DM.full`` does).
+        """
+        if n not in self.buffers:
+            fm = self.maps.get(n) or self.f.map(n)
+            self.maps[n] = fm
+            buf, run = fm.buffer()
+            self.buffers[n] = (buf, run, [fm.size1_out(i) for i in range(fm.n_out())])
+        buf, run, sizes = self.buffers[n]
+        ins = [np.ascontiguousarray(a, dtype=float) for a in args]
+        outs = [np.empty((n, k)) for k in sizes]
+        for i, a in enumerate(ins):
+            buf.set_arg(i, memoryview(a))
+        for i, o in enumerate(outs):
+            buf.set_res(i, memoryview(o))
+        run()
+        return outs

@@ -113,10 +113,10 @@ class PathConstrainedProblem:
     def _evaluate(self, s: np.ndarray, f: _MapCache) -> dict[str, np.ndarray]:
         T, dT, ddT = self.path.evaluate(s)
         n = s.size
-        m, c, d, g, q, dq, ddq, disc, cos = f(n, T.T, dT.T, ddT.T, np.repeat(self.signs[:, None], n, axis=1))
-        out = {"T": T, "dT": dT, "ddT": ddT, "m": m.T, "c": c.T, "d": d.T, "g": g.T}
+        m, c, d, g, q, dq, ddq, disc, cos = f.rows(n, T, dT, ddT, np.tile(self.signs, (n, 1)))
+        out = {"T": T, "dT": dT, "ddT": ddT, "m": m, "c": c, "d": d, "g": g}
         if self.dynamics is not None:
-            out.update(q=q.T, dq=dq.T, ddq=ddq.T, disc=disc.T, cos=cos.T)
+            out.update(q=q, dq=dq, ddq=ddq, disc=disc, cos=cos)
         return out
 
     def _check_reach(self, s: np.ndarray, ev: dict[str, np.ndarray]) -> None:

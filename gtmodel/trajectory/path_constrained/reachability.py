@@ -102,7 +102,6 @@ def _stage_sets(p: np.ndarray, r: np.ndarray, w: np.ndarray, e: np.ndarray) -> t
     """
     n, M = p.shape
     zero = p == 0
-    lo1, hi1, sp1 = _intervals(np.where(zero, r, 0.0), np.where(zero, w, 0.0), np.where(zero, e, -1.0))
     # pairs (i: p > 0, j: p < 0): p_i row_j - p_j row_i eliminates a
     ci = np.flatnonzero(np.any(p > 0, axis=0))
     cj = np.flatnonzero(np.any(p < 0, axis=0))
@@ -111,15 +110,17 @@ def _stage_sets(p: np.ndarray, r: np.ndarray, w: np.ndarray, e: np.ndarray) -> t
     P = np.where(valid, pi * r[:, None, cj] - pj * r[:, ci, None], 0.0)
     Q = np.where(valid, pi * w[:, None, cj] - pj * w[:, ci, None], 0.0)
     R = np.where(valid, pi * e[:, None, cj] - pj * e[:, ci, None], -1.0)
-    lo2, hi2, sp2 = _intervals(P, Q, R)
+    # the one-sided rows without a (p == 0) and the pairs, in one elementwise call
+    lo_all, hi_all, split_all = _intervals(
+        np.concatenate([np.where(zero, r, 0.0), P.reshape(n, -1)], axis=1),
+        np.concatenate([np.where(zero, w, 0.0), Q.reshape(n, -1)], axis=1),
+        np.concatenate([np.where(zero, e, -1.0), R.reshape(n, -1)], axis=1),
+    )
     codes = M + (ci[:, None] * M + cj[None, :]).ravel()
-    lo_all = np.concatenate([lo1, lo2.reshape(n, -1)], axis=1)
-    hi_all = np.concatenate([hi1, hi2.reshape(n, -1)], axis=1)
     code_all = np.concatenate([np.arange(M), codes])
     arg_lo = np.argmax(lo_all, axis=1)
     arg_hi = np.argmin(hi_all, axis=1)
     idx = np.arange(n)
-    split_all = np.concatenate([sp1, sp2.reshape(n, -1)], axis=1)
     hull_hi = np.min(np.where(np.isfinite(split_all), _INF, hi_all), axis=1)
     nsplit = np.sum(np.isfinite(split_all) & (split_all <= hull_hi[:, None]), axis=1)
     return lo_all[idx, arg_lo], hi_all[idx, arg_hi], code_all[arg_lo], code_all[arg_hi], hull_hi, nsplit
@@ -215,7 +216,10 @@ def _reachability(
     code = np.where(Pb == 0, 5, code)
     code = np.where(Qb != 0, 6, code)
     code = np.where(pa == 0, 4, code)
-    table = np.stack([code, alpha, beta, Pb, Qb, Eb, pa], axis=2).tolist()
+    # one (N, M', 7) array; each step converts only its own rows to Python floats, so no
+    # grid-sized tree of Python lists lives through the loop (it made the garbage collector's
+    # full collections, and so the time per grid point, grow with N)
+    table = np.stack([code, alpha, beta, Pb, Qb, Eb, pa], axis=2)
     K_lo = [0.0] * (N + 1)
     K_hi = [0.0] * (N + 1)
     slo, shi, shull = S_lo.tolist(), S_hi.tolist(), S_hull.tolist()
@@ -227,7 +231,7 @@ def _reachability(
         lo, hi = slo[k], shi[k]
         hull = shull[k]
         upper = None
-        for cd, al, be, P, Q, E, pp in table[k]:
+        for cd, al, be, P, Q, E, pp in table[k].tolist():
             if cd == 1.0:
                 v = al + be * klo
                 if v < hi:
@@ -286,17 +290,17 @@ def _reachability(
     bk = 0.0
     sqrt = math.sqrt
     viscous = bool(np.any(wp != 0))
-    ftable = (np.stack([rp, wp, ep], axis=2) if viscous else np.stack([rp, ep], axis=2)).tolist()
+    ftable = np.stack([rp, wp, ep], axis=2) if viscous else np.stack([rp, ep], axis=2)
     for k in range(N):
         amax = _INF
         if viscous:
             x = sqrt(bk)
-            for rr, ww, ee in ftable[k]:
+            for rr, ww, ee in ftable[k].tolist():
                 v = -(rr * bk + ww * x + ee)
                 if v < amax:
                     amax = v
         else:
-            for rr, ee in ftable[k]:
+            for rr, ee in ftable[k].tolist():
                 v = -(rr * bk + ee)
                 if v < amax:
                     amax = v
