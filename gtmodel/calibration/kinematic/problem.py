@@ -73,6 +73,13 @@ MAX_REANCHOR = 5
 FK_CACHE_SIZE = 8
 
 
+def _bounded_add(cache: set[Any], key: Any, size: int = 8 * FK_CACHE_SIZE) -> None:
+    """Add ``key`` to a set used as a cache, emptying it first when it is full."""
+    if len(cache) >= size:
+        cache.clear()
+    cache.add(key)
+
+
 class CalibrationProblem:
     """Calibration NLPs of a model and a parameter selection, built once, solved many times.
 
@@ -138,6 +145,11 @@ class CalibrationProblem:
         self._pfun: ca.Function | None = None
         self._closure_cache: dict[int, ca.Function] = {}
         self._fk_cache: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        # per data set (keyed by a hash of q, T, quat, weights): evaluators bound to its
+        # padded arrays, the chosen alignment per start vector, the start rank checks passed
+        self._eval_cache: dict[str, list[_Evaluator]] = {}
+        self._align_cache: dict[tuple[str, bytes], tuple[int, np.ndarray, np.ndarray]] = {}
+        self._rank_ok: set[tuple[str, int, bytes]] = set()
         self._transform_safe: bool | None = None
         self.build_time = 0.0
 
@@ -339,9 +351,10 @@ class CalibrationProblem:
             start_model = start
         else:
             start_model = self.model.with_parameters(start)
-        evs = [_Evaluator(grp, data, self.model.parameter_vector()) for grp in self._groups]
+        key = self._data_key(data)
+        evs = self._evaluators(key, data)
         if align:
-            aligned, Rf, tf = self._best_alignment(start_model, data, evs)
+            aligned, Rf, tf = self._best_alignment(start_model, data, evs, key, start_model is self.model or not isinstance(start, ClosureModel))
         else:
             aligned, Rf, tf = start_model, np.eye(3), np.zeros(3)
         if not self._shares_equations(start_model, aligned, data):
@@ -370,7 +383,7 @@ class CalibrationProblem:
         cost0_arm = np.zeros(n_arms)
         residuals = np.zeros((data.N, self.model.n_links))
         active = data.weights > 0
-        for grp, ev in zip(self._groups, evs):
+        for gi, (grp, ev) in enumerate(zip(self._groups, evs)):
             ev.set_pb(pb_final)
             mask = np.repeat(active, grp.nr)
             m = int(mask.sum())
@@ -387,7 +400,8 @@ class CalibrationProblem:
                     )
                 )
             else:
-                if numerical_rank(J0[mask]) < grp.nx:
+                rank_key = (key, gi, pb_final.tobytes())
+                if rank_key not in self._rank_ok and numerical_rank(J0[mask]) < grp.nx:
                     rep0 = analyze_jacobian(J0[mask], grp.var_names)
                     arm_s = ", ".join(str(a + 1) for a in grp.arms)
                     err = ModelError(
@@ -397,6 +411,7 @@ class CalibrationProblem:
                     )
                     err.report = rep0  # type: ignore[attr-defined]
                     raise err
+                _bounded_add(self._rank_ok, rank_key)
                 t0 = time.perf_counter()
                 x, status, message, iters, b = self._solve_group(grp, ev, x0, solver, int(max_iter))
                 # quaternions: move the anchors to the solution; if the solve failed after a
@@ -502,8 +517,32 @@ class CalibrationProblem:
             self._fk_cache[key] = _nominal_positions(model, q)
         return self._fk_cache[key]
 
+    @staticmethod
+    def _data_key(data: _Data) -> str:
+        """Hash of a data set (actuator values, positions, orientations, weights)."""
+        h = hashlib.sha1()
+        for a in (data.q, data.T, data.quat, data.weights):
+            a = np.ascontiguousarray(a, dtype=float)
+            h.update(str(a.shape).encode())
+            h.update(a.tobytes())
+        return h.hexdigest()
+
+    def _evaluators(self, key: str, data: _Data) -> list[_Evaluator]:
+        """Evaluators of all groups bound to the data set ``key`` (built once per data set).
+
+        Every use sets the anchor first (``set_pb``), so a re-used evaluator carries no
+        state of an earlier solve into the next.
+        """
+        evs = self._eval_cache.get(key)
+        if evs is None:
+            evs = [_Evaluator(grp, data, self.model.parameter_vector()) for grp in self._groups]
+            if len(self._eval_cache) >= FK_CACHE_SIZE:
+                self._eval_cache.pop(next(iter(self._eval_cache)))
+            self._eval_cache[key] = evs
+        return evs
+
     def _best_alignment(
-        self, model: ClosureModel, data: _Data, evs: list["_Evaluator"]
+        self, model: ClosureModel, data: _Data, evs: list["_Evaluator"], key: str | None = None, cache: bool = False
     ) -> tuple[ClosureModel, np.ndarray, np.ndarray]:
         """The start model in the measurement frame (eqs. 5.3-5.4), guarded by the cost.
 
@@ -512,6 +551,10 @@ class CalibrationProblem:
         rigid fit moves a start model into a far-away device frame, but on a small pose
         cloud with a poor nominal model its rotation can be far off (worse than none).
         """
+        akey = (key, model.parameter_vector().tobytes()) if cache and key is not None else None
+        if akey is not None and akey in self._align_cache:
+            best, R, t = self._align_cache[akey]
+            return (model, np.eye(3), np.zeros(3)) if best == 0 else (model.transformed(R, t), R.copy(), t.copy())
         Tn, ok = self._nominal_fk(model, data.q)
         ok = ok & (data.weights > 0)
         cands: list[tuple[ClosureModel, np.ndarray, np.ndarray]] = [(model, np.eye(3), np.zeros(3))]
@@ -528,6 +571,10 @@ class CalibrationProblem:
         costs = [self._start_cost(m.parameter_vector(), evs) for m, _, _ in cands]
         best = int(np.argmin(costs))
         _log.info("frame alignment: start V %s -> candidate %d", ", ".join(f"{c:.3g}" for c in costs), best)
+        if akey is not None:
+            if len(self._align_cache) >= FK_CACHE_SIZE:
+                self._align_cache.pop(next(iter(self._align_cache)))
+            self._align_cache[akey] = (best, cands[best][1].copy(), cands[best][2].copy())
         return cands[best]
 
     def _equal_closures(self, other: ClosureModel, q: np.ndarray, T: np.ndarray, quat: np.ndarray) -> bool:
