@@ -13,6 +13,7 @@ import hashlib
 import logging
 import math
 import time
+from collections import OrderedDict
 from typing import Any
 
 import casadi as ca
@@ -28,7 +29,7 @@ from gtmodel.calibration.kinematic.result import CalibrationResult, GroupResult
 from gtmodel.calibration.kinematic.selection import ParameterSelection, _parameter_expression
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.result import normalize_ipopt_status
-from gtmodel.robots.closure import ClosureModel
+from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
 from gtmodel.status import Status
 
 __all__ = [
@@ -42,6 +43,7 @@ __all__ = [
     "REANCHOR_ANGLE",
     "MAX_REANCHOR",
     "FK_CACHE_SIZE",
+    "GRAPH_CACHE_SIZE",
 ]
 
 _log = logging.getLogger("gtmodel")
@@ -71,6 +73,29 @@ MAX_REANCHOR = 5
 #: Nominal FK results kept per problem (keyed by the actuator values), for repeated solves
 #: on the same poses (simulated calibrations, benchmarks).
 FK_CACHE_SIZE = 8
+#: Residual/Jacobian graphs (one :class:`_Group` list per model structure and selection)
+#: shared by all problems of models whose closure equations are known to depend on the
+#: instance only through the parameter vector and its names (``ThreeLinkClosure``); least
+#: recently used dropped first.
+GRAPH_CACHE_SIZE = 16
+_SHARED_GRAPH_TYPES = (ThreeLinkClosure,)
+_GRAPHS: "OrderedDict[tuple[Any, ...], list[_Group]]" = OrderedDict()
+
+
+_ARM_PARAMETERS: dict[tuple[Any, ...], np.ndarray] = {}
+
+
+def _arm_parameter_indices(model: ClosureModel, arm: int) -> np.ndarray:
+    """``model.arm_parameter_indices(arm)`` (Jacobian sparsity), kept per structure for the
+    model types of ``_SHARED_GRAPH_TYPES``."""
+    if type(model) not in _SHARED_GRAPH_TYPES:
+        return model.arm_parameter_indices(arm)
+    key = (type(model), tuple(model.parameter_names()), model.n_q, arm)
+    if key not in _ARM_PARAMETERS:
+        if len(_ARM_PARAMETERS) >= 8 * GRAPH_CACHE_SIZE:
+            _ARM_PARAMETERS.clear()
+        _ARM_PARAMETERS[key] = np.array(model.arm_parameter_indices(arm))
+    return _ARM_PARAMETERS[key].copy()
 
 
 def _bounded_add(cache: set[Any], key: Any, size: int = 8 * FK_CACHE_SIZE) -> None:
@@ -115,7 +140,7 @@ class CalibrationProblem:
         self.resolution = self.selection._resolve(model)
         res = self.resolution
         n_arms = len(model.links)
-        arm_vars = [res.variables_of(model.arm_parameter_indices(a)) for a in range(n_arms)]
+        arm_vars = [res.variables_of(_arm_parameter_indices(model, a)) for a in range(n_arms)]
         used = set().union(*arm_vars) if arm_vars else set()
         unused = [res.var_names[v] for v in range(res.n_vars) if v not in used]
         if unused:
@@ -163,9 +188,7 @@ class CalibrationProblem:
         if self._groups is not None:
             return 0.0
         t0 = time.perf_counter()
-        self._groups = [
-            _Group(self.model, self.resolution, arms, vars_) for arms, vars_ in zip(self.arm_groups, self._group_vars)
-        ]
+        self._groups = self._shared_groups()
         x = ca.SX.sym("x", self.resolution.n_vars)
         pb = ca.SX.sym("p0", self.model.n_parameters)
         p = _parameter_expression(self.resolution, x, pb, {v: v for v in range(self.resolution.n_vars)})
@@ -182,6 +205,31 @@ class CalibrationProblem:
         dt = time.perf_counter() - t0
         self.build_time += dt
         return dt
+
+    def _shared_groups(self) -> list[_Group]:
+        """The groups' CasADi graphs, shared between problems of the same structure.
+
+        Shared only for the model types of ``_SHARED_GRAPH_TYPES`` (exact type), keyed by
+        the parameter names, the number of actuators, the links per arm and the selection;
+        other models build their own.
+        """
+        def build() -> list[_Group]:
+            return [_Group(self.model, self.resolution, a, v) for a, v in zip(self.arm_groups, self._group_vars)]
+
+        if type(self.model) not in _SHARED_GRAPH_TYPES:
+            return build()
+        sel = self.selection
+        key = (
+            type(self.model), self.resolution.names, self.model.n_q, tuple(len(l) for l in self.model.links),
+            (sel.free, sel.fixed, sel.ties),
+        )
+        groups = _GRAPHS.get(key)
+        if groups is None:
+            groups = _GRAPHS[key] = build()
+            while len(_GRAPHS) > GRAPH_CACHE_SIZE:
+                _GRAPHS.popitem(last=False)
+        _GRAPHS.move_to_end(key)
+        return groups
 
     # -------------------------------------------------------------- helpers
     def _anchor(self, p: np.ndarray) -> np.ndarray:
@@ -581,6 +629,8 @@ class CalibrationProblem:
         """Whether ``other`` has the problem model's closure equations (at its p and one pose)."""
         if type(other) is not type(self.model) or tuple(other.parameter_names()) != self.resolution.names:
             return False
+        if type(other) in _SHARED_GRAPH_TYPES:  # equations fixed by the type and the parameter names
+            return True
         args = (other.parameter_vector(), q, T, quat)
         for a in range(len(self.model.links)):
             if a not in self._closure_cache:
