@@ -13,7 +13,6 @@ import hashlib
 import logging
 import math
 import time
-from collections import OrderedDict
 from typing import Any
 
 import casadi as ca
@@ -24,12 +23,19 @@ from gtmodel._geometry import rotation_vector_to_rotation
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian, combine_reports, numerical_rank
 from gtmodel.calibration.kinematic.alignment import _nominal_positions, fit_rigid_transform
 from gtmodel.calibration.kinematic.data import _check_data, _Data, _unpack_measurements
+from gtmodel.calibration.kinematic.graph_cache import (
+    _SHARED_GRAPH_TYPES,
+    GRAPH_CACHE_SIZE,
+    _arm_parameter_indices,
+    _bounded_add,
+    shared_groups,
+)
 from gtmodel.calibration.kinematic.residuals import _Evaluator, _Group
 from gtmodel.calibration.kinematic.result import CalibrationResult, GroupResult
 from gtmodel.calibration.kinematic.selection import ParameterSelection, _parameter_expression
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.result import normalize_ipopt_status
-from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
+from gtmodel.robots.closure import ClosureModel
 from gtmodel.status import Status
 
 __all__ = [
@@ -73,37 +79,6 @@ MAX_REANCHOR = 5
 #: Nominal FK results kept per problem (keyed by the actuator values), for repeated solves
 #: on the same poses (simulated calibrations, benchmarks).
 FK_CACHE_SIZE = 8
-#: Residual/Jacobian graphs (one :class:`_Group` list per model structure and selection)
-#: shared by all problems of models whose closure equations are known to depend on the
-#: instance only through the parameter vector and its names (``ThreeLinkClosure``); least
-#: recently used dropped first.
-GRAPH_CACHE_SIZE = 16
-_SHARED_GRAPH_TYPES = (ThreeLinkClosure,)
-_GRAPHS: "OrderedDict[tuple[Any, ...], list[_Group]]" = OrderedDict()
-
-
-_ARM_PARAMETERS: dict[tuple[Any, ...], np.ndarray] = {}
-
-
-def _arm_parameter_indices(model: ClosureModel, arm: int) -> np.ndarray:
-    """``model.arm_parameter_indices(arm)`` (Jacobian sparsity), kept per structure for the
-    model types of ``_SHARED_GRAPH_TYPES``."""
-    if type(model) not in _SHARED_GRAPH_TYPES:
-        return model.arm_parameter_indices(arm)
-    key = (type(model), tuple(model.parameter_names()), model.n_q, arm)
-    if key not in _ARM_PARAMETERS:
-        if len(_ARM_PARAMETERS) >= 8 * GRAPH_CACHE_SIZE:
-            _ARM_PARAMETERS.clear()
-        _ARM_PARAMETERS[key] = np.array(model.arm_parameter_indices(arm))
-    return _ARM_PARAMETERS[key].copy()
-
-
-def _bounded_add(cache: set[Any], key: Any, size: int = 8 * FK_CACHE_SIZE) -> None:
-    """Add ``key`` to a set used as a cache, emptying it first when it is full."""
-    if len(cache) >= size:
-        cache.clear()
-    cache.add(key)
-
 
 class CalibrationProblem:
     """Calibration NLPs of a model and a parameter selection, built once, solved many times.
@@ -188,7 +163,7 @@ class CalibrationProblem:
         if self._groups is not None:
             return 0.0
         t0 = time.perf_counter()
-        self._groups = self._shared_groups()
+        self._groups = shared_groups(self.model, self.resolution, self.selection, self.arm_groups, self._group_vars)
         x = ca.SX.sym("x", self.resolution.n_vars)
         pb = ca.SX.sym("p0", self.model.n_parameters)
         p = _parameter_expression(self.resolution, x, pb, {v: v for v in range(self.resolution.n_vars)})
@@ -205,31 +180,6 @@ class CalibrationProblem:
         dt = time.perf_counter() - t0
         self.build_time += dt
         return dt
-
-    def _shared_groups(self) -> list[_Group]:
-        """The groups' CasADi graphs, shared between problems of the same structure.
-
-        Shared only for the model types of ``_SHARED_GRAPH_TYPES`` (exact type), keyed by
-        the parameter names, the number of actuators, the links per arm and the selection;
-        other models build their own.
-        """
-        def build() -> list[_Group]:
-            return [_Group(self.model, self.resolution, a, v) for a, v in zip(self.arm_groups, self._group_vars)]
-
-        if type(self.model) not in _SHARED_GRAPH_TYPES:
-            return build()
-        sel = self.selection
-        key = (
-            type(self.model), self.resolution.names, self.model.n_q, tuple(len(l) for l in self.model.links),
-            (sel.free, sel.fixed, sel.ties),
-        )
-        groups = _GRAPHS.get(key)
-        if groups is None:
-            groups = _GRAPHS[key] = build()
-            while len(_GRAPHS) > GRAPH_CACHE_SIZE:
-                _GRAPHS.popitem(last=False)
-        _GRAPHS.move_to_end(key)
-        return groups
 
     # -------------------------------------------------------------- helpers
     def _anchor(self, p: np.ndarray) -> np.ndarray:
