@@ -1,6 +1,6 @@
 """Calibration speed: gtmodel's default solver vs SciPy least_squares with finite differences.
 
-Usage: python benchmarks/bench_calibration.py [--repeat N]
+Usage: python benchmarks/bench_calibration.py [--repeat N] [--json]
 
 Problem: the L1 21-parameter (modified) model of Dressler (2012), Table 5.1, calibrated on
 779 synthetic laser-tracker poses (IK of a workspace grid, 10 um Gaussian noise, seed 0),
@@ -22,6 +22,13 @@ Printed, each as the median of ``--repeat`` runs in this process (machines are n
    (one 7-parameter arm group).
 5. Greedy pose selection (eq. 5.9), ~1347 candidates -> 200.
 
+With ``--json`` the last line of stdout is one JSON object: ``whole_call_ms`` (the whole
+:func:`~gtmodel.calibration.kinematic.calibrate` call, its problem and graphs cached as in
+any repeated use), ``scipy_ms`` (the peer of 2.), both as medians of ``--repeat``
+interleaved runs plus their minima (``*_min_ms``), ``solve_ms`` (the solver alone),
+``ratio`` = scipy_ms / whole_call_ms, ``ratio_min``, both costs ``V`` (``cost``,
+``scipy_cost`` [m^4]) and ``cost_rel_diff``.
+
 OpenBLAS threads are limited to 1 (set before NumPy is imported) for both sides: on a
 shared 2-core machine multi-threaded BLAS made single small LAPACK calls take 10-40 ms.
 """
@@ -33,6 +40,7 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
+import json  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
 
@@ -44,6 +52,7 @@ from gtmodel.calibration.kinematic import (  # noqa: E402
     DEFAULT_SOLVER,
     LSQ_TOLERANCE,
     CalibrationProblem,
+    calibrate,
 )
 from gtmodel.calibration.pose_selection import select_poses  # noqa: E402
 from gtmodel.robots.closure import ThreeLinkClosure  # noqa: E402
@@ -161,7 +170,42 @@ def graph_variants(model: ThreeLinkClosure, q: np.ndarray, T: np.ndarray) -> Non
         print(f"  {name:48s} {b:10.3f} {1e3 * ev:10.3f}")
 
 
-def main(repeat: int) -> None:
+def whole_call_vs_scipy(nominal: ThreeLinkClosure, q: np.ndarray, T: np.ndarray, repeat: int) -> dict:
+    """Whole ``calibrate`` call vs the SciPy peer, interleaved runs (the machine is shared)."""
+    res = calibrate(nominal, q, T)  # builds (or re-uses) the problem and its graphs
+    peer = ScipyPeer(nominal, q, T)
+    p0 = np.array(list(res.initial_parameters.values()))
+    sol = peer.solve(p0)
+    whole, scipy_t, solve = [], [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        res = calibrate(nominal, q, T)
+        whole.append(time.perf_counter() - t0)
+        solve.append(res.solve_time)
+        t0 = time.perf_counter()
+        sol = peer.solve(p0)
+        scipy_t.append(time.perf_counter() - t0)
+    w, sp = 1e3 * statistics.median(whole), 1e3 * statistics.median(scipy_t)
+    return {
+        "n_poses": int(len(q)),
+        "n_parameters": int(nominal.n_parameters),
+        "repeat": int(repeat),
+        "whole_call_ms": w,
+        "scipy_ms": sp,
+        "ratio": sp / w,
+        "whole_call_min_ms": 1e3 * min(whole),
+        "scipy_min_ms": 1e3 * min(scipy_t),
+        "ratio_min": min(scipy_t) / min(whole),
+        "solve_ms": 1e3 * statistics.median(solve),
+        "cost": float(res.cost),
+        "scipy_cost": float(2 * sol.cost),
+        "cost_rel_diff": float(abs(res.cost - 2 * sol.cost) / abs(res.cost)),
+        "status": str(res.status),
+        "scipy_status": int(sol.status),
+    }
+
+
+def main(repeat: int, as_json: bool = False) -> None:
     true, nominal, q, T = data()
     print(f"casadi {ca.__version__}, numpy {np.__version__}, scipy {scipy.__version__}; {len(q)} poses, 21 parameters")
 
@@ -230,8 +274,19 @@ def main(repeat: int) -> None:
         f"sigma_max^2/sigma_min = {sel.acceptance:.1f} (accepted: {sel.accepted})"
     )
 
+    if as_json:
+        out = whole_call_vs_scipy(nominal, q, T, max(repeat, 15))
+        print(
+            f"\nwhole calibrate call {out['whole_call_ms']:.2f} ms (min {out['whole_call_min_ms']:.2f}), "
+            f"scipy {out['scipy_ms']:.2f} ms (min {out['scipy_min_ms']:.2f}): {out['ratio']:.1f}x; "
+            f"costs differ by {out['cost_rel_diff']:.1e} (relative)"
+        )
+        print(json.dumps(out))
+
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
-    main(ap.parse_args().repeat)
+    ap.add_argument("--json", action="store_true", help="print one JSON object on the last line of stdout")
+    args = ap.parse_args()
+    main(args.repeat, args.json)

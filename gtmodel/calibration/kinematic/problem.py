@@ -23,6 +23,13 @@ from gtmodel._geometry import rotation_vector_to_rotation
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian, combine_reports, numerical_rank
 from gtmodel.calibration.kinematic.alignment import _nominal_positions, fit_rigid_transform
 from gtmodel.calibration.kinematic.data import _check_data, _Data, _unpack_measurements
+from gtmodel.calibration.kinematic.graph_cache import (
+    _SHARED_GRAPH_TYPES,
+    GRAPH_CACHE_SIZE,
+    _arm_parameter_indices,
+    _bounded_add,
+    shared_groups,
+)
 from gtmodel.calibration.kinematic.residuals import _Evaluator, _Group
 from gtmodel.calibration.kinematic.result import CalibrationResult, GroupResult
 from gtmodel.calibration.kinematic.selection import ParameterSelection, _parameter_expression
@@ -42,6 +49,7 @@ __all__ = [
     "REANCHOR_ANGLE",
     "MAX_REANCHOR",
     "FK_CACHE_SIZE",
+    "GRAPH_CACHE_SIZE",
 ]
 
 _log = logging.getLogger("gtmodel")
@@ -71,7 +79,6 @@ MAX_REANCHOR = 5
 #: Nominal FK results kept per problem (keyed by the actuator values), for repeated solves
 #: on the same poses (simulated calibrations, benchmarks).
 FK_CACHE_SIZE = 8
-
 
 class CalibrationProblem:
     """Calibration NLPs of a model and a parameter selection, built once, solved many times.
@@ -108,7 +115,7 @@ class CalibrationProblem:
         self.resolution = self.selection._resolve(model)
         res = self.resolution
         n_arms = len(model.links)
-        arm_vars = [res.variables_of(model.arm_parameter_indices(a)) for a in range(n_arms)]
+        arm_vars = [res.variables_of(_arm_parameter_indices(model, a)) for a in range(n_arms)]
         used = set().union(*arm_vars) if arm_vars else set()
         unused = [res.var_names[v] for v in range(res.n_vars) if v not in used]
         if unused:
@@ -138,6 +145,11 @@ class CalibrationProblem:
         self._pfun: ca.Function | None = None
         self._closure_cache: dict[int, ca.Function] = {}
         self._fk_cache: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        # per data set (keyed by a hash of q, T, quat, weights): evaluators bound to its
+        # padded arrays, the chosen alignment per start vector, the start rank checks passed
+        self._eval_cache: dict[str, list[_Evaluator]] = {}
+        self._align_cache: dict[tuple[str, bytes], tuple[int, np.ndarray, np.ndarray]] = {}
+        self._rank_ok: set[tuple[str, int, bytes]] = set()
         self._transform_safe: bool | None = None
         self.build_time = 0.0
 
@@ -151,9 +163,7 @@ class CalibrationProblem:
         if self._groups is not None:
             return 0.0
         t0 = time.perf_counter()
-        self._groups = [
-            _Group(self.model, self.resolution, arms, vars_) for arms, vars_ in zip(self.arm_groups, self._group_vars)
-        ]
+        self._groups = shared_groups(self.model, self.resolution, self.selection, self.arm_groups, self._group_vars)
         x = ca.SX.sym("x", self.resolution.n_vars)
         pb = ca.SX.sym("p0", self.model.n_parameters)
         p = _parameter_expression(self.resolution, x, pb, {v: v for v in range(self.resolution.n_vars)})
@@ -339,9 +349,10 @@ class CalibrationProblem:
             start_model = start
         else:
             start_model = self.model.with_parameters(start)
-        evs = [_Evaluator(grp, data, self.model.parameter_vector()) for grp in self._groups]
+        key = self._data_key(data)
+        evs = self._evaluators(key, data)
         if align:
-            aligned, Rf, tf = self._best_alignment(start_model, data, evs)
+            aligned, Rf, tf = self._best_alignment(start_model, data, evs, key, start_model is self.model or not isinstance(start, ClosureModel))
         else:
             aligned, Rf, tf = start_model, np.eye(3), np.zeros(3)
         if not self._shares_equations(start_model, aligned, data):
@@ -370,7 +381,7 @@ class CalibrationProblem:
         cost0_arm = np.zeros(n_arms)
         residuals = np.zeros((data.N, self.model.n_links))
         active = data.weights > 0
-        for grp, ev in zip(self._groups, evs):
+        for gi, (grp, ev) in enumerate(zip(self._groups, evs)):
             ev.set_pb(pb_final)
             mask = np.repeat(active, grp.nr)
             m = int(mask.sum())
@@ -387,7 +398,8 @@ class CalibrationProblem:
                     )
                 )
             else:
-                if numerical_rank(J0[mask]) < grp.nx:
+                rank_key = (key, gi, pb_final.tobytes())
+                if rank_key not in self._rank_ok and numerical_rank(J0[mask]) < grp.nx:
                     rep0 = analyze_jacobian(J0[mask], grp.var_names)
                     arm_s = ", ".join(str(a + 1) for a in grp.arms)
                     err = ModelError(
@@ -397,6 +409,7 @@ class CalibrationProblem:
                     )
                     err.report = rep0  # type: ignore[attr-defined]
                     raise err
+                _bounded_add(self._rank_ok, rank_key)
                 t0 = time.perf_counter()
                 x, status, message, iters, b = self._solve_group(grp, ev, x0, solver, int(max_iter))
                 # quaternions: move the anchors to the solution; if the solve failed after a
@@ -502,8 +515,32 @@ class CalibrationProblem:
             self._fk_cache[key] = _nominal_positions(model, q)
         return self._fk_cache[key]
 
+    @staticmethod
+    def _data_key(data: _Data) -> str:
+        """Hash of a data set (actuator values, positions, orientations, weights)."""
+        h = hashlib.sha1()
+        for a in (data.q, data.T, data.quat, data.weights):
+            a = np.ascontiguousarray(a, dtype=float)
+            h.update(str(a.shape).encode())
+            h.update(a.tobytes())
+        return h.hexdigest()
+
+    def _evaluators(self, key: str, data: _Data) -> list[_Evaluator]:
+        """Evaluators of all groups bound to the data set ``key`` (built once per data set).
+
+        Every use sets the anchor first (``set_pb``), so a re-used evaluator carries no
+        state of an earlier solve into the next.
+        """
+        evs = self._eval_cache.get(key)
+        if evs is None:
+            evs = [_Evaluator(grp, data, self.model.parameter_vector()) for grp in self._groups]
+            if len(self._eval_cache) >= FK_CACHE_SIZE:
+                self._eval_cache.pop(next(iter(self._eval_cache)))
+            self._eval_cache[key] = evs
+        return evs
+
     def _best_alignment(
-        self, model: ClosureModel, data: _Data, evs: list["_Evaluator"]
+        self, model: ClosureModel, data: _Data, evs: list["_Evaluator"], key: str | None = None, cache: bool = False
     ) -> tuple[ClosureModel, np.ndarray, np.ndarray]:
         """The start model in the measurement frame (eqs. 5.3-5.4), guarded by the cost.
 
@@ -512,6 +549,10 @@ class CalibrationProblem:
         rigid fit moves a start model into a far-away device frame, but on a small pose
         cloud with a poor nominal model its rotation can be far off (worse than none).
         """
+        akey = (key, model.parameter_vector().tobytes()) if cache and key is not None else None
+        if akey is not None and akey in self._align_cache:
+            best, R, t = self._align_cache[akey]
+            return (model, np.eye(3), np.zeros(3)) if best == 0 else (model.transformed(R, t), R.copy(), t.copy())
         Tn, ok = self._nominal_fk(model, data.q)
         ok = ok & (data.weights > 0)
         cands: list[tuple[ClosureModel, np.ndarray, np.ndarray]] = [(model, np.eye(3), np.zeros(3))]
@@ -528,12 +569,18 @@ class CalibrationProblem:
         costs = [self._start_cost(m.parameter_vector(), evs) for m, _, _ in cands]
         best = int(np.argmin(costs))
         _log.info("frame alignment: start V %s -> candidate %d", ", ".join(f"{c:.3g}" for c in costs), best)
+        if akey is not None:
+            if len(self._align_cache) >= FK_CACHE_SIZE:
+                self._align_cache.pop(next(iter(self._align_cache)))
+            self._align_cache[akey] = (best, cands[best][1].copy(), cands[best][2].copy())
         return cands[best]
 
     def _equal_closures(self, other: ClosureModel, q: np.ndarray, T: np.ndarray, quat: np.ndarray) -> bool:
         """Whether ``other`` has the problem model's closure equations (at its p and one pose)."""
         if type(other) is not type(self.model) or tuple(other.parameter_names()) != self.resolution.names:
             return False
+        if type(other) in _SHARED_GRAPH_TYPES:  # equations fixed by the type and the parameter names
+            return True
         args = (other.parameter_vector(), q, T, quat)
         for a in range(len(self.model.links)):
             if a not in self._closure_cache:
