@@ -282,6 +282,9 @@ def cart_acceleration_expression(T: Expr, T_dot: Expr, T_ddot: Expr, q: Expr, q_
     )
 
 
+_SIGNS = [np.array([1.0 if (c >> i) & 1 else -1.0 for i in range(3)]) for c in range(8)]
+
+
 def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:
     """Root signs ``s`` of the three IK quadratics for an IK configuration.
 
@@ -305,7 +308,7 @@ def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:
         c = int(configuration)
         if not 0 <= c <= 7:
             raise InputError(f"configuration: expected an integer 0-7, got {c}")
-        return np.array([1.0 if (c >> i) & 1 else -1.0 for i in range(3)])
+        return _SIGNS[c].copy()  # a copy: the caller may change it
     try:
         s = np.array(configuration, dtype=float)
     except (TypeError, ValueError):

@@ -100,14 +100,13 @@ class MappedFunction:
         """One sample through the call buffer, or None if an argument does not fit it."""
         if not hasattr(self, "_sizes_in") or len(args) != len(self._sizes_in):
             return None
-        for a, k in zip(args, self._sizes_in):
-            if not isinstance(a, np.ndarray) or a.size != k:
-                return None
         _, ins, outs, trigger = self._single_buffer()
-        for dst, a in zip(ins, args):
+        for dst, a in zip(ins, args):  # copying before every argument is checked is harmless
+            if type(a) is not np.ndarray or a.size != dst.size:
+                return None
             dst[:] = a.ravel(order="F")
         trigger()
-        return [o.reshape((c, r)).T.copy() for o, (r, c) in zip(outs, self._shapes_out)]
+        return [o[:, None].copy() if c == 1 else o.reshape((c, r)).T.copy() for o, (r, c) in zip(outs, self._shapes_out)]
 
     def __call__(self, *args: np.ndarray, n: int | None = None) -> list[np.ndarray]:
         """Evaluate on ``n`` samples.
