@@ -54,10 +54,10 @@ class MappedFunction:
 
     Notes
     -----
-    A single sample (``n == 1``, dense inputs of the Function's sizes) is evaluated through
-    :meth:`casadi.Function.buffer` with preallocated NumPy arrays, without conversion to
-    ``casadi.DM``; this shares state, so one instance must not be called from two threads
-    at once.
+    Dense inputs of the Function's sizes (one sample, or ``n`` samples of the mapped
+    Function) are evaluated through :meth:`casadi.Function.buffer` with preallocated NumPy
+    arrays per ``n``, without conversion to ``casadi.DM``; this shares state, so one
+    instance must not be called from two threads at once.
 
     Examples
     --------
@@ -77,36 +77,44 @@ class MappedFunction:
             else:
                 log.info("%s: %s", f.name(), self.how)
         self._maps: dict[int, ca.Function] = {}
-        self._buffer = None
+        self._buffers: dict[int, tuple] = {}
         dense = all(f.sparsity_in(i).is_dense() for i in range(f.n_in())) and all(f.sparsity_out(i).is_dense() for i in range(f.n_out()))
         if dense:
             self._sizes_in = [f.nnz_in(i) for i in range(f.n_in())]
             self._shapes_out = [f.size_out(i) for i in range(f.n_out())]
 
-    def _single_buffer(self):
-        """The Function's call buffer, its NumPy input/output arrays and its trigger (built once)."""
-        if self._buffer is None:
-            buf, trigger = self.function.buffer()
-            ins = [np.zeros(k) for k in self._sizes_in]
-            outs = [np.zeros(r * c) for r, c in self._shapes_out]
+    def _buffer_of(self, n: int):
+        """The call buffer of ``f`` (``n == 1``) or of its map over ``n``, its NumPy input and
+        output arrays (column-major data) and its trigger (built once per ``n``)."""
+        entry = self._buffers.get(n)
+        if entry is None:
+            fn = self.function if n == 1 else self._mapped(n)
+            buf, trigger = fn.buffer()
+            ins = [np.zeros(k * n) for k in self._sizes_in]
+            outs = [np.zeros(r * c * n) for r, c in self._shapes_out]
             for i, a in enumerate(ins):
                 buf.set_arg(i, memoryview(a))
             for i, a in enumerate(outs):
                 buf.set_res(i, memoryview(a))
-            self._buffer = (buf, ins, outs, trigger)  # buf keeps the pointers: hold every array
-        return self._buffer
+            entry = self._buffers[n] = (buf, ins, outs, trigger)  # buf keeps the pointers: hold every array
+        return entry
 
-    def _call_single(self, args) -> list[np.ndarray] | None:
-        """One sample through the call buffer, or None if an argument does not fit it."""
+    def _call_buffer(self, args, n: int) -> list[np.ndarray] | None:
+        """``n`` samples through the call buffer, or None if an argument does not fit it."""
         if not hasattr(self, "_sizes_in") or len(args) != len(self._sizes_in):
             return None
-        _, ins, outs, trigger = self._single_buffer()
+        _, ins, outs, trigger = self._buffer_of(n)
         for dst, a in zip(ins, args):  # copying before every argument is checked is harmless
             if type(a) is not np.ndarray or a.size != dst.size:
                 return None
             dst[:] = a.ravel(order="F")
         trigger()
-        return [o[:, None].copy() if c == 1 else o.reshape((c, r)).T.copy() for o, (r, c) in zip(outs, self._shapes_out)]
+        return [o[:, None].copy() if c * n == 1 else o.reshape((c * n, r)).T.copy() for o, (r, c) in zip(outs, self._shapes_out)]
+
+    def _mapped(self, n: int) -> ca.Function:
+        if n not in self._maps:
+            self._maps[n] = self.function.map(n)
+        return self._maps[n]
 
     def __call__(self, *args: np.ndarray, n: int | None = None) -> list[np.ndarray]:
         """Evaluate on ``n`` samples.
@@ -126,15 +134,10 @@ class MappedFunction:
         """
         if n is None:
             n = max(a.shape[1] for a in args)
-        if n == 1:
-            fast = self._call_single(args)
-            if fast is not None:
-                return fast
-            out = self.function(*args)
-        else:
-            if n not in self._maps:
-                self._maps[n] = self.function.map(n)
-            out = self._maps[n](*args)
+        fast = self._call_buffer(args, n)
+        if fast is not None:
+            return fast
+        out = self.function(*args) if n == 1 else self._mapped(n)(*args)
         if not isinstance(out, (list, tuple)):
             out = [out]
         return [np.asarray(o) for o in out]

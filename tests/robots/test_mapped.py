@@ -131,3 +131,17 @@ def test_compiled_falls_back_to_the_interpreter_with_a_warning(monkeypatch, tmp_
     assert dc._inv.function is dc._inv.f
     assert any("compiled=True, but evaluated by the CasADi interpreter" in m for m in caplog.messages), caplog.messages
     np.testing.assert_array_equal(got, d.inverse_dynamics(T, np.zeros((3, 3)), np.ones((3, 3))))
+
+
+def test_batch_buffer_equals_the_mapped_function_call():
+    """Checked against Function.map's own call (DM conversion): 7 samples of a matrix input
+    through the per-n buffer, and a broadcast argument (one column for all samples) through
+    the ordinary map call, to round-off."""
+    X, y = ca.SX.sym("X", 3, 2), ca.SX.sym("y", 2)
+    f = ca.Function("f", [X, y], [X @ y, ca.sumsqr(X)])
+    m = MappedFunction(f)
+    Xv, yv = RNG.normal(size=(3, 14)), RNG.normal(size=(2, 7))
+    got, got_broadcast = m(Xv, yv, n=7), m(Xv, yv[:, :1], n=7)
+    ref, ref_broadcast = f.map(7)(Xv, yv), f.map(7)(Xv, yv[:, :1])
+    np.testing.assert_allclose(np.concatenate([g.ravel() for g in got]), np.concatenate([np.asarray(r).ravel() for r in ref]), rtol=1e-15, atol=0)
+    np.testing.assert_allclose(np.concatenate([g.ravel() for g in got_broadcast]), np.concatenate([np.asarray(r).ravel() for r in ref_broadcast]), rtol=1e-15, atol=0)
