@@ -104,10 +104,15 @@ class MappedFunction:
         if not hasattr(self, "_sizes_in") or len(args) != len(self._sizes_in):
             return None
         _, ins, outs, trigger = self._buffer_of(n)
-        for dst, a in zip(ins, args):  # copying before every argument is checked is harmless
-            if type(a) is not np.ndarray or a.size != dst.size:
+        for dst, a, k in zip(ins, args, self._sizes_in):  # copying before every argument is checked is harmless
+            if type(a) is not np.ndarray:
                 return None
-            dst[:] = a.ravel(order="F")
+            if a.size == dst.size:
+                dst[:] = a.ravel(order="F")
+            elif a.size == k:  # one sample's value for all n (as map broadcasts it)
+                dst.reshape(n, k)[:] = a.ravel(order="F")
+            else:
+                return None
         trigger()
         return [o[:, None].copy() if c * n == 1 else o.reshape((c * n, r)).T.copy() for o, (r, c) in zip(outs, self._shapes_out)]
 

@@ -135,8 +135,8 @@ def test_compiled_falls_back_to_the_interpreter_with_a_warning(monkeypatch, tmp_
 
 def test_batch_buffer_equals_the_mapped_function_call():
     """Checked against Function.map's own call (DM conversion): 7 samples of a matrix input
-    through the per-n buffer, and a broadcast argument (one column for all samples) through
-    the ordinary map call, to round-off."""
+    through the per-n buffer, also with a broadcast argument (one sample's value for all
+    samples, as map broadcasts it), to round-off."""
     X, y = ca.SX.sym("X", 3, 2), ca.SX.sym("y", 2)
     f = ca.Function("f", [X, y], [X @ y, ca.sumsqr(X)])
     m = MappedFunction(f)
