@@ -11,7 +11,10 @@ therefore goes through :meth:`casadi.Function.buffer` with preallocated NumPy in
 outputs (no conversion), and with ``compiled=True`` the Function is evaluated by its own
 CasADi-generated C, compiled once to a cached shared library and loaded as a
 ``casadi.external`` (:func:`gtmodel._compiler.compiled_function`), single samples and
-``map`` batches alike. The generated C is the same graph, never a second model.
+``map`` batches alike. The generated C is the same graph, never a second model. Batches
+go through a call buffer per N as well. Figures: ``python benchmarks/bench_model_calls.py``
+(L1 inverse dynamics, one call: 61 us -> 7 us with the buffer, 6 us compiled; the public
+method with its checks ~20 us either way; batch of 1000: 2.2 -> 0.6 us per sample compiled).
 """
 
 from __future__ import annotations
