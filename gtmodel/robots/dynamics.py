@@ -120,6 +120,10 @@ class GantryTau3Dynamics:
         Use the asymmetric friction of Table 6.1 (default False: symmetric Table 6.3).
     gravity : bool, optional
         Include gravity (default True).
+    compiled : bool, optional
+        Evaluate the numpy API (and the kinematics') through the Functions' generated C,
+        compiled once to cached shared libraries (default False; see
+        :class:`gtmodel.robots.mapped.MappedFunction`). Same results to 1e-12.
 
     Raises
     ------
@@ -134,6 +138,7 @@ class GantryTau3Dynamics:
         friction_width: float = DEFAULT_FRICTION_WIDTH,
         asymmetric: bool = False,
         gravity: bool = True,
+        compiled: bool = False,
     ) -> None:
         self.parameters = load_parameters(parameters)
         check_friction_form(friction, friction_width)
@@ -143,7 +148,8 @@ class GantryTau3Dynamics:
         self.friction_width = float(friction_width)
         self.asymmetric = bool(asymmetric)
         self.gravity = bool(gravity)
-        self.kinematics = GantryTau3Kinematics(self.parameters)
+        self.compiled = bool(compiled)
+        self.kinematics = GantryTau3Kinematics(self.parameters, self.compiled)
         kp = self.parameters.kinematics
         self.L, self.As, self.v = np.asarray(kp.L), np.asarray(kp.As), np.asarray(kp.v)
 
@@ -324,11 +330,11 @@ class GantryTau3Dynamics:
 
     @cached_property
     def _inv(self) -> _Mapped:
-        return _Mapped(self.inverse_dynamics_function)
+        return _Mapped(self.inverse_dynamics_function, self.compiled)
 
     @cached_property
     def _fwd(self) -> _Mapped:
-        return _Mapped(self.forward_dynamics_function)
+        return _Mapped(self.forward_dynamics_function, self.compiled)
 
     def _checked(self, mapped: _Mapped, T, a, b, configuration, names):
         Tn, single = _as_points(T, names[0])
@@ -340,7 +346,7 @@ class GantryTau3Dynamics:
         out, disc, cos_min = mapped(Tn.T, An.T, Bn.T, s[:, None])
         self.kinematics._check_reach(disc, Tn)
         cos_min = cos_min.ravel()
-        if np.any(cos_min < SINGULARITY_TOLERANCE):
+        if (cos_min < SINGULARITY_TOLERANCE).any():
             k = int(np.argmin(cos_min))
             raise SingularConfigurationError(f"pose T={Tn[k].tolist()} is singular: a link is perpendicular to its guideway")
         out = out.T

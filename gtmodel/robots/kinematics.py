@@ -282,6 +282,9 @@ def cart_acceleration_expression(T: Expr, T_dot: Expr, T_ddot: Expr, q: Expr, q_
     )
 
 
+_SIGNS = [np.array([1.0 if (c >> i) & 1 else -1.0 for i in range(3)]) for c in range(8)]
+
+
 def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:
     """Root signs ``s`` of the three IK quadratics for an IK configuration.
 
@@ -305,7 +308,7 @@ def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:
         c = int(configuration)
         if not 0 <= c <= 7:
             raise InputError(f"configuration: expected an integer 0-7, got {c}")
-        return np.array([1.0 if (c >> i) & 1 else -1.0 for i in range(3)])
+        return _SIGNS[c].copy()  # a copy: the caller may change it
     try:
         s = np.array(configuration, dtype=float)
     except (TypeError, ValueError):
@@ -327,6 +330,8 @@ def _as_points(x, name: str) -> tuple[np.ndarray, bool]:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] == 0:
         raise InputError(f"{name}: expected shape (3,) or (N, 3), got {np.shape(x)}")
+    if np.isfinite(arr).all():  # the fast path (a call of a model is ~us: keep numpy's wrappers out)
+        return arr, single
     bad = ~np.all(np.isfinite(arr), axis=1)
     if np.any(bad):
         raise InputError(f"{name}: row {int(np.argmax(bad))} is not finite: {arr[np.argmax(bad)].tolist()}")
@@ -347,6 +352,9 @@ class GantryTau3Kinematics:
     parameters : RobotParameters or KinematicParameters or str or pathlib.Path
         A parameter set, or the name/path of one (see
         :func:`gtmodel.robots.parameters.load_parameters`).
+    compiled : bool, optional
+        Evaluate the numpy API through the Functions' generated C, compiled once to cached
+        shared libraries (default False; see :class:`gtmodel.robots.mapped.MappedFunction`).
 
     Notes
     -----
@@ -355,7 +363,8 @@ class GantryTau3Kinematics:
     vectors; ``s`` (3) holds IK root signs and ``solution`` (1) the FK branch.
     """
 
-    def __init__(self, parameters: RobotParameters | KinematicParameters | str) -> None:
+    def __init__(self, parameters: RobotParameters | KinematicParameters | str, compiled: bool = False) -> None:
+        self.compiled = bool(compiled)
         if isinstance(parameters, KinematicParameters):
             self.parameters: RobotParameters | None = None
             self.kinematic_parameters = parameters
@@ -412,7 +421,7 @@ class GantryTau3Kinematics:
 
     @cached_property
     def _cos(self) -> MappedFunction:
-        return MappedFunction(self.link_cosines_function)
+        return MappedFunction(self.link_cosines_function, self.compiled)
 
     @cached_property
     def acceleration_function(self) -> ca.Function:
@@ -436,28 +445,28 @@ class GantryTau3Kinematics:
 
     @cached_property
     def _ik(self) -> MappedFunction:
-        return MappedFunction(self.ik_function)
+        return MappedFunction(self.ik_function, self.compiled)
 
     @cached_property
     def _fk(self) -> MappedFunction:
-        return MappedFunction(self.fk_function)
+        return MappedFunction(self.fk_function, self.compiled)
 
     @cached_property
     def _jac(self) -> MappedFunction:
-        return MappedFunction(self.jacobian_function)
+        return MappedFunction(self.jacobian_function, self.compiled)
 
     @cached_property
     def _acc(self) -> MappedFunction:
-        return MappedFunction(self.acceleration_function)
+        return MappedFunction(self.acceleration_function, self.compiled)
 
     @cached_property
     def _cacc(self) -> MappedFunction:
-        return MappedFunction(self.cart_acceleration_function)
+        return MappedFunction(self.cart_acceleration_function, self.compiled)
 
     # --------------------------------------------------------------- checks
     def _check_reach(self, disc: np.ndarray, T: np.ndarray) -> None:
         bad = disc < 0  # (3, N)
-        if np.any(bad):
+        if bad.any():
             k = int(np.argwhere(bad)[0][1])
             arms = [int(a) for a in np.flatnonzero(bad[:, k])]
             where = "" if T.shape[0] == 1 else f" (row {k})"
