@@ -315,8 +315,9 @@ class OptimalControlKind(ProblemKind):
             raise file.wrap("model.file", exc) from None
         except GtModelError as exc:
             raise file.wrap("model.class", exc) from None
+        final_time = _final_time(file, doc.optimization)  # its ProblemError already names the file and field
         try:
-            opt = Optimization(model, **_final_time(file, doc.optimization))
+            opt = Optimization(model, **final_time)
         except GtModelError as exc:
             raise file.wrap("optimization.final_time", exc) from None
         params = model.variables("parameter")

@@ -88,6 +88,9 @@ BAD = [
     ("free_time_without_bounds", "bounds = [0.5, 5.0]", "", r"field 'optimization\.final_time\.bounds': expected bounds"),
     ("parameter_huge", "m_pole = 0.3 ", "m_pole = 1e308 ", r"field 'model\.parameters\.m_pole': expected a number <= 1e\+09"),
     ("class_missing", 'class = "CartPendulum"', "", r"missing field 'model\.class'"),
+    # the field is named once (an earlier version wrapped the final-time message twice)
+    ("initial_guess_outside_bounds", "bounds = [0.5, 5.0]", "bounds = [0.5, 0.6]",
+     r"^(?!.*field '[^']*': .*field ').*field 'optimization\.final_time\.initial_guess': expected a time within"),
     ("free_parameter_unknown", "[initial_guess]", "[free_parameters]\nlength = [0.3, 0.8]\n\n[initial_guess]", r"field 'free_parameters\.length': expected one of the model's names"),
 ]
 HELPERS = {
