@@ -94,7 +94,11 @@ class ProblemFile:
         Returns
         -------
         ProblemError
+            A :class:`ProblemError` of this file is returned as it is (it already names the
+            file and its field, which is more precise than ``field``).
         """
+        if isinstance(error, ProblemError) and str(error).startswith(f"{self.path}: "):
+            return error
         return ProblemError(f"{self.path}: field '{field}': {error}")
 
     def reference(self, field: str, ref: str, shipped: Collection[str] = ()) -> str | Path:
