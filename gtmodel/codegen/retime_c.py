@@ -102,6 +102,8 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
 RETIME_SOURCE = r"""
 /* ---- online re-timing: two-pass reachability (hand-written; the Python solver's algorithm) ---- */
 #define @U@_RETIME_EMPTY_TOLERANCE 1e-12 /* relative tolerance on an empty interval (rounding) */
+/* max(1, x) as Python's max(1.0, x) (1 for NaN) */
+#define @U@_RETIME_AT_LEAST_1(x) ((x) > 1.0 ? (x) : 1.0)
 
 unsigned long @P@_retime_work_bytes(void) { return (unsigned long)sizeof(@P@_retime_work); }
 
@@ -195,28 +197,31 @@ static void @P@_retime_stage(const double *p, const double *r, const double *w, 
 }
 
 /* 1 if the greedy step k is proven to dominate every feasible profile (the Python
- * solver's _uncertified_stages, per stage). */
+ * solver's _uncertified_stages, per stage). For the rows with p > 0 the forward pass left
+ * r / p, w / p, e / p in r, w, e. */
 static int @P@_retime_certified(const @P@_retime_work *wk, int k, int M, double td)
 {
     const double *p = wk->p + (long)k * M, *r = wk->r + (long)k * M, *w = wk->w + (long)k * M, *e = wk->e + (long)k * M;
     const double bk = wk->b[k], lo = wk->k_lo[k];
-    const double tol = 1e-12 * fmax(1.0, fabs(wk->k_hi[k + 1]));
+    const double tol = 1e-12 * @U@_RETIME_AT_LEAST_1(fabs(wk->k_hi[k + 1]));
     double x, vmin = INFINITY, val, rp, wp, ep, slope, val_lo;
     int i;
+    (void)p;
     if (wk->b[k + 1] >= wk->k_hi[k + 1] - tol) return 1;       /* capped by the controllable set */
-    if (bk <= lo + 1e-12 * fmax(1.0, bk)) return 1;             /* pinned at its lowest value */
+    if (bk <= lo + 1e-12 * @U@_RETIME_AT_LEAST_1(bk)) return 1;             /* pinned at its lowest value */
     x = sqrt(bk);
+    double vals[@U@_RETIME_SIDES];
     for (i = 0; i < M; ++i) {
         if (!(p[i] > 0.0)) continue;
-        val = bk - td * (r[i] / p[i] * bk + w[i] / p[i] * x + e[i] / p[i]);
-        if (val < vmin) vmin = val;
+        vals[i] = bk - td * (r[i] * bk + w[i] * x + e[i]);
+        if (vals[i] < vmin) vmin = vals[i];
     }
     for (i = 0; i < M; ++i) {
         if (!(p[i] > 0.0)) continue;
-        rp = r[i] / p[i];
-        wp = w[i] / p[i];
-        ep = e[i] / p[i];
-        val = bk - td * (rp * bk + wp * x + ep);
+        rp = r[i];
+        wp = w[i];
+        ep = e[i];
+        val = vals[i];
         if (!(val <= vmin + tol)) continue; /* not active */
         if (wp > 0.0) {
             val_lo = lo - td * (rp * lo + wp * sqrt(lo) + ep);
@@ -239,7 +244,7 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
     casadi_real w[@U@_RETIME_SZ_W];
     casadi_real sg[3], cm[@R@], cc[@R@], cd[@R@], cg[@R@], q[3], disc[3], cs[3];
     double lim[@R@];
-    double bound_hi[@R@], bound_lo[@R@], b0, bk, bn, amax, x, v, klo, khi, lo, hi, hull, l2, h2, b2, td, t;
+    double bound_hi[@R@], bound_lo[@R@], nonfinite, b0, bk, bn, amax, x, v, klo, khi, lo, hi, hull, l2, h2, b2, td, t;
     int hi_rows[@R@], lo_rows[@R@], nhi = 0, nlo = 0, M, N, i, j, k, flag, nsplit, splits = 0, uncertified = 0, finite_limits = 0;
     if (info != NULL) {
         info->final_time = 0.0;
@@ -278,11 +283,11 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
             if (info != NULL) info->index = k;
             return GT_BAD_ARGUMENT;
         }
-        for (i = 0; i < 3; ++i) {
-            if (!isfinite(T[3 * k + i]) || !isfinite(dT[3 * k + i]) || !isfinite(ddT[3 * k + i])) {
-                if (info != NULL) info->index = k;
-                return GT_BAD_ARGUMENT;
-            }
+        nonfinite = 0.0;
+        for (i = 0; i < 3; ++i) nonfinite += 0.0 * T[3 * k + i] + 0.0 * dT[3 * k + i] + 0.0 * ddT[3 * k + i];
+        if (nonfinite != 0.0) {
+            if (info != NULL) info->index = k;
+            return GT_BAD_ARGUMENT;
         }
     }
     /* the rows at every grid point, from the generated coefficients; the stage sets */
@@ -319,12 +324,14 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
                 return GT_SINGULAR;
             }
         }
-        for (j = 0; j < @R@; ++j) {
-            if (!isfinite(cm[j]) || !isfinite(cc[j]) || !isfinite(cd[j]) || !isfinite(cg[j])) {
-                if (info != NULL) info->index = k;
-                return GT_NUMERIC_ERROR;
-            }
-            if (!limits->viscous_friction) cd[j] = 0.0;
+        nonfinite = 0.0; /* 0 * x is 0 for a finite x, NaN for an infinite or NaN one */
+        for (j = 0; j < @R@; ++j) nonfinite += 0.0 * cm[j] + 0.0 * cc[j] + 0.0 * cd[j] + 0.0 * cg[j];
+        if (nonfinite != 0.0) {
+            if (info != NULL) info->index = k;
+            return GT_NUMERIC_ERROR;
+        }
+        if (!limits->viscous_friction) {
+            for (j = 0; j < @R@; ++j) cd[j] = 0.0;
         }
         for (i = 0; i < nhi; ++i) { /* m a + c b + d sqrt(b) + g - hi <= 0 */
             j = hi_rows[i];
@@ -362,7 +369,7 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
     }
     /* empty stage sets, rest points that need s_dot > 0 */
     for (k = 0; k < n; ++k) {
-        const double tol = @U@_RETIME_EMPTY_TOLERANCE * fmax(1.0, isfinite(work->s_hi[k]) ? fabs(work->s_hi[k]) : 0.0);
+        const double tol = @U@_RETIME_EMPTY_TOLERANCE * @U@_RETIME_AT_LEAST_1(isfinite(work->s_hi[k]) ? fabs(work->s_hi[k]) : 0.0);
         if (work->s_lo[k] > work->s_hi[k] + tol || (work->rest[k] && work->s_lo[k] > tol)) {
             if (info != NULL) info->index = k;
             return GT_INFEASIBLE;
@@ -445,7 +452,7 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
             }
         }
         if (lo > hi) {
-            if (lo > hi + @U@_RETIME_EMPTY_TOLERANCE * fmax(1.0, fabs(hi))) {
+            if (lo > hi + @U@_RETIME_EMPTY_TOLERANCE * @U@_RETIME_AT_LEAST_1(fabs(hi))) {
                 if (info != NULL) info->index = k;
                 return GT_INFEASIBLE;
             }
@@ -456,7 +463,7 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
     }
     /* the start state must be controllable */
     b0 = s_dot_start * s_dot_start;
-    if (b0 > work->k_hi[0] + @U@_RETIME_EMPTY_TOLERANCE * fmax(1.0, fabs(work->k_hi[0])) || b0 < work->k_lo[0] - @U@_RETIME_EMPTY_TOLERANCE * fmax(1.0, fabs(work->k_lo[0]))) {
+    if (b0 > work->k_hi[0] + @U@_RETIME_EMPTY_TOLERANCE * @U@_RETIME_AT_LEAST_1(fabs(work->k_hi[0])) || b0 < work->k_lo[0] - @U@_RETIME_EMPTY_TOLERANCE * @U@_RETIME_AT_LEAST_1(fabs(work->k_lo[0]))) {
         if (info != NULL) info->index = 0;
         return GT_INFEASIBLE;
     }
@@ -464,13 +471,17 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
     bk = b0;
     work->b[0] = b0;
     for (k = 0; k < N; ++k) {
-        const double *pk = work->p + (long)k * M, *rk = work->r + (long)k * M, *wk = work->w + (long)k * M, *ek = work->e + (long)k * M;
+        const double *pk = work->p + (long)k * M;
+        double *rk = work->r + (long)k * M, *wk = work->w + (long)k * M, *ek = work->e + (long)k * M;
         td = 2.0 * (s[k + 1] - s[k]);
         amax = INFINITY;
         x = sqrt(bk);
         for (i = 0; i < M; ++i) {
             if (!(pk[i] > 0.0)) continue;
-            v = -(rk[i] / pk[i] * bk + wk[i] / pk[i] * x + ek[i] / pk[i]);
+            rk[i] /= pk[i]; /* kept for the certificate */
+            wk[i] /= pk[i];
+            ek[i] /= pk[i];
+            v = -(rk[i] * bk + wk[i] * x + ek[i]);
             if (v < amax) amax = v;
         }
         bn = bk + td * amax;
@@ -481,10 +492,10 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
         bk = bn;
     }
     /* the duration (b piecewise linear: dt = 2 ds / (s_dot_k + s_dot_k+1)) */
+    for (k = 0; k < n; ++k) work->s_lo[k] = sqrt(work->b[k] > 0.0 ? work->b[k] : 0.0); /* s_dot (s_lo is free now) */
     t = 0.0;
     for (k = 0; k < N; ++k) {
-        const double x0 = sqrt(work->b[k] > 0.0 ? work->b[k] : 0.0), x1 = sqrt(work->b[k + 1] > 0.0 ? work->b[k + 1] : 0.0);
-        const double dt = 2.0 * (s[k + 1] - s[k]) / (x0 + x1);
+        const double dt = 2.0 * (s[k + 1] - s[k]) / (work->s_lo[k] + work->s_lo[k + 1]);
         if (!isfinite(dt) || !isfinite(work->a[k])) { /* s_dot zero at both ends of an interval */
             if (info != NULL) info->index = k;
             return GT_INFEASIBLE;
@@ -492,7 +503,7 @@ int @P@_retime(int n, const double s[], const double T[], const double dT[], con
         t += dt;
     }
     for (k = 0; k < N; ++k) uncertified += !@P@_retime_certified(work, k, M, 2.0 * (s[k + 1] - s[k]));
-    for (k = 0; k < n; ++k) s_dot[k] = sqrt(work->b[k] > 0.0 ? work->b[k] : 0.0);
+    for (k = 0; k < n; ++k) s_dot[k] = work->s_lo[k];
     if (s_dot_start > 0.0) s_dot[0] = s_dot_start;
     if (s_ddot != NULL) {
         for (k = 0; k < N; ++k) s_ddot[k] = work->a[k];
