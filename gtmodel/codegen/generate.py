@@ -22,6 +22,11 @@ writes, into ``out_dir``:
     convergence and return ``GT_NOT_CONVERGED`` otherwise; a loop that tests convergence
     every ``k > 1`` steps evaluates only the residual at the tests.
 
+With ``retime_n_max`` the wrapper source also holds ``<prefix>_retime``, the online
+re-timing along a path (:mod:`gtmodel.codegen.retime`): hand-written two passes around the
+CasADi-generated row coefficients ``<prefix>_cg_retime_rows``, its work memory a
+caller-owned struct sized at generation.
+
 The C functions are reentrant (no static or global mutable state) and thus thread-safe.
 ``real="float"`` generates single-precision code (``float`` arrays in the API).
 """
