@@ -576,10 +576,10 @@ def generate(
     try:
         header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton,
                                        [*(controller_header_lines(prefix, controller, real) if controller else ()),
-                                        *(retime_header_lines(prefix, retime_n_max) if retime_f is not None else ())]))
+                                        *(retime_header_lines(prefix, retime_n_max, retime_sizes) if retime_f is not None else ())]))
         source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every,
                                         [*(controller_source_lines(prefix, controller, real) if controller else ()),
-                                         *(retime_source_lines(prefix, model, retime_n_max, retime_sizes) if retime_f is not None else ())]))
+                                         *(retime_source_lines(prefix, model, retime_sizes) if retime_f is not None else ())]))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)

@@ -139,7 +139,7 @@ def _fields() -> list[tuple[str, str, int]]:
     return [(k, RETIME_FIELDS[k], PATH_ROW_COUNTS[k]) for k in PATH_LIMIT_KINDS]
 
 
-def retime_header_lines(prefix: str, n_max: int) -> list[str]:
+def retime_header_lines(prefix: str, n_max: int, sizes: tuple[int, int, int, int]) -> list[str]:
     """Header declarations of the re-timing function: sizes, limits, work and info structs, prototypes.
 
     Parameters
@@ -148,6 +148,8 @@ def retime_header_lines(prefix: str, n_max: int) -> list[str]:
         C prefix (``gt_L1``).
     n_max : int
         ``<PREFIX>_RETIME_N_MAX``.
+    sizes : tuple of int
+        ``(sz_arg, sz_res, sz_iw, sz_w)`` of the generated rows function (for the stack use).
 
     Returns
     -------
@@ -174,11 +176,12 @@ def retime_header_lines(prefix: str, n_max: int) -> list[str]:
         "    int constrain_end;          /* 1: rows with s_ddot also at the last point (default), 0: TOPP-RA's scheme */",
         f"}} {P}_retime_limits;",
     ]
-    out += RETIME_HEADER.replace("@P@", P).replace("@U@", U).replace("@R@", str(ROWS)).splitlines()
+    stack = 8 * (sum(sizes) + 7 * ROWS + SIDES * SIDES + 3 * SIDES + 64)  # work arrays, coefficients, pair sets
+    out += RETIME_HEADER.replace("@P@", P).replace("@U@", U).replace("@R@", str(ROWS)).replace("@STACK@", str(stack)).splitlines()
     return out + [""]
 
 
-def retime_source_lines(prefix: str, model: RobotModel, n_max: int, sizes: tuple[int, int, int, int]) -> list[str]:
+def retime_source_lines(prefix: str, model: RobotModel, sizes: tuple[int, int, int, int]) -> list[str]:
     """Source of the re-timing function: the model's limits as constants and the two passes.
 
     Parameters
@@ -187,8 +190,6 @@ def retime_source_lines(prefix: str, model: RobotModel, n_max: int, sizes: tuple
         C prefix.
     model : RobotModel
         The 3-link model (cart travel and joint-angle limits of the workspace checks).
-    n_max : int
-        ``<PREFIX>_RETIME_N_MAX``.
     sizes : tuple of int
         ``(sz_arg, sz_res, sz_iw, sz_w)`` of the generated rows function.
 
@@ -225,7 +226,6 @@ def retime_source_lines(prefix: str, model: RobotModel, n_max: int, sizes: tuple
         f"static const unsigned char {P}_retime_squared[{ROWS}] = {{{', '.join(squared)}}};",
     ]
     text = RETIME_SOURCE.replace("@INIT_LIMITS@", "\n".join(init)).replace("@ROW_LIMITS@", "\n".join(rows))
-    del n_max  # the size lives in the header's macro
     return head + text.replace("@P@", P).replace("@U@", U).replace("@R@", str(ROWS)).splitlines()
 
 

@@ -91,7 +91,8 @@ int @P@_retime_limits_init(@P@_retime_limits *limits);
  *   non-finite, viscous_friction or constrain_end not 0/1, a configuration outside 0-7);
  *   GT_TOO_LARGE (n > @U@_RETIME_N_MAX); GT_NUMERIC_ERROR (a non-finite coefficient).
  * Time: O(n) evaluations of the generated rows function and O(n) pass steps; no heap, no
- * static or global mutable state (reentrant with separate work memory).
+ * static or global mutable state (reentrant with separate work memory). Stack use: about
+ * @STACK@ bytes.
  */
 int @P@_retime(int n, const double s[], const double T[], const double dT[], const double ddT[], const int rest[],
     int configuration, double s_dot_start, const @P@_retime_limits *limits, @P@_retime_work *work,
