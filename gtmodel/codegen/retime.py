@@ -362,6 +362,36 @@ class RetimeFunction:
         out.constrain_end = int(bool(constrain_end))
         return out
 
+    def prepared(self, s: Any, T: Any, dT: Any, ddT: Any, limits: Any, configuration: int = 0, s_dot_start: float = 0.0) -> Any:
+        """A call of the C function with its arguments converted once, for timing.
+
+        Parameters
+        ----------
+        s, T, dT, ddT, limits, configuration, s_dot_start
+            As for :meth:`__call__` (no rest points).
+
+        Returns
+        -------
+        callable
+            ``call() -> int``: one call of ``<prefix>_retime`` (the C status); the
+            outputs go to buffers kept by the callable.
+        """
+        s = np.ascontiguousarray(s, dtype=float).reshape(-1)
+        k = s.size
+        arrays = [np.ascontiguousarray(np.reshape(np.asarray(a, dtype=float), (k, 3))) for a in (T, dT, ddT)]
+        lim = limits if isinstance(limits, ctypes.Structure) else self.limits(limits)
+        out = np.empty(k)
+        info = self.Info()
+        dptr = ctypes.POINTER(ctypes.c_double)
+        cargs = (k, s.ctypes.data_as(dptr), *(a.ctypes.data_as(dptr) for a in arrays), None, int(configuration), float(s_dot_start),
+                 ctypes.byref(lim), ctypes.byref(self.work), out.ctypes.data_as(dptr), None, ctypes.byref(info))
+        keep = (s, arrays, lim, out, info)
+
+        def call() -> int:
+            return int(self.cfunc(*cargs)) if keep else 0  # the closure keeps the buffers alive
+
+        return call
+
     def __call__(self, s: Any, T: Any, dT: Any, ddT: Any, limits: Any, configuration: int = 0, s_dot_start: float = 0.0,
                  rest: Any = None, n: int | None = None) -> RetimeResult:
         """Re-time a sampled path in C.

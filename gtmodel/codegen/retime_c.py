@@ -120,7 +120,7 @@ int @P@_retime_limits_init(@P@_retime_limits *limits)
 /* {b >= 0 : P b + Q sqrt(b) + R <= 0}, a quadratic in x = sqrt(b): [lo, hi] (lo > hi when
  * empty) and, when the set is [0, b1] u [b2, inf), b2 in split (else INFINITY); the
  * interval containing rest is returned. The scalar _interval of the Python solver. */
-static void @P@_retime_interval(double P, double Q, double R, double *lo, double *hi, double *split)
+static inline void @P@_retime_interval(double P, double Q, double R, double *lo, double *hi, double *split)
 {
     double D, sq, qq, r1, r2, x1, x2, v;
     *split = INFINITY;
