@@ -270,6 +270,24 @@ class RetimeResult(StatusResult):
     splits: int
 
 
+def _columns(s: Any, T: Any, dT: Any, ddT: Any, rest: Any = None) -> tuple[np.ndarray, list[np.ndarray], np.ndarray | None]:
+    """Contiguous float arrays of the samples, shapes checked; values unchecked (the C function checks them)."""
+    try:
+        s = np.ascontiguousarray(s, dtype=float).reshape(-1)
+        arrays = [np.ascontiguousarray(np.asarray(a, dtype=float)) for a in (T, dT, ddT)]
+    except (TypeError, ValueError):
+        raise InputError("s, T, dT, ddT: expected numeric arrays") from None
+    for name, a in zip(("T", "dT", "ddT"), arrays):
+        if a.shape != (s.size, 3):
+            raise InputError(f"{name}: expected shape ({s.size}, 3) for {s.size} grid points, got {a.shape}")
+    r = None
+    if rest is not None:
+        r = np.ascontiguousarray(np.asarray(rest, dtype=bool), dtype=np.intc).reshape(-1)
+        if r.size != s.size:
+            raise InputError(f"rest: expected {s.size} flags, got {r.size}")
+    return s, arrays, r
+
+
 class RetimeFunction:
     """The compiled ``<prefix>_retime`` called through ctypes, with its own work memory.
 
@@ -375,10 +393,14 @@ class RetimeFunction:
         callable
             ``call() -> int``: one call of ``<prefix>_retime`` (the C status); the
             outputs go to buffers kept by the callable.
+
+        Raises
+        ------
+        InputError
+            As :meth:`__call__`.
         """
-        s = np.ascontiguousarray(s, dtype=float).reshape(-1)
+        s, arrays, _ = _columns(s, T, dT, ddT)
         k = s.size
-        arrays = [np.ascontiguousarray(np.reshape(np.asarray(a, dtype=float), (k, 3))) for a in (T, dT, ddT)]
         lim = limits if isinstance(limits, ctypes.Structure) else self.limits(limits)
         out = np.empty(k)
         info = self.Info()
@@ -417,12 +439,16 @@ class RetimeFunction:
         -------
         RetimeResult
             The profile and status (never raises on a C status).
+
+        Raises
+        ------
+        InputError
+            Arrays of the wrong shapes (the values are passed unchecked: the C function
+            checks them), or limits that :meth:`limits` rejects.
         """
-        s = np.ascontiguousarray(s, dtype=float).reshape(-1)
+        s, arrays, r = _columns(s, T, dT, ddT, rest)
         k = s.size
-        arrays = [np.ascontiguousarray(np.reshape(np.asarray(a, dtype=float), (k, 3))) for a in (T, dT, ddT)]
         lim = limits if isinstance(limits, ctypes.Structure) else self.limits(limits)
-        r = None if rest is None else np.ascontiguousarray(np.asarray(rest, dtype=bool), dtype=np.intc)
         s_dot = np.full(k, np.nan)
         s_ddot = np.full(k, np.nan)
         info = self.Info()

@@ -211,6 +211,18 @@ def test_flags_other_than_0_or_1_are_bad_arguments(retime, line_samples, field):
     assert retime_name(retime(*line_samples, lim)) == "GT_BAD_ARGUMENT"
 
 
+@pytest.mark.parametrize(
+    "change, match",
+    [({"T": np.zeros((5, 3))}, r"T: expected shape \(200, 3\)"), ({"rest": [True, False]}, "rest: expected 200 flags"),
+     ({"limits": {"speed": 1.0}}, "unknown kind 'speed'"), ({"limits": {"force_limit": [1.0, 2.0]}}, "expects 3 value")],
+)
+def test_python_wrapper_rejects_wrong_shapes(retime, line_samples, change, match):
+    s, T, dT, ddT = line_samples
+    kw = {"s": s, "T": T, "dT": dT, "ddT": ddT, "limits": {"force_limit": 450.0}, **change}
+    with pytest.raises(InputError, match=match):
+        retime(**kw)
+
+
 def test_null_pointer_is_a_bad_argument(retime, line_samples):
     s, T, dT, ddT = line_samples
     out = np.full(s.size, np.nan)
