@@ -205,13 +205,11 @@ static int @P@_retime_certified(const @P@_retime_work *wk, int k, int M, double 
     const double *p = wk->p + (long)k * M, *r = wk->r + (long)k * M, *w = wk->w + (long)k * M, *e = wk->e + (long)k * M;
     const double bk = wk->b[k], lo = wk->k_lo[k];
     const double tol = 1e-12 * @U@_RETIME_AT_LEAST_1(fabs(wk->k_hi[k + 1]));
-    double x, vmin = INFINITY, val, rp, wp, ep, slope, val_lo;
+    double x, vmin = INFINITY, val, rp, wp, ep, slope, val_lo, vals[@U@_RETIME_SIDES];
     int i;
-    (void)p;
-    if (wk->b[k + 1] >= wk->k_hi[k + 1] - tol) return 1;       /* capped by the controllable set */
-    if (bk <= lo + 1e-12 * @U@_RETIME_AT_LEAST_1(bk)) return 1;             /* pinned at its lowest value */
+    if (wk->b[k + 1] >= wk->k_hi[k + 1] - tol) return 1; /* capped by the controllable set */
+    if (bk <= lo + 1e-12 * @U@_RETIME_AT_LEAST_1(bk)) return 1; /* pinned at its lowest value */
     x = sqrt(bk);
-    double vals[@U@_RETIME_SIDES];
     for (i = 0; i < M; ++i) {
         if (!(p[i] > 0.0)) continue;
         vals[i] = bk - td * (r[i] * bk + w[i] * x + e[i]);
