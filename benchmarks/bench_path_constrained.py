@@ -35,7 +35,7 @@ evaluation) + ``compute_parameterization``. No assertions: timings depend on the
 ``--json``: only case 1, on N = 100, 500, 2000, 10^4 and 10^5 points, then ONE JSON object on
 the last line of stdout: ``ratio_to_toppra`` (gt total / TOPP-RA, both setup + solve, best of
 ``--repeat``), the wall times, the durations of both, and the exact gridded optimum from
-IPOPT (:meth:`PathConstrainedProblem.solve_nlp`, tol 1e-10) for N <= ``--nlp-max``, with
+IPOPT (:meth:`PathConstrainedProblem.solve_nlp`, tol 1e-14, bounds not relaxed) for N <= ``--nlp-max``, with
 gtmodel's distance to it in ppm. Without TOPP-RA the ratios are ``null`` and ``"toppra"``
 says it is missing (``pip install toppra``: a benchmark-only dependency, not in pyproject).
 """
@@ -256,7 +256,7 @@ def json_main(args) -> None:
             T_tp = duration(sd, gp.s)
         T_nlp = None
         if n <= args.nlp_max:
-            nlp = kin.solve_nlp(gp)
+            nlp = kin.solve_nlp(gp, tol=1e-14)
             T_nlp = nlp.final_time if nlp.status == "optimal" else None
         ppm = (sol.final_time - T_nlp) / T_nlp * 1e6 if T_nlp else None
         out["ratio_to_toppra"][key] = t_total / t_tp if t_tp else None
