@@ -134,7 +134,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--json", action="store_true", help="case 1 on 100 ... 10^5 points, one JSON object on the last line")
     ap.add_argument("--grids", type=int, nargs="+", default=list(JSON_GRIDS), help="grid sizes of --json (default 100 500 2000 10000 100000)")
-    ap.add_argument("--nlp-max", type=int, default=10_000, help="largest N cross-checked with IPOPT in --json mode")
+    ap.add_argument("--nlp-max", type=int, default=100_000, help="largest N cross-checked with IPOPT in --json mode")
     args = ap.parse_args()
     if args.json:
         json_main(args)
