@@ -1,6 +1,6 @@
 """Path-constrained time-optimal motion: gtmodel's reachability solver against TOPP-RA.
 
-Usage: python benchmarks/bench_path_constrained.py [--repeat 7] [--json] [--nlp-max 10000]
+Usage: python benchmarks/bench_path_constrained.py [--repeat 7] [--json] [--nlp-max 100000]
 
 TOPP-RA (``pip install toppra``, Pham & Pham 2018) is the reference implementation of the
 reachability method (Cython LP solver "seidel"). Both solve the same gridded problem, on
