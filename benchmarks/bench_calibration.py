@@ -27,7 +27,9 @@ With ``--json`` the last line of stdout is one JSON object: ``whole_call_ms`` (t
 any repeated use), ``scipy_ms`` (the peer of 2.), both as medians of ``--repeat``
 interleaved runs plus their minima (``*_min_ms``), ``solve_ms`` (the solver alone),
 ``ratio`` = scipy_ms / whole_call_ms, ``ratio_min``, both costs ``V`` (``cost``,
-``scipy_cost`` [m^4]) and ``cost_rel_diff``.
+``scipy_cost`` [m^4]), ``cost_rel_diff``, gtmodel's ``iterations`` (Jacobian
+evaluations), the peer's residual evaluations (``scipy_evaluations``) and the 1-minute
+``load_average`` of the machine at the end (the figures are from a shared machine).
 
 OpenBLAS threads are limited to 1 (set before NumPy is imported) for both sides: on a
 shared 2-core machine multi-threaded BLAS made single small LAPACK calls take 10-40 ms.
@@ -202,6 +204,9 @@ def whole_call_vs_scipy(nominal: ThreeLinkClosure, q: np.ndarray, T: np.ndarray,
         "cost_rel_diff": float(abs(res.cost - 2 * sol.cost) / abs(res.cost)),
         "status": str(res.status),
         "scipy_status": int(sol.status),
+        "iterations": int(res.iterations),
+        "scipy_evaluations": int(peer.n_eval),
+        "load_average": os.getloadavg()[0],
     }
 
 

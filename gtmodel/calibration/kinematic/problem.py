@@ -229,6 +229,7 @@ class CalibrationProblem:
         self._align_cache: dict[tuple[str, bytes], tuple[int, np.ndarray, np.ndarray]] = {}
         self._rank_ok: set[tuple[str, int, bytes]] = set()
         self._transform_safe: bool | None = None
+        self._last_data: tuple[tuple[np.ndarray, ...], str] | None = None
         self.build_time = 0.0
 
     # -------------------------------------------------------------- building
@@ -458,10 +459,9 @@ class CalibrationProblem:
         cost_arm = np.zeros(n_arms)
         cost0_arm = np.zeros(n_arms)
         residuals = np.zeros((data.N, self.model.n_links))
-        active = data.weights > 0
         for gi, (grp, ev) in enumerate(zip(self._groups, evs)):
             ev.set_pb(pb_final)
-            mask = np.repeat(active, grp.nr)
+            mask = ev.mask
             m = int(mask.sum())
             x0 = x_all[grp.var_idx].copy()
             r0, J0 = ev.residuals_jacobian(x0)
@@ -601,15 +601,23 @@ class CalibrationProblem:
             self._fk_cache[key] = _nominal_positions(model, q)
         return self._fk_cache[key]
 
-    @staticmethod
-    def _data_key(data: _Data) -> str:
-        """Hash of a data set (actuator values, positions, orientations, weights)."""
+    def _data_key(self, data: _Data) -> str:
+        """Hash of a data set (actuator values, positions, orientations, weights).
+
+        The last data set and its key are kept: the same data again (a repeated solve)
+        is recognised by comparing the arrays, without hashing them."""
+        arrays = (data.q, data.T, data.quat, data.weights)
+        last = self._last_data
+        if last is not None and all(a.shape == b.shape and np.array_equal(a, b) for a, b in zip(arrays, last[0])):
+            return last[1]
         h = hashlib.sha1()
-        for a in (data.q, data.T, data.quat, data.weights):
+        for a in arrays:
             a = np.ascontiguousarray(a, dtype=float)
             h.update(str(a.shape).encode())
             h.update(a.tobytes())
-        return h.hexdigest()
+        key = h.hexdigest()
+        self._last_data = (arrays, key)  # the checked copies made by _check_data, not the caller's
+        return key
 
     def _evaluators(self, key: str, data: _Data) -> list[_Evaluator]:
         """Evaluators of all groups bound to the data set ``key`` (built once per data set).
