@@ -88,8 +88,8 @@ MAX_REANCHOR = 5
 #: on the same poses (simulated calibrations, benchmarks).
 FK_CACHE_SIZE = 8
 #: Messages of MINPACK's ``lmder`` return codes, as :func:`scipy.optimize.least_squares`
-#: words them (codes 6-8: a tolerance below what rounding allows, the point is as good
-#: as the arithmetic can make it).
+#: words them (codes 6-8, a tolerance below what rounding allows -- no better point
+#: exists -- keep leastsq's words and give status "acceptable").
 _MINPACK_MESSAGES = {
     0: "Improper input parameters status returned from `leastsq`",
     1: "`ftol` termination condition is satisfied.",
@@ -775,14 +775,17 @@ class CalibrationProblem:
             return x0, "error", f"least_squares failed: {e}", 0, 0.0
         x, info, code = out[0], out[2], int(out[-1])
         iters = int(info.get("njev", info["nfev"]))
-        if code in (1, 2, 3, 4, 6, 7, 8) and np.all(np.isfinite(x)):
+        finite = bool(np.all(np.isfinite(x)))
+        if code in (1, 2, 3, 4) and finite:
             status = "optimal"
+        elif code in (6, 7, 8) and finite:  # a tolerance below the rounding: no better point exists
+            status = "acceptable"
         elif code == 5:
             status = "max_iterations"
         else:
             status = "error"
-        message = _MINPACK_MESSAGES.get(code, str(out[-2]))
-        if status == "optimal":
+        message = _MINPACK_MESSAGES.get(code, str(out[-2]).replace("\n ", ""))
+        if status in ("optimal", "acceptable"):
             x, n_polish = self._polish(ev, x)
             iters += n_polish
         return x, status, message, iters, 0.0
