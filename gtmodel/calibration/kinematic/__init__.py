@@ -4,7 +4,8 @@ The package, one module per job: :mod:`~gtmodel.calibration.kinematic.selection`
 fixed and tied parameters), :mod:`~gtmodel.calibration.kinematic.alignment` (Kabsch frame
 alignment), :mod:`~gtmodel.calibration.kinematic.data` (measurement checks),
 :mod:`~gtmodel.calibration.kinematic.residuals` (CasADi residual/Jacobian graphs and
-IPOPT NLPs of a group of arms), :mod:`~gtmodel.calibration.kinematic.problem`
+IPOPT NLPs of a group of arms), :mod:`~gtmodel.calibration.kinematic.lsq` (MINPACK
+solve and Gauss-Newton polishing of a group), :mod:`~gtmodel.calibration.kinematic.problem`
 (:class:`CalibrationProblem`), :mod:`~gtmodel.calibration.kinematic.result` (results) and
 :mod:`~gtmodel.calibration.kinematic.shortcuts` (:func:`calibrate`,
 :func:`analyze_identifiability` with a cache of problems).
