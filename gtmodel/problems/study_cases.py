@@ -250,7 +250,7 @@ def _run_one(task: CaseTask, previous: Any, warm_start: bool, keep_solution: boo
                           previous=previous, warm_start=warm_start, heartbeat=task.heartbeat)
     wall = time.perf_counter() - start
     summary = outcome.summary
-    if outcome.written and outcome.status is not Status.INTERRUPTED:
+    if task.key and outcome.written and outcome.status is not Status.INTERRUPTED:
         summary = _stamp(task.folder, task, wall) or summary
     record = CaseRecord(task.label, task.key, task.folder, outcome.status, wall, summary, outcome.written,
                         outcome.solution if keep_solution else None)
