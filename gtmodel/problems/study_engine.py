@@ -196,12 +196,13 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
         else:
             cluster = LocalCluster(n_workers=min(workers, max(1, len(units))), threads_per_worker=1, processes=True,
                                    dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},  # no port 8787 clash
-                                   silence_logs=logging.ERROR)
+                                   silence_logs=logging.ERROR, preload=["gtmodel.problems.study_cases"])
             client = Client(cluster)
     futures: dict[Any, Sequence[CaseTask]] = {}
     try:
         client.wait_for_workers(1, timeout=120)
-        client.run(importlib.import_module, "gtmodel.problems.study_cases")  # import on every worker: part of the startup
+        if scheduler is not None:  # a local cluster's workers preload it (study_cases.dask_setup)
+            client.run(importlib.import_module, "gtmodel.problems.study_cases")  # import on every worker: part of the startup
         info.update(workers=len(client.scheduler_info().get("workers", {})), scheduler=scheduler,
                     startup_s=time.perf_counter() - start)
         for unit in units:
