@@ -18,7 +18,9 @@ import pytest
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_NOT_OPTIMAL, main
 from gtmodel.errors import InputError
 from gtmodel.problems.study_cases import case_key
+from gtmodel.problems import get_kind
 from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study_progress import StudyProgress
 
 from .study_fixtures import SMALL_DESIGN, write_study
 
@@ -132,3 +134,42 @@ def test_command_writes_the_table_and_exits_with_the_worst_status(small, tmp_pat
     assert code == EXIT_NOT_OPTIMAL
     assert "6/6 case(s) finished (4 optimal, 2 infeasible)" in capsys.readouterr().out
     assert json.loads((tmp_path / "o" / "summary.json").read_text())["finished"] == 6
+
+
+def test_warm_started_chains_solve_each_row_in_order_and_resume_per_case(tmp_path, monkeypatch):
+    """warm_start = true: one chain per force limit along the grid axis; each case after the
+    first of its chain gets the previous solution; a deleted case reruns alone."""
+    kind = type(get_kind("path_constrained"))
+    calls = []
+    original = kind.solve
+
+    def solve(self, declaration, **kw):
+        calls.append((kw.get("previous") is not None, kw.get("warm_start")))
+        return original(self, declaration, **kw)
+
+    monkeypatch.setattr(kind, "solve", solve)
+    design = SMALL_DESIGN.replace("values = [40, 60]", "values = [40, 60, 80]").replace("[60.0, 60.0, 60.0], ", "")
+    study = write_study(tmp_path, design, header="warm_start = true")
+    outcome = run_study(study, tmp_path / "out", workers=1)
+    assert calls == [(False, True), (True, True), (True, True)] * 2
+    assert (outcome.table["status"] == "optimal").all()
+    shutil.rmtree(tmp_path / "out" / outcome.table["folder"][1])
+    calls.clear()
+    again = run_study(study, tmp_path / "out", workers=1)
+    assert calls == [(False, True)] and again.table["key"].tolist() == outcome.table["key"].tolist()
+
+
+def test_progress_lines_when_piped(caplog):
+    caplog.set_level("INFO", logger="gtmodel")
+    with StudyProgress("s", 4, mode="log", every=2, interval=1e9) as bar:
+        for status in ("optimal", "infeasible", "optimal", "optimal"):
+            bar.update(status)
+    lines = [r.getMessage() for r in caplog.records]
+    assert [line.split(",")[0:2] for line in lines] == [["s: 2/4 cases done", " 1 failed"], ["s: 4/4 cases done", " 1 failed"]]
+
+
+def test_progress_is_silent_when_off(caplog, capsys):
+    caplog.set_level("INFO", logger="gtmodel")
+    with StudyProgress("s", 2, mode="off") as bar:
+        bar.update("optimal")
+    assert not caplog.records and capsys.readouterr() == ("", "")

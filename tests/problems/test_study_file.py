@@ -12,8 +12,10 @@ import pytest
 from gtmodel.cli import EXIT_BAD_INPUT, main
 from gtmodel.errors import ProblemError
 from gtmodel.problems.study_engine import plan_cases, run_study
-from gtmodel.problems.study_file import MAX_CASES, load_study, value_text
+from gtmodel.problems.study_file import (MAX_CASES, AxisSchema, CaseSchema, DesignSchema, RangeSpec, StudySchema, load_study,
+                                         value_text)
 
+from ..conftest import REPO
 from .study_fixtures import write_base
 
 AXIS = '[design]\n[[design.axes]]\nfield = "w"\n'
@@ -139,3 +141,11 @@ def test_two_cases_of_the_same_problem_are_refused(tmp_path):
                  '[[design.cases]]\nlabel = "b"\noverrides = { "method.grid" = 40 }\n')
     with pytest.raises(ProblemError, match=r"the cases 'a' and 'b' are the same problem"):
         plan_cases(load_study(f), tmp_path / "out")
+
+
+@pytest.mark.parametrize("schema", [StudySchema, DesignSchema, AxisSchema, RangeSpec, CaseSchema], ids=lambda s: s.__name__)
+def test_every_field_is_documented(schema):
+    page = (REPO / "docs" / "study_files.md").read_text()
+    missing = [name for name in schema.model_fields if f"`{name}`" not in page and f"`design.{name}`" not in page
+               and f"{name} =" not in page and f"{name}," not in page]
+    assert not missing, f"docs/study_files.md does not name {missing}"
