@@ -173,3 +173,12 @@ def test_progress_is_silent_when_off(caplog, capsys):
     with StudyProgress("s", 2, mode="off") as bar:
         bar.update("optimal")
     assert not caplog.records and capsys.readouterr() == ("", "")
+
+
+def test_an_unreachable_scheduler_is_bad_input(small, tmp_path, capsys):
+    dask = pytest.importorskip("dask")
+    study, _ = small
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        code = main(["study", str(study), "--out", str(tmp_path / "o"), "--scheduler", "tcp://127.0.0.1:9", "-q"])
+    assert code == EXIT_BAD_INPUT
+    assert "scheduler 'tcp://127.0.0.1:9': cannot connect" in capsys.readouterr().err

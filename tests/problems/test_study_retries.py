@@ -7,8 +7,6 @@ so every worker that runs the case dies; the local cluster's nanny replaces it.
 
 from __future__ import annotations
 
-import pytest
-
 from gtmodel.problems import study_engine
 from gtmodel.problems.study_engine import run_study
 
@@ -16,7 +14,6 @@ from ..conftest import PROBLEMS_DIR
 from .study_fixtures import write_study
 
 
-@pytest.mark.slow  # about 30 s: a local cluster and worker restarts
 def test_a_case_that_kills_every_worker_is_a_row_after_bounded_retries(tmp_path, monkeypatch):
     """Dask reschedules it after its worker died, at most ALLOWED_FAILURES times (here 1);
     then the case is an internal_error row and the study ends (exit 3), nothing hangs."""
