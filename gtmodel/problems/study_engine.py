@@ -210,7 +210,7 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
             client = Client(cluster)
     futures: dict[Any, Sequence[CaseTask]] = {}
     try:
-        client.wait_for_workers(1, timeout=120)
+        client.wait_for_workers(1 if cluster is None else len(cluster.workers), timeout=120)
         if scheduler is not None:  # a local cluster's workers preload it (study_cases.dask_setup)
             client.run(importlib.import_module, "gtmodel.problems.study_cases")  # import on every worker: part of the startup
         info.update(workers=len(client.scheduler_info().get("workers", {})), scheduler=scheduler,
@@ -221,8 +221,8 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
             unit = futures.pop(fut)
             try:
                 records = fut.result()
-            except KilledWorker:
-                records = _unfinished(unit, f"its worker died {ALLOWED_FAILURES} times (dask KilledWorker)")
+            except KilledWorker as exc:  # Dask gave up after allowed-failures worker deaths
+                records = _unfinished(unit, f"every worker that ran it died (dask KilledWorker: {exc})")
             except Exception as exc:  # noqa: BLE001 - a failing task is that case's row, never fatal
                 records = _unfinished(unit, f"{type(exc).__name__}: {exc}")
             fut.release()
@@ -312,7 +312,7 @@ def run_study(study: Study | str | Path, out: str | Path | None = None, *, worke
     on_case : callable, optional
         Called with each :class:`CaseRecord` as it finishes.
     verbose : bool, optional
-        Solver progress (in-process only).
+        Solver progress (in this process only; ignored on workers).
 
     Returns
     -------
@@ -340,7 +340,8 @@ def run_study(study: Study | str | Path, out: str | Path | None = None, *, worke
     out = Path(out) if out is not None else Path("results") / study.name
     plots = study.plots if plots is None else plots
     analysis = ANALYSES[study.analysis]
-    tasks = plan_cases(study, out, plots=plots, verbose=verbose)
+    in_process = scheduler is None and workers == 1
+    tasks = plan_cases(study, out, plots=plots, verbose=verbose and in_process)  # no solver logs from workers
     root = Path(out).resolve()
 
     def pending(task: CaseTask) -> bool:
@@ -353,7 +354,7 @@ def run_study(study: Study | str | Path, out: str | Path | None = None, *, worke
     units = [[t for t in u if t.key in todo_keys] for u in _units(study, tasks)]
     units = [u for u in units if u]
     records: dict[str, CaseRecord] = {}
-    info: dict[str, Any] = {"workers": 0 if not units else (1 if scheduler is None and workers == 1 else workers),
+    info: dict[str, Any] = {"workers": 0 if not units else (1 if in_process else workers),
                             "scheduler": scheduler, "startup_s": 0.0}
     interrupted = False
     exec_start = time.perf_counter()

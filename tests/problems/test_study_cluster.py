@@ -118,5 +118,5 @@ def test_a_case_that_kills_every_worker_is_a_row_after_bounded_retries(tmp_path,
     study.write_text('base = "pendulum.toml"\nplots = false\n[design]\n[[design.axes]]\nfield = "model.file"\nvalues = ["crash.py"]\n')
     outcome = run_study(study, tmp_path / "out", workers=2)
     assert outcome.table["status"].tolist() == ["internal_error"]
-    assert "worker died 1 times" in outcome.table["message"][0]
+    assert "every worker that ran it died (dask KilledWorker" in outcome.table["message"][0]
     assert outcome.exit_code == 3
