@@ -231,6 +231,7 @@ def _study(args: argparse.Namespace) -> int:
     if outcome.status is Status.INTERRUPTED:
         print("gtmodel: interrupted (rerun the same command to solve the missing cases)", file=sys.stderr)
     print(f"study        {outcome.summary['name']}: {outcome.status} ({outcome.message})")
+    print(f"cases        {outcome.summary['run_now']} solved now, {outcome.summary['skipped']} finished before, {outcome.summary['missing']} missing")
     print(f"results in   {outcome.out}/ (table.parquet, table.csv, summary.json, cases/)")
     return outcome.exit_code
 

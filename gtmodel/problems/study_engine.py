@@ -167,7 +167,8 @@ def execute(units: Sequence[Sequence[CaseTask]], on_record: Callable[[CaseRecord
     KeyboardInterrupt
         Ctrl-C / SIGTERM (the remaining cases are cancelled, the cluster closed first).
     InputError
-        ``workers`` is not a positive integer, or the scheduler cannot be reached.
+        ``workers`` is not a positive integer; the scheduler cannot be reached, has no
+        worker within 120 s, or its workers cannot import gtmodel.
     """
     info = {} if info is None else info
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -210,9 +211,15 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
             client = Client(cluster)
     futures: dict[Any, Sequence[CaseTask]] = {}
     try:
-        client.wait_for_workers(1 if cluster is None else len(cluster.workers), timeout=120)
+        try:
+            client.wait_for_workers(1 if cluster is None else len(cluster.workers), timeout=120)
+        except TimeoutError:
+            raise InputError(f"scheduler {scheduler!r}: no worker joined within 120 s") from None
         if scheduler is not None:  # a local cluster's workers preload it (study_cases.dask_setup)
-            client.run(importlib.import_module, "gtmodel.problems.study_cases")  # import on every worker: part of the startup
+            try:  # import on every worker: part of the startup
+                client.run(importlib.import_module, "gtmodel.problems.study_cases")
+            except ImportError as exc:
+                raise InputError(f"scheduler {scheduler!r}: its workers cannot import gtmodel ({exc})") from None
         info.update(workers=len(client.scheduler_info().get("workers", {})), scheduler=scheduler,
                     startup_s=time.perf_counter() - start)
         for unit in units:
