@@ -10,7 +10,9 @@ Measured side by side in one run, because these machines are noisy:
 - ``final_time_s`` and ``peer_final_time_s``: the two optima;
 - ``ms_per_iteration``: gtmodel's solve time per IPOPT iteration at 50, 100, 200 and 400
   elements (the cost of one iteration should grow linearly with the mesh).
-Medians of ``--repeat`` solves. With ``--json`` the last line of stdout is one JSON object.
+Medians of ``--repeat`` solves; the ``*_cpu*`` keys are the same figures in process CPU time
+(both solvers are single-threaded), steadier than wall time on a shared machine. With
+``--json`` the last line of stdout is one JSON object.
 """
 
 from __future__ import annotations
@@ -28,13 +30,14 @@ import numpy as np
 
 from gtmodel.modeling.collocation_nlp import collocation_coefficients
 from gtmodel.problems import load_problem
+from gtmodel.trajectory import point_to_point as ptp
 from gtmodel.trajectory.point_to_point import SOLVER_OPTIONS, build_optimization, solve_point_to_point
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def peer_opti(decl) -> tuple[float, float, int, str]:
-    """The NLP of ``decl`` written directly in casadi.Opti; returns (solve s, final time, iterations, status)."""
+def peer_opti(decl) -> tuple[float, float, int, str, float]:
+    """The NLP of ``decl`` written directly in casadi.Opti; returns (solve s, final time, iterations, status, CPU s)."""
     opt, _ = build_optimization(decl)
     dae = opt.flat()
     N, d = decl.elements, decl.points
@@ -93,14 +96,14 @@ def peer_opti(decl) -> tuple[float, float, int, str]:
     opti.solver("ipopt", {"print_time": False, "record_time": True, "error_on_fail": False}, ipopt)
     sol = opti.solve()
     st = sol.stats()
-    return float(st["t_wall_total"]), float(sol.value(tf)), int(st["iter_count"]), str(st["return_status"])
+    return float(st["t_wall_total"]), float(sol.value(tf)), int(st["iter_count"]), str(st["return_status"]), float(st["t_proc_total"])
 
 
-def ours(decl) -> tuple[float, float, int, str]:
-    """gtmodel's solve (the IPOPT call); returns (solve s, final time, iterations, status)."""
+def ours(decl) -> tuple[float, float, int, str, float]:
+    """gtmodel's solve (the IPOPT call); returns (solve s, final time, iterations, status, CPU s)."""
     s = solve_point_to_point(decl)
     r = s.result
-    return r.solve_time, r.final_time, r.iterations, str(r.status)
+    return r.solve_time, r.final_time, r.iterations, str(r.status), float(r.stats["t_proc_total"])
 
 
 def main() -> None:
@@ -111,6 +114,7 @@ def main() -> None:
     ap.add_argument("--grid", default="50,100,200,400", help="elements of the per-iteration grid")
     a = ap.parse_args()
     decl = load_problem(a.problem).declaration
+    ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}  # CPU time in the stats, as the peer's
     print(f"casadi {ca.__version__}; load average {os.getloadavg()[0]:.2f} (2 cores shared)")
     ours(decl)  # compile (or load the cached) derivatives once
     mine = [ours(decl) for _ in range(a.repeat)]
@@ -128,22 +132,28 @@ def main() -> None:
         "final_time_s": mine[0][1],
         "peer_final_time_s": peer[0][1],
         "speedup": peer_s / solve_s,
+        "solve_cpu_s": statistics.median(m[4] for m in mine),
+        "peer_solve_cpu_s": statistics.median(p[4] for p in peer),
         "final_time_rel_diff": abs(mine[0][1] - peer[0][1]) / abs(peer[0][1]),
     }
     print(f"{'':10s} {'solve [s]':>10s} {'iter':>5s} {'T_f [s]':>14s}  status")
     print(f"{'gtmodel':10s} {solve_s:10.3f} {mine[0][2]:5d} {mine[0][1]:14.10f}  {mine[0][3]}")
     print(f"{'Opti':10s} {peer_s:10.3f} {peer[0][2]:5d} {peer[0][1]:14.10f}  {peer[0][3]}")
-    print(f"speedup {out['speedup']:.1f}x, final times differ by {out['final_time_rel_diff']:.2e} (relative)")
-    ms = {}
+    out["speedup_cpu"] = out["peer_solve_cpu_s"] / out["solve_cpu_s"]
+    print(f"speedup {out['speedup']:.1f}x (CPU time {out['speedup_cpu']:.1f}x), final times differ by {out['final_time_rel_diff']:.2e} (relative)")
+    ms, ms_cpu = {}, {}
     for n in (int(x) for x in a.grid.split(",")):
         dn = dataclasses.replace(decl, elements=n)
         ours(dn)
         runs = [ours(dn) for _ in range(max(1, a.repeat - 1))]
         ms[str(n)] = statistics.median(1e3 * r[0] / max(r[2], 1) for r in runs)
-        print(f"{n:5d} elements: {ms[str(n)]:8.2f} ms/iteration ({runs[0][2]} iterations, T_f {runs[0][1]:.10f} s)")
+        ms_cpu[str(n)] = statistics.median(1e3 * r[4] / max(r[2], 1) for r in runs)
+        print(f"{n:5d} elements: {ms[str(n)]:8.2f} ms/iteration, CPU {ms_cpu[str(n)]:8.2f} ({runs[0][2]} iterations, T_f {runs[0][1]:.10f} s)")
     out["ms_per_iteration"] = ms
+    out["ms_per_iteration_cpu"] = ms_cpu
     keys = sorted(ms, key=int)
     out["ms_per_iteration_ratio"] = ms[keys[-1]] / ms[keys[0]]
+    out["ms_per_iteration_cpu_ratio"] = ms_cpu[keys[-1]] / ms_cpu[keys[0]]
     out["load_average"] = os.getloadavg()[0]
     if a.json:
         print(json.dumps(out))
