@@ -183,6 +183,8 @@ class CollocationNLP:
         ``(t, x, z, u, p, tf) -> (ode, alg, path)`` and the Lagrange integrand.
     npath : int
         Path constraints per point.
+    block_sizes : list of int
+        Size of each block of :attr:`blocks`.
     """
 
     w: ca.SX

@@ -132,11 +132,8 @@ class PointToPoint:
         Where the declaration comes from (file name), used in error messages.
     start_time : float
         Start time ``t0`` [s]; the final time and its bounds are absolute times.
-    solver : {"ipopt"}
-        The NLP solver (``casadi.nlpsol`` plugin).
-    jit : bool
-        Evaluate the NLP derivatives through compiled C (cached; see
-        :class:`~gtmodel.modeling.CollocationTranscription`'s ``compile``).
+    solver, jit : str, bool
+        NLP solver (``"ipopt"``) and compiled C derivatives (``CollocationTranscription``'s ``compile``).
 
     Raises
     ------
@@ -422,8 +419,7 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     # bound it too, so that the sampled forces stay within the limits everywhere
     opt.add_point_constraint(tau, at="start", lb=-problem.force_limit, ub=problem.force_limit, name="tau(start)")
     T_ddot = model.der(T_dot)
-    # the boundary poses are model parameters (NLP parameters): re-solves for new poses
-    # reuse the NLP (:func:`gtmodel.trajectory.resolve_point_to_point`)
+    # poses as NLP parameters: re-solves for new poses reuse the NLP (resolve_point_to_point)
     poses = (("start", model.parameter(START_POSE, problem.start)), ("final", model.parameter(END_POSE, problem.end)))
     for at, pose in poses:
         opt.add_point_constraint(T - pose, at=at, lb=0.0, ub=0.0, name=f"T({at})")
