@@ -33,7 +33,7 @@ _log = logging.getLogger("gtmodel")
 
 #: Flags of the compiled point derivatives. The L1 robot's point Hessian (issue 17, one
 #: loaded run): -O0 compiles in 1.0 s and evaluates in 18 us per point, -O1 in 2.7 s and
-#: 12 us, -O2 in 3.6 s and 17 us (the interpreter: about 100 us).
+#: 12 us, -O2 in 3.6 s and 17 us (the CasADi interpreter: 90 us).
 COMPILE_FLAGS = ("-O1", "-fPIC", "-shared")
 
 
