@@ -71,3 +71,17 @@ def test_banded_layout_copies_the_final_time_per_element():
     copies = [i for i, (kind, _, _) in enumerate(tr._blocks) if kind == "tf"]
     assert len(copies) == 4 and len(tr.nlp.rows_tf) == 3
     assert np.isfinite(tr._lbw[tr.nlp.offsets[("tf", 3, 0)]]) and np.isinf(tr._lbw[tr.nlp.offsets[("tf", 0, 0)]])
+
+
+@pytest.mark.parametrize("env, value", [("GTMODEL_COMPILE", "0"), ("CC", "/no/such/compiler")])
+def test_without_a_compiler_the_interpreter_gives_the_same_values(monkeypatch, tmp_path, env, value):
+    # second method: the interpreted transcription (compile=False) at a random point
+    monkeypatch.setenv("GTMODEL_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("GTMODEL_COMPILE", raising=False)
+    monkeypatch.setenv(env, value)
+    kw = dict(elements=3, points=2, nominal={"c": 0.5})
+    a = CollocationTranscription(_free_parameter_problem(), compile=True, **kw)
+    b = CollocationTranscription(_free_parameter_problem(), compile=False, **kw)
+    assert a.evaluation.startswith("CasADi interpreter")
+    va, vb = _values(a, "nlp_hess_l", np.random.default_rng(1)), _values(b, "nlp_hess_l", np.random.default_rng(1))
+    np.testing.assert_array_equal(va, vb)
