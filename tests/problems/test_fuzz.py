@@ -31,7 +31,7 @@ from ..conftest import PROBLEMS_DIR  # noqa: E402
 
 SHIPPED = sorted(PROBLEMS_DIR.glob("*.toml"))
 CASES_PER_FILE = 100
-MAX_SECONDS = 10.0  # per case, or 3x the shipped file's own load time if that is longer (the defects it guards against took 28 s and more)
+MAX_SECONDS = 10.0  # CPU seconds per case, or 3x the shipped file's own load time if that is longer (the defects it guards against took 28 s and more)
 MAX_MB = 400
 
 BAD_VALUES = [
@@ -111,13 +111,15 @@ def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, 
             (folder / extra.name).symlink_to(extra)
     target = folder / shipped.name
     target.write_text(text, encoding="utf-8")
-    t0 = time.monotonic()
+    # CPU time of this process, not wall time: the defects guarded against (28 s and more)
+    # are computation, and other processes on a shared machine do not count against it
+    t0 = time.process_time()
     load_problem(target)  # the shipped file itself (F1: ~6 s to build its synthetic data)
-    limit = max(MAX_SECONDS, 3.0 * (time.monotonic() - t0))
+    limit = max(MAX_SECONDS, 3.0 * (time.process_time() - t0))
     start_mb = _peak_mb()
 
     def load_timed() -> float:
-        t0 = time.monotonic()
+        t0 = time.process_time()
         try:
             load_problem(target)
         except GtModelError as exc:
@@ -125,7 +127,7 @@ def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, 
             assert str(target) in message
             # a field, a table ('[data]'), the TOML syntax or the encoding is named
             assert any(w in message for w in ("field '", "'[", "[truth]", "invalid TOML", "not UTF-8")), message
-        return time.monotonic() - t0
+        return time.process_time() - t0
 
     @settings(max_examples=CASES_PER_FILE, deadline=None, derandomize=True, database=None,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large])
