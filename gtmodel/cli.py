@@ -7,6 +7,10 @@
 ``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
     A study: every case in ``DIR/<case>/`` and a comparison table (``comparison.md``,
     ``comparison.csv``, columns from each kind) with overlay plots in ``DIR``.
+``gtmodel study STUDY.toml [--workers N | --scheduler ADDRESS] [--out DIR] [--retry-failed]``
+    A study file (:mod:`gtmodel.problems.study_file`): many cases of one problem file on a
+    local Dask cluster, in this process (``--workers 1``) or on a cluster; resumable
+    (finished cases are not rerun); ``DIR/table.parquet``, ``table.csv``, ``summary.json``.
 ``gtmodel schema KIND [--out FILE]`` / ``gtmodel schema --list`` / ``gtmodel schema --docs DIR``
     The JSON Schema of a kind's problem files; the kinds; the reference page and schemas.
 ``gtmodel codegen --robot L1 --out DIR [--check]``
@@ -50,6 +54,8 @@ from gtmodel.errors import GtModelError
 from gtmodel.problems import KINDS, run_problem
 from gtmodel.problems.docs import json_schema, write_docs
 from gtmodel.problems.study import solve_study
+from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study_progress import progress_mode
 from gtmodel.status import Status, exit_code_table
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_OPTIMAL", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED"]
@@ -69,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Parser with the sub-commands ``solve``, ``schema`` and ``codegen``.
+        Parser with the sub-commands ``solve``, ``study``, ``schema`` and ``codegen``.
     """
     parser = argparse.ArgumentParser(
         prog="gtmodel",
@@ -92,6 +98,18 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
     solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+
+    study = sub.add_parser("study", help="run a study file (many cases of one problem file), locally or on a Dask cluster")
+    study.add_argument("study", type=Path, help="study file (TOML), e.g. studies/l1_table_3_1.toml")
+    where = study.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core; 1 = in this process, no Dask)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="an existing Dask scheduler, e.g. tcp://10.0.0.5:8786")
+    study.add_argument("--out", type=Path, default=None, help="study folder (default: results/<study name>); finished cases in it are not rerun")
+    study.add_argument("--retry-failed", action="store_true", help="also rerun finished cases that did not succeed")
+    study.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
+    study.add_argument("-q", "--quiet", action="store_true", help="no progress")
+    study.add_argument("-v", "--verbose", action="store_true", help="solver progress (with --workers 1)")
+    study.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     schema = sub.add_parser("schema", help="JSON Schema of a problem kind, the list of kinds, or the reference docs")
     schema.add_argument("kind", nargs="?", default=None, help=f"one of {', '.join(KINDS)}")
@@ -206,6 +224,16 @@ def _solve(args: argparse.Namespace) -> int:
     return _solve_study(args)
 
 
+def _study(args: argparse.Namespace) -> int:
+    outcome = run_study(args.study, args.out, workers=args.workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
+                        plots=False if args.no_plots else None, progress=progress_mode(not args.quiet), verbose=args.verbose)
+    if outcome.status is Status.INTERRUPTED:
+        print("gtmodel: interrupted (rerun the same command to solve the missing cases)", file=sys.stderr)
+    print(f"study        {outcome.summary['name']}: {outcome.status} ({outcome.message})")
+    print(f"results in   {outcome.out}/ (table.parquet, table.csv, summary.json, cases/)")
+    return outcome.exit_code
+
+
 def _schema(args: argparse.Namespace) -> int:
     if args.list:
         print("\n".join(f"{name:<30} {kind.title}" for name, kind in KINDS.items()))
@@ -293,6 +321,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "solve":
             return _solve(args)
+        if args.command == "study":
+            return _study(args)
         if args.command == "schema":
             return _schema(args)
         return _codegen(args)
