@@ -151,8 +151,13 @@ def plot_accuracy_vs_poses(groups: pd.DataFrame, path: str | Path, title: str = 
         if "truth_mean_error_m_q10" in g:
             ax.fill_between(n, 1e6 * g["truth_mean_error_m_q10"].to_numpy(dtype=float), 1e6 * g["truth_mean_error_m_q90"].to_numpy(dtype=float),
                             color=line.get_color(), alpha=0.2)
+    from matplotlib.ticker import ScalarFormatter  # heavy optional dependency
+
     ax.set_xscale("log")
     ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(ScalarFormatter())
+        axis.set_minor_formatter(ScalarFormatter())
     ax.set_xlabel("calibration poses")
     ax.set_ylabel("mean TCP error vs the truth [um]")
     ax.grid(True, which="both")
@@ -172,6 +177,7 @@ def plot_time_map(
     labels: tuple[str, str] = ("x [m]", "y [m]"),
     start: tuple[float, float] | None = None,
     title: str = "",
+    start_label: str = "start",
 ) -> Path:
     """Map of minimum motion times over a grid of end positions; cells without a time marked.
 
@@ -189,9 +195,11 @@ def plot_time_map(
     labels : tuple of str, optional
         Axis labels (with units).
     start : tuple of float, optional
-        The start position in the map plane [m], marked with a star.
+        The start position in the map plane [m] (or its projection), marked with a star.
     title : str, optional
         Figure title.
+    start_label : str, optional
+        Legend text of the start.
 
     Returns
     -------
@@ -218,7 +226,7 @@ def plot_time_map(
         if sel.any():
             ax.plot(xa[sel], ya[sel], marker, color="tab:red", ls="none", ms=8, mew=2, label=f"{text} ({int(sel.sum())})")
     if start is not None:
-        ax.plot([start[0]], [start[1]], "*", color="white", mec="k", ms=16, ls="none", label="start")
+        ax.plot([start[0]], [start[1]], "*", color="white", mec="k", ms=16, ls="none", label=start_label)
     ax.set_xlabel(labels[0])
     ax.set_ylabel(labels[1])
     ax.set_aspect("equal")

@@ -173,7 +173,9 @@ class TimeOptimalMap(StudyAnalysis):
             in_plane = start is not None and all(abs(start["xyz".index(c[-1])] - cells[c].iloc[0]) < 1e-9 for c in fixed)
             plot_time_map(cells[varying[0]], cells[varying[1]], t.to_numpy(dtype=float), list(cls), folder / "time_map.png",
                           labels=(f"{axes[0]} [m]", f"{axes[1]} [m]"),
-                          start=(start["xyz".index(axes[0])], start["xyz".index(axes[1])]) if in_plane else None,
+                          start=None if start is None else (start["xyz".index(axes[0])], start["xyz".index(axes[1])]),
+                          start_label="start" if in_plane else "start (projected: " + ", ".join(
+                              f"{c[-1]} = {start['xyz'.index(c[-1])]:g} m" for c in fixed) + ")",
                           title=f"minimum time to {field} ({', '.join(f'{c[-1]} = {cells[c].iloc[0]:g} m' for c in fixed)})"
                           + ("" if start is None else f", start {tuple(round(v, 3) for v in start)} m"))
             files.append("time_map.png")
