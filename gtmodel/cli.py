@@ -93,6 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--sweep", default=None, metavar="FIELD=V1,V2,...", help="solve one file for several values of a field, e.g. w=0,0.001,0.01"
     )
     solve.add_argument("--warm-start", action="store_true", help="in a sweep, start each case from the previous solution")
+    solve.add_argument("--workers", type=int, default=1, help="several files or a sweep: cases in parallel on a local Dask cluster (default 1)")
     group = solve.add_mutually_exclusive_group()
     group.add_argument("-q", "--quiet", action="store_true", help="no solver progress")
     group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
@@ -209,7 +210,7 @@ def _solve_study(args: argparse.Namespace) -> int:
 
     result = solve_study(
         args.problem, out, sweep=sweep, verbose=show, plots=not args.no_plots, warm_start=args.warm_start,
-        on_case=report, heartbeat=heartbeat,
+        on_case=report, heartbeat=heartbeat, workers=args.workers,
     )
     if result.status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)

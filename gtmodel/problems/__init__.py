@@ -11,6 +11,7 @@ Modules: :mod:`~gtmodel.problems.base` (the protocol), :mod:`~gtmodel.problems.s
 :mod:`~gtmodel.problems.kinds` (one module per kind), :mod:`~gtmodel.problems.run`
 (load/solve/write one file), :mod:`~gtmodel.problems.results` (result folders),
 :mod:`~gtmodel.problems.study` (several files or a sweep, comparison table),
+:mod:`~gtmodel.problems.study_file` / :mod:`~gtmodel.problems.study_engine` (study files on Dask),
 :mod:`~gtmodel.problems.docs` (reference page and JSON Schemas).
 """
 

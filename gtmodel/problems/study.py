@@ -19,7 +19,8 @@ from gtmodel.errors import ProblemError
 from gtmodel.problems.base import Column
 from gtmodel.problems.registry import KINDS
 from gtmodel.problems.results import ResultFolder
-from gtmodel.problems.run import RunOutcome, run_problem
+from gtmodel.problems.study_cases import CaseRecord, CaseTask
+from gtmodel.problems.study_engine import execute
 from gtmodel.status import Status
 
 __all__ = ["StudyCase", "StudyResult", "solve_study", "comparison_columns", "write_comparison"]
@@ -95,11 +96,14 @@ def solve_study(
     warm_start: bool = False,
     on_case: Callable[[StudyCase], None] | None = None,
     heartbeat: bool = False,
+    workers: int = 1,
 ) -> StudyResult:
     """Solve several problem files, or one file over a sweep of one field, and compare.
 
-    A sweep over a named parameter reuses the NLP built for the first case (and, with
-    ``warm_start``, starts from the previous solution). Bad input in one case is that
+    The cases run on the study engine's executors
+    (:func:`~gtmodel.problems.study_engine.execute`). In this process, a sweep over a
+    named parameter reuses the NLP built for the first case (and, with ``warm_start``,
+    starts from the previous solution). Bad input in one case is that
     case's status and the study goes on; Ctrl-C stops the study. ``out_dir`` receives one
     folder per case, ``comparison.csv``, ``comparison.md``, overlay plots and
     ``summary.json`` (the study's status and its cases).
@@ -122,6 +126,11 @@ def solve_study(
         Called with each finished :class:`StudyCase` (progress reporting).
     heartbeat : bool, optional
         Log a line every few seconds during long solves.
+    workers : int, optional
+        1 (default): the cases one after another in this process (a sweep is one chain:
+        the NLP is reused, ``warm_start`` applies); more: the cases in parallel on a local
+        Dask cluster (:func:`~gtmodel.problems.study_engine.execute`; no overlay plots, no
+        warm start).
 
     Returns
     -------
@@ -142,26 +151,30 @@ def solve_study(
     specs = [(Path(paths[0]), {sweep[0]: v}) for v in sweep[1]] if sweep is not None else [(Path(p), {}) for p in paths]
     folder = ResultFolder(out_dir)
     cases: list[StudyCase] = []
-    previous = None
     interrupted = False
+    tasks = []
+    for path, overrides in specs:
+        suffix = "".join(f"[{k}={v}]" for k, v in overrides.items())
+        tasks.append(CaseTask(suffix, "", path, overrides, folder.path / _safe_folder(path.stem + suffix), plots=plots,
+                              verbose=verbose, heartbeat=heartbeat))
+    chain = sweep is not None and workers == 1  # one chain: the NLP of the first case is reused, warm starts
+    units = [tasks] if chain else [[t] for t in tasks]
+
+    def on_record(record: CaseRecord) -> None:
+        task = next(t for t in tasks if t.folder == record.folder)
+        label = (record.summary.get("name") or task.path.stem) + task.label
+        case = StudyCase(label, task.path, task.overrides, out_dir / task.folder.name, record.summary, record.solution, record.status)
+        cases.append(case)
+        if on_case is not None:
+            on_case(case)
+
     try:
-        for path, overrides in specs:
-            suffix = "".join(f"[{k}={v}]" for k, v in overrides.items())
-            tmp_out = folder.path / _safe_folder(path.stem + suffix)
-            outcome: RunOutcome = run_problem(
-                path, tmp_out, overrides, verbose=verbose, plots=plots,
-                previous=previous if sweep else None, warm_start=warm_start, heartbeat=heartbeat,
-            )
-            label = (outcome.problem.name if outcome.problem else path.stem) + suffix
-            case = StudyCase(label, path, overrides, out_dir / tmp_out.name, outcome.summary, outcome.solution, outcome.status)
-            cases.append(case)
-            if outcome.solution is not None:
-                previous = outcome.solution
-            if on_case is not None:
-                on_case(case)
-            if outcome.status is Status.INTERRUPTED:
-                interrupted = True
-                break
+        try:
+            execute(units, on_record, workers=workers, chain=chain, warm_start=warm_start and chain, keep_solutions=True)
+        except KeyboardInterrupt:
+            interrupted = True
+        order = {t.folder.name: i for i, t in enumerate(tasks)}
+        cases.sort(key=lambda c: order[c.out.name])
         status = Status.INTERRUPTED if interrupted else Status.worst(c.status for c in cases)
         files = write_comparison(cases, folder.path, plots=plots)
         folder.commit({

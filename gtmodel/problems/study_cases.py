@@ -19,6 +19,8 @@ import json
 import logging
 import os
 import re
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,7 +34,7 @@ from gtmodel.problems.run import run_problem
 from gtmodel.status import Status
 
 __all__ = ["CaseTask", "CaseRecord", "case_key", "resolve_document", "safe_name", "finished_summary", "run_unit",
-           "record_failure"]
+           "record_failure", "dask_setup"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -250,7 +252,7 @@ def _run_one(task: CaseTask, previous: Any, warm_start: bool, keep_solution: boo
                           previous=previous, warm_start=warm_start, heartbeat=task.heartbeat)
     wall = time.perf_counter() - start
     summary = outcome.summary
-    if outcome.written and outcome.status is not Status.INTERRUPTED:
+    if task.key and outcome.written and outcome.status is not Status.INTERRUPTED:
         summary = _stamp(task.folder, task, wall) or summary
     record = CaseRecord(task.label, task.key, task.folder, outcome.status, wall, summary, outcome.written,
                         outcome.solution if keep_solution else None)
@@ -327,3 +329,20 @@ def record_failure(task: CaseTask, message: str, status: Status = Status.INTERNA
     except Exception as exc:  # noqa: BLE001 - the record keeps the failure
         _log.warning("gtmodel: could not write %s: %s", task.folder, exc)
     return CaseRecord(task.label, task.key, task.folder, Status(status), None, summary, written)
+
+
+def dask_setup(worker: Any = None) -> None:
+    """Dask preload hook of a local cluster's workers (this module is their ``preload``).
+
+    A worker process ignores SIGINT: Ctrl-C on a terminal reaches the whole process group,
+    and the study's own process stops the cases and closes the cluster (no traceback from
+    every worker). Importing this module on start also makes gtmodel's import part of
+    the worker's startup, not of its first case.
+
+    Parameters
+    ----------
+    worker : distributed.Worker, optional
+        The starting worker (unused).
+    """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)

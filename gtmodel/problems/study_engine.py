@@ -195,12 +195,14 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
             client = Client(scheduler, timeout="30s")
         else:
             cluster = LocalCluster(n_workers=min(workers, max(1, len(units))), threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+                                   dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},  # no port 8787 clash
+                                   silence_logs=logging.ERROR, preload=["gtmodel.problems.study_cases"])
             client = Client(cluster)
     futures: dict[Any, Sequence[CaseTask]] = {}
     try:
         client.wait_for_workers(1, timeout=120)
-        client.run(importlib.import_module, "gtmodel.problems.study_cases")  # import on every worker: part of the startup
+        if scheduler is not None:  # a local cluster's workers preload it (study_cases.dask_setup)
+            client.run(importlib.import_module, "gtmodel.problems.study_cases")  # import on every worker: part of the startup
         info.update(workers=len(client.scheduler_info().get("workers", {})), scheduler=scheduler,
                     startup_s=time.perf_counter() - start)
         for unit in units:
@@ -379,7 +381,8 @@ def _finish(study: Study, tasks: Sequence[CaseTask], records: dict[str, CaseReco
         except Exception as exc:  # noqa: BLE001 - the table and the cases stay; the failure is reported
             _log.warning("gtmodel: analysis %r failed: %s: %s", study.analysis, type(exc).__name__, exc)
             figures = {"error": f"{type(exc).__name__}: {exc}"}
-    counts = {str(k): int(v) for k, v in table["status"].value_counts().items()} if len(table) else {}
+    found = table["status"].value_counts() if len(table) else {}
+    counts = {str(s): int(found[s]) for s in Status if s in found}  # best first
     status = Status.INTERRUPTED if interrupted else Status.worst(table["status"]) if len(table) else Status.ERROR
     run = [r for r in records.values() if r.status is not Status.INTERRUPTED and r.wall_s is not None]
     run_s = sum(r.wall_s for r in run)  # type: ignore[misc]

@@ -1,0 +1,104 @@
+"""A study on a real Dask cluster: a ``dask scheduler`` and two ``dask worker`` processes
+on 127.0.0.1 (subprocesses), one worker killed (SIGKILL) while it runs a case.
+
+Independent reference: the scheduler's own record of the tasks the killed worker was
+processing, and the case folders on disk (one per case, no duplicates, no partial ones).
+(The bounded retries of a case that kills every worker: test_study_retries.py.)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from gtmodel.problems.study_engine import run_study
+
+from ..conftest import REPO
+from .study_fixtures import grid_design, write_study
+
+distributed = pytest.importorskip("distributed")
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """End a process started in its own session, with its children (nanny and worker)."""
+    for sig, wait in ((signal.SIGTERM, 10), (signal.SIGKILL, 10)):
+        if proc.poll() is not None:
+            break
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            break
+        try:
+            proc.wait(wait)
+        except subprocess.TimeoutExpired:
+            continue
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)  # leftovers of the group (a worker whose nanny died)
+    except ProcessLookupError:
+        pass
+
+
+@pytest.fixture
+def cluster(tmp_path):
+    """(scheduler address, {worker address: its `dask worker` process}); all stopped at the end."""
+    env = {**os.environ, "PYTHONPATH": str(REPO), "MPLBACKEND": "Agg"}
+    scheduler_file = tmp_path / "scheduler.json"
+    log = open(tmp_path / "cluster.log", "w")
+    dask = [sys.executable, "-m", "dask"]
+    procs = []
+    try:
+        procs.append(subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                       "--scheduler-file", str(scheduler_file)], env=env, stdout=log, stderr=log, start_new_session=True))
+        deadline = time.monotonic() + 60
+        while not scheduler_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(scheduler_file.read_text())["address"]
+        workers = [subprocess.Popen([*dask, "worker", "--scheduler-file", str(scheduler_file), "--nthreads", "1", "--nworkers", "1",
+                                     "--host", "127.0.0.1", "--no-dashboard", "--death-timeout", "60"],
+                                    env=env, stdout=log, stderr=log, start_new_session=True) for _ in range(2)]
+        procs += workers
+        with distributed.Client(address, timeout="60s") as client:
+            client.wait_for_workers(2, timeout=120)
+            pids = client.run(os.getpid)
+        by_group = {os.getpgid(pid): addr for addr, pid in pids.items()}
+        yield address, {by_group[p.pid]: p for p in workers}
+    finally:
+        for p in reversed(procs):
+            _stop(p)
+        log.close()
+
+
+def test_a_killed_worker_loses_nothing_and_duplicates_nothing(cluster, tmp_path):
+    address, workers = cluster
+    n = 10
+    study = write_study(tmp_path, grid_design(n, grid=4000))
+    victim_address, victim = next(iter(workers.items()))
+    killed: list[list[str]] = []
+    records = []
+    with distributed.Client(address, timeout="60s") as monitor:
+
+        def on_case(record):
+            records.append(record)
+            deadline = time.monotonic() + 30
+            while not killed and time.monotonic() < deadline:
+                running = monitor.processing(workers=[victim_address]).get(victim_address, [])
+                if running:  # the scheduler says the victim is processing a case: kill it now
+                    os.killpg(victim.pid, signal.SIGKILL)
+                    killed.append(list(running))
+                time.sleep(0.02)
+
+        outcome = run_study(study, tmp_path / "out", scheduler=address, on_case=on_case)
+    assert killed and killed[0], "the victim worker was not processing a case"
+    assert victim.wait(10) is not None  # it is gone for good (no nanny left to restart it)
+    table = outcome.table
+    assert outcome.status == "optimal" and outcome.summary["scheduler"] == address
+    assert len(table) == n and table["key"].is_unique and (table["status"] == "optimal").all()
+    assert len(records) == n and len({r.key for r in records}) == n  # each case reported once
+    folders = sorted(p.name for p in (tmp_path / "out" / "cases").iterdir())
+    assert folders == sorted(table["folder"].str.removeprefix("cases/"))  # one folder per case, no partial ones left
