@@ -58,7 +58,7 @@ def test_bad_arguments(tmp_path, table, out, match):
 
 @pytest.mark.parametrize(
     "name, analysis, cases",
-    [("l1_table_3_1", "sweep", 3), ("l1_time_optimal_map", "time_optimal_map", 132), ("l1_calibration_monte_carlo", "calibration_monte_carlo", 1200)],
+    [("l1_table_3_1", "sweep", 3), ("l1_time_optimal_map", "time_optimal_map", 99), ("l1_calibration_monte_carlo", "calibration_monte_carlo", 1200)],
 )
 def test_shipped_studies_load(name, analysis, cases):
     study = load_study(REPO / "studies" / f"{name}.toml")
