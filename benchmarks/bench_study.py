@@ -4,12 +4,14 @@ Usage: python benchmarks/bench_study.py [--json] [--grid 8] [--keep DIR]
 
 The cases: the minimum-time motion of ``problems/l1_time_optimal.toml`` from its start to
 an 8 x 8 grid of end positions (x -0.5..0.3 m, y 2.5..3.2 m, z = -0.6 m; all inside the
-workspace), written as a study file in a temporary folder. In ONE run, the same study is
-run twice from scratch, as a user runs it (``python -m gtmodel.cli study ... --no-plots
--q``, a fresh process each, so both pay the imports): first with ``--workers 2`` (a local
-Dask cluster of 2 processes), then with ``--workers 1`` (in-process, no Dask).
+workspace), written as two study files of 32 cases each (y below / above 2.85 m) in a
+temporary folder. In ONE run, each half is run from scratch with both settings, as a user
+runs it (``python -m gtmodel.cli study ... --no-plots -q``, a fresh process each, so both
+pay the imports): ``--workers 2`` (a local Dask cluster of 2 processes) and ``--workers 1``
+(in-process, no Dask), in the order 2, 1 (first half), 1, 2 (second half): on a machine
+whose load drifts, this ABBA order cancels a linear drift from the ratio.
 
-Printed, per run: the wall time of the command, the study's own timing (from its
+Printed, per setting (summed over the two halves): the wall time of the command, the study's own timing (from its
 ``summary.json``: cluster start-up, execution, the sum of the cases' ``run_problem`` times)
 and the machinery's overhead per case, ``(busy * workers - sum run_problem) / cases`` with
 ``busy`` the execution time after the cluster start-up (for 2 workers this includes the
@@ -36,9 +38,11 @@ REPO = Path(__file__).resolve().parents[1]
 BASE = REPO / "problems" / "l1_time_optimal.toml"
 
 
-def study_text(grid: int) -> str:
-    """The benchmark's study file: ``grid`` x ``grid`` end positions of l1_time_optimal."""
-    return f"""name = "bench_study"
+def study_text(grid: int, half: int) -> str:
+    """Half ``half`` (0, 1) of the benchmark's ``grid`` x ``grid`` end positions of l1_time_optimal."""
+    y = [2.5 + 0.7 * k / (grid - 1) for k in range(grid)]
+    ys = y[: grid // 2] if half == 0 else y[grid // 2:]
+    return f"""name = "bench_study_{half}"
 base = "{BASE.as_posix()}"
 analysis = "generic"
 plots = false
@@ -46,8 +50,22 @@ plots = false
 [design]
 [[design.axes]]
 field = "motion.end"
-points = {{ x = {{ start = -0.5, stop = 0.3, num = {grid} }}, y = {{ start = 2.5, stop = 3.2, num = {grid} }}, z = -0.6 }}
+points = {{ x = {{ start = -0.5, stop = 0.3, num = {grid} }}, y = {{ start = {ys[0]!r}, stop = {ys[-1]!r}, num = {len(ys)} }}, z = -0.6 }}
 """
+
+
+def _combine(a: dict, b: dict) -> dict:
+    """Two runs of one setting (the halves) as one: times summed, means over all cases."""
+    out = {"workers": a["workers"], "cases": a["cases"] + b["cases"],
+           "counts": {k: a["counts"].get(k, 0) + b["counts"].get(k, 0) for k in {*a["counts"], *b["counts"]}}}
+    for k in ("wall_s", "startup_s", "execute_s", "busy_s", "run_problem_s"):
+        out[k] = (a[k] or 0.0) + (b[k] or 0.0)
+    n = out["cases"]
+    out["case_mean_s"] = out["run_problem_s"] / n
+    out["overhead_per_case_s"] = (out["busy_s"] * out["workers"] - out["run_problem_s"]) / n
+    out["overhead_percent"] = 100.0 * out["overhead_per_case_s"] / out["case_mean_s"]
+    out["halves"] = [a, b]
+    return out
 
 
 def run(study: Path, out: Path, workers: int) -> dict:
@@ -80,12 +98,16 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench_study_") as tmp:
         root = args.keep if args.keep is not None else Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
-        study = root / "bench_study.toml"
-        study.write_text(study_text(args.grid), encoding="utf-8")
+        studies = [root / f"bench_study_{h}.toml" for h in (0, 1)]
+        for h, f in enumerate(studies):
+            f.write_text(study_text(args.grid, h), encoding="utf-8")
         load0 = os.getloadavg()
-        two = run(study, root / "workers2", 2)
-        one = run(study, root / "workers1", 1)
+        two_a = run(studies[0], root / "half0_workers2", 2)
+        one_a = run(studies[0], root / "half0_workers1", 1)
+        one_b = run(studies[1], root / "half1_workers1", 1)
+        two_b = run(studies[1], root / "half1_workers2", 2)
         load1 = os.getloadavg()
+        one, two = _combine(one_a, one_b), _combine(two_a, two_b)
     result = {
         "cases": one["cases"], "cpu_count": os.cpu_count(), "loadavg_before": load0, "loadavg_after": load1,
         "workers1": one, "workers2": two,
