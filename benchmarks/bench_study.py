@@ -18,7 +18,13 @@ and the machinery's overhead per case, ``(busy * workers - sum run_problem) / ca
 idle tail when the last cases run), as a percentage of the mean case time. Then the
 speed-up ``wall(workers 1) / wall(workers 2)`` (the whole command) and the same over the
 execution alone. The machine is shared with other jobs: timings move with its load, so
-the ratios are from one run (both measured back to back) and the load average is printed.
+the ratios are from one run and the load average is printed.
+
+What the machine gives: before and after the study runs, a pure-Python CPU loop (no
+gtmodel) is timed in 1 process and in 2 processes at once (``multiprocessing``); the ratio
+``2 x t(1 process) / t(2 processes)`` is the speed-up any 2-process job could reach at that
+moment (2.0 on two idle cores; ~1.0 when other jobs leave one core's worth). The study's
+speed-up is also printed relative to it (``speedup_vs_machine``).
 
 ``--json``: one JSON object on the last line of stdout with these figures.
 """
@@ -27,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
 import subprocess
 import sys
@@ -68,6 +75,28 @@ def _combine(a: dict, b: dict) -> dict:
     return out
 
 
+def _spin(_: int) -> float:
+    t0 = time.perf_counter()
+    s = 0
+    for i in range(SPIN_LOOPS):
+        s += i
+    return time.perf_counter() - t0
+
+
+#: Iterations of the reference CPU loop (~1.5 s on an idle core of the development machine).
+SPIN_LOOPS = 20_000_000
+
+
+def machine_speedup() -> float:
+    """What 2 processes gain over 1 on this machine now: ``2 t1 / t2`` of a pure-Python loop."""
+    one = _spin(0)
+    with multiprocessing.Pool(2) as pool:
+        t0 = time.perf_counter()
+        pool.map(_spin, [0, 1])
+        two = time.perf_counter() - t0
+    return 2.0 * one / two
+
+
 def run(study: Path, out: Path, workers: int) -> dict:
     """One ``gtmodel study`` run from scratch; its wall time and the study's timing."""
     env = dict(os.environ, PYTHONPATH=str(REPO), MPLBACKEND="Agg")
@@ -102,11 +131,13 @@ def main() -> None:
         for h, f in enumerate(studies):
             f.write_text(study_text(args.grid, h), encoding="utf-8")
         load0 = os.getloadavg()
+        machine0 = machine_speedup()
         two_a = run(studies[0], root / "half0_workers2", 2)
         one_a = run(studies[0], root / "half0_workers1", 1)
         one_b = run(studies[1], root / "half1_workers1", 1)
         two_b = run(studies[1], root / "half1_workers2", 2)
         load1 = os.getloadavg()
+        machine1 = machine_speedup()
         one, two = _combine(one_a, one_b), _combine(two_a, two_b)
     result = {
         "cases": one["cases"], "cpu_count": os.cpu_count(), "loadavg_before": load0, "loadavg_after": load1,
@@ -114,13 +145,17 @@ def main() -> None:
         "speedup_wall": one["wall_s"] / two["wall_s"],
         "speedup_execute": one["execute_s"] / two["execute_s"],
         "speedup_busy": one["busy_s"] / two["busy_s"],
+        "machine_speedup_before": machine0, "machine_speedup_after": machine1,
     }
+    result["speedup_vs_machine"] = result["speedup_wall"] / (0.5 * (machine0 + machine1))
     for r in (two, one):
         print(f"--workers {r['workers']}: wall {r['wall_s']:.1f} s (start-up {r['startup_s'] or 0:.1f} s, execution {r['execute_s']:.1f} s), "
               f"{r['cases']} cases {r['counts']}, mean case {r['case_mean_s']:.2f} s, "
               f"overhead {1e3 * r['overhead_per_case_s']:.0f} ms/case = {r['overhead_percent']:.1f} % of a case")
     print(f"speed-up 2 vs 1 worker: {result['speedup_wall']:.2f}x (whole command), {result['speedup_execute']:.2f}x (execution), "
           f"{result['speedup_busy']:.2f}x (execution after the cluster start-up)")
+    print(f"the machine's own 2-process speed-up (pure-Python loop): {machine0:.2f}x before, {machine1:.2f}x after; "
+          f"the study reached {result['speedup_vs_machine']:.2f} of it")
     print(f"load average before {load0[0]:.2f}, after {load1[0]:.2f} on {os.cpu_count()} cores (shared machine)")
     if args.json:
         print(json.dumps(result))
