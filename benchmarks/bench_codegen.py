@@ -27,10 +27,21 @@ from ``--controller FILE`` when it holds them, else gtmodel.estimation's ``Kalma
 ``python_kf_step_ns``, ``python_ekf_step_ns`` (and the details under ``filters``).
 ``python benchmarks/bench_codegen.py --robots "" --no-controller`` runs the filter rows alone.
 
+Online re-timing (issue 17; aim: at most 500 us for N = 500, under 1/8 of the 4 ms cycle):
+``gt_L1_retime`` (generated with ``retime_n_max``) on the shipped path problem
+(``problems/l1_path_constrained.toml``: the L1 straight line, |tau_i| <= 450 N, viscous
+friction, 500 grid points), median time per call through ctypes with the arguments converted
+once (the C time plus a few us of call overhead), next to the Python solver on the same case in the same run
+(``PathConstrainedProblem.solve``: the coefficient evaluation and the two passes, the
+problem built once), and the largest relative difference of the two ``s_dot``. ``--json``
+keys ``retime_us``, ``retime_python_us``, ``retime_python_passes_us`` (the passes alone),
+``retime_max_rel_diff``, ``retime_n`` (details under ``retime``); ``--retime-n N`` sets the grid,
+``--no-retime`` skips it.
+
 Bundles: L1 = ik + jacobian + inverse_dynamics (aim < 1 us), F1 = ik + fk, both
 warm-started from the previous sample (aim < 10 us); the F1 default starts (continuation
-from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py`` (``--json``: one JSON document instead of the
-tables; ``--robots ""``: the controller only)
+from the home pose) are listed separately. Run: ``python benchmarks/bench_codegen.py`` (``--json``: one JSON object on the last line of
+stdout, the tables on stderr; ``--robots ""``: the controller only)
 (``--cflags "-O3 -march=native"``: optional extra flags for the libraries, to see what
 the target's instruction set gains; the generated code needs only ``-std=c99 -O2``).
 """
@@ -56,11 +67,15 @@ from gtmodel.codegen import Controller, check_controller, compile_shared, find_c
 from gtmodel.codegen.check import _c_call, sample_inputs, time_functions, timed_rows
 from gtmodel.codegen.controller_check import ILC_MARGIN, run_inputs
 from gtmodel.codegen.filter_check import FILTER_CYCLES, TIMING_BLOCK, filter_record, python_filter_run, time_filters
+from gtmodel.codegen.retime import RetimeFunction
+from gtmodel.problems import load_problem
+from gtmodel.trajectory import PathConstrainedProblem
 from gtmodel.estimation import StationaryKalman, ilc_correction_function
 from gtmodel.estimation.end_effector import EndEffectorModel
 from gtmodel.estimation.filters import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.robots.kinematics import configuration_signs
 
+PATH_PROBLEM = Path(__file__).resolve().parents[1] / "problems" / "l1_path_constrained.toml"
 BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}
 
 COUNTER = r"""
@@ -216,6 +231,38 @@ def filter_rows(controller: Controller, root: Path, n: int, cflags: str) -> dict
     return rows
 
 
+def retime_row(root: Path, n: int, cflags: str, repeats: int = 200) -> dict[str, float]:
+    """gt_L1_retime against the Python path solver on the shipped path problem with ``n`` grid points."""
+    d = load_problem(PATH_PROBLEM).declaration
+    problem = PathConstrainedProblem(d.path, d.constraints, d.robot, d.configuration, d.viscous_friction)
+    gen = generate("L1", root / "src", functions=("ik",), retime_n_max=max(n, 1000))
+    retime = RetimeFunction(load_library(gen, compile_shared(gen, root / "build", extra_flags=cflags.split())))
+    gp = problem.gridded(n)
+    S = gp.samples
+    limits = retime.limits({"force_limit": d.constraints.force_limit}, viscous_friction=d.viscous_friction)
+    args = (gp.s, S["T"], S["dT"], S["ddT"], limits)
+    c = retime(*args, rest=gp.rest)
+    py = problem.solve(n)
+    call = retime.prepared(*args)
+    c_us = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        call()
+        c_us.append((time.perf_counter() - t0) * 1e6)
+    py_us, passes_us = [], []
+    for _ in range(max(repeats // 20, 5)):
+        t0 = time.perf_counter()
+        sol = problem.solve(n)
+        py_us.append((time.perf_counter() - t0) * 1e6)
+        passes_us.append(sol.solve_time * 1e6)
+    scale = np.where(py.s_dot != 0, np.abs(py.s_dot), 1.0)
+    return {
+        "n": n, "c_us": float(np.median(c_us)), "c_best_us": float(np.min(c_us)), "python_us": float(np.median(py_us)),
+        "python_passes_us": float(np.median(passes_us)), "max_rel_diff": float(np.max(np.abs(c.s_dot - py.s_dot) / scale)),
+        "c_status": c.status.value, "python_status": py.status.value, "final_time_s": c.final_time, "python_final_time_s": py.final_time,
+    }
+
+
 def main(argv: list[str] | None = None) -> None:
     """Run the benchmark and print one table per robot and one for the controller (or JSON)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -230,7 +277,9 @@ def main(argv: list[str] | None = None) -> None:
                     help="controller file for the controller rows (default: gtmodel.estimation's L1 Kalman step and a 400-cycle table)")
     ap.add_argument("--no-controller", action="store_true", help="skip the controller rows (Kalman step, ILC)")
     ap.add_argument("--no-filters", action="store_true", help="skip the KF/EKF rows of the tracker + IMU fusion")
-    ap.add_argument("--json", action="store_true", help="print one JSON document (ns per call per function) instead of tables")
+    ap.add_argument("--no-retime", action="store_true", help="skip the online re-timing row (gt_L1_retime vs the Python path solver)")
+    ap.add_argument("--retime-n", type=int, default=500, help="grid points of the re-timing row (default 500)")
+    ap.add_argument("--json", action="store_true", help="print one JSON object (ns per call per function) on the last line instead of tables")
     args = ap.parse_args(argv)
     doc: dict = {"robots": {}, "controller": {}, "filters": {}}
     out = sys.stdout
@@ -298,11 +347,24 @@ def main(argv: list[str] | None = None) -> None:
             if "ekf_step" in rows:
                 c = rows["ekf_step"]["c_ns"]
                 print(f"EKF step {c / 1000:.1f} us = {c / 1e4:.2f} % of the 1 ms sample (aim < 20 us: {'met' if c < 20000 else 'NOT met'})")
+        if not args.no_retime:
+            r = retime_row(Path(tmp) / "retime", args.retime_n, args.cflags)
+            doc["retime"] = r
+            doc.update(retime_us=r["c_us"], retime_python_us=r["python_us"], retime_python_passes_us=r["python_passes_us"],
+                       retime_max_rel_diff=r["max_rel_diff"], retime_n=r["n"])
+            print(f"\nonline re-timing, {PATH_PROBLEM.name}, N = {r['n']} grid points (load average {os.getloadavg()[0]:.1f} "
+                  f"on {os.cpu_count()} CPUs)")
+            print(f"  gt_L1_retime (ctypes call)   {r['c_us']:>10.0f} us median, {r['c_best_us']:.0f} us best   "
+                  f"(aim <= 500 us: {'met' if r['c_us'] <= 500 else 'NOT met'})")
+            print(f"  Python PathConstrainedProblem.solve {r['python_us']:>7.0f} us median (passes alone {r['python_passes_us']:.0f} us); "
+                  f"Python/C {r['python_us'] / r['c_us']:.0f}")
+            print(f"  max |s_dot C - Python| / |s_dot| = {r['max_rel_diff']:.1e}; status C {r['c_status']}, Python {r['python_status']}; "
+                  f"final time {r['final_time_s']:.6f} s")
     print("\nC: mean over a C loop of one input (warm start = a nearby sample); Python: the CasADi Function called "
           "with NumPy inputs, or for the F1 Newton functions the Python model's method (same step Functions).")
     if args.json:
         sys.stdout = out
-        print(json.dumps(doc, indent=1))
+        print(json.dumps(doc))
 
 
 if __name__ == "__main__":

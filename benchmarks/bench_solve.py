@@ -1,72 +1,164 @@
-"""Solve time and iterations of the shipped problems (a benchmark, not a test).
+"""Solve time of the minimum-time OCP against the same NLP written directly in casadi.Opti (a benchmark, not a test).
 
-Usage: python benchmarks/bench_solve.py [problems/*.toml]   (default: the point_to_point problems)
+Usage: python benchmarks/bench_solve.py [problem.toml] [--json] [--repeat 3] [--grid 50,100,200,400]
 
-Printed next to peers measured in the same run, because these machines are noisy:
-- iterations against the thesis' Optimica/IPOPT figure for the same kind of problem
-  (Dressler (2012), Table 3.1: 199 iterations for the direct minimum-time problem);
-- wall time of the robot problem against a peer NLP of the same size built the same way:
-  the minimum-time double integrator (3 axes, same elements and points), so the ratio
-  shows what the robot model costs over the bare transcription.
+Measured side by side in one run, because these machines are noisy:
+- ``solve_s``: gtmodel's solve of the problem (default ``problems/l1_time_optimal.toml``),
+  the IPOPT call only (the NLP built and its compiled derivatives cached beforehand);
+- ``peer_solve_s``: the same NLP (same model equations, mesh, constraints, force scaling,
+  initial guess and IPOPT options) written directly in ``casadi.Opti``, the IPOPT call only;
+- ``final_time_s`` and ``peer_final_time_s``: the two optima;
+- ``ms_per_iteration``: gtmodel's solve time per IPOPT iteration at 50, 100, 200 and 400
+  elements (the cost of one iteration should grow linearly with the mesh).
+Medians of ``--repeat`` solves; the ``*_cpu*`` keys are the same figures in process CPU time
+(both solvers are single-threaded), steadier than wall time on a shared machine. With
+``--json`` the last line of stdout is one JSON object.
 """
 
 from __future__ import annotations
 
-import sys
+import argparse
+import dataclasses
+import json
+import os
+import statistics
 import time
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from gtmodel.modeling import CollocationTranscription, Model, Optimization
-from gtmodel.problems import load_problem, solve_problem
+from gtmodel.modeling.collocation_nlp import collocation_coefficients
+from gtmodel.problems import load_problem
+from gtmodel.trajectory import point_to_point as ptp
+from gtmodel.trajectory.point_to_point import SOLVER_OPTIONS, build_optimization, solve_point_to_point
 
-THESIS_ITERATIONS = 199  # Table 3.1, "direct, w = 0"
-
-
-def peer_double_integrator(elements: int, points: int) -> tuple[float, float, int]:
-    """Build + solve a 3-axis minimum-time double integrator of the same mesh size."""
-    t0 = time.perf_counter()
-    m = Model("double_integrator")
-    x = m.state("x", 3)
-    v = m.state("v", 3)
-    u = m.input("u", 3, lb=-1.0, ub=1.0)
-    m.equation(m.der(x), v)
-    m.equation(m.der(v), u)
-    opt = Optimization(m, final_time=2.0, free_final_time=True, final_time_bounds=(0.1, 10.0))
-    opt.set_objective(mayer=opt.final_time)
-    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
-    opt.add_point_constraint(v, at="start", lb=0.0, ub=0.0)
-    opt.add_point_constraint(x - np.array([0.4, 0.25, -0.2]), at="final", lb=0.0, ub=0.0)
-    opt.add_point_constraint(v, at="final", lb=0.0, ub=0.0)
-    tr = CollocationTranscription(opt, elements=elements, points=points)
-    build = time.perf_counter() - t0
-    res = tr.solve()
-    return build, res.solve_time, res.iterations
+ROOT = Path(__file__).resolve().parents[1]
 
 
-def main(paths: list[str]) -> None:
-    import tomllib
+def peer_opti(decl) -> tuple[float, float, int, str, float]:
+    """The NLP of ``decl`` written directly in casadi.Opti; returns (solve s, final time, iterations, status, CPU s)."""
+    opt, _ = build_optimization(decl)
+    dae = opt.flat()
+    N, d = decl.elements, decl.points
+    co = collocation_coefficients(d, decl.scheme)
+    pvec = dae.parameter_vector({**opt.parameters, **decl.named_parameters})
+    args = [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time]
+    xdot = dae.ode_expr
 
-    files = [Path(p) for p in paths] or sorted(
-        p for p in Path(__file__).resolve().parents[1].glob("problems/*.toml") if tomllib.loads(p.read_text())["kind"] == "point_to_point"
-    )
-    print(f"casadi {ca.__version__}")
-    print(f"{'problem':28s} {'status':10s} {'T_f [s]':>8s} {'iter':>5s} {'iter/thesis':>11s} {'solve [s]':>9s} {'total [s]':>9s} {'peer solve [s]':>14s} {'ratio':>6s}")
-    for f in files:
-        problem = load_problem(f)
-        d = problem.declaration
-        t0 = time.perf_counter()
-        sol = solve_problem(problem)
-        total = time.perf_counter() - t0
-        r = sol.result
-        _, peer_solve, peer_iter = peer_double_integrator(d.elements, d.points)
-        print(
-            f"{problem.name:28s} {r.status:10s} {r.final_time:8.4f} {r.iterations:5d} {r.iterations / THESIS_ITERATIONS:11.2f} "
-            f"{r.solve_time:9.2f} {total:9.2f} {peer_solve:14.3f} {r.solve_time / peer_solve:6.1f}"
-        )
+    def fn(exprs):
+        e = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
+        return ca.Function("f", args, [ca.substitute(e, dae.xdot, xdot)])
+
+    ode, path = fn([dae.ode_expr]), fn([c.expr for c in opt.path_constraints])
+    lagr, mayer = fn([opt.lagrange]), fn([opt.mayer])
+    u_lb, u_ub = opt.bounds_vectors(dae, "u")
+    u_nom = np.asarray(decl.force_limit, dtype=float)  # the same scaling as gtmodel's nominal
+    opti = ca.Opti()
+    tf = opti.variable()
+    X = [[opti.variable(dae.nx) for _ in range(d + 1)] for _ in range(N)] + [[opti.variable(dae.nx)]]
+    U = [[opti.variable(dae.nu) for _ in range(d)] for _ in range(N)]
+    p = ca.DM(pvec)
+    t0 = opt.start_time
+    h = (tf - t0) / N
+    J = 0
+    for k in range(N):
+        for j in range(1, d + 1):
+            t = t0 + (k + co["root"][j]) * h
+            u = U[k][j - 1] * u_nom
+            xp = sum(co["C"][r, j] * X[k][r] for r in range(d + 1))
+            opti.subject_to(h * ode(t, X[k][j], ca.MX(0, 1), u, p, tf) == xp)
+            lo, hi = np.concatenate([c.lb for c in opt.path_constraints]), np.concatenate([c.ub for c in opt.path_constraints])
+            opti.subject_to(opti.bounded(lo, path(t, X[k][j], ca.MX(0, 1), u, p, tf), hi))
+            opti.subject_to(opti.bounded(u_lb / u_nom, U[k][j - 1], u_ub / u_nom))
+            J += co["B"][j - 1] * h * lagr(t, X[k][j], ca.MX(0, 1), u, p, tf)
+        xend = sum(co["D"][r] * X[k][r] for r in range(d + 1))
+        opti.subject_to(X[k + 1][0] == xend)
+    u0 = sum(co["L0"][j] * U[0][j] for j in range(d)) * u_nom
+    uN = sum(co["L1"][j] * U[-1][j] for j in range(d)) * u_nom
+    for c in opt.point_constraints:
+        e = ca.Function("e", args, [ca.substitute(c.expr, dae.xdot, xdot)])
+        val = e(t0, X[0][0], ca.MX(0, 1), u0, p, tf) if c.at == "start" else e(tf, X[N][0], ca.MX(0, 1), uN, p, tf)
+        opti.subject_to(opti.bounded(c.lb, val, c.ub))
+    opti.subject_to(opti.bounded(opt.final_time_bounds[0], tf, opt.final_time_bounds[1]))
+    opti.minimize(J + mayer(tf, X[N][0], ca.MX(0, 1), uN, p, tf))
+    # the same initial guess as gtmodel's: the declared guesses at the collocation times
+    tfg = opt.final_time_guess
+    guess = {name: opt.initial_guesses[name] for name in ("T", "T_dot", "tau")}
+    for k in range(N + 1):
+        for j in range(d + 1 if k < N else 1):
+            t = t0 + (k + co["root"][j]) * (tfg - t0) / N
+            opti.set_initial(X[k][j], np.concatenate([np.ravel(guess["T"](t)), np.ravel(guess["T_dot"](t))]))
+            if 1 <= j and k < N:
+                opti.set_initial(U[k][j - 1], np.clip(np.ravel(guess["tau"](t)) / u_nom, -1, 1))
+    opti.set_initial(tf, tfg)
+    ipopt = {"max_iter": decl.max_iter, "tol": decl.tol, "print_level": int(os.environ.get("PEER_PRINT", 0)), "sb": "yes", **SOLVER_OPTIONS}
+    opti.solver("ipopt", {"print_time": False, "record_time": True, "error_on_fail": False}, ipopt)
+    sol = opti.solve()
+    st = sol.stats()
+    return float(st["t_wall_total"]), float(sol.value(tf)), int(st["iter_count"]), str(st["return_status"]), float(st["t_proc_total"])
+
+
+def ours(decl) -> tuple[float, float, int, str, float]:
+    """gtmodel's solve (the IPOPT call); returns (solve s, final time, iterations, status, CPU s)."""
+    s = solve_point_to_point(decl)
+    r = s.result
+    return r.solve_time, r.final_time, r.iterations, str(r.status), float(r.stats["t_proc_total"])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("problem", nargs="?", default=str(ROOT / "problems/l1_time_optimal.toml"))
+    ap.add_argument("--json", action="store_true", help="print one JSON object on the last line")
+    ap.add_argument("--repeat", type=int, default=3, help="solves per figure (median)")
+    ap.add_argument("--grid", default="50,100,200,400", help="elements of the per-iteration grid")
+    a = ap.parse_args()
+    decl = load_problem(a.problem).declaration
+    ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}  # CPU time in the stats, as the peer's
+    print(f"casadi {ca.__version__}; load average {os.getloadavg()[0]:.2f} (2 cores shared)")
+    ours(decl)  # compile (or load the cached) derivatives once
+    mine = [ours(decl) for _ in range(a.repeat)]
+    peer = [peer_opti(decl) for _ in range(a.repeat)]
+    solve_s, peer_s = statistics.median(m[0] for m in mine), statistics.median(p[0] for p in peer)
+    out = {
+        "problem": Path(a.problem).name,
+        "elements": decl.elements,
+        "solve_s": solve_s,
+        "iterations": mine[0][2],
+        "status": mine[0][3],
+        "peer_solve_s": peer_s,
+        "peer_iterations": peer[0][2],
+        "peer_status": peer[0][3],
+        "final_time_s": mine[0][1],
+        "peer_final_time_s": peer[0][1],
+        "speedup": peer_s / solve_s,
+        "solve_cpu_s": statistics.median(m[4] for m in mine),
+        "peer_solve_cpu_s": statistics.median(p[4] for p in peer),
+        "final_time_rel_diff": abs(mine[0][1] - peer[0][1]) / abs(peer[0][1]),
+    }
+    print(f"{'':10s} {'solve [s]':>10s} {'iter':>5s} {'T_f [s]':>14s}  status")
+    print(f"{'gtmodel':10s} {solve_s:10.3f} {mine[0][2]:5d} {mine[0][1]:14.10f}  {mine[0][3]}")
+    print(f"{'Opti':10s} {peer_s:10.3f} {peer[0][2]:5d} {peer[0][1]:14.10f}  {peer[0][3]}")
+    out["speedup_cpu"] = out["peer_solve_cpu_s"] / out["solve_cpu_s"]
+    print(f"speedup {out['speedup']:.1f}x (CPU time {out['speedup_cpu']:.1f}x), final times differ by {out['final_time_rel_diff']:.2e} (relative)")
+    ms, ms_cpu = {}, {}
+    for n in (int(x) for x in a.grid.split(",")):
+        dn = dataclasses.replace(decl, elements=n)
+        ours(dn)
+        runs = [ours(dn) for _ in range(max(1, a.repeat - 1))]
+        ms[str(n)] = statistics.median(1e3 * r[0] / max(r[2], 1) for r in runs)
+        ms_cpu[str(n)] = statistics.median(1e3 * r[4] / max(r[2], 1) for r in runs)
+        print(f"{n:5d} elements: {ms[str(n)]:8.2f} ms/iteration, CPU {ms_cpu[str(n)]:8.2f} ({runs[0][2]} iterations, T_f {runs[0][1]:.10f} s)")
+    out["ms_per_iteration"] = ms
+    out["ms_per_iteration_cpu"] = ms_cpu
+    keys = sorted(ms, key=int)
+    out["ms_per_iteration_ratio"] = ms[keys[-1]] / ms[keys[0]]
+    out["ms_per_iteration_cpu_ratio"] = ms_cpu[keys[-1]] / ms_cpu[keys[0]]
+    out["load_average"] = os.getloadavg()[0]
+    if a.json:
+        print(json.dumps(out))
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    t = time.perf_counter()
+    main()

@@ -130,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
     cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
                     help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library")
+    cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
     cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
@@ -231,6 +232,7 @@ def _study(args: argparse.Namespace) -> int:
     if outcome.status is Status.INTERRUPTED:
         print("gtmodel: interrupted (rerun the same command to solve the missing cases)", file=sys.stderr)
     print(f"study        {outcome.summary['name']}: {outcome.status} ({outcome.message})")
+    print(f"cases        {outcome.summary['run_now']} solved now, {outcome.summary['skipped']} finished before, {outcome.summary['missing']} missing")
     print(f"results in   {outcome.out}/ (table.parquet, table.csv, summary.json, cases/)")
     return outcome.exit_code
 
@@ -267,6 +269,7 @@ def _codegen(args: argparse.Namespace) -> int:
     generated = generate(
         robot=args.robot or "L1", out_dir=args.out, friction=args.friction, real=args.real, prefix="gt_fusion" if functions == [] else None,
         newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions, controller=controller,
+        retime_n_max=args.retime_n_max,
     )
     print(f"wrote {', '.join(str(p) for p in generated.files)}")
     print(generated.version)

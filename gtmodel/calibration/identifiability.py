@@ -55,6 +55,7 @@ from gtmodel.errors import InputError
 __all__ = [
     "IdentifiabilityReport",
     "analyze_jacobian",
+    "analyze_qr",
     "numerical_rank",
     "combine_reports",
     "observability_indices",
@@ -218,11 +219,16 @@ def observability_indices(singular_values: np.typing.ArrayLike, n_residuals: int
         raise InputError(f"singular_values: expected finite non-negative values, got {s.tolist()}")
     if int(n_residuals) < 1:
         raise InputError(f"n_residuals: expected a positive number of rows, got {n_residuals!r}")
+    return _observability(s, int(n_residuals))
+
+
+def _observability(s: np.ndarray, n_residuals: int) -> dict[str, float]:
+    """O1-O5 from singular values sorted descending (no checks; see observability_indices)."""
     smax, smin = float(s[0]), float(s[-1])
     if smin <= 0.0:
         return {"O1": 0.0, "O2": 0.0, "O3": 0.0, "O4": 0.0, "O5": 0.0}
     return {
-        "O1": float(np.exp(np.mean(np.log(s)))) / math.sqrt(int(n_residuals)),
+        "O1": float(np.exp(np.mean(np.log(s)))) / math.sqrt(n_residuals),
         "O2": smin / smax,
         "O3": smin,
         "O4": smin * smin / smax,
@@ -281,6 +287,62 @@ def analyze_jacobian(
         raise InputError(f"tolerance and threshold must be positive, got {tolerance!r}, {threshold!r}")
 
     R, piv = scipy.linalg.qr(Js, mode="r", pivoting=True, check_finite=False)
+    rss = None
+    if residuals is not None:
+        r = np.asarray(residuals, dtype=float).ravel()
+        if r.size != m:
+            raise InputError(f"residuals: expected {m} values (one per row of J), got {r.size}")
+        if not np.all(np.isfinite(r)):
+            raise InputError("residuals: non-finite values")
+        rss = float(r @ r)
+    return analyze_qr(R, piv, norms, m, names, rss=rss, tolerance=tolerance, threshold=threshold)
+
+
+def analyze_qr(
+    R: np.ndarray,
+    piv: np.ndarray,
+    norms: np.ndarray,
+    n_residuals: int,
+    names: Sequence[str],
+    rss: float | None = None,
+    tolerance: float = RANK_TOLERANCE,
+    threshold: float = DEPENDENCY_THRESHOLD,
+) -> IdentifiabilityReport:
+    """The report of :func:`analyze_jacobian` from a pivoted QR already computed.
+
+    For a solver that has factorised the column-scaled Jacobian anyway (a Gauss-Newton
+    step): ``J_s P = Q R`` with ``J_s = J / norms`` (steps 1-2 of the module docstring);
+    the rank, dependencies, observability and covariance need ``R`` only. No argument
+    checks (an internal fast path; :func:`analyze_jacobian` checks its inputs first).
+
+    Parameters
+    ----------
+    R : numpy.ndarray, shape (k, n), k >= n (or k = m < n)
+        Upper-triangular factor of the column-pivoted QR of the column-scaled Jacobian.
+    piv : numpy.ndarray of int, shape (n,)
+        The column permutation ``P`` (``J_s[:, piv] = Q R``).
+    norms : numpy.ndarray, shape (n,)
+        Column norms of the unscaled Jacobian (:func:`scale_columns`).
+    n_residuals : int
+        Number of rows ``m`` of the Jacobian.
+    names : sequence of str
+        Parameter names (columns, unpermuted order).
+    rss : float, optional
+        Residual sum of squares at the point of ``J``; with ``m > n`` the standard
+        deviations are reported (``sigma^2 = rss / (m - n)``).
+    tolerance : float, optional
+        Relative rank tolerance (default :data:`RANK_TOLERANCE`).
+    threshold : float, optional
+        Smallest reported scaled dependency coefficient (default
+        :data:`DEPENDENCY_THRESHOLD`).
+
+    Returns
+    -------
+    IdentifiabilityReport
+        The same report as :func:`analyze_jacobian` of that Jacobian.
+    """
+    names = tuple(names)
+    m, n = int(n_residuals), len(names)
     diag = np.abs(np.diag(R))
     ref = diag[0] if diag.size else 0.0
     rank = int(np.sum(diag > tolerance * ref)) if ref > 0 else 0
@@ -304,31 +366,27 @@ def analyze_jacobian(
             non_identifiable[names[j]] = {"depends_on": deps}
 
     # singular values of J_s = those of R (J_s P = Q R with orthonormal Q)
-    sv = scipy.linalg.svd(R, compute_uv=False, check_finite=False)
+    sv = np.linalg.svd(R, compute_uv=False)
     sv_full = np.zeros(n)
     sv_full[: sv.size] = sv
-    obs = observability_indices(sv_full, m) if rank == n else dict.fromkeys(_INDEX_NAMES, 0.0)
+    obs = _observability(sv_full, m) if rank == n else dict.fromkeys(_INDEX_NAMES, 0.0)
     cond = float(sv_full[0] / sv_full[-1]) if sv_full[-1] > 0 and rank == n else math.inf
 
     std: dict[str, float] = {}
     cov = np.zeros((0, 0))
-    if residuals is not None:
-        r = np.asarray(residuals, dtype=float).ravel()
-        if r.size != m:
-            raise InputError(f"residuals: expected {m} values (one per row of J), got {r.size}")
-        if not np.all(np.isfinite(r)):
-            raise InputError("residuals: non-finite values")
-        if m > n:
-            sigma2 = float(r @ r) / (m - n)
-            std = {s: math.inf for s in names}
-            cov = np.full((n, n), math.inf)
-            if rank > 0:
+    if rss is not None and m > n:
+        sigma2 = rss / (m - n)
+        std = {s: math.inf for s in names}
+        cov = np.full((n, n), math.inf)
+        if rank > 0:
+            Rinv, info = scipy.linalg.lapack.dtrtri(R[:rank, :rank])
+            if info != 0:  # a zero diagonal entry cannot pass the rank test; kept as a guard
                 Rinv = scipy.linalg.solve_triangular(R[:rank, :rank], np.eye(rank), lower=False, check_finite=False)
-                # (J_I^T J_I)^-1 = D^-1 (R11^T R11)^-1 D^-1 with D the column norms (pivot order)
-                C = sigma2 * (Rinv @ Rinv.T) / np.outer(norms[ident], norms[ident])
-                cov[np.ix_(ident, ident)] = C
-                for ii, i in enumerate(ident):
-                    std[names[i]] = float(math.sqrt(C[ii, ii]))
+            # (J_I^T J_I)^-1 = D^-1 (R11^T R11)^-1 D^-1 with D the column norms (pivot order)
+            C = sigma2 * (Rinv @ Rinv.T) / np.outer(norms[ident], norms[ident])
+            cov[np.ix_(ident, ident)] = C
+            for ii, i in enumerate(ident):
+                std[names[i]] = float(math.sqrt(C[ii, ii]))
     return IdentifiabilityReport(
         names=names,
         rank=rank,
@@ -344,7 +402,6 @@ def analyze_jacobian(
         covariance=cov,
         tolerance=float(tolerance),
     )
-
 
 
 def numerical_rank(J: np.typing.ArrayLike, tolerance: float = RANK_TOLERANCE) -> int:

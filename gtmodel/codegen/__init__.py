@@ -4,7 +4,8 @@
 ``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
 ``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``) and, with a
 ``Controller``, the controller of the 4 ms loop (Kalman step, ILC correction) and the KF/EKF
-steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.filter_step`);
+steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.filter_step`), with
+``retime_n_max`` the online re-timing along a path (:mod:`gtmodel.codegen.retime`);
 ``compile_shared``
 builds a shared library with the system C compiler; ``check`` compares the compiled C with
 the Python evaluation, probes the edge cases and times every function. The hand-written

@@ -53,6 +53,8 @@ STATUS_CODES: dict[str, tuple[int, str]] = {
     "GT_BAD_ARGUMENT": (4, "NULL pointer, non-finite input or invalid configuration/solution; outputs untouched"),
     "GT_NUMERIC_ERROR": (5, "evaluation failed or produced a non-finite value; outputs untouched"),
     "GT_NOT_CONVERGED": (6, "Newton's method did not converge within the iteration limit; outputs untouched"),
+    "GT_INFEASIBLE": (7, "no motion along the path satisfies the limits (re-timing); outputs untouched"),
+    "GT_TOO_LARGE": (8, "more grid points than the size fixed at generation (re-timing N_MAX); outputs untouched"),
 }
 
 #: Largest accepted |C - Python| of an inverse kinematics [m, rad].

@@ -22,6 +22,11 @@ writes, into ``out_dir``:
     convergence and return ``GT_NOT_CONVERGED`` otherwise; a loop that tests convergence
     every ``k > 1`` steps evaluates only the residual at the tests.
 
+With ``retime_n_max`` the wrapper source also holds ``<prefix>_retime``, the online
+re-timing along a path (:mod:`gtmodel.codegen.retime`): hand-written two passes around the
+CasADi-generated row coefficients ``<prefix>_cg_retime_rows``, its work memory a
+caller-owned struct sized at generation.
+
 The C functions are reentrant (no static or global mutable state) and thus thread-safe.
 ``real="float"`` generates single-precision code (``float`` arrays in the API).
 """
@@ -42,6 +47,7 @@ from gtmodel.errors import CodegenError, InputError
 from gtmodel.codegen.c_text import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
 from gtmodel.codegen.controller import Controller, controller_header_lines, controller_source_lines
 from gtmodel.codegen.declarations import FunctionSpec
+from gtmodel.codegen.retime import check_retime_n_max, retime_header_lines, retime_rows_function, retime_source_lines
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
@@ -99,6 +105,9 @@ class GeneratedCode:
     controller : Controller or None
         The controller functions generated with the model's (``kalman_step``,
         ``ilc_correction``; see :mod:`gtmodel.codegen.controller`), or None.
+    retime_n_max : int
+        ``<PREFIX>_RETIME_N_MAX`` of the re-timing function ``<prefix>_retime``
+        (:mod:`gtmodel.codegen.retime`); 0 when it was not generated.
     """
 
     out_dir: Path
@@ -119,6 +128,7 @@ class GeneratedCode:
     kind: str = "three_link"
     newton: dict[str, tuple[float, int]] = field(default_factory=dict, repr=False)
     controller: Controller | None = field(default=None, repr=False)
+    retime_n_max: int = 0
 
     @property
     def c_sources(self) -> tuple[Path, Path]:
@@ -372,6 +382,7 @@ def generate(
     max_iter: int | None = None,
     newton_check_every: int | None = None,
     controller: Controller | None = None,
+    retime_n_max: int | None = None,
 ) -> GeneratedCode:
     """Generate C source and a public header for the model functions of a robot.
 
@@ -421,6 +432,12 @@ def generate(
         :mod:`~gtmodel.codegen.filter_step`), e.g. from
         :func:`~gtmodel.codegen.controller_file.load_controller`; checked by
         :func:`~gtmodel.codegen.controller_check.check_controller`.
+    retime_n_max : int or None, optional
+        Also generate the online re-timing function ``<prefix>_retime`` (3-link sets,
+        double precision; :mod:`gtmodel.codegen.retime`): the time-optimal ``s_dot(s)``
+        along a sampled path by the two-pass reachability of the Python path solver, for
+        at most this many grid points (``<PREFIX>_RETIME_N_MAX``, the size of the
+        caller's work struct). None (default): not generated.
 
     Returns
     -------
@@ -431,7 +448,8 @@ def generate(
     ------
     InputError
         Unknown function name, invalid prefix, friction form, real type, tolerance or
-        iteration limit; ``controller`` not a Controller.
+        iteration limit; ``controller`` not a Controller; ``retime_n_max`` out of range
+        or given for a robot that is not a 3-link set or in single precision.
     ParameterError
         Unknown or invalid robot / parameter set.
     CodegenError
@@ -457,6 +475,8 @@ def generate(
         isinstance(newton_check_every, bool) or not isinstance(newton_check_every, (int, np.integer)) or not 1 <= newton_check_every <= 100
     ):
         raise InputError(f"newton_check_every: expected an integer from 1 to 100, got {newton_check_every!r}")
+    if retime_n_max is not None:
+        retime_n_max = check_retime_n_max(retime_n_max, model, real)
     only_controller = controller is not None and functions is not None and not isinstance(functions, (str, FunctionSpec)) and len(functions) == 0
     specs = () if only_controller else _resolve_specs(default_functions(model.kind) if functions is None else functions, model.kind)
     if controller is not None:
@@ -516,6 +536,12 @@ def generate(
             cg.add(f)
         tol = newton_tolerance if newton_tolerance is not None else (nl.tolerance if real == "double" else nl.float_tolerance)
         newton[spec.name] = (float(tol), int(max_iter if max_iter is not None else nl.max_iter))
+    retime_f = None
+    if retime_n_max is not None:
+        if only_controller:
+            raise InputError("retime_n_max: the re-timing function needs the robot's functions (functions is empty)")
+        retime_f = retime_rows_function(model, f"{prefix}_cg_retime_rows")
+        cg.add(retime_f)
     try:
         cg.generate(str(out) + "/")
     except RuntimeError as exc:
@@ -529,6 +555,7 @@ def generate(
         else:
             each = [_work_sizes(casadi_text, cnames[spec.name][k], f) for k, f in funcs[spec.name].items()]
             sizes[spec.name] = tuple(max(s[i] for s in each) for i in range(4))  # type: ignore[assignment]
+    retime_sizes = _work_sizes(casadi_text, f"{prefix}_cg_retime_rows", retime_f) if retime_f is not None else None
     casadi_source.write_text(
         "/* CasADi-generated code; gtmodel marked unused function parameters (void) and the\n"
         " * scalar helpers (casadi_sq, casadi_fmax, ...) static, so that they are inlined. */\n"
@@ -548,9 +575,11 @@ def generate(
     source = out / f"{prefix}.c"
     try:
         header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton,
-                                       controller_header_lines(prefix, controller, real) if controller else ()))
+                                       [*(controller_header_lines(prefix, controller, real) if controller else ()),
+                                        *(retime_header_lines(prefix, retime_n_max, retime_sizes) if retime_f is not None else ())]))
         source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every,
-                                        controller_source_lines(prefix, controller, real) if controller else ()))
+                                        [*(controller_source_lines(prefix, controller, real) if controller else ()),
+                                         *(retime_source_lines(prefix, model, retime_sizes) if retime_f is not None else ())]))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)
@@ -580,4 +609,5 @@ def generate(
         kind=model.kind,
         newton=newton,
         controller=controller,
+        retime_n_max=retime_n_max or 0,
     )

@@ -1,11 +1,11 @@
 """Direct collocation transcription of an :class:`~gtmodel.modeling.Optimization` to an NLP.
 
-Method (as in JModelica.org's LocalDAECollocator): the horizon is split into ``elements``
-uniform elements; in each, states are polynomials of degree ``points`` through the
-element start and the ``points`` collocation points (``casadi.collocation_points``,
-Radau IIA or Gauss-Legendre); inputs and algebraic variables are NLP variables at the
-collocation points only. States are continuous across elements. A free final time is
-handled by time scaling ``t = t0 + tau (tf - t0)`` with ``tf`` an NLP variable.
+The transcription itself (variables ordered stage by stage, a copy of a free final time
+per element) is :mod:`gtmodel.modeling.collocation_nlp`; the constraint Jacobian and
+Lagrangian Hessian assembled from per-point derivatives (optionally compiled C) are
+:mod:`gtmodel.modeling.collocation_derivatives`; warm-started re-solves as one function
+of the parameters are :mod:`gtmodel.modeling.collocation_function`. This module holds
+the solvable transcription: guesses, solves and results.
 
 Conventions:
 
@@ -22,7 +22,7 @@ Conventions:
 Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
 solved repeatedly for new parameter values and initial guesses. Free parameters
 (:meth:`Optimization.free_parameter`) are NLP variables instead, one per scalar element,
-shared by all collocation points (like a free final time).
+shared by all collocation points.
 """
 
 from __future__ import annotations
@@ -36,95 +36,34 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, SolverError
+from gtmodel.modeling.collocation_derivatives import assembled_derivatives
+from gtmodel.modeling.collocation_function import WARM_START_OPTIONS, resolve_function
+from gtmodel.modeling.collocation_nlp import collocation_coefficients, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, _vector_value
 from gtmodel.modeling.optimization import Optimization
-from gtmodel.modeling.result import (
-    CollocationData,
-    OptimizationResult,
-    lagrange_basis,
-    normalize_ipopt_status,
-)
+from gtmodel.modeling.result import CollocationData, OptimizationResult, normalize_ipopt_status
 from gtmodel.status import Status
 
 __all__ = ["CollocationTranscription", "solve"]
 
 _log = logging.getLogger("gtmodel")
 
-#: CasADi-level nlpsol options passed through unchanged (others are IPOPT options).
-_CASADI_OPTIONS = {
-    "print_time",
-    "expand",
-    "error_on_fail",
-    "record_time",
-    "verbose",
-    "calc_lam_p",
-    "calc_lam_x",
-    "calc_f",
-    "calc_g",
-    "bound_consistency",
-    "show_eval_warnings",
-    "iteration_callback",
-    "regularity_check",
-}
+#: nlpsol plugins a transcription can be solved with. CasADi's fatrop plugin is not one:
+#: it takes no ``jac_g``/``hess_lag`` options, so it would differentiate the whole NLP graph
+#: itself (interpreted), which issue 17 measured only matching IPOPT before the compiled
+#: derivatives made IPOPT's evaluations 5x cheaper.
+SOLVERS = ("ipopt",)
+#: Default mesh size from which a free final time is copied per element (banded KKT). L1
+#: minimum-time problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared
+#: variable 13.0 ms at 50 elements and 127 ms at 400 (9.7x for 8x the mesh), copies 14.0
+#: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
+#: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
+BANDED_MIN_ELEMENTS = 300
 
 
-def _merge_options(verbose: bool, solver_options: Mapping[str, Any] | None) -> dict[str, Any]:
-    ipopt: dict[str, Any] = {"max_iter": 3000, "tol": 1e-8}
-    top: dict[str, Any] = {"error_on_fail": False}
-    if verbose:
-        ipopt["print_level"] = 5
-        top["print_time"] = True
-    else:
-        ipopt["print_level"] = 0
-        ipopt["sb"] = "yes"
-        top["print_time"] = False
-        top["show_eval_warnings"] = False
-    for key, value in (solver_options or {}).items():
-        if not isinstance(key, str):
-            raise InputError(f"solver_options keys must be strings, got {key!r}")
-        if key == "ipopt" and isinstance(value, Mapping):
-            ipopt.update(value)
-        elif key.startswith("ipopt."):
-            ipopt[key[6:]] = value
-        elif key in _CASADI_OPTIONS:
-            top[key] = value
-        else:
-            ipopt[key] = value
-    top["ipopt"] = ipopt
-    return top
-
-
-def _collocation_coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
-    """Derivative matrix, continuity, quadrature and extrapolation weights.
-
-    ``C`` and ``D`` from ``casadi.collocation_coeff`` (Lagrange polynomials through ``0``
-    and the collocation points), which keeps the exact zeros of the scheme: for Radau the
-    end of an element is its last collocation point, so ``D = (0, ..., 0, 1)`` and a
-    continuity constraint involves two states only. ``B`` integrates the polynomial through
-    the collocation points (inputs and algebraics have no value at the element start).
-    """
-    tau = np.array(ca.collocation_points(d, scheme), dtype=float)
-    root = np.concatenate([[0.0], tau])
-    c_, d_, _ = ca.collocation_coeff(tau.tolist())
-    C = np.zeros((d + 1, d + 1))
-    C[:, 1:] = np.array(c_, dtype=float)  # C[r, j]: derivative of basis r at root j (j >= 1)
-    # quadrature weights of the collocation points (interpolatory, without the element start)
-    B = np.zeros(d)
-    for j in range(d):
-        coeff = np.zeros(d)
-        coeff[j] = 1.0
-        poly = np.poly1d(np.polyfit(tau, coeff, d - 1)) if d > 1 else np.poly1d([1.0])
-        ipoly = np.polyint(poly)
-        B[j] = ipoly(1.0) - ipoly(0.0)
-    return {
-        "tau": tau,
-        "root": root,
-        "C": C,
-        "D": np.array(d_, dtype=float).reshape(-1),
-        "B": B,
-        "L0": lagrange_basis(tau, np.array([0.0]))[0],
-        "L1": lagrange_basis(tau, np.array([1.0]))[0],
-    }
+def _fname(name: str) -> str:
+    """``name`` as a C identifier (CasADi Function names)."""
+    return "".join(ch if ch.isalnum() else "_" for ch in name)
 
 
 class CollocationTranscription:
@@ -162,6 +101,19 @@ class CollocationTranscription:
         constraints call the per-point function instead of copying its expression
         graph. ``"casadi"``: CasADi differentiates the whole expression graph of the
         NLP (several times slower to build, the same values).
+    compile : bool, optional
+        With ``derivatives="assembled"``: evaluate the per-point derivatives through C
+        generated from their CasADi graph, compiled once with the system compiler and
+        cached by a hash of the source (:func:`gtmodel._compiler.compiled_function`);
+        the same values, several times faster per evaluation. Without a compiler (or
+        with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
+    solver : {"ipopt"}, optional
+        The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options.
+    banded : bool, optional
+        A free final time as one copy per element tied by equalities, so that the KKT
+        matrix is banded, or as one variable shared by all elements (a dense row and
+        column). The same optimum (see :mod:`gtmodel.modeling.collocation_nlp`); default
+        banded from :data:`BANDED_MIN_ELEMENTS` elements on.
 
     Raises
     ------
@@ -183,6 +135,9 @@ class CollocationTranscription:
         solver_options: Mapping[str, Any] | None = None,
         nominal: Mapping[str, Any] | None = None,
         derivatives: str = "assembled",
+        compile: bool = False,
+        solver: str = "ipopt",
+        banded: bool | None = None,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -199,7 +154,13 @@ class CollocationTranscription:
         if derivatives not in ("assembled", "casadi"):
             raise InputError(f"derivatives must be 'assembled' or 'casadi', got {derivatives!r}")
         self.derivatives = derivatives
-        self.options = _merge_options(verbose, solver_options)
+        if solver not in SOLVERS:
+            raise InputError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
+        self.plugin = solver
+        self.compile = bool(compile)
+        self.banded = self.elements >= BANDED_MIN_ELEMENTS if banded is None else bool(banded)
+        self.verbose = bool(verbose)
+        self.options = merge_options(verbose, solver_options, solver)
         self.dae: FlatDAE = optimization.flat()
         self.nominal = self._nominal_values(nominal)
         self._build()
@@ -243,322 +204,50 @@ class CollocationTranscription:
         idx = [np.arange(p_vars[n].start, p_vars[n].stop) for n in self.optimization.free_parameters]
         return np.concatenate(idx).astype(int) if idx else np.zeros(0, dtype=int)
 
-    def _with_free(self, p_nlp: ca.SX, pf: ca.SX) -> ca.SX:
-        """The model parameter vector: ``p_nlp`` with the free elements replaced by ``pf * nominal``."""
-        idx = self._free_index()
-        if idx.size == 0:
-            return p_nlp
-        elems = [p_nlp[i] for i in range(int(p_nlp.numel()))]
-        for k, i in enumerate(idx):
-            elems[int(i)] = pf[k] * float(self.nominal["pf"][k])
-        return ca.vertcat(*elems)
-
     # ------------------------------------------------------------------ build
     def _build(self) -> None:
         opt, dae = self.optimization, self.dae
-        N, d = self.elements, self.points
-        co = _collocation_coefficients(d, self.scheme)
+        co = collocation_coefficients(self.points, self.scheme)
         self._co = co
-        nx, nz, nu = dae.nx, dae.nz, dae.nu
-        t0 = opt.start_time
         assembled = self.derivatives == "assembled"
-
-        # expression functions of (t, x, z, u, p, tf); der() replaced by the ODE rhs
-        args = [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time]
-
-        def subst(e: ca.SX) -> ca.SX:
-            return ca.substitute(e, dae.xdot, dae.ode_expr) if dae.nx else e
-
-        def fn(name: str, exprs: list[ca.SX]) -> ca.Function:
-            e = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
-            return ca.Function(name, args, [subst(e)])
-
-        start_c = [c for c in opt.point_constraints if c.at == "start"]
-        final_c = [c for c in opt.point_constraints if c.at == "final"]
-        start_fn = fn("point_start", [c.expr for c in start_c])
-        final_fn = fn("point_final", [c.expr for c in final_c])
-        mayer_fn = fn("mayer", [opt.mayer])
-        lagr_fn = fn("lagrange", [opt.lagrange])
-        # what is imposed at each collocation point: the model equations and the path
-        # constraints, one function with common subexpressions (kinematics, mass matrix)
-        # computed once
-        path_expr = subst(ca.vertcat(*[c.expr for c in opt.path_constraints])) if opt.path_constraints else ca.SX(0, 1)
-        point_out = ca.cse([dae.ode_expr, dae.alg_expr, path_expr])
-        point_fn = ca.Function("point", args, point_out)
-        # in the NLP graph a call node per point (not a copy of the graph) when the
-        # derivatives are assembled from the per-point ones below
-        point_call = ca.Function("point_call", args, point_out, {"never_inline": True}) if assembled else point_fn
-        npath = int(path_expr.numel())
-
-        P_nlp = dae.p  # nlpsol's parameters: the model parameter values
-        npf = int(self._free_index().size)
-        PF_sym = ca.SX.sym("pf", npf)
-        P = self._with_free(P_nlp, PF_sym)  # free elements are NLP variables
-        free = opt.free_final_time
-        noms = self.nominal
-        tf_nom = float(noms["tf"][0])
-        T_sym = ca.SX.sym("tf")
-        T = T_sym * tf_nom if free else ca.SX(opt.final_time_value)
-        h = (T - t0) / N
-
-        x_lb, x_ub = opt.bounds_vectors(dae, "x")
-        z_lb, z_ub = opt.bounds_vectors(dae, "z")
-        u_lb, u_ub = opt.bounds_vectors(dae, "u")
-
-        w: list[ca.SX] = []
-        lbw: list[np.ndarray] = []
-        ubw: list[np.ndarray] = []
-        scale: list[np.ndarray] = []
-        blocks: list[tuple[str, int, int]] = []  # (kind, element, tau index)
-        offsets: dict[tuple[str, int, int], int] = {}  # first index in w of each block
-        g: list[ca.SX] = []
-        lbg: list[np.ndarray] = []
-        ubg: list[np.ndarray] = []
-        n_w = [0]
-        n_g = [0]
-
-        def var(kind: str, k: int, j: int, n: int, lb: np.ndarray, ub: np.ndarray) -> ca.SX:
-            v = ca.SX.sym(f"{kind}_{k}_{j}", n)
-            sc = noms[kind]
-            offsets[(kind, k, j)] = n_w[0]
-            n_w[0] += n
-            w.append(v)
-            lbw.append(lb / sc)
-            ubw.append(ub / sc)
-            scale.append(sc)
-            blocks.append((kind, k, j))
-            return v * ca.DM(sc) if np.any(sc != 1.0) else v
-
-        def con(expr: ca.SX, lb: np.ndarray, ub: np.ndarray) -> int:
-            first = n_g[0]
-            if expr.numel():
-                n_g[0] += int(expr.numel())
-                g.append(expr)
-                lbg.append(np.broadcast_to(lb, (expr.numel(),)).astype(float))
-                ubg.append(np.broadcast_to(ub, (expr.numel(),)).astype(float))
-            return first
-
-        path_lb = np.concatenate([c.lb for c in opt.path_constraints]) if opt.path_constraints else np.zeros(0)
-        path_ub = np.concatenate([c.ub for c in opt.path_constraints]) if opt.path_constraints else np.zeros(0)
-        point_lb = np.concatenate([np.zeros(nx + nz), path_lb])
-        point_ub = np.concatenate([np.zeros(nx + nz), path_ub])
-
-        Xs: list[list[ca.SX]] = []
-        Us: list[list[ca.SX]] = []
-        Zs: list[list[ca.SX]] = []
-        rows_point: list[tuple[int, int, int]] = []  # (k, j, first row) of the point constraints
-        rows_cont: list[tuple[int, int]] = []  # (k, first row) of the continuity constraints
-        J = ca.SX(0)
-        Xk0 = var("x", 0, 0, nx, x_lb, x_ub)
-        for k in range(N):
-            Xk = [Xk0] + [var("x", k, j, nx, x_lb, x_ub) for j in range(1, d + 1)]
-            Uk = [var("u", k, j, nu, u_lb, u_ub) for j in range(1, d + 1)]
-            Zk = [var("z", k, j, nz, z_lb, z_ub) for j in range(1, d + 1)]
-            Xs.append(Xk)
-            Us.append(Uk)
-            Zs.append(Zk)
-            for j in range(1, d + 1):
-                tkj = t0 + (k + co["root"][j]) * h
-                xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1) if co["C"][r, j] != 0.0)
-                fkj, akj, pkj = point_call(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T)
-                first = con(ca.vertcat(h * fkj - xp, akj, pkj), point_lb, point_ub)
-                rows_point.append((k, j, first))
-                J = J + co["B"][j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, T)
-            xend = sum(co["D"][r] * Xk[r] for r in range(d + 1) if co["D"][r] != 0.0)
-            Xk0 = var("x", k + 1, 0, nx, x_lb, x_ub)
-            rows_cont.append((k, con(Xk0 - xend, np.zeros(1), np.zeros(1))))
-        XN = Xk0
-        if free:
-            offsets[("tf", 0, 0)] = n_w[0]
-            n_w[0] += 1
-            w.append(T_sym)
-            lbw.append(np.array([opt.final_time_bounds[0]]) / tf_nom)
-            ubw.append(np.array([opt.final_time_bounds[1]]) / tf_nom)
-            scale.append(np.array([tf_nom]))
-            blocks.append(("tf", 0, 0))
-        if npf:
-            pf_lb = np.concatenate([lb for lb, _, _ in opt.free_parameters.values()])
-            pf_ub = np.concatenate([ub for _, ub, _ in opt.free_parameters.values()])
-            offsets[("pf", 0, 0)] = n_w[0]
-            n_w[0] += npf
-            w.append(PF_sym)
-            lbw.append(pf_lb / noms["pf"])
-            ubw.append(pf_ub / noms["pf"])
-            scale.append(noms["pf"])
-            blocks.append(("pf", 0, 0))
-
-        def extrap(vals: list[ca.SX], weights: np.ndarray, n: int) -> ca.SX:
-            if n == 0:
-                return ca.SX(0, 1)
-            return sum(weights[j] * vals[j] for j in range(d))
-
-        u_start, z_start = extrap(Us[0], co["L0"], nu), extrap(Zs[0], co["L0"], nz)
-        u_final, z_final = extrap(Us[-1], co["L1"], nu), extrap(Zs[-1], co["L1"], nz)
-        ends: list[tuple[int, ca.SX]] = []  # (first row, expression) of the point constraints
-        if start_c:
-            e = start_fn(t0, Xs[0][0], z_start, u_start, P, T)
-            ends.append((con(e, np.concatenate([c.lb for c in start_c]), np.concatenate([c.ub for c in start_c])), e))
-        if final_c:
-            e = final_fn(T, XN, z_final, u_final, P, T)
-            ends.append((con(e, np.concatenate([c.lb for c in final_c]), np.concatenate([c.ub for c in final_c])), e))
-        mayer = mayer_fn(T, XN, z_final, u_final, P, T)
-        J = J + mayer
-
-        wv = ca.vertcat(*w)
-        gv = ca.vertcat(*g) if g else ca.SX(0, 1)
-        self._blocks = blocks
-        self._block_sizes = [int(b.numel()) for b in w]
-        self._scale = np.concatenate(scale) if scale else np.zeros(0)
-        self._lbw = np.concatenate(lbw) if lbw else np.zeros(0)
-        self._ubw = np.concatenate(ubw) if ubw else np.zeros(0)
-        self._lbg = np.concatenate(lbg) if lbg else np.zeros(0)
-        self._ubg = np.concatenate(ubg) if ubg else np.zeros(0)
-        self._fg = ca.Function("fg", [wv, P_nlp], [J, gv])
-        xc = ca.horzcat(*[ca.horzcat(*Xk) for Xk in Xs])
-        uc = ca.horzcat(*[ca.horzcat(*Uk) for Uk in Us]) if nu else ca.SX(0, N * d)
-        zc = ca.horzcat(*[ca.horzcat(*Zk) for Zk in Zs]) if nz else ca.SX(0, N * d)
-        self._extract = ca.Function("extract", [wv, P_nlp], [xc, uc, zc, XN, ca.vertcat(T), P])
-        self.key = (id(self), N, d, self.scheme, int(wv.numel()))
-        nlp_options = dict(self.options)
+        free_index = self._free_index()
+        if self.banded and opt.free_final_time:
+            # N copies of the final time: scaled by sqrt(N), IPOPT's regularisation of the
+            # Hessian, delta_w |step|^2, weighs a common change of all copies as it would
+            # weigh a change of one shared variable
+            self.nominal["tf"] = self.nominal["tf"] * np.sqrt(self.elements)
+        nlp = transcribe(
+            opt, dae, self.elements, self.points, co, self.nominal, free_index, inline_points=not assembled, final_time_copies=self.banded
+        )
+        self.nlp = nlp
+        wv, gv, P_nlp = nlp.w, nlp.g, nlp.p
+        self._blocks = nlp.blocks
+        self._block_sizes = nlp.block_sizes
+        self._scale, self._lbw, self._ubw, self._lbg, self._ubg = nlp.scale, nlp.lbw, nlp.ubw, nlp.lbg, nlp.ubg
+        self._fg = ca.Function("fg", [wv, P_nlp], [nlp.f, gv])
+        self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
+        self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()))
+        self.derivative_functions: dict[str, ca.Function] = {}
+        self.evaluation = "CasADi interpreter (whole NLP graph)"
         if assembled:
-            nlp_options["jac_g"], nlp_options["hess_lag"] = self._assembled_derivatives(
-                wv, gv, P_nlp, point_fn, lagr_fn, offsets, rows_point, rows_cont, ends, mayer, t0, tf_nom, npath
+            jac_g, hess_lag, self.evaluation = assembled_derivatives(
+                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile
             )
+            self.derivative_functions = {"jac_g": jac_g, "hess_lag": hess_lag}
+        self.solver = self._nlpsol(self.options)
+        self._warm_solver: ca.Function | None = None
+        _log.debug("collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel())
+
+    def _nlpsol(self, options: Mapping[str, Any]) -> ca.Function:
+        """A ``casadi.nlpsol`` of this NLP with ``options`` (the derivative functions are shared)."""
+        nlp = self.nlp
+        nlp_options = {**options, **self.derivative_functions}
         try:
-            self.solver = ca.nlpsol(
-                f"{dae.name}_collocation",
-                "ipopt",
-                {"x": wv, "p": P_nlp, "f": J, "g": gv},
-                nlp_options,
+            return ca.nlpsol(
+                f"{_fname(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": nlp.f, "g": nlp.g}, nlp_options
             )
         except RuntimeError as exc:
-            raise SolverError(f"could not build the IPOPT solver: {exc}") from exc
-        _log.debug(
-            "collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel()
-        )
-
-    def _assembled_derivatives(
-        self,
-        wv: ca.SX,
-        gv: ca.SX,
-        P: ca.SX,
-        point_fn: ca.Function,
-        lagr_fn: ca.Function,
-        offsets: Mapping[tuple[str, int, int], int],
-        rows_point: list[tuple[int, int, int]],
-        rows_cont: list[tuple[int, int]],
-        ends: list[tuple[int, ca.SX]],
-        mayer: ca.SX,
-        t0: float,
-        tf_nom: float,
-        npath: int,
-    ) -> tuple[ca.Function, ca.Function]:
-        """Constraint Jacobian and Lagrangian Hessian assembled from per-point derivatives.
-
-        At collocation point ``(k, j)`` the nonlinear constraints ``h f(t, x, z, u), g_alg,
-        path`` and the Lagrange term depend only on that point's ``x, z, u`` and on the
-        final time; the collocation polynomial and continuity terms are linear with the
-        constant coefficients ``C`` and ``D``. So the point functions are differentiated
-        once (small expressions) and their derivatives, called at every point, are placed
-        into the sparse NLP matrices. The point constraints at the start and final time
-        (few) are differentiated directly. Returns the ``jac_g`` and ``hess_lag``
-        functions of ``casadi.nlpsol``.
-        """
-        opt, dae, co, noms = self.optimization, self.dae, self._co, self.nominal
-        N, d = self.elements, self.points
-        nx, nz, nu = dae.nx, dae.nz, dae.nu
-        free = opt.free_final_time
-        nw, ng = int(wv.numel()), int(gv.numel())
-        nr = nx + nz + npath
-
-        # local functions of the scaled point variables v = (x, z, u[, tf][, free parameters])
-        xs, zs, us = ca.SX.sym("xs", nx), ca.SX.sym("zs", nz), ca.SX.sym("us", nu)
-        ts = ca.SX.sym("ts") if free else ca.SX(0, 1)
-        npf = int(self._free_index().size)
-        ps = ca.SX.sym("ps", npf)
-        P_loc = self._with_free(P, ps)
-        c, b, lam_f = ca.SX.sym("c"), ca.SX.sym("b"), ca.SX.sym("lam_f")
-        lam_r = ca.SX.sym("lam_r", nr)
-        T = ts * tf_nom if free else ca.SX(opt.final_time_value)
-        h = (T - t0) / N
-        t = t0 + c * h
-        x, z, u = xs * ca.DM(noms["x"]), zs * ca.DM(noms["z"]), us * ca.DM(noms["u"])
-        f, a, p = point_fn(t, x, z, u, P_loc, T)
-        r = ca.vertcat(h * f, a, p)
-        v = ca.vertcat(xs, zs, us, ts, ps)
-        jac_r = ca.jacobian(r, v)
-        lag = ca.dot(lam_r, r) + lam_f * b * h * lagr_fn(t, x, z, u, P_loc, T)
-        hess_r = ca.triu(ca.hessian(lag, v)[0])
-        local_in = [xs, zs, us, ts, ps, P, c]
-        jac_fn = ca.Function("point_jac", local_in, [jac_r], {"never_inline": True})
-        hess_fn = ca.Function("point_hess", local_in + [b, lam_f, lam_r], [hess_r], {"never_inline": True})
-        jr, jc = jac_r.sparsity().get_triplet()
-        hr, hc = hess_r.sparsity().get_triplet()
-
-        lam_f_g = ca.SX.sym("lam_f")
-        lam_g = ca.SX.sym("lam_g", ng)
-        tf_index = [offsets[("tf", 0, 0)]] if free else []
-        tf_arg = wv[tf_index[0]] if free else ca.SX(0, 1)
-        pf_index = list(offsets[("pf", 0, 0)] + np.arange(npf)) if npf else []
-        pf_arg = wv[offsets[("pf", 0, 0)]:offsets[("pf", 0, 0)] + npf] if npf else ca.SX(0, 1)
-        jac: dict[tuple[int, int], list] = {}
-        hess: dict[tuple[int, int], list] = {}
-
-        def add(store: dict, row: int, col: int, value: Any) -> None:
-            store.setdefault((row, col), []).append(value)
-
-        for k, j, first in rows_point:
-            ox, oz, ou = offsets[("x", k, j)], offsets[("z", k, j)], offsets[("u", k, j)]
-            cols = np.concatenate([ox + np.arange(nx), oz + np.arange(nz), ou + np.arange(nu), tf_index, pf_index]).astype(int)
-            arg = [wv[ox:ox + nx], wv[oz:oz + nz], wv[ou:ou + nu], tf_arg, pf_arg, P, k + co["root"][j]]
-            for value, rr, cc in zip(jac_fn(*arg).nonzeros(), jr, jc):
-                add(jac, first + rr, int(cols[cc]), value)
-            # collocation polynomial: - sum_r C[r, j] x_{k,r} (scaled variables)
-            for r_ in range(d + 1):
-                if co["C"][r_, j] != 0.0:
-                    o = offsets[("x", k, r_)]
-                    for i in range(nx):
-                        add(jac, first + i, o + i, -co["C"][r_, j] * noms["x"][i])
-            hk = hess_fn(*arg, co["B"][j - 1], lam_f_g, lam_g[first:first + nr])
-            for value, rr, cc in zip(hk.nonzeros(), hr, hc):
-                R, C_ = int(cols[rr]), int(cols[cc])
-                add(hess, min(R, C_), max(R, C_), value)
-        for k, first in rows_cont:
-            o = offsets[("x", k + 1, 0)]
-            for i in range(nx):
-                add(jac, first + i, o + i, noms["x"][i])
-            for r_ in range(d + 1):
-                if co["D"][r_] != 0.0:
-                    o = offsets[("x", k, r_)]
-                    for i in range(nx):
-                        add(jac, first + i, o + i, -co["D"][r_] * noms["x"][i])
-        # point constraints at the ends and the Mayer term: few, differentiated directly
-        lag_ends = lam_f_g * mayer
-        for first, e in ends:
-            n = int(e.numel())
-            je = ca.jacobian(e, wv)
-            for value, rr, cc in zip(je.nonzeros(), *je.sparsity().get_triplet()):
-                add(jac, first + rr, cc, value)
-            lag_ends = lag_ends + ca.dot(lam_g[first:first + n], e)
-        he = ca.triu(ca.hessian(lag_ends, wv)[0])
-        for value, rr, cc in zip(he.nonzeros(), *he.sparsity().get_triplet()):
-            add(hess, rr, cc, value)
-
-        def matrix(store: dict, nrow: int, ncol: int) -> ca.SX:
-            keys = sorted(store, key=lambda rc: (rc[1], rc[0]))  # column-major, as CasADi stores
-            sp = ca.Sparsity.triplet(nrow, ncol, [rc[0] for rc in keys], [rc[1] for rc in keys])
-            values = [ca.SX(0)] * len(keys)
-            for i, key in enumerate(keys):
-                terms = store[key]
-                values[i] = terms[0] if len(terms) == 1 else sum(terms[1:], terms[0])
-            return ca.SX(sp, ca.vertcat(*values)) if keys else ca.SX(nrow, ncol)
-
-        jac_g = ca.Function("nlp_jac_g", [wv, P], [gv, matrix(jac, ng, nw)], ["x", "p"], ["g", "jac_g_x"])
-        hess_lag = ca.Function(
-            "nlp_hess_l", [wv, P, lam_f_g, lam_g], [matrix(hess, nw, nw)], ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]
-        )
-        return jac_g, hess_lag
-
+            raise SolverError(f"could not build the {self.plugin} solver: {exc}") from exc
 
     # ------------------------------------------------------------------ guesses
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
@@ -605,6 +294,7 @@ class CollocationTranscription:
         self,
         parameters: Mapping[str, Any] | None = None,
         initial_guess: OptimizationResult | Mapping[str, Any] | None = None,
+        warm_start: bool = False,
     ) -> OptimizationResult:
         """Solve the NLP; never raises for a non-optimal outcome.
 
@@ -618,6 +308,11 @@ class CollocationTranscription:
             start), a result of another transcription (sampled), or a mapping from
             variable names (and ``"final_time"``) to guesses in the formats of
             :meth:`Optimization.set_initial_guess`. Default: the problem's guesses.
+        warm_start : bool, optional
+            With a previous result of this transcription as ``initial_guess``: start
+            IPOPT from its primal point *and multipliers* with a small barrier parameter
+            (:data:`gtmodel.modeling.collocation_function.WARM_START_OPTIONS`), a true
+            warm start. Default False (the primal point only, a cold barrier).
 
         Returns
         -------
@@ -668,21 +363,65 @@ class CollocationTranscription:
         if w0 is None:
             w0 = self._initial_w(guesses, tf_guess, pvec)
 
+        solver = self.solver
+        warm: dict[str, np.ndarray] = {}
+        if warm_start:
+            if not (isinstance(initial_guess, OptimizationResult) and initial_guess.transcription_key == self.key
+                    and initial_guess.lam_g is not None):
+                raise InputError("warm_start: initial_guess must be a result of this transcription (with its multipliers)")
+            solver = self.warm_solver()
+            warm = {"lam_x0": initial_guess.lam_w, "lam_g0": initial_guess.lam_g}
         t_start = _time.perf_counter()
         error_msg = None
+        lam = (None, None)
         try:
-            sol = self.solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pvec)
+            sol = solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pvec, **warm)
             w_opt = np.array(sol["x"], dtype=float).reshape(-1)
+            lam = (np.array(sol["lam_x"], dtype=float).reshape(-1), np.array(sol["lam_g"], dtype=float).reshape(-1))
         except RuntimeError as exc:  # e.g. NaN/exception inside an evaluation
             error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
             w_opt = w0
         solve_time = _time.perf_counter() - t_start
-        stats = dict(self.solver.stats())
+        stats = dict(solver.stats())
         message = error_msg or str(stats.get("return_status", "unknown"))
         status = Status.ERROR if error_msg else normalize_ipopt_status(message)
         if not np.all(np.isfinite(w_opt)):
             status = Status.ERROR
-        return self._result(w_opt, pvec, status, message, stats, solve_time)
+        res = self._result(w_opt, pvec, status, message, stats, solve_time)
+        res.lam_w, res.lam_g = lam
+        return res
+
+    def warm_solver(self) -> ca.Function:
+        """The nlpsol of warm starts (built once; shares the derivative functions).
+
+        Returns
+        -------
+        casadi.Function
+            IPOPT with :data:`~gtmodel.modeling.collocation_function.WARM_START_OPTIONS`.
+        """
+        if self._warm_solver is None:
+            opts = {**self.options, self.plugin: {**self.options[self.plugin], **WARM_START_OPTIONS}}
+            self._warm_solver = self._nlpsol(opts)
+        return self._warm_solver
+
+    def to_function(self, name: str = "resolve", warm_start: bool = True) -> ca.Function:
+        """This NLP's solve as one CasADi Function of the parameters and a start point (rockit's ``to_function``).
+
+        See :func:`gtmodel.modeling.collocation_function.resolve_function`.
+
+        Parameters
+        ----------
+        name : str, optional
+            Function name.
+        warm_start : bool, optional
+            Use the warm-start solver (multipliers and a small barrier parameter).
+
+        Returns
+        -------
+        casadi.Function
+            ``(p, w0, lam_w0, lam_g0) -> (w, lam_w, lam_g, objective, final_time)``.
+        """
+        return resolve_function(self, name, warm_start)
 
     def _result(
         self,

@@ -216,6 +216,8 @@ class OptimizationResult(StatusResult):
         Raw NLP decision vector (for warm starts).
     transcription_key : tuple or None
         Identifies the transcription that produced ``w``.
+    lam_w, lam_g : numpy.ndarray or None
+        Multipliers of the bounds of ``w`` and of the constraints (for warm starts).
     """
 
     iterations: int
@@ -235,6 +237,8 @@ class OptimizationResult(StatusResult):
     dae: FlatDAE | None = field(default=None, repr=False)
     w: np.ndarray | None = field(default=None, repr=False)
     transcription_key: tuple | None = field(default=None, repr=False)
+    lam_w: np.ndarray | None = field(default=None, repr=False)
+    lam_g: np.ndarray | None = field(default=None, repr=False)
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.

@@ -20,6 +20,7 @@ import logging
 import os
 import re
 import signal
+import socket
 import threading
 import time
 from dataclasses import dataclass, field
@@ -192,6 +193,10 @@ class CaseRecord:
         Whether the folder was written.
     solution : Any, optional
         The kind's solution (only when run in this process and asked for).
+    started : float or None, optional
+        When :func:`~gtmodel.problems.run.run_problem` started (``time.time()``) [s].
+    worker : str, optional
+        The process that ran it (``host:pid``).
     """
 
     label: str
@@ -202,6 +207,8 @@ class CaseRecord:
     summary: dict[str, Any]
     written: bool = True
     solution: Any = None
+    started: float | None = None
+    worker: str = ""
 
 
 def finished_summary(folder: Path, key: str) -> dict[str, Any] | None:
@@ -247,6 +254,7 @@ def _stamp(folder: Path, task: CaseTask, wall_s: float) -> dict[str, Any] | None
 
 
 def _run_one(task: CaseTask, previous: Any, warm_start: bool, keep_solution: bool) -> tuple[CaseRecord, Any]:
+    started = time.time()
     start = time.perf_counter()
     outcome = run_problem(task.path, task.folder, task.overrides, verbose=task.verbose, plots=task.plots,
                           previous=previous, warm_start=warm_start, heartbeat=task.heartbeat)
@@ -255,7 +263,7 @@ def _run_one(task: CaseTask, previous: Any, warm_start: bool, keep_solution: boo
     if task.key and outcome.written and outcome.status is not Status.INTERRUPTED:
         summary = _stamp(task.folder, task, wall) or summary
     record = CaseRecord(task.label, task.key, task.folder, outcome.status, wall, summary, outcome.written,
-                        outcome.solution if keep_solution else None)
+                        outcome.solution if keep_solution else None, started, f"{socket.gethostname()}:{os.getpid()}")
     return record, outcome.solution
 
 
@@ -336,7 +344,9 @@ def dask_setup(worker: Any = None) -> None:
 
     A worker process ignores SIGINT: Ctrl-C on a terminal reaches the whole process group,
     and the study's own process stops the cases and closes the cluster (no traceback from
-    every worker). Importing this module on start also makes gtmodel's import part of
+    every worker); SIGTERM gets its default action back, and the ``gtmodel`` logger drops
+    the handlers a forked worker inherited (warnings still reach standard error, info
+    lines do not). Importing this module on start also makes gtmodel's import part of
     the worker's startup, not of its first case.
 
     Parameters
@@ -346,3 +356,7 @@ def dask_setup(worker: Any = None) -> None:
     """
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    for handler in list(_log.handlers):
+        _log.removeHandler(handler)
+    _log.setLevel(logging.WARNING)

@@ -1,7 +1,8 @@
 """Progress of a study: a rich progress bar on a terminal, log lines when piped, or nothing.
 
 On a terminal (standard error is a TTY) a :mod:`rich` bar shows cases done, failed and
-the ETA; otherwise one ``gtmodel`` log line is written every ``every`` cases or every
+the ETA (from the first finished case on: a local cluster forks its workers before any
+thread of the bar writes to the terminal); otherwise one ``gtmodel`` log line is written every ``every`` cases or every
 ``interval`` seconds, whichever comes first; ``mode="off"`` (tests, library use) is
 silent.
 """
@@ -75,15 +76,24 @@ class StudyProgress:
 
     def __enter__(self) -> "StudyProgress":
         self._start = self._last_log = time.monotonic()
-        if self.mode == "rich":
-            self._bar = Progress(
-                TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-                console=Console(stderr=True),
-            )
-            self._bar.__enter__()
-            self._task = self._bar.add_task(self.name, total=self.total, failed=0)
         return self
+
+    def _start_bar(self) -> None:
+        # started at the first finished case, not before: the local cluster forks its workers
+        # first, while no thread of the bar writes to the terminal
+        frozen: list[float] = [self._start]  # the task's clock starts with the study, not with the bar
+
+        def now() -> float:
+            return frozen[0] if frozen else time.monotonic()
+
+        self._bar = Progress(
+            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("failed {task.fields[failed]}"), TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+            console=Console(stderr=True), get_time=now,
+        )
+        self._task = self._bar.add_task(self.name, total=self.total, failed=0)
+        frozen.clear()
+        self._bar.__enter__()
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         if self._bar is not None:
@@ -100,6 +110,8 @@ class StudyProgress:
         """
         self.done += 1
         self.failed += 0 if Status(status).success else 1
+        if self.mode == "rich" and self._bar is None:
+            self._start_bar()
         if self._bar is not None and self._task is not None:
             self._bar.update(self._task, completed=self.done, failed=self.failed)
         elif self.mode == "log":

@@ -8,6 +8,7 @@ from gtmodel.trajectory.point_to_point import (
     solve_point_to_point,
     trapezoid_profile,
 )
+from gtmodel.trajectory.point_to_point_resolve import point_to_point_function, resolve_point_to_point
 from gtmodel.trajectory.path import Path, Polyline, SplinePath, StraightLine
 from gtmodel.trajectory.path_constrained import (
     PathConstrainedProblem,
@@ -25,6 +26,8 @@ __all__ = [
     "build_optimization",
     "solve_point_to_point",
     "trapezoid_profile",
+    "resolve_point_to_point",
+    "point_to_point_function",
     "Path",
     "StraightLine",
     "Polyline",

@@ -48,6 +48,8 @@ __all__ = [
     "SAMPLE_TIME",
     "SOLVER_OPTIONS",
     "TRAJECTORY_COLUMNS",
+    "START_POSE",
+    "END_POSE",
 ]
 
 _log = logging.getLogger("gtmodel")
@@ -66,6 +68,8 @@ SAMPLE_TIME = 0.004
 #: ``perturb_always_cd`` is neutral on the median but gives the L1 problem 49 instead of 64.
 #: The objective scaling is applied only with a free final time (see the function).
 SOLVER_OPTIONS = {"obj_scaling_factor": 1e4, "perturb_always_cd": "yes"}
+#: Model parameters holding the boundary poses [m] (NLP parameters of the transcription).
+START_POSE, END_POSE = "T_start_pose", "T_end_pose"
 #: Leading columns of the trajectory table, in this order.
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3")
 
@@ -128,6 +132,8 @@ class PointToPoint:
         Where the declaration comes from (file name), used in error messages.
     start_time : float
         Start time ``t0`` [s]; the final time and its bounds are absolute times.
+    solver, jit : str, bool
+        NLP solver (``"ipopt"``) and compiled C derivatives (``CollocationTranscription``'s ``compile``).
 
     Raises
     ------
@@ -162,6 +168,8 @@ class PointToPoint:
     guess: Any = "trapezoid"
     origin: str = "<python>"
     start_time: float = 0.0
+    solver: str = "ipopt"
+    jit: bool = True
     parameters: RobotParameters = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -411,7 +419,9 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     # bound it too, so that the sampled forces stay within the limits everywhere
     opt.add_point_constraint(tau, at="start", lb=-problem.force_limit, ub=problem.force_limit, name="tau(start)")
     T_ddot = model.der(T_dot)
-    for at, pose in (("start", problem.start), ("final", problem.end)):
+    # poses as NLP parameters: re-solves for new poses reuse the NLP (resolve_point_to_point)
+    poses = (("start", model.parameter(START_POSE, problem.start)), ("final", model.parameter(END_POSE, problem.end)))
+    for at, pose in poses:
         opt.add_point_constraint(T - pose, at=at, lb=0.0, ub=0.0, name=f"T({at})")
         opt.add_point_constraint(T_dot, at=at, lb=0.0, ub=0.0, name=f"T_dot({at})")
         opt.add_point_constraint(T_ddot, at=at, lb=0.0, ub=0.0, name=f"T_ddot({at})")
@@ -692,6 +702,8 @@ def solve_point_to_point(
             verbose=verbose,
             solver_options=options,
             nominal={"tau": problem.force_limit},
+            compile=problem.jit,
+            solver=problem.solver,
         )
         guess = previous.result if (warm_start and previous is not None) else None
         result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)

@@ -70,3 +70,16 @@ def test_singular_problem_raises_every_time(data):
         calibrate(model, q1, T1, align=False)
     with pytest.raises(ModelError, match="singular"):
         calibrate(model, q1, T1, align=False)
+
+
+def test_changed_data_in_place_is_a_new_data_set(data):
+    """The last data set is recognised by value, not identity: the caller's array changed
+    in place gives the result of a fresh problem on the new values (checked against it)."""
+    q, T = data
+    T2 = T.copy()
+    problem = CalibrationProblem(nominal())
+    problem.solve(q, T2)
+    T2[:, 2] += 1e-4 * np.sin(np.arange(len(T2)))
+    r_cached = problem.solve(q, T2)
+    r_fresh = CalibrationProblem(nominal()).solve(q, T2.copy())
+    np.testing.assert_array_equal(r_cached.parameter_vector, r_fresh.parameter_vector)

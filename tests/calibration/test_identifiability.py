@@ -12,11 +12,13 @@ import math
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 from gtmodel.calibration.kinematic import analyze_identifiability, calibrate
 from gtmodel.calibration.identifiability import (
     RANK_TOLERANCE,
     analyze_jacobian,
+    analyze_qr,
     combine_reports,
     numerical_rank,
     observability_indices,
@@ -285,3 +287,30 @@ def test_analyze_jacobian_bad_input(J, kwargs, match):
 def test_observability_bad_input(sv, m, match):
     with pytest.raises(InputError, match=match):
         observability_indices(sv, m)
+
+
+def _dependent_jacobian() -> np.ndarray:
+    J = np.random.default_rng(5).standard_normal((40, 4)) * [1.0, 1e-3, 10.0, 1.0]
+    J[:, 3] = 2.0 * J[:, 0] - 0.5 * J[:, 2]  # column 3 a combination of 0 and 2
+    return J
+
+
+@pytest.mark.parametrize(
+    "J", [np.random.default_rng(4).standard_normal((30, 5)) * [1.0, 1e3, 1e-2, 1.0, 5.0], _dependent_jacobian()],
+    ids=["full_rank", "rank_deficient"],
+)
+def test_analyze_qr_equals_analyze_jacobian(J):
+    """The report from a pivoted QR computed elsewhere (the calibration's polishing step)
+    equals analyze_jacobian's report of the same Jacobian (checked against it: a second
+    route through the same factorisation)."""
+    r = np.random.default_rng(6).standard_normal(J.shape[0])
+    names = [f"x{i}" for i in range(J.shape[1])]
+    ref = analyze_jacobian(J, names, residuals=r)
+    Js, norms = scale_columns(J)
+    R, piv = scipy.linalg.qr(Js, mode="r", pivoting=True)
+    rep = analyze_qr(R, piv, norms, J.shape[0], names, rss=float(r @ r))
+    assert (rep.rank, rep.identifiable, rep.n_residuals) == (ref.rank, ref.identifiable, ref.n_residuals)
+    assert rep.non_identifiable.keys() == ref.non_identifiable.keys()
+    np.testing.assert_allclose(rep.singular_values, ref.singular_values, rtol=EXACT)
+    np.testing.assert_allclose(list(rep.std.values()), list(ref.std.values()), rtol=EXACT)
+    np.testing.assert_allclose(list(rep.observability.values()), list(ref.observability.values()), rtol=EXACT)

@@ -1,9 +1,10 @@
 """A study on a real Dask cluster: a ``dask scheduler`` and two ``dask worker`` processes
-on 127.0.0.1 (subprocesses), one worker killed (SIGKILL) while it runs a case.
+on 127.0.0.1 (subprocesses), one worker killed (SIGKILL) while it runs a case; and Dask's bounded retries
+(``allowed-failures``) of a case that kills every worker it runs on, on a local cluster.
 
 Independent reference: the scheduler's own record of the tasks the killed worker was
-processing, and the case folders on disk (one per case, no duplicates, no partial ones).
-(The bounded retries of a case that kills every worker: test_study_retries.py.)
+processing; the case folders on disk (one per case, no duplicates, no partial ones); a
+model file that kills the process importing it (``os._exit``).
 """
 
 from __future__ import annotations
@@ -17,9 +18,10 @@ import time
 
 import pytest
 
+from gtmodel.problems import study_engine
 from gtmodel.problems.study_engine import run_study
 
-from ..conftest import REPO
+from ..conftest import PROBLEMS_DIR, REPO
 from .study_fixtures import grid_design, write_study
 
 distributed = pytest.importorskip("distributed")
@@ -102,3 +104,19 @@ def test_a_killed_worker_loses_nothing_and_duplicates_nothing(cluster, tmp_path)
     assert len(records) == n and len({r.key for r in records}) == n  # each case reported once
     folders = sorted(p.name for p in (tmp_path / "out" / "cases").iterdir())
     assert folders == sorted(table["folder"].str.removeprefix("cases/"))  # one folder per case, no partial ones left
+
+
+def test_a_case_that_kills_every_worker_is_a_row_after_bounded_retries(tmp_path, monkeypatch):
+    """Dask reschedules it after its worker died, at most ALLOWED_FAILURES times (here 1);
+    then the case is an internal_error row and the study ends (exit 3), nothing hangs."""
+    monkeypatch.setattr(study_engine, "ALLOWED_FAILURES", 1)
+    (tmp_path / "crash.py").write_text("import os\nos._exit(1)  # a model file that kills the process loading it\n")
+    model = (PROBLEMS_DIR / "cart_pendulum_swing_up.toml").read_text()
+    assert 'file = "../models/cart_pendulum.py"' in model
+    study = write_study(tmp_path, "")
+    (tmp_path / "pendulum.toml").write_text(model.replace('"../models/cart_pendulum.py"', '"crash.py"'))
+    study.write_text('base = "pendulum.toml"\nplots = false\n[design]\n[[design.axes]]\nfield = "model.file"\nvalues = ["crash.py"]\n')
+    outcome = run_study(study, tmp_path / "out", workers=2)
+    assert outcome.table["status"].tolist() == ["internal_error"]
+    assert "every worker that ran it died (dask KilledWorker" in outcome.table["message"][0]
+    assert outcome.exit_code == 3

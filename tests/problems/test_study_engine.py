@@ -173,3 +173,38 @@ def test_progress_is_silent_when_off(caplog, capsys):
     with StudyProgress("s", 2, mode="off") as bar:
         bar.update("optimal")
     assert not caplog.records and capsys.readouterr() == ("", "")
+
+
+def test_an_unreachable_scheduler_is_bad_input(small, tmp_path, capsys):
+    dask = pytest.importorskip("dask")
+    study, _ = small
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        code = main(["study", str(study), "--out", str(tmp_path / "o"), "--scheduler", "tcp://127.0.0.1:9", "-q"])
+    assert code == EXIT_BAD_INPUT
+    assert "scheduler 'tcp://127.0.0.1:9': cannot connect" in capsys.readouterr().err
+
+
+def test_warm_started_chains_on_a_local_cluster(tmp_path):
+    """The same chains as units of two worker processes: the same keys and statuses as in this process."""
+    design = SMALL_DESIGN.replace("[60.0, 60.0, 60.0], ", "")
+    study = write_study(tmp_path, design, header="warm_start = true")
+    local = run_study(study, tmp_path / "a", workers=1)
+    cluster = run_study(study, tmp_path / "b", workers=2)
+    assert cluster.table["key"].tolist() == local.table["key"].tolist()
+    assert (cluster.table["status"] == "optimal").all() and cluster.summary["workers"] == 2
+
+
+def test_solve_sweep_on_two_workers_writes_the_same_comparison(tmp_path):
+    base = write_study(tmp_path, SMALL_DESIGN).parent / "base.toml"
+    args = [str(base), "--sweep", "method.grid=40,60,80", "--quiet", "--no-plots"]
+    assert main(["solve", *args, "--out", str(tmp_path / "one")]) == 0
+    assert main(["solve", *args, "--out", str(tmp_path / "two"), "--workers", "2"]) == 0
+    one, two = (pd.read_csv(tmp_path / d / "comparison.csv").drop(columns="solve_time_s") for d in ("one", "two"))
+    pd.testing.assert_frame_equal(one, two)  # every column but the solve time
+
+
+def test_rich_progress_bar_runs(capsys):
+    with StudyProgress("s", 2, mode="rich") as bar:
+        bar.update("optimal")
+        bar.update("infeasible")
+    assert "2/2" in capsys.readouterr().err

@@ -31,8 +31,7 @@ def _finished_folders(out) -> list:
     return [p for p in cases.iterdir() if (p / "summary.json").exists()] if cases.exists() else []
 
 
-# the local cluster's start dominates (15-40 s on the shared 2-core machine)
-@pytest.mark.parametrize("workers", ["1", pytest.param("2", marks=pytest.mark.slow)], ids=["in_process", "local_cluster"])
+@pytest.mark.parametrize("workers", ["1", "2"], ids=["in_process", "local_cluster"])
 def test_ctrl_c_stops_with_130_keeps_finished_cases_and_a_rerun_completes_the_rest(tmp_path, workers):
     n = 14
     study = write_study(tmp_path, grid_design(n, grid=2000))

@@ -78,6 +78,23 @@ def test_trapezoid_reachability_equals_ipopt(trapezoid_problem):
     assert abs(a.final_time - b.final_time) <= NLP_REL_TOL * b.final_time
 
 
+@pytest.mark.parametrize("points", [100, 500])
+def test_tight_ipopt_lands_on_the_gridded_optimum(points):
+    """Reference: IPOPT (an interior-point method on the same grid) with tol 1e-14 and
+    unrelaxed bounds; the reachability optimum is exact, so the two agree to 1e-12
+    relative (1e-6 ppm), the benchmark's line case (issue 17)."""
+    problem = PathConstrainedProblem(StraightLine([0.0, 0.0, 0.0], [0.8, 0.3, -0.2]),
+                                     PathConstraints(tcp_velocity_limit=1.0, tcp_acceleration_limit=5.0), constrain_end=False)
+    gp = problem.gridded(points)
+    loose, tight = problem.solve_nlp(gp), problem.solve_nlp(gp, tol=1e-14)
+    exact = problem.solve(gp).final_time
+    assert tight.status == "optimal", tight.message
+    assert abs(tight.final_time - exact) <= 1e-12 * exact
+    # the NLP is rebuilt for other options (it was once cached by grid size alone, so a
+    # second tol was silently ignored): the loose solve stops measurably farther away
+    assert abs(loose.final_time - exact) > abs(tight.final_time - exact)
+
+
 def test_polyline_stops_at_the_corner():
     """Reference: two analytic rest-to-rest trapezoids, 0.5 m along x (0.5 + 0.2 s) and
     0.4 m along y (0.4 + 0.2 s); the corner is a grid point with s_dot = 0."""

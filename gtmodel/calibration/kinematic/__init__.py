@@ -4,7 +4,8 @@ The package, one module per job: :mod:`~gtmodel.calibration.kinematic.selection`
 fixed and tied parameters), :mod:`~gtmodel.calibration.kinematic.alignment` (Kabsch frame
 alignment), :mod:`~gtmodel.calibration.kinematic.data` (measurement checks),
 :mod:`~gtmodel.calibration.kinematic.residuals` (CasADi residual/Jacobian graphs and
-IPOPT NLPs of a group of arms), :mod:`~gtmodel.calibration.kinematic.problem`
+IPOPT NLPs of a group of arms), :mod:`~gtmodel.calibration.kinematic.lsq` (MINPACK
+solve and Gauss-Newton polishing of a group), :mod:`~gtmodel.calibration.kinematic.problem`
 (:class:`CalibrationProblem`), :mod:`~gtmodel.calibration.kinematic.result` (results) and
 :mod:`~gtmodel.calibration.kinematic.shortcuts` (:func:`calibrate`,
 :func:`analyze_identifiability` with a cache of problems).
@@ -78,15 +79,29 @@ solver          iterations  solve [ms]   build [s]   optimum vs ``"lm"`` (relati
 ==============  ==========  ===========  ==========  ==============================
 
 (``"lm"``/``"trf"`` iterations are Jacobian evaluations including the polishing step.)
-``"lm"`` -- MINPACK's Levenberg-Marquardt through :func:`scipy.optimize.least_squares`
-with the exact CasADi Jacobian, plus one Gauss-Newton polishing step (see
-:data:`POLISH_STEPS`) -- is the default: fewest evaluations, least overhead; the whole
-``calibrate`` call (alignment, rank check, statistics, report) takes 12-36 ms. SciPy's
-least_squares with its 2-point finite-difference Jacobian on the same residuals (all 21
-parameters, same CasADi graph through buffers, method "lm" or "trf") needs 37-91 ms and
-~89 residual evaluations: 3-11x the solve time, 1.2-5x the whole call (the ratio
-moves with the machine's load: the many small calls of the exact-Jacobian path suffer
-more from a busy CPU than the peer's few long ones). IPOPT (exact Hessian
+``"lm"`` -- MINPACK's Levenberg-Marquardt (``lmder``) with the exact CasADi Jacobian,
+called through :func:`scipy.optimize.leastsq` exactly as
+``least_squares(method="lm", x_scale="jac")`` calls it (same iterates to the last bit,
+without its per-evaluation wrappers), plus one Gauss-Newton polishing step (see
+:data:`POLISH_STEPS`) -- is the default: fewest evaluations, least overhead. Each
+evaluation is one call of the residual + Jacobian graph (the Jacobian MINPACK asks for
+next at the same point is the cached one); the polishing step's column-pivoted QR
+(LAPACK directly) also gives the rank, singular values and covariance of the report
+(:func:`~gtmodel.calibration.identifiability.analyze_qr`), and the alignment and the
+start rank check are cached per data set and start, so a repeated call does little
+besides the solves. Whole ``calibrate`` call, L1, 779 poses (``bench_calibration.py
+--json``, shared 2-core machine at load 4-9, medians of 15 interleaved runs): 4.7 ms
+CPU (9 ms wall) against 15-23 ms CPU (33 ms wall) for SciPy's least_squares with its
+2-point finite-difference Jacobian on the same residuals (all 21 parameters, one SX
+graph of all poses through buffers, 89 residual evaluations): 3-5x. What remains of the
+call (CPU, ms): 13 residual + Jacobian evaluations of 779 poses by the CasADi
+interpreter 1.5, MINPACK's own work 0.7, the final residuals 0.2, polishing QR and
+reports 0.8, data checks, parameters and result 0.5. Evaluating the blocks as compiled
+C (:func:`gtmodel._compiler.compiled_function`, bit-identical) made the call 1.3x
+faster but the peer, evaluated the same way, 2x faster (ratio 3.5x -> 2.2x), for
+~3 s of the C compiler per graph: not used. The ratio moves with the machine's load:
+the many small calls of the exact-Jacobian path suffer more from a busy CPU than the
+peer's few long ones. IPOPT (exact Hessian
 of V, or the Gauss-Newton Hessian ``2 J^T J``) reaches the same optimum with a different
 method; it is kept as that independent check and for calibration problems that need
 constraints, at ~10x the time here (its per-iteration overhead dominates).

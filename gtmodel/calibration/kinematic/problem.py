@@ -20,7 +20,13 @@ import numpy as np
 import scipy.optimize
 
 from gtmodel._geometry import rotation_vector_to_rotation
-from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian, combine_reports, numerical_rank
+from gtmodel.calibration.identifiability import (
+    IdentifiabilityReport,
+    analyze_jacobian,
+    analyze_qr,
+    combine_reports,
+    numerical_rank,
+)
 from gtmodel.calibration.kinematic.alignment import _nominal_positions, fit_rigid_transform
 from gtmodel.calibration.kinematic.data import _check_data, _Data, _unpack_measurements
 from gtmodel.calibration.kinematic.graph_cache import (
@@ -30,6 +36,7 @@ from gtmodel.calibration.kinematic.graph_cache import (
     _bounded_add,
     shared_groups,
 )
+from gtmodel.calibration.kinematic.lsq import LSQ_TOLERANCE, POLISH_MAX_STEP, POLISH_STEPS, _polish, _solve_minpack
 from gtmodel.calibration.kinematic.residuals import _Evaluator, _Group
 from gtmodel.calibration.kinematic.result import CalibrationResult, GroupResult
 from gtmodel.calibration.kinematic.selection import ParameterSelection, _parameter_expression
@@ -63,14 +70,6 @@ DEFAULT_SOLVER = "lm"
 #: Iteration limit per group: residual evaluations (``max_nfev``) for "lm"/"trf", IPOPT
 #: iterations for "ipopt"/"ipopt-gn".
 MAX_ITER = 200
-#: Termination tolerance of least_squares: ``ftol = xtol = gtol`` (relative change of the
-#: cost, relative step, scaled gradient).
-LSQ_TOLERANCE = 1e-10
-#: Gauss-Newton polishing steps after a converged least_squares run (see ``_polish``).
-POLISH_STEPS = 1
-#: Largest relative polishing step ``|dx| / (1 + |x|)``; larger steps mean the run had not
-#: converged and are not taken.
-POLISH_MAX_STEP = 1e-6
 #: Rotation [rad] of a quaternion's local variables beyond which a failed solve is repeated
 #: from the re-set anchor (the anchor is always re-set to the solution).
 REANCHOR_ANGLE = 0.5
@@ -79,6 +78,7 @@ MAX_REANCHOR = 5
 #: Nominal FK results kept per problem (keyed by the actuator values), for repeated solves
 #: on the same poses (simulated calibrations, benchmarks).
 FK_CACHE_SIZE = 8
+
 
 class CalibrationProblem:
     """Calibration NLPs of a model and a parameter selection, built once, solved many times.
@@ -151,6 +151,7 @@ class CalibrationProblem:
         self._align_cache: dict[tuple[str, bytes], tuple[int, np.ndarray, np.ndarray]] = {}
         self._rank_ok: set[tuple[str, int, bytes]] = set()
         self._transform_safe: bool | None = None
+        self._last_data: tuple[tuple[np.ndarray, ...], str] | None = None
         self.build_time = 0.0
 
     # -------------------------------------------------------------- building
@@ -380,10 +381,9 @@ class CalibrationProblem:
         cost_arm = np.zeros(n_arms)
         cost0_arm = np.zeros(n_arms)
         residuals = np.zeros((data.N, self.model.n_links))
-        active = data.weights > 0
         for gi, (grp, ev) in enumerate(zip(self._groups, evs)):
             ev.set_pb(pb_final)
-            mask = np.repeat(active, grp.nr)
+            mask = ev.mask
             m = int(mask.sum())
             x0 = x_all[grp.var_idx].copy()
             r0, J0 = ev.residuals_jacobian(x0)
@@ -424,10 +424,18 @@ class CalibrationProblem:
                     b += b2
                 t_solve += time.perf_counter() - t0 - b
                 build += b
-                r, J = ev.residuals_jacobian(x)
-                V = float(r @ r)
+                qr = ev.polish_qr
+                if qr is not None and np.array_equal(qr.x_after, x):
+                    # the report from the polishing step's factorisation (at most
+                    # POLISH_MAX_STEP away), the residuals at the solution
+                    r = qr.r if qr.x_after is qr.x else ev.residuals_only(x)
+                    V = float(r @ r)
+                    rep = analyze_qr(qr.R, qr.piv, qr.norms, m, grp.var_names, rss=V if m > grp.nx else None)
+                else:
+                    r, J = ev.residuals_jacobian(x)
+                    V = float(r @ r)
+                    rep = analyze_jacobian(J[mask], grp.var_names, residuals=r[mask] if m > grp.nx else None)
                 sigma = math.sqrt(V / (m - grp.nx)) if m > grp.nx else math.inf
-                rep = analyze_jacobian(J[mask], grp.var_names, residuals=r[mask] if m > grp.nx else None)
                 reports.append(rep)
                 x_final[grp.var_idx] = x
                 pb_final[:] = ev.pb  # carries this group's re-anchored quaternions
@@ -515,15 +523,23 @@ class CalibrationProblem:
             self._fk_cache[key] = _nominal_positions(model, q)
         return self._fk_cache[key]
 
-    @staticmethod
-    def _data_key(data: _Data) -> str:
-        """Hash of a data set (actuator values, positions, orientations, weights)."""
+    def _data_key(self, data: _Data) -> str:
+        """Hash of a data set (actuator values, positions, orientations, weights).
+
+        The last data set and its key are kept: the same data again (a repeated solve)
+        is recognised by comparing the arrays, without hashing them."""
+        arrays = (data.q, data.T, data.quat, data.weights)
+        last = self._last_data
+        if last is not None and all(a.shape == b.shape and np.array_equal(a, b) for a, b in zip(arrays, last[0])):
+            return last[1]
         h = hashlib.sha1()
-        for a in (data.q, data.T, data.quat, data.weights):
+        for a in arrays:
             a = np.ascontiguousarray(a, dtype=float)
             h.update(str(a.shape).encode())
             h.update(a.tobytes())
-        return h.hexdigest()
+        key = h.hexdigest()
+        self._last_data = (arrays, key)  # the checked copies made by _check_data, not the caller's
+        return key
 
     def _evaluators(self, key: str, data: _Data) -> list[_Evaluator]:
         """Evaluators of all groups bound to the data set ``key`` (built once per data set).
@@ -635,34 +651,16 @@ class CalibrationProblem:
             out[js] = 0.0
         return out
 
-    @staticmethod
-    def _polish(ev: _Evaluator, x: np.ndarray) -> tuple[np.ndarray, int]:
-        """Gauss-Newton steps with the exact Jacobian after a converged least_squares run.
-
-        least_squares stops when the decrease of V falls below the rounding of V, which
-        near the optimum is reached ~1e-11 away from it (the closure residual
-        ``|A - B|^2 - L^2`` cancels ~11 digits); the Gauss-Newton step uses the gradient,
-        which is not affected, and lands on the optimum to ~1e-14. Steps larger than
-        :data:`POLISH_MAX_STEP` (relative) are not taken.
-        """
-        n = 0
-        for _ in range(POLISH_STEPS):
-            r, J = ev.residuals_jacobian(x)
-            dx = np.linalg.lstsq(J, -r, rcond=None)[0]
-            scale = 1.0 + float(np.linalg.norm(x))
-            if not np.all(np.isfinite(dx)) or np.linalg.norm(dx) > POLISH_MAX_STEP * scale:
-                break
-            x = x + dx
-            n += 1
-            if np.linalg.norm(dx) <= 1e-15 * scale:
-                break
-        return x, n
+    _polish = staticmethod(_polish)  # lsq._polish (Gauss-Newton step, QR kept for the report)
+    _solve_minpack = staticmethod(_solve_minpack)  # lsq._solve_minpack (solver "lm")
 
     def _solve_group(
         self, grp: _Group, ev: _Evaluator, x0: np.ndarray, solver: str, max_iter: int
     ) -> tuple[np.ndarray, str, str, int, float]:
         """Solve one group; returns x, status, message, iterations, build time spent."""
-        if solver in ("lm", "trf"):
+        if solver == "lm":
+            return self._solve_minpack(ev, x0, max_iter)
+        if solver == "trf":
             try:
                 sol = scipy.optimize.least_squares(
                     ev.residuals, x0, jac=ev.jacobian, method=solver, x_scale="jac",

@@ -132,6 +132,8 @@ class _Evaluator:
         self.x = np.zeros(group.nx)
         self.pb = np.ascontiguousarray(pb, dtype=float).copy()
         self.inputs = [self.x, self.pb, *data.padded(M)]
+        #: residual rows of the poses with non-zero weight (the others are zero)
+        self.mask = np.repeat(data.weights > 0, group.nr)
         self.r_out = np.zeros((M, group.nr))
         self.rJ_r = np.zeros((M, group.nr))
         self.rJ_J = np.zeros((M, max(group.nx, 1), group.nr))
@@ -146,6 +148,8 @@ class _Evaluator:
         if group.nx:
             self.fb_rJ.set_res(1, memoryview(self.rJ_J))
         self.n_eval = 0
+        #: factorisation of the last Gauss-Newton polishing step (CalibrationProblem._polish)
+        self.polish_qr: Any = None
         self._x_J: np.ndarray | None = None
         self._r = np.zeros(0)
         self._J = np.zeros((0, 0))
@@ -153,6 +157,7 @@ class _Evaluator:
     def set_pb(self, pb: np.ndarray) -> None:
         self.pb[:] = pb
         self._x_J = None
+        self.polish_qr = None
 
     def residuals_only(self, x: np.ndarray) -> np.ndarray:
         self.x[:] = x
@@ -160,22 +165,34 @@ class _Evaluator:
         return self.r_out[: self.N].ravel().copy()
 
     def residuals_jacobian(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residuals and Jacobian at ``x``; the last point's values are kept, because
-        least_squares asks for the Jacobian at the point of its last residual call."""
+        """Residuals and Jacobian at ``x`` (read-only arrays; copy before changing them).
+
+        The last point's values are kept, because least_squares asks for the Jacobian at
+        the point of its last residual call."""
         if self._x_J is not None and np.array_equal(self._x_J, x):
-            return self._r.copy(), self._J.copy()
+            return self._r, self._J
         self.x[:] = x
         self.ev_rJ()
         self.n_eval += 1
         r = self.rJ_r[: self.N].ravel().copy()
         J = self.rJ_J[: self.N, : self.group.nx].transpose(0, 2, 1).reshape(self.N * self.group.nr, self.group.nx).copy()
+        r.flags.writeable = False
+        J.flags.writeable = False
         self._x_J, self._r, self._J = np.array(x, dtype=float), r, J
-        return r.copy(), J.copy()
+        return r, J
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        return self.residuals_jacobian(x)[0]
+        return self.residuals_jacobian(x)[0].copy()
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
+        return self.residuals_jacobian(x)[1].copy()
+
+    def residuals_view(self, x: np.ndarray) -> np.ndarray:
+        """Residuals without a copy (for MINPACK, which copies them into its own arrays)."""
+        return self.residuals_jacobian(x)[0]
+
+    def jacobian_view(self, x: np.ndarray) -> np.ndarray:
+        """Jacobian without a copy (for MINPACK, which copies it into its own array)."""
         return self.residuals_jacobian(x)[1]
 
     def nlp_parameters(self, scale: float) -> np.ndarray:

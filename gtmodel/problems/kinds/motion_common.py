@@ -13,7 +13,7 @@ import numpy as np
 from pydantic import Field
 
 from gtmodel.problems.base import Column
-from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, Section, choice, integer, number, vector
+from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, Section, choice, integer, number, vector
 
 __all__ = [
     "MOTION_EMPTY_FIELDS",
@@ -23,6 +23,7 @@ __all__ = [
     "MotionSection",
     "CollocationSection",
     "SolverSection",
+    "OcpSolverSection",
     "trajectory_columns",
     "force_statistics",
 ]
@@ -92,6 +93,29 @@ class SolverSection(Section):
 
     max_iter: integer(1, 10**6, description="IPOPT iteration limit") = 3000
     tol: number(gt=0, le=1.0, description="IPOPT tolerance") = 1e-8
+
+
+class OcpSolverSection(SolverSection):
+    """``[solver]`` of a collocation OCP: the NLP solver and how its derivatives are evaluated.
+
+    Parameters
+    ----------
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    name : str
+        The NLP solver: ``"ipopt"`` (IPOPT with MUMPS, the project's assembled
+        derivatives). ``fatrop`` is not offered: CasADi's fatrop plugin differentiates
+        the NLP itself and cannot take the compiled derivatives (issue 17).
+    jit : bool
+        Evaluate the constraint Jacobian and Lagrangian Hessian through C generated from
+        their CasADi graph, compiled once with the system compiler and cached (the same
+        values, about 5x faster per evaluation); the interpreter without a compiler.
+    """
+
+    name: choice("ipopt", description="NLP solver") = "ipopt"
+    jit: Flag = Field(default=True, description="compiled (cached) C for the NLP derivatives")
 
 
 #: Summary fields of the motion kinds that are null when a run ends before a solution.

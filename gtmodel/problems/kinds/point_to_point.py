@@ -24,7 +24,7 @@ from gtmodel.problems.kinds.motion_common import (
     CollocationSection,
     MotionSection,
     RobotReference,
-    SolverSection,
+    OcpSolverSection,
     force_statistics,
     trajectory_columns,
 )
@@ -112,7 +112,7 @@ class PointToPointFile(ProblemSchema):
         ``[initial_guess]``: how the NLP is started.
     collocation : CollocationSection
         ``[collocation]``: the transcription.
-    solver : SolverSection
+    solver : OcpSolverSection
         ``[solver]``: IPOPT settings.
     """
 
@@ -124,7 +124,7 @@ class PointToPointFile(ProblemSchema):
     optimization: OptimizationSection
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
-    solver: SolverSection = SolverSection()
+    solver: OcpSolverSection = OcpSolverSection()
 
 
 #: Names the point-to-point model defines (see :func:`gtmodel.trajectory.problem_names`).
@@ -236,6 +236,8 @@ class PointToPointKind(ProblemKind):
                 guess=guess,
                 origin=str(file.path),
                 start_time=t0,
+                solver=doc.solver.name,
+                jit=doc.solver.jit,
             )
         except InputError as exc:
             raise ProblemError(f"{file.path}: {exc}") from None

@@ -14,7 +14,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.robots.dynamics import GantryTau3Dynamics
-from gtmodel.robots.kinematics import link_cosines_expression
+from gtmodel.robots.path_projection import path_rows_function
 
 __all__: list[str] = []
 
@@ -44,63 +44,10 @@ def _rows_function(dyn: GantryTau3Dynamics | None, kinds: tuple[str, ...], visco
     """CasADi Function ``rows(T, dT, ddT, sg) -> (m, c, d, g, q, dq, ddq, disc, cos)``.
 
     Rows in the order of :meth:`PathConstraints.bounds`; ``dq = q'(s)``, ``ddq = q''(s)``.
+    The graph is :func:`gtmodel.robots.path_projection.path_rows_function`, the one the
+    generated C re-timing function is generated from.
     """
-    T, dT, ddT, sg = (ca.SX.sym(n, 3) for n in ("T", "dT", "ddT", "sg"))
-    M: list[ca.SX] = []
-    C: list[ca.SX] = []
-    D: list[ca.SX] = []
-    G: list[ca.SX] = []
-    zero3 = ca.SX.zeros(3)
-    if dyn is not None:
-        kin = dyn.kinematics
-        q, disc = kin.ik_function(T, sg)
-        dq, ddq = kin.cart_acceleration_function(T, dT, ddT, sg)
-        cos = link_cosines_expression(T, q, kin.As, kin.v)
-    else:
-        q = dq = ddq = disc = cos = ca.SX(0, 1)
-    for kind in kinds:
-        if kind == "force_limit":
-            sd, sdd = ca.SX.sym("sd"), ca.SX.sym("sdd")
-            tau = dyn.inverse_dynamics_function(T, dT * sd, ddT * sd**2 + dT * sdd, sg)[0]
-            m = ca.jacobian(tau, sdd)
-            J1 = ca.jacobian(tau, sd)
-            H = ca.jacobian(J1, sd)
-            m, J1, H, tau1 = (ca.substitute(e, ca.vertcat(sd, sdd), ca.DM([1.0, 0.0])) for e in (m, J1, H, tau))
-            c = H / 2
-            d = J1 - H
-            g = tau1 - J1 + H / 2
-            M.append(m)
-            C.append(c)
-            D.append(d if viscous else zero3)
-            G.append(g)
-        elif kind == "cart_velocity_limit":
-            M.append(zero3)
-            C.append(dq**2)
-            D.append(zero3)
-            G.append(zero3)
-        elif kind == "cart_acceleration_limit":
-            M.append(dq)
-            C.append(ddq)
-            D.append(zero3)
-            G.append(zero3)
-        elif kind == "tcp_velocity_limit":
-            M.append(zero3)
-            C.append(dT**2)
-            D.append(zero3)
-            G.append(zero3)
-        elif kind == "tcp_speed_limit":
-            M.append(ca.SX(0))
-            C.append(ca.sumsqr(dT))
-            D.append(ca.SX(0))
-            G.append(ca.SX(0))
-        elif kind == "tcp_acceleration_limit":
-            M.append(dT)
-            C.append(ddT)
-            D.append(zero3)
-            G.append(zero3)
-    outs = [ca.vertcat(*X) for X in (M, C, D, G)] + [q, dq, ddq, disc, cos]
-    names = ["m", "c", "d", "g", "q", "dq", "ddq", "disc", "cos"]
-    return ca.Function("path_rows", [T, dT, ddT, sg], outs, ["T", "dT", "ddT", "sg"], names)
+    return path_rows_function(dyn, kinds, viscous)
 
 
 def _cached_rows_function(robot: Any, dyn: GantryTau3Dynamics | None, kinds: tuple[str, ...], viscous: bool) -> ca.Function:
