@@ -37,6 +37,8 @@ others (eq. 5.5), with identifiability and parameter uncertainties::
 
     [pose_selection]                # optional: choose poses from the candidates by eq. 5.9
     n = 185
+    method = "condition"            # "condition" (eq. 5.9) | "random"
+    planned = false                 # select on the start model's FK (before measuring)
 
 The synthetic pose grid is bounded up front: the number of grid points a step would
 examine is computed from the workspace box and the step before any pose is built, and a
@@ -76,7 +78,6 @@ from gtmodel.calibration import (
     random_poses,
     read_cart_measurements,
     read_measurements,
-    select_poses,
     synthetic_cart_measurements,
     synthetic_measurements,
 )
@@ -84,6 +85,7 @@ from gtmodel.calibration.kinematic import SOLVERS
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.calibration_poses import choose_poses
 from gtmodel.problems.kinds.calibration_results import write_calibration
 from gtmodel.problems.schema import (
     axis_count,
@@ -195,9 +197,11 @@ class CalibrationSection(Section):
 
 
 class PoseSelectionSection(Section):
-    """``[pose_selection]``: choose poses from the candidates (eq. 5.9)."""
+    """``[pose_selection]``: choose poses from the candidates (eq. 5.9, or at random)."""
 
     n: integer(2, 10**6, description="number of poses to select")
+    method: choice("condition", "random", description="greedy condition-number selection (eq. 5.9) or a random choice (seeded by truth.seed)") = "condition"
+    planned: Flag = Field(default=False, description="condition only: select on the start model's FK at the candidates (poses planned before measuring: the same for every seed)")
 
 
 @fill_doc(**KIND_DOCS)
@@ -256,6 +260,12 @@ class CalibrationDeclaration:
     truth_exact : bool
         The synthetic data come from ``truth`` exactly (no actuator errors), so its error on
         the data is the noise floor.
+    pose_method : str
+        ``"condition"`` (eq. 5.9) or ``"random"`` (with ``pose_selection``).
+    pose_planned : bool
+        Select on the start model's FK instead of the measured positions.
+    seed : int
+        Seed of the data (the random pose choice).
     """
 
     measurements: Any
@@ -269,6 +279,9 @@ class CalibrationDeclaration:
     source: str
     pose_selection: int | None = None
     truth_exact: bool = True
+    pose_method: str = "condition"
+    pose_planned: bool = False
+    seed: int = 0
 
 
 @dataclass
@@ -375,12 +388,14 @@ class CalibrationKind(ProblemKind):
         else:
             data, cart, truth, noise_sigma, source = _synthetic_data(doc, file)
         models = [_start_model(k, m, doc, file, truth, cart, data.n_q) for k, m in enumerate(doc.models)]
+        ps = doc.pose_selection if doc.pose_selection is not None else PoseSelectionSection(n=2)
         n_sel = doc.pose_selection.n if doc.pose_selection is not None else None
         if n_sel is not None and n_sel >= data.n_poses:
             raise file.fail("pose_selection.n", f"fewer poses than the {data.n_poses} candidates", n_sel)
         exact = truth is not None and doc.truth.actuator_errors == "none"
         cal = doc.calibration
-        return CalibrationDeclaration(data, cart, models, truth, noise_sigma, cal.solver, cal.max_iter, cal.align, source, n_sel, exact)
+        return CalibrationDeclaration(data, cart, models, truth, noise_sigma, cal.solver, cal.max_iter, cal.align, source, n_sel, exact,
+                                      ps.method, ps.planned, doc.truth.seed if doc.truth is not None else 0)
 
     def solve(self, declaration: CalibrationDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> CalibrationOutcome:
         """Calibrate every declared model on every second pose and evaluate on the others.
@@ -634,11 +649,11 @@ def _solve(decl: CalibrationDeclaration) -> CalibrationOutcome:
     t0 = time.perf_counter()
     data = decl.measurements
     selected = None
+    extra: dict[str, Any] = {}
     if decl.pose_selection is not None:
-        first = decl.models[0]
-        sel = select_poses(first["model"], data.q, decl.pose_selection, T=data.T, quat=data.quat, selection=first["selection"])
-        selected = np.asarray(sel.indices)
-        data = data.subset(np.sort(selected))
+        choice_ = choose_poses(decl.models[0], data, decl.pose_selection, decl.pose_method, decl.pose_planned, decl.seed)
+        selected, extra["pose_choice"] = choice_.indices, choice_.summary()
+        data = data.subset(selected)
     cal, val = data.split_alternate()
     results = []
     starts: dict[str, Any] = {}
@@ -661,7 +676,7 @@ def _solve(decl: CalibrationDeclaration) -> CalibrationOutcome:
             floor = evaluate(decl.truth, val, label="true robot (noise floor)")
         except GtModelError:
             floor = None
-    return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts})
+    return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts, **extra})
 
 
 def _start_report(model: Any, val: Any) -> Any:
