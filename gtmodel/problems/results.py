@@ -134,9 +134,12 @@ class ResultFolder:
 
     Examples
     --------
-    >>> folder = ResultFolder("results/x")                        # doctest: +SKIP
-    >>> (folder.path / "trajectory.csv").write_text("...")         # doctest: +SKIP
-    >>> folder.commit({"status": "optimal"})                       # doctest: +SKIP
+    >>> with ResultFolder("results/x") as folder:                  # doctest: +SKIP
+    ...     (folder.path / "trajectory.csv").write_text("...")
+    ...     folder.commit({"status": "optimal"})
+
+    As a context manager, the partial folder is removed at the end of the block unless it
+    was committed (an exception or Ctrl-C inside leaves the earlier target as it was).
     """
 
     def __init__(self, target: str | Path) -> None:
@@ -194,6 +197,13 @@ class ResultFolder:
     def discard(self) -> None:
         """Remove the partial folder (the target is left untouched)."""
         shutil.rmtree(self.path, ignore_errors=True)
+
+    def __enter__(self) -> "ResultFolder":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if not self.committed:
+            self.discard()
 
 
 def _remove_orphans(parent: Path, name: str) -> None:

@@ -133,20 +133,17 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         left as it was.
     """
     kind = get_kind(problem.kind)
-    folder = ResultFolder(out_dir)
-    try:
-        written = kind.write(problem.declaration, solution, folder.path, plots, problem.name)
-        summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
-        if problem.overrides:
-            summary["overrides"] = dict(problem.overrides)
-        summary.update(written.fields)
-        summary["status"] = kind.status(solution)
-        return folder.commit(summary)
-    except OSError as exc:
-        raise ResultWriteError(f"cannot write into {folder.path}: {exc.strerror or exc}") from None
-    finally:
-        if not folder.committed:
-            folder.discard()
+    with ResultFolder(out_dir) as folder:
+        try:
+            written = kind.write(problem.declaration, solution, folder.path, plots, problem.name)
+            summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
+            if problem.overrides:
+                summary["overrides"] = dict(problem.overrides)
+            summary.update(written.fields)
+            summary["status"] = kind.status(solution)
+            return folder.commit(summary)
+        except OSError as exc:
+            raise ResultWriteError(f"cannot write into {folder.path}: {exc.strerror or exc}") from None
 
 
 @dataclass
@@ -260,14 +257,9 @@ def _failed(path: Path, target: Path, problem: Problem | None, error: BaseExcept
     written = False
     if write:
         try:
-            with InterruptGuard():
-                folder = ResultFolder(target)
-                try:
-                    summary = folder.commit(summary)
-                    written = True
-                finally:
-                    if not folder.committed:
-                        folder.discard()
+            with InterruptGuard(), ResultFolder(target) as folder:
+                summary = folder.commit(summary)
+                written = True
         except (ResultWriteError, KeyboardInterrupt) as exc:
             _log.warning("gtmodel: could not write %s: %s", target / "summary.json", exc)
     return RunOutcome(path, target, status, summary, problem, None, error, written)

@@ -327,13 +327,9 @@ def record_failure(task: CaseTask, message: str, status: Status = Status.INTERNA
     summary["study"] = {"key": task.key, "label": task.label, "design": task.design, "wall_s": None}
     written = False
     try:
-        folder = ResultFolder(task.folder)
-        try:
+        with ResultFolder(task.folder) as folder:
             summary = folder.commit(summary)
             written = True
-        finally:
-            if not folder.committed:
-                folder.discard()
     except Exception as exc:  # noqa: BLE001 - the record keeps the failure
         _log.warning("gtmodel: could not write %s: %s", task.folder, exc)
     return CaseRecord(task.label, task.key, task.folder, Status(status), None, summary, written)
