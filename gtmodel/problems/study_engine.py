@@ -107,15 +107,18 @@ def plan_cases(study: Study, out: str | Path, plots: bool = True, verbose: bool 
     ------
     ProblemError
         An override names a field the base file does not have (the first such case,
-        before anything runs; names the base file and the field), or two cases resolve to
-        the same problem.
+        before anything runs; names the study file, the case, the base file and the
+        field), or two cases resolve to the same problem.
     """
     out = Path(out).resolve()
     data = read_toml(study.base, ProblemError, "problem file")
     tasks: list[CaseTask] = []
     seen: dict[str, str] = {}
     for case in study.cases:
-        key = case_key(study.base, resolve_document(study.base, case.overrides, data))
+        try:
+            key = case_key(study.base, resolve_document(study.base, case.overrides, data))
+        except ProblemError as exc:  # the override's fault is the study file's: name it first
+            raise ProblemError(f"{study.path}: field 'design' (case {case.label!r}): {exc}") from None
         if key in seen:
             raise ProblemError(f"{study.path}: field 'design': the cases {seen[key]!r} and {case.label!r} are the same problem")
         seen[key] = case.label

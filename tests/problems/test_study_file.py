@@ -122,7 +122,8 @@ def test_unknown_field_of_the_base_fails_before_anything_runs(tmp_path):
     f.write_text('base = "base.toml"\n[design]\n[[design.axes]]\nfield = "limits.forse"\nvalues = [1.0]\n')
     with pytest.raises(ProblemError, match=r"cannot sweep 'limits.forse'") as info:
         run_study(f, tmp_path / "out", workers=1)
-    assert str(info.value).startswith(str(base))  # the override error names the base file
+    # the study file first (its design is at fault), then the base file and its missing field
+    assert str(info.value).startswith(f"{f}: field 'design' (case 'limits.forse=1.0'): {base}:")
     assert not (tmp_path / "out").exists()
 
 
