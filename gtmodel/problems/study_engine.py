@@ -37,6 +37,7 @@ from gtmodel._toml import read_toml
 from gtmodel.errors import InputError, ProblemError, ResultWriteError
 from gtmodel.problems.analyses import ANALYSES
 from gtmodel.problems.results import write_json
+from gtmodel.problems.runtime import InterruptGuard
 from gtmodel.problems.study_cases import (CaseRecord, CaseTask, case_key, finished_summary, record_failure,
                                           resolve_document, run_unit, safe_name)
 from gtmodel.problems.study_file import Study, load_study
@@ -178,12 +179,17 @@ def execute(units: Sequence[Sequence[CaseTask]], on_record: Callable[[CaseRecord
         raise InputError(f"workers: expected a positive integer, got {workers!r}")
     if scheduler is None and workers == 1:
         info.update(workers=1, scheduler=None, startup_s=0.0)
-        for unit in units:
-            records = run_unit(unit, chain, warm_start, keep_solutions)
-            for r in records:
-                on_record(r)
-            if any(r.status is Status.INTERRUPTED for r in records):
-                raise KeyboardInterrupt("interrupted by the user")
+        # the guard keeps a SIGINT that arrives between the cases' own guards even if the
+        # KeyboardInterrupt it raises is swallowed (e.g. raised inside a finalizer, where
+        # Python only prints "Exception ignored"): checked after every unit
+        with InterruptGuard() as guard:
+            for unit in units:
+                records = run_unit(unit, chain, warm_start, keep_solutions)
+                for r in records:
+                    on_record(r)
+                if any(r.status is Status.INTERRUPTED for r in records):
+                    raise KeyboardInterrupt("interrupted by the user")
+                guard.check()
         return info
     _execute_dask(units, on_record, workers, scheduler, chain, warm_start, info)
     return info

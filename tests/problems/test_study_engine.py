@@ -10,6 +10,7 @@ against a run on a local cluster (the same numbers).
 from __future__ import annotations
 
 import json
+import time
 import shutil
 
 import pandas as pd
@@ -208,3 +209,31 @@ def test_rich_progress_bar_runs(capsys):
         bar.update("optimal")
         bar.update("infeasible")
     assert "2/2" in capsys.readouterr().err
+
+
+def test_a_sigint_swallowed_between_cases_still_interrupts_the_study(small, tmp_path, monkeypatch):
+    """A SIGINT whose KeyboardInterrupt is lost outside the cases' own guards (here caught
+    on purpose, as Python does in a finalizer) still stops an in-process study: status
+    ``interrupted`` after the case it came in, the remaining cases not run."""
+    import os
+    import signal
+
+    import gtmodel.problems.study_engine as engine
+
+    original = engine.run_unit
+    units = []
+
+    def run_unit(unit, *args, **kw):
+        records = original(unit, *args, **kw)
+        units.append(records)
+        if len(units) == 1:
+            try:
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.5)  # the handler runs here
+            except KeyboardInterrupt:
+                pass  # swallowed
+        return records
+
+    monkeypatch.setattr(engine, "run_unit", run_unit)
+    outcome = run_study(small[0], tmp_path / "again", workers=1)
+    assert outcome.status == "interrupted" and len(units) == 1 and len(outcome.table) == 1
