@@ -6,7 +6,7 @@ Measured side by side in one run, because these machines are noisy:
 - ``solve_s``: gtmodel's solve of the problem (default ``problems/l1_time_optimal.toml``),
   the IPOPT call only (the NLP built and its compiled derivatives cached beforehand);
 - ``peer_solve_s``: the same NLP (same model equations, mesh, constraints, force scaling,
-  initial guess and IPOPT options) written directly in ``casadi.Opti``, the IPOPT call only;
+  initial guess and IPOPT options, :data:`IPOPT_DEFAULTS` included) written directly in ``casadi.Opti``, the IPOPT call only;
 - ``final_time_s`` and ``peer_final_time_s``: the two optima;
 - ``ms_per_iteration``: gtmodel's solve time per IPOPT iteration at 50, 100, 200 and 400
   elements (the cost of one iteration should grow linearly with the mesh).
@@ -28,7 +28,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from gtmodel.modeling.collocation_nlp import collocation_coefficients
+from gtmodel.modeling.collocation_nlp import IPOPT_DEFAULTS, collocation_coefficients
 from gtmodel.problems import load_problem
 from gtmodel.trajectory import point_to_point as ptp
 from gtmodel.trajectory.point_to_point import SOLVER_OPTIONS, build_optimization, solve_point_to_point
@@ -92,7 +92,7 @@ def peer_opti(decl) -> tuple[float, float, int, str, float]:
             if 1 <= j and k < N:
                 opti.set_initial(U[k][j - 1], np.clip(np.ravel(guess["tau"](t)) / u_nom, -1, 1))
     opti.set_initial(tf, tfg)
-    ipopt = {"max_iter": decl.max_iter, "tol": decl.tol, "print_level": int(os.environ.get("PEER_PRINT", 0)), "sb": "yes", **SOLVER_OPTIONS}
+    ipopt = {"max_iter": decl.max_iter, "tol": decl.tol, "print_level": int(os.environ.get("PEER_PRINT", 0)), "sb": "yes", **IPOPT_DEFAULTS, **SOLVER_OPTIONS}
     opti.solver("ipopt", {"print_time": False, "record_time": True, "error_on_fail": False}, ipopt)
     sol = opti.solve()
     st = sol.stats()

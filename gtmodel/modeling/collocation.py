@@ -86,7 +86,8 @@ class CollocationTranscription:
         nested ``{"ipopt": {...}}``) and CasADi nlpsol options (``"print_time"``,
         ``"expand"``, ...); merged over the defaults ``max_iter=3000``, ``tol=1e-8``,
         ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings)
-        unless ``verbose``.
+        unless ``verbose``, and with IPOPT
+        :data:`~gtmodel.modeling.collocation_nlp.IPOPT_DEFAULTS`.
     nominal : mapping of str to float or array_like, optional
         Nominal magnitudes of states, inputs, algebraic variables, free parameters
         (by name) and of ``"final_time"``: the NLP works with ``variable / nominal`` (Modelica's
