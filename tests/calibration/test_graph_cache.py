@@ -8,25 +8,13 @@ import pytest
 
 from gtmodel.calibration.kinematic import CalibrationProblem, calibrate
 from gtmodel.errors import ModelError
-from gtmodel.robots.closure import ThreeLinkClosure
-from gtmodel.robots.kinematics import GantryTau3Kinematics
-from gtmodel.robots.parameters import load_parameters
 
-NOISE = 10e-6  # laser tracker [m]
-N_POSES = 200
+from ._l1_data import l1_poses, nominal
 
 
 @pytest.fixture(scope="module")
 def data():
-    true = ThreeLinkClosure(load_parameters("L1"))
-    T = GantryTau3Kinematics(load_parameters("L1")).workspace_grid(0.115)
-    T = T[np.unique(np.linspace(0, len(T) - 1, N_POSES).round().astype(int))]
-    q = true.ik(T)
-    return q, T + NOISE * np.random.default_rng(3).standard_normal(T.shape)
-
-
-def nominal():
-    return ThreeLinkClosure(load_parameters("L1_ideal"), model="modified")
+    return l1_poses(seed=3)
 
 
 def test_second_problem_shares_graphs_and_equals_first(data):

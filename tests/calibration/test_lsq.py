@@ -10,25 +10,13 @@ import scipy.optimize
 
 from gtmodel.calibration.identifiability import analyze_jacobian
 from gtmodel.calibration.kinematic import LSQ_TOLERANCE, MAX_ITER, CalibrationProblem
-from gtmodel.robots.closure import ThreeLinkClosure
-from gtmodel.robots.kinematics import GantryTau3Kinematics
-from gtmodel.robots.parameters import load_parameters
 
-NOISE = 10e-6  # laser tracker [m]
-N_POSES = 200
+from ._l1_data import l1_poses, nominal
 
 
 @pytest.fixture(scope="module")
 def data():
-    true = ThreeLinkClosure(load_parameters("L1"))
-    T = GantryTau3Kinematics(load_parameters("L1")).workspace_grid(0.115)
-    T = T[np.unique(np.linspace(0, len(T) - 1, N_POSES).round().astype(int))]
-    q = true.ik(T)
-    return q, T + NOISE * np.random.default_rng(7).standard_normal(T.shape)
-
-
-def nominal():
-    return ThreeLinkClosure(load_parameters("L1_ideal"), model="modified")
+    return l1_poses(seed=7)
 
 
 def test_lm_equals_least_squares(data):

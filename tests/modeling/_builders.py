@@ -34,3 +34,20 @@ def min_energy_problem():
     return opt
 
 
+
+
+def min_energy_over_distance_parameter():
+    """The minimum-energy transfer with the distance as model parameter ``D`` (default 1):
+    ``min int u^2`` over 1 s, rest to rest over ``D``; closed-form cost ``12 D^2``."""
+    m = Model("di_param")
+    dist = m.parameter("D", 1.0)
+    x, v, u = m.state("x"), m.state("v"), m.input("u")
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), u)
+    opt = Optimization(m, final_time=1.0)
+    opt.set_objective(lagrange=u**2)
+    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
+    opt.add_point_constraint(v, at="start", lb=0.0, ub=0.0)
+    opt.add_point_constraint(x - dist, at="final", lb=0.0, ub=0.0)
+    opt.add_point_constraint(v, at="final", lb=0.0, ub=0.0)
+    return opt

@@ -12,7 +12,7 @@ import pytest
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult, solve
 
-from ._builders import double_integrator, min_energy_problem, rest_to_rest
+from ._builders import double_integrator, min_energy_over_distance_parameter, min_energy_problem, rest_to_rest
 
 COST_TOL = 1e-6  # min-energy cost: the cubic solution is exactly representable (d = 3)
 TRAJ_TOL = 1e-6  # trajectory vs closed form on the mesh
@@ -100,20 +100,7 @@ def test_start_point_constraint_on_input_uses_extrapolation_at_tau0():
 
 def test_repeated_solves_with_parameters_and_warm_start():
     # reference: min energy over distance D in 1 s has cost 12 D^2 (scaling of the closed form)
-    m = Model("di_param")
-    dist = m.parameter("D", 1.0)
-    x = m.state("x")
-    v = m.state("v")
-    u = m.input("u")
-    m.equation(m.der(x), v)
-    m.equation(m.der(v), u)
-    opt = Optimization(m, final_time=1.0)
-    opt.set_objective(lagrange=u**2)
-    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
-    opt.add_point_constraint(v, at="start", lb=0.0, ub=0.0)
-    opt.add_point_constraint(x - dist, at="final", lb=0.0, ub=0.0)
-    opt.add_point_constraint(v, at="final", lb=0.0, ub=0.0)
-    tr = CollocationTranscription(opt, elements=10)
+    tr = CollocationTranscription(min_energy_over_distance_parameter(), elements=10)
     first = tr.solve()
     second = tr.solve(parameters={"D": 2.0}, initial_guess=first)
     third = tr.solve(parameters={"D": 0.5}, initial_guess={"x": ([0.0, 1.0], [0.0, 0.5])})

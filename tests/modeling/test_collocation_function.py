@@ -6,24 +6,16 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling import CollocationTranscription
+
+from ._builders import min_energy_over_distance_parameter
 
 COST_TOL = 1e-6
 
 
 def _transcription():
     # min int u^2 over 1 s moving rest to rest over D: cost 12 D^2 (closed form)
-    m = Model("di_param")
-    dist = m.parameter("D", 1.0)
-    x, v, u = m.state("x"), m.state("v"), m.input("u")
-    m.equation(m.der(x), v)
-    m.equation(m.der(v), u)
-    opt = Optimization(m, final_time=1.0)
-    opt.set_objective(lagrange=u**2)
-    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
-    opt.add_point_constraint(v, at="start", lb=0.0, ub=0.0)
-    opt.add_point_constraint(x - dist, at="final", lb=0.0, ub=0.0)
-    opt.add_point_constraint(v, at="final", lb=0.0, ub=0.0)
+    opt = min_energy_over_distance_parameter()
     return CollocationTranscription(opt, elements=10)
 
 
