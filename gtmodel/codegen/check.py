@@ -698,14 +698,14 @@ def time_functions(generated: GeneratedCode, library: Path, samples: Mapping[str
 #: Functions the C unit-test program calls.
 HARNESS_FUNCTIONS = ("ik", "fk", "jacobian", "jacobian_inverse", "acceleration", "inverse_dynamics", "gravity")
 #: Files of the hand-written harness shipped as package data in ``gtmodel/codegen/harness/``.
-HARNESS_FILES = ("Makefile", "unit_test.c", "loop.c")
+HARNESS_FILES = ("Makefile", "unit_test.c", "loop.c", "heap_watch.h")
 
 
 def harness_dir() -> Path:
     """The folder of the hand-written C harness shipped with the package.
 
     ``gtmodel/codegen/harness/`` (package data: the Makefile rules, ``unit_test.c``,
-    ``loop.c``), in a source checkout and after ``pip install .`` alike; ``codegen/Makefile``
+    ``loop.c``, ``retime_example.c`` and the heap counter ``heap_watch.h`` they include), in a source checkout and after ``pip install .`` alike; ``codegen/Makefile``
     of a source checkout includes its Makefile.
 
     Returns

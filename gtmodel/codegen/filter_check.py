@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, find_compiler
-from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe
+from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe, harness_dir
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.generate import GeneratedCode
@@ -506,20 +506,7 @@ _PROGRAM = r"""/* Stand-alone run of {p}_{stem}_init/_update over a measurement 
 #include <stdlib.h>
 #include "{header}"
 
-static long heap_calls = 0;
-static int heap_watch = 0;
-void *__real_malloc(size_t n);
-void *__real_calloc(size_t n, size_t m);
-void *__real_realloc(void *p, size_t n);
-void __real_free(void *p);
-void *__wrap_malloc(size_t n);
-void *__wrap_calloc(size_t n, size_t m);
-void *__wrap_realloc(void *p, size_t n);
-void __wrap_free(void *p);
-void *__wrap_malloc(size_t n) {{ heap_calls += heap_watch; return __real_malloc(n); }}
-void *__wrap_calloc(size_t n, size_t m) {{ heap_calls += heap_watch; return __real_calloc(n, m); }}
-void *__wrap_realloc(void *p, size_t n) {{ heap_calls += heap_watch; return __real_realloc(p, n); }}
-void __wrap_free(void *p) {{ heap_calls += heap_watch; __real_free(p); }}
+#include "heap_watch.h"
 
 #define N {n}
 static const {real} Z[N][{nz}] = {{{z}}};
@@ -607,7 +594,7 @@ def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, 
     objects = list(objects) if objects is not None else []
     for c_file in (src,) if objects else (*generated.c_sources, src):
         obj = build / (c_file.stem + ".strict.o")
-        proc = subprocess.run([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-c", str(c_file), "-o", str(obj)], capture_output=True, text=True)
+        proc = subprocess.run([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-I", str(harness_dir()), "-c", str(c_file), "-o", str(obj)], capture_output=True, text=True)
         if proc.returncode != 0:
             raise CodegenError(f"compiling {c_file.name} with {' '.join(STRICT_FLAGS)} failed:\n{proc.stderr.strip()}")
         objects.append(obj)

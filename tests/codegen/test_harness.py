@@ -218,7 +218,7 @@ def test_the_harness_ships_with_the_package():
     assert folder == Path(gtmodel.codegen.__file__).resolve().parent / "harness"
     assert all((folder / name).is_file() for name in HARNESS_FILES)
     package_data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
-    assert package_data["gtmodel.codegen"] == ["harness/Makefile", "harness/*.c"]
+    assert package_data["gtmodel.codegen"] == ["harness/Makefile", "harness/*.c", "harness/*.h"]
     assert "include ../gtmodel/codegen/harness/Makefile" in (HARNESS / "Makefile").read_text()
 
 

@@ -71,17 +71,7 @@
 #endif
 #endif
 
-/* ---- heap-allocation counter (link with -Wl,--wrap=malloc,...) ---- */
-static long heap_calls = 0; /* counts calls made while heap_watch is set */
-static int heap_watch = 0;
-void *__real_malloc(size_t n);
-void *__real_calloc(size_t n, size_t m);
-void *__real_realloc(void *p, size_t n);
-void __real_free(void *p);
-void *__wrap_malloc(size_t n) { heap_calls += heap_watch; return __real_malloc(n); }
-void *__wrap_calloc(size_t n, size_t m) { heap_calls += heap_watch; return __real_calloc(n, m); }
-void *__wrap_realloc(void *p, size_t n) { heap_calls += heap_watch; return __real_realloc(p, n); }
-void __wrap_free(void *p) { heap_calls += heap_watch; __real_free(p); }
+#include "heap_watch.h" /* heap-allocation counter (link with -Wl,--wrap=malloc,...) */
 
 static double ns_of(const struct timespec *t) { return (double)t->tv_sec * 1e9 + (double)t->tv_nsec; }
 

@@ -51,21 +51,7 @@
 #error "retime_example.c: N_GRID exceeds the generated RETIME_N_MAX"
 #endif
 
-/* ---- heap-allocation counter (link with -Wl,--wrap=malloc,...) ---- */
-static long heap_calls = 0;
-static int heap_watch = 0;
-void *__real_malloc(size_t n);
-void *__real_calloc(size_t n, size_t m);
-void *__real_realloc(void *p, size_t n);
-void __real_free(void *p);
-void *__wrap_malloc(size_t n);
-void *__wrap_calloc(size_t n, size_t m);
-void *__wrap_realloc(void *p, size_t n);
-void __wrap_free(void *p);
-void *__wrap_malloc(size_t n) { heap_calls += heap_watch; return __real_malloc(n); }
-void *__wrap_calloc(size_t n, size_t m) { heap_calls += heap_watch; return __real_calloc(n, m); }
-void *__wrap_realloc(void *p, size_t n) { heap_calls += heap_watch; return __real_realloc(p, n); }
-void __wrap_free(void *p) { heap_calls += heap_watch; __real_free(p); }
+#include "heap_watch.h" /* heap-allocation counter (link with -Wl,--wrap=malloc,...) */
 
 static const double A[3] = {-0.20, 2.75, -0.40}, B[3] = {0.20, 3.00, -0.60};
 
