@@ -100,3 +100,40 @@ def test_no_assertion_inside_a_loop():
     parametrized, or checked by one assertion that lists every failing element."""
     offenders = _assertions_inside_loops()
     assert not offenders, "assertions inside loops (parametrize, or assert once over a list):\n" + "\n".join(offenders)
+
+
+TEST_FILES = sorted((REPO / "tests").rglob("*.py"))
+#: Calls that give one-shot iterators, which pytest 10 no longer accepts as argvalues.
+ITERATOR_CALLS = {"enumerate", "zip", "map", "filter", "iter", "reversed"}
+
+
+def _one_shot_argvalues(tree) -> list[int]:
+    lines = []
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "parametrize"):
+            continue
+        values = node.args[1] if len(node.args) > 1 else None
+        values = next((k.value for k in node.keywords if k.arg == "argvalues"), values)
+        if isinstance(values, ast.GeneratorExp) or (
+            isinstance(values, ast.Call)
+            and isinstance(values.func, ast.Name)
+            and values.func.id in ITERATOR_CALLS
+        ):
+            lines.append(node.lineno)
+    return lines
+
+
+@pytest.mark.parametrize("path", TEST_FILES, ids=[str(p.relative_to(REPO)) for p in TEST_FILES])
+def test_parametrize_gets_a_collection_not_a_one_shot_iterator(path):
+    """pytest 10 removes iterators (enumerate, zip, generators) as parametrize values."""
+    assert _one_shot_argvalues(ast.parse(path.read_text(encoding="utf-8"))) == []
+
+
+def test_one_shot_argvalues_are_found():
+    """The check above can fail: it finds enumerate(...) and a generator expression."""
+    source = (
+        "@pytest.mark.parametrize('i, n', enumerate((1, 2)))\ndef t(i, n): pass\n"
+        "@pytest.mark.parametrize('x', (x for x in 'ab'))\ndef u(x): pass\n"
+        "@pytest.mark.parametrize('x', [1, 2])\ndef v(x): pass\n"
+    )
+    assert _one_shot_argvalues(ast.parse(source)) == [1, 3]

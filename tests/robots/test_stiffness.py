@@ -74,7 +74,7 @@ def test_shipped_values_carry_their_sources():
     assert "stiffness" not in available_parameter_sets()
 
 
-@pytest.mark.parametrize("i, n", enumerate((1, 2, 3)))
+@pytest.mark.parametrize("i, n", [(0, 1), (1, 2), (2, 3)])
 def test_arm_compliance_is_series_and_parallel_springs(d1, i, n):
     """Closed form: cluster of n parallel links, each a tube E A / L in series with two joints."""
     s = d1.stiffness
