@@ -35,3 +35,10 @@ def test_quick_start_command_names_a_shipped_problem():
     commands = re.findall(r"```bash\n(.*?)```", README, flags=re.S)[0]
     solve = re.search(r"gtmodel solve (\S+)", commands)
     assert solve and (REPO / solve.group(1)).is_file()
+
+
+def test_ci_runs_the_slow_tests_after_the_readme_command():
+    """The slow-marked tests are left out of the default run; CI runs them after it."""
+    lines = [ln.strip() for ln in (REPO / ".ci" / "run").read_text().splitlines()]
+    readme_line = next(i for i, ln in enumerate(lines) if "pytest" in ln)
+    assert "python -m pytest -m slow" in lines[readme_line + 1 :]
