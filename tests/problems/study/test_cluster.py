@@ -18,10 +18,10 @@ import time
 
 import pytest
 
-from gtmodel.problems import study_engine
-from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study import executors as study_engine
+from gtmodel.problems.study.engine import run_study
 
-from ..conftest import PROBLEMS_DIR, REPO
+from ...conftest import PROBLEMS_DIR, REPO
 from .study_fixtures import grid_design, write_study
 
 distributed = pytest.importorskip("distributed")

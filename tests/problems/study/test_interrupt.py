@@ -20,9 +20,9 @@ import pandas as pd
 import pytest
 
 from gtmodel.cli import EXIT_INTERRUPTED
-from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study.engine import run_study
 
-from ..conftest import REPO
+from ...conftest import REPO
 from .study_fixtures import grid_design, write_study
 
 

@@ -18,10 +18,10 @@ import pytest
 
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_NOT_OPTIMAL, main
 from gtmodel.errors import InputError
-from gtmodel.problems.study_cases import case_key
+from gtmodel.problems.study.cases import case_key
 from gtmodel.problems import get_kind
-from gtmodel.problems.study_engine import run_study
-from gtmodel.problems.study_progress import StudyProgress
+from gtmodel.problems.study.engine import run_study
+from gtmodel.problems.study.progress import StudyProgress
 
 from .study_fixtures import SMALL_DESIGN, write_study
 
@@ -218,7 +218,7 @@ def test_a_sigint_swallowed_between_cases_still_interrupts_the_study(small, tmp_
     import os
     import signal
 
-    import gtmodel.problems.study_engine as engine
+    import gtmodel.problems.study.executors as engine
 
     original = engine.run_unit
     units = []
