@@ -381,7 +381,7 @@ def _timing(root: Path, run: Sequence[CaseRecord], info: dict, timing: dict) -> 
             before = json.loads((root / "summary.json").read_text(encoding="utf-8"))
         except (OSError, ValueError):
             before = None
-        if isinstance(before, dict) and before.get("run_now"):
+        if isinstance(before, dict) and before.get("workers"):  # solved by it, or carried over from the run that did
             return {k: before.get(k) for k in ("workers", "scheduler", "timing")}
     run_s = sum(r.wall_s for r in run)  # type: ignore[misc]
     n_workers = max(1, int(info.get("workers") or 1))

@@ -64,6 +64,16 @@ def test_rerun_runs_nothing(small):
     assert again.table.drop(columns="wall_s").equals(outcome.table.drop(columns="wall_s"))
 
 
+def test_a_rerun_that_solves_nothing_keeps_the_timing_of_the_run_that_did(small, tmp_path):
+    """Defect (h): a no-op rerun overwrote the first run's timings (``workers 0``)."""
+    study, outcome = small
+    out = tmp_path / "copy"
+    shutil.copytree(outcome.out, out)
+    again = run_study(study, out, workers=1)
+    kept = {k: outcome.summary[k] for k in ("workers", "scheduler", "timing")}
+    assert (again.summary["run_now"], {k: again.summary[k] for k in kept}) == (0, kept)
+
+
 def test_deleting_one_case_folder_reruns_only_it(small, tmp_path):
     study, outcome = small
     out = tmp_path / "copy"
