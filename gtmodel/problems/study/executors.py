@@ -123,7 +123,7 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
             client.wait_for_workers(1 if cluster is None else len(cluster.workers), timeout=120)
         except TimeoutError:
             raise InputError(f"scheduler {scheduler!r}: no worker joined within 120 s") from None
-        if scheduler is not None:  # a local cluster's workers preload it (study_cases.dask_setup)
+        if scheduler is not None:  # a local cluster's workers preload it (cases.dask_setup)
             try:  # import on every worker: part of the startup
                 client.run(importlib.import_module, "gtmodel.problems.study.cases")
             except ImportError as exc:
