@@ -5,8 +5,11 @@
     ``results/<problem name>``): ``summary.json`` (always, listing every file), the data
     files of its kind and PNG plots. The folder is replaced only when the run is complete.
 ``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
-    A study: every case in ``DIR/<case>/`` and a comparison table (``comparison.md``,
-    ``comparison.csv``, columns from each kind) with overlay plots in ``DIR``.
+    A comparison, on the study engine (:func:`gtmodel.problems.study.run_study`): every case
+    in ``DIR/<case>/``, a comparison table (``comparison.md``, ``comparison.csv``, columns
+    from each kind) with each kind's overlay plots, ``table.csv`` and ``summary.json`` in
+    ``DIR``. A missing file, an unknown swept field or an ``--out`` that is a file is one
+    error before anything runs or is written.
 ``gtmodel study STUDY.toml [--workers N | --scheduler ADDRESS] [--out DIR] [--retry-failed]``
     A study file (:mod:`gtmodel.problems.study.design`): many cases of one problem file on a
     local Dask cluster, in this process (``--workers 1``) or on a cluster; resumable

@@ -264,3 +264,12 @@ def test_out_naming_a_file_is_found_before_the_solve_with_one_message(tmp_path, 
     err = capsys.readouterr().err
     assert (code, err) == (EXIT_BAD_INPUT, f"gtmodel: error: cannot write the result folder {blocker / 'sub'}: its parent {blocker} is a file\n")
     assert [p.name for p in tmp_path.iterdir()] == ["taken"] and blocker.read_text() == "not a folder"
+
+
+def test_schema_list_prints_every_kind_with_its_title(capsys):
+    """``schema --list`` reads the titles from the kinds' sources (no import): they must be the kinds' own."""
+    from gtmodel.problems import KINDS
+
+    assert main(["schema", "--list"]) == 0
+    listed = [line.split(None, 1) for line in capsys.readouterr().out.splitlines()]
+    assert listed == [[name, kind.title] for name, kind in KINDS.items()]
