@@ -234,11 +234,12 @@ def _solve(args: argparse.Namespace) -> int:
 
 
 def _study(args: argparse.Namespace) -> int:
+    check_problem_files([args.study], "study file")  # before anything is imported or written
+    if args.out is not None:
+        check_output_folder(args.out)
     from gtmodel.problems.study.engine import run_study
     from gtmodel.problems.study.progress import progress_mode
 
-    if args.out is not None:
-        check_output_folder(args.out)
     outcome = run_study(args.study, args.out, workers=args.workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
                         plots=False if args.no_plots else None, progress=progress_mode(not args.quiet), verbose=args.verbose)
     if outcome.status is Status.INTERRUPTED:

@@ -211,7 +211,8 @@ def test_infeasible_duration_bounds_give_status_infeasible(tmp_path, capsys):
 
 #: Heavy libraries the fast paths of the command must not import (issue 24, item 7).
 HEAVY = ("casadi", "scipy", "pandas", "matplotlib", "control", "dask", "pydantic")
-FAST_PATHS = {"help": ["--help"], "schema_list": ["schema", "--list"], "missing_file": ["solve", "nope.toml"]}
+FAST_PATHS = {"help": ["--help"], "schema_list": ["schema", "--list"], "missing_file": ["solve", "nope.toml"],
+              "missing_study_file": ["study", "nope.toml"], "out_is_a_file": ["solve", str(BASE), "--out", str(BASE)]}
 
 
 @pytest.mark.parametrize("argv", list(FAST_PATHS.values()), ids=list(FAST_PATHS))

@@ -16,13 +16,15 @@ from gtmodel.errors import ProblemError, ResultWriteError
 __all__ = ["check_problem_files", "check_output_folder"]
 
 
-def check_problem_files(paths: Sequence[str | Path]) -> None:
-    """Check that every problem file exists (a mistyped path writes nothing).
+def check_problem_files(paths: Sequence[str | Path], what: str = "problem file") -> None:
+    """Check that every input file exists (a mistyped path writes nothing).
 
     Parameters
     ----------
     paths : sequence of str or pathlib.Path
-        Problem files.
+        Problem files (or study files).
+    what : str, optional
+        What the files are, for the message.
 
     Raises
     ------
@@ -31,8 +33,8 @@ def check_problem_files(paths: Sequence[str | Path]) -> None:
     """
     for p in paths:
         if not Path(p).is_file():
-            what = "it is a folder" if Path(p).is_dir() else "no such file"
-            raise ProblemError(f"{p}: cannot read the problem file ({what})")
+            why = "it is a folder" if Path(p).is_dir() else "no such file"
+            raise ProblemError(f"{p}: cannot read the {what} ({why})")
 
 
 def check_output_folder(out: str | Path) -> None:
