@@ -455,7 +455,8 @@ def solve_study(paths: Sequence[str | Path], out_dir: str | Path | None = None, 
         Write PNG plots (each case's, and the overlays).
     workers : int, optional
         1 (default): in this process (a sweep is one chain reusing the NLP); more: a
-        local Dask cluster (no overlay plots, no warm start).
+        local Dask cluster (no overlay plots; with ``warm_start`` a sweep stays one chain,
+        on one worker).
     **options
         Passed on to :func:`run_study` (``verbose``, ``heartbeat``, ``on_case``, ``progress``).
 
