@@ -5,10 +5,13 @@
     ``results/<problem name>``): ``summary.json`` (always, listing every file), the data
     files of its kind and PNG plots. The folder is replaced only when the run is complete.
 ``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
-    A study: every case in ``DIR/<case>/`` and a comparison table (``comparison.md``,
-    ``comparison.csv``, columns from each kind) with overlay plots in ``DIR``.
+    A comparison, on the study engine (:func:`gtmodel.problems.study.run_study`): every case
+    in ``DIR/<case>/``, a comparison table (``comparison.md``, ``comparison.csv``, columns
+    from each kind) with each kind's overlay plots, ``table.csv`` and ``summary.json`` in
+    ``DIR``. A missing file, an unknown swept field or an ``--out`` that is a file is one
+    error before anything runs or is written.
 ``gtmodel study STUDY.toml [--workers N | --scheduler ADDRESS] [--out DIR] [--retry-failed]``
-    A study file (:mod:`gtmodel.problems.study_file`): many cases of one problem file on a
+    A study file (:mod:`gtmodel.problems.study.design`): many cases of one problem file on a
     local Dask cluster, in this process (``--workers 1``) or on a cluster; resumable
     (finished cases are not rerun); ``DIR/table.parquet``, ``table.csv``, ``summary.json``.
 ``gtmodel schema KIND [--out FILE]`` / ``gtmodel schema --list`` / ``gtmodel schema --docs DIR``
@@ -31,6 +34,13 @@ Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
 2 invalid input (also an output that cannot be written), 3 internal error, 130
 interrupted (Ctrl-C, SIGTERM).
+
+Fast start: this module imports only the standard library and gtmodel's base modules;
+each sub-command imports the layers it needs when it runs (the imports inside the
+``_solve``/``_study``/``_schema``/``_codegen`` functions), and the input checks that need
+no model (missing problem file, an output folder that is a file) come first. So
+``gtmodel --help``, ``gtmodel schema --list`` and such input errors take a fraction of a
+second; ``benchmarks/bench_cli_startup.py`` measures it.
 """
 
 from __future__ import annotations
@@ -46,16 +56,9 @@ from pathlib import Path
 from typing import Sequence
 
 from gtmodel import __version__
-from gtmodel.problems.overrides import parse_override
-from gtmodel.codegen import check, check_controller, generate, load_controller
-from gtmodel.codegen.model_code import check_model, generate_model
-from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.errors import GtModelError
-from gtmodel.problems import KINDS, run_problem
-from gtmodel.problems.docs import json_schema, write_docs
-from gtmodel.problems.study import solve_study
-from gtmodel.problems.study_engine import run_study
-from gtmodel.problems.study_progress import progress_mode
+from gtmodel.problems.overrides import parse_override
+from gtmodel.problems.study.preflight import check_output_folder, check_problem_files
 from gtmodel.status import Status, exit_code_table
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_OPTIMAL", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_INTERRUPTED"]
@@ -113,7 +116,7 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     schema = sub.add_parser("schema", help="JSON Schema of a problem kind, the list of kinds, or the reference docs")
-    schema.add_argument("kind", nargs="?", default=None, help=f"one of {', '.join(KINDS)}")
+    schema.add_argument("kind", nargs="?", default=None, help="a problem kind (gtmodel schema --list prints them)")
     schema.add_argument("--out", type=Path, default=None, help="write the schema to this file (default: standard output)")
     schema.add_argument("--list", action="store_true", help="print the kinds, one per line")
     schema.add_argument("--docs", type=Path, default=None, metavar="DIR", help="write DIR/problem_files.md and DIR/schemas/*.schema.json")
@@ -179,6 +182,8 @@ def _progress(args: argparse.Namespace) -> tuple[bool, bool]:
 
 
 def _solve_one(args: argparse.Namespace, path: Path) -> int:
+    from gtmodel.problems.run import run_problem
+
     show, heartbeat = _progress(args)
     outcome = run_problem(path, args.out, verbose=show, plots=not args.no_plots, heartbeat=heartbeat)
     status = outcome.status
@@ -199,9 +204,11 @@ def _solve_one(args: argparse.Namespace, path: Path) -> int:
 
 
 def _solve_study(args: argparse.Namespace) -> int:
-    sweep = parse_override(args.sweep) if args.sweep else None
-    default = args.problem[0].stem + ("_sweep_" + sweep[0].replace(".", "_") if sweep else "_study")
-    out = args.out if args.out is not None else Path("results") / default
+    from gtmodel.problems.study.design import comparison_study
+    from gtmodel.problems.study.engine import run_study
+
+    study = comparison_study(args.problem, parse_override(args.sweep) if args.sweep else None, warm_start=args.warm_start,
+                             plots=not args.no_plots)
     show, heartbeat = _progress(args)
 
     def report(case) -> None:
@@ -209,24 +216,30 @@ def _solve_study(args: argparse.Namespace) -> int:
             print(f"gtmodel: error: {case.label}: {case.summary.get('message')}", file=sys.stderr)
         _log.info("%s: %s", case.label, case.status)
 
-    result = solve_study(
-        args.problem, out, sweep=sweep, verbose=show, plots=not args.no_plots, warm_start=args.warm_start,
-        on_case=report, heartbeat=heartbeat, workers=args.workers,
-    )
-    if result.status is Status.INTERRUPTED:
+    outcome = run_study(study, args.out, workers=args.workers, verbose=show, heartbeat=heartbeat, on_case=report)
+    if outcome.status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
-    print((out / "comparison.md").read_text(encoding="utf-8"), end="")
-    print(f"results in   {out}/ (comparison.md, comparison.csv, summary.json, one folder per case)")
-    return result.exit_code
+    print((outcome.out / "comparison.md").read_text(encoding="utf-8"), end="")
+    print(f"results in   {outcome.out}/ (comparison.md, comparison.csv, table.csv, summary.json, one folder per case)")
+    return outcome.exit_code
 
 
 def _solve(args: argparse.Namespace) -> int:
+    check_problem_files(args.problem)  # before anything is imported or written
+    if args.out is not None:
+        check_output_folder(args.out)
     if len(args.problem) == 1 and args.sweep is None:
         return _solve_one(args, args.problem[0])
     return _solve_study(args)
 
 
 def _study(args: argparse.Namespace) -> int:
+    check_problem_files([args.study], "study file")  # before anything is imported or written
+    if args.out is not None:
+        check_output_folder(args.out)
+    from gtmodel.problems.study.engine import run_study
+    from gtmodel.problems.study.progress import progress_mode
+
     outcome = run_study(args.study, args.out, workers=args.workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
                         plots=False if args.no_plots else None, progress=progress_mode(not args.quiet), verbose=args.verbose)
     if outcome.status is Status.INTERRUPTED:
@@ -238,9 +251,13 @@ def _study(args: argparse.Namespace) -> int:
 
 
 def _schema(args: argparse.Namespace) -> int:
+    from gtmodel.problems.registry import KINDS, kind_titles
+
     if args.list:
-        print("\n".join(f"{name:<30} {kind.title}" for name, kind in KINDS.items()))
+        print("\n".join(f"{name:<30} {title}" for name, title in kind_titles().items()))
         return EXIT_OK
+    from gtmodel.problems.docs import json_schema, write_docs
+
     if args.docs is not None:
         for p in write_docs(args.docs):
             print(f"wrote {p}")
@@ -260,6 +277,8 @@ def _schema(args: argparse.Namespace) -> int:
 
 
 def _codegen(args: argparse.Namespace) -> int:
+    from gtmodel.codegen import check, check_controller, generate, load_controller
+
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
     if args.model is not None:
         return _codegen_model(args, functions)
@@ -288,6 +307,9 @@ def _codegen(args: argparse.Namespace) -> int:
 
 
 def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int:
+    from gtmodel.codegen.model_code import check_model, generate_model
+    from gtmodel.problems.user_model import load_user_model, split_model_reference
+
     if args.controller is not None or args.robot is not None:
         raise GtModelError("--model generates a user model's library: give it without --robot and --controller")
     generated = generate_model(load_user_model(*split_model_reference(args.model)), args.out, functions=functions, real=args.real)

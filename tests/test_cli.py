@@ -207,3 +207,70 @@ def test_infeasible_duration_bounds_give_status_infeasible(tmp_path, capsys):
     assert summary["last_iterate"] is True
     assert not (out / "trajectory.csv").exists()
     assert "Traceback" not in capsys.readouterr().err
+
+
+#: Heavy libraries the fast paths of the command must not import (issue 24, item 7).
+HEAVY = ("casadi", "scipy", "pandas", "matplotlib", "control", "dask", "pydantic")
+FAST_PATHS = {"help": ["--help"], "schema_list": ["schema", "--list"], "missing_file": ["solve", "nope.toml"],
+              "missing_study_file": ["study", "nope.toml"], "out_is_a_file": ["solve", str(BASE), "--out", str(BASE)]}
+
+
+@pytest.mark.parametrize("argv", list(FAST_PATHS.values()), ids=list(FAST_PATHS))
+def test_fast_paths_of_the_command_import_no_heavy_library(tmp_path, argv):
+    """``gtmodel --help``, ``schema --list`` and a mistyped path start in a fraction of a
+    second because they never import the solvers' stack (checked on sys.modules in a fresh
+    process, not by timing; benchmarks/bench_cli_startup.py measures the time)."""
+    script = ("import sys\nfrom gtmodel.cli import main\ntry:\n    code = main(sys.argv[1:])\nexcept SystemExit as exc:\n    code = exc.code\n"
+              f"print('IMPORTED', sorted(m for m in {HEAVY!r} if m in sys.modules))\n")
+    proc = subprocess.run([sys.executable, "-c", script, *argv], capture_output=True, text=True, cwd=tmp_path, timeout=120,
+                          env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
+    assert proc.stdout.splitlines()[-1] == "IMPORTED []", proc.stdout + proc.stderr
+
+
+def test_a_mistyped_problem_path_is_one_error_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    """Defect (e): ``gtmodel solve nope.toml`` created results/nope/summary.json."""
+    monkeypatch.chdir(tmp_path)
+    code = main(["solve", "nope.toml", "--quiet"])
+    err = capsys.readouterr().err
+    assert (code, err) == (EXIT_BAD_INPUT, "gtmodel: error: nope.toml: cannot read the problem file (no such file)\n")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_run_problem_on_a_missing_file_writes_nothing(tmp_path, monkeypatch):
+    """Defect (e), from the library: run_problem reports the missing file and writes no folder."""
+    from gtmodel.problems import run_problem
+
+    monkeypatch.chdir(tmp_path)
+    outcome = run_problem(tmp_path / "nope.toml")
+    assert (outcome.status, outcome.written, list(tmp_path.iterdir())) == ("invalid_input", False, [])
+
+
+def test_an_invalid_input_summary_is_named_after_the_problem_file(tmp_path, capsys):
+    """Defect (h): the summary of a file that does not load had ``"name": null``."""
+    f = tmp_path / "broken.toml"
+    f.write_text(BASE.read_text().replace("free = true", "free = true\nfree_time = 2.0").replace('name = "l1_time_optimal"', ""))
+    code = main(["solve", str(f), "--out", str(tmp_path / "out"), "--quiet"])
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert (code, summary["status"], summary["name"]) == (EXIT_BAD_INPUT, "invalid_input", "broken")
+
+
+def test_out_naming_a_file_is_found_before_the_solve_with_one_message(tmp_path, capsys, monkeypatch):
+    """Defect (b): checked up front (no solve is started), one line, exit 2, the file kept."""
+    from gtmodel.problems import run as run_module
+
+    monkeypatch.setattr(run_module, "solve_problem", lambda *a, **k: pytest.fail("solved before checking --out"))
+    blocker = tmp_path / "taken"
+    blocker.write_text("not a folder")
+    code = main(["solve", str(BASE), "--out", str(blocker / "sub"), "--quiet"])
+    err = capsys.readouterr().err
+    assert (code, err) == (EXIT_BAD_INPUT, f"gtmodel: error: cannot write the result folder {blocker / 'sub'}: its parent {blocker} is a file\n")
+    assert [p.name for p in tmp_path.iterdir()] == ["taken"] and blocker.read_text() == "not a folder"
+
+
+def test_schema_list_prints_every_kind_with_its_title(capsys):
+    """``schema --list`` reads the titles from the kinds' sources (no import): they must be the kinds' own."""
+    from gtmodel.problems import KINDS
+
+    assert main(["schema", "--list"]) == 0
+    listed = [line.split(None, 1) for line in capsys.readouterr().out.splitlines()]
+    assert listed == [[name, kind.title] for name, kind in KINDS.items()]

@@ -140,3 +140,49 @@ def test_ctrl_c_in_a_sweep_stops_the_whole_study(tmp_path, capsys, monkeypatch):
     assert summary["status"] == "interrupted"
     assert [c["status"] for c in summary["cases"]] == ["optimal", "interrupted"]
     assert "interrupted" in capsys.readouterr().err
+
+
+def test_two_kinds_compared_keep_each_kinds_overlays_and_list_every_file_once(tmp_path, capsys):
+    """Defect (a): a free path and a straight line (two kinds) wrote their overlays under the
+    same names (the second overwrote the first) and the summary listed them twice."""
+    free = tmp_path / "l1_time_optimal.toml"
+    free.write_text(BASE.read_text().replace("elements = 50 ", "elements = 10 "))
+    line = tmp_path / "l1_path_constrained.toml"
+    line.write_text((PROBLEMS_DIR / "l1_path_constrained.toml").read_text().replace("grid = 500 ", "grid = 50 "))
+    out = tmp_path / "table_3_1"
+    code = main(["solve", str(free), str(line), "--out", str(out), "--quiet"])
+    summary = json.loads((out / "summary.json").read_text())
+    overlays = sorted(f for f in summary["files"] if "overlay" in f)
+    assert code == EXIT_OK
+    assert len(summary["files"]) == len(set(summary["files"])), summary["files"]
+    assert [c["label"] for c in summary["cases"]] == ["l1_time_optimal", "l1_path_constrained"]
+    assert overlays == sorted(f"{k}_overlay_{p}.png" for k in ("point_to_point", "path_constrained") for p in ("forces", "tcp"))
+    assert sorted(p.name for p in out.glob("*overlay*")) == overlays
+
+
+def test_out_naming_a_file_stops_a_comparison_before_it_runs(tmp_path, capsys):
+    """Defect (b) for several files: one message, up front, exit 2, nothing written."""
+    blocker = tmp_path / "taken"
+    blocker.write_text("not a folder")
+    code = main(["solve", str(BASE), str(PROBLEMS_DIR / "l1_path_constrained.toml"), "--out", str(blocker), "--quiet"])
+    err = capsys.readouterr().err
+    assert (code, err) == (EXIT_BAD_INPUT, f"gtmodel: error: cannot write the result folder {blocker}: a file of that name is in the way\n")
+    assert [p.name for p in tmp_path.iterdir()] == ["taken"]
+
+
+def test_a_sweep_over_an_unknown_field_is_one_error_and_no_folder(tmp_path, capsys):
+    """Defect (g): the error was repeated per case and a comparison folder still written."""
+    out = tmp_path / "o"
+    code = main(["solve", str(BASE), "--sweep", "nonexistent=1,2,3", "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT
+    assert err.count("gtmodel: error") == 1 and "cannot sweep 'nonexistent'" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_mistyped_file_in_a_comparison_writes_nothing(tmp_path, capsys, monkeypatch):
+    """Defect (e) for several files: the missing one is named, nothing is created."""
+    monkeypatch.chdir(tmp_path)
+    code = main(["solve", str(BASE), "nope.toml", "--quiet"])
+    assert (code, capsys.readouterr().err) == (EXIT_BAD_INPUT, "gtmodel: error: nope.toml: cannot read the problem file (no such file)\n")
+    assert list(tmp_path.iterdir()) == []

@@ -10,14 +10,15 @@ Modules: :mod:`~gtmodel.problems.base` (the protocol), :mod:`~gtmodel.problems.s
 (field types, validation), :mod:`~gtmodel.problems.registry`,
 :mod:`~gtmodel.problems.kinds` (one module per kind), :mod:`~gtmodel.problems.run`
 (load/solve/write one file), :mod:`~gtmodel.problems.results` (result folders),
-:mod:`~gtmodel.problems.study` (several files or a sweep, comparison table),
-:mod:`~gtmodel.problems.study_file` / :mod:`~gtmodel.problems.study_engine` (study files on Dask),
-:mod:`~gtmodel.problems.docs` (reference page and JSON Schemas).
+:mod:`~gtmodel.problems.study` (one engine for study files, comparisons of several files
+and sweeps, locally or on Dask), :mod:`~gtmodel.problems.docs` (reference page and JSON
+Schemas).
+
+The names below are imported on first use (:mod:`gtmodel._lazy`), so that the
+``gtmodel`` command starts without importing the whole stack.
 """
 
-from gtmodel.problems.base import Column, Problem, ProblemFile, ProblemKind, Written
-from gtmodel.problems.registry import KINDS, get_kind
-from gtmodel.problems.run import RunOutcome, load_problem, run_problem, solve_problem, write_results
+from gtmodel._lazy import lazy_exports
 
 __all__ = [
     "KINDS",
@@ -33,3 +34,9 @@ __all__ = [
     "solve_problem",
     "write_results",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "KINDS": "registry", "get_kind": "registry",
+    "Column": "base", "Problem": "base", "ProblemFile": "base", "ProblemKind": "base", "Written": "base",
+    "RunOutcome": "run", "load_problem": "run", "run_problem": "run", "solve_problem": "run", "write_results": "run",
+})

@@ -1,46 +1,74 @@
 """The registry of problem kinds: ``kind = "..."`` in a file -> its :class:`ProblemKind`.
 
 Adding a kind is one class in :mod:`gtmodel.problems.kinds` and one line in
-:data:`_CLASSES`.
+:data:`_CLASSES`. The registry names each kind's class by its dotted path and imports a
+kind's module only when the kind is first used, so that listing the kinds (``gtmodel
+schema --list``) or a problem file of one kind does not import every kind's solvers.
 """
 
 from __future__ import annotations
 
+import ast
+import importlib
+import importlib.util
+from pathlib import Path
+from typing import TYPE_CHECKING, Iterator, Mapping
+
 from gtmodel.errors import ProblemError
-from gtmodel.problems.base import ProblemKind
-from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
-from gtmodel.problems.kinds.calibration import CalibrationKind
-from gtmodel.problems.kinds.elasto_geometric_calibration import ElastoGeometricKind
-from gtmodel.problems.kinds.dynamic_identification import DynamicIdentificationKind
-from gtmodel.problems.kinds.joint_stiffness_calibration import JointStiffnessKind
-from gtmodel.problems.kinds.point_to_point import PointToPointKind
-from gtmodel.problems.kinds.tracking import TrackingKind
-from gtmodel.problems.kinds.ilc import ILCKind
-from gtmodel.problems.kinds.state_estimation import StateEstimationKind
-from gtmodel.problems.kinds.correction_stability import CorrectionStabilityKind
-from gtmodel.problems.kinds.optimal_control import OptimalControlKind
 
-__all__ = ["KINDS", "get_kind"]
+if TYPE_CHECKING:
+    from gtmodel.problems.base import ProblemKind
 
-_CLASSES: tuple[type[ProblemKind], ...] = (
-    PointToPointKind,
-    PathConstrainedKind,
-    CalibrationKind,
-    ElastoGeometricKind,
-    DynamicIdentificationKind,
-    JointStiffnessKind,
-    TrackingKind,
-    ILCKind,
-    StateEstimationKind,
-    CorrectionStabilityKind,
-    OptimalControlKind,
-)
+__all__ = ["KINDS", "get_kind", "kind_titles"]
+
+#: Kind name -> ``module:class`` of its :class:`ProblemKind`, in the order of the documentation.
+_CLASSES: dict[str, str] = {
+    "point_to_point": "gtmodel.problems.kinds.point_to_point:PointToPointKind",
+    "path_constrained": "gtmodel.problems.kinds.path_constrained:PathConstrainedKind",
+    "calibration": "gtmodel.problems.kinds.calibration:CalibrationKind",
+    "elasto_geometric_calibration": "gtmodel.problems.kinds.elasto_geometric_calibration:ElastoGeometricKind",
+    "dynamic_identification": "gtmodel.problems.kinds.dynamic_identification:DynamicIdentificationKind",
+    "joint_stiffness_calibration": "gtmodel.problems.kinds.joint_stiffness_calibration:JointStiffnessKind",
+    "tracking": "gtmodel.problems.kinds.tracking:TrackingKind",
+    "ilc": "gtmodel.problems.kinds.ilc:ILCKind",
+    "state_estimation": "gtmodel.problems.kinds.state_estimation:StateEstimationKind",
+    "correction_stability": "gtmodel.problems.kinds.correction_stability:CorrectionStabilityKind",
+    "optimal_control": "gtmodel.problems.kinds.optimal_control:OptimalControlKind",
+}
+
+
+class _Kinds(Mapping[str, "ProblemKind"]):
+    """Kind name -> the kind (one instance each), its module imported on first use."""
+
+    def __init__(self, classes: Mapping[str, str]) -> None:
+        self._classes = dict(classes)
+        self._kinds: dict[str, ProblemKind] = {}
+
+    def __getitem__(self, name: str) -> "ProblemKind":
+        kind = self._kinds.get(name)
+        if kind is None:
+            module, cls = self._classes[name].split(":")
+            kind = self._kinds[name] = getattr(importlib.import_module(module), cls)()
+        return kind
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._classes)
+
+    def __len__(self) -> int:
+        return len(self._classes)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._classes
+
+    def __repr__(self) -> str:
+        return f"KINDS({', '.join(self._classes)})"
+
 
 #: Kind name -> the kind (one instance each), in the order of the documentation.
-KINDS: dict[str, ProblemKind] = {cls.name: cls() for cls in _CLASSES}
+KINDS: Mapping[str, "ProblemKind"] = _Kinds(_CLASSES)
 
 
-def get_kind(name: str) -> ProblemKind:
+def get_kind(name: str) -> "ProblemKind":
     """The kind of a name.
 
     Parameters
@@ -57,7 +85,29 @@ def get_kind(name: str) -> ProblemKind:
     ProblemError
         Not a registered kind.
     """
-    try:
-        return KINDS[name]
-    except KeyError:
-        raise ProblemError(f"unknown problem kind {name!r}: expected one of {', '.join(KINDS)}") from None
+    if name not in _CLASSES:
+        raise ProblemError(f"unknown problem kind {name!r}: expected one of {', '.join(KINDS)}")
+    return KINDS[name]
+
+
+def kind_titles() -> dict[str, str]:
+    """Kind name -> its one-line title, read from the kinds' sources without importing them.
+
+    The title is the ``title = "..."`` class attribute of the kind's class (what
+    ``KINDS[name].title`` gives); reading it from the source keeps ``gtmodel schema
+    --list`` from importing every kind's solvers.
+
+    Returns
+    -------
+    dict of str to str
+        In the order of :data:`KINDS`; ``""`` for a kind whose title is not a literal.
+    """
+    titles = {}
+    for name, target in _CLASSES.items():
+        module, cls = target.split(":")
+        spec = importlib.util.find_spec(module)
+        tree = ast.parse(Path(spec.origin).read_text(encoding="utf-8")) if spec is not None and spec.origin else ast.Module(body=[])
+        titles[name] = next((node.value.value for c in tree.body if isinstance(c, ast.ClassDef) and c.name == cls
+                             for node in c.body if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant)
+                             and any(getattr(t, "id", None) == "title" for t in node.targets)), "")
+    return titles

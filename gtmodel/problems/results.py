@@ -100,7 +100,7 @@ def failure_summary(problem: str | Path, error: BaseException | str, status: Sta
     kind : str, optional
         The problem kind, if known.
     name : str, optional
-        The problem name, if known.
+        The problem name, if known (default: the problem file's name without ``.toml``).
     empty_fields : tuple of str, optional
         The kind's numeric summary fields, written as null.
 
@@ -114,7 +114,7 @@ def failure_summary(problem: str | Path, error: BaseException | str, status: Sta
         message = "interrupted by the user"
     else:
         message = f"{type(error).__name__}: {error}"
-    out: dict[str, Any] = {"problem": str(problem), "name": name, "kind": kind, "status": Status(status), "message": message}
+    out: dict[str, Any] = {"problem": str(problem), "name": name if name is not None else Path(problem).stem, "kind": kind, "status": Status(status), "message": message}
     out.update({k: None for k in empty_fields})
     return out
 

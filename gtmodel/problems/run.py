@@ -221,11 +221,15 @@ def run_problem(
     RunOutcome
         Never raises for bad input, solver failure or internal errors (their status says
         so); a :class:`KeyboardInterrupt` is recorded as ``interrupted`` (the caller
-        decides whether to stop).
+        decides whether to stop). A problem file that does not exist writes nothing.
     """
     path = Path(path)
     target = Path(out) if out is not None else Path("results") / path.stem
     problem: Problem | None = None
+    if not path.is_file():  # a mistyped path: reported, nothing written (no results/<typo>/)
+        what = "it is a folder" if path.is_dir() else "no such file"
+        return _failed(path, target, None, ProblemError(f"{path}: cannot read the problem file ({what})"), Status.INVALID_INPUT,
+                       write=False)
     try:
         problem = load_problem(path, overrides)
         target = Path(out) if out is not None else Path("results") / problem.name
@@ -251,7 +255,7 @@ def run_problem(
 def _failed(path: Path, target: Path, problem: Problem | None, error: BaseException, status: Status, write: bool = True) -> RunOutcome:
     kind = get_kind(problem.kind) if problem is not None else None
     summary = failure_summary(
-        path, error, status, kind=problem.kind if problem else _peek_kind(path), name=problem.name if problem else None,
+        path, error, status, kind=problem.kind if problem else _peek_kind(path), name=problem.name if problem else _peek_name(path),
         empty_fields=kind.empty_fields if kind is not None else (),
     )
     written = False
@@ -263,6 +267,15 @@ def _failed(path: Path, target: Path, problem: Problem | None, error: BaseExcept
         except (ResultWriteError, KeyboardInterrupt) as exc:
             _log.warning("gtmodel: could not write %s: %s", target / "summary.json", exc)
     return RunOutcome(path, target, status, summary, problem, None, error, written)
+
+
+def _peek_name(path: Path) -> str:
+    """The name of a problem that could not be loaded: its ``name`` field if readable, else the file's stem."""
+    try:
+        name = read_toml(path, ProblemError, "problem file").get("name") if path.is_file() else None
+    except GtModelError:
+        name = None
+    return name if isinstance(name, str) and name.strip() else path.stem
 
 
 def _peek_kind(path: Path) -> str | None:

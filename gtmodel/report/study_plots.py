@@ -1,7 +1,7 @@
 """Plots of studies (``gtmodel study``): Monte-Carlo calibration, time-optimal maps, sweeps.
 
 Every function takes plain arrays or DataFrames (the study analyses in
-:mod:`gtmodel.problems.analyses` compute them), writes one PNG and returns its path;
+:mod:`gtmodel.problems.study.analyses` compute them), writes one PNG and returns its path;
 matplotlib is imported inside the functions (it is heavy and optional for the rest).
 """
 

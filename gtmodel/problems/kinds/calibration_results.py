@@ -1,7 +1,7 @@
 """Result files of the kinematic calibration kinds: summary rows, ``errors.csv``, ``parameters.toml``.
 
 With synthetic data, the summary also compares the first model with its true robot (the
-Monte-Carlo study's input, :mod:`gtmodel.problems.analyses.calibration_monte_carlo`):
+Monte-Carlo study's input, :mod:`gtmodel.problems.study.analyses.calibration_monte_carlo`):
 ``parameters`` (per parameter: ``estimate``, ``truth``, predicted ``std`` and its
 ``role``) and ``truth_mean_error_m``/``truth_max_error_m`` (TCP error against the
 noise-free true robot on all candidate poses). The frame: synthetic measurements are

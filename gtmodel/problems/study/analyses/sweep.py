@@ -16,10 +16,10 @@ import numpy as np
 import pandas as pd
 
 from gtmodel.errors import GtModelError
-from gtmodel.problems.analyses.common import SOLVED, check_analyse_args, design_columns, status_counts
+from gtmodel.problems.study.analyses.common import SOLVED, check_analyse_args, design_columns, status_counts
 from gtmodel.problems.registry import get_kind
 from gtmodel.problems.results import json_safe
-from gtmodel.problems.study_analysis import StudyAnalysis
+from gtmodel.problems.study.analysis import StudyAnalysis
 from gtmodel.report.study_plots import plot_sweep
 
 __all__ = ["Sweep", "sweep_columns"]

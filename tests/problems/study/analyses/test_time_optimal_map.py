@@ -18,10 +18,10 @@ import pandas as pd
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.problems.analyses.time_optimal_map import TimeOptimalMap, cell_class, point_axes
-from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study.analyses.time_optimal_map import TimeOptimalMap, cell_class, point_axes
+from gtmodel.problems.study.engine import run_study
 
-from ...conftest import PROBLEMS_DIR, REPO
+from ....conftest import PROBLEMS_DIR, REPO
 
 MAP = TimeOptimalMap()
 #: Agreement of a study cell with a single ``gtmodel solve`` run (issue 16).

@@ -10,10 +10,10 @@ import pandas as pd
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.problems.analyses.sweep import Sweep, sweep_columns
-from gtmodel.problems.study_file import load_study
+from gtmodel.problems.study.analyses.sweep import Sweep, sweep_columns
+from gtmodel.problems.study.design import load_study
 
-from ...conftest import REPO
+from ....conftest import REPO
 
 SWEEP = Sweep()
 

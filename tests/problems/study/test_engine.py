@@ -18,10 +18,10 @@ import pytest
 
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_NOT_OPTIMAL, main
 from gtmodel.errors import InputError
-from gtmodel.problems.study_cases import case_key
+from gtmodel.problems.study.cases import case_key
 from gtmodel.problems import get_kind
-from gtmodel.problems.study_engine import run_study
-from gtmodel.problems.study_progress import StudyProgress
+from gtmodel.problems.study.engine import run_study
+from gtmodel.problems.study.progress import StudyProgress
 
 from .study_fixtures import SMALL_DESIGN, write_study
 
@@ -62,6 +62,16 @@ def test_rerun_runs_nothing(small):
     again = run_study(study, outcome.out, workers=1, on_case=ran.append)
     assert ran == [] and again.summary["skipped"] == 6
     assert again.table.drop(columns="wall_s").equals(outcome.table.drop(columns="wall_s"))
+
+
+def test_a_rerun_that_solves_nothing_keeps_the_timing_of_the_run_that_did(small, tmp_path):
+    """Defect (h): a no-op rerun overwrote the first run's timings (``workers 0``)."""
+    study, outcome = small
+    out = tmp_path / "copy"
+    shutil.copytree(outcome.out, out)
+    again = run_study(study, out, workers=1)
+    kept = {k: outcome.summary[k] for k in ("workers", "scheduler", "timing")}
+    assert (again.summary["run_now"], {k: again.summary[k] for k in kept}) == (0, kept)
 
 
 def test_deleting_one_case_folder_reruns_only_it(small, tmp_path):
@@ -218,7 +228,7 @@ def test_a_sigint_swallowed_between_cases_still_interrupts_the_study(small, tmp_
     import os
     import signal
 
-    import gtmodel.problems.study_engine as engine
+    import gtmodel.problems.study.executors as engine
 
     original = engine.run_unit
     units = []

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..conftest import PROBLEMS_DIR
+from ...conftest import PROBLEMS_DIR
 
 BASE = PROBLEMS_DIR / "l1_path_constrained.toml"
 

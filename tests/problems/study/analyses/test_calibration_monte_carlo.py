@@ -14,11 +14,11 @@ import pandas as pd
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.problems.analyses import ANALYSES
-from gtmodel.problems.analyses.calibration_monte_carlo import NORMAL_COVERAGE, CalibrationMonteCarlo
-from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study.analyses import ANALYSES
+from gtmodel.problems.study.analyses.calibration_monte_carlo import NORMAL_COVERAGE, CalibrationMonteCarlo
+from gtmodel.problems.study.engine import run_study
 
-from ...conftest import REPO
+from ....conftest import REPO
 
 MC = CalibrationMonteCarlo()
 N_CASES = 400

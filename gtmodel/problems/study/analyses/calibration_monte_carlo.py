@@ -31,8 +31,8 @@ import numpy as np
 import pandas as pd
 
 from gtmodel.problems.results import json_safe
-from gtmodel.problems.analyses.common import check_analyse_args, finite_or_none, solved_rows, status_counts
-from gtmodel.problems.study_analysis import StudyAnalysis
+from gtmodel.problems.study.analyses.common import check_analyse_args, finite_or_none, solved_rows, status_counts
+from gtmodel.problems.study.analysis import StudyAnalysis
 from gtmodel.report.study_plots import plot_accuracy_vs_poses, plot_normalised_errors, plot_parameter_spread
 
 __all__ = ["CalibrationMonteCarlo", "NORMAL_COVERAGE", "COVERAGE_BANDS", "GROUP_COLUMNS"]

@@ -18,10 +18,10 @@ import time
 
 import pytest
 
-from gtmodel.problems import study_engine
-from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study import executors
+from gtmodel.problems.study.engine import run_study
 
-from ..conftest import PROBLEMS_DIR, REPO
+from ...conftest import PROBLEMS_DIR, REPO
 from .study_fixtures import grid_design, write_study
 
 distributed = pytest.importorskip("distributed")
@@ -109,7 +109,7 @@ def test_a_killed_worker_loses_nothing_and_duplicates_nothing(cluster, tmp_path)
 def test_a_case_that_kills_every_worker_is_a_row_after_bounded_retries(tmp_path, monkeypatch):
     """Dask reschedules it after its worker died, at most ALLOWED_FAILURES times (here 1);
     then the case is an internal_error row and the study ends (exit 3), nothing hangs."""
-    monkeypatch.setattr(study_engine, "ALLOWED_FAILURES", 1)
+    monkeypatch.setattr(executors, "ALLOWED_FAILURES", 1)
     (tmp_path / "crash.py").write_text("import os\nos._exit(1)  # a model file that kills the process loading it\n")
     model = (PROBLEMS_DIR / "cart_pendulum_swing_up.toml").read_text()
     assert 'file = "../models/cart_pendulum.py"' in model

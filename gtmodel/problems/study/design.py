@@ -6,7 +6,7 @@ A study file (TOML, ``gtmodel study STUDY.toml``) names a base problem file and 
 
     name = "l1_map"                              # optional, default the file stem
     base = "../problems/l1_time_optimal.toml"    # relative to the study file
-    analysis = "generic"                         # a key of gtmodel.problems.analyses.ANALYSES
+    analysis = "generic"                         # a key of gtmodel.problems.study.analyses.ANALYSES
     warm_start = false                           # chains along the last axis
     plots = true
 
@@ -33,17 +33,18 @@ import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, Sequence
 
 import numpy as np
 from pydantic import Field, ValidationError
 
 from gtmodel._toml import read_toml
 from gtmodel.errors import ProblemError
-from gtmodel.problems.analyses import ANALYSES
+from gtmodel.problems.study.analyses import ANALYSES
+from gtmodel.problems.study.preflight import check_problem_files
 from gtmodel.problems.schema import Flag, NonEmptyText, Section, Text, integer, number, problem_error
 
-__all__ = ["CaseSpec", "Study", "StudySchema", "load_study", "expand_design", "value_text", "MAX_CASES"]
+__all__ = ["CaseSpec", "Study", "StudySchema", "load_study", "comparison_study", "expand_design", "value_text", "MAX_CASES"]
 
 #: Largest number of cases of one study (a typo such as ``num = 1e9`` fails at once).
 MAX_CASES = 1_000_000
@@ -148,7 +149,7 @@ class StudySchema(Section):
     base : str
         The base problem file, relative to the study file.
     analysis : str, optional
-        A key of :data:`~gtmodel.problems.analyses.ANALYSES` (default ``"generic"``).
+        A key of :data:`~gtmodel.problems.study.analyses.ANALYSES` (default ``"generic"``).
     warm_start : bool, optional
         Solve each row of the design (all columns but the last axis fixed) in order, each
         case starting from the previous solution.
@@ -183,12 +184,16 @@ class CaseSpec:
     chain : str, optional
         The row of the design this case belongs to (all design columns but the last
         axis'), for warm-started chains.
+    base : pathlib.Path, optional
+        The case's own problem file (a comparison of several files); default the
+        study's base file.
     """
 
     label: str
     overrides: dict[str, Any]
     design: dict[str, Any]
     chain: str = ""
+    base: Path | None = None
 
 
 @dataclass
@@ -197,8 +202,8 @@ class Study:
 
     Parameters
     ----------
-    path : pathlib.Path
-        The study file.
+    path : pathlib.Path or None
+        The study file (None for a comparison given on the command line).
     name : str
         Study name.
     description : str
@@ -206,16 +211,26 @@ class Study:
     base : pathlib.Path
         The base problem file (resolved).
     analysis : str
-        Key of :data:`~gtmodel.problems.analyses.ANALYSES`.
+        Key of :data:`~gtmodel.problems.study.analyses.ANALYSES`.
     warm_start : bool
         Warm-started chains along the last axis.
     plots : bool
         Write plots.
     cases : list of CaseSpec
         The expanded design, in order.
+    comparison : bool, optional
+        A comparison (``gtmodel solve A.toml B.toml`` or ``--sweep``): each case in
+        ``DIR/<case>/``, the folder replaced whole when the run ends (nothing is resumed),
+        a problem file that cannot be read is its case's status, and the kinds'
+        comparison table and overlay plots (:mod:`~gtmodel.problems.study.comparison`).
+    reuse : bool, optional
+        In this process, solve each chain in order, each case reusing the NLP built for
+        the previous one (a sweep over a named parameter), also without ``warm_start``.
+    sweep : tuple of (str, list), optional
+        The swept field and its values (recorded in the summary).
     """
 
-    path: Path
+    path: Path | None
     name: str
     description: str
     base: Path
@@ -223,6 +238,9 @@ class Study:
     warm_start: bool
     plots: bool
     cases: list[CaseSpec] = field(default_factory=list)
+    comparison: bool = False
+    reuse: bool = False
+    sweep: tuple[str, list[Any]] | None = None
 
 
 def value_text(value: Any) -> str:
@@ -290,6 +308,64 @@ def load_study(path: str | Path) -> Study:
         raise ProblemError(f"{path}: field 'analysis': expected one of {', '.join(sorted(ANALYSES))}, got {doc.analysis!r}")
     return Study(path=path, name=doc.name or path.stem, description=doc.description, base=base, analysis=doc.analysis,
                  warm_start=doc.warm_start, plots=doc.plots, cases=expand_design(doc.design, path))
+
+
+def comparison_study(paths: Sequence[str | Path], sweep: tuple[str, Sequence[Any]] | None = None, warm_start: bool = False,
+                     plots: bool = True) -> Study:
+    """The study of several problem files, or of one file over a sweep of one field.
+
+    Parameters
+    ----------
+    paths : sequence of str or pathlib.Path
+        Problem files (exactly one with ``sweep``).
+    sweep : tuple of (str, sequence), optional
+        Field name and its values, e.g. ``("w", [0, 0.001, 0.01])``.
+    warm_start : bool, optional
+        Start each sweep case from the previous case's solution (in this process).
+    plots : bool, optional
+        Write PNG plots.
+
+    Returns
+    -------
+    Study
+        Its name is ``<stem>_sweep_<field>`` or ``<stem>_study``; case labels are the
+        problem names (``name[w=0.001]`` in a sweep).
+
+    Raises
+    ------
+    ProblemError
+        No files, a sweep with more than one file or without values, a problem file that
+        does not exist (names it; nothing is written).
+    """
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise ProblemError("a study needs at least one problem file")
+    if sweep is not None and len(paths) != 1:
+        raise ProblemError(f"--sweep needs exactly one problem file, got {len(paths)}")
+    if sweep is not None and not list(sweep[1]):
+        raise ProblemError(f"--sweep {sweep[0]}: expected at least one value")
+    check_problem_files(paths)
+    cases = []
+    if sweep is not None:
+        name = _problem_name(paths[0])
+        for v in sweep[1]:
+            cases.append(CaseSpec(f"{name}[{sweep[0]}={v}]", {sweep[0]: v}, {sweep[0]: _cell(v)}, base=paths[0]))
+        study_name = paths[0].stem + "_sweep_" + sweep[0].replace(".", "_")
+    else:
+        cases = [CaseSpec(_problem_name(p), {}, {}, base=p) for p in paths]
+        study_name = paths[0].stem + "_study"
+    return Study(path=None, name=study_name, description="", base=paths[0], analysis="generic", warm_start=warm_start,
+                 plots=plots, cases=cases, comparison=True, reuse=sweep is not None,
+                 sweep=(sweep[0], list(sweep[1])) if sweep is not None else None)
+
+
+def _problem_name(path: Path) -> str:
+    """The ``name`` field of a problem file, else its stem (also for an unreadable file)."""
+    try:
+        name = read_toml(path, ProblemError, "problem file").get("name")
+    except ProblemError:
+        return path.stem
+    return name if isinstance(name, str) and name.strip() else path.stem
 
 
 def _linspace(r: RangeSpec) -> list[Any]:

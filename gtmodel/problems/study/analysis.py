@@ -9,7 +9,7 @@ one row per case in a tidy table (design values, status, the kind's summary fiel
 - :meth:`StudyAnalysis.analyse`: study-level figures for the study's ``summary.json`` and
   its plots, computed from the whole table.
 
-The analyses are registered in :data:`gtmodel.problems.analyses.ANALYSES`.
+The analyses are registered in :data:`gtmodel.problems.study.analyses.ANALYSES`.
 """
 
 from __future__ import annotations

@@ -22,9 +22,9 @@ from typing import Any, ClassVar, Mapping
 import numpy as np
 import pandas as pd
 
-from gtmodel.problems.analyses.common import SOLVED, check_analyse_args, design_columns, status_counts
+from gtmodel.problems.study.analyses.common import SOLVED, check_analyse_args, design_columns, status_counts
 from gtmodel.problems.results import json_safe
-from gtmodel.problems.study_analysis import StudyAnalysis
+from gtmodel.problems.study.analysis import StudyAnalysis
 from gtmodel.report.study_plots import plot_time_map
 
 __all__ = ["TimeOptimalMap", "cell_class", "point_axes"]
@@ -41,7 +41,7 @@ def cell_class(status: str) -> str:
     Returns
     -------
     str
-        ``"solved"`` (statuses in :data:`~gtmodel.problems.analyses.common.SOLVED`),
+        ``"solved"`` (statuses in :data:`~gtmodel.problems.study.analyses.common.SOLVED`),
         ``"infeasible"``, ``"outside"`` (``invalid_input``: rejected when loading, e.g.
         outside the workspace) or ``"failed"``.
     """

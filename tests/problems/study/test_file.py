@@ -11,11 +11,11 @@ import pytest
 
 from gtmodel.cli import EXIT_BAD_INPUT, main
 from gtmodel.errors import ProblemError
-from gtmodel.problems.study_engine import plan_cases, run_study
-from gtmodel.problems.study_file import (MAX_CASES, AxisSchema, CaseSchema, DesignSchema, RangeSpec, StudySchema, load_study,
+from gtmodel.problems.study.engine import plan_cases, run_study
+from gtmodel.problems.study.design import (MAX_CASES, AxisSchema, CaseSchema, DesignSchema, RangeSpec, StudySchema, load_study,
                                          value_text)
 
-from ..conftest import REPO
+from ...conftest import REPO
 from .study_fixtures import write_base
 
 AXIS = '[design]\n[[design.axes]]\nfield = "w"\n'

@@ -1,6 +1,6 @@
 """The registry of study analyses: ``analysis = "..."`` in a study file -> its :class:`StudyAnalysis`.
 
-- ``generic``: the table of cases only (:class:`~gtmodel.problems.study_analysis.StudyAnalysis`);
+- ``generic``: the table of cases only (:class:`~gtmodel.problems.study.analysis.StudyAnalysis`);
 - ``calibration_monte_carlo``: coverage of the predicted parameter deviations over seeds,
   accuracy against the number of poses (:mod:`.calibration_monte_carlo`);
 - ``time_optimal_map``: minimum time over a grid of end positions (:mod:`.time_optimal_map`);
@@ -9,10 +9,10 @@
 
 from __future__ import annotations
 
-from gtmodel.problems.analyses.calibration_monte_carlo import CalibrationMonteCarlo
-from gtmodel.problems.analyses.sweep import Sweep
-from gtmodel.problems.analyses.time_optimal_map import TimeOptimalMap
-from gtmodel.problems.study_analysis import StudyAnalysis
+from gtmodel.problems.study.analyses.calibration_monte_carlo import CalibrationMonteCarlo
+from gtmodel.problems.study.analyses.sweep import Sweep
+from gtmodel.problems.study.analyses.time_optimal_map import TimeOptimalMap
+from gtmodel.problems.study.analysis import StudyAnalysis
 
 __all__ = ["ANALYSES"]
 

@@ -2,7 +2,7 @@
 
 Columns: the design columns, ``case``, ``key``, ``folder``, ``status``, ``wall_s``, then
 every scalar top-level field of the case's ``summary.json`` (numbers, strings, booleans),
-then the analysis' own columns (:meth:`~gtmodel.problems.study_analysis.StudyAnalysis.row`).
+then the analysis' own columns (:meth:`~gtmodel.problems.study.analysis.StudyAnalysis.row`).
 Written as ``table.parquet`` (pyarrow) and ``table.csv``, each replaced atomically.
 """
 
@@ -15,8 +15,8 @@ from typing import Any, Mapping, Sequence
 import pandas as pd
 
 from gtmodel.errors import ResultWriteError
-from gtmodel.problems.study_analysis import StudyAnalysis
-from gtmodel.problems.study_cases import CaseTask
+from gtmodel.problems.study.analysis import StudyAnalysis
+from gtmodel.problems.study.cases import CaseTask
 
 __all__ = ["case_row", "build_table", "write_table", "FIRST_COLUMNS"]
 

@@ -1,6 +1,6 @@
 """Checks and table helpers shared by the study analyses.
 
-The study table (:mod:`gtmodel.problems.study_analysis`) holds the design columns first,
+The study table (:mod:`gtmodel.problems.study.analysis`) holds the design columns first,
 then ``case``, ``key``, ``folder``, ``status``, ``wall_s``, the kind's scalar summary
 fields and the analysis' own columns. The helpers here check that layout once, so every
 analysis fails on a malformed table with one :class:`~gtmodel.errors.InputError` naming

@@ -20,9 +20,9 @@ import pandas as pd
 import pytest
 
 from gtmodel.cli import EXIT_INTERRUPTED
-from gtmodel.problems.study_engine import run_study
+from gtmodel.problems.study.engine import run_study
 
-from ..conftest import REPO
+from ...conftest import REPO
 from .study_fixtures import grid_design, write_study
 
 
@@ -52,7 +52,7 @@ def test_ctrl_c_stops_with_130_keeps_finished_cases_and_a_rerun_completes_the_re
     written = (out / "summary.json").read_text() if (out / "summary.json").exists() else "no summary.json"
     # one exit 0 (all cases finished, SIGINT lost) in ~17 runs on the loaded machine, cause not
     # seen; an in-process study now also keeps a SIGINT whose KeyboardInterrupt is swallowed
-    # between cases (test_study_engine.py); the message keeps what is needed if it comes back
+    # between cases (study/test_engine.py); the message keeps what is needed if it comes back
     assert proc.returncode == EXIT_INTERRUPTED, f"exit {proc.returncode}; stderr:\n{stderr}\nsummary.json:\n{written}"
     summary = json.loads((out / "summary.json").read_text())
     table = pd.read_parquet(out / "table.parquet")
