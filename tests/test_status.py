@@ -11,7 +11,7 @@ from gtmodel.status import EXIT_CODES, Status, StatusResult, SolverResult
 
 from .conftest import REPO
 
-# the table of the issue and of README.md, written out independently of the code
+# the table of the issue and of docs/getting_started.md, written out independently of the code
 EXPECTED_EXIT = {
     "optimal": 0, "converged": 0, "acceptable": 1, "max_iterations": 1, "infeasible": 1,
     "error": 1, "invalid_input": 2, "internal_error": 3, "interrupted": 130,
@@ -65,7 +65,7 @@ def test_help_prints_the_table():
     assert rows == EXPECTED_EXIT
 
 
-def test_readme_prints_the_table():
-    text = (REPO / "README.md").read_text(encoding="utf-8")
+def test_getting_started_prints_the_table():
+    text = (REPO / "docs" / "getting_started.md").read_text(encoding="utf-8")
     rows = dict((s, int(c)) for s, c in re.findall(r"^\|\s*`(\w+)`\s*\|\s*(\d+)\s*\|", text, flags=re.M))
     assert rows == EXPECTED_EXIT

@@ -184,7 +184,7 @@ class GantryTau3Stiffness:
 
         Outputs ``K`` (3x3) [N/m], ``k`` (3) arm stiffness [N/m], ``f`` (3) arm forces [N],
         ``dT`` (3) deflection [m], ``disc`` (3) IK discriminants, ``cos_min`` (1) smallest
-        |cos| of a link to its guideway. Eqs. (1)-(3), IK of eq. 4.9.
+        ``|cos|`` of a link to its guideway. Eqs. (1)-(3), IK of eq. 4.9.
         """
         T = ca.SX.sym("T", 3)
         s = ca.SX.sym("s", 3)

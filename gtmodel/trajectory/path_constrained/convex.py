@@ -68,13 +68,13 @@ class PathConstrainedProblem:
     InputError
         Not a :class:`Path`, not :class:`PathConstraints`, an actuator limit without a
         robot, or an invalid configuration.
+    UnreachablePoseError
+        The path leaves the robot's workspace (names the first ``s``).
 
     Notes
     -----
     At a corner of a polyline the arrival (with the incoming tangent) is not checked; only
     the departure is (right-continuous ``dT/ds``).
-    UnreachablePoseError
-        The path leaves the robot's workspace (names the first ``s``).
     """
 
     def __init__(
