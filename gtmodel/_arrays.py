@@ -13,7 +13,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["as_rows", "as_signal", "as_vector", "as_per_axis", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int", "positive_float"]
+__all__ = ["as_rows", "as_signal", "as_times", "as_vector", "as_per_axis", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int", "positive_float"]
 
 
 def as_rows(x: Any, name: str, width: int) -> tuple[np.ndarray, bool]:
@@ -107,6 +107,49 @@ def as_signal(
     if np.any(bad):
         k, j = (int(v) for v in np.argwhere(bad)[0])
         raise InputError(f"{name}: sample {k}, column {j} is not finite ({arr[k, j]!r})")
+    return arr
+
+
+def as_times(t: Any, name: str = "t", min_samples: int = 2) -> np.ndarray:
+    """Sample times: a finite, strictly increasing 1-D float array [s] (the time axis of a signal).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Times [s].
+    name : str, optional
+        Argument name for messages (default ``"t"``).
+    min_samples : int, optional
+        Smallest number of samples N (default 2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+
+    Raises
+    ------
+    InputError
+        Not numeric, not 1-D, fewer than ``min_samples`` samples, a sample that is not
+        finite, or a time not above the one before it (the sample named, 0-based).
+    """
+    try:
+        arr = np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a 1-D array of times in s, got {t!r}") from None
+    if arr.ndim != 1:
+        raise InputError(f"{name}: expected a 1-D array of times in s, got shape {arr.shape}")
+    if arr.size < min_samples:
+        raise InputError(f"{name}: expected at least {min_samples} samples, got {arr.size}")
+    bad = ~np.isfinite(arr)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise InputError(f"{name}: sample {k} is not finite ({float(arr[k])!r})")
+    back = np.diff(arr) <= 0
+    if np.any(back):
+        k = int(np.argmax(back)) + 1
+        raise InputError(
+            f"{name}: times must increase strictly, but sample {k} does not (t[{k}] = {float(arr[k])!r} s <= t[{k - 1}] = {float(arr[k - 1])!r} s)"
+        )
     return arr
 
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import scipy.signal
 
-from gtmodel._arrays import as_signal, positive_int
+from gtmodel._arrays import as_signal, as_times, positive_int
 from gtmodel._tables import read_table, write_table
 from gtmodel.errors import InputError
 
@@ -30,26 +30,6 @@ MIN_SAMPLES = 30
 #: Largest relative deviation of a sampling interval from the median before a log is
 #: rejected as non-uniformly sampled (the filters assume a constant rate).
 SAMPLING_TOLERANCE = 0.01
-
-
-def _time(t: Any, name: str = "t") -> np.ndarray:
-    try:
-        arr = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a 1-D array of times in s") from None
-    if arr.ndim != 1:
-        raise InputError(f"{name}: expected a 1-D array of times in s, got shape {arr.shape}")
-    if arr.size < MIN_SAMPLES:
-        raise InputError(f"{name}: expected at least {MIN_SAMPLES} samples, got {arr.size}")
-    bad = ~np.isfinite(arr)
-    if np.any(bad):
-        k = int(np.argmax(bad))
-        raise InputError(f"{name}: sample {k} is not finite ({arr[k]!r})")
-    dt = np.diff(arr)
-    if np.any(dt <= 0):
-        k = int(np.argmax(dt <= 0)) + 1
-        raise InputError(f"{name}: time is not strictly increasing at sample {k} (t[{k}] = {arr[k]!r} s <= t[{k - 1}] = {arr[k - 1]!r} s)")
-    return arr
 
 
 @dataclass
@@ -88,7 +68,7 @@ class MotionLog:
     def __post_init__(self) -> None:
         if (self.q is None) == (self.T is None):
             raise InputError("MotionLog: give exactly one of q (cart positions) and T (TCP positions)")
-        self.t = _time(self.t)
+        self.t = as_times(self.t, "t", MIN_SAMPLES)
         n = self.t.size
         self.tau = as_signal(self.tau, "tau", 3, n, like="t")
         if self.q is not None:
@@ -244,18 +224,7 @@ class DynamicSamples:
             raise InputError("smoother: expected a callable filter (array (N, ...) -> array (N, ...)) or None")
         if self.coordinates not in ("cart", "tcp"):
             raise InputError(f"coordinates: expected 'cart' or 'tcp', got {self.coordinates!r}")
-        try:
-            t = np.asarray(self.t, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError("t: expected a 1-D array of times in s") from None
-        if t.ndim != 1 or t.size < 1:
-            raise InputError(f"t: expected a non-empty 1-D array, got shape {t.shape}")
-        if np.any(~np.isfinite(t)):
-            raise InputError(f"t: sample {int(np.argmax(~np.isfinite(t)))} is not finite")
-        if t.size > 1 and np.any(np.diff(t) <= 0):
-            k = int(np.argmax(np.diff(t) <= 0)) + 1
-            raise InputError(f"t: time is not strictly increasing at sample {k}")
-        self.t = t
+        self.t = t = as_times(self.t, "t", 1)
         n = t.size
         self.x = as_signal(self.x, "x", 3, n, like="t")
         self.x_dot = as_signal(self.x_dot, "x_dot", 3, n, like="t")

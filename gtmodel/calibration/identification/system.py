@@ -54,7 +54,7 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
-from gtmodel._arrays import as_signal
+from gtmodel._arrays import as_signal, as_times
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.actuator_dynamics import actuator_tf
 from gtmodel.robots.structural import CONVENTIONS, PhysicalModel
@@ -88,18 +88,8 @@ TIME_STEP_RTOL = 1e-6
 
 # ----------------------------------------------------------------------------- data checks
 def _time(t: Any, n_min: int) -> tuple[np.ndarray, float]:
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1:
-        raise InputError(f"t: expected a 1-D array of times in s, got shape {t.shape}")
-    if t.size < n_min:
-        raise InputError(f"t: too few samples: {t.size}, need at least {n_min}")
-    bad = np.nonzero(~np.isfinite(t))[0]
-    if bad.size:
-        raise InputError(f"t: non-finite time at index {int(bad[0])}")
+    t = as_times(t, "t", n_min)
     steps = np.diff(t)
-    nonpos = np.nonzero(steps <= 0)[0]
-    if nonpos.size:
-        raise InputError(f"t: times must increase strictly, but t[{int(nonpos[0]) + 1}] <= t[{int(nonpos[0])}]")
     dt = float(np.mean(steps))
     worst = int(np.argmax(np.abs(steps - dt)))
     if abs(steps[worst] - dt) > TIME_STEP_RTOL * dt:
