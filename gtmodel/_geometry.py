@@ -24,6 +24,8 @@ __all__ = [
     "rot_z",
     "quat_mul",
     "quat_exp",
+    "quat_conj",
+    "QUAT_EXP_SERIES_LIMIT",
 ]
 
 
@@ -44,28 +46,32 @@ def rot_x(a: Any) -> Any:
     return ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c, -s), ca.horzcat(0, s, c))
 
 
-def quaternion_to_rotation(quat: Any) -> Any:
-    """Rotation matrix of a quaternion ``(w, x, y, z)``.
+def quaternion_to_rotation(quat: Any, normalise: bool = True) -> Any:
+    """Rotation matrix of a quaternion ``(w, x, y, z)`` (Hamilton convention: ``R`` rotates body-frame vectors into the world frame).
 
-    The quaternion is normalised inside the formula (``R`` is a rotation for any non-zero
-    ``quat``), so a calibration that lets the 4-vector drift cannot produce a scaled
-    "rotation" (the failure reported in Dressler (2012), ch. 5.4).
+    With ``normalise`` (the default) the quaternion is normalised inside the formula (``R``
+    is a rotation for any non-zero ``quat``), so a calibration that lets the 4-vector drift
+    cannot produce a scaled "rotation" (the failure reported in Dressler (2012), ch. 5.4).
+    Without it the standard unit-quaternion form ``I + 2 w [v]x + 2 [v]x^2`` is used, whose
+    derivative keeps the radial direction (the filters of :mod:`gtmodel.estimation`, whose
+    state quaternion is normalised by the transition).
 
     Parameters
     ----------
-    quat : casadi.SX or casadi.MX or array_like, shape (4,)
-        Quaternion ``(w, x, y, z)``, not zero.
+    quat : casadi.SX or casadi.MX or casadi.DM or array_like, shape (4,)
+        Quaternion ``(w, x, y, z)``: not zero (``normalise=True``) or unit (``normalise=False``).
+    normalise : bool, optional
+        Divide by ``|quat|^2`` inside the formula (default True).
 
     Returns
     -------
     casadi.SX or casadi.MX or numpy.ndarray, shape (3, 3)
-        The rotation matrix (NumPy array for numeric input).
+        The rotation matrix (NumPy array for numeric input, including ``casadi.DM``).
     """
     numeric = not isinstance(quat, (ca.SX, ca.MX))
     qv = ca.DM(np.asarray(quat, dtype=float).reshape(4)) if numeric else quat
     w, x, y, z = qv[0], qv[1], qv[2], qv[3]
-    n2 = w * w + x * x + y * y + z * z
-    s = 2.0 / n2
+    s = 2.0 / (w * w + x * x + y * y + z * z) if normalise else 2.0
     R = ca.vertcat(
         ca.horzcat(1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)),
         ca.horzcat(s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)),
@@ -239,17 +245,18 @@ def rotation_log(M: Any) -> Any:
     return f * vee
 
 
-def quat_mul(a: Any, b: Any) -> ca.SX:
-    """Hamilton product ``a b`` of quaternions ``(w, x, y, z)`` (CasADi expression).
+def quat_mul(a: Any, b: Any) -> Any:
+    """Hamilton product ``a (x) b`` of quaternions ``(w, x, y, z)`` (a CasADi column).
 
     Parameters
     ----------
-    a, b : casadi.SX or casadi.MX or array_like, shape (4,)
+    a, b : casadi.SX or casadi.MX or casadi.DM or array_like, shape (4,)
         Quaternions.
 
     Returns
     -------
-    casadi.SX or casadi.MX, shape (4,)
+    casadi.SX or casadi.MX or casadi.DM, shape (4, 1)
+        The product (``numpy.asarray(...).ravel()`` for NumPy).
     """
     w1, x1, y1, z1 = a[0], a[1], a[2], a[3]
     w2, x2, y2, z2 = b[0], b[1], b[2], b[3]
@@ -261,21 +268,52 @@ def quat_mul(a: Any, b: Any) -> ca.SX:
     )
 
 
-def quat_exp(r: Any) -> ca.SX:
-    """Unit quaternion of the rotation vector ``r`` (= exp(r/2)), smooth at ``r = 0``.
+def quat_conj(q: Any) -> Any:
+    """Conjugate ``(w, -x, -y, -z)`` of a quaternion (the inverse of a unit quaternion).
 
     Parameters
     ----------
-    r : casadi.SX or casadi.MX, shape (3,)
-        Rotation vector [rad].
+    q : casadi.SX or casadi.MX or casadi.DM or array_like, shape (4,)
+        Quaternion ``(w, x, y, z)``.
 
     Returns
     -------
-    casadi.SX or casadi.MX, shape (4,)
+    casadi.SX or casadi.MX or casadi.DM, shape (4, 1)
     """
-    th2 = ca.dot(r, r)
-    th = ca.sqrt(th2 + 1e-300)
-    small = th2 < 1e-8
-    c = ca.if_else(small, 1 - th2 / 8 + th2 * th2 / 384, ca.cos(th / 2))
-    s = ca.if_else(small, 0.5 - th2 / 48 + th2 * th2 / 3840, ca.sin(th / 2) / th)
-    return ca.vertcat(c, s * r)
+    return ca.vertcat(q[0], -q[1], -q[2], -q[3])
+
+
+#: Below this squared half angle ``|r|^2 / 4`` [rad^2] :func:`quat_exp` uses its Taylor series
+#: (truncation error below 1e-16; above it ``sin(theta)/theta`` loses no digits to cancellation,
+#: in its values or in its AD derivatives).
+QUAT_EXP_SERIES_LIMIT = 1e-2
+
+
+def quat_exp(r: Any) -> Any:
+    """Unit quaternion of the rotation vector ``r`` (``exp(r / 2)``), smooth at ``r = 0``.
+
+    ``exp(r / 2) = (cos(theta), sin(theta)/theta r / 2)`` with ``theta = |r| / 2``, written in
+    ``theta^2``, with the Taylor series of ``cos`` and ``sin(theta)/theta`` (to ``theta^8``) below
+    ``theta^2 =`` :data:`QUAT_EXP_SERIES_LIMIT`: the expression and its AD derivatives are
+    finite at ``r = 0`` and accurate to rounding on both sides of the switch (Cvitanic (2021),
+    eq. (28)).
+
+    Parameters
+    ----------
+    r : casadi.SX or casadi.MX or casadi.DM or array_like, shape (3,)
+        Rotation vector [rad] (axis times angle).
+
+    Returns
+    -------
+    casadi.SX or casadi.MX or casadi.DM, shape (4, 1)
+        Scalar-first unit quaternion.
+    """
+    v = ca.vertcat(r[0], r[1], r[2])
+    s = ca.dot(v, v) / 4.0  # theta^2
+    theta = ca.sqrt(ca.fmax(s, QUAT_EXP_SERIES_LIMIT))  # the large-angle branch never sees theta = 0
+    cos_series = 1 - s / 2 + s**2 / 24 - s**3 / 720 + s**4 / 40320
+    sinc_series = 1 - s / 6 + s**2 / 120 - s**3 / 5040 + s**4 / 362880
+    small = s < QUAT_EXP_SERIES_LIMIT
+    c = ca.if_else(small, cos_series, ca.cos(theta))
+    sinc = ca.if_else(small, sinc_series, ca.sin(theta) / theta)
+    return ca.vertcat(c, sinc * v / 2)

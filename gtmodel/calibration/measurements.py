@@ -1,8 +1,9 @@
 """Measurement data for kinematic calibration: CSV files in, :class:`MeasurementSet` out.
 
-Two small CSV formats are read and written here, both strictly validated: every error is
-an :class:`~gtmodel.errors.InputError` naming the file, the line (1-based line number in
-the file) and the column.
+Two small CSV formats are read and written here, both in the one table format of
+:mod:`gtmodel._tables` (comments, header, numbers; read by :func:`gtmodel._tables.read_table`)
+and strictly validated: every error is an :class:`~gtmodel.errors.InputError` naming the
+file, the line (1-based line number in the file) and the column.
 
 Pose measurements (:func:`read_measurements`, :meth:`MeasurementSet.to_csv`)
 ---------------------------------------------------------------------------
@@ -16,9 +17,9 @@ known load on the plate and a weight. Example (3-DOF robot, laser tracker)::
     -0.25,0.10,0.35,-1.0723,2.9135,-0.6311
     ...
 
-- Lines starting with ``#`` are allowed only at the top of the file, before the header
-  (provenance: robot, device, date, frame). They are kept in
-  :attr:`MeasurementSet.comments` and written back by :meth:`MeasurementSet.to_csv`.
+- Lines starting with ``#`` are comments. Those at the top, before the header
+  (provenance: robot, device, date, frame), are kept in :attr:`MeasurementSet.comments`
+  and written back by :meth:`MeasurementSet.to_csv`; those between rows are skipped.
 - The header names the columns, each with its unit. Columns may come in any order; each
   may appear once. Accepted columns:
 
@@ -39,8 +40,8 @@ known load on the plate and a weight. Example (3-DOF robot, laser tracker)::
 
 - Every data row has exactly one value per header column: a decimal number
   (``[+-]digits[.digits][e[+-]digits]``); NaN, inf, empty fields, thousands separators
-  and quotes are errors. SI units as named in the header (a file in mm is converted
-  before writing it in this format).
+  and quotes are errors (:mod:`gtmodel._tables`). SI units as named in the header (a file
+  in mm is converted before writing it in this format).
 - A quaternion must have unit norm within :data:`QUATERNION_NORM_TOLERANCE`; weights
   must be positive; two identical rows are an error (a copy-paste slip); the file must
   hold at least ``min_poses`` rows (default :data:`MIN_POSES`). Empty lines are allowed
@@ -71,7 +72,6 @@ from __future__ import annotations
 
 import logging
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
@@ -79,6 +79,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._tables import Table, read_table, write_table
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import quaternion_to_rotation
 
@@ -115,8 +116,6 @@ _T_COLS = ("Tx_m", "Ty_m", "Tz_m")
 _QUAT_COLS = ("qw", "qx", "qy", "qz")
 _LOAD_COLS = ("F_x_N", "F_y_N", "F_z_N")
 _WEIGHT_COL = "weight"
-_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
-_NONFINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
 def measurement_columns(n_q: int = 3, orientation: bool = False, weights: bool = False, load: bool = False) -> tuple[str, ...]:
@@ -393,7 +392,7 @@ class MeasurementSet:
         if self.weights is not None:
             blocks.append(self.weights[:, None])
         comments = list(self.comments) or ([f" source: {self.source}"] if self.source else [])
-        return _write_csv(Path(path), comments, self.columns(), np.hstack(blocks))
+        return write_table(path, self.columns(), np.hstack(blocks), comments, what="measurement file")
 
 
 @dataclass(frozen=True, eq=False)
@@ -497,109 +496,18 @@ class CartMeasurements:
         """
         rows = [np.column_stack([np.full(qa.size, i + 1.0), qa, pa]) for i, (qa, pa) in enumerate(zip(self.q, self.positions))]
         comments = list(self.comments) or ([f" source: {self.source}"] if self.source else [])
-        return _write_csv(Path(path), comments, CART_COLUMNS, np.vstack(rows), integer_columns=(0,))
+        return write_table(path, CART_COLUMNS, np.vstack(rows), comments, integer_columns=(0,), what="measurement file")
 
 
-# ----------------------------------------------------------------------------- CSV helpers
-def _write_csv(path: Path, comments: Sequence[str], columns: Sequence[str], data: np.ndarray, integer_columns: Sequence[int] = ()) -> Path:
-    lines = []
-    for c in comments:
-        text = str(c).replace("\n", " ")
-        lines.append("#" + text)
-    lines.append(",".join(columns))
-    for row in data:
-        lines.append(",".join(str(int(x)) if j in integer_columns else repr(float(x)) for j, x in enumerate(row)))
-    try:
-        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write measurement file ({exc.strerror})") from None
-    return path
-
-
-@dataclass
-class _Table:
-    origin: str
-    comments: list[str]
-    columns: list[str]
-    header_line: int
-    rows: list[tuple[int, list[str]]]
-
-
-def _read_table(path: str | Path, what: str) -> _Table:
-    """Split a file into comments, header and rows; structural errors name file and line."""
-    origin = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise InputError(f"{origin}: cannot read {what} ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{origin}: not a UTF-8 text file ({exc.reason})") from None
-    lines = text.splitlines()
-    n = len(lines)
-    while n > 0 and not lines[n - 1].strip():
-        n -= 1  # empty lines at the end are allowed
-    comments: list[str] = []
-    k = 0
-    while k < n and lines[k].startswith("#"):
-        comments.append(lines[k][1:])
-        k += 1
-    if k >= n:
-        raise InputError(f"{origin}: no header line: expected a line of column names after the '#' comments")
-    header_line = k + 1
-    if not lines[k].strip():
-        raise InputError(f"{origin}: line {header_line}: empty line where the header was expected")
-    columns = [c.strip() for c in lines[k].split(",")]
-    seen: dict[str, int] = {}
-    for c in columns:
-        if c == "":
-            raise InputError(f"{origin}: line {header_line} (header): empty column name")
-        if c in seen:
-            raise InputError(f"{origin}: line {header_line} (header): column '{c}' appears twice")
-        seen[c] = 1
-    rows = []
-    for j in range(k + 1, n):
-        line = lines[j]
-        lineno = j + 1
-        if line.startswith("#"):
-            raise InputError(f"{origin}: line {lineno}: '#' comment lines are only allowed at the top of the file, before the header")
-        if not line.strip():
-            raise InputError(f"{origin}: line {lineno}: empty line inside the data (allowed only at the end of the file)")
-        fields = line.split(",")
-        if len(fields) != len(columns):
-            raise InputError(
-                f"{origin}: line {lineno}: {len(fields)} values, expected {len(columns)} (one per header column: {','.join(columns)})"
-            )
-        rows.append((lineno, fields))
-    return _Table(origin, comments, columns, header_line, rows)
-
-
-def _parse_number(origin: str, lineno: int, column: str, text: str) -> float:
-    s = text.strip()
-    if _NUMBER.fullmatch(s):
-        return float(s)
-    if _NONFINITE.fullmatch(s):
-        raise InputError(f"{origin}: line {lineno}, column '{column}': NaN/inf is not allowed, got '{s}'")
-    raise InputError(f"{origin}: line {lineno}, column '{column}': expected a decimal number, got '{text}'")
-
-
-def _parse_rows(table: _Table) -> np.ndarray:
-    data = np.empty((len(table.rows), len(table.columns)))
-    for r, (lineno, fields) in enumerate(table.rows):
-        for c, (name, text) in enumerate(zip(table.columns, fields)):
-            data[r, c] = _parse_number(table.origin, lineno, name, text)
-    return data
-
-
-def _check_duplicates(table: _Table, data: np.ndarray, key_columns: Sequence[int] | None = None, what: str = "identical to") -> None:
+# ----------------------------------------------------------------------------- checks
+def _check_duplicates(table: Table, data: np.ndarray, key_columns: Sequence[int] | None = None, what: str = "identical to") -> None:
     key = data if key_columns is None else data[:, list(key_columns)]
     first: dict[bytes, int] = {}
     for r in range(data.shape[0]):
         b = np.ascontiguousarray(key[r] + 0.0).tobytes()  # + 0.0 maps -0.0 to 0.0
         if b in first:
             cols = "all columns" if key_columns is None else ", ".join(f"'{table.columns[c]}'" for c in key_columns)
-            raise InputError(
-                f"{table.origin}: line {table.rows[r][0]}: duplicated row, {what} line {table.rows[first[b]][0]} ({cols})"
-            )
+            raise table.error(f"duplicated row, {what} line {table.lines[first[b]]} ({cols})", row=r)
         first[b] = r
 
 
@@ -634,36 +542,25 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
     """
     if n_q is not None and n_q not in (3, 6):
         raise InputError(f"n_q: expected 3, 6 or None, got {n_q!r}")
-    table = _read_table(path, "measurement file")
-    origin, cols, hl = table.origin, table.columns, table.header_line
-    known = set(_Q_LINEAR) | set(_Q_ROTARY) | set(_T_COLS) | set(_QUAT_COLS) | set(_LOAD_COLS) | {_WEIGHT_COL}
-    for c in cols:
-        if c not in known:
-            raise InputError(
-                f"{origin}: line {hl} (header): unknown column '{c}'; expected the columns "
-                f"{','.join(measurement_columns(6, True, True, True))} (q4..q6 for the F1 only, qw..qz, F_x_N..F_z_N and "
-                "weight optional)"
-            )
+    table = read_table(path, "measurement file")
+    origin, cols, hl = table.source, table.columns, table.header_line
+    known = [*measurement_columns(6, True, True, True)]
+    table.check_columns(allowed=known)
     rotary = [c for c in _Q_ROTARY if c in cols]
     if rotary and len(rotary) != 3:
-        missing = [c for c in _Q_ROTARY if c not in cols]
-        raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)} (the F1 angles q4..q6 come together)")
+        table.check_columns(_Q_ROTARY, note="the F1 angles q4..q6 come together")
     n_q_file = 6 if rotary else 3
     if n_q is not None and n_q != n_q_file:
         expected = ",".join(measurement_columns(n_q)[:n_q])
         raise InputError(f"{origin}: line {hl} (header): expected {n_q} actuator columns {expected}, the file has {n_q_file}")
-    missing = [c for c in list(_Q_LINEAR) + list(_T_COLS) if c not in cols]
-    if missing:
-        raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)}")
+    table.check_columns(list(_Q_LINEAR) + list(_T_COLS))
     quat_cols = [c for c in _QUAT_COLS if c in cols]
-    if quat_cols and len(quat_cols) != 4:
-        missing = [c for c in _QUAT_COLS if c not in cols]
-        raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)} (a quaternion needs qw, qx, qy, qz)")
+    if quat_cols:
+        table.check_columns(_QUAT_COLS, note="a quaternion needs qw, qx, qy, qz")
     load_cols = [c for c in _LOAD_COLS if c in cols]
-    if load_cols and len(load_cols) != 3:
-        missing = [c for c in _LOAD_COLS if c not in cols]
-        raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)} (a load needs F_x_N, F_y_N, F_z_N)")
-    data = _parse_rows(table)
+    if load_cols:
+        table.check_columns(_LOAD_COLS, note="a load needs F_x_N, F_y_N, F_z_N")
+    data = table.data
     if data.shape[0] < min_poses:
         raise InputError(f"{origin}: {data.shape[0]} data row(s), expected at least {min_poses} poses")
     ix = {c: j for j, c in enumerate(cols)}
@@ -674,9 +571,9 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
         bad = ~(np.abs(norm - 1.0) <= QUATERNION_NORM_TOLERANCE)
         if np.any(bad):
             r = int(np.argmax(bad))
-            raise InputError(
-                f"{origin}: line {table.rows[r][0]}, columns 'qw,qx,qy,qz': quaternion norm {norm[r]:.9g}, expected a unit "
-                f"quaternion (|norm - 1| <= {QUATERNION_NORM_TOLERANCE:g})"
+            raise table.error(
+                f"quaternion norm {norm[r]:.9g}, expected a unit quaternion (|norm - 1| <= {QUATERNION_NORM_TOLERANCE:g})",
+                row=r, column="qw,qx,qy,qz",
             )
     weights = None
     if _WEIGHT_COL in ix:
@@ -684,7 +581,7 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
         bad = ~(weights > 0)
         if np.any(bad):
             r = int(np.argmax(bad))
-            raise InputError(f"{origin}: line {table.rows[r][0]}, column 'weight': expected a positive weight, got {float(weights[r])!r}")
+            raise table.error(f"expected a positive weight, got {float(weights[r])!r}", row=r, column="weight")
     _check_duplicates(table, data)
     qcols = measurement_columns(n_q_file)[:n_q_file]
     ms = MeasurementSet(
@@ -726,21 +623,15 @@ def read_cart_measurements(path: str | Path, n_arms: int = 3) -> CartMeasurement
     """
     if not isinstance(n_arms, (int, np.integer)) or n_arms < 1:
         raise InputError(f"n_arms: expected a positive integer, got {n_arms!r}")
-    table = _read_table(path, "cart-measurement file")
-    origin, cols, hl = table.origin, table.columns, table.header_line
-    for c in cols:
-        if c not in CART_COLUMNS:
-            raise InputError(f"{origin}: line {hl} (header): unknown column '{c}'; expected the columns {','.join(CART_COLUMNS)}")
-    missing = [c for c in CART_COLUMNS if c not in cols]
-    if missing:
-        raise InputError(f"{origin}: line {hl} (header): missing column(s) {', '.join(missing)}")
-    data = _parse_rows(table)
-    ix = {c: j for j, c in enumerate(cols)}
+    table = read_table(path, "cart-measurement file")
+    origin = table.source
+    table.check_columns(CART_COLUMNS, allowed=CART_COLUMNS)
+    data = table.data
+    ix = {c: j for j, c in enumerate(table.columns)}
     arm = data[:, ix["arm"]]
     for r, a in enumerate(arm):
         if not (a == math.floor(a) and 1 <= a <= n_arms):
-            got = table.rows[r][1][ix["arm"]].strip()
-            raise InputError(f"{origin}: line {table.rows[r][0]}, column 'arm': expected an integer arm number 1..{n_arms}, got {got!r}")
+            raise table.error(f"expected an integer arm number 1..{n_arms}, got '{a:g}'", row=r, column="arm")
     _check_duplicates(table, data, key_columns=(ix["arm"], ix["q_m"]), what="the same arm and q_m as")
     qs, ps = [], []
     pcols = [ix["x_m"], ix["y_m"], ix["z_m"]]

@@ -50,9 +50,8 @@ from typing import Any
 import numpy as np
 import scipy.signal
 
-from gtmodel._arrays import as_finite, positive_float, positive_int
+from gtmodel._arrays import as_finite, as_signal, as_vector, positive_float, positive_int
 from gtmodel.errors import InputError
-from gtmodel.estimation._signals import signal_rows
 
 __all__ = ["ComplementaryFilter", "THESIS_CUTOFFS_HZ", "PAD_DECAY", "forward_backward_design_hz"]
 
@@ -147,9 +146,7 @@ class ComplementaryFilter:
     def __init__(self, cutoff_hz: Any = THESIS_CUTOFFS_HZ, dt: float = 0.004, order: int = 2) -> None:
         self.dt = positive_float(dt, "dt")
         self.order = positive_int(order, "order")
-        fc = as_finite(cutoff_hz, "cutoff_hz")
-        if fc.ndim != 1 or fc.size == 0:
-            raise InputError(f"cutoff_hz: expected a 1-D array of frequencies (one per direction), got shape {fc.shape}")
+        fc = as_vector(cutoff_hz, "cutoff_hz", what="frequencies (one per direction)")
         nyquist = 0.5 / self.dt
         bad = (fc <= 0) | (fc >= nyquist)
         if np.any(bad):
@@ -209,7 +206,7 @@ class ComplementaryFilter:
         InputError
             Not of shape ``(N, d)`` or not finite.
         """
-        arr = signal_rows(x, "x", self.d)
+        arr = as_signal(x, "x", self.d)
         return np.column_stack([self._lp(j, arr[:, j]) for j in range(self.d)])
 
     def high_pass(self, x: Any) -> np.ndarray:
@@ -230,7 +227,7 @@ class ComplementaryFilter:
         InputError
             Not of shape ``(N, d)`` or not finite.
         """
-        arr = signal_rows(x, "x", self.d)
+        arr = as_signal(x, "x", self.d)
         return arr - self.low_pass(arr)
 
     def double_integral(self, a_m: Any) -> np.ndarray:
@@ -255,7 +252,7 @@ class ComplementaryFilter:
         InputError
             Not of shape ``(N, d)`` or not finite.
         """
-        return self._integral(signal_rows(a_m, "a_m", self.d))
+        return self._integral(as_signal(a_m, "a_m", self.d))
 
     def estimate(self, z_kin: Any, a_m: Any) -> np.ndarray:
         """Tool-position estimate ``z_hat = LP(z_kin) + HP(I(a_m))`` (Dressler (2012), eq. 7.17).
@@ -277,8 +274,8 @@ class ComplementaryFilter:
         InputError
             A signal not of shape ``(N, d)``, of another length than ``z_kin``, or not finite.
         """
-        zk = signal_rows(z_kin, "z_kin", self.d)
-        am = signal_rows(a_m, "a_m", self.d, zk.shape[0])
+        zk = as_signal(z_kin, "z_kin", self.d)
+        am = as_signal(a_m, "a_m", self.d, zk.shape[0], like="z_kin")
         acc = self._integral(am)
         return np.column_stack([self._lp(j, zk[:, j]) + acc[:, j] - self._lp(j, acc[:, j]) for j in range(self.d)])
 

@@ -42,7 +42,7 @@ import control
 import numpy as np
 from threadpoolctl import threadpool_limits  # a dependency of scikit-learn
 
-from gtmodel._arrays import positive_float, positive_int
+from gtmodel._arrays import as_vector, positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation.correction import (
     CALIBRATION_POSES_DEG,
@@ -327,9 +327,7 @@ def simulate_loop(model: OffsetResponseModel, gain: float, reference: Any, delay
 
 
 def _reference(model: OffsetResponseModel, reference: Any, period_cycles: int | None) -> tuple[np.ndarray, int]:
-    r = np.asarray(reference, dtype=float)
-    if r.ndim != 1 or not np.all(np.isfinite(r)):
-        raise InputError(f"reference: expected a finite array of shape (n,), got shape {r.shape}")
+    r = as_vector(reference, "reference")
     w = positive_int(period_cycles, "period_cycles") if period_cycles is not None else int(round(path_period() / model.dt))
     if r.size < 2 * w:
         raise InputError(f"reference: expected at least 2 windows of {w} cycles, got {r.size}")

@@ -5,7 +5,7 @@ One CasADi graph for every filter (KF, EKF, UKF, particle filter) and the genera
 Conventions
 -----------
 * Quaternions are unit, Hamilton, SCALAR-FIRST ``[w, x, y, z]``; ``R(quat)`` rotates vectors of the
-  tracker-target (body) frame into the world frame (:func:`quaternion_to_rotation_matrix`).
+  tracker-target (body) frame into the world frame (:func:`gtmodel._geometry.quaternion_to_rotation`).
 * State (``rotation=True``, 19-D)::
 
       x = [p(3), v(3), a(3), quaternion(4), w(3), alpha(3)]
@@ -50,7 +50,7 @@ Transition over one sample ``dt`` (21)-(28)
   with the body rate ``w + alpha t``: ``quat <- quat (x) exp(phi / 2)``,
   ``phi = w dt + alpha dt^2 / 2`` (exact for a constant rate direction; the commutator term
   ``dt^3 w x alpha / 12`` is neglected), then normalised (``quat / |quat|``). ``exp`` is
-  :func:`quaternion_from_rotation_vector` (smooth at ``phi = 0``, so the AD Jacobian is finite).
+  :func:`gtmodel._geometry.quat_exp` (smooth at ``phi = 0``, so the AD Jacobian is finite).
   The thesis' exact discrete form of (28) is not in the shipped spec: this is our reading; it
   agrees with the first-order form ``quat + dt/2 quat (x) (0, w)`` followed by the normalisation
   to ``O(|w dt|^3)`` per sample (5e-11 rad at 1 rad/s and 1 kHz).
@@ -79,17 +79,14 @@ import casadi as ca
 import control
 import numpy as np
 
-from gtmodel._arrays import as_array, as_finite, as_rotation, positive_float, positive_int
+from gtmodel._arrays import as_array, as_per_axis, as_rotation, positive_float, positive_int
+from gtmodel._geometry import quat_exp, quat_mul, quaternion_to_rotation
 from gtmodel.errors import InputError
 
 __all__ = [
     "IMU_TRANSLATION_M",
     "IMU_ROTATION",
     "constant_acceleration",
-    "quaternion_multiply",
-    "quaternion_conjugate",
-    "quaternion_from_rotation_vector",
-    "quaternion_to_rotation_matrix",
     "EndEffectorModel",
 ]
 
@@ -98,8 +95,6 @@ IMU_TRANSLATION_M = (-0.180, -0.100, 0.120)
 #: Rotation IMU frame -> target frame, ``v_T = R_TI v_I``: 180 deg about y (Table 7, "~180 deg about y").
 IMU_ROTATION = np.array([[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
 
-#: Below this squared half angle [rad^2] the exponential map uses its Taylor series (error < 1e-16).
-_SERIES_LIMIT = 1e-2
 _ROTATION_TOLERANCE = 1e-9
 
 
@@ -139,87 +134,6 @@ def constant_acceleration(dt: float, d: int) -> tuple[np.ndarray, np.ndarray]:
     return np.kron(np.asarray(sysd.A), eye), np.kron(np.asarray(sysd.B), eye)
 
 
-def quaternion_multiply(p: Any, q: Any) -> Any:
-    """Hamilton product ``p (x) q`` of scalar-first quaternions (CasADi or NumPy vectors).
-
-    Parameters
-    ----------
-    p, q : casadi.SX, casadi.MX, casadi.DM or array_like, shape (4,)
-        Quaternions ``[w, x, y, z]``.
-
-    Returns
-    -------
-    casadi.SX, casadi.MX or casadi.DM, shape (4, 1)
-        The product (a CasADi column; ``numpy.asarray(...).ravel()`` for NumPy).
-    """
-    pw, pv = p[0], ca.vertcat(p[1], p[2], p[3])
-    qw, qv = q[0], ca.vertcat(q[1], q[2], q[3])
-    return ca.vertcat(pw * qw - ca.dot(pv, qv), pw * qv + qw * pv + ca.cross(pv, qv))
-
-
-def quaternion_conjugate(q: Any) -> Any:
-    """Conjugate ``[w, -x, -y, -z]`` (the inverse of a unit quaternion).
-
-    Parameters
-    ----------
-    q : casadi.SX, casadi.MX, casadi.DM or array_like, shape (4,)
-        Quaternion ``[w, x, y, z]``.
-
-    Returns
-    -------
-    casadi.SX, casadi.MX or casadi.DM, shape (4, 1)
-    """
-    return ca.vertcat(q[0], -q[1], -q[2], -q[3])
-
-
-def quaternion_from_rotation_vector(phi: Any) -> Any:
-    """Exponential map: the unit quaternion of the rotation vector ``phi`` (Cvitanic (2021), eq. (28)).
-
-    ``exp(phi / 2) = [cos(|phi|/2), sin(|phi|/2) phi / |phi|]``, written in ``theta^2 = |phi|^2 / 4``
-    with the Taylor series of ``cos`` and ``sin(theta)/theta`` below ``theta^2 = 1e-2`` (truncation
-    error < 1e-16), so the expression and its AD derivatives are finite at ``phi = 0``.
-
-    Parameters
-    ----------
-    phi : casadi.SX, casadi.MX, casadi.DM or array_like, shape (3,)
-        Rotation vector [rad] (axis times angle).
-
-    Returns
-    -------
-    casadi.SX, casadi.MX or casadi.DM, shape (4, 1)
-        Scalar-first unit quaternion.
-    """
-    v = ca.vertcat(phi[0], phi[1], phi[2])
-    s = ca.dot(v, v) / 4.0  # theta^2
-    theta = ca.sqrt(ca.fmax(s, _SERIES_LIMIT))  # the large-angle branch never sees theta = 0
-    cos_series = 1 - s / 2 + s**2 / 24 - s**3 / 720 + s**4 / 40320
-    sinc_series = 1 - s / 6 + s**2 / 120 - s**3 / 5040 + s**4 / 362880
-    small = s < _SERIES_LIMIT
-    c = ca.if_else(small, cos_series, ca.cos(theta))
-    sinc = ca.if_else(small, sinc_series, ca.sin(theta) / theta)
-    return ca.vertcat(c, sinc * v / 2)
-
-
-def quaternion_to_rotation_matrix(q: Any) -> Any:
-    """Rotation matrix ``R(quat)`` (target/body frame -> world) of a unit scalar-first quaternion.
-
-    Parameters
-    ----------
-    q : casadi.SX, casadi.MX, casadi.DM or array_like, shape (4,)
-        Quaternion ``[w, x, y, z]`` (assumed unit: the standard form ``I + 2 w [v]x + 2 [v]x^2``).
-
-    Returns
-    -------
-    casadi.SX, casadi.MX or casadi.DM, shape (3, 3)
-    """
-    w, x, y, z = q[0], q[1], q[2], q[3]
-    return ca.vertcat(
-        ca.horzcat(1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-        ca.horzcat(2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-        ca.horzcat(2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-    )
-
-
 def _lever_terms(w: Any, alpha: Any, r: Any) -> Any:
     """``alpha x r + w x (w x r)``: the target's acceleration relative to the IMU (29)."""
     return ca.cross(alpha, r) + ca.cross(w, ca.cross(w, r))
@@ -231,17 +145,6 @@ def _unit_quaternion(value: Any, name: str) -> np.ndarray:
     if n < 1e-12:
         raise InputError(f"{name}: expected a quaternion [w, x, y, z] of nonzero norm, got {q.tolist()}")
     return q / n
-
-
-def _axis_std(value: Any, name: str, positive: bool) -> np.ndarray:
-    arr = as_finite(value, name, nonnegative=True)
-    if arr.ndim == 0:
-        arr = np.full(3, float(arr))
-    if arr.shape != (3,):
-        raise InputError(f"{name}: expected a number or shape (3,) (one per axis), got shape {arr.shape}")
-    if positive and not np.all(arr > 0):
-        raise InputError(f"{name}: expected standard deviations > 0, got {arr.tolist()}")
-    return arr
 
 
 class EndEffectorModel:
@@ -348,15 +251,15 @@ class EndEffectorModel:
             a1 = self._A[np.ix_([3, 6], [3, 6])]  # [v, a] rows of kron(A1, I3) at axis 0: [[1, dt], [0, 1]]
             w_next = a1[0, 0] * w + a1[0, 1] * alpha
             phi = w * self.dt + alpha * (self.dt**2 / 2.0)
-            q_next = quaternion_multiply(quat, quaternion_from_rotation_vector(phi))  # (27)-(28)
+            q_next = quat_mul(quat, quat_exp(phi))  # (27)-(28)
             q_next = q_next / ca.norm_2(q_next)
             x_next = ca.vertcat(pva_next, q_next, w_next, alpha)
-            r_wi = ca.mtimes(quaternion_to_rotation_matrix(quat), r_ti)
+            r_wi = ca.mtimes(quaternion_to_rotation(quat, normalise=False), r_ti)
             w_i = ca.mtimes(r_ti.T, w)
             alpha_i = ca.mtimes(r_ti.T, alpha)
         else:
             x_next = pva_next
-            r_wi = ca.DM(quaternion_to_rotation_matrix(ca.DM(self.orientation)) @ self.imu_rotation)
+            r_wi = ca.DM(quaternion_to_rotation(self.orientation, normalise=False) @ self.imu_rotation)
             w_i = alpha_i = ca.DM.zeros(3)
         a_target_i = ca.mtimes(r_wi.T, x[sl["acceleration"]])
         a_imu = a_target_i - _lever_terms(w_i, alpha_i, t)  # (29) solved for the IMU's acceleration
@@ -405,11 +308,11 @@ class EndEffectorModel:
             A negative or non-finite standard deviation, another shape than a number or (3,),
             ``quaternion`` not > 0 for the rotation model.
         """
-        sj = _axis_std(jerk, "jerk", positive=False)
+        sj = as_per_axis(jerk, 3, "jerk", nonnegative=True)
         q = np.zeros((self.nx, self.nx))
         q[:9, :9] = (self._G * sj**2) @ self._G.T
         if self.rotation:
-            sw = _axis_std(angular_jerk, "angular_jerk", positive=False)
+            sw = as_per_axis(angular_jerk, 3, "angular_jerk", nonnegative=True)
             g = self._G[3:9, :]  # [dt^2/2, dt] per axis: rows of v and a
             q[13:19, 13:19] = (g * sw**2) @ g.T
             q[9:13, 9:13] = positive_float(quaternion, "quaternion") ** 2 * np.eye(4)

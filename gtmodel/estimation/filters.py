@@ -33,10 +33,11 @@ import casadi as ca
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from gtmodel._arrays import as_signal
 from gtmodel._compiler import compiled_function
+from gtmodel._geometry import quat_conj, quat_mul
 from gtmodel.errors import InputError
-from gtmodel.estimation._signals import signal_rows
-from gtmodel.estimation.end_effector import EndEffectorModel, quaternion_conjugate, quaternion_multiply
+from gtmodel.estimation.end_effector import EndEffectorModel
 from gtmodel.status import Status, StatusResult
 
 __all__ = ["FilterRun", "KalmanFilter", "ExtendedKalmanFilter", "cholesky_pivots"]
@@ -52,7 +53,7 @@ _PSD_TOLERANCE = 1e-12
 def _quaternion_error_jacobian() -> ca.Function:
     """``J(q^) = d(2 vec(q^* (x) q)) / dq``: first-order rotation-vector error, shape (3, 4)."""
     qh, q = ca.SX.sym("quat_hat", 4), ca.SX.sym("quat", 4)
-    err = 2 * quaternion_multiply(quaternion_conjugate(qh), q)[1:4]
+    err = 2 * quat_mul(quat_conj(qh), q)[1:4]
     return ca.Function("quaternion_error_jacobian", [qh], [ca.jacobian(err, q)])
 
 
@@ -125,9 +126,7 @@ class FilterRun(StatusResult):
             ``x_true`` of another shape or not finite.
         """
         n, nx = self.x.shape
-        xt = signal_rows(x_true, "x_true", nx)
-        if xt.shape[0] != n:
-            raise InputError(f"x_true: expected {n} samples (as many as the run), got {xt.shape[0]}")
+        xt = as_signal(x_true, "x_true", nx, n, like="the run")
         if self.quaternion_slice is None:
             e, cov = xt - self.x, self.P
         else:
@@ -358,7 +357,7 @@ class _GaussianFilter:
         InputError
             ``z`` of another shape or not finite.
         """
-        zz = signal_rows(z, "z", self.nz)
+        zz = as_signal(z, "z", self.nz)
         n = zz.shape[0]
         if self._evaluator is None:
             self._evaluator = self.step_function()

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.signal
 import scipy.stats
 
-from gtmodel._arrays import as_finite, positive_int
+from gtmodel._arrays import as_finite, as_vector, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation.filters import FilterRun
 from gtmodel.estimation.tracker_imu import Measurements, SensorEstimate, SensorSpec, Truth, orientation_error
@@ -68,9 +68,7 @@ def nees_test(nees: Any, dof: int, level: float = 0.95) -> dict[str, Any]:
         ``nees`` not a finite 1-D array of at least 2 non-negative values, ``dof`` not a
         positive integer, ``level`` outside (0, 1).
     """
-    e = as_finite(nees, "nees", nonnegative=True)
-    if e.ndim != 1 or e.size < 2:
-        raise InputError(f"nees: expected a 1-D array of at least 2 values, got shape {e.shape}")
+    e = as_vector(nees, "nees", min_size=2, nonnegative=True)
     dof = positive_int(dof, "dof")
     level = float(as_finite(level, "level"))
     if not 0.0 < level < 1.0:

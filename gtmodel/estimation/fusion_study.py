@@ -43,13 +43,12 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._arrays import as_array, as_finite, positive_float, positive_int
+from gtmodel._geometry import quat_exp, quat_mul
 from gtmodel.errors import InputError
 from gtmodel.estimation.end_effector import (
     IMU_ROTATION,
     IMU_TRANSLATION_M,
     EndEffectorModel,
-    quaternion_from_rotation_vector,
-    quaternion_multiply,
 )
 from gtmodel.estimation.filters import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.estimation.fusion_runs import QUANTITIES, FusionRun, nees_test
@@ -349,7 +348,7 @@ class FusionStudy:
         if not model.rotation:
             return x0, np.diag(var[0:9])
         # orientation: the true quaternion turned by the drawn rotation vector, quat (x) exp(theta / 2)
-        x0[9:13] = np.asarray(quaternion_multiply(ca.DM(x0[9:13]), quaternion_from_rotation_vector(ca.DM(draw[9:12])))).ravel()
+        x0[9:13] = np.asarray(quat_mul(ca.DM(x0[9:13]), quat_exp(ca.DM(draw[9:12])))).ravel()
         x0[13:19] += draw[12:18]
         p0 = np.diag(np.r_[var[0:9], np.full(4, var[9] / 4.0), var[12:18]])
         return x0, p0

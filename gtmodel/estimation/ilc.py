@@ -31,7 +31,7 @@ from typing import Any, Callable, Mapping
 import casadi as ca
 import numpy as np
 
-from gtmodel._arrays import as_finite, positive_float
+from gtmodel._arrays import as_finite, as_signal, positive_float
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
 
@@ -193,11 +193,8 @@ def run_ilc(
     for name, op in (("Q", Q), ("L", L)):
         if not callable(getattr(op, "apply", None)):
             raise InputError(f"{name}: expected a filter with an apply(x) method (QFilter, LearningFilter), got {type(op).__name__}")
-    u_first = as_finite(u0, "u0")
-    if u_first.ndim not in (1, 2) or u_first.shape[0] == 0:
-        raise InputError(f"u0: expected shape (N,) or (N, d), got {u_first.shape}")
-    single = u_first.ndim == 1
-    u = u_first[:, None] if single else u_first.copy()
+    single = np.ndim(u0) == 1
+    u = as_signal(u0, "u0", vector=True).copy()
     shape = u.shape
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 0:
         raise InputError(f"iterations: expected a non-negative integer, got {iterations!r}")
@@ -285,11 +282,7 @@ def ilc_correction_function(table: Any) -> ca.Function:
     InputError
         ``table`` not finite, empty or of another shape.
     """
-    tab = as_finite(table, "table")
-    if tab.ndim == 1:
-        tab = tab[:, None]
-    if tab.ndim != 2 or tab.shape[0] == 0 or tab.shape[1] == 0:
-        raise InputError(f"table: expected a non-empty table of shape (N, d), got shape {np.shape(table)}")
+    tab = as_signal(table, "table", vector=True)
     n, d = tab.shape
     k = ca.MX.sym("k")
     row = ca.floor(k)

@@ -73,9 +73,8 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from gtmodel._arrays import as_finite, positive_float, positive_int
+from gtmodel._arrays import as_array, as_finite, as_per_axis, as_signal, positive_float, positive_int
 from gtmodel.errors import InputError
-from gtmodel.estimation._signals import signal_rows
 from gtmodel.estimation.end_effector import constant_acceleration
 
 __all__ = [
@@ -94,17 +93,6 @@ DEFAULT_JERK_NOISE = (100.0, 100.0)
 DEFAULT_POSITION_NOISE = (0.358e-3, 1.064e-3)
 
 _MINUS_3_DB = 1.0 / math.sqrt(2.0)
-
-
-def _per_direction(value: Any, name: str, d: int) -> np.ndarray:
-    arr = as_finite(value, name)
-    if arr.ndim == 0:
-        arr = np.full(d, float(arr))
-    if arr.shape != (d,):
-        raise InputError(f"{name}: expected a number or shape ({d},) (one per direction), got shape {arr.shape}")
-    if np.any(arr <= 0):
-        raise InputError(f"{name}: expected standard deviations > 0, got {arr.tolist()}")
-    return arr
 
 
 class StationaryKalman:
@@ -171,9 +159,9 @@ class StationaryKalman:
     ) -> None:
         self.dt = positive_float(dt, "dt")
         self.d = positive_int(d, "d")
-        self.accelerometer_noise = _per_direction(accelerometer_noise, "accelerometer_noise", self.d)
-        self.position_noise = _per_direction(position_noise, "position_noise", self.d)
-        self.jerk_noise = _per_direction(jerk_noise, "jerk_noise", self.d)
+        self.accelerometer_noise = as_per_axis(accelerometer_noise, self.d, "accelerometer_noise", positive=True)
+        self.position_noise = as_per_axis(position_noise, self.d, "position_noise", positive=True)
+        self.jerk_noise = as_per_axis(jerk_noise, self.d, "jerk_noise", positive=True)
         self.A, self.G = constant_acceleration(self.dt, self.d)  # kron(A1, I_d), kron(G1, I_d): shared with the 19-D model
         eye = np.eye(self.d)
         self.C = np.kron(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), eye)
@@ -237,8 +225,8 @@ class StationaryKalman:
         InputError
             Another shape or not finite.
         """
-        z0 = signal_rows(np.reshape(z_kin0, (1, -1)) if np.ndim(z_kin0) == 1 else z_kin0, "z_kin0", self.d, 1)[0]
-        a0 = signal_rows(np.reshape(a_m0, (1, -1)) if np.ndim(a_m0) == 1 else a_m0, "a_m0", self.d, 1)[0]
+        z0 = as_signal(np.reshape(z_kin0, (1, -1)) if np.ndim(z_kin0) == 1 else z_kin0, "z_kin0", self.d, 1)[0]
+        a0 = as_signal(np.reshape(a_m0, (1, -1)) if np.ndim(a_m0) == 1 else a_m0, "a_m0", self.d, 1)[0]
         return np.concatenate([z0, np.zeros(self.d), a0])
 
     def run(self, z_kin: Any, a_m: Any, x0: Any = None) -> tuple[np.ndarray, np.ndarray]:
@@ -265,14 +253,12 @@ class StationaryKalman:
         InputError
             Signals of another shape or length, or not finite; ``x0`` not of shape ``(3d,)``.
         """
-        zk = signal_rows(z_kin, "z_kin", self.d)
-        am = signal_rows(a_m, "a_m", self.d, zk.shape[0])
+        zk = as_signal(z_kin, "z_kin", self.d)
+        am = as_signal(a_m, "a_m", self.d, zk.shape[0], like="z_kin")
         if x0 is None:
             x_init = self.initial_state(zk[0], am[0])
         else:
-            x_init = as_finite(x0, "x0")
-            if x_init.shape != (3 * self.d,):
-                raise InputError(f"x0: expected shape ({3 * self.d},), got {x_init.shape}")
+            x_init = as_array(x0, (3 * self.d,), "x0")
         runner = self.step_function().mapaccum("kalman_run", zk.shape[0])
         x_next, z_hat = runner(x_init, np.hstack([zk, am]).T)
         return np.asarray(z_hat).T, np.asarray(x_next).T

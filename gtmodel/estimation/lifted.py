@@ -47,20 +47,12 @@ import scipy.signal
 
 from gtmodel.estimation.complementary import MIN_CUTOFF_FRACTION
 
-from gtmodel._arrays import as_finite, positive_float, positive_int
+from gtmodel._arrays import as_finite, as_signal, as_vector, positive_float, positive_int
 from gtmodel.errors import InputError
 
 __all__ = ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
 
 _log = logging.getLogger("gtmodel")
-
-
-def _signal(x: Any, name: str) -> tuple[np.ndarray, bool]:
-    """A finite ``(N, d)`` float array and whether ``x`` was one-dimensional ``(N,)``."""
-    arr = as_finite(x, name)
-    if arr.ndim not in (1, 2) or arr.shape[0] == 0 or (arr.ndim == 2 and arr.shape[1] == 0):
-        raise InputError(f"{name}: expected a signal of shape (N,) or (N, d) with N >= 1, got shape {arr.shape}")
-    return (arr[:, None], True) if arr.ndim == 1 else (arr, False)
 
 
 def _lift(apply: Any, n: Any) -> np.ndarray:
@@ -91,9 +83,7 @@ def lifted_matrix(h: Any) -> np.ndarray:
     InputError
         ``h`` not one-dimensional, empty or not finite.
     """
-    h = as_finite(h, "h")
-    if h.ndim != 1 or h.size == 0:
-        raise InputError(f"h: expected a non-empty impulse response of shape (n,), got shape {h.shape}")
+    h = as_vector(h, "h", what="impulse-response samples")
     return scipy.linalg.toeplitz(h, np.zeros(h.size))
 
 
@@ -211,10 +201,7 @@ class QFilter:
         if window is None:
             self.window = None
         else:
-            w = as_finite(window, "window")
-            if w.ndim != 1 or w.size == 0:
-                raise InputError(f"window: expected a 1-D array of weights of shape (N,), got shape {w.shape}")
-            self.window = w
+            self.window = as_vector(window, "window", what="weights")
 
     def apply(self, x: Any) -> np.ndarray:
         """Filter a signal (each column separately): zero-phase low-pass, then the window.
@@ -236,7 +223,7 @@ class QFilter:
         InputError
             ``x`` not finite or of another shape, or ``N`` different from the window's length.
         """
-        arr, single = _signal(x, "x")
+        arr, single = as_signal(x, "x", vector=True), np.ndim(x) == 1
         if self.window is not None and arr.shape[0] != self.window.size:
             raise InputError(f"x: expected {self.window.size} samples (the window's length), got {arr.shape[0]}")
         out = arr
@@ -353,7 +340,7 @@ class LearningFilter:
         InputError
             ``e`` not finite or of another shape.
         """
-        arr, single = _signal(e, "e")
+        arr, single = as_signal(e, "e", vector=True), np.ndim(e) == 1
         out = np.zeros_like(arr)
         if self.delta < arr.shape[0]:
             out[: arr.shape[0] - self.delta] = self.gamma * arr[self.delta :]

@@ -117,10 +117,9 @@ import scipy.stats
 from filterpy.kalman import MerweScaledSigmaPoints
 from filterpy.monte_carlo import systematic_resample
 
-from gtmodel._arrays import as_array, as_finite, positive_int
+from gtmodel._arrays import as_array, as_finite, as_signal, positive_int
 from gtmodel._compiler import compiled_function
 from gtmodel.errors import InputError
-from gtmodel.estimation._signals import signal_rows
 from gtmodel.estimation.end_effector import EndEffectorModel
 from gtmodel.estimation.filters import FilterRun
 from gtmodel.status import Status
@@ -397,7 +396,7 @@ class UnscentedKalmanFilter:
         InputError
             ``z`` of another width, empty, or not finite.
         """
-        zz = signal_rows(z, "z", self.model.nz)
+        zz = as_signal(z, "z", self.model.nz)
         n, nx = zz.shape[0], self.model.nx
         xs, ps = np.empty((n, nx)), np.empty((n, nx, nx))
         x, p = self.x0.copy(), self.P0.copy()
@@ -680,7 +679,7 @@ class ParticleFilter:
         InputError
             ``z`` of another width, empty, or not finite.
         """
-        zz = signal_rows(z, "z", self.model.nz)
+        zz = as_signal(z, "z", self.model.nz)
         n, nx, npart = zz.shape[0], self.model.nx, self.n_particles
         rng = np.random.default_rng(self.seed)
         xs, ps = np.empty((n, nx)), np.empty((n, nx, nx))

@@ -26,8 +26,8 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._arrays import as_array, as_finite, positive_float
+from gtmodel._geometry import quat_exp, quat_mul
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import quaternion_from_rotation_vector, quaternion_multiply
 
 __all__ = ["SINE_PATH", "FEED_RATE_M_S", "MIN_SAMPLES", "MAX_SAMPLES", "Truth", "SinePath"]
 
@@ -262,7 +262,7 @@ class SinePath:
 def _rotate_about_axis_function() -> ca.Function:
     """``quat_0 (x) exp(theta n / 2)`` for one angle, mapped over samples by the caller."""
     q0, n, th = ca.SX.sym("q0", 4), ca.SX.sym("n", 3), ca.SX.sym("theta")
-    f = ca.Function("rotate_about_axis", [q0, n, th], [quaternion_multiply(q0, quaternion_from_rotation_vector(th * n))])
+    f = ca.Function("rotate_about_axis", [q0, n, th], [quat_mul(q0, quat_exp(th * n))])
     return f
 
 

@@ -37,17 +37,14 @@ import casadi as ca
 import numpy as np
 import scipy.signal
 
-from gtmodel._arrays import as_array, as_finite, positive_float
+from gtmodel._arrays import as_array, as_finite, as_signal, positive_float
+from gtmodel._geometry import quat_conj, quat_exp, quat_mul, quaternion_to_rotation
 from gtmodel.errors import InputError
 from gtmodel.estimation.sine_path import MAX_SAMPLES, MIN_SAMPLES, SINE_PATH, SinePath, Truth, _map
 from gtmodel.estimation.end_effector import (
     IMU_ROTATION,
     IMU_TRANSLATION_M,
     EndEffectorModel,
-    quaternion_conjugate,
-    quaternion_from_rotation_vector,
-    quaternion_multiply,
-    quaternion_to_rotation_matrix,
 )
 
 __all__ = [
@@ -295,28 +292,28 @@ def believed_transform(spec: SensorSpec, translation: Any = IMU_TRANSLATION_M, r
         raise InputError(f"spec: expected a SensorSpec, got {type(spec).__name__}")
     t = as_array(translation, (3,), "translation") + spec.transform_translation_error_mm * 1e-3 * _ERROR_DIRECTION
     r = as_array(rotation, (3, 3), "rotation")
-    dq = quaternion_from_rotation_vector(ca.DM(math.radians(spec.transform_orientation_error_deg) * _ERROR_DIRECTION))
-    return t, r @ np.asarray(quaternion_to_rotation_matrix(dq))
+    dq = quat_exp(ca.DM(math.radians(spec.transform_orientation_error_deg) * _ERROR_DIRECTION))
+    return t, r @ quaternion_to_rotation(dq, normalise=False)
 
 
 def _compose_function() -> ca.Function:
     """``quat (x) exp(delta / 2)`` (a body-side rotation-vector perturbation), normalised."""
     q, d = ca.SX.sym("q", 4), ca.SX.sym("delta", 3)
-    out = quaternion_multiply(q, quaternion_from_rotation_vector(d))
+    out = quat_mul(q, quat_exp(d))
     return ca.Function("perturb", [q, d], [out / ca.norm_2(out)])
 
 
 def _angle_function() -> ca.Function:
     """Rotation angle ``2 atan2(|v|, |w|)`` of ``conj(q_est) (x) q_true`` (sign-invariant)."""
     qe, qt = ca.SX.sym("q_est", 4), ca.SX.sym("q_true", 4)
-    d = quaternion_multiply(quaternion_conjugate(qe / ca.norm_2(qe)), qt / ca.norm_2(qt))
+    d = quat_mul(quat_conj(qe / ca.norm_2(qe)), qt / ca.norm_2(qt))
     return ca.Function("angle", [qe, qt], [2 * ca.atan2(ca.norm_2(d[1:4]), ca.fabs(d[0]))])
 
 
 def _sensor_acceleration_function() -> ca.Function:
     """World acceleration of the target from the IMU reading (29), the tracker orientation and ``R_TI``."""
     a_t_imu, quat, r_ti = ca.SX.sym("a_target_imu", 3), ca.SX.sym("quat", 4), ca.SX.sym("R_TI", 3, 3)
-    r_wi = ca.mtimes(quaternion_to_rotation_matrix(quat / ca.norm_2(quat)), r_ti)
+    r_wi = ca.mtimes(quaternion_to_rotation(quat / ca.norm_2(quat), normalise=False), r_ti)
     return ca.Function("sensor_acceleration", [a_t_imu, quat, r_ti], [ca.mtimes(r_wi, a_t_imu)])
 
 
@@ -444,9 +441,7 @@ def four_point_derivative(y: Any, dt: float) -> np.ndarray:
         ``y`` not a finite 2-D array with at least 4 rows, ``dt`` not positive.
     """
     dt = positive_float(dt, "dt")
-    arr = as_finite(y, "y")
-    if arr.ndim != 2 or arr.shape[0] < WINDOW:
-        raise InputError(f"y: expected shape (N, d) with N >= {WINDOW}, got {arr.shape}")
+    arr = as_signal(y, "y", min_samples=WINDOW)
     c = scipy.signal.savgol_coeffs(WINDOW, 1, deriv=1, delta=dt, pos=WINDOW - 1, use="dot")
     windows = np.lib.stride_tricks.sliding_window_view(arr, WINDOW, axis=0)  # (N-3, d, 4), oldest first
     return windows @ c

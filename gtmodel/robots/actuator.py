@@ -106,6 +106,7 @@ import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 from scipy.spatial.transform import Rotation
 
+from gtmodel._arrays import as_rows
 from gtmodel.errors import InputError
 from gtmodel._geometry import rotation_to_zyz, rotation_vector_to_rotation, zyz_to_rotation
 from gtmodel.robots.closure import ClosureModel, ThreeLinkClosure
@@ -654,11 +655,7 @@ class PiecewiseActuatorClosure(WrappedClosure):
         InputError
             If ``q`` does not have 3 columns.
         """
-        qa = np.asarray(q, dtype=float)
-        single = qa.ndim == 1
-        qa = np.atleast_2d(qa)
-        if qa.shape[1] != 3:
-            raise InputError(f"q must have 3 columns, got shape {np.shape(q)}")
+        qa, single = as_rows(q, "q", 3)
         A = np.array(self._points_function.map(qa.shape[0])(self.parameter_vector(), qa.T))
         A = A.reshape(3, qa.shape[0], self.n_links).transpose(1, 2, 0)
         return A[0] if single else A
@@ -722,12 +719,9 @@ class PiecewiseActuatorClosure(WrappedClosure):
         InputError
             If ``q`` has the wrong shape or lies outside a surveyed range.
         """
-        qa = np.asarray(q, dtype=float)
-        q2 = np.atleast_2d(qa)
-        if q2.shape[1] != 3 or not np.all(np.isfinite(q2)):
-            raise InputError(f"q must be finite with 3 columns, got shape {np.shape(q)}")
+        q2, single = as_rows(q, "q", 3)
         self._check_range(q2)
-        return qa
+        return q2[0] if single else q2
 
     def fk_start(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
         """Start of Newton's method: the chord 3-link model's FK, the nominal plate orientation.

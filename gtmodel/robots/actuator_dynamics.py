@@ -39,6 +39,7 @@ import control
 import numpy as np
 import scipy.optimize
 
+from gtmodel._arrays import as_times
 from gtmodel.errors import InputError
 from gtmodel.robots.parameters import _read_data_file, _Reader
 
@@ -404,18 +405,6 @@ def bandwidth(sys: control.LTI, dbdrop: float = -3.0) -> float:
     return float(w) / (2.0 * math.pi)
 
 
-def _time_vector(t: Any, n_min: int = 2) -> np.ndarray:
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or t.size < n_min:
-        raise InputError(f"t: expected a 1-D array of at least {n_min} times in s, got shape {t.shape}")
-    if not np.all(np.isfinite(t)):
-        raise InputError(f"t: non-finite value at index {int(np.nonzero(~np.isfinite(t))[0][0])}")
-    steps = np.diff(t)
-    if np.any(steps <= 0):
-        raise InputError(f"t: times must increase strictly (index {int(np.nonzero(steps <= 0)[0][0]) + 1})")
-    return t
-
-
 def step(sys: control.LTI, duration: float = 2.0, amplitude: float = 1.0) -> control.TimeResponseData:
     """Step response of an actuator model (or any SISO system) over ``duration`` seconds.
 
@@ -484,7 +473,7 @@ def simulate(sys: control.LTI, t: np.ndarray, u: np.ndarray) -> control.TimeResp
     """
     if not isinstance(sys, control.LTI) or not sys.issiso():
         raise InputError(f"sys: expected a SISO control.LTI system, got {type(sys).__name__}")
-    t = _time_vector(t)
+    t = as_times(t)
     u = np.asarray(u, dtype=float)
     if u.shape != t.shape:
         raise InputError(f"u: expected shape {t.shape} like t, got {u.shape}")

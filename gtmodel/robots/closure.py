@@ -34,6 +34,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._arrays import as_rows
 from gtmodel._geometry import (  # noqa: F401 - re-exported: part of the robots API
     quaternion_to_rotation,
     rotation_to_quaternion,
@@ -411,12 +412,8 @@ class ClosureModel(ABC):
         InputError
             If the shapes do not match.
         """
-        qa = np.asarray(q, dtype=float)
-        single = qa.ndim == 1
-        qa = np.atleast_2d(qa)
+        qa, single = as_rows(q, "q", self.n_q)
         N = qa.shape[0]
-        if qa.shape[1] != self.n_q:
-            raise InputError(f"q must have {self.n_q} columns, got shape {np.shape(q)}")
         T0a = np.broadcast_to(np.asarray(T0, dtype=float), (N, 3))
         R0a = np.broadcast_to(np.eye(3) if R0 is None else np.asarray(R0, dtype=float), (N, 3, 3))
         solver = self.pose_function(max_iter)

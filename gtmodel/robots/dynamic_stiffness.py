@@ -33,7 +33,7 @@ import scipy.optimize
 import scipy.signal
 
 from gtmodel._docstrings import fill_doc
-from gtmodel._arrays import positive_float, positive_int
+from gtmodel._arrays import as_rows, positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
 
@@ -396,13 +396,7 @@ class DynamicStiffnessGP:
         InputError
             Wrong shape or non-finite values.
         """
-        Xa = np.asarray(X, dtype=float)
-        if Xa.ndim == 1:
-            Xa = Xa.reshape(1, -1)
-        if Xa.ndim != 2 or Xa.shape[1] != self.n_inputs:
-            raise InputError(f"X: expected shape (N, {self.n_inputs}) or ({self.n_inputs},), got {np.asarray(X).shape}")
-        if not np.all(np.isfinite(Xa)):
-            raise InputError("X: non-finite value")
+        Xa, _ = as_rows(X, "X", self.n_inputs)
         Z = (Xa - self._mu) / self._sd
         out = {n: np.zeros((Xa.shape[0], 3)) for n in ("m", "c", "k")}
         std = {n: np.zeros((Xa.shape[0], 3)) for n in ("m", "c", "k")}

@@ -34,13 +34,13 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._arrays import as_rows
 from gtmodel.errors import InputError, SingularConfigurationError
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form, friction_force
 from gtmodel.robots.mapped import MappedFunction as _Mapped
 from gtmodel.robots.kinematics import (
     SINGULARITY_TOLERANCE,
     GantryTau3Kinematics,
-    _as_points,
     configuration_signs,
     fk_expression,
     ik_expression,
@@ -337,9 +337,9 @@ class GantryTau3Dynamics:
         return _Mapped(self.forward_dynamics_function, self.compiled)
 
     def _checked(self, mapped: _Mapped, T, a, b, configuration, names):
-        Tn, single = _as_points(T, names[0])
-        An, _ = _as_points(a, names[1])
-        Bn, _ = _as_points(b, names[2])
+        Tn, single = as_rows(T, names[0], 3)
+        An, _ = as_rows(a, names[1], 3)
+        Bn, _ = as_rows(b, names[2], 3)
         if not (Tn.shape == An.shape == Bn.shape):
             raise InputError(f"{', '.join(names)}: expected equal shapes, got {Tn.shape}, {An.shape}, {Bn.shape}")
         s = configuration_signs(configuration)
@@ -435,7 +435,7 @@ class GantryTau3Dynamics:
         InputError
             Wrong shape or non-finite values.
         """
-        Tn, single = _as_points(T, "T")
+        Tn, single = as_rows(T, "T", 3)
         zero = np.zeros_like(Tn)
         out = self.inverse_dynamics(Tn, zero, zero, configuration)
         return out[0] if single else out

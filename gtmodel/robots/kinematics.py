@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._arrays import as_rows
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.mapped import MappedFunction
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
@@ -319,25 +320,6 @@ def configuration_signs(configuration: int | Sequence[int]) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- numpy glue
-def _as_points(x, name: str) -> tuple[np.ndarray, bool]:
-    """(N, 3) float array and whether the input was a single (3,) point."""
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of shape (3,) or (N, 3), got {x!r}") from None
-    single = arr.ndim == 1
-    if single:
-        arr = arr[None, :]
-    if arr.ndim != 2 or arr.shape[1] != 3 or arr.shape[0] == 0:
-        raise InputError(f"{name}: expected shape (3,) or (N, 3), got {np.shape(x)}")
-    if np.isfinite(arr).all():  # the fast path (a call of a model is ~us: keep numpy's wrappers out)
-        return arr, single
-    bad = ~np.all(np.isfinite(arr), axis=1)
-    if np.any(bad):
-        raise InputError(f"{name}: row {int(np.argmax(bad))} is not finite: {arr[np.argmax(bad)].tolist()}")
-    return arr, single
-
-
 def _solution_sign(solution: int) -> float:
     if solution not in (1, -1) or isinstance(solution, bool):
         raise InputError(f"solution: expected +1 or -1, got {solution!r}")
@@ -502,7 +484,7 @@ class GantryTau3Kinematics:
         InputError
             Wrong shape, non-finite values or an invalid configuration.
         """
-        Tn, single = _as_points(T, "T")
+        Tn, single = as_rows(T, "T", 3)
         s = configuration_signs(configuration)
         q, disc = self._ik(Tn.T, s[:, None])
         self._check_reach(disc, Tn)
@@ -533,7 +515,7 @@ class GantryTau3Kinematics:
         InputError
             Wrong shape, non-finite values or an invalid ``solution``.
         """
-        qn, single = _as_points(q, "q")
+        qn, single = as_rows(q, "q", 3)
         sol = _solution_sign(solution)
         T, h2, j = self._fk(qn.T, np.array([[sol]]))
         h2 = h2.ravel()
@@ -550,7 +532,7 @@ class GantryTau3Kinematics:
         return T[0] if single else T
 
     def _jacobians(self, T, configuration) -> tuple[np.ndarray, np.ndarray, bool]:
-        Tn, single = _as_points(T, "T")
+        Tn, single = as_rows(T, "T", 3)
         s = configuration_signs(configuration)
         J, Jinv, _, disc, cos_min = self._jac(Tn.T, s[:, None])
         self._check_reach(disc, Tn)
@@ -647,9 +629,9 @@ class GantryTau3Kinematics:
         InputError
             Wrong or mismatched shapes, non-finite values.
         """
-        Tn, single = _as_points(T, "T")
-        Td, _ = _as_points(T_dot, "T_dot")
-        qdd, _ = _as_points(q_ddot, "q_ddot")
+        Tn, single = as_rows(T, "T", 3)
+        Td, _ = as_rows(T_dot, "T_dot", 3)
+        qdd, _ = as_rows(q_ddot, "q_ddot", 3)
         if not (Tn.shape == Td.shape == qdd.shape):
             raise InputError(f"T, T_dot, q_ddot: expected equal shapes, got {Tn.shape}, {Td.shape}, {qdd.shape}")
         s = configuration_signs(configuration)
@@ -685,9 +667,9 @@ class GantryTau3Kinematics:
         InputError
             Wrong or mismatched shapes, non-finite values.
         """
-        Tn, single = _as_points(T, "T")
-        Td, _ = _as_points(T_dot, "T_dot")
-        Tdd, _ = _as_points(T_ddot, "T_ddot")
+        Tn, single = as_rows(T, "T", 3)
+        Td, _ = as_rows(T_dot, "T_dot", 3)
+        Tdd, _ = as_rows(T_ddot, "T_ddot", 3)
         if not (Tn.shape == Td.shape == Tdd.shape):
             raise InputError(f"T, T_dot, T_ddot: expected equal shapes, got {Tn.shape}, {Td.shape}, {Tdd.shape}")
         s = configuration_signs(configuration)
@@ -720,7 +702,7 @@ class GantryTau3Kinematics:
         InputError
             Wrong shape or non-finite values.
         """
-        Tn, single = _as_points(T, "T")
+        Tn, single = as_rows(T, "T", 3)
         s = configuration_signs(configuration)
         c, _, disc = self._cos(Tn.T, s[:, None])
         self._check_reach(disc, Tn)
@@ -755,7 +737,7 @@ class GantryTau3Kinematics:
         """
         if limits and self.parameters is None:
             raise InputError("in_workspace: needs a full RobotParameters set with limits")
-        Tn, single = _as_points(T, "T")
+        Tn, single = as_rows(T, "T", 3)
         s = configuration_signs(configuration)
         c, q, disc = self._cos(Tn.T, s[:, None])
         if limits:

@@ -37,7 +37,7 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
-from gtmodel._arrays import as_array
+from gtmodel._arrays import as_array, as_rows
 from gtmodel._docstrings import fill_doc
 from gtmodel._geometry import rot_x, rot_y, rot_z
 from gtmodel.errors import ConvergenceError, InputError, ParameterError, SingularConfigurationError
@@ -107,34 +107,11 @@ _doc = fill_doc(
 
 
 def _vector(value: Any, n: int, name: str, positive: bool = False) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected {n} numbers, got {value!r}") from None
-    if arr.shape != (n,):
-        raise InputError(f"{name}: expected shape ({n},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise InputError(f"{name}: expected finite numbers, got {arr.tolist()}")
+    arr = as_array(value, (n,), name)
     if positive and np.any(arr <= 0):
         bad = int(np.flatnonzero(arr <= 0)[0])
         raise InputError(f"{name}: expected positive values, entry {bad} is {arr[bad]!r}")
     return arr
-
-
-def _rows(value: Any, n: int, name: str) -> tuple[np.ndarray, bool]:
-    """(N, n) array from (n,) or (N, n); the flag says whether the input was a single row."""
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of shape ({n},) or (N, {n}), got {value!r}") from None
-    single = arr.ndim == 1
-    arr2 = arr.reshape(1, -1) if single else arr
-    if arr2.ndim != 2 or arr2.shape[1] != n or arr2.shape[0] == 0:
-        raise InputError(f"{name}: expected shape ({n},) or (N, {n}), got {arr.shape}")
-    if not np.all(np.isfinite(arr2)):
-        row = int(np.flatnonzero(~np.all(np.isfinite(arr2), axis=1))[0])
-        raise InputError(f"{name}: row {row} has a non-finite value: {arr2[row].tolist()}")
-    return arr2, single
 
 
 def rotation_rpy(rpy: Any) -> np.ndarray:
@@ -263,7 +240,7 @@ class SerialArm:
             Wrong shape, a non-finite angle, or an angle outside its limits: the message
             names the row, the joint and its limits in degrees.
         """
-        th, _ = _rows(theta, 6, name)
+        th, _ = as_rows(theta, name, 6)
         if self.joint_limits is None:
             return th
         lo, hi = self.joint_limits[:, 0], self.joint_limits[:, 1]
@@ -396,7 +373,7 @@ class SerialArm:
 
         {angle_raises}
         """
-        th, single = _rows(theta, 6, "theta")
+        th, single = as_rows(theta, "theta", 6)
         out = np.stack([np.array(self.fk_function(row)) for row in th])
         return out[0] if single else out
 

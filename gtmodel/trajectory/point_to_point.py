@@ -24,6 +24,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._tables import read_table
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.expressions import parse_constraint, parse_objective
@@ -492,18 +493,15 @@ def _set_guess(problem: PointToPoint, opt: Optimization, T, T_dot, tau, dyn: Gan
 
 def _read_guess_csv(path: Path) -> dict[str, np.ndarray]:
     """Read a trajectory CSV (as written by :meth:`PointToPointSolution.write_csv`) for a guess."""
-    try:
-        data = np.genfromtxt(path, delimiter=",", names=True)
-    except OSError as exc:
-        raise InputError(f"guess: cannot read trajectory file {path}: {exc}") from None
     need = ["t", "x", "y", "z", "xd", "yd", "zd", "tau1", "tau2", "tau3"]
-    names = data.dtype.names or ()
-    missing = [c for c in need if c not in names]
-    if missing:
-        raise InputError(f"guess: trajectory file {path} lacks the columns {', '.join(missing)}")
-    out = {c: np.atleast_1d(np.asarray(data[c], dtype=float)) for c in need}
-    if out["t"].size < 2 or not np.all(np.isfinite(np.column_stack(list(out.values())))) or np.any(np.diff(out["t"]) <= 0):
-        raise InputError(f"guess: trajectory file {path} needs >= 2 rows of finite values with increasing t")
+    try:
+        table = read_table(path, "trajectory file")
+        table.check_columns(need)
+    except InputError as exc:
+        raise InputError(f"guess: {exc}") from None
+    out = {c: table.column(c) for c in need}
+    if out["t"].size < 2 or np.any(np.diff(out["t"]) <= 0):
+        raise InputError(f"guess: trajectory file {path} needs >= 2 rows with increasing t")
     return out
 
 

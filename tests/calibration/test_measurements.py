@@ -126,7 +126,6 @@ MALFORMED = [
     ("too-few-rows", f"# t\n{GOOD_HEADER}\n{ROW_A}\n", r"1 data row\(s\), expected at least 2 poses"),
     ("header-only", f"# t\n{GOOD_HEADER}\n", r"0 data row\(s\), expected at least 2 poses"),
     ("no-header", "# only comments\n# here\n", r"no header line"),
-    ("comment-after-header", f"# t\n{GOOD_HEADER}\n{ROW_A}\n# late comment\n{ROW_B}\n", r"line 4: '#' comment lines are only allowed at the top"),
     ("empty-line-inside", f"# t\n{GOOD_HEADER}\n{ROW_A}\n\n{ROW_B}\n", r"line 4: empty line inside the data"),
 ]
 
@@ -139,6 +138,14 @@ def test_malformed_measurement_file(tmp_path, content, match):
     with pytest.raises(InputError, match=match) as info:
         read_measurements(path)
     assert str(path) in str(info.value)
+
+
+def test_comment_between_rows_is_skipped(tmp_path):
+    """A '#' line between rows is a comment (gtmodel._tables format); only the top ones are kept."""
+    path = tmp_path / "late.csv"
+    path.write_text(f"# t\n{GOOD_HEADER}\n{ROW_A}\n# late comment\n{ROW_B}\n")
+    ms = read_measurements(path)
+    assert ms.n_poses == 2 and ms.comments == (" t",)
 
 
 def test_quaternion_within_tolerance_is_accepted(tmp_path):

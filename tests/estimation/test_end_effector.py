@@ -13,15 +13,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from gtmodel._geometry import quat_exp as quaternion_from_rotation_vector
+from gtmodel._geometry import quat_mul as quaternion_multiply
+from gtmodel._geometry import quaternion_to_rotation as quaternion_to_rotation_matrix
 from gtmodel.errors import InputError
 from gtmodel.estimation.end_effector import (
     IMU_ROTATION,
     IMU_TRANSLATION_M,
     EndEffectorModel,
     constant_acceleration,
-    quaternion_from_rotation_vector,
-    quaternion_multiply,
-    quaternion_to_rotation_matrix,
 )
 from gtmodel.estimation.kalman import StationaryKalman
 

@@ -12,8 +12,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from gtmodel._geometry import quat_conj as quaternion_conjugate
+from gtmodel._geometry import quat_mul as quaternion_multiply
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import EndEffectorModel, quaternion_conjugate, quaternion_multiply
+from gtmodel.estimation.end_effector import EndEffectorModel
 from gtmodel.estimation.filters import ExtendedKalmanFilter, FilterRun, KalmanFilter
 from gtmodel.estimation.sampling_filters import ParticleFilter, ParticleRun, UnscentedKalmanFilter
 

@@ -158,7 +158,7 @@ def test_singular_pose_raises(arm):
     "call, match",
     [
         (lambda a: a.fk(np.zeros(5)), r"theta: expected shape \(6,\)"),
-        (lambda a: a.fk([0, 0, np.nan, 0, 0, 0]), "theta: row 0 has a non-finite"),
+        (lambda a: a.fk([0, 0, np.nan, 0, 0, 0]), "theta: row 0 is not finite"),
         (lambda a: a.jacobian(np.zeros((2, 6))), r"theta: expected shape \(6,\)"),
         (lambda a: a.deflection(POSES[0], np.zeros(3), K_THETA), r"F: expected shape \(6,\)"),
         (lambda a: a.deflection(POSES[0], np.zeros(6), -K_THETA), "k_theta: expected positive"),

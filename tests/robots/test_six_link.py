@@ -383,7 +383,7 @@ BAD_ARGUMENTS = [
     ("R0_not_rotation", lambda m: SixLinkClosure(m.L, m.A0, m.v, m.B0, R0=_NOT_ROT), InputError, "R0: expected a rotation matrix"),
     ("A0_nan", lambda m: SixLinkClosure(m.L, np.full((6, 3), np.nan), m.v, m.B0), InputError, "A0: expected finite"),
     ("ik_T_shape", lambda m: m.ik(np.zeros((2, 2))), InputError, r"T: expected shape \(3,\) or \(N, 3\)"),
-    ("ik_R_not_rotation", lambda m: m.ik(np.zeros(3), _NOT_ROT), InputError, "R: row 0 is not a rotation matrix"),
+    ("ik_R_not_rotation", lambda m: m.ik(np.zeros(3), _NOT_ROT), InputError, "R: matrix 0 is not a rotation"),
     ("ik_R_count", lambda m: m.ik(np.zeros((2, 3)), np.stack([np.eye(3)] * 3)), InputError, r"R: expected shape \(3, 3\) or \(2, 3, 3\)"),
     ("ik_configuration", lambda m: m.ik(np.zeros(3), configuration=9), InputError, "configuration: expected an integer 0-7"),
     ("fk_q_shape", lambda m: m.fk(np.zeros(4)), InputError, r"q: expected shape \(3,\) or \(N, 3\)"),

@@ -18,7 +18,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
-from gtmodel.calibration.identification.signals import _signal
+from gtmodel._arrays import as_signal
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.parameters import RobotParameters, load_parameters
@@ -64,10 +64,10 @@ class ConstantVelocityData:
     pose: np.ndarray
 
     def __post_init__(self) -> None:
-        self.T = _signal(self.T, "T", None)
+        self.T = as_signal(self.T, "T", 3)
         n = self.T.shape[0]
-        self.q_dot = _signal(self.q_dot, "q_dot", n)
-        self.tau = _signal(self.tau, "tau", n)
+        self.q_dot = as_signal(self.q_dot, "q_dot", 3, n, like="T")
+        self.tau = as_signal(self.tau, "tau", 3, n, like="T")
         pose = np.asarray(self.pose).ravel()
         if pose.size != n:
             raise InputError(f"pose: expected {n} indices (one per run), got {pose.size}")

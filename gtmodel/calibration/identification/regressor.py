@@ -21,8 +21,8 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._arrays import as_signal
 from gtmodel._compiler import compiled_function
-from gtmodel.calibration.identification.signals import _signal
 from gtmodel.calibration.identification.variants import ModelVariant, _symbolic_dynamics, _unit, _value_of, get_variant
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
@@ -222,11 +222,9 @@ class DynamicRegressor:
         """
         if coordinates not in ("cart", "tcp"):
             raise InputError(f"coordinates: expected 'cart' or 'tcp', got {coordinates!r}")
-        arrs = [_signal(a, n, None) for a, n in zip((x, x_dot, x_ddot), ("x", "x_dot", "x_ddot"))]
-        n = arrs[0].shape[0]
-        for a, name in zip(arrs[1:], ("x_dot", "x_ddot")):
-            if a.shape[0] != n:
-                raise InputError(f"{name}: expected {n} samples (as x), got {a.shape[0]}")
+        x = as_signal(x, "x", 3)
+        n = x.shape[0]
+        arrs = [x, as_signal(x_dot, "x_dot", 3, n, like="x"), as_signal(x_ddot, "x_ddot", 3, n, like="x")]
         compiled = n >= _COMPILE_MIN_SAMPLES
         f = self._evaluation_function(coordinates, compiled)
         p = self.n_parameters

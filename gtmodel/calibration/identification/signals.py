@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import scipy.signal
 
-from gtmodel._arrays import positive_int
-from gtmodel.calibration.measurements import _parse_rows, _read_table, _write_csv
+from gtmodel._arrays import as_signal, as_times, positive_int
+from gtmodel._tables import read_table, write_table
 from gtmodel.errors import InputError
 
 __all__ = ["MotionLog", "read_motion_log", "DynamicSamples", "preprocess_log", "MIN_SAMPLES", "SAMPLING_TOLERANCE"]
@@ -30,42 +30,6 @@ MIN_SAMPLES = 30
 #: Largest relative deviation of a sampling interval from the median before a log is
 #: rejected as non-uniformly sampled (the filters assume a constant rate).
 SAMPLING_TOLERANCE = 0.01
-
-
-def _signal(a: Any, name: str, n: int | None) -> np.ndarray:
-    try:
-        arr = np.asarray(a, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of numbers of shape (N, 3)") from None
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise InputError(f"{name}: expected shape (N, 3), got {arr.shape}")
-    if n is not None and arr.shape[0] != n:
-        raise InputError(f"{name}: expected {n} samples (one per time t), got {arr.shape[0]}")
-    bad = ~np.isfinite(arr)
-    if np.any(bad):
-        k, j = (int(v) for v in np.argwhere(bad)[0])
-        raise InputError(f"{name}: sample {k}, column {j + 1} is not finite ({arr[k, j]!r})")
-    return arr
-
-
-def _time(t: Any, name: str = "t") -> np.ndarray:
-    try:
-        arr = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected a 1-D array of times in s") from None
-    if arr.ndim != 1:
-        raise InputError(f"{name}: expected a 1-D array of times in s, got shape {arr.shape}")
-    if arr.size < MIN_SAMPLES:
-        raise InputError(f"{name}: expected at least {MIN_SAMPLES} samples, got {arr.size}")
-    bad = ~np.isfinite(arr)
-    if np.any(bad):
-        k = int(np.argmax(bad))
-        raise InputError(f"{name}: sample {k} is not finite ({arr[k]!r})")
-    dt = np.diff(arr)
-    if np.any(dt <= 0):
-        k = int(np.argmax(dt <= 0)) + 1
-        raise InputError(f"{name}: time is not strictly increasing at sample {k} (t[{k}] = {arr[k]!r} s <= t[{k - 1}] = {arr[k - 1]!r} s)")
-    return arr
 
 
 @dataclass
@@ -104,13 +68,13 @@ class MotionLog:
     def __post_init__(self) -> None:
         if (self.q is None) == (self.T is None):
             raise InputError("MotionLog: give exactly one of q (cart positions) and T (TCP positions)")
-        self.t = _time(self.t)
+        self.t = as_times(self.t, "t", MIN_SAMPLES)
         n = self.t.size
-        self.tau = _signal(self.tau, "tau", n)
+        self.tau = as_signal(self.tau, "tau", 3, n, like="t")
         if self.q is not None:
-            self.q = _signal(self.q, "q", n)
+            self.q = as_signal(self.q, "q", 3, n, like="t")
         else:
-            self.T = _signal(self.T, "T", n)
+            self.T = as_signal(self.T, "T", 3, n, like="t")
 
     @property
     def coordinates(self) -> str:
@@ -158,15 +122,15 @@ class MotionLog:
             The file cannot be written.
         """
         comments = [f" {self.source}"] if self.source else []
-        return _write_csv(Path(path), comments, self.columns(), np.column_stack([self.t, self.positions, self.tau]))
+        return write_table(path, self.columns(), np.column_stack([self.t, self.positions, self.tau]), comments, what="motion log")
 
 
 def read_motion_log(path: str | Path) -> MotionLog:
     """Read a logged motion from CSV (the identification data of Dressler (2012), ch. 6.2).
 
-    Format (as the calibration CSV of :mod:`gtmodel.calibration.measurements`): optional
-    ``#`` comment lines at the top, a header naming the columns with their units, then one
-    row per sample::
+    Format (the CSV table of :mod:`gtmodel._tables`, like the calibration files of
+    :mod:`gtmodel.calibration.measurements`): ``#`` comment lines (those at the top name the
+    source), a header naming the columns with their units, then one row per sample::
 
         # L1, 4 ms servo log, excitation run 3
         t_s,q1_m,q2_m,q3_m,tau1_N,tau2_N,tau3_N
@@ -191,30 +155,23 @@ def read_motion_log(path: str | Path) -> MotionLog:
         Unreadable file, missing/unknown column, a malformed or non-finite number, or
         non-increasing time; the message names the file and the line.
     """
-    table = _read_table(path, "motion log")
+    table = read_table(path, "motion log")
     cols = table.columns
     q_cols, T_cols, tau_cols = ["q1_m", "q2_m", "q3_m"], ["Tx_m", "Ty_m", "Tz_m"], ["tau1_N", "tau2_N", "tau3_N"]
-    allowed = {"t_s", *q_cols, *T_cols, *tau_cols}
-    for c in cols:
-        if c not in allowed:
-            raise InputError(f"{table.origin}: line {table.header_line} (header): unknown column '{c}' (allowed: {', '.join(sorted(allowed))})")
+    table.check_columns(allowed=["t_s", *q_cols, *T_cols, *tau_cols])
     has_q, has_T = all(c in cols for c in q_cols), all(c in cols for c in T_cols)
     if has_q == has_T:
-        raise InputError(f"{table.origin}: line {table.header_line} (header): expected exactly one of the column sets q1_m,q2_m,q3_m and Tx_m,Ty_m,Tz_m")
-    for c in ["t_s", *tau_cols]:
-        if c not in cols:
-            raise InputError(f"{table.origin}: line {table.header_line} (header): missing column '{c}'")
-    data = _parse_rows(table)
-    idx = {c: j for j, c in enumerate(cols)}
-    t = data[:, idx["t_s"]]
+        raise table.error("expected exactly one of the column sets q1_m,q2_m,q3_m and Tx_m,Ty_m,Tz_m")
+    table.check_columns(["t_s", *tau_cols])
+    t = table.column("t_s")
     dt = np.diff(t)
     if np.any(dt <= 0):
         r = int(np.argmax(dt <= 0)) + 1
-        raise InputError(f"{table.origin}: line {table.rows[r][0]}, column 't_s': time not strictly increasing ({t[r]!r} after {t[r - 1]!r})")
+        raise table.error(f"time not strictly increasing ({t[r]!r} after {t[r - 1]!r})", row=r, column="t_s")
     if t.size < MIN_SAMPLES:
-        raise InputError(f"{table.origin}: {t.size} samples, expected at least {MIN_SAMPLES}")
-    pos = data[:, [idx[c] for c in (q_cols if has_q else T_cols)]]
-    tau = data[:, [idx[c] for c in tau_cols]]
+        raise InputError(f"{table.source}: {t.size} samples, expected at least {MIN_SAMPLES}")
+    pos = table.columns_of(q_cols if has_q else T_cols)
+    tau = table.columns_of(tau_cols)
     source = " ".join(s.strip() for s in table.comments) or str(path)
     return MotionLog(t=t, tau=tau, q=pos if has_q else None, T=None if has_q else pos, source=source)
 
@@ -267,23 +224,12 @@ class DynamicSamples:
             raise InputError("smoother: expected a callable filter (array (N, ...) -> array (N, ...)) or None")
         if self.coordinates not in ("cart", "tcp"):
             raise InputError(f"coordinates: expected 'cart' or 'tcp', got {self.coordinates!r}")
-        try:
-            t = np.asarray(self.t, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError("t: expected a 1-D array of times in s") from None
-        if t.ndim != 1 or t.size < 1:
-            raise InputError(f"t: expected a non-empty 1-D array, got shape {t.shape}")
-        if np.any(~np.isfinite(t)):
-            raise InputError(f"t: sample {int(np.argmax(~np.isfinite(t)))} is not finite")
-        if t.size > 1 and np.any(np.diff(t) <= 0):
-            k = int(np.argmax(np.diff(t) <= 0)) + 1
-            raise InputError(f"t: time is not strictly increasing at sample {k}")
-        self.t = t
+        self.t = t = as_times(self.t, "t", 1)
         n = t.size
-        self.x = _signal(self.x, "x", n)
-        self.x_dot = _signal(self.x_dot, "x_dot", n)
-        self.x_ddot = _signal(self.x_ddot, "x_ddot", n)
-        self.tau = _signal(self.tau, "tau", n)
+        self.x = as_signal(self.x, "x", 3, n, like="t")
+        self.x_dot = as_signal(self.x_dot, "x_dot", 3, n, like="t")
+        self.x_ddot = as_signal(self.x_ddot, "x_ddot", 3, n, like="t")
+        self.tau = as_signal(self.tau, "tau", 3, n, like="t")
 
     @property
     def n_samples(self) -> int:

@@ -17,8 +17,9 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._arrays import as_signal
 from gtmodel.calibration.identification.friction import ConstantVelocityData
-from gtmodel.calibration.identification.signals import MotionLog, _signal
+from gtmodel.calibration.identification.signals import MotionLog
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.parameters import RobotParameters, load_parameters
@@ -64,7 +65,7 @@ class StribeckTerm:
         numpy.ndarray, shape (N, 3)
             Force [N] (adds to the actuator force like friction).
         """
-        v = _signal(q_dot, "q_dot", None)
+        v = as_signal(q_dot, "q_dot", 3)
         return np.asarray(self.function.map(v.shape[0])(v.T)).T
 
 
@@ -197,7 +198,7 @@ def simulate_constant_velocity(
     InputError
         Invalid poses, speeds or options.
     """
-    P = _signal(np.atleast_2d(np.asarray(poses, dtype=float)), "poses", None)
+    P = as_signal(np.atleast_2d(np.asarray(poses, dtype=float)), "poses", 3)
     S = np.asarray(speeds, dtype=float).ravel()
     if S.size == 0 or not np.all(np.isfinite(S)) or np.any(S <= 0):
         raise InputError(f"speeds: expected positive finite speeds in m/s, got {S.tolist()}")

@@ -54,6 +54,7 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
+from gtmodel._arrays import as_signal, as_times
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.actuator_dynamics import actuator_tf
 from gtmodel.robots.structural import CONVENTIONS, PhysicalModel
@@ -87,18 +88,8 @@ TIME_STEP_RTOL = 1e-6
 
 # ----------------------------------------------------------------------------- data checks
 def _time(t: Any, n_min: int) -> tuple[np.ndarray, float]:
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1:
-        raise InputError(f"t: expected a 1-D array of times in s, got shape {t.shape}")
-    if t.size < n_min:
-        raise InputError(f"t: too few samples: {t.size}, need at least {n_min}")
-    bad = np.nonzero(~np.isfinite(t))[0]
-    if bad.size:
-        raise InputError(f"t: non-finite time at index {int(bad[0])}")
+    t = as_times(t, "t", n_min)
     steps = np.diff(t)
-    nonpos = np.nonzero(steps <= 0)[0]
-    if nonpos.size:
-        raise InputError(f"t: times must increase strictly, but t[{int(nonpos[0]) + 1}] <= t[{int(nonpos[0])}]")
     dt = float(np.mean(steps))
     worst = int(np.argmax(np.abs(steps - dt)))
     if abs(steps[worst] - dt) > TIME_STEP_RTOL * dt:
@@ -106,20 +97,6 @@ def _time(t: Any, n_min: int) -> tuple[np.ndarray, float]:
             f"t: samples must be equally spaced (mean step {dt:.6g} s), but step {worst} is {steps[worst]:.6g} s"
         )
     return t, dt
-
-
-def _signal(name: str, x: Any, n: int) -> np.ndarray:
-    x = np.asarray(x, dtype=float)
-    if x.ndim == 1:
-        x = x[:, None]
-    if x.ndim != 2:
-        raise InputError(f"{name}: expected shape (N,) or (N, channels), got {x.shape}")
-    if x.shape[0] != n:
-        raise InputError(f"{name}: expected {n} samples like t, got {x.shape[0]} (inconsistent signal lengths)")
-    bad = np.argwhere(~np.isfinite(x))
-    if bad.size:
-        raise InputError(f"{name}: non-finite value (NaN or inf) at sample {int(bad[0][0])}, channel {int(bad[0][1])}")
-    return x
 
 
 def _check_regressor(phi: np.ndarray, what: str) -> None:
@@ -305,8 +282,8 @@ def identify_actuator(
     start = max(max(candidates), 1)
     t, dt = _time(t, 2)
     n = t.size
-    uu = _signal("u", u, n)
-    yy = _signal("y", y, n)
+    uu = as_signal(u, "u", n=n, like="t", vector=True)
+    yy = as_signal(y, "y", n=n, like="t", vector=True)
     if uu.shape[1] != 1 or yy.shape[1] != 1:
         raise InputError(f"u, y: expected single-channel signals, got {uu.shape[1]} and {yy.shape[1]} channels")
     uu, yy = uu[:, 0], yy[:, 0]
@@ -454,8 +431,8 @@ def identify_state_space(
         raise InputError(f"markov_length: expected more than 2 * hankel_size = {2 * hankel_size}, got {markov_length}")
     t, dt = _time(t, 2)
     n = t.size
-    U = _signal("u", u, n)
-    Y = _signal("y", y, n)
+    U = as_signal(u, "u", n=n, like="t", vector=True)
+    Y = as_signal(y, "y", n=n, like="t", vector=True)
     p, m = Y.shape[1], U.shape[1]
     order = 2 * p if order is None else _int("order", order, 1)
     if order > p * hankel_size or order > m * hankel_size:

@@ -16,7 +16,6 @@ field reference is ``docs/problem_files.md``.
 
 from __future__ import annotations
 
-import csv
 import logging
 import math
 import time
@@ -37,6 +36,7 @@ from gtmodel.calibration.joint_stiffness import (
 )
 from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError
 from gtmodel._docstrings import fill_doc
+from gtmodel._tables import read_table
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import MAX_FORCE_N, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.stiffness_calibration import plot_joint_stiffness
@@ -222,9 +222,10 @@ class JointStiffnessOutcome:
 def read_deflection_csv(path: Path) -> DeflectionData:
     """Read measured (pose, wrench, deflection) rows, strictly validated.
 
-    Cvitanic (2021), eq. (3) data: the header must be :data:`DATA_COLUMNS` (in that order);
-    each further non-empty line that does not start with ``#`` is one measurement of 18
-    finite numbers. Joint angles are converted from degrees to rad.
+    Cvitanic (2021), eq. (3) data in the CSV table format of :mod:`gtmodel._tables`: the
+    header must be :data:`DATA_COLUMNS` (in that order); each further line that does not
+    start with ``#`` is one measurement of 18 finite decimal numbers. Joint angles are
+    converted from degrees to rad.
 
     Parameters
     ----------
@@ -245,45 +246,14 @@ def read_deflection_csv(path: Path) -> DeflectionData:
         or more than :data:`MAX_MEASUREMENTS` measurements.
     """
     try:
-        if path.stat().st_size > MAX_DATA_BYTES:
-            raise ProblemError(f"{path}: expected a data file of at most {MAX_DATA_BYTES} bytes, got {path.stat().st_size}")
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ProblemError(f"{path}: cannot read the data file ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ProblemError(f"{path}: cannot read the data file (not UTF-8 text: byte {exc.start})") from None
-    rows: list[list[float]] = []
-    header_seen = False
-    for lineno, fields in enumerate(csv.reader(text.splitlines()), start=1):
-        if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith("#"):
-            continue
-        cells = [c.strip() for c in fields]
-        if not header_seen:
-            if cells != DATA_COLUMNS:
-                raise ProblemError(f"{path}: line {lineno}: expected the header {','.join(DATA_COLUMNS)}, got {','.join(cells)}")
-            header_seen = True
-            continue
-        if len(cells) != len(DATA_COLUMNS):
-            raise ProblemError(f"{path}: line {lineno}: expected {len(DATA_COLUMNS)} columns, got {len(cells)}")
-        if len(rows) >= MAX_MEASUREMENTS:
-            raise ProblemError(f"{path}: line {lineno}: expected at most {MAX_MEASUREMENTS} measurement lines")
-        row = []
-        for col, (name, cell) in enumerate(zip(DATA_COLUMNS, cells), start=1):
-            try:
-                v = float(cell)
-            except ValueError:
-                v = math.nan
-            if not math.isfinite(v):
-                raise ProblemError(f"{path}: line {lineno}, column {col} ({name}): expected a finite number, got {cell!r}")
-            row.append(v)
-        rows.append(row)
-    if not header_seen:
-        raise ProblemError(f"{path}: expected the header {','.join(DATA_COLUMNS)}, the file is empty")
-    if len(rows) < 2:
-        raise ProblemError(f"{path}: expected at least 2 measurement lines, got {len(rows)}")
-    a = np.array(rows)
+        table = read_table(path, "the data file", header=DATA_COLUMNS, max_rows=MAX_MEASUREMENTS, max_bytes=MAX_DATA_BYTES)
+    except InputError as exc:
+        raise ProblemError(str(exc)) from None
+    if table.n_rows < 2:
+        raise ProblemError(f"{path}: expected at least 2 measurement lines, got {table.n_rows}")
+    rows, a = table.n_rows, table.data
     try:
-        return DeflectionData(np.radians(a[:, :6]), a[:, 6:12], a[:, 12:], f"measured: {path.name}, {len(rows)} rows")
+        return DeflectionData(np.radians(a[:, :6]), a[:, 6:12], a[:, 12:], f"measured: {path.name}, {rows} rows")
     except InputError as exc:
         raise ProblemError(f"{path}: {exc}") from None
 

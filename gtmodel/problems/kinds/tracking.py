@@ -32,8 +32,9 @@ import numpy as np
 from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
+from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
-from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.errors import GtModelError, InputError, ProblemError
 from gtmodel.estimation import TrackingPlant, TrackingResponse
 from gtmodel.estimation.plant import DT
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
@@ -145,7 +146,7 @@ class TrackingSolution(StatusResult):
 
 
 def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float = DT) -> dict[str, np.ndarray]:
-    """Read and check a ``trajectory.csv`` (header line, comma separated, 4 ms samples).
+    """Read and check a ``trajectory.csv`` (a CSV table of :mod:`gtmodel._tables`, 4 ms samples).
 
     Parameters
     ----------
@@ -166,27 +167,22 @@ def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float 
     Raises
     ------
     ProblemError
-        Unreadable file, missing columns (named), fewer than 2 or more than
-        :data:`MAX_SAMPLES` rows, non-finite values, a sample step other than ``dt``
+        Unreadable file or a malformed table (:func:`gtmodel._tables.read_table`: the line and
+        column named), missing columns (named), fewer than 2 or more than
+        :data:`MAX_SAMPLES` rows, a sample step other than ``dt``
         (within :data:`DT_TOLERANCE`; the last step may be shorter), decreasing times.
     """
     where = f"the trajectory file {path}"
     try:
-        with open(path, encoding="utf-8") as fh:
-            header = fh.readline().strip().split(",")
-            data = np.loadtxt(fh, delimiter=",", ndmin=2, max_rows=MAX_SAMPLES + 1)
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise origin.fail(field_name, f"a readable CSV file with a header line ({where}: {exc})") from None
+        table = read_table(path, "the trajectory file", max_rows=MAX_SAMPLES)
+    except InputError as exc:
+        raise origin.fail(field_name, f"a readable CSV table ({exc})") from None
+    header, data = table.columns, table.data
     missing = [c for c in REQUIRED_COLUMNS if c not in header]
     if missing:
         raise origin.fail(field_name, f"the columns {', '.join(REQUIRED_COLUMNS)} ({where} lacks {', '.join(missing)})")
-    if data.shape[1] != len(header):
-        raise origin.fail(field_name, f"{len(header)} values per row like the header ({where} has {data.shape[1]})")
     if not 2 <= data.shape[0] <= MAX_SAMPLES:
         raise origin.fail(field_name, f"2 to {MAX_SAMPLES} samples ({where} has {data.shape[0]})")
-    if not np.all(np.isfinite(data)):
-        row = int(np.nonzero(~np.all(np.isfinite(data), axis=1))[0][0])
-        raise origin.fail(field_name, f"finite numbers ({where}: row {row + 1} is not finite)")
     cols = {name: data[:, k] for k, name in enumerate(header)}
     steps = np.diff(cols["t"])
     body, last = steps[:-1], steps[-1]

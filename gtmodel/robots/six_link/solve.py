@@ -7,7 +7,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from gtmodel._arrays import as_rows
+from gtmodel._arrays import as_rotations, as_rows
 from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
 from gtmodel.robots.kinematics import configuration_signs
 from gtmodel.robots.six_link.layout import (
@@ -35,22 +35,7 @@ class SixLinkSolvers:
     def _orientations(self, R: Any, N: int) -> np.ndarray:
         if R is None:
             return np.broadcast_to(self.R0, (N, 3, 3))
-        try:
-            Ra = np.asarray(R, dtype=float)
-        except (TypeError, ValueError):
-            raise InputError(f"R: expected rotation matrices of shape (3, 3) or (N, 3, 3), got {R!r}") from None
-        if Ra.shape == (3, 3):
-            Ra = np.broadcast_to(Ra, (N, 3, 3))
-        if Ra.shape != (N, 3, 3):
-            raise InputError(f"R: expected shape (3, 3) or ({N}, 3, 3) to match T, got {Ra.shape}")
-        if not np.all(np.isfinite(Ra)):
-            raise InputError("R: expected finite rotation matrices")
-        err = np.abs(np.einsum("nji,njk->nik", Ra, Ra) - np.eye(3)).max(axis=(1, 2))
-        bad = (err > ROTATION_TOLERANCE) | (np.linalg.det(Ra) < 0)
-        if np.any(bad):
-            k = int(np.argmax(bad))
-            raise InputError(f"R: row {k} is not a rotation matrix (max |R^T R - I| = {err[k]:.3g})")
-        return Ra
+        return as_rotations(R, N, "R", ROTATION_TOLERANCE)
 
     def ik_links(
         self, T: np.typing.ArrayLike, R: np.typing.ArrayLike | None = None, configuration: int | Sequence[int] = 0

@@ -12,12 +12,12 @@ import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._arrays import as_rows
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, SingularConfigurationError
 from gtmodel.robots.kinematics import (
     SINGULARITY_TOLERANCE,
     GantryTau3Kinematics,
-    _as_points,
     configuration_signs,
     ik_expression,
 )
@@ -210,7 +210,7 @@ class GantryTau3Stiffness:
 
     # ------------------------------------------------------------------ numpy glue
     def _poses(self, T: Any, configuration: Any, limits: bool) -> tuple[np.ndarray, bool, np.ndarray]:
-        Tn, single = _as_points(T, "T")
+        Tn, single = as_rows(T, "T", 3)
         s = configuration_signs(configuration)
         self.kinematics.ik(Tn, configuration)  # UnreachablePoseError naming the arm
         if limits:
@@ -393,6 +393,6 @@ class GantryTau3Stiffness:
 
         {pose_raises}
         """
-        Tn, _ = _as_points(T, "T")
+        Tn, _ = as_rows(T, "T", 3)
         (K, _, _, dT), _, _ = self._evaluate(Tn, None, configuration, limits)
         return StiffnessMap(Tn, K, dT, self.stiffness, self.payload_kg)

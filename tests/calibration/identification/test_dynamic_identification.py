@@ -263,9 +263,9 @@ def _nan_at(a, k, j):
 
 BAD_LOGS = [
     ("short_tau", lambda t, tau, q: dict(t=t, tau=tau[:-1], q=q), r"tau: expected 100 samples"),
-    ("nan_q", lambda t, tau, q: dict(t=t, tau=tau, q=_nan_at(q, 17, 1)), r"q: sample 17, column 2 is not finite"),
-    ("nan_tau", lambda t, tau, q: dict(t=t, tau=_nan_at(tau, 5, 0), q=q), r"tau: sample 5, column 1"),
-    ("time_not_increasing", lambda t, tau, q: dict(t=_bad_time(t), tau=tau, q=q), r"t: time is not strictly increasing at sample 42"),
+    ("nan_q", lambda t, tau, q: dict(t=t, tau=tau, q=_nan_at(q, 17, 1)), r"q: sample 17, column 1 is not finite"),
+    ("nan_tau", lambda t, tau, q: dict(t=t, tau=_nan_at(tau, 5, 0), q=q), r"tau: sample 5, column 0 is not finite"),
+    ("time_not_increasing", lambda t, tau, q: dict(t=_bad_time(t), tau=tau, q=q), r"t: times must increase strictly, but sample 42 does not"),
     ("q_and_T", lambda t, tau, q: dict(t=t, tau=tau, q=q, T=q), r"exactly one of q"),
     ("neither_q_nor_T", lambda t, tau, q: dict(t=t, tau=tau), r"exactly one of q"),
     ("tau_wrong_width", lambda t, tau, q: dict(t=t, tau=tau[:, :2], q=q), r"tau: expected shape \(N, 3\)"),

@@ -145,7 +145,7 @@ _T_IRREG[100:] += 0.001
     [
         ((_T, _U[:-1], _Y), {}, "u: expected 200 samples like t"),
         ((_T, _U, _Y[:-3]), {}, "y: expected 200 samples"),
-        ((_T, _U, _NAN), {}, "y: non-finite value .* at sample 50"),
+        ((_T, _U, _NAN), {}, "y: sample 50, column 0 is not finite"),
         ((_T_BACK, _U, _Y), {}, "t: times must increase strictly"),
         ((_T_IRREG, _U, _Y), {}, "t: samples must be equally spaced"),
         ((_T[:20], _U[:20], _Y[:20]), {}, "too few samples"),
@@ -245,7 +245,7 @@ _YS_NAN[100, 1] = np.nan
     "args, kwargs, match",
     [
         ((_TS, _US[:-1], _YS), {}, "u: expected 8190 samples like t"),
-        ((_TS, _US, _YS_NAN), {}, "y: non-finite value .* sample 100, channel 1"),
+        ((_TS, _US, _YS_NAN), {}, "y: sample 100, column 1 is not finite"),
         ((_TS[::-1], _US, _YS), {}, "t: times must increase"),
         ((_TS[:150], _US[:150], _YS[:150]), {}, "too few samples"),
         ((_TS, np.c_[_US[:, 0], _US[:, 0]], _YS), {}, "singular regressor"),

@@ -163,7 +163,7 @@ def test_non_finite_value_in_the_trajectory_file(tmp_path):
     csv.write_text("t,x,y,z,q1,q2,q3\n0,0,2.9,-0.5,0,0,0\n0.004,nan,2.9,-0.5,0,0,0\n")
     base = tmp_path / "base.toml"
     base.write_text(_file_problem(csv))
-    assert_bad_problem(tmp_path, base, "nan", lambda text: text, r"field 'trajectory\.file': expected finite numbers \(.*row 2 is not finite\)")
+    assert_bad_problem(tmp_path, base, "nan", lambda text: text, r"field 'trajectory\.file': expected a readable CSV table \(.*traj\.csv: line 3, column 'x': NaN/inf is not allowed")
 
 
 BAD = [

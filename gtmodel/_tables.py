@@ -1,0 +1,335 @@
+"""CSV tables of numbers: the one reader (and writer) of gtmodel's data files.
+
+Every CSV file gtmodel reads goes through :func:`read_table`: pose measurements and cart
+surveys (:mod:`gtmodel.calibration.measurements`), motion logs
+(:func:`gtmodel.calibration.identification.read_motion_log`), joint deflections
+(``joint_stiffness_calibration``) and the ``trajectory.csv`` a trajectory problem writes
+(re-read as an initial guess or replayed by ``tracking``). Each reader then checks its own
+columns and what the numbers mean; the format below is the same for all.
+
+Format
+------
+::
+
+    # robot: L1, device: Leica laser tracker          <- comments: provenance, kept
+    # date: 2011-05-03
+    q1_m,q2_m,q3_m,Tx_m,Ty_m,Tz_m                     <- header: one name per column
+    -0.25,0.10,0.35,-1.0723,2.9135,-0.6311            <- one row of numbers per line
+    # tracker re-levelled here                        <- a comment between rows: skipped
+    -0.20,0.12,0.31,-1.0511,2.9202,-0.6127
+
+- UTF-8 text (a byte-order mark is allowed), values separated by commas.
+- Lines starting with ``#`` are comments. Those above the header are the file's provenance
+  (:attr:`Table.comments`, written back by :func:`write_table`); those between rows are skipped.
+- The header is the first line that is not a comment: the column names, each non-empty and
+  unique (surrounding spaces are ignored). Each reader says which columns it needs; most
+  may come in any order.
+- Units are SI and part of the column name where a format names them (``t_s``, ``q1_m``,
+  ``tau1_N``, ``theta1_deg``: degrees only where the name says so); the ``trajectory.csv``
+  of the trajectory problems uses its short names ``t, x, y, z, q1, ...`` in s and m.
+- Every data row holds exactly one value per header column, each a decimal number
+  (``[+-]digits[.digits][e[+-]digits]``, spaces around it allowed). NaN, inf, empty fields,
+  thousands separators and quotes are errors.
+- Empty lines are allowed only at the end of the file.
+
+Every error is an :class:`~gtmodel.errors.InputError` naming the file, the line (1-based
+line number in the file) and, for a value, the column.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import numpy.typing  # noqa: F401  (np.typing in annotations)
+
+from gtmodel.errors import InputError
+
+__all__ = ["Table", "read_table", "write_table"]
+
+_NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
+_NUMBER_RE = re.compile(_NUMBER)
+_NONFINITE_RE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class Table:
+    """A CSV table read by :func:`read_table`.
+
+    Parameters
+    ----------
+    source : str
+        The file (named in errors).
+    columns : tuple of str
+        The header's column names, in file order.
+    data : numpy.ndarray, shape (N, len(columns))
+        The values, one row per data line.
+    lines : numpy.ndarray of int, shape (N,)
+        The 1-based line number in the file of each row.
+    header_line : int
+        The 1-based line number of the header.
+    comments : tuple of str
+        The ``#`` lines above the header, without the ``#``.
+    """
+
+    source: str
+    columns: tuple[str, ...]
+    data: np.ndarray
+    lines: np.ndarray
+    header_line: int
+    comments: tuple[str, ...] = ()
+
+    @property
+    def n_rows(self) -> int:
+        """Number of data rows N."""
+        return int(self.data.shape[0])
+
+    def column(self, name: str) -> np.ndarray:
+        """The values of one column.
+
+        Parameters
+        ----------
+        name : str
+            A header name.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N,)
+
+        Raises
+        ------
+        InputError
+            No such column (the header line named).
+        """
+        return self.data[:, self.index(name)]
+
+    def columns_of(self, names: Sequence[str]) -> np.ndarray:
+        """The values of several columns, in the order given.
+
+        Parameters
+        ----------
+        names : sequence of str
+            Header names.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, len(names))
+
+        Raises
+        ------
+        InputError
+            A name not in the header.
+        """
+        return self.data[:, [self.index(c) for c in names]]
+
+    def index(self, name: str) -> int:
+        """Position of a column in the header.
+
+        Parameters
+        ----------
+        name : str
+            A header name.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        InputError
+            No such column (the header line named).
+        """
+        try:
+            return self.columns.index(name)
+        except ValueError:
+            raise self.error(f"missing column(s) {name}") from None
+
+    def check_columns(self, required: Sequence[str] = (), allowed: Sequence[str] | None = None, note: str = "") -> None:
+        """Check the header: every ``required`` column present, no column outside ``allowed``.
+
+        Parameters
+        ----------
+        required : sequence of str, optional
+            Columns the file must have.
+        allowed : sequence of str, optional
+            Every accepted column (None: any).
+        note : str, optional
+            Appended to a missing-column message (e.g. which columns come together).
+
+        Raises
+        ------
+        InputError
+            ``"<file>: line <k> (header): unknown column '<c>' (allowed: ...)"`` or
+            ``"... missing column(s) <c1>, <c2>"``.
+        """
+        if allowed is not None:
+            for c in self.columns:
+                if c not in allowed:
+                    raise self.error(f"unknown column '{c}' (allowed: {', '.join(allowed)})")
+        missing = [c for c in required if c not in self.columns]
+        if missing:
+            raise self.error(f"missing column(s) {', '.join(missing)}{f' ({note})' if note else ''}")
+
+    def error(self, message: str, row: int | None = None, column: str | None = None) -> InputError:
+        """An error naming the file, the line (the header's when ``row`` is None) and the column.
+
+        Parameters
+        ----------
+        message : str
+            What is wrong (after the location).
+        row : int, optional
+            0-based data row (its file line is named); None names the header line.
+        column : str, optional
+            Column name (quoted in the message); several may be given joined by commas.
+
+        Returns
+        -------
+        InputError
+            ``"<file>: line <k>, column '<c>': <message>"`` (to raise).
+        """
+        where = f"line {int(self.lines[row])}" if row is not None else f"line {self.header_line} (header)"
+        if column is not None:
+            where += f", column{'s' if ',' in column else ''} '{column}'"
+        return InputError(f"{self.source}: {where}: {message}")
+
+
+def _number(source: str, lineno: int, column: str, text: str) -> float:
+    s = text.strip()
+    if _NUMBER_RE.fullmatch(s):
+        return float(s)
+    if _NONFINITE_RE.fullmatch(s):
+        raise InputError(f"{source}: line {lineno}, column '{column}': NaN/inf is not allowed, got '{s}'")
+    raise InputError(f"{source}: line {lineno}, column '{column}': expected a decimal number, got '{text}'")
+
+
+def read_table(
+    path: str | Path, what: str = "table", header: Sequence[str] | None = None, max_rows: int | None = None, max_bytes: int | None = None
+) -> Table:
+    """Read a CSV table of numbers (format in the module docstring), strictly validated.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    what : str, optional
+        What the file is, for messages (``"cannot read <what>"``).
+    header : sequence of str, optional
+        The exact header (names in this order), when the format fixes it.
+    max_rows : int, optional
+        Most data rows accepted (a larger file is refused at the first row too many).
+    max_bytes : int, optional
+        Largest file size accepted [bytes] (checked before reading).
+
+    Returns
+    -------
+    Table
+
+    Raises
+    ------
+    InputError
+        Unreadable, too large or non-UTF-8 file; no header; an empty or repeated column
+        name (or another header than ``header``); a row with another number of values than
+        the header; a value that is not a finite decimal number; a comment-free empty line
+        inside the data; more than ``max_rows`` rows. The message names the file, the line
+        (1-based) and the column.
+    """
+    source = str(path)
+    try:
+        if max_bytes is not None and Path(path).stat().st_size > max_bytes:
+            raise InputError(f"{source}: {Path(path).stat().st_size} bytes, expected at most {max_bytes} bytes")
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise InputError(f"{source}: cannot read {what} ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{source}: cannot read {what} (not UTF-8 text: byte {exc.start})") from None
+    lines = text.splitlines()
+    n = len(lines)
+    while n > 0 and not lines[n - 1].strip():
+        n -= 1  # empty lines at the end are allowed
+    comments: list[str] = []
+    k = 0
+    while k < n and lines[k].startswith("#"):
+        comments.append(lines[k][1:])
+        k += 1
+    expected = ",".join(header) if header is not None else "(a line of column names)"
+    if k >= n:
+        state = "the file is empty" if not comments else "the file holds only '#' comments"
+        raise InputError(f"{source}: expected the header {expected}, {state} (no header line)")
+    header_line = k + 1
+    if not lines[k].strip():
+        raise InputError(f"{source}: line {header_line}: empty line where the header {expected} was expected")
+    columns = tuple(c.strip() for c in lines[k].split(","))
+    if header is not None and columns != tuple(header):
+        raise InputError(f"{source}: line {header_line}: expected the header {expected}, got {','.join(columns)}")
+    seen: set[str] = set()
+    for c in columns:
+        if c == "":
+            raise InputError(f"{source}: line {header_line} (header): empty column name")
+        if c in seen:
+            raise InputError(f"{source}: line {header_line} (header): column '{c}' appears twice")
+        seen.add(c)
+    width = len(columns)
+    row_re = re.compile(rf"\s*{_NUMBER}\s*(?:,\s*{_NUMBER}\s*){{{width - 1}}}")
+    rows: list[list[str]] = []
+    linenos: list[int] = []
+    for j in range(k + 1, n):
+        line, lineno = lines[j], j + 1
+        if line.startswith("#"):
+            continue
+        if max_rows is not None and len(rows) >= max_rows:
+            raise InputError(f"{source}: line {lineno}: more than {max_rows} data rows")
+        fields = line.split(",")
+        if not row_re.fullmatch(line):  # the slow path finds what is wrong
+            if not line.strip():
+                raise InputError(f"{source}: line {lineno}: empty line inside the data (allowed only at the end of the file)")
+            if len(fields) != width:
+                raise InputError(f"{source}: line {lineno}: {len(fields)} values, expected {width} (one per header column: {','.join(columns)})")
+            for name, cell in zip(columns, fields):
+                _number(source, lineno, name, cell)
+        rows.append(fields)
+        linenos.append(lineno)
+    data = np.array(rows, dtype=float) if rows else np.empty((0, width))
+    return Table(source, columns, data.reshape(len(rows), width), np.array(linenos, dtype=int), header_line, tuple(comments))
+
+
+def write_table(path: str | Path, columns: Sequence[str], data: np.typing.ArrayLike, comments: Sequence[str] = (), integer_columns: Sequence[int] = (), what: str = "table") -> Path:
+    """Write a CSV table that :func:`read_table` reads back exactly (``repr`` of each float).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        File to write (overwritten).
+    columns : sequence of str
+        Header names.
+    data : array_like, shape (N, len(columns))
+        Values.
+    comments : sequence of str, optional
+        Comment lines written above the header (each after a ``#``; newlines become spaces).
+    integer_columns : sequence of int, optional
+        Columns written as integers.
+    what : str, optional
+        What the file is, for messages.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    InputError
+        The file cannot be written.
+    """
+    path = Path(path)
+    lines = ["#" + str(c).replace("\n", " ") for c in comments]
+    lines.append(",".join(columns))
+    for row in np.asarray(data, dtype=float):
+        lines.append(",".join(str(int(x)) if j in integer_columns else repr(float(x)) for j, x in enumerate(row)))
+    try:
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write {what} ({exc.strerror})") from None
+    return path

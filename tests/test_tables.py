@@ -1,0 +1,123 @@
+"""The one CSV table reader (:mod:`gtmodel._tables`): format rules and the errors naming file, line and column.
+
+Independent reference: the tables are written here as literal text, so each expected line
+number and value is read off the test itself.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtmodel._tables import read_table, write_table
+from gtmodel.errors import GtModelError, InputError
+
+GOOD = "# robot: L1\n# date: 2011-05-03\nt_s, q1_m ,tau1_N\n0.0,0.1,-2.5\n# a note between rows\n0.004,+.2,3e-1\n\n\n"
+
+
+def _write(tmp_path, text, name="t.csv"):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def test_good_table(tmp_path):
+    """Comments at the top kept, a comment between rows skipped, names stripped, trailing empty lines allowed."""
+    t = read_table(_write(tmp_path, GOOD))
+    assert t.columns == ("t_s", "q1_m", "tau1_N") and t.header_line == 3
+    assert t.comments == (" robot: L1", " date: 2011-05-03")
+    np.testing.assert_array_equal(t.data, [[0.0, 0.1, -2.5], [0.004, 0.2, 0.3]])
+    assert t.lines.tolist() == [4, 6] and t.n_rows == 2
+    np.testing.assert_array_equal(t.column("tau1_N"), [-2.5, 0.3])
+    np.testing.assert_array_equal(t.columns_of(["tau1_N", "t_s"]), [[-2.5, 0.0], [0.3, 0.004]])
+
+
+def test_byte_order_mark_and_header_only(tmp_path):
+    p = tmp_path / "bom.csv"
+    p.write_bytes(b"\xef\xbb\xbfa,b\n")
+    t = read_table(p)
+    assert t.columns == ("a", "b") and t.data.shape == (0, 2)
+
+
+def test_round_trip_is_exact(tmp_path):
+    data = np.array([[1.0, 0.1 + 0.2, -1e-300], [2.0, np.pi, 6.02e23]])
+    p = write_table(tmp_path / "w.csv", ["arm", "x_m", "y_m"], data, comments=[" source: test"], integer_columns=(0,))
+    assert p.read_text().splitlines()[:2] == ["# source: test", "arm,x_m,y_m"]
+    t = read_table(p)
+    np.testing.assert_array_equal(t.data, data)
+    assert t.comments == (" source: test",)
+
+
+BAD = [
+    ("letters", "a,b\n1,2\n3,x\n", r"t\.csv: line 3, column 'b': expected a decimal number, got 'x'"),
+    ("empty_field", "a,b\n1,\n", r"line 2, column 'b': expected a decimal number, got ''"),
+    ("nan", "a,b\n1,2\nnan,4\n", r"line 3, column 'a': NaN/inf is not allowed, got 'nan'"),
+    ("inf", "a,b\n-Infinity,2\n", r"line 2, column 'a': NaN/inf is not allowed"),
+    ("underscore", "a,b\n1_000,2\n", r"line 2, column 'a': expected a decimal number"),
+    ("quoted", 'a,b\n"1",2\n', r"line 2, column 'a': expected a decimal number, got '\"1\"'"),
+    ("thousands", "a,b\n1,2,5\n", r"line 2: 3 values, expected 2 \(one per header column: a,b\)"),
+    ("too_few", "a,b,c\n1,2\n", r"line 2: 2 values, expected 3"),
+    ("empty_line_inside", "a,b\n1,2\n\n3,4\n", r"line 3: empty line inside the data"),
+    ("repeated_column", "# c\na,b,a\n1,2,3\n", r"line 2 \(header\): column 'a' appears twice"),
+    ("empty_column", "a,,b\n1,2,3\n", r"line 1 \(header\): empty column name"),
+    ("no_header", "# only\n# comments\n", r"expected the header \(a line of column names\), the file holds only '#' comments \(no header line\)"),
+    ("empty_file", "", r"t\.csv: expected the header .*the file is empty \(no header line\)"),
+]
+
+
+@pytest.mark.parametrize("case, text, match", BAD, ids=[c[0] for c in BAD])
+def test_bad_rows_and_columns(tmp_path, case, text, match):
+    """Each malformed table: an InputError (a GtModelError) naming the file, the line and the column."""
+    p = _write(tmp_path, text)
+    with pytest.raises(InputError, match=match) as info:
+        read_table(p)
+    assert isinstance(info.value, GtModelError) and str(p) in str(info.value)
+
+
+def test_fixed_header_and_limits(tmp_path):
+    p = _write(tmp_path, "# c\na,b\n1,2\n3,4\n5,6\n")
+    assert read_table(p, header=("a", "b")).n_rows == 3
+    with pytest.raises(InputError, match=r"line 2: expected the header b,a, got a,b"):
+        read_table(p, header=("b", "a"))
+    with pytest.raises(InputError, match=r"line 5: more than 2 data rows"):
+        read_table(p, max_rows=2)
+    with pytest.raises(InputError, match=r"bytes, expected at most 4 bytes"):
+        read_table(p, max_bytes=4)
+
+
+def test_unreadable_files(tmp_path):
+    with pytest.raises(InputError, match=r"nope\.csv: cannot read motion log \("):
+        read_table(tmp_path / "nope.csv", "motion log")
+    p = tmp_path / "latin.csv"
+    p.write_bytes("a\n# caf\xe9\n1\n".encode("latin-1"))
+    with pytest.raises(InputError, match=r"latin\.csv: cannot read the data file \(not UTF-8 text: byte 7\)"):
+        read_table(p, "the data file")
+
+
+def test_column_checks_name_the_header_line(tmp_path):
+    t = read_table(_write(tmp_path, "# c\nq1_m,Tz_mm\n1,2\n"))
+    with pytest.raises(InputError, match=r"line 2 \(header\): unknown column 'Tz_mm' \(allowed: q1_m, Tz_m\)"):
+        t.check_columns(allowed=["q1_m", "Tz_m"])
+    with pytest.raises(InputError, match=r"line 2 \(header\): missing column\(s\) q2_m, q3_m \(they come together\)"):
+        t.check_columns(["q1_m", "q2_m", "q3_m"], note="they come together")
+    with pytest.raises(InputError, match=r"line 2 \(header\): missing column\(s\) t_s"):
+        t.column("t_s")
+    err = t.error("expected a positive weight", row=0, column="q1_m")
+    assert str(err).endswith("t.csv: line 3, column 'q1_m': expected a positive weight")
+
+
+def test_guess_reader_uses_the_table_format(tmp_path):
+    """The trajectory.csv read back as an initial guess: the same rules, its own column check."""
+    from gtmodel.trajectory.point_to_point import _read_guess_csv
+
+    cols = ["t", "x", "y", "z", "xd", "yd", "zd", "tau1", "tau2", "tau3", "q1"]
+    rows = [",".join(str(0.004 * k + j) for j in range(len(cols))) for k in range(3)]
+    p = _write(tmp_path, ",".join(cols) + "\n" + "\n".join(rows) + "\n", "trajectory.csv")
+    got = _read_guess_csv(p)
+    np.testing.assert_allclose(got["tau3"], [9.0, 9.004, 9.008])
+    p.write_text(",".join(cols[:-2]) + "\n" + "\n".join(r.rsplit(",", 2)[0] for r in rows) + "\n")
+    with pytest.raises(InputError, match=r"guess: .*trajectory\.csv: line 1 \(header\): missing column\(s\) tau3"):
+        _read_guess_csv(p)
+    p.write_text(",".join(cols) + "\n" + rows[0] + "\n" + rows[0].replace("0.0", "nan", 1) + "\n")
+    with pytest.raises(InputError, match=r"guess: .*trajectory\.csv: line 3, column 't': NaN/inf is not allowed"):
+        _read_guess_csv(p)
