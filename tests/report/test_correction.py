@@ -18,8 +18,8 @@ def test_offset_response_in_ms_and_mm(tmp_path, directions):
     responses = {d: {"truth": 1e-4 * np.sin(40 * T + k), "single mode": 1e-4 * np.sin(41 * T + k)} for k, d in enumerate(directions)}
     fig = plot_offset_response(T, responses, tmp_path / "r.png", title="demo")
     assert_png(tmp_path / "r.png")
+    assert [ax.get_title() for ax in fig.axes] == [f"{d} direction" for d in directions]
     for ax, (d, curves) in zip(fig.axes, responses.items()):
-        assert ax.get_title() == f"{d} direction"
         for label, y in curves.items():
             assert_line(ax, label, T * 1e3, y * 1e3)
 
@@ -30,12 +30,12 @@ def test_loop_errors_in_mm_scaled_by_the_first_curve(tmp_path, directions):
     runs[directions[0]]["K = 0.12"][-3:] = np.inf  # a diverged run: not drawn
     fig = plot_loop_errors(T, runs, tmp_path / "l.png")
     assert_png(tmp_path / "l.png")
+    peaks = [np.abs(curves["K = 0.11 (stable)"]).max() for curves in runs.values()]
+    assert [ax.get_ylim() for ax in fig.axes] == pytest.approx([(-3e3 * p, 3e3 * p) for p in peaks])
+    assert [ax.get_ylabel() for ax in fig.axes] == [f"{d} error [mm]" for d in directions]
     for ax, (d, curves) in zip(fig.axes, runs.items()):
         for label, e in curves.items():
             assert_line(ax, label, T, np.where(np.isfinite(e), e, np.nan) * 1e3)
-        peak = np.abs(curves["K = 0.11 (stable)"]).max()
-        assert ax.get_ylim() == pytest.approx((-3e3 * peak, 3e3 * peak))
-        assert ax.get_ylabel() == f"{d} error [mm]"
 
 
 @pytest.mark.parametrize("n_poses", [1, 4])

@@ -29,9 +29,9 @@ def test_errors_in_mm_from_one_mm_on_else_um(tmp_path, plot, labels, amplitude, 
     e = _error(amplitude)
     fig = plot(T, e, tmp_path / "e.png", end_time=0.5)
     assert_png(tmp_path / "e.png")
+    assert [ax.get_ylabel() for ax in fig.axes] == [f"{label} [{unit}]" for label in labels]
     for i, (ax, label) in enumerate(zip(fig.axes, labels)):
         assert_line(ax, label, T, e[:, i] * scale)
-        assert ax.get_ylabel() == f"{label} [{unit}]"
         np.testing.assert_allclose(line(ax, "end of the motion").get_xdata(), [0.5, 0.5])
 
 

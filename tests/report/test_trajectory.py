@@ -44,8 +44,8 @@ def test_forces_draw_each_cart_force_and_its_limits(tmp_path, limit):
     for i, ax in enumerate(fig.axes):
         assert_line(ax, f"tau{i + 1}", traj["t"], traj[f"tau{i + 1}"])
         np.testing.assert_allclose(line_y(ax, "limit"), [limit[i], limit[i]])
-        assert ax.get_ylim() == pytest.approx((-1.15 * limit[i], 1.15 * limit[i]))
-        assert ax.get_ylabel() == f"tau{i + 1} [N]"
+    assert [ax.get_ylim() for ax in fig.axes] == pytest.approx([(-1.15 * lim, 1.15 * lim) for lim in limit])
+    assert [ax.get_ylabel() for ax in fig.axes] == ["tau1 [N]", "tau2 [N]", "tau3 [N]"]
 
 
 def line_y(ax, label):
