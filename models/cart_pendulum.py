@@ -30,11 +30,11 @@ class CartPendulum(Model):
         l = self.parameter("l", 0.5)  # m, hinge to pole mass
         g = self.parameter("g", 9.81)  # m/s^2
         d = self.parameter("d", 0.0)  # N s/m, viscous friction of the cart
-        s = self.state("s")
-        v = self.state("v")
-        theta = self.state("theta")
-        omega = self.state("omega")
-        F = self.input("F")
+        s = self.state("s", unit="m")
+        v = self.state("v", unit="m/s")
+        theta = self.state("theta", unit="rad")
+        omega = self.state("omega", unit="rad/s")
+        F = self.input("F", unit="N")
         self.equation(self.der(s), v, name="cart_kinematics")
         self.equation(self.der(theta), omega, name="pole_kinematics")
         self.equation(

@@ -69,7 +69,7 @@ __all__ = [
 #: Names of the controller functions (the C symbols are ``<prefix>_<name>``).
 CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction", *FILTER_FUNCTIONS)
 #: Sample time of the loop [s] (Dressler (2012), ch. 3.2).
-DEFAULT_DT = 0.004
+from gtmodel.defaults import LOOP_PERIOD_S as DEFAULT_DT  # noqa: E402  (the one loop period, gtmodel.defaults)
 #: Largest accepted ``|ilc_correction(k) - table[k]| / (1 + |table[k]|)`` when a Controller is built.
 ILC_TABLE_TOLERANCE = 1e-12
 

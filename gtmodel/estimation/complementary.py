@@ -51,6 +51,7 @@ import numpy as np
 import scipy.signal
 
 from gtmodel._arrays import as_finite, as_signal, as_vector, positive_float, positive_int
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 
 __all__ = ["ComplementaryFilter", "THESIS_CUTOFFS_HZ", "PAD_DECAY", "forward_backward_design_hz"]
@@ -117,7 +118,7 @@ class ComplementaryFilter:
         Cut-off frequency per direction [Hz], each in ``(0, 1 / (2 dt))``. Default: the
         thesis' 4.50 Hz (x) and 2.63 Hz (y) (:data:`THESIS_CUTOFFS_HZ`).
     dt : float, optional
-        Sample time [s] (the L1 loop: 0.004).
+        Sample time [s] (default the loop period, :data:`gtmodel.defaults.LOOP_PERIOD_S`).
     order : int, optional
         Butterworth order per pass (the thesis: 2).
 
@@ -143,7 +144,7 @@ class ComplementaryFilter:
         1-D, ``dt`` not positive, ``order`` not a positive integer.
     """
 
-    def __init__(self, cutoff_hz: Any = THESIS_CUTOFFS_HZ, dt: float = 0.004, order: int = 2) -> None:
+    def __init__(self, cutoff_hz: Any = THESIS_CUTOFFS_HZ, dt: float = LOOP_PERIOD_S, order: int = 2) -> None:
         self.dt = positive_float(dt, "dt")
         self.order = positive_int(order, "order")
         fc = as_vector(cutoff_hz, "cutoff_hz", what="frequencies (one per direction)")

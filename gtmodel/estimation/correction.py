@@ -67,6 +67,7 @@ import scipy.optimize
 import scipy.signal
 
 from gtmodel._arrays import as_rows, positive_float, positive_int
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamic_stiffness import DIRECTIONS, DynamicStiffnessGP, ModeFitResult, single_mode_tf
 from gtmodel.robots.serial import SerialArm
@@ -95,7 +96,7 @@ __all__ = [
 _log = logging.getLogger("gtmodel")
 
 #: Cycle time of the real-time corrections [s] (Cvitanic (2021), section 5.1; KUKA RSI).
-CYCLE_TIME_S = 0.004
+CYCLE_TIME_S = LOOP_PERIOD_S
 #: Measured controller delay [s] (Cvitanic (2021), section 5.1).
 CONTROLLER_DELAY_S = 0.052
 #: The delay in cycles (52 ms / 4 ms).
@@ -149,7 +150,7 @@ def equivalent_force(command: Any, dt: float = CYCLE_TIME_S, mass: float = 1.0, 
     command : array_like, shape (n,)
         Commanded TCP position per cycle (programmed path plus offsets) [m], n >= 1.
     dt : float, optional
-        Cycle time [s] (default 0.004).
+        Cycle time [s] (default :data:`CYCLE_TIME_S`).
     mass : float, optional
         The mass the command accelerates [kg] (default 1: the commanded acceleration [m/s^2]).
     feed_rate : float, optional
@@ -195,7 +196,7 @@ class OffsetResponseModel:
     mass : float
         Mass ``M`` of the equivalent force [kg], > 0.
     dt : float, optional
-        Cycle time [s] (default 0.004).
+        Cycle time [s] (default :data:`CYCLE_TIME_S`).
 
     Raises
     ------

@@ -74,6 +74,7 @@ import scipy.linalg
 import scipy.optimize
 
 from gtmodel._arrays import as_array, as_finite, as_per_axis, as_signal, positive_float, positive_int
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.end_effector import constant_acceleration
 
@@ -151,7 +152,7 @@ class StationaryKalman:
 
     def __init__(
         self,
-        dt: float = 0.004,
+        dt: float = LOOP_PERIOD_S,
         accelerometer_noise: Any = DEFAULT_ACCELEROMETER_NOISE,
         position_noise: Any = DEFAULT_POSITION_NOISE,
         jerk_noise: Any = DEFAULT_JERK_NOISE,
@@ -426,7 +427,7 @@ class StationaryKalman:
 
 def tune_position_noise(
     crossover_hz: float,
-    dt: float = 0.004,
+    dt: float = LOOP_PERIOD_S,
     accelerometer_noise: float = DEFAULT_ACCELEROMETER_NOISE,
     jerk_noise: float = DEFAULT_JERK_NOISE[0],
 ) -> float:

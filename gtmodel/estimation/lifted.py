@@ -48,6 +48,7 @@ import scipy.signal
 from gtmodel.estimation.complementary import MIN_CUTOFF_FRACTION
 
 from gtmodel._arrays import as_finite, as_signal, as_vector, positive_float, positive_int
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 
 __all__ = ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
@@ -163,7 +164,7 @@ class QFilter:
         Cut-off of the causal Butterworth filter [Hz], ``0 < cutoff_hz < 1 / (2 dt)``;
         None for no low-pass (the window only).
     dt : float, optional
-        Sample time [s] (default 0.004).
+        Sample time [s] (default the loop period, :data:`gtmodel.defaults.LOOP_PERIOD_S`).
     order : int, optional
         Order of the causal filter (default 2).
     window : array_like, shape (N,), optional
@@ -178,12 +179,12 @@ class QFilter:
 
     Examples
     --------
-    >>> q = QFilter(10.0, dt=0.004, window=time_window(320))
+    >>> q = QFilter(10.0, window=time_window(320))  # at the 4 ms loop period
     >>> q.lifted(320).shape
     (320, 320)
     """
 
-    def __init__(self, cutoff_hz: float | None, dt: float = 0.004, order: int = 2, window: Any = None) -> None:
+    def __init__(self, cutoff_hz: float | None, dt: float = LOOP_PERIOD_S, order: int = 2, window: Any = None) -> None:
         self.dt = positive_float(dt, "dt")
         self.order = positive_int(order, "order")
         nyquist = 0.5 / self.dt

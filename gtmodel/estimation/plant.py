@@ -1,7 +1,7 @@
 """Closed-loop tracking plant of the L1 Gantry-Tau at 4 ms: actuators, kinematics, structure, sensors.
 
 Dressler (2012), eqs. 6.11, 6.14/6.15 and ch. 7.3. The chain, every block a discrete
-python-control system at ``dt = 0.004`` s (no hand-written integrator)::
+python-control system at the loop period ``dt`` (4 ms, from the robot's data file; no hand-written integrator)::
 
     q_ref --(6.11, per axis)--> q = q_m --fk--> T_kin --(2nd difference)--> a_kin
     a_kin(x, y) --(structure (6.14), c2d "foh")--> d, d''
@@ -58,8 +58,9 @@ import control
 import numpy as np
 
 from gtmodel._arrays import as_rows, positive_float, positive_int
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.robots.actuator_dynamics import actuator_models
+from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models, loop_period
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.structural import Modes, PhysicalModel
 from gtmodel.status import Status, StatusResult
@@ -68,8 +69,9 @@ __all__ = ["DT", "STANDARD_GRAVITY", "MIN_FREQUENCY_HZ", "ToolStructure", "Senso
 
 _log = logging.getLogger("gtmodel")
 
-#: Sample time of the L1 controller [s].
-DT = 0.004
+#: Sample time of the controller [s] where no robot's data file is at hand (the L1's own
+#: comes from its file, :func:`gtmodel.robots.actuator_dynamics.loop_period`).
+DT = LOOP_PERIOD_S
 #: Standard gravity [m/s^2] (the accelerometer range is 1.5 of it).
 STANDARD_GRAVITY = 9.80665
 #: Largest accepted difference between an actuator model's sample time and ``dt`` [s].
@@ -198,7 +200,7 @@ class ToolStructure:
         Parameters
         ----------
         dt : float, optional
-            Sample time [s] (default 0.004).
+            Sample time [s] (default :data:`DT`, the loop period).
 
         Returns
         -------
@@ -389,7 +391,7 @@ class TrackingPlant:
     sensors : SensorModel, optional
         Accelerometer and gauge (default :class:`SensorModel`'s defaults).
     dt : float, optional
-        Sample time [s] (default 0.004).
+        Sample time [s] (default :data:`DT`, the loop period).
     configuration : int, optional
         IK configuration for the Jacobian (default 0).
     solution : {1, -1}, optional
@@ -456,9 +458,10 @@ class TrackingPlant:
         Returns
         -------
         TrackingPlant
-            At ``dt = 0.004`` s.
+            At the loop period of ``L1_dynamics_models`` (4 ms).
         """
-        return cls(GantryTau3Kinematics("L1"), actuator_models("L1_dynamics_models"), structure, sensors, DT, configuration)
+        models = load_dynamics_models("L1_dynamics_models")
+        return cls(GantryTau3Kinematics("L1"), actuator_models(models), structure, sensors, loop_period(models), configuration)
 
     def _times(self, n: int) -> np.ndarray:
         return np.arange(n) * self.dt

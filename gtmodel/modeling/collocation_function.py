@@ -15,19 +15,14 @@ from typing import Any
 
 import casadi as ca
 
+from gtmodel.defaults import defaults
+
 __all__ = ["WARM_START_OPTIONS", "resolve_function"]
 
-#: IPOPT options of warm starts: start from the given primal-dual point with a small
-#: barrier parameter and without pushing it off the bounds.
-WARM_START_OPTIONS = {
-    "warm_start_init_point": "yes",
-    "mu_init": 1e-4,
-    "warm_start_bound_push": 1e-9,
-    "warm_start_bound_frac": 1e-9,
-    "warm_start_slack_bound_push": 1e-9,
-    "warm_start_slack_bound_frac": 1e-9,
-    "warm_start_mult_bound_push": 1e-9,
-}
+#: IPOPT options of warm starts: the dict ``defaults["ipopt.warm_start"]`` of
+#: :mod:`gtmodel.defaults` (start from the given primal-dual point with a small barrier
+#: parameter and without pushing it off the bounds).
+WARM_START_OPTIONS = defaults["ipopt.warm_start"]
 
 
 def resolve_function(transcription: Any, name: str = "resolve", warm_start: bool = True) -> ca.Function:

@@ -25,6 +25,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.dae import FlatDAE
 from gtmodel.modeling.optimization import Optimization
@@ -52,14 +53,10 @@ CASADI_OPTIONS = {
     "debug",
 }
 
-#: IPOPT options every collocation NLP starts from (``solver_options`` override them).
-#: ``mumps_mem_percent``: MUMPS's workspace is its estimate plus this percentage (IPOPT's
-#: default 1000 allocates eleven times the estimate for every fresh solver; when a
-#: factorisation needs more, IPOPT doubles it and factorises again, so the iterates are
-#: the same). L1 minimum-time problem, fresh solver, quiet machine (issue 17): 139 ->
-#: 98 ms per iteration at 400 elements, 11.4 -> 10.5 at 50, the same 93 and 49 iterations
-#: and final times. 0 is not allowed: doubling 0 stays 0, and the solve fails.
-IPOPT_DEFAULTS: dict[str, Any] = {"mumps_mem_percent": 20}
+#: IPOPT options every collocation NLP starts from (``solver_options`` override them): the
+#: dict ``defaults["ipopt.options"]`` of :mod:`gtmodel.defaults` (why ``mumps_mem_percent``
+#: is 20 is written there).
+IPOPT_DEFAULTS: dict[str, Any] = defaults["ipopt.options"]
 
 
 def merge_options(verbose: bool, solver_options: Mapping[str, Any] | None, plugin: str = "ipopt") -> dict[str, Any]:
@@ -85,7 +82,8 @@ def merge_options(verbose: bool, solver_options: Mapping[str, Any] | None, plugi
     InputError
         A key is not a string.
     """
-    inner: dict[str, Any] = {"max_iter": 3000, "tol": 1e-8, **(IPOPT_DEFAULTS if plugin == "ipopt" else {})}
+    inner: dict[str, Any] = {"max_iter": defaults["nlp.max_iter"], "tol": defaults["nlp.tol"],
+                             **(defaults["ipopt.options"] if plugin == "ipopt" else {})}
     top: dict[str, Any] = {"error_on_fail": False}
     if verbose:
         inner["print_level"] = 5

@@ -61,6 +61,7 @@ class _Var:
     lb: np.ndarray
     ub: np.ndarray
     der: ca.SX | None = None
+    unit: str = ""
 
     @property
     def size(self) -> int:
@@ -105,6 +106,11 @@ class Model(EventsMixin):
 
     # ------------------------------------------------------------------ declarations
     @property
+    def units(self) -> dict[str, str]:
+        """SI unit of every state, algebraic variable and input declared with one, by name."""
+        return {name: var.unit for name, var in self._vars.items() if var.unit}
+
+    @property
     def time(self) -> ca.SX:
         """The time symbol (SX scalar), s."""
         return self._time
@@ -117,6 +123,7 @@ class Model(EventsMixin):
         start: Any = None,
         lb: Any = None,
         ub: Any = None,
+        unit: str = "",
     ) -> ca.SX:
         if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
@@ -129,7 +136,9 @@ class Model(EventsMixin):
         bad = np.nonzero(lbv > ubv)[0]
         if bad.size:
             raise ModelError(f"{what}: lower bound exceeds upper bound at elements {bad.tolist()}")
-        var = _Var(name, kind, sym, _vector_value(start, size, f"{what} start"), lbv, ubv)
+        if not isinstance(unit, str):
+            raise InputError(f"{what} unit: expected a string such as 'm', got {unit!r}")
+        var = _Var(name, kind, sym, _vector_value(start, size, f"{what} start"), lbv, ubv, unit=unit)
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
@@ -171,7 +180,7 @@ class Model(EventsMixin):
         return self._declare(name, "parameter", size, start=arr)
 
     def state(
-        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None
+        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
     ) -> ca.SX:
         """Declare a differential state.
 
@@ -185,6 +194,8 @@ class Model(EventsMixin):
             Start value (initial condition for simulation, initial guess); default 0.
         lb, ub : float or array_like, optional
             Bounds (Modelica ``min``/``max``) used by optimisation; default unbounded.
+        unit : str, optional
+            SI unit (e.g. ``"m"``), shown on plots (:attr:`units`); default none.
 
         Returns
         -------
@@ -198,10 +209,10 @@ class Model(EventsMixin):
         ModelError
             If the name is already declared or ``lb > ub``.
         """
-        return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub)
+        return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub, unit)
 
     def algebraic(
-        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None
+        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
     ) -> ca.SX:
         """Declare an algebraic variable.
 
@@ -215,6 +226,8 @@ class Model(EventsMixin):
             Start value (guess for the consistent initialisation); default 0.
         lb, ub : float or array_like, optional
             Bounds used by optimisation; default unbounded.
+        unit : str, optional
+            SI unit (e.g. ``"N"``), shown on plots (:attr:`units`); default none.
 
         Returns
         -------
@@ -229,11 +242,11 @@ class Model(EventsMixin):
             If the name is already declared or ``lb > ub``.
         """
         return self._declare(
-            name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub
+            name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub, unit
         )
 
     def input(
-        self, name: str, shape: Any = 1, lb: Any = None, ub: Any = None, start: Any = None
+        self, name: str, shape: Any = 1, lb: Any = None, ub: Any = None, start: Any = None, unit: str = ""
     ) -> ca.SX:
         """Declare an input (control) variable.
 
@@ -247,6 +260,8 @@ class Model(EventsMixin):
             Bounds used by optimisation; default unbounded.
         start : float or array_like, optional
             Nominal value, used as initial guess by optimisation; default 0.
+        unit : str, optional
+            SI unit (e.g. ``"N"``), shown on plots (:attr:`units`); default none.
 
         Returns
         -------
@@ -260,7 +275,7 @@ class Model(EventsMixin):
         ModelError
             If the name is already declared or ``lb > ub``.
         """
-        return self._declare(name, "input", _shape_to_size(shape, f"input {name!r}"), start, lb, ub)
+        return self._declare(name, "input", _shape_to_size(shape, f"input {name!r}"), start, lb, ub, unit)
 
     def der(self, x: ca.SX) -> ca.SX:
         """Symbol of the time derivative of a declared state (or of elements of one).

@@ -278,7 +278,7 @@ class OptimizationResult(StatusResult):
         Parameters
         ----------
         dt : float
-            Sample period, s (e.g. 0.004 for a 4 ms controller). The grid ends at the
+            Sample period, s (e.g. :data:`gtmodel.defaults.LOOP_PERIOD_S` for the 4 ms controller). The grid ends at the
             last multiple of ``dt`` not after the final time (within 1e-9 dt).
 
         Returns

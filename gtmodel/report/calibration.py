@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
 from gtmodel.calibration.evaluation import AccuracyReport
+from gtmodel.report._figure import new_figure, save
 
 __all__ = ["plot_error_histogram"]
 
 
-def plot_error_histogram(reports: Mapping[str, AccuracyReport], path: str | Path, bins: int = 30, title: str = "") -> Path:
+def plot_error_histogram(reports: Mapping[str, AccuracyReport], path: str | Path, bins: int = 30, title: str = "") -> Any:
     """Histogram of TCP errors of one or several models (Dressler (2012), Fig. 3.8).
 
     Parameters
@@ -28,13 +29,10 @@ def plot_error_histogram(reports: Mapping[str, AccuracyReport], path: str | Path
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure (one axes; one histogram per report, errors in um), written to ``path``.
     """
-    from matplotlib.figure import Figure  # heavy optional dependency
-
-    fig = Figure(figsize=(7, 4), layout="constrained")
-    ax = fig.subplots()
+    fig, ax = new_figure()
     top = max(r.max_error for r in reports.values()) * 1e6
     edges = np.linspace(0.0, top, bins + 1)
     for label, r in reports.items():
@@ -44,6 +42,4 @@ def plot_error_histogram(reports: Mapping[str, AccuracyReport], path: str | Path
     ax.grid(True)
     ax.legend(fontsize="small")
     fig.suptitle(title or "TCP error on the validation poses")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)

@@ -20,6 +20,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from gtmodel.errors import InputError
+from gtmodel.report._figure import new_figure, panel_size, save
 
 __all__ = ["write_gain_table", "plot_offset_response", "plot_loop_errors", "plot_gains"]
 
@@ -94,7 +95,7 @@ def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Map
     return [f"{stem}.md", f"{stem}.csv"]
 
 
-def plot_offset_response(t: Any, responses: Mapping[str, Mapping[str, Any]], path: str | Path, title: str = "") -> Path:
+def plot_offset_response(t: Any, responses: Mapping[str, Mapping[str, Any]], path: str | Path, title: str = "") -> Any:
     """Response to one offset command, truth against the fitted single mode (Fig. 35 style).
 
     Parameters
@@ -110,8 +111,8 @@ def plot_offset_response(t: Any, responses: Mapping[str, Mapping[str, Any]], pat
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
 
     Raises
     ------
@@ -121,10 +122,8 @@ def plot_offset_response(t: Any, responses: Mapping[str, Mapping[str, Any]], pat
     tt = np.asarray(t, dtype=float).reshape(-1)
     if not responses:
         raise InputError("responses: expected at least one direction")
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(4.4 * len(responses), 3.4), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(responses), sharey=True))
+    fig, axes = new_figure(1, len(responses), sharey=True, size=panel_size(len(responses)))
+    axes = np.atleast_1d(axes)
     for ax, (d, curves) in zip(axes, responses.items()):
         for label, y in curves.items():
             yy = np.asarray(y, dtype=float).reshape(-1)
@@ -138,11 +137,10 @@ def plot_offset_response(t: Any, responses: Mapping[str, Mapping[str, Any]], pat
     axes[0].set_ylabel("TCP position [mm]")
     if title:
         fig.suptitle(title)
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return save(fig, path)
 
 
-def plot_loop_errors(t: Any, runs: Mapping[str, Mapping[str, Any]], path: str | Path, title: str = "") -> Path:
+def plot_loop_errors(t: Any, runs: Mapping[str, Mapping[str, Any]], path: str | Path, title: str = "") -> Any:
     """Tracking error of the simulated correction loop at chosen gains (Fig. 36 style).
 
     Parameters
@@ -159,8 +157,8 @@ def plot_loop_errors(t: Any, runs: Mapping[str, Mapping[str, Any]], path: str | 
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
 
     Raises
     ------
@@ -170,10 +168,8 @@ def plot_loop_errors(t: Any, runs: Mapping[str, Mapping[str, Any]], path: str | 
     tt = np.asarray(t, dtype=float).reshape(-1)
     if not runs:
         raise InputError("runs: expected at least one direction")
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(9.0, 2.8 * len(runs)), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(len(runs), 1, sharex=True))
+    fig, axes = new_figure(len(runs), 1, sharex=True, size=(9.0, 2.8 * len(runs)))
+    axes = np.atleast_1d(axes)
     for ax, (d, curves) in zip(axes, runs.items()):
         for label, e in curves.items():
             ee = np.asarray(e, dtype=float).reshape(-1)
@@ -190,11 +186,10 @@ def plot_loop_errors(t: Any, runs: Mapping[str, Mapping[str, Any]], path: str | 
     axes[-1].set_xlabel("time [s]")
     if title:
         fig.suptitle(title)
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return save(fig, path)
 
 
-def plot_gains(directions: Sequence[str], predicted: Any, simulated: Any, path: str | Path, title: str = "") -> Path:
+def plot_gains(directions: Sequence[str], predicted: Any, simulated: Any, path: str | Path, title: str = "") -> Any:
     """Predicted against simulated largest stable gain per validation pose, one panel per direction.
 
     Parameters
@@ -212,8 +207,8 @@ def plot_gains(directions: Sequence[str], predicted: Any, simulated: Any, path: 
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
 
     Raises
     ------
@@ -224,10 +219,8 @@ def plot_gains(directions: Sequence[str], predicted: Any, simulated: Any, path: 
     if P.ndim != 2 or P.shape[1] != len(directions):
         raise InputError(f"predicted: expected shape (V, {len(directions)}), got {P.shape}")
     S = _gains(simulated, "simulated", P.shape)
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(4.4 * len(directions), 3.4), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(directions)))
+    fig, axes = new_figure(1, len(directions), size=panel_size(len(directions)))
+    axes = np.atleast_1d(axes)
     pose = np.arange(1, P.shape[0] + 1)
     for j, (ax, d) in enumerate(zip(axes, directions)):
         ax.bar(pose - 0.18, P[:, j], width=0.36, label="predicted (single mode + GPR)")
@@ -240,5 +233,4 @@ def plot_gains(directions: Sequence[str], predicted: Any, simulated: Any, path: 
     axes[0].legend(fontsize=8, loc="lower right", framealpha=0.9)
     if title:
         fig.suptitle(title)
-    fig.savefig(path, dpi=110)
-    return Path(path)
+    return save(fig, path)

@@ -16,6 +16,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from gtmodel.report._figure import new_figure, save
+
 __all__ = ["write_fusion_tables", "plot_velocity", "plot_angular_acceleration", "plot_sweep", "QUANTITY_LABELS"]
 
 #: Row labels of the tables (quantity key -> text with unit).
@@ -128,14 +130,7 @@ def write_fusion_tables(out: str | Path, name: str, table_8: Mapping[str, Any], 
     return files
 
 
-def _figure(rows: int, cols: int, size: tuple[float, float]) -> tuple[Any, Any]:
-    from matplotlib.figure import Figure  # matplotlib loads only when a plot is drawn
-
-    fig = Figure(figsize=size, layout="constrained")
-    return fig, fig.subplots(rows, cols, squeeze=False)
-
-
-def plot_velocity(t: Any, truth: Any, regression: Any, fusion: Any, path: str | Path, title: str = "", axis: int = 1) -> Path:
+def plot_velocity(t: Any, truth: Any, regression: Any, fusion: Any, path: str | Path, title: str = "", axis: int = 1) -> Any:
     """Velocity of one axis: truth, four-point regression and fusion, and the error norms (style of Fig. 24).
 
     Parameters
@@ -153,11 +148,12 @@ def plot_velocity(t: Any, truth: Any, regression: Any, fusion: Any, path: str | 
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     t = np.asarray(t, float)
     tr, rg, fu = (1e3 * np.asarray(v, float) for v in (truth, regression, fusion))
-    fig, ax = _figure(2, 1, (8, 6))
+    fig, ax = new_figure(2, 1, (8, 6), squeeze=False)
     c = "xyz"[axis]
     ax[0, 0].plot(t, rg[:, axis], lw=0.6, color="tab:orange", label="tracker, four-point regression")
     ax[0, 0].plot(t, fu[:, axis], lw=1, color="tab:blue", label="fusion")
@@ -171,12 +167,10 @@ def plot_velocity(t: Any, truth: Any, regression: Any, fusion: Any, path: str | 
         a.grid(True)
         a.legend(loc="upper right", fontsize="small")
     fig.suptitle(f"{title}: velocity" if title else "velocity")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_angular_acceleration(t: Any, truth: Any, regression: Any, fusion: Any, peaks: Any, path: str | Path, title: str = "") -> Path:
+def plot_angular_acceleration(t: Any, truth: Any, regression: Any, fusion: Any, peaks: Any, path: str | Path, title: str = "") -> Any:
     """Angular acceleration along its largest axis: truth, gyro regression, fusion; sine peaks shaded (style of Fig. 25).
 
     Parameters
@@ -194,13 +188,14 @@ def plot_angular_acceleration(t: Any, truth: Any, regression: Any, fusion: Any, 
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     t = np.asarray(t, float)
     tr, rg, fu = (np.degrees(np.asarray(v, float)) for v in (truth, regression, fusion))
     k = int(np.argmax(np.abs(tr).max(axis=0)))
     peaks = np.asarray(peaks, bool)
-    fig, ax = _figure(2, 1, (8, 6))
+    fig, ax = new_figure(2, 1, (8, 6), squeeze=False)
     ax[0, 0].plot(t, rg[:, k], lw=0.5, color="tab:orange", label="gyro, four-point regression")
     ax[0, 0].plot(t, fu[:, k], lw=1, color="tab:blue", label="fusion (EKF)")
     ax[0, 0].plot(t, tr[:, k], "k--", lw=1, label="truth")
@@ -216,13 +211,11 @@ def plot_angular_acceleration(t: Any, truth: Any, regression: Any, fusion: Any, 
         a.grid(True)
         a.legend(loc="upper right", fontsize="small")
     fig.suptitle(f"{title}: angular acceleration" if title else "angular acceleration")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
 def plot_sweep(rows: Sequence[Mapping[str, Any]], path: str | Path, title: str = "",
-               quantities: Sequence[str] = ("position_mm", "velocity_mm_s", "acceleration_m_s2", "angular_velocity_deg_s")) -> Path:
+               quantities: Sequence[str] = ("position_mm", "velocity_mm_s", "acceleration_m_s2", "angular_velocity_deg_s")) -> Any:
     """Table 10 as bars: the improvement of fusion over the sensor per swept value (style of Fig. 26).
 
     Parameters
@@ -238,10 +231,11 @@ def plot_sweep(rows: Sequence[Mapping[str, Any]], path: str | Path, title: str =
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     labels = [f"{r['parameter']}={r['value']:g}" for r in rows]
-    fig, ax = _figure(len(quantities), 1, (10, 2.2 * len(quantities) + 1.5))
+    fig, ax = new_figure(len(quantities), 1, (10, 2.2 * len(quantities) + 1.5), squeeze=False)
     x = np.arange(len(rows))
     for a, q in zip(ax[:, 0], quantities):
         vals = np.array([(r.get(q) or {}).get("improvement_percent") if isinstance(r.get(q), Mapping) else np.nan for r in rows], float)
@@ -253,6 +247,4 @@ def plot_sweep(rows: Sequence[Mapping[str, Any]], path: str | Path, title: str =
         a.grid(True, axis="y")
         a.set_xticks(x, [] if a is not ax[-1, 0] else labels, rotation=75, fontsize="x-small")
     fig.suptitle(f"{title}: Table 10 sweep, fusion vs sensor (clipped at -100 %)" if title else "Table 10 sweep")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)

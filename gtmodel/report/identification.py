@@ -8,11 +8,12 @@ from typing import Any
 import numpy as np
 
 from gtmodel.calibration import DynamicRegressor
+from gtmodel.report._figure import new_figure, save
 
 __all__ = ["plot_identification_residuals"]
 
 
-def plot_identification_residuals(robot: Any, configuration: int, variant: str, samples: Any, result: Any, path: str | Path, title: str = "") -> Path:
+def plot_identification_residuals(robot: Any, configuration: int, variant: str, samples: Any, result: Any, path: str | Path, title: str = "") -> Any:
     """Plot filtered measured forces against the identified model, and the residuals.
 
     Top row: per actuator the measured (filtered) force and the model force ``Y theta +
@@ -42,19 +43,16 @@ def plot_identification_residuals(robot: Any, configuration: int, variant: str, 
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    from matplotlib.figure import Figure
-
     s = samples
     reg = DynamicRegressor(robot, variant, configuration)
     Y, tau0, q_dot = reg.evaluate(s.x, s.x_dot, s.x_ddot, s.coordinates)
     tau_hat = Y @ result.theta + tau0
     if s.smoother is not None:  # the forces went through this filter; so does the model (parallel filtering)
         tau_hat = s.smoother(tau_hat)
-    fig = Figure(figsize=(13, 6.5))
-    ax = fig.subplots(2, 3, sharex="row")
+    fig, ax = new_figure(2, 3, sharex="row", size=(13, 6.5))
     for i in range(3):
         ax[0, i].plot(s.t, s.tau[:, i], lw=0.8, label="measured (filtered)")
         ax[0, i].plot(s.t, tau_hat[:, i], lw=0.8, ls="--", label="model (same filter)")
@@ -68,6 +66,4 @@ def plot_identification_residuals(robot: Any, configuration: int, variant: str, 
     ax[0, 0].legend(fontsize=8)
     ax[1, 0].legend(fontsize=8)
     fig.suptitle(f"{title}: residual RMS {np.round(result.residual_rms, 2).tolist()} N")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    return Path(path)
+    return save(fig, path)

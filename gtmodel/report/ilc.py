@@ -1,7 +1,8 @@
 """Plots of iterative learning control runs (Dressler (2012), Figs. 7.7-7.11 style).
 
 Every function takes plain arrays or mappings of arrays (not result objects), draws on a
-:class:`matplotlib.figure.Figure` (no pyplot state, safe under Agg) and writes a PNG:
+:class:`matplotlib.figure.Figure` (no pyplot state, safe under Agg), writes a PNG and
+returns the figure:
 
 - :func:`plot_error_measure`: error measure (7.25) per iteration, log scale, one panel per
   case, one line per actuator or tool direction (Figs. 7.7-7.10);
@@ -16,11 +17,19 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from gtmodel.errors import InputError
+from gtmodel.report._figure import new_figure, save
 
-__all__ = ["plot_error_measure", "plot_tool_path", "plot_iteration_errors"]
+__all__ = ["plot_error_measure", "plot_tool_path", "plot_iteration_errors", "case_title", "SIGNAL_TITLES"]
+
+#: What each learning signal is, for panel titles (Dressler (2012), Table 7.2).
+SIGNAL_TITLES = {
+    "actuator": "actuator positions",
+    "complementary": "complementary filter (7.17)",
+    "kalman": "Kalman filter (7.19)-(7.22)",
+    "tool": "measured tool position",
+}
 
 
 def _columns(x: Any, name: str) -> np.ndarray:
@@ -32,13 +41,33 @@ def _columns(x: Any, name: str) -> np.ndarray:
     return arr
 
 
+def case_title(name: str, signal: str | None = None) -> str:
+    """Panel title of an ILC case as in Dressler (2012), Table 7.2: ``"Case 2A: complementary filter (7.17)"``.
+
+    Parameters
+    ----------
+    name : str
+        Case name (``"1"``, ``"2A"``, ...; a name that starts with "Case" is kept as it is).
+    signal : str, optional
+        Learning signal (a key of :data:`SIGNAL_TITLES`, or any text); None: no subtitle.
+
+    Returns
+    -------
+    str
+        The title.
+    """
+    label = name if name.strip().lower().startswith("case") else f"Case {name}"
+    return f"{label}: {SIGNAL_TITLES.get(signal, signal)}" if signal else label
+
+
 def plot_error_measure(
     measures: Mapping[str, Any],
     path: str | Path,
     labels: Sequence[str] | None = None,
     relative: bool = True,
     title: str = "",
-) -> Path:
+    signals: Mapping[str, str] | None = None,
+) -> Any:
     """Error measure (7.25) per iteration, log scale, one panel per case (Figs. 7.7-7.10).
 
     Parameters
@@ -54,11 +83,13 @@ def plot_error_measure(
         Plot relative to iteration 0 (default True) instead of absolute values [m].
     title : str, optional
         Figure title.
+    signals : Mapping[str, str], optional
+        Case name -> learning signal, named in the panel title (:func:`case_title`).
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``: one axes per case, titled by :func:`case_title`.
 
     Raises
     ------
@@ -68,22 +99,20 @@ def plot_error_measure(
     if not measures:
         raise InputError("measures: expected at least one case")
     data = {name: _columns(m, f"measures[{name!r}]") for name, m in measures.items()}
-    fig = Figure(figsize=(4.2 * len(data), 3.6), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(data), sharey=True))
+    fig, axes = new_figure(1, len(data), sharey=True, size=(4.2 * len(data), 3.6))
+    axes = np.atleast_1d(axes)
     for ax, (name, m) in zip(axes, data.items()):
         cols = labels if labels is not None else [str(j + 1) for j in range(m.shape[1])]
         values = m / np.where(m[0] > 0, m[0], 1.0) if relative else m
         for j in range(m.shape[1]):
             ax.semilogy(np.arange(m.shape[0]), values[:, j], "o-", ms=3, label=cols[j] if j < len(cols) else str(j + 1))
-        ax.set_title(name)
+        ax.set_title(case_title(name, (signals or {}).get(name)))
         ax.set_xlabel("iteration")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize="small")
     axes[0].set_ylabel("error measure relative to iteration 0" if relative else "error measure [m]")
     fig.suptitle(title or "ILC error measure (7.25)")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
 def plot_tool_path(
@@ -91,7 +120,7 @@ def plot_tool_path(
     paths: Mapping[str, Any],
     path: str | Path,
     title: str = "",
-) -> Path:
+) -> Any:
     """Tool path in the xy plane: reference and chosen iterations (Fig. 7.11).
 
     Coordinates are drawn in mm relative to the first reference sample.
@@ -110,8 +139,8 @@ def plot_tool_path(
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
 
     Raises
     ------
@@ -122,8 +151,7 @@ def plot_tool_path(
     if ref.ndim != 2 or ref.shape[1] < 2 or ref.shape[0] == 0:
         raise InputError(f"reference: expected shape (N, 2) or (N, 3), got {ref.shape}")
     origin = ref[0, :2]
-    fig = Figure(figsize=(5.5, 5.0), layout="constrained")
-    ax = fig.subplots()
+    fig, ax = new_figure(size=(5.5, 5.0))
     ax.plot(*(1e3 * (ref[:, :2] - origin)).T, "k--", lw=1.0, label="reference")
     for label, p in paths.items():
         arr = np.asarray(p, dtype=float)
@@ -136,9 +164,7 @@ def plot_tool_path(
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     fig.suptitle(title or "tool path")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
 def plot_iteration_errors(
@@ -148,7 +174,7 @@ def plot_iteration_errors(
     iterations: Sequence[int] | None = None,
     labels: Sequence[str] | None = None,
     title: str = "",
-) -> Path:
+) -> Any:
     """Error over time of chosen iterations, one panel per column (actuator or direction).
 
     Parameters
@@ -168,8 +194,8 @@ def plot_iteration_errors(
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
 
     Raises
     ------
@@ -187,8 +213,8 @@ def plot_iteration_errors(
     d = e.shape[2]
     cols = labels if labels is not None else [str(j + 1) for j in range(d)]
     t = np.arange(e.shape[1]) * dt
-    fig = Figure(figsize=(7, 1.9 * d + 0.8), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(d, 1, sharex=True))
+    fig, axes = new_figure(d, 1, sharex=True, size=(7, 1.9 * d + 0.8))
+    axes = np.atleast_1d(axes)
     for j, ax in enumerate(axes):
         for k in its:
             ax.plot(t, 1e3 * e[k, :, j], lw=1.0, label=f"iteration {k}")
@@ -197,6 +223,4 @@ def plot_iteration_errors(
     axes[0].legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(title or "ILC error per iteration")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
-from matplotlib.figure import Figure
+
+from gtmodel.report._figure import new_figure, save
 
 __all__ = ["plot_signals", "MAX_PANELS"]
 
@@ -21,7 +22,8 @@ def plot_signals(
     path: str | Path,
     title: str = "",
     bounds: Mapping[str, tuple[float, float]] | None = None,
-) -> Path:
+    units: Mapping[str, str] | None = None,
+) -> Any:
     """Plot signals against time, one panel each, with their bounds as dashed lines.
 
     Parameters
@@ -36,24 +38,28 @@ def plot_signals(
         Figure title.
     bounds : Mapping[str, tuple of float], optional
         Name -> ``(lo, hi)``; finite bounds are drawn.
+    units : Mapping[str, str], optional
+        Name -> SI unit, shown on the y labels as ``name [unit]`` (e.g. :attr:`Model.units
+        <gtmodel.modeling.Model.units>`).
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     names = list(signals)[:MAX_PANELS]
     cols = min(2, max(1, len(names)))
     rows = max(1, math.ceil(len(names) / cols))
-    fig = Figure(figsize=(5.2 * cols, 2.4 * rows + 0.6), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    fig, axes = new_figure(rows, cols, size=(5.2 * cols, 2.4 * rows + 0.6), squeeze=False)
+    axes = axes.ravel()
     for ax, name in zip(axes, names):
         ax.plot(t, np.asarray(signals[name], dtype=float).reshape(-1), label=name)
         lo, hi = (bounds or {}).get(name, (-np.inf, np.inf))
         for b in (lo, hi):
             if np.isfinite(b):
                 ax.axhline(b, color="k", linestyle="--", linewidth=0.8)
-        ax.set_ylabel(name)
+        unit = (units or {}).get(name)
+        ax.set_ylabel(f"{name} [{unit}]" if unit else name)
         ax.grid(True)
     for ax in axes[len(names):]:
         ax.set_visible(False)
@@ -61,6 +67,4 @@ def plot_signals(
         ax.set_xlabel("t [s]")
     more = f" (first {MAX_PANELS} of {len(signals)})" if len(signals) > MAX_PANELS else ""
     fig.suptitle((title or "trajectory") + more)
-    path = Path(path)
-    fig.savefig(path, dpi=100)
-    return path
+    return save(fig, path)

@@ -10,6 +10,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 from gtmodel.robots.stiffness import MEASURED_D1_N_PER_UM, N_PER_UM, StiffnessMap
+from gtmodel.report._figure import new_figure, save
 
 __all__ = ["plot_stiffness_map"]
 
@@ -62,10 +63,7 @@ def plot_stiffness_map(
         raise InputError(f"axes: expected two different coordinates of 0, 1, 2, got {axes!r}")
     val = values[quantity](smap)
     if ax is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=(6.4, 5), layout="constrained")
-        ax = fig.subplots()
+        fig, ax = new_figure(size=(6.4, 5))
     else:
         fig = ax.figure
     a, b = axes
@@ -87,6 +85,4 @@ def plot_stiffness_map(
         + f"\n{stated}",
         fontsize=8,
     )
-    if path is not None:
-        fig.savefig(path, dpi=110, bbox_inches="tight")
-    return fig
+    return save(fig, path, bbox_inches="tight")

@@ -7,10 +7,12 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from gtmodel.report._figure import new_figure, save
+
 __all__ = ["plot_joint_stiffness"]
 
 
-def plot_joint_stiffness(results: Mapping[str, Any], methods: Sequence[str], k_true: np.ndarray | None, path: str | Path, title: str = "") -> Path:
+def plot_joint_stiffness(results: Mapping[str, Any], methods: Sequence[str], k_true: np.ndarray | None, path: str | Path, title: str = "") -> Any:
     """Bar plot (log scale) of the identified joint stiffnesses of several methods.
 
     Parameters
@@ -29,15 +31,12 @@ def plot_joint_stiffness(results: Mapping[str, Any], methods: Sequence[str], k_t
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    from matplotlib.figure import Figure
-
     joints = np.arange(1, 7)
     width = 0.8 / len(methods)
-    fig = Figure(figsize=(8, 4.5))
-    ax = fig.subplots()
+    fig, ax = new_figure(size=(8, 4.5))
     for i, m in enumerate(methods):
         r = results[m]
         k = np.where(np.isfinite(r.k_theta), r.k_theta, np.nan) / 1e6
@@ -51,6 +50,4 @@ def plot_joint_stiffness(results: Mapping[str, Any], methods: Sequence[str], k_t
     ax.set_ylabel("k_theta [MN m/rad]")
     ax.set_title(title)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    return Path(path)
+    return save(fig, path)

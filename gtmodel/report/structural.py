@@ -8,6 +8,7 @@ import numpy as np
 
 from gtmodel.errors import ModelError
 from gtmodel.robots.structural import PhysicalModel
+from gtmodel.report._figure import new_figure, save
 
 __all__ = ["plot_bode", "plot_impulse"]
 
@@ -32,12 +33,9 @@ def plot_bode(model: PhysicalModel, freqs_hz: Any = None, title: str = "") -> An
     matplotlib.figure.Figure
         Two axes: magnitude [dB] and phase [deg] over frequency [Hz].
     """
-    from matplotlib.figure import Figure  # matplotlib loads only when a plot is drawn
-
     f = np.logspace(0, 3, 400) if freqs_hz is None else np.asarray(freqs_hz, dtype=float)
     resp = model.frequency_response(f)
-    fig = Figure(figsize=(7, 5), layout="constrained")
-    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True)
+    fig, (ax_mag, ax_ph) = new_figure(2, 1, sharex=True, size=(7, 5))
     for i in range(resp.magnitude.shape[0]):
         for j in range(resp.magnitude.shape[1]):
             label = f"x{i + 1}/u{j + 1}"
@@ -77,13 +75,11 @@ def plot_impulse(model: PhysicalModel, duration: float = 0.5, title: str = "") -
     matplotlib.figure.Figure
         One axis per input.
     """
-    from matplotlib.figure import Figure  # matplotlib loads only when a plot is drawn
-
     resp = model.impulse_response(duration)
     y = np.asarray(resp.outputs)
     m = y.shape[1]
-    fig = Figure(figsize=(7, 2.6 * m), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(m, 1, sharex=True))
+    fig, axes = new_figure(m, 1, sharex=True, size=(7, 2.6 * m))
+    axes = np.atleast_1d(axes)
     for j in range(m):
         for i in range(y.shape[0]):
             axes[j].plot(resp.time, y[i, j], label=f"x{i + 1}")

@@ -1,18 +1,20 @@
 """Plots of studies (``gtmodel study``): Monte-Carlo calibration, time-optimal maps, sweeps.
 
 Every function takes plain arrays or DataFrames (the study analyses in
-:mod:`gtmodel.problems.study.analyses` compute them), writes one PNG and returns its path;
-matplotlib is imported inside the functions (it is heavy and optional for the rest).
+:mod:`gtmodel.problems.study.analyses` compute them), writes one PNG and returns the figure
+(through :mod:`gtmodel.report._figure`, which imports matplotlib when a figure is made).
 """
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+
+from gtmodel.report._figure import new_figure, save
 
 __all__ = [
     "plot_normalised_errors",
@@ -32,14 +34,7 @@ MAP_MARKERS = {
 }
 
 
-def _figure(size: tuple[float, float]) -> tuple[object, object]:
-    from matplotlib.figure import Figure  # heavy optional dependency
-
-    fig = Figure(figsize=size, layout="constrained")
-    return fig, fig.subplots()
-
-
-def plot_normalised_errors(z: np.typing.ArrayLike, path: str | Path, coverage: tuple[float, float] | None = None, title: str = "") -> Path:
+def plot_normalised_errors(z: np.typing.ArrayLike, path: str | Path, coverage: tuple[float, float] | None = None, title: str = "") -> Any:
     """Histogram of normalised parameter errors ``(estimate - truth) / predicted std``.
 
     An honest covariance gives a standard normal (drawn over the histogram); the 1- and
@@ -58,11 +53,12 @@ def plot_normalised_errors(z: np.typing.ArrayLike, path: str | Path, coverage: t
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     za = np.asarray(z, dtype=float).ravel()
     za = za[np.isfinite(za)]
-    fig, ax = _figure((7, 4))
+    fig, ax = new_figure()
     lim = max(4.0, float(np.quantile(np.abs(za), 0.999)) if za.size else 4.0)
     edges = np.linspace(-lim, lim, 61)
     label = "cases" if coverage is None else f"measured: {100 * coverage[0]:.1f} % within 1 sigma, {100 * coverage[1]:.1f} % within 2"
@@ -77,12 +73,10 @@ def plot_normalised_errors(z: np.typing.ArrayLike, path: str | Path, coverage: t
     ax.grid(True)
     ax.legend(fontsize="small")
     fig.suptitle(title or "normalised parameter errors")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_parameter_spread(per_parameter: pd.DataFrame, path: str | Path, title: str = "") -> Path:
+def plot_parameter_spread(per_parameter: pd.DataFrame, path: str | Path, title: str = "") -> Any:
     """Per parameter: spread of the error over the predicted deviation, and coverage.
 
     Parameters
@@ -97,14 +91,12 @@ def plot_parameter_spread(per_parameter: pd.DataFrame, path: str | Path, title: 
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    from matplotlib.figure import Figure  # heavy optional dependency
-
     names = list(per_parameter["parameter"])
     x = np.arange(len(names))
-    fig = Figure(figsize=(max(7.0, 0.35 * len(names) + 2), 6), layout="constrained")
-    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    fig, (ax1, ax2) = new_figure(2, 1, sharex=True, size=(max(7.0, 0.35 * len(names) + 2), 6))
     ax1.bar(x, per_parameter["spread_ratio"], color="tab:blue")
     ax1.axhline(1.0, color="k", lw=1)
     ax1.set_ylabel("error spread / predicted std")
@@ -119,12 +111,10 @@ def plot_parameter_spread(per_parameter: pd.DataFrame, path: str | Path, title: 
     ax2.grid(True, axis="y")
     ax2.legend(fontsize="small")
     fig.suptitle(title or "parameter errors against the predicted deviations")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_accuracy_vs_poses(groups: pd.DataFrame, path: str | Path, title: str = "") -> Path:
+def plot_accuracy_vs_poses(groups: pd.DataFrame, path: str | Path, title: str = "") -> Any:
     """TCP error against the noise-free truth vs the number of calibration poses, per pose choice.
 
     Parameters
@@ -139,9 +129,10 @@ def plot_accuracy_vs_poses(groups: pd.DataFrame, path: str | Path, title: str = 
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    fig, ax = _figure((7, 4))
+    fig, ax = new_figure()
     methods = groups["pose_method"] if "pose_method" in groups else pd.Series(["poses"] * len(groups))
     labels = {"condition": "selected, eq. 5.9", "random": "random"}
     for m in sorted(set(methods.astype(str))):
@@ -163,9 +154,7 @@ def plot_accuracy_vs_poses(groups: pd.DataFrame, path: str | Path, title: str = 
     ax.grid(True, which="both")
     ax.legend(fontsize="small", title="median, 10-90 % band")
     fig.suptitle(title or "accuracy against the number of poses")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
 def plot_time_map(
@@ -178,7 +167,7 @@ def plot_time_map(
     start: tuple[float, float] | None = None,
     title: str = "",
     start_label: str = "start",
-) -> Path:
+) -> Any:
     """Map of minimum motion times over a grid of end positions; cells without a time marked.
 
     Parameters
@@ -203,7 +192,8 @@ def plot_time_map(
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     xa, ya, ta = (np.asarray(a, dtype=float).ravel() for a in (x, y, time_s))
     cls = np.asarray(list(cell_class), dtype=object)
@@ -217,7 +207,7 @@ def plot_time_map(
         mid = 0.5 * (v[1:] + v[:-1])
         return np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
 
-    fig, ax = _figure((7, 5.5))
+    fig, ax = new_figure(size=(7, 5.5))
     ax.set_facecolor("0.85")
     mesh = ax.pcolormesh(edges(xs), edges(ys), np.ma.masked_invalid(grid), cmap="viridis", shading="flat")
     fig.colorbar(mesh, ax=ax, label="minimum time [s]")
@@ -233,13 +223,11 @@ def plot_time_map(
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(0, -0.12), ncol=1)
     fig.suptitle(title or "minimum motion time to each end position")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
 def plot_sweep(axis: str, values: np.typing.ArrayLike, columns: Mapping[str, np.typing.ArrayLike], path: str | Path,
-               solved: np.typing.ArrayLike | None = None, title: str = "") -> Path:
+               solved: np.typing.ArrayLike | None = None, title: str = "") -> Any:
     """Each column of a sweep against the swept value, one panel per column.
 
     Parameters
@@ -259,16 +247,15 @@ def plot_sweep(axis: str, values: np.typing.ArrayLike, columns: Mapping[str, np.
 
     Returns
     -------
-    pathlib.Path
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    from matplotlib.figure import Figure  # heavy optional dependency
-
     v = np.asarray(values, dtype=float).ravel()
     ok = np.ones(v.shape, dtype=bool) if solved is None else np.asarray(solved, dtype=bool).ravel()
     order = np.argsort(v)
     n = max(1, len(columns))
-    fig = Figure(figsize=(6, 2.3 * n + 0.6), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(n, 1, sharex=True))
+    fig, axes = new_figure(n, 1, sharex=True, size=(6, 2.3 * n + 0.6))
+    axes = np.atleast_1d(axes)
     for ax, (label, col) in zip(axes, columns.items()):
         c = np.asarray(col, dtype=float).ravel()
         ax.plot(v[order][ok[order]], c[order][ok[order]], "o-")
@@ -279,6 +266,4 @@ def plot_sweep(axis: str, values: np.typing.ArrayLike, columns: Mapping[str, np.
         ax.grid(True)
     axes[-1].set_xlabel(axis)
     fig.suptitle(title or f"sweep over {axis}")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)

@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel.report._figure import new_figure, save
+
 __all__ = ["plot_actuator_error", "plot_tool_error", "plot_tool_path", "plot_deflection"]
 
 
@@ -20,19 +22,12 @@ def _unit(x: np.ndarray) -> tuple[float, str]:
     return (1e3, "mm") if np.abs(x).max(initial=0.0) >= 1e-3 else (1e6, "um")
 
 
-def _figure(rows: int, cols: int, size: tuple[float, float]) -> tuple[Any, Any]:
-    from matplotlib.figure import Figure  # matplotlib loads only when a plot is drawn
-
-    fig = Figure(figsize=size, layout="constrained")
-    return fig, fig.subplots(rows, cols, sharex=cols == 1, squeeze=False)
-
-
 def _errors(t: Any, e: Any, labels: tuple[str, ...], ylabel: str, path: str | Path, title: str, end_time: float | None,
-            extra: Any = None, extra_label: str = "") -> Path:
+            extra: Any = None, extra_label: str = "") -> Any:
     t = np.asarray(t, dtype=float)
     e = np.asarray(e, dtype=float)
     scale, unit = _unit(e)
-    fig, axes = _figure(len(labels), 1, (8, 6.5))
+    fig, axes = new_figure(len(labels), 1, "plot.tall", sharex=True, squeeze=False)
     for i, label in enumerate(labels):
         ax = axes[i, 0]
         ax.plot(t, e[:, i] * scale, lw=1, label=label)
@@ -45,12 +40,10 @@ def _errors(t: Any, e: Any, labels: tuple[str, ...], ylabel: str, path: str | Pa
         ax.grid(True)
     axes[-1, 0].set_xlabel("t [s]")
     fig.suptitle(f"{title}: {ylabel}" if title else ylabel)
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_actuator_error(t: Any, error: Any, path: str | Path, title: str = "", end_time: float | None = None) -> Path:
+def plot_actuator_error(t: Any, error: Any, path: str | Path, title: str = "", end_time: float | None = None) -> Any:
     """Actuator tracking error ``q - q_ref`` of each actuator against time.
 
     Parameters
@@ -68,13 +61,13 @@ def plot_actuator_error(t: Any, error: Any, path: str | Path, title: str = "", e
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     return _errors(t, error, ("q1 - q1_ref", "q2 - q2_ref", "q3 - q3_ref"), "actuator error", path, title, end_time)
 
 
-def plot_tool_error(t: Any, error: Any, path: str | Path, title: str = "", end_time: float | None = None, deflection: Any = None) -> Path:
+def plot_tool_error(t: Any, error: Any, path: str | Path, title: str = "", end_time: float | None = None, deflection: Any = None) -> Any:
     """Tool tracking error ``z - T_ref`` in x, y, z against time, with the deflection part.
 
     Parameters
@@ -94,13 +87,13 @@ def plot_tool_error(t: Any, error: Any, path: str | Path, title: str = "", end_t
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     return _errors(t, error, ("x - x_ref", "y - y_ref", "z - z_ref"), "tool error", path, title, end_time, deflection, "deflection")
 
 
-def plot_tool_path(T_ref: Any, z: Any, path: str | Path, title: str = "") -> Path:
+def plot_tool_path(T_ref: Any, z: Any, path: str | Path, title: str = "") -> Any:
     """Tool path: reference against the true tool position, in the xy, yz and xz planes.
 
     Parameters
@@ -116,12 +109,12 @@ def plot_tool_path(T_ref: Any, z: Any, path: str | Path, title: str = "") -> Pat
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     T_ref = np.asarray(T_ref, dtype=float)
     z = np.asarray(z, dtype=float)
-    fig, axes = _figure(1, 3, (11, 3.8))
+    fig, axes = new_figure(1, 3, (11, 3.8), squeeze=False)
     for ax, (a, b) in zip(axes[0], (("x", "y"), ("y", "z"), ("x", "z"))):
         i, j = "xyz".index(a), "xyz".index(b)
         ax.plot(T_ref[:, i], T_ref[:, j], "k--", lw=1, label="reference")
@@ -132,12 +125,10 @@ def plot_tool_path(T_ref: Any, z: Any, path: str | Path, title: str = "") -> Pat
         ax.grid(True)
     axes[0, 0].legend(fontsize="small")
     fig.suptitle(f"{title}: tool path" if title else "tool path")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_deflection(t: Any, deflection: Any, path: str | Path, title: str = "", end_time: float | None = None) -> Path:
+def plot_deflection(t: Any, deflection: Any, path: str | Path, title: str = "", end_time: float | None = None) -> Any:
     """Structural deflection ``d`` of the tool from its kinematic position (x, y, z) against time.
 
     Dressler (2012), eq. 6.14.
@@ -157,7 +148,7 @@ def plot_deflection(t: Any, deflection: Any, path: str | Path, title: str = "", 
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
     return _errors(t, deflection, ("d_x", "d_y", "d_z"), "structural deflection", path, title, end_time)

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
-from matplotlib.figure import Figure
+
+from gtmodel.report._figure import new_figure, save
 
 __all__ = ["plot_tcp_path", "plot_forces", "plot_overlay", "plot_path_profile"]
 
 
-def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, title: str = "") -> Path:
+def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, title: str = "") -> Any:
     """Plot the TCP path: coordinates against time and two projections.
 
     Parameters
@@ -28,11 +29,10 @@ def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, 
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    fig = Figure(figsize=(11, 3.6), layout="constrained")
-    ax_t, ax_xy, ax_yz = fig.subplots(1, 3)
+    fig, (ax_t, ax_xy, ax_yz) = new_figure(1, 3, size="plot.wide")
     t = traj["t"]
     for c in "xyz":
         ax_t.plot(t, traj[c] - traj[c][0], label=f"{c} - {c}(0)")
@@ -52,12 +52,10 @@ def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, 
         ax.grid(True)
     ax_xy.legend(fontsize="small")
     fig.suptitle(f"{title}: TCP path" if title else "TCP path")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_forces(traj: Mapping[str, np.ndarray], force_limit, path: str | Path, title: str = "") -> Path:
+def plot_forces(traj: Mapping[str, np.ndarray], force_limit, path: str | Path, title: str = "") -> Any:
     """Plot the three cart forces against their limits.
 
     Parameters
@@ -73,11 +71,10 @@ def plot_forces(traj: Mapping[str, np.ndarray], force_limit, path: str | Path, t
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    fig = Figure(figsize=(8, 6.5), layout="constrained")
-    axes = fig.subplots(3, 1, sharex=True)
+    fig, axes = new_figure(3, 1, sharex=True, size="plot.tall")
     t = traj["t"]
     for i, ax in enumerate(axes):
         lim = float(force_limit[i])
@@ -90,12 +87,10 @@ def plot_forces(traj: Mapping[str, np.ndarray], force_limit, path: str | Path, t
         ax.legend(loc="upper right", fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{title}: cart forces" if title else "cart forces")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)
 
 
-def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | Path) -> list[Path]:
+def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | Path) -> list[Any]:
     """Overlay the forces and TCP paths of several solutions (Dressler (2012), Figs. 3.9-3.10).
 
     Parameters
@@ -107,12 +102,12 @@ def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | P
 
     Returns
     -------
-    list of pathlib.Path
-        The two written files.
+    list of matplotlib.figure.Figure
+        The forces and the TCP-path figures, written to ``overlay_forces.png`` and
+        ``overlay_tcp.png``.
     """
     out_dir = Path(out_dir)
-    fig = Figure(figsize=(8, 6.5), layout="constrained")
-    axes = fig.subplots(3, 1, sharex=True)
+    fig, axes = new_figure(3, 1, sharex=True, size="plot.tall")
     for label, tr in trajs.items():
         for i, ax in enumerate(axes):
             ax.plot(tr["t"] - tr["t"][0], tr[f"tau{i + 1}"], label=label)
@@ -122,11 +117,9 @@ def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | P
     axes[0].legend(fontsize="small", loc="upper right")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle("cart forces")
-    f1 = out_dir / "overlay_forces.png"
-    fig.savefig(f1, dpi=110)
+    forces = save(fig, out_dir / "overlay_forces.png")
 
-    fig = Figure(figsize=(11, 3.6), layout="constrained")
-    axes = fig.subplots(1, 3)
+    fig, axes = new_figure(1, 3, size="plot.wide")
     for label, tr in trajs.items():
         for ax, (a, b) in zip(axes, (("x", "y"), ("y", "z"), ("x", "z"))):
             ax.plot(tr[a], tr[b], label=label)
@@ -137,12 +130,10 @@ def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | P
         ax.grid(True)
     axes[0].legend(fontsize="small")
     fig.suptitle("TCP paths")
-    f2 = out_dir / "overlay_tcp.png"
-    fig.savefig(f2, dpi=110)
-    return [f1, f2]
+    return [forces, save(fig, out_dir / "overlay_tcp.png")]
 
 
-def plot_path_profile(solution, path: str | Path, title: str = "") -> Path:
+def plot_path_profile(solution, path: str | Path, title: str = "") -> Any:
     """Plot a path-constrained profile: ``s_dot`` and ``s_ddot`` against ``s``.
 
     Parameters
@@ -156,11 +147,10 @@ def plot_path_profile(solution, path: str | Path, title: str = "") -> Path:
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    matplotlib.figure.Figure
+        The figure, written to ``path``.
     """
-    fig = Figure(figsize=(8, 5), layout="constrained")
-    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    fig, (ax1, ax2) = new_figure(2, 1, sharex=True, size=(8, 5))
     s = np.asarray(solution.s)
     ax1.plot(s, np.asarray(solution.s_dot), "-")
     ax1.set_ylabel("s_dot [1/s]")
@@ -171,6 +161,4 @@ def plot_path_profile(solution, path: str | Path, title: str = "") -> Path:
     ax2.set_xlabel("path coordinate s [-]")
     ax2.grid(True)
     fig.suptitle(f"{title}: path profile" if title else "path profile")
-    path = Path(path)
-    fig.savefig(path, dpi=110)
-    return path
+    return save(fig, path)

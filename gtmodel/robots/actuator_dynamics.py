@@ -6,7 +6,7 @@ five samples of the 4 ms controller::
 
     G_a,i(q) = q^-5 b_i / (1 - a_i q^-1),    y_k = a_i y_(k-1) + b_i u_(k-5)
 
-As a python-control :class:`control.TransferFunction` in ``z`` (``dt = 0.004``) this is
+As a python-control :class:`control.TransferFunction` in ``z`` (``dt`` the loop period, 4 ms) this is
 ``b_i z^-5 z / (z - a_i) = b_i / (z^5 - a_i z^4)``: numerator ``[b_i]``, denominator
 ``[1, -a_i, 0, 0, 0, 0]``. The thesis' numbers are in the data file
 ``gtmodel/robots/data/L1_dynamics_models.toml`` (table ``[actuators]``), loaded and
@@ -40,6 +40,7 @@ import numpy as np
 import scipy.optimize
 
 from gtmodel._arrays import as_times
+from gtmodel.defaults import LOOP_PERIOD_S, defaults
 from gtmodel.errors import InputError
 from gtmodel.robots.parameters import _read_data_file, _Reader
 
@@ -49,6 +50,7 @@ __all__ = [
     "DynamicsModels",
     "load_dynamics_models",
     "dynamics_models_from_mapping",
+    "loop_period",
     "actuator_tf",
     "actuator_models",
     "bandwidth",
@@ -276,13 +278,42 @@ def load_dynamics_models(name_or_path: str | Path) -> DynamicsModels:
     return dynamics_models_from_mapping(data, origin=origin, path=path)
 
 
+def loop_period(source: str | Path | DynamicsModels | None = None) -> float:
+    """Period of a robot's controller loop [s], read from its data file.
+
+    The loop period is the sample time of the closed-loop actuator models (Dressler (2012),
+    eq. 6.11), ``[actuators] sample_time_s`` of the dynamics-models file. Without a file,
+    the fallback :data:`gtmodel.defaults.LOOP_PERIOD_S` (via ``defaults["loop.period"]``).
+
+    Parameters
+    ----------
+    source : str, pathlib.Path, DynamicsModels or None, optional
+        Shipped name (e.g. ``"L1_dynamics_models"``), file path or loaded models; None
+        (default): no robot is known.
+
+    Returns
+    -------
+    float
+        The period [s], positive.
+
+    Raises
+    ------
+    ParameterError
+        The file is invalid (see :func:`load_dynamics_models`).
+    """
+    if source is None:
+        return float(defaults["loop.period"])
+    models = source if isinstance(source, DynamicsModels) else load_dynamics_models(source)
+    return float(models.actuators.sample_time)
+
+
 def _check_dt(dt: Any) -> float:
     if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating, np.integer)) or not math.isfinite(dt) or dt <= 0:
         raise InputError(f"dt: expected a positive sampling time in s, got {dt!r}")
     return float(dt)
 
 
-def actuator_tf(a: float, b: float, dt: float = 0.004, delay: int = 5) -> control.TransferFunction:
+def actuator_tf(a: float, b: float, dt: float = LOOP_PERIOD_S, delay: int = 5) -> control.TransferFunction:
     """One closed-loop actuator model as a discrete transfer function.
 
     Dressler (2012), eq. 6.11: ``G(q) = q^-delay b / (1 - a q^-1)``, i.e.
@@ -297,7 +328,7 @@ def actuator_tf(a: float, b: float, dt: float = 0.004, delay: int = 5) -> contro
     b : float
         Gain coefficient (non-zero).
     dt : float, optional
-        Sampling time [s] (default 0.004).
+        Sampling time [s] (default the loop period, :data:`gtmodel.defaults.LOOP_PERIOD_S`).
     delay : int, optional
         Dead time in samples (default 5; ``delay = 0`` gives ``b z / (z - a)``, with a
         direct feedthrough).

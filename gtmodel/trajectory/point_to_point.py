@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._tables import read_table
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.expressions import parse_constraint, parse_objective
@@ -56,7 +57,7 @@ __all__ = [
 _log = logging.getLogger("gtmodel")
 
 #: Controller sample time [s] of the resampled trajectory (Dressler (2012), ch. 3.2).
-SAMPLE_TIME = 0.004
+SAMPLE_TIME = LOOP_PERIOD_S
 #: IPOPT options of :func:`solve_point_to_point` (besides ``max_iter`` and ``tol``). The
 #: cost (seconds, of order one, gradient on the final time only) is small next to the
 #: barrier terms of the ~1300 force bounds and path constraints of the default mesh, so
@@ -547,7 +548,7 @@ class PointToPointSolution:
         Parameters
         ----------
         dt : float, optional
-            Sample time [s]; default 0.004 s.
+            Sample time [s]; default :data:`SAMPLE_TIME` (the loop period).
 
         Returns
         -------

@@ -20,6 +20,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel._arrays import as_signal
 from gtmodel.calibration.identification.friction import ConstantVelocityData
 from gtmodel.calibration.identification.signals import MotionLog
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.parameters import RobotParameters, load_parameters
@@ -73,7 +74,7 @@ def simulate_log(
     trajectory: Any,
     duration: float,
     parameters: RobotParameters | str | Path,
-    sample_time: float = 0.004,
+    sample_time: float = LOOP_PERIOD_S,
     force_noise: float = 5.0,
     position_noise: float = 1e-6,
     position_resolution: float = 1e-6,

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.modeling.components import Component, Input, Parameter, State, Variable, connect
 from gtmodel.modeling.library import rotational, translational
@@ -207,7 +208,7 @@ class PositionServo(Component):
 _J, _RATIO, _RADIUS, _M_CART = 1.2e-3, 10.0, 0.025, 38.23
 _REFLECT = (_RATIO / _RADIUS) ** 2
 _L1 = two_mass_parameters((13.8258, 103.3373), _J * _REFLECT, _M_CART, (0.16683, 0.0067885))
-_T_REF = 0.004 / -math.log(0.9728)
+_T_REF = LOOP_PERIOD_S / -math.log(0.9728)
 
 
 class CompliantDriveAxis(Component):

@@ -18,15 +18,15 @@ from gtmodel.problems.kinds.motion_common import RobotReference
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.schema import NonEmptyText, Section, integer, number, vector
 from gtmodel.robots import GantryTau3Kinematics
-from gtmodel.robots.actuator_dynamics import DynamicsModels, actuator_models, load_dynamics_models
+from gtmodel.robots.actuator_dynamics import DynamicsModels, actuator_models, load_dynamics_models, loop_period
 
 __all__ = ["RobotSection", "StructureSection", "SensorsSection", "build_plant", "NYQUIST_HZ", "SHIPPED_DYNAMICS"]
 
-#: Nyquist frequency of the 4 ms loop [Hz].
+#: Nyquist frequency of the 4 ms loop [Hz] (bound of the cut-off fields; the filters check their own loop period).
 NYQUIST_HZ = 0.5 / DT
 #: Shipped dynamics-models files.
 SHIPPED_DYNAMICS = ("L1_dynamics_models",)
-#: Tolerance on the actuator models' sample time [s].
+#: Tolerance on the loop period against the actuator models' sample time [s].
 _DT_TOLERANCE = 1e-9
 
 
@@ -41,9 +41,14 @@ class RobotSection(RobotReference):
         IK configuration, 0..7.
     dynamics_models : str
         Closed-loop actuator models (6.11): a shipped dynamics-models file or a TOML path.
+    loop_period : float, optional
+        Period of the controller loop [s]; omitted: the actuator models' sample time (the
+        robot's data file; 4 ms on the L1). Given, it must equal that sample time.
     """
 
     dynamics_models: NonEmptyText = Field(default="L1_dynamics_models", description="closed-loop actuator models (6.11): shipped name or a TOML path relative to this file")
+    loop_period: number(gt=0, le=1.0, unit="s", description="period of the controller loop; omitted: the actuator models' sample time "
+                                                             "from the robot's data file (L1: 4 ms)") | None = None
 
 
 class StructureSection(Section):
@@ -109,8 +114,8 @@ def build_plant(robot: RobotSection, structure: StructureSection, sensors: Senso
     Raises
     ------
     ProblemError
-        An unknown parameter set or dynamics-models file, actuator models of another sample
-        time or count, or a plant the models reject (the message names the field).
+        An unknown parameter set or dynamics-models file, not 3 actuator models, a loop period
+        other than their sample time, or a plant the models reject (the message names the field).
     """
     params = robot_parameters(file, "robot.parameters", robot.parameters)
     ref = file.reference("robot.dynamics_models", robot.dynamics_models, SHIPPED_DYNAMICS)
@@ -118,12 +123,15 @@ def build_plant(robot: RobotSection, structure: StructureSection, sensors: Senso
         models: DynamicsModels = load_dynamics_models(ref)
     except ParameterError as exc:
         raise file.wrap("robot.dynamics_models", exc) from None
-    if abs(models.actuators.sample_time - DT) > _DT_TOLERANCE or models.actuators.a.size != 3:
-        raise file.fail("robot.dynamics_models", f"3 actuator models with sample_time_s = {DT}",
-                        f"{models.actuators.a.size} at {models.actuators.sample_time} s")
+    if models.actuators.a.size != 3:
+        raise file.fail("robot.dynamics_models", "3 actuator models", f"{models.actuators.a.size}")
+    period = loop_period(models)
+    if robot.loop_period is not None and abs(robot.loop_period - period) > _DT_TOLERANCE:
+        raise file.fail("robot.loop_period", f"the sample time of the actuator models in robot.dynamics_models ({period:g} s)",
+                        robot.loop_period)
     try:
         tool = ToolStructure(tuple(structure.frequencies_hz), tuple(structure.stiffness), tuple(structure.damping), structure.mass)
         sensor_model = SensorModel(sensors.accelerometer_noise, sensors.accelerometer_range, sensors.gauge_noise, sensors.seed)
-        return TrackingPlant(GantryTau3Kinematics(params), actuator_models(models), tool, sensor_model, DT, robot.configuration)
+        return TrackingPlant(GantryTau3Kinematics(params), actuator_models(models), tool, sensor_model, period, robot.configuration)
     except GtModelError as exc:
         raise file.wrap("structure", exc) from None

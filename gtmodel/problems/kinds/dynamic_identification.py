@@ -38,6 +38,7 @@ from gtmodel.calibration import (
     simulate_log,
 )
 from gtmodel.calibration.identification import THESIS_TABLE_6_3, VARIANTS, StribeckTerm
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
@@ -126,7 +127,7 @@ class TruthSection(Section):
 
     parameters: NonEmptyText = Field(description="the true robot: shipped parameter set or a TOML path relative to the problem file")
     duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of the log") = 30.0
-    sample_time: number(gt=0, le=1.0, unit="s", description="sampling interval") = 0.004
+    sample_time: number(gt=0, le=1.0, unit="s", description="sampling interval") = LOOP_PERIOD_S
     force_noise: number(ge=0, le=MAX_FORCE_N, unit="N", description="Gaussian force noise (std)") = 5.0
     position_noise: number(ge=0, le=1.0, unit="m", description="Gaussian position noise (std)") = 1e-6
     position_resolution: number(ge=0, le=1.0, unit="m", description="encoder quantisation (0: none)") = 1e-6

@@ -367,10 +367,11 @@ class ILCKind(ProblemKind):
             figure).
         """
         plant = build_plant(doc.robot, doc.structure, doc.sensors, file)
+        dt = plant.dt  # the loop period: [robot] loop_period, else the actuator models' sample time
         ref = doc.reference
         try:
             T, q, final_time = plan_square(plant.kinematics, ref.corner, ref.side, ref.speed, ref.acceleration, ref.lead,
-                                           ref.grid, doc.robot.configuration)
+                                           ref.grid, doc.robot.configuration, dt)
         except UnreachablePoseError as exc:
             raise file.fail("reference.corner", "a square inside the workspace", f"{ref.corner} ({exc})") from None
         except GtModelError as exc:
@@ -385,11 +386,11 @@ class ILCKind(ProblemKind):
             raise file.wrap("ilc.tukey_points", exc) from None
         est = doc.estimators
         try:
-            complementary = ComplementaryFilter(est.complementary_cutoff_hz, dt=SAMPLE_TIME_S)
+            complementary = ComplementaryFilter(est.complementary_cutoff_hz, dt=dt)
         except GtModelError as exc:
             raise file.wrap("estimators.complementary_cutoff_hz", exc) from None
         try:
-            kalman = StationaryKalman(dt=SAMPLE_TIME_S, accelerometer_noise=max(doc.sensors.accelerometer_noise, 1e-6),
+            kalman = StationaryKalman(dt=dt, accelerometer_noise=max(doc.sensors.accelerometer_noise, 1e-6),
                                       position_noise=tuple(est.kalman_position_noise), jerk_noise=tuple(est.kalman_jerk_noise), d=2)
         except (GtModelError, ValueError, np.linalg.LinAlgError) as exc:  # a Riccati equation without a stabilising solution
             raise file.fail("estimators", "Kalman noise figures with a stationary solution of the Riccati equation", str(exc)) from None
@@ -397,7 +398,7 @@ class ILCKind(ProblemKind):
         kin = plant.kinematics
         configuration = doc.robot.configuration
         experiment = ILCExperiment(
-            plant, ILCReference(np.arange(n) * SAMPLE_TIME_S, T, q, window), LearningFilter(il.gamma, il.delta), il.iterations,
+            plant, ILCReference(np.arange(n) * dt, T, q, window), LearningFilter(il.gamma, il.delta), il.iterations,
             estimators, lambda X: kin.ik(X, configuration), ref.corner,
         )
         cases: list[ILCCase] = []
@@ -512,7 +513,7 @@ actuator correction of the first case when it learns on the actuators, for
         fields: dict[str, Any] = {
             "status": solution.status,
             "message": "; ".join(r.message for r in solution.results.values()),
-            "sample_time_s": SAMPLE_TIME_S,
+            "sample_time_s": declaration.experiment.plant.dt,
             "samples": declaration.experiment.reference.n,
             "square_final_time_s": declaration.final_time,
             "iterations": declaration.experiment.iterations,
@@ -554,17 +555,18 @@ actuator correction of the first case when it learns on the actuators, for
             kalman = declaration.experiment.estimators["kalman"]
             save_controller(out / "controller.json",
                             Controller(kalman_step=kalman.step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table,
-                                       dt=SAMPLE_TIME_S),
+                                       dt=declaration.experiment.plant.dt),
                             description=f"{name}: stationary Kalman step (x, y) and the learned actuator correction of case "
                                         f"{first.case.name}; gtmodel codegen --robot L1 --controller controller.json")
             written.files.append("controller.json")
             fields["controller"] = {"file": "controller.json", "ilc_case": first.case.name, "ilc_table_samples": int(table.shape[0])}
         if plots:
+            signals = {c.name: c.signal for c, _, _, _ in rows}  # panel titles "Case 1: actuator positions" (Table 7.2)
             plot_error_measure({c.name: r.actuator_error for c, r, _, _ in rows}, out / "ilc_actuator_errors.png",
-                               labels=["actuator 1", "actuator 2", "actuator 3"],
+                               labels=["actuator 1", "actuator 2", "actuator 3"], signals=signals,
                                title=f"{name}: actuator-side error measure (7.25) per iteration")
             plot_error_measure({c.name: r.tool_error[:, :2] for c, r, _, _ in rows}, out / "ilc_tool_errors.png",
-                               labels=["x", "y"], title=f"{name}: tool-side error measure (7.25) per iteration")
+                               labels=["x", "y"], signals=signals, title=f"{name}: tool-side error measure (7.25) per iteration")
             written.files += ["ilc_actuator_errors.png", "ilc_tool_errors.png"]
             ref_T = declaration.experiment.reference.T
             for c, r, _, _ in rows:

@@ -446,7 +446,7 @@ class OptimalControlKind(ProblemKind):
             for group, fname in (("states", "states.png"), ("inputs", "inputs.png")):
                 signals = {k: v for k, v in getattr(r, group).items() if np.ndim(v) == 1}
                 if signals:
-                    plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds)
+                    plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds, units=d.model.units)
                     written.files.append(fname)
         return written
 

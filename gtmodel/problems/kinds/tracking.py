@@ -11,7 +11,7 @@ sensors). The trajectory is a ``trajectory.csv`` of kind ``point_to_point`` or
   ``gtmodel solve l1_time_optimal.toml`` writes; or
 - ``[trajectory] file = "results/l1_time_optimal/trajectory.csv"``: a file already written.
 
-The samples must be ``dt = 0.004`` s apart (within 1e-9 s); the last step may be shorter
+The samples must be one loop period (``dt`` = 4 ms) apart (within 1e-9 s); the last step may be shorter
 (the final time of a ``point_to_point`` trajectory, where the motion is at rest): that
 last row is the rest position, placed on the next 4 ms sample. After the motion the
 reference is held for ``settle_time``. The actuator references are the columns
@@ -157,7 +157,7 @@ def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float 
     field_name : str
         The field that names the trajectory (named in errors).
     dt : float, optional
-        Required sample time [s] (default 0.004).
+        Required sample time [s] (default the loop period).
 
     Returns
     -------
@@ -232,7 +232,7 @@ class TrackingKind(ProblemKind):
         plant = build_plant(doc.robot, doc.structure, doc.sensors, file)
         if tr.file is not None:
             source = file.data_file("trajectory.file", tr.file)
-            columns = read_trajectory(source, file, "trajectory.file")
+            columns = read_trajectory(source, file, "trajectory.file", plant.dt)
             self._check_robot(plant, columns, file, "trajectory.file")
             return TrackingDeclaration(plant, tr.settle_time, source, columns, None, file)
         source = file.data_file("trajectory.problem", tr.problem)
@@ -297,10 +297,10 @@ class TrackingKind(ProblemKind):
                 return TrackingSolution(status=kind.status(ssol), message=f"the referenced problem {d.source} ended with status {source_status}: {ssol.message}", source_status=source_status)
             with tempfile.TemporaryDirectory(prefix="gtmodel-tracking-") as tmp:
                 kind.write(sdecl, ssol, Path(tmp), False, sname)
-                cols = read_trajectory(Path(tmp) / "trajectory.csv", d.origin, "trajectory.problem")
+                cols = read_trajectory(Path(tmp) / "trajectory.csv", d.origin, "trajectory.problem", d.plant.dt)
             self._check_robot(d.plant, cols, d.origin, "trajectory.problem")
         q = np.column_stack([cols[f"q{i}"] for i in (1, 2, 3)])
-        settle = int(math.ceil(d.settle_time / DT - 1e-9))
+        settle = int(math.ceil(d.settle_time / d.plant.dt - 1e-9))
         q_ref = np.vstack([q, np.repeat(q[-1:], settle, axis=0)])
         response = d.plant.simulate(q_ref)
         return TrackingSolution(
@@ -339,7 +339,7 @@ class TrackingKind(ProblemKind):
             "message": solution.message,
             "trajectory_source": str(d.source),
             "source_status": solution.source_status,
-            "sample_time_s": DT,
+            "sample_time_s": d.plant.dt,
             "settle_time_s": d.settle_time,
             "structure_modes_hz": modes.natural_frequencies_hz.tolist(),
             "structure_damping": modes.damping_ratios.tolist(),

@@ -127,7 +127,7 @@ class PathSolution(StatusResult):
         Parameters
         ----------
         dt : float, optional
-            Sample time [s]; default 0.004 s. The last sample is the final time.
+            Sample time [s]; default the loop period (:data:`gtmodel.defaults.LOOP_PERIOD_S`). The last sample is the final time.
 
         Returns
         -------

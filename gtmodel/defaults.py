@@ -1,0 +1,129 @@
+"""One place for gtmodel's defaults: loop period, plot style, solver options.
+
+In the style of python-control's ``control.config.defaults``: :data:`defaults` is a
+documented dict of dotted keys that the functions read when they are called, so a notebook
+can change a default for a session and :func:`reset_defaults` puts every key back::
+
+    >>> from gtmodel import defaults
+    >>> defaults.defaults["plot.dpi"] = 200      # sharper PNGs for this session
+    >>> defaults.reset_defaults()
+    >>> defaults.defaults["plot.dpi"]
+    110
+
+Keys
+----
+``loop.period``
+    Period of the robot controller's loop [s] (Dressler (2012), ch. 3.2: 4 ms on the L1).
+    Where a robot is known, its data file gives the period (the actuator models' sample
+    time ``[actuators] sample_time_s`` of ``gtmodel/robots/data/<robot>_dynamics_models.toml``,
+    :func:`gtmodel.robots.actuator_dynamics.loop_period`); this is the fallback, and the
+    default argument of every function that samples at the loop (bound when the function's
+    module is imported, so changing the key later does not change those defaults).
+``plot.dpi``
+    Resolution of every PNG the report layer writes [dots per inch].
+``plot.figsize``
+    Size of a one-panel figure [in] (width, height).
+``plot.wide``, ``plot.tall``, ``plot.panel``
+    Sizes [in] of a row of three panels, of a column of three panels, and of one panel in a
+    row of per-case panels (width per panel, height).
+``plot.layout``
+    Matplotlib layout engine of new figures.
+``nlp.max_iter``, ``nlp.tol``
+    Iteration limit and tolerance of every NLP solver (IPOPT, fatrop) before the problem's
+    own ``solver_options``.
+``ipopt.options``
+    Further IPOPT options of every collocation NLP (``solver_options`` override them).
+    ``mumps_mem_percent``: MUMPS's workspace is its estimate plus this percentage (IPOPT's
+    default 1000 allocates eleven times the estimate for every fresh solver; when a
+    factorisation needs more, IPOPT doubles it and factorises again, so the iterates are the
+    same). L1 minimum-time problem, fresh solver, quiet machine (issue 17): 139 -> 98 ms per
+    iteration at 400 elements, 11.4 -> 10.5 at 50, the same 93 and 49 iterations and final
+    times. 0 is not allowed: doubling 0 stays 0, and the solve fails.
+``ipopt.warm_start``
+    IPOPT options of warm starts: start from the given primal-dual point with a small
+    barrier parameter and without pushing it off the bounds.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+from gtmodel.errors import InputError
+
+__all__ = ["LOOP_PERIOD_S", "defaults", "reset_defaults", "get"]
+
+#: Period of the controller loop [s], the fallback where no robot data file is at hand
+#: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
+LOOP_PERIOD_S = 0.004
+
+_FACTORY: dict[str, Any] = {
+    "loop.period": LOOP_PERIOD_S,
+    "plot.dpi": 110,
+    "plot.figsize": (7.0, 4.0),
+    "plot.wide": (11.0, 3.6),
+    "plot.tall": (8.0, 6.5),
+    "plot.panel": (4.4, 3.4),
+    "plot.layout": "constrained",
+    "nlp.max_iter": 3000,
+    "nlp.tol": 1e-8,
+    "ipopt.options": {"mumps_mem_percent": 20},
+    "ipopt.warm_start": {
+        "warm_start_init_point": "yes",
+        "mu_init": 1e-4,
+        "warm_start_bound_push": 1e-9,
+        "warm_start_bound_frac": 1e-9,
+        "warm_start_slack_bound_push": 1e-9,
+        "warm_start_slack_bound_frac": 1e-9,
+        "warm_start_mult_bound_push": 1e-9,
+    },
+}
+
+#: The defaults in force, by dotted key (see the module docstring for each key).
+defaults: dict[str, Any] = copy.deepcopy(_FACTORY)
+
+
+def reset_defaults() -> None:
+    """Put every key of :data:`defaults` back to its shipped value (keys added by a user are dropped).
+
+    Option dicts (``ipopt.options``, ``ipopt.warm_start``) are refilled in place, so a module
+    that holds one of them under its own name (e.g.
+    :data:`gtmodel.modeling.collocation_nlp.IPOPT_DEFAULTS`) sees the reset too.
+    """
+    for key in [k for k in defaults if k not in _FACTORY]:
+        del defaults[key]
+    for key, value in _FACTORY.items():
+        current = defaults.get(key)
+        if isinstance(current, dict) and isinstance(value, dict):
+            current.clear()
+            current.update(copy.deepcopy(value))
+        else:
+            defaults[key] = copy.deepcopy(value)
+
+
+def get(key: str, value: Any = None) -> Any:
+    """``value`` if given, else the default of ``key`` (python-control's ``_get_param`` idiom).
+
+    Parameters
+    ----------
+    key : str
+        A dotted key of :data:`defaults`, e.g. ``"plot.dpi"``.
+    value : object, optional
+        An explicit value; returned unchanged unless None.
+
+    Returns
+    -------
+    object
+        ``value`` or ``defaults[key]``.
+
+    Raises
+    ------
+    InputError
+        ``key`` is not a key of :data:`defaults`.
+    """
+    if value is not None:
+        return value
+    try:
+        return defaults[key]
+    except KeyError:
+        raise InputError(f"key: expected one of {', '.join(sorted(defaults))}, got {key!r}") from None
