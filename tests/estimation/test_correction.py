@@ -152,7 +152,7 @@ def test_gp_over_j2_j3_interpolates_a_smooth_field():
     assert gp.n_inputs == 2
     np.testing.assert_allclose(gp.predict(np.radians(CALIBRATION_POSES_DEG))["k"][:, 1], 5e6 * base, rtol=1e-2)
     np.testing.assert_allclose(gp.predict(np.radians(VALIDATION_POSES_DEG))["m"][:, 0], 200 * _smooth(VALIDATION_POSES_DEG), rtol=5e-2)
-    with pytest.raises(InputError, match=r"X: expected shape \(N, 2\) or \(2,\)"):
+    with pytest.raises(InputError, match=r"X: expected shape \(2,\) or \(N, 2\)"):
         gp.predict(np.zeros(4))
 
 
