@@ -4,7 +4,7 @@
 ``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
 ``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``) and, with a
 ``Controller``, the controller of the 4 ms loop (Kalman step, ILC correction) and the KF/EKF
-steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.filter_step`), with
+steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.specs.filter`), with
 ``retime_n_max`` the online re-timing along a path (:mod:`gtmodel.codegen.retime`);
 ``compile_shared``
 builds a shared library with the system C compiler; ``check`` compares the compiled C with
@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.check import CheckReport, FunctionCheck, StatusProbe, check
+from gtmodel.codegen.check.controller import ControllerCheckReport, check_controller
 from gtmodel.codegen.controller import Controller
-from gtmodel.codegen.controller_check import ControllerCheckReport, check_controller
 from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate

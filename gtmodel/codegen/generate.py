@@ -33,6 +33,7 @@ The C functions are reentrant (no static or global mutable state) and thus threa
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import re
 from dataclasses import dataclass, field
@@ -44,15 +45,17 @@ import numpy as np
 
 import gtmodel
 from gtmodel.errors import CodegenError, InputError
-from gtmodel.codegen.c_text import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
-from gtmodel.codegen.controller import Controller, controller_header_lines, controller_source_lines
-from gtmodel.codegen.declarations import FunctionSpec
-from gtmodel.codegen.retime import check_retime_n_max, retime_header_lines, retime_rows_function, retime_source_lines
+from gtmodel.codegen.controller import Controller
+from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
+from gtmodel.codegen.emit import Fragment
+from gtmodel.codegen.emit.controller import controller_fragment
+from gtmodel.codegen.emit.retime import check_retime_n_max, retime_fragment, retime_rows_function
+from gtmodel.codegen.emit.robot import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
 
-__all__ = ["GeneratedCode", "generate", "REAL_TYPES"]
+__all__ = ["GeneratedCode", "generate", "REAL_TYPES", "controller_part", "robot_part"]
 
 log = logging.getLogger("gtmodel")
 
@@ -429,9 +432,9 @@ def generate(
         ``<prefix>_kalman_update``, and the ILC correction lookup
         ``<prefix>_ilc_correction``; the KF/EKF steps of the tracker + IMU fusion
         ``<prefix>_kf_step``/``<prefix>_ekf_step`` with ``<prefix>_kf_state`` ... of
-        :mod:`~gtmodel.codegen.filter_step`), e.g. from
+        :mod:`~gtmodel.codegen.specs.filter`), e.g. from
         :func:`~gtmodel.codegen.controller_file.load_controller`; checked by
-        :func:`~gtmodel.codegen.controller_check.check_controller`.
+        :func:`~gtmodel.codegen.check.controller.check_controller`.
     retime_n_max : int or None, optional
         Also generate the online re-timing function ``<prefix>_retime`` (3-link sets,
         double precision; :mod:`gtmodel.codegen.retime`): the time-optimal ``s_dot(s)``
@@ -485,7 +488,7 @@ def generate(
         clash = [s.name for s in specs if s.name in controller.functions]
         if clash:
             raise InputError(f"functions: {clash} clash with the controller's functions")
-        specs = specs + controller.specs()
+        specs = specs + controller.specs()  # the controller fragment's specs
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -573,13 +576,13 @@ def generate(
         )
     header = out / f"{prefix}.h"
     source = out / f"{prefix}.c"
+    extra = Fragment.join([
+        *([controller_fragment(prefix, controller, real)] if controller else ()),
+        *([retime_fragment(prefix, model, retime_n_max, retime_sizes)] if retime_f is not None else ()),
+    ])
     try:
-        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton,
-                                       [*(controller_header_lines(prefix, controller, real) if controller else ()),
-                                        *(retime_header_lines(prefix, retime_n_max, retime_sizes) if retime_f is not None else ())]))
-        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every,
-                                        [*(controller_source_lines(prefix, controller, real) if controller else ()),
-                                         *(retime_source_lines(prefix, model, retime_sizes) if retime_f is not None else ())]))
+        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton, extra.header))
+        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every, extra.source))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)
@@ -611,3 +614,40 @@ def generate(
         controller=controller,
         retime_n_max=retime_n_max or 0,
     )
+
+
+def controller_part(generated: GeneratedCode) -> GeneratedCode:
+    """The generated code restricted to its controller functions.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        A library generated with ``controller=``.
+
+    Returns
+    -------
+    GeneratedCode
+        The same files, ``specs`` and ``functions`` only those of kind
+        :data:`~gtmodel.codegen.declarations.CONTROLLER_KIND`.
+    """
+    specs = tuple(s for s in generated.specs if s.kind == CONTROLLER_KIND)
+    return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))
+
+
+def robot_part(generated: GeneratedCode) -> GeneratedCode:
+    """The generated code restricted to its robot-model functions (what :func:`~gtmodel.codegen.check.check` checks).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        Any generated library.
+
+    Returns
+    -------
+    GeneratedCode
+        The same files, ``specs`` and ``functions`` without the controller functions.
+    """
+    specs = tuple(s for s in generated.specs if s.kind != CONTROLLER_KIND)
+    if len(specs) == len(generated.specs):
+        return generated
+    return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))

@@ -39,8 +39,10 @@ import numpy as np
 
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
-from gtmodel.codegen.c_text import _arg_size, _c_params, _comment_block, _doc_lines, _out_function, _wrapper_text
-from gtmodel.codegen.check import CheckReport, _compare, _probe, time_functions
+from gtmodel.codegen.emit.robot import _arg_size, _c_params, _comment_block, _doc_lines, _out_function, _wrapper_text
+from gtmodel.codegen.check.compare import compare, probe
+from gtmodel.codegen.check.report import CheckReport
+from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare, _static_helpers, _void_unused_parameters, _work_sizes
 from gtmodel.errors import CodegenError, InputError
@@ -398,12 +400,12 @@ def check_model(
     results, probes = [], []
     for spec in generated.specs:
         cf = library[spec.name]
-        results.append(_compare(spec, cf, source, samples[spec.name], generated.real))
+        results.append(compare(spec, cf, source, samples[spec.name], generated.real))
         for a in spec.args:
             for bad in (np.nan, np.inf):
                 row = np.array(samples[spec.name][a.name][0], dtype=float)
                 row[0] = bad
-                probes.append(_probe(cf, spec, samples[spec.name], f"{a.name}[0] = {bad}", "GT_BAD_ARGUMENT", {a.name: row}))
+                probes.append(probe(cf, spec, samples[spec.name], f"{a.name}[0] = {bad}", "GT_BAD_ARGUMENT", {a.name: row}))
     if timing:
         times = time_functions(generated, library.path, samples, build)
         results = [type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]

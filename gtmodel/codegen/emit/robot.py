@@ -1,4 +1,4 @@
-"""The C text of the generated library: header, doc comments, argument checks, wrappers, Newton loops.
+"""Emitting the model functions: header, doc comments, argument checks, wrappers, Newton loops.
 
 Given the CasADi Functions prepared by :mod:`gtmodel.codegen.generate` (renamed, dense,
 their work sizes known), these functions write the public header and the wrapper
@@ -14,13 +14,9 @@ from typing import Sequence
 import casadi as ca
 
 from gtmodel.codegen.declarations import CONTROLLER_KIND, STATUS_CODES, THRESHOLD_MACROS, FunctionSpec, StatusCheck
+from gtmodel.codegen.emit import c_float as _c_float
 from gtmodel.codegen.robot import RobotModel
 from gtmodel.errors import CodegenError
-
-
-def _c_float(x: float) -> str:
-    r = repr(float(x))
-    return r if any(ch in r for ch in ".eE") else r + ".0"
 
 
 def _check_every(nl, newton_check_every: int | None) -> int:
