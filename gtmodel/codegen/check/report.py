@@ -169,7 +169,7 @@ class FunctionCheck:
         """
         if not self.tolerance_rule:
             return f"tol {self.tolerance:g}"
-        used = "inf" if self.max_ratio is None or not np.isfinite(self.max_ratio) else f"{100 * self.max_ratio:.0f}%"
+        used = "inf" if self.max_ratio is None or not np.isfinite(self.max_ratio) else f"{100 * self.max_ratio:.3g}%"
         return f"tol {self.tolerance:g} {self.tolerance_rule}, worst {used} of it"
 
 
