@@ -205,7 +205,24 @@ def _casadi_reference(spec: FunctionSpec, model: RobotModel, inputs: Mapping[str
 
 
 def row_args(spec: FunctionSpec, inputs: Mapping[str, np.ndarray], i: int, overrides: Mapping | None = None) -> list:
-    """C arguments of sample ``i``; a non-finite optional sample value means NULL (overrides are passed as given)."""
+    """C arguments of one sample.
+
+    Parameters
+    ----------
+    spec : FunctionSpec
+        The function.
+    inputs : Mapping
+        ``{argument name: (N, ...) samples}``.
+    i : int
+        Sample index.
+    overrides : Mapping or None, optional
+        Argument values used instead of the sample's (passed as given).
+
+    Returns
+    -------
+    list
+        One value per C argument; a non-finite optional sample value is None (NULL).
+    """
     args = []
     for a in spec.args:
         if overrides and a.name in overrides:
@@ -238,6 +255,27 @@ def _diffs(spec: FunctionSpec, out, ref: Mapping[str, np.ndarray], real: str) ->
 
 
 def compare(spec: FunctionSpec, cf, model: RobotModel, inputs: Mapping[str, np.ndarray], real: str) -> FunctionCheck:
+    """Evaluate a compiled function on samples and compare it with the Python model.
+
+    Parameters
+    ----------
+    spec : FunctionSpec
+        The function.
+    cf : CompiledFunction
+        Its compiled C function.
+    model : RobotModel or ModelSource
+        The model evaluated from Python (``spec.reference``, else the CasADi Function).
+    inputs : Mapping
+        ``{argument name: (N, ...) samples}``.
+    real : {"double", "float"}
+        Floating-point type of the C code.
+
+    Returns
+    -------
+    FunctionCheck
+        The largest differences, the tolerance with its rule (:func:`~gtmodel.codegen.check.report.within`)
+        and the samples the Python model refused (non-finite reference: skipped).
+    """
     n = len(inputs[spec.args[0].name])
     ref = spec.reference(model, inputs) if spec.reference is not None else _casadi_reference(spec, model, inputs)
     ref = {o.name: np.reshape(ref[o.name], (n, -1)) for o in spec.outputs}
@@ -255,6 +293,33 @@ def compare(spec: FunctionSpec, cf, model: RobotModel, inputs: Mapping[str, np.n
 
 
 def probe(cf, spec: FunctionSpec, inputs, case: str, expected: str, overrides: Mapping, model: RobotModel | None = None, real: str = "double") -> StatusProbe:
+    """Call a compiled function on the first sample with some arguments replaced, and check its status.
+
+    Parameters
+    ----------
+    cf : CompiledFunction
+        The compiled C function.
+    spec : FunctionSpec
+        Its declaration.
+    inputs : Mapping
+        ``{argument name: (N, ...) samples}``.
+    case : str
+        What is fed, for the report.
+    expected : str
+        Expected status macro(s), alternatives separated by ``|``.
+    overrides : Mapping
+        Argument values replacing the sample's.
+    model : RobotModel or None, optional
+        With ``GT_OK`` the outputs must equal this model's evaluation; None: a non-OK
+        status must leave the outputs untouched (:data:`~gtmodel.codegen.check.report.SENTINEL`).
+    real : {"double", "float"}, optional
+        Floating-point type of the C code.
+
+    Returns
+    -------
+    StatusProbe
+        Passed when the status is an expected one and the outputs are as required.
+    """
     status, out = _call_row(cf, spec, inputs, 0, overrides)
     codes = [STATUS_CODES[e][0] for e in expected.split("|")]
     if status == 0 and model is not None:
@@ -303,6 +368,29 @@ def _singular_pose(model: RobotModel, poses: np.ndarray) -> np.ndarray | None:
 
 
 def edge_probes(generated: GeneratedCode, spec: FunctionSpec, cf, model: RobotModel, inputs, cache: dict) -> list[StatusProbe]:
+    """The edge-case probes of one robot function (:func:`probe` each).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        The generated library.
+    spec : FunctionSpec
+        The function.
+    cf : CompiledFunction
+        Its compiled C function.
+    model : RobotModel
+        The robot model.
+    inputs : Mapping
+        Its samples (:func:`sample_inputs`).
+    cache : dict
+        Poses shared between the functions of one check (boundary and singular poses).
+
+    Returns
+    -------
+    list of StatusProbe
+        Unreachable and far inputs, the workspace boundary and beyond, singular poses,
+        non-finite inputs, invalid configurations and Newton starts.
+    """
     probes = []
     real = generated.real
     statuses = {c.status for c in spec.checks}
