@@ -8,7 +8,10 @@ of the functions it adds. :func:`gtmodel.codegen.generate` joins the fragments i
 Hand-written C lives in ``.c``/``.h`` template files of the package data folder
 ``gtmodel/codegen/harness/`` (``template_*.c``/``template_*.h``), never in Python strings;
 :func:`fill` is the one substitution: ``@NAME@`` is replaced by the value given for ``NAME``
-(every marker must be given a value). The modules of this subpackage:
+(every marker must be given a value; a marker alone on its line is a block of whole lines,
+and its line goes when the block is empty). Code that depends on the declarations (the
+argument checks, calls and Newton loops of each wrapper) is built line by line in Python
+and enters the templates as such blocks. The modules of this subpackage:
 
 - :mod:`~gtmodel.codegen.emit.robot`: header and wrapper text of the model functions;
 - :mod:`~gtmodel.codegen.emit.controller`: the Kalman state and ILC sizes of the controller;
@@ -33,6 +36,8 @@ if TYPE_CHECKING:  # annotations only
 __all__ = ["Fragment", "harness_dir", "template", "fill", "c_float"]
 
 _MARKER = re.compile(r"@([A-Z][A-Z0-9_]*)@")
+#: A marker alone on its line: with an empty value the whole line goes (an optional block of lines).
+_BLOCK = re.compile(r"^@([A-Z][A-Z0-9_]*)@\n", re.M)
 #: Start of the comment that documents a template file (not part of the emitted C).
 _DOC_START = "/*@template"
 
@@ -135,7 +140,9 @@ def fill(name: str, **values: object) -> str:
         Template file name in the harness folder (see :func:`template`).
     **values : object
         ``NAME=value`` per marker (more are ignored: one set of values may serve a
-        header and a source template); each value is inserted as ``str(value)``.
+        header and a source template); each value is inserted as ``str(value)``. A
+        marker alone on its line stands for a block of lines: with an empty value the
+        line is removed.
 
     Returns
     -------
@@ -151,6 +158,7 @@ def fill(name: str, **values: object) -> str:
     missing = sorted(set(_MARKER.findall(text)) - set(values))
     if missing:
         raise CodegenError(f"C template {name}: no value for the markers {missing}")
+    text = _BLOCK.sub(lambda m: m.group(0) if str(values[m.group(1)]) else "", text)
     return _MARKER.sub(lambda m: str(values[m.group(1)]), text)
 
 
