@@ -50,7 +50,7 @@ from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
 from gtmodel.codegen.emit import Fragment
 from gtmodel.codegen.emit.controller import controller_fragment
 from gtmodel.codegen.emit.retime import check_retime_n_max, retime_fragment, retime_rows_function
-from gtmodel.codegen.emit.robot import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
+from gtmodel.codegen.emit.robot import _arg_size, _check_every, _out_function, functions_fragment, header_text, wrapper_text
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
@@ -576,13 +576,14 @@ def generate(
         )
     header = out / f"{prefix}.h"
     source = out / f"{prefix}.c"
+    wrapped = functions_fragment(prefix, specs, funcs, cnames, sizes, real, newton_check_every)  # the robot's and controller's functions
     extra = Fragment.join([
         *([controller_fragment(prefix, controller, real)] if controller else ()),
         *([retime_fragment(prefix, model, retime_n_max, retime_sizes)] if retime_f is not None else ()),
     ])
     try:
-        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton, extra.header))
-        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every, extra.source))
+        header.write_text(header_text(prefix, wrapped, version, phash, model, friction, real, newton, extra.header))
+        source.write_text(wrapper_text(prefix, wrapped, sizes, extra.source))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)

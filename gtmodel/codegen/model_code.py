@@ -40,7 +40,7 @@ import numpy as np
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.emit import fill
-from gtmodel.codegen.emit.robot import _arg_size, _c_params, _comment_block, _doc_lines, _out_function, _wrapper_text
+from gtmodel.codegen.emit.robot import _arg_size, _out_function, functions_fragment, wrapper_text
 from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport
 from gtmodel.codegen.check.robot import time_functions
@@ -196,18 +196,15 @@ def model_specs(dae: FlatDAE) -> tuple[FunctionSpec, ...]:
     return tuple(specs)
 
 
-def _header_text(prefix: str, specs, funcs, sizes, version: str, phash: str, dae: FlatDAE, real: str) -> str:
+def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE, real: str) -> str:
     P = prefix.upper()
-    prototypes = []
-    for spec in specs:
-        prototypes += [_comment_block(_doc_lines(spec, funcs, P, sizes[spec.name])), f"int {prefix}_{spec.name}({_c_params(spec, funcs, real)});", ""]
     return fill(
         "template_model_header.h", GP=prefix, P=P, NAME=dae.name, VERSION=version, HASH=phash, REAL=real,
         STATES=", ".join(dae.x_names) or "none", ALGEBRAIC=", ".join(dae.z_names) or "none", INPUTS=", ".join(dae.u_names) or "none",
         PARAMETERS=", ".join(f"{n} = {v!r}" for n, v in zip(dae.p_names, dae.p_value.tolist())) or "none",
         NX=dae.nx, NZ=dae.nz, NU=dae.nu,
         STATUS_DEFINES="\n".join(f"#define {m} {v} /* {d} */" for m, (v, d) in STATUS_CODES.items()),
-        PROTOTYPES="\n".join(prototypes),
+        PROTOTYPES="\n".join(functions.header),
     )
 
 
@@ -290,8 +287,9 @@ def generate_model(
     try:
         casadi_source.write_text("/* CasADi-generated code; gtmodel marked unused function parameters (void) and the\n"
                                  " * scalar helpers static. */\n" + _static_helpers(_void_unused_parameters(text)))
-        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, dae, real))
-        wrapper.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real))
+        wrapped = functions_fragment(prefix, specs, funcs, cnames, sizes, real)
+        header.write_text(_header_text(prefix, wrapped, version, phash, dae, real))
+        wrapper.write_text(wrapper_text(prefix, wrapped, sizes))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for model %s", wrapper, ", ".join(s.name for s in specs), dae.name)

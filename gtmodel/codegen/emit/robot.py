@@ -1,9 +1,14 @@
-"""Emitting the model functions: header, doc comments, argument checks, wrappers, Newton loops.
+"""Emitting the wrapped functions and the frame of a library: header, doc comments, wrappers, Newton loops.
 
 Given the CasADi Functions prepared by :mod:`gtmodel.codegen.generate` (renamed, dense,
-their work sizes known), these functions write the public header and the wrapper
-functions around the CasADi-generated code: argument checks, status conditions, the
-bounded Newton loops of :class:`~gtmodel.codegen.declarations.NewtonLoop`.
+their work sizes known), :func:`functions_fragment` writes the wrapped functions (a
+robot's, a controller's, a user model's) as a :class:`~gtmodel.codegen.emit.Fragment`:
+doc comment and prototype per function, and the wrappers around the CasADi-generated code
+(argument checks, status conditions, the bounded Newton loops of
+:class:`~gtmodel.codegen.declarations.NewtonLoop`). :func:`header_text` and
+:func:`wrapper_text` put it and the other fragments in the frame of the two files, the
+hand-written template files ``harness/template_header.h``, ``template_wrapper.c`` and
+``template_wrapper_helpers.c``.
 """
 
 from __future__ import annotations
@@ -15,9 +20,11 @@ import casadi as ca
 
 from gtmodel.codegen.declarations import CONTROLLER_KIND, STATUS_CODES, THRESHOLD_MACROS, FunctionSpec, StatusCheck
 from gtmodel.codegen.emit import c_float as _c_float
-from gtmodel.codegen.emit import fill
+from gtmodel.codegen.emit import Fragment, fill
 from gtmodel.codegen.robot import RobotModel
 from gtmodel.errors import CodegenError
+
+__all__ = ["functions_fragment", "header_text", "wrapper_text"]
 
 
 def _check_every(nl, newton_check_every: int | None) -> int:
@@ -104,10 +111,80 @@ def _doc_lines(spec: FunctionSpec, funcs: dict, P: str, sizes: tuple[int, int, i
     return lines
 
 
-def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str, model: RobotModel, friction: str, real: str, newton: dict,
-                 extra: Sequence[str] = ()) -> str:
+def functions_fragment(gen_prefix: str, specs: Sequence[FunctionSpec], funcs: dict, cnames: dict, sizes: dict, real: str,
+                       newton_check_every: int | None = None) -> Fragment:
+    """The wrapped functions (a robot's, a controller's, a user model's) as a fragment of the library.
+
+    Parameters
+    ----------
+    gen_prefix : str
+        C prefix (``gt_L1``).
+    specs : sequence of FunctionSpec
+        The functions, in order.
+    funcs : dict
+        ``{name: casadi.Function}`` of a closed-form function, ``{name: {part: casadi.Function}}``
+        of a Newton loop (prepared by :mod:`gtmodel.codegen.generate`).
+    cnames : dict
+        The C names of those Functions, in the same layout.
+    sizes : dict
+        ``{name: (sz_arg, sz_res, sz_iw, sz_w)}`` of the stack work arrays.
+    real : {"double", "float"}
+        Floating-point type.
+    newton_check_every : int or None, optional
+        Steps between convergence tests of every Newton loop (None: each declaration's).
+
+    Returns
+    -------
+    Fragment
+        Header: per function its doc comment and prototype; source: the wrappers
+        (argument checks, calls of the CasADi-generated code, status conditions, bounded
+        Newton loops); specs: ``specs``.
+    """
     P = gen_prefix.upper()
-    robot = any(spec.kind != CONTROLLER_KIND for spec in specs)
+    prototypes: list[str] = []
+    bodies: list[str] = []
+    for spec in specs:
+        prototypes += [*_comment_block(_doc_lines(spec, funcs, P, sizes[spec.name])).splitlines(),
+                       f"int {gen_prefix}_{spec.name}({_c_params(spec, funcs, real)});", ""]
+        if spec.newton is None:
+            bodies += _closed_form_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs)
+        else:
+            bodies += _newton_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs, newton_check_every)
+    return Fragment(tuple(prototypes), tuple(bodies), tuple(specs))
+
+
+def header_text(gen_prefix: str, functions: Fragment, version: str, phash: str, model: RobotModel, friction: str, real: str,
+                newton: dict, extra: Sequence[str] = ()) -> str:
+    """The public header ``<prefix>.h`` of a robot's (or a controller's) library.
+
+    Parameters
+    ----------
+    gen_prefix : str
+        C prefix (``gt_L1``).
+    functions : Fragment
+        The wrapped functions (:func:`functions_fragment`).
+    version : str
+        Version string of the library.
+    phash : str
+        Parameter (or controller) hash.
+    model : RobotModel
+        The robot (named unless every function is a controller's).
+    friction : str
+        Friction form of the dynamics.
+    real : {"double", "float"}
+        Floating-point type.
+    newton : dict
+        ``{name: (tolerance, max_iter)}`` of the Newton loops.
+    extra : sequence of str, optional
+        Header lines of the other fragments (controller, re-timing), after the prototypes.
+
+    Returns
+    -------
+    str
+        The header (``harness/template_header.h`` filled).
+    """
+    P = gen_prefix.upper()
+    robot = any(spec.kind != CONTROLLER_KIND for spec in functions.specs)
     robot_doc = [
         f" * Robot: {model.description}",
         f" * Friction form of the dynamics: {friction}" if model.kind == "three_link" else " * Kinematics only.",
@@ -126,9 +203,6 @@ def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str,
             f"#define {N}_TOLERANCE {_c_float(tol)}",
             f"#define {N}_MAX_ITER {int(max_iter)}",
         ]
-    prototypes = []
-    for spec in specs:
-        prototypes += [_comment_block(_doc_lines(spec, funcs, P, sizes[spec.name])), f"int {gen_prefix}_{spec.name}({_c_params(spec, funcs, real)});", ""]
     return fill(
         "template_header.h", GP=gen_prefix, P=P, VERSION=version, HASH=phash, REAL=real, IS_FLOAT=1 if real == "float" else 0,
         WHAT=f"the {model.name} Gantry-Tau model." if robot else "gtmodel controller functions (no robot model).",
@@ -136,7 +210,7 @@ def _header_text(gen_prefix: str, specs, funcs, sizes, version: str, phash: str,
         ROBOT_DOC="\n".join(robot_doc), ROBOT_DEFINE=f'#define {P}_ROBOT "{model.name}"' if robot else "",
         STATUS_DEFINES="\n".join(f"#define {macro} {value} /* {doc} */" for macro, (value, doc) in STATUS_CODES.items()),
         ROBOT_TOLERANCES="\n".join(tolerances), NEWTON_DEFINES="\n".join(newton_defines),
-        PROTOTYPES="\n".join(prototypes), EXTRA="\n".join(extra),
+        PROTOTYPES="\n".join(functions.header), EXTRA="\n".join(extra),
     )
 
 
@@ -329,9 +403,28 @@ def _newton_body(gp: str, P: str, spec: FunctionSpec, parts: dict, cnames: dict,
     return body
 
 
-def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newton_check_every: int | None = None,
-                  extra: Sequence[str] = ()) -> str:
+def wrapper_text(gen_prefix: str, functions: Fragment, sizes: dict, extra: Sequence[str] = ()) -> str:
+    """The wrapper source ``<prefix>.c`` of a library.
+
+    Parameters
+    ----------
+    gen_prefix : str
+        C prefix (``gt_L1``).
+    functions : Fragment
+        The wrapped functions (:func:`functions_fragment`).
+    sizes : dict
+        ``{name: (sz_arg, sz_res, sz_iw, sz_w)}`` of the stack work arrays.
+    extra : sequence of str, optional
+        Source lines of the other fragments (controller, re-timing), at the end.
+
+    Returns
+    -------
+    str
+        ``harness/template_wrapper.c`` filled, the static helpers the wrappers call
+        (``harness/template_wrapper_helpers.c``), the wrappers and ``extra``.
+    """
     P = gen_prefix.upper()
+    specs = functions.specs
     sizes_lines = []
     for spec in specs:
         N = f"{P}_{spec.name.upper()}"
@@ -344,12 +437,7 @@ def _wrapper_text(gen_prefix: str, specs, funcs, cnames, sizes, real: str, newto
         ]
     cases = "\n".join(f'    case {macro}: return "{macro}";' for macro in STATUS_CODES)
     out = fill("template_wrapper.c", GP=gen_prefix, P=P, SIZES="\n".join(sizes_lines), STATUS_CASES=cases).splitlines() + [""]
-    bodies: list[str] = []
-    for spec in specs:
-        if spec.newton is None:
-            bodies += _closed_form_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs)
-        else:
-            bodies += _newton_body(gen_prefix, P, spec, funcs[spec.name], cnames[spec.name], real, funcs, newton_check_every)
+    bodies = list(functions.source)
     helpers = _helpers(gen_prefix)
     used = "\n".join(bodies)
     for h in ("finite", "all", "copy", "transpose", "signs"):
