@@ -10,6 +10,22 @@ steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.specs.filter`), w
 builds a shared library with the system C compiler; ``check`` compares the compiled C with
 the Python evaluation, probes the edge cases and times every function. The hand-written
 harness (Makefile, 4 ms loop, C unit tests) is in ``codegen/`` at the top of the repository.
+
+The stages, each importing only those below it (an import-linter contract):
+
+- :mod:`~gtmodel.codegen.declarations`, :mod:`~gtmodel.codegen.robot`: what a generated
+  function is (``FunctionSpec``) and the robot models;
+- :mod:`~gtmodel.codegen.specs`: the declarations per robot kind and of the filter steps;
+- :mod:`~gtmodel.codegen.controller`: the ``Controller`` and its declarations;
+- :mod:`~gtmodel.codegen.emit`: the C, one ``Fragment`` (header lines, source lines, specs)
+  per part, the hand-written C in template files of ``harness/``;
+- :mod:`~gtmodel.codegen.generate`: the four files of a library from the fragments;
+- :mod:`~gtmodel.codegen.build`, :mod:`~gtmodel.codegen.retime`,
+  :mod:`~gtmodel.codegen.controller_file`: compiling and loading, calling the re-timing,
+  controller files;
+- :mod:`~gtmodel.codegen.check`: the self-checks, with one helper that writes, compiles,
+  runs and parses a C program;
+- :mod:`~gtmodel.codegen.model_code`: the same for a user's model.
 """
 
 from __future__ import annotations

@@ -48,6 +48,7 @@ from gtmodel.errors import CodegenError, InputError
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
 from gtmodel.codegen.emit import Fragment
+from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
 from gtmodel.codegen.emit.controller import controller_fragment
 from gtmodel.codegen.emit.retime import check_retime_n_max, retime_fragment, retime_rows_function
 from gtmodel.codegen.emit.robot import _arg_size, _check_every, _out_function, functions_fragment, header_text, wrapper_text
@@ -325,52 +326,6 @@ def _residual_part(step: ca.Function, cname: str) -> ca.Function:
     ins = step.sx_in()
     outs = step.call(dict(zip(step.name_in(), ins)))
     return ca.Function(cname, ins, [outs[n] for n in keep], step.name_in(), keep)
-
-
-def _work_sizes(casadi_c: str, cname: str, f: ca.Function) -> tuple[int, int, int, int]:
-    """Work-array sizes from the generated ``<cname>_work`` function (CasADi's values as fallback)."""
-    pat = re.compile(
-        rf"int {re.escape(cname)}_work\(.*?\{{\s*(?:\(void\)\w+;\s*)*"
-        r"if \(sz_arg\) \*sz_arg = (\d+);\s*if \(sz_res\) \*sz_res = (\d+);\s*"
-        r"if \(sz_iw\) \*sz_iw = (\d+);\s*if \(sz_w\) \*sz_w = (\d+);",
-        re.S,
-    )
-    m = pat.search(casadi_c)
-    if m:
-        sizes = tuple(int(g) for g in m.groups())
-    else:  # pragma: no cover - depends on the CasADi version
-        log.warning("codegen: could not read %s_work from the generated code; using CasADi's sizes", cname)
-        sizes = (f.sz_arg(), f.sz_res(), f.sz_iw(), f.sz_w())
-    return (max(sizes[0], f.n_in()), max(sizes[1], f.n_out()), sizes[2], sizes[3])
-
-
-_FUNC_DEF = re.compile(r"^((?:CASADI_SYMBOL_EXPORT |static )?[A-Za-z_][\w ]*?[\s\*]+\w+)\(([^()]*)\) \{$", re.M)
-
-
-_HELPER_DEF = re.compile(r"^casadi_real (casadi_\w+)\(", re.M)
-
-
-def _static_helpers(text: str) -> str:
-    """Give CasADi's scalar helpers (``casadi_sq``, ``casadi_fmax``, ...) internal linkage.
-
-    Generated with external linkage, they are called through the PLT of a shared library
-    (``-fPIC`` keeps them interposable) and never inlined: one call per ``x*x`` of the
-    model. ``static`` lets the compiler inline them (same operations, same values).
-    """
-    return _HELPER_DEF.sub(lambda m: f"static casadi_real {m.group(1)}(" if text.count(m.group(1) + "(") > 1 else m.group(0), text)
-
-
-def _void_unused_parameters(text: str) -> str:
-    """Mark every parameter of every function definition ``(void)``: no unused-parameter warnings."""
-
-    def add(m: re.Match) -> str:
-        params = m.group(2).strip()
-        if params in ("", "void"):
-            return m.group(0)
-        names = [re.split(r"[\s\*]+", p.strip())[-1] for p in params.split(",")]
-        return m.group(0) + " " + " ".join(f"(void){n};" for n in names)
-
-    return _FUNC_DEF.sub(add, text)
 
 
 # ----------------------------------------------------------------------------- API

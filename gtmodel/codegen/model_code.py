@@ -45,7 +45,8 @@ from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec
-from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare, _static_helpers, _void_unused_parameters, _work_sizes
+from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
+from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.modeling import FlatDAE, Model
 
