@@ -39,12 +39,12 @@ import numpy as np
 
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
-from gtmodel.codegen.emit import fill
+from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.emit.robot import _arg_size, _out_function, functions_fragment, wrapper_text
 from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport
 from gtmodel.codegen.check.robot import time_functions
-from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec
+from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
 from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare
 from gtmodel.errors import CodegenError, InputError
@@ -204,7 +204,7 @@ def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE,
         STATES=", ".join(dae.x_names) or "none", ALGEBRAIC=", ".join(dae.z_names) or "none", INPUTS=", ".join(dae.u_names) or "none",
         PARAMETERS=", ".join(f"{n} = {v!r}" for n, v in zip(dae.p_names, dae.p_value.tolist())) or "none",
         NX=dae.nx, NZ=dae.nz, NU=dae.nu,
-        STATUS_DEFINES="\n".join(f"#define {m} {v} /* {d} */" for m, (v, d) in STATUS_CODES.items()),
+        OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
         PROTOTYPES="\n".join(functions.header),
     )
 

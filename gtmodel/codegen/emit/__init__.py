@@ -30,10 +30,12 @@ from typing import TYPE_CHECKING, Iterable
 
 from gtmodel.errors import CodegenError
 
+from gtmodel.codegen.declarations import STATUS_CODES
+
 if TYPE_CHECKING:  # annotations only
     from gtmodel.codegen.declarations import FunctionSpec
 
-__all__ = ["Fragment", "harness_dir", "template", "fill", "c_float"]
+__all__ = ["Fragment", "harness_dir", "template", "fill", "header_guard", "c_float"]
 
 _MARKER = re.compile(r"@([A-Z][A-Z0-9_]*)@")
 #: A marker alone on its line: with an empty value the whole line goes (an optional block of lines).
@@ -160,6 +162,28 @@ def fill(name: str, **values: object) -> str:
         raise CodegenError(f"C template {name}: no value for the markers {missing}")
     text = _BLOCK.sub(lambda m: m.group(0) if str(values[m.group(1)]) else "", text)
     return _MARKER.sub(lambda m: str(values[m.group(1)]), text)
+
+
+def header_guard(P: str) -> tuple[str, str]:
+    """The opening and the closing of a generated public header (``harness/template_header_guard.h``).
+
+    Parameters
+    ----------
+    P : str
+        The upper-case prefix (``GT_L1``): the guard is ``<P>_H``.
+
+    Returns
+    -------
+    opening : str
+        Include guard, ``extern "C"`` and the status codes shared by every library
+        (:data:`~gtmodel.codegen.declarations.STATUS_CODES`), without a final newline.
+    closing : str
+        The end of ``extern "C"`` and of the guard, without a final newline.
+    """
+    text = fill("template_header_guard.h", P=P,
+                STATUS_DEFINES="\n".join(f"#define {m} {v} /* {d} */" for m, (v, d) in STATUS_CODES.items()))
+    opening, closing = text.split("/*@split*/\n")
+    return opening.rstrip("\n"), closing.rstrip("\n")
 
 
 def c_float(x: float) -> str:

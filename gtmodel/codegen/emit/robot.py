@@ -20,7 +20,7 @@ import casadi as ca
 
 from gtmodel.codegen.declarations import CONTROLLER_KIND, STATUS_CODES, THRESHOLD_MACROS, FunctionSpec, StatusCheck
 from gtmodel.codegen.emit import c_float as _c_float
-from gtmodel.codegen.emit import Fragment, fill
+from gtmodel.codegen.emit import Fragment, fill, header_guard
 from gtmodel.codegen.robot import RobotModel
 from gtmodel.errors import CodegenError
 
@@ -208,7 +208,7 @@ def header_text(gen_prefix: str, functions: Fragment, version: str, phash: str, 
         WHAT=f"the {model.name} Gantry-Tau model." if robot else "gtmodel controller functions (no robot model).",
         SOURCE="the CasADi model" if robot else "the controller's CasADi Functions",
         ROBOT_DOC="\n".join(robot_doc), ROBOT_DEFINE=f'#define {P}_ROBOT "{model.name}"' if robot else "",
-        STATUS_DEFINES="\n".join(f"#define {macro} {value} /* {doc} */" for macro, (value, doc) in STATUS_CODES.items()),
+        OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
         ROBOT_TOLERANCES="\n".join(tolerances), NEWTON_DEFINES="\n".join(newton_defines),
         PROTOTYPES="\n".join(functions.header), EXTRA="\n".join(extra),
     )

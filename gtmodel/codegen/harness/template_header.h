@@ -1,9 +1,9 @@
 /*@template (stripped when filled: gtmodel.codegen.emit.fill)
  * The public header <prefix>.h of a generated library (gtmodel.codegen.emit.robot).
- * Markers: @GP@ the C prefix, @P@ its upper case, @WHAT@ what the library holds, @SOURCE@ what it
+ * Markers: @GP@ the C prefix, @P@ its upper case (the include guard), @WHAT@ what the library holds, @SOURCE@ what it
  * is generated from, @VERSION@, @HASH@ the parameter (or controller) hash, @REAL@ the
  * floating-point type, @IS_FLOAT@ 1 or 0; blocks of whole lines (a block marker alone on its line
- * is removed with an empty value): @ROBOT_DOC@, @STATUS_DEFINES@, @ROBOT_DEFINE@,
+ * is removed with an empty value): @OPEN@ and @CLOSE@ (template_header_guard.h), @ROBOT_DOC@, @ROBOT_DEFINE@,
  * @ROBOT_TOLERANCES@, @NEWTON_DEFINES@, @PROTOTYPES@, @EXTRA@.
  */
 /* @GP@.h: C API of @WHAT@
@@ -22,18 +22,7 @@
  * functions are reentrant and thread-safe; the only memory they touch is their
  * stack frame and the caller's arrays.
  */
-#ifndef @P@_H
-#define @P@_H
-
-#ifdef __cplusplus
-extern "C" {
-#endif
-
-/* Status codes, shared by every gtmodel-generated library. */
-#ifndef GT_STATUS_CODES
-#define GT_STATUS_CODES
-@STATUS_DEFINES@
-#endif
+@OPEN@
 
 #define @P@_VERSION "@VERSION@"
 #define @P@_PARAMETER_HASH "@HASH@"
@@ -52,8 +41,4 @@ const char *@GP@_status_string(int status);
 
 @PROTOTYPES@
 @EXTRA@
-#ifdef __cplusplus
-} /* extern "C" */
-#endif
-
-#endif /* @P@_H */
+@CLOSE@

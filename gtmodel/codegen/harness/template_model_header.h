@@ -1,8 +1,8 @@
 /*@template (stripped when filled: gtmodel.codegen.emit.fill)
  * The public header <prefix>.h of a user model's library (gtmodel.codegen.model_code).
- * Markers: @GP@ the C prefix, @P@ its upper case, @NAME@ the model, @VERSION@, @HASH@,
+ * Markers: @GP@ the C prefix, @P@ its upper case (the include guard), @NAME@ the model, @VERSION@, @HASH@,
  * @REAL@, @STATES@ @ALGEBRAIC@ @INPUTS@ @PARAMETERS@ the names (and values) listed,
- * @NX@ @NZ@ @NU@ the sizes; blocks: @STATUS_DEFINES@, @PROTOTYPES@.
+ * @NX@ @NZ@ @NU@ the sizes; blocks: @OPEN@ and @CLOSE@ (template_header_guard.h), @PROTOTYPES@.
  */
 /* @GP@.h: C API of the user model @NAME@.
  *
@@ -18,18 +18,7 @@
  * Every function returns a status code (GT_OK = 0). On any other status the output
  * arrays are NOT written. Work arrays are on the stack; no heap, no global state.
  */
-#ifndef @P@_H
-#define @P@_H
-
-#ifdef __cplusplus
-extern "C" {
-#endif
-
-/* Status codes, shared by every gtmodel-generated library. */
-#ifndef GT_STATUS_CODES
-#define GT_STATUS_CODES
-@STATUS_DEFINES@
-#endif
+@OPEN@
 
 #define @P@_VERSION "@VERSION@"
 #define @P@_PARAMETER_HASH "@HASH@"
@@ -46,8 +35,4 @@ const char *@GP@_version(void);
 const char *@GP@_status_string(int status);
 
 @PROTOTYPES@
-#ifdef __cplusplus
-} /* extern "C" */
-#endif
-
-#endif /* @P@_H */
+@CLOSE@
