@@ -64,9 +64,10 @@ import scipy.signal
 import casadi as ca
 
 from gtmodel.codegen import Controller, check_controller, compile_shared, find_compiler, generate, load_controller, load_library
-from gtmodel.codegen.check import _c_call, sample_inputs, time_functions, timed_rows
-from gtmodel.codegen.controller_check import ILC_MARGIN, run_inputs
-from gtmodel.codegen.filter_check import FILTER_CYCLES, TIMING_BLOCK, filter_record, python_filter_run, time_filters
+from gtmodel.codegen.check import sample_inputs, time_functions, timed_rows
+from gtmodel.codegen.check.robot import _c_call
+from gtmodel.codegen.check.controller import ILC_MARGIN, run_inputs
+from gtmodel.codegen.check.filter import FILTER_CYCLES, TIMING_BLOCK, filter_record, python_filter_run, time_filters
 from gtmodel.codegen.retime import RetimeFunction
 from gtmodel.problems import load_problem
 from gtmodel.trajectory import PathConstrainedProblem

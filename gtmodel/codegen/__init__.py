@@ -4,20 +4,36 @@
 ``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
 ``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``) and, with a
 ``Controller``, the controller of the 4 ms loop (Kalman step, ILC correction) and the KF/EKF
-steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.filter_step`), with
+steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.specs.filter`), with
 ``retime_n_max`` the online re-timing along a path (:mod:`gtmodel.codegen.retime`);
 ``compile_shared``
 builds a shared library with the system C compiler; ``check`` compares the compiled C with
 the Python evaluation, probes the edge cases and times every function. The hand-written
 harness (Makefile, 4 ms loop, C unit tests) is in ``codegen/`` at the top of the repository.
+
+The stages, each importing only those below it (an import-linter contract):
+
+- :mod:`~gtmodel.codegen.declarations`, :mod:`~gtmodel.codegen.robot`: what a generated
+  function is (``FunctionSpec``) and the robot models;
+- :mod:`~gtmodel.codegen.specs`: the declarations per robot kind and of the filter steps;
+- :mod:`~gtmodel.codegen.controller`: the ``Controller`` and its declarations;
+- :mod:`~gtmodel.codegen.emit`: the C, one ``Fragment`` (header lines, source lines, specs)
+  per part, the hand-written C in template files of ``harness/``;
+- :mod:`~gtmodel.codegen.generate`: the four files of a library from the fragments;
+- :mod:`~gtmodel.codegen.build`, :mod:`~gtmodel.codegen.retime`,
+  :mod:`~gtmodel.codegen.controller_file`: compiling and loading, calling the re-timing,
+  controller files;
+- :mod:`~gtmodel.codegen.check`: the self-checks, with one helper that writes, compiles,
+  runs and parses a C program;
+- :mod:`~gtmodel.codegen.model_code`: the same for a user's model.
 """
 
 from __future__ import annotations
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.check import CheckReport, FunctionCheck, StatusProbe, check
+from gtmodel.codegen.check.controller import ControllerCheckReport, check_controller
 from gtmodel.codegen.controller import Controller
-from gtmodel.codegen.controller_check import ControllerCheckReport, check_controller
 from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate

@@ -36,23 +36,17 @@ file (:mod:`gtmodel.codegen.controller_file`) for ``gtmodel codegen --controller
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from gtmodel.codegen.c_text import _c_float
 from gtmodel.codegen.declarations import CONTROLLER_KIND, ArgSpec, FunctionSpec, OutputSpec
-from gtmodel.codegen.filter_step import (
-    FILTER_FUNCTIONS, check_filter_function, filter_header_lines, filter_sizes, filter_source_lines, filter_spec,
-)
+from gtmodel.codegen.specs.filter import FILTER_FUNCTIONS, check_filter_function, filter_sizes, filter_spec
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-
-if TYPE_CHECKING:  # annotations only
-    from gtmodel.codegen.generate import GeneratedCode
 
 __all__ = [
     "CONTROLLER_KIND",
@@ -60,16 +54,12 @@ __all__ = [
     "DEFAULT_DT",
     "ILC_TABLE_TOLERANCE",
     "Controller",
-    "controller_part",
-    "robot_part",
-    "controller_header_lines",
-    "controller_source_lines",
 ]
 
 #: Names of the controller functions (the C symbols are ``<prefix>_<name>``).
 CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction", *FILTER_FUNCTIONS)
-#: Sample time of the loop [s] (Dressler (2012), ch. 3.2).
-from gtmodel.defaults import LOOP_PERIOD_S as DEFAULT_DT  # noqa: E402  (the one loop period, gtmodel.defaults)
+#: Sample time of the loop [s] (Dressler (2012), ch. 3.2): the one loop period of gtmodel.defaults.
+DEFAULT_DT = LOOP_PERIOD_S
 #: Largest accepted ``|ilc_correction(k) - table[k]| / (1 + |table[k]|)`` when a Controller is built.
 ILC_TABLE_TOLERANCE = 1e-12
 
@@ -118,7 +108,8 @@ class Controller:
         ``ilc_table[k]`` for every ``k`` in ``[0, N)`` (to ``ILC_TABLE_TOLERANCE``
         relative) and ``u(-1) = u(N) = 0``.
     dt : float, optional
-        Sample time of the loop [s] (default 0.004); the header's
+        Sample time of the loop [s] (default: the loop period,
+        ``gtmodel.defaults.LOOP_PERIOD_S``); the header's
         ``<PREFIX>_CONTROLLER_DT``. For the filters of the tracker + IMU fusion the
         sensors' sample time (0.001 at 1 kHz): the self-check's measurement record uses it.
     kf_step : casadi.Function or None, optional
@@ -126,7 +117,7 @@ class Controller:
         one step of the Kalman filter of the 3-axis (translation-only) end-effector model,
         Cvitanic (2021), eqs. (21)-(26); e.g. ``KalmanFilter(...).step_function()`` of
         :mod:`gtmodel.estimation.filters` (nx 9, nz 6). Generated as ``<prefix>_kf_step``
-        with the state struct ``<prefix>_kf_state`` (:mod:`gtmodel.codegen.filter_step`).
+        with the state struct ``<prefix>_kf_state`` (:mod:`gtmodel.codegen.specs.filter`).
     ekf_step : casadi.Function or None, optional
         The same signature for the extended Kalman filter of the 19-D model, eqs. (21)-(29)
         (nx 19, nz 13; ``ExtendedKalmanFilter(...).step_function()``); ``<prefix>_ekf_step``.
@@ -283,155 +274,3 @@ class Controller:
             ))
         out += [filter_spec(n, getattr(self, n), CONTROLLER_KIND) for n in self.filter_sizes]
         return tuple(out)
-
-
-def controller_part(generated: "GeneratedCode") -> "GeneratedCode":
-    """The generated code restricted to its controller functions.
-
-    Parameters
-    ----------
-    generated : GeneratedCode
-        A library generated with ``controller=``.
-
-    Returns
-    -------
-    GeneratedCode
-        The same files, ``specs`` and ``functions`` only those of kind
-        :data:`CONTROLLER_KIND`.
-    """
-    specs = tuple(s for s in generated.specs if s.kind == CONTROLLER_KIND)
-    return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))
-
-
-def robot_part(generated: "GeneratedCode") -> "GeneratedCode":
-    """The generated code restricted to its robot-model functions (what :func:`~gtmodel.codegen.check.check` checks).
-
-    Parameters
-    ----------
-    generated : GeneratedCode
-        Any generated library.
-
-    Returns
-    -------
-    GeneratedCode
-        The same files, ``specs`` and ``functions`` without the controller functions.
-    """
-    specs = tuple(s for s in generated.specs if s.kind != CONTROLLER_KIND)
-    if len(specs) == len(generated.specs):
-        return generated
-    return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))
-
-
-def controller_header_lines(prefix: str, controller: Controller, real: str) -> list[str]:
-    """Header declarations of the controller: sizes, sample time, the Kalman state struct.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    controller : Controller
-        The controller generated.
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        Lines placed after the function prototypes of the header.
-    """
-    P = prefix.upper()
-    out = [
-        "/* ---- Controller of the 4 ms loop (Dressler (2012), ch. 7) ---- */",
-        "/* Sample time of the loop [s]. */",
-        f"#define {P}_CONTROLLER_DT {_c_float(controller.dt)}",
-    ]
-    if controller.kalman_step is not None:
-        nx, ny, nz = controller.kalman_sizes
-        out += [
-            "/* Sizes of the Kalman filter: state, measurements [z_kin; a_m], tool position estimate. */",
-            f"#define {P}_KALMAN_NX {nx}",
-            f"#define {P}_KALMAN_NY {ny}",
-            f"#define {P}_KALMAN_NZ {nz}",
-            "/* State of the Kalman filter, owned by the caller (stack, static or in a bigger struct; no heap). */",
-            f"typedef struct {prefix}_kalman_state {{",
-            f"    {real} x[{nx}]; /* x_k, the layout of {prefix}_kalman_step's x */",
-            f"}} {prefix}_kalman_state;",
-            "",
-            "/*",
-            " * Set the filter state to x0 (NULL: zeros).",
-            " * Returns GT_OK, or GT_BAD_ARGUMENT (state NULL or x0 non-finite; state untouched).",
-            " */",
-            f"int {prefix}_kalman_init({prefix}_kalman_state *state, const {real} x0[{nx}]);",
-            "",
-            "/*",
-            f" * One cycle of the Kalman filter: {prefix}_kalman_step(state->x, y, x_next, z_hat), then",
-            " * state->x = x_next. On any status other than GT_OK neither the state nor z_hat is",
-            " * written. Returns GT_OK, GT_BAD_ARGUMENT (a NULL pointer, non-finite y or state),",
-            " * GT_NUMERIC_ERROR.",
-            " */",
-            f"int {prefix}_kalman_update({prefix}_kalman_state *state, const {real} y[{ny}], {real} z_hat[{nz}]);",
-            "",
-        ]
-    if controller.ilc_correction is not None:
-        out += [
-            "/* Cycles of the learned ILC table (k = 0 .. ILC_LENGTH - 1) and size of the correction. */",
-            f"#define {P}_ILC_LENGTH {controller.ilc_length}",
-            f"#define {P}_ILC_D {controller.ilc_d}",
-            "",
-        ]
-    for name in controller.filter_sizes:
-        out += filter_header_lines(prefix, name, getattr(controller, name), real)
-    return out
-
-
-def controller_source_lines(prefix: str, controller: Controller, real: str) -> list[str]:
-    """Wrapper source of the Kalman state functions (``<prefix>_kalman_init``, ``_update``).
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    controller : Controller
-        The controller generated.
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        C lines appended to the wrapper source (empty without ``kalman_step`` and filters):
-        also ``<prefix>_kf_init``/``_update`` and ``<prefix>_ekf_init``/``_update``.
-    """
-    filters = [line for name in controller.filter_sizes
-               for line in filter_source_lines(prefix, name, getattr(controller, name), real)]
-    if controller.kalman_step is None:
-        return filters
-    nx = controller.kalman_sizes[0]
-    st = f"{prefix}_kalman_state"
-    return [
-        f"int {prefix}_kalman_init({st} *state, const {real} x0[{nx}])",
-        "{",
-        "    int i;",
-        "    if (state == NULL) return GT_BAD_ARGUMENT;",
-        "    if (x0 != NULL) {",
-        f"        for (i = 0; i < {nx}; ++i) {{",
-        "            if (!isfinite(x0[i])) return GT_BAD_ARGUMENT;",
-        "        }",
-        "    }",
-        f"    for (i = 0; i < {nx}; ++i) state->x[i] = x0 != NULL ? x0[i] : ({real})0;",
-        "    return GT_OK;",
-        "}",
-        "",
-        f"int {prefix}_kalman_update({st} *state, const {real} y[{controller.kalman_sizes[1]}], {real} z_hat[{controller.kalman_sizes[2]}])",
-        "{",
-        f"    {real} x_next[{nx}];",
-        "    int i, status;",
-        "    if (state == NULL) return GT_BAD_ARGUMENT;",
-        f"    status = {prefix}_kalman_step(state->x, y, x_next, z_hat);",
-        "    if (status != GT_OK) return status;",
-        f"    for (i = 0; i < {nx}; ++i) state->x[i] = x_next[i];",
-        "    return GT_OK;",
-        "}",
-        "",
-        *filters,
-    ]

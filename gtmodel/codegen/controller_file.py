@@ -10,7 +10,7 @@ significant digits, exact) or a NumPy archive (``.npz``, read with ``allow_pickl
 key                       value                                                     required
 ========================  ========================================================  ===========
 ``format``                ``"gtmodel.controller/1"``                                yes
-``dt``                    sample time of the loop [s], positive (0.004)             yes
+``dt``                    sample time of the loop [s], positive (4 ms on the L1)    yes
 ``kalman_step``           the CasADi Function ``"kalman_step"(x, y) -> (x_next,     no
                           z_hat)`` serialised by ``casadi.Function.serialize()``
                           (string; e.g. ``StationaryKalman(...).step_function()``)

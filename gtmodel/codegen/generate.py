@@ -33,6 +33,7 @@ The C functions are reentrant (no static or global mutable state) and thus threa
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import re
 from dataclasses import dataclass, field
@@ -44,15 +45,18 @@ import numpy as np
 
 import gtmodel
 from gtmodel.errors import CodegenError, InputError
-from gtmodel.codegen.c_text import _arg_size, _check_every, _header_text, _out_function, _wrapper_text
-from gtmodel.codegen.controller import Controller, controller_header_lines, controller_source_lines
-from gtmodel.codegen.declarations import FunctionSpec
-from gtmodel.codegen.retime import check_retime_n_max, retime_header_lines, retime_rows_function, retime_source_lines
+from gtmodel.codegen.controller import Controller
+from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
+from gtmodel.codegen.emit import Fragment
+from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
+from gtmodel.codegen.emit.controller import controller_fragment
+from gtmodel.codegen.emit.retime import check_retime_n_max, retime_fragment, retime_rows_function
+from gtmodel.codegen.emit.robot import _arg_size, _check_every, _out_function, functions_fragment, header_text, wrapper_text
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
 
-__all__ = ["GeneratedCode", "generate", "REAL_TYPES"]
+__all__ = ["GeneratedCode", "generate", "REAL_TYPES", "controller_part", "robot_part"]
 
 log = logging.getLogger("gtmodel")
 
@@ -324,52 +328,6 @@ def _residual_part(step: ca.Function, cname: str) -> ca.Function:
     return ca.Function(cname, ins, [outs[n] for n in keep], step.name_in(), keep)
 
 
-def _work_sizes(casadi_c: str, cname: str, f: ca.Function) -> tuple[int, int, int, int]:
-    """Work-array sizes from the generated ``<cname>_work`` function (CasADi's values as fallback)."""
-    pat = re.compile(
-        rf"int {re.escape(cname)}_work\(.*?\{{\s*(?:\(void\)\w+;\s*)*"
-        r"if \(sz_arg\) \*sz_arg = (\d+);\s*if \(sz_res\) \*sz_res = (\d+);\s*"
-        r"if \(sz_iw\) \*sz_iw = (\d+);\s*if \(sz_w\) \*sz_w = (\d+);",
-        re.S,
-    )
-    m = pat.search(casadi_c)
-    if m:
-        sizes = tuple(int(g) for g in m.groups())
-    else:  # pragma: no cover - depends on the CasADi version
-        log.warning("codegen: could not read %s_work from the generated code; using CasADi's sizes", cname)
-        sizes = (f.sz_arg(), f.sz_res(), f.sz_iw(), f.sz_w())
-    return (max(sizes[0], f.n_in()), max(sizes[1], f.n_out()), sizes[2], sizes[3])
-
-
-_FUNC_DEF = re.compile(r"^((?:CASADI_SYMBOL_EXPORT |static )?[A-Za-z_][\w ]*?[\s\*]+\w+)\(([^()]*)\) \{$", re.M)
-
-
-_HELPER_DEF = re.compile(r"^casadi_real (casadi_\w+)\(", re.M)
-
-
-def _static_helpers(text: str) -> str:
-    """Give CasADi's scalar helpers (``casadi_sq``, ``casadi_fmax``, ...) internal linkage.
-
-    Generated with external linkage, they are called through the PLT of a shared library
-    (``-fPIC`` keeps them interposable) and never inlined: one call per ``x*x`` of the
-    model. ``static`` lets the compiler inline them (same operations, same values).
-    """
-    return _HELPER_DEF.sub(lambda m: f"static casadi_real {m.group(1)}(" if text.count(m.group(1) + "(") > 1 else m.group(0), text)
-
-
-def _void_unused_parameters(text: str) -> str:
-    """Mark every parameter of every function definition ``(void)``: no unused-parameter warnings."""
-
-    def add(m: re.Match) -> str:
-        params = m.group(2).strip()
-        if params in ("", "void"):
-            return m.group(0)
-        names = [re.split(r"[\s\*]+", p.strip())[-1] for p in params.split(",")]
-        return m.group(0) + " " + " ".join(f"(void){n};" for n in names)
-
-    return _FUNC_DEF.sub(add, text)
-
-
 # ----------------------------------------------------------------------------- API
 def generate(
     robot: Any = "L1",
@@ -429,9 +387,9 @@ def generate(
         ``<prefix>_kalman_update``, and the ILC correction lookup
         ``<prefix>_ilc_correction``; the KF/EKF steps of the tracker + IMU fusion
         ``<prefix>_kf_step``/``<prefix>_ekf_step`` with ``<prefix>_kf_state`` ... of
-        :mod:`~gtmodel.codegen.filter_step`), e.g. from
+        :mod:`~gtmodel.codegen.specs.filter`), e.g. from
         :func:`~gtmodel.codegen.controller_file.load_controller`; checked by
-        :func:`~gtmodel.codegen.controller_check.check_controller`.
+        :func:`~gtmodel.codegen.check.controller.check_controller`.
     retime_n_max : int or None, optional
         Also generate the online re-timing function ``<prefix>_retime`` (3-link sets,
         double precision; :mod:`gtmodel.codegen.retime`): the time-optimal ``s_dot(s)``
@@ -485,7 +443,7 @@ def generate(
         clash = [s.name for s in specs if s.name in controller.functions]
         if clash:
             raise InputError(f"functions: {clash} clash with the controller's functions")
-        specs = specs + controller.specs()
+        specs = specs + controller.specs()  # the controller fragment's specs
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -573,13 +531,14 @@ def generate(
         )
     header = out / f"{prefix}.h"
     source = out / f"{prefix}.c"
+    wrapped = functions_fragment(prefix, specs, funcs, cnames, sizes, real, newton_check_every)  # the robot's and controller's functions
+    extra = Fragment.join([
+        *([controller_fragment(prefix, controller, real)] if controller else ()),
+        *([retime_fragment(prefix, model, retime_n_max, retime_sizes)] if retime_f is not None else ()),
+    ])
     try:
-        header.write_text(_header_text(prefix, specs, funcs, sizes, version, phash, model, friction, real, newton,
-                                       [*(controller_header_lines(prefix, controller, real) if controller else ()),
-                                        *(retime_header_lines(prefix, retime_n_max, retime_sizes) if retime_f is not None else ())]))
-        source.write_text(_wrapper_text(prefix, specs, funcs, cnames, sizes, real, newton_check_every,
-                                        [*(controller_source_lines(prefix, controller, real) if controller else ()),
-                                         *(retime_source_lines(prefix, model, retime_sizes) if retime_f is not None else ())]))
+        header.write_text(header_text(prefix, wrapped, version, phash, model, friction, real, newton, extra.header))
+        source.write_text(wrapper_text(prefix, wrapped, sizes, extra.source))
     except OSError as exc:
         raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for %s", source, ", ".join(s.name for s in specs), model.name)
@@ -611,3 +570,40 @@ def generate(
         controller=controller,
         retime_n_max=retime_n_max or 0,
     )
+
+
+def controller_part(generated: GeneratedCode) -> GeneratedCode:
+    """The generated code restricted to its controller functions.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        A library generated with ``controller=``.
+
+    Returns
+    -------
+    GeneratedCode
+        The same files, ``specs`` and ``functions`` only those of kind
+        :data:`~gtmodel.codegen.declarations.CONTROLLER_KIND`.
+    """
+    specs = tuple(s for s in generated.specs if s.kind == CONTROLLER_KIND)
+    return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))
+
+
+def robot_part(generated: GeneratedCode) -> GeneratedCode:
+    """The generated code restricted to its robot-model functions (what :func:`~gtmodel.codegen.check.check` checks).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        Any generated library.
+
+    Returns
+    -------
+    GeneratedCode
+        The same files, ``specs`` and ``functions`` without the controller functions.
+    """
+    specs = tuple(s for s in generated.specs if s.kind != CONTROLLER_KIND)
+    if len(specs) == len(generated.specs):
+        return generated
+    return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))

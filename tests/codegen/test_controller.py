@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from gtmodel.codegen import Controller, generate
-from gtmodel.codegen.controller import CONTROLLER_KIND, controller_part, robot_part
+from gtmodel.codegen.controller import CONTROLLER_KIND
+from gtmodel.codegen.generate import controller_part, robot_part
 from gtmodel.errors import InputError
 
 from .controller_functions import ilc_correction_function, kalman_step_function, learned_table

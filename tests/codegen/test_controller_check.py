@@ -19,7 +19,7 @@ import pytest
 
 from gtmodel.cli import main
 from gtmodel.codegen import Controller, check_controller, save_controller
-from gtmodel.codegen.controller_check import ILC_MARGIN, RUN_CYCLES, python_run, run_inputs
+from gtmodel.codegen.check.controller import ILC_MARGIN, RUN_CYCLES, python_run, run_inputs
 from gtmodel.errors import InputError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.trajectory.export import write_c_header

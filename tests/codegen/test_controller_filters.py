@@ -22,7 +22,7 @@ import pytest
 
 from gtmodel.cli import main
 from gtmodel.codegen import Controller, check_controller, compile_shared, generate, load_controller, load_library, save_controller
-from gtmodel.codegen.filter_check import (
+from gtmodel.codegen.check.filter import (
     FILTER_CYCLES,
     QUATERNION_SLICE,
     STRICT_FLAGS,

@@ -25,7 +25,7 @@ from gtmodel.cli import main
 from gtmodel.codegen import check, generate
 from gtmodel.codegen.check import HARNESS_FILES, harness_dir, run_harness_unit_tests
 
-check_module = importlib.import_module("gtmodel.codegen.check")
+check_module = importlib.import_module("gtmodel.codegen.check.harness")
 ROOT = Path(__file__).resolve().parents[2]
 HARNESS = ROOT / "codegen"
 PROBLEM = ROOT / "problems" / "l1_time_optimal.toml"

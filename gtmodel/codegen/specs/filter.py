@@ -1,4 +1,4 @@
-"""The KF and EKF steps of the laser tracker + IMU fusion as generated C (Cvitanic (2021), ch. 4).
+"""Declarations of the KF and EKF steps of the laser tracker + IMU fusion as generated C (Cvitanic (2021), ch. 4).
 
 Each filter step is a CasADi Function of :mod:`gtmodel.estimation.filters`
 (``KalmanFilter(...).step_function()``, ``ExtendedKalmanFilter(...).step_function()``; the
@@ -31,6 +31,7 @@ For ``name`` in ``kf``, ``ekf`` the generated library has (``<P>`` the upper-cas
     ``<prefix>_<name>_step`` on the state; the state is replaced only when ``GT_OK`` is returned.
 
 and the sizes ``<P>_<NAME>_NX``, ``<P>_<NAME>_NZ`` (``<P>_KF_NX 9``, ``<P>_EKF_NX 19`` ...).
+The state struct and its two functions are emitted by :mod:`gtmodel.codegen.emit.filter`.
 """
 
 from __future__ import annotations
@@ -50,8 +51,6 @@ __all__ = [
     "check_filter_function",
     "filter_sizes",
     "filter_spec",
-    "filter_header_lines",
-    "filter_source_lines",
 ]
 
 #: Names of the filter step functions (the C symbols are ``<prefix>_<name>``).
@@ -177,103 +176,3 @@ def filter_spec(name: str, f: ca.Function, kind: str) -> FunctionSpec:
         unit="state and covariance units",
         kind=kind,
     )
-
-
-def filter_header_lines(prefix: str, name: str, f: ca.Function, real: str) -> list[str]:
-    """Header lines of one filter: sizes, the state struct, ``_init`` and ``_update``.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    name : {"kf_step", "ekf_step"}
-        The step function.
-    f : casadi.Function
-        Its Function (sizes).
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        Lines placed after the function prototypes of the header.
-    """
-    nx, nz = filter_sizes(f)
-    stem = name[:-5]
-    P = f"{prefix.upper()}_{stem.upper()}"
-    st = f"{prefix}_{stem}_state"
-    return [
-        f"/* Sizes of the {stem.upper()} (Cvitanic (2021), ch. 4): state, measurement, pivots (S then P_next). */",
-        f"#define {P}_NX {nx}",
-        f"#define {P}_NZ {nz}",
-        f"#define {P}_NPIVOTS {nz + nx}",
-        f"/* State of the {stem.upper()}, owned by the caller (stack, static or in a bigger struct; no heap). */",
-        f"typedef struct {st} {{",
-        f"    {real} x[{nx}];  /* posterior mean x_{{k|k}} */",
-        f"    {real} P[{nx * nx}]; /* posterior covariance P_{{k|k}}, row-major {nx}x{nx} */",
-        f"}} {st};",
-        "",
-        "/*",
-        " * Set the prior (x0, P0 row-major). Returns GT_OK, or GT_BAD_ARGUMENT (a NULL pointer,",
-        " * a non-finite value; state untouched). A P0 that is not positive definite is reported",
-        " * by the first update (GT_NUMERIC_ERROR).",
-        " */",
-        f"int {prefix}_{stem}_init({st} *state, const {real} x0[{nx}], const {real} P0[{nx * nx}]);",
-        "",
-        "/*",
-        f" * One filter step on the state: {prefix}_{name}(state->x, state->P, z, ...). The state is",
-        " * replaced only when GT_OK is returned. Returns GT_OK, GT_BAD_ARGUMENT (NULL pointer,",
-        " * non-finite z or state), GT_NUMERIC_ERROR (covariance not positive definite or a",
-        " * non-finite result).",
-        " */",
-        f"int {prefix}_{stem}_update({st} *state, const {real} z[{nz}]);",
-        "",
-    ]
-
-
-def filter_source_lines(prefix: str, name: str, f: ca.Function, real: str) -> list[str]:
-    """Wrapper source of one filter's ``_init`` and ``_update``.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    name : {"kf_step", "ekf_step"}
-        The step function.
-    f : casadi.Function
-        Its Function (sizes).
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        C lines appended to the wrapper source.
-    """
-    nx, nz = filter_sizes(f)
-    stem = name[:-5]
-    st = f"{prefix}_{stem}_state"
-    return [
-        f"int {prefix}_{stem}_init({st} *state, const {real} x0[{nx}], const {real} P0[{nx * nx}])",
-        "{",
-        "    int i;",
-        "    if (state == NULL || x0 == NULL || P0 == NULL) return GT_BAD_ARGUMENT;",
-        f"    for (i = 0; i < {nx}; ++i) {{",
-        "        if (!isfinite(x0[i])) return GT_BAD_ARGUMENT;",
-        "    }",
-        f"    for (i = 0; i < {nx * nx}; ++i) {{",
-        "        if (!isfinite(P0[i])) return GT_BAD_ARGUMENT;",
-        "    }",
-        f"    for (i = 0; i < {nx}; ++i) state->x[i] = x0[i];",
-        f"    for (i = 0; i < {nx * nx}; ++i) state->P[i] = P0[i];",
-        "    return GT_OK;",
-        "}",
-        "",
-        f"int {prefix}_{stem}_update({st} *state, const {real} z[{nz}])",
-        "{",
-        "    if (state == NULL) return GT_BAD_ARGUMENT;",
-        "    /* the step writes its outputs only on GT_OK (computed in its own work arrays first) */",
-        f"    return {prefix}_{name}(state->x, state->P, z, state->x, state->P);",
-        "}",
-        "",
-    ]

@@ -15,7 +15,7 @@ import numpy as np
 
 from gtmodel.codegen.declarations import FK_TOLERANCE, IK_TOLERANCE, ArgSpec, FunctionSpec, NewtonLoop, OutputSpec, StatusCheck
 from gtmodel.codegen.robot import RobotModel
-from gtmodel.codegen.specs_three_link import T_ARG, UNREACHABLE, by_configuration
+from gtmodel.codegen.specs.three_link import T_ARG, UNREACHABLE, by_configuration
 from gtmodel.errors import ConvergenceError, UnreachablePoseError
 from gtmodel.robots import f1 as f1_model
 from gtmodel.robots import six_link as six_link_model

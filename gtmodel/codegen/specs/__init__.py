@@ -19,8 +19,8 @@ by :mod:`gtmodel.codegen.controller` from the CasADi Functions a
 from __future__ import annotations
 
 from gtmodel.codegen.declarations import FunctionSpec
-from gtmodel.codegen.specs_closures import F1_SPECS, SIX_LINK_SPECS
-from gtmodel.codegen.specs_three_link import DEFAULT_FUNCTIONS, FUNCTION_SPECS
+from gtmodel.codegen.specs.closures import F1_SPECS, SIX_LINK_SPECS
+from gtmodel.codegen.specs.three_link import DEFAULT_FUNCTIONS, FUNCTION_SPECS
 
 __all__ = ["FUNCTION_SPECS", "SIX_LINK_SPECS", "F1_SPECS", "SPECS_BY_KIND", "DEFAULT_FUNCTIONS", "default_functions"]
 

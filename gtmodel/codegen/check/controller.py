@@ -15,28 +15,27 @@ then probes the status contract (NULL pointers, NaN/Inf inputs or state: ``GT_BA
 with the outputs and the state untouched) and, with ``timing=True``, times each function
 in a C loop over the run (ns per call). The KF/EKF steps of the tracker + IMU fusion
 (``kf_step``, ``ekf_step``) are checked over a measurement record of a few thousand steps
-by :mod:`gtmodel.codegen.filter_check` (every state and covariance; the quaternion norm;
+by :mod:`gtmodel.codegen.check.filter` (every state and covariance; the quaternion norm;
 a covariance that is not positive definite gives ``GT_NUMERIC_ERROR``).
 """
 
 from __future__ import annotations
 
-import ctypes
 import logging
-import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
-from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, SENTINEL, CheckReport, FunctionCheck, StatusProbe
-from gtmodel.codegen.controller import Controller, controller_part
+from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
+from gtmodel.codegen.check.filter import FILTER_CYCLES, filter_checks, filter_probes, filter_record, time_filters
+from gtmodel.codegen.check.report import SENTINEL, CheckReport, FunctionCheck, StatusProbe, run_check, status_probe
+from gtmodel.codegen.check.run import c_function, pointer, time_program, timing_block
+from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
-from gtmodel.codegen.filter_check import FILTER_CYCLES, filter_checks, filter_probes, filter_record, time_filters
-from gtmodel.codegen.generate import GeneratedCode
-from gtmodel.errors import CodegenError, InputError
+from gtmodel.codegen.generate import GeneratedCode, controller_part
+from gtmodel.errors import InputError
 
 __all__ = [
     "RUN_CYCLES",
@@ -186,29 +185,9 @@ def python_run(controller: Controller, y: np.ndarray, x0: np.ndarray, k: np.ndar
     return out
 
 
-def _within(c: np.ndarray, r: np.ndarray, real: str, tol: float) -> tuple[float, bool]:
-    d = np.abs(np.asarray(c, float) - r)
-    if not np.all(np.isfinite(d)):
-        return float("inf"), False
-    worst = float(d.max()) if d.size else 0.0
-    ok = bool(np.all(d <= (FLOAT_RELATIVE_TOLERANCE * (1 + np.abs(r)) if real == "float" else tol)))
-    return worst, ok
-
-
-def _raw(library: CompiledLibrary, name: str, nargs: int, int_first: bool = False):
-    f = getattr(library.cdll, f"{library.generated.prefix}_{name}")
-    f.restype = ctypes.c_int
-    f.argtypes = ([ctypes.c_int] if int_first else [ctypes.c_void_p]) + [ctypes.c_void_p] * (nargs - 1)
-    return f
-
-
-def _ptr(a: np.ndarray | None):
-    return None if a is None else a.ctypes.data
-
-
 def _c_kalman_run(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The whole run in C through ``kalman_init``/``kalman_update``: statuses, states, estimates."""
-    init, update = _raw(library, "kalman_init", 2), _raw(library, "kalman_update", 3)
+    init, update = c_function(library, "kalman_init", 2), c_function(library, "kalman_update", 3)
     state = np.full(x0.size, SENTINEL, dtype=dtype)
     x0c = np.ascontiguousarray(x0, dtype=dtype)
     ys = np.ascontiguousarray(y, dtype=dtype)
@@ -216,10 +195,10 @@ def _c_kalman_run(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray, dtype
     zs = np.zeros((len(y), library["kalman_step"].sizes_out[1]))
     z = np.zeros(zs.shape[1], dtype=dtype)
     status = np.zeros(len(y) + 1, dtype=int)
-    status[0] = init(_ptr(state), _ptr(x0c))
+    status[0] = init(pointer(state), pointer(x0c))
     xs[0] = state
     for i in range(len(y)):
-        status[i + 1] = update(_ptr(state), _ptr(ys[i]), _ptr(z))
+        status[i + 1] = update(pointer(state), pointer(ys[i]), pointer(z))
         xs[i + 1], zs[i] = state, z
     return status, xs, zs
 
@@ -229,20 +208,14 @@ def _kalman_checks(library: CompiledLibrary, controller: Controller, ref: dict, 
     spec = cf.spec
     status, (xn, zh) = cf.call_rows(ref["x"][:-1], y, fill=SENTINEL)
     good = status == _OK
-    e1, ok1 = _within(np.hstack([xn, zh])[good], np.hstack([ref["x"][1:], ref["z_hat"]])[good], real, spec.tolerance)
     st, xs, zs = _c_kalman_run(library, y, x0, cf.dtype)
-    e2, ok2 = _within(np.hstack([xs[1:], zs]), np.hstack([ref["x"][1:], ref["z_hat"]]), real, spec.tolerance)
-    e0, ok0 = _within(xs[0], ref["x"][0], real, spec.tolerance)
-    tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else spec.tolerance
+    ref_next = np.hstack([ref["x"][1:], ref["z_hat"]])
     n = len(y)
     return [
-        FunctionCheck("kalman_step", n, e1, tol, spec.unit, int(np.sum(~good)), bool(ok1 and good.all())),
-        FunctionCheck("kalman_update", n, max(e0, e2), tol, spec.unit, int(np.sum(st != _OK)), bool(ok0 and ok2 and np.all(st == _OK))),
+        run_check("kalman_step", n, [(np.hstack([xn, zh])[good], ref_next[good])], real, spec.tolerance, spec.unit, int(np.sum(~good))),
+        run_check("kalman_update", n, [(np.hstack([xs[1:], zs]), ref_next), (xs[0], ref["x"][0])], real, spec.tolerance, spec.unit,
+                  int(np.sum(st != _OK))),
     ]
-
-
-def _probe(function: str, case: str, expected: str, status: int, untouched: bool) -> StatusProbe:
-    return StatusProbe(function, case, expected, int(status), bool(untouched), bool(status == STATUS_CODES[expected][0] and untouched))
 
 
 def _kalman_probes(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray) -> list[StatusProbe]:
@@ -250,8 +223,8 @@ def _kalman_probes(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray) -> l
     dt = cf.dtype
     nx, ny = cf.sizes_in
     nz = cf.sizes_out[1]
-    step = _raw(library, "kalman_step", 4)
-    init, update = _raw(library, "kalman_init", 2), _raw(library, "kalman_update", 3)
+    step = c_function(library, "kalman_step", 4)
+    init, update = c_function(library, "kalman_init", 2), c_function(library, "kalman_update", 3)
     good_x, good_y = np.ascontiguousarray(x0, dt), np.ascontiguousarray(y[0], dt)
     probes = []
 
@@ -266,29 +239,29 @@ def _kalman_probes(library: CompiledLibrary, y: np.ndarray, x0: np.ndarray) -> l
             x_in, y_in = good_x.copy(), good_y.copy()
             (x_in if arg == "x" else y_in)[0] = bad
             xo, zo = fresh()
-            s = step(_ptr(x_in), _ptr(y_in), _ptr(xo), _ptr(zo))
-            probes.append(_probe("kalman_step", f"{what} in {arg}", "GT_BAD_ARGUMENT", s, clean(xo, zo)))
+            s = step(pointer(x_in), pointer(y_in), pointer(xo), pointer(zo))
+            probes.append(status_probe("kalman_step", f"{what} in {arg}", "GT_BAD_ARGUMENT", s, clean(xo, zo)))
     for i, arg in enumerate(("x", "y", "x_next", "z_hat")):
         xo, zo = fresh()
-        ptrs = [_ptr(good_x), _ptr(good_y), _ptr(xo), _ptr(zo)]
+        ptrs = [pointer(good_x), pointer(good_y), pointer(xo), pointer(zo)]
         ptrs[i] = None
         s = step(*ptrs)
-        probes.append(_probe("kalman_step", f"NULL {arg}", "GT_BAD_ARGUMENT", s, clean(xo if i != 2 else None, zo if i != 3 else None)))
+        probes.append(status_probe("kalman_step", f"NULL {arg}", "GT_BAD_ARGUMENT", s, clean(xo if i != 2 else None, zo if i != 3 else None)))
     state, zo = fresh()
-    probes.append(_probe("kalman_init", "NULL state", "GT_BAD_ARGUMENT", init(None, _ptr(good_x)), True))
+    probes.append(status_probe("kalman_init", "NULL state", "GT_BAD_ARGUMENT", init(None, pointer(good_x)), True))
     bad_x = good_x.copy()
     bad_x[-1] = np.nan
-    probes.append(_probe("kalman_init", "NaN in x0", "GT_BAD_ARGUMENT", init(_ptr(state), _ptr(bad_x)), clean(state)))
-    s = init(_ptr(state), None)
-    probes.append(_probe("kalman_init", "x0 NULL (zeros)", "GT_OK", s, bool(np.all(state == 0))))
+    probes.append(status_probe("kalman_init", "NaN in x0", "GT_BAD_ARGUMENT", init(pointer(state), pointer(bad_x)), clean(state)))
+    s = init(pointer(state), None)
+    probes.append(status_probe("kalman_init", "x0 NULL (zeros)", "GT_OK", s, bool(np.all(state == 0))))
     for case, y_in, z_ptr in (("NULL y", None, zo), ("NULL z_hat", good_y, None), ("NaN in y", np.full(ny, np.nan, dt), zo)):
         st = np.full(nx, SENTINEL, dt)
-        s = update(_ptr(st), _ptr(y_in), _ptr(z_ptr))
-        probes.append(_probe("kalman_update", case, "GT_BAD_ARGUMENT", s, clean(st, z_ptr)))
-    probes.append(_probe("kalman_update", "NULL state", "GT_BAD_ARGUMENT", update(None, _ptr(good_y), _ptr(zo)), clean(zo)))
+        s = update(pointer(st), pointer(y_in), pointer(z_ptr))
+        probes.append(status_probe("kalman_update", case, "GT_BAD_ARGUMENT", s, clean(st, z_ptr)))
+    probes.append(status_probe("kalman_update", "NULL state", "GT_BAD_ARGUMENT", update(None, pointer(good_y), pointer(zo)), clean(zo)))
     st = np.full(nx, np.nan, dt)
-    s = update(_ptr(st), _ptr(good_y), _ptr(zo))
-    probes.append(_probe("kalman_update", "NaN in the state", "GT_BAD_ARGUMENT", s, bool(np.all(np.isnan(st))) and clean(zo)))
+    s = update(pointer(st), pointer(good_y), pointer(zo))
+    probes.append(status_probe("kalman_update", "NaN in the state", "GT_BAD_ARGUMENT", s, bool(np.all(np.isnan(st))) and clean(zo)))
     return probes
 
 
@@ -296,58 +269,20 @@ def _ilc(library: CompiledLibrary, controller: Controller, ref: dict, k: np.ndar
     cf = library["ilc_correction"]
     status, (u,) = cf.call_rows(k, fill=SENTINEL)
     good = status == _OK
-    err, ok = _within(u[good], ref["u"][good], real, cf.spec.tolerance)
-    tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else cf.spec.tolerance
-    check = FunctionCheck("ilc_correction", len(k), err, tol, cf.spec.unit, int(np.sum(~good)), bool(ok and good.all()))
-    raw = _raw(library, "ilc_correction", 2, int_first=True)
+    check = run_check("ilc_correction", len(k), [(u[good], ref["u"][good])], real, cf.spec.tolerance, cf.spec.unit, int(np.sum(~good)))
+    raw = c_function(library, "ilc_correction", 2, int_first=True)
     probes = []
     n = controller.ilc_length
     for case, kk in (("k = -1 (before the table)", -1), ("k = N (after the table)", n), ("k = INT_MIN", -(2**31)), ("k = INT_MAX", 2**31 - 1)):
         out = np.full(cf.sizes_out[0], SENTINEL, cf.dtype)
-        s = raw(kk, _ptr(out))
-        probes.append(_probe("ilc_correction", case + ": zero", "GT_OK", s, bool(np.all(out == 0))))
-    probes.append(_probe("ilc_correction", "NULL u", "GT_BAD_ARGUMENT", raw(0, None), True))
+        s = raw(kk, pointer(out))
+        probes.append(status_probe("ilc_correction", case + ": zero", "GT_OK", s, bool(np.all(out == 0))))
+    probes.append(status_probe("ilc_correction", "NULL u", "GT_BAD_ARGUMENT", raw(0, None), True))
     return check, probes
 
 
-_TIMER = r"""
-#define _POSIX_C_SOURCE 199309L
-#include <stdio.h>
-#include <time.h>
-#include "{header}"
-
-static double now_ns(void)
-{{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}}
-
-#define CYCLES {cycles}
-static const {real} Y[CYCLES > 0 ? CYCLES : 1][{ny}] = {{{y}}};
-
-int main(void)
-{{
-    volatile double sink = 0.0;
-    int status = 0;
-    long i, n;
-    double t0, t1;
-{blocks}
-    return status != 0;
-}}
-"""
-
-
 def _timing_block(label: str, init: str, call: str, budget_s: float) -> str:
-    return "\n".join([
-        "    {",
-        f"        {init}",
-        f"        t0 = now_ns(); for (i = 0; i < 1000; ++i) {{ status |= {call}; }} t1 = now_ns();",
-        f"        n = (long)({budget_s * 1e9} / ((t1 - t0) / 1000.0 + 1.0)); if (n < 1000) n = 1000;",
-        f"        t0 = now_ns(); for (i = 0; i < n; ++i) {{ status |= {call}; }} t1 = now_ns();",
-        f'        printf("{label}\\t%.3f\\n", (t1 - t0) / (double)n);',
-        "    }",
-    ])
+    return timing_block(label, [f"        {init}"], f"status |= {call};", budget_s, calibration=1000)
 
 
 def time_controller(generated: GeneratedCode, library: Path, inputs: dict[str, np.ndarray], build_dir: str | Path, budget_s: float = 0.05) -> dict[str, float]:
@@ -392,19 +327,9 @@ def time_controller(generated: GeneratedCode, library: Path, inputs: dict[str, n
         m = c.ilc_length + 2 * ILC_MARGIN
         blocks.append(_timing_block("ilc_correction", f"{real} u[{c.ilc_d}];",
                                     f"{p}_ilc_correction((int)(i % {m}) - {ILC_MARGIN}, u); sink += u[0]", budget_s))
-    build = Path(build_dir)
-    build.mkdir(parents=True, exist_ok=True)
-    src = build / f"{p}_controller_timing.c"
-    src.write_text(_TIMER.format(header=generated.header.name, cycles=len(y), real=real, ny=y.shape[1], y=ytext, blocks="\n".join(blocks)))
-    exe = build / f"{p}_controller_timing"
-    proc = subprocess.run([*find_compiler(), "-std=c99", "-O2", "-Wall", "-Wextra", "-I", str(generated.out_dir), str(src), "-o", str(exe),
-                           "-L", str(library.parent), f"-l{p}", f"-Wl,-rpath,{library.parent}", "-lm"], capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise CodegenError(f"controller timing program failed to build:\n{proc.stderr.strip()}")
-    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600)
-    if run.returncode != 0:
-        raise CodegenError("controller timing program: a timed call returned a non-OK status")
-    return {k: float(v) for k, v in (line.split("\t") for line in run.stdout.strip().splitlines())}
+    tables = ["", f"#define CYCLES {len(y)}", f"static const {real} Y[CYCLES > 0 ? CYCLES : 1][{y.shape[1]}] = {{{ytext}}};", ""]
+    rows = time_program(generated, library, f"{p}_controller_timing", blocks, build_dir, tables, "controller timing program")
+    return {k: float(v) for k, v in rows}
 
 
 def _records(c: Controller, cycles: int, seed: int, given: dict | None) -> dict[str, dict[str, np.ndarray]]:
@@ -466,7 +391,7 @@ def check_controller(
         Initial filter state ``(nx,)`` (default zeros).
     filter_cycles : int, optional
         Measurements of the default record of each KF/EKF step
-        (:func:`~gtmodel.codegen.filter_check.filter_record`; default 3000).
+        (:func:`~gtmodel.codegen.check.filter.filter_record`; default 3000).
     records : dict or None, optional
         ``{"kf_step" | "ekf_step": {"z": (N, nz), "x0": (nx,), "P0": (nx, nx)}}``: a
         measurement record and prior to replay instead of the default one (e.g. a

@@ -20,7 +20,6 @@ and linked with a heap-call counter, for valgrind (:func:`run_filter_program`).
 
 from __future__ import annotations
 
-import ctypes
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,12 +27,15 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from gtmodel.codegen.build import CompiledLibrary, find_compiler
-from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe, harness_dir
+from gtmodel._compiler import find_compiler, run_compiler
+from gtmodel.codegen.build import CompiledLibrary
+from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe, run_check, status_probe
+from gtmodel.codegen.check.run import c_function, compile_program, pointer, time_program
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.codegen.emit import fill
 from gtmodel.codegen.generate import GeneratedCode
-from gtmodel.errors import CodegenError, InputError
+from gtmodel.errors import InputError
 from gtmodel.estimation.end_effector import EndEffectorModel
 
 __all__ = [
@@ -63,6 +65,8 @@ QUATERNION_NORM_TOLERANCE = 1e-14
 TIMING_BLOCK = 100
 #: Compiler flags of the stand-alone filter program and of the library objects it links.
 STRICT_FLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
+#: Link flag of the stand-alone program: the heap calls go through the counter of ``harness/heap_watch.h``.
+HEAP_WRAP = "-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free"
 #: Sensor figures of the record (Cvitanic (2021), Table 7 order of magnitude): tracker
 #: position [m], tracker orientation (quaternion components), gyro [rad/s], accelerometer [m/s^2].
 POSITION_NOISE, QUATERNION_NOISE, GYRO_NOISE, ACCELEROMETER_NOISE = 6.4e-6, 1e-5, 1e-3, 0.012
@@ -182,17 +186,6 @@ def python_filter_run(f: ca.Function, z: np.ndarray, x0: np.ndarray, P0: np.ndar
     return FilterTrace(np.zeros(n + 1, dtype=int), x, P)
 
 
-def _raw(library: CompiledLibrary, name: str, nargs: int):
-    f = getattr(library.cdll, f"{library.generated.prefix}_{name}")
-    f.restype = ctypes.c_int
-    f.argtypes = [ctypes.c_void_p] * nargs
-    return f
-
-
-def _ptr(a: np.ndarray | None):
-    return None if a is None else a.ctypes.data
-
-
 def c_filter_run(library: CompiledLibrary, name: str, z: np.ndarray, x0: np.ndarray, P0: np.ndarray) -> FilterTrace:
     """The C run over a record through ``<prefix>_<stem>_init`` / ``_update`` (state in a struct).
 
@@ -217,26 +210,18 @@ def c_filter_run(library: CompiledLibrary, name: str, z: np.ndarray, x0: np.ndar
     stem = name[:-5]
     dt = library[name].dtype
     nx = x0.size
-    init, update = _raw(library, f"{stem}_init", 3), _raw(library, f"{stem}_update", 2)
+    init, update = c_function(library, f"{stem}_init", 3), c_function(library, f"{stem}_update", 2)
     state = np.full(nx + nx * nx, SENTINEL, dtype=dt)  # the struct: x[nx] then P[nx*nx], no padding
     zs = np.ascontiguousarray(z, dtype=dt)
     x0c, P0c = np.ascontiguousarray(x0, dtype=dt), np.ascontiguousarray(P0, dtype=dt)
     out = np.zeros((len(z) + 1, state.size))
     status = np.zeros(len(z) + 1, dtype=int)
-    status[0] = init(_ptr(state), _ptr(x0c), _ptr(P0c))
+    status[0] = init(pointer(state), pointer(x0c), pointer(P0c))
     out[0] = state
     for i in range(len(z)):
-        status[i + 1] = update(_ptr(state), _ptr(zs[i]))
+        status[i + 1] = update(pointer(state), pointer(zs[i]))
         out[i + 1] = state
     return FilterTrace(status, out[:, :nx], out[:, nx:].reshape(-1, nx, nx))
-
-
-def _within(c: np.ndarray, r: np.ndarray, real: str, tol: float) -> tuple[float, bool]:
-    d = np.abs(np.asarray(c, float) - r)
-    if not np.all(np.isfinite(d)):
-        return float("inf"), False
-    worst = float(d.max()) if d.size else 0.0
-    return worst, bool(np.all(d <= (FLOAT_RELATIVE_TOLERANCE * (1 + np.abs(r)) if real == "float" else tol)))
 
 
 def filter_checks(library: CompiledLibrary, controller: Controller, name: str, record: dict[str, np.ndarray],
@@ -267,20 +252,18 @@ def filter_checks(library: CompiledLibrary, controller: Controller, name: str, r
     f = getattr(controller, name)
     stem = name[:-5]
     cf = library[name]
-    tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else cf.spec.tolerance
+    tol = cf.spec.tolerance
     z, x0, P0 = record["z"], record["x0"], record["P0"]
     ref = python_filter_run(f, z, x0, P0)
     run = c_filter_run(library, name, z, x0, P0)
     n = len(z)
     flat = lambda r: np.hstack([r.x, r.P.reshape(len(r.x), -1)])  # noqa: E731
-    e1, ok1 = _within(flat(run), flat(ref), real, tol)
     status, (xn, Pn) = cf.call_rows(ref.x[:-1], ref.P[:-1].reshape(n, -1), z, fill=SENTINEL)
     good = status == _OK
-    e2, ok2 = _within(np.hstack([xn, Pn])[good], flat(ref)[1:][good], real, tol)
     unit = cf.spec.unit
     checks = [
-        FunctionCheck(f"{stem}_update", n, e1, tol, unit, int(np.sum(run.status != _OK)), bool(ok1 and np.all(run.status == _OK))),
-        FunctionCheck(name, n, e2, tol, unit, int(np.sum(~good)), bool(ok2 and good.all())),
+        run_check(f"{stem}_update", n, [(flat(run), flat(ref))], real, tol, unit, int(np.sum(run.status != _OK))),
+        run_check(name, n, [(np.hstack([xn, Pn])[good], flat(ref)[1:][good])], real, tol, unit, int(np.sum(~good))),
     ]
     if x0.size == 19:
         dev = np.abs(np.linalg.norm(run.x[1:, QUATERNION_SLICE], axis=1) - 1.0)
@@ -288,10 +271,6 @@ def filter_checks(library: CompiledLibrary, controller: Controller, name: str, r
         qtol = FLOAT_RELATIVE_TOLERANCE if real == "float" else QUATERNION_NORM_TOLERANCE
         checks.append(FunctionCheck(f"{stem}_update quaternion norm", n, worst, qtol, "| |quat| - 1 |", 0, worst <= qtol))
     return checks, run, ref
-
-
-def _probe(function: str, case: str, expected: str, status: int, untouched: bool) -> StatusProbe:
-    return StatusProbe(function, case, expected, int(status), bool(untouched), bool(status == STATUS_CODES[expected][0] and untouched))
 
 
 def not_positive_definite(P0: np.ndarray) -> np.ndarray:
@@ -333,8 +312,8 @@ def filter_probes(library: CompiledLibrary, name: str, record: dict[str, np.ndar
     stem = name[:-5]
     dt = library[name].dtype
     nx = record["x0"].size
-    step = _raw(library, name, 5)
-    init, update = _raw(library, f"{stem}_init", 3), _raw(library, f"{stem}_update", 2)
+    step = c_function(library, name, 5)
+    init, update = c_function(library, f"{stem}_init", 3), c_function(library, f"{stem}_update", 2)
     good = {"x": np.ascontiguousarray(record["x0"], dt), "P": np.ascontiguousarray(record["P0"], dt),
             "z": np.ascontiguousarray(record["z"][0], dt)}
     sentinel = np.asarray(SENTINEL, dt)
@@ -347,7 +326,7 @@ def filter_probes(library: CompiledLibrary, name: str, record: dict[str, np.ndar
 
     def run_step(inputs, null=None):
         xo, Po = fresh(nx), fresh(nx * nx)
-        ptrs = [_ptr(inputs["x"]), _ptr(inputs["P"]), _ptr(inputs["z"]), _ptr(xo), _ptr(Po)]
+        ptrs = [pointer(inputs["x"]), pointer(inputs["P"]), pointer(inputs["z"]), pointer(xo), pointer(Po)]
         if null is not None:
             ptrs[null] = None
         return step(*ptrs), clean(xo, Po)
@@ -358,22 +337,22 @@ def filter_probes(library: CompiledLibrary, name: str, record: dict[str, np.ndar
             inputs = {k: v.copy() for k, v in good.items()}
             inputs[arg][-1] = bad
             s, ok = run_step(inputs)
-            probes.append(_probe(name, f"{what} in {arg}", "GT_BAD_ARGUMENT", s, ok))
+            probes.append(status_probe(name, f"{what} in {arg}", "GT_BAD_ARGUMENT", s, ok))
     for i, arg in enumerate(("x", "P", "z", "x_next", "P_next")):
         s, ok = run_step(good, null=i)
-        probes.append(_probe(name, f"NULL {arg}", "GT_BAD_ARGUMENT", s, ok))
+        probes.append(status_probe(name, f"NULL {arg}", "GT_BAD_ARGUMENT", s, ok))
     bad_P = np.ascontiguousarray(not_positive_definite(record["P0"]), dt)
     s, ok = run_step(dict(good, P=bad_P))
-    probes.append(_probe(name, "P not positive definite", "GT_NUMERIC_ERROR", s, ok))
+    probes.append(status_probe(name, "P not positive definite", "GT_NUMERIC_ERROR", s, ok))
     s, ok = run_step(dict(good, P=np.ascontiguousarray(-record["P0"], dt)))
-    probes.append(_probe(name, "P negative definite", "GT_NUMERIC_ERROR", s, ok))
+    probes.append(status_probe(name, "P negative definite", "GT_NUMERIC_ERROR", s, ok))
 
     st = fresh(nx + nx * nx)
-    probes.append(_probe(f"{stem}_init", "NULL state", "GT_BAD_ARGUMENT", init(None, _ptr(good["x"]), _ptr(good["P"])), True))
+    probes.append(status_probe(f"{stem}_init", "NULL state", "GT_BAD_ARGUMENT", init(None, pointer(good["x"]), pointer(good["P"])), True))
     for case, x0, P0 in (("NULL x0", None, good["P"]), ("NULL P0", good["x"], None),
                          ("NaN in P0", good["x"], np.where(np.eye(nx, dtype=bool), np.nan, good["P"]).astype(dt))):
         st = fresh(nx + nx * nx)
-        probes.append(_probe(f"{stem}_init", case, "GT_BAD_ARGUMENT", init(_ptr(st), _ptr(x0), _ptr(P0)), clean(st)))
+        probes.append(status_probe(f"{stem}_init", case, "GT_BAD_ARGUMENT", init(pointer(st), pointer(x0), pointer(P0)), clean(st)))
 
     def state_of(x, P):
         return np.ascontiguousarray(np.concatenate([x.ravel(), P.ravel()]), dt)
@@ -385,9 +364,9 @@ def filter_probes(library: CompiledLibrary, name: str, record: dict[str, np.ndar
         ("covariance not positive definite", state_of(good["x"], bad_P), good["z"], "GT_NUMERIC_ERROR"),
     ):
         before = state.copy()
-        s = update(_ptr(state), _ptr(z))
-        probes.append(_probe(f"{stem}_update", case, expected, s, bool(np.array_equal(state, before, equal_nan=True))))
-    probes.append(_probe(f"{stem}_update", "NULL state", "GT_BAD_ARGUMENT", update(None, _ptr(good["z"])), True))
+        s = update(pointer(state), pointer(z))
+        probes.append(status_probe(f"{stem}_update", case, expected, s, bool(np.array_equal(state, before, equal_nan=True))))
+    probes.append(status_probe(f"{stem}_update", "NULL state", "GT_BAD_ARGUMENT", update(None, pointer(good["z"])), True))
     return probes
 
 
@@ -397,31 +376,6 @@ def _c_array(values: np.ndarray, rows: bool = False) -> str:
     if rows:
         return ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in values)
     return ", ".join(f"{float(v)!r}" for v in np.ravel(values))
-
-
-_TIMER = r"""
-#define _POSIX_C_SOURCE 199309L
-#include <stdio.h>
-#include <time.h>
-#include "{header}"
-
-static double now_ns(void)
-{{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}}
-{tables}
-int main(void)
-{{
-    volatile double sink = 0.0;
-    int status = 0;
-    long i, n;
-    double t0, t1;
-{blocks}
-    return status != 0;
-}}
-"""
 
 
 def time_filters(generated: GeneratedCode, library: Path, records: dict[str, dict[str, np.ndarray]], build_dir: str | Path,
@@ -466,89 +420,25 @@ def time_filters(generated: GeneratedCode, library: Path, records: dict[str, dic
         for label, call in ((name, f"{p}_{name}(s.x, s.P, Z_{stem}[i % {N}], s.x, s.P)"), (f"{stem}_update", f"{p}_{stem}_update(&s, Z_{stem}[i % {N}])")):
             restart = f"if (i % {N} == 0) status |= {p}_{stem}_init(&s, X0_{stem}, P0_{stem});"
             block = (f"if (i % {TIMING_BLOCK} == 0) tb = now_ns(); status |= {call}; sink += s.x[0]; "
-                     f"if (i % {TIMING_BLOCK} == {TIMING_BLOCK - 1}) {{{{ tb = (now_ns() - tb) / {TIMING_BLOCK}.0; if (tb < best) best = tb; }}}}")
-            loop = f"for (i = 0; i < {{n}}; ++i) {{{{ {restart} {block} }}}}"
+                     f"if (i % {TIMING_BLOCK} == {TIMING_BLOCK - 1}) {{ tb = (now_ns() - tb) / {TIMING_BLOCK}.0; if (tb < best) best = tb; }}")
+
+            def loop(n: object, restart: str = restart, block: str = block) -> str:
+                return f"for (i = 0; i < {n}; ++i) {{ {restart} {block} }}"
             blocks.append("\n".join([
                 "    {",
                 f"        {p}_{stem}_state s;",
                 "        double tb = 0.0, best = 1e300;",
-                f"        t0 = now_ns(); {loop.format(n=N)} t1 = now_ns();",
+                f"        t0 = now_ns(); {loop(N)} t1 = now_ns();",
                 f"        n = (long)({budget_s * 1e9} / ((t1 - t0) / {N}.0 + 1.0)); n = n < {N} ? {N} : (n / {N}) * {N};",
                 "        best = 1e300;",
-                f"        t0 = now_ns(); {loop.format(n='n')} t1 = now_ns();",
+                f"        t0 = now_ns(); {loop('n')} t1 = now_ns();",
                 f'        printf("{label}\\t%.3f\\t%.3f\\n", (t1 - t0) / (double)n, best);',
                 "    }",
             ]))
-    build = Path(build_dir)
-    build.mkdir(parents=True, exist_ok=True)
-    src = build / f"{p}_filter_timing.c"
-    src.write_text(_TIMER.format(header=generated.header.name, tables="\n".join(tables), blocks="\n".join(blocks)))
-    exe = build / f"{p}_filter_timing"
-    proc = subprocess.run([*find_compiler(), "-std=c99", "-O2", "-Wall", "-Wextra", "-I", str(generated.out_dir), str(src), "-o", str(exe),
-                           "-L", str(library.parent), f"-l{p}", f"-Wl,-rpath,{library.parent}", "-lm"], capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise CodegenError(f"filter timing program failed to build:\n{proc.stderr.strip()}")
-    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=600)
-    if run.returncode != 0:
-        raise CodegenError("filter timing program: a timed step returned a non-OK status")
     out = {}
-    for line in run.stdout.strip().splitlines():
-        label, mean, best = line.split("\t")
+    for label, mean, best in time_program(generated, library, f"{p}_filter_timing", blocks, build_dir, tables, "filter timing program"):
         out[label], out[f"{label} best"] = float(mean), float(best)
     return out
-
-
-_PROGRAM = r"""/* Stand-alone run of {p}_{stem}_init/_update over a measurement record (generated by gtmodel).
- * Writes, per step, the status (as a double) then x[NX] and P[NX*NX] to argv[1]; prints the
- * number of heap calls made by the filter (malloc/calloc/realloc/free, counted by
- * -Wl,--wrap while a filter function runs) and of non-OK statuses. */
-#include <stdio.h>
-#include <stdlib.h>
-#include "{header}"
-
-#include "heap_watch.h"
-
-#define N {n}
-static const {real} Z[N][{nz}] = {{{z}}};
-static const {real} X0[{nx}] = {{{x0}}};
-static const {real} P0[{nx2}] = {{{P0}}};
-
-static int put(FILE *fh, int status, const {p}_{stem}_state *s)
-{{
-    double row[1 + {nx} + {nx2}];
-    int i;
-    row[0] = (double)status;
-    for (i = 0; i < {nx}; ++i) row[1 + i] = (double)s->x[i];
-    for (i = 0; i < {nx2}; ++i) row[1 + {nx} + i] = (double)s->P[i];
-    return fwrite(row, sizeof row, 1, fh) == 1;
-}}
-
-int main(int argc, char **argv)
-{{
-    {p}_{stem}_state s;
-    FILE *fh;
-    long k, bad = 0;
-    int status, written = 1;
-    if (argc < 2 || (fh = fopen(argv[1], "wb")) == NULL) return 2;
-    heap_watch = 1;
-    status = {p}_{stem}_init(&s, X0, P0);
-    heap_watch = 0;
-    bad += status != GT_OK;
-    written &= put(fh, status, &s);
-    for (k = 0; k < N; ++k) {{
-        heap_watch = 1;
-        status = {p}_{stem}_update(&s, Z[k]);
-        heap_watch = 0;
-        bad += status != GT_OK;
-        written &= put(fh, status, &s);
-    }}
-    written &= fclose(fh) == 0;
-    printf("steps %ld\n", (long)N);
-    printf("non-OK status %ld\n", bad);
-    printf("heap calls in the filter %ld\n", heap_calls);
-    return (bad == 0 && heap_calls == 0 && written) ? 0 : 1;
-}}
-"""
 
 
 def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, np.ndarray], build_dir: str | Path,
@@ -587,23 +477,17 @@ def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, 
     nx, nz = record["x0"].size, record["z"].shape[1]
     build = Path(build_dir)
     build.mkdir(parents=True, exist_ok=True)
-    src = build / f"{p}_{stem}_run.c"
-    src.write_text(_PROGRAM.format(p=p, stem=stem, header=generated.header.name, n=len(record["z"]), real=generated.real, nx=nx,
-                                   nz=nz, nx2=nx * nx, z=_c_array(record["z"], rows=True), x0=_c_array(record["x0"]), P0=_c_array(record["P0"])))
-    cc = find_compiler()
-    objects = list(objects) if objects is not None else []
-    for c_file in (src,) if objects else (*generated.c_sources, src):
-        obj = build / (c_file.stem + ".strict.o")
-        proc = subprocess.run([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-I", str(harness_dir()), "-c", str(c_file), "-o", str(obj)], capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise CodegenError(f"compiling {c_file.name} with {' '.join(STRICT_FLAGS)} failed:\n{proc.stderr.strip()}")
-        objects.append(obj)
-    exe = build / f"{p}_{stem}_run"
-    proc = subprocess.run([*cc, *map(str, objects), "-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free", "-lm", "-o", str(exe)],
-                          capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise CodegenError(f"linking {exe.name} failed:\n{proc.stderr.strip()}")
-    return exe
+    text = fill("template_filter_run.c", PREFIX=p, STEM=stem, HEADER=generated.header.name, N=len(record["z"]), REAL=generated.real,
+                NX=nx, NZ=nz, NX2=nx * nx, Z=_c_array(record["z"], rows=True), X0=_c_array(record["x0"]), P0=_c_array(record["P0"]))
+    if objects is None:  # the library's sources, compiled here with the strict flags
+        cc = find_compiler()
+        objects = []
+        for c_file in generated.c_sources:
+            obj = build / (c_file.stem + ".strict.o")
+            run_compiler([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-c", str(c_file), "-o", str(obj)],
+                         f"compiling {c_file.name} with {' '.join(STRICT_FLAGS)}")
+            objects.append(obj)
+    return compile_program(generated, f"{p}_{stem}_run", text, build, flags=STRICT_FLAGS, objects=tuple(objects), link_flags=(HEAP_WRAP,))
 
 
 def run_filter_program(program: str | Path, out_file: str | Path, nx: int, valgrind: bool = False,

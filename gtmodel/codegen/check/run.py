@@ -1,0 +1,233 @@
+"""The one way the self-checks build and run a C program against a generated library.
+
+:func:`compile_program` writes a C source, compiles it through
+:func:`gtmodel._compiler.run_compiler` with the build flags of the library
+(:data:`~gtmodel.codegen.build.COMMON_FLAGS` and the wrapper warnings, or the caller's
+flags) and links it; :func:`run_program` runs it and parses its tab-separated output;
+:func:`time_program` does both for a timing program from the template
+``harness/template_timer.c`` whose blocks come from :func:`timing_block` (or the caller's
+own). The checks of the robot functions, the controller and the KF/EKF steps all time
+through here.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import logging
+import subprocess
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from gtmodel._compiler import find_compiler, run_compiler
+from gtmodel.codegen.build import COMMON_FLAGS, WRAPPER_WARNINGS, CompiledLibrary
+from gtmodel.codegen.emit import fill, harness_dir
+from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.errors import CodegenError
+
+__all__ = ["PROGRAM_FLAGS", "compile_program", "run_program", "time_program", "timing_block", "c_function", "pointer"]
+
+log = logging.getLogger("gtmodel")
+
+#: Flags of a check program: the library's own (:data:`~gtmodel.codegen.build.COMMON_FLAGS`) and its warnings.
+PROGRAM_FLAGS = (*COMMON_FLAGS, *WRAPPER_WARNINGS)
+
+
+def compile_program(generated: GeneratedCode, name: str, text: str, build_dir: str | Path, *, library: Path | None = None,
+                    flags: Sequence[str] = PROGRAM_FLAGS, objects: Sequence[Path] = (), link_flags: Sequence[str] = ()) -> Path:
+    """Write a C program and build it against the generated code.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        The generated library (its folder is on the include path, with the harness folder).
+    name : str
+        File stem: the source is ``<build_dir>/<name>.c``, the program ``<build_dir>/<name>``.
+    text : str
+        The C source.
+    build_dir : str or pathlib.Path
+        Folder for the source, objects and program (created if missing).
+    library : pathlib.Path or None, optional
+        Shared library ``lib<prefix>.so`` to link (with an rpath to its folder); None:
+        link ``objects`` instead.
+    flags : sequence of str, optional
+        Compiler flags (default :data:`PROGRAM_FLAGS`).
+    objects : sequence of pathlib.Path, optional
+        Objects linked into the program (with ``library`` None).
+    link_flags : sequence of str, optional
+        More flags of the link step (e.g. ``-Wl,--wrap=malloc``).
+
+    Returns
+    -------
+    pathlib.Path
+        The program.
+
+    Raises
+    ------
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        The program failed to compile or link (the message holds the compiler output).
+    """
+    build = Path(build_dir)
+    build.mkdir(parents=True, exist_ok=True)
+    src = build / f"{name}.c"
+    src.write_text(text)
+    exe = build / name
+    inc = ["-I", str(generated.out_dir), "-I", str(harness_dir())]
+    cc = find_compiler()
+    if library is not None:
+        run_compiler([*cc, *flags, *inc, str(src), "-o", str(exe), "-L", str(library.parent), f"-l{generated.prefix}",
+                      f"-Wl,-rpath,{library.parent}", *link_flags, "-lm"], f"building {src.name}")
+        return exe
+    obj = build / (src.stem + ".strict.o")
+    run_compiler([*cc, *flags, *inc, "-c", str(src), "-o", str(obj)], f"compiling {src.name} with {' '.join(flags)}")
+    run_compiler([*cc, *map(str, objects), str(obj), *link_flags, "-lm", "-o", str(exe)], f"linking {exe.name}")
+    return exe
+
+
+def run_program(program: Path, what: str, timeout: float = 600) -> list[list[str]]:
+    """Run a check program and parse its output.
+
+    Parameters
+    ----------
+    program : pathlib.Path
+        The program (:func:`compile_program`).
+    what : str
+        What it is, for the message of a failure.
+    timeout : float, optional
+        Seconds.
+
+    Returns
+    -------
+    list of list of str
+        Per output line its tab-separated fields.
+
+    Raises
+    ------
+    CodegenError
+        The program exited with a non-zero code (a call returned a non-OK status) or did
+        not finish in time.
+    """
+    try:
+        run = subprocess.run([str(program)], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise CodegenError(f"{what}: did not finish within {timeout:g} s") from None
+    if run.returncode != 0:
+        raise CodegenError(f"{what}: a timed call returned a non-OK status")
+    return [line.split("\t") for line in run.stdout.strip().splitlines()]
+
+
+def timing_block(label: str, decl: Sequence[str], call: str, budget_s: float, calibration: int = 100) -> str:
+    """One block of a timing program: ``calibration`` calls, then about ``budget_s`` seconds of calls.
+
+    Parameters
+    ----------
+    label : str
+        First field of the printed line ``label<TAB>ns per call``.
+    decl : sequence of str
+        Declarations and set-up statements of the block (indented lines).
+    call : str
+        The statement(s) timed, e.g. ``"status |= gt_L1_ik(a0, 0, o0); sink += o0[0];"``.
+    budget_s : float
+        About this many seconds of calls.
+    calibration : int, optional
+        Calls of the first (calibrating) loop and the least number timed.
+
+    Returns
+    -------
+    str
+        C lines.
+    """
+    c = calibration
+    return "\n".join([
+        "    {",
+        *decl,
+        f"        t0 = now_ns(); for (i = 0; i < {c}; ++i) {{ {call} }} t1 = now_ns();",
+        f"        n = (long)({budget_s * 1e9} / ((t1 - t0) / {c}.0 + 1.0)); if (n < {c}) n = {c};",
+        f"        t0 = now_ns(); for (i = 0; i < n; ++i) {{ {call} }} t1 = now_ns();",
+        f'        printf("{label}\\t%.3f\\n", (t1 - t0) / (double)n);',
+        "    }",
+    ])
+
+
+def time_program(generated: GeneratedCode, library: Path, name: str, blocks: Sequence[str], build_dir: str | Path,
+                 tables: Sequence[str] = (), what: str = "timing program") -> list[list[str]]:
+    """Build the timing program of ``blocks`` against the shared library, run it and parse its output.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        The generated library.
+    library : pathlib.Path
+        Its shared library.
+    name : str
+        Program name (file stem), e.g. ``"gt_L1_timing"``.
+    blocks : sequence of str
+        Timed blocks (:func:`timing_block`), each printing a line ``label<TAB>value...``.
+    build_dir : str or pathlib.Path
+        Folder for the program.
+    tables : sequence of str, optional
+        Lines before ``main``: constant input tables.
+    what : str, optional
+        What it is, for the messages.
+
+    Returns
+    -------
+    list of list of str
+        Per printed line its tab-separated fields.
+
+    Raises
+    ------
+    CodegenError
+        The program failed to build, or a timed call returned a non-OK status.
+    """
+    text = fill("template_timer.c", HEADER=generated.header.name, TABLES="\n".join(tables), BLOCKS="\n".join(blocks))
+    try:
+        exe = compile_program(generated, name, text, build_dir, library=library)
+    except CodegenError as exc:
+        raise CodegenError(f"{what} failed to build:\n{exc}") from None
+    log.debug("codegen: running %s", exe)
+    return run_program(exe, what)
+
+
+def c_function(library: CompiledLibrary, name: str, nargs: int, int_first: bool = False):
+    """A raw ctypes function ``<prefix>_<name>`` of a library: pointer arguments, ``int`` result.
+
+    Parameters
+    ----------
+    library : CompiledLibrary
+        The loaded library.
+    name : str
+        Function name without the prefix, e.g. ``"kalman_update"``.
+    nargs : int
+        Number of arguments.
+    int_first : bool, optional
+        The first argument is an ``int`` (e.g. the cycle of ``ilc_correction``).
+
+    Returns
+    -------
+    ctypes function
+        Called with :func:`pointer` values (None for NULL).
+    """
+    f = getattr(library.cdll, f"{library.generated.prefix}_{name}")
+    f.restype = ctypes.c_int
+    f.argtypes = ([ctypes.c_int] if int_first else [ctypes.c_void_p]) + [ctypes.c_void_p] * (nargs - 1)
+    return f
+
+
+def pointer(a: np.ndarray | None) -> int | None:
+    """The data address of a contiguous array for a :func:`c_function` call (None: NULL).
+
+    Parameters
+    ----------
+    a : numpy.ndarray or None
+        A C-contiguous array of the library's floating-point type.
+
+    Returns
+    -------
+    int or None
+        Its address.
+    """
+    return None if a is None else a.ctypes.data
