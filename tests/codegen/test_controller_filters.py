@@ -1,6 +1,6 @@
 """The KF/EKF steps of the tracker + IMU fusion as generated C (issue 14, item 6).
 
-Independent references: the very CasADi step Functions of gtmodel.estimation.filters evaluated
+Independent references: the very CasADi step Functions of gtmodel.estimation.filters.gaussian evaluated
 from Python over the same measurement record (``mapaccum``, as ``KalmanFilter.run`` does); a
 Function with other noise figures must fail the check; the stand-alone program (strict flags,
 heap calls counted by ``-Wl,--wrap``) under valgrind's memcheck; ``nm`` on the objects.
@@ -32,7 +32,7 @@ from gtmodel.codegen.filter_check import (
     run_filter_program,
 )
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import EndEffectorModel
+from gtmodel.estimation.filters.end_effector import EndEffectorModel
 
 from .controller_functions import FILTER_DT, fusion_filter
 

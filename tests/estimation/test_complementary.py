@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter, forward_backward_design_hz
+from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter, forward_backward_design_hz
 
 DT = 0.004
 #: The specification: zero-phase magnitude -3 dB at the cut-off within 0.1 dB.

@@ -21,7 +21,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.calibration.joint_stiffness import TABLE_2_K_THETA
-from gtmodel.estimation.correction import (
+from gtmodel.estimation.closed_loop.correction import (
     CALIBRATION_POSES_DEG,
     TABLE_16,
     TABLE_17,
@@ -35,7 +35,7 @@ from gtmodel.estimation.correction import (
     pose_compliance,
     truth_model,
 )
-from gtmodel.estimation.correction_loop import (
+from gtmodel.estimation.closed_loop.correction_loop import (
     closed_loop,
     correction_study,
     critical_gain,

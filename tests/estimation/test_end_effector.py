@@ -14,7 +14,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import (
+from gtmodel.estimation.filters.end_effector import (
     IMU_ROTATION,
     IMU_TRANSLATION_M,
     EndEffectorModel,
@@ -23,7 +23,7 @@ from gtmodel.estimation.end_effector import (
     quaternion_multiply,
     quaternion_to_rotation_matrix,
 )
-from gtmodel.estimation.kalman import StationaryKalman
+from gtmodel.estimation.filters.kalman import StationaryKalman
 
 #: The specification: AD Jacobians equal central finite differences to 1e-6 relative.
 FD_TOLERANCE = 1e-6

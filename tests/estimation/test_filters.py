@@ -18,9 +18,9 @@ from filterpy.kalman import KalmanFilter as FilterpyKF
 from scipy.spatial.transform import Rotation
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import EndEffectorModel
-from gtmodel.estimation.filters import ExtendedKalmanFilter, FilterRun, KalmanFilter, cholesky_pivots
-from gtmodel.estimation.kalman import StationaryKalman
+from gtmodel.estimation.filters.end_effector import EndEffectorModel
+from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, FilterRun, KalmanFilter, cholesky_pivots
+from gtmodel.estimation.filters.kalman import StationaryKalman
 from gtmodel.status import Status
 
 DT = 0.001

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.fusion_runs import nees_test
+from gtmodel.estimation.fusion.runs import nees_test
 
 
 def test_nees_test_accepts_a_consistent_independent_sequence():

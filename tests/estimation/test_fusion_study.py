@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.fusion_runs import nees_test
-from gtmodel.estimation.fusion_study import APPENDIX_B, THESIS_TABLE_11, THESIS_TABLE_8, FusionStudy
-from gtmodel.estimation.tracker_imu import SensorSpec
+from gtmodel.estimation.fusion.runs import nees_test
+from gtmodel.estimation.fusion.study import APPENDIX_B, THESIS_TABLE_11, THESIS_TABLE_8, FusionStudy
+from gtmodel.estimation.fusion.tracker_imu import SensorSpec
 from gtmodel.status import Status
 
 from ..conftest import SHARED_REFERENCE

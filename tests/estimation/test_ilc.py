@@ -1,4 +1,4 @@
-"""Iterative learning control (gtmodel.estimation.ilc, gtmodel.estimation.lifted), Dressler (2012) ch. 7.
+"""Iterative learning control (gtmodel.estimation.ilc.iteration, gtmodel.estimation.ilc.lifted), Dressler (2012) ch. 7.
 
 Checked against closed forms (the lifted system of a first-order-plus-delay plant),
 SciPy/python-control (Tukey window, Toeplitz matrices, forced responses), the thesis'

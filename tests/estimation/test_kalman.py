@@ -17,8 +17,8 @@ import pytest
 import scipy.linalg
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
-from gtmodel.estimation.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE, StationaryKalman, tune_position_noise
+from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
+from gtmodel.estimation.filters.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE, StationaryKalman, tune_position_noise
 
 DT = 0.004
 #: The specification: the gain equals a second Riccati solver to 1e-9 (relative per entry).

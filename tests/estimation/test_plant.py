@@ -1,4 +1,4 @@
-"""The closed-loop tracking plant (gtmodel.estimation.plant) against independent references.
+"""The closed-loop tracking plant (gtmodel.estimation.closed_loop.plant) against independent references.
 
 References: closed forms of the actuator model (6.11) (DC gain ``b/(1-a)``, impulse response
 ``b a^(k-5)``), the static closed form of the structure (``d = -m_acc a / k``), the
@@ -17,7 +17,7 @@ import pytest
 
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.estimation import SensorModel, ToolStructure, TrackingPlant, TrackingResponse
-from gtmodel.estimation.plant import DT, STANDARD_GRAVITY
+from gtmodel.estimation.closed_loop.plant import DT, STANDARD_GRAVITY
 from gtmodel.robots import GantryTau3Kinematics
 from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.estimation.sine_path import FEED_RATE_M_S, SinePath
-from gtmodel.estimation.tracker_imu import TABLE_7
+from gtmodel.estimation.fusion.sine_path import FEED_RATE_M_S, SinePath
+from gtmodel.estimation.fusion.tracker_imu import TABLE_7
 
 DT = 1e-3
 

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import IMU_ROTATION, EndEffectorModel
-from gtmodel.estimation.tracker_imu import (
+from gtmodel.estimation.filters.end_effector import IMU_ROTATION, EndEffectorModel
+from gtmodel.estimation.fusion.tracker_imu import (
     SWEEP_PARAMETERS,
     TABLE_7,
     SensorSpec,

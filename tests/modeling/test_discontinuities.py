@@ -1,4 +1,4 @@
-"""Tests of sign() switched by events with Filippov sliding (gtmodel.modeling.discontinuities).
+"""Tests of sign() switched by events with Filippov sliding (gtmodel.modeling.structure.discontinuities).
 
 References: closed forms of Coulomb friction (uniform deceleration to rest, breakaway when
 the force exceeds the friction), a triangle wave, stated per test.
@@ -12,9 +12,9 @@ import pytest
 
 from gtmodel.errors import ConvergenceError
 from gtmodel.modeling import Model
-from gtmodel.modeling.discontinuities import sign_modes
-from gtmodel.modeling.event_simulation import simulate_events
-from gtmodel.modeling.simulation import simulate_model
+from gtmodel.modeling.structure.discontinuities import sign_modes
+from gtmodel.modeling.simulation.event_simulation import simulate_events
+from gtmodel.modeling.simulation.integration import simulate_model
 
 MU_G = 0.3 * 9.81  # Coulomb deceleration, m/s^2
 EVENT_TOL = 1e-6  # s

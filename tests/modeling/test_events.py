@@ -13,8 +13,8 @@ from scipy.special import ellipk
 
 from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling import Model
-from gtmodel.modeling.event_simulation import simulate_events
-from gtmodel.modeling.events import EventRecord
+from gtmodel.modeling.simulation.event_simulation import simulate_events
+from gtmodel.modeling.structure.events import EventRecord
 
 # mass on a spring to the wall, on a belt at constant speed: k = 4 N/m, m = 1 kg,
 # v_b = 0.5 m/s, static friction F_s = 1 N > kinetic friction F_k = 0.6 N

@@ -12,8 +12,8 @@ import pytest
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Model, Optimization, solve, structural_simplify
-from gtmodel.modeling.index_reduction import pantelides, reduced_system, select_dummies
-from gtmodel.modeling.structure import scalarize
+from gtmodel.modeling.structure.index_reduction import pantelides, reduced_system, select_dummies
+from gtmodel.modeling.structure.analysis import scalarize
 
 from ._dae_builders import angle_pendulum, cartesian_pendulum, slider_crank, slider_crank_minimal
 

@@ -1,4 +1,4 @@
-"""Tests of the linearisation of models (gtmodel.modeling.linear).
+"""Tests of the linearisation of models (gtmodel.modeling.simulation.linear).
 
 References: hand-derived Jacobians of small linear and nonlinear models (stated per test).
 """
@@ -11,7 +11,7 @@ import pytest
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Model
-from gtmodel.modeling.linear import linearize
+from gtmodel.modeling.simulation.linear import linearize
 
 
 def msd(k=4.0, c=0.4, mass=2.0):

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.modeling.result import CollocationData, lagrange_basis, normalize_ipopt_status
+from gtmodel.modeling.ocp.result import CollocationData, lagrange_basis, normalize_ipopt_status
 
 NODE_TOL = 1e-12  # evaluation at a node reproduces the node value up to rounding
 POLY_TOL = 1e-10  # interpolation of a polynomial of admissible degree

@@ -1,4 +1,4 @@
-"""Tests of gtmodel.modeling.simulation: piecewise-constant inputs that change on the grid.
+"""Tests of gtmodel.modeling.simulation.integration: piecewise-constant inputs that change on the grid.
 
 A composed model with a ``translational.Force`` source has algebraic variables that
 follow the input directly (the flange force); IDAS does not make them consistent again
@@ -20,7 +20,7 @@ import pytest
 
 from gtmodel.modeling import Component, Model, connect
 from gtmodel.modeling.library import translational as tr
-from gtmodel.modeling.simulation import input_segments
+from gtmodel.modeling.simulation.integration import input_segments
 
 M1, M2, C, D = 1.0, 2.0, 100.0, 3.0
 SIM_TOL = 1e-7  # vs closed form at rtol = 1e-8 / atol = 1e-10 (positions of order 0.1 m)

@@ -13,9 +13,9 @@ import scipy.sparse as sps
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Model, check_structure, structural_simplify
-from gtmodel.modeling.components import Component
+from gtmodel.modeling.components.component import Component
 from gtmodel.modeling.library.translational import Fixed, Mass, Spring
-from gtmodel.modeling.structure import (
+from gtmodel.modeling.structure.analysis import (
     dulmage_mendelsohn,
     eliminate_aliases,
     incidence,
