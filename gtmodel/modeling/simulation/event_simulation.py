@@ -28,7 +28,7 @@ loop (:func:`simulate_events_reduced`): its when-clauses are carried over and th
 targets kept as states. The dummy selection made at the start is not re-made between
 events, so a constraint whose selection turns singular on the way (a Cartesian pendulum
 passing ``x = 0``) stops with a ConvergenceError (a strict xfail in
-tests/modeling/test_events.py); linear couplings (rigidly joined masses) are exact.
+tests/modeling/structure/test_events.py); linear couplings (rigidly joined masses) are exact.
 
 Why not CasADi's own event support (DAE field ``"zero"`` with option ``"transition"``,
 experimental in 3.8): measured in casadi 3.8.2 on ``x'' = -x``, ``x(0) = 1``, ``zero = x``

@@ -23,7 +23,7 @@ from gtmodel.modeling import (
     parse_objective,
 )
 
-from ._builders import double_integrator
+from .._builders import double_integrator
 
 EVAL_TOL = 1e-12  # parsed vs directly built expression, same operations in double precision
 MIN_TIME_TOL = 1e-5  # min-time tf: bang-bang with active bounds, IPOPT tol 1e-8 (as test_collocation)
@@ -303,7 +303,7 @@ def test_documented_example_parses():
     import tomllib
     from pathlib import Path
 
-    doc = (Path(__file__).resolve().parents[2] / "docs" / "problem_language.md").read_text()
+    doc = (Path(__file__).resolve().parents[3] / "docs" / "problem_language.md").read_text()
     block = doc.split("## Complete example", 1)[1].split("```toml\n", 1)[1].split("```", 1)[0]
     data = tomllib.loads(block)
     scalars = "x y z xd yd zd q1 q2 q3 qd1 qd2 qd3 tau1 tau2 tau3 time final_time".split()

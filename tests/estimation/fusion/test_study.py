@@ -21,7 +21,7 @@ from gtmodel.estimation.fusion.study import APPENDIX_B, THESIS_TABLE_11, THESIS_
 from gtmodel.estimation.fusion.tracker_imu import SensorSpec
 from gtmodel.status import Status
 
-from ..conftest import SHARED_REFERENCE
+from ...conftest import SHARED_REFERENCE
 
 REFERENCE = tomllib.loads((SHARED_REFERENCE / "serial_kr500.toml").read_text())["state_estimation"]
 #: The judged velocity improvement over the four-point regression [%].

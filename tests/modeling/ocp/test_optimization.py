@@ -14,7 +14,7 @@ import pytest
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
 
-from ._builders import double_integrator
+from .._builders import double_integrator
 
 
 def _opt():

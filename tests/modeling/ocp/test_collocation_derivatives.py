@@ -8,7 +8,7 @@ import pytest
 
 from gtmodel.modeling import CollocationTranscription, Optimization
 
-from ._builders import double_integrator, rest_to_rest
+from .._builders import double_integrator, rest_to_rest
 from .test_optimization import _free_parameter_problem
 
 

@@ -32,7 +32,7 @@ from gtmodel.estimation.fusion.tracker_imu import (
     sensor_only,
 )
 
-from ..conftest import SHARED_REFERENCE
+from ...conftest import SHARED_REFERENCE
 
 REFERENCE = tomllib.loads((SHARED_REFERENCE / "serial_kr500.toml").read_text())["state_estimation"]
 DT = 1e-3

@@ -46,7 +46,7 @@ from gtmodel.estimation.closed_loop.correction_loop import (
 )
 from gtmodel.robots.serial import load_serial_arm
 
-from ..conftest import SHARED_REFERENCE
+from ...conftest import SHARED_REFERENCE
 
 DT = 0.004
 SINGLE = OffsetResponseModel((200.0,), (4000.0,), (2.5e6,), 200.0)

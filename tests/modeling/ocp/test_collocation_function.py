@@ -8,7 +8,7 @@ import pytest
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription
 
-from ._builders import min_energy_over_distance_parameter
+from .._builders import min_energy_over_distance_parameter
 
 COST_TOL = 1e-6
 

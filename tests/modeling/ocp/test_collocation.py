@@ -12,7 +12,7 @@ import pytest
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult, solve
 
-from ._builders import double_integrator, min_energy_over_distance_parameter, min_energy_problem, rest_to_rest
+from .._builders import double_integrator, min_energy_over_distance_parameter, min_energy_problem, rest_to_rest
 
 COST_TOL = 1e-6  # min-energy cost: the cubic solution is exactly representable (d = 3)
 TRAJ_TOL = 1e-6  # trajectory vs closed form on the mesh
