@@ -125,7 +125,7 @@ class Controller:
         ``"kf_step"(x[nx], P[nx,nx], z[nz]) -> (x_next[nx], P_next[nx,nx], pivots[nz+nx])``:
         one step of the Kalman filter of the 3-axis (translation-only) end-effector model,
         Cvitanic (2021), eqs. (21)-(26); e.g. ``KalmanFilter(...).step_function()`` of
-        :mod:`gtmodel.estimation.filters.gaussian` (nx 9, nz 6). Generated as ``<prefix>_kf_step``
+        :mod:`gtmodel.estimation.filters` (nx 9, nz 6). Generated as ``<prefix>_kf_step``
         with the state struct ``<prefix>_kf_state`` (:mod:`gtmodel.codegen.filter_step`).
     ekf_step : casadi.Function or None, optional
         The same signature for the extended Kalman filter of the 19-D model, eqs. (21)-(29)

@@ -1,6 +1,6 @@
 """The KF and EKF steps of the laser tracker + IMU fusion as generated C (Cvitanic (2021), ch. 4).
 
-Each filter step is a CasADi Function of :mod:`gtmodel.estimation.filters.gaussian`
+Each filter step is a CasADi Function of :mod:`gtmodel.estimation.filters`
 (``KalmanFilter(...).step_function()``, ``ExtendedKalmanFilter(...).step_function()``; the
 ONE graph of the Python filters, nothing is rebuilt here)::
 

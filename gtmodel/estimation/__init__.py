@@ -24,9 +24,9 @@ Lower layers only: robots, modeling and the base modules.
 
 from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
 from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, run_ilc
-from gtmodel.estimation.filters.kalman import StationaryKalman, tune_position_noise
+from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter, StationaryKalman, tune_position_noise
 from gtmodel.estimation.filters.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
-from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, FilterRun, KalmanFilter
+from gtmodel.estimation.filters.gaussian import FilterRun
 from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
 from gtmodel.estimation.filters.sampling import ParticleFilter, ParticleRun, UnscentedKalmanFilter
 from gtmodel.estimation.fusion.tracker_imu import SensorSpec, measure, four_point_velocity

@@ -19,8 +19,7 @@ import scipy.signal
 
 from gtmodel.estimation import StationaryKalman, ilc_correction_function
 from gtmodel.estimation.filters.end_effector import EndEffectorModel
-from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, KalmanFilter
-from gtmodel.estimation.filters.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
+from gtmodel.estimation.filters.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE, ExtendedKalmanFilter, KalmanFilter
 
 __all__ = ["DT", "FILTER_DT", "kalman_filter", "kalman_step_function", "ilc_correction_function", "learned_table", "fusion_filter"]
 

@@ -1,6 +1,6 @@
 """The KF/EKF steps of the tracker + IMU fusion as generated C (issue 14, item 6).
 
-Independent references: the very CasADi step Functions of gtmodel.estimation.filters.gaussian evaluated
+Independent references: the very CasADi step Functions of gtmodel.estimation.filters evaluated
 from Python over the same measurement record (``mapaccum``, as ``KalmanFilter.run`` does); a
 Function with other noise figures must fail the check; the stand-alone program (strict flags,
 heap calls counted by ``-Wl,--wrap``) under valgrind's memcheck; ``nm`` on the objects.

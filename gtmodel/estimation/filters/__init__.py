@@ -21,8 +21,8 @@ from __future__ import annotations
 
 from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
 from gtmodel.estimation.filters.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
-from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, FilterRun, KalmanFilter, cholesky_pivots
-from gtmodel.estimation.filters.kalman import StationaryKalman, tune_position_noise
+from gtmodel.estimation.filters.gaussian import FilterRun, cholesky_pivots
+from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter, StationaryKalman, tune_position_noise
 from gtmodel.estimation.filters.sampling import ParticleFilter, ParticleRun, UnscentedKalmanFilter
 
 __all__ = [

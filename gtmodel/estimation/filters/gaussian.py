@@ -1,10 +1,14 @@
-"""Kalman and extended Kalman filter of the end-effector state (Cvitanic (2021), section 4.1).
+"""The predict-update step of the Kalman and extended Kalman filters (Cvitanic (2021), section 4.1).
+
+The filters themselves are in :mod:`gtmodel.estimation.filters.kalman`; this module holds
+their one step, the record of a filter run (:class:`FilterRun`, with the NEES) and the
+Cholesky pivots.
 
 ONE implementation: the filter step is one CasADi Function built from the
 :class:`~gtmodel.estimation.filters.end_effector.EndEffectorModel`'s transition, measurement and their AD
 Jacobians. On the linear translation-only model the same graph is the Kalman filter
-(:class:`KalmanFilter`, ``"kf_step"``); on the 19-D model it is the extended Kalman filter
-(:class:`ExtendedKalmanFilter`, ``"ekf_step"``). Predict-then-update, sample ``k``::
+(:class:`~gtmodel.estimation.filters.kalman.KalmanFilter`, ``"kf_step"``); on the 19-D model it is the extended Kalman filter
+(:class:`~gtmodel.estimation.filters.kalman.ExtendedKalmanFilter`, ``"ekf_step"``). Predict-then-update, sample ``k``::
 
     x- = f(x),  F = df/dx(x),  P- = F P F^T + Q                     (predict)
     z^ = h(x-), H = dh/dx(x-), S = H P- H^T + R                      (innovation covariance)
@@ -39,7 +43,7 @@ from gtmodel.estimation._signals import signal_rows
 from gtmodel.estimation.filters.end_effector import EndEffectorModel, quaternion_conjugate, quaternion_multiply
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["FilterRun", "KalmanFilter", "ExtendedKalmanFilter", "cholesky_pivots"]
+__all__ = ["FilterRun", "cholesky_pivots"]
 
 logger = logging.getLogger("gtmodel")
 
@@ -388,154 +392,3 @@ class _GaussianFilter:
         return FilterRun(
             status=status, message=message, name=self._name, x=xs, P=ps, step_time_s=elapsed / n, quaternion_slice=qs
         )
-
-
-class ExtendedKalmanFilter(_GaussianFilter):
-    """Extended Kalman filter of the end-effector state (Cvitanic (2021), section 4.1; module docstring).
-
-    The step linearises the model's CasADi transition and measurement by AD
-    (:attr:`EndEffectorModel.transition_jacobian`, :attr:`EndEffectorModel.measurement_jacobian`);
-    on a linear model it is exactly the Kalman filter.
-
-    Parameters
-    ----------
-    model : EndEffectorModel
-        The state model (the filter's belief of the IMU-to-target transform).
-    Q : array_like, shape (nx, nx)
-        Process-noise covariance per sample, symmetric positive semi-definite
-        (e.g. :meth:`EndEffectorModel.process_noise`).
-    R : array_like, shape (nz, nz)
-        Measurement-noise covariance, symmetric positive definite
-        (e.g. :meth:`EndEffectorModel.measurement_noise`).
-    x0 : array_like, shape (nx,)
-        Initial estimate (posterior of the sample before the first measurement); its quaternion
-        is normalised.
-    P0 : array_like, shape (nx, nx)
-        Its covariance, symmetric positive definite.
-    compiled : bool, optional
-        :meth:`run` evaluates the step as C compiled from the same graph
-        (:func:`gtmodel._compiler.compiled_function`: cached; the CasADi interpreter when no
-        compiler is found or ``GTMODEL_COMPILE=0``). The first run of a graph builds it
-        (seconds); :meth:`step_function` is the CasADi Function either way.
-
-    Attributes
-    ----------
-    model : EndEffectorModel
-    nx, nz : int
-    Q, R, P0 : numpy.ndarray
-        The covariances (symmetrised).
-    x0 : numpy.ndarray, shape (nx,)
-    compiled : bool
-
-    Raises
-    ------
-    InputError
-        ``model`` not an EndEffectorModel; a matrix of another shape, not finite, not symmetric,
-        ``Q`` not positive semi-definite, ``R`` or ``P0`` not positive definite; ``x0`` of another
-        shape, not finite, or with a quaternion of zero norm; ``compiled`` not a bool.
-    """
-
-    _name = "ekf"
-
-    def step_function(self) -> ca.Function:
-        """The EKF step ``"ekf_step"(x[nx], P[nx, nx], z[nz]) -> (x_next, P_next, pivots[nz + nx])``.
-
-        Returns
-        -------
-        casadi.Function
-            See the module docstring; the same object on every call.
-        """
-        return super().step_function()
-
-    def run(self, z: Any) -> FilterRun:
-        """Filter a record (:meth:`casadi.Function.mapaccum` of :meth:`step_function`).
-
-        Parameters
-        ----------
-        z : array_like, shape (N, nz)
-            Measurements in the model's order [SI].
-
-        Returns
-        -------
-        FilterRun
-            Named ``"ekf"``; ``status`` ``"error"`` with the arrays cut at a failing sample.
-
-        Raises
-        ------
-        InputError
-            ``z`` of another shape or not finite.
-        """
-        return super().run(z)
-
-
-class KalmanFilter(_GaussianFilter):
-    """Kalman filter of the translation-only (linear) end-effector model (Cvitanic (2021), section 4.1).
-
-    The same graph as :class:`ExtendedKalmanFilter` (one implementation): on the linear model
-    the Jacobians are the constant matrices ``A = kron(A1, I_3)`` and ``C``.
-
-    Parameters
-    ----------
-    model : EndEffectorModel
-        A linear model (``rotation=False``).
-    Q : array_like, shape (nx, nx)
-        Process-noise covariance per sample, symmetric positive semi-definite.
-    R : array_like, shape (nz, nz)
-        Measurement-noise covariance, symmetric positive definite.
-    x0 : array_like, shape (nx,)
-        Initial estimate.
-    P0 : array_like, shape (nx, nx)
-        Its covariance, symmetric positive definite.
-    compiled : bool, optional
-        Evaluate :meth:`run` as compiled C (see :class:`ExtendedKalmanFilter`).
-
-    Attributes
-    ----------
-    model : EndEffectorModel
-    nx, nz : int
-    Q, R, P0 : numpy.ndarray
-    x0 : numpy.ndarray, shape (nx,)
-    compiled : bool
-
-    Raises
-    ------
-    InputError
-        As :class:`ExtendedKalmanFilter`, and a model that is not linear.
-    """
-
-    _name = "kf"
-
-    def __init__(self, model: EndEffectorModel, Q: Any, R: Any, x0: Any, P0: Any, compiled: bool = False) -> None:
-        if isinstance(model, EndEffectorModel) and not model.is_linear:
-            raise InputError("model: expected a linear model (EndEffectorModel(rotation=False)) for the Kalman filter; use ExtendedKalmanFilter")
-        super().__init__(model, Q, R, x0, P0, compiled)
-
-    def step_function(self) -> ca.Function:
-        """The KF step ``"kf_step"(x[nx], P[nx, nx], z[nz]) -> (x_next, P_next, pivots[nz + nx])``.
-
-        Returns
-        -------
-        casadi.Function
-            See the module docstring; the same object on every call.
-        """
-        return super().step_function()
-
-    def run(self, z: Any) -> FilterRun:
-        """Filter a record (:meth:`casadi.Function.mapaccum` of :meth:`step_function`).
-
-        Parameters
-        ----------
-        z : array_like, shape (N, nz)
-            Measurements ``[p_m, a_m]`` [m, m/s^2].
-
-        Returns
-        -------
-        FilterRun
-            Named ``"kf"``.
-
-        Raises
-        ------
-        InputError
-            ``z`` of another shape or not finite.
-        """
-        return super().run(z)

@@ -1,4 +1,14 @@
-"""Stationary Kalman filter for the tool position (Dressler (2012), eqs. 7.19-7.22).
+"""The Kalman filters of the loop: the stationary Kalman filter of the tool position, and the
+Kalman and extended Kalman filters of the end-effector state.
+
+* :class:`StationaryKalman`, :func:`tune_position_noise`: the stationary Kalman filter for the
+  tool position (Dressler (2012), eqs. 7.19-7.22), described below.
+* :class:`KalmanFilter`, :class:`ExtendedKalmanFilter`: the Kalman filter of the linear
+  (translation-only) and the extended Kalman filter of the 19-D end-effector model of the
+  laser tracker + IMU fusion (Cvitanic (2021), section 4.1); both run the one CasADi
+  predict-update step of :mod:`gtmodel.estimation.filters.gaussian`.
+
+Stationary Kalman filter for the tool position (Dressler (2012), eqs. 7.19-7.22).
 
 Model, per direction ``j`` (x, y, ...): the tool position extended with velocity and
 acceleration states, driven by white jerk (7.19)::
@@ -76,11 +86,14 @@ import scipy.optimize
 from gtmodel._arrays import as_finite, positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation._signals import signal_rows
-from gtmodel.estimation.filters.end_effector import constant_acceleration
+from gtmodel.estimation.filters.end_effector import EndEffectorModel, constant_acceleration
+from gtmodel.estimation.filters.gaussian import FilterRun, _GaussianFilter
 
 __all__ = [
     "StationaryKalman",
     "tune_position_noise",
+    "KalmanFilter",
+    "ExtendedKalmanFilter",
     "DEFAULT_POSITION_NOISE",
     "DEFAULT_JERK_NOISE",
     "DEFAULT_ACCELEROMETER_NOISE",
@@ -483,3 +496,154 @@ def tune_position_noise(
     if not (f_hi < target < f_lo):
         raise InputError(f"crossover_hz: expected a frequency in ({f_hi:.4g}, {f_lo:.4g}) Hz for these noises, got {crossover_hz!r}")
     return math.exp(scipy.optimize.brentq(lambda v: crossover(v) - target, lo, hi, xtol=1e-12))
+
+
+class ExtendedKalmanFilter(_GaussianFilter):
+    """Extended Kalman filter of the end-effector state (Cvitanic (2021), section 4.1; the step: :mod:`gtmodel.estimation.filters.gaussian`).
+
+    The step linearises the model's CasADi transition and measurement by AD
+    (:attr:`EndEffectorModel.transition_jacobian`, :attr:`EndEffectorModel.measurement_jacobian`);
+    on a linear model it is exactly the Kalman filter.
+
+    Parameters
+    ----------
+    model : EndEffectorModel
+        The state model (the filter's belief of the IMU-to-target transform).
+    Q : array_like, shape (nx, nx)
+        Process-noise covariance per sample, symmetric positive semi-definite
+        (e.g. :meth:`EndEffectorModel.process_noise`).
+    R : array_like, shape (nz, nz)
+        Measurement-noise covariance, symmetric positive definite
+        (e.g. :meth:`EndEffectorModel.measurement_noise`).
+    x0 : array_like, shape (nx,)
+        Initial estimate (posterior of the sample before the first measurement); its quaternion
+        is normalised.
+    P0 : array_like, shape (nx, nx)
+        Its covariance, symmetric positive definite.
+    compiled : bool, optional
+        :meth:`run` evaluates the step as C compiled from the same graph
+        (:func:`gtmodel._compiler.compiled_function`: cached; the CasADi interpreter when no
+        compiler is found or ``GTMODEL_COMPILE=0``). The first run of a graph builds it
+        (seconds); :meth:`step_function` is the CasADi Function either way.
+
+    Attributes
+    ----------
+    model : EndEffectorModel
+    nx, nz : int
+    Q, R, P0 : numpy.ndarray
+        The covariances (symmetrised).
+    x0 : numpy.ndarray, shape (nx,)
+    compiled : bool
+
+    Raises
+    ------
+    InputError
+        ``model`` not an EndEffectorModel; a matrix of another shape, not finite, not symmetric,
+        ``Q`` not positive semi-definite, ``R`` or ``P0`` not positive definite; ``x0`` of another
+        shape, not finite, or with a quaternion of zero norm; ``compiled`` not a bool.
+    """
+
+    _name = "ekf"
+
+    def step_function(self) -> ca.Function:
+        """The EKF step ``"ekf_step"(x[nx], P[nx, nx], z[nz]) -> (x_next, P_next, pivots[nz + nx])``.
+
+        Returns
+        -------
+        casadi.Function
+            See :mod:`gtmodel.estimation.filters.gaussian`; the same object on every call.
+        """
+        return super().step_function()
+
+    def run(self, z: Any) -> FilterRun:
+        """Filter a record (:meth:`casadi.Function.mapaccum` of :meth:`step_function`).
+
+        Parameters
+        ----------
+        z : array_like, shape (N, nz)
+            Measurements in the model's order [SI].
+
+        Returns
+        -------
+        FilterRun
+            Named ``"ekf"``; ``status`` ``"error"`` with the arrays cut at a failing sample.
+
+        Raises
+        ------
+        InputError
+            ``z`` of another shape or not finite.
+        """
+        return super().run(z)
+
+
+class KalmanFilter(_GaussianFilter):
+    """Kalman filter of the translation-only (linear) end-effector model (Cvitanic (2021), section 4.1).
+
+    The same graph as :class:`ExtendedKalmanFilter` (one implementation): on the linear model
+    the Jacobians are the constant matrices ``A = kron(A1, I_3)`` and ``C``.
+
+    Parameters
+    ----------
+    model : EndEffectorModel
+        A linear model (``rotation=False``).
+    Q : array_like, shape (nx, nx)
+        Process-noise covariance per sample, symmetric positive semi-definite.
+    R : array_like, shape (nz, nz)
+        Measurement-noise covariance, symmetric positive definite.
+    x0 : array_like, shape (nx,)
+        Initial estimate.
+    P0 : array_like, shape (nx, nx)
+        Its covariance, symmetric positive definite.
+    compiled : bool, optional
+        Evaluate :meth:`run` as compiled C (see :class:`ExtendedKalmanFilter`).
+
+    Attributes
+    ----------
+    model : EndEffectorModel
+    nx, nz : int
+    Q, R, P0 : numpy.ndarray
+    x0 : numpy.ndarray, shape (nx,)
+    compiled : bool
+
+    Raises
+    ------
+    InputError
+        As :class:`ExtendedKalmanFilter`, and a model that is not linear.
+    """
+
+    _name = "kf"
+
+    def __init__(self, model: EndEffectorModel, Q: Any, R: Any, x0: Any, P0: Any, compiled: bool = False) -> None:
+        if isinstance(model, EndEffectorModel) and not model.is_linear:
+            raise InputError("model: expected a linear model (EndEffectorModel(rotation=False)) for the Kalman filter; use ExtendedKalmanFilter")
+        super().__init__(model, Q, R, x0, P0, compiled)
+
+    def step_function(self) -> ca.Function:
+        """The KF step ``"kf_step"(x[nx], P[nx, nx], z[nz]) -> (x_next, P_next, pivots[nz + nx])``.
+
+        Returns
+        -------
+        casadi.Function
+            See :mod:`gtmodel.estimation.filters.gaussian`; the same object on every call.
+        """
+        return super().step_function()
+
+    def run(self, z: Any) -> FilterRun:
+        """Filter a record (:meth:`casadi.Function.mapaccum` of :meth:`step_function`).
+
+        Parameters
+        ----------
+        z : array_like, shape (N, nz)
+            Measurements ``[p_m, a_m]`` [m, m/s^2].
+
+        Returns
+        -------
+        FilterRun
+            Named ``"kf"``.
+
+        Raises
+        ------
+        InputError
+            ``z`` of another shape or not finite.
+        """
+        return super().run(z)

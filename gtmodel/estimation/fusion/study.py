@@ -51,7 +51,7 @@ from gtmodel.estimation.filters.end_effector import (
     quaternion_from_rotation_vector,
     quaternion_multiply,
 )
-from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, KalmanFilter
+from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.estimation.fusion.runs import QUANTITIES, FusionRun, nees_test
 from gtmodel.estimation.filters.sampling import ParticleFilter, UnscentedKalmanFilter
 from gtmodel.estimation.fusion.tracker_imu import (

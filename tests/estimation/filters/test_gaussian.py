@@ -19,8 +19,8 @@ from scipy.spatial.transform import Rotation
 
 from gtmodel.errors import InputError
 from gtmodel.estimation.filters.end_effector import EndEffectorModel
-from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, FilterRun, KalmanFilter, cholesky_pivots
-from gtmodel.estimation.filters.kalman import StationaryKalman
+from gtmodel.estimation.filters.gaussian import FilterRun, cholesky_pivots
+from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter, StationaryKalman
 from gtmodel.status import Status
 
 DT = 0.001

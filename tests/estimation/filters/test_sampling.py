@@ -1,6 +1,6 @@
 """Unscented Kalman filter and particle filter on the end-effector model (Cvitanic (2021), sec. 4.1).
 
-Independent references: the Kalman filter (and the EKF) of gtmodel.estimation.filters.gaussian on the
+Independent references: the Kalman filter (and the EKF) of gtmodel.estimation.filters.kalman on the
 linear translation-only model, where the UKF is exact (a second method, another algorithm);
 the EKF on a mildly nonlinear 19-D run; the true states of runs generated FROM the model with
 a fixed seed (state noise N(0, Q), measurement noise N(0, R)) for the particle filter.
@@ -14,7 +14,8 @@ import scipy.linalg
 
 from gtmodel.errors import InputError
 from gtmodel.estimation.filters.end_effector import EndEffectorModel, quaternion_conjugate, quaternion_multiply
-from gtmodel.estimation.filters.gaussian import ExtendedKalmanFilter, FilterRun, KalmanFilter
+from gtmodel.estimation.filters.gaussian import FilterRun
+from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.estimation.filters.sampling import ParticleFilter, ParticleRun, UnscentedKalmanFilter
 
 DT = 1e-3
