@@ -28,7 +28,8 @@ from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.estimation.filters.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
 from gtmodel.estimation.filters.gaussian import FilterRun
 from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
-from gtmodel.estimation.filters.sampling import ParticleFilter, ParticleRun, UnscentedKalmanFilter
+from gtmodel.estimation.filters.particle import ParticleFilter, ParticleRun
+from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
 from gtmodel.estimation.fusion.tracker_imu import SensorSpec, measure, four_point_velocity
 from gtmodel.estimation.fusion.sine_path import SinePath, Truth
 from gtmodel.estimation.fusion.runs import FusionRun, nees_test

@@ -41,11 +41,10 @@ from gtmodel.modeling.ocp import expressions as _expressions
 from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult
+from gtmodel.modeling.ocp.declare import apply_to, optimization_names
 from gtmodel.modeling.ocp.expressions import (
     Objective,
     ParsedConstraint,
-    apply_to,
-    optimization_names,
     parse_constraint,
     parse_expression,
     parse_objective,

@@ -8,8 +8,9 @@
 * :mod:`~gtmodel.estimation.filters.gaussian`: the one CasADi predict-update step the
   Kalman and extended Kalman filters share, the record of a filter run
   (:class:`FilterRun`, NEES) and the Cholesky pivots;
-* :mod:`~gtmodel.estimation.filters.sampling`: the unscented Kalman filter and the particle
-  filter (Cvitanic (2021), section 4.1);
+* :mod:`~gtmodel.estimation.filters.unscented` and :mod:`~gtmodel.estimation.filters.particle`:
+  the sampling filters, the unscented Kalman filter and the particle filter (Cvitanic (2021),
+  section 4.1);
 * :mod:`~gtmodel.estimation.filters.end_effector`: the 19-D end-effector state model of the
   laser tracker + IMU fusion the filters run on (Cvitanic (2021), eqs. (21)-(29)).
 
@@ -23,7 +24,8 @@ from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, Compleme
 from gtmodel.estimation.filters.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
 from gtmodel.estimation.filters.gaussian import FilterRun, cholesky_pivots
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter, StationaryKalman, tune_position_noise
-from gtmodel.estimation.filters.sampling import ParticleFilter, ParticleRun, UnscentedKalmanFilter
+from gtmodel.estimation.filters.particle import ParticleFilter, ParticleRun
+from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
 
 __all__ = [
     "ComplementaryFilter",

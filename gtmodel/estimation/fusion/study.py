@@ -53,7 +53,8 @@ from gtmodel.estimation.filters.end_effector import (
 )
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.estimation.fusion.runs import QUANTITIES, FusionRun, nees_test
-from gtmodel.estimation.filters.sampling import ParticleFilter, UnscentedKalmanFilter
+from gtmodel.estimation.filters.particle import ParticleFilter
+from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
 from gtmodel.estimation.fusion.tracker_imu import (
     SWEEP_PARAMETERS,
     TABLE_7,

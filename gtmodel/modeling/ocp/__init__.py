@@ -4,6 +4,8 @@
   problem declared over a model (no transcription);
 * :mod:`~gtmodel.modeling.ocp.expressions`: the restricted expression language of problem
   files (objectives, constraints) parsed into CasADi;
+* :mod:`~gtmodel.modeling.ocp.declare`: the name table of an optimisation and the parsed
+  objective and constraints declared on it (:func:`apply_to`);
 * :mod:`~gtmodel.modeling.ocp.collocation`: :func:`solve` / :class:`CollocationTranscription`,
   direct collocation solved with IPOPT (or fatrop);
 * :mod:`~gtmodel.modeling.ocp.collocation_nlp`: the collocation NLP (variables, constraints,
@@ -16,11 +18,10 @@
 from __future__ import annotations
 
 from gtmodel.modeling.ocp.optimization import Constraint, Optimization
+from gtmodel.modeling.ocp.declare import apply_to, optimization_names
 from gtmodel.modeling.ocp.expressions import (
     Objective,
     ParsedConstraint,
-    apply_to,
-    optimization_names,
     parse_constraint,
     parse_expression,
     parse_objective,

@@ -2,7 +2,9 @@
 linearisation and the inverse model.
 
 * :mod:`~gtmodel.modeling.simulation.model`: :class:`Model`, the equation-based model
-  (variables, ``der()`` equations, outputs), flattened to a :class:`~gtmodel.modeling.dae.FlatDAE`;
+  (variables, ``der()`` equations, outputs);
+* :mod:`~gtmodel.modeling.simulation.flatten`: a model flattened to its semi-explicit
+  CasADi DAE (:class:`~gtmodel.modeling.dae.FlatDAE`), ``der()`` solved symbolically;
 * :mod:`~gtmodel.modeling.simulation.integration`: the flat DAE integrated on a time grid
   with SUNDIALS (IDAS or CVODES);
 * :mod:`~gtmodel.modeling.simulation.event_simulation`: simulation with zero-crossing events;

@@ -16,7 +16,8 @@ from gtmodel.errors import InputError
 from gtmodel.estimation.filters.end_effector import EndEffectorModel, quaternion_conjugate, quaternion_multiply
 from gtmodel.estimation.filters.gaussian import FilterRun
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
-from gtmodel.estimation.filters.sampling import ParticleFilter, ParticleRun, UnscentedKalmanFilter
+from gtmodel.estimation.filters.particle import ParticleFilter, ParticleRun
+from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
 
 DT = 1e-3
 #: The specification: UKF and EKF equal the KF on the linear 3-axis model to 1e-9 (relative to
