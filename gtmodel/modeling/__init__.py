@@ -52,13 +52,13 @@ from gtmodel.modeling.ocp.expressions import (
 
 #: Module paths the docs name, kept importable after the move into rooms (the same module
 #: objects under their old names: ``from gtmodel.modeling.linear import linearize`` works).
-DOC_PATHS = {
+_DOC_PATHS = {
     "linear": _linear,
     "expressions": _expressions,
     "collocation": _collocation,
     "discontinuities": _discontinuities,
 }
-for _name, _module in DOC_PATHS.items():
+for _name, _module in _DOC_PATHS.items():
     sys.modules.setdefault(f"{__name__}.{_name}", _module)
 
 __all__ = [
