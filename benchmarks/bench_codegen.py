@@ -72,8 +72,8 @@ from gtmodel.codegen.retime import RetimeFunction
 from gtmodel.problems import load_problem
 from gtmodel.trajectory import PathConstrainedProblem
 from gtmodel.estimation import StationaryKalman, ilc_correction_function
-from gtmodel.estimation.end_effector import EndEffectorModel
-from gtmodel.estimation.filters import ExtendedKalmanFilter, KalmanFilter
+from gtmodel.estimation.filters.end_effector import EndEffectorModel
+from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
 from gtmodel.robots.kinematics import configuration_signs
 
 PATH_PROBLEM = Path(__file__).resolve().parents[1] / "problems" / "l1_path_constrained.toml"

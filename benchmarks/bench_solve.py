@@ -28,7 +28,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from gtmodel.modeling.collocation_nlp import IPOPT_DEFAULTS, collocation_coefficients
+from gtmodel.modeling.ocp.collocation_nlp import IPOPT_DEFAULTS, collocation_coefficients
 from gtmodel.problems import load_problem
 from gtmodel.trajectory import point_to_point as ptp
 from gtmodel.trajectory.point_to_point import SOLVER_OPTIONS, build_optimization, solve_point_to_point

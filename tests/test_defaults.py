@@ -9,8 +9,8 @@ import pytest
 
 from gtmodel import defaults as gd
 from gtmodel.errors import InputError
-from gtmodel.modeling.collocation_function import WARM_START_OPTIONS
-from gtmodel.modeling.collocation_nlp import IPOPT_DEFAULTS, merge_options
+from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS
+from gtmodel.modeling.ocp.collocation_nlp import IPOPT_DEFAULTS, merge_options
 from gtmodel.robots.actuator_dynamics import load_dynamics_models, loop_period
 
 from .conftest import PROBLEMS_DIR, assert_bad_problem, replace_once

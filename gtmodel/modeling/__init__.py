@@ -1,5 +1,12 @@
 """Modelica-inspired modelling layer: equation-based models, Optimica-style problems.
 
+Rooms by job (lower rooms never import higher ones; an import-linter contract checks it):
+``library`` (MSL-named components) -> ``components`` (Component, connectors, connect())
+and ``ocp`` (Optimization, expressions, collocation, results) -> ``simulation`` (Model,
+flattening to a CasADi DAE, simulators, linearisation, inverse model) -> ``structure``
+(incidence, matching, alias elimination, index reduction, initialisation, events) ->
+:mod:`~gtmodel.modeling.dae` (the flat DAE and the symbol helpers every room shares).
+
 * :class:`Model` declares parameters, states, algebraic variables, inputs, ``der()``
   equations and outputs (CasADi SX), flattens to a :class:`FlatDAE` and simulates.
 * :class:`Optimization` declares an optimal control problem over a model.
@@ -13,30 +20,46 @@
 * ``Model.when`` / ``Model.mode``: zero-crossing state events (``sign()`` becomes
   event-switched modes); the event times are in ``SimulationResult.events``.
 * :func:`inverse_model`: forces from a prescribed motion (Modelica's inverse model);
-  :func:`gtmodel.modeling.linear.linearize`: the linearisation of a model.
+  :func:`gtmodel.modeling.simulation.linear.linearize`: the linearisation of a model.
 """
 
 from __future__ import annotations
 
-from gtmodel.modeling.collocation import CollocationTranscription, solve
-from gtmodel.modeling.components import Component, Input, Parameter, State, Structural, Variable, connect
-from gtmodel.modeling.connectors import Connector, Flow, Potential
+import sys
+
 from gtmodel.modeling.dae import FlatDAE, SimulationResult
-from gtmodel.modeling.model import Model
-from gtmodel.modeling.optimization import Optimization
-from gtmodel.modeling.index_reduction import structural_simplify
-from gtmodel.modeling.inverse import InverseModel, inverse_model
-from gtmodel.modeling.structure import check_structure
-from gtmodel.modeling.result import OptimizationResult
-from gtmodel.modeling.expressions import (
+from gtmodel.modeling.structure import discontinuities as _discontinuities
+from gtmodel.modeling.structure.analysis import check_structure
+from gtmodel.modeling.structure.index_reduction import structural_simplify
+from gtmodel.modeling.simulation import linear as _linear
+from gtmodel.modeling.simulation.model import Model
+from gtmodel.modeling.simulation.inverse import InverseModel, inverse_model
+from gtmodel.modeling.components.component import Component, Input, Parameter, State, Structural, Variable, connect
+from gtmodel.modeling.components.connectors import Connector, Flow, Potential
+from gtmodel.modeling.ocp import collocation as _collocation
+from gtmodel.modeling.ocp import expressions as _expressions
+from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
+from gtmodel.modeling.ocp.optimization import Optimization
+from gtmodel.modeling.ocp.result import OptimizationResult
+from gtmodel.modeling.ocp.declare import apply_to, optimization_names
+from gtmodel.modeling.ocp.expressions import (
     Objective,
     ParsedConstraint,
-    apply_to,
-    optimization_names,
     parse_constraint,
     parse_expression,
     parse_objective,
 )
+
+#: Module paths the docs name, kept importable after the move into rooms (the same module
+#: objects under their old names: ``from gtmodel.modeling.linear import linearize`` works).
+_DOC_PATHS = {
+    "linear": _linear,
+    "expressions": _expressions,
+    "collocation": _collocation,
+    "discontinuities": _discontinuities,
+}
+for _name, _module in _DOC_PATHS.items():
+    sys.modules.setdefault(f"{__name__}.{_name}", _module)
 
 __all__ = [
     "Model",

@@ -244,7 +244,7 @@ class SimulationResult:
     p : dict of str to numpy.ndarray
         Parameter values used (for a mode of :meth:`Model.mode`: its start value).
     events : list of EventRecord
-        State events in time order (:mod:`gtmodel.modeling.events`): time, when-clause
+        State events in time order (:mod:`gtmodel.modeling.structure.events`): time, when-clause
         name and mode values after it; empty for a model without when-clauses.
     """
 

@@ -9,7 +9,7 @@ and the cost is::
 with the final time free. It is declared on the rigid-body model of
 :func:`gtmodel.robots.gantry_tau_model` (TCP states, smooth friction) as an
 :class:`gtmodel.modeling.Optimization` and transcribed by direct collocation
-(:mod:`gtmodel.modeling.collocation`). The initial guess is the straight line with a
+(:mod:`gtmodel.modeling.ocp.collocation`). The initial guess is the straight line with a
 trapezoidal velocity profile (the thesis' choice) and the forces of the inverse dynamics
 along it.
 """
@@ -28,8 +28,8 @@ from gtmodel._tables import read_table
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
-from gtmodel.modeling.expressions import parse_constraint, parse_objective
-from gtmodel.modeling.result import lagrange_basis
+from gtmodel.modeling.ocp.expressions import parse_constraint, parse_objective
+from gtmodel.modeling.ocp.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
 from gtmodel.robots.kinematics import cart_acceleration_expression, configuration_signs, link_cosines_expression
@@ -111,7 +111,7 @@ class PointToPoint:
     name : str
         Name of the problem (used in reports).
     objective : str
-        Objective in the problem language (:mod:`gtmodel.modeling.expressions`), over the
+        Objective in the problem language (:mod:`gtmodel.modeling.ocp.expressions`), over the
         names of :func:`problem_names`.
     constraints : sequence of str
         Extra path or point constraints in the problem language.

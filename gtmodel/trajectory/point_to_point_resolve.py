@@ -5,7 +5,7 @@ The NLP of :func:`gtmodel.trajectory.solve_point_to_point` takes the boundary po
 parameters of the objective as NLP parameters, so a changed pose or weight is a new
 parameter vector of the same NLP: nothing is transcribed or compiled again. A warm start
 uses the previous solution's primal point and multipliers with a small barrier parameter
-(:data:`gtmodel.modeling.collocation_function.WARM_START_OPTIONS`); the tests check that it
+(:data:`gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`); the tests check that it
 reaches the optimum of a cold start after a 1 cm change of the end pose. The same solve as
 one CasADi Function of the parameter vector is :meth:`point_to_point_function`.
 """
@@ -143,7 +143,7 @@ def point_to_point_function(previous: PointToPointSolution, warm_start: bool = T
     previous : PointToPointSolution
         A solution of :func:`~gtmodel.trajectory.solve_point_to_point`.
     warm_start : bool, optional
-        Warm-start IPOPT options (see :func:`gtmodel.modeling.collocation_function.resolve_function`).
+        Warm-start IPOPT options (see :func:`gtmodel.modeling.ocp.collocation_function.resolve_function`).
 
     Returns
     -------

@@ -18,9 +18,8 @@ import numpy as np
 import scipy.signal
 
 from gtmodel.estimation import StationaryKalman, ilc_correction_function
-from gtmodel.estimation.end_effector import EndEffectorModel
-from gtmodel.estimation.filters import ExtendedKalmanFilter, KalmanFilter
-from gtmodel.estimation.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
+from gtmodel.estimation.filters.end_effector import EndEffectorModel
+from gtmodel.estimation.filters.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE, ExtendedKalmanFilter, KalmanFilter
 
 __all__ = ["DT", "FILTER_DT", "kalman_filter", "kalman_step_function", "ilc_correction_function", "learned_table", "fusion_filter"]
 

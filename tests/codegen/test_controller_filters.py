@@ -32,7 +32,7 @@ from gtmodel.codegen.check.filter import (
     run_filter_program,
 )
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import EndEffectorModel
+from gtmodel.estimation.filters.end_effector import EndEffectorModel
 
 from .controller_functions import FILTER_DT, fusion_filter
 

@@ -149,10 +149,10 @@ def test_robot_generate_is_unchanged_by_the_model_path(tmp_path):
 def test_composed_model_code_equals_python(tmp_path):
     # a component model: hierarchical output names become C identifiers (mass.acc -> mass_acc;
     # the MSL-like Mass has its acceleration as a variable, the output is declared here)
-    pytest.importorskip("gtmodel.modeling.components")
+    pytest.importorskip("gtmodel.modeling.components.component")
     f = tmp_path / "osc.py"
     f.write_text(
-        "from gtmodel.modeling.components import Component, connect\n"
+        "from gtmodel.modeling.components.component import Component, connect\n"
         "from gtmodel.modeling.library.translational import Fixed, Force, Mass, Spring\n\n\n"
         "class MassAcc(Mass):\n    def equations(self):\n        super().equations()\n        self.output('acc', self.a)\n\n\n"
         "class Oscillator(Component):\n    fixed = Fixed()\n    spring = Spring(c=4.0)\n    mass = MassAcc(m=1.0)\n    force = Force()\n\n"
@@ -167,7 +167,7 @@ def test_composed_model_code_equals_python(tmp_path):
 
 COMPOSED_FILE = '''
 from gtmodel.modeling import Component, connect
-from gtmodel.modeling.index_reduction import structural_simplify
+from gtmodel.modeling.structure.index_reduction import structural_simplify
 from gtmodel.modeling.library import translational as tr
 from gtmodel.modeling.library.drive import CompliantDriveAxis
 

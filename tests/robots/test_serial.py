@@ -199,7 +199,7 @@ def test_unknown_arm():
 
 def test_shipped_joint_limits_contain_the_thesis_poses(arm):
     """The assumed limits hold every pose of Cvitanic (2021), Tables 1, 12 and 13 (joints 1, 4-6 of Tables 12-13 as the correction study's)."""
-    from gtmodel.estimation.correction import CALIBRATION_POSES_DEG, VALIDATION_POSES_DEG, joint_angles
+    from gtmodel.estimation.closed_loop.correction import CALIBRATION_POSES_DEG, VALIDATION_POSES_DEG, joint_angles
 
     assert arm.joint_limits.shape == (6, 2)
     arm.check_joint_limits(np.radians([[19.67, -52.14, 117.9, 11.86, -66.08, -4.84], [42.99, -40.39, 97.42, -177.38, 72.1, -179.8]]))

@@ -50,7 +50,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel.calibration.identification.regressor import DynamicRegressor
 from gtmodel.calibration.identification.variants import ModelVariant
 from gtmodel.errors import GtModelError, InputError
-from gtmodel.modeling.result import normalize_ipopt_status
+from gtmodel.modeling.ocp.result import normalize_ipopt_status
 from gtmodel.robots.kinematics import GantryTau3Kinematics, fk_expression, link_cosines_expression
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status, StatusResult

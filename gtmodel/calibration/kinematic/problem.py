@@ -41,7 +41,7 @@ from gtmodel.calibration.kinematic.residuals import _Evaluator, _Group
 from gtmodel.calibration.kinematic.result import CalibrationResult, GroupResult
 from gtmodel.calibration.kinematic.selection import ParameterSelection, _parameter_expression
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.result import normalize_ipopt_status
+from gtmodel.modeling.ocp.result import normalize_ipopt_status
 from gtmodel.robots.closure import ClosureModel
 from gtmodel.status import Status
 

@@ -36,7 +36,7 @@ from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.emit import fill
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.errors import InputError
-from gtmodel.estimation.end_effector import EndEffectorModel
+from gtmodel.estimation.filters.end_effector import EndEffectorModel
 
 __all__ = [
     "FILTER_CYCLES",
@@ -117,7 +117,7 @@ def filter_record(controller: Controller, name: str, cycles: int = FILTER_CYCLES
     -------
     dict of str to numpy.ndarray
         ``"z"`` ``(cycles, nz)``: the measurement Function of
-        :class:`~gtmodel.estimation.end_effector.EndEffectorModel` (``dt``, the default
+        :class:`~gtmodel.estimation.filters.end_effector.EndEffectorModel` (``dt``, the default
         IMU-to-target transform; the one graph of the filters) of a true motion, plus noise:
         the target on ``p_j = 10 mm sin(2 pi f_j t)`` (``f_j`` = 1, 0.8, 0.6 Hz) and (19-D)
         rotating by ``0.1 sin(pi t)`` rad about ``(1, 1, 1)/sqrt 3``; noise 6.4 um on the

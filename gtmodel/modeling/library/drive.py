@@ -42,7 +42,7 @@ import numpy as np
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable, connect
+from gtmodel.modeling.components.component import Component, Input, Parameter, State, Variable, connect
 from gtmodel.modeling.library import rotational, translational
 
 __all__ = ["PositionServo", "CompliantDriveAxis", "TwoMassParameters", "two_mass_parameters", "drive_axis_from_modes"]
@@ -179,7 +179,7 @@ class PositionServo(Component):
         Reference filter time constant [s], > 0.
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     kp = Parameter(10.0, unit="N.m/rad", description="position-loop stiffness Kv*Kp", lb=0.0)

@@ -11,8 +11,8 @@ rotational flange, support fixed), :class:`SignalVoltage`, :class:`ConstantVolta
 
 from __future__ import annotations
 
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
-from gtmodel.modeling.connectors import Connector, Flow, Potential
+from gtmodel.modeling.components.component import Component, Input, Parameter, State, Variable
+from gtmodel.modeling.components.connectors import Connector, Flow, Potential
 from gtmodel.modeling.library import rotational
 
 __all__ = [
@@ -71,7 +71,7 @@ class OnePort(Component):
     Parameters
     ----------
     **modifiers
-        See :class:`~gtmodel.modeling.components.Component`.
+        See :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     p = PositivePin("positive pin (current flows from p to n when i > 0)")
@@ -95,7 +95,7 @@ class Resistor(OnePort):
         Resistance [Ohm] (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     R = Parameter(1.0, unit="Ohm", description="resistance")
@@ -115,7 +115,7 @@ class Inductor(OnePort):
         Inductance [H], > 0 (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     L = Parameter(1.0, unit="H", description="inductance", lb=0.0)
@@ -136,7 +136,7 @@ class Capacitor(OnePort):
         Capacitance [F], > 0 (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     C = Parameter(1.0, unit="F", description="capacitance", lb=0.0)
@@ -160,7 +160,7 @@ class EMF(Component):
         Transformation coefficient [N m/A] (= V s/rad) (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     k = Parameter(1.0, unit="N.m/A", description="transformation coefficient")
@@ -206,7 +206,7 @@ class ConstantVoltage(OnePort):
         Voltage [V] (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     V = Parameter(1.0, unit="V", description="value of the constant voltage")

@@ -3,7 +3,7 @@
 The friction state machine of the Modelica Standard Library (MSL 4.0,
 ``Translational.Interfaces.PartialFriction`` / ``PartialFrictionWithStop``; Otter, Elmqvist
 and Mattsson (1999), "Hybrid modeling in Modelica based on the synchronous data flow
-principle"), written with the events of :mod:`gtmodel.modeling.events`:
+principle"), written with the events of :mod:`gtmodel.modeling.structure.events`:
 
 * modes ``1`` forward sliding (``v_rel > 0``), ``0`` stuck, ``-1`` backward sliding;
 * sliding: ``f = F_prop v_rel + mode (F_Coulomb + F_Stribeck exp(-fexp |v_rel|))``
@@ -29,7 +29,7 @@ until the force pulls it away from the stop.
 
 :class:`MassWithStopAndFriction` is a component on the translational flanges of
 :mod:`gtmodel.modeling.library.translational` (its mode, friction law and when-clauses reach the
-flattened model through :meth:`~gtmodel.modeling.components.Component.model_call`);
+flattened model through :meth:`~gtmodel.modeling.components.component.Component.model_call`);
 :func:`add_friction` declares the same state machine on a plain
 :class:`~gtmodel.modeling.Model` for any relative velocity.
 """
@@ -43,9 +43,9 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.components import Parameter, State, Variable
+from gtmodel.modeling.components.component import Parameter, State, Variable
 from gtmodel.modeling.library.translational import PartialTwoFlanges
-from gtmodel.modeling.model import Model
+from gtmodel.modeling.simulation.model import Model
 
 __all__ = ["Stribeck", "FrictionSymbols", "stribeck_force", "add_friction", "MassWithStopAndFriction"]
 
@@ -287,7 +287,7 @@ class MassWithStopAndFriction(PartialTwoFlanges):
         Velocity of the friction surface [m/s] (default 0).
     **modifiers
         Further modifiers (start values of the states ``s``, ``v``), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=1e-300)

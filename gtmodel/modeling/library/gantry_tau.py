@@ -1,7 +1,7 @@
 """Gantry-Tau parts on the 3-D frame connector: cart on a guideway, link, plate, and the 3-link robot.
 
 The rigid-body model of Dressler (2012), ch. 6.2 (the point masses of eq. (6.7)), written
-as acausal components on :class:`~gtmodel.modeling.connectors.Frame` (position ``r`` (3)
+as acausal components on :class:`~gtmodel.modeling.components.connectors.Frame` (position ``r`` (3)
 [m], cut force ``f`` (3) [N] acting on the component, world coordinates), named after their
 counterparts in ``Modelica.Mechanics.MultiBody``:
 
@@ -19,8 +19,8 @@ counterparts in ``Modelica.Mechanics.MultiBody``:
   attachment frames at constant offsets;
 * :class:`GantryTau3` — the three-link robot (three forces, carts, links and the plate,
   connected): a closed kinematic chain, index 3; ``Model.simulate`` reduces it
-  (Pantelides + dummy derivatives, :mod:`gtmodel.modeling.index_reduction`) and
-  :func:`~gtmodel.modeling.inverse.inverse_model` gives its inverse dynamics::
+  (Pantelides + dummy derivatives, :mod:`gtmodel.modeling.structure.index_reduction`) and
+  :func:`~gtmodel.modeling.simulation.inverse.inverse_model` gives its inverse dynamics::
 
       inv = inverse_model(GantryTau3(...).to_model(),
                           known=["plate.r", "plate.v", "der(plate.v)", "cart1.q", "cart2.q", "cart3.q"],
@@ -42,8 +42,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from gtmodel.modeling.components import Component, Parameter, State, Structural, Variable, connect
-from gtmodel.modeling.connectors import Frame_a, Frame_b
+from gtmodel.modeling.components.component import Component, Parameter, State, Structural, Variable, connect
+from gtmodel.modeling.components.connectors import Frame_a, Frame_b
 from gtmodel.modeling.library import translational
 
 __all__ = ["Fixed", "Cart", "Link", "Plate", "GantryTau3"]
@@ -60,7 +60,7 @@ class Fixed(Component):
     r : array_like, optional
         Position of the frame [m], shape (3,) (default the origin).
     **modifiers
-        See :class:`~gtmodel.modeling.components.Component`.
+        See :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     r = Parameter([0.0, 0.0, 0.0], unit="m", description="position of the fixed frame")
@@ -110,7 +110,7 @@ class Cart(Component):
         Form of the sign in the Coulomb term (structural, default ``"tanh"``).
     **modifiers
         Start values of the states ``q`` [m] and ``q_dot`` [m/s], see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     As = Parameter([0.0, 0.0, 0.0], unit="m", description="spherical-joint point at q = 0")
@@ -169,7 +169,7 @@ class Link(Component):
         Gravitational acceleration vector [m/s^2], shape (3,) (default ``(0, 0, -9.81)``).
     **modifiers
         Start values of ``r_mid`` [m], ``v_mid`` [m/s] and ``f_rod`` [N], see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     L = Parameter(1.0, unit="m", description="rod length, joint centre to joint centre", lb=1e-12)
@@ -213,7 +213,7 @@ class Plate(Component):
         coordinates (default 0).
     **modifiers
         Start values of the TCP position ``r`` [m] and velocity ``v`` [m/s], see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     m = Parameter(1.0, unit="kg", description="plate mass at the TCP", lb=0.0)

@@ -13,8 +13,8 @@ Components (Modelica Standard Library 4.0 names and equations, support flanges f
 
 from __future__ import annotations
 
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
-from gtmodel.modeling.connectors import Connector, Flow, Potential
+from gtmodel.modeling.components.component import Component, Input, Parameter, State, Variable
+from gtmodel.modeling.components.connectors import Connector, Flow, Potential
 from gtmodel.modeling.library import translational
 
 __all__ = [
@@ -74,7 +74,7 @@ class PartialTwoFlanges(Component):
     Parameters
     ----------
     **modifiers
-        See :class:`~gtmodel.modeling.components.Component`.
+        See :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     flange_a = Flange_a("flange of the left shaft")
@@ -89,7 +89,7 @@ class PartialCompliant(PartialTwoFlanges):
     Parameters
     ----------
     **modifiers
-        See :class:`~gtmodel.modeling.components.Component`.
+        See :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     phi_rel = Variable(unit="rad", description="relative rotation angle flange_b.phi - flange_a.phi")
@@ -113,7 +113,7 @@ class Spring(PartialCompliant):
         Unstretched angle [rad] (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     c = Parameter(1e5, unit="N.m/rad", description="spring constant", lb=0.0)
@@ -134,7 +134,7 @@ class PartialCompliantWithRelativeStates(PartialCompliant):
     ----------
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     phi_rel = State(unit="rad", description="relative rotation angle flange_b.phi - flange_a.phi")
@@ -155,7 +155,7 @@ class Damper(PartialCompliantWithRelativeStates):
         Damping constant [N m s/rad], >= 0 (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     d = Parameter(0.0, unit="N.m.s/rad", description="damping constant", lb=0.0)
@@ -181,7 +181,7 @@ class SpringDamper(PartialCompliantWithRelativeStates):
         Unstretched angle [rad] (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     c = Parameter(1e5, unit="N.m/rad", description="spring constant", lb=0.0)
@@ -206,7 +206,7 @@ class Inertia(PartialTwoFlanges):
         Moment of inertia [kg m^2], >= 0 (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     J = Parameter(1.0, unit="kg.m2", description="moment of inertia", lb=0.0)
@@ -235,7 +235,7 @@ class IdealGear(PartialTwoFlanges):
         Transmission ratio ``flange_a.phi / flange_b.phi`` [1], non-zero (default 1).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     ratio = Parameter(1.0, unit="1", description="transmission ratio flange_a.phi / flange_b.phi")
@@ -274,7 +274,7 @@ class Fixed(Component):
         Fixed angle [rad] (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     phi0 = Parameter(0.0, unit="rad", description="fixed offset angle of the housing")
@@ -297,7 +297,7 @@ class IdealRollingWheel(Component):
         Wheel (pulley) radius [m], > 0 (default 0.3).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     radius = Parameter(0.3, unit="m", description="radius of the wheel", lb=0.0)

@@ -6,7 +6,7 @@ Velocities are component-internal (``v = der(s)`` in :class:`Mass`, ``v_rel =
 der(s_rel)`` with the relative states of :class:`Damper` and :class:`SpringDamper`, as
 MSL's ``PartialCompliantWithRelativeStates``). A model with a damper or a rigid coupling
 (two masses joined directly) is therefore of higher index; ``Model.simulate`` reduces it
-(:func:`gtmodel.modeling.index_reduction.structural_simplify`: alias elimination,
+(:func:`gtmodel.modeling.structure.index_reduction.structural_simplify`: alias elimination,
 Pantelides, dummy derivatives). A chain of masses and springs only is index 1.
 
 Components (Modelica Standard Library 4.0 names and equations):
@@ -17,8 +17,8 @@ The optional ``support`` flanges of the MSL sources are omitted (support fixed).
 
 from __future__ import annotations
 
-from gtmodel.modeling.components import Component, Input, Parameter, State, Variable
-from gtmodel.modeling.connectors import Connector, Flow, Potential
+from gtmodel.modeling.components.component import Component, Input, Parameter, State, Variable
+from gtmodel.modeling.components.connectors import Connector, Flow, Potential
 
 __all__ = [
     "Flange",
@@ -75,7 +75,7 @@ class PartialTwoFlanges(Component):
     Parameters
     ----------
     **modifiers
-        See :class:`~gtmodel.modeling.components.Component`.
+        See :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     flange_a = Flange_a("left flange")
@@ -91,7 +91,7 @@ class PartialCompliant(PartialTwoFlanges):
     Parameters
     ----------
     **modifiers
-        See :class:`~gtmodel.modeling.components.Component`.
+        See :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     s_rel = Variable(unit="m", description="relative distance flange_b.s - flange_a.s")
@@ -115,7 +115,7 @@ class Spring(PartialCompliant):
         Unstretched length [m] (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     c = Parameter(1.0, unit="N/m", description="spring constant", lb=0.0)
@@ -137,7 +137,7 @@ class PartialCompliantWithRelativeStates(PartialCompliant):
     ----------
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     s_rel = State(unit="m", description="relative distance flange_b.s - flange_a.s")
@@ -158,7 +158,7 @@ class Damper(PartialCompliantWithRelativeStates):
         Damping constant [N s/m], >= 0 (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     d = Parameter(0.0, unit="N.s/m", description="damping constant", lb=0.0)
@@ -182,7 +182,7 @@ class SpringDamper(PartialCompliantWithRelativeStates):
         Unstretched length [m] (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     c = Parameter(1.0, unit="N/m", description="spring constant", lb=0.0)
@@ -211,7 +211,7 @@ class Mass(PartialTwoFlanges):
         Length [m] between the flanges (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     m = Parameter(1.0, unit="kg", description="mass of the sliding mass", lb=0.0)
@@ -257,7 +257,7 @@ class Fixed(Component):
         Fixed position [m] (default 0).
     **modifiers
         Further modifiers (start values of variables, sub-components), see
-        :class:`~gtmodel.modeling.components.Component`.
+        :class:`~gtmodel.modeling.components.component.Component`.
     """
 
     s0 = Parameter(0.0, unit="m", description="fixed offset position of the housing")

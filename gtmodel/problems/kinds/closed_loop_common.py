@@ -12,7 +12,7 @@ from pydantic import Field
 
 from gtmodel.errors import GtModelError, ParameterError
 from gtmodel.estimation import SensorModel, ToolStructure, TrackingPlant
-from gtmodel.estimation.plant import DT, STANDARD_GRAVITY
+from gtmodel.estimation.closed_loop.plant import DT, STANDARD_GRAVITY
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.kinds.motion_common import RobotReference
 from gtmodel.problems.references import robot_parameters

@@ -5,7 +5,7 @@ fitted to the response to ONE offset command at each calibration pose ``(j2, j3)
 12), interpolated by GPR to the validation poses (Table 13), and the correction loop (4 ms
 cycle, 13-cycle delay, P controller on the error of the sine path) gives the largest stable
 gain per pose and direction. The "simulated" gain is that of the richer simulation: the
-pose-dependent two-mode truth of :func:`gtmodel.estimation.correction.truth_model` (Table 16
+pose-dependent two-mode truth of :func:`gtmodel.estimation.closed_loop.correction.truth_model` (Table 16
 dominant and Table 17 second modes; pose dependence from the joint-spring model of the
 ILLUSTRATIVE serial arm with Table 2; every assumption is listed in ``summary.json``).
 
@@ -31,7 +31,7 @@ from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ParameterError
-from gtmodel.estimation.correction import (
+from gtmodel.estimation.closed_loop.correction import (
     CALIBRATION_POSES_DEG,
     CONTROLLER_DELAY_S,
     CYCLE_TIME_S,
@@ -40,7 +40,7 @@ from gtmodel.estimation.correction import (
     WRIST_JOINTS_DEG,
     joint_angles,
 )
-from gtmodel.estimation.correction_loop import (
+from gtmodel.estimation.closed_loop.correction_loop import (
     FEED_RATE_M_S,
     GROWTH_TOLERANCE,
     SINE_AMPLITUDE_M,
@@ -296,7 +296,7 @@ class CorrectionStabilityKind(ProblemKind):
         return CorrectionStabilityDeclaration(arm, doc, resolutions)
 
     def solve(self, declaration: CorrectionStabilityDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> CorrectionStudy:
-        """Run the study (:func:`~gtmodel.estimation.correction_loop.correction_study`).
+        """Run the study (:func:`~gtmodel.estimation.closed_loop.correction_loop.correction_study`).
 
         Parameters
         ----------

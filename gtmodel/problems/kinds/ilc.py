@@ -50,9 +50,9 @@ from gtmodel.estimation import (
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.codegen import Controller, save_controller
 from gtmodel.estimation import ilc_correction_function
-from gtmodel.estimation.complementary import MIN_CUTOFF_FRACTION
-from gtmodel.estimation.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
-from gtmodel.estimation.plant import DT as SAMPLE_TIME_S
+from gtmodel.estimation.filters.complementary import MIN_CUTOFF_FRACTION
+from gtmodel.estimation.filters.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
+from gtmodel.estimation.closed_loop.plant import DT as SAMPLE_TIME_S
 from gtmodel.problems.kinds.closed_loop_common import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection, build_plant
 from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.ilc import plot_error_measure, plot_tool_path

@@ -5,7 +5,7 @@
 :class:`gtmodel.modeling.Model` (the protocol: :mod:`gtmodel.problems.user_model`); the
 file is the user's own code, imported as such. Everything else in the problem file is
 data: parameter overrides, boundary conditions, bounds, and the objective and constraints
-in the problem language over the model's variable names (:mod:`gtmodel.modeling.expressions`,
+in the problem language over the model's variable names (:mod:`gtmodel.modeling.ocp.expressions`,
 ``docs/problem_language.md``: parsed, never evaluated). A composed model's hierarchical
 names (``mass.s``, ``spring.c``) are written with ``_`` for ``.`` in expressions
 (``mass_s``; the language has no attribute access) and may be written either way as keys

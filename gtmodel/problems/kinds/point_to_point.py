@@ -1,7 +1,7 @@
 """Kind ``point_to_point``: free-path time/energy-optimal motion between two poses.
 
 Dressler (2012), ch. 3.5, Table 3.1 "direct" rows. The objective and extra constraints
-are written in the problem language (:mod:`gtmodel.modeling.expressions`, documented in
+are written in the problem language (:mod:`gtmodel.modeling.ocp.expressions`, documented in
 ``docs/problem_language.md``). The field reference is ``docs/problem_files.md``.
 """
 
@@ -15,7 +15,7 @@ import numpy as np
 from pydantic import Field
 
 from gtmodel.errors import InputError, ProblemError, UnreachablePoseError
-from gtmodel.modeling.expressions import parse_constraint, parse_objective
+from gtmodel.modeling.ocp.expressions import parse_constraint, parse_objective
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (

@@ -3,7 +3,7 @@
 The sine path (``[path]``, 3-axis and 5-axis), the Table 7 sensors (``[sensors]``, the thesis'
 baseline by default), the filters' tuning (``[filter]``) and the study's extent (``[study]``: the
 10x-noisier tracker of Table 9, the Table 10 sweeps, the filter comparison) run through
-:class:`~gtmodel.estimation.fusion_study.FusionStudy`. The result folder holds ``summary.json``
+:class:`~gtmodel.estimation.fusion.study.FusionStudy`. The result folder holds ``summary.json``
 (fields ``table_8``, ``table_9``, ``table_10``, ``velocity_mean_error_mm_s`` per motion,
 ``angular_acceleration``, ``filter_comparison``, ``nees``, ``process_noise``, ``checks``),
 ``table_8.md/.csv``, ``table_9.md/.csv``, ``table_10.md/.csv``, ``filter_comparison.md/.csv``
@@ -25,7 +25,7 @@ from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError
-from gtmodel.estimation.fusion_study import (
+from gtmodel.estimation.fusion.study import (
     APPENDIX_B,
     DEFAULT_INITIAL_COVARIANCE,
     FILTERS,
@@ -34,7 +34,7 @@ from gtmodel.estimation.fusion_study import (
     FusionStudy,
     FusionStudyResult,
 )
-from gtmodel.estimation.tracker_imu import MAX_SAMPLES, MIN_SAMPLES, SINE_PATH, TABLE_7, SensorSpec
+from gtmodel.estimation.fusion.tracker_imu import MAX_SAMPLES, MIN_SAMPLES, SINE_PATH, TABLE_7, SensorSpec
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.fusion import plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables
@@ -272,7 +272,7 @@ def _samples(file: ProblemFile, field: str, dt: float, duration: float, where: s
 
 
 class StateEstimationKind(ProblemKind):
-    """The laser tracker + IMU fusion study (:class:`~gtmodel.estimation.fusion_study.FusionStudy`)."""
+    """The laser tracker + IMU fusion study (:class:`~gtmodel.estimation.fusion.study.FusionStudy`)."""
 
     name = "state_estimation"
     schema = StateEstimationFile

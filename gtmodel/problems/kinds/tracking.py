@@ -1,6 +1,6 @@
 """Kind ``tracking``: replay a planned trajectory through the closed-loop L1 at 4 ms.
 
-Dressler (2012), ch. 7.3, with the plant of :mod:`gtmodel.estimation.plant` (actuators
+Dressler (2012), ch. 7.3, with the plant of :mod:`gtmodel.estimation.closed_loop.plant` (actuators
 (6.11), fk, structure (6.14) at the ILC operating point: 7.4 Hz in x, 11.5 Hz in y,
 sensors). The trajectory is a ``trajectory.csv`` of kind ``point_to_point`` or
 ``path_constrained`` (columns ``t, x, y, z, q1, q2, q3``, 4 ms samples), given either as
@@ -36,7 +36,7 @@ from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, InputError, ProblemError
 from gtmodel.estimation import TrackingPlant, TrackingResponse
-from gtmodel.estimation.plant import DT
+from gtmodel.estimation.closed_loop.plant import DT
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.closed_loop_common import RobotSection, SensorsSection, StructureSection, build_plant
 from gtmodel.problems.kinds.path_constrained import PathConstrainedKind

@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import InputError, SingularConfigurationError, SolverError
-from gtmodel.modeling.result import normalize_ipopt_status
+from gtmodel.modeling.ocp.result import normalize_ipopt_status
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, configuration_signs
 from gtmodel.robots.parameters import RobotParameters
@@ -359,7 +359,7 @@ class PathConstrainedProblem:
         Returns
         -------
         PathSolution
-            With IPOPT's status mapped by :func:`gtmodel.modeling.result.normalize_ipopt_status`.
+            With IPOPT's status mapped by :func:`gtmodel.modeling.ocp.result.normalize_ipopt_status`.
 
         Raises
         ------

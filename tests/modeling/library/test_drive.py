@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.modeling.index_reduction import structural_simplify
+from gtmodel.modeling.structure.index_reduction import structural_simplify
 from gtmodel.modeling.library.drive import CompliantDriveAxis, drive_axis_from_modes, two_mass_parameters
-from gtmodel.modeling.linear import linearize
+from gtmodel.modeling.simulation.linear import linearize
 from gtmodel.robots.actuator_dynamics import actuator_models, bandwidth
 from gtmodel.robots.structural import PhysicalModel
 

@@ -133,7 +133,7 @@ def test_model_file_relative_to_the_problem_file(tmp_path):
 
 
 COMPOSED = '''
-from gtmodel.modeling.components import Component, connect
+from gtmodel.modeling.components.component import Component, connect
 from gtmodel.modeling.library.translational import Fixed, Force, Mass, Spring
 
 
@@ -174,7 +174,7 @@ def test_composed_model_with_hierarchical_names(tmp_path):
     # a component model (to_model()); hierarchical names as quoted keys or with _ for .;
     # checked against the closed form: minimum-energy transfer of x'' + 4 x = f over 2 s
     # (the Gramian solution), objective = d^T W^-1 d
-    pytest.importorskip("gtmodel.modeling.components")
+    pytest.importorskip("gtmodel.modeling.components.component")
     (tmp_path / "osc.py").write_text(COMPOSED)
     (tmp_path / "osc.toml").write_text(COMPOSED_PROBLEM)
     outcome = run_problem(tmp_path / "osc.toml", tmp_path / "out", plots=False)

@@ -1,0 +1,269 @@
+"""The sine path of Cvitanic (2021), section 4.2, and its closed-form true state (3-axis and 5-axis).
+
+The sine path ``y = A sin(2 pi f x)`` (reference ``sine_path``:
+``A = 76.2 mm``, ``f = 19.685 cycles/m``, i.e. a 50.8 mm wavelength) traversed with ``x`` at
+the feed rate ``v_f`` (a decision: the feed is the speed along ``x``, so every derivative is
+closed form; the thesis does not say whether its feed is along ``x`` or along the arc), in the
+world ``xy`` plane from ``start``. The temporal frequency is ``omega = 2 pi f v_f``
+(0.833 Hz at 42.33 mm/s). 3-axis: translation only, the orientation constant. 5-axis: the
+end-effector also rotates about a FIXED BODY AXIS ``n`` by the angle
+``theta(t) = theta_0 sin(omega t)`` (default ``theta_0 = 10 deg``, ``n`` tilted 30 deg from
+the body z axis towards x), so ``quat(t) = quat_0 (x) exp(theta(t) n / 2)`` and, because ``n``
+is invariant under that rotation, the body angular velocity and acceleration are
+``w = theta'(t) n`` and ``alpha = theta''(t) n`` exactly.
+:meth:`SinePath.truth` samples the closed form into the 19-D (or 9-D) state layout of
+:class:`~gtmodel.estimation.filters.end_effector.EndEffectorModel`. Used by the sensors of
+:mod:`gtmodel.estimation.fusion.tracker_imu` and the study of :mod:`gtmodel.estimation.fusion.study`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel._arrays import as_array, as_finite, positive_float
+from gtmodel._geometry import quat_exp, quat_mul
+from gtmodel.errors import InputError
+
+__all__ = ["SINE_PATH", "FEED_RATE_M_S", "MIN_SAMPLES", "MAX_SAMPLES", "Truth", "SinePath"]
+
+#: The sine path of section 4.2 (reference ``sine_path``): amplitude [m], spatial frequency [cycles/m].
+SINE_PATH = {"amplitude_m": 0.0762, "spatial_frequency_cycles_per_m": 19.685}
+#: The Table 7 baseline feed rate [m/s] (42.33 mm/s).
+FEED_RATE_M_S = 0.04233
+#: Fewest samples of a path (the four-point regression needs 4, a table needs more).
+MIN_SAMPLES = 10
+#: Most samples of a path (keeps memory and run time bounded).
+MAX_SAMPLES = 200_000
+
+
+def _map(f: ca.Function, n: int, *args: Any) -> np.ndarray:
+    """Evaluate ``f`` over ``n`` columns (``Function.map``), arguments with one column broadcast."""
+    return np.asarray(f.map(n)(*args))
+
+
+@dataclass(frozen=True)
+class Truth:
+    """The true state of a path, sampled (rows are samples).
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Times [s].
+    x : numpy.ndarray, shape (N, 19) or (N, 9)
+        True states in the layout of :class:`~gtmodel.estimation.filters.end_effector.EndEffectorModel`.
+    jerk : numpy.ndarray, shape (N, 3)
+        True jerk of the target [m/s^3] (for the process noise).
+    angular_jerk : numpy.ndarray, shape (N, 3)
+        True body angular jerk [rad/s^3] (zero for a 3-axis path).
+    rotation : bool
+        True for the 19-D layout.
+    orientation : numpy.ndarray, shape (4,)
+        The initial (3-axis: constant) orientation quaternion.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    jerk: np.ndarray
+    angular_jerk: np.ndarray
+    rotation: bool
+    orientation: np.ndarray
+
+    @property
+    def position(self) -> np.ndarray:
+        """Target position [m], shape (N, 3)."""
+        return self.x[:, 0:3]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Target velocity [m/s], shape (N, 3)."""
+        return self.x[:, 3:6]
+
+    @property
+    def acceleration(self) -> np.ndarray:
+        """Target acceleration [m/s^2], shape (N, 3)."""
+        return self.x[:, 6:9]
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        """Orientation quaternions, shape (N, 4) (3-axis: the constant one repeated)."""
+        return self.x[:, 9:13] if self.rotation else np.tile(self.orientation, (self.t.size, 1))
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        """Body angular velocity [rad/s], shape (N, 3) (3-axis: zero)."""
+        return self.x[:, 13:16] if self.rotation else np.zeros((self.t.size, 3))
+
+    @property
+    def angular_acceleration(self) -> np.ndarray:
+        """Body angular acceleration [rad/s^2], shape (N, 3) (3-axis: zero)."""
+        return self.x[:, 16:19] if self.rotation else np.zeros((self.t.size, 3))
+
+
+def _unit(value: Any, name: str, width: int) -> np.ndarray:
+    v = as_array(value, (width,), name)
+    n = float(np.linalg.norm(v))
+    if not n > 1e-12:
+        raise InputError(f"{name}: expected a vector of nonzero norm, got {v.tolist()}")
+    return v / n
+
+
+@dataclass(frozen=True)
+class SinePath:
+    """The sine path of section 4.2, 3-axis or 5-axis (see the module docstring).
+
+    Parameters
+    ----------
+    duration : float
+        Length of the record [s] (> 0).
+    feed_rate : float, optional
+        Speed along x [m/s] (Table 7: 42.33 mm/s).
+    amplitude : float, optional
+        Sine amplitude in y [m] (reference: 76.2 mm).
+    spatial_frequency : float, optional
+        Cycles per metre of x (reference: 19.685).
+    start : array_like, shape (3,), optional
+        Position of the target at ``t = 0`` [m].
+    rotation : bool, optional
+        True: 5-axis (the end-effector rotates); False: 3-axis.
+    rotation_amplitude : float, optional
+        ``theta_0`` [rad] of the 5-axis rotation ``theta = theta_0 sin(omega t)`` (default 10 deg).
+    rotation_axis : array_like, shape (3,), optional
+        Body axis ``n`` of the rotation (normalised; default 30 deg from z towards x).
+    orientation : array_like, shape (4,), optional
+        ``quat_0``, scalar-first (normalised): the initial (3-axis: constant) orientation.
+
+    Raises
+    ------
+    InputError
+        A non-positive duration, feed rate or spatial frequency, a negative amplitude, a
+        rotation axis or quaternion of zero norm, or values that are not finite.
+    """
+
+    duration: float
+    feed_rate: float = FEED_RATE_M_S
+    amplitude: float = SINE_PATH["amplitude_m"]
+    spatial_frequency: float = SINE_PATH["spatial_frequency_cycles_per_m"]
+    start: Any = (1.5, 0.0, 1.0)
+    rotation: bool = False
+    rotation_amplitude: float = math.radians(10.0)
+    rotation_axis: Any = (0.5, 0.0, math.sqrt(3.0) / 2.0)
+    orientation: Any = (1.0, 0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "duration", positive_float(self.duration, "duration"))
+        object.__setattr__(self, "feed_rate", positive_float(self.feed_rate, "feed_rate"))
+        object.__setattr__(self, "spatial_frequency", positive_float(self.spatial_frequency, "spatial_frequency"))
+        object.__setattr__(self, "amplitude", float(as_finite(self.amplitude, "amplitude", nonnegative=True)))
+        object.__setattr__(self, "rotation_amplitude", float(as_finite(self.rotation_amplitude, "rotation_amplitude", nonnegative=True)))
+        object.__setattr__(self, "start", as_array(self.start, (3,), "start"))
+        object.__setattr__(self, "rotation_axis", _unit(self.rotation_axis, "rotation_axis", 3))
+        object.__setattr__(self, "orientation", _unit(self.orientation, "orientation", 4))
+        if not isinstance(self.rotation, (bool, np.bool_)):
+            raise InputError(f"rotation: expected True or False, got {self.rotation!r}")
+
+    @property
+    def omega(self) -> float:
+        """Temporal angular frequency ``2 pi f v_f`` of the sine [rad/s]."""
+        return 2.0 * math.pi * self.spatial_frequency * self.feed_rate
+
+    def samples(self, dt: float) -> int:
+        """Number of samples ``floor(duration / dt) + 1`` at the sample time ``dt``.
+
+        Parameters
+        ----------
+        dt : float
+            Sample time [s].
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        InputError
+            ``dt`` not positive, or fewer than :data:`MIN_SAMPLES` or more than
+            :data:`MAX_SAMPLES` samples.
+        """
+        dt = positive_float(dt, "dt")
+        n = math.floor(self.duration / dt + 1e-9) + 1
+        if not MIN_SAMPLES <= n <= MAX_SAMPLES:
+            raise InputError(f"dt: expected {MIN_SAMPLES} to {MAX_SAMPLES} samples over the path's {self.duration:g} s, got {n} at dt = {dt:g} s")
+        return n
+
+    def truth(self, dt: float) -> Truth:
+        """The closed-form true state at ``t_k = k dt``.
+
+        ``p = start + (v_f t, A sin(omega t), 0)``, ``v, a, jerk`` its derivatives;
+        5-axis: ``quat = quat_0 (x) exp(theta n / 2)``, ``w = theta' n``, ``alpha = theta'' n``,
+        ``theta = theta_0 sin(omega t)`` (module docstring).
+
+        Parameters
+        ----------
+        dt : float
+            Sample time [s].
+
+        Returns
+        -------
+        Truth
+            19-D states if :attr:`rotation`, else 9-D.
+
+        Raises
+        ------
+        InputError
+            See :meth:`samples`.
+        """
+        n = self.samples(dt)
+        t = np.arange(n) * dt
+        w0, amp, vf = self.omega, self.amplitude, self.feed_rate
+        s, c = np.sin(w0 * t), np.cos(w0 * t)
+        zero = np.zeros(n)
+        p = self.start + np.column_stack([vf * t, amp * s, zero])
+        v = np.column_stack([np.full(n, vf), amp * w0 * c, zero])
+        a = np.column_stack([zero, -amp * w0**2 * s, zero])
+        jerk = np.column_stack([zero, -amp * w0**3 * c, zero])
+        if not self.rotation:
+            return Truth(t, np.hstack([p, v, a]), jerk, np.zeros((n, 3)), False, self.orientation)
+        th0, axis = self.rotation_amplitude, self.rotation_axis
+        theta, dtheta, ddtheta, dddtheta = th0 * s, th0 * w0 * c, -th0 * w0**2 * s, -th0 * w0**3 * c
+        quat = _map(_ROTATE, n, self.orientation, axis, theta[None, :]).T
+        return Truth(t, np.hstack([p, v, a, quat, np.outer(dtheta, axis), np.outer(ddtheta, axis)]),
+                     jerk, np.outer(dddtheta, axis), True, self.orientation)
+
+    def jerk_rms(self, dt: float) -> tuple[float, float]:
+        """RMS over the samples of ``|jerk|`` [m/s^3] and of ``|angular jerk|`` [rad/s^3].
+
+        The process noise of the fusion study is tuned from these (a white-jerk model whose
+        standard deviation is the path's RMS jerk, the same on each axis).
+
+        Parameters
+        ----------
+        dt : float
+            Sample time [s].
+
+        Returns
+        -------
+        tuple of float
+            ``(jerk_rms, angular_jerk_rms)``; the second is 0 for a 3-axis path.
+
+        Raises
+        ------
+        InputError
+            See :meth:`samples`.
+        """
+        tr = self.truth(dt)
+        return (float(np.sqrt(np.mean(np.sum(tr.jerk**2, axis=1)))), float(np.sqrt(np.mean(np.sum(tr.angular_jerk**2, axis=1)))))
+
+
+def _rotate_about_axis_function() -> ca.Function:
+    """``quat_0 (x) exp(theta n / 2)`` for one angle, mapped over samples by the caller."""
+    q0, n, th = ca.SX.sym("q0", 4), ca.SX.sym("n", 3), ca.SX.sym("theta")
+    f = ca.Function("rotate_about_axis", [q0, n, th], [quat_mul(q0, quat_exp(th * n))])
+    return f
+
+
+_ROTATE = _rotate_about_axis_function()

@@ -1,0 +1,34 @@
+"""Iterative learning control of the 4 ms loop (Dressler (2012), ch. 7).
+
+* :mod:`~gtmodel.estimation.ilc.iteration`: the trial-to-trial loop, the error measure and
+  the learned correction table;
+* :mod:`~gtmodel.estimation.ilc.lifted`: the lifted-system operators, the Q and learning
+  filters and the stability checks;
+* :mod:`~gtmodel.estimation.ilc.experiment`: the ILC experiment of section 7.3 on the
+  simulated closed-loop L1.
+"""
+
+from __future__ import annotations
+
+from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, run_ilc
+from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
+from gtmodel.estimation.ilc.experiment import REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
+
+__all__ = [
+    "error_measure",
+    "ILCResult",
+    "run_ilc",
+    "ilc_correction_function",
+    "lifted_matrix",
+    "time_window",
+    "QFilter",
+    "LearningFilter",
+    "ILCStability",
+    "stability",
+    "SIGNALS",
+    "REQUIREMENTS",
+    "ILCCase",
+    "ILCReference",
+    "ILCCaseResult",
+    "ILCExperiment",
+]

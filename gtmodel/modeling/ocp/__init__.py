@@ -1,0 +1,46 @@
+"""Optimal control, Optimica style: the problem, its transcription, its solution.
+
+* :mod:`~gtmodel.modeling.ocp.optimization`: :class:`Optimization`, an optimal control
+  problem declared over a model (no transcription);
+* :mod:`~gtmodel.modeling.ocp.expressions`: the restricted expression language of problem
+  files (objectives, constraints) parsed into CasADi;
+* :mod:`~gtmodel.modeling.ocp.declare`: the name table of an optimisation and the parsed
+  objective and constraints declared on it (:func:`apply_to`);
+* :mod:`~gtmodel.modeling.ocp.collocation`: :func:`solve` / :class:`CollocationTranscription`,
+  direct collocation solved with IPOPT (or fatrop);
+* :mod:`~gtmodel.modeling.ocp.collocation_nlp`: the collocation NLP (variables, constraints,
+  layout); :mod:`~gtmodel.modeling.ocp.collocation_derivatives`: its Jacobian and Hessian
+  assembled from per-point derivatives; :mod:`~gtmodel.modeling.ocp.collocation_function`:
+  warm-started re-solves as one CasADi Function;
+* :mod:`~gtmodel.modeling.ocp.result`: :class:`OptimizationResult` and the collocation data.
+"""
+
+from __future__ import annotations
+
+from gtmodel.modeling.ocp.optimization import Constraint, Optimization
+from gtmodel.modeling.ocp.declare import apply_to, optimization_names
+from gtmodel.modeling.ocp.expressions import (
+    Objective,
+    ParsedConstraint,
+    parse_constraint,
+    parse_expression,
+    parse_objective,
+)
+from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
+from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult
+
+__all__ = [
+    "Optimization",
+    "Constraint",
+    "Objective",
+    "ParsedConstraint",
+    "parse_expression",
+    "parse_objective",
+    "parse_constraint",
+    "optimization_names",
+    "apply_to",
+    "CollocationTranscription",
+    "solve",
+    "OptimizationResult",
+    "CollocationData",
+]

@@ -1,0 +1,564 @@
+"""Direct collocation transcription of an :class:`~gtmodel.modeling.Optimization` to an NLP.
+
+The transcription itself (variables ordered stage by stage, a copy of a free final time
+per element) is :mod:`gtmodel.modeling.ocp.collocation_nlp`; the constraint Jacobian and
+Lagrangian Hessian assembled from per-point derivatives (optionally compiled C) are
+:mod:`gtmodel.modeling.ocp.collocation_derivatives`; warm-started re-solves as one function
+of the parameters are :mod:`gtmodel.modeling.ocp.collocation_function`. This module holds
+the solvable transcription: guesses, solves and results.
+
+Conventions:
+
+* Path constraints and variable bounds of inputs/algebraics are enforced at the
+  collocation points; state bounds also at element boundaries.
+* Point constraints and the Mayer term at the final time use the final state and, for
+  inputs/algebraics, the last element's polynomial at ``tau = 1`` (for Radau a
+  collocation point; for Legendre an extrapolation).
+* Point constraints at the start time use the initial state and, for inputs/algebraics,
+  the first element's Lagrange polynomial through its collocation points evaluated at
+  ``tau = 0`` (an extrapolation for both schemes).
+* The Lagrange term uses the quadrature of the collocation points.
+
+Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
+solved repeatedly for new parameter values and initial guesses. Free parameters
+(:meth:`Optimization.free_parameter`) are NLP variables instead, one per scalar element,
+shared by all collocation points.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as _time
+from collections.abc import Mapping
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError, SolverError
+from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
+from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
+from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, merge_options, transcribe
+from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, _vector_value
+from gtmodel.modeling.ocp.optimization import Optimization
+from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
+from gtmodel.status import Status
+
+__all__ = ["CollocationTranscription", "solve"]
+
+_log = logging.getLogger("gtmodel")
+
+#: nlpsol plugins a transcription can be solved with. CasADi's fatrop plugin is not one:
+#: it takes no ``jac_g``/``hess_lag`` options, so it would differentiate the whole NLP graph
+#: itself (interpreted), which issue 17 measured only matching IPOPT before the compiled
+#: derivatives made IPOPT's evaluations 5x cheaper. Its own linear algebra is no faster
+#: here either: on the L1 problem written stage by stage (50 elements, final-time copies,
+#: ``structure_detection="auto"``) it took 52 iterations to the same final time (1e-11),
+#: 0.35 s of them in computing search directions, against IPOPT + MUMPS's ~0.3 s (issue 17).
+SOLVERS = ("ipopt",)
+#: Default mesh size from which a free final time is copied per element (banded KKT). L1
+#: minimum-time problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared
+#: variable 13.0 ms at 50 elements and 127 ms at 400 (9.7x for 8x the mesh), copies 14.0
+#: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
+#: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
+BANDED_MIN_ELEMENTS = 300
+
+
+def _fname(name: str) -> str:
+    """``name`` as a C identifier (CasADi Function names)."""
+    return "".join(ch if ch.isalnum() else "_" for ch in name)
+
+
+class CollocationTranscription:
+    """An optimisation problem transcribed once by direct collocation, solvable repeatedly.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The declared problem.
+    elements : int, optional
+        Number of uniform elements; default 50.
+    points : int, optional
+        Collocation points per element (polynomial degree of states); default 3.
+    scheme : {"radau", "legendre"}, optional
+        Collocation points; default ``"radau"``.
+    verbose : bool, optional
+        Show IPOPT output and timing; default False.
+    solver_options : mapping, optional
+        IPOPT options (plain names such as ``"max_iter"`` or ``"ipopt.max_iter"``, or a
+        nested ``{"ipopt": {...}}``) and CasADi nlpsol options (``"print_time"``,
+        ``"expand"``, ...); merged over the defaults ``max_iter=3000``, ``tol=1e-8``,
+        ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings)
+        unless ``verbose``, and with IPOPT
+        :data:`~gtmodel.modeling.ocp.collocation_nlp.IPOPT_DEFAULTS`.
+    nominal : mapping of str to float or array_like, optional
+        Nominal magnitudes of states, inputs, algebraic variables, free parameters
+        (by name) and of ``"final_time"``: the NLP works with ``variable / nominal`` (Modelica's
+        ``nominal`` attribute, JModelica's variable scaling), so that variables of
+        different units (forces in hundreds of N, positions in m) are of order one.
+        Results, guesses and bounds stay in the model's units. Default: no scaling.
+    derivatives : {"assembled", "casadi"}, optional
+        How the Jacobian of the constraints and the Hessian of the Lagrangian are
+        built. ``"assembled"`` (default): differentiate the per-point functions (model
+        equations, path constraints, Lagrange integrand) once and assemble the sparse
+        matrices from their values at each collocation point; the collocation
+        constraints call the per-point function instead of copying its expression
+        graph. ``"casadi"``: CasADi differentiates the whole expression graph of the
+        NLP (several times slower to build, the same values).
+    compile : bool, optional
+        With ``derivatives="assembled"``: evaluate the per-point derivatives through C
+        generated from their CasADi graph, compiled once with the system compiler and
+        cached by a hash of the source (:func:`gtmodel._compiler.compiled_function`);
+        the same values, several times faster per evaluation. Without a compiler (or
+        with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
+    solver : {"ipopt"}, optional
+        The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options.
+    banded : bool, optional
+        A free final time as one copy per element tied by equalities, so that the KKT
+        matrix is banded, or as one variable shared by all elements (a dense row and
+        column). The same optimum (see :mod:`gtmodel.modeling.ocp.collocation_nlp`); default
+        banded from :data:`BANDED_MIN_ELEMENTS` elements on.
+
+    Raises
+    ------
+    InputError
+        If ``elements``/``points``/``scheme`` are invalid.
+    ModelError
+        If the model cannot be flattened.
+    SolverError
+        If CasADi cannot build the NLP solver.
+    """
+
+    def __init__(
+        self,
+        optimization: Optimization,
+        elements: int = 50,
+        points: int = 3,
+        scheme: str = "radau",
+        verbose: bool = False,
+        solver_options: Mapping[str, Any] | None = None,
+        nominal: Mapping[str, Any] | None = None,
+        derivatives: str = "assembled",
+        compile: bool = False,
+        solver: str = "ipopt",
+        banded: bool | None = None,
+    ) -> None:
+        if not isinstance(optimization, Optimization):
+            raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
+        if not isinstance(elements, (int, np.integer)) or isinstance(elements, bool) or elements < 1:
+            raise InputError(f"elements must be a positive integer, got {elements!r}")
+        if not isinstance(points, (int, np.integer)) or isinstance(points, bool) or not 1 <= points <= 9:
+            raise InputError(f"points must be an integer in 1..9, got {points!r}")
+        if scheme not in ("radau", "legendre"):
+            raise InputError(f"scheme must be 'radau' or 'legendre', got {scheme!r}")
+        self.optimization = optimization
+        self.elements = int(elements)
+        self.points = int(points)
+        self.scheme = scheme
+        if derivatives not in ("assembled", "casadi"):
+            raise InputError(f"derivatives must be 'assembled' or 'casadi', got {derivatives!r}")
+        self.derivatives = derivatives
+        if solver not in SOLVERS:
+            raise InputError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
+        self.plugin = solver
+        self.compile = bool(compile)
+        self.banded = self.elements >= BANDED_MIN_ELEMENTS if banded is None else bool(banded)
+        self.verbose = bool(verbose)
+        self.options = merge_options(verbose, solver_options, solver)
+        self.dae: FlatDAE = optimization.flat()
+        self.nominal = self._nominal_values(nominal)
+        self._build()
+
+    def _nominal_values(self, nominal: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
+        """Per-kind scale vectors ``{"x", "z", "u", "tf"}`` from the ``nominal`` mapping."""
+        dae = self.dae
+        free = self._free_slices()
+        npf = sum(sl.stop - sl.start for sl in free.values())
+        out = {"x": np.ones(dae.nx), "z": np.ones(dae.nz), "u": np.ones(dae.nu), "tf": np.ones(1), "pf": np.ones(npf)}
+        known = {"final_time": ("tf", slice(0, 1))}
+        for kind, vars_ in (("x", dae.x_vars), ("z", dae.z_vars), ("u", dae.u_vars), ("pf", free)):
+            for name, sl in vars_.items():
+                known[name] = (kind, sl)
+        for name, value in (nominal or {}).items():
+            if name not in known:
+                raise InputError(f"nominal: {name!r} is not a state, input, algebraic variable, free parameter or 'final_time'")
+            kind, sl = known[name]
+            n = sl.stop - sl.start
+            try:
+                v = np.broadcast_to(np.asarray(value, dtype=float).reshape(-1) if np.ndim(value) else float(value), (n,))
+            except (TypeError, ValueError):
+                raise InputError(f"nominal of {name!r}: expected a positive number or {n} of them, got {value!r}") from None
+            if not np.all(np.isfinite(v) & (v > 0)):
+                raise InputError(f"nominal of {name!r}: expected positive finite values, got {value!r}")
+            out[kind][sl] = v
+        return out
+
+    def _free_slices(self) -> dict[str, slice]:
+        """Free parameter name -> its slice in the vector of free parameter elements."""
+        out, k = {}, 0
+        for name in self.optimization.free_parameters:
+            n = self.dae.p_vars[name].stop - self.dae.p_vars[name].start
+            out[name] = slice(k, k + n)
+            k += n
+        return out
+
+    def _free_index(self) -> np.ndarray:
+        """Indices in the model parameter vector of the free parameter elements, in order."""
+        p_vars = self.dae.p_vars
+        idx = [np.arange(p_vars[n].start, p_vars[n].stop) for n in self.optimization.free_parameters]
+        return np.concatenate(idx).astype(int) if idx else np.zeros(0, dtype=int)
+
+    # ------------------------------------------------------------------ build
+    def _build(self) -> None:
+        opt, dae = self.optimization, self.dae
+        co = collocation_coefficients(self.points, self.scheme)
+        self._co = co
+        assembled = self.derivatives == "assembled"
+        free_index = self._free_index()
+        if self.banded and opt.free_final_time:
+            # N copies of the final time: scaled by sqrt(N), IPOPT's regularisation of the
+            # Hessian, delta_w |step|^2, weighs a common change of all copies as it would
+            # weigh a change of one shared variable
+            self.nominal["tf"] = self.nominal["tf"] * np.sqrt(self.elements)
+        nlp = transcribe(
+            opt, dae, self.elements, self.points, co, self.nominal, free_index, inline_points=not assembled, final_time_copies=self.banded
+        )
+        self.nlp = nlp
+        wv, gv, P_nlp = nlp.w, nlp.g, nlp.p
+        self._blocks = nlp.blocks
+        self._block_sizes = nlp.block_sizes
+        self._scale, self._lbw, self._ubw, self._lbg, self._ubg = nlp.scale, nlp.lbw, nlp.ubw, nlp.lbg, nlp.ubg
+        self._fg = ca.Function("fg", [wv, P_nlp], [nlp.f, gv])
+        self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
+        self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()))
+        self.derivative_functions: dict[str, ca.Function] = {}
+        self.evaluation = "CasADi interpreter (whole NLP graph)"
+        if assembled:
+            jac_g, hess_lag, self.evaluation = assembled_derivatives(
+                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile
+            )
+            self.derivative_functions = {"jac_g": jac_g, "hess_lag": hess_lag}
+        self.solver = self._nlpsol(self.options)
+        self._warm_solver: ca.Function | None = None
+        _log.debug("collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel())
+
+    def _nlpsol(self, options: Mapping[str, Any]) -> ca.Function:
+        """A ``casadi.nlpsol`` of this NLP with ``options`` (the derivative functions are shared)."""
+        nlp = self.nlp
+        nlp_options = {**options, **self.derivative_functions}
+        try:
+            return ca.nlpsol(
+                f"{_fname(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": nlp.f, "g": nlp.g}, nlp_options
+            )
+        except RuntimeError as exc:
+            raise SolverError(f"could not build the {self.plugin} solver: {exc}") from exc
+
+    # ------------------------------------------------------------------ guesses
+    def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
+        opt, dae, co = self.optimization, self.dae, self._co
+        N, t0 = self.elements, opt.start_time
+        h = (tf_guess - t0) / N
+        fns = {}
+        for cat, vars_, start in (("x", dae.x_vars, dae.x_start), ("z", dae.z_vars, dae.z_start), ("u", dae.u_vars, None)):
+            for name, sl in vars_.items():
+                n = sl.stop - sl.start
+                if start is None:
+                    kind_syms = self.optimization.model._vars[name]
+                    default = kind_syms.start.copy()
+                else:
+                    default = start[sl].copy()
+                fns[(cat, name)] = (sl, _guess_fn(guesses.get(name), n, name, default))
+        w0 = []
+        for (kind, k, j), size in zip(self._blocks, self._block_sizes):
+            if kind == "tf":
+                w0.append(np.array([tf_guess]))
+                continue
+            if kind == "pf":
+                w0.append(self._free_start(pvec))
+                continue
+            t = t0 + (k + co["root"][j]) * h
+            vals = np.zeros(size)
+            for (cat, _name), (sl, f) in fns.items():
+                if cat == kind:
+                    vals[sl] = f(t)
+            w0.append(vals)
+        w = np.concatenate(w0) if w0 else np.zeros(0)
+        lo, hi = self._lbw, self._ubw
+        return np.clip(w / self._scale, lo, hi)  # the NLP works with variable / nominal
+
+    def _free_start(self, pvec: np.ndarray) -> np.ndarray:
+        """Initial guess of the free parameter elements: their start, else the value clipped into the bounds."""
+        out = []
+        for name, (lb, ub, start) in self.optimization.free_parameters.items():
+            out.append(start if start is not None else np.clip(pvec[self.dae.p_vars[name]], lb, ub))
+        return np.concatenate(out) if out else np.zeros(0)
+
+    # ------------------------------------------------------------------ solve
+    def solve(
+        self,
+        parameters: Mapping[str, Any] | None = None,
+        initial_guess: OptimizationResult | Mapping[str, Any] | None = None,
+        warm_start: bool = False,
+    ) -> OptimizationResult:
+        """Solve the NLP; never raises for a non-optimal outcome.
+
+        Parameters
+        ----------
+        parameters : mapping of str to float or array_like, optional
+            Parameter values overriding the model defaults and
+            :meth:`Optimization.set_parameter`.
+        initial_guess : OptimizationResult or mapping, optional
+            A previous result of this transcription (its NLP vector is reused: warm
+            start), a result of another transcription (sampled), or a mapping from
+            variable names (and ``"final_time"``) to guesses in the formats of
+            :meth:`Optimization.set_initial_guess`. Default: the problem's guesses.
+        warm_start : bool, optional
+            With a previous result of this transcription as ``initial_guess``: start
+            IPOPT from its primal point *and multipliers* with a small barrier parameter
+            (:data:`gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`), a true
+            warm start. Default False (the primal point only, a cold barrier).
+
+        Returns
+        -------
+        OptimizationResult
+            With ``status`` and the solution or the last iterate.
+
+        Raises
+        ------
+        InputError
+            If parameters or guesses are malformed.
+        """
+        opt, dae = self.optimization, self.dae
+        merged = {k: v for k, v in opt.parameters.items()}
+        merged.update(parameters or {})
+        pvec = dae.parameter_vector(merged)
+        guesses: dict[str, Any] = dict(opt.initial_guesses)
+        tf_guess = opt.final_time_guess
+        w0 = None
+        if isinstance(initial_guess, OptimizationResult):
+            if initial_guess.transcription_key == self.key and initial_guess.w is not None:
+                w0 = np.clip(initial_guess.w, self._lbw, self._ubw)
+            elif initial_guess.collocation is not None:
+                res = initial_guess
+                tf_guess = float(np.clip(res.final_time, *opt.final_time_bounds))
+                span_old = res.final_time - opt.start_time
+
+                def from_result(cat: str, name: str, res: OptimizationResult = res) -> Any:
+                    def f(t: float) -> np.ndarray:
+                        s = opt.start_time + (t - opt.start_time) / (tf_guess - opt.start_time) * span_old
+                        return np.asarray(res.sample([s])[cat][name], dtype=float).reshape(-1)
+
+                    return f
+
+                for cat, vars_ in (("states", dae.x_vars), ("inputs", dae.u_vars), ("algebraics", dae.z_vars)):
+                    for name in vars_:
+                        guesses[name] = from_result(cat, name)
+        elif isinstance(initial_guess, Mapping):
+            for name, value in initial_guess.items():
+                if name == "final_time":
+                    tf_guess = float(np.clip(float(value), *opt.final_time_bounds))
+                    continue
+                known = {**dae.x_vars, **dae.z_vars, **dae.u_vars}
+                if name not in known:
+                    raise InputError(f"initial_guess: {name!r} is not a state, input or algebraic variable")
+                guesses[name] = value
+        elif initial_guess is not None:
+            raise InputError("initial_guess must be an OptimizationResult or a mapping")
+        if w0 is None:
+            w0 = self._initial_w(guesses, tf_guess, pvec)
+
+        solver = self.solver
+        warm: dict[str, np.ndarray] = {}
+        if warm_start:
+            if not (isinstance(initial_guess, OptimizationResult) and initial_guess.transcription_key == self.key
+                    and initial_guess.lam_g is not None):
+                raise InputError("warm_start: initial_guess must be a result of this transcription (with its multipliers)")
+            solver = self.warm_solver()
+            warm = {"lam_x0": initial_guess.lam_w, "lam_g0": initial_guess.lam_g}
+        t_start = _time.perf_counter()
+        error_msg = None
+        lam = (None, None)
+        try:
+            sol = solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pvec, **warm)
+            w_opt = np.array(sol["x"], dtype=float).reshape(-1)
+            lam = (np.array(sol["lam_x"], dtype=float).reshape(-1), np.array(sol["lam_g"], dtype=float).reshape(-1))
+        except RuntimeError as exc:  # e.g. NaN/exception inside an evaluation
+            error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
+            w_opt = w0
+        solve_time = _time.perf_counter() - t_start
+        stats = dict(solver.stats())
+        message = error_msg or str(stats.get("return_status", "unknown"))
+        status = Status.ERROR if error_msg else normalize_ipopt_status(message)
+        if not np.all(np.isfinite(w_opt)):
+            status = Status.ERROR
+        res = self._result(w_opt, pvec, status, message, stats, solve_time)
+        res.lam_w, res.lam_g = lam
+        return res
+
+    def warm_solver(self) -> ca.Function:
+        """The nlpsol of warm starts (built once; shares the derivative functions).
+
+        Returns
+        -------
+        casadi.Function
+            IPOPT with :data:`~gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`.
+        """
+        if self._warm_solver is None:
+            opts = {**self.options, self.plugin: {**self.options[self.plugin], **WARM_START_OPTIONS}}
+            self._warm_solver = self._nlpsol(opts)
+        return self._warm_solver
+
+    def to_function(self, name: str = "resolve", warm_start: bool = True) -> ca.Function:
+        """This NLP's solve as one CasADi Function of the parameters and a start point (rockit's ``to_function``).
+
+        See :func:`gtmodel.modeling.ocp.collocation_function.resolve_function`.
+
+        Parameters
+        ----------
+        name : str, optional
+            Function name.
+        warm_start : bool, optional
+            Use the warm-start solver (multipliers and a small barrier parameter).
+
+        Returns
+        -------
+        casadi.Function
+            ``(p, w0, lam_w0, lam_g0) -> (w, lam_w, lam_g, objective, final_time)``.
+        """
+        return resolve_function(self, name, warm_start)
+
+    def _result(
+        self,
+        w: np.ndarray,
+        pvec: np.ndarray,
+        status: str,
+        message: str,
+        stats: dict[str, Any],
+        solve_time: float,
+    ) -> OptimizationResult:
+        dae, opt, co = self.dae, self.optimization, self._co
+        N, d = self.elements, self.points
+        f_val, g_val = self._fg(w, pvec)
+        f_val = float(f_val)
+        g_val = np.array(g_val, dtype=float).reshape(-1)
+        viol = [0.0]
+        if g_val.size:
+            viol.append(float(np.max(np.maximum(self._lbg - g_val, g_val - self._ubg))))
+        if w.size:
+            viol.append(float(np.max(np.maximum(self._lbw - w, w - self._ubw) * self._scale)))
+        max_viol = float(max(viol)) if np.all(np.isfinite(g_val)) else float("nan")
+        xc, uc, zc, _xn, T, p_all = self._extract(w, pvec)
+        tf = float(T)
+        pvec = np.array(p_all, dtype=float).reshape(-1)  # free parameters at their optimal values
+        colloc = CollocationData(
+            t0=opt.start_time,
+            tf=tf,
+            elements=N,
+            points=d,
+            scheme=self.scheme,
+            tau_root=co["root"].copy(),
+            xc=np.array(xc).reshape(dae.nx, N, d + 1).transpose(1, 2, 0),
+            uc=np.array(uc).reshape(dae.nu, N, d).transpose(1, 2, 0),
+            zc=np.array(zc).reshape(dae.nz, N, d).transpose(1, 2, 0),
+        )
+        t = colloc.mesh()
+        xs, us, zs = colloc.evaluate(t)
+        params = {k: pvec[s].copy() for k, s in dae.p_vars.items()}
+        try:
+            outs = _eval_outputs(dae, t, xs, zs, us, pvec)
+        except RuntimeError:
+            outs = {}
+        iterations = int(stats.get("iter_count", 0) or 0)
+        if status != "optimal":
+            _log.warning("collocation solve of %s ended with status %s (%s)", dae.name, status, message)
+        return OptimizationResult(
+            status=status,
+            message=message,
+            iterations=iterations,
+            solve_time=solve_time,
+            objective=f_val,
+            final_time=tf,
+            max_constraint_violation=max_viol,
+            t=t,
+            states=_unpack(dae.x_vars, xs),
+            inputs=_unpack(dae.u_vars, us),
+            algebraics=_unpack(dae.z_vars, zs),
+            outputs=outs,
+            parameters=params,
+            last_iterate=status not in ("optimal", "acceptable"),
+            stats=stats,
+            collocation=colloc,
+            dae=dae,
+            w=w.copy(),
+            transcription_key=self.key,
+        )
+
+
+def _guess_fn(spec: Any, size: int, name: str, default: np.ndarray) -> Any:
+    """Turn a guess specification into ``f(t) -> (size,)``."""
+    if spec is None:
+        return lambda t: default
+    if callable(spec):
+        return lambda t: _vector_value(spec(t), size, f"initial guess of {name!r}")
+    if isinstance(spec, tuple) and len(spec) == 2:
+        tg = np.asarray(spec[0], dtype=float).reshape(-1)
+        vg = np.asarray(spec[1], dtype=float).reshape(tg.size, -1)
+        if vg.shape[1] != size:
+            raise InputError(f"initial guess of {name!r}: expected {size} columns, got {vg.shape[1]}")
+        return lambda t: np.array([np.interp(t, tg, vg[:, i]) for i in range(size)])
+    const = _vector_value(spec, size, f"initial guess of {name!r}")
+    return lambda t: const
+
+
+def solve(
+    optimization: Optimization,
+    elements: int = 50,
+    points: int = 3,
+    scheme: str = "radau",
+    verbose: bool = False,
+    solver_options: Mapping[str, Any] | None = None,
+    initial_guess: OptimizationResult | Mapping[str, Any] | None = None,
+) -> OptimizationResult:
+    """Transcribe by direct collocation and solve with IPOPT.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The declared problem.
+    elements : int, optional
+        Number of uniform elements; default 50.
+    points : int, optional
+        Collocation points per element; default 3.
+    scheme : {"radau", "legendre"}, optional
+        Collocation scheme; default ``"radau"``.
+    verbose : bool, optional
+        Show IPOPT output; default False.
+    solver_options : mapping, optional
+        IPOPT/CasADi options merged over the defaults (see
+        :class:`CollocationTranscription`).
+    initial_guess : OptimizationResult or mapping, optional
+        See :meth:`CollocationTranscription.solve`.
+
+    Returns
+    -------
+    OptimizationResult
+        The result; ``success`` is True only for status ``"optimal"``.
+
+    Raises
+    ------
+    InputError
+        On invalid transcription arguments or guesses.
+    ModelError
+        If the model cannot be flattened.
+    SolverError
+        If the NLP solver cannot be built.
+    """
+    tr = CollocationTranscription(
+        optimization,
+        elements=elements,
+        points=points,
+        scheme=scheme,
+        verbose=verbose,
+        solver_options=solver_options,
+    )
+    return tr.solve(initial_guess=initial_guess)

@@ -1,0 +1,272 @@
+"""Constraint Jacobian and Lagrangian Hessian of a collocation NLP, assembled from per-point derivatives.
+
+At collocation point ``(k, j)`` the nonlinear constraints ``h f(t, x, z, u), g_alg, path``
+and the Lagrange term depend only on that point's ``x, z, u``, on the element's copy of
+the final time and on the free parameters; the collocation polynomial, continuity and
+final-time-copy terms are linear with constant coefficients. So the point functions are
+differentiated once by CasADi AD (small expressions), evaluated at all points in one
+``Function.map`` call, and their values placed into the sparse NLP matrices by one
+constant sparse matrix product: the evaluation costs the same per point at any mesh
+size. The point derivatives can be compiled to C (:func:`gtmodel._compiler.compiled_function`,
+cached by a hash of the generated source, so the compiler runs once per model and the
+cache serves every mesh size and every later process). The point constraints at the start
+and final time and the Mayer term (few) are differentiated directly.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import defaultdict
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.sparse
+
+from gtmodel._compiler import compiled_function
+from gtmodel.modeling.ocp.collocation_nlp import CollocationNLP
+from gtmodel.modeling.ocp.optimization import Optimization
+
+__all__ = ["assembled_derivatives", "COMPILE_FLAGS"]
+
+_log = logging.getLogger("gtmodel")
+
+#: Flags of the compiled point derivatives. The L1 robot's point Hessian (issue 17, one
+#: loaded run): -O0 compiles in 1.0 s and evaluates in 18 us per point, -O1 in 2.7 s and
+#: 12 us, -O2 in 3.6 s and 17 us (the CasADi interpreter: 90 us).
+COMPILE_FLAGS = ("-O1", "-fPIC", "-shared")
+
+
+class _Assembly:
+    """Triplets ``(row, col) += coefficient * value[source]`` of one sparse matrix."""
+
+    def __init__(self) -> None:
+        self.terms: dict[tuple[int, int], list[tuple[int, float]]] = defaultdict(list)
+
+    def add(self, row: int, col: int, source: int, coefficient: float = 1.0) -> None:
+        self.terms[(int(row), int(col))].append((int(source), float(coefficient)))
+
+    def matrix(self, values: ca.MX, n_values: int, nrow: int, ncol: int) -> ca.MX:
+        """The sparse ``nrow x ncol`` matrix whose nonzeros are ``S @ values``."""
+        keys = sorted(self.terms, key=lambda rc: (rc[1], rc[0]))  # column-major, as CasADi stores
+        sp = ca.Sparsity.triplet(nrow, ncol, [rc[0] for rc in keys], [rc[1] for rc in keys])
+        rows, cols, vals = [], [], []
+        for i, key in enumerate(keys):
+            for source, coefficient in self.terms[key]:
+                rows.append(i)
+                cols.append(source)
+                vals.append(coefficient)
+        if not keys:
+            return ca.MX(nrow, ncol)
+        coo = scipy.sparse.coo_matrix((vals, (rows, cols)), shape=(len(keys), n_values)).tocsc()
+        coo.sum_duplicates()
+        coo.sort_indices()
+        S = ca.DM(ca.Sparsity(len(keys), n_values, coo.indptr.tolist(), coo.indices.tolist()), coo.data.tolist())
+        return ca.sparsity_cast(ca.mtimes(S, values), sp)
+
+
+def _local_functions(nlp: CollocationNLP, opt: Optimization, dae: Any, N: int, noms: Any, free_index: np.ndarray) -> tuple:
+    """Per-point ``jac(v) (nr, nv)`` and ``triu hess(v) (nv, nv)`` of the scaled point variables."""
+    nx, nz, nu = dae.nx, dae.nz, dae.nu
+    free = opt.free_final_time
+    t0 = opt.start_time
+    xs, zs, us = ca.SX.sym("xs", nx), ca.SX.sym("zs", nz), ca.SX.sym("us", nu)
+    ts = ca.SX.sym("ts") if free else ca.SX(0, 1)
+    npf = int(free_index.size)
+    ps = ca.SX.sym("ps", npf)
+    P = nlp.p
+    if npf:
+        elems = [P[i] for i in range(int(P.numel()))]
+        for k, i in enumerate(free_index):
+            elems[int(i)] = ps[k] * float(noms["pf"][k])
+        P_loc = ca.vertcat(*elems)
+    else:
+        P_loc = P
+    c, b, lam_f = ca.SX.sym("c"), ca.SX.sym("b"), ca.SX.sym("lam_f")
+    nr = nx + nz + nlp.npath
+    lam_r = ca.SX.sym("lam_r", nr)
+    tn = ca.SX.sym("tf_nominal")  # an input: the compiled code serves every mesh size
+    T = ts * tn if free else ca.SX(opt.final_time_value)
+    n_el = ca.SX.sym("elements")
+    h = (T - t0) / n_el
+    t = t0 + c * h
+    x, z, u = xs * ca.DM(noms["x"]), zs * ca.DM(noms["z"]), us * ca.DM(noms["u"])
+    f, a, p = nlp.point_fn(t, x, z, u, P_loc, T)
+    r = ca.vertcat(h * f, a, p)
+    v = ca.vertcat(xs, zs, us, ts, ps)
+    jac_r = ca.jacobian(r, v)
+    lag = ca.dot(lam_r, r) + lam_f * b * h * nlp.lagr_fn(t, x, z, u, P_loc, T)
+    hess_r = ca.triu(ca.hessian(lag, v)[0])
+    local_in = [xs, zs, us, ts, ps, P, c, tn, n_el]
+    names = ["xs", "zs", "us", "ts", "ps", "p", "c", "tf_nominal", "elements"]
+    jac_fn = ca.Function(f"{_name(dae.name)}_point_jac", local_in, [jac_r], names, ["jac"])
+    hess_fn = ca.Function(f"{_name(dae.name)}_point_hess", local_in + [b, lam_f, lam_r], [hess_r], names + ["b", "lam_f", "lam_r"], ["hess"])
+    return jac_fn, hess_fn
+
+
+def _nz(x: ca.MX) -> ca.MX:
+    """The nonzeros of ``x`` as a column (CasADi's column-major order)."""
+    return ca.sparsity_cast(x, ca.Sparsity.dense(x.nnz(), 1)) if x.nnz() else ca.MX(0, 1)
+
+
+def _name(dae_name: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in dae_name)
+
+
+def assembled_derivatives(
+    nlp: CollocationNLP,
+    opt: Optimization,
+    dae: Any,
+    N: int,
+    d: int,
+    co: Any,
+    noms: Any,
+    free_index: np.ndarray,
+    compile: bool,
+) -> tuple[ca.Function, ca.Function, str]:
+    """The ``jac_g`` and ``hess_lag`` Functions of ``casadi.nlpsol`` for ``nlp``.
+
+    Parameters
+    ----------
+    nlp : CollocationNLP
+        From :func:`gtmodel.modeling.ocp.collocation_nlp.transcribe`.
+    opt : Optimization
+        The problem.
+    dae : FlatDAE
+        Its model.
+    N, d : int
+        Elements and points per element.
+    co : mapping
+        Collocation coefficients.
+    noms : mapping
+        Nominal vectors.
+    free_index : numpy.ndarray of int
+        Model-parameter indices of the free parameters.
+    compile : bool
+        Evaluate the point derivatives through compiled C (cached), else interpreted.
+
+    Returns
+    -------
+    jac_g, hess_lag : casadi.Function
+        ``(x, p) -> (g, jac_g_x)`` and ``(x, p, lam_f, lam_g) -> triu_hess_gamma_x_x``.
+    how : str
+        How the point derivatives are evaluated (compiled, cached, interpreted and why).
+    """
+    nx, nz, nu = dae.nx, dae.nz, dae.nu
+    free = opt.free_final_time
+    npf = int(free_index.size)
+    nw, ng = int(nlp.w.numel()), int(nlp.g.numel())
+    nr = nx + nz + nlp.npath
+    nv = nx + nz + nu + (1 if free else 0) + npf
+    offs = nlp.offsets
+    jac_fn, hess_fn = _local_functions(nlp, opt, dae, N, noms, free_index)
+    how = "CasADi interpreter"
+    if compile:
+        jac_fn, how_j = compiled_function(jac_fn, COMPILE_FLAGS, "collocation")
+        hess_fn, how = compiled_function(hess_fn, COMPILE_FLAGS, "collocation")
+        _log.debug("collocation point derivatives of %s: %s; %s", dae.name, how_j, how)
+    M = len(nlp.rows_point)
+    # per point: the columns of its local variables v = (x, z, u[, tf_k][, pf]) in w
+    cols = np.zeros((M, nv), dtype=int)
+    rows = np.zeros((M, nr), dtype=int)
+    cpos = np.zeros(M)
+    bw = np.zeros(M)
+    pf_cols = offs[("pf", 0, 0)] + np.arange(npf) if npf else np.zeros(0, dtype=int)
+    for m, (k, j, first) in enumerate(nlp.rows_point):
+        tf_col = [offs[("tf", k, 0)]] if free else []
+        cols[m] = np.concatenate(
+            [offs[("x", k, j)] + np.arange(nx), offs[("z", k, j)] + np.arange(nz), offs[("u", k, j)] + np.arange(nu), tf_col, pf_cols]
+        )
+        rows[m] = first + np.arange(nr)
+        cpos[m] = k + co["root"][j]
+        bw[m] = co["B"][j - 1]
+
+    w = ca.MX.sym("x", nw)
+    P = ca.MX.sym("p", int(nlp.p.numel()))
+    lam_f = ca.MX.sym("lam_f")
+    lam_g = ca.MX.sym("lam_g", ng)
+
+    def gather(vec: ca.MX, idx: np.ndarray) -> ca.MX:
+        n = idx.shape[1]
+        if n == 0:
+            return ca.MX(0, M)
+        return ca.reshape(vec[idx.reshape(-1).tolist()], n, M)
+
+    ends_t = ca.MX(0, 1) if not free else gather(w, cols[:, nx + nz + nu:nx + nz + nu + 1])
+    args = [
+        gather(w, cols[:, :nx]),
+        gather(w, cols[:, nx:nx + nz]),
+        gather(w, cols[:, nx + nz:nx + nz + nu]),
+        ends_t if free else ca.MX(0, 1),
+        w[pf_cols.tolist()] if npf else ca.MX(0, 1),
+        P,
+        ca.DM(cpos).T,
+        float(noms["tf"][0]),
+        float(N),
+    ]
+    jm = jac_fn.map(M, "serial")(*args)
+    hm = hess_fn.map(M, "serial")(*args, ca.DM(bw).T, lam_f, gather(lam_g, rows))
+    jr, jc = jac_fn.sparsity_out(0).get_triplet()
+    hr, hc = hess_fn.sparsity_out(0).get_triplet()
+    nj, nh = len(jr), len(hr)
+
+    # the end point constraints and the Mayer term, differentiated directly (few entries)
+    e_all = ca.vertcat(*[e for _, e in nlp.ends]) if nlp.ends else ca.SX(0, 1)
+    e_rows = np.concatenate([first + np.arange(int(e.numel())) for first, e in nlp.ends]) if nlp.ends else np.zeros(0, dtype=int)
+    lam_e = ca.SX.sym("lam_e", int(e_all.numel()))
+    lam_fs = ca.SX.sym("lam_f")
+    je = ca.jacobian(e_all, nlp.w)
+    he = ca.triu(ca.hessian(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), nlp.w)[0])
+    ends_jac = ca.Function("ends_jac", [nlp.w, nlp.p], [je])
+    ends_hess = ca.Function("ends_hess", [nlp.w, nlp.p, lam_fs, lam_e], [he])
+    je_val = ends_jac(w, P)
+    he_val = ends_hess(w, P, lam_f, lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1))
+
+    # Jacobian: values = [point jacobians (M nj), end jacobian, 1]
+    jac = _Assembly()
+    for m in range(M):
+        base = m * nj
+        for i, (rr, cc) in enumerate(zip(jr, jc)):
+            jac.add(rows[m, rr], cols[m, cc], base + i)
+    je_r, je_c = je.sparsity().get_triplet()
+    for i, (rr, cc) in enumerate(zip(je_r, je_c)):
+        jac.add(e_rows[rr], cc, M * nj + i)
+    one = M * nj + len(je_r)
+    nom_x = noms["x"]
+    for m, (k, j, first) in enumerate(nlp.rows_point):
+        for r_ in range(d + 1):  # collocation polynomial: - sum_r C[r, j] x_{k,r}
+            if co["C"][r_, j] != 0.0:
+                o = offs[("x", k, r_)]
+                for i in range(nx):
+                    jac.add(first + i, o + i, one, -co["C"][r_, j] * nom_x[i])
+    for k, first in nlp.rows_cont:
+        o = offs[("x", k + 1, 0)]
+        for i in range(nx):
+            jac.add(first + i, o + i, one, nom_x[i])
+        for r_ in range(d + 1):
+            if co["D"][r_] != 0.0:
+                o = offs[("x", k, r_)]
+                for i in range(nx):
+                    jac.add(first + i, o + i, one, -co["D"][r_] * nom_x[i])
+    for k, row in nlp.rows_tf:
+        jac.add(row, offs[("tf", k + 1, 0)], one, 1.0)
+        jac.add(row, offs[("tf", k, 0)], one, -1.0)
+    jvals = ca.vertcat(_nz(jm), _nz(je_val), ca.MX(1))
+    jac_mx = jac.matrix(jvals, one + 1, ng, nw)
+
+    hess = _Assembly()
+    for m in range(M):
+        base = m * nh
+        for i, (rr, cc) in enumerate(zip(hr, hc)):
+            R, C_ = cols[m, rr], cols[m, cc]
+            hess.add(min(R, C_), max(R, C_), base + i)
+    he_r, he_c = he.sparsity().get_triplet()
+    for i, (rr, cc) in enumerate(zip(he_r, he_c)):
+        hess.add(rr, cc, M * nh + i)
+    hvals = ca.vertcat(_nz(hm), _nz(he_val))
+    hess_mx = hess.matrix(hvals, M * nh + len(he_r), nw, nw)
+
+    g_fn = ca.Function("nlp_g", [nlp.w, nlp.p], [nlp.g])
+    jac_g = ca.Function("nlp_jac_g", [w, P], [g_fn(w, P), jac_mx], ["x", "p"], ["g", "jac_g_x"])
+    hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hess_mx], ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+    return jac_g, hess_lag, how

@@ -1,0 +1,211 @@
+"""Flattening of a :class:`~gtmodel.modeling.Model` into its semi-explicit DAE (:class:`FlatDAE`).
+
+:meth:`gtmodel.modeling.Model.flatten` calls :func:`flatten_model`: the variables are
+stacked by kind (``x``, ``z``, ``u``, ``p``), the equations containing ``der()`` are solved
+for ``der()`` symbolically (``M(.) xdot = -b(.)`` with ``M = d res / d xdot``,
+``casadi.solve``; a constant ``M`` is inverted numerically once), and the algebraic
+equations are checked to be index 1 in the algebraic variables::
+
+    xdot = f(t, x, z, u, p)
+       0 = g(t, x, z, u, p)
+
+The record of one declared variable (:class:`_Var`) is shared with
+:mod:`gtmodel.modeling.simulation.model`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import ModelError
+from gtmodel.modeling.dae import FlatDAE, expand_names
+
+__all__ = ["flatten_model"]
+
+_KINDS = ("parameter", "state", "algebraic", "input")
+
+
+@dataclass
+class _Var:
+    """One declared variable (internal record)."""
+
+    name: str
+    kind: str
+    sym: ca.SX
+    start: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
+    der: ca.SX | None = None
+    unit: str = ""
+
+    @property
+    def size(self) -> int:
+        return int(self.sym.numel())
+
+
+def flatten_model(model: Any) -> FlatDAE:
+    """Flatten a model into a semi-explicit DAE (the work of :meth:`gtmodel.modeling.Model.flatten`).
+
+    Parameters
+    ----------
+    model : Model
+        The model, with its declared variables, equations and outputs.
+
+    Returns
+    -------
+    FlatDAE
+        The semi-explicit DAE and its CasADi Functions.
+
+    Raises
+    ------
+    ModelError
+        If the number of scalar equations differs from states + algebraics, the
+        equations are not solvable for ``der()`` (naming the states), or the
+        algebraic equations are not index-1 in the algebraic variables.
+    """
+    by_kind = {k: [v for v in model._vars.values() if v.kind == k] for k in _KINDS}
+
+    def cat(vs: list[_Var], attr: str = "sym") -> ca.SX:
+        return ca.vertcat(*[getattr(v, attr) for v in vs]) if vs else ca.SX(0, 1)
+
+    def slices(vs: list[_Var]) -> dict[str, slice]:
+        out, k = {}, 0
+        for v in vs:
+            out[v.name] = slice(k, k + v.size)
+            k += v.size
+        return out
+
+    def names(vs: list[_Var]) -> list[str]:
+        return [n for v in vs for n in expand_names(v.name, v.size)]
+
+    def arr(vs: list[_Var], attr: str) -> np.ndarray:
+        return np.concatenate([getattr(v, attr) for v in vs]) if vs else np.zeros(0)
+
+    states, algs = by_kind["state"], by_kind["algebraic"]
+    x, xdot, z = cat(states), cat(states, "der"), cat(algs)
+    u, p = cat(by_kind["input"]), cat(by_kind["parameter"])
+    nx, nz = int(x.numel()), int(z.numel())
+    x_names, z_names = names(states), names(algs)
+
+    res = ca.vertcat(*[r for _, r in model._equations]) if model._equations else ca.SX(0, 1)
+    neq = int(res.numel())
+    if neq != nx + nz:
+        raise ModelError(
+            f"model {model.name!r} has {neq} scalar equations but {nx} states + {nz} "
+            f"algebraic variables = {nx + nz} unknowns"
+        )
+    subst_rows = {  # scalar rows of the substitute_der equations
+        k for j, (lo, hi) in enumerate(_row_ranges(model._equations)) if j in model._der_substituted
+        for k in range(lo, hi)
+    }
+    diff_rows = [i for i in range(neq) if nx and i not in subst_rows and ca.depends_on(res[i], xdot)]
+    alg_rows = [i for i in range(neq) if i not in set(diff_rows)]
+    res_d = res[diff_rows] if diff_rows else ca.SX(0, 1)
+    res_a = res[alg_rows] if alg_rows else ca.SX(0, 1)
+
+    # --- differential part: M xdot + b = 0
+    if nx:
+        M = ca.jacobian(res_d, xdot)
+        missing = [x_names[j] for j in range(nx) if M[:, j].nnz() == 0]
+        if missing:
+            raise ModelError(
+                f"model {model.name!r}: der() of state(s) {missing} appear(s) in no equation"
+            )
+        if len(diff_rows) != nx or ca.sprank(M) < nx:
+            raise ModelError(
+                f"model {model.name!r}: the equations containing der() ({len(diff_rows)} scalar) "
+                f"cannot be solved for der() of the {nx} states {x_names} (structurally singular)"
+            )
+        b = ca.substitute(res_d, xdot, ca.SX.zeros(nx))
+        if not ca.depends_on(M, ca.vertcat(x, z, u, p, model._time)) and M.is_constant():
+            Mn = np.array(ca.DM(M))
+            if np.linalg.matrix_rank(Mn) < nx:
+                raise ModelError(
+                    f"model {model.name!r}: the der() coefficient matrix is singular for states {x_names}"
+                )
+            if np.allclose(Mn, np.eye(nx)):
+                f = -b
+            else:
+                f = ca.SX(ca.DM(np.linalg.solve(Mn, np.eye(nx)))) @ (-b)
+        else:
+            f = ca.solve(M, -b)
+        f = ca.simplify(f) if f.numel() < 50 else f
+    else:
+        f = ca.SX(0, 1)
+    if subst_rows and nx:
+        res_a = ca.substitute(res_a, xdot, f)
+
+    # --- algebraic part: index-1 check
+    if nz:
+        Jz = ca.jacobian(res_a, z)
+        if int(res_a.numel()) != nz or ca.sprank(Jz) < nz:
+            no_z = [z_names[j] for j in range(nz) if Jz[:, j].nnz() == 0]
+            raise ModelError(
+                f"model {model.name!r}: the algebraic equations are not solvable for the algebraic "
+                f"variables {no_z or z_names} (not index 1); flatten() needs an index-1 DAE: "
+                "reduce it with gtmodel.modeling.structural_simplify(model) (simulate() does)"
+            )
+    elif res_a.numel():
+        # unreachable by the count check, kept for safety
+        raise ModelError(f"model {model.name!r}: algebraic equations without algebraic variables")
+
+    g = res_a
+    args = [model._time, x, z, u, p]
+    argn = ["t", "x", "z", "u", "p"]
+    out_exprs = {
+        n: (ca.substitute(e, xdot, f) if nx else e) for n, e in model._outputs.items()
+    }
+    ode = ca.Function(f"{model.name}_ode", args, [f], argn, ["xdot"])
+    alg = ca.Function(f"{model.name}_alg", args, [g], argn, ["g"])
+    outputs = ca.Function(
+        f"{model.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
+        {"allow_duplicate_io_names": True},  # an output may be called x, z, u, p or t
+    )
+    return FlatDAE(
+        name=model.name,
+        t=model._time,
+        x=x,
+        z=z,
+        u=u,
+        p=p,
+        xdot=xdot,
+        ode_expr=f,
+        alg_expr=g,
+        output_exprs=out_exprs,
+        ode=ode,
+        alg=alg,
+        outputs=outputs,
+        x_vars=slices(states),
+        z_vars=slices(algs),
+        u_vars=slices(by_kind["input"]),
+        p_vars=slices(by_kind["parameter"]),
+        x_names=x_names,
+        z_names=z_names,
+        u_names=names(by_kind["input"]),
+        p_names=names(by_kind["parameter"]),
+        output_names=[n for k, e in out_exprs.items() for n in expand_names(k, int(e.numel()))],
+        output_sizes={k: int(e.numel()) for k, e in out_exprs.items()},
+        x_start=arr(states, "start"),
+        z_start=arr(algs, "start"),
+        p_value=arr(by_kind["parameter"], "start"),
+        x_lb=arr(states, "lb"),
+        x_ub=arr(states, "ub"),
+        z_lb=arr(algs, "lb"),
+        z_ub=arr(algs, "ub"),
+        u_lb=arr(by_kind["input"], "lb"),
+        u_ub=arr(by_kind["input"], "ub"),
+    )
+
+
+def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:
+    """Scalar row range ``[lo, hi)`` of each equation in the stacked residual."""
+    out, k = [], 0
+    for _, r in equations:
+        out.append((k, k + int(r.numel())))
+        k += int(r.numel())
+    return out
