@@ -94,7 +94,7 @@ freedom), the cloud's variances about 0.75 of the EKF's: 1000 particles in 19 di
 do not hold the posterior's thin directions (held as a strict xfail in the tests).
 
 Status of a run (as :class:`~gtmodel.estimation.filters.FilterRun`: never NaN rows):
-``optimal`` when every step ran; ``error`` when a covariance was not positive definite or
+``completed`` when every step ran; ``error`` when a covariance was not positive definite or
 a value not finite (UKF), or when the particle filter lost the measurement (every
 particle's ``d2`` above the chi-square quantile ``1 - lost_probability``, ``nz`` degrees
 of freedom: the cloud no longer holds the state) or its weights degenerated (ESS below
@@ -389,7 +389,7 @@ class UnscentedKalmanFilter:
         -------
         FilterRun
             Name ``"ukf"``; ``x`` (N, nx) and ``P`` (N, nx, nx) the posteriors; ``step_time_s``
-            the mean wall time per step [s]; status ``optimal``, or ``error`` with the
+            the mean wall time per step [s]; status ``completed``, or ``error`` with the
             arrays cut before the failing sample (named in the message).
 
         Raises
@@ -401,7 +401,7 @@ class UnscentedKalmanFilter:
         n, nx = zz.shape[0], self.model.nx
         xs, ps = np.empty((n, nx)), np.empty((n, nx, nx))
         x, p = self.x0.copy(), self.P0.copy()
-        status, message = Status.OPTIMAL, f"ukf: filtered {n} samples"
+        status, message = Status.COMPLETED, f"ukf: filtered {n} samples"
         t0 = time.perf_counter()
         k = 0
         for k in range(n):
@@ -418,7 +418,7 @@ class UnscentedKalmanFilter:
         else:
             k = n
         elapsed = time.perf_counter() - t0
-        if status is not Status.OPTIMAL:
+        if status is not Status.COMPLETED:
             _LOG.warning(message)
         return FilterRun(
             name=self.name,
@@ -445,7 +445,7 @@ class ParticleRun(FilterRun):
     Parameters
     ----------
     status : Status
-        ``"optimal"``, or ``"error"`` (measurement lost, weights degenerate).
+        ``"completed"``, or ``"error"`` (measurement lost, weights degenerate).
     message : str
         Summary: resamplings and ESS, or the failing sample.
     name : str
@@ -671,7 +671,7 @@ class ParticleFilter:
         ParticleRun
             Name ``"pf"``; ``x`` (N, nx) the weighted means, ``P`` (N, nx, nx) the weighted
             covariances (before resampling), ``step_time_s`` the mean wall time per step [s],
-            ``ess``, ``resampled``, ``min_d2`` per sample; status ``optimal``, or ``error``
+            ``ess``, ``resampled``, ``min_d2`` per sample; status ``completed``, or ``error``
             (measurement lost or weights degenerate) with ``x``, ``P`` cut before the
             failing sample (named in the message; the diagnostics include it).
 
@@ -685,7 +685,7 @@ class ParticleFilter:
         rng = np.random.default_rng(self.seed)
         xs, ps = np.empty((n, nx)), np.empty((n, nx, nx))
         ess, resampled, min_d2 = np.full(n, np.nan), np.zeros(n, bool), np.full(n, np.nan)
-        status, message = Status.OPTIMAL, ""
+        status, message = Status.COMPLETED, ""
         t0 = time.perf_counter()
         x_start, p_start, first = self.x0, self.P0, 0
         if self.gaussian_start:
@@ -747,7 +747,7 @@ class ParticleFilter:
             else:
                 k = n
         elapsed = time.perf_counter() - t0
-        if status is Status.OPTIMAL:
+        if status is Status.COMPLETED:
             message = (
                 f"pf: filtered {n} samples, {npart} particles, {int(resampled.sum())} resamplings, "
                 f"ESS min {np.nanmin(ess):.4g} median {np.nanmedian(ess):.4g}"
