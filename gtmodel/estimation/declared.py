@@ -16,8 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
-from gtmodel.estimation.correction_loop import CorrectionStudy, correction_study
-from gtmodel.estimation.fusion_study import FusionStudy, FusionStudyResult
+from gtmodel.estimation import CorrectionStudy, FusionStudy, FusionStudyResult, correction_study
 from gtmodel.robots import SerialArm
 
 __all__ = ["StateEstimationDeclaration", "CorrectionStabilityDeclaration"]

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gtmodel.estimation.plant import DT, TrackingPlant, TrackingResponse
+from gtmodel.estimation import TrackingPlant, TrackingResponse
 from gtmodel.status import StatusResult
 
 __all__ = ["TrackingSolution", "replay"]
@@ -42,8 +42,7 @@ class TrackingSolution(StatusResult):
     source_status: str = "file"
 
 
-def replay(plant: TrackingPlant, q: np.ndarray, settle_time: float, label: str, source_status: str = "file",
-           dt: float = DT) -> TrackingSolution:
+def replay(plant: TrackingPlant, q: np.ndarray, settle_time: float, label: str, source_status: str = "file") -> TrackingSolution:
     """Simulate actuator references followed by a hold at the last one.
 
     Parameters
@@ -51,22 +50,20 @@ def replay(plant: TrackingPlant, q: np.ndarray, settle_time: float, label: str, 
     plant : TrackingPlant
         The closed-loop plant.
     q : numpy.ndarray, shape (N, 3)
-        Actuator references at the loop period [m].
+        Actuator references at the plant's sample time ``plant.dt`` [m].
     settle_time : float
         Hold after the motion [s] (rounded up to whole samples).
     label : str
         Where the references come from (for the message).
     source_status : str, optional
         Status of the problem that produced ``q`` (``"file"`` for a trajectory file).
-    dt : float, optional
-        Loop period [s].
 
     Returns
     -------
     TrackingSolution
         The plant's response; status ``completed``.
     """
-    settle = int(math.ceil(settle_time / dt - 1e-9))
+    settle = int(math.ceil(settle_time / plant.dt - 1e-9))
     q_ref = np.vstack([q, np.repeat(q[-1:], settle, axis=0)])
     response = plant.simulate(q_ref)
     return TrackingSolution(

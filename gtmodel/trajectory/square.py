@@ -13,7 +13,6 @@ from typing import Any
 import numpy as np
 
 from gtmodel.errors import SolverError
-from gtmodel.estimation.plant import DT as SAMPLE_TIME_S
 from gtmodel.trajectory.path import Polyline
 from gtmodel.trajectory.path_constrained import PathConstraints, solve_path_convex
 
@@ -21,7 +20,7 @@ __all__ = ["plan_square"]
 
 
 def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceleration: float, lead: int, grid: int,
-                configuration: int, dt: float = SAMPLE_TIME_S) -> tuple[np.ndarray, np.ndarray, float]:
+                configuration: int, dt: float) -> tuple[np.ndarray, np.ndarray, float]:
     """Time-optimal square in the xy plane, corners at rest, sampled at ``dt``, with lead-in/out.
 
     Dressler (2012), section 7.3: the path is a :class:`~gtmodel.trajectory.Polyline`
@@ -48,8 +47,8 @@ def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceler
         Grid points of the solver.
     configuration : int
         IK configuration.
-    dt : float, optional
-        Sample time [s].
+    dt : float
+        Sample time [s] (the loop period).
 
     Returns
     -------
