@@ -28,8 +28,8 @@ NLP_SOLVERS = ("ipopt",)
 
 def _positive_int(name: str, value: object, hi: int | None = None) -> None:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1 or (hi is not None and value > hi):
-        span = f"in 1..{hi}" if hi is not None else "positive"
-        raise InputError(f"{name}: expected a {span} integer, got {value!r}")
+        span = f"an integer in 1..{hi}" if hi is not None else "a positive integer"
+        raise InputError(f"{name}: expected {span}, got {value!r}")
 
 
 @dataclass(frozen=True)
