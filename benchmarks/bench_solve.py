@@ -40,8 +40,8 @@ def peer_opti(decl) -> tuple[float, float, int, str, float]:
     """The NLP of ``decl`` written directly in casadi.Opti; returns (solve s, final time, iterations, status, CPU s)."""
     opt, _ = build_optimization(decl)
     dae = opt.flat()
-    N, d = decl.elements, decl.points
-    co = collocation_coefficients(d, decl.scheme)
+    N, d = decl.method.elements, decl.method.points
+    co = collocation_coefficients(d, decl.method.scheme)
     pvec = dae.parameter_vector({**opt.parameters, **decl.named_parameters})
     args = [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time]
     xdot = dae.ode_expr
@@ -92,7 +92,7 @@ def peer_opti(decl) -> tuple[float, float, int, str, float]:
             if 1 <= j and k < N:
                 opti.set_initial(U[k][j - 1], np.clip(np.ravel(guess["tau"](t)) / u_nom, -1, 1))
     opti.set_initial(tf, tfg)
-    ipopt = {"max_iter": decl.max_iter, "tol": decl.tol, "print_level": int(os.environ.get("PEER_PRINT", 0)), "sb": "yes", **IPOPT_DEFAULTS, **SOLVER_OPTIONS}
+    ipopt = {"max_iter": decl.solver.max_iter, "tol": decl.solver.tol, "print_level": int(os.environ.get("PEER_PRINT", 0)), "sb": "yes", **IPOPT_DEFAULTS, **SOLVER_OPTIONS}
     opti.solver("ipopt", {"print_time": False, "record_time": True, "error_on_fail": False}, ipopt)
     sol = opti.solve()
     st = sol.stats()
@@ -122,7 +122,7 @@ def main() -> None:
     solve_s, peer_s = statistics.median(m[0] for m in mine), statistics.median(p[0] for p in peer)
     out = {
         "problem": Path(a.problem).name,
-        "elements": decl.elements,
+        "elements": decl.method.elements,
         "solve_s": solve_s,
         "iterations": mine[0][2],
         "status": mine[0][3],
@@ -143,7 +143,7 @@ def main() -> None:
     print(f"speedup {out['speedup']:.1f}x (CPU time {out['speedup_cpu']:.1f}x), final times differ by {out['final_time_rel_diff']:.2e} (relative)")
     ms, ms_cpu = {}, {}
     for n in (int(x) for x in a.grid.split(",")):
-        dn = dataclasses.replace(decl, elements=n)
+        dn = dataclasses.replace(decl, method=dataclasses.replace(decl.method, elements=n))
         ours(dn)
         runs = [ours(dn) for _ in range(max(1, a.repeat - 1))]
         ms[str(n)] = statistics.median(1e3 * r[0] / max(r[2], 1) for r in runs)

@@ -45,3 +45,19 @@ def fill_doc(**sections: str) -> Callable[[_F], _F]:
         return func
 
     return fill
+
+
+#: Sections shared by every subpackage (insert with ``fill_doc(**SHARED_DOCS)``):
+#: ``solve_args``, the keyword arguments of every declaration's ``solve`` (the problem kinds
+#: call it with them, see :meth:`gtmodel.problems.base.ProblemKind.solve`).
+SHARED_DOCS = {
+    "solve_args": """
+        verbose : bool, optional
+            Log the solver's progress.
+        previous : Any, optional
+            The previous solution of a sweep, reused where the declaration can (the
+            motion problems reuse its NLP); ignored otherwise.
+        warm_start : bool, optional
+            Start from ``previous`` where the declaration can; ignored otherwise.
+    """,
+}

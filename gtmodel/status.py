@@ -11,6 +11,7 @@ status             exit  meaning
 =================  ====  ===================================================
 ``optimal``        0     solved to the requested tolerance
 ``converged``      0     an iterative estimate met its stopping rule
+``completed``      0     a simulation or filter run ended normally (no optimisation)
 ``acceptable``     1     solved to the solver's looser "acceptable" level
 ``max_iterations`` 1     stopped at the iteration or time limit
 ``infeasible``     1     the solver proved (locally) that no solution exists
@@ -43,6 +44,7 @@ class Status(enum.StrEnum):
 
     OPTIMAL = "optimal"
     CONVERGED = "converged"
+    COMPLETED = "completed"
     ACCEPTABLE = "acceptable"
     MAX_ITERATIONS = "max_iterations"
     INFEASIBLE = "infeasible"
@@ -58,8 +60,8 @@ class Status(enum.StrEnum):
 
     @property
     def success(self) -> bool:
-        """True for ``optimal`` and ``converged``: a solution to rely on."""
-        return self in (Status.OPTIMAL, Status.CONVERGED)
+        """True for ``optimal``, ``converged`` and ``completed``: a result to rely on."""
+        return self in (Status.OPTIMAL, Status.CONVERGED, Status.COMPLETED)
 
     @property
     def exit_code(self) -> int:
@@ -94,6 +96,7 @@ _ORDER = tuple(Status)
 EXIT_CODES: dict[Status, int] = {
     Status.OPTIMAL: 0,
     Status.CONVERGED: 0,
+    Status.COMPLETED: 0,
     Status.ACCEPTABLE: 1,
     Status.MAX_ITERATIONS: 1,
     Status.INFEASIBLE: 1,
@@ -147,5 +150,5 @@ class StatusResult:
 
     @property
     def success(self) -> bool:
-        """True when :attr:`status` is ``optimal`` or ``converged``."""
+        """True when :attr:`status` is ``optimal``, ``converged`` or ``completed``."""
         return self.status.success

@@ -13,7 +13,7 @@ from .conftest import REPO
 
 # the table of the issue and of docs/getting_started.md, written out independently of the code
 EXPECTED_EXIT = {
-    "optimal": 0, "converged": 0, "acceptable": 1, "max_iterations": 1, "infeasible": 1,
+    "optimal": 0, "converged": 0, "completed": 0, "acceptable": 1, "max_iterations": 1, "infeasible": 1,
     "error": 1, "invalid_input": 2, "internal_error": 3, "interrupted": 130,
 }
 
@@ -35,6 +35,7 @@ def test_every_status_has_an_exit_code():
         (["infeasible", "max_iterations"], "infeasible"),
         (["optimal", "infeasible", "error"], "error"),
         (["converged", "optimal"], "converged"),
+        (["completed", "optimal"], "completed"),
         (["interrupted", "internal_error", "optimal"], "interrupted"),
     ],
 )
@@ -51,7 +52,7 @@ def test_unknown_status_is_refused():
         Status.worst(["great"])
 
 
-@pytest.mark.parametrize("status, success", [("optimal", True), ("converged", True), ("acceptable", False), ("error", False)])
+@pytest.mark.parametrize("status, success", [("optimal", True), ("converged", True), ("completed", True), ("acceptable", False), ("error", False)])
 def test_status_result_success(status, success):
     result = StatusResult(status=status, message="m")
     assert result.success is success

@@ -6,9 +6,12 @@ A kind declares (rockit's split between declaring and transcribing):
 - ``schema``: a :class:`~gtmodel.problems.schema.ProblemSchema` subclass (pydantic);
 - :meth:`ProblemKind.load`: the validated document -> the solver-level declaration
   (semantic checks the schema cannot express: workspace, expressions, data files);
-- :meth:`ProblemKind.solve`: declaration -> solution (a result with ``status``);
+- :meth:`ProblemKind.solve`: declaration -> solution (a result with ``status``); by default
+  the declaration's own ``solve`` (the domain object carries its method and solver settings);
 - :meth:`ProblemKind.write`: solution -> files in a result folder and summary fields;
-- ``columns``: what it contributes to a study's comparison table.
+- ``columns``: what it contributes to a study's comparison table (their keys are the
+  summary fields left empty when a run fails before a solution, with
+  ``extra_empty_fields``).
 
 Adding a kind is one class in :mod:`gtmodel.problems.kinds` and one line in
 :mod:`gtmodel.problems.registry`.
@@ -21,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Collection, Mapping
 
+from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel.errors import ProblemError
 from gtmodel.problems.schema import ProblemSchema
 from gtmodel.status import Status
@@ -37,6 +41,14 @@ KIND_DOCS = {
             The file, for references and error messages.
         name : str
             Problem name.
+    """,
+    "write_args": """
+        out : pathlib.Path
+            The result folder (new and empty).
+        plots : bool
+            Write the PNG plots.
+        name : str
+            Problem name (plot titles).
     """,
     "header_fields": """
         name : str, optional
@@ -207,8 +219,17 @@ class ProblemKind(ABC):
     title: ClassVar[str] = ""
     #: Columns of a study table (after ``case`` and ``status``).
     columns: ClassVar[tuple[Column, ...]] = ()
-    #: Summary fields that are None when a case failed before solving.
-    empty_fields: ClassVar[tuple[str, ...]] = ()
+    #: Summary fields that are None when a case failed before solving, besides the keys of
+    #: :attr:`columns`.
+    extra_empty_fields: ClassVar[tuple[str, ...]] = ()
+
+    @property
+    def empty_fields(self) -> tuple[str, ...]:
+        """Summary fields that are None when a case failed before solving.
+
+        The keys of :attr:`columns`, then :attr:`extra_empty_fields` (each once).
+        """
+        return tuple(dict.fromkeys([c.key for c in self.columns] + list(self.extra_empty_fields)))
 
     @abstractmethod
     def load(self, doc: Any, file: ProblemFile, name: str) -> Any:
@@ -234,26 +255,22 @@ class ProblemKind(ABC):
             A semantic error (outside the workspace, bad expression, unreadable data).
         """
 
-    @abstractmethod
+    @fill_doc(**SHARED_DOCS)
     def solve(self, declaration: Any, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> Any:
-        """Solve a declaration.
+        """Solve a declaration: by default its own ``solve`` method, with the same arguments.
 
         Parameters
         ----------
         declaration : Any
             From :meth:`load`.
-        verbose : bool, optional
-            Show the solver's progress.
-        previous : Any, optional
-            The previous solution of a sweep (reuse of a built NLP, where supported).
-        warm_start : bool, optional
-            Start from ``previous``.
+        {solve_args}
 
         Returns
         -------
         Any
             The solution; :meth:`status` reads its status.
         """
+        return declaration.solve(verbose=verbose, previous=previous, warm_start=warm_start)
 
     @abstractmethod
     def write(self, declaration: Any, solution: Any, out: Path, plots: bool, name: str) -> Written:

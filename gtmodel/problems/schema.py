@@ -40,7 +40,6 @@ __all__ = [
     "Text",
     "NonEmptyText",
     "validate_document",
-    "axis_count",
     "problem_error",
     "MAX_LENGTH_M",
     "MAX_FORCE_N",
@@ -397,28 +396,6 @@ def problem_error(path: Path | str, error: ValidationError, schema: type[BaseMod
 def _short(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
-
-
-def axis_count(lo: float, hi: float, step: float) -> float:
-    """Points of ``numpy.arange(lo, hi + step / 2, step)``, counted without building it.
-
-    For bounding grid sizes up front (a typo of a grid step must be a load-time error,
-    not minutes and gigabytes later). Python floats: an overflow is ``inf``, no warning.
-
-    Parameters
-    ----------
-    lo, hi : float
-        The range.
-    step : float
-        The step (> 0).
-
-    Returns
-    -------
-    float
-        The count (``inf`` if it overflows).
-    """
-    n = (float(hi) - float(lo) + float(step) / 2) / float(step)
-    return max(0.0, float(math.ceil(n))) if math.isfinite(n) else math.inf
 
 
 def validate_document(schema: type[ProblemSchema], data: Mapping[str, Any], path: Path | str) -> ProblemSchema:

@@ -17,13 +17,14 @@ along it.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, fields
+from dataclasses import InitVar, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel._tables import read_table
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, UnreachablePoseError
@@ -36,6 +37,8 @@ from gtmodel.robots.kinematics import cart_acceleration_expression, configuratio
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status
+from gtmodel.trajectory.rest_to_rest import bang_bang_duration, check_holding_forces, trapezoid_profile
+from gtmodel.trajectory.settings import Collocation, SolverSettings
 
 __all__ = [
     "PointToPoint",
@@ -104,10 +107,6 @@ class PointToPoint:
         Friction form used in the optimisation and its width [m/s] (smooth by default).
     configuration : int
         IK configuration of the robot (see :func:`gtmodel.robots.configuration_signs`).
-    elements, points, scheme : int, int, str
-        Collocation mesh (JModelica's defaults: 50 elements, 3 Radau points).
-    max_iter, tol : int, float
-        IPOPT iteration limit and tolerance.
     name : str
         Name of the problem (used in reports).
     objective : str
@@ -134,13 +133,27 @@ class PointToPoint:
         Where the declaration comes from (file name), used in error messages.
     start_time : float
         Start time ``t0`` [s]; the final time and its bounds are absolute times.
-    solver, jit : str, bool
-        NLP solver (``"ipopt"``) and compiled C derivatives (``CollocationTranscription``'s ``compile``).
+    method : Collocation
+        The transcription (JModelica's defaults: 50 elements, 3 Radau points).
+    solver : SolverSettings
+        The NLP solver, its iteration limit and tolerance, compiled C derivatives.
+    elements, points, scheme : int, int, str, optional
+        Shortcuts replacing the fields of ``method``.
+    max_iter, tol, jit : int, float, bool, optional
+        Shortcuts replacing the fields of ``solver``.
 
     Raises
     ------
     InputError
-        Malformed numbers (naming the argument).
+        Malformed numbers, or force limits that cannot hold the robot at rest at ``start``
+        or ``end`` (each naming the argument).
+    UnreachablePoseError
+        ``start`` or ``end`` outside the workspace (naming which).
+
+    Notes
+    -----
+    The physical invariants (poses in the workspace, force limits above the holding
+    forces) are checked here, once; transcribing and solving trust them.
     """
 
     robot: RobotParameters | str
@@ -153,11 +166,6 @@ class PointToPoint:
     friction: str = "tanh"
     friction_width: float = DEFAULT_FRICTION_WIDTH
     configuration: int = 0
-    elements: int = 50
-    points: int = 3
-    scheme: str = "radau"
-    max_iter: int = 3000
-    tol: float = 1e-8
     name: str = "point_to_point"
     objective: str = DEFAULT_OBJECTIVE
     constraints: tuple[str, ...] = ()
@@ -170,11 +178,24 @@ class PointToPoint:
     guess: Any = "trapezoid"
     origin: str = "<python>"
     start_time: float = 0.0
-    solver: str = "ipopt"
-    jit: bool = True
+    method: Collocation = field(default_factory=Collocation)
+    solver: SolverSettings = field(default_factory=SolverSettings)
+    elements: InitVar[int | None] = None
+    points: InitVar[int | None] = None
+    scheme: InitVar[str | None] = None
+    max_iter: InitVar[int | None] = None
+    tol: InitVar[float | None] = None
+    jit: InitVar[bool | None] = None
     parameters: RobotParameters = field(init=False, repr=False)
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, elements: int | None, points: int | None, scheme: str | None, max_iter: int | None,
+                      tol: float | None, jit: bool | None) -> None:
+        method = {k: v for k, v in (("elements", elements), ("points", points), ("scheme", scheme)) if v is not None}
+        solver = {k: v for k, v in (("max_iter", max_iter), ("tol", tol), ("jit", jit)) if v is not None}
+        if method:
+            self.method = replace(self.method, **method)
+        if solver:
+            self.solver = replace(self.solver, **solver)
         self.parameters = load_parameters(self.robot)
         for key in ("start", "end", "force_limit"):
             arr = np.asarray(getattr(self, key), dtype=float)
@@ -206,74 +227,32 @@ class PointToPoint:
             raise InputError("start and end: the poses coincide, there is no motion to optimise")
         if not self.free_final_time and not self.final_time_guess > 0:
             raise InputError(f"final_time_guess: a fixed duration must be positive, got {self.final_time_guess!r}")
+        dyn = GantryTau3Dynamics(self.parameters, friction=self.friction, friction_width=self.friction_width)
+        for label, pose in (("start", self.start), ("end", self.end)):
+            try:
+                dyn.kinematics.require_in_workspace(pose, self.configuration)
+            except UnreachablePoseError as exc:
+                raise UnreachablePoseError(f"{label}: {exc}") from None
+        check_holding_forces(self, dyn)
+
+    @fill_doc(**SHARED_DOCS)
+    def solve(self, *, verbose: bool = False, previous: PointToPointSolution | None = None, warm_start: bool = False) -> PointToPointSolution:
+        """Transcribe and solve (:func:`solve_point_to_point`).
+
+        Parameters
+        ----------
+        {solve_args}
+
+        Returns
+        -------
+        PointToPointSolution
+        """
+        return solve_point_to_point(self, verbose=verbose, previous=previous, warm_start=warm_start)
 
 
-def trapezoid_profile(start, end, duration: float, t, ramp: float = 1.0 / 3.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Straight line with a trapezoidal velocity profile.
-
-    Parameters
-    ----------
-    start, end : array_like, shape (3,)
-        End points [m].
-    duration : float
-        Duration [s].
-    t : array_like, shape (K,)
-        Times in ``[0, duration]`` [s].
-    ramp : float, optional
-        Fraction of the duration spent accelerating (and decelerating); default 1/3.
-
-    Returns
-    -------
-    T, T_dot, T_ddot : numpy.ndarray, each shape (K, 3)
-        Position [m], velocity [m/s] and acceleration [m/s^2].
-
-    Raises
-    ------
-    InputError
-        Non-positive duration or ``ramp`` outside (0, 0.5].
-    """
-    if not duration > 0:
-        raise InputError(f"duration: expected a positive time in s, got {duration!r}")
-    if not 0 < ramp <= 0.5:
-        raise InputError(f"ramp: expected a fraction in (0, 0.5], got {ramp!r}")
-    start = np.asarray(start, dtype=float)
-    delta = np.asarray(end, dtype=float) - start
-    t = np.clip(np.asarray(t, dtype=float).reshape(-1), 0.0, duration)
-    ta = ramp * duration
-    a = 1.0 / (ta * (duration - ta))  # peak path acceleration for unit length
-    s = np.where(t < ta, 0.5 * a * t**2, np.where(t <= duration - ta, a * ta * (t - ta / 2), 1 - 0.5 * a * (duration - t) ** 2))
-    sd = np.where(t < ta, a * t, np.where(t <= duration - ta, a * ta, a * (duration - t)))
-    sdd = np.where(t < ta, a, np.where(t <= duration - ta, 0.0, -a))
-    return start + np.outer(s, delta), np.outer(sd, delta), np.outer(sdd, delta)
-
-
-def check_holding_forces(problem: PointToPoint, dynamics: GantryTau3Dynamics | None = None) -> None:
-    """Check that the force limits can hold the robot at rest at both end poses.
-
-    At rest friction is zero in every form, so the actuators must supply exactly
-    ``J^T G`` (Dressler (2012), eq. 6.7 with ``T_dot = T_ddot = 0``); if that exceeds a
-    limit, the rest-to-rest problem is infeasible whatever the solver does.
-
-    Parameters
-    ----------
-    problem : PointToPoint
-        The declaration.
-    dynamics : GantryTau3Dynamics, optional
-        The dynamics to use (default: built from the problem's parameter set).
-
-    Raises
-    ------
-    InputError
-        A holding force exceeds its limit; the message gives both.
-    """
-    dyn = dynamics or GantryTau3Dynamics(problem.parameters, friction=problem.friction, friction_width=problem.friction_width)
-    for label, pose in (("start", problem.start), ("end", problem.end)):
-        hold = dyn.gravity_forces(pose, problem.configuration)
-        if np.any(np.abs(hold) > problem.force_limit):
-            raise InputError(
-                f"force_limit: {problem.force_limit.tolist()} N cannot hold the robot at rest at the {label} pose "
-                f"{pose.tolist()}, which needs {np.round(hold, 2).tolist()} N (gravity, eq. 6.7)"
-            )
+#: Read access under the former flat names (``problem.elements`` is ``problem.method.elements``, ...).
+for _name, _part in (("elements", "method"), ("points", "method"), ("scheme", "method"), ("max_iter", "solver"), ("tol", "solver"), ("jit", "solver")):
+    setattr(PointToPoint, _name, property(lambda self, _n=_name, _p=_part: getattr(getattr(self, _p), _n), doc=f"``{_part}.{_name}``"))
 
 
 def problem_names(model: Model, optimization: Optimization, named_parameters: dict[str, ca.SX]) -> dict[str, ca.SX]:
@@ -317,35 +296,6 @@ def problem_names(model: Model, optimization: Optimization, named_parameters: di
     return names
 
 
-def bang_bang_duration(problem: PointToPoint, dynamics: GantryTau3Dynamics | None = None) -> float:
-    """Rough minimum duration from the force limits, for the initial guess.
-
-    Each cart is treated as a double integrator with the force left after gravity and
-    Coulomb friction at the start pose, driving its own mass plus a third of the plate,
-    over its IK displacement (bang-bang: ``t_i = 2 sqrt(|dq_i| / a_i)``).
-
-    Parameters
-    ----------
-    problem : PointToPoint
-        The declaration.
-    dynamics : GantryTau3Dynamics, optional
-        Dynamics to use (built from the problem if omitted).
-
-    Returns
-    -------
-    float
-        The largest ``t_i`` [s].
-    """
-    dyn = dynamics or GantryTau3Dynamics(problem.parameters, friction=problem.friction, friction_width=problem.friction_width)
-    kin = dyn.kinematics
-    dq = np.abs(kin.ik(problem.end, problem.configuration) - kin.ik(problem.start, problem.configuration))
-    d = problem.parameters.dynamics
-    hold = np.abs(dyn.gravity_forces(problem.start, problem.configuration)) + np.asarray(d.f_c)
-    spare = np.maximum(problem.force_limit - hold, 0.05 * problem.force_limit)
-    mass = np.asarray(d.m_c) + np.asarray(d.m_a) + d.m_p / 3.0
-    return float(np.max(2.0 * np.sqrt(dq / (spare / mass))))
-
-
 def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
     """Declare the point-to-point problem as an :class:`Optimization` (not yet transcribed).
 
@@ -366,11 +316,8 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
 
     Raises
     ------
-    UnreachablePoseError
-        ``start`` or ``end`` is outside the workspace (names which and why).
     InputError
-        The force limits cannot hold the robot at rest at ``start`` or ``end``, or the
-        guess file is unusable.
+        The guess file is unusable.
     ProblemError
         An objective or constraint expression is invalid (names the origin, the field and
         the offending token).
@@ -386,12 +333,6 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
         p, states="tcp", friction=problem.friction, friction_width=problem.friction_width, configuration=problem.configuration
     )
     kin = model.dynamics.kinematics
-    for label, pose in (("start", problem.start), ("end", problem.end)):
-        try:
-            kin.require_in_workspace(pose, problem.configuration)
-        except UnreachablePoseError as exc:
-            raise UnreachablePoseError(f"{label}: {exc}") from None
-    check_holding_forces(problem, model.dynamics)
     psyms = {k: model.parameter(k, v) for k, v in problem.named_parameters.items()}
     T, T_dot, tau = model.variables("state")["T"], model.variables("state")["T_dot"], model.variables("input")["tau"]
     dyn = model.dynamics
@@ -671,8 +612,6 @@ def solve_point_to_point(
 
     Raises
     ------
-    UnreachablePoseError
-        ``start`` or ``end`` outside the workspace.
     ProblemError
         Invalid objective or constraint expression.
 
@@ -682,7 +621,7 @@ def solve_point_to_point(
     :class:`~gtmodel.modeling.CollocationTranscription`) and with the IPOPT options
     :data:`SOLVER_OPTIONS`; neither changes the problem, only the path IPOPT takes.
     """
-    options = {"max_iter": problem.max_iter, "tol": problem.tol, **SOLVER_OPTIONS}
+    options = {"max_iter": problem.solver.max_iter, "tol": problem.solver.tol, **SOLVER_OPTIONS}
     if not problem.free_final_time:
         # the objective scaling is tuned for a cost in seconds (free final time); a
         # fixed-time energy cost (~1e5 N^2 s) needs none
@@ -695,14 +634,14 @@ def solve_point_to_point(
         opt, _ = build_optimization(problem)
         tr = CollocationTranscription(
             opt,
-            elements=problem.elements,
-            points=problem.points,
-            scheme=problem.scheme,
+            elements=problem.method.elements,
+            points=problem.method.points,
+            scheme=problem.method.scheme,
             verbose=verbose,
             solver_options=options,
             nominal={"tau": problem.force_limit},
-            compile=problem.jit,
-            solver=problem.solver,
+            compile=problem.solver.jit,
+            solver=problem.solver.name,
         )
         guess = previous.result if (warm_start and previous is not None) else None
         result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)

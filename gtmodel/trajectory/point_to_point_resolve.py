@@ -20,14 +20,12 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._arrays import as_finite
-from gtmodel.errors import InputError, UnreachablePoseError
-from gtmodel.robots.kinematics import GantryTau3Kinematics
+from gtmodel.errors import InputError
 from gtmodel.trajectory.point_to_point import (
     END_POSE,
     START_POSE,
     PointToPointSolution,
     _energy,
-    check_holding_forces,
 )
 
 __all__ = ["resolve_point_to_point", "point_to_point_function", "point_to_point_parameters"]
@@ -114,19 +112,13 @@ def resolve_point_to_point(
     if tr is None:
         raise InputError("previous: the solution holds no NLP (solve it with solve_point_to_point)")
     params = point_to_point_parameters(previous, start, end, named_parameters)
+    # the new declaration checks its poses (workspace) and force limits (holding forces) itself
     decl = dataclasses.replace(
         previous.problem,
         start=params[START_POSE],
         end=params[END_POSE],
         named_parameters={k: v for k, v in params.items() if k not in (START_POSE, END_POSE)},
     )
-    kin = GantryTau3Kinematics(decl.parameters)
-    for label, pose in (("start", decl.start), ("end", decl.end)):
-        try:
-            kin.require_in_workspace(pose, decl.configuration)
-        except UnreachablePoseError as exc:
-            raise UnreachablePoseError(f"{label}: {exc}") from None
-    check_holding_forces(decl)
     warm = warm_start and previous.result.lam_g is not None and previous.result.transcription_key == tr.key
     result = tr.solve(parameters=params, initial_guess=previous.result if warm else None, warm_start=warm)
     if warm and not result.success:

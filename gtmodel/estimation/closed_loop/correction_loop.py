@@ -245,12 +245,12 @@ def spectral_radius(model: OffsetResponseModel, gain: float, delay_cycles: int =
 
 @dataclass
 class LoopSimulation(StatusResult):
-    """A step-by-step simulation of the correction loop (status ``"optimal"``; ``stable`` says the verdict).
+    """A step-by-step simulation of the correction loop (status ``"completed"``; ``stable`` says the verdict).
 
     Parameters
     ----------
     status : Status
-        ``"optimal"`` (the simulation ran, whatever the verdict); keyword only.
+        ``"completed"`` (the simulation ran, whatever the verdict); keyword only.
     message : str
         The verdict in words; keyword only.
     gain : float
@@ -349,18 +349,18 @@ def _simulate(loop: ca.Function, K: float, r: np.ndarray, w: int) -> LoopSimulat
         e = np.where(np.isfinite(e), e, math.inf)
     stable = finite and growth <= 1.0 + GROWTH_TOLERANCE
     verdict = "stable" if stable else "unstable"
-    return LoopSimulation(status=Status.OPTIMAL, message=f"{verdict} at K = {K:g}: max|e| grows x{growth:.4g} over the last period",
+    return LoopSimulation(status=Status.COMPLETED, message=f"{verdict} at K = {K:g}: max|e| grows x{growth:.4g} over the last period",
                           gain=K, reference=r, position=p, error=e, command=u, growth=growth, stable=stable)
 
 
 @dataclass
 class GainScan(StatusResult):
-    """The largest stable P gain on a grid (status ``"optimal"``, or ``"max_iterations"`` if the grid ran out).
+    """The largest stable P gain on a grid (status ``"completed"``, or ``"max_iterations"`` if the grid ran out).
 
     Parameters
     ----------
     status : Status
-        ``"optimal"``: an unstable grid gain was found above :attr:`gain`;
+        ``"completed"``: an unstable grid gain was found above :attr:`gain`;
         ``"max_iterations"``: stable up to ``max_gain``; keyword only.
     message : str
         Summary; keyword only.
@@ -449,7 +449,7 @@ def largest_stable_gain(model: OffsetResponseModel, resolution: float, method: s
             break
     found = not flags[-1]
     gain = gains[-2] if found and len(gains) > 1 else (0.0 if found else gains[-1])
-    status = Status.OPTIMAL if found else Status.MAX_ITERATIONS
+    status = Status.COMPLETED if found else Status.MAX_ITERATIONS
     msg = f"{method}: largest stable K = {gain:g} (resolution {h:g})" + ("" if found else f"; stable up to max_gain = {top:g}")
     return GainScan(status=status, message=msg, method=method, resolution=h, gain=float(gain), gains=np.array(gains),
                     stable=np.array(flags, dtype=bool), measure=np.array(measure))

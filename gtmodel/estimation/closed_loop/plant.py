@@ -301,7 +301,7 @@ class TrackingResponse(StatusResult):
     Parameters
     ----------
     status : Status
-        ``"optimal"``: the simulation completed (keyword only).
+        ``"completed"``: the simulation completed (keyword only).
     message : str
         Summary (keyword only).
     t : numpy.ndarray, shape (N,)
@@ -496,7 +496,7 @@ class TrackingPlant:
         Returns
         -------
         TrackingResponse
-            Status ``"optimal"`` and every signal (N, 3).
+            Status ``"completed"`` and every signal (N, 3).
 
         Raises
         ------
@@ -518,7 +518,7 @@ class TrackingPlant:
         a = a_kin + dd
         a_m, z_m = self.sensors.measure(a, z, trial)
         return TrackingResponse(
-            status=Status.OPTIMAL, message=f"simulated {n} samples of {self.dt} s",
+            status=Status.COMPLETED, message=f"simulated {n} samples of {self.dt} s",
             t=self._times(n), q_ref=q_ref, q=q, q_m=q.copy(), T_ref=T_ref, T_kin=T_kin, d=d, z=z, a_kin=a_kin, a=a, a_m=a_m, z_m=z_m,
         )
 

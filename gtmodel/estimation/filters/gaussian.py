@@ -79,7 +79,7 @@ class FilterRun(StatusResult):
     Parameters
     ----------
     status : Status
-        ``"optimal"`` when every step's pivots were finite and positive, ``"error"`` otherwise.
+        ``"completed"`` when every step's pivots were finite and positive, ``"error"`` otherwise.
     message : str
         Summary (the failing sample and matrix on failure).
     name : str
@@ -380,7 +380,7 @@ class _GaussianFilter:
         ok = np.all(np.isfinite(pivots) & (pivots > 0), axis=1) & np.all(np.isfinite(xs), axis=1)
         qs = self.model.state_slices.get("quaternion")
         if np.all(ok):
-            status, message = Status.OPTIMAL, f"{self._name}: filtered {n} samples"
+            status, message = Status.COMPLETED, f"{self._name}: filtered {n} samples"
         else:
             k = int(np.argmin(ok))
             which = "S (innovation covariance)" if not np.all(np.isfinite(pivots[k, : self.nz]) & (pivots[k, : self.nz] > 0)) else "P"

@@ -100,7 +100,7 @@ class ParticleRun(FilterRun):
     Parameters
     ----------
     status : Status
-        ``"optimal"``, or ``"error"`` (measurement lost, weights degenerate).
+        ``"completed"``, or ``"error"`` (measurement lost, weights degenerate).
     message : str
         Summary: resamplings and ESS, or the failing sample.
     name : str
@@ -326,7 +326,7 @@ class ParticleFilter:
         ParticleRun
             Name ``"pf"``; ``x`` (N, nx) the weighted means, ``P`` (N, nx, nx) the weighted
             covariances (before resampling), ``step_time_s`` the mean wall time per step [s],
-            ``ess``, ``resampled``, ``min_d2`` per sample; status ``optimal``, or ``error``
+            ``ess``, ``resampled``, ``min_d2`` per sample; status ``completed``, or ``error``
             (measurement lost or weights degenerate) with ``x``, ``P`` cut before the
             failing sample (named in the message; the diagnostics include it).
 
@@ -340,7 +340,7 @@ class ParticleFilter:
         rng = np.random.default_rng(self.seed)
         xs, ps = np.empty((n, nx)), np.empty((n, nx, nx))
         ess, resampled, min_d2 = np.full(n, np.nan), np.zeros(n, bool), np.full(n, np.nan)
-        status, message = Status.OPTIMAL, ""
+        status, message = Status.COMPLETED, ""
         t0 = time.perf_counter()
         x_start, p_start, first = self.x0, self.P0, 0
         if self.gaussian_start:
@@ -402,7 +402,7 @@ class ParticleFilter:
             else:
                 k = n
         elapsed = time.perf_counter() - t0
-        if status is Status.OPTIMAL:
+        if status is Status.COMPLETED:
             message = (
                 f"pf: filtered {n} samples, {npart} particles, {int(resampled.sum())} resamplings, "
                 f"ESS min {np.nanmin(ess):.4g} median {np.nanmedian(ess):.4g}"

@@ -47,7 +47,7 @@ almost no spread after normalisation; the small quaternion term of ``Q``
 (:meth:`EndEffectorModel.process_noise`) keeps ``P-`` positive definite.
 
 Status of a run (as :class:`~gtmodel.estimation.filters.gaussian.FilterRun`: never NaN rows):
-``optimal`` when every step ran; ``error`` when a covariance was not positive definite or
+``completed`` when every step ran; ``error`` when a covariance was not positive definite or
 a value not finite (UKF), or when the particle filter lost the measurement (every
 particle's ``d2`` above the chi-square quantile ``1 - lost_probability``, ``nz`` degrees
 of freedom: the cloud no longer holds the state) or its weights degenerated (ESS below
@@ -336,7 +336,7 @@ class UnscentedKalmanFilter:
         -------
         FilterRun
             Name ``"ukf"``; ``x`` (N, nx) and ``P`` (N, nx, nx) the posteriors; ``step_time_s``
-            the mean wall time per step [s]; status ``optimal``, or ``error`` with the
+            the mean wall time per step [s]; status ``completed``, or ``error`` with the
             arrays cut before the failing sample (named in the message).
 
         Raises
@@ -348,7 +348,7 @@ class UnscentedKalmanFilter:
         n, nx = zz.shape[0], self.model.nx
         xs, ps = np.empty((n, nx)), np.empty((n, nx, nx))
         x, p = self.x0.copy(), self.P0.copy()
-        status, message = Status.OPTIMAL, f"ukf: filtered {n} samples"
+        status, message = Status.COMPLETED, f"ukf: filtered {n} samples"
         t0 = time.perf_counter()
         k = 0
         for k in range(n):
@@ -365,7 +365,7 @@ class UnscentedKalmanFilter:
         else:
             k = n
         elapsed = time.perf_counter() - t0
-        if status is not Status.OPTIMAL:
+        if status is not Status.COMPLETED:
             _LOG.warning(message)
         return FilterRun(
             name=self.name,

@@ -449,7 +449,7 @@ class FusionStudy:
         FusionStudyResult
             Status: the worst of the runs' (a diverged filter is ``"error"``, its row says so).
         """
-        res = FusionStudyResult(status=Status.OPTIMAL)
+        res = FusionStudyResult(status=Status.COMPLETED)
         for motion, rotation in MOTIONS.items():
             base = res.runs[motion] = self.run_case(rotation, label=motion)
             noisy_spec = self.spec.replace(position_noise_mm=self.spec.position_noise_mm * self.noisy_tracker_factor,

@@ -1,1 +1,28 @@
-"""One module per problem kind, each defining one :class:`~gtmodel.problems.base.ProblemKind`."""
+"""One module per problem kind, each defining one :class:`~gtmodel.problems.base.ProblemKind`.
+
+A kind is thin: its file schema, ``load`` (the validated file -> the domain's
+declaration, naming TOML fields in errors), ``write`` (files and summary fields) and its
+study columns. What is solved, and how, lives in the domain packages (rockit's split
+between declaring a problem, choosing a method and choosing a solver):
+
+==================================  ====================================================
+kind                                declaration (with its ``solve``)
+==================================  ====================================================
+``point_to_point``                  :class:`gtmodel.trajectory.PointToPoint`
+``path_constrained``                :mod:`gtmodel.trajectory.path_constrained.declared`
+``optimal_control``                 :mod:`gtmodel.trajectory.model_ocp`
+``calibration``                     :mod:`gtmodel.calibration.comparison`
+``elasto_geometric_calibration``    :mod:`gtmodel.calibration.elasto_geometric_declared`
+``joint_stiffness_calibration``     :mod:`gtmodel.calibration.joint_stiffness_declared`
+``dynamic_identification``          :mod:`gtmodel.calibration.identification.declared`
+``ilc``                             :mod:`gtmodel.estimation.ilc.cases`
+``state_estimation``                :mod:`gtmodel.estimation.fusion.declared`
+``correction_stability``            :mod:`gtmodel.estimation.closed_loop.declared`
+``tracking``                        here (it solves another problem file first), replayed
+                                    by :mod:`gtmodel.estimation.closed_loop.replay`
+==================================  ====================================================
+
+The method and solver settings of the optimisation kinds are
+:class:`gtmodel.trajectory.settings.Collocation` and
+:class:`gtmodel.trajectory.settings.SolverSettings`.
+"""

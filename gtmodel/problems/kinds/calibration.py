@@ -53,12 +53,7 @@ result is a complete robot parameter set), ``errors.csv`` and ``error_histogram.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
-import math
-import time
-from dataclasses import dataclass, field
-from fnmatch import fnmatchcase
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -68,12 +63,10 @@ from pydantic import BeforeValidator, Field
 from pydantic_core import PydanticCustomError
 
 from gtmodel.calibration import (
-    AccuracyReport,
     ActuatorErrors,
     CalibrationProblem,
     ParameterSelection,
     device_noise,
-    evaluate,
     grid_poses,
     random_poses,
     read_cart_measurements,
@@ -81,14 +74,14 @@ from gtmodel.calibration import (
     synthetic_cart_measurements,
     synthetic_measurements,
 )
+from gtmodel.calibration.comparison import CalibrationDeclaration, CalibrationOutcome, perturbed_model
+from gtmodel.calibration.grid_count import grid_candidates
 from gtmodel.calibration.kinematic import SOLVERS
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
-from gtmodel.problems.kinds.calibration_poses import choose_poses
 from gtmodel.problems.kinds.calibration_results import write_calibration
 from gtmodel.problems.schema import (
-    axis_count,
     MAX_LENGTH_M,
     Flag,
     NonEmptyText,
@@ -99,10 +92,9 @@ from gtmodel.problems.schema import (
     matrix,
     number,
 )
-from gtmodel.robots import GantryTau3Kinematics, available_parameter_sets, load_f1, load_six_link
+from gtmodel.robots import available_parameter_sets, load_f1, load_six_link
 from gtmodel.robots.actuator import PiecewiseActuatorClosure
 from gtmodel.robots.closure import ThreeLinkClosure
-from gtmodel.status import Status
 
 __all__ = [
     "CalibrationKind",
@@ -231,104 +223,6 @@ class CalibrationFile(ProblemSchema):
     pose_selection: PoseSelectionSection | None = None
 
 
-@dataclass
-class CalibrationDeclaration:
-    """A validated calibration problem.
-
-    Parameters
-    ----------
-    measurements : MeasurementSet
-        All poses (before the calibration/validation split).
-    cart : CartMeasurements or None
-        Cart surveys (piecewise-linear actuator models).
-    models : list of dict
-        Per model: ``name``, ``type``, ``model`` (start ClosureModel), ``selection``.
-    truth : ClosureModel or None
-        The true robot of synthetic data (for the noise floor and parameter checks).
-    noise_sigma : float or None
-        Position noise of synthetic data [m].
-    solver : str
-        Calibration solver.
-    max_iter : int
-        Iteration limit.
-    align : bool
-        Frame alignment.
-    source : str
-        Where the data come from.
-    pose_selection : int or None
-        Number of poses to select (eq. 5.9) before splitting.
-    truth_exact : bool
-        The synthetic data come from ``truth`` exactly (no actuator errors), so its error on
-        the data is the noise floor.
-    pose_method : str
-        ``"condition"`` (eq. 5.9) or ``"random"`` (with ``pose_selection``).
-    pose_planned : bool
-        Select on the start model's FK instead of the measured positions.
-    seed : int
-        Seed of the data (the random pose choice).
-    """
-
-    measurements: Any
-    cart: Any
-    models: list
-    truth: Any
-    noise_sigma: float | None
-    solver: str
-    max_iter: int
-    align: bool
-    source: str
-    pose_selection: int | None = None
-    truth_exact: bool = True
-    pose_method: str = "condition"
-    pose_planned: bool = False
-    seed: int = 0
-
-
-@dataclass
-class CalibrationOutcome:
-    """Results of a calibration problem: one calibration and evaluation per model.
-
-    Parameters
-    ----------
-    declaration : CalibrationDeclaration
-        The problem.
-    calibration : MeasurementSet
-        The poses used to calibrate.
-    validation : MeasurementSet
-        The poses used to evaluate.
-    results : list
-        Per model: ``(name, CalibrationResult or None, AccuracyReport or None, message)``.
-    noise_floor : AccuracyReport or None
-        The true robot's errors on the validation poses (synthetic data only): what a
-        perfect model achieves on the same noise.
-    selected : numpy.ndarray or None
-        Indices of the selected poses (pose selection).
-    solve_time : float
-        Total wall time [s].
-    extra : dict
-        Further figures for reports.
-    """
-
-    declaration: CalibrationDeclaration
-    calibration: Any
-    validation: Any
-    results: list
-    noise_floor: Any = None
-    selected: Any = None
-    solve_time: float = 0.0
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def status(self) -> Status:
-        """Worst status over the models (``error`` if a model could not be calibrated)."""
-        return Status.worst(res.status if res is not None else ("optimal" if rep is not None else "error") for _, res, rep, _ in self.results)
-
-    @property
-    def success(self) -> bool:
-        """True when every model calibrated to an optimal solution."""
-        return self.status == Status.OPTIMAL
-
-
 def calibration_columns() -> tuple[Column, ...]:
     """Study-table columns of the calibration kinds (validation errors, eq. 5.5).
 
@@ -350,8 +244,7 @@ class CalibrationKind(ProblemKind):
     schema = CalibrationFile
     title = "kinematic calibration from closure equations, models compared on validation poses (Dressler (2012), ch. 5)"
     columns = calibration_columns()
-    empty_fields = ("mean_error_m", "max_error_m", "rms_error_m", "n_calibration", "n_validation", "rank", "n_parameters",
-                    "iterations", "solve_time_s")
+    extra_empty_fields = ("rms_error_m", "n_calibration", "n_validation", "rank", "n_parameters", "iterations")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: CalibrationFile, file: ProblemFile, name: str) -> CalibrationDeclaration:
@@ -397,32 +290,7 @@ class CalibrationKind(ProblemKind):
         return CalibrationDeclaration(data, cart, models, truth, noise_sigma, cal.solver, cal.max_iter, cal.align, source, n_sel, exact,
                                       ps.method, ps.planned, doc.truth.seed if doc.truth is not None else 0)
 
-    def solve(self, declaration: CalibrationDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> CalibrationOutcome:
-        """Calibrate every declared model on every second pose and evaluate on the others.
-
-        Parameters
-        ----------
-        declaration : CalibrationDeclaration
-            From :meth:`load`.
-        verbose : bool, optional
-            Log progress per model.
-        previous : Any, optional
-            Unused (no reuse between cases).
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        CalibrationOutcome
-            A model whose calibration failed has ``None`` results and a message.
-
-        Raises
-        ------
-        ProblemError
-            Too few poses for a model's free parameters, or an unidentifiable request.
-        """
-        return _solve(declaration)
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: CalibrationDeclaration, solution: CalibrationOutcome, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``parameters.toml``, ``errors.csv`` and the error histogram.
 
@@ -434,12 +302,7 @@ class CalibrationKind(ProblemKind):
             The problem.
         solution : CalibrationOutcome
             Its results.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write the PNG histogram.
-        name : str
-            Plot title.
+        {write_args}
 
         Returns
         -------
@@ -484,83 +347,6 @@ def _closure(base: str, ref: str, file: ProblemFile, field_name: str, parametris
         raise file.wrap(field_name, exc) from None
 
 
-def _perturbed(model: Any, size: float, seed: int, keep: Any = ()) -> Any:
-    """Start model with every parameter moved by up to ``size`` (lengths/points) at random.
-
-    Direction-like parameters (guideway ``v`` and quaternions) are perturbed by ``size``
-    relative to their unit size, so the start error stays of the order of ``size`` [m].
-    Parameters matching a pattern in ``keep`` (fixed ones, tie targets) are not moved:
-    a calibration cannot recover a value it holds fixed.
-    """
-    if size == 0.0:
-        return model
-    rng = np.random.default_rng(seed)
-    p = model.parameter_vector().copy()
-    step = rng.uniform(-size, size, p.size)
-    names = model.parameter_names()
-    held = [any(fnmatchcase(n, k) or n.startswith(k + "_") for k in keep) for n in names]
-    p += np.where(held, 0.0, step)
-    return model.with_parameters(p)
-
-
-def _grid_candidates(truth: Any, tkind: str, t: TruthSection) -> tuple[float, float]:
-    """Grid points a synthetic grid would examine: ``(total, orientation factor)``.
-
-    - 3-link: the TCP grid over the workspace box (:meth:`GantryTau3Kinematics.workspace_bounds`);
-    - six-link: the ``q`` grid over the cart travel (and the rotary ranges);
-    - F1: positions in the box within reach of every guideway segment (an upper bound of
-      the positions the F1's own 6-D grid examines) times the orientations within the
-      reorientation range.
-    """
-    step = t.grid_step
-    if tkind == "three_link":
-        if truth.robot is None:
-            return 0.0, 1.0  # no limits: grid_poses says so
-        kin = GantryTau3Kinematics(dataclasses.replace(truth.robot, kinematics=truth.kinematics))
-        return math.prod(axis_count(lo, hi, step) for lo, hi in kin.workspace_bounds()), 1.0
-    if tkind == "six_link":
-        lim = getattr(truth, "limits", None)
-        if lim is None:
-            return 0.0, 1.0
-        n = math.prod(axis_count(lo, hi, step) for lo, hi in np.asarray(lim.cart_travel, dtype=float))
-        rot = 1.0
-        if truth.n_q > 3 and t.rotary_travel_deg is not None:
-            rot = math.prod(axis_count(lo, hi, t.rotary_step_deg) for lo, hi in t.rotary_travel_deg)
-        return n * rot, rot
-    lim = truth.limits
-    if lim is None:
-        return 0.0, 1.0
-    lo, hi = _f1_position_box(truth, lim)
-    spans = [(float(h) - float(l)) / float(step) for l, h in zip(lo, hi)]
-    positions = math.prod(math.floor(x) + 1.0 if math.isfinite(x) else math.inf for x in spans)
-    ratio = [float(r) / float(t.grid_step_deg) for r in np.degrees(lim.reorientation_range)]
-    rot = math.prod(2.0 * math.floor(x + 1e-9) + 1.0 if math.isfinite(x) else math.inf for x in ratio)
-    return positions * rot, rot
-
-
-def _f1_position_box(truth: Any, lim: Any) -> tuple[np.ndarray, np.ndarray]:
-    """A box containing every F1 TCP position whose joints ``B_ij`` are within reach.
-
-    Per link ``ij``: the cart's travel segment ``A0_i + [q_min, q_max] v_i`` grown by
-    ``L_ij`` (plus the joint-plate offset ``|Abj_ij|`` on arms 2 and 3 and ``|r3|`` on arm
-    3) and ``|B0_ij|``; the box is the intersection over the links (the box the F1's own
-    workspace grid fills, from the parameter names of Dressler (2012), Table 5.4).
-    """
-    p = dict(zip(truth.parameter_names(), truth.parameter_vector()))
-
-    def vec(name: str) -> np.ndarray:
-        return np.array([p[f"{name}_{c}"] for c in "xyz"])
-
-    lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
-    for arm, links in enumerate(truth.links):
-        seg = np.array([vec(f"A0_{arm + 1}") + lim.cart_travel[arm, k] * vec(f"v{arm + 1}") for k in range(2)])
-        for n in links:
-            reach = p[f"L_{n}"] + (np.linalg.norm(vec(f"Abj_{n}")) if arm > 0 else 0.0) + (np.linalg.norm(vec("r3")) if arm == 2 else 0.0)
-            grow = reach + np.linalg.norm(vec(f"B0_{n}"))
-            lo, hi = np.maximum(lo, seg.min(axis=0) - grow), np.minimum(hi, seg.max(axis=0) + grow)
-    return lo, hi
-
-
 def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile) -> np.ndarray:
     """The pose grid or random poses of the truth, bounded before anything is built."""
     rotary = None if t.rotary_travel_deg is None else np.deg2rad(np.asarray(t.rotary_travel_deg, dtype=float))
@@ -571,7 +357,7 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile) -> 
         if t.random_poses is not None:
             raise file.fail("truth.random_poses", "either grid_step or random_poses, not both", t.random_poses)
         cap = MAX_GRID_CANDIDATES[tkind]
-        count, angular = _grid_candidates(truth, tkind, t)
+        count, angular = grid_candidates(truth, tkind, t.grid_step, t.grid_step_deg, t.rotary_travel_deg, t.rotary_step_deg)
         if angular > cap:
             key = "truth.grid_step_deg" if tkind == "f1" else "truth.rotary_step_deg"
             raise file.fail(key, f"an angular step giving at most {cap} grid poses (this one gives {angular:.3g} orientations)",
@@ -595,7 +381,7 @@ def _synthetic_data(doc: CalibrationFile, file: ProblemFile) -> tuple[Any, Any, 
     t = doc.truth
     truth = _closure(t.model, t.parameters, file, "truth.parameters")
     # a robot that differs from its parameter set (built tolerances): every parameter moved
-    truth = _perturbed(truth, t.perturbation, 7)
+    truth = perturbed_model(truth, t.perturbation, 7)
     noise = device_noise(t.noise)
     errors = ActuatorErrors.table_4_1() if t.actuator_errors == "table_4_1" else None
     cart = None
@@ -624,7 +410,7 @@ def _start_model(k: int, m: ModelSection, doc: CalibrationFile, file: ProblemFil
     else:
         start = _closure(base, m.start, file, f"{key}.start", m.parametrisation)
     held = [*m.fixed, *(t.split("=")[0].strip() for t in m.ties)]
-    start = _perturbed(start, m.perturbation, 1000 + k, keep=held)
+    start = perturbed_model(start, m.perturbation, 1000 + k, keep=held)
     if m.type.endswith("_piecewise"):
         if cart is None:
             raise file.fail("data.cart_file", f"cart surveys for the piecewise-linear model '{mname}'")
@@ -640,59 +426,3 @@ def _start_model(k: int, m: ModelSection, doc: CalibrationFile, file: ProblemFil
     if start.n_q != n_q:
         raise file.fail(f"{key}.type", f"a model with {n_q} actuator values per pose (the data's)", m.type)
     return {"name": mname, "type": m.type, "model": start, "selection": selection}
-
-
-# ------------------------------------------------------------------ solving
-
-
-def _solve(decl: CalibrationDeclaration) -> CalibrationOutcome:
-    t0 = time.perf_counter()
-    data = decl.measurements
-    selected = None
-    extra: dict[str, Any] = {}
-    if decl.pose_selection is not None:
-        choice_ = choose_poses(decl.models[0], data, decl.pose_selection, decl.pose_method, decl.pose_planned, decl.seed)
-        selected, extra["pose_choice"] = choice_.indices, choice_.summary()
-        data = data.subset(selected)
-    cal, val = data.split_alternate()
-    results = []
-    starts: dict[str, Any] = {}
-    for spec in decl.models:
-        _log.info("calibrating %s (%s) on %d poses ...", spec["name"], spec["type"], cal.n_poses)
-        try:
-            res = CalibrationProblem(spec["model"], spec["selection"]).solve(cal, solver=decl.solver, align=decl.align, max_iter=decl.max_iter)
-        except GtModelError as exc:
-            raise ProblemError(f"model '{spec['name']}': {exc}") from None
-        try:
-            report = evaluate(res.model, val, label=spec["name"]) if res.success else None
-            msg = res.message
-        except GtModelError as exc:
-            report, msg = None, f"evaluation failed: {exc}"
-        starts[spec["name"]] = _start_report(spec["model"].transformed(res.rotation, res.translation), val)
-        results.append((spec["name"], res, report, msg))
-    floor = None
-    if decl.truth is not None:
-        try:
-            floor = evaluate(decl.truth, val, label="true robot (noise floor)")
-        except GtModelError:
-            floor = None
-    return CalibrationOutcome(decl, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts, **extra})
-
-
-def _start_report(model: Any, val: Any) -> Any:
-    """The uncalibrated start on the validation poses; poses where it cannot assemble are skipped."""
-    try:
-        return evaluate(model, val, label="start")
-    except GtModelError:
-        pass
-    reps = []
-    for k in range(val.n_poses):
-        try:
-            reps.append(evaluate(model, val.subset([k]), label="start"))
-        except GtModelError:
-            continue
-    if not reps:
-        return None
-    rep = AccuracyReport(np.vstack([r.error_vectors for r in reps]), label="start")
-    rep.skipped = val.n_poses - len(reps)
-    return rep

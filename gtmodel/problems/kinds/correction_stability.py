@@ -22,7 +22,6 @@ structure), ``table_14.md``/``.csv``, ``calibration_fits.csv`` and the plots
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -30,6 +29,7 @@ import numpy as np
 from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
+from gtmodel.estimation.closed_loop.declared import CorrectionStabilityDeclaration
 from gtmodel.errors import InputError, ParameterError
 from gtmodel.estimation.closed_loop.correction import (
     CALIBRATION_POSES_DEG,
@@ -46,7 +46,6 @@ from gtmodel.estimation.closed_loop.correction_loop import (
     SINE_AMPLITUDE_M,
     SINE_SPATIAL_FREQUENCY_PER_M,
     CorrectionStudy,
-    correction_study,
     path_period,
     simulate_loop,
     sine_reference,
@@ -54,8 +53,7 @@ from gtmodel.estimation.closed_loop.correction_loop import (
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, choice, integer, matrix, number, vector
 from gtmodel.report.correction import plot_gains, plot_loop_errors, plot_offset_response, write_gain_table
-from gtmodel.robots import SerialArm, load_serial_arm
-from gtmodel.status import Status
+from gtmodel.robots import load_serial_arm
 
 __all__ = ["CorrectionStabilityKind", "CorrectionStabilityFile", "CorrectionStabilityDeclaration", "SHIPPED_ARMS", "ASSUMPTIONS", "THESIS_STRUCTURE"]
 
@@ -211,25 +209,6 @@ class CorrectionStabilityFile(ProblemSchema):
     path: PathSection = PathSection()
 
 
-@dataclass(frozen=True)
-class CorrectionStabilityDeclaration:
-    """A validated ``correction_stability`` problem.
-
-    Parameters
-    ----------
-    arm : SerialArm
-        The arm (joint limits checked on load).
-    doc : CorrectionStabilityFile
-        The validated file.
-    resolutions : dict of str to float
-        Gain step per corrected direction.
-    """
-
-    arm: SerialArm
-    doc: CorrectionStabilityFile
-    resolutions: dict[str, float]
-
-
 class CorrectionStabilityKind(ProblemKind):
     """Largest stable gain of pose-offset corrections: prediction vs the richer simulation (Cvitanic (2021), section 5)."""
 
@@ -240,7 +219,6 @@ class CorrectionStabilityKind(ProblemKind):
         Column("poses_within_one_increment", "poses within 1 increment", "{:d}"),
         Column("min_x_over_y", "min x/y gain", "{:.3g}"),
     )
-    empty_fields = ("poses_within_one_increment", "min_x_over_y")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: CorrectionStabilityFile, file: ProblemFile, name: str) -> CorrectionStabilityDeclaration:
@@ -293,35 +271,14 @@ class CorrectionStabilityKind(ProblemKind):
             raise file.fail("loop.duration", f"at least two path periods ({2 * period:.4g} s for path.feed_rate and path.spatial_frequency)", doc.loop.duration)
         if round(period / CYCLE_TIME_S) < 1:
             raise file.fail("path.spatial_frequency", f"a path period of at least one cycle ({CYCLE_TIME_S} s)", doc.path.spatial_frequency)
-        return CorrectionStabilityDeclaration(arm, doc, resolutions)
-
-    def solve(self, declaration: CorrectionStabilityDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> CorrectionStudy:
-        """Run the study (:func:`~gtmodel.estimation.closed_loop.correction_loop.correction_study`).
-
-        Parameters
-        ----------
-        declaration : CorrectionStabilityDeclaration
-            From :meth:`load`.
-        verbose : bool, optional
-            Unused.
-        previous : Any, optional
-            Unused.
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        CorrectionStudy
-            Status ``"optimal"``, or ``"max_iterations"`` when a scan stayed stable up to
-            ``loop.max_gain``, or ``"error"`` when a fit did not converge.
-        """
-        d = declaration.doc
-        return correction_study(
-            declaration.arm, d.poses.calibration_deg, d.poses.validation_deg, tuple(d.loop.directions), declaration.resolutions,
-            d.calibration.offset, d.calibration.response_cycles, d.loop.delay_cycles, d.loop.duration, d.loop.max_gain,
-            d.calibration.seed, (d.path.amplitude, d.path.feed_rate, d.path.spatial_frequency), d.arm.wrist_joints_deg,
+        d = doc
+        return CorrectionStabilityDeclaration(
+            arm, d.poses.calibration_deg, d.poses.validation_deg, tuple(d.loop.directions), resolutions, d.calibration.offset,
+            d.calibration.response_cycles, d.loop.delay_cycles, d.loop.duration, d.loop.max_gain, d.calibration.seed,
+            (d.path.amplitude, d.path.feed_rate, d.path.spatial_frequency), d.arm.wrist_joints_deg,
         )
 
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: CorrectionStabilityDeclaration, solution: CorrectionStudy, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``table_14.md``/``.csv``, ``calibration_fits.csv`` and the plots.
 
@@ -331,12 +288,7 @@ class CorrectionStabilityKind(ProblemKind):
             The declaration.
         solution : CorrectionStudy
             Its solution.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write ``offset_response.png``, ``loop_error.png``, ``gains.png``.
-        name : str
-            Problem name (titles).
+        {write_args}
 
         Returns
         -------
@@ -375,7 +327,7 @@ class CorrectionStabilityKind(ProblemKind):
             "status": s.status,
             "message": s.message,
             "cycle_time_s": CYCLE_TIME_S,
-            "delay_cycles": declaration.doc.loop.delay_cycles,
+            "delay_cycles": declaration.delay_cycles,
             "directions": dirs,
             "resolutions": s.resolutions,
             "offset_m": s.offset,
@@ -421,8 +373,8 @@ class CorrectionStabilityKind(ProblemKind):
 
     @staticmethod
     def _plots(declaration: CorrectionStabilityDeclaration, s: CorrectionStudy, out: Path, name: str) -> list[str]:
-        d = declaration.doc
-        n = d.calibration.response_cycles
+        d = declaration
+        n = d.response_cycles
         responses = {}
         for direction in s.directions:
             truth = s.calibration_truth[0][direction]
@@ -432,36 +384,22 @@ class CorrectionStabilityKind(ProblemKind):
             responses[direction] = {"truth (two modes)": p, "fitted single mode": single.offset_response(s.offset, n)[1]}
         plot_offset_response(t, responses, out / "offset_response.png",
                              title=f"{name}: response to one {s.offset * 1e3:g} mm offset command, calibration pose 1")
-        n_sim = int(round(d.loop.duration / CYCLE_TIME_S))
-        ref = sine_reference(n_sim, CYCLE_TIME_S, d.path.amplitude, d.path.feed_rate, d.path.spatial_frequency)
-        window = int(round(path_period(d.path.feed_rate, d.path.spatial_frequency) / CYCLE_TIME_S))
+        n_sim = int(round(d.duration / CYCLE_TIME_S))
+        ref = sine_reference(n_sim, CYCLE_TIME_S, *d.path)
+        window = int(round(path_period(d.path[1], d.path[2]) / CYCLE_TIME_S))
         runs = {}
         for j, direction in enumerate(s.directions):
             K = s.simulated_gain[0, j]
             h = s.resolutions[direction]
             curves = {}
             for gain in ([K] if K > 0 else []) + [K + h]:
-                sim = simulate_loop(s.truth_models[0][direction], gain, ref, d.loop.delay_cycles, window)
+                sim = simulate_loop(s.truth_models[0][direction], gain, ref, d.delay_cycles, window)
                 curves[f"K = {gain:.3g} ({'stable' if sim.stable else 'unstable'})"] = sim.error
             runs[direction] = curves
         plot_loop_errors(np.arange(n_sim) * CYCLE_TIME_S, runs, out / "loop_error.png",
                          title=f"{name}: simulated correction loop (two-mode truth), validation pose 1")
         plot_gains(s.directions, s.predicted_gain, s.simulated_gain, out / "gains.png", title=f"{name}: largest stable P gain")
         return ["offset_response.png", "loop_error.png", "gains.png"]
-
-    def status(self, solution: CorrectionStudy) -> Status:
-        """The study's status.
-
-        Parameters
-        ----------
-        solution : CorrectionStudy
-            From :meth:`solve`.
-
-        Returns
-        -------
-        Status
-        """
-        return Status(solution.status)
 
 
 def _mode(model: Any) -> dict[str, list[float]]:

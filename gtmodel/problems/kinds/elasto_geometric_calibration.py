@@ -50,29 +50,28 @@ from __future__ import annotations
 
 import logging
 import math
-import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field
 
-from gtmodel.calibration import elasto_geometric_study, grid_poses
+from gtmodel.calibration import grid_poses
 from gtmodel.report.calibration import plot_error_histogram
 from gtmodel.calibration.kinematic import SOLVERS
 from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES, compliance_selection
-from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.calibration.elasto_geometric_declared import ElastoGeometricDeclaration, ElastoGeometricOutcome
+from gtmodel.errors import GtModelError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
+from gtmodel.calibration.grid_count import axis_count
 from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, StringList, calibration_columns
 from gtmodel.problems.kinds.calibration_results import calibrated_tables
 from gtmodel.problems.references import robot_parameters
-from gtmodel.problems.schema import MAX_LENGTH_M, axis_count, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.robots import GantryTau3Kinematics, GantryTau3Stiffness, load_stiffness
 from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.report.stiffness import plot_stiffness_map
-from gtmodel.status import Status
 
 __all__ = [
     "ElastoGeometricKind",
@@ -156,88 +155,6 @@ class ElastoGeometricFile(ProblemSchema):
     stiffness_map: StiffnessMapSection = StiffnessMapSection()
 
 
-@dataclass
-class ElastoGeometricDeclaration:
-    """A validated elasto-geometric calibration problem.
-
-    Parameters
-    ----------
-    truth : GantryTau3Stiffness
-        The true robot (geometry, stated stiffness values; ``payload_kg`` = the largest payload).
-    start : ThreeLinkClosure
-        Start geometry.
-    q : numpy.ndarray, shape (N, 3)
-        Grid poses (cart positions) [m].
-    payloads_kg : numpy.ndarray, shape (n_loads,)
-        Payloads every pose is measured with [kg].
-    noise : str
-        Device name.
-    seed : int
-        Noise seed.
-    start_compliance : str
-        ``"zero"`` or ``"stated"``.
-    free_compliance : tuple of str
-        Compliance names/patterns estimated.
-    solver : str
-        Calibration solver.
-    max_iter : int
-        Iteration limit.
-    align : bool
-        Frame alignment.
-    compare_single_load : bool
-        Also calibrate on single-load data.
-    map_step : float
-        Grid step of the stiffness map [m].
-    map_x : float or None
-        Section coordinate of the stiffness map [m].
-    source : str
-        Description of the data.
-    """
-
-    truth: Any
-    start: Any
-    q: np.ndarray
-    payloads_kg: np.ndarray
-    noise: str
-    seed: int
-    start_compliance: str
-    free_compliance: tuple
-    solver: str
-    max_iter: int
-    align: bool
-    compare_single_load: bool
-    map_step: float
-    map_x: float | None
-    source: str
-
-
-@dataclass
-class ElastoGeometricOutcome:
-    """Results of an elasto-geometric calibration problem.
-
-    Parameters
-    ----------
-    study : ElastoGeometricStudy
-        The comparison on the declared loads.
-    single_load : ElastoGeometricStudy or None
-        The same on single-load data (``compare_single_load``).
-    stiffness_map : StiffnessMap
-        Stiffness of the true robot on a yz section.
-    solve_time : float
-        Wall time [s].
-    """
-
-    study: Any
-    single_load: Any
-    stiffness_map: Any
-    solve_time: float
-
-    @property
-    def status(self) -> Status:
-        """Worst status of the calibrations."""
-        return Status.worst([self.study.status] + ([self.single_load.status] if self.single_load is not None else []))
-
-
 class ElastoGeometricKind(ProblemKind):
     """Geometric-only vs elasto-geometric calibration of a compliant robot (Dressler (2012), ch. 5.3, 6.3)."""
 
@@ -245,9 +162,9 @@ class ElastoGeometricKind(ProblemKind):
     schema = ElastoGeometricFile
     title = "compliant robot: geometric-only vs elasto-geometric calibration (Dressler (2012), ch. 5.3, 6.3)"
     columns = calibration_columns()
-    empty_fields = ("mean_error_m", "max_error_m", "geometric_mean_error_m", "geometric_max_error_m", "elasto_geometric_mean_error_m",
+    extra_empty_fields = ("geometric_mean_error_m", "geometric_max_error_m", "elasto_geometric_mean_error_m",
                     "elasto_geometric_max_error_m", "noise_floor_mean_error_m", "noise_floor_max_error_m", "n_calibration",
-                    "n_validation", "iterations", "solve_time_s")
+                    "n_validation", "iterations")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: ElastoGeometricFile, file: ProblemFile, name: str) -> ElastoGeometricDeclaration:
@@ -309,49 +226,7 @@ class ElastoGeometricKind(ProblemKind):
             c.compare_single_load, m.step, m.x, source,
         )
 
-    def solve(self, declaration: ElastoGeometricDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> ElastoGeometricOutcome:
-        """Run the comparison (and the single-load one), and the stiffness map of the truth.
-
-        Parameters
-        ----------
-        declaration : ElastoGeometricDeclaration
-            From :meth:`load`.
-        verbose : bool, optional
-            Log progress.
-        previous : Any, optional
-            Unused.
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        ElastoGeometricOutcome
-
-        Raises
-        ------
-        ProblemError
-            A calibration that cannot be posed (too few poses, a singular problem naming the
-            non-identifiable parameters), or a stiffness-map section without workspace points.
-        """
-        decl = declaration
-        t0 = time.perf_counter()
-        opts = dict(
-            noise=decl.noise, seed=decl.seed, start_compliance=decl.start_compliance, free_compliance=decl.free_compliance,
-            solver=decl.solver, align=decl.align, max_iter=decl.max_iter,
-        )
-        try:
-            study = elasto_geometric_study(decl.truth, decl.start, decl.q, payloads_kg=decl.payloads_kg, **opts)
-            if verbose:
-                _log.info("elasto-geometric study: %s / %s", study.geometric.summary(), study.elasto.summary())
-            single = None
-            if decl.compare_single_load:
-                single = elasto_geometric_study(decl.truth, decl.start, decl.q, payloads_kg=None, **opts)
-            T = decl.truth.section_grid(decl.map_x, decl.map_step)
-            smap = decl.truth.stiffness_map(T)
-        except GtModelError as exc:
-            raise ProblemError(str(exc)) from None
-        return ElastoGeometricOutcome(study, single, smap, time.perf_counter() - t0)
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: ElastoGeometricDeclaration, solution: ElastoGeometricOutcome, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, parameters, errors, the synthetic measurements and plots.
 
@@ -364,12 +239,7 @@ class ElastoGeometricKind(ProblemKind):
             The problem.
         solution : ElastoGeometricOutcome
             Its results.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write PNG plots.
-        name : str
-            Problem name (titles).
+        {write_args}
 
         Returns
         -------

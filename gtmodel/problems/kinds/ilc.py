@@ -25,8 +25,6 @@ actuator correction of the first case when it learns on the actuators, for
 from __future__ import annotations
 
 import logging
-import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -34,13 +32,12 @@ import numpy as np
 from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
-from gtmodel.errors import GtModelError, ProblemError, SolverError, UnreachablePoseError
+from gtmodel.errors import GtModelError, UnreachablePoseError
 from gtmodel.estimation import (
     REQUIREMENTS,
     SIGNALS,
     ComplementaryFilter,
     ILCCase,
-    ILCCaseResult,
     ILCExperiment,
     ILCReference,
     LearningFilter,
@@ -56,16 +53,13 @@ from gtmodel.estimation.closed_loop.plant import DT as SAMPLE_TIME_S
 from gtmodel.problems.kinds.closed_loop_common import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection, build_plant
 from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.ilc import plot_error_measure, plot_tool_path
-from gtmodel.status import Status
-from gtmodel.trajectory import PathConstraints, Polyline, solve_path_convex
+from gtmodel.estimation.ilc.cases import ILCDeclaration, ILCOutcome
+from gtmodel.trajectory.square import plan_square
 
 __all__ = [
     "ILCFile",
-    "ILCDeclaration",
-    "ILCOutcome",
     "ILCKind",
     "THESIS_TABLE_7_2",
-    "plan_square",
 ]
 
 _log = logging.getLogger("gtmodel")
@@ -226,109 +220,6 @@ class ILCFile(ProblemSchema):
     cases: list[CaseSection] = Field(min_length=1, max_length=20, description="the ILC cases")
 
 
-@dataclass
-class ILCDeclaration:
-    """A validated ILC experiment.
-
-    Parameters
-    ----------
-    experiment : ILCExperiment
-        Plant, reference, learning law and estimators.
-    cases : list of ILCCase
-        The cases, in file order.
-    checks : dict
-        Per case name the lifted check computed at load (7.15), (7.16).
-    final_time : float
-        Duration of the square motion (without lead-in/out) [s].
-    """
-
-    experiment: ILCExperiment
-    cases: list[ILCCase]
-    checks: dict[str, Any]
-    final_time: float
-
-
-@dataclass
-class ILCOutcome:
-    """Results of the ILC cases.
-
-    Parameters
-    ----------
-    results : dict of str to ILCCaseResult
-        Per case name.
-    solve_time : float
-        Wall time [s].
-    """
-
-    results: dict[str, ILCCaseResult]
-    solve_time: float
-
-    @property
-    def status(self) -> Status:
-        """Worst status of the cases."""
-        return Status.worst(Status(r.status) for r in self.results.values())
-
-
-def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceleration: float, lead: int, grid: int,
-                configuration: int, dt: float = SAMPLE_TIME_S) -> tuple[np.ndarray, np.ndarray, float]:
-    """Time-optimal square in the xy plane, corners at rest, sampled at ``dt``, with lead-in/out.
-
-    Dressler (2012), section 7.3: the path is a :class:`~gtmodel.trajectory.Polyline`
-    through the corners, solved by :func:`~gtmodel.trajectory.solve_path_convex` under a TCP
-    speed limit ``speed`` and a per-axis acceleration limit ``acceleration``; samples at
-    ``k dt`` up to the final time, then the end pose held for ``lead`` samples (and the
-    start pose for ``lead`` samples before).
-
-    Parameters
-    ----------
-    kinematics : GantryTau3Kinematics
-        The robot (workspace check and IK).
-    corner : array_like, shape (3,)
-        First corner [m].
-    side : float
-        Side [m].
-    speed : float
-        TCP speed limit [m/s].
-    acceleration : float
-        TCP acceleration limit per axis [m/s^2].
-    lead : int
-        Lead-in and lead-out [samples].
-    grid : int
-        Grid points of the solver.
-    configuration : int
-        IK configuration.
-    dt : float, optional
-        Sample time [s].
-
-    Returns
-    -------
-    T : numpy.ndarray, shape (N, 3)
-        Tool reference [m].
-    q : numpy.ndarray, shape (N, 3)
-        Actuator references [m].
-    final_time : float
-        Duration of the motion [s].
-
-    Raises
-    ------
-    UnreachablePoseError
-        The square leaves the workspace.
-    SolverError
-        The planner found no motion.
-    """
-    c = np.asarray(corner, dtype=float)
-    pts = c + side * np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]], dtype=float)
-    path = Polyline(pts, robot=kinematics, configuration=configuration)
-    sol = solve_path_convex(path, PathConstraints(tcp_speed_limit=speed, tcp_acceleration_limit=acceleration), grid=grid)
-    if not sol.success:
-        raise SolverError(f"square: the path-constrained planner ended with status {sol.status} ({sol.message})")
-    t = np.arange(0.0, sol.final_time, dt)
-    T = sol.sample(t)["T"]
-    T = np.vstack([np.repeat(pts[:1], lead, axis=0), T, np.repeat(pts[-1:], lead + 1, axis=0)])
-    q = kinematics.ik(T, configuration)
-    return T, q, float(sol.final_time)
-
-
 def _channels(checks: dict[str, Any]) -> dict[str, dict[str, float | bool]]:
     return {ch: {"rho": float(c.rho), "sigma_max": float(c.sigma_max), "stable": bool(c.stable), "monotone": bool(c.monotone)}
             for ch, c in checks.items()}
@@ -344,7 +235,6 @@ class ILCKind(ProblemKind):
         Column("worst_sigma_max", "worst sigma_max", "{:.3f}"),
         Column("solve_time_s", "solve time [s]", "{:.2f}"),
     )
-    empty_fields = ("worst_sigma_max", "solve_time_s")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: ILCFile, file: ProblemFile, name: str) -> ILCDeclaration:
@@ -371,7 +261,7 @@ class ILCKind(ProblemKind):
         ref = doc.reference
         try:
             T, q, final_time = plan_square(plant.kinematics, ref.corner, ref.side, ref.speed, ref.acceleration, ref.lead,
-                                           ref.grid, doc.robot.configuration, dt)
+                                           ref.grid, doc.robot.configuration, plant.dt)
         except UnreachablePoseError as exc:
             raise file.fail("reference.corner", "a square inside the workspace", f"{ref.corner} ({exc})") from None
         except GtModelError as exc:
@@ -421,49 +311,7 @@ class ILCKind(ProblemKind):
             cases.append(case)
         return ILCDeclaration(experiment, cases, checks, final_time)
 
-    def solve(self, declaration: ILCDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> ILCOutcome:
-        """Run every case's ILC iterations (Dressler (2012), eqs. 7.2-7.16).
-
-        Parameters
-        ----------
-        declaration : ILCDeclaration
-            The experiment.
-        verbose : bool, optional
-            Log each case's outcome at INFO.
-        previous : Any, optional
-            Unused.
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        ILCOutcome
-            One result per case, each with its status.
-        """
-        t0 = time.perf_counter()
-        results = {}
-        for case in declaration.cases:
-            results[case.name] = declaration.experiment.run(case)
-            if verbose:
-                r = results[case.name]
-                _log.info("ILC case %s: %s, tool error x/y relative %s", case.name, r.status,
-                          np.round(r.relative("tool")[:2], 4).tolist())
-        return ILCOutcome(results, time.perf_counter() - t0)
-
-    def status(self, solution: ILCOutcome) -> Status:
-        """Worst status of the cases.
-
-        Parameters
-        ----------
-        solution : ILCOutcome
-            The results.
-
-        Returns
-        -------
-        Status
-        """
-        return solution.status
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: ILCDeclaration, solution: ILCOutcome, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``table_7_2.md``/``.csv``, ``ilc_iterations.csv``, ``controller.json`` (the stationary Kalman step and the learned
 actuator correction of the first case when it learns on the actuators, for
@@ -478,12 +326,7 @@ actuator correction of the first case when it learns on the actuators, for
             The experiment.
         solution : ILCOutcome
             Its results.
-        out : pathlib.Path
-            Result folder.
-        plots : bool
-            Write the PNG plots.
-        name : str
-            Problem name (titles).
+        {write_args}
 
         Returns
         -------

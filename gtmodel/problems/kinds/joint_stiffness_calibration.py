@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import logging
 import math
-import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -27,21 +25,21 @@ import numpy as np
 from pydantic import AfterValidator, Field
 from pydantic_core import PydanticCustomError
 
-from gtmodel.calibration import DeflectionData, DeflectionNoise, calibrate_cp, calibrate_dpp, synthetic_deflections
+from gtmodel.calibration import DeflectionData, DeflectionNoise, synthetic_deflections
 from gtmodel.calibration.joint_stiffness import (
     TABLE_1_POSES_DEG,
     TABLE_2_K_THETA,
     TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS,
     axis_wrenches,
 )
+from gtmodel.calibration.joint_stiffness_declared import JointStiffnessDeclaration, JointStiffnessOutcome
 from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError
 from gtmodel._docstrings import fill_doc
 from gtmodel._tables import read_table
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import MAX_FORCE_N, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.stiffness_calibration import plot_joint_stiffness
-from gtmodel.robots import SerialArm, load_serial_arm
-from gtmodel.status import Status
+from gtmodel.robots import load_serial_arm
 
 __all__ = [
     "JointStiffnessKind",
@@ -170,55 +168,6 @@ class JointStiffnessFile(ProblemSchema):
     data: DataSection | None = None
 
 
-@dataclass
-class JointStiffnessDeclaration:
-    """A validated joint-stiffness calibration problem.
-
-    Parameters
-    ----------
-    arm : SerialArm
-        Nominal arm (Jacobian source; also generates synthetic data).
-    data : DeflectionData
-        Measurements (synthetic or read from a file).
-    k_true : numpy.ndarray or None, shape (6,)
-        True joint stiffnesses of synthetic data [N m/rad] (None for measured data).
-    scaled_rotation_weight : float
-        CP rotation weight of the scaled variant [m/rad] (the thesis' 10).
-    bounds : str
-        ``"none"`` or ``"positive"``.
-    source : str
-        Description of the data.
-    """
-
-    arm: SerialArm
-    data: DeflectionData
-    k_true: np.ndarray | None
-    scaled_rotation_weight: float
-    bounds: str
-    source: str
-
-
-@dataclass
-class JointStiffnessOutcome:
-    """Results of a joint-stiffness calibration problem.
-
-    Parameters
-    ----------
-    results : dict of str to JointStiffnessResult
-        One result per name of :data:`METHODS`.
-    solve_time : float
-        Wall time [s].
-    """
-
-    results: dict[str, Any]
-    solve_time: float
-
-    @property
-    def status(self) -> Status:
-        """Worst status of the calibrations."""
-        return Status.worst(Status(r.status) for r in self.results.values())
-
-
 def read_deflection_csv(path: Path) -> DeflectionData:
     """Read measured (pose, wrench, deflection) rows, strictly validated.
 
@@ -272,7 +221,6 @@ class JointStiffnessKind(ProblemKind):
         Column("n_measurements", "measurements", "{}"),
         Column("solve_time_s", "solve time [s]", "{:.3f}"),
     )
-    empty_fields = ("n_measurements", "solve_time_s")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: JointStiffnessFile, file: ProblemFile, name: str) -> JointStiffnessDeclaration:
@@ -328,48 +276,7 @@ class JointStiffnessKind(ProblemKind):
         source = f"synthetic on the Table 1 poses ({arm.name}, scenario {tr.scenario!r}): {data.description}"
         return JointStiffnessDeclaration(arm, data, k, cal.scaled_rotation_weight, cal.bounds, source)
 
-    def solve(self, declaration: JointStiffnessDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> JointStiffnessOutcome:
-        """Run the CP (weight 1), CP (scaled rotation weight) and DPP calibrations.
-
-        Cvitanic (2021), eqs. (3)-(5) and Table 2 (:func:`~gtmodel.calibration.calibrate_cp`,
-        :func:`~gtmodel.calibration.calibrate_dpp`).
-
-        Parameters
-        ----------
-        declaration : JointStiffnessDeclaration
-            The problem.
-        verbose : bool, optional
-            Log the identified stiffnesses.
-        previous : Any, optional
-            Unused (linear least squares need no warm start).
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        JointStiffnessOutcome
-            One result per method (each with its status).
-
-        Raises
-        ------
-        ProblemError
-            A calibration that cannot be posed (e.g. an arm without a spherical wrist for DPP).
-        """
-        decl = declaration
-        t0 = time.perf_counter()
-        try:
-            results = {
-                "CP": calibrate_cp(decl.arm, decl.data, 1.0, decl.bounds),
-                "CP_rotations_scaled_x10": calibrate_cp(decl.arm, decl.data, decl.scaled_rotation_weight, decl.bounds),
-                "DPP": calibrate_dpp(decl.arm, decl.data, decl.bounds),
-            }
-        except GtModelError as exc:
-            raise ProblemError(str(exc)) from None
-        if verbose:
-            for m, r in results.items():
-                _log.info("joint stiffness %s: k = %s MN m/rad (%s)", m, np.round(r.k_theta / 1e6, 3).tolist(), r.status)
-        return JointStiffnessOutcome(results, time.perf_counter() - t0)
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: JointStiffnessDeclaration, solution: JointStiffnessOutcome, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``stiffness.csv`` and ``joint_stiffness.png`` (Cvitanic (2021), Table 2).
 
@@ -379,12 +286,7 @@ class JointStiffnessKind(ProblemKind):
             The problem.
         solution : JointStiffnessOutcome
             Its results.
-        out : pathlib.Path
-            Result folder.
-        plots : bool
-            Write the PNG plot.
-        name : str
-            Problem name (title).
+        {write_args}
 
         Returns
         -------

@@ -16,7 +16,7 @@ from gtmodel.problems.base import Column
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, Section, choice, integer, number, vector
 
 __all__ = [
-    "MOTION_EMPTY_FIELDS",
+    "MOTION_EXTRA_EMPTY_FIELDS",
     "AT_BOUND_RTOL",
     "MAX_TIME_S",
     "RobotReference",
@@ -118,8 +118,9 @@ class OcpSolverSection(SolverSection):
     jit: Flag = Field(default=True, description="compiled (cached) C for the NLP derivatives")
 
 
-#: Summary fields of the motion kinds that are null when a run ends before a solution.
-MOTION_EMPTY_FIELDS = ("final_time_s", "energy", "iterations", "solve_time_s", "objective", "max_constraint_violation")
+#: Summary fields of the motion kinds, besides their columns, that are null when a run ends
+#: before a solution.
+MOTION_EXTRA_EMPTY_FIELDS = ("objective", "max_constraint_violation")
 
 
 def trajectory_columns() -> tuple[Column, ...]:

@@ -16,7 +16,6 @@ of the tables (``"mass.s" = 0.0`` or ``mass_s = 0.0``). The problem is declared 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
@@ -28,13 +27,15 @@ from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError
-from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult, apply_to, optimization_names
+from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import MAX_TIME_S, CollocationSection, SolverSection
 from gtmodel.problems.references import named_parameters
 from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
+from gtmodel.trajectory.model_ocp import OptimalControl
+from gtmodel.trajectory.settings import Collocation, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
 
@@ -172,61 +173,6 @@ class OptimalControlFile(ProblemSchema):
     solver: SolverSection = SolverSection()
 
 
-@dataclass
-class OptimalControl:
-    """The declaration of an ``optimal_control`` problem.
-
-    Parameters
-    ----------
-    name : str
-        Problem name.
-    model_file : pathlib.Path
-        The model's Python file.
-    class_name : str
-        The class in it.
-    optimization : Optimization
-        The declared problem (objective, constraints, bounds, boundary values, guesses).
-    elements, points : int
-        Collocation elements and points per element.
-    scheme : str
-        ``"radau"`` or ``"legendre"``.
-    max_iter : int
-        IPOPT iteration limit.
-    tol : float
-        IPOPT tolerance.
-    nominal : dict of str to float
-        Nominal magnitudes (scaling).
-    objective : str
-        The objective text.
-    constraints : tuple of str
-        The constraint texts.
-    named_parameters : dict of str to float
-        The ``[parameters]`` table.
-    bounds : dict of str to tuple of float
-        Bounds per scalar variable name (for the plots).
-    """
-
-    name: str
-    model_file: Path
-    class_name: str
-    optimization: Optimization
-    elements: int
-    points: int
-    scheme: str
-    max_iter: int
-    tol: float
-    nominal: dict[str, float] = field(default_factory=dict)
-    objective: str = ""
-    constraints: tuple[str, ...] = ()
-    named_parameters: dict[str, float] = field(default_factory=dict)
-    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
-
-    @property
-    def model(self) -> Model:
-        """The user's model."""
-        return self.optimization.model
-
-
 def _scalar_variables(model: Model) -> dict[str, tuple[str, ca.SX]]:
     """Scalar states, inputs and algebraics by name: ``name -> (kind, symbol)``."""
     out = {}
@@ -287,7 +233,7 @@ class OptimalControlKind(ProblemKind):
         Column("iterations", "iterations", "{}"),
         Column("solve_time_s", "solve time [s]", "{:.3f}"),
     )
-    empty_fields = ("final_time_s", "objective", "iterations", "solve_time_s", "max_constraint_violation")
+    extra_empty_fields = ("max_constraint_violation",)
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: OptimalControlFile, file: ProblemFile, name: str) -> OptimalControl:
@@ -364,38 +310,13 @@ class OptimalControlKind(ProblemKind):
         col = doc.collocation
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
-            elements=col.elements, points=col.points, scheme=col.scheme,
-            max_iter=doc.solver.max_iter, tol=doc.solver.tol, nominal={nkeys[k]: v for k, v in doc.nominal.items()},
+            method=Collocation(col.elements, col.points, col.scheme),
+            solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
         )
 
-    def solve(self, declaration: OptimalControl, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> OptimizationResult:
-        """Transcribe by collocation and solve with IPOPT.
-
-        Parameters
-        ----------
-        declaration : OptimalControl
-            From :meth:`load`.
-        verbose : bool, optional
-            IPOPT's iteration log.
-        previous : OptimizationResult, optional
-            A sweep's previous solution.
-        warm_start : bool, optional
-            Start from ``previous`` (sampled onto the new mesh).
-
-        Returns
-        -------
-        OptimizationResult
-        """
-        d = declaration
-        tr = CollocationTranscription(
-            d.optimization, elements=d.elements, points=d.points, scheme=d.scheme, verbose=verbose,
-            solver_options={"max_iter": d.max_iter, "tol": d.tol}, nominal=d.nominal,
-        )
-        guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
-        return tr.solve(initial_guess=guess)
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: OptimalControl, solution: OptimizationResult, out: Path, plots: bool, name: str) -> Written:
         """Summary fields; ``trajectories.csv`` and plots of the states and inputs.
 
@@ -408,12 +329,7 @@ class OptimalControlKind(ProblemKind):
             The declaration.
         solution : OptimizationResult
             Its solution.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write PNG plots.
-        name : str
-            Plot title.
+        {write_args}
 
         Returns
         -------
@@ -436,7 +352,7 @@ class OptimalControlKind(ProblemKind):
             "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
-            "collocation": {"elements": d.elements, "points": d.points, "scheme": d.scheme},
+            "collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme},
         })
         if r.status not in ("optimal", "acceptable"):
             return written

@@ -11,7 +11,6 @@ The field reference is ``docs/problem_files.md``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
 
@@ -23,7 +22,7 @@ from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (
-    MOTION_EMPTY_FIELDS,
+    MOTION_EXTRA_EMPTY_FIELDS,
     MAX_TIME_S,
     CollocationSection,
     MotionSection,
@@ -35,18 +34,16 @@ from gtmodel.problems.kinds.motion_common import (
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.schema import MAX_FORCE_N, MAX_LENGTH_M, Flag, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.report.trajectory import plot_forces, plot_overlay, plot_path_profile, plot_tcp_path
-from gtmodel.robots import RobotParameters
 from gtmodel.trajectory import (
-    Path as TcpPath,
     PathConstraints,
     PathSolution,
     Polyline,
     SplinePath,
     StraightLine,
-    solve_path_collocation,
-    solve_path_convex,
 )
 from gtmodel.trajectory.export import write_c_header
+from gtmodel.trajectory.path_constrained.declared import PATH_METHODS, PathConstrainedDeclaration
+from gtmodel.trajectory.settings import Collocation, SolverSettings
 
 __all__ = [
     "PATH_METHODS",
@@ -58,10 +55,6 @@ __all__ = [
     "path_trajectory_columns",
 ]
 
-#: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
-#: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection
-#: solved by collocation (Dressler (2012), ch. 3.5).
-PATH_METHODS = ("convex", "collocation")
 #: Most grid points of the convex method (20000 solve in about a second, 250 MB).
 MAX_GRID_POINTS = 20000
 #: Most via points of a path.
@@ -175,60 +168,6 @@ class PathConstrainedFile(ProblemSchema):
     solver: SolverSection = SolverSection()
 
 
-@dataclass(frozen=True)
-class PathConstrainedDeclaration:
-    """A validated ``path_constrained`` problem.
-
-    Parameters
-    ----------
-    path : gtmodel.trajectory.Path
-        The TCP path (checked inside the workspace).
-    robot : RobotParameters
-        Parameter set.
-    constraints : gtmodel.trajectory.PathConstraints
-        Limits along the path.
-    method : str
-        One of :data:`PATH_METHODS`.
-    grid : int
-        Grid points of the convex method.
-    w : float
-        Energy weight of the collocation method's objective
-        ``final_time + w * sum_i integral tau_i^2 dt`` [1/N^2].
-    configuration : int
-        IK configuration.
-    viscous_friction : bool
-        Include viscous friction.
-    elements, points : int
-        Collocation mesh (method ``"collocation"``).
-    scheme : str
-        ``"radau"`` or ``"legendre"``.
-    final_time_guess : float
-        Initial guess of the duration [s] (method ``"collocation"``).
-    final_time_bounds : tuple of float
-        Bounds of the duration [s] (method ``"collocation"``).
-    max_iter : int
-        IPOPT iteration limit.
-    tol : float
-        IPOPT tolerance.
-    """
-
-    path: TcpPath
-    robot: RobotParameters
-    constraints: PathConstraints
-    method: str
-    grid: int
-    w: float
-    configuration: int
-    viscous_friction: bool
-    elements: int = 50
-    points: int = 3
-    scheme: str = "radau"
-    final_time_guess: float = 1.0
-    final_time_bounds: tuple[float, float] = (0.05, 10.0)
-    max_iter: int = 3000
-    tol: float = 1e-8
-
-
 def path_trajectory_columns(solution: PathSolution) -> dict[str, np.ndarray]:
     """The 4 ms table of a path-constrained solution, with the columns of the free-path CSV.
 
@@ -268,7 +207,7 @@ class PathConstrainedKind(ProblemKind):
     schema = PathConstrainedFile
     title = "time-optimal motion along a given TCP path (Dressler (2012), ch. 3.5; Verscheure et al. (2009))"
     columns = trajectory_columns()
-    empty_fields = MOTION_EMPTY_FIELDS
+    extra_empty_fields = MOTION_EXTRA_EMPTY_FIELDS
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: PathConstrainedFile, file: ProblemFile, name: str) -> PathConstrainedDeclaration:
@@ -352,54 +291,13 @@ class PathConstrainedKind(ProblemKind):
             w=method.w,
             configuration=configuration,
             viscous_friction=doc.robot.viscous_friction,
-            elements=col.elements,
-            points=col.points,
-            scheme=col.scheme,
+            collocation=Collocation(col.elements, col.points, col.scheme),
             final_time_guess=method.final_time_guess,
             final_time_bounds=(float(lo), float(hi)),
-            max_iter=sol.max_iter,
-            tol=sol.tol,
+            solver=SolverSettings(max_iter=sol.max_iter, tol=sol.tol),
         )
 
-    def solve(self, declaration: PathConstrainedDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> PathSolution:
-        """Solve with the declared method.
-
-        Parameters
-        ----------
-        declaration : PathConstrainedDeclaration
-            From :meth:`load`.
-        verbose : bool, optional
-            IPOPT's iteration log (method ``"collocation"``).
-        previous : Any, optional
-            Unused (each case is solved afresh).
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        PathSolution
-            Always returned; its ``status`` says whether it is optimal.
-        """
-        d = declaration
-        if d.method == "convex":
-            return solve_path_convex(d.path, d.constraints, robot=d.robot, grid=d.grid, configuration=d.configuration, viscous_friction=d.viscous_friction)
-        return solve_path_collocation(
-            d.path,
-            d.robot,
-            d.constraints.force_limit,
-            w=d.w,
-            configuration=d.configuration,
-            viscous_friction=d.viscous_friction,
-            elements=d.elements,
-            points=d.points,
-            scheme=d.scheme,
-            final_time_guess=d.final_time_guess,
-            final_time_bounds=d.final_time_bounds,
-            max_iter=d.max_iter,
-            tol=d.tol,
-            verbose=verbose,
-        )
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: PathConstrainedDeclaration, solution: PathSolution, out: Path, plots: bool, name: str) -> Written:
         """Summary fields; ``trajectory.csv``, ``trajectory.h`` and plots of a solution.
 
@@ -412,12 +310,7 @@ class PathConstrainedKind(ProblemKind):
             The declaration.
         solution : PathSolution
             Its solution.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write PNG plots (``tcp_path.png``, ``profile.png``, ``forces.png`` with force limits).
-        name : str
-            Plot title.
+        {write_args}
 
         Returns
         -------

@@ -19,7 +19,7 @@ from gtmodel.modeling.ocp.expressions import parse_constraint, parse_objective
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import (
-    MOTION_EMPTY_FIELDS,
+    MOTION_EXTRA_EMPTY_FIELDS,
     MAX_TIME_S,
     CollocationSection,
     MotionSection,
@@ -41,9 +41,9 @@ from gtmodel.problems.schema import (
     vector,
 )
 from gtmodel.report.trajectory import plot_forces, plot_overlay, plot_tcp_path
-from gtmodel.robots import GantryTau3Kinematics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
-from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution, check_holding_forces, solve_point_to_point
+from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution
+from gtmodel.trajectory.settings import Collocation, SolverSettings
 from gtmodel.trajectory.export import write_c_header
 
 __all__ = ["PointToPointKind", "PointToPointFile", "point_to_point_summary"]
@@ -142,7 +142,7 @@ class PointToPointKind(ProblemKind):
     schema = PointToPointFile
     title = "free-path time/energy-optimal motion between two poses (Dressler (2012), ch. 3.5)"
     columns = trajectory_columns()
-    empty_fields = MOTION_EMPTY_FIELDS
+    extra_empty_fields = MOTION_EXTRA_EMPTY_FIELDS
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: PointToPointFile, file: ProblemFile, name: str) -> PointToPoint:
@@ -160,14 +160,13 @@ class PointToPointKind(ProblemKind):
         ------
         ProblemError
             A pose outside the workspace, inconsistent final-time settings, force limits
-            that cannot hold the robot at rest, an invalid expression.
+            that cannot hold the robot at rest, an invalid expression (each naming its
+            field: the declaration's own checks are reported under :data:`ARGUMENT_FIELDS`).
         """
         params = robot_parameters(file, "robot.parameters", doc.robot.parameters)
         lim = doc.limits
         joint = None if lim.joint_angle_deg is None else float(np.deg2rad(lim.joint_angle_deg))
         named = named_parameters(file, doc.parameters, MODEL_NAMES)
-        if named.get("w", 0.0) < 0:
-            raise file.fail("parameters.w", "a non-negative energy weight", named["w"])
         opt = doc.optimization
         t0 = opt.start_time
         ft, ftn = opt.final_time, "optimization.final_time"
@@ -200,13 +199,7 @@ class PointToPointKind(ProblemKind):
         start, end = np.array(doc.motion.start), np.array(doc.motion.end)
         if np.linalg.norm(end - start) < 1e-9:
             raise file.fail("motion.end", "a pose different from motion.start", end.tolist())
-        kin = GantryTau3Kinematics(params)
-        for key, pose in (("start", start), ("end", end)):
-            try:
-                kin.require_in_workspace(pose, doc.robot.configuration)
-            except UnreachablePoseError as exc:
-                raise file.wrap(f"motion.{key}", exc) from None
-        col = doc.collocation
+        col, sol = doc.collocation, doc.solver
         try:
             decl = PointToPoint(
                 robot=params,
@@ -219,11 +212,6 @@ class PointToPointKind(ProblemKind):
                 friction=doc.robot.friction,
                 friction_width=doc.robot.friction_width,
                 configuration=doc.robot.configuration,
-                elements=col.elements,
-                points=col.points,
-                scheme=col.scheme,
-                max_iter=doc.solver.max_iter,
-                tol=doc.solver.tol,
                 name=name,
                 objective=opt.objective,
                 constraints=tuple(opt.constraints),
@@ -236,52 +224,15 @@ class PointToPointKind(ProblemKind):
                 guess=guess,
                 origin=str(file.path),
                 start_time=t0,
-                solver=doc.solver.name,
-                jit=doc.solver.jit,
+                method=Collocation(col.elements, col.points, col.scheme),
+                solver=SolverSettings(sol.name, sol.max_iter, sol.tol, sol.jit),
             )
-        except InputError as exc:
-            raise ProblemError(f"{file.path}: {exc}") from None
-        try:
-            check_holding_forces(decl)
-        except InputError as exc:
-            raise file.wrap("limits.force", exc) from None
+        except (InputError, UnreachablePoseError) as exc:
+            raise _field_error(file, exc) from None
         _check_expressions(decl)
         return decl
 
-    def solve(self, declaration: PointToPoint, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> PointToPointSolution:
-        """Transcribe and solve (:func:`~gtmodel.trajectory.solve_point_to_point`).
-
-        Parameters
-        ----------
-        declaration : PointToPoint
-            From :meth:`load`.
-        verbose : bool, optional
-            IPOPT's iteration log.
-        previous : PointToPointSolution, optional
-            A sweep's previous solution (its NLP is reused).
-        warm_start : bool, optional
-            Start from ``previous``.
-
-        Returns
-        -------
-        PointToPointSolution
-        """
-        return solve_point_to_point(declaration, verbose=verbose, previous=previous, warm_start=warm_start)
-
-    def status(self, solution: PointToPointSolution) -> Any:
-        """The IPOPT status of the solve.
-
-        Parameters
-        ----------
-        solution : PointToPointSolution
-            From :meth:`solve`.
-
-        Returns
-        -------
-        Status
-        """
-        return super().status(solution.result)
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: PointToPoint, solution: PointToPointSolution, out: Path, plots: bool, name: str) -> Written:
         """Summary fields; ``trajectory.csv``, ``trajectory.h`` and plots of a solution.
 
@@ -294,12 +245,7 @@ class PointToPointKind(ProblemKind):
             The declaration.
         solution : PointToPointSolution
             Its solution.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write PNG plots.
-        name : str
-            Plot title.
+        {write_args}
 
         Returns
         -------
@@ -333,6 +279,18 @@ class PointToPointKind(ProblemKind):
         """
         trajs = {label: sol.trajectory() for label, sol in solutions.items()}
         return [p.name for p in plot_overlay(trajs, out)] if trajs else []
+
+
+#: The file field of each :class:`~gtmodel.trajectory.PointToPoint` argument its checks name.
+ARGUMENT_FIELDS = {"start": "motion.start", "end": "motion.end", "force_limit": "limits.force", "w": "parameters.w"}
+
+
+def _field_error(file: ProblemFile, exc: Exception) -> ProblemError:
+    """The declaration's error (``"argument: message"``) under the file field of the argument."""
+    arg, sep, rest = str(exc).partition(": ")
+    if sep and arg in ARGUMENT_FIELDS:
+        return ProblemError(f"{file.path}: field '{ARGUMENT_FIELDS[arg]}': {rest}")
+    return ProblemError(f"{file.path}: {exc}")
 
 
 def _check_expressions(decl: PointToPoint) -> None:
@@ -379,7 +337,7 @@ def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -
         "w": decl.named_parameters.get("w"),
         "free_final_time": decl.free_final_time,
         "force_limit_N": decl.force_limit.tolist(),
-        "collocation": {"elements": decl.elements, "points": decl.points, "scheme": decl.scheme},
+        "collocation": {"elements": decl.method.elements, "points": decl.method.points, "scheme": decl.method.scheme},
         "robot": decl.parameters.name,
     }
     if r.status in ("optimal", "acceptable"):

@@ -16,7 +16,6 @@ baseline by default), the filters' tuning (``[filter]``) and the study's extent 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -24,6 +23,7 @@ import numpy as np
 from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
+from gtmodel.estimation.fusion.declared import StateEstimationDeclaration
 from gtmodel.errors import InputError
 from gtmodel.estimation.fusion.study import (
     APPENDIX_B,
@@ -235,22 +235,6 @@ class StateEstimationFile(ProblemSchema):
     study: StudySection = StudySection()
 
 
-@dataclass(frozen=True)
-class StateEstimationDeclaration:
-    """A validated fusion study.
-
-    Parameters
-    ----------
-    study : FusionStudy
-        The study.
-    origin : ProblemFile
-        The problem file.
-    """
-
-    study: FusionStudy
-    origin: ProblemFile
-
-
 def _nonzero(file: ProblemFile, field: str, value: list[float], what: str) -> None:
     if not math.fsum(v * v for v in value) > 1e-18:
         raise file.fail(field, f"{what} of nonzero norm", value)
@@ -281,7 +265,6 @@ class StateEstimationKind(ProblemKind):
         Column("velocity_fusion_3_axis_mm_s", "v fused 3-axis [mm/s]", "{:.4g}"),
         Column("velocity_fusion_5_axis_mm_s", "v fused 5-axis [mm/s]", "{:.4g}"),
     )
-    empty_fields = ("velocity_fusion_3_axis_mm_s", "velocity_fusion_5_axis_mm_s")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: StateEstimationFile, file: ProblemFile, name: str) -> StateEstimationDeclaration:
@@ -344,29 +327,9 @@ class StateEstimationKind(ProblemKind):
             )
         except InputError as exc:
             raise file.wrap("path", exc) from None
-        return StateEstimationDeclaration(study, file)
+        return StateEstimationDeclaration(study)
 
-    def solve(self, declaration: StateEstimationDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> FusionStudyResult:
-        """Run the study.
-
-        Parameters
-        ----------
-        declaration : StateEstimationDeclaration
-            From :meth:`load`.
-        verbose : bool, optional
-            Unused.
-        previous : Any, optional
-            Unused.
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        FusionStudyResult
-            Status ``"optimal"``, or ``"error"`` when a filter diverged (its row says which).
-        """
-        return declaration.study.run()
-
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: StateEstimationDeclaration, solution: FusionStudyResult, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, the tables (.md/.csv), ``fusion_baseline.csv`` and the plots.
 
@@ -376,12 +339,7 @@ class StateEstimationKind(ProblemKind):
             The declaration.
         solution : FusionStudyResult
             Its result.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write the PNG plots.
-        name : str
-            Title.
+        {write_args}
 
         Returns
         -------

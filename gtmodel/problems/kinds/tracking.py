@@ -22,7 +22,6 @@ reference is held for ``settle_time``. The actuator references are the columns
 
 from __future__ import annotations
 
-import math
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,15 +34,15 @@ from gtmodel._docstrings import fill_doc
 from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, InputError, ProblemError
-from gtmodel.estimation import TrackingPlant, TrackingResponse
+from gtmodel.estimation import TrackingPlant
 from gtmodel.estimation.closed_loop.plant import DT
+from gtmodel.estimation.closed_loop.replay import TrackingSolution, replay
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.closed_loop_common import RobotSection, SensorsSection, StructureSection, build_plant
 from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, number, validate_document
 from gtmodel.report.tracking import plot_actuator_error, plot_deflection, plot_tool_error, plot_tool_path
-from gtmodel.status import Status, StatusResult
 
 __all__ = ["TrackingFile", "TrackingDeclaration", "TrackingSolution", "TrackingKind", "read_trajectory", "REQUIRED_COLUMNS"]
 
@@ -121,30 +120,6 @@ class TrackingDeclaration:
     origin: ProblemFile
 
 
-@dataclass
-class TrackingSolution(StatusResult):
-    """The outcome of a ``tracking`` problem.
-
-    Parameters
-    ----------
-    status : Status
-        ``"optimal"`` when the replay ran; the referenced problem's status when it did not
-        solve (keyword only).
-    message : str
-        What happened (keyword only).
-    response : TrackingResponse or None
-        The simulated run.
-    motion_samples : int
-        Samples of the motion (before the settling hold).
-    source_status : str
-        Status of the referenced problem (``"file"`` for a trajectory file).
-    """
-
-    response: TrackingResponse | None = None
-    motion_samples: int = 0
-    source_status: str = "file"
-
-
 def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float = DT) -> dict[str, np.ndarray]:
     """Read and check a ``trajectory.csv`` (a CSV table of :mod:`gtmodel._tables`, 4 ms samples).
 
@@ -204,7 +179,6 @@ class TrackingKind(ProblemKind):
         Column("tool_error_max_abs_m", "max |z - T_ref| [m]", "{:.3e}"),
         Column("deflection_max_abs_m", "max |d| [m]", "{:.3e}"),
     )
-    empty_fields = ("actuator_error_max_abs_m", "tool_error_max_abs_m", "deflection_max_abs_m")
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: TrackingFile, file: ProblemFile, name: str) -> TrackingDeclaration:
@@ -280,7 +254,7 @@ class TrackingKind(ProblemKind):
         Returns
         -------
         TrackingSolution
-            Status ``"optimal"`` with the response, or the referenced problem's status.
+            Status ``"completed"`` with the response, or the referenced problem's status.
 
         Raises
         ------
@@ -300,14 +274,9 @@ class TrackingKind(ProblemKind):
                 cols = read_trajectory(Path(tmp) / "trajectory.csv", d.origin, "trajectory.problem", d.plant.dt)
             self._check_robot(d.plant, cols, d.origin, "trajectory.problem")
         q = np.column_stack([cols[f"q{i}"] for i in (1, 2, 3)])
-        settle = int(math.ceil(d.settle_time / d.plant.dt - 1e-9))
-        q_ref = np.vstack([q, np.repeat(q[-1:], settle, axis=0)])
-        response = d.plant.simulate(q_ref)
-        return TrackingSolution(
-            status=response.status, message=f"replayed {q.shape[0]} samples of {d.source.name} and {settle} settling samples",
-            response=response, motion_samples=q.shape[0], source_status=source_status,
-        )
+        return replay(d.plant, q, d.settle_time, d.source.name, source_status)
 
+    @fill_doc(**KIND_DOCS)
     def write(self, declaration: TrackingDeclaration, solution: TrackingSolution, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``tracking.csv`` and plots of a replay.
 
@@ -317,12 +286,7 @@ class TrackingKind(ProblemKind):
             The declaration.
         solution : TrackingSolution
             Its solution.
-        out : pathlib.Path
-            The folder.
-        plots : bool
-            Write ``actuator_error.png``, ``tool_error.png``, ``deflection.png``, ``tool_path.png``.
-        name : str
-            Plot title.
+        {write_args}
 
         Returns
         -------

@@ -15,7 +15,8 @@ import pytest
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem, run_problem
-from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, CalibrationDeclaration
+from gtmodel.calibration.comparison import CalibrationDeclaration
+from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES
 from gtmodel.robots.parameters import load_parameters
 from gtmodel.status import Status
 

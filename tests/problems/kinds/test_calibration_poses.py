@@ -12,7 +12,7 @@ import pytest
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem, run_problem, solve_problem
-from gtmodel.problems.kinds.calibration_poses import choose_poses
+from gtmodel.calibration.pose_choice import choose_poses
 from gtmodel.problems.kinds.calibration_results import parameters_vs_truth
 
 from ...conftest import REPO, replace_once as _edit

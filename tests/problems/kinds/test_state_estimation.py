@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from gtmodel.problems import load_problem, run_problem
-from gtmodel.problems.kinds.state_estimation import StateEstimationDeclaration
+from gtmodel.estimation.fusion.declared import StateEstimationDeclaration
 from gtmodel.status import Status
 
 from ...conftest import PROBLEMS_DIR, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
@@ -45,7 +45,7 @@ def solved(tmp_path_factory):
 
 def test_quick_run_writes_its_files(solved):
     outcome, out = solved
-    assert outcome.exit_code == 0 and outcome.summary["status"] == "optimal"
+    assert outcome.exit_code == 0 and outcome.summary["status"] == "completed"
     names = ["table_8.md", "table_8.csv", "table_9.md", "table_9.csv", "table_10.md", "table_10.csv", "filter_comparison.md",
              "filter_comparison.csv", "fusion_baseline_3_axis.csv", "fusion_baseline_5_axis.csv", "velocity_3_axis.png",
              "velocity_5_axis.png", "angular_acceleration.png", "table_10.png"]
@@ -97,10 +97,10 @@ def test_summary_errors_are_those_of_the_written_runs(solved, motion):
 def test_shipped_file_through_the_cli(tmp_path):
     # the judged command: exit 0, the whole shipped study (~30 s of CPU)
     code, s = solve_through_cli(FILE, tmp_path / "out", "--no-plots")
-    assert code == 0 and s["status"] == "optimal"
+    assert code == 0 and s["status"] == "completed"
     assert all(s["checks"][m]["velocity_fusion_30_percent_below_tracker"] and s["checks"][m]["table_9_structure"] for m in ("3-axis", "5-axis"))
     assert [r["filter"] for r in s["filter_comparison"]] == ["kf", "ekf", "ukf", "pf", "ekf", "ukf", "pf"]
-    assert all(r["status"] == "optimal" for r in s["filter_comparison"] + s["table_10"])
+    assert all(r["status"] == "completed" for r in s["filter_comparison"] + s["table_10"])
 
 
 JUDGED = [
@@ -147,4 +147,4 @@ def test_bad_state_estimation_problem(tmp_path, case, edit, match):
 
 
 def test_status_is_an_enum_member(solved):
-    assert solved[0].status is Status.OPTIMAL
+    assert solved[0].status is Status.COMPLETED

@@ -43,7 +43,7 @@ def shipped(tmp_path_factory):
 
 def test_shipped_tracking_problem_runs(shipped):
     outcome, out = shipped
-    assert outcome.exit_code == 0 and outcome.summary["status"] == "optimal"
+    assert outcome.exit_code == 0 and outcome.summary["status"] == "completed"
     assert outcome.summary["files"] == ["summary.json", "actuator_error.png", "deflection.png", "tool_error.png", "tool_path.png", "tracking.csv"]
     assert all((out / f).stat().st_size > 0 for f in outcome.summary["files"])
     s = json.loads((out / "summary.json").read_text())
@@ -114,7 +114,7 @@ def test_trajectory_file_is_replayed(tmp_path):
     d = load_problem(f).declaration
     assert isinstance(d, TrackingDeclaration) and d.source == csv
     code, summary = solve_through_cli(f, tmp_path / "out", "--no-plots")
-    assert code == 0 and summary["status"] == "optimal" and summary["source_status"] == "file"
+    assert code == 0 and summary["status"] == "completed" and summary["source_status"] == "file"
     assert summary["motion_samples"] == 150 and summary["accelerometer_clipped_samples"] == 0
     # a 10 mm move: the static actuator errors are (b/(1-a) - 1) of the cart moves, below 0.2 mm
     assert max(abs(e) for e in summary["actuator_error_final_m"]) < 2e-4
@@ -208,4 +208,4 @@ def test_invalid_referenced_problem_is_named_with_its_field(tmp_path):
 
 
 def test_status_is_an_enum_member(shipped):
-    assert shipped[0].status is Status.OPTIMAL
+    assert shipped[0].status is Status.COMPLETED

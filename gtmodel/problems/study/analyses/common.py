@@ -22,7 +22,7 @@ __all__ = ["SOLVED", "check_analyse_args", "design_columns", "solved_rows", "fin
 
 #: Statuses whose figures a study analysis uses (a solution; ``acceptable``: a solver
 #: stopped at its acceptable tolerance, still a solution to report).
-SOLVED = ("optimal", "converged", "acceptable")
+SOLVED = ("optimal", "converged", "completed", "acceptable")
 
 
 def check_analyse_args(table: Any, out: Any, plots: Any, required: Iterable[str] = ("status",)) -> tuple[pd.DataFrame, Path]:

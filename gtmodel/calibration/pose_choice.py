@@ -1,4 +1,4 @@
-"""Which candidate poses a calibration problem uses (``[pose_selection]``, Dressler (2012), ch. 5.6).
+"""Which candidate poses a calibration uses (``[pose_selection]`` of a problem file, Dressler (2012), ch. 5.6).
 
 Two ways to keep ``n`` of the candidate poses (before the split into calibration and
 validation poses):
@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from gtmodel.calibration import CalibrationProblem, select_poses
-from gtmodel.calibration.pose_selection import ACCEPTANCE_LIMIT, acceptance_value, scaled_condition_number
+from gtmodel.calibration.kinematic import CalibrationProblem
+from gtmodel.calibration.pose_selection import ACCEPTANCE_LIMIT, acceptance_value, scaled_condition_number, select_poses
 from gtmodel.errors import GtModelError
 from gtmodel.robots.closure import rotation_to_quaternion
 

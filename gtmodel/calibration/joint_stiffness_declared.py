@@ -1,0 +1,111 @@
+"""A joint-stiffness calibration as declared by a problem file: arm, data, and the three methods' results.
+
+Cvitanic (2021), eqs. (3)-(5) and Table 2: :class:`JointStiffnessDeclaration` holds the
+nominal arm and the deflection data (measured or synthetic);
+:meth:`JointStiffnessDeclaration.solve` runs CP (weight 1), CP with the scaled rotation
+weight and DPP, giving a :class:`JointStiffnessOutcome`.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gtmodel._docstrings import SHARED_DOCS, fill_doc
+from gtmodel.calibration.joint_stiffness import DeflectionData, calibrate_cp, calibrate_dpp
+from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.robots import SerialArm
+from gtmodel.status import Status
+
+__all__ = ["JointStiffnessDeclaration", "JointStiffnessOutcome"]
+
+_log = logging.getLogger("gtmodel")
+
+
+@dataclass
+class JointStiffnessDeclaration:
+    """A validated joint-stiffness calibration problem.
+
+    Parameters
+    ----------
+    arm : SerialArm
+        Nominal arm (Jacobian source; also generates synthetic data).
+    data : DeflectionData
+        Measurements (synthetic or read from a file).
+    k_true : numpy.ndarray or None, shape (6,)
+        True joint stiffnesses of synthetic data [N m/rad] (None for measured data).
+    scaled_rotation_weight : float
+        CP rotation weight of the scaled variant [m/rad] (the thesis' 10).
+    bounds : str
+        ``"none"`` or ``"positive"``.
+    source : str
+        Description of the data.
+    """
+
+    arm: SerialArm
+    data: DeflectionData
+    k_true: np.ndarray | None
+    scaled_rotation_weight: float
+    bounds: str
+    source: str
+
+    @fill_doc(**SHARED_DOCS)
+    def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> "JointStiffnessOutcome":
+        """Run the CP (weight 1), CP (scaled rotation weight) and DPP calibrations.
+
+        Cvitanic (2021), eqs. (3)-(5) and Table 2 (:func:`~gtmodel.calibration.calibrate_cp`,
+        :func:`~gtmodel.calibration.calibrate_dpp`).
+
+        Parameters
+        ----------
+        {solve_args}
+
+        Returns
+        -------
+        JointStiffnessOutcome
+            One result per method (each with its status).
+
+        Raises
+        ------
+        ProblemError
+            A calibration that cannot be posed (e.g. an arm without a spherical wrist for DPP).
+        """
+        decl = self
+        t0 = time.perf_counter()
+        try:
+            results = {
+                "CP": calibrate_cp(decl.arm, decl.data, 1.0, decl.bounds),
+                "CP_rotations_scaled_x10": calibrate_cp(decl.arm, decl.data, decl.scaled_rotation_weight, decl.bounds),
+                "DPP": calibrate_dpp(decl.arm, decl.data, decl.bounds),
+            }
+        except GtModelError as exc:
+            raise ProblemError(str(exc)) from None
+        if verbose:
+            for m, r in results.items():
+                _log.info("joint stiffness %s: k = %s MN m/rad (%s)", m, np.round(r.k_theta / 1e6, 3).tolist(), r.status)
+        return JointStiffnessOutcome(results, time.perf_counter() - t0)
+
+
+@dataclass
+class JointStiffnessOutcome:
+    """Results of a joint-stiffness calibration problem.
+
+    Parameters
+    ----------
+    results : dict of str to JointStiffnessResult
+        One result per name of :data:`METHODS`.
+    solve_time : float
+        Wall time [s].
+    """
+
+    results: dict[str, Any]
+    solve_time: float
+
+    @property
+    def status(self) -> Status:
+        """Worst status of the calibrations."""
+        return Status.worst(Status(r.status) for r in self.results.values())

@@ -1,0 +1,83 @@
+"""The problem kinds are thin: defaults from ProblemKind, declarations in the domain, honest statuses."""
+
+from __future__ import annotations
+
+import tomllib
+
+import pytest
+
+from gtmodel.errors import InputError
+from gtmodel.problems.base import ProblemKind
+from gtmodel.problems.registry import KINDS
+from gtmodel.problems.run import load_problem
+from gtmodel.status import Status
+from gtmodel.trajectory import PointToPoint
+from gtmodel.trajectory.settings import Collocation, SolverSettings
+
+from ..conftest import PROBLEMS_DIR
+
+#: Kinds that simulate (or filter) and optimise nothing: their success is ``completed``.
+SIMULATION_KINDS = ("tracking", "state_estimation", "correction_stability")
+
+
+@pytest.mark.parametrize("name", list(KINDS))
+def test_empty_fields_start_with_the_column_keys(name):
+    kind = KINDS[name]
+    keys = [c.key for c in kind.columns]
+    assert list(kind.empty_fields[: len(keys)]) == keys
+    assert len(set(kind.empty_fields)) == len(kind.empty_fields)
+
+
+@pytest.mark.parametrize("name", [n for n in KINDS if n != "tracking"])
+def test_kinds_solve_through_the_declaration(name):
+    # no pass-through solve in the kinds: ProblemKind.solve calls the declaration's own
+    assert type(KINDS[name]).solve is ProblemKind.solve
+
+
+def test_default_solve_passes_the_arguments_on():
+    class Declaration:
+        def solve(self, *, verbose=False, previous=None, warm_start=False):
+            return (verbose, previous, warm_start)
+
+    assert KINDS["calibration"].solve(Declaration(), verbose=True, previous=1, warm_start=True) == (True, 1, True)
+
+
+@pytest.mark.parametrize("name", list(KINDS))
+def test_declarations_live_in_the_domain_packages(name):
+    # the one exception: tracking's declaration holds another problem file's kind
+    files = [p for p in sorted(PROBLEMS_DIR.glob("*.toml")) if tomllib.loads(p.read_text())["kind"] == name]
+    if name in ("ilc", "calibration", "elasto_geometric_calibration"):
+        pytest.skip("loading builds the experiment or synthetic data (seconds to a minute); covered by the kind's tests")
+    decl = load_problem(files[0]).declaration
+    module = type(decl).__module__
+    assert module.startswith("gtmodel.problems.kinds.tracking") if name == "tracking" else not module.startswith("gtmodel.problems")
+
+
+def test_simulation_statuses_are_completed_not_optimal():
+    # defect (c): a simulation is not an optimisation
+    assert Status.COMPLETED.success and Status.COMPLETED.exit_code == 0
+    assert Status.worst(["optimal", "completed"]) == "completed"
+    assert set(SIMULATION_KINDS) <= set(KINDS)
+
+
+def test_point_to_point_method_and_solver_settings_are_objects():
+    p = PointToPoint("L1", start=[-0.2, 2.75, -0.4], end=[0.2, 3.0, -0.6], force_limit=[450, 450, 450], elements=12, max_iter=50)
+    assert p.method == Collocation(12, 3, "radau") and p.solver == SolverSettings(max_iter=50)
+    assert (p.elements, p.max_iter, p.jit) == (12, 50, True)  # read under the former names
+
+
+@pytest.mark.parametrize("build, match", [
+    (lambda: Collocation(elements=0), "elements: expected a positive integer"),
+    (lambda: Collocation(points=10), "points: expected an integer in 1..9"),
+    (lambda: Collocation(scheme="euler"), "scheme: expected one of radau, legendre"),
+    (lambda: SolverSettings(name="fatrop"), "name: expected one of ipopt"),
+    (lambda: SolverSettings(tol=0.0), "tol: expected a positive finite number"),
+])
+def test_settings_name_the_bad_value(build, match):
+    with pytest.raises(InputError, match=match):
+        build()
+
+
+def test_point_to_point_checks_its_invariants_once_at_construction():
+    with pytest.raises(InputError, match="force_limit: .* cannot hold the robot at rest at the start pose"):
+        PointToPoint("L1", start=[-0.2, 2.75, -0.4], end=[0.2, 3.0, -0.6], force_limit=[100, 100, 100])
