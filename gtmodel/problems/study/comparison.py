@@ -145,7 +145,7 @@ def write_overlays(cases: Sequence[StudyCase], out_dir: str | Path) -> list[str]
     out_dir = Path(out_dir)
     by_kind: dict[str, dict[str, Any]] = {}
     for c in cases:
-        if c.solution is not None and c.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+        if c.solution is not None and (c.status.success or c.status is Status.ACCEPTABLE):
             by_kind.setdefault(c.summary["kind"], {})[c.label] = c.solution
     if len(by_kind) == 1:
         ((kind_name, solutions),) = by_kind.items()
