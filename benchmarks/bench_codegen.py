@@ -74,7 +74,7 @@ from gtmodel.trajectory import PathConstrainedProblem
 from gtmodel.estimation import StationaryKalman, ilc_correction_function
 from gtmodel.estimation.filters.end_effector import EndEffectorModel
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
-from gtmodel.robots.kinematics import configuration_signs
+from gtmodel.robots.kinematic_expressions import configuration_signs
 
 PATH_PROBLEM = Path(__file__).resolve().parents[1] / "problems" / "l1_path_constrained.toml"
 BUNDLES = {"L1": ("ik", "jacobian", "inverse_dynamics"), "F1": ("ik", "fk")}

@@ -38,15 +38,14 @@ from gtmodel._arrays import as_rows
 from gtmodel.errors import InputError, SingularConfigurationError
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form, friction_force
 from gtmodel.robots.mapped import MappedFunction as _Mapped
-from gtmodel.robots.kinematics import (
-    SINGULARITY_TOLERANCE,
-    GantryTau3Kinematics,
+from gtmodel.robots.kinematic_expressions import (
     configuration_signs,
     fk_expression,
     ik_expression,
     jacobian_inverse_expression,
     link_cosines_expression,
 )
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, GantryTau3Kinematics
 from gtmodel.robots.parameters import DynamicParameters, RobotParameters, load_parameters
 
 __all__ = ["lagrange_terms", "GantryTau3Dynamics"]
@@ -195,7 +194,7 @@ class GantryTau3Dynamics:
         T, T_dot : casadi.SX, shape (3, 1)
             TCP position [m] and velocity [m/s].
         s : casadi.SX or array_like, shape (3,)
-            IK root signs (see :func:`gtmodel.robots.kinematics.configuration_signs`).
+            IK root signs (see :func:`gtmodel.robots.kinematic_expressions.configuration_signs`).
         dynamics : DynamicParameters, optional
             Parameters to use instead of the parameter set's (default None). ``m_p``,
             ``m_c`` and ``m_a`` may be CasADi symbols: the terms are linear in them, which
@@ -272,7 +271,7 @@ class GantryTau3Dynamics:
         T, T_dot, T_ddot : casadi.SX, shape (3, 1)
             TCP position [m], velocity [m/s] and acceleration [m/s^2].
         s : casadi.SX or array_like, shape (3,)
-            IK root signs (see :func:`gtmodel.robots.kinematics.configuration_signs`).
+            IK root signs (see :func:`gtmodel.robots.kinematic_expressions.configuration_signs`).
         dynamics : DynamicParameters, optional
             Parameters to use instead of the parameter set's (default None); may hold
             CasADi symbols (see :meth:`tcp_terms`).

@@ -25,7 +25,7 @@ from gtmodel.errors import InputError
 from gtmodel.modeling import Model
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
-from gtmodel.robots.kinematics import configuration_signs
+from gtmodel.robots.kinematic_expressions import configuration_signs
 from gtmodel.robots.parameters import RobotParameters
 
 __all__ = ["STATE_CHOICES", "gantry_tau_model"]
@@ -60,7 +60,7 @@ def gantry_tau_model(
         Use the asymmetric friction of Table 6.1.
     configuration : int or sequence of int, optional
         IK configuration used with TCP states (see
-        :func:`gtmodel.robots.kinematics.configuration_signs`).
+        :func:`gtmodel.robots.kinematic_expressions.configuration_signs`).
     solution : {1, -1}, optional
         FK assembly used with cart states.
     name : str, optional

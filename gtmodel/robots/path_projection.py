@@ -17,7 +17,7 @@ import casadi as ca
 
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
-from gtmodel.robots.kinematics import link_cosines_expression
+from gtmodel.robots.kinematic_expressions import link_cosines_expression
 
 __all__ = ["PATH_LIMIT_KINDS", "PATH_ROW_COUNTS", "PATH_SQUARED_KINDS", "path_rows_function"]
 

@@ -33,7 +33,11 @@ from gtmodel.modeling.ocp.expressions import parse_constraint, parse_objective
 from gtmodel.modeling.ocp.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
-from gtmodel.robots.kinematics import cart_acceleration_expression, configuration_signs, link_cosines_expression
+from gtmodel.robots.kinematic_expressions import (
+    cart_acceleration_expression,
+    configuration_signs,
+    link_cosines_expression,
+)
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status

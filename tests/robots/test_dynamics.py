@@ -226,7 +226,7 @@ def test_asymmetric_needs_parameters():
 def test_tcp_closed_form_equals_automatic_differentiation_of_the_energies():
     """tcp_terms (closed form via eq. 6.6) against lagrange_terms (CasADi AD of KE and V)."""
     from gtmodel.robots.dynamics import lagrange_terms
-    from gtmodel.robots.kinematics import ik_expression
+    from gtmodel.robots.kinematic_expressions import ik_expression
 
     dyn = GantryTau3Dynamics(_with_link_masses())
     T = ca.SX.sym("T", 3)

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
-from gtmodel.robots.kinematics import GantryTau3Kinematics, closure_residual, configuration_signs
+from gtmodel.robots.kinematic_expressions import closure_residual, configuration_signs
+from gtmodel.robots.kinematics import GantryTau3Kinematics
 
 #: FK(IK(T)) round trip [m] (issue requirement).
 ROUND_TRIP_TOL = 1e-12

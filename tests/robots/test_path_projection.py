@@ -12,7 +12,8 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
-from gtmodel.robots.kinematics import GantryTau3Kinematics, configuration_signs
+from gtmodel.robots.kinematic_expressions import configuration_signs
+from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.path_projection import PATH_LIMIT_KINDS, PATH_ROW_COUNTS, path_rows_function
 
 #: Coefficient form against the direct evaluation (same model, rounding) [relative].

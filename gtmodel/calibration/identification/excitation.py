@@ -51,7 +51,8 @@ from gtmodel.calibration.identification.regressor import DynamicRegressor
 from gtmodel.calibration.identification.variants import ModelVariant
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.modeling.ocp.result import normalize_ipopt_status
-from gtmodel.robots.kinematics import GantryTau3Kinematics, fk_expression, link_cosines_expression
+from gtmodel.robots.kinematic_expressions import fk_expression, link_cosines_expression
+from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status, StatusResult
 

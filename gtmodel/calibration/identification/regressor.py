@@ -27,7 +27,8 @@ from gtmodel.calibration.identification.variants import ModelVariant, _symbolic_
 from gtmodel.errors import InputError, SingularConfigurationError, UnreachablePoseError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
-from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, configuration_signs, fk_expression, link_cosines_expression
+from gtmodel.robots.kinematic_expressions import configuration_signs, fk_expression, link_cosines_expression
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE
 from gtmodel.robots.parameters import DynamicParameters, RobotParameters, load_parameters
 
 __all__ = ["DynamicRegressor"]

@@ -24,7 +24,8 @@ from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.codegen.robot import RobotModel
 from gtmodel.codegen.specs import SPECS_BY_KIND
 from gtmodel.errors import CodegenError, SingularConfigurationError
-from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, GantryTau3Kinematics, configuration_signs
+from gtmodel.robots.kinematic_expressions import configuration_signs
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, GantryTau3Kinematics
 from gtmodel.robots.parameters import available_parameter_sets
 
 __all__ = ["sample_inputs", "compare", "probe", "edge_probes", "row_args"]

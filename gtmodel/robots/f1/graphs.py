@@ -25,7 +25,7 @@ from gtmodel.robots.f1.layout import (
     START_SUBSTEPS,
     _get,
 )
-from gtmodel.robots.kinematics import fk_expression, ik_expression
+from gtmodel.robots.kinematic_expressions import fk_expression, ik_expression
 
 __all__ = ["F1Graphs"]
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from gtmodel._geometry import zyz_to_rotation
 from gtmodel.errors import InputError
-from gtmodel.robots.kinematics import configuration_signs, fk_expression
+from gtmodel.robots.kinematic_expressions import configuration_signs, fk_expression
 from gtmodel.robots.six_link.layout import (
     _ARM_OF_LINK,
     _EULER_AT_REFERENCE,
@@ -128,7 +128,7 @@ class SixLinkGraphs:
         ----------
         configuration : int or sequence of int, optional
             IK configuration 0-7 or three root signs (one per arm, shared by its links),
-            see :func:`gtmodel.robots.kinematics.configuration_signs`.
+            see :func:`gtmodel.robots.kinematic_expressions.configuration_signs`.
 
         Returns
         -------
@@ -169,7 +169,7 @@ class SixLinkGraphs:
             IK configuration of ``f_ik`` (see :meth:`ik_links_function`).
         solution : {1, -1}, optional
             FK branch of the trilateration start (see
-            :func:`gtmodel.robots.kinematics.fk_expression`).
+            :func:`gtmodel.robots.kinematic_expressions.fk_expression`).
         parametric : bool, optional
             If True the parameter vector is a second input ``p``; otherwise the current
             values are embedded as constants.

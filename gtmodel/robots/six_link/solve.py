@@ -9,7 +9,7 @@ import numpy as np
 
 from gtmodel._arrays import as_rotations, as_rows
 from gtmodel.errors import ConvergenceError, InputError, UnreachablePoseError
-from gtmodel.robots.kinematics import configuration_signs
+from gtmodel.robots.kinematic_expressions import configuration_signs
 from gtmodel.robots.six_link.layout import (
     _ARM_OF_LINK,
     _ASSEMBLY_TOLERANCE,
@@ -139,7 +139,7 @@ class SixLinkSolvers:
         configuration : int or sequence of int, optional
             IK configuration of ``f_ik`` (see :meth:`ik_links`).
         solution : {1, -1}, optional
-            FK branch of the start (see :func:`gtmodel.robots.kinematics.fk_expression`).
+            FK branch of the start (see :func:`gtmodel.robots.kinematic_expressions.fk_expression`).
         max_iter : int, optional
             Newton iteration limit (default :data:`FK_MAX_ITER`).
 

@@ -15,12 +15,8 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel._arrays import as_rows
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, SingularConfigurationError
-from gtmodel.robots.kinematics import (
-    SINGULARITY_TOLERANCE,
-    GantryTau3Kinematics,
-    configuration_signs,
-    ik_expression,
-)
+from gtmodel.robots.kinematic_expressions import configuration_signs, ik_expression
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, GantryTau3Kinematics
 from gtmodel.robots.mapped import MappedFunction as _Mapped
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.robots.stiffness.expressions import (

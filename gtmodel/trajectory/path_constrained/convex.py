@@ -18,7 +18,8 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel.errors import InputError, SingularConfigurationError, SolverError
 from gtmodel.modeling.ocp.result import normalize_ipopt_status
 from gtmodel.robots.dynamics import GantryTau3Dynamics
-from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE, configuration_signs
+from gtmodel.robots.kinematic_expressions import configuration_signs
+from gtmodel.robots.kinematics import SINGULARITY_TOLERANCE
 from gtmodel.robots.parameters import RobotParameters
 from gtmodel.status import Status
 from gtmodel.trajectory.path import Path
@@ -53,7 +54,7 @@ class PathConstrainedProblem:
         are then checked along the path). A dynamics object with a smooth friction form is
         replaced by the same model with the exact Coulomb sign (see the module docstring).
     configuration : int or sequence of int, optional
-        IK configuration (see :func:`gtmodel.robots.kinematics.configuration_signs`).
+        IK configuration (see :func:`gtmodel.robots.kinematic_expressions.configuration_signs`).
     viscous_friction : bool, optional
         Include the viscous friction ``f_v q_dot`` of the model (default True); False drops
         it (Coulomb friction and the rigid-body terms remain), e.g. to compare with solvers
