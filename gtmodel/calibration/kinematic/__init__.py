@@ -6,7 +6,9 @@ alignment), :mod:`~gtmodel.calibration.kinematic.data` (measurement checks),
 :mod:`~gtmodel.calibration.kinematic.residuals` (CasADi residual/Jacobian graphs and
 IPOPT NLPs of a group of arms), :mod:`~gtmodel.calibration.kinematic.lsq` (MINPACK
 solve and Gauss-Newton polishing of a group), :mod:`~gtmodel.calibration.kinematic.problem`
-(:class:`CalibrationProblem`), :mod:`~gtmodel.calibration.kinematic.result` (results) and
+(:class:`CalibrationProblem`), :mod:`~gtmodel.calibration.kinematic.start` (what a solve
+does before solving: caches per data set, the frame alignment guarded by the cost),
+:mod:`~gtmodel.calibration.kinematic.result` (results) and
 :mod:`~gtmodel.calibration.kinematic.shortcuts` (:func:`calibrate`,
 :func:`analyze_identifiability` with a cache of problems).
 
@@ -116,7 +118,6 @@ from gtmodel.calibration.kinematic.alignment import COLLINEAR_TOLERANCE, align_m
 from gtmodel.calibration.kinematic.shortcuts import PROBLEM_CACHE_SIZE, analyze_identifiability, calibrate
 from gtmodel.calibration.kinematic.problem import (
     DEFAULT_SOLVER,
-    FK_CACHE_SIZE,
     LSQ_TOLERANCE,
     MAX_ITER,
     MAX_REANCHOR,
@@ -129,6 +130,7 @@ from gtmodel.calibration.kinematic.problem import (
 from gtmodel.calibration.kinematic.residuals import CHUNK_SIZE, IPOPT_TOLERANCE
 from gtmodel.calibration.kinematic.result import CalibrationResult, GroupResult
 from gtmodel.calibration.kinematic.selection import ParameterSelection
+from gtmodel.calibration.kinematic.start import FK_CACHE_SIZE
 
 __all__ = [
     "ParameterSelection",
