@@ -10,9 +10,49 @@ public names is first used; ``from gtmodel.problems import load_problem`` works 
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import sys
+from types import ModuleType
 from typing import Any, Callable, Mapping
 
-__all__ = ["lazy_exports"]
+__all__ = ["lazy_exports", "lazy_module"]
+
+
+def lazy_module(name: str) -> ModuleType:
+    """A module that is imported when one of its attributes is first used.
+
+    The standard library's :class:`importlib.util.LazyLoader` (the recipe of the
+    :mod:`importlib` documentation): python-control, for one, imports matplotlib.pyplot and
+    SciPy's signal and stats packages (~2 s of CPU), which a model that never builds a
+    transfer function should not pay for. A module already imported is returned as it is.
+
+    Parameters
+    ----------
+    name : str
+        The module's absolute name, e.g. ``"control"``.
+
+    Returns
+    -------
+    module
+        The module (registered in :data:`sys.modules`), loaded on first attribute access.
+
+    Raises
+    ------
+    ModuleNotFoundError
+        No module of that name is installed.
+    """
+    module = sys.modules.get(name)
+    if module is not None:
+        return module
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.loader is None:
+        raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+    loader = importlib.util.LazyLoader(spec.loader)
+    spec.loader = loader
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    loader.exec_module(module)
+    return module
 
 
 def lazy_exports(package: str, exports: Mapping[str, str]) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:

@@ -13,9 +13,12 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import pandas as pd
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError
+
+#: pandas, imported on first use (~0.5 s of CPU, only for DataFrames).
+pd = lazy_module("pandas")
 
 __all__ = ["FlatDAE", "SimulationResult", "expand_names"]
 

@@ -35,14 +35,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-import control
 import numpy as np
 import scipy.optimize
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_times
 from gtmodel.defaults import LOOP_PERIOD_S, defaults
 from gtmodel.errors import InputError
 from gtmodel.robots.parameters import _read_data_file, _Reader
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = [
     "ActuatorParameters",

@@ -27,15 +27,19 @@ import logging
 from dataclasses import dataclass
 from typing import Any
 
-import control
 import numpy as np
 import scipy.optimize
-import scipy.signal
 
+from gtmodel._lazy import lazy_module
 from gtmodel._docstrings import fill_doc
 from gtmodel._arrays import as_rows, positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
+#: SciPy's signal package, imported on first use (~1 s of CPU with the scipy.stats it imports).
+signal = lazy_module("scipy.signal")
 
 __all__ = [
     "DIRECTIONS",
@@ -300,8 +304,8 @@ def simulate_single_mode(m: Any, c: Any, k: Any, t: Any, F: Any) -> np.ndarray:
         raise InputError("F: non-finite value")
     out = np.zeros((tt.size, 3))
     for i in range(3):
-        num, den, _ = scipy.signal.cont2discrete(([1.0], [pars[0][i], pars[1][i], pars[2][i]]), float(dt[0]), method="zoh")
-        out[:, i] = scipy.signal.lfilter(np.asarray(num, dtype=float).reshape(-1), den, FF[:, i])
+        num, den, _ = signal.cont2discrete(([1.0], [pars[0][i], pars[1][i], pars[2][i]]), float(dt[0]), method="zoh")
+        out[:, i] = signal.lfilter(np.asarray(num, dtype=float).reshape(-1), den, FF[:, i])
     return out
 
 

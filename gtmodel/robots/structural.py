@@ -43,12 +43,15 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import control
 import numpy as np
 import scipy.linalg
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.actuator_dynamics import DynamicsModels, load_dynamics_models
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = ["Modes", "PhysicalModel", "CONVENTIONS"]
 

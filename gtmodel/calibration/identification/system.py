@@ -49,16 +49,19 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import control
 import numpy as np
 import scipy.linalg
 import scipy.signal
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_signal, as_times
 from gtmodel.errors import InputError, ModelError
 from gtmodel.robots.actuator_dynamics import actuator_tf
 from gtmodel.robots.structural import CONVENTIONS, PhysicalModel
 from gtmodel.status import Status, StatusResult
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = [
     "ActuatorIdentification",

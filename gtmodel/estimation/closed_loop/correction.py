@@ -61,17 +61,20 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
-import control
 import numpy as np
 import scipy.optimize
 import scipy.signal
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_rows, positive_float, positive_int
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamic_stiffness import DIRECTIONS, DynamicStiffnessGP, ModeFitResult, single_mode_tf
 from gtmodel.robots.serial import SerialArm
 from gtmodel.status import Status
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = [
     "CYCLE_TIME_S",

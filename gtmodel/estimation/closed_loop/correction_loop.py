@@ -38,10 +38,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
-import control
 import numpy as np
 from threadpoolctl import threadpool_limits  # a dependency of scikit-learn
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_vector, positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.correction import (
@@ -58,6 +58,9 @@ from gtmodel.estimation.closed_loop.correction import (
 from gtmodel.robots.dynamic_stiffness import DIRECTIONS, ModeFitResult
 from gtmodel.robots.serial import SerialArm
 from gtmodel.status import Status, StatusResult
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = [
     "FEED_RATE_M_S",

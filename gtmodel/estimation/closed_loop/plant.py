@@ -54,9 +54,9 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
-import control
 import numpy as np
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_rows, positive_float, positive_int
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
@@ -64,6 +64,9 @@ from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_mode
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.structural import Modes, PhysicalModel
 from gtmodel.status import Status, StatusResult
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = ["DT", "STANDARD_GRAVITY", "MIN_FREQUENCY_HZ", "ToolStructure", "SensorModel", "TrackingResponse", "TrackingPlant"]
 

@@ -76,12 +76,15 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
-import control
 import numpy as np
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_array, as_per_axis, as_rotation, positive_float, positive_int
 from gtmodel._geometry import quat_exp, quat_mul, quaternion_to_rotation
 from gtmodel.errors import InputError
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = [
     "IMU_TRANSLATION_M",

@@ -78,16 +78,19 @@ import math
 from typing import Any
 
 import casadi as ca
-import control
 import numpy as np
 import scipy.linalg
 import scipy.optimize
 
+from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_array, as_finite, as_per_axis, as_signal, positive_float, positive_int
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.filters.end_effector import EndEffectorModel, constant_acceleration
 from gtmodel.estimation.filters.gaussian import FilterRun, _GaussianFilter
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = [
     "StationaryKalman",

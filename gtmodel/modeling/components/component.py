@@ -60,13 +60,16 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import pandas as pd
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import GtModelError, InputError, ModelError
 from gtmodel.modeling.components.connectors import Connector
 from gtmodel.modeling.components.declarations import Input, Parameter, State, Structural, Variable, _ComponentBase, _declarations
 from gtmodel.modeling.components.flattening import _ACTIVE, _Flattening
 from gtmodel.modeling.simulation.model import Model
+
+#: pandas, imported on first use (~0.5 s of CPU, only for DataFrames).
+pd = lazy_module("pandas")
 
 __all__ = ["Parameter", "Variable", "State", "Input", "Structural", "Component", "connect"]
 

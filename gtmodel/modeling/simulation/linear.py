@@ -19,13 +19,16 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
-import control
 import numpy as np
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _vector_value
 from gtmodel.modeling.structure.index_reduction import structural_simplify
 from gtmodel.modeling.simulation.model import Model
+
+#: python-control, imported on first use (it imports matplotlib.pyplot: ~2 s of CPU).
+control = lazy_module("control")
 
 __all__ = ["Linearization", "linearize"]
 
