@@ -9,7 +9,10 @@ import numpy as np
 
 from gtmodel.report._figure import new_figure, save
 
-__all__ = ["plot_tcp_path", "plot_forces", "plot_overlay", "plot_path_profile"]
+__all__ = ["plot_tcp_path", "plot_forces", "plot_overlay", "plot_path_profile", "OVERLAY_FILES"]
+
+#: The files :func:`plot_overlay` writes: the cart forces and the TCP paths of every case.
+OVERLAY_FILES = ("overlay_forces.png", "overlay_tcp.png")
 
 
 def plot_tcp_path(traj: Mapping[str, np.ndarray], start, end, path: str | Path, title: str = "") -> Any:
@@ -117,7 +120,7 @@ def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | P
     axes[0].legend(fontsize="small", loc="upper right")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle("cart forces")
-    forces = save(fig, out_dir / "overlay_forces.png")
+    forces = save(fig, out_dir / OVERLAY_FILES[0])
 
     fig, axes = new_figure(1, 3, size="plot.wide")
     for label, tr in trajs.items():
@@ -130,7 +133,7 @@ def plot_overlay(trajs: Mapping[str, Mapping[str, np.ndarray]], out_dir: str | P
         ax.grid(True)
     axes[0].legend(fontsize="small")
     fig.suptitle("TCP paths")
-    return [forces, save(fig, out_dir / "overlay_tcp.png")]
+    return [forces, save(fig, out_dir / OVERLAY_FILES[1])]
 
 
 def plot_path_profile(solution, path: str | Path, title: str = "") -> Any:

@@ -33,7 +33,7 @@ from gtmodel.problems.kinds.motion_common import (
 )
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.schema import MAX_FORCE_N, MAX_LENGTH_M, Flag, ProblemSchema, Section, choice, integer, number, vector
-from gtmodel.report.trajectory import plot_forces, plot_overlay, plot_path_profile, plot_tcp_path
+from gtmodel.report.trajectory import OVERLAY_FILES, plot_forces, plot_overlay, plot_path_profile, plot_tcp_path
 from gtmodel.trajectory import (
     PathConstraints,
     PathSolution,
@@ -370,4 +370,7 @@ class PathConstrainedKind(ProblemKind):
             ``overlay_forces.png``, ``overlay_tcp.png`` (none without solutions).
         """
         trajs = {label: path_trajectory_columns(sol) for label, sol in solutions.items()}
-        return [p.name for p in plot_overlay(trajs, out)] if trajs else []
+        if not trajs:
+            return []
+        plot_overlay(trajs, out)
+        return list(OVERLAY_FILES)

@@ -40,7 +40,7 @@ from gtmodel.problems.schema import (
     number,
     vector,
 )
-from gtmodel.report.trajectory import plot_forces, plot_overlay, plot_tcp_path
+from gtmodel.report.trajectory import OVERLAY_FILES, plot_forces, plot_overlay, plot_tcp_path
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution
 from gtmodel.trajectory.settings import Collocation, SolverSettings
@@ -278,7 +278,10 @@ class PointToPointKind(ProblemKind):
         list of str
         """
         trajs = {label: sol.trajectory() for label, sol in solutions.items()}
-        return [p.name for p in plot_overlay(trajs, out)] if trajs else []
+        if not trajs:
+            return []
+        plot_overlay(trajs, out)
+        return list(OVERLAY_FILES)
 
 
 #: The file field of each :class:`~gtmodel.trajectory.PointToPoint` argument its checks name.
