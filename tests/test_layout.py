@@ -7,6 +7,7 @@ standard library's ``ast`` on every module of gtmodel/.
 from __future__ import annotations
 
 import ast
+import importlib.util
 import shutil
 import subprocess
 import sys
@@ -143,3 +144,26 @@ def test_one_shot_argvalues_are_found():
         "@pytest.mark.parametrize('x', [1, 2])\ndef v(x): pass\n"
     )
     assert _one_shot_argvalues(ast.parse(source)) == [1, 3]
+
+
+def _make_layout():
+    spec = importlib.util.spec_from_file_location("make_layout", REPO / "docs" / "make_layout.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_layout_page_lists_every_module_with_its_docstring():
+    """docs/layout.md's module table is what docs/make_layout.py builds from the code now."""
+    make_layout = _make_layout()
+    text = make_layout.LAYOUT.read_text(encoding="utf-8")
+    assert make_layout.updated(text) == text, "docs/layout.md is out of date: run python docs/make_layout.py"
+
+
+def test_layout_table_names_a_new_module(tmp_path):
+    """The check above can fail: a table without one module differs from the built one."""
+    make_layout = _make_layout()
+    table = make_layout.module_table()
+    assert "`gtmodel/defaults.py`" in table
+    stale = table.replace(next(ln for ln in table.splitlines() if "`gtmodel/defaults.py`" in ln) + "\n", "")
+    assert make_layout.updated(stale) != stale
