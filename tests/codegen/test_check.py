@@ -66,7 +66,7 @@ def test_check_passes_on_10000_random_reachable_poses(built, robot):
     assert lines[-1] == "PASSED"
 
 
-@pytest.mark.parametrize("robot", ["D1_six_link", "F1"])
+@pytest.mark.parametrize("robot", ["D1_six_link", pytest.param("F1", marks=pytest.mark.slow)])  # F1: ~20 s
 def test_newton_functions_match_python(built, robot):
     """Six-link FK (eq. 4.15) and F1 IK/FK (eqs. 4.27-4.33) against the Python Newton solvers.
 

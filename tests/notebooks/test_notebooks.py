@@ -21,6 +21,10 @@ REPO = Path(__file__).resolve().parents[2]
 NOTEBOOKS_DIR = REPO / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOKS_DIR.glob("*.ipynb"))
 IDS = [p.name for p in NOTEBOOKS]
+#: Executed in the default run (the own-model story of README, ~10 s); the others take 8-30 s
+#: each and run with the tests marked slow (``python -m pytest -m slow``, also in CI).
+DEFAULT_RUN = {"10_compliant_drive_axis_from_components.ipynb"}
+EXECUTE = [pytest.param(p, id=p.name, marks=() if p.name in DEFAULT_RUN else pytest.mark.slow) for p in NOTEBOOKS]
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
@@ -52,7 +56,7 @@ def test_notebook_asserts_a_result(path: Path) -> None:
     assert n > 0, f"{path.name}: no assert statement in any code cell; check a key figure of the notebook"
 
 
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=IDS)
+@pytest.mark.parametrize("path", EXECUTE)
 def test_notebook_executes(path: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("MPLBACKEND", "Agg")  # inherited by the kernel process
     monkeypatch.chdir(tmp_path)

@@ -196,7 +196,7 @@ def test_unstable_design_diverges_in_simulation(cutoff, gamma, delta):
     assert res.iterations < 30
 
 
-@pytest.mark.parametrize("cutoff", [10.0, None])
+@pytest.mark.parametrize("cutoff", [pytest.param(10.0, marks=pytest.mark.slow), None])  # the Q filter case: ~9 s
 def test_monotone_design_never_increases_the_error(cutoff):
     """A design the criterion (7.16) calls monotone: the 2-norm error never grows from trial to trial (simulation)."""
     Q, L = _case1(cutoff)

@@ -76,6 +76,7 @@ def cluster(tmp_path):
         log.close()
 
 
+@pytest.mark.slow  # ~10 s: a Dask cluster, a worker killed mid-case
 def test_a_killed_worker_loses_nothing_and_duplicates_nothing(cluster, tmp_path):
     address, workers = cluster
     n = 10
@@ -106,6 +107,7 @@ def test_a_killed_worker_loses_nothing_and_duplicates_nothing(cluster, tmp_path)
     assert folders == sorted(table["folder"].str.removeprefix("cases/"))  # one folder per case, no partial ones left
 
 
+@pytest.mark.slow  # ~6 s: every retry starts a worker again
 def test_a_case_that_kills_every_worker_is_a_row_after_bounded_retries(tmp_path, monkeypatch):
     """Dask reschedules it after its worker died, at most ALLOWED_FAILURES times (here 1);
     then the case is an internal_error row and the study ends (exit 3), nothing hangs."""

@@ -31,7 +31,7 @@ def _finished_folders(out) -> list:
     return [p for p in cases.iterdir() if (p / "summary.json").exists()] if cases.exists() else []
 
 
-@pytest.mark.parametrize("workers", ["1", "2"], ids=["in_process", "local_cluster"])
+@pytest.mark.parametrize("workers", ["1", pytest.param("2", marks=pytest.mark.slow)], ids=["in_process", "local_cluster"])  # the cluster: ~9 s
 def test_ctrl_c_stops_with_130_keeps_finished_cases_and_a_rerun_completes_the_rest(tmp_path, workers):
     n = 14
     study = write_study(tmp_path, grid_design(n, grid=2000))
