@@ -51,11 +51,17 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["LOOP_PERIOD_S", "defaults", "reset_defaults", "get"]
+__all__ = ["LOOP_PERIOD_S", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "defaults", "reset_defaults", "get"]
 
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
 LOOP_PERIOD_S = 0.004
+#: The selectable forms of the sign function of the friction model
+#: (:mod:`gtmodel.robots.friction`; here so that problem schemas name them without
+#: importing the dynamics).
+FRICTION_FORMS = ("exact", "tanh", "piecewise")
+#: Default velocity width [m/s] of the smooth ("tanh") and piecewise-linear friction forms.
+DEFAULT_FRICTION_WIDTH = 0.01
 
 _FACTORY: dict[str, Any] = {
     "loop.period": LOOP_PERIOD_S,
