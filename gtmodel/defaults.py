@@ -51,7 +51,7 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["LOOP_PERIOD_S", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "defaults", "reset_defaults", "get"]
+__all__ = ["LOOP_PERIOD_S", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "defaults", "reset_defaults", "get"]
 
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
@@ -62,6 +62,10 @@ LOOP_PERIOD_S = 0.004
 FRICTION_FORMS = ("exact", "tanh", "piecewise")
 #: Default velocity width [m/s] of the smooth ("tanh") and piecewise-linear friction forms.
 DEFAULT_FRICTION_WIDTH = 0.01
+#: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
+#: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection
+#: solved by collocation (Dressler (2012), ch. 3.5); :mod:`gtmodel.trajectory.path_constrained`.
+PATH_METHODS = ("convex", "collocation")
 
 _FACTORY: dict[str, Any] = {
     "loop.period": LOOP_PERIOD_S,

@@ -45,6 +45,7 @@ _CLASSES: dict[str, str] = {
 #: ``schema`` of its (imported) kind.
 _SCHEMAS: dict[str, str] = {
     "point_to_point": "gtmodel.problems.kinds.schemas.point_to_point:PointToPointFile",
+    "path_constrained": "gtmodel.problems.kinds.schemas.path_constrained:PathConstrainedFile",
 }
 
 

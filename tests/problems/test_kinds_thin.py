@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import tomllib
 
 import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.problems.base import ProblemKind
-from gtmodel.problems.registry import KINDS
+from gtmodel.problems.registry import _SCHEMAS, KINDS, get_schema
 from gtmodel.problems.run import load_problem
 from gtmodel.status import Status
 from gtmodel.trajectory import PointToPoint
@@ -81,3 +84,20 @@ def test_settings_name_the_bad_value(build, match):
 def test_point_to_point_checks_its_invariants_once_at_construction():
     with pytest.raises(InputError, match="force_limit: .* cannot hold the robot at rest at the start pose"):
         PointToPoint("L1", start=[-0.2, 2.75, -0.4], end=[0.2, 3.0, -0.6], force_limit=[100, 100, 100])
+
+
+@pytest.mark.parametrize("name", list(KINDS))
+def test_the_light_schema_of_a_kind_is_its_schema(name):
+    """The registry validates a file against the kind's schema without importing the kind
+    (issue 24, item 7): the light module's class is the kind's ``schema``, and it imports
+    no solver (checked on sys.modules in a fresh process)."""
+    assert get_schema(name) is KINDS[name].schema
+    target = _SCHEMAS.get(name)
+    if target is None:
+        return
+    module = target.split(":")[0]
+    script = (f"import sys, {module}\n"
+              "print(sorted(m for m in ('numpy', 'casadi', 'scipy', 'control', 'matplotlib', 'pandas') if m in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                          env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
+    assert proc.stdout.strip() == "[]", proc.stdout + proc.stderr
