@@ -56,11 +56,11 @@ __all__ = ["LOOP_PERIOD_S", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_ME
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
 LOOP_PERIOD_S = 0.004
-#: The selectable forms of the sign function of the friction model
-#: (:mod:`gtmodel.robots.friction`; here so that problem schemas name them without
-#: importing the dynamics).
+#: The selectable forms of the sign function of the friction model, and the default
+#: velocity width [m/s] of the smooth ("tanh") and piecewise-linear forms: those of
+#: :mod:`gtmodel.robots.friction` (equal, checked by the tests), here so that problem
+#: schemas name them without importing the dynamics.
 FRICTION_FORMS = ("exact", "tanh", "piecewise")
-#: Default velocity width [m/s] of the smooth ("tanh") and piecewise-linear friction forms.
 DEFAULT_FRICTION_WIDTH = 0.01
 #: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
 #: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection

@@ -46,6 +46,7 @@ _CLASSES: dict[str, str] = {
 _SCHEMAS: dict[str, str] = {
     "point_to_point": "gtmodel.problems.kinds.schemas.point_to_point:PointToPointFile",
     "path_constrained": "gtmodel.problems.kinds.schemas.path_constrained:PathConstrainedFile",
+    "optimal_control": "gtmodel.problems.kinds.schemas.optimal_control:OptimalControlFile",
 }
 
 

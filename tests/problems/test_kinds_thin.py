@@ -101,3 +101,11 @@ def test_the_light_schema_of_a_kind_is_its_schema(name):
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
                           env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
     assert proc.stdout.strip() == "[]", proc.stdout + proc.stderr
+
+
+def test_the_light_constants_are_those_of_the_domain():
+    """Constants the light schemas name, equal to the domain's (gtmodel.defaults)."""
+    from gtmodel import defaults
+    from gtmodel.robots import friction
+
+    assert (defaults.FRICTION_FORMS, defaults.DEFAULT_FRICTION_WIDTH) == (friction.FRICTION_FORMS, friction.DEFAULT_FRICTION_WIDTH)
