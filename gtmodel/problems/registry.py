@@ -47,6 +47,7 @@ _SCHEMAS: dict[str, str] = {
     "point_to_point": "gtmodel.problems.kinds.schemas.point_to_point:PointToPointFile",
     "path_constrained": "gtmodel.problems.kinds.schemas.path_constrained:PathConstrainedFile",
     "optimal_control": "gtmodel.problems.kinds.schemas.optimal_control:OptimalControlFile",
+    "tracking": "gtmodel.problems.kinds.schemas.tracking:TrackingFile",
 }
 
 

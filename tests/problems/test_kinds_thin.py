@@ -108,4 +108,7 @@ def test_the_light_constants_are_those_of_the_domain():
     from gtmodel import defaults
     from gtmodel.robots import friction
 
+    from gtmodel.estimation.closed_loop import plant
+
     assert (defaults.FRICTION_FORMS, defaults.DEFAULT_FRICTION_WIDTH) == (friction.FRICTION_FORMS, friction.DEFAULT_FRICTION_WIDTH)
+    assert (defaults.STANDARD_GRAVITY, defaults.LOOP_PERIOD_S) == (plant.STANDARD_GRAVITY, plant.DT)
