@@ -112,3 +112,7 @@ def test_the_light_constants_are_those_of_the_domain():
 
     assert (defaults.FRICTION_FORMS, defaults.DEFAULT_FRICTION_WIDTH) == (friction.FRICTION_FORMS, friction.DEFAULT_FRICTION_WIDTH)
     assert (defaults.STANDARD_GRAVITY, defaults.LOOP_PERIOD_S) == (plant.STANDARD_GRAVITY, plant.DT)
+    from gtmodel.calibration.identification import VARIANTS
+    from gtmodel.problems.kinds.schemas.dynamic_identification import VARIANT_NAMES
+
+    assert VARIANT_NAMES == tuple(VARIANTS)
