@@ -48,6 +48,7 @@ _SCHEMAS: dict[str, str] = {
     "path_constrained": "gtmodel.problems.kinds.schemas.path_constrained:PathConstrainedFile",
     "optimal_control": "gtmodel.problems.kinds.schemas.optimal_control:OptimalControlFile",
     "tracking": "gtmodel.problems.kinds.schemas.tracking:TrackingFile",
+    "calibration": "gtmodel.problems.kinds.schemas.calibration:CalibrationFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
 }
 

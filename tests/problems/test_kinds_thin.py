@@ -116,3 +116,7 @@ def test_the_light_constants_are_those_of_the_domain():
     from gtmodel.problems.kinds.schemas.dynamic_identification import VARIANT_NAMES
 
     assert VARIANT_NAMES == tuple(VARIANTS)
+    from gtmodel.calibration.kinematic import SOLVERS
+    from gtmodel.problems.kinds.schemas.calibration import LSQ_SOLVERS
+
+    assert LSQ_SOLVERS == tuple(SOLVERS)
