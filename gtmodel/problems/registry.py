@@ -49,6 +49,7 @@ _SCHEMAS: dict[str, str] = {
     "optimal_control": "gtmodel.problems.kinds.schemas.optimal_control:OptimalControlFile",
     "tracking": "gtmodel.problems.kinds.schemas.tracking:TrackingFile",
     "calibration": "gtmodel.problems.kinds.schemas.calibration:CalibrationFile",
+    "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
 }
 

@@ -120,3 +120,7 @@ def test_the_light_constants_are_those_of_the_domain():
     from gtmodel.problems.kinds.schemas.calibration import LSQ_SOLVERS
 
     assert LSQ_SOLVERS == tuple(SOLVERS)
+    from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES
+    from gtmodel.problems.kinds.schemas.elasto_geometric_calibration import COMPLIANCE_NAME_LIST
+
+    assert COMPLIANCE_NAME_LIST == tuple(COMPLIANCE_NAMES)
