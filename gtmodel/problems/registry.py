@@ -50,6 +50,7 @@ _SCHEMAS: dict[str, str] = {
     "tracking": "gtmodel.problems.kinds.schemas.tracking:TrackingFile",
     "calibration": "gtmodel.problems.kinds.schemas.calibration:CalibrationFile",
     "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
+    "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
 }
 

@@ -124,3 +124,8 @@ def test_the_light_constants_are_those_of_the_domain():
     from gtmodel.problems.kinds.schemas.elasto_geometric_calibration import COMPLIANCE_NAME_LIST
 
     assert COMPLIANCE_NAME_LIST == tuple(COMPLIANCE_NAMES)
+    from gtmodel.calibration import joint_stiffness
+    from gtmodel.problems.kinds.schemas import joint_stiffness_calibration as js
+
+    assert list(js.TABLE_2_DPP_K_THETA) == joint_stiffness.TABLE_2_K_THETA["DPP"].tolist()
+    assert js.TABLE_2_ROTATION_ONLY_STIFFNESS == joint_stiffness.TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS
