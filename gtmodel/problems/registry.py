@@ -48,6 +48,7 @@ _SCHEMAS: dict[str, str] = {
     "path_constrained": "gtmodel.problems.kinds.schemas.path_constrained:PathConstrainedFile",
     "optimal_control": "gtmodel.problems.kinds.schemas.optimal_control:OptimalControlFile",
     "tracking": "gtmodel.problems.kinds.schemas.tracking:TrackingFile",
+    "ilc": "gtmodel.problems.kinds.schemas.ilc:ILCFile",
     "calibration": "gtmodel.problems.kinds.schemas.calibration:CalibrationFile",
     "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
     "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",

@@ -129,3 +129,10 @@ def test_the_light_constants_are_those_of_the_domain():
 
     assert list(js.TABLE_2_DPP_K_THETA) == joint_stiffness.TABLE_2_K_THETA["DPP"].tolist()
     assert js.TABLE_2_ROTATION_ONLY_STIFFNESS == joint_stiffness.TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS
+    from gtmodel import estimation
+    from gtmodel.estimation.filters import complementary, kalman
+    from gtmodel.problems.kinds.schemas import ilc
+
+    assert (ilc.ILC_SIGNALS, ilc.ILC_REQUIREMENTS) == (tuple(estimation.SIGNALS), tuple(estimation.REQUIREMENTS))
+    assert (ilc.MIN_CUTOFF_FRACTION, ilc.KALMAN_POSITION_NOISE, ilc.KALMAN_JERK_NOISE) == (
+        complementary.MIN_CUTOFF_FRACTION, tuple(kalman.DEFAULT_POSITION_NOISE), tuple(kalman.DEFAULT_JERK_NOISE))
