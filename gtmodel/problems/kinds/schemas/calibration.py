@@ -15,19 +15,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, matrix, number
 
-__all__ = [
-    "CalibrationFile",
-    "MODEL_TYPES",
-    "MAX_PERTURBATION_M",
-    "MAX_RANDOM_POSES",
-    "LSQ_SOLVERS",
-    "StringList",
-    "DataSection",
-    "TruthSection",
-    "ModelSection",
-    "CalibrationSection",
-    "PoseSelectionSection",
-]
+__all__ = ["CalibrationFile", "MODEL_TYPES", "MAX_PERTURBATION_M", "MAX_RANDOM_POSES", "LSQ_SOLVERS", "StringList"]
 
 #: The least-squares solvers of a kinematic calibration, those of
 #: :data:`gtmodel.calibration.kinematic.SOLVERS` (equal, checked by the tests; here so that

@@ -17,19 +17,7 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.schema import MAX_FORCE_N, MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = [
-    "DynamicIdentificationFile",
-    "VARIANT_NAMES",
-    "MAX_DURATION_S",
-    "MAX_SPEED",
-    "MAX_ACCELERATION",
-    "RobotSection",
-    "DataSection",
-    "TruthSection",
-    "ExcitationSection",
-    "FilterSection",
-    "IdentificationSection",
-]
+__all__ = ["DynamicIdentificationFile", "VARIANT_NAMES", "MAX_DURATION_S", "MAX_SPEED", "MAX_ACCELERATION"]
 
 #: Names of the Table 6.3 variants, those of :data:`gtmodel.calibration.identification.VARIANTS`
 #: (equal, checked by the tests; here so that a file is validated without the identification).

@@ -15,16 +15,7 @@ from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.calibration import LSQ_SOLVERS, StringList
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = [
-    "ElastoGeometricFile",
-    "MAX_PAYLOAD_KG",
-    "MAX_PAYLOADS",
-    "COMPLIANCE_NAME_LIST",
-    "TruthSection",
-    "StartSection",
-    "CalibrationSection",
-    "StiffnessMapSection",
-]
+__all__ = ["ElastoGeometricFile", "MAX_PAYLOAD_KG", "MAX_PAYLOADS", "COMPLIANCE_NAME_LIST"]
 
 #: The compliance names, those of :data:`gtmodel.calibration.elasto_geometric.COMPLIANCE_NAMES`
 #: (equal, checked by the tests; here so that a file is validated without the calibration).

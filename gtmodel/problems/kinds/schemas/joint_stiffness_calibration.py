@@ -23,11 +23,6 @@ __all__ = [
     "MAX_JOINT_STIFFNESS",
     "TABLE_2_DPP_K_THETA",
     "TABLE_2_ROTATION_ONLY_STIFFNESS",
-    "ArmSection",
-    "TruthSection",
-    "NoiseSection",
-    "CalibrationSection",
-    "DataSection",
 ]
 
 #: Defaults of ``[truth]``, those of :mod:`gtmodel.calibration.joint_stiffness` (equal,

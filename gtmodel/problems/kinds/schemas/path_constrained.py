@@ -17,15 +17,7 @@ from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, MotionSection, RobotReference, SolverSection
 from gtmodel.problems.schema import MAX_FORCE_N, MAX_LENGTH_M, Flag, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = [
-    "MAX_GRID_POINTS",
-    "MAX_VIA_POINTS",
-    "PathConstrainedFile",
-    "RobotSection",
-    "PathSection",
-    "LimitsSection",
-    "MethodSection",
-]
+__all__ = ["MAX_GRID_POINTS", "MAX_VIA_POINTS", "PathConstrainedFile"]
 
 #: Most grid points of the convex method (20000 solve in about a second, 250 MB).
 MAX_GRID_POINTS = 20000

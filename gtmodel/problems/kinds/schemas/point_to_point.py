@@ -16,7 +16,7 @@ from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, MotionSection, OcpSolverSection, RobotReference
 from gtmodel.problems.schema import MAX_FORCE_N, Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
 
-__all__ = ["PointToPointFile", "RobotSection", "LimitsSection", "FinalTimeSection", "OptimizationSection", "InitialGuessSection"]
+__all__ = ["PointToPointFile"]
 
 
 class RobotSection(RobotReference):

@@ -15,7 +15,7 @@ from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.closed_loop import RobotSection, SensorsSection, StructureSection
 from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, number
 
-__all__ = ["TrackingFile", "TrajectorySection", "MAX_SETTLE_S"]
+__all__ = ["TrackingFile", "MAX_SETTLE_S"]
 
 #: Longest accepted settling time [s].
 MAX_SETTLE_S = 60.0
