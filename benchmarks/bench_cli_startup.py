@@ -9,14 +9,16 @@ the console script's own work), its CPU time (user + system, of the child proces
 - ``schema_list``: ``gtmodel schema --list``;
 - ``missing_file``: ``gtmodel solve nope.toml`` (a mistyped path: exit 2, nothing written);
 - ``unknown_field``: ``gtmodel solve bad.toml`` with an unknown field in a copy of
-  ``problems/l1_time_optimal.toml`` (exit 2): this one loads the file's kind, and with it
-  its solvers' modules (CasADi, SciPy, python-control), so it is reported, not promised;
+  ``problems/l1_time_optimal.toml`` (exit 2, an ``invalid_input`` summary written);
+- ``wrong_type``: the same with a wrong type (``w = "zero"``, exit 2): both are reported
+  by the kind's light schema (:mod:`gtmodel.problems.kinds.schemas`) before the kind and
+  its solvers' modules (CasADi, SciPy, python-control) are imported;
 - the peers: ``python -c pass`` (the interpreter's own start) and ``python -c "import
   casadi"`` (the one library every solve needs).
 
 Printed: the minimum over ``--repeat`` runs of each (the least disturbed by other jobs on
 a shared machine), and each command's ratio to ``python -c pass`` and to ``import casadi``.
-The goal of issue 24: the first three well under 1 s of CPU. With ``--json`` the last line
+The goal of issue 24: the gtmodel commands well under 1 s of CPU. With ``--json`` the last line
 of stdout is one JSON object.
 """
 
@@ -54,7 +56,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench_cli_") as tmp:
         work = Path(tmp)
         bad = work / "bad.toml"
-        bad.write_text((REPO / "problems" / "l1_time_optimal.toml").read_text(encoding="utf-8") + "\nunknown_field = 1\n", encoding="utf-8")
+        base = (REPO / "problems" / "l1_time_optimal.toml").read_text(encoding="utf-8")
+        bad.write_text(base + "\nunknown_field = 1\n", encoding="utf-8")
+        mistyped = work / "mistyped.toml"
+        mistyped.write_text(base.replace("w = 0.0 ", 'w = "zero" ', 1), encoding="utf-8")
         commands = {
             "python_pass": ([py, "-c", "pass"], 0),
             "import_casadi": ([py, "-c", "import casadi"], 0),
@@ -62,6 +67,7 @@ def main() -> None:
             "schema_list": ([py, "-m", "gtmodel.cli", "schema", "--list"], 0),
             "missing_file": ([py, "-m", "gtmodel.cli", "solve", "nope.toml"], 2),
             "unknown_field": ([py, "-m", "gtmodel.cli", "solve", str(bad), "--out", str(work / "out"), "-q"], 2),
+            "wrong_type": ([py, "-m", "gtmodel.cli", "solve", str(mistyped), "--out", str(work / "out2"), "-q"], 2),
         }
         times: dict[str, list[float]] = {k: [] for k in commands}
         for _ in range(args.repeat):  # interleaved: a change of load hits every command alike

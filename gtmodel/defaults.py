@@ -51,11 +51,24 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["LOOP_PERIOD_S", "defaults", "reset_defaults", "get"]
+__all__ = ["LOOP_PERIOD_S", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "defaults", "reset_defaults", "get"]
 
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
 LOOP_PERIOD_S = 0.004
+#: The selectable forms of the sign function of the friction model, and the default
+#: velocity width [m/s] of the smooth ("tanh") and piecewise-linear forms: those of
+#: :mod:`gtmodel.robots.friction` (equal, checked by the tests), here so that problem
+#: schemas name them without importing the dynamics.
+FRICTION_FORMS = ("exact", "tanh", "piecewise")
+DEFAULT_FRICTION_WIDTH = 0.01
+#: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
+#: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection
+#: solved by collocation (Dressler (2012), ch. 3.5); :mod:`gtmodel.trajectory.path_constrained`.
+PATH_METHODS = ("convex", "collocation")
+#: Standard gravity [m/s^2] (that of :mod:`gtmodel.estimation.closed_loop.plant`, equal,
+#: checked by the tests; here for the problem schemas' defaults).
+STANDARD_GRAVITY = 9.80665
 
 _FACTORY: dict[str, Any] = {
     "loop.period": LOOP_PERIOD_S,

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 import tomllib
@@ -225,6 +226,29 @@ def test_fast_paths_of_the_command_import_no_heavy_library(tmp_path, argv):
     proc = subprocess.run([sys.executable, "-c", script, *argv], capture_output=True, text=True, cwd=tmp_path, timeout=120,
                           env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
     assert proc.stdout.splitlines()[-1] == "IMPORTED []", proc.stdout + proc.stderr
+
+
+#: Libraries a problem file with a bad field must not import: it is reported by its kind's
+#: light schema before the kind (its solvers) is imported (issue 24, item 7).
+SOLVER_STACK = ("casadi", "scipy", "control", "matplotlib", "pandas")
+
+
+@pytest.mark.parametrize("case", ["unknown_top_field", "unknown_field", "wrong_type"])
+def test_a_bad_field_is_reported_without_importing_the_solvers(tmp_path, case):
+    """``gtmodel solve`` on a file with an unknown field or a wrong type: exit 2, the usual
+    message and an ``invalid_input`` summary, from the schema alone (sys.modules of a fresh
+    process; benchmarks/bench_cli_startup.py measures the time)."""
+    edit, pattern = {c: (e, p) for c, e, p in BAD_PROBLEMS}[case]
+    f = tmp_path / "bad.toml"
+    f.write_text(edit(BASE.read_text()))
+    script = ("import sys\nfrom gtmodel.cli import main\ntry:\n    code = main(sys.argv[1:])\nexcept SystemExit as exc:\n    code = exc.code\n"
+              f"print('EXIT', code)\nprint('IMPORTED', sorted(m for m in {SOLVER_STACK!r} if m in sys.modules))\n")
+    proc = subprocess.run([sys.executable, "-c", script, "solve", str(f), "--out", str(tmp_path / "out"), "--quiet"], capture_output=True,
+                          text=True, cwd=tmp_path, timeout=120, env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
+    assert proc.stdout.splitlines()[-2:] == [f"EXIT {EXIT_BAD_INPUT}", "IMPORTED []"], proc.stdout + proc.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "invalid_input"
+    assert re.search(pattern, summary["message"]) and re.search(pattern, proc.stderr), proc.stderr
 
 
 def test_a_mistyped_problem_path_is_one_error_and_writes_nothing(tmp_path, capsys, monkeypatch):

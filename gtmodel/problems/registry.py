@@ -1,9 +1,12 @@
 """The registry of problem kinds: ``kind = "..."`` in a file -> its :class:`ProblemKind`.
 
 Adding a kind is one class in :mod:`gtmodel.problems.kinds` and one line in
-:data:`_CLASSES`. The registry names each kind's class by its dotted path and imports a
+:data:`_CLASSES` (and its schema, in :mod:`gtmodel.problems.kinds.schemas`, one line in
+:data:`_SCHEMAS`). The registry names each kind's class by its dotted path and imports a
 kind's module only when the kind is first used, so that listing the kinds (``gtmodel
-schema --list``) or a problem file of one kind does not import every kind's solvers.
+schema --list``) or a problem file of one kind does not import every kind's solvers; and
+it names each kind's schema by its own (light) path, so that a file with a bad field is
+reported (:func:`get_schema`) before its kind's solvers are imported.
 """
 
 from __future__ import annotations
@@ -18,8 +21,9 @@ from gtmodel.errors import ProblemError
 
 if TYPE_CHECKING:
     from gtmodel.problems.base import ProblemKind
+    from gtmodel.problems.schema import ProblemSchema
 
-__all__ = ["KINDS", "get_kind", "kind_titles"]
+__all__ = ["KINDS", "get_kind", "get_schema", "kind_titles"]
 
 #: Kind name -> ``module:class`` of its :class:`ProblemKind`, in the order of the documentation.
 _CLASSES: dict[str, str] = {
@@ -34,6 +38,21 @@ _CLASSES: dict[str, str] = {
     "state_estimation": "gtmodel.problems.kinds.state_estimation:StateEstimationKind",
     "correction_stability": "gtmodel.problems.kinds.correction_stability:CorrectionStabilityKind",
     "optimal_control": "gtmodel.problems.kinds.optimal_control:OptimalControlKind",
+}
+
+#: Kind name -> ``module:class`` of its schema in a light module (pydantic, no solver); the
+#: kind's ``schema`` is the same class. A kind not listed is validated against the
+#: ``schema`` of its (imported) kind.
+_SCHEMAS: dict[str, str] = {
+    "point_to_point": "gtmodel.problems.kinds.schemas.point_to_point:PointToPointFile",
+    "path_constrained": "gtmodel.problems.kinds.schemas.path_constrained:PathConstrainedFile",
+    "optimal_control": "gtmodel.problems.kinds.schemas.optimal_control:OptimalControlFile",
+    "tracking": "gtmodel.problems.kinds.schemas.tracking:TrackingFile",
+    "ilc": "gtmodel.problems.kinds.schemas.ilc:ILCFile",
+    "calibration": "gtmodel.problems.kinds.schemas.calibration:CalibrationFile",
+    "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
+    "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",
+    "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
 }
 
 
@@ -88,6 +107,33 @@ def get_kind(name: str) -> "ProblemKind":
     if name not in _CLASSES:
         raise ProblemError(f"unknown problem kind {name!r}: expected one of {', '.join(KINDS)}")
     return KINDS[name]
+
+
+def get_schema(name: str) -> "type[ProblemSchema]":
+    """The schema of a kind, without importing the kind's module where it has a light one.
+
+    Parameters
+    ----------
+    name : str
+        E.g. ``"point_to_point"``.
+
+    Returns
+    -------
+    type of ProblemSchema
+        The same class as ``get_kind(name).schema``.
+
+    Raises
+    ------
+    ProblemError
+        Not a registered kind.
+    """
+    if name not in _CLASSES:
+        raise ProblemError(f"unknown problem kind {name!r}: expected one of {', '.join(KINDS)}")
+    target = _SCHEMAS.get(name)
+    if target is None:
+        return KINDS[name].schema
+    module, cls = target.split(":")
+    return getattr(importlib.import_module(module), cls)
 
 
 def kind_titles() -> dict[str, str]:

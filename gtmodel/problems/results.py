@@ -17,10 +17,9 @@ import json
 import math
 import os
 import shutil
+import sys
 from pathlib import Path
 from typing import Any, Mapping
-
-import numpy as np
 
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
@@ -42,13 +41,16 @@ def json_safe(value: Any) -> Any:
     """
     if isinstance(value, Status):
         return value.value
-    if isinstance(value, (bool, np.bool_)):
+    # numpy values exist only once numpy is imported: it is not imported here, so that a
+    # summary of a file that failed validation is written without it (fast start).
+    np = sys.modules.get("numpy")
+    if isinstance(value, bool) or (np is not None and isinstance(value, np.bool_)):
         return bool(value)
-    if isinstance(value, (np.integer,)):
+    if np is not None and isinstance(value, np.integer):
         return int(value)
-    if isinstance(value, (float, np.floating)):
+    if isinstance(value, float) or (np is not None and isinstance(value, np.floating)):
         return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.ndarray):
+    if np is not None and isinstance(value, np.ndarray):
         return [json_safe(x) for x in value.tolist()]
     if isinstance(value, Mapping):
         return {str(k): json_safe(v) for k, v in value.items()}

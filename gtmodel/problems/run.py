@@ -1,6 +1,7 @@
 """Loading, solving and writing one problem file: the one path every kind goes through.
 
-:func:`load_problem` reads and validates a file against its kind's schema and builds the
+:func:`load_problem` reads and validates a file against its kind's schema (a light module:
+a bad field is reported before the kind's solvers are imported) and builds the
 declaration; :func:`solve_problem` solves it (Ctrl-C swallowed by a solver still stops
 the run); :func:`run_problem` does both and writes the result folder, turning every
 outcome into a summary with one :class:`~gtmodel.status.Status`.
@@ -17,7 +18,7 @@ from gtmodel.problems.overrides import apply_override
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
-from gtmodel.problems.registry import KINDS, get_kind
+from gtmodel.problems.registry import KINDS, get_kind, get_schema
 from gtmodel.problems.results import ResultFolder, failure_summary
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 from gtmodel.problems.schema import validate_document
@@ -62,10 +63,9 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
         if "kind" not in data:
             raise ProblemError(f"{path}: missing field 'kind'")
         raise file.fail("kind", f"one of {', '.join(KINDS)}", kind_name)
-    kind = get_kind(kind_name)
-    doc = validate_document(kind.schema, data, path)
+    doc = validate_document(get_schema(kind_name), data, path)  # before the kind (its solvers) is imported
     name = doc.name or path.stem
-    declaration = kind.load(doc, file, name)
+    declaration = get_kind(kind_name).load(doc, file, name)
     return Problem(path=path, name=name, kind=kind_name, description=doc.description, declaration=declaration,
                    data=data, overrides=dict(overrides or {}))
 

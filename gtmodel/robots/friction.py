@@ -24,15 +24,15 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from gtmodel.defaults import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.errors import InputError
 from gtmodel.robots.parameters import DynamicParameters
 
 __all__ = ["FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "sign_approximation", "friction_force", "check_friction_form"]
 
-#: The selectable forms of the sign function.
-FRICTION_FORMS = ("exact", "tanh", "piecewise")
-#: Default velocity width [m/s] of the smooth ("tanh") and piecewise-linear forms.
-DEFAULT_FRICTION_WIDTH = 0.01
+# FRICTION_FORMS (the selectable forms of the sign function) and DEFAULT_FRICTION_WIDTH (the
+# velocity width [m/s] of the smooth and piecewise-linear forms) are written once, in
+# gtmodel.defaults, where the problem files' light schemas read them too.
 
 
 def check_friction_form(form: str, width: float) -> None:

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import tomllib
 
 import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.problems.base import ProblemKind
-from gtmodel.problems.registry import KINDS
+from gtmodel.problems.registry import _SCHEMAS, KINDS, get_schema
 from gtmodel.problems.run import load_problem
 from gtmodel.status import Status
 from gtmodel.trajectory import PointToPoint
@@ -81,3 +84,55 @@ def test_settings_name_the_bad_value(build, match):
 def test_point_to_point_checks_its_invariants_once_at_construction():
     with pytest.raises(InputError, match="force_limit: .* cannot hold the robot at rest at the start pose"):
         PointToPoint("L1", start=[-0.2, 2.75, -0.4], end=[0.2, 3.0, -0.6], force_limit=[100, 100, 100])
+
+
+@pytest.mark.parametrize("name", list(KINDS))
+def test_the_light_schema_of_a_kind_is_its_schema(name):
+    """The registry validates a file against the kind's schema without importing the kind
+    (issue 24, item 7): the light module's class is the kind's ``schema``, and it imports
+    no solver (checked on sys.modules in a fresh process)."""
+    assert get_schema(name) is KINDS[name].schema
+    target = _SCHEMAS.get(name)
+    if target is None:
+        return
+    module = target.split(":")[0]
+    script = (f"import sys, {module}\n"
+              "print(sorted(m for m in ('numpy', 'casadi', 'scipy', 'control', 'matplotlib', 'pandas') if m in sys.modules))")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                          env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
+    assert proc.stdout.strip() == "[]", proc.stdout + proc.stderr
+
+
+def test_the_light_constants_are_those_of_the_domain():
+    """Constants the light schemas name, equal to the domain's (gtmodel.defaults)."""
+    from gtmodel import defaults
+    from gtmodel.robots import friction
+
+    from gtmodel.estimation.closed_loop import plant
+
+    assert (defaults.FRICTION_FORMS, defaults.DEFAULT_FRICTION_WIDTH) == (friction.FRICTION_FORMS, friction.DEFAULT_FRICTION_WIDTH)
+    assert (defaults.STANDARD_GRAVITY, defaults.LOOP_PERIOD_S) == (plant.STANDARD_GRAVITY, plant.DT)
+    from gtmodel.calibration.identification import VARIANTS
+    from gtmodel.problems.kinds.schemas.dynamic_identification import VARIANT_NAMES
+
+    assert VARIANT_NAMES == tuple(VARIANTS)
+    from gtmodel.calibration.kinematic import SOLVERS
+    from gtmodel.problems.kinds.schemas.calibration import LSQ_SOLVERS
+
+    assert LSQ_SOLVERS == tuple(SOLVERS)
+    from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES
+    from gtmodel.problems.kinds.schemas.elasto_geometric_calibration import COMPLIANCE_NAME_LIST
+
+    assert COMPLIANCE_NAME_LIST == tuple(COMPLIANCE_NAMES)
+    from gtmodel.calibration import joint_stiffness
+    from gtmodel.problems.kinds.schemas import joint_stiffness_calibration as js
+
+    assert list(js.TABLE_2_DPP_K_THETA) == joint_stiffness.TABLE_2_K_THETA["DPP"].tolist()
+    assert js.TABLE_2_ROTATION_ONLY_STIFFNESS == joint_stiffness.TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS
+    from gtmodel import estimation
+    from gtmodel.estimation.filters import complementary, kalman
+    from gtmodel.problems.kinds.schemas import ilc
+
+    assert (ilc.ILC_SIGNALS, ilc.ILC_REQUIREMENTS) == (tuple(estimation.SIGNALS), tuple(estimation.REQUIREMENTS))
+    assert (ilc.MIN_CUTOFF_FRACTION, ilc.KALMAN_POSITION_NOISE, ilc.KALMAN_JERK_NOISE) == (
+        complementary.MIN_CUTOFF_FRACTION, tuple(kalman.DEFAULT_POSITION_NOISE), tuple(kalman.DEFAULT_JERK_NOISE))

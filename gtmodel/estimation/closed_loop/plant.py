@@ -58,7 +58,7 @@ import numpy as np
 
 from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_rows, positive_float, positive_int
-from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.defaults import LOOP_PERIOD_S, STANDARD_GRAVITY  # standard gravity [m/s^2]: the accelerometer range is 1.5 of it
 from gtmodel.errors import InputError
 from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models, loop_period
 from gtmodel.robots.kinematics import GantryTau3Kinematics
@@ -75,8 +75,6 @@ _log = logging.getLogger("gtmodel")
 #: Sample time of the controller [s] where no robot's data file is at hand (the L1's own
 #: comes from its file, :func:`gtmodel.robots.actuator_dynamics.loop_period`).
 DT = LOOP_PERIOD_S
-#: Standard gravity [m/s^2] (the accelerometer range is 1.5 of it).
-STANDARD_GRAVITY = 9.80665
 #: Largest accepted difference between an actuator model's sample time and ``dt`` [s].
 _DT_TOLERANCE = 1e-12
 

@@ -1,6 +1,8 @@
 """One module per problem kind, each defining one :class:`~gtmodel.problems.base.ProblemKind`.
 
-A kind is thin: its file schema, ``load`` (the validated file -> the domain's
+A kind is thin: its file schema (defined in a light module of
+:mod:`gtmodel.problems.kinds.schemas`, so that a file is validated before the kind's
+solvers are imported), ``load`` (the validated file -> the domain's
 declaration, naming TOML fields in errors), ``write`` (files and summary fields) and its
 study columns. What is solved, and how, lives in the domain packages (rockit's split
 between declaring a problem, choosing a method and choosing a solver):

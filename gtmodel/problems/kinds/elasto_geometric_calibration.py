@@ -51,24 +51,22 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import Field
 
 from gtmodel.calibration import grid_poses
 from gtmodel.report.calibration import plot_error_histogram
-from gtmodel.calibration.kinematic import SOLVERS
-from gtmodel.calibration.elasto_geometric import COMPLIANCE_NAMES, compliance_selection
+from gtmodel.calibration.elasto_geometric import compliance_selection
 from gtmodel.calibration.elasto_geometric_declared import ElastoGeometricDeclaration, ElastoGeometricOutcome
 from gtmodel.errors import GtModelError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.calibration.grid_count import axis_count
-from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, StringList, calibration_columns
+from gtmodel.problems.kinds.calibration import MAX_GRID_CANDIDATES, calibration_columns
 from gtmodel.problems.kinds.calibration_results import calibrated_tables
+from gtmodel.problems.kinds.schemas.elasto_geometric_calibration import MAX_PAYLOAD_KG, ElastoGeometricFile
 from gtmodel.problems.references import robot_parameters
-from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.robots import GantryTau3Kinematics, GantryTau3Stiffness, load_stiffness
 from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.report.stiffness import plot_stiffness_map
@@ -84,75 +82,10 @@ __all__ = [
 
 _log = logging.getLogger("gtmodel")
 
-#: Largest payload [kg] (the Gantry-Tau robots carry tens of kilograms).
-MAX_PAYLOAD_KG = 1.0e3
-#: Largest number of payloads (each multiplies the measured poses).
-MAX_PAYLOADS = 10
 #: Largest number of points of the stiffness-map section examined (one statics solve each).
 MAX_MAP_POINTS = 20_000
 #: Shipped stiffness files.
 _STIFFNESS_SETS = ("stiffness", "default")
-
-
-class TruthSection(Section):
-    """``[truth]``: the compliant true robot and its synthetic measurements."""
-
-    parameters: NonEmptyText = Field(description="robot parameter set of the true robot: a shipped name or a TOML path")
-    stiffness: NonEmptyText = Field(default="stiffness", description='stated stiffness values: "stiffness" (shipped) or a TOML path')
-    payloads_kg: vector(None, nonnegative=True, bound=MAX_PAYLOAD_KG, max_length=MAX_PAYLOADS, unit="kg",
-                        description="every pose is measured with each payload") = [40.0]
-    noise: choice("laser_tracker", "stereo_vision", "none", description="measurement device (noise)") = "laser_tracker"
-    grid_step: number(gt=0, le=MAX_LENGTH_M, unit="m", description="spacing of the regular workspace grid")
-    seed: integer(0, 2**31 - 1, description="noise seed") = 0
-
-
-class StartSection(Section):
-    """``[start]``: the start model."""
-
-    parameters: NonEmptyText = Field(description="start geometry: a shipped name or a TOML path")
-    parametrisation: choice("ideal", "modified", description="ideal (15) or modified (21 parameters)") = "modified"
-    compliance: choice("zero", "stated", description="start compliances") = "zero"
-
-
-class CalibrationSection(Section):
-    """``[calibration]``: solver options and the free compliances."""
-
-    solver: choice(*SOLVERS, description="least-squares solver") = "lm"
-    max_iter: integer(1, 10**6, description="iteration limit") = 200
-    align: Flag = Field(default=True, description="move the start model into the measurement frame")
-    free_compliance: StringList = Field(default_factory=lambda: list(COMPLIANCE_NAMES), description="compliance names or patterns estimated")
-    compare_single_load: Flag = Field(default=False, description="also calibrate on one load (the largest payload)")
-
-
-class StiffnessMapSection(Section):
-    """``[stiffness_map]``: stiffness map of the true robot on a yz section."""
-
-    step: number(gt=0, le=MAX_LENGTH_M, unit="m", description="grid spacing in y and z") = 0.05
-    x: number(ge=-MAX_LENGTH_M, le=MAX_LENGTH_M, unit="m", description="section coordinate (default: the workspace median)") | None = None
-
-
-@fill_doc(**KIND_DOCS)
-class ElastoGeometricFile(ProblemSchema):
-    """An ``elasto_geometric_calibration`` problem file.
-
-    Parameters
-    ----------
-    {header_fields}
-    truth : TruthSection
-        ``[truth]``: the true robot, stiffness, payloads and noise.
-    start : StartSection
-        ``[start]``: the model calibrated and its starting compliances.
-    calibration : CalibrationSection, optional
-        ``[calibration]``: solver settings and free compliances.
-    stiffness_map : StiffnessMapSection, optional
-        ``[stiffness_map]``: the stiffness map written with the result.
-    """
-
-    kind: Literal["elasto_geometric_calibration"]
-    truth: TruthSection
-    start: StartSection
-    calibration: CalibrationSection = CalibrationSection()
-    stiffness_map: StiffnessMapSection = StiffnessMapSection()
 
 
 class ElastoGeometricKind(ProblemKind):

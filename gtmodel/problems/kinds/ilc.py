@@ -26,16 +26,13 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError, UnreachablePoseError
 from gtmodel.estimation import (
-    REQUIREMENTS,
-    SIGNALS,
     ComplementaryFilter,
     ILCCase,
     ILCExperiment,
@@ -47,11 +44,8 @@ from gtmodel.estimation import (
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.codegen import Controller, save_controller
 from gtmodel.estimation import ilc_correction_function
-from gtmodel.estimation.filters.complementary import MIN_CUTOFF_FRACTION
-from gtmodel.estimation.filters.kalman import DEFAULT_JERK_NOISE, DEFAULT_POSITION_NOISE
-from gtmodel.estimation.closed_loop.plant import DT as SAMPLE_TIME_S
-from gtmodel.problems.kinds.closed_loop_common import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection, build_plant
-from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.kinds.closed_loop_common import build_plant
+from gtmodel.problems.kinds.schemas.ilc import ILCFile
 from gtmodel.report.ilc import plot_error_measure, plot_tool_path
 from gtmodel.estimation.ilc.cases import ILCDeclaration, ILCOutcome
 from gtmodel.trajectory.square import plan_square
@@ -73,151 +67,6 @@ THESIS_TABLE_7_2 = {
 
 #: Most samples of a reference (lead-in, motion and lead-out); bounds the lifted matrices.
 MAX_SAMPLES = 4000
-#: Most ILC iterations.
-MAX_ITERATIONS = 100
-
-
-#: Lowest filter cut-off [Hz] (below it the Butterworth design is numerically degenerate).
-MIN_CUTOFF_HZ = MIN_CUTOFF_FRACTION / SAMPLE_TIME_S
-
-
-def _cutoff(description: str) -> Any:
-    return number(ge=MIN_CUTOFF_HZ, lt=NYQUIST_HZ, unit="Hz", description=description,
-                  what=f"a cut-off frequency in [{MIN_CUTOFF_HZ:g}, {NYQUIST_HZ:g}) Hz (below the Nyquist frequency of the 4 ms loop)")
-
-
-class ReferenceSection(Section):
-    """``[reference]``: the square of section 7.3.
-
-    Parameters
-    ----------
-    corner : list of float, shape (3,)
-        First corner [m]; the square runs +x, +y, -x, -y from it.
-    side : float
-        Side length [m].
-    speed : float
-        Nominal TCP speed [m/s] (the speed limit of the planner).
-    acceleration : float
-        TCP acceleration limit per axis [m/s^2].
-    lead : int
-        Lead-in and lead-out at rest [samples].
-    grid : int
-        Grid points of the path-constrained solver.
-    """
-
-    corner: vector(3, bound=MAX_LENGTH_M, unit="m", description="first corner of the square (it runs +x, +y, -x, -y)")
-    side: number(gt=0, le=1.0, unit="m", description="side of the square (the thesis: 10 mm)") = 0.010
-    speed: number(gt=0, le=10.0, unit="m/s", description="nominal TCP speed (the thesis: 100 mm/s)") = 0.100
-    acceleration: number(gt=0, le=1000.0, unit="m/s^2", description="TCP acceleration limit per axis") = 2.0
-    lead: integer(0, 1000, description="lead-in and lead-out at rest, in samples (the thesis: 100)") = 100
-    grid: integer(20, 5000, description="grid points of the path-constrained solver") = 400
-
-
-class ILCSection(Section):
-    """``[ilc]``: the learning law (7.2) and Q's time window.
-
-    Parameters
-    ----------
-    iterations : int
-        Iterations after the first trial.
-    gamma : float
-        Learning gain.
-    delta : int
-        Time shift of L [samples].
-    tukey_points : int
-        Length of the Tukey window whose halves weight the lead-in and lead-out.
-    tukey_alpha : float
-        Tukey shape parameter.
-    """
-
-    iterations: integer(1, MAX_ITERATIONS, description="ILC iterations after the first trial") = 10
-    gamma: number(gt=0, le=100.0, description="learning gain of L = gamma q^delta (the thesis: 0.9)") = 0.9
-    delta: integer(0, 100, description="time shift of L in samples (the thesis: 5)") = 5
-    tukey_points: integer(2, 2000, description="Tukey window length (the thesis: 200)") = 200
-    tukey_alpha: number(ge=0, le=1.0, description="Tukey window shape (the thesis: 0.95)") = 0.95
-
-
-class EstimatorsSection(Section):
-    """``[estimators]``: the tool-position estimators of Cases 2A and 2B.
-
-    Parameters
-    ----------
-    complementary_cutoff_hz : list of float, shape (2,)
-        Complementary filter cut-offs in x and y [Hz] (7.17).
-    kalman_position_noise : list of float, shape (2,)
-        Kalman filter: std of the kinematic position as a tool-position measurement [m].
-    kalman_jerk_noise : list of float, shape (2,)
-        Kalman filter: std of the white jerk driving the model [m/s^3].
-    """
-
-    complementary_cutoff_hz: vector(2, positive=True, bound=NYQUIST_HZ, unit="Hz",
-                                    description="complementary filter cut-offs in x and y (the thesis: 4.50, 2.63)") = Field(
-        default_factory=lambda: [4.50, 2.63])
-    kalman_position_noise: vector(2, positive=True, bound=1.0, unit="m",
-                                  description="Kalman: std of fk(q_m) as a tool-position measurement in x, y "
-                                              "(default: crossover at the complementary cut-offs)") = Field(
-        default_factory=lambda: list(DEFAULT_POSITION_NOISE))
-    kalman_jerk_noise: vector(2, positive=True, bound=1e6, unit="m/s^3", description="Kalman: std of the white jerk of the model in x, y") = Field(
-        default_factory=lambda: list(DEFAULT_JERK_NOISE))
-
-
-class CaseSection(Section):
-    """``[[cases]]``: one ILC case.
-
-    Parameters
-    ----------
-    name : str
-        Label (e.g. ``"1"``, ``"2A"``).
-    signal : str
-        Learning signal: actuator, complementary, kalman or tool.
-    q_cutoff_hz : float or None
-        Cut-off of Q's zero-phase Butterworth low-pass [Hz]; omitted: no low-pass.
-    q_order : int
-        Butterworth order.
-    require : str
-        monotone (7.16), stable (7.15) or none.
-    """
-
-    name: NonEmptyText = Field(description="case label")
-    signal: choice(*SIGNALS, description="learning signal: actuator positions (Case 1), the complementary (2A) or Kalman (2B) "
-                                         "tool estimate, or the measured tool position (3)")
-    q_cutoff_hz: _cutoff("cut-off of Q's zero-phase Butterworth low-pass (omit for none)") | None = None
-    q_order: integer(1, 8, description="order of Q's Butterworth low-pass") = 2
-    require: choice(*REQUIREMENTS, description="lifted check that must hold before the case runs: "
-                                               "monotone (sigma_max < 1, 7.16), stable (rho < 1, 7.15) or none") = "monotone"
-
-
-@fill_doc(**KIND_DOCS)
-class ILCFile(ProblemSchema):
-    """An ``ilc`` problem file.
-
-    Parameters
-    ----------
-    {header_fields}
-    robot : RobotSection
-        ``[robot]``: kinematics and actuator models.
-    reference : ReferenceSection
-        ``[reference]``: the square.
-    structure : StructureSection, optional
-        ``[structure]``: the tool structure.
-    sensors : SensorsSection, optional
-        ``[sensors]``: accelerometer and gauge.
-    ilc : ILCSection, optional
-        ``[ilc]``: the learning law.
-    estimators : EstimatorsSection, optional
-        ``[estimators]``: complementary and Kalman filter settings.
-    cases : list of CaseSection
-        ``[[cases]]``: the cases, in order.
-    """
-
-    kind: Literal["ilc"]
-    robot: RobotSection
-    reference: ReferenceSection
-    structure: StructureSection = StructureSection()
-    sensors: SensorsSection = SensorsSection()
-    ilc: ILCSection = ILCSection()
-    estimators: EstimatorsSection = EstimatorsSection()
-    cases: list[CaseSection] = Field(min_length=1, max_length=20, description="the ILC cases")
 
 
 def _channels(checks: dict[str, Any]) -> dict[str, dict[str, float | bool]]:

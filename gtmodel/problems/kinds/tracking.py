@@ -25,10 +25,9 @@ from __future__ import annotations
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel._tables import read_table
@@ -38,10 +37,11 @@ from gtmodel.estimation import TrackingPlant
 from gtmodel.estimation.closed_loop.plant import DT
 from gtmodel.estimation.closed_loop.replay import TrackingSolution, replay
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
-from gtmodel.problems.kinds.closed_loop_common import RobotSection, SensorsSection, StructureSection, build_plant
+from gtmodel.problems.kinds.closed_loop_common import build_plant
 from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
+from gtmodel.problems.kinds.schemas.tracking import TrackingFile
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
-from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, number, validate_document
+from gtmodel.problems.schema import validate_document
 from gtmodel.report.tracking import plot_actuator_error, plot_deflection, plot_tool_error, plot_tool_path
 
 __all__ = ["TrackingFile", "TrackingDeclaration", "TrackingSolution", "TrackingKind", "read_trajectory", "REQUIRED_COLUMNS"]
@@ -52,44 +52,10 @@ REQUIRED_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3")
 DT_TOLERANCE = 1e-9
 #: Largest accepted ``|fk(q) - (x, y, z)|`` of a trajectory file [m].
 FK_TOLERANCE = 1e-6
-#: Longest accepted settling time [s].
-MAX_SETTLE_S = 60.0
 #: Most samples of a replayed trajectory (one hour at 4 ms).
 MAX_SAMPLES = 900_000
 #: Kinds whose ``trajectory.csv`` can be replayed.
 SOURCE_KINDS = {"point_to_point": PointToPointKind(), "path_constrained": PathConstrainedKind()}
-
-
-class TrajectorySection(Section):
-    """``[trajectory]``: what is replayed (exactly one of ``problem`` and ``file``)."""
-
-    problem: NonEmptyText | None = Field(default=None, description="a point_to_point or path_constrained problem file (relative to this file), solved first; its trajectory.csv is replayed")
-    file: NonEmptyText | None = Field(default=None, description="a trajectory.csv written by point_to_point or path_constrained (relative to this file)")
-    settle_time: number(ge=0, le=MAX_SETTLE_S, unit="s", description="the reference is held at its last value this long after the motion") = 1.0
-
-
-@fill_doc(**KIND_DOCS)
-class TrackingFile(ProblemSchema):
-    """A ``tracking`` problem file.
-
-    Parameters
-    ----------
-    {header_fields}
-    trajectory : TrajectorySection
-        ``[trajectory]``: the replayed trajectory and the settling time.
-    robot : RobotSection
-        ``[robot]``: parameter set, IK configuration, actuator models.
-    structure : StructureSection
-        ``[structure]``: the structural modes.
-    sensors : SensorsSection
-        ``[sensors]``: noise and range.
-    """
-
-    kind: Literal["tracking"]
-    trajectory: TrajectorySection
-    robot: RobotSection
-    structure: StructureSection = StructureSection()
-    sensors: SensorsSection = SensorsSection()
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
+from gtmodel.defaults import PATH_METHODS
 from gtmodel.robots import RobotParameters
 from gtmodel.trajectory.path import Path as TcpPath
 from gtmodel.trajectory.path_constrained.collocation import solve_path_collocation
@@ -23,10 +24,7 @@ from gtmodel.trajectory.settings import Collocation, SolverSettings
 
 __all__ = ["PathConstrainedDeclaration", "PATH_METHODS"]
 
-#: Methods of kind ``path_constrained``: the convex reformulation (Verscheure et al.
-#: (2009), solved to the exact optimum of the gridded problem) and the thesis' projection
-#: solved by collocation (Dressler (2012), ch. 3.5).
-PATH_METHODS = ("convex", "collocation")
+# PATH_METHODS (the methods of kind ``path_constrained``) lives in gtmodel.defaults.
 
 
 @dataclass(frozen=True)

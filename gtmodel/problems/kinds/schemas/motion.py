@@ -1,0 +1,101 @@
+"""The tables the motion kinds (``point_to_point``, ``path_constrained``) share, and their closed-loop relatives.
+
+``[motion]``, ``[collocation]``, ``[solver]`` and the robot reference of ``[robot]``
+read the same in those kinds. Light (pydantic and :mod:`gtmodel.problems.schema` only), so
+that a file is validated before its kind's solvers are imported.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, Section, choice, integer, number, vector
+
+__all__ = ["MAX_TIME_S", "RobotReference", "MotionSection", "CollocationSection", "SolverSection", "OcpSolverSection"]
+
+#: Longest final time accepted [s].
+MAX_TIME_S = 1.0e4
+
+
+class RobotReference(Section):
+    """``[robot]``: the parameter set and the IK configuration (each kind adds its dynamics options).
+
+    Parameters
+    ----------
+    parameters : str
+        Shipped parameter set name or a TOML path relative to the problem file.
+    configuration : int
+        IK configuration, 0..7.
+    """
+
+    parameters: NonEmptyText = Field(description="shipped parameter set (L1, D1, L1_ideal) or a TOML path relative to the problem file")
+    configuration: integer(0, 7, description="IK configuration") = 0
+
+
+class MotionSection(Section):
+    """``[motion]``: rest-to-rest between two TCP positions.
+
+    Parameters
+    ----------
+    start, end : list of float, shape (3,)
+        TCP positions at rest [m].
+    """
+
+    start: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the start")
+    end: vector(3, bound=MAX_LENGTH_M, unit="m", description="TCP position at rest at the end")
+
+
+class CollocationSection(Section):
+    """``[collocation]``: the transcription.
+
+    Parameters
+    ----------
+    elements : int
+        Finite elements, 1..10000.
+    points : int
+        Collocation points per element, 1..9.
+    scheme : str
+        ``"radau"`` or ``"legendre"``.
+    """
+
+    elements: integer(1, 10000, description="finite elements") = 50
+    points: integer(1, 9, description="collocation points per element") = 3
+    scheme: choice("radau", "legendre") = "radau"
+
+
+class SolverSection(Section):
+    """``[solver]``: IPOPT settings.
+
+    Parameters
+    ----------
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    """
+
+    max_iter: integer(1, 10**6, description="IPOPT iteration limit") = 3000
+    tol: number(gt=0, le=1.0, description="IPOPT tolerance") = 1e-8
+
+
+class OcpSolverSection(SolverSection):
+    """``[solver]`` of a collocation OCP: the NLP solver and how its derivatives are evaluated.
+
+    Parameters
+    ----------
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    name : str
+        The NLP solver: ``"ipopt"`` (IPOPT with MUMPS, the project's assembled
+        derivatives). ``fatrop`` is not offered: CasADi's fatrop plugin differentiates
+        the NLP itself and cannot take the compiled derivatives (issue 17).
+    jit : bool
+        Evaluate the constraint Jacobian and Lagrangian Hessian through C generated from
+        their CasADi graph, compiled once with the system compiler and cached (the same
+        values, about 5x faster per evaluation); the interpreter without a compiler.
+    """
+
+    name: choice("ipopt", description="NLP solver") = "ipopt"
+    jit: Flag = Field(default=True, description="compiled (cached) C for the NLP derivatives")
