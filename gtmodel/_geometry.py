@@ -258,14 +258,9 @@ def quat_mul(a: Any, b: Any) -> Any:
     casadi.SX or casadi.MX or casadi.DM, shape (4, 1)
         The product (``numpy.asarray(...).ravel()`` for NumPy).
     """
-    w1, x1, y1, z1 = a[0], a[1], a[2], a[3]
-    w2, x2, y2, z2 = b[0], b[1], b[2], b[3]
-    return ca.vertcat(
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-    )
+    aw, av = a[0], ca.vertcat(a[1], a[2], a[3])
+    bw, bv = b[0], ca.vertcat(b[1], b[2], b[3])
+    return ca.vertcat(aw * bw - ca.dot(av, bv), aw * bv + bw * av + ca.cross(av, bv))
 
 
 def quat_conj(q: Any) -> Any:
