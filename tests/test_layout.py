@@ -167,3 +167,57 @@ def test_layout_table_names_a_new_module(tmp_path):
     assert "`gtmodel/defaults.py`" in table
     stale = table.replace(next(ln for ln in table.splitlines() if "`gtmodel/defaults.py`" in ln) + "\n", "")
     assert make_layout.updated(stale) != stale
+
+
+def _cycles(graph) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan), i.e. import cycles."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.find_modules_directly_imported_by(v):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for module in sorted(graph.modules):
+        if module not in index:
+            visit(module)
+    return found
+
+
+def test_no_import_cycle_between_modules():
+    """Every import of gtmodel/ (TYPE_CHECKING ones too), as import-linter's grimp builds the graph."""
+    grimp = pytest.importorskip("grimp")
+    assert _cycles(grimp.build_graph("gtmodel")) == []
+
+
+def test_a_cycle_is_found():
+    """The check above can fail: a two-module cycle is one component."""
+
+    class Graph:
+        modules = {"a", "b", "c"}
+        edges = {"a": {"b"}, "b": {"a"}, "c": {"a"}}
+
+        def find_modules_directly_imported_by(self, m):
+            return self.edges[m]
+
+    assert _cycles(Graph()) == [["a", "b"]]

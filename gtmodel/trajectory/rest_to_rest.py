@@ -10,20 +10,17 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
 from gtmodel.errors import InputError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 
-if TYPE_CHECKING:  # pragma: no cover - annotations only
-    from gtmodel.trajectory.point_to_point import PointToPoint
-
 __all__ = ["check_holding_forces", "trapezoid_profile", "bang_bang_duration"]
 
 
-def check_holding_forces(problem: PointToPoint, dynamics: GantryTau3Dynamics | None = None) -> None:
+def check_holding_forces(problem: Any, dynamics: GantryTau3Dynamics | None = None) -> None:
     """Check that the force limits can hold the robot at rest at both end poses.
 
     At rest friction is zero in every form, so the actuators must supply exactly
@@ -32,7 +29,7 @@ def check_holding_forces(problem: PointToPoint, dynamics: GantryTau3Dynamics | N
 
     Parameters
     ----------
-    problem : PointToPoint
+    problem : gtmodel.trajectory.PointToPoint
         The declaration.
     dynamics : GantryTau3Dynamics, optional
         The dynamics to use (default: built from the problem's parameter set).
@@ -91,7 +88,7 @@ def trapezoid_profile(start, end, duration: float, t, ramp: float = 1.0 / 3.0) -
     return start + np.outer(s, delta), np.outer(sd, delta), np.outer(sdd, delta)
 
 
-def bang_bang_duration(problem: PointToPoint, dynamics: GantryTau3Dynamics | None = None) -> float:
+def bang_bang_duration(problem: Any, dynamics: GantryTau3Dynamics | None = None) -> float:
     """Rough minimum duration from the force limits, for the initial guess.
 
     Each cart is treated as a double integrator with the force left after gravity and
@@ -100,7 +97,7 @@ def bang_bang_duration(problem: PointToPoint, dynamics: GantryTau3Dynamics | Non
 
     Parameters
     ----------
-    problem : PointToPoint
+    problem : gtmodel.trajectory.PointToPoint
         The declaration.
     dynamics : GantryTau3Dynamics, optional
         Dynamics to use (built from the problem if omitted).
