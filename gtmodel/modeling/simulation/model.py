@@ -49,6 +49,29 @@ _log = logging.getLogger("gtmodel")
 _NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 
 
+#: Docstring entries shared by :meth:`Model.state`, :meth:`Model.algebraic` and :meth:`Model.input`.
+_DECLARE_DOCS = {
+    "name_shape": """
+        name : str
+            Identifier, unique in the model.
+        shape : int or tuple, optional
+            Size ``n`` or ``(n,)``/``(n, 1)``; default 1.
+        """,
+    "unit": """
+        unit : str, optional
+            SI unit (e.g. ``"m"``, ``"N"``), shown on plots (:attr:`units`); default none.
+        """,
+    "raises": """
+        Raises
+        ------
+        InputError
+            If the name, shape, start or bounds are malformed.
+        ModelError
+            If the name is already declared or ``lb > ub``.
+        """,
+}
+
+
 class Model(EventsMixin):
     """An equation-based model (Modelica-inspired) built from CasADi SX symbols.
 
@@ -160,6 +183,7 @@ class Model(EventsMixin):
         size = arr.size if shape is None else _shape_to_size(shape, f"parameter {name!r}")
         return self._declare(name, "parameter", size, start=arr)
 
+    @fill_doc(**_DECLARE_DOCS)
     def state(
         self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
     ) -> ca.SX:
@@ -167,31 +191,23 @@ class Model(EventsMixin):
 
         Parameters
         ----------
-        name : str
-            Identifier, unique in the model.
-        shape : int or tuple, optional
-            Size ``n`` or ``(n,)``/``(n, 1)``; default 1.
+        {name_shape}
         start : float or array_like, optional
             Start value (initial condition for simulation, initial guess); default 0.
         lb, ub : float or array_like, optional
             Bounds (Modelica ``min``/``max``) used by optimisation; default unbounded.
-        unit : str, optional
-            SI unit (e.g. ``"m"``), shown on plots (:attr:`units`); default none.
+        {unit}
 
         Returns
         -------
         casadi.SX
             State symbol, ``(n, 1)``.
 
-        Raises
-        ------
-        InputError
-            If the name, shape, start or bounds are malformed.
-        ModelError
-            If the name is already declared or ``lb > ub``.
+        {raises}
         """
         return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub, unit)
 
+    @fill_doc(**_DECLARE_DOCS)
     def algebraic(
         self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
     ) -> ca.SX:
@@ -199,33 +215,25 @@ class Model(EventsMixin):
 
         Parameters
         ----------
-        name : str
-            Identifier, unique in the model.
-        shape : int or tuple, optional
-            Size ``n`` or ``(n,)``/``(n, 1)``; default 1.
+        {name_shape}
         start : float or array_like, optional
             Start value (guess for the consistent initialisation); default 0.
         lb, ub : float or array_like, optional
             Bounds used by optimisation; default unbounded.
-        unit : str, optional
-            SI unit (e.g. ``"N"``), shown on plots (:attr:`units`); default none.
+        {unit}
 
         Returns
         -------
         casadi.SX
             Algebraic symbol, ``(n, 1)``.
 
-        Raises
-        ------
-        InputError
-            If the name, shape, start or bounds are malformed.
-        ModelError
-            If the name is already declared or ``lb > ub``.
+        {raises}
         """
         return self._declare(
             name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub, unit
         )
 
+    @fill_doc(**_DECLARE_DOCS)
     def input(
         self, name: str, shape: Any = 1, lb: Any = None, ub: Any = None, start: Any = None, unit: str = ""
     ) -> ca.SX:
@@ -233,28 +241,19 @@ class Model(EventsMixin):
 
         Parameters
         ----------
-        name : str
-            Identifier, unique in the model.
-        shape : int or tuple, optional
-            Size ``n`` or ``(n,)``/``(n, 1)``; default 1.
+        {name_shape}
         lb, ub : float or array_like, optional
             Bounds used by optimisation; default unbounded.
         start : float or array_like, optional
             Nominal value, used as initial guess by optimisation; default 0.
-        unit : str, optional
-            SI unit (e.g. ``"N"``), shown on plots (:attr:`units`); default none.
+        {unit}
 
         Returns
         -------
         casadi.SX
             Input symbol, ``(n, 1)``.
 
-        Raises
-        ------
-        InputError
-            If the name, shape or bounds are malformed.
-        ModelError
-            If the name is already declared or ``lb > ub``.
+        {raises}
         """
         return self._declare(name, "input", _shape_to_size(shape, f"input {name!r}"), start, lb, ub, unit)
 
