@@ -14,7 +14,7 @@ from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.emit import Fragment, c_float, fill
 from gtmodel.codegen.emit.filter import filter_fragment
 
-__all__ = ["controller_fragment", "controller_header_lines", "controller_source_lines"]
+__all__ = ["controller_fragment"]
 
 
 def _kalman_values(prefix: str, controller: Controller, real: str) -> dict[str, object]:
@@ -26,23 +26,8 @@ def _filters(prefix: str, controller: Controller, real: str) -> Fragment:
     return Fragment.join(filter_fragment(prefix, name, getattr(controller, name), real) for name in controller.filter_sizes)
 
 
-def controller_header_lines(prefix: str, controller: Controller, real: str) -> list[str]:
-    """Header declarations of the controller: sizes, sample time, the Kalman and filter state structs.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    controller : Controller
-        The controller generated.
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        Lines placed after the function prototypes of the header.
-    """
+def _header_lines(prefix: str, controller: Controller, real: str) -> list[str]:
+    """Sizes, sample time, the Kalman and filter state structs (after the prototypes)."""
     M = prefix.upper()
     out = fill("template_controller.h", M=M, DT=c_float(controller.dt)).splitlines()
     if controller.kalman_step is not None:
@@ -52,24 +37,8 @@ def controller_header_lines(prefix: str, controller: Controller, real: str) -> l
     return out + list(_filters(prefix, controller, real).header)
 
 
-def controller_source_lines(prefix: str, controller: Controller, real: str) -> list[str]:
-    """Wrapper source of the Kalman state functions (``<prefix>_kalman_init``, ``_update``) and of the filters'.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    controller : Controller
-        The controller generated.
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        C lines appended to the wrapper source (empty without ``kalman_step`` and filters):
-        also ``<prefix>_kf_init``/``_update`` and ``<prefix>_ekf_init``/``_update``.
-    """
+def _source_lines(prefix: str, controller: Controller, real: str) -> list[str]:
+    """``<prefix>_kalman_init``/``_update`` and the filters' ``_init``/``_update`` (may be empty)."""
     out = [] if controller.kalman_step is None else fill("template_kalman_state.c", **_kalman_values(prefix, controller, real)).splitlines()
     return out + list(_filters(prefix, controller, real).source)
 
@@ -89,8 +58,9 @@ def controller_fragment(prefix: str, controller: Controller, real: str) -> Fragm
     Returns
     -------
     Fragment
-        :func:`controller_header_lines`, :func:`controller_source_lines` and
+        Header: sizes, the sample time ``<PREFIX>_CONTROLLER_DT``, the Kalman, ILC and filter
+        state structs; source: ``<prefix>_kalman_init``/``_update`` and the filters'
+        ``_init``/``_update`` (``<prefix>_kf_*``, ``<prefix>_ekf_*``); specs:
         :meth:`Controller.specs <gtmodel.codegen.controller.Controller.specs>`.
     """
-    return Fragment(tuple(controller_header_lines(prefix, controller, real)), tuple(controller_source_lines(prefix, controller, real)),
-                    controller.specs())
+    return Fragment(tuple(_header_lines(prefix, controller, real)), tuple(_source_lines(prefix, controller, real)), controller.specs())

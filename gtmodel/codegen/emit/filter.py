@@ -13,7 +13,7 @@ import casadi as ca
 from gtmodel.codegen.emit import Fragment, fill
 from gtmodel.codegen.specs.filter import filter_sizes
 
-__all__ = ["filter_fragment", "filter_header_lines", "filter_source_lines"]
+__all__ = ["filter_fragment"]
 
 
 def _values(prefix: str, name: str, f: ca.Function, real: str) -> dict[str, object]:
@@ -22,50 +22,6 @@ def _values(prefix: str, name: str, f: ca.Function, real: str) -> dict[str, obje
     stem = name[:-5]
     return {"PREFIX": prefix, "NAME": name, "STEM": stem, "STEM_U": stem.upper(), "M": f"{prefix.upper()}_{stem.upper()}",
             "ST": f"{prefix}_{stem}_state", "REAL": real, "NX": nx, "NZ": nz, "NX2": nx * nx, "NPIVOTS": nz + nx}
-
-
-def filter_header_lines(prefix: str, name: str, f: ca.Function, real: str) -> list[str]:
-    """Header lines of one filter: sizes, the state struct, ``_init`` and ``_update``.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    name : {"kf_step", "ekf_step"}
-        The step function.
-    f : casadi.Function
-        Its Function (sizes).
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        Lines placed after the function prototypes of the header.
-    """
-    return fill("template_filter_state.h", **_values(prefix, name, f, real)).splitlines()
-
-
-def filter_source_lines(prefix: str, name: str, f: ca.Function, real: str) -> list[str]:
-    """Wrapper source of one filter's ``_init`` and ``_update``.
-
-    Parameters
-    ----------
-    prefix : str
-        C prefix (``gt_L1``).
-    name : {"kf_step", "ekf_step"}
-        The step function.
-    f : casadi.Function
-        Its Function (sizes).
-    real : {"double", "float"}
-        Floating-point type.
-
-    Returns
-    -------
-    list of str
-        C lines appended to the wrapper source.
-    """
-    return fill("template_filter_state.c", **_values(prefix, name, f, real)).splitlines()
 
 
 def filter_fragment(prefix: str, name: str, f: ca.Function, real: str) -> Fragment:
@@ -85,6 +41,9 @@ def filter_fragment(prefix: str, name: str, f: ca.Function, real: str) -> Fragme
     Returns
     -------
     Fragment
-        :func:`filter_header_lines` and :func:`filter_source_lines`.
+        Header: sizes, the state struct, the ``_init`` and ``_update`` prototypes
+        (``template_filter_state.h``); source: their definitions (``template_filter_state.c``).
     """
-    return Fragment(tuple(filter_header_lines(prefix, name, f, real)), tuple(filter_source_lines(prefix, name, f, real)))
+    values = _values(prefix, name, f, real)
+    return Fragment(tuple(fill("template_filter_state.h", **values).splitlines()),
+                    tuple(fill("template_filter_state.c", **values).splitlines()))
