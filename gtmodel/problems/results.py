@@ -24,7 +24,7 @@ from typing import Any, Mapping
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
-__all__ = ["ResultFolder", "json_safe", "write_json", "failure_summary"]
+__all__ = ["check_output_folder", "ResultFolder", "json_safe", "write_json", "failure_summary"]
 
 
 def json_safe(value: Any) -> Any:
@@ -121,6 +121,55 @@ def failure_summary(problem: str | Path, error: BaseException | str, status: Sta
     return out
 
 
+def check_output_folder(out: str | Path) -> None:
+    """Check that a run may write its result (or study) folder where asked.
+
+    A run writes only into a folder that is new, empty, or a gtmodel result folder (its
+    ``summary.json`` is a run's summary, or, for a study stopped before its summary, one of
+    its ``cases/*/summary.json`` is), so a mistyped ``--out`` never replaces a folder of the
+    user's own files (DESIGN.md, "A user's files are never destroyed").
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        The folder.
+
+    Raises
+    ------
+    ResultWriteError
+        ``out`` or a parent of it is an existing file, or ``out`` holds files no gtmodel
+        run wrote (names the folder and what to do).
+    """
+    out = Path(out)
+    for p in (out, *out.parents):
+        if p.exists() or p.is_symlink():
+            if not p.is_dir():
+                why = "a file of that name is in the way" if p == out else f"its parent {p} is a file"
+                raise ResultWriteError(f"cannot write the result folder {out}: {why}")
+            break
+    if out.is_dir() and not _written_by_gtmodel(out):
+        raise ResultWriteError(f"will not write the result folder {out}: it holds files that no gtmodel run wrote "
+                               "(no summary.json of a run) and a run replaces its folder whole; give a new or empty folder")
+
+
+def _written_by_gtmodel(folder: Path) -> bool:
+    """Empty, or a result folder of a run or of a study (see :func:`check_output_folder`)."""
+    if not any(folder.iterdir()):
+        return True
+    if _is_run_summary(folder / "summary.json"):
+        return True
+    cases = folder / "cases"
+    return cases.is_dir() and any(_is_run_summary(c / "summary.json") for c in cases.iterdir())
+
+
+def _is_run_summary(path: Path) -> bool:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(data, dict) and data.get("status") in {s.value for s in Status}
+
+
 class ResultFolder:
     """A result folder being written: files go to a partial folder until :meth:`commit`.
 
@@ -132,7 +181,8 @@ class ResultFolder:
     Raises
     ------
     ResultWriteError
-        The partial folder cannot be created (names the path).
+        The target may not be written (:func:`check_output_folder`: a file, or a folder of
+        files no gtmodel run wrote) or the partial folder cannot be created (names the path).
 
     Examples
     --------
@@ -146,6 +196,7 @@ class ResultFolder:
 
     def __init__(self, target: str | Path) -> None:
         self.target = Path(target)
+        check_output_folder(self.target)
         parent = self.target.parent
         self.path = parent / f".{self.target.name}.partial-{os.getpid()}"
         try:

@@ -29,14 +29,21 @@ def _files(folder):
     return sorted(p.name for p in folder.iterdir())
 
 
+def _earlier_run(target, files):
+    """A result folder an earlier run wrote: its files and its summary.json listing them."""
+    target.mkdir()
+    for name, text in files.items():
+        (target / name).write_text(text)
+    (target / "summary.json").write_text(json.dumps({"status": "optimal", "files": ["summary.json", *files]}))
+
+
 def test_commit_replaces_the_folder_and_lists_every_file(tmp_path):
     target = tmp_path / "out"
-    target.mkdir()
-    (target / "old.csv").write_text("stale")
+    _earlier_run(target, {"old.csv": "stale"})
     folder = ResultFolder(target)
     (folder.path / "a.csv").write_text("1")
     (folder.path / "b.png").write_bytes(b"x")
-    assert _files(target) == ["old.csv"]  # nothing visible before the commit
+    assert _files(target) == ["old.csv", "summary.json"]  # nothing visible before the commit
     summary = folder.commit({"status": "optimal"})
     assert _files(target) == ["a.csv", "b.png", "summary.json"]
     assert json.loads((target / "summary.json").read_text())["files"] == ["summary.json", "a.csv", "b.png"]
@@ -46,8 +53,7 @@ def test_commit_replaces_the_folder_and_lists_every_file(tmp_path):
 
 def test_discard_leaves_the_earlier_folder_untouched(tmp_path):
     target = tmp_path / "out"
-    target.mkdir()
-    (target / "trajectory.csv").write_text("earlier run")
+    _earlier_run(target, {"trajectory.csv": "earlier run"})
     folder = ResultFolder(target)
     (folder.path / "half.csv").write_text("half")
     folder.discard()
@@ -66,10 +72,9 @@ def test_orphaned_partial_folder_of_a_dead_process_is_removed(tmp_path):
 def test_a_file_in_place_of_the_folder_is_an_io_error_naming_it(tmp_path):
     target = tmp_path / "out"
     target.write_text("a file")
-    folder = ResultFolder(target)
     with pytest.raises(ResultWriteError, match=f"cannot write the result folder {target}"):
-        folder.commit({"status": "optimal"})
-    folder.discard()
+        ResultFolder(target)  # refused before anything is written
+    assert _files(tmp_path) == ["out"]
     assert target.read_text() == "a file"
 
 
@@ -191,3 +196,48 @@ def test_heartbeat_disabled_is_silent(caplog):
     with Heartbeat("solving x", interval=0.05, enabled=False):
         time.sleep(0.2)
     assert not [r for r in caplog.records if "still running" in r.getMessage()]
+
+
+#: Folders of a user's own files: a run must refuse them, not replace them (issue 26, item 1).
+USER_FOLDERS = {
+    "problem_files": {"a.toml": "kind = 'x'\n", "b.toml": "kind = 'y'\n"},
+    "only_a_hidden_repo": {".git/HEAD": "ref: refs/heads/main\n"},
+    "a_foreign_summary": {"summary.json": '{"total": 3}', "data.csv": "1,2\n"},
+}
+
+
+def _make(folder, files):
+    for name, text in files.items():
+        (folder / name).parent.mkdir(parents=True, exist_ok=True)
+        (folder / name).write_text(text)
+    return {p.relative_to(folder): p.read_text() for p in folder.rglob("*") if p.is_file()}
+
+
+@pytest.mark.parametrize("files", USER_FOLDERS.values(), ids=USER_FOLDERS)
+def test_a_folder_of_the_users_files_is_refused_by_the_cli_and_left_as_it_was(tmp_path, capsys, files):
+    """Also a bad problem file (whose run writes only a summary) must not empty it."""
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    before = _make(mine, files)
+    codes = [main(["solve", str(p), "--out", str(mine)]) for p in (REPO / "problems" / "l1_time_optimal.toml", tmp_path / "missing.toml")]
+    assert codes == [EXIT_BAD_INPUT, EXIT_BAD_INPUT]
+    assert f"will not write the result folder {mine}: it holds files that no gtmodel run wrote" in capsys.readouterr().err
+    assert {p.relative_to(mine): p.read_text() for p in mine.rglob("*") if p.is_file()} == before
+
+
+@pytest.mark.parametrize("files", USER_FOLDERS.values(), ids=USER_FOLDERS)
+def test_result_folder_refuses_a_folder_of_the_users_files(tmp_path, files):
+    """The library path (run_problem, studies) goes through ResultFolder: the same rule."""
+    before = _make(tmp_path, files)
+    with pytest.raises(ResultWriteError, match="it holds files that no gtmodel run wrote"):
+        ResultFolder(tmp_path)
+    assert {p.relative_to(tmp_path): p.read_text() for p in tmp_path.rglob("*") if p.is_file()} == before
+
+
+def test_an_empty_folder_and_an_earlier_result_folder_are_written(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    for _ in range(2):  # empty, then the folder the first commit wrote
+        with ResultFolder(out) as folder:
+            folder.commit({"status": "optimal"})
+    assert _files(out) == ["summary.json"]
