@@ -13,6 +13,9 @@ status             exit  meaning
 ``converged``      0     an iterative estimate met its stopping rule
 ``completed``      0     a simulation or filter run ended normally (no optimisation)
 ``acceptable``     1     solved to the solver's looser "acceptable" level
+``check_failed``   1     solved, but the result's own check failed (its verification
+                         against an independent simulation, or a self-check it
+                         states); the ``checks``/``verification`` block says which
 ``max_iterations`` 1     stopped at the iteration or time limit
 ``infeasible``     1     the solver proved (locally) that no solution exists
 ``error``          1     the solver failed (numerical failure, exception)
@@ -46,6 +49,7 @@ class Status(enum.StrEnum):
     CONVERGED = "converged"
     COMPLETED = "completed"
     ACCEPTABLE = "acceptable"
+    CHECK_FAILED = "check_failed"
     MAX_ITERATIONS = "max_iterations"
     INFEASIBLE = "infeasible"
     ERROR = "error"
@@ -98,6 +102,7 @@ EXIT_CODES: dict[Status, int] = {
     Status.CONVERGED: 0,
     Status.COMPLETED: 0,
     Status.ACCEPTABLE: 1,
+    Status.CHECK_FAILED: 1,
     Status.MAX_ITERATIONS: 1,
     Status.INFEASIBLE: 1,
     Status.ERROR: 1,

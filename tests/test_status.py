@@ -13,7 +13,7 @@ from .conftest import REPO
 
 # the table of the issue and of docs/getting_started.md, written out independently of the code
 EXPECTED_EXIT = {
-    "optimal": 0, "converged": 0, "completed": 0, "acceptable": 1, "max_iterations": 1, "infeasible": 1,
+    "optimal": 0, "converged": 0, "completed": 0, "acceptable": 1, "check_failed": 1, "max_iterations": 1, "infeasible": 1,
     "error": 1, "invalid_input": 2, "internal_error": 3, "interrupted": 130,
 }
 
@@ -32,6 +32,7 @@ def test_every_status_has_an_exit_code():
     [
         ([], "optimal"),
         (["optimal", "acceptable"], "acceptable"),
+        (["check_failed", "acceptable", "optimal"], "check_failed"),
         (["infeasible", "max_iterations"], "infeasible"),
         (["optimal", "infeasible", "error"], "error"),
         (["converged", "optimal"], "converged"),
