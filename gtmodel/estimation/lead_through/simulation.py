@@ -104,8 +104,9 @@ class Operator:
         Planned force [N] at given times [s], linearly interpolated (held after the last).
     aim : sequence of (float, array_like of 3), optional
         Where the operator wants the tool [m], linearly interpolated; None: no correction.
-    gain : array_like of 3, optional
-        Spring-like correction per base axis [N/m] (0 on an axis: no correction there).
+    gain : array_like of 3 or array_like (3, 3), optional
+        Spring-like correction [N/m]: per base axis (3 entries, 0: no correction on that
+        axis) or a symmetric positive semi-definite matrix (e.g. ``k n n^T``: along ``n`` only).
     lag : float, optional
         Reaction lag [s] of the perceived position.
     noise_rms : float, optional
@@ -131,8 +132,11 @@ class Operator:
         if self.aim is not None:
             _knots(self.aim, "aim", 3)
         g = np.asarray(self.gain, dtype=float) if np.asarray(self.gain).dtype.kind in "fiu" else None
-        if g is None or g.shape != (3,) or not np.all(np.isfinite(g)) or np.any(g < 0):
-            raise InputError(f"gain: expected 3 finite non-negative gains [N/m], got {self.gain!r}")
+        if g is not None and g.shape == (3,):
+            g = np.diag(g)
+        if g is None or g.shape != (3, 3) or not np.all(np.isfinite(g)) or not np.allclose(g, g.T) \
+                or np.linalg.eigvalsh(0.5 * (g + g.T)).min() < -1e-9 * max(1.0, float(np.abs(g).max())):
+            raise InputError(f"gain: expected 3 non-negative gains or a symmetric positive semi-definite 3x3 matrix [N/m], got {self.gain!r}")
         object.__setattr__(self, "gain", g)
         object.__setattr__(self, "lag", _nonneg(self.lag, "lag", "s", positive=True))
         object.__setattr__(self, "noise_rms", _nonneg(self.noise_rms, "noise_rms", "N"))
@@ -255,7 +259,7 @@ def _closed_loop_step(law: LeadThroughLaw, contact: Surface | PegHole, servo: Se
     f_plan, aim, noise_t, noise_h, n_n = u[:3], u[3:6], u[6:12], u[12:18], u[18:21]
     W = contact.wrench(p, R, V)
     F_t = W + noise_t
-    F_h = ca.vertcat(f_plan + ca.DM(operator.gain) * (aim - p_seen), ca.SX.zeros(3)) + noise_h
+    F_h = ca.vertcat(f_plan + ca.mtimes(ca.DM(operator.gain), aim - p_seen), ca.SX.zeros(3)) + noise_h
     x_next, V_tool, n, _ = law.step_function()(x, F_h, F_t, n_n)
     V_ref = V_tool if servo.delay_samples == 0 else V_prev
     ws = 2 * math.pi * servo.bandwidth_hz
