@@ -221,6 +221,8 @@ class CorrectionRangeRow:
         Peak of the force spectrum [Hz].
     predicted_hz : float
         Oscillation frequency of the linearised contact loop [Hz].
+    run : LeadThroughRun or None, optional
+        The record (not a measure: left out of :meth:`measures`).
     """
 
     correction_range_deg: float
@@ -230,6 +232,16 @@ class CorrectionRangeRow:
     lost_contact_fraction: float
     frequency_hz: float
     predicted_hz: float
+    run: LeadThroughRun | None = field(default=None, repr=False, compare=False)
+
+    def measures(self) -> dict[str, float]:
+        """The measures as a dict (every field but ``run``).
+
+        Returns
+        -------
+        dict of str to float
+        """
+        return {k: v for k, v in vars(self).items() if k != "run"}
 
 
 def correction_range_study(ranges: Sequence[float] = (0.0, 5.0, 10.0), surface: Surface = METAL_PLATE,
@@ -289,7 +301,7 @@ def correction_range_study(ranges: Sequence[float] = (0.0, 5.0, 10.0), surface: 
         spectrum = np.abs(np.fft.rfft(f - f.mean()))
         freq = np.fft.rfftfreq(f.size, run.dt)
         rows.append(CorrectionRangeRow(float(phi), float(f.std()), float(f.min()), float(f.max()), float(np.mean(f <= 0.0)),
-                                       float(freq[1 + np.argmax(spectrum[1:])]), predicted))
+                                       float(freq[1 + np.argmax(spectrum[1:])]), predicted, run))
     return rows
 
 
