@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     record = lead_through_record()
     with tempfile.TemporaryDirectory(prefix="gtmodel-bench-lt-") as tmp:
         generated = generate(out_dir=Path(tmp) / "lt", controller=Controller(lead_through_step=step, dt=law.dt), functions=[],
-                             prefix="gt_lead_through")
+                             prefix="gt")
         library = compile_shared(generated, Path(tmp) / "build")
         c = time_lead_through(generated, library, record, Path(tmp) / "build")
     call_ns, whole_ns = python_times(step, record)

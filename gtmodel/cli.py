@@ -26,7 +26,7 @@
     A controller of the fusion filters only (KF/EKF steps) and no ``--robot``: the library
     holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``);
     a controller of the lead-through step alone (the ``controller.json`` of a ``lead_through``
-    run), prefix ``gt_lead_through``.
+    run), prefix ``gt``.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -287,7 +287,7 @@ def _codegen(args: argparse.Namespace) -> int:
     controller = load_controller(args.controller) if args.controller is not None else None
     if args.robot is None and functions is None and controller is not None and controller.kalman_step is None and controller.ilc_correction is None:
         functions = []  # the fusion filters and the lead-through step need no robot: the controller alone
-    alone = "gt_lead_through" if controller is not None and controller.functions == ("lead_through_step",) else "gt_fusion"
+    alone = "gt" if controller is not None and controller.functions == ("lead_through_step",) else "gt_fusion"
     generated = generate(
         robot=args.robot or "L1", out_dir=args.out, friction=args.friction, real=args.real, prefix=alone if functions == [] else None,
         newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions, controller=controller,

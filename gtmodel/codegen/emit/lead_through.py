@@ -19,7 +19,7 @@ def lead_through_fragment(prefix: str, real: str) -> Fragment:
     Parameters
     ----------
     prefix : str
-        C prefix (``gt_lead_through``).
+        C prefix (``gt``).
     real : {"double", "float"}
         Floating-point type.
 
