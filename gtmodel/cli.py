@@ -24,7 +24,9 @@
     controller of the 4 ms loop (Kalman step, ILC correction) from a controller file
     (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
     A controller of the fusion filters only (KF/EKF steps) and no ``--robot``: the library
-    holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``).
+    holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``);
+    a controller of the lead-through step alone (the ``controller.json`` of a ``lead_through``
+    run), prefix ``gt``.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -284,9 +286,10 @@ def _codegen(args: argparse.Namespace) -> int:
         return _codegen_model(args, functions)
     controller = load_controller(args.controller) if args.controller is not None else None
     if args.robot is None and functions is None and controller is not None and controller.kalman_step is None and controller.ilc_correction is None:
-        functions = []  # the fusion filters need no robot: the controller alone, prefix gt_fusion
+        functions = []  # the fusion filters and the lead-through step need no robot: the controller alone
+    alone = "gt" if controller is not None and controller.functions == ("lead_through_step",) else "gt_fusion"
     generated = generate(
-        robot=args.robot or "L1", out_dir=args.out, friction=args.friction, real=args.real, prefix="gt_fusion" if functions == [] else None,
+        robot=args.robot or "L1", out_dir=args.out, friction=args.friction, real=args.real, prefix=alone if functions == [] else None,
         newton_tolerance=args.newton_tolerance, max_iter=args.max_iter, functions=functions, controller=controller,
         retime_n_max=args.retime_n_max,
     )

@@ -45,6 +45,7 @@ import numpy as np
 
 from gtmodel.codegen.declarations import CONTROLLER_KIND, ArgSpec, FunctionSpec, OutputSpec
 from gtmodel.codegen.specs.filter import FILTER_FUNCTIONS, check_filter_function, filter_sizes, filter_spec
+from gtmodel.codegen.specs.lead_through import check_lead_through_function, lead_through_spec
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 
@@ -57,7 +58,7 @@ __all__ = [
 ]
 
 #: Names of the controller functions (the C symbols are ``<prefix>_<name>``).
-CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction", *FILTER_FUNCTIONS)
+CONTROLLER_FUNCTIONS = ("kalman_step", "ilc_correction", *FILTER_FUNCTIONS, "lead_through_step")
 #: Sample time of the loop [s] (Dressler (2012), ch. 3.2): the one loop period of gtmodel.defaults.
 DEFAULT_DT = LOOP_PERIOD_S
 #: Largest accepted ``|ilc_correction(k) - table[k]| / (1 + |table[k]|)`` when a Controller is built.
@@ -121,6 +122,12 @@ class Controller:
     ekf_step : casadi.Function or None, optional
         The same signature for the extended Kalman filter of the 19-D model, eqs. (21)-(29)
         (nx 19, nz 13; ``ExtendedKalmanFilter(...).step_function()``); ``<prefix>_ekf_step``.
+    lead_through_step : casadi.Function or None, optional
+        ``"lead_through_step"(x[8], F_h[6], F_t[6], n_n[3]) -> (x_next[8], V_tool[6], n[3], valid)``:
+        one step of the two-sensor lead-through controller, Dressler (2012), eqs. 8.3-8.11
+        (``LeadThroughLaw(...).step_function()`` of :mod:`gtmodel.estimation.lead_through`);
+        ``<prefix>_lead_through_step`` with the state struct ``<prefix>_lead_through_state``
+        (:mod:`gtmodel.codegen.specs.lead_through`).
 
     Raises
     ------
@@ -139,6 +146,7 @@ class Controller:
     dt: float = DEFAULT_DT
     kf_step: ca.Function | None = field(default=None, repr=False)
     ekf_step: ca.Function | None = field(default=None, repr=False)
+    lead_through_step: ca.Function | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if all(getattr(self, n) is None for n in CONTROLLER_FUNCTIONS):
@@ -146,6 +154,8 @@ class Controller:
         for name in FILTER_FUNCTIONS:
             if getattr(self, name) is not None:
                 check_filter_function(getattr(self, name), name)
+        if self.lead_through_step is not None:
+            check_lead_through_function(self.lead_through_step)
         if isinstance(self.dt, bool) or not isinstance(self.dt, (int, float, np.floating)) or not (np.isfinite(self.dt) and self.dt > 0):
             raise InputError(f"dt: expected a positive sample time [s], got {self.dt!r}")
         object.__setattr__(self, "dt", float(self.dt))
@@ -233,7 +243,7 @@ class Controller:
         Returns
         -------
         tuple of FunctionSpec
-            ``kalman_step``, ``ilc_correction``, ``kf_step``, ``ekf_step`` (those given), each wrapping the given Function
+            ``kalman_step``, ``ilc_correction``, ``kf_step``, ``ekf_step``, ``lead_through_step`` (those given), each wrapping the given Function
             (the self-check compares with that Function evaluated from Python).
         """
         out = []
@@ -273,4 +283,6 @@ class Controller:
                 kind=CONTROLLER_KIND,
             ))
         out += [filter_spec(n, getattr(self, n), CONTROLLER_KIND) for n in self.filter_sizes]
+        if self.lead_through_step is not None:
+            out.append(lead_through_spec(self.lead_through_step, CONTROLLER_KIND))
         return tuple(out)

@@ -23,10 +23,13 @@ key                       value                                                 
                           (``KalmanFilter(...).step_function()``)
 ``ekf_step``              the EKF step of the 19-D model, same signature            no
                           (``ExtendedKalmanFilter(...).step_function()``)
+``lead_through_step``     the lead-through controller step ``"lead_through_step"    no
+                          (x, F_h, F_t, n_n) -> (x_next, V_tool, n, valid)``
+                          serialised (``LeadThroughLaw(...).step_function()``)
 ``description``           free text (what run, which case)                          no
 ========================  ========================================================  ===========
 
-At least one of ``kalman_step``, ``ilc_correction``, ``kf_step`` and ``ekf_step`` must be
+At least one of ``kalman_step``, ``ilc_correction``, ``kf_step``, ``ekf_step`` and ``lead_through_step`` must be
 present. For the filters ``dt`` is the sensors' sample time (0.001 at 1 kHz). The Functions are
 stored themselves, not rebuilt from matrices: the C is generated from the very graph the
 Python estimation ran (the serialisation is CasADi's; a file written by another CasADi
@@ -64,9 +67,9 @@ __all__ = ["CONTROLLER_FORMAT", "CONTROLLER_KEYS", "save_controller", "load_cont
 #: Value of the ``format`` key.
 CONTROLLER_FORMAT = "gtmodel.controller/1"
 #: Every key a controller file may hold.
-CONTROLLER_KEYS = ("format", "dt", "kalman_step", "ilc_correction", "ilc_table", "kf_step", "ekf_step", "description")
+CONTROLLER_KEYS = ("format", "dt", "kalman_step", "ilc_correction", "ilc_table", "kf_step", "ekf_step", "lead_through_step", "description")
 #: Keys holding a serialised CasADi Function.
-_FUNCTION_KEYS = ("kalman_step", "ilc_correction", "kf_step", "ekf_step")
+_FUNCTION_KEYS = ("kalman_step", "ilc_correction", "kf_step", "ekf_step", "lead_through_step")
 _SUFFIXES = (".json", ".npz")
 
 
@@ -103,7 +106,7 @@ def save_controller(path: str | Path, controller: Controller, description: str =
     if not isinstance(controller, Controller):
         raise InputError(f"controller: expected a gtmodel.codegen.Controller, got {type(controller).__name__}")
     data: dict[str, Any] = {"format": CONTROLLER_FORMAT, "dt": controller.dt}
-    for key in ("kalman_step", "kf_step", "ekf_step"):
+    for key in ("kalman_step", "kf_step", "ekf_step", "lead_through_step"):
         if getattr(controller, key) is not None:
             data[key] = getattr(controller, key).serialize()
     if controller.ilc_correction is not None:
@@ -206,7 +209,7 @@ def load_controller(path: str | Path) -> Controller:
     if "description" in data:
         _string(path, data, "description")
     kw: dict[str, Any] = {"dt": float(dt)}
-    for key in ("kalman_step", "kf_step", "ekf_step"):
+    for key in ("kalman_step", "kf_step", "ekf_step", "lead_through_step"):
         if key in data:
             kw[key] = _function(path, data, key)
     if "ilc_correction" in data:

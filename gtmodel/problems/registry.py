@@ -38,6 +38,7 @@ _CLASSES: dict[str, str] = {
     "state_estimation": "gtmodel.problems.kinds.state_estimation:StateEstimationKind",
     "correction_stability": "gtmodel.problems.kinds.correction_stability:CorrectionStabilityKind",
     "optimal_control": "gtmodel.problems.kinds.optimal_control:OptimalControlKind",
+    "lead_through": "gtmodel.problems.kinds.lead_through:LeadThroughKind",
 }
 
 #: Kind name -> ``module:class`` of its schema in a light module (pydantic, no solver); the
@@ -53,6 +54,7 @@ _SCHEMAS: dict[str, str] = {
     "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
     "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
+    "lead_through": "gtmodel.problems.kinds.schemas.lead_through:LeadThroughFile",
 }
 
 

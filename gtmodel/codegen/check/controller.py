@@ -30,6 +30,7 @@ import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.check.filter import FILTER_CYCLES, filter_checks, filter_probes, filter_record, time_filters
+from gtmodel.codegen.check.lead_through import check_record, lead_through_checks, lead_through_probes, lead_through_record, time_lead_through
 from gtmodel.codegen.check.report import SENTINEL, CheckReport, FunctionCheck, StatusProbe, run_check, status_probe
 from gtmodel.codegen.check.run import c_function, pointer, time_program, timing_block
 from gtmodel.codegen.controller import Controller
@@ -335,6 +336,7 @@ def time_controller(generated: GeneratedCode, library: Path, inputs: dict[str, n
 def _records(c: Controller, cycles: int, seed: int, given: dict | None) -> dict[str, dict[str, np.ndarray]]:
     """The measurement record and prior of every filter step: ``given`` ones validated, else :func:`filter_record`."""
     given = {} if given is None else dict(given)
+    lead = given.pop("lead_through_step", None)
     unknown = [k for k in given if k not in c.filter_sizes]
     if unknown:
         raise InputError(f"records: {unknown[0]!r} is not a filter of the controller ({', '.join(c.filter_sizes) or 'none'})")
@@ -353,6 +355,15 @@ def _records(c: Controller, cycles: int, seed: int, given: dict | None) -> dict[
                 raise InputError(f"records[{name!r}][{key!r}]: expected finite values of shape {want}, got {v.shape}")
             rec[key] = v
         out[name] = rec
+    if lead is not None and c.lead_through_step is None:
+        raise InputError("records: 'lead_through_step' given but the controller has no lead_through_step")
+    if c.lead_through_step is not None:
+        try:
+            out["lead_through_step"] = lead_through_record(seed=seed) if lead is None else check_record(lead)
+        except InputError as exc:
+            raise InputError(f"records['lead_through_step']: {exc}") from None
+        if np.any(out["lead_through_step"]["x0"] != 0):
+            raise InputError("records['lead_through_step']['x0']: expected zeros (the C run starts from _init: at rest)")
     return out
 
 
@@ -395,7 +406,9 @@ def check_controller(
     records : dict or None, optional
         ``{"kf_step" | "ekf_step": {"z": (N, nz), "x0": (nx,), "P0": (nx, nx)}}``: a
         measurement record and prior to replay instead of the default one (e.g. a
-        simulated tracker + IMU run of the fusion study).
+        simulated tracker + IMU run of the fusion study); ``{"lead_through_step": {"F_h":
+        (N, 6), "F_t": (N, 6), "n_n": (N, 3), "x0": zeros (8,)}}``: a recorded lead-through
+        session (default :func:`~gtmodel.codegen.check.lead_through.lead_through_record`).
 
     Returns
     -------
@@ -448,15 +461,22 @@ def check_controller(
         results.append(check)
         probes += p
     recs = _records(c, filter_cycles, seed, records)
+    lead = recs.pop("lead_through_step", None)
     for name, rec in recs.items():
         results += filter_checks(library, c, name, rec, generated.real)[0]
         probes += filter_probes(library, name, rec)
+    if lead is not None:
+        results += lead_through_checks(library, c, lead, generated.real)
+        probes += lead_through_probes(library, lead)
     if timing:
         times = time_controller(controller_part(generated), library.path, inputs, build) if c.kalman_step or c.ilc_correction else {}
         if recs:
             times.update(time_filters(controller_part(generated), library.path, recs, build))
+        if lead is not None:
+            times.update(time_lead_through(controller_part(generated), library.path, lead, build))
         results = [FunctionCheck(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]
-    n = len(inputs["y"]) if c.kalman_step is not None else (len(inputs["k"]) if c.ilc_correction is not None else max(len(r["z"]) for r in recs.values()))
+    lengths = [len(r["z"]) for r in recs.values()] + ([len(lead["F_h"])] if lead is not None else [])
+    n = len(inputs["y"]) if c.kalman_step is not None else (len(inputs["k"]) if c.ilc_correction is not None else max(lengths))
     report = ControllerCheckReport(
         robot=generated.robot_name, prefix=generated.prefix, n=n,
         seed=seed, functions=tuple(results), probes=tuple(probes), version=library.version(), library=library.path,

@@ -13,6 +13,7 @@ from __future__ import annotations
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.emit import Fragment, c_float, fill
 from gtmodel.codegen.emit.filter import filter_fragment
+from gtmodel.codegen.emit.lead_through import lead_through_fragment
 
 __all__ = ["controller_fragment"]
 
@@ -23,7 +24,11 @@ def _kalman_values(prefix: str, controller: Controller, real: str) -> dict[str, 
 
 
 def _filters(prefix: str, controller: Controller, real: str) -> Fragment:
-    return Fragment.join(filter_fragment(prefix, name, getattr(controller, name), real) for name in controller.filter_sizes)
+    """The filters' and the lead-through step's state functions."""
+    parts = [filter_fragment(prefix, name, getattr(controller, name), real) for name in controller.filter_sizes]
+    if controller.lead_through_step is not None:
+        parts.append(lead_through_fragment(prefix, real))
+    return Fragment.join(parts)
 
 
 def _header_lines(prefix: str, controller: Controller, real: str) -> list[str]:
