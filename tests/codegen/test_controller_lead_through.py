@@ -75,6 +75,7 @@ def test_a_step_of_another_law_fails_the_check(built):
     assert not report.passed
 
 
+@pytest.mark.slow
 @needs_valgrind
 def test_stand_alone_run_is_valgrind_clean_and_heap_free(built, tmp_path):
     gen, _, build = built
