@@ -1,0 +1,26 @@
+"""Calibration from stereo camera images (Dressler (2012), ch. 5.5): the camera as a measuring device.
+
+One module per job: :mod:`~gtmodel.calibration.vision.camera` (pinhole camera with
+Brown-Conrady distortion as a CasADi expression, the five-square pattern),
+:mod:`~gtmodel.calibration.vision.images` (synthetic images with detection failures, the
+corner measurement file), :mod:`~gtmodel.calibration.vision.reconstruction` (bundle
+adjustment, TCP with covariance, metric scale) and :mod:`~gtmodel.calibration.vision.study`
+(kinematic calibration on the reconstructed TCPs beside the laser tracker's).
+"""
+
+from gtmodel.calibration.vision.camera import Camera, Pattern, look_at, projection_expression, undistort
+from gtmodel.calibration.vision.images import (
+    PatternMount,
+    StereoImages,
+    SyntheticStereo,
+    actuator_grid_poses,
+    read_stereo_corners,
+    synthetic_stereo_images,
+)
+from gtmodel.calibration.vision.reconstruction import StereoReconstruction, bundle_adjust, reconstruct, scale_from_carts, start_values
+
+__all__ = [
+    "Camera", "Pattern", "look_at", "projection_expression", "undistort", "PatternMount", "StereoImages", "SyntheticStereo",
+    "actuator_grid_poses", "read_stereo_corners", "synthetic_stereo_images", "StereoReconstruction", "bundle_adjust",
+    "reconstruct", "scale_from_carts", "start_values",
+]
