@@ -18,9 +18,11 @@ from gtmodel.calibration.vision.images import (
     synthetic_stereo_images,
 )
 from gtmodel.calibration.vision.reconstruction import StereoReconstruction, bundle_adjust, reconstruct, scale_from_carts, start_values
+from gtmodel.calibration.vision.study import VisionStudy, calibrate_from_images, image_radius, vision_calibration_study, vision_tcp_errors_vs_radius
 
 __all__ = [
     "Camera", "Pattern", "look_at", "projection_expression", "undistort", "PatternMount", "StereoImages", "SyntheticStereo",
     "actuator_grid_poses", "read_stereo_corners", "synthetic_stereo_images", "StereoReconstruction", "bundle_adjust",
-    "reconstruct", "scale_from_carts", "start_values",
+    "reconstruct", "scale_from_carts", "start_values", "VisionStudy", "calibrate_from_images", "image_radius", "vision_calibration_study",
+    "vision_tcp_errors_vs_radius",
 ]

@@ -344,6 +344,7 @@ def synthetic_stereo_images(
     seed: int | None = 0,
     max_obliquity_deg: float = MAX_OBLIQUITY_DEG,
     margin_px: float = 0.0,
+    plate_poses: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> SyntheticStereo:
     """Simulated corner detections of two cameras at given actuator values.
 
@@ -367,6 +368,10 @@ def synthetic_stereo_images(
         Largest detection angle [deg] (default :data:`MAX_OBLIQUITY_DEG`).
     margin_px : float, optional
         Image border where corners are not detected [px].
+    plate_poses : tuple of numpy.ndarray, optional
+        ``(T (N, 3), R (N, 3, 3))``: the true plate poses, when they are not
+        ``true_model.fk(q)`` (e.g. with actuator errors,
+        :func:`~gtmodel.calibration.synthetic.synthetic_measurements`).
 
     Returns
     -------
@@ -385,7 +390,9 @@ def synthetic_stereo_images(
         raise InputError(f"max_obliquity_deg: expected (0, 90], got {max_obliquity_deg!r}")
     mount = PatternMount() if mount is None else mount
     qa = np.atleast_2d(np.asarray(q, dtype=float))
-    T, R = true_model.fk(qa)
+    T, R = true_model.fk(qa) if plate_poses is None else (np.asarray(plate_poses[0], dtype=float), np.asarray(plate_poses[1], dtype=float))
+    if T.shape != (qa.shape[0], 3) or R.shape != (qa.shape[0], 3, 3):
+        raise InputError(f"plate_poses: expected T ({qa.shape[0]}, 3) and R ({qa.shape[0]}, 3, 3), got {T.shape} and {R.shape}")
     N, M = qa.shape[0], pattern.n_corners
     X = mount.corners_world(pattern, T, R)
     centre = T + R @ mount.offset

@@ -48,7 +48,7 @@ from gtmodel.calibration.vision.images import StereoImages
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["StereoReconstruction", "reconstruct", "bundle_adjust", "start_values", "scale_from_carts", "homography_pose", "CART_PAIR_TOLERANCE_M"]
+__all__ = ["StereoReconstruction", "common_displacement_pairs", "reconstruct", "bundle_adjust", "start_values", "scale_from_carts", "homography_pose", "CART_PAIR_TOLERANCE_M"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -367,6 +367,27 @@ def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
 
+def common_displacement_pairs(q: np.typing.ArrayLike, tolerance: float = CART_PAIR_TOLERANCE_M) -> tuple[np.ndarray, np.ndarray]:
+    """Pose pairs whose carts all moved by the same non-zero distance.
+
+    Parameters
+    ----------
+    q : array_like, shape (N, 3)
+        Cart positions [m].
+    tolerance : float, optional
+        Largest spread of the three carts' displacements [m].
+
+    Returns
+    -------
+    k, l : numpy.ndarray of int, shape (P,)
+        The pairs (``k < l``).
+    """
+    qa = np.asarray(q, dtype=float)
+    dq = qa[None, :, :] - qa[:, None, :]
+    common = (np.ptp(dq, axis=2) <= tolerance) & (np.abs(dq[:, :, 0]) > 10 * tolerance)
+    return np.nonzero(np.triu(common, 1))
+
+
 def scale_from_carts(q: np.typing.ArrayLike, T: np.typing.ArrayLike, transmission: float = 1.0,
                      tolerance: float = CART_PAIR_TOLERANCE_M) -> tuple[float, int, float]:
     """Metric scale from poses whose carts moved by one common displacement (Dressler (2012), ch. 5.5).
@@ -403,15 +424,13 @@ def scale_from_carts(q: np.typing.ArrayLike, T: np.typing.ArrayLike, transmissio
         No pair of poses with a common cart displacement.
     """
     qa, Ta = np.asarray(q, dtype=float), np.asarray(T, dtype=float)
-    dq = qa[None, :, :] - qa[:, None, :]
-    common = (np.ptp(dq, axis=2) <= tolerance) & (np.abs(dq[:, :, 0]) > 10 * tolerance)
-    k, l_ = np.nonzero(np.triu(common, 1))
+    k, l_ = common_displacement_pairs(qa, tolerance)
     if k.size == 0:
         raise InputError("scale: no two poses whose carts all moved by the same distance (needed for the metric scale; "
                          "measure poses on a cart grid, or give the scale)")
     if not (np.isfinite(transmission) and transmission > 0):
         raise InputError(f"transmission: expected a positive factor, got {transmission!r}")
-    delta = transmission * np.abs(dq[k, l_].mean(axis=1))
+    delta = transmission * np.abs((qa[l_] - qa[k]).mean(axis=1))
     d = np.linalg.norm(Ta[l_] - Ta[k], axis=1)
     lam = float(np.sum(delta * d) / np.sum(d * d))
     return lam, int(k.size), float(np.sqrt(np.mean((lam * d - delta) ** 2)))
