@@ -94,8 +94,9 @@ def _coverage(seeds):
 
 
 def test_covariance_is_honest_on_a_few_noise_draws():
+    """3 draws (about 330 coordinates): the binomial sd of the coverage is 0.026, so +-4 sd about 0.683."""
     c = _coverage(range(3))
-    assert COVERAGE[0] <= c <= COVERAGE[1], c
+    assert 0.683 - 0.1 <= c <= 0.683 + 0.1, c
 
 
 @pytest.mark.slow
