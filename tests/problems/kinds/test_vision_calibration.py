@@ -39,8 +39,8 @@ def test_shipped_problem_reproduces_the_structure_of_section_5_5(tmp_path):
     assert 1e-3 <= s["parameter_difference_max_m"] <= 30e-3                             # thesis up to 9 mm
     assert s["poses_detected"] < s["poses_commanded"]                                   # detection failures
     assert s["relative_orientation"]["rotation_error_rad"] < 1e-2
-    for f in ("camera_views.png", "reconstruction.png", "vision_errors.png", "vision_tcp.csv", "parameters.toml"):
-        assert (out / f).stat().st_size > 0
+    files = ("camera_views.png", "reconstruction.png", "vision_errors.png", "vision_tcp.csv", "parameters.toml")
+    assert [f for f in files if not (out / f).is_file() or (out / f).stat().st_size == 0] == []
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = ["VisionCalibrationFile", "CameraSection", "MAX_IMAGE_PX", "MAX_DISTORTION"]
+__all__ = ["VisionCalibrationFile", "MAX_IMAGE_PX", "MAX_DISTORTION"]
 
 #: Largest image side [px].
 MAX_IMAGE_PX = 100_000
