@@ -45,7 +45,6 @@ calibration), ``parameters_tracker.toml`` and the plots ``camera_views.png``,
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -60,14 +59,13 @@ from gtmodel.calibration.vision import (
     Pattern,
     PatternMount,
     StereoImages,
-    SyntheticStereo,
     VisionStudy,
     actuator_grid_poses,
-    calibrate_from_images,
     look_at,
     read_stereo_corners,
     synthetic_stereo_images,
 )
+from gtmodel.calibration.vision.declared import VisionDeclaration
 from gtmodel.calibration.vision.reconstruction import common_displacement_pairs
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
@@ -83,77 +81,6 @@ _log = logging.getLogger("gtmodel")
 
 #: Most cart-grid candidates a ``truth.grid_step`` may give (each costs a forward kinematics).
 MAX_GRID_CANDIDATES = 200_000
-
-
-@dataclass
-class VisionDeclaration:
-    """A loaded ``vision_calibration`` problem.
-
-    Parameters
-    ----------
-    images : StereoImages
-        Poses seen by both cameras.
-    cameras : tuple of Camera
-        The cameras as the reconstruction assumes them.
-    pattern : Pattern
-        The pattern.
-    mount : PatternMount
-        The pattern on the plate.
-    start_model : ThreeLinkClosure
-        The nominal model.
-    pixel_sigma : float
-        Corner noise [px].
-    transmission : float or None
-        TCP travel per cart travel (None: from the start model).
-    solver : str
-        Least-squares solver.
-    max_iter : int
-        Iteration limit.
-    source : str
-        Where the data come from.
-    T_tracker : numpy.ndarray, shape (n, 3), or None
-        Tracker TCPs of the same poses [m].
-    T_true : numpy.ndarray, shape (n, 3), or None
-        True TCPs [m] (synthetic).
-    synthetic : SyntheticStereo or None
-        The synthetic images and truth.
-    true_cameras : tuple of Camera or None
-        The true cameras (synthetic).
-    """
-
-    images: StereoImages
-    cameras: tuple[Camera, Camera]
-    pattern: Pattern
-    mount: PatternMount
-    start_model: ThreeLinkClosure
-    pixel_sigma: float
-    transmission: float | None
-    solver: str
-    max_iter: int
-    source: str
-    T_tracker: np.ndarray | None = None
-    T_true: np.ndarray | None = None
-    synthetic: SyntheticStereo | None = None
-    true_cameras: tuple[Camera, Camera] | None = None
-
-    def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> VisionStudy:
-        """Reconstruct and calibrate (:func:`~gtmodel.calibration.vision.study.calibrate_from_images`).
-
-        Parameters
-        ----------
-        verbose : bool, optional
-            Unused (progress goes to the ``gtmodel`` logger).
-        previous : Any, optional
-            Unused.
-        warm_start : bool, optional
-            Unused.
-
-        Returns
-        -------
-        VisionStudy
-        """
-        return calibrate_from_images(self.images, self.cameras, self.pattern, self.start_model, self.mount, self.pixel_sigma,
-                                     self.T_tracker, self.T_true, self.transmission, self.solver, self.max_iter, self.synthetic)
 
 
 def _camera(k: int, c: CameraSection, file: ProblemFile, distortion: Any) -> Camera:
@@ -210,7 +137,10 @@ class VisionCalibrationKind(ProblemKind):
         pt = doc.pattern
         if pt.pitch <= pt.side:
             raise file.fail("pattern.pitch", f"a pitch above the side {pt.side:g} m (squares apart)", pt.pitch)
-        pattern = Pattern.five_squares(pt.side, pt.pitch)
+        try:
+            pattern = Pattern.five_squares(pt.side, pt.pitch)
+        except GtModelError as exc:
+            raise file.wrap("pattern.side", exc) from None
         try:
             mount = PatternMount.facing(pt.normal, pt.x_axis, pt.offset)
         except GtModelError as exc:
