@@ -39,9 +39,14 @@ from gtmodel.errors import InputError
 from gtmodel.robots.closure import ClosureModel
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["VisionStudy", "vision_calibration_study", "calibrate_from_images", "image_radius", "THESIS_FIGURES", "vision_tcp_errors_vs_radius"]
+__all__ = ["REPROJECTION_CHECK_FACTOR", "VisionStudy", "vision_calibration_study", "calibrate_from_images", "image_radius", "THESIS_FIGURES", "vision_tcp_errors_vs_radius"]
 
 _log = logging.getLogger("gtmodel")
+
+#: Self-check: a reprojection RMS above this many declared corner sigmas means the camera
+#: model or the detections are not what was declared (the predicted covariance would not be
+#: honest): the result is ``check_failed``.
+REPROJECTION_CHECK_FACTOR = 2.0
 
 #: The figures of Dressler (2012), ch. 5.5 this study is compared with.
 THESIS_FIGURES = {
@@ -279,6 +284,8 @@ def calibrate_from_images(
     Returns
     -------
     VisionStudy
+        ``check_failed`` when the reprojection RMS exceeds :data:`REPROJECTION_CHECK_FACTOR`
+        times ``pixel_sigma``.
 
     Raises
     ------
@@ -316,6 +323,10 @@ def calibrate_from_images(
             errors["tracker_vs_truth"] = tcp_errors(res_t.model, qd[val], T_true[val])
     status = Status.worst([rec.status, res_v.status] + ([res_t.status] if res_t is not None else []))
     msg = f"{n} poses seen by both cameras; {rec.message}; vision calibration {res_v.status}"
+    if rec.rms_px > REPROJECTION_CHECK_FACTOR * pixel_sigma:
+        status = Status.worst([status, Status.CHECK_FAILED])
+        msg = (f"CHECK FAILED: reprojection RMS {rec.rms_px:.3g} px is above {REPROJECTION_CHECK_FACTOR:g} x the declared corner noise "
+               f"{pixel_sigma:g} px (camera model or detections off; the predicted covariance is not honest); " + msg)
     if T_tracker is not None:
         msg += f"; vision error mean {np.linalg.norm(T_vis - T_tracker, axis=1).mean() * 1e3:.3g} mm"
     if "vision_vs_truth" in errors:

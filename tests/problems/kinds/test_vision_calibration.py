@@ -67,6 +67,16 @@ def test_measured_corners_run(corner_file, tmp_path):
     assert read_stereo_corners(corner_file / "corners.csv", 20).n_poses == 24
 
 
+def test_corners_noisier_than_declared_fail_the_self_check(corner_file, tmp_path):
+    """The corners carry 0.5 px noise and a lens error; declared 0.1 px: check_failed (exit 1), never success."""
+    text = (corner_file / "data.toml").read_text().replace("pixel_sigma = 0.5 ", "pixel_sigma = 0.1 ")
+    (tmp_path / "corners.csv").write_text((corner_file / "corners.csv").read_text())
+    (tmp_path / "p.toml").write_text(text)
+    outcome = run_problem(tmp_path / "p.toml", tmp_path / "out", plots=False)
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert outcome.status == "check_failed" and s["message"].startswith("CHECK FAILED: reprojection RMS")
+
+
 def test_corner_file_with_a_missing_corner_exits_2_naming_the_row(corner_file, tmp_path, capsys):
     lines = (corner_file / "corners.csv").read_text().splitlines()
     k = next(i for i, ln in enumerate(lines) if ln.startswith("pose,")) + 2 * 20 + 7  # corner 7 of the third pose
