@@ -33,6 +33,7 @@ from gtmodel.calibration.kinematic.alignment import fit_rigid_transform
 from gtmodel.calibration.kinematic.result import CalibrationResult
 from gtmodel.calibration.synthetic import LASER_TRACKER, ActuatorErrors, DeviceNoise, synthetic_measurements
 from gtmodel.calibration.vision.camera import Camera, Pattern
+from gtmodel.calibration.vision.intersection import intersect_tcp
 from gtmodel.calibration.vision.images import PatternMount, StereoImages, SyntheticStereo, synthetic_stereo_images
 from gtmodel.calibration.vision.reconstruction import StereoReconstruction, reconstruct
 from gtmodel.errors import InputError
@@ -303,6 +304,8 @@ def calibrate_from_images(
     if transmission is None:
         transmission = float(np.mean(np.linalg.norm(np.asarray(start_model.kinematics.v, dtype=float), axis=1)))
     rec = reconstruct(images, cameras, pattern, mount.tcp_in_pattern, pixel_sigma, scale="carts", transmission=transmission)
+    T_int, _ = intersect_tcp(images, cameras, pattern, rec.R21, rec.t21, pixel_sigma, rec.R, mount.tcp_in_pattern)
+    rec.message += f"; TCP by intersection within {rec.scale * np.abs(T_int - rec.T).max() * 1e3:.3g} mm of the bundle adjustment's"
     qd = images.q
     R, t = (np.eye(3), np.zeros(3)) if T_tracker is None else fit_rigid_transform(rec.T_metric, T_tracker)
     T_vis = rec.T_metric @ R.T + t
