@@ -278,7 +278,6 @@ class VisionCalibrationKind(ProblemKind):
                 uv, depth = cam.project(centres[~syn.detected.all(axis=1)])
                 missed.append(uv[(depth > 0) & cam.inside(uv, -0.05 * cam.width)])
         plot_camera_views(cams, s.images.uv, out / "camera_views.png", f"{name}: the pattern in both cameras", missed)
-        R, t = s.frame
         if s.T_tracker is not None:
             pos = np.array([c.position for c in cams])
             axes = np.array([c.R[2] for c in cams])
