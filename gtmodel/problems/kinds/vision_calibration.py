@@ -134,13 +134,8 @@ class VisionCalibrationKind(ProblemKind):
         except GtModelError as exc:
             raise file.wrap("calibration.start", exc) from None
         cams = tuple(_camera(k, c, file, c.distortion) for k, c in enumerate(doc.cameras))
+        pattern = self._pattern(doc, file)
         pt = doc.pattern
-        if pt.pitch <= pt.side:
-            raise file.fail("pattern.pitch", f"a pitch above the side {pt.side:g} m (squares apart)", pt.pitch)
-        try:
-            pattern = Pattern.five_squares(pt.side, pt.pitch)
-        except GtModelError as exc:
-            raise file.wrap("pattern.side", exc) from None
         try:
             mount = PatternMount.facing(pt.normal, pt.x_axis, pt.offset)
         except GtModelError as exc:
@@ -169,6 +164,25 @@ class VisionCalibrationKind(ProblemKind):
             raise file.fail("data.file" if doc.data is not None else "truth.grid_step",
                             "poses with a common cart displacement (all three carts moved by the same distance) for the metric scale", "none")
         return decl
+
+    @staticmethod
+    def _pattern(doc: VisionCalibrationFile, file: ProblemFile) -> Pattern:
+        pt = doc.pattern
+        if pt.type == "corners":
+            if pt.corners is None:
+                raise file.fail("pattern.corners", 'the corners of a pattern of type = "corners"')
+            try:
+                return Pattern(np.asarray(pt.corners, dtype=float), name="pattern")
+            except GtModelError as exc:
+                raise file.wrap("pattern.corners", exc) from None
+        if pt.corners is not None:
+            raise file.fail("pattern.corners", 'no corners with type = "five_squares" (or type = "corners")', pt.corners)
+        if pt.pitch <= pt.side:
+            raise file.fail("pattern.pitch", f"a pitch above the side {pt.side:g} m (squares apart)", pt.pitch)
+        try:
+            return Pattern.five_squares(pt.side, pt.pitch)
+        except GtModelError as exc:
+            raise file.wrap("pattern.side", exc) from None
 
     @staticmethod
     def _synthetic(doc: VisionCalibrationFile, file: ProblemFile, common: dict[str, Any]) -> VisionDeclaration:

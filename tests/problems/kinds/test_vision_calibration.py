@@ -102,12 +102,51 @@ BAD = [
     ("both_sources", _edit("\n[truth]\n", "\n[data]\nfile = \"c.csv\"\n\n[truth]\n"), r"exactly one of '\[truth\]'"),
     ("bad_start", _edit('start = "L1_ideal"', 'start = "Z9"'), r"field 'calibration\.start'"),
     ("bad_truth", _edit('parameters = "L1"', 'parameters = "Z9"'), r"field 'truth\.parameters'"),
+    ("zero_grid_step", _edit("grid_step = 0.15 ", "grid_step = 0.0 "), r"field 'truth\.grid_step': expected a positive number"),
+    ("bad_actuator_errors", _edit('actuator_errors = "table_4_1"', 'actuator_errors = "table_9"'), r"field 'truth\.actuator_errors'"),
+    ("bad_tracker", _edit('tracker_noise = "laser_tracker"', 'tracker_noise = "tape"'), r"field 'truth\.tracker_noise'"),
+    ("zero_image", _edit("image_size = [1024, 768]", "image_size = [0, 768]"), r"field 'cameras\[0\]\.image_size'"),
+    ("negative_focal", _edit("focal_px = [1400.0, 1400.0]", "focal_px = [-1400.0, 1400.0]"), r"field 'cameras\[0\]\.focal_px'"),
+    ("up_along_axis", _edit("look_at = [-0.05, 2.85, -0.51]\n\n[[cameras]]", "look_at = [-0.5, 5.0, -1.2]\n\n[[cameras]]"),
+     r"field 'cameras\[0\]': .*parallel to the up direction"),
+    ("x_axis_along_normal", _edit("x_axis = [1.0, 0.0, 0.0]", "x_axis = [0.0, 2.0, 0.0]"), r"field 'pattern\.normal': .*x_axis: must not be parallel"),
+    ("zero_obliquity", _edit("max_obliquity_deg = 60.0", "max_obliquity_deg = 0.0"), r"field 'measurement\.max_obliquity_deg': expected a positive"),
+    ("zero_transmission", _edit("max_obliquity_deg = 60.0", "max_obliquity_deg = 60.0\ntransmission = 0.0"), r"field 'measurement\.transmission'"),
+    ("bad_parametrisation", _edit('parametrisation = "modified"', 'parametrisation = "exotic"'), r"field 'calibration\.parametrisation'"),
+    ("corners_without_list", _edit('type = "five_squares"', 'type = "corners"'), r"field 'pattern\.corners': expected the corners"),
+    ("collinear_corners", _edit('type = "five_squares"', 'type = "corners"\ncorners = [[0, 0], [0.1, 0], [0.2, 0], [0.3, 0]]'),
+     r"field 'pattern\.corners': .*collinear"),
+    ("corners_with_five_squares", _edit("pitch = 0.1", "pitch = 0.1\ncorners = [[0, 0], [0.1, 0], [0.1, 0.1], [0, 0.1]]"),
+     r"field 'pattern\.corners': expected no corners"),
 ]
 
 
 @pytest.mark.parametrize("case, edit, match", BAD, ids=[b[0] for b in BAD])
 def test_bad_problem_is_refused_naming_the_field(tmp_path, case, edit, match):
     assert_bad_problem(tmp_path, FILE, case, edit, match)
+
+
+def test_tracker_file_without_a_pose_is_refused(corner_file, tmp_path):
+    from gtmodel.calibration import MeasurementSet
+    from gtmodel.errors import ProblemError
+
+    images = read_stereo_corners(corner_file / "corners.csv", 20)
+    MeasurementSet(q=images.q[1:], T=np.zeros((images.n_poses - 1, 3))).to_csv(tmp_path / "tracker.csv")
+    (tmp_path / "corners.csv").write_text((corner_file / "corners.csv").read_text())
+    text = (corner_file / "data.toml").read_text().replace('\nfile = "corners.csv"\n', '\nfile = "corners.csv"\ntracker_file = "tracker.csv"\n')
+    (tmp_path / "p.toml").write_text(text)
+    with pytest.raises(ProblemError, match=rf"field 'data\.tracker_file': expected a row with the cart positions of pose {images.pose_ids[0]}"):
+        load_problem(tmp_path / "p.toml")
+
+
+def test_a_planar_pattern_given_by_its_corners(tmp_path):
+    """A 4 x 3 chessboard-like grid of corners instead of the five squares: the run converges."""
+    xs, ys = np.meshgrid(np.arange(4) * 0.05 - 0.075, np.arange(3) * 0.05 - 0.05)
+    corners = ", ".join(f"[{x:.3f}, {y:.3f}]" for x, y in zip(xs.ravel(), ys.ravel()))
+    text = FILE.read_text().replace('type = "five_squares"', f'type = "corners"\ncorners = [{corners}]').replace("grid_step = 0.15 ", "grid_step = 0.3 ")
+    (tmp_path / "p.toml").write_text(text)
+    decl = load_problem(tmp_path / "p.toml").declaration
+    assert decl.images.n_corners == 12 and decl.images.n_poses >= 4
 
 
 def test_true_distortion_with_data_is_refused(corner_file, tmp_path):

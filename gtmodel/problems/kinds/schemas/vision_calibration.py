@@ -13,7 +13,7 @@ from pydantic_core import PydanticCustomError
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
-from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, matrix, number, vector
 
 __all__ = ["VisionCalibrationFile", "MAX_IMAGE_PX", "MAX_DISTORTION"]
 
@@ -63,9 +63,10 @@ def _two_cameras(v: Any) -> Any:
 class PatternSection(Section):
     """``[pattern]``: the calibration pattern on the end-effector plate."""
 
-    type: choice("five_squares", description="five squares in a quincunx, 20 corners (Dressler (2012), Figure 5.14)") = "five_squares"
-    side: number(gt=0, le=10.0, unit="m", description="side of each square (declared size: the reconstruction's unit)") = 0.06
-    pitch: number(gt=0, le=10.0, unit="m", description="distance between the squares' centres along x and y (> side)") = 0.1
+    type: choice("five_squares", "corners", description="five squares in a quincunx, 20 corners (Dressler (2012), Figure 5.14), or any planar pattern given by its corners") = "five_squares"
+    side: number(gt=0, le=10.0, unit="m", description="five_squares: side of each square (declared size: the reconstruction's unit)") = 0.06
+    pitch: number(gt=0, le=10.0, unit="m", description="five_squares: distance between the squares' centres along x and y (> side)") = 0.1
+    corners: matrix(2, bound=10.0, unit="m", description="corners: the pattern's corners (x, y) in its plane, in the order of the corner file's numbers (at least 4, not collinear)") | None = None
     normal: vector(3, bound=MAX_LENGTH_M, description="pattern normal in the plate frame (towards the cameras)") = [0.0, 1.0, 0.0]
     x_axis: vector(3, bound=MAX_LENGTH_M, description="pattern x direction in the plate frame") = [1.0, 0.0, 0.0]
     offset: vector(3, bound=10.0, unit="m", description="pattern centre from the TCP in the plate frame") = [0.0, 0.0, 0.0]
