@@ -33,6 +33,7 @@ _CLASSES: dict[str, str] = {
     "elasto_geometric_calibration": "gtmodel.problems.kinds.elasto_geometric_calibration:ElastoGeometricKind",
     "dynamic_identification": "gtmodel.problems.kinds.dynamic_identification:DynamicIdentificationKind",
     "joint_stiffness_calibration": "gtmodel.problems.kinds.joint_stiffness_calibration:JointStiffnessKind",
+    "vision_calibration": "gtmodel.problems.kinds.vision_calibration:VisionCalibrationKind",
     "tracking": "gtmodel.problems.kinds.tracking:TrackingKind",
     "ilc": "gtmodel.problems.kinds.ilc:ILCKind",
     "state_estimation": "gtmodel.problems.kinds.state_estimation:StateEstimationKind",
@@ -53,6 +54,7 @@ _SCHEMAS: dict[str, str] = {
     "calibration": "gtmodel.problems.kinds.schemas.calibration:CalibrationFile",
     "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
     "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",
+    "vision_calibration": "gtmodel.problems.kinds.schemas.vision_calibration:VisionCalibrationFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
     "lead_through": "gtmodel.problems.kinds.schemas.lead_through:LeadThroughFile",
 }
