@@ -38,6 +38,7 @@ _CLASSES: dict[str, str] = {
     "state_estimation": "gtmodel.problems.kinds.state_estimation:StateEstimationKind",
     "correction_stability": "gtmodel.problems.kinds.correction_stability:CorrectionStabilityKind",
     "optimal_control": "gtmodel.problems.kinds.optimal_control:OptimalControlKind",
+    "pose_accuracy": "gtmodel.problems.kinds.pose_accuracy:PoseAccuracyKind",
 }
 
 #: Kind name -> ``module:class`` of its schema in a light module (pydantic, no solver); the
@@ -53,6 +54,7 @@ _SCHEMAS: dict[str, str] = {
     "elasto_geometric_calibration": "gtmodel.problems.kinds.schemas.elasto_geometric_calibration:ElastoGeometricFile",
     "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
+    "pose_accuracy": "gtmodel.problems.kinds.schemas.pose_accuracy:PoseAccuracyFile",
 }
 
 
