@@ -39,6 +39,7 @@ _CLASSES: dict[str, str] = {
     "correction_stability": "gtmodel.problems.kinds.correction_stability:CorrectionStabilityKind",
     "optimal_control": "gtmodel.problems.kinds.optimal_control:OptimalControlKind",
     "pose_accuracy": "gtmodel.problems.kinds.pose_accuracy:PoseAccuracyKind",
+    "automated_calibration": "gtmodel.problems.kinds.automated_calibration:AutomatedCalibrationKind",
 }
 
 #: Kind name -> ``module:class`` of its schema in a light module (pydantic, no solver); the
@@ -55,6 +56,7 @@ _SCHEMAS: dict[str, str] = {
     "joint_stiffness_calibration": "gtmodel.problems.kinds.schemas.joint_stiffness_calibration:JointStiffnessFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
     "pose_accuracy": "gtmodel.problems.kinds.schemas.pose_accuracy:PoseAccuracyFile",
+    "automated_calibration": "gtmodel.problems.kinds.schemas.automated_calibration:AutomatedCalibrationFile",
 }
 
 
