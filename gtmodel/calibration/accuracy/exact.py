@@ -25,6 +25,7 @@ import numpy as np
 
 from gtmodel.calibration.accuracy.geometric import CORNER_SIGNS, _fk_points_function, fk_branch
 from gtmodel.calibration.accuracy.tolerances import NominalPoses, Tolerances
+from gtmodel.robots.mapped import MappedFunction
 from gtmodel.status import Status
 
 __all__ = ["WorstCase", "MonteCarlo", "worst_case", "monte_carlo"]
@@ -58,6 +59,12 @@ def _deviation_function() -> ca.Function:
     A = ca.vertcat(*rows)
     T = _fk_points_function()(A, L + p[52:55] * z, v, branch)
     return ca.Function("deviation", [w, z, p], [T - Tn], ["w", "z", "p"], ["dT"])
+
+
+@lru_cache(maxsize=1)
+def _deviation_mapped() -> MappedFunction:
+    """:func:`_deviation_function` over samples (maps cached per sample count)."""
+    return MappedFunction(_deviation_function())
 
 
 @lru_cache(maxsize=1)
@@ -169,7 +176,7 @@ def worst_case(nominal: NominalPoses, k: int, tol: Tolerances, corner_starts_use
     p = _parameters(nominal, k, tol, branch)
     scale = tol.scale
     corners = corner_starts(nominal, k, tol)
-    values = np.linalg.norm(np.array(dev.map(8)(corners[:, :9].T, corners[:, 9:].T, np.tile(p[:, None], (1, 8)))), axis=0)
+    values = np.linalg.norm(_deviation_mapped()(corners[:, :9].T.copy(), corners[:, 9:].T.copy(), p, n=8)[0], axis=0)
     order = np.argsort(-values)
     rng = np.random.default_rng(seed)
     starts = [corners[j] for j in order[:max(1, min(8, corner_starts_used))]]
@@ -264,5 +271,5 @@ def monte_carlo(nominal: NominalPoses, k: int, tol: Tolerances, samples: int = 2
     p = _parameters(nominal, k, tol, branch)
     w = _ball(rng, 3 * samples).reshape(samples, 9)
     z = rng.uniform(-1.0, 1.0, size=(samples, 3))
-    dT = np.array(_deviation_function().map(samples)(w.T, z.T, np.tile(p[:, None], (1, samples))))
+    dT = _deviation_mapped()(w.T.copy(), z.T.copy(), p, n=samples)[0]
     return MonteCarlo(np.linalg.norm(dT, axis=0))

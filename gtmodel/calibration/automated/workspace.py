@@ -55,7 +55,17 @@ class Obstacle:
     name: str = ""
 
     def contains(self, P: np.ndarray) -> np.ndarray:
-        """Whether points lie in the box grown by the safety zone, shape (N,)."""
+        """Whether points lie in the box grown by the safety zone.
+
+        Parameters
+        ----------
+        P : numpy.ndarray, shape (N, 3)
+            Points [m].
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+        """
         return np.all((P >= self.lo - self.safety) & (P <= self.hi + self.safety), axis=1)
 
 
@@ -85,7 +95,17 @@ class PinholeCamera:
     pattern_corners: np.ndarray
 
     def sees(self, P: np.ndarray) -> np.ndarray:
-        """Whether every pattern point at TCP positions ``P`` projects inside the image, shape (N,)."""
+        """Whether every pattern point projects inside the image, in front of the camera (pinhole model).
+
+        Parameters
+        ----------
+        P : numpy.ndarray, shape (N, 3)
+            TCP positions [m].
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+        """
         ok = np.ones(P.shape[0], dtype=bool)
         w, h = self.image
         for c in self.pattern_corners:
@@ -115,7 +135,17 @@ class Tracker:
     max_range: float
 
     def sees(self, P: np.ndarray) -> np.ndarray:
-        """Whether the TCP positions lie in the tracker's range, shape (N,)."""
+        """Whether the TCP positions lie in the tracker's range.
+
+        Parameters
+        ----------
+        P : numpy.ndarray, shape (N, 3)
+            TCP positions [m].
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+        """
         d = np.linalg.norm(P - self.position, axis=1)
         return (d >= self.min_range) & (d <= self.max_range)
 
@@ -202,7 +232,18 @@ class CalibrationWorkspace:
     joint_axes: np.ndarray | None = None
 
     def joint_angles(self, P: np.ndarray) -> np.ndarray:
-        """Joint angles [rad] at reachable TCP positions, shape (N, 3) (see ``joint_axes``)."""
+        """Joint angles at reachable TCP positions (see ``joint_axes``).
+
+        Parameters
+        ----------
+        P : numpy.ndarray, shape (N, 3)
+            TCP positions [m], every one reachable.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N, 3)
+            Angle of each link to its joint's neutral axis [rad].
+        """
         kin = self.kinematics
         if self.joint_axes is None:
             return kin.link_angles(P)
@@ -212,7 +253,17 @@ class CalibrationWorkspace:
         return np.arccos(np.clip(np.einsum("nix,ix->ni", d, self.joint_axes), -1.0, 1.0))
 
     def kinematic(self, P: np.ndarray) -> np.ndarray:
-        """Reach, cart travel and joint-angle limit at TCP positions, shape (N,)."""
+        """Reach, cart travel and joint-angle limit at TCP positions (the kinematic workspace).
+
+        Parameters
+        ----------
+        P : numpy.ndarray, shape (N, 3)
+            TCP positions [m].
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (N,)
+        """
         kin = self.kinematics
         ok = kin.in_workspace(P, limits=False)
         if ok.any():

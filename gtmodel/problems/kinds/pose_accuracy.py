@@ -56,7 +56,7 @@ from gtmodel.calibration.accuracy import (
     Section,
     Tolerances,
 )
-from gtmodel.calibration.accuracy.section import section_poses
+from gtmodel.calibration.accuracy.section import MAX_SECTION_POINTS, section_poses
 from gtmodel.errors import GtModelError
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.schemas.pose_accuracy import PoseAccuracyFile
@@ -67,6 +67,8 @@ from gtmodel.robots.kinematics import GantryTau3Kinematics
 __all__ = ["PoseAccuracyKind", "PoseAccuracyFile"]
 
 UM = 1e-6
+#: Grid lines per axis of the load-time check that the section meets the workspace.
+_CHECK_LINES = 50
 
 
 class PoseAccuracyKind(ProblemKind):
@@ -98,7 +100,7 @@ class PoseAccuracyKind(ProblemKind):
         ------
         ProblemError
             A bad parameter set; a section range that is not increasing, too fine or without
-            a workspace point; repeated case names; an inverse case that is not declared; a
+            a workspace point (checked on a grid of about 50 x 50 points); repeated case names; an inverse case that is not declared; a
             check pose outside the workspace.
         """
         ref = file.reference("robot.parameters", doc.robot.parameters, available_parameter_sets())
@@ -113,10 +115,12 @@ class PoseAccuracyKind(ProblemKind):
                 raise file.fail(f"section.{key}", "an increasing range [min, max]", [lo, hi])
         angle = None if s.max_link_angle_deg is None else float(np.radians(s.max_link_angle_deg))
         section = Section(s.x, tuple(s.y), tuple(s.z), s.step, angle)
-        try:
-            _, _, inside = section_poses(kin, section)
-        except GtModelError as exc:
-            raise file.wrap("section.step", exc) from None
+        ys, zs = section.axes()
+        if ys.size * zs.size > MAX_SECTION_POINTS:
+            raise file.fail("section.step", f"a step giving at most {MAX_SECTION_POINTS} grid points", s.step)
+        # the load-time check on a grid of at most ~50 x 50 points (the map is the solve's job)
+        coarse = max(s.step, (s.y[1] - s.y[0]) / _CHECK_LINES, (s.z[1] - s.z[0]) / _CHECK_LINES)
+        _, _, inside = section_poses(kin, Section(s.x, tuple(s.y), tuple(s.z), coarse, angle))
         if not inside.any():
             raise file.fail("section", "a section with grid points in the workspace (none of its points is reachable within the limits)",
                             {"x": s.x, "y": s.y, "z": s.z})
