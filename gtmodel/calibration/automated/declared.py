@@ -6,7 +6,10 @@ spread evenly over it, the acceptance of the pose set by eq. 5.14 per arm and by
 calibration with the device's noise (:func:`~gtmodel.calibration.pose_selection.simulate_calibration`:
 the mean calibrated parameters must lie within ``recovery_sigmas`` standard errors of the
 truth), more poses (the desired count times ``growth``) when either fails, an
-identifiability report per arm, and the joint positions of the poses for the controller.
+identifiability report per arm, the joint positions of the poses for the controller, and
+the calibration from the measurements taken there (a measurement file, or synthetic
+measurements of the truth with the device's noise at the accepted poses): the *a priori*
+model calibrated on every second pose and validated on the others, as in the thesis.
 
 Eq. 5.14 as printed, ``sigma_max^2 / sigma_min = sigma_max / cond(J) < C``, is not one
 quantity (``sigma_max / cond(J)`` is ``sigma_min``). Two readings are offered
@@ -28,13 +31,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gtmodel.calibration.automated.workspace import CalibrationWorkspace, grid_constant
+from gtmodel.calibration.evaluation import tcp_errors
 from gtmodel.calibration.identifiability import IdentifiabilityReport, analyze_jacobian
-from gtmodel.calibration.kinematic import CalibrationProblem, ParameterSelection
+from gtmodel.calibration.kinematic import CalibrationProblem, CalibrationResult, ParameterSelection, calibrate
+from gtmodel.calibration.measurements import MeasurementSet
 from gtmodel.calibration.pose_selection import SimulationResult, acceptance_value, simulate_calibration
+from gtmodel.calibration.synthetic import DeviceNoise, synthetic_measurements
 from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.status import Status
 
-__all__ = ["AutomatedCalibrationDeclaration", "AutomatedCalibrationResult", "Round"]
+__all__ = ["AutomatedCalibrationDeclaration", "AutomatedCalibrationResult", "Round", "Calibrated"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -87,6 +93,32 @@ class Round:
 
 
 @dataclass
+class Calibrated:
+    """The calibration from the measurements at the poses (Dressler (2012), ch. 5.6, Fig. 5.26).
+
+    Parameters
+    ----------
+    result : CalibrationResult
+        The *a priori* model calibrated on every second measured pose.
+    source : str
+        ``"synthetic"`` (truth + device noise) or the measurement file.
+    validation_errors : numpy.ndarray, shape (M,)
+        ``||T_k - fk(q_k)||`` on the other poses [m] (eq. 5.5).
+    true_errors : numpy.ndarray, shape (M,) or None
+        Synthetic data: the calibrated model's distance from the true robot's TCP at the
+        validation poses [m].
+    parameter_errors : dict of str to float or None
+        Synthetic data: calibrated minus true parameter.
+    """
+
+    result: CalibrationResult
+    source: str
+    validation_errors: np.ndarray
+    true_errors: np.ndarray | None = None
+    parameter_errors: dict[str, float] | None = None
+
+
+@dataclass
 class AutomatedCalibrationResult:
     """The result of an automated calibration.
 
@@ -107,6 +139,8 @@ class AutomatedCalibrationResult:
         Per arm, for the last round's poses.
     workspace_points : numpy.ndarray, shape (M, 3)
         The remaining grid points [m].
+    calibrated : Calibrated or None
+        The calibration from the measurements (after an accepted round).
     """
 
     status: str
@@ -118,6 +152,7 @@ class AutomatedCalibrationResult:
     rounds: list[Round] = field(default_factory=list)
     identifiability: list[IdentifiabilityReport] = field(default_factory=list)
     workspace_points: np.ndarray | None = None
+    calibrated: Calibrated | None = None
 
     @property
     def workspace_ratio(self) -> float:
@@ -163,6 +198,8 @@ class AutomatedCalibrationDeclaration:
         Noise seed.
     criterion : str
         ``"condition"`` or ``"noise_amplification"`` (module docstring).
+    measurements : MeasurementSet or None
+        Measurements taken at the poses (None: synthetic ones of ``truth``).
     """
 
     workspace: CalibrationWorkspace
@@ -178,6 +215,35 @@ class AutomatedCalibrationDeclaration:
     max_rounds: int = 4
     seed: int = 0
     criterion: str = "condition"
+    measurements: MeasurementSet | None = None
+
+    def calibrate(self, q: np.ndarray) -> Calibrated:
+        """Calibrate the *a priori* model on every second pose, validate on the others.
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (N, 3)
+            The accepted poses' joint positions [m] (used for synthetic measurements).
+
+        Returns
+        -------
+        Calibrated
+        """
+        if self.measurements is not None:
+            q_m, T_m, source = self.measurements.q, self.measurements.T, self.measurements.source
+        else:
+            data = synthetic_measurements(self.truth, q, noise=DeviceNoise(self.noise_sigma, 0.0, "device"), seed=self.seed + 1)
+            q_m, T_m, source = data.q, data.T, "synthetic"
+        fit, val = np.arange(0, q_m.shape[0], 2), np.arange(1, q_m.shape[0], 2)
+        res = calibrate(self.apriori, q_m[fit], T_m[fit])
+        errors = tcp_errors(res.model, q_m[val], T_m[val])
+        out = Calibrated(res, source, errors)
+        if self.measurements is None:
+            T_true = np.atleast_2d(self.truth.fk(q_m[val])[0])
+            out.true_errors = np.linalg.norm(np.atleast_2d(res.model.fk(q_m[val])[0]) - T_true, axis=1)
+            out.parameter_errors = {n: float(v - t) for n, v, t in zip(res.model.parameter_names(), res.model.parameter_vector(),
+                                                                       self.truth.parameter_vector())}
+        return out
 
     def arm_jacobians(self, q: np.ndarray, T: np.ndarray) -> list[tuple[np.ndarray, tuple[str, ...]]]:
         """The closure Jacobian of each arm with respect to its parameters (a priori model).
@@ -269,6 +335,11 @@ class AutomatedCalibrationDeclaration:
             res.message = (f"no pose set accepted in {len(res.rounds)} rounds: eq. 5.14 {['%.3g' % v for v in final.acceptance]} "
                            f"(C = {self.threshold:g}), worst parameter bias {final.worst_recovery:.3g} standard errors")
         else:
+            res.calibrated = self.calibrate(final.q)
+            cal = res.calibrated.result
+            if not Status(cal.status).success:
+                res.status = Status(cal.status).value
             res.message = (f"{final.T.shape[0]} poses ({final.desired} desired, h = {final.grid_constant:.4f} m), "
-                           f"workspace ratio {res.workspace_ratio:.2f}, eq. 5.14 max {max(final.acceptance):.3g} < {self.threshold:g}")
+                           f"workspace ratio {res.workspace_ratio:.2f}, eq. 5.14 max {max(final.acceptance):.3g} < {self.threshold:g}; "
+                           f"calibrated ({res.calibrated.source}): validation error mean {res.calibrated.validation_errors.mean() * 1e3:.2f} mm")
         return res

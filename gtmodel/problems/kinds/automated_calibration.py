@@ -33,12 +33,16 @@ Dressler (2012), ch. 5.6 (Fig. 5.21, eq. 5.14, Table 5.7, Figs. 5.22-5.26)::
     desired = 100
     threshold = 200.0               # C of eq. 5.14
 
+    [data]                          # optional: the measurements taken at the poses
+    file = "measured.csv"           # (default: synthetic measurements of the truth)
+
 The result folder holds ``summary.json`` (workspace ratio and points removed per step, per
 round the desired count, grid constant, poses, eq. 5.14 per arm and the simulated
 calibration; per arm the identifiability report), ``poses.csv`` (the joint positions of the
 poses, the program a controller runs), ``calibration_poses.mod`` (the same as a RAPID module
 with ``MoveAbsJ``), ``simulated_parameters.csv`` (truth, a priori, calibrated mean, spread and
-predicted std per parameter) and ``workspace.png``.
+predicted std per parameter), the calibration from the measurements (``parameters.toml``: the calibrated
+kinematics; ``errors.csv``: the validation poses' errors, eq. 5.5) and ``workspace.png``.
 """
 
 from __future__ import annotations
@@ -61,6 +65,7 @@ from gtmodel.calibration.automated import (
     write_pose_csv,
 )
 from gtmodel.calibration.comparison import perturbed_model
+from gtmodel.calibration.measurements import read_measurements
 from gtmodel.calibration.synthetic import device_noise
 from gtmodel.errors import GtModelError
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
@@ -170,9 +175,18 @@ class AutomatedCalibrationKind(ProblemKind):
             truth = ThreeLinkClosure(_parameters(doc.truth, file, "truth"))
         else:
             truth = perturbed_model(ThreeLinkClosure(apriori), doc.simulation.perturbation, doc.simulation.seed + 7)
+        measured = None
+        if doc.data is not None:
+            try:
+                measured = read_measurements(file.data_file("data.file", doc.data.file))
+            except GtModelError as exc:
+                raise file.wrap("data.file", exc) from None
+            if measured.q.shape[1] != 3 or measured.n_poses < 16:
+                raise file.fail("data.file", "measurements of a 3-link robot (q1..q3) at 16 poses or more", f"{measured.n_poses} poses")
         p, s = doc.poses, doc.simulation
         return AutomatedCalibrationDeclaration(ws, ThreeLinkClosure(apriori), truth, doc.limits.search_step, p.desired, p.threshold,
-                                               float(noise), s.runs, s.recovery_sigmas, p.growth, p.max_rounds, s.seed, p.criterion)
+                                               float(noise), s.runs, s.recovery_sigmas, p.growth, p.max_rounds, s.seed, p.criterion,
+                                               measured)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: AutomatedCalibrationDeclaration, solution: AutomatedCalibrationResult, out: Path, plots: bool,
@@ -241,6 +255,8 @@ class AutomatedCalibrationKind(ProblemKind):
                 lines.append(n + "," + ",".join(repr(float(x)) for x in row))
             (out / "simulated_parameters.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
             written.files.append("simulated_parameters.csv")
+        if r.calibrated is not None:
+            written.files += _write_calibrated(r, out, name, fields)
         if plots:
             kin = declaration.workspace.kinematics
             ends = np.array([[kin.As[i] + declaration.workspace.cart_travel[i, k] * kin.v[i] for k in range(2)] for i in range(3)])
@@ -248,6 +264,34 @@ class AutomatedCalibrationKind(ProblemKind):
                                        out / "workspace.png", f"{name}: {f.T.shape[0]} poses, workspace ratio {r.workspace_ratio:.2f}")
             written.files.append("workspace.png")
         return written
+
+
+def _write_calibrated(r: AutomatedCalibrationResult, out: Path, name: str, fields: dict[str, Any]) -> list[str]:
+    """The calibration from the measurements: summary fields, ``parameters.toml``, ``errors.csv``."""
+    c = r.calibrated
+    res = c.result
+    fields["calibration"] = {
+        "source": c.source,
+        "status": str(res.status),
+        "n_calibration": int(res.n_poses),
+        "n_validation": int(c.validation_errors.size),
+        "validation_error_mean_m": float(c.validation_errors.mean()),
+        "validation_error_max_m": float(c.validation_errors.max()),
+        "true_error_mean_m": None if c.true_errors is None else float(c.true_errors.mean()),
+        "true_error_max_m": None if c.true_errors is None else float(c.true_errors.max()),
+        "max_parameter_error": None if c.parameter_errors is None else max(abs(v) for v in c.parameter_errors.values()),
+    }
+    k = res.model.kinematics
+    fmt = lambda a: np.array2string(np.asarray(a), separator=", ", precision=10, max_line_width=400).replace("\n", "")  # noqa: E731
+    lines = [f"# Calibrated by gtmodel ({name}, automated calibration) from {c.source}, {res.n_poses} poses; SI units",
+             "# Kinematics only: add [dynamics] and [limits] for a complete parameter set.",
+             "[kinematics]", f'source = "gtmodel automated calibration {name}"', 'model = "modified"',
+             f"L = {fmt(k.L)}", f"As = {fmt(k.As)}", f"v = {fmt(k.v)}", "", "# standard deviations:"]
+    lines += [f"#   {n} = {float(v):.3e}" for n, v in res.std.items()]
+    (out / "parameters.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    errors = [f"{e!r}" for e in c.validation_errors]
+    (out / "errors.csv").write_text("# validation poses (every second measured pose), eq. 5.5\nerror_m\n" + "\n".join(errors) + "\n", encoding="utf-8")
+    return ["parameters.toml", "errors.csv"]
 
 
 def _round_fields(x: Any) -> dict[str, Any]:

@@ -57,6 +57,9 @@ def test_coarse_run_is_accepted_and_writes_the_program(coarse):
     assert arms == [(7, True, [])] * 3, arms
     last = s["rounds"][-1]
     assert last["recovered"] and last["accepted_5_14"]
+    cal = s["calibration"]
+    assert cal["status"] == "optimal" and cal["source"] == "synthetic" and cal["true_error_mean_m"] < 2 * s["noise_m"]  # 15 poses
+    assert (out / "parameters.toml").is_file() and (out / "errors.csv").is_file()
 
 
 def test_more_poses_when_rejected(tmp_path):
@@ -81,6 +84,31 @@ def test_shipped_table_5_7_set_up(tmp_path):
     assert s["max_acceptance"] < 200
     assert s["rounds"][-1]["recovered"]
     assert s["rounds"][-1]["tcp_error_mean_m"] < s["noise_m"]
+    assert s["calibration"]["status"] == "optimal" and s["calibration"]["true_error_mean_m"] < s["noise_m"]
+
+
+@pytest.mark.slow
+def test_measured_data_at_the_poses_are_calibrated(tmp_path, coarse):
+    """[data]: noise-free measurements of Table 5.7's calibrated robot at the written poses
+    give a model that reproduces them (validation error below 1 um)."""
+    from gtmodel.calibration.measurements import measurement_columns
+    from gtmodel.robots.closure import ThreeLinkClosure
+    from gtmodel.robots.parameters import KinematicParameters
+
+    doc = tomllib.loads(FILE.read_text())
+    truth = ThreeLinkClosure(KinematicParameters(L=np.array(doc["truth"]["L"]), As=np.array(doc["truth"]["As"]), v=np.array(doc["truth"]["v"])))
+    q = read_table(coarse[2] / "poses.csv", what="poses").data[:, 1:4]
+    T = np.atleast_2d(truth.fk(q)[0])
+    rows = [",".join(measurement_columns())] + [",".join(repr(float(v)) for v in np.r_[a, b]) for a, b in zip(q, T)]
+    (tmp_path / "measured.csv").write_text("\n".join(rows) + "\n")
+    text = FILE.read_text()
+    for e in COARSE:
+        text = e(text)
+    f = tmp_path / "measured.toml"
+    f.write_text(text + '\n[data]\nfile = "measured.csv"\n')
+    code, s = solve_through_cli(f, tmp_path / "out", "--no-plots")
+    assert code == 0 and s["calibration"]["source"].endswith("measured.csv")
+    assert s["calibration"]["validation_error_max_m"] < 1e-6
 
 
 BAD = [
@@ -97,6 +125,7 @@ BAD = [
     ("nan_noise", _edit('type = "camera"', 'type = "camera"\nnoise = nan'), r"field 'device\.noise'"),
     ("zero_desired", _edit("desired = 100", "desired = 0"), r"field 'poses\.desired'"),
     ("growth_one", _edit("growth = 1.5", "growth = 1.0"), r"field 'poses\.growth'"),
+    ("missing_data_file", lambda t: t + '\n[data]\nfile = "no_such.csv"\n', r"field 'data\.file'"),
 ]
 
 

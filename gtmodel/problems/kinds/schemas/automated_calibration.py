@@ -85,6 +85,12 @@ class SimulationSection(Section):
     seed: integer(0, 2**31 - 1, description="noise seed") = 0
 
 
+class DataSection(Section):
+    """``[data]``: the measurements taken at the poses (the calibration kind's CSV format)."""
+
+    file: NonEmptyText = Field(description="measurement CSV (columns q1, q2, q3, x, y, z; docs/own_data.md), relative to this file")
+
+
 @fill_doc(**KIND_DOCS)
 class AutomatedCalibrationFile(ProblemSchema):
     """An ``automated_calibration`` problem file.
@@ -106,6 +112,8 @@ class AutomatedCalibrationFile(ProblemSchema):
         ``[poses]``.
     simulation : SimulationSection
         ``[simulation]``.
+    data : DataSection, optional
+        ``[data]``: measurements taken at the poses (default: synthetic ones of the truth).
     """
 
     kind: Literal["automated_calibration"]
@@ -116,3 +124,4 @@ class AutomatedCalibrationFile(ProblemSchema):
     device: DeviceSection
     poses: PosesSection = PosesSection()
     simulation: SimulationSection = SimulationSection()
+    data: DataSection | None = None
