@@ -101,7 +101,7 @@ def plot_face_areas(case: CaseResult, line_z: float, path: str | Path | None = N
 
 
 def plot_error_set(case: CaseResult, check: int = 0, path: str | Path | None = None, title: str = "") -> Any:
-    """The error set at a check pose: parallelepiped, exact worst case and Monte-Carlo samples.
+    """The error set at a check pose: parallelepiped edges, exact worst case and Monte-Carlo samples (up to 2000).
 
     Parameters
     ----------
@@ -130,6 +130,9 @@ def plot_error_set(case: CaseResult, check: int = 0, path: str | Path | None = N
         for b in range(a + 1, 8):
             if np.sum(CORNER_SIGNS[a] != CORNER_SIGNS[b]) == 1:
                 ax.plot(*np.column_stack([corners[a], corners[b]]), "k-", linewidth=0.8)
+    cloud = c.monte_carlo.deviations[:2000] * UM
+    ax.scatter(cloud[:, 0], cloud[:, 1], cloud[:, 2], s=1, color="0.5", alpha=0.4,
+               label=f"Monte-Carlo (max {c.monte_carlo.max * UM:.1f} um)")
     d = c.exact.deviation * UM
     ax.scatter(*d, color="r", s=30, label=f"exact worst case {c.exact.error * UM:.1f} um")
     ax.set_xlabel("dx [um]")

@@ -217,9 +217,12 @@ class MonteCarlo:
     ----------
     errors : numpy.ndarray, shape (n,)
         Deviation of every sample [m].
+    deviations : numpy.ndarray, shape (n, 3)
+        The deviation vectors [m].
     """
 
     errors: np.ndarray
+    deviations: np.ndarray
 
     @property
     def max(self) -> float:
@@ -272,4 +275,4 @@ def monte_carlo(nominal: NominalPoses, k: int, tol: Tolerances, samples: int = 2
     w = _ball(rng, 3 * samples).reshape(samples, 9)
     z = rng.uniform(-1.0, 1.0, size=(samples, 3))
     dT = _deviation_mapped()(w.T.copy(), z.T.copy(), p, n=samples)[0]
-    return MonteCarlo(np.linalg.norm(dT, axis=0))
+    return MonteCarlo(np.linalg.norm(dT, axis=0), dT.T.copy())
