@@ -8,6 +8,7 @@ promises (no Monte-Carlo sample above the exact worst case, parallelepiped = exa
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from gtmodel.status import Status
@@ -59,6 +60,18 @@ def test_three_methods_agree_where_the_thesis_says(coarse, case):
 def test_saddle_of_case_1_is_near_0_2_mm_in_the_centre(coarse):
     centre = coarse[1]["cases"]["case_1"]["checks"]["centre"]["exact_m"]
     assert centre == pytest.approx(0.2e-3, rel=0.1)
+
+
+def test_thesis_shape_of_the_maps(coarse):
+    """Fig. 4.9: the faces orthogonal to link 1 (smallest tolerance) are the largest; case 1's
+    largest error next to an actuator, case 2's next to guideway 2 (its 58 um axial error)."""
+    s = coarse[1]
+    actuators = np.array(s["actuators_yz_m"])
+    faces = s["cases"]["case_1"]["checks"]["centre"]["face_areas_m2"]
+    nearest = {case: int(np.argmin(np.linalg.norm(actuators - np.array(s["cases"][case]["checks"]["max"]["T_m"][1:]), axis=1)))
+               for case in ("case_1", "case_2")}
+    assert int(np.argmax(faces)) == 0 and nearest["case_2"] == 1, (faces, nearest)
+    assert np.linalg.norm(actuators[nearest["case_1"]] - s["cases"]["case_1"]["checks"]["max"]["T_m"][1:]) < 0.3
 
 
 @pytest.mark.slow
