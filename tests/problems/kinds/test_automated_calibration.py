@@ -125,6 +125,8 @@ BAD = [
     ("nan_noise", _edit('type = "camera"', 'type = "camera"\nnoise = nan'), r"field 'device\.noise'"),
     ("zero_desired", _edit("desired = 100", "desired = 0"), r"field 'poses\.desired'"),
     ("growth_one", _edit("growth = 1.5", "growth = 1.0"), r"field 'poses\.growth'"),
+    ("tracker_range_reversed", _edit('type = "camera"', 'type = "laser_tracker"\nrange = [10.0, 1.0]'), r"field 'device\.range'"),
+    ("tracker_out_of_range", _edit('type = "camera"', 'type = "laser_tracker"\nrange = [30.0, 40.0]'), r"field 'device': expected a device that measures"),
     ("missing_data_file", lambda t: t + '\n[data]\nfile = "no_such.csv"\n', r"field 'data\.file'"),
 ]
 
