@@ -7,9 +7,13 @@ device noise for studies and tests (:mod:`gtmodel.calibration.synthetic`); calib
 from closure equations (:mod:`gtmodel.calibration.kinematic`), identifiability
 (:mod:`gtmodel.calibration.identifiability`), pose selection
 (:mod:`gtmodel.calibration.pose_selection`) and accuracy reports
-(:mod:`gtmodel.calibration.evaluation`).
+(:mod:`gtmodel.calibration.evaluation`); worst-case pose accuracy from actuator tolerances
+(:mod:`gtmodel.calibration.accuracy`, Appendix A) and the automated calibration of ch. 5.6
+(:mod:`gtmodel.calibration.automated`).
 """
 
+from gtmodel.calibration.accuracy import Tolerances, largest_tolerances, monte_carlo, parallelepiped, worst_case
+from gtmodel.calibration.automated import CalibrationWorkspace, rapid_module
 from gtmodel.calibration.kinematic import (
     CalibrationProblem,
     CalibrationResult,
@@ -74,6 +78,13 @@ from gtmodel.calibration.joint_stiffness import (
 )
 
 __all__ = [
+    "Tolerances",
+    "parallelepiped",
+    "worst_case",
+    "monte_carlo",
+    "largest_tolerances",
+    "CalibrationWorkspace",
+    "rapid_module",
     "calibrate",
     "CalibrationProblem",
     "CalibrationResult",

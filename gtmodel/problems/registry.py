@@ -40,6 +40,8 @@ _CLASSES: dict[str, str] = {
     "correction_stability": "gtmodel.problems.kinds.correction_stability:CorrectionStabilityKind",
     "optimal_control": "gtmodel.problems.kinds.optimal_control:OptimalControlKind",
     "lead_through": "gtmodel.problems.kinds.lead_through:LeadThroughKind",
+    "pose_accuracy": "gtmodel.problems.kinds.pose_accuracy:PoseAccuracyKind",
+    "automated_calibration": "gtmodel.problems.kinds.automated_calibration:AutomatedCalibrationKind",
 }
 
 #: Kind name -> ``module:class`` of its schema in a light module (pydantic, no solver); the
@@ -57,6 +59,8 @@ _SCHEMAS: dict[str, str] = {
     "vision_calibration": "gtmodel.problems.kinds.schemas.vision_calibration:VisionCalibrationFile",
     "dynamic_identification": "gtmodel.problems.kinds.schemas.dynamic_identification:DynamicIdentificationFile",
     "lead_through": "gtmodel.problems.kinds.schemas.lead_through:LeadThroughFile",
+    "pose_accuracy": "gtmodel.problems.kinds.schemas.pose_accuracy:PoseAccuracyFile",
+    "automated_calibration": "gtmodel.problems.kinds.schemas.automated_calibration:AutomatedCalibrationFile",
 }
 
 
