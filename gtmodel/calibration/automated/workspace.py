@@ -22,6 +22,7 @@ from itertools import product
 
 import numpy as np
 
+from gtmodel.calibration.vision.camera import Camera
 from gtmodel.errors import InputError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.workspace import in_ranges
@@ -94,6 +95,18 @@ class PinholeCamera:
     image: tuple[int, int]
     pattern_corners: np.ndarray
 
+    def camera(self) -> Camera:
+        """This camera as the one camera model of gtmodel (:class:`gtmodel.calibration.vision.Camera`, no distortion).
+
+        Returns
+        -------
+        Camera
+            Principal point at the image centre; ``R`` the transpose of :attr:`rotation`.
+        """
+        w, h = self.image
+        return Camera("camera", int(w), int(h), float(self.focal), float(self.focal), w / 2, h / 2, np.zeros(5),
+                      np.asarray(self.rotation, dtype=float).T, np.asarray(self.position, dtype=float))
+
     def sees(self, P: np.ndarray) -> np.ndarray:
         """Whether every pattern point projects inside the image, in front of the camera (pinhole model).
 
@@ -106,15 +119,12 @@ class PinholeCamera:
         -------
         numpy.ndarray of bool, shape (N,)
         """
+        camera = self.camera()
+        P = np.asarray(P, dtype=float)
         ok = np.ones(P.shape[0], dtype=bool)
-        w, h = self.image
         for c in self.pattern_corners:
-            X = (P + c - self.position) @ self.rotation  # camera coordinates
-            z = X[:, 2]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                u = self.focal * X[:, 0] / z + w / 2
-                v = self.focal * X[:, 1] / z + h / 2
-            ok &= (z > 0) & (u >= 0) & (u <= w) & (v >= 0) & (v <= h)
+            uv, depth = camera.project(P + c)
+            ok &= (depth > 0) & camera.inside(uv)
         return ok
 
 
