@@ -42,6 +42,8 @@ class OptimalControl:
         Nominal magnitudes (scaling).
     objective : str
         The objective text.
+    sense : {"minimize", "maximize"}
+        Whether it is minimised or maximised.
     constraints : tuple of str
         The constraint texts.
     named_parameters : dict of str to float
@@ -58,6 +60,7 @@ class OptimalControl:
     solver: SolverSettings
     nominal: dict[str, float] = field(default_factory=dict)
     objective: str = ""
+    sense: str = "minimize"
     constraints: tuple[str, ...] = ()
     named_parameters: dict[str, float] = field(default_factory=dict)
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)

@@ -439,7 +439,7 @@ class CollocationTranscription:
         dae, opt, co = self.dae, self.optimization, self._co
         N, d = self.elements, self.points
         f_val, g_val = self._fg(w, pvec)
-        f_val = float(f_val)
+        f_val = opt.objective_sign * float(f_val)  # the NLP minimises sign * objective
         g_val = np.array(g_val, dtype=float).reshape(-1)
         viol = [0.0]
         if g_val.size:

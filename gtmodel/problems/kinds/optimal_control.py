@@ -26,7 +26,7 @@ import numpy as np
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError
-from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names
+from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
@@ -80,6 +80,29 @@ def _aliases(names: Any) -> dict[str, str]:
         alias = re.sub(r"[^A-Za-z0-9_]", "_", n)
         out.setdefault(alias, n)
     return out
+
+
+def _bound_value(file: ProblemFile, field_: str, value: float | str, table: dict[str, Any], numeric: bool = False) -> Any:
+    """One side of a ``[lo, hi]`` pair: a number, or an expression of parameters (a number or, unless ``numeric``, an SX)."""
+    if not isinstance(value, str):
+        return float(value)
+    e = parse_expression(value, table, str(file.path), field_)
+    if not ca.symvar(e):
+        return float(ca.DM(ca.evalf(e)))
+    if numeric:
+        raise file.fail(field_, "numbers or expressions of [parameters] names", value)
+    return e
+
+
+def _objective(file: ProblemFile, opt: OptimizationSection) -> tuple[str | None, str | None, str]:
+    """The objective text, its sense and its field: exactly one of objective, minimize, maximize."""
+    given = [(k, getattr(opt, k)) for k in ("objective", "minimize", "maximize") if getattr(opt, k) is not None]
+    if len(given) > 1:
+        raise file.fail(f"optimization.{given[1][0]}", f"one objective (optimization.{given[0][0]} is given too)")
+    if not given:
+        raise file.fail("optimization.objective", "an objective (objective, minimize or maximize)")
+    key, text = given[0]
+    return text, "maximize" if key == "maximize" else "minimize", key
 
 
 def _unknown(file: ProblemFile, field_: str, name: str, known: Any) -> Exception:
@@ -139,33 +162,41 @@ class OptimalControlKind(ProblemKind):
             if params[pkeys[key]].numel() != 1:
                 raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[pkeys[key]].numel()} elements)")
             opt.set_parameter(pkeys[key], value)
-        for key, (lo, hi) in doc.free_parameters.items():
+        origin = str(file.path)
+        named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
+        table = optimization_names(opt, named, origin=origin)
+        table = {k: table[n] for k, n in _aliases(table).items() if k.isidentifier()}
+        for key, pair in doc.free_parameters.items():
             if key not in pkeys:
                 raise _unknown(file, f"free_parameters.{key}", key, params)
+            lo, hi = (_bound_value(file, f"free_parameters.{key}", v, table, numeric=True) for v in pair)
             if lo > hi:
                 raise file.fail(f"free_parameters.{key}", "[lo, hi] with lo <= hi", [lo, hi])
             opt.free_parameter(pkeys[key], lo, hi)
         variables = _scalar_variables(model)
         vkeys = _aliases(variables)
         bounds: dict[str, tuple[float, float]] = {}
-        for key, (lo, hi) in doc.bounds.items():
+        for key, pair in doc.bounds.items():
             if key not in vkeys:
                 raise _unknown(file, f"bounds.{key}", key, variables)
-            if lo > hi:
+            lo, hi = (_bound_value(file, f"bounds.{key}", v, table) for v in pair)
+            if isinstance(lo, float) and isinstance(hi, float) and lo > hi:
                 raise file.fail(f"bounds.{key}", "[lo, hi] with lo <= hi", [lo, hi])
-            opt.set_bounds(variables[vkeys[key]][1], lo, hi)
-            bounds[vkeys[key]] = (lo, hi)
+            try:
+                opt.set_bounds(variables[vkeys[key]][1], lo, hi)
+            except GtModelError as exc:
+                raise file.wrap(f"bounds.{key}", exc) from None
+            if isinstance(lo, float) and isinstance(hi, float):
+                bounds[vkeys[key]] = (lo, hi)
         boundary = {at: {vkeys.get(k, k): v for k, v in getattr(doc.boundary, at).items()} for at in ("start", "final")}
         for at in ("start", "final"):
             for key, value in getattr(doc.boundary, at).items():
                 if key not in vkeys:
                     raise _unknown(file, f"boundary.{at}.{key}", key, variables)
                 opt.add_point_constraint(variables[vkeys[key]][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
-        origin = str(file.path)
-        named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
-        table = optimization_names(opt, named, origin=origin)
-        table = {k: table[n] for k, n in _aliases(table).items() if k.isidentifier()}
-        apply_to(opt, doc.optimization.objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.")
+        objective, sense, objective_key = _objective(file, doc.optimization)
+        apply_to(opt, objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.", sense=sense,
+                 objective_key=objective_key)
         nkeys = {**vkeys, "final_time": "final_time", **{k: n for k, n in pkeys.items() if n in opt.free_parameters}}
         for key in doc.nominal:
             if key not in nkeys:
@@ -177,7 +208,7 @@ class OptimalControlKind(ProblemKind):
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
             method=Collocation(col.elements, col.points, col.scheme),
             solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
-            objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
+            objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
         )
 
@@ -211,6 +242,7 @@ class OptimalControlKind(ProblemKind):
             "max_constraint_violation": r.max_constraint_violation,
             "last_iterate": r.last_iterate,
             "objective_expression": d.objective,
+            "objective_sense": d.sense,
             "constraints": list(d.constraints),
             "parameters": dict(d.named_parameters),
             "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name},

@@ -6,21 +6,59 @@ The kind is :mod:`gtmodel.problems.kinds.optimal_control`; the field reference i
 
 from __future__ import annotations
 
-from typing import Literal
+import math
+from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import BeforeValidator, Field
+from pydantic_core import PydanticCustomError
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
 from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
 
-__all__ = ["ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "OptimalControlFile", "MAX_VALUE"]
+__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "OptimalControlFile", "MAX_VALUE"]
 
 
 #: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
 #: (SI units; keeps 1e308 out of the solver).
 MAX_VALUE = 1.0e9
+
+_INF = {"inf": math.inf, "+inf": math.inf, "-inf": -math.inf}
+
+
+def _bound_pair(v: Any) -> Any:
+    """``[lo, hi]``: numbers (``inf``/``-inf`` leave a side open), ``"inf"``/``"-inf"`` or expressions of parameters."""
+    what = ('a list [lo, hi] of numbers (|x| <= 1e+09, or -inf/inf for an open side), "inf"/"-inf" or '
+            'expressions of parameters')
+    if not isinstance(v, list) or len(v) != 2:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
+    out = []
+    for x in v:
+        if isinstance(x, str) and x.strip().lower() in _INF:
+            x = _INF[x.strip().lower()]
+        if isinstance(x, bool) or not isinstance(x, (int, float, str)) or (isinstance(x, str) and not x.strip()):
+            raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
+        if isinstance(x, (int, float)):
+            if math.isnan(x) or (math.isfinite(x) and abs(x) > MAX_VALUE):
+                raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
+            x = float(x)
+        out.append(x)
+    lo, hi = out
+    if lo == -math.inf and hi == math.inf:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "a bound on at least one side ([-inf, inf] bounds nothing: leave the entry out)"})
+    if lo == math.inf or hi == -math.inf:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "lo < inf and hi > -inf"})
+    return out
+
+
+#: ``[lo, hi]`` of a bound: numbers (``inf``, ``-inf``, ``"inf"``, ``"-inf"`` for an open
+#: side, not both) or expressions of parameters (``"-F_max"``).
+BoundPair = Annotated[
+    list[float | str],
+    BeforeValidator(_bound_pair),
+    Field(min_length=2, max_length=2, description='[lo, hi]: numbers, -inf/inf (or "-inf"/"inf") for an open side, or expressions of parameters such as "-F_max"'),
+]
 
 
 class ModelSection(Section):
@@ -67,8 +105,9 @@ class OptimizationSection(Section):
 
     Parameters
     ----------
-    objective : str
-        Objective over the model's names.
+    objective, minimize, maximize : str, optional
+        The objective over the model's names, minimised (``objective`` or ``minimize``)
+        or maximised (``maximize``); exactly one of them (none with ``[[data]]`` only).
     constraints : list of str
         Path and point constraints.
     start_time : float
@@ -77,7 +116,9 @@ class OptimizationSection(Section):
         Fixed or free final time.
     """
 
-    objective: NonEmptyText = Field(description='objective over the model\'s names, e.g. "final_time + w * integral(F^2)"')
+    objective: NonEmptyText | None = Field(None, description='objective to minimise over the model\'s names, e.g. "final_time + w * integral(F^2)"')
+    minimize: NonEmptyText | None = Field(None, description="objective to minimise (the same as objective)")
+    maximize: NonEmptyText | None = Field(None, description='objective to maximise, e.g. "h(final_time)"')
     constraints: Expressions = Field(default_factory=list, description='path/point constraints, e.g. ["abs(s) <= 1", "theta(final_time) == pi"]')
     start_time: number(ge=-MAX_TIME_S, le=MAX_TIME_S, unit="s") = 0.0
     final_time: FinalTimeSection
@@ -144,8 +185,8 @@ class OptimalControlFile(ProblemSchema):
     parameters: dict[str, number()] = Field(default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001")
     optimization: OptimizationSection
     boundary: BoundarySection = BoundarySection()
-    bounds: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's)")
-    free_parameters: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
+    bounds: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's); inf for an open side, expressions of parameters allowed")
+    free_parameters: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
     nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
