@@ -28,6 +28,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
 from gtmodel.problems.user_model import ModelFileError, load_user_model
@@ -201,8 +202,8 @@ class OptimalControlKind(ProblemKind):
         for key in doc.nominal:
             if key not in nkeys:
                 raise _unknown(file, f"nominal.{key}", key, set(variables) | {"final_time"} | set(opt.free_parameters))
-        if doc.initial_guess.method == "linear":
-            _linear_guess(opt, boundary, variables)
+        declare_initial_guess(file, doc.initial_guess, opt, boundary, variables, vkeys, table,
+                              doc.optimization.final_time.initial_guess is not None)
         col = doc.collocation
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
@@ -262,14 +263,3 @@ class OptimalControlKind(ProblemKind):
                     plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds, units=d.model.units)
                     written.files.append(fname)
         return written
-
-
-def _linear_guess(opt: Optimization, boundary: dict[str, dict[str, float]], variables: dict[str, tuple[str, ca.SX]]) -> None:
-    """Initial guesses linear in time between the start and final boundary values (by declared name)."""
-    t0, tf = opt.start_time, opt.final_time_guess
-    start, final = boundary["start"], boundary["final"]
-    for key, (kind, sym) in variables.items():
-        if key in start and key in final:
-            opt.set_initial_guess(sym, ([t0, tf], [start[key], final[key]]))
-        elif key in start or key in final:
-            opt.set_initial_guess(sym, start.get(key, final.get(key)))

@@ -105,3 +105,39 @@ BAD = [
 def test_bad_language_through_cli(folder, capsys, case, old, new, match):
     assert old in PROBLEM
     assert_bad_problem_through_cli(folder, capsys, PROBLEM.replace(old, new), match)
+
+
+def test_guess_from_an_earlier_result_folder_and_by_simulation(folder):
+    # the same problem restarted from its own result converges at once to the same optimum;
+    # a simulation guess (JModelica's default) and a per-variable expression also solve it
+    (folder / "p.toml").write_text(PROBLEM)
+    first = run_problem(folder / "p.toml", folder / "first", plots=False)
+    again = PROBLEM + '[initial_guess]\nmethod = "file"\nfile = "first"\n'
+    (folder / "again.toml").write_text(again)
+    second = run_problem(folder / "again.toml", folder / "second", plots=False)
+    assert second.summary["objective"] == pytest.approx(first.summary["objective"], rel=1e-8)
+    assert second.summary["iterations"] < first.summary["iterations"]
+    sim = PROBLEM + '[initial_guess]\nmethod = "simulation"\n[initial_guess.inputs]\nu = "0.5 * (2 - time)"\n[initial_guess.values]\nv = "0.1 * time"\n'
+    (folder / "sim.toml").write_text(sim)
+    third = run_problem(folder / "sim.toml", folder / "third", plots=False)
+    assert third.summary["objective"] == pytest.approx(first.summary["objective"], rel=1e-8)
+
+
+GUESS = '[initial_guess]\nmethod = "file"\nfile = "guess.csv"\n'
+BAD_GUESS = [
+    ("guess_of_another_problem", "t,theta,omega\n0,0,0\n2,1,1\n", GUESS, r"field 'initial_guess\.file': .*columns theta, omega name no state, input or algebraic variable of model 'di'"),
+    ("guess_with_nan", "t,x\n0,0\n2,nan\n", GUESS, r"field 'initial_guess\.file': .*guess\.csv.*line 3"),
+    ("guess_without_time_column", "time,x\n0,0\n2,1\n", GUESS, r"field 'initial_guess\.file': no time column 't'"),
+    ("guess_file_missing", None, GUESS, r"field 'initial_guess\.file': expected an existing CSV file or result folder"),
+    ("guess_file_without_method", "t,x\n0,0\n2,1\n", '[initial_guess]\nfile = "guess.csv"\n', r"field 'initial_guess\.file': expected method = \"file\""),
+    ("guess_value_of_a_state", None, '[initial_guess.values]\nx = "v * time"\n', r"field 'initial_guess\.values\.x': expected an expression of time, final_time and parameters"),
+    ("guess_value_unknown_name", None, "[initial_guess.values]\nq = 1.0\n", r"field 'initial_guess\.values\.q': expected one of the model's variables"),
+    ("simulation_input_unknown", None, '[initial_guess]\nmethod = "simulation"\n[initial_guess.inputs]\nF = 1.0\n', r"field 'initial_guess\.inputs\.F': expected an input of the model \(u\)"),
+]
+
+
+@pytest.mark.parametrize("case, csv, extra, match", BAD_GUESS, ids=[c[0] for c in BAD_GUESS])
+def test_bad_initial_guess_through_cli(folder, capsys, case, csv, extra, match):
+    if csv is not None:
+        (folder / "guess.csv").write_text(csv)
+    assert_bad_problem_through_cli(folder, capsys, PROBLEM + extra, match)

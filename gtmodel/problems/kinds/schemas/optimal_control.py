@@ -52,6 +52,16 @@ def _bound_pair(v: Any) -> Any:
     return out
 
 
+def _guess_value(v: Any) -> Any:
+    if isinstance(v, bool) or not isinstance(v, (int, float, str)) or (isinstance(v, str) and not v.strip()) or (
+            isinstance(v, (int, float)) and not (math.isfinite(v) and abs(v) <= MAX_VALUE)):
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "a finite number (|x| <= 1e+09) or an expression of time"})
+    return float(v) if not isinstance(v, str) else v
+
+
+#: A guess: a number or an expression of ``time``, ``final_time`` and parameters.
+GuessValue = Annotated[float | str, BeforeValidator(_guess_value)]
+
 #: ``[lo, hi]`` of a bound: numbers (``inf``, ``-inf``, ``"inf"``, ``"-inf"`` for an open
 #: side, not both) or expressions of parameters (``"-F_max"``).
 BoundPair = Annotated[
@@ -145,10 +155,30 @@ class InitialGuessSection(Section):
     method : str
         ``"linear"``: states (and other variables with both boundary values) interpolated
         linearly between their start and final values, others at their start values;
-        ``"start"``: every variable at the model's start value.
+        ``"start"``: every variable at the model's start value; ``"simulation"``: the
+        model simulated from its start values (``[boundary.start]``) under ``inputs``;
+        ``"file"``: the trajectory in ``file``.
+    file : str, optional
+        With ``method = "file"``: a CSV (time column and columns named as the model's
+        variables) or an earlier result folder (its ``trajectories.csv``), relative to
+        the problem file; interpolated linearly onto the mesh. With a free final time the
+        table's last time is the guess of the final time (unless
+        ``optimization.final_time.initial_guess`` is given).
+    time_column : str
+        The time column of ``file`` [s].
+    values : dict of str to float or str
+        Per-variable guesses overriding the method: a number or an expression of
+        ``time``, ``final_time`` and parameters.
+    inputs : dict of str to float or str
+        With ``method = "simulation"``: the inputs of the simulation, numbers or
+        expressions of ``time`` (default the model's input start values).
     """
 
-    method: choice("linear", "start", description="linear between the boundary values, or the model's start values") = "linear"
+    method: choice("linear", "start", "simulation", "file", description="linear between the boundary values, the model's start values, a simulation of the model under inputs, or the trajectory in file") = "linear"
+    file: NonEmptyText | None = Field(None, description='method "file": a CSV with a time column, or an earlier result folder (its trajectories.csv), relative to this file')
+    time_column: NonEmptyText = Field("t", description="time column of file [s]")
+    values: dict[str, GuessValue] = Field(default_factory=dict, description='per-variable guesses: numbers or expressions of time, e.g. theta = "pi * time / final_time"')
+    inputs: dict[str, GuessValue] = Field(default_factory=dict, description='method "simulation": inputs as numbers or expressions of time, e.g. F = "5 * sin(time)"')
 
 
 @fill_doc(**KIND_DOCS)
