@@ -33,7 +33,7 @@ from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalCon
 from gtmodel.problems.references import named_parameters
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
-from gtmodel.trajectory.model_ocp import OptimalControl
+from gtmodel.trajectory.model_ocp import MultipleShooting, OptimalControl
 from gtmodel.trajectory.settings import Collocation, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
@@ -204,10 +204,17 @@ class OptimalControlKind(ProblemKind):
                 raise _unknown(file, f"nominal.{key}", key, set(variables) | {"final_time"} | set(opt.free_parameters))
         declare_initial_guess(file, doc.initial_guess, opt, boundary, variables, vkeys, table,
                               doc.optimization.final_time.initial_guess is not None)
-        col = doc.collocation
+        col, tr = doc.collocation, doc.transcription
+        method: Collocation | MultipleShooting = Collocation(col.elements, col.points, col.scheme)
+        if tr.method == "multiple_shooting":
+            if doc.nominal:
+                raise file.fail("nominal", 'no nominal values with [transcription] method = "multiple_shooting" (scaling is for collocation)')
+            if opt.model.flatten().nz and tr.integrator in ("rk", "cvodes"):
+                raise file.fail("transcription.integrator", "collocation or idas for a model with algebraic variables", tr.integrator)
+            method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
-            method=Collocation(col.elements, col.points, col.scheme),
+            method=method,
             solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
@@ -250,7 +257,9 @@ class OptimalControlKind(ProblemKind):
             "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
-            "collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme},
+            "transcription": _transcription_summary(d.method),
+            **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
+               if isinstance(d.method, Collocation) else {}),
         })
         if r.status not in ("optimal", "acceptable"):
             return written
@@ -263,3 +272,11 @@ class OptimalControlKind(ProblemKind):
                     plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds, units=d.model.units)
                     written.files.append(fname)
         return written
+
+
+def _transcription_summary(method: Collocation | MultipleShooting) -> dict[str, Any]:
+    """The summary's ``transcription`` block (``collocation`` keeps its former keys)."""
+    if isinstance(method, MultipleShooting):
+        return {"method": "multiple_shooting", "intervals": method.intervals, "controls": method.controls,
+                "integrator": method.integrator or "default", "steps": method.steps}
+    return {"method": "collocation", "elements": method.elements, "points": method.points, "scheme": method.scheme}

@@ -141,3 +141,27 @@ def test_bad_initial_guess_through_cli(folder, capsys, case, csv, extra, match):
     if csv is not None:
         (folder / "guess.csv").write_text(csv)
     assert_bad_problem_through_cli(folder, capsys, PROBLEM + extra, match)
+
+
+def test_multiple_shooting_from_the_file(folder):
+    # the same problem by direct multiple shooting with piecewise-linear inputs (the optimal
+    # u ~ T - t is representable): the same closed-form optimum
+    text = PROBLEM + '[transcription]\nmethod = "multiple_shooting"\nintervals = 8\ncontrols = "linear"\n'
+    (folder / "ms.toml").write_text(text)
+    outcome = run_problem(folder / "ms.toml", folder / "out", plots=False)
+    assert outcome.status == Status.OPTIMAL
+    assert outcome.summary["transcription"] == {"method": "multiple_shooting", "intervals": 8, "controls": "linear",
+                                                "integrator": "default", "steps": 4}
+    assert outcome.summary["objective"] == pytest.approx(np.sqrt(0.5 * 2.0**3 / 3.0), rel=1e-7)
+
+
+BAD_TRANSCRIPTION = [
+    ("unknown_method", '[transcription]\nmethod = "single_shooting"\n', r"field 'transcription\.method': expected one of collocation, multiple_shooting"),
+    ("nominal_with_shooting", '[transcription]\nmethod = "multiple_shooting"\n[nominal]\nu = 2.0\n', r"field 'nominal': expected no nominal values"),
+    ("controls_unknown", '[transcription]\nmethod = "multiple_shooting"\ncontrols = "cubic"\n', r"field 'transcription\.controls': expected one of constant, linear"),
+]
+
+
+@pytest.mark.parametrize("case, extra, match", BAD_TRANSCRIPTION, ids=[c[0] for c in BAD_TRANSCRIPTION])
+def test_bad_transcription_through_cli(folder, capsys, case, extra, match):
+    assert_bad_problem_through_cli(folder, capsys, PROBLEM + extra, match)

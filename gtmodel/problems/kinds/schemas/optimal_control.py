@@ -15,9 +15,9 @@ from pydantic_core import PydanticCustomError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
-from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
+from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "OptimalControlFile", "MAX_VALUE"]
+__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection", "OptimalControlFile", "MAX_VALUE"]
 
 
 #: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
@@ -181,6 +181,34 @@ class InitialGuessSection(Section):
     inputs: dict[str, GuessValue] = Field(default_factory=dict, description='method "simulation": inputs as numbers or expressions of time, e.g. F = "5 * sin(time)"')
 
 
+class TranscriptionSection(Section):
+    """``[transcription]``: the transcription method.
+
+    Parameters
+    ----------
+    method : str
+        ``"collocation"`` (direct collocation, settings in ``[collocation]``) or
+        ``"multiple_shooting"`` (direct multiple shooting, a CasADi integrator per interval).
+    intervals : int
+        Shooting intervals (multiple shooting).
+    controls : str
+        ``"constant"`` or ``"linear"``: inputs piecewise constant or piecewise linear
+        over the shooting intervals.
+    integrator : str, optional
+        ``"rk"`` (fixed-step RK4, ODEs), ``"collocation"`` (fixed-step implicit, DAEs),
+        ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step); default rk for ODEs,
+        collocation for DAEs.
+    steps : int
+        Fixed integrator steps per interval (rk, collocation).
+    """
+
+    method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"
+    intervals: integer(1, 10000, description="multiple shooting: number of intervals") = 50
+    controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
+    integrator: choice("rk", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs)") | None = None
+    steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, collocation)") = 4
+
+
 @fill_doc(**KIND_DOCS)
 class OptimalControlFile(ProblemSchema):
     """An ``optimal_control`` problem file.
@@ -204,8 +232,10 @@ class OptimalControlFile(ProblemSchema):
         ``[nominal]``: magnitudes for scaling (variables, ``final_time``).
     initial_guess : InitialGuessSection
         ``[initial_guess]``: how the NLP is started.
+    transcription : TranscriptionSection
+        ``[transcription]``: collocation or multiple shooting.
     collocation : CollocationSection
-        ``[collocation]``: the transcription.
+        ``[collocation]``: the collocation mesh.
     solver : SolverSection
         ``[solver]``: IPOPT settings.
     """
@@ -219,5 +249,6 @@ class OptimalControlFile(ProblemSchema):
     free_parameters: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
     nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
     initial_guess: InitialGuessSection = InitialGuessSection()
+    transcription: TranscriptionSection = TranscriptionSection()
     collocation: CollocationSection = CollocationSection()
     solver: SolverSection = SolverSection()
