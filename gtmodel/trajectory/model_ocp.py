@@ -15,6 +15,7 @@ from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
+from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.trajectory.settings import Collocation, SolverSettings
 
@@ -73,6 +74,10 @@ class OptimalControl:
         The ``[parameters]`` table.
     bounds : dict of str to tuple of float
         Bounds per scalar variable name (for the plots).
+    estimation : dict or None
+        After :meth:`solve` of a problem with data fits: the residual statistics and the
+        estimates with standard deviations
+        (:func:`gtmodel.modeling.ocp.estimation.estimate_statistics`).
     """
 
     name: str
@@ -87,6 +92,7 @@ class OptimalControl:
     constraints: tuple[str, ...] = ()
     named_parameters: dict[str, float] = field(default_factory=dict)
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    estimation: dict[str, Any] | None = None
 
     @property
     def model(self) -> Model:
@@ -112,10 +118,17 @@ class OptimalControl:
             shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
                                              steps=m.steps, verbose=verbose, solver_options=options)
             same = isinstance(previous, OptimizationResult) and previous.collocation is not None
-            return shooting.solve(initial_guess=previous if warm_start and same else None)
+            return self._estimated(shooting, shooting.solve(initial_guess=previous if warm_start and same else None))
         tr = CollocationTranscription(
             d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, verbose=verbose,
             solver_options={"max_iter": d.solver.max_iter, "tol": d.solver.tol}, nominal=d.nominal,
         )
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
-        return tr.solve(initial_guess=guess)
+        return self._estimated(tr, tr.solve(initial_guess=guess))
+
+    def _estimated(self, transcription: Any, result: OptimizationResult) -> OptimizationResult:
+        """Keep the statistics of a data fit (:attr:`estimation`) of a solved problem."""
+        self.estimation = None
+        if self.optimization.data_fits and result.status in ("optimal", "acceptable"):
+            self.estimation = estimate_statistics(transcription, result)
+        return result

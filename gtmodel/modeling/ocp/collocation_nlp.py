@@ -193,6 +193,9 @@ class CollocationNLP:
         Path constraints per point.
     block_sizes : list of int
         Size of each block of :attr:`blocks`.
+    special : casadi.SX
+        The values of the timed variables and integrals (``Optimization.special_symbols``
+        order) as expressions of ``w`` and ``p``.
     """
 
     w: ca.SX
@@ -221,6 +224,7 @@ class CollocationNLP:
     lagr_fn: ca.Function
     npath: int
     block_sizes: list = field(default_factory=list)
+    special: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
 
 
 def transcribe(
@@ -462,4 +466,5 @@ def transcribe(
         lagr_fn=lagr_fn,
         npath=int(path_expr.numel()),
         block_sizes=[int(b.numel()) for b in w],
+        special=s_val,
     )

@@ -168,6 +168,7 @@ class Optimization:
         self.point_constraints: list[Constraint] = []
         self.bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.initial_guesses: dict[str, Any] = {}
+        self.data_fits: list[Any] = []  # gtmodel.modeling.ocp.estimation.fit_data
         self.parameters: dict[str, np.ndarray] = {}
         self.free_parameters: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray | None]] = {}
         self._flat: FlatDAE | None = None

@@ -260,6 +260,7 @@ class ShootingTranscription:
         self._blocks = blocks
         gv = ca.vertcat(*g) if g else ca.MX(0, 1)
         self._fg = ca.Function("fg", [w, P], [J, gv])
+        self.special_function = ca.Function("special", [w, P], [s_val])
         # the result's samples: node states and the states/inputs at the Radau points of each interval
         tau = np.array(ca.collocation_points(_SAMPLE_POINTS, "radau"), dtype=float)
         xs, us, zs = [], [], []
@@ -355,9 +356,11 @@ class ShootingTranscription:
             w0 = self._initial_w(guesses, tf_guess, pvec)
         t_start = _time.perf_counter()
         error_msg = None
+        lam = (None, None)
         try:
             sol = self.solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pvec)
             w = np.array(sol["x"], dtype=float).reshape(-1)
+            lam = (np.array(sol["lam_x"], dtype=float).reshape(-1), np.array(sol["lam_g"], dtype=float).reshape(-1))
         except RuntimeError as exc:
             error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
             w = w0
@@ -365,7 +368,9 @@ class ShootingTranscription:
         stats = dict(self.solver.stats())
         message = error_msg or str(stats.get("return_status", "unknown"))
         status = Status.ERROR if error_msg or not np.all(np.isfinite(w)) else normalize_ipopt_status(message)
-        return self._result(w, pvec, status, message, stats, solve_time)
+        res = self._result(w, pvec, status, message, stats, solve_time)
+        res.lam_w, res.lam_g = lam
+        return res
 
     def _result(self, w: np.ndarray, pvec: np.ndarray, status: str, message: str, stats: dict, solve_time: float) -> OptimizationResult:
         opt, dae, N, d = self.optimization, self.dae, self.intervals, _SAMPLE_POINTS

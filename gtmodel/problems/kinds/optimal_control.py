@@ -28,6 +28,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.optimal_control_data import declare_data
 from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
@@ -95,13 +96,15 @@ def _bound_value(file: ProblemFile, field_: str, value: float | str, table: dict
     return e
 
 
-def _objective(file: ProblemFile, opt: OptimizationSection) -> tuple[str | None, str | None, str]:
-    """The objective text, its sense and its field: exactly one of objective, minimize, maximize."""
+def _objective(file: ProblemFile, opt: OptimizationSection, data: bool) -> tuple[str | None, str | None, str]:
+    """The objective text, its sense and its field: exactly one of objective, minimize, maximize (none with data)."""
     given = [(k, getattr(opt, k)) for k in ("objective", "minimize", "maximize") if getattr(opt, k) is not None]
     if len(given) > 1:
         raise file.fail(f"optimization.{given[1][0]}", f"one objective (optimization.{given[0][0]} is given too)")
     if not given:
-        raise file.fail("optimization.objective", "an objective (objective, minimize or maximize)")
+        if data:
+            return None, "minimize", "objective"
+        raise file.fail("optimization.objective", "an objective (objective, minimize or maximize) or [[data]] to fit")
     key, text = given[0]
     return text, "maximize" if key == "maximize" else "minimize", key
 
@@ -195,9 +198,14 @@ class OptimalControlKind(ProblemKind):
                 if key not in vkeys:
                     raise _unknown(file, f"boundary.{at}.{key}", key, variables)
                 opt.add_point_constraint(variables[vkeys[key]][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
-        objective, sense, objective_key = _objective(file, doc.optimization)
+        objective, sense, objective_key = _objective(file, doc.optimization, bool(doc.data))
         apply_to(opt, objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.", sense=sense,
                  objective_key=objective_key)
+        fit = declare_data(file, doc.data, opt, table)
+        if fit is not None:
+            if sense == "maximize":
+                raise file.fail("optimization.maximize", "a minimised objective with [[data]] (the fit is a sum of squares)")
+            opt.set_objective(mayer=opt.mayer + fit, sense="minimize")
         nkeys = {**vkeys, "final_time": "final_time", **{k: n for k, n in pkeys.items() if n in opt.free_parameters}}
         for key in doc.nominal:
             if key not in nkeys:
@@ -257,6 +265,7 @@ class OptimalControlKind(ProblemKind):
             "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
+            **({"estimation": d.estimation} if d.estimation is not None else {}),
             "transcription": _transcription_summary(d.method),
             **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
                if isinstance(d.method, Collocation) else {}),

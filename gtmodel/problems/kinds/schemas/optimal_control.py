@@ -17,7 +17,7 @@ from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
 from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection", "OptimalControlFile", "MAX_VALUE"]
+__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection", "DataSection", "OptimalControlFile", "MAX_VALUE"]
 
 
 #: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
@@ -181,6 +181,35 @@ class InitialGuessSection(Section):
     inputs: dict[str, GuessValue] = Field(default_factory=dict, description='method "simulation": inputs as numbers or expressions of time, e.g. F = "5 * sin(time)"')
 
 
+class DataSection(Section):
+    """``[[data]]``: measurements of the model for parameter estimation (a least-squares objective).
+
+    Parameters
+    ----------
+    file : str
+        CSV file of the measurements (relative to the problem file), read with
+        ``gtmodel._tables.read_table``: a time column and one column per measured name.
+    time_column : str
+        The time column [s].
+    measures : list of str
+        Model names measured (outputs, states, algebraic variables).
+    columns : list of str, optional
+        The CSV column of each measured name; default the names themselves.
+    std : list of float, optional
+        Standard deviations of the measurements, one per measured name (or one for all);
+        weights ``1 / std^2``.
+    weights : list of float, optional
+        Weights of the squared residuals instead of ``std``; default 1.
+    """
+
+    file: NonEmptyText = Field(description="CSV of the measurements, relative to this file")
+    time_column: NonEmptyText = Field("t", description="time column of the CSV [s]")
+    measures: list[NonEmptyText] = Field(min_length=1, description='model names measured, e.g. ["x", "v"] (outputs, states, algebraics)')
+    columns: list[NonEmptyText] | None = Field(None, description="CSV column of each measured name (default: the names)")
+    std: vector(None, positive=True, bound=MAX_VALUE, description="standard deviations, one per measured name or one for all") | None = None
+    weights: vector(None, positive=True, bound=MAX_VALUE, description="weights of the squared residuals instead of std") | None = None
+
+
 class TranscriptionSection(Section):
     """``[transcription]``: the transcription method.
 
@@ -232,6 +261,8 @@ class OptimalControlFile(ProblemSchema):
         ``[nominal]``: magnitudes for scaling (variables, ``final_time``).
     initial_guess : InitialGuessSection
         ``[initial_guess]``: how the NLP is started.
+    data : list of DataSection
+        ``[[data]]``: measurements fitted by least squares (parameter estimation).
     transcription : TranscriptionSection
         ``[transcription]``: collocation or multiple shooting.
     collocation : CollocationSection
@@ -249,6 +280,7 @@ class OptimalControlFile(ProblemSchema):
     free_parameters: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
     nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
     initial_guess: InitialGuessSection = InitialGuessSection()
+    data: list[DataSection] = Field(default_factory=list, description="[[data]] tables: measurements fitted by least squares (parameter estimation)")
     transcription: TranscriptionSection = TranscriptionSection()
     collocation: CollocationSection = CollocationSection()
     solver: SolverSection = SolverSection()
