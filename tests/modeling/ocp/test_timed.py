@@ -41,8 +41,9 @@ def test_maximise_final_state_under_an_isoperimetric_constraint():
     assert np.trapezoid(r.sample(t)["inputs"]["u"] ** 2, t) == pytest.approx(0.5, rel=1e-4)
 
 
-@pytest.mark.parametrize("t1, elements, rel", [(0.3, 10, 1e-8), (0.35, 20, 2e-3)], ids=["on_boundary", "interior"])
-def test_variable_at_an_interior_time(t1, elements, rel):
+@pytest.mark.parametrize("t1, elements, rel, scheme", [(0.3, 10, 1e-8, "radau"), (0.35, 20, 2e-3, "radau"), (0.3, 10, 1e-8, "legendre")],
+                         ids=["on_boundary", "interior", "legendre_on_boundary"])
+def test_variable_at_an_interior_time(t1, elements, rel, scheme):
     # at an element boundary the optimum is a polynomial on each element (exact); strictly
     # inside an element the kink of u at t1 is interpolated (first-order accurate)
     m, x, v, u = double_integrator()
@@ -50,7 +51,7 @@ def test_variable_at_an_interior_time(t1, elements, rel):
     _from_rest(opt, x, v)
     opt.set_objective(lagrange=u**2)
     opt.add_constraint(opt.timed(x, t1), lb=1.0, ub=1.0)
-    r = CollocationTranscription(opt, elements=elements).solve()
+    r = CollocationTranscription(opt, elements=elements, scheme=scheme).solve()
     assert r.status == "optimal"
     assert r.objective == pytest.approx(3.0 / t1**3, rel=rel)
     assert r.sample([t1])["states"]["x"][0] == pytest.approx(1.0, abs=1e-8)  # the same polynomial the result samples

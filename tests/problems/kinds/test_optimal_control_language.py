@@ -50,6 +50,7 @@ v = 0.0
 [bounds]
 u = ["-umax", inf]
 v = ["-inf", 10.0]
+x = [-1e20, 100.0]
 [collocation]
 elements = 10
 '''
@@ -89,6 +90,8 @@ BAD = [
     ("bare_variable_with_timed", '"x(1.0) >= 0.1 * speed(final_time)"', '"x(1.0) >= v"', r"field 'optimization\.constraints\[1\]': 'v' is not evaluated at a time point"),
     ("inf_both_sides", 'u = ["-umax", inf]', "u = [-inf, inf]", r"field 'bounds\.u': expected a bound on at least one side"),
     ("inf_strings_both_sides", 'u = ["-umax", inf]', 'u = ["-inf", "inf"]', r"field 'bounds\.u': expected a bound on at least one side"),
+    ("inf_by_1e20_both_sides", 'u = ["-umax", inf]', "u = [-1e20, 1e20]", r"field 'bounds\.u': expected a bound on at least one side"),
+    ("bound_between_finite_and_infinite", 'u = ["-umax", inf]', "u = [-1e12, 1.0]", r"field 'bounds\.u': expected a list \[lo, hi\] of numbers \(\|x\| <= 1e\+09"),
     ("lower_bound_inf", 'u = ["-umax", inf]', 'u = [inf, 1.0]', r"field 'bounds\.u': expected lo < inf and hi > -inf"),
     ("bound_nan", 'u = ["-umax", inf]', "u = [nan, 1.0]", r"field 'bounds\.u': expected a list \[lo, hi\]"),
     ("bound_unknown_name", 'u = ["-umax", inf]', 'u = ["-umx", inf]', r"field 'bounds\.u': undefined name at column 2: 'umx'"),

@@ -25,11 +25,14 @@ __all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection
 MAX_VALUE = 1.0e9
 
 _INF = {"inf": math.inf, "+inf": math.inf, "-inf": -math.inf}
+#: A bound of at least this magnitude means infinite (IPOPT's ``nlp_upper_bound_inf``
+#: convention: ``1e20`` is written for "no bound").
+INFINITE_BOUND = 1.0e19
 
 
 def _bound_pair(v: Any) -> Any:
     """``[lo, hi]``: numbers (``inf``/``-inf`` leave a side open), ``"inf"``/``"-inf"`` or expressions of parameters."""
-    what = ('a list [lo, hi] of numbers (|x| <= 1e+09, or -inf/inf for an open side), "inf"/"-inf" or '
+    what = ('a list [lo, hi] of numbers (|x| <= 1e+09, or -inf/inf, |x| >= 1e19, for an open side), "inf"/"-inf" or '
             'expressions of parameters')
     if not isinstance(v, list) or len(v) != 2:
         raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
@@ -40,6 +43,8 @@ def _bound_pair(v: Any) -> Any:
         if isinstance(x, bool) or not isinstance(x, (int, float, str)) or (isinstance(x, str) and not x.strip()):
             raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
         if isinstance(x, (int, float)):
+            if math.isfinite(x) and abs(x) >= INFINITE_BOUND:
+                x = math.copysign(math.inf, x)
             if math.isnan(x) or (math.isfinite(x) and abs(x) > MAX_VALUE):
                 raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
             x = float(x)
@@ -67,7 +72,7 @@ GuessValue = Annotated[float | str, BeforeValidator(_guess_value)]
 BoundPair = Annotated[
     list[float | str],
     BeforeValidator(_bound_pair),
-    Field(min_length=2, max_length=2, description='[lo, hi]: numbers, -inf/inf (or "-inf"/"inf") for an open side, or expressions of parameters such as "-F_max"'),
+    Field(min_length=2, max_length=2, description='[lo, hi]: numbers, -inf/inf (or "-inf"/"inf", or a magnitude >= 1e19 such as 1e20) for an open side, or expressions of parameters such as "-F_max"'),
 ]
 
 
