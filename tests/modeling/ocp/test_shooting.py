@@ -14,6 +14,7 @@ References, independent of the transcription:
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -91,3 +92,20 @@ def test_a_dae_with_the_collocation_integrator():
 def test_bad_arguments(kwargs, match):
     with pytest.raises(InputError, match=match):
         ShootingTranscription(min_energy_problem(), **kwargs)
+
+
+def test_own_rk4_matches_casadis_rk_plugin():
+    # the SX Runge-Kutta 4 of the default "rk" against casadi.integrator(..., "rk", ...)
+    # (used when integrator options are given): the same discretisation, the same optimum
+    m = Model("pendulum")
+    th, om, u = m.state("th"), m.state("om"), m.input("u")
+    m.equation(m.der(th), om)
+    m.equation(m.der(om), -9.81 * ca.sin(th) + u)  # nonlinear, so RK4 is not exact
+    opt = Optimization(m, final_time=2.0)
+    opt.set_objective(lagrange=u**2)
+    for var, at, value in ((th, "start", 0.0), (om, "start", 0.0), (th, "final", 1.0), (om, "final", 0.0)):
+        opt.add_point_constraint(var, at=at, lb=value, ub=value)
+    own = ShootingTranscription(opt, intervals=10, steps=2).solve()
+    plugin = ShootingTranscription(opt, intervals=10, steps=2, integrator_options={"number_of_finite_elements": 2}).solve()
+    assert own.status == plugin.status == "optimal"
+    assert own.objective == pytest.approx(plugin.objective, rel=1e-10)
