@@ -15,7 +15,6 @@ states, algebraics, inputs, parameters) and :attr:`Optimization.final_time`.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -24,70 +23,11 @@ import numpy as np
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
 from gtmodel.modeling.simulation.model import Model
+from gtmodel.modeling.ocp.terms import Constraint, Integral, Timed
 
-__all__ = ["Optimization", "Constraint"]
+__all__ = ["Optimization", "Constraint", "Timed", "Integral"]
 
 _log = logging.getLogger("gtmodel")
-
-
-@dataclass
-class Constraint:
-    """A declared constraint ``lb <= expr <= ub``.
-
-    Parameters
-    ----------
-    name : str
-        Label used in messages.
-    expr : casadi.SX
-        Column expression.
-    lb, ub : numpy.ndarray
-        Bounds, one per element of ``expr``.
-    at : str or None
-        ``None`` for a path constraint, ``"start"`` or ``"final"`` for a point constraint
-        (model variables taken there), ``"timed"`` for a constraint on timed variables
-        and integrals (:meth:`Optimization.timed`, :meth:`Optimization.integral`).
-    """
-
-    name: str
-    expr: ca.SX
-    lb: np.ndarray
-    ub: np.ndarray
-    at: str | None = None
-
-
-@dataclass
-class Timed:
-    """A timed variable: an expression of the model's variables at one fixed time (Optimica's ``x(t)``).
-
-    Parameters
-    ----------
-    symbol : casadi.SX
-        Scalar symbol standing for the value in objectives and constraints.
-    expr : casadi.SX
-        Scalar expression of model variables, parameters and ``final_time``.
-    time : float or str
-        Absolute time [s] in the horizon, or ``"start"`` / ``"final"``.
-    """
-
-    symbol: ca.SX
-    expr: ca.SX
-    time: float | str
-
-
-@dataclass
-class Integral:
-    """An integral over the horizon standing as a symbol (isoperimetric constraints).
-
-    Parameters
-    ----------
-    symbol : casadi.SX
-        Scalar symbol standing for the value.
-    expr : casadi.SX
-        Scalar integrand over ``[start_time, final_time]``.
-    """
-
-    symbol: ca.SX
-    expr: ca.SX
 
 
 class Optimization:
