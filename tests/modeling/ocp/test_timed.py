@@ -8,7 +8,8 @@ References (all closed forms, independent of the transcription):
   minimum-energy reach of a free-velocity target, ``3 / t1^3`` (``u = 0`` after ``t1``);
 * ``x(t0)^2 + integral(u^2)`` with ``x' = u``, ``x(T) = 1``, ``T = 1``: ``a^2 + (1 - a)^2``
   with ``a = x(t0)``, minimum ``0.5`` at ``a = 0.5``;
-* minimum time rest to rest over ``D`` with ``|u| <= umax``: ``T = 2 sqrt(D / umax)``.
+* minimum time rest to rest over ``D`` with ``|u| <= umax``: ``T = 2 sqrt(D / umax)``;
+* the COPS hanging chain (published optimum 5.06852), its length an isoperimetric constraint.
 """
 
 from __future__ import annotations
@@ -121,3 +122,31 @@ def test_interior_time_with_a_free_final_time_is_refused():
     with pytest.raises(ModelError, match="free final time only the start and the final time"):
         opt.timed(x, 0.5)
     assert opt.timed(x, 0.0) is opt.timed(x, "start")
+
+
+def _hanging_chain():
+    m = Model("chain")
+    x, u = m.state("x"), m.input("u")
+    m.equation(m.der(x), u)
+    opt = Optimization(m, final_time=1.0)
+    opt.add_point_constraint(x, at="start", lb=1.0, ub=1.0)
+    opt.add_point_constraint(x, at="final", lb=3.0, ub=3.0)
+    opt.set_objective(lagrange=x * ca.sqrt(1 + u**2))  # potential energy
+    opt.add_constraint(opt.integral(ca.sqrt(1 + u**2)), lb=4.0, ub=4.0)  # the chain's length
+    opt.set_initial_guess(x, lambda t: np.array([4 * (t - 0.5) ** 2 + 2 * t]))
+    opt.set_initial_guess(u, lambda t: np.array([8 * (t - 0.5) + 2]))
+    return opt
+
+
+@pytest.mark.parametrize("method", ["collocation", pytest.param("multiple_shooting", marks=pytest.mark.slow)])
+def test_hanging_chain_with_its_length_as_an_isoperimetric_constraint(method):
+    # COPS 3.0 (Dolan, More, Munson 2004), hanging chain a = 1, b = 3, L = 4: published
+    # minimum 5.06852 (their nh = 800 mesh); written with integral() as the length constraint
+    # instead of an extra state
+    from gtmodel.modeling.ocp.shooting import ShootingTranscription
+
+    opt = _hanging_chain()
+    tr = CollocationTranscription(opt, elements=50) if method == "collocation" else ShootingTranscription(opt, intervals=100, controls="linear")
+    r = tr.solve()
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(5.06852, rel=2e-5)
