@@ -89,6 +89,9 @@ BAD = [
     ("unknown_measured_name", lambda p, c: (p.replace('measures = ["y"]', 'measures = ["z"]'), c), r"field 'data\[0\]\.measures': expected names of the model's outputs, states or algebraic variables \(.*x.*y"),
     ("time_outside_horizon", lambda p, c: (p.replace("value = 2.0", "value = 1.0"), c), r"field 'data\[0\]\.file': timed variable at t = 1\.1 s: outside the horizon \[0, 1\] s"),
     ("std_and_weights", lambda p, c: (p.replace("std = [0.02]", "std = [0.02]\nweights = [1.0]"), c), r"field 'data\[0\]\.weights': expected std or weights, not both"),
+    ("std_count", lambda p, c: (p.replace("std = [0.02]", "std = [0.02, 0.03]"), c), r"field 'data\[0\]\.std': expected one value or one per measured name \(1\)"),
+    ("std_negative", lambda p, c: (p.replace("std = [0.02]", "std = [-0.02]"), c), r"field 'data\[0\]\.std': expected 1 positive numbers"),
+    ("data_with_free_final_time", lambda p, c: (p.replace("free = false\nvalue = 2.0", "free = true\nbounds = [1.0, 3.0]"), c), r"field 'data\[0\]\.file': timed variable at t = 0\.1 s: with a free final time only the start and the final time"),
     ("csv_missing", lambda p, c: (p.replace('file = "measured.csv"', 'file = "nope.csv"'), c), r"field 'data\[0\]\.file'"),
     ("time_column_missing", lambda p, c: (p.replace('time_column = "t"', 'time_column = "time"'), c), r"field 'data\[0\]\.time_column': expected a column of measured\.csv"),
 ]

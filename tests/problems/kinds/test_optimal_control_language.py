@@ -161,6 +161,9 @@ def test_multiple_shooting_from_the_file(folder):
 BAD_TRANSCRIPTION = [
     ("unknown_method", '[transcription]\nmethod = "single_shooting"\n', r"field 'transcription\.method': expected one of collocation, multiple_shooting"),
     ("nominal_with_shooting", '[transcription]\nmethod = "multiple_shooting"\n[nominal]\nu = 2.0\n', r"field 'nominal': expected no nominal values"),
+    ("integrator_unknown", '[transcription]\nmethod = "multiple_shooting"\nintegrator = "euler"\n', r"field 'transcription\.integrator': expected one of rk, collocation, cvodes, idas"),
+    ("intervals_zero", '[transcription]\nmethod = "multiple_shooting"\nintervals = 0\n', r"field 'transcription\.intervals': expected an integer in 1\.\.10000"),
+    ("steps_zero", '[transcription]\nmethod = "multiple_shooting"\nsteps = 0\n', r"field 'transcription\.steps': expected an integer in 1\.\.1000"),
     ("controls_unknown", '[transcription]\nmethod = "multiple_shooting"\ncontrols = "cubic"\n', r"field 'transcription\.controls': expected one of constant, linear"),
 ]
 
