@@ -11,7 +11,13 @@ names (``mass.s``, ``spring.c``) are written with ``_`` for ``.`` in expressions
 (``mass_s``; the language has no attribute access) and may be written either way as keys
 of the tables (``"mass.s" = 0.0`` or ``mass_s = 0.0``). The problem is declared as a
 :class:`~gtmodel.modeling.Optimization` and solved by direct collocation
-(:class:`~gtmodel.modeling.CollocationTranscription`, IPOPT).
+(:class:`~gtmodel.modeling.CollocationTranscription`, IPOPT) or, with ``[transcription]
+method = "multiple_shooting"``, by direct multiple shooting
+(:class:`~gtmodel.modeling.ocp.shooting.ShootingTranscription`). The initial guess
+(``[initial_guess]``) is :mod:`gtmodel.problems.kinds.optimal_control_guess`; measured
+data fitted by least squares (``[[data]]``, parameter estimation) is
+:mod:`gtmodel.problems.kinds.optimal_control_data`, its estimates and residual statistics
+in the summary's ``estimation`` block.
 """
 
 from __future__ import annotations
@@ -118,7 +124,7 @@ class OptimalControlKind(ProblemKind):
 
     name = "optimal_control"
     schema = OptimalControlFile
-    title = "optimal control of the user's own model ([model] file and class), by direct collocation"
+    title = "optimal control or parameter estimation on the user's own model ([model] file and class), by direct collocation or multiple shooting"
     columns = (
         Column("final_time_s", "T_final [s]", "{:.4f}"),
         Column("objective", "objective", "{:.6g}"),
