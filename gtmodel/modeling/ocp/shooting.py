@@ -342,7 +342,7 @@ class ShootingTranscription:
                 tf_guess = float(np.clip(res.final_time, *opt.final_time_bounds))
                 for cat, vars_ in (("states", dae.x_vars), ("inputs", dae.u_vars), ("algebraics", dae.z_vars)):
                     for name in vars_:
-                        guesses[name] = (lambda c, n: (lambda t: np.asarray(res.sample([min(t, res.final_time)])[c][n], dtype=float).reshape(-1)))(cat, name)
+                        guesses[name] = _sampled(res, cat, name)
         elif isinstance(initial_guess, Mapping):
             for name, value in initial_guess.items():
                 if name == "final_time":
@@ -413,6 +413,15 @@ class ShootingTranscription:
             parameters={k: pvec[s].copy() for k, s in dae.p_vars.items()}, last_iterate=status not in ("optimal", "acceptable"),
             stats=stats, collocation=colloc, dae=dae, w=w.copy(), transcription_key=self.key,
         )
+
+
+def _sampled(result: OptimizationResult, group: str, name: str) -> Any:
+    """``f(t)``: variable ``name`` of ``result`` (``group`` states/inputs/algebraics) sampled at ``t`` (clipped to its horizon)."""
+
+    def f(t: float) -> np.ndarray:
+        return np.asarray(result.sample([min(t, result.final_time)])[group][name], dtype=float).reshape(-1)
+
+    return f
 
 
 def _rk4(problem: dict[str, ca.SX], steps: int) -> ca.Function:

@@ -109,3 +109,13 @@ def test_own_rk4_matches_casadis_rk_plugin():
     plugin = ShootingTranscription(opt, intervals=10, steps=2, integrator_options={"number_of_finite_elements": 2}).solve()
     assert own.status == plugin.status == "optimal"
     assert own.objective == pytest.approx(plugin.objective, rel=1e-10)
+
+
+def test_started_from_a_collocation_result():
+    # the collocation optimum (u = 6 - 12 t, exact on any mesh) sampled onto the shooting
+    # nodes is already the piecewise-linear optimum: no iteration needed
+    from gtmodel.modeling import CollocationTranscription
+
+    opt = min_energy_problem()
+    r = ShootingTranscription(opt, intervals=10, controls="linear").solve(initial_guess=CollocationTranscription(opt, elements=10).solve())
+    assert r.status == "optimal" and r.iterations <= 1 and r.objective == pytest.approx(12.0, rel=1e-10)
