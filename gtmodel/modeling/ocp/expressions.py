@@ -355,7 +355,8 @@ class _Parser:
                              "divided by a constant or parameter", f)
         if self.mode == "integrand":
             return self.fail("nested integral() is not allowed", f)
-        return self.fail("integral() is only allowed in the objective and constraints", f)
+        where = "the objective" if self.specials is None else "the objective and constraints"
+        return self.fail(f"integral() is only allowed in {where}", f)
 
     def time_point(self, node: ast.Call, f: ast.Name) -> ca.SX:
         n = f.id
