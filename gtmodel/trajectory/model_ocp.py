@@ -15,9 +15,33 @@ from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
+from gtmodel.modeling.ocp.estimation import estimate_statistics
+from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.trajectory.settings import Collocation, SolverSettings
 
-__all__ = ["OptimalControl"]
+__all__ = ["OptimalControl", "MultipleShooting"]
+
+
+@dataclass(frozen=True)
+class MultipleShooting:
+    """The method: direct multiple shooting (:class:`~gtmodel.modeling.ocp.shooting.ShootingTranscription`).
+
+    Parameters
+    ----------
+    intervals : int
+        Shooting intervals.
+    controls : {"constant", "linear"}
+        Input parametrisation per interval.
+    integrator : str or None
+        Integrator plugin (None: rk for ODEs, collocation for DAEs).
+    steps : int
+        Fixed steps per interval of rk/collocation.
+    """
+
+    intervals: int = 50
+    controls: str = "constant"
+    integrator: str | None = None
+    steps: int = 4
 
 
 @dataclass
@@ -34,7 +58,7 @@ class OptimalControl:
         The class in it.
     optimization : Optimization
         The declared problem (objective, constraints, bounds, boundary values, guesses).
-    method : Collocation
+    method : Collocation or MultipleShooting
         The transcription.
     solver : SolverSettings
         IPOPT's iteration limit and tolerance.
@@ -42,25 +66,33 @@ class OptimalControl:
         Nominal magnitudes (scaling).
     objective : str
         The objective text.
+    sense : {"minimize", "maximize"}
+        Whether it is minimised or maximised.
     constraints : tuple of str
         The constraint texts.
     named_parameters : dict of str to float
         The ``[parameters]`` table.
     bounds : dict of str to tuple of float
         Bounds per scalar variable name (for the plots).
+    estimation : dict or None
+        After :meth:`solve` of a problem with data fits: the residual statistics and the
+        estimates with standard deviations
+        (:func:`gtmodel.modeling.ocp.estimation.estimate_statistics`).
     """
 
     name: str
     model_file: Path
     class_name: str
     optimization: Optimization
-    method: Collocation
+    method: Collocation | MultipleShooting
     solver: SolverSettings
     nominal: dict[str, float] = field(default_factory=dict)
     objective: str = ""
+    sense: str = "minimize"
     constraints: tuple[str, ...] = ()
     named_parameters: dict[str, float] = field(default_factory=dict)
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    estimation: dict[str, Any] | None = None
 
     @property
     def model(self) -> Model:
@@ -69,7 +101,7 @@ class OptimalControl:
 
     @fill_doc(**SHARED_DOCS)
     def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> OptimizationResult:
-        """Transcribe by collocation and solve with IPOPT.
+        """Transcribe (collocation or multiple shooting) and solve with IPOPT.
 
         Parameters
         ----------
@@ -80,9 +112,23 @@ class OptimalControl:
         OptimizationResult
         """
         d = self
+        options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
+        if isinstance(d.method, MultipleShooting):
+            m = d.method
+            shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
+                                             steps=m.steps, verbose=verbose, solver_options=options)
+            same = isinstance(previous, OptimizationResult) and previous.collocation is not None
+            return self._estimated(shooting, shooting.solve(initial_guess=previous if warm_start and same else None))
         tr = CollocationTranscription(
             d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, verbose=verbose,
             solver_options={"max_iter": d.solver.max_iter, "tol": d.solver.tol}, nominal=d.nominal,
         )
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
-        return tr.solve(initial_guess=guess)
+        return self._estimated(tr, tr.solve(initial_guess=guess))
+
+    def _estimated(self, transcription: Any, result: OptimizationResult) -> OptimizationResult:
+        """Keep the statistics of a data fit (:attr:`estimation`) of a solved problem."""
+        self.estimation = None
+        if self.optimization.data_fits and result.status in ("optimal", "acceptable"):
+            self.estimation = estimate_statistics(transcription, result)
+        return result

@@ -12,6 +12,11 @@
   layout); :mod:`~gtmodel.modeling.ocp.collocation_derivatives`: its Jacobian and Hessian
   assembled from per-point derivatives; :mod:`~gtmodel.modeling.ocp.collocation_function`:
   warm-started re-solves as one CasADi Function;
+* :mod:`~gtmodel.modeling.ocp.shooting`: :class:`ShootingTranscription`, direct multiple
+  shooting (piecewise-constant or piecewise-linear inputs, a CasADi integrator per interval);
+* :mod:`~gtmodel.modeling.ocp.timed`: the values of timed variables ``x(t)`` and integrals
+  in a collocation NLP;
+* :mod:`~gtmodel.modeling.ocp.guesses`: initial guesses from a table or a simulation;
 * :mod:`~gtmodel.modeling.ocp.result`: :class:`OptimizationResult` and the collocation data.
 """
 
@@ -28,6 +33,8 @@ from gtmodel.modeling.ocp.expressions import (
 )
 from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult
+from gtmodel.modeling.ocp.shooting import ShootingTranscription
+from gtmodel.modeling.ocp.guesses import guess_by_simulation, guess_from_table
 
 __all__ = [
     "Optimization",
@@ -43,4 +50,7 @@ __all__ = [
     "solve",
     "OptimizationResult",
     "CollocationData",
+    "ShootingTranscription",
+    "guess_by_simulation",
+    "guess_from_table",
 ]

@@ -229,6 +229,7 @@ class CollocationTranscription:
         self._block_sizes = nlp.block_sizes
         self._scale, self._lbw, self._ubw, self._lbg, self._ubg = nlp.scale, nlp.lbw, nlp.ubw, nlp.lbg, nlp.ubg
         self._fg = ca.Function("fg", [wv, P_nlp], [nlp.f, gv])
+        self.special_function = ca.Function("special", [wv, P_nlp], [nlp.special])
         self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
         self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()))
         self.derivative_functions: dict[str, ca.Function] = {}
@@ -439,7 +440,7 @@ class CollocationTranscription:
         dae, opt, co = self.dae, self.optimization, self._co
         N, d = self.elements, self.points
         f_val, g_val = self._fg(w, pvec)
-        f_val = float(f_val)
+        f_val = opt.objective_sign * float(f_val)  # the NLP minimises sign * objective
         g_val = np.array(g_val, dtype=float).reshape(-1)
         viol = [0.0]
         if g_val.size:

@@ -63,7 +63,7 @@ def resolve_function(transcription: Any, name: str = "resolve", warm_start: bool
     return ca.Function(
         name,
         [p, w0, lw, lg],
-        [sol["x"], sol["lam_x"], sol["lam_g"], sol["f"], tf],
+        [sol["x"], sol["lam_x"], sol["lam_g"], transcription.optimization.objective_sign * sol["f"], tf],
         ["p", "w0", "lam_w0", "lam_g0"],
         ["w", "lam_w", "lam_g", "objective", "final_time"],
     )

@@ -30,6 +30,7 @@ from gtmodel.errors import InputError
 from gtmodel.modeling.dae import FlatDAE
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import lagrange_basis
+from gtmodel.modeling.ocp.timed import PointArgs, special_values
 
 __all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "CollocationNLP", "transcribe"]
 
@@ -192,6 +193,9 @@ class CollocationNLP:
         Path constraints per point.
     block_sizes : list of int
         Size of each block of :attr:`blocks`.
+    special : casadi.SX
+        The values of the timed variables and integrals (``Optimization.special_symbols``
+        order) as expressions of ``w`` and ``p``.
     """
 
     w: ca.SX
@@ -220,6 +224,7 @@ class CollocationNLP:
     lagr_fn: ca.Function
     npath: int
     block_sizes: list = field(default_factory=list)
+    special: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
 
 
 def transcribe(
@@ -272,10 +277,11 @@ def transcribe(
 
     start_c = [c for c in opt.point_constraints if c.at == "start"]
     final_c = [c for c in opt.point_constraints if c.at == "final"]
+    timed_c = [c for c in opt.point_constraints if c.at == "timed"]
     start_fn = fn("point_start", [c.expr for c in start_c])
     final_fn = fn("point_final", [c.expr for c in final_c])
-    mayer_fn = fn("mayer", [opt.mayer])
-    lagr_fn = fn("lagrange", [opt.lagrange])
+    sign = opt.objective_sign  # the NLP minimises sign * objective
+    lagr_fn = fn("lagrange", [sign * opt.lagrange])
     # what is imposed at each collocation point: the model equations and the path
     # constraints, one function with common subexpressions (kinematics, mass matrix) once
     path_expr = subst(ca.vertcat(*[c.expr for c in opt.path_constraints])) if opt.path_constraints else ca.SX(0, 1)
@@ -346,6 +352,8 @@ def transcribe(
     rows_cont: list[tuple[int, int]] = []
     rows_tf: list[tuple[int, int]] = []
     J = ca.SX(0)
+    quadrature: list[tuple[PointArgs, ca.SX]] = []
+    element_vars: list[tuple[list[ca.SX], list[ca.SX], list[ca.SX], ca.SX]] = []
     Xk0 = var("x", 0, 0, nx, x_lb, x_ub)
     copies = free and final_time_copies
     if copies:
@@ -371,6 +379,8 @@ def transcribe(
             first = con(ca.vertcat(h * fkj - xp, akj, pkj), point_lb, point_ub)
             rows_point.append((k, j, first))
             J = J + co["B"][j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
+            quadrature.append((PointArgs(tkj, Xk[j], Zk[j - 1], Uk[j - 1], Tk), co["B"][j - 1] * h))
+        element_vars.append((Xk, Uk, Zk, Tk))
         xend = sum(co["D"][r] * Xk[r] for r in range(d + 1) if co["D"][r] != 0.0)
         Xk0 = var("x", k + 1, 0, nx, x_lb, x_ub)
         rows_cont.append((k, con(Xk0 - xend, np.zeros(1), np.zeros(1))))
@@ -414,7 +424,19 @@ def transcribe(
     if final_c:
         e = final_fn(T, XN, z_final, u_final, P, T)
         ends.append((con(e, np.concatenate([c.lb for c in final_c]), np.concatenate([c.ub for c in final_c])), e))
-    mayer = mayer_fn(T, XN, z_final, u_final, P, T)
+    start_args = PointArgs(ca.SX(t0), Xs[0][0], z_start, u_start, T_first)
+    final_args = PointArgs(T, XN, z_final, u_final, T)
+    s_sym, s_val = special_values(opt, fn, P, element_vars, (start_args, final_args), quadrature, co)
+
+    def final_value(name: str, exprs: list[ca.SX]) -> ca.SX:
+        """``exprs`` with model variables at the final time and timed variables/integrals by value."""
+        f = ca.Function(name, [*args, s_sym], [subst(ca.vertcat(*exprs))])
+        return f(T, XN, z_final, u_final, P, T, s_val)
+
+    if timed_c:
+        e = final_value("point_timed", [c.expr for c in timed_c])
+        ends.append((con(e, np.concatenate([c.lb for c in timed_c]), np.concatenate([c.ub for c in timed_c])), e))
+    mayer = final_value("mayer", [sign * opt.mayer])
     J = J + mayer
     cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
     return CollocationNLP(
@@ -444,4 +466,5 @@ def transcribe(
         lagr_fn=lagr_fn,
         npath=int(path_expr.numel()),
         block_sizes=[int(b.numel()) for b in w],
+        special=s_val,
     )

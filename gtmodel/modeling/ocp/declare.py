@@ -90,11 +90,16 @@ def apply_to(
     parameters: Mapping[str, float] | None = None,
     origin: str = "",
     prefix: str = "",
+    sense: str | None = None,
+    objective_key: str = "objective",
 ) -> tuple[Objective | None, list[ParsedConstraint]]:
     """Parse an objective and constraints and declare them on an optimisation.
 
     Point constraints are added with :meth:`Optimization.add_point_constraint` (which
-    evaluates model variables at the time point), path constraints with
+    evaluates model variables at the time point), constraints on variables at fixed
+    times ``x(2.5)``, at several time points or on ``integral()`` with
+    :meth:`Optimization.add_constraint` (over :meth:`Optimization.timed` and
+    :meth:`Optimization.integral` symbols), path constraints with
     :meth:`Optimization.add_path_constraint`, the objective with
     :meth:`Optimization.set_objective` (replacing both terms).
 
@@ -116,6 +121,10 @@ def apply_to(
         File path for messages.
     prefix : str, optional
         Prefix of field keys in messages, e.g. ``"optimization."``.
+    sense : {"minimize", "maximize"}, optional
+        Whether the objective is minimised or maximised; default unchanged (minimised).
+    objective_key : str, optional
+        Field key of the objective in messages (after ``prefix``); default ``"objective"``.
 
     Returns
     -------
@@ -131,6 +140,7 @@ def apply_to(
     """
     if isinstance(constraints, str):
         raise InputError("constraints must be a sequence of strings, not one string")
+    specials = (_timed_callback(optimization), optimization.integral)
     table = _table(optimization_names(optimization, parameters, origin=origin) if names is None else names)
     model = optimization.model
     varying = [model.time] + [
@@ -150,18 +160,36 @@ def apply_to(
 
     parsed_obj = None
     if objective is not None:
-        key = f"{prefix}objective"
-        parsed_obj = parse_objective(objective, table, origin, key, static)
-        declare(key, lambda: optimization.set_objective(mayer=parsed_obj.mayer, lagrange=parsed_obj.lagrange))
+        key = f"{prefix}{objective_key}"
+        parsed_obj = parse_objective(objective, table, origin, key, static, specials)
+        declare(key, lambda: optimization.set_objective(mayer=parsed_obj.mayer, lagrange=parsed_obj.lagrange, sense=sense))
         _log.debug("objective %r: mayer %s, lagrange %s", objective, parsed_obj.mayer, parsed_obj.lagrange)
     parsed = []
     for i, text in enumerate(constraints):
         key = f"{prefix}constraints[{i}]"
-        c = parse_constraint(text, table, origin, key, static)
+        c = parse_constraint(text, table, origin, key, static, specials)
         if c.at is None:
             declare(key, lambda c=c: optimization.add_path_constraint(c.expr, c.lb, c.ub, name=c.name))
+        elif c.at == "timed":
+            declare(key, lambda c=c: optimization.add_constraint(c.expr, c.lb, c.ub, name=c.name))
         else:
             declare(key, lambda c=c: optimization.add_point_constraint(c.expr, c.at, c.lb, c.ub, name=c.name))
         _log.debug("constraint %s %r: %g <= %s <= %g at %s", key, text, c.lb, c.expr, c.ub, c.at or "path")
         parsed.append(c)
     return parsed_obj, parsed
+
+
+def _timed_callback(optimization: Optimization) -> Callable[[ca.SX, Any], ca.SX]:
+    """``timed(expr, time)`` of the parser: the time a number, ``"start"``/``"final"`` or static SX."""
+
+    def timed(expr: ca.SX, time: Any) -> ca.SX:
+        if isinstance(time, ca.SX):
+            if not optimization.free_final_time:
+                time = ca.substitute(time, optimization.final_time, ca.SX(optimization.final_time_value))
+            if ca.symvar(time):
+                raise ProblemError("the time of a time point must be a number (start_time, final_time when fixed, "
+                                   "numbers and [parameters] names)")
+            time = float(ca.DM(ca.evalf(time)))
+        return optimization.timed(expr, time)
+
+    return timed

@@ -30,7 +30,7 @@ from typing import Any
 
 import casadi as ca
 
-from gtmodel.errors import InputError, ProblemError
+from gtmodel.errors import GtModelError, InputError, ProblemError
 
 __all__ = [
     "FUNCTIONS",
@@ -116,7 +116,9 @@ class ParsedConstraint:
     lb, ub : float
         Bounds (``-inf``/``inf`` when absent; equal for ``==``).
     at : str or None
-        ``None`` for a path constraint, ``"start"`` or ``"final"`` for a point constraint.
+        ``None`` for a path constraint, ``"start"`` or ``"final"`` for a point constraint,
+        ``"timed"`` for a constraint on timed variables and integrals (``expr`` holds
+        their symbols).
     text : str
         The source text.
     name : str
@@ -131,13 +133,24 @@ class ParsedConstraint:
     name: str = ""
 
 
+#: Callbacks of timed variables and integrals: ``timed(expr, time)`` with ``time`` a
+#: static SX (or ``"start"``/``"final"``) and ``integral(expr)``, each returning a symbol
+#: (:meth:`Optimization.timed`, :meth:`Optimization.integral`).
+Specials = tuple[Callable[[ca.SX, Any], ca.SX], Callable[[ca.SX], ca.SX]]
+
+
 class _Parser:
     """Walks the whitelisted AST of one text; ``mode`` selects what the context allows."""
 
     def __init__(
-        self, text: Any, names: Mapping[str, Any], static: Collection[str] | None, origin: str, key: str
+        self, text: Any, names: Mapping[str, Any], static: Collection[str] | None, origin: str, key: str,
+        specials: Specials | None = None,
     ) -> None:
         self.origin, self.key = str(origin), str(key)
+        self.specials = specials
+        self.timed_mode = False  # second pass of a constraint: time points and integrals as symbols
+        self.needs_timed = False  # first pass found what only timed variables / integrals can express
+        self.point_ats: set[str] = set()
         if not isinstance(text, str):
             raise self.fail(f"expected an expression string, got {type(text).__name__}")
         self.text = text.replace("\r", " ").replace("\n", " ").replace("\t", " ")
@@ -264,7 +277,11 @@ class _Parser:
             if self.mode == "factor":
                 raise self.fail("a factor of integral() must be constant in time (numbers, parameters, "
                                 "final_time)", node)
-            self.bare.append(node)
+            if self.mode == "when":
+                raise self.fail("the time of a time point must be constant (numbers, parameters, start_time, "
+                                "final_time)", node)
+            if self.mode != "integrand":
+                self.bare.append(node)
         return val
 
     def undefined(self, node: ast.AST, what: str) -> ProblemError:
@@ -283,6 +300,8 @@ class _Parser:
         if node.keywords:
             raise self.fail("keyword arguments are not allowed", node.keywords[0].value)
         if f.id == "integral":
+            if self.specials is not None and self.mode == "constraint":
+                return self.constraint_integral(node, f)
             raise self.integral_misplaced(f)
         if f.id in _FUNCS:
             lo, hi, fn = _FUNCS[f.id]
@@ -303,8 +322,28 @@ class _Parser:
             return fn(*args)
         if f.id in self.names:
             return self.time_point(node, f)
-        point = len(node.args) == 1 and isinstance(node.args[0], ast.Name) and node.args[0].id in TIME_POINTS
+        point = len(node.args) == 1 and (self.specials is not None or (
+            isinstance(node.args[0], ast.Name) and node.args[0].id in TIME_POINTS))
         raise self.undefined(f, "name" if point else "function")
+
+    def constraint_integral(self, node: ast.Call, f: ast.Name) -> ca.SX:
+        """``integral(f)`` in a constraint: a symbol of the integral (isoperimetric constraint)."""
+        if len(node.args) != 1 or node.keywords:
+            raise self.fail(f"integral() takes 1 argument, got {len(node.args)}", node)
+        if self.inside:
+            raise self.fail(f"integral() inside {self.inside[-1]}() is not allowed in a constraint", f)
+        integrand = self.scalar(node.args[0], "integrand")
+        self.needs_timed = True
+        if not self.timed_mode:
+            return ca.SX(0)
+        return self.special(lambda: self.specials[1](integrand), node)  # type: ignore[index]
+
+    def special(self, fn: Callable[[], ca.SX], node: ast.AST) -> ca.SX:
+        """Call a timed-variable/integral callback, its error placed at ``node``."""
+        try:
+            return fn()
+        except GtModelError as exc:
+            raise self.fail(str(exc).split("\n")[0], node) from None
 
     def integral_misplaced(self, f: ast.Name) -> ProblemError:
         if self.mode in ("mayer", "factor") and self.inside:
@@ -316,34 +355,45 @@ class _Parser:
                              "divided by a constant or parameter", f)
         if self.mode == "integrand":
             return self.fail("nested integral() is not allowed", f)
-        return self.fail("integral() is only allowed in the objective", f)
+        where = "the objective" if self.specials is None else "the objective and constraints"
+        return self.fail(f"integral() is only allowed in {where}", f)
 
     def time_point(self, node: ast.Call, f: ast.Name) -> ca.SX:
         n = f.id
-        if len(node.args) != 1 or node.keywords or not (
-            isinstance(node.args[0], ast.Name) and node.args[0].id in TIME_POINTS
-        ):
+        if len(node.args) != 1 or node.keywords:
+            raise self.fail(f"a time point takes one time, as {n}(final_time) or {n}(2.5)", node)
+        arg = node.args[0]
+        named = isinstance(arg, ast.Name) and arg.id in TIME_POINTS
+        if not named and self.specials is None:
             raise self.fail(f"a variable can only be evaluated at final_time or start_time, as "
                             f"{n}(final_time)", node)
-        at = TIME_POINTS[node.args[0].id]
         if n in self.static or n == "time":
             raise self.fail(f"'{n}' does not vary in time, write it without a time point", node,
                             "use final_time / start_time" if n == "time" else "")
-        if self.mode in ("expression", "integrand", "factor"):
+        if self.mode in ("expression", "integrand", "factor", "when"):
             where = {"expression": "in this expression", "integrand": "inside integral()",
-                     "factor": "in a factor of integral()"}[self.mode]
+                     "factor": "in a factor of integral()", "when": "in the time of a time point"}[self.mode]
             raise self.fail(f"time-point evaluation is not allowed {where}", node)
+        val = self.names[n]
+        if val.numel() != 1:
+            raise self.fail(f"'{n}' has {val.numel()} elements, only scalars are allowed", f,
+                            "use the scalar names of its elements")
+        when: Any = TIME_POINTS[arg.id] if named else self.scalar(arg, "when")
+        if self.specials is not None and (self.timed_mode or (self.mode == "mayer" and when != "final")):
+            return self.special(lambda: self.specials[0](val, when), node)  # type: ignore[index]
+        at = when if named else "timed"
         if self.mode == "mayer" and at != "final":
             raise self.fail("the objective can evaluate variables at final_time only", node)
+        if self.specials is not None:
+            self.point_ats.add(at)
+            self.needs_timed = self.needs_timed or at == "timed" or len(self.point_ats) > 1
+            if self.needs_timed:
+                return val
         if self.at is not None and self.at != at:
             a = self.span(self.at_node)[0] + 1 if self.at_node is not None else 0
             raise self.fail(f"mixes start_time and final_time (first time point at column {a})", node,
                             "write one constraint per time point")
         self.at, self.at_node = at, node
-        val = self.names[n]
-        if val.numel() != 1:
-            raise self.fail(f"'{n}' has {val.numel()} elements, only scalars are allowed", f,
-                            "use the scalar names of its elements")
         return val
 
     def guarded(self, fn: Callable[[], Any]) -> Any:
@@ -454,7 +504,7 @@ def parse_expression(
 
 def parse_objective(
     text: str, names: Mapping[str, Any], origin: str = "", key: str = "objective",
-    static: Collection[str] | None = None,
+    static: Collection[str] | None = None, specials: Specials | None = None,
 ) -> Objective:
     """Parse an objective and split it into Mayer and Lagrange parts.
 
@@ -462,7 +512,8 @@ def parse_objective(
     ``lagrange = w*f - g/c``. ``integral()`` may appear only along chains of ``+ - * /``
     from the top, multiplied or divided by factors constant in time (numbers, static
     names, ``final_time``). Outside ``integral()`` time-varying names must be written
-    ``v(final_time)``.
+    ``v(final_time)``; with ``specials``, also ``v(start_time)`` or ``v(t)`` at a fixed
+    time ``t`` (timed variables in the Mayer term).
 
     Parameters
     ----------
@@ -476,6 +527,9 @@ def parse_objective(
         Field key for messages; default ``"objective"``.
     static : collection of str, optional
         Names constant in time (see :func:`parse_expression`).
+    specials : tuple of callable, optional
+        ``(timed, integral)`` callbacks (e.g. :meth:`Optimization.timed` and
+        :meth:`Optimization.integral`); without them only ``v(final_time)`` is accepted.
 
     Returns
     -------
@@ -491,7 +545,7 @@ def parse_objective(
     InputError
         If ``names`` is malformed.
     """
-    p = _Parser(text, names, static, origin, key)
+    p = _Parser(text, names, static, origin, key, specials)
     tree = p.guarded(p.tree)
     if isinstance(tree, ast.Compare):
         raise p.fail("the objective is an expression to minimise, not a comparison", tree)
@@ -500,7 +554,8 @@ def parse_objective(
 
 
 def parse_constraint(
-    text: str, names: Mapping[str, Any], origin: str = "", key: str = "", static: Collection[str] | None = None
+    text: str, names: Mapping[str, Any], origin: str = "", key: str = "", static: Collection[str] | None = None,
+    specials: Specials | None = None,
 ) -> ParsedConstraint:
     """Parse ``e1 <= e2``, ``e1 >= e2``, ``e1 == e2`` or ``lo <= e <= hi`` (also ``>=``).
 
@@ -509,6 +564,10 @@ def parse_constraint(
     ``e1 <= e2`` gives ``expr = e1 - e2``, ``ub = 0``. In ``lo <= e <= hi`` the outer
     parts must be numbers. Calls ``v(final_time)`` / ``v(start_time)`` make it a point
     constraint; then every time-varying name must be evaluated at that same time point.
+    With ``specials``, a constraint may also evaluate names at fixed times ``v(2.5)``,
+    mix time points (``x(final_time) == x(start_time)``) and contain ``integral(f)``
+    (isoperimetric constraints): it is then a constraint on timed variables and integrals
+    (``at = "timed"``), its time points and integrals replaced by the callbacks' symbols.
 
     Parameters
     ----------
@@ -522,6 +581,8 @@ def parse_constraint(
         Field key for messages, e.g. ``"constraints[2]"``; also the constraint name.
     static : collection of str, optional
         Names constant in time (see :func:`parse_expression`).
+    specials : tuple of callable, optional
+        ``(timed, integral)`` callbacks (see :func:`parse_objective`).
 
     Returns
     -------
@@ -536,7 +597,7 @@ def parse_constraint(
     InputError
         If ``names`` is malformed.
     """
-    p = _Parser(text, names, static, origin, key)
+    p = _Parser(text, names, static, origin, key, specials)
     tree = p.guarded(p.tree)
     if not isinstance(tree, ast.Compare):
         p.guarded(lambda: p.scalar(tree, "constraint"))  # a more specific error first, if any
@@ -553,6 +614,17 @@ def parse_constraint(
         raise p.fail("at most two comparisons (lo <= e <= hi) are allowed",
                      p.op_span(operands[2], operands[3]))
     vals = p.guarded(lambda: [p.scalar(n, "constraint") for n in operands])
+    if p.needs_timed:  # time points other than one of start/final, or integral(): a second pass with symbols
+        if p.bare:
+            n = p.bare[0]
+            raise p.fail(f"'{n.id}' is not evaluated at a time point in a constraint on time points or integrals", n,
+                         "use final_time" if n.id == "time" else f"write {n.id}(t) at a time t, or make it a separate path constraint")
+        p = _Parser(text, names, static, origin, key, specials)
+        p.timed_mode = True
+        tree = p.guarded(p.tree)
+        operands = [tree.left, *tree.comparators]  # type: ignore[attr-defined]
+        vals = p.guarded(lambda: [p.scalar(n, "constraint") for n in operands])
+        p.at = "timed"
     consts = [_const(v) for v in vals]
     inf = math.inf
     if len(operands) == 3:

@@ -15,7 +15,6 @@ states, algebraics, inputs, parameters) and :attr:`Optimization.final_time`.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -24,33 +23,11 @@ import numpy as np
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
 from gtmodel.modeling.simulation.model import Model
+from gtmodel.modeling.ocp.terms import Constraint, Integral, Timed
 
-__all__ = ["Optimization", "Constraint"]
+__all__ = ["Optimization", "Constraint", "Timed", "Integral"]
 
 _log = logging.getLogger("gtmodel")
-
-
-@dataclass
-class Constraint:
-    """A declared constraint ``lb <= expr <= ub``.
-
-    Parameters
-    ----------
-    name : str
-        Label used in messages.
-    expr : casadi.SX
-        Column expression.
-    lb, ub : numpy.ndarray
-        Bounds, one per element of ``expr``.
-    at : str or None
-        ``None`` for a path constraint, ``"start"`` or ``"final"`` for a point constraint.
-    """
-
-    name: str
-    expr: ca.SX
-    lb: np.ndarray
-    ub: np.ndarray
-    at: str | None = None
 
 
 class Optimization:
@@ -124,10 +101,14 @@ class Optimization:
         self.final_time_value = tf
         self.mayer: ca.SX = ca.SX(0)
         self.lagrange: ca.SX = ca.SX(0)
+        self.sense = "minimize"
+        self.timed_variables: list[Timed] = []
+        self.integrals: list[Integral] = []
         self.path_constraints: list[Constraint] = []
         self.point_constraints: list[Constraint] = []
         self.bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.initial_guesses: dict[str, Any] = {}
+        self.data_fits: list[Any] = []  # gtmodel.modeling.ocp.estimation.fit_data
         self.parameters: dict[str, np.ndarray] = {}
         self.free_parameters: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray | None]] = {}
         self._flat: FlatDAE | None = None
@@ -154,10 +135,157 @@ class Optimization:
         self._flat = self.model.flatten()
         return self._flat
 
-    def _expr(self, expr: Any, what: str) -> ca.SX:
+    def _expr(self, expr: Any, what: str, special: bool = True) -> ca.SX:
         e = _as_sx(expr, what)
-        self.model.check_symbols(e, what, extra=[self._final_time])
+        extra = [self._final_time] + ([v.symbol for v in self.special_symbols()] if special else [])
+        self.model.check_symbols(e, what, extra=extra)
         return e
+
+    def special_symbols(self) -> list[Timed | Integral]:
+        """The timed variables and integrals declared so far, in order.
+
+        Returns
+        -------
+        list of Timed or Integral
+        """
+        return [*self.timed_variables, *self.integrals]
+
+    def _depends_on_special(self, e: ca.SX) -> bool:
+        syms = [v.symbol for v in self.special_symbols()]
+        return bool(syms) and ca.depends_on(e, ca.vertcat(*syms))
+
+    def _varying(self) -> ca.SX:
+        """The model's time-varying symbols: time, states, their derivatives, algebraics, inputs."""
+        m = self.model
+        parts = [m.time] + [ca.vec(s) for k in ("state", "algebraic", "input") for s in m.variables(k).values()]
+        parts += [ca.vec(m.der(s)) for s in m.variables("state").values()]
+        return ca.vertcat(*parts)
+
+    # ------------------------------------------------------------------ timed variables, integrals
+    def timed(self, expr: Any, time: float | str) -> ca.SX:
+        """A symbol for the value of ``expr`` at one fixed time (Optimica's timed variable ``x(t)``).
+
+        Use the symbol in the objective (:meth:`set_objective`, as a Mayer term) and in
+        constraints (:meth:`add_constraint`). The transcription gives it the value of
+        ``expr`` with the model variables interpolated at ``time``: by collocation, from the
+        polynomials of the element that contains ``time`` (states through the element start
+        and its collocation points, inputs and algebraics through the collocation points);
+        exact at element boundaries; by multiple shooting, integrated from the interval's
+        start to ``time``.
+
+        Parameters
+        ----------
+        expr : casadi.SX or float
+            Scalar expression of model variables, parameters and :attr:`final_time`.
+        time : float or {"start", "final"}
+            Absolute time [s] in ``[start_time, final_time]``, or the start or final time.
+            With a free final time only ``"start"``, ``"final"`` and the start time itself.
+
+        Returns
+        -------
+        casadi.SX
+            Scalar symbol standing for the value.
+
+        Raises
+        ------
+        InputError
+            If ``expr`` is not scalar or ``time`` is not a number or ``"start"``/``"final"``.
+        ModelError
+            If ``time`` is outside the horizon, or an interior time with a free final time.
+        """
+        e = self._expr(expr, "timed variable", special=False)
+        if e.numel() != 1:
+            raise InputError(f"timed variable: expression must be scalar, got {e.numel()} elements")
+        if isinstance(time, str):
+            if time not in ("start", "final"):
+                raise InputError(f"timed variable: time must be a number, 'start' or 'final', got {time!r}")
+            at: float | str = time
+        else:
+            try:
+                t = float(time)
+            except (TypeError, ValueError):
+                raise InputError(f"timed variable: time must be a number, 'start' or 'final', got {time!r}") from None
+            t0, tf = self.start_time, self.final_time_value
+            tol = 1e-12 * max(1.0, abs(t0), abs(tf))
+            if self.free_final_time:
+                if abs(t - t0) > tol:
+                    raise ModelError(
+                        f"timed variable at t = {t:g} s: with a free final time only the start and the final time "
+                        "can be used (an interior time would move within the elements as the final time changes)"
+                    )
+                at = "start"
+            elif not t0 - tol <= t <= tf + tol:
+                raise ModelError(f"timed variable at t = {t:g} s: outside the horizon [{t0:g}, {tf:g}] s")
+            else:
+                at = "start" if abs(t - t0) <= tol else "final" if abs(t - tf) <= tol else t
+        for v in self.timed_variables:
+            if v.time == at and ca.is_equal(v.expr, e, 20):
+                return v.symbol
+        sym = ca.SX.sym(f"timed{len(self.timed_variables)}")
+        self.timed_variables.append(Timed(sym, e, at))
+        return sym
+
+    def integral(self, expr: Any) -> ca.SX:
+        """A symbol for the integral of ``expr`` over the horizon, for constraints and objectives.
+
+        ``opt.add_constraint(opt.integral(x**2), ub=1)`` is an isoperimetric constraint.
+        The transcription gives the symbol the quadrature of the collocation points (by
+        multiple shooting: the integrator's quadrature).
+
+        Parameters
+        ----------
+        expr : casadi.SX or float
+            Scalar integrand of model variables, ``time``, parameters, :attr:`final_time`.
+
+        Returns
+        -------
+        casadi.SX
+            Scalar symbol standing for the value.
+
+        Raises
+        ------
+        InputError
+            If ``expr`` is not scalar.
+        ModelError
+            If ``expr`` contains symbols not declared by the model.
+        """
+        e = self._expr(expr, "integral", special=False)
+        if e.numel() != 1:
+            raise InputError(f"integral: integrand must be scalar, got {e.numel()} elements")
+        sym = ca.SX.sym(f"integral{len(self.integrals)}")
+        self.integrals.append(Integral(sym, e))
+        return sym
+
+    def add_constraint(self, expr: Any, lb: Any = -np.inf, ub: Any = np.inf, name: str | None = None) -> None:
+        """Add ``lb <= expr <= ub`` over timed variables and integrals (Optimica's point constraints).
+
+        Parameters
+        ----------
+        expr : casadi.SX
+            Column expression of symbols from :meth:`timed` and :meth:`integral`,
+            parameters and :attr:`final_time` (no model variable outside them).
+        lb, ub : float or array_like, optional
+            Bounds (scalar or one per element); ``lb == ub`` for equalities.
+        name : str, optional
+            Label used in messages; default ``"point<k>"``.
+
+        Raises
+        ------
+        InputError
+            If bound sizes do not match.
+        ModelError
+            If ``expr`` contains a model variable outside a timed variable or integral,
+            unknown symbols, or ``lb > ub``.
+        """
+        label = name or f"point{len(self.point_constraints)}"
+        e = self._expr(expr, f"constraint {label!r}")
+        if ca.depends_on(e, self._varying()):
+            raise ModelError(
+                f"constraint {label!r}: a model variable appears outside a timed variable or integral; "
+                "use timed(x, t) / integral(f), or add_path_constraint for a constraint at every time"
+            )
+        lbv, ubv = self._bounds(lb, ub, int(e.numel()), f"constraint {label!r}")
+        self.point_constraints.append(Constraint(label, e, lbv, ubv, "timed"))
 
     @staticmethod
     def _bounds(lb: Any, ub: Any, size: int, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -189,32 +317,44 @@ class Optimization:
     def objective_integrand(self, expr: Any) -> None:
         self.set_objective(lagrange=expr)
 
-    def set_objective(self, mayer: Any = None, lagrange: Any = None) -> None:
-        """Set the Mayer and/or Lagrange terms of the objective (minimised).
+    def set_objective(self, mayer: Any = None, lagrange: Any = None, sense: str | None = None) -> None:
+        """Set the Mayer and/or Lagrange terms of the objective and whether it is minimised or maximised.
 
         Parameters
         ----------
         mayer : casadi.SX or float, optional
             Scalar expression evaluated at the final time (may use ``final_time``,
-            parameters and model variables, which are taken at ``tf``). Unchanged if
-            omitted.
+            parameters, symbols of :meth:`timed` and :meth:`integral`, and model
+            variables, which are taken at ``tf``). Unchanged if omitted.
         lagrange : casadi.SX or float, optional
             Scalar integrand over the horizon. Unchanged if omitted.
+        sense : {"minimize", "maximize"}, optional
+            Minimise (default) or maximise ``mayer + integral(lagrange)``; the result's
+            ``objective`` is the value of that expression either way. Unchanged if omitted.
 
         Raises
         ------
         InputError
-            If an expression is not scalar.
+            If an expression is not scalar or ``sense`` is not one of the two.
         ModelError
             If an expression contains symbols not declared by the model.
         """
+        if sense is not None:
+            if sense not in ("minimize", "maximize"):
+                raise InputError(f"objective sense must be 'minimize' or 'maximize', got {sense!r}")
+            self.sense = sense
         for label, expr in (("mayer", mayer), ("lagrange", lagrange)):
             if expr is None:
                 continue
-            e = self._expr(expr, f"objective ({label} term)")
+            e = self._expr(expr, f"objective ({label} term)", special=label == "mayer")
             if e.numel() != 1:
                 raise InputError(f"objective ({label} term) must be scalar, got {e.numel()} elements")
             setattr(self, label, e)
+
+    @property
+    def objective_sign(self) -> float:
+        """``1.0`` when minimising, ``-1.0`` when maximising (the NLP minimises ``sign * objective``)."""
+        return -1.0 if self.sense == "maximize" else 1.0
 
     # ------------------------------------------------------------------ constraints
     def add_path_constraint(
@@ -239,7 +379,7 @@ class Optimization:
             If ``expr`` contains unknown symbols or ``lb > ub`` (naming the constraint).
         """
         label = name or f"path{len(self.path_constraints)}"
-        e = self._expr(expr, f"path constraint {label!r}")
+        e = self._expr(expr, f"path constraint {label!r}", special=False)
         lbv, ubv = self._bounds(lb, ub, int(e.numel()), f"path constraint {label!r}")
         self.path_constraints.append(Constraint(label, e, lbv, ubv, None))
 
@@ -274,7 +414,7 @@ class Optimization:
         if at not in ("start", "final"):
             raise InputError(f"point constraint: at must be 'start' or 'final', got {at!r}")
         label = name or f"point{len(self.point_constraints)}"
-        e = self._expr(expr, f"point constraint {label!r}")
+        e = self._expr(expr, f"point constraint {label!r}", special=False)
         lbv, ubv = self._bounds(lb, ub, int(e.numel()), f"point constraint {label!r}")
         self.point_constraints.append(Constraint(label, e, lbv, ubv, at))
 
@@ -285,17 +425,41 @@ class Optimization:
         ----------
         variable : casadi.SX
             A declared state/input/algebraic symbol, or elements of one.
-        lb, ub : float or array_like, optional
-            Bounds, scalar or one per selected element.
+        lb, ub : float, array_like or casadi.SX, optional
+            Bounds, scalar or one per selected element; ``-inf``/``inf`` (the
+            defaults) leave a side open. A bound that is an expression of model
+            parameters (fixed or free, :meth:`free_parameter`) and ``final_time`` is
+            imposed as the path constraint ``variable - lb >= 0`` / ``ub - variable >= 0``
+            at the collocation points (named ``"bounds of <name>"``).
 
         Raises
         ------
         ModelError
-            If ``variable`` is not a state, input or algebraic, or ``lb > ub``.
+            If ``variable`` is not a state, input or algebraic, ``lb > ub``, or a
+            bound expression contains model variables other than parameters.
+        InputError
+            If a bound has the wrong size or is NaN.
         """
         kind, name, idx = self.model.locate(variable)
         if kind == "parameter":
             raise ModelError(f"set_bounds: {name!r} is a parameter; bounds apply to states, inputs, algebraics")
+        var = _as_sx(variable, "variable")
+        symbolic = []
+        for side, value in (("lb", lb), ("ub", ub)):
+            if isinstance(value, ca.SX) and not value.is_constant():
+                e = self._expr(value, f"bounds of {name!r} ({side})", special=False)
+                if ca.depends_on(e, self._varying()):
+                    raise ModelError(f"bounds of {name!r} ({side}): a bound may depend on parameters and final_time only")
+                if e.numel() not in (1, var.numel()):
+                    raise InputError(f"bounds of {name!r} ({side}): expected 1 or {var.numel()} elements, got {e.numel()}")
+                symbolic.append((side, e))
+        if symbolic:
+            numeric = {s: (v if not any(s == k for k, _ in symbolic) else (-np.inf if s == "lb" else np.inf))
+                       for s, v in (("lb", lb), ("ub", ub))}
+            for side, e in symbolic:
+                diff = var - e if side == "lb" else e - var
+                self.add_path_constraint(diff, 0.0, np.inf, name=f"bounds of {name!r} ({side})")
+            lb, ub = numeric["lb"], numeric["ub"]
         lbv, ubv = self._bounds(lb, ub, len(idx), f"bounds of {name!r}")
         size = int(self.model.variables(kind)[name].numel())
         cur_lb, cur_ub = self.bounds.get(name, (np.full(size, np.nan), np.full(size, np.nan)))

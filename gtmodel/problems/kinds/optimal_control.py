@@ -11,7 +11,13 @@ names (``mass.s``, ``spring.c``) are written with ``_`` for ``.`` in expressions
 (``mass_s``; the language has no attribute access) and may be written either way as keys
 of the tables (``"mass.s" = 0.0`` or ``mass_s = 0.0``). The problem is declared as a
 :class:`~gtmodel.modeling.Optimization` and solved by direct collocation
-(:class:`~gtmodel.modeling.CollocationTranscription`, IPOPT).
+(:class:`~gtmodel.modeling.CollocationTranscription`, IPOPT) or, with ``[transcription]
+method = "multiple_shooting"``, by direct multiple shooting
+(:class:`~gtmodel.modeling.ocp.shooting.ShootingTranscription`). The initial guess
+(``[initial_guess]``) is :mod:`gtmodel.problems.kinds.optimal_control_guess`; measured
+data fitted by least squares (``[[data]]``, parameter estimation) is
+:mod:`gtmodel.problems.kinds.optimal_control_data`, its estimates and residual statistics
+in the summary's ``estimation`` block.
 """
 
 from __future__ import annotations
@@ -26,13 +32,15 @@ import numpy as np
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError
-from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names
+from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
+from gtmodel.problems.kinds.optimal_control_data import declare_data
+from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
-from gtmodel.trajectory.model_ocp import OptimalControl
+from gtmodel.trajectory.model_ocp import MultipleShooting, OptimalControl
 from gtmodel.trajectory.settings import Collocation, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
@@ -82,6 +90,31 @@ def _aliases(names: Any) -> dict[str, str]:
     return out
 
 
+def _bound_value(file: ProblemFile, field_: str, value: float | str, table: dict[str, Any], numeric: bool = False) -> Any:
+    """One side of a ``[lo, hi]`` pair: a number, or an expression of parameters (a number or, unless ``numeric``, an SX)."""
+    if not isinstance(value, str):
+        return float(value)
+    e = parse_expression(value, table, str(file.path), field_)
+    if not ca.symvar(e):
+        return float(ca.DM(ca.evalf(e)))
+    if numeric:
+        raise file.fail(field_, "numbers or expressions of [parameters] names", value)
+    return e
+
+
+def _objective(file: ProblemFile, opt: OptimizationSection, data: bool) -> tuple[str | None, str | None, str]:
+    """The objective text, its sense and its field: exactly one of objective, minimize, maximize (none with data)."""
+    given = [(k, getattr(opt, k)) for k in ("objective", "minimize", "maximize") if getattr(opt, k) is not None]
+    if len(given) > 1:
+        raise file.fail(f"optimization.{given[1][0]}", f"one objective (optimization.{given[0][0]} is given too)")
+    if not given:
+        if data:
+            return None, "minimize", "objective"
+        raise file.fail("optimization.objective", "an objective (objective, minimize or maximize) or [[data]] to fit")
+    key, text = given[0]
+    return text, "maximize" if key == "maximize" else "minimize", key
+
+
 def _unknown(file: ProblemFile, field_: str, name: str, known: Any) -> Exception:
     return file.fail(field_, f"one of the model's names ({', '.join(sorted(known)) or 'none'})", name)
 
@@ -91,7 +124,7 @@ class OptimalControlKind(ProblemKind):
 
     name = "optimal_control"
     schema = OptimalControlFile
-    title = "optimal control of the user's own model ([model] file and class), by direct collocation"
+    title = "optimal control or parameter estimation on the user's own model ([model] file and class), by direct collocation or multiple shooting"
     columns = (
         Column("final_time_s", "T_final [s]", "{:.4f}"),
         Column("objective", "objective", "{:.6g}"),
@@ -139,45 +172,65 @@ class OptimalControlKind(ProblemKind):
             if params[pkeys[key]].numel() != 1:
                 raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[pkeys[key]].numel()} elements)")
             opt.set_parameter(pkeys[key], value)
-        for key, (lo, hi) in doc.free_parameters.items():
+        origin = str(file.path)
+        named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
+        table = optimization_names(opt, named, origin=origin)
+        table = {k: table[n] for k, n in _aliases(table).items() if k.isidentifier()}
+        for key, pair in doc.free_parameters.items():
             if key not in pkeys:
                 raise _unknown(file, f"free_parameters.{key}", key, params)
+            lo, hi = (_bound_value(file, f"free_parameters.{key}", v, table, numeric=True) for v in pair)
             if lo > hi:
                 raise file.fail(f"free_parameters.{key}", "[lo, hi] with lo <= hi", [lo, hi])
             opt.free_parameter(pkeys[key], lo, hi)
         variables = _scalar_variables(model)
         vkeys = _aliases(variables)
         bounds: dict[str, tuple[float, float]] = {}
-        for key, (lo, hi) in doc.bounds.items():
+        for key, pair in doc.bounds.items():
             if key not in vkeys:
                 raise _unknown(file, f"bounds.{key}", key, variables)
-            if lo > hi:
+            lo, hi = (_bound_value(file, f"bounds.{key}", v, table) for v in pair)
+            if isinstance(lo, float) and isinstance(hi, float) and lo > hi:
                 raise file.fail(f"bounds.{key}", "[lo, hi] with lo <= hi", [lo, hi])
-            opt.set_bounds(variables[vkeys[key]][1], lo, hi)
-            bounds[vkeys[key]] = (lo, hi)
+            try:
+                opt.set_bounds(variables[vkeys[key]][1], lo, hi)
+            except GtModelError as exc:
+                raise file.wrap(f"bounds.{key}", exc) from None
+            if isinstance(lo, float) and isinstance(hi, float):
+                bounds[vkeys[key]] = (lo, hi)
         boundary = {at: {vkeys.get(k, k): v for k, v in getattr(doc.boundary, at).items()} for at in ("start", "final")}
         for at in ("start", "final"):
             for key, value in getattr(doc.boundary, at).items():
                 if key not in vkeys:
                     raise _unknown(file, f"boundary.{at}.{key}", key, variables)
                 opt.add_point_constraint(variables[vkeys[key]][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
-        origin = str(file.path)
-        named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
-        table = optimization_names(opt, named, origin=origin)
-        table = {k: table[n] for k, n in _aliases(table).items() if k.isidentifier()}
-        apply_to(opt, doc.optimization.objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.")
+        objective, sense, objective_key = _objective(file, doc.optimization, bool(doc.data))
+        apply_to(opt, objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.", sense=sense,
+                 objective_key=objective_key)
+        fit = declare_data(file, doc.data, opt, table)
+        if fit is not None:
+            if sense == "maximize":
+                raise file.fail("optimization.maximize", "a minimised objective with [[data]] (the fit is a sum of squares)")
+            opt.set_objective(mayer=opt.mayer + fit, sense="minimize")
         nkeys = {**vkeys, "final_time": "final_time", **{k: n for k, n in pkeys.items() if n in opt.free_parameters}}
         for key in doc.nominal:
             if key not in nkeys:
                 raise _unknown(file, f"nominal.{key}", key, set(variables) | {"final_time"} | set(opt.free_parameters))
-        if doc.initial_guess.method == "linear":
-            _linear_guess(opt, boundary, variables)
-        col = doc.collocation
+        declare_initial_guess(file, doc.initial_guess, opt, boundary, variables, vkeys, table,
+                              doc.optimization.final_time.initial_guess is not None)
+        col, tr = doc.collocation, doc.transcription
+        method: Collocation | MultipleShooting = Collocation(col.elements, col.points, col.scheme)
+        if tr.method == "multiple_shooting":
+            if doc.nominal:
+                raise file.fail("nominal", 'no nominal values with [transcription] method = "multiple_shooting" (scaling is for collocation)')
+            if opt.model.flatten().nz and tr.integrator in ("rk", "cvodes"):
+                raise file.fail("transcription.integrator", "collocation or idas for a model with algebraic variables", tr.integrator)
+            method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
-            method=Collocation(col.elements, col.points, col.scheme),
+            method=method,
             solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
-            objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
+            objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
         )
 
@@ -211,13 +264,17 @@ class OptimalControlKind(ProblemKind):
             "max_constraint_violation": r.max_constraint_violation,
             "last_iterate": r.last_iterate,
             "objective_expression": d.objective,
+            "objective_sense": d.sense,
             "constraints": list(d.constraints),
             "parameters": dict(d.named_parameters),
             "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name},
             "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
-            "collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme},
+            **({"estimation": d.estimation} if d.estimation is not None else {}),
+            "transcription": _transcription_summary(d.method),
+            **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
+               if isinstance(d.method, Collocation) else {}),
         })
         if r.status not in ("optimal", "acceptable"):
             return written
@@ -232,12 +289,9 @@ class OptimalControlKind(ProblemKind):
         return written
 
 
-def _linear_guess(opt: Optimization, boundary: dict[str, dict[str, float]], variables: dict[str, tuple[str, ca.SX]]) -> None:
-    """Initial guesses linear in time between the start and final boundary values (by declared name)."""
-    t0, tf = opt.start_time, opt.final_time_guess
-    start, final = boundary["start"], boundary["final"]
-    for key, (kind, sym) in variables.items():
-        if key in start and key in final:
-            opt.set_initial_guess(sym, ([t0, tf], [start[key], final[key]]))
-        elif key in start or key in final:
-            opt.set_initial_guess(sym, start.get(key, final.get(key)))
+def _transcription_summary(method: Collocation | MultipleShooting) -> dict[str, Any]:
+    """The summary's ``transcription`` block (``collocation`` keeps its former keys)."""
+    if isinstance(method, MultipleShooting):
+        return {"method": "multiple_shooting", "intervals": method.intervals, "controls": method.controls,
+                "integrator": method.integrator or "default", "steps": method.steps}
+    return {"method": "collocation", "elements": method.elements, "points": method.points, "scheme": method.scheme}

@@ -314,3 +314,17 @@ def test_documented_example_parses():
     assert [c.at for c in cons] == [None] * 5 + ["final"]
     assert (cons[4].lb, cons[4].ub) == (-0.5, 0.5)
     assert data["optimization"]["final_time"]["free"] is True
+
+
+def test_time_points_and_integrals_need_the_callbacks_of_an_optimization():
+    # without (timed, integral) callbacks (e.g. the robot kinds) a constraint keeps to one of
+    # start_time/final_time and no integral(); with them (apply_to) it becomes "timed"
+
+    names = {"x": ca.SX.sym("x"), "final_time": ca.SX.sym("final_time"), "start_time": 0.0}
+    with pytest.raises(ProblemError, match=r"a variable can only be evaluated at final_time or start_time"):
+        parse_constraint("x(0.5) == 1", names, static=["final_time", "start_time"])
+    seen = []
+    specials = (lambda e, t: seen.append(t) or ca.SX.sym("xt"), lambda e: ca.SX.sym("I"))
+    c = parse_constraint("x(0.5) + integral(x^2) <= x(final_time)", names, static=["final_time", "start_time"], specials=specials)
+    assert c.at == "timed" and c.ub == 0.0 and len(seen) == 2 and seen[1] == "final"
+    assert float(ca.DM(ca.evalf(seen[0]))) == 0.5

@@ -6,21 +6,74 @@ The kind is :mod:`gtmodel.problems.kinds.optimal_control`; the field reference i
 
 from __future__ import annotations
 
-from typing import Literal
+import math
+from typing import Annotated, Any, Literal
 
-from pydantic import Field
+from pydantic import BeforeValidator, Field
+from pydantic_core import PydanticCustomError
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
-from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
+from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = ["ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "OptimalControlFile", "MAX_VALUE"]
+__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection", "DataSection", "OptimalControlFile", "MAX_VALUE"]
 
 
 #: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
 #: (SI units; keeps 1e308 out of the solver).
 MAX_VALUE = 1.0e9
+
+_INF = {"inf": math.inf, "+inf": math.inf, "-inf": -math.inf}
+#: A bound of at least this magnitude means infinite (IPOPT's ``nlp_upper_bound_inf``
+#: convention: ``1e20`` is written for "no bound").
+INFINITE_BOUND = 1.0e19
+
+
+def _bound_pair(v: Any) -> Any:
+    """``[lo, hi]``: numbers (``inf``/``-inf`` leave a side open), ``"inf"``/``"-inf"`` or expressions of parameters."""
+    what = ('a list [lo, hi] of numbers (|x| <= 1e+09, or -inf/inf, |x| >= 1e19, for an open side), "inf"/"-inf" or '
+            'expressions of parameters')
+    if not isinstance(v, list) or len(v) != 2:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
+    out = []
+    for x in v:
+        if isinstance(x, str) and x.strip().lower() in _INF:
+            x = _INF[x.strip().lower()]
+        if isinstance(x, bool) or not isinstance(x, (int, float, str)) or (isinstance(x, str) and not x.strip()):
+            raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
+        if isinstance(x, (int, float)):
+            if math.isfinite(x) and abs(x) >= INFINITE_BOUND:
+                x = math.copysign(math.inf, x)
+            if math.isnan(x) or (math.isfinite(x) and abs(x) > MAX_VALUE):
+                raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": what})
+            x = float(x)
+        out.append(x)
+    lo, hi = out
+    if lo == -math.inf and hi == math.inf:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "a bound on at least one side ([-inf, inf] bounds nothing: leave the entry out)"})
+    if lo == math.inf or hi == -math.inf:
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "lo < inf and hi > -inf"})
+    return out
+
+
+def _guess_value(v: Any) -> Any:
+    if isinstance(v, bool) or not isinstance(v, (int, float, str)) or (isinstance(v, str) and not v.strip()) or (
+            isinstance(v, (int, float)) and not (math.isfinite(v) and abs(v) <= MAX_VALUE)):
+        raise PydanticCustomError("gtmodel", "expected {expected}", {"expected": "a finite number (|x| <= 1e+09) or an expression of time"})
+    return float(v) if not isinstance(v, str) else v
+
+
+#: A guess: a number or an expression of ``time``, ``final_time`` and parameters.
+GuessValue = Annotated[float | str, BeforeValidator(_guess_value)]
+
+#: ``[lo, hi]`` of a bound: numbers (``inf``, ``-inf``, ``"inf"``, ``"-inf"`` for an open
+#: side, not both) or expressions of parameters (``"-F_max"``).
+BoundPair = Annotated[
+    list[float | str],
+    BeforeValidator(_bound_pair),
+    Field(min_length=2, max_length=2, description='[lo, hi]: numbers, -inf/inf (or "-inf"/"inf", or a magnitude >= 1e19 such as 1e20) for an open side, or expressions of parameters such as "-F_max"'),
+]
 
 
 class ModelSection(Section):
@@ -67,8 +120,9 @@ class OptimizationSection(Section):
 
     Parameters
     ----------
-    objective : str
-        Objective over the model's names.
+    objective, minimize, maximize : str, optional
+        The objective over the model's names, minimised (``objective`` or ``minimize``)
+        or maximised (``maximize``); exactly one of them (none with ``[[data]]`` only).
     constraints : list of str
         Path and point constraints.
     start_time : float
@@ -77,7 +131,9 @@ class OptimizationSection(Section):
         Fixed or free final time.
     """
 
-    objective: NonEmptyText = Field(description='objective over the model\'s names, e.g. "final_time + w * integral(F^2)"')
+    objective: NonEmptyText | None = Field(None, description='objective to minimise over the model\'s names, e.g. "final_time + w * integral(F^2)"')
+    minimize: NonEmptyText | None = Field(None, description="objective to minimise (the same as objective)")
+    maximize: NonEmptyText | None = Field(None, description='objective to maximise, e.g. "h(final_time)"')
     constraints: Expressions = Field(default_factory=list, description='path/point constraints, e.g. ["abs(s) <= 1", "theta(final_time) == pi"]')
     start_time: number(ge=-MAX_TIME_S, le=MAX_TIME_S, unit="s") = 0.0
     final_time: FinalTimeSection
@@ -104,10 +160,87 @@ class InitialGuessSection(Section):
     method : str
         ``"linear"``: states (and other variables with both boundary values) interpolated
         linearly between their start and final values, others at their start values;
-        ``"start"``: every variable at the model's start value.
+        ``"start"``: every variable at the model's start value; ``"simulation"``: the
+        model simulated from its start values (``[boundary.start]``) under ``inputs``;
+        ``"file"``: the trajectory in ``file``.
+    file : str, optional
+        With ``method = "file"``: a CSV (time column and columns named as the model's
+        variables) or an earlier result folder (its ``trajectories.csv``), relative to
+        the problem file; interpolated linearly onto the mesh. With a free final time the
+        table's last time is the guess of the final time (unless
+        ``optimization.final_time.initial_guess`` is given).
+    time_column : str
+        The time column of ``file`` [s].
+    values : dict of str to float or str
+        Per-variable guesses overriding the method: a number or an expression of
+        ``time``, ``final_time`` and parameters.
+    inputs : dict of str to float or str
+        With ``method = "simulation"``: the inputs of the simulation, numbers or
+        expressions of ``time`` (default the model's input start values).
     """
 
-    method: choice("linear", "start", description="linear between the boundary values, or the model's start values") = "linear"
+    method: choice("linear", "start", "simulation", "file", description="linear between the boundary values, the model's start values, a simulation of the model under inputs, or the trajectory in file") = "linear"
+    file: NonEmptyText | None = Field(None, description='method "file": a CSV with a time column, or an earlier result folder (its trajectories.csv), relative to this file')
+    time_column: NonEmptyText = Field("t", description="time column of file [s]")
+    values: dict[str, GuessValue] = Field(default_factory=dict, description='per-variable guesses: numbers or expressions of time, e.g. theta = "pi * time / final_time"')
+    inputs: dict[str, GuessValue] = Field(default_factory=dict, description='method "simulation": inputs as numbers or expressions of time, e.g. F = "5 * sin(time)"')
+
+
+class DataSection(Section):
+    """``[[data]]``: measurements of the model for parameter estimation (a least-squares objective).
+
+    Parameters
+    ----------
+    file : str
+        CSV file of the measurements (relative to the problem file), read with
+        ``gtmodel._tables.read_table``: a time column and one column per measured name.
+    time_column : str
+        The time column [s].
+    measures : list of str
+        Model names measured (outputs, states, algebraic variables).
+    columns : list of str, optional
+        The CSV column of each measured name; default the names themselves.
+    std : list of float, optional
+        Standard deviations of the measurements, one per measured name (or one for all);
+        weights ``1 / std^2``.
+    weights : list of float, optional
+        Weights of the squared residuals instead of ``std``; default 1.
+    """
+
+    file: NonEmptyText = Field(description="CSV of the measurements, relative to this file")
+    time_column: NonEmptyText = Field("t", description="time column of the CSV [s]")
+    measures: list[NonEmptyText] = Field(min_length=1, description='model names measured, e.g. ["x", "v"] (outputs, states, algebraics)')
+    columns: list[NonEmptyText] | None = Field(None, description="CSV column of each measured name (default: the names)")
+    std: vector(None, positive=True, bound=MAX_VALUE, description="standard deviations, one per measured name or one for all") | None = None
+    weights: vector(None, positive=True, bound=MAX_VALUE, description="weights of the squared residuals instead of std") | None = None
+
+
+class TranscriptionSection(Section):
+    """``[transcription]``: the transcription method.
+
+    Parameters
+    ----------
+    method : str
+        ``"collocation"`` (direct collocation, settings in ``[collocation]``) or
+        ``"multiple_shooting"`` (direct multiple shooting, a CasADi integrator per interval).
+    intervals : int
+        Shooting intervals (multiple shooting).
+    controls : str
+        ``"constant"`` or ``"linear"``: inputs piecewise constant or piecewise linear
+        over the shooting intervals.
+    integrator : str, optional
+        ``"rk"`` (fixed-step RK4, ODEs), ``"collocation"`` (fixed-step implicit, DAEs),
+        ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step); default rk for ODEs,
+        collocation for DAEs.
+    steps : int
+        Fixed integrator steps per interval (rk, collocation).
+    """
+
+    method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"
+    intervals: integer(1, 10000, description="multiple shooting: number of intervals") = 50
+    controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
+    integrator: choice("rk", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs)") | None = None
+    steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, collocation)") = 4
 
 
 @fill_doc(**KIND_DOCS)
@@ -133,8 +266,12 @@ class OptimalControlFile(ProblemSchema):
         ``[nominal]``: magnitudes for scaling (variables, ``final_time``).
     initial_guess : InitialGuessSection
         ``[initial_guess]``: how the NLP is started.
+    data : list of DataSection
+        ``[[data]]``: measurements fitted by least squares (parameter estimation).
+    transcription : TranscriptionSection
+        ``[transcription]``: collocation or multiple shooting.
     collocation : CollocationSection
-        ``[collocation]``: the transcription.
+        ``[collocation]``: the collocation mesh.
     solver : SolverSection
         ``[solver]``: IPOPT settings.
     """
@@ -144,9 +281,11 @@ class OptimalControlFile(ProblemSchema):
     parameters: dict[str, number()] = Field(default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001")
     optimization: OptimizationSection
     boundary: BoundarySection = BoundarySection()
-    bounds: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's)")
-    free_parameters: dict[str, vector(2, bound=MAX_VALUE)] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
+    bounds: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's); inf for an open side, expressions of parameters allowed")
+    free_parameters: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi]: model parameters optimised with the trajectory, started at their value")
     nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
     initial_guess: InitialGuessSection = InitialGuessSection()
+    data: list[DataSection] = Field(default_factory=list, description="[[data]] tables: measurements fitted by least squares (parameter estimation)")
+    transcription: TranscriptionSection = TranscriptionSection()
     collocation: CollocationSection = CollocationSection()
     solver: SolverSection = SolverSection()
