@@ -42,6 +42,8 @@ class _Var:
     ub: np.ndarray
     der: ca.SX | None = None
     unit: str = ""
+    fixed: np.ndarray | None = None  # per element: the start is an initial condition (Modelica's fixed)
+    given: bool = False  # the start was given (not the default 0)
 
     @property
     def size(self) -> int:

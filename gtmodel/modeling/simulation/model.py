@@ -32,7 +32,15 @@ import numpy as np
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value
+from gtmodel.modeling.dae import (
+    FlatDAE,
+    SimulationResult,
+    _as_sx,
+    _shape_to_size,
+    _symbol_names,
+    _vector_value,
+    fixed_flags,
+)
 from gtmodel.modeling.structure.discontinuities import sign_modes
 from gtmodel.modeling.simulation.flatten import _KINDS, _Var, flatten_model
 from gtmodel.modeling.simulation.event_simulation import simulate_events, simulate_events_reduced
@@ -60,6 +68,15 @@ _DECLARE_DOCS = {
     "unit": """
         unit : str, optional
             SI unit (e.g. ``"m"``, ``"N"``), shown on plots (:attr:`units`); default none.
+        """,
+    "fixed": """
+        fixed : bool or array_like of bool, optional
+            Whether ``start`` is an initial condition that :meth:`Model.simulate` must meet
+            (Modelica's ``fixed = true``: kept through alias elimination and index
+            reduction, an error if it contradicts the model or the other initial
+            conditions); default False: ``start`` is a guess, used as the initial value
+            only where the initialisation has degrees of freedom left (see
+            :mod:`gtmodel.modeling.structure.initialization`).
         """,
     "raises": """
         Raises
@@ -128,6 +145,7 @@ class Model(EventsMixin):
         lb: Any = None,
         ub: Any = None,
         unit: str = "",
+        fixed: Any = False,
     ) -> ca.SX:
         if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
@@ -142,7 +160,11 @@ class Model(EventsMixin):
             raise ModelError(f"{what}: lower bound exceeds upper bound at elements {bad.tolist()}")
         if not isinstance(unit, str):
             raise InputError(f"{what} unit: expected a string such as 'm', got {unit!r}")
-        var = _Var(name, kind, sym, _vector_value(start, size, f"{what} start"), lbv, ubv, unit=unit)
+        flags = fixed_flags(fixed, size, f"{what} fixed")
+        if kind in ("parameter", "input") and flags.any():
+            raise ModelError(f"{what}: only states and algebraic variables have initial conditions (fixed)")
+        var = _Var(name, kind, sym, _vector_value(start, size, f"{what} start"), lbv, ubv, unit=unit, fixed=flags,
+                   given=start is not None)
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
@@ -185,7 +207,8 @@ class Model(EventsMixin):
 
     @fill_doc(**_DECLARE_DOCS)
     def state(
-        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
+        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = "",
+        fixed: Any = False,
     ) -> ca.SX:
         """Declare a differential state.
 
@@ -193,10 +216,12 @@ class Model(EventsMixin):
         ----------
         {name_shape}
         start : float or array_like, optional
-            Start value (initial condition for simulation, initial guess); default 0.
+            Start value (the initial value where the initialisation leaves it free, and
+            the guess of the initialisation and of optimisation); default 0.
         lb, ub : float or array_like, optional
             Bounds (Modelica ``min``/``max``) used by optimisation; default unbounded.
         {unit}
+        {fixed}
 
         Returns
         -------
@@ -205,11 +230,12 @@ class Model(EventsMixin):
 
         {raises}
         """
-        return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub, unit)
+        return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub, unit, fixed)
 
     @fill_doc(**_DECLARE_DOCS)
     def algebraic(
-        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
+        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = "",
+        fixed: Any = False,
     ) -> ca.SX:
         """Declare an algebraic variable.
 
@@ -221,6 +247,7 @@ class Model(EventsMixin):
         lb, ub : float or array_like, optional
             Bounds used by optimisation; default unbounded.
         {unit}
+        {fixed}
 
         Returns
         -------
@@ -230,7 +257,7 @@ class Model(EventsMixin):
         {raises}
         """
         return self._declare(
-            name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub, unit
+            name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub, unit, fixed
         )
 
     @fill_doc(**_DECLARE_DOCS)
@@ -576,7 +603,7 @@ class Model(EventsMixin):
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
             flat = model._flattens()
-            if model._initial_equations:  # consistent start (structured_simulation), then events
+            if model._needs_initialisation(flat, x0):  # consistent start (structured_simulation), then events
                 start = consistent_start(model, t_grid, x0, u, p, z0)
                 x0 = {k: v for k, v in start.items() if model._vars[k].kind == "state"}
                 z0 = np.concatenate([v for k, v in start.items() if model._vars[k].kind == "algebraic"] or [np.zeros(0)])
@@ -587,9 +614,24 @@ class Model(EventsMixin):
                     raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
                 return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)
             return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
-        if self._initial_equations or not self._flattens():
+        if self._needs_initialisation(True, x0) or not self._flattens():
             return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
         return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+
+    def _needs_initialisation(self, flat: bool, x0: Any) -> bool:
+        """Whether the start must be solved (initial equations, fixed starts the flat DAE cannot keep).
+
+        A flat (index-1, alias-free) model keeps its states' starts and ``x0`` as they are;
+        initial equations, a fixed start of an algebraic variable, and on a model that is
+        reduced first also fixed starts and ``x0`` entries of states, need the initialisation
+        of :mod:`gtmodel.modeling.structure.initialization`.
+        """
+        if self._initial_equations:
+            return True
+        for v in self._vars.values():
+            if v.fixed is not None and v.fixed.any() and (v.kind == "algebraic" or (v.kind == "state" and not flat)):
+                return True
+        return not flat and isinstance(x0, Mapping)
 
     def _flattens(self) -> bool:
         """Whether :meth:`flatten` accepts the model as it is (else simulate reduces it)."""

@@ -505,6 +505,27 @@ def structural_simplify(model: Any, point: tuple | None = None, keep_states: tup
     return build_model(model, aug, sel, states, algs, values)
 
 
+def _fixed_of_kept(system: ScalarDAE) -> dict[str, float]:
+    """The fixed starts on the variables the alias elimination kept (``+-`` an alias's value).
+
+    Raises
+    ------
+    ModelError
+        If two aliases of one variable have fixed starts that disagree (naming both).
+    """
+    out: dict[str, tuple[str, float]] = {}
+    for nm, val in system.fixed_start.items():
+        sign, keep = system.aliases.get(nm, (1.0, nm))
+        value = sign * val
+        if keep in out and abs(out[keep][1] - value) > 1e-12 * max(1.0, abs(value)):
+            raise ModelError(
+                f"model {system.name!r}: the fixed starts of {out[keep][0]!r} and {nm!r} disagree, but the equations make "
+                f"them the same variable ({keep} = {out[keep][1]:g} vs {value:g}); make them consistent or one not fixed"
+            )
+        out.setdefault(keep, (nm, value))
+    return {k: v for k, (_, v) in out.items()}
+
+
 def build_model(
     model: Any, aug: AugmentedDAE, sel: Selection, states: list[int], algs: list[int], values: np.ndarray,
     direct: bool = False,
@@ -549,18 +570,21 @@ def build_model(
                 bounds[nm] = (float(var.lb[j]), float(var.ub[j]))
     taken: set[str] = set(new._vars)
     new_syms: dict[int, ca.SX] = {}
+    fixed = _fixed_of_kept(aug.system)
     for kind, idx in (("state", states), ("algebraic", algs)):
         for v in idx:
             nm = aug.names[v]
             lb, ub = bounds.get(nm, (-np.inf, np.inf)) if aug.order[v] == 0 else (-np.inf, np.inf)
             decl = new.state if kind == "state" else new.algebraic
+            fix = aug.order[v] == 0 and nm in fixed  # a fixed start stays one (of the kept alias)
+            start = fixed[nm] if fix else values[v]
             try:
-                sym = decl(nm, start=values[v], lb=lb, ub=ub)
+                sym = decl(nm, start=start, lb=lb, ub=ub, fixed=fix)
             except (InputError, ModelError):
                 cand, k = _ident(nm), 1
                 while cand in taken:
                     cand, k = f"{_ident(nm)}_{k}", k + 1
-                sym = decl(cand, start=values[v], lb=lb, ub=ub)
+                sym = decl(cand, start=start, lb=lb, ub=ub, fixed=fix)
             taken.update(new._vars)
             new_syms[v] = sym
     if direct:  # no dummy: the der() of the states stay der() of the new model
