@@ -462,6 +462,8 @@ def _merge(inner: dict, outer: dict) -> dict:
     for key, value in outer.items():
         if isinstance(value, dict) and isinstance(out.get(key), dict) and key in out:
             out[key] = _merge(out[key], value)
+        elif isinstance(value, dict) and key in out and not isinstance(out[key], (dict, Component)):
+            out[key] = {"start": out[key], **value}  # a variable's start, modified: Mass(s=0.1) + {"fixed": False}
         else:
             out[key] = value
     return out
