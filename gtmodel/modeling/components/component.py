@@ -203,7 +203,9 @@ class Component(_ComponentBase):
             columns ``name`` (hierarchical, relative to this component), ``kind``
             (``parameter``, ``structural``, ``state``, ``algebraic``, ``input``,
             ``potential``, ``flow``), ``value`` (parameter value or variable start,
-            ``None`` for connector variables), ``unit`` and ``description``.
+            ``None`` for connector variables), ``fixed`` (whether a variable's start is an
+            initial condition, Modelica's ``fixed``; ``None`` where no start applies),
+            ``unit`` and ``description``.
         """
         rows: list[dict[str, Any]] = []
 
@@ -219,7 +221,10 @@ class Component(_ComponentBase):
                 elif isinstance(decl, Variable):
                     start = comp._attributes[name]["start"]
                     value = None if start is None else (start[0] if start.size == 1 else start)
-                    rows.append(dict(name=pre + name, kind=decl.kind, value=value, unit=decl.unit, description=decl.description))
+                    flags = comp._attributes[name].get("fixed")
+                    fixed = None if flags is None else (bool(flags[0]) if flags.size == 1 else flags.tolist())
+                    rows.append(dict(name=pre + name, kind=decl.kind, value=value, fixed=fixed, unit=decl.unit,
+                                     description=decl.description))
             for cname, conn in comp.connectors().items():
                 for var in conn.variables():
                     rows.append(dict(name=f"{pre}{cname}.{var.name}", kind="flow" if var.is_flow else "potential",
@@ -228,7 +233,7 @@ class Component(_ComponentBase):
                 walk(sub, f"{pre}{sname}.")
 
         walk(self, "")
-        return pd.DataFrame(rows, columns=["name", "kind", "value", "unit", "description"])
+        return pd.DataFrame(rows, columns=["name", "kind", "value", "fixed", "unit", "description"])
 
     def _value(self, name: str) -> np.ndarray:
         value = self._values[name]

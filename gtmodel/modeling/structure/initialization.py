@@ -220,14 +220,21 @@ def initial_system(
     return InitialSystem(res, labels, redundant, redundant_labels, full, list(aug.eq_names) + extra_labels)
 
 
-def _inconsistent(aug: AugmentedDAE, system: InitialSystem, bad: list[tuple[str, float]]) -> ModelError:
+def _inconsistent(
+    aug: AugmentedDAE, system: InitialSystem, bad: list[tuple[str, float]], conditions: Mapping[str, Condition]
+) -> ModelError:
     """The error for redundant initial conditions that do not hold at the solution."""
+    value_of = {f"{nm} = {val:.12g} ({src})": val for nm, (val, src) in conditions.items()}
+    bad_text = [
+        f"{lab}, but the others give {value_of[lab] + r:.6g}" if lab in value_of else f"{lab} (residual {r:.6g})"
+        for lab, r in bad
+    ]
     dm = dulmage_mendelsohn(system.full_pattern)
     lab = system.full_labels
     extra = [lab[i] for i in dm["over_eqs"] if i >= len(aug.res)]
     return ModelError(
         f"initialisation of model {aug.system.name!r} is over-determined and inconsistent: "
-        f"{[f'{name} (residual {r:.6g})' for name, r in bad]} do not hold where the others do; "
+        f"{bad_text} do not hold where the others do; "
         f"equations {[lab[i] for i in dm['over_eqs']]} over-determine variables "
         f"{[aug.names[j] for j in dm['over_vars']]}; remove {len(bad)} of the initial equations / fixed starts / "
         f"x0 values {extra} or make them consistent"
@@ -305,6 +312,6 @@ def solve_initial(
         scale = max(1.0, np.max(np.abs(sol), initial=0.0))
         bad = [(lab, float(x)) for lab, x in zip(system.redundant_labels, rr) if not abs(x) <= 1e-8 * scale]
         if bad:
-            raise _inconsistent(aug, system, bad)
+            raise _inconsistent(aug, system, bad, conditions)
     _log.debug("initialised model %s: %d unknowns", s.name, len(sol))
     return sol
