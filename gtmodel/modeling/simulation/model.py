@@ -45,7 +45,7 @@ from gtmodel.modeling.structure.discontinuities import sign_modes
 from gtmodel.modeling.simulation.flatten import _KINDS, _Var, flatten_model
 from gtmodel.modeling.simulation.event_simulation import simulate_events, simulate_events_reduced
 from gtmodel.modeling.structure.events import EventsMixin, EventSpec
-from gtmodel.modeling.simulation.integration import SIMULATE_DOCS, simulate_model
+from gtmodel.modeling.simulation.integration import SIMULATE_DOCS, integrator_options, simulate_model
 from gtmodel.modeling.simulation.structured_simulation import consistent_start, simulate_structured
 
 __all__ = ["Model"]
@@ -572,6 +572,7 @@ class Model(EventsMixin):
         rtol: float = 1e-8,
         atol: float = 1e-10,
         z0: Any = None,
+        options: Mapping[str, Any] | None = None,
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
@@ -600,6 +601,7 @@ class Model(EventsMixin):
 
         {simulate_returns}
         """
+        integrator_options(options, rtol, atol, integrator)  # bad options refused by name before any work
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
             flat = model._flattens()
@@ -608,15 +610,16 @@ class Model(EventsMixin):
                 x0 = {k: v for k, v in start.items() if model._vars[k].kind == "state"}
                 z0 = np.concatenate([v for k, v in start.items() if model._vars[k].kind == "algebraic"] or [np.zeros(0)])
                 if not flat:
-                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True)
+                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True,
+                                                   options=options)
             if not flat:  # aliases or high index: reduced once (event_simulation)
                 if z0 is not None:
                     raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
-                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)
-            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
+                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, options=options)
+            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0, options=options)
         if self._needs_initialisation(True, x0) or not self._flattens():
-            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
-        return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0, options)
+        return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0, options)
 
     def _needs_initialisation(self, flat: bool, x0: Any) -> bool:
         """Whether the start must be solved (initial equations, fixed starts the flat DAE cannot keep).

@@ -45,7 +45,13 @@ from gtmodel.modeling.structure.index_reduction import (
     selection_quality,
 )
 from gtmodel.modeling.structure.initialization import solve_initial
-from gtmodel.modeling.simulation.integration import SIMULATE_DOCS, input_intervals, input_segments, simulate_model
+from gtmodel.modeling.simulation.integration import (
+    SIMULATE_DOCS,
+    input_intervals,
+    input_segments,
+    integrator_options,
+    simulate_model,
+)
 from gtmodel.modeling.structure.analysis import check_structure, eliminate_aliases, scalarize
 
 __all__ = ["simulate_structured", "consistent_start", "SWITCH_RATIO", "CHECK_POINTS"]
@@ -158,7 +164,7 @@ def _refine(t: np.ndarray, n_check: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray, uf: np.ndarray,
-               pv: np.ndarray, rtol: float, atol: float) -> np.ndarray:
+               pv: np.ndarray, opts: dict) -> np.ndarray:
     """IDAS on the reduced DAE of ``sel`` over the grid ``tf``; all variables per row."""
     s = aug.system
     states, algs = reduced_system(aug, sel)
@@ -168,9 +174,7 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
     }
     # the values are consistent (solve_initial, or the previous segment): give IDACalcIC the
     # state derivatives too, else its line search can fail from xdot = 0 on restarts
-    opts = {"reltol": float(rtol), "abstol": float(atol), "show_eval_warnings": False,
-            "disable_internal_warnings": True,
-            "init_xdot": [float(v0[aug.diff[v]]) for v in states]}
+    opts = {**opts, "init_xdot": [float(v0[aug.diff[v]]) for v in states]}
     n = tf.size
     u_cas = np.vstack([uf[:1], uf]).T if s.u.numel() else np.zeros((0, n))
     x0 = v0[states]
@@ -197,7 +201,7 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
 
 
 def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.ndarray, v0: np.ndarray,
-                   rtol: float, atol: float) -> tuple[np.ndarray, list[float]]:
+                   opts: dict) -> tuple[np.ndarray, list[float]]:
     """Integrate with dummy re-selection; all variables on ``tf`` and the switch times."""
     n = tf.size
     vals = np.empty((n, len(aug.syms)))
@@ -216,7 +220,7 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
         kend = min(k + chunk, n - 1) if sel.levels else n - 1  # nothing to re-select: one run
         kend = min(kend, int(cuts[np.searchsorted(cuts, k, side="right")]))
         try:
-            seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, rtol, atol)
+            seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, opts)
         except ConvergenceError:
             if kend - k == 1 or not sel.levels:
                 raise
@@ -323,6 +327,7 @@ def simulate_structured(
     rtol: float = 1e-8,
     atol: float = 1e-10,
     z0: Any = None,
+    options: Mapping[str, Any] | None = None,
 ) -> SimulationResult:
     """Simulate a model with initial equations, aliases or a high index (see the module docstring).
 
@@ -341,11 +346,12 @@ def simulate_structured(
     {simulate_returns}
     """
     t = _check_grid(t_grid, integrator)
+    opts = integrator_options(options, rtol, atol, integrator)  # bad options refused before any work
     system, aug, pv, p_slices, u_int, v0, obs, obs_names = _initial_point(model, t, x0, u, p, z0)
     if aug.n_differentiated == 0 and not system.aliases and model._flattens():
         ov = np.array(obs(v0)).ravel()
         nx = sum(v.size for v in model._vars.values() if v.kind == "state")
-        return simulate_model(model, t, ov[:nx], u, p, integrator, rtol, atol, ov[nx:])
+        return simulate_model(model, t, ov[:nx], u, p, integrator, rtol, atol, ov[nx:], options)
     if integrator != "idas":
         raise InputError(f"model {model.name!r} needs index reduction or alias elimination; use integrator 'idas'")
     if aug.n_differentiated:
@@ -353,7 +359,7 @@ def simulate_structured(
         uf = np.repeat(u_int, np.diff(pos), axis=0)
     else:
         tf, pos, uf = t, np.arange(t.size), u_int
-    vals, switches = _switching_run(aug, tf, uf, pv, v0, rtol, atol)
+    vals, switches = _switching_run(aug, tf, uf, pv, v0, opts)
     vals = vals[pos]
     if switches:
         _log.debug("model %s: dummy derivatives switched at t = %s s", model.name, switches)
