@@ -386,12 +386,35 @@ def structure_message(inc: Incidence, what: str) -> str | None:
         ``"<what> is structurally singular / over-determined / under-determined: ..."``
         naming the equations in excess and the variables left undetermined.
     """
+    found = structure_parts(inc)
+    if found is None:
+        return None
+    kind, parts = found
+    n, k = inc.matrix.shape
+    return "; ".join([f"{what} is {kind} ({n} scalar equations, {k} unknowns)", *parts])
+
+
+def structure_parts(inc: Incidence) -> tuple[str, list[str]] | None:
+    """The diagnosis of :func:`structure_message` in pieces: the kind and the named parts.
+
+    Parameters
+    ----------
+    inc : Incidence
+        Equations x unknowns.
+
+    Returns
+    -------
+    tuple or None
+        ``(kind, parts)``: ``"over-determined"``, ``"under-determined"`` or
+        ``"structurally singular"``, and the sentences naming the equations in excess and
+        the variables left undetermined; None if the incidence has a perfect matching.
+    """
     n, k = inc.matrix.shape
     dm = dulmage_mendelsohn(inc.matrix)
     if not dm["unmatched_eqs"] and not dm["unmatched_vars"]:
         return None
     kind = "over-determined" if n > k else "under-determined" if n < k else "structurally singular"
-    parts = [f"{what} is {kind} ({n} scalar equations, {k} unknowns)"]
+    parts = []
     if dm["unmatched_eqs"]:
         parts.append(
             f"equations {[inc.eq_names[i] for i in dm['over_eqs']]} over-determine "
@@ -404,7 +427,7 @@ def structure_message(inc: Incidence, what: str) -> str | None:
             f"(by equations {[inc.eq_names[i] for i in dm['under_eqs']]}; "
             f"{len(dm['unmatched_vars'])} equation(s) missing)"
         )
-    return "; ".join(parts)
+    return kind, parts
 
 
 def check_structure(system: ScalarDAE | Any) -> Incidence:
