@@ -415,7 +415,8 @@ def simulate_events_reduced(
     the simulation (a constraint whose selection turns singular, e.g. a pendulum passing
     ``x = 0``, fails with a ConvergenceError; linear couplings such as rigidly joined
     masses are exact), and the states the reduction made dummies take their values from
-    the constraints (their ``x0``/start values are not used).
+    the constraints (:meth:`Model.simulate` solves a consistent start first when ``x0`` or a
+    fixed start names one, and passes ``consistent=True``).
 
     Parameters
     ----------

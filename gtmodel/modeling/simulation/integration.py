@@ -52,7 +52,8 @@ SIMULATE_DOCS = {
             Integration starts at ``t_grid[0]``.
         x0 : array_like or mapping, optional
             Initial state, shape ``(nx,)``, or a mapping from state names to values;
-            default the declared start values.
+            default the declared start values. Every entry is an initial condition
+            (kept through index reduction; contradictory ones are refused, naming them).
         u : float, array_like or callable, optional
             Inputs, held piecewise constant on the grid: a constant ``(nu,)``; an array
             ``(N-1, nu)`` or ``(N, nu)`` whose row ``k`` applies on ``[t_k, t_{k+1})``

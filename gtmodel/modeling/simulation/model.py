@@ -582,18 +582,23 @@ class Model(EventsMixin):
         :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
         is reduced once first, keeping the reinit targets as states
         (:func:`~gtmodel.modeling.simulation.event_simulation.simulate_events_reduced`: ``x0`` a
-        mapping, no ``z0``); with initial equations the consistent start is solved first
+        mapping, no ``z0``); with initial equations, fixed starts or ``x0`` entries that the
+        reduction could drop, the consistent start is solved first
         (:func:`~gtmodel.modeling.simulation.structured_simulation.consistent_start`, the modes at their
         start values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten` accepts
-        and that has no initial equations is simulated as it is. Otherwise the structural
+        and that has no initial equations (nor fixed starts of algebraic variables) is simulated as it is. Otherwise
+        the structural
         passes run first
         (:func:`~gtmodel.modeling.simulation.structured_simulation.simulate_structured`): the structural
         check (one error naming the equations and variables), alias elimination, index
         reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
         selection turns singular), and the consistent initialisation with the
-        :meth:`initial_equation` s. For a high-index model without initial equations, the
-        ``x0``/start values of the states picked by the dummy selection are kept and the
-        others are computed (their values are guesses).
+        :meth:`initial_equation` s. Start values follow Modelica
+        (:mod:`gtmodel.modeling.structure.initialization`): every ``x0`` entry and every start
+        declared ``fixed=True`` (a component modifier's start value is) is an initial
+        condition, kept whichever states the index reduction selects; contradictory ones
+        are one error naming them; the remaining freedom (a model without initial
+        equations) is taken from the start values, given ones first.
 
         Parameters
         ----------

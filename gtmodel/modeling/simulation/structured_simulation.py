@@ -293,7 +293,7 @@ def consistent_start(
     t_grid : array_like
         Output times, ``(N,)``, s; the values are at ``t_grid[0]`` (inputs of the first interval).
     x0, u, p, z0 : optional
-        As for :meth:`Model.simulate` (``x0`` values are guesses unless given as a mapping).
+        As for :meth:`Model.simulate` (``x0`` entries are initial conditions, ``z0`` guesses).
 
     Returns
     -------
@@ -331,11 +331,12 @@ def simulate_structured(
 ) -> SimulationResult:
     """Simulate a model with initial equations, aliases or a high index (see the module docstring).
 
-    Without initial equations, a high-index model keeps ``x0`` (or the start values) of
-    the states of the dummy-derivative selection made at those values; the other states
-    and all algebraic variables are computed (their ``x0``/start values are guesses). With
-    initial equations, the states named in an ``x0`` mapping are fixed; all other values
-    are guesses. The switch times of the dummy selection are logged (debug).
+    The ``x0`` entries (a mapping, or a vector of all states) and the starts declared
+    ``fixed=True`` are initial conditions on the variables they name
+    (:mod:`gtmodel.modeling.structure.initialization`); without initial equations the
+    remaining freedom is taken from start values (given starts first, then the states of
+    the dummy-derivative selection made at the start values); all other values are
+    guesses. The switch times of the dummy selection are logged (debug).
 
     Parameters
     ----------
