@@ -313,5 +313,30 @@ def solve_initial(
         bad = [(lab, float(x)) for lab, x in zip(system.redundant_labels, rr) if not abs(x) <= 1e-8 * scale]
         if bad:
             raise _inconsistent(aug, system, bad, conditions)
+    _report_moved_guesses(aug, sol, conditions)
     _log.debug("initialised model %s: %d unknowns", s.name, len(sol))
     return sol
+
+
+def _report_moved_guesses(aug: AugmentedDAE, sol: np.ndarray, conditions: Mapping[str, Condition]) -> None:
+    """Log (warning) the given, not fixed, start values that the initialisation did not keep.
+
+    They are guesses (``fixed=False``), but a user who gave one may have meant an initial
+    condition: the message names each with its start and its initial value, and the way to
+    make it one (``fixed=True`` or ``x0``).
+    """
+    s = aug.system
+    names = [nm for nm in s.given_start if nm not in conditions and nm in s.observed]
+    if not names:
+        return
+    values = np.array(ca.Function("observed", [_cat(aug.syms)], [_cat([s.observed[nm] for nm in names])])(sol)).ravel()
+    moved = [
+        f"{nm} (start {s.given_start[nm]:.6g}, initial value {val:.6g})" for nm, val in zip(names, values)
+        if abs(val - s.given_start[nm]) > 1e-8 * max(1.0, abs(s.given_start[nm]))
+    ]
+    if moved:
+        _log.warning(
+            "model %s: the initialisation did not keep the start values %s; they are guesses (fixed=False): "
+            "declare them fixed=True or give them in x0 to make them initial conditions",
+            s.name, moved,
+        )

@@ -368,3 +368,13 @@ def test_under_specified_initialisation_names_the_missing_state():
     m.initial_equation(y, -np.sqrt(0.75), name="y0")  # redundant with x (consistent); no filling from starts
     with pytest.raises(ModelError, match=r"under-determined.*x0 values for 1 of the states \[.*'u'"):
         m.simulate([0.0, 0.1])
+
+
+def test_a_guess_the_initialisation_moves_is_reported(caplog):
+    # x's start 10 is a guess (fixed=False): the steady state x = 1.5 replaces it, with a warning
+    m, x, _ = first_order()
+    m.initial_equation(m.der(x), 0.0, name="steady")
+    with caplog.at_level("WARNING", logger="gtmodel"):
+        res = m.simulate(np.linspace(0.0, 1.0, 3))
+    assert res.x["x"][0] == pytest.approx(1.5)
+    assert "did not keep the start values ['x (start 10, initial value 1.5)']" in caplog.text
