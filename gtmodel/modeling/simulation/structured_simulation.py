@@ -44,7 +44,7 @@ from gtmodel.modeling.structure.index_reduction import (
     select_dummies,
     selection_quality,
 )
-from gtmodel.modeling.structure.initialization import solve_initial
+from gtmodel.modeling.structure.initialization import fill_order, guess_and_conditions, solve_initial
 from gtmodel.modeling.simulation.integration import (
     SIMULATE_DOCS,
     input_intervals,
@@ -88,66 +88,6 @@ def _parameter_vector(model: Any, p: Mapping[str, Any] | None) -> tuple[np.ndarr
         sl = slices[name]
         vec[sl] = _vector_value(value, sl.stop - sl.start, f"parameter {name!r}")
     return vec, slices
-
-
-def _guess_and_conditions(model: Any, aug: AugmentedDAE, x0: Any, z0: Any) -> tuple[np.ndarray, dict[str, tuple]]:
-    """Start values of all variables (x0/z0 applied) and the initial conditions by name.
-
-    The conditions are the starts declared ``fixed=True`` and every entry of ``x0`` (a
-    mapping, or a vector of all states); ``z0`` values are guesses.
-    """
-    s = aug.system
-    guess = np.concatenate([s.start, np.zeros(len(aug.syms) - s.n_vars)])
-    index = {nm: k for k, nm in enumerate(aug.names)}
-    states = [v for v in model._vars.values() if v.kind == "state"]
-    algs = [v for v in model._vars.values() if v.kind == "algebraic"]
-    fixed: dict[str, tuple] = {nm: (val, "fixed start") for nm, val in s.fixed_start.items()}
-    conditions: dict[str, tuple] = {}  # x0 first: its entries are kept where conditions are redundant
-
-    def put(name: str, value: float) -> None:
-        if name in index:
-            guess[index[name]] = value
-        elif name in s.aliases:
-            sign, keep = s.aliases[name]
-            put(keep, sign * value)
-
-    for name, (value, _) in fixed.items():
-        put(name, value)
-    if isinstance(x0, Mapping):
-        known = {v.name: v for v in states}
-        for name, val in x0.items():
-            if name not in known:
-                raise InputError(f"x0: {name!r} is not a state of model {model.name!r}")
-            vals = _vector_value(val, known[name].size, f"x0[{name!r}]")
-            for nm, val_ in zip(expand_names(name, known[name].size), vals):
-                put(nm, float(val_))
-                conditions[nm] = (float(val_), "x0")
-    elif x0 is not None:
-        names = [nm for v in states for nm in expand_names(v.name, v.size)]
-        for nm, val_ in zip(names, _vector_value(x0, len(names), "x0")):
-            put(nm, float(val_))
-            conditions[nm] = (float(val_), "x0")
-    conditions.update({nm: c for nm, c in fixed.items() if nm not in conditions})
-    if z0 is not None:
-        names = [nm for v in algs for nm in expand_names(v.name, v.size)]
-        for nm, val_ in zip(names, _vector_value(z0, len(names), "z0")):
-            put(nm, float(val_))
-    return guess, conditions
-
-
-def _fill_order(aug: AugmentedDAE, guess: np.ndarray, selected: list[int]) -> list[tuple[int, float]]:
-    """Candidates completing an under-specified initialisation, in priority order.
-
-    The variables that have a derivative (the states of some dummy selection): first the
-    declared states whose start was given, then the states of ``selected`` (the dummy
-    selection at the guess), then the others, each in declaration order.
-    """
-    s = aug.system
-    given = {s.aliases.get(nm, (1.0, nm))[1] for nm in s.given_start}
-    chosen = set(selected)
-    cand = [v for v in range(len(aug.syms)) if aug.diff[v] is not None]
-    cand.sort(key=lambda v: (not (aug.order[v] == 0 and aug.names[v] in given), v not in chosen, v))
-    return [(v, float(guess[v])) for v in cand]
 
 
 def _refine(t: np.ndarray, n_check: int) -> tuple[np.ndarray, np.ndarray]:
@@ -263,12 +203,12 @@ def _initial_point(model: Any, t: np.ndarray, x0: Any, u: Any, p: Mapping[str, A
     aug = pantelides(system)
     pv, p_slices = _parameter_vector(model, p)
     u_int = input_intervals(u, t, int(system.u.numel()), system.u_start)
-    guess, conditions = _guess_and_conditions(model, aug, x0, z0)
+    guess, conditions = guess_and_conditions(model, aug, x0, z0)
     u0 = u_int[0]
     fill = None
     if not system.init_res:  # the remaining degrees of freedom at start values (Modelica tools)
         sel0 = select_dummies(aug, (t[0], guess, u0, pv))
-        fill = _fill_order(aug, guess, reduced_system(aug, sel0)[0])
+        fill = fill_order(aug, guess, reduced_system(aug, sel0)[0])
     v0 = solve_initial(aug, float(t[0]), u0, pv, guess, conditions, fill)
     obs_names = [nm for v in model._vars.values() if v.kind in ("state", "algebraic")
                  for nm in expand_names(v.name, v.size)]

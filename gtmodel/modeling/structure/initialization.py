@@ -27,13 +27,14 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
 import scipy.sparse as sps
 
-from gtmodel.errors import ConvergenceError, ModelError
-from gtmodel.modeling.structure.index_reduction import AugmentedDAE
+from gtmodel.errors import ConvergenceError, InputError, ModelError
+from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure.analysis import (
     Incidence,
     dulmage_mendelsohn,
@@ -42,7 +43,19 @@ from gtmodel.modeling.structure.analysis import (
     structure_message,
 )
 
-__all__ = ["Condition", "InitialSystem", "condition_residuals", "initial_system", "solve_initial"]
+if TYPE_CHECKING:  # index_reduction imports this module (structural_simplify's consistent start)
+    from gtmodel.modeling.structure.index_reduction import AugmentedDAE
+
+__all__ = [
+    "Condition",
+    "InconsistentInitialisation",
+    "InitialSystem",
+    "condition_residuals",
+    "fill_order",
+    "guess_and_conditions",
+    "initial_system",
+    "solve_initial",
+]
 
 _log = logging.getLogger("gtmodel")
 
@@ -87,6 +100,104 @@ def condition_residuals(aug: AugmentedDAE, conditions: Mapping[str, Condition]) 
         res.append(s.observed[name] - value)
         labels.append(f"{name} = {value:.12g} ({source})")
     return res, labels
+
+
+def guess_and_conditions(model: Any, aug: AugmentedDAE, x0: Any, z0: Any) -> tuple[np.ndarray, dict[str, Condition]]:
+    """Start values of all variables (x0/z0 applied) and the initial conditions by name.
+
+    The conditions are every entry of ``x0`` (a mapping, or a vector of all states), then
+    the starts declared ``fixed=True`` (an ``x0`` entry replaces the start of its state);
+    ``z0`` values are guesses.
+
+    Parameters
+    ----------
+    model : Model
+        The model (its declared states and algebraic variables).
+    aug : AugmentedDAE
+        Its DAE after :func:`~gtmodel.modeling.structure.index_reduction.pantelides`.
+    x0 : mapping or array_like or None
+        As for :meth:`gtmodel.modeling.Model.simulate`.
+    z0 : array_like or None
+        Guesses of the algebraic variables, ``(nz,)``.
+
+    Returns
+    -------
+    guess : numpy.ndarray
+        All variables of ``aug``, ``(len(aug.syms),)``.
+    conditions : dict of str to tuple
+        Original scalar name -> ``(value, source)``, ``x0`` entries first.
+
+    Raises
+    ------
+    InputError
+        If ``x0`` names no state or has the wrong size, or ``z0`` the wrong size.
+    """
+    s = aug.system
+    guess = np.concatenate([s.start, np.zeros(len(aug.syms) - s.n_vars)])
+    index = {nm: k for k, nm in enumerate(aug.names)}
+    states = [v for v in model._vars.values() if v.kind == "state"]
+    algs = [v for v in model._vars.values() if v.kind == "algebraic"]
+    fixed: dict[str, Condition] = {nm: (val, "fixed start") for nm, val in s.fixed_start.items()}
+    conditions: dict[str, Condition] = {}  # x0 first: its entries are kept where conditions are redundant
+
+    def put(name: str, value: float) -> None:
+        if name in index:
+            guess[index[name]] = value
+        elif name in s.aliases:
+            sign, keep = s.aliases[name]
+            put(keep, sign * value)
+
+    for name, (value, _) in fixed.items():
+        put(name, value)
+    if isinstance(x0, Mapping):
+        known = {v.name: v for v in states}
+        for name, val in x0.items():
+            if name not in known:
+                raise InputError(f"x0: {name!r} is not a state of model {model.name!r}")
+            vals = _vector_value(val, known[name].size, f"x0[{name!r}]")
+            for nm, val_ in zip(expand_names(name, known[name].size), vals):
+                put(nm, float(val_))
+                conditions[nm] = (float(val_), "x0")
+    elif x0 is not None:
+        names = [nm for v in states for nm in expand_names(v.name, v.size)]
+        for nm, val_ in zip(names, _vector_value(x0, len(names), "x0")):
+            put(nm, float(val_))
+            conditions[nm] = (float(val_), "x0")
+    conditions.update({nm: c for nm, c in fixed.items() if nm not in conditions})
+    if z0 is not None:
+        names = [nm for v in algs for nm in expand_names(v.name, v.size)]
+        for nm, val_ in zip(names, _vector_value(z0, len(names), "z0")):
+            put(nm, float(val_))
+    return guess, conditions
+
+
+def fill_order(aug: AugmentedDAE, guess: np.ndarray, selected: list[int]) -> list[tuple[int, float]]:
+    """Candidates completing an under-specified initialisation, in priority order.
+
+    The variables that have a derivative (the states of some dummy selection): first the
+    declared states whose start was given, then the states of ``selected`` (the dummy
+    selection at the guess), then the others, each in declaration order.
+
+    Parameters
+    ----------
+    aug : AugmentedDAE
+        The DAE after :func:`~gtmodel.modeling.structure.index_reduction.pantelides`.
+    guess : numpy.ndarray
+        All variables' start values, ``(len(aug.syms),)``.
+    selected : list of int
+        The states of a dummy selection made at ``guess``.
+
+    Returns
+    -------
+    list of tuple
+        ``(variable index, guess)`` for :func:`initial_system`'s ``fill``.
+    """
+    s = aug.system
+    given = {s.aliases.get(nm, (1.0, nm))[1] for nm in s.given_start}
+    chosen = set(selected)
+    cand = [v for v in range(len(aug.syms)) if aug.diff[v] is not None]
+    cand.sort(key=lambda v: (not (aug.order[v] == 0 and aug.names[v] in given), v not in chosen, v))
+    return [(v, float(guess[v])) for v in cand]
 
 
 def _rank(pat: sps.csr_matrix) -> int:
@@ -220,9 +331,13 @@ def initial_system(
     return InitialSystem(res, labels, redundant, redundant_labels, full, list(aug.eq_names) + extra_labels)
 
 
+class InconsistentInitialisation(ModelError):
+    """Initial conditions (fixed starts, ``x0``, initial equations) that contradict each other or the model."""
+
+
 def _inconsistent(
     aug: AugmentedDAE, system: InitialSystem, bad: list[tuple[str, float]], conditions: Mapping[str, Condition]
-) -> ModelError:
+) -> InconsistentInitialisation:
     """The error for redundant initial conditions that do not hold at the solution."""
     value_of = {f"{nm} = {val:.12g} ({src})": val for nm, (val, src) in conditions.items()}
     bad_text = [
@@ -232,7 +347,7 @@ def _inconsistent(
     dm = dulmage_mendelsohn(system.full_pattern)
     lab = system.full_labels
     extra = [lab[i] for i in dm["over_eqs"] if i >= len(aug.res)]
-    return ModelError(
+    return InconsistentInitialisation(
         f"initialisation of model {aug.system.name!r} is over-determined and inconsistent: "
         f"{bad_text} do not hold where the others do; "
         f"equations {[lab[i] for i in dm['over_eqs']]} over-determine variables "

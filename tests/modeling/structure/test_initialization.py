@@ -220,9 +220,15 @@ def test_structural_simplify_keeps_the_fixed_starts():
     # reference: the reduced model (either state kept) starts where the declared one did
     from gtmodel.modeling import structural_simplify
 
-    reduced = structural_simplify(_msd(False, s=3.0, v=10.0))
-    res = reduced.simulate(np.linspace(0.0, 1.0, 11))
-    assert res.outputs.get("mass.s", res.x.get("mass.s", res.z.get("mass.s")))[0] == pytest.approx(3.0, abs=1e-12)
+    for mass_first in (True, False):
+        reduced = structural_simplify(_msd(mass_first, s=3.0, v=10.0))
+        flat = reduced.flatten()  # its start values are consistent: mass.s = 3 whichever state was kept
+        starts = dict(zip(flat.x_names + flat.z_names, np.concatenate([flat.x_start, flat.z_start])))
+        assert starts["mass_s" if "mass_s" in starts else "mass.s"] == pytest.approx(3.0, abs=1e-12)
+        assert starts.get("damper.s_rel", starts.get("damper_s_rel")) == pytest.approx(-3.0 if mass_first else 3.0)
+        res = reduced.simulate(np.linspace(0.0, 1.0, 11))
+        found = {**res.outputs, **res.x, **res.z}
+        assert found["mass.s" if "mass.s" in found else "mass_s"][0] == pytest.approx(3.0, abs=1e-12)
 
 
 def _dc_motor(**mods):
