@@ -30,7 +30,9 @@ A sub-component's parameter can be bound to a parameter of the enclosing class
         gear = IdealGear(ratio=n)          # one model parameter "n", no "gear.ratio"
 
 Instantiation with keyword arguments is a modifier (``Spring(c=2e5)``; a state's start
-value ``Mass(s=0.1)`` or ``Mass(s={"start": 0.1, "lb": 0})``; a sub-component's
+value ``Mass(s=0.1)`` or ``Mass(s={"start": 0.1, "lb": 0})``, an initial condition
+(Modelica's ``fixed = true``) unless ``{"start": 0.1, "fixed": False}`` makes it a guess;
+a sub-component's
 modifiers ``Axis(belt={"c": 2e5})`` or a replacement ``Axis(belt=SpringDamper(...))``).
 Subclassing is ``extends``: declarations are inherited and can be redeclared; a
 subclass keeps the base's equations by calling ``super().equations()``.

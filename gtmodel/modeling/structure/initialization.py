@@ -27,7 +27,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -43,8 +43,9 @@ from gtmodel.modeling.structure.analysis import (
     structure_message,
 )
 
-if TYPE_CHECKING:  # index_reduction imports this module (structural_simplify's consistent start)
-    from gtmodel.modeling.structure.index_reduction import AugmentedDAE
+#: ``aug`` arguments are :class:`~gtmodel.modeling.structure.index_reduction.AugmentedDAE` s
+#: (annotated ``Any``: index_reduction imports this module for structural_simplify's start).
+AugmentedDAE = Any
 
 __all__ = [
     "Condition",
