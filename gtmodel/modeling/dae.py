@@ -20,7 +20,7 @@ from gtmodel.errors import InputError
 #: pandas, imported on first use (~0.5 s of CPU, only for DataFrames).
 pd = lazy_module("pandas")
 
-__all__ = ["FlatDAE", "SimulationResult", "expand_names"]
+__all__ = ["FlatDAE", "SimulationResult", "expand_names", "fixed_flags"]
 
 
 def expand_names(name: str, size: int) -> list[str]:
@@ -86,6 +86,38 @@ def _vector_value(value: Any, size: int, what: str, default: float = 0.0) -> np.
     if arr.size != size:
         raise InputError(f"{what}: expected {size} values, got {arr.size}")
     return arr
+
+
+def fixed_flags(value: Any, size: int, what: str) -> np.ndarray:
+    """A ``fixed`` attribute as a boolean vector of ``size`` elements.
+
+    Parameters
+    ----------
+    value : bool or array_like of bool
+        One flag for all elements, or one per element.
+    size : int
+        Number of scalar elements of the variable.
+    what : str
+        Name used in the message.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(size,)`` of bool.
+
+    Raises
+    ------
+    InputError
+        If ``value`` is not booleans (numbers and strings are refused) or has another size.
+    """
+    arr = np.asarray(value, dtype=object).reshape(-1)
+    if arr.size == 0 or not all(isinstance(v, (bool, np.bool_)) for v in arr):
+        raise InputError(f"{what}: expected True or False (or one per element), got {value!r}")
+    if arr.size == 1:
+        arr = np.repeat(arr, size)
+    if arr.size != size:
+        raise InputError(f"{what}: expected 1 or {size} flags, got {arr.size}")
+    return arr.astype(bool)
 
 
 def _symbol_names(syms: Sequence[ca.SX]) -> list[str]:

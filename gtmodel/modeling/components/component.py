@@ -30,7 +30,9 @@ A sub-component's parameter can be bound to a parameter of the enclosing class
         gear = IdealGear(ratio=n)          # one model parameter "n", no "gear.ratio"
 
 Instantiation with keyword arguments is a modifier (``Spring(c=2e5)``; a state's start
-value ``Mass(s=0.1)`` or ``Mass(s={"start": 0.1, "lb": 0})``; a sub-component's
+value ``Mass(s=0.1)`` or ``Mass(s={"start": 0.1, "lb": 0})``, an initial condition
+(Modelica's ``fixed = true``) unless ``{"start": 0.1, "fixed": False}`` makes it a guess;
+a sub-component's
 modifiers ``Axis(belt={"c": 2e5})`` or a replacement ``Axis(belt=SpringDamper(...))``).
 Subclassing is ``extends``: declarations are inherited and can be redeclared; a
 subclass keeps the base's equations by calling ``super().equations()``.
@@ -203,7 +205,9 @@ class Component(_ComponentBase):
             columns ``name`` (hierarchical, relative to this component), ``kind``
             (``parameter``, ``structural``, ``state``, ``algebraic``, ``input``,
             ``potential``, ``flow``), ``value`` (parameter value or variable start,
-            ``None`` for connector variables), ``unit`` and ``description``.
+            ``None`` for connector variables), ``fixed`` (whether a variable's start is an
+            initial condition, Modelica's ``fixed``; ``None`` where no start applies),
+            ``unit`` and ``description``.
         """
         rows: list[dict[str, Any]] = []
 
@@ -219,7 +223,10 @@ class Component(_ComponentBase):
                 elif isinstance(decl, Variable):
                     start = comp._attributes[name]["start"]
                     value = None if start is None else (start[0] if start.size == 1 else start)
-                    rows.append(dict(name=pre + name, kind=decl.kind, value=value, unit=decl.unit, description=decl.description))
+                    flags = comp._attributes[name].get("fixed")
+                    fixed = None if flags is None else (bool(flags[0]) if flags.size == 1 else flags.tolist())
+                    rows.append(dict(name=pre + name, kind=decl.kind, value=value, fixed=fixed, unit=decl.unit,
+                                     description=decl.description))
             for cname, conn in comp.connectors().items():
                 for var in conn.variables():
                     rows.append(dict(name=f"{pre}{cname}.{var.name}", kind="flow" if var.is_flow else "potential",
@@ -228,7 +235,7 @@ class Component(_ComponentBase):
                 walk(sub, f"{pre}{sname}.")
 
         walk(self, "")
-        return pd.DataFrame(rows, columns=["name", "kind", "value", "unit", "description"])
+        return pd.DataFrame(rows, columns=["name", "kind", "value", "fixed", "unit", "description"])
 
     def _value(self, name: str) -> np.ndarray:
         value = self._values[name]
@@ -462,6 +469,8 @@ def _merge(inner: dict, outer: dict) -> dict:
     for key, value in outer.items():
         if isinstance(value, dict) and isinstance(out.get(key), dict) and key in out:
             out[key] = _merge(out[key], value)
+        elif isinstance(value, dict) and key in out and not isinstance(out[key], (dict, Component)):
+            out[key] = {"start": out[key], **value}  # a variable's start, modified: Mass(s=0.1) + {"fixed": False}
         else:
             out[key] = value
     return out

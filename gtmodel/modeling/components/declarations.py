@@ -21,7 +21,7 @@ import numpy as np
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.components.connectors import Connector
-from gtmodel.modeling.dae import _shape_to_size, _vector_value
+from gtmodel.modeling.dae import _shape_to_size, _vector_value, fixed_flags
 
 __all__ = ["Parameter", "Variable", "State", "Input", "Structural"]
 
@@ -126,9 +126,13 @@ class Variable:
     shape : int or tuple, optional
         Size ``n`` or ``(n,)``; default 1.
     start : float or array_like, optional
-        Start value (initial condition of a state, guess otherwise); default 0.
+        Start value; default 0. A guess for the initialisation unless ``fixed``.
     lb, ub : float or array_like, optional
         Bounds used by optimisation; default unbounded.
+    fixed : bool or array_like of bool, optional
+        Whether the start value is an initial condition (Modelica's ``fixed``); default
+        False for a declaration. A modifier that gives a start value makes it True
+        (``Mass(s=3)``) unless it says otherwise (``Mass(s={"start": 3, "fixed": False})``).
 
     Raises
     ------
@@ -139,13 +143,19 @@ class Variable:
     kind = "algebraic"
 
     def __init__(
-        self, unit: str = "", description: str = "", shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None
+        self, unit: str = "", description: str = "", shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None,
+        fixed: Any = False,
     ) -> None:
         self.name = ""
         self.unit = unit
         self.description = description
         self.size = _shape_to_size(shape, f"{type(self).__name__} shape")
-        self.attributes = self.modify({"start": start, "lb": lb, "ub": ub}, f"{type(self).__name__}")
+        if self.kind == "input" and fixed is not False:
+            raise ModelError(f"{type(self).__name__}: an input has no initial condition; fixed must stay False, got {fixed!r}")
+        self.attributes = self.modify(
+            {"start": start, "lb": lb, "ub": ub, **({} if self.kind == "input" else {"fixed": fixed})},
+            f"{type(self).__name__}",
+        )
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
@@ -156,13 +166,18 @@ class Variable:
         return instance._symbol(self.name)
 
     def modify(self, modifier: Any, where: str, base: dict | None = None) -> dict[str, Any]:
-        """Apply a modifier: a start value, or a mapping with ``start``, ``lb``, ``ub``.
+        """Apply a modifier: a start value, or a mapping with ``start``, ``fixed``, ``lb``, ``ub``.
+
+        A start value given by a modifier is an initial condition (``fixed`` True) unless
+        the mapping sets ``fixed`` (the user's value is honoured, never replaced: see
+        :mod:`gtmodel.modeling.structure.initialization`); an input's start is its nominal
+        value and takes no ``fixed``.
 
         Parameters
         ----------
         modifier : float, array_like or mapping
-            ``Mass(s=0.1)`` gives a start value; ``Mass(s={"start": 0.1, "lb": 0.0})``
-            any of the attributes.
+            ``Mass(s=0.1)`` gives a fixed start value; ``Mass(s={"start": 0.1, "lb": 0.0})``
+            any of the attributes (``{"start": 0.1, "fixed": False}``: a guess).
         where : str
             Name used in messages.
         base : dict, optional
@@ -171,21 +186,33 @@ class Variable:
         Returns
         -------
         dict
-            ``{"start": ndarray or None, "lb": ..., "ub": ...}``.
+            ``{"start": ndarray or None, "lb": ..., "ub": ..., "fixed": bool ndarray}``
+            (no ``fixed`` for an input).
 
         Raises
         ------
         ModelError
-            If a mapping has keys other than start, lb, ub.
+            If a mapping has keys other than start, fixed, lb, ub (fixed: not for an input).
         InputError
-            If a value is not numbers of the variable's size.
+            If a value is not numbers of the variable's size, or ``fixed`` not booleans.
         """
-        out = dict(base if base is not None else getattr(self, "attributes", {"start": None, "lb": None, "ub": None}))
-        mod = modifier if isinstance(modifier, dict) else {"start": modifier}
-        bad = sorted(set(mod) - {"start", "lb", "ub"})
+        defaults = {"start": None, "lb": None, "ub": None}
+        if self.kind != "input":
+            defaults["fixed"] = np.zeros(self.size, dtype=bool)
+        out = dict(base if base is not None else getattr(self, "attributes", defaults))
+        mod = dict(modifier) if isinstance(modifier, dict) else {"start": modifier}
+        allowed = set(defaults)
+        bad = sorted(set(mod) - allowed)
         if bad:
-            raise ModelError(f"{where}: unknown attribute(s) {bad} of variable {self.name!r}; allowed: start, lb, ub")
+            raise ModelError(
+                f"{where}: unknown attribute(s) {bad} of variable {self.name!r}; allowed: {', '.join(sorted(allowed))}"
+            )
+        if "fixed" in allowed and "fixed" not in mod and mod.get("start") is not None:
+            mod["fixed"] = True  # a start value the user gives is an initial condition
         for key, value in mod.items():
+            if key == "fixed":
+                out[key] = fixed_flags(value, self.size, f"{where}: fixed of variable {self.name!r}")
+                continue
             if value is None:
                 continue
             if isinstance(value, (bool, np.bool_, str, bytes)):
@@ -214,9 +241,12 @@ class State(Variable):
     shape : int or tuple, optional
         Size; default 1.
     start : float or array_like, optional
-        Initial value for simulation; default 0.
+        Start value; default 0 (a guess unless ``fixed``).
     lb, ub : float or array_like, optional
         Bounds used by optimisation.
+    fixed : bool or array_like of bool, optional
+        Whether the declared start is an initial condition; default False (a modifier's
+        start value is fixed, see :class:`Variable`).
     """
 
     kind = "state"
@@ -237,6 +267,8 @@ class Input(Variable):
         Nominal value (simulation default, optimisation guess); default 0.
     lb, ub : float or array_like, optional
         Bounds used by optimisation.
+    fixed : bool, optional
+        Not used (an input has no initial condition); must stay False.
     """
 
     kind = "input"

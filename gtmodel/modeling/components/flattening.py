@@ -50,6 +50,7 @@ class _Declared:
     lb: Any = None
     ub: Any = None
     value: Any = None
+    fixed: Any = None
 
 
 @dataclass
@@ -77,7 +78,8 @@ class _Flattening:
         if kind == "parameter":
             sym = m.parameter(full, attrs["value"])
         else:
-            sym = getattr(m, kind)(full, shape=size, start=attrs.get("start"), lb=attrs.get("lb"), ub=attrs.get("ub"))
+            extra = {} if kind == "input" or attrs.get("fixed") is None else {"fixed": attrs["fixed"]}
+            sym = getattr(m, kind)(full, shape=size, start=attrs.get("start"), lb=attrs.get("lb"), ub=attrs.get("ub"), **extra)
         self.declared.append(_Declared(full, kind, sym, size, **attrs))
         self.known.update(sym[i].element_hash() for i in range(size))
         if kind == "state":
@@ -287,7 +289,8 @@ class _Flattening:
             if d.kind == "parameter":
                 sym = model.parameter(d.name, d.value)
             else:
-                sym = getattr(model, d.kind)(d.name, shape=d.size, start=d.start, lb=d.lb, ub=d.ub)
+                extra = {} if d.kind == "input" or d.fixed is None else {"fixed": d.fixed}
+                sym = getattr(model, d.kind)(d.name, shape=d.size, start=d.start, lb=d.lb, ub=d.ub, **extra)
             old.append(d.sym)
             new.append(sym)
             if d.kind == "state":

@@ -57,7 +57,7 @@ from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, expand_names
 from gtmodel.modeling.structure.events import EventRecord
 from gtmodel.modeling.structure.index_reduction import _ident, structural_simplify
-from gtmodel.modeling.simulation.integration import simulation_inputs
+from gtmodel.modeling.simulation.integration import TIME_OPTIONS, integrator_options, simulation_inputs, time_scaled
 
 __all__ = ["simulate_events", "simulate_events_reduced"]
 
@@ -82,7 +82,8 @@ def _crossed(c0: np.ndarray, c1: np.ndarray, direction: np.ndarray, eps: float =
 class _EventSimulator:
     """The functions of one event simulation and its restart loop (internal)."""
 
-    def __init__(self, model: Any, dae: Any, integrator: str, rtol: float, atol: float) -> None:
+    def __init__(self, model: Any, dae: Any, integrator: str, rtol: float, atol: float,
+                 options: Mapping[str, Any] | None = None) -> None:
         self.model, self.dae, self.plugin = model, dae, integrator
         spec = model._events
         self.whens = spec.whens
@@ -126,24 +127,20 @@ class _EventSimulator:
         if dae.nz:
             self.ddict["z"] = dae.z
             self.ddict["alg"] = ca.substitute(dae.alg_expr, dae.t, tt)
-        self.opts = {
-            "reltol": float(rtol),
-            "abstol": float(atol),
-            "show_eval_warnings": False,
-            "disable_internal_warnings": True,
-        }
+        self.opts = integrator_options(options, rtol, atol, integrator)
         self._integrators: dict[tuple[float, ...], ca.Function] = {}
         self._cond_maps: dict[int, ca.Function] = {}
 
     # -------------------------------------------------------------- numeric helpers
     def integrate(self, fracs: tuple[float, ...], tc: float, h: float, x: np.ndarray, z: np.ndarray, p: np.ndarray, u: np.ndarray):
         """States and algebraics at ``tc + h * fracs`` (increasing, last 1): ``(nx, k)``, ``(nz, k)``."""
-        key = tuple(np.round(fracs, 13))
+        key = tuple(np.round(fracs, 13)) + ((h,) if any(k in self.opts for k in TIME_OPTIONS) else ())
         F = self._integrators.get(key)
         if F is None:  # one integrator per output layout (a uniform grid needs one), last 64 kept
             if len(self._integrators) >= 64:
                 self._integrators.pop(next(iter(self._integrators)))
-            F = ca.integrator("event_integrator", self.plugin, self.ddict, 0.0, list(fracs), self.opts)
+            opts = time_scaled(self.opts, h)  # step sizes in units of h
+            F = ca.integrator("event_integrator", self.plugin, self.ddict, 0.0, list(fracs), opts)
             self._integrators[key] = F
         k = len(fracs)
         try:
@@ -252,6 +249,7 @@ def simulate_events(
     event_tol: float = 1e-12,
     max_events: int = 10000,
     max_event_iter: int = 20,
+    options: Mapping[str, Any] | None = None,
 ) -> SimulationResult:
     """Integrate a model with when-clauses on a time grid, stopping and restarting at events.
 
@@ -286,6 +284,9 @@ def simulate_events(
         Most events allowed (a guard against chattering and Zeno behaviour); default 10000.
     max_event_iter : int, optional
         Most rounds of the event iteration at one instant; default 20.
+    options : mapping, optional
+        Integrator options, as for :meth:`Model.simulate`
+        (:func:`~gtmodel.modeling.simulation.integration.integrator_options`).
 
     Returns
     -------
@@ -313,7 +314,7 @@ def simulate_events(
     max_event_iter = positive_int(max_event_iter, "max_event_iter")
     if model._events is None or not model._events.whens:
         raise InputError(f"model {model.name!r} declares no when-clause; use Model.simulate")
-    sim = _EventSimulator(model, dae, integrator, rtol, atol)
+    sim = _EventSimulator(model, dae, integrator, rtol, atol, options)
     n = t.size
     xs, zs, ps = np.zeros((n, dae.nx)), np.zeros((n, dae.nz)), np.zeros((n, dae.npar))
     zv = sim.consistent_z(float(t[0]), xv, zv, u_int[0], pv, f"at the start t = {t[0]:.12g} s")
@@ -401,6 +402,7 @@ def simulate_events_reduced(
     rtol: float = 1e-8,
     atol: float = 1e-10,
     consistent: bool = False,
+    options: Mapping[str, Any] | None = None,
 ) -> SimulationResult:
     """Simulate a model with when-clauses that ``flatten()`` refuses (aliases, high index).
 
@@ -413,7 +415,8 @@ def simulate_events_reduced(
     the simulation (a constraint whose selection turns singular, e.g. a pendulum passing
     ``x = 0``, fails with a ConvergenceError; linear couplings such as rigidly joined
     masses are exact), and the states the reduction made dummies take their values from
-    the constraints (their ``x0``/start values are not used).
+    the constraints (:meth:`Model.simulate` solves a consistent start first when ``x0`` or a
+    fixed start names one, and passes ``consistent=True``).
 
     Parameters
     ----------
@@ -436,6 +439,8 @@ def simulate_events_reduced(
         ``x0`` holds consistent values of all states (from
         :func:`~gtmodel.modeling.simulation.structured_simulation.consistent_start`): the dummies'
         are dropped instead of refused; default false.
+    options : mapping, optional
+        Integrator options, as for :meth:`Model.simulate`.
 
     Returns
     -------
@@ -471,7 +476,7 @@ def simulate_events_reduced(
                 f"x0: {dummies} of model {model.name!r} are not states after index reduction (dummy derivatives: "
                 f"their values follow from the constraints); states: {[v.name for v in reduced._vars.values() if v.kind == 'state']}"
             )
-    res = simulate_events(reduced, t_grid, x0, u, p, integrator, rtol, atol)
+    res = simulate_events(reduced, t_grid, x0, u, p, integrator, rtol, atol, options=options)
     found = {**res.outputs, **res.z, **res.x}
 
     def column(nm: str) -> np.ndarray:

@@ -21,9 +21,11 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+import scipy.sparse as sps
 
 from gtmodel.errors import ModelError
 from gtmodel.modeling.dae import FlatDAE, expand_names
+from gtmodel.modeling.structure.analysis import incidence, matching, scalarize, structure_message, structure_parts
 
 __all__ = ["flatten_model"]
 
@@ -42,6 +44,8 @@ class _Var:
     ub: np.ndarray
     der: ca.SX | None = None
     unit: str = ""
+    fixed: np.ndarray | None = None  # per element: the start is an initial condition (Modelica's fixed)
+    given: bool = False  # the start was given (not the default 0)
 
     @property
     def size(self) -> int:
@@ -64,9 +68,11 @@ def flatten_model(model: Any) -> FlatDAE:
     Raises
     ------
     ModelError
-        If the number of scalar equations differs from states + algebraics, the
-        equations are not solvable for ``der()`` (naming the states), or the
-        algebraic equations are not index-1 in the algebraic variables.
+        One message naming equations and variables: structurally singular, over- or
+        under-determined (as :func:`~gtmodel.modeling.structure.analysis.check_structure`
+        says); or, for a structurally regular model, of higher index (the states whose
+        ``der()`` the equations cannot give, or the algebraic equations that do not fix
+        the algebraic variables), with the way out (``structural_simplify``).
     """
     by_kind = {k: [v for v in model._vars.values() if v.kind == k] for k in _KINDS}
 
@@ -95,10 +101,10 @@ def flatten_model(model: Any) -> FlatDAE:
     res = ca.vertcat(*[r for _, r in model._equations]) if model._equations else ca.SX(0, 1)
     neq = int(res.numel())
     if neq != nx + nz:
-        raise ModelError(
-            f"model {model.name!r} has {neq} scalar equations but {nx} states + {nz} "
-            f"algebraic variables = {nx + nz} unknowns"
-        )
+        counts = f"model {model.name!r} has {neq} scalar equations but {nx} states + {nz} algebraic variables"
+        found = structure_parts(incidence(scalarize(model)))
+        raise ModelError("; ".join([f"{counts} = {nx + nz} unknowns ({found[0] if found else 'singular'})",
+                                    *(found[1] if found else [])]))
     subst_rows = {  # scalar rows of the substitute_der equations
         k for j, (lo, hi) in enumerate(_row_ranges(model._equations)) if j in model._der_substituted
         for k in range(lo, hi)
@@ -113,20 +119,22 @@ def flatten_model(model: Any) -> FlatDAE:
         M = ca.jacobian(res_d, xdot)
         missing = [x_names[j] for j in range(nx) if M[:, j].nnz() == 0]
         if missing:
-            raise ModelError(
-                f"model {model.name!r}: der() of state(s) {missing} appear(s) in no equation"
-            )
+            raise _refusal(model, f"der() of state(s) {missing} appear(s) in no equation")
         if len(diff_rows) != nx or ca.sprank(M) < nx:
-            raise ModelError(
-                f"model {model.name!r}: the equations containing der() ({len(diff_rows)} scalar) "
-                f"cannot be solved for der() of the {nx} states {x_names} (structurally singular)"
+            raise _refusal(
+                model, f"the equations containing der() ({len(diff_rows)} scalar) cannot be solved for der() of "
+                f"the states {_unmatched(M, x_names)} (of the {nx} states {x_names}; not index 1): two or more states "
+                f"are dependent (equations {[_row_labels(model._equations)[i] for i in diff_rows]})"
             )
         b = ca.substitute(res_d, xdot, ca.SX.zeros(nx))
         if not ca.depends_on(M, ca.vertcat(x, z, u, p, model._time)) and M.is_constant():
             Mn = np.array(ca.DM(M))
             if np.linalg.matrix_rank(Mn) < nx:
+                labels = _row_labels(model._equations)
                 raise ModelError(
-                    f"model {model.name!r}: the der() coefficient matrix is singular for states {x_names}"
+                    f"model {model.name!r}: the der() coefficient matrix of equations "
+                    f"{[labels[i] for i in diff_rows]} is singular for states {x_names} (numerically: the "
+                    "equations are dependent in der())"
                 )
             if np.allclose(Mn, np.eye(nx)):
                 f = -b
@@ -144,11 +152,10 @@ def flatten_model(model: Any) -> FlatDAE:
     if nz:
         Jz = ca.jacobian(res_a, z)
         if int(res_a.numel()) != nz or ca.sprank(Jz) < nz:
-            no_z = [z_names[j] for j in range(nz) if Jz[:, j].nnz() == 0]
-            raise ModelError(
-                f"model {model.name!r}: the algebraic equations are not solvable for the algebraic "
-                f"variables {no_z or z_names} (not index 1); flatten() needs an index-1 DAE: "
-                "reduce it with gtmodel.modeling.structural_simplify(model) (simulate() does)"
+            labels = _row_labels(model._equations)
+            raise _refusal(
+                model, f"the algebraic equations {[labels[i] for i in alg_rows]} are not solvable for the algebraic "
+                f"variables {_unmatched(Jz, z_names)} (not index 1)"
             )
     elif res_a.numel():
         # unreachable by the count check, kept for safety
@@ -200,6 +207,39 @@ def flatten_model(model: Any) -> FlatDAE:
         u_lb=arr(by_kind["input"], "lb"),
         u_ub=arr(by_kind["input"], "ub"),
     )
+
+
+def _refusal(model: Any, detail: str) -> ModelError:
+    """Why ``flatten()`` refuses a model: structurally singular (the one message of the structural
+    check, naming equations and variables), else of higher index (``detail``, and the way out).
+
+    A model is blamed on its index only when Pantelides' test passes (``der(x)`` merged
+    into ``x``, the equations match the unknowns one to one,
+    :func:`~gtmodel.modeling.structure.analysis.check_structure`): otherwise no index
+    reduction helps, and the message names the equations in excess and the variables left
+    undetermined, as ``simulate()`` and ``structural_simplify`` do.
+    """
+    msg = structure_message(incidence(scalarize(model)), f"model {model.name!r}")
+    if msg:
+        return ModelError(msg)
+    return ModelError(
+        f"model {model.name!r}: {detail}; the model is structurally regular but of higher index (or has alias "
+        "equations between states): flatten() needs an index-1 DAE: reduce it with "
+        "gtmodel.modeling.structural_simplify(model) (simulate() does)"
+    )
+
+
+def _unmatched(jac: ca.SX, names: list[str]) -> list[str]:
+    """Columns of a Jacobian left unmatched by a maximum matching of its sparsity (the variables it cannot fix)."""
+    rows, cols = jac.sparsity().get_triplet()
+    pat = sps.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(jac.size1(), jac.size2()))
+    var_to_eq = matching(pat)[1]
+    return [names[j] for j in range(len(names)) if var_to_eq[j] < 0] or list(names)
+
+
+def _row_labels(equations: Sequence[tuple[str, ca.SX]]) -> list[str]:
+    """The label of each scalar row of the stacked residual (``"label[i]"`` for vector equations)."""
+    return [name if r.numel() == 1 else f"{name}[{i}]" for name, r in equations for i in range(int(r.numel()))]
 
 
 def _row_ranges(equations: Sequence[tuple[str, ca.SX]]) -> list[tuple[int, int]]:

@@ -33,7 +33,15 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value
 
-__all__ = ["simulate_model", "simulation_inputs", "input_intervals", "SIMULATE_DOCS"]
+__all__ = [
+    "simulate_model",
+    "simulation_inputs",
+    "input_intervals",
+    "integrator_options",
+    "time_scaled",
+    "SIMULATE_DOCS",
+    "INTEGRATOR_OPTIONS",
+]
 
 #: The arguments, returns and errors of a simulation, shared by :func:`simulate_model` and
 #: :meth:`gtmodel.modeling.Model.simulate` (inserted by :func:`~gtmodel._docstrings.fill_doc`).
@@ -44,7 +52,8 @@ SIMULATE_DOCS = {
             Integration starts at ``t_grid[0]``.
         x0 : array_like or mapping, optional
             Initial state, shape ``(nx,)``, or a mapping from state names to values;
-            default the declared start values.
+            default the declared start values. Every entry is an initial condition
+            (kept through index reduction; contradictory ones are refused, naming them).
         u : float, array_like or callable, optional
             Inputs, held piecewise constant on the grid: a constant ``(nu,)``; an array
             ``(N-1, nu)`` or ``(N, nu)`` whose row ``k`` applies on ``[t_k, t_{k+1})``
@@ -63,6 +72,18 @@ SIMULATE_DOCS = {
         z0 : array_like, optional
             Guess for the algebraic variables at ``t_grid[0]``, shape ``(nz,)``;
             default the declared start values. IDAS computes consistent values.
+        options : mapping, optional
+            Integrator options (:data:`~gtmodel.modeling.simulation.integration.INTEGRATOR_OPTIONS`):
+            ``rtol``, ``atol`` (override the arguments), ``max_num_steps`` (steps
+            allowed between two output times; SUNDIALS' default 500: raise it for tight
+            tolerances on long output intervals, the cure for ``IDA_TOO_MUCH_WORK`` /
+            ``CV_TOO_MUCH_WORK``), ``max_step_size``, ``initial_step`` (s),
+            ``min_step_size`` (s, CVODES only), ``max_order`` (1-5, the BDF order
+            limit) and ``suppress_algebraic`` (IDAS only: leave the algebraic variables
+            out of the local error test, as Modelica tools do for index-1 DAEs; at
+            tolerances near 1e-10 their round-off otherwise makes the steps collapse);
+            passed to CasADi's SUNDIALS integrators. An unknown name or a bad value is
+            refused by name (InputError).
 
     """,
     "simulate_returns": """
@@ -85,6 +106,101 @@ SIMULATE_DOCS = {
 
 _log = logging.getLogger("gtmodel")
 
+#: The integrator options of a simulation: name -> (CasADi/SUNDIALS option, kind, the
+#: integrators that take it). ``kind``: ``"tol"`` positive float, ``"time"`` positive
+#: float in seconds (rescaled where the DAE runs in scaled time), ``"steps"`` positive int,
+#: ``"order"`` int 1..5, ``"flag"`` bool.
+INTEGRATOR_OPTIONS: dict[str, tuple[str, str, tuple[str, ...]]] = {
+    "rtol": ("reltol", "tol", ("idas", "cvodes")),
+    "atol": ("abstol", "tol", ("idas", "cvodes")),
+    "max_num_steps": ("max_num_steps", "steps", ("idas", "cvodes")),
+    "max_step_size": ("max_step_size", "time", ("idas", "cvodes")),
+    "initial_step": ("step0", "time", ("idas", "cvodes")),
+    "min_step_size": ("min_step_size", "time", ("cvodes",)),
+    "max_order": ("max_multistep_order", "order", ("idas", "cvodes")),
+    "suppress_algebraic": ("suppress_algebraic", "flag", ("idas",)),
+}
+#: The CasADi options that are times (divided by the segment length in scaled time).
+TIME_OPTIONS = tuple(cas for cas, kind, _ in INTEGRATOR_OPTIONS.values() if kind == "time")
+
+
+def integrator_options(options: Mapping[str, Any] | None, rtol: float, atol: float, integrator: str) -> dict[str, Any]:
+    """The CasADi options of a SUNDIALS integrator from a simulation's ``rtol``, ``atol`` and ``options``.
+
+    Parameters
+    ----------
+    options : mapping or None
+        Option name -> value, names of :data:`INTEGRATOR_OPTIONS` (``rtol`` and ``atol``
+        here override the arguments).
+    rtol, atol : float
+        Relative and absolute tolerances.
+    integrator : {"idas", "cvodes"}
+        The SUNDIALS integrator.
+
+    Returns
+    -------
+    dict
+        Options for ``casadi.integrator`` (``reltol``, ``abstol``, ... and warnings off).
+
+    Raises
+    ------
+    InputError
+        If ``integrator`` is unknown; naming the option: an unknown name (listing the allowed ones), one the integrator
+        does not take, or a value that is not a positive finite number (a positive integer
+        for ``max_num_steps``, 1 to 5 for ``max_order``).
+    """
+    if integrator not in ("idas", "cvodes"):
+        raise InputError(f"integrator must be 'idas' or 'cvodes', got {integrator!r}")
+    given = {"rtol": rtol, "atol": atol}
+    if options is not None:
+        if not isinstance(options, Mapping):
+            raise InputError(f"options: expected a mapping of integrator option names to values, got {options!r}")
+        unknown = sorted(str(k) for k in options if k not in INTEGRATOR_OPTIONS)
+        if unknown:
+            raise InputError(f"options: unknown integrator option(s) {unknown}; allowed: {sorted(INTEGRATOR_OPTIONS)}")
+        given.update(options)
+    out: dict[str, Any] = {"show_eval_warnings": False, "disable_internal_warnings": True}
+    for name, value in given.items():
+        cas, kind, plugins = INTEGRATOR_OPTIONS[name]
+        if integrator not in plugins:
+            raise InputError(f"options: {name!r} is an option of {' and '.join(plugins)} only, not of {integrator!r}")
+        what = f"options[{name!r}]" if options is not None and name in options else name
+        if kind == "flag":
+            if not isinstance(value, (bool, np.bool_)):
+                raise InputError(f"{what}: expected True or False, got {value!r}")
+            out[cas] = bool(value)
+        elif kind in ("steps", "order"):
+            ok = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+            lo, hi = (1, 5) if kind == "order" else (1, np.inf)
+            if not ok or not lo <= value <= hi:
+                want = "an integer from 1 to 5" if kind == "order" else "a positive integer"
+                raise InputError(f"{what}: expected {want}, got {value!r}")
+            out[cas] = int(value)
+        else:
+            ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+            if not ok or not np.isfinite(value) or value <= 0:
+                raise InputError(f"{what}: expected a positive finite number, got {value!r}")
+            out[cas] = float(value)
+    return out
+
+
+def time_scaled(opts: Mapping[str, Any], h: float) -> dict[str, Any]:
+    """Integrator options for a DAE in scaled time ``t = t0 + tau h``: the step sizes divided by ``h``.
+
+    Parameters
+    ----------
+    opts : mapping
+        From :func:`integrator_options`.
+    h : float
+        Segment length, s.
+
+    Returns
+    -------
+    dict
+        A copy with :data:`TIME_OPTIONS` in units of ``tau``.
+    """
+    return {k: (v / h if k in TIME_OPTIONS else v) for k, v in opts.items()}
+
 
 @fill_doc(**SIMULATE_DOCS)
 def simulate_model(
@@ -97,6 +213,7 @@ def simulate_model(
     rtol: float = 1e-8,
     atol: float = 1e-10,
     z0: Any = None,
+    options: Mapping[str, Any] | None = None,
 ) -> SimulationResult:
     """Integrate the model on a time grid.
 
@@ -110,12 +227,7 @@ def simulate_model(
     """
     dae = model.flatten()
     t, x0v, z0v, pv, u_int = simulation_inputs(model, dae, t_grid, x0, u, p, integrator, z0)
-    opts = {
-        "reltol": float(rtol),
-        "abstol": float(atol),
-        "show_eval_warnings": False,
-        "disable_internal_warnings": True,
-    }
+    opts = integrator_options(options, rtol, atol, integrator)
     changes = input_segments(u_int)
     starts = changes if dae.nz and ca.depends_on(dae.alg_expr, dae.u) else np.zeros(1, int)
     try:
@@ -204,11 +316,12 @@ def _integrate_segments(name: str, dae: Any, plugin: str, opts: dict, t: np.ndar
         # from 0: a segment reports its consistent start values, the right limit at a change
         # (as the reported input u[a] and the outputs; the event simulation does the same)
         fracs = tuple(np.round(np.append((t[a:b] - t[a]) / h_s, 1.0), 13))
-        F = cache.get(fracs)
+        key = fracs + ((h_s,) if any(k in opts for k in TIME_OPTIONS) else ())  # step sizes in units of h
+        F = cache.get(key)
         if F is None:  # a uniform grid needs one per segment length
             if len(cache) >= 64:
                 cache.pop(next(iter(cache)))
-            F = cache[fracs] = ca.integrator(f"{name}_segment", plugin, ddict, 0.0, list(fracs), opts)
+            F = cache[key] = ca.integrator(f"{name}_segment", plugin, ddict, 0.0, list(fracs), time_scaled(opts, h_s))
         res = F(x0=xs[a] if a else x0, z0=zs[a] if a else z0, p=np.concatenate([pv, [t[a], h_s]]), u=u_int[a])
         xs[a:b + 1] = np.array(res["xf"]).reshape(dae.nx, len(fracs)).T
         zs[a:b + 1] = np.array(res["zf"]).reshape(dae.nz, len(fracs)).T

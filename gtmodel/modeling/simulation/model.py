@@ -32,12 +32,20 @@ import numpy as np
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import FlatDAE, SimulationResult, _as_sx, _shape_to_size, _symbol_names, _vector_value
+from gtmodel.modeling.dae import (
+    FlatDAE,
+    SimulationResult,
+    _as_sx,
+    _shape_to_size,
+    _symbol_names,
+    _vector_value,
+    fixed_flags,
+)
 from gtmodel.modeling.structure.discontinuities import sign_modes
 from gtmodel.modeling.simulation.flatten import _KINDS, _Var, flatten_model
 from gtmodel.modeling.simulation.event_simulation import simulate_events, simulate_events_reduced
 from gtmodel.modeling.structure.events import EventsMixin, EventSpec
-from gtmodel.modeling.simulation.integration import SIMULATE_DOCS, simulate_model
+from gtmodel.modeling.simulation.integration import SIMULATE_DOCS, integrator_options, simulate_model
 from gtmodel.modeling.simulation.structured_simulation import consistent_start, simulate_structured
 
 __all__ = ["Model"]
@@ -60,6 +68,15 @@ _DECLARE_DOCS = {
     "unit": """
         unit : str, optional
             SI unit (e.g. ``"m"``, ``"N"``), shown on plots (:attr:`units`); default none.
+        """,
+    "fixed": """
+        fixed : bool or array_like of bool, optional
+            Whether ``start`` is an initial condition that :meth:`Model.simulate` must meet
+            (Modelica's ``fixed = true``: kept through alias elimination and index
+            reduction, an error if it contradicts the model or the other initial
+            conditions); default False: ``start`` is a guess, used as the initial value
+            only where the initialisation has degrees of freedom left (see
+            :mod:`gtmodel.modeling.structure.initialization`).
         """,
     "raises": """
         Raises
@@ -128,6 +145,7 @@ class Model(EventsMixin):
         lb: Any = None,
         ub: Any = None,
         unit: str = "",
+        fixed: Any = False,
     ) -> ca.SX:
         if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
@@ -142,7 +160,11 @@ class Model(EventsMixin):
             raise ModelError(f"{what}: lower bound exceeds upper bound at elements {bad.tolist()}")
         if not isinstance(unit, str):
             raise InputError(f"{what} unit: expected a string such as 'm', got {unit!r}")
-        var = _Var(name, kind, sym, _vector_value(start, size, f"{what} start"), lbv, ubv, unit=unit)
+        flags = fixed_flags(fixed, size, f"{what} fixed")
+        if kind in ("parameter", "input") and flags.any():
+            raise ModelError(f"{what}: only states and algebraic variables have initial conditions (fixed)")
+        var = _Var(name, kind, sym, _vector_value(start, size, f"{what} start"), lbv, ubv, unit=unit, fixed=flags,
+                   given=start is not None)
         if kind == "state":
             var.der = ca.SX.sym(f"der({name})", size)
         self._vars[name] = var
@@ -185,7 +207,8 @@ class Model(EventsMixin):
 
     @fill_doc(**_DECLARE_DOCS)
     def state(
-        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
+        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = "",
+        fixed: Any = False,
     ) -> ca.SX:
         """Declare a differential state.
 
@@ -193,10 +216,12 @@ class Model(EventsMixin):
         ----------
         {name_shape}
         start : float or array_like, optional
-            Start value (initial condition for simulation, initial guess); default 0.
+            Start value (the initial value where the initialisation leaves it free, and
+            the guess of the initialisation and of optimisation); default 0.
         lb, ub : float or array_like, optional
             Bounds (Modelica ``min``/``max``) used by optimisation; default unbounded.
         {unit}
+        {fixed}
 
         Returns
         -------
@@ -205,11 +230,12 @@ class Model(EventsMixin):
 
         {raises}
         """
-        return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub, unit)
+        return self._declare(name, "state", _shape_to_size(shape, f"state {name!r}"), start, lb, ub, unit, fixed)
 
     @fill_doc(**_DECLARE_DOCS)
     def algebraic(
-        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = ""
+        self, name: str, shape: Any = 1, start: Any = None, lb: Any = None, ub: Any = None, unit: str = "",
+        fixed: Any = False,
     ) -> ca.SX:
         """Declare an algebraic variable.
 
@@ -221,6 +247,7 @@ class Model(EventsMixin):
         lb, ub : float or array_like, optional
             Bounds used by optimisation; default unbounded.
         {unit}
+        {fixed}
 
         Returns
         -------
@@ -230,7 +257,7 @@ class Model(EventsMixin):
         {raises}
         """
         return self._declare(
-            name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub, unit
+            name, "algebraic", _shape_to_size(shape, f"algebraic {name!r}"), start, lb, ub, unit, fixed
         )
 
     @fill_doc(**_DECLARE_DOCS)
@@ -545,6 +572,7 @@ class Model(EventsMixin):
         rtol: float = 1e-8,
         atol: float = 1e-10,
         z0: Any = None,
+        options: Mapping[str, Any] | None = None,
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
@@ -554,18 +582,23 @@ class Model(EventsMixin):
         :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
         is reduced once first, keeping the reinit targets as states
         (:func:`~gtmodel.modeling.simulation.event_simulation.simulate_events_reduced`: ``x0`` a
-        mapping, no ``z0``); with initial equations the consistent start is solved first
+        mapping, no ``z0``); with initial equations, fixed starts or ``x0`` entries that the
+        reduction could drop, the consistent start is solved first
         (:func:`~gtmodel.modeling.simulation.structured_simulation.consistent_start`, the modes at their
         start values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten` accepts
-        and that has no initial equations is simulated as it is. Otherwise the structural
+        and that has no initial equations (nor fixed starts of algebraic variables) is simulated as it is. Otherwise
+        the structural
         passes run first
         (:func:`~gtmodel.modeling.simulation.structured_simulation.simulate_structured`): the structural
         check (one error naming the equations and variables), alias elimination, index
         reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
         selection turns singular), and the consistent initialisation with the
-        :meth:`initial_equation` s. For a high-index model without initial equations, the
-        ``x0``/start values of the states picked by the dummy selection are kept and the
-        others are computed (their values are guesses).
+        :meth:`initial_equation` s. Start values follow Modelica
+        (:mod:`gtmodel.modeling.structure.initialization`): every ``x0`` entry and every start
+        declared ``fixed=True`` (a component modifier's start value is) is an initial
+        condition, kept whichever states the index reduction selects; contradictory ones
+        are one error naming them; the remaining freedom (a model without initial
+        equations) is taken from the start values, given ones first.
 
         Parameters
         ----------
@@ -573,23 +606,40 @@ class Model(EventsMixin):
 
         {simulate_returns}
         """
+        integrator_options(options, rtol, atol, integrator)  # bad options refused by name before any work
         model = sign_modes(self, sliding=integrator != "cvodes") or self  # sign() switched by events
         if model._events is not None and model._events.whens:
             flat = model._flattens()
-            if model._initial_equations:  # consistent start (structured_simulation), then events
+            if model._needs_initialisation(flat, x0):  # consistent start (structured_simulation), then events
                 start = consistent_start(model, t_grid, x0, u, p, z0)
                 x0 = {k: v for k, v in start.items() if model._vars[k].kind == "state"}
                 z0 = np.concatenate([v for k, v in start.items() if model._vars[k].kind == "algebraic"] or [np.zeros(0)])
                 if not flat:
-                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True)
+                    return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, consistent=True,
+                                                   options=options)
             if not flat:  # aliases or high index: reduced once (event_simulation)
                 if z0 is not None:
                     raise InputError(f"model {self.name!r} is index-reduced for the event simulation: z0 is not supported")
-                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol)
-            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0)
-        if self._initial_equations or not self._flattens():
-            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
-        return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0)
+                return simulate_events_reduced(model, t_grid, x0, u, p, integrator, rtol, atol, options=options)
+            return simulate_events(model, t_grid, x0, u, p, integrator, rtol, atol, z0, options=options)
+        if self._needs_initialisation(True, x0) or not self._flattens():
+            return simulate_structured(self, t_grid, x0, u, p, integrator, rtol, atol, z0, options)
+        return simulate_model(self, t_grid, x0, u, p, integrator, rtol, atol, z0, options)
+
+    def _needs_initialisation(self, flat: bool, x0: Any) -> bool:
+        """Whether the start must be solved (initial equations, fixed starts the flat DAE cannot keep).
+
+        A flat (index-1, alias-free) model keeps its states' starts and ``x0`` as they are;
+        initial equations, a fixed start of an algebraic variable, and on a model that is
+        reduced first also fixed starts and ``x0`` entries of states, need the initialisation
+        of :mod:`gtmodel.modeling.structure.initialization`.
+        """
+        if self._initial_equations:
+            return True
+        for v in self._vars.values():
+            if v.fixed is not None and v.fixed.any() and (v.kind == "algebraic" or (v.kind == "state" and not flat)):
+                return True
+        return not flat and isinstance(x0, Mapping)
 
     def _flattens(self) -> bool:
         """Whether :meth:`flatten` accepts the model as it is (else simulate reduces it)."""

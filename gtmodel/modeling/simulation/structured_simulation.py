@@ -44,8 +44,14 @@ from gtmodel.modeling.structure.index_reduction import (
     select_dummies,
     selection_quality,
 )
-from gtmodel.modeling.structure.initialization import solve_initial
-from gtmodel.modeling.simulation.integration import SIMULATE_DOCS, input_intervals, input_segments, simulate_model
+from gtmodel.modeling.structure.initialization import fill_order, guess_and_conditions, solve_initial
+from gtmodel.modeling.simulation.integration import (
+    SIMULATE_DOCS,
+    input_intervals,
+    input_segments,
+    integrator_options,
+    simulate_model,
+)
 from gtmodel.modeling.structure.analysis import check_structure, eliminate_aliases, scalarize
 
 __all__ = ["simulate_structured", "consistent_start", "SWITCH_RATIO", "CHECK_POINTS"]
@@ -84,43 +90,6 @@ def _parameter_vector(model: Any, p: Mapping[str, Any] | None) -> tuple[np.ndarr
     return vec, slices
 
 
-def _guess_and_fixed(model: Any, aug: AugmentedDAE, x0: Any, z0: Any) -> tuple[np.ndarray, dict[int, float]]:
-    """Start values of all variables (x0/z0 applied) and the states fixed by an x0 mapping."""
-    s = aug.system
-    guess = np.concatenate([s.start, np.zeros(len(aug.syms) - s.n_vars)])
-    index = {nm: k for k, nm in enumerate(aug.names)}
-    states = [v for v in model._vars.values() if v.kind == "state"]
-    algs = [v for v in model._vars.values() if v.kind == "algebraic"]
-    fixed: dict[int, float] = {}
-
-    def put(name: str, value: float, fix: bool) -> None:
-        if name in index:
-            guess[index[name]] = value
-            if fix:
-                fixed[index[name]] = value
-        elif name in s.aliases:
-            sign, keep = s.aliases[name]
-            put(keep, sign * value, fix)
-
-    if isinstance(x0, Mapping):
-        known = {v.name: v for v in states}
-        for name, val in x0.items():
-            if name not in known:
-                raise InputError(f"x0: {name!r} is not a state of model {model.name!r}")
-            vals = _vector_value(val, known[name].size, f"x0[{name!r}]")
-            for nm, val_ in zip(expand_names(name, known[name].size), vals):
-                put(nm, float(val_), True)
-    elif x0 is not None:
-        names = [nm for v in states for nm in expand_names(v.name, v.size)]
-        for nm, val_ in zip(names, _vector_value(x0, len(names), "x0")):
-            put(nm, float(val_), False)
-    if z0 is not None:
-        names = [nm for v in algs for nm in expand_names(v.name, v.size)]
-        for nm, val_ in zip(names, _vector_value(z0, len(names), "z0")):
-            put(nm, float(val_), False)
-    return guess, fixed
-
-
 def _refine(t: np.ndarray, n_check: int) -> tuple[np.ndarray, np.ndarray]:
     """Fine grid with at least ``n_check`` intervals and the user-grid positions in it."""
     h = (t[-1] - t[0]) / n_check
@@ -135,7 +104,7 @@ def _refine(t: np.ndarray, n_check: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray, uf: np.ndarray,
-               pv: np.ndarray, rtol: float, atol: float) -> np.ndarray:
+               pv: np.ndarray, opts: dict) -> np.ndarray:
     """IDAS on the reduced DAE of ``sel`` over the grid ``tf``; all variables per row."""
     s = aug.system
     states, algs = reduced_system(aug, sel)
@@ -145,9 +114,7 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
     }
     # the values are consistent (solve_initial, or the previous segment): give IDACalcIC the
     # state derivatives too, else its line search can fail from xdot = 0 on restarts
-    opts = {"reltol": float(rtol), "abstol": float(atol), "show_eval_warnings": False,
-            "disable_internal_warnings": True,
-            "init_xdot": [float(v0[aug.diff[v]]) for v in states]}
+    opts = {**opts, "init_xdot": [float(v0[aug.diff[v]]) for v in states]}
     n = tf.size
     u_cas = np.vstack([uf[:1], uf]).T if s.u.numel() else np.zeros((0, n))
     x0 = v0[states]
@@ -174,7 +141,7 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
 
 
 def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.ndarray, v0: np.ndarray,
-                   rtol: float, atol: float) -> tuple[np.ndarray, list[float]]:
+                   opts: dict) -> tuple[np.ndarray, list[float]]:
     """Integrate with dummy re-selection; all variables on ``tf`` and the switch times."""
     n = tf.size
     vals = np.empty((n, len(aug.syms)))
@@ -193,7 +160,7 @@ def _switching_run(aug: AugmentedDAE, tf: np.ndarray, uf: np.ndarray, pv: np.nda
         kend = min(k + chunk, n - 1) if sel.levels else n - 1  # nothing to re-select: one run
         kend = min(kend, int(cuts[np.searchsorted(cuts, k, side="right")]))
         try:
-            seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, rtol, atol)
+            seg = _integrate(aug, sel, tf[k:kend + 1], vals[k], uf[k:kend], pv, opts)
         except ConvergenceError:
             if kend - k == 1 or not sel.levels:
                 raise
@@ -236,12 +203,13 @@ def _initial_point(model: Any, t: np.ndarray, x0: Any, u: Any, p: Mapping[str, A
     aug = pantelides(system)
     pv, p_slices = _parameter_vector(model, p)
     u_int = input_intervals(u, t, int(system.u.numel()), system.u_start)
-    guess, fixed = _guess_and_fixed(model, aug, x0, z0)
+    guess, conditions = guess_and_conditions(model, aug, x0, z0)
     u0 = u_int[0]
-    if not system.init_res:
+    fill = None
+    if not system.init_res:  # the remaining degrees of freedom at start values (Modelica tools)
         sel0 = select_dummies(aug, (t[0], guess, u0, pv))
-        fixed = {v: guess[v] for v in reduced_system(aug, sel0)[0]}
-    v0 = solve_initial(aug, float(t[0]), u0, pv, guess, fixed)
+        fill = fill_order(aug, guess, reduced_system(aug, sel0)[0])
+    v0 = solve_initial(aug, float(t[0]), u0, pv, guess, conditions, fill)
     obs_names = [nm for v in model._vars.values() if v.kind in ("state", "algebraic")
                  for nm in expand_names(v.name, v.size)]
     obs = ca.Function("observed", [_cat(aug.syms)], [_cat([system.observed[nm] for nm in obs_names])])
@@ -265,7 +233,7 @@ def consistent_start(
     t_grid : array_like
         Output times, ``(N,)``, s; the values are at ``t_grid[0]`` (inputs of the first interval).
     x0, u, p, z0 : optional
-        As for :meth:`Model.simulate` (``x0`` values are guesses unless given as a mapping).
+        As for :meth:`Model.simulate` (``x0`` entries are initial conditions, ``z0`` guesses).
 
     Returns
     -------
@@ -299,14 +267,16 @@ def simulate_structured(
     rtol: float = 1e-8,
     atol: float = 1e-10,
     z0: Any = None,
+    options: Mapping[str, Any] | None = None,
 ) -> SimulationResult:
     """Simulate a model with initial equations, aliases or a high index (see the module docstring).
 
-    Without initial equations, a high-index model keeps ``x0`` (or the start values) of
-    the states of the dummy-derivative selection made at those values; the other states
-    and all algebraic variables are computed (their ``x0``/start values are guesses). With
-    initial equations, the states named in an ``x0`` mapping are fixed; all other values
-    are guesses. The switch times of the dummy selection are logged (debug).
+    The ``x0`` entries (a mapping, or a vector of all states) and the starts declared
+    ``fixed=True`` are initial conditions on the variables they name
+    (:mod:`gtmodel.modeling.structure.initialization`); without initial equations the
+    remaining freedom is taken from start values (given starts first, then the states of
+    the dummy-derivative selection made at the start values); all other values are
+    guesses. The switch times of the dummy selection are logged (debug).
 
     Parameters
     ----------
@@ -317,11 +287,12 @@ def simulate_structured(
     {simulate_returns}
     """
     t = _check_grid(t_grid, integrator)
+    opts = integrator_options(options, rtol, atol, integrator)  # bad options refused before any work
     system, aug, pv, p_slices, u_int, v0, obs, obs_names = _initial_point(model, t, x0, u, p, z0)
     if aug.n_differentiated == 0 and not system.aliases and model._flattens():
         ov = np.array(obs(v0)).ravel()
         nx = sum(v.size for v in model._vars.values() if v.kind == "state")
-        return simulate_model(model, t, ov[:nx], u, p, integrator, rtol, atol, ov[nx:])
+        return simulate_model(model, t, ov[:nx], u, p, integrator, rtol, atol, ov[nx:], options)
     if integrator != "idas":
         raise InputError(f"model {model.name!r} needs index reduction or alias elimination; use integrator 'idas'")
     if aug.n_differentiated:
@@ -329,7 +300,7 @@ def simulate_structured(
         uf = np.repeat(u_int, np.diff(pos), axis=0)
     else:
         tf, pos, uf = t, np.arange(t.size), u_int
-    vals, switches = _switching_run(aug, tf, uf, pv, v0, rtol, atol)
+    vals, switches = _switching_run(aug, tf, uf, pv, v0, opts)
     vals = vals[pos]
     if switches:
         _log.debug("model %s: dummy derivatives switched at t = %s s", model.name, switches)

@@ -88,6 +88,12 @@ class ScalarDAE:
         its expression in the remaining unknowns (identity, or ``+-`` an alias).
     aliases : dict of str to tuple
         Eliminated unknown name -> ``(sign, kept name)``.
+    fixed_start : dict of str to float
+        Original scalar unknown name -> its start value, for the starts declared
+        ``fixed=True`` (initial conditions; kept by name through alias elimination).
+    given_start : dict of str to float
+        Original scalar unknown name -> start value, for every start that was given (not
+        the default 0), fixed or not.
     """
 
     name: str
@@ -109,6 +115,8 @@ class ScalarDAE:
     outputs: dict[str, ca.SX]
     observed: dict[str, ca.SX] = field(default_factory=dict)
     aliases: dict[str, tuple[float, str]] = field(default_factory=dict)
+    fixed_start: dict[str, float] = field(default_factory=dict)
+    given_start: dict[str, float] = field(default_factory=dict)
 
     @property
     def n_vars(self) -> int:
@@ -164,6 +172,8 @@ def scalarize(model: Any) -> ScalarDAE:
         raise InputError(f"model must be a gtmodel.modeling.Model, got {type(model).__name__}")
     vars_ = list(model._vars.values())
     syms, names, kinds, starts, ders = [], [], [], [], {}
+    fixed_start: dict[str, float] = {}
+    given_start: dict[str, float] = {}
     for kind in ("state", "algebraic"):
         for v in (w for w in vars_ if w.kind == kind):
             for j, nm in enumerate(expand_names(v.name, v.size)):
@@ -173,6 +183,10 @@ def scalarize(model: Any) -> ScalarDAE:
                 names.append(nm)
                 kinds.append(kind)
                 starts.append(float(v.start[j]))
+                if getattr(v, "given", False):
+                    given_start[nm] = float(v.start[j])
+                if getattr(v, "fixed", None) is not None and bool(v.fixed[j]):
+                    fixed_start[nm] = float(v.start[j])
 
     def split(items: list[tuple[str, ca.SX]]) -> tuple[list[ca.SX], list[str]]:
         res, lab = [], []
@@ -207,6 +221,8 @@ def scalarize(model: Any) -> ScalarDAE:
         u_names=[n for v in inputs for n in expand_names(v.name, v.size)],
         outputs=dict(model._outputs),
         observed=observed,
+        fixed_start=fixed_start,
+        given_start=given_start,
     )
 
 
@@ -370,12 +386,35 @@ def structure_message(inc: Incidence, what: str) -> str | None:
         ``"<what> is structurally singular / over-determined / under-determined: ..."``
         naming the equations in excess and the variables left undetermined.
     """
+    found = structure_parts(inc)
+    if found is None:
+        return None
+    kind, parts = found
+    n, k = inc.matrix.shape
+    return "; ".join([f"{what} is {kind} ({n} scalar equations, {k} unknowns)", *parts])
+
+
+def structure_parts(inc: Incidence) -> tuple[str, list[str]] | None:
+    """The diagnosis of :func:`structure_message` in pieces: the kind and the named parts.
+
+    Parameters
+    ----------
+    inc : Incidence
+        Equations x unknowns.
+
+    Returns
+    -------
+    tuple or None
+        ``(kind, parts)``: ``"over-determined"``, ``"under-determined"`` or
+        ``"structurally singular"``, and the sentences naming the equations in excess and
+        the variables left undetermined; None if the incidence has a perfect matching.
+    """
     n, k = inc.matrix.shape
     dm = dulmage_mendelsohn(inc.matrix)
     if not dm["unmatched_eqs"] and not dm["unmatched_vars"]:
         return None
     kind = "over-determined" if n > k else "under-determined" if n < k else "structurally singular"
-    parts = [f"{what} is {kind} ({n} scalar equations, {k} unknowns)"]
+    parts = []
     if dm["unmatched_eqs"]:
         parts.append(
             f"equations {[inc.eq_names[i] for i in dm['over_eqs']]} over-determine "
@@ -388,7 +427,7 @@ def structure_message(inc: Incidence, what: str) -> str | None:
             f"(by equations {[inc.eq_names[i] for i in dm['under_eqs']]}; "
             f"{len(dm['unmatched_vars'])} equation(s) missing)"
         )
-    return "; ".join(parts)
+    return kind, parts
 
 
 def check_structure(system: ScalarDAE | Any) -> Incidence:
@@ -445,8 +484,11 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
     class keeps one representative — its first state, else its first variable — and every
     other member is replaced by ``+-`` the representative (``der()`` too for states). An alias
     equation closing a cycle in a class is kept as an equation. The eliminated variables stay
-    available through ``observed`` (for results and outputs); their start values are dropped
-    (the representative's start wins).
+    available through ``observed`` (for results and outputs). Start values are never lost:
+    the fixed starts stay initial conditions by name (``fixed_start``, solved by
+    :mod:`gtmodel.modeling.structure.initialization`), and the representative's guess is
+    the start of the class's first fixed member, else of its first member with a given
+    start, else its own.
 
     Parameters
     ----------
@@ -493,12 +535,18 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
     for v in range(n):
         classes.setdefault(find(v)[0], []).append(v)
     rep_of: dict[int, tuple[int, float]] = {}
+    start = system.start.copy()
     for root, members in classes.items():
         states = [v for v in members if system.var_kinds[v] == "state"]
         rep = states[0] if states else members[0]
         s_rep = find(rep)[1]
         for v in members:
             rep_of[v] = (rep, find(v)[1] * s_rep)  # v = s_v root = s_v s_rep rep (s_rep = +-1)
+        for table in (system.fixed_start, system.given_start):  # the guess of the class
+            named = [v for v in [rep] + members if system.var_names[v] in table]
+            if named:
+                start[rep] = rep_of[named[0]][1] * table[system.var_names[named[0]]]
+                break
     subs_from, subs_to = [], []
     aliases: dict[str, tuple[float, str]] = {}
     for v in range(n):
@@ -532,7 +580,7 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
         var_names=[system.var_names[k] for k in keep_idx],
         var_kinds=[system.var_kinds[k] for k in keep_idx],
         der_syms={remap[k]: d for k, d in system.der_syms.items() if k in remap},
-        start=system.start[keep_idx],
+        start=start[keep_idx],
         eq_res=subst(kept_res),
         eq_names=kept_names,
         init_res=subst(system.init_res),
@@ -545,4 +593,6 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
         outputs=dict(zip(out_names, subst([system.outputs[k] for k in out_names]))),
         observed=dict(zip(obs_names, subst([system.observed[k] for k in obs_names]))),
         aliases={**system.aliases, **aliases},
+        fixed_start=dict(system.fixed_start),
+        given_start=dict(system.given_start),
     )

@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 import scipy.linalg as sla
 
-from gtmodel.errors import InputError, ModelError
+from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure.events import transfer_events
 from gtmodel.modeling.structure.analysis import (
@@ -44,6 +44,12 @@ from gtmodel.modeling.structure.analysis import (
     matching,
     scalarize,
     sparsity_pattern,
+)
+from gtmodel.modeling.structure.initialization import (
+    InconsistentInitialisation,
+    fill_order,
+    guess_and_conditions,
+    solve_initial,
 )
 
 __all__ = [
@@ -437,7 +443,10 @@ def structural_simplify(model: Any, point: tuple | None = None, keep_states: tup
     differentiated equations, the same parameters and inputs, and as outputs the declared
     outputs and the eliminated aliases. The dummy selection is fixed (made at ``point`` or at
     the start values); ``Model.simulate`` re-selects when it becomes singular,
-    this model does not. The modes, when-clauses and ``substitute_der`` marks of the
+    this model does not. Fixed starts (Modelica's ``fixed``, :mod:`gtmodel.modeling.structure.initialization`)
+    stay fixed starts of the kept variables; a model without events and with fixed starts
+    gets the consistent values at t = 0 as its start values (so ``flatten().x_start`` of
+    the reduced model starts where the user said, whichever states were selected). The modes, when-clauses and ``substitute_der`` marks of the
     model (:mod:`gtmodel.modeling.structure.events`) are carried over to the new model.
 
     Parameters
@@ -462,7 +471,8 @@ def structural_simplify(model: Any, point: tuple | None = None, keep_states: tup
         If ``model`` is not a model or ``point`` is malformed.
     ModelError
         If the model is structurally singular (one message naming the equations and
-        variables) or cannot be reduced.
+        variables) or cannot be reduced, or its fixed starts contradict each other or the
+        model (InconsistentInitialisation, naming them).
     """
     full = scalarize(model)
     check_structure(full)  # on the user's own equations, so that the message names them
@@ -477,6 +487,8 @@ def structural_simplify(model: Any, point: tuple | None = None, keep_states: tup
     nv = len(aug.syms)
     if point is None:
         v0 = np.concatenate([system.start, np.zeros(nv - system.n_vars)])
+        if system.fixed_start and getattr(model, "_events", None) is None:
+            v0 = _consistent_start_values(model, aug, v0)  # the reduced model starts where the user said
         point = (0.0, v0, system.u_start, system.p_value)
     elif not isinstance(point, (tuple, list)) or len(point) != 4:
         raise InputError(f"point must be a tuple (t, v, u, p), got {point!r}")
@@ -503,6 +515,51 @@ def structural_simplify(model: Any, point: tuple | None = None, keep_states: tup
     sel = select_dummies(aug, point, avoid)  # a state stays one while its der() is no dummy
     states, algs = reduced_system(aug, sel)
     return build_model(model, aug, sel, states, algs, values)
+
+
+def _consistent_start_values(model: Any, aug: AugmentedDAE, v0: np.ndarray) -> np.ndarray:
+    """Consistent values of all variables at t = 0 from the fixed starts (the start values if the
+    initialisation is under-determined or does not converge).
+
+    Raises
+    ------
+    InconsistentInitialisation
+        If the fixed starts contradict each other or the model (naming them).
+    """
+    s = aug.system
+    guess, conditions = guess_and_conditions(model, aug, None, None)
+    fill = None
+    if not s.init_res:
+        sel0 = select_dummies(aug, (0.0, guess, s.u_start, s.p_value))
+        fill = fill_order(aug, guess, reduced_system(aug, sel0)[0])
+    try:
+        return solve_initial(aug, 0.0, s.u_start, s.p_value, guess, conditions, fill)
+    except InconsistentInitialisation:
+        raise
+    except (ModelError, ConvergenceError) as exc:  # e.g. initial equations that leave freedom: starts as given
+        _log.debug("structural_simplify %s: start values as given (%s)", s.name, exc)
+        return guess
+
+
+def _fixed_of_kept(system: ScalarDAE) -> dict[str, float]:
+    """The fixed starts on the variables the alias elimination kept (``+-`` an alias's value).
+
+    Raises
+    ------
+    ModelError
+        If two aliases of one variable have fixed starts that disagree (naming both).
+    """
+    out: dict[str, tuple[str, float]] = {}
+    for nm, val in system.fixed_start.items():
+        sign, keep = system.aliases.get(nm, (1.0, nm))
+        value = sign * val
+        if keep in out and abs(out[keep][1] - value) > 1e-12 * max(1.0, abs(value)):
+            raise ModelError(
+                f"model {system.name!r}: the fixed starts of {out[keep][0]!r} and {nm!r} disagree, but the equations make "
+                f"them the same variable ({keep} = {out[keep][1]:g} vs {value:g}); make them consistent or one not fixed"
+            )
+        out.setdefault(keep, (nm, value))
+    return {k: v for k, (_, v) in out.items()}
 
 
 def build_model(
@@ -549,18 +606,21 @@ def build_model(
                 bounds[nm] = (float(var.lb[j]), float(var.ub[j]))
     taken: set[str] = set(new._vars)
     new_syms: dict[int, ca.SX] = {}
+    fixed = _fixed_of_kept(aug.system)
     for kind, idx in (("state", states), ("algebraic", algs)):
         for v in idx:
             nm = aug.names[v]
             lb, ub = bounds.get(nm, (-np.inf, np.inf)) if aug.order[v] == 0 else (-np.inf, np.inf)
             decl = new.state if kind == "state" else new.algebraic
+            fix = aug.order[v] == 0 and nm in fixed  # a fixed start stays one (of the kept alias)
+            start = fixed[nm] if fix else values[v]
             try:
-                sym = decl(nm, start=values[v], lb=lb, ub=ub)
+                sym = decl(nm, start=start, lb=lb, ub=ub, fixed=fix)
             except (InputError, ModelError):
                 cand, k = _ident(nm), 1
                 while cand in taken:
                     cand, k = f"{_ident(nm)}_{k}", k + 1
-                sym = decl(cand, start=values[v], lb=lb, ub=ub)
+                sym = decl(cand, start=start, lb=lb, ub=ub, fixed=fix)
             taken.update(new._vars)
             new_syms[v] = sym
     if direct:  # no dummy: the der() of the states stay der() of the new model

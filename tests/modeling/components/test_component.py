@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+import pandas as pd
 import pytest
 
 from gtmodel.errors import GtModelError, InputError, ModelError
@@ -93,6 +94,24 @@ def test_describe_lists_the_declarations():
     assert table.set_index("name").loc["mass.s", "kind"] == "state"
     assert table.set_index("name").loc["mass.flange_a.f", "kind"] == "flow"
     assert table.set_index("name").loc["mass.a", "kind"] == "algebraic"
+
+
+@pytest.mark.parametrize(
+    "modifiers, start, fixed",
+    [
+        ({}, 0.1, True),  # Oscillator's class modifier mass = Mass(s=0.1): the user's value, fixed
+        ({"mass": {"s": {"fixed": False}}}, 0.1, False),  # the start kept, as a guess (nested modifiers merge)
+        ({"mass": {"s": 0.3}}, 0.3, True),
+        ({"mass": {"s": {"start": 0.3, "fixed": False}}}, 0.3, False),
+    ],
+    ids=["class_modifier", "released", "outer_value", "outer_guess"],
+)
+def test_a_start_value_a_user_gives_is_fixed(modifiers, start, fixed):
+    # Modelica's start/fixed; the library's own defaults (mass.v) stay guesses
+    table = Oscillator(**modifiers).describe().set_index("name")
+    assert (table.loc["mass.s", "value"], table.loc["mass.s", "fixed"]) == (start, fixed)
+    assert not table.loc["mass.v", "fixed"]
+    assert pd.isna(table.loc["spring.c", "fixed"])
 
 
 def test_class_template_is_not_shared_between_instances():

@@ -17,7 +17,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling import Component, Model, connect
+from gtmodel.modeling.library import rotational as rot
 from gtmodel.modeling.library import translational as tr
 from gtmodel.modeling.simulation.integration import input_segments
 
@@ -245,3 +247,72 @@ def test_input_changing_every_sample_on_1000_samples_builds_one_integrator(monke
     s1, _ = two_mass_closed_form(t, u)
     np.testing.assert_allclose(res.x["m1.s"], s1, atol=SIM_TOL)
     assert len(built) == 1, built
+
+
+# ---------------------------------------------------------------- integrator options
+
+
+class TwoInertiaDrive(Component):
+    """Torque -> motor inertia -- shaft spring -- load inertia (index 1), J = 1 kg m^2, c = 1e4 N m/rad."""
+
+    torque = rot.Torque()
+    motor = rot.Inertia(J=1.0)
+    shaft = rot.Spring(c=1e4)
+    load = rot.Inertia(J=1.0)
+
+    def equations(self):
+        connect(self.torque.flange, self.motor.flange_a)
+        connect(self.motor.flange_b, self.shaft.flange_a)
+        connect(self.shaft.flange_b, self.load.flange_a)
+
+
+def test_two_inertia_drive_at_rtol_1e_10_needs_and_takes_a_higher_step_limit():
+    # reference: closed form from rest under 1 N m: centre phi_c = t^2 / 4, relative angle
+    # r = -(1 - cos(w t)) / (J w^2), w = sqrt(2 c / J); motor phi_c - r / 2, load phi_c + r / 2
+    model = TwoInertiaDrive().to_model("drive")
+    t = np.array([0.0, 10.0])  # one output interval: about 14,000 steps at rtol 1e-10
+    tight = dict(u=1.0, rtol=1e-10, atol=1e-12)
+    with pytest.raises(ConvergenceError, match="TOO_MUCH_WORK"):
+        model.simulate(t, **tight, options={"suppress_algebraic": True})
+    res = model.simulate(t, **tight, options={"suppress_algebraic": True, "max_num_steps": 100_000})
+    w = np.sqrt(2e4)
+    rel = -(1.0 - np.cos(w * t)) / w**2
+    np.testing.assert_allclose(res.x["motor.phi"], t**2 / 4 - rel / 2, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(res.x["load.phi"], t**2 / 4 + rel / 2, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("integrator", ["idas", "cvodes"])
+def test_max_step_size_does_not_step_over_a_short_pulse(integrator):
+    # reference: x' = exp(-((t - 0.5) / 1e-3)^2) from 0: x(1) = 1e-3 sqrt(pi) (a Gaussian's
+    # integral); one output interval, so without a step limit the integrator may not see it
+    m = Model("pulse")
+    x = m.state("x")
+    m.equation(m.der(x), ca.exp(-(((m.time - 0.5) / 1e-3) ** 2)))
+    res = m.simulate([0.0, 1.0], integrator=integrator, options={"max_step_size": 1e-4, "max_num_steps": 100_000})
+    assert res.x["x"][-1] == pytest.approx(1e-3 * np.sqrt(np.pi), rel=1e-5)
+
+
+@pytest.mark.parametrize(
+    "options, integrator, match",
+    [
+        ({"max_steps": 10}, "idas", r"unknown integrator option\(s\) \['max_steps'\]; allowed: .*'max_num_steps'"),
+        ({"max_num_steps": 0}, "idas", r"options\['max_num_steps'\]: expected a positive integer, got 0"),
+        ({"max_num_steps": 1.5}, "idas", r"options\['max_num_steps'\]: expected a positive integer"),
+        ({"max_num_steps": True}, "idas", r"options\['max_num_steps'\]: expected a positive integer"),
+        ({"rtol": -1e-8}, "idas", r"options\['rtol'\]: expected a positive finite number"),
+        ({"max_step_size": float("nan")}, "idas", r"options\['max_step_size'\]: expected a positive finite"),
+        ({"max_order": 6}, "idas", r"options\['max_order'\]: expected an integer from 1 to 5"),
+        ({"min_step_size": 1e-9}, "idas", r"'min_step_size' is an option of cvodes only, not of 'idas'"),
+        ({"suppress_algebraic": True}, "cvodes", r"'suppress_algebraic' is an option of idas only"),
+        ({"suppress_algebraic": 1}, "idas", r"options\['suppress_algebraic'\]: expected True or False"),
+        ([("rtol", 1e-6)], "idas", r"options: expected a mapping"),
+    ],
+    ids=["unknown", "zero_steps", "float_steps", "bool_steps", "negative_rtol", "nan_step", "order_6",
+         "min_step_idas", "suppress_cvodes", "suppress_int", "not_mapping"],
+)
+def test_bad_integrator_options_are_refused_by_name(options, integrator, match):
+    m = Model("decay")
+    x = m.state("x", start=1.0)
+    m.equation(m.der(x), -x)
+    with pytest.raises(InputError, match=match):
+        m.simulate([0.0, 1.0], integrator=integrator, options=options)
