@@ -1,0 +1,284 @@
+"""Export a gtmodel model as a Functional Mock-up Unit (FMI 2.0 / 3.0, source + binary).
+
+What comes from CasADi and what from gtmodel (CasADi 3.8):
+
+* **FMI 3.0 model exchange**: CasADi's own export (``casadi.DaeBuilder.export_fmu``)
+  writes the C code of the equations and their directional and adjoint derivatives and
+  the FMI 3.0 wrapper (``<id>.c``, ``<id>_wrap.c``, ``buildDescription.xml``). Its
+  ``modelDescription.xml`` fails FMPy's validation (internal variables with illegal
+  names, units without ``UnitDefinitions``, states without start values, incomplete
+  initial unknowns), so gtmodel writes that file itself
+  (:mod:`gtmodel.exchange.description`) with CasADi's value references.
+* **FMI 2.0 model exchange and co-simulation** (CasADi 3.8 has none): gtmodel's own
+  wrapper (``templates/fmi2_wrapper.c``) around CasADi-generated C of the explicit ODE
+  and its forward derivative (``casadi.CodeGenerator``); co-simulation integrates with
+  the fixed-step classical 4th-order Runge-Kutta method (no SUNDIALS), inputs held over
+  the communication step, substeps of at most ``step`` seconds (error ``O(step^4)``).
+* Both: the model reduced to an explicit ODE (:func:`gtmodel.exchange.explicit.explicit_model`),
+  parameters as tunable FMI parameters with units and descriptions, the binary built for
+  this platform with the C compiler of :mod:`gtmodel._compiler`, the sources inside the
+  FMU (a source FMU: a user on another platform rebuilds it), zipped with :mod:`zipfile`.
+
+Not exported yet: event indicators (models with when-clauses or modes), FMI 3.0
+co-simulation, discrete-time (clocked) FMUs of the controller steps.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import platform
+import sys
+import tempfile
+import uuid
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterator
+
+import casadi as ca
+import numpy as np
+
+from gtmodel._compiler import find_compiler, run_compiler
+from gtmodel.errors import InputError
+from gtmodel.exchange.description import ValueReferences, model_description
+from gtmodel.exchange.explicit import ExplicitModel, explicit_model, fmi_identifier
+
+__all__ = ["ExportedFmu", "export_fmu", "fmi_platform"]
+
+_HERE = Path(__file__).parent
+INCLUDE_DIR = _HERE / "include"
+TEMPLATE_FMI2 = _HERE / "templates" / "fmi2_wrapper.c"
+VERSIONS = ("2.0", "3.0")
+INTERFACES = ("me", "cs", "both")
+
+
+@dataclass
+class ExportedFmu:
+    """An FMU written by :func:`export_fmu`.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``.fmu`` archive.
+    version : str
+        FMI version (``"2.0"`` or ``"3.0"``).
+    interfaces : tuple of str
+        ``"ModelExchange"`` and/or ``"CoSimulation"``.
+    identifier : str
+        ``modelIdentifier``.
+    model : ExplicitModel
+        The exported explicit ODE and its variable names.
+    platform : str
+        Platform folder of the binary (e.g. ``"linux64"``, ``"x86_64-linux"``), ``""`` if
+        only sources were packed.
+    step : float or None
+        The co-simulation's fixed embedded step [s] (``None`` without co-simulation).
+    """
+
+    path: Path
+    version: str
+    interfaces: tuple[str, ...]
+    identifier: str
+    model: ExplicitModel
+    platform: str
+    step: float | None
+
+
+def fmi_platform(version: str) -> tuple[str, str]:
+    """The binaries folder and shared-library suffix of this platform for an FMI version.
+
+    Parameters
+    ----------
+    version : {"2.0", "3.0"}
+        FMI version.
+
+    Returns
+    -------
+    tuple of str
+        E.g. ``("linux64", ".so")`` for FMI 2.0, ``("x86_64-linux", ".so")`` for 3.0.
+    """
+    system = {"linux": "linux", "darwin": "darwin", "win32": "win"}.get(sys.platform, sys.platform)
+    ext = {"linux": ".so", "darwin": ".dylib", "win": ".dll"}.get(system, ".so")
+    machine = platform.machine().lower().replace("amd64", "x86_64").replace("arm64", "aarch64")
+    if version == "2.0":
+        return f"{system}{'64' if sys.maxsize > 2**32 else '32'}", ext
+    return f"{machine}-{'windows' if system == 'win' else system}", ext
+
+
+@contextlib.contextmanager
+def _cwd(path: Path) -> Iterator[None]:
+    old = os.getcwd()
+    os.chdir(path)
+    try:
+        yield
+    finally:
+        os.chdir(old)
+
+
+def _compile(sources: list[Path], out: Path, build: Path, what: str) -> None:
+    cc = find_compiler()
+    flags = ["-shared", "-fPIC", "-O1", "-fvisibility=default", f"-I{INCLUDE_DIR}", f"-I{build}"]
+    run_compiler([*cc, *flags, *(str(s) for s in sources), "-o", str(out), "-lm"], what)
+
+
+def _codegen(em: ExplicitModel, ident: str, build: Path) -> tuple[Path, Path]:
+    """CasADi C of ``f`` and its forward derivative as ``<id>_model.c/.h``."""
+    cg = ca.CodeGenerator(f"{ident}_model.c", {"with_header": True, "prefix": f"{ident}_"})
+    for fn, suffix in ((em.f, "f"), (em.derivative_function(), "df")):  # C names <id>_f, <id>_df
+        args = fn.mx_in()
+        cg.add(ca.Function(f"{ident}_{suffix}", args, fn(*args), fn.name_in(), fn.name_out()))
+    with _cwd(build):
+        cg.generate()
+    return build / f"{ident}_model.c", build / f"{ident}_model.h"
+
+
+def _fmi2_files(em: ExplicitModel, ident: str, build: Path, step: float, me: bool, cs: bool) -> tuple[dict, str]:
+    """Sources and description of gtmodel's FMI 2.0 wrapper: {local path: archive path}, XML."""
+    c_model, h_model = _codegen(em, ident, build)
+    vr = ValueReferences.contiguous(em)
+    start = np.zeros(2 * em.nx + len(em.u_names) + len(em.p_names) + em.ny + 1)
+    start[vr.x] = em.x_start
+    start[vr.u] = em.u_start
+    start[vr.p] = em.p_value
+    guid = "{" + str(uuid.uuid4()) + "}"
+    subs = {"@ID@": ident, "@NX@": str(em.nx), "@NU@": str(len(em.u_names)), "@NP@": str(len(em.p_names)),
+            "@NY@": str(em.ny), "@STEP@": repr(float(step)), "@GUID@": guid,
+            "@START@": ", ".join(repr(float(v)) for v in start)}
+    text = TEMPLATE_FMI2.read_text()
+    for k, v in subs.items():
+        text = text.replace(k, v)
+    wrap = build / f"{ident}.c"
+    wrap.write_text(text)
+    xml = model_description(em, "2.0", ident, vr, model_exchange=me, co_simulation=cs, step_size=step if cs else None, token=guid)
+    src = ["{id}.c", "{id}_model.c"]
+    files_xml = "".join(f'<File name="{s.format(id=ident)}"/>' for s in src)
+    for tag in ("ModelExchange", "CoSimulation"):  # the sources a user rebuilds from (FMI 2.0 SourceFiles)
+        xml = _with_sources(xml, tag, files_xml)
+    files = {wrap: f"sources/{wrap.name}", c_model: f"sources/{c_model.name}", h_model: f"sources/{h_model.name}"}
+    return files, xml
+
+
+def _with_sources(xml: str, tag: str, files_xml: str) -> str:
+    start = xml.find(f"<{tag} ")
+    if start < 0:
+        return xml
+    end = xml.find("/>", start)
+    return xml[:end] + f"><SourceFiles>{files_xml}</SourceFiles></{tag}>" + xml[end + 2:]
+
+
+def _fmi3_files(em: ExplicitModel, ident: str, build: Path) -> tuple[dict, str]:
+    """CasADi's FMI 3.0 model-exchange sources and gtmodel's description."""
+    dae = ca.DaeBuilder(ident)
+    t = dae.add("time", "independent")
+    p = [dae.add(n, "parameter", "tunable", {"start": float(v)}) for n, v in zip(em.p_names, em.p_value)]
+    x = [dae.add(n, {"start": float(v)}) for n, v in zip(em.x_names, em.x_start)]
+    u = [dae.add(n, "input", {"start": float(v)}) for n, v in zip(em.u_names, em.u_start)]
+    y = [dae.add(n, "output") for n in em.y_names]
+    xdot, yv = em.f(t, ca.vertcat(*x), ca.vertcat(*u) if u else ca.MX(0, 1), ca.vertcat(*p) if p else ca.MX(0, 1))
+    for i, xi in enumerate(x):
+        dae.eq(dae.der(xi), xdot[i])
+    for i, yi in enumerate(y):
+        dae.eq(yi, yv[i])
+    with _cwd(build):
+        raw = dae.export_fmu({"no_warning": True, "with_serialization": False})
+    casadi_xml = ET.parse(build / "modelDescription.xml").getroot()
+    refs = {v.get("name"): int(v.get("valueReference")) for v in casadi_xml.find("ModelVariables")}
+    vr = ValueReferences(
+        x=[refs[n] for n in em.x_names], dx=[refs[f"der({n})"] for n in em.x_names], u=[refs[n] for n in em.u_names],
+        p=[refs[n] for n in em.p_names], y=[refs[n] for n in em.y_names], time=refs["time"],
+    )
+    token = casadi_xml.get("instantiationToken")
+    xml = model_description(em, "3.0", ident, vr, model_exchange=True, token=token, generation_tool=f"gtmodel with CasADi {ca.__version__}")
+    files = {build / local: arc for local, arc in raw.items() if arc.startswith("sources/")}
+    return files, xml
+
+
+def export_fmu(
+    model: Any,
+    out: str | os.PathLike,
+    version: str = "2.0",
+    interface: str = "both",
+    step: float = 1e-3,
+    name: str | None = None,
+    binary: bool = True,
+) -> ExportedFmu:
+    """Export a gtmodel model as an FMU (sources and a binary for this platform).
+
+    Parameters
+    ----------
+    model : Model or Component
+        The model: a flat :class:`~gtmodel.modeling.Model`, a composed
+        :class:`~gtmodel.modeling.Component` (flattened, aliases eliminated, index reduced,
+        algebraic variables solved inside), e.g. a robot's
+        :func:`~gtmodel.robots.model.gantry_tau_model`.
+    out : str or os.PathLike
+        The ``.fmu`` file to write (parent folders are created; an existing file is replaced).
+    version : {"2.0", "3.0"}, optional
+        FMI version; default ``"2.0"``.
+    interface : {"me", "cs", "both"}, optional
+        Model exchange, co-simulation or both (FMI 2.0); FMI 3.0 is model exchange only
+        (CasADi's export). Default ``"both"`` (``"me"`` for 3.0).
+    step : float, optional
+        Fixed step [s] of the co-simulation's embedded RK4 integrator; default 1e-3.
+    name : str, optional
+        Model name in the FMU; default the model's. Its identifier form (non-identifier
+        characters replaced by ``_``) names the binary.
+    binary : bool, optional
+        Build the binary for this platform (default); ``False`` packs sources only.
+
+    Returns
+    -------
+    ExportedFmu
+        The path, version, interfaces and exported model.
+
+    Raises
+    ------
+    InputError
+        Unknown version or interface, co-simulation asked for FMI 3.0, ``step <= 0``, or
+        ``out`` cannot be written (naming it).
+    ModelError
+        The model cannot be reduced to an explicit ODE (see
+        :func:`~gtmodel.exchange.explicit.explicit_model`).
+    CodegenError
+        The C compiler fails (its message).
+    """
+    if version not in VERSIONS:
+        raise InputError(f"version: expected one of {', '.join(VERSIONS)}, got {version!r}")
+    if interface not in INTERFACES:
+        raise InputError(f"interface: expected one of {', '.join(INTERFACES)}, got {interface!r}")
+    if version == "3.0":
+        if interface == "cs":
+            raise InputError("interface 'cs': FMI 3.0 co-simulation is not exported (CasADi 3.8's FMI 3.0 export is model exchange); use version 2.0")
+        interface = "me"
+    if not (isinstance(step, (int, float)) and step > 0 and np.isfinite(step)):
+        raise InputError(f"step: expected a positive number of seconds, got {step!r}")
+    out = Path(out)
+    if out.suffix != ".fmu":
+        raise InputError(f"out {out}: the file name must end in .fmu")
+    em = explicit_model(model, name)
+    ident = fmi_identifier(em.name)
+    me, cs = interface in ("me", "both"), interface in ("cs", "both")
+    with tempfile.TemporaryDirectory(prefix="gtmodel_fmu_") as tmp:
+        build = Path(tmp)
+        if version == "2.0":
+            files, xml = _fmi2_files(em, ident, build, float(step), me, cs)
+        else:
+            files, xml = _fmi3_files(em, ident, build)
+        plat = ""
+        if binary:
+            plat, ext = fmi_platform(version)
+            lib = build / f"{ident}{ext}"
+            _compile([p for p in files if p.suffix == ".c"], lib, build, f"building the FMU binary of {em.name!r}")
+            files[lib] = f"binaries/{plat}/{lib.name}"
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zf:
+                zf.writestr("modelDescription.xml", xml)
+                for local, arc in files.items():
+                    zf.write(local, arc)
+        except OSError as exc:
+            raise InputError(f"out {out}: cannot write the FMU ({exc.strerror or exc})") from None
+    interfaces = tuple(k for k, on in (("ModelExchange", me), ("CoSimulation", cs)) if on)
+    return ExportedFmu(out, version, interfaces, ident, em, plat, float(step) if cs else None)
