@@ -25,6 +25,10 @@
     (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
     A controller of the fusion filters only (KF/EKF steps) and no ``--robot``: the library
     holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``).
+``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS]) --out NAME.fmu``
+    Export a model as an FMU (:func:`gtmodel.exchange.export_fmu`, docs/fmu.md): FMI 2.0
+    model exchange and co-simulation (``--fmi-version 3.0``: model exchange), C sources
+    and a binary for this platform.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -78,7 +82,7 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Parser with the sub-commands ``solve``, ``study``, ``schema`` and ``codegen``.
+        Parser with the sub-commands ``solve``, ``study``, ``schema``, ``codegen`` and ``export-fmu``.
     """
     parser = argparse.ArgumentParser(
         prog="gtmodel",
@@ -138,6 +142,18 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
     cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
     cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+
+    fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 ME/CS, FMI 3.0 ME), sources and a binary")
+    what = fx.add_mutually_exclusive_group(required=True)
+    what.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model, e.g. models/cart_pendulum.py:CartPendulum")
+    what.add_argument("--robot", default=None, help="a robot's rigid-body dynamics with friction (cart states q, q_dot; input tau): L1, D1, ... or a parameter TOML")
+    what.add_argument("--modelica", default=None, metavar="FILE.mo[:CLASS]", help="a Modelica model (through pymoca, docs/fmu.md)")
+    fx.add_argument("--out", type=Path, required=True, help="the .fmu file to write")
+    fx.add_argument("--fmi-version", default="2.0", choices=("2.0", "3.0"), help="FMI version (default 2.0)")
+    fx.add_argument("--interface", default=None, choices=("me", "cs", "both"), help="model exchange, co-simulation or both (default both for 2.0, me for 3.0)")
+    fx.add_argument("--step", type=float, default=1e-3, help="fixed step [s] of the co-simulation's embedded RK4 (default 1e-3)")
+    fx.add_argument("--sources-only", action="store_true", help="pack the C sources without building a binary")
+    fx.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     return parser
 
 
@@ -322,6 +338,35 @@ def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int
     return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
 
 
+def _export_fmu(args: argparse.Namespace) -> int:
+    from gtmodel.exchange import export_fmu
+
+    if args.model is not None:
+        from gtmodel.problems.user_model import load_user_model, split_model_reference
+
+        model = load_user_model(*split_model_reference(args.model))
+    elif args.modelica is not None:
+        from gtmodel.exchange.modelica import load_modelica
+
+        file, sep, cls = args.modelica.rpartition(":")
+        if not sep or not file.endswith(".mo"):
+            file, cls = args.modelica, ""
+        model = load_modelica(file, cls or None)
+    else:
+        from gtmodel.robots.model import gantry_tau_model
+
+        model = gantry_tau_model(args.robot, states="cart")
+    interface = args.interface or ("both" if args.fmi_version == "2.0" else "me")
+    fmu = export_fmu(model, args.out, version=args.fmi_version, interface=interface, step=args.step, binary=not args.sources_only)
+    em = fmu.model
+    print(f"wrote {fmu.path} (FMI {fmu.version} {' + '.join(fmu.interfaces)}, binary {fmu.platform or 'none: sources only'})")
+    print(f"model {em.name}: {em.nx} states, {len(em.u_names)} inputs, {len(em.p_names)} parameters, {em.ny} outputs"
+          + (f", {em.algebraic_eliminated} algebraic variables solved inside" if em.algebraic_eliminated else ""))
+    if fmu.step is not None:
+        print(f"co-simulation: fixed-step RK4, step <= {fmu.step:g} s")
+    return EXIT_OK
+
+
 def _sigterm(signum: int, frame: object) -> None:
     raise KeyboardInterrupt("SIGTERM")
 
@@ -351,6 +396,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _study(args)
         if args.command == "schema":
             return _schema(args)
+        if args.command == "export-fmu":
+            return _export_fmu(args)
         return _codegen(args)
     except KeyboardInterrupt:
         print("gtmodel: interrupted", file=sys.stderr)

@@ -29,14 +29,14 @@ def _cart_pendulum() -> Model:
     return mod.CartPendulum()
 
 
-def _compare(fmu, model, names, start, inputs, stop, n=11, fmi_type="ModelExchange", step=None):
+def _compare(fmu, model, names, start, inputs, stop, n=11, fmi_type="ModelExchange", step=None, rtol=1e-11):
     """Largest relative deviation of FMPy's trajectories from gtmodel's simulate()."""
     t = np.linspace(0.0, stop, n)
     flat = model.to_model() if hasattr(model, "to_model") else model
     u = None
     if inputs:
         u = np.array([inputs[k] for k in sorted(inputs)]) if len(inputs) > 1 else next(iter(inputs.values()))
-    ref = flat.simulate(t, x0=start or None, u=u, rtol=1e-11, atol=1e-12).to_dataframe()
+    ref = flat.simulate(t, x0=start or None, u=u, rtol=rtol, atol=rtol * 0.1).to_dataframe()
     kw = dict(relative_tolerance=1e-11) if fmi_type == "ModelExchange" else dict(step_size=step)
     res = fmpy.simulate_fmu(str(fmu), stop_time=stop, output_interval=stop / (n - 1) if step is None else step,
                             start_values={**(start or {}), **inputs}, output=names, fmi_type=fmi_type, **kw)
@@ -88,7 +88,8 @@ def test_composed_drive_axis_fmu_equals_gtmodel(tmp_path, version):
     md = fmpy.read_model_description(str(fmu.path))
     kp = next(v for v in md.modelVariables if v.name == "servo.kp")
     assert kp.unit == "N.m/rad" and kp.description == "position-loop stiffness Kv*Kp"
-    dev = _compare(fmu.path, axis, ["cart.s", "servo.phi"], None, {"servo.phi_ref": 1.0}, 0.1)
+    # gtmodel's index-reduced IDAS run fails at rtol 1e-11 (too much work): 1e-9
+    dev = _compare(fmu.path, axis, ["cart.s", "servo.phi"], None, {"servo.phi_ref": 1.0}, 0.1, rtol=1e-9)
     assert dev < 1e-6, dev
 
 
