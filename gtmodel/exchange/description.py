@@ -6,8 +6,8 @@ variability="continuous" initial="exact"`` with their start value; inputs with a
 value (FMI requires one); derivatives and outputs ``initial="calculated"`` without start.
 The dependencies of the outputs and derivatives on the states and inputs are the
 structural sparsity of the model's Jacobian (``casadi.Function.jac_sparsity``); the
-initial unknowns are the outputs and derivatives (the states start ``exact``), their
-dependencies left to the default ("depends on all", valid in both versions).
+initial unknowns are the outputs and derivatives (the states start ``exact``), depending on
+the states, inputs and parameters (all ``exact`` at initialisation).
 """
 
 from __future__ import annotations
@@ -67,17 +67,16 @@ def _attr(**kw: object) -> str:
                     if v is not None and (v != "" or k.startswith("dependencies")))
 
 
-def _deps(em: ExplicitModel) -> tuple[list[list[int]], list[list[int]]]:
-    """Per derivative and per output: indices into ``[x; u]`` they depend on."""
+def _deps(em: ExplicitModel, with_parameters: bool = False) -> tuple[list[list[int]], list[list[int]]]:
+    """Per derivative and per output: indices into ``[x; u]`` (``[x; u; p]``) they depend on."""
     out = []
     for o in range(2):
-        sx = em.f.jac_sparsity(o, 1)
-        su = em.f.jac_sparsity(o, 2)
         rows = [[] for _ in range(em.f.size1_out(o))]
-        for r, c in zip(*sx.get_triplet()):
-            rows[r].append(c)
-        for r, c in zip(*su.get_triplet()):
-            rows[r].append(em.nx + c)
+        offset = 0
+        for i in (1, 2, 3) if with_parameters else (1, 2):
+            for r, c in zip(*em.f.jac_sparsity(o, i).get_triplet()):
+                rows[r].append(offset + c)
+            offset += em.f.size1_in(i)
         out.append([sorted(set(r)) for r in rows])
     return out[0], out[1]
 
@@ -125,7 +124,8 @@ def model_description(
     """
     token = token or "{" + str(uuid.uuid4()) + "}"
     dx_deps, y_deps = _deps(em)
-    xu_vr = vr.x + vr.u
+    dx_init, y_init = _deps(em, with_parameters=True)  # initial unknowns: also on the parameters
+    xu_vr = vr.x + vr.u + vr.p
     units = sorted({em.units[n] for n in em.x_names + em.u_names + em.p_names + em.y_names if em.units.get(n)})
     unit_of = lambda n: em.units.get(n, "")  # noqa: E731
     desc = lambda n: em.descriptions.get(n, "")  # noqa: E731
@@ -184,8 +184,8 @@ def model_description(
             lines.append(f"    <Output {_attr(valueReference=r, dependencies=' '.join(str(xu_vr[j]) for j in d))}/>")
         for r, d in zip(vr.dx, dx_deps):
             lines.append(f"    <ContinuousStateDerivative {_attr(valueReference=r, dependencies=' '.join(str(xu_vr[j]) for j in d))}/>")
-        for r in vr.y + vr.dx:
-            lines.append(f"    <InitialUnknown {_attr(valueReference=r)}/>")
+        for r, d in zip(vr.y + vr.dx, y_init + dx_init):
+            lines.append(f"    <InitialUnknown {_attr(valueReference=r, dependencies=' '.join(str(xu_vr[j]) for j in d))}/>")
     else:
         def block(tag: str, refs: list[int], deps: list[list[int]] | None) -> None:
             if not refs:
@@ -200,7 +200,7 @@ def model_description(
 
         block("Outputs", vr.y, y_deps)
         block("Derivatives", vr.dx, dx_deps)
-        block("InitialUnknowns", vr.y + vr.dx, None)
+        block("InitialUnknowns", vr.y + vr.dx, y_init + dx_init)
     lines.append("  </ModelStructure>")
     lines.append("</fmiModelDescription>")
     return "\n".join(lines) + "\n"
