@@ -118,6 +118,11 @@ def _metadata(source: Any, model: Model) -> tuple[dict[str, str], dict[str, str]
                 units[row.name] = str(row.unit)
             if row.description:
                 descriptions[row.name] = str(row.description)
+    for name, (unit, text) in getattr(source, "exchange_metadata", {}).items():  # a Modelica model's (modelica.py)
+        if unit:
+            units.setdefault(name, unit)
+        if text:
+            descriptions.setdefault(name, text)
     for name, unit in model.units.items():
         units.setdefault(name, unit)
     return units, descriptions
