@@ -339,6 +339,13 @@ def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int
 
 
 def _export_fmu(args: argparse.Namespace) -> int:
+    if args.out.suffix != ".fmu":  # the checks that need no model first (fast, no CasADi)
+        raise GtModelError(f"--out {args.out}: the file name must end in .fmu")
+    source = args.model.rpartition(":")[0] if args.model else args.modelica
+    if source is not None:
+        source = source if source.endswith((".py", ".mo")) or ":" not in source else source.rpartition(":")[0]
+        if not Path(source).is_file():
+            raise GtModelError(f"{source}: no such model file")
     from gtmodel.exchange import export_fmu
 
     if args.model is not None:
