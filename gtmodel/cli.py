@@ -25,10 +25,11 @@
     (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
     A controller of the fusion filters only (KF/EKF steps) and no ``--robot``: the library
     holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``).
-``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS]) --out NAME.fmu``
+``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS] | --controller FILE) --out NAME.fmu``
     Export a model as an FMU (:func:`gtmodel.exchange.export_fmu`, docs/fmu.md): FMI 2.0
     model exchange and co-simulation (``--fmi-version 3.0``: model exchange), C sources
-    and a binary for this platform.
+    and a binary for this platform; a controller file's Kalman step as a discrete-time
+    co-simulation FMU (:func:`gtmodel.exchange.fmu_step.export_step_fmu`).
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -148,6 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
     what.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model, e.g. models/cart_pendulum.py:CartPendulum")
     what.add_argument("--robot", default=None, help="a robot's rigid-body dynamics with friction (cart states q, q_dot; input tau): L1, D1, ... or a parameter TOML")
     what.add_argument("--modelica", default=None, metavar="FILE.mo[:CLASS]", help="a Modelica model (through pymoca, docs/fmu.md)")
+    what.add_argument("--controller", default=None, metavar="FILE", help="a controller file's Kalman step as a discrete-time co-simulation FMU (FMI 2.0, its sample period)")
     fx.add_argument("--out", type=Path, required=True, help="the .fmu file to write")
     fx.add_argument("--fmi-version", default="2.0", choices=("2.0", "3.0"), help="FMI version (default 2.0)")
     fx.add_argument("--interface", default=None, choices=("me", "cs", "both"), help="model exchange, co-simulation or both (default both for 2.0, me for 3.0)")
@@ -341,11 +343,13 @@ def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int
 def _export_fmu(args: argparse.Namespace) -> int:
     if args.out.suffix != ".fmu":  # the checks that need no model first (fast, no CasADi)
         raise GtModelError(f"--out {args.out}: the file name must end in .fmu")
-    source = args.model.rpartition(":")[0] if args.model else args.modelica
+    source = args.model.rpartition(":")[0] if args.model else args.modelica or args.controller
     if source is not None:
         source = source if source.endswith((".py", ".mo")) or ":" not in source else source.rpartition(":")[0]
         if not Path(source).is_file():
             raise GtModelError(f"{source}: no such model file")
+    if args.controller is not None:
+        return _export_step_fmu(args)
     from gtmodel.exchange import export_fmu
 
     if args.model is not None:
@@ -371,6 +375,21 @@ def _export_fmu(args: argparse.Namespace) -> int:
           + (f", {em.algebraic_eliminated} algebraic variables solved inside" if em.algebraic_eliminated else ""))
     if fmu.step is not None:
         print(f"co-simulation: fixed-step RK4, step <= {fmu.step:g} s")
+    return EXIT_OK
+
+
+def _export_step_fmu(args: argparse.Namespace) -> int:
+    from gtmodel.codegen import load_controller
+    from gtmodel.exchange.fmu_step import export_step_fmu
+
+    controller = load_controller(args.controller)
+    if controller.kalman_step is None:
+        raise GtModelError(f"{args.controller}: the controller has no kalman_step to export (the filters' steps carry a covariance matrix)")
+    if args.fmi_version != "2.0" or args.interface not in (None, "cs"):
+        raise GtModelError("--controller: a discrete-time step is exported as FMI 2.0 co-simulation only")
+    fmu = export_step_fmu(controller.kalman_step, args.out, dt=controller.dt, binary=not args.sources_only)
+    print(f"wrote {fmu.path} (FMI 2.0 CoSimulation, discrete step every {fmu.dt:g} s, binary {fmu.platform or 'none: sources only'})")
+    print(f"states {', '.join(fmu.x_names)}; inputs {', '.join(fmu.u_names)}; outputs {', '.join(fmu.y_names)}")
     return EXIT_OK
 
 

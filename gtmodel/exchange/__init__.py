@@ -2,7 +2,9 @@
 
 * :func:`export_fmu`: a gtmodel model as an FMU (FMI 2.0 model exchange and co-simulation
   with an embedded fixed-step RK4; FMI 3.0 model exchange through CasADi's own export), C
-  sources and a binary for this platform (:mod:`gtmodel.exchange.fmu_export`).
+  sources and a binary for this platform (:mod:`gtmodel.exchange.fmu_export`);
+  :func:`export_step_fmu`: a discrete-time controller step (the 4 ms Kalman step) as an
+  FMI 2.0 co-simulation FMU (:mod:`gtmodel.exchange.fmu_step`).
 * :func:`import_fmu`: an FMU (FMI 2.0 / 3.0 model exchange) loaded by CasADi's
   ``DaeBuilder`` as an :class:`ExplicitModel` (:mod:`gtmodel.exchange.fmu_import`), which
   :func:`simulate_explicit`, :func:`linearize_explicit`, :func:`connect_explicit` (with
@@ -22,6 +24,7 @@ from gtmodel.exchange.explicit_ocp import ExplicitOcpResult, solve_explicit_ocp
 from gtmodel.exchange.explicit_ops import connect_explicit, linearize_explicit, simulate_explicit
 from gtmodel.exchange.fmu_export import ExportedFmu, export_fmu
 from gtmodel.exchange.fmu_import import ImportedFmu, import_fmu
+from gtmodel.exchange.fmu_step import StepFmu, export_step_fmu
 from gtmodel.exchange.modelica import load_modelica
 
 __all__ = [
@@ -29,6 +32,8 @@ __all__ = [
     "explicit_model",
     "ExportedFmu",
     "export_fmu",
+    "StepFmu",
+    "export_step_fmu",
     "ImportedFmu",
     "import_fmu",
     "simulate_explicit",
