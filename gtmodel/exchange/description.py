@@ -148,7 +148,7 @@ def model_description(
     head = dict(fmiVersion=version, modelName=em.name, generationTool=generation_tool, variableNamingConvention="structured")
     head["instantiationToken" if v3 else "guid"] = token
     if not v3:
-        head["numberOfEventIndicators"] = 0
+        head["numberOfEventIndicators"] = len(em.directions)
     lines.append(f"<fmiModelDescription {_attr(**head)}>")
     dd = "providesDirectionalDerivatives" if v3 else "providesDirectionalDerivative"
     if model_exchange:

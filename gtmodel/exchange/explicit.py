@@ -65,6 +65,16 @@ class ExplicitModel:
         Unit and description per scalar name (missing: none).
     algebraic_eliminated : int
         Number of algebraic variables solved for inside ``f`` (``fast_newton`` rootfinder).
+    indicators : casadi.Function or None
+        ``c(t, x, u, p) -> c (nw, 1)``: the when-clauses' zero-crossing functions (the FMU's
+        event indicators); ``None`` without events.
+    jump : casadi.Function or None
+        ``jump(t, x, u, p, fire (nw, 1)) -> x_new``: the reinits of the clauses whose
+        ``fire`` entry is 1, right-hand sides at the values before the event.
+    directions : list of int
+        Per clause: 1 fires when ``c`` becomes ``> 0``, -1 when ``< 0``, 0 both.
+    event_names : list of str
+        The clauses' names.
     """
 
     name: str
@@ -79,6 +89,10 @@ class ExplicitModel:
     units: dict[str, str] = field(default_factory=dict)
     descriptions: dict[str, str] = field(default_factory=dict)
     algebraic_eliminated: int = 0
+    indicators: ca.Function | None = None
+    jump: ca.Function | None = None
+    directions: list[int] = field(default_factory=list)
+    event_names: list[str] = field(default_factory=list)
 
     @property
     def nx(self) -> int:
@@ -138,6 +152,24 @@ def _expand(meta: dict[str, str], names: list[str]) -> dict[str, str]:
     return out
 
 
+def _add_events(em: ExplicitModel, dae: Any, whens: list) -> None:
+    """Event indicators and the jump map of the when-clauses (reinit only) of a flat model."""
+    t, x, u, p = dae.t, dae.x, dae.u, dae.p
+    fire = ca.SX.sym("fire", len(whens))
+    x_new = x
+    for k, w in enumerate(whens):
+        target = x
+        for name, idx, expr in w.reinit:
+            sl = dae.x_vars[name]
+            for j, i in enumerate(idx):
+                target = ca.vertcat(target[: sl.start + i], expr[j] if expr.numel() > 1 else expr, target[sl.start + i + 1:])
+        x_new = x_new + fire[k] * (target - x)
+    em.indicators = ca.Function("ind", [t, x, u, p], [ca.vertcat(*[w.condition for w in whens])], ["t", "x", "u", "p"], ["c"])
+    em.jump = ca.Function("jump", [t, x, u, p, fire], [x_new], ["t", "x", "u", "p", "fire"], ["x_new"])
+    em.directions = [int(w.direction) for w in whens]
+    em.event_names = [w.name for w in whens]
+
+
 def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
     """Reduce a model to the explicit ODE of an FMU (algebraic variables solved inside).
 
@@ -158,8 +190,9 @@ def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
     InputError
         ``model`` is neither a Model nor a Component.
     ModelError
-        The model has events (when-clauses or ``sign()`` modes: not exported yet), no
-        state, or does not reduce to index 1.
+        The model has modes (``Model.mode``, ``assign`` of a when-clause) or when-clauses
+        together with algebraic variables, index reduction or initial equations (not
+        exported yet), no state, or does not reduce to index 1.
     """
     if isinstance(model, Component):
         source, m = model, model.to_model(name)
@@ -167,8 +200,13 @@ def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
         source, m = model, model
     else:
         raise InputError(f"model: expected a gtmodel Model or Component, got {type(model).__name__}")
-    if m._events is not None and (m._events.whens or m._events.modes):
-        raise ModelError(f"model {m.name!r}: when-clauses and modes are not exported to an FMU yet (event indicators)")
+    whens = list(m._events.whens) if m._events is not None else []
+    if m._events is not None and (m._events.modes or any(w.assign or w.initial for w in whens)):
+        raise ModelError(f"model {m.name!r}: modes and assign/initial when-clauses are not exported to an FMU yet "
+                         "(when-clauses with reinit are)")
+    if whens and (not m._flattens() or m._initial_equations):
+        raise ModelError(f"model {m.name!r}: when-clauses are exported for models that flatten as they are "
+                         "(no index reduction, no initial equations)")
     reduced = m if m._flattens() and not m._initial_equations else structural_simplify(m)
     dae = reduced.flatten()
     if dae.nx == 0:
@@ -197,6 +235,10 @@ def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
         p_value=np.asarray(dae.p_value, float).copy(), units=_expand(units, names), descriptions=_expand(descriptions, names),
         algebraic_eliminated=dae.nz,
     )
+    if whens:
+        if dae.nz:
+            raise ModelError(f"model {m.name!r}: when-clauses are exported for models without algebraic variables")
+        _add_events(em, dae, whens)
     bad = [v for v in (*em.x_start, *em.p_value) if not math.isfinite(v)]
     if bad:
         raise ModelError(f"model {m.name!r}: start and parameter values must be finite")

@@ -19,8 +19,11 @@ What comes from CasADi and what from gtmodel (CasADi 3.8):
   this platform with the C compiler of :mod:`gtmodel._compiler`, the sources inside the
   FMU (a source FMU: a user on another platform rebuilds it), zipped with :mod:`zipfile`.
 
-Not exported yet: event indicators (models with when-clauses or modes), FMI 3.0
-co-simulation, discrete-time (clocked) FMUs of the controller steps.
+Events: the when-clauses with ``reinit`` of a model that flattens as it is become FMI 2.0
+event indicators (model exchange: the importer locates the crossing; co-simulation: the
+RK4 step length is bisected to the crossing). Not exported yet: modes (``Model.mode``,
+``assign``, ``sign()`` switching), events in FMI 3.0, FMI 3.0 co-simulation; discrete-time
+controller steps are FMI 2.0 co-simulation FMUs (:mod:`gtmodel.exchange.fmu_step`).
 """
 
 from __future__ import annotations
@@ -126,9 +129,12 @@ def _compile(sources: list[Path], out: Path, build: Path, what: str) -> None:
 def _codegen(em: ExplicitModel, ident: str, build: Path) -> tuple[Path, Path]:
     """CasADi C of ``f`` and its forward derivative as ``<id>_model.c/.h``."""
     cg = ca.CodeGenerator(f"{ident}_model.c", {"with_header": True, "prefix": f"{ident}_"})
-    for fn, suffix in ((em.f, "f"), (em.derivative_function(), "df")):  # C names <id>_f, <id>_df
+    functions = [(em.f, "f"), (em.derivative_function(), "df")]
+    if em.indicators is not None:  # when-clauses: event indicators and the jump map
+        functions += [(em.indicators, "ind"), (em.jump, "jump")]
+    for fn, suffix in functions:  # C names <id>_f, <id>_df (, <id>_ind, <id>_jump)
         args = fn.mx_in()
-        cg.add(ca.Function(f"{ident}_{suffix}", args, fn(*args), fn.name_in(), fn.name_out()))
+        cg.add(ca.Function(f"{ident}_{suffix}", args, fn.call(args), fn.name_in(), fn.name_out()))
     with _cwd(build):
         cg.generate()
     return build / f"{ident}_model.c", build / f"{ident}_model.h"
@@ -144,7 +150,8 @@ def _fmi2_files(em: ExplicitModel, ident: str, build: Path, step: float, me: boo
     start[vr.p] = em.p_value
     guid = "{" + str(uuid.uuid4()) + "}"
     subs = {"@ID@": ident, "@NX@": str(em.nx), "@NU@": str(len(em.u_names)), "@NP@": str(len(em.p_names)),
-            "@NY@": str(em.ny), "@STEP@": repr(float(step)), "@GUID@": guid,
+            "@NY@": str(em.ny), "@STEP@": repr(float(step)), "@GUID@": guid, "@NZ@": str(len(em.directions)),
+            "@DIRS@": ", ".join(str(d) for d in em.directions) or "0",
             "@START@": ", ".join(repr(float(v)) for v in start)}
     text = TEMPLATE_FMI2.read_text()
     for k, v in subs.items():
@@ -258,6 +265,8 @@ def export_fmu(
     if out.suffix != ".fmu":
         raise InputError(f"out {out}: the file name must end in .fmu")
     em = explicit_model(model, name)
+    if version == "3.0" and em.indicators is not None:
+        raise InputError(f"model {em.name!r} has when-clauses: events are exported with FMI 2.0 (version='2.0')")
     ident = fmi_identifier(em.name)
     me, cs = interface in ("me", "both"), interface in ("cs", "both")
     with tempfile.TemporaryDirectory(prefix="gtmodel_fmu_") as tmp:

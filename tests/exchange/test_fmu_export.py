@@ -77,6 +77,36 @@ def test_cart_pendulum_co_simulation_error_is_of_rk4_order(tmp_path):
     assert devs[0] < 1e-6 and devs[1] < 1e-6
 
 
+def _ball(e: float = 0.8, g: float = 9.81) -> Model:
+    m = Model("ball")
+    h, v = m.state("h", start=1.0, unit="m"), m.state("v", unit="m/s")
+    m.equation(m.der(h), v)
+    m.equation(m.der(v), -g)
+    m.when(-h, reinit={v: -e * v, h: 0.0}, name="impact")
+    return m
+
+
+def test_bouncing_ball_events_in_model_exchange_and_co_simulation(tmp_path):
+    # reference: the impact times in closed form, t1 = sqrt(2 h0 / g), then flights 2 e^k v1 / g
+    fmu = export_fmu(_ball(), tmp_path / "ball.fmu", step=1e-3)
+    assert validate_fmu(str(fmu.path)) == [] and fmpy.read_model_description(str(fmu.path)).numberOfEventIndicators == 1
+    e, g = 0.8, 9.81
+    t1, v1 = np.sqrt(2.0 / g), np.sqrt(2.0 * g)
+    impacts = t1 + np.concatenate([[0.0], np.cumsum([2.0 * e**k * v1 / g for k in range(1, 4)])])
+
+    def exact_h(t):
+        k = np.searchsorted(impacts, t) - 1
+        if k < 0:
+            return 1.0 - 0.5 * g * t**2
+        vk, tau = e ** (k + 1) * v1, t - impacts[k]
+        return vk * tau - 0.5 * g * tau**2
+
+    for kind, kw in (("ModelExchange", dict(relative_tolerance=1e-10)), ("CoSimulation", {})):
+        res = fmpy.simulate_fmu(str(fmu.path), stop_time=2.5, output_interval=0.01, output=["h"], fmi_type=kind, **kw)
+        err = np.max(np.abs(res["h"] - [exact_h(t) for t in res["time"]]))
+        assert err < 1e-6, (kind, err)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("version", ["2.0", "3.0"])
 def test_composed_drive_axis_fmu_equals_gtmodel(tmp_path, version):
@@ -123,6 +153,13 @@ def test_export_bad_arguments(tmp_path, kwargs, error, match):
 
 
 def test_export_rejects_models_it_cannot_carry(tmp_path):
+    with pytest.raises(InputError, match="'ball' has when-clauses: events are exported with FMI 2.0"):
+        export_fmu(_ball(), tmp_path / "b.fmu", version="3.0")
+    moded = _ball()
+    mode = moded.mode("stuck", 0.0)
+    moded.when(moded.variables("state")["v"], assign={mode: 1.0}, name="stick")
+    with pytest.raises(ModelError, match="'ball': modes and assign/initial when-clauses are not exported"):
+        export_fmu(moded, tmp_path / "b.fmu")
     m = Model("static")
     m.parameter("k", 1.0)
     z = m.algebraic("z")

@@ -4,8 +4,12 @@
  *   @ID@_f(t, x, u, p) -> (xdot, y)                 the explicit ODE and the outputs
  *   @ID@_df(t, x, u, p, dx, du, dp) -> (dxdot, dy)  its forward directional derivative
  * Value references: [0, NX) states, [NX, 2 NX) derivatives, then inputs, parameters, outputs.
+ *   @ID@_ind(t, x, u, p) -> c, @ID@_jump(t, x, u, p, fire) -> x_new   (NZ > 0: when-clauses)
  * Co-simulation: the classical fixed-step 4th-order Runge-Kutta method with the inputs held
- * over the communication step, substeps of at most STEP seconds (no SUNDIALS).
+ * over the communication step, substeps of at most STEP seconds (no SUNDIALS); a state event
+ * inside a substep is located by bisection of the RK4 step length and handled there.
+ * Events (Modelica's when c > 0 / c < 0): a clause fires when its condition is true and was
+ * false at the last event (pre); its reinit is applied with the values before the event.
  */
 #include <math.h>
 #include <stdio.h>
@@ -19,6 +23,7 @@
 #define NU @NU@
 #define NP @NP@
 #define NY @NY@
+#define NZ @NZ@
 #define VR_X 0
 #define VR_DX (NX)
 #define VR_U (2 * NX)
@@ -29,6 +34,7 @@
 #define GUID "@GUID@"
 
 static const double START[NV + 1] = {@START@};
+static const int DIRECTION[NZ + 1] = {@DIRS@};
 
 typedef struct {
   double v[NV + 1];
@@ -42,6 +48,7 @@ typedef struct {
   casadi_int* iw;
   double* w;
   double k[4][NX + 1], xs[NX + 1];
+  int pre[NZ + 1];
 } Inst;
 
 static void logmsg(Inst* m, fmi2Status s, const char* msg) {
@@ -58,6 +65,72 @@ static int rhs(Inst* m, double t, const double* x, double* xdot, double* y) {
   m->res[1] = y;
   return @ID@_f(m->arg, m->res, m->iw, m->w, 0);
 }
+
+/* one classical RK4 step of length h from x (time t) into out */
+static int rk4(Inst* m, double t, const double* x, double h, double* out) {
+  int i, j;
+  if (rhs(m, t, x, m->k[0], 0)) return 1;
+  for (i = 0; i < NX; ++i) m->xs[i] = x[i] + 0.5 * h * m->k[0][i];
+  if (rhs(m, t + 0.5 * h, m->xs, m->k[1], 0)) return 1;
+  for (i = 0; i < NX; ++i) m->xs[i] = x[i] + 0.5 * h * m->k[1][i];
+  if (rhs(m, t + 0.5 * h, m->xs, m->k[2], 0)) return 1;
+  for (i = 0; i < NX; ++i) m->xs[i] = x[i] + h * m->k[2][i];
+  if (rhs(m, t + h, m->xs, m->k[3], 0)) return 1;
+  for (i = 0; i < NX; ++i) {
+    double inc = 0;
+    for (j = 0; j < 4; ++j) inc += (j == 0 || j == 3 ? 1.0 : 2.0) * m->k[j][i];
+    out[i] = x[i] + h * inc / 6.0;
+  }
+  return 0;
+}
+
+#if NZ > 0
+static int indicators(Inst* m, double t, const double* x, double* c) {
+  m->arg[0] = &t;
+  m->arg[1] = x;
+  m->arg[2] = m->v + VR_U;
+  m->arg[3] = m->v + VR_P;
+  m->res[0] = c;
+  return @ID@_ind(m->arg, m->res, m->iw, m->w, 0);
+}
+/* the condition of a clause: c > 0 (rising), c < 0 (falling), the sign of c (both) */
+static int condition(int dir, double c) { return dir > 0 ? c > 0 : dir < 0 ? c < 0 : (c > 0) - (c < 0); }
+static void set_pre(Inst* m, const double* c) {
+  int k;
+  for (k = 0; k < NZ; ++k) m->pre[k] = condition(DIRECTION[k], c[k]);
+}
+static int fired(Inst* m, const double* c, double* fire) {
+  int k, any = 0;
+  for (k = 0; k < NZ; ++k) {
+    int now = condition(DIRECTION[k], c[k]);
+    fire[k] = DIRECTION[k] != 0 ? (now && !m->pre[k]) : (now != 0 && m->pre[k] != 0 && now != m->pre[k]);
+    any |= fire[k] != 0;
+  }
+  return any;
+}
+/* event handling at (t, x): fire the clauses, reinit x, update pre; returns 1 if x changed, -1 on error */
+static int handle_events(Inst* m, double t, double* x) {
+  double c[NZ + 1], fire[NZ + 1], xn[NX + 1];
+  int changed = 0, iter;
+  for (iter = 0; iter < 10; ++iter) { /* event iteration: until no clause fires */
+    if (indicators(m, t, x, c)) return -1;
+    if (!fired(m, c, fire)) break;
+    set_pre(m, c);
+    m->arg[0] = &t;
+    m->arg[1] = x;
+    m->arg[2] = m->v + VR_U;
+    m->arg[3] = m->v + VR_P;
+    m->arg[4] = fire;
+    m->res[0] = xn;
+    if (@ID@_jump(m->arg, m->res, m->iw, m->w, 0)) return -1;
+    memcpy(x, xn, NX * sizeof(double));
+    changed = 1;
+  }
+  if (indicators(m, t, x, c)) return -1;
+  set_pre(m, c);
+  return changed;
+}
+#endif
 
 static fmi2Status update(Inst* m) {
   if (!m->dirty) return fmi2OK;
@@ -97,6 +170,18 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
   if (r2 > sz_res) sz_res = r2;
   if (i2 > sz_iw) sz_iw = i2;
   if (w2 > sz_w) sz_w = w2;
+#if NZ > 0
+  @ID@_ind_work(&a2, &r2, &i2, &w2);
+  if (a2 > sz_arg) sz_arg = a2;
+  if (r2 > sz_res) sz_res = r2;
+  if (i2 > sz_iw) sz_iw = i2;
+  if (w2 > sz_w) sz_w = w2;
+  @ID@_jump_work(&a2, &r2, &i2, &w2);
+  if (a2 > sz_arg) sz_arg = a2;
+  if (r2 > sz_res) sz_res = r2;
+  if (i2 > sz_iw) sz_iw = i2;
+  if (w2 > sz_w) sz_w = w2;
+#endif
   m->arg = (const double**)calloc(sz_arg + 1, sizeof(double*));
   m->res = (double**)calloc(sz_res + 1, sizeof(double*));
   m->iw = (casadi_int*)calloc(sz_iw + 1, sizeof(casadi_int));
@@ -121,7 +206,15 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, fmi2Real tol
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) { (void)c; return fmi2OK; }
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) { return update((Inst*)c); }
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+  Inst* m = (Inst*)c;
+#if NZ > 0
+  double ind[NZ + 1];
+  if (indicators(m, m->t, m->v + VR_X, ind)) return fmi2Error;
+  set_pre(m, ind);
+#endif
+  return update(m);
+}
 fmi2Status fmi2Terminate(fmi2Component c) { (void)c; return fmi2OK; }
 
 fmi2Status fmi2Reset(fmi2Component c) {
@@ -204,11 +297,18 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 /* ---- model exchange */
 fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi2OK; }
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo* e) {
-  (void)c;
+  Inst* m = (Inst*)c;
+  int changed = 0;
+#if NZ > 0
+  changed = handle_events(m, m->t, m->v + VR_X);
+  if (changed < 0) return fmi2Error;
+  if (changed) m->dirty = 1;
+#endif
+  (void)m;
   e->newDiscreteStatesNeeded = fmi2False;
   e->terminateSimulation = fmi2False;
   e->nominalsOfContinuousStatesChanged = fmi2False;
-  e->valuesOfContinuousStatesChanged = fmi2False;
+  e->valuesOfContinuousStatesChanged = changed ? fmi2True : fmi2False;
   e->nextEventTimeDefined = fmi2False;
   e->nextEventTime = 0;
   return fmi2OK;
@@ -239,7 +339,16 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t n) {
   memcpy(dx, m->v + VR_DX, NX * sizeof(double));
   return fmi2OK;
 }
-fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real ind[], size_t n) { (void)c; (void)ind; return n ? fmi2Error : fmi2OK; }
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real ind[], size_t n) {
+#if NZ > 0
+  Inst* m = (Inst*)c;
+  if (n != NZ) return fmi2Error;
+  return indicators(m, m->t, m->v + VR_X, ind) ? fmi2Error : fmi2OK;
+#else
+  (void)c; (void)ind;
+  return n ? fmi2Error : fmi2OK;
+#endif
+}
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t n) {
   Inst* m = (Inst*)c;
   if (n != NX) return fmi2Error;
@@ -264,30 +373,40 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t0, fmi2Real H, fmi2Boolean noPrior) {
   Inst* m = (Inst*)c;
   double* x = m->v + VR_X;
-  double h, t = t0;
-  long n, s;
-  int i, j;
+  double xn[NX + 1], h, t = t0, end = t0 + H;
+  long n;
   (void)noPrior;
   if (H <= 0) return H == 0 ? fmi2OK : fmi2Error;
   n = (long)ceil(H / STEP - 1e-9);
   if (n < 1) n = 1;
   h = H / n;
-  for (s = 0; s < n; ++s) {
-    if (rhs(m, t, x, m->k[0], 0)) goto fail;
-    for (i = 0; i < NX; ++i) m->xs[i] = x[i] + 0.5 * h * m->k[0][i];
-    if (rhs(m, t + 0.5 * h, m->xs, m->k[1], 0)) goto fail;
-    for (i = 0; i < NX; ++i) m->xs[i] = x[i] + 0.5 * h * m->k[1][i];
-    if (rhs(m, t + 0.5 * h, m->xs, m->k[2], 0)) goto fail;
-    for (i = 0; i < NX; ++i) m->xs[i] = x[i] + h * m->k[2][i];
-    if (rhs(m, t + h, m->xs, m->k[3], 0)) goto fail;
-    for (i = 0; i < NX; ++i) {
-      double inc = 0;
-      for (j = 0; j < 4; ++j) inc += (j == 0 || j == 3 ? 1.0 : 2.0) * m->k[j][i];
-      x[i] += h * inc / 6.0;
+  while (end - t > 1e-12 * (fabs(end) + 1.0)) {
+    double hs = h < end - t ? h : end - t;
+    if (rk4(m, t, x, hs, xn)) goto fail;
+#if NZ > 0
+    {
+      double ind[NZ + 1], fire[NZ + 1], lo = 0.0, hi = hs;
+      int it, r;
+      if (indicators(m, t + hs, xn, ind)) goto fail;
+      if (fired(m, ind, fire)) { /* a state event inside the substep: bisect the step length */
+        for (it = 0; it < 60 && hi - lo > 1e-15 * (fabs(t) + 1.0); ++it) {
+          double mid = 0.5 * (lo + hi);
+          if (rk4(m, t, x, mid, xn) || indicators(m, t + mid, xn, ind)) goto fail;
+          if (fired(m, ind, fire)) hi = mid; else lo = mid;
+        }
+        if (rk4(m, t, x, hi, xn)) goto fail;
+        memcpy(x, xn, NX * sizeof(double));
+        t += hi;
+        r = handle_events(m, t, x);
+        if (r < 0) goto fail;
+        continue;
+      }
     }
-    t = t0 + (s + 1) * h;
+#endif
+    memcpy(x, xn, NX * sizeof(double));
+    t += hs;
   }
-  m->t = t0 + H;
+  m->t = end;
   m->dirty = 1;
   return update(m);
 fail:
