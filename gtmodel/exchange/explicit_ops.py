@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import ConvergenceError, InputError, ModelError
-from gtmodel.exchange.explicit import ExplicitModel, explicit_model
+from gtmodel.exchange.explicit import ExplicitModel, explicit_model, fmi_identifier
 from gtmodel.modeling import Component, Model, SimulationResult
 from gtmodel.modeling.simulation.linear import Linearization
 
@@ -105,7 +105,7 @@ def simulate_explicit(
     xdot, _ = em.f(ts, xs, us, ps)
     dae = {"t": ts, "x": xs, "u": us, "p": ps, "ode": xdot}
     try:
-        F = ca.integrator(f"{em.name}_sim", "cvodes", dae, float(t[0]), list(t), {"abstol": atol, "reltol": rtol})
+        F = ca.integrator(f"{fmi_identifier(em.name)}_sim", "cvodes", dae, float(t[0]), list(t), {"abstol": atol, "reltol": rtol})
         u_cas = np.vstack([u_int[:1], u_int]).T if nu else np.zeros((0, n))  # u[:, k] held on (t[k-1], t[k]]
         x_traj = np.array(F(x0=xv, p=pv, u=u_cas)["xf"]).reshape(em.nx, n).T
     except RuntimeError as exc:
@@ -248,7 +248,7 @@ def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str,
     xdot = ca.vertcat(*[outs[k][0] for k in order])
     y = ca.vertcat(*[ys[k] for k in order])
     xall, pall = ca.vertcat(*[xs[k] for k in order]), ca.vertcat(*[ps[k] for k in order])
-    f = ca.Function(name, [t, xall, uf, pall], [xdot, y], ["t", "x", "u", "p"], ["xdot", "y"])
+    f = ca.Function(fmi_identifier(name), [t, xall, uf, pall], [xdot, y], ["t", "x", "u", "p"], ["xdot", "y"])
     pre = lambda k, names: [f"{k}.{n}" for n in names]  # noqa: E731
     meta = lambda attr: {f"{k}.{n}": v for k in order for n, v in getattr(ems[k], attr).items()}  # noqa: E731
     return ExplicitModel(

@@ -126,7 +126,8 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
     ------
     InputError
         Naming the file: missing, not a zip archive (corrupt), no ``modelDescription.xml``,
-        an FMI version other than 2.0/3.0, no model exchange interface, no binary for this
+        an FMI version other than 2.0/3.0, no model exchange interface, event indicators
+        (events are not imported), no binary for this
         platform and no sources, ``derivatives="directional"`` for an FMU without them, or
         CasADi cannot load it.
     CodegenError
@@ -166,6 +167,10 @@ def _load(path: Path, folder: Path, derivatives: str, name: str | None) -> Impor
         raise InputError(f"{path}: no model exchange interface (the FMU has {', '.join(kinds) or 'no interface'}); "
                          "gtmodel imports model-exchange FMUs")
     ident = me.get("modelIdentifier", "")
+    n_events = int(root.get("numberOfEventIndicators", "0") or 0) if version == "2.0" else len(list(root.iter("EventIndicator")))
+    if n_events:
+        raise InputError(f"{path}: the FMU has {n_events} event indicator(s); gtmodel's import (CasADi's FmuFunction) "
+                         "evaluates the continuous-time equations only, so its events would be lost")
     plat, ext = fmi_platform(version)
     built = False
     if not (folder / "binaries" / plat / f"{ident}{ext}").is_file():

@@ -147,6 +147,17 @@ def test_bad_fmus_name_the_file(fmus, tmp_path, make, match):
         import_fmu(make(paths["2.0"], tmp_path))
 
 
+def test_an_fmu_with_events_is_refused(tmp_path):
+    ball = Model("ball")
+    h, v = ball.state("h", start=1.0), ball.state("v")
+    ball.equation(ball.der(h), v)
+    ball.equation(ball.der(v), -9.81)
+    ball.when(-h, reinit={v: -0.8 * v}, name="impact")
+    fmu = export_fmu(ball, tmp_path / "ball.fmu", interface="me")
+    with pytest.raises(InputError, match="ball.fmu: the FMU has 1 event indicator.s.; .* its events would be lost"):
+        import_fmu(fmu.path)
+
+
 def test_directional_derivatives_asked_of_an_fmu_without_them(fmus, tmp_path):
     _, paths = fmus
     path = _repack(paths["2.0"], tmp_path / "nodd.fmu", edit=lambda x: x.replace('providesDirectionalDerivative="true"', 'providesDirectionalDerivative="false"'))
