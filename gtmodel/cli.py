@@ -27,8 +27,8 @@
     holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``).
 ``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS] | --controller FILE) --out NAME.fmu``
     Export a model as an FMU (:func:`gtmodel.exchange.export_fmu`, docs/fmu.md): FMI 2.0
-    model exchange and co-simulation (``--fmi-version 3.0``: model exchange), C sources
-    and a binary for this platform; a controller file's Kalman step as a discrete-time
+    or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
+    for this platform; a controller file's Kalman step as a discrete-time
     co-simulation FMU (:func:`gtmodel.exchange.fmu_step.export_step_fmu`).
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
@@ -144,7 +144,7 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
     cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
-    fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 ME/CS, FMI 3.0 ME), sources and a binary")
+    fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 / 3.0, model exchange and co-simulation), sources and a binary")
     what = fx.add_mutually_exclusive_group(required=True)
     what.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model, e.g. models/cart_pendulum.py:CartPendulum")
     what.add_argument("--robot", default=None, help="a robot's rigid-body dynamics with friction (cart states q, q_dot; input tau): L1, D1, ... or a parameter TOML")
@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
     what.add_argument("--controller", default=None, metavar="FILE", help="a controller file's Kalman step as a discrete-time co-simulation FMU (FMI 2.0, its sample period)")
     fx.add_argument("--out", type=Path, required=True, help="the .fmu file to write")
     fx.add_argument("--fmi-version", default="2.0", choices=("2.0", "3.0"), help="FMI version (default 2.0)")
-    fx.add_argument("--interface", default=None, choices=("me", "cs", "both"), help="model exchange, co-simulation or both (default both for 2.0, me for 3.0)")
+    fx.add_argument("--interface", default="both", choices=("me", "cs", "both"), help="model exchange, co-simulation or both (default both)")
     fx.add_argument("--step", type=float, default=1e-3, help="fixed step [s] of the co-simulation's embedded RK4 (default 1e-3)")
     fx.add_argument("--sources-only", action="store_true", help="pack the C sources without building a binary")
     fx.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
@@ -367,8 +367,7 @@ def _export_fmu(args: argparse.Namespace) -> int:
         from gtmodel.robots.model import gantry_tau_model
 
         model = gantry_tau_model(args.robot, states="cart")
-    interface = args.interface or ("both" if args.fmi_version == "2.0" else "me")
-    fmu = export_fmu(model, args.out, version=args.fmi_version, interface=interface, step=args.step, binary=not args.sources_only)
+    fmu = export_fmu(model, args.out, version=args.fmi_version, interface=args.interface, step=args.step, binary=not args.sources_only)
     em = fmu.model
     print(f"wrote {fmu.path} (FMI {fmu.version} {' + '.join(fmu.interfaces)}, binary {fmu.platform or 'none: sources only'})")
     print(f"model {em.name}: {em.nx} states, {len(em.u_names)} inputs, {len(em.p_names)} parameters, {em.ny} outputs"
@@ -385,7 +384,7 @@ def _export_step_fmu(args: argparse.Namespace) -> int:
     controller = load_controller(args.controller)
     if controller.kalman_step is None:
         raise GtModelError(f"{args.controller}: the controller has no kalman_step to export (the filters' steps carry a covariance matrix)")
-    if args.fmi_version != "2.0" or args.interface not in (None, "cs"):
+    if args.fmi_version != "2.0" or args.interface == "me":
         raise GtModelError("--controller: a discrete-time step is exported as FMI 2.0 co-simulation only")
     fmu = export_step_fmu(controller.kalman_step, args.out, dt=controller.dt, binary=not args.sources_only)
     print(f"wrote {fmu.path} (FMI 2.0 CoSimulation, discrete step every {fmu.dt:g} s, binary {fmu.platform or 'none: sources only'})")

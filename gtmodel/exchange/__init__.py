@@ -1,7 +1,7 @@
 """Exchange with the Modelica world: FMUs out and in, Modelica source in (docs/fmu.md).
 
 * :func:`export_fmu`: a gtmodel model as an FMU (FMI 2.0 model exchange and co-simulation
-  with an embedded fixed-step RK4; FMI 3.0 model exchange through CasADi's own export), C
+  with an embedded fixed-step RK4; FMI 3.0 through CasADi's own export, co-simulation added), C
   sources and a binary for this platform (:mod:`gtmodel.exchange.fmu_export`);
   :func:`export_step_fmu`: a discrete-time controller step (the 4 ms Kalman step) as an
   FMI 2.0 co-simulation FMU (:mod:`gtmodel.exchange.fmu_step`).

@@ -2,7 +2,7 @@
 
 What comes from CasADi and what from gtmodel (CasADi 3.8):
 
-* **FMI 3.0 model exchange**: CasADi's own export (``casadi.DaeBuilder.export_fmu``)
+* **FMI 3.0 model exchange** (and co-simulation on top of it, below): CasADi's own export (``casadi.DaeBuilder.export_fmu``)
   writes the C code of the equations and their directional and adjoint derivatives and
   the FMI 3.0 wrapper (``<id>.c``, ``<id>_wrap.c``, ``buildDescription.xml``). Its
   ``modelDescription.xml`` fails FMPy's validation (internal variables with illegal
@@ -19,10 +19,15 @@ What comes from CasADi and what from gtmodel (CasADi 3.8):
   this platform with the C compiler of :mod:`gtmodel._compiler`, the sources inside the
   FMU (a source FMU: a user on another platform rebuilds it), zipped with :mod:`zipfile`.
 
+FMI 3.0 co-simulation: CasADi's wrapper leaves ``fmi3InstantiateCoSimulation``,
+``fmi3EnterStepMode`` and ``fmi3DoStep`` unimplemented; gtmodel replaces those three
+bodies in the generated ``<id>_wrap.c`` (the same RK4 on the wrapper's own model-exchange
+functions).
+
 Events: the when-clauses with ``reinit`` of a model that flattens as it is become FMI 2.0
 event indicators (model exchange: the importer locates the crossing; co-simulation: the
 RK4 step length is bisected to the crossing). Not exported yet: modes (``Model.mode``,
-``assign``, ``sign()`` switching), events in FMI 3.0, FMI 3.0 co-simulation; discrete-time
+``assign``, ``sign()`` switching), events in FMI 3.0; discrete-time
 controller steps are FMI 2.0 co-simulation FMUs (:mod:`gtmodel.exchange.fmu_step`).
 """
 
@@ -44,7 +49,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._compiler import find_compiler, run_compiler
-from gtmodel.errors import InputError
+from gtmodel.errors import CodegenError, InputError
 from gtmodel.exchange.description import ValueReferences, model_description
 from gtmodel.exchange.explicit import ExplicitModel, explicit_model, fmi_identifier
 
@@ -175,8 +180,72 @@ def _with_sources(xml: str, tag: str, files_xml: str) -> str:
     return xml[:end] + f"><SourceFiles>{files_xml}</SourceFiles></{tag}>" + xml[end + 2:]
 
 
-def _fmi3_files(em: ExplicitModel, ident: str, build: Path) -> tuple[dict, str]:
-    """CasADi's FMI 3.0 model-exchange sources and gtmodel's description."""
+#: FMI 3.0 co-simulation added to CasADi's model-exchange wrapper: the three functions it
+#: leaves "not implemented", replaced (instantiation as for model exchange; an RK4 DoStep on
+#: the wrapper's own model-exchange functions, inputs held over the communication step).
+_FMI3_CS = {
+    "fmi3InstantiateCoSimulation": """{
+  (void)eventModeUsed; (void)earlyReturnAllowed; (void)requiredIntermediateVariables;
+  (void)nRequiredIntermediateVariables; (void)intermediateUpdate;
+  return fmi3InstantiateModelExchange(instanceName, instantiationToken, resourcePath, visible, loggingOn,
+                                      instanceEnvironment, logMessage);
+}""",
+    "fmi3EnterStepMode": """{
+  (void)instance;
+  return fmi3OK;
+}""",
+    "fmi3DoStep": """{
+  /* gtmodel: classical RK4, substeps of at most GT_STEP s, inputs held over the step */
+  static const double c[4] = {0.0, 0.5, 0.5, 1.0};
+  double x0[N_X + 1], xs[N_X + 1], k[4][N_X + 1], h;
+  double t0 = currentCommunicationPoint, H = communicationStepSize;
+  long n, s;
+  int i, j;
+  (void)noSetFMUStatePriorToCurrentPoint;
+  *eventHandlingNeeded = fmi3False;
+  *terminateSimulation = fmi3False;
+  *earlyReturn = fmi3False;
+  *lastSuccessfulTime = t0;
+  if (H <= 0) return H == 0 ? fmi3OK : fmi3Error;
+  n = (long)(H / GT_STEP);
+  if (n * GT_STEP < H * (1.0 - 1e-12)) ++n;
+  if (n < 1) n = 1;
+  h = H / n;
+  if (fmi3GetContinuousStates(instance, x0, N_X) != fmi3OK) return fmi3Error;
+  for (s = 0; s < n; ++s) {
+    double t = t0 + s * h;
+    for (j = 0; j < 4; ++j) {
+      for (i = 0; i < N_X; ++i) xs[i] = x0[i] + (j ? c[j] * h * k[j - 1][i] : 0.0);
+      if (fmi3SetTime(instance, t + c[j] * h) != fmi3OK || fmi3SetContinuousStates(instance, xs, N_X) != fmi3OK
+          || fmi3GetContinuousStateDerivatives(instance, k[j], N_X) != fmi3OK) return fmi3Error;
+    }
+    for (i = 0; i < N_X; ++i) x0[i] += h * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]) / 6.0;
+  }
+  if (fmi3SetTime(instance, t0 + H) != fmi3OK || fmi3SetContinuousStates(instance, x0, N_X) != fmi3OK) return fmi3Error;
+  *lastSuccessfulTime = t0 + H;
+  return fmi3OK;
+}""",
+}
+
+
+def _add_fmi3_co_simulation(wrap: Path, step: float) -> None:
+    """Replace the "not implemented" co-simulation functions of CasADi's FMI 3.0 wrapper."""
+    text = wrap.read_text()
+    for name, body in _FMI3_CS.items():
+        start = text.find(f"FMI3_Export fmi3Status {name}(")
+        if start < 0:
+            start = text.find(f"FMI3_Export fmi3Instance {name}(")
+        brace = text.find("{", text.find(")", start)) if start >= 0 else -1  # the body after the signature
+        end = text.find("\n}", brace) if brace >= 0 else -1
+        if start < 0 or brace < 0 or end < 0 or "Not implemented" not in text[brace:end]:
+            raise CodegenError(f"CasADi {ca.__version__}'s FMI 3.0 wrapper has no unimplemented {name} to replace; "
+                               "FMI 3.0 co-simulation cannot be added")
+        text = text[:brace] + body + text[end + 2:]
+    wrap.write_text(f"#define GT_STEP {float(step)!r}\n" + text)
+
+
+def _fmi3_files(em: ExplicitModel, ident: str, build: Path, cs: bool = False, step: float = 1e-3) -> tuple[dict, str]:
+    """CasADi's FMI 3.0 model-exchange sources (with co-simulation added) and gtmodel's description."""
     dae = ca.DaeBuilder(ident)
     t = dae.add("time", "independent")
     p = [dae.add(n, "parameter", "tunable", {"start": float(v)}) for n, v in zip(em.p_names, em.p_value)]
@@ -197,7 +266,10 @@ def _fmi3_files(em: ExplicitModel, ident: str, build: Path) -> tuple[dict, str]:
         p=[refs[n] for n in em.p_names], y=[refs[n] for n in em.y_names], time=refs["time"],
     )
     token = casadi_xml.get("instantiationToken")
-    xml = model_description(em, "3.0", ident, vr, model_exchange=True, token=token, generation_tool=f"gtmodel with CasADi {ca.__version__}")
+    if cs:
+        _add_fmi3_co_simulation(build / f"{ident}_wrap.c", step)
+    xml = model_description(em, "3.0", ident, vr, model_exchange=True, co_simulation=cs, step_size=step if cs else None,
+                            token=token, generation_tool=f"gtmodel with CasADi {ca.__version__}")
     files = {build / local: arc for local, arc in raw.items() if arc.startswith("sources/")}
     return files, xml
 
@@ -225,8 +297,8 @@ def export_fmu(
     version : {"2.0", "3.0"}, optional
         FMI version; default ``"2.0"``.
     interface : {"me", "cs", "both"}, optional
-        Model exchange, co-simulation or both (FMI 2.0); FMI 3.0 is model exchange only
-        (CasADi's export). Default ``"both"`` (``"me"`` for 3.0).
+        Model exchange, co-simulation or both; default ``"both"``. FMI 3.0 always carries
+        model exchange (CasADi's wrapper, on which its co-simulation is built).
     step : float, optional
         Fixed step [s] of the co-simulation's embedded RK4 integrator; default 1e-3.
     name : str, optional
@@ -243,8 +315,8 @@ def export_fmu(
     Raises
     ------
     InputError
-        Unknown version or interface, co-simulation asked for FMI 3.0, ``step <= 0``, or
-        ``out`` cannot be written (naming it).
+        Unknown version or interface, ``step <= 0``, when-clauses with FMI 3.0, or ``out``
+        cannot be written (naming it).
     ModelError
         The model cannot be reduced to an explicit ODE (see
         :func:`~gtmodel.exchange.explicit.explicit_model`).
@@ -255,10 +327,8 @@ def export_fmu(
         raise InputError(f"version: expected one of {', '.join(VERSIONS)}, got {version!r}")
     if interface not in INTERFACES:
         raise InputError(f"interface: expected one of {', '.join(INTERFACES)}, got {interface!r}")
-    if version == "3.0":
-        if interface == "cs":
-            raise InputError("interface 'cs': FMI 3.0 co-simulation is not exported (CasADi 3.8's FMI 3.0 export is model exchange); use version 2.0")
-        interface = "me"
+    if version == "3.0" and interface == "cs":
+        interface = "both"  # CasADi's wrapper is model exchange; co-simulation is added on top of it
     if not (isinstance(step, (int, float)) and step > 0 and np.isfinite(step)):
         raise InputError(f"step: expected a positive number of seconds, got {step!r}")
     out = Path(out)
@@ -274,7 +344,7 @@ def export_fmu(
         if version == "2.0":
             files, xml = _fmi2_files(em, ident, build, float(step), me, cs)
         else:
-            files, xml = _fmi3_files(em, ident, build)
+            files, xml = _fmi3_files(em, ident, build, cs, float(step))
         plat = ""
         if binary:
             plat, ext = fmi_platform(version)

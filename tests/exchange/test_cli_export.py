@@ -30,7 +30,7 @@ def test_export_a_modelica_model_as_fmi3(tmp_path, capsys):
     fmpy_validation = pytest.importorskip("fmpy.validation")
     out = tmp_path / "osc.fmu"
     code = main(["export-fmu", "--modelica", str(DATA / "oscillator.mo"), "--out", str(out), "--fmi-version", "3.0"])
-    assert code == EXIT_OK and "FMI 3.0 ModelExchange" in capsys.readouterr().out
+    assert code == EXIT_OK and "FMI 3.0 ModelExchange + CoSimulation" in capsys.readouterr().out
     assert fmpy_validation.validate_fmu(str(out)) == []
 
 
@@ -40,7 +40,7 @@ def test_export_a_modelica_model_as_fmi3(tmp_path, capsys):
         (["--modelica", str(DATA / "syntax_error.mo")], "syntax_error.mo:5: Modelica syntax error"),
         (["--modelica", str(DATA / "bouncing_ball_when.mo")], "bouncing_ball_when.mo:7: unsupported Modelica construct: when-clause"),
         (["--model", "nothere.py:Model"], "nothere.py: no such model file"),
-        (["--robot", "L1", "--fmi-version", "3.0", "--interface", "cs"], "FMI 3.0 co-simulation is not exported"),
+        (["--robot", "L1", "--step", "-1"], "step: expected a positive number of seconds"),
     ],
 )
 def test_bad_input_exits_2_naming_it(tmp_path, capsys, argv, match):
