@@ -25,6 +25,7 @@ def test_export_a_user_model(tmp_path, capsys):
     assert fmpy_validation.validate_fmu(str(out)) == []
 
 
+@pytest.mark.slow  # default-run budget: the Modelica path is also run by tests/exchange/test_modelica.py
 def test_export_a_modelica_model_as_fmi3(tmp_path, capsys):
     pytest.importorskip("pymoca")
     fmpy_validation = pytest.importorskip("fmpy.validation")

@@ -67,7 +67,10 @@ def test_cart_pendulum_fmu_is_valid_and_equals_gtmodel(tmp_path, version):
         assert np.max(np.abs(res["theta"] - ref.x["theta"])) < 1e-6
 
 
-@pytest.mark.parametrize(("version", "interfaces"), [("2.0", ("CoSimulation",)), ("3.0", ("ModelExchange", "CoSimulation"))])
+@pytest.mark.parametrize(("version", "interfaces"), [
+    ("2.0", ("CoSimulation",)),
+    pytest.param("3.0", ("ModelExchange", "CoSimulation"), marks=pytest.mark.slow),  # default-run budget
+])
 def test_cart_pendulum_co_simulation_error_is_of_rk4_order(tmp_path, version, interfaces):
     model = _cart_pendulum()
     fmu = export_fmu(model, tmp_path / "cp_cs.fmu", version=version, interface="cs", step=2e-3)
