@@ -14,7 +14,9 @@ Supported subset (docs/fmu.md has the table): ``model``/``block``/``package`` cl
 ``max``, ``unit`` and comments, ``der()``, equations (also ``if``-expressions and ``for``
 equations as pymoca expands them), ``initial equation``, ``extends``, modifications,
 connectors with ``flow`` and ``connect``, arrays of Reals, the built-in math functions.
-Rejected: ``when``, ``algorithm``, ``pre``/``edge``/``change``/``reinit``/``sample``/
+``function`` classes with an ``algorithm`` (pymoca translates them; a function nested in a
+model gets a dotted name CasADi 3.8 refuses, so declare it at the top level of the file).
+Rejected: ``when``, ``algorithm`` outside functions, ``pre``/``edge``/``change``/``reinit``/``sample``/
 ``initial()``/``terminal()``, ``delay``, ``discrete`` variables, non-Real variables
 that are not parameters, external functions.
 """
@@ -67,13 +69,34 @@ def _code_only(text: str) -> str:
     return _COMMENT_RE.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
 
 
+_CLASS_RE = re.compile(r"\bend\s+([A-Za-z_][\w.]*)\s*;|\b(model|block|function|class|package|connector|record|type)\s+([A-Za-z_]\w*)")
+
+
+def _function_spans(code: str) -> list[tuple[int, int]]:
+    """Character ranges of ``function`` classes (an algorithm section is allowed there)."""
+    stack: list[tuple[str, str, int]] = []
+    spans = []
+    for m in _CLASS_RE.finditer(code):
+        if m.group(1):  # "end NAME;" closes the class of that name
+            if stack and stack[-1][1] == m.group(1).split(".")[-1]:
+                kind, _, start = stack.pop()
+                if kind == "function":
+                    spans.append((start, m.end()))
+        elif code[max(0, m.start() - 4):m.start()].strip() != "end":
+            stack.append((m.group(2), m.group(3), m.start()))
+    return spans
+
+
 def _check_constructs(path: Path, text: str) -> None:
     code = _code_only(text)
+    functions = _function_spans(code)
     hits = []
     for what, pattern in UNSUPPORTED.items():
-        m = re.search(pattern, code)
-        if m:
+        for m in re.finditer(pattern, code):
+            if what == "algorithm section" and any(a <= m.start() < b for a, b in functions):
+                continue  # a function's algorithm: pymoca translates it
             hits.append((code.count("\n", 0, m.start()) + 1, what))
+            break
     if hits:
         line, what = min(hits)
         raise InputError(f"{path}:{line}: unsupported Modelica construct: {what} (pymoca would drop it; "
@@ -144,7 +167,11 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
     try:
         mo = generator.generate(ast, class_name)
     except Exception as exc:  # noqa: BLE001 - pymoca raises many types
-        raise InputError(f"{path}: pymoca cannot translate class {class_name!r}: {type(exc).__name__}: {exc}") from None
+        lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+        msg = lines[-1] if lines else type(exc).__name__
+        if "Function name is not valid" in str(exc):
+            msg = "a function declared inside a class gets a dotted name CasADi refuses: declare it at the top level of the file"
+        raise InputError(f"{path}: pymoca cannot translate class {class_name!r}: {msg}") from None
     if getattr(mo, "delay_states", None):
         raise InputError(f"{path}: unsupported Modelica construct: delay() in class {class_name!r}")
     return _to_model(path, ast, mo, class_name)

@@ -46,6 +46,17 @@ def test_van_der_pol_with_initial_equation_matches_scipy():
     np.testing.assert_allclose(sim.x["x"], ref.y[0], atol=1e-6)
 
 
+def test_arrays_for_equations_extends_if_expressions_and_functions():
+    # references: x' = -min(x, 0.5) from 1 reaches 0.5 at t = 1; x' = -x^2 gives 1 / (1 + t)
+    chain = load_modelica(DATA / "chain_arrays.mo")
+    assert chain.flatten().x_names == ["x[0]", "x[1]", "x[2]", "v[0]", "v[1]", "v[2]"]  # Modelica x[1] is x[0]
+    t = np.linspace(0.0, 2.0, 11)
+    sat = load_modelica(DATA / "saturated_extends.mo", "Saturated").simulate(t, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(sat.x["x"], np.where(t <= 1.0, 1.0 - 0.5 * t, 0.5 * np.exp(-(t - 1.0))), atol=1e-7)
+    fun = load_modelica(DATA / "top_level_function.mo", "WithFunction").simulate(t, rtol=1e-11, atol=1e-12)
+    np.testing.assert_allclose(fun.x["x"], 1.0 / (1.0 + t), atol=1e-8)
+
+
 @pytest.mark.parametrize(
     ("file", "cls", "match"),
     [
@@ -54,6 +65,7 @@ def test_van_der_pol_with_initial_equation_matches_scipy():
         ("algorithm_section.mo", None, r"algorithm_section.mo:4: unsupported Modelica construct: algorithm section"),
         ("missing.mo", None, r"missing.mo: no such Modelica file"),
         ("oscillator.mo", "NoSuchModel", r"oscillator.mo: pymoca cannot translate class 'NoSuchModel'"),
+        ("nested_function.mo", None, r"nested_function.mo: pymoca cannot translate class 'WithFunction': a function declared inside"),
     ],
 )
 def test_bad_modelica_names_file_line_and_construct(file, cls, match):
