@@ -78,7 +78,8 @@ def test_fmu_connected_to_a_gtmodel_controller(fmus):
     assert abs(a.x["plant.s"][-1]) > 0.01  # the controller moved the cart
 
 
-def test_round_trip_ocp_reaches_the_native_optimum(fmus):
+@pytest.mark.parametrize("version", ["2.0", pytest.param("3.0", marks=pytest.mark.slow)])
+def test_round_trip_ocp_reaches_the_native_optimum(fmus, version):
     model, paths = fmus
     final = {"s": 0.5, "v": 0.0, "theta": 0.0, "omega": 0.0}
     opt = Optimization(model, free_final_time=True, final_time=2.0, final_time_bounds=(0.1, 10.0))
@@ -90,7 +91,7 @@ def test_round_trip_ocp_reaches_the_native_optimum(fmus):
     opt.set_bounds(F, -5.0, 5.0)
     opt.set_objective(mayer=opt.final_time, lagrange=1e-2 * F**2)
     native = solve(opt, elements=20, points=3)
-    imp = import_fmu(paths["2.0"])
+    imp = import_fmu(paths[version])
     res = solve_explicit_ocp(imp.model, final_time=2.0, free_final_time=True, final_time_bounds=(0.1, 10.0),
                              start={k: 0.0 for k in final}, final=final, input_bounds={"F": (-5.0, 5.0)},
                              lagrange=lambda v: 1e-2 * v["F"] ** 2, elements=20, derivatives=imp.derivatives)
