@@ -30,6 +30,9 @@
     or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
     for this platform; a controller file's Kalman step as a discrete-time
     co-simulation FMU (:func:`gtmodel.exchange.fmu_step.export_step_fmu`).
+``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV]``
+    Load an FMU as gtmodel does (:func:`gtmodel.exchange.import_fmu`): its variables and
+    where its derivatives come from; simulate it with CVODES.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -83,7 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Parser with the sub-commands ``solve``, ``study``, ``schema``, ``codegen`` and ``export-fmu``.
+        Parser with the sub-commands ``solve``, ``study``, ``schema``, ``codegen``,
+        ``export-fmu`` and ``import-fmu``.
     """
     parser = argparse.ArgumentParser(
         prog="gtmodel",
@@ -156,6 +160,14 @@ def build_parser() -> argparse.ArgumentParser:
     fx.add_argument("--step", type=float, default=1e-3, help="fixed step [s] of the co-simulation's embedded RK4 (default 1e-3)")
     fx.add_argument("--sources-only", action="store_true", help="pack the C sources without building a binary")
     fx.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+
+    fi = sub.add_parser("import-fmu", help="load an FMU (FMI 2.0/3.0 model exchange) as gtmodel does, list it, simulate it")
+    fi.add_argument("fmu", type=Path, help="the .fmu file")
+    fi.add_argument("--stop-time", type=float, default=None, help="simulate from 0 to this time [s] with CVODES (start values, inputs at their start)")
+    fi.add_argument("--points", type=int, default=101, help="output points of the simulation (default 101)")
+    fi.add_argument("--out", type=Path, default=None, help="write the simulation to this CSV file (columns t, states, outputs)")
+    fi.add_argument("--finite-differences", action="store_true", help="derivatives by finite differences even if the FMU provides directional derivatives")
+    fi.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     return parser
 
 
@@ -377,6 +389,37 @@ def _export_fmu(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _import_fmu(args: argparse.Namespace) -> int:
+    if not args.fmu.is_file():  # before the heavy imports
+        raise GtModelError(f"{args.fmu}: no such FMU file")
+    from gtmodel.exchange import import_fmu, simulate_explicit
+
+    imported = import_fmu(args.fmu, derivatives="finite_differences" if args.finite_differences else "auto")
+    em = imported.model
+    print(f"{args.fmu}: FMI {imported.version} model exchange, model {em.name!r}"
+          + (" (binary built here from its sources)" if imported.built_from_sources else ""))
+    for label, names in (("states", em.x_names), ("inputs", em.u_names), ("parameters", em.p_names), ("outputs", em.y_names)):
+        print(f"{label:<11} {', '.join(names) or '-'}")
+    print(f"derivatives {imported.derivatives}")
+    if args.stop_time is None:
+        return EXIT_OK
+    if not args.stop_time > 0 or args.points < 2:
+        raise GtModelError(f"--stop-time must be positive and --points at least 2, got {args.stop_time}, {args.points}")
+    import numpy as np
+
+    sim = simulate_explicit(em, np.linspace(0.0, args.stop_time, args.points))
+    columns = {"t": sim.t, **sim.x, **sim.outputs}
+    if args.out is not None:
+        try:
+            args.out.write_text(",".join(columns) + "\n" + "\n".join(
+                ",".join(repr(float(columns[c][k])) for c in columns) for k in range(sim.t.size)) + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise GtModelError(f"--out {args.out}: cannot write ({exc.strerror or exc})") from None
+        print(f"wrote {args.out} ({sim.t.size} rows)")
+    print("at t = " + f"{args.stop_time:g} s: " + ", ".join(f"{n} = {sim.x[n][-1]:.6g}" for n in em.x_names))
+    return EXIT_OK
+
+
 def _export_step_fmu(args: argparse.Namespace) -> int:
     from gtmodel.codegen import load_controller
     from gtmodel.exchange.fmu_step import export_step_fmu
@@ -423,6 +466,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _schema(args)
         if args.command == "export-fmu":
             return _export_fmu(args)
+        if args.command == "import-fmu":
+            return _import_fmu(args)
         return _codegen(args)
     except KeyboardInterrupt:
         print("gtmodel: interrupted", file=sys.stderr)

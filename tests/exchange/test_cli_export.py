@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -57,3 +58,31 @@ def test_a_missing_model_file_is_reported_without_importing_casadi(tmp_path):
     proc = subprocess.run([sys.executable, "-c", script, "export-fmu", "--model", "nope.py:M", "--out", "m.fmu"],
                           capture_output=True, text=True, cwd=tmp_path, timeout=120, env=dict(os.environ, PYTHONPATH=str(REPO)))
     assert proc.stdout.splitlines()[-1] == f"IMPORTED False {EXIT_BAD_INPUT}", proc.stdout + proc.stderr
+
+
+def test_import_fmu_lists_and_simulates(tmp_path, capsys):
+    from gtmodel.exchange import export_fmu
+    from gtmodel.problems.user_model import load_user_model
+
+    model = load_user_model(REPO / "models" / "cart_pendulum.py", "CartPendulum")
+    fmu = export_fmu(model, tmp_path / "cp.fmu", interface="me").path
+    csv = tmp_path / "run.csv"
+    code = main(["import-fmu", str(fmu), "--stop-time", "1.0", "--points", "11", "--out", str(csv)])
+    text = capsys.readouterr().out
+    assert code == EXIT_OK and "states      s, v, theta, omega" in text and "directional derivatives of the FMU" in text
+    rows = csv.read_text().splitlines()
+    assert rows[0] == "t,s,v,theta,omega,tip_x,tip_y,energy" and len(rows) == 12
+    assert abs(float(rows[-1].split(",")[6]) + 0.5) < 1e-12  # at rest hanging down: tip_y = -l
+
+
+@pytest.mark.parametrize(
+    ("content", "match"),
+    [(None, "nothere.fmu: no such FMU file"), (b"garbage", r"bad.fmu: not an FMU \(corrupt: not a zip archive\)")],
+)
+def test_import_fmu_bad_file_exits_2(tmp_path, capsys, content, match):
+    path = tmp_path / ("nothere.fmu" if content is None else "bad.fmu")
+    if content is not None:
+        path.write_bytes(content)
+    assert main(["import-fmu", str(path)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert re.search(match, err) and "Traceback" not in err
