@@ -94,7 +94,10 @@ def test_round_trip_ocp_reaches_the_native_optimum(fmus, version):
     imp = import_fmu(paths[version])
     res = solve_explicit_ocp(imp.model, final_time=2.0, free_final_time=True, final_time_bounds=(0.1, 10.0),
                              start={k: 0.0 for k in final}, final=final, input_bounds={"F": (-5.0, 5.0)},
-                             lagrange=lambda v: 1e-2 * v["F"] ** 2, elements=20, derivatives=imp.derivatives)
+                             lagrange=lambda v: 1e-2 * v["F"] ** 2, elements=20, derivatives=imp.derivatives,
+                             # FMI 3.0 (CasADi's wrapper): its finite-difference Hessian stalls IPOPT (205 iterations,
+                             # "acceptable"); quasi-Newton Hessians reach the optimum in 23
+                             solver_options={"hessian_approximation": "limited-memory"} if version == "3.0" else None)
     assert native.status == "optimal" and res.status == "optimal"
     assert res.derivatives == "directional derivatives of the FMU"
     assert abs(res.final_time - native.final_time) < 1e-6 * native.final_time
