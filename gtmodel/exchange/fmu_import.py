@@ -58,7 +58,7 @@ class ImportedFmu:
     derivatives : str
         ``"directional derivatives of the FMU"`` or ``"finite differences (CasADi)"``.
     folder : pathlib.Path
-        The unzipped FMU (kept while this object lives).
+        The unzipped FMU (removed when :attr:`model` is garbage-collected).
     built_from_sources : bool
         Whether the binary was built here from the FMU's sources.
     """
@@ -152,7 +152,7 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
     except BaseException:
         shutil.rmtree(folder, ignore_errors=True)
         raise
-    weakref.finalize(imported, shutil.rmtree, str(folder), True)
+    weakref.finalize(imported.model, shutil.rmtree, str(folder), True)  # the folder lives as long as the model
     return imported
 
 
