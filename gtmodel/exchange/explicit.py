@@ -1,0 +1,245 @@
+"""A gtmodel model as the explicit ODE an FMU carries: ``xdot, y = F(t, x, u, p)``.
+
+Both FMU writers (:mod:`gtmodel.exchange.fmu_export`) start from an :class:`ExplicitModel`:
+the model is flattened (:meth:`gtmodel.modeling.Model.flatten`), after alias elimination
+and index reduction (:func:`gtmodel.modeling.structural_simplify`) when it needs them, and
+its algebraic variables ``z`` are eliminated by solving ``0 = g(t, x, z, u, p)`` with
+CasADi's ``fast_newton`` rootfinder (the one whose C code generation CasADi supports; one iteration for the linear ``g`` of a composed component), started from the
+variables' start values. Units and descriptions come from the model (``Model.units``) and,
+for a :class:`~gtmodel.modeling.Component`, from its declarations
+(:meth:`~gtmodel.modeling.Component.describe`).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling import Component, Model, structural_simplify
+
+__all__ = ["ExplicitModel", "explicit_model", "fmi_identifier"]
+
+_IDENT_RE = re.compile(r"[^A-Za-z0-9_]")
+
+
+def fmi_identifier(name: str) -> str:
+    """A C identifier for the FMU's ``modelIdentifier`` (non-identifier characters become ``_``).
+
+    Parameters
+    ----------
+    name : str
+        Model name.
+
+    Returns
+    -------
+    str
+        ``name`` with every character outside ``[A-Za-z0-9_]`` replaced by ``_``, prefixed
+        by ``m_`` when it starts with a digit.
+    """
+    ident = _IDENT_RE.sub("_", name) or "model"
+    return f"m_{ident}" if ident[0].isdigit() else ident
+
+
+@dataclass
+class ExplicitModel:
+    """The explicit ODE of a model and the FMI metadata of its scalar variables.
+
+    Parameters
+    ----------
+    name : str
+        Model name.
+    f : casadi.Function
+        ``f(t, x, u, p) -> (xdot, y)``, shapes ``(1,1), (nx,1), (nu,1), (np,1) ->
+        (nx,1), (ny,1)``.
+    x_names, u_names, p_names, y_names : list of str
+        Scalar names (``"T[0]"`` style) of states, inputs, parameters and outputs.
+    x_start, u_start, p_value : numpy.ndarray
+        Start values of the states and inputs, parameter values (SI units).
+    units, descriptions : dict of str to str
+        Unit and description per scalar name (missing: none).
+    algebraic_eliminated : int
+        Number of algebraic variables solved for inside ``f`` (``fast_newton`` rootfinder).
+    indicators : casadi.Function or None
+        ``c(t, x, u, p) -> c (nw, 1)``: the when-clauses' zero-crossing functions (the FMU's
+        event indicators); ``None`` without events.
+    jump : casadi.Function or None
+        ``jump(t, x, u, p, fire (nw, 1)) -> x_new``: the reinits of the clauses whose
+        ``fire`` entry is 1, right-hand sides at the values before the event.
+    directions : list of int
+        Per clause: 1 fires when ``c`` becomes ``> 0``, -1 when ``< 0``, 0 both.
+    event_names : list of str
+        The clauses' names.
+    """
+
+    name: str
+    f: ca.Function
+    x_names: list[str]
+    u_names: list[str]
+    p_names: list[str]
+    y_names: list[str]
+    x_start: np.ndarray
+    u_start: np.ndarray
+    p_value: np.ndarray
+    units: dict[str, str] = field(default_factory=dict)
+    descriptions: dict[str, str] = field(default_factory=dict)
+    algebraic_eliminated: int = 0
+    indicators: ca.Function | None = None
+    jump: ca.Function | None = None
+    directions: list[int] = field(default_factory=list)
+    event_names: list[str] = field(default_factory=list)
+
+    @property
+    def nx(self) -> int:
+        """Number of states."""
+        return len(self.x_names)
+
+    @property
+    def ny(self) -> int:
+        """Number of scalar outputs."""
+        return len(self.y_names)
+
+    def derivative_function(self) -> ca.Function:
+        """Forward directional derivative of :attr:`f` (CasADi AD, for ``GetDirectionalDerivative``).
+
+        Returns
+        -------
+        casadi.Function
+            ``df(t, x, u, p, dx, du, dp) -> (dxdot, dy)``, the Jacobian of ``f`` times the
+            seeds (time is not seeded).
+        """
+        t, x, u, p = (ca.MX.sym(n, self.f.size1_in(i)) for i, n in enumerate(("t", "x", "u", "p")))
+        dx, du, dp = ca.MX.sym("dx", self.nx), ca.MX.sym("du", len(self.u_names)), ca.MX.sym("dp", len(self.p_names))
+        fwd = self.f.forward(1)
+        outs = self.f(t, x, u, p)
+        douts = fwd(t, x, u, p, *outs, ca.MX(1, 1), dx, du, dp)
+        return ca.Function("df", [t, x, u, p, dx, du, dp], list(douts), ["t", "x", "u", "p", "dx", "du", "dp"], ["dxdot", "dy"])
+
+
+def _metadata(source: Any, model: Model) -> tuple[dict[str, str], dict[str, str]]:
+    """Units and descriptions by scalar name, from a component's declarations and the model."""
+    units: dict[str, str] = {}
+    descriptions: dict[str, str] = {}
+    if isinstance(source, Component):
+        table = source.describe()
+        for row in table.itertuples(index=False):
+            if row.unit:
+                units[row.name] = str(row.unit)
+            if row.description:
+                descriptions[row.name] = str(row.description)
+    for name, (unit, text) in getattr(source, "exchange_metadata", {}).items():  # a Modelica model's (modelica.py)
+        if unit:
+            units.setdefault(name, unit)
+        if text:
+            descriptions.setdefault(name, text)
+    for name, unit in model.units.items():
+        units.setdefault(name, unit)
+    return units, descriptions
+
+
+def _expand(meta: dict[str, str], names: list[str]) -> dict[str, str]:
+    """Give element names ``v[i]`` the entry of their declared name ``v``."""
+    out = dict(meta)
+    for n in names:
+        base = n.split("[", 1)[0]
+        if n not in out and base in meta:
+            out[n] = meta[base]
+    return out
+
+
+def _add_events(em: ExplicitModel, dae: Any, whens: list) -> None:
+    """Event indicators and the jump map of the when-clauses (reinit only) of a flat model."""
+    t, x, u, p = dae.t, dae.x, dae.u, dae.p
+    fire = ca.SX.sym("fire", len(whens))
+    x_new = x
+    for k, w in enumerate(whens):
+        target = x
+        for name, idx, expr in w.reinit:
+            sl = dae.x_vars[name]
+            for j, i in enumerate(idx):
+                target = ca.vertcat(target[: sl.start + i], expr[j] if expr.numel() > 1 else expr, target[sl.start + i + 1:])
+        x_new = x_new + fire[k] * (target - x)
+    em.indicators = ca.Function("ind", [t, x, u, p], [ca.vertcat(*[w.condition for w in whens])], ["t", "x", "u", "p"], ["c"])
+    em.jump = ca.Function("jump", [t, x, u, p, fire], [x_new], ["t", "x", "u", "p", "fire"], ["x_new"])
+    em.directions = [int(w.direction) for w in whens]
+    em.event_names = [w.name for w in whens]
+
+
+def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
+    """Reduce a model to the explicit ODE of an FMU (algebraic variables solved inside).
+
+    Parameters
+    ----------
+    model : Model or Component
+        A gtmodel model, or a component (flattened with :meth:`Component.to_model`).
+    name : str, optional
+        Model name in the FMU; default the model's.
+
+    Returns
+    -------
+    ExplicitModel
+        ``f(t, x, u, p) -> (xdot, y)`` and the metadata.
+
+    Raises
+    ------
+    InputError
+        ``model`` is neither a Model nor a Component.
+    ModelError
+        The model has modes (``Model.mode``, ``assign`` of a when-clause) or when-clauses
+        together with algebraic variables, index reduction or initial equations (not
+        exported yet), no state, or does not reduce to index 1.
+    """
+    if isinstance(model, Component):
+        source, m = model, model.to_model(name)
+    elif isinstance(model, Model):
+        source, m = model, model
+    else:
+        raise InputError(f"model: expected a gtmodel Model or Component, got {type(model).__name__}")
+    whens = list(m._events.whens) if m._events is not None else []
+    if m._events is not None and (m._events.modes or any(w.assign or w.initial for w in whens)):
+        raise ModelError(f"model {m.name!r}: modes and assign/initial when-clauses are not exported to an FMU yet "
+                         "(when-clauses with reinit are)")
+    if whens and (not m._flattens() or m._initial_equations):
+        raise ModelError(f"model {m.name!r}: when-clauses are exported for models that flatten as they are "
+                         "(no index reduction, no initial equations)")
+    reduced = m if m._flattens() and not m._initial_equations else structural_simplify(m)
+    dae = reduced.flatten()
+    if dae.nx == 0:
+        raise ModelError(f"model {m.name!r} has no state; an FMU of model exchange needs at least one")
+    t, x, u, p = dae.t, dae.x, dae.u, dae.p
+    y = ca.vertcat(*[ca.vec(dae.output_exprs[k]) for k in dae.output_sizes]) if dae.output_sizes else ca.SX(0, 1)
+    if dae.nz == 0:
+        f = ca.Function("f", [t, x, u, p], [dae.ode_expr, y], ["t", "x", "u", "p"], ["xdot", "y"])
+    else:
+        g = ca.Function("g", [dae.z, ca.vertcat(t, x, u, p)], [dae.alg_expr])
+        solver = ca.rootfinder("zsolve", "fast_newton", g, {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False})
+        fz = ca.Function("fz", [t, x, z := dae.z, u, p], [dae.ode_expr, y])
+        tm, xm, um, pm = ca.MX.sym("t"), ca.MX.sym("x", dae.nx), ca.MX.sym("u", dae.nu), ca.MX.sym("p", dae.npar)
+        zm = solver(ca.DM(dae.z_start), ca.vertcat(tm, xm, um, pm))
+        xdot_m, y_m = fz(tm, xm, zm, um, pm)
+        f = ca.Function("f", [tm, xm, um, pm], [xdot_m, y_m], ["t", "x", "u", "p"], ["xdot", "y"])
+        del z
+    u_start = np.zeros(dae.nu)
+    for k, sl in dae.u_vars.items():
+        u_start[sl] = reduced._vars[k].start
+    units, descriptions = _metadata(source, reduced)
+    names = dae.x_names + dae.u_names + dae.p_names + dae.output_names
+    em = ExplicitModel(
+        name=name or m.name, f=f, x_names=list(dae.x_names), u_names=list(dae.u_names), p_names=list(dae.p_names),
+        y_names=list(dae.output_names), x_start=np.asarray(dae.x_start, float).copy(), u_start=u_start,
+        p_value=np.asarray(dae.p_value, float).copy(), units=_expand(units, names), descriptions=_expand(descriptions, names),
+        algebraic_eliminated=dae.nz,
+    )
+    if whens:
+        if dae.nz:
+            raise ModelError(f"model {m.name!r}: when-clauses are exported for models without algebraic variables")
+        _add_events(em, dae, whens)
+    bad = [v for v in (*em.x_start, *em.p_value) if not math.isfinite(v)]
+    if bad:
+        raise ModelError(f"model {m.name!r}: start and parameter values must be finite")
+    return em
