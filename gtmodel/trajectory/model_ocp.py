@@ -15,7 +15,8 @@ from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 
 __all__ = ["OptimalControl"]
 
@@ -48,6 +49,8 @@ class OptimalControl:
         The ``[parameters]`` table.
     bounds : dict of str to tuple of float
         Bounds per scalar variable name (for the plots).
+    refinement : Refinement
+        Verification tolerance and mesh refinement.
     """
 
     name: str
@@ -61,6 +64,7 @@ class OptimalControl:
     constraints: tuple[str, ...] = ()
     named_parameters: dict[str, float] = field(default_factory=dict)
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    refinement: Refinement = field(default_factory=Refinement)
 
     @property
     def model(self) -> Model:
@@ -69,7 +73,7 @@ class OptimalControl:
 
     @fill_doc(**SHARED_DOCS)
     def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> OptimizationResult:
-        """Transcribe by collocation and solve with IPOPT.
+        """Transcribe by collocation and solve with IPOPT (refining the mesh if :attr:`refinement` says so).
 
         Parameters
         ----------
@@ -80,9 +84,15 @@ class OptimalControl:
         OptimizationResult
         """
         d = self
-        tr = CollocationTranscription(
-            d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, verbose=verbose,
-            solver_options={"max_iter": d.solver.max_iter, "tol": d.solver.tol}, nominal=d.nominal,
-        )
+        if d.refinement.tolerance is not None:
+            d.optimization.verification_tolerance = d.refinement.tolerance
+        options = {"verbose": verbose, "solver_options": {"max_iter": d.solver.max_iter, "tol": d.solver.tol}, "nominal": d.nominal}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
+        if d.refinement.refine:
+            return solve_refined(
+                d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
+                max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                initial_guess=guess, **options,
+            )
+        tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **options)
         return tr.solve(initial_guess=guess)

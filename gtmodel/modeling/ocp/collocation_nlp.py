@@ -31,7 +31,7 @@ from gtmodel.modeling.dae import FlatDAE
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import lagrange_basis
 
-__all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "CollocationNLP", "transcribe"]
+__all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "CollocationNLP", "transcribe", "element_scaling"]
 
 #: CasADi-level nlpsol options passed through unchanged (others are options of the solver plugin).
 CASADI_OPTIONS = {
@@ -222,6 +222,31 @@ class CollocationNLP:
     block_sizes: list = field(default_factory=list)
 
 
+def element_scaling(N: int, fractions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Per element ``n_k`` and ``c_k`` with ``h_k = (tf - t0) / n_k`` and ``t_kj = t0 + (c_k + tau_j) h_k``.
+
+    A uniform mesh has ``n_k = N`` and ``c_k = k`` (exactly); a mesh of fractions ``f_k``
+    has ``n_k = 1 / f_k`` and ``c_k = (f_0 + ... + f_{k-1}) / f_k``.
+
+    Parameters
+    ----------
+    N : int
+        Elements.
+    fractions : numpy.ndarray or None
+        Element lengths as fractions of the horizon, shape ``(N,)``; None for uniform.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(n, c)``, each of shape ``(N,)``.
+    """
+    if fractions is None:
+        return np.full(N, float(N)), np.arange(N, dtype=float)
+    f = np.asarray(fractions, dtype=float)
+    cum = np.concatenate([[0.0], np.cumsum(f)[:-1]])
+    return 1.0 / f, cum / f
+
+
 def transcribe(
     opt: Optimization,
     dae: FlatDAE,
@@ -232,6 +257,7 @@ def transcribe(
     free_index: np.ndarray,
     inline_points: bool,
     final_time_copies: bool = True,
+    fractions: np.ndarray | None = None,
 ) -> CollocationNLP:
     """Transcribe ``opt`` by direct collocation (see the module docstring).
 
@@ -254,6 +280,9 @@ def transcribe(
     final_time_copies : bool, optional
         A copy of a free final time per element tied by equalities (banded KKT matrix;
         default), or one variable shared by all elements, placed after the final state.
+    fractions : numpy.ndarray or None, optional
+        Element lengths as fractions of the horizon, shape ``(N,)``, summing to 1 (a
+        refined mesh); default uniform.
 
     Returns
     -------
@@ -356,8 +385,9 @@ def transcribe(
     else:
         Tk = ca.SX(opt.final_time_value)
     T_first = Tk
+    n_el, c0 = element_scaling(N, fractions)
     for k in range(N):
-        h = (Tk - t0) / N
+        h = (Tk - t0) / n_el[k]
         Xk = [Xk0] + [var("x", k, j, nx, x_lb, x_ub) for j in range(1, d + 1)]
         Uk = [var("u", k, j, nu, u_lb, u_ub) for j in range(1, d + 1)]
         Zk = [var("z", k, j, nz, z_lb, z_ub) for j in range(1, d + 1)]
@@ -365,7 +395,7 @@ def transcribe(
         Us.append(Uk)
         Zs.append(Zk)
         for j in range(1, d + 1):
-            tkj = t0 + (k + co["root"][j]) * h
+            tkj = t0 + (c0[k] + co["root"][j]) * h
             xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1) if co["C"][r, j] != 0.0)
             fkj, akj, pkj = point_call(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
             first = con(ca.vertcat(h * fkj - xp, akj, pkj), point_lb, point_ub)

@@ -30,10 +30,11 @@ from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, 
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
+from gtmodel.problems.results import verification_fields
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
 from gtmodel.trajectory.model_ocp import OptimalControl
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
 
@@ -179,6 +180,7 @@ class OptimalControlKind(ProblemKind):
             solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
+            refinement=Refinement(doc.transcription.refine, doc.transcription.tolerance, doc.transcription.max_elements, doc.transcription.max_passes),
         )
 
     @fill_doc(**KIND_DOCS)
@@ -186,7 +188,8 @@ class OptimalControlKind(ProblemKind):
         """Summary fields; ``trajectories.csv`` and plots of the states and inputs.
 
         Nothing but the summary fields is written for a failed solve (its last iterate
-        is not a trajectory).
+        is not a trajectory); a solution that failed its verification (``check_failed``)
+        is written with its ``verification`` block, to be inspected.
 
         Parameters
         ----------
@@ -218,8 +221,9 @@ class OptimalControlKind(ProblemKind):
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
             "collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme},
+            **verification_fields(r),
         })
-        if r.status not in ("optimal", "acceptable"):
+        if r.status not in ("optimal", "acceptable", "check_failed"):
             return written
         r.to_csv(out / "trajectories.csv")
         written.files.append("trajectories.csv")

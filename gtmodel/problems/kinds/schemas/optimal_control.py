@@ -13,9 +13,12 @@ from pydantic import Field
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
-from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
+from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
-__all__ = ["ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "OptimalControlFile", "MAX_VALUE"]
+__all__ = [
+    "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection",
+    "OptimalControlFile", "MAX_VALUE",
+]
 
 
 #: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
@@ -110,6 +113,30 @@ class InitialGuessSection(Section):
     method: choice("linear", "start", description="linear between the boundary values, or the model's start values") = "linear"
 
 
+class TranscriptionSection(Section):
+    """``[transcription]``: verification of the solution and adaptive mesh refinement.
+
+    Parameters
+    ----------
+    refine : bool
+        Refine the mesh where the solution is least accurate (element defects, input
+        switches) until the verification passes or a limit is reached.
+    tolerance : float, optional
+        Verification tolerance: largest deviation of a state's simulation under the
+        optimal inputs from the transcribed state, scaled by ``max(1, max |x|)``;
+        default 1e-2 (``gtmodel.defaults``).
+    max_elements : int
+        Limit on the elements of a refined mesh.
+    max_passes : int
+        Limit on the solves of the refinement.
+    """
+
+    refine: Flag = Field(False, description="refine the mesh until the verification passes (h-refinement, switches located)")
+    tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation") | None = None
+    max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
+    max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
+
+
 @fill_doc(**KIND_DOCS)
 class OptimalControlFile(ProblemSchema):
     """An ``optimal_control`` problem file.
@@ -135,6 +162,8 @@ class OptimalControlFile(ProblemSchema):
         ``[initial_guess]``: how the NLP is started.
     collocation : CollocationSection
         ``[collocation]``: the transcription.
+    transcription : TranscriptionSection
+        ``[transcription]``: verification tolerance and mesh refinement.
     solver : SolverSection
         ``[solver]``: IPOPT settings.
     """
@@ -149,4 +178,5 @@ class OptimalControlFile(ProblemSchema):
     nominal: dict[str, number(gt=0, le=MAX_VALUE)] = Field(default_factory=dict, description="nominal magnitudes for scaling, e.g. F = 10.0 (variables, final_time)")
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
+    transcription: TranscriptionSection = TranscriptionSection()
     solver: SolverSection = SolverSection()
