@@ -51,6 +51,9 @@ class OptimalControl:
         Bounds per scalar variable name (for the plots).
     refinement : Refinement
         Verification tolerance and mesh refinement.
+    benchmark : dict or None
+        A published optimum to compare with: ``{"source", "published", "quantity",
+        "sign"}`` (``objective = sign * published``).
     """
 
     name: str
@@ -65,6 +68,7 @@ class OptimalControl:
     named_parameters: dict[str, float] = field(default_factory=dict)
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
     refinement: Refinement = field(default_factory=Refinement)
+    benchmark: dict[str, Any] | None = None
 
     @property
     def model(self) -> Model:

@@ -385,7 +385,10 @@ def transcribe(
     else:
         Tk = ca.SX(opt.final_time_value)
     T_first = Tk
-    n_el, c0 = element_scaling(N, fractions)
+    # plain floats: a NumPy scalar times an SX takes NumPy's slow ufunc dispatch
+    n_el_a, c0_a = element_scaling(N, fractions)
+    n_el, c0 = n_el_a.tolist(), c0_a.tolist()
+    C, D, B, root = co["C"].tolist(), co["D"].tolist(), co["B"].tolist(), co["root"].tolist()
     for k in range(N):
         h = (Tk - t0) / n_el[k]
         Xk = [Xk0] + [var("x", k, j, nx, x_lb, x_ub) for j in range(1, d + 1)]
@@ -395,13 +398,13 @@ def transcribe(
         Us.append(Uk)
         Zs.append(Zk)
         for j in range(1, d + 1):
-            tkj = t0 + (c0[k] + co["root"][j]) * h
-            xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1) if co["C"][r, j] != 0.0)
+            tkj = t0 + (c0[k] + root[j]) * h
+            xp = sum(C[r][j] * Xk[r] for r in range(d + 1) if C[r][j] != 0.0)
             fkj, akj, pkj = point_call(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
             first = con(ca.vertcat(h * fkj - xp, akj, pkj), point_lb, point_ub)
             rows_point.append((k, j, first))
-            J = J + co["B"][j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
-        xend = sum(co["D"][r] * Xk[r] for r in range(d + 1) if co["D"][r] != 0.0)
+            J = J + B[j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
+        xend = sum(D[r] * Xk[r] for r in range(d + 1) if D[r] != 0.0)
         Xk0 = var("x", k + 1, 0, nx, x_lb, x_ub)
         rows_cont.append((k, con(Xk0 - xend, np.zeros(1), np.zeros(1))))
         if copies and k < N - 1:

@@ -174,6 +174,9 @@ class OptimalControlKind(ProblemKind):
         if doc.initial_guess.method == "linear":
             _linear_guess(opt, boundary, variables)
         col = doc.collocation
+        bench = doc.benchmark.model_dump() if doc.benchmark is not None else None
+        if bench is not None and bench["sign"] not in (1.0, -1.0):
+            raise file.fail("benchmark.sign", "1 or -1", bench["sign"])
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
             method=Collocation(col.elements, col.points, col.scheme),
@@ -181,6 +184,7 @@ class OptimalControlKind(ProblemKind):
             objective=doc.optimization.objective, constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
             refinement=Refinement(doc.transcription.refine, doc.transcription.tolerance, doc.transcription.max_elements, doc.transcription.max_passes),
+            benchmark=bench,
         )
 
     @fill_doc(**KIND_DOCS)
@@ -223,6 +227,12 @@ class OptimalControlKind(ProblemKind):
             "collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme},
             **verification_fields(r),
         })
+        if d.benchmark is not None:
+            b = d.benchmark
+            value = b["sign"] * r.objective
+            written.fields["benchmark"] = {
+                **b, "value": value, "relative_error": abs(value - b["published"]) / max(abs(b["published"]), 1e-300),
+            }
         if r.status not in ("optimal", "acceptable", "check_failed"):
             return written
         r.to_csv(out / "trajectories.csv")

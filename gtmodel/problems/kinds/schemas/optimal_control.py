@@ -13,10 +13,11 @@ from pydantic import Field
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
-from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, Text, choice, integer, number, vector
 
 __all__ = [
     "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection",
+    "BenchmarkSection",
     "OptimalControlFile", "MAX_VALUE",
 ]
 
@@ -137,6 +138,28 @@ class TranscriptionSection(Section):
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
 
 
+class BenchmarkSection(Section):
+    """``[benchmark]``: the published optimum a benchmark problem is checked against.
+
+    Parameters
+    ----------
+    source : str
+        Where the value is published (author, year, problem number).
+    published : float
+        The published optimum.
+    quantity : str
+        What the value is (``"final time [s]"``, ``"objective"``).
+    sign : float
+        ``objective = sign * published`` (``-1`` where a maximum is written as the
+        minimum of its negative).
+    """
+
+    source: NonEmptyText = Field(description='where the value is published, e.g. "COPS 3.0, problem 4 (Dolan, More, Munson 2004)"')
+    published: number(description="the published optimum")
+    quantity: Text = Field("objective", description='what the value is, e.g. "final time [s]"')
+    sign: number(ge=-1, le=1, description="objective = sign * published: 1, or -1 for a maximum written as minimise its negative") = 1.0
+
+
 @fill_doc(**KIND_DOCS)
 class OptimalControlFile(ProblemSchema):
     """An ``optimal_control`` problem file.
@@ -164,6 +187,8 @@ class OptimalControlFile(ProblemSchema):
         ``[collocation]``: the transcription.
     transcription : TranscriptionSection
         ``[transcription]``: verification tolerance and mesh refinement.
+    benchmark : BenchmarkSection, optional
+        ``[benchmark]``: a published optimum to compare with (benchmark problems).
     solver : SolverSection
         ``[solver]``: IPOPT settings.
     """
@@ -179,4 +204,5 @@ class OptimalControlFile(ProblemSchema):
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
     transcription: TranscriptionSection = TranscriptionSection()
+    benchmark: BenchmarkSection | None = None
     solver: SolverSection = SolverSection()
