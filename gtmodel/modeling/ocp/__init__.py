@@ -12,7 +12,10 @@
   layout); :mod:`~gtmodel.modeling.ocp.collocation_derivatives`: its Jacobian and Hessian
   assembled from per-point derivatives; :mod:`~gtmodel.modeling.ocp.collocation_function`:
   warm-started re-solves as one CasADi Function;
-* :mod:`~gtmodel.modeling.ocp.result`: :class:`OptimizationResult` and the collocation data.
+* :mod:`~gtmodel.modeling.ocp.result`: :class:`OptimizationResult` and the collocation data;
+* :mod:`~gtmodel.modeling.ocp.verification`: :func:`verify`, every solution simulated under
+  its optimal inputs (``check_failed`` beyond the tolerance);
+  :mod:`~gtmodel.modeling.ocp.refinement`: :func:`solve_refined`, adaptive mesh refinement.
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ from gtmodel.modeling.ocp.expressions import (
 )
 from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult
+from gtmodel.modeling.ocp.verification import Verification, verify
+from gtmodel.modeling.ocp.refinement import solve_refined
 
 __all__ = [
     "Optimization",
@@ -43,4 +48,7 @@ __all__ = [
     "solve",
     "OptimizationResult",
     "CollocationData",
+    "Verification",
+    "verify",
+    "solve_refined",
 ]

@@ -18,12 +18,20 @@ choose the elements to split:
   within the element, so that the switch moves onto an element boundary. Repeated, this
   locates the switch time to the width of the element that holds it.
 
-The result of the last pass is returned with ``refinement``: one dict per pass
-(elements, objective, status, largest defect, switches, verification deviation).
+A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
+:data:`SPURIOUS_DEVIATION` has found a spurious
+minimum of the NLP (the COPS hanging chain on 20 elements: its length shrinks inside the
+first element): the next pass starts from a repaired guess instead of the spurious
+trajectory (the inputs of the failing elements interpolated from their neighbours', the
+states simulated under those inputs). The result of the pass with the smallest
+verification deviation (normally the last) is returned with ``refinement``: one dict per pass (elements, objective, status, largest
+defect, switches, verification deviation).
 """
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import logging
 from typing import Any
 
@@ -34,9 +42,10 @@ from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
+from gtmodel.modeling.ocp.verification import verify
 from gtmodel.status import Status
 
-__all__ = ["solve_refined", "refine_mesh", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION"]
+__all__ = ["solve_refined", "refine_mesh", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION", "SPURIOUS", "SPURIOUS_DEVIATION"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -47,6 +56,13 @@ MAX_PASSES = 10
 #: An element holds a switch when an input changes by more than this fraction of its
 #: range over the horizon between the collocation points of the element.
 SWITCH_FRACTION = 0.25
+#: A verification deviation this many times the tolerance, and above
+#: :data:`SPURIOUS_DEVIATION`, marks a spurious minimum of the NLP rather than a
+#: discretisation error: the next pass starts from a repaired guess.
+SPURIOUS = 100.0
+#: Scaled deviation above which a failed verification is taken for a spurious minimum (the
+#: hanging chain's: 0.24; the L1 motions on 12 elements: up to 0.06).
+SPURIOUS_DEVIATION = 0.1
 
 
 def switch_elements(result: OptimizationResult) -> dict[int, float]:
@@ -167,6 +183,7 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
     switches = switch_elements(result)
     for k, tau in switches.items():
         if frac[k] > tolerance:
+            # the switch explains the element's defect: one cut, at the switch
             plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), [tau])
     budget = max_elements - N
     split: list[int] = []
@@ -196,6 +213,33 @@ def _guess_from(result: OptimizationResult) -> dict[str, Any]:
         for name, values in group.items():
             out[name] = (t[keep], np.asarray(values, dtype=float)[keep])
     return out
+
+
+def _repaired_guess(result: OptimizationResult, tolerance: float) -> dict[str, Any]:
+    """A guess away from a spurious minimum: the inputs of the elements whose defect exceeds
+    the tolerance interpolated from the other elements', the states simulated under them."""
+    col, v = result.collocation, result.verification
+    bad = np.asarray(v.element_errors) > tolerance
+    guess = _guess_from(result)
+    if col is None or not bad.any() or bad.all() or col.uc.shape[2] == 0:
+        return guess
+    breaks = col.breaks()
+    tc = breaks[:-1, None] + col.tau_root[None, 1:] * np.diff(breaks)[:, None]  # (N, d)
+    uc = col.uc.copy()
+    for i in range(uc.shape[2]):
+        uc[bad, :, i] = np.interp(tc[bad], tc[~bad].ravel(), uc[~bad, :, i].ravel())
+    repaired = copy.copy(result)
+    repaired.collocation = dataclasses.replace(col, uc=uc)
+    sim = verify(repaired, tolerance)
+    if sim.simulated.size == 0:
+        return guess
+    t_sim = np.concatenate([[col.t0], sim.t])
+    x_sim = np.vstack([col.xc[0, 0][None, :], sim.simulated])
+    for name, sl in result.dae.x_vars.items():
+        guess[name] = (t_sim, x_sim[:, sl])
+    for name, sl in result.dae.u_vars.items():
+        guess[name] = (tc.ravel(), uc.reshape(-1, uc.shape[2])[:, sl])
+    return guess
 
 
 def solve_refined(
@@ -237,9 +281,9 @@ def solve_refined(
     Returns
     -------
     OptimizationResult
-        The last pass's result, with ``refinement`` (one dict per pass). Its status is
-        that of the last solve: ``check_failed`` if the limits stopped the refinement
-        before the verification passed.
+        The result of the pass with the smallest verification deviation (normally the
+        last), with ``refinement`` (one dict per pass); ``check_failed`` if the limits
+        stopped the refinement before the verification passed.
 
     Raises
     ------
@@ -256,6 +300,7 @@ def solve_refined(
     guess: Any = initial_guess
     history: list[dict[str, Any]] = []
     result: OptimizationResult | None = None
+    best: OptimizationResult | None = None  # the last pass that ended with a solution
     for n_pass in range(int(max_passes)):
         tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=True, **transcription)
         result = tr.solve(initial_guess=guess)
@@ -267,6 +312,8 @@ def solve_refined(
         history.append(entry)
         if v is None:  # the solve failed: nothing to refine from
             break
+        if best is None or v.max_scaled_deviation <= best.verification.max_scaled_deviation:
+            best = result
         entry["max_scaled_deviation"] = v.max_scaled_deviation
         entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
         new, info = refine_mesh(result, tol, max_elements)
@@ -275,10 +322,21 @@ def solve_refined(
             break
         entry["split"] = len(info["split"])
         mesh = new
-        guess = _guess_from(result)
+        if v.max_scaled_deviation > max(SPURIOUS * tol, SPURIOUS_DEVIATION):
+            # not a discretisation error but a spurious minimum of the NLP: start the next
+            # pass away from it (its own trajectory would lead back)
+            entry["restart"] = "inputs of the failing elements interpolated, states simulated"
+            guess = _repaired_guess(result, tol)
+        else:
+            guess = _guess_from(result)
         _log.info("mesh refinement of %s: pass %d, %d elements, objective %.10g, splitting %d", tr.dae.name, n_pass + 1,
                   tr.elements, result.objective, len(info["split"]))
     assert result is not None
+    if best is not None and best is not result:
+        _log.warning("mesh refinement of %s: the last pass ended %s (deviation %s); returning the verified closest pass",
+                     optimization.model.name, result.status,
+                     "none" if result.verification is None else f"{result.verification.max_scaled_deviation:.3g}")
+        result = best
     result.refinement = history
     if result.status == Status.OPTIMAL and len(history) == max_passes and history[-1].get("split"):
         _log.warning("mesh refinement of %s stopped at the pass limit (%d) with elements still to split", optimization.model.name, max_passes)
