@@ -347,7 +347,8 @@ class CollocationTranscription:
         Raises
         ------
         InputError
-            If parameters or guesses are malformed.
+            If parameters or guesses are malformed, or the problem's verification
+            tolerance is not a positive number.
         """
         opt, dae = self.optimization, self.dae
         merged = {k: v for k, v in opt.parameters.items()}

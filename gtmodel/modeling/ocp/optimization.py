@@ -21,7 +21,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel.defaults import defaults
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
 from gtmodel.modeling.simulation.model import Model
@@ -134,36 +133,9 @@ class Optimization:
         self._flat: FlatDAE | None = None
 
     # ------------------------------------------------------------------ helpers
-    #: Tolerance of the verification of this problem's solutions (None: the default
-    #: ``defaults["ocp.verification_tolerance"]``; :mod:`gtmodel.modeling.ocp.verification`).
-    _verification_tolerance: float | None = None
-
-    @property
-    def verification_tolerance(self) -> float:
-        """Tolerance of the verification by simulation (scaled deviation of the states).
-
-        Default ``gtmodel.defaults.defaults["ocp.verification_tolerance"]`` (1e-2); a
-        solution whose states deviate more from their simulation under its optimal inputs
-        is ``check_failed`` (:mod:`gtmodel.modeling.ocp.verification`).
-
-        Raises
-        ------
-        InputError
-            On setting a value that is not a positive finite number.
-        """
-        if self._verification_tolerance is None:
-            return float(defaults["ocp.verification_tolerance"])
-        return self._verification_tolerance
-
-    @verification_tolerance.setter
-    def verification_tolerance(self, value: float) -> None:
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            raise InputError(f"verification_tolerance must be a positive number, got {value!r}") from None
-        if not (np.isfinite(v) and v > 0):
-            raise InputError(f"verification_tolerance must be a positive finite number, got {value!r}")
-        self._verification_tolerance = v
+    #: Tolerance of the verification by simulation of this problem's solutions, a positive
+    #: number (:mod:`gtmodel.modeling.ocp.verification`); None: ``defaults["ocp.verification_tolerance"]``.
+    verification_tolerance: float | None = None
 
     @property
     def final_time(self) -> ca.SX:

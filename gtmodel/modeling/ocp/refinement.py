@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
@@ -270,8 +271,9 @@ def solve_refined(
     max_passes : int, optional
         Limit on the solves; default :data:`MAX_PASSES`.
     tolerance : float, optional
-        Verification tolerance; default the problem's
-        :attr:`Optimization.verification_tolerance`.
+        Verification tolerance, set as the problem's
+        :attr:`Optimization.verification_tolerance`; default the problem's (or
+        ``defaults["ocp.verification_tolerance"]``).
     initial_guess : OptimizationResult or mapping, optional
         Guess of the first pass (see :meth:`CollocationTranscription.solve`).
     **transcription
@@ -288,7 +290,7 @@ def solve_refined(
     Raises
     ------
     InputError
-        On invalid limits or transcription arguments.
+        On invalid limits, tolerance or transcription arguments.
     """
     for label, value, lo in (("max_elements", max_elements, elements), ("max_passes", max_passes, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
@@ -296,6 +298,12 @@ def solve_refined(
     if tolerance is not None:
         optimization.verification_tolerance = tolerance
     tol = optimization.verification_tolerance
+    try:
+        tol = float(defaults["ocp.verification_tolerance"] if tol is None else tol)
+    except (TypeError, ValueError):
+        raise InputError(f"tolerance: expected a positive number, got {tol!r}") from None
+    if not (np.isfinite(tol) and tol > 0):
+        raise InputError(f"tolerance: expected a positive number, got {tol!r}")
     mesh: np.ndarray | None = None
     guess: Any = initial_guess
     history: list[dict[str, Any]] = []

@@ -185,7 +185,10 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     """
     if result.collocation is None or result.dae is None:
         raise InputError("verify: this result holds no collocation data (nothing to simulate)")
-    tolerance = float(defaults["ocp.verification_tolerance"] if tolerance is None else tolerance)
+    try:
+        tolerance = float(defaults["ocp.verification_tolerance"] if tolerance is None else tolerance)
+    except (TypeError, ValueError):
+        raise InputError(f"verify: tolerance must be a positive number, got {tolerance!r}") from None
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise InputError(f"verify: tolerance must be a positive number, got {tolerance!r}")
     start = _time.perf_counter()
