@@ -144,3 +144,29 @@ def test_refine_mesh_splits_elements_above_the_tolerance():
 def test_bad_refinement_limits_are_refused(kwargs, match):
     with pytest.raises(InputError, match=match):
         solve_refined(step_response(10, 3), elements=10, **kwargs)
+
+
+class AlgebraicFirstOrder(Model):
+    """x' = -x + z, 0 = z - 2 u: a DAE (verified with IDAS)."""
+
+    def __init__(self) -> None:
+        super().__init__("algebraic_first_order")
+        x, z, u = self.state("x"), self.algebraic("z"), self.input("u")
+        self.equation(self.der(x), -x + z)
+        self.equation(z, 2 * u)
+
+
+def test_a_dae_is_verified_with_idas():
+    m = AlgebraicFirstOrder()
+    opt = Optimization(m, final_time=2.0)
+    x, u = m.variables("state")["x"], m.variables("input")["u"]
+    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
+    opt.add_point_constraint(x, at="final", lb=1.0, ub=1.0)
+    opt.set_objective(lagrange=u**2)
+    res = CollocationTranscription(opt, elements=10).solve()
+    v = res.verification
+    assert res.status == Status.OPTIMAL and v.integrator.startswith("idas")
+    # minimum energy of x' = -x + 2 u from 0 to x(2) = 1 (Pontryagin): u proportional to e^t,
+    # x(t) = sinh(t) / sinh(2); the simulation under the optimal input follows the closed form
+    np.testing.assert_allclose(v.simulated[:, 0], np.sinh(v.t) / np.sinh(2.0), atol=1e-4)
+    assert v.passed and v.max_abs_deviation < 1e-4
