@@ -200,6 +200,15 @@ def _print_summary(summary: dict, out: Path) -> None:
     ):
         if summary.get(key) is not None:
             lines.append(f"{label:<12} {fmt.format(summary[key])}")
+    ver = summary.get("verification")
+    if isinstance(ver, dict):
+        dev = ver.get("max_scaled_deviation")
+        dev_text = f"{dev:.2e}" if isinstance(dev, float) else str(dev)
+        verdict = "passed" if ver.get("passed") else "FAILED"
+        lines.append(f"verified     {verdict}: deviation {dev_text} (tolerance {ver.get('tolerance'):.0e}) from a simulation")
+    if summary.get("refinement"):
+        last = summary["refinement"][-1]
+        lines.append(f"refined      {len(summary['refinement'])} passes, {last.get('elements')} elements")
     if "fraction_at_force_bound" in summary:
         frac = ", ".join(f"{100 * f:.0f} %" for f in summary["fraction_at_force_bound"])
         lines.append(f"at bound     {frac} of the samples (tau1, tau2, tau3)")

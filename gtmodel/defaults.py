@@ -39,6 +39,16 @@ Keys
     same). L1 minimum-time problem, fresh solver, quiet machine (issue 17): 139 -> 98 ms per
     iteration at 400 elements, 11.4 -> 10.5 at 50, the same 93 and 49 iterations and final
     times. 0 is not allowed: doubling 0 stays 0, and the solve fails.
+``ocp.verification_tolerance``
+    Tolerance of the verification of every collocation solution
+    (:mod:`gtmodel.modeling.ocp.verification`): the largest deviation of a state's
+    simulation under the optimal inputs from the transcribed state, scaled by
+    ``max(1, max |x|)``; a solution beyond it is ``check_failed``, never ``optimal``.
+    An :class:`~gtmodel.modeling.Optimization` may set its own (a problem file:
+    ``[transcription] tolerance``). 1e-2 flags spurious minima of the NLP (the COPS
+    hanging chain on 20 elements: 0.24) and keeps the shipped L1 motions on the thesis'
+    50-element mesh, whose bang-bang forces switch inside elements (largest deviation
+    3.6e-3 to 4.0e-3 of the TCP velocity); ask for 1e-3 or less with ``refine``.
 ``ipopt.warm_start``
     IPOPT options of warm starts: start from the given primal-dual point with a small
     barrier parameter and without pushing it off the bounds.
@@ -81,6 +91,7 @@ _FACTORY: dict[str, Any] = {
     "nlp.max_iter": 3000,
     "nlp.tol": 1e-8,
     "ipopt.options": {"mumps_mem_percent": 20},
+    "ocp.verification_tolerance": 1e-2,
     "ipopt.warm_start": {
         "warm_start_init_point": "yes",
         "mu_init": 1e-4,

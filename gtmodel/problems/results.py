@@ -24,7 +24,7 @@ from typing import Any, Mapping
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
-__all__ = ["check_output_folder", "ResultFolder", "json_safe", "write_json", "failure_summary"]
+__all__ = ["check_output_folder", "ResultFolder", "json_safe", "write_json", "failure_summary", "verification_fields"]
 
 
 def json_safe(value: Any) -> Any:
@@ -118,6 +118,34 @@ def failure_summary(problem: str | Path, error: BaseException | str, status: Sta
         message = f"{type(error).__name__}: {error}"
     out: dict[str, Any] = {"problem": str(problem), "name": name if name is not None else Path(problem).stem, "kind": kind, "status": Status(status), "message": message}
     out.update({k: None for k in empty_fields})
+    return out
+
+
+def verification_fields(result: Any) -> dict[str, Any]:
+    """The ``verification`` (and ``refinement``) summary fields of a collocation result.
+
+    Parameters
+    ----------
+    result : object
+        A result with ``verification`` (a
+        :class:`gtmodel.modeling.ocp.verification.Verification` or None) and
+        ``refinement`` (list of dict) attributes, e.g. an
+        :class:`~gtmodel.modeling.OptimizationResult`; anything else gives no fields.
+
+    Returns
+    -------
+    dict
+        ``{"verification": {...}}`` when the result was verified (``passed``,
+        ``tolerance``, largest deviations, per-state deviations, integrator), plus
+        ``{"refinement": [...]}`` (one entry per pass) when its mesh was refined; else
+        ``{"verification": None}`` for a collocation result that was not verified.
+    """
+    if not hasattr(result, "verification"):
+        return {}
+    v = result.verification
+    out: dict[str, Any] = {"verification": v.to_dict() if v is not None else None}
+    if getattr(result, "refinement", None):
+        out["refinement"] = json_safe(result.refinement)
     return out
 
 

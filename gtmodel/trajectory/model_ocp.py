@@ -17,7 +17,8 @@ from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
+from gtmodel.modeling.ocp.refinement import solve_refined
 
 __all__ = ["OptimalControl", "MultipleShooting"]
 
@@ -74,6 +75,11 @@ class OptimalControl:
         The ``[parameters]`` table.
     bounds : dict of str to tuple of float
         Bounds per scalar variable name (for the plots).
+    refinement : Refinement
+        Verification tolerance and mesh refinement.
+    benchmark : dict or None
+        A published optimum to compare with: ``{"source", "published", "quantity",
+        "sign"}`` (``objective = sign * published``).
     estimation : dict or None
         After :meth:`solve` of a problem with data fits: the residual statistics and the
         estimates with standard deviations
@@ -92,6 +98,8 @@ class OptimalControl:
     constraints: tuple[str, ...] = ()
     named_parameters: dict[str, float] = field(default_factory=dict)
     bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    refinement: Refinement = field(default_factory=Refinement)
+    benchmark: dict[str, Any] | None = None
     estimation: dict[str, Any] | None = None
 
     @property
@@ -101,7 +109,7 @@ class OptimalControl:
 
     @fill_doc(**SHARED_DOCS)
     def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> OptimizationResult:
-        """Transcribe (collocation or multiple shooting) and solve with IPOPT.
+        """Transcribe (collocation or multiple shooting) and solve with IPOPT (refining a collocation mesh if :attr:`refinement` says so).
 
         Parameters
         ----------
@@ -112,6 +120,8 @@ class OptimalControl:
         OptimizationResult
         """
         d = self
+        if d.refinement.tolerance is not None:
+            d.optimization.verification_tolerance = d.refinement.tolerance
         options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
         if isinstance(d.method, MultipleShooting):
             m = d.method
@@ -119,11 +129,16 @@ class OptimalControl:
                                              steps=m.steps, verbose=verbose, solver_options=options)
             same = isinstance(previous, OptimizationResult) and previous.collocation is not None
             return self._estimated(shooting, shooting.solve(initial_guess=previous if warm_start and same else None))
-        tr = CollocationTranscription(
-            d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, verbose=verbose,
-            solver_options={"max_iter": d.solver.max_iter, "tol": d.solver.tol}, nominal=d.nominal,
-        )
+        kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
+        if d.refinement.refine:
+            self.estimation = None  # refused with data fits on load: the statistics need one fixed mesh
+            return solve_refined(
+                d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
+                max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                initial_guess=guess, **kwargs,
+            )
+        tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **kwargs)
         return self._estimated(tr, tr.solve(initial_guess=guess))
 
     def _estimated(self, transcription: Any, result: OptimizationResult) -> OptimizationResult:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from gtmodel.errors import InputError
 
-__all__ = ["Collocation", "SolverSettings", "SCHEMES", "NLP_SOLVERS"]
+__all__ = ["Collocation", "SolverSettings", "Refinement", "SCHEMES", "NLP_SOLVERS"]
 
 #: Collocation point families.
 SCHEMES = ("radau", "legendre")
@@ -95,3 +95,39 @@ class SolverSettings:
         _positive_int("max_iter", self.max_iter)
         if isinstance(self.tol, bool) or not isinstance(self.tol, (int, float)) or not 0 < self.tol < float("inf"):
             raise InputError(f"tol: expected a positive finite number, got {self.tol!r}")
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """Verification and adaptive mesh refinement of a collocation solution.
+
+    Parameters
+    ----------
+    refine : bool
+        Refine the mesh (:func:`gtmodel.modeling.ocp.refinement.solve_refined`) until the
+        verification passes, or solve once on the given mesh (verified all the same).
+    tolerance : float or None
+        Verification tolerance (scaled deviation of the states from their simulation,
+        :mod:`gtmodel.modeling.ocp.verification`); None for the default
+        ``defaults["ocp.verification_tolerance"]``.
+    max_elements : int
+        Limit on the elements of a refined mesh.
+    max_passes : int
+        Limit on the solves of the refinement.
+
+    Raises
+    ------
+    InputError
+        A value out of range (naming it).
+    """
+
+    refine: bool = False
+    tolerance: float | None = None
+    max_elements: int = 400
+    max_passes: int = 10
+
+    def __post_init__(self) -> None:
+        _positive_int("max_elements", self.max_elements)
+        _positive_int("max_passes", self.max_passes)
+        if self.tolerance is not None and not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
+            raise InputError(f"tolerance: expected a number in (0, 1), got {self.tolerance!r}")

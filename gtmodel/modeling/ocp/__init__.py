@@ -17,7 +17,10 @@
 * :mod:`~gtmodel.modeling.ocp.timed`: the values of timed variables ``x(t)`` and integrals
   in a collocation NLP;
 * :mod:`~gtmodel.modeling.ocp.guesses`: initial guesses from a table or a simulation;
-* :mod:`~gtmodel.modeling.ocp.result`: :class:`OptimizationResult` and the collocation data.
+* :mod:`~gtmodel.modeling.ocp.result`: :class:`OptimizationResult` and the collocation data;
+* :mod:`~gtmodel.modeling.ocp.verification`: :func:`verify`, every solution simulated under
+  its optimal inputs (``check_failed`` beyond the tolerance);
+  :mod:`~gtmodel.modeling.ocp.refinement`: :func:`solve_refined`, adaptive mesh refinement.
 """
 
 from __future__ import annotations
@@ -35,6 +38,8 @@ from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.modeling.ocp.guesses import guess_by_simulation, guess_from_table
+from gtmodel.modeling.ocp.verification import Verification, verify
+from gtmodel.modeling.ocp.refinement import solve_refined
 
 __all__ = [
     "Optimization",
@@ -53,4 +58,7 @@ __all__ = [
     "ShootingTranscription",
     "guess_by_simulation",
     "guess_from_table",
+    "Verification",
+    "verify",
+    "solve_refined",
 ]

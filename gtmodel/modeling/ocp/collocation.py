@@ -38,10 +38,11 @@ import numpy as np
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
-from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, merge_options, transcribe
+from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, _vector_value
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
+from gtmodel.modeling.ocp.verification import verify
 from gtmodel.status import Status
 
 __all__ = ["CollocationTranscription", "solve"]
@@ -118,6 +119,14 @@ class CollocationTranscription:
         matrix is banded, or as one variable shared by all elements (a dense row and
         column). The same optimum (see :mod:`gtmodel.modeling.ocp.collocation_nlp`); default
         banded from :data:`BANDED_MIN_ELEMENTS` elements on.
+    mesh : array_like, optional
+        Relative element lengths, shape ``(N,)`` (positive; normalised to sum to 1), for
+        a non-uniform mesh (mesh refinement, :mod:`gtmodel.modeling.ocp.refinement`);
+        ``elements`` is then ``N``. Default: ``elements`` uniform elements.
+    verify : bool, optional
+        Verify every solution by simulation (:func:`gtmodel.modeling.ocp.verification.verify`,
+        with the problem's :attr:`Optimization.verification_tolerance`): the result's
+        ``verification``; a solution that fails it is ``check_failed``. Default True.
 
     Raises
     ------
@@ -142,9 +151,19 @@ class CollocationTranscription:
         compile: bool = False,
         solver: str = "ipopt",
         banded: bool | None = None,
+        mesh: Any = None,
+        verify: bool = True,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
+        self.fractions: np.ndarray | None = None
+        if mesh is not None:
+            f = np.asarray(mesh, dtype=float).reshape(-1)
+            if f.size < 1 or not np.all(np.isfinite(f) & (f > 0)):
+                raise InputError(f"mesh: expected positive finite relative element lengths, got {mesh!r}")
+            self.fractions = f / f.sum()
+            elements = int(f.size)
+        self.verify = bool(verify)
         if not isinstance(elements, (int, np.integer)) or isinstance(elements, bool) or elements < 1:
             raise InputError(f"elements must be a positive integer, got {elements!r}")
         if not isinstance(points, (int, np.integer)) or isinstance(points, bool) or not 1 <= points <= 9:
@@ -221,7 +240,8 @@ class CollocationTranscription:
             # weigh a change of one shared variable
             self.nominal["tf"] = self.nominal["tf"] * np.sqrt(self.elements)
         nlp = transcribe(
-            opt, dae, self.elements, self.points, co, self.nominal, free_index, inline_points=not assembled, final_time_copies=self.banded
+            opt, dae, self.elements, self.points, co, self.nominal, free_index, inline_points=not assembled, final_time_copies=self.banded,
+            fractions=self.fractions,
         )
         self.nlp = nlp
         wv, gv, P_nlp = nlp.w, nlp.g, nlp.p
@@ -231,12 +251,13 @@ class CollocationTranscription:
         self._fg = ca.Function("fg", [wv, P_nlp], [nlp.f, gv])
         self.special_function = ca.Function("special", [wv, P_nlp], [nlp.special])
         self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
-        self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()))
+        self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()),
+                    None if self.fractions is None else tuple(self.fractions.tolist()))
         self.derivative_functions: dict[str, ca.Function] = {}
         self.evaluation = "CasADi interpreter (whole NLP graph)"
         if assembled:
             jac_g, hess_lag, self.evaluation = assembled_derivatives(
-                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile
+                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions
             )
             self.derivative_functions = {"jac_g": jac_g, "hess_lag": hess_lag}
         self.solver = self._nlpsol(self.options)
@@ -258,7 +279,7 @@ class CollocationTranscription:
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
         opt, dae, co = self.optimization, self.dae, self._co
         N, t0 = self.elements, opt.start_time
-        h = (tf_guess - t0) / N
+        n_el, c0 = element_scaling(N, self.fractions)
         fns = {}
         for cat, vars_, start in (("x", dae.x_vars, dae.x_start), ("z", dae.z_vars, dae.z_start), ("u", dae.u_vars, None)):
             for name, sl in vars_.items():
@@ -277,7 +298,7 @@ class CollocationTranscription:
             if kind == "pf":
                 w0.append(self._free_start(pvec))
                 continue
-            t = t0 + (k + co["root"][j]) * h
+            t = t0 + (c0[k] + co["root"][j]) * (tf_guess - t0) / n_el[k] if k < N else tf_guess
             vals = np.zeros(size)
             for (cat, _name), (sl, f) in fns.items():
                 if cat == kind:
@@ -327,7 +348,8 @@ class CollocationTranscription:
         Raises
         ------
         InputError
-            If parameters or guesses are malformed.
+            If parameters or guesses are malformed, or the problem's verification
+            tolerance is not a positive number.
         """
         opt, dae = self.optimization, self.dae
         merged = {k: v for k, v in opt.parameters.items()}
@@ -394,7 +416,35 @@ class CollocationTranscription:
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
         res.lam_w, res.lam_g = lam
+        if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+            self.check(res)
         return res
+
+    def check(self, result: OptimizationResult) -> OptimizationResult:
+        """Verify a solution by simulation and downgrade it to ``check_failed`` if it fails.
+
+        Sets ``result.verification`` (:func:`gtmodel.modeling.ocp.verification.verify`
+        with the problem's :attr:`Optimization.verification_tolerance`); an ``optimal``
+        or ``acceptable`` result whose verification fails becomes ``check_failed`` with
+        the verification's message.
+
+        Parameters
+        ----------
+        result : OptimizationResult
+            A result of this transcription.
+
+        Returns
+        -------
+        OptimizationResult
+            ``result``, changed in place.
+        """
+        v = verify(result, self.optimization.verification_tolerance)
+        result.verification = v
+        if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+            _log.warning("collocation solve of %s: %s was %s, but %s", self.dae.name, result.message, result.status, v.message)
+            result.message = f"{result.message}; verification failed: {v.message}"
+            result.status = Status.CHECK_FAILED
+        return result
 
     def warm_solver(self) -> ca.Function:
         """The nlpsol of warm starts (built once; shares the derivative functions).
@@ -461,6 +511,7 @@ class CollocationTranscription:
             xc=np.array(xc).reshape(dae.nx, N, d + 1).transpose(1, 2, 0),
             uc=np.array(uc).reshape(dae.nu, N, d).transpose(1, 2, 0),
             zc=np.array(zc).reshape(dae.nz, N, d).transpose(1, 2, 0),
+            fractions=None if self.fractions is None else self.fractions.copy(),
         )
         t = colloc.mesh()
         xs, us, zs = colloc.evaluate(t)

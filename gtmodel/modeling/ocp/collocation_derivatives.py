@@ -24,7 +24,7 @@ import numpy as np
 import scipy.sparse
 
 from gtmodel._compiler import compiled_function
-from gtmodel.modeling.ocp.collocation_nlp import CollocationNLP
+from gtmodel.modeling.ocp.collocation_nlp import CollocationNLP, element_scaling
 from gtmodel.modeling.ocp.optimization import Optimization
 
 __all__ = ["assembled_derivatives", "COMPILE_FLAGS"]
@@ -123,6 +123,7 @@ def assembled_derivatives(
     noms: Any,
     free_index: np.ndarray,
     compile: bool,
+    fractions: np.ndarray | None = None,
 ) -> tuple[ca.Function, ca.Function, str]:
     """The ``jac_g`` and ``hess_lag`` Functions of ``casadi.nlpsol`` for ``nlp``.
 
@@ -144,6 +145,8 @@ def assembled_derivatives(
         Model-parameter indices of the free parameters.
     compile : bool
         Evaluate the point derivatives through compiled C (cached), else interpreted.
+    fractions : numpy.ndarray or None, optional
+        Element lengths as fractions of the horizon (a refined mesh); default uniform.
 
     Returns
     -------
@@ -170,6 +173,8 @@ def assembled_derivatives(
     cols = np.zeros((M, nv), dtype=int)
     rows = np.zeros((M, nr), dtype=int)
     cpos = np.zeros(M)
+    nel = np.zeros(M)
+    n_el, c0 = element_scaling(N, fractions)
     bw = np.zeros(M)
     pf_cols = offs[("pf", 0, 0)] + np.arange(npf) if npf else np.zeros(0, dtype=int)
     for m, (k, j, first) in enumerate(nlp.rows_point):
@@ -178,7 +183,8 @@ def assembled_derivatives(
             [offs[("x", k, j)] + np.arange(nx), offs[("z", k, j)] + np.arange(nz), offs[("u", k, j)] + np.arange(nu), tf_col, pf_cols]
         )
         rows[m] = first + np.arange(nr)
-        cpos[m] = k + co["root"][j]
+        cpos[m] = c0[k] + co["root"][j]
+        nel[m] = n_el[k]
         bw[m] = co["B"][j - 1]
 
     w = ca.MX.sym("x", nw)
@@ -202,7 +208,7 @@ def assembled_derivatives(
         P,
         ca.DM(cpos).T,
         float(noms["tf"][0]),
-        float(N),
+        float(N) if fractions is None else ca.DM(nel).T,
     ]
     jm = jac_fn.map(M, "serial")(*args)
     hm = hess_fn.map(M, "serial")(*args, ca.DM(bw).T, lam_f, gather(lam_g, rows))

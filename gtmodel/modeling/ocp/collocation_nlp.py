@@ -32,7 +32,7 @@ from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import lagrange_basis
 from gtmodel.modeling.ocp.timed import PointArgs, special_values
 
-__all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "CollocationNLP", "transcribe"]
+__all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "CollocationNLP", "transcribe", "element_scaling"]
 
 #: CasADi-level nlpsol options passed through unchanged (others are options of the solver plugin).
 CASADI_OPTIONS = {
@@ -227,6 +227,31 @@ class CollocationNLP:
     special: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
 
 
+def element_scaling(N: int, fractions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """Per element ``n_k`` and ``c_k`` with ``h_k = (tf - t0) / n_k`` and ``t_kj = t0 + (c_k + tau_j) h_k``.
+
+    A uniform mesh has ``n_k = N`` and ``c_k = k`` (exactly); a mesh of fractions ``f_k``
+    has ``n_k = 1 / f_k`` and ``c_k = (f_0 + ... + f_{k-1}) / f_k``.
+
+    Parameters
+    ----------
+    N : int
+        Elements.
+    fractions : numpy.ndarray or None
+        Element lengths as fractions of the horizon, shape ``(N,)``; None for uniform.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(n, c)``, each of shape ``(N,)``.
+    """
+    if fractions is None:
+        return np.full(N, float(N)), np.arange(N, dtype=float)
+    f = np.asarray(fractions, dtype=float)
+    cum = np.concatenate([[0.0], np.cumsum(f)[:-1]])
+    return 1.0 / f, cum / f
+
+
 def transcribe(
     opt: Optimization,
     dae: FlatDAE,
@@ -237,6 +262,7 @@ def transcribe(
     free_index: np.ndarray,
     inline_points: bool,
     final_time_copies: bool = True,
+    fractions: np.ndarray | None = None,
 ) -> CollocationNLP:
     """Transcribe ``opt`` by direct collocation (see the module docstring).
 
@@ -259,6 +285,9 @@ def transcribe(
     final_time_copies : bool, optional
         A copy of a free final time per element tied by equalities (banded KKT matrix;
         default), or one variable shared by all elements, placed after the final state.
+    fractions : numpy.ndarray or None, optional
+        Element lengths as fractions of the horizon, shape ``(N,)``, summing to 1 (a
+        refined mesh); default uniform.
 
     Returns
     -------
@@ -364,8 +393,12 @@ def transcribe(
     else:
         Tk = ca.SX(opt.final_time_value)
     T_first = Tk
+    # plain floats: a NumPy scalar times an SX takes NumPy's slow ufunc dispatch
+    n_el_a, c0_a = element_scaling(N, fractions)
+    n_el, c0 = n_el_a.tolist(), c0_a.tolist()
+    C, D, B, root = co["C"].tolist(), co["D"].tolist(), co["B"].tolist(), co["root"].tolist()
     for k in range(N):
-        h = (Tk - t0) / N
+        h = (Tk - t0) / n_el[k]
         Xk = [Xk0] + [var("x", k, j, nx, x_lb, x_ub) for j in range(1, d + 1)]
         Uk = [var("u", k, j, nu, u_lb, u_ub) for j in range(1, d + 1)]
         Zk = [var("z", k, j, nz, z_lb, z_ub) for j in range(1, d + 1)]
@@ -373,15 +406,15 @@ def transcribe(
         Us.append(Uk)
         Zs.append(Zk)
         for j in range(1, d + 1):
-            tkj = t0 + (k + co["root"][j]) * h
-            xp = sum(co["C"][r, j] * Xk[r] for r in range(d + 1) if co["C"][r, j] != 0.0)
+            tkj = t0 + (c0[k] + root[j]) * h
+            xp = sum(C[r][j] * Xk[r] for r in range(d + 1) if C[r][j] != 0.0)
             fkj, akj, pkj = point_call(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
             first = con(ca.vertcat(h * fkj - xp, akj, pkj), point_lb, point_ub)
             rows_point.append((k, j, first))
-            J = J + co["B"][j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
-            quadrature.append((PointArgs(tkj, Xk[j], Zk[j - 1], Uk[j - 1], Tk), co["B"][j - 1] * h))
+            J = J + B[j - 1] * h * lagr_fn(tkj, Xk[j], Zk[j - 1], Uk[j - 1], P, Tk)
+            quadrature.append((PointArgs(tkj, Xk[j], Zk[j - 1], Uk[j - 1], Tk), B[j - 1] * h))
         element_vars.append((Xk, Uk, Zk, Tk))
-        xend = sum(co["D"][r] * Xk[r] for r in range(d + 1) if co["D"][r] != 0.0)
+        xend = sum(D[r] * Xk[r] for r in range(d + 1) if D[r] != 0.0)
         Xk0 = var("x", k + 1, 0, nx, x_lb, x_ub)
         rows_cont.append((k, con(Xk0 - xend, np.zeros(1), np.zeros(1))))
         if copies and k < N - 1:
@@ -426,7 +459,7 @@ def transcribe(
         ends.append((con(e, np.concatenate([c.lb for c in final_c]), np.concatenate([c.ub for c in final_c])), e))
     start_args = PointArgs(ca.SX(t0), Xs[0][0], z_start, u_start, T_first)
     final_args = PointArgs(T, XN, z_final, u_final, T)
-    s_sym, s_val = special_values(opt, fn, P, element_vars, (start_args, final_args), quadrature, co)
+    s_sym, s_val = special_values(opt, fn, P, element_vars, (start_args, final_args), quadrature, co, fractions)
 
     def final_value(name: str, exprs: list[ca.SX]) -> ca.SX:
         """``exprs`` with model variables at the final time and timed variables/integrals by value."""

@@ -114,6 +114,10 @@ class Optimization:
         self._flat: FlatDAE | None = None
 
     # ------------------------------------------------------------------ helpers
+    #: Tolerance of the verification by simulation of this problem's solutions, a positive
+    #: number (:mod:`gtmodel.modeling.ocp.verification`); None: ``defaults["ocp.verification_tolerance"]``.
+    verification_tolerance: float | None = None
+
     @property
     def final_time(self) -> ca.SX:
         """Symbol of the final time (SX scalar), s; usable in any expression."""

@@ -91,7 +91,7 @@ class CollocationData:
     t0, tf : float
         Start and final time, s.
     elements : int
-        Number of elements ``N`` (uniform mesh).
+        Number of elements ``N``.
     points : int
         Collocation points per element ``d``.
     scheme : str
@@ -104,6 +104,9 @@ class CollocationData:
         Input values at the collocation points, shape ``(N, d, nu)``.
     zc : numpy.ndarray
         Algebraic values at the collocation points, shape ``(N, d, nz)``.
+    fractions : numpy.ndarray or None, optional
+        Element lengths as fractions of the horizon, shape ``(N,)``, summing to 1;
+        ``None`` for a uniform mesh.
     """
 
     t0: float
@@ -115,6 +118,22 @@ class CollocationData:
     xc: np.ndarray
     uc: np.ndarray
     zc: np.ndarray
+    fractions: np.ndarray | None = None
+
+    def breaks(self) -> np.ndarray:
+        """Element boundaries ``t_0 < t_1 < ... < t_N = tf``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Times, s, shape ``(N + 1,)``.
+        """
+        span = self.tf - self.t0
+        if self.fractions is None:
+            return self.t0 + span * np.arange(self.elements + 1) / self.elements
+        cum = np.concatenate([[0.0], np.cumsum(self.fractions)])
+        cum[-1] = 1.0
+        return self.t0 + span * cum
 
     def mesh(self) -> np.ndarray:
         """Collocation mesh: start time, interior collocation points and element ends.
@@ -124,13 +143,16 @@ class CollocationData:
         numpy.ndarray
             Increasing times, s, shape ``(K,)``.
         """
-        h = (self.tf - self.t0) / self.elements
         inner = [c for c in self.tau_root[1:] if c < 1.0 - 1e-12]
         local = np.array(inner + [1.0])
-        ts = [np.array([self.t0])]
-        for k in range(self.elements):
-            ts.append(self.t0 + (k + local) * h)
-        return np.concatenate(ts)
+        if self.fractions is None:
+            h = (self.tf - self.t0) / self.elements
+            ts = [np.array([self.t0])]
+            for k in range(self.elements):
+                ts.append(self.t0 + (k + local) * h)
+            return np.concatenate(ts)
+        b = self.breaks()
+        return np.concatenate([[self.t0], (b[:-1, None] + local[None, :] * np.diff(b)[:, None]).reshape(-1)])
 
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Evaluate the collocation polynomials.
@@ -155,10 +177,16 @@ class CollocationData:
         tol = 1e-9 * max(1.0, abs(span))
         if np.any(~np.isfinite(t)) or np.any(t < self.t0 - tol) or np.any(t > self.tf + tol):
             raise InputError(f"sample times must lie in [{self.t0}, {self.tf}]")
-        h = span / self.elements
-        s = (t - self.t0) / h
-        k = np.clip(np.ceil(s - 1e-9) - 1, 0, self.elements - 1).astype(int)
-        tau = np.clip(s - k, 0.0, 1.0)
+        if self.fractions is None:
+            h = span / self.elements
+            s = (t - self.t0) / h
+            k = np.clip(np.ceil(s - 1e-9) - 1, 0, self.elements - 1).astype(int)
+            tau = np.clip(s - k, 0.0, 1.0)
+        else:
+            b = self.breaks()
+            hb = np.diff(b)
+            k = np.clip(np.searchsorted(b, t - 1e-9 * hb.min(), side="left") - 1, 0, self.elements - 1)
+            tau = np.clip((t - b[k]) / hb[k], 0.0, 1.0)
         nx, nu, nz = self.xc.shape[2], self.uc.shape[2], self.zc.shape[2]
         xs, us, zs = np.zeros((t.size, nx)), np.zeros((t.size, nu)), np.zeros((t.size, nz))
         lx = lagrange_basis(self.tau_root, tau)
@@ -218,6 +246,13 @@ class OptimizationResult(StatusResult):
         Identifies the transcription that produced ``w``.
     lam_w, lam_g : numpy.ndarray or None
         Multipliers of the bounds of ``w`` and of the constraints (for warm starts).
+    verification : Verification or None
+        The check of the solution by simulation
+        (:class:`gtmodel.modeling.ocp.verification.Verification`); None when not verified
+        (a failed solve, or ``verify=False``).
+    refinement : list of dict
+        The mesh refinement passes that led to this result (elements, objective, error
+        per pass; :mod:`gtmodel.modeling.ocp.refinement`), empty without refinement.
     """
 
     iterations: int
@@ -239,6 +274,8 @@ class OptimizationResult(StatusResult):
     transcription_key: tuple | None = field(default=None, repr=False)
     lam_w: np.ndarray | None = field(default=None, repr=False)
     lam_g: np.ndarray | None = field(default=None, repr=False)
+    verification: Any = field(default=None, repr=False)
+    refinement: list[dict[str, Any]] = field(default_factory=list, repr=False)
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.

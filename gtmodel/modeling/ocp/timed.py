@@ -59,6 +59,7 @@ def special_values(
     ends: tuple[PointArgs, PointArgs],
     quadrature: Sequence[tuple[PointArgs, ca.SX]],
     co: dict[str, np.ndarray],
+    fractions: np.ndarray | None = None,
 ) -> tuple[ca.SX, ca.SX]:
     """The symbols of timed variables and integrals and their values in the NLP.
 
@@ -82,6 +83,9 @@ def special_values(
         ``sum(weight * f(args))``.
     co : dict
         Collocation coefficients (``root``, ``tau``).
+    fractions : numpy.ndarray or None, optional
+        Element lengths as fractions of the horizon, shape ``(N,)`` (a refined,
+        non-uniform mesh); None for a uniform mesh.
 
     Returns
     -------
@@ -104,10 +108,17 @@ def special_values(
             values.append(f(a.t, a.x, a.z, a.u, P, a.T))
             continue
         t = float(v.time)
-        h = (opt.final_time_value - t0) / N
-        s = (t - t0) / h
-        k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
-        tau = float(np.clip(s - k, 0.0, 1.0))
+        if fractions is None:
+            h = (opt.final_time_value - t0) / N
+            s = (t - t0) / h
+            k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
+            tau = float(np.clip(s - k, 0.0, 1.0))
+        else:  # the element containing t (the left one at a boundary) on the non-uniform mesh
+            f = np.asarray(fractions, dtype=float)
+            edges = np.concatenate([[0.0], np.cumsum(f)])
+            s_frac = (t - t0) / (opt.final_time_value - t0)
+            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(f.min()), side="left"), 0, N - 1))
+            tau = float(np.clip((s_frac - edges[k]) / f[k], 0.0, 1.0))
         X, U, Z, T = elements[k]
         lx = lagrange_basis(co["root"], np.array([tau]))[0]
         lu = lagrange_basis(co["tau"], np.array([tau]))[0]

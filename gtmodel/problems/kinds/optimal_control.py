@@ -38,10 +38,11 @@ from gtmodel.problems.kinds.optimal_control_data import declare_data
 from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
+from gtmodel.problems.results import verification_fields
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
 from gtmodel.trajectory.model_ocp import MultipleShooting, OptimalControl
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
 
@@ -226,12 +227,21 @@ class OptimalControlKind(ProblemKind):
             if opt.model.flatten().nz and tr.integrator in ("rk", "cvodes"):
                 raise file.fail("transcription.integrator", "collocation or idas for a model with algebraic variables", tr.integrator)
             method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
+        if tr.refine and tr.method == "multiple_shooting":
+            raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement is for collocation)', True)
+        if tr.refine and doc.data:
+            raise file.fail("transcription.refine", "false with [[data]] (the estimates' statistics are computed on one fixed mesh)", True)
+        bench = doc.benchmark.model_dump() if doc.benchmark is not None else None
+        if bench is not None and bench["sign"] not in (1.0, -1.0):
+            raise file.fail("benchmark.sign", "1 or -1", bench["sign"])
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
             method=method,
             solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
+            refinement=Refinement(doc.transcription.refine, doc.transcription.tolerance, doc.transcription.max_elements, doc.transcription.max_passes),
+            benchmark=bench,
         )
 
     @fill_doc(**KIND_DOCS)
@@ -239,7 +249,8 @@ class OptimalControlKind(ProblemKind):
         """Summary fields; ``trajectories.csv`` and plots of the states and inputs.
 
         Nothing but the summary fields is written for a failed solve (its last iterate
-        is not a trajectory).
+        is not a trajectory); a solution that failed its verification (``check_failed``)
+        is written with its ``verification`` block, to be inspected.
 
         Parameters
         ----------
@@ -275,8 +286,15 @@ class OptimalControlKind(ProblemKind):
             "transcription": _transcription_summary(d.method),
             **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
                if isinstance(d.method, Collocation) else {}),
+            **verification_fields(r),
         })
-        if r.status not in ("optimal", "acceptable"):
+        if d.benchmark is not None:
+            b = d.benchmark
+            value = b["sign"] * r.objective
+            written.fields["benchmark"] = {
+                **b, "value": value, "relative_error": abs(value - b["published"]) / max(abs(b["published"]), 1e-300),
+            }
+        if r.status not in ("optimal", "acceptable", "check_failed"):
             return written
         r.to_csv(out / "trajectories.csv")
         written.files.append("trajectories.csv")

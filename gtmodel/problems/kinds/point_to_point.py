@@ -16,6 +16,7 @@ import numpy as np
 from gtmodel.errors import InputError, ProblemError, UnreachablePoseError
 from gtmodel.modeling.ocp.expressions import parse_constraint, parse_objective
 from gtmodel._docstrings import fill_doc
+from gtmodel.problems.results import verification_fields
 from gtmodel.problems.base import KIND_DOCS, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.motion_common import MOTION_EXTRA_EMPTY_FIELDS, force_statistics, trajectory_columns
 from gtmodel.problems.kinds.schemas.point_to_point import PointToPointFile
@@ -153,7 +154,7 @@ class PointToPointKind(ProblemKind):
         Written
         """
         written = Written(point_to_point_summary(declaration, solution))
-        if solution.result.status in ("optimal", "acceptable"):
+        if solution.result.status in ("optimal", "acceptable", "check_failed"):
             traj = solution.trajectory()
             solution.write_csv(out / "trajectory.csv")
             write_c_header(traj, out / "trajectory.h", name=name)
@@ -221,7 +222,8 @@ def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -
     -------
     dict
         Status, final time, energy, iterations, solve time, objective, constraint
-        violation, force statistics and the problem's settings.
+        violation, the verification by simulation, force statistics and the problem's
+        settings.
     """
     r = solution.result
     summary: dict[str, Any] = {
@@ -243,8 +245,9 @@ def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -
         "force_limit_N": decl.force_limit.tolist(),
         "collocation": {"elements": decl.method.elements, "points": decl.method.points, "scheme": decl.method.scheme},
         "robot": decl.parameters.name,
+        **verification_fields(r),
     }
-    if r.status in ("optimal", "acceptable"):
+    if r.status in ("optimal", "acceptable", "check_failed"):
         traj = solution.trajectory()
         summary.update(force_statistics(traj, decl.force_limit))
         summary["sample_time_s"] = float(traj["t"][1] - traj["t"][0]) if len(traj["t"]) > 1 else None

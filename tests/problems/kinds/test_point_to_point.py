@@ -13,6 +13,7 @@ import tomllib
 import numpy as np
 import pytest
 
+from tests.conftest import verification_tolerance
 from gtmodel.errors import ProblemError
 from gtmodel.problems import get_kind, load_problem, run_problem
 from gtmodel.problems.kinds.motion_common import AT_BOUND_RTOL
@@ -42,6 +43,14 @@ def test_shipped_file_declares_its_settings(name):
     assert (d.elements, d.points, d.scheme) == (50, 3, "radau")
 
 
+@pytest.fixture(autouse=True, scope="module")
+def _coarse_mesh_tolerance():
+    """The solves here use 12 elements, whose L1 motions deviate 1-6 % from their simulation
+    (check_failed at the default tolerance 1e-2): these tests are about other things."""
+    with verification_tolerance(0.1):
+        yield
+
+
 @pytest.fixture(scope="module")
 def coarse(tmp_path_factory):
     folder = tmp_path_factory.mktemp("p2p")
@@ -53,6 +62,8 @@ def coarse(tmp_path_factory):
 def test_result_folder_of_a_solve(coarse):
     outcome, out = coarse
     assert outcome.status == Status.OPTIMAL
+    ver = outcome.summary["verification"]  # verified by simulation, within the coarse tolerance
+    assert ver["passed"] and ver["tolerance"] == 0.1 and 0 < ver["max_scaled_deviation"] < 0.1
     files = {"summary.json", "trajectory.csv", "trajectory.h", "tcp_path.png", "forces.png"}
     assert set(outcome.summary["files"]) == files == {p.name for p in out.iterdir()}
 

@@ -15,9 +15,12 @@ from pydantic_core import PydanticCustomError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
-from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, Text, choice, integer, number, vector
 
-__all__ = ["BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection", "TranscriptionSection", "DataSection", "OptimalControlFile", "MAX_VALUE"]
+__all__ = [
+    "BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection",
+    "TranscriptionSection", "DataSection", "BenchmarkSection", "OptimalControlFile", "MAX_VALUE",
+]
 
 
 #: Largest magnitude of a parameter, boundary value, bound or nominal value in the file
@@ -216,7 +219,7 @@ class DataSection(Section):
 
 
 class TranscriptionSection(Section):
-    """``[transcription]``: the transcription method.
+    """``[transcription]``: the transcription method, the verification tolerance and mesh refinement.
 
     Parameters
     ----------
@@ -234,6 +237,17 @@ class TranscriptionSection(Section):
         collocation for DAEs.
     steps : int
         Fixed integrator steps per interval (rk, collocation).
+    refine : bool
+        Collocation: refine the mesh where the solution is least accurate (element
+        defects, input switches) until the verification passes or a limit is reached.
+    tolerance : float, optional
+        Verification tolerance: largest deviation of a state's simulation under the
+        optimal inputs from the transcribed state, scaled by ``max(1, max |x|)``;
+        default 1e-2 (``gtmodel.defaults``).
+    max_elements : int
+        Limit on the elements of a refined mesh.
+    max_passes : int
+        Limit on the solves of the refinement.
     """
 
     method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"
@@ -241,6 +255,32 @@ class TranscriptionSection(Section):
     controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
     integrator: choice("rk", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs)") | None = None
     steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, collocation)") = 4
+    refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located)")
+    tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation") | None = None
+    max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
+    max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
+
+
+class BenchmarkSection(Section):
+    """``[benchmark]``: the published optimum a benchmark problem is checked against.
+
+    Parameters
+    ----------
+    source : str
+        Where the value is published (author, year, problem number).
+    published : float
+        The published optimum.
+    quantity : str
+        What the value is (``"final time [s]"``, ``"objective"``).
+    sign : float
+        ``objective = sign * published`` (``-1`` where a maximum is written as the
+        minimum of its negative).
+    """
+
+    source: NonEmptyText = Field(description='where the value is published, e.g. "COPS 3.0, problem 4 (Dolan, More, Munson 2004)"')
+    published: number(description="the published optimum")
+    quantity: Text = Field("objective", description='what the value is, e.g. "final time [s]"')
+    sign: number(ge=-1, le=1, description="objective = sign * published: 1, or -1 for a maximum written as minimise its negative") = 1.0
 
 
 @fill_doc(**KIND_DOCS)
@@ -269,9 +309,12 @@ class OptimalControlFile(ProblemSchema):
     data : list of DataSection
         ``[[data]]``: measurements fitted by least squares (parameter estimation).
     transcription : TranscriptionSection
-        ``[transcription]``: collocation or multiple shooting.
+        ``[transcription]``: collocation or multiple shooting, verification tolerance and
+        mesh refinement.
     collocation : CollocationSection
         ``[collocation]``: the collocation mesh.
+    benchmark : BenchmarkSection, optional
+        ``[benchmark]``: a published optimum to compare with (benchmark problems).
     solver : SolverSection
         ``[solver]``: IPOPT settings.
     """
@@ -288,4 +331,5 @@ class OptimalControlFile(ProblemSchema):
     data: list[DataSection] = Field(default_factory=list, description="[[data]] tables: measurements fitted by least squares (parameter estimation)")
     transcription: TranscriptionSection = TranscriptionSection()
     collocation: CollocationSection = CollocationSection()
+    benchmark: BenchmarkSection | None = None
     solver: SolverSection = SolverSection()

@@ -1,0 +1,252 @@
+"""Verification of a collocation solution by simulation with a variable-step integrator.
+
+A collocation solution satisfies the model equations at the collocation points only.
+Between them, and for a spurious minimum of the NLP (a polynomial that collocates the
+equations but is no solution of them: the COPS hanging chain on 20 elements ends
+"optimal" 5.5 % below the true minimum), the transcribed states can be far from what the
+optimal inputs do to the model. :func:`verify` checks: the inputs, interpolated as the
+transcription defines them (per element the Lagrange polynomial through the ``d``
+collocation points, the same polynomial :meth:`OptimizationResult.sample` evaluates),
+drive the model in SUNDIALS (CVODES for an ODE, IDAS with algebraic variables) through
+``casadi.integrator``, element by element with the model written in the element's
+scaled time ``t = t_k + tau h_k``, ``tau in [0, 1]`` (one integrator serves every
+element). Two simulations are compared with the collocation polynomials at the
+collocation points, the element ends and the midpoints between them:
+
+* the *simulation* (global): one run over the whole horizon from the initial state; its
+  largest deviation per state is the verification figure (``max_abs_deviation``,
+  ``max_rel_deviation``);
+* the *element defects* (local, as Dymos' and GPOPS-II's error estimates): each element
+  simulated from its own collocated start state; their largest scaled deviation per
+  element is what mesh refinement (:mod:`gtmodel.modeling.ocp.refinement`) refines.
+
+A state ``i`` passes when ``max |x_sim - x_col| <= tolerance * max(1, max |x_col|)``
+(the mixed absolute/relative test of integrators with ``atol = rtol = tolerance``).
+The relative deviation reported is ``max |x_sim - x_col| / max |x_col|``.
+"""
+
+from __future__ import annotations
+
+import logging
+import time as _time
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.defaults import defaults
+from gtmodel.errors import InputError
+from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
+
+__all__ = ["Verification", "verify", "INTEGRATOR_RTOL"]
+
+_log = logging.getLogger("gtmodel")
+
+#: Relative (and absolute, times 1e-2) tolerance of the verifying integrator: far below
+#: any verification tolerance, so that the deviation measured is the transcription's.
+INTEGRATOR_RTOL = 1e-9
+
+
+@dataclass
+class Verification:
+    """The outcome of :func:`verify`.
+
+    Parameters
+    ----------
+    tolerance : float
+        The tolerance of the scaled deviation.
+    passed : bool
+        Every state's deviation within the tolerance (and the simulation ran).
+    max_abs_deviation, max_rel_deviation : float
+        Largest absolute deviation (model units) and largest relative deviation over the
+        states (``inf`` if the simulation failed).
+    max_scaled_deviation : float
+        Largest ``|x_sim - x_col| / max(1, max |x_col|)``, compared with ``tolerance``.
+    states : dict of str to dict
+        Per scalar state name: ``{"max_abs_deviation", "max_rel_deviation", "at_time_s"}``.
+    element_errors : numpy.ndarray
+        Per element, the largest scaled deviation of its own simulation from its start
+        (the local error estimate), shape ``(N,)``.
+    integrator : str
+        ``"cvodes"`` or ``"idas"`` and its tolerance.
+    message : str
+        Why it failed (or ``""``).
+    time_s : float
+        Wall time of the verification, s.
+    t : numpy.ndarray
+        Times of the comparison (collocation points, their midpoints, element ends), s,
+        shape ``(K,)``, increasing.
+    simulated : numpy.ndarray
+        The simulated states there, shape ``(K, nx)`` (empty if the simulation failed).
+    """
+
+    tolerance: float
+    passed: bool
+    max_abs_deviation: float
+    max_rel_deviation: float
+    max_scaled_deviation: float
+    states: dict[str, dict[str, float]] = field(default_factory=dict)
+    element_errors: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    integrator: str = ""
+    message: str = ""
+    time_s: float = 0.0
+    t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    simulated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``verification`` block of a ``summary.json`` (JSON types only).
+
+        Returns
+        -------
+        dict
+            ``passed``, ``tolerance``, the largest deviations, per-state deviations, the
+            integrator, the largest element defect, the message.
+        """
+        def num(v: float) -> float | str:
+            return float(v) if np.isfinite(v) else str(v)
+
+        return {
+            "passed": bool(self.passed),
+            "tolerance": float(self.tolerance),
+            "max_abs_deviation": num(self.max_abs_deviation),
+            "max_rel_deviation": num(self.max_rel_deviation),
+            "max_scaled_deviation": num(self.max_scaled_deviation),
+            "max_element_error": num(float(np.max(self.element_errors))) if self.element_errors.size else None,
+            "states": {k: {kk: num(vv) for kk, vv in v.items()} for k, v in self.states.items()},
+            "integrator": self.integrator,
+            "method": "the optimal inputs (collocation polynomials) drive the model from the initial state",
+            "message": self.message,
+        }
+
+
+def _check_taus(root: np.ndarray) -> np.ndarray:
+    """Points of an element where the deviation is measured: the collocation points, their midpoints, the end."""
+    pts = np.unique(np.concatenate([root, [1.0]]))
+    mids = 0.5 * (pts[:-1] + pts[1:])
+    return np.unique(np.concatenate([pts[1:], mids]))
+
+
+def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: float) -> tuple[ca.Function, str]:
+    """``F(x0, z0, p=[model p, U (nu d), t_k, h_k]) -> xf (nx, len(taus))`` on the scaled element."""
+    dae, col = result.dae, result.collocation
+    d = col.points
+    nu = dae.nu
+    tau = ca.SX.sym("tau")
+    tk, hk = ca.SX.sym("t_k"), ca.SX.sym("h_k")
+    U = ca.SX.sym("U", nu, d)
+    nodes = col.tau_root[1:]
+    basis = []
+    for j in range(d):
+        b = ca.SX(1)
+        for r in range(d):
+            if r != j:
+                b = b * (tau - nodes[r]) / (nodes[j] - nodes[r])
+        basis.append(b)
+    u_tau = ca.mtimes(U, ca.vertcat(*basis)) if nu else ca.SX(0, 1)
+    t_of = tk + tau * hk
+    ode = ca.substitute([dae.ode_expr, dae.alg_expr], [dae.t, dae.u], [t_of, u_tau])
+    p_all = ca.vertcat(dae.p, ca.vec(U), tk, hk)
+    spec: dict[str, Any] = {"x": dae.x, "p": p_all, "t": tau, "ode": hk * ode[0]}
+    plugin = "cvodes"
+    if dae.nz:
+        spec.update(z=dae.z, alg=ode[1])
+        plugin = "idas"
+    opts = {"abstol": rtol * 1e-2, "reltol": rtol, "max_num_steps": 100000}
+    F = ca.integrator(f"{''.join(c if c.isalnum() else '_' for c in dae.name)}_verify", plugin, spec, 0.0, list(taus), opts)
+    return F, f"{plugin} (rtol {rtol:g})"
+
+
+def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float = INTEGRATOR_RTOL) -> Verification:
+    """Simulate the optimal inputs with a variable-step integrator and compare with the transcribed states.
+
+    See the module docstring for the method and the test.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A collocation result (with its collocation data and model).
+    tolerance : float, optional
+        Largest allowed scaled deviation; default
+        ``gtmodel.defaults.defaults["ocp.verification_tolerance"]``.
+    rtol : float, optional
+        Relative tolerance of the integrator; default :data:`INTEGRATOR_RTOL`.
+
+    Returns
+    -------
+    Verification
+        Never raises for a failing simulation: it is a failed verification with the
+        integrator's message.
+
+    Raises
+    ------
+    InputError
+        If the result holds no collocation data or the tolerance is not positive.
+    """
+    if result.collocation is None or result.dae is None:
+        raise InputError("verify: this result holds no collocation data (nothing to simulate)")
+    try:
+        tolerance = float(defaults["ocp.verification_tolerance"] if tolerance is None else tolerance)
+    except (TypeError, ValueError):
+        raise InputError(f"verify: tolerance must be a positive number, got {tolerance!r}") from None
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise InputError(f"verify: tolerance must be a positive number, got {tolerance!r}")
+    start = _time.perf_counter()
+    dae, col = result.dae, result.collocation
+    N, d, nx = col.elements, col.points, dae.nx
+    names = dae.x_names
+    if nx == 0:
+        return Verification(tolerance, True, 0.0, 0.0, 0.0, {}, np.zeros(N), "", "no states", _time.perf_counter() - start)
+    taus = _check_taus(col.tau_root)
+    breaks = col.breaks()
+    h = np.diff(breaks)
+    poly = np.einsum("tr,krx->ktx", lagrange_basis(col.tau_root, taus), col.xc)  # (N, T, nx)
+    t_check = breaks[:-1, None] + taus[None, :] * h[:, None]
+    pvec = dae.parameter_vector(result.parameters)
+    scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
+    peak = np.max(np.abs(col.xc), axis=(0, 1))
+    # element k's parameters: the model's, its inputs U (nu, d) in column-major order, t_k, h_k
+    U = np.stack([col.uc[k].T.reshape(-1, order="F") for k in range(N)], axis=1) if dae.nu else np.zeros((0, N))
+    P = np.vstack([np.tile(pvec[:, None], (1, N)), U, breaks[None, :-1], h[None, :]])
+    z0 = col.zc[:, 0, :].T if dae.nz else np.zeros((0, N))
+    message = ""
+    try:
+        F, how = _element_integrator(result, taus, rtol)
+        local = F.map(N)(x0=col.xc[:, 0, :].T, z0=z0, p=P)
+        xl = np.array(local["xf"], dtype=float).reshape(nx, N, taus.size).transpose(1, 2, 0)
+        element_errors = np.max(np.abs(xl - poly) / scale, axis=(1, 2))
+        xg = np.zeros_like(poly)
+        x0 = col.xc[0, 0, :]
+        for k in range(N):
+            out = F(x0=x0, z0=z0[:, k], p=P[:, k])
+            xg[k] = np.array(out["xf"], dtype=float).reshape(nx, taus.size).T
+            x0 = xg[k, -1]
+        dev = np.abs(xg - poly)
+        if not np.all(np.isfinite(dev)):
+            raise RuntimeError("the simulation returned non-finite states")
+    except RuntimeError as exc:
+        text = str(exc).strip().splitlines()
+        message = f"the verifying simulation failed: {text[-1] if text else exc!r}"
+        _log.warning("verification of %s: %s", dae.name, message)
+        inf = float("inf")
+        return Verification(tolerance, False, inf, inf, inf, {}, np.full(N, inf), "", message, _time.perf_counter() - start)
+    flat = dev.reshape(-1, nx)
+    where = np.argmax(flat, axis=0)
+    abs_dev = flat[where, np.arange(nx)]
+    rel_dev = abs_dev / np.where(peak > 0, peak, 1.0)
+    scaled = abs_dev / scale
+    states = {
+        names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_check.reshape(-1)[where[i]])}
+        for i in range(nx)
+    }
+    passed = bool(np.all(scaled <= tolerance))
+    if not passed:
+        worst = int(np.argmax(scaled))
+        message = (
+            f"state {names[worst]!r} deviates by {abs_dev[worst]:.3g} (scaled {scaled[worst]:.3g} > tolerance {tolerance:g}) "
+            f"at t = {states[names[worst]]['at_time_s']:.6g} s from its simulation under the optimal inputs"
+        )
+    return Verification(
+        tolerance, passed, float(abs_dev.max()), float(rel_dev.max()), float(scaled.max()), states,
+        element_errors, how, message, _time.perf_counter() - start, t_check.reshape(-1), xg.reshape(-1, nx),
+    )

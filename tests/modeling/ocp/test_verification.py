@@ -1,0 +1,172 @@
+"""Verification of collocation solutions by simulation, non-uniform meshes and mesh refinement.
+
+Independent references: closed-form solutions of linear ODEs (the deviation the verifier
+reports is recomputed from ``1 - exp(-t)``), and the analytic minimum-time double
+integrator (final time 2 s, switch at 1 s; Bryson and Ho 1975, sec. 7.3).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtmodel.defaults import defaults
+from gtmodel.errors import InputError
+from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling.ocp.refinement import refine_mesh, solve_refined, switch_times
+from gtmodel.modeling.ocp.verification import verify
+from gtmodel.status import Status
+
+
+class FirstOrder(Model):
+    """x' = -x + u."""
+
+    def __init__(self) -> None:
+        super().__init__("first_order")
+        x = self.state("x")
+        u = self.input("u")
+        self.equation(self.der(x), -x + u)
+
+
+class DoubleIntegrator(Model):
+    def __init__(self) -> None:
+        super().__init__("double_integrator")
+        x, v, u = self.state("x"), self.state("v"), self.input("u")
+        self.equation(self.der(x), v)
+        self.equation(self.der(v), u)
+
+
+def step_response(elements: int, points: int) -> Optimization:
+    """x(0) = 0 under u = 1 (bounds lb = ub): x(t) = 1 - exp(-t) on [0, 2]."""
+    m = FirstOrder()
+    opt = Optimization(m, final_time=2.0)
+    x, u = m.variables("state")["x"], m.variables("input")["u"]
+    opt.set_bounds(u, 1.0, 1.0)
+    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
+    opt.set_objective(lagrange=x**2)
+    return opt
+
+
+def min_time_double_integrator() -> Optimization:
+    m = DoubleIntegrator()
+    opt = Optimization(m, final_time=3.0, free_final_time=True, final_time_bounds=(0.5, 10.0))
+    x, v = m.variables("state")["x"], m.variables("state")["v"]
+    opt.set_objective(mayer=opt.final_time)
+    opt.set_bounds(m.variables("input")["u"], -1.0, 1.0)
+    for sym, at, value in ((x, "start", 0.0), (v, "start", 0.0), (x, "final", 1.0), (v, "final", 0.0)):
+        opt.add_point_constraint(sym, at=at, lb=value, ub=value)
+    return opt
+
+
+@pytest.mark.parametrize("elements, points", [(2, 1), (4, 2), (3, 3)])
+def test_deviation_is_that_of_the_closed_form_solution(elements, points):
+    res = CollocationTranscription(step_response(elements, points), elements=elements, points=points).solve()
+    v = res.verification
+    # the collocation polynomial against the exact 1 - exp(-t) at the compared times
+    exact = 1.0 - np.exp(-v.t)
+    poly = res.sample(v.t)["states"]["x"]
+    expected = np.max(np.abs(poly - exact))
+    assert v.states["x"]["max_abs_deviation"] == pytest.approx(expected, rel=1e-5, abs=1e-9)
+    assert v.max_rel_deviation == pytest.approx(expected / np.max(np.abs(res.collocation.xc)), rel=1e-5, abs=1e-9)
+    np.testing.assert_allclose(v.simulated[:, 0], exact, atol=1e-7)
+    assert v.passed == (expected <= v.tolerance)
+
+
+def test_a_solution_beyond_the_tolerance_is_check_failed_never_optimal():
+    opt = step_response(2, 1)  # implicit Euler on 2 elements: x off by ~0.1
+    res = CollocationTranscription(opt, elements=2, points=1).solve()
+    assert res.status == Status.CHECK_FAILED and not res.success
+    assert "verification failed" in res.message and "'x'" in res.message
+    assert res.verification.max_scaled_deviation > defaults["ocp.verification_tolerance"]
+    opt.verification_tolerance = 0.5
+    assert CollocationTranscription(opt, elements=2, points=1).solve().status == Status.OPTIMAL
+    unverified = CollocationTranscription(step_response(2, 1), elements=2, points=1, verify=False).solve()
+    assert unverified.verification is None and unverified.status == Status.OPTIMAL
+
+
+@pytest.mark.parametrize("value", [0.0, -1e-3, float("nan"), float("inf"), "tight"])
+def test_bad_tolerances_are_refused(value):
+    opt = step_response(2, 1)
+    opt.verification_tolerance = value
+    with pytest.raises(InputError, match="tolerance must be a positive number"):
+        CollocationTranscription(opt, elements=2, points=1).solve()
+    res = CollocationTranscription(opt, elements=2, points=1, verify=False).solve()
+    with pytest.raises(InputError, match="tolerance must be a positive number"):
+        verify(res, tolerance=value)
+
+
+@pytest.mark.parametrize("mesh, match", [([1.0, 0.0, 1.0], "positive"), ([1.0, np.nan], "positive"), ([], "positive")])
+def test_bad_meshes_are_refused(mesh, match):
+    with pytest.raises(InputError, match=match):
+        CollocationTranscription(step_response(2, 1), mesh=mesh)
+
+
+def test_a_non_uniform_mesh_is_used_as_given():
+    fractions = np.array([1.0, 3.0, 4.0])
+    res = CollocationTranscription(step_response(3, 3), mesh=fractions, points=3).solve()
+    col = res.collocation
+    np.testing.assert_allclose(col.breaks(), [0.0, 0.25, 1.0, 2.0])
+    # the element ends are on the mesh, and the solution there is the exact one (3 Radau
+    # points are accurate to ~1e-4 here)
+    ends = res.sample(col.breaks())["states"]["x"]
+    np.testing.assert_allclose(ends, 1.0 - np.exp(-col.breaks()), atol=2e-4)
+    assert res.t[0] == 0.0 and np.all(np.diff(res.t) > 0) and res.t.size == 1 + 3 * 3
+    assert res.verification.passed
+
+
+def test_refinement_locates_the_bang_bang_switch():
+    opt = min_time_double_integrator()
+    coarse = CollocationTranscription(opt, elements=11).solve()
+    assert coarse.final_time > 2.0 + 1e-4  # the switch inside an element costs time
+    opt.verification_tolerance = 1e-6
+    res = solve_refined(opt, elements=11)
+    assert res.status == Status.OPTIMAL and res.verification.passed
+    assert res.final_time == pytest.approx(2.0, abs=1e-6)
+    (ts,) = switch_times(res)
+    widths = np.diff(res.collocation.breaks())
+    assert abs(ts - 1.0) <= max(1e-6, widths.min())  # to the mesh's accuracy
+    assert res.refinement[0]["elements"] == 11 and res.refinement[-1]["elements"] == res.collocation.elements
+    assert len(res.refinement) >= 2
+
+
+def test_refine_mesh_splits_elements_above_the_tolerance():
+    res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
+    errors = res.verification.element_errors
+    fractions, info = refine_mesh(res, tolerance=float(np.median(errors)), max_elements=100)
+    assert info["split"] and len(fractions) > 4 and fractions.sum() == pytest.approx(1.0)
+    same, info = refine_mesh(res, tolerance=1.0, max_elements=100)
+    assert info["split"] == [] and len(same) == 4
+    capped, info = refine_mesh(res, tolerance=1e-12, max_elements=4)
+    assert info["split"] == [] and len(capped) == 4
+
+
+@pytest.mark.parametrize("kwargs, match", [({"max_elements": 5}, "max_elements"), ({"max_passes": 0}, "max_passes")])
+def test_bad_refinement_limits_are_refused(kwargs, match):
+    with pytest.raises(InputError, match=match):
+        solve_refined(step_response(10, 3), elements=10, **kwargs)
+
+
+class AlgebraicFirstOrder(Model):
+    """x' = -x + z, 0 = z - 2 u: a DAE (verified with IDAS)."""
+
+    def __init__(self) -> None:
+        super().__init__("algebraic_first_order")
+        x, z, u = self.state("x"), self.algebraic("z"), self.input("u")
+        self.equation(self.der(x), -x + z)
+        self.equation(z, 2 * u)
+
+
+def test_a_dae_is_verified_with_idas():
+    m = AlgebraicFirstOrder()
+    opt = Optimization(m, final_time=2.0)
+    x, u = m.variables("state")["x"], m.variables("input")["u"]
+    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
+    opt.add_point_constraint(x, at="final", lb=1.0, ub=1.0)
+    opt.set_objective(lagrange=u**2)
+    res = CollocationTranscription(opt, elements=10).solve()
+    v = res.verification
+    assert res.status == Status.OPTIMAL and v.integrator.startswith("idas")
+    # minimum energy of x' = -x + 2 u from 0 to x(2) = 1 (Pontryagin): u proportional to e^t,
+    # x(t) = sinh(t) / sinh(2); the simulation under the optimal input follows the closed form
+    np.testing.assert_allclose(v.simulated[:, 0], np.sinh(v.t) / np.sinh(2.0), atol=1e-4)
+    assert v.passed and v.max_abs_deviation < 1e-4
