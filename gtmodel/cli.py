@@ -445,7 +445,5 @@ def main(argv: Sequence[str] | None = None) -> int:
         _signals.restore(previous)
 
 
-if __name__ == "__main__":  # pragma: no cover
-    from gtmodel.__main__ import main as _entry
-
-    sys.exit(_entry())
+if __name__ == "__main__":  # pragma: no cover - ``python -m gtmodel.cli``: gtmodel/__init__.py installed the handlers
+    sys.exit(main())

@@ -31,6 +31,11 @@ from pathlib import Path
 from typing import Any, Iterator, Mapping
 
 from gtmodel import __version__, _signals
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
@@ -235,10 +240,11 @@ def output_lock(out: str | Path) -> Iterator[None]:
         Another process holds the lock (names ``out`` and that process), or the lock file
         cannot be created.
     """
-    import fcntl  # POSIX only
-
     out = Path(out)
-    absolute = Path(os.path.abspath(out))
+    absolute = Path(os.path.realpath(out))  # one lock whatever path names the folder
+    if fcntl is None:  # not POSIX: no lock (docs/reliability.md)
+        yield
+        return
     lock = absolute.parent / f".{absolute.name}.lock"
     try:
         absolute.parent.mkdir(parents=True, exist_ok=True)
