@@ -101,10 +101,13 @@ def test_a_folder_of_the_users_files_is_refused_and_left_byte_identical(tmp_path
 @pytest.mark.parametrize("where, message", [
     ("file/sub", "its parent {tmp}/file is a file"),
     ("file", "a file of that name is in the way"),
+    ("link", "it is a symbolic link, which a run would replace by a folder; give the folder it points to ({tmp}/earlier)"),
     (".", "it holds the current folder"),
-], ids=["under_a_file", "a_file", "the_current_folder"])
+], ids=["under_a_file", "a_file", "a_symlink", "the_current_folder"])
 def test_a_bad_out_is_one_plain_message_naming_it(tmp_path, base, where, message):
     (tmp_path / "file").write_text("x")
+    _earlier_result(tmp_path / "earlier")
+    (tmp_path / "link").symlink_to(tmp_path / "earlier")
     done = _run("solve", str(base), "--out", where, "-q", cwd=tmp_path)
     assert done.returncode == 2
     assert done.stderr == f"gtmodel: error: cannot write the result folder {where}: {message.format(tmp=tmp_path)}\n" \

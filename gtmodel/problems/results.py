@@ -160,7 +160,8 @@ def check_output_folder(out: str | Path) -> None:
     ResultWriteError
         ``out`` or a parent of it is an existing file; ``out`` holds files no gtmodel run
         wrote; ``out`` (or the folder it would be created in) is not writable; ``out`` is
-        a mount point or holds the current folder. The message names ``out`` and what to do.
+        a symbolic link, a mount point or holds the current folder. The message names
+        ``out`` and what to do.
     """
     out = Path(out)
     absolute = Path(os.path.abspath(out))
@@ -173,6 +174,9 @@ def check_output_folder(out: str | Path) -> None:
             existing = p
             break
     if existing == absolute:
+        if absolute.is_symlink():
+            raise ResultWriteError(f"cannot write the result folder {out}: it is a symbolic link, which a run would replace by a "
+                                   f"folder; give the folder it points to ({os.path.realpath(absolute)})")
         if os.path.ismount(absolute) or absolute == absolute.parent:
             raise ResultWriteError(f"cannot write the result folder {out}: it is a mount point, which a run cannot replace; "
                                    "give a folder inside it")
