@@ -303,7 +303,8 @@ def _rows(path: Path, header: str, row: str, n: int) -> Path:
     ("gtmodel.problems.kinds.joint_stiffness_calibration:read_deflection_csv", ",".join(
         ["theta1_deg", "theta2_deg", "theta3_deg", "theta4_deg", "theta5_deg", "theta6_deg", "fx_N", "fy_N", "fz_N",
          "mx_Nm", "my_Nm", "mz_Nm", "dx_m", "dy_m", "dz_m", "drx_rad", "dry_rad", "drz_rad"]), ",".join(["0"] * 18)),
-], ids=["poses", "cart_survey", "motion_log", "deflections"])
+    ("gtmodel.trajectory.point_to_point:_read_guess_csv", "t,x,y,z,xd,yd,zd,tau1,tau2,tau3", "0,0,0,0,0,0,0,0,0,0"),
+], ids=["poses", "cart_survey", "motion_log", "deflections", "initial_guess"])
 def test_a_million_rows_are_refused_within_a_second(tmp_path, reader, header, row):
     import importlib
 
