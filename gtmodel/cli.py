@@ -32,8 +32,10 @@
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
-2 invalid input (also an output that cannot be written), 3 internal error, 130
-interrupted (Ctrl-C, SIGTERM).
+2 invalid input (also an output that cannot be written, or an ``--out`` another run is
+writing), 3 internal error, 130 interrupted (Ctrl-C, SIGTERM: at any moment, also during
+start-up and repeated; the handlers come first, :mod:`gtmodel.__main__`). What each
+outcome leaves in ``--out``: ``docs/reliability.md``.
 
 Fast start: this module imports only the standard library and gtmodel's base modules;
 each sub-command imports the layers it needs when it runs (the imports inside the
