@@ -1,6 +1,42 @@
-"""``python -m gtmodel``: the ``gtmodel`` command (:func:`gtmodel.cli.main`)."""
+"""``python -m gtmodel`` and the ``gtmodel`` command: signals first, then the command.
 
-from gtmodel.cli import main
+SIGINT and SIGTERM are handled (:mod:`gtmodel._signals`) before anything else of gtmodel
+is imported, so an interrupt during start-up, like one at any later moment, ends the run
+with status ``interrupted`` and exit code 130 (``docs/reliability.md``). Only a signal in
+the first milliseconds, while Python itself starts, ends the process by the signal
+(like SIGKILL: the earlier result folder is left as it was).
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+
+from gtmodel import _signals
+
+__all__ = ["main"]
+
+
+def main() -> int:
+    """Run the ``gtmodel`` command with the interrupt handling installed first.
+
+    Returns
+    -------
+    int
+        The exit code (:data:`gtmodel.status.EXIT_CODES`; 130 interrupted).
+    """
+    _signals.install()
+    try:
+        with _signals.protected():  # a signal while the command loads is raised once the run can handle it
+            from gtmodel.cli import main as cli_main
+        code = cli_main()
+    except KeyboardInterrupt:  # before the command could handle it (e.g. during argument parsing)
+        print("gtmodel: interrupted", file=sys.stderr)
+        code = 130
+    for sig in _signals.SIGNALS:  # the run has ended and reported: its outcome stands
+        signal.signal(sig, signal.SIG_IGN)
+    return code
+
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    sys.exit(main())

@@ -173,6 +173,31 @@ class Table:
         if missing:
             raise self.error(f"missing column(s) {', '.join(missing)}{f' ({note})' if note else ''}")
 
+    def check_unique_rows(self, key_columns: Sequence[str] | None = None, what: str = "identical to") -> None:
+        """Reject a row whose values (in ``key_columns``, or in every column) repeat an earlier row's.
+
+        Parameters
+        ----------
+        key_columns : sequence of str, optional
+            The columns that must not repeat together (default: all).
+        what : str, optional
+            How the repeated row relates to the first, for the message.
+
+        Raises
+        ------
+        InputError
+            The first repeated row, naming its line and the line it repeats.
+        """
+        cols = list(range(len(self.columns))) if key_columns is None else [self.index(c) for c in key_columns]
+        key = np.ascontiguousarray(self.data[:, cols] + 0.0)  # + 0.0 maps -0.0 to 0.0
+        first: dict[bytes, int] = {}
+        for r in range(key.shape[0]):
+            b = key[r].tobytes()
+            if b in first:
+                named = "all columns" if key_columns is None else ", ".join(f"'{c}'" for c in key_columns)
+                raise self.error(f"duplicated row, {what} line {int(self.lines[first[b]])} ({named})", row=r)
+            first[b] = r
+
     def error(self, message: str, row: int | None = None, column: str | None = None) -> InputError:
         """An error naming the file, the line (the header's when ``row`` is None) and the column.
 
@@ -271,6 +296,13 @@ def read_table(
         if c in seen:
             raise InputError(f"{source}: line {header_line} (header): column '{c}' appears twice")
         seen.add(c)
+    if max_rows is not None and n - k - 1 > max_rows:  # refuse a huge file before parsing it
+        count = 0
+        for j in range(k + 1, n):
+            if not lines[j].startswith("#"):
+                count += 1
+                if count > max_rows:
+                    raise InputError(f"{source}: line {j + 1}: more than {max_rows} data rows")
     width = len(columns)
     row_re = re.compile(rf"\s*{_NUMBER}\s*(?:,\s*{_NUMBER}\s*){{{width - 1}}}")
     rows: list[list[str]] = []

@@ -42,8 +42,10 @@
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
-2 invalid input (also an output that cannot be written), 3 internal error, 130
-interrupted (Ctrl-C, SIGTERM).
+2 invalid input (also an output that cannot be written, or an ``--out`` another run is
+writing), 3 internal error, 130 interrupted (Ctrl-C, SIGTERM: at any moment, also during
+start-up and repeated; the handlers come first, :mod:`gtmodel.__main__`). What each
+outcome leaves in ``--out``: ``docs/reliability.md``.
 
 Fast start: this module imports only the standard library and gtmodel's base modules;
 each sub-command imports the layers it needs when it runs (the imports inside the
@@ -58,16 +60,16 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import signal
 import sys
-import threading
 import traceback
 from pathlib import Path
 from typing import Sequence
 
-from gtmodel import __version__
-from gtmodel.errors import GtModelError
+from gtmodel import __version__, _signals
+from gtmodel._toml import read_toml
+from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.problems.overrides import parse_override
+from gtmodel.problems.results import failure_summary, output_lock
 from gtmodel.problems.study.preflight import check_output_folder, check_problem_files
 from gtmodel.status import Status, exit_code_table
 
@@ -222,11 +224,11 @@ def _progress(args: argparse.Namespace) -> tuple[bool, bool]:
     return show, not args.quiet and not show
 
 
-def _solve_one(args: argparse.Namespace, path: Path) -> int:
+def _solve_one(args: argparse.Namespace, path: Path, target: Path) -> int:
     from gtmodel.problems.run import run_problem
 
     show, heartbeat = _progress(args)
-    outcome = run_problem(path, args.out, verbose=show, plots=not args.no_plots, heartbeat=heartbeat)
+    outcome = run_problem(path, target, verbose=show, plots=not args.no_plots, heartbeat=heartbeat)
     status = outcome.status
     if status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
@@ -244,7 +246,7 @@ def _solve_one(args: argparse.Namespace, path: Path) -> int:
     return status.exit_code
 
 
-def _solve_study(args: argparse.Namespace) -> int:
+def _solve_study(args: argparse.Namespace, target: Path) -> int:
     from gtmodel.problems.study.design import comparison_study
     from gtmodel.problems.study.engine import run_study
 
@@ -257,7 +259,7 @@ def _solve_study(args: argparse.Namespace) -> int:
             print(f"gtmodel: error: {case.label}: {case.summary.get('message')}", file=sys.stderr)
         _log.info("%s: %s", case.label, case.status)
 
-    outcome = run_study(study, args.out, workers=args.workers, verbose=show, heartbeat=heartbeat, on_case=report)
+    outcome = run_study(study, target, workers=args.workers, verbose=show, heartbeat=heartbeat, on_case=report)
     if outcome.status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
     print((outcome.out / "comparison.md").read_text(encoding="utf-8"), end="")
@@ -265,30 +267,105 @@ def _solve_study(args: argparse.Namespace) -> int:
     return outcome.exit_code
 
 
+def _toml_name(path: Path) -> str:
+    """A problem or study file's ``name`` field if it can be read, else the file's stem (as the run names it)."""
+    try:
+        name = read_toml(path, ProblemError, "problem file").get("name")
+    except GtModelError:
+        name = None
+    return name if isinstance(name, str) and name.strip() else path.stem
+
+
+def _solve_target(args: argparse.Namespace) -> Path:
+    """The result folder of ``gtmodel solve`` (``--out``, else the default the run would take)."""
+    if args.out is not None:
+        return args.out
+    first = args.problem[0]
+    if len(args.problem) == 1 and args.sweep is None:
+        return Path("results") / _toml_name(first)
+    if args.sweep is not None:
+        return Path("results") / (first.stem + "_sweep_" + args.sweep.split("=", 1)[0].strip().replace(".", "_"))
+    return Path("results") / (first.stem + "_study")
+
+
+def _guarded(target: Path, run, on_interrupt) -> int:
+    """Run with the output folder locked; an interrupt anywhere inside leaves the documented folder state.
+
+    ``run()`` does the work (interruptible); ``on_interrupt()`` writes what an interrupted
+    run leaves, with further signals only counted. A second run on the same folder is
+    refused by the lock before any work (exit 2).
+    """
+    check_output_folder(target)  # before anything is imported or written
+    with output_lock(target):
+        try:
+            with _signals.interruptible():
+                code = run()
+                _signals.raise_if_pending()  # a signal that came in a protected step at the very end
+            return code
+        except KeyboardInterrupt:
+            with _signals.settled():
+                on_interrupt()
+                print("gtmodel: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+
+
 def _solve(args: argparse.Namespace) -> int:
     check_problem_files(args.problem)  # before anything is imported or written
-    if args.out is not None:
-        check_output_folder(args.out)
-    if len(args.problem) == 1 and args.sweep is None:
-        return _solve_one(args, args.problem[0])
-    return _solve_study(args)
+    target = _solve_target(args)
+    single = len(args.problem) == 1 and args.sweep is None
+
+    def run() -> int:
+        return _solve_one(args, args.problem[0], target) if single else _solve_study(args, target)
+
+    def on_interrupt() -> None:
+        from gtmodel.problems.run import write_failure
+
+        path = args.problem[0] if single else Path(", ".join(str(p) for p in args.problem))
+        summary = failure_summary(path, KeyboardInterrupt(), Status.INTERRUPTED, name=target.name)
+        if single:
+            summary["kind"] = _toml_kind(args.problem[0])
+        written, _, why = write_failure(target, summary)
+        if written:
+            print(f"gtmodel: wrote {target / 'summary.json'} (status interrupted)", file=sys.stderr)
+        elif why:
+            print(f"gtmodel: could not write {target / 'summary.json'}: {why}", file=sys.stderr)
+
+    return _guarded(target, run, on_interrupt)
+
+
+def _toml_kind(path: Path) -> str | None:
+    try:
+        kind = read_toml(path, ProblemError, "problem file").get("kind")
+    except GtModelError:
+        return None
+    return kind if isinstance(kind, str) else None
 
 
 def _study(args: argparse.Namespace) -> int:
     check_problem_files([args.study], "study file")  # before anything is imported or written
-    if args.out is not None:
-        check_output_folder(args.out)
-    from gtmodel.problems.study.engine import run_study
-    from gtmodel.problems.study.progress import progress_mode
+    target = args.out if args.out is not None else Path("results") / _toml_name(args.study)
 
-    outcome = run_study(args.study, args.out, workers=args.workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
-                        plots=False if args.no_plots else None, progress=progress_mode(not args.quiet), verbose=args.verbose)
-    if outcome.status is Status.INTERRUPTED:
-        print("gtmodel: interrupted (rerun the same command to solve the missing cases)", file=sys.stderr)
-    print(f"study        {outcome.summary['name']}: {outcome.status} ({outcome.message})")
-    print(f"cases        {outcome.summary['run_now']} solved now, {outcome.summary['skipped']} finished before, {outcome.summary['missing']} missing")
-    print(f"results in   {outcome.out}/ (table.parquet, table.csv, summary.json, cases/)")
-    return outcome.exit_code
+    def run() -> int:
+        from gtmodel.problems.study.engine import run_study
+        from gtmodel.problems.study.progress import progress_mode
+
+        outcome = run_study(args.study, target, workers=args.workers, scheduler=args.scheduler, retry_failed=args.retry_failed,
+                            plots=False if args.no_plots else None, progress=progress_mode(not args.quiet), verbose=args.verbose)
+        if outcome.status is Status.INTERRUPTED:
+            print("gtmodel: interrupted (rerun the same command to solve the missing cases)", file=sys.stderr)
+        print(f"study        {outcome.summary['name']}: {outcome.status} ({outcome.message})")
+        print(f"cases        {outcome.summary['run_now']} solved now, {outcome.summary['skipped']} finished before, "
+              f"{outcome.summary['missing']} missing")
+        print(f"results in   {outcome.out}/ (table.parquet, table.csv, summary.json, cases/)")
+        return outcome.exit_code
+
+    def on_interrupt() -> None:
+        # a study folder is kept across runs (its finished cases are reused); its summary says this run was interrupted
+        from gtmodel.problems.study.engine import mark_interrupted
+
+        mark_interrupted(target)
+
+    return _guarded(target, run, on_interrupt)
 
 
 def _schema(args: argparse.Namespace) -> int:
@@ -445,12 +522,13 @@ def _export_step_fmu(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _sigterm(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt("SIGTERM")
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``gtmodel`` command.
+
+    SIGINT and SIGTERM are handled by :mod:`gtmodel._signals` for the whole call
+    (installed here unless ``python -m gtmodel`` already did, at process start): any
+    number of them, at any moment of a run, end it with status ``interrupted`` and exit
+    code 130 (``docs/reliability.md``).
 
     Parameters
     ----------
@@ -462,23 +540,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     int
         Exit code from :data:`gtmodel.status.EXIT_CODES`: 0 success (optimal / check
         passed), 1 not optimal / check failed, 2 invalid input or unwritable output,
-        3 internal error, 130 interrupted.
+        3 internal error, 130 interrupted (SIGINT or SIGTERM).
     """
-    args = build_parser().parse_args(argv)
-    _setup_logging(getattr(args, "quiet", False))
-    previous = signal.signal(signal.SIGTERM, _sigterm) if _main_thread() else None
+    previous = _signals.install()
+    args = None
     try:
-        if args.command == "solve":
+        args = build_parser().parse_args(argv)
+        _setup_logging(getattr(args, "quiet", False))
+        if args.command == "solve":  # interruptible once the output folder is checked and locked
             return _solve(args)
         if args.command == "study":
             return _study(args)
-        if args.command == "schema":
-            return _schema(args)
-        if args.command == "export-fmu":
-            return _export_fmu(args)
-        if args.command == "import-fmu":
-            return _import_fmu(args)
-        return _codegen(args)
+        with _signals.interruptible():
+            if args.command == "schema":
+                return _schema(args)
+            if args.command == "export-fmu":
+                return _export_fmu(args)
+            if args.command == "import-fmu":
+                return _import_fmu(args)
+            return _codegen(args)
     except KeyboardInterrupt:
         print("gtmodel: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -491,13 +571,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
         return EXIT_INTERNAL
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        _signals.restore(previous)
 
 
-def _main_thread() -> bool:
-    return threading.current_thread() is threading.main_thread()
-
-
-if __name__ == "__main__":  # pragma: no cover
+if __name__ == "__main__":  # pragma: no cover - ``python -m gtmodel.cli``: gtmodel/__init__.py installed the handlers
     sys.exit(main())

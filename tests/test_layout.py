@@ -26,7 +26,8 @@ LAZY_OK = ("matplotlib", "sklearn", "dask", "distributed")
 #: command must start in a fraction of a second (``gtmodel --help``, ``schema --list``, an
 #: input error; issue 24, item 7): each sub-command imports the layers it needs (the whole
 #: problem layer pulls in CasADi, SciPy, pandas and matplotlib: 4-6 s) when it runs.
-LAZY_GTMODEL_OK = {"gtmodel/cli.py": ("gtmodel.",)}
+#: ``gtmodel/__main__.py`` installs the signal handlers before it imports the command (issue 26).
+LAZY_GTMODEL_OK = {"gtmodel/cli.py": ("gtmodel.",), "gtmodel/__main__.py": ("gtmodel.cli",)}
 MAX_LINES = 700
 
 

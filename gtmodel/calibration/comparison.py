@@ -66,6 +66,10 @@ class CalibrationDeclaration:
         Select on the start model's FK instead of the measured positions.
     seed : int
         Seed of the data (the random pose choice).
+    build_measurements : callable, optional
+        ``() -> (MeasurementSet, source)``: synthetic data made on first use of
+        ``measurements`` (given as None), e.g. when solved: an F1 grid takes seconds, and
+        loading a problem file stays fast.
     """
 
     measurements: Any
@@ -82,6 +86,7 @@ class CalibrationDeclaration:
     pose_method: str = "condition"
     pose_planned: bool = False
     seed: int = 0
+    build_measurements: Any = None
 
     @fill_doc(**SHARED_DOCS)
     def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> "CalibrationOutcome":
@@ -100,7 +105,7 @@ class CalibrationDeclaration:
         ------
         ProblemError
             Too few poses for a model's free parameters, or an unidentifiable request
-            (naming the model).
+            (naming the model); synthetic data that cannot be generated.
         """
         t0 = time.perf_counter()
         data = self.measurements
@@ -133,6 +138,21 @@ class CalibrationDeclaration:
             except GtModelError:
                 floor = None
         return CalibrationOutcome(self, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts, **extra})
+
+
+def _measurements(self: CalibrationDeclaration) -> Any:
+    """The poses (built by ``build_measurements`` on first use)."""
+    if self.__dict__.get("_measurements") is None and self.build_measurements is not None:
+        _log.info("generating the synthetic measurements ...")
+        self.__dict__["_measurements"], self.source = self.build_measurements()
+    return self.__dict__.get("_measurements")
+
+
+def _set_measurements(self: CalibrationDeclaration, value: Any) -> None:
+    self.__dict__["_measurements"] = value
+
+
+CalibrationDeclaration.measurements = property(_measurements, _set_measurements)  # type: ignore[assignment]
 
 
 @dataclass

@@ -362,7 +362,7 @@ def synthetic_deflections(
     k = _array(k_theta, (6,), "k_theta")
     if np.any(k <= 0):
         j = int(np.flatnonzero(k <= 0)[0])
-        raise InputError(f"k_theta: expected positive stiffnesses, joint {j + 1} has {k[j]!r}")
+        raise InputError(f"k_theta: expected positive stiffnesses, joint {j + 1} has {float(k[j])!r}")
     if series_translational_stiffness is not None and (not np.isfinite(series_translational_stiffness) or series_translational_stiffness <= 0):
         raise InputError(f"series_translational_stiffness: expected a finite number > 0, got {series_translational_stiffness!r}")
     if rotation_only_stiffness is not None and (not np.isfinite(rotation_only_stiffness) or rotation_only_stiffness <= 0):

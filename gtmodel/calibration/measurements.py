@@ -79,7 +79,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
-from gtmodel._tables import Table, read_table, write_table
+from gtmodel._tables import read_table, write_table
 from gtmodel.errors import InputError
 from gtmodel.robots.closure import quaternion_to_rotation
 
@@ -92,6 +92,10 @@ __all__ = [
     "QUATERNION_NORM_TOLERANCE",
     "MIN_POSES",
     "MIN_CART_POINTS",
+    "MAX_POSES",
+    "MAX_POSE_FILE_BYTES",
+    "MAX_CART_POINTS",
+    "MAX_CART_FILE_BYTES",
     "CART_COLUMNS",
 ]
 
@@ -107,6 +111,13 @@ QUATERNION_NORM_TOLERANCE = 1e-6
 MIN_POSES = 2
 #: Smallest number of cart positions per arm in a cart-measurement file (one segment).
 MIN_CART_POINTS = 2
+#: Most poses in a measurement file (a laser-tracker campaign holds hundreds to a few thousand;
+#: Dressler (2012), ch. 5) and the largest such file [bytes]: a larger file is refused before it is parsed.
+MAX_POSES = 20_000
+MAX_POSE_FILE_BYTES = 10_000_000
+#: Most rows of a cart survey (all arms) and the largest such file [bytes].
+MAX_CART_POINTS = 20_000
+MAX_CART_FILE_BYTES = 5_000_000
 #: Columns of the cart-measurement format, in the order written.
 CART_COLUMNS = ("arm", "q_m", "x_m", "y_m", "z_m")
 
@@ -500,17 +511,6 @@ class CartMeasurements:
 
 
 # ----------------------------------------------------------------------------- checks
-def _check_duplicates(table: Table, data: np.ndarray, key_columns: Sequence[int] | None = None, what: str = "identical to") -> None:
-    key = data if key_columns is None else data[:, list(key_columns)]
-    first: dict[bytes, int] = {}
-    for r in range(data.shape[0]):
-        b = np.ascontiguousarray(key[r] + 0.0).tobytes()  # + 0.0 maps -0.0 to 0.0
-        if b in first:
-            cols = "all columns" if key_columns is None else ", ".join(f"'{table.columns[c]}'" for c in key_columns)
-            raise table.error(f"duplicated row, {what} line {table.lines[first[b]]} ({cols})", row=r)
-        first[b] = r
-
-
 # ----------------------------------------------------------------------------- readers
 def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int = MIN_POSES) -> MeasurementSet:
     """Read a pose-measurement CSV file (format in the module docstring), strictly validated.
@@ -533,8 +533,8 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
     Raises
     ------
     InputError
-        Unreadable file; unknown, missing, incomplete (quaternion, F1 angles, load) or
-        repeated columns; a row with the wrong number of values; a value that is not a finite
+        Unreadable file, more than :data:`MAX_POSES` rows or :data:`MAX_POSE_FILE_BYTES`
+        bytes; unknown, missing, incomplete (quaternion, F1 angles, load) or repeated columns; a row with the wrong number of values; a value that is not a finite
         decimal number; a non-unit quaternion (:data:`QUATERNION_NORM_TOLERANCE`); a
         non-positive weight; two identical rows; fewer than ``min_poses`` rows; or
         ``n_q`` disagreeing with the header. The message names the file, the line
@@ -542,7 +542,7 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
     """
     if n_q is not None and n_q not in (3, 6):
         raise InputError(f"n_q: expected 3, 6 or None, got {n_q!r}")
-    table = read_table(path, "measurement file")
+    table = read_table(path, "measurement file", max_rows=MAX_POSES, max_bytes=MAX_POSE_FILE_BYTES)
     origin, cols, hl = table.source, table.columns, table.header_line
     known = [*measurement_columns(6, True, True, True)]
     table.check_columns(allowed=known)
@@ -582,7 +582,7 @@ def read_measurements(path: str | Path, n_q: int | None = None, min_poses: int =
         if np.any(bad):
             r = int(np.argmax(bad))
             raise table.error(f"expected a positive weight, got {float(weights[r])!r}", row=r, column="weight")
-    _check_duplicates(table, data)
+    table.check_unique_rows()
     qcols = measurement_columns(n_q_file)[:n_q_file]
     ms = MeasurementSet(
         q=data[:, [ix[c] for c in qcols]],
@@ -615,7 +615,7 @@ def read_cart_measurements(path: str | Path, n_arms: int = 3) -> CartMeasurement
     Raises
     ------
     InputError
-        Unreadable file; unknown, missing or repeated columns; a row with the wrong
+        Unreadable file, more than :data:`MAX_CART_POINTS` rows or :data:`MAX_CART_FILE_BYTES` bytes; unknown, missing or repeated columns; a row with the wrong
         number of values; a value that is not a finite decimal number; an ``arm`` that is
         not an integer in ``1..n_arms``; an arm with fewer than :data:`MIN_CART_POINTS`
         rows; the same ``q_m`` twice for one arm. The message names the file, the line
@@ -623,7 +623,7 @@ def read_cart_measurements(path: str | Path, n_arms: int = 3) -> CartMeasurement
     """
     if not isinstance(n_arms, (int, np.integer)) or n_arms < 1:
         raise InputError(f"n_arms: expected a positive integer, got {n_arms!r}")
-    table = read_table(path, "cart-measurement file")
+    table = read_table(path, "cart-measurement file", max_rows=MAX_CART_POINTS, max_bytes=MAX_CART_FILE_BYTES)
     origin = table.source
     table.check_columns(CART_COLUMNS, allowed=CART_COLUMNS)
     data = table.data
@@ -632,7 +632,7 @@ def read_cart_measurements(path: str | Path, n_arms: int = 3) -> CartMeasurement
     for r, a in enumerate(arm):
         if not (a == math.floor(a) and 1 <= a <= n_arms):
             raise table.error(f"expected an integer arm number 1..{n_arms}, got '{a:g}'", row=r, column="arm")
-    _check_duplicates(table, data, key_columns=(ix["arm"], ix["q_m"]), what="the same arm and q_m as")
+    table.check_unique_rows(("arm", "q_m"), what="the same arm and q_m as")
     qs, ps = [], []
     pcols = [ix["x_m"], ix["y_m"], ix["z_m"]]
     for i in range(n_arms):

@@ -8,23 +8,41 @@ the failed run's ``summary.json`` alone and no file of the earlier run can look 
 A process killed outright (SIGKILL, power loss) never reaches the replacement: the earlier
 folder stays intact, and the orphaned partial folder is removed by the next run.
 
-``summary.json`` lists every file of its folder (``files``, itself included).
+The replacement swaps the two folders in one step (Linux ``renameat2`` with
+``RENAME_EXCHANGE``), so a reader never finds the target missing; where that call is not
+available (another OS or file system) it is two renames with a window of microseconds
+in between. :func:`output_lock` keeps a second ``gtmodel`` command off a folder in use.
+
+``summary.json`` lists every file of its folder (``files``, itself included) and carries
+the marker ``"written_by": "gtmodel ..."`` by which a folder is recognised as a result.
 """
 
 from __future__ import annotations
 
+import ctypes
+import errno
 import json
 import math
 import os
 import shutil
 import sys
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
+from gtmodel import __version__, _signals
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
-__all__ = ["check_output_folder", "ResultFolder", "json_safe", "write_json", "failure_summary", "verification_fields"]
+__all__ = ["check_output_folder", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields"]
+
+#: The ``written_by`` field of every ``summary.json`` gtmodel writes (how a result folder is recognised).
+MARKER = f"gtmodel {__version__}"
 
 
 def json_safe(value: Any) -> Any:
@@ -150,12 +168,15 @@ def verification_fields(result: Any) -> dict[str, Any]:
 
 
 def check_output_folder(out: str | Path) -> None:
-    """Check that a run may write its result (or study) folder where asked.
+    """Check, before any work, that a run may write its result (or study) folder where asked.
 
     A run writes only into a folder that is new, empty, or a gtmodel result folder (its
-    ``summary.json`` is a run's summary, or, for a study stopped before its summary, one of
-    its ``cases/*/summary.json`` is), so a mistyped ``--out`` never replaces a folder of the
-    user's own files (DESIGN.md, "A user's files are never destroyed").
+    ``summary.json`` is a run's summary with the ``written_by`` marker, or, for a study
+    stopped before its summary, one of its ``cases/*/summary.json`` is), so a mistyped
+    ``--out`` never replaces a folder of the user's own files (DESIGN.md, "A user's files
+    are never destroyed"). The folder, or the nearest folder above it that exists, must be
+    writable, and it may not be a mount point or hold the current folder (a run replaces
+    its folder whole).
 
     Parameters
     ----------
@@ -165,37 +186,135 @@ def check_output_folder(out: str | Path) -> None:
     Raises
     ------
     ResultWriteError
-        ``out`` or a parent of it is an existing file, or ``out`` holds files no gtmodel
-        run wrote (names the folder and what to do).
+        ``out`` or a parent of it is an existing file; ``out`` holds files no gtmodel run
+        wrote; ``out`` (or the folder it would be created in) is not writable; ``out`` is
+        a symbolic link, a mount point or holds the current folder. The message names
+        ``out`` and what to do.
     """
     out = Path(out)
-    for p in (out, *out.parents):
+    absolute = Path(os.path.abspath(out))
+    existing = absolute
+    for p in (absolute, *absolute.parents):
         if p.exists() or p.is_symlink():
             if not p.is_dir():
-                why = "a file of that name is in the way" if p == out else f"its parent {p} is a file"
+                why = "a file of that name is in the way" if p == absolute else f"its parent {p} is a file"
                 raise ResultWriteError(f"cannot write the result folder {out}: {why}")
+            existing = p
             break
-    if out.is_dir() and not _written_by_gtmodel(out):
-        raise ResultWriteError(f"will not write the result folder {out}: it holds files that no gtmodel run wrote "
-                               "(no summary.json of a run) and a run replaces its folder whole; give a new or empty folder")
+    if existing == absolute:
+        if absolute.is_symlink():
+            raise ResultWriteError(f"cannot write the result folder {out}: it is a symbolic link, which a run would replace by a "
+                                   f"folder; give the folder it points to ({os.path.realpath(absolute)})")
+        if os.path.ismount(absolute) or absolute == absolute.parent:
+            raise ResultWriteError(f"cannot write the result folder {out}: it is a mount point, which a run cannot replace; "
+                                   "give a folder inside it")
+        try:
+            cwd = Path(os.getcwd())
+        except OSError:
+            cwd = None
+        if cwd is not None and (cwd == absolute or absolute in cwd.parents):
+            raise ResultWriteError(f"will not write the result folder {out}: it holds the current folder and a run replaces "
+                                   "its folder whole; give another folder")
+        if not _written_by_gtmodel(absolute):
+            raise ResultWriteError(f"will not write the result folder {out}: it holds files that no gtmodel run wrote "
+                                   "(no summary.json of a run) and a run replaces its folder whole; give a new or empty folder")
+        for p, what in ((absolute.parent, "the folder it is in"), (absolute, "it")):
+            if not os.access(p, os.W_OK | os.X_OK):
+                raise ResultWriteError(f"cannot write the result folder {out}: {what} is not writable ({p})")
+    elif not os.access(existing, os.W_OK | os.X_OK):
+        raise ResultWriteError(f"cannot write the result folder {out}: {existing} is not writable")
 
 
 def _written_by_gtmodel(folder: Path) -> bool:
     """Empty, or a result folder of a run or of a study (see :func:`check_output_folder`)."""
-    if not any(folder.iterdir()):
-        return True
+    try:
+        if not any(folder.iterdir()):
+            return True
+    except OSError:
+        return False
     if _is_run_summary(folder / "summary.json"):
         return True
     cases = folder / "cases"
-    return cases.is_dir() and any(_is_run_summary(c / "summary.json") for c in cases.iterdir())
+    try:
+        return cases.is_dir() and any(_is_run_summary(c / "summary.json") for c in cases.iterdir())
+    except OSError:
+        return False
 
 
 def _is_run_summary(path: Path) -> bool:
+    """A ``summary.json`` of gtmodel: a status, and the marker (or, before the marker, the file list)."""
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return False
-    return isinstance(data, dict) and data.get("status") in {s.value for s in Status}
+    if not isinstance(data, dict) or data.get("status") not in {s.value for s in Status}:
+        return False
+    marker = data.get("written_by")
+    files = data.get("files")
+    return (isinstance(marker, str) and marker.startswith("gtmodel ")) or (isinstance(files, list) and "summary.json" in files)
+
+
+@contextmanager
+def output_lock(out: str | Path) -> Iterator[None]:
+    """Hold the lock of a result folder for a whole run: a second run on it is refused at once.
+
+    The lock is ``.<name>.lock`` beside the folder (``fcntl.flock``; released by the
+    system when the process ends, also when it is killed); it is removed at the end.
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        The result folder.
+
+    Raises
+    ------
+    ResultWriteError
+        Another process holds the lock (names ``out`` and that process), or the lock file
+        cannot be created.
+    """
+    out = Path(out)
+    absolute = Path(os.path.realpath(out))  # one lock whatever path names the folder
+    if fcntl is None:  # not POSIX: no lock (docs/reliability.md)
+        yield
+        return
+    lock = absolute.parent / f".{absolute.name}.lock"
+    try:
+        absolute.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ResultWriteError(f"cannot write the result folder {out}: {exc.strerror or exc}") from None
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise ResultWriteError(f"cannot write the result folder {out}: {exc.strerror or exc}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(fd, 32).decode("ascii", "replace").strip()
+            os.close(fd)
+            who = f" (process {holder})" if holder.isdigit() else ""
+            raise ResultWriteError(f"cannot write the result folder {out}: another gtmodel run{who} is writing it; "
+                                   "wait for it to end or give another --out") from None
+        try:
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino  # not unlinked by the holder that just ended
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+    except OSError:
+        pass  # the pid is only for the message of a second run
+    try:
+        yield
+    finally:
+        try:
+            os.unlink(lock)
+        except OSError:
+            pass
+        os.close(fd)
 
 
 class ResultFolder:
@@ -259,21 +378,60 @@ class ResultFolder:
         files = sorted(p.name for p in self.path.iterdir() if p.name != "summary.json")
         out = dict(summary)
         out["files"] = ["summary.json", *files]
-        write_json(self.path / "summary.json", out)
-        old = self.target.parent / f".{self.target.name}.old-{os.getpid()}"
+        out["written_by"] = MARKER
         try:
-            if self.target.exists() or self.target.is_symlink():
-                if not self.target.is_dir():
-                    raise ResultWriteError(f"cannot write the result folder {self.target}: a file of that name is in the way")
-                os.replace(self.target, old)
-            os.replace(self.path, self.target)
-        except OSError as exc:
-            if old.exists() and not self.target.exists():
-                os.replace(old, self.target)
-            raise ResultWriteError(f"cannot replace the result folder {self.target}: {exc.strerror or exc}") from None
-        shutil.rmtree(old, ignore_errors=True)
-        self.committed = True
+            write_json(self.path / "summary.json", out)
+        except ResultWriteError as exc:
+            raise self.write_error(exc) from None
+        with _signals.protected():  # a signal here is raised once the target is whole again
+            try:
+                old = self._swap()
+            except OSError as exc:
+                raise ResultWriteError(f"cannot replace the result folder {self.target}: {exc.strerror or exc}") from None
+            self.committed = True
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
         return out
+
+    def _swap(self) -> Path | None:
+        """Put the partial folder in place of the target; the earlier target's new path (to remove)."""
+        target = self.target
+        if target.is_symlink() or (target.exists() and not target.is_dir()):
+            raise ResultWriteError(f"cannot write the result folder {target}: a file of that name is in the way")
+        if not target.exists():
+            try:
+                os.rename(self.path, target)
+                return None
+            except OSError as exc:
+                if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                    raise  # else another process created the target meanwhile: swap with it
+        if _exchange(self.path, target):
+            return self.path  # the partial path now holds the earlier folder
+        old = target.parent / f".{target.name}.old-{os.getpid()}"
+        os.replace(target, old)  # no atomic swap here: the target is missing for a moment
+        try:
+            os.replace(self.path, target)
+        except OSError:
+            os.replace(old, target)
+            raise
+        return old
+
+    def write_error(self, exc: OSError) -> ResultWriteError:
+        """One message for a failed write into the folder, naming the target, never the partial folder.
+
+        Parameters
+        ----------
+        exc : OSError
+            The failure (a :class:`~gtmodel.errors.ResultWriteError` keeps its words, with
+            the partial folder's path replaced by the target's).
+
+        Returns
+        -------
+        ResultWriteError
+        """
+        if isinstance(exc, ResultWriteError):
+            return ResultWriteError(str(exc).replace(str(self.path), str(self.target)))
+        return ResultWriteError(f"cannot write the result folder {self.target}: {exc.strerror or exc}")
 
     def discard(self) -> None:
         """Remove the partial folder (the target is left untouched)."""
@@ -285,6 +443,32 @@ class ResultFolder:
     def __exit__(self, *exc: Any) -> None:
         if not self.committed:
             self.discard()
+
+
+_RENAME_EXCHANGE = 2
+_libc: Any = None
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two folders in one step (Linux ``renameat2(RENAME_EXCHANGE)``); False where unsupported."""
+    global _libc
+    if not sys.platform.startswith("linux"):
+        return False
+    if _libc is None:
+        try:
+            _libc = ctypes.CDLL(None, use_errno=True)
+            _libc.renameat2  # glibc >= 2.28
+        except (OSError, AttributeError):
+            _libc = False
+    if _libc is False:
+        return False
+    at_fdcwd = -100
+    if _libc.renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
+        return False  # the file system cannot swap
+    raise OSError(err, os.strerror(err), str(b))
 
 
 def _remove_orphans(parent: Path, name: str) -> None:

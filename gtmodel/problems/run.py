@@ -10,21 +10,24 @@ outcome into a summary with one :class:`~gtmodel.status.Status`.
 from __future__ import annotations
 
 import logging
+import os
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from gtmodel.problems.overrides import apply_override
+from gtmodel import _signals
 from gtmodel._toml import read_toml
+from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
 from gtmodel.problems.registry import KINDS, get_kind, get_schema
-from gtmodel.problems.results import ResultFolder, failure_summary
+from gtmodel.problems.results import ResultFolder, check_output_folder, failure_summary
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 from gtmodel.problems.schema import validate_document
 from gtmodel.status import Status
 
-__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "RunOutcome"]
+__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "write_failure", "RunOutcome"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -142,8 +145,8 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
             summary.update(written.fields)
             summary["status"] = kind.status(solution)
             return folder.commit(summary)
-        except OSError as exc:
-            raise ResultWriteError(f"cannot write into {folder.path}: {exc.strerror or exc}") from None
+        except OSError as exc:  # a ResultWriteError too: one message, naming the target
+            raise folder.write_error(exc) from None
 
 
 @dataclass
@@ -243,9 +246,7 @@ def run_problem(
         return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
     except KeyboardInterrupt as exc:
         return _failed(path, target, problem, exc, Status.INTERRUPTED)
-    except ResultWriteError as exc:
-        return _failed(path, target, problem, exc, Status.INVALID_INPUT, write=False)
-    except GtModelError as exc:
+    except GtModelError as exc:  # a ResultWriteError too: the earlier result must not look current
         return _failed(path, target, problem, exc, Status.INVALID_INPUT)
     except Exception as exc:  # noqa: BLE001 - a defect: reported with its status, never lost
         _log.debug("internal error", exc_info=True)
@@ -260,13 +261,55 @@ def _failed(path: Path, target: Path, problem: Problem | None, error: BaseExcept
     )
     written = False
     if write:
-        try:
-            with InterruptGuard(), ResultFolder(target) as folder:
-                summary = folder.commit(summary)
-                written = True
-        except (ResultWriteError, KeyboardInterrupt) as exc:
-            _log.warning("gtmodel: could not write %s: %s", target / "summary.json", exc)
+        with _signals.protected():
+            written, summary, why = write_failure(target, summary)
+        if not written and not isinstance(error, ResultWriteError):  # else the run's own message says it
+            _log.warning("gtmodel: could not write %s: %s", target / "summary.json", why)
     return RunOutcome(path, target, status, summary, problem, None, error, written)
+
+
+def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str, Any], str]:
+    """Replace a result folder by a failed run's ``summary.json`` alone.
+
+    If even that cannot be written (a full disk), the earlier result (a gtmodel result
+    folder, never another) is removed, so that none of it looks current, and the write is
+    tried once more.
+
+    Parameters
+    ----------
+    target : pathlib.Path
+        The result folder.
+    summary : dict
+        The failed run's summary (:func:`~gtmodel.problems.results.failure_summary`).
+
+    Returns
+    -------
+    tuple of (bool, dict, str)
+        Whether it was written, the summary as written, and why not (empty if written).
+    """
+    try:
+        with ResultFolder(target) as folder:
+            return True, folder.commit(summary), ""
+    except ResultWriteError as exc:
+        why = str(exc)
+    try:
+        check_output_folder(target)  # never remove what is not a gtmodel result folder
+    except ResultWriteError:
+        return False, summary, why
+    aside = target.parent / f".{target.name}.old-{os.getpid()}"
+    try:
+        if target.is_dir():
+            os.replace(target, aside)
+            shutil.rmtree(aside, ignore_errors=True)
+    except OSError:
+        pass
+    try:  # the earlier files are gone: there may be room now
+        with ResultFolder(target) as folder:
+            return True, folder.commit(summary), ""
+    except ResultWriteError:
+        pass
+    gone = "; the earlier result there was removed so that it cannot look current" if not target.exists() else ""
+    return False, summary, why + gone
 
 
 def _peek_name(path: Path) -> str:

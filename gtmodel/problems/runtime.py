@@ -2,8 +2,8 @@
 
 Solvers called through CasADi catch Ctrl-C themselves and return a failure status
 (IPOPT's ``NonIpopt_Exception_Thrown``), which used to end a run as ``error``. Inside
-:class:`InterruptGuard` a SIGINT or SIGTERM is recorded; :meth:`InterruptGuard.check`
-turns it back into :class:`KeyboardInterrupt` once the solver has returned, so the whole
+:class:`InterruptGuard` (on :mod:`gtmodel._signals`) a SIGINT or SIGTERM is recorded;
+:meth:`InterruptGuard.check` turns it back into :class:`KeyboardInterrupt` once the solver has returned, so the whole
 run stops with status ``interrupted`` (exit code 130), also inside a study.
 
 :class:`Heartbeat` logs one line every few seconds while a long solve runs and nothing
@@ -13,11 +13,12 @@ else shows progress (output piped, or ``--quiet`` off a terminal).
 from __future__ import annotations
 
 import logging
-import signal
 import threading
 import time
-from types import FrameType, TracebackType
+from types import TracebackType
 from typing import Any
+
+from gtmodel import _signals
 
 __all__ = ["InterruptGuard", "Heartbeat"]
 
@@ -25,7 +26,12 @@ _log = logging.getLogger("gtmodel")
 
 
 class InterruptGuard:
-    """Record SIGINT/SIGTERM while a run is in progress (main thread only; else a no-op).
+    """An interruptible section of a run: SIGINT/SIGTERM raise, and are remembered.
+
+    The handler is :func:`gtmodel._signals.handler` (installed here if the ``gtmodel``
+    command has not installed it already, and put back afterwards): the first signal
+    raises :class:`KeyboardInterrupt`, later ones are only counted, and :meth:`check`
+    raises again for a signal a solver swallowed. Main thread only; elsewhere a no-op.
 
     Examples
     --------
@@ -35,23 +41,30 @@ class InterruptGuard:
     """
 
     def __init__(self) -> None:
-        self.interrupted = False
-        self._previous: dict[int, Any] = {}
+        self._previous: dict[int, Any] | None = None
+        self._section: Any = None
 
-    def _handler(self, signum: int, frame: FrameType | None) -> None:
-        self.interrupted = True
-        raise KeyboardInterrupt(signal.Signals(signum).name)
+    @property
+    def interrupted(self) -> bool:
+        """Whether a SIGINT or SIGTERM came (since the handler was installed)."""
+        return _signals.received()
 
     def __enter__(self) -> "InterruptGuard":
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._previous[sig] = signal.signal(sig, self._handler)
+        self._previous = _signals.install()
+        self._section = _signals.interruptible()
+        try:
+            self._section.__enter__()
+        except BaseException:
+            _signals.restore(self._previous)
+            raise
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
-        for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
-        self._previous.clear()
+        try:
+            self._section.__exit__(exc_type, exc, tb)
+        finally:
+            _signals.restore(self._previous)
+            self._previous = None
 
     def check(self) -> None:
         """Raise :class:`KeyboardInterrupt` if a signal arrived since entering.
@@ -61,7 +74,7 @@ class InterruptGuard:
         KeyboardInterrupt
             A SIGINT or SIGTERM was received (perhaps swallowed by a solver).
         """
-        if self.interrupted:
+        if _signals.received():
             raise KeyboardInterrupt("interrupted by the user")
 
 

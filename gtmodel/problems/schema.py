@@ -50,6 +50,10 @@ __all__ = [
 MAX_LENGTH_M = 1.0e3
 #: Largest force accepted in a problem file [N].
 MAX_FORCE_N = 1.0e7
+#: Largest magnitude of a named number of the expressions (``[parameters]``, e.g. an
+#: energy weight ``w``): a larger one is a typo or a unit slip, and makes the solver run
+#: for minutes before it fails (``w = 2^63 - 1``: 40-135 CPU-s).
+MAX_NAMED_NUMBER = 1.0e6
 
 
 def _fail(expected: str) -> PydanticCustomError:

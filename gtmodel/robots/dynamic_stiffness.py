@@ -105,7 +105,7 @@ def _check_freq(freq_hz: Any, name: str = "freq_hz") -> np.ndarray:
         raise InputError(f"{name}: expected positive frequencies, index {int(np.flatnonzero(f <= 0)[0])} is {f[f <= 0][0]!r}")
     if np.any(np.diff(f) <= 0):
         i = int(np.flatnonzero(np.diff(f) <= 0)[0])
-        raise InputError(f"{name}: expected strictly increasing frequencies, index {i + 1} ({f[i + 1]!r}) <= index {i} ({f[i]!r})")
+        raise InputError(f"{name}: expected strictly increasing frequencies, index {i + 1} ({float(f[i + 1])!r}) <= index {i} ({float(f[i])!r})")
     return f
 
 

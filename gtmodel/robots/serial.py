@@ -110,7 +110,7 @@ def _vector(value: Any, n: int, name: str, positive: bool = False) -> np.ndarray
     arr = as_array(value, (n,), name)
     if positive and np.any(arr <= 0):
         bad = int(np.flatnonzero(arr <= 0)[0])
-        raise InputError(f"{name}: expected positive values, entry {bad} is {arr[bad]!r}")
+        raise InputError(f"{name}: expected positive values, entry {bad} is {float(arr[bad])!r}")
     return arr
 
 

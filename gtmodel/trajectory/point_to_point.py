@@ -57,6 +57,8 @@ __all__ = [
     "SAMPLE_TIME",
     "SOLVER_OPTIONS",
     "TRAJECTORY_COLUMNS",
+    "GUESS_MAX_ROWS",
+    "GUESS_MAX_BYTES",
     "START_POSE",
     "END_POSE",
 ]
@@ -80,6 +82,10 @@ SOLVER_OPTIONS = {"obj_scaling_factor": 1e4, "perturb_always_cd": "yes"}
 #: Model parameters holding the boundary poses [m] (NLP parameters of the transcription).
 START_POSE, END_POSE = "T_start_pose", "T_end_pose"
 #: Leading columns of the trajectory table, in this order.
+#: Most rows and largest size [bytes] of a trajectory file given as an initial guess (a motion
+#: of seconds at any spacing; a larger file is refused before it is parsed).
+GUESS_MAX_ROWS = 100_000
+GUESS_MAX_BYTES = 20_000_000
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3")
 
 
@@ -441,7 +447,7 @@ def _read_guess_csv(path: Path) -> dict[str, np.ndarray]:
     """Read a trajectory CSV (as written by :meth:`PointToPointSolution.write_csv`) for a guess."""
     need = ["t", "x", "y", "z", "xd", "yd", "zd", "tau1", "tau2", "tau3"]
     try:
-        table = read_table(path, "trajectory file")
+        table = read_table(path, "trajectory file", max_rows=GUESS_MAX_ROWS, max_bytes=GUESS_MAX_BYTES)
         table.check_columns(need)
     except InputError as exc:
         raise InputError(f"guess: {exc}") from None

@@ -23,10 +23,16 @@ from gtmodel._arrays import as_signal, as_times, positive_int
 from gtmodel._tables import read_table, write_table
 from gtmodel.errors import InputError
 
-__all__ = ["MotionLog", "read_motion_log", "DynamicSamples", "preprocess_log", "MIN_SAMPLES", "SAMPLING_TOLERANCE"]
+__all__ = ["MotionLog", "read_motion_log", "DynamicSamples", "preprocess_log", "MIN_SAMPLES", "MAX_SAMPLES", "MAX_LOG_BYTES",
+           "SAMPLING_TOLERANCE"]
 
 #: Fewest samples of a motion log (a Butterworth ``filtfilt`` needs some periods of data).
 MIN_SAMPLES = 30
+#: Most samples of a motion log (17 min at the 4 ms servo period; the logs of Dressler (2012),
+#: ch. 6.2 last seconds to minutes) and the largest such file [bytes]: a larger file is
+#: refused before it is parsed.
+MAX_SAMPLES = 250_000
+MAX_LOG_BYTES = 50_000_000
 #: Largest relative deviation of a sampling interval from the median before a log is
 #: rejected as non-uniformly sampled (the filters assume a constant rate).
 SAMPLING_TOLERANCE = 0.01
@@ -152,10 +158,11 @@ def read_motion_log(path: str | Path) -> MotionLog:
     Raises
     ------
     InputError
-        Unreadable file, missing/unknown column, a malformed or non-finite number, or
-        non-increasing time; the message names the file and the line.
+        Unreadable file, missing/unknown column, a malformed or non-finite number,
+        non-increasing time, more than :data:`MAX_SAMPLES` samples or :data:`MAX_LOG_BYTES`
+        bytes; the message names the file and the line.
     """
-    table = read_table(path, "motion log")
+    table = read_table(path, "motion log", max_rows=MAX_SAMPLES, max_bytes=MAX_LOG_BYTES)
     cols = table.columns
     q_cols, T_cols, tau_cols = ["q1_m", "q2_m", "q3_m"], ["Tx_m", "Ty_m", "Tz_m"], ["tau1_N", "tau2_N", "tau3_N"]
     table.check_columns(allowed=["t_s", *q_cols, *T_cols, *tau_cols])
@@ -167,7 +174,7 @@ def read_motion_log(path: str | Path) -> MotionLog:
     dt = np.diff(t)
     if np.any(dt <= 0):
         r = int(np.argmax(dt <= 0)) + 1
-        raise table.error(f"time not strictly increasing ({t[r]!r} after {t[r - 1]!r})", row=r, column="t_s")
+        raise table.error(f"time not strictly increasing ({float(t[r])!r} after {float(t[r - 1])!r})", row=r, column="t_s")
     if t.size < MIN_SAMPLES:
         raise InputError(f"{table.source}: {t.size} samples, expected at least {MIN_SAMPLES}")
     pos = table.columns_of(q_cols if has_q else T_cols)

@@ -152,7 +152,7 @@ class ComplementaryFilter:
         bad = (fc <= 0) | (fc >= nyquist)
         if np.any(bad):
             j = int(np.argmax(bad))
-            raise InputError(f"cutoff_hz: entry {j} = {fc[j]!r} Hz is outside (0, {nyquist:g}) Hz (Nyquist for dt = {self.dt:g} s)")
+            raise InputError(f"cutoff_hz: entry {j} = {float(fc[j])!r} Hz is outside (0, {nyquist:g}) Hz (Nyquist for dt = {self.dt:g} s)")
         self.cutoff_hz = fc
         self.d = int(fc.size)
         self.design_hz = np.array([forward_backward_design_hz(f, self.dt, self.order) for f in fc])

@@ -173,20 +173,28 @@ class CalibrationKind(ProblemKind):
             elif doc.truth is None:
                 raise file.fail(f"models[{k}].start", "a parameter set (there is no [truth] with measured data)", m.start)
         truth = cart = noise_sigma = None
+        n_sel = doc.pose_selection.n if doc.pose_selection is not None else None
+        build = None
         if doc.data is not None:
             data, cart = _read_data(doc.data, file)
             source = f"measurements from {doc.data.file}"
+            n_q = data.n_q
+            _check_selection_size(file, n_sel, data.n_poses)
         else:
-            data, cart, truth, noise_sigma, source = _synthetic_data(doc, file)
-        models = [_start_model(k, m, doc, file, truth, cart, data.n_q) for k, m in enumerate(doc.models)]
+            # the cheap part now (truth model, pose count, cart surveys); the poses and the
+            # measurements of an F1 grid (its 6-D workspace grid: seconds) when the problem
+            # is solved, so a typo in a model's fixed parameters or ties is reported at once
+            truth, cart, noise_sigma, build = _synthetic_setup(doc, file, n_sel)
+            data, source, n_q = None, "synthetic (generated when solved)", truth.n_q
+        models = [_start_model(k, m, doc, file, truth, cart, n_q) for k, m in enumerate(doc.models)]
+        if build is not None and not (doc.truth.model == "f1" and doc.truth.grid_step is not None):
+            data, source = build()  # a 3-link or six-link set: a fraction of a second
+            build = None
         ps = doc.pose_selection if doc.pose_selection is not None else PoseSelectionSection(n=2)
-        n_sel = doc.pose_selection.n if doc.pose_selection is not None else None
-        if n_sel is not None and n_sel >= data.n_poses:
-            raise file.fail("pose_selection.n", f"fewer poses than the {data.n_poses} candidates", n_sel)
         exact = truth is not None and doc.truth.actuator_errors == "none"
         cal = doc.calibration
         return CalibrationDeclaration(data, cart, models, truth, noise_sigma, cal.solver, cal.max_iter, cal.align, source, n_sel, exact,
-                                      ps.method, ps.planned, doc.truth.seed if doc.truth is not None else 0)
+                                      ps.method, ps.planned, doc.truth.seed if doc.truth is not None else 0, build)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: CalibrationDeclaration, solution: CalibrationOutcome, out: Path, plots: bool, name: str) -> Written:
@@ -245,8 +253,8 @@ def _closure(base: str, ref: str, file: ProblemFile, field_name: str, parametris
         raise file.wrap(field_name, exc) from None
 
 
-def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile) -> np.ndarray:
-    """The pose grid or random poses of the truth, bounded before anything is built."""
+def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, count_only: bool = False) -> np.ndarray | None:
+    """The pose grid or random poses of the truth, bounded before anything is built (only the checks with ``count_only``)."""
     rotary = None if t.rotary_travel_deg is None else np.deg2rad(np.asarray(t.rotary_travel_deg, dtype=float))
     if rotary is not None and np.any(rotary[:, 0] >= rotary[:, 1]):
         raise file.fail("truth.rotary_travel_deg", "rows [min, max] with min < max", t.rotary_travel_deg)
@@ -262,6 +270,8 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile) -> 
                             t.grid_step_deg if tkind == "f1" else t.rotary_step_deg)
         if count > cap:
             raise file.fail("truth.grid_step", f"a grid step giving at most {cap} grid poses (this one gives {count:.3g})", t.grid_step)
+        if count_only:
+            return None
         if tkind == "f1":
             # the F1's own 6-D workspace grid (position and orientation steps)
             _, _, q = truth.workspace_grid(step_m=t.grid_step, step_deg=t.grid_step_deg, return_q=True)
@@ -272,29 +282,46 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile) -> 
     n = t.random_poses if t.random_poses is not None else 400
     if n > MAX_RANDOM_POSES[tkind]:
         raise file.fail("truth.random_poses", f"at most {MAX_RANDOM_POSES[tkind]} random poses for a {tkind} truth", n)
+    if count_only:
+        return None
     return random_poses(truth, n, seed=t.seed, rotary_travel=rotary)
 
 
-def _synthetic_data(doc: CalibrationFile, file: ProblemFile) -> tuple[Any, Any, Any, float, str]:
+def _check_selection_size(file: ProblemFile, n_sel: int | None, n_poses: int) -> None:
+    if n_sel is not None and n_sel >= n_poses:
+        raise file.fail("pose_selection.n", f"fewer poses than the {n_poses} candidates", n_sel)
+
+
+def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None) -> tuple[Any, Any, float, Any]:
+    """The truth model, the cart surveys and the noise now; a function building the poses and measurements later."""
     t = doc.truth
     truth = _closure(t.model, t.parameters, file, "truth.parameters")
     # a robot that differs from its parameter set (built tolerances): every parameter moved
     truth = perturbed_model(truth, t.perturbation, 7)
     noise = device_noise(t.noise)
     errors = ActuatorErrors.table_4_1() if t.actuator_errors == "table_4_1" else None
+    _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
     cart = None
     try:
-        q = _truth_poses(truth, t.model, t, file)
-        data = synthetic_measurements(truth, q, noise=noise, actuator_errors=errors, seed=t.seed)
         if any(m.type.endswith("_piecewise") for m in doc.models):
             cart = synthetic_cart_measurements(truth, errors, noise=noise, seed=t.seed + 1)
-    except ProblemError:
-        raise
     except GtModelError as exc:
         raise ProblemError(f"{file.path}: field 'truth': cannot generate the synthetic data: {exc}") from None
-    source = (f"synthetic: truth {t.model} '{t.parameters}', {t.noise} noise, actuator errors {t.actuator_errors}, "
-              f"seed {t.seed}, {data.n_poses} poses")
-    return data, cart, truth, noise.position_sigma_m, source
+
+    def build() -> tuple[Any, str]:
+        try:
+            q = _truth_poses(truth, t.model, t, file)
+            data = synthetic_measurements(truth, q, noise=noise, actuator_errors=errors, seed=t.seed)
+        except ProblemError:
+            raise
+        except GtModelError as exc:
+            raise ProblemError(f"{file.path}: field 'truth': cannot generate the synthetic data: {exc}") from None
+        _check_selection_size(file, n_sel, data.n_poses)
+        source = (f"synthetic: truth {t.model} '{t.parameters}', {t.noise} noise, actuator errors {t.actuator_errors}, "
+                  f"seed {t.seed}, {data.n_poses} poses")
+        return data, source
+
+    return truth, cart, noise.position_sigma_m, build
 
 
 def _start_model(k: int, m: ModelSection, doc: CalibrationFile, file: ProblemFile, truth: Any, cart: Any, n_q: int) -> dict[str, Any]:

@@ -235,7 +235,7 @@ class DynamicIdentificationKind(ProblemKind):
             low = next(b for b in first.residual_by_speed if b["v_min"] == 0.02)
             high = [b for b in first.residual_by_speed if b["v_min"] >= 0.2]
             fields["residual_rms_low_speed_N"] = low["rms"]
-            fields["residual_rms_high_speed_N"] = [float(np.sqrt(np.nanmean([b["rms"][i] ** 2 for b in high]))) for i in range(3)]
+            fields["residual_rms_high_speed_N"] = [_rms_of_bins([b["rms"][i] for b in high]) for i in range(3)]
             fields["residual_by_speed"] = first.residual_by_speed
             fields["status"] = solution.status
         if solution.design is not None:
@@ -338,3 +338,9 @@ def _write_parameters(path: Path, decl: DynamicIdentificationDeclaration, varian
     ]
     lines += [f"#   {n} = {float(s):.6g}" for n, s in zip(res.names, res.std)]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def _rms_of_bins(rms: list[float]) -> float | None:
+    """The RMS over speed bins of their RMS values; None when no bin holds samples (a slow log: no warning)."""
+    finite = [float(r) ** 2 for r in rms if r is not None and np.isfinite(r)]
+    return float(np.sqrt(np.mean(finite))) if finite else None

@@ -98,7 +98,7 @@ def read_deflection_csv(path: Path) -> DeflectionData:
     ProblemError
         Unreadable, too large or non-UTF-8 file, wrong header, wrong number of columns or
         a non-number (the message names the file, the line and the column); fewer than 2
-        or more than :data:`MAX_MEASUREMENTS` measurements.
+        or more than :data:`MAX_MEASUREMENTS` measurements; a line identical to an earlier one.
     """
     try:
         table = read_table(path, "the data file", header=DATA_COLUMNS, max_rows=MAX_MEASUREMENTS, max_bytes=MAX_DATA_BYTES)
@@ -106,6 +106,10 @@ def read_deflection_csv(path: Path) -> DeflectionData:
         raise ProblemError(str(exc)) from None
     if table.n_rows < 2:
         raise ProblemError(f"{path}: expected at least 2 measurement lines, got {table.n_rows}")
+    try:
+        table.check_unique_rows()  # a copy-paste slip, as in the other data formats
+    except InputError as exc:
+        raise ProblemError(str(exc)) from None
     rows, a = table.n_rows, table.data
     try:
         return DeflectionData(np.radians(a[:, :6]), a[:, 6:12], a[:, 12:], f"measured: {path.name}, {rows} rows")

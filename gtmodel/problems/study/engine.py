@@ -31,8 +31,6 @@ import json
 import logging
 import os
 import shutil
-import signal
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +38,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 import pandas as pd
 
+from gtmodel import _signals
 from gtmodel._toml import read_toml
 from gtmodel.errors import InputError, ProblemError, ResultWriteError
 from gtmodel.problems.results import ResultFolder, write_json
@@ -53,7 +52,7 @@ from gtmodel.problems.study.progress import StudyProgress
 from gtmodel.problems.study.table import build_table, case_row, write_table
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["StudyOutcome", "plan_cases", "run_study", "solve_study"]
+__all__ = ["StudyOutcome", "plan_cases", "run_study", "solve_study", "mark_interrupted"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -177,21 +176,6 @@ def _units(study: Study, tasks: Sequence[CaseTask], in_process: bool) -> list[li
     return list(chains.values())
 
 
-class _NoInterrupt:
-    """SIGINT/SIGTERM ignored while the final table and summary are written (main thread)."""
-
-    def __enter__(self) -> "_NoInterrupt":
-        self._old = {}
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._old[sig] = signal.signal(sig, signal.SIG_IGN)
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        for sig, handler in self._old.items():
-            signal.signal(sig, handler)
-
-
 def _default_workers() -> int:
     return max(1, os.cpu_count() or 1)
 
@@ -282,6 +266,7 @@ def run_study(study: Study | str | Path, out: str | Path | None = None, *, worke
             return summary is None or (retry_failed and not Status(summary["status"]).success)
 
         todo = [t for t in tasks if pending(t)]
+        before = {t.key: finished_summary(t.folder, t.key) for t in todo}  # what a rerun replaces
         plan_s = time.perf_counter() - started
         todo_keys = {t.key for t in todo}
         units = [[t for t in u if t.key in todo_keys] for u in _units(study, tasks, in_process)]
@@ -308,9 +293,15 @@ def run_study(study: Study | str | Path, out: str | Path | None = None, *, worke
             except KeyboardInterrupt:
                 interrupted = True
         exec_s = time.perf_counter() - exec_start
-        with _NoInterrupt():
-            outcome = _finish(study, tasks, records, root, analysis, plots, interrupted, info,
-                              {"plan_s": plan_s, "execute_s": exec_s, "started": started}, folder)
+        with _signals.settled():  # the table and summary are written whole; a signal meanwhile makes the study interrupted
+            timing = {"plan_s": plan_s, "execute_s": exec_s, "started": started}
+            interrupted = interrupted or _signals.received()
+            outcome = _finish(study, tasks, records, root, analysis, plots, interrupted, info, timing, folder, before)
+            if _signals.received() and not interrupted:
+                if folder is not None:
+                    folder = ResultFolder(target)
+                    root = folder.path.resolve()
+                outcome = _finish(study, tasks, records, root, analysis, plots, True, info, timing, folder, before)
     finally:
         if folder is not None and not folder.committed:
             folder.discard()
@@ -318,7 +309,7 @@ def run_study(study: Study | str | Path, out: str | Path | None = None, *, worke
 
 
 def _finish(study: Study, tasks: Sequence[CaseTask], records: dict[str, CaseRecord], root: Path, analysis: Any, plots: bool,
-            interrupted: bool, info: dict, timing: dict, folder: ResultFolder | None) -> StudyOutcome:
+            interrupted: bool, info: dict, timing: dict, folder: ResultFolder | None, before: dict[str, dict | None]) -> StudyOutcome:
     root.mkdir(parents=True, exist_ok=True)
     if not interrupted:
         _remove_partials(root / "cases")
@@ -341,6 +332,9 @@ def _finish(study: Study, tasks: Sequence[CaseTask], records: dict[str, CaseReco
     status = Status.INTERRUPTED if interrupted else Status.worst(table["status"]) if len(table) else Status.ERROR
     run = [r for r in records.values() if r.status is not Status.INTERRUPTED and r.wall_s is not None]
     missing = len(tasks) - len(table)
+    # solved now: a case to run whose result is new (also one that ended while the run shut
+    # down, whose record never came back); finished before: every other case with a result
+    now = sum(1 for t in tasks if t.key in before and (s := _case_summary(t, records)) is not None and s != before[t.key])
     message = ", ".join(f"{n} {s}" for s, n in counts.items()) or "no case finished"
     message = f"{len(table)}/{len(tasks)} case(s) finished ({message})" + ("; interrupted by the user" if interrupted else "")
     summary = {
@@ -350,7 +344,7 @@ def _finish(study: Study, tasks: Sequence[CaseTask], records: dict[str, CaseReco
         "analysis_name": study.analysis, "status": status, "message": message,
         "cases": [{"label": c.label, "folder": str(c.out.relative_to(out)), "status": c.status} for c in cases],
         "finished": len(table), "missing": missing, "counts": counts,
-        "run_now": len(run), "skipped": len(tasks) - len(run) - missing,
+        "run_now": now, "skipped": len(tasks) - now - missing,
         "wall_s": time.perf_counter() - timing["started"],
         **_timing(root, run, info, timing),
         "analysis": figures,
@@ -474,3 +468,39 @@ def solve_study(paths: Sequence[str | Path], out_dir: str | Path | None = None, 
     """
     study = comparison_study(paths, sweep, warm_start=warm_start, plots=plots)
     return run_study(study, out_dir, workers=workers, **options)
+
+
+def mark_interrupted(out: str | Path) -> bool:
+    """Mark a study folder's ``summary.json`` as ``interrupted`` (a run stopped before its end).
+
+    The finished cases (``cases/``) and the table of earlier runs are kept (a rerun
+    resumes from them); the summary says that the last run was interrupted, so that no
+    earlier status looks current.
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        The study folder.
+
+    Returns
+    -------
+    bool
+        Whether a summary was there and marked.
+    """
+    path = Path(out) / "summary.json"
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    if not isinstance(summary, dict) or summary.get("status") not in {s.value for s in Status}:
+        return False
+    summary["status"] = Status.INTERRUPTED
+    summary["message"] = f"interrupted by the user before the run ended (earlier: {summary.get('message')}); rerun to resume"
+    summary["run_now"] = 0
+    tmp = path.with_name(f".summary.json.{os.getpid()}")
+    try:
+        write_json(tmp, summary)
+        os.replace(tmp, path)
+    except OSError:
+        return False
+    return True

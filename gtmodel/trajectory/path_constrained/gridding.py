@@ -55,7 +55,7 @@ def _check_grid(path: Path, grid: Any) -> np.ndarray:
         raise InputError("grid: values must be finite")
     if np.any(np.diff(s) <= 0):
         k = int(np.argmax(np.diff(s) <= 0))
-        raise InputError(f"grid: expected strictly increasing s, but s[{k + 1}] = {s[k + 1]!r} <= s[{k}] = {s[k]!r}")
+        raise InputError(f"grid: expected strictly increasing s, but s[{k + 1}] = {float(s[k + 1])!r} <= s[{k}] = {float(s[k])!r}")
     if abs(s[0]) > 1e-12 or abs(s[-1] - 1.0) > 1e-12:
         raise InputError(f"grid: expected to start at s = 0 and end at s = 1, got {s[0]!r} .. {s[-1]!r}")
     s = s.copy()

@@ -15,7 +15,7 @@ from pydantic_core import PydanticCustomError
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
-from gtmodel.problems.schema import Expressions, Flag, NonEmptyText, ProblemSchema, Section, Text, choice, integer, number, vector
+from gtmodel.problems.schema import MAX_NAMED_NUMBER, Expressions, Flag, NonEmptyText, ProblemSchema, Section, Text, choice, integer, number, vector
 
 __all__ = [
     "BoundPair", "ModelSection", "FinalTimeSection", "OptimizationSection", "BoundarySection", "InitialGuessSection",
@@ -293,7 +293,7 @@ class OptimalControlFile(ProblemSchema):
     model : ModelSection
         ``[model]``: file, class, parameter overrides.
     parameters : dict of str to float
-        ``[parameters]``: named numbers of the expressions.
+        ``[parameters]``: named numbers of the expressions, each within +-:data:`~gtmodel.problems.schema.MAX_NAMED_NUMBER`.
     optimization : OptimizationSection
         ``[optimization]``: objective, constraints, horizon.
     boundary : BoundarySection
@@ -321,7 +321,8 @@ class OptimalControlFile(ProblemSchema):
 
     kind: Literal["optimal_control"]
     model: ModelSection
-    parameters: dict[str, number()] = Field(default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001")
+    parameters: dict[str, number(ge=-MAX_NAMED_NUMBER, le=MAX_NAMED_NUMBER)] = Field(
+        default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001 (|value| <= 1e6)")
     optimization: OptimizationSection
     boundary: BoundarySection = BoundarySection()
     bounds: dict[str, BoundPair] = Field(default_factory=dict, description="name = [lo, hi] for states, inputs, algebraics (overrides the model's); inf for an open side, expressions of parameters allowed")

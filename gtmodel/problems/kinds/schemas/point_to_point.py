@@ -14,7 +14,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.defaults import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, MotionSection, OcpSolverSection, RobotReference
-from gtmodel.problems.schema import MAX_FORCE_N, Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
+from gtmodel.problems.schema import MAX_FORCE_N, MAX_NAMED_NUMBER, Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
 
 __all__ = ["PointToPointFile"]
 
@@ -75,7 +75,7 @@ class PointToPointFile(ProblemSchema):
     limits : LimitsSection
         ``[limits]``: actuator and TCP bounds.
     parameters : dict of str to float
-        ``[parameters]``: named numbers of the expressions.
+        ``[parameters]``: named numbers of the expressions, each within +-:data:`~gtmodel.problems.schema.MAX_NAMED_NUMBER`.
     optimization : OptimizationSection
         ``[optimization]``: objective, constraints, final time.
     initial_guess : InitialGuessSection
@@ -90,7 +90,8 @@ class PointToPointFile(ProblemSchema):
     robot: RobotSection
     motion: MotionSection
     limits: LimitsSection
-    parameters: dict[str, number()] = Field(default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001")
+    parameters: dict[str, number(ge=-MAX_NAMED_NUMBER, le=MAX_NAMED_NUMBER)] = Field(
+        default_factory=dict, description="named numbers of the expressions, e.g. w = 0.001 (|value| <= 1e6)")
     optimization: OptimizationSection
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
