@@ -208,6 +208,9 @@ def _print_summary(summary: dict, out: Path) -> None:
         dev_text = f"{dev:.2e}" if isinstance(dev, float) else str(dev)
         verdict = "passed" if ver.get("passed") else "FAILED"
         lines.append(f"verified     {verdict}: deviation {dev_text} (tolerance {ver.get('tolerance'):.0e}) from a simulation")
+        for name, c in (ver.get("integrals") or {}).items():
+            if not c.get("passed"):
+                lines.append(f"             integral({name}): {c['collocation']:.6g} in the NLP, {c['simulated']:.6g} simulated")
     if summary.get("refinement"):
         last = summary["refinement"][-1]
         lines.append(f"refined      {len(summary['refinement'])} passes, {last.get('elements')} elements")

@@ -23,6 +23,13 @@ collocation points, the element ends and the midpoints between them:
 A state ``i`` passes when ``max |x_sim - x_col| <= tolerance * max(1, max |x_col|)``
 (the mixed absolute/relative test of integrators with ``atol = rtol = tolerance``).
 The relative deviation reported is ``max |x_sim - x_col| / max |x_col|``.
+
+The integrals of the problem (``integral()`` in constraints: isoperimetric constraints;
+:meth:`~gtmodel.modeling.Optimization.integral`) are checked the same way: the integrand
+is integrated as a quadrature of the simulation, and the value the NLP used (its
+collocation quadrature) passes when ``|I_sim - I_col| <= tolerance * max(1, |I_col|)``. A
+spurious minimum that satisfies an integral constraint only at the collocation points (the
+hanging chain's length with the input oscillating between them) is caught here.
 """
 
 from __future__ import annotations
@@ -79,6 +86,9 @@ class Verification:
         shape ``(K,)``, increasing.
     simulated : numpy.ndarray
         The simulated states there, shape ``(K, nx)`` (empty if the simulation failed).
+    integrals : dict of str to dict
+        Per checked integral (by its integrand): ``{"collocation", "simulated",
+        "abs_deviation", "passed"}``.
     """
 
     tolerance: float
@@ -93,6 +103,7 @@ class Verification:
     time_s: float = 0.0
     t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     simulated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    integrals: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """The ``verification`` block of a ``summary.json`` (JSON types only).
@@ -114,6 +125,8 @@ class Verification:
             "max_scaled_deviation": num(self.max_scaled_deviation),
             "max_element_error": num(float(np.max(self.element_errors))) if self.element_errors.size else None,
             "states": {k: {kk: num(vv) for kk, vv in v.items()} for k, v in self.states.items()},
+            **({"integrals": {k: {kk: (num(vv) if not isinstance(vv, bool) else vv) for kk, vv in v.items()}
+                              for k, v in self.integrals.items()}} if self.integrals else {}),
             "integrator": self.integrator,
             "method": "the optimal inputs (collocation polynomials) drive the model from the initial state",
             "message": self.message,
@@ -127,8 +140,13 @@ def _check_taus(root: np.ndarray) -> np.ndarray:
     return np.unique(np.concatenate([pts[1:], mids]))
 
 
-def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: float) -> tuple[ca.Function, str]:
-    """``F(x0, z0, p=[model p, U (nu d), t_k, h_k]) -> xf (nx, len(taus))`` on the scaled element."""
+def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: float,
+                        integrands: ca.Function | None = None) -> tuple[ca.Function, str]:
+    """``F(x0, z0, p=[model p, U (nu d), t_k, h_k]) -> xf (nx, len(taus)), qf`` on the scaled element.
+
+    ``integrands(t, x, z, u, p)``: the integrands integrated as quadratures (``qf`` their
+    integrals over the element, at each of ``taus``).
+    """
     dae, col = result.dae, result.collocation
     d = col.points
     nu = dae.nu
@@ -148,6 +166,8 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
     ode = ca.substitute([dae.ode_expr, dae.alg_expr], [dae.t, dae.u], [t_of, u_tau])
     p_all = ca.vertcat(dae.p, ca.vec(U), tk, hk)
     spec: dict[str, Any] = {"x": dae.x, "p": p_all, "t": tau, "ode": hk * ode[0]}
+    if integrands is not None and integrands.numel_out():
+        spec["quad"] = hk * integrands(t_of, dae.x, dae.z, u_tau, dae.p)
     plugin = "cvodes"
     if dae.nz:
         spec.update(z=dae.z, alg=ode[1])
@@ -157,7 +177,8 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
     return F, f"{plugin} (rtol {rtol:g})"
 
 
-def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float = INTEGRATOR_RTOL) -> Verification:
+def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float = INTEGRATOR_RTOL,
+           integrals: tuple[list[str], ca.Function, np.ndarray] | None = None) -> Verification:
     """Simulate the optimal inputs with a variable-step integrator and compare with the transcribed states.
 
     See the module docstring for the method and the test.
@@ -171,6 +192,10 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         ``gtmodel.defaults.defaults["ocp.verification_tolerance"]``.
     rtol : float, optional
         Relative tolerance of the integrator; default :data:`INTEGRATOR_RTOL`.
+    integrals : tuple, optional
+        ``(names, integrands, values)``: the problem's integrals to check, their integrand
+        Function ``(t, x, z, u, p) -> (m,)`` (final time substituted) and the values the
+        NLP used, shape ``(m,)``.
 
     Returns
     -------
@@ -211,16 +236,20 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     z0 = col.zc[:, 0, :].T if dae.nz else np.zeros((0, N))
     message = ""
     try:
-        F, how = _element_integrator(result, taus, rtol)
+        F, how = _element_integrator(result, taus, rtol, integrals[1] if integrals else None)
         local = F.map(N)(x0=col.xc[:, 0, :].T, z0=z0, p=P)
         xl = np.array(local["xf"], dtype=float).reshape(nx, N, taus.size).transpose(1, 2, 0)
         element_errors = np.max(np.abs(xl - poly) / scale, axis=(1, 2))
         xg = np.zeros_like(poly)
         x0 = col.xc[0, 0, :]
+        m = len(integrals[0]) if integrals else 0
+        q_sim = np.zeros(m)
         for k in range(N):
             out = F(x0=x0, z0=z0[:, k], p=P[:, k])
             xg[k] = np.array(out["xf"], dtype=float).reshape(nx, taus.size).T
             x0 = xg[k, -1]
+            if m:
+                q_sim += np.array(out["qf"], dtype=float).reshape(m, taus.size)[:, -1]
         dev = np.abs(xg - poly)
         if not np.all(np.isfinite(dev)):
             raise RuntimeError("the simulation returned non-finite states")
@@ -239,8 +268,20 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_check.reshape(-1)[where[i]])}
         for i in range(nx)
     }
-    passed = bool(np.all(scaled <= tolerance))
-    if not passed:
+    checked: dict[str, dict[str, Any]] = {}
+    if integrals:
+        for name, col_value, sim_value in zip(integrals[0], np.asarray(integrals[2], dtype=float), q_sim):
+            gap = abs(float(sim_value) - float(col_value))
+            checked[name] = {"collocation": float(col_value), "simulated": float(sim_value), "abs_deviation": gap,
+                             "passed": bool(gap <= tolerance * max(1.0, abs(float(col_value))))}
+    passed = bool(np.all(scaled <= tolerance)) and all(c["passed"] for c in checked.values())
+    bad_integral = next((n for n, c in checked.items() if not c["passed"]), None)
+    if not passed and bool(np.all(scaled <= tolerance)):
+        c = checked[bad_integral]
+        message = (f"integral({bad_integral}) is {c['collocation']:.6g} in the collocation NLP but {c['simulated']:.6g} "
+                   f"in the simulation under the optimal inputs (deviation {c['abs_deviation']:.3g} > tolerance "
+                   f"{tolerance:g} x max(1, |value|))")
+    elif not passed:
         worst = int(np.argmax(scaled))
         message = (
             f"state {names[worst]!r} deviates by {abs_dev[worst]:.3g} (scaled {scaled[worst]:.3g} > tolerance {tolerance:g}) "
@@ -248,5 +289,5 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         )
     return Verification(
         tolerance, passed, float(abs_dev.max()), float(rel_dev.max()), float(scaled.max()), states,
-        element_errors, how, message, _time.perf_counter() - start, t_check.reshape(-1), xg.reshape(-1, nx),
+        element_errors, how, message, _time.perf_counter() - start, t_check.reshape(-1), xg.reshape(-1, nx), checked,
     )

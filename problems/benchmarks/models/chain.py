@@ -2,8 +2,10 @@
 
 A chain of length ``L`` hangs between ``x(0) = a`` and ``x(1) = b``; its potential energy
 ``integral(x sqrt(1 + u^2))`` is minimised with ``x' = u``. The length constraint
-``integral(sqrt(1 + u^2)) = L`` (isoperimetric) is the state ``length``,
-``length' = sqrt(1 + u^2)``, with ``length(0) = 0`` and ``length(1) = L``.
+``integral(sqrt(1 + u^2)) = L`` (isoperimetric) is an ``integral()`` constraint of the
+problem file on :class:`Chain`; :class:`HangingChain` carries it as the state ``length``,
+``length' = sqrt(1 + u^2)``, with ``length(0) = 0`` and ``length(1) = L`` (the same problem
+written without integral constraints).
 """
 
 from __future__ import annotations
@@ -23,3 +25,13 @@ class HangingChain(Model):
         u = self.input("u")
         self.equation(self.der(x), u, name="slope")
         self.equation(self.der(length), ca.sqrt(1 + u**2), name="arc_length")
+
+
+class Chain(Model):
+    """State x (height); input u = dx/dt (the length constraint is an integral() of the problem)."""
+
+    def __init__(self) -> None:
+        super().__init__("chain")
+        x = self.state("x")
+        u = self.input("u")
+        self.equation(self.der(x), u, name="slope")

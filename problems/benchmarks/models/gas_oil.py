@@ -5,11 +5,11 @@ Gas oil ``y1`` cracks to gasoline ``y2`` and other products::
     y1' = -(theta1 + theta3) y1^2,   y2' = theta1 y1^2 - theta2 y2,   y(0) = (1, 0)
 
 The rate constants ``theta`` are estimated from the 21 measurements of ``y1, y2`` in
-``../data/gas_oil.csv`` (least squares). The problem language cannot yet take a variable
-at an interior time (``y1(0.025)``), so the model carries one copy of the ODE per
-measurement time ``t_j``, in the scaled time ``s = t / t_j`` on ``[0, 1]``: copy ``j`` at
-``s = 1`` is the state at ``t_j`` (the same solution, exactly), and the output ``sse`` is
-the sum of squared residuals at the final time (``s = 1``).
+``../data/gas_oil.csv`` (least squares). :class:`GasOilODE` is the model the problem file
+fits with a ``[[data]]`` table; :class:`GasOil` is the same fit written without data tables:
+one copy of the ODE per measurement time ``t_j``, in the scaled time ``s = t / t_j`` on
+``[0, 1]`` (copy ``j`` at ``s = 1`` is the state at ``t_j``, exactly), and the output
+``sse`` is the sum of squared residuals at the final time.
 """
 
 from __future__ import annotations
@@ -22,6 +22,18 @@ import numpy as np
 from gtmodel.modeling import Model
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "gas_oil.csv"
+
+
+class GasOilODE(Model):
+    """States y1 (gas oil), y2 (gasoline); parameters theta1..3 (rate constants)."""
+
+    def __init__(self) -> None:
+        super().__init__("gas_oil_ode")
+        theta = [self.parameter(f"theta{i}", 1.0) for i in (1, 2, 3)]
+        y1 = self.state("y1", start=1.0)
+        y2 = self.state("y2", start=0.0)
+        self.equation(self.der(y1), -(theta[0] + theta[2]) * y1**2, name="gas_oil")
+        self.equation(self.der(y2), theta[0] * y1**2 - theta[1] * y2, name="gasoline")
 
 
 class GasOil(Model):

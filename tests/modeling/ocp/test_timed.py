@@ -40,6 +40,11 @@ def test_maximise_final_state_under_an_isoperimetric_constraint():
     assert r.objective == pytest.approx(np.sqrt(0.5 * 2.0**3 / 3.0), rel=1e-7)  # reported as maximised, positive
     t = np.linspace(0.0, 2.0, 401)
     assert np.trapezoid(r.sample(t)["inputs"]["u"] ** 2, t) == pytest.approx(0.5, rel=1e-4)
+    # the verification integrates the constraint's integrand along the simulation (a quadrature of
+    # CVODES, independent of the collocation quadrature): the same 0.5
+    (energy,) = r.verification.integrals.values()
+    assert energy["passed"] and energy["simulated"] == pytest.approx(0.5, rel=1e-7)
+    assert energy["collocation"] == pytest.approx(0.5, rel=1e-7)  # the constraint, active, to the solver tolerance
 
 
 @pytest.mark.parametrize("t1, elements, rel, scheme", [(0.3, 10, 1e-8, "radau"), (0.35, 20, 2e-3, "radau"), (0.3, 10, 1e-8, "legendre")],
