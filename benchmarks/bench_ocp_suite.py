@@ -46,20 +46,25 @@ ROOT = Path(__file__).resolve().parents[1]
 BENCHMARKS = ROOT / "problems" / "benchmarks"
 
 
-def _fn(opt: Any, dae: Any, exprs: list) -> Any:
+def _fn(opt: Any, dae: Any, exprs: list, specials: Any = None) -> Any:
     """``(t, x, z, u, p, final_time) -> exprs`` with ``der()`` replaced by the model's right-hand side.
 
     Time and the final time are passed only where the expression uses them (rockit refuses
-    a time symbol in an expression that does not need it).
+    a time symbol in an expression that does not need it). ``specials``: the problem's
+    timed variables and integrals as rockit expressions (:func:`_specials`), substituted
+    for their symbols.
     """
     e = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
     if dae.nx:
         e = ca.substitute(e, dae.xdot, dae.ode_expr)
-    f = ca.Function("f", [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time], [e])
+    syms = [v.symbol for v in opt.special_symbols()]
+    S = ca.vertcat(*syms) if syms else ca.SX(0, 1)
+    f = ca.Function("f", [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time, S], [e])
     uses_t, uses_T = ca.depends_on(e, dae.t), ca.depends_on(e, opt.final_time)
+    uses_S = bool(syms) and ca.depends_on(e, S)
 
     def call(t: Any, x: Any, z: Any, u: Any, p: Any, T: Any) -> Any:
-        return f(t if uses_t else 0, x, z, u, p, T if uses_T else 0)
+        return f(t if uses_t else 0, x, z, u, p, T if uses_T else 0, specials if uses_S else ca.DM.zeros(S.numel()))
 
     return call
 
@@ -117,6 +122,24 @@ def rockit_solve(decl: Any) -> dict[str, Any]:
     T = ocp.T
     args = (ocp.t, Xv, Z, Uv, Pv, T)
     ocp.set_der(Xv, _fn(opt, dae, [dae.ode_expr])(*args))
+    # timed variables at the start/final time and integrals as rockit signals (an integral: a
+    # quadrature state from 0, read at the final time), each with the time it is read at;
+    # an interior time is not translated (rockit's formulation has no value at a fixed time)
+    special, when = [], []
+    for v in opt.special_symbols():
+        if not hasattr(v, "time"):
+            q = ocp.state()
+            ocp.set_der(q, _fn(opt, dae, [v.expr])(*args))
+            ocp.subject_to(ocp.at_t0(q) == 0)
+            special.append(q)
+            when.append("final")
+        elif v.time in ("start", "final"):
+            special.append(_fn(opt, dae, [v.expr])(*args))
+            when.append(v.time)
+        else:
+            return {"objective": float("nan"), "iterations": -1, "whole_call_s": float("nan"),
+                    "status": f"not translated: a variable at the interior time {v.time} s"}
+    specials = ca.vertcat(*special) if special else None
     for kind, var in (("x", Xv), ("u", Uv)):
         lb, ub = opt.bounds_vectors(dae, kind)
         for i in range(lb.size):
@@ -129,15 +152,23 @@ def rockit_solve(decl: Any) -> dict[str, Any]:
         ocp.subject_to(T >= lo)
         ocp.subject_to(T <= hi)
     for c in opt.path_constraints:
-        e = _fn(opt, dae, [c.expr])(*args)
+        e = _fn(opt, dae, [c.expr], specials)(*args)
         for i in range(c.lb.size):
             if np.isfinite(c.lb[i]):
                 ocp.subject_to(e[i] >= c.lb[i])
             if np.isfinite(c.ub[i]):
                 ocp.subject_to(e[i] <= c.ub[i])
+    syms = [v.symbol for v in opt.special_symbols()]
     for c in opt.point_constraints:
-        e = _fn(opt, dae, [c.expr])(*args)
-        at = ocp.at_t0 if c.at == "start" else ocp.at_tf
+        e = _fn(opt, dae, [c.expr], specials)(*args)
+        at_time = c.at
+        if c.at == "timed":  # read at the one time of the specials it uses
+            times = {w for sym, w in zip(syms, when) if ca.depends_on(c.expr, sym)}
+            if len(times) != 1:
+                return {"objective": float("nan"), "iterations": -1, "whole_call_s": float("nan"),
+                        "status": "not translated: a constraint on values at two times"}
+            at_time = times.pop()
+        at = ocp.at_t0 if at_time == "start" else ocp.at_tf
         for i in range(c.lb.size):
             if c.lb[i] == c.ub[i]:
                 ocp.subject_to(at(e[i]) == c.lb[i])
@@ -146,10 +177,11 @@ def rockit_solve(decl: Any) -> dict[str, Any]:
                 ocp.subject_to(at(e[i]) >= c.lb[i])
             if np.isfinite(c.ub[i]):
                 ocp.subject_to(at(e[i]) <= c.ub[i])
-    objective = ocp.at_tf(_fn(opt, dae, [opt.mayer])(*args))
+    objective = ocp.at_tf(_fn(opt, dae, [opt.mayer], specials)(*args))
     if not (opt.lagrange.is_constant() and float(opt.lagrange) == 0.0):
         objective = objective + ocp.integral(_fn(opt, dae, [opt.lagrange])(*args))
-    ocp.add_objective(objective)
+    sign = opt.objective_sign  # maximize: rockit minimises the negative
+    ocp.add_objective(sign * objective)
     for name, sl in dae.x_vars.items():
         ocp.set_initial(X[list(dae.x_vars).index(name)], _guess_expr(opt.initial_guesses.get(name), ocp.t, t0, dae.x_start[sl]))
     for k, name in enumerate(dae.u_vars):
@@ -165,7 +197,7 @@ def rockit_solve(decl: Any) -> dict[str, Any]:
         return {"objective": float("nan"), "iterations": -1, "whole_call_s": elapsed, "status": f"failed: {str(exc).splitlines()[-1][:120]}"}
     elapsed = time.perf_counter() - start
     stats = sol.stats
-    value = float(sol.value(objective))
+    value = float(sol.value(objective))  # the objective itself (a maximum reported positive, as gtmodel does)
     status = "optimal"
     return {"objective": value, "iterations": int(stats.get("iter_count", 0)), "whole_call_s": elapsed,
             "status": status if stats.get("success", False) else str(stats.get("return_status", status))}
@@ -212,6 +244,7 @@ def run_one(path: Path, cli: bool, rockit: bool) -> dict[str, Any]:
     if rockit:
         peer = rockit_solve(load_problem(path).declaration)
         pv = bench["sign"] * peer["objective"]
+        peer["whole_call_s"] = peer["whole_call_s"] if np.isfinite(peer["whole_call_s"]) else float("nan")
         row.update({
             "rockit_objective": pv, "rockit_relative_error": abs(pv - pub) / abs(pub), "rockit_iterations": peer["iterations"],
             "rockit_status": peer["status"], "rockit_whole_call_s": peer["whole_call_s"],
