@@ -51,6 +51,9 @@ def lazy_module(name: str) -> ModuleType:
     spec.loader = loader
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
+    parent, _, child = name.rpartition(".")
+    if parent:  # as the import system does: ``import a.b`` then ``a.b`` finds it
+        setattr(sys.modules[parent], child, module)
     loader.exec_module(module)
     return module
 

@@ -21,11 +21,14 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse
 
+from gtmodel._lazy import lazy_module
 from gtmodel._compiler import compiled_function
 from gtmodel.modeling.ocp.collocation_nlp import CollocationNLP, element_scaling
 from gtmodel.modeling.ocp.optimization import Optimization
+
+#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
+sparse = lazy_module("scipy.sparse")
 
 __all__ = ["assembled_derivatives", "COMPILE_FLAGS"]
 
@@ -58,7 +61,7 @@ class _Assembly:
                 vals.append(coefficient)
         if not keys:
             return ca.MX(nrow, ncol)
-        coo = scipy.sparse.coo_matrix((vals, (rows, cols)), shape=(len(keys), n_values)).tocsc()
+        coo = sparse.coo_matrix((vals, (rows, cols)), shape=(len(keys), n_values)).tocsc()
         coo.sum_duplicates()
         coo.sort_indices()
         S = ca.DM(ca.Sparsity(len(keys), n_values, coo.indptr.tolist(), coo.indices.tolist()), coo.data.tolist())
