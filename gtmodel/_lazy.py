@@ -18,13 +18,50 @@ from typing import Any, Callable, Mapping
 __all__ = ["lazy_exports", "lazy_module"]
 
 
+class _LazyModule(ModuleType):
+    """Stands for a module not yet imported; imports it (the ordinary way) on first attribute use.
+
+    Not registered in :data:`sys.modules`, so the import system never sees a half-loaded
+    package: the standard library's :class:`importlib.util.LazyLoader` registers its module
+    and, for a package whose ``__init__`` imports its own submodules (``gtmodel.robots``,
+    ``scipy.sparse``), a later ``import package.submodule`` then executes that submodule
+    twice (two copies of its classes: ``isinstance`` fails).
+    """
+
+    def __init__(self, name: str) -> None:
+        super().__init__(name)
+        object.__setattr__(self, "_lazy_target", None)
+
+    def _lazy_load(self) -> ModuleType:
+        target = object.__getattribute__(self, "_lazy_target")
+        if target is None:
+            target = importlib.import_module(object.__getattribute__(self, "__name__"))
+            object.__setattr__(self, "_lazy_target", target)
+        return target
+
+    def __getattr__(self, attr: str) -> Any:  # only for names not on the stand-in itself
+        return getattr(self._lazy_load(), attr)
+
+    def __setattr__(self, attr: str, value: Any) -> None:  # e.g. a test's monkeypatch
+        setattr(self._lazy_load(), attr, value)
+
+    def __delattr__(self, attr: str) -> None:
+        delattr(self._lazy_load(), attr)
+
+    def __dir__(self) -> list[str]:
+        return dir(self._lazy_load())
+
+
 def lazy_module(name: str) -> ModuleType:
     """A module that is imported when one of its attributes is first used.
 
-    The standard library's :class:`importlib.util.LazyLoader` (the recipe of the
-    :mod:`importlib` documentation): python-control, for one, imports matplotlib.pyplot and
-    SciPy's signal and stats packages (~2 s of CPU), which a model that never builds a
-    transfer function should not pay for. A module already imported is returned as it is.
+    python-control, for one, imports matplotlib.pyplot and SciPy's signal and stats
+    packages (~2 s of CPU), which a model that never builds a transfer function should not
+    pay for; SciPy's sparse matrices (~1 s with their array-API layer) likewise for a
+    problem that never checks a model's structure. A module already imported is returned
+    as it is; otherwise a stand-in that imports the module the ordinary way
+    (:func:`importlib.import_module`) on its first attribute use and forwards every
+    attribute to it (reads, and writes such as a test's monkeypatch).
 
     Parameters
     ----------
@@ -34,7 +71,7 @@ def lazy_module(name: str) -> ModuleType:
     Returns
     -------
     module
-        The module (registered in :data:`sys.modules`), loaded on first attribute access.
+        The module, or its stand-in until first use.
 
     Raises
     ------
@@ -47,12 +84,7 @@ def lazy_module(name: str) -> ModuleType:
     spec = importlib.util.find_spec(name)
     if spec is None or spec.loader is None:
         raise ModuleNotFoundError(f"No module named {name!r}", name=name)
-    loader = importlib.util.LazyLoader(spec.loader)
-    spec.loader = loader
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    loader.exec_module(module)
-    return module
+    return _LazyModule(name)
 
 
 def lazy_exports(package: str, exports: Mapping[str, str]) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:

@@ -228,6 +228,30 @@ def test_fast_paths_of_the_command_import_no_heavy_library(tmp_path, argv):
     assert proc.stdout.splitlines()[-1] == "IMPORTED []", proc.stdout + proc.stderr
 
 
+#: What ``gtmodel solve`` on an optimal-control problem with a user's model (plots off) does
+#: not need, and so must not import: pandas, matplotlib, python-control, SciPy's sparse,
+#: optimisation, linear-algebra and interpolation packages, the robot models, the inverse
+#: model and the acausal components (issue 25: the process within 1.5 s of the solve itself;
+#: benchmarks/bench_ocp_suite.py measures the time, ``cli_s``).
+NOT_ON_THE_SOLVE_PATH = ("pandas", "matplotlib", "control", "scipy.sparse", "scipy.optimize", "scipy.linalg",
+                         "scipy.interpolate", "gtmodel.robots", "gtmodel.modeling.simulation.inverse",
+                         "gtmodel.modeling.components")
+
+
+def test_solving_a_user_model_problem_imports_only_what_it_needs(tmp_path):
+    """A published benchmark (the smallest) solved in a fresh process: sys.modules checked,
+    not timed; the result is the shipped one (the double integrator's minimum time, 2 s)."""
+    problem = PROBLEMS_DIR / "benchmarks" / "double_integrator_min_time.toml"
+    script = ("import sys\nfrom gtmodel.cli import main\ntry:\n    code = main(sys.argv[1:])\nexcept SystemExit as exc:\n    code = exc.code\n"
+              f"print('EXIT', code)\nprint('IMPORTED', sorted(m for m in {NOT_ON_THE_SOLVE_PATH!r} if m in sys.modules))\n")
+    proc = subprocess.run([sys.executable, "-c", script, "solve", str(problem), "--out", str(tmp_path / "out"), "--no-plots", "--quiet"],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=300, env=dict(os.environ, PYTHONPATH=str(PROBLEMS_DIR.parent)))
+    assert proc.stdout.splitlines()[-2:] == ["EXIT 0", "IMPORTED []"], proc.stdout + proc.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "optimal" and abs(summary["final_time_s"] - 2.0) < 1e-6
+    assert (tmp_path / "out" / "trajectories.csv").read_text().startswith("t,")
+
+
 #: Libraries a problem file with a bad field must not import: it is reported by its kind's
 #: light schema before the kind (its solvers) is imported (issue 24, item 7).
 SOLVER_STACK = ("casadi", "scipy", "control", "matplotlib", "pandas")

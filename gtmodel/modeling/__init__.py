@@ -27,15 +27,13 @@ from __future__ import annotations
 
 import sys
 
+from gtmodel._lazy import lazy_exports
 from gtmodel.modeling.dae import FlatDAE, SimulationResult
 from gtmodel.modeling.structure import discontinuities as _discontinuities
 from gtmodel.modeling.structure.analysis import check_structure
 from gtmodel.modeling.structure.index_reduction import structural_simplify
 from gtmodel.modeling.simulation import linear as _linear
 from gtmodel.modeling.simulation.model import Model
-from gtmodel.modeling.simulation.inverse import InverseModel, inverse_model
-from gtmodel.modeling.components.component import Component, Input, Parameter, State, Structural, Variable, connect
-from gtmodel.modeling.components.connectors import Connector, Flow, Potential
 from gtmodel.modeling.ocp import collocation as _collocation
 from gtmodel.modeling.ocp import expressions as _expressions
 from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
@@ -91,3 +89,20 @@ __all__ = [
     "Potential",
     "Flow",
 ]
+
+#: Imported on first use (:mod:`gtmodel._lazy`): the inverse model and the acausal components,
+#: which a problem file on an equation-based model (``gtmodel solve``) does not need.
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "InverseModel": "simulation.inverse",
+    "inverse_model": "simulation.inverse",
+    "Component": "components.component",
+    "Input": "components.component",
+    "Parameter": "components.component",
+    "State": "components.component",
+    "Structural": "components.component",
+    "Variable": "components.component",
+    "connect": "components.component",
+    "Connector": "components.connectors",
+    "Flow": "components.connectors",
+    "Potential": "components.connectors",
+})

@@ -9,16 +9,19 @@ from __future__ import annotations
 import re
 from typing import Mapping
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import ParameterError
 from gtmodel.problems.base import ProblemFile
-from gtmodel.robots import RobotParameters, available_parameter_sets, load_parameters
+
+#: The robot models, imported on first use: kinds without a robot (``optimal_control``) do not need them.
+robots = lazy_module("gtmodel.robots")
 
 __all__ = ["robot_parameters", "named_parameters"]
 
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
-def robot_parameters(file: ProblemFile, field: str, ref: str) -> RobotParameters:
+def robot_parameters(file: ProblemFile, field: str, ref: str) -> robots.RobotParameters:
     """A Gantry-Tau parameter set: a shipped name (``L1``, ``D1``, ...) or a TOML file.
 
     Parameters
@@ -39,9 +42,9 @@ def robot_parameters(file: ProblemFile, field: str, ref: str) -> RobotParameters
     ProblemError
         Not a shipped set nor a loadable file (names the field).
     """
-    target = file.reference(field, ref, available_parameter_sets())
+    target = file.reference(field, ref, robots.available_parameter_sets())
     try:
-        return load_parameters(str(target))
+        return robots.load_parameters(str(target))
     except ParameterError as exc:
         raise file.wrap(field, exc) from None
 

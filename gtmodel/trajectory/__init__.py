@@ -1,23 +1,10 @@
-"""Optimal motion on top of the modelling layer: point-to-point time/energy-optimal motion."""
+"""Optimal motion on top of the modelling layer: point-to-point time/energy-optimal motion.
 
-from gtmodel.trajectory.point_to_point import (
-    SAMPLE_TIME,
-    PointToPoint,
-    PointToPointSolution,
-    build_optimization,
-    solve_point_to_point,
-    trapezoid_profile,
-)
-from gtmodel.trajectory.point_to_point_resolve import point_to_point_function, resolve_point_to_point
-from gtmodel.trajectory.path import Path, Polyline, SplinePath, StraightLine
-from gtmodel.trajectory.path_constrained import (
-    PathConstrainedProblem,
-    PathConstraints,
-    PathSolution,
-    solve_path_collocation,
-    solve_path_convex,
-)
-from gtmodel.trajectory.milling import MillingProcess, SpindleAngleResult, optimise_spindle_angle
+The names below are imported on first use (:mod:`gtmodel._lazy`): a problem that needs only
+:mod:`gtmodel.trajectory.model_ocp` does not import the robot models and path planners.
+"""
+
+from gtmodel._lazy import lazy_exports
 
 __all__ = [
     "SAMPLE_TIME",
@@ -41,3 +28,11 @@ __all__ = [
     "SpindleAngleResult",
     "optimise_spindle_angle",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "SAMPLE_TIME": "point_to_point", "PointToPoint": "point_to_point", "PointToPointSolution": "point_to_point", "build_optimization": "point_to_point", "solve_point_to_point": "point_to_point", "trapezoid_profile": "point_to_point",
+    "point_to_point_function": "point_to_point_resolve", "resolve_point_to_point": "point_to_point_resolve",
+    "Path": "path", "Polyline": "path", "SplinePath": "path", "StraightLine": "path",
+    "PathConstrainedProblem": "path_constrained", "PathConstraints": "path_constrained", "PathSolution": "path_constrained", "solve_path_collocation": "path_constrained", "solve_path_convex": "path_constrained",
+    "MillingProcess": "milling", "SpindleAngleResult": "milling", "optimise_spindle_angle": "milling",
+})

@@ -40,11 +40,14 @@ from typing import Any, Sequence
 import casadi as ca
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
-from scipy.interpolate import CubicSpline
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.kinematics import GantryTau3Kinematics
+
+#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
+interpolate = lazy_module("scipy.interpolate")
 
 __all__ = [
     "Path",
@@ -420,7 +423,7 @@ class SplinePath(Path):
         chord = np.linalg.norm(np.diff(pts, axis=0), axis=1)
         x = np.concatenate([[0.0], np.cumsum(chord) / chord.sum()])
         x[-1] = 1.0
-        spline = CubicSpline(x, pts, bc_type=bc_type, axis=0)
+        spline = interpolate.CubicSpline(x, pts, bc_type=bc_type, axis=0)
         c = np.asarray(spline.c, dtype=float)
         if c.shape[0] < 4:  # CubicSpline lowers the degree for 2 or 3 points: pad to cubic
             c = np.concatenate([np.zeros((4 - c.shape[0],) + c.shape[1:]), c])

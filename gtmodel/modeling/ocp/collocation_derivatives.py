@@ -21,7 +21,6 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse
 
 from gtmodel._compiler import compiled_function
 from gtmodel.modeling.ocp.collocation_nlp import CollocationNLP, element_scaling
@@ -50,18 +49,20 @@ class _Assembly:
         """The sparse ``nrow x ncol`` matrix whose nonzeros are ``S @ values``."""
         keys = sorted(self.terms, key=lambda rc: (rc[1], rc[0]))  # column-major, as CasADi stores
         sp = ca.Sparsity.triplet(nrow, ncol, [rc[0] for rc in keys], [rc[1] for rc in keys])
-        rows, cols, vals = [], [], []
-        for i, key in enumerate(keys):
-            for source, coefficient in self.terms[key]:
-                rows.append(i)
-                cols.append(source)
-                vals.append(coefficient)
         if not keys:
             return ca.MX(nrow, ncol)
-        coo = scipy.sparse.coo_matrix((vals, (rows, cols)), shape=(len(keys), n_values)).tocsc()
-        coo.sum_duplicates()
-        coo.sort_indices()
-        S = ca.DM(ca.Sparsity(len(keys), n_values, coo.indptr.tolist(), coo.indices.tolist()), coo.data.tolist())
+        # S (len(keys) x n_values, CSC): S[i, source] = the sum of the coefficients of that
+        # pair in the order added (duplicates summed as scipy.sparse's sum_duplicates does)
+        summed: dict[tuple[int, int], float] = {}
+        for i, key in enumerate(keys):
+            for source, coefficient in self.terms[key]:
+                entry = (source, i)
+                summed[entry] = summed[entry] + coefficient if entry in summed else coefficient
+        entries = sorted(summed)  # column-major, rows sorted within a column
+        colind = np.zeros(n_values + 1, dtype=np.int64)
+        np.add.at(colind, np.array([c for c, _ in entries], dtype=np.int64) + 1, 1)
+        S = ca.DM(ca.Sparsity(len(keys), n_values, np.cumsum(colind).tolist(), [r for _, r in entries]),
+                  [summed[e] for e in entries])
         return ca.sparsity_cast(ca.mtimes(S, values), sp)
 
 

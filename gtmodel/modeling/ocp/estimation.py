@@ -28,11 +28,13 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse
-import scipy.sparse.linalg
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.optimization import Optimization
+
+#: SciPy's sparse matrices and their LU (``sparse.linalg``), imported on first use: only a fit needs them.
+sparse = lazy_module("scipy.sparse")
 
 __all__ = ["DataFit", "fit_data", "least_squares", "estimate_statistics"]
 
@@ -213,17 +215,17 @@ def _covariance(transcription: Any, w: np.ndarray, pvec: np.ndarray, rows: Seque
     active_g = (lbg == ubg) | _at_bound(g, lbg, ubg)
     active_w = (lbw == ubw) | _at_bound(w, lbw, ubw)
     nw = w.size
-    Aw = scipy.sparse.identity(nw, format="csr")[np.nonzero(active_w)[0]]
-    A_act = scipy.sparse.vstack([A[np.nonzero(active_g)[0]], Aw]).tocsc()
-    H = (Jr.T @ scipy.sparse.diags(W) @ Jr).tocsc()
+    Aw = sparse.identity(nw, format="csr")[np.nonzero(active_w)[0]]
+    A_act = sparse.vstack([A[np.nonzero(active_g)[0]], Aw]).tocsc()
+    H = (Jr.T @ sparse.diags(W) @ Jr).tocsc()
     na = A_act.shape[0]
-    K = scipy.sparse.bmat([[H, A_act.T], [A_act, None]], format="csc")
+    K = sparse.bmat([[H, A_act.T], [A_act, None]], format="csc")
     scale = getattr(transcription, "_scale", np.ones(nw))
     pf_cols = _free_columns(transcription, nw)
     rhs = np.zeros((nw + na, len(pf_cols)))
     rhs[pf_cols, np.arange(len(pf_cols))] = 1.0
     try:
-        lu = scipy.sparse.linalg.splu(K)
+        lu = sparse.linalg.splu(K)
         sol = lu.solve(rhs)
     except RuntimeError:  # singular: a parameter the data do not determine
         _log.warning("parameter estimation: the reduced Gauss-Newton Hessian is singular (parameters not identifiable)")
@@ -250,8 +252,8 @@ def _free_columns(transcription: Any, nw: int) -> np.ndarray:
     return np.arange(nw - n, nw)
 
 
-def _sparse(m: Any) -> scipy.sparse.csr_matrix:
+def _sparse(m: Any) -> sparse.csr_matrix:
     """A CasADi DM as a scipy CSR matrix."""
     dm = ca.DM(m)
     r, c = dm.sparsity().get_triplet()
-    return scipy.sparse.csr_matrix((np.array(dm.nonzeros(), dtype=float), (r, c)), shape=dm.shape)
+    return sparse.csr_matrix((np.array(dm.nonzeros(), dtype=float), (r, c)), shape=dm.shape)

@@ -20,7 +20,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
-from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _frame, _unpack
+from gtmodel.modeling.dae import FlatDAE, _columns, _eval_outputs, _frame, _unpack, _write_columns
 
 __all__ = ["OptimizationResult", "CollocationData", "normalize_ipopt_status", "lagrange_basis"]
 
@@ -372,5 +372,10 @@ class OptimizationResult(StatusResult):
             The written file.
         """
         p = Path(path)
-        self.to_dataframe(dt).to_csv(p, index=False)
+        if dt is None:
+            cols = _columns(self.t, self.states, self.inputs, self.algebraics, self.outputs)
+        else:
+            s = self.resample(dt)
+            cols = _columns(s["t"], s["states"], s["inputs"], s["algebraics"], s["outputs"])
+        _write_columns(p, cols)  # the columns of to_dataframe(dt), without importing pandas
         return p

@@ -17,12 +17,12 @@ linearisation and the inverse model.
 
 from __future__ import annotations
 
+from gtmodel._lazy import lazy_exports
 from gtmodel.modeling.simulation.model import Model
 from gtmodel.modeling.simulation.integration import simulate_model
 from gtmodel.modeling.simulation.event_simulation import simulate_events
 from gtmodel.modeling.simulation.structured_simulation import simulate_structured
 from gtmodel.modeling.simulation.linear import Linearization, linearize
-from gtmodel.modeling.simulation.inverse import InverseModel, inverse_model
 
 __all__ = [
     "Model",
@@ -34,3 +34,6 @@ __all__ = [
     "InverseModel",
     "inverse_model",
 ]
+
+#: The inverse model, imported on first use (a solve or a simulation does not need it).
+__getattr__, __dir__ = lazy_exports(__name__, {"InverseModel": "inverse", "inverse_model": "inverse"})

@@ -50,14 +50,17 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import brentq
 
 from gtmodel._arrays import positive_float, positive_int
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, expand_names
 from gtmodel.modeling.structure.events import EventRecord
 from gtmodel.modeling.structure.index_reduction import _ident, structural_simplify
 from gtmodel.modeling.simulation.integration import TIME_OPTIONS, integrator_options, simulation_inputs, time_scaled
+
+#: SciPy's optimisers (brentq), imported on first use: a simulation without events does not need them.
+optimize = lazy_module("scipy.optimize")
 
 __all__ = ["simulate_events", "simulate_events_reduced"]
 
@@ -199,7 +202,7 @@ class _EventSimulator:
         fb = phi(tb)
         if sign * ca_[i] > 0.0 or fb <= 0.0:  # crossed exactly at ta, or not seen again
             return ta if sign * ca_[i] > 0.0 else tb
-        root = float(brentq(phi, ta, tb, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
+        root = float(optimize.brentq(phi, ta, tb, xtol=tol, rtol=4 * np.finfo(float).eps, maxiter=200))
         step = tol
         while root < tb and phi(root) <= 0.0:  # the event is at the right limit: crossed
             root, step = min(root + step, tb), 2.0 * step

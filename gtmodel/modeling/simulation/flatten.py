@@ -21,11 +21,14 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sps
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import ModelError
 from gtmodel.modeling.dae import FlatDAE, expand_names
 from gtmodel.modeling.structure.analysis import incidence, matching, scalarize, structure_message, structure_parts
+
+#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
+sps = lazy_module("scipy.sparse")
 
 __all__ = ["flatten_model"]
 

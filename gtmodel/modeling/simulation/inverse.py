@@ -47,13 +47,15 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sps
-from scipy.sparse.csgraph import connected_components, min_weight_full_bipartite_matching
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure.index_reduction import pantelides
 from gtmodel.modeling.structure.analysis import check_structure, dulmage_mendelsohn, scalarize
+
+#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
+sps = lazy_module("scipy.sparse")  # and its graph algorithms, sps.csgraph
 
 __all__ = ["InverseModel", "inverse_model"]
 
@@ -252,7 +254,7 @@ def _blocks(weights: sps.csr_matrix, eq_of: np.ndarray) -> tuple[list[list[int]]
                 src.append(int(w))  # v is computed from an equation using w: w before v
                 dst.append(v)
     graph = sps.csr_matrix((np.ones(len(src)), (src, dst)), shape=(m, m))
-    ncomp, label = connected_components(graph, directed=True, connection="strong")
+    ncomp, label = sps.csgraph.connected_components(graph, directed=True, connection="strong")
     members: list[list[int]] = [[] for _ in range(ncomp)]
     for v in range(m):
         members[label[v]].append(v)
@@ -498,7 +500,7 @@ def inverse_model(
     try:
         if n_var > n_eq:
             raise ValueError
-        var_idx, eq_idx = min_weight_full_bipartite_matching(weights.T.tocsr())
+        var_idx, eq_idx = sps.csgraph.min_weight_full_bipartite_matching(weights.T.tocsr())
     except ValueError:
         raise ModelError(_undetermined_message(model, pattern, eq_names, var_names, known)) from None
     eq_of = np.full(n_var, -1)

@@ -29,11 +29,14 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sps
-from scipy.sparse.csgraph import maximum_bipartite_matching
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import expand_names
+
+#: SciPy's sparse matrices and graph algorithms (``sps.csgraph``), imported on first use (~1 s of imports a
+#: problem that never checks a model's structure should not pay for).
+sps = lazy_module("scipy.sparse")
 
 __all__ = [
     "ScalarDAE",
@@ -303,7 +306,7 @@ def matching(matrix: sps.spmatrix) -> tuple[np.ndarray, np.ndarray]:
     n, k = m.shape
     if n == 0 or k == 0:
         return np.full(n, -1), np.full(k, -1)
-    eq_to_var = maximum_bipartite_matching(m, perm_type="column")
+    eq_to_var = sps.csgraph.maximum_bipartite_matching(m, perm_type="column")
     var_to_eq = np.full(k, -1)
     for i, j in enumerate(eq_to_var):
         if j >= 0:

@@ -32,8 +32,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.linalg as sla
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure.events import transfer_events
@@ -51,6 +51,9 @@ from gtmodel.modeling.structure.initialization import (
     guess_and_conditions,
     solve_initial,
 )
+
+#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
+sla = lazy_module("scipy.linalg")
 
 __all__ = [
     "AugmentedDAE",

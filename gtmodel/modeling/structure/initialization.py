@@ -31,8 +31,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sps
 
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure.analysis import (
@@ -42,6 +42,9 @@ from gtmodel.modeling.structure.analysis import (
     sparsity_pattern,
     structure_message,
 )
+
+#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
+sps = lazy_module("scipy.sparse")
 
 #: ``aug`` arguments are :class:`~gtmodel.modeling.structure.index_reduction.AugmentedDAE` s
 #: (annotated ``Any``: index_reduction imports this module for structural_simplify's start).
