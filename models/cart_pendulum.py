@@ -25,9 +25,9 @@ class CartPendulum(Model):
 
     def __init__(self) -> None:
         super().__init__("cart_pendulum")
-        m_cart = self.parameter("m_cart", 1.0)  # kg
-        m_pole = self.parameter("m_pole", 0.3)  # kg
-        l = self.parameter("l", 0.5)  # m, hinge to pole mass
+        m_cart = self.parameter("m_cart", 1.0, min=1e-3)  # kg (a massless cart has no dynamics)
+        m_pole = self.parameter("m_pole", 0.3, min=0.0)  # kg
+        l = self.parameter("l", 0.5, min=1e-3)  # m, hinge to pole mass
         g = self.parameter("g", 9.81)  # m/s^2
         d = self.parameter("d", 0.0)  # N s/m, viscous friction of the cart
         s = self.state("s", unit="m")

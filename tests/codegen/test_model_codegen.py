@@ -23,7 +23,7 @@ from gtmodel.modeling import Model
 from gtmodel.problems.user_model import load_user_model
 from gtmodel.robots import load_parameters
 
-from ..conftest import REPO
+from ..conftest import REPO, replace_once
 
 MODEL_FILE = REPO / "models" / "cart_pendulum.py"
 
@@ -66,7 +66,7 @@ def test_header_has_the_models_own_hash_and_no_robot_macros(cart_pendulum):
 
 def test_parameter_hash_changes_with_a_parameter_value(tmp_path):
     other = tmp_path / "heavier.py"
-    other.write_text(MODEL_FILE.read_text().replace('"m_pole", 0.3)', '"m_pole", 0.31)'))
+    other.write_text(replace_once('"m_pole", 0.3,', '"m_pole", 0.31,')(MODEL_FILE.read_text()))
     a, b = load_user_model(MODEL_FILE, "CartPendulum"), load_user_model(other, "CartPendulum")
     assert model_parameter_hash(a.flatten()) == model_parameter_hash(load_user_model(MODEL_FILE, "CartPendulum").flatten())
     assert model_parameter_hash(a.flatten()) != model_parameter_hash(b.flatten())

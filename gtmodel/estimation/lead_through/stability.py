@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.lead_through.simulation import Servo
 
@@ -79,7 +80,7 @@ class ContactLoop:
         return float(-s.real / max(abs(s), 1e-300))
 
 
-def contact_loop(gain: float, stiffness: float, damping: float = 0.0, servo: Servo | None = None, dt: float = 0.004) -> ContactLoop:
+def contact_loop(gain: float, stiffness: float, damping: float = 0.0, servo: Servo | None = None, dt: float = LOOP_PERIOD_S) -> ContactLoop:
     """The contact loop along the normal, linearised (see the module).
 
     Parameters
@@ -125,7 +126,7 @@ def contact_loop(gain: float, stiffness: float, damping: float = 0.0, servo: Ser
     return ContactLoop(A=A, poles=poles[order], dt=dt)
 
 
-def largest_stable_gain(stiffness: float, damping: float = 0.0, servo: Servo | None = None, dt: float = 0.004,
+def largest_stable_gain(stiffness: float, damping: float = 0.0, servo: Servo | None = None, dt: float = LOOP_PERIOD_S,
                         upper: float = 10.0, rtol: float = 1e-6) -> float:
     """The largest force gain ``K_n`` [m/(N s)] for which the contact loop is stable (bisection).
 

@@ -534,12 +534,15 @@ class Optimization:
         ModelError
             If ``name`` is not a parameter of the model.
         InputError
-            If the value has the wrong size.
+            If the value has the wrong size or lies outside the parameter's ``min``/``max``
+            range (:meth:`Model.parameter <gtmodel.modeling.Model.parameter>`).
         """
         params = self.model.variables("parameter")
         if name not in params:
             raise ModelError(f"set_parameter: model {self.model.name!r} has no parameter {name!r}")
-        self.parameters[name] = _vector_value(value, int(params[name].numel()), f"parameter {name!r}")
+        v = _vector_value(value, int(params[name].numel()), f"parameter {name!r}")
+        self.model.check_parameter(name, v)
+        self.parameters[name] = v
 
     def free_parameter(self, name: str, lb: Any = -np.inf, ub: Any = np.inf, start: Any = None) -> ca.SX:
         """Make a model parameter a decision variable (constant in time) of the problem.

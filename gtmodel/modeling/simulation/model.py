@@ -172,7 +172,7 @@ class Model(EventsMixin):
             self._hashes.update(s[i].element_hash() for i in range(size))
         return sym
 
-    def parameter(self, name: str, value: Any, shape: Any = None) -> ca.SX:
+    def parameter(self, name: str, value: Any, shape: Any = None, min: Any = None, max: Any = None) -> ca.SX:  # noqa: A002
         """Declare a parameter with a numeric default value.
 
         Parameters
@@ -183,6 +183,11 @@ class Model(EventsMixin):
             Default value (SI units); overridable at simulation/optimisation time.
         shape : int or tuple, optional
             Size ``n`` or ``(n,)``/``(n, 1)``; inferred from ``value`` when omitted.
+        min, max : float or array_like, optional
+            The physically meaningful range (Modelica's ``min``/``max`` attributes), e.g.
+            ``min=1e-6`` for a mass: a value outside it, the default or an override (a
+            problem file's ``[model.parameters]``, :meth:`Optimization.set_parameter`), is
+            refused naming the parameter. Default: unbounded.
 
         Returns
         -------
@@ -192,9 +197,10 @@ class Model(EventsMixin):
         Raises
         ------
         InputError
-            If the name is not an identifier, or the value/shape are inconsistent.
+            If the name is not an identifier, the value/shape are inconsistent, or the
+            value lies outside ``[min, max]``.
         ModelError
-            If the name is already declared.
+            If the name is already declared, or ``min`` exceeds ``max``.
         """
         try:
             arr = np.asarray(value, dtype=float).reshape(-1)
@@ -203,7 +209,36 @@ class Model(EventsMixin):
         if arr.size == 0 or not np.all(np.isfinite(arr)):
             raise InputError(f"parameter {name!r}: value must be finite and non-empty, got {value!r}")
         size = arr.size if shape is None else _shape_to_size(shape, f"parameter {name!r}")
-        return self._declare(name, "parameter", size, start=arr)
+        sym = self._declare(name, "parameter", size, start=arr, lb=min, ub=max)
+        self.check_parameter(name, arr)
+        return sym
+
+    def check_parameter(self, name: str, value: Any) -> None:
+        """Check a value of a parameter against its ``min``/``max`` range (:meth:`parameter`).
+
+        Parameters
+        ----------
+        name : str
+            A declared parameter.
+        value : float or array_like
+            The value, of the parameter's size.
+
+        Raises
+        ------
+        InputError
+            A value outside the range, naming the parameter, the value and the range.
+        ModelError
+            ``name`` is not a parameter of the model.
+        """
+        var = self._vars.get(name)
+        if var is None or var.kind != "parameter":
+            raise ModelError(f"model {self.name!r} has no parameter {name!r}")
+        v = np.asarray(value, dtype=float).reshape(-1)
+        bad = np.nonzero((v < var.lb) | (v > var.ub))[0] if v.size == var.lb.size else np.zeros(0, int)
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(f"parameter {name!r}: {v[i]:g} is outside its range [{var.lb[i]:g}, {var.ub[i]:g}]"
+                             + (f" (element {i})" if v.size > 1 else ""))
 
     @fill_doc(**_DECLARE_DOCS)
     def state(

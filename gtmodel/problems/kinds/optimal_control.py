@@ -172,7 +172,10 @@ class OptimalControlKind(ProblemKind):
                 raise _unknown(file, f"model.parameters.{key}", key, params)
             if params[pkeys[key]].numel() != 1:
                 raise file.fail(f"model.parameters.{key}", f"a scalar parameter ({key!r} has {params[pkeys[key]].numel()} elements)")
-            opt.set_parameter(pkeys[key], value)
+            try:
+                opt.set_parameter(pkeys[key], value)
+            except GtModelError as exc:
+                raise file.fail(f"model.parameters.{key}", f"a value in the parameter's range ({exc})") from None
         origin = str(file.path)
         named = named_parameters(file, doc.parameters, set(_aliases(optimization_names(opt, origin=origin))) | {"pi"})
         table = optimization_names(opt, named, origin=origin)

@@ -271,3 +271,22 @@ def _dae_model():
 def test_input_errors(call, match):
     with pytest.raises(InputError, match=match):
         call()
+
+
+@pytest.mark.parametrize("kwargs, value, match", [
+    ({"min": 1e-3}, 0.0, r"parameter 'm': 0 is outside its range \[0\.001, inf\]"),
+    ({"max": 10.0}, 11.0, r"parameter 'm': 11 is outside its range \[-inf, 10\]"),
+])
+def test_a_parameter_value_outside_its_range_is_refused(kwargs, value, match):
+    # Modelica's min/max on a parameter: the default and every override are checked
+    m = Model("ranged")
+    m.parameter("m", 1.0, **kwargs)
+    with pytest.raises(InputError, match=match):
+        m.check_parameter("m", value)
+    with pytest.raises(InputError, match=match):
+        Model("ranged_default").parameter("m", value, **kwargs)
+
+
+def test_a_parameter_range_with_min_above_max_is_refused():
+    with pytest.raises(ModelError, match=r"lower bound exceeds upper bound"):
+        Model("ranged").parameter("m", 1.0, min=2.0, max=0.0)

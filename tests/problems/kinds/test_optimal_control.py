@@ -87,6 +87,8 @@ BAD = [
     ("bounds_reversed", "F = [-20.0, 20.0]", "F = [20.0, -20.0]", r"field 'bounds\.F': expected \[lo, hi\] with lo <= hi"),
     ("free_time_without_bounds", "bounds = [0.5, 5.0]", "", r"field 'optimization\.final_time\.bounds': expected bounds"),
     ("parameter_huge", "m_pole = 0.3 ", "m_pole = 1e308 ", r"field 'model\.parameters\.m_pole': expected a number <= 1e\+09"),
+    # the model's own range (Model.parameter(..., min=1e-3)): a massless cart is refused on load
+    ("massless_cart", "m_cart = 1.0 ", "m_cart = 0.0 ", r"field 'model\.parameters\.m_cart': expected a value in the parameter's range \(parameter 'm_cart': 0 is outside its range \[0\.001, inf\]\)"),
     ("class_missing", 'class = "CartPendulum"', "", r"missing field 'model\.class'"),
     # the field is named once (an earlier version wrapped the final-time message twice)
     ("initial_guess_outside_bounds", "bounds = [0.5, 5.0]", "bounds = [0.5, 0.6]",
