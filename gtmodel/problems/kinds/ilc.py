@@ -110,7 +110,7 @@ class ILCKind(ProblemKind):
         ref = doc.reference
         try:
             T, q, final_time = plan_square(plant.kinematics, ref.corner, ref.side, ref.speed, ref.acceleration, ref.lead,
-                                           ref.grid, doc.robot.configuration, plant.dt)
+                                           ref.grid, doc.robot.configuration, plant.dt, ref.rounds)
         except UnreachablePoseError as exc:
             raise file.fail("reference.corner", "a square inside the workspace", f"{ref.corner} ({exc})") from None
         except GtModelError as exc:

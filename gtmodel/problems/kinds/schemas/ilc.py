@@ -69,6 +69,8 @@ class ReferenceSection(Section):
         Lead-in and lead-out at rest [samples].
     grid : int
         Grid points of the path-constrained solver.
+    rounds : int
+        Consecutive rounds of the square (the thesis: 2).
     """
 
     corner: vector(3, bound=MAX_LENGTH_M, unit="m", description="first corner of the square (it runs +x, +y, -x, -y)")
@@ -77,6 +79,7 @@ class ReferenceSection(Section):
     acceleration: number(gt=0, le=1000.0, unit="m/s^2", description="TCP acceleration limit per axis") = 2.0
     lead: integer(0, 1000, description="lead-in and lead-out at rest, in samples (the thesis: 100)") = 100
     grid: integer(20, 5000, description="grid points of the path-constrained solver") = 400
+    rounds: integer(1, 10, description="consecutive rounds of the square, at rest at every corner (the thesis: 2)") = 1
 
 
 class ILCSection(Section):
