@@ -69,7 +69,10 @@ def _fusion(s: dict[str, Any]) -> dict[str, Any]:
 def _correction(s: dict[str, Any]) -> dict[str, Any]:
     return {"status": s["status"], "predicted": s["predicted_gain"], "simulated": s["simulated_gain"],
             "x_over_y": s.get("x_over_y_predicted"), "poses": [v["pose"] for v in s["validation"]],
-            "critical": {d: [v["predicted_critical_gain"][d] for v in s["validation"]] for d in s["directions"]}}
+            "critical": {d: [v["predicted_critical_gain"][d] for v in s["validation"]] for d in s["directions"]},
+            "vibration_critical": {d: [v["vibration_loop_critical_gain"][d]["predicted"] for v in s["validation"] if "vibration_loop_critical_gain" in v]
+                                   for d in s["directions"]},
+            "resolutions": s["resolutions"]}
 
 
 def _d1(s: dict[str, Any]) -> dict[str, Any]:
@@ -275,19 +278,32 @@ def _correction_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
         return [(f"{src}, Table 14", "see the thesis", "not run", "-", "not run", "run the problem, then collect")]
     px, py = c["predicted"].get("x"), c["predicted"].get("y")
     ratio = c.get("x_over_y") or []
-    return [
-        (f"{src}, Table 14: largest stable P gain x, poses {c['poses'][0]}-{c['poses'][-1]}", "0.2 at every pose", _f(px, 3), "0.1 (one step)",
-         "reproduced" if _within(px, [0.2] * len(px), 0.1) else "differs",
-         f"the 13-cycle (52 ms) delay bounds a P loop on an executed offset of DC gain 1 near 2 sin(pi / 50) = 0.126 "
-         f"(critical gains {_f(min(c['critical']['x']), 4)}-{_f(max(c['critical']['x']), 4)}); the thesis' 0.2 in x needs an offset "
-         "that executes less than 1:1 in x, or a shorter delay; the deciding number is the measured DC gain of one x offset command"),
-        (f"{src}, Table 14: largest stable P gain y", "0.01-0.03 predicted, 0.02-0.04 measured", _f(py, 3), "0.01 (one step)",
-         "reproduced" if _within(py, [0.02] * len(py), 0.02) else "differs", "as for x: our y gains are bounded by the same delay"),
-        (f"{src}, Table 14 structure: x gains 5-20 x the y gains", "x / y 6.7-20", _f(ratio, 3), "x / y >= 5",
-         "structure reproduced" if ratio and min(ratio) >= 5 else "differs",
-         "in our model every direction's offset executes with DC gain 1 and the same delay, so the delay, not the stiffness, "
-         "sets both limits; the thesis' x >> y comes from the robot's stiffer x (Figs. 35-36)"),
+    vib = c.get("vibration_critical") or {}
+    res = c.get("resolutions") or {"x": 0.1, "y": 0.01}
+    grid = {d: [math.floor((k - 1e-12) / res[d]) * res[d] for k in v] for d, v in vib.items() if v}
+    rows = [
+        (f"{src}, Table 14: largest stable P gain x, poses {c['poses'][0]}-{c['poses'][-1]} (our accumulating loop)", "0.2 at every pose", _f(px, 3),
+         "0.1 (one step)", "reproduced" if _within(px, [0.2] * len(px), 0.1 + 1e-9) else "differs",
+         f"our loop accumulates the corrections (K z / (z - 1)) and executes them with DC gain 1, so the 13-cycle (52 ms) delay bounds "
+         f"every gain near 2 sin(pi / 50) = 0.126 (critical gains {_f(min(c['critical']['x']), 4)}-{_f(max(c['critical']['x']), 4)})"),
+        (f"{src}, Table 14: largest stable P gain y (our accumulating loop)", "0.01-0.03 predicted, 0.02-0.04 measured", _f(py, 3), "0.01 (one step)",
+         "reproduced" if _within(py, [0.025] * len(py), 0.015 + 1e-9) else "differs", "bounded by the same delay as x: 0.11-0.12"),
     ]
+    if grid.get("x"):
+        gx, gy = grid["x"], grid.get("y", [])
+        rows.append((f"{src}, Table 14 with the loop of section 5.3.5 (error = vibration only, corrections not accumulated): largest stable x / y",
+                     "x 0.2; y 0.01-0.04", f"x {_f(gx, 2)}; y {_f(gy, 2)} (critical x {_f(vib['x'], 3)})", "one step",
+                     "reproduced" if _within(gx, [0.2] * len(gx), 0.1 + 1e-9) and _within(gy, [0.025] * len(gy), 0.015 + 1e-9) else
+                     ("structure reproduced" if _within(gx, [0.2] * len(gx), 0.1 + 1e-9) else "differs"),
+                     "x: the thesis' loop reproduces 0.2 within one step at most poses; y: our modes in y (Table 16 means on an illustrative "
+                     "arm, 25 Hz, zeta 0.11) vibrate as little as in x, so y is not 10x lower. In this loop the limit is about 2 zeta (m / M) at "
+                     "the resonance: the thesis' y gains need a y vibration per unit offset ~10x ours; the deciding numbers are the thesis' "
+                     "equivalent-force fits (m, c, k) of the Table 12 poses, which it shows only as m k (Figs. 40-41)"))
+    rows.append((f"{src}, Table 14 structure: x gains 5-20 x the y gains", "x / y 6.7-20", _f(ratio, 3), "x / y >= 5",
+                 "structure reproduced" if ratio and min(ratio) >= 5 else "differs",
+                 "with the delay setting both limits (accumulating loop) or equal x / y modes (vibration loop) the ratio stays near 1; "
+                 "the thesis' x >> y comes from the robot's directional stiffness of its own fits"))
+    return rows
 
 
 def _other_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:

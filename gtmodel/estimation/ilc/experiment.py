@@ -286,6 +286,7 @@ class ILCExperiment:
         self._responses: dict[str, np.ndarray] | None = None
         self._robust: dict[tuple[Any, ...], RobustQFilter] = {}
         self._coupled_T: dict[str, np.ndarray] = {}
+        self._checks: dict[ILCCase, dict[str, ILCStability]] = {}
 
     # -- the lifted check ------------------------------------------------------------------
     def q_filter(self, case: ILCCase) -> QFilter:
@@ -470,10 +471,13 @@ class ILCExperiment:
         -------
         dict of str to ILCStability
         """
+        if case in self._checks:  # the problem's load checks every case; its run reuses the figures
+            return self._checks[case]
         n = self.reference.n
         Q = self.q_filter(case).lifted(n)
         L = self.learning.lifted(n)
-        return {ch: stability(Q, L, T) for ch, T in self.transfer_matrices(case).items()}
+        self._checks[case] = {ch: stability(Q, L, T) for ch, T in self.transfer_matrices(case).items()}
+        return self._checks[case]
 
     # -- one trial -------------------------------------------------------------------------
     def _estimate(self, case: ILCCase, resp: Any) -> np.ndarray:

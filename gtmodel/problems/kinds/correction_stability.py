@@ -55,6 +55,7 @@ from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, choice
 from gtmodel.estimation.closed_loop.vibration_loop import vibration_loop_critical_gain
 from gtmodel.report.correction import plot_gains, plot_loop_errors, plot_offset_response, write_gain_table
 from gtmodel.robots import load_serial_arm
+from gtmodel.status import Status
 
 __all__ = ["CorrectionStabilityKind", "CorrectionStabilityFile", "CorrectionStabilityDeclaration", "SHIPPED_ARMS", "ASSUMPTIONS", "THESIS_STRUCTURE",
            "THESIS_TABLE_14"]
@@ -287,6 +288,26 @@ class CorrectionStabilityKind(ProblemKind):
             (d.path.amplitude, d.path.feed_rate, d.path.spatial_frequency), d.arm.wrist_joints_deg,
         )
 
+    def status(self, solution: CorrectionStudy) -> Status:
+        """``check_failed`` when the study's self-check failed, else the study's status.
+
+        The self-check: the step-by-step simulation and the closed-loop poles give the same
+        largest stable gain at every pose and direction (``methods_agree``).
+
+        Parameters
+        ----------
+        solution : CorrectionStudy
+            The study.
+
+        Returns
+        -------
+        Status
+        """
+        status = Status(solution.status)
+        agree = (np.array_equal(solution.predicted_gain, solution.predicted_gain_eigenvalues)
+                 and np.array_equal(solution.simulated_gain, solution.simulated_gain_eigenvalues))
+        return Status.CHECK_FAILED if status.success and not agree else status
+
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: CorrectionStabilityDeclaration, solution: CorrectionStudy, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``table_14.md``/``.csv``, ``calibration_fits.csv`` and the plots.
@@ -339,7 +360,7 @@ class CorrectionStabilityKind(ProblemKind):
                      "damping_ratio": f[d].damping_ratio, "rms_relative_error": f[d].rms_relative_error, "status": str(f[d].status)} for d in f}
                 for f in s.fits]
         fields: dict[str, Any] = {
-            "status": s.status,
+            "status": self.status(s),
             "message": s.message,
             "cycle_time_s": CYCLE_TIME_S,
             "delay_cycles": declaration.delay_cycles,
