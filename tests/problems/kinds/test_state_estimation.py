@@ -180,12 +180,12 @@ def test_tracker_imu_kalman_filter_rerun_from_the_exports(solved):
     assert mine_p == pytest.approx(s["table_8"]["3-axis"]["position_mm"]["fusion"], rel=1e-3)  # truth written to 10 digits
 
 
-def test_fusion_exports_hold_the_filter_setup(solved):
+@pytest.mark.parametrize("motion, nx, nz", [("3_axis", 9, 6), ("5_axis", 19, 13)])
+def test_fusion_exports_hold_the_filter_setup(solved, motion, nx, nz):
     out = solved[1]
-    for motion, nx, nz in (("3_axis", 9, 6), ("5_axis", 19, 13)):
-        setup = np.load(out / f"filter_setup_{motion}.npz")
-        assert setup["x0"].shape == (nx,) and setup["P0"].shape == setup["Q"].shape == (nx, nx) and setup["R"].shape == (nz, nz)
-        assert np.all(np.linalg.eigvalsh(setup["P0"]) > 0) and np.all(np.linalg.eigvalsh(setup["R"]) > 0)
-        with open(out / f"sensor_records_{motion}.csv") as fh:
-            assert len(fh.readline().split(",")) == 1 + nz
+    setup = np.load(out / f"filter_setup_{motion}.npz")
+    assert setup["x0"].shape == (nx,) and setup["P0"].shape == setup["Q"].shape == (nx, nx) and setup["R"].shape == (nz, nz)
+    assert np.all(np.linalg.eigvalsh(setup["P0"]) > 0) and np.all(np.linalg.eigvalsh(setup["R"]) > 0)
+    with open(out / f"sensor_records_{motion}.csv") as fh:
+        assert len(fh.readline().split(",")) == 1 + nz
     assert json.loads((out / "summary.json").read_text())["failed_checks"] == []
