@@ -290,6 +290,7 @@ class ILCExperiment:
         self._robust: dict[tuple[Any, ...], RobustQFilter] = {}
         self._coupled_T: dict[str, np.ndarray] = {}
         self._checks: dict[ILCCase, dict[str, ILCStability]] = {}
+        self._estimator_lifted: dict[str, tuple[Any, Any]] = {}
 
     # -- the lifted check ------------------------------------------------------------------
     def q_filter(self, case: ILCCase) -> QFilter:
@@ -375,18 +376,34 @@ class ILCExperiment:
             ``"q1"``..``"q3"`` (Case 1) or ``"x"``, ``"y"``, ``"z"``.
         """
         h = self._impulses()
-        n = self.reference.n
         if case.signal == "actuator":
             return {f"q{i + 1}": lifted_matrix(h["actuator"][:, i]) for i in range(3)}
         out: dict[str, np.ndarray] = {}
         if case.signal == "tool":
             pos = h["tool_position"]
             return {a: lifted_matrix(pos[:, j]) for j, a in enumerate(_AXES)}
-        F_kin, F_acc = self.estimators[case.signal].lifted(n)
+        F_kin, F_acc = self.estimator_matrices(case.signal)
         for j, a in enumerate(_AXES[:2]):
             out[a] = F_kin[j] @ lifted_matrix(h["kin"][:, j]) + F_acc[j] @ lifted_matrix(h["acc"][:, j])
         out["z"] = lifted_matrix(h["kin"][:, 2])
         return out
+
+    def estimator_matrices(self, signal: str) -> tuple[Any, Any]:
+        """The lifted matrices ``(F_kin, F_acc)`` of an estimator over the reference's length, built once.
+
+        Parameters
+        ----------
+        signal : str
+            ``"complementary"`` or ``"kalman"``.
+
+        Returns
+        -------
+        tuple
+            The estimator's ``lifted(N)`` (per direction ``(N, N)`` matrices).
+        """
+        if signal not in self._estimator_lifted:
+            self._estimator_lifted[signal] = self.estimators[signal].lifted(self.reference.n)
+        return self._estimator_lifted[signal]
 
     def coupled_transfer_matrix(self, case: ILCCase) -> np.ndarray:
         """The lifted map of all three channels together, cross-coupling included.
@@ -418,7 +435,7 @@ class ILCExperiment:
             return T
         h = self._impulses()
         if case.signal != "tool":
-            F_kin, F_acc = self.estimators[case.signal].lifted(n)
+            F_kin, F_acc = self.estimator_matrices(case.signal)
         for j in range(3):
             for l in range(3):
                 if case.signal == "tool":

@@ -338,9 +338,9 @@ def _exports(declaration: ILCDeclaration, solution: ILCOutcome, out: Path) -> li
     comp, kal = e.estimators["complementary"], e.estimators["kalman"]
     est: dict[str, Any] = {"complementary_cutoff_hz": comp.cutoff_hz, "complementary_design_hz": comp.design_hz,
                            "complementary_sos": np.asarray(comp.sos), "complementary_reading": comp.reading}
-    for key, f in (("complementary", comp), ("kalman", kal)):
+    for key in ("complementary", "kalman"):
         if any(c.signal == key for c in declaration.cases):
-            F_kin, F_acc = f.lifted(n)
+            F_kin, F_acc = e.estimator_matrices(key)
             est[f"F_kin_{key}"], est[f"F_acc_{key}"] = np.asarray(F_kin), np.asarray(F_acc)
     for k in ("A", "C", "Q", "R", "P", "L", "M"):
         est[f"kalman_{k}"] = getattr(kal, k)
