@@ -28,7 +28,7 @@ def solved(tmp_path_factory):
 def test_thesis_set_up(solved):
     status, _, s = solved
     assert status == Status.CONVERGED
-    assert s["square_final_time_s"] == pytest.approx(2.5, abs=0.15)  # Fig. 7.8: fully applied 1.6-4.1 s
+    assert s["square_final_time_s"] == pytest.approx(2.5, abs=0.3)  # Fig. 7.8: fully applied 1.6-4.1 s (2.5 s)
     assert s["estimators"]["complementary_crossover_hz"] == pytest.approx([4.50, 2.63], abs=1e-9)
 
 
