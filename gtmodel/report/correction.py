@@ -33,7 +33,8 @@ def _gains(values: Any, name: str, shape: tuple[int, int]) -> np.ndarray:
 
 
 def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Mapping[str, float], predicted: Any, simulated: Any,
-                     out: str | Path, stem: str = "table_14", title: str = "", note: str = "") -> list[str]:
+                     out: str | Path, stem: str = "table_14", title: str = "", note: str = "", first_pose: int = 1,
+                     thesis: Mapping[str, Any] | None = None) -> list[str]:
     """Write the Table 14 layout: per validation pose, predicted and simulated gain per direction.
 
     Parameters
@@ -56,6 +57,12 @@ def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Map
         Heading of the Markdown file.
     note : str, optional
         A paragraph after the table (e.g. the thesis' figures beside ours).
+    first_pose : int, optional
+        Number of the first validation pose (the thesis numbers Table 13's poses 17-22, after
+        the 16 calibration poses of Table 12).
+    thesis : Mapping[str, Mapping[str, sequence of float]], optional
+        The thesis' gains beside ours: ``{"predicted": {d: (V,)}, "actual": {d: (V,)}}``
+        (Cvitanic (2021), Table 14).
 
     Returns
     -------
@@ -75,15 +82,19 @@ def write_gain_table(poses_deg: Any, directions: Sequence[str], resolutions: Map
     S = _gains(simulated, "simulated", (q.shape[0], len(dirs)))
     h = np.array([float(resolutions[d]) for d in dirs])
     within = np.abs(P - S) <= h * (1 + 1e-9)
-    header = ["pose", "j2_deg", "j3_deg"] + [f"{w}_{d}" for d in dirs for w in ("predicted", "simulated")] + ["within_one_increment"]
+    th_dirs = [d for d in dirs if thesis and d in thesis.get("predicted", {}) and d in thesis.get("actual", {})]
+    header = (["pose", "j2_deg", "j3_deg"] + [f"{w}_{d}" for d in dirs for w in ("predicted", "simulated")]
+              + [f"thesis_{w}_{d}" for d in th_dirs for w in ("predicted", "actual")] + ["within_one_increment"])
     csv = [",".join(header)]
-    md_head = "| pose | j2 [deg] | j3 [deg] | " + " | ".join(f"{d} predicted | {d} simulated" for d in dirs) + " | within one increment |"
-    md = [md_head, "|" + "---|" * (4 + 2 * len(dirs))]
+    md_head = ("| pose | j2 [deg] | j3 [deg] | " + " | ".join(f"{d} predicted | {d} simulated" for d in dirs)
+               + "".join(f" | thesis {d} predicted | thesis {d} actual" for d in th_dirs) + " | within one increment |")
+    md = [md_head, "|" + "---|" * (4 + 2 * len(dirs) + 2 * len(th_dirs))]
     for v in range(q.shape[0]):
         cells = [f"{x:.4g}" for j in range(len(dirs)) for x in (P[v, j], S[v, j])]
+        cells += [f"{thesis[w][d][v]:.4g}" for d in th_dirs for w in ("predicted", "actual")]  # type: ignore[index]
         ok = "yes" if within[v].all() else "no"
-        csv.append(",".join([str(v + 1), f"{q[v, 0]:.2f}", f"{q[v, 1]:.2f}", *cells, ok]))
-        md.append(f"| {v + 1} | {q[v, 0]:.2f} | {q[v, 1]:.2f} | " + " | ".join(cells) + f" | {ok} |")
+        csv.append(",".join([str(first_pose + v), f"{q[v, 0]:.2f}", f"{q[v, 1]:.2f}", *cells, ok]))
+        md.append(f"| {first_pose + v} | {q[v, 0]:.2f} | {q[v, 1]:.2f} | " + " | ".join(cells) + f" | {ok} |")
     folder = Path(out)
     (folder / f"{stem}.csv").write_text("\n".join(csv) + "\n", encoding="utf-8")
     res = ", ".join(f"{d}: {resolutions[d]:g}" for d in dirs)

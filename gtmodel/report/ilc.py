@@ -8,7 +8,10 @@ returns the figure:
   case, one line per actuator or tool direction (Figs. 7.7-7.10);
 - :func:`plot_tool_path`: tool path in the xy plane, reference vs iteration 0 vs the
   last iteration (Fig. 7.11);
-- :func:`plot_iteration_errors`: the error over time of chosen iterations.
+- :func:`plot_iteration_errors`: the error over time of chosen iterations;
+- :func:`plot_convergence`: per case ``|Q^-1(f)|`` beside the loop gain
+  ``sigma_max(I - L T(f))`` (Figs. 7.14, 7.17) and the lifted ``sigma_max`` (7.16) per channel
+  and coupled.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import numpy as np
 from gtmodel.errors import InputError
 from gtmodel.report._figure import new_figure, save
 
-__all__ = ["plot_error_measure", "plot_tool_path", "plot_iteration_errors", "case_title", "SIGNAL_TITLES"]
+__all__ = ["plot_error_measure", "plot_tool_path", "plot_iteration_errors", "plot_convergence", "case_title", "SIGNAL_TITLES"]
 
 #: What each learning signal is, for panel titles (Dressler (2012), Table 7.2).
 SIGNAL_TITLES = {
@@ -223,4 +226,52 @@ def plot_iteration_errors(
     axes[0].legend(fontsize="small")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(title or "ILC error per iteration")
+    return save(fig, path)
+
+
+def plot_convergence(cases: Mapping[str, Mapping[str, Any]], path: str | Path, title: str = "") -> Any:
+    """Monotone-convergence picture of every case (Dressler (2012), Figs. 7.14, 7.17 and eq. 7.16).
+
+    Parameters
+    ----------
+    cases : Mapping[str, Mapping]
+        Case name -> ``{"signal": str, "freqs_hz": (F,), "q": (F,) |Q(f)|, "loop_gain": (F,)
+        sigma_max(I - L T(f)), "sigma": {channel: float}, "coupled": float or None}``.
+    path : str or pathlib.Path
+        PNG file to write.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per case: ``|Q^-1|``, the loop gain and their product ``|Q| g`` against
+        frequency; the lifted figures in the legend.
+
+    Raises
+    ------
+    InputError
+        No case.
+    """
+    if not cases:
+        raise InputError("cases: expected at least one case")
+    fig, axes = new_figure(1, len(cases), sharey=True, size=(4.2 * len(cases), 3.6))
+    axes = np.atleast_1d(axes)
+    for ax, (name, c) in zip(axes, cases.items()):
+        f, q, g = (np.asarray(c[k], dtype=float) for k in ("freqs_hz", "q", "loop_gain"))
+        ax.semilogy(f, 1.0 / np.maximum(np.abs(q), 1e-12), label="|Q^-1|")
+        ax.semilogy(f, g, label="sigma_max(I - L T)")
+        ax.semilogy(f, np.abs(q) * g, "--", label="|Q| sigma_max(I - L T)")
+        lifted = ", ".join(f"{ch} {v:.3f}" for ch, v in c["sigma"].items())
+        coupled = c.get("coupled")
+        ax.axhline(1.0, color="k", lw=0.8)
+        ax.set_title(case_title(name, c.get("signal")))
+        ax.text(0.02, 0.02, f"lifted sigma_max: {lifted}" + (f"\ncoupled {coupled:.3f}" if coupled is not None else ""),
+                transform=ax.transAxes, fontsize="x-small", va="bottom")
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylim(1e-2, 1e2)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize="x-small", loc="upper right")
+    axes[0].set_ylabel("magnitude")
+    fig.suptitle(title or "ILC monotone convergence (7.16)")
     return save(fig, path)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from gtmodel.errors import SolverError
+from gtmodel.errors import InputError, SolverError
 from gtmodel.trajectory.path import Polyline
 from gtmodel.trajectory.path_constrained import PathConstraints, solve_path_convex
 
@@ -20,7 +20,7 @@ __all__ = ["plan_square"]
 
 
 def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceleration: float, lead: int, grid: int,
-                configuration: int, dt: float) -> tuple[np.ndarray, np.ndarray, float]:
+                configuration: int, dt: float, rounds: int = 1) -> tuple[np.ndarray, np.ndarray, float]:
     """Time-optimal square in the xy plane, corners at rest, sampled at ``dt``, with lead-in/out.
 
     Dressler (2012), section 7.3: the path is a :class:`~gtmodel.trajectory.Polyline`
@@ -49,6 +49,10 @@ def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceler
         IK configuration.
     dt : float
         Sample time [s] (the loop period).
+    rounds : int, optional
+        Consecutive rounds of the square (the thesis: 2, "to have the ILC algorithm cover
+        the complete rectilinear figure", Dressler (2012), section 7.3); at rest at every
+        corner of every round.
 
     Returns
     -------
@@ -61,13 +65,18 @@ def plan_square(kinematics: Any, corner: Any, side: float, speed: float, acceler
 
     Raises
     ------
+    InputError
+        ``rounds`` not a positive integer.
     UnreachablePoseError
         The square leaves the workspace.
     SolverError
         The planner found no motion.
     """
     c = np.asarray(corner, dtype=float)
-    pts = c + side * np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]], dtype=float)
+    if int(rounds) != rounds or rounds < 1:
+        raise InputError(f"rounds: expected a positive integer, got {rounds!r}")
+    loop = np.array([[1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]], dtype=float)
+    pts = c + side * np.vstack([np.zeros((1, 3)), np.tile(loop, (int(rounds), 1))])
     path = Polyline(pts, robot=kinematics, configuration=configuration)
     sol = solve_path_convex(path, PathConstraints(tcp_speed_limit=speed, tcp_acceleration_limit=acceleration), grid=grid)
     if not sol.success:

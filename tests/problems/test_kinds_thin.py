@@ -134,5 +134,8 @@ def test_the_light_constants_are_those_of_the_domain():
     from gtmodel.problems.kinds.schemas import ilc
 
     assert (ilc.ILC_SIGNALS, ilc.ILC_REQUIREMENTS) == (tuple(estimation.SIGNALS), tuple(estimation.REQUIREMENTS))
+    from gtmodel.estimation.ilc.experiment import Q_DESIGNS
+
+    assert (ilc.ILC_Q_DESIGNS, ilc.CUTOFF_READINGS) == (Q_DESIGNS, complementary.CUTOFF_READINGS)
     assert (ilc.MIN_CUTOFF_FRACTION, ilc.KALMAN_POSITION_NOISE, ilc.KALMAN_JERK_NOISE) == (
         complementary.MIN_CUTOFF_FRACTION, tuple(kalman.DEFAULT_POSITION_NOISE), tuple(kalman.DEFAULT_JERK_NOISE))

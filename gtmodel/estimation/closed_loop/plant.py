@@ -574,7 +574,10 @@ class TrackingPlant:
             ``acc`` (n, 3): true acceleration ``a_j`` [m/s^2 per m];
             ``tool_position`` (n, 3): ``T_kin,j + d_j`` [m/m];
             ``cross_coupling`` (3, 3): ``max_k |H_kin[k][l, j]| / max_k |H_kin[k][j, j]|``
-            (response in ``l`` to an impulse in ``j``; diagonal 1).
+            (response in ``l`` to an impulse in ``j``; diagonal 1);
+            ``kin_full``, ``acc_full``, ``tool_position_full`` (n, 3, 3): the whole responses,
+            ``[k, l, j]`` the response in direction ``l`` to an impulse of the tool reference
+            in ``j`` (the coupled lifted check uses them; the diagonals are the entries above).
 
         Raises
         ------
@@ -590,9 +593,15 @@ class TrackingPlant:
         J = self.kinematics.jacobian(T0[0], self.configuration)
         h = self.actuator_impulse_responses(n)
         H = np.einsum("li,ki,ij->klj", J, h, np.linalg.inv(J))  # (n, 3 out, 3 in)
-        kin = np.einsum("kjj->kj", H).copy()
         peak = np.max(np.abs(H), axis=0)
         coupling = peak / np.diag(peak)[None, :]
-        a_kin = _second_difference(kin, self.dt)
-        d, dd = self._structure(a_kin)
-        return {"kin": kin, "acc": a_kin + dd, "tool_position": kin + d, "cross_coupling": coupling}
+        acc_full = np.empty_like(H)
+        pos_full = np.empty_like(H)
+        for j in range(3):  # every input direction: the structure sees the whole kinematic acceleration
+            a_kin = _second_difference(H[:, :, j], self.dt)
+            d, dd = self._structure(a_kin)
+            acc_full[:, :, j] = a_kin + dd
+            pos_full[:, :, j] = H[:, :, j] + d
+        diag = lambda X: np.einsum("kjj->kj", X).copy()  # noqa: E731 - the diagonal responses
+        return {"kin": diag(H), "acc": diag(acc_full), "tool_position": diag(pos_full), "cross_coupling": coupling,
+                "kin_full": H, "acc_full": acc_full, "tool_position_full": pos_full}

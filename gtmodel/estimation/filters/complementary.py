@@ -54,7 +54,10 @@ from gtmodel._arrays import as_finite, as_signal, as_vector, positive_float, pos
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 
-__all__ = ["ComplementaryFilter", "THESIS_CUTOFFS_HZ", "PAD_DECAY", "forward_backward_design_hz"]
+__all__ = ["ComplementaryFilter", "THESIS_CUTOFFS_HZ", "PAD_DECAY", "CUTOFF_READINGS", "forward_backward_design_hz"]
+
+#: How a cut-off is read: -3 dB of the zero-phase filter, or Matlab's ``butter`` + ``filtfilt`` (-6 dB, the crossover).
+CUTOFF_READINGS = ("zero_phase_3db", "matlab")
 
 #: Cut-off frequencies [Hz] of the thesis' complementary filter, x and y (Dressler (2012), ch. 7.3).
 THESIS_CUTOFFS_HZ = (4.50, 2.63)
@@ -121,11 +124,19 @@ class ComplementaryFilter:
         Sample time [s] (default the loop period, :data:`gtmodel.defaults.LOOP_PERIOD_S`).
     order : int, optional
         Butterworth order per pass (the thesis: 2).
+    reading : str, optional
+        How ``cutoff_hz`` is read: ``"zero_phase_3db"`` (default: the zero-phase magnitude
+        is -3 dB there, the design frequency moved up by :func:`forward_backward_design_hz`)
+        or ``"matlab"`` (the thesis' tool, ``butter(order, fc)`` then ``filtfilt``: the
+        design frequency is the cut-off, the zero-phase magnitude is -6 dB there, so LP
+        and HP = 1 - LP cross over exactly at ``cutoff_hz``).
 
     Attributes
     ----------
     cutoff_hz : numpy.ndarray, shape (d,)
-        The -3 dB frequencies of the zero-phase low-pass [Hz].
+        The cut-off frequencies as given [Hz] (read per ``reading``).
+    reading : str
+        The reading of ``cutoff_hz``.
     design_hz : numpy.ndarray, shape (d,)
         The Butterworth design frequencies (:func:`forward_backward_design_hz`) [Hz].
     sos : list of numpy.ndarray
@@ -141,10 +152,13 @@ class ComplementaryFilter:
     ------
     InputError
         A cut-off not in ``(0, Nyquist)`` (message names ``cutoff_hz``), ``cutoff_hz`` not
-        1-D, ``dt`` not positive, ``order`` not a positive integer.
+        1-D, ``dt`` not positive, ``order`` not a positive integer, an unknown ``reading``.
     """
 
-    def __init__(self, cutoff_hz: Any = THESIS_CUTOFFS_HZ, dt: float = LOOP_PERIOD_S, order: int = 2) -> None:
+    def __init__(self, cutoff_hz: Any = THESIS_CUTOFFS_HZ, dt: float = LOOP_PERIOD_S, order: int = 2, reading: str = "zero_phase_3db") -> None:
+        if reading not in CUTOFF_READINGS:
+            raise InputError(f"reading: expected one of {', '.join(CUTOFF_READINGS)}, got {reading!r}")
+        self.reading = reading
         self.dt = positive_float(dt, "dt")
         self.order = positive_int(order, "order")
         fc = as_vector(cutoff_hz, "cutoff_hz", what="frequencies (one per direction)")
@@ -155,7 +169,8 @@ class ComplementaryFilter:
             raise InputError(f"cutoff_hz: entry {j} = {float(fc[j])!r} Hz is outside (0, {nyquist:g}) Hz (Nyquist for dt = {self.dt:g} s)")
         self.cutoff_hz = fc
         self.d = int(fc.size)
-        self.design_hz = np.array([forward_backward_design_hz(f, self.dt, self.order) for f in fc])
+        self.design_hz = (np.array(fc, dtype=float) if reading == "matlab"
+                          else np.array([forward_backward_design_hz(f, self.dt, self.order) for f in fc]))
         self.sos = [scipy.signal.butter(self.order, f, btype="low", output="sos", fs=1.0 / self.dt) for f in self.design_hz]
         poles = [np.max(np.abs(scipy.signal.sos2zpk(s)[1])) for s in self.sos]
         self._settle = [int(math.ceil(math.log(PAD_DECAY) / math.log(p))) for p in poles]
@@ -336,4 +351,4 @@ class ComplementaryFilter:
         return np.stack([np.abs(scipy.signal.sosfreqz(s, worN=f, fs=1.0 / self.dt)[1]) ** 2 for s in self.sos])
 
     def __repr__(self) -> str:
-        return f"ComplementaryFilter(cutoff_hz={self.cutoff_hz.tolist()}, dt={self.dt}, order={self.order})"
+        return f"ComplementaryFilter(cutoff_hz={self.cutoff_hz.tolist()}, dt={self.dt}, order={self.order}, reading={self.reading!r})"

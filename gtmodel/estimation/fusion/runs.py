@@ -133,6 +133,9 @@ class FusionRun(StatusResult):
         (rotation quantities only for 5-axis cases).
     step_time_us : float
         Mean wall time per filter step [us].
+    setup : dict of str to numpy.ndarray
+        The filter's set-up, for an independent re-run: ``x0`` (nx,), ``P0``, ``Q`` (nx, nx),
+        ``R`` (nz, nz); for the linear 3-axis model also ``F`` (nx, nx) and ``H`` (nz, nx).
     """
 
     label: str
@@ -145,6 +148,7 @@ class FusionRun(StatusResult):
     first: int
     errors: dict[str, dict[str, float]] = field(default_factory=dict)
     step_time_us: float = float("nan")
+    setup: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def end(self) -> int:

@@ -407,7 +407,12 @@ class FusionStudy:
         sensor = sensor_only(meas, model)
         first = max(sensor.first, int(math.ceil(self.warmup / dt - 1e-9)))
         out = FusionRun(status=run.status, message=run.message, label=label, filter_name=filter_name, spec=spec, truth=truth,
-                        measurements=meas, sensor=sensor, run=run, first=first, step_time_us=1e6 * run.step_time_s)
+                        measurements=meas, sensor=sensor, run=run, first=first, step_time_us=1e6 * run.step_time_s,
+                        setup={"x0": np.asarray(x0, float), "P0": np.asarray(P0, float), "Q": np.asarray(Q, float), "R": np.asarray(R, float)})
+        if model.is_linear:
+            zero = np.zeros(model.nx)
+            out.setup["F"] = np.asarray(model.transition_jacobian(zero), float)
+            out.setup["H"] = np.asarray(model.measurement_jacobian(zero), float)
         if out.end <= first + 1:
             return out
         for q, (_, _, needs_rotation) in QUANTITIES.items():

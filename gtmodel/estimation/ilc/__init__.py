@@ -11,8 +11,8 @@
 from __future__ import annotations
 
 from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, run_ilc
-from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability, time_window
-from gtmodel.estimation.ilc.experiment import REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
+from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, RobustQFilter, lifted_matrix, stability, time_window
+from gtmodel.estimation.ilc.experiment import Q_DESIGNS, REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
 
 __all__ = [
     "error_measure",
@@ -22,11 +22,13 @@ __all__ = [
     "lifted_matrix",
     "time_window",
     "QFilter",
+    "RobustQFilter",
     "LearningFilter",
     "ILCStability",
     "stability",
     "SIGNALS",
     "REQUIREMENTS",
+    "Q_DESIGNS",
     "ILCCase",
     "ILCReference",
     "ILCCaseResult",

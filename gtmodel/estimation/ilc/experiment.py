@@ -19,8 +19,10 @@ to trial. The four cases of section 7.3 differ only in the signal the error
 The estimators act on x and y (the structural model deflects the tool in x and y); z is
 taken from the kinematic position ``fk(q_m)``. Stability (7.15) and monotone convergence
 (7.16) are computed per channel (actuator or tool direction) from the lifted matrices (7.9)
-of the plant's impulse responses linearised at the operating point (diagonal channels;
-the cross-coupling of the actuators is left out of the check and stays in the simulation).
+of the plant's impulse responses linearised at the operating point (diagonal channels,
+:meth:`ILCExperiment.check`) and, when asked, for all channels together with the
+cross-coupling (:meth:`ILCExperiment.coupled_check`: in tool space the actuators' different
+dynamics couple the directions; Case 1's actuators are independent).
 The error measure (7.25) is taken over the fully corrected samples (time window 1) on the
 actuator side (``r_q - q_m``) and on the tool side (``r_T - z``, the true tool position)
 for every iteration.
@@ -34,17 +36,19 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Literal, Mapping
 
 import numpy as np
+import scipy.linalg
+import scipy.sparse.linalg
 
 from gtmodel._arrays import as_rows, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation.filters.complementary import ComplementaryFilter
 from gtmodel.estimation.ilc.iteration import error_measure, run_ilc
-from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, lifted_matrix, stability
+from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, RobustQFilter, lifted_matrix, stability
 from gtmodel.estimation.filters.kalman import StationaryKalman
 from gtmodel.estimation.closed_loop.plant import TrackingPlant
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["SIGNALS", "REQUIREMENTS", "ILCCase", "ILCReference", "ILCCaseResult", "ILCExperiment"]
+__all__ = ["SIGNALS", "REQUIREMENTS", "Q_DESIGNS", "ILCCase", "ILCReference", "ILCCaseResult", "ILCExperiment"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -52,6 +56,15 @@ _log = logging.getLogger("gtmodel")
 SIGNALS = ("actuator", "complementary", "kalman", "tool")
 #: What a case requires of its design before it runs: (7.15), (7.16) or nothing.
 REQUIREMENTS = ("monotone", "stable", "none")
+#: Designs of the Q filter: zero-phase Butterworth, or the robust shaping of Cases 2 and 3.
+Q_DESIGNS = ("butterworth", "robust")
+#: Points of the frequency grid of the robust design's loop gain (0 to Nyquist).
+LOOP_GAIN_POINTS = 129
+#: Lanczos/Arnoldi vectors of the coupled check (a robust Q flattens |Q| |I - L T| at its margin over a
+#: band, so the largest singular values cluster; more vectors than ARPACK's default 20 converge fast).
+ARPACK_VECTORS = 64
+#: Restarts of ARPACK before the coupled check falls back to the dense decompositions.
+ARPACK_ITERATIONS = 300
 #: Names of the three tool directions.
 _AXES = ("x", "y", "z")
 
@@ -75,6 +88,12 @@ class ILCCase:
         Order of the Butterworth filter (applied forward and backward).
     require : str, optional
         One of :data:`REQUIREMENTS`: what the lifted check must show before the case runs.
+    q_design : str, optional
+        ``"butterworth"`` (:class:`QFilter`, Case 1 of the thesis) or ``"robust"``
+        (:class:`RobustQFilter`: the Butterworth at ``q_cutoff_hz`` capped by
+        ``q_margin / sigma_max(I - L T(f))``, Cases 2 and 3).
+    q_margin : float, optional
+        The robust design's bound of ``|Q| |I - L T|`` (in (0, 1)).
     """
 
     name: str
@@ -82,12 +101,18 @@ class ILCCase:
     q_cutoff_hz: float | None
     q_order: int = 2
     require: str = "monotone"
+    q_design: str = "butterworth"
+    q_margin: float = 0.9
 
     def __post_init__(self) -> None:
         if self.signal not in SIGNALS:
             raise InputError(f"signal: expected one of {', '.join(SIGNALS)}, got {self.signal!r}")
         if self.require not in REQUIREMENTS:
             raise InputError(f"require: expected one of {', '.join(REQUIREMENTS)}, got {self.require!r}")
+        if self.q_design not in Q_DESIGNS:
+            raise InputError(f"q_design: expected one of {', '.join(Q_DESIGNS)}, got {self.q_design!r}")
+        if self.q_design == "robust" and self.q_cutoff_hz is None:
+            raise InputError("q_cutoff_hz: the robust Q design needs a cut-off (the thesis: 30 Hz)")
 
     @property
     def tool_side(self) -> bool:
@@ -155,6 +180,14 @@ class ILCCaseResult(StatusResult):
         tool offset [m]).
     solve_time : float
         Wall time [s].
+    u : numpy.ndarray, shape (K+1, N, 3)
+        The correction applied in every trial (actuator [m] or tool offset [m]).
+    eps : numpy.ndarray, shape (K+1, N, 3)
+        The learning error of every trial [m].
+    coupled : ILCStability or None
+        The coupled check of all channels together (:meth:`ILCExperiment.coupled_check`), when run.
+    deflection : numpy.ndarray, shape (3,) or None
+        Error measure (7.25) of the structural deflection ``d = z - fk(q)`` at iteration 0 [m].
     """
 
     case: ILCCase
@@ -165,6 +198,10 @@ class ILCCaseResult(StatusResult):
     tool_paths: dict[int, np.ndarray] = field(default_factory=dict)
     correction: np.ndarray | None = None
     solve_time: float = 0.0
+    u: np.ndarray | None = None
+    eps: np.ndarray | None = None
+    coupled: ILCStability | None = None
+    deflection: np.ndarray | None = None
 
     def relative(self, side: str, first: int = 5, last: int = 10) -> np.ndarray:
         """Mean error measure over iterations ``first..last`` relative to iteration 0.
@@ -219,6 +256,8 @@ class ILCExperiment:
         ``ik(T (N, 3)) -> q (N, 3)``: the IK of the tool-space cases.
     operating_point : array_like, shape (3,)
         Tool position the lifted matrices are linearised at [m].
+    coupled : bool, optional
+        Also run the coupled check (:meth:`coupled_check`) of every case (default False).
 
     Raises
     ------
@@ -235,6 +274,7 @@ class ILCExperiment:
         estimators: Mapping[str, Any],
         ik: Callable[[np.ndarray], np.ndarray],
         operating_point: Any,
+        coupled: bool = False,
     ) -> None:
         n = reference.n
         as_rows(reference.T, "reference.T", 3)
@@ -248,7 +288,12 @@ class ILCExperiment:
         self.estimators = dict(estimators)
         self.ik = ik
         self.operating_point = np.asarray(operating_point, dtype=float).reshape(3)
+        self.coupled = bool(coupled)
         self._responses: dict[str, np.ndarray] | None = None
+        self._robust: dict[tuple[Any, ...], RobustQFilter] = {}
+        self._coupled_T: dict[str, np.ndarray] = {}
+        self._checks: dict[ILCCase, dict[str, ILCStability]] = {}
+        self._estimator_lifted: dict[str, tuple[Any, Any]] = {}
 
     # -- the lifted check ------------------------------------------------------------------
     def q_filter(self, case: ILCCase) -> QFilter:
@@ -263,7 +308,53 @@ class ILCExperiment:
         -------
         QFilter
         """
+        if case.q_design == "robust":
+            key = (case.signal, case.q_cutoff_hz, case.q_order, case.q_margin)
+            if key not in self._robust:
+                f, g = self.loop_gain(case)
+                self._robust[key] = RobustQFilter(case.q_cutoff_hz, f, g, case.q_margin, dt=self.plant.dt, order=case.q_order,
+                                                  window=self.reference.window)
+            return self._robust[key]
         return QFilter(case.q_cutoff_hz, dt=self.plant.dt, order=case.q_order, window=self.reference.window)
+
+    def loop_gain(self, case: ILCCase, points: int = LOOP_GAIN_POINTS) -> tuple[np.ndarray, np.ndarray]:
+        """``sigma_max(I - L T(f))`` of a case's coupled map, measured on the lifted operators.
+
+        Each channel is driven by ``exp(i 2 pi f t)`` through ``I - kron(I_3, L) T``
+        (:meth:`coupled_transfer_matrix`); the complex amplitude of every output channel is
+        read over the middle half of the trial (least squares on the same exponential), which
+        gives the 3 x 3 frequency response whose largest singular value is returned.
+
+        Parameters
+        ----------
+        case : ILCCase
+            The case.
+        points : int, optional
+            Grid points from 0 to the Nyquist frequency.
+
+        Returns
+        -------
+        freqs_hz : numpy.ndarray, shape (points,)
+        gain : numpy.ndarray, shape (points,)
+        """
+        n = self.reference.n
+        T = self.coupled_transfer_matrix(case)
+        L = self.learning.lifted(n)
+        f = np.linspace(0.0, 0.5 / self.plant.dt, positive_int(points, "points"))
+        t = np.arange(n) * self.plant.dt
+        mid = slice(n // 4, n - n // 4)
+        E = np.exp(2j * np.pi * np.outer(t, f))  # (n, F): the input of every frequency
+        G = np.empty((f.size, 3, 3), dtype=complex)
+        norm = np.sum(np.abs(E[mid]) ** 2, axis=0)
+        for j in range(3):
+            cols = T[:, j * n:(j + 1) * n]
+            TE = cols @ E.real + 1j * (cols @ E.imag)  # (3 n, F), real products
+            for i in range(3):
+                LTE = L @ TE[i * n:(i + 1) * n].real + 1j * (L @ TE[i * n:(i + 1) * n].imag)
+                Y = (E if i == j else 0.0) - LTE
+                G[:, i, j] = np.sum(np.conj(E[mid]) * Y[mid], axis=0) / norm
+        gain = np.linalg.norm(G, ord=2, axis=(1, 2))
+        return f, np.maximum(gain, 1e-12)
 
     def _impulses(self) -> dict[str, np.ndarray]:
         if self._responses is None:
@@ -288,18 +379,116 @@ class ILCExperiment:
             ``"q1"``..``"q3"`` (Case 1) or ``"x"``, ``"y"``, ``"z"``.
         """
         h = self._impulses()
-        n = self.reference.n
         if case.signal == "actuator":
             return {f"q{i + 1}": lifted_matrix(h["actuator"][:, i]) for i in range(3)}
         out: dict[str, np.ndarray] = {}
         if case.signal == "tool":
             pos = h["tool_position"]
             return {a: lifted_matrix(pos[:, j]) for j, a in enumerate(_AXES)}
-        F_kin, F_acc = self.estimators[case.signal].lifted(n)
+        F_kin, F_acc = self.estimator_matrices(case.signal)
         for j, a in enumerate(_AXES[:2]):
             out[a] = F_kin[j] @ lifted_matrix(h["kin"][:, j]) + F_acc[j] @ lifted_matrix(h["acc"][:, j])
         out["z"] = lifted_matrix(h["kin"][:, 2])
         return out
+
+    def estimator_matrices(self, signal: str) -> tuple[Any, Any]:
+        """The lifted matrices ``(F_kin, F_acc)`` of an estimator over the reference's length, built once.
+
+        Parameters
+        ----------
+        signal : str
+            ``"complementary"`` or ``"kalman"``.
+
+        Returns
+        -------
+        tuple
+            The estimator's ``lifted(N)`` (per direction ``(N, N)`` matrices).
+        """
+        if signal not in self._estimator_lifted:
+            self._estimator_lifted[signal] = self.estimators[signal].lifted(self.reference.n)
+        return self._estimator_lifted[signal]
+
+    def coupled_transfer_matrix(self, case: ILCCase) -> np.ndarray:
+        """The lifted map of all three channels together, cross-coupling included.
+
+        Dressler (2012), eqs. 7.9 and 7.15 on the stacked trial ``[u_1; u_2; u_3]``: block
+        ``(l, j)`` maps the correction of channel ``j`` to the learning signal of channel
+        ``l``. Case 1: the actuators (6.11) are independent, so the matrix is block diagonal
+        (the per-channel blocks of :meth:`transfer_matrices`). Tool-side cases: the chain
+        tool reference -> IK -> actuators -> fk (``J diag(h) J^-1``, whose off-diagonal terms
+        come from the different actuator dynamics) -> structure -> estimator, every block.
+
+        Parameters
+        ----------
+        case : ILCCase
+            The case.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3 N, 3 N)
+        """
+        if case.signal in self._coupled_T:
+            return self._coupled_T[case.signal]
+        n = self.reference.n
+        T = np.zeros((3 * n, 3 * n))
+        self._coupled_T[case.signal] = T
+        if case.signal == "actuator":
+            for i, M in enumerate(self.transfer_matrices(case).values()):
+                T[i * n:(i + 1) * n, i * n:(i + 1) * n] = M
+            return T
+        h = self._impulses()
+        if case.signal != "tool":
+            F_kin, F_acc = self.estimator_matrices(case.signal)
+        for j in range(3):
+            for l in range(3):
+                if case.signal == "tool":
+                    block = lifted_matrix(h["tool_position_full"][:, l, j])
+                elif l < 2:
+                    block = F_kin[l] @ lifted_matrix(h["kin_full"][:, l, j]) + F_acc[l] @ lifted_matrix(h["acc_full"][:, l, j])
+                else:
+                    block = lifted_matrix(h["kin_full"][:, l, j])
+                T[l * n:(l + 1) * n, j * n:(j + 1) * n] = block
+        return T
+
+    def coupled_check(self, case: ILCCase) -> ILCStability:
+        """Stability (7.15) and monotone convergence (7.16) of all channels together.
+
+        Dressler (2012), eqs. 7.15-7.16 with ``Q`` and ``L`` acting on every channel
+        (``kron(I_3, Q)``) and the coupled map of :meth:`coupled_transfer_matrix`; the
+        largest singular value and eigenvalue modulus by ARPACK (:func:`scipy.sparse.linalg.svds`,
+        :func:`scipy.sparse.linalg.eigs`, tolerances 1e-10 and 1e-8, :data:`ARPACK_VECTORS` vectors) on the ``(3 N, 3 N)`` matrix.
+
+        Parameters
+        ----------
+        case : ILCCase
+            The case.
+
+        Returns
+        -------
+        ILCStability
+        """
+        n = self.reference.n
+        Q = self.q_filter(case).lifted(n)
+        L = self.learning.lifted(n)
+        T = self.coupled_transfer_matrix(case)
+
+        def each(M: np.ndarray, v: np.ndarray) -> np.ndarray:  # kron(I_3, M) @ v, v of shape (3 N,) or (3 N, k)
+            return (M @ v.reshape(3, n, -1).transpose(1, 0, 2).reshape(n, -1)).reshape(n, 3, -1).transpose(1, 0, 2).reshape(v.shape)
+
+        op = scipy.sparse.linalg.LinearOperator(
+            (3 * n, 3 * n), matvec=lambda v: each(Q, v - each(L, T @ v)),
+            rmatvec=lambda v: (lambda w: w - T.T @ each(L.T, w))(each(Q.T, v)), dtype=float)
+        try:
+            sigma = float(scipy.sparse.linalg.svds(op, k=1, ncv=ARPACK_VECTORS, tol=1e-10, maxiter=ARPACK_ITERATIONS,
+                                                   return_singular_vectors=False, random_state=0)[0])
+            rho = float(np.max(np.abs(scipy.sparse.linalg.eigs(op, k=1, which="LM", ncv=ARPACK_VECTORS, tol=1e-8, maxiter=ARPACK_ITERATIONS,
+                                                               return_eigenvectors=False))))
+        except scipy.sparse.linalg.ArpackNoConvergence:  # a clustered spectrum: the dense decompositions, bounded in time
+            _log.info("ILC coupled check of case %s: ARPACK did not converge; dense decomposition of the (%d, %d) matrix", case.name, 3 * n, 3 * n)
+            A = op @ np.eye(3 * n)
+            sigma = float(scipy.linalg.svdvals(A)[0])
+            rho = float(np.max(np.abs(scipy.linalg.eigvals(A))))
+        return ILCStability(rho=rho, sigma_max=sigma, stable=rho < 1.0, monotone=sigma < 1.0)
 
     def check(self, case: ILCCase) -> dict[str, ILCStability]:
         """Stability (7.15) and monotone convergence (7.16) of a case, per channel.
@@ -313,10 +502,13 @@ class ILCExperiment:
         -------
         dict of str to ILCStability
         """
+        if case in self._checks:  # the problem's load checks every case; its run reuses the figures
+            return self._checks[case]
         n = self.reference.n
         Q = self.q_filter(case).lifted(n)
         L = self.learning.lifted(n)
-        return {ch: stability(Q, L, T) for ch, T in self.transfer_matrices(case).items()}
+        self._checks[case] = {ch: stability(Q, L, T) for ch, T in self.transfer_matrices(case).items()}
+        return self._checks[case]
 
     # -- one trial -------------------------------------------------------------------------
     def _estimate(self, case: ILCCase, resp: Any) -> np.ndarray:
@@ -391,4 +583,5 @@ class ILCExperiment:
             status=Status(result.status), message=f"case {case.name}: {result.message}", case=case, stability=checks,
             actuator_error=act, tool_error=tool, learning_error=learn, tool_paths=paths,
             correction=np.asarray(result.next_u if result.next_u is not None else result.u[-1]), solve_time=time.perf_counter() - t0,
+            u=np.asarray(result.u), eps=np.asarray(result.eps), deflection=np.asarray(error_measure(np.asarray(responses[0].d), mask)), coupled=self.coupled_check(case) if self.coupled else None,
         )

@@ -51,7 +51,7 @@ from gtmodel._arrays import as_finite, as_signal, as_vector, positive_float, pos
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 
-__all__ = ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
+__all__ = ["lifted_matrix", "time_window", "QFilter", "RobustQFilter", "LearningFilter", "ILCStability", "stability"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -289,6 +289,118 @@ class QFilter:
     def __repr__(self) -> str:
         w = None if self.window is None else self.window.size
         return f"QFilter(cutoff_hz={self.cutoff_hz}, dt={self.dt}, order={self.order}, window={w} samples)"
+
+
+class RobustQFilter(QFilter):
+    """Q shaped below the inverse loop gain: learning up to a cut-off, robust around resonances.
+
+    Dressler (2012), ch. 7.4, Cases 2 and 3 (Figs. 7.14, 7.17): Q "learns up to 30 Hz" and is
+    "robust to large model errors especially around the resonance frequencies", i.e. its
+    magnitude stays below ``|1 - L T|^-1`` (the frequency-domain condition for monotone
+    convergence, Norrlöf and Gunnarsson (2002)). The thesis gives no formula; here the wanted
+    magnitude is ``min(|B(f)|^2, margin / g(f))`` with ``|B|^2`` the zero-phase Butterworth
+    of :class:`QFilter` at ``cutoff_hz`` and ``g(f)`` the loop gain ``sigma_max(I - L T)``
+    at ``f`` (given on a grid, interpolated linearly), realised as a symmetric FIR filter of
+    ``taps`` taps (:func:`scipy.signal.firwin2`, frequency sampling, Hamming window) applied
+    centred (zero phase, :func:`scipy.signal.oaconvolve`, zeros beyond the trial), then the
+    time window.
+
+    Parameters
+    ----------
+    cutoff_hz : float
+        Cut-off of the Butterworth part [Hz] (the thesis: 30).
+    freqs_hz : array_like, shape (F,)
+        Frequency grid of the loop gain [Hz], increasing, from 0 to the Nyquist frequency.
+    loop_gain : array_like, shape (F,)
+        ``sigma_max(I - L T)`` at ``freqs_hz`` (positive).
+    margin : float, optional
+        Wanted bound of ``|Q| g`` (default 0.9; below 1).
+    dt : float, optional
+        Sample time [s].
+    order : int, optional
+        Order of the Butterworth part.
+    window : array_like, shape (N,), optional
+        Time window.
+    taps : int, optional
+        FIR length (odd; default 101).
+
+    Raises
+    ------
+    InputError
+        A bad cut-off, grid, gain, margin or tap count.
+    """
+
+    def __init__(self, cutoff_hz: float, freqs_hz: Any, loop_gain: Any, margin: float = 0.9, dt: float = LOOP_PERIOD_S,
+                 order: int = 2, window: Any = None, taps: int = 101) -> None:
+        super().__init__(cutoff_hz, dt=dt, order=order, window=window)
+        f = as_vector(freqs_hz, "freqs_hz", what="frequencies")
+        g = as_vector(loop_gain, "loop_gain", what="gains")
+        nyquist = 0.5 / self.dt
+        if f.size != g.size or f.size < 2 or np.any(np.diff(f) <= 0) or f[0] != 0.0 or abs(f[-1] - nyquist) > 1e-9 * nyquist:
+            raise InputError(f"freqs_hz: expected an increasing grid from 0 to {nyquist:g} Hz with one loop gain each")
+        if np.any(g <= 0):
+            raise InputError("loop_gain: expected positive gains")
+        m = float(as_finite(margin, "margin"))
+        if not 0.0 < m < 1.0:
+            raise InputError(f"margin: expected a number in (0, 1), got {margin!r}")
+        taps = positive_int(taps, "taps")
+        if taps % 2 == 0:
+            raise InputError(f"taps: expected an odd FIR length (a centred, zero-phase filter), got {taps}")
+        self.margin = m
+        self.taps = taps
+        self.freqs_hz, self.loop_gain = f, g
+        self.wanted = np.minimum(super().magnitude(f), m / g)
+        self.fir = scipy.signal.firwin2(taps, f, self.wanted, fs=1.0 / self.dt)
+
+    def apply(self, x: Any) -> np.ndarray:
+        """Filter a signal (each column): the centred FIR, then the window.
+
+        Parameters
+        ----------
+        x : array_like, shape (N,) or (N, d)
+            Signal, rows are samples.
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape as ``x``.
+
+        Raises
+        ------
+        InputError
+            ``x`` not finite, or ``N`` different from the window's length.
+        """
+        arr, single = as_signal(x, "x", vector=True), np.ndim(x) == 1
+        if self.window is not None and arr.shape[0] != self.window.size:
+            raise InputError(f"x: expected {self.window.size} samples (the window's length), got {arr.shape[0]}")
+        out = scipy.signal.oaconvolve(arr, self.fir[:, None], mode="full", axes=0)[self.taps // 2: self.taps // 2 + arr.shape[0]]
+        if self.window is not None:
+            out = out * self.window[:, None]
+        return out[:, 0] if single else out
+
+    def magnitude(self, f_hz: Any) -> np.ndarray:
+        """Magnitude of the FIR (without the window); its phase is 0 (centred, symmetric).
+
+        Parameters
+        ----------
+        f_hz : array_like, shape (F,)
+            Frequencies [Hz].
+
+        Returns
+        -------
+        numpy.ndarray, shape (F,)
+
+        Raises
+        ------
+        InputError
+            Frequencies not finite.
+        """
+        f = np.atleast_1d(as_finite(f_hz, "f_hz"))
+        _, h = scipy.signal.freqz(self.fir, worN=f, fs=1.0 / self.dt)
+        return np.abs(h)
+
+    def __repr__(self) -> str:
+        return f"RobustQFilter(cutoff_hz={self.cutoff_hz}, margin={self.margin}, taps={self.taps})"
 
 
 class LearningFilter:

@@ -46,7 +46,7 @@ from gtmodel.codegen import Controller, save_controller
 from gtmodel.estimation import ilc_correction_function
 from gtmodel.problems.kinds.closed_loop_common import build_plant
 from gtmodel.problems.kinds.schemas.ilc import ILCFile
-from gtmodel.report.ilc import plot_error_measure, plot_tool_path
+from gtmodel.report.ilc import plot_convergence, plot_error_measure, plot_tool_path
 from gtmodel.estimation.ilc.cases import ILCDeclaration, ILCOutcome
 from gtmodel.trajectory.square import plan_square
 
@@ -58,12 +58,17 @@ __all__ = [
 
 _log = logging.getLogger("gtmodel")
 
-#: The thesis' figures quoted in the issue and the spec for Case 1 (Dressler (2012), ch. 7.3):
-#: largest singular values (7.16) per actuator and the actuator-side error after 5 iterations
-#: relative to iteration 0. The other cells of Table 7.2 are not in the shipped reference data.
+#: The thesis' figures, Dressler (2012), section 7.4: Table 7.2 (tool-side error (7.25), mean of
+#: iterations 5-10 relative to iteration 0, x and y), the largest singular values (7.16) of each
+#: case (Case 1 per actuator, eq. 7.28; Cases 2A/2B and 3 in the text of section 7.4) and Case 1's
+#: actuator-side error after 5 iterations ("about 2 %", Fig. 7.7).
 THESIS_TABLE_7_2 = {
-    "1": {"sigma_max": [0.90, 0.91, 0.93], "actuator_relative_error": 0.02},
+    "1": {"tool_x": 0.133, "tool_y": 0.361, "sigma_max": [0.90, 0.91, 0.93], "actuator_relative_error": 0.02},
+    "2A": {"tool_x": 0.126, "tool_y": 0.239, "sigma_max": [0.86]},
+    "2B": {"tool_x": 0.133, "tool_y": 0.252, "sigma_max": [0.93]},
+    "3": {"tool_x": 0.103, "tool_y": 0.249, "sigma_max": [0.95]},
 }
+
 
 #: Most samples of a reference (lead-in, motion and lead-out); bounds the lifted matrices.
 MAX_SAMPLES = 4000
@@ -110,7 +115,7 @@ class ILCKind(ProblemKind):
         ref = doc.reference
         try:
             T, q, final_time = plan_square(plant.kinematics, ref.corner, ref.side, ref.speed, ref.acceleration, ref.lead,
-                                           ref.grid, doc.robot.configuration, plant.dt)
+                                           ref.grid, doc.robot.configuration, plant.dt, ref.rounds)
         except UnreachablePoseError as exc:
             raise file.fail("reference.corner", "a square inside the workspace", f"{ref.corner} ({exc})") from None
         except GtModelError as exc:
@@ -125,7 +130,7 @@ class ILCKind(ProblemKind):
             raise file.wrap("ilc.tukey_points", exc) from None
         est = doc.estimators
         try:
-            complementary = ComplementaryFilter(est.complementary_cutoff_hz, dt=dt)
+            complementary = ComplementaryFilter(est.complementary_cutoff_hz, dt=dt, reading=est.cutoff_reading)
         except GtModelError as exc:
             raise file.wrap("estimators.complementary_cutoff_hz", exc) from None
         try:
@@ -138,14 +143,16 @@ class ILCKind(ProblemKind):
         configuration = doc.robot.configuration
         experiment = ILCExperiment(
             plant, ILCReference(np.arange(n) * dt, T, q, window), LearningFilter(il.gamma, il.delta), il.iterations,
-            estimators, lambda X: kin.ik(X, configuration), ref.corner,
+            estimators, lambda X: kin.ik(X, configuration), ref.corner, coupled=il.coupled_check,
         )
         cases: list[ILCCase] = []
         checks: dict[str, Any] = {}
         for i, c in enumerate(doc.cases):
             if c.name in checks:
                 raise file.fail(f"cases[{i}].name", "a name not used by an earlier case", c.name)
-            case = ILCCase(c.name, c.signal, c.q_cutoff_hz, c.q_order, c.require)
+            if c.q_design == "robust" and c.q_cutoff_hz is None:
+                raise file.fail(f"cases[{i}].q_cutoff_hz", "a cut-off for the robust Q design (the thesis: 30 Hz)", None)
+            case = ILCCase(c.name, c.signal, c.q_cutoff_hz, c.q_order, c.require, c.q_design, c.q_margin)
             checks[c.name] = experiment.check(case)
             if c.require != "none":
                 key = "monotone" if c.require == "monotone" else "stable"
@@ -192,8 +199,15 @@ actuator correction of the first case when it learns on the actuators, for
                 "status": r.status, "message": r.message, "signal": case.signal, "q_cutoff_hz": case.q_cutoff_hz,
                 "q_order": case.q_order, "require": case.require, "checks": _channels(r.stability),
                 "actuator_error_m": r.actuator_error.tolist(), "tool_error_m": r.tool_error.tolist(),
-                "solve_time_s": r.solve_time,
+                "solve_time_s": r.solve_time, "q_design": case.q_design,
             }
+            if r.deflection is not None:
+                entry["deflection_rms_m"] = np.asarray(r.deflection).tolist()
+            if case.q_design == "robust":
+                entry["q_margin"] = case.q_margin
+            if r.coupled is not None:
+                entry["coupled_check"] = {"rho": r.coupled.rho, "sigma_max": r.coupled.sigma_max, "stable": r.coupled.stable,
+                                          "monotone": r.coupled.monotone}
             if r.learning_error is not None:
                 entry["learning_error"] = np.asarray(r.learning_error).tolist()
             if len(r.actuator_error) > 1:
@@ -213,6 +227,7 @@ actuator correction of the first case when it learns on the actuators, for
             "table_7_2_definition": "mean of the error measure over iterations 5-10 relative to iteration 0",
             "cases": cases,
             "worst_sigma_max": float(worst),
+            "estimators": _estimator_figures(declaration),
             "thesis": THESIS_TABLE_7_2,
             "solve_time_s": solution.solve_time,
         }
@@ -229,7 +244,9 @@ actuator correction of the first case when it learns on the actuators, for
             cells = [f"{v:.4f}" for v in (*act, tool[0], tool[1])]
             lines.append(",".join([case.name, case.signal, *cells, f"{smax:.4f}", f"{rho:.4f}"]))
             th = THESIS_TABLE_7_2.get(case.name)
-            thesis = (f"sigma_max {th['sigma_max']}, actuator about {th['actuator_relative_error']:.0%}" if th else "not in the reference data")
+            thesis = (f"tool x {th['tool_x']:.3f}, y {th['tool_y']:.3f}; sigma_max {', '.join(f'{v:.2f}' for v in th['sigma_max'])}"
+                      + (f"; actuator about {th['actuator_relative_error']:.0%} at k = 5" if "actuator_relative_error" in th else "")
+                      if th else "not in the thesis")
             md.append(f"| {case.name} | {case.signal} | " + " | ".join(cells) + f" | {smax:.3f} | {rho:.3f} | {thesis} |")
         (out / "table_7_2.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
         (out / "table_7_2.md").write_text(
@@ -241,6 +258,7 @@ actuator correction of the first case when it learns on the actuators, for
                 it.append(",".join([case.name, str(k), *(f"{v:.9g}" for v in (*a, *t))]))
         (out / "ilc_iterations.csv").write_text("\n".join(it) + "\n", encoding="utf-8")
         written.files += ["table_7_2.md", "table_7_2.csv", "ilc_iterations.csv"]
+        written.files += _exports(declaration, solution, out)
         first = rows[0][1]
         if first.success and first.case.signal == "actuator":
             table = np.asarray(first.correction)
@@ -260,6 +278,9 @@ actuator correction of the first case when it learns on the actuators, for
             plot_error_measure({c.name: r.tool_error[:, :2] for c, r, _, _ in rows}, out / "ilc_tool_errors.png",
                                labels=["x", "y"], signals=signals, title=f"{name}: tool-side error measure (7.25) per iteration")
             written.files += ["ilc_actuator_errors.png", "ilc_tool_errors.png"]
+            plot_convergence(_convergence(declaration, solution), out / "ilc_convergence.png",
+                             title=f"{name}: |Q^-1| and the loop gain (Figs. 7.14, 7.17); lifted sigma_max (7.16)")
+            written.files.append("ilc_convergence.png")
             ref_T = declaration.experiment.reference.T
             for c, r, _, _ in rows:
                 paths = {f"iteration {k}": z for k, z in sorted(r.tool_paths.items())}
@@ -267,3 +288,71 @@ actuator correction of the first case when it learns on the actuators, for
                                title=f"{name}, case {c.name} ({c.signal}): tool path")
                 written.files.append(f"ilc_tool_path_case_{c.name}.png")
         return written
+
+
+def _estimator_figures(declaration: ILCDeclaration) -> dict[str, Any]:
+    """The estimators' printed figures: the complementary filter's reading and crossover, the Kalman gain."""
+    comp, kal = declaration.experiment.estimators["complementary"], declaration.experiment.estimators["kalman"]
+    # LP and HP = 1 - LP cross where the zero-phase magnitude |H(f)|^2 is 1/2: at the Butterworth design frequency
+    return {"complementary_reading": comp.reading, "complementary_cutoff_hz": comp.cutoff_hz.tolist(),
+            "complementary_crossover_hz": comp.design_hz.tolist(), "kalman_measurement_gain": np.asarray(kal.M).tolist()}
+
+
+def _convergence(declaration: ILCDeclaration, solution: ILCOutcome) -> dict[str, Any]:
+    """Per case the data of :func:`~gtmodel.report.ilc.plot_convergence`."""
+    e = declaration.experiment
+    out: dict[str, Any] = {}
+    for case in declaration.cases:
+        r = solution.results[case.name]
+        f, g = e.loop_gain(case)
+        out[case.name] = {"signal": case.signal, "freqs_hz": f, "loop_gain": g, "q": e.q_filter(case).magnitude(f),
+                          "sigma": {ch: c.sigma_max for ch, c in r.stability.items()},
+                          "coupled": None if r.coupled is None else r.coupled.sigma_max}
+    return out
+
+
+def _exports(declaration: ILCDeclaration, solution: ILCOutcome, out: Path) -> list[str]:
+    """The data of an independent check (Dressler (2012), eqs. 7.2-7.22).
+
+    ``ilc_lifted.npz``: ``t``, ``window``, ``gamma``, ``delta``, ``L`` (N, N) and the plant's
+    impulse responses linearised at the operating point (``h_actuator`` (N, 3); ``h_kin``,
+    ``h_acc``, ``h_tool_position`` (N, 3, 3), ``[k, l, j]`` the response in direction ``l`` to an
+    impulse of the tool reference in ``j``); per case ``Q_<case>`` (N, N). ``ilc_estimators.npz``:
+    the estimators' lifted matrices ``F_kin_<estimator>``, ``F_acc_<estimator>`` (2, N, N), the
+    complementary filter's ``complementary_cutoff_hz``, ``complementary_design_hz``,
+    ``complementary_sos`` (2, sections, 6), the Kalman filter's ``kalman_A``, ``kalman_C``,
+    ``kalman_Q``, ``kalman_R``, ``kalman_P``, ``kalman_L``, ``kalman_M`` and the sensor noise
+    covariances ``accelerometer_covariance``, ``gauge_covariance``. ``ilc_signals_case_<case>.npz``:
+    the reference ``T_ref``, ``q_ref`` (N, 3) and per trial the correction ``u`` and the learning
+    error ``eps`` (K+1, N, 3).
+    """
+    e = declaration.experiment
+    n = e.reference.n
+    h = e._impulses()
+    lifted: dict[str, Any] = {"t": e.reference.t, "window": e.reference.window, "gamma": e.learning.gamma, "delta": e.learning.delta,
+                              "L": e.learning.lifted(n), "h_actuator": h["actuator"], "h_kin": h["kin_full"], "h_acc": h["acc_full"],
+                              "h_tool_position": h["tool_position_full"]}
+    for case in declaration.cases:
+        lifted[f"Q_{case.name}"] = e.q_filter(case).lifted(n)
+    np.savez(out / "ilc_lifted.npz", **lifted)
+    comp, kal = e.estimators["complementary"], e.estimators["kalman"]
+    est: dict[str, Any] = {"complementary_cutoff_hz": comp.cutoff_hz, "complementary_design_hz": comp.design_hz,
+                           "complementary_sos": np.asarray(comp.sos), "complementary_reading": comp.reading}
+    for key in ("complementary", "kalman"):
+        if any(c.signal == key for c in declaration.cases):
+            F_kin, F_acc = e.estimator_matrices(key)
+            est[f"F_kin_{key}"], est[f"F_acc_{key}"] = np.asarray(F_kin), np.asarray(F_acc)
+    for k in ("A", "C", "Q", "R", "P", "L", "M"):
+        est[f"kalman_{k}"] = getattr(kal, k)
+    sensors = e.plant.sensors
+    est["accelerometer_covariance"] = np.eye(3) * sensors.accelerometer_noise**2
+    est["gauge_covariance"] = np.eye(2) * sensors.gauge_noise**2
+    np.savez(out / "ilc_estimators.npz", **est)
+    files = ["ilc_lifted.npz", "ilc_estimators.npz"]
+    for case in declaration.cases:
+        r = solution.results[case.name]
+        if r.u is None:
+            continue
+        np.savez_compressed(out / f"ilc_signals_case_{case.name}.npz", T_ref=e.reference.T, q_ref=e.reference.q, u=r.u, eps=r.eps)
+        files.append(f"ilc_signals_case_{case.name}.npz")
+    return files

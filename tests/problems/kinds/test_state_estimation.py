@@ -148,3 +148,44 @@ def test_bad_state_estimation_problem(tmp_path, case, edit, match):
 
 def test_status_is_an_enum_member(solved):
     assert solved[0].status is Status.COMPLETED
+
+
+def test_tracker_imu_kalman_filter_rerun_from_the_exports(solved):
+    """Independent: a plain numpy KF recursion (Joseph form) from the exported x0, P0, F, H, Q, R and the raw record."""
+    s, out = solved[0].summary, solved[1]
+    setup = np.load(out / "filter_setup_3_axis.npz")
+    rec = np.loadtxt(out / "sensor_records_3_axis.csv", delimiter=",", skiprows=1)
+    F, H, Q, R = setup["F"], setup["H"], setup["Q"], setup["R"]
+    x, P = setup["x0"].copy(), setup["P0"].copy()
+    xs = []
+    for z in rec[1:, 1:]:  # (x0, P0) is the posterior at sample 0; every later sample: predict, update
+        x, P = F @ x, F @ P @ F.T + Q
+        S = H @ P @ H.T + R
+        K = np.linalg.solve(S, H @ P).T
+        x = x + K @ (z - H @ x)
+        I_KH = np.eye(x.size) - K @ H
+        P = I_KH @ P @ I_KH.T + K @ R @ K.T
+        xs.append(x)
+    xs = np.array(xs)
+    base = np.loadtxt(out / "fusion_baseline_3_axis.csv", delimiter=",", skiprows=1)
+    with open(out / "fusion_baseline_3_axis.csv") as fh:
+        header = fh.readline().strip().split(",")
+    col = {h: base[:, k] for k, h in enumerate(header)}
+    k = np.rint(col["t"] / setup["dt"]).astype(int)  # samples of the metric
+    true_v = np.column_stack([col[f"velocity_{c}_true"] for c in "xyz"])
+    mine = 1e3 * np.linalg.norm(xs[k - 1, 3:6] - true_v, axis=1).mean()
+    assert mine == pytest.approx(s["table_8"]["3-axis"]["velocity_mm_s"]["fusion"], rel=1e-6)
+    true_p = np.column_stack([col[f"position_{c}_true"] for c in "xyz"])
+    mine_p = 1e3 * np.linalg.norm(xs[k - 1, 0:3] - true_p, axis=1).mean()
+    assert mine_p == pytest.approx(s["table_8"]["3-axis"]["position_mm"]["fusion"], rel=1e-3)  # truth written to 10 digits
+
+
+@pytest.mark.parametrize("motion, nx, nz", [("3_axis", 9, 6), ("5_axis", 19, 13)])
+def test_fusion_exports_hold_the_filter_setup(solved, motion, nx, nz):
+    out = solved[1]
+    setup = np.load(out / f"filter_setup_{motion}.npz")
+    assert setup["x0"].shape == (nx,) and setup["P0"].shape == setup["Q"].shape == (nx, nx) and setup["R"].shape == (nz, nz)
+    assert np.all(np.linalg.eigvalsh(setup["P0"]) > 0) and np.all(np.linalg.eigvalsh(setup["R"]) > 0)
+    with open(out / f"sensor_records_{motion}.csv") as fh:
+        assert len(fh.readline().split(",")) == 1 + nz
+    assert json.loads((out / "summary.json").read_text())["failed_checks"] == []

@@ -14,7 +14,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.closed_loop import NYQUIST_HZ, RobotSection, SensorsSection, StructureSection
-from gtmodel.problems.schema import MAX_LENGTH_M, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
+from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, number, vector
 
 __all__ = [
     "ILCFile",
@@ -22,6 +22,8 @@ __all__ = [
     "MIN_CUTOFF_HZ",
     "ILC_SIGNALS",
     "ILC_REQUIREMENTS",
+    "ILC_Q_DESIGNS",
+    "CUTOFF_READINGS",
     "ReferenceSection",
     "ILCSection",
     "EstimatorsSection",
@@ -36,6 +38,8 @@ __all__ = [
 #: and the Kalman filter's default noises [m], [m/s^3] (:mod:`gtmodel.estimation.filters.kalman`).
 ILC_SIGNALS = ("actuator", "complementary", "kalman", "tool")
 ILC_REQUIREMENTS = ("monotone", "stable", "none")
+ILC_Q_DESIGNS = ("butterworth", "robust")
+CUTOFF_READINGS = ("zero_phase_3db", "matlab")
 MIN_CUTOFF_FRACTION = 1e-4
 KALMAN_POSITION_NOISE = (0.000358, 0.001064)
 KALMAN_JERK_NOISE = (100.0, 100.0)
@@ -69,6 +73,8 @@ class ReferenceSection(Section):
         Lead-in and lead-out at rest [samples].
     grid : int
         Grid points of the path-constrained solver.
+    rounds : int
+        Consecutive rounds of the square (the thesis: 2).
     """
 
     corner: vector(3, bound=MAX_LENGTH_M, unit="m", description="first corner of the square (it runs +x, +y, -x, -y)")
@@ -77,6 +83,7 @@ class ReferenceSection(Section):
     acceleration: number(gt=0, le=1000.0, unit="m/s^2", description="TCP acceleration limit per axis") = 2.0
     lead: integer(0, 1000, description="lead-in and lead-out at rest, in samples (the thesis: 100)") = 100
     grid: integer(20, 5000, description="grid points of the path-constrained solver") = 400
+    rounds: integer(1, 10, description="consecutive rounds of the square, at rest at every corner (the thesis: 2)") = 1
 
 
 class ILCSection(Section):
@@ -94,6 +101,8 @@ class ILCSection(Section):
         Length of the Tukey window whose halves weight the lead-in and lead-out.
     tukey_alpha : float
         Tukey shape parameter.
+    coupled_check : bool
+        Also check (7.15)/(7.16) for all channels together, cross-coupling included.
     """
 
     iterations: integer(1, MAX_ITERATIONS, description="ILC iterations after the first trial") = 10
@@ -101,6 +110,7 @@ class ILCSection(Section):
     delta: integer(0, 100, description="time shift of L in samples (the thesis: 5)") = 5
     tukey_points: integer(2, 2000, description="Tukey window length (the thesis: 200)") = 200
     tukey_alpha: number(ge=0, le=1.0, description="Tukey window shape (the thesis: 0.95)") = 0.95
+    coupled_check: Flag = Field(default=False, description="also check (7.15)/(7.16) for all channels together, cross-coupling included")
 
 
 class EstimatorsSection(Section):
@@ -114,6 +124,9 @@ class EstimatorsSection(Section):
         Kalman filter: std of the kinematic position as a tool-position measurement [m].
     kalman_jerk_noise : list of float, shape (2,)
         Kalman filter: std of the white jerk driving the model [m/s^3].
+    cutoff_reading : str
+        How the complementary cut-offs are read: zero_phase_3db or matlab (butter + filtfilt:
+        LP and HP cross over at the cut-off).
     """
 
     complementary_cutoff_hz: vector(2, positive=True, bound=NYQUIST_HZ, unit="Hz",
@@ -125,6 +138,8 @@ class EstimatorsSection(Section):
         default_factory=lambda: list(KALMAN_POSITION_NOISE))
     kalman_jerk_noise: vector(2, positive=True, bound=1e6, unit="m/s^3", description="Kalman: std of the white jerk of the model in x, y") = Field(
         default_factory=lambda: list(KALMAN_JERK_NOISE))
+    cutoff_reading: choice(*CUTOFF_READINGS, description="reading of the complementary cut-offs: the -3 dB point of the zero-phase filter, "
+                                                        "or Matlab's butter + filtfilt (the thesis: LP and HP cross over at the cut-off)") = "zero_phase_3db"
 
 
 class CaseSection(Section):
@@ -142,6 +157,10 @@ class CaseSection(Section):
         Butterworth order.
     require : str
         monotone (7.16), stable (7.15) or none.
+    q_design : str
+        butterworth, or robust (the Butterworth capped by q_margin / sigma_max(I - L T(f))).
+    q_margin : float
+        The robust design's bound of ``|Q| |I - L T|``.
     """
 
     name: NonEmptyText = Field(description="case label")
@@ -151,6 +170,9 @@ class CaseSection(Section):
     q_order: integer(1, 8, description="order of Q's Butterworth low-pass") = 2
     require: choice(*ILC_REQUIREMENTS, description="lifted check that must hold before the case runs: "
                                                "monotone (sigma_max < 1, 7.16), stable (rho < 1, 7.15) or none") = "monotone"
+    q_design: choice(*ILC_Q_DESIGNS, description="Q design: butterworth (Case 1), or robust (Cases 2, 3: the Butterworth capped by "
+                                                 "q_margin / sigma_max(I - L T(f)), learning up to the cut-off, robust at the resonances)") = "butterworth"
+    q_margin: number(gt=0, lt=1.0, description="robust Q: bound of |Q| |I - L T| over the frequencies") = 0.9
 
 
 @fill_doc(**KIND_DOCS)

@@ -1,0 +1,400 @@
+"""The fidelity report: every thesis figure the project addresses, the thesis' value, ours, a tolerance and a verdict.
+
+Two steps, both run by ``python -m gtmodel.report.fidelity``:
+
+``collect RESULTS``
+    Reads the shipped problems' result folders ``RESULTS/<problem>/summary.json`` (run them
+    first: ``gtmodel solve problems/<problem>.toml --out RESULTS/<problem>``) for the problems
+    of :data:`PROBLEMS`, keeps the figures the rows need, adds the ones read from the shipped
+    model data (the actuator bandwidths of (6.11)), and writes ``docs/fidelity_figures.json``.
+``render``
+    Writes ``docs/fidelity.md`` from ``docs/fidelity_figures.json`` (:func:`render`):
+    ``tests/report/test_fidelity.py`` fails while the page is not what the figures give.
+
+Verdicts: ``reproduced`` (ours within the tolerance of the thesis' figure), ``structure
+reproduced`` (the thesis' ordering or pattern holds, the values differ), ``differs`` (with the
+measured cause), ``not run`` (the result folder was missing when the figures were collected)
+and ``not attempted``. Sources: Dressler (2012), sections 5.3, 6.3, 7.3-7.4; Cvitanic (2021),
+sections 2, 4.3, 5.4.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import scipy.optimize
+
+from gtmodel.errors import InputError
+from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
+
+__all__ = ["PROBLEMS", "collect", "render", "rows", "main"]
+
+#: The shipped problems whose result folders the report reads.
+PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models")
+REPO = Path(__file__).resolve().parents[2]
+FIGURES = REPO / "docs" / "fidelity_figures.json"
+PAGE = REPO / "docs" / "fidelity.md"
+CASES = ("1", "2A", "2B", "3")
+
+
+def _ilc(s: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {"status": s["status"], "samples": s["samples"], "final_time_s": s["square_final_time_s"],
+                           "estimators": s.get("estimators", {}), "cases": {}}
+    for name, c in s["cases"].items():
+        act = np.asarray(c["actuator_error_m"])
+        out["cases"][name] = {
+            "sigma": {ch: v["sigma_max"] for ch, v in c["checks"].items()},
+            "coupled": (c.get("coupled_check") or {}).get("sigma_max"),
+            "q_design": c.get("q_design", "butterworth"), "q_cutoff_hz": c["q_cutoff_hz"],
+            "tool_x": c["table_7_2"]["tool_x"], "tool_y": c["table_7_2"]["tool_y"],
+            "actuator_k5": (act[min(5, len(act) - 1)] / act[0]).tolist(),
+            "deflection_rms_m": c.get("deflection_rms_m"), "tool_error_k0_m": c["tool_error_m"][0],
+        }
+    return out
+
+
+def _fusion(s: dict[str, Any]) -> dict[str, Any]:
+    keep = ("sensor", "fusion", "fusion_appendix_b", "thesis_sensor", "thesis_fusion")
+    t8 = {m: {q: {k: v for k, v in d.items() if k in keep} for q, d in t.items()} for m, t in s["table_8"].items()}
+    t10 = [{k: r[k] for k in ("parameter", "value", "motion")} | {"velocity": r.get("velocity_mm_s")} for r in s["table_10"]]
+    return {"status": s["status"], "table_8": t8, "table_9": s["table_9"], "table_10": t10, "checks": s["checks"],
+            "failed_checks": s.get("failed_checks"), "nees": {m: {k: n[k] for k in ("mean", "band", "dof")} for m, n in s["nees"].items()}}
+
+
+def _correction(s: dict[str, Any]) -> dict[str, Any]:
+    return {"status": s["status"], "predicted": s["predicted_gain"], "simulated": s["simulated_gain"],
+            "x_over_y": s.get("x_over_y_predicted"), "poses": [v["pose"] for v in s["validation"]],
+            "critical": {d: [v["predicted_critical_gain"][d] for v in s["validation"]] for d in s["directions"]},
+            "vibration_critical": {d: [v["vibration_loop_critical_gain"][d]["predicted"] for v in s["validation"] if "vibration_loop_critical_gain" in v]
+                                   for d in s["directions"]},
+            "resolutions": s["resolutions"]}
+
+
+def _d1(s: dict[str, Any]) -> dict[str, Any]:
+    return {"status": s["status"], "models": s.get("models")}
+
+
+_EXTRACT: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
+    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction, "d1_error_models": _d1}
+
+
+def actuator_bandwidths_hz() -> list[float]:
+    """-3 dB bandwidth of the closed-loop actuator models (6.11) of the L1.
+
+    The frequency where ``|G(e^{i 2 pi f dt})|`` falls to ``|G(1)| / sqrt(2)`` (the DC gain
+    of each model, which is not exactly 1), by :func:`scipy.optimize.brentq` on the
+    python-control frequency response.
+
+    Returns
+    -------
+    list of float
+        Per axis [Hz] (Dressler (2012), section 6.3: "about 1.1 Hz").
+    """
+    out = []
+    for g in actuator_models(load_dynamics_models("L1_dynamics_models")):
+        dt = float(g.dt)
+        mag = lambda f, g=g, dt=dt: abs(complex(g(np.exp(2j * math.pi * f * dt))))  # noqa: E731
+        out.append(float(scipy.optimize.brentq(lambda f: mag(f) - mag(0.0) / math.sqrt(2.0), 1e-6, 0.5 / dt, xtol=1e-12)))
+    return out
+
+
+def collect(results: str | Path, figures: str | Path = FIGURES) -> dict[str, Any]:
+    """Read the result folders and write the figures file.
+
+    Parameters
+    ----------
+    results : str or pathlib.Path
+        Folder holding ``<problem>/summary.json`` for the problems of :data:`PROBLEMS`
+        (a missing one is recorded as not run).
+    figures : str or pathlib.Path, optional
+        JSON file to write (default ``docs/fidelity_figures.json``).
+
+    Returns
+    -------
+    dict
+        The figures written.
+
+    Raises
+    ------
+    InputError
+        ``results`` is not a folder, or a summary is not JSON.
+    """
+    root = Path(results)
+    if not root.is_dir():
+        raise InputError(f"results: expected a folder of result folders, got {str(root)!r}")
+    data: dict[str, Any] = {"model": {"actuator_bandwidth_hz": actuator_bandwidths_hz()}}
+    for name in PROBLEMS:
+        path = root / name / "summary.json"
+        if not path.is_file():
+            data[name] = None
+            continue
+        try:
+            data[name] = _EXTRACT[name](json.loads(path.read_text(encoding="utf-8")))
+        except (ValueError, KeyError) as exc:
+            raise InputError(f"{path}: not a {name} summary ({exc})") from None
+    Path(figures).write_text(json.dumps(data, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    return data
+
+
+def _f(x: Any, digits: int = 3) -> str:
+    if x is None:
+        return "n/a"
+    if isinstance(x, (list, tuple)):
+        return " / ".join(_f(v, digits) for v in x)
+    return f"{x:.{digits}g}" if isinstance(x, float) else str(x)
+
+
+def _within(ours: Any, thesis: Any, tol: float) -> bool:
+    a, b = np.atleast_1d(np.asarray(ours, float)), np.atleast_1d(np.asarray(thesis, float))
+    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= tol + 1e-12))
+
+
+def _ilc_rows(d: dict[str, Any], tag: str, model: dict[str, Any]) -> list[tuple[str, ...]]:
+    ilc = d.get(tag)
+    src = "Dressler (2012)"
+    if ilc is None:
+        return [(f"{src}, Table 7.2 / (7.28) [{tag}]", "see the thesis", "not run", "-", "not run", "run the problem, then collect")]
+    c = ilc["cases"]
+    rows: list[tuple[str, ...]] = []
+    thesis_sigma = {"1": [0.90, 0.91, 0.93], "2A": [0.86], "2B": [0.93], "3": [0.95]}
+    for name in CASES:
+        if name not in c:
+            continue
+        sig = c[name]["sigma"]
+        per = [sig[k] for k in ("q1", "q2", "q3")] if name == "1" else [max(sig.values())]
+        coupled = c[name]["coupled"]
+        ok = _within(per, thesis_sigma[name], 0.02)
+        ok_c = coupled is None or abs(coupled - max(thesis_sigma[name])) <= 0.02
+        verdict = "reproduced" if ok and ok_c else ("structure reproduced" if all(v < 1 for v in per) else "differs")
+        cause = ("" if verdict == "reproduced" else
+                 f"Q: {c[name]['q_design']} at {_f(c[name]['q_cutoff_hz'])} Hz; the thesis' Q of Cases 2/3 is only drawn (Fig. 7.14/7.17), "
+                 "so its margin is a choice here" if name != "1" else
+                 "per-actuator figures of the (6.11) models with the thesis' L and Q; the trial length changes them by < 0.01")
+        rows.append((f"{src}, (7.28) / section 7.4: sigma_max Case {name}" + (" per actuator" if name == "1" else " (worst channel)"),
+                     _f(thesis_sigma[name], 2), f"{_f(per, 4)}; coupled {_f(coupled, 4)}", "0.02", verdict, cause))
+    bw = model["actuator_bandwidth_hz"]
+    k5 = c["1"]["actuator_k5"]
+    rows.append((f"{src}, Fig. 7.7: Case 1 actuator error at k = 5 relative to k = 0", "about 0.02", _f(k5, 3), "0.03",
+                 "reproduced" if _within(k5, [0.02] * 3, 0.03) else "differs",
+                 f"the (6.11) servos have a -3 dB bandwidth of {_f(bw, 3)} Hz; with L = 0.9 q^5 the per-iteration factor |1 - gamma G(f)| "
+                 "is 0.34 at 0.5 Hz, 0.58 at 1 Hz and 0.81 at 2 Hz, and the square's lag error lies at 0.8-3 Hz (a round of 1.25 s, "
+                 "a side of 0.31 s): five iterations leave (0.6-0.8)^5 = 8-33 %. 2 % needs the error below ~0.6 Hz or a faster servo "
+                 "than the identified (6.11)"))
+    for name in CASES:
+        if name not in c:
+            continue
+        th = {"1": (0.133, 0.361), "2A": (0.126, 0.239), "2B": (0.133, 0.252), "3": (0.103, 0.249)}[name]
+        ours = (c[name]["tool_x"], c[name]["tool_y"])
+        defl, tool0 = c[name].get("deflection_rms_m"), c[name]["tool_error_k0_m"]
+        cause = (f"the tool error at k = 0 is {_f([1e3 * v for v in tool0[:2]], 3)} mm RMS (x / y), actuator lag; "
+                 + (f"the structure (6.14) deflects {_f([1e6 * v for v in defl[:2]], 2)} um RMS" if defl else "the structural deflection is a few um")
+                 + ": the unlearned lag, not the resonances, sets tool x and y, so x and y fall alike")
+        ok = _within(ours, th, 0.05)
+        rows.append((f"{src}, Table 7.2: Case {name} tool x / y (k = 5-10 over k = 0)", _f(list(th), 3), _f(list(ours), 3), "0.05",
+                     "reproduced" if ok else "differs", "" if ok else cause))
+    if all(n in c for n in ("1", "2A", "2B")):
+        y1, y2a, y2b = c["1"]["tool_y"], c["2A"]["tool_y"], c["2B"]["tool_y"]
+        ok = y2a < y1 and y2b < y1
+        rows.append((f"{src}, Table 7.2 structure: Cases 2A, 2B improve tool y over Case 1", "36.1 % -> 23.9 / 25.2 %",
+                     f"{100 * y1:.1f} % -> {100 * y2a:.1f} / {100 * y2b:.1f} %", "ordering", "structure reproduced" if ok else "differs",
+                     "" if ok else "the accelerometer adds the deflection, which is small against the lag error here"))
+    est = ilc.get("estimators", {})
+    if est:
+        cross = est.get("complementary_crossover_hz")
+        ok = _within(cross, [4.50, 2.63], 0.01)
+        rows.append((f"{src}, section 7.3: complementary filter crossover x / y [Hz]", "4.50 / 2.63", _f(cross, 4), "0.01 Hz",
+                     "reproduced" if ok else "differs",
+                     "" if ok else f"cut-off read as the -3 dB point of the zero-phase filter ({est.get('complementary_reading')}); "
+                                   "Matlab's butter + filtfilt reading (l1_ilc_thesis) crosses at the cut-off"))
+    return [(r[0] + f" [{tag}]", *r[1:]) for r in rows]
+
+
+def _fusion_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
+    f = d.get("kr500_state_estimation")
+    src = "Cvitanic (2021)"
+    if f is None:
+        return [(f"{src}, Tables 8-10", "see the thesis", "not run", "-", "not run", "run the problem, then collect")]
+    t8 = f["table_8"]
+    p3, a3 = t8["3-axis"]["position_mm"], t8["3-axis"]["acceleration_m_s2"]
+    rows = [
+        (f"{src}, Table 8: position 3-axis, tracker -> fusion [mm]", "0.0089 -> 0.0089 (no gain)",
+         f"{_f(p3['sensor'])} -> {_f(p3['fusion'])} (our Q); {_f(p3.get('fusion_appendix_b'))} (Appendix B Q)", "10 % (Appendix B Q)",
+         "structure reproduced" if p3.get("fusion_appendix_b") and abs(p3["fusion_appendix_b"] / p3["sensor"] - 1) <= 0.1 else "differs",
+         "the thesis' 'no gain' is its tuning: Appendix B's Q_p = 2.54e-4 m^2 per sample (10^6 x R_p) passes the tracker through; "
+         "our white-jerk Q smooths the white tracker noise"),
+        (f"{src}, Table 8: velocity improved most", "velocity the largest gain",
+         ", ".join(f"{m}: {_f(-100 * (1 - t8[m]['velocity_mm_s']['fusion'] / t8[m]['velocity_mm_s']['sensor']), 3)} %" for m in t8),
+         "ordering", "structure reproduced" if all(
+             t8[m]["velocity_mm_s"]["fusion"] / t8[m]["velocity_mm_s"]["sensor"] <= min(v["fusion"] / v["sensor"] for v in t8[m].values()) + 1e-12
+             for m in t8) else "differs", ""),
+        (f"{src}, Table 8: acceleration 3-axis, sensor -> fusion [m/s^2]", "0.00018 -> 0.00012", f"{_f(a3['sensor'])} -> {_f(a3['fusion'])}",
+         "factor 2", "differs",
+         "Table 7's 0.00039 m/s^2/rtHz at 1 kHz is sigma = 0.0123 m/s^2 per axis and sample, whose 3-D error norm has mean "
+         "1.596 sigma = 0.0197 m/s^2 (ours: the sensor column); the thesis' 0.00018 implies sigma = 1.1e-4 m/s^2, i.e. a density "
+         "of 3.6e-6 m/s^2/rtHz: the thesis' accelerometer noise was not the Table 7 density as sampled here"),
+    ]
+    o5 = t8.get("5-axis", {}).get("orientation_deg")
+    if o5:
+        rows.append((f"{src}, Table 8: orientation 5-axis, tracker -> fusion [deg]", "0.012 -> 0.11 (worse)", f"{_f(o5['sensor'])} -> {_f(o5['fusion'])}",
+                     "ordering", "differs" if o5["fusion"] < o5["sensor"] else "structure reproduced",
+                     "our EKF propagates the quaternion with the gyro at 1 kHz and improves it; the thesis' worse orientation is not "
+                     "explained by its text (its EKF tuning for the quaternion is not given): the deciding number is its Q of the quaternion states"))
+    t9 = f["table_9"].get("3-axis", {}).get("position_mm")
+    if t9:
+        th = (0.889, 0.41)
+        rows.append((f"{src}, Table 9: tracker noise 0.64 mm, 3-axis position sensor / fusion [mm]", "0.889 / 0.41",
+                     f"{_f(t9['sensor'])} / {_f(t9['fusion'])} (noise factor {f['table_9']['3-axis'].get('factor')})", "20 %",
+                     "reproduced" if abs(t9["sensor"] / th[0] - 1) <= 0.2 and abs(t9["fusion"] / th[1] - 1) <= 0.2 else
+                     ("structure reproduced" if t9["fusion"] < t9["sensor"] else "differs"),
+                     "sensor: the mean norm of 3-D noise of 0.64 mm per axis is 1.596 x 0.64 = 1.02 mm (the thesis' 0.889 is 1.39 sigma); "
+                     "fusion: our white-jerk Q weights the IMU more than the thesis' Appendix B Q"))
+    limits = {"accel_noise_m_s2_rtHz": ("< 0.1", "< 0.1"), "accel_bias_m_s2": ("< 0.001", "< 0.001"), "gyro_noise_deg_s_rtHz": ("N/A", "< 0.1"),
+              "gyro_bias_deg_s": ("N/A", "< 1"), "transform_orientation_error_deg": ("< 10", "< 0.1"),
+              "transform_translation_error_mm": ("no constraint", "< 100 mm"), "sample_time_s": ("< 0.01", "< 0.01")}
+    for par, (l3, l5) in limits.items():
+        runs = [r for r in f["table_10"] if r["parameter"] == par]
+        txt = "; ".join(f"{r['motion']} {_f(r['value'])}: fusion {'better' if r['velocity'] and r['velocity']['fusion'] < r['velocity']['sensor'] else 'not better'}"
+                        for r in runs) or "not run"
+        motions = {r["motion"] for r in runs}
+        rows.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", txt, "one grid step",
+                     "not run" if not runs else "partly run" if motions != {"3-axis", "5-axis"} else "see values",
+                     "the shipped sweep runs the 5-axis EKF at the largest Table 7 offsets only (run time); the 3-axis sweep is not run"))
+    fails = f.get("failed_checks")
+    rows.append(("self-checks of the run (NEES, position not degraded, Table 9 ordering, Appendix B position)", "-",
+                 f"status {f['status']}; failed: {', '.join(fails) if fails else 'none'}", "-",
+                 "reproduced" if not fails else "differs", "a failed self-check makes the status check_failed (exit 1)"))
+    return rows
+
+
+def _correction_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
+    c = d.get("kr500_correction_stability")
+    src = "Cvitanic (2021)"
+    if c is None:
+        return [(f"{src}, Table 14", "see the thesis", "not run", "-", "not run", "run the problem, then collect")]
+    px, py = c["predicted"].get("x"), c["predicted"].get("y")
+    ratio = c.get("x_over_y") or []
+    vib = c.get("vibration_critical") or {}
+    res = c.get("resolutions") or {"x": 0.1, "y": 0.01}
+    grid = {d: [math.floor((k - 1e-12) / res[d]) * res[d] for k in v] for d, v in vib.items() if v}
+    rows = [
+        (f"{src}, Table 14: largest stable P gain x, poses {c['poses'][0]}-{c['poses'][-1]} (our accumulating loop)", "0.2 at every pose", _f(px, 3),
+         "0.1 (one step)", "reproduced" if _within(px, [0.2] * len(px), 0.1 + 1e-9) else "differs",
+         f"our loop accumulates the corrections (K z / (z - 1)) and executes them with DC gain 1, so the 13-cycle (52 ms) delay bounds "
+         f"every gain near 2 sin(pi / 50) = 0.126 (critical gains {_f(min(c['critical']['x']), 4)}-{_f(max(c['critical']['x']), 4)})"),
+        (f"{src}, Table 14: largest stable P gain y (our accumulating loop)", "0.01-0.03 predicted, 0.02-0.04 measured", _f(py, 3), "0.01 (one step)",
+         "reproduced" if _within(py, [0.025] * len(py), 0.015 + 1e-9) else "differs", "bounded by the same delay as x: 0.11-0.12"),
+    ]
+    if grid.get("x"):
+        gx, gy = grid["x"], grid.get("y", [])
+        rows.append((f"{src}, Table 14 with the loop of section 5.3.5 (error = vibration only, corrections not accumulated): largest stable x / y",
+                     "x 0.2; y 0.01-0.04", f"x {_f(gx, 2)}; y {_f(gy, 2)} (critical x {_f(vib['x'], 3)})", "one step",
+                     "reproduced" if _within(gx, [0.2] * len(gx), 0.1 + 1e-9) and _within(gy, [0.025] * len(gy), 0.015 + 1e-9) else
+                     ("structure reproduced" if _within(gx, [0.2] * len(gx), 0.1 + 1e-9) else "differs"),
+                     "x: the thesis' loop reproduces 0.2 within one step at most poses; y: our modes in y (Table 16 means on an illustrative "
+                     "arm, 25 Hz, zeta 0.11) vibrate as little as in x, so y is not 10x lower. In this loop the limit is about 2 zeta (m / M) at "
+                     "the resonance: the thesis' y gains need a y vibration per unit offset ~10x ours; the deciding numbers are the thesis' "
+                     "equivalent-force fits (m, c, k) of the Table 12 poses, which it shows only as m k (Figs. 40-41)"))
+    rows.append((f"{src}, Table 14 structure: x gains 5-20 x the y gains", "x / y 6.7-20", _f(ratio, 3), "x / y >= 5",
+                 "structure reproduced" if ratio and min(ratio) >= 5 else "differs",
+                 "with the delay setting both limits (accumulating loop) or equal x / y modes (vibration loop) the ratio stays near 1; "
+                 "the thesis' x >> y comes from the robot's directional stiffness of its own fits"))
+    return rows
+
+
+def _other_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
+    bw = d["model"]["actuator_bandwidth_hz"]
+    rows = [("Dressler (2012), section 6.3: actuator bandwidth of the (6.11) models, axes 1-3 [Hz]", "about 1.1", _f(bw, 3), "0.2 Hz",
+             "reproduced" if _within(bw, [1.1] * 3, 0.2) else "differs",
+             "the -3 dB points of b / (1 - a q^-1) from the published a, b: axes 1-2 have poles 0.9647 / 0.9656 (1.4 Hz), axis 3 0.9728 (1.1 Hz); "
+             "the thesis' 'about 1.1 Hz' matches axis 3")]
+    d1 = d.get("d1_error_models")
+    if d1 is None or not d1.get("models"):
+        rows.append(("Dressler (2012), Tables 5.2/5.3: D1 error models 1-5, mean / max TCP error [um]", "140/410, 120/440, 110/260, 100/340, 90/240",
+                     "not run", "ranking", "not run", "run problems/d1_error_models.toml, then collect"))
+    else:
+        models = d1["models"]
+        rows.append(("Dressler (2012), Tables 5.2/5.3: D1 error models 1-5, mean / max TCP error [um]", "140/410, 120/440, 110/260, 100/340, 90/240",
+                     "; ".join(f"{_f(m.get('mean_um'))}/{_f(m.get('max_um'))}" for m in models) if isinstance(models, list) else json.dumps(models)[:200],
+                     "ranking", "see values", "synthetic truth (six-link D1 with Table 4.1 actuator errors); model 5 not declared"))
+    rows.append(("Dressler (2012), (7.21)-(7.22): Kalman filter on the identified tool model with z_kin as input", "model (7.21)",
+                 "triple integrator of the tool position measuring z_kin and a_m", "-", "not attempted",
+                 "(7.21) needs the identified model from z_kin to the tool position (A, B, C of section 6.3 at the ILC operating point), "
+                 "which the thesis does not print; the shipped filter's noise figures place its crossover at the complementary cut-offs"))
+    rows.append(("Cvitanic (2021), Table 2: joint stiffness by CP vs DPP, DPP closer to the truth", "DPP lower stiffness, closer", "not attempted", "-",
+                 "not attempted", "needs the thesis' deflection measurements (not in the reference data) or a synthetic truth"))
+    return rows
+
+
+def rows(data: dict[str, Any]) -> list[tuple[str, ...]]:
+    """Every row of the report: ``(figure, thesis, ours, tolerance, verdict, cause)``.
+
+    Parameters
+    ----------
+    data : dict
+        The collected figures (:func:`collect`).
+
+    Returns
+    -------
+    list of tuple of str
+    """
+    return (_ilc_rows(data, "l1_ilc_thesis", data["model"]) + _ilc_rows(data, "l1_ilc", data["model"]) + _fusion_rows(data)
+            + _correction_rows(data) + _other_rows(data))
+
+
+def render(data: dict[str, Any]) -> str:
+    """The Markdown page ``docs/fidelity.md`` from the collected figures.
+
+    Parameters
+    ----------
+    data : dict
+        The collected figures (:func:`collect`).
+
+    Returns
+    -------
+    str
+    """
+    head = ("# Fidelity: the theses' figures against ours\n\n"
+            "Generated by `python -m gtmodel.report.fidelity render` from `docs/fidelity_figures.json`, which "
+            "`python -m gtmodel.report.fidelity collect results` writes from the shipped problems' result folders "
+            f"({', '.join(f'`{p}`' for p in PROBLEMS)}; run each with `gtmodel solve problems/<name>.toml --out results/<name>`, `l1_ilc_thesis` from `problems/thesis/`). "
+            "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
+            "Verdicts: *reproduced* (within the tolerance), *structure reproduced* (the thesis' ordering or pattern holds), "
+            "*differs* (with the measured cause), *not run*, *not attempted*. `[l1_ilc_thesis]`: the ILC set-up the thesis' text "
+            "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading); `[l1_ilc]`: the quick variant.\n\n"
+            "| thesis figure | thesis | ours | tolerance | verdict | measured cause of a difference |\n|---|---|---|---|---|---|\n")
+    body = "\n".join("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in r) + " |" for r in rows(data))
+    return head + body + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m gtmodel.report.fidelity {collect RESULTS | render}``.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit code (0).
+    """
+    ap = argparse.ArgumentParser(prog="python -m gtmodel.report.fidelity", description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("collect", help="read RESULTS/<problem>/summary.json and write docs/fidelity_figures.json")
+    c.add_argument("results")
+    sub.add_parser("render", help="write docs/fidelity.md from docs/fidelity_figures.json")
+    args = ap.parse_args(argv)
+    if args.command == "collect":
+        collect(args.results)
+    PAGE.write_text(render(json.loads(FIGURES.read_text(encoding="utf-8"))), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - the command line
+    raise SystemExit(main())
