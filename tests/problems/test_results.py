@@ -146,6 +146,7 @@ def test_sigkill_mid_run_leaves_the_earlier_folder_intact(tmp_path, earlier_run)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
 
 
+@pytest.mark.slow
 def test_sigint_during_ipopt_stops_with_status_interrupted(tmp_path):
     out = tmp_path / "out"
     text = BASE.read_text().replace("elements = 50 ", "elements = 400 ")

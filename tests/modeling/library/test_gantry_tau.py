@@ -113,6 +113,7 @@ def test_l1_inverse_dynamics_equals_gantry_tau3_dynamics(case):
     assert np.max(np.abs(np.array(residual))) < 1e-9
 
 
+@pytest.mark.slow
 def test_l1_simulates_with_the_closure_kept():
     # reference: GantryTau3Dynamics.forward_dynamics integrated by SciPy's DOP853 (a second
     # method: TCP coordinates, no constraint); the closure |A_i - T| = L_i to 1e-8 m
