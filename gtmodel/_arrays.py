@@ -13,7 +13,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["as_rows", "as_signal", "as_times", "as_vector", "as_per_axis", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int", "positive_float"]
+__all__ = ["as_rows", "as_signal", "as_times", "as_vector", "as_per_axis", "as_array", "as_finite", "as_rotation", "as_rotations", "positive_int", "positive_float", "finite_float"]
 
 
 def as_rows(x: Any, name: str, width: int) -> tuple[np.ndarray, bool]:
@@ -421,4 +421,38 @@ def positive_float(value: Any, name: str) -> float:
         raise InputError(f"{name}: expected a number > 0, got {value!r}") from None
     if not np.isfinite(v) or v <= 0:
         raise InputError(f"{name}: expected a finite number > 0, got {value!r}")
+    return v
+
+
+def finite_float(value: Any, name: str, unit: str = "", *, positive: bool = False, nonnegative: bool = False) -> float:
+    """A finite real number (not a bool), optionally > 0 or >= 0, as a ``float``.
+
+    Parameters
+    ----------
+    value : Any
+        The input (a scalar).
+    name : str
+        Argument name for messages.
+    unit : str, optional
+        Unit named in the message (e.g. ``"N/m"``).
+    positive, nonnegative : bool, optional
+        Require ``value > 0`` or ``value >= 0``.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    InputError
+        Not a number (a bool is not one), not finite, or of the wrong sign; the message
+        reads ``"<name>: expected a finite positive value [<unit>], got <value>"``.
+    """
+    what = "positive " if positive else "non-negative " if nonnegative else ""
+    expected = f"{name}: expected a finite {what}value" + (f" [{unit}]" if unit else "")
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"{expected}, got {value!r}")
+    v = float(value)
+    if not np.isfinite(v) or (positive and v <= 0) or (nonnegative and v < 0):
+        raise InputError(f"{expected}, got {value!r}")
     return v

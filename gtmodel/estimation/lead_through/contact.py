@@ -31,16 +31,12 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._arrays import finite_float
 from gtmodel.errors import InputError
 
 __all__ = ["CARDBOARD", "METAL_PLATE", "Surface", "PegHole", "surface_of"]
 
 
-def _value(v: Any, name: str, unit: str, *, allow_zero: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)) \
-            or float(v) < 0 or (float(v) == 0 and not allow_zero):
-        raise InputError(f"{name}: expected a finite {'non-negative' if allow_zero else 'positive'} value [{unit}], got {v!r}")
-    return float(v)
 
 
 def _point(v: Any, name: str) -> np.ndarray:
@@ -85,8 +81,8 @@ class Surface:
     point: Any = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "stiffness", _value(self.stiffness, "stiffness", "N/m"))
-        object.__setattr__(self, "damping", _value(self.damping, "damping", "N s/m", allow_zero=True))
+        object.__setattr__(self, "stiffness", finite_float(self.stiffness, "stiffness", "N/m", positive=True))
+        object.__setattr__(self, "damping", finite_float(self.damping, "damping", "N s/m", nonnegative=True))
         object.__setattr__(self, "normal", _unit(self.normal, "normal"))
         object.__setattr__(self, "point", _point(self.point, "point"))
 
@@ -189,10 +185,10 @@ class PegHole:
 
     def __post_init__(self) -> None:
         for name, unit in (("peg_radius", "m"), ("hole_radius", "m"), ("depth", "m"), ("stiffness", "N/m")):
-            object.__setattr__(self, name, _value(getattr(self, name), name, unit))
+            object.__setattr__(self, name, finite_float(getattr(self, name), name, unit, positive=True))
         if self.hole_radius < self.peg_radius:
             raise InputError(f"hole_radius: expected at least peg_radius ({self.peg_radius} m), got {self.hole_radius} m")
-        a = _value(self.misalignment_deg, "misalignment_deg", "deg", allow_zero=True)
+        a = finite_float(self.misalignment_deg, "misalignment_deg", "deg", nonnegative=True)
         if a >= 45.0:
             raise InputError(f"misalignment_deg: expected an angle in [0, 45) degrees, got {self.misalignment_deg!r}")
         object.__setattr__(self, "misalignment_deg", a)

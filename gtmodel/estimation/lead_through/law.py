@@ -46,6 +46,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._arrays import finite_float
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 
@@ -100,13 +101,6 @@ def _matrix(value: Any, name: str, *, definite: bool) -> np.ndarray:
     return out
 
 
-def _positive(value: Any, name: str, unit: str, *, allow_zero: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError(f"{name}: expected a number [{unit}], got {value!r}")
-    v = float(value)
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise InputError(f"{name}: expected a finite {'non-negative' if allow_zero else 'positive'} value [{unit}], got {value!r}")
-    return v
 
 
 def unit_normal(value: Any, name: str = "nominal_normal") -> np.ndarray:
@@ -212,14 +206,14 @@ class LeadThroughLaw:
                 or not math.isfinite(float(self.force_reference)):
             raise InputError(f"force_reference: expected a finite force [N], got {self.force_reference!r}")
         object.__setattr__(self, "force_reference", float(self.force_reference))
-        phi = _positive(self.correction_range_deg, "correction_range_deg", "deg", allow_zero=True)
+        phi = finite_float(self.correction_range_deg, "correction_range_deg", "deg", nonnegative=True)
         if phi > 90.0:
             raise InputError(f"correction_range_deg: expected phi_L in [0, 90] degrees (eq. 8.10), got {self.correction_range_deg!r}")
         object.__setattr__(self, "correction_range_deg", phi)
         object.__setattr__(self, "nominal_normal", unit_normal(self.nominal_normal))
         for name, unit in (("contact_force", "N"), ("release_force", "N"), ("max_speed", "m/s"),
                            ("max_angular_speed", "rad/s"), ("dt", "s")):
-            object.__setattr__(self, name, _positive(getattr(self, name), name, unit))
+            object.__setattr__(self, name, finite_float(getattr(self, name), name, unit, positive=True))
         if not isinstance(self.tool_force_control, (bool, np.bool_)):
             raise InputError(f"tool_force_control: expected true or false, got {self.tool_force_control!r}")
         if self.release_force <= self.contact_force:

@@ -29,6 +29,7 @@ import casadi as ca
 import numpy as np
 from scipy import signal
 
+from gtmodel._arrays import finite_float
 from gtmodel.errors import InputError
 from gtmodel.estimation.lead_through.contact import PegHole, Surface
 from gtmodel.estimation.lead_through.law import STATE_SIZE, LeadThroughLaw
@@ -36,11 +37,6 @@ from gtmodel.estimation.lead_through.law import STATE_SIZE, LeadThroughLaw
 __all__ = ["Servo", "Operator", "LeadThroughRun", "simulate", "rodrigues"]
 
 
-def _nonneg(v: Any, name: str, unit: str, *, positive: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)) \
-            or float(v) < 0 or (positive and float(v) == 0):
-        raise InputError(f"{name}: expected a finite {'positive' if positive else 'non-negative'} value [{unit}], got {v!r}")
-    return float(v)
 
 
 @dataclass(frozen=True)
@@ -64,7 +60,7 @@ class Servo:
     delay_samples: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "bandwidth_hz", _nonneg(self.bandwidth_hz, "bandwidth_hz", "Hz", positive=True))
+        object.__setattr__(self, "bandwidth_hz", finite_float(self.bandwidth_hz, "bandwidth_hz", "Hz", positive=True))
         if self.delay_samples not in (0, 1) or isinstance(self.delay_samples, bool):
             raise InputError(f"delay_samples: expected 0 or 1, got {self.delay_samples!r}")
 
@@ -138,9 +134,9 @@ class Operator:
                 or np.linalg.eigvalsh(0.5 * (g + g.T)).min() < -1e-9 * max(1.0, float(np.abs(g).max())):
             raise InputError(f"gain: expected 3 non-negative gains or a symmetric positive semi-definite 3x3 matrix [N/m], got {self.gain!r}")
         object.__setattr__(self, "gain", g)
-        object.__setattr__(self, "lag", _nonneg(self.lag, "lag", "s", positive=True))
-        object.__setattr__(self, "noise_rms", _nonneg(self.noise_rms, "noise_rms", "N"))
-        object.__setattr__(self, "noise_hz", _nonneg(self.noise_hz, "noise_hz", "Hz", positive=True))
+        object.__setattr__(self, "lag", finite_float(self.lag, "lag", "s", positive=True))
+        object.__setattr__(self, "noise_rms", finite_float(self.noise_rms, "noise_rms", "N", nonnegative=True))
+        object.__setattr__(self, "noise_hz", finite_float(self.noise_hz, "noise_hz", "Hz", positive=True))
 
     def planned(self, t: np.ndarray, rng: np.random.Generator, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """Planned force (with the random force) and aim point per sample.
@@ -324,11 +320,11 @@ def simulate(
         raise InputError(f"contact: expected a Surface or a PegHole, got {type(contact).__name__}")
     if not isinstance(operator, Operator):
         raise InputError(f"operator: expected an Operator, got {type(operator).__name__}")
-    duration = _nonneg(duration, "duration", "s", positive=True)
+    duration = finite_float(duration, "duration", "s", positive=True)
     if duration > 600:
         raise InputError(f"duration: expected at most 600 s, got {duration}")
     servo = Servo() if servo is None else servo
-    tool_noise, handle_noise = _nonneg(tool_noise, "tool_noise", "N"), _nonneg(handle_noise, "handle_noise", "N")
+    tool_noise, handle_noise = finite_float(tool_noise, "tool_noise", "N", nonnegative=True), finite_float(handle_noise, "handle_noise", "N", nonnegative=True)
     p0 = np.asarray(start, dtype=float) if np.asarray(start).dtype.kind in "fiu" else None
     if p0 is None or p0.shape != (3,) or not np.all(np.isfinite(p0)):
         raise InputError(f"start: expected 3 finite numbers [m], got {start!r}")

@@ -25,18 +25,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gtmodel._arrays import finite_float
 from gtmodel.defaults import LOOP_PERIOD_S
-from gtmodel.errors import InputError
 from gtmodel.estimation.lead_through.simulation import Servo
 
 __all__ = ["ContactLoop", "contact_loop", "largest_stable_gain"]
 
 
-def _positive(v: float, name: str, unit: str, *, allow_zero: bool = False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(float(v)) \
-            or float(v) < 0 or (float(v) == 0 and not allow_zero):
-        raise InputError(f"{name}: expected a finite {'non-negative' if allow_zero else 'positive'} value [{unit}], got {v!r}")
-    return float(v)
 
 
 @dataclass(frozen=True)
@@ -105,10 +100,10 @@ def contact_loop(gain: float, stiffness: float, damping: float = 0.0, servo: Ser
     InputError
         A negative gain or damping, a stiffness or ``dt`` that is not positive.
     """
-    K = _positive(gain, "gain", "m/(N s)", allow_zero=True)
-    k = _positive(stiffness, "stiffness", "N/m")
-    d = _positive(damping, "damping", "N s/m", allow_zero=True)
-    dt = _positive(dt, "dt", "s")
+    K = finite_float(gain, "gain", "m/(N s)", nonnegative=True)
+    k = finite_float(stiffness, "stiffness", "N/m", positive=True)
+    d = finite_float(damping, "damping", "N s/m", nonnegative=True)
+    dt = finite_float(dt, "dt", "s", positive=True)
     servo = Servo() if servo is None else servo
     ws = 2 * math.pi * servo.bandwidth_hz
     e = math.exp(-ws * dt)
