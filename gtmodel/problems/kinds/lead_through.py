@@ -75,6 +75,12 @@ def run_table(run: LeadThroughRun) -> dict[str, np.ndarray]:
     return cols
 
 
+def _expected(exc: Exception) -> str:
+    """The part of an ``InputError`` ("<arg>: expected X, got Y") that follows "expected", for ``ProblemFile.fail``."""
+    text = str(exc).split(": ", 1)[-1]
+    return text[len("expected "):] if text.startswith("expected ") else text
+
+
 def _write_csv(path: Path, cols: dict[str, Any]) -> None:
     np.savetxt(path, np.column_stack([np.asarray(v, dtype=float) for v in cols.values()]), delimiter=",",
                header=",".join(cols), comments="", fmt="%.17g")
@@ -118,7 +124,7 @@ class LeadThroughKind(ProblemKind):
         except InputError as exc:
             arg = str(exc).split(":", 1)[0]
             field = next((f for f, a in _LAW_FIELDS.items() if a == arg), "controller")
-            raise file.fail(f"controller.{field}" if field != "controller" else field, str(exc).split(": ", 1)[-1]) from None
+            raise file.fail(f"controller.{field}" if field != "controller" else field, _expected(exc)) from None
         ex = doc.experiment
         surface = stiff = hole = None
         if c.task == "surface_tracking":
@@ -136,7 +142,7 @@ class LeadThroughKind(ProblemKind):
             try:
                 hole = PegHole(p.peg_radius, p.hole_radius, p.depth, p.misalignment_deg, stiffness=p.stiffness)
             except InputError as exc:
-                raise file.fail(f"peg.{str(exc).split(':', 1)[0]}", str(exc).split(": ", 1)[-1]) from None
+                raise file.fail(f"peg.{str(exc).split(':', 1)[0]}", _expected(exc)) from None
         return LeadThroughDeclaration(
             law=law, servo=Servo(doc.servo.bandwidth_hz, doc.servo.delay_samples), surface=surface, stiff_surface=stiff,
             hole=hole, duration=ex.duration, seed=ex.seed, tool_noise=doc.sensors.tool_noise,

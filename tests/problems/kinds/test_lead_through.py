@@ -116,6 +116,11 @@ def test_bad_input_through_the_cli(tmp_path, capsys, case, edit, match):
     assert_bad_problem_through_cli(tmp_path, capsys, edit(SURFACE.read_text()), match)
 
 
+def test_a_hole_narrower_than_the_peg_is_one_plain_message(tmp_path, capsys):
+    text = PEG.read_text().replace("hole_radius = 2.0e-3", "hole_radius = 1.0e-3")
+    assert_bad_problem_through_cli(tmp_path, capsys, text, r"field 'peg\.hole_radius': expected at least peg_radius \(0\.0015 m\), got 0\.001 m")
+
+
 def test_peg_without_its_table_is_refused(tmp_path, capsys):
     text = PEG.read_text()
     text = text[:text.index("[peg]")] + text[text.index("[experiment]"):]
