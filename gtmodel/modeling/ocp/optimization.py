@@ -23,6 +23,7 @@ import numpy as np
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
 from gtmodel.modeling.simulation.model import Model
+from gtmodel.modeling.ocp.initial import model_initial_conditions
 from gtmodel.modeling.ocp.terms import Constraint, Integral, Timed
 
 __all__ = ["Optimization", "Constraint", "Timed", "Integral"]
@@ -105,7 +106,7 @@ class Optimization:
         self.timed_variables: list[Timed] = []
         self.integrals: list[Integral] = []
         self.path_constraints: list[Constraint] = []
-        self.point_constraints: list[Constraint] = []
+        self.declared_point_constraints: list[Constraint] = []
         self.bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.initial_guesses: dict[str, Any] = {}
         self.data_fits: list[Any] = []  # gtmodel.modeling.ocp.estimation.fit_data
@@ -144,6 +145,23 @@ class Optimization:
         extra = [self._final_time] + ([v.symbol for v in self.special_symbols()] if special else [])
         self.model.check_symbols(e, what, extra=extra)
         return e
+
+    @property
+    def point_constraints(self) -> list[Constraint]:
+        """The point constraints: the declared ones, then the model's own initial conditions.
+
+        The model's starts declared ``fixed=True`` (``Mass(s=3)``) and its initial
+        equations are initial conditions of the optimisation as of a simulation
+        (:func:`gtmodel.modeling.ocp.initial.model_initial_conditions`), unless a declared
+        start constraint states the variable's initial value itself.
+
+        Raises
+        ------
+        InitialConditionConflict
+            If a fixed start contradicts a declared start constraint on that variable
+            (naming both).
+        """
+        return [*self.declared_point_constraints, *model_initial_conditions(self)]
 
     def special_symbols(self) -> list[Timed | Integral]:
         """The timed variables and integrals declared so far, in order.
@@ -281,7 +299,7 @@ class Optimization:
             If ``expr`` contains a model variable outside a timed variable or integral,
             unknown symbols, or ``lb > ub``.
         """
-        label = name or f"point{len(self.point_constraints)}"
+        label = name or f"point{len(self.declared_point_constraints)}"
         e = self._expr(expr, f"constraint {label!r}")
         if ca.depends_on(e, self._varying()):
             raise ModelError(
@@ -289,7 +307,7 @@ class Optimization:
                 "use timed(x, t) / integral(f), or add_path_constraint for a constraint at every time"
             )
         lbv, ubv = self._bounds(lb, ub, int(e.numel()), f"constraint {label!r}")
-        self.point_constraints.append(Constraint(label, e, lbv, ubv, "timed"))
+        self.declared_point_constraints.append(Constraint(label, e, lbv, ubv, "timed"))
 
     @staticmethod
     def _bounds(lb: Any, ub: Any, size: int, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -417,10 +435,10 @@ class Optimization:
         """
         if at not in ("start", "final"):
             raise InputError(f"point constraint: at must be 'start' or 'final', got {at!r}")
-        label = name or f"point{len(self.point_constraints)}"
+        label = name or f"point{len(self.declared_point_constraints)}"
         e = self._expr(expr, f"point constraint {label!r}", special=False)
         lbv, ubv = self._bounds(lb, ub, int(e.numel()), f"point constraint {label!r}")
-        self.point_constraints.append(Constraint(label, e, lbv, ubv, at))
+        self.declared_point_constraints.append(Constraint(label, e, lbv, ubv, at))
 
     def set_bounds(self, variable: Any, lb: Any = -np.inf, ub: Any = np.inf) -> None:
         """Bound a state, input or algebraic variable for all ``t`` (overrides model bounds).

@@ -78,8 +78,10 @@ def condition_residuals(aug: AugmentedDAE, conditions: Mapping[str, Condition]) 
 
     Parameters
     ----------
-    aug : AugmentedDAE
-        The DAE after :func:`~gtmodel.modeling.structure.index_reduction.pantelides`.
+    aug : AugmentedDAE or ScalarDAE
+        The DAE after :func:`~gtmodel.modeling.structure.index_reduction.pantelides`, or a
+        :class:`~gtmodel.modeling.structure.analysis.ScalarDAE` (its ``observed`` names;
+        the optimisation's initial conditions, :mod:`gtmodel.modeling.ocp.initial`).
     conditions : mapping of str to tuple
         Original scalar name (``"mass.s"``, ``"T[0]"``; an eliminated alias too) ->
         ``(value, source)``.
@@ -96,7 +98,7 @@ def condition_residuals(aug: AugmentedDAE, conditions: Mapping[str, Condition]) 
     ModelError
         If a name is no scalar state or algebraic variable of the model.
     """
-    s = aug.system
+    s = getattr(aug, "system", aug)
     res, labels = [], []
     for name, (value, source) in conditions.items():
         if name not in s.observed:

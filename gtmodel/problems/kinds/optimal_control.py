@@ -33,6 +33,7 @@ import numpy as np
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
+from gtmodel.modeling.ocp.initial import InitialConditionConflict, fixed_starts
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.optimal_control_data import declare_data
 from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
@@ -216,6 +217,12 @@ class OptimalControlKind(ProblemKind):
             if sense == "maximize":
                 raise file.fail("optimization.maximize", "a minimised objective with [[data]] (the fit is a sum of squares)")
             opt.set_objective(mayer=opt.mayer + fit, sense="minimize")
+        try:  # the model's fixed starts are initial conditions unless the file states its own (conflicts named here)
+            fixed = fixed_starts(opt)
+        except InitialConditionConflict as exc:
+            raise file.wrap(exc.constraint if exc.constraint.startswith(("boundary.", "optimization.")) else "boundary.start",
+                            exc) from None
+        boundary["start"] = {**{n: v for n, v in fixed.items() if n in variables}, **boundary["start"]}
         nkeys = {**vkeys, "final_time": "final_time", **{k: n for k, n in pkeys.items() if n in opt.free_parameters}}
         for key in doc.nominal:
             if key not in nkeys:
