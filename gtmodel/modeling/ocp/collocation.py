@@ -42,8 +42,7 @@ from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, eleme
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, _vector_value
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
-from gtmodel.modeling.ocp.terms import Integral
-from gtmodel.modeling.ocp.verification import verify
+from gtmodel.modeling.ocp.verification import check_result
 from gtmodel.status import Status
 
 __all__ = ["CollocationTranscription", "solve"]
@@ -443,27 +442,7 @@ class CollocationTranscription:
         OptimizationResult
             ``result``, changed in place.
         """
-        v = verify(result, self.optimization.verification_tolerance, integrals=self._integrals(result, special))
-        result.verification = v
-        if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-            _log.warning("collocation solve of %s: %s was %s, but %s", self.dae.name, result.message, result.status, v.message)
-            result.message = f"{result.message}; verification failed: {v.message}"
-            result.status = Status.CHECK_FAILED
-        return result
-
-    def _integrals(self, result: OptimizationResult, special: np.ndarray | None) -> tuple[list[str], ca.Function, np.ndarray] | None:
-        """The problem's integrals for :func:`verify`: names, integrand Function, NLP values (None: none)."""
-        opt, dae = self.optimization, self.dae
-        specials = opt.special_symbols()
-        picked = [(i, v) for i, v in enumerate(specials) if isinstance(v, Integral)]
-        if special is None or not picked:
-            return None
-        exprs = ca.vertcat(*[v.expr for _, v in picked])
-        if dae.nx:
-            exprs = ca.substitute(exprs, dae.xdot, dae.ode_expr)
-        exprs = ca.substitute(exprs, opt.final_time, ca.SX(float(result.final_time)))
-        integrands = ca.Function("integrands", [dae.t, dae.x, dae.z, dae.u, dae.p], [exprs])
-        return [str(v.expr) for _, v in picked], integrands, np.array([special[i] for i, _ in picked])
+        return check_result(result, self.optimization, special)
 
     def warm_solver(self) -> ca.Function:
         """The nlpsol of warm starts (built once; shares the derivative functions).

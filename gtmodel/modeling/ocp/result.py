@@ -107,6 +107,11 @@ class CollocationData:
     fractions : numpy.ndarray or None, optional
         Element lengths as fractions of the horizon, shape ``(N,)``, summing to 1;
         ``None`` for a uniform mesh.
+    shooting : str or None, optional
+        ``None`` for collocation polynomials; for a multiple-shooting result the input
+        parametrisation (``"constant"`` or ``"linear"``): ``xc`` then holds the node
+        states and the integrated states at ``tau_root[1:]`` (samples of the integrated
+        trajectory, not a polynomial), ``uc`` the inputs there.
     """
 
     t0: float
@@ -119,6 +124,7 @@ class CollocationData:
     uc: np.ndarray
     zc: np.ndarray
     fractions: np.ndarray | None = None
+    shooting: str | None = None
 
     def breaks(self) -> np.ndarray:
         """Element boundaries ``t_0 < t_1 < ... < t_N = tf``.

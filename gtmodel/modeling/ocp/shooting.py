@@ -24,7 +24,11 @@ more parameter of the integrator.
 The solution is returned as an :class:`~gtmodel.modeling.ocp.result.OptimizationResult`
 whose :class:`~gtmodel.modeling.ocp.result.CollocationData` holds, per interval, the node
 state and the integrated states at the three Radau points of the interval (and the
-inputs there), so ``sample``/``to_csv`` interpolate the integrated trajectory.
+inputs there), so ``sample``/``to_csv`` interpolate the integrated trajectory. Every
+solution is verified by simulation (:mod:`gtmodel.modeling.ocp.verification`, as a
+collocation solution is): the piecewise constant or linear inputs drive the model in
+CVODES or IDAS from the initial state, and the nodes and the integrated samples are
+compared with it; beyond the tolerance the result is ``check_failed``.
 """
 
 from __future__ import annotations
@@ -43,6 +47,7 @@ from gtmodel.modeling.ocp.collocation import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.optimization import Integral, Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
+from gtmodel.modeling.ocp.verification import check_result
 from gtmodel.status import Status
 
 __all__ = ["ShootingTranscription", "INTEGRATORS", "CONTROLS"]
@@ -79,6 +84,12 @@ class ShootingTranscription:
         :class:`~gtmodel.modeling.ocp.collocation.CollocationTranscription`).
     integrator_options : mapping, optional
         Options of ``casadi.integrator`` (e.g. ``{"abstol": 1e-10}`` for ``"cvodes"``).
+    verify : bool, optional
+        Verify every solution by simulation (:func:`gtmodel.modeling.ocp.verification.verify`:
+        the piecewise constant or linear inputs drive the model in CVODES or IDAS, compared
+        with the nodes and the integrator's sample points, with the problem's
+        :attr:`Optimization.verification_tolerance`): the result's ``verification``; a
+        solution that fails it is ``check_failed``. Default True.
 
     Raises
     ------
@@ -101,6 +112,7 @@ class ShootingTranscription:
         verbose: bool = False,
         solver_options: Mapping[str, Any] | None = None,
         integrator_options: Mapping[str, Any] | None = None,
+        verify: bool = True,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -126,6 +138,7 @@ class ShootingTranscription:
             options.setdefault("hessian_approximation", "limited-memory")
         self.options = merge_options(verbose, options, "ipopt")
         self.integrator_options = dict(integrator_options or {})
+        self.verify = bool(verify)
         self._build()
 
     # ------------------------------------------------------------------ build
@@ -371,6 +384,9 @@ class ShootingTranscription:
         status = Status.ERROR if error_msg or not np.all(np.isfinite(w)) else normalize_ipopt_status(message)
         res = self._result(w, pvec, status, message, stats, solve_time)
         res.lam_w, res.lam_g = lam
+        if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+            special = np.array(self.special_function(w, pvec), dtype=float).reshape(-1)
+            check_result(res, opt, special, what="multiple shooting solve")
         return res
 
     def _result(self, w: np.ndarray, pvec: np.ndarray, status: str, message: str, stats: dict, solve_time: float) -> OptimizationResult:
@@ -394,7 +410,7 @@ class ShootingTranscription:
             tau_root=np.concatenate([[0.0], self._tau]),
             xc=xs.reshape(dae.nx, N, d + 1).transpose(1, 2, 0),
             uc=us.reshape(dae.nu, N, d).transpose(1, 2, 0),
-            zc=zs.reshape(dae.nz, N, d).transpose(1, 2, 0),
+            zc=zs.reshape(dae.nz, N, d).transpose(1, 2, 0), shooting=self.controls,
         )
         t = colloc.mesh()
         x, u, z = colloc.evaluate(t)

@@ -24,6 +24,15 @@ A state ``i`` passes when ``max |x_sim - x_col| <= tolerance * max(1, max |x_col
 (the mixed absolute/relative test of integrators with ``atol = rtol = tolerance``).
 The relative deviation reported is ``max |x_sim - x_col| / max |x_col|``.
 
+A multiple-shooting result (:mod:`gtmodel.modeling.ocp.shooting`) is verified the same
+way: its inputs are piecewise constant or linear (the Lagrange polynomial through their
+values at the interval's sample points reproduces them exactly), and the simulation is
+compared with what the transcription integrated: the node states ``X_k`` and the states
+its integrator reached at the sample points of each interval (three Radau points, the
+interval's end included). A shooting result whose fixed-step integrator (``rk``,
+``collocation``) is too coarse for the model, or whose continuity constraints hold only
+loosely, deviates from the variable-step simulation and fails.
+
 The integrals of the problem (``integral()`` in constraints: isoperimetric constraints;
 :meth:`~gtmodel.modeling.Optimization.integral`) are checked the same way: the integrand
 is integrated as a quadrature of the simulation, and the value the NLP used (its
@@ -45,8 +54,10 @@ import numpy as np
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
+from gtmodel.modeling.ocp.terms import Integral
+from gtmodel.status import Status
 
-__all__ = ["Verification", "verify", "INTEGRATOR_RTOL"]
+__all__ = ["Verification", "verify", "check_result", "problem_integrals", "INTEGRATOR_RTOL"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -89,6 +100,8 @@ class Verification:
     integrals : dict of str to dict
         Per checked integral (by its integrand): ``{"collocation", "simulated",
         "abs_deviation", "passed"}``.
+    method : str
+        What was compared (the ``method`` of :meth:`to_dict`).
     """
 
     tolerance: float
@@ -104,6 +117,7 @@ class Verification:
     t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     simulated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     integrals: dict[str, dict[str, Any]] = field(default_factory=dict)
+    method: str = "the optimal inputs (collocation polynomials) drive the model from the initial state"
 
     def to_dict(self) -> dict[str, Any]:
         """The ``verification`` block of a ``summary.json`` (JSON types only).
@@ -128,7 +142,7 @@ class Verification:
             **({"integrals": {k: {kk: (num(vv) if not isinstance(vv, bool) else vv) for kk, vv in v.items()}
                               for k, v in self.integrals.items()}} if self.integrals else {}),
             "integrator": self.integrator,
-            "method": "the optimal inputs (collocation polynomials) drive the model from the initial state",
+            "method": self.method,
             "message": self.message,
         }
 
@@ -222,10 +236,15 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     names = dae.x_names
     if nx == 0:
         return Verification(tolerance, True, 0.0, 0.0, 0.0, {}, np.zeros(N), "", "no states", _time.perf_counter() - start)
-    taus = _check_taus(col.tau_root)
+    shooting = col.shooting is not None
     breaks = col.breaks()
     h = np.diff(breaks)
-    poly = np.einsum("tr,krx->ktx", lagrange_basis(col.tau_root, taus), col.xc)  # (N, T, nx)
+    if shooting:  # the integrated samples themselves, at the integrator's sample points (the end included)
+        taus = np.asarray(col.tau_root[1:], dtype=float)
+        poly = np.asarray(col.xc[:, 1:, :], dtype=float)
+    else:
+        taus = _check_taus(col.tau_root)
+        poly = np.einsum("tr,krx->ktx", lagrange_basis(col.tau_root, taus), col.xc)  # (N, T, nx)
     t_check = breaks[:-1, None] + taus[None, :] * h[:, None]
     pvec = dae.parameter_vector(result.parameters)
     scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
@@ -260,12 +279,16 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         inf = float("inf")
         return Verification(tolerance, False, inf, inf, inf, {}, np.full(N, inf), "", message, _time.perf_counter() - start)
     flat = dev.reshape(-1, nx)
+    t_flat = t_check.reshape(-1)
+    if shooting and N > 1:  # the nodes X_1 .. X_{N-1} against the simulation there
+        flat = np.vstack([flat, np.abs(xg[:-1, -1, :] - col.xc[1:, 0, :])])
+        t_flat = np.concatenate([t_flat, breaks[1:-1]])
     where = np.argmax(flat, axis=0)
     abs_dev = flat[where, np.arange(nx)]
     rel_dev = abs_dev / np.where(peak > 0, peak, 1.0)
     scaled = abs_dev / scale
     states = {
-        names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_check.reshape(-1)[where[i]])}
+        names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_flat[where[i]])}
         for i in range(nx)
     }
     checked: dict[str, dict[str, Any]] = {}
@@ -287,7 +310,74 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
             f"state {names[worst]!r} deviates by {abs_dev[worst]:.3g} (scaled {scaled[worst]:.3g} > tolerance {tolerance:g}) "
             f"at t = {states[names[worst]]['at_time_s']:.6g} s from its simulation under the optimal inputs"
         )
+    method = (f"the optimal inputs (piecewise {col.shooting}) drive the model from the initial state; compared at "
+              "the shooting nodes and the integrator's sample points" if shooting else Verification.method)
     return Verification(
         tolerance, passed, float(abs_dev.max()), float(rel_dev.max()), float(scaled.max()), states,
         element_errors, how, message, _time.perf_counter() - start, t_check.reshape(-1), xg.reshape(-1, nx), checked,
+        method,
     )
+
+
+def problem_integrals(optimization: Any, result: OptimizationResult,
+                      special: np.ndarray | None) -> tuple[list[str], ca.Function, np.ndarray] | None:
+    """The problem's integrals for :func:`verify`: names, integrand Function, the NLP's values.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The problem (its :meth:`~gtmodel.modeling.Optimization.integral` s).
+    result : OptimizationResult
+        Its solution (model and final time).
+    special : numpy.ndarray or None
+        The values of the timed variables and integrals in the NLP, in the order of
+        :meth:`~gtmodel.modeling.Optimization.special_symbols`.
+
+    Returns
+    -------
+    tuple or None
+        ``(names, integrands, values)`` as :func:`verify` takes them; None without
+        integrals or values.
+    """
+    dae = result.dae
+    picked = [(i, v) for i, v in enumerate(optimization.special_symbols()) if isinstance(v, Integral)]
+    if special is None or not picked or dae is None:
+        return None
+    exprs = ca.vertcat(*[v.expr for _, v in picked])
+    if dae.nx:
+        exprs = ca.substitute(exprs, dae.xdot, dae.ode_expr)
+    exprs = ca.substitute(exprs, optimization.final_time, ca.SX(float(result.final_time)))
+    integrands = ca.Function("integrands", [dae.t, dae.x, dae.z, dae.u, dae.p], [exprs])
+    return [str(v.expr) for _, v in picked], integrands, np.array([special[i] for i, _ in picked])
+
+
+def check_result(result: OptimizationResult, optimization: Any, special: np.ndarray | None = None,
+                 what: str = "collocation solve") -> OptimizationResult:
+    """Verify a solution (:func:`verify`) and downgrade it to ``check_failed`` if it fails.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A solution of a transcription of ``optimization`` (collocation or multiple shooting).
+    optimization : Optimization
+        The problem (its :attr:`~gtmodel.modeling.Optimization.verification_tolerance`).
+    special : numpy.ndarray, optional
+        The NLP's values of the timed variables and integrals (see
+        :func:`problem_integrals`); given, the integrals are verified too.
+    what : str, optional
+        The solve named in the log message.
+
+    Returns
+    -------
+    OptimizationResult
+        ``result``, changed in place: its ``verification`` set, an ``optimal`` or
+        ``acceptable`` status that fails it ``check_failed`` with the verification's
+        message.
+    """
+    v = verify(result, optimization.verification_tolerance, integrals=problem_integrals(optimization, result, special))
+    result.verification = v
+    if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
+        _log.warning("%s of %s: %s was %s, but %s", what, result.dae.name, result.message, result.status, v.message)
+        result.message = f"{result.message}; verification failed: {v.message}"
+        result.status = Status.CHECK_FAILED
+    return result

@@ -9,7 +9,11 @@ References, independent of the transcription:
 * minimum time with ``|u| <= 1`` over distance 1: ``T = 2`` (the switch at ``T/2`` falls on
   a node for even ``N``);
 * maximise ``x(T)`` with ``integral(u^2) <= E``: ``sqrt(E T^3 / 3)`` (Cauchy-Schwarz), the
-  optimal ``u ~ T - t`` linear, so piecewise-linear inputs reach it.
+  optimal ``u ~ T - t`` linear, so piecewise-linear inputs reach it;
+* verification: a fast oscillator ``x'' = -100 x + u`` shot with one Runge-Kutta 4 step per
+  interval (``omega h = 2``) "solves" the discrete map, not the model: CVODES under its
+  piecewise-constant inputs disagrees (``check_failed``), and the same problem shot with
+  CVODES itself is the reference (its optimum a fifth of the coarse one).
 """
 
 from __future__ import annotations
@@ -42,6 +46,9 @@ def test_minimum_energy(controls, expected):
     if controls == "constant":  # held on each interval in the result's samples
         u = r.sample([0.01, 0.05, 0.09])["inputs"]["u"]
         assert np.ptp(u) < 1e-9
+    # verified: CVODES under the held (or linear) inputs reproduces the nodes and samples
+    v = r.verification
+    assert v.passed and v.max_abs_deviation < 1e-6 and f"piecewise {controls}" in v.to_dict()["method"]
 
 
 def test_minimum_time_bang_bang():
@@ -65,6 +72,8 @@ def test_maximise_with_an_isoperimetric_constraint_and_a_timed_variable():
     r = ShootingTranscription(opt, intervals=8, controls="linear").solve()
     assert r.status == "optimal"
     assert r.objective == pytest.approx(np.sqrt(0.5 * 2.0**3 / 3.0), rel=1e-7)
+    (check,) = r.verification.integrals.values()  # the integral's quadrature, simulated too
+    assert check["passed"] and check["simulated"] == pytest.approx(0.5, rel=1e-6)
 
 
 def test_a_dae_with_the_collocation_integrator():
@@ -119,3 +128,22 @@ def test_started_from_a_collocation_result():
     opt = min_energy_problem()
     r = ShootingTranscription(opt, intervals=10, controls="linear").solve(initial_guess=CollocationTranscription(opt, elements=10).solve())
     assert r.status == "optimal" and r.iterations <= 1 and r.objective == pytest.approx(12.0, rel=1e-10)
+
+
+def _oscillator(integrator=None):
+    m = Model("oscillator")
+    x, v, u = m.state("x"), m.state("v"), m.input("u")
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), -100.0 * x + u)
+    opt = Optimization(m, final_time=2.0)
+    opt.set_objective(lagrange=u**2)
+    rest_to_rest(opt, x, v)
+    return ShootingTranscription(opt, intervals=10, steps=1, integrator=integrator).solve()
+
+
+def test_coarse_integrator_fails_its_verification():
+    coarse, reference = _oscillator(), _oscillator("cvodes")
+    assert reference.status == "optimal" and reference.verification.passed
+    assert coarse.status == "check_failed" and not coarse.verification.passed
+    assert "deviates" in coarse.verification.message and "verification failed" in coarse.message
+    assert coarse.objective > 4.0 * reference.objective  # the optimum of RK4's map, not of the model
