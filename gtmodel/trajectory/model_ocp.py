@@ -132,12 +132,20 @@ class OptimalControl:
         kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
         if d.refinement.refine:
-            self.estimation = None  # refused with data fits on load: the statistics need one fixed mesh
-            return solve_refined(
+            result = solve_refined(
                 d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                 max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
                 initial_guess=guess, **kwargs,
             )
+            self.estimation = None
+            col = result.collocation
+            if not d.optimization.data_fits or col is None:
+                return result
+            # a data fit's statistics on the mesh of the returned pass (refinement only splits elements,
+            # so data times that were mesh points stay mesh points): its transcription rebuilt, not solved
+            final = CollocationTranscription(d.optimization, elements=col.elements, points=col.points, scheme=col.scheme,
+                                             mesh=col.fractions, **kwargs)
+            return self._estimated(final, result)
         tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **kwargs)
         return self._estimated(tr, tr.solve(initial_guess=guess))
 

@@ -186,10 +186,11 @@ def _timed_callback(optimization: Optimization) -> Callable[[ca.SX, Any], ca.SX]
         if isinstance(time, ca.SX):
             if not optimization.free_final_time:
                 time = ca.substitute(time, optimization.final_time, ca.SX(optimization.final_time_value))
-            if ca.symvar(time):
-                raise ProblemError("the time of a time point must be a number (start_time, final_time when fixed, "
+            if any(not ca.is_equal(s, optimization.final_time) for s in ca.symvar(time)):
+                raise ProblemError("the time of a time point must be a number (start_time, final_time, "
                                    "numbers and [parameters] names)")
-            time = float(ca.DM(ca.evalf(time)))
-        return optimization.timed(expr, time)
+            if not ca.symvar(time):
+                time = float(ca.DM(ca.evalf(time)))
+        return optimization.timed(expr, time)  # a free final time: a fixed fraction of the horizon
 
     return timed

@@ -30,7 +30,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._lazy import lazy_module
-from gtmodel.errors import InputError
+from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.ocp.optimization import Optimization
 
 #: SciPy's sparse matrices and their LU (``sparse.linalg``), imported on first use: only a fit needs them.
@@ -104,6 +104,8 @@ def fit_data(
     ModelError
         If a time is outside the horizon or the final time is free.
     """
+    if opt.free_final_time:
+        raise ModelError(f"data {name!r}: measurements are at fixed times; fit them on a fixed final time (free = false)")
     t = np.asarray(times, dtype=float).reshape(-1)
     y = np.asarray(values, dtype=float).reshape(-1)
     if t.shape != y.shape or t.size == 0:

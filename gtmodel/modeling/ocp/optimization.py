@@ -184,7 +184,7 @@ class Optimization:
         return ca.vertcat(*parts)
 
     # ------------------------------------------------------------------ timed variables, integrals
-    def timed(self, expr: Any, time: float | str) -> ca.SX:
+    def timed(self, expr: Any, time: float | str | ca.SX) -> ca.SX:
         """A symbol for the value of ``expr`` at one fixed time (Optimica's timed variable ``x(t)``).
 
         Use the symbol in the objective (:meth:`set_objective`, as a Mayer term) and in
@@ -195,13 +195,21 @@ class Optimization:
         exact at element boundaries; by multiple shooting, integrated from the interval's
         start to ``time``.
 
+        With a free final time, an interior time is a fixed fraction ``s`` of the horizon
+        (normalised time): ``time = start_time + s * (final_time - start_time)``, written
+        with the :attr:`final_time` symbol (``0.5 * opt.final_time`` from ``t0 = 0``); the
+        point moves with the final time, at a fixed place in its element. A number is then
+        refused: Optimica's ``x(t)`` is at a fixed time, which a free horizon may leave or
+        move across elements.
+
         Parameters
         ----------
         expr : casadi.SX or float
             Scalar expression of model variables, parameters and :attr:`final_time`.
-        time : float or {"start", "final"}
-            Absolute time [s] in ``[start_time, final_time]``, or the start or final time.
-            With a free final time only ``"start"``, ``"final"`` and the start time itself.
+        time : float, {"start", "final"} or casadi.SX
+            Absolute time [s] in ``[start_time, final_time]``, the start or final time, or
+            an expression ``a + b * final_time`` [s] (a fixed final time substituted; with
+            a free one it must be ``start_time + s (final_time - start_time)``, ``0 <= s <= 1``).
 
         Returns
         -------
@@ -211,41 +219,75 @@ class Optimization:
         Raises
         ------
         InputError
-            If ``expr`` is not scalar or ``time`` is not a number or ``"start"``/``"final"``.
+            If ``expr`` is not scalar or ``time`` is not a number, ``"start"``/``"final"``
+            or an expression of the final time.
         ModelError
-            If ``time`` is outside the horizon, or an interior time with a free final time.
+            If ``time`` is outside the horizon, or with a free final time a number other than
+            the start time or an expression not of the form ``start_time + s (final_time -
+            start_time)``.
         """
         e = self._expr(expr, "timed variable", special=False)
         if e.numel() != 1:
             raise InputError(f"timed variable: expression must be scalar, got {e.numel()} elements")
-        if isinstance(time, str):
+        t0 = self.start_time
+        tol = 1e-12 * max(1.0, abs(t0), abs(self.final_time_value))
+        fraction = None
+        if isinstance(time, ca.SX) and not time.is_constant():
+            at, fraction = self._timed_expression(time, tol)
+        elif isinstance(time, str):
             if time not in ("start", "final"):
                 raise InputError(f"timed variable: time must be a number, 'start' or 'final', got {time!r}")
-            at: float | str = time
+            at = time
         else:
             try:
-                t = float(time)
-            except (TypeError, ValueError):
+                t = float(time) if not isinstance(time, ca.SX) else float(ca.DM(ca.evalf(time)))
+            except (TypeError, ValueError, RuntimeError):
                 raise InputError(f"timed variable: time must be a number, 'start' or 'final', got {time!r}") from None
-            t0, tf = self.start_time, self.final_time_value
-            tol = 1e-12 * max(1.0, abs(t0), abs(tf))
-            if self.free_final_time:
-                if abs(t - t0) > tol:
-                    raise ModelError(
-                        f"timed variable at t = {t:g} s: with a free final time only the start and the final time "
-                        "can be used (an interior time would move within the elements as the final time changes)"
-                    )
-                at = "start"
-            elif not t0 - tol <= t <= tf + tol:
-                raise ModelError(f"timed variable at t = {t:g} s: outside the horizon [{t0:g}, {tf:g}] s")
-            else:
-                at = "start" if abs(t - t0) <= tol else "final" if abs(t - tf) <= tol else t
+            if self.free_final_time and abs(t - t0) > tol:
+                raise ModelError(
+                    f"timed variable at t = {t:g} s: with a free final time only the start and the final time or a "
+                    "fixed fraction s of the horizon can be used (a fixed interior time may fall outside the horizon "
+                    "or move across elements as the final time changes); write the time as start_time + s * "
+                    "(final_time - start_time), e.g. x(0.5 * final_time) from start_time = 0"
+                )
+            at = "start" if self.free_final_time else self._timed_at_number(t, tol)
         for v in self.timed_variables:
-            if v.time == at and ca.is_equal(v.expr, e, 20):
+            if v.time == at and v.fraction == fraction and ca.is_equal(v.expr, e, 20):
                 return v.symbol
         sym = ca.SX.sym(f"timed{len(self.timed_variables)}")
-        self.timed_variables.append(Timed(sym, e, at))
+        self.timed_variables.append(Timed(sym, e, at, fraction))
         return sym
+
+    def _timed_expression(self, time: ca.SX, tol: float) -> tuple[float | str, float | None]:
+        """``(at, fraction)`` of a time written with the final time (see :meth:`timed`)."""
+        T = self._final_time
+        if time.numel() != 1 or any(not ca.is_equal(s, T) for s in ca.symvar(time)):
+            raise InputError("timed variable: a time expression may use numbers and final_time only")
+        slope = ca.jacobian(time, T)
+        if ca.depends_on(slope, T):
+            raise ModelError("timed variable: the time must be affine in final_time (start_time + s * (final_time - start_time))")
+        b = float(ca.DM(ca.evalf(slope)))
+        a = float(ca.DM(ca.evalf(ca.substitute(time, T, ca.SX(0.0)))))
+        t0 = self.start_time
+        if not self.free_final_time:
+            t = a + b * self.final_time_value
+            return self._timed_at_number(t, tol), None
+        if abs(a - t0 * (1.0 - b)) > tol or not -1e-12 <= b <= 1.0 + 1e-12:
+            raise ModelError(
+                f"timed variable at {a:g} + {b:g} * final_time s: with a free final time an interior time must be a fixed "
+                "fraction s of the horizon, start_time + s * (final_time - start_time) with 0 <= s <= 1"
+            )
+        if b <= 1e-12:
+            return "start", None
+        if b >= 1.0 - 1e-12:
+            return "final", None
+        return t0 + b * (self.final_time_guess - t0), b
+
+    def _timed_at_number(self, t: float, tol: float) -> float | str:
+        t0, tf = self.start_time, self.final_time_value
+        if not t0 - tol <= t <= tf + tol:
+            raise ModelError(f"timed variable at t = {t:g} s: outside the horizon [{t0:g}, {tf:g}] s")
+        return "start" if abs(t - t0) <= tol else "final" if abs(t - tf) <= tol else t
 
     def integral(self, expr: Any) -> ca.SX:
         """A symbol for the integral of ``expr`` over the horizon, for constraints and objectives.

@@ -235,13 +235,15 @@ class ShootingTranscription:
                 k = 0 if v.time == "start" else N
                 values.append(f(t0 + k * h, X[k], Z[k], u_node(k), Pm, T))
                 continue
-            s = (float(v.time) - t0) / ((opt.final_time_value - t0) / N)
+            # normalised time: a fixed time of a fixed horizon, or a fixed fraction of a free one
+            s = N * (v.fraction if v.fraction is not None else (float(v.time) - t0) / (opt.final_time_value - t0))
             k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
             frac = float(np.clip(s - k, 0.0, 1.0))
             ua, ub = u_pair(k)
             r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, frac))
             u_t = ua if self.controls == "constant" else (1 - frac) * ua + frac * ub
-            values.append(f(float(v.time), r["xf"], r["zf"] if nz else ca.MX(0, 1), u_t, Pm, T))
+            t_v = float(v.time) if v.fraction is None else t0 + v.fraction * (T - t0)
+            values.append(f(t_v, r["xf"], r["zf"] if nz else ca.MX(0, 1), u_t, Pm, T))
         s_sym = ca.vertcat(*[v.symbol for v in opt.special_symbols()]) if opt.special_symbols() else ca.SX(0, 1)
         s_val = ca.vertcat(*values) if values else ca.MX(0, 1)
         for at, k in (("start", 0), ("final", N), ("timed", N)):

@@ -52,12 +52,19 @@ class Timed:
     expr : casadi.SX
         Scalar expression of model variables, parameters and ``final_time``.
     time : float or str
-        Absolute time [s] in the horizon, or ``"start"`` / ``"final"``.
+        Absolute time [s] in the horizon, or ``"start"`` / ``"final"``; for a time at a
+        fixed fraction of a free horizon, that time at the final time's guess (for
+        messages only).
+    fraction : float or None, optional
+        ``s`` in ``(0, 1)`` for a time ``start_time + s (final_time - start_time)`` of a
+        free final time (normalised time: the point moves with the final time); None
+        otherwise.
     """
 
     symbol: ca.SX
     expr: ca.SX
     time: float | str
+    fraction: float | None = None
 
 
 @dataclass

@@ -11,7 +11,8 @@ gives each symbol its value as an expression of the collocation NLP's variables:
   states through the element start and its collocation points, inputs and algebraic
   variables through the collocation points. No mesh point is moved to ``t``; at an
   element boundary (``t`` a multiple of the element length from the start) the value is
-  that of the mesh itself. At ``"start"``/``"final"`` the values are the point
+  that of the mesh itself. A time at a fixed fraction ``s`` of a free horizon
+  (``Timed.fraction``) lies at a fixed place of its element, ``t = t0 + s (T - t0)``. At ``"start"``/``"final"`` the values are the point
   constraints' (initial/final state; inputs extrapolated to ``tau = 0`` / ``tau = 1``);
 * an integral is the collocation quadrature (weights ``B_j``, as the Lagrange term).
 """
@@ -107,23 +108,23 @@ def special_values(
             a = ends[0] if v.time == "start" else ends[1]
             values.append(f(a.t, a.x, a.z, a.u, P, a.T))
             continue
-        t = float(v.time)
+        # normalised time: a fixed time of a fixed horizon, or a fixed fraction of a free one
+        s_frac = v.fraction if v.fraction is not None else (float(v.time) - t0) / (opt.final_time_value - t0)
         if fractions is None:
-            h = (opt.final_time_value - t0) / N
-            s = (t - t0) / h
+            s = s_frac * N
             k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
             tau = float(np.clip(s - k, 0.0, 1.0))
         else:  # the element containing t (the left one at a boundary) on the non-uniform mesh
-            f = np.asarray(fractions, dtype=float)
-            edges = np.concatenate([[0.0], np.cumsum(f)])
-            s_frac = (t - t0) / (opt.final_time_value - t0)
-            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(f.min()), side="left"), 0, N - 1))
-            tau = float(np.clip((s_frac - edges[k]) / f[k], 0.0, 1.0))
+            fr = np.asarray(fractions, dtype=float)
+            edges = np.concatenate([[0.0], np.cumsum(fr)])
+            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(fr.min()), side="left"), 0, N - 1))
+            tau = float(np.clip((s_frac - edges[k]) / fr[k], 0.0, 1.0))
         X, U, Z, T = elements[k]
         lx = lagrange_basis(co["root"], np.array([tau]))[0]
         lu = lagrange_basis(co["tau"], np.array([tau]))[0]
         x = sum(float(lx[r]) * X[r] for r in range(len(X)))
         u = sum(float(lu[j]) * U[j] for j in range(len(U))) if U[0].numel() else ca.SX(0, 1)
         z = sum(float(lu[j]) * Z[j] for j in range(len(Z))) if Z[0].numel() else ca.SX(0, 1)
+        t = float(v.time) if v.fraction is None else t0 + v.fraction * (T - t0)
         values.append(f(t, x, z, u, P, T))
     return ca.vertcat(*[v.symbol for v in specials]), ca.vertcat(*values)

@@ -238,9 +238,9 @@ class OptimalControlKind(ProblemKind):
                 raise file.fail("transcription.integrator", "collocation or idas for a model with algebraic variables", tr.integrator)
             method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
         if tr.refine and tr.method == "multiple_shooting":
-            raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement is for collocation)', True)
-        if tr.refine and doc.data:
-            raise file.fail("transcription.refine", "false with [[data]] (the estimates' statistics are computed on one fixed mesh)", True)
+            raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement splits '
+                            'collocation elements; shooting is verified as it is: raise transcription.intervals or steps, '
+                            'or refine with method = "collocation")', True)
         bench = doc.benchmark.model_dump() if doc.benchmark is not None else None
         if bench is not None and bench["sign"] not in (1.0, -1.0):
             raise file.fail("benchmark.sign", "1 or -1", bench["sign"])

@@ -121,12 +121,39 @@ def test_bad_declarations(call, exc, match):
         call(opt, x, u)
 
 
-def test_interior_time_with_a_free_final_time_is_refused():
+def test_interior_time_with_a_free_final_time_is_a_fraction_of_the_horizon():
     m, x, v, u = double_integrator()
     opt = Optimization(m, free_final_time=True, final_time_bounds=(1.0, 3.0))
-    with pytest.raises(ModelError, match="free final time only the start and the final time"):
+    with pytest.raises(ModelError, match=r"free final time only the start and the final time or a fixed fraction s of the "
+                       r"horizon .* write the time as start_time \+ s \* \(final_time - start_time\)"):
         opt.timed(x, 0.5)
-    assert opt.timed(x, 0.0) is opt.timed(x, "start")
+    with pytest.raises(ModelError, match=r"start_time \+ s \* \(final_time - start_time\) with 0 <= s <= 1"):
+        opt.timed(x, 1.0 + 0.5 * opt.final_time)
+    with pytest.raises(InputError, match="numbers and final_time only"):
+        opt.timed(x, u * opt.final_time)
+    assert opt.timed(x, 0.0) is opt.timed(x, "start") is opt.timed(x, 0 * opt.final_time)
+    assert opt.timed(x, 1.0 * opt.final_time) is opt.timed(x, "final")
+
+
+@pytest.mark.parametrize("method", ["collocation", "multiple_shooting"])
+def test_speed_limit_at_half_of_a_free_horizon(method):
+    # minimum time rest to rest over 1 with |u| <= 1 and v(T/2) <= 0.1: by symmetry each half
+    # accelerates for a, brakes for a - 0.1 to v = 0.1 over 0.5: a^2 - 0.005 = 0.5, so
+    # T = 2 (2 sqrt(0.505) - 0.1) = 2.642534 (by hand; the switches are off the mesh: O(h))
+    from gtmodel.modeling.ocp.shooting import ShootingTranscription
+
+    m, x, v, u = double_integrator()
+    opt = Optimization(m, free_final_time=True, final_time_bounds=(0.5, 5.0), final_time_guess=3.0)
+    opt.set_bounds(u, -1.0, 1.0)
+    for var, at, value in ((x, "start", 0.0), (v, "start", 0.0), (x, "final", 1.0), (v, "final", 0.0)):
+        opt.add_point_constraint(var, at=at, lb=value, ub=value)
+    opt.set_objective(mayer=opt.final_time)
+    opt.add_constraint(opt.timed(v, 0.5 * opt.final_time), ub=0.1)
+    tr = CollocationTranscription(opt, elements=20) if method == "collocation" else ShootingTranscription(opt, intervals=20)
+    r = tr.solve()
+    T = 2.0 * (2.0 * np.sqrt(0.505) - 0.1)
+    assert r.status == "optimal" and r.final_time == pytest.approx(T, rel=5e-3 if method == "multiple_shooting" else 5e-4)
+    assert r.sample([0.5 * r.final_time])["states"]["v"][0] == pytest.approx(0.1, abs=1e-6)  # where the point moved
 
 
 def _hanging_chain():

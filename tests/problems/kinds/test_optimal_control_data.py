@@ -83,6 +83,23 @@ def test_estimates_and_standard_deviations_match_scipy(folder, method):
     assert est["chi2_per_dof"] == pytest.approx(np.sum((residual / SIGMA) ** 2) / (t.size - 1), rel=1e-4)
 
 
+@pytest.mark.slow
+def test_refined_mesh_keeps_the_estimates(folder):
+    # [transcription] refine with [[data]]: the mesh of 10 elements (data times between its
+    # points) is refined to the tolerance, and the statistics are those of the refined
+    # mesh's transcription: the same estimates as scipy's fit of the closed form
+    tmp, t, y = folder
+    text = PROBLEM.format(method="collocation").replace("elements = 40", "elements = 10")
+    text = text.replace("intervals = 40", "refine = true\ntolerance = 1e-6")
+    (tmp / "r.toml").write_text(text)
+    outcome = run_problem(tmp / "r.toml", tmp / "out", plots=False)
+    assert outcome.status == Status.OPTIMAL and len(outcome.summary["refinement"]) > 1
+    assert outcome.summary["verification"]["passed"] and outcome.summary["verification"]["tolerance"] == 1e-6
+    popt, pcov = curve_fit(lambda t, k, a: a * np.exp(-k * t), t, y, p0=[1.0, 1.0], sigma=np.full(t.size, SIGMA), absolute_sigma=True)
+    est = outcome.summary["estimation"]["estimates"]["k"]
+    assert est["value"] == pytest.approx(popt[0], rel=1e-6) and est["std"] == pytest.approx(np.sqrt(pcov[0, 0]), rel=1e-4)
+
+
 BAD = [
     ("nan_in_csv", lambda p, c: (p, c.replace("\n0.2", "\nnan", 1)), r"field 'data\[0\]\.file': .*measured\.csv.*line 3"),
     ("missing_column", lambda p, c: (p.replace('columns = ["y_meas"]', 'columns = ["y_m"]'), c), r"field 'data\[0\]\.columns': expected a column of measured\.csv \(t, y_meas\), got 'y_m'"),
@@ -91,7 +108,7 @@ BAD = [
     ("std_and_weights", lambda p, c: (p.replace("std = [0.02]", "std = [0.02]\nweights = [1.0]"), c), r"field 'data\[0\]\.weights': expected std or weights, not both"),
     ("std_count", lambda p, c: (p.replace("std = [0.02]", "std = [0.02, 0.03]"), c), r"field 'data\[0\]\.std': expected one value or one per measured name \(1\)"),
     ("std_negative", lambda p, c: (p.replace("std = [0.02]", "std = [-0.02]"), c), r"field 'data\[0\]\.std': expected 1 positive numbers"),
-    ("data_with_free_final_time", lambda p, c: (p.replace("free = false\nvalue = 2.0", "free = true\nbounds = [1.0, 3.0]"), c), r"field 'data\[0\]\.file': timed variable at t = 0\.1 s: with a free final time only the start and the final time"),
+    ("data_with_free_final_time", lambda p, c: (p.replace("free = false\nvalue = 2.0", "free = true\nbounds = [1.0, 3.0]"), c), r"field 'data\[0\]\.file': data 'y': measurements are at fixed times; fit them on a fixed final time"),
     ("csv_missing", lambda p, c: (p.replace('file = "measured.csv"', 'file = "nope.csv"'), c), r"field 'data\[0\]\.file'"),
     ("time_column_missing", lambda p, c: (p.replace('time_column = "t"', 'time_column = "time"'), c), r"field 'data\[0\]\.time_column': expected a column of measured\.csv"),
 ]

@@ -100,6 +100,9 @@ BAD = [
     ("no_objective", 'maximize = "x(final_time)"', "", r"field 'optimization\.objective': expected an objective"),
     ("integral_nested_in_constraint", '"integral(u^2) <= E"', '"sqrt(integral(u^2)) <= E"', r"field 'optimization\.constraints\[0\]': integral\(\) inside sqrt\(\) is not allowed"),
     ("maximize_bad_name", 'maximize = "x(final_time)"', 'maximize = "z(final_time)"', r"field 'optimization\.maximize': undefined name at column 1: 'z'"),
+    ("interior_time_with_free_final_time", "free = false\nvalue = 2.0", "free = true\nbounds = [1.0, 3.0]", r"field 'optimization\.constraints\[1\]': timed variable at t = 1 s: with a free final time only the start and the final time or a fixed fraction s of the horizon .* write the time as start_time \+ s \* \(final_time - start_time\)"),
+    ("time_not_a_fraction_of_the_horizon", '"x(1.0) >= 0.1 * speed(final_time)"]\n[optimization.final_time]\nfree = false\nvalue = 2.0',
+     '"x(1.0 + 0.5 * final_time) >= 0"]\n[optimization.final_time]\nfree = true\nbounds = [1.0, 3.0]', r"field 'optimization\.constraints\[1\]': timed variable at 1 \+ 0\.5 \* final_time s: with a free final time an interior time must be a fixed fraction s of the horizon"),
     ("free_parameter_of_a_model_parameter", "[collocation]", '[free_parameters]\numax = ["-umax", 2.0]\n[collocation]', r"field 'free_parameters\.umax': expected numbers or expressions of \[parameters\] names"),
 ]
 
@@ -108,6 +111,19 @@ BAD = [
 def test_bad_language_through_cli(folder, capsys, case, old, new, match):
     assert old in PROBLEM
     assert_bad_problem_through_cli(folder, capsys, PROBLEM.replace(old, new), match)
+
+
+def test_interior_time_of_a_free_horizon_as_a_fraction(folder):
+    # minimum time with v(0.5 * final_time) <= 0.1: T = 2 (2 sqrt(0.505) - 0.1) by hand
+    # (tests/modeling/ocp/test_timed.py), here written in the file
+    text = PROBLEM.replace('maximize = "x(final_time)"', 'minimize = "final_time"')
+    text = text.replace('"integral(u^2) <= E", "x(1.0) >= 0.1 * speed(final_time)"', '"v(0.5 * final_time) <= 0.1"')
+    text = text.replace("free = false\nvalue = 2.0", "free = true\nbounds = [0.5, 5.0]\ninitial_guess = 3.0")
+    text = text.replace("[bounds]", "[boundary.final]\nx = 1.0\nv = 0.0\n[bounds]").replace("elements = 10", "elements = 20")
+    (folder / "half.toml").write_text(text.replace('u = ["-umax", inf]', 'u = ["-umax", "umax"]'))
+    outcome = run_problem(folder / "half.toml", folder / "half", plots=False)
+    assert outcome.status == Status.OPTIMAL
+    assert outcome.summary["final_time_s"] == pytest.approx(2.0 * (2.0 * np.sqrt(0.505) - 0.1), rel=5e-4)
 
 
 def test_guess_from_an_earlier_result_folder_and_by_simulation(folder):
@@ -167,6 +183,7 @@ BAD_TRANSCRIPTION = [
     ("integrator_unknown", '[transcription]\nmethod = "multiple_shooting"\nintegrator = "euler"\n', r"field 'transcription\.integrator': expected one of rk, collocation, cvodes, idas"),
     ("intervals_zero", '[transcription]\nmethod = "multiple_shooting"\nintervals = 0\n', r"field 'transcription\.intervals': expected an integer in 1\.\.10000"),
     ("steps_zero", '[transcription]\nmethod = "multiple_shooting"\nsteps = 0\n', r"field 'transcription\.steps': expected an integer in 1\.\.1000"),
+    ("refine_with_shooting", '[transcription]\nmethod = "multiple_shooting"\nrefine = true\n', r"field 'transcription\.refine': expected false with method = \"multiple_shooting\" \(mesh refinement splits collocation elements; shooting is verified as it is: raise transcription\.intervals"),
     ("controls_unknown", '[transcription]\nmethod = "multiple_shooting"\ncontrols = "cubic"\n', r"field 'transcription\.controls': expected one of constant, linear"),
 ]
 
