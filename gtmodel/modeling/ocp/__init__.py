@@ -2,6 +2,8 @@
 
 * :mod:`~gtmodel.modeling.ocp.optimization`: :class:`Optimization`, an optimal control
   problem declared over a model (no transcription);
+* :mod:`~gtmodel.modeling.ocp.initial`: the model's fixed starts and initial equations as
+  initial conditions of the problem (unless it states its own);
 * :mod:`~gtmodel.modeling.ocp.expressions`: the restricted expression language of problem
   files (objectives, constraints) parsed into CasADi;
 * :mod:`~gtmodel.modeling.ocp.declare`: the name table of an optimisation and the parsed

@@ -148,10 +148,13 @@ class BoundarySection(Section):
     Parameters
     ----------
     start, final : dict of str to float
-        Variable name -> value (each an equality point constraint).
+        Variable name -> value (each an equality point constraint). The model's fixed
+        starts (``Mass(s=3)``) are initial conditions too; a ``start`` entry takes the
+        place of the fixed start of its variable when it has the same value, and is an
+        error naming the variable when it differs.
     """
 
-    start: dict[str, number(ge=-MAX_VALUE, le=MAX_VALUE)] = Field(default_factory=dict, description="name -> value at the start time, e.g. theta = 0.0")
+    start: dict[str, number(ge=-MAX_VALUE, le=MAX_VALUE)] = Field(default_factory=dict, description="name -> value at the start time, e.g. theta = 0.0 (the model's fixed starts hold too; a different value for one is an error)")
     final: dict[str, number(ge=-MAX_VALUE, le=MAX_VALUE)] = Field(default_factory=dict, description="name -> value at the final time, e.g. theta = 3.141592653589793")
 
 
@@ -239,11 +242,13 @@ class TranscriptionSection(Section):
         Fixed integrator steps per interval (rk, collocation).
     refine : bool
         Collocation: refine the mesh where the solution is least accurate (element
-        defects, input switches) until the verification passes or a limit is reached.
+        defects, input switches) until the verification passes or a limit is reached
+        (also with ``[[data]]``: the statistics are those of the final mesh); refused
+        with multiple shooting.
     tolerance : float, optional
-        Verification tolerance: largest deviation of a state's simulation under the
-        optimal inputs from the transcribed state, scaled by ``max(1, max |x|)``;
-        default 1e-2 (``gtmodel.defaults``).
+        Verification tolerance (collocation and multiple shooting): largest deviation of
+        a state's simulation under the optimal inputs from the transcribed state, scaled
+        by ``max(1, max |x|)``; default 1e-2 (``gtmodel.defaults``).
     max_elements : int
         Limit on the elements of a refined mesh.
     max_passes : int
@@ -255,8 +260,8 @@ class TranscriptionSection(Section):
     controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
     integrator: choice("rk", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs)") | None = None
     steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, collocation)") = 4
-    refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located)")
-    tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation") | None = None
+    refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; with [[data]] too; not with multiple_shooting)")
+    tolerance: number(gt=0, lt=1, description="verification tolerance (collocation and multiple shooting): scaled deviation of the states from their simulation") | None = None
     max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
 
