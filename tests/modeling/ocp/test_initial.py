@@ -84,6 +84,7 @@ def test_guess_is_no_initial_condition():
     assert r.status == "optimal" and r.objective == pytest.approx(0.0, abs=1e-8)
 
 
+@pytest.mark.slow
 def test_initial_equation_is_an_initial_condition():
     m = PushedGuess().to_model("pushed")
     states = m.variables("state")

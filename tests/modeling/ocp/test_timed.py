@@ -135,7 +135,7 @@ def test_interior_time_with_a_free_final_time_is_a_fraction_of_the_horizon():
     assert opt.timed(x, 1.0 * opt.final_time) is opt.timed(x, "final")
 
 
-@pytest.mark.parametrize("method", ["collocation", "multiple_shooting"])
+@pytest.mark.parametrize("method", ["collocation", pytest.param("multiple_shooting", marks=pytest.mark.slow)])
 def test_speed_limit_at_half_of_a_free_horizon(method):
     # minimum time rest to rest over 1 with |u| <= 1 and v(T/2) <= 0.1: by symmetry each half
     # accelerates for a, brakes for a - 0.1 to v = 0.1 over 0.5: a^2 - 0.005 = 0.5, so

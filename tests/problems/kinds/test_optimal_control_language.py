@@ -113,6 +113,7 @@ def test_bad_language_through_cli(folder, capsys, case, old, new, match):
     assert_bad_problem_through_cli(folder, capsys, PROBLEM.replace(old, new), match)
 
 
+@pytest.mark.slow
 def test_interior_time_of_a_free_horizon_as_a_fraction(folder):
     # minimum time with v(0.5 * final_time) <= 0.1: T = 2 (2 sqrt(0.505) - 0.1) by hand
     # (tests/modeling/ocp/test_timed.py), here written in the file
