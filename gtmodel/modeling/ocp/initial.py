@@ -153,9 +153,54 @@ def model_initial_conditions(opt: Any) -> list[Constraint]:
     out = []
     if keep:
         res, labels = condition_residuals(system, keep)
+        res = _in_states(opt, res, [n for n, k in zip(system.var_names, system.var_kinds) if k == "algebraic" and n in keep])
         for r, name, label in zip(res, keep, labels):
             out.append(Constraint(f"fixed start of {name}", r, np.zeros(1), np.zeros(1), "start"))
             _log.debug("optimisation of %s: initial condition %s", system.name, label)
     for r, label in zip(system.init_res, system.init_names):
         out.append(Constraint(f"initial equation {label}", r, np.zeros(1), np.zeros(1), "start"))
     return out
+
+
+def _in_states(opt: Any, res: list[ca.SX], algebraic: list[str]) -> list[ca.SX]:
+    """The residuals with algebraic variables written in the states where the model's equations give them.
+
+    A transcription has no algebraic variables at the start time itself (collocation
+    extrapolates them from the first element), so a fixed start of an algebraic variable
+    (``mass.s`` made a dummy derivative by index reduction) would hold only to the mesh's
+    accuracy. Algebraic equations that fix one unknown algebraic variable each, affinely
+    and without the inputs (the alias chains of connections: ``flange.s = mass.s + L/2``,
+    ``s_rel = s_b - s_a``), are solved for it one after the other, and the residuals
+    written in the states and parameters: the condition then holds on the initial state
+    exactly. Algebraic variables in loops or nonlinear equations stay as they are.
+    """
+    if not algebraic:
+        return res
+    dae = opt.flat()
+    z, g = dae.z, dae.alg_expr
+    nz, ne = int(z.numel()), int(g.numel())
+    cols: list[set[int]] = [set() for _ in range(ne)]
+    rows, colidx = ca.jacobian(g, z).sparsity().get_triplet()
+    for r, c in zip(rows, colidx):
+        cols[r].add(c)
+    known: dict[int, ca.SX] = {}
+    used: set[int] = set()
+    progress = True
+    while progress:
+        progress = False
+        for k in range(ne):
+            left = [j for j in cols[k] if j not in known]
+            if k in used or len(left) != 1:
+                continue
+            j = left[0]
+            e = ca.substitute(g[k], ca.vertcat(*[z[i] for i in known]), ca.vertcat(*known.values())) if known else g[k]
+            slope = ca.jacobian(e, z[j])
+            if ca.depends_on(e, dae.u) or ca.depends_on(slope, z[j]) or slope.is_zero():
+                continue
+            known[j] = ca.simplify(z[j] - e / slope)
+            used.add(k)
+            progress = True
+    if not known:
+        return res
+    zs, exprs = ca.vertcat(*[z[i] for i in known]), ca.vertcat(*known.values())
+    return [ca.substitute(r, zs, exprs) for r in res]
