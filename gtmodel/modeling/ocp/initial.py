@@ -18,6 +18,11 @@ an inequality frees the initial value within them), and is a conflict otherwise
 (:class:`InitialConditionConflict`, naming the variable and the constraint). Starts with
 ``fixed=False`` are guesses: they seed the initial guess (the transcriptions' default
 guess is the start values), nothing more.
+
+A fixed start of an algebraic variable (``mass.s`` where index reduction kept the damper's
+``s_rel`` as the state) is written in the states where the model's algebraic equations
+give the variable affinely without the inputs (the connection equations), so it holds on
+the initial state exactly rather than on collocation's extrapolation of the first element.
 """
 
 from __future__ import annotations
@@ -178,7 +183,7 @@ def _in_states(opt: Any, res: list[ca.SX], algebraic: list[str]) -> list[ca.SX]:
         return res
     dae = opt.flat()
     z, g = dae.z, dae.alg_expr
-    nz, ne = int(z.numel()), int(g.numel())
+    ne = int(g.numel())
     cols: list[set[int]] = [set() for _ in range(ne)]
     rows, colidx = ca.jacobian(g, z).sparsity().get_triplet()
     for r, c in zip(rows, colidx):
