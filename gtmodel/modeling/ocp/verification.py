@@ -1,4 +1,4 @@
-"""Verification of a collocation solution by simulation with a variable-step integrator.
+"""Verification of a collocation (or multiple-shooting) solution by simulation with a variable-step integrator.
 
 A collocation solution satisfies the model equations at the collocation points only.
 Between them, and for a spurious minimum of the NLP (a polynomial that collocates the
@@ -200,7 +200,8 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     Parameters
     ----------
     result : OptimizationResult
-        A collocation result (with its collocation data and model).
+        A collocation or multiple-shooting result (with its collocation data, the
+        shooting samples for the latter, and model).
     tolerance : float, optional
         Largest allowed scaled deviation; default
         ``gtmodel.defaults.defaults["ocp.verification_tolerance"]``.
