@@ -170,6 +170,7 @@ def test_call_rows_equals_single_calls(built):
     assert list(status) == [0, 0, 0, 0, 0, 1] and np.all(q[-1] == SENTINEL)
 
 
+@pytest.mark.slow  # compiles F1 (~14 CPU-s); the F1 check row is slow too
 def test_call_rows_passes_null_for_non_finite_optional_rows(built):
     """F1 IK: a NaN row of the optional start q0 is NULL, i.e. the default start."""
     gen, lib = built("F1")

@@ -147,9 +147,9 @@ def test_new_function_is_a_declaration(tmp_path):
     assert report.functions[1].max_abs_diff <= CART_ACCELERATION_TOLERANCE
 
 
-def test_header_documents_units_sizes_statuses_and_newton_bounds(built):
+def test_header_documents_units_sizes_statuses_and_newton_bounds(generated):
     """The F1 header: units, array sizes, status codes, the Newton bounds, version and hash."""
-    gen, _ = built("F1")
+    gen = generated("F1")
     header = gen.header.read_text()
     assert "int gt_F1_ik(const double T[3], const double R[9], const double q0[6], double q[6], int *iterations);" in header
     assert "int gt_F1_fk(const double q[6], const double T0[3], const double R0[9], double T[3], double R[9], int *iterations);" in header
@@ -160,9 +160,9 @@ def test_header_documents_units_sizes_statuses_and_newton_bounds(built):
 
 
 @pytest.mark.parametrize("robot", ["D1_six_link", "F1"])
-def test_newton_loops_are_bounded(built, robot):
+def test_newton_loops_are_bounded(generated, robot):
     """No unbounded branch: no while loop; every Newton loop runs k = 0 .. MAX_ITER."""
-    gen, _ = built(robot)
+    gen = generated(robot)
     src = gen.source.read_text()
     assert "while" not in src and "goto" not in src
     bad = [
@@ -176,9 +176,9 @@ def test_newton_loops_are_bounded(built, robot):
 
 
 @pytest.mark.parametrize("name", ["ik", "fk"])
-def test_f1_loop_hoists_invariants_and_tests_the_residual_alone(built, name):
+def test_f1_loop_hoists_invariants_and_tests_the_residual_alone(generated, name):
     """F1 loops: the fixed-input part once before the loop, the residual alone at the tests."""
-    gen, _ = built("F1")
+    gen = generated("F1")
     src = gen.source.read_text()
     body = src[src.index(f"int gt_F1_{name}(") :]
     body = body[: body.index("\n}\n")]
@@ -188,8 +188,8 @@ def test_f1_loop_hoists_invariants_and_tests_the_residual_alone(built, name):
     assert f"k % {F1_BLOCK} == 0" in body
 
 
-def test_f1_casadi_helpers_are_inlined(built):
-    gen, _ = built("F1")
+def test_f1_casadi_helpers_are_inlined(generated):
+    gen = generated("F1")
     casadi_src = gen.casadi_source.read_text()
     assert "static casadi_real casadi_sq(" in casadi_src  # inlined helper, not a PLT call
 
