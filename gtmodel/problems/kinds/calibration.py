@@ -16,6 +16,7 @@ others (eq. 5.5), with identifiability and parameter uncertainties::
     parameters = "L1"               # parameter set of the true robot
     noise = "laser_tracker"         # "laser_tracker" (10 um) | "stereo_vision" (1.7 mm) | "none"
     actuator_errors = "none"        # "none" | "table_4_1" (cyclic error, straightness, backlash)
+    # cyclic_period = 0.2           # m, period of table_4_1's cyclic error (default: pinion circumference)
     grid_step = 0.1153              # m, regular grid in the workspace ...
     # random_poses = 400            # ... or this many random poses
     seed = 0
@@ -299,7 +300,10 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
     # a robot that differs from its parameter set (built tolerances): every parameter moved
     truth = perturbed_model(truth, t.perturbation, 7)
     noise = device_noise(t.noise)
-    errors = ActuatorErrors.table_4_1() if t.actuator_errors == "table_4_1" else None
+    if t.cyclic_period is not None and t.actuator_errors != "table_4_1":
+        raise file.fail("truth.cyclic_period", "actuator_errors = 'table_4_1' (the period belongs to its cyclic error)", t.cyclic_period)
+    period = {} if t.cyclic_period is None else {"cyclic_period_m": t.cyclic_period}
+    errors = ActuatorErrors.table_4_1(**period) if t.actuator_errors == "table_4_1" else None
     _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
     cart = None
     try:

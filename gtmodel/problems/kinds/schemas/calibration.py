@@ -52,6 +52,7 @@ class TruthSection(Section):
     perturbation: number(ge=0, le=MAX_PERTURBATION_M, unit="m", description="random change of every length/point of the true robot (built tolerances)") = 0.0
     noise: choice("laser_tracker", "stereo_vision", "none", description="measurement device (noise)") = "laser_tracker"
     actuator_errors: choice("none", "table_4_1", description="actuator errors of the data (Table 4.1)") = "none"
+    cyclic_period: number(gt=0, le=MAX_LENGTH_M, unit="m", description="period of the cyclic rack-and-pinion error of table_4_1 (default 0.2 m, the pinion circumference assumed; the thesis' tooth pitch is much shorter than the 50 mm survey step)") | None = None
     grid_step: number(gt=0, le=MAX_LENGTH_M, unit="m", description="spacing of a regular pose grid in the workspace") | None = None
     grid_step_deg: number(gt=0, le=90, unit="deg", description="orientation spacing of the F1's 6-D grid") = 10.0
     random_poses: integer(2, max(MAX_RANDOM_POSES.values()), description="number of random poses (without grid_step)") | None = None
