@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from gtmodel.report.fidelity_d1 import THESIS_TABLE_5_3, d1_rows, length_error_um
+from gtmodel.report.fidelity_d1 import THESIS_TABLE_5_3, d1_rows, gravity_sag_figures, length_error_um
 
 
 def _figures(means_um):
@@ -58,3 +58,14 @@ def test_equal_arms_do_not_reproduce_the_thesis_arm_order():
     # thesis: arm 1 > 2 > 3 (73 / 60 / 19 um); equal synthetic arms have no such order
     r = _row(d1_rows({"d1_error_models_thesis": _figures([100] * 4)}), "Table 5.8: model 1 final cost")
     assert r[1] == "73 / 60 / 19" and r[4] == "differs"
+
+
+@pytest.mark.slow
+def test_the_quoted_gravity_sag_figures():
+    # the numbers quoted in the Table 5.8 row, recomputed (project stiffness model, model-1 calibration)
+    f = gravity_sag_figures()
+    assert f["sag_um"] == pytest.approx([36, 46], abs=1.0)
+    assert f["mean_um"] < 1.0 and max(f["arm_um"]) < 0.5
+    assert f["tcp_stiffness_z_N_per_um"] == pytest.approx(2.5, abs=0.1)  # within the D1's measured 2-4 N/um
+    assert f["transverse_force_N"][0] == pytest.approx([8, 80], abs=1.0)
+    assert f["transverse_force_N"][1][1] < 12
