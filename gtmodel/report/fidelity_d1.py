@@ -19,6 +19,10 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel.calibration import CalibrationProblem, grid_poses, tcp_errors
+from gtmodel.robots.closure import ThreeLinkClosure
+from gtmodel.robots.stiffness import GantryTau3Stiffness
+
 __all__ = ["D1_PROBLEMS", "THESIS_TABLE_5_3", "extract", "d1_rows", "length_error_um", "gravity_sag_figures"]
 
 #: The D1 error-model runs: the dense-grid variant and the thesis' set-up (problems/thesis/).
@@ -62,8 +66,8 @@ def gravity_sag_figures(grid_step: float = 0.16, payload_kg: float = 0.0) -> dic
     drive compliances: about 2.5 N/um at the TCP, the D1's measured 2-4 N/um, Dressler (2012),
     ch. 6.3), calibrated with model 1 on every second pose and evaluated on the others (eq. 5.5).
     Also the force each arm's link puts on its cart across the guideway, the load a compliant
-    cart would follow. Takes a few seconds (imports the calibration; used by the slow check of
-    the figures quoted in :func:`d1_rows`).
+    cart would follow. Takes a few seconds (used by the slow check of the figures quoted in
+    :func:`d1_rows`).
 
     Parameters
     ----------
@@ -84,11 +88,6 @@ def gravity_sag_figures(grid_step: float = 0.16, payload_kg: float = 0.0) -> dic
     GtModelError
         If the grid, the statics or the calibration fail.
     """
-    # the calibration stack on first use only: rendering the report stays light
-    from gtmodel.calibration import CalibrationProblem, grid_poses, tcp_errors
-    from gtmodel.robots.closure import ThreeLinkClosure
-    from gtmodel.robots.stiffness import GantryTau3Stiffness
-
     model = ThreeLinkClosure("D1")
     q = grid_poses(model, grid_step)
     T0, _ = model.fk(q)
