@@ -240,7 +240,8 @@ def write_calibration(decl: Any, outcome: Any, out: Path, plots: bool, title: st
     if reports:
         cols = {"pose": np.arange(outcome.validation.n_poses)}
         for name, rep in reports.items():
-            cols[f"error_m[{name}]"] = rep.errors
+            head = f"error_m[{name}]"
+            cols['"' + head.replace('"', '""') + '"' if any(c in head for c in ',"') else head] = rep.errors  # RFC 4180 quoting
         np.savetxt(out / "errors.csv", np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="", fmt="%.9g")
         written.files.append("errors.csv")
         if plots:

@@ -122,6 +122,15 @@ BAD = [
     ("bad_max_iter", _edit("max_iter = 200", "max_iter = 0"), r"field 'calibration\.max_iter'"),
     ("negative_seed", _edit("seed = 0", "seed = -1"), r"field 'truth\.seed'"),
     ("cyclic_period_without_errors", _edit("seed = 0", "seed = 0\ncyclic_period = 0.01"), r"field 'truth\.cyclic_period': expected actuator_errors = 'table_4_1'"),
+    ("armwise_unknown_arm", _edit("[calibration]", '[[models]]\ntype = "armwise"\narms = ["modified", "nope", "ideal"]\n\n[calibration]'),
+     r"field 'models\[2\]\.arms\[1\]': expected the name of an earlier declared, calibrated model"),
+    ("armwise_two_arms", _edit("[calibration]", '[[models]]\ntype = "armwise"\narms = ["modified", "ideal"]\n\n[calibration]'),
+     r"field 'models\[2\]\.arms': expected the names of 3 earlier declared models"),
+    ("armwise_without_arms", _edit("[calibration]", '[[models]]\ntype = "armwise"\n\n[calibration]'), r"field 'models\[2\]\.arms'"),
+    ("armwise_fixed", _edit("[calibration]", '[[models]]\ntype = "armwise"\narms = ["modified", "ideal", "ideal"]\nfixed = ["L1"]\n\n[calibration]'),
+     r"field 'models\[2\]\.fixed': expected nothing for type = 'armwise'"),
+    ("arms_on_a_calibrated_model", _edit('name = "ideal"', 'name = "ideal"\narms = ["modified", "modified", "modified"]'),
+     r"field 'models\[1\]\.arms': expected no arms"),
     ("cyclic_period_negative", _edit("seed = 0", "seed = 0\ncyclic_period = -0.01"), r"field 'truth\.cyclic_period': expected a positive number"),
 ]
 

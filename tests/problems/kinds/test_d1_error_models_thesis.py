@@ -9,6 +9,8 @@ period, recomputed here for the data).
 
 from __future__ import annotations
 
+import csv
+
 import numpy as np
 import pytest
 
@@ -27,11 +29,11 @@ FILE = PROBLEMS_DIR / "thesis" / "d1_error_models_thesis.toml"
 def solved(tmp_path_factory):
     out = tmp_path_factory.mktemp("d1_thesis")
     outcome = run_problem(FILE, out, plots=False)
-    return outcome.status, {m["name"].split(":")[0]: m for m in outcome.summary["models"]}, outcome.summary
+    return outcome.status, {m["name"].split(":")[0]: m for m in outcome.summary["models"]}, outcome.summary, out
 
 
 def test_thesis_pose_count_and_status(solved):
-    status, _, s = solved
+    status, _, s, _ = solved
     assert status == Status.OPTIMAL
     assert (s["n_calibration"], s["n_validation"]) == (63, 63)  # thesis: 61 calibrate, half validate
 
@@ -59,7 +61,7 @@ def test_plate_joints_are_what_the_six_link_data_barely_determine(solved):
 def test_fidelity_rows_of_the_run(solved):
     rows = d1_rows({"d1_error_models": None, "d1_error_models_thesis": extract(solved[2])})
     assert any("Tables 5.2/5.3: D1 error models 1-5" in r[0] and "[d1_error_models_thesis]" in r[0] for r in rows)
-    assert sum("Table 5.3: D1 model" in r[0] and "thesis]" in r[0] for r in rows) == 4
+    assert sum("Table 5.3: D1 model" in r[0] and "thesis]" in r[0] for r in rows) == 5
 
 
 def test_the_declared_cyclic_period_generates_the_data():
@@ -70,3 +72,18 @@ def test_the_declared_cyclic_period_generates_the_data():
     assert np.abs(again.T - d.measurements.T).max() < 1e-12
     other = synthetic_measurements(d.truth, d.measurements.q, noise="laser_tracker", actuator_errors=ActuatorErrors.table_4_1(), seed=0)
     assert np.abs(other.T - d.measurements.T).max() > 1e-5
+
+
+def test_model_5_joins_the_calibrated_arms(solved):
+    # Table 5.3 model 5: arms 1, 3 of model 3 and arm 2 of model 4; evaluated on the same validation poses
+    models = solved[1]
+    m5 = models["5"]
+    assert m5["status"] == "optimal" and "arms 1: 3: six-link" in m5["message"]
+    assert m5["mean_error_m"] < models["3"]["mean_error_m"]
+    assert models["5, arms 1 and 3 with B0 held"]["mean_error_m"] < m5["mean_error_m"]
+
+
+def test_errors_csv_has_one_header_per_column_with_commas_in_model_names(solved):
+    rows = list(csv.reader((solved[3] / "errors.csv").open(encoding="utf-8")))
+    assert len(rows[0]) == len(rows[1]) == 1 + len(solved[1])
+    assert rows[0][1] == "error_m[1: 3-link, linear actuators]"
