@@ -24,6 +24,7 @@ from gtmodel.calibration.evaluation import AccuracyReport, evaluate
 from gtmodel.calibration.kinematic import CalibrationProblem
 from gtmodel.calibration.pose_choice import choose_poses
 from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.robots.armwise import ArmwiseClosure
 from gtmodel.status import Status
 
 __all__ = ["CalibrationDeclaration", "CalibrationOutcome", "perturbed_model", "start_report"]
@@ -119,6 +120,9 @@ class CalibrationDeclaration:
         results = []
         starts: dict[str, Any] = {}
         for spec in self.models:
+            if spec["type"] == "armwise":
+                results.append(_armwise(spec, {name: res for name, res, _, _ in results}, val))
+                continue
             _log.info("calibrating %s (%s) on %d poses ...", spec["name"], spec["type"], cal.n_poses)
             try:
                 res = CalibrationProblem(spec["model"], spec["selection"]).solve(cal, solver=self.solver, align=self.align, max_iter=self.max_iter)
@@ -138,6 +142,24 @@ class CalibrationDeclaration:
             except GtModelError:
                 floor = None
         return CalibrationOutcome(self, cal, val, results, floor, selected, time.perf_counter() - t0, {"start_reports": starts, **extra})
+
+
+def _armwise(spec: dict[str, Any], calibrated: dict[str, Any], val: Any) -> tuple[str, None, Any, str]:
+    """Arms of calibrated models joined (:class:`~gtmodel.robots.armwise.ArmwiseClosure`) and evaluated (eq. 5.5).
+
+    Dressler (2012), Table 5.3, model 5: the arms are calibrated separately, so joining the
+    calibrated arms is the calibration of the joined model. A source that did not calibrate,
+    or a joined model whose FK fails at a validation pose, gives no report and a message.
+    """
+    parts = [calibrated.get(a) for a in spec["arms"]]
+    bad = [a for a, r in zip(spec["arms"], parts) if r is None or not r.success]
+    if bad:
+        return spec["name"], None, None, f"not joined: model(s) {bad} did not calibrate"
+    try:
+        model = ArmwiseClosure([r.model for r in parts], name=spec["name"])
+        return spec["name"], None, evaluate(model, val, label=spec["name"]), "arms " + ", ".join(f"{i + 1}: {a}" for i, a in enumerate(spec["arms"]))
+    except GtModelError as exc:
+        return spec["name"], None, None, f"evaluation failed: {exc}"
 
 
 def _measurements(self: CalibrationDeclaration) -> Any:

@@ -30,12 +30,15 @@ import numpy as np
 import scipy.optimize
 
 from gtmodel.errors import InputError
+from gtmodel.report.fidelity_d1 import D1_PROBLEMS, d1_rows
+from gtmodel.report.fidelity_d1 import extract as extract_d1
 from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
 
 __all__ = ["PROBLEMS", "collect", "render", "rows", "main"]
 
 #: The shipped problems whose result folders the report reads.
 PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models")
+PROBLEMS = tuple(dict.fromkeys(PROBLEMS + D1_PROBLEMS))  # the D1 error-model runs (gtmodel.report.fidelity_d1)
 REPO = Path(__file__).resolve().parents[2]
 FIGURES = REPO / "docs" / "fidelity_figures.json"
 PAGE = REPO / "docs" / "fidelity.md"
@@ -75,12 +78,9 @@ def _correction(s: dict[str, Any]) -> dict[str, Any]:
             "resolutions": s["resolutions"]}
 
 
-def _d1(s: dict[str, Any]) -> dict[str, Any]:
-    return {"status": s["status"], "models": s.get("models")}
-
-
 _EXTRACT: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction, "d1_error_models": _d1}
+    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction}
+_EXTRACT.update({name: extract_d1 for name in D1_PROBLEMS})
 
 
 def actuator_bandwidths_hz() -> list[float]:
@@ -312,15 +312,6 @@ def _other_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
              "reproduced" if _within(bw, [1.1] * 3, 0.2) else "differs",
              "the -3 dB points of b / (1 - a q^-1) from the published a, b: axes 1-2 have poles 0.9647 / 0.9656 (1.4 Hz), axis 3 0.9728 (1.1 Hz); "
              "the thesis' 'about 1.1 Hz' matches axis 3")]
-    d1 = d.get("d1_error_models")
-    if d1 is None or not d1.get("models"):
-        rows.append(("Dressler (2012), Tables 5.2/5.3: D1 error models 1-5, mean / max TCP error [um]", "140/410, 120/440, 110/260, 100/340, 90/240",
-                     "not run", "ranking", "not run", "run problems/d1_error_models.toml, then collect"))
-    else:
-        models = d1["models"]
-        rows.append(("Dressler (2012), Tables 5.2/5.3: D1 error models 1-5, mean / max TCP error [um]", "140/410, 120/440, 110/260, 100/340, 90/240",
-                     "; ".join(f"{_f(m.get('mean_um'))}/{_f(m.get('max_um'))}" for m in models) if isinstance(models, list) else json.dumps(models)[:200],
-                     "ranking", "see values", "synthetic truth (six-link D1 with Table 4.1 actuator errors); model 5 not declared"))
     rows.append(("Dressler (2012), (7.21)-(7.22): Kalman filter on the identified tool model with z_kin as input", "model (7.21)",
                  "triple integrator of the tool position measuring z_kin and a_m", "-", "not attempted",
                  "(7.21) needs the identified model from z_kin to the tool position (A, B, C of section 6.3 at the ILC operating point), "
@@ -343,7 +334,8 @@ def rows(data: dict[str, Any]) -> list[tuple[str, ...]]:
     list of tuple of str
     """
     return (_ilc_rows(data, "l1_ilc_thesis", data["model"]) + _ilc_rows(data, "l1_ilc", data["model"]) + _fusion_rows(data)
-            + _correction_rows(data) + _other_rows(data))
+            + _correction_rows(data) + _other_rows(data)
+            + d1_rows(data))
 
 
 def render(data: dict[str, Any]) -> str:

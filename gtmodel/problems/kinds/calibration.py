@@ -16,6 +16,7 @@ others (eq. 5.5), with identifiability and parameter uncertainties::
     parameters = "L1"               # parameter set of the true robot
     noise = "laser_tracker"         # "laser_tracker" (10 um) | "stereo_vision" (1.7 mm) | "none"
     actuator_errors = "none"        # "none" | "table_4_1" (cyclic error, straightness, backlash)
+    # cyclic_period = 0.2           # m, period of table_4_1's cyclic error (default: pinion circumference)
     grid_step = 0.1153              # m, regular grid in the workspace ...
     # random_poses = 400            # ... or this many random poses
     seed = 0
@@ -23,7 +24,9 @@ others (eq. 5.5), with identifiability and parameter uncertainties::
     [[models]]                      # one table per model to calibrate and compare
     name = "modified"
     type = "three_link"             # "three_link" | "three_link_piecewise" | "six_link"
-                                    # | "six_link_piecewise" | "f1"
+                                    # | "six_link_piecewise" | "f1" | "armwise"
+    # arms = ["3", "4", "3"]        # armwise only: the calibrated arm i of the model named
+                                    #   arms[i] (declared earlier), joined (Table 5.3 model 5)
     parametrisation = "modified"    # three_link only: "ideal" (15) | "modified" (21)
     start = "L1_ideal"              # start parameters: a set name/path, or "truth"
     perturbation = 0.0              # m, random start perturbation of every length/point
@@ -168,6 +171,8 @@ class CalibrationKind(ProblemKind):
         if (doc.data is None) == (doc.truth is None):
             raise ProblemError(f"{file.path}: declare exactly one of '[data]' (a measurement file) and '[truth]' (synthetic data)")
         for k, m in enumerate(doc.models):  # references first: a bad one fails before the data are built
+            if m.type == "armwise":
+                continue  # joins calibrated arms: no start of its own
             if m.start != "truth":
                 file.reference(f"models[{k}].start", m.start, _SHIPPED)
             elif doc.truth is None:
@@ -299,7 +304,10 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
     # a robot that differs from its parameter set (built tolerances): every parameter moved
     truth = perturbed_model(truth, t.perturbation, 7)
     noise = device_noise(t.noise)
-    errors = ActuatorErrors.table_4_1() if t.actuator_errors == "table_4_1" else None
+    if t.cyclic_period is not None and t.actuator_errors != "table_4_1":
+        raise file.fail("truth.cyclic_period", "actuator_errors = 'table_4_1' (the period belongs to its cyclic error)", t.cyclic_period)
+    period = {} if t.cyclic_period is None else {"cyclic_period_m": t.cyclic_period}
+    errors = ActuatorErrors.table_4_1(**period) if t.actuator_errors == "table_4_1" else None
     _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
     cart = None
     try:
@@ -324,8 +332,27 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
     return truth, cart, noise.position_sigma_m, build
 
 
+def _armwise_model(k: int, m: ModelSection, doc: CalibrationFile, file: ProblemFile) -> dict[str, Any]:
+    """An ``armwise`` entry: the arms of earlier declared models joined after their calibration (Table 5.3, model 5)."""
+    key = f"models[{k}]"
+    earlier = {(e.name if e.name is not None else e.type): e.type for e in doc.models[:k]}
+    if m.arms is None or len(m.arms) != 3:
+        raise file.fail(f"{key}.arms", "the names of 3 earlier declared models, one per arm", m.arms)
+    for f in ("fixed", "ties"):
+        if getattr(m, f):
+            raise file.fail(f"{key}.{f}", "nothing for type = 'armwise' (its arms are calibrated as their models)", getattr(m, f))
+    for i, a in enumerate(m.arms):
+        if earlier.get(a) in (None, "armwise"):
+            raise file.fail(f"{key}.arms[{i}]", f"the name of an earlier declared, calibrated model (one of {sorted(n for n, t in earlier.items() if t != 'armwise')})", a)
+    return {"name": m.name if m.name is not None else "armwise", "type": "armwise", "arms": list(m.arms), "model": None, "selection": None}
+
+
 def _start_model(k: int, m: ModelSection, doc: CalibrationFile, file: ProblemFile, truth: Any, cart: Any, n_q: int) -> dict[str, Any]:
     key = f"models[{k}]"
+    if m.type == "armwise":
+        return _armwise_model(k, m, doc, file)
+    if m.arms is not None:
+        raise file.fail(f"{key}.arms", "no arms (they belong to type = 'armwise')", m.arms)
     mname = m.name if m.name is not None else m.type
     base = _base_type(m.type)
     if m.start == "truth":

@@ -21,14 +21,16 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from gtmodel._geometry import rotation_to_zyz
 from gtmodel.calibration import tcp_errors
 from gtmodel.errors import GtModelError
 from gtmodel.report.calibration import plot_error_histogram
 from gtmodel.problems.base import Written
 from gtmodel.robots.closure import ThreeLinkClosure
 
-__all__ = ["write_calibration", "calibrated_tables", "parameters_vs_truth"]
+__all__ = ["write_calibration", "calibrated_tables", "parameters_vs_truth", "measured_orientation_range_deg"]
 
 
 def _within_3_std(res: Any, truth: Any) -> dict[str, Any] | None:
@@ -96,6 +98,53 @@ def _truth_errors(res: Any, decl: Any) -> dict[str, float]:
     return {"truth_mean_error_m": float(e.mean()), "truth_max_error_m": float(e.max())}
 
 
+def _closure_figures(res: Any) -> dict[str, Any]:
+    """Per-link RMS closure residual, the conditioning and the least determined parameter of a calibration.
+
+    The RMS of ``||A - B||^2 - L^2`` over the calibration poses [m^2] is ``sqrt(V_j / N)`` of the
+    thesis' final cost per link (Dressler (2012), Tables 5.8-5.9); divided by ``2 L`` it is the
+    length error along the link [m].
+    """
+    r = np.asarray(res.residuals, dtype=float)
+    names = [n for arm in getattr(res.model, "links", ()) for n in arm]
+    ident = res.identifiability
+    finite = {k: v for k, v in res.std.items() if v and np.isfinite(v)}
+    worst = max(finite, key=finite.get) if finite else None
+    out: dict[str, Any] = {
+        "cost_per_arm": [float(c) for c in res.cost_per_arm],
+        "link_residual_rms_m2": np.sqrt(np.mean(r**2, axis=0)).tolist() if r.size else [],
+        "condition_number": float(ident.condition_number),
+    }
+    if len(names) == r.shape[-1]:
+        out["links"] = names
+    if worst is not None:
+        out["least_determined"] = {"name": worst, "std": float(finite[worst])}
+    return out
+
+
+def measured_orientation_range_deg(data: Any) -> list[float] | None:
+    """Range (max - min) of the measured plate orientation's ZYZ Euler angles over all poses.
+
+    The figure of Dressler (2012), Fig. 4.7 (D1: 0.1 deg in alpha to 0.5 deg in beta).
+
+    Parameters
+    ----------
+    data : MeasurementSet
+        Measured poses (``quat`` (N, 4) ``(w, x, y, z)`` or None).
+
+    Returns
+    -------
+    list of float or None
+        ``[alpha, beta, gamma]`` ranges [deg]; None without orientations.
+    """
+    quat = getattr(data, "quat", None)
+    if quat is None:
+        return None
+    R = Rotation.from_quat(np.asarray(quat, dtype=float)[:, [1, 2, 3, 0]]).as_matrix()
+    e = np.unwrap(rotation_to_zyz(R), axis=0)
+    return np.degrees(e.max(axis=0) - e.min(axis=0)).tolist()
+
+
 def _model_row(name: str, res: Any, rep: Any, msg: str, decl: Any, start: Any) -> dict[str, Any]:
     row: dict[str, Any] = {"name": name, "status": res.status if res else ("optimal" if rep is not None else "error"), "message": msg}
     if res is not None:
@@ -109,6 +158,7 @@ def _model_row(name: str, res: Any, rep: Any, msg: str, decl: Any, start: Any) -
             cost=float(res.cost),
             quaternion_norms=res.quaternion_norms,
         )
+        row.update(_closure_figures(res))
         check = _within_3_std(res, decl.truth)
         if check is not None:
             row["parameters_vs_truth"] = check
@@ -170,6 +220,9 @@ def write_calibration(decl: Any, outcome: Any, out: Path, plots: bool, title: st
         key = "noise_floor" if decl.truth_exact else "truth_without_actuator_errors"
         summary[f"{key}_mean_error_m"] = outcome.noise_floor.mean_error
         summary[f"{key}_max_error_m"] = outcome.noise_floor.max_error
+    orient = measured_orientation_range_deg(decl.measurements)
+    if orient is not None:
+        summary["measured_orientation_range_deg"] = orient
     if outcome.selected is not None:
         summary["selected_poses"] = int(outcome.selected.size)
     summary.update(outcome.extra.get("pose_choice", {}))
@@ -187,7 +240,8 @@ def write_calibration(decl: Any, outcome: Any, out: Path, plots: bool, title: st
     if reports:
         cols = {"pose": np.arange(outcome.validation.n_poses)}
         for name, rep in reports.items():
-            cols[f"error_m[{name}]"] = rep.errors
+            head = f"error_m[{name}]"
+            cols['"' + head.replace('"', '""') + '"' if any(c in head for c in ',"') else head] = rep.errors  # RFC 4180 quoting
         np.savetxt(out / "errors.csv", np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="", fmt="%.9g")
         written.files.append("errors.csv")
         if plots:

@@ -121,6 +121,17 @@ BAD = [
     ("bad_align", _edit("align = true", 'align = "yes"'), r"field 'calibration\.align': expected true or false"),
     ("bad_max_iter", _edit("max_iter = 200", "max_iter = 0"), r"field 'calibration\.max_iter'"),
     ("negative_seed", _edit("seed = 0", "seed = -1"), r"field 'truth\.seed'"),
+    ("cyclic_period_without_errors", _edit("seed = 0", "seed = 0\ncyclic_period = 0.01"), r"field 'truth\.cyclic_period': expected actuator_errors = 'table_4_1'"),
+    ("armwise_unknown_arm", _edit("[calibration]", '[[models]]\ntype = "armwise"\narms = ["modified", "nope", "ideal"]\n\n[calibration]'),
+     r"field 'models\[2\]\.arms\[1\]': expected the name of an earlier declared, calibrated model"),
+    ("armwise_two_arms", _edit("[calibration]", '[[models]]\ntype = "armwise"\narms = ["modified", "ideal"]\n\n[calibration]'),
+     r"field 'models\[2\]\.arms': expected the names of 3 earlier declared models"),
+    ("armwise_without_arms", _edit("[calibration]", '[[models]]\ntype = "armwise"\n\n[calibration]'), r"field 'models\[2\]\.arms'"),
+    ("armwise_fixed", _edit("[calibration]", '[[models]]\ntype = "armwise"\narms = ["modified", "ideal", "ideal"]\nfixed = ["L1"]\n\n[calibration]'),
+     r"field 'models\[2\]\.fixed': expected nothing for type = 'armwise'"),
+    ("arms_on_a_calibrated_model", _edit('name = "ideal"', 'name = "ideal"\narms = ["modified", "modified", "modified"]'),
+     r"field 'models\[1\]\.arms': expected no arms"),
+    ("cyclic_period_negative", _edit("seed = 0", "seed = 0\ncyclic_period = -0.01"), r"field 'truth\.cyclic_period': expected a positive number"),
 ]
 
 #: The fuzz reproducers of issue 12 (non-GtModelError exceptions or unbounded work before
@@ -258,3 +269,21 @@ def test_d1_piecewise_actuator_models_beat_the_linear_ones(tmp_path):
     assert all(m["status"] == "optimal" for m in models.values())
     assert models["2"]["mean_error_m"] < models["1"]["mean_error_m"]
     assert models["4"]["mean_error_m"] < models["3"]["mean_error_m"]
+
+
+def test_measured_orientation_range_against_scipy_euler():
+    """Fig. 4.7's figure: ZYZ angle ranges of the measured plate orientation (scipy's intrinsic 'ZYZ' as reference)."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from gtmodel.calibration import MeasurementSet
+    from gtmodel.problems.kinds.calibration_results import measured_orientation_range_deg
+
+    rng = np.random.default_rng(3)
+    nominal = Rotation.from_euler("ZYZ", [85.0, 100.0, -88.0], degrees=True)
+    rots = Rotation.from_rotvec(rng.normal(scale=np.radians(0.1), size=(40, 3))) * nominal
+    quat = rots.as_quat()[:, [3, 0, 1, 2]]
+    data = MeasurementSet(q=np.zeros((40, 3)), T=np.zeros((40, 3)), quat=quat)
+    e = rots.as_euler("ZYZ", degrees=True)
+    assert measured_orientation_range_deg(data) == pytest.approx(list(e.max(axis=0) - e.min(axis=0)), abs=1e-9)
+    assert measured_orientation_range_deg(MeasurementSet(q=np.zeros((2, 3)), T=np.zeros((2, 3)))) is None

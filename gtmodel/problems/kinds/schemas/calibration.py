@@ -22,7 +22,7 @@ __all__ = ["CalibrationFile", "MODEL_TYPES", "MAX_PERTURBATION_M", "MAX_RANDOM_P
 #: a file is validated without the calibration).
 LSQ_SOLVERS = ("lm", "trf", "ipopt", "ipopt-gn")
 #: Model types a calibration problem can declare.
-MODEL_TYPES = ("three_link", "three_link_piecewise", "six_link", "six_link_piecewise", "f1")
+MODEL_TYPES = ("three_link", "three_link_piecewise", "six_link", "six_link_piecewise", "f1", "armwise")
 #: Largest random perturbation of a parameter set [m] (built tolerances are millimetres).
 MAX_PERTURBATION_M = 0.1
 #: Largest number of random poses, per truth model (rejection sampling with IK or FK).
@@ -52,6 +52,7 @@ class TruthSection(Section):
     perturbation: number(ge=0, le=MAX_PERTURBATION_M, unit="m", description="random change of every length/point of the true robot (built tolerances)") = 0.0
     noise: choice("laser_tracker", "stereo_vision", "none", description="measurement device (noise)") = "laser_tracker"
     actuator_errors: choice("none", "table_4_1", description="actuator errors of the data (Table 4.1)") = "none"
+    cyclic_period: number(gt=0, le=MAX_LENGTH_M, unit="m", description="period of the cyclic rack-and-pinion error of table_4_1 (default 0.2 m, the pinion circumference assumed; the thesis' tooth pitch is much shorter than the 50 mm survey step)") | None = None
     grid_step: number(gt=0, le=MAX_LENGTH_M, unit="m", description="spacing of a regular pose grid in the workspace") | None = None
     grid_step_deg: number(gt=0, le=90, unit="deg", description="orientation spacing of the F1's 6-D grid") = 10.0
     random_poses: integer(2, max(MAX_RANDOM_POSES.values()), description="number of random poses (without grid_step)") | None = None
@@ -70,6 +71,7 @@ class ModelSection(Section):
     perturbation: number(ge=0, le=MAX_PERTURBATION_M, unit="m", description="random start perturbation of every length/point") = 0.0
     fixed: StringList = Field(default_factory=list, description="parameter names or patterns kept at the start")
     ties: StringList = Field(default_factory=list, description='equalities, e.g. ["Abj_2b_z = Abj_2a_z"]')
+    arms: StringList | None = Field(default=None, description='armwise only: for arms 1-3 the name of an earlier declared model whose calibrated arm it takes (Table 5.3 model 5), e.g. ["3", "4", "3"]')
 
 
 def _model_tables(v: Any) -> Any:
