@@ -48,27 +48,15 @@ from gtmodel.problems.kinds.closed_loop_common import build_plant
 from gtmodel.problems.kinds.schemas.ilc import ILCFile
 from gtmodel.report.ilc import plot_convergence, plot_error_measure, plot_tool_path
 from gtmodel.estimation.ilc.cases import ILCDeclaration, ILCOutcome
+from gtmodel.estimation.ilc.thesis import thesis_table_7_2
 from gtmodel.trajectory.square import plan_square
 
 __all__ = [
     "ILCFile",
     "ILCKind",
-    "THESIS_TABLE_7_2",
 ]
 
 _log = logging.getLogger("gtmodel")
-
-#: The thesis' figures, Dressler (2012), section 7.4: Table 7.2 (tool-side error (7.25), mean of
-#: iterations 5-10 relative to iteration 0, x and y), the largest singular values (7.16) of each
-#: case (Case 1 per actuator, eq. 7.28; Cases 2A/2B and 3 in the text of section 7.4) and Case 1's
-#: actuator-side error after 5 iterations ("about 2 %", Fig. 7.7).
-THESIS_TABLE_7_2 = {
-    "1": {"tool_x": 0.133, "tool_y": 0.361, "sigma_max": [0.90, 0.91, 0.93], "actuator_relative_error": 0.02},
-    "2A": {"tool_x": 0.126, "tool_y": 0.239, "sigma_max": [0.86]},
-    "2B": {"tool_x": 0.133, "tool_y": 0.252, "sigma_max": [0.93]},
-    "3": {"tool_x": 0.103, "tool_y": 0.249, "sigma_max": [0.95]},
-}
-
 
 #: Most samples of a reference (lead-in, motion and lead-out); bounds the lifted matrices.
 MAX_SAMPLES = 4000
@@ -228,7 +216,7 @@ actuator correction of the first case when it learns on the actuators, for
             "cases": cases,
             "worst_sigma_max": float(worst),
             "estimators": _estimator_figures(declaration),
-            "thesis": THESIS_TABLE_7_2,
+            "thesis": thesis_table_7_2(),  # Dressler (2012), Table 7.2, from tests/reference/gantry_tau_L1.toml
             "solve_time_s": solution.solve_time,
         }
         written = Written(fields)
@@ -243,7 +231,7 @@ actuator correction of the first case when it learns on the actuators, for
             rho = max(c.rho for c in r.stability.values())
             cells = [f"{v:.4f}" for v in (*act, tool[0], tool[1])]
             lines.append(",".join([case.name, case.signal, *cells, f"{smax:.4f}", f"{rho:.4f}"]))
-            th = THESIS_TABLE_7_2.get(case.name)
+            th = fields["thesis"].get(case.name)
             thesis = (f"tool x {th['tool_x']:.3f}, y {th['tool_y']:.3f}; sigma_max {', '.join(f'{v:.2f}' for v in th['sigma_max'])}"
                       + (f"; actuator about {th['actuator_relative_error']:.0%} at k = 5" if "actuator_relative_error" in th else "")
                       if th else "not in the thesis")
