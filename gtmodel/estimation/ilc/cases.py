@@ -42,6 +42,8 @@ class ILCDeclaration:
     estimator_comparison : dict, optional
         The tool-position estimators compared on the uncorrected trial (RMS of the
         estimation error per estimator, the Kalman filters' tuning), when computed.
+    rounds : int, optional
+        Rounds of the square in the reference (the thesis: 2).
     """
 
     experiment: ILCExperiment
@@ -49,6 +51,7 @@ class ILCDeclaration:
     checks: dict[str, Any]
     final_time: float
     estimator_comparison: dict[str, Any] | None = None
+    rounds: int = 1
 
     @fill_doc(**SHARED_DOCS)
     def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> "ILCOutcome":

@@ -65,8 +65,9 @@ LOOP_GAIN_POINTS = 129
 #: Arnoldi vectors of the coupled check's spectral radius (more than ARPACK's default 20: the largest
 #: eigenvalues of a robust Q's iteration matrix cluster).
 ARPACK_VECTORS = 64
-#: Restarts of ARPACK before the coupled check falls back to the dense eigenvalues.
-ARPACK_ITERATIONS = 300
+#: Restarts of ARPACK before the coupled check falls back to the dense eigenvalues (a clustered spectrum
+#: needs hundreds, about a minute of CPU at 3 N = 2500, where the dense eigenvalues take about 12 s).
+ARPACK_ITERATIONS = 30
 #: Names of the three tool directions.
 _AXES = ("x", "y", "z")
 
@@ -496,7 +497,7 @@ class ILCExperiment:
         (:func:`scipy.sparse.linalg.eigs`, tolerance 1e-8, at most :data:`ARPACK_ITERATIONS`
         restarts), else from :func:`scipy.linalg.eigvals`; one BLAS thread (the
         decompositions cost 10-20x more CPU with threads on a busy machine). Bounded in time:
-        about 1 min of CPU per case at ``N = 834`` (two rounds of the thesis' square).
+        about 20 s of CPU per case at ``N = 834`` (two rounds of the thesis' square).
 
         Parameters
         ----------

@@ -163,7 +163,7 @@ class ILCKind(ProblemKind):
                                     f"a {key} design ({figure} < 1, Dressler (2012) eq. {eq}) for case {c.name!r}",
                                     f"{figure} = {value:.4g} on channel {ch}; lower gamma or the Q cut-off, or require = \"none\"")
             cases.append(case)
-        return ILCDeclaration(experiment, cases, checks, final_time, comparison)
+        return ILCDeclaration(experiment, cases, checks, final_time, comparison, ref.rounds)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: ILCDeclaration, solution: ILCOutcome, out: Path, plots: bool, name: str) -> Written:
@@ -220,6 +220,7 @@ actuator correction of the first case when it learns on the actuators, for
             "sample_time_s": declaration.experiment.plant.dt,
             "samples": declaration.experiment.reference.n,
             "square_final_time_s": declaration.final_time,
+            "reference_rounds": declaration.rounds,
             "iterations": declaration.experiment.iterations,
             "error_measure": "RMS of the error over the fully corrected samples (time window 1), eq. 7.25",
             "table_7_2_definition": "mean of the error measure over iterations 5-10 relative to iteration 0",
