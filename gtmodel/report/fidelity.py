@@ -54,7 +54,7 @@ def _ilc(s: dict[str, Any]) -> dict[str, Any]:
             "q_design": c.get("q_design", "butterworth"), "q_cutoff_hz": c["q_cutoff_hz"],
             "tool_x": c["table_7_2"]["tool_x"], "tool_y": c["table_7_2"]["tool_y"],
             "actuator_k5": (act[min(5, len(act) - 1)] / act[0]).tolist(),
-            "deflection_rms_m": c.get("deflection_rms_m"), "tool_error_k0_m": c["tool_error_m"][0],
+            "deflection_rms_m": c.get("deflection_rms_m"), "tool_error_k0_m": c["tool_error_m"][0], "tool_error_last_m": c["tool_error_m"][-1],
         }
     return out
 
@@ -260,13 +260,22 @@ def _ilc_rows(d: dict[str, Any], tag: str, model: dict[str, Any]) -> list[tuple[
         th = (table[name]["tool_x"], table[name]["tool_y"])
         ours = (c[name]["tool_x"], c[name]["tool_y"])
         defl, tool0 = c[name].get("deflection_rms_m"), c[name]["tool_error_k0_m"]
-        cause = (f"the tool error at k = 0 is {_f([1e3 * v for v in tool0[:2]], 3)} mm RMS (x / y), actuator lag; "
+        last = c[name].get("tool_error_last_m")
+        ok_x = abs(ours[0] - th[0]) <= 0.05 + 1e-12
+        cause = (("x within the tolerance, y differs: " if ok_x else "")
+                 + f"the tool error at k = 0 is {_f([1e3 * v for v in tool0[:2]], 3)} mm RMS (x / y), actuator lag; "
                  + (f"the structure (6.14) deflects {_f([1e6 * v for v in defl[:2]], 2)} um RMS" if defl else "the structural deflection is a few um")
-                 + ": the unlearned lag, not the resonances, sets tool x and y, so x and y fall alike. "
-                 + (f"The thesis' y {_f(th[1])} with the actuators near 2 % needs an unlearned deflection of about {_f(th[1])} x the k = 0 "
-                    f"error, {_f(1e3 * th[1] * tool0[1], 3)} mm RMS, {_f(th[1] * tool0[1] / defl[1], 3)} x ours (m_acc / k = 11 um per m/s^2 "
-                    "at <= 2 m/s^2). Deciding number: the thesis' k = 0 / k = 10 tool error in mm (Fig. 7.9) or the gain of its G_c (6.13, "
-                    "Fig. 6.10) at 11.5 Hz" if defl and name == "1" else ""))
+                 + ": the lag, which every case learns, sets tool x and y, not the resonances. ")
+        if defl and name == "1":
+            cause += (f"The thesis' y {_f(th[1])} with the actuators near 2 % needs an unlearned deflection of about {_f(th[1])} x the k = 0 "
+                      f"error, {_f(1e3 * th[1] * tool0[1], 3)} mm RMS, {_f(th[1] * tool0[1] / defl[1], 3)} x ours (m_acc / k = 5.6 / 11 um "
+                      "per m/s^2 in x / y). Deciding number: the thesis' k = 0 / k = 10 tool error in mm (Fig. 7.9) or the gain of its "
+                      "G_c (6.13, Fig. 6.10) at 11.5 Hz")
+        elif last:
+            cause += (f"After 10 iterations {_f([1e6 * v for v in last[:2]], 3)} um RMS remain (x / y), the same in Cases 2A, 2B and 3: "
+                      "the estimates recover the small deflection. The thesis' Case 3, learning on the measured tool, still leaves y at "
+                      "24.9 %: its remaining y error is one the learning itself does not remove (above the robust Q's band at the "
+                      "11.5 Hz resonance, or not repeatable, Fig. 7.13). Deciding number: the spectrum of its k = 10 tool y error (Fig. 7.9)")
         ok = _within(ours, th, 0.05)
         rows.append((f"{src}, Table 7.2: Case {name} tool x / y (k = 5-10 over k = 0)", _f(list(th), 3), _f(list(ours), 3), "0.05",
                      "reproduced" if ok else "differs", "" if ok else cause))

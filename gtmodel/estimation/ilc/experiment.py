@@ -68,6 +68,9 @@ ARPACK_VECTORS = 64
 #: Restarts of ARPACK before the coupled check falls back to the dense eigenvalues (a clustered spectrum
 #: needs hundreds, about a minute of CPU at 3 N = 2500, where the dense eigenvalues take about 12 s).
 ARPACK_ITERATIONS = 30
+#: Largest coupled matrix (3 N) whose spectral radius is taken from the dense eigenvalues directly (about 12 s of
+#: CPU at 2500; ARPACK rarely converges on these clustered spectra within :data:`ARPACK_ITERATIONS`).
+DENSE_EIGENVALUES = 3000
 #: Names of the three tool directions.
 _AXES = ("x", "y", "z")
 
@@ -493,9 +496,10 @@ class ILCExperiment:
         diagonal, and its figures are the largest of the per-channel ones (:meth:`check`),
         exactly. The tool-side cases: the dense ``(3 N, 3 N)`` matrix of :meth:`coupled_matrix`;
         ``sigma_max`` is the square root of the largest eigenvalue of ``A A^T``
-        (:func:`scipy.linalg.eigh`, that eigenvalue only) and ``rho`` comes from ARPACK
+        (:func:`scipy.linalg.eigh`, that eigenvalue only) and ``rho`` from the dense eigenvalues
+        (:func:`scipy.linalg.eigvals`) up to ``3 N =`` :data:`DENSE_EIGENVALUES`, above it from ARPACK
         (:func:`scipy.sparse.linalg.eigs`, tolerance 1e-8, at most :data:`ARPACK_ITERATIONS`
-        restarts), else from :func:`scipy.linalg.eigvals`; one BLAS thread (the
+        restarts) before the dense eigenvalues; one BLAS thread (the
         decompositions cost 10-20x more CPU with threads on a busy machine). Bounded in time:
         about 20 s of CPU per case at ``N = 834`` (two rounds of the thesis' square).
 
@@ -517,11 +521,14 @@ class ILCExperiment:
         with threadpool_limits(limits=1, user_api="blas"):
             gram = A @ A.T
             sigma = math.sqrt(max(float(scipy.linalg.eigh(gram, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0]), 0.0))
-            try:
-                rho = float(np.max(np.abs(scipy.sparse.linalg.eigs(A, k=1, which="LM", ncv=ARPACK_VECTORS, tol=1e-8,
-                                                                   maxiter=ARPACK_ITERATIONS, return_eigenvectors=False))))
-            except scipy.sparse.linalg.ArpackNoConvergence:  # a clustered spectrum: the dense decomposition
-                _log.info("ILC coupled check of case %s: ARPACK did not converge; dense eigenvalues of the (%d, %d) matrix", case.name, m, m)
+            rho = None
+            if m > DENSE_EIGENVALUES:
+                try:
+                    rho = float(np.max(np.abs(scipy.sparse.linalg.eigs(A, k=1, which="LM", ncv=ARPACK_VECTORS, tol=1e-8,
+                                                                       maxiter=ARPACK_ITERATIONS, return_eigenvectors=False))))
+                except scipy.sparse.linalg.ArpackNoConvergence:  # a clustered spectrum: the dense decomposition
+                    _log.info("ILC coupled check of case %s: ARPACK did not converge; dense eigenvalues of the (%d, %d) matrix", case.name, m, m)
+            if rho is None:
                 rho = float(np.max(np.abs(scipy.linalg.eigvals(A))))
         _log.debug("ILC coupled check of case %s: rho = %.6g, sigma_max = %.6g (3 N = %d)", case.name, rho, sigma, m)
         return ILCStability(rho=rho, sigma_max=sigma, stable=rho < 1.0, monotone=sigma < 1.0)
