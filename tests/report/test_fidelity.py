@@ -71,9 +71,10 @@ def test_learning_factors_from_the_models():
     import cmath
     import math
     a, b = [0.9647, 0.9656, 0.9728], [0.03527, 0.03425, 0.02748]
-    for f, got in fidelity.learning_factors().items():
-        z = cmath.exp(2j * math.pi * float(f) * 0.004)
-        assert got == pytest.approx([abs(1 - 0.9 * bi / (1 - ai / z)) for ai, bi in zip(a, b)], rel=1e-3)
+    z = {f: cmath.exp(2j * math.pi * f * 0.004) for f in fidelity.LEARNING_FACTOR_HZ}
+    expected = [abs(1 - 0.9 * bi / (1 - ai / zf)) for zf in z.values() for ai, bi in zip(a, b)]
+    got = fidelity.learning_factors()
+    assert list(got) == [f"{f:g}" for f in z] and sum(got.values(), []) == pytest.approx(expected, rel=1e-3)
 
 
 def test_collect_only_keeps_the_other_problems(tmp_path):

@@ -32,22 +32,23 @@ def _square_wave_kinematic(n=300):
     return np.column_stack([1e-3 * p, 2e-3 * p])
 
 
-def test_kinematic_model_is_the_simulated_plant(models):
+@pytest.mark.parametrize("j", [0, 1])
+def test_kinematic_model_is_the_simulated_plant(models, j):
     st = ToolStructure()
     zk = _square_wave_kinematic()
     a_kin = np.zeros_like(zk)
     a_kin[1:-1] = (zk[2:] - 2 * zk[1:-1] + zk[:-2]) / DT**2
     t = np.arange(len(zk)) * DT
     d = np.asarray(control.forced_response(st.discrete(DT), t, a_kin.T).outputs)[:2].T  # the plant's structure
-    for j, (A, B, C) in enumerate(models):
-        u = np.concatenate([zk[2:, j], [zk[-1, j]] * 2])  # u(t) = z_kin(t + 2)
-        x = np.linalg.solve(np.eye(5) - A, B) * zk[0, j]
-        z = []
-        for k in range(len(zk)):
-            z.append(C @ x)
-            x = A @ x + B * u[k]
-        assert np.max(np.abs(np.array(z) - (zk[:, j] + d[:, j]))) < 1e-12
-        assert np.max(np.abs(d[:, j])) > 1e-7  # the deflection is there to be modelled
+    A, B, C = models[j]
+    u = np.concatenate([zk[2:, j], [zk[-1, j]] * 2])  # u(t) = z_kin(t + 2)
+    x = np.linalg.solve(np.eye(5) - A, B) * zk[0, j]
+    z = []
+    for k in range(len(zk)):
+        z.append(C @ x)
+        x = A @ x + B * u[k]
+    assert np.max(np.abs(np.array(z) - (zk[:, j] + d[:, j]))) < 1e-12
+    assert np.max(np.abs(d[:, j])) > 1e-7  # the deflection is there to be modelled
 
 
 def test_extension_is_the_forward_euler_of_7_20(models):
@@ -64,14 +65,14 @@ def test_extension_is_the_forward_euler_of_7_20(models):
     assert np.allclose(xa[2:], np.diff(z, 2) / DT**2, atol=1e-9)
 
 
+@pytest.mark.parametrize("j", [0, 1])
 @pytest.mark.parametrize("r", [1e-14, 1e-8])
-def test_gain_is_dlqe_predictor_gain(models, r):
+def test_gain_is_dlqe_predictor_gain(models, r, j):
     kf = ModelKalman(models, DT, 0.07**2, r, lookahead=2)
-    for j in range(2):
-        Ab, cy = kf.Abar[j], kf.Cbar[j][1:2]
-        L, P, _ = control.dlqe(Ab, np.eye(7), cy, r * np.eye(7), np.array([[0.07**2]]))
-        assert np.allclose(kf.K[j], np.asarray(L).reshape(-1), rtol=1e-6, atol=1e-12)
-        assert np.allclose(kf.P[j], P, rtol=1e-6, atol=1e-18)
+    Ab, cy = kf.Abar[j], kf.Cbar[j][1:2]
+    L, P, _ = control.dlqe(Ab, np.eye(7), cy, r * np.eye(7), np.array([[0.07**2]]))
+    assert np.allclose(kf.K[j], np.asarray(L).reshape(-1), rtol=1e-6, atol=1e-12)
+    assert np.allclose(kf.P[j], P, rtol=1e-6, atol=1e-18)
 
 
 def test_lifted_matrices_are_the_filter(models):
@@ -80,9 +81,8 @@ def test_lifted_matrices_are_the_filter(models):
     rng = np.random.default_rng(0)
     zk, am = 1e-3 * rng.normal(size=(n, 2)), rng.normal(size=(n, 2))
     f_kin, f_acc = kf.lifted(n)
-    direct = kf.estimate(zk, am)
-    for j in range(2):
-        assert np.allclose(f_kin[j] @ zk[:, j] + f_acc[j] @ am[:, j], direct[:, j], atol=1e-15)
+    lifted = np.column_stack([f_kin[j] @ zk[:, j] + f_acc[j] @ am[:, j] for j in range(2)])
+    assert np.allclose(lifted, kf.estimate(zk, am), atol=1e-15)
 
 
 def test_tuned_filter_recovers_the_exact_model(models):
