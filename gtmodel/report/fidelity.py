@@ -470,7 +470,7 @@ def render(data: dict[str, Any]) -> str:
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
             "Verdicts: *reproduced* (within the tolerance), *structure reproduced* (the thesis' ordering or pattern holds), "
             "*differs* (with the measured cause), *not run*, *not attempted*. `[l1_ilc_thesis]`: the ILC set-up the thesis' text "
-            "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading); `[l1_ilc]`: the quick variant.\n\n"
+            "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading, Case 2B's Kalman filter on model (7.21) with z_kin as input); `[l1_ilc]`: the quick variant. Table 7.2's thesis figures are read from `tests/reference/gantry_tau_L1.toml` `[ilc.table_7_2]`.\n\n"
             "| thesis figure | thesis | ours | tolerance | verdict | measured cause of a difference |\n|---|---|---|---|---|---|\n")
     body = "\n".join("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in r) + " |" for r in rows(data))
     return head + body + "\n"
