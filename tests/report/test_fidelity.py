@@ -64,3 +64,26 @@ def test_collect_records_a_missing_folder_as_not_run(tmp_path):
 def test_collect_refuses_a_missing_results_folder(tmp_path):
     with pytest.raises(fidelity.InputError, match="results: expected a folder of result folders"):
         fidelity.collect(tmp_path / "nope", tmp_path / "figures.json")
+
+
+def test_learning_factors_from_the_models():
+    # independent: 1 - gamma z^delta G(z) = 1 - gamma b / (1 - a z^-1) for G = q^-5 b / (1 - a q^-1) (Dressler (2012), eq. 6.11)
+    import cmath
+    import math
+    a, b = [0.9647, 0.9656, 0.9728], [0.03527, 0.03425, 0.02748]
+    z = {f: cmath.exp(2j * math.pi * f * 0.004) for f in fidelity.LEARNING_FACTOR_HZ}
+    expected = [abs(1 - 0.9 * bi / (1 - ai / zf)) for zf in z.values() for ai, bi in zip(a, b)]
+    got = fidelity.learning_factors()
+    assert list(got) == [f"{f:g}" for f in z] and sum(got.values(), []) == pytest.approx(expected, rel=1e-3)
+
+
+def test_collect_only_keeps_the_other_problems(tmp_path):
+    figures = tmp_path / "figures.json"
+    figures.write_text(json.dumps({"model": {}, "kr500_state_estimation": {"kept": 1}}))
+    (tmp_path / "l1_ilc").mkdir()
+    data = fidelity.collect(tmp_path, figures, only=["l1_ilc"])
+    assert data["kr500_state_estimation"] == {"kept": 1} and data["l1_ilc"] is None
+    with pytest.raises(fidelity.InputError, match="only: expected problems of"):
+        fidelity.collect(tmp_path, figures, only=["nope"])
+    with pytest.raises(fidelity.InputError, match="does not exist"):
+        fidelity.collect(tmp_path, tmp_path / "none.json", only=["l1_ilc"])

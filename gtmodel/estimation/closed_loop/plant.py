@@ -215,6 +215,48 @@ class ToolStructure:
         """
         return control.c2d(self.continuous(), positive_float(dt, "dt"), method="foh")
 
+    def kinematic_model(self, dt: float = DT) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """The model (6.13) from the kinematic to the true tool position, per direction, exactly as simulated.
+
+        Dressler (2012), eqs. 6.13 and 7.19: ``z = z_kin + d`` with the deflection ``d`` of
+        :meth:`discrete` (one SISO mode per direction, first-order hold) driven by the central
+        second difference of ``z_kin`` (as :class:`TrackingPlant` does). State
+        ``x = [xi (2), z_kin(t + 1), z_kin(t), z_kin(t - 1)]``, input ``u(t) = z_kin(t + 2)``
+        (a look-ahead of 2 samples makes the model strictly proper: ``z(t) = C x(t)``).
+
+        Parameters
+        ----------
+        dt : float, optional
+            Sample time [s].
+
+        Returns
+        -------
+        list of tuple
+            ``[(A (5, 5), B (5,), C (5,))]`` for x and y; the look-ahead is 2 samples.
+
+        Raises
+        ------
+        InputError
+            ``dt`` not a positive number.
+        """
+        dt = positive_float(dt, "dt")
+        pm = self.physical_model()
+        out = []
+        for j in range(2):
+            m, c, k, b = pm.M[j, j], pm.D[j, j], pm.K[j, j], pm.B[j, j]
+            mode = control.c2d(control.ss([[0.0, 1.0], [-k / m, -c / m]], [[0.0], [b / m]], [[1.0, 0.0]], [[0.0]]), dt, method="foh")
+            Af, Bf = np.asarray(mode.A), np.asarray(mode.B).reshape(-1)
+            Cf, Df = np.asarray(mode.C).reshape(-1), float(np.asarray(mode.D).reshape(-1)[0])
+            g = np.array([0.0, 0.0, 1.0, -2.0, 1.0]) / dt**2  # a_kin(t) from [xi, z_kin(t+1), z_kin(t), z_kin(t-1)]
+            A = np.zeros((5, 5))
+            A[:2, :2] = Af
+            A[:2] += np.outer(Bf, g)
+            A[3, 2] = A[4, 3] = 1.0  # the shift register
+            B = np.array([0.0, 0.0, 1.0, 0.0, 0.0])
+            C = np.concatenate([Cf, [0.0, 1.0, 0.0]]) + Df * g
+            out.append((A, B, C))
+        return out
+
 
 @dataclass(frozen=True)
 class SensorModel:

@@ -5,6 +5,8 @@
 * :mod:`~gtmodel.estimation.filters.kalman`: the Kalman filters: the stationary Kalman
   filter of the tool position (Dressler (2012), eqs. 7.19-7.22), and the Kalman and extended
   Kalman filters of the end-effector state (Cvitanic (2021), section 4.1);
+* :mod:`~gtmodel.estimation.filters.model_kalman`: the thesis' form of the tool-position
+  Kalman filter, model (7.21) with the kinematic position as input (Dressler (2012), eqs. 7.19-7.22);
 * :mod:`~gtmodel.estimation.filters.gaussian`: the one CasADi predict-update step the
   Kalman and extended Kalman filters share, the record of a filter run
   (:class:`FilterRun`, NEES) and the Cholesky pivots;
@@ -24,6 +26,7 @@ from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, Compleme
 from gtmodel.estimation.filters.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
 from gtmodel.estimation.filters.gaussian import FilterRun, cholesky_pivots
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter, StationaryKalman, tune_position_noise
+from gtmodel.estimation.filters.model_kalman import ModelKalman
 from gtmodel.estimation.filters.particle import ParticleFilter, ParticleRun
 from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
 
@@ -32,6 +35,7 @@ __all__ = [
     "THESIS_CUTOFFS_HZ",
     "StationaryKalman",
     "tune_position_noise",
+    "ModelKalman",
     "FilterRun",
     "KalmanFilter",
     "ExtendedKalmanFilter",

@@ -31,6 +31,7 @@ for every iteration.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Literal, Mapping
@@ -38,6 +39,7 @@ from typing import Any, Callable, Literal, Mapping
 import numpy as np
 import scipy.linalg
 import scipy.sparse.linalg
+from threadpoolctl import threadpool_limits
 
 from gtmodel._arrays import as_rows, positive_int
 from gtmodel.errors import InputError
@@ -60,11 +62,15 @@ REQUIREMENTS = ("monotone", "stable", "none")
 Q_DESIGNS = ("butterworth", "robust")
 #: Points of the frequency grid of the robust design's loop gain (0 to Nyquist).
 LOOP_GAIN_POINTS = 129
-#: Lanczos/Arnoldi vectors of the coupled check (a robust Q flattens |Q| |I - L T| at its margin over a
-#: band, so the largest singular values cluster; more vectors than ARPACK's default 20 converge fast).
+#: Arnoldi vectors of the coupled check's spectral radius (more than ARPACK's default 20: the largest
+#: eigenvalues of a robust Q's iteration matrix cluster).
 ARPACK_VECTORS = 64
-#: Restarts of ARPACK before the coupled check falls back to the dense decompositions.
-ARPACK_ITERATIONS = 300
+#: Restarts of ARPACK before the coupled check falls back to the dense eigenvalues (a clustered spectrum
+#: needs hundreds, about a minute of CPU at 3 N = 2500, where the dense eigenvalues take about 12 s).
+ARPACK_ITERATIONS = 30
+#: Largest coupled matrix (3 N) whose spectral radius is taken from the dense eigenvalues directly (about 12 s of
+#: CPU at 2500; ARPACK rarely converges on these clustered spectra within :data:`ARPACK_ITERATIONS`).
+DENSE_EIGENVALUES = 3000
 #: Names of the three tool directions.
 _AXES = ("x", "y", "z")
 
@@ -450,13 +456,52 @@ class ILCExperiment:
                 T[l * n:(l + 1) * n, j * n:(j + 1) * n] = block
         return T
 
+    def coupled_matrix(self, case: ILCCase) -> np.ndarray:
+        """The coupled iteration matrix ``kron(I_3, Q) (I - kron(I_3, L) T)`` of all channels.
+
+        Dressler (2012), eqs. 7.15-7.16 on the stacked trial; built block by block,
+        ``A_lj = Q (delta_lj I - L T_lj)`` with ``T`` of :meth:`coupled_transfer_matrix`
+        (``L`` is a shift: ``L T_lj`` is ``gamma`` times the rows of ``T_lj`` moved up by ``delta``).
+
+        Parameters
+        ----------
+        case : ILCCase
+            The case.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3 N, 3 N)
+        """
+        n = self.reference.n
+        Q = self.q_filter(case).lifted(n)
+        T = self.coupled_transfer_matrix(case)
+        A = np.empty((3 * n, 3 * n))
+        with threadpool_limits(limits=1, user_api="blas"):
+            for j in range(3):
+                cols = slice(j * n, (j + 1) * n)
+                for l in range(3):
+                    rows = slice(l * n, (l + 1) * n)
+                    B = -self.learning.apply(T[rows, cols])  # -L T_lj, (n, n)
+                    if l == j:
+                        B[np.diag_indices(n)] += 1.0
+                    A[rows, cols] = Q @ B
+        return A
+
     def coupled_check(self, case: ILCCase) -> ILCStability:
         """Stability (7.15) and monotone convergence (7.16) of all channels together.
 
         Dressler (2012), eqs. 7.15-7.16 with ``Q`` and ``L`` acting on every channel
-        (``kron(I_3, Q)``) and the coupled map of :meth:`coupled_transfer_matrix`; the
-        largest singular value and eigenvalue modulus by ARPACK (:func:`scipy.sparse.linalg.svds`,
-        :func:`scipy.sparse.linalg.eigs`, tolerances 1e-10 and 1e-8, :data:`ARPACK_VECTORS` vectors) on the ``(3 N, 3 N)`` matrix.
+        (``kron(I_3, Q)``) and the coupled map of :meth:`coupled_transfer_matrix`.
+        Case 1 (``"actuator"``): the actuators are independent, the iteration matrix is block
+        diagonal, and its figures are the largest of the per-channel ones (:meth:`check`),
+        exactly. The tool-side cases: the dense ``(3 N, 3 N)`` matrix of :meth:`coupled_matrix`;
+        ``sigma_max`` is the square root of the largest eigenvalue of ``A A^T``
+        (:func:`scipy.linalg.eigh`, that eigenvalue only) and ``rho`` from the dense eigenvalues
+        (:func:`scipy.linalg.eigvals`) up to ``3 N =`` :data:`DENSE_EIGENVALUES`, above it from ARPACK
+        (:func:`scipy.sparse.linalg.eigs`, tolerance 1e-8, at most :data:`ARPACK_ITERATIONS`
+        restarts) before the dense eigenvalues; one BLAS thread (the
+        decompositions cost 10-20x more CPU with threads on a busy machine). Bounded in time:
+        about 20 s of CPU per case at ``N = 834`` (two rounds of the thesis' square).
 
         Parameters
         ----------
@@ -467,27 +512,25 @@ class ILCExperiment:
         -------
         ILCStability
         """
-        n = self.reference.n
-        Q = self.q_filter(case).lifted(n)
-        L = self.learning.lifted(n)
-        T = self.coupled_transfer_matrix(case)
-
-        def each(M: np.ndarray, v: np.ndarray) -> np.ndarray:  # kron(I_3, M) @ v, v of shape (3 N,) or (3 N, k)
-            return (M @ v.reshape(3, n, -1).transpose(1, 0, 2).reshape(n, -1)).reshape(n, 3, -1).transpose(1, 0, 2).reshape(v.shape)
-
-        op = scipy.sparse.linalg.LinearOperator(
-            (3 * n, 3 * n), matvec=lambda v: each(Q, v - each(L, T @ v)),
-            rmatvec=lambda v: (lambda w: w - T.T @ each(L.T, w))(each(Q.T, v)), dtype=float)
-        try:
-            sigma = float(scipy.sparse.linalg.svds(op, k=1, ncv=ARPACK_VECTORS, tol=1e-10, maxiter=ARPACK_ITERATIONS,
-                                                   return_singular_vectors=False, random_state=0)[0])
-            rho = float(np.max(np.abs(scipy.sparse.linalg.eigs(op, k=1, which="LM", ncv=ARPACK_VECTORS, tol=1e-8, maxiter=ARPACK_ITERATIONS,
-                                                               return_eigenvectors=False))))
-        except scipy.sparse.linalg.ArpackNoConvergence:  # a clustered spectrum: the dense decompositions, bounded in time
-            _log.info("ILC coupled check of case %s: ARPACK did not converge; dense decomposition of the (%d, %d) matrix", case.name, 3 * n, 3 * n)
-            A = op @ np.eye(3 * n)
-            sigma = float(scipy.linalg.svdvals(A)[0])
-            rho = float(np.max(np.abs(scipy.linalg.eigvals(A))))
+        if case.signal == "actuator":
+            per = self.check(case).values()
+            rho, sigma = max(c.rho for c in per), max(c.sigma_max for c in per)
+            return ILCStability(rho=rho, sigma_max=sigma, stable=rho < 1.0, monotone=sigma < 1.0)
+        A = self.coupled_matrix(case)
+        m = A.shape[0]
+        with threadpool_limits(limits=1, user_api="blas"):
+            gram = A @ A.T
+            sigma = math.sqrt(max(float(scipy.linalg.eigh(gram, eigvals_only=True, subset_by_index=[m - 1, m - 1])[0]), 0.0))
+            rho = None
+            if m > DENSE_EIGENVALUES:
+                try:
+                    rho = float(np.max(np.abs(scipy.sparse.linalg.eigs(A, k=1, which="LM", ncv=ARPACK_VECTORS, tol=1e-8,
+                                                                       maxiter=ARPACK_ITERATIONS, return_eigenvectors=False))))
+                except scipy.sparse.linalg.ArpackNoConvergence:  # a clustered spectrum: the dense decomposition
+                    _log.info("ILC coupled check of case %s: ARPACK did not converge; dense eigenvalues of the (%d, %d) matrix", case.name, m, m)
+            if rho is None:
+                rho = float(np.max(np.abs(scipy.linalg.eigvals(A))))
+        _log.debug("ILC coupled check of case %s: rho = %.6g, sigma_max = %.6g (3 N = %d)", case.name, rho, sigma, m)
         return ILCStability(rho=rho, sigma_max=sigma, stable=rho < 1.0, monotone=sigma < 1.0)
 
     def check(self, case: ILCCase) -> dict[str, ILCStability]:
@@ -507,7 +550,8 @@ class ILCExperiment:
         n = self.reference.n
         Q = self.q_filter(case).lifted(n)
         L = self.learning.lifted(n)
-        self._checks[case] = {ch: stability(Q, L, T) for ch, T in self.transfer_matrices(case).items()}
+        with threadpool_limits(limits=1, user_api="blas"):  # (N, N) decompositions: threads cost 10-20x CPU on a busy machine
+            self._checks[case] = {ch: stability(Q, L, T) for ch, T in self.transfer_matrices(case).items()}
         return self._checks[case]
 
     # -- one trial -------------------------------------------------------------------------

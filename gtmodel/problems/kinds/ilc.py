@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError, UnreachablePoseError
@@ -44,31 +45,21 @@ from gtmodel.estimation import (
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.codegen import Controller, save_controller
 from gtmodel.estimation import ilc_correction_function
+from gtmodel.estimation.filters.model_kalman import ModelKalman
+from gtmodel.estimation.ilc.iteration import error_measure
 from gtmodel.problems.kinds.closed_loop_common import build_plant
 from gtmodel.problems.kinds.schemas.ilc import ILCFile
 from gtmodel.report.ilc import plot_convergence, plot_error_measure, plot_tool_path
 from gtmodel.estimation.ilc.cases import ILCDeclaration, ILCOutcome
+from gtmodel.estimation.ilc.thesis import thesis_table_7_2
 from gtmodel.trajectory.square import plan_square
 
 __all__ = [
     "ILCFile",
     "ILCKind",
-    "THESIS_TABLE_7_2",
 ]
 
 _log = logging.getLogger("gtmodel")
-
-#: The thesis' figures, Dressler (2012), section 7.4: Table 7.2 (tool-side error (7.25), mean of
-#: iterations 5-10 relative to iteration 0, x and y), the largest singular values (7.16) of each
-#: case (Case 1 per actuator, eq. 7.28; Cases 2A/2B and 3 in the text of section 7.4) and Case 1's
-#: actuator-side error after 5 iterations ("about 2 %", Fig. 7.7).
-THESIS_TABLE_7_2 = {
-    "1": {"tool_x": 0.133, "tool_y": 0.361, "sigma_max": [0.90, 0.91, 0.93], "actuator_relative_error": 0.02},
-    "2A": {"tool_x": 0.126, "tool_y": 0.239, "sigma_max": [0.86]},
-    "2B": {"tool_x": 0.133, "tool_y": 0.252, "sigma_max": [0.93]},
-    "3": {"tool_x": 0.103, "tool_y": 0.249, "sigma_max": [0.95]},
-}
-
 
 #: Most samples of a reference (lead-in, motion and lead-out); bounds the lifted matrices.
 MAX_SAMPLES = 4000
@@ -110,6 +101,10 @@ class ILCKind(ProblemKind):
             fails the check it requires (``cases[i].require``, naming the channel and the
             figure).
         """
+        with threadpool_limits(limits=1, user_api="blas"):  # (N, N) products and decompositions: threads cost 10-20x CPU on a busy machine
+            return self._load(doc, file)
+
+    def _load(self, doc: ILCFile, file: ProblemFile) -> ILCDeclaration:
         plant = build_plant(doc.robot, doc.structure, doc.sensors, file)
         dt = plant.dt  # the loop period: [robot] loop_period, else the actuator models' sample time
         ref = doc.reference
@@ -138,7 +133,10 @@ class ILCKind(ProblemKind):
                                       position_noise=tuple(est.kalman_position_noise), jerk_noise=tuple(est.kalman_jerk_noise), d=2)
         except (GtModelError, ValueError, np.linalg.LinAlgError) as exc:  # a Riccati equation without a stabilising solution
             raise file.fail("estimators", "Kalman noise figures with a stationary solution of the Riccati equation", str(exc)) from None
-        estimators = {"complementary": complementary, "kalman": kalman}
+        comparison, model_kalman = _compare_estimators(plant, q, window, complementary, kalman)
+        estimators = {"complementary": complementary, "kalman": model_kalman if est.kalman_form == "model" else kalman,
+                      "kalman_triple_integrator": kalman, "kalman_model": model_kalman}
+        comparison["kalman_form"] = est.kalman_form
         kin = plant.kinematics
         configuration = doc.robot.configuration
         experiment = ILCExperiment(
@@ -165,7 +163,7 @@ class ILCKind(ProblemKind):
                                     f"a {key} design ({figure} < 1, Dressler (2012) eq. {eq}) for case {c.name!r}",
                                     f"{figure} = {value:.4g} on channel {ch}; lower gamma or the Q cut-off, or require = \"none\"")
             cases.append(case)
-        return ILCDeclaration(experiment, cases, checks, final_time)
+        return ILCDeclaration(experiment, cases, checks, final_time, comparison, ref.rounds)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: ILCDeclaration, solution: ILCOutcome, out: Path, plots: bool, name: str) -> Written:
@@ -222,13 +220,14 @@ actuator correction of the first case when it learns on the actuators, for
             "sample_time_s": declaration.experiment.plant.dt,
             "samples": declaration.experiment.reference.n,
             "square_final_time_s": declaration.final_time,
+            "reference_rounds": declaration.rounds,
             "iterations": declaration.experiment.iterations,
             "error_measure": "RMS of the error over the fully corrected samples (time window 1), eq. 7.25",
             "table_7_2_definition": "mean of the error measure over iterations 5-10 relative to iteration 0",
             "cases": cases,
             "worst_sigma_max": float(worst),
             "estimators": _estimator_figures(declaration),
-            "thesis": THESIS_TABLE_7_2,
+            "thesis": thesis_table_7_2(),  # Dressler (2012), Table 7.2, from tests/reference/gantry_tau_L1.toml
             "solve_time_s": solution.solve_time,
         }
         written = Written(fields)
@@ -243,7 +242,7 @@ actuator correction of the first case when it learns on the actuators, for
             rho = max(c.rho for c in r.stability.values())
             cells = [f"{v:.4f}" for v in (*act, tool[0], tool[1])]
             lines.append(",".join([case.name, case.signal, *cells, f"{smax:.4f}", f"{rho:.4f}"]))
-            th = THESIS_TABLE_7_2.get(case.name)
+            th = fields["thesis"].get(case.name)
             thesis = (f"tool x {th['tool_x']:.3f}, y {th['tool_y']:.3f}; sigma_max {', '.join(f'{v:.2f}' for v in th['sigma_max'])}"
                       + (f"; actuator about {th['actuator_relative_error']:.0%} at k = 5" if "actuator_relative_error" in th else "")
                       if th else "not in the thesis")
@@ -262,7 +261,7 @@ actuator correction of the first case when it learns on the actuators, for
         first = rows[0][1]
         if first.success and first.case.signal == "actuator":
             table = np.asarray(first.correction)
-            kalman = declaration.experiment.estimators["kalman"]
+            kalman = declaration.experiment.estimators["kalman_triple_integrator"]  # the one CasADi step of the generated C
             save_controller(out / "controller.json",
                             Controller(kalman_step=kalman.step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table,
                                        dt=declaration.experiment.plant.dt),
@@ -290,12 +289,43 @@ actuator correction of the first case when it learns on the actuators, for
         return written
 
 
+#: Look-ahead of the thesis-form Kalman filter's input: the simulated deflection at t uses z_kin(t + 1)
+#: (central second difference), so the model (6.13) is strictly proper in z_kin(t + 2).
+MODEL_KALMAN_LOOKAHEAD = 2
+
+
+def _compare_estimators(plant: Any, q_ref: np.ndarray, window: np.ndarray, complementary: ComplementaryFilter,
+                        kalman: StationaryKalman) -> tuple[dict[str, Any], ModelKalman]:
+    """The thesis-form Kalman filter tuned on the uncorrected trial, and every estimator's error on it.
+
+    Dressler (2012), eqs. 7.17-7.22 and Fig. 7.1 (the estimation errors of the kinematic
+    position, the complementary filter and the Kalman filter against the gauges): the
+    uncorrected trial (the reference, trial 0's noise) is simulated; the model (6.13) is the
+    plant's own structure (:meth:`~gtmodel.estimation.ToolStructure.kinematic_model`, a
+    perfectly identified model); :meth:`ModelKalman.tuned` sets ``R2`` and ``r``; the RMS of
+    ``z - z_hat`` over the fully corrected samples is reported per estimator and direction.
+    """
+    resp = plant.simulate(q_ref, trial=0)
+    z_kin, a_m, z = np.asarray(resp.T_kin)[:, :2], np.asarray(resp.a_m)[:, :2], np.asarray(resp.z)[:, :2]
+    mask = window >= 1.0 - 1e-12
+    model, tuning = ModelKalman.tuned(plant.structure.kinematic_model(plant.dt), plant.dt, z_kin, a_m, z,
+                                      lookahead=MODEL_KALMAN_LOOKAHEAD, mask=mask)
+    estimates = {"kinematic": z_kin, "complementary": complementary.estimate(z_kin, a_m),
+                 "kalman_triple_integrator": kalman.estimate(z_kin, a_m), "kalman_model": model.estimate(z_kin, a_m)}
+    rms = {k: error_measure(z - v, mask).tolist() for k, v in estimates.items()}
+    closest = min(rms, key=lambda k: float(np.sum(rms[k])))
+    return {"estimation_error_rms_m": rms, "closest_to_truth": closest, "kalman_model_tuning": tuning,
+            "kalman_model_gain": [k.tolist() for k in model.K], "kalman_model_lookahead": MODEL_KALMAN_LOOKAHEAD,
+            "deflection_rms_m": error_measure(z - z_kin, mask).tolist()}, model
+
+
 def _estimator_figures(declaration: ILCDeclaration) -> dict[str, Any]:
     """The estimators' printed figures: the complementary filter's reading and crossover, the Kalman gain."""
-    comp, kal = declaration.experiment.estimators["complementary"], declaration.experiment.estimators["kalman"]
+    comp, kal = declaration.experiment.estimators["complementary"], declaration.experiment.estimators["kalman_triple_integrator"]
     # LP and HP = 1 - LP cross where the zero-phase magnitude |H(f)|^2 is 1/2: at the Butterworth design frequency
     return {"complementary_reading": comp.reading, "complementary_cutoff_hz": comp.cutoff_hz.tolist(),
-            "complementary_crossover_hz": comp.design_hz.tolist(), "kalman_measurement_gain": np.asarray(kal.M).tolist()}
+            "complementary_crossover_hz": comp.design_hz.tolist(), "kalman_measurement_gain": np.asarray(kal.M).tolist(),
+            **(declaration.estimator_comparison or {})}
 
 
 def _convergence(declaration: ILCDeclaration, solution: ILCOutcome) -> dict[str, Any]:
@@ -321,7 +351,9 @@ def _exports(declaration: ILCDeclaration, solution: ILCOutcome, out: Path) -> li
     the estimators' lifted matrices ``F_kin_<estimator>``, ``F_acc_<estimator>`` (2, N, N), the
     complementary filter's ``complementary_cutoff_hz``, ``complementary_design_hz``,
     ``complementary_sos`` (2, sections, 6), the Kalman filter's ``kalman_A``, ``kalman_C``,
-    ``kalman_Q``, ``kalman_R``, ``kalman_P``, ``kalman_L``, ``kalman_M`` and the sensor noise
+    ``kalman_Q``, ``kalman_R``, ``kalman_P``, ``kalman_L``, ``kalman_M`` (the triple integrator), the
+    thesis-form filter's (7.21)-(7.22) ``kalman_model_{Abar,Bbar,Cbar,P,K}_{x,y}``, ``kalman_model_R2``,
+    ``kalman_model_r``, the form Case 2B used (``kalman_form``) and the sensor noise
     covariances ``accelerometer_covariance``, ``gauge_covariance``. ``ilc_signals_case_<case>.npz``:
     the reference ``T_ref``, ``q_ref`` (N, 3) and per trial the correction ``u`` and the learning
     error ``eps`` (K+1, N, 3).
@@ -335,7 +367,7 @@ def _exports(declaration: ILCDeclaration, solution: ILCOutcome, out: Path) -> li
     for case in declaration.cases:
         lifted[f"Q_{case.name}"] = e.q_filter(case).lifted(n)
     np.savez(out / "ilc_lifted.npz", **lifted)
-    comp, kal = e.estimators["complementary"], e.estimators["kalman"]
+    comp, kal, model = e.estimators["complementary"], e.estimators["kalman_triple_integrator"], e.estimators["kalman_model"]
     est: dict[str, Any] = {"complementary_cutoff_hz": comp.cutoff_hz, "complementary_design_hz": comp.design_hz,
                            "complementary_sos": np.asarray(comp.sos), "complementary_reading": comp.reading}
     for key in ("complementary", "kalman"):
@@ -344,6 +376,11 @@ def _exports(declaration: ILCDeclaration, solution: ILCOutcome, out: Path) -> li
             est[f"F_kin_{key}"], est[f"F_acc_{key}"] = np.asarray(F_kin), np.asarray(F_acc)
     for k in ("A", "C", "Q", "R", "P", "L", "M"):
         est[f"kalman_{k}"] = getattr(kal, k)
+    est["kalman_form"] = "model" if e.estimators["kalman"] is model else "triple_integrator"
+    est["kalman_model_R2"], est["kalman_model_r"] = model.R2, model.process_noise
+    for j, axis in enumerate("xy"):
+        for k in ("Abar", "Bbar", "Cbar", "P", "K"):
+            est[f"kalman_model_{k}_{axis}"] = getattr(model, k)[j]
     sensors = e.plant.sensors
     est["accelerometer_covariance"] = np.eye(3) * sensors.accelerometer_noise**2
     est["gauge_covariance"] = np.eye(2) * sensors.gauge_noise**2

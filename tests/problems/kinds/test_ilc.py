@@ -226,3 +226,27 @@ def test_signals_are_those_of_the_error_measure(exports):
     assert sig["u"].shape == sig["eps"].shape == (s["iterations"] + 1, s["samples"], 3)
 
 
+
+
+@pytest.mark.parametrize("axis", ["x", "y"])
+def test_thesis_form_kalman_gain_from_the_exports(exports, axis):
+    """Independent: the predictor gain of (7.22) by scipy.linalg.solve_discrete_are on the exported (7.21) matrices (gtmodel: the same
+    equation through ModelKalman; the tests of ModelKalman check it against control.dlqe)."""
+    _, _, est, _ = exports
+    Ab, Cb, r = est[f"kalman_model_Abar_{axis}"], est[f"kalman_model_Cbar_{axis}"], float(est["kalman_model_r"])
+    cy, r2 = Cb[1:2], np.array([[est["kalman_model_R2"]["xy".index(axis)]]])
+    P = scipy.linalg.solve_discrete_are(Ab.T, cy.T, r * np.eye(Ab.shape[0]), r2)
+    K = (Ab @ P @ cy.T @ np.linalg.inv(cy @ P @ cy.T + r2)).reshape(-1)
+    assert np.max(np.abs(K - est[f"kalman_model_K_{axis}"])) <= TOL * max(np.max(np.abs(K)), 1e-12)
+
+
+def test_estimators_are_compared_on_the_uncorrected_trial(exports):
+    # both Kalman forms computed; the summary says which is closest to the simulated truth (RMS over the corrected samples)
+    s = exports[0]
+    e = s["estimators"]
+    rms = e["estimation_error_rms_m"]
+    assert set(rms) == {"kinematic", "complementary", "kalman_triple_integrator", "kalman_model"}
+    assert e["closest_to_truth"] == min(rms, key=lambda k: sum(rms[k]))
+    assert e["kalman_form"] == "triple_integrator" and str(exports[2]["kalman_form"]) == "triple_integrator"
+    # the (7.21) filter's model is the plant's structure: it recovers the deflection the kinematic position misses
+    assert max(rms["kalman_model"]) < 0.01 * min(e["deflection_rms_m"])

@@ -24,6 +24,7 @@ __all__ = [
     "ILC_REQUIREMENTS",
     "ILC_Q_DESIGNS",
     "CUTOFF_READINGS",
+    "KALMAN_FORMS",
     "ReferenceSection",
     "ILCSection",
     "EstimatorsSection",
@@ -40,6 +41,7 @@ ILC_SIGNALS = ("actuator", "complementary", "kalman", "tool")
 ILC_REQUIREMENTS = ("monotone", "stable", "none")
 ILC_Q_DESIGNS = ("butterworth", "robust")
 CUTOFF_READINGS = ("zero_phase_3db", "matlab")
+KALMAN_FORMS = ("triple_integrator", "model")
 MIN_CUTOFF_FRACTION = 1e-4
 KALMAN_POSITION_NOISE = (0.000358, 0.001064)
 KALMAN_JERK_NOISE = (100.0, 100.0)
@@ -127,6 +129,11 @@ class EstimatorsSection(Section):
     cutoff_reading : str
         How the complementary cut-offs are read: zero_phase_3db or matlab (butter + filtfilt:
         LP and HP cross over at the cut-off).
+    kalman_form : str
+        The Kalman filter Case 2B learns on: triple_integrator (the tool position as a triple
+        integrator measuring fk(q_m) and a_m) or model (the thesis' (7.19)-(7.22): the model
+        from fk(q_m) to the tool position with fk(q_m) as input, the accelerometer measured).
+        Both are computed and compared in the summary.
     """
 
     complementary_cutoff_hz: vector(2, positive=True, bound=NYQUIST_HZ, unit="Hz",
@@ -140,6 +147,9 @@ class EstimatorsSection(Section):
         default_factory=lambda: list(KALMAN_JERK_NOISE))
     cutoff_reading: choice(*CUTOFF_READINGS, description="reading of the complementary cut-offs: the -3 dB point of the zero-phase filter, "
                                                         "or Matlab's butter + filtfilt (the thesis: LP and HP cross over at the cut-off)") = "zero_phase_3db"
+    kalman_form: choice(*KALMAN_FORMS, description="the Kalman filter of Case 2B: triple_integrator (measures fk(q_m) and a_m) or model "
+                                                   "(the thesis' (7.19)-(7.22): fk(q_m) as input of the structural model, a_m measured); "
+                                                   "both are compared in the summary") = "triple_integrator"
 
 
 class CaseSection(Section):
