@@ -30,6 +30,7 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.ocp.expressions import parse_constraint, parse_objective
+from gtmodel.modeling.ocp.refinement import solve_refined
 from gtmodel.modeling.ocp.result import lagrange_basis
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH
@@ -42,7 +43,7 @@ from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status
 from gtmodel.trajectory.rest_to_rest import bang_bang_duration, check_holding_forces, trapezoid_profile
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 
 __all__ = [
     "PointToPoint",
@@ -147,6 +148,11 @@ class PointToPoint:
         The transcription (JModelica's defaults: 50 elements, 3 Radau points).
     solver : SolverSettings
         The NLP solver, its iteration limit and tolerance, compiled C derivatives.
+    refinement : Refinement
+        Verification tolerance and adaptive mesh refinement
+        (:func:`gtmodel.modeling.ocp.refinement.solve_refined`): off by default (the thesis'
+        50 elements, verified all the same); on, the mesh is split where the states deviate
+        from their simulation until the verification passes.
     elements, points, scheme : int, int, str, optional
         Shortcuts replacing the fields of ``method``.
     max_iter, tol, jit : int, float, bool, optional
@@ -190,6 +196,7 @@ class PointToPoint:
     start_time: float = 0.0
     method: Collocation = field(default_factory=Collocation)
     solver: SolverSettings = field(default_factory=SolverSettings)
+    refinement: Refinement = field(default_factory=Refinement)
     elements: InitVar[int | None] = None
     points: InitVar[int | None] = None
     scheme: InitVar[str | None] = None
@@ -636,24 +643,28 @@ def solve_point_to_point(
         # the objective scaling is tuned for a cost in seconds (free final time); a
         # fixed-time energy cost (~1e5 N^2 s) needs none
         options.pop("obj_scaling_factor")
+    ref = problem.refinement
     if previous is not None and previous.transcription is not None and _structure(previous.problem) == _structure(problem):
         tr = previous.transcription
         guess = previous.result if warm_start else None
         result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
     else:
         opt, _ = build_optimization(problem)
-        tr = CollocationTranscription(
-            opt,
-            elements=problem.method.elements,
-            points=problem.method.points,
-            scheme=problem.method.scheme,
-            verbose=verbose,
-            solver_options=options,
-            nominal={"tau": problem.force_limit},
-            compile=problem.solver.jit,
-            solver=problem.solver.name,
-        )
+        if ref.tolerance is not None:
+            opt.verification_tolerance = ref.tolerance
         guess = previous.result if (warm_start and previous is not None) else None
-        result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
+        common = {"verbose": verbose, "solver_options": options, "nominal": {"tau": problem.force_limit},
+                  "compile": problem.solver.jit, "solver": problem.solver.name}
+        if ref.refine:
+            # each pass is a new mesh, so no NLP is kept for a sweep to reuse
+            tr = None
+            result = solve_refined(opt, elements=problem.method.elements, points=problem.method.points,
+                                   scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
+                                   max_passes=ref.max_passes, initial_guess=guess,
+                                   parameters=problem.named_parameters, **common)
+        else:
+            tr = CollocationTranscription(opt, elements=problem.method.elements, points=problem.method.points,
+                                          scheme=problem.method.scheme, **common)
+            result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
     return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)

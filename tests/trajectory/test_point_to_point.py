@@ -130,3 +130,23 @@ def test_warm_started_sweep_reuses_the_nlp(coarse_solution):
     assert sol.transcription is coarse_solution.transcription
     assert sol.result.status == "optimal"
     assert sol.result.final_time >= coarse_solution.result.final_time - 1e-9
+
+
+def test_refinement_splits_the_mesh_and_keeps_the_best_verified_pass():
+    """``refinement``: the 12-element motion refined against a 2e-2 tolerance.
+
+    Independent check: each pass's deviation is that of a CVODES simulation under the pass's
+    optimal inputs (:mod:`gtmodel.modeling.ocp.verification`); the returned pass is the one
+    closest to it, and its mesh has more elements than the first.
+    """
+    from gtmodel.trajectory.settings import Refinement
+
+    p = PointToPoint("L1", start=START, end=END, force_limit=[450, 450, 450], elements=12,
+                     refinement=Refinement(refine=True, tolerance=2e-2, max_passes=3))
+    solution = solve_point_to_point(p)
+    passes = solution.result.refinement
+    deviations = [e["max_scaled_deviation"] for e in passes if "max_scaled_deviation" in e]
+    assert len(passes) >= 2 and passes[-1]["elements"] > 12
+    assert solution.result.verification.max_scaled_deviation == min(deviations)
+    assert deviations[0] > 2e-2 and min(deviations) < deviations[0]
+    assert solution.transcription is None  # a refined solve keeps no NLP for sweeps

@@ -252,6 +252,7 @@ def solve_refined(
     max_passes: int = MAX_PASSES,
     tolerance: float | None = None,
     initial_guess: OptimizationResult | dict[str, Any] | None = None,
+    parameters: dict[str, Any] | None = None,
     **transcription: Any,
 ) -> OptimizationResult:
     """Solve by collocation with adaptive h-refinement of the mesh (see the module docstring).
@@ -276,6 +277,8 @@ def solve_refined(
         ``defaults["ocp.verification_tolerance"]``).
     initial_guess : OptimizationResult or mapping, optional
         Guess of the first pass (see :meth:`CollocationTranscription.solve`).
+    parameters : mapping of str to float or array_like, optional
+        Parameter values of every pass (see :meth:`CollocationTranscription.solve`).
     **transcription
         Further arguments of :class:`CollocationTranscription` (``solver_options``,
         ``nominal``, ``verbose``, ...).
@@ -311,7 +314,7 @@ def solve_refined(
     best: OptimizationResult | None = None  # the last pass that ended with a solution
     for n_pass in range(int(max_passes)):
         tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=True, **transcription)
-        result = tr.solve(initial_guess=guess)
+        result = tr.solve(parameters=parameters, initial_guess=guess)
         v = result.verification
         entry: dict[str, Any] = {
             "pass": n_pass + 1, "elements": tr.elements, "status": str(result.status), "objective": result.objective,

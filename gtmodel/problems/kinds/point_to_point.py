@@ -23,7 +23,7 @@ from gtmodel.problems.kinds.schemas.point_to_point import PointToPointFile
 from gtmodel.problems.references import named_parameters, robot_parameters
 from gtmodel.report.trajectory import OVERLAY_FILES, plot_forces, plot_overlay, plot_tcp_path
 from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 from gtmodel.trajectory.export import write_c_header
 
 __all__ = ["PointToPointKind", "PointToPointFile", "point_to_point_summary"]
@@ -101,7 +101,7 @@ class PointToPointKind(ProblemKind):
         start, end = np.array(doc.motion.start), np.array(doc.motion.end)
         if np.linalg.norm(end - start) < 1e-9:
             raise file.fail("motion.end", "a pose different from motion.start", end.tolist())
-        col, sol = doc.collocation, doc.solver
+        col, sol, tr = doc.collocation, doc.solver, doc.transcription
         try:
             decl = PointToPoint(
                 robot=params,
@@ -128,6 +128,7 @@ class PointToPointKind(ProblemKind):
                 start_time=t0,
                 method=Collocation(col.elements, col.points, col.scheme),
                 solver=SolverSettings(sol.name, sol.max_iter, sol.tol, sol.jit),
+                refinement=Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes),
             )
         except (InputError, UnreachablePoseError) as exc:
             raise _field_error(file, exc) from None

@@ -109,6 +109,9 @@ BAD = [
     ("elements_huge", _edit("elements = 50 ", "elements = 100000000 "), r"field 'collocation\.elements': expected an integer in 1\.\.10000"),
     ("tol_inf", _edit("tol = 1e-8", "tol = inf"), r"field 'solver\.tol': expected a finite number"),
     ("max_iter_float", _edit("max_iter = 3000", "max_iter = 3000.0"), r"field 'solver\.max_iter': expected an integer in 1\.\."),
+    ("refine_tolerance_above_1", _edit("[solver]", "[transcription]\nrefine = true\ntolerance = 2.0\n\n[solver]"), r"field 'transcription\.tolerance': expected"),
+    ("refine_string", _edit("[solver]", '[transcription]\nrefine = "yes"\n\n[solver]'), r"field 'transcription\.refine': expected true or false"),
+    ("refine_max_passes_zero", _edit("[solver]", "[transcription]\nmax_passes = 0\n\n[solver]"), r"field 'transcription\.max_passes': expected an integer in 1\.\.100"),
     ("kind_list", _edit('kind = "point_to_point"', "kind = []"), r"field 'kind': expected one of"),
 ]
 

@@ -11,7 +11,7 @@ from pydantic import Field
 
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, Section, choice, integer, number, vector
 
-__all__ = ["MAX_TIME_S", "RobotReference", "MotionSection", "CollocationSection", "SolverSection", "OcpSolverSection"]
+__all__ = ["MAX_TIME_S", "RobotReference", "MotionSection", "CollocationSection", "RefinementSection", "SolverSection", "OcpSolverSection"]
 
 #: Longest final time accepted [s].
 MAX_TIME_S = 1.0e4
@@ -61,6 +61,30 @@ class CollocationSection(Section):
     elements: integer(1, 10000, description="finite elements") = 50
     points: integer(1, 9, description="collocation points per element") = 3
     scheme: choice("radau", "legendre") = "radau"
+
+
+class RefinementSection(Section):
+    """``[transcription]``: the verification tolerance and adaptive mesh refinement of a collocation solve.
+
+    Parameters
+    ----------
+    refine : bool
+        Refine the mesh where the solution is least accurate (element defects, input
+        switches) until the verification passes or a limit is reached.
+    tolerance : float, optional
+        Verification tolerance: largest deviation of a state's simulation under the
+        optimal inputs from the transcribed state, scaled by ``max(1, max |x|)``; default
+        1e-2 (``gtmodel.defaults``).
+    max_elements : int
+        Limit on the elements of a refined mesh.
+    max_passes : int
+        Limit on the solves of the refinement.
+    """
+
+    refine: Flag = Field(False, description="refine the mesh until the verification passes (h-refinement, switches located)")
+    tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation") | None = None
+    max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
+    max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
 
 
 class SolverSection(Section):

@@ -13,7 +13,7 @@ from pydantic import Field
 from gtmodel._docstrings import fill_doc
 from gtmodel.defaults import DEFAULT_FRICTION_WIDTH, FRICTION_FORMS
 from gtmodel.problems.base import KIND_DOCS
-from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, MotionSection, OcpSolverSection, RobotReference
+from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, MotionSection, OcpSolverSection, RefinementSection, RobotReference
 from gtmodel.problems.schema import MAX_FORCE_N, MAX_NAMED_NUMBER, Expressions, Flag, NonEmptyText, ProblemSchema, Section, choice, number, vector
 
 __all__ = ["PointToPointFile"]
@@ -82,6 +82,8 @@ class PointToPointFile(ProblemSchema):
         ``[initial_guess]``: how the NLP is started.
     collocation : CollocationSection
         ``[collocation]``: the transcription.
+    transcription : RefinementSection
+        ``[transcription]``: verification tolerance and mesh refinement.
     solver : OcpSolverSection
         ``[solver]``: IPOPT settings.
     """
@@ -95,4 +97,5 @@ class PointToPointFile(ProblemSchema):
     optimization: OptimizationSection
     initial_guess: InitialGuessSection = InitialGuessSection()
     collocation: CollocationSection = CollocationSection()
+    transcription: RefinementSection = RefinementSection()
     solver: OcpSolverSection = OcpSolverSection()
