@@ -148,7 +148,8 @@ class CalibrationKind(ProblemKind):
     def load(self, doc: CalibrationFile, file: ProblemFile, name: str) -> CalibrationDeclaration:
         """Validate the semantics, read or generate the data and build the start models.
 
-        Synthetic data are generated here (seeded, so a file always gives the same data).
+        Synthetic data (seeded, so a file always gives the same data) are generated here for a
+        3-link truth, and when first used (at solve time) for an F1 or six-link truth.
 
         Parameters
         ----------
@@ -182,13 +183,15 @@ class CalibrationKind(ProblemKind):
             _check_selection_size(file, n_sel, data.n_poses)
         else:
             # the cheap part now (truth model, pose count, cart surveys); the poses and the
-            # measurements of an F1 grid (its 6-D workspace grid: seconds) when the problem
-            # is solved, so a typo in a model's fixed parameters or ties is reported at once
+            # measurements of an F1 or six-link truth when the problem is solved (an F1 6-D
+            # workspace grid: seconds; the D1 six-link grid's forward kinematics: 0.9 CPU-s), so a
+            # typo in a model's fixed parameters or ties is reported at once and every shipped
+            # file loads in under a CPU second
             truth, cart, noise_sigma, build = _synthetic_setup(doc, file, n_sel)
             data, source, n_q = None, "synthetic (generated when solved)", truth.n_q
         models = [_start_model(k, m, doc, file, truth, cart, n_q) for k, m in enumerate(doc.models)]
-        if build is not None and not (doc.truth.model == "f1" and doc.truth.grid_step is not None):
-            data, source = build()  # a 3-link or six-link set: a fraction of a second
+        if build is not None and doc.truth.model == "three_link":
+            data, source = build()  # a 3-link set: a fraction of a second (its too-few-poses errors at once)
             build = None
         ps = doc.pose_selection if doc.pose_selection is not None else PoseSelectionSection(n=2)
         exact = truth is not None and doc.truth.actuator_errors == "none"
