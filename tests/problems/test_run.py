@@ -20,8 +20,10 @@ SHIPPED = sorted(PROBLEMS_DIR.glob("*.toml"))
 ALL_SHIPPED = sorted(PROBLEMS_DIR.rglob("*.toml"))
 #: CPU seconds a shipped file may take to load (issue 26: the expensive set-up, such as the ILC
 #: lifted checks or synthetic calibration data, runs at solve time). Measured 2026-11-22 in
-#: fresh processes: at most 0.24 CPU-s, or 0.87-0.90 for the three closed-loop files whose
-#: load is mostly the first import of python-control (warmed up below, as it is after one run).
+#: fresh processes after importing the kind: at most 0.26 CPU-s, or 0.83-0.86 for the three
+#: closed-loop ILC/tracking files, whose load is mostly python-control's first import (0.08-0.13
+#: CPU-s without it; imported below, as it is after one run). Before: l1_ilc 12, the thesis ILC
+#: file 78, d1_error_models 1.1 CPU-s.
 LOAD_CPU_S = 1.0
 
 
