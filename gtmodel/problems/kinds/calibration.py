@@ -54,6 +54,7 @@ result is a complete robot parameter set), ``errors.csv`` and ``error_histogram.
 from __future__ import annotations
 
 import logging
+import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -256,8 +257,9 @@ def _closure(base: str, ref: str, file: ProblemFile, field_name: str, parametris
         raise file.wrap(field_name, exc) from None
 
 
-def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, count_only: bool = False) -> np.ndarray | None:
-    """The pose grid or random poses of the truth, bounded before anything is built (only the checks with ``count_only``)."""
+def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, count_only: bool = False) -> np.ndarray | int:
+    """The pose grid or random poses of the truth, bounded before anything is built (``count_only``: the checks, and the
+    number of candidates before the workspace filter)."""
     rotary = None if t.rotary_travel_deg is None else np.deg2rad(np.asarray(t.rotary_travel_deg, dtype=float))
     if rotary is not None and np.any(rotary[:, 0] >= rotary[:, 1]):
         raise file.fail("truth.rotary_travel_deg", "rows [min, max] with min < max", t.rotary_travel_deg)
@@ -274,7 +276,7 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, cou
         if count > cap:
             raise file.fail("truth.grid_step", f"a grid step giving at most {cap} grid poses (this one gives {count:.3g})", t.grid_step)
         if count_only:
-            return None
+            return math.ceil(count)  # an upper bound of the poses the grid gives
         if tkind == "f1":
             # the F1's own 6-D workspace grid (position and orientation steps)
             _, _, q = truth.workspace_grid(step_m=t.grid_step, step_deg=t.grid_step_deg, return_q=True)
@@ -286,7 +288,7 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, cou
     if n > MAX_RANDOM_POSES[tkind]:
         raise file.fail("truth.random_poses", f"at most {MAX_RANDOM_POSES[tkind]} random poses for a {tkind} truth", n)
     if count_only:
-        return None
+        return int(n)
     return random_poses(truth, n, seed=t.seed, rotary_travel=rotary)
 
 
@@ -303,7 +305,8 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
     truth = perturbed_model(truth, t.perturbation, 7)
     noise = device_noise(t.noise)
     errors = ActuatorErrors.table_4_1() if t.actuator_errors == "table_4_1" else None
-    _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
+    candidates = _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
+    _check_selection_size(file, n_sel, candidates)  # at most this many poses: a selection as large is refused at once
     cart = None
     try:
         if any(m.type.endswith("_piecewise") for m in doc.models):
