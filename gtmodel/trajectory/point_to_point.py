@@ -43,7 +43,7 @@ from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status
 from gtmodel.trajectory.rest_to_rest import bang_bang_duration, check_holding_forces, trapezoid_profile
-from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
+from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings, objective_scaling
 
 __all__ = [
     "PointToPoint",
@@ -78,7 +78,9 @@ SAMPLE_TIME = LOOP_PERIOD_S
 #: their limits (:func:`solve_point_to_point`) this halves the iterations of the L1
 #: problem and six variants of it (median 165 -> 70; the L1 problem 119 -> 49).
 #: ``perturb_always_cd`` is neutral on the median but gives the L1 problem 49 instead of 64.
-#: The objective scaling is applied only with a free final time (see the function).
+#: The objective scaling is applied only with a free final time, and for a cost in seconds:
+#: :func:`~gtmodel.trajectory.settings.objective_scaling` divides it by the cost's size at the guess in units of the guess's
+#: duration (an energy weight makes the cost thousands of times larger).
 SOLVER_OPTIONS = {"obj_scaling_factor": 1e4, "perturb_always_cd": "yes"}
 #: Model parameters holding the boundary poses [m] (NLP parameters of the transcription).
 START_POSE, END_POSE = "T_start_pose", "T_end_pose"
@@ -589,6 +591,18 @@ def _energy(result: OptimizationResult) -> float:
     return float(total)
 
 
+def _scale_objective(tr: CollocationTranscription, problem: PointToPoint, options: dict[str, Any]) -> float | None:
+    """Set the objective scaling of this problem's weights (:func:`~gtmodel.trajectory.settings.objective_scaling`) on the transcription's solver; return it (None: unscaled)."""
+    if "obj_scaling_factor" not in options:  # a fixed final time: no scaling
+        return None
+    duration = tr.optimization.final_time_guess - tr.optimization.start_time
+    scaling = objective_scaling(tr.objective_at_guess(problem.named_parameters), duration, options["obj_scaling_factor"])
+    if scaling != tr.options[tr.plugin].get("obj_scaling_factor"):
+        tr.set_solver_options({"obj_scaling_factor": scaling})
+        _log.debug("%s: objective scaling %.4g", problem.name, scaling)
+    return scaling
+
+
 def _structure(problem: PointToPoint) -> tuple:
     """What must be equal for two declarations to share one transcription."""
     skip = {"named_parameters", "w", "name", "parameters", "guess", "origin"}
@@ -647,6 +661,7 @@ def solve_point_to_point(
     if previous is not None and previous.transcription is not None and _structure(previous.problem) == _structure(problem):
         tr = previous.transcription
         guess = previous.result if warm_start else None
+        _scale_objective(tr, problem, options)
         result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
     else:
         opt, _ = build_optimization(problem)
@@ -655,16 +670,19 @@ def solve_point_to_point(
         guess = previous.result if (warm_start and previous is not None) else None
         common = {"verbose": verbose, "solver_options": options, "nominal": {"tau": problem.force_limit},
                   "compile": problem.solver.jit, "solver": problem.solver.name}
+        tr = CollocationTranscription(opt, elements=problem.method.elements, points=problem.method.points,
+                                      scheme=problem.method.scheme, **common)
+        scaling = _scale_objective(tr, problem, options)
         if ref.refine:
-            # each pass is a new mesh, so no NLP is kept for a sweep to reuse
+            # each pass is a new mesh (with the first mesh's objective scaling), so no NLP is kept for a sweep to reuse
             tr = None
+            if scaling is not None:
+                common["solver_options"] = {**options, "obj_scaling_factor": scaling}
             result = solve_refined(opt, elements=problem.method.elements, points=problem.method.points,
                                    scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
                                    max_passes=ref.max_passes, initial_guess=guess,
                                    parameters=problem.named_parameters, **common)
         else:
-            tr = CollocationTranscription(opt, elements=problem.method.elements, points=problem.method.points,
-                                          scheme=problem.method.scheme, **common)
             result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
     return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)

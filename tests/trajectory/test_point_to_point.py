@@ -9,8 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.conftest import verification_tolerance
+from tests.conftest import PROBLEMS_DIR, verification_tolerance
 from gtmodel.errors import InputError, UnreachablePoseError
+from gtmodel.problems import load_problem
 from gtmodel.trajectory.point_to_point import PointToPoint, build_optimization, solve_point_to_point, trapezoid_profile
 
 START = np.array([-0.2, 2.75, -0.40])
@@ -150,3 +151,20 @@ def test_refinement_splits_the_mesh_and_keeps_the_best_verified_pass():
     assert solution.result.verification.max_scaled_deviation == min(deviations)
     assert deviations[0] > 2e-2 and min(deviations) < deviations[0]
     assert solution.transcription is None  # a refined solve keeps no NLP for sweeps
+
+
+#: Iterations of the shipped minimum-time problem (w = 0: 49); an energy weight may take a few
+#: times more, never the 3000 of the iteration limit (w = 10 and 1000 did before the objective
+#: scaling followed the cost's size: 81 and 85 CPU-s instead of 1.6).
+WEIGHT_ITERATIONS = 400
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("w", [10.0, 1000.0])
+def test_an_energy_weight_does_not_stall_the_solver(w):
+    """Issue 26: every accepted weight ends within a few times the iterations of w = 0, optimal."""
+    problem = load_problem(PROBLEMS_DIR / "l1_time_optimal.toml", {"w": w}).declaration
+    sol = solve_point_to_point(problem)
+    assert sol.result.status == "optimal" and sol.result.iterations < WEIGHT_ITERATIONS
+    # the energy term dominates: longer than the minimum time 0.6754 s, less energy than its 403 185 N^2 s
+    assert sol.result.final_time > 1.0 and sol.energy < 3.0e5

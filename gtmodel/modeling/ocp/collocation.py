@@ -183,6 +183,7 @@ class CollocationTranscription:
         self.compile = bool(compile)
         self.banded = self.elements >= BANDED_MIN_ELEMENTS if banded is None else bool(banded)
         self.verbose = bool(verbose)
+        self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self.dae: FlatDAE = optimization.flat()
         self.nominal = self._nominal_values(nominal)
@@ -443,6 +444,48 @@ class CollocationTranscription:
             ``result``, changed in place.
         """
         return check_result(result, self.optimization, special)
+
+    def objective_at_guess(self, parameters: Mapping[str, Any] | None = None) -> float:
+        """The NLP objective at the problem's declared initial guess (e.g. to choose its scaling).
+
+        Parameters
+        ----------
+        parameters : mapping of str to float or array_like, optional
+            Parameter values, as for :meth:`solve`.
+
+        Returns
+        -------
+        float
+            The objective (Mayer plus Lagrange term) of the guess.
+
+        Raises
+        ------
+        InputError
+            Malformed parameters or guesses.
+        """
+        opt = self.optimization
+        pvec = self.dae.parameter_vector({**opt.parameters, **(parameters or {})})
+        w0 = self._initial_w(dict(opt.initial_guesses), opt.final_time_guess, pvec)
+        return float(self._fg(w0, pvec)[0])
+
+    def set_solver_options(self, solver_options: Mapping[str, Any]) -> None:
+        """Rebuild the solver with further options (the NLP and its derivative functions are kept).
+
+        Parameters
+        ----------
+        solver_options : mapping
+            Options merged over the current ones, as ``solver_options`` of the constructor
+            (plain plugin names, e.g. ``{"obj_scaling_factor": 10.0}``).
+
+        Raises
+        ------
+        SolverError
+            The solver cannot be built with these options.
+        """
+        self._solver_options.update(solver_options)
+        self.options = merge_options(self.verbose, self._solver_options, self.plugin)
+        self.solver = self._nlpsol(self.options)
+        self._warm_solver = None
 
     def warm_solver(self) -> ca.Function:
         """The nlpsol of warm starts (built once; shares the derivative functions).

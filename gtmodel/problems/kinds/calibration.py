@@ -57,6 +57,7 @@ result is a complete robot parameter set), ``errors.csv`` and ``error_histogram.
 from __future__ import annotations
 
 import logging
+import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -151,7 +152,8 @@ class CalibrationKind(ProblemKind):
     def load(self, doc: CalibrationFile, file: ProblemFile, name: str) -> CalibrationDeclaration:
         """Validate the semantics, read or generate the data and build the start models.
 
-        Synthetic data are generated here (seeded, so a file always gives the same data).
+        Synthetic data (seeded, so a file always gives the same data) are generated here for a
+        3-link truth, and when first used (at solve time) for an F1 or six-link truth.
 
         Parameters
         ----------
@@ -187,13 +189,15 @@ class CalibrationKind(ProblemKind):
             _check_selection_size(file, n_sel, data.n_poses)
         else:
             # the cheap part now (truth model, pose count, cart surveys); the poses and the
-            # measurements of an F1 grid (its 6-D workspace grid: seconds) when the problem
-            # is solved, so a typo in a model's fixed parameters or ties is reported at once
+            # measurements of an F1 or six-link truth when the problem is solved (an F1 6-D
+            # workspace grid: seconds; the D1 six-link grid's forward kinematics: 0.9 CPU-s), so a
+            # typo in a model's fixed parameters or ties is reported at once and every shipped
+            # file loads in under a CPU second
             truth, cart, noise_sigma, build = _synthetic_setup(doc, file, n_sel)
             data, source, n_q = None, "synthetic (generated when solved)", truth.n_q
         models = [_start_model(k, m, doc, file, truth, cart, n_q) for k, m in enumerate(doc.models)]
-        if build is not None and not (doc.truth.model == "f1" and doc.truth.grid_step is not None):
-            data, source = build()  # a 3-link or six-link set: a fraction of a second
+        if build is not None and doc.truth.model == "three_link":
+            data, source = build()  # a 3-link set: a fraction of a second (its too-few-poses errors at once)
             build = None
         ps = doc.pose_selection if doc.pose_selection is not None else PoseSelectionSection(n=2)
         exact = truth is not None and doc.truth.actuator_errors == "none"
@@ -258,8 +262,9 @@ def _closure(base: str, ref: str, file: ProblemFile, field_name: str, parametris
         raise file.wrap(field_name, exc) from None
 
 
-def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, count_only: bool = False) -> np.ndarray | None:
-    """The pose grid or random poses of the truth, bounded before anything is built (only the checks with ``count_only``)."""
+def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, count_only: bool = False) -> np.ndarray | int:
+    """The pose grid or random poses of the truth, bounded before anything is built (``count_only``: the checks, and the
+    number of candidates before the workspace filter)."""
     rotary = None if t.rotary_travel_deg is None else np.deg2rad(np.asarray(t.rotary_travel_deg, dtype=float))
     if rotary is not None and np.any(rotary[:, 0] >= rotary[:, 1]):
         raise file.fail("truth.rotary_travel_deg", "rows [min, max] with min < max", t.rotary_travel_deg)
@@ -276,7 +281,7 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, cou
         if count > cap:
             raise file.fail("truth.grid_step", f"a grid step giving at most {cap} grid poses (this one gives {count:.3g})", t.grid_step)
         if count_only:
-            return None
+            return math.ceil(count)  # an upper bound of the poses the grid gives
         if tkind == "f1":
             # the F1's own 6-D workspace grid (position and orientation steps)
             _, _, q = truth.workspace_grid(step_m=t.grid_step, step_deg=t.grid_step_deg, return_q=True)
@@ -288,7 +293,7 @@ def _truth_poses(truth: Any, tkind: str, t: TruthSection, file: ProblemFile, cou
     if n > MAX_RANDOM_POSES[tkind]:
         raise file.fail("truth.random_poses", f"at most {MAX_RANDOM_POSES[tkind]} random poses for a {tkind} truth", n)
     if count_only:
-        return None
+        return int(n)
     return random_poses(truth, n, seed=t.seed, rotary_travel=rotary)
 
 
@@ -308,7 +313,8 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
         raise file.fail("truth.cyclic_period", "actuator_errors = 'table_4_1' (the period belongs to its cyclic error)", t.cyclic_period)
     period = {} if t.cyclic_period is None else {"cyclic_period_m": t.cyclic_period}
     errors = ActuatorErrors.table_4_1(**period) if t.actuator_errors == "table_4_1" else None
-    _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
+    candidates = _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
+    _check_selection_size(file, n_sel, candidates)  # at most this many poses: a selection as large is refused at once
     cart = None
     try:
         if any(m.type.endswith("_piecewise") for m in doc.models):

@@ -11,7 +11,8 @@ The plant is the closed-loop L1 (``[robot]``, ``[structure]``, ``[sensors]``, se
 Butterworth low-pass with the Tukey time window (``[ilc]``); the cases (``[[cases]]``)
 choose the learning signal (:data:`~gtmodel.estimation.SIGNALS`) and Q's cut-off, and may
 require the lifted check (7.15)/(7.16) to hold before they run: a design that fails it is
-a load-time error naming the case.
+an input error naming the case (exit 2), raised at solve time before any trial (the check
+decomposes the lifted matrices: seconds to a minute, too slow for loading the file).
 
 The result folder holds ``summary.json`` (per case ``rho`` and ``sigma_max`` per channel,
 the error measure (7.25) per iteration on the actuator and the tool side, the Table 7.2
@@ -39,6 +40,7 @@ from gtmodel.estimation import (
     ILCExperiment,
     ILCReference,
     LearningFilter,
+    QFilter,
     StationaryKalman,
     time_window,
 )
@@ -83,7 +85,7 @@ class ILCKind(ProblemKind):
 
     @fill_doc(**KIND_DOCS)
     def load(self, doc: ILCFile, file: ProblemFile, name: str) -> ILCDeclaration:
-        """Plan the square, build the plant and estimators, check each case's design.
+        """Plan the square, build the plant and estimators, check each case's fields (cheap checks only).
 
         Parameters
         ----------
@@ -97,9 +99,10 @@ class ILCKind(ProblemKind):
         ------
         ProblemError
             The square leaves the workspace (``reference.corner``), the planner fails, two
-            cases share a name, the window is longer than the reference, or a case's design
-            fails the check it requires (``cases[i].require``, naming the channel and the
-            figure).
+            cases share a name, the window is longer than the reference, or a case's Q
+            cut-off is not below the Nyquist frequency of the loop period. A case's design
+            that fails the lifted check it requires (``cases[i].require``) is reported by
+            the solve, before any trial (:meth:`ILCDeclaration.check_requirements`).
         """
         with threadpool_limits(limits=1, user_api="blas"):  # (N, N) products and decompositions: threads cost 10-20x CPU on a busy machine
             return self._load(doc, file)
@@ -144,26 +147,19 @@ class ILCKind(ProblemKind):
             estimators, lambda X: kin.ik(X, configuration), ref.corner, coupled=il.coupled_check,
         )
         cases: list[ILCCase] = []
-        checks: dict[str, Any] = {}
-        for i, c in enumerate(doc.cases):
-            if c.name in checks:
+        names: set[str] = set()
+        for i, c in enumerate(doc.cases):  # the cheap checks; the lifted ones (seconds to minutes) run at solve time
+            if c.name in names:
                 raise file.fail(f"cases[{i}].name", "a name not used by an earlier case", c.name)
+            names.add(c.name)
             if c.q_design == "robust" and c.q_cutoff_hz is None:
                 raise file.fail(f"cases[{i}].q_cutoff_hz", "a cut-off for the robust Q design (the thesis: 30 Hz)", None)
-            case = ILCCase(c.name, c.signal, c.q_cutoff_hz, c.q_order, c.require, c.q_design, c.q_margin)
-            checks[c.name] = experiment.check(case)
-            if c.require != "none":
-                key = "monotone" if c.require == "monotone" else "stable"
-                figure = "sigma_max" if key == "monotone" else "rho"
-                bad = {ch: getattr(r, figure) for ch, r in checks[c.name].items() if not getattr(r, key)}
-                if bad:
-                    ch, value = next(iter(bad.items()))
-                    eq = "7.16" if key == "monotone" else "7.15"
-                    raise file.fail(f"cases[{i}].require",
-                                    f"a {key} design ({figure} < 1, Dressler (2012) eq. {eq}) for case {c.name!r}",
-                                    f"{figure} = {value:.4g} on channel {ch}; lower gamma or the Q cut-off, or require = \"none\"")
-            cases.append(case)
-        return ILCDeclaration(experiment, cases, checks, final_time, comparison, ref.rounds)
+            try:
+                QFilter(c.q_cutoff_hz, dt=dt, order=c.q_order)  # the cut-off against this loop period's Nyquist frequency
+            except GtModelError as exc:
+                raise file.wrap(f"cases[{i}].q_cutoff_hz", exc) from None
+            cases.append(ILCCase(c.name, c.signal, c.q_cutoff_hz, c.q_order, c.require, c.q_design, c.q_margin))
+        return ILCDeclaration(experiment, cases, final_time, estimator_comparison=comparison, rounds=ref.rounds, fail=file.fail)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: ILCDeclaration, solution: ILCOutcome, out: Path, plots: bool, name: str) -> Written:

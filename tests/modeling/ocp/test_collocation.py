@@ -135,6 +135,26 @@ def test_iteration_limit_is_reported():
     assert res.message == "Maximum_Iterations_Exceeded"
 
 
+def test_objective_at_guess_and_new_solver_options():
+    # reference: tf + int_0^tf u^2 dt at the guess tf = 2, u = 0.5 is 2 + 0.25 * 2 = 2.5 (the
+    # quadrature is exact for constants)
+    m, x, v, u = double_integrator()
+    opt = Optimization(m, free_final_time=True, final_time_bounds=(0.5, 5.0), final_time_guess=2.0)
+    opt.set_objective(mayer=opt.final_time, lagrange=u**2)
+    opt.set_bounds(u, -1.0, 1.0)
+    rest_to_rest(opt, x, v)
+    opt.set_initial_guess(u, 0.5)
+    tr = CollocationTranscription(opt, elements=10, solver_options={"tol": 1e-9})
+    assert tr.objective_at_guess() == pytest.approx(2.5, rel=1e-12)
+    # a rebuilt solver keeps the options given at construction and adds the new one
+    tr.set_solver_options({"max_iter": 2})
+    res = tr.solve()
+    assert res.status == "max_iterations" and res.iterations == 2
+    assert (tr.options["ipopt"]["tol"], tr.options["ipopt"]["max_iter"]) == (1e-9, 2)
+    tr.set_solver_options({"max_iter": 200})
+    assert tr.solve().status == "optimal"
+
+
 def test_nan_in_evaluation_is_an_error_status():
     # reference: sqrt of a negative number is NaN at every admissible point
     m, x, v, u = double_integrator()

@@ -206,6 +206,14 @@ def test_six_link_grid_is_bounded_up_front(tmp_path):
     assert seconds < REJECT_SECONDS
 
 
+def test_six_link_selection_larger_than_the_grid_is_refused_before_the_data_are_built(tmp_path):
+    # the D1 grid's synthetic data are built at solve time (0.9 CPU-s of forward kinematics);
+    # a selection of more poses than the grid's candidates is refused at load all the same
+    _, err, seconds = _load_bad(tmp_path, D1_FILE, "selection", lambda t: t + "\n[pose_selection]\nn = 100000\n")
+    assert re.search(r"field 'pose_selection\.n': expected fewer poses than the \d+ candidates", str(err)), err
+    assert seconds < REJECT_SECONDS
+
+
 def test_bad_file_gives_invalid_input_and_no_data_files(tmp_path):
     f = tmp_path / "bad.toml"
     f.write_text(_edit('noise = "laser_tracker"', 'noise = "ruler"')(L1_FILE.read_text()))

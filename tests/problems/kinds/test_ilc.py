@@ -127,7 +127,7 @@ def test_a_design_the_criterion_calls_unstable_diverges(tmp_path):
     f = tmp_path / "unstable.toml"
     f.write_text(text)
     problem = load_problem(f)
-    checks = problem.declaration.checks["1"]
+    checks = problem.declaration.experiment.check(problem.declaration.cases[0])
     assert all(c.rho > 1.0 for c in checks.values())
     outcome = run_problem(f, tmp_path / "out", plots=False)
     assert outcome.status == Status.ERROR
@@ -142,7 +142,6 @@ BAD = [
      r"field 'cases\[0\]\.q_cutoff_hz'.*Nyquist"),
     ("complementary_above_nyquist", _edit("complementary_cutoff_hz = [4.50, 2.63]", "complementary_cutoff_hz = [4.50, 263.0]"),
      r"field 'estimators.complementary_cutoff_hz"),
-    ("unstable_as_monotone", _edit("gamma = 0.9", "gamma = 60.0"), r"field 'cases\[0\]\.require'.*monotone.*sigma_max"),
     ("duplicate_case", _edit('name = "2A"', 'name = "1"'), r"field 'cases\[1\]\.name'"),
     ("unknown_signal", _edit('signal = "tool"', 'signal = "laser"'), r"field 'cases\[3\]\.signal'"),
     ("unknown_field", _edit("[ilc]\n", "[ilc]\nlearning_rate = 1.0\n"), r"unknown field 'ilc.learning_rate'"),
@@ -154,9 +153,15 @@ def test_bad_input_names_the_field(tmp_path, case, edit, match):
     assert_bad_problem(tmp_path, FILE, case, edit, match)
 
 
-def test_bad_input_through_the_cli_exits_2(tmp_path, capsys):
+def test_a_design_failing_its_required_check_exits_2_before_any_trial(tmp_path, capsys, monkeypatch):
+    """The lifted check (eigenvalues and SVD: seconds) runs at solve time, not at load (issue 26);
+    a design failing the check it requires (gamma = 60: sigma_max > 1, 7.16) still ends as bad
+    input (exit 2) naming the file and ``cases[0].require``, before any trial is simulated."""
+    from gtmodel.estimation import ILCExperiment
+
+    monkeypatch.setattr(ILCExperiment, "trial", lambda *a, **k: pytest.fail("a trial ran before the required check"))
     text = _edit("gamma = 0.9", "gamma = 60.0")(FILE.read_text())
-    assert_bad_problem_through_cli(tmp_path, capsys, text, r"cases\[0\]\.require")
+    assert_bad_problem_through_cli(tmp_path, capsys, text, r"bad\.toml: field 'cases\[0\]\.require'.*monotone.*sigma_max")
 
 
 TOL = 1e-6
