@@ -49,8 +49,6 @@ def test_default_solve_passes_the_arguments_on():
 def test_declarations_live_in_the_domain_packages(name):
     # the one exception: tracking's declaration holds another problem file's kind
     files = [p for p in sorted(PROBLEMS_DIR.glob("*.toml")) if tomllib.loads(p.read_text())["kind"] == name]
-    if name in ("ilc", "calibration", "elasto_geometric_calibration"):
-        pytest.skip("loading builds the experiment or synthetic data (seconds to a minute); covered by the kind's tests")
     decl = load_problem(files[0]).declaration
     module = type(decl).__module__
     assert module.startswith("gtmodel.problems.kinds.tracking") if name == "tracking" else not module.startswith("gtmodel.problems")
