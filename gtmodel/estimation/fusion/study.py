@@ -51,6 +51,7 @@ from gtmodel.estimation.filters.end_effector import (
     EndEffectorModel,
 )
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
+from gtmodel.estimation.fusion.limits import ROTATION_ONLY_PARAMETERS, TUNINGS, limits
 from gtmodel.estimation.fusion.runs import QUANTITIES, FusionRun, nees_test
 from gtmodel.estimation.filters.particle import ParticleFilter
 from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
@@ -135,8 +136,11 @@ class FusionStudyResult(StatusResult):
         5-axis: ``{gyro_regression, fusion, improvement_percent}`` over all samples, at the sine
         peaks (``|alpha| >= 0.9 max``) and elsewhere [deg/s^2].
     table_10 : list of dict
-        One row per swept value: ``parameter, value, motion, filter, status`` and per quantity
+        One row per motion and swept value: ``parameter, value, motion, filter, status`` and per quantity
         ``{sensor, fusion, improvement_percent}``, ``stops_paying`` (quantities where fusion is not better).
+    table_10_limits : list of dict
+        Per motion, tuning and parameter where the fused velocity stops paying
+        (:func:`~gtmodel.estimation.fusion.limits.velocity_limit`), against the thesis' Table 10.
     filter_comparison : list of dict
         One row per motion and filter: ``motion, filter, status, samples, step_time_us`` and the errors.
     nees : dict
@@ -154,6 +158,7 @@ class FusionStudyResult(StatusResult):
     velocity_mean_error_mm_s: dict[str, Any] = field(default_factory=dict)
     angular_acceleration: dict[str, Any] = field(default_factory=dict)
     table_10: list[dict[str, Any]] = field(default_factory=list)
+    table_10_limits: list[dict[str, Any]] = field(default_factory=list)
     filter_comparison: list[dict[str, Any]] = field(default_factory=list)
     nees: dict[str, Any] = field(default_factory=dict)
     process_noise: dict[str, Any] = field(default_factory=dict)
@@ -210,6 +215,15 @@ class FusionStudy:
         Table 10: Table 7 parameter -> values (None: every parameter at the thesis' offsets).
     sweep_duration : float or None, optional
         Length of the sweep runs [s] (None: ``duration``).
+    sweep_motions : sequence of str, optional
+        Motions of the Table 10 sweep (``"3-axis"``, ``"5-axis"``); a 3-axis run skips the
+        parameters it does not measure (:data:`~gtmodel.estimation.fusion.limits.ROTATION_ONLY_PARAMETERS`, Table 10's N/A).
+    limit_tunings : sequence of str, optional
+        Tunings of the Table 10 limit search (:mod:`~gtmodel.estimation.fusion.limits`; empty: not run).
+    limit_parameters : sequence of str or None, optional
+        Parameters of the limit search (None: every row of Table 10).
+    limit_bisections : int, optional
+        Halvings of the bracketing decade per limit.
     comparison_filters : sequence of str, optional
         Filters of the comparison (:data:`FILTERS`).
     comparison_duration : float, optional
@@ -243,6 +257,10 @@ class FusionStudy:
     noisy_tracker_factor: float = 10.0
     sweep: Any = None
     sweep_duration: float | None = None
+    sweep_motions: Any = ("3-axis", "5-axis")
+    limit_tunings: Any = ()
+    limit_parameters: Any = None
+    limit_bisections: int = 4
     comparison_filters: Any = FILTERS
     comparison_duration: float = 1.0
     particles: int = 1000
@@ -278,6 +296,14 @@ class FusionStudy:
             for v in values:
                 self.spec.replace(**{name: v})  # checks the value
         object.__setattr__(self, "sweep", sweep)
+        bad = [m for m in self.sweep_motions if m not in MOTIONS]
+        if bad:
+            raise InputError(f"sweep_motions: expected some of {', '.join(MOTIONS)}, got {', '.join(map(str, bad))}")
+        bad = [t for t in self.limit_tunings if t not in TUNINGS]
+        if bad:
+            raise InputError(f"limit_tunings: expected some of {', '.join(TUNINGS)}, got {', '.join(map(str, bad))}")
+        object.__setattr__(self, "sweep_motions", tuple(self.sweep_motions))
+        object.__setattr__(self, "limit_tunings", tuple(self.limit_tunings))
         bad = [f for f in self.comparison_filters if f not in FILTERS]
         if bad:
             raise InputError(f"comparison_filters: expected some of {', '.join(FILTERS)}, got {', '.join(map(str, bad))}")
@@ -478,11 +504,16 @@ class FusionStudy:
                 res.angular_acceleration = self._angular_acceleration(base)
         if table_10:
             res.table_10 = self._table_10()
+            if self.limit_tunings:
+                res.table_10_limits = limits(self, self.sweep_motions, self.limit_tunings, self.limit_parameters, self.limit_bisections)
         if comparison:
             res.filter_comparison = self._comparison({m: res.runs[m].run.P[-1] for m in MOTIONS if res.runs[m].run.P.shape[0]})
         statuses = [r.status for r in res.runs.values()] + [row["status"] for row in res.table_10 + res.filter_comparison]
+        statuses += [e["status"] for row in res.table_10_limits for e in row["evaluations"] if e["status"] != "error"]
         res.status = Status.worst(statuses)
         res.message = f"{len(res.runs)} baseline runs, {len(res.table_10)} sweep runs, {len(res.filter_comparison)} comparison runs"
+        if res.table_10_limits:
+            res.message += f", {len(res.table_10_limits)} Table 10 limits"
         return res
 
     @staticmethod
@@ -525,15 +556,20 @@ class FusionStudy:
 
     def _table_10(self) -> list[dict[str, Any]]:
         rows = []
-        for name, values in self.sweep.items():
-            for value in values:
-                spec = self.spec.replace(**{name: value})
-                try:
-                    case = self.run_case(True, spec, duration=self.sweep_duration, label=f"{name}={value:g}")
-                except InputError as exc:  # e.g. a sample time leaving too few samples
-                    rows.append({"parameter": name, "value": value, "motion": "5-axis", "filter": "ekf", "status": str(Status.ERROR), "message": str(exc)})
-                    continue
-                rows.append(self._row(name, value, case))
+        for motion in self.sweep_motions:
+            rotation = MOTIONS[motion]
+            for name, values in self.sweep.items():
+                if not rotation and name in ROTATION_ONLY_PARAMETERS:
+                    continue  # Table 10: N/A
+                for value in values:
+                    spec = self.spec.replace(**{name: value})
+                    try:
+                        case = self.run_case(rotation, spec, duration=self.sweep_duration, label=f"{motion} {name}={value:g}")
+                    except InputError as exc:  # e.g. a sample time leaving too few samples
+                        rows.append({"parameter": name, "value": value, "motion": motion, "filter": "ekf" if rotation else "kf",
+                                     "status": str(Status.ERROR), "message": str(exc)})
+                        continue
+                    rows.append(self._row(name, value, case))
         return rows
 
     @staticmethod

@@ -10,7 +10,9 @@ baseline by default), the filters' tuning (``[filter]``) and the study's extent 
 (the thesis' figures beside ours where the reference data has them), ``fusion_baseline.csv``
 (the baseline runs' truth and estimates) and the plots ``velocity_3_axis.png``,
 ``velocity_5_axis.png`` (style of Fig. 24), ``angular_acceleration.png`` (Fig. 25) and
-``table_10.png`` (Fig. 26). The field reference is ``docs/problem_files.md``.
+``table_10.png`` (Fig. 26); with ``[study.limits]``, ``table_10_limits`` (where the fused velocity
+stops paying, per motion, tuning and parameter, against Table 10: :mod:`gtmodel.estimation.fusion.limits`)
+and ``table_10_limits.md/.csv``. The field reference is ``docs/problem_files.md``.
 """
 
 from __future__ import annotations
@@ -34,13 +36,15 @@ from gtmodel.estimation.fusion.study import (
     FusionStudy,
     FusionStudyResult,
 )
+from gtmodel.estimation.fusion.limits import THESIS_TABLE_10, TUNINGS
 from gtmodel.estimation.fusion.tracker_imu import MAX_SAMPLES, MIN_SAMPLES, SINE_PATH, TABLE_7, SensorSpec
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.status import Status
-from gtmodel.report.fusion import plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables
+from gtmodel.report.fusion import plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables, write_limits_table
 
-__all__ = ["StateEstimationFile", "StateEstimationKind", "PathSection", "SensorsSection", "FilterSection", "StudySection", "SweepSection"]
+__all__ = ["StateEstimationFile", "StateEstimationKind", "PathSection", "SensorsSection", "FilterSection", "StudySection", "SweepSection",
+           "LimitsSection"]
 
 #: Longest record [s].
 MAX_DURATION_S = 60.0
@@ -184,6 +188,26 @@ class SweepSection(Section):
     transform_orientation_error_deg: _sweep_type("deg") = _sweep_field("transform_orientation_error_deg")
 
 
+class LimitsSection(Section):
+    """``[study.limits]``: locate where the fused velocity stops paying (Cvitanic (2021), Table 10) by search.
+
+    Parameters
+    ----------
+    tunings : list of str
+        Filter tunings searched: ``white_jerk`` (ours), ``appendix_b`` (the thesis' 3-axis Q); empty: no search.
+    parameters : list of str
+        Table 10 rows searched (default: all seven).
+    bisections : int
+        Halvings of the bracketing decade per limit.
+    """
+
+    tunings: list[choice(*TUNINGS, description="a tuning")] = Field(default_factory=list, max_length=2,
+                                                                   description="filter tunings searched (white_jerk, appendix_b: 3-axis only); [] skips the search")
+    parameters: list[choice(*THESIS_TABLE_10, description="a Table 10 row")] = Field(default_factory=lambda: list(THESIS_TABLE_10), max_length=7,
+                                                                                   description="Table 10 rows searched")
+    bisections: integer(0, 10, description="halvings of the decade where fusion stops paying") = 4
+
+
 class StudySection(Section):
     """``[study]``: Table 9, the Table 10 sweeps and the filter comparison.
 
@@ -195,6 +219,10 @@ class StudySection(Section):
         Length of each Table 10 run [s].
     sweep : SweepSection
         ``[study.sweep]``: the swept values.
+    sweep_motions : list of str
+        Motions of the sweep (``3-axis``, ``5-axis``).
+    limits : LimitsSection
+        ``[study.limits]``: the Table 10 limit search.
     comparison_filters : list of str
         Filters compared (kf, ekf, ukf, pf).
     comparison_duration : float
@@ -206,6 +234,9 @@ class StudySection(Section):
     noisy_tracker_factor: number(gt=0, le=1e4, description="Table 9: the tracker's noise times this (the thesis: 10)") = 10.0
     sweep_duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of each Table 10 run") = 3.0
     sweep: SweepSection = SweepSection()
+    sweep_motions: list[choice("3-axis", "5-axis", description="a motion")] = Field(default_factory=lambda: ["3-axis", "5-axis"], min_length=1, max_length=2,
+                                                                                  description="motions of the Table 10 sweep and limit search")
+    limits: LimitsSection = LimitsSection()
     comparison_filters: list[choice(*FILTERS, description="a filter")] = Field(default_factory=lambda: list(FILTERS), max_length=4,
                                                                               description="filters compared: kf, ekf, ukf, pf")
     comparison_duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of each comparison run") = 1.0
@@ -323,7 +354,9 @@ class StateEstimationKind(ProblemKind):
                 rotation_amplitude=math.radians(p.rotation_amplitude_deg), rotation_axis=p.rotation_axis, orientation=p.initial_orientation,
                 seed=s.seed, warmup=f.warmup, jerk_std=f.jerk_std, angular_jerk_std=f.angular_jerk_std, quaternion_std=f.quaternion_std,
                 initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
-                sweep=sweep, sweep_duration=st.sweep_duration, comparison_filters=tuple(st.comparison_filters),
+                sweep=sweep, sweep_duration=st.sweep_duration, sweep_motions=tuple(dict.fromkeys(st.sweep_motions)),
+                limit_tunings=tuple(dict.fromkeys(st.limits.tunings)), limit_parameters=tuple(dict.fromkeys(st.limits.parameters)),
+                limit_bisections=st.limits.bisections, comparison_filters=tuple(st.comparison_filters),
                 comparison_duration=st.comparison_duration, particles=st.particles,
             )
         except InputError as exc:
@@ -366,7 +399,8 @@ class StateEstimationKind(ProblemKind):
             hardware Table 11 beside it, ``thesis_velocity``),
             ``angular_acceleration``, ``filter_comparison``, ``nees``, ``process_noise``,
             ``checks`` (the self-checks, each a boolean with its figures), ``failed_checks``
-            (their failures: the status is then ``check_failed``, exit 1), ``notes``.
+            (their failures: the status is then ``check_failed``, exit 1), ``notes``; with a
+            limit search, ``table_10_limits`` (and ``table_10_limits.md/.csv``).
         """
         r = solution
         vel = r.velocity_mean_error_mm_s
@@ -393,8 +427,11 @@ class StateEstimationKind(ProblemKind):
             "velocity_fusion_3_axis_mm_s": (vel.get("3-axis") or {}).get("fusion"),
             "velocity_fusion_5_axis_mm_s": (vel.get("5-axis") or {}).get("fusion"),
         }
+        if r.table_10_limits:
+            fields["table_10_limits"] = r.table_10_limits
         written = Written(fields)
         written.files += write_fusion_tables(out, name, r.table_8, r.table_9, r.table_10, r.filter_comparison)
+        written.files += write_limits_table(out, name, r.table_10_limits)
         written.files += _baseline_csv(r, out)
         written.files += _exports(r, out)
         if plots:
