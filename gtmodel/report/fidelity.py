@@ -35,7 +35,8 @@ from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_mode
 __all__ = ["PROBLEMS", "collect", "render", "rows", "main"]
 
 #: The shipped problems whose result folders the report reads.
-PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models")
+PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models", "kr500_table_10",
+            "kr500_table_2")
 REPO = Path(__file__).resolve().parents[2]
 FIGURES = REPO / "docs" / "fidelity_figures.json"
 PAGE = REPO / "docs" / "fidelity.md"
@@ -79,8 +80,20 @@ def _d1(s: dict[str, Any]) -> dict[str, Any]:
     return {"status": s["status"], "models": s.get("models")}
 
 
+def _table_10_figures(s: dict[str, Any]) -> dict[str, Any]:
+    keep = ("motion", "parameter", "tuning", "limit", "pays_up_to", "stops_at", "verdict", "decades_from_thesis", "search")
+    return {"status": s["status"], "limits": [{k: r[k] for k in keep} for r in s.get("table_10_limits", [])]}
+
+
+def _table_2_figures(s: dict[str, Any]) -> dict[str, Any]:
+    return {"status": s["status"], "source": s["source"], "monte_carlo": s.get("monte_carlo"),
+            "ratio_to_truth": {m: v["ratio_to_truth"] for m, v in s["methods"].items()},
+            "rotation_weight": {m: v["rotation_weight"] for m, v in s["methods"].items()}, "dpp_step2": s["methods"]["DPP"].get("step2")}
+
+
 _EXTRACT: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction, "d1_error_models": _d1}
+    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction, "d1_error_models": _d1,
+    "kr500_table_10": _table_10_figures, "kr500_table_2": _table_2_figures}
 
 
 def actuator_bandwidths_hz() -> list[float]:
@@ -253,17 +266,7 @@ def _fusion_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
                      ("structure reproduced" if t9["fusion"] < t9["sensor"] else "differs"),
                      "sensor: the mean norm of 3-D noise of 0.64 mm per axis is 1.596 x 0.64 = 1.02 mm (the thesis' 0.889 is 1.39 sigma); "
                      "fusion: our white-jerk Q weights the IMU more than the thesis' Appendix B Q"))
-    limits = {"accel_noise_m_s2_rtHz": ("< 0.1", "< 0.1"), "accel_bias_m_s2": ("< 0.001", "< 0.001"), "gyro_noise_deg_s_rtHz": ("N/A", "< 0.1"),
-              "gyro_bias_deg_s": ("N/A", "< 1"), "transform_orientation_error_deg": ("< 10", "< 0.1"),
-              "transform_translation_error_mm": ("no constraint", "< 100 mm"), "sample_time_s": ("< 0.01", "< 0.01")}
-    for par, (l3, l5) in limits.items():
-        runs = [r for r in f["table_10"] if r["parameter"] == par]
-        txt = "; ".join(f"{r['motion']} {_f(r['value'])}: fusion {'better' if r['velocity'] and r['velocity']['fusion'] < r['velocity']['sensor'] else 'not better'}"
-                        for r in runs) or "not run"
-        motions = {r["motion"] for r in runs}
-        rows.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", txt, "one grid step",
-                     "not run" if not runs else "partly run" if motions != {"3-axis", "5-axis"} else "see values",
-                     "the shipped sweep runs the 5-axis EKF at the largest Table 7 offsets only (run time); the 3-axis sweep is not run"))
+    rows += _table_10_rows(f, d.get("kr500_table_10"))
     fails = f.get("failed_checks")
     rows.append(("self-checks of the run (NEES, position not degraded, Table 9 ordering, Appendix B position)", "-",
                  f"status {f['status']}; failed: {', '.join(fails) if fails else 'none'}", "-",
@@ -325,8 +328,94 @@ def _other_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
                  "triple integrator of the tool position measuring z_kin and a_m", "-", "not attempted",
                  "(7.21) needs the identified model from z_kin to the tool position (A, B, C of section 6.3 at the ILC operating point), "
                  "which the thesis does not print; the shipped filter's noise figures place its crossover at the complementary cut-offs"))
-    rows.append(("Cvitanic (2021), Table 2: joint stiffness by CP vs DPP, DPP closer to the truth", "DPP lower stiffness, closer", "not attempted", "-",
-                 "not attempted", "needs the thesis' deflection measurements (not in the reference data) or a synthetic truth"))
+    return rows
+
+
+#: Cvitanic (2021), Table 10 as printed, per parameter ``(3-axis, 5-axis)`` (see gtmodel.estimation.fusion.limits.THESIS_TABLE_10).
+_TABLE_10_TEXT = {"accel_noise_m_s2_rtHz": ("< 0.1", "< 0.1"), "accel_bias_m_s2": ("< 0.001", "< 0.001"), "gyro_noise_deg_s_rtHz": ("N/A", "< 0.1"),
+                  "gyro_bias_deg_s": ("N/A", "< 1"), "transform_orientation_error_deg": ("< 10", "< 0.1"),
+                  "transform_translation_error_mm": ("no constraint", "< 100 mm"), "sample_time_s": ("< 0.01", "< 0.01")}
+#: The measured cause of each Table 10 row where ours differs (the runs of problems/thesis/kr500_table_10.toml).
+_TABLE_10_CAUSE = {
+    "accel_noise_m_s2_rtHz": "the filter is told the noise (R follows the sweep) and falls back on its white-jerk model, which smooths the tracker "
+                             "better than the four-point regression even with the accelerometer ignored (about 1.05 mm/s against 5.13 mm/s "
+                             "at 0.039), so fusion never stops paying; with the thesis' Appendix B Q (fixed Q_a) the 3-axis KF stops near "
+                             "the value shown. Deciding numbers: whether the thesis' R followed the swept noise, and its 5-axis EKF Q",
+    "accel_bias_m_s2": "the tuning sets it: the thesis' Appendix B Q reproduces the 3-axis limit (0.99 decades above it: a narrow pass), our white-jerk Q keeps a "
+                       "bias out of the velocity up to about 0.1 m/s^2 in both motions; the thesis prints no Q for its 5-axis EKF (the deciding number)",
+    "gyro_noise_deg_s_rtHz": "as for the accelerometer noise: the EKF is told the gyro noise and the tracker's orientation carries the "
+                             "rotation; deciding numbers: the thesis' 5-axis EKF Q and R",
+    "gyro_bias_deg_s": "a gyro bias enters the velocity only through the lever-arm terms of (29) and the rotated acceleration; our EKF "
+                       "estimates the rotation from the tracker's orientation as well. Deciding numbers: the thesis' 5-axis EKF Q and R",
+    "transform_orientation_error_deg": "3-axis reproduced; in 5-axis our EKF is no more sensitive than the 3-axis KF (the error rotates the "
+                                       "measured acceleration by sin(10 deg) = 0.17 of its size, in both motions): the lever-arm terms of (29) with the "
+                                       "[-180, -100, 120] mm transform do not make it 100x more sensitive. Deciding numbers: the thesis' "
+                                       "5-axis velocity errors at 0.1 and 1 deg, and the axis of its error ('applied to the z axis')",
+    "transform_translation_error_mm": "",
+    "sample_time_s": "the tracker-only baseline, a causal four-point regression evaluated at its newest sample, lags 1.5 sample times: its "
+                     "error grows with dt (see the Table 7 sweep) faster than any filter's, so fusion pays up to 0.1 s with either Q. "
+                     "Measured beside it (not shipped): a centred regression has 0.46 mm/s at 0.01 s, and the Appendix B KF (5.8 mm/s) "
+                     "stops paying against it between 0.002 and 0.005 s. Deciding number: the thesis' tracker-only velocity error at "
+                     "0.002 and 0.01 s (where its regression's slope is compared)",
+}
+
+
+def _limit_text(r: dict[str, Any]) -> str:
+    if r["stops_at"] is None:
+        return f"> {_f(r['search'][1])}"
+    if r["pays_up_to"] is None:
+        return f"<= {_f(r['search'][0])}"
+    return _f(r["limit"], 2)
+
+
+def _table_10_rows(f: dict[str, Any], t10: dict[str, Any] | None) -> list[tuple[str, ...]]:
+    """Cvitanic (2021), Table 10: the limits of problems/thesis/kr500_table_10.toml beside the shipped sweep at the Table 7 offsets."""
+    src = "Cvitanic (2021)"
+    limits = (t10 or {}).get("limits", [])
+    out = []
+    for par, (l3, l5) in _TABLE_10_TEXT.items():
+        sweep = "; ".join(f"{r['motion']} {_f(r['value'])}: {'pays' if r['velocity'] and r['velocity']['fusion'] < r['velocity']['sensor'] else 'not'}"
+                          for r in f["table_10"] if r["parameter"] == par)
+        found = [r for r in limits if r["parameter"] == par]
+        if not found:
+            out.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", f"Table 7 offsets: {sweep or 'not run'}", "one decade",
+                        "not run", "run problems/thesis/kr500_table_10.toml, then collect"))
+            continue
+        ours = "; ".join(f"{r['motion']} {'our Q' if r['tuning'] == 'white_jerk' else 'Appendix B Q'} {_limit_text(r)}" for r in found)
+        own = [r for r in found if r["tuning"] == "white_jerk" and r["verdict"] != "N/A"]
+        verdict = "reproduced" if own and all(r["verdict"] == "reproduced" for r in own) else "differs"
+        out.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", f"{ours} (Table 7 offsets: {sweep or 'not run'})",
+                    "one decade", verdict, "" if verdict == "reproduced" else _TABLE_10_CAUSE[par]))
+    return out
+
+
+def _table_2_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
+    """Cvitanic (2021), Table 2: CP, CP x10 and DPP as the thesis defines them (problems/thesis/kr500_table_2.toml) against the truth."""
+    t2 = d.get("kr500_table_2")
+    name = "Cvitanic (2021), Table 2: joint stiffness by CP vs DPP, DPP closer to the truth"
+    if t2 is None or not t2.get("monte_carlo"):
+        return [(name, "DPP below CP on every joint (CP / DPP 1.2-6.5), DPP closer", "not run", "-", "not run",
+                 "run problems/thesis/kr500_table_2.toml, then collect")]
+    mc = t2["monte_carlo"]
+    w = t2["rotation_weight"]
+    cp, cps = f"CP w={w['CP']:g}", f"CP w={w['CP_rotations_scaled_x10']:g}"
+    ok = mc["dpp_below_cp_every_joint"] and mc["dpp_closer_to_truth"]
+    cause = ("with the thesis' definitions (force-only gravity + pulley loads at the Table 1 poses, three-target rotation noise, CP's "
+             "residual in mm and rad, DPP's eq. (5) on the TCP translation) and an exact joint-spring model, every method is "
+             "median-unbiased to about 1 %: the thesis' CP / DPP gap of 1.2-6.5 is not measurement noise but data the joint-spring model "
+             "does not fit. The one mechanism found that moves CP with the rotation weight (an unmodelled rotation-only compliance of "
+             "0.3 MN m/rad, scenario table_2) biases DPP, not CP, with these definitions (50 seeds: DPP joints 1-2 2.9x / 3.5x the truth, "
+             "CP 1.00), the opposite of the thesis. Deciding numbers: the ten measured deflection screws and wrenches (or each method's "
+             "residuals), the units of the CP residual, and the KR 500-3's DH table (the geometry here is illustrative)")
+    rows = [(name, "DPP below CP on every joint (CP / DPP 1.2-6.5), DPP closer",
+             f"{mc['seeds']} seeds: median CP / DPP {_f(mc['median_cp_over_dpp'], 3)}; mean abs(ln(k / k_true)) CP {_f(mc[cp]['mean_abs_log_ratio'], 2)}, "
+             f"DPP {_f(mc['DPP']['mean_abs_log_ratio'], 2)}; DPP closer in {100 * mc['dpp_closer_fraction']:.0f} % of the seeds",
+             "ordering", "reproduced" if ok else "differs", "" if ok else cause)]
+    ok = mc["cp_scaled_below_dpp_joints_1_3"]
+    rows.append(("Cvitanic (2021), Table 2: CP with rotations x10 below DPP on the arm joints 1-3", "2.13 / 1.59 / 1.12 < 2.86 / 2.36 / 1.67",
+                 f"median k / k_true: CP x10 {_f(mc[cps]['median_ratio'][:3], 3)}, DPP {_f(mc['DPP']['median_ratio'][:3], 3)}", "ordering",
+                 "reproduced" if ok else "differs",
+                 "" if ok else "with an exact model the rotation weight does not move CP (the weighting only matters when data and model disagree)"))
     return rows
 
 
@@ -343,7 +432,7 @@ def rows(data: dict[str, Any]) -> list[tuple[str, ...]]:
     list of tuple of str
     """
     return (_ilc_rows(data, "l1_ilc_thesis", data["model"]) + _ilc_rows(data, "l1_ilc", data["model"]) + _fusion_rows(data)
-            + _correction_rows(data) + _other_rows(data))
+            + _correction_rows(data) + _other_rows(data) + _table_2_rows(data))
 
 
 def render(data: dict[str, Any]) -> str:
@@ -361,7 +450,7 @@ def render(data: dict[str, Any]) -> str:
     head = ("# Fidelity: the theses' figures against ours\n\n"
             "Generated by `python -m gtmodel.report.fidelity render` from `docs/fidelity_figures.json`, which "
             "`python -m gtmodel.report.fidelity collect results` writes from the shipped problems' result folders "
-            f"({', '.join(f'`{p}`' for p in PROBLEMS)}; run each with `gtmodel solve problems/<name>.toml --out results/<name>`, `l1_ilc_thesis` from `problems/thesis/`). "
+            f"({', '.join(f'`{p}`' for p in PROBLEMS)}; run each with `gtmodel solve problems/<name>.toml --out results/<name>`, `l1_ilc_thesis`, `kr500_table_10` and `kr500_table_2` from `problems/thesis/`). "
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
             "Verdicts: *reproduced* (within the tolerance), *structure reproduced* (the thesis' ordering or pattern holds), "
             "*differs* (with the measured cause), *not run*, *not attempted*. `[l1_ilc_thesis]`: the ILC set-up the thesis' text "
