@@ -62,6 +62,7 @@ from gtmodel.estimation.fusion.tracker_imu import (
     SinePath,
     Truth,
     believed_transform,
+    error_axis,
     measure,
     sensor_only,
 )
@@ -196,6 +197,9 @@ class FusionStudy:
         5-axis body rotation axis.
     orientation : array_like, shape (4,), optional
         Initial orientation quaternion ``[w, x, y, z]`` (nonzero norm).
+    transform_error_axis : array_like, shape (3,) or None, optional
+        Axis of the Table 7 transform errors in the IMU frame
+        (:func:`~gtmodel.estimation.fusion.tracker_imu.believed_transform`; None: ``(1, 1, 1)/sqrt(3)``).
     seed : int, optional
         Seed of the sensor noise and of the initial-state draw.
     warmup : float, optional
@@ -247,6 +251,7 @@ class FusionStudy:
     rotation_amplitude: float = math.radians(10.0)
     rotation_axis: Any = (0.5, 0.0, math.sqrt(3.0) / 2.0)
     orientation: Any = (1.0, 0.0, 0.0, 0.0)
+    transform_error_axis: Any = None
     seed: int = 1
     warmup: float = 0.1
     jerk_std: float | None = None
@@ -303,6 +308,8 @@ class FusionStudy:
         if bad:
             raise InputError(f"limit_tunings: expected some of {', '.join(TUNINGS)}, got {', '.join(map(str, bad))}")
         object.__setattr__(self, "sweep_motions", tuple(self.sweep_motions))
+        if self.transform_error_axis is not None:
+            object.__setattr__(self, "transform_error_axis", tuple(float(v) for v in error_axis(self.transform_error_axis)))
         object.__setattr__(self, "limit_tunings", tuple(self.limit_tunings))
         bad = [f for f in self.comparison_filters if f not in FILTERS]
         if bad:
@@ -420,7 +427,7 @@ class FusionStudy:
         truth = path.truth(dt)
         rng = np.random.default_rng(self.seed)
         meas = measure(truth, spec, int(rng.integers(2**31)), IMU_TRANSLATION_M, IMU_ROTATION)
-        t_belief, r_belief = believed_transform(spec)
+        t_belief, r_belief = believed_transform(spec, axis=self.transform_error_axis)
         model = EndEffectorModel(dt, rotation=rotation, imu_translation=t_belief, imu_rotation=r_belief, orientation=path.orientation)
         sj, sa = self.process_noise(path, dt)
         Q = np.diag(as_array(q_diag, (model.nx,), "q_diag")) if q_diag is not None else model.process_noise(sj, sa, self.quaternion_std)

@@ -111,6 +111,8 @@ class SensorsSection(Section):
         Error of the filter's believed IMU-to-target translation [mm].
     transform_orientation_error_deg : float
         Error of the filter's believed IMU-to-target rotation [deg].
+    transform_error_axis : list of float
+        Axis of both transform errors in the IMU frame (normalised; the thesis: its sine's amplitude direction).
     seed : int
         Seed of the sensor noise and the initial-state draw.
     """
@@ -125,6 +127,8 @@ class SensorsSection(Section):
     feed_rate_mm_s: number(gt=0, le=1e4, unit="mm/s", description="feed rate along x (Table 7: 42.33)") = _baseline("feed_rate_mm_s")
     transform_translation_error_mm: number(ge=-1e3, le=1e3, unit="mm", description="error of the believed IMU-to-target translation") = 0.0
     transform_orientation_error_deg: number(ge=-180.0, le=180.0, unit="deg", description="error of the believed IMU-to-target rotation") = 0.0
+    transform_error_axis: vector(3, bound=1e3, description="axis of both transform errors in the IMU frame, normalised; nonzero "
+                                                        "(the thesis: its sine's amplitude direction, y here)") = Field(default_factory=lambda: [1.0, 1.0, 1.0])
     seed: integer(0, 2**31 - 1, description="seed of the sensor noise and of the initial-state draw") = 1
 
 
@@ -321,6 +325,7 @@ class StateEstimationKind(ProblemKind):
         p, s, f, st = doc.path, doc.sensors, doc.filter, doc.study
         _nonzero(file, "path.initial_orientation", p.initial_orientation, "a quaternion [w, x, y, z]")
         _nonzero(file, "path.rotation_axis", p.rotation_axis, "a rotation axis")
+        _nonzero(file, "sensors.transform_error_axis", s.transform_error_axis, "an error axis")
         _positive_definite(file, "filter.initial_covariance", f.initial_covariance, 6)
         _positive_definite(file, "filter.appendix_b_q_diag", f.appendix_b_q_diag, 9)
         _samples(file, "sensors.sample_time_s", s.sample_time_s, p.duration, "path.duration")
@@ -352,6 +357,7 @@ class StateEstimationKind(ProblemKind):
             study = FusionStudy(
                 spec=spec, duration=p.duration, amplitude=p.amplitude, spatial_frequency=p.spatial_frequency, start=p.start,
                 rotation_amplitude=math.radians(p.rotation_amplitude_deg), rotation_axis=p.rotation_axis, orientation=p.initial_orientation,
+                transform_error_axis=s.transform_error_axis,
                 seed=s.seed, warmup=f.warmup, jerk_std=f.jerk_std, angular_jerk_std=f.angular_jerk_std, quaternion_std=f.quaternion_std,
                 initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
                 sweep=sweep, sweep_duration=st.sweep_duration, sweep_motions=tuple(dict.fromkeys(st.sweep_motions)),
