@@ -16,6 +16,11 @@ bracket ``[pays_up_to, stops_at]``. :func:`judge` compares it with the thesis (:
 ``reproduced`` when ``|log10(limit / thesis)| <= 1`` (within one grid step), ``differs`` otherwise;
 a thesis "no constraint" is reproduced when fusion still pays at the top of the search range.
 
+Baselines: ``"causal"`` (the study's tracker-only velocity: the slope of the last four positions taken as
+the velocity NOW, as the thesis describes it; it lags 1.5 sample times) and ``"centred"`` (the same slope
+compared with the true velocity at the window's centre, :func:`centred_velocity_error`: no lag, the
+noise alone), to measure how much of the sample-time limit the baseline's lag decides.
+
 Tunings: ``"white_jerk"`` (the study's own ``Q``, :meth:`FusionStudy.process_noise`) and
 ``"appendix_b"`` (the thesis' diagonal ``Q`` of its 3-axis KF, Appendix B; 3-axis only, the thesis
 gives no ``Q`` for its 5-axis EKF). ``R`` follows the swept sensor figures in both (the filter is
@@ -31,7 +36,8 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["THESIS_TABLE_10", "ROTATION_ONLY_PARAMETERS", "SEARCH_RANGE", "TUNINGS", "velocity_limit", "judge", "decade_grid", "limits"]
+__all__ = ["THESIS_TABLE_10", "ROTATION_ONLY_PARAMETERS", "SEARCH_RANGE", "TUNINGS", "BASELINES", "velocity_limit", "judge", "decade_grid",
+           "limits", "centred_velocity_error"]
 
 #: Cvitanic (2021), Table 10: the limit per parameter ``(3-axis, 5-axis)`` in the Table 7 units
 #: (:data:`~gtmodel.estimation.fusion.tracker_imu.TABLE_7`); ``None``: "N/A", ``math.inf``: "No
@@ -61,6 +67,10 @@ SEARCH_RANGE: dict[str, tuple[float, float]] = {
 }
 #: The filter tunings of the search (module docstring).
 TUNINGS = ("white_jerk", "appendix_b")
+#: The tracker-only velocity baselines (module docstring).
+BASELINES = ("causal", "centred")
+#: Weights of the least-squares slope of four equally spaced samples (times 1 / dt): ``(-3, -1, 1, 3) / 10``.
+_SLOPE = np.array([-1.5, -0.5, 0.5, 1.5]) / 5.0
 #: The quantity Table 10 judges (section 4.3.3: "the velocity estimation ... improved the most").
 QUANTITY = "velocity_mm_s"
 
@@ -91,7 +101,39 @@ def decade_grid(low: float, high: float) -> list[float]:
     return grid
 
 
-def _evaluate(study: Any, rotation: bool, parameter: str, value: float, q_diag: Any, duration: float | None) -> dict[str, Any]:
+def centred_velocity_error(study: Any, case: Any, duration: float) -> float:
+    """Mean norm [mm/s] of the four-point slope of the tracker positions against the TRUE velocity at the window's centre.
+
+    The slope of samples ``k .. k+3`` (least squares, ``(-3, -1, 1, 3) / (10 dt)``) is compared with the
+    velocity at ``t_k + 1.5 dt``, taken from the closed-form path sampled at ``dt / 2`` (index ``2k + 3``);
+    windows ending from ``case.first`` on are scored. The causal baseline of the study compares the same
+    slope with the velocity at ``t_{k+3}``.
+
+    Parameters
+    ----------
+    study : FusionStudy
+        The study that ran the case (its path).
+    case : FusionRun
+        The run (its spec, truth and tracker positions).
+    duration : float
+        The run's length [s].
+
+    Returns
+    -------
+    float
+        Mean Euclidean norm of the error [mm/s].
+    """
+    dt = case.spec.dt
+    p = case.measurements.position
+    n = p.shape[0] - 3
+    slope = sum(_SLOPE[j] * p[j : j + n] for j in range(4)) / dt
+    half = study.path(case.truth.rotation, case.spec, duration).truth(dt / 2.0).velocity
+    err = np.linalg.norm(slope - half[3 : 3 + 2 * n : 2], axis=1)
+    first = max(0, case.first - 3)
+    return 1e3 * float(np.mean(err[first:]))
+
+
+def _evaluate(study: Any, rotation: bool, parameter: str, value: float, q_diag: Any, duration: float, baseline: str) -> dict[str, Any]:
     spec = study.spec.replace(**{parameter: value})
     try:
         case = study.run_case(rotation, spec, q_diag=q_diag, duration=duration, label=f"limit {parameter}={value:g}")
@@ -100,12 +142,13 @@ def _evaluate(study: Any, rotation: bool, parameter: str, value: float, q_diag: 
     e = case.errors.get(QUANTITY)
     if e is None:
         return {"value": value, "sensor": None, "fusion": None, "pays": False, "status": str(case.status), "message": case.message}
-    return {"value": value, "sensor": e["sensor"], "fusion": e["fusion"], "pays": bool(e["fusion"] < e["sensor"]),
+    sensor = e["sensor"] if baseline == "causal" else centred_velocity_error(study, case, duration)
+    return {"value": value, "sensor": sensor, "fusion": e["fusion"], "pays": bool(e["fusion"] < sensor),
             "status": str(case.status), "message": case.message}
 
 
 def velocity_limit(study: Any, rotation: bool, parameter: str, *, tuning: str = "white_jerk", bisections: int = 4,
-                   duration: float | None = None, search: tuple[float, float] | None = None) -> dict[str, Any]:
+                   duration: float | None = None, search: tuple[float, float] | None = None, baseline: str = "causal") -> dict[str, Any]:
     """Locate the value of one Table 7 parameter where fusion stops paying in velocity (Cvitanic (2021), Table 10).
 
     Parameters
@@ -124,11 +167,13 @@ def velocity_limit(study: Any, rotation: bool, parameter: str, *, tuning: str = 
         Length of each run [s] (default the study's ``sweep_duration`` or ``duration``).
     search : tuple of float, optional
         ``(low, high)`` instead of :data:`SEARCH_RANGE`.
+    baseline : {"causal", "centred"}, optional
+        The tracker-only velocity fusion is judged against (module docstring).
 
     Returns
     -------
     dict
-        ``motion, parameter, tuning, thesis_limit`` (None: N/A, ``inf``: no constraint),
+        ``motion, parameter, tuning, baseline, thesis_limit`` (None: N/A, ``inf``: no constraint),
         ``search`` (low, high), ``pays_up_to`` (largest value seen paying, None if the first did
         not), ``stops_at`` (smallest value seen not paying, None if none up to ``high``),
         ``limit`` (geometric mean of the two; ``low`` or ``high`` where one is missing),
@@ -138,13 +183,15 @@ def velocity_limit(study: Any, rotation: bool, parameter: str, *, tuning: str = 
     Raises
     ------
     InputError
-        An unknown parameter or tuning, ``"appendix_b"`` on the 5-axis model, a parameter the
+        An unknown parameter, tuning or baseline, ``"appendix_b"`` on the 5-axis model, a parameter the
         3-axis model does not measure, a negative ``bisections``.
     """
     if parameter not in THESIS_TABLE_10:
         raise InputError(f"parameter: expected one of {', '.join(THESIS_TABLE_10)}, got {parameter!r}")
     if tuning not in TUNINGS:
         raise InputError(f"tuning: expected one of {', '.join(TUNINGS)}, got {tuning!r}")
+    if baseline not in BASELINES:
+        raise InputError(f"baseline: expected one of {', '.join(BASELINES)}, got {baseline!r}")
     if tuning == "appendix_b" and rotation:
         raise InputError("tuning: 'appendix_b' is the thesis' 3-axis KF (Appendix B gives no Q for the 5-axis EKF)")
     if not rotation and parameter in ROTATION_ONLY_PARAMETERS:
@@ -157,7 +204,7 @@ def velocity_limit(study: Any, rotation: bool, parameter: str, *, tuning: str = 
     evals: list[dict[str, Any]] = []
     pays_up_to = stops_at = None
     for value in decade_grid(low, high):
-        ev = _evaluate(study, rotation, parameter, value, q_diag, duration)
+        ev = _evaluate(study, rotation, parameter, value, q_diag, duration, baseline)
         evals.append(ev)
         if not ev["pays"]:
             stops_at = value
@@ -166,7 +213,7 @@ def velocity_limit(study: Any, rotation: bool, parameter: str, *, tuning: str = 
     if pays_up_to is not None and stops_at is not None:
         for _ in range(int(bisections)):
             mid = math.sqrt(pays_up_to * stops_at)
-            ev = _evaluate(study, rotation, parameter, mid, q_diag, duration)
+            ev = _evaluate(study, rotation, parameter, mid, q_diag, duration, baseline)
             evals.append(ev)
             if ev["pays"]:
                 pays_up_to = mid
@@ -174,7 +221,7 @@ def velocity_limit(study: Any, rotation: bool, parameter: str, *, tuning: str = 
                 stops_at = mid
     limit = math.sqrt(pays_up_to * stops_at) if pays_up_to is not None and stops_at is not None else (low if stops_at is not None else high)
     thesis = THESIS_TABLE_10[parameter][1 if rotation else 0]
-    row = {"motion": "5-axis" if rotation else "3-axis", "parameter": parameter, "tuning": tuning, "thesis_limit": thesis,
+    row = {"motion": "5-axis" if rotation else "3-axis", "parameter": parameter, "tuning": tuning, "baseline": baseline, "thesis_limit": thesis,
            "search": [low, high], "pays_up_to": pays_up_to, "stops_at": stops_at, "limit": limit, "evaluations": evals}
     row.update(judge(row))
     return row
@@ -205,7 +252,8 @@ def judge(row: dict[str, Any]) -> dict[str, Any]:
     return {"verdict": "reproduced" if abs(d) <= 1.0 + 1e-9 else "differs", "decades_from_thesis": d}
 
 
-def limits(study: Any, motions: Any, tunings: Any = ("white_jerk",), parameters: Any = None, bisections: int = 4) -> list[dict[str, Any]]:
+def limits(study: Any, motions: Any, tunings: Any = ("white_jerk",), parameters: Any = None, bisections: int = 4,
+           centred: Any = ()) -> list[dict[str, Any]]:
     """Every limit of Table 10 for the given motions and tunings (:func:`velocity_limit`).
 
     Parameters
@@ -220,11 +268,13 @@ def limits(study: Any, motions: Any, tunings: Any = ("white_jerk",), parameters:
         Keys of :data:`THESIS_TABLE_10` (default all); a parameter the motion does not measure is skipped.
     bisections : int, optional
         As :func:`velocity_limit`.
+    centred : sequence of str, optional
+        Parameters searched a second time against the centred baseline (``baseline="centred"``).
 
     Returns
     -------
     list of dict
-        One :func:`velocity_limit` row per (motion, tuning, parameter).
+        One :func:`velocity_limit` row per (motion, tuning, parameter, baseline).
 
     Raises
     ------
@@ -243,5 +293,6 @@ def limits(study: Any, motions: Any, tunings: Any = ("white_jerk",), parameters:
             for p in parameters:
                 if not rotation and p in ROTATION_ONLY_PARAMETERS:
                     continue
-                rows.append(velocity_limit(study, rotation, p, tuning=tuning, bisections=bisections))
+                for baseline in ("causal", "centred") if p in centred else ("causal",):
+                    rows.append(velocity_limit(study, rotation, p, tuning=tuning, bisections=bisections, baseline=baseline))
     return rows

@@ -228,6 +228,8 @@ class FusionStudy:
         Parameters of the limit search (None: every row of Table 10).
     limit_bisections : int, optional
         Halvings of the bracketing decade per limit.
+    limit_centred : sequence of str, optional
+        Parameters searched again against the centred (lag-free) tracker regression.
     comparison_filters : sequence of str, optional
         Filters of the comparison (:data:`FILTERS`).
     comparison_duration : float, optional
@@ -266,6 +268,7 @@ class FusionStudy:
     limit_tunings: Any = ()
     limit_parameters: Any = None
     limit_bisections: int = 4
+    limit_centred: Any = ()
     comparison_filters: Any = FILTERS
     comparison_duration: float = 1.0
     particles: int = 1000
@@ -512,7 +515,8 @@ class FusionStudy:
         if table_10:
             res.table_10 = self._table_10()
             if self.limit_tunings:
-                res.table_10_limits = limits(self, self.sweep_motions, self.limit_tunings, self.limit_parameters, self.limit_bisections)
+                res.table_10_limits = limits(self, self.sweep_motions, self.limit_tunings, self.limit_parameters, self.limit_bisections,
+                                             self.limit_centred)
         if comparison:
             res.filter_comparison = self._comparison({m: res.runs[m].run.P[-1] for m in MOTIONS if res.runs[m].run.P.shape[0]})
         statuses = [r.status for r in res.runs.values()] + [row["status"] for row in res.table_10 + res.filter_comparison]

@@ -203,6 +203,8 @@ class LimitsSection(Section):
         Table 10 rows searched (default: all seven).
     bisections : int
         Halvings of the bracketing decade per limit.
+    centred : list of str
+        Rows searched again against the centred (lag-free) four-point regression.
     """
 
     tunings: list[choice(*TUNINGS, description="a tuning")] = Field(default_factory=list, max_length=2,
@@ -210,6 +212,8 @@ class LimitsSection(Section):
     parameters: list[choice(*THESIS_TABLE_10, description="a Table 10 row")] = Field(default_factory=lambda: list(THESIS_TABLE_10), max_length=7,
                                                                                    description="Table 10 rows searched")
     bisections: integer(0, 10, description="halvings of the decade where fusion stops paying") = 4
+    centred: list[choice(*THESIS_TABLE_10, description="a Table 10 row")] = Field(
+        default_factory=list, max_length=7, description="rows searched again against the centred (lag-free) four-point regression of the tracker")
 
 
 class StudySection(Section):
@@ -362,7 +366,7 @@ class StateEstimationKind(ProblemKind):
                 initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
                 sweep=sweep, sweep_duration=st.sweep_duration, sweep_motions=tuple(dict.fromkeys(st.sweep_motions)),
                 limit_tunings=tuple(dict.fromkeys(st.limits.tunings)), limit_parameters=tuple(dict.fromkeys(st.limits.parameters)),
-                limit_bisections=st.limits.bisections, comparison_filters=tuple(st.comparison_filters),
+                limit_bisections=st.limits.bisections, limit_centred=tuple(dict.fromkeys(st.limits.centred)), comparison_filters=tuple(st.comparison_filters),
                 comparison_duration=st.comparison_duration, particles=st.particles,
             )
         except InputError as exc:

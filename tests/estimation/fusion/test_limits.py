@@ -15,7 +15,8 @@ from types import SimpleNamespace
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.fusion.limits import THESIS_TABLE_10, decade_grid, judge, limits, velocity_limit
+from gtmodel.estimation.fusion.limits import THESIS_TABLE_10, centred_velocity_error, decade_grid, judge, limits, velocity_limit
+from gtmodel.estimation.fusion.study import FusionStudy
 
 #: Where the stand-in's fusion stops paying (accelerometer bias, m/s^2).
 CROSSING = 0.0037
@@ -105,6 +106,7 @@ BAD = [
     ("unknown_tuning", dict(rotation=True, parameter="accel_bias_m_s2", tuning="thesis"), r"tuning: expected one of white_jerk, appendix_b"),
     ("appendix_b_5_axis", dict(rotation=True, parameter="accel_bias_m_s2", tuning="appendix_b"), r"tuning: 'appendix_b' is the thesis' 3-axis KF"),
     ("gyro_3_axis", dict(rotation=False, parameter="gyro_bias_deg_s"), r"parameter: gyro_bias_deg_s is not measured by the 3-axis model"),
+    ("unknown_baseline", dict(rotation=False, parameter="accel_bias_m_s2", baseline="smoothed"), r"baseline: expected one of causal, centred, got 'smoothed'"),
     ("negative_bisections", dict(rotation=False, parameter="accel_bias_m_s2", bisections=-1), r"bisections: expected an integer >= 0, got -1"),
 ]
 
@@ -119,3 +121,13 @@ def test_bad_search(case, kwargs, match):
 def test_bad_motion():
     with pytest.raises(InputError, match=r"motions: expected '3-axis' or '5-axis', got 'planar'"):
         limits(_Study(), ["planar"])
+
+
+@pytest.mark.slow
+def test_centred_regression_error_is_the_noise_of_the_slope():
+    # independent: the least-squares slope of four samples has the standard deviation sigma sqrt(0.2) / dt per
+    # axis; the mean norm of a 3-D isotropic Gaussian is 2 sqrt(2 / pi) times it (the lag-free baseline sees only noise)
+    study = FusionStudy(duration=1.2, sweep={})
+    case = study.run_case(False, duration=1.2)
+    expected = 2.0 * math.sqrt(2.0 / math.pi) * math.sqrt(0.2) * study.spec.position_std / study.spec.dt * 1e3
+    assert centred_velocity_error(study, case, 1.2) == pytest.approx(expected, rel=0.05)
