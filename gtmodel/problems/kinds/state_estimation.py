@@ -73,6 +73,8 @@ class PathSection(Section):
         5-axis: the body rotation axis (normalised; nonzero).
     initial_orientation : list of float, shape (4,)
         Orientation quaternion ``[w, x, y, z]`` at t = 0 (normalised; nonzero).
+    rotation_law : str
+        5-axis: ``sine`` (theta_0 sin(omega t)) or ``normal`` (the tool normal to the path, the thesis' motion).
     """
 
     duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of every baseline run") = 3.0
@@ -84,6 +86,8 @@ class PathSection(Section):
         default_factory=lambda: [0.5, 0.0, math.sqrt(3.0) / 2.0])
     initial_orientation: vector(4, bound=10.0, description="orientation quaternion [w, x, y, z] at t = 0 (normalised, nonzero norm)") = Field(
         default_factory=lambda: [1.0, 0.0, 0.0, 0.0])
+    rotation_law: choice("sine", "normal", description='5-axis: "sine": theta_0 sin(omega t) about the body axis; "normal": the slope angle '
+                                                       '(the tool normal to the path, the thesis\' Fig. 22; with the axis [0, 0, 1])') = "sine"
 
 
 class SensorsSection(Section):
@@ -361,7 +365,7 @@ class StateEstimationKind(ProblemKind):
             study = FusionStudy(
                 spec=spec, duration=p.duration, amplitude=p.amplitude, spatial_frequency=p.spatial_frequency, start=p.start,
                 rotation_amplitude=math.radians(p.rotation_amplitude_deg), rotation_axis=p.rotation_axis, orientation=p.initial_orientation,
-                transform_error_axis=s.transform_error_axis,
+                transform_error_axis=s.transform_error_axis, rotation_law=p.rotation_law,
                 seed=s.seed, warmup=f.warmup, jerk_std=f.jerk_std, angular_jerk_std=f.angular_jerk_std, quaternion_std=f.quaternion_std,
                 initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
                 sweep=sweep, sweep_duration=st.sweep_duration, sweep_motions=tuple(dict.fromkeys(st.sweep_motions)),
