@@ -55,6 +55,7 @@ __all__ = [
     "TABLE_2_K_THETA",
     "ROTATION_WEIGHT_FOR_UNITS",
     "TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS",
+    "DPP_STEP2",
     "DeflectionData",
     "DeflectionNoise",
     "JointStiffnessResult",
@@ -102,6 +103,10 @@ ROTATION_WEIGHT_FOR_UNITS = {"m_rad": 1.0, "mm_mrad": 1.0, "mm_rad": 1e-3, "mm_d
 #: them" in the seeded studies of tests/calibration/test_joint_stiffness.py. A hypothesis,
 #: not a thesis figure.
 TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS = 0.3e6
+
+
+#: The data of DPP's step 2 (:func:`calibrate_dpp`): the rotation, or the TCP translation as eq. (5) is written.
+DPP_STEP2 = ("rotation", "tcp_translation")
 
 
 def _rows(fn: Any, *args: np.ndarray) -> list[np.ndarray]:
@@ -563,13 +568,16 @@ def calibrate_cp(arm: SerialArm, data: DeflectionData, rotation_weight: float = 
     return _result("CP", c, std, cond, problems, arm, data, rotation_weight, {})
 
 
-def calibrate_dpp(arm: SerialArm, data: DeflectionData, bounds: str = "none") -> JointStiffnessResult:
+def calibrate_dpp(arm: SerialArm, data: DeflectionData, bounds: str = "none", step2: str = "rotation") -> JointStiffnessResult:
     """Decoupled partial-pose (DPP) calibration, Cvitanic (2021), eqs. (4)-(5) and Table 2.
 
     Step 1, eq. (4): joints 1-3 from the wrist-centre displacement
     ``dp_wc = dp - dphi x (p_TCP - p_wc) = sum_{i<=3} J_wc,i c_i tau_i`` with
-    ``tau = J^T F``. Step 2, eq. (5): joints 4-6 from the rotation left by joints 1-3,
-    ``dphi - sum_{i<=3} z_i c_i tau_i = sum_{i>=4} z_i c_i tau_i``.
+    ``tau = J^T F``. Step 2, eq. (5), joints 4-6 with joints 1-3 fixed: ``step2="rotation"``
+    from the rotation they leave, ``dphi - sum_{i<=3} z_i c_i tau_i = sum_{i>=4} z_i c_i tau_i``;
+    ``step2="tcp_translation"`` as the thesis writes (5), from the TCP's LINEAR displacement
+    ("Delta X refers to the linear displacement of the end-effector"):
+    ``dp - sum_{i<=3} J_v,i c_i tau_i = sum_{i>=4} J_v,i c_i tau_i`` (``J_v``: the linear rows of ``J``).
 
     Parameters
     ----------
@@ -579,6 +587,8 @@ def calibrate_dpp(arm: SerialArm, data: DeflectionData, bounds: str = "none") ->
         Measured wrenches and deflections (rotations are needed for both steps).
     bounds : {"none", "positive"}, optional
         ``"positive"`` constrains ``c >= 0`` in both steps.
+    step2 : {"rotation", "tcp_translation"}, optional
+        The data of step 2 (above).
 
     Returns
     -------
@@ -588,9 +598,11 @@ def calibrate_dpp(arm: SerialArm, data: DeflectionData, bounds: str = "none") ->
     Raises
     ------
     InputError
-        Wrong argument types, or an arm whose wrist centre moves with joints 4-6.
+        Wrong argument types, an unknown ``step2``, or an arm whose wrist centre moves with joints 4-6.
     """
     _check_common(arm, data, bounds)
+    if step2 not in DPP_STEP2:
+        raise InputError(f"step2: expected one of {', '.join(DPP_STEP2)}, got {step2!r}")
     J = _rows(arm.jacobian_function, data.theta)[0]
     p_wc, Jwc = _rows(arm.wrist_function, data.theta)
     if np.max(np.abs(Jwc[:, :, 3:])) > 1e-9:
@@ -600,12 +612,14 @@ def calibrate_dpp(arm: SerialArm, data: DeflectionData, bounds: str = "none") ->
     A1 = (Jwc[:, :, :3] * tau[:, None, :3]).reshape(-1, 3)
     y1 = (data.dX[:, :3] - np.cross(data.dX[:, 3:], r)).reshape(-1)
     c13, std13, cond1, problems = _solve(A1, y1, bounds, "DPP step 1 (wrist centre, joints 1-3)")
-    A2 = (J[:, 3:, 3:] * tau[:, None, 3:]).reshape(-1, 3)
-    y2 = (data.dX[:, 3:] - (J[:, 3:, :3] * tau[:, None, :3]) @ c13).reshape(-1)
-    c46, std46, cond2, problems2 = _solve(A2, y2, bounds, "DPP step 2 (rotation, joints 4-6)")
+    rows = slice(3, 6) if step2 == "rotation" else slice(0, 3)  # eq. (5) on the rotation, or on the TCP translation
+    A2 = (J[:, rows, 3:] * tau[:, None, 3:]).reshape(-1, 3)
+    y2 = (data.dX[:, rows] - (J[:, rows, :3] * tau[:, None, :3]) @ c13).reshape(-1)
+    c46, std46, cond2, problems2 = _solve(A2, y2, bounds, f"DPP step 2 ({step2.replace('_', ' ')}, joints 4-6)")
     c = np.concatenate([c13, c46])
     std = np.concatenate([std13, std46])
-    return _result("DPP", c, std, max(cond1, cond2), problems + problems2, arm, data, 1.0, {"condition_step1": cond1, "condition_step2": cond2})
+    return _result("DPP", c, std, max(cond1, cond2), problems + problems2, arm, data, 1.0,
+                   {"condition_step1": cond1, "condition_step2": cond2, "step2": step2})
 
 
 def cp_dpp_study(
@@ -614,6 +628,7 @@ def cp_dpp_study(
     k_true: Any,
     seeds: int = 30,
     rotation_weights: tuple[float, ...] = (1.0, 10.0),
+    dpp_step2: str = "rotation",
 ) -> dict[str, np.ndarray]:
     """Seeded Monte-Carlo comparison of CP (several rotation weights) and DPP, Cvitanic (2021), Table 2.
 
@@ -634,6 +649,8 @@ def cp_dpp_study(
     rotation_weights : tuple of float, optional
         CP rotation weights [m/rad] (default ``(1.0, 10.0)``; see
         :data:`ROTATION_WEIGHT_FOR_UNITS` for the weight of a residual in mm).
+    dpp_step2 : {"rotation", "tcp_translation"}, optional
+        The data of DPP's step 2 (:func:`calibrate_dpp`).
 
     Returns
     -------
@@ -658,5 +675,5 @@ def cp_dpp_study(
         data = data_for_seed(seed)
         for w in rotation_weights:
             out[f"CP w={w:g}"].append(calibrate_cp(arm, data, rotation_weight=w).k_theta / k)
-        out["DPP"].append(calibrate_dpp(arm, data).k_theta / k)
+        out["DPP"].append(calibrate_dpp(arm, data, step2=dpp_step2).k_theta / k)
     return {name: np.array(v) for name, v in out.items()}

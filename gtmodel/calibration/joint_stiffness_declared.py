@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
-from gtmodel.calibration.joint_stiffness import DeflectionData, calibrate_cp, calibrate_dpp
+from gtmodel.calibration.joint_stiffness import DeflectionData, calibrate_cp, calibrate_dpp, cp_dpp_study
+from gtmodel.calibration.joint_stiffness_thesis import summarise_table_2
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.robots import SerialArm
 from gtmodel.status import Status
@@ -44,6 +46,14 @@ class JointStiffnessDeclaration:
         ``"none"`` or ``"positive"``.
     source : str
         Description of the data.
+    rotation_weight : float, optional
+        CP rotation weight [m/rad] (1: a residual in m and rad).
+    dpp_step2 : str, optional
+        The data of DPP's step 2 (:func:`~gtmodel.calibration.calibrate_dpp`).
+    data_for_seed : callable or None, optional
+        ``seed -> DeflectionData`` of the synthetic experiment (the Monte Carlo; None: none).
+    seeds : int, optional
+        Monte-Carlo seeds (``data_for_seed(0 .. seeds - 1)``; 1: none).
     """
 
     arm: SerialArm
@@ -52,13 +62,19 @@ class JointStiffnessDeclaration:
     scaled_rotation_weight: float
     bounds: str
     source: str
+    rotation_weight: float = 1.0
+    dpp_step2: str = "rotation"
+    data_for_seed: Callable[[int], DeflectionData] | None = None
+    seeds: int = 1
 
     @fill_doc(**SHARED_DOCS)
     def solve(self, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> "JointStiffnessOutcome":
-        """Run the CP (weight 1), CP (scaled rotation weight) and DPP calibrations.
+        """Run the CP (rotation weight), CP (scaled rotation weight) and DPP calibrations, and the Monte Carlo.
 
         Cvitanic (2021), eqs. (3)-(5) and Table 2 (:func:`~gtmodel.calibration.calibrate_cp`,
-        :func:`~gtmodel.calibration.calibrate_dpp`).
+        :func:`~gtmodel.calibration.calibrate_dpp`); with ``seeds > 1`` the seeded comparison
+        against the truth (:func:`~gtmodel.calibration.cp_dpp_study`,
+        :func:`~gtmodel.calibration.joint_stiffness_thesis.summarise_table_2`).
 
         Parameters
         ----------
@@ -78,16 +94,21 @@ class JointStiffnessDeclaration:
         t0 = time.perf_counter()
         try:
             results = {
-                "CP": calibrate_cp(decl.arm, decl.data, 1.0, decl.bounds),
+                "CP": calibrate_cp(decl.arm, decl.data, decl.rotation_weight, decl.bounds),
                 "CP_rotations_scaled_x10": calibrate_cp(decl.arm, decl.data, decl.scaled_rotation_weight, decl.bounds),
-                "DPP": calibrate_dpp(decl.arm, decl.data, decl.bounds),
+                "DPP": calibrate_dpp(decl.arm, decl.data, decl.bounds, decl.dpp_step2),
             }
+            monte_carlo = None
+            if decl.seeds > 1 and decl.data_for_seed is not None and decl.k_true is not None:
+                w, ws = decl.rotation_weight, decl.scaled_rotation_weight
+                ratios = cp_dpp_study(decl.arm, decl.data_for_seed, decl.k_true, decl.seeds, (w, ws), decl.dpp_step2)
+                monte_carlo = summarise_table_2(ratios, f"CP w={w:g}", f"CP w={ws:g}")
         except GtModelError as exc:
             raise ProblemError(str(exc)) from None
         if verbose:
             for m, r in results.items():
                 _log.info("joint stiffness %s: k = %s MN m/rad (%s)", m, np.round(r.k_theta / 1e6, 3).tolist(), r.status)
-        return JointStiffnessOutcome(results, time.perf_counter() - t0)
+        return JointStiffnessOutcome(results, time.perf_counter() - t0, monte_carlo)
 
 
 @dataclass
@@ -100,10 +121,13 @@ class JointStiffnessOutcome:
         One result per name of :data:`METHODS`.
     solve_time : float
         Wall time [s].
+    monte_carlo : dict or None, optional
+        The seeded comparison against the truth (:func:`~gtmodel.calibration.joint_stiffness_thesis.summarise_table_2`).
     """
 
     results: dict[str, Any]
     solve_time: float
+    monte_carlo: dict[str, Any] | None = None
 
     @property
     def status(self) -> Status:

@@ -38,7 +38,8 @@ from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_mode
 __all__ = ["PROBLEMS", "LEARNING_FACTOR_HZ", "collect", "learning_factors", "render", "rows", "main"]
 
 #: The shipped problems whose result folders the report reads.
-PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models")
+PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models", "kr500_table_10",
+            "kr500_table_2")
 PROBLEMS = tuple(dict.fromkeys(PROBLEMS + D1_PROBLEMS))  # the D1 error-model runs (gtmodel.report.fidelity_d1)
 REPO = Path(__file__).resolve().parents[2]
 FIGURES = REPO / "docs" / "fidelity_figures.json"
@@ -79,8 +80,21 @@ def _correction(s: dict[str, Any]) -> dict[str, Any]:
             "resolutions": s["resolutions"]}
 
 
+def _table_10_figures(s: dict[str, Any]) -> dict[str, Any]:
+    keep = ("motion", "parameter", "tuning", "baseline", "limit", "pays_up_to", "stops_at", "verdict", "decades_from_thesis", "search")
+    return {"status": s["status"], "limits": [{k: r[k] for k in keep} for r in s.get("table_10_limits", [])],
+            "failed_checks": s.get("failed_checks"), "nees": {m: {k: n[k] for k in ("mean", "band")} for m, n in s["nees"].items()}}
+
+
+def _table_2_figures(s: dict[str, Any]) -> dict[str, Any]:
+    return {"status": s["status"], "source": s["source"], "monte_carlo": s.get("monte_carlo"),
+            "ratio_to_truth": {m: v["ratio_to_truth"] for m, v in s["methods"].items()},
+            "rotation_weight": {m: v["rotation_weight"] for m, v in s["methods"].items()}, "dpp_step2": s["methods"]["DPP"].get("step2")}
+
+
 _EXTRACT: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
-    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction}
+    "l1_ilc": _ilc, "l1_ilc_thesis": _ilc, "kr500_state_estimation": _fusion, "kr500_correction_stability": _correction,
+    "kr500_table_10": _table_10_figures, "kr500_table_2": _table_2_figures}
 _EXTRACT.update({name: extract_d1 for name in D1_PROBLEMS})
 
 
@@ -336,17 +350,7 @@ def _fusion_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
                      ("structure reproduced" if t9["fusion"] < t9["sensor"] else "differs"),
                      "sensor: the mean norm of 3-D noise of 0.64 mm per axis is 1.596 x 0.64 = 1.02 mm (the thesis' 0.889 is 1.39 sigma); "
                      "fusion: our white-jerk Q weights the IMU more than the thesis' Appendix B Q"))
-    limits = {"accel_noise_m_s2_rtHz": ("< 0.1", "< 0.1"), "accel_bias_m_s2": ("< 0.001", "< 0.001"), "gyro_noise_deg_s_rtHz": ("N/A", "< 0.1"),
-              "gyro_bias_deg_s": ("N/A", "< 1"), "transform_orientation_error_deg": ("< 10", "< 0.1"),
-              "transform_translation_error_mm": ("no constraint", "< 100 mm"), "sample_time_s": ("< 0.01", "< 0.01")}
-    for par, (l3, l5) in limits.items():
-        runs = [r for r in f["table_10"] if r["parameter"] == par]
-        txt = "; ".join(f"{r['motion']} {_f(r['value'])}: fusion {'better' if r['velocity'] and r['velocity']['fusion'] < r['velocity']['sensor'] else 'not better'}"
-                        for r in runs) or "not run"
-        motions = {r["motion"] for r in runs}
-        rows.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", txt, "one grid step",
-                     "not run" if not runs else "partly run" if motions != {"3-axis", "5-axis"} else "see values",
-                     "the shipped sweep runs the 5-axis EKF at the largest Table 7 offsets only (run time); the 3-axis sweep is not run"))
+    rows += _table_10_rows(f, d.get("kr500_table_10"))
     fails = f.get("failed_checks")
     rows.append(("self-checks of the run (NEES, position not degraded, Table 9 ordering, Appendix B position)", "-",
                  f"status {f['status']}; failed: {', '.join(fails) if fails else 'none'}", "-",
@@ -421,8 +425,116 @@ def _other_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
              "the -3 dB points of b / (1 - a q^-1) from the published a, b: axes 1-2 have poles 0.9647 / 0.9656 (1.4 Hz), axis 3 0.9728 (1.1 Hz); "
              "the thesis' 'about 1.1 Hz' matches axis 3")]
     rows.append(_kalman_row(d))
-    rows.append(("Cvitanic (2021), Table 2: joint stiffness by CP vs DPP, DPP closer to the truth", "DPP lower stiffness, closer", "not attempted", "-",
-                 "not attempted", "needs the thesis' deflection measurements (not in the reference data) or a synthetic truth"))
+    return rows
+
+
+#: Cvitanic (2021), Table 10 as printed, per parameter ``(3-axis, 5-axis)`` (see gtmodel.estimation.fusion.limits.THESIS_TABLE_10).
+_TABLE_10_TEXT = {"accel_noise_m_s2_rtHz": ("< 0.1", "< 0.1"), "accel_bias_m_s2": ("< 0.001", "< 0.001"), "gyro_noise_deg_s_rtHz": ("N/A", "< 0.1"),
+                  "gyro_bias_deg_s": ("N/A", "< 1"), "transform_orientation_error_deg": ("< 10", "< 0.1"),
+                  "transform_translation_error_mm": ("no constraint", "< 100 mm"), "sample_time_s": ("< 0.01", "< 0.01")}
+#: The measured cause of each Table 10 row where ours differs (the runs of problems/thesis/kr500_table_10.toml).
+_TABLE_10_CAUSE = {
+    "accel_noise_m_s2_rtHz": "the filter is told the noise (R follows the sweep) and falls back on its white-jerk model, which smooths the tracker "
+                             "better than the four-point regression even with the accelerometer ignored (about 1.05 mm/s against 5.13 mm/s "
+                             "at 0.039), so fusion never stops paying; with the thesis' Appendix B Q (fixed Q_a) the 3-axis KF stops near "
+                             "the value shown. Deciding numbers: whether the thesis' R followed the swept noise, and its 5-axis EKF Q",
+    "accel_bias_m_s2": "the tuning sets it: the thesis' Appendix B Q reproduces the 3-axis limit (0.99 decades above it: a narrow pass), our "
+                       "white-jerk Q keeps a bias out of the velocity up to about 0.1 m/s^2 in both motions; the thesis prints no Q for its "
+                       "5-axis EKF (the deciding number)",
+    "gyro_noise_deg_s_rtHz": "as for the accelerometer noise: the EKF is told the gyro noise (R follows the sweep) and the tracker's orientation "
+                             "carries the rotation, so fusion never stops paying. Deciding numbers: the thesis' 5-axis EKF Q and R, and "
+                             "whether its R followed the swept noise",
+    "gyro_bias_deg_s": "",
+    "transform_orientation_error_deg": "run with the thesis' error axis (its z: the sine's amplitude direction, the tool axis). 3-axis: our feed "
+                                       "is constant along x, so the acceleration lies on that axis and a rotation about it changes nothing (no "
+                                       "limit; about the axis (1, 1, 1) the limit is 8 deg, the thesis' 10); the thesis' constant TANGENTIAL "
+                                       "speed turns the acceleration within the plane, which gives it a finite limit. 5-axis (tool normal to "
+                                       "the path): a limit of about 7 deg, set like the bias limit by our Q (the error acts as a bias of "
+                                       "sin(error) |a|). Deciding numbers: the thesis' 5-axis EKF Q, and its path at constant tangential speed",
+    "transform_translation_error_mm": "3-axis: no constraint, as the thesis says (both points see the same motion). 5-axis with the thesis' "
+                                      "tool normal to the path: it turns at up to 49 rad/s at the crests (curvature radius 0.86 mm), so a "
+                                      "lever-arm error e gives omega^2 e = 2.4 m/s^2 per mm there, and fusion stops paying near 1 mm; the "
+                                      "thesis' 0.1 m would be 240 m/s^2 at the crests. With our x-feed the crests come every 0.6 s, with the "
+                                      "thesis' constant tangential speed about every 3.6 s (its Fig. 24-25: one peak in 5 s), which dilutes "
+                                      "them in the mean about 6 times, not 100. Deciding numbers: the thesis' 5-axis velocity error at 2.54 mm "
+                                      "and the path it ran (feed along the arc, crest radius)",
+    "sample_time_s": "5-axis (tool normal to the path): reproduced, the constant-acceleration model (21)-(28) breaks at the crests, as the "
+                     "thesis explains. 3-axis: the tracker-only baseline, the slope of the last four positions taken as the velocity now "
+                     "(the thesis' words), lags 1.5 sample times: its error grows with dt (21 mm/s at 0.01 s) faster than the KF's, so "
+                     "fusion pays up to 0.1 s with either Q. Against the same slope compared at its window's centre (lag-free, 0.5 mm/s "
+                     "at 0.01 s) the thesis' Appendix B KF stops paying at the limit shown, within a decade of 0.01 s, while our "
+                     "white-jerk KF still pays. Deciding number: the thesis' 3-axis tracker-only velocity error at 0.002 and 0.01 s",
+}
+
+
+def _limit_text(r: dict[str, Any]) -> str:
+    if r["stops_at"] is None:
+        return f"> {_f(r['search'][1])}"
+    if r["pays_up_to"] is None:
+        return f"<= {_f(r['search'][0])}"
+    return _f(r["limit"], 2)
+
+
+def _table_10_rows(f: dict[str, Any], t10: dict[str, Any] | None) -> list[tuple[str, ...]]:
+    """Cvitanic (2021), Table 10: the limits of problems/thesis/kr500_table_10.toml beside the shipped sweep at the Table 7 offsets."""
+    src = "Cvitanic (2021)"
+    limits = (t10 or {}).get("limits", [])
+    out = []
+    for par, (l3, l5) in _TABLE_10_TEXT.items():
+        sweep = "; ".join(f"{r['motion']} {_f(r['value'])}: {'pays' if r['velocity'] and r['velocity']['fusion'] < r['velocity']['sensor'] else 'not'}"
+                          for r in f["table_10"] if r["parameter"] == par)
+        found = [r for r in limits if r["parameter"] == par]
+        if not found:
+            out.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", f"Table 7 offsets: {sweep or 'not run'}", "one decade",
+                        "not run", "run problems/thesis/kr500_table_10.toml, then collect"))
+            continue
+        ours = "; ".join(f"{r['motion'] + (' (tool normal to the path)' if r['motion'] == '5-axis' else '')} "
+                         f"{'our Q' if r['tuning'] == 'white_jerk' else 'Appendix B Q'}"
+                         f"{' vs the centred regression' if r.get('baseline') == 'centred' else ''} {_limit_text(r)}" for r in found)
+        sweep = (f"kr500_state_estimation at the Table 7 offsets, its 5-axis a 10 deg turn about a fixed axis"
+                 f"{', error axis (1, 1, 1)' if par.startswith('transform') else ''}: {sweep or 'not run'}")
+        own = [r for r in found if r["tuning"] == "white_jerk" and r.get("baseline", "causal") == "causal" and r["verdict"] != "N/A"]
+        verdict = "reproduced" if own and all(r["verdict"] == "reproduced" for r in own) else "differs"
+        out.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", f"{ours} ({sweep})",
+                    "one decade", verdict, "" if verdict == "reproduced" else _TABLE_10_CAUSE[par]))
+    if t10 is not None and t10.get("nees"):
+        fails, nees = t10.get("failed_checks") or [], t10["nees"].get("5-axis", {})
+        out.append((f"{src}, Table 10 run (problems/thesis/kr500_table_10.toml): self-checks", "-",
+                    f"status {t10['status']}; failed: {', '.join(fails) or 'none'}; 5-axis NEES {_f(nees.get('mean'))} (band {_f(nees.get('band'))})",
+                    "-", "reproduced" if not fails else "differs",
+                    "" if not fails else "the thesis' tool normal to the path turns at up to 49 rad/s and 1600 rad/s^2 at the crests: the EKF's "
+                    "constant-angular-acceleration model (26)-(28), with the white angular jerk set to the path's largest, is overconfident "
+                    "there (the thesis: its EKF and UKF 'struggle' at the peaks); the run's status says so (check_failed, exit 1)"))
+    return out
+
+
+def _table_2_rows(d: dict[str, Any]) -> list[tuple[str, ...]]:
+    """Cvitanic (2021), Table 2: CP, CP x10 and DPP as the thesis defines them (problems/thesis/kr500_table_2.toml) against the truth."""
+    t2 = d.get("kr500_table_2")
+    name = "Cvitanic (2021), Table 2: joint stiffness by CP vs DPP, DPP closer to the truth"
+    if t2 is None or not t2.get("monte_carlo"):
+        return [(name, "DPP below CP on every joint (CP / DPP 1.2-6.5), DPP closer", "not run", "-", "not run",
+                 "run problems/thesis/kr500_table_2.toml, then collect")]
+    mc = t2["monte_carlo"]
+    w = t2["rotation_weight"]
+    cp, cps = f"CP w={w['CP']:g}", f"CP w={w['CP_rotations_scaled_x10']:g}"
+    ok = mc["dpp_below_cp_every_joint"] and mc["dpp_closer_to_truth"]
+    cause = ("with the thesis' definitions (force-only gravity + pulley loads at the Table 1 poses, three-target rotation noise, CP's "
+             "residual in mm and rad, DPP's eq. (5) on the TCP translation) and an exact joint-spring model, every method is "
+             "median-unbiased to about 1 %: the thesis' CP / DPP gap of 1.2-6.5 is not measurement noise but data the joint-spring model "
+             "does not fit. The one mechanism found that moves CP with the rotation weight (an unmodelled rotation-only compliance of "
+             "0.3 MN m/rad, scenario table_2) biases DPP, not CP, with these definitions (50 seeds: DPP joints 1-2 2.9x / 3.5x the truth, "
+             "CP 1.00), the opposite of the thesis. Deciding numbers: the ten measured deflection screws and wrenches (or each method's "
+             "residuals), the units of the CP residual, and the KR 500-3's DH table (the geometry here is illustrative)")
+    rows = [(name, "DPP below CP on every joint (CP / DPP 1.2-6.5), DPP closer",
+             f"{mc['seeds']} seeds: median CP / DPP {_f(mc['median_cp_over_dpp'], 3)}; mean abs(ln(k / k_true)) CP {_f(mc[cp]['mean_abs_log_ratio'], 2)}, "
+             f"DPP {_f(mc['DPP']['mean_abs_log_ratio'], 2)}; DPP closer in {100 * mc['dpp_closer_fraction']:.0f} % of the seeds",
+             "ordering", "reproduced" if ok else "differs", "" if ok else cause)]
+    ok = mc["cp_scaled_below_dpp_joints_1_3"]
+    rows.append(("Cvitanic (2021), Table 2: CP with rotations x10 below DPP on the arm joints 1-3", "2.13 / 1.59 / 1.12 < 2.86 / 2.36 / 1.67",
+                 f"median k / k_true: CP x10 {_f(mc[cps]['median_ratio'][:3], 3)}, DPP {_f(mc['DPP']['median_ratio'][:3], 3)}", "ordering",
+                 "reproduced" if ok else "differs",
+                 "" if ok else "with an exact model the rotation weight does not move CP (the weighting only matters when data and model disagree)"))
     return rows
 
 
@@ -439,7 +551,7 @@ def rows(data: dict[str, Any]) -> list[tuple[str, ...]]:
     list of tuple of str
     """
     return (_ilc_rows(data, "l1_ilc_thesis", data["model"]) + _ilc_rows(data, "l1_ilc", data["model"]) + _fusion_rows(data)
-            + _correction_rows(data) + _other_rows(data)
+            + _correction_rows(data) + _other_rows(data) + _table_2_rows(data)
             + d1_rows(data))
 
 
@@ -458,7 +570,7 @@ def render(data: dict[str, Any]) -> str:
     head = ("# Fidelity: the theses' figures against ours\n\n"
             "Generated by `python -m gtmodel.report.fidelity render` from `docs/fidelity_figures.json`, which "
             "`python -m gtmodel.report.fidelity collect results` writes from the shipped problems' result folders "
-            f"({', '.join(f'`{p}`' for p in PROBLEMS)}; run each with `gtmodel solve problems/<name>.toml --out results/<name>`, `l1_ilc_thesis` from `problems/thesis/`). "
+            f"({', '.join(f'`{p}`' for p in PROBLEMS)}; run each with `gtmodel solve problems/<name>.toml --out results/<name>`, `l1_ilc_thesis`, `kr500_table_10` and `kr500_table_2` from `problems/thesis/`). "
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
             "Verdicts: *reproduced* (within the tolerance), *structure reproduced* (the thesis' ordering or pattern holds), "
             "*differs* (with the measured cause), *not run*, *not attempted*. `[l1_ilc_thesis]`: the ILC set-up the thesis' text "

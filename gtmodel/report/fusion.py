@@ -18,7 +18,7 @@ import numpy as np
 
 from gtmodel.report._figure import new_figure, save
 
-__all__ = ["write_fusion_tables", "plot_velocity", "plot_angular_acceleration", "plot_sweep", "QUANTITY_LABELS"]
+__all__ = ["write_fusion_tables", "write_limits_table", "plot_velocity", "plot_angular_acceleration", "plot_sweep", "QUANTITY_LABELS"]
 
 #: Row labels of the tables (quantity key -> text with unit).
 QUANTITY_LABELS = {
@@ -214,6 +214,43 @@ def plot_angular_acceleration(t: Any, truth: Any, regression: Any, fusion: Any, 
     return save(fig, path)
 
 
+def write_limits_table(out: str | Path, name: str, limits: Sequence[Mapping[str, Any]]) -> list[str]:
+    """Write ``table_10_limits.md`` and ``.csv``: where the fused velocity stops paying, against Cvitanic (2021), Table 10.
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        Result folder.
+    name : str
+        Problem name (the titles).
+    limits : sequence of Mapping
+        Rows of :func:`gtmodel.estimation.fusion.limits.velocity_limit` (nothing is written when empty).
+
+    Returns
+    -------
+    list of str
+        The file names written.
+    """
+    def lim(v: Any) -> str:
+        return "N/A" if v is None else ("no constraint" if v == float("inf") else f"< {v:g}")
+
+    rows = []
+    for r in limits:
+        found = r["stops_at"] is not None
+        ours = (f"{r['limit']:.3g} (pays at {_num(r['pays_up_to'])}, not at {_num(r['stops_at'])})" if found and r["pays_up_to"] is not None
+                else f"<= {r['search'][0]:g} (not at the low end)" if found else f"> {r['search'][1]:g} (pays over the whole range)")
+        rows.append([r["motion"], r["tuning"], r.get("baseline", "causal"), r["parameter"], lim(r["thesis_limit"]), ours, r["decades_from_thesis"],
+                     r["verdict"], len(r["evaluations"])])
+    if not rows:
+        return []
+    return _write(Path(out), "table_10_limits", f"{name}: Table 10 limits (where the fused velocity stops paying)",
+                  _METRIC + " Per row one Table 7 parameter is searched on a decade grid, the others at the baseline, then the "
+                  "bracketing decade is bisected in log10; `limit` is the geometric mean of the final bracket. Tracker baseline: the "
+                  "four-point regression taken as the velocity now (causal, the thesis' reading) or compared at its window's centre. Verdict: reproduced "
+                  "when within one decade (one grid step) of the thesis' limit.",
+                  ["motion", "tuning", "tracker baseline", "parameter", "thesis", "ours", "decades from thesis", "verdict", "runs"], rows)
+
+
 def plot_sweep(rows: Sequence[Mapping[str, Any]], path: str | Path, title: str = "",
                quantities: Sequence[str] = ("position_mm", "velocity_mm_s", "acceleration_m_s2", "angular_velocity_deg_s")) -> Any:
     """Table 10 as bars: the improvement of fusion over the sensor per swept value (style of Fig. 26).
@@ -234,7 +271,8 @@ def plot_sweep(rows: Sequence[Mapping[str, Any]], path: str | Path, title: str =
     matplotlib.figure.Figure
         The figure, written to ``path``.
     """
-    labels = [f"{r['parameter']}={r['value']:g}" for r in rows]
+    several = len({r.get("motion") for r in rows}) > 1
+    labels = [(f"{r['motion']} " if several else "") + f"{r['parameter']}={r['value']:g}" for r in rows]
     fig, ax = new_figure(len(quantities), 1, (10, 2.2 * len(quantities) + 1.5), squeeze=False)
     x = np.arange(len(rows))
     for a, q in zip(ax[:, 0], quantities):

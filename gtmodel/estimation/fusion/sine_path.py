@@ -10,7 +10,11 @@ end-effector also rotates about a FIXED BODY AXIS ``n`` by the angle
 ``theta(t) = theta_0 sin(omega t)`` (default ``theta_0 = 10 deg``, ``n`` tilted 30 deg from
 the body z axis towards x), so ``quat(t) = quat_0 (x) exp(theta(t) n / 2)`` and, because ``n``
 is invariant under that rotation, the body angular velocity and acceleration are
-``w = theta'(t) n`` and ``alpha = theta''(t) n`` exactly.
+``w = theta'(t) n`` and ``alpha = theta''(t) n`` exactly. ``rotation_law="normal"`` is the thesis'
+5-axis motion ("the tool axis is constrained to remain normal to the path", Fig. 22): ``theta(t)``
+is the path's slope angle ``atan(A 2 pi f cos(omega t))`` (up to 84 deg; with ``n`` the plane's
+normal the tool stays normal to the sine), turning at up to ``A (2 pi f)^2 v_f`` (49 rad/s at the
+crests at 42.33 mm/s); its derivatives are CasADi's of the closed form.
 :meth:`SinePath.truth` samples the closed form into the 19-D (or 9-D) state layout of
 :class:`~gtmodel.estimation.filters.end_effector.EndEffectorModel`. Used by the sensors of
 :mod:`gtmodel.estimation.fusion.tracker_imu` and the study of :mod:`gtmodel.estimation.fusion.study`.
@@ -29,12 +33,14 @@ from gtmodel._arrays import as_array, as_finite, positive_float
 from gtmodel._geometry import quat_exp, quat_mul
 from gtmodel.errors import InputError
 
-__all__ = ["SINE_PATH", "FEED_RATE_M_S", "MIN_SAMPLES", "MAX_SAMPLES", "Truth", "SinePath"]
+__all__ = ["SINE_PATH", "FEED_RATE_M_S", "MIN_SAMPLES", "MAX_SAMPLES", "ROTATION_LAWS", "Truth", "SinePath"]
 
 #: The sine path of section 4.2 (reference ``sine_path``): amplitude [m], spatial frequency [cycles/m].
 SINE_PATH = {"amplitude_m": 0.0762, "spatial_frequency_cycles_per_m": 19.685}
 #: The Table 7 baseline feed rate [m/s] (42.33 mm/s).
 FEED_RATE_M_S = 0.04233
+#: The 5-axis rotation laws of :class:`SinePath` (module docstring).
+ROTATION_LAWS = ("sine", "normal")
 #: Fewest samples of a path (the four-point regression needs 4, a table needs more).
 MIN_SAMPLES = 10
 #: Most samples of a path (keeps memory and run time bounded).
@@ -136,12 +142,15 @@ class SinePath:
         Body axis ``n`` of the rotation (normalised; default 30 deg from z towards x).
     orientation : array_like, shape (4,), optional
         ``quat_0``, scalar-first (normalised): the initial (3-axis: constant) orientation.
+    rotation_law : {"sine", "normal"}, optional
+        5-axis ``theta(t)``: ``theta_0 sin(omega t)``, or the path's slope angle (the tool normal
+        to the path, the thesis' motion; ``rotation_amplitude`` unused).
 
     Raises
     ------
     InputError
         A non-positive duration, feed rate or spatial frequency, a negative amplitude, a
-        rotation axis or quaternion of zero norm, or values that are not finite.
+        rotation axis or quaternion of zero norm, values that are not finite, an unknown rotation law.
     """
 
     duration: float
@@ -153,6 +162,7 @@ class SinePath:
     rotation_amplitude: float = math.radians(10.0)
     rotation_axis: Any = (0.5, 0.0, math.sqrt(3.0) / 2.0)
     orientation: Any = (1.0, 0.0, 0.0, 0.0)
+    rotation_law: str = "sine"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration", positive_float(self.duration, "duration"))
@@ -165,6 +175,8 @@ class SinePath:
         object.__setattr__(self, "orientation", _unit(self.orientation, "orientation", 4))
         if not isinstance(self.rotation, (bool, np.bool_)):
             raise InputError(f"rotation: expected True or False, got {self.rotation!r}")
+        if self.rotation_law not in ROTATION_LAWS:
+            raise InputError(f"rotation_law: expected one of {', '.join(ROTATION_LAWS)}, got {self.rotation_law!r}")
 
     @property
     def omega(self) -> float:
@@ -229,7 +241,11 @@ class SinePath:
         if not self.rotation:
             return Truth(t, np.hstack([p, v, a]), jerk, np.zeros((n, 3)), False, self.orientation)
         th0, axis = self.rotation_amplitude, self.rotation_axis
-        theta, dtheta, ddtheta, dddtheta = th0 * s, th0 * w0 * c, -th0 * w0**2 * s, -th0 * w0**3 * c
+        if self.rotation_law == "normal":  # the slope angle and its derivatives (module docstring)
+            slope = amp * 2.0 * math.pi * self.spatial_frequency
+            theta, dtheta, ddtheta, dddtheta = (np.asarray(o).ravel() for o in _SLOPE_ANGLE.map(n)(t[None, :], slope, w0))
+        else:
+            theta, dtheta, ddtheta, dddtheta = th0 * s, th0 * w0 * c, -th0 * w0**2 * s, -th0 * w0**3 * c
         quat = _map(_ROTATE, n, self.orientation, axis, theta[None, :]).T
         return Truth(t, np.hstack([p, v, a, quat, np.outer(dtheta, axis), np.outer(ddtheta, axis)]),
                      jerk, np.outer(dddtheta, axis), True, self.orientation)
@@ -267,3 +283,15 @@ def _rotate_about_axis_function() -> ca.Function:
 
 
 _ROTATE = _rotate_about_axis_function()
+
+
+def _slope_angle_function() -> ca.Function:
+    """``theta = atan(m cos(omega t))`` (the slope angle of a sine of largest slope ``m``) and its first three time derivatives."""
+    t, m, w = ca.SX.sym("t"), ca.SX.sym("m"), ca.SX.sym("omega")
+    th = ca.atan(m * ca.cos(w * t))
+    d1 = ca.jacobian(th, t)
+    d2 = ca.jacobian(d1, t)
+    return ca.Function("slope_angle", [t, m, w], [th, d1, d2, ca.jacobian(d2, t)])
+
+
+_SLOPE_ANGLE = _slope_angle_function()

@@ -51,6 +51,7 @@ from gtmodel.estimation.filters.end_effector import (
     EndEffectorModel,
 )
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter
+from gtmodel.estimation.fusion.limits import ROTATION_ONLY_PARAMETERS, TUNINGS, limits
 from gtmodel.estimation.fusion.runs import QUANTITIES, FusionRun, nees_test
 from gtmodel.estimation.filters.particle import ParticleFilter
 from gtmodel.estimation.filters.unscented import UnscentedKalmanFilter
@@ -61,6 +62,7 @@ from gtmodel.estimation.fusion.tracker_imu import (
     SinePath,
     Truth,
     believed_transform,
+    error_axis,
     measure,
     sensor_only,
 )
@@ -135,8 +137,11 @@ class FusionStudyResult(StatusResult):
         5-axis: ``{gyro_regression, fusion, improvement_percent}`` over all samples, at the sine
         peaks (``|alpha| >= 0.9 max``) and elsewhere [deg/s^2].
     table_10 : list of dict
-        One row per swept value: ``parameter, value, motion, filter, status`` and per quantity
+        One row per motion and swept value: ``parameter, value, motion, filter, status`` and per quantity
         ``{sensor, fusion, improvement_percent}``, ``stops_paying`` (quantities where fusion is not better).
+    table_10_limits : list of dict
+        Per motion, tuning and parameter where the fused velocity stops paying
+        (:func:`~gtmodel.estimation.fusion.limits.velocity_limit`), against the thesis' Table 10.
     filter_comparison : list of dict
         One row per motion and filter: ``motion, filter, status, samples, step_time_us`` and the errors.
     nees : dict
@@ -154,6 +159,7 @@ class FusionStudyResult(StatusResult):
     velocity_mean_error_mm_s: dict[str, Any] = field(default_factory=dict)
     angular_acceleration: dict[str, Any] = field(default_factory=dict)
     table_10: list[dict[str, Any]] = field(default_factory=list)
+    table_10_limits: list[dict[str, Any]] = field(default_factory=list)
     filter_comparison: list[dict[str, Any]] = field(default_factory=list)
     nees: dict[str, Any] = field(default_factory=dict)
     process_noise: dict[str, Any] = field(default_factory=dict)
@@ -191,6 +197,11 @@ class FusionStudy:
         5-axis body rotation axis.
     orientation : array_like, shape (4,), optional
         Initial orientation quaternion ``[w, x, y, z]`` (nonzero norm).
+    rotation_law : {"sine", "normal"}, optional
+        The 5-axis rotation (:class:`~gtmodel.estimation.fusion.sine_path.SinePath`; "normal": the thesis' tool normal to the path).
+    transform_error_axis : array_like, shape (3,) or None, optional
+        Axis of the Table 7 transform errors in the IMU frame
+        (:func:`~gtmodel.estimation.fusion.tracker_imu.believed_transform`; None: ``(1, 1, 1)/sqrt(3)``).
     seed : int, optional
         Seed of the sensor noise and of the initial-state draw.
     warmup : float, optional
@@ -210,6 +221,17 @@ class FusionStudy:
         Table 10: Table 7 parameter -> values (None: every parameter at the thesis' offsets).
     sweep_duration : float or None, optional
         Length of the sweep runs [s] (None: ``duration``).
+    sweep_motions : sequence of str, optional
+        Motions of the Table 10 sweep (``"3-axis"``, ``"5-axis"``); a 3-axis run skips the
+        parameters it does not measure (:data:`~gtmodel.estimation.fusion.limits.ROTATION_ONLY_PARAMETERS`, Table 10's N/A).
+    limit_tunings : sequence of str, optional
+        Tunings of the Table 10 limit search (:mod:`~gtmodel.estimation.fusion.limits`; empty: not run).
+    limit_parameters : sequence of str or None, optional
+        Parameters of the limit search (None: every row of Table 10).
+    limit_bisections : int, optional
+        Halvings of the bracketing decade per limit.
+    limit_centred : sequence of str, optional
+        Parameters searched again against the centred (lag-free) tracker regression.
     comparison_filters : sequence of str, optional
         Filters of the comparison (:data:`FILTERS`).
     comparison_duration : float, optional
@@ -233,6 +255,8 @@ class FusionStudy:
     rotation_amplitude: float = math.radians(10.0)
     rotation_axis: Any = (0.5, 0.0, math.sqrt(3.0) / 2.0)
     orientation: Any = (1.0, 0.0, 0.0, 0.0)
+    rotation_law: str = "sine"
+    transform_error_axis: Any = None
     seed: int = 1
     warmup: float = 0.1
     jerk_std: float | None = None
@@ -243,6 +267,11 @@ class FusionStudy:
     noisy_tracker_factor: float = 10.0
     sweep: Any = None
     sweep_duration: float | None = None
+    sweep_motions: Any = ("3-axis", "5-axis")
+    limit_tunings: Any = ()
+    limit_parameters: Any = None
+    limit_bisections: int = 4
+    limit_centred: Any = ()
     comparison_filters: Any = FILTERS
     comparison_duration: float = 1.0
     particles: int = 1000
@@ -278,6 +307,16 @@ class FusionStudy:
             for v in values:
                 self.spec.replace(**{name: v})  # checks the value
         object.__setattr__(self, "sweep", sweep)
+        bad = [m for m in self.sweep_motions if m not in MOTIONS]
+        if bad:
+            raise InputError(f"sweep_motions: expected some of {', '.join(MOTIONS)}, got {', '.join(map(str, bad))}")
+        bad = [t for t in self.limit_tunings if t not in TUNINGS]
+        if bad:
+            raise InputError(f"limit_tunings: expected some of {', '.join(TUNINGS)}, got {', '.join(map(str, bad))}")
+        object.__setattr__(self, "sweep_motions", tuple(self.sweep_motions))
+        if self.transform_error_axis is not None:
+            object.__setattr__(self, "transform_error_axis", tuple(float(v) for v in error_axis(self.transform_error_axis)))
+        object.__setattr__(self, "limit_tunings", tuple(self.limit_tunings))
         bad = [f for f in self.comparison_filters if f not in FILTERS]
         if bad:
             raise InputError(f"comparison_filters: expected some of {', '.join(FILTERS)}, got {', '.join(map(str, bad))}")
@@ -309,7 +348,7 @@ class FusionStudy:
             See :class:`~gtmodel.estimation.fusion.tracker_imu.SinePath`.
         """
         return SinePath(self.duration if duration is None else duration, spec.feed_rate, self.amplitude, self.spatial_frequency,
-                        self.start, rotation, self.rotation_amplitude, self.rotation_axis, self.orientation)
+                        self.start, rotation, self.rotation_amplitude, self.rotation_axis, self.orientation, self.rotation_law)
 
     def process_noise(self, path: SinePath, dt: float) -> tuple[float, float]:
         """The white-jerk standard deviations of ``Q`` [m/s^3], [rad/s^3] (module docstring).
@@ -394,7 +433,7 @@ class FusionStudy:
         truth = path.truth(dt)
         rng = np.random.default_rng(self.seed)
         meas = measure(truth, spec, int(rng.integers(2**31)), IMU_TRANSLATION_M, IMU_ROTATION)
-        t_belief, r_belief = believed_transform(spec)
+        t_belief, r_belief = believed_transform(spec, axis=self.transform_error_axis)
         model = EndEffectorModel(dt, rotation=rotation, imu_translation=t_belief, imu_rotation=r_belief, orientation=path.orientation)
         sj, sa = self.process_noise(path, dt)
         Q = np.diag(as_array(q_diag, (model.nx,), "q_diag")) if q_diag is not None else model.process_noise(sj, sa, self.quaternion_std)
@@ -478,11 +517,17 @@ class FusionStudy:
                 res.angular_acceleration = self._angular_acceleration(base)
         if table_10:
             res.table_10 = self._table_10()
+            if self.limit_tunings:
+                res.table_10_limits = limits(self, self.sweep_motions, self.limit_tunings, self.limit_parameters, self.limit_bisections,
+                                             self.limit_centred)
         if comparison:
             res.filter_comparison = self._comparison({m: res.runs[m].run.P[-1] for m in MOTIONS if res.runs[m].run.P.shape[0]})
         statuses = [r.status for r in res.runs.values()] + [row["status"] for row in res.table_10 + res.filter_comparison]
+        statuses += [e["status"] for row in res.table_10_limits for e in row["evaluations"] if e["status"] != "error"]
         res.status = Status.worst(statuses)
         res.message = f"{len(res.runs)} baseline runs, {len(res.table_10)} sweep runs, {len(res.filter_comparison)} comparison runs"
+        if res.table_10_limits:
+            res.message += f", {len(res.table_10_limits)} Table 10 limits"
         return res
 
     @staticmethod
@@ -525,15 +570,20 @@ class FusionStudy:
 
     def _table_10(self) -> list[dict[str, Any]]:
         rows = []
-        for name, values in self.sweep.items():
-            for value in values:
-                spec = self.spec.replace(**{name: value})
-                try:
-                    case = self.run_case(True, spec, duration=self.sweep_duration, label=f"{name}={value:g}")
-                except InputError as exc:  # e.g. a sample time leaving too few samples
-                    rows.append({"parameter": name, "value": value, "motion": "5-axis", "filter": "ekf", "status": str(Status.ERROR), "message": str(exc)})
-                    continue
-                rows.append(self._row(name, value, case))
+        for motion in self.sweep_motions:
+            rotation = MOTIONS[motion]
+            for name, values in self.sweep.items():
+                if not rotation and name in ROTATION_ONLY_PARAMETERS:
+                    continue  # Table 10: N/A
+                for value in values:
+                    spec = self.spec.replace(**{name: value})
+                    try:
+                        case = self.run_case(rotation, spec, duration=self.sweep_duration, label=f"{motion} {name}={value:g}")
+                    except InputError as exc:  # e.g. a sample time leaving too few samples
+                        rows.append({"parameter": name, "value": value, "motion": motion, "filter": "ekf" if rotation else "kf",
+                                     "status": str(Status.ERROR), "message": str(exc)})
+                        continue
+                    rows.append(self._row(name, value, case))
         return rows
 
     @staticmethod

@@ -65,6 +65,7 @@ __all__ = [
     "mean_error",
     "orientation_error",
     "believed_transform",
+    "error_axis",
 ]
 
 #: Table 7 of Cvitanic (2021): baseline and sweep values of each parameter, units in the name
@@ -263,11 +264,14 @@ class SensorSpec:
         return self.feed_rate_mm_s * 1e-3
 
 
-def believed_transform(spec: SensorSpec, translation: Any = IMU_TRANSLATION_M, rotation: Any = IMU_ROTATION) -> tuple[np.ndarray, np.ndarray]:
+def believed_transform(spec: SensorSpec, translation: Any = IMU_TRANSLATION_M, rotation: Any = IMU_ROTATION,
+                       axis: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """The filter's belief of the IMU-to-target transform: the true one with the Table 7 errors.
 
-    ``t_belief = t + e_t (1, 1, 1)/sqrt(3)``, ``R_belief = R exp(e_R [(1, 1, 1)/sqrt(3)]x)``
-    (the rotation error on the IMU side; a decision, the thesis gives magnitudes only).
+    ``t_belief = t + e_t u``, ``R_belief = R exp(e_R [u]x)`` with ``u`` the unit error axis in
+    the IMU frame (the rotation error on the IMU side). Default ``u = (1, 1, 1)/sqrt(3)``; the
+    thesis applies both errors "to the z axis", its sine's amplitude direction (Cvitanic (2021),
+    section 4.2.2).
 
     Parameters
     ----------
@@ -277,6 +281,8 @@ def believed_transform(spec: SensorSpec, translation: Any = IMU_TRANSLATION_M, r
         The true lever arm IMU -> target in the IMU frame [m].
     rotation : array_like, shape (3, 3), optional
         The true rotation ``R_TI`` (IMU -> target coordinates).
+    axis : array_like, shape (3,), optional
+        The error axis in the IMU frame (normalised; default ``(1, 1, 1)/sqrt(3)``).
 
     Returns
     -------
@@ -286,14 +292,40 @@ def believed_transform(spec: SensorSpec, translation: Any = IMU_TRANSLATION_M, r
     Raises
     ------
     InputError
-        ``spec`` not a SensorSpec, or a transform of another shape or not finite.
+        ``spec`` not a SensorSpec, a transform of another shape or not finite, an axis of zero norm.
     """
     if not isinstance(spec, SensorSpec):
         raise InputError(f"spec: expected a SensorSpec, got {type(spec).__name__}")
-    t = as_array(translation, (3,), "translation") + spec.transform_translation_error_mm * 1e-3 * _ERROR_DIRECTION
+    u = _ERROR_DIRECTION if axis is None else error_axis(axis)
+    t = as_array(translation, (3,), "translation") + spec.transform_translation_error_mm * 1e-3 * u
     r = as_array(rotation, (3, 3), "rotation")
-    dq = quat_exp(ca.DM(math.radians(spec.transform_orientation_error_deg) * _ERROR_DIRECTION))
+    dq = quat_exp(ca.DM(math.radians(spec.transform_orientation_error_deg) * u))
     return t, r @ quaternion_to_rotation(dq, normalise=False)
+
+
+def error_axis(axis: Any) -> np.ndarray:
+    """The unit axis of the transform errors (:func:`believed_transform`).
+
+    Parameters
+    ----------
+    axis : array_like, shape (3,)
+        A direction in the IMU frame, nonzero.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        ``axis / |axis|``.
+
+    Raises
+    ------
+    InputError
+        Another shape, a non-finite entry or a zero norm.
+    """
+    u = as_array(axis, (3,), "axis")
+    n = float(np.linalg.norm(u))
+    if not n > 1e-12:
+        raise InputError(f"axis: expected a direction of nonzero norm, got {u.tolist()}")
+    return u / n
 
 
 def _compose_function() -> ca.Function:

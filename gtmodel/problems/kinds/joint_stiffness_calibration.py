@@ -29,6 +29,7 @@ from gtmodel.calibration.joint_stiffness import (
     TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS,
     axis_wrenches,
 )
+from gtmodel.calibration.joint_stiffness_thesis import gravity_pulley_wrenches, three_target_rotation_std
 from gtmodel.calibration.joint_stiffness_declared import JointStiffnessDeclaration, JointStiffnessOutcome
 from gtmodel.errors import GtModelError, InputError, ParameterError, ProblemError
 from gtmodel._docstrings import fill_doc
@@ -148,8 +149,8 @@ class JointStiffnessKind(ProblemKind):
         ------
         ProblemError
             Both or neither of ``[truth]`` and ``[data]``, ``[noise]`` with ``[data]``, a
-            rotation-only stiffness with scenario "none", an unknown arm, a bad data file
-            (its line and column named).
+            rotation-only stiffness with scenario "none", ``noise.rotation_std`` beside
+            ``noise.target_radius``, an unknown arm, a bad data file (its line and column named).
         """
         ref = file.reference("arm.model", doc.arm.model, SHIPPED_ARMS)
         try:
@@ -167,24 +168,33 @@ class JointStiffnessKind(ProblemKind):
                 data = read_deflection_csv(path)
             except GtModelError as exc:
                 raise file.wrap("data.file", exc) from None
-            return JointStiffnessDeclaration(arm, data, None, cal.scaled_rotation_weight, cal.bounds, data.description)
+            return JointStiffnessDeclaration(arm, data, None, cal.scaled_rotation_weight, cal.bounds, data.description, cal.rotation_weight,
+                                             cal.dpp_step2)
         tr = doc.truth
         if tr.scenario == "none" and tr.rotation_only_stiffness is not None:
             raise file.fail("truth.rotation_only_stiffness", "no value with scenario = \"none\" (the joint-spring model is exact)")
         k_r = tr.rotation_only_stiffness if tr.rotation_only_stiffness is not None else TABLE_2_SCENARIO_ROTATION_ONLY_STIFFNESS
         nz = doc.noise or NoiseSection()
-        noise = DeflectionNoise(nz.position_std, nz.position_std_per_m, nz.rotation_std, nz.force_relative_std)
+        if nz.target_radius is not None and "rotation_std" in nz.model_fields_set:
+            raise file.fail("noise.rotation_std", "no value with noise.target_radius (the three targets give the rotation noise)")
+        rot_std = nz.rotation_std if nz.target_radius is None else three_target_rotation_std(nz.position_std, nz.target_radius)
+        noise = DeflectionNoise(nz.position_std, nz.position_std_per_m, rot_std, nz.force_relative_std)
         k = np.array(tr.k_theta)
-        idx, F = axis_wrenches(len(TABLE_1_POSES_DEG), tr.force, tr.moment)
+        n = len(TABLE_1_POSES_DEG)
+        idx, F = gravity_pulley_wrenches(n, tr.force) if tr.load_cases == "gravity_pulley" else axis_wrenches(n, tr.force, tr.moment)
+        theta = np.radians(TABLE_1_POSES_DEG)[idx]
+        k_only = k_r if tr.scenario == "table_2" else None
+
+        def data_for_seed(offset: int) -> DeflectionData:
+            return synthetic_deflections(arm, theta, F, k, noise=noise, rotation_only_stiffness=k_only, seed=tr.seed + offset)
+
         try:
-            data = synthetic_deflections(
-                arm, np.radians(TABLE_1_POSES_DEG)[idx], F, k, noise=noise,
-                rotation_only_stiffness=k_r if tr.scenario == "table_2" else None, seed=tr.seed,
-            )
+            data = data_for_seed(0)
         except InputError as exc:
             raise file.wrap("truth", exc) from None
-        source = f"synthetic on the Table 1 poses ({arm.name}, scenario {tr.scenario!r}): {data.description}"
-        return JointStiffnessDeclaration(arm, data, k, cal.scaled_rotation_weight, cal.bounds, source)
+        source = f"synthetic on the Table 1 poses ({arm.name}, scenario {tr.scenario!r}, loads {tr.load_cases!r}): {data.description}"
+        return JointStiffnessDeclaration(arm, data, k, cal.scaled_rotation_weight, cal.bounds, source, cal.rotation_weight, cal.dpp_step2,
+                                         data_for_seed, tr.seeds)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: JointStiffnessDeclaration, solution: JointStiffnessOutcome, out: Path, plots: bool, name: str) -> Written:
@@ -202,7 +212,9 @@ class JointStiffnessKind(ProblemKind):
         -------
         Written
             ``status``, per method the stiffnesses [N m/rad] with std, ratio to the truth,
-            residual RMS, condition numbers; the truth and the thesis' Table 2 rows. The
+            residual RMS, condition numbers; the truth and the thesis' Table 2 rows; with
+            ``[truth] seeds > 1``, ``monte_carlo`` (the methods against the truth and Table 2's
+            pattern over the seeds). The
             files are written only when every method succeeded.
         """
         decl = declaration
@@ -221,7 +233,7 @@ class JointStiffnessKind(ProblemKind):
                 "rms_translation_m": r.rms_translation,
                 "rms_rotation_rad": r.rms_rotation,
                 "condition_number": r.condition,
-                **{k: float(v) for k, v in r.extra.items()},
+                **{k: (v if isinstance(v, str) else float(v)) for k, v in r.extra.items()},
             }
             for j in range(6):
                 cells = [m, str(j + 1), f"{r.k_theta[j]:.9g}", f"{r.std_k_theta[j]:.9g}",
@@ -239,6 +251,8 @@ class JointStiffnessKind(ProblemKind):
             "thesis_table_2_Nm_per_rad": {m: TABLE_2_K_THETA[m].tolist() for m in METHODS},
             "solve_time_s": solution.solve_time,
         }
+        if solution.monte_carlo is not None:
+            fields["monte_carlo"] = solution.monte_carlo
         written = Written(fields)
         if not solution.status.success:
             return written

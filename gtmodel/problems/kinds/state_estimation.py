@@ -10,7 +10,9 @@ baseline by default), the filters' tuning (``[filter]``) and the study's extent 
 (the thesis' figures beside ours where the reference data has them), ``fusion_baseline.csv``
 (the baseline runs' truth and estimates) and the plots ``velocity_3_axis.png``,
 ``velocity_5_axis.png`` (style of Fig. 24), ``angular_acceleration.png`` (Fig. 25) and
-``table_10.png`` (Fig. 26). The field reference is ``docs/problem_files.md``.
+``table_10.png`` (Fig. 26); with ``[study.limits]``, ``table_10_limits`` (where the fused velocity
+stops paying, per motion, tuning and parameter, against Table 10: :mod:`gtmodel.estimation.fusion.limits`)
+and ``table_10_limits.md/.csv``. The field reference is ``docs/problem_files.md``.
 """
 
 from __future__ import annotations
@@ -34,13 +36,15 @@ from gtmodel.estimation.fusion.study import (
     FusionStudy,
     FusionStudyResult,
 )
+from gtmodel.estimation.fusion.limits import THESIS_TABLE_10, TUNINGS
 from gtmodel.estimation.fusion.tracker_imu import MAX_SAMPLES, MIN_SAMPLES, SINE_PATH, TABLE_7, SensorSpec
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.schema import ProblemSchema, Section, choice, integer, number, vector
 from gtmodel.status import Status
-from gtmodel.report.fusion import plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables
+from gtmodel.report.fusion import plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables, write_limits_table
 
-__all__ = ["StateEstimationFile", "StateEstimationKind", "PathSection", "SensorsSection", "FilterSection", "StudySection", "SweepSection"]
+__all__ = ["StateEstimationFile", "StateEstimationKind", "PathSection", "SensorsSection", "FilterSection", "StudySection", "SweepSection",
+           "LimitsSection"]
 
 #: Longest record [s].
 MAX_DURATION_S = 60.0
@@ -69,6 +73,8 @@ class PathSection(Section):
         5-axis: the body rotation axis (normalised; nonzero).
     initial_orientation : list of float, shape (4,)
         Orientation quaternion ``[w, x, y, z]`` at t = 0 (normalised; nonzero).
+    rotation_law : str
+        5-axis: ``sine`` (theta_0 sin(omega t)) or ``normal`` (the tool normal to the path, the thesis' motion).
     """
 
     duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of every baseline run") = 3.0
@@ -80,6 +86,8 @@ class PathSection(Section):
         default_factory=lambda: [0.5, 0.0, math.sqrt(3.0) / 2.0])
     initial_orientation: vector(4, bound=10.0, description="orientation quaternion [w, x, y, z] at t = 0 (normalised, nonzero norm)") = Field(
         default_factory=lambda: [1.0, 0.0, 0.0, 0.0])
+    rotation_law: choice("sine", "normal", description='5-axis: "sine": theta_0 sin(omega t) about the body axis; "normal": the slope angle '
+                                                       '(the tool normal to the path, the thesis\' Fig. 22; with the axis [0, 0, 1])') = "sine"
 
 
 class SensorsSection(Section):
@@ -107,6 +115,8 @@ class SensorsSection(Section):
         Error of the filter's believed IMU-to-target translation [mm].
     transform_orientation_error_deg : float
         Error of the filter's believed IMU-to-target rotation [deg].
+    transform_error_axis : list of float
+        Axis of both transform errors in the IMU frame (normalised; the thesis: its sine's amplitude direction).
     seed : int
         Seed of the sensor noise and the initial-state draw.
     """
@@ -121,6 +131,8 @@ class SensorsSection(Section):
     feed_rate_mm_s: number(gt=0, le=1e4, unit="mm/s", description="feed rate along x (Table 7: 42.33)") = _baseline("feed_rate_mm_s")
     transform_translation_error_mm: number(ge=-1e3, le=1e3, unit="mm", description="error of the believed IMU-to-target translation") = 0.0
     transform_orientation_error_deg: number(ge=-180.0, le=180.0, unit="deg", description="error of the believed IMU-to-target rotation") = 0.0
+    transform_error_axis: vector(3, bound=1e3, description="axis of both transform errors in the IMU frame, normalised; nonzero "
+                                                        "(the thesis: its sine's amplitude direction, y here)") = Field(default_factory=lambda: [1.0, 1.0, 1.0])
     seed: integer(0, 2**31 - 1, description="seed of the sensor noise and of the initial-state draw") = 1
 
 
@@ -184,6 +196,30 @@ class SweepSection(Section):
     transform_orientation_error_deg: _sweep_type("deg") = _sweep_field("transform_orientation_error_deg")
 
 
+class LimitsSection(Section):
+    """``[study.limits]``: locate where the fused velocity stops paying (Cvitanic (2021), Table 10) by search.
+
+    Parameters
+    ----------
+    tunings : list of str
+        Filter tunings searched: ``white_jerk`` (ours), ``appendix_b`` (the thesis' 3-axis Q); empty: no search.
+    parameters : list of str
+        Table 10 rows searched (default: all seven).
+    bisections : int
+        Halvings of the bracketing decade per limit.
+    centred : list of str
+        Rows searched again against the centred (lag-free) four-point regression.
+    """
+
+    tunings: list[choice(*TUNINGS, description="a tuning")] = Field(default_factory=list, max_length=2,
+                                                                   description="filter tunings searched (white_jerk, appendix_b: 3-axis only); [] skips the search")
+    parameters: list[choice(*THESIS_TABLE_10, description="a Table 10 row")] = Field(default_factory=lambda: list(THESIS_TABLE_10), max_length=7,
+                                                                                   description="Table 10 rows searched")
+    bisections: integer(0, 10, description="halvings of the decade where fusion stops paying") = 4
+    centred: list[choice(*THESIS_TABLE_10, description="a Table 10 row")] = Field(
+        default_factory=list, max_length=7, description="rows searched again against the centred (lag-free) four-point regression of the tracker")
+
+
 class StudySection(Section):
     """``[study]``: Table 9, the Table 10 sweeps and the filter comparison.
 
@@ -195,6 +231,10 @@ class StudySection(Section):
         Length of each Table 10 run [s].
     sweep : SweepSection
         ``[study.sweep]``: the swept values.
+    sweep_motions : list of str
+        Motions of the sweep (``3-axis``, ``5-axis``).
+    limits : LimitsSection
+        ``[study.limits]``: the Table 10 limit search.
     comparison_filters : list of str
         Filters compared (kf, ekf, ukf, pf).
     comparison_duration : float
@@ -206,6 +246,9 @@ class StudySection(Section):
     noisy_tracker_factor: number(gt=0, le=1e4, description="Table 9: the tracker's noise times this (the thesis: 10)") = 10.0
     sweep_duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of each Table 10 run") = 3.0
     sweep: SweepSection = SweepSection()
+    sweep_motions: list[choice("3-axis", "5-axis", description="a motion")] = Field(default_factory=lambda: ["3-axis", "5-axis"], min_length=1, max_length=2,
+                                                                                  description="motions of the Table 10 sweep and limit search")
+    limits: LimitsSection = LimitsSection()
     comparison_filters: list[choice(*FILTERS, description="a filter")] = Field(default_factory=lambda: list(FILTERS), max_length=4,
                                                                               description="filters compared: kf, ekf, ukf, pf")
     comparison_duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of each comparison run") = 1.0
@@ -290,6 +333,7 @@ class StateEstimationKind(ProblemKind):
         p, s, f, st = doc.path, doc.sensors, doc.filter, doc.study
         _nonzero(file, "path.initial_orientation", p.initial_orientation, "a quaternion [w, x, y, z]")
         _nonzero(file, "path.rotation_axis", p.rotation_axis, "a rotation axis")
+        _nonzero(file, "sensors.transform_error_axis", s.transform_error_axis, "an error axis")
         _positive_definite(file, "filter.initial_covariance", f.initial_covariance, 6)
         _positive_definite(file, "filter.appendix_b_q_diag", f.appendix_b_q_diag, 9)
         _samples(file, "sensors.sample_time_s", s.sample_time_s, p.duration, "path.duration")
@@ -321,9 +365,12 @@ class StateEstimationKind(ProblemKind):
             study = FusionStudy(
                 spec=spec, duration=p.duration, amplitude=p.amplitude, spatial_frequency=p.spatial_frequency, start=p.start,
                 rotation_amplitude=math.radians(p.rotation_amplitude_deg), rotation_axis=p.rotation_axis, orientation=p.initial_orientation,
+                transform_error_axis=s.transform_error_axis, rotation_law=p.rotation_law,
                 seed=s.seed, warmup=f.warmup, jerk_std=f.jerk_std, angular_jerk_std=f.angular_jerk_std, quaternion_std=f.quaternion_std,
                 initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
-                sweep=sweep, sweep_duration=st.sweep_duration, comparison_filters=tuple(st.comparison_filters),
+                sweep=sweep, sweep_duration=st.sweep_duration, sweep_motions=tuple(dict.fromkeys(st.sweep_motions)),
+                limit_tunings=tuple(dict.fromkeys(st.limits.tunings)), limit_parameters=tuple(dict.fromkeys(st.limits.parameters)),
+                limit_bisections=st.limits.bisections, limit_centred=tuple(dict.fromkeys(st.limits.centred)), comparison_filters=tuple(st.comparison_filters),
                 comparison_duration=st.comparison_duration, particles=st.particles,
             )
         except InputError as exc:
@@ -366,7 +413,8 @@ class StateEstimationKind(ProblemKind):
             hardware Table 11 beside it, ``thesis_velocity``),
             ``angular_acceleration``, ``filter_comparison``, ``nees``, ``process_noise``,
             ``checks`` (the self-checks, each a boolean with its figures), ``failed_checks``
-            (their failures: the status is then ``check_failed``, exit 1), ``notes``.
+            (their failures: the status is then ``check_failed``, exit 1), ``notes``; with a
+            limit search, ``table_10_limits`` (and ``table_10_limits.md/.csv``).
         """
         r = solution
         vel = r.velocity_mean_error_mm_s
@@ -393,8 +441,11 @@ class StateEstimationKind(ProblemKind):
             "velocity_fusion_3_axis_mm_s": (vel.get("3-axis") or {}).get("fusion"),
             "velocity_fusion_5_axis_mm_s": (vel.get("5-axis") or {}).get("fusion"),
         }
+        if r.table_10_limits:
+            fields["table_10_limits"] = r.table_10_limits
         written = Written(fields)
         written.files += write_fusion_tables(out, name, r.table_8, r.table_9, r.table_10, r.filter_comparison)
+        written.files += write_limits_table(out, name, r.table_10_limits)
         written.files += _baseline_csv(r, out)
         written.files += _exports(r, out)
         if plots:

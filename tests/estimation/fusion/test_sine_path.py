@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gtmodel.errors import InputError
 from gtmodel.estimation.fusion.sine_path import FEED_RATE_M_S, SinePath
 from gtmodel.estimation.fusion.tracker_imu import TABLE_7
 
@@ -59,3 +60,34 @@ def test_path_is_the_reference_sine():
     assert SinePath(2.0).omega / (2 * np.pi) == pytest.approx(19.685 * 0.04233)
 
 
+
+
+@pytest.fixture(scope="module")
+def normal_tool():
+    return SinePath(1.2, rotation=True, rotation_axis=(0.0, 0.0, 1.0), rotation_law="normal")
+
+
+def test_normal_tool_stays_normal_to_the_path(normal_tool):
+    # the thesis' 5-axis motion (Fig. 22): the body y axis, turned by the quaternion, is perpendicular to the velocity
+    # and the body x axis along it (independent: the rotation matrix of each quaternion)
+    tr = normal_tool.truth(DT)
+    w, x, y, z = tr.quaternion.T
+    body_x = np.column_stack([1 - 2 * (y**2 + z**2), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+    body_y = np.column_stack([2 * (x * y - w * z), 1 - 2 * (x**2 + z**2), 2 * (y * z + w * x)])
+    v = tr.velocity / np.linalg.norm(tr.velocity, axis=1)[:, None]
+    np.testing.assert_allclose((body_y * v).sum(1), 0.0, atol=1e-12)
+    np.testing.assert_allclose((body_x * v).sum(1), 1.0, atol=1e-12)
+
+
+def test_normal_tool_turns_at_curvature_times_speed_at_the_crests():
+    # at a crest (t = 0.3 s) the slope is 0 and |w| = y'' v_f = A (2 pi f)^2 v_f = 49.3 rad/s; its derivatives by central differences
+    tr = SinePath(0.35, rotation=True, rotation_axis=(0.0, 0.0, 1.0), rotation_law="normal").truth(1e-5)
+    assert np.abs(tr.angular_velocity[:, 2]).max() == pytest.approx(0.0762 * (2 * np.pi * 19.685) ** 2 * 0.04233, rel=1e-6)
+    h = 1e-5
+    np.testing.assert_allclose((tr.x[2:, 13:16] - tr.x[:-2, 13:16]) / (2 * h), tr.x[1:-1, 16:19], atol=1e-6 * np.abs(tr.x[:, 16:19]).max())
+    np.testing.assert_allclose((tr.x[2:, 16:19] - tr.x[:-2, 16:19]) / (2 * h), tr.angular_jerk[1:-1], atol=1e-5 * np.abs(tr.angular_jerk).max())
+
+
+def test_unknown_rotation_law():
+    with pytest.raises(InputError, match=r"rotation_law: expected one of sine, normal, got 'spin'"):
+        SinePath(1.0, rotation=True, rotation_law="spin")

@@ -162,5 +162,16 @@ def test_believed_transform_errors():
     assert angle == pytest.approx(10.0, rel=1e-9)
 
 
+def test_believed_transform_errors_about_a_given_axis():
+    # the thesis' axis (its sine's amplitude direction): the translation error along it, the rotation about it
+    # (independent: the rotation's fixed axis is the eigenvector of eigenvalue 1 of IMU_ROTATION^T R)
+    t, r = believed_transform(SensorSpec(transform_translation_error_mm=2.0, transform_orientation_error_deg=5.0), axis=[0.0, 3.0, 0.0])
+    np.testing.assert_allclose(t - np.array([-0.180, -0.100, 0.120]), [0.0, 2e-3, 0.0], atol=1e-15)
+    w, v = np.linalg.eig(IMU_ROTATION.T @ r)
+    np.testing.assert_allclose(np.abs(np.real(v[:, np.argmin(np.abs(w - 1))])), [0.0, 1.0, 0.0], atol=1e-12)
+    with pytest.raises(InputError, match=r"axis: expected a direction of nonzero norm, got \[0\.0, 0\.0, 0\.0\]"):
+        believed_transform(SensorSpec(), axis=[0.0, 0.0, 0.0])
+
+
 def test_mean_error_is_the_mean_norm():
     assert mean_error([[3.0, 4.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 1.0]]) == pytest.approx(3.0)

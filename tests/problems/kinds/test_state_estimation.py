@@ -15,6 +15,8 @@ import pytest
 
 from gtmodel.problems import load_problem, run_problem
 from gtmodel.estimation.fusion.declared import StateEstimationDeclaration
+from gtmodel.estimation.fusion.limits import THESIS_TABLE_10
+from gtmodel.estimation.fusion.tracker_imu import TABLE_7
 from gtmodel.status import Status
 
 from ...conftest import PROBLEMS_DIR, assert_bad_problem, assert_bad_problem_through_cli, solve_through_cli
@@ -51,7 +53,8 @@ def test_quick_run_writes_its_files(solved):
              "velocity_5_axis.png", "angular_acceleration.png", "table_10.png"]
     assert not [n for n in names if not (out / n).is_file() or (out / n).stat().st_size == 0]
     s = json.loads((out / "summary.json").read_text())
-    assert len(s["table_10"]) == 2 and [r["filter"] for r in s["filter_comparison"]] == ["kf", "ekf", "ukf", "ekf", "ukf"]
+    assert [(r["motion"], r["parameter"]) for r in s["table_10"]] == [("3-axis", "sample_time_s"), ("5-axis", "gyro_bias_deg_s"), ("5-axis", "sample_time_s")]
+    assert [r["filter"] for r in s["filter_comparison"]] == ["kf", "ekf", "ukf", "ekf", "ukf"]
     assert isinstance(load_problem(FILE).declaration, StateEstimationDeclaration)
 
 
@@ -103,6 +106,41 @@ def test_shipped_file_through_the_cli(tmp_path):
     assert all(r["status"] == "completed" for r in s["filter_comparison"] + s["table_10"])
 
 
+THESIS_FILE = PROBLEMS_DIR / "thesis" / "kr500_table_10.toml"
+
+
+def test_thesis_table_10_file_searches_both_motions_with_both_tunings():
+    study = load_problem(THESIS_FILE).declaration.study
+    assert study.sweep_motions == ("3-axis", "5-axis") and study.limit_tunings == ("white_jerk", "appendix_b")
+    assert study.limit_parameters == tuple(THESIS_TABLE_10) and study.comparison_filters == ()
+
+
+@pytest.mark.slow
+def test_table_10_limit_of_the_accelerometer_bias_on_the_thesis_file(tmp_path):
+    # a part of problems/thesis/kr500_table_10.toml (~20 s): the 3-axis accelerometer bias, both tunings.
+    # Independent reference: the thesis' Table 10 (< 0.001 m/s^2); the thesis' own Q (Appendix B) lands within
+    # one decade of it (0.93 decades above: a narrow pass, the bracket after 2 bisections straddles the decade),
+    # our white-jerk Q a decade or more higher (it keeps the bias out of the velocity longer).
+    text = THESIS_FILE.read_text()
+    text = text.replace(text[text.index("[study.sweep]"):text.index("[study.limits]")], "[study.sweep]\n" + "\n".join(f"{k} = []" for k in TABLE_7) + "\n\n")
+    text = _edit('sweep_motions = ["3-axis", "5-axis"]', 'sweep_motions = ["3-axis"]')(text)
+    # the 3-axis rows only: the 5-axis baseline runs turn 10 deg about a fixed axis here (the thesis' normal-following
+    # tool makes the 5-axis EKF overconfident, NEES 244 against [16.7, 19.4]: check_failed, the thesis file's status)
+    text = _edit('rotation_law = "normal"', 'rotation_law = "sine"')(text)
+    text = _edit("bisections = 4", 'bisections = 4\nparameters = ["accel_bias_m_s2"]')(text)
+    (tmp_path / "t10.toml").write_text(text)
+    outcome = run_problem(tmp_path / "t10.toml", tmp_path / "out")
+    rows = {r["tuning"]: r for r in outcome.summary["table_10_limits"]}
+    assert outcome.exit_code == 0 and set(rows) == {"white_jerk", "appendix_b"}
+    assert rows["appendix_b"]["verdict"] == "reproduced" and abs(rows["appendix_b"]["decades_from_thesis"]) <= 1.0
+    assert rows["white_jerk"]["limit"] >= 10 * rows["appendix_b"]["limit"]
+    ev = {t: {e["value"]: e for e in r["evaluations"]} for t, r in rows.items()}  # the bracket: fusion pays below it, not at its top
+    wrong = [t for t, r in rows.items() if not (ev[t][r["pays_up_to"]]["fusion"] < ev[t][r["pays_up_to"]]["sensor"]
+                                                 and ev[t][r["stops_at"]]["fusion"] >= ev[t][r["stops_at"]]["sensor"])]
+    assert not wrong
+    assert (tmp_path / "out" / "table_10_limits.md").is_file()
+
+
 JUDGED = [
     ("zero_quaternion", _edit("initial_orientation = [1.0, 0.0, 0.0, 0.0]", "initial_orientation = [0.0, 0.0, 0.0, 0.0]"),
      r"bad\.toml: field 'path\.initial_orientation': expected a quaternion \[w, x, y, z\] of nonzero norm"),
@@ -138,6 +176,10 @@ BAD = [
     ("unknown_field", _edit("seed = 1", "seed = 1\nnoise = 2"), r"unknown field 'sensors\.noise'"),
     ("seed_negative", _edit("seed = 1", "seed = -1"), r"field 'sensors\.seed': expected an integer in 0\.\."),
     ("feed_zero", _edit("feed_rate_mm_s = 42.33", "feed_rate_mm_s = 0.0"), r"field 'sensors\.feed_rate_mm_s': expected a positive number"),
+    ("unknown_rotation_law", _edit("rotation_amplitude_deg = 10.0", 'rotation_amplitude_deg = 10.0\nrotation_law = "spin"'),
+     r"field 'path\.rotation_law': expected one of sine, normal"),
+    ("unknown_motion", _edit('sweep_motions = ["3-axis", "5-axis"]', 'sweep_motions = ["planar"]'), r"field 'study\.sweep_motions\[0\]': expected one of 3-axis, 5-axis"),
+    ("unknown_tuning", _edit("[study.sweep]", '[study.limits]\ntunings = ["thesis"]\n\n[study.sweep]'), r"field 'study\.limits\.tunings\[0\]': expected one of white_jerk, appendix_b"),
 ]
 
 

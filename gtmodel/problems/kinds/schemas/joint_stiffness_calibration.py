@@ -69,9 +69,12 @@ class TruthSection(Section):
     scenario: choice("none", "table_2", description='"none": exact joint-spring model; "table_2": unmodelled rotation-only compliance') = "table_2"
     rotation_only_stiffness: _stiffness("stiffness of the unmodelled rotation-only compliance, scenario table_2 only "
                                         f"(default {TABLE_2_ROTATION_ONLY_STIFFNESS:g})") | None = None
+    load_cases: choice("axis", "gravity_pulley", description='"axis": forces along +x, +y, -z and moments about x, y, z per pose; '
+                       '"gravity_pulley": the thesis\' force-only loads, gravity (-z) and a pulley along +x and +y per pose') = "axis"
     force: number(gt=0, le=MAX_FORCE_N, unit="N", description="force of each force load case") = 1000.0
     moment: number(gt=0, le=MAX_MOMENT_NM, unit="N m", description="moment of each moment load case") = 200.0
     seed: integer(0, 2**31 - 1, description="noise seed") = 0
+    seeds: integer(1, 10_000, description="Monte-Carlo seeds seed .. seed + seeds - 1 judged against the truth and Table 2's pattern (1: none)") = 1
 
 
 class NoiseSection(Section):
@@ -81,6 +84,8 @@ class NoiseSection(Section):
     position_std_per_m: number(ge=0, le=1.0, unit="m/m", description="position noise per m of tracker distance") = 6e-6
     rotation_std: number(ge=0, le=math.pi, unit="rad", description="rotation noise (std) per axis") = 2.6e-4
     force_relative_std: number(ge=0, le=1.0, description="relative wrench noise (std)") = 0.0
+    target_radius: number(gt=0, le=10.0, unit="m", description="three tracker targets on this radius measure the rotation: "
+                          "rotation_std = position_std / (radius sqrt(3/2)), replacing rotation_std") | None = None
 
 
 class CalibrationSection(Section):
@@ -88,6 +93,8 @@ class CalibrationSection(Section):
 
     scaled_rotation_weight: number(gt=0, le=1e6, unit="m/rad", description="rotation weight of the scaled CP variant (the thesis' x10)") = 10.0
     bounds: choice("none", "positive", description='"positive": compliances c = 1/k >= 0') = "none"
+    rotation_weight: number(gt=0, le=1e6, unit="m/rad", description="rotation weight of CP (1: residual in m and rad; 1e-3: in mm and rad)") = 1.0
+    dpp_step2: choice("rotation", "tcp_translation", description='data of DPP step 2: the rotation, or the TCP translation as eq. (5) is written') = "rotation"
 
 
 class DataSection(Section):
