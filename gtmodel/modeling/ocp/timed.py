@@ -57,7 +57,7 @@ def special_values(
     P: ca.SX,
     elements: Sequence[tuple[list[ca.SX], list[ca.SX], list[ca.SX], ca.SX]],
     ends: tuple[PointArgs, PointArgs],
-    quadrature: Sequence[tuple[PointArgs, ca.SX]],
+    quadrature: tuple[PointArgs, ca.SX],
     co: dict[str, np.ndarray],
     fractions: np.ndarray | None = None,
 ) -> tuple[ca.SX, ca.SX]:
@@ -78,9 +78,10 @@ def special_values(
         the element's final time.
     ends : tuple of PointArgs
         The arguments at the start and at the final time.
-    quadrature : sequence of tuple
-        ``(args, weight)`` per collocation point: the integral of ``f`` is
-        ``sum(weight * f(args))``.
+    quadrature : tuple
+        ``(args, weights)``: the arguments at all ``M`` collocation points as columns
+        (``t`` and ``T`` ``(1, M)``, ``x`` ``(nx, M)``, ...) and the quadrature weights
+        ``(1, M)``; the integral of ``f`` is ``sum(weights * f(args))`` (one mapped call).
     co : dict
         Collocation coefficients (``root``, ``tau``).
     fractions : numpy.ndarray or None, optional
@@ -101,7 +102,8 @@ def special_values(
     for v in specials:
         f = make_fn("special", [v.expr])
         if isinstance(v, Integral):
-            values.append(sum(w * f(a.t, a.x, a.z, a.u, P, a.T) for a, w in quadrature))
+            a, weights = quadrature
+            values.append(ca.mtimes(f.map(int(weights.shape[1]))(a.t, a.x, a.z, a.u, P, a.T), weights.T))
             continue
         if v.time in ("start", "final"):
             a = ends[0] if v.time == "start" else ends[1]
@@ -114,11 +116,11 @@ def special_values(
             k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
             tau = float(np.clip(s - k, 0.0, 1.0))
         else:  # the element containing t (the left one at a boundary) on the non-uniform mesh
-            f = np.asarray(fractions, dtype=float)
-            edges = np.concatenate([[0.0], np.cumsum(f)])
+            frac = np.asarray(fractions, dtype=float)
+            edges = np.concatenate([[0.0], np.cumsum(frac)])
             s_frac = (t - t0) / (opt.final_time_value - t0)
-            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(f.min()), side="left"), 0, N - 1))
-            tau = float(np.clip((s_frac - edges[k]) / f[k], 0.0, 1.0))
+            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(frac.min()), side="left"), 0, N - 1))
+            tau = float(np.clip((s_frac - edges[k]) / frac[k], 0.0, 1.0))
         X, U, Z, T = elements[k]
         lx = lagrange_basis(co["root"], np.array([tau]))[0]
         lu = lagrange_basis(co["tau"], np.array([tau]))[0]
