@@ -520,9 +520,10 @@ def transcribe(
 
 
 class _ElementVars:
-    """Per element ``(X, U, Z, T)`` of the NLP on demand (the states at the start and the ``d``
-    points, inputs and algebraics at the points, the element's final time), as
-    :func:`~gtmodel.modeling.ocp.timed.special_values` reads them (few elements are read)."""
+    """The element variables of the NLP as :func:`~gtmodel.modeling.ocp.timed.special_values` reads them:
+    the states at the start and the ``d`` points of each element ``X_all`` ``(nx (d + 1), N)``,
+    the inputs and algebraics at the points ``Up`` ``(nu d, N)``, ``Zp``, the element final
+    times ``Trow`` ``(1, N)``."""
 
     def __init__(self, X_all: ca.SX, Up: ca.SX, Zp: ca.SX, Trow: ca.SX, nx: int, nu: int, nz: int, d: int) -> None:
         self._m, self._n, self._d = (X_all, Up, Zp, Trow), (nx, nu, nz), d
@@ -530,9 +531,19 @@ class _ElementVars:
     def __len__(self) -> int:
         return int(self._m[3].shape[1])
 
-    def __getitem__(self, k: int) -> tuple[list[ca.SX], list[ca.SX], list[ca.SX], ca.SX]:
+    def interpolate(self, ks: np.ndarray, lx: np.ndarray, lu: np.ndarray) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+        """States, inputs, algebraics ``(n., n)`` and final times ``(1, n)`` in elements ``ks`` with weights ``lx`` ``(d + 1, n)``, ``lu`` ``(d, n)``."""
         (X_all, Up, Zp, Trow), (nx, nu, nz), d = self._m, self._n, self._d
-        X = [X_all[r * nx:(r + 1) * nx, k] for r in range(d + 1)]
-        U = [Up[j * nu:(j + 1) * nu, k] for j in range(d)]
-        Z = [Zp[j * nz:(j + 1) * nz, k] for j in range(d)]
-        return X, U, Z, Trow[0, k]
+        cols = [int(k) for k in ks]
+
+        def combine(m: ca.SX, n: int, weights: np.ndarray) -> ca.SX:
+            if not n:
+                return ca.SX(0, len(cols))
+            sel = m[:, cols]
+            out = None
+            for r in range(weights.shape[0]):
+                term = sel[r * n:(r + 1) * n, :] * ca.DM(np.tile(weights[r][None, :], (n, 1)))
+                out = term if out is None else out + term
+            return out
+
+        return combine(X_all, nx, lx), combine(Up, nu, lu), combine(Zp, nz, lu), Trow[:, cols]

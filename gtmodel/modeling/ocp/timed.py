@@ -18,8 +18,9 @@ gives each symbol its value as an expression of the collocation NLP's variables:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -55,7 +56,7 @@ def special_values(
     opt: Optimization,
     make_fn: Callable[[str, list[ca.SX]], ca.Function],
     P: ca.SX,
-    elements: Sequence[tuple[list[ca.SX], list[ca.SX], list[ca.SX], ca.SX]],
+    elements: Any,
     ends: tuple[PointArgs, PointArgs],
     quadrature: tuple[PointArgs, ca.SX],
     co: dict[str, np.ndarray],
@@ -72,10 +73,12 @@ def special_values(
         (``der()`` of states substituted by the model's right-hand side).
     P : casadi.SX
         The model parameter vector of the NLP (free parameters as variables).
-    elements : sequence of tuple
-        Per element ``(X, U, Z, T)``: states at the element start and its collocation
-        points (``d + 1``), inputs and algebraics at the collocation points (``d``), and
-        the element's final time.
+    elements : object
+        The NLP's element variables: ``len(elements)`` is the number of elements ``N`` and
+        ``elements.interpolate(ks, lx, lu)`` gives the states ``(nx, n)``, inputs, algebraic
+        variables and element final times ``(1, n)`` in elements ``ks`` (``(n,)``) with the
+        Lagrange weights ``lx`` ``(d + 1, n)`` (through the element start and its points) and
+        ``lu`` ``(d, n)`` (through its points).
     ends : tuple of PointArgs
         The arguments at the start and at the final time.
     quadrature : tuple
@@ -98,34 +101,46 @@ def special_values(
         return ca.SX(0, 1), ca.SX(0, 1)
     t0 = opt.start_time
     N = len(elements)
-    values = []
-    for v in specials:
-        f = make_fn("special", [v.expr])
+    values: list[ca.SX] = [ca.SX(0, 1)] * len(specials)
+    interior: list[int] = []
+    for i, v in enumerate(specials):
         if isinstance(v, Integral):
             a, weights = quadrature
-            values.append(ca.mtimes(f.map(int(weights.shape[1]))(a.t, a.x, a.z, a.u, P, a.T), weights.T))
-            continue
-        if v.time in ("start", "final"):
+            f = make_fn("special", [v.expr])
+            values[i] = ca.mtimes(f.map(int(weights.shape[1]))(a.t, a.x, a.z, a.u, P, a.T), weights.T)
+        elif v.time in ("start", "final"):
             a = ends[0] if v.time == "start" else ends[1]
-            values.append(f(a.t, a.x, a.z, a.u, P, a.T))
-            continue
-        t = float(v.time)
+            values[i] = make_fn("special", [v.expr])(a.t, a.x, a.z, a.u, P, a.T)
+        else:
+            interior.append(i)
+    if interior:
+        times = np.array([float(specials[i].time) for i in interior])
         if fractions is None:
             h = (opt.final_time_value - t0) / N
-            s = (t - t0) / h
-            k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
-            tau = float(np.clip(s - k, 0.0, 1.0))
+            s = (times - t0) / h
+            ks = np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1).astype(int)
+            taus = np.clip(s - ks, 0.0, 1.0)
         else:  # the element containing t (the left one at a boundary) on the non-uniform mesh
             frac = np.asarray(fractions, dtype=float)
             edges = np.concatenate([[0.0], np.cumsum(frac)])
-            s_frac = (t - t0) / (opt.final_time_value - t0)
-            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(frac.min()), side="left"), 0, N - 1))
-            tau = float(np.clip((s_frac - edges[k]) / frac[k], 0.0, 1.0))
-        X, U, Z, T = elements[k]
-        lx = lagrange_basis(co["root"], np.array([tau]))[0]
-        lu = lagrange_basis(co["tau"], np.array([tau]))[0]
-        x = sum(float(lx[r]) * X[r] for r in range(len(X)))
-        u = sum(float(lu[j]) * U[j] for j in range(len(U))) if U[0].numel() else ca.SX(0, 1)
-        z = sum(float(lu[j]) * Z[j] for j in range(len(Z))) if Z[0].numel() else ca.SX(0, 1)
-        values.append(f(t, x, z, u, P, T))
+            s_frac = (times - t0) / (opt.final_time_value - t0)
+            ks = np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(frac.min()), side="left"), 0, N - 1).astype(int)
+            taus = np.clip((s_frac - edges[ks]) / frac[ks], 0.0, 1.0)
+        # the states through the element start and its points, inputs and algebraics through
+        # its points, at every interior time at once (columns)
+        x, u, z, T = elements.interpolate(ks, lagrange_basis(co["root"], taus).T, lagrange_basis(co["tau"], taus).T)
+        # one mapped call per distinct expression (a data table measures one expression at many times)
+        groups: list[list[int]] = []
+        for c, i in enumerate(interior):
+            for g in groups:
+                if ca.is_equal(specials[interior[g[0]]].expr, specials[i].expr, 2):
+                    g.append(c)
+                    break
+            else:
+                groups.append([c])
+        for g in groups:
+            f = make_fn("special", [specials[interior[g[0]]].expr])
+            row = f.map(len(g))(ca.DM(times[g]).T, x[:, g], z[:, g], u[:, g], P, T[:, g])
+            for j, c in enumerate(g):
+                values[interior[c]] = row[0, j]
     return ca.vertcat(*[v.symbol for v in specials]), ca.vertcat(*values)
