@@ -18,6 +18,7 @@ sparse factorisation linear in the mesh and is the structure stage-wise solvers 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -132,6 +133,12 @@ def collocation_coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
         ``tau`` (d,), ``root`` (d + 1,), ``C`` (d + 1, d + 1), ``D`` (d + 1,), ``B`` (d,),
         ``L0`` and ``L1`` (d,): the points' basis at ``tau = 0`` and ``1``.
     """
+    return {key: value.copy() for key, value in _coefficients(int(d), str(scheme)).items()}
+
+
+@functools.lru_cache(maxsize=32)
+def _coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
+    """:func:`collocation_coefficients`, computed once per ``(d, scheme)`` (a refined solve asks for them per pass)."""
     tau = np.array(ca.collocation_points(d, scheme), dtype=float)
     root = np.concatenate([[0.0], tau])
     c_, d_, _ = ca.collocation_coeff(tau.tolist())
