@@ -8,12 +8,18 @@ collocation points only. States are continuous across elements. A free final tim
 handled by time scaling ``t = t0 + tau (tf - t0)``.
 
 The decision variables are ordered stage by stage: element ``k`` holds its start state,
-its copy ``tf_k`` of a free final time, then the states, algebraic variables and inputs at
+its copy ``tf_k`` of a free final time, then the states, inputs and algebraic variables at
 its collocation points; the last block is the final state, then the free parameters. The
 copies are tied by ``tf_{k+1} = tf_k`` (linear equalities, the same optimum), so that
 every constraint involves the variables of one or two neighbouring elements: the KKT
 matrix is banded (a single shared final time is a dense row and column), which keeps the
 sparse factorisation linear in the mesh and is the structure stage-wise solvers require.
+
+The NLP is built from matrices with one column per element (the decision vector reshaped)
+and the model equations, the Lagrange term and the integrals at all ``N d`` collocation
+points are one mapped call each (``Function.map``): a few CasADi operations whatever the
+mesh. The same NLP built point by point in Python cost about 5 ms per collocation point
+(the hanging chain's 150 points: 0.8 s against 0.04 s; the expressions are identical).
 """
 
 from __future__ import annotations
