@@ -20,6 +20,12 @@ machines are noisy:
   points; rockit holds a control constant on each element), its whole call (building the
   ``Ocp`` and solving; ``expand=True``, rockit's fastest evaluation), objective, relative
   error and iterations; ``ratio_to_rockit`` is ``whole_call_s / rockit_whole_call_s``;
+  rockit holds a control constant per element, so where the optimal control jumps inside
+  an element (bang-bang, state constraints) its optimum is further from the published one;
+- ``rockit_refined_mesh_*`` (files with ``[transcription] refine``): rockit solved once more,
+  untimed and outside the ratio, on the mesh gtmodel's refinement ended with (rockit's
+  ``FunctionGrid``; rockit has no refinement of its own), to show that both transcriptions
+  reach the same optimum on the same mesh;
 - ``cli_s``: the wall time of a user's ``python -m gtmodel solve FILE --no-plots --out TMP``
   process (imports, problem layer, solve, result folder); ``cli_minus_whole_call_s`` is
   what the process adds to the in-process whole call.
@@ -165,9 +171,14 @@ def _measured_expr(opt: Any, fit: Any) -> Any:
     return by_symbol[id(fit.symbols[0])].expr
 
 
-def rockit_solve(decl: Any) -> dict[str, Any]:
-    """Build ``decl`` (an ``optimal_control`` declaration) in rockit and solve it; the whole call timed."""
+def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
+    """Build ``decl`` (an ``optimal_control`` declaration) in rockit and solve it; the whole call timed.
+
+    ``mesh``: element boundaries normalised to ``[0, 1]`` (gtmodel's refined mesh), given to
+    rockit as a ``FunctionGrid``; default the file's uniform elements.
+    """
     from rockit import DirectCollocation, FreeTime, Ocp
+    from rockit.sampling_method import FunctionGrid, UniformGrid
 
     start, cpu = time.perf_counter(), time.process_time()
     opt = decl.optimization
@@ -282,7 +293,11 @@ def rockit_solve(decl: Any) -> dict[str, Any]:
         ocp.set_initial(U[k], _guess_expr(opt.initial_guesses.get(name), ocp.t, t0, default))
     ocp.solver("ipopt", {"print_time": False, "expand": True,
                          "ipopt": {"print_level": 0, "sb": "yes", "max_iter": decl.solver.max_iter, "tol": decl.solver.tol}})
-    ocp.method(DirectCollocation(N=decl.method.elements, M=1, degree=decl.method.points, scheme=decl.method.scheme))
+    if mesh is None:
+        N, grid = decl.method.elements, UniformGrid()
+    else:
+        N, grid = len(mesh) - 1, FunctionGrid(lambda n: [float(v) for v in mesh])
+    ocp.method(DirectCollocation(N=N, M=1, degree=decl.method.points, scheme=decl.method.scheme, grid=grid))
     try:
         sol = ocp.solve()
     except RuntimeError as exc:  # IPOPT did not converge (rockit raises): no solution to report
@@ -371,6 +386,14 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
             "rockit_whole_call_s_all": [q["whole_call_s"] for q in peers],
             "ratio_to_rockit": whole / pw, "ratio_to_rockit_cpu": whole_cpu / pc,
         })
+    if rockit and res.refinement and res.collocation is not None:
+        # not timed, not in the ratio: rockit on the mesh gtmodel's refinement ended with
+        # (rockit has no refinement), to show both transcriptions reach the same optimum there
+        br = np.asarray(res.collocation.breaks(), dtype=float)
+        fine = rockit_solve(load_problem(path).declaration, mesh=(br - br[0]) / (br[-1] - br[0]))
+        fv = bench["sign"] * fine["objective"]
+        row.update({"rockit_refined_mesh_objective": fv, "rockit_refined_mesh_relative_error": abs(fv - pub) / abs(pub),
+                    "rockit_refined_mesh_status": fine["status"]})
     if cli:
         row["cli_s"] = float(np.median([c[0] for c in clis]))
         row["cli_cpu_s"] = float(np.median([c[1] for c in clis]))
