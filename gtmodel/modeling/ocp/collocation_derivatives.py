@@ -16,7 +16,6 @@ and final time and the Mayer term (few) are differentiated directly.
 from __future__ import annotations
 
 import logging
-from collections import defaultdict
 from typing import Any
 
 import casadi as ca
@@ -36,33 +35,44 @@ _log = logging.getLogger("gtmodel")
 COMPILE_FLAGS = ("-O1", "-fPIC", "-shared")
 
 
+def _sorted_unique(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.unique(keys, return_inverse=True)`` of integer keys, without importing ``numpy.ma`` (numpy 2.4's unique does)."""
+    order = np.argsort(keys, kind="stable")
+    k = keys[order]
+    new = np.ones(k.size, dtype=bool)
+    new[1:] = k[1:] != k[:-1]
+    inverse = np.empty(k.size, dtype=np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    return k[new], inverse
+
+
 class _Assembly:
-    """Triplets ``(row, col) += coefficient * value[source]`` of one sparse matrix."""
+    """Triplets ``(row, col) += coefficient * value[source]`` of one sparse matrix (numpy arrays, added in bulk)."""
 
     def __init__(self) -> None:
-        self.terms: dict[tuple[int, int], list[tuple[int, float]]] = defaultdict(list)
+        self.parts: list[tuple[np.ndarray, ...]] = []
 
-    def add(self, row: int, col: int, source: int, coefficient: float = 1.0) -> None:
-        self.terms[(int(row), int(col))].append((int(source), float(coefficient)))
+    def add(self, row: Any, col: Any, source: Any, coefficient: Any = 1.0) -> None:
+        """Add the triplets of the broadcast arrays ``row``, ``col``, ``source``, ``coefficient``."""
+        r, c, s, v = np.broadcast_arrays(np.asarray(row, dtype=np.int64), np.asarray(col, dtype=np.int64),
+                                         np.asarray(source, dtype=np.int64), np.asarray(coefficient, dtype=float))
+        self.parts.append((r.ravel(), c.ravel(), s.ravel(), v.ravel()))
 
     def matrix(self, values: ca.MX, n_values: int, nrow: int, ncol: int) -> ca.MX:
         """The sparse ``nrow x ncol`` matrix whose nonzeros are ``S @ values``."""
-        keys = sorted(self.terms, key=lambda rc: (rc[1], rc[0]))  # column-major, as CasADi stores
-        sp = ca.Sparsity.triplet(nrow, ncol, [rc[0] for rc in keys], [rc[1] for rc in keys])
-        if not keys:
+        if not self.parts or not sum(p[0].size for p in self.parts):
             return ca.MX(nrow, ncol)
+        r, c, s, v = (np.concatenate([p[i] for p in self.parts]) for i in range(4))
+        keys, key_of = _sorted_unique(c * nrow + r)  # column-major, as CasADi stores
+        sp = ca.Sparsity.triplet(nrow, ncol, (keys % nrow).tolist(), (keys // nrow).tolist())
         # S (len(keys) x n_values, CSC): S[i, source] = the sum of the coefficients of that
-        # pair in the order added (duplicates summed as scipy.sparse's sum_duplicates does)
-        summed: dict[tuple[int, int], float] = {}
-        for i, key in enumerate(keys):
-            for source, coefficient in self.terms[key]:
-                entry = (source, i)
-                summed[entry] = summed[entry] + coefficient if entry in summed else coefficient
-        entries = sorted(summed)  # column-major, rows sorted within a column
-        colind = np.zeros(n_values + 1, dtype=np.int64)
-        np.add.at(colind, np.array([c for c, _ in entries], dtype=np.int64) + 1, 1)
-        S = ca.DM(ca.Sparsity(len(keys), n_values, np.cumsum(colind).tolist(), [r for _, r in entries]),
-                  [summed[e] for e in entries])
+        # pair (duplicates summed as scipy.sparse's sum_duplicates does)
+        nk = int(keys.size)
+        entries, entry_of = _sorted_unique(s * nk + key_of)  # column-major, rows sorted within a column
+        summed = np.zeros(entries.size)
+        np.add.at(summed, entry_of, v)
+        colind = np.concatenate([[0], np.cumsum(np.bincount(entries // nk, minlength=n_values))])
+        S = ca.DM(ca.Sparsity(nk, n_values, colind.tolist(), (entries % nk).tolist()), summed)
         return ca.sparsity_cast(ca.mtimes(S, values), sp)
 
 
@@ -230,46 +240,42 @@ def assembled_derivatives(
     he_val = ends_hess(w, P, lam_f, lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1))
 
     # Jacobian: values = [point jacobians (M nj), end jacobian, 1]
+    jr, jc, hr, hc = (np.asarray(a, dtype=np.int64) for a in (jr, jc, hr, hc))
     jac = _Assembly()
-    for m in range(M):
-        base = m * nj
-        for i, (rr, cc) in enumerate(zip(jr, jc)):
-            jac.add(rows[m, rr], cols[m, cc], base + i)
-    je_r, je_c = je.sparsity().get_triplet()
-    for i, (rr, cc) in enumerate(zip(je_r, je_c)):
-        jac.add(e_rows[rr], cc, M * nj + i)
+    jac.add(rows[:, jr], cols[:, jc], np.arange(M)[:, None] * nj + np.arange(nj)[None, :])
+    je_r, je_c = (np.asarray(a, dtype=np.int64) for a in je.sparsity().get_triplet())
+    jac.add(e_rows[je_r] if je_r.size else je_r, je_c, M * nj + np.arange(je_r.size))
     one = M * nj + len(je_r)
-    nom_x = noms["x"]
-    for m, (k, j, first) in enumerate(nlp.rows_point):
-        for r_ in range(d + 1):  # collocation polynomial: - sum_r C[r, j] x_{k,r}
-            if co["C"][r_, j] != 0.0:
-                o = offs[("x", k, r_)]
-                for i in range(nx):
-                    jac.add(first + i, o + i, one, -co["C"][r_, j] * nom_x[i])
-    for k, first in nlp.rows_cont:
-        o = offs[("x", k + 1, 0)]
-        for i in range(nx):
-            jac.add(first + i, o + i, one, nom_x[i])
-        for r_ in range(d + 1):
-            if co["D"][r_] != 0.0:
-                o = offs[("x", k, r_)]
-                for i in range(nx):
-                    jac.add(first + i, o + i, one, -co["D"][r_] * nom_x[i])
-    for k, row in nlp.rows_tf:
-        jac.add(row, offs[("tf", k + 1, 0)], one, 1.0)
-        jac.add(row, offs[("tf", k, 0)], one, -1.0)
+    nom_x = np.asarray(noms["x"], dtype=float)
+    ix = np.arange(nx)
+    C, D = np.asarray(co["C"], dtype=float), np.asarray(co["D"], dtype=float)
+    # the linear terms, all points at once: xoff[k, r] is the first column of x_{k,r}
+    xoff = np.full((N + 1, d + 1), -1, dtype=np.int64)
+    for (kind, k, r_), o in offs.items():
+        if kind == "x":
+            xoff[k, r_] = o
+    pk, pj, pfirst = (np.array([t[i] for t in nlp.rows_point], dtype=np.int64) for i in range(3))
+    for r_ in range(d + 1):  # collocation polynomial: - sum_r C[r, j] x_{k,r}
+        sel = C[r_, pj] != 0.0
+        jac.add(pfirst[sel, None] + ix, xoff[pk[sel], r_][:, None] + ix, one, -C[r_, pj[sel]][:, None] * nom_x)
+    ck, cfirst = (np.array([t[i] for t in nlp.rows_cont], dtype=np.int64) for i in range(2))
+    jac.add(cfirst[:, None] + ix, xoff[ck + 1, 0][:, None] + ix, one, nom_x)
+    for r_ in range(d + 1):
+        if D[r_] != 0.0:
+            jac.add(cfirst[:, None] + ix, xoff[ck, r_][:, None] + ix, one, -D[r_] * nom_x)
+    if nlp.rows_tf:
+        tk, trow = (np.array([t[i] for t in nlp.rows_tf], dtype=np.int64) for i in range(2))
+        toff = np.array([offs[("tf", k, 0)] for k in range(N)], dtype=np.int64)
+        jac.add(trow, toff[tk + 1], one, 1.0)
+        jac.add(trow, toff[tk], one, -1.0)
     jvals = ca.vertcat(_nz(jm), _nz(je_val), ca.MX(1))
     jac_mx = jac.matrix(jvals, one + 1, ng, nw)
 
     hess = _Assembly()
-    for m in range(M):
-        base = m * nh
-        for i, (rr, cc) in enumerate(zip(hr, hc)):
-            R, C_ = cols[m, rr], cols[m, cc]
-            hess.add(min(R, C_), max(R, C_), base + i)
+    R, C_ = cols[:, hr], cols[:, hc]
+    hess.add(np.minimum(R, C_), np.maximum(R, C_), np.arange(M)[:, None] * nh + np.arange(nh)[None, :])
     he_r, he_c = he.sparsity().get_triplet()
-    for i, (rr, cc) in enumerate(zip(he_r, he_c)):
-        hess.add(rr, cc, M * nh + i)
+    hess.add(he_r, he_c, M * nh + np.arange(len(he_r)))
     hvals = ca.vertcat(_nz(hm), _nz(he_val))
     hess_mx = hess.matrix(hvals, M * nh + len(he_r), nw, nw)
 

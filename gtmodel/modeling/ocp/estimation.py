@@ -29,12 +29,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.ocp.optimization import Optimization
 
-#: SciPy's sparse matrices and their LU (``sparse.linalg``), imported on first use: only a fit needs them.
-sparse = lazy_module("scipy.sparse")
 
 __all__ = ["DataFit", "fit_data", "least_squares", "estimate_statistics"]
 
@@ -210,26 +207,28 @@ def _covariance(transcription: Any, w: np.ndarray, pvec: np.ndarray, rows: Seque
     psym = fn.mx_in(1)
     J_fn = ca.Function("jr", [wsym, psym], [ca.jacobian(fn(wsym, psym)[rows, :] if rows else ca.MX(0, 1), wsym)])
     g_fn = ca.Function("jg", [wsym, psym], [ca.jacobian(transcription._fg(wsym, psym)[1], wsym)])
-    Jr = _sparse(J_fn(w, pvec))
-    A = _sparse(g_fn(w, pvec))
+    Jr = ca.DM(J_fn(w, pvec))
+    A = ca.DM(g_fn(w, pvec))
     lbg, ubg, lbw, ubw = transcription._lbg, transcription._ubg, transcription._lbw, transcription._ubw
     g = np.array(transcription._fg(w, pvec)[1], dtype=float).reshape(-1)
-    active_g = (lbg == ubg) | _at_bound(g, lbg, ubg)
-    active_w = (lbw == ubw) | _at_bound(w, lbw, ubw)
+    active_g = np.nonzero((lbg == ubg) | _at_bound(g, lbg, ubg))[0]
+    active_w = np.nonzero((lbw == ubw) | _at_bound(w, lbw, ubw))[0]
     nw = w.size
-    Aw = sparse.identity(nw, format="csr")[np.nonzero(active_w)[0]]
-    A_act = sparse.vstack([A[np.nonzero(active_g)[0]], Aw]).tocsc()
-    H = (Jr.T @ sparse.diags(W) @ Jr).tocsc()
-    na = A_act.shape[0]
-    K = sparse.bmat([[H, A_act.T], [A_act, None]], format="csc")
+    # the KKT matrix in CasADi's sparse format, factorised by its CSparse LU (no SciPy import)
+    Aw = ca.DM(ca.Sparsity.triplet(active_w.size, nw, np.arange(active_w.size).tolist(), active_w.tolist()), 1.0)
+    A_act = ca.vertcat(A[active_g.tolist(), :], Aw)
+    H = ca.mtimes(Jr.T, ca.mtimes(ca.diag(ca.DM(W)), Jr))
+    na = int(A_act.shape[0])
+    K = ca.blockcat([[H, A_act.T], [A_act, ca.DM(na, na)]])
     scale = getattr(transcription, "_scale", np.ones(nw))
     pf_cols = _free_columns(transcription, nw)
     rhs = np.zeros((nw + na, len(pf_cols)))
     rhs[pf_cols, np.arange(len(pf_cols))] = 1.0
     try:
-        lu = sparse.linalg.splu(K)
-        sol = lu.solve(rhs)
+        sol = np.array(ca.solve(K, ca.DM(rhs), "csparse"), dtype=float)
     except RuntimeError:  # singular: a parameter the data do not determine
+        sol = np.full(rhs.shape, np.nan)
+    if not np.all(np.isfinite(sol)):
         _log.warning("parameter estimation: the reduced Gauss-Newton Hessian is singular (parameters not identifiable)")
         return np.full((len(pf_cols), len(pf_cols)), np.nan)
     cov = sol[pf_cols, :]
@@ -252,10 +251,3 @@ def _free_columns(transcription: Any, nw: int) -> np.ndarray:
     """Indices in ``w`` of the free parameter elements (the last entries of both transcriptions)."""
     n = sum(transcription.dae.p_vars[k].stop - transcription.dae.p_vars[k].start for k in transcription.optimization.free_parameters)
     return np.arange(nw - n, nw)
-
-
-def _sparse(m: Any) -> sparse.csr_matrix:
-    """A CasADi DM as a scipy CSR matrix."""
-    dm = ca.DM(m)
-    r, c = dm.sparsity().get_triplet()
-    return sparse.csr_matrix((np.array(dm.nonzeros(), dtype=float), (r, c)), shape=dm.shape)

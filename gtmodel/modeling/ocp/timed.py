@@ -19,8 +19,9 @@ gives each symbol its value as an expression of the collocation NLP's variables:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -56,9 +57,9 @@ def special_values(
     opt: Optimization,
     make_fn: Callable[[str, list[ca.SX]], ca.Function],
     P: ca.SX,
-    elements: Sequence[tuple[list[ca.SX], list[ca.SX], list[ca.SX], ca.SX]],
+    elements: Any,
     ends: tuple[PointArgs, PointArgs],
-    quadrature: Sequence[tuple[PointArgs, ca.SX]],
+    quadrature: tuple[PointArgs, ca.SX],
     co: dict[str, np.ndarray],
     fractions: np.ndarray | None = None,
 ) -> tuple[ca.SX, ca.SX]:
@@ -73,15 +74,18 @@ def special_values(
         (``der()`` of states substituted by the model's right-hand side).
     P : casadi.SX
         The model parameter vector of the NLP (free parameters as variables).
-    elements : sequence of tuple
-        Per element ``(X, U, Z, T)``: states at the element start and its collocation
-        points (``d + 1``), inputs and algebraics at the collocation points (``d``), and
-        the element's final time.
+    elements : object
+        The NLP's element variables: ``len(elements)`` is the number of elements ``N`` and
+        ``elements.interpolate(ks, lx, lu)`` gives the states ``(nx, n)``, inputs, algebraic
+        variables and element final times ``(1, n)`` in elements ``ks`` (``(n,)``) with the
+        Lagrange weights ``lx`` ``(d + 1, n)`` (through the element start and its points) and
+        ``lu`` ``(d, n)`` (through its points).
     ends : tuple of PointArgs
         The arguments at the start and at the final time.
-    quadrature : sequence of tuple
-        ``(args, weight)`` per collocation point: the integral of ``f`` is
-        ``sum(weight * f(args))``.
+    quadrature : tuple
+        ``(args, weights)``: the arguments at all ``M`` collocation points as columns
+        (``t`` and ``T`` ``(1, M)``, ``x`` ``(nx, M)``, ...) and the quadrature weights
+        ``(1, M)``; the integral of ``f`` is ``sum(weights * f(args))`` (one mapped call).
     co : dict
         Collocation coefficients (``root``, ``tau``).
     fractions : numpy.ndarray or None, optional
@@ -98,33 +102,48 @@ def special_values(
         return ca.SX(0, 1), ca.SX(0, 1)
     t0 = opt.start_time
     N = len(elements)
-    values = []
-    for v in specials:
-        f = make_fn("special", [v.expr])
+    values: list[ca.SX] = [ca.SX(0, 1)] * len(specials)
+    interior: list[int] = []
+    for i, v in enumerate(specials):
         if isinstance(v, Integral):
-            values.append(sum(w * f(a.t, a.x, a.z, a.u, P, a.T) for a, w in quadrature))
-            continue
-        if v.time in ("start", "final"):
+            a, weights = quadrature
+            f = make_fn("special", [v.expr])
+            values[i] = ca.mtimes(f.map(int(weights.shape[1]))(a.t, a.x, a.z, a.u, P, a.T), weights.T)
+        elif v.time in ("start", "final"):
             a = ends[0] if v.time == "start" else ends[1]
-            values.append(f(a.t, a.x, a.z, a.u, P, a.T))
-            continue
-        # normalised time: a fixed time of a fixed horizon, or a fixed fraction of a free one
-        s_frac = v.fraction if v.fraction is not None else (float(v.time) - t0) / (opt.final_time_value - t0)
+            values[i] = make_fn("special", [v.expr])(a.t, a.x, a.z, a.u, P, a.T)
+        else:
+            interior.append(i)
+    if interior:
+        # a fixed time of a fixed horizon, or a fixed fraction of a free one (normalised time)
+        fracs = [specials[i].fraction for i in interior]
+        times = np.array([np.nan if fr is not None else float(specials[i].time) for fr, i in zip(fracs, interior)])
         if fractions is None:
-            s = s_frac * N
-            k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
-            tau = float(np.clip(s - k, 0.0, 1.0))
+            s = np.array([fr * N if fr is not None else (t - t0) / ((opt.final_time_value - t0) / N) for fr, t in zip(fracs, times)])
+            ks = np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1).astype(int)
+            taus = np.clip(s - ks, 0.0, 1.0)
         else:  # the element containing t (the left one at a boundary) on the non-uniform mesh
-            fr = np.asarray(fractions, dtype=float)
-            edges = np.concatenate([[0.0], np.cumsum(fr)])
-            k = int(np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(fr.min()), side="left"), 0, N - 1))
-            tau = float(np.clip((s_frac - edges[k]) / fr[k], 0.0, 1.0))
-        X, U, Z, T = elements[k]
-        lx = lagrange_basis(co["root"], np.array([tau]))[0]
-        lu = lagrange_basis(co["tau"], np.array([tau]))[0]
-        x = sum(float(lx[r]) * X[r] for r in range(len(X)))
-        u = sum(float(lu[j]) * U[j] for j in range(len(U))) if U[0].numel() else ca.SX(0, 1)
-        z = sum(float(lu[j]) * Z[j] for j in range(len(Z))) if Z[0].numel() else ca.SX(0, 1)
-        t = float(v.time) if v.fraction is None else t0 + v.fraction * (T - t0)
-        values.append(f(t, x, z, u, P, T))
+            frac = np.asarray(fractions, dtype=float)
+            edges = np.concatenate([[0.0], np.cumsum(frac)])
+            s_frac = np.array([fr if fr is not None else (t - t0) / (opt.final_time_value - t0) for fr, t in zip(fracs, times)])
+            ks = np.clip(np.searchsorted(edges[1:], s_frac - 1e-9 * float(frac.min()), side="left"), 0, N - 1).astype(int)
+            taus = np.clip((s_frac - edges[ks]) / frac[ks], 0.0, 1.0)
+        # the states through the element start and its points, inputs and algebraics through
+        # its points, at every interior time at once (columns)
+        x, u, z, T = elements.interpolate(ks, lagrange_basis(co["root"], taus).T, lagrange_basis(co["tau"], taus).T)
+        # one mapped call per distinct expression (a data table measures one expression at many times)
+        groups: list[list[int]] = []
+        for c, i in enumerate(interior):
+            for g in groups:
+                if ca.is_equal(specials[interior[g[0]]].expr, specials[i].expr, 2):
+                    g.append(c)
+                    break
+            else:
+                groups.append([c])
+        for g in groups:
+            f = make_fn("special", [specials[interior[g[0]]].expr])
+            tg = ca.horzcat(*[t0 + fracs[c] * (T[:, c] - t0) if fracs[c] is not None else ca.DM(times[c]) for c in g])
+            row = f.map(len(g))(tg, x[:, g], z[:, g], u[:, g], P, T[:, g])
+            for j, c in enumerate(g):
+                values[interior[c]] = row[0, j]
     return ca.vertcat(*[v.symbol for v in specials]), ca.vertcat(*values)

@@ -149,9 +149,10 @@ class Verification:
 
 def _check_taus(root: np.ndarray) -> np.ndarray:
     """Points of an element where the deviation is measured: the collocation points, their midpoints, the end."""
-    pts = np.unique(np.concatenate([root, [1.0]]))
+    # sorted(set(...)) rather than numpy.unique, which imports numpy.ma on first use (numpy 2.4)
+    pts = np.array(sorted(set(np.concatenate([root, [1.0]]).tolist())))
     mids = 0.5 * (pts[:-1] + pts[1:])
-    return np.unique(np.concatenate([pts[1:], mids]))
+    return np.array(sorted(set(np.concatenate([pts[1:], mids]).tolist())))
 
 
 def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: float,

@@ -63,6 +63,20 @@ def test_variable_at_an_interior_time(t1, elements, rel, scheme):
     assert r.sample([t1])["states"]["x"][0] == pytest.approx(1.0, abs=1e-8)  # the same polynomial the result samples
 
 
+def test_variable_at_an_interior_time_on_a_non_uniform_mesh():
+    # t1 = 0.3 is the end of the third element of the mesh (0.1, 0.1, 0.1, 0.35, 0.35): the
+    # optimum is a polynomial on each element, exact (a refined mesh once crashed here)
+    m, x, v, u = double_integrator()
+    opt = Optimization(m, final_time=1.0)
+    _from_rest(opt, x, v)
+    opt.set_objective(lagrange=u**2)
+    opt.add_constraint(opt.timed(x, 0.3), lb=1.0, ub=1.0)
+    r = CollocationTranscription(opt, mesh=[0.1, 0.1, 0.1, 0.35, 0.35]).solve()
+    assert r.status == "optimal"
+    assert r.objective == pytest.approx(3.0 / 0.3**3, rel=1e-8)
+    assert r.sample([0.3])["states"]["x"][0] == pytest.approx(1.0, abs=1e-8)
+
+
 def test_start_value_in_the_objective_and_mixed_time_points():
     m = Model("integrator")
     x, u = m.state("x"), m.input("u")
