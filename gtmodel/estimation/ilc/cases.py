@@ -59,6 +59,15 @@ class ILCDeclaration:
     rounds: int = 1
     fail: Callable[[str, str, Any], GtModelError] | None = None
 
+    @property
+    def checks(self) -> dict[str, Any]:
+        """Per case name, per channel the lifted check (:class:`~gtmodel.estimation.ILCStability`), computed on first use.
+
+        Dressler (2012), eqs. 7.15-7.16. The same figures as :meth:`check_requirements`,
+        without raising for a case that fails what it requires.
+        """
+        return {case.name: self.experiment.check(case) for case in self.cases}
+
     def check_requirements(self) -> dict[str, Any]:
         """The lifted check of every case (7.15), (7.16); an error for the first case that fails what it requires.
 
