@@ -5,7 +5,15 @@ The sine path ``y = A sin(2 pi f x)`` (reference ``sine_path``:
 the feed rate ``v_f`` (a decision: the feed is the speed along ``x``, so every derivative is
 closed form; the thesis does not say whether its feed is along ``x`` or along the arc), in the
 world ``xy`` plane from ``start``. The temporal frequency is ``omega = 2 pi f v_f``
-(0.833 Hz at 42.33 mm/s). 3-axis: translation only, the orientation constant. 5-axis: the
+(0.833 Hz at 42.33 mm/s). ``feed="tangential"`` is the thesis' own wording ("sine waves in space
+with a constant tangential velocity, or 'feed rate'", Cvitanic (2021), sec. 4.2): the speed
+along the arc is ``v_f``; the abscissa ``u(t)`` solves ``s(u) = v_f t`` with the arc length
+``s(u) = sqrt(1 + m^2) / k E(k u | m^2 / (1 + m^2))`` (``k = 2 pi f``, ``m = A k``, ``E`` the
+incomplete elliptic integral of the second kind, :func:`scipy.special.ellipeinc`), inverted by
+interpolation in a table and Newton (:func:`abscissa`); every time derivative
+is CasADi's of the closed form in ``u`` with ``u' = v_f / sqrt(1 + (m cos k u)^2)`` (chain
+rule), so ``|v| = v_f`` exactly. Its crests come every ``s(pi / (2 k)) / v_f`` s from a zero
+crossing (1.87 s at 42.33 mm/s: the thesis' "spikes around 1.8 s", Figs. 24-25). 3-axis: translation only, the orientation constant. 5-axis: the
 end-effector also rotates about a FIXED BODY AXIS ``n`` by the angle
 ``theta(t) = theta_0 sin(omega t)`` (default ``theta_0 = 10 deg``, ``n`` tilted 30 deg from
 the body z axis towards x), so ``quat(t) = quat_0 (x) exp(theta(t) n / 2)`` and, because ``n``
@@ -28,12 +36,13 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from scipy.special import ellipeinc
 
 from gtmodel._arrays import as_array, as_finite, positive_float
 from gtmodel._geometry import quat_exp, quat_mul
 from gtmodel.errors import InputError
 
-__all__ = ["SINE_PATH", "FEED_RATE_M_S", "MIN_SAMPLES", "MAX_SAMPLES", "ROTATION_LAWS", "Truth", "SinePath"]
+__all__ = ["SINE_PATH", "FEED_RATE_M_S", "MIN_SAMPLES", "MAX_SAMPLES", "ROTATION_LAWS", "FEEDS", "Truth", "SinePath", "arc_length", "abscissa"]
 
 #: The sine path of section 4.2 (reference ``sine_path``): amplitude [m], spatial frequency [cycles/m].
 SINE_PATH = {"amplitude_m": 0.0762, "spatial_frequency_cycles_per_m": 19.685}
@@ -41,6 +50,8 @@ SINE_PATH = {"amplitude_m": 0.0762, "spatial_frequency_cycles_per_m": 19.685}
 FEED_RATE_M_S = 0.04233
 #: The 5-axis rotation laws of :class:`SinePath` (module docstring).
 ROTATION_LAWS = ("sine", "normal")
+#: What the feed rate is the speed of (module docstring): along x, or along the arc (the thesis' wording).
+FEEDS = ("x", "tangential")
 #: Fewest samples of a path (the four-point regression needs 4, a table needs more).
 MIN_SAMPLES = 10
 #: Most samples of a path (keeps memory and run time bounded).
@@ -127,7 +138,7 @@ class SinePath:
     duration : float
         Length of the record [s] (> 0).
     feed_rate : float, optional
-        Speed along x [m/s] (Table 7: 42.33 mm/s).
+        Speed along x, or along the arc (``feed``) [m/s] (Table 7: 42.33 mm/s).
     amplitude : float, optional
         Sine amplitude in y [m] (reference: 76.2 mm).
     spatial_frequency : float, optional
@@ -145,12 +156,15 @@ class SinePath:
     rotation_law : {"sine", "normal"}, optional
         5-axis ``theta(t)``: ``theta_0 sin(omega t)``, or the path's slope angle (the tool normal
         to the path, the thesis' motion; ``rotation_amplitude`` unused).
+    feed : {"x", "tangential"}, optional
+        The feed rate is the speed along x (closed form in t), or along the arc (the thesis'
+        constant tangential speed; module docstring).
 
     Raises
     ------
     InputError
         A non-positive duration, feed rate or spatial frequency, a negative amplitude, a
-        rotation axis or quaternion of zero norm, values that are not finite, an unknown rotation law.
+        rotation axis or quaternion of zero norm, values that are not finite, an unknown rotation law or feed.
     """
 
     duration: float
@@ -163,6 +177,7 @@ class SinePath:
     rotation_axis: Any = (0.5, 0.0, math.sqrt(3.0) / 2.0)
     orientation: Any = (1.0, 0.0, 0.0, 0.0)
     rotation_law: str = "sine"
+    feed: str = "x"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration", positive_float(self.duration, "duration"))
@@ -177,10 +192,12 @@ class SinePath:
             raise InputError(f"rotation: expected True or False, got {self.rotation!r}")
         if self.rotation_law not in ROTATION_LAWS:
             raise InputError(f"rotation_law: expected one of {', '.join(ROTATION_LAWS)}, got {self.rotation_law!r}")
+        if self.feed not in FEEDS:
+            raise InputError(f"feed: expected one of {', '.join(FEEDS)}, got {self.feed!r}")
 
     @property
     def omega(self) -> float:
-        """Temporal angular frequency ``2 pi f v_f`` of the sine [rad/s]."""
+        """Temporal angular frequency ``2 pi f v_f`` of the sine [rad/s] (x feed; along the arc the rate of ``k u`` varies)."""
         return 2.0 * math.pi * self.spatial_frequency * self.feed_rate
 
     def samples(self, dt: float) -> int:
@@ -212,7 +229,8 @@ class SinePath:
 
         ``p = start + (v_f t, A sin(omega t), 0)``, ``v, a, jerk`` its derivatives;
         5-axis: ``quat = quat_0 (x) exp(theta n / 2)``, ``w = theta' n``, ``alpha = theta'' n``,
-        ``theta = theta_0 sin(omega t)`` (module docstring).
+        ``theta = theta_0 sin(omega t)`` (module docstring); ``feed="tangential"``: the same
+        in the abscissa ``u(t)`` of constant arc speed (module docstring).
 
         Parameters
         ----------
@@ -231,6 +249,8 @@ class SinePath:
         """
         n = self.samples(dt)
         t = np.arange(n) * dt
+        if self.feed == "tangential":
+            return self._truth_tangential(t)
         w0, amp, vf = self.omega, self.amplitude, self.feed_rate
         s, c = np.sin(w0 * t), np.cos(w0 * t)
         zero = np.zeros(n)
@@ -249,6 +269,26 @@ class SinePath:
         quat = _map(_ROTATE, n, self.orientation, axis, theta[None, :]).T
         return Truth(t, np.hstack([p, v, a, quat, np.outer(dtheta, axis), np.outer(ddtheta, axis)]),
                      jerk, np.outer(dddtheta, axis), True, self.orientation)
+
+    def _truth_tangential(self, t: np.ndarray) -> Truth:
+        """The true state at constant speed along the arc (module docstring)."""
+        n, amp, vf = t.size, self.amplitude, self.feed_rate
+        k = 2.0 * math.pi * self.spatial_frequency
+        u = abscissa(vf * t, amp, k)
+        p, v, a, jerk, theta, dtheta, ddtheta, dddtheta = (np.asarray(o) for o in _ARC_STATE.map(n)(u[None, :], amp, k, vf))
+        zero = np.zeros((n, 1))
+        pos = self.start + np.column_stack([p.T, zero])
+        x = np.hstack([pos, np.column_stack([v.T, zero]), np.column_stack([a.T, zero])])
+        jerk = np.column_stack([jerk.T, zero])
+        if not self.rotation:
+            return Truth(t, x, jerk, np.zeros((n, 3)), False, self.orientation)
+        axis = self.rotation_axis
+        if self.rotation_law == "normal":
+            theta, dtheta, ddtheta, dddtheta = theta.ravel(), dtheta.ravel(), ddtheta.ravel(), dddtheta.ravel()
+        else:  # theta_0 sin(phase), the phase k u of the sine (the x-feed law with omega t -> k u)
+            theta, dtheta, ddtheta, dddtheta = (self.rotation_amplitude * np.asarray(q).ravel() for q in _ARC_SINE.map(n)(u[None, :], amp, k, vf))
+        quat = _map(_ROTATE, n, self.orientation, axis, theta[None, :]).T
+        return Truth(t, np.hstack([x, quat, np.outer(dtheta, axis), np.outer(ddtheta, axis)]), jerk, np.outer(dddtheta, axis), True, self.orientation)
 
     def jerk_rms(self, dt: float) -> tuple[float, float]:
         """RMS over the samples of ``|jerk|`` [m/s^3] and of ``|angular jerk|`` [rad/s^3].
@@ -295,3 +335,86 @@ def _slope_angle_function() -> ca.Function:
 
 
 _SLOPE_ANGLE = _slope_angle_function()
+
+
+def arc_length(u: Any, amplitude: float, k: float) -> np.ndarray:
+    """Arc length of ``y = A sin(k x)`` from ``x = 0`` to ``x = u`` [m] (module docstring).
+
+    ``s(u) = sqrt(1 + m^2) / k E(k u | m^2 / (1 + m^2))``, ``m = A k``: the integral of
+    ``sqrt(1 + (m cos k x)^2)`` written as an incomplete elliptic integral of the second kind.
+
+    Parameters
+    ----------
+    u : array_like, shape (N,)
+        Abscissae [m].
+    amplitude : float
+        ``A`` [m] (>= 0).
+    k : float
+        ``2 pi f`` [rad/m] (> 0).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        Arc lengths [m].
+    """
+    m2 = (amplitude * k) ** 2
+    return math.sqrt(1.0 + m2) / k * ellipeinc(k * np.asarray(u, dtype=float), m2 / (1.0 + m2))
+
+
+def abscissa(s: Any, amplitude: float, k: float) -> np.ndarray:
+    """The abscissa ``u`` at which the arc length of ``y = A sin(k x)`` from 0 is ``s`` (module docstring).
+
+    The inverse of :func:`arc_length` tabulated on a grid of 64 points per quarter wavelength
+    (linear interpolation, the start), then Newton's ``u -= (s(u) - s) / sqrt(1 + (m cos k u)^2)``
+    until the arc length matches to ``1e-14 m`` (at most 20 steps).
+
+    Parameters
+    ----------
+    s : array_like, shape (N,)
+        Arc lengths [m] (>= 0).
+    amplitude : float
+        ``A`` [m].
+    k : float
+        ``2 pi f`` [rad/m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        Abscissae [m].
+    """
+    s = np.asarray(s, dtype=float)
+    m = amplitude * k
+    top = float(s.max(initial=0.0))
+    grid = np.linspace(0.0, top, int(math.ceil(top * k / (math.pi / 2) * 64)) + 2)
+    u = np.interp(s, arc_length(grid, amplitude, k), grid)
+    for _ in range(20):
+        r = arc_length(u, amplitude, k) - s
+        if np.abs(r).max(initial=0.0) < 1e-14:
+            break
+        u = u - r / np.sqrt(1.0 + (m * np.cos(k * u)) ** 2)
+    return u
+
+
+def _arc_state_functions() -> tuple[ca.Function, ca.Function]:
+    """Position, velocity, acceleration, jerk (x, y) and the slope angle with three derivatives, in ``u`` at constant arc speed."""
+    u, amp, k, vf = ca.SX.sym("u"), ca.SX.sym("A"), ca.SX.sym("k"), ca.SX.sym("vf")
+    udot = vf / ca.sqrt(1.0 + (amp * k * ca.cos(k * u)) ** 2)
+
+    def d(h: ca.SX) -> ca.SX:  # time derivative by the chain rule
+        return ca.jacobian(h, u) * udot
+
+    p = ca.vertcat(u, amp * ca.sin(k * u))
+    v = d(p)
+    a = d(v)
+    th = ca.atan(amp * k * ca.cos(k * u))
+    d1 = d(th)
+    d2 = d(d1)
+    sn = ca.sin(k * u)
+    s1 = d(sn)
+    s2 = d(s1)
+    args = [u, amp, k, vf]
+    return (ca.Function("arc_state", args, [p, v, a, d(a), th, d1, d2, d(d2)]),
+            ca.Function("arc_sine", args, [sn, s1, s2, d(s2)]))
+
+
+_ARC_STATE, _ARC_SINE = _arc_state_functions()

@@ -91,3 +91,70 @@ def test_normal_tool_turns_at_curvature_times_speed_at_the_crests():
 def test_unknown_rotation_law():
     with pytest.raises(InputError, match=r"rotation_law: expected one of sine, normal, got 'spin'"):
         SinePath(1.0, rotation=True, rotation_law="spin")
+
+
+# -- constant tangential speed (the thesis' "constant tangential velocity, or feed rate", sec. 4.2) -------------------
+
+@pytest.fixture(scope="module")
+def tangential():
+    return SinePath(2.5, rotation=True, rotation_axis=(0.0, 0.0, 1.0), rotation_law="normal", feed="tangential")
+
+
+@pytest.fixture(scope="module")
+def tangential_fine():
+    # 1.9 s at 1e-5 s: through the first crest (1.84 s)
+    return SinePath(1.9, rotation=True, rotation_axis=(0.0, 0.0, 1.0), rotation_law="normal", feed="tangential").truth(1e-5)
+
+
+def test_tangential_speed_is_the_feed_rate(tangential, tangential_fine):
+    # |v| = v_f to 1e-9, and v is the derivative of p (central differences, independent of the chain rule)
+    tr = tangential.truth(DT)
+    np.testing.assert_allclose(np.linalg.norm(tr.velocity, axis=1), 0.04233, rtol=0, atol=1e-9)
+    fine = tangential_fine
+    fd = (fine.position[2:] - fine.position[:-2]) / 2e-5
+    np.testing.assert_allclose(fd, fine.velocity[1:-1], atol=1e-8)
+    for lo, d in ((3, 6), (6, 9)):  # a = v', jerk = a'
+        fd = (fine.x[2:, lo:lo + 3] - fine.x[:-2, lo:lo + 3]) / 2e-5
+        ref = fine.x[1:-1, d:d + 3] if d < 9 else fine.jerk[1:-1]
+        np.testing.assert_allclose(fd, ref, atol=1e-6 * np.abs(ref).max())
+
+
+def test_tangential_arc_length_is_feed_times_time(tangential):
+    # independent: the arc length integral sqrt(1 + (A k cos k x)^2) by adaptive quadrature, not the elliptic form
+    from scipy.integrate import quad
+
+    tr = tangential.truth(DT)
+    k, m = 2 * np.pi * 19.685, 0.0762 * 2 * np.pi * 19.685
+    x, y = tr.position[:, 0] - 1.5, tr.position[:, 1]
+    np.testing.assert_allclose(y, 0.0762 * np.sin(k * x), atol=1e-15)
+    for i in range(0, tr.t.size, 250):
+        s, _ = quad(lambda u: np.sqrt(1 + (m * np.cos(k * u)) ** 2), 0.0, x[i], limit=200, epsabs=1e-13)
+        assert s == pytest.approx(0.04233 * tr.t[i], abs=1e-11)
+
+
+def test_tangential_tool_stays_normal_and_crests_near_the_thesis_spike(tangential, tangential_fine):
+    # the tool normal to the path (body x along v); the first crest near 1.8 s (Cvitanic (2021), Figs. 24-25)
+    tr = tangential.truth(DT)
+    w, x, y, z = tr.quaternion.T
+    body_x = np.column_stack([1 - 2 * (y**2 + z**2), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+    np.testing.assert_allclose((body_x * tr.velocity).sum(1) / 0.04233, 1.0, atol=1e-12)
+    assert tr.t[np.argmax(tr.position[:, 1])] == pytest.approx(1.84, abs=0.01)
+    h, fine = 1e-5, tangential_fine  # w' = alpha by central differences
+    np.testing.assert_allclose((fine.x[2:, 13:16] - fine.x[:-2, 13:16]) / (2 * h), fine.x[1:-1, 16:19], atol=1e-6 * np.abs(fine.x[:, 16:19]).max())
+
+
+@pytest.mark.parametrize("rotation, law", [(False, "sine"), (True, "sine"), (True, "normal")])
+def test_x_feed_unchanged_bit_for_bit(rotation, law):
+    # the default feed is the closed form in t (as before the tangential option), bit for bit
+    a, b = SinePath(1.0, rotation=rotation, rotation_law=law), SinePath(1.0, rotation=rotation, rotation_law=law, feed="x")
+    ta, tb = a.truth(DT), b.truth(DT)
+    assert np.array_equal(ta.x, tb.x) and np.array_equal(ta.jerk, tb.jerk)
+    t = np.arange(1001) * DT
+    w0 = 2.0 * np.pi * 19.685 * 0.04233
+    assert np.array_equal(ta.position, np.array([1.5, 0.0, 1.0]) + np.column_stack([0.04233 * t, 0.0762 * np.sin(w0 * t), 0 * t]))
+    assert np.array_equal(ta.velocity[:, 1], 0.0762 * w0 * np.cos(w0 * t))
+
+
+def test_unknown_feed():
+    with pytest.raises(InputError, match=r"feed: expected one of x, tangential, got 'arc'"):
+        SinePath(1.0, feed="arc")
