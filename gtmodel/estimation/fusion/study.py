@@ -199,6 +199,9 @@ class FusionStudy:
         Initial orientation quaternion ``[w, x, y, z]`` (nonzero norm).
     rotation_law : {"sine", "normal"}, optional
         The 5-axis rotation (:class:`~gtmodel.estimation.fusion.sine_path.SinePath`; "normal": the thesis' tool normal to the path).
+    feed : {"x", "tangential"}, optional
+        The feed rate is the speed along x, or along the arc (the thesis' constant tangential speed;
+        :class:`~gtmodel.estimation.fusion.sine_path.SinePath`).
     transform_error_axis : array_like, shape (3,) or None, optional
         Axis of the Table 7 transform errors in the IMU frame
         (:func:`~gtmodel.estimation.fusion.tracker_imu.believed_transform`; None: ``(1, 1, 1)/sqrt(3)``).
@@ -256,6 +259,7 @@ class FusionStudy:
     rotation_axis: Any = (0.5, 0.0, math.sqrt(3.0) / 2.0)
     orientation: Any = (1.0, 0.0, 0.0, 0.0)
     rotation_law: str = "sine"
+    feed: str = "x"
     transform_error_axis: Any = None
     seed: int = 1
     warmup: float = 0.1
@@ -348,7 +352,7 @@ class FusionStudy:
             See :class:`~gtmodel.estimation.fusion.tracker_imu.SinePath`.
         """
         return SinePath(self.duration if duration is None else duration, spec.feed_rate, self.amplitude, self.spatial_frequency,
-                        self.start, rotation, self.rotation_amplitude, self.rotation_axis, self.orientation, self.rotation_law)
+                        self.start, rotation, self.rotation_amplitude, self.rotation_axis, self.orientation, self.rotation_law, self.feed)
 
     def process_noise(self, path: SinePath, dt: float) -> tuple[float, float]:
         """The white-jerk standard deviations of ``Q`` [m/s^3], [rad/s^3] (module docstring).

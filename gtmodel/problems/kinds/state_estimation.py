@@ -55,7 +55,7 @@ def _baseline(name: str) -> float:
 
 
 class PathSection(Section):
-    """``[path]``: the sine path ``y = A sin(2 pi f x)``, x at the feed rate; the 5-axis rotation.
+    """``[path]``: the sine path ``y = A sin(2 pi f x)``, x (or the arc: ``feed``) at the feed rate; the 5-axis rotation.
 
     Parameters
     ----------
@@ -75,6 +75,8 @@ class PathSection(Section):
         Orientation quaternion ``[w, x, y, z]`` at t = 0 (normalised; nonzero).
     rotation_law : str
         5-axis: ``sine`` (theta_0 sin(omega t)) or ``normal`` (the tool normal to the path, the thesis' motion).
+    feed : str
+        ``x``: the feed rate is the speed along x; ``tangential``: along the arc (the thesis' constant tangential speed).
     """
 
     duration: number(gt=0, le=MAX_DURATION_S, unit="s", description="length of every baseline run") = 3.0
@@ -88,6 +90,8 @@ class PathSection(Section):
         default_factory=lambda: [1.0, 0.0, 0.0, 0.0])
     rotation_law: choice("sine", "normal", description='5-axis: "sine": theta_0 sin(omega t) about the body axis; "normal": the slope angle '
                                                        '(the tool normal to the path, the thesis\' Fig. 22; with the axis [0, 0, 1])') = "sine"
+    feed: choice("x", "tangential", description='"x": the feed rate is the speed along x (closed form in t); "tangential": the speed along '
+                                                'the arc (the thesis\' "constant tangential velocity", sec. 4.2)') = "x"
 
 
 class SensorsSection(Section):
@@ -110,7 +114,7 @@ class SensorsSection(Section):
     sample_time_s : float
         Sample time of all sensors [s].
     feed_rate_mm_s : float
-        Feed rate along x [mm/s].
+        Feed rate along x, or along the arc (``[path] feed``) [mm/s].
     transform_translation_error_mm : float
         Error of the filter's believed IMU-to-target translation [mm].
     transform_orientation_error_deg : float
@@ -128,7 +132,7 @@ class SensorsSection(Section):
     accel_bias_m_s2: number(ge=-100.0, le=100.0, unit="m/s^2", description="accelerometer bias on every IMU axis (Table 7: 0.00025)") = _baseline("accel_bias_m_s2")
     accel_noise_m_s2_rtHz: number(gt=0, le=100.0, unit="m/s^2/rtHz", description="accelerometer noise density (Table 7: 0.00039)") = _baseline("accel_noise_m_s2_rtHz")
     sample_time_s: number(gt=0, le=MAX_DURATION_S, unit="s", description="sample time of every sensor (Table 7: 0.001)") = _baseline("sample_time_s")
-    feed_rate_mm_s: number(gt=0, le=1e4, unit="mm/s", description="feed rate along x (Table 7: 42.33)") = _baseline("feed_rate_mm_s")
+    feed_rate_mm_s: number(gt=0, le=1e4, unit="mm/s", description="feed rate along x, or along the arc with [path] feed = \"tangential\" (Table 7: 42.33)") = _baseline("feed_rate_mm_s")
     transform_translation_error_mm: number(ge=-1e3, le=1e3, unit="mm", description="error of the believed IMU-to-target translation") = 0.0
     transform_orientation_error_deg: number(ge=-180.0, le=180.0, unit="deg", description="error of the believed IMU-to-target rotation") = 0.0
     transform_error_axis: vector(3, bound=1e3, description="axis of both transform errors in the IMU frame, normalised; nonzero "
@@ -365,7 +369,7 @@ class StateEstimationKind(ProblemKind):
             study = FusionStudy(
                 spec=spec, duration=p.duration, amplitude=p.amplitude, spatial_frequency=p.spatial_frequency, start=p.start,
                 rotation_amplitude=math.radians(p.rotation_amplitude_deg), rotation_axis=p.rotation_axis, orientation=p.initial_orientation,
-                transform_error_axis=s.transform_error_axis, rotation_law=p.rotation_law,
+                transform_error_axis=s.transform_error_axis, rotation_law=p.rotation_law, feed=p.feed,
                 seed=s.seed, warmup=f.warmup, jerk_std=f.jerk_std, angular_jerk_std=f.angular_jerk_std, quaternion_std=f.quaternion_std,
                 initial_covariance=f.initial_covariance, appendix_b_q=f.appendix_b_q_diag, noisy_tracker_factor=st.noisy_tracker_factor,
                 sweep=sweep, sweep_duration=st.sweep_duration, sweep_motions=tuple(dict.fromkeys(st.sweep_motions)),

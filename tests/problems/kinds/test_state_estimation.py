@@ -178,6 +178,8 @@ BAD = [
     ("feed_zero", _edit("feed_rate_mm_s = 42.33", "feed_rate_mm_s = 0.0"), r"field 'sensors\.feed_rate_mm_s': expected a positive number"),
     ("unknown_rotation_law", _edit("rotation_amplitude_deg = 10.0", 'rotation_amplitude_deg = 10.0\nrotation_law = "spin"'),
      r"field 'path\.rotation_law': expected one of sine, normal"),
+    ("unknown_feed", _edit("rotation_amplitude_deg = 10.0", 'rotation_amplitude_deg = 10.0\nfeed = "arc"'),
+     r"field 'path\.feed': expected one of x, tangential"),
     ("unknown_motion", _edit('sweep_motions = ["3-axis", "5-axis"]', 'sweep_motions = ["planar"]'), r"field 'study\.sweep_motions\[0\]': expected one of 3-axis, 5-axis"),
     ("unknown_tuning", _edit("[study.sweep]", '[study.limits]\ntunings = ["thesis"]\n\n[study.sweep]'), r"field 'study\.limits\.tunings\[0\]': expected one of white_jerk, appendix_b"),
 ]
