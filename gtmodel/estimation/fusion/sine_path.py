@@ -2,8 +2,8 @@
 
 The sine path ``y = A sin(2 pi f x)`` (reference ``sine_path``:
 ``A = 76.2 mm``, ``f = 19.685 cycles/m``, i.e. a 50.8 mm wavelength) traversed with ``x`` at
-the feed rate ``v_f`` (a decision: the feed is the speed along ``x``, so every derivative is
-closed form; the thesis does not say whether its feed is along ``x`` or along the arc), in the
+the feed rate ``v_f`` (the default ``feed="x"``: the feed is the speed along ``x``, so every
+derivative is closed form in ``t``; the thesis' own path is ``feed="tangential"`` below), in the
 world ``xy`` plane from ``start``. The temporal frequency is ``omega = 2 pi f v_f``
 (0.833 Hz at 42.33 mm/s). ``feed="tangential"`` is the thesis' own wording ("sine waves in space
 with a constant tangential velocity, or 'feed rate'", Cvitanic (2021), sec. 4.2): the speed
