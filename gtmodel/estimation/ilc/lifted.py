@@ -227,15 +227,19 @@ class QFilter:
         arr, single = as_signal(x, "x", vector=True), np.ndim(x) == 1
         if self.window is not None and arr.shape[0] != self.window.size:
             raise InputError(f"x: expected {self.window.size} samples (the window's length), got {arr.shape[0]}")
-        out = arr
-        if self._sos is not None:
-            try:
-                out = scipy.signal.sosfiltfilt(self._sos, arr, axis=0)
-            except ValueError as exc:  # too short for the end extension
-                raise InputError(f"x: {arr.shape[0]} samples are too few for the forward-backward filter ({exc})") from None
+        out = self._filter(arr)
         if self.window is not None:
             out = out * self.window[:, None]
         return out[:, 0] if single else out
+
+    def _filter(self, arr: np.ndarray) -> np.ndarray:
+        """The filter alone on checked ``(N, d)`` columns: forward-backward Butterworth (or none)."""
+        if self._sos is None:
+            return arr
+        try:
+            return scipy.signal.sosfiltfilt(self._sos, arr, axis=0)
+        except ValueError as exc:  # too short for the end extension
+            raise InputError(f"x: {arr.shape[0]} samples are too few for the forward-backward filter ({exc})") from None
 
     def lifted(self, n: int) -> np.ndarray:
         """The lifted matrix of :meth:`apply` on ``(n,)`` signals (Dressler (2012), eq. 7.9).
@@ -352,31 +356,9 @@ class RobustQFilter(QFilter):
         self.wanted = np.minimum(super().magnitude(f), m / g)
         self.fir = scipy.signal.firwin2(taps, f, self.wanted, fs=1.0 / self.dt)
 
-    def apply(self, x: Any) -> np.ndarray:
-        """Filter a signal (each column): the centred FIR, then the window.
-
-        Parameters
-        ----------
-        x : array_like, shape (N,) or (N, d)
-            Signal, rows are samples.
-
-        Returns
-        -------
-        numpy.ndarray
-            Same shape as ``x``.
-
-        Raises
-        ------
-        InputError
-            ``x`` not finite, or ``N`` different from the window's length.
-        """
-        arr, single = as_signal(x, "x", vector=True), np.ndim(x) == 1
-        if self.window is not None and arr.shape[0] != self.window.size:
-            raise InputError(f"x: expected {self.window.size} samples (the window's length), got {arr.shape[0]}")
-        out = scipy.signal.oaconvolve(arr, self.fir[:, None], mode="full", axes=0)[self.taps // 2: self.taps // 2 + arr.shape[0]]
-        if self.window is not None:
-            out = out * self.window[:, None]
-        return out[:, 0] if single else out
+    def _filter(self, arr: np.ndarray) -> np.ndarray:
+        """The centred FIR alone on checked ``(N, d)`` columns (:meth:`apply` adds the window)."""
+        return scipy.signal.oaconvolve(arr, self.fir[:, None], mode="full", axes=0)[self.taps // 2: self.taps // 2 + arr.shape[0]]
 
     def magnitude(self, f_hz: Any) -> np.ndarray:
         """Magnitude of the FIR (without the window); its phase is 0 (centred, symmetric).
