@@ -151,6 +151,7 @@ def test_refinement_splits_the_mesh_and_keeps_the_best_verified_pass():
     assert solution.result.verification.max_scaled_deviation == min(deviations)
     assert deviations[0] > 2e-2 and min(deviations) < deviations[0]
     assert solution.transcription is None  # a refined solve keeps no NLP for sweeps
+    assert solution.result.solve_time == pytest.approx(sum(e["solve_time"] for e in passes))  # every pass counted
 
 
 #: Iterations of the shipped minimum-time problem (w = 0: 49); an energy weight may take a few

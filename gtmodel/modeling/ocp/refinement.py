@@ -287,7 +287,8 @@ def solve_refined(
     -------
     OptimizationResult
         The result of the pass with the smallest verification deviation (normally the
-        last), with ``refinement`` (one dict per pass); ``check_failed`` if the limits
+        last), with ``refinement`` (one dict per pass) and ``solve_time`` the sum over the
+        passes; ``check_failed`` if the limits
         stopped the refinement before the verification passed.
 
     Raises
@@ -318,7 +319,7 @@ def solve_refined(
         v = result.verification
         entry: dict[str, Any] = {
             "pass": n_pass + 1, "elements": tr.elements, "status": str(result.status), "objective": result.objective,
-            "final_time": result.final_time, "iterations": result.iterations,
+            "final_time": result.final_time, "iterations": result.iterations, "solve_time": result.solve_time,
         }
         history.append(entry)
         if v is None:  # the solve failed: nothing to refine from
@@ -349,6 +350,7 @@ def solve_refined(
                      "none" if result.verification is None else f"{result.verification.max_scaled_deviation:.3g}")
         result = best
     result.refinement = history
+    result.solve_time = float(sum(e["solve_time"] for e in history))  # every pass's solve, not the returned one's alone
     if result.status == Status.OPTIMAL and len(history) == max_passes and history[-1].get("split"):
         _log.warning("mesh refinement of %s stopped at the pass limit (%d) with elements still to split", optimization.model.name, max_passes)
     return result
