@@ -81,8 +81,8 @@ class RefinementSection(Section):
         Limit on the solves of the refinement.
     """
 
-    refine: Flag = Field(False, description="refine the mesh until the verification passes (h-refinement, switches located)")
-    tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation") | None = None
+    refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; also with [[data]]; not with multiple shooting)")
+    tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation (default 1e-2)") | None = None
     max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
 

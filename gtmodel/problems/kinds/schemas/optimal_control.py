@@ -14,7 +14,7 @@ from pydantic_core import PydanticCustomError
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
-from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, SolverSection
+from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, RefinementSection, SolverSection
 from gtmodel.problems.schema import MAX_NAMED_NUMBER, Expressions, Flag, NonEmptyText, ProblemSchema, Section, Text, choice, integer, number, vector
 
 __all__ = [
@@ -221,7 +221,7 @@ class DataSection(Section):
     weights: vector(None, positive=True, bound=MAX_VALUE, description="weights of the squared residuals instead of std") | None = None
 
 
-class TranscriptionSection(Section):
+class TranscriptionSection(RefinementSection):
     """``[transcription]``: the transcription method, the verification tolerance and mesh refinement.
 
     Parameters
@@ -260,10 +260,6 @@ class TranscriptionSection(Section):
     controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
     integrator: choice("rk", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs)") | None = None
     steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, collocation)") = 4
-    refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; with [[data]] too; not with multiple_shooting)")
-    tolerance: number(gt=0, lt=1, description="verification tolerance (collocation and multiple shooting): scaled deviation of the states from their simulation") | None = None
-    max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
-    max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
 
 
 class BenchmarkSection(Section):
