@@ -41,8 +41,8 @@ import casadi as ca
 import numpy as np
 from threadpoolctl import threadpool_limits  # a dependency of scikit-learn
 
-from gtmodel._lazy import lazy_module
 from gtmodel._arrays import as_vector, positive_float, positive_int
+from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.correction import (
     CALIBRATION_POSES_DEG,
@@ -55,6 +55,10 @@ from gtmodel.estimation.closed_loop.correction import (
     offset_response_gp,
     truth_model,
 )
+from gtmodel.estimation.closed_loop.vibration_loop import (
+    bisect_critical_gain,
+    delay_line,
+)
 from gtmodel.robots.dynamic_stiffness import DIRECTIONS, ModeFitResult
 from gtmodel.robots.serial import SerialArm
 from gtmodel.status import Status, StatusResult
@@ -63,25 +67,25 @@ from gtmodel.status import Status, StatusResult
 control = lazy_module("control")
 
 __all__ = [
+    "DEFAULT_RESOLUTIONS",
     "FEED_RATE_M_S",
+    "GROWTH_TOLERANCE",
+    "METHODS",
+    "POLE_MARGIN",
     "SINE_AMPLITUDE_M",
     "SINE_SPATIAL_FREQUENCY_PER_M",
-    "GROWTH_TOLERANCE",
-    "POLE_MARGIN",
-    "METHODS",
-    "sine_reference",
-    "path_period",
-    "loop_plant",
-    "closed_loop",
-    "spectral_radius",
-    "LoopSimulation",
-    "simulate_loop",
-    "GainScan",
-    "largest_stable_gain",
-    "critical_gain",
-    "DEFAULT_RESOLUTIONS",
     "CorrectionStudy",
+    "GainScan",
+    "LoopSimulation",
+    "closed_loop",
     "correction_study",
+    "critical_gain",
+    "largest_stable_gain",
+    "loop_plant",
+    "path_period",
+    "simulate_loop",
+    "sine_reference",
+    "spectral_radius",
 ]
 
 _log = logging.getLogger("gtmodel")
@@ -157,16 +161,6 @@ def sine_reference(n: int, dt: float = CYCLE_TIME_S, amplitude: float = SINE_AMP
     return positive_float(amplitude, "amplitude") * np.sin(w * np.arange(n) * positive_float(dt, "dt"))
 
 
-def _delay_line(n: int, dt: float) -> control.StateSpace:
-    """``y_k = u_{k-n}``: an exact shift register."""
-    A = np.eye(n, k=-1)
-    B = np.zeros((n, 1))
-    B[0, 0] = 1.0
-    C = np.zeros((1, n))
-    C[0, -1] = 1.0
-    return control.ss(A, B, C, [[0.0]], dt)
-
-
 def loop_plant(model: OffsetResponseModel, delay_cycles: int = DELAY_CYCLES) -> control.StateSpace:
     """Plant from the accumulated offset ``u_k`` to the TCP position: ``z^-delay P(z)``.
 
@@ -190,7 +184,7 @@ def loop_plant(model: OffsetResponseModel, delay_cycles: int = DELAY_CYCLES) -> 
     if not isinstance(model, OffsetResponseModel):
         raise InputError(f"model: expected an OffsetResponseModel, got {type(model).__name__}")
     delay = positive_int(delay_cycles, "delay_cycles")
-    return control.series(_delay_line(delay, model.dt), model.response_ss())
+    return control.series(delay_line(delay, model.dt), model.response_ss())
 
 
 def closed_loop(model: OffsetResponseModel, gain: float, delay_cycles: int = DELAY_CYCLES) -> control.StateSpace:
@@ -485,18 +479,7 @@ def critical_gain(model: OffsetResponseModel, delay_cycles: int = DELAY_CYCLES, 
     InputError
         Bad arguments.
     """
-    lo, hi = positive_float(tol, "tol"), positive_float(max_gain, "max_gain")
-    if spectral_radius(model, hi, delay_cycles) < 1.0:
-        return hi
-    if spectral_radius(model, lo, delay_cycles) >= 1.0:
-        return 0.0
-    while hi - lo > tol:
-        mid = 0.5 * (lo + hi)
-        if spectral_radius(model, mid, delay_cycles) < 1.0:
-            lo = mid
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+    return bisect_critical_gain(lambda K: spectral_radius(model, K, delay_cycles), max_gain, tol)
 
 
 @dataclass

@@ -22,6 +22,8 @@ not a fixed 0.126.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import control
 import numpy as np
 
@@ -29,7 +31,7 @@ from gtmodel._arrays import positive_float, positive_int
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.correction import OffsetResponseModel
 
-__all__ = ["vibration_plant", "vibration_loop_critical_gain"]
+__all__ = ["bisect_critical_gain", "delay_line", "vibration_loop_critical_gain", "vibration_plant"]
 
 
 def vibration_plant(model: OffsetResponseModel, delay_cycles: int = 13) -> control.StateSpace:
@@ -57,9 +59,8 @@ def vibration_plant(model: OffsetResponseModel, delay_cycles: int = 13) -> contr
     if not isinstance(model, OffsetResponseModel):
         raise InputError(f"model: expected an OffsetResponseModel, got {type(model).__name__}")
     delay = positive_int(delay_cycles, "delay_cycles")
-    shift = control.ss(np.eye(delay, k=-1), np.eye(delay, 1), np.eye(1, delay, delay - 1), [[0.0]], model.dt)
     vib = model.response_ss() - control.ss([], [], [], [[1.0]], model.dt)
-    return control.series(shift, vib)
+    return control.series(delay_line(delay, model.dt), vib)
 
 
 def vibration_loop_critical_gain(model: OffsetResponseModel, delay_cycles: int = 13, upper: float = 100.0, tol: float = 1e-6) -> float:
@@ -82,7 +83,8 @@ def vibration_loop_critical_gain(model: OffsetResponseModel, delay_cycles: int =
     Returns
     -------
     float
-        The critical gain [-] (``upper`` if none below it).
+        The critical gain [-] (``upper`` if none below it, 0 if unstable at ``tol``); the
+        bisection of :func:`bisect_critical_gain`.
 
     Raises
     ------
@@ -90,17 +92,68 @@ def vibration_loop_critical_gain(model: OffsetResponseModel, delay_cycles: int =
         A bad model, delay, ``upper`` or ``tol``.
     """
     plant = vibration_plant(model, delay_cycles)
-    upper = positive_float(upper, "upper")
-    tol = positive_float(tol, "tol")
+    unity = control.ss([], [], [], [[1.0]], model.dt)
+    return bisect_critical_gain(
+        lambda K: float(np.max(np.abs(np.linalg.eigvals(np.asarray(control.feedback(plant * K, unity).A))))), upper, tol)
 
-    def stable(K: float) -> bool:
-        loop = control.feedback(plant * K, control.ss([], [], [], [[1.0]], model.dt))
-        return bool(np.max(np.abs(np.linalg.eigvals(np.asarray(loop.A)))) < 1.0)
 
-    if stable(upper):
-        return upper
-    lo, hi = 0.0, upper
+def delay_line(n: int, dt: float) -> control.StateSpace:
+    """``y_k = u_{k-n}``: an exact shift register, the controller delay ``z^-n``.
+
+    Parameters
+    ----------
+    n : int
+        Delay in samples, >= 1.
+    dt : float
+        Sample time [s].
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete, ``n`` states, strictly proper.
+    """
+    A = np.eye(n, k=-1)
+    B = np.zeros((n, 1))
+    B[0, 0] = 1.0
+    C = np.zeros((1, n))
+    C[0, -1] = 1.0
+    return control.ss(A, B, C, [[0.0]], dt)
+
+
+def bisect_critical_gain(radius: Callable[[float], float], max_gain: float, tol: float) -> float:
+    """Gain at which a closed loop's spectral radius reaches 1, by bisection on ``[tol, max_gain]``.
+
+    Cvitanic (2021), eq. (33). Assumes the loop is stable for small gains and loses
+    stability once (checked on the bracket ends).
+
+    Parameters
+    ----------
+    radius : callable
+        ``radius(K) -> float``: largest closed-loop pole modulus at the gain ``K`` [-].
+    max_gain : float
+        Upper end of the bracket [-].
+    tol : float
+        Lower end and final width of the bracket [-].
+
+    Returns
+    -------
+    float
+        The critical gain [-] (``max_gain`` if the loop is stable there, 0 if unstable at ``tol``).
+
+    Raises
+    ------
+    InputError
+        ``max_gain`` or ``tol`` not a positive number.
+    """
+    lo, hi = positive_float(tol, "tol"), positive_float(max_gain, "max_gain")
+    if radius(hi) < 1.0:
+        return hi
+    if radius(lo) >= 1.0:
+        return 0.0
     while hi - lo > tol:
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return hi
+        if radius(mid) < 1.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
