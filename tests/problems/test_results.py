@@ -112,10 +112,10 @@ def test_failed_run_leaves_no_file_of_the_earlier_run(tmp_path, earlier_run, edi
     assert match in summary["message"]
 
 
-def _solve_process(out, *extra):
+def _solve_process(out, *extra, problem=BASE):
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(REPO))
     return subprocess.Popen(
-        [sys.executable, "-m", "gtmodel.cli", "solve", str(BASE), "--out", str(out), "--no-plots", *extra],
+        [sys.executable, "-m", "gtmodel.cli", "solve", str(problem), "--out", str(out), "--no-plots", *extra],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=REPO,
     )
 
@@ -138,7 +138,11 @@ def test_sigkill_mid_run_leaves_the_earlier_folder_intact(tmp_path, earlier_run)
     out = tmp_path / "out"
     subprocess.run(["cp", "-r", str(earlier_run), str(out)], check=True)
     before = {p.name: p.read_bytes() for p in out.iterdir()}
-    proc = _solve_process(out, "-v")
+    # 400 elements: the solve lasts seconds, so the kill lands mid-run on a fast machine too
+    # (at 50 elements the run could finish inside the 0.5 s and replace the folder legitimately)
+    slow = tmp_path / "slow.toml"
+    slow.write_text(BASE.read_text().replace("elements = 50 ", "elements = 400 "))
+    proc = _solve_process(out, "-v", problem=slow)
     _wait_for(proc, "solving")
     time.sleep(0.5)
     proc.send_signal(signal.SIGKILL)

@@ -44,7 +44,7 @@ def test_forces_draw_each_cart_force_and_its_limits(tmp_path, limit):
     for i, ax in enumerate(fig.axes):
         assert_line(ax, f"tau{i + 1}", traj["t"], traj[f"tau{i + 1}"])
         np.testing.assert_allclose(line_y(ax, "limit"), [limit[i], limit[i]])
-    assert [ax.get_ylim() for ax in fig.axes] == pytest.approx([(-1.15 * lim, 1.15 * lim) for lim in limit])
+    np.testing.assert_allclose([ax.get_ylim() for ax in fig.axes], [(-1.15 * lim, 1.15 * lim) for lim in limit], rtol=1e-6)
     assert [ax.get_ylabel() for ax in fig.axes] == ["tau1 [N]", "tau2 [N]", "tau3 [N]"]
 
 
