@@ -22,7 +22,7 @@ from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
 from gtmodel.problems.registry import KINDS, get_kind, get_schema
-from gtmodel.problems.results import ResultFolder, check_output_folder, failure_summary
+from gtmodel.problems.results import MARKER, ResultFolder, check_output_folder, failure_summary, json_safe
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 from gtmodel.problems.schema import validate_document
 from gtmodel.status import Status
@@ -107,7 +107,7 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
     return solution
 
 
-def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True) -> dict[str, Any]:
+def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True, report: bool = False) -> dict[str, Any]:
     """Write the result folder of a solved problem, replacing the folder only when complete.
 
     Data files and plots are written only when the solver returned a solution, never
@@ -123,6 +123,9 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         Result folder (replaced whole; see :mod:`gtmodel.problems.results`).
     plots : bool, optional
         Write PNG plots (default True).
+    report : bool, optional
+        Also write ``report.html``, the folder's page (:mod:`gtmodel.report.result_page`;
+        default False; ``gtmodel solve`` writes it unless ``--no-report``).
 
     Returns
     -------
@@ -144,9 +147,23 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
                 summary["overrides"] = dict(problem.overrides)
             summary.update(written.fields)
             summary["status"] = kind.status(solution)
+            if report:
+                _write_report(folder.path, summary)
             return folder.commit(summary)
         except OSError as exc:  # a ResultWriteError too: one message, naming the target
             raise folder.write_error(exc) from None
+
+
+def _write_report(path: Path, summary: dict[str, Any]) -> None:
+    """``report.html`` of a folder being written, from the summary as :meth:`ResultFolder.commit` will write it."""
+    from gtmodel.report.result_page import REPORT_FILE, write_report
+
+    files = sorted({p.name for p in path.iterdir() if p.name != "summary.json"} | {REPORT_FILE})
+    page_summary = {**summary, "status": str(summary["status"]), "files": ["summary.json", *files], "written_by": MARKER}
+    try:
+        write_report(path, json_safe(page_summary))
+    except ImportError as exc:  # plotly missing from an older installation: the results stand without their page
+        _log.warning("gtmodel: report.html not written: %s (pip install plotly)", exc)
 
 
 @dataclass
@@ -197,6 +214,7 @@ def run_problem(
     previous: Any = None,
     warm_start: bool = False,
     heartbeat: bool = False,
+    report: bool = False,
 ) -> RunOutcome:
     """Load, solve and write one problem; every outcome becomes a status and a summary.
 
@@ -218,6 +236,8 @@ def run_problem(
         Start from ``previous``.
     heartbeat : bool, optional
         Log a line every few seconds while solving (when nothing else shows progress).
+    report : bool, optional
+        Also write ``report.html`` (:func:`write_results`).
 
     Returns
     -------
@@ -241,7 +261,7 @@ def run_problem(
         with Heartbeat(label, enabled=heartbeat):
             solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
         with InterruptGuard() as guard:
-            summary = write_results(problem, solution, target, plots=plots)
+            summary = write_results(problem, solution, target, plots=plots, report=report)
             guard.check()
         return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
     except KeyboardInterrupt as exc:
