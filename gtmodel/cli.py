@@ -382,7 +382,7 @@ def _study(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from gtmodel.problems.results import add_report
+    from gtmodel.problems.run import add_report
 
     page = add_report(args.folder)
     print(f"wrote {page}")

@@ -39,7 +39,7 @@ except ImportError:  # pragma: no cover - Windows
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
-__all__ = ["check_output_folder", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields", "add_report"]
+__all__ = ["check_output_folder", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields"]
 
 #: The ``written_by`` field of every ``summary.json`` gtmodel writes (how a result folder is recognised).
 MARKER = f"gtmodel {__version__}"
@@ -165,59 +165,6 @@ def verification_fields(result: Any) -> dict[str, Any]:
     if getattr(result, "refinement", None):
         out["refinement"] = json_safe(result.refinement)
     return out
-
-
-def add_report(folder: str | Path) -> Path:
-    """Write ``report.html`` into a finished result folder (``gtmodel report DIR``).
-
-    The page (:func:`gtmodel.report.result_page.write_report`) is written beside the
-    folder's files under a hidden name and renamed into place, then ``summary.json``, which
-    lists every file of its folder, is rewritten (likewise) with ``report.html`` in its
-    ``files``; nothing else in the folder changes and nothing is written outside it. The
-    folder is locked as for a run (:func:`output_lock`).
-
-    Parameters
-    ----------
-    folder : str or pathlib.Path
-        A result folder: its ``summary.json`` is a run's summary (status and the
-        ``written_by`` marker).
-
-    Returns
-    -------
-    pathlib.Path
-        The written page.
-
-    Raises
-    ------
-    ResultWriteError
-        ``folder`` is not a result folder (no run's ``summary.json``), is in use by a run,
-        or cannot be written (names the folder).
-    """
-    from gtmodel.report.result_page import REPORT_FILE, write_report
-
-    folder = Path(folder)
-    summary_path = folder / "summary.json"
-    if not _is_run_summary(summary_path):
-        raise ResultWriteError(f"{folder}: not a gtmodel result folder (no summary.json of a run); give the folder a "
-                               "`gtmodel solve` wrote")
-    with output_lock(folder):
-        summary = json.loads(summary_path.read_text(encoding="utf-8"))
-        files = list(summary.get("files") or ["summary.json"])
-        if REPORT_FILE not in files:
-            files.append(REPORT_FILE)
-        summary["files"] = files
-        hidden = [folder / f".{name}.partial-{os.getpid()}" for name in (REPORT_FILE, "summary.json")]
-        try:
-            write_report(folder, summary, path=hidden[0])
-            write_json(hidden[1], summary)
-            os.replace(hidden[0], folder / REPORT_FILE)
-            os.replace(hidden[1], summary_path)  # summary.json last, as a run writes it
-        except OSError as exc:
-            raise ResultWriteError(f"cannot write the report of {folder}: {exc.strerror or exc}") from None
-        finally:
-            for p in hidden:
-                p.unlink(missing_ok=True)
-    return folder / REPORT_FILE
 
 
 def check_output_folder(out: str | Path) -> None:

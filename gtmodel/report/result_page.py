@@ -17,7 +17,7 @@ is listed, not read.
 
 This module renders and writes the page only; where it may be written (a result folder's
 rules, ``summary.json`` listing it) is the problem layer's business
-(:func:`gtmodel.problems.run.write_report`).
+(:func:`gtmodel.problems.run.add_report`, ``write_results(report=True)``).
 """
 
 from __future__ import annotations
@@ -30,6 +30,8 @@ import math
 import re
 from pathlib import Path
 from typing import Any, Mapping
+
+from plotly.offline import get_plotlyjs
 
 from gtmodel.errors import InputError
 from gtmodel.status import Status
@@ -391,8 +393,6 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
     if not isinstance(summary, Mapping):
         raise InputError(f"{folder / 'summary.json'}: expected a JSON object")
     if plotly_js is None:
-        from plotly.offline import get_plotlyjs  # a dependency; imported only when a page is written
-
         plotly_js = get_plotlyjs()
     page = _Page()
     name, kind, status = summary.get("name", folder.name), summary.get("kind"), summary.get("status", "unknown")
