@@ -35,7 +35,7 @@ extensions = [
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "schemas", "**/.ipynb_checkpoints"]
+exclude_patterns = ["_build", "_static", "schemas", "**/.ipynb_checkpoints"]
 
 # Markdown: anchors for "#section" links, fences as in GitHub.
 myst_heading_anchors = 3
@@ -51,7 +51,9 @@ numpydoc_xref_param_type = False
 
 html_theme = "alabaster"
 html_title = "gtmodel"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+# wider pages, and wide tables (the field reference) scroll instead of wrapping a word per line
+html_css_files = ["gtmodel.css"]
 
 
 class GtPackage(Directive):

@@ -35,6 +35,11 @@
 ``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV]``
     Load an FMU as gtmodel does (:func:`gtmodel.exchange.import_fmu`): its variables and
     where its derivatives come from; simulate it with CVODES.
+``gtmodel report RESULT_DIR``
+    Write ``RESULT_DIR/report.html``: one self-contained page of a result folder (status,
+    objective, verification, warnings, zoomable trajectories with their bounds, the
+    model's variables, the plots; :mod:`gtmodel.report.result_page`). ``gtmodel solve``
+    writes it for a single problem unless ``--no-report``.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -90,7 +95,7 @@ def build_parser() -> argparse.ArgumentParser:
     Returns
     -------
     argparse.ArgumentParser
-        Parser with the sub-commands ``solve``, ``study``, ``schema``, ``codegen``,
+        Parser with the sub-commands ``solve``, ``study``, ``report``, ``schema``, ``codegen``,
         ``export-fmu`` and ``import-fmu``.
     """
     parser = argparse.ArgumentParser(
@@ -114,6 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("-q", "--quiet", action="store_true", help="no solver progress")
     group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
     solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
+    solve.add_argument("--no-report", action="store_true", help="do not write report.html (the result's HTML page; a single problem only)")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     study = sub.add_parser("study", help="run a study file (many cases of one problem file), locally or on a Dask cluster")
@@ -127,6 +133,10 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("-q", "--quiet", action="store_true", help="no progress")
     study.add_argument("-v", "--verbose", action="store_true", help="solver progress (with --workers 1)")
     study.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+
+    rep = sub.add_parser("report", help="write RESULT_DIR/report.html, the HTML page of a result folder")
+    rep.add_argument("folder", type=Path, help="a result folder written by gtmodel solve, e.g. results/l1_time_optimal")
+    rep.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     schema = sub.add_parser("schema", help="JSON Schema of a problem kind, the list of kinds, or the reference docs")
     schema.add_argument("kind", nargs="?", default=None, help="a problem kind (gtmodel schema --list prints them)")
@@ -231,7 +241,7 @@ def _solve_one(args: argparse.Namespace, path: Path, target: Path) -> int:
     from gtmodel.problems.run import run_problem
 
     show, heartbeat = _progress(args)
-    outcome = run_problem(path, target, verbose=show, plots=not args.no_plots, heartbeat=heartbeat)
+    outcome = run_problem(path, target, verbose=show, plots=not args.no_plots, heartbeat=heartbeat, report=not args.no_report)
     status = outcome.status
     if status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
@@ -369,6 +379,14 @@ def _study(args: argparse.Namespace) -> int:
         mark_interrupted(target)
 
     return _guarded(target, run, on_interrupt)
+
+
+def _report(args: argparse.Namespace) -> int:
+    from gtmodel.problems.run import add_report
+
+    page = add_report(args.folder)
+    print(f"wrote {page}")
+    return EXIT_OK
 
 
 def _schema(args: argparse.Namespace) -> int:
@@ -557,6 +575,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         with _signals.interruptible():
             if args.command == "schema":
                 return _schema(args)
+            if args.command == "report":
+                return _report(args)
             if args.command == "export-fmu":
                 return _export_fmu(args)
             if args.command == "import-fmu":

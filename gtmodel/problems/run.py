@@ -9,6 +9,7 @@ outcome into a summary with one :class:`~gtmodel.status.Status`.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import shutil
@@ -22,12 +23,14 @@ from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
 from gtmodel.problems.registry import KINDS, get_kind, get_schema
-from gtmodel.problems.results import ResultFolder, check_output_folder, failure_summary
+from gtmodel.problems.results import (MARKER, ResultFolder, _is_run_summary, check_output_folder, failure_summary, json_safe,
+                                     output_lock, write_json)
+from gtmodel.report.result_page import REPORT_FILE, write_report
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 from gtmodel.problems.schema import validate_document
 from gtmodel.status import Status
 
-__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "write_failure", "RunOutcome"]
+__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "write_failure", "add_report", "RunOutcome"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -107,7 +110,7 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
     return solution
 
 
-def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True) -> dict[str, Any]:
+def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True, report: bool = False) -> dict[str, Any]:
     """Write the result folder of a solved problem, replacing the folder only when complete.
 
     Data files and plots are written only when the solver returned a solution, never
@@ -123,6 +126,9 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         Result folder (replaced whole; see :mod:`gtmodel.problems.results`).
     plots : bool, optional
         Write PNG plots (default True).
+    report : bool, optional
+        Also write ``report.html``, the folder's page (:mod:`gtmodel.report.result_page`;
+        default False; ``gtmodel solve`` writes it unless ``--no-report``).
 
     Returns
     -------
@@ -144,9 +150,69 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
                 summary["overrides"] = dict(problem.overrides)
             summary.update(written.fields)
             summary["status"] = kind.status(solution)
+            if report:
+                _write_report(folder.path, summary)
             return folder.commit(summary)
         except OSError as exc:  # a ResultWriteError too: one message, naming the target
             raise folder.write_error(exc) from None
+
+
+def _write_report(path: Path, summary: dict[str, Any]) -> None:
+    """``report.html`` of a folder being written, from the summary as :meth:`ResultFolder.commit` will write it."""
+    files = sorted({p.name for p in path.iterdir() if p.name != "summary.json"} | {REPORT_FILE})
+    write_report(path, json_safe({**summary, "files": ["summary.json", *files], "written_by": MARKER}))
+
+
+def add_report(folder: str | Path) -> Path:
+    """Write ``report.html`` into a finished result folder (``gtmodel report DIR``).
+
+    The page (:func:`gtmodel.report.result_page.write_report`) is written beside the
+    folder's files under a hidden name and renamed into place, then ``summary.json``, which
+    lists every file of its folder, is rewritten (likewise) with ``report.html`` in its
+    ``files``; nothing else in the folder changes. The folder is locked as for a run
+    (:func:`~gtmodel.problems.results.output_lock`: the lock file beside it, removed at the
+    end, is the only file written outside it).
+
+    Parameters
+    ----------
+    folder : str or pathlib.Path
+        A result folder: its ``summary.json`` is a run's summary (status and the
+        ``written_by`` marker).
+
+    Returns
+    -------
+    pathlib.Path
+        The written page.
+
+    Raises
+    ------
+    ResultWriteError
+        ``folder`` is not a result folder (no run's ``summary.json``), is in use by a run,
+        or cannot be written (names the folder).
+    """
+    folder = Path(folder)
+    summary_path = folder / "summary.json"
+    if not _is_run_summary(summary_path):
+        raise ResultWriteError(f"{folder}: not a gtmodel result folder (no summary.json of a run); give the folder a "
+                               "`gtmodel solve` wrote")
+    with output_lock(folder):
+        summary = json.loads(summary_path.read_text(encoding="utf-8"))
+        files = list(summary.get("files") or ["summary.json"])
+        if REPORT_FILE not in files:
+            files.append(REPORT_FILE)
+        summary["files"] = files
+        hidden = [folder / f".{name}.partial-{os.getpid()}" for name in (REPORT_FILE, "summary.json")]
+        try:
+            write_report(folder, summary, path=hidden[0])
+            write_json(hidden[1], summary)
+            os.replace(hidden[0], folder / REPORT_FILE)
+            os.replace(hidden[1], summary_path)  # summary.json last, as a run writes it
+        except OSError as exc:
+            raise ResultWriteError(f"cannot write the report of {folder}: {exc.strerror or exc}") from None
+        finally:
+            for p in hidden:
+                p.unlink(missing_ok=True)
+    return folder / REPORT_FILE
 
 
 @dataclass
@@ -197,6 +263,7 @@ def run_problem(
     previous: Any = None,
     warm_start: bool = False,
     heartbeat: bool = False,
+    report: bool = False,
 ) -> RunOutcome:
     """Load, solve and write one problem; every outcome becomes a status and a summary.
 
@@ -218,6 +285,8 @@ def run_problem(
         Start from ``previous``.
     heartbeat : bool, optional
         Log a line every few seconds while solving (when nothing else shows progress).
+    report : bool, optional
+        Also write ``report.html`` (:func:`write_results`).
 
     Returns
     -------
@@ -241,7 +310,7 @@ def run_problem(
         with Heartbeat(label, enabled=heartbeat):
             solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
         with InterruptGuard() as guard:
-            summary = write_results(problem, solution, target, plots=plots)
+            summary = write_results(problem, solution, target, plots=plots, report=report)
             guard.check()
         return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
     except KeyboardInterrupt as exc:

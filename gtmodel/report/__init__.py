@@ -7,4 +7,7 @@ figure through the one helper :mod:`gtmodel.report._figure` (size, resolution an
 from :mod:`gtmodel.defaults`), writes it to the PNG file it is given and returns the
 :class:`matplotlib.figure.Figure`, so a test or a notebook can read the plotted data back.
 No global pyplot state is touched: safe under the ``Agg`` backend and headless.
+
+:mod:`~gtmodel.report.result_page` is the one HTML page: ``report.html`` of a result
+folder, its figures drawn by Plotly (inlined) in the browser from the folder's tables.
 """

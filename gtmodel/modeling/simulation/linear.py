@@ -92,6 +92,56 @@ class Linearization:
             self.A, self.B, self.C, self.D, states=clean(self.x_names), inputs=clean(self.u_names), outputs=clean(self.y_names)
         )
 
+    def bode_plot(self, path: Any = None, omega: Any = None, hz: bool = False, title: str = "") -> Any:
+        """Bode plot of every input-output pair, computed by python-control (matplotlib figure).
+
+        Drawn by :func:`gtmodel.report.linear.plot_bode` (the report layer, imported when
+        called) from :func:`control.frequency_response` of :meth:`to_state_space`.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path, optional
+            Also write the figure to this PNG file.
+        omega : array_like, optional
+            Frequencies [rad/s], shape ``(K,)``; default python-control's choice.
+        hz : bool, optional
+            Frequency axis in Hz.
+        title : str, optional
+            Figure title.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Magnitude [dB] and phase [deg] axes.
+        """
+        from gtmodel.report.linear import plot_bode  # the one layer that draws (pyproject: ignore_imports)
+
+        return plot_bode(self, path=path, omega=omega, hz=hz, title=title)
+
+    def step_plot(self, path: Any = None, T: Any = None, title: str = "") -> Any:
+        """Unit step responses of every input-output pair, computed by python-control.
+
+        Drawn by :func:`gtmodel.report.linear.plot_step` (the report layer, imported when
+        called) from :func:`control.step_response` of :meth:`to_state_space`.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path, optional
+            Also write the figure to this PNG file.
+        T : float or array_like, optional
+            Final time [s] or time points, shape ``(K,)``; default python-control's choice.
+        title : str, optional
+            Figure title.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            One axes per output.
+        """
+        from gtmodel.report.linear import plot_step  # the one layer that draws (pyproject: ignore_imports)
+
+        return plot_step(self, path=path, T=T, title=title)
+
 
 def _selection(dae: FlatDAE, names: Sequence[str] | None) -> tuple[ca.SX, list[str]]:
     """Output expressions for scalar names of states, algebraic variables or outputs."""

@@ -72,11 +72,13 @@ def force_statistics(traj: dict[str, Any], force_limit: Any) -> dict[str, Any]:
     dict
         ``max_force_ratio`` (3,): ``max_t |tau_i| / force_limit_i``;
         ``fraction_at_force_bound`` (3,): fraction of samples with ``|tau_i|`` within
-        :data:`AT_BOUND_RTOL` of the limit.
+        :data:`AT_BOUND_RTOL` of the limit; ``bounds``: ``{"tau1": [-limit_1, limit_1], ...}``
+        (the trajectory table's columns with their bounds, drawn by ``gtmodel report``).
     """
     limit = np.asarray(force_limit, dtype=float)
     tau = np.abs(np.column_stack([traj["tau1"], traj["tau2"], traj["tau3"]]))
     return {
         "max_force_ratio": (tau.max(axis=0) / limit).tolist(),
         "fraction_at_force_bound": (tau >= (1 - AT_BOUND_RTOL) * limit).mean(axis=0).tolist(),
+        "bounds": {f"tau{i + 1}": [-float(f), float(f)] for i, f in enumerate(limit)},
     }

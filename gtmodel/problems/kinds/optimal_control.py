@@ -297,6 +297,7 @@ class OptimalControlKind(ProblemKind):
             **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
                if isinstance(d.method, Collocation) else {}),
             **verification_fields(r),
+            **_variable_fields(d, r),
         })
         if d.benchmark is not None:
             b = d.benchmark
@@ -323,3 +324,24 @@ def _transcription_summary(method: Collocation | MultipleShooting) -> dict[str, 
         return {"method": "multiple_shooting", "intervals": method.intervals, "controls": method.controls,
                 "integrator": method.integrator or "default", "steps": method.steps}
     return {"method": "collocation", "elements": method.elements, "points": method.points, "scheme": method.scheme}
+
+
+def _variable_fields(d: OptimalControl, r: OptimizationResult) -> dict[str, Any]:
+    """The summary's ``variables`` (names by group, as the tables' columns), ``units`` and ``bounds``.
+
+    ``bounds`` are those the NLP imposes: the model's, overridden by the problem file's
+    (``Optimization.bounds_vectors``); an open side is ``null``. They let a reader of the
+    folder (``gtmodel report``) draw each trajectory with its bounds.
+    """
+    groups = {"states": r.states, "inputs": r.inputs, "algebraics": r.algebraics, "outputs": r.outputs}
+    out: dict[str, Any] = {"variables": {g: list(v) for g, v in groups.items()}, "units": dict(d.model.units or {})}
+    if r.dae is not None:
+        bounds: dict[str, Any] = {}
+        for cat in ("x", "z", "u"):
+            lb, ub = d.optimization.bounds_vectors(r.dae, cat)
+            for name, sl in getattr(r.dae, f"{cat}_vars").items():
+                lo, hi = lb[sl], ub[sl]
+                if np.any(np.isfinite(lo)) or np.any(np.isfinite(hi)):
+                    bounds[name] = [float(lo[0]), float(hi[0])] if lo.size == 1 else [lo.tolist(), hi.tolist()]
+        out["bounds"] = bounds
+    return out

@@ -1,0 +1,472 @@
+"""One self-contained HTML page of a result folder: ``report.html`` (``gtmodel report DIR``).
+
+The page shows what the folder holds, for every kind: the status and message, the
+objective and the other summary fields, the verification block, the warnings, the
+benchmark comparison, the trajectories of every CSV table with a time column as zoomable
+Plotly figures (one panel per column, panels sharing the time axis; the bounds of the
+variables drawn as dashed lines where ``summary.json`` has them), the model's variables
+with their units and bounds, the other tables, the kind's PNG plots and the whole
+``summary.json``. Plotly's script is inlined (about 4.7 MB), so the page needs no network
+and no other file: it can be mailed or archived alone.
+
+The optimal-control summary names its variable groups (``variables``: states, inputs,
+algebraics, outputs), their ``units`` and ``bounds``; other kinds' tables are plotted
+column by column. A trace holds at most :data:`MAX_POINTS` samples (every k-th sample of
+a longer table, said in the figure's title); a CSV file larger than :data:`MAX_CSV_BYTES`
+is listed, not read.
+
+This module renders and writes the page only; where it may be written (a result folder's
+rules, ``summary.json`` listing it) is the problem layer's business
+(:func:`gtmodel.problems.run.add_report`, ``write_results(report=True)``).
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import json
+import math
+import re
+from pathlib import Path
+from typing import Any, Mapping
+
+from plotly.offline import get_plotlyjs
+
+from gtmodel.errors import InputError
+from gtmodel.status import Status
+
+__all__ = ["REPORT_FILE", "MAX_POINTS", "MAX_CSV_BYTES", "render_report", "write_report", "read_csv_columns"]
+
+#: The page's file name in a result folder.
+REPORT_FILE = "report.html"
+#: Most samples of one trace (a longer table is thinned to every k-th row).
+MAX_POINTS = 4000
+#: Largest CSV file read into the page, bytes.
+MAX_CSV_BYTES = 50_000_000
+#: Most panels of one figure (further columns go to the next figure).
+MAX_PANELS = 16
+#: Rows of a table without a time column shown in the page.
+MAX_TABLE_ROWS = 200
+
+_TIME_COLUMNS = re.compile(r"^(t|time)(_s| ?\[s\])?$", re.IGNORECASE)
+_GROUPS = ("states", "inputs", "algebraics", "outputs")
+_STATUS_CLASS = {0: "ok", 1: "warn"}  # exit code -> colour; 2, 3, 130: "bad"
+
+_CSS = """
+body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0 auto;max-width:1200px;padding:1em 2em;color:#222}
+h1{font-size:1.6em;margin-bottom:.2em} h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
+.status{display:inline-block;padding:.15em .6em;border-radius:.3em;font-weight:bold;color:#fff}
+.ok{background:#2e7d32} .warn{background:#ef6c00} .bad{background:#c62828}
+table{border-collapse:collapse;margin:.5em 0} td,th{border:1px solid #ddd;padding:.25em .6em;text-align:left;vertical-align:top}
+th{background:#f4f4f4} td.num{text-align:right;font-variant-numeric:tabular-nums}
+.scroll{overflow-x:auto} pre{background:#f7f7f7;padding:.6em;overflow-x:auto;font-size:.85em}
+ul.warnings li{color:#b71c1c} .gt-figure{width:100%} img.png{max-width:100%;border:1px solid #eee}
+.muted{color:#666}
+"""
+
+_SCRIPT = """
+document.querySelectorAll("script.gt-figure-spec").forEach(function (node) {
+  var spec = JSON.parse(node.textContent);
+  var div = document.getElementById(node.dataset.target);
+  Plotly.newPlot(div, spec.data, spec.layout, {responsive: true, displaylogo: false});
+});
+"""
+
+
+def _esc(value: Any) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, bool) or value is None:
+        return "—" if value is None else str(value).lower()
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def _is_scalar(value: Any) -> bool:
+    return value is None or isinstance(value, (str, int, float, bool))
+
+
+def _finite(value: Any) -> float | None:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def read_csv_columns(path: str | Path) -> tuple[list[str], dict[str, list[Any]]]:
+    """The columns of a CSV file gtmodel wrote, numbers where every value is one.
+
+    Lenient where :func:`gtmodel._tables.read_table` is strict, since a result table may
+    hold text columns (case names) and empty or non-finite values: a column whose values
+    all read as numbers (``nan``, ``inf`` and empty fields as NaN) is numeric, any other
+    column text. Lines starting with ``#`` are skipped.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file (UTF-8, header row first).
+
+    Returns
+    -------
+    tuple
+        ``(header, columns)``: the column names in file order and name -> list of values
+        (float for a numeric column, str otherwise), each as long as the number of rows.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, is not UTF-8, has no header or a row of another length
+        (names the file and line).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read the table ({exc})") from None
+    rows = [(i + 1, r) for i, r in enumerate(csv.reader(text.splitlines())) if r and not r[0].lstrip().startswith("#")]
+    if not rows:
+        raise InputError(f"{path}: no header row")
+    header = [h.strip() for h in rows[0][1]]
+    body: list[list[str]] = []
+    for lineno, row in rows[1:]:
+        if len(row) != len(header):
+            raise InputError(f"{path}, line {lineno}: {len(row)} values, expected {len(header)} (the header's columns)")
+        body.append(row)
+    columns: dict[str, list[Any]] = {}
+    for j, name in enumerate(header):
+        raw = [r[j].strip() for r in body]
+        try:
+            columns[name] = [float(v) if v else math.nan for v in raw]
+        except ValueError:
+            columns[name] = raw
+    return header, columns
+
+
+def _time_column(header: list[str], columns: Mapping[str, list[Any]]) -> str | None:
+    for name in header:
+        if _TIME_COLUMNS.match(name) and columns[name] and isinstance(columns[name][0], float):
+            return name
+    return None
+
+
+def _base(name: str) -> str:
+    """``"T[0]"`` -> ``"T"`` (a vector variable's element in its table column)."""
+    return name.split("[", 1)[0]
+
+
+def _bound_pair(bounds: Mapping[str, Any], name: str) -> tuple[float | None, float | None]:
+    """``(lo, hi)`` of a column (``None`` for an open side); ``"T[1]"`` takes element 1 of ``T``'s bounds."""
+    pair = bounds.get(name)
+    index = None
+    if pair is None:
+        pair = bounds.get(_base(name))
+        m = re.search(r"\[(\d+)\]$", name)
+        index = int(m.group(1)) if m else None
+    if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+        return None, None
+    out = []
+    for side in pair:
+        if isinstance(side, (list, tuple)):
+            side = side[index] if index is not None and index < len(side) else None
+        out.append(_finite(side))
+    return out[0], out[1]
+
+
+def _json_list(values: list[float]) -> list[float | None]:
+    return [v if math.isfinite(v) else None for v in values]
+
+
+def _figure_spec(title: str, t: list[float], panels: list[tuple[str, list[float]]], bounds: Mapping[str, Any],
+                 units: Mapping[str, str], t_label: str) -> dict[str, Any]:
+    """A Plotly figure: one panel per signal, shared time axis, bounds as dashed lines."""
+    n = len(t)
+    step = max(1, math.ceil(n / MAX_POINTS))
+    idx = list(range(0, n, step))
+    if idx and idx[-1] != n - 1:
+        idx.append(n - 1)
+    ts = _json_list([t[i] for i in idx])
+    t_span = [min(t), max(t)] if t else [0.0, 1.0]
+    data: list[dict[str, Any]] = []
+    layout: dict[str, Any] = {
+        "title": {"text": title + (f" (every {step}th of {n} samples)" if step > 1 else "")},
+        "grid": {"rows": len(panels), "columns": 1, "pattern": "coupled", "roworder": "top to bottom"},
+        "height": 140 + 170 * len(panels),
+        "showlegend": False,
+        "margin": {"l": 80, "r": 20, "t": 60, "b": 50},
+        "hovermode": "x unified",
+    }
+    for k, (name, values) in enumerate(panels):
+        axis = "y" if k == 0 else f"y{k + 1}"
+        data.append({"type": "scatter", "mode": "lines", "name": name, "x": ts, "y": _json_list([values[i] for i in idx]),
+                     "xaxis": "x", "yaxis": axis, "line": {"color": "#1f77b4"}})
+        for side, b in zip(("lower bound", "upper bound"), _bound_pair(bounds, name)):
+            if b is not None:
+                data.append({"type": "scatter", "mode": "lines", "name": f"{name} {side}", "x": t_span, "y": [b, b],
+                             "xaxis": "x", "yaxis": axis, "line": {"color": "#444", "dash": "dash", "width": 1},
+                             "hoverinfo": "name+y"})
+        unit = units.get(name, units.get(_base(name)))
+        layout["yaxis" if k == 0 else f"yaxis{k + 1}"] = {"title": {"text": f"{name} [{unit}]" if unit else name}}
+    layout["xaxis"] = {"title": {"text": t_label}}
+    return {"data": data, "layout": layout}
+
+
+class _Page:
+    """The page being assembled: sections of HTML and the figures' specifications."""
+
+    def __init__(self) -> None:
+        self.parts: list[str] = []
+        self.figures = 0
+
+    def add(self, text: str) -> None:
+        self.parts.append(text)
+
+    def figure(self, spec: Mapping[str, Any]) -> None:
+        self.figures += 1
+        div = f"gt-figure-{self.figures}"
+        payload = json.dumps(spec, allow_nan=False).replace("</", "<\\/")
+        self.add(f'<div class="gt-figure" id="{div}"></div>'
+                 f'<script type="application/json" class="gt-figure-spec" data-target="{div}">{payload}</script>')
+
+    def table(self, header: list[str], rows: list[list[Any]]) -> None:
+        head = "".join(f"<th>{_esc(h)}</th>" for h in header)
+        body = "".join("<tr>" + "".join(
+            f'<td class="num">{_esc(_fmt(v))}</td>' if isinstance(v, (int, float)) and not isinstance(v, bool)
+            else f"<td>{_esc(_fmt(v))}</td>" for v in row) + "</tr>" for row in rows)
+        self.add(f'<div class="scroll"><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table></div>')
+
+
+def _status_class(status: Any) -> str:
+    try:
+        return _STATUS_CLASS.get(Status(status).exit_code, "bad")
+    except ValueError:
+        return "bad"
+
+
+def _warnings(summary: Mapping[str, Any]) -> list[str]:
+    """The summary's own ``warnings`` and what its fields say is not to be relied on."""
+    out = [str(w) for w in summary.get("warnings") or []]
+    if summary.get("last_iterate"):
+        out.append("the trajectories are the solver's last iterate, not a solution")
+    ver = summary.get("verification")
+    if isinstance(ver, Mapping) and ver.get("passed") is False:
+        out.append(f"verification failed: {ver.get('message') or 'the simulation deviates from the solution'}")
+    bench = summary.get("benchmark")
+    if isinstance(bench, Mapping):
+        err, tol = _finite(bench.get("relative_error")), _finite(bench.get("tolerance"))
+        if err is not None and tol is not None and err > tol:
+            out.append(f"benchmark: relative error {err:.3g} beyond its tolerance {tol:.3g}")
+    return list(dict.fromkeys(out))
+
+
+def _summary_section(page: _Page, summary: Mapping[str, Any]) -> None:
+    skip = {"name", "kind", "status", "message", "files", "written_by"}
+    rows = [[k, v if _is_scalar(v) else "; ".join(_fmt(x) for x in v)] for k, v in summary.items() if k not in skip and
+            (_is_scalar(v) or (isinstance(v, list) and len(v) <= 20 and all(_is_scalar(x) for x in v)))]
+    page.add("<h2>Summary</h2>")
+    page.table(["field", "value"], rows)
+    for key in ("transcription", "model", "refinement"):
+        value = summary.get(key)
+        if value:
+            page.add(f"<h3>{_esc(key)}</h3><pre>{_esc(json.dumps(value, indent=2))}</pre>")
+
+
+def _verification_section(page: _Page, ver: Any) -> None:
+    page.add('<h2 id="verification">Verification</h2>')
+    if not isinstance(ver, Mapping):
+        page.add('<p class="muted">not verified (a failed solve, or the check was not run)</p>')
+        return
+    verdict = '<span class="status ok">passed</span>' if ver.get("passed") else '<span class="status bad">failed</span>'
+    page.add(f"<p>{verdict} {_esc(ver.get('method', ''))}</p>")
+    page.table(["field", "value"], [[k, v] for k, v in ver.items() if _is_scalar(v) and k != "passed"])
+    for key, value in ver.items():
+        if isinstance(value, Mapping) and value and all(isinstance(v, Mapping) for v in value.values()):
+            cols = list(dict.fromkeys(c for v in value.values() for c in v))
+            page.add(f"<h3>{_esc(key)}</h3>")
+            page.table([key[:-1] if key.endswith("s") else key, *cols], [[n, *(v.get(c) for c in cols)] for n, v in value.items()])
+
+
+def _variables(summary: Mapping[str, Any], header: list[str]) -> dict[str, list[str]]:
+    """Columns of a trajectory table by variable group (``summary["variables"]``), else one group."""
+    groups = summary.get("variables")
+    if not isinstance(groups, Mapping):
+        return {"": header}
+    out: dict[str, list[str]] = {}
+    for group, names in groups.items():
+        names = set(names or [])
+        cols = [h for h in header if h in names or _base(h) in names]
+        if cols:
+            out[str(group)] = cols
+    rest = [h for h in header if not any(h in c for c in out.values())]
+    if rest:
+        out["other columns"] = rest
+    return out
+
+
+def _csv_section(page: _Page, folder: Path, name: str, summary: Mapping[str, Any]) -> None:
+    path = folder / name
+    size = path.stat().st_size
+    if size > MAX_CSV_BYTES:
+        page.add(f"<h3>{_esc(name)}</h3><p class='muted'>{size / 1e6:.0f} MB: too large to show (limit {MAX_CSV_BYTES / 1e6:.0f} MB)</p>")
+        return
+    try:
+        header, columns = read_csv_columns(path)
+    except InputError as exc:
+        page.add(f"<h3>{_esc(name)}</h3><p class='muted'>not shown: {_esc(exc)}</p>")
+        return
+    n = len(next(iter(columns.values()), []))
+    time = _time_column(header, columns)
+    numeric = [h for h in header if h != time and all(isinstance(v, float) for v in columns[h])]
+    if time is not None and numeric and n > 1:
+        bounds = summary.get("bounds") if isinstance(summary.get("bounds"), Mapping) else {}
+        units = summary.get("units") if isinstance(summary.get("units"), Mapping) else {}
+        for group, cols in _variables(summary, numeric).items():
+            for start in range(0, len(cols), MAX_PANELS):
+                chunk = cols[start:start + MAX_PANELS]
+                title = f"{name}: {group}" if group else name
+                if len(cols) > MAX_PANELS:
+                    title += f" ({start + 1}-{start + len(chunk)} of {len(cols)})"
+                page.figure(_figure_spec(title, columns[time], [(c, columns[c]) for c in chunk], bounds, units, f"{time} [s]"))
+        return
+    page.add(f"<h3>{_esc(name)}</h3>")
+    more = f" (first {MAX_TABLE_ROWS} of {n} rows)" if n > MAX_TABLE_ROWS else ""
+    page.table(header, [[columns[h][i] for h in header] for i in range(min(n, MAX_TABLE_ROWS))])
+    if more:
+        page.add(f"<p class='muted'>{_esc(more.strip())}</p>")
+
+
+def _variables_section(page: _Page, summary: Mapping[str, Any]) -> None:
+    groups = summary.get("variables")
+    params = summary.get("model_parameters")
+    if not isinstance(groups, Mapping) and not isinstance(params, Mapping):
+        return
+    page.add('<h2 id="variables">Model variables</h2>')
+    bounds = summary.get("bounds") if isinstance(summary.get("bounds"), Mapping) else {}
+    units = summary.get("units") if isinstance(summary.get("units"), Mapping) else {}
+    if isinstance(groups, Mapping):
+        rows = []
+        for group, names in groups.items():
+            for n in names or []:
+                lo, hi = bounds.get(n, (None, None)) if isinstance(bounds.get(n), (list, tuple)) else (None, None)
+                rows.append([n, group, units.get(n, ""), json.dumps(lo) if isinstance(lo, list) else lo,
+                             json.dumps(hi) if isinstance(hi, list) else hi])
+        page.table(["variable", "kind", "unit", "lower bound", "upper bound"], rows)
+    if isinstance(params, Mapping) and params:
+        page.add("<h3>parameters</h3>")
+        page.table(["parameter", "value", "unit"], [[k, json.dumps(v) if not _is_scalar(v) else v, units.get(k, "")]
+                                                    for k, v in params.items()])
+
+
+def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, plotly_js: str | None = None) -> str:
+    """The HTML page of a result folder.
+
+    Parameters
+    ----------
+    folder : str or pathlib.Path
+        The result folder (its CSV tables, PNG plots and Markdown tables are read).
+    summary : Mapping[str, Any], optional
+        Its summary; default the folder's ``summary.json``.
+    plotly_js : str, optional
+        Plotly's script to inline; default :func:`plotly.offline.get_plotlyjs` (a test
+        may pass a stand-in).
+
+    Returns
+    -------
+    str
+        The page, one self-contained HTML document.
+
+    Raises
+    ------
+    InputError
+        No ``summary.json`` to read (and none given), or it is not a JSON object.
+    """
+    folder = Path(folder)
+    if summary is None:
+        try:
+            summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise InputError(f"{folder}: no readable summary.json, not a result folder ({exc})") from None
+    if not isinstance(summary, Mapping):
+        raise InputError(f"{folder / 'summary.json'}: expected a JSON object")
+    if plotly_js is None:
+        plotly_js = get_plotlyjs()
+    page = _Page()
+    name, kind, status = summary.get("name", folder.name), summary.get("kind"), summary.get("status", "unknown")
+    page.add(f"<h1>{_esc(name)}</h1><p>{_esc(kind or 'result')} &middot; <span class='status {_status_class(status)}'>"
+             f"{_esc(status)}</span> {_esc(summary.get('message', ''))}</p>")
+    if summary.get("description"):
+        page.add(f"<p>{_esc(summary['description'])}</p>")
+    key = [(k, summary[k]) for k in ("objective", "final_time_s", "solve_time_s", "iterations") if _is_scalar(summary.get(k))
+           and summary.get(k) is not None]
+    if key:
+        page.add("<p>" + " &middot; ".join(f"<b>{_esc(k)}</b> {_esc(_fmt(v))}" for k, v in key) + "</p>")
+    warnings = _warnings(summary)
+    page.add('<h2 id="warnings">Warnings</h2>')
+    page.add("<ul class='warnings'>" + "".join(f"<li>{_esc(w)}</li>" for w in warnings) + "</ul>" if warnings
+             else "<p class='muted'>none</p>")
+    if "verification" in summary:
+        _verification_section(page, summary["verification"])
+    if isinstance(summary.get("benchmark"), Mapping):
+        page.add("<h2>Benchmark</h2>")
+        page.table(["field", "value"], [[k, v] for k, v in summary["benchmark"].items()])
+    _summary_section(page, summary)
+    files = [f for f in summary.get("files") or sorted(p.name for p in folder.iterdir()) if (folder / f).is_file()]
+    csvs = [f for f in files if f.endswith(".csv")]
+    if csvs:
+        page.add('<h2 id="trajectories">Trajectories and tables</h2>')
+        for f in csvs:
+            _csv_section(page, folder, f, summary)
+    _variables_section(page, summary)
+    for f in (f for f in files if f.endswith(".md")):
+        page.add(f"<h3>{_esc(f)}</h3><pre>{_esc((folder / f).read_text(encoding='utf-8', errors='replace'))}</pre>")
+    pngs = [f for f in files if f.endswith(".png")]
+    if pngs:
+        page.add('<h2 id="plots">Plots</h2>')
+        for f in pngs:
+            data = base64.b64encode((folder / f).read_bytes()).decode("ascii")
+            page.add(f"<h3>{_esc(f)}</h3><img class='png' alt='{_esc(f)}' src='data:image/png;base64,{data}'>")
+    others = [f for f in files if not f.endswith((".csv", ".png", ".md")) and f not in ("summary.json", REPORT_FILE)]
+    if others:
+        page.add("<h2>Other files</h2><ul>" + "".join(f"<li>{_esc(f)} ({(folder / f).stat().st_size} bytes)</li>" for f in others)
+                 + "</ul>")
+    page.add(f"<h2>summary.json</h2><details><summary>show</summary><pre>{_esc(json.dumps(summary, indent=2))}</pre></details>")
+    title = _esc(f"{name}: {status}")
+    return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+            f"<link rel='icon' href='data:,'><title>{title}</title><style>{_CSS}</style>"
+            f"<script>{plotly_js}</script></head>\n<body>\n" + "\n".join(page.parts)
+            + f"\n<script>{_SCRIPT}</script>\n</body></html>\n")
+
+
+def write_report(folder: str | Path, summary: Mapping[str, Any] | None = None, path: str | Path | None = None) -> Path:
+    """Write the HTML page of a result folder (:func:`render_report`).
+
+    Parameters
+    ----------
+    folder : str or pathlib.Path
+        The result folder.
+    summary : Mapping[str, Any], optional
+        Its summary; default the folder's ``summary.json``.
+    path : str or pathlib.Path, optional
+        The file to write; default ``folder / "report.html"``.
+
+    Returns
+    -------
+    pathlib.Path
+        The written page.
+
+    Raises
+    ------
+    InputError
+        As :func:`render_report`.
+    OSError
+        The page cannot be written.
+    """
+    folder = Path(folder)
+    target = Path(path) if path is not None else folder / REPORT_FILE
+    target.write_text(render_report(folder, summary), encoding="utf-8")
+    return target
