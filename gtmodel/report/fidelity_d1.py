@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from gtmodel.calibration import CalibrationProblem, grid_poses, tcp_errors
+from gtmodel.report.fidelity_rules import Case, Row
 from gtmodel.robots.closure import ThreeLinkClosure
 from gtmodel.robots.stiffness import GantryTau3Stiffness
 
@@ -196,9 +197,10 @@ def _rows_of(tag: str, d: dict[str, Any]) -> list[tuple[str, ...]]:
             continue
         th_mean, th_max = THESIS_TABLE_5_3["mean"][k - 1], THESIS_TABLE_5_3["max"][k - 1]
         ok = abs(1e6 * m["mean_error_m"] - th_mean) <= 0.2 * th_mean
-        rows.append((f"{_SRC}, Table 5.3: D1 model {k} mean / max TCP error [um] [{tag}]", f"{th_mean} / {th_max}",
-                     f"{_um(m['mean_error_m'])} / {_um(m['max_error_m'])}", "20 % of the mean", "reproduced" if ok else "differs",
-                     "" if ok else causes[k]))
+        case = Case(f"Table 5.3 models [{tag}]", f"model {k}", float(th_mean), 1e6 * m["mean_error_m"], 0.2 * th_mean)
+        rows.append(Row(f"{_SRC}, Table 5.3: D1 model {k} mean / max TCP error [um] [{tag}]", f"{th_mean} / {th_max}",
+                        f"{_um(m['mean_error_m'])} / {_um(m['max_error_m'])}", "20 % of the mean", "reproduced" if ok else "differs",
+                        causes[k], (case,)))
     means = [(_model(models, k) or {}).get("mean_error_m") for k in range(1, 6)]
     have = [x for x in means[:4] if x is not None] + ([means[4]] if means[4] is not None else [])
     ranked = len(have) >= 4 and all(a > b for a, b in zip(have, have[1:]))
@@ -247,6 +249,7 @@ def d1_rows(data: dict[str, Any]) -> list[tuple[str, ...]]:
     Returns
     -------
     list of tuple of str
+        Rows of Table 5.3 are :class:`~gtmodel.report.fidelity_rules.Row` with their model as a case.
     """
     rows: list[tuple[str, ...]] = []
     for tag in D1_PROBLEMS:
