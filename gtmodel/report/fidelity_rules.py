@@ -157,22 +157,22 @@ def apply_rules(rows: list[Row]) -> list[Row]:
             groups.setdefault(c.group, []).append(c)
     out = []
     for r in rows:
-        tag, family = _family(r.figure)
         if r.verdict in STATUSES[1:]:
             out.append(r)
-        elif family is not None:
-            out.append(r._replace(verdict="variant", cause=f"variant of [{DECLARED[family]}], which carries the verdict (here: {r.verdict}"
-                                  + (f"; {r.cause}" if r.cause else "") + ")"))
-        elif r.reading:
-            out.append(r._replace(verdict="check of a reading"))
+            continue
+        if r.reading:
+            r = r._replace(verdict="check of a reading")
         elif r.verdict in ("reproduced", "predicted") and not all(cases_differ_as_thesis(c, groups[c.group]) for c in r.cases):
             bad = [c for c in r.cases if not cases_differ_as_thesis(c, groups[c.group])]
             text = "; ".join(f"case {c.name}: ours {c.ours:.4g} within {c.tol:g} of the thesis' {c.thesis:.4g}, but its cases "
                              + ", ".join(f"{o.name} {o.ours:.4g} (thesis {o.thesis:.4g})" for o in groups[c.group] if o.name != c.name)
                              + " do not differ as the thesis' do" for c in bad)
-            out.append(r._replace(verdict=r.fallback, cause=f"coincidence, not a reproduction: {text}" + (f". {r.cause}" if r.cause else "")))
-        else:
-            out.append(r)
+            r = r._replace(verdict=r.fallback, cause=f"coincidence, not a reproduction: {text}" + (f". {r.cause}" if r.cause else ""))
+        family = _family(r.figure)[1]
+        if family is not None:
+            r = r._replace(verdict="variant", cause=f"variant of [{DECLARED[family]}], which carries the verdict (here: {r.verdict}"
+                           + (f"; {r.cause}" if r.cause else "") + ")")
+        out.append(r)
     return out
 
 

@@ -31,7 +31,7 @@ ISSUE_ROWS = [
 
 @pytest.fixture(scope="module")
 def figures():
-    return json.loads(fidelity.FIGURES.read_text(encoding="utf-8"))
+    return fidelity.load()
 
 
 def test_page_is_not_stale(figures):
