@@ -1,4 +1,16 @@
-"""Fitted, then predicted: the unprinted filter tuning of Cvitanic (2021), Tables 8-10, fitted to Table 8 and held fixed.
+"""Fitted, then predicted: the unprinted filter tuning of Cvitanic (2021), Tables 8-10, and the D1's unmodelled cart error, Dressler (2012), Table 5.8.
+
+Two fits, each to one table, whose quantity is then held fixed to predict the others.
+
+**D1 (Dressler (2012), section 5.3).** The measured per-arm residuals of model 1 (Table 5.8: 73 / 60 /
+19 um as RMS length errors) are absent from the synthetic robot (15 / 21 / 21 um). The text supports a
+load-dependent cart error (the carts move with the links' load; the arms with fewer links are the less
+stiff): :func:`gtmodel.problems.fidelity_fits.fit_d1_cart_compliance` sizes the carts' transverse compliance
+(:mod:`gtmodel.calibration.cart_compliance`) to Table 5.8 on model 1 of the thesis' set-up;
+``problems/thesis/d1_error_models_fitted.toml`` holds it, and its run predicts Table 5.3
+(:mod:`gtmodel.report.fidelity_d1`).
+
+**Cvitanic (2021), Tables 8-10.**
 
 The thesis' 3-axis Kalman filter has a diagonal ``Q`` (Appendix B: ``Q_p, Q_v, Q_a`` per axis), with
 which its Table 9 cannot come out (its ``Q_p = 2.54e-4 m^2`` passes the tracker through: 1.02 -> 1.02 mm,
@@ -17,16 +29,14 @@ Table 8 alone, in the same diagonal form, and the other tables are then predicte
 Predicted with it (the dimensionless fused / sensor-only ratios, which do not depend on how the noise
 densities are read): Table 9's position (tracker noise 0.64 mm) and acceleration (accelerometer noise
 0.0039) rows, and Table 10's 3-axis limits (:func:`~gtmodel.estimation.fusion.limits.velocity_limit`
-with this ``Q``). ``python -m gtmodel.report.fidelity_fits`` computes them (about 15 s) and writes
+with this ``Q``). ``python -m gtmodel.problems.fidelity_fits`` computes both fits (about 10 s) and writes
 ``docs/fidelity_fits.json``, which :mod:`gtmodel.report.fidelity` renders; a slow test checks that the
 command reproduces the stored values.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -38,10 +48,14 @@ from gtmodel.estimation.fusion.study import APPENDIX_B, FusionStudy
 from gtmodel.estimation.fusion.tracker_imu import TABLE_7
 from gtmodel.report.fidelity_rules import Row
 
-__all__ = ["FITS", "QA_BRACKET", "QP_BRACKET", "TABLE_8_RATIOS", "TABLE_9_RATIOS", "TABLE_10_3_AXIS", "ratios", "fit_table_8", "predict",
-           "compute", "fit_rows", "main"]
+__all__ = ["FITS", "D1_THESIS_FILE", "D1_FITTED_FILE", "QA_BRACKET", "QP_BRACKET", "TABLE_8_RATIOS", "TABLE_9_RATIOS", "TABLE_10_3_AXIS", "ratios", "fit_table_8", "predict",
+           "fit_rows"]
 
-FITS = Path(__file__).resolve().parents[2] / "docs" / "fidelity_fits.json"
+REPO = Path(__file__).resolve().parents[2]
+FITS = REPO / "docs" / "fidelity_fits.json"
+#: The D1 set-up the thesis' text defines, and the same with the cart compliance fitted to Table 5.8.
+D1_THESIS_FILE = REPO / "problems" / "thesis" / "d1_error_models_thesis.toml"
+D1_FITTED_FILE = REPO / "problems" / "thesis" / "d1_error_models_fitted.toml"
 #: Cvitanic (2021), Table 8, 3-axis: fused / sensor-only mean error (position 0.0089 / 0.0089 mm, acceleration 0.00012 / 0.00018 m/s^2).
 TABLE_8_RATIOS = {"position_mm": 0.0089 / 0.0089, "acceleration_m_s2": 0.00012 / 0.00018}
 #: Table 9, 3-axis: fused / sensor-only mean error (tracker noise 0.64 mm: 0.41 / 0.889; accelerometer noise 0.0039: 0.00048 / 0.0018).
@@ -154,18 +168,6 @@ def predict(fit: dict[str, Any], study: FusionStudy | None = None) -> dict[str, 
     return {"table_9": t9, "table_10": t10}
 
 
-def compute() -> dict[str, Any]:
-    """The fit and the predictions (what ``docs/fidelity_fits.json`` holds).
-
-    Returns
-    -------
-    dict
-        ``command``, ``cvitanic_tables_8_10``: ``fit`` (:func:`fit_table_8`) and ``predicted`` (:func:`predict`).
-    """
-    fit = fit_table_8()
-    return {"command": "python -m gtmodel.report.fidelity_fits", "cvitanic_tables_8_10": {"fit": fit, "predicted": predict(fit)}}
-
-
 def _g(x: float | None, digits: int = 3) -> str:
     return "n/a" if x is None else f"{x:.{digits}g}"
 
@@ -186,7 +188,7 @@ def fit_rows(fits: dict[str, Any] | None) -> list[Row]:
     """
     name = f"{_SRC}, Tables 8-10: 3-axis KF tuning (Q_p, Q_a) fitted to Table 8, held fixed"
     if not fits or "cvitanic_tables_8_10" not in fits:
-        return [Row(name, "not printed", "not run", "-", "not run", "run python -m gtmodel.report.fidelity_fits")]
+        return [Row(name, "not printed", "not run", "-", "not run", "run python -m gtmodel.problems.fidelity_fits")]
     f, p = fits["cvitanic_tables_8_10"]["fit"], fits["cvitanic_tables_8_10"]["predicted"]
     held = f"fitted Q_p = {_g(f['q_p'])} m^2, Q_a = {_g(f['q_a'])} (m/s^2)^2 per sample (Q_v = Appendix B's {_g(f['q_v'])})"
     rows = [Row(f"{_SRC}, Table 8: 3-axis fused / sensor-only error, position / acceleration (the fit)",
@@ -221,25 +223,3 @@ def fit_rows(fits: dict[str, Any] | None) -> list[Row]:
                                                     f"{'above' if r['decades_from_thesis'] > 0 else 'below'} the thesis' limit")
                                                  + ". " + _T10_CAUSE[par])))
     return rows
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m gtmodel.report.fidelity_fits``: compute the fits and write ``docs/fidelity_fits.json``.
-
-    Parameters
-    ----------
-    argv : list of str, optional
-        Arguments (default ``sys.argv[1:]``; none are taken).
-
-    Returns
-    -------
-    int
-        Exit code (0).
-    """
-    argparse.ArgumentParser(prog="python -m gtmodel.report.fidelity_fits", description=__doc__.splitlines()[0]).parse_args(argv)
-    FITS.write_text(json.dumps(compute(), indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover - the command line
-    raise SystemExit(main())
