@@ -34,7 +34,7 @@ from gtmodel.estimation.ilc.thesis import thesis_table_7_2
 from gtmodel.report.fidelity_d1 import D1_PROBLEMS, d1_rows
 from gtmodel.report.fidelity_d1 import extract as extract_d1
 from gtmodel.report.fidelity_fits import FITS, fit_rows
-from gtmodel.report.fidelity_rules import RULES, Case, Row, apply_rules, delay_pole_magnitude, largest_stable_delay
+from gtmodel.report.fidelity_rules import NOT_DIGITISED, NOT_DIGITISED_ROW, RULES, Case, Row, apply_rules, delay_pole_magnitude, largest_stable_delay
 from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
 
 __all__ = ["PROBLEMS", "LEARNING_FACTOR_HZ", "collect", "learning_factors", "load", "render", "rows", "main"]
@@ -275,7 +275,7 @@ def _ilc_rows(d: dict[str, Any], tag: str, model: dict[str, Any]) -> list[tuple[
                  f"(axes 1-3) is {_factors(model)}; the square's lag error lies at the rate of its sides and above ({_side(ilc)}), "
                  f"where five iterations leave at least {_five(model)}. 2 % needs the error below ~0.6 Hz or a faster servo: section 6.3 itself finds the (6.11) "
                  "models too slow on the rectilinear ILC path. Deciding number: the servo bandwidth on that path, or the spectrum of "
-                 "the k = 0 actuator error of Fig. 7.8 (neither printed)"))
+                 f"the k = 0 actuator error of Fig. 7.8 (neither printed). {NOT_DIGITISED_ROW}"))
     for name in CASES:
         if name not in c:
             continue
@@ -298,6 +298,7 @@ def _ilc_rows(d: dict[str, Any], tag: str, model: dict[str, Any]) -> list[tuple[
                       "the estimates recover the small deflection. The thesis' Case 3, learning on the measured tool, still leaves y at "
                       "24.9 %: its remaining y error is one the learning itself does not remove (above the robust Q's band at the "
                       "11.5 Hz resonance, or not repeatable, Fig. 7.13). Deciding number: the spectrum of its k = 10 tool y error (Fig. 7.9)")
+        cause += f". {NOT_DIGITISED_ROW}"
         ok = _within(ours, th, 0.05)
         rows.append((f"{src}, Table 7.2: Case {name} tool x / y (k = 5-10 over k = 0)", _f(list(th), 3), _f(list(ours), 3), "0.05",
                      "reproduced" if ok else "differs", "" if ok else cause))
@@ -606,7 +607,7 @@ def render(data: dict[str, Any]) -> str:
             "The fitted quantities and the rows predicted with them come from `docs/fidelity_fits.json`, which "
             "`python -m gtmodel.problems.fidelity_fits` writes (a slow test checks that it reproduces the file). "
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
-            + RULES + "\n"
+            + RULES + "\n" + NOT_DIGITISED + "\n"
             "`[l1_ilc_thesis]`: the ILC set-up the thesis' text "
             "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading, Case 2B's Kalman filter on model (7.21) with z_kin as input); `[l1_ilc]`: the quick variant. Table 7.2's thesis figures are read from `tests/reference/gantry_tau_L1.toml` `[ilc.table_7_2]`.\n\n"
             "| thesis figure | thesis | ours | tolerance | verdict | measured cause of a difference |\n|---|---|---|---|---|---|\n")

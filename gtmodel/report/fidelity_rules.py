@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["VERDICTS", "STATUSES", "DECLARED", "RULES", "Case", "Row", "cases_differ_as_thesis", "apply_rules", "delay_pole_magnitude",
+__all__ = ["VERDICTS", "STATUSES", "DECLARED", "RULES", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Row", "cases_differ_as_thesis", "apply_rules", "delay_pole_magnitude",
            "largest_stable_delay"]
 
 #: The verdicts a row can carry, from the strongest.
@@ -51,6 +51,22 @@ RULES = (
     "- *variant*: the figure of a set-up other than the declared one, shown beside it; it carries no verdict. *not run*: the result "
     "folder was missing.\n"
 )
+
+#: Why the ILC group's deciding figures are not digitised (Dressler (2012), Figs. 6.10, 7.8, 7.9; the seeds' text, checked).
+NOT_DIGITISED = (
+    "Digitised figures: none. The deciding figures of the ILC rows (Dressler (2012), Fig. 6.10: Bode diagrams of G_r (6.12) and "
+    "G_c (6.13); Fig. 7.8: actuator error at k = 0 and 10; Fig. 7.9: tool error at k = 0 and 10) exist here only as the thesis' "
+    "text converted from the PDF, which keeps each caption and no axis ticks, no plotted values and no printed amplitude: nothing "
+    "to read points from, so no figure data are invented. What the text does print is used: the resonances of Table 6.4 (x 7.4 Hz; "
+    "y 11.4-11.5 Hz, 11.4-11.9 Hz at first after an x impulse; x 10.4-10.7 Hz under a y force), the model orders (G_r seventh, G_c "
+    "tenth order, 'resonances around 10 Hz'), Fig. 7.7's '2 % after five iterations', Table 7.2 and the trial of Fig. 7.8 "
+    "(fully corrected from 1.6 to 4.1 s after a lead-in, then a lead-out: at least 1,100 samples at 4 ms; `[l1_ilc_thesis]` runs "
+    "834 samples, 2.53 s corrected, a shorter lead-in and lead-out). Frequencies alone do not fix G_c's gain at 11.5 Hz, "
+    "the deciding number of the tool rows.\n"
+)
+#: The sentence a differing ILC row carries (the page's paragraph :data:`NOT_DIGITISED` says more).
+NOT_DIGITISED_ROW = ("Not digitisable here: Figs. 6.10, 7.8 and 7.9 are captions only in the available text (no axis ticks or values; "
+                     "see 'Digitised figures' above the table)")
 
 
 class Case(NamedTuple):
