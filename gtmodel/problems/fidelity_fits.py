@@ -1,6 +1,6 @@
-"""Runs the fits of the fidelity report and writes ``docs/fidelity_fits.json`` (``python -m gtmodel.problems.fidelity_fits``).
+"""Runs the three fits of the fidelity report and writes ``docs/fidelity_fits.json`` (``python -m gtmodel.problems.fidelity_fits``).
 
-Two fits, each to one thesis table, whose quantity the report then holds fixed to predict the others
+Each fit is to one thesis table, whose quantity the report then holds fixed to predict the others
 (:mod:`gtmodel.report.fidelity_fits` renders them):
 
 - Cvitanic (2021), Tables 8-10: the 3-axis KF's diagonal ``Q`` fitted to Table 8
@@ -8,9 +8,12 @@ Two fits, each to one thesis table, whose quantity the report then holds fixed t
   (:func:`gtmodel.report.fidelity_fits.predict`);
 - Dressler (2012), Table 5.8: the D1 carts' transverse compliance (:mod:`gtmodel.calibration.cart_compliance`)
   fitted on model 1 of the thesis' set-up (:func:`fit_d1_cart_compliance`, which runs the ``calibration``
-  kind, hence this layer); ``problems/thesis/d1_error_models_fitted.toml`` holds it and its run predicts Table 5.3.
+  kind, hence this layer); ``problems/thesis/d1_error_models_fitted.toml`` holds it and its run predicts Table 5.3;
+- Dressler (2012), Table 7.2: the ILC structure's static TCP stiffness in y (eq. 6.14) fitted to Case 1's tool y
+  (:func:`fit_l1_stiffness_y`, Case 1 of the thesis' ILC set-up alone); ``problems/thesis/l1_ilc_fitted.toml`` holds it and
+  its run predicts the other cases of Table 7.2.
 
-About 10 s; ``tests/report/test_fidelity_fits.py`` checks (slow) that it reproduces the stored file.
+About 30 s; ``tests/report/test_fidelity_fits.py`` checks (slow) that it reproduces the stored file.
 """
 
 from __future__ import annotations
@@ -18,7 +21,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import tempfile
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +37,16 @@ from gtmodel.report.fidelity_d1 import THESIS_FINAL_COST, THESIS_N_CALIBRATION, 
 from gtmodel.report.fidelity_fits import D1_THESIS_FILE, FITS, fit_table_8, predict
 from gtmodel.robots.closure import ThreeLinkClosure
 
-__all__ = ["d1_model_1_arms", "fit_d1_cart_compliance", "compute", "main"]
+__all__ = ["L1_THESIS_FILE", "L1_FITTED_FILE", "TABLE_7_2_CASE_1_TOOL_Y", "d1_model_1_arms", "fit_d1_cart_compliance", "l1_case_1",
+           "fit_l1_stiffness_y", "compute", "main"]
+
+#: The ILC set-up the thesis' text defines, and the same with the static TCP stiffness in y fitted to Table 7.2's Case 1 tool y.
+L1_THESIS_FILE = D1_THESIS_FILE.parent / "l1_ilc_thesis.toml"
+L1_FITTED_FILE = D1_THESIS_FILE.parent / "l1_ilc_fitted.toml"
+#: Dressler (2012), Table 7.2: Case 1, tool y, mean of iterations 5-10 over iteration 0.
+TABLE_7_2_CASE_1_TOOL_Y = 0.361
+#: Bracket of the fitted stiffness [N/m] (the upper end: the thesis set-up's 2e6, the D1's measured 2-4 N/um).
+STIFFNESS_Y_BRACKET = (1e3, 2e6)
 
 
 def d1_model_1_arms(compliance_um_per_N: Any) -> dict[str, Any]:
@@ -97,6 +111,59 @@ def fit_d1_cart_compliance() -> dict[str, Any]:
             "cart_displacement_um": [float(c[i] * F[:, i].max()) for i in range(3)]}
 
 
+def l1_case_1(stiffness_y: float) -> dict[str, Any]:
+    """Case 1 of the thesis' ILC set-up with the static TCP stiffness in y replaced: Table 7.2's figures.
+
+    Runs :data:`L1_THESIS_FILE` with its first case alone and without the coupled check (about 3 s).
+
+    Parameters
+    ----------
+    stiffness_y : float
+        Static TCP stiffness in y [N/m] (``[structure] stiffness``'s second entry, Dressler (2012), eq. 6.14).
+
+    Returns
+    -------
+    dict
+        ``tool_x``, ``tool_y`` (mean of iterations 5-10 over iteration 0), ``actuator`` (per actuator),
+        ``deflection_rms_um`` (x, y, of the uncorrected trial).
+
+    Raises
+    ------
+    ProblemError
+        The run fails.
+    """
+    text = L1_THESIS_FILE.read_text(encoding="utf-8").split("\n", 1)[1]
+    kx = tomllib.loads(text)["structure"]["stiffness"][0]
+    text = re.sub(r"(?m)^stiffness = \[[^\]]*\]", f"stiffness = [{kx!r}, {float(stiffness_y)!r}]", text, count=1)
+    text = text.replace("coupled_check = true", "coupled_check = false")
+    head, rest = text.split("[[cases]]", 1)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "l1_case_1.toml"
+        path.write_text(head + "[[cases]]" + rest.split("[[cases]]")[0], encoding="utf-8")
+        run_problem(path, Path(tmp) / "out", plots=False)
+        c = json.loads((Path(tmp) / "out" / "summary.json").read_text(encoding="utf-8"))["cases"]["1"]
+    return {"tool_x": c["table_7_2"]["tool_x"], "tool_y": c["table_7_2"]["tool_y"], "actuator": c["table_7_2"]["actuator"],
+            "deflection_rms_um": [1e6 * v for v in c["deflection_rms_m"][:2]]}
+
+
+def fit_l1_stiffness_y() -> dict[str, Any]:
+    """The static TCP stiffness in y fitted to Table 7.2's Case 1 tool y (0.361).
+
+    :func:`scipy.optimize.brentq` in ``log10`` of the stiffness over :data:`STIFFNESS_Y_BRACKET`
+    on :func:`l1_case_1`'s tool y.
+
+    Returns
+    -------
+    dict
+        ``stiffness_y_N_per_m``, ``case_1`` (:func:`l1_case_1` with it), ``thesis_set_up`` (at the thesis set-up's stiffness),
+        ``target`` (0.361).
+    """
+    lo, hi = (math.log10(v) for v in STIFFNESS_Y_BRACKET)
+    x = scipy.optimize.brentq(lambda x: l1_case_1(10.0**x)["tool_y"] - TABLE_7_2_CASE_1_TOOL_Y, lo, hi, xtol=1e-3)
+    k = 10.0**x
+    return {"stiffness_y_N_per_m": k, "case_1": l1_case_1(k), "thesis_set_up": l1_case_1(STIFFNESS_Y_BRACKET[1]), "target": TABLE_7_2_CASE_1_TOOL_Y}
+
+
 def compute() -> dict[str, Any]:
     """The fit and the predictions (what ``docs/fidelity_fits.json`` holds).
 
@@ -104,11 +171,11 @@ def compute() -> dict[str, Any]:
     -------
     dict
         ``command``, ``cvitanic_tables_8_10``: ``fit`` (:func:`fit_table_8`) and ``predicted`` (:func:`predict`);
-        ``d1_cart_compliance`` (:func:`fit_d1_cart_compliance`).
+        ``d1_cart_compliance`` (:func:`fit_d1_cart_compliance`); ``l1_stiffness_y`` (:func:`fit_l1_stiffness_y`).
     """
     fit = fit_table_8()
     return {"command": "python -m gtmodel.problems.fidelity_fits", "cvitanic_tables_8_10": {"fit": fit, "predicted": predict(fit)},
-            "d1_cart_compliance": fit_d1_cart_compliance()}
+            "d1_cart_compliance": fit_d1_cart_compliance(), "l1_stiffness_y": fit_l1_stiffness_y()}
 
 
 

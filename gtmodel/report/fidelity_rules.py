@@ -42,7 +42,7 @@ RULES = (
     "coincide where the thesis' differ is demoted, and says so.\n"
     "- *predicted*: computed with a quantity fitted to another table (the row names the fit and the table), held fixed, and within "
     "the tolerance. Fitted quantities are labelled *fitted* where they appear; the set-up with a fitted quantity "
-    "(`[d1_error_models_fitted]`, the fits of `docs/fidelity_fits.json`) carries the predicted verdicts, its rows named "
+    "(`[l1_ilc_fitted]`, `[d1_error_models_fitted]`; the fits of `docs/fidelity_fits.json`) carries the predicted verdicts, its rows named "
     "*predicted from the ... fit*.\n"
     "- *structure reproduced*: the thesis' ordering or pattern holds, the values differ (the cause is given).\n"
     "- *check of a reading*: the figure is the set-up's input read back, or the figure a quantity was fitted or chosen to give "
