@@ -11,10 +11,10 @@ Two steps, both run by ``python -m gtmodel.report.fidelity``:
     Writes ``docs/fidelity.md`` from ``docs/fidelity_figures.json`` (:func:`render`):
     ``tests/report/test_fidelity.py`` fails while the page is not what the figures give.
 
-Verdicts: ``reproduced`` (ours within the tolerance of the thesis' figure), ``structure
-reproduced`` (the thesis' ordering or pattern holds, the values differ), ``differs`` (with the
-measured cause), ``not run`` (the result folder was missing when the figures were collected)
-and ``not attempted``. Sources: Dressler (2012), sections 5.3, 6.3, 7.3-7.4; Cvitanic (2021),
+Verdicts and the rules that govern them: :mod:`gtmodel.report.fidelity_rules` (reproduced, predicted,
+structure reproduced, check of a reading, differs; variant and not run carry none). The fitted
+quantities and the rows predicted with them: :mod:`gtmodel.report.fidelity_fits` (the fits file
+``docs/fidelity_fits.json``, written by ``python -m gtmodel.problems.fidelity_fits``). Sources: Dressler (2012), sections 5.3, 6.3, 7.3-7.4; Cvitanic (2021),
 sections 2, 4.3, 5.4.
 """
 

@@ -62,7 +62,8 @@ NOT_DIGITISED = (
     "tenth order, 'resonances around 10 Hz'), Fig. 7.7's '2 % after five iterations', Table 7.2 and the trial of Fig. 7.8 "
     "(fully corrected from 1.6 to 4.1 s after a lead-in, then a lead-out: at least 1,100 samples at 4 ms; `[l1_ilc_thesis]` runs "
     "834 samples, 2.53 s corrected, a shorter lead-in and lead-out). Frequencies alone do not fix G_c's gain at 11.5 Hz, "
-    "the deciding number of the tool rows.\n"
+    "the deciding number of the tool rows; in its place Table 7.2's Case 1 tool y is used to fit the structure's y stiffness "
+    "(`[l1_ilc_fitted]`), and the other cases are predicted with it.\n"
 )
 #: The sentence a differing ILC row carries (the page's paragraph :data:`NOT_DIGITISED` says more).
 NOT_DIGITISED_ROW = ("Not digitisable here: Figs. 6.10, 7.8 and 7.9 are captions only in the available text (no axis ticks or values; "
