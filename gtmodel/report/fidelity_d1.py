@@ -255,9 +255,13 @@ def _rows_of(tag: str, d: dict[str, Any], fit: dict[str, Any] | None = None) -> 
                      "(77 / 54 / 32 um), which order the synthetic arms: the thesis' residual is not the actuator non-linearity. "
                      "Nor the axial compliance: the project's stiffness model (2.5 N/um at the TCP, as the D1's measured 2-4) sags the "
                      "plate 36-46 um under its weight, of which a model-1 calibration leaves 0.6 um mean (gravity_sag_figures). "
-                     "Arm 1's link pushes its cart across the guideway with 8-80 N over the grid (arm 2: 0-11 N, z vertical assumed): "
-                     "73 um needs a transverse cart compliance of a few um/N, which the model takes as rigid and the thesis saw on the "
-                     "L1 (carts moved up to 100 um with the TCP's yz, Fig. 4.5). Deciding data: set 3's cart positions against the TCP pose"))
+                     "Arm 1's link pushes its cart across the guideway with 8-80 N over the grid (arm 2: 0-11 N, z vertical assumed), "
+                     "a load the thesis saw move the L1's carts by up to 100 um (Fig. 4.5) and the model takes as rigid; "
+                     + (f"sized to 73 / 60 um, that transverse cart compliance must be {fit['compliance_um_per_N'][0]:.3g} / "
+                        f"{fit['compliance_um_per_N'][1]:.3g} um/N (fitted, the [{FITTED}] rows), moving cart 1 by up to "
+                        f"{fit['cart_displacement_um'][0] / 1e3:.0f} mm: a model-1 calibration absorbs all but a few per cent of it"
+                        if fit else "sized to 73 / 60 um it is fitted in the fitted set-up's rows") +
+                     ". Deciding data: set 3's cart positions against the TCP pose"))
     orient = d.get("measured_orientation_range_deg")
     if orient and not fitted:
         ok = 0.25 <= max(orient) <= 1.0
