@@ -37,7 +37,7 @@ RULES = (
     "Verdicts (enforced by `tests/report/test_fidelity.py`):\n\n"
     "- *reproduced*: ours is within the tolerance of the thesis' figure **and** was computed with the thesis' set-up "
     f"(the declared set-ups: `[{DECLARED['ilc']}]` for the ILC rows, `[{DECLARED['d1']}]` for the D1 rows). A case-specific figure "
-    "(a case of (7.28), an error model of Table 5.3) is reproduced only if its cases differ as the thesis' do: for every other case "
+    "(a case of (7.28) or Table 7.2, an error model of Table 5.3) is reproduced or predicted only if its cases differ as the thesis' do: for every other case "
     "whose thesis value differs from its own by more than the tolerance, ours differs in the same direction. A row whose cases "
     "coincide where the thesis' differ is demoted, and says so.\n"
     "- *predicted*: computed with a quantity fitted to another table (the row names the fit and the table), held fixed, and within "
