@@ -1,17 +1,22 @@
-"""``docs/fidelity.md`` is what ``docs/fidelity_figures.json`` gives, and lists every row of issue 27.
+"""``docs/fidelity.md`` is what ``docs/fidelity_figures.json`` gives, lists every row of issue 27 and keeps the rules of issue 38.
 
 Independent reference: the issue's list of thesis figures (Dressler (2012) Table 7.2, (7.28), Fig. 7.7,
 the complementary crossover, the actuator bandwidths, Tables 5.2/5.3; Cvitanic (2021) Tables 2, 8, 9,
-10, 14); the verdicts are recomputed from the figures by :func:`gtmodel.report.fidelity.render`.
+10, 14); the verdicts are recomputed from the figures by :func:`gtmodel.report.fidelity.render`; the case rule
+(issue 38) recomputed in the test from the rows' cases; the delay loop's stability against its closed-form critical gain.
 """
 
 from __future__ import annotations
 
+import collections
+import copy
 import json
+import math
 
 import pytest
 
 from gtmodel.report import fidelity
+from gtmodel.report import fidelity_rules as rules
 
 ISSUE_ROWS = [
     "(7.28) / section 7.4: sigma_max Case 1", "sigma_max Case 2A", "sigma_max Case 2B", "sigma_max Case 3",
@@ -26,7 +31,7 @@ ISSUE_ROWS = [
 
 @pytest.fixture(scope="module")
 def figures():
-    return json.loads(fidelity.FIGURES.read_text(encoding="utf-8"))
+    return fidelity.load()
 
 
 def test_page_is_not_stale(figures):
@@ -40,9 +45,79 @@ def test_every_issue_row_is_listed(figures, row):
 
 
 def test_every_row_has_a_verdict_and_a_cause_where_it_differs(figures):
-    verdicts = {"reproduced", "structure reproduced", "differs", "not run", "not attempted", "partly run", "see values"}
-    bad = [r for r in fidelity.rows(figures) if len(r) != 6 or r[4] not in verdicts or (r[4] == "differs" and len(r[5]) <= 20)]
+    verdicts = set(rules.VERDICTS + rules.STATUSES)
+    bad = [r for r in fidelity.rows(figures) if len(r[:6]) != 6 or r[4] not in verdicts or (r[4] in ("differs", "variant") and len(r[5]) <= 20)]
     assert not bad
+
+
+def test_the_rules_head_the_page():
+    page = fidelity.PAGE.read_text(encoding="utf-8")
+    assert rules.RULES in page and page.index(rules.RULES) < page.index("| thesis figure |")
+
+
+def test_no_reproduced_row_whose_cases_coincide_where_the_thesis_differ(figures):
+    # the rule itself, recomputed here: for each case, every other case of its group whose thesis value differs by more
+    # than the tolerance must differ the same way in ours
+    rows = fidelity.rows(figures)
+    cases = [c for r in rows for c in r.cases]
+    bad = [(r.figure, c.name, o.name) for r in rows if r.verdict in ("reproduced", "predicted") for c in r.cases for o in cases
+           if o.group == c.group and o.name != c.name and abs(o.thesis - c.thesis) > c.tol
+           and (o.ours - c.ours) * (o.thesis - c.thesis) <= 0]
+    assert not bad
+
+
+def _sigma_figures(figures, sigma_2a, sigma_2b, sigma_3):
+    data = copy.deepcopy(figures)
+    for name, v in (("2A", sigma_2a), ("2B", sigma_2b), ("3", sigma_3)):
+        case = data["l1_ilc_thesis"]["cases"][name]
+        case["sigma"] = {k: v for k in case["sigma"]}
+        case["coupled"] = v
+    return data
+
+
+@pytest.mark.parametrize("sigmas, verdict", [
+    ((0.928, 0.928, 0.928), "structure reproduced"),  # the issue's coincidence: one Q gives the same margin in every case
+    ((0.9276, 0.9274, 0.9274), "structure reproduced"),  # 2B below 2A where the thesis has 0.93 > 0.86
+    ((0.87, 0.93, 0.95), "reproduced"),  # the thesis' own figures (7.28): 0.86 / 0.93 / 0.95
+], ids=["equal", "wrong_order", "as_the_thesis"])
+def test_case_2b_is_reproduced_only_if_its_cases_differ_as_the_thesis(figures, sigmas, verdict):
+    rows = fidelity.rows(_sigma_figures(figures, *sigmas))
+    row = next(r for r in rows if "sigma_max Case 2B" in r.figure and r.figure.endswith("[l1_ilc_thesis]"))
+    assert row.verdict == verdict and (verdict == "reproduced" or row.cause.startswith("coincidence, not a reproduction"))
+
+
+def test_the_crossover_is_a_check_of_a_reading(figures):
+    # with Matlab's butter + filtfilt reading the crossover is the cut-off, the set-up's input: the row cannot fail
+    row = next(r for r in fidelity.rows(figures) if "complementary filter crossover" in r.figure and r.figure.endswith("[l1_ilc_thesis]"))
+    assert row.reading and row.verdict == "check of a reading"
+
+
+def test_one_set_up_carries_each_verdict(figures):
+    # the same figure of two set-ups (e.g. D1 model 3 of d1_error_models and d1_error_models_thesis) carries one verdict
+    seen = collections.Counter(r.figure.rsplit(" [", 1)[0] for r in fidelity.rows(figures) if r.verdict not in rules.STATUSES)
+    assert [f for f, n in seen.items() if n > 1] == []
+    variants = [r for r in fidelity.rows(figures) if r.figure.endswith(("[l1_ilc]", "[d1_error_models]"))]
+    assert variants and {r.verdict for r in variants} == {"variant"}
+
+
+@pytest.mark.parametrize("delay", [1, 7, 13])
+def test_delay_pole_magnitude_against_the_critical_gain_in_closed_form(delay):
+    # independent: z^d (z - 1) + K = 0 has a root on the unit circle at K = 2 sin(pi / (2 (2 d + 1)))
+    k_crit = 2 * math.sin(math.pi / (2 * (2 * delay + 1)))
+    assert rules.delay_pole_magnitude(0.999 * k_crit, delay) < 1 < rules.delay_pole_magnitude(1.001 * k_crit, delay)
+
+
+def test_largest_stable_delay_at_the_thesis_gain():
+    # 2 sin(pi / (2 (2 d + 1))) > 0.2  <=>  d <= 7
+    assert rules.largest_stable_delay(0.2) == 7 and rules.delay_pole_magnitude(0.2, 13) > 1.02
+
+
+@pytest.mark.parametrize("gains, verdict", [([0.1] * 6, "differs"), ([0.2] * 6, "reproduced"), ([0.3] * 6, "differs")])
+def test_table_14_x_is_reproduced_only_on_the_thesis_step(figures, gains, verdict):
+    data = copy.deepcopy(figures)
+    data["kr500_correction_stability"]["predicted"]["x"] = gains
+    row = next(r for r in fidelity.rows(data) if "Table 14: largest stable P gain x" in r.figure)
+    assert row.verdict == verdict
 
 
 def test_actuator_bandwidths_from_the_models():
@@ -87,3 +162,12 @@ def test_collect_only_keeps_the_other_problems(tmp_path):
         fidelity.collect(tmp_path, figures, only=["nope"])
     with pytest.raises(fidelity.InputError, match="does not exist"):
         fidelity.collect(tmp_path, tmp_path / "none.json", only=["l1_ilc"])
+
+
+def test_the_page_says_why_the_ilc_figures_are_not_digitised(figures):
+    # the seeds hold Figs. 6.10, 7.8 and 7.9 as captions only (Dressler (2012) converted from the PDF): every differing
+    # Fig. 7.7 / Table 7.2 row of the declared set-up points to the paragraph that says so
+    page = fidelity.PAGE.read_text(encoding="utf-8")
+    ilc = [r for r in fidelity.rows(figures) if r.figure.endswith("[l1_ilc_thesis]") and ("Table 7.2: Case" in r.figure or "Fig. 7.7" in r.figure)]
+    assert rules.NOT_DIGITISED in page and len(ilc) == 5
+    assert [r.figure for r in ilc if r.verdict == "differs" and rules.NOT_DIGITISED_ROW not in r.cause] == []

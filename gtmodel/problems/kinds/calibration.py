@@ -17,6 +17,7 @@ others (eq. 5.5), with identifiability and parameter uncertainties::
     noise = "laser_tracker"         # "laser_tracker" (10 um) | "stereo_vision" (1.7 mm) | "none"
     actuator_errors = "none"        # "none" | "table_4_1" (cyclic error, straightness, backlash)
     # cyclic_period = 0.2           # m, period of table_4_1's cyclic error (default: pinion circumference)
+    # cart_compliance = [3e-6, 2e-6, 0.0]  # m/N, carts yielding across their guideways (D1-type robots)
     grid_step = 0.1153              # m, regular grid in the workspace ...
     # random_poses = 400            # ... or this many random poses
     seed = 0
@@ -56,6 +57,7 @@ result is a complete robot parameter set), ``errors.csv`` and ``error_histogram.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from importlib import resources
@@ -76,6 +78,7 @@ from gtmodel.calibration import (
     synthetic_cart_measurements,
     synthetic_measurements,
 )
+from gtmodel.calibration.cart_compliance import cart_compliance_offsets
 from gtmodel.calibration.comparison import CalibrationDeclaration, CalibrationOutcome, perturbed_model
 from gtmodel.calibration.grid_count import grid_candidates
 from gtmodel.errors import GtModelError, ProblemError
@@ -311,6 +314,8 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
     noise = device_noise(t.noise)
     if t.cyclic_period is not None and t.actuator_errors != "table_4_1":
         raise file.fail("truth.cyclic_period", "actuator_errors = 'table_4_1' (the period belongs to its cyclic error)", t.cyclic_period)
+    if t.cart_compliance is not None and t.model == "f1":
+        raise file.fail("truth.cart_compliance", "a three_link or six_link truth (the F1's carts carry no such model)", t.cart_compliance)
     period = {} if t.cyclic_period is None else {"cyclic_period_m": t.cyclic_period}
     errors = ActuatorErrors.table_4_1(**period) if t.actuator_errors == "table_4_1" else None
     candidates = _truth_poses(truth, t.model, t, file, count_only=True)  # the pose set's field checks and size caps
@@ -326,13 +331,17 @@ def _synthetic_setup(doc: CalibrationFile, file: ProblemFile, n_sel: int | None)
         try:
             q = _truth_poses(truth, t.model, t, file)
             data = synthetic_measurements(truth, q, noise=noise, actuator_errors=errors, seed=t.seed)
+            if t.cart_compliance is not None:  # the carts yield across their guideways under the arms' gravity forces
+                data = dataclasses.replace(data, T=data.T + cart_compliance_offsets(data.T, data.q[:, :3], t.cart_compliance,
+                                                                                    t.parameters.removesuffix("_six_link")))
         except ProblemError:
             raise
         except GtModelError as exc:
             raise ProblemError(f"{file.path}: field 'truth': cannot generate the synthetic data: {exc}") from None
         _check_selection_size(file, n_sel, data.n_poses)
         source = (f"synthetic: truth {t.model} '{t.parameters}', {t.noise} noise, actuator errors {t.actuator_errors}, "
-                  f"seed {t.seed}, {data.n_poses} poses")
+                  f"seed {t.seed}, {data.n_poses} poses"
+                  + (f", cart compliance {' / '.join(f'{1e6 * c:.3g}' for c in t.cart_compliance)} um/N" if t.cart_compliance is not None else ""))
         return data, source
 
     return truth, cart, noise.position_sigma_m, build

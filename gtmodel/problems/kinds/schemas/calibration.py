@@ -13,7 +13,7 @@ from pydantic_core import PydanticCustomError
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
-from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, matrix, number
+from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, ProblemSchema, Section, choice, integer, matrix, number, vector
 
 __all__ = ["CalibrationFile", "MODEL_TYPES", "MAX_PERTURBATION_M", "MAX_RANDOM_POSES", "LSQ_SOLVERS", "StringList"]
 
@@ -53,6 +53,7 @@ class TruthSection(Section):
     noise: choice("laser_tracker", "stereo_vision", "none", description="measurement device (noise)") = "laser_tracker"
     actuator_errors: choice("none", "table_4_1", description="actuator errors of the data (Table 4.1)") = "none"
     cyclic_period: number(gt=0, le=MAX_LENGTH_M, unit="m", description="period of the cyclic rack-and-pinion error of table_4_1 (default 0.2 m, the pinion circumference assumed; the thesis' tooth pitch is much shorter than the 50 mm survey step)") | None = None
+    cart_compliance: vector(3, nonnegative=True, bound=1e-3, unit="m/N", description="three_link/six_link D1-type truth: transverse compliance of each cart under its arm's gravity force (gtmodel.calibration.cart_compliance), a load-dependent error the error models do not hold") | None = None
     grid_step: number(gt=0, le=MAX_LENGTH_M, unit="m", description="spacing of a regular pose grid in the workspace") | None = None
     grid_step_deg: number(gt=0, le=90, unit="deg", description="orientation spacing of the F1's 6-D grid") = 10.0
     random_poses: integer(2, max(MAX_RANDOM_POSES.values()), description="number of random poses (without grid_step)") | None = None

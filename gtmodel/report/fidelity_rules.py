@@ -1,0 +1,236 @@
+"""The verdict rules of the fidelity report (``docs/fidelity.md``): the five verdicts, the case rule and the declared set-ups.
+
+A row of :mod:`gtmodel.report.fidelity` is a :class:`Row`. Its verdict is one of :data:`VERDICTS`
+(or a status of :data:`STATUSES`), and :func:`apply_rules` enforces what the page's head
+(:data:`RULES`) promises:
+
+- *reproduced* only within the tolerance and with the thesis' set-up (the declared set-up of
+  :data:`DECLARED`; the other set-ups' rows are *variant* rows and carry no verdict);
+- a case-specific figure (a :class:`Case` of a group: Dressler (2012)'s Cases 1-3 of (7.28), the
+  D1's error models 1-5 of Table 5.3) is *reproduced* or *predicted* only if its cases differ as
+  the thesis' do: for every other case of its group whose thesis value differs from its own by
+  more than the tolerance, ours must differ in the same direction (:func:`cases_differ_as_thesis`);
+- a row whose figure is its own input read back (it cannot fail) is a *check of a reading*;
+- *predicted* is a figure computed with a quantity fitted to another table (named in the row)
+  and held fixed, within the tolerance.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = ["VERDICTS", "STATUSES", "DECLARED", "RULES", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Row", "cases_differ_as_thesis", "apply_rules", "delay_pole_magnitude",
+           "largest_stable_delay"]
+
+#: The verdicts a row can carry, from the strongest.
+VERDICTS = ("reproduced", "predicted", "structure reproduced", "check of a reading", "differs")
+#: Labels of rows that carry no verdict.
+STATUSES = ("variant", "not run", "not attempted")
+#: Per figure family, the set-up whose rows carry the verdicts (the other set-ups' rows are variants).
+DECLARED = {"ilc": "l1_ilc_thesis", "d1": "d1_error_models_thesis"}
+#: Per figure family, its variant set-ups.
+VARIANTS = {"l1_ilc": "ilc", "d1_error_models": "d1"}
+
+RULES = (
+    "Verdicts (enforced by `tests/report/test_fidelity.py`):\n\n"
+    "- *reproduced*: ours is within the tolerance of the thesis' figure **and** was computed with the thesis' set-up "
+    f"(the declared set-ups: `[{DECLARED['ilc']}]` for the ILC rows, `[{DECLARED['d1']}]` for the D1 rows). A case-specific figure "
+    "(a case of (7.28) or Table 7.2, an error model of Table 5.3) is reproduced or predicted only if its cases differ as the thesis' do: for every other case "
+    "whose thesis value differs from its own by more than the tolerance, ours differs in the same direction. A row whose cases "
+    "coincide where the thesis' differ is demoted, and says so.\n"
+    "- *predicted*: computed with a quantity fitted to another table (the row names the fit and the table), held fixed, and within "
+    "the tolerance. Fitted quantities are labelled *fitted* where they appear; the set-up with a fitted quantity "
+    "(`[l1_ilc_fitted]`, `[d1_error_models_fitted]`; the fits of `docs/fidelity_fits.json`) carries the predicted verdicts, its rows named "
+    "*predicted from the ... fit*.\n"
+    "- *structure reproduced*: the thesis' ordering or pattern holds, the values differ (the cause is given).\n"
+    "- *check of a reading*: the figure is the set-up's input read back, or the figure a quantity was fitted or chosen to give "
+    "(it cannot fail); it checks how the thesis' text is read, not a reproduction.\n"
+    "- *differs*: with the measured cause and the deciding number the thesis does not print.\n"
+    "- *variant*: the figure of a set-up other than the declared one, shown beside it; it carries no verdict. *not run*: the result "
+    "folder was missing.\n"
+)
+
+#: Why the ILC group's deciding figures are not digitised (Dressler (2012), Figs. 6.10, 7.8, 7.9; the seeds' text, checked).
+NOT_DIGITISED = (
+    "Digitised figures: none. The deciding figures of the ILC rows (Dressler (2012), Fig. 6.10: Bode diagrams of G_r (6.12) and "
+    "G_c (6.13); Fig. 7.8: actuator error at k = 0 and 10; Fig. 7.9: tool error at k = 0 and 10) exist here only as the thesis' "
+    "text converted from the PDF, which keeps each caption and no axis ticks, no plotted values and no printed amplitude: nothing "
+    "to read points from, so no figure data are invented. What the text does print is used: the resonances of Table 6.4 (x 7.4 Hz; "
+    "y 11.4-11.5 Hz, 11.4-11.9 Hz at first after an x impulse; x 10.4-10.7 Hz under a y force), the model orders (G_r seventh, G_c "
+    "tenth order, 'resonances around 10 Hz'), Fig. 7.7's '2 % after five iterations', Table 7.2 and the trial of Fig. 7.8 "
+    "(fully corrected from 1.6 to 4.1 s after a lead-in, then a lead-out: at least 1,100 samples at 4 ms; `[l1_ilc_thesis]` runs "
+    "834 samples, 2.53 s corrected, a shorter lead-in and lead-out). Frequencies alone do not fix G_c's gain at 11.5 Hz, "
+    "the deciding number of the tool rows; in its place Table 7.2's Case 1 tool y is used to fit the structure's y stiffness "
+    "(`[l1_ilc_fitted]`), and the other cases are predicted with it.\n"
+)
+#: The sentence a differing ILC row carries (the page's paragraph :data:`NOT_DIGITISED` says more).
+NOT_DIGITISED_ROW = ("Not digitisable here: Figs. 6.10, 7.8 and 7.9 are captions only in the available text (no axis ticks or values; "
+                     "see 'Digitised figures' above the table)")
+
+
+class Case(NamedTuple):
+    """One case of a case-specific figure: its group, its name, the thesis' value, ours and the tolerance.
+
+    Parameters
+    ----------
+    group : str
+        The figure whose cases are compared (e.g. ``"(7.28) Cases [l1_ilc_thesis]"``).
+    name : str
+        The case (e.g. ``"2B"``, ``"model 4"``).
+    thesis : float
+        The thesis' value.
+    ours : float
+        Ours.
+    tol : float
+        The row's tolerance (same unit): thesis values further apart than this differ.
+    """
+
+    group: str
+    name: str
+    thesis: float
+    ours: float
+    tol: float
+
+
+class Row(NamedTuple):
+    """A row of the page: the six printed columns, its cases, whether it reads an input back, the demoted verdict.
+
+    Parameters
+    ----------
+    figure : str
+        The thesis figure, ending in ``[set-up]`` where several set-ups give it.
+    thesis : str
+        The thesis' value as printed.
+    ours : str
+        Ours.
+    tolerance : str
+        The tolerance or the criterion.
+    verdict : str
+        One of :data:`VERDICTS` or :data:`STATUSES`.
+    cause : str
+        The measured cause of a difference (or the fit a prediction holds fixed).
+    cases : tuple of Case, optional
+        The row's cases, for the case rule.
+    reading : bool, optional
+        True if the figure is the set-up's input read back (the row cannot fail).
+    fallback : str, optional
+        The verdict when the case rule demotes the row.
+    """
+
+    figure: str
+    thesis: str
+    ours: str
+    tolerance: str
+    verdict: str
+    cause: str
+    cases: tuple[Case, ...] = ()
+    reading: bool = False
+    fallback: str = "differs"
+
+
+def cases_differ_as_thesis(case: Case, group: list[Case]) -> bool:
+    """Whether ``case`` differs from the other cases of its group as the thesis' value does.
+
+    Parameters
+    ----------
+    case : Case
+        The case judged.
+    group : list of Case
+        Every case of its group (``case`` may be among them).
+
+    Returns
+    -------
+    bool
+        True if, for every other case whose thesis value differs from ``case.thesis`` by more
+        than ``case.tol``, ours differs from ``case.ours`` with the same sign.
+    """
+    return all(np.sign(o.ours - case.ours) == np.sign(o.thesis - case.thesis) for o in group
+               if o.name != case.name and abs(o.thesis - case.thesis) > case.tol + 1e-12)
+
+
+def _family(figure: str) -> tuple[str | None, str | None]:
+    tag = figure.rsplit("[", 1)[-1].rstrip("]") if figure.endswith("]") else None
+    return tag, VARIANTS.get(tag or "")
+
+
+def apply_rules(rows: list[Row]) -> list[Row]:
+    """The rows with :data:`RULES` applied: readings, variant set-ups and coinciding cases.
+
+    Parameters
+    ----------
+    rows : list of Row
+        The rows as the figures give them.
+
+    Returns
+    -------
+    list of Row
+        Readings as *check of a reading*; rows of a variant set-up as *variant* (their own verdict
+        in the cause); reproduced / predicted rows whose cases coincide where the thesis' differ
+        demoted to the row's ``fallback`` with the cases in the cause.
+    """
+    groups: dict[str, list[Case]] = {}
+    for r in rows:
+        for c in r.cases:
+            groups.setdefault(c.group, []).append(c)
+    out = []
+    for r in rows:
+        if r.verdict in STATUSES[1:]:
+            out.append(r)
+            continue
+        if r.reading:
+            r = r._replace(verdict="check of a reading")
+        elif r.verdict in ("reproduced", "predicted") and not all(cases_differ_as_thesis(c, groups[c.group]) for c in r.cases):
+            bad = [c for c in r.cases if not cases_differ_as_thesis(c, groups[c.group])]
+            text = "; ".join(f"case {c.name}: ours {c.ours:.4g} within {c.tol:g} of the thesis' {c.thesis:.4g}, but its cases "
+                             + ", ".join(f"{o.name} {o.ours:.4g} (thesis {o.thesis:.4g})" for o in groups[c.group] if o.name != c.name)
+                             + " do not differ as the thesis' do" for c in bad)
+            r = r._replace(verdict=r.fallback, cause=f"coincidence, not a reproduction: {text}" + (f". {r.cause}" if r.cause else ""))
+        family = _family(r.figure)[1]
+        if family is not None:
+            r = r._replace(verdict="variant", cause=f"variant of [{DECLARED[family]}], which carries the verdict (here: {r.verdict}"
+                           + (f"; {r.cause}" if r.cause else "") + ")")
+        out.append(r)
+    return out
+
+
+def delay_pole_magnitude(gain: float, delay_cycles: int) -> float:
+    """Largest pole magnitude of the accumulating correction loop with a pure delay, ``z^d (z - 1) + K = 0``.
+
+    The loop of Cvitanic (2021), eq. (33), ``K z / (z - 1) z^-d P(z)`` with ``P = 1`` (the
+    correction executed with DC gain 1): the delay alone.
+
+    Parameters
+    ----------
+    gain : float
+        Proportional gain K.
+    delay_cycles : int
+        Delay d [cycles] (>= 1).
+
+    Returns
+    -------
+    float
+        ``max |z|`` over the ``d + 1`` roots (> 1: unstable).
+    """
+    p = np.zeros(int(delay_cycles) + 2)
+    p[0], p[1], p[-1] = 1.0, -1.0, float(gain)
+    return float(np.max(np.abs(np.roots(p))))
+
+
+def largest_stable_delay(gain: float, max_delay: int = 60) -> int:
+    """The largest delay [cycles] for which :func:`delay_pole_magnitude` stays below 1 at ``gain`` (0 if none).
+
+    Parameters
+    ----------
+    gain : float
+        Proportional gain K.
+    max_delay : int, optional
+        Largest delay tried [cycles].
+
+    Returns
+    -------
+    int
+    """
+    stable = [d for d in range(1, max_delay + 1) if delay_pole_magnitude(gain, d) < 1.0]
+    return max(stable) if stable else 0
