@@ -56,7 +56,7 @@ __all__ = [
 
 #: Unrolled Newton steps of the algebraic blocks that are not affine in their variables.
 NEWTON_ITERATIONS = 12
-#: Convergence test of a Newton solve: ``max|residual| <= NEWTON_TOLERANCE (1 + max|unknowns|)``.
+#: Convergence test of a Newton solve: ``sum|residual| <= NEWTON_TOLERANCE (1 + sum|unknowns|)``.
 NEWTON_TOLERANCE = 1e-10
 #: Unrolled Newton steps of an implicit integrator step (one suffices for a linear model).
 STEP_NEWTON_ITERATIONS = 6
@@ -69,10 +69,13 @@ _RADAU_C = (1.0 / 3.0, 1.0)
 
 
 def _converged(residual: ca.SX, unknowns: ca.SX, tol: float) -> ca.SX:
-    """1 where ``max|residual| <= tol (1 + max|unknowns|)`` (NaN fails the test), else 0."""
+    """1 where ``sum|residual| <= tol (1 + sum|unknowns|)`` and all is finite, else 0.
+
+    Sums, not maxima: a NaN propagates through a sum (``fmax`` would drop it)."""
     if residual.numel() == 0:
         return ca.SX(1.0)
-    return ca.norm_inf(residual) <= tol * (1.0 + ca.norm_inf(unknowns))
+    size = ca.sum1(ca.fabs(unknowns))
+    return (ca.sum1(ca.fabs(residual)) <= tol * (1.0 + size)) * (size < math.inf)
 
 
 def _newton(residual: ca.SX, v: ca.SX, v0: ca.SX, iterations: int, tol: float) -> tuple[ca.SX, ca.SX]:
@@ -286,7 +289,7 @@ class ExplicitODE:
             the explicit Euler predictor).
         tolerance : float, optional
             Convergence test of the implicit stage equations:
-            ``max|residual| <= tolerance (1 + max|stages|)``.
+            ``sum|residual| <= tolerance (1 + sum|stages|)``.
 
         Returns
         -------
@@ -377,18 +380,20 @@ class ExplicitODE:
         return x, np.asarray(ok).reshape(-1)
 
 
-def _reduced(model: Any, name: str | None) -> tuple[Model, Model]:
-    """(the model as given, the model reduced as ``simulate()`` reduces it)."""
+def _reduced(model: Any, name: str | None) -> tuple[Model, Model, dict[str, str]]:
+    """(the model as given, the model reduced as ``simulate()`` reduces it, declared units)."""
     from gtmodel.modeling.components.component import Component  # higher room, imported on use
 
+    units: dict[str, str] = {}
     if isinstance(model, Component):
         m = model.to_model(name)
+        units = {str(r.name): str(r.unit) for r in model.describe().itertuples(index=False) if r.unit}
     elif isinstance(model, Model):
         m = model
     else:
         raise InputError(f"model: expected a gtmodel Model or Component, got {type(model).__name__}")
     reduced = m if m._flattens() and not m._initial_equations else structural_simplify(m)
-    return m, reduced
+    return m, reduced, {**units, **reduced.units}
 
 
 def explicit_ode(model: Any, name: str | None = None, iterations: int = NEWTON_ITERATIONS,
@@ -424,7 +429,7 @@ def explicit_ode(model: Any, name: str | None = None, iterations: int = NEWTON_I
     """
     if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
         raise InputError(f"iterations: expected a positive number of Newton steps, got {iterations!r}")
-    m, reduced = _reduced(model, name)
+    m, reduced, units = _reduced(model, name)
     dae = reduced.flatten()
     if dae.nx == 0:
         raise ModelError(f"model {m.name!r} has no state: there is no ODE to make explicit")
@@ -445,6 +450,6 @@ def explicit_ode(model: Any, name: str | None = None, iterations: int = NEWTON_I
         y_names=list(dae.output_names), x0=x0, u0=u0, p_default=pv,
         x_lb=np.asarray(dae.x_lb, float).copy(), x_ub=np.asarray(dae.x_ub, float).copy(),
         u_lb=np.asarray(dae.u_lb, float).copy(), u_ub=np.asarray(dae.u_ub, float).copy(),
-        units=_scalar_meta(dict(reduced.units), names), symbolic=n_newton == 0, algebraic=dae.nz, newton=n_newton,
+        units=_scalar_meta(units, names), symbolic=n_newton == 0, algebraic=dae.nz, newton=n_newton,
         time_dependent=bool(ca.depends_on(ca.vertcat(xdot, y), dae.t)),
     )
