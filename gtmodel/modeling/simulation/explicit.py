@@ -273,7 +273,7 @@ class ExplicitODE:
         return self._timeless(["converged"], "converged")
 
     def step(self, dt: float = LOOP_PERIOD_S, method: str = "rk4", iterations: int = STEP_NEWTON_ITERATIONS,
-             tolerance: float = NEWTON_TOLERANCE) -> ca.Function:
+             tolerance: float = NEWTON_TOLERANCE, substeps: int = 1) -> ca.Function:
         """One fixed integrator step over ``dt`` with the input held: ``step(x, u, p) -> (x_next, converged)``.
 
         Parameters
@@ -290,6 +290,8 @@ class ExplicitODE:
         tolerance : float, optional
             Convergence test of the implicit stage equations:
             ``sum|residual| <= tolerance (1 + sum|stages|)``.
+        substeps : int, optional
+            Equal steps of the method within ``dt`` (default 1).
 
         Returns
         -------
@@ -302,17 +304,31 @@ class ExplicitODE:
         Raises
         ------
         InputError
-            ``dt`` not positive and finite, unknown ``method``, ``iterations`` below 1.
+            ``dt`` not positive and finite, unknown ``method``, ``iterations`` or
+            ``substeps`` below 1.
         ModelError
             The model depends on time explicitly.
         """
+        if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+            raise InputError(f"substeps: expected a positive number of steps per period, got {substeps!r}")
         if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
             raise InputError(f"dt: expected a positive step length in seconds, got {dt!r}")
         if method not in STEP_METHODS:
             raise InputError(f"method: expected one of {', '.join(STEP_METHODS)}, got {method!r}")
         if isinstance(iterations, bool) or not isinstance(iterations, (int, np.integer)) or iterations < 1:
             raise InputError(f"iterations: expected a positive number of Newton steps, got {iterations!r}")
-        dt = float(dt)
+        single = self._single_step(float(dt) / int(substeps), method, int(iterations), float(tolerance))
+        if substeps == 1:
+            return single
+        x, u, p = ca.SX.sym("x", self.nx), ca.SX.sym("u", self.nu), ca.SX.sym("p", self.np)
+        xk, ok = x, ca.SX(1.0)
+        for _ in range(int(substeps)):
+            xk, ok_k = single(xk, u, p)
+            ok = ok * ok_k
+        return ca.Function(f"step_{method}", [x, u, p], [xk, ok], ["x", "u", "p"], ["x_next", "converged"])
+
+    def _single_step(self, dt: float, method: str, iterations: int, tolerance: float) -> ca.Function:
+        """One step of ``method`` over ``dt`` (see :meth:`step`)."""
         f = self.f
         ok_f = self.converged
         x, u, p = ca.SX.sym("x", self.nx), ca.SX.sym("u", self.nu), ca.SX.sym("p", self.np)
@@ -326,7 +342,7 @@ class ExplicitODE:
         elif method == "implicit_euler":
             v = ca.SX.sym("v", self.nx)  # the new state
             res = v - x - dt * f(v, u, p)
-            v_sol, ok = _newton(res, v, x + dt * f(x, u, p), int(iterations), tolerance)
+            v_sol, ok = _newton(res, v, x + dt * f(x, u, p), iterations, tolerance)
             x_next = v_sol
             ok = ok * ok_f(v_sol, u, p)
         else:  # radau2: stage derivatives K1, K2
@@ -335,7 +351,7 @@ class ExplicitODE:
             stages = [x + dt * (_RADAU_A[i][0] * ks[0] + _RADAU_A[i][1] * ks[1]) for i in range(2)]
             res = ca.vertcat(*[ks[i] - f(stages[i], u, p) for i in range(2)])
             k0 = f(x, u, p)
-            k_sol, ok = _newton(res, kk, ca.vertcat(k0, k0), int(iterations), tolerance * max(1.0, 1.0 / dt))
+            k_sol, ok = _newton(res, kk, ca.vertcat(k0, k0), iterations, tolerance * max(1.0, 1.0 / dt))
             k1, k2 = k_sol[: self.nx], k_sol[self.nx:]
             x_next = x + dt * (_RADAU_A[1][0] * k1 + _RADAU_A[1][1] * k2)
             ok = ok * ok_f(x + dt * (_RADAU_A[0][0] * k1 + _RADAU_A[0][1] * k2), u, p) * ok_f(x_next, u, p)
