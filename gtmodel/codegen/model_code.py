@@ -50,13 +50,11 @@ import numpy as np
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.emit import fill, header_guard
-from gtmodel.codegen.emit.robot import _arg_size, _out_function, functions_fragment, wrapper_text
 from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
-from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
-from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare
+from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
 from gtmodel.codegen.check.report import FunctionCheck
 from gtmodel.codegen.declarations import StatusCheck
 from gtmodel.defaults import LOOP_PERIOD_S
@@ -354,43 +352,15 @@ def generate_model(
         raise InputError(f"functions: {unknown or 'none'} not among the model's functions ({', '.join(table)})")
     specs = tuple(table[f] for f in dict.fromkeys(chosen))
     source = ModelSource(model, ode, float(dt), int(substeps))
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise CodegenError(f"cannot create output folder {out}: {exc.strerror}") from None
-    cg = ca.CodeGenerator(f"{prefix}_casadi.c", {"with_header": True, "prefix": f"{prefix}_cg_", "casadi_real": real})
-    funcs, cnames = {}, {}
-    for spec in specs:
-        cnames[spec.name] = f"{prefix}_cg_{spec.name}"
-        funcs[spec.name] = _prepare(spec, spec.build(source), cnames[spec.name])
-        cg.add(funcs[spec.name])
-    try:
-        cg.generate(str(out) + "/")
-    except RuntimeError as exc:
-        raise CodegenError(f"CasADi code generation failed: {exc}") from None
-    casadi_source = out / f"{prefix}_casadi.c"
-    text = casadi_source.read_text()
-    sizes = {s.name: _work_sizes(text, cnames[s.name], funcs[s.name]) for s in specs}
     phash = model_parameter_hash(dae)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; model {dae.name} sha256:{phash}; real {real}"
+    out, _, sizes, signatures = write_library(
+        prefix, specs, source, out_dir, real, lambda wrapped: _header_text(prefix, wrapped, version, phash, dae, real, float(dt), int(substeps)))
     header, wrapper = out / f"{prefix}.h", out / f"{prefix}.c"
-    try:
-        casadi_source.write_text("/* CasADi-generated code; gtmodel marked unused function parameters (void) and the\n"
-                                 " * scalar helpers static. */\n" + _static_helpers(_void_unused_parameters(text)))
-        wrapped = functions_fragment(prefix, specs, funcs, cnames, sizes, real)
-        header.write_text(_header_text(prefix, wrapped, version, phash, dae, real, float(dt), int(substeps)))
-        wrapper.write_text(wrapper_text(prefix, wrapped, sizes))
-    except OSError as exc:
-        raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for model %s", wrapper, ", ".join(s.name for s in specs), dae.name)
-    signatures = {
-        s.name: (tuple(_arg_size(s, funcs, a) for a in s.args), tuple(_out_function(s, funcs).numel_out(o.casadi_output) for o in s.outputs))
-        for s in specs
-    }
     return GeneratedCode(
         out_dir=out, prefix=prefix, functions=tuple(s.name for s in specs), source=wrapper, header=header,
-        casadi_source=casadi_source, casadi_header=out / f"{prefix}_casadi.h", parameters=source, friction="",
+        casadi_source=out / f"{prefix}_casadi.c", casadi_header=out / f"{prefix}_casadi.h", parameters=source, friction="",
         parameter_hash=phash, version=version, specs=specs, work_sizes=sizes, signatures=signatures, real=real, kind=MODEL_KIND,
     )
 
