@@ -397,11 +397,12 @@ class ExplicitODE:
 
 
 def _reduced(model: Any, name: str | None) -> tuple[Model, Model, dict[str, str]]:
-    """(the model as given, the model reduced as ``simulate()`` reduces it, declared units)."""
-    from gtmodel.modeling.components.component import Component  # higher room, imported on use
+    """(the model as given, the model reduced as ``simulate()`` reduces it, declared units).
 
+    A component (the room above, not imported here) is recognised by its ``to_model`` and
+    ``describe`` methods."""
     units: dict[str, str] = {}
-    if isinstance(model, Component):
+    if not isinstance(model, Model) and callable(getattr(model, "to_model", None)) and callable(getattr(model, "describe", None)):
         m = model.to_model(name)
         units = {str(r.name): str(r.unit) for r in model.describe().itertuples(index=False) if r.unit}
     elif isinstance(model, Model):
