@@ -155,6 +155,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "or an optimal_control result folder: its tracking controller (feedforward + time-varying LQR) alone")
     cg.add_argument("--period", type=float, default=None, metavar="S",
                     help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
+    cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
+    cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
     cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
@@ -414,8 +416,8 @@ def _codegen(args: argparse.Namespace) -> int:
         return _codegen_model(args, functions)
     if args.controller is not None and args.controller.is_dir():
         return _codegen_tracking(args)
-    if args.period is not None:
-        raise GtModelError("--period applies to --model and to a --controller result folder")
+    if args.period is not None or args.q is not None or args.r is not None:
+        raise GtModelError("--period, --q and --r apply to --model (--period) and to a --controller result folder")
     controller = load_controller(args.controller) if args.controller is not None else None
     if args.robot is None and functions is None and controller is not None and controller.kalman_step is None and controller.ilc_correction is None:
         functions = []  # the fusion filters and the lead-through step need no robot: the controller alone
@@ -466,7 +468,15 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
         raise GtModelError("--controller RESULT_DIR generates the tracking controller alone: give it without --robot, --functions, --retime-n-max")
     if not is_result_folder(args.controller):
         raise GtModelError(f"--controller {args.controller}: a folder must be a result folder (with summary.json)")
-    controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}))
+    weights = {}
+    for flag in ("q", "r"):
+        text = getattr(args, flag)
+        if text is not None:
+            try:
+                weights[flag.upper()] = [float(v) for v in text.split(",")]
+            except ValueError:
+                raise GtModelError(f"--{flag}: expected comma-separated numbers, got {text!r}") from None
+    controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}), **weights)
     generated = generate_loop_step(tracking_step(controller, f"tracking of {ode.name}"), args.out, prefix="gt_tracking", real=args.real)
     print(f"wrote {', '.join(str(p) for p in generated.files)}")
     print(generated.version)
