@@ -17,7 +17,7 @@ Newton iteration inside the graph where a block is not affine in its variables),
 ``<prefix>_step_implicit(x[, u], x_next)``
     one step of the 2-stage Radau IIA method (order 3, L-stable: for stiff models such as a
     motor whose electrical time constant is shorter than the period), its stage equations
-    solved by a bounded Newton iteration with the exact Jacobian,
+    solved by a bounded simplified Newton iteration (the exact Jacobian at the predictor),
 
 (the steps for models that do not depend on time explicitly) with the machinery of the
 robot code (:mod:`gtmodel.codegen.generate`: CasADi's code generator, plain-C wrappers

@@ -253,7 +253,7 @@ class NewtonLoop:
 def test_newton_model_c_gives_not_converged_never_nan(tmp_path):
     # reference: the same explicit ODE from Python (1e-12) and simulate() over the horizon;
     # a state whose Newton solve overflows gives GT_NOT_CONVERGED with the outputs untouched
-    gen = generate_model(NewtonLoop().build(), tmp_path / "src")
+    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["ode", "step_implicit"], substeps=1)
     report = check_model(gen, n=200)
     assert report.passed, "\n".join(report.summary_lines())
     lib = load_library(gen, compile_shared(gen, tmp_path / "build2", werror=True))
