@@ -6,7 +6,7 @@ Every controller that runs in the loop (the tracking controller of
 ``control(t (1,1), x (nx,1), u_last (nu,1)[, w (nw,1)]) -> (u (nu,1)[, w_next (nw,1)], ok (1,1))``
 
 (``w`` an inner memory the step carries from one period to the next, e.g. an MPC's shifted
-warm start, the C argument ``warm`` of ``<prefix>_control``; ``ok`` 1 when the result is
+warm start, the C argument ``w_start`` of ``<prefix>_control``; ``ok`` 1 when the result is
 valid, e.g. the QP solved), described by a
 :class:`LoopStep`. :func:`generate_loop_step` writes it through the one codegen path
 (:func:`gtmodel.codegen.generate.write_library`: CasADi's code generator, a plain-C wrapper
@@ -199,7 +199,7 @@ def _spec(step: LoopStep) -> FunctionSpec:
             ArgSpec("u_last", "vector", "u_last", "the last input")]
     outs = [OutputSpec("u", "u", f"input ({', '.join(step.u_names[:12])}), saturated")]
     if step.nw:
-        args.append(ArgSpec("warm", "vector", "w", "inner memory (warm start)"))  # "w" is the wrapper's work array
+        args.append(ArgSpec("w_start", "vector", "w", "inner memory (warm start)"))  # not 'w': the wrapper's work array
         outs.append(OutputSpec("w_next", "w_next", "inner memory of the next period"))
     return FunctionSpec(
         "control", lambda source: source.function, args=tuple(args), outputs=tuple(outs),
@@ -247,7 +247,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     phash = _hash(step)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; controller {step.name} sha256:{phash}; real {real}"
     P = prefix.upper()
-    ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "warm": "mem->w"}
+    ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
     outs = {"u": "u_new", "w_next": "w_new"}
     call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
     values = dict(
@@ -320,14 +320,14 @@ def _samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.n
            "x": rows + scale * rng.standard_normal(rows.shape),
            "u_last": rng.uniform(lo, hi, (n, step.nu))}
     if step.nw:
-        out["warm"] = np.tile(step.w_init, (n, 1))
+        out["w_start"] = np.tile(step.w_init, (n, 1))
     return out
 
 
 def _reference(step: LoopStep, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     n = len(inputs["t"])
     f = step.function.map(n)
-    res = f.call({("w" if k == "warm" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()})
+    res = f.call({("w" if k == "w_start" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()})
     ok = np.asarray(res["ok"]).reshape(-1) > 0.5
     out = {"u": np.asarray(res["u"]).T}
     if step.nw:
@@ -356,7 +356,7 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     x0 = np.asarray(samples["x"][0], dtype=float)
     t0 = float(samples["t"][0, 0])
     ref = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": safe[None, :],
-                            **({"warm": step.w_init[None, :]} if step.nw else {})})["u"][0]
+                            **({"w_start": step.w_init[None, :]} if step.nw else {})})["u"][0]
     run("valid state after init (u equals Python)", "GT_OK", t0, x0, ref)
     bad = x0.copy()
     bad[0] = math.nan
