@@ -19,7 +19,7 @@ from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen import compile_shared, generate, load_library, parameter_hash
 from gtmodel.codegen.build import find_compiler
 from gtmodel.codegen.model_code import MODEL_TOLERANCE, STRICT_EXTRA, check_model, generate_model, model_parameter_hash
-from gtmodel.errors import InputError, ModelError
+from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling import Model
 from gtmodel.problems.user_model import load_user_model
 from gtmodel.robots import load_parameters
@@ -272,3 +272,16 @@ def test_dc_motor_steps_over_the_horizon_equal_simulate(tmp_path):
     assert report.passed, "\n".join(report.summary_lines())
     assert [r.name for r in horizon] == ["step_rk4 over 250 periods vs simulate()", "step_implicit over 250 periods vs simulate()"]
     assert "#define GT_DC_MOTOR_DT 0.004" in gen.header.read_text() and "const double x[3], const double u[1], double xdot[3]" in gen.header.read_text()
+
+
+def test_horizon_check_fails_when_simulate_fails(tmp_path):
+    # no reference, no success: a simulate() that fails makes the horizon check (and the report) fail
+    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["step_rk4"], substeps=1)
+
+    def failing(*args, **kwargs):
+        raise ConvergenceError("IDAS gave up")
+
+    gen.parameters.model.simulate = failing
+    report = check_model(gen, n=20)
+    assert not report.passed
+    assert [r.name for r in report.functions if not r.ok] == ["step_rk4 over 250 periods vs simulate() (simulate failed)"]
