@@ -48,6 +48,7 @@ import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport, StatusProbe
+from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
@@ -369,7 +370,8 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     return probes
 
 
-def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build_dir: str | Path | None = None) -> CheckReport:
+def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build_dir: str | Path | None = None,
+                    timing: bool = False) -> CheckReport:
     """Compile a loop controller strictly and compare it with Python; probe the step contract.
 
     Parameters
@@ -382,6 +384,8 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
         Seed of the random generator.
     build_dir : str or pathlib.Path, optional
         Build folder (default ``<out_dir>/build``).
+    timing : bool, optional
+        Also time ``<prefix>_control`` in a C loop (ns/call).
 
     Returns
     -------
@@ -413,6 +417,9 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     spec = FunctionSpec(**{**spec.__dict__, "reference": lambda source, inputs: _reference(source, inputs)})
     cf = library["control"]
     results = (compare(spec, cf, step, samples, generated.real),)
+    if timing:
+        times = time_functions(generated, library.path, {"control": samples}, build)
+        results = tuple(type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results)
     probes = []
     for a in spec.args:
         row = np.array(samples[a.name][0], dtype=float)
