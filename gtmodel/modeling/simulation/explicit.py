@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import casadi as ca
@@ -250,7 +251,7 @@ class ExplicitODE:
         res = self.full(t=0.0, x=x, u=u, p=p)
         return ca.Function(name, [x, u, p], [res[o] for o in outputs], ["x", "u", "p"], outputs)
 
-    @property
+    @cached_property
     def f(self) -> ca.Function:
         """``f(x, u, p) -> xdot``: the right-hand side, ``(nx,1), (nu,1), (np,1) -> (nx,1)``.
 
@@ -261,7 +262,7 @@ class ExplicitODE:
         """
         return self._timeless(["xdot"], "f")
 
-    @property
+    @cached_property
     def h(self) -> ca.Function:
         """``h(x, u, p) -> y``: the declared outputs, ``(nx,1), (nu,1), (np,1) -> (ny,1)``.
 
@@ -272,7 +273,7 @@ class ExplicitODE:
         """
         return self._timeless(["y"], "h")
 
-    @property
+    @cached_property
     def converged(self) -> ca.Function:
         """``converged(x, u, p) -> converged``: 1 when the algebraic Newton solves converged.
 
