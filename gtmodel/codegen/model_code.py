@@ -418,7 +418,7 @@ def check_horizon(generated: GeneratedCode, library: CompiledLibrary, periods: i
     -------
     list of FunctionCheck
         One per step function (named ``"<step> over N periods vs simulate()"``): the C
-        step from the start values with a smooth input (one sine period, held over each
+        step from ``simulate()``'s start (consistent with initial equations) with a smooth input (one sine period, held over each
         period), against the model's own simulation (IDAS, its default tolerances) of the same
         piecewise-constant input at the period boundaries. A status other than ``GT_OK``
         fails it; so does a simulation that fails (no reference, named in the report).
@@ -442,7 +442,7 @@ def check_horizon(generated: GeneratedCode, library: CompiledLibrary, periods: i
     for name in steps:
         cf = library[name]
         xs = np.full_like(ref, np.nan)
-        xs[0] = ode.x0
+        xs[0] = ref[0]  # simulate()'s consistent start (initial equations, fixed starts) is the C's start too
         bad = 0
         for k in range(periods):
             args = (xs[k], u[k]) if ode.nu else (xs[k],)
