@@ -41,9 +41,15 @@
     model's variables, the plots; :mod:`gtmodel.report.result_page`). ``gtmodel solve``
     writes it for a single problem unless ``--no-report``.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
-    Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
-    algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
-    ``-Werror`` and compares it with the model evaluated from Python.
+    Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: its explicit ODE
+    right-hand side, outputs and fixed steps over the loop period) with its own parameter
+    hash; ``--check`` compiles it with ``-Werror``, compares it with the model evaluated
+    from Python and iterates each step over a horizon against ``simulate()``.
+``gtmodel codegen --controller RESULT_DIR --out DIR [--check]``
+    The tracking controller of an ``optimal_control`` result folder
+    (:func:`gtmodel.problems.controller.tracking_from_result`: feedforward + time-varying
+    LQR at the loop period, saturated) as C with the loop-step interface
+    (:mod:`gtmodel.codegen.loop_step`: ``gt_tracking_init``, ``gt_tracking_step``).
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
@@ -155,7 +161,12 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--max-iter", type=int, default=None, help="iteration limit of the Newton loops (default 20)")
     cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
     cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
-                    help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library")
+                    help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library; "
+                    "or an optimal_control result folder: its tracking controller (feedforward + time-varying LQR) alone")
+    cg.add_argument("--period", type=float, default=None, metavar="S",
+                    help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
+    cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
+    cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
     cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
@@ -421,6 +432,10 @@ def _codegen(args: argparse.Namespace) -> int:
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
     if args.model is not None:
         return _codegen_model(args, functions)
+    if args.controller is not None and args.controller.is_dir():
+        return _codegen_tracking(args)
+    if args.period is not None or args.q is not None or args.r is not None:
+        raise GtModelError("--period, --q and --r apply to --model (--period) and to a --controller result folder")
     controller = load_controller(args.controller) if args.controller is not None else None
     if args.robot is None and functions is None and controller is not None and controller.kalman_step is None and controller.ilc_correction is None:
         functions = []  # the fusion filters and the lead-through step need no robot: the controller alone
@@ -452,12 +467,42 @@ def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int
 
     if args.controller is not None or args.robot is not None:
         raise GtModelError("--model generates a user model's library: give it without --robot and --controller")
-    generated = generate_model(load_user_model(*split_model_reference(args.model)), args.out, functions=functions, real=args.real)
+    period = {} if args.period is None else {"dt": args.period}
+    generated = generate_model(load_user_model(*split_model_reference(args.model)), args.out, functions=functions, real=args.real, **period)
     print(f"wrote {', '.join(str(p) for p in generated.files)}")
     print(generated.version)
     if not args.check:
         return EXIT_OK
     report = check_model(generated, n=args.samples, seed=args.seed, timing=True)
+    print("\n".join(report.summary_lines()))
+    return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
+
+
+def _codegen_tracking(args: argparse.Namespace) -> int:
+    from gtmodel.codegen.loop_step import check_loop_step, generate_loop_step, tracking_step
+    from gtmodel.problems.controller import is_result_folder, tracking_from_result
+
+    if args.robot is not None or args.functions is not None or args.retime_n_max is not None:
+        raise GtModelError("--controller RESULT_DIR generates the tracking controller alone: give it without --robot, --functions, --retime-n-max")
+    if not is_result_folder(args.controller):
+        raise GtModelError(f"--controller {args.controller}: a folder must be a result folder (with summary.json)")
+    weights = {}
+    for flag in ("q", "r"):
+        text = getattr(args, flag)
+        if text is not None:
+            try:
+                weights[flag.upper()] = [float(v) for v in text.split(",")]
+            except ValueError:
+                raise GtModelError(f"--{flag}: expected comma-separated numbers, got {text!r}") from None
+    controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}), **weights)
+    generated = generate_loop_step(tracking_step(controller, f"tracking of {ode.name}"), args.out, prefix="gt_tracking", real=args.real)
+    print(f"wrote {', '.join(str(p) for p in generated.files)}")
+    print(generated.version)
+    print(f"tracking controller of {ode.name}: {controller.length} samples at {controller.dt:g} s, "
+          f"{controller.nx} states, {controller.nu} inputs, input bounds {controller.u_lb.tolist()} .. {controller.u_ub.tolist()}")
+    if not args.check:
+        return EXIT_OK
+    report = check_loop_step(generated, n=min(args.samples, 2000), seed=args.seed, timing=True)
     print("\n".join(report.summary_lines()))
     return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
 

@@ -56,7 +56,7 @@ from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
 
-__all__ = ["GeneratedCode", "generate", "REAL_TYPES", "controller_part", "robot_part"]
+__all__ = ["GeneratedCode", "generate", "REAL_TYPES", "controller_part", "robot_part", "write_library"]
 
 log = logging.getLogger("gtmodel")
 
@@ -607,3 +607,87 @@ def robot_part(generated: GeneratedCode) -> GeneratedCode:
     if len(specs) == len(generated.specs):
         return generated
     return dataclasses.replace(generated, specs=specs, functions=tuple(s.name for s in specs))
+
+
+def write_library(
+    prefix: str,
+    specs: Sequence[FunctionSpec],
+    source: Any,
+    out_dir: str | Path,
+    real: str,
+    header: Any,
+    extra_source: str = "",
+) -> tuple[Path, dict[str, ca.Function], dict[str, tuple[int, int, int, int]], dict[str, tuple]]:
+    """Write CasADi's C of some declared functions, their plain-C wrappers and a header.
+
+    The one writer of the libraries that are not a robot's (a user model's,
+    :mod:`gtmodel.codegen.model_code`; a loop step's, :mod:`gtmodel.codegen.loop_step`):
+    ``<prefix>_casadi.c/.h`` (CasADi's code generator, unused parameters marked, helpers
+    static), ``<prefix>.c`` (the wrappers with argument checks and status codes, then
+    ``extra_source``) and ``<prefix>.h`` (``header(fragment)``: the text around the
+    prototypes).
+
+    Parameters
+    ----------
+    prefix : str
+        C symbol prefix.
+    specs : sequence of FunctionSpec
+        The functions; ``spec.build(source)`` gives each CasADi Function.
+    source : object
+        Passed to ``spec.build``.
+    out_dir : str or pathlib.Path
+        Folder (created if missing).
+    real : {"double", "float"}
+        Floating-point type.
+    header : callable
+        ``header(fragment) -> str``, the header text (``fragment.header`` the prototypes).
+    extra_source : str, optional
+        C appended to ``<prefix>.c`` (e.g. the memory functions of a loop step).
+
+    Returns
+    -------
+    out : pathlib.Path
+        The folder.
+    funcs : dict of str to casadi.Function
+        The prepared Functions by spec name.
+    sizes : dict
+        Work sizes by spec name.
+    signatures : dict
+        ``(argument sizes, output sizes)`` by spec name.
+
+    Raises
+    ------
+    CodegenError
+        CasADi's code generation or writing the files failed.
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CodegenError(f"cannot create output folder {out}: {exc.strerror}") from None
+    cg = ca.CodeGenerator(f"{prefix}_casadi.c", {"with_header": True, "prefix": f"{prefix}_cg_", "casadi_real": real})
+    funcs, cnames = {}, {}
+    for spec in specs:
+        cnames[spec.name] = f"{prefix}_cg_{spec.name}"
+        funcs[spec.name] = _prepare(spec, spec.build(source), cnames[spec.name])
+        cg.add(funcs[spec.name])
+    try:
+        cg.generate(str(out) + "/")
+    except RuntimeError as exc:
+        raise CodegenError(f"CasADi code generation failed: {exc}") from None
+    casadi_source = out / f"{prefix}_casadi.c"
+    text = casadi_source.read_text()
+    sizes = {s.name: _work_sizes(text, cnames[s.name], funcs[s.name]) for s in specs}
+    try:
+        casadi_source.write_text("/* CasADi-generated code; gtmodel marked unused function parameters (void) and the\n"
+                                 " * scalar helpers static. */\n" + _static_helpers(_void_unused_parameters(text)))
+        wrapped = functions_fragment(prefix, specs, funcs, cnames, sizes, real)
+        (out / f"{prefix}.h").write_text(header(wrapped))
+        (out / f"{prefix}.c").write_text(wrapper_text(prefix, wrapped, sizes) + extra_source)
+    except OSError as exc:
+        raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
+    signatures = {
+        s.name: (tuple(_arg_size(s, funcs, a) for a in s.args), tuple(_out_function(s, funcs).numel_out(o.casadi_output) for o in s.outputs))
+        for s in specs
+    }
+    return out, funcs, sizes, signatures

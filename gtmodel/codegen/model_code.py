@@ -1,27 +1,36 @@
-"""C for a user's own model (``gtmodel codegen --model FILE:CLASS``): the flattened DAE's functions.
+"""C for a user's own model (``gtmodel codegen --model FILE:CLASS``): its explicit ODE and fixed steps.
 
-A :class:`~gtmodel.modeling.Model` flattens to the semi-explicit DAE
-``xdot = f(t, x, z, u, p)``, ``0 = g(t, x, z, u, p)`` with outputs ``y(t, x, z, u, p)``
-(:class:`~gtmodel.modeling.FlatDAE`). :func:`generate_model` writes C for
+A :class:`~gtmodel.modeling.Model` (or :class:`~gtmodel.modeling.Component`) is reduced
+to its explicit ODE ``xdot = f(x, u)``, ``y = h(x, u)`` by
+:func:`gtmodel.modeling.explicit_ode` (the reduction :meth:`Model.simulate` uses; the
+algebraic variables eliminated symbolically in block-triangular order, or by a bounded
+Newton iteration inside the graph where a block is not affine in its variables), and
+:func:`generate_model` writes C for
 
-``<prefix>_ode(t, x[, z][, u], xdot)``
-    the right-hand side ``f`` (models with states);
-``<prefix>_alg(t, x[, z][, u], g)``
-    the algebraic residual ``g`` (models with algebraic variables);
-``<prefix>_outputs(t, x[, z][, u], <output 1>, ...)``
-    the declared outputs (models with outputs),
+``<prefix>_ode([t,] x[, u], xdot)``
+    the right-hand side ``f`` (a true ODE: no algebraic variables among the inputs);
+``<prefix>_outputs([t,] x[, u], <output 1>, ...)``
+    the declared outputs ``h`` (models with outputs);
+``<prefix>_step_rk4(x[, u], x_next)``
+    one explicit Runge-Kutta 4 step over the period ``<PREFIX>_DT`` (the 4 ms loop by
+    default), the input held;
+``<prefix>_step_implicit(x[, u], x_next)``
+    one step of the 2-stage Radau IIA method (order 3, L-stable: for stiff models such as a
+    motor whose electrical time constant is shorter than the period), its stage equations
+    solved by a bounded simplified Newton iteration (the exact Jacobian at the predictor),
 
-with the machinery of the robot code (:mod:`gtmodel.codegen.generate`: CasADi's code
-generator, common subexpressions merged, plain-C wrappers with argument checks, status
-codes, stack work arrays, no heap, reentrant) and a header of its own: the model's
-name, variables and units as declared, and its OWN parameter hash
-(:func:`model_parameter_hash`, of the flattened model), no robot or Gantry-Tau macros.
-The parameter values (the model's defaults) are embedded as constants, as a robot's
-are. :func:`check_model` compiles the code under the robot code's strict flags
-(``-std=c99 -Wall -Wextra -Werror -pedantic``) and compares every function with the CasADi evaluation from Python on random
-inputs (1e-12, absolute or relative) and probes non-finite inputs; the Python side is
-the model's own CasADi Functions (``FlatDAE.ode``, ``alg``, ``outputs``, which simulation
-and the transcriptions use) with the parameter values as an input.
+(the steps for models that do not depend on time explicitly) with the machinery of the
+robot code (:mod:`gtmodel.codegen.generate`: CasADi's code generator, plain-C wrappers
+with argument checks, status codes, stack work arrays, no heap, reentrant) and a header
+of its own: the model's name, variables and units as declared, and its OWN parameter hash
+(:func:`model_parameter_hash`). The parameter values (the model's defaults) are embedded
+as constants. A Newton iteration that does not converge (the algebraic one or the
+implicit step's) gives ``GT_NOT_CONVERGED`` with the outputs untouched, never NaN.
+:func:`check_model` compiles the code under the robot code's strict flags
+(``-std=c99 -Wall -Wextra -Werror -pedantic``), compares every function with the same
+CasADi Functions evaluated from Python on random inputs (1e-12, absolute or relative),
+probes non-finite inputs, and iterates each C step over a horizon of periods against
+:meth:`Model.simulate` (IDAS, tight tolerances) to :data:`HORIZON_TOLERANCE`.
 """
 
 from __future__ import annotations
@@ -29,6 +38,7 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,25 +50,37 @@ import numpy as np
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.emit import fill, header_guard
-from gtmodel.codegen.emit.robot import _arg_size, _out_function, functions_fragment, wrapper_text
 from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
-from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
-from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare
-from gtmodel.errors import CodegenError, InputError
-from gtmodel.modeling import FlatDAE, Model
+from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.codegen.check.report import FunctionCheck
+from gtmodel.codegen.declarations import StatusCheck
+from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.errors import CodegenError, GtModelError, InputError
+from gtmodel.modeling import Component, ExplicitODE, FlatDAE, Model, explicit_ode
 
-__all__ = ["MODEL_KIND", "MODEL_FUNCTIONS", "MODEL_TOLERANCE", "STRICT_EXTRA", "ModelSource", "model_parameter_hash", "model_specs",
-           "generate_model", "check_model"]
+__all__ = ["MODEL_KIND", "MODEL_FUNCTIONS", "MODEL_TOLERANCE", "HORIZON_TOLERANCE", "HORIZON_PERIODS", "STEP_FUNCTIONS", "SUBSTEPS",
+           "STRICT_EXTRA", "ModelSource", "model_parameter_hash", "model_specs", "generate_model", "check_model", "check_horizon"]
 
 log = logging.getLogger("gtmodel")
 
 #: ``FunctionSpec.kind`` / ``GeneratedCode.kind`` of a user model's functions.
 MODEL_KIND = "model"
 #: The functions a model can have, in C order.
-MODEL_FUNCTIONS = ("ode", "alg", "outputs")
+MODEL_FUNCTIONS = ("ode", "outputs", "step_rk4", "step_implicit")
+#: The fixed-step functions and their :meth:`~gtmodel.modeling.ExplicitODE.step` methods.
+STEP_FUNCTIONS = {"step_rk4": "rk4", "step_implicit": "radau2"}
+#: Largest accepted deviation of a C step iterated over the horizon from ``simulate()``,
+#: relative to the largest magnitude of that state over the horizon (plus the same absolute floor).
+HORIZON_TOLERANCE = 1e-3
+#: Default substeps of the generated fixed steps within one period (``<PREFIX>_SUBSTEPS``):
+#: four RK4 or Radau IIA steps of 1 ms hold a motor's 1.7 ms electrical time constant to
+#: :data:`HORIZON_TOLERANCE` where one 4 ms step does not.
+SUBSTEPS = 4
+#: Periods of the horizon check (1 s at the 4 ms loop).
+HORIZON_PERIODS = 250
 #: Largest accepted ``|C - Python|`` of a model function (absolute, or relative to ``|Python|``).
 MODEL_TOLERANCE = 1e-12
 #: Flags :func:`check_model` adds to :func:`~gtmodel.codegen.build.compile_shared`'s
@@ -92,23 +114,34 @@ def _c_names(names: Sequence[str]) -> dict[str, str]:
 
 @dataclass(frozen=True)
 class ModelSource:
-    """What the model code is generated from: the model and its flattened DAE.
+    """What the model code is generated from: the model, its explicit ODE and the step period.
 
     Parameters
     ----------
     model : Model
-        The user's model.
-    dae : FlatDAE
-        Its flattening.
+        The user's model (a component's flattened model).
+    ode : ExplicitODE
+        Its explicit ODE (:func:`gtmodel.modeling.explicit_ode`).
+    dt : float
+        Period of the fixed-step functions [s].
+    substeps : int
+        Steps of the method within the period.
     """
 
     model: Model
-    dae: FlatDAE
+    ode: ExplicitODE
+    dt: float = LOOP_PERIOD_S
+    substeps: int = SUBSTEPS
 
     @property
     def name(self) -> str:
         """The model's name."""
         return self.model.name
+
+    @property
+    def dae(self) -> FlatDAE:
+        """The reduced, flattened model the ODE was built from."""
+        return self.ode.dae
 
 
 def model_parameter_hash(dae: FlatDAE) -> str:
@@ -141,96 +174,145 @@ def _names_doc(names: Sequence[str], what: str) -> str:
     return f"{what} ({shown})"
 
 
-def model_specs(dae: FlatDAE) -> tuple[FunctionSpec, ...]:
-    """The declarations of a model's C functions (``ode``, ``alg``, ``outputs`` as it has them).
+def _split_outputs(dae: FlatDAE, y: ca.SX) -> dict[str, ca.SX]:
+    """The stacked outputs ``y`` by declared output (vector outputs keep their length)."""
+    out, k = {}, 0
+    for name, size in dae.output_sizes.items():
+        out[name] = y[k:k + size]
+        k += size
+    return out
+
+
+def _model_functions(ode: ExplicitODE, dt: float, substeps: int = SUBSTEPS) -> dict[str, tuple[list[str], ca.Function]]:
+    """Per C function: its CasADi input names and the Function with ``p`` as the last input."""
+    dae = ode.dae
+    ins = (["t"] if ode.time_dependent else []) + ["x"] + (["u"] if ode.nu else [])
+    sym = {"t": ca.SX.sym("t"), "x": ca.SX.sym("x", ode.nx), "u": ca.SX.sym("u", ode.nu), "p": ca.SX.sym("p", ode.np)}
+    res = ode.full(t=sym["t"] if ode.time_dependent else 0.0, x=sym["x"], u=sym["u"], p=sym["p"])
+    args = [sym[n] for n in ins] + [sym["p"]]
+    out = {"ode": (ins, ca.Function("ode", args, [res["xdot"], res["converged"]], ins + ["p"], ["xdot", "converged"]))}
+    if dae.output_sizes:
+        names = _c_names(list(dae.output_sizes))
+        ys = _split_outputs(dae, res["y"])
+        out["outputs"] = (ins, ca.Function("outputs", args, [ys[k] for k in names] + [res["converged"]], ins + ["p"],
+                                           [names[k] for k in names] + ["converged"]))
+    if not ode.time_dependent:
+        for name, method in STEP_FUNCTIONS.items():
+            st = ode.step(dt, method, substeps=substeps)
+            r = st(x=sym["x"], u=sym["u"], p=sym["p"])
+            out[name] = (ins, ca.Function(name, args, [r["x_next"], r["converged"]], ins + ["p"], ["x_next", "converged"]))
+    return out
+
+
+def model_specs(ode: ExplicitODE, dt: float = LOOP_PERIOD_S, substeps: int = SUBSTEPS) -> tuple[FunctionSpec, ...]:
+    """The declarations of a model's C functions (``ode``, ``outputs``, ``step_rk4``, ``step_implicit``).
 
     Parameters
     ----------
-    dae : FlatDAE
-        The flattened model; its parameter values are embedded as constants.
+    ode : ExplicitODE
+        The model's explicit ODE; its default parameter values are embedded as constants.
+    dt : float, optional
+        Period of the fixed-step functions [s] (default the 4 ms loop).
+    substeps : int, optional
+        Steps of the method within the period (default :data:`SUBSTEPS`).
 
     Returns
     -------
     tuple of FunctionSpec
-        One per non-empty function; empty arguments (no algebraics, no inputs) are left out.
+        One per function the model has (``outputs`` with declared outputs; the steps for
+        models that do not depend on time explicitly); the input ``u`` is left out for a
+        model without inputs. Each has the status check ``converged`` (``GT_NOT_CONVERGED``).
     """
-    p = ca.DM(dae.p_value)
-    ins = [("t", dae.t, "time [s]"), ("x", dae.x, _names_doc(dae.x_names, "states")),
-           ("z", dae.z, _names_doc(dae.z_names, "algebraic variables")), ("u", dae.u, _names_doc(dae.u_names, "inputs"))]
-    ins = [(n, s, d) for n, s, d in ins if s.numel() > 0]
-    args = tuple(ArgSpec(n, "vector", n, d) for n, s, d in ins)
+    dae = ode.dae
+    p = ca.DM(ode.p_default)
+    docs = {"t": "time [s]", "x": _names_doc(ode.x_names, "states"), "u": _names_doc(ode.u_names, "inputs")}
+    checks = (StatusCheck("converged", ">", "0.5", "GT_NOT_CONVERGED"),)
+    table = _model_functions(ode, dt, substeps)
 
-    def fixed(e: ca.SX) -> ca.SX:
-        return ca.substitute(e, dae.p, p) if dae.npar else e
+    def fixed(name: str) -> Any:
+        ins, f = table[name]
+        sy = [ca.SX.sym(n, f.size1_in(n)) for n in ins]
+        g = ca.Function(f"{dae.name}_{name}", sy, f.call(sy + [p]), ins, f.name_out())
+        return lambda source: g
 
-    def function(name: str, outs: dict[str, ca.SX]) -> Any:
-        f = ca.Function(f"{dae.name}_{name}", [s for _, s, _ in ins], [fixed(e) for e in outs.values()], [n for n, _, _ in ins], list(outs))
-        return lambda source: f
-
-    def reference(fname: str, names: dict[str, str]) -> Any:
-        """The model's own Function (``FlatDAE.ode``/``alg``/``outputs``, parameters as input) from Python."""
+    def reference(name: str, outs: Sequence[str]) -> Any:
+        """The same Function with the parameters as an input, from Python; rows that did not converge NaN (skipped)."""
 
         def ref(source: ModelSource, inputs: Any) -> dict[str, np.ndarray]:
+            ins, f = _model_functions(source.ode, source.dt, source.substeps)[name]
             n = len(next(iter(inputs.values())))
-            f = getattr(source.dae, fname)
-            cols = {k: np.asarray(inputs[k], dtype=float).reshape(n, -1).T for k in inputs}
-            cols["p"] = np.tile(source.dae.p_value.reshape(-1, 1), (1, n))
-            res = f.map(n)(**{k: cols.get(k, np.zeros((f.numel_in(k), n))) for k in f.name_in()})
-            return {c: np.asarray(ca.DM(res[o])).T.reshape(n, -1) for o, c in names.items()}
+            cols = [np.asarray(inputs[k], dtype=float).reshape(n, -1).T for k in ins]
+            res = f.map(n)(*cols, np.tile(source.ode.p_default.reshape(-1, 1), (1, n)))
+            res = res if isinstance(res, (list, tuple)) else [res]
+            ok = np.asarray(res[-1]).reshape(-1) > 0.5
+            got = {o: np.asarray(ca.DM(v)).T.reshape(n, -1) for o, v in zip(f.name_out(), res)}
+            return {o: np.where(ok[:, None], got[o], np.nan) for o in outs}
 
         return ref
 
+    common = dict(tolerance=MODEL_TOLERANCE, relative_tolerance=MODEL_TOLERANCE, kind=MODEL_KIND, checks=checks)
     specs = []
-    common = dict(args=args, tolerance=MODEL_TOLERANCE, relative_tolerance=MODEL_TOLERANCE, kind=MODEL_KIND)
-    if dae.nx:
-        specs.append(FunctionSpec("ode", function("ode", {"xdot": dae.ode_expr}), reference=reference("ode", {"xdot": "xdot"}), outputs=(OutputSpec("xdot", "xdot", _names_doc(dae.x_names, "der() of the states")),),
-                                  doc=f"Right-hand side xdot = f(t, x, z, u) of the flattened model {dae.name}.", **common))
-    if dae.nz:
-        specs.append(FunctionSpec("alg", function("alg", {"g": dae.alg_expr}), reference=reference("alg", {"g": "g"}), outputs=(OutputSpec("g", "g", "algebraic residual, zero on the solution"),),
-                                  doc=f"Algebraic residual 0 = g(t, x, z, u) of the flattened model {dae.name}.", **common))
-    if dae.output_exprs:
-        names = _c_names(list(dae.output_exprs))
-        outs = {names[k]: v for k, v in dae.output_exprs.items()}
-        specs.append(FunctionSpec("outputs", function("outputs", outs), reference=reference("outputs", names),
-                                  outputs=tuple(OutputSpec(c, c, f"output {k}") for k, c in names.items()),
-                                  doc=f"The declared outputs of the model {dae.name}.", **common))
+    for name, (ins, f) in table.items():
+        args = tuple(ArgSpec(n, "vector", n, docs[n]) for n in ins)
+        if name == "ode":
+            outputs = (OutputSpec("xdot", "xdot", _names_doc(ode.x_names, "der() of the states")),)
+            doc = f"Explicit right-hand side xdot = f(x, u) of the model {dae.name} (algebraic variables eliminated)."
+        elif name == "outputs":
+            outputs = tuple(OutputSpec(c, c, f"output {k}") for k, c in _c_names(list(dae.output_sizes)).items())
+            doc = f"The declared outputs y = h(x, u) of the model {dae.name}."
+        else:
+            outputs = (OutputSpec("x_next", "x_next", _names_doc(ode.x_names, "states one period later")),)
+            what = "explicit Runge-Kutta 4" if STEP_FUNCTIONS[name] == "rk4" else "2-stage Radau IIA (order 3, L-stable, bounded Newton)"
+            doc = (f"One period ({dt!r} s, {substeps} {what} steps) of the model {dae.name}, the input held "
+                   "(GT_NOT_CONVERGED: a Newton iteration failed).")
+        specs.append(FunctionSpec(name, fixed(name), args=args, outputs=outputs, doc=doc,
+                                  reference=reference(name, [o.casadi_output for o in outputs]), **common))
     return tuple(specs)
 
 
-def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE, real: str) -> str:
+def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE, real: str, dt: float, substeps: int) -> str:
     P = prefix.upper()
     return fill(
         "template_model_header.h", GP=prefix, P=P, NAME=dae.name, VERSION=version, HASH=phash, REAL=real,
         STATES=", ".join(dae.x_names) or "none", ALGEBRAIC=", ".join(dae.z_names) or "none", INPUTS=", ".join(dae.u_names) or "none",
         PARAMETERS=", ".join(f"{n} = {v!r}" for n, v in zip(dae.p_names, dae.p_value.tolist())) or "none",
-        NX=dae.nx, NZ=dae.nz, NU=dae.nu,
+        NX=dae.nx, NZ=dae.nz, NU=dae.nu, NY=len(dae.output_names), DT=repr(float(dt)), SUBSTEPS=substeps,
         OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
         PROTOTYPES="\n".join(functions.header),
     )
 
 
 def generate_model(
-    model: Model,
+    model: Model | Component,
     out_dir: str | Path,
     functions: Sequence[str] | None = None,
     prefix: str | None = None,
     real: str = "double",
+    dt: float = LOOP_PERIOD_S,
+    substeps: int = SUBSTEPS,
 ) -> GeneratedCode:
     """Generate C and a header for the functions of a user's model.
 
     Parameters
     ----------
-    model : Model
+    model : Model or Component
         The model (e.g. from :func:`gtmodel.problems.user_model.load_user_model`); its
-        parameter defaults are embedded.
+        parameter defaults are embedded. Reduced to its explicit ODE by
+        :func:`gtmodel.modeling.explicit_ode`.
     out_dir : str or pathlib.Path
         Folder to write into (created if missing).
     functions : sequence of str, optional
-        A subset of ``"ode"``, ``"alg"``, ``"outputs"``; default all the model has.
+        A subset of :data:`MODEL_FUNCTIONS` (``"ode"``, ``"outputs"``, ``"step_rk4"``,
+        ``"step_implicit"``); default all the model has.
     prefix : str, optional
         C symbol prefix; default ``"gt_<model name>"``.
     real : {"double", "float"}, optional
         Floating-point type.
+    dt : float, optional
+        Period of the fixed-step functions [s] (default the 4 ms loop,
+        :data:`gtmodel.defaults.LOOP_PERIOD_S`; ``<PREFIX>_DT`` in the header).
+    substeps : int, optional
+        Steps of the method within one period (default :data:`SUBSTEPS`; ``<PREFIX>_SUBSTEPS``).
 
     Returns
     -------
@@ -241,66 +323,44 @@ def generate_model(
     Raises
     ------
     InputError
-        Not a Model, an unknown or absent function, a bad prefix or real type.
+        Not a Model or Component, an unknown or absent function, a bad prefix, real type
+        or period.
     ModelError
-        The model does not flatten.
+        The model does not reduce to an explicit ODE (no state, not index 1).
     CodegenError
         CasADi's code generation or writing the files failed.
     """
+    if isinstance(model, Component):
+        model = model.to_model()
     if not isinstance(model, Model):
-        raise InputError(f"model: expected a gtmodel.modeling.Model, got {type(model).__name__}")
+        raise InputError(f"model: expected a gtmodel.modeling.Model or Component, got {type(model).__name__}")
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
-    dae = model.flatten()
     prefix = prefix if prefix is not None else "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", model.name)
     if not isinstance(prefix, str) or not _IDENT.match(prefix):
         raise InputError(f"prefix: expected a C identifier such as 'gt_cart_pendulum', got {prefix!r}")
-    table = {s.name: s for s in model_specs(dae)}
-    if not table:
-        raise InputError(f"model {model.name!r} has no states, algebraic variables or outputs: nothing to generate")
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not np.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt: expected a positive period in seconds, got {dt!r}")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise InputError(f"substeps: expected a positive number of steps per period, got {substeps!r}")
+    ode = explicit_ode(model)
+    dae = ode.dae
+    table = {s.name: s for s in model_specs(ode, float(dt), int(substeps))}
     chosen = list(table) if functions is None else list(functions)
     unknown = [f for f in chosen if f not in table]
     if unknown or not chosen:
         raise InputError(f"functions: {unknown or 'none'} not among the model's functions ({', '.join(table)})")
     specs = tuple(table[f] for f in dict.fromkeys(chosen))
-    source = ModelSource(model, dae)
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise CodegenError(f"cannot create output folder {out}: {exc.strerror}") from None
-    cg = ca.CodeGenerator(f"{prefix}_casadi.c", {"with_header": True, "prefix": f"{prefix}_cg_", "casadi_real": real})
-    funcs, cnames = {}, {}
-    for spec in specs:
-        cnames[spec.name] = f"{prefix}_cg_{spec.name}"
-        funcs[spec.name] = _prepare(spec, spec.build(source), cnames[spec.name])
-        cg.add(funcs[spec.name])
-    try:
-        cg.generate(str(out) + "/")
-    except RuntimeError as exc:
-        raise CodegenError(f"CasADi code generation failed: {exc}") from None
-    casadi_source = out / f"{prefix}_casadi.c"
-    text = casadi_source.read_text()
-    sizes = {s.name: _work_sizes(text, cnames[s.name], funcs[s.name]) for s in specs}
+    source = ModelSource(model, ode, float(dt), int(substeps))
     phash = model_parameter_hash(dae)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; model {dae.name} sha256:{phash}; real {real}"
+    out, _, sizes, signatures = write_library(
+        prefix, specs, source, out_dir, real, lambda wrapped: _header_text(prefix, wrapped, version, phash, dae, real, float(dt), int(substeps)))
     header, wrapper = out / f"{prefix}.h", out / f"{prefix}.c"
-    try:
-        casadi_source.write_text("/* CasADi-generated code; gtmodel marked unused function parameters (void) and the\n"
-                                 " * scalar helpers static. */\n" + _static_helpers(_void_unused_parameters(text)))
-        wrapped = functions_fragment(prefix, specs, funcs, cnames, sizes, real)
-        header.write_text(_header_text(prefix, wrapped, version, phash, dae, real))
-        wrapper.write_text(wrapper_text(prefix, wrapped, sizes))
-    except OSError as exc:
-        raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
     log.info("codegen: wrote %s (%s) for model %s", wrapper, ", ".join(s.name for s in specs), dae.name)
-    signatures = {
-        s.name: (tuple(_arg_size(s, funcs, a) for a in s.args), tuple(_out_function(s, funcs).numel_out(o.casadi_output) for o in s.outputs))
-        for s in specs
-    }
     return GeneratedCode(
         out_dir=out, prefix=prefix, functions=tuple(s.name for s in specs), source=wrapper, header=header,
-        casadi_source=casadi_source, casadi_header=out / f"{prefix}_casadi.h", parameters=source, friction="",
+        casadi_source=out / f"{prefix}_casadi.c", casadi_header=out / f"{prefix}_casadi.h", parameters=source, friction="",
         parameter_hash=phash, version=version, specs=specs, work_sizes=sizes, signatures=signatures, real=real, kind=MODEL_KIND,
     )
 
@@ -318,6 +378,88 @@ def _sample(dae: FlatDAE, n: int, rng: np.random.Generator) -> dict[str, np.ndar
     return out
 
 
+def _horizon_input(ode: ExplicitODE, n: int) -> np.ndarray:
+    """``(n, nu)`` smooth input over the horizon: one sine period about the start (mid-range within finite bounds)."""
+    lb, ub = ode.u_lb, ode.u_ub
+    finite = np.isfinite(lb) & np.isfinite(ub)
+    lo, hi = np.where(finite, lb, 0.0), np.where(finite, ub, 0.0)
+    centre = np.where(finite, 0.5 * (lo + hi), ode.u0)
+    amplitude = np.where(finite, 0.25 * (hi - lo), np.maximum(1.0, np.abs(ode.u0)))
+    phase = np.sin(2.0 * np.pi * np.arange(n) / n)
+    return centre[None, :] + phase[:, None] * amplitude[None, :]
+
+
+def _state_trajectory(result: Any, name: str) -> np.ndarray:
+    """One scalar state (``"v"`` or ``"v[i]"``) of a :class:`~gtmodel.modeling.SimulationResult`."""
+    base, _, index = name.partition("[")
+    for group in (result.x, result.z):
+        if base in group:
+            values = np.asarray(group[base], dtype=float)
+            return values if values.ndim == 1 else values[:, int(index.rstrip("]") or 0)]
+    raise CodegenError(f"horizon check: simulate() reports no variable {name!r}")
+
+
+def check_horizon(generated: GeneratedCode, library: CompiledLibrary, periods: int = HORIZON_PERIODS,
+                  tolerance: float = HORIZON_TOLERANCE) -> list[FunctionCheck]:
+    """Iterate each generated C step over a horizon and compare with :meth:`Model.simulate`.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        From :func:`generate_model`.
+    library : CompiledLibrary
+        The compiled and loaded code.
+    periods : int, optional
+        Number of periods ``N`` (default :data:`HORIZON_PERIODS`).
+    tolerance : float, optional
+        Accepted ``|x_C - x_simulate|`` per state: ``tolerance (1 + max_t |x_simulate|)``.
+
+    Returns
+    -------
+    list of FunctionCheck
+        One per step function (named ``"<step> over N periods vs simulate()"``): the C
+        step from ``simulate()``'s start (consistent with initial equations) with a smooth input (one sine period, held over each
+        period), against the model's own simulation (IDAS, its default tolerances) of the same
+        piecewise-constant input at the period boundaries. A status other than ``GT_OK``
+        fails it; so does a simulation that fails (no reference, named in the report).
+    """
+    source: ModelSource = generated.parameters
+    ode = source.ode
+    steps = [s.name for s in generated.specs if s.name in STEP_FUNCTIONS]
+    if not steps or periods < 1:
+        return []
+    t = source.dt * np.arange(periods + 1)
+    u = _horizon_input(ode, periods)
+    try:
+        sim = source.model.simulate(t, u=u if ode.nu else None)
+    except GtModelError as exc:  # no reference: every step's horizon check fails, the report says so
+        log.warning("horizon check of %s: simulate() failed: %s", generated.prefix, exc)
+        return [FunctionCheck(name=f"{name} over {periods} periods vs simulate() (simulate failed)", n=periods, max_abs_diff=math.inf,
+                              tolerance=tolerance, unit="", n_not_ok=0, passed=False) for name in steps]
+    ref = np.column_stack([_state_trajectory(sim, n) for n in ode.x_names])
+    bound = tolerance * (1.0 + np.max(np.abs(ref), axis=0))
+    out = []
+    for name in steps:
+        cf = library[name]
+        xs = np.full_like(ref, np.nan)
+        xs[0] = ref[0]  # simulate()'s consistent start (initial equations, fixed starts) is the C's start too
+        bad = 0
+        for k in range(periods):
+            args = (xs[k], u[k]) if ode.nu else (xs[k],)
+            status, (x_next,) = cf(*args)
+            bad += status != 0
+            xs[k + 1] = x_next if status == 0 else np.nan
+        dev = np.abs(xs - ref)
+        worst = float(np.nanmax(dev)) if np.any(np.isfinite(dev)) else math.inf
+        ratio = float(np.nanmax(dev / bound)) if np.all(np.isfinite(dev)) else math.inf
+        out.append(FunctionCheck(
+            name=f"{name} over {periods} periods vs simulate()", n=periods, max_abs_diff=worst, tolerance=tolerance, unit="",
+            n_not_ok=int(bad), passed=bool(bad == 0 and ratio <= 1.0), tolerance_rule="x (1 + max|simulate()|) per state",
+            max_ratio=ratio,
+        ))
+    return out
+
+
 def check_model(
     generated: GeneratedCode,
     n: int = 1000,
@@ -325,6 +467,7 @@ def check_model(
     library: CompiledLibrary | None = None,
     build_dir: str | Path | None = None,
     timing: bool = False,
+    horizon: int = HORIZON_PERIODS,
 ) -> CheckReport:
     """Compile a model's generated C (``-std=c99 -Wall -Wextra -Werror -pedantic``) and compare it with Python.
 
@@ -342,12 +485,15 @@ def check_model(
         Build folder (default ``<out_dir>/build``).
     timing : bool, optional
         Also time every function in a C loop (ns/call).
+    horizon : int, optional
+        Periods of the horizon check of the step functions (:func:`check_horizon`; 0: none).
 
     Returns
     -------
     CheckReport
         Per function the largest ``|C - Python|`` against :data:`MODEL_TOLERANCE`
-        (absolute or relative); probes: a NaN or infinite input gives
+        (absolute or relative; random inputs where the Python evaluation did not converge
+        are skipped), per step function the horizon comparison with ``simulate()``; probes: a NaN or infinite input gives
         ``GT_BAD_ARGUMENT`` with the outputs untouched. A failed check is a report with
         ``passed == False``.
 
@@ -383,6 +529,7 @@ def check_model(
     if timing:
         times = time_functions(generated, library.path, samples, build)
         results = [type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]
+    results += check_horizon(generated, library, int(horizon))
     report = CheckReport(
         robot=source.name, prefix=generated.prefix, n=int(n), seed=seed, functions=tuple(results),
         probes=tuple(probes), version=library.version(), library=library.path,

@@ -3,9 +3,10 @@
 Both FMU writers (:mod:`gtmodel.exchange.fmu_export`) start from an :class:`ExplicitModel`:
 the model is flattened (:meth:`gtmodel.modeling.Model.flatten`), after alias elimination
 and index reduction (:func:`gtmodel.modeling.structural_simplify`) when it needs them, and
-its algebraic variables ``z`` are eliminated by solving ``0 = g(t, x, z, u, p)`` with
-CasADi's ``fast_newton`` rootfinder (the one whose C code generation CasADi supports; one iteration for the linear ``g`` of a composed component), started from the
-variables' start values. Units and descriptions come from the model (``Model.units``) and,
+its algebraic variables ``z`` are eliminated as for every explicit model
+(:func:`gtmodel.modeling.explicit_ode`: symbolically in block-triangular order where the
+blocks are affine in their variables, the common case of a composed component; otherwise
+by a bounded Newton iteration inside the graph, started from the variables' start values). Units and descriptions come from the model (``Model.units``) and,
 for a :class:`~gtmodel.modeling.Component`, from its declarations
 (:meth:`~gtmodel.modeling.Component.describe`).
 """
@@ -21,7 +22,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling import Component, Model, structural_simplify
+from gtmodel.modeling import Component, Model, explicit_ode
 
 __all__ = ["ExplicitModel", "explicit_model", "fmi_identifier"]
 
@@ -64,7 +65,7 @@ class ExplicitModel:
     units, descriptions : dict of str to str
         Unit and description per scalar name (missing: none).
     algebraic_eliminated : int
-        Number of algebraic variables solved for inside ``f`` (``fast_newton`` rootfinder).
+        Number of algebraic variables eliminated inside ``f`` (:func:`gtmodel.modeling.explicit_ode`).
     indicators : casadi.Function or None
         ``c(t, x, u, p) -> c (nw, 1)``: the when-clauses' zero-crossing functions (the FMU's
         event indicators); ``None`` without events.
@@ -121,7 +122,7 @@ class ExplicitModel:
         return ca.Function("df", [t, x, u, p, dx, du, dp], list(douts), ["t", "x", "u", "p", "dx", "du", "dp"], ["dxdot", "dy"])
 
 
-def _metadata(source: Any, model: Model) -> tuple[dict[str, str], dict[str, str]]:
+def _metadata(source: Any, model_units: dict[str, str]) -> tuple[dict[str, str], dict[str, str]]:
     """Units and descriptions by scalar name, from a component's declarations and the model."""
     units: dict[str, str] = {}
     descriptions: dict[str, str] = {}
@@ -137,7 +138,7 @@ def _metadata(source: Any, model: Model) -> tuple[dict[str, str], dict[str, str]
             units.setdefault(name, unit)
         if text:
             descriptions.setdefault(name, text)
-    for name, unit in model.units.items():
+    for name, unit in model_units.items():
         units.setdefault(name, unit)
     return units, descriptions
 
@@ -207,27 +208,14 @@ def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
     if whens and (not m._flattens() or m._initial_equations):
         raise ModelError(f"model {m.name!r}: when-clauses are exported for models that flatten as they are "
                          "(no index reduction, no initial equations)")
-    reduced = m if m._flattens() and not m._initial_equations else structural_simplify(m)
-    dae = reduced.flatten()
-    if dae.nx == 0:
-        raise ModelError(f"model {m.name!r} has no state; an FMU of model exchange needs at least one")
-    t, x, u, p = dae.t, dae.x, dae.u, dae.p
-    y = ca.vertcat(*[ca.vec(dae.output_exprs[k]) for k in dae.output_sizes]) if dae.output_sizes else ca.SX(0, 1)
-    if dae.nz == 0:
-        f = ca.Function("f", [t, x, u, p], [dae.ode_expr, y], ["t", "x", "u", "p"], ["xdot", "y"])
-    else:
-        g = ca.Function("g", [dae.z, ca.vertcat(t, x, u, p)], [dae.alg_expr])
-        solver = ca.rootfinder("zsolve", "fast_newton", g, {"abstol": 1e-14, "max_iter": 50, "error_on_fail": False})
-        fz = ca.Function("fz", [t, x, z := dae.z, u, p], [dae.ode_expr, y])
-        tm, xm, um, pm = ca.MX.sym("t"), ca.MX.sym("x", dae.nx), ca.MX.sym("u", dae.nu), ca.MX.sym("p", dae.npar)
-        zm = solver(ca.DM(dae.z_start), ca.vertcat(tm, xm, um, pm))
-        xdot_m, y_m = fz(tm, xm, zm, um, pm)
-        f = ca.Function("f", [tm, xm, um, pm], [xdot_m, y_m], ["t", "x", "u", "p"], ["xdot", "y"])
-        del z
-    u_start = np.zeros(dae.nu)
-    for k, sl in dae.u_vars.items():
-        u_start[sl] = reduced._vars[k].start
-    units, descriptions = _metadata(source, reduced)
+    ode = explicit_ode(m)
+    reduced_units = ode.units
+    dae = ode.dae
+    t, x, u, p = (ca.SX.sym(n, k) for n, k in (("t", 1), ("x", ode.nx), ("u", ode.nu), ("p", ode.np)))
+    out = ode.full(t=t, x=x, u=u, p=p)
+    f = ca.Function("f", [t, x, u, p], [out["xdot"], out["y"]], ["t", "x", "u", "p"], ["xdot", "y"])
+    u_start = ode.u0
+    units, descriptions = _metadata(source, reduced_units)
     names = dae.x_names + dae.u_names + dae.p_names + dae.output_names
     em = ExplicitModel(
         name=name or m.name, f=f, x_names=list(dae.x_names), u_names=list(dae.u_names), p_names=list(dae.p_names),

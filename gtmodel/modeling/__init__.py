@@ -19,6 +19,9 @@ flattening to a CasADi DAE, simulators, linearisation, inverse model) -> ``struc
   ``Model.initial_equation`` for a consistent initialisation.
 * ``Model.when`` / ``Model.mode``: zero-crossing state events (``sign()`` becomes
   event-switched modes); the event times are in ``SimulationResult.events``.
+* :func:`explicit_ode`: the model as an explicit ODE ``xdot = f(x, u, p)``, ``y = h(x, u, p)``
+  (algebraic variables eliminated symbolically, or by Newton inside the graph) and its
+  fixed-step integrators (:meth:`ExplicitODE.step`: RK4, implicit Euler, Radau IIA);
 * :func:`inverse_model`: forces from a prescribed motion (Modelica's inverse model);
   :func:`gtmodel.modeling.simulation.linear.linearize`: the linearisation of a model.
 """
@@ -34,6 +37,7 @@ from gtmodel.modeling.structure.analysis import check_structure
 from gtmodel.modeling.structure.index_reduction import structural_simplify
 from gtmodel.modeling.simulation import linear as _linear
 from gtmodel.modeling.simulation.model import Model
+from gtmodel.modeling.simulation.explicit import ExplicitODE, explicit_ode
 from gtmodel.modeling.ocp import collocation as _collocation
 from gtmodel.modeling.ocp import expressions as _expressions
 from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
@@ -65,6 +69,8 @@ __all__ = [
     "SimulationResult",
     "Optimization",
     "structural_simplify",
+    "ExplicitODE",
+    "explicit_ode",
     "check_structure",
     "inverse_model",
     "InverseModel",

@@ -1,8 +1,9 @@
 """``gtmodel codegen --model FILE:CLASS``: C for a user model, compiled with -Werror, equal to Python.
 
-Checked against the model's own CasADi Functions evaluated from Python (``FlatDAE.ode``,
-``alg``, ``outputs``, parameters as an input) to 1e-12, and against the closed form of
-the cart-pendulum's accelerations (Lagrange's equations solved by hand for s'', theta'').
+Checked against the same CasADi Functions evaluated from Python (the explicit ODE of
+``gtmodel.modeling.explicit_ode``, parameters as an input) to 1e-12, against the closed form of
+the cart-pendulum's accelerations (Lagrange's equations solved by hand for s'', theta''), and
+each C step iterated over 250 periods against ``simulate()`` (IDAS).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen import compile_shared, generate, load_library, parameter_hash
 from gtmodel.codegen.build import find_compiler
 from gtmodel.codegen.model_code import MODEL_TOLERANCE, STRICT_EXTRA, check_model, generate_model, model_parameter_hash
-from gtmodel.errors import InputError, ModelError
+from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling import Model
 from gtmodel.problems.user_model import load_user_model
 from gtmodel.robots import load_parameters
@@ -51,9 +52,9 @@ def _dae_model() -> Model:
 
 def test_cart_pendulum_code_equals_python(cart_pendulum):
     _, gen, report = cart_pendulum
-    assert gen.functions == ("ode", "outputs")
+    assert gen.functions == ("ode", "outputs", "step_rk4", "step_implicit")
     assert report.passed, "\n".join(report.summary_lines())
-    assert max(f.max_abs_diff for f in report.functions) <= MODEL_TOLERANCE
+    assert max(f.max_abs_diff for f in report.functions if "periods" not in f.name) <= MODEL_TOLERANCE
 
 
 def test_header_has_the_models_own_hash_and_no_robot_macros(cart_pendulum):
@@ -80,7 +81,7 @@ def test_ode_equals_the_closed_form_accelerations(cart_pendulum):
     rng = np.random.default_rng(1)
     x = rng.uniform(-3, 3, (50, 4))
     F = rng.uniform(-20, 20, (50, 1))
-    status, (xdot,) = lib["ode"].call_rows(np.zeros((50, 1)), x, F)
+    status, (xdot,) = lib["ode"].call_rows(x, F)
     M, m, l, g = 1.0, 0.3, 0.5, 9.81
     th, om = x[:, 2], x[:, 3]
     sdd = (F[:, 0] + m * np.sin(th) * (l * om**2 + g * np.cos(th))) / (M + m * np.sin(th) ** 2)
@@ -92,7 +93,7 @@ def test_ode_equals_the_closed_form_accelerations(cart_pendulum):
 def test_dae_model_residual_and_vector_outputs(tmp_path):
     gen = generate_model(_dae_model(), tmp_path / "src")
     report = check_model(gen, n=300)
-    assert gen.functions == ("ode", "alg", "outputs")
+    assert gen.functions == ("ode", "outputs")  # time-dependent: no fixed steps
     assert report.passed, "\n".join(report.summary_lines())
     assert "double y_w[1], double pos[3]" in gen.header.read_text()
 
@@ -122,7 +123,7 @@ def test_cli_codegen_model_bad_input(tmp_path, capsys, ref, match):
 @pytest.mark.parametrize(
     "kwargs, error, match",
     [
-        ({"functions": ["alg"]}, InputError, r"functions: \['alg'\] not among the model's functions \(ode, outputs\)"),
+        ({"functions": ["alg"]}, InputError, r"functions: \['alg'\] not among the model's functions \(ode, outputs, step_rk4, step_implicit\)"),
         ({"prefix": "1bad"}, InputError, "prefix: expected a C identifier"),
         ({"real": "long double"}, InputError, "real: expected 'double' or 'float'"),
     ],
@@ -136,7 +137,7 @@ def test_generate_model_bad_arguments(tmp_path, kwargs, error, match):
 def test_generate_model_refuses_a_model_that_does_not_flatten(tmp_path):
     m = Model("underdetermined")
     m.state("x")
-    with pytest.raises(ModelError, match="0 scalar equations but 1 states"):
+    with pytest.raises(ModelError, match=r"'underdetermined' is under-determined \(0 scalar equations, 1 unknowns\)"):
         generate_model(m, tmp_path)
 
 
@@ -199,7 +200,7 @@ STRICT = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
 
 @pytest.mark.parametrize(
     "cls, functions",
-    [("Axis", ("ode", "alg", "outputs")), ("PushedTwoMass", ("ode", "alg"))],
+    [("Axis", ("ode", "outputs", "step_rk4", "step_implicit")), ("PushedTwoMass", ("ode", "step_rk4", "step_implicit"))],
 )
 def test_composed_library_models_compile_strictly_and_equal_python(tmp_path, cls, functions):
     # reference: the model's own CasADi Functions from Python (check_model, 1e-12); the sources
@@ -218,7 +219,7 @@ def test_composed_library_models_compile_strictly_and_equal_python(tmp_path, cls
     assert not failed, failed
     report = check_model(gen, n=200)  # compiles with -Werror -pedantic too (STRICT_EXTRA)
     assert report.passed, "\n".join(report.summary_lines())
-    assert max(r.max_abs_diff for r in report.functions) <= MODEL_TOLERANCE
+    assert max(r.max_rel_diff for r in report.functions if "periods" not in r.name) <= MODEL_TOLERANCE
 
 
 def test_cli_codegen_composed_axis_check_passes(tmp_path, capsys):
@@ -234,3 +235,53 @@ def test_cli_codegen_composed_axis_check_passes(tmp_path, capsys):
 def test_check_model_compiles_pedantically():
     # reference: the robot code's strict set (filter_check.STRICT_FLAGS = compile_shared's + -pedantic)
     assert STRICT_EXTRA == ("-pedantic",)
+
+
+class NewtonLoop:
+    """An algebraic loop through a nonlinear equation: z + 0.5 sin(z) = x (Newton inside the C)."""
+
+    def build(self):
+        m = Model("newton_loop")
+        x = m.state("x", start=1.0)
+        z = m.algebraic("z", start=0.5)
+        u = m.input("u")
+        m.equation(m.der(x), u - z)
+        m.equation(z + 0.5 * ca.sin(z), x)
+        return m
+
+
+def test_newton_model_c_gives_not_converged_never_nan(tmp_path):
+    # reference: the same explicit ODE from Python (1e-12) and simulate() over the horizon;
+    # a state whose Newton solve overflows gives GT_NOT_CONVERGED with the outputs untouched
+    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["ode", "step_implicit"], substeps=1)
+    report = check_model(gen, n=200)
+    assert report.passed, "\n".join(report.summary_lines())
+    lib = load_library(gen, compile_shared(gen, tmp_path / "build2", werror=True))
+    status, (xdot,) = lib["ode"].call_rows(np.array([[1.0], [1e308]]), np.zeros((2, 1)), fill=-7.0)
+    assert status.tolist() == [0, 6] and xdot[1, 0] == -7.0 and np.isfinite(xdot[0, 0])
+    status, (x_next,) = lib["step_implicit"].call_rows(np.array([[1e308]]), np.zeros((1, 1)), fill=-7.0)
+    assert status.tolist() == [6] and x_next[0, 0] == -7.0
+
+
+def test_dc_motor_steps_over_the_horizon_equal_simulate(tmp_path):
+    # the composed DC motor (29 algebraic variables eliminated): C steps iterated over 250
+    # periods of 4 ms against IDAS (simulate) within HORIZON_TOLERANCE
+    gen = generate_model(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"), tmp_path / "src")
+    report = check_model(gen, n=200)
+    horizon = [r for r in report.functions if "periods" in r.name]
+    assert report.passed, "\n".join(report.summary_lines())
+    assert [r.name for r in horizon] == ["step_rk4 over 250 periods vs simulate()", "step_implicit over 250 periods vs simulate()"]
+    assert "#define GT_DC_MOTOR_DT 0.004" in gen.header.read_text() and "const double x[3], const double u[1], double xdot[3]" in gen.header.read_text()
+
+
+def test_horizon_check_fails_when_simulate_fails(tmp_path):
+    # no reference, no success: a simulate() that fails makes the horizon check (and the report) fail
+    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["step_rk4"], substeps=1)
+
+    def failing(*args, **kwargs):
+        raise ConvergenceError("IDAS gave up")
+
+    gen.parameters.model.simulate = failing
+    report = check_model(gen, n=20)
+    assert not report.passed
+    assert [r.name for r in report.functions if not r.ok] == ["step_rk4 over 250 periods vs simulate() (simulate failed)"]

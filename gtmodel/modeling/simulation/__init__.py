@@ -10,6 +10,8 @@ linearisation and the inverse model.
 * :mod:`~gtmodel.modeling.simulation.event_simulation`: simulation with zero-crossing events;
 * :mod:`~gtmodel.modeling.simulation.structured_simulation`: simulation of models that need
   the structural passes (initial equations, aliases, high index);
+* :mod:`~gtmodel.modeling.simulation.explicit`: :func:`explicit_ode`, the model as an explicit
+  ODE ``xdot = f(x, u, p)`` (algebraic variables eliminated) and its fixed-step integrators;
 * :mod:`~gtmodel.modeling.simulation.linear`: :func:`linearize` about an operating point;
 * :mod:`~gtmodel.modeling.simulation.inverse`: :func:`inverse_model`, the inputs that
   produce a prescribed motion.
@@ -23,6 +25,7 @@ from gtmodel.modeling.simulation.integration import simulate_model
 from gtmodel.modeling.simulation.event_simulation import simulate_events
 from gtmodel.modeling.simulation.structured_simulation import simulate_structured
 from gtmodel.modeling.simulation.linear import Linearization, linearize
+from gtmodel.modeling.simulation.explicit import ExplicitODE, explicit_ode
 
 __all__ = [
     "Model",
@@ -31,6 +34,8 @@ __all__ = [
     "simulate_structured",
     "Linearization",
     "linearize",
+    "ExplicitODE",
+    "explicit_ode",
     "InverseModel",
     "inverse_model",
 ]

@@ -1,0 +1,435 @@
+"""The ONE C step interface of the loop controllers: a CasADi Function behind a memory struct.
+
+Every controller that runs in the loop (the tracking controller of
+:mod:`gtmodel.estimation.tracking`, a real-time MPC) is ONE CasADi Function of the form
+
+``control(t (1,1), x (nx,1), u_last (nu,1)[, w (nw,1)]) -> (u (nu,1)[, w_next (nw,1)], ok (1,1))``
+
+(``w`` an inner memory the step carries from one period to the next, e.g. an MPC's shifted
+warm start, the C argument ``w_start`` of ``<prefix>_control``; ``ok`` 1 when the result is
+valid, e.g. the QP solved), described by a
+:class:`LoopStep`. :func:`generate_loop_step` writes it through the one codegen path
+(:func:`gtmodel.codegen.generate.write_library`: CasADi's code generator, a plain-C wrapper
+``<prefix>_control`` with argument checks and status codes) and adds, from
+``harness/template_loop_step.h``/``.c``, the fixed interface of the loop::
+
+    typedef struct PREFIX_memory { real u_last[NU]; real w[NW or 1]; long steps; int status; } PREFIX_memory;
+    int PREFIX_init(PREFIX_memory *mem);
+    int PREFIX_step(PREFIX_memory *mem, real t, const real *x, real *u);
+
+No heap: the memory is the caller's, of static size. ``PREFIX_step`` returns ``GT_OK`` with
+``u`` saturated at the input bounds; ``GT_BAD_ARGUMENT`` for a NULL pointer or a non-finite
+``t`` or ``x``; ``GT_NUMERIC_ERROR`` for a non-finite result; the :attr:`LoopStep.fail_status`
+(e.g. ``GT_NOT_CONVERGED``) when ``ok`` is 0. On every failure it writes the safe input:
+the last input, saturated. :func:`check_loop_step` compiles it strictly, compares
+``<prefix>_control`` with the Function evaluated from Python on random inputs and probes
+the step contract.
+
+To reuse it (an MPC): build the Function above, wrap it in a :class:`LoopStep` (``w_init``
+the first warm start, ``fail_status="GT_NOT_CONVERGED"``), call :func:`generate_loop_step`
+and :func:`check_loop_step`; nothing else is C.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import logging
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+import gtmodel
+from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
+from gtmodel.codegen.check.compare import compare, probe
+from gtmodel.codegen.check.report import CheckReport, StatusProbe
+from gtmodel.codegen.check.robot import time_functions
+from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
+from gtmodel.codegen.emit import fill, header_guard
+from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.errors import CodegenError, InputError
+from gtmodel.estimation.tracking import TrackingController
+
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "LoopStep", "tracking_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
+
+log = logging.getLogger("gtmodel")
+
+#: ``GeneratedCode.kind`` of a loop controller.
+LOOP_KIND = "loop_step"
+#: Largest accepted ``|C - Python|`` of the inner step (absolute, or relative to ``|Python|``).
+LOOP_TOLERANCE = 1e-12
+_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_STRICT_EXTRA = ("-pedantic",)
+
+
+@dataclass(frozen=True)
+class LoopStep:
+    """A loop controller: its CasADi Function and what the memory functions need.
+
+    Parameters
+    ----------
+    name : str
+        Controller name (for the header).
+    function : casadi.Function
+        ``control(t, x, u_last[, w]) -> (u[, w_next], ok)``, inputs and outputs named so.
+    dt : float
+        Loop period [s] (``<PREFIX>_DT``).
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds of the saturation (``-inf``/``inf``: none).
+    u_init : numpy.ndarray
+        ``(nu,)`` the input before the first step (saturated by ``_init``).
+    x_names, u_names : list of str
+        Scalar names of states and inputs (for the header).
+    w_init : numpy.ndarray
+        ``(nw,)`` initial inner memory (empty: none).
+    description : str
+        Comment lines for the header (the law, its source).
+    fail_status : str
+        Status macro returned when ``ok`` is 0 (default ``GT_NUMERIC_ERROR``).
+    t_range : tuple of float
+        Times sampled by the check [s].
+    x_samples : numpy.ndarray
+        ``(M, nx)`` states about which the check samples (e.g. the reference).
+    """
+
+    name: str
+    function: ca.Function
+    dt: float
+    u_lb: np.ndarray
+    u_ub: np.ndarray
+    u_init: np.ndarray
+    x_names: list[str]
+    u_names: list[str]
+    w_init: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    description: str = ""
+    fail_status: str = "GT_NUMERIC_ERROR"
+    t_range: tuple[float, float] = (0.0, 1.0)
+    x_samples: np.ndarray = field(default_factory=lambda: np.zeros((1, 0)))
+
+    @property
+    def nx(self) -> int:
+        """Number of states."""
+        return int(self.function.numel_in("x"))
+
+    @property
+    def nu(self) -> int:
+        """Number of inputs."""
+        return int(self.function.numel_in("u_last"))
+
+    @property
+    def nw(self) -> int:
+        """Length of the inner memory."""
+        return int(self.function.numel_in("w")) if "w" in self.function.name_in() else 0
+
+    def validate(self) -> None:
+        """Check the Function's interface and the sizes.
+
+        Raises
+        ------
+        InputError
+            Inputs or outputs not named as the interface, sizes that disagree, a bad period
+            or status.
+        """
+        f = self.function
+        if not isinstance(f, ca.Function):
+            raise InputError(f"function: expected a casadi.Function, got {type(f).__name__}")
+        ins = ["t", "x", "u_last"] + (["w"] if "w" in f.name_in() else [])
+        outs = ["u"] + (["w_next"] if "w" in f.name_in() else []) + ["ok"]
+        if f.name_in() != ins or f.name_out() != outs:
+            raise InputError(f"function: expected inputs {ins} and outputs {outs}, got {f.name_in()} and {f.name_out()}")
+        if f.numel_in("t") != 1 or f.numel_out("u") != self.nu or f.numel_out("ok") != 1 or (self.nw and f.numel_out("w_next") != self.nw):
+            raise InputError("function: t and ok must be scalars, u as long as u_last, w_next as long as w")
+        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0):
+            raise InputError(f"dt: expected a positive loop period in seconds, got {self.dt!r}")
+        for label, v, n in (("u_lb", self.u_lb, self.nu), ("u_ub", self.u_ub, self.nu), ("u_init", self.u_init, self.nu), ("w_init", self.w_init, self.nw)):
+            if np.size(v) != n or np.any(np.isnan(v)):
+                raise InputError(f"{label}: expected {n} values, got {np.size(v)}")
+        if not (np.all(np.isfinite(self.u_init)) and np.all(np.isfinite(self.w_init)) and np.all(np.asarray(self.u_lb) <= np.asarray(self.u_ub))):
+            raise InputError("u_init, w_init: expected finite values; u_lb <= u_ub")
+        if self.fail_status not in STATUS_CODES or self.fail_status == "GT_OK":
+            raise InputError(f"fail_status: expected a failure status of {', '.join(STATUS_CODES)}, got {self.fail_status!r}")
+
+
+def tracking_step(controller: TrackingController, name: str = "tracking") -> LoopStep:
+    """The loop step of a tracking controller (:func:`gtmodel.estimation.tracking.tracking_controller`).
+
+    Parameters
+    ----------
+    controller : TrackingController
+        Feedforward and time-varying LQR gains.
+    name : str, optional
+        Controller name for the header.
+
+    Returns
+    -------
+    LoopStep
+        Its :meth:`~gtmodel.estimation.tracking.TrackingController.function`, period,
+        input bounds, first input ``u*_0`` and the reference as the check's samples.
+    """
+    c = controller
+    text = (f"Tracking controller: u = sat(u*_k - K_k (x - x*_k)), k = floor((t - {c.t0!r}) / {c.dt!r}) held in 0..{c.length - 1}\n"
+            "(feedforward u* and reference x* sampled at the period, time-varying LQR gains K_k from the\n"
+            "backward discrete Riccati recursion on the model's fixed-step Jacobians; gtmodel.estimation.tracking).\n"
+            f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
+    return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), description=text,
+                    t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
+
+
+def _c_array(values: Any) -> str:
+    """C initialiser of a real array (infinite entries as ``INFINITY``; at least one entry)."""
+    vals = np.asarray(values, dtype=float).reshape(-1)
+    if vals.size == 0:
+        return "0"
+    return ", ".join("INFINITY" if v == math.inf else "-INFINITY" if v == -math.inf else repr(float(v)) for v in vals)
+
+
+def _hash(step: LoopStep) -> str:
+    """Short hash of the controller: its Function's serialisation, bounds and period."""
+    text = step.function.serialize() + repr((step.dt, np.asarray(step.u_lb).tolist(), np.asarray(step.u_ub).tolist()))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _spec(step: LoopStep) -> FunctionSpec:
+    args = [ArgSpec("t", "vector", "t", "time [s]"), ArgSpec("x", "vector", "x", f"measured state ({', '.join(step.x_names[:12])})"),
+            ArgSpec("u_last", "vector", "u_last", "the last input")]
+    outs = [OutputSpec("u", "u", f"input ({', '.join(step.u_names[:12])}), saturated")]
+    if step.nw:
+        args.append(ArgSpec("w_start", "vector", "w", "inner memory (warm start)"))  # not 'w': the wrapper's work array
+        outs.append(OutputSpec("w_next", "w_next", "inner memory of the next period"))
+    return FunctionSpec(
+        "control", lambda source: source.function, args=tuple(args), outputs=tuple(outs),
+        checks=(StatusCheck("ok", ">", "0.5", step.fail_status),), tolerance=LOOP_TOLERANCE,
+        relative_tolerance=LOOP_TOLERANCE, kind=LOOP_KIND,
+        doc=f"The inner step of the loop controller {step.name} (called by _step; the memory functions are the interface).",
+    )
+
+
+def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_controller", real: str = "double") -> GeneratedCode:
+    """Generate C for a loop controller: the inner step and the memory interface.
+
+    Parameters
+    ----------
+    step : LoopStep
+        The controller.
+    out_dir : str or pathlib.Path
+        Folder to write into (created if missing).
+    prefix : str, optional
+        C symbol prefix (``<prefix>_step``, ``<prefix>_init``, ``<prefix>_memory``).
+    real : {"double", "float"}, optional
+        Floating-point type.
+
+    Returns
+    -------
+    GeneratedCode
+        ``kind = "loop_step"``, ``parameters`` the :class:`LoopStep`, ``functions``
+        ``("control",)``.
+
+    Raises
+    ------
+    InputError
+        A bad step (:meth:`LoopStep.validate`), prefix or real type.
+    CodegenError
+        CasADi's code generation or writing the files failed.
+    """
+    if not isinstance(step, LoopStep):
+        raise InputError(f"step: expected a LoopStep, got {type(step).__name__}")
+    step.validate()
+    if real not in REAL_TYPES:
+        raise InputError(f"real: expected 'double' or 'float', got {real!r}")
+    if not isinstance(prefix, str) or not _IDENT.match(prefix):
+        raise InputError(f"prefix: expected a C identifier such as 'gt_tracking', got {prefix!r}")
+    spec = _spec(step)
+    phash = _hash(step)
+    version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; controller {step.name} sha256:{phash}; real {real}"
+    P = prefix.upper()
+    ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
+    outs = {"u": "u_new", "w_next": "w_new"}
+    call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
+    values = dict(
+        GP=prefix, P=P, NAME=step.name, VERSION=version, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
+        DT=repr(float(step.dt)), OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
+        DESCRIPTION="\n".join(f" * {line}".rstrip() for line in (step.description or step.name).splitlines()),
+        ULB=_c_array(step.u_lb), UUB=_c_array(step.u_ub), U0=_c_array(step.u_init), W0=_c_array(step.w_init), CALL=call,
+    )
+    memory = "\n" + fill("template_loop_step.c", **values)
+    out, _, sizes, signatures = write_library(
+        prefix, (spec,), step, out_dir, real, lambda wrapped: fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header)),
+        extra_source=memory)
+    log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
+    return GeneratedCode(
+        out_dir=out, prefix=prefix, functions=("control",), source=out / f"{prefix}.c", header=out / f"{prefix}.h",
+        casadi_source=out / f"{prefix}_casadi.c", casadi_header=out / f"{prefix}_casadi.h", parameters=step, friction="",
+        parameter_hash=phash, version=version, specs=(spec,), work_sizes=sizes, signatures=signatures, real=real, kind=LOOP_KIND,
+    )
+
+
+def load_loop_step(generated: GeneratedCode, library: CompiledLibrary) -> tuple[type, Any, Any]:
+    """The memory struct type and the ``_init`` / ``_step`` functions of a compiled loop controller (ctypes).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        From :func:`generate_loop_step`.
+    library : CompiledLibrary
+        Its compiled library.
+
+    Returns
+    -------
+    memory : type
+        A ``ctypes.Structure`` of the layout of ``<prefix>_memory``.
+    init : callable
+        ``init(ctypes.byref(mem)) -> int``.
+    step : callable
+        ``step(ctypes.byref(mem), t, x_ptr, u_ptr) -> int`` (``x_ptr``, ``u_ptr`` pointers
+        to the real type, or None).
+
+    Raises
+    ------
+    InputError
+        Not a loop controller's code.
+    """
+    if generated.kind != LOOP_KIND or not isinstance(generated.parameters, LoopStep):
+        raise InputError("generated: expected the code of a loop controller (from generate_loop_step)")
+    step: LoopStep = generated.parameters
+    real = ctypes.c_float if generated.real == "float" else ctypes.c_double
+    memory = type("Memory", (ctypes.Structure,), {"_fields_": [
+        ("u_last", real * step.nu), ("w", real * max(step.nw, 1)), ("steps", ctypes.c_long), ("status", ctypes.c_int)]})
+    lib = ctypes.CDLL(str(library.path))
+    init = getattr(lib, f"{generated.prefix}_init")
+    init.argtypes, init.restype = [ctypes.POINTER(memory)], ctypes.c_int
+    fstep = getattr(lib, f"{generated.prefix}_step")
+    fstep.argtypes, fstep.restype = [ctypes.POINTER(memory), real, ctypes.POINTER(real), ctypes.POINTER(real)], ctypes.c_int
+    return memory, init, fstep
+
+
+def _samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """Random inputs of the inner step: times in (and a little beyond) ``t_range``, states about ``x_samples``."""
+    t0, t1 = step.t_range
+    span = max(t1 - t0, step.dt)
+    xs = step.x_samples if step.x_samples.size else np.zeros((1, step.nx))
+    rows = xs[rng.integers(0, xs.shape[0], n)]
+    scale = 0.1 * (1.0 + np.max(np.abs(xs), axis=0))
+    lo = np.where(np.isfinite(step.u_lb), step.u_lb, step.u_init - 1.0)
+    hi = np.where(np.isfinite(step.u_ub), step.u_ub, step.u_init + 1.0)
+    out = {"t": rng.uniform(t0 - 0.05 * span, t1 + 0.05 * span, (n, 1)),
+           "x": rows + scale * rng.standard_normal(rows.shape),
+           "u_last": rng.uniform(lo, hi, (n, step.nu))}
+    if step.nw:
+        out["w_start"] = np.tile(step.w_init, (n, 1))
+    return out
+
+
+def _reference(step: LoopStep, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    n = len(inputs["t"])
+    f = step.function.map(n)
+    res = f.call({("w" if k == "w_start" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()})
+    ok = np.asarray(res["ok"]).reshape(-1) > 0.5
+    out = {"u": np.asarray(res["u"]).T}
+    if step.nw:
+        out["w_next"] = np.asarray(res["w_next"]).T
+    return {k: np.where(ok[:, None], v, np.nan) for k, v in out.items()}
+
+
+def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples: dict[str, np.ndarray]) -> list[StatusProbe]:
+    """The step contract through the memory functions: NULLs, non-finite input, the safe input, equality with Python."""
+    step: LoopStep = generated.parameters
+    memory, init, fstep = load_loop_step(generated, library)
+    real = ctypes.c_float if generated.real == "float" else ctypes.c_double
+    safe = np.clip(step.u_init, step.u_lb, step.u_ub)
+    probes = []
+
+    def run(case: str, expected: str, t: float, x: np.ndarray | None, want: np.ndarray | None, null_mem: bool = False) -> None:
+        mem = memory()
+        init(ctypes.byref(mem))
+        u = (real * step.nu)(*([12345.0] * step.nu))
+        xa = None if x is None else (real * step.nx)(*x.tolist())
+        status = fstep(None if null_mem else ctypes.byref(mem), t, xa, u)
+        got = np.array(u[:], dtype=float)
+        untouched = bool(np.all(got == 12345.0)) if want is None else bool(np.allclose(got, want, rtol=1e-9, atol=1e-12))
+        probes.append(StatusProbe("step", case, expected, int(status), untouched, int(status) == STATUS_CODES[expected][0] and untouched))
+
+    x0 = np.asarray(samples["x"][0], dtype=float)
+    t0 = float(samples["t"][0, 0])
+    ref = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": safe[None, :],
+                            **({"w_start": step.w_init[None, :]} if step.nw else {})})["u"][0]
+    run("valid state after init (u equals Python)", "GT_OK", t0, x0, ref)
+    bad = x0.copy()
+    bad[0] = math.nan
+    run("x[0] = nan (u = the last input, saturated)", "GT_BAD_ARGUMENT", t0, bad, safe)
+    run("t = nan (u = the last input, saturated)", "GT_BAD_ARGUMENT", math.nan, x0, safe)
+    run("x NULL (u = the last input, saturated)", "GT_BAD_ARGUMENT", t0, None, safe)
+    run("mem NULL (u untouched)", "GT_BAD_ARGUMENT", t0, x0, None, null_mem=True)
+    init_null = init(None)
+    probes.append(StatusProbe("init", "mem NULL", "GT_BAD_ARGUMENT", int(init_null), True, int(init_null) == STATUS_CODES["GT_BAD_ARGUMENT"][0]))
+    return probes
+
+
+def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build_dir: str | Path | None = None,
+                    timing: bool = False) -> CheckReport:
+    """Compile a loop controller strictly and compare it with Python; probe the step contract.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        From :func:`generate_loop_step`.
+    n : int, optional
+        Random inputs of the inner step (default 500).
+    seed : int, optional
+        Seed of the random generator.
+    build_dir : str or pathlib.Path, optional
+        Build folder (default ``<out_dir>/build``).
+    timing : bool, optional
+        Also time ``<prefix>_control`` in a C loop (ns/call).
+
+    Returns
+    -------
+    CheckReport
+        ``control``: the largest ``|C - Python|`` (:data:`LOOP_TOLERANCE`, absolute or
+        relative) on random times, states about the reference and last inputs; probes:
+        non-finite inputs of ``control``, and of ``_step``: ``GT_OK`` with ``u`` equal to
+        Python after ``_init``, ``GT_BAD_ARGUMENT`` with the safe input for a NaN state or
+        time and a NULL state, a NULL memory (``u`` untouched) and ``_init(NULL)``.
+
+    Raises
+    ------
+    InputError
+        Not a loop controller's code, ``n`` not positive.
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        Compilation failed.
+    """
+    if generated.kind != LOOP_KIND or not isinstance(generated.parameters, LoopStep):
+        raise InputError("generated: expected the code of a loop controller (from generate_loop_step)")
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise InputError(f"n: expected a positive number of samples, got {n!r}")
+    build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
+    library = load_library(generated, compile_shared(generated, build, werror=True, extra_flags=_STRICT_EXTRA))
+    step: LoopStep = generated.parameters
+    samples = _samples(step, int(n), np.random.default_rng(seed))
+    spec = generated.specs[0]
+    spec = FunctionSpec(**{**spec.__dict__, "reference": lambda source, inputs: _reference(source, inputs)})
+    cf = library["control"]
+    results = (compare(spec, cf, step, samples, generated.real),)
+    if timing:
+        times = time_functions(generated, library.path, {"control": samples}, build)
+        results = tuple(type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results)
+    probes = []
+    for a in spec.args:
+        row = np.array(samples[a.name][0], dtype=float)
+        row[0] = np.nan
+        probes.append(probe(cf, spec, samples, f"{a.name}[0] = nan", "GT_BAD_ARGUMENT", {a.name: row}))
+    try:
+        probes += _contract_probes(generated, library, samples)
+    except (OSError, AttributeError) as exc:
+        raise CodegenError(f"loop controller {generated.prefix}: cannot load _init/_step: {exc}") from None
+    report = CheckReport(robot=step.name, prefix=generated.prefix, n=int(n), seed=seed, functions=results, probes=tuple(probes),
+                         version=library.version(), library=library.path)
+    log.info("codegen check of loop controller %s: %s", generated.prefix, "passed" if report.passed else "FAILED")
+    return report

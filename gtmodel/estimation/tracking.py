@@ -1,0 +1,394 @@
+"""A trajectory-tracking controller for any model: feedforward plus time-varying LQR.
+
+From an optimal motion ``x*(t), u*(t)`` of a model (e.g. an ``optimal_control`` result) and
+the model's explicit ODE (:func:`gtmodel.modeling.explicit_ode`), :func:`tracking_controller`
+builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
+
+* the reference sampled at ``t_k = t_0 + k dt``: ``x*_k``, ``u*_k`` (linear interpolation of
+  the given samples);
+* the discretised linearisation along it: ``A_k = d step / d x``, ``B_k = d step / d u`` at
+  ``(x*_k, u*_k)``, the Jacobians (CasADi AD) of the model's fixed step
+  (:meth:`~gtmodel.modeling.ExplicitODE.step`, the same one the generated C integrates);
+* the time-varying LQR gains from the backward discrete Riccati recursion
+  (Anderson & Moore, Optimal Control: Linear Quadratic Methods, sec. 2.4)
+  ``P_N = Q_f``, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``,
+  ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``;
+* the law ``u = sat(u*_k - K_k (x - x*_k))``, saturated at the input bounds; after the
+  reference ends, its final state is held: the input that holds it (least squares
+  ``f(x*_end, u) = 0``, e.g. zero voltage for a motor at rest) and the stationary LQR gain
+  there (before the start, the first sample).
+
+:meth:`TrackingController.function` is ONE CasADi Function of the step interface shared
+by the loop controllers (:mod:`gtmodel.codegen.loop_step`): ``control(t, x, u_last) -> (u,
+ok)``, the tables (references and gains) constant inside it, indexed by the period
+``k = floor((t - t_0) / dt)`` (the first sample before the start, the held end after it);
+:func:`gtmodel.codegen.loop_step.generate_loop_step` writes it as C. :func:`dlqr` is the
+time-invariant LQR (the stationary solution of the same recursion).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.linalg
+
+from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.errors import InputError
+from gtmodel.modeling import ExplicitODE
+
+__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate"]
+
+#: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
+#: point) selects sample ``k``, not ``k - 1``.
+INDEX_EPS = 1e-6
+
+
+def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Time-invariant discrete LQR: the gain of ``u = -K x`` minimising ``sum x'Qx + u'Ru``.
+
+    Parameters
+    ----------
+    A : array_like
+        ``(nx, nx)`` state matrix of ``x_{k+1} = A x_k + B u_k``.
+    B : array_like
+        ``(nx, nu)`` input matrix.
+    Q : array_like
+        ``(nx, nx)`` state weight, symmetric positive semi-definite.
+    R : array_like
+        ``(nu, nu)`` input weight, symmetric positive definite.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        ``(nu, nx)`` gain, ``K = (R + B'PB)^{-1} B'PA``.
+    P : numpy.ndarray
+        ``(nx, nx)`` stabilising solution of the discrete algebraic Riccati equation
+        (:func:`scipy.linalg.solve_discrete_are`).
+
+    Raises
+    ------
+    InputError
+        Inconsistent shapes, or no stabilising solution (the pair is not stabilisable).
+    """
+    A, B, Q, R = (np.atleast_2d(np.asarray(v, dtype=float)) for v in (A, B, Q, R))
+    nx, nu = B.shape
+    if A.shape != (nx, nx) or Q.shape != (nx, nx) or R.shape != (nu, nu):
+        raise InputError(f"dlqr: expected A ({nx}, {nx}), B ({nx}, {nu}), Q ({nx}, {nx}), R ({nu}, {nu}); "
+                         f"got {A.shape}, {B.shape}, {Q.shape}, {R.shape}")
+    try:
+        P = scipy.linalg.solve_discrete_are(A, B, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise InputError(f"dlqr: no stabilising solution of the Riccati equation ({exc})") from None
+    K = np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
+    return K, P
+
+
+def riccati_gains(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, Qf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Time-varying LQR gains by the backward discrete Riccati recursion.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        ``(N, nx, nx)`` state matrices ``A_k``.
+    B : numpy.ndarray
+        ``(N, nx, nu)`` input matrices ``B_k``.
+    Q : numpy.ndarray
+        ``(nx, nx)`` stage state weight.
+    R : numpy.ndarray
+        ``(nu, nu)`` input weight (positive definite).
+    Qf : numpy.ndarray
+        ``(nx, nx)`` terminal weight ``P_N``.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        ``(N, nu, nx)`` gains, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``.
+    P : numpy.ndarray
+        ``(N + 1, nx, nx)`` cost-to-go matrices, ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``
+        (symmetrised).
+    """
+    n, nx, nu = B.shape
+    K = np.zeros((n, nu, nx))
+    P = np.zeros((n + 1, nx, nx))
+    P[n] = Qf
+    for k in range(n - 1, -1, -1):
+        Pk = P[k + 1]
+        K[k] = np.linalg.solve(R + B[k].T @ Pk @ B[k], B[k].T @ Pk @ A[k])
+        Pn = Q + A[k].T @ Pk @ (A[k] - B[k] @ K[k])
+        P[k] = 0.5 * (Pn + Pn.T)
+    return K, P
+
+
+def saturate(u: Any, lb: Any, ub: Any) -> Any:
+    """``min(max(u, lb), ub)`` element-wise (NumPy arrays or CasADi expressions; infinite bounds bound nothing).
+
+    Parameters
+    ----------
+    u : array_like or casadi.MX or casadi.SX
+        Input, ``(nu,)`` or ``(nu, 1)``.
+    lb, ub : array_like
+        ``(nu,)`` bounds.
+
+    Returns
+    -------
+    same type as ``u``
+        The saturated input.
+    """
+    if isinstance(u, (ca.MX, ca.SX)):
+        return ca.fmin(ca.fmax(u, ca.DM(np.asarray(lb, float))), ca.DM(np.asarray(ub, float)))
+    return np.minimum(np.maximum(np.asarray(u, dtype=float), lb), ub)
+
+
+def _weight(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
+    """A weight matrix: None (the default diagonal), a vector (the diagonal) or a matrix."""
+    if value is None:
+        return np.diag(default)
+    w = np.asarray(value, dtype=float)
+    if w.ndim == 1 and w.size == size:
+        w = np.diag(w)
+    if w.shape != (size, size) or not np.all(np.isfinite(w)):
+        raise InputError(f"{name}: expected {size} diagonal entries or a ({size}, {size}) matrix of finite numbers, got shape {w.shape}")
+    if not np.allclose(w, w.T) or np.min(np.linalg.eigvalsh(0.5 * (w + w.T))) < 0:
+        raise InputError(f"{name}: expected a symmetric positive semi-definite weight")
+    return w
+
+
+@dataclass
+class TrackingController:
+    """Feedforward plus time-varying LQR along a reference, sampled at the loop period.
+
+    Parameters
+    ----------
+    dt : float
+        Loop period [s].
+    t0 : float
+        Time of the first sample [s].
+    x_ref : numpy.ndarray
+        ``(N, nx)`` reference states ``x*_k`` at ``t_0 + k dt``.
+    u_ref : numpy.ndarray
+        ``(N, nu)`` feedforward ``u*_k``.
+    K : numpy.ndarray
+        ``(N, nu, nx)`` gains of ``u = u*_k - K_k (x - x*_k)``.
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds of the saturation (``-inf``/``inf``: none).
+    x_names, u_names : list of str
+        Scalar names of states and inputs.
+    Q, R, Qf : numpy.ndarray
+        The weights the gains were computed with.
+    x_hold : numpy.ndarray
+        ``(nx,)`` the state held after the reference ends: its last given sample ``x*_end``
+        (at the reference's end time, which the period grid need not hit).
+    u_hold : numpy.ndarray
+        ``(nu,)`` the input that holds it (least squares ``f(x*_end, u) = 0``), saturated.
+    K_hold : numpy.ndarray
+        ``(nu, nx)`` the stationary LQR gain at ``(x*_end, u_hold)`` (``K_{N-1}`` if the
+        pair is not stabilisable there).
+    """
+
+    dt: float
+    t0: float
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    K: np.ndarray
+    u_lb: np.ndarray
+    u_ub: np.ndarray
+    x_names: list[str]
+    u_names: list[str]
+    Q: np.ndarray
+    R: np.ndarray
+    Qf: np.ndarray
+    x_hold: np.ndarray
+    u_hold: np.ndarray
+    K_hold: np.ndarray
+
+    @property
+    def nx(self) -> int:
+        """Number of states."""
+        return self.x_ref.shape[1]
+
+    @property
+    def nu(self) -> int:
+        """Number of inputs."""
+        return self.u_ref.shape[1]
+
+    @property
+    def length(self) -> int:
+        """Number of samples ``N``."""
+        return self.x_ref.shape[0]
+
+    @property
+    def u_initial(self) -> np.ndarray:
+        """``(nu,)`` the input before the first step: ``u*_0`` saturated."""
+        return saturate(self.u_ref[0], self.u_lb, self.u_ub)
+
+    def function(self) -> ca.Function:
+        """The controller as ONE CasADi Function of the loop-step interface.
+
+        Returns
+        -------
+        casadi.Function
+            ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``:
+            ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N`` (a NaN ``t`` gives
+            ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
+            reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
+            :attr:`K_hold`; ``ok`` is 1 when ``u`` is
+            finite. ``u_last`` is not used by this law (the interface is shared with the
+            MPC, whose warm start it is). The tables are constants of the graph, indexed
+            parametrically (the generated C looks them up; no heap).
+        """
+        n, nx, nu = self.length, self.nx, self.nu
+        t, x, u_last = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu)
+        k = ca.fmin(ca.fmax(ca.floor((t - self.t0) / self.dt + INDEX_EPS), 0), n)
+        k = ca.if_else(t == t, k, 0)  # a NaN time reads sample 0; ok is then 0 below
+        table = np.vstack([np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)]),  # row k: x*_k, u*_k, K_k (row-major)
+                           np.hstack([self.x_hold, self.u_hold, self.K_hold.reshape(-1)])])  # row N: hold the end
+        width = table.shape[1]
+        values = ca.MX(ca.DM(table.reshape(-1)))
+        base = width * k
+        xs = ca.vertcat(*[values[base + j] for j in range(nx)])
+        us = ca.vertcat(*[values[base + nx + j] for j in range(nu)])
+        gain = ca.vertcat(*[ca.horzcat(*[values[base + nx + nu + i * nx + j] for j in range(nx)]) for i in range(nu)])
+        u = saturate(us - ca.mtimes(gain, x - xs), self.u_lb, self.u_ub)
+        total = ca.sum1(ca.fabs(u)) + ca.fabs(t)
+        ok = total < math.inf  # 0 for NaN or infinite entries
+        return ca.Function("control", [t, x, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
+
+    def __call__(self, t: float, x: Any) -> np.ndarray:
+        """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        x : array_like
+            ``(nx,)`` measured state.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(nu,)`` the saturated input.
+        """
+        u, _ = self.function()(t, np.asarray(x, dtype=float), self.u_initial)
+        return np.asarray(u).reshape(-1)
+
+
+def _sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:
+    """``values`` (``(M, n)`` on ``t``) linearly interpolated on ``grid``."""
+    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
+        raise InputError(f"{name}: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
+    return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])]) if values.shape[1] else np.zeros((grid.size, 0))
+
+
+def tracking_controller(
+    ode: ExplicitODE,
+    t: Any,
+    x_ref: Any,
+    u_ref: Any,
+    dt: float = LOOP_PERIOD_S,
+    Q: Any = None,
+    R: Any = None,
+    Qf: Any = None,
+    u_lb: Any = None,
+    u_ub: Any = None,
+    p: Any = None,
+    method: str = "rk4",
+    substeps: int = 1,
+) -> TrackingController:
+    """Feedforward and time-varying LQR along a reference motion of a model.
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model (:func:`gtmodel.modeling.explicit_ode`).
+    t : array_like
+        ``(M,)`` increasing reference times [s] (e.g. an optimal control result's mesh).
+    x_ref : array_like
+        ``(M, nx)`` reference states in the order of ``ode.x_names``.
+    u_ref : array_like
+        ``(M, nu)`` reference inputs in the order of ``ode.u_names``.
+    dt : float, optional
+        Loop period [s] (default :data:`gtmodel.defaults.LOOP_PERIOD_S`).
+    Q : array_like, optional
+        State weight: ``(nx,)`` diagonal or ``(nx, nx)``; default Bryson's rule,
+        ``1 / s_i^2`` with ``s_i`` the range of state ``i`` along the reference (at least
+        ``1e-3 (1 + max|x_i|)``).
+    R : array_like, optional
+        Input weight, ``(nu,)`` or ``(nu, nu)`` positive definite; default ``1 / s_j^2``
+        with ``s_j`` half the bound range (finite bounds) or the reference's range.
+    Qf : array_like, optional
+        Terminal weight; default the stationary Riccati solution at the held end
+        (:attr:`TrackingController.x_hold`, ``u_hold``) if it exists, else ``Q``.
+    u_lb, u_ub : array_like, optional
+        ``(nu,)`` saturation bounds; default the model's declared input bounds.
+    p : array_like, optional
+        ``(np,)`` model parameters; default ``ode.p_default``.
+    method : {"rk4", "implicit_euler", "radau2"}, optional
+        The fixed step whose Jacobians are the ``A_k``, ``B_k``.
+    substeps : int, optional
+        Its steps within one period.
+
+    Returns
+    -------
+    TrackingController
+
+    Raises
+    ------
+    InputError
+        Shapes or values out of range, times not increasing, a reference shorter than
+        one period, ``R`` not positive definite.
+    """
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt: expected a positive loop period in seconds, got {dt!r}")
+    tt = np.asarray(t, dtype=float).reshape(-1)
+    if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
+        raise InputError("t: expected at least two increasing finite reference times")
+    n = int(math.floor((tt[-1] - tt[0]) / dt + INDEX_EPS)) + 1
+    if n < 2:
+        raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than one period ({dt:g} s)")
+    grid = tt[0] + dt * np.arange(n)
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(tt.size, -1), np.asarray(u_ref, dtype=float).reshape(tt.size, -1)
+    xs = _sampled(tt, x_given, grid, "x_ref")
+    us = _sampled(tt, u_given, grid, "u_ref")
+    if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
+        raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
+    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
+    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
+    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
+        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
+    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
+    if pv.size != ode.np:
+        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
+    x_span = np.ptp(xs, axis=0)
+    x_scale = np.maximum(x_span, 1e-3 * (1.0 + np.max(np.abs(xs), axis=0)))
+    finite = np.isfinite(lb) & np.isfinite(ub)
+    u_scale = np.where(finite, 0.5 * (np.where(finite, ub, 0) - np.where(finite, lb, 0)), np.maximum(np.ptp(us, axis=0), 1e-3 * (1 + np.max(np.abs(us), axis=0))))
+    Qm = _weight(Q, ode.nx, 1.0 / x_scale**2, "Q")
+    Rm = _weight(R, ode.nu, 1.0 / u_scale**2, "R")
+    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
+        raise InputError("R: expected a positive definite input weight")
+    step = ode.step(dt, method, substeps=substeps)
+    xsym, usym, psym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
+    xn = step(xsym, usym, psym)[0]
+    ab = ca.Function("AB", [xsym, usym, psym], [ca.jacobian(xn, xsym), ca.jacobian(xn, usym)])
+    Aa, Bb = ab.map(n)(xs.T, us.T, np.tile(pv.reshape(-1, 1), (1, n)))
+    A = np.asarray(Aa).reshape(ode.nx, n, ode.nx).transpose(1, 0, 2)  # [A_0 A_1 ...] side by side
+    B = np.asarray(Bb).reshape(ode.nx, n, ode.nu).transpose(1, 0, 2)
+    # after the end: the input that holds the final state (least squares f(x*_N, u) = 0) and the stationary gain there
+    fx = ca.Function("fB", [xsym, usym, psym], [ode.f(xsym, usym, psym), ca.jacobian(ode.f(xsym, usym, psym), usym)])
+    x_hold = x_given[-1]
+    rest, Bc = (np.asarray(v) for v in fx(x_hold, u_given[-1], pv))
+    u_hold = saturate(u_given[-1] - np.linalg.lstsq(Bc, rest.ravel(), rcond=None)[0], lb, ub)
+    Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
+    try:
+        K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
+    except InputError:
+        K_hold, P_hold = None, Qm
+    Qfm = P_hold if Qf is None else _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
+    K, _ = riccati_gains(A, B, Qm, Rm, Qfm)
+    return TrackingController(dt=float(dt), t0=float(tt[0]), x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
+                              x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm,
+                              x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1), K_hold=K[-1] if K_hold is None else K_hold)

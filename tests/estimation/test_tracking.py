@@ -1,0 +1,143 @@
+"""Tracking controller: feedforward + time-varying LQR of a model along a reference.
+
+References: python-control's ``dlqr`` (time-invariant LQR), the stationary limit of the
+backward Riccati recursion, a closed loop on the model's step with mismatched parameters
+(the feedback must beat the feedforward alone), and the saturation bounds.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import control
+import numpy as np
+import pytest
+
+from gtmodel.errors import InputError
+from gtmodel.estimation.tracking import dlqr, riccati_gains, tracking_controller
+from gtmodel.modeling import explicit_ode
+from gtmodel.problems.user_model import load_user_model
+
+from ..conftest import REPO
+
+DT = 0.004
+#: Angle-tracking weights of the motor: the armature current is an internal state (weighting
+#: it by its range, Bryson's default, fights the angle correction), the rotor angle is the task.
+Q_ANGLE = [1e-2, 1.0, 1e-4]
+
+
+@pytest.fixture(scope="module")
+def motor():
+    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
+    t = np.linspace(0.0, 1.0, 101)
+    u = (6.0 * np.sin(2 * np.pi * t))[:, None]
+    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
+    return ode, t, x, u
+
+
+def _linearisation(ode, x, u):
+    xs, us = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
+    xn = ode.step(DT, "rk4")(xs, us, ode.p_default)[0]
+    f = ca.Function("AB", [xs, us], [ca.jacobian(xn, xs), ca.jacobian(xn, us)])
+    return (np.asarray(m) for m in f(x, u))
+
+
+def test_dlqr_equals_python_control(motor):
+    ode, *_ = motor
+    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    Q, R = np.diag([1.0, 10.0, 0.01]), np.array([[0.1]])
+    K, P = dlqr(A, B, Q, R)
+    K_ref, P_ref, _ = control.dlqr(A, B, Q, R)
+    np.testing.assert_allclose(K, K_ref, rtol=1e-9)
+    np.testing.assert_allclose(P, P_ref, rtol=1e-9)
+
+
+def test_riccati_recursion_converges_to_dlqr(motor):
+    # a long horizon of constant A, B: the first gain is the stationary (dlqr) one
+    ode, *_ = motor
+    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    Q, R = np.diag([1.0, 10.0, 0.01]), np.array([[0.1]])
+    K, P = riccati_gains(np.tile(A, (2000, 1, 1)), np.tile(B, (2000, 1, 1)), Q, R, np.zeros((3, 3)))
+    K_ref, P_ref, _ = control.dlqr(A, B, Q, R)
+    np.testing.assert_allclose(K[0], K_ref, rtol=1e-8)
+    np.testing.assert_allclose(P[0], P_ref, rtol=1e-8)
+
+
+def test_linear_motor_gains_are_the_stationary_ones(motor):
+    # the motor is linear: A_k, B_k constant; with Qf the stationary P every K_k is dlqr's
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0])
+    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    K_ref, _, _ = control.dlqr(A, B, c.Q, c.R)
+    assert c.K.shape == (251, 1, 3)
+    np.testing.assert_allclose(c.K, np.broadcast_to(K_ref, c.K.shape), rtol=1e-8)
+
+
+def _closed_loop(ode, c, p, feedback: bool) -> float:
+    """RMS error of the load angle (rotor angle) over the reference, plant with parameters p."""
+    step = ode.step(DT, "rk4", substeps=4)
+    law = c.function()
+    xk = c.x_ref[0].copy()
+    err = []
+    for k in range(c.length - 1):
+        uk = np.asarray(law(k * DT, xk, c.u_initial)[0]).ravel() if feedback else c.u_ref[k]
+        xk = np.asarray(step(xk, uk, p)[0]).ravel()
+        err.append(xk[1] - c.x_ref[k + 1, 1])
+    return float(np.sqrt(np.mean(np.square(err))))
+
+
+def test_feedback_halves_the_error_of_the_feedforward_with_10_percent_mismatch(motor):
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u, u_lb=[-24.0], u_ub=[24.0], Q=Q_ANGLE)
+    p = ode.p_default.copy()
+    for name in ("r.R", "emf.k", "friction.d", "load.J"):
+        p[ode.p_names.index(name)] *= 1.1
+    assert _closed_loop(ode, c, p, True) < 0.5 * _closed_loop(ode, c, p, False)
+
+
+def test_input_is_saturated_at_the_bounds(motor):
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u, u_lb=[-7.0], u_ub=[7.0], Q=Q_ANGLE)
+    far = c.x_ref[100] + np.array([0.0, 50.0, 0.0])
+    assert c(100 * DT, far) == pytest.approx([-7.0]) and c(100 * DT, c.x_ref[100] - [0.0, 50.0, 0.0]) == pytest.approx([7.0])
+    # on the reference the input is the feedforward; before it the first sample, after it the held end
+    assert c(100 * DT, c.x_ref[100]) == pytest.approx(c.u_ref[100], abs=1e-12)
+    assert c(-1.0, c.x_ref[0]) == pytest.approx(c.u_ref[0], abs=1e-12)
+    assert c(99.0, c.x_hold) == pytest.approx(c.u_hold, abs=1e-12)
+
+
+def test_held_end_input_holds_the_final_state(motor):
+    # reference: the model itself, f(x_end, u_hold) = 0 where the input can hold the state;
+    # the motor's end state of this reference is at rest in current only if u_hold balances it
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u)
+    np.testing.assert_array_equal(c.x_hold, x[-1])
+    rest = np.asarray(ode.f(c.x_hold, c.u_hold, ode.p_default)).ravel()
+    # one input, three states: the current equation is balanced, the others are what they are
+    assert abs(rest[0]) < 1e-9 * (1 + abs(c.u_hold[0]))
+
+
+@pytest.mark.parametrize("t, x", [(np.nan, [0.0, 0.0, 0.0]), (0.1, [np.nan, 0.0, 0.0])], ids=["t_nan", "x_nan"])
+def test_non_finite_input_is_not_ok(motor, t, x):
+    ode, tt, xx, uu = motor
+    c = tracking_controller(ode, tt, xx, uu, u_lb=[-np.inf], u_ub=[np.inf])
+    assert float(c.function()(t, x, c.u_initial)[1]) == 0.0
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"dt": 0.0}, r"dt: expected a positive loop period in seconds, got 0\.0"),
+        ({"t": [0.0, 0.0]}, "t: expected at least two increasing finite reference times"),
+        ({"t": [0.0, 0.001], "x_ref": np.zeros((2, 3)), "u_ref": np.zeros((2, 1))}, r"shorter than one period \(0\.004 s\)"),
+        ({"x_ref": np.zeros((101, 2))}, "x_ref, u_ref: expected 3 state and 1"),
+        ({"R": [0.0]}, "R: expected a positive definite input weight"),
+        ({"Q": [[1.0, 2.0], [3.0, 4.0]]}, r"Q: expected 3 diagonal entries or a \(3, 3\) matrix"),
+        ({"u_lb": [1.0], "u_ub": [0.0]}, "u_lb, u_ub: expected 1 bounds each with u_lb <= u_ub"),
+    ],
+    ids=["dt", "t", "short", "x_columns", "R", "Q", "bounds"],
+)
+def test_bad_arguments(motor, kwargs, match):
+    ode, t, x, u = motor
+    args = {"t": t, "x_ref": x, "u_ref": u, **kwargs}
+    with pytest.raises(InputError, match=match):
+        tracking_controller(ode, **args)

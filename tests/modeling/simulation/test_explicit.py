@@ -1,0 +1,166 @@
+"""explicit_ode: a model as xdot = f(x, u, p), its fixed steps, against independent references.
+
+References: SciPy's ``solve_ivp`` (Radau) on the explicit right-hand side and IDAS on the
+DAE (``Model.simulate``), the DC motor's closed-form steady state, and the orders of the
+fixed-step methods.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling import Model, explicit_ode
+from gtmodel.problems.user_model import load_user_model
+
+from ...conftest import REPO
+
+MOTOR = REPO / "models" / "dc_motor.py"
+R, K, RATIO, D = 0.5, 0.05, 50.0, 0.02  # the model file's parameters
+
+
+@pytest.fixture(scope="module")
+def motor():
+    model = load_user_model(MOTOR, "DCMotorModel")
+    return model, explicit_ode(model)
+
+
+def _loop_model() -> Model:
+    """An algebraic loop through a nonlinear equation: z + 0.5 sin(z) = x, xdot = u - z."""
+    m = Model("loop")
+    x = m.state("x", start=1.0)
+    z = m.algebraic("z", start=0.5)
+    u = m.input("u")
+    m.equation(m.der(x), u - z)
+    m.equation(z + 0.5 * ca.sin(z), x)
+    m.output("zz", z)
+    return m
+
+
+def test_motor_is_eliminated_symbolically(motor):
+    _, ode = motor
+    assert (ode.symbolic, ode.newton, ode.x_names, ode.u_names) == (True, 0, ["ind.i", "emf.phi", "rotor.w"], ["src.v"])
+    assert ode.algebraic == 29
+
+
+def test_component_gives_units_and_the_same_ode(motor):
+    # the component itself (reduced inside explicit_ode) and the model file's reduced model: one ODE
+    spec = importlib.util.spec_from_file_location("dc_motor_file", MOTOR)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    ode = explicit_ode(module.DCMotor())
+    assert (ode.units["ind.i"], ode.units["src.v"], ode.units["r.R"]) == ("A", "V", "Ohm")
+    x = np.array([1.0, 0.2, 30.0])
+    np.testing.assert_allclose(np.asarray(ode.f(x, 5.0, ode.p_default)), np.asarray(motor[1].f(x, 5.0, motor[1].p_default)), rtol=1e-14)
+
+
+def test_motor_rest_point_is_the_closed_form_steady_state(motor):
+    # V = R i + k w and k i = (d / ratio^2) w (the load's friction seen at the rotor)
+    _, ode = motor
+    V = 12.0
+    w = K * V / (R * D / RATIO**2 + K**2)
+    i = D / RATIO**2 * w / K
+    xdot = np.asarray(ode.f([i, 0.0, w], V, ode.p_default)).ravel()
+    assert xdot[1] == pytest.approx(w, rel=1e-12)
+    np.testing.assert_allclose(xdot[[0, 2]], 0.0, atol=1e-9)
+
+
+def test_motor_f_integrated_by_scipy_equals_simulate(motor):
+    # peer: SciPy Radau on the explicit f; IDAS on the DAE (simulate)
+    model, ode = motor
+    t = np.linspace(0.0, 0.3, 31)
+    f = ode.f
+    sol = solve_ivp(lambda _t, x: np.asarray(f(x, 12.0, ode.p_default)).ravel(), (0.0, 0.3), ode.x0, t_eval=t,
+                    method="Radau", rtol=1e-11, atol=1e-12)
+    res = model.simulate(t, u=12.0, rtol=1e-10, atol=1e-12)
+    got = np.column_stack([res.x[n] for n in ode.x_names])
+    assert np.max(np.abs(sol.y.T - got) / np.abs(got).max(axis=0)) < 1e-7
+
+
+def test_newton_loop_model_equals_simulate():
+    # IDAS solves the same DAE with its own Newton; the explicit f carries an unrolled one
+    m = _loop_model()
+    ode = explicit_ode(m)
+    assert (ode.symbolic, ode.newton) == (False, 1)
+    t = np.linspace(0.0, 2.0, 21)
+    res = m.simulate(t, u=0.3, rtol=1e-10, atol=1e-12)
+    x, ok = ode.simulate_steps(ode.step(0.01, "rk4"), np.full((200, 1), 0.3))
+    assert ok.min() == 1.0
+    np.testing.assert_allclose(x[::10, 0], res.x["x"], atol=1e-8)
+    np.testing.assert_allclose(np.asarray(ode.h(x[-1], 0.3, [])).ravel(), res.outputs["zz"][-1], atol=1e-8)
+
+
+@pytest.mark.parametrize("x, converged", [(1.0, 1.0), (50.0, 1.0), (np.nan, 0.0), (1e308, 0.0)])
+def test_newton_converged_flag(x, converged):
+    # z + 0.5 sin z = x has one root for every finite x; NaN and an overflow are flagged
+    ode = explicit_ode(_loop_model())
+    assert float(ode.converged(x, 0.0, [])) == converged
+
+
+@pytest.mark.parametrize("method, substeps, tolerance", [("rk4", 4, 1e-4), ("radau2", 4, 1e-3), ("implicit_euler", 16, 2e-2)])
+def test_motor_steps_follow_simulate(motor, method, substeps, tolerance):
+    # reference: IDAS on the DAE with the same piecewise-constant input, at the period boundaries
+    model, ode = motor
+    n, dt = 100, 0.004
+    u = (6.0 * np.sin(2 * np.pi * np.arange(n) / n))[:, None]
+    res = model.simulate(dt * np.arange(n + 1), u=u, rtol=1e-10, atol=1e-12)
+    ref = np.column_stack([res.x[k] for k in ode.x_names])
+    x, ok = ode.simulate_steps(ode.step(dt, method, substeps=substeps), u)
+    assert ok.min() == 1.0
+    assert np.max(np.abs(x - ref) / (1.0 + np.abs(ref).max(axis=0))) < tolerance
+
+
+def test_radau_is_stable_where_rk4_is_not(motor):
+    # the electrical pole (about -535 1/s) times 8 ms leaves RK4's stability region (-2.79);
+    # Radau IIA is L-stable
+    model, ode = motor
+    n, dt = 50, 0.008
+    u = np.full((n, 1), 6.0)
+    ref = model.simulate(dt * np.arange(n + 1), u=u).x["rotor.w"]
+    rk4, _ = ode.simulate_steps(ode.step(dt, "rk4"), u)
+    radau, ok = ode.simulate_steps(ode.step(dt, "radau2"), u)
+    assert np.max(np.abs(rk4[:, 2])) > 1e3 * np.max(np.abs(ref))
+    assert ok.min() == 1.0 and np.max(np.abs(radau[:, 2] - ref)) < 0.02 * np.max(np.abs(ref))
+
+
+def test_time_dependent_model_refuses_f():
+    m = Model("forced")
+    x = m.state("x")
+    m.equation(m.der(x), ca.sin(m.time) - x)
+    ode = explicit_ode(m)
+    assert ode.time_dependent
+    assert float(ode.full(t=np.pi / 2, x=0.0, u=ca.DM(0, 1), p=ca.DM(0, 1))["xdot"]) == pytest.approx(1.0)
+    with pytest.raises(ModelError, match="'forced' depends on time explicitly"):
+        ode.f
+
+
+def _no_state() -> Model:
+    m = Model("static")
+    y = m.algebraic("y")
+    m.equation(y, 1.0)
+    return m
+
+
+@pytest.mark.parametrize(
+    "call, error, match",
+    [
+        (lambda ode: explicit_ode("motor"), InputError, "model: expected a gtmodel Model or Component, got str"),
+        (lambda ode: explicit_ode(_no_state()), ModelError, "'static' has no state"),
+        (lambda ode: explicit_ode(_loop_model(), iterations=0), InputError, "iterations: expected a positive"),
+        (lambda ode: ode.step(0.0), InputError, r"dt: expected a positive step length in seconds, got 0\.0"),
+        (lambda ode: ode.step(float("nan")), InputError, "dt: expected a positive step length"),
+        (lambda ode: ode.step(0.004, "euler"), InputError, "method: expected one of rk4, implicit_euler, radau2, got 'euler'"),
+        (lambda ode: ode.step(0.004, "radau2", iterations=0), InputError, "iterations: expected a positive number"),
+        (lambda ode: ode.step(0.004, substeps=0), InputError, "substeps: expected a positive number"),
+        (lambda ode: ode.simulate_steps(ode.step(), np.zeros((3, 1)), p=[1.0]), InputError, "p, x0: expected lengths 8 and 3"),
+    ],
+    ids=["not_a_model", "no_state", "iterations", "dt_zero", "dt_nan", "method", "step_iterations", "substeps", "p_length"],
+)
+def test_bad_arguments(motor, call, error, match):
+    with pytest.raises(error, match=match):
+        call(motor[1])
