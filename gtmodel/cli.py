@@ -32,9 +32,10 @@
     or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
     for this platform; a controller file's Kalman step as a discrete-time
     co-simulation FMU (:func:`gtmodel.exchange.fmu_step.export_step_fmu`).
-``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV]``
+``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV] [--max-members N --max-member-mb MB --max-total-mb MB --max-description-mb MB]``
     Load an FMU as gtmodel does (:func:`gtmodel.exchange.import_fmu`): its variables and
-    where its derivatives come from; simulate it with CVODES.
+    where its derivatives come from; simulate it with CVODES. The archive is unpacked
+    under caps (:class:`gtmodel.exchange.fmu_archive.ArchiveLimits`) the options raise.
 ``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
     Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: ODE right-hand side,
     algebraic residual, outputs) with its own parameter hash; ``--check`` compiles it with
@@ -171,6 +172,10 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("--points", type=int, default=101, help="output points of the simulation (default 101)")
     fi.add_argument("--out", type=Path, default=None, help="write the simulation to this CSV file (columns t, states, outputs)")
     fi.add_argument("--finite-differences", action="store_true", help="derivatives by finite differences even if the FMU provides directional derivatives")
+    fi.add_argument("--max-members", type=int, default=None, metavar="N", help="raise the cap on the archive's members (default 10000, docs/fmu.md)")
+    fi.add_argument("--max-member-mb", type=int, default=None, metavar="MB", help="raise the cap on one member's unpacked size (default 256 MiB)")
+    fi.add_argument("--max-total-mb", type=int, default=None, metavar="MB", help="raise the cap on the archive's unpacked size (default 1024 MiB)")
+    fi.add_argument("--max-description-mb", type=int, default=None, metavar="MB", help="raise the cap on modelDescription.xml (default 8 MiB)")
     fi.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     return parser
 
@@ -485,8 +490,18 @@ def _import_fmu(args: argparse.Namespace) -> int:
     if not args.fmu.is_file():  # before the heavy imports
         raise GtModelError(f"{args.fmu}: no such FMU file")
     from gtmodel.exchange import import_fmu, simulate_explicit
+    from gtmodel.exchange.fmu_archive import ArchiveLimits
 
-    imported = import_fmu(args.fmu, derivatives="finite_differences" if args.finite_differences else "auto")
+    mb = 1 << 20
+    given = {"max_members": args.max_members, "max_member_bytes": args.max_member_mb and args.max_member_mb * mb,
+             "max_total_bytes": args.max_total_mb and args.max_total_mb * mb,
+             "max_description_bytes": args.max_description_mb and args.max_description_mb * mb}
+    for option, value in (("--max-members", args.max_members), ("--max-member-mb", args.max_member_mb),
+                          ("--max-total-mb", args.max_total_mb), ("--max-description-mb", args.max_description_mb)):
+        if value is not None and value <= 0:
+            raise GtModelError(f"{option}: expected a positive integer, got {value}")
+    limits = ArchiveLimits(**{k: v for k, v in given.items() if v is not None})
+    imported = import_fmu(args.fmu, derivatives="finite_differences" if args.finite_differences else "auto", limits=limits)
     em = imported.model
     print(f"{args.fmu}: FMI {imported.version} model exchange, model {em.name!r}"
           + (" (binary built here from its sources)" if imported.built_from_sources else ""))
