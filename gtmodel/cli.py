@@ -61,6 +61,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 import traceback
 from pathlib import Path
@@ -115,6 +116,8 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("-q", "--quiet", action="store_true", help="no solver progress")
     group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
     solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
+    solve.add_argument("--data-dir", type=Path, action="append", default=[], metavar="DIR",
+                       help="a folder data files may also come from (default: only the problem file's folder); repeatable")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     study = sub.add_parser("study", help="run a study file (many cases of one problem file), locally or on a Dask cluster")
@@ -319,6 +322,11 @@ def _guarded(target: Path, run, on_interrupt) -> int:
 
 def _solve(args: argparse.Namespace) -> int:
     check_problem_files(args.problem)  # before anything is imported or written
+    for folder in args.data_dir:
+        if not folder.is_dir():
+            raise GtModelError(f"--data-dir {folder}: not a folder")
+    if args.data_dir:  # the environment reaches parallel workers too (gtmodel.problems.base.DATA_DIRS_ENV)
+        os.environ["GTMODEL_DATA_DIRS"] = os.pathsep.join(str(d.resolve()) for d in args.data_dir)
     target = _solve_target(args)
     single = len(args.problem) == 1 and args.sweep is None
 

@@ -180,9 +180,11 @@ class TrackingKind(ProblemKind):
             data = read_toml(source, ProblemError, "problem file")
         except ProblemError as exc:
             raise file.wrap("trajectory.problem", exc) from None
-        kind = SOURCE_KINDS.get(data.get("kind"))
+        named = data.get("kind")  # type-checked here: a list or table is not a kind (it was an unhashable key)
+        kind = SOURCE_KINDS.get(named) if isinstance(named, str) else None
         if kind is None:
-            raise file.fail("trajectory.problem", f"a problem file of kind {' or '.join(SOURCE_KINDS)} ({source} is of kind {data.get('kind')!r})")
+            shown = repr(named) if isinstance(named, str) and len(named) <= 40 else f"a {type(named).__name__}, not a kind name"
+            raise file.fail("trajectory.problem", f"a problem file of kind {' or '.join(SOURCE_KINDS)} ({source} is of kind {shown})")
         try:
             sdoc = validate_document(kind.schema, data, source)
             sname = sdoc.name or source.stem
