@@ -1,9 +1,10 @@
 """The ``gtmodel`` command.
 
-``gtmodel solve PROBLEM.toml [--out DIR]``
+``gtmodel solve PROBLEM.toml [--out DIR] [--data-dir DIR ...]``
     Load, validate and solve a problem file; write the result folder ``DIR`` (default
     ``results/<problem name>``): ``summary.json`` (always, listing every file), the data
     files of its kind and PNG plots. The folder is replaced only when the run is complete.
+    Data files must lie in the problem file's folder or a ``--data-dir`` folder.
 ``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
     A comparison, on the study engine (:func:`gtmodel.problems.study.run_study`): every case
     in ``DIR/<case>/``, a comparison table (``comparison.md``, ``comparison.csv``, columns
