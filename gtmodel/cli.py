@@ -593,6 +593,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"gtmodel: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as exc:  # noqa: BLE001 - reported, non-zero exit
+        if _signals.received():  # CasADi turned the signal into NotImplementedError/SystemError
+            print("gtmodel: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        if isinstance(exc, MemoryError):
+            print("gtmodel: error: out of memory: the input is too large for this machine", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, OSError) and exc.filename is not None:  # a path the user gave (--out too long, no permission)
+            print(f"gtmodel: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         if getattr(args, "debug", False):
             traceback.print_exc()
         print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)

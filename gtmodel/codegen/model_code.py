@@ -49,6 +49,7 @@ from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_par
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, _prepare
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.modeling import FlatDAE, Model
+from gtmodel.modeling.dae import casadi_name
 
 __all__ = ["MODEL_KIND", "MODEL_FUNCTIONS", "MODEL_TOLERANCE", "STRICT_EXTRA", "ModelSource", "model_parameter_hash", "model_specs",
            "generate_model", "check_model"]
@@ -164,7 +165,7 @@ def model_specs(dae: FlatDAE) -> tuple[FunctionSpec, ...]:
         return ca.substitute(e, dae.p, p) if dae.npar else e
 
     def function(name: str, outs: dict[str, ca.SX]) -> Any:
-        f = ca.Function(f"{dae.name}_{name}", [s for _, s, _ in ins], [fixed(e) for e in outs.values()], [n for n, _, _ in ins], list(outs))
+        f = ca.Function(f"{casadi_name(dae.name)}_{name}", [s for _, s, _ in ins], [fixed(e) for e in outs.values()], [n for n, _, _ in ins], list(outs))
         return lambda source: f
 
     def reference(fname: str, names: dict[str, str]) -> Any:
@@ -252,7 +253,7 @@ def generate_model(
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
     dae = model.flatten()
-    prefix = prefix if prefix is not None else "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", model.name)
+    prefix = prefix if prefix is not None else "gt_" + casadi_name(model.name)
     if not isinstance(prefix, str) or not _IDENT.match(prefix):
         raise InputError(f"prefix: expected a C identifier such as 'gt_cart_pendulum', got {prefix!r}")
     table = {s.name: s for s in model_specs(dae)}
