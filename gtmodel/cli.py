@@ -413,6 +413,9 @@ def _schema(args: argparse.Namespace) -> int:
 
 def _codegen(args: argparse.Namespace) -> int:
     from gtmodel.codegen import check, check_controller, generate, load_controller
+    from gtmodel.codegen.generate import check_out_dir
+
+    check_out_dir(args.out)  # the rule of solve --out: never a folder of the user's own files
 
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
     if args.model is not None:
