@@ -281,7 +281,7 @@ def _load(path: Path, folder: Path, derivatives: str, name: str | None, limits: 
         md.write_text(md.read_text(encoding="utf-8").replace('providesDirectionalDerivatives="true"', 'providesDirectionalDerivatives="false"')
                       .replace('providesDirectionalDerivative="true"', 'providesDirectionalDerivative="false"'), encoding="utf-8")
     try:
-        dae = ca.DaeBuilder(name or ident, str(folder), {})
+        dae = ca.DaeBuilder(ident, str(folder), {})  # a C identifier; the model keeps the name asked for
         f = dae.create("f", ["t", "x", "u", "p"], ["ode", "y"], {"enable_fd": not use_dd})
     except RuntimeError as exc:
         msg = str(exc).strip().splitlines()
