@@ -227,3 +227,14 @@ def test_fmi3_build_description_definitions_reach_the_compiler(sources, tmp_path
         "sources/buildDescription.xml": _bd(_FMI3_FILES + '<SourceFile name="check.c"/>')})
     with pytest.raises(CodegenError, match=r"nodef.fmu: building the FMU's binary from its 3 C source\(s\) failed: .*check.c:2:\d+: error: #error GTM_NEEDED must be 3"):
         import_fmu(bad)
+
+
+def test_the_private_extraction_folder_is_removed_with_the_model(sources, sandbox):
+    import gc
+    import stat
+
+    imp = import_fmu(sources["2.0"])
+    assert imp.folder.parent == sandbox / "tmp" and stat.S_IMODE(imp.folder.stat().st_mode) == 0o700
+    del imp
+    gc.collect()
+    assert list((sandbox / "tmp").iterdir()) == []
