@@ -131,6 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
     study.add_argument("-q", "--quiet", action="store_true", help="no progress")
     study.add_argument("-v", "--verbose", action="store_true", help="solver progress (with --workers 1)")
+    study.add_argument("--data-dir", type=Path, action="append", default=[], metavar="DIR",
+                       help="a folder data files may also come from (default: only the problem file's folder); repeatable")
     study.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     schema = sub.add_parser("schema", help="JSON Schema of a problem kind, the list of kinds, or the reference docs")
@@ -321,13 +323,19 @@ def _guarded(target: Path, run, on_interrupt) -> int:
             return EXIT_INTERRUPTED
 
 
-def _solve(args: argparse.Namespace) -> int:
-    check_problem_files(args.problem)  # before anything is imported or written
-    for folder in args.data_dir:
+def _data_dirs(folders: list[Path]) -> None:
+    """``--data-dir``: folders data files may also come from, through the environment (so
+    parallel workers see them too; :data:`gtmodel.problems.base.DATA_DIRS_ENV`)."""
+    for folder in folders:
         if not folder.is_dir():
             raise GtModelError(f"--data-dir {folder}: not a folder")
-    if args.data_dir:  # the environment reaches parallel workers too (gtmodel.problems.base.DATA_DIRS_ENV)
-        os.environ["GTMODEL_DATA_DIRS"] = os.pathsep.join(str(d.resolve()) for d in args.data_dir)
+    if folders:
+        os.environ["GTMODEL_DATA_DIRS"] = os.pathsep.join(str(d.resolve()) for d in folders)
+
+
+def _solve(args: argparse.Namespace) -> int:
+    check_problem_files(args.problem)  # before anything is imported or written
+    _data_dirs(args.data_dir)
     target = _solve_target(args)
     single = len(args.problem) == 1 and args.sweep is None
 
@@ -360,6 +368,7 @@ def _toml_kind(path: Path) -> str | None:
 
 def _study(args: argparse.Namespace) -> int:
     check_problem_files([args.study], "study file")  # before anything is imported or written
+    _data_dirs(args.data_dir)
     target = args.out if args.out is not None else Path("results") / _toml_name(args.study)
 
     def run() -> int:
@@ -573,6 +582,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         3 internal error, 130 interrupted (SIGINT or SIGTERM).
     """
     previous = _signals.install()
+    data_dirs = os.environ.get("GTMODEL_DATA_DIRS")  # --data-dir sets it for this call only
     args = None
     try:
         args = build_parser().parse_args(argv)
@@ -611,6 +621,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERNAL
     finally:
         _signals.restore(previous)
+        if data_dirs is None:
+            os.environ.pop("GTMODEL_DATA_DIRS", None)
+        else:
+            os.environ["GTMODEL_DATA_DIRS"] = data_dirs
 
 
 if __name__ == "__main__":  # pragma: no cover - ``python -m gtmodel.cli``: gtmodel/__init__.py installed the handlers

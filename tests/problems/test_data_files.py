@@ -85,3 +85,13 @@ def test_data_dir_must_be_a_folder(tmp_path, capsys):
     f = _problem(tmp_path, "x.csv")
     assert main(["solve", str(f), "--data-dir", str(tmp_path / "nowhere"), "--out", str(tmp_path / "o")]) == EXIT_BAD_INPUT
     assert "--data-dir" in capsys.readouterr().err
+
+
+def test_the_data_dir_option_lets_a_run_read_there_and_is_forgotten_afterwards(layout, capsys):
+    work, foreign = layout
+    csv = _trajectory(foreign / "traj.csv", last=0.0013)
+    problem = _problem(work, str(csv))
+    assert main(["solve", str(problem), "--out", str(work / "a"), "--quiet", "--no-plots"]) == EXIT_BAD_INPUT
+    code = main(["solve", str(problem), "--data-dir", str(foreign), "--out", str(work / "b"), "--quiet", "--no-plots"])
+    assert code in (0, 1), capsys.readouterr().err  # loaded and solved (a status of the tracking run)
+    assert "GTMODEL_DATA_DIRS" not in os.environ
