@@ -78,8 +78,13 @@ def _parse_xml(path: Path, file: Path, member: str, limits: ArchiveLimits) -> ET
     if size > limits.max_description_bytes:
         raise InputError(f"{path}: {member} has {size} bytes, more than {limits.max_description_bytes} "
                          "(limits.max_description_bytes); the FMU is refused")
+    with open(file, "rb") as fh:
+        head = fh.read(size)
+    if re.search(rb"<!\s*(DOCTYPE|ENTITY)", head, re.IGNORECASE):  # FMI descriptions use none: no entity expansion at all
+        raise InputError(f"{path}: {member} declares a DTD or entities (<!DOCTYPE>, <!ENTITY>), which FMI descriptions "
+                         "do not use; the FMU is refused")
     try:
-        return ET.parse(file).getroot()
+        return ET.fromstring(head)
     except ET.ParseError as exc:
         raise InputError(f"{path}: {member} is not valid XML ({exc})") from None
 

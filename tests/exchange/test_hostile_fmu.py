@@ -136,6 +136,15 @@ HOSTILE = [
     ("bad_definition_name", lambda s, d: _repack(s["3.0"], d / "def3.fmu", add={
         "sources/buildDescription.xml": _bd(_FMI3_FILES, defs='<PreprocessorDefinition name="X -o /tmp/y" value="1"/>')}),
      r"PreprocessorDefinition name 'X -o /tmp/y' is not a C identifier"),
+    ("billion_laughs", lambda s, d: _zip(d / "lol.fmu", {"modelDescription.xml": '<?xml version="1.0"?><!DOCTYPE m [<!ENTITY a "aaaaaaaaaa">'
+                                                        + "".join(f'<!ENTITY a{i} "{"&a;" * 10}">' for i in range(1, 9)) + "]>" + _md()}),
+     r"modelDescription.xml declares a DTD or entities"),
+    ("external_entity", lambda s, d: _zip(d / "ext.fmu", {"modelDescription.xml": f'<!DOCTYPE m [<!ENTITY e SYSTEM "file://{d}/foreign/secret.txt">]>'
+                                                          + _md().replace('modelName="m"', 'modelName="&e;"')}),
+     r"modelDescription.xml declares a DTD or entities"),
+    ("entity_in_build_description", lambda s, d: _repack(s["3.0"], d / "bd_ent.fmu", add={
+        "sources/buildDescription.xml": '<!DOCTYPE b [<!ENTITY x "y">]>' + _bd(_FMI3_FILES)}),
+     r"sources/buildDescription.xml declares a DTD or entities"),
     ("clocks", lambda s, d: _zip(d / "clock.fmu", {"modelDescription.xml": _md("3.0", variables='<Clock name="tick" valueReference="1" causality="input" variability="discrete"/>')}),
      r"the FMU has clocks \(tick\)"),
     ("time_events", lambda s, d: _zip(d / "stair.fmu", {"modelDescription.xml": _md(variables=_STATE2 + '<ScalarVariable name="counter" valueReference="2" causality="output" variability="discrete"><Integer start="1"/></ScalarVariable>', structure=_DERIV2)}),
