@@ -98,6 +98,29 @@ def _copy_capped(path: Path, zf: zipfile.ZipFile, info: zipfile.ZipInfo, target:
             dst.write(chunk)
 
 
+def _central_directory(path: Path) -> tuple[int, int] | None:
+    """(entries, bytes) of the archive's central directory from its end record, read before
+    ``zipfile`` loads every entry into memory; None when there is no end record."""
+    with open(path, "rb") as fh:
+        fh.seek(0, 2)
+        size = fh.tell()
+        fh.seek(max(0, size - (1 << 16) - 22))
+        tail = fh.read()
+        at = tail.rfind(b"PK\x05\x06")
+        if at < 0 or len(tail) < at + 22:
+            return None
+        entries = int.from_bytes(tail[at + 10:at + 12], "little")
+        cd_bytes = int.from_bytes(tail[at + 12:at + 16], "little")
+        loc = at - 20
+        if (entries == 0xFFFF or cd_bytes == 0xFFFFFFFF) and loc >= 0 and tail[loc:loc + 4] == b"PK\x06\x07":
+            fh.seek(int.from_bytes(tail[loc + 8:loc + 16], "little"))
+            record = fh.read(56)
+            if record[:4] == b"PK\x06\x06" and len(record) == 56:
+                entries = int.from_bytes(record[32:40], "little")
+                cd_bytes = int.from_bytes(record[40:48], "little")
+        return entries, cd_bytes
+
+
 def extract_fmu(path: Path, limits: ArchiveLimits | None = None) -> Path:
     """Unpack an FMU into a new private temporary folder, refusing what breaks the limits.
 
@@ -125,6 +148,10 @@ def extract_fmu(path: Path, limits: ArchiveLimits | None = None) -> Path:
     folder = Path(tempfile.mkdtemp(prefix="gtmodel_fmu_import_"))
     root = folder.resolve()
     try:
+        directory = _central_directory(path)  # before zipfile reads every entry into memory
+        if directory is not None and (directory[0] > limits.max_members or directory[1] > limits.max_members * 4096):
+            raise InputError(f"{path}: the archive declares {directory[0]} members ({directory[1]} bytes of directory), more "
+                             f"than {limits.max_members} (limits.max_members); the FMU is refused")
         with zipfile.ZipFile(path) as zf:
             infos = zf.infolist()
             if len(infos) > limits.max_members:
