@@ -114,6 +114,9 @@ def _sources(path: Path, folder: Path, root: ET.Element, ident: str, limits: Arc
                     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,99}", key):
                         raise InputError(f"{path}: buildDescription PreprocessorDefinition name {key[:100]!r} is not a C identifier; the FMU is refused")
                     value = d.get("value")
+                    if value is not None and (len(value) > 200 or any(ord(c) < 32 or ord(c) == 127 for c in value)):
+                        raise InputError(f"{path}: buildDescription PreprocessorDefinition {key} has a value with control "
+                                         "characters or over 200 characters; the FMU is refused")
                     flags.append(f"-D{key}" if value is None else f"-D{key}={value}")
                 for inc in fileset.iter("IncludeDirectory"):
                     flags.append(f"-I{inside(path, src_dir, inc.get('name'), 'buildDescription IncludeDirectory')}")

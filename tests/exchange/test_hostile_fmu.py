@@ -145,6 +145,9 @@ HOSTILE = [
     ("entity_in_build_description", lambda s, d: _repack(s["3.0"], d / "bd_ent.fmu", add={
         "sources/buildDescription.xml": '<!DOCTYPE b [<!ENTITY x "y">]>' + _bd(_FMI3_FILES)}),
      r"sources/buildDescription.xml declares a DTD or entities"),
+    ("definition_with_a_newline", lambda s, d: _repack(s["3.0"], d / "defnl.fmu", add={
+        "sources/buildDescription.xml": _bd(_FMI3_FILES, defs=f'<PreprocessorDefinition name="X" value="1&#10;#include &quot;{d}/foreign/secret.txt&quot;"/>')}),
+     r"PreprocessorDefinition X has a value with control characters"),
     ("clocks", lambda s, d: _zip(d / "clock.fmu", {"modelDescription.xml": _md("3.0", variables='<Clock name="tick" valueReference="1" causality="input" variability="discrete"/>')}),
      r"the FMU has clocks \(tick\)"),
     ("time_events", lambda s, d: _zip(d / "stair.fmu", {"modelDescription.xml": _md(variables=_STATE2 + '<ScalarVariable name="counter" valueReference="2" causality="output" variability="discrete"><Integer start="1"/></ScalarVariable>', structure=_DERIV2)}),
