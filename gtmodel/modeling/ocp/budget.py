@@ -14,8 +14,9 @@ at 400, about 110 kB per collocation point: 2,000 bytes per variable and 800 per
 nonzero, on a 150 MB base) the estimate below follows the peak resident memory, and
 ``elements = 10000, points = 9`` (which grew to 5.6 GB and was killed) is refused at once.
 
-The limit is :data:`MEMORY_SHARE` of the memory available when the check runs (Linux
-``MemAvailable``; the physical pages free elsewhere), or the number of megabytes in the
+The limit is :data:`MEMORY_SHARE` of the memory available when the check runs (the least of
+Linux ``MemAvailable`` or the free physical pages, a cgroup's memory limit minus its use, and
+``ulimit -v`` minus the process's virtual size), or the number of megabytes in the
 environment variable :data:`MEMORY_ENV`.
 """
 
@@ -76,18 +77,46 @@ def estimate(elements: int, points: int, nx: int, nz: int, nu: int) -> NlpSize:
     return NlpSize(variables, nonzeros, _BASE + _PER_VARIABLE * variables + _PER_NONZERO * nonzeros)
 
 
+def _read_number(path: str) -> float | None:
+    try:
+        with open(path, encoding="ascii") as fh:
+            text = fh.read().strip()
+    except OSError:
+        return None
+    return float(text) if text.isdigit() else None
+
+
 def _available() -> float | None:
+    """Memory this process may still take [bytes]: the least of the system's available
+    memory, the cgroup's limit minus its use (v2 and v1), and ``RLIMIT_AS`` minus this
+    process's virtual size; None when none is known."""
+    known: list[float] = []
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
+                    known.append(float(line.split()[1]) * 1024.0)
     except OSError:
-        pass
+        try:
+            known.append(float(os.sysconf("SC_AVPHYS_PAGES")) * float(os.sysconf("SC_PAGE_SIZE")))
+        except (ValueError, OSError, AttributeError):
+            pass
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        limit, usage = _read_number(limit_file), _read_number(usage_file)
+        if limit is not None and limit < 1 << 60:
+            known.append(max(0.0, limit - (usage or 0.0)))
     try:
-        return float(os.sysconf("SC_AVPHYS_PAGES")) * float(os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return None
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY:
+            with open("/proc/self/statm", encoding="ascii") as fh:
+                virtual = float(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+            known.append(max(0.0, soft - virtual))
+    except (ImportError, OSError, ValueError, IndexError):
+        pass
+    return min(known) if known else None
 
 
 def memory_limit() -> float | None:

@@ -54,3 +54,16 @@ def test_default_limit_is_a_share_of_the_available_memory(monkeypatch):
     limit = memory_limit()
     assert limit is None or limit > 0
     assert check_memory(50, 3, 6, 0, 3) == estimate(50, 3, 6, 0, 3)  # a shipped problem's size passes
+
+
+def test_ulimit_v_lowers_the_limit(tmp_path):
+    """Under ``ulimit -v`` (RLIMIT_AS) the limit follows it (reference: the rlimit set in a child)."""
+    import subprocess
+    import sys
+
+    code = ("import resource; resource.setrlimit(resource.RLIMIT_AS, (3_000_000_000, resource.RLIM_INFINITY)); "
+            "from gtmodel.modeling.ocp.budget import memory_limit; print(memory_limit())")
+    env = {k: v for k, v in __import__("os").environ.items() if k != MEMORY_ENV}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert 0 < float(out.stdout) <= 0.8 * 3_000_000_000
