@@ -53,6 +53,18 @@ __all__ = ["Table", "read_table", "write_table"]
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 _NUMBER_RE = re.compile(_NUMBER)
 _NONFINITE_RE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+#: Largest file :func:`read_table` reads when its caller sets no smaller cap [bytes].
+DEFAULT_MAX_BYTES = 256_000_000
+#: Lines beyond ``max_rows`` a table may have (header, comments, empty lines at the end).
+_SLACK_LINES = 10_000
+#: Longest excerpt of a file's content a message quotes [characters].
+EXCERPT = 32
+
+
+def _excerpt(text: str) -> str:
+    """A short, escaped excerpt of file content for a message (never a whole line)."""
+    short = text[:EXCERPT].encode("unicode_escape").decode("ascii")
+    return short + ("..." if len(text) > EXCERPT else "")
 
 
 @dataclass(frozen=True)
@@ -226,8 +238,8 @@ def _number(source: str, lineno: int, column: str, text: str) -> float:
     if _NUMBER_RE.fullmatch(s):
         return float(s)
     if _NONFINITE_RE.fullmatch(s):
-        raise InputError(f"{source}: line {lineno}, column '{column}': NaN/inf is not allowed, got '{s}'")
-    raise InputError(f"{source}: line {lineno}, column '{column}': expected a decimal number, got '{text}'")
+        raise InputError(f"{source}: line {lineno}, column '{_excerpt(column)}': NaN/inf is not allowed, got '{_excerpt(s)}'")
+    raise InputError(f"{source}: line {lineno}, column '{_excerpt(column)}': expected a decimal number, got '{_excerpt(text)}'")
 
 
 def read_table(
@@ -246,7 +258,9 @@ def read_table(
     max_rows : int, optional
         Most data rows accepted (a larger file is refused at the first row too many).
     max_bytes : int, optional
-        Largest file size accepted [bytes] (checked before reading).
+        Largest file size accepted [bytes]: checked on the file's size before reading and
+        while reading (a file whose size the system does not report is read at most this
+        far); default :data:`DEFAULT_MAX_BYTES`.
 
     Returns
     -------
@@ -259,17 +273,26 @@ def read_table(
         name (or another header than ``header``); a row with another number of values than
         the header; a value that is not a finite decimal number; a comment-free empty line
         inside the data; more than ``max_rows`` rows. The message names the file, the line
-        (1-based) and the column.
+        (1-based) and the column, and quotes at most :data:`EXCERPT` characters of the
+        file's content, escaped.
     """
     source = str(path)
+    cap = DEFAULT_MAX_BYTES if max_bytes is None else max_bytes
     try:
-        if max_bytes is not None and Path(path).stat().st_size > max_bytes:
-            raise InputError(f"{source}: {Path(path).stat().st_size} bytes, expected at most {max_bytes} bytes")
-        text = Path(path).read_text(encoding="utf-8-sig")
+        if Path(path).stat().st_size > cap:
+            raise InputError(f"{source}: {Path(path).stat().st_size} bytes, expected at most {cap} bytes")
+        with open(path, "rb") as fh:
+            raw = fh.read(cap + 1)  # bounded also when the size was not reported (a pipe, /proc)
+        if len(raw) > cap:
+            raise InputError(f"{source}: more than {cap} bytes, expected at most {cap} bytes")
+        text = raw.decode("utf-8-sig")
     except OSError as exc:
         raise InputError(f"{source}: cannot read {what} ({exc.strerror})") from None
     except UnicodeDecodeError as exc:
         raise InputError(f"{source}: cannot read {what} (not UTF-8 text: byte {exc.start})") from None
+    if max_rows is not None and text.count("\n") > max_rows + _SLACK_LINES:  # before splitting: lines cost memory
+        raise InputError(f"{source}: more than {max_rows + _SLACK_LINES} lines, expected at most {max_rows} data rows "
+                         f"(and up to {_SLACK_LINES} lines of header, comments and trailing empty lines)")
     lines = text.splitlines()
     n = len(lines)
     while n > 0 and not lines[n - 1].strip():
@@ -288,13 +311,13 @@ def read_table(
         raise InputError(f"{source}: line {header_line}: empty line where the header {expected} was expected")
     columns = tuple(c.strip() for c in lines[k].split(","))
     if header is not None and columns != tuple(header):
-        raise InputError(f"{source}: line {header_line}: expected the header {expected}, got {','.join(columns)}")
+        raise InputError(f"{source}: line {header_line}: expected the header {expected}, got {_excerpt(','.join(columns))}")
     seen: set[str] = set()
     for c in columns:
         if c == "":
             raise InputError(f"{source}: line {header_line} (header): empty column name")
         if c in seen:
-            raise InputError(f"{source}: line {header_line} (header): column '{c}' appears twice")
+            raise InputError(f"{source}: line {header_line} (header): column '{_excerpt(c)}' appears twice")
         seen.add(c)
     if max_rows is not None and n - k - 1 > max_rows:  # refuse a huge file before parsing it
         count = 0
@@ -318,7 +341,8 @@ def read_table(
             if not line.strip():
                 raise InputError(f"{source}: line {lineno}: empty line inside the data (allowed only at the end of the file)")
             if len(fields) != width:
-                raise InputError(f"{source}: line {lineno}: {len(fields)} values, expected {width} (one per header column: {','.join(columns)})")
+                raise InputError(f"{source}: line {lineno}: {len(fields)} values, expected {width} (one per header column: "
+                                 f"{_excerpt(','.join(columns))})")
             for name, cell in zip(columns, fields):
                 _number(source, lineno, name, cell)
         rows.append(fields)

@@ -8,6 +8,9 @@ from typing import Any
 
 from gtmodel.errors import GtModelError
 
+#: Largest TOML file read [bytes] (problem, study and parameter files are a few kB).
+MAX_TOML_BYTES = 16_000_000
+
 
 def read_toml(path: Path, error: type[GtModelError], what: str, origin: str | None = None, text: str | None = None) -> dict[str, Any]:
     """Parse a TOML file; unreadable files and syntax errors raise ``error`` naming the file.
@@ -33,12 +36,17 @@ def read_toml(path: Path, error: type[GtModelError], what: str, origin: str | No
     Raises
     ------
     GtModelError
-        Of class ``error``: the file cannot be read, is not UTF-8 or is not valid TOML.
+        Of class ``error``: the file cannot be read, is larger than :data:`MAX_TOML_BYTES`
+        (checked while reading), is not UTF-8 or is not valid TOML.
     """
     origin = str(path) if origin is None else origin
     if text is None:
         try:
-            text = Path(path).read_text(encoding="utf-8")
+            with open(path, "rb") as fh:
+                raw = fh.read(MAX_TOML_BYTES + 1)
+            if len(raw) > MAX_TOML_BYTES:
+                raise error(f"{origin}: {what} larger than {MAX_TOML_BYTES} bytes")
+            text = raw.decode("utf-8")
         except OSError as exc:
             raise error(f"{origin}: cannot read {what} ({exc.strerror})") from None
         except UnicodeDecodeError as exc:

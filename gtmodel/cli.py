@@ -1,9 +1,10 @@
 """The ``gtmodel`` command.
 
-``gtmodel solve PROBLEM.toml [--out DIR]``
+``gtmodel solve PROBLEM.toml [--out DIR] [--data-dir DIR ...]``
     Load, validate and solve a problem file; write the result folder ``DIR`` (default
     ``results/<problem name>``): ``summary.json`` (always, listing every file), the data
     files of its kind and PNG plots. The folder is replaced only when the run is complete.
+    Data files must lie in the problem file's folder or a ``--data-dir`` folder.
 ``gtmodel solve A.toml B.toml ... [--out DIR]`` / ``gtmodel solve A.toml --sweep w=0,0.001``
     A comparison, on the study engine (:func:`gtmodel.problems.study.run_study`): every case
     in ``DIR/<case>/``, a comparison table (``comparison.md``, ``comparison.csv``, columns
@@ -32,9 +33,10 @@
     or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
     for this platform; a controller file's Kalman step as a discrete-time
     co-simulation FMU (:func:`gtmodel.exchange.fmu_step.export_step_fmu`).
-``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV]``
+``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV] [--max-members N --max-member-mb MB --max-total-mb MB --max-description-mb MB]``
     Load an FMU as gtmodel does (:func:`gtmodel.exchange.import_fmu`): its variables and
-    where its derivatives come from; simulate it with CVODES.
+    where its derivatives come from; simulate it with CVODES. The archive is unpacked
+    under caps (:class:`gtmodel.exchange.fmu_archive.ArchiveLimits`) the options raise.
 ``gtmodel report RESULT_DIR``
     Write ``RESULT_DIR/report.html``: one self-contained page of a result folder (status,
     objective, verification, warnings, zoomable trajectories with their bounds, the
@@ -71,6 +73,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 import traceback
 from pathlib import Path
@@ -126,6 +129,8 @@ def build_parser() -> argparse.ArgumentParser:
     group.add_argument("-v", "--verbose", action="store_true", help="solver progress even when not on a terminal")
     solve.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
     solve.add_argument("--no-report", action="store_true", help="do not write report.html (the result's HTML page; a single problem only)")
+    solve.add_argument("--data-dir", type=Path, action="append", default=[], metavar="DIR",
+                       help="a folder data files may also come from (default: only the problem file's folder); repeatable")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     study = sub.add_parser("study", help="run a study file (many cases of one problem file), locally or on a Dask cluster")
@@ -138,6 +143,8 @@ def build_parser() -> argparse.ArgumentParser:
     study.add_argument("--no-plots", action="store_true", help="do not write PNG plots")
     study.add_argument("-q", "--quiet", action="store_true", help="no progress")
     study.add_argument("-v", "--verbose", action="store_true", help="solver progress (with --workers 1)")
+    study.add_argument("--data-dir", type=Path, action="append", default=[], metavar="DIR",
+                       help="a folder data files may also come from (default: only the problem file's folder); repeatable")
     study.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
     rep = sub.add_parser("report", help="write RESULT_DIR/report.html, the HTML page of a result folder")
@@ -192,6 +199,10 @@ def build_parser() -> argparse.ArgumentParser:
     fi.add_argument("--points", type=int, default=101, help="output points of the simulation (default 101)")
     fi.add_argument("--out", type=Path, default=None, help="write the simulation to this CSV file (columns t, states, outputs)")
     fi.add_argument("--finite-differences", action="store_true", help="derivatives by finite differences even if the FMU provides directional derivatives")
+    fi.add_argument("--max-members", type=int, default=None, metavar="N", help="raise the cap on the archive's members (default 10000, docs/fmu.md)")
+    fi.add_argument("--max-member-mb", type=int, default=None, metavar="MB", help="raise the cap on one member's unpacked size (default 256 MiB)")
+    fi.add_argument("--max-total-mb", type=int, default=None, metavar="MB", help="raise the cap on the archive's unpacked size (default 1024 MiB)")
+    fi.add_argument("--max-description-mb", type=int, default=None, metavar="MB", help="raise the cap on modelDescription.xml (default 8 MiB)")
     fi.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     return parser
 
@@ -333,8 +344,19 @@ def _guarded(target: Path, run, on_interrupt) -> int:
             return EXIT_INTERRUPTED
 
 
+def _data_dirs(folders: list[Path]) -> None:
+    """``--data-dir``: folders data files may also come from, through the environment (so
+    parallel workers see them too; :data:`gtmodel.problems.base.DATA_DIRS_ENV`)."""
+    for folder in folders:
+        if not folder.is_dir():
+            raise GtModelError(f"--data-dir {folder}: not a folder")
+    if folders:
+        os.environ["GTMODEL_DATA_DIRS"] = os.pathsep.join(str(d.resolve()) for d in folders)
+
+
 def _solve(args: argparse.Namespace) -> int:
     check_problem_files(args.problem)  # before anything is imported or written
+    _data_dirs(args.data_dir)
     target = _solve_target(args)
     single = len(args.problem) == 1 and args.sweep is None
 
@@ -367,6 +389,7 @@ def _toml_kind(path: Path) -> str | None:
 
 def _study(args: argparse.Namespace) -> int:
     check_problem_files([args.study], "study file")  # before anything is imported or written
+    _data_dirs(args.data_dir)
     target = args.out if args.out is not None else Path("results") / _toml_name(args.study)
 
     def run() -> int:
@@ -428,6 +451,9 @@ def _schema(args: argparse.Namespace) -> int:
 
 def _codegen(args: argparse.Namespace) -> int:
     from gtmodel.codegen import check, check_controller, generate, load_controller
+    from gtmodel.codegen.generate import check_out_dir
+
+    check_out_dir(args.out)  # the rule of solve --out: never a folder of the user's own files
 
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
     if args.model is not None:
@@ -548,8 +574,18 @@ def _import_fmu(args: argparse.Namespace) -> int:
     if not args.fmu.is_file():  # before the heavy imports
         raise GtModelError(f"{args.fmu}: no such FMU file")
     from gtmodel.exchange import import_fmu, simulate_explicit
+    from gtmodel.exchange.fmu_archive import ArchiveLimits
 
-    imported = import_fmu(args.fmu, derivatives="finite_differences" if args.finite_differences else "auto")
+    mb = 1 << 20
+    given = {"max_members": args.max_members, "max_member_bytes": args.max_member_mb and args.max_member_mb * mb,
+             "max_total_bytes": args.max_total_mb and args.max_total_mb * mb,
+             "max_description_bytes": args.max_description_mb and args.max_description_mb * mb}
+    for option, value in (("--max-members", args.max_members), ("--max-member-mb", args.max_member_mb),
+                          ("--max-total-mb", args.max_total_mb), ("--max-description-mb", args.max_description_mb)):
+        if value is not None and value <= 0:
+            raise GtModelError(f"{option}: expected a positive integer, got {value}")
+    limits = ArchiveLimits(**{k: v for k, v in given.items() if v is not None})
+    imported = import_fmu(args.fmu, derivatives="finite_differences" if args.finite_differences else "auto", limits=limits)
     em = imported.model
     print(f"{args.fmu}: FMI {imported.version} model exchange, model {em.name!r}"
           + (" (binary built here from its sources)" if imported.built_from_sources else ""))
@@ -609,6 +645,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         3 internal error, 130 interrupted (SIGINT or SIGTERM).
     """
     previous = _signals.install()
+    data_dirs = os.environ.get("GTMODEL_DATA_DIRS")  # --data-dir sets it for this call only
     args = None
     try:
         args = build_parser().parse_args(argv)
@@ -634,12 +671,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"gtmodel: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as exc:  # noqa: BLE001 - reported, non-zero exit
+        if _signals.received():  # CasADi turned the signal into NotImplementedError/SystemError
+            print("gtmodel: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        if isinstance(exc, MemoryError):
+            print("gtmodel: error: out of memory: the input is too large for this machine", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, OSError) and exc.filename is not None:  # a path the user gave (--out too long, no permission)
+            print(f"gtmodel: error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         if getattr(args, "debug", False):
             traceback.print_exc()
         print(f"gtmodel: internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", file=sys.stderr)
         return EXIT_INTERNAL
     finally:
         _signals.restore(previous)
+        if data_dirs is None:
+            os.environ.pop("GTMODEL_DATA_DIRS", None)
+        else:
+            os.environ["GTMODEL_DATA_DIRS"] = data_dirs
 
 
 if __name__ == "__main__":  # pragma: no cover - ``python -m gtmodel.cli``: gtmodel/__init__.py installed the handlers

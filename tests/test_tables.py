@@ -121,3 +121,20 @@ def test_guess_reader_uses_the_table_format(tmp_path):
     p.write_text(",".join(cols) + "\n" + rows[0] + "\n" + rows[0].replace("0.0", "nan", 1) + "\n")
     with pytest.raises(InputError, match=r"guess: .*trajectory\.csv: line 3, column 't': NaN/inf is not allowed"):
         _read_guess_csv(p)
+
+
+def test_messages_quote_only_a_short_escaped_excerpt_of_the_content(tmp_path):
+    """A file that is not a table (a copy of /etc/passwd): the message names line and column
+    and quotes at most 32 characters, escaped. Reference: the file's own lines."""
+    secret = "root:x:0:0:root:/root:/bin/bash-and-a-long-tail-SECRET"
+    p = _write(tmp_path, f"{secret}\ndaemon:x:1:1:daemon:/usr/sbin:/usr/sbin/nologin-SECRET\n")
+    with pytest.raises(InputError, match=r"line 2, column 'root:x:0:0:root:/root:/bin/bash-\.\.\.': expected a decimal number, got 'daemon:x:1:1:daemon:/usr/sbin:/u\.\.\.'") as info:
+        read_table(p)
+    assert "SECRET" not in str(info.value)
+
+
+def test_empty_lines_beyond_the_row_cap_are_refused_before_splitting(tmp_path):
+    p = _write(tmp_path, "a\n1\n" + "\n" * 20_000)
+    with pytest.raises(InputError, match=r"more than 10010 lines, expected at most 10 data rows"):
+        read_table(p, max_rows=10)
+    assert read_table(_write(tmp_path, "a\n1\n" + "\n" * 9_000), max_rows=10).n_rows == 1  # trailing empty lines within the slack

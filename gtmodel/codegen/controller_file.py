@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import json
 import math
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -71,6 +72,8 @@ CONTROLLER_KEYS = ("format", "dt", "kalman_step", "ilc_correction", "ilc_table",
 #: Keys holding a serialised CasADi Function.
 _FUNCTION_KEYS = ("kalman_step", "ilc_correction", "kf_step", "ekf_step", "lead_through_step")
 _SUFFIXES = (".json", ".npz")
+#: Largest controller file, and largest unpacked content of an ``.npz`` one [bytes] (checked before reading).
+MAX_BYTES = 100_000_000
 
 
 def _suffix(path: Path) -> str:
@@ -132,6 +135,12 @@ def _read(path: Path) -> dict[str, Any]:
     if not path.is_file():
         raise InputError(f"controller file {path}: not found")
     try:
+        size = path.stat().st_size
+        if kind == ".npz" and zipfile.is_zipfile(path):  # the arrays' unpacked size, as the archive declares it
+            with zipfile.ZipFile(path) as zf:
+                size = max(size, sum(i.file_size for i in zf.infolist()))
+        if size > MAX_BYTES:
+            raise InputError(f"controller file {path}: {size} bytes (unpacked), expected at most {MAX_BYTES}")
         if kind == ".json":
             data = json.loads(path.read_text(encoding="utf-8"))
             if not isinstance(data, dict):
@@ -139,8 +148,10 @@ def _read(path: Path) -> dict[str, Any]:
             return data
         with np.load(path, allow_pickle=False) as z:
             return {k: z[k] for k in z.files}
-    except (OSError, ValueError, UnicodeDecodeError) as exc:
-        raise InputError(f"controller file {path}: cannot read it as {kind[1:].upper()} ({exc})") from None
+    except InputError:
+        raise
+    except (OSError, ValueError, UnicodeDecodeError, zipfile.BadZipFile) as exc:
+        raise InputError(f"controller file {path}: cannot read it as {kind[1:].upper()} ({str(exc)[:200]})") from None
 
 
 def _string(path: Path, data: dict, key: str) -> str:

@@ -60,6 +60,7 @@ from gtmodel.codegen.declarations import StatusCheck
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import CodegenError, GtModelError, InputError
 from gtmodel.modeling import Component, ExplicitODE, FlatDAE, Model, explicit_ode
+from gtmodel.modeling.dae import casadi_name
 
 __all__ = ["MODEL_KIND", "MODEL_FUNCTIONS", "MODEL_TOLERANCE", "HORIZON_TOLERANCE", "HORIZON_PERIODS", "STEP_FUNCTIONS", "SUBSTEPS",
            "STRICT_EXTRA", "ModelSource", "model_parameter_hash", "model_specs", "generate_model", "check_model", "check_horizon"]
@@ -232,7 +233,7 @@ def model_specs(ode: ExplicitODE, dt: float = LOOP_PERIOD_S, substeps: int = SUB
     def fixed(name: str) -> Any:
         ins, f = table[name]
         sy = [ca.SX.sym(n, f.size1_in(n)) for n in ins]
-        g = ca.Function(f"{dae.name}_{name}", sy, f.call(sy + [p]), ins, f.name_out())
+        g = ca.Function(f"{casadi_name(dae.name)}_{name}", sy, f.call(sy + [p]), ins, f.name_out())
         return lambda source: g
 
     def reference(name: str, outs: Sequence[str]) -> Any:
@@ -336,7 +337,7 @@ def generate_model(
         raise InputError(f"model: expected a gtmodel.modeling.Model or Component, got {type(model).__name__}")
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
-    prefix = prefix if prefix is not None else "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", model.name)
+    prefix = prefix if prefix is not None else "gt_" + casadi_name(model.name)
     if not isinstance(prefix, str) or not _IDENT.match(prefix):
         raise InputError(f"prefix: expected a C identifier such as 'gt_cart_pendulum', got {prefix!r}")
     if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not np.isfinite(dt) or dt <= 0:

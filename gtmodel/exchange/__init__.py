@@ -6,7 +6,9 @@
   :func:`export_step_fmu`: a discrete-time controller step (the 4 ms Kalman step) as an
   FMI 2.0 co-simulation FMU (:mod:`gtmodel.exchange.fmu_step`).
 * :func:`import_fmu`: an FMU (FMI 2.0 / 3.0 model exchange) loaded by CasADi's
-  ``DaeBuilder`` as an :class:`ExplicitModel` (:mod:`gtmodel.exchange.fmu_import`), which
+  ``DaeBuilder`` as an :class:`ExplicitModel` (:mod:`gtmodel.exchange.fmu_import`; the
+  archive unpacked as untrusted input under :class:`ArchiveLimits`,
+  :mod:`gtmodel.exchange.fmu_archive`), which
   :func:`simulate_explicit`, :func:`linearize_explicit`, :func:`connect_explicit` (with
   gtmodel models and components) and :func:`solve_explicit_ocp` (direct collocation, the
   transcription of :func:`gtmodel.modeling.solve`) use.
@@ -22,6 +24,7 @@ from __future__ import annotations
 from gtmodel.exchange.explicit import ExplicitModel, explicit_model
 from gtmodel.exchange.explicit_ocp import ExplicitOcpResult, solve_explicit_ocp
 from gtmodel.exchange.explicit_ops import connect_explicit, linearize_explicit, simulate_explicit
+from gtmodel.exchange.fmu_archive import ArchiveLimits
 from gtmodel.exchange.fmu_export import ExportedFmu, export_fmu
 from gtmodel.exchange.fmu_import import ImportedFmu, import_fmu
 from gtmodel.exchange.fmu_step import StepFmu, export_step_fmu
@@ -36,6 +39,7 @@ __all__ = [
     "export_step_fmu",
     "ImportedFmu",
     "import_fmu",
+    "ArchiveLimits",
     "simulate_explicit",
     "linearize_explicit",
     "connect_explicit",

@@ -14,7 +14,6 @@ for a :class:`~gtmodel.modeling.Component`, from its declarations
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,14 +22,12 @@ import numpy as np
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import Component, Model, explicit_ode
+from gtmodel.modeling.dae import casadi_name
 
 __all__ = ["ExplicitModel", "explicit_model", "fmi_identifier"]
 
-_IDENT_RE = re.compile(r"[^A-Za-z0-9_]")
-
-
 def fmi_identifier(name: str) -> str:
-    """A C identifier for the FMU's ``modelIdentifier`` (non-identifier characters become ``_``).
+    """A C identifier for the FMU's ``modelIdentifier`` and CasADi's Function names.
 
     Parameters
     ----------
@@ -40,11 +37,14 @@ def fmi_identifier(name: str) -> str:
     Returns
     -------
     str
-        ``name`` with every character outside ``[A-Za-z0-9_]`` replaced by ``_``, prefixed
-        by ``m_`` when it starts with a digit.
+        :func:`gtmodel.modeling.dae.casadi_name` of ``name`` (``my-model`` -> ``my_model``,
+        ``cart__pole`` -> ``cart_pole``, ``2dof`` -> ``m_2dof``), or ``"model"`` for a name
+        it refuses (an imported FMU's ``modelName`` may be anything).
     """
-    ident = _IDENT_RE.sub("_", name) or "model"
-    return f"m_{ident}" if ident[0].isdigit() else ident
+    try:
+        return casadi_name(name)
+    except InputError:
+        return "model"
 
 
 @dataclass

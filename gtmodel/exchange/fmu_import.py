@@ -18,8 +18,8 @@ the C compiler of :mod:`gtmodel._compiler`.
 from __future__ import annotations
 
 import logging
+import re
 import shutil
-import tempfile
 import weakref
 import xml.etree.ElementTree as ET
 import zipfile
@@ -30,8 +30,9 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._compiler import find_compiler, run_compiler
-from gtmodel.errors import InputError
+from gtmodel.errors import CodegenError, CompilerNotFoundError, InputError
 from gtmodel.exchange.explicit import ExplicitModel
+from gtmodel.exchange.fmu_archive import ArchiveLimits, extract_fmu, inside, plain_identifier
 from gtmodel.exchange.fmu_export import INCLUDE_DIR, fmi_platform
 
 __all__ = ["ImportedFmu", "import_fmu", "DERIVATIVES"]
@@ -71,40 +72,120 @@ class ImportedFmu:
     built_from_sources: bool = False
 
 
-def _read_description(path: Path, folder: Path) -> ET.Element:
+def _parse_xml(path: Path, file: Path, member: str, limits: ArchiveLimits) -> ET.Element:
+    """Parse one XML member of the archive, its size capped (``limits.max_description_bytes``)."""
+    size = file.stat().st_size
+    if size > limits.max_description_bytes:
+        raise InputError(f"{path}: {member} has {size} bytes, more than {limits.max_description_bytes} "
+                         "(limits.max_description_bytes); the FMU is refused")
+    with open(file, "rb") as fh:
+        head = fh.read(size)
+    if re.search(rb"<!\s*(DOCTYPE|ENTITY)", head, re.IGNORECASE):  # FMI descriptions use none: no entity expansion at all
+        raise InputError(f"{path}: {member} declares a DTD or entities (<!DOCTYPE>, <!ENTITY>), which FMI descriptions "
+                         "do not use; the FMU is refused")
+    try:
+        return ET.fromstring(head)
+    except ET.ParseError as exc:
+        raise InputError(f"{path}: {member} is not valid XML ({exc})") from None
+
+
+def _read_description(path: Path, folder: Path, limits: ArchiveLimits) -> ET.Element:
     md = folder / "modelDescription.xml"
     if not md.is_file():
         raise InputError(f"{path}: not an FMU (no modelDescription.xml in the archive)")
-    try:
-        return ET.parse(md).getroot()
-    except ET.ParseError as exc:
-        raise InputError(f"{path}: modelDescription.xml is not valid XML ({exc})") from None
+    return _parse_xml(path, md, "modelDescription.xml", limits)
 
 
-def _build_from_sources(path: Path, folder: Path, root: ET.Element, ident: str, version: str) -> Path:
-    """Compile ``sources/*.c`` into ``binaries/<platform>/<id><ext>`` (a source FMU)."""
+def _sources(path: Path, folder: Path, root: ET.Element, ident: str, limits: ArchiveLimits) -> tuple[list[Path], list[str]]:
+    """The C sources to build (each once) and the compiler's ``-D``/``-I`` flags, all inside ``sources/``."""
+    src_dir = folder / "sources"
+    listed: list[Path] = []
+    flags: list[str] = []
+    bd = src_dir / "buildDescription.xml"
+    if bd.is_file():  # FMI 3.0: the build configuration of this model identifier (else the first)
+        configs = list(_parse_xml(path, bd, "sources/buildDescription.xml", limits).iter("BuildConfiguration"))
+        chosen = [c for c in configs if c.get("modelIdentifier") == ident] or configs[:1]
+        for config in chosen:
+            for fileset in config.iter("SourceFileSet"):
+                for f in fileset.iter("SourceFile"):
+                    listed.append(inside(path, src_dir, f.get("name"), "buildDescription SourceFile"))
+                for d in fileset.iter("PreprocessorDefinition"):
+                    key = d.get("name", "")
+                    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,99}", key):
+                        raise InputError(f"{path}: buildDescription PreprocessorDefinition name {key[:100]!r} is not a C identifier; the FMU is refused")
+                    value = d.get("value")
+                    if value is not None and (len(value) > 200 or any(ord(c) < 32 or ord(c) == 127 for c in value)):
+                        raise InputError(f"{path}: buildDescription PreprocessorDefinition {key} has a value with control "
+                                         "characters or over 200 characters; the FMU is refused")
+                    flags.append(f"-D{key}" if value is None else f"-D{key}={value}")
+                for inc in fileset.iter("IncludeDirectory"):
+                    flags.append(f"-I{inside(path, src_dir, inc.get('name'), 'buildDescription IncludeDirectory')}")
+    else:  # FMI 2.0: <SourceFiles> of the model exchange interface (also listed again under CoSimulation)
+        for f in root.findall("ModelExchange/SourceFiles/File"):
+            listed.append(inside(path, src_dir, f.get("name"), "SourceFiles File"))
+    if not listed and src_dir.is_dir():
+        listed = sorted(src_dir.glob("*.c"))
+    once = list(dict.fromkeys(p for p in listed if p.suffix == ".c"))  # each source once, in order
+    return once, flags
+
+
+_INCLUDE = re.compile(rb"^[ \t]*#[ \t]*(?:include|include_next|import|embed)\b[ \t]*(.*)$", re.MULTILINE)
+
+
+def _check_includes(path: Path, src_dir: Path) -> None:
+    """Refuse ``#include`` of absolute paths, ``..`` or macros in any file under ``sources/``:
+    the compiler must read nothing outside the unpacked FMU but the system headers."""
+    for file in sorted(p for p in src_dir.rglob("*") if p.is_file()):
+        for m in _INCLUDE.finditer(file.read_bytes()):
+            target = m.group(1).split(b"//")[0].strip()
+            name = target[1:-1] if target[:1] in (b'"', b"<") and target[-1:] in (b'"', b">") else None
+            if name is None or name.startswith(b"/") or b".." in name or b"\\" in name or b":" in name:
+                shown = target[:80].decode("ascii", "backslashreplace")
+                raise InputError(f"{path}: sources/{file.relative_to(src_dir).as_posix()} includes {shown!r}: "
+                                 "an #include must name a header by a relative path without '..'; the FMU is refused")
+
+
+def _first_error(msg: str) -> str:
+    """The compiler's first ``error:`` line (file, line and message), shortened and escaped."""
+    for line in msg.splitlines():
+        if "error" in line:
+            return line.strip()[:300].encode("unicode_escape").decode("ascii")
+    return msg.strip().splitlines()[-1][:300].encode("unicode_escape").decode("ascii") if msg.strip() else "(no output)"
+
+
+def _build_from_sources(path: Path, folder: Path, root: ET.Element, ident: str, version: str, limits: ArchiveLimits) -> Path:
+    """Compile the FMU's C sources into ``binaries/<platform>/<id><ext>`` (a source FMU)."""
     plat, ext = fmi_platform(version)
     src_dir = folder / "sources"
-    listed = [f.get("name") for f in root.iter("File") if f.get("name", "").endswith(".c")]
-    bd = src_dir / "buildDescription.xml"
-    if bd.is_file():  # FMI 3.0: the source files of the build description
-        listed = [f.get("name") for f in ET.parse(bd).getroot().iter("SourceFile") if f.get("name", "").endswith(".c")]
-    sources = [src_dir / n for n in listed] if listed else sorted(src_dir.glob("*.c"))
+    sources, flags = _sources(path, folder, root, ident, limits) if src_dir.is_dir() else ([], [])
     present = sorted(p.name for p in (folder / "binaries").glob("*")) if (folder / "binaries").is_dir() else []
-    if not sources or not all(s.is_file() for s in sources):
+    missing = [s for s in sources if not s.is_file()]
+    if not sources or missing:
+        what = f"missing source {missing[0].relative_to(src_dir.resolve()).as_posix()!r}" if missing else "no C sources to build one"
         raise InputError(
-            f"{path}: no binary for this platform ({plat}) and no C sources to build one "
+            f"{path}: no binary for this platform ({plat}) and {what} "
             f"(binaries for: {', '.join(present) or 'none'})"
         )
-    out = folder / "binaries" / plat / f"{ident}{ext}"
+    _check_includes(path, src_dir)
+    out = inside(path, folder / "binaries", f"{plat}/{ident}{ext}", "binary")
     out.parent.mkdir(parents=True, exist_ok=True)
-    cmd = [*find_compiler(), "-shared", "-fPIC", "-O1", f"-I{INCLUDE_DIR}", f"-I{src_dir}", *map(str, sources), "-o", str(out), "-lm"]
-    run_compiler(cmd, f"{path}: building the FMU's binary from its sources")
+    # a shared library exports the plain fmi3 names (the standard header's override of a source FMU's prefix)
+    plain = ["-DFMI3_OVERRIDE_FUNCTION_PREFIX"] if version == "3.0" else []
+    cmd = [*find_compiler(), "-shared", "-fPIC", "-O1", f"-I{INCLUDE_DIR}", f"-I{src_dir}", *plain, *flags,
+           *map(str, sources), "-o", str(out), "-lm"]
+    try:
+        run_compiler(cmd, f"{path}: building the FMU's binary from its sources")
+    except CompilerNotFoundError:
+        raise
+    except CodegenError as exc:
+        raise CodegenError(f"{path}: building the FMU's binary from its {len(sources)} C source(s) failed: "
+                           f"{_first_error(str(exc).split(chr(10), 1)[-1])}") from None
     _log.info("built %s from the sources of %s", out.name, path)
     return out
 
 
-def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = None) -> ImportedFmu:
+def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = None,
+               limits: ArchiveLimits | None = None) -> ImportedFmu:
     """Load an FMU (FMI 2.0 / 3.0 model exchange) as an explicit model.
 
     Parameters
@@ -116,6 +197,9 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
         provides them) or CasADi's finite differences.
     name : str, optional
         Model name; default the FMU's ``modelName``.
+    limits : ArchiveLimits, optional
+        Caps on the archive (members, unpacked sizes, ``modelDescription.xml``); default
+        :class:`~gtmodel.exchange.fmu_archive.ArchiveLimits` (docs/fmu.md).
 
     Returns
     -------
@@ -126,12 +210,16 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
     ------
     InputError
         Naming the file: missing, not a zip archive (corrupt), no ``modelDescription.xml``,
-        an FMI version other than 2.0/3.0, no model exchange interface, event indicators
-        (events are not imported), no binary for this
+        an archive beyond ``limits`` or with a member name that leaves the archive (naming
+        the member), a ``modelIdentifier`` that is not a C identifier, a source, include
+        folder or binary name outside the unpacked folder, an FMI version other than
+        2.0/3.0, no model exchange interface, a feature that cannot be simulated here
+        (event indicators, clocks, time events of discrete variables, no continuous
+        states; the message names it), no binary for this
         platform and no sources, ``derivatives="directional"`` for an FMU without them, or
         CasADi cannot load it.
     CodegenError
-        Building a source FMU failed.
+        Building a source FMU failed: the message names the compiler's first error.
     """
     path = Path(path)
     if derivatives not in DERIVATIVES:
@@ -140,15 +228,10 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
         raise InputError(f"{path}: no such FMU file")
     if not zipfile.is_zipfile(path):
         raise InputError(f"{path}: not an FMU (corrupt: not a zip archive)")
-    folder = Path(tempfile.mkdtemp(prefix="gtmodel_fmu_import_"))
+    limits = limits or ArchiveLimits()
+    folder = extract_fmu(path, limits)
     try:
-        with zipfile.ZipFile(path) as zf:
-            zf.extractall(folder)
-    except (zipfile.BadZipFile, OSError) as exc:
-        shutil.rmtree(folder, ignore_errors=True)
-        raise InputError(f"{path}: not an FMU (corrupt archive: {exc})") from None
-    try:
-        imported = _load(path, folder, derivatives, name)
+        imported = _load(path, folder, derivatives, name, limits)
     except BaseException:
         shutil.rmtree(folder, ignore_errors=True)
         raise
@@ -156,8 +239,30 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
     return imported
 
 
-def _load(path: Path, folder: Path, derivatives: str, name: str | None) -> ImportedFmu:
-    root = _read_description(path, folder)
+def _unsupported(path: Path, root: ET.Element, version: str) -> str | None:
+    """The FMU feature gtmodel's import cannot simulate, named; ``None`` when there is none."""
+    n_events = int(root.get("numberOfEventIndicators", "0") or 0) if version == "2.0" else len(root.findall("ModelStructure/EventIndicator"))
+    if n_events:
+        return (f"the FMU has {n_events} event indicator(s) (state events); gtmodel's import (CasADi's FmuFunction) "
+                "evaluates the continuous-time equations only, so its events would be lost")
+    variables = list(root.find("ModelVariables") if root.find("ModelVariables") is not None else [])
+    clocks = [v.get("name", "?") for v in variables if v.tag == "Clock"]
+    if clocks:
+        return f"the FMU has clocks ({', '.join(clocks[:5])}); FMI 3.0 clocked partitions cannot be simulated by gtmodel's import"
+    discrete = [v.get("name", "?") for v in variables if v.get("variability") == "discrete"
+                and v.get("causality", "local") in ("local", "output")]
+    if discrete:
+        return (f"the FMU has discrete-time variables changed at events ({', '.join(discrete[:5])}): time events "
+                "(next event time) and event updates are not simulated by gtmodel's import")
+    n_states = len(root.findall("ModelStructure/Derivatives/Unknown")) if version == "2.0" else len(root.findall("ModelStructure/ContinuousStateDerivative"))
+    if not n_states:
+        return ("the FMU has no continuous states (no derivatives in ModelStructure); gtmodel imports an FMU as an "
+                "ODE xdot = f(t, x, u, p) and an algebraic input-output map has nothing to integrate")
+    return None
+
+
+def _load(path: Path, folder: Path, derivatives: str, name: str | None, limits: ArchiveLimits) -> ImportedFmu:
+    root = _read_description(path, folder, limits)
     version = root.get("fmiVersion", "")
     if version not in ("2.0", "3.0"):
         raise InputError(f"{path}: FMI version {version or '(none)'} is not supported (2.0 or 3.0)")
@@ -166,15 +271,14 @@ def _load(path: Path, folder: Path, derivatives: str, name: str | None) -> Impor
         kinds = [k for k in ("CoSimulation", "ScheduledExecution") if root.find(k) is not None]
         raise InputError(f"{path}: no model exchange interface (the FMU has {', '.join(kinds) or 'no interface'}); "
                          "gtmodel imports model-exchange FMUs")
-    ident = me.get("modelIdentifier", "")
-    n_events = int(root.get("numberOfEventIndicators", "0") or 0) if version == "2.0" else len(list(root.iter("EventIndicator")))
-    if n_events:
-        raise InputError(f"{path}: the FMU has {n_events} event indicator(s); gtmodel's import (CasADi's FmuFunction) "
-                         "evaluates the continuous-time equations only, so its events would be lost")
+    ident = plain_identifier(path, me.get("modelIdentifier", ""), "ModelExchange")
+    why = _unsupported(path, root, version)
+    if why:
+        raise InputError(f"{path}: {why}")
     plat, ext = fmi_platform(version)
     built = False
-    if not (folder / "binaries" / plat / f"{ident}{ext}").is_file():
-        _build_from_sources(path, folder, root, ident, version)
+    if not inside(path, folder / "binaries", f"{plat}/{ident}{ext}", "binary").is_file():
+        _build_from_sources(path, folder, root, ident, version, limits)
         built = True
     provides = (me.get("providesDirectionalDerivatives") or me.get("providesDirectionalDerivative") or "false") == "true"
     if derivatives == "directional" and not provides:
@@ -185,7 +289,7 @@ def _load(path: Path, folder: Path, derivatives: str, name: str | None) -> Impor
         md.write_text(md.read_text(encoding="utf-8").replace('providesDirectionalDerivatives="true"', 'providesDirectionalDerivatives="false"')
                       .replace('providesDirectionalDerivative="true"', 'providesDirectionalDerivative="false"'), encoding="utf-8")
     try:
-        dae = ca.DaeBuilder(name or ident, str(folder), {})
+        dae = ca.DaeBuilder(ident, str(folder), {})  # a C identifier; the model keeps the name asked for
         f = dae.create("f", ["t", "x", "u", "p"], ["ode", "y"], {"enable_fd": not use_dd})
     except RuntimeError as exc:
         msg = str(exc).strip().splitlines()

@@ -18,7 +18,8 @@ connectors with ``flow`` and ``connect``, arrays of Reals, the built-in math fun
 model gets a dotted name CasADi 3.8 refuses, so declare it at the top level of the file).
 Rejected: ``when``, ``algorithm`` outside functions, ``pre``/``edge``/``change``/``reinit``/``sample``/
 ``initial()``/``terminal()``, ``delay``, ``discrete`` variables, non-Real variables
-that are not parameters, external functions.
+that are not parameters, external functions, ``assert()``/``terminate()`` (pymoca 0.12 fails
+on them without a line).
 """
 
 from __future__ import annotations
@@ -51,6 +52,8 @@ UNSUPPORTED = {
     "delay()": r"\bdelay\s*\(",
     "discrete variable": r"\bdiscrete\b",
     "external function": r"\bexternal\b",
+    "assert()": r"\bassert\s*\(",
+    "terminate()": r"\bterminate\s*\(",
 }
 _COMMENT_RE = re.compile(r"//[^\n]*|/\*.*?\*/|\"(?:[^\"\\]|\\.)*\"", re.S)
 

@@ -19,6 +19,8 @@ Adding a kind is one class in :mod:`gtmodel.problems.kinds` and one line in
 
 from __future__ import annotations
 
+import os
+import stat
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -152,7 +154,14 @@ class ProblemFile:
         return target
 
     def data_file(self, field: str, ref: str) -> Path:
-        """Resolve a data file (CSV, ...) named in the problem file.
+        """Resolve a data file (CSV, ...) named in the problem file: the one place data paths are checked.
+
+        A data file must stay where the problem lives: after symbolic links are resolved it
+        lies inside the problem file's folder or inside a folder named with ``gtmodel solve
+        --data-dir`` (the environment variable :data:`DATA_DIRS_ENV`, folders separated by
+        ``os.pathsep``), and it is a regular file (not a device, FIFO or socket, nothing
+        under ``/proc``, ``/sys`` or ``/dev``). So a problem file from someone else cannot make
+        gtmodel read, and quote in its messages, any other file of the machine.
 
         Parameters
         ----------
@@ -168,9 +177,45 @@ class ProblemFile:
         Raises
         ------
         ProblemError
-            The file does not exist.
+            The file does not exist, resolves outside the allowed folders, or is not a
+            regular file; the message names the problem file, the field and the path.
         """
-        return Path(self.reference(field, ref))
+        target = Path(self.reference(field, ref))
+        try:
+            real = target.resolve(strict=True)
+            mode = real.stat().st_mode
+        except (OSError, RuntimeError, ValueError):
+            raise self.fail(field, "an existing, readable data file", ref) from None
+        roots = [self.path.parent.resolve(), *data_dirs()]
+        if any(real.is_relative_to(s) for s in _SPECIAL) or not stat.S_ISREG(mode):
+            raise self.fail(field, "a regular data file (not a device, FIFO, socket or a file under /proc, /sys, /dev)", ref)
+        if not any(real.is_relative_to(r) for r in roots):
+            raise self.fail(field, f"a data file inside the problem file's folder {self.path.parent} "
+                                   "or a folder given with --data-dir (symbolic links resolved)", ref)
+        return target
+
+
+#: Environment variable naming extra folders data files may come from (``os.pathsep``-separated; ``gtmodel solve --data-dir``).
+DATA_DIRS_ENV = "GTMODEL_DATA_DIRS"
+_SPECIAL = (Path("/proc"), Path("/sys"), Path("/dev"))
+
+
+def data_dirs() -> list[Path]:
+    """The extra folders data files may come from (:data:`DATA_DIRS_ENV`), resolved.
+
+    Returns
+    -------
+    list of pathlib.Path
+        Existing folders named in the environment variable; empty when it is unset.
+    """
+    out = []
+    for part in os.environ.get(DATA_DIRS_ENV, "").split(os.pathsep):
+        if part.strip():
+            try:
+                out.append(Path(part).resolve())
+            except (OSError, RuntimeError):
+                continue
+    return out
 
 
 @dataclass(frozen=True)

@@ -318,8 +318,29 @@ def run_problem(
     except GtModelError as exc:  # a ResultWriteError too: the earlier result must not look current
         return _failed(path, target, problem, exc, Status.INVALID_INPUT)
     except Exception as exc:  # noqa: BLE001 - a defect: reported with its status, never lost
+        if _signals.received():  # CasADi turns a signal inside a solver into NotImplementedError/SystemError
+            return _failed(path, target, problem, KeyboardInterrupt("interrupted"), Status.INTERRUPTED)
+        if isinstance(exc, MemoryError):  # too large for this machine: bad input, with a status and a message
+            return _failed(path, target, problem, out_of_memory(path), Status.INVALID_INPUT)
         _log.debug("internal error", exc_info=True)
         return _failed(path, target, problem, exc, Status.INTERNAL_ERROR)
+
+
+def out_of_memory(what: Path | str) -> ProblemError:
+    """The error a :class:`MemoryError` becomes: bad input (exit 2) naming what was too large.
+
+    Parameters
+    ----------
+    what : pathlib.Path or str
+        The problem file (or the command's input).
+
+    Returns
+    -------
+    ProblemError
+        To be recorded or raised by the caller.
+    """
+    return ProblemError(f"{what}: out of memory: the problem or a data file it names is too large for this machine "
+                        "(reduce collocation.elements/points, the data files, or run where more memory is available)")
 
 
 def _failed(path: Path, target: Path, problem: Problem | None, error: BaseException, status: Status, write: bool = True) -> RunOutcome:

@@ -113,3 +113,16 @@ def test_cli_bad_controller_file_exits_2_naming_file_and_key(tmp_path, controlle
 def test_format_constant_is_written(tmp_path, controller):
     assert json.loads(save_controller(tmp_path / "c.json", controller).read_text())["format"] == CONTROLLER_FORMAT
     assert isinstance(ca.Function.deserialize(json.loads((tmp_path / "c.json").read_text())["kalman_step"]), ca.Function)
+
+
+def test_an_npz_bomb_is_refused_by_its_declared_size(tmp_path):
+    """200 MB of zeros packed into ~200 kB: refused before numpy unpacks it (reference: the zip header)."""
+    import zipfile
+
+    from gtmodel.codegen.controller_file import MAX_BYTES
+
+    bomb = tmp_path / "bomb.npz"
+    with zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("kalman_step.npy", bytes(2 * MAX_BYTES))
+    with pytest.raises(InputError, match=rf"controller file .*bomb.npz: {2 * MAX_BYTES} bytes \(unpacked\), expected at most {MAX_BYTES}"):
+        load_controller(bomb)

@@ -7,6 +7,7 @@ independent side; gtmodel's own ``Model.simulate`` (IDAS) the reference.
 from __future__ import annotations
 
 import importlib.util
+import re
 import zipfile
 
 import numpy as np
@@ -192,3 +193,32 @@ def test_source_fmu_is_rebuilt_by_fmpy(tmp_path, version):
                             fmi_type="ModelExchange", relative_tolerance=1e-11, output_interval=0.1)
     ref = model.simulate(np.linspace(0.0, 1.0, 11), x0={"theta": 0.5}, u=0.0, rtol=1e-11, atol=1e-12)
     assert np.max(np.abs(res["theta"] - ref.x["theta"])) < 1e-7
+
+
+def test_a_flattened_component_exports_the_units_descriptions_and_parameters_of_the_component(tmp_path):
+    """``export_fmu(C().to_model())`` states what ``export_fmu(C())`` states (reference: the
+    component's own export and its ``describe()`` table)."""
+    from gtmodel.modeling.library.drive import CompliantDriveAxis
+
+    axis = CompliantDriveAxis()
+    texts = [zipfile.ZipFile(export_fmu(source, tmp_path / f"{i}.fmu", interface="me", binary=False).path)
+             .read("modelDescription.xml").decode() for i, source in enumerate((axis, axis.to_model("CompliantDriveAxis")))]
+    strip = [re.sub(r'guid="[^"]*"', "", t) for t in texts]
+    assert strip[0] == strip[1]
+    assert 'name="servo.kp"' in strip[1] and 'unit="N.m/rad"' in strip[1] and "position-loop stiffness Kv*Kp" in strip[1]
+
+
+@pytest.mark.parametrize(("name", "version"), [("cart__pole", "3.0"), ('a"<b>&c', "2.0"), ("my-model", "2.0")])
+def test_a_hostile_model_name_exports_and_imports(tmp_path, name, version):
+    """CasADi refuses ``cart__pole`` as a Function name; the FMU's identifier is the one mapping
+    (``casadi_name``), the XML quotes the name. Reference: x = exp(-t) after the round trip."""
+    from gtmodel.exchange import import_fmu, simulate_explicit
+    from gtmodel.modeling import Model
+
+    m = Model(name)
+    x = m.state("x", start=1.0)
+    m.equation(m.der(x), -x)
+    imported = import_fmu(export_fmu(m, tmp_path / "n.fmu", version=version, interface="me").path)
+    assert imported.model.name == name
+    sim = simulate_explicit(imported.model, np.linspace(0.0, 1.0, 3), rtol=1e-11, atol=1e-13)
+    np.testing.assert_allclose(sim.x["x"], np.exp(-np.linspace(0.0, 1.0, 3)), rtol=1e-8)

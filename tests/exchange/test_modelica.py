@@ -63,6 +63,7 @@ def test_arrays_for_equations_extends_if_expressions_and_functions():
         ("syntax_error.mo", None, r"syntax_error.mo:5: Modelica syntax error: missing ';' at 'end'"),
         ("bouncing_ball_when.mo", None, r"bouncing_ball_when.mo:7: unsupported Modelica construct: when-clause"),
         ("algorithm_section.mo", None, r"algorithm_section.mo:4: unsupported Modelica construct: algorithm section"),
+        ("assert_clause.mo", None, r"assert_clause.mo:6: unsupported Modelica construct: assert\(\)"),
         ("missing.mo", None, r"missing.mo: no such Modelica file"),
         ("oscillator.mo", "NoSuchModel", r"oscillator.mo: pymoca cannot translate class 'NoSuchModel'"),
         ("nested_function.mo", None, r"nested_function.mo: pymoca cannot translate class 'WithFunction': a function declared inside"),

@@ -113,8 +113,9 @@ def _peak_mb() -> float:
 
 @pytest.mark.filterwarnings("error::RuntimeWarning")  # numpy overflow warnings are defects too
 @pytest.mark.parametrize("shipped, cases", CASES)
-def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, cases, tmp_path_factory):
+def test_mutated_problem_files_are_accepted_or_rejected_naming_a_field(shipped, cases, tmp_path_factory, monkeypatch):
     text = shipped.read_text(encoding="utf-8")
+    monkeypatch.setenv("GTMODEL_DATA_DIRS", str(PROBLEMS_DIR))  # the links below resolve there (`solve --data-dir`)
     folder = tmp_path_factory.mktemp(shipped.stem) / "problems"  # beside ../models/, as in the repository
     folder.mkdir()
     (folder.parent / "models").symlink_to(PROBLEMS_DIR.parent / "models")  # user models (kind optimal_control)

@@ -428,7 +428,10 @@ class Component(_ComponentBase):
         -------
         Model
             Parameters ``"sub.param"``, states, algebraic variables (every kept connector
-            variable), inputs, equations (components' and connections') and outputs.
+            variable), inputs, equations (components' and connections') and outputs; the
+            declared units and descriptions by flat name in ``model.exchange_metadata``
+            (``{name: (unit, description)}``, what an exported FMU states, as for the
+            component itself).
 
         Raises
         ------
@@ -437,7 +440,10 @@ class Component(_ComponentBase):
         InputError
             Malformed equations (size mismatch).
         """
-        return _Flattening(self, name or type(self).__name__).run()
+        model = _Flattening(self, name or type(self).__name__).run()
+        model.exchange_metadata = {str(row.name): (str(row.unit or ""), str(row.description or ""))
+                                   for row in self.describe().itertuples(index=False) if row.unit or row.description}
+        return model
 
     def __repr__(self) -> str:
         mods = ", ".join(f"{k}={v!r}" for k, v in self._modifiers.items())

@@ -36,6 +36,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, SolverError
+from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
@@ -131,7 +132,9 @@ class CollocationTranscription:
     Raises
     ------
     InputError
-        If ``elements``/``points``/``scheme`` are invalid.
+        If ``elements``/``points``/``scheme`` are invalid, or the NLP's estimated memory
+        exceeds the limit (:func:`gtmodel.modeling.ocp.budget.check_memory`; checked
+        before anything is built).
     ModelError
         If the model cannot be flattened.
     SolverError
@@ -186,6 +189,7 @@ class CollocationTranscription:
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self.dae: FlatDAE = optimization.flat()
+        self.size = check_memory(self.elements, self.points, self.dae.nx, self.dae.nz, self.dae.nu)  # before any of it is built
         self.nominal = self._nominal_values(nominal)
         self._build()
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from gtmodel._compiler import compiled_function
 from gtmodel.modeling.ocp.collocation_nlp import CollocationNLP, element_scaling
+from gtmodel.modeling.dae import casadi_name
 from gtmodel.modeling.ocp.optimization import Optimization
 
 __all__ = ["assembled_derivatives", "COMPILE_FLAGS"]
@@ -110,18 +111,14 @@ def _local_functions(nlp: CollocationNLP, opt: Optimization, dae: Any, N: int, n
     hess_r = ca.triu(ca.hessian(lag, v)[0])
     local_in = [xs, zs, us, ts, ps, P, c, tn, n_el]
     names = ["xs", "zs", "us", "ts", "ps", "p", "c", "tf_nominal", "elements"]
-    jac_fn = ca.Function(f"{_name(dae.name)}_point_jac", local_in, [jac_r], names, ["jac"])
-    hess_fn = ca.Function(f"{_name(dae.name)}_point_hess", local_in + [b, lam_f, lam_r], [hess_r], names + ["b", "lam_f", "lam_r"], ["hess"])
+    jac_fn = ca.Function(f"{casadi_name(dae.name)}_point_jac", local_in, [jac_r], names, ["jac"])
+    hess_fn = ca.Function(f"{casadi_name(dae.name)}_point_hess", local_in + [b, lam_f, lam_r], [hess_r], names + ["b", "lam_f", "lam_r"], ["hess"])
     return jac_fn, hess_fn
 
 
 def _nz(x: ca.MX) -> ca.MX:
     """The nonzeros of ``x`` as a column (CasADi's column-major order)."""
     return ca.sparsity_cast(x, ca.Sparsity.dense(x.nnz(), 1)) if x.nnz() else ca.MX(0, 1)
-
-
-def _name(dae_name: str) -> str:
-    return "".join(ch if ch.isalnum() else "_" for ch in dae_name)
 
 
 def assembled_derivatives(

@@ -42,7 +42,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, SolverError
-from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack
+from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
 from gtmodel.modeling.ocp.collocation import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.optimization import Integral, Optimization
@@ -292,7 +292,7 @@ class ShootingTranscription:
         self._tau = tau
         self.nlp = {"x": w, "p": P, "f": J, "g": gv}
         try:
-            self.solver = ca.nlpsol(f"{''.join(c if c.isalnum() else '_' for c in dae.name)}_shooting", "ipopt", self.nlp, self.options)
+            self.solver = ca.nlpsol(f"{casadi_name(dae.name)}_shooting", "ipopt", self.nlp, self.options)
         except RuntimeError as exc:
             raise SolverError(f"could not build the ipopt solver: {exc}") from exc
         self.key = (id(self), "multiple_shooting", N, self.controls, int(w.numel()))

@@ -53,6 +53,7 @@ import numpy as np
 
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
+from gtmodel.modeling.dae import casadi_name
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
 from gtmodel.status import Status
@@ -188,7 +189,7 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
         spec.update(z=dae.z, alg=ode[1])
         plugin = "idas"
     opts = {"abstol": rtol * 1e-2, "reltol": rtol, "max_num_steps": 100000}
-    F = ca.integrator(f"{''.join(c if c.isalnum() else '_' for c in dae.name)}_verify", plugin, spec, 0.0, list(taus), opts)
+    F = ca.integrator(f"{casadi_name(dae.name)}_verify", plugin, spec, 0.0, list(taus), opts)
     return F, f"{plugin} (rtol {rtol:g})"
 
 

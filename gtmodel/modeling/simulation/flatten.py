@@ -24,7 +24,7 @@ import numpy as np
 
 from gtmodel._lazy import lazy_module
 from gtmodel.errors import ModelError
-from gtmodel.modeling.dae import FlatDAE, expand_names
+from gtmodel.modeling.dae import FlatDAE, casadi_name, expand_names
 from gtmodel.modeling.structure.analysis import incidence, matching, scalarize, structure_message, structure_parts
 
 #: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
@@ -170,10 +170,10 @@ def flatten_model(model: Any) -> FlatDAE:
     out_exprs = {
         n: (ca.substitute(e, xdot, f) if nx else e) for n, e in model._outputs.items()
     }
-    ode = ca.Function(f"{model.name}_ode", args, [f], argn, ["xdot"])
-    alg = ca.Function(f"{model.name}_alg", args, [g], argn, ["g"])
+    ode = ca.Function(f"{casadi_name(model.name)}_ode", args, [f], argn, ["xdot"])
+    alg = ca.Function(f"{casadi_name(model.name)}_alg", args, [g], argn, ["g"])
     outputs = ca.Function(
-        f"{model.name}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
+        f"{casadi_name(model.name)}_outputs", args, list(out_exprs.values()), argn, list(out_exprs.keys()),
         {"allow_duplicate_io_names": True},  # an output may be called x, z, u, p or t
     )
     return FlatDAE(

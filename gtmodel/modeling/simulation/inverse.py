@@ -50,7 +50,7 @@ import numpy as np
 
 from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import _vector_value, expand_names
+from gtmodel.modeling.dae import _vector_value, casadi_name, expand_names
 from gtmodel.modeling.structure.index_reduction import pantelides
 from gtmodel.modeling.structure.analysis import check_structure, dulmage_mendelsohn, scalarize
 
@@ -525,7 +525,7 @@ def inverse_model(
     exprs = ca.substitute(outs + [residual], [_cat(solved_from)], [_cat(solved_to)]) if solved_from else outs + [residual]
     ins = list(known_in) + ([p_sym] if parameter_input else [])
     in_names = list(known) + (["p"] if parameter_input else [])
-    fn = ca.Function(f"{model.name}_inverse", ins, exprs, in_names, list(unknown) + ["residual"])
+    fn = ca.Function(f"{casadi_name(model.name)}_inverse", ins, exprs, in_names, list(unknown) + ["residual"])
     free = ca.symvar(_cat([ca.vec(e) for e in exprs])) if exprs else []
     allowed = {str(s.name()) for i in ins for s in ca.symvar(i)} | {"time"}
     stray = [str(s.name()) for s in free if str(s.name()) not in allowed]

@@ -39,6 +39,7 @@ from gtmodel.modeling.dae import (
     _shape_to_size,
     _symbol_names,
     _vector_value,
+    casadi_name,
     fixed_flags,
 )
 from gtmodel.modeling.structure.discontinuities import sign_modes
@@ -115,6 +116,7 @@ class Model(EventsMixin):
     def __init__(self, name: str) -> None:
         if not isinstance(name, str) or not name:
             raise InputError(f"model name must be a non-empty string, got {name!r}")
+        casadi_name(name)  # a name with no C/CasADi form is refused here (InputError), not by CasADi later
         self.name = name
         self._vars: dict[str, _Var] = {}
         self._time = ca.SX.sym("time")

@@ -54,6 +54,8 @@ DT_TOLERANCE = 1e-9
 FK_TOLERANCE = 1e-6
 #: Most samples of a replayed trajectory (one hour at 4 ms).
 MAX_SAMPLES = 900_000
+#: Largest trajectory file [bytes] (checked before reading): 900,000 rows of 7 columns at ~20 characters each.
+MAX_BYTES = 130_000_000
 #: Kinds whose ``trajectory.csv`` can be replayed.
 SOURCE_KINDS = {"point_to_point": PointToPointKind(), "path_constrained": PathConstrainedKind()}
 
@@ -110,12 +112,12 @@ def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float 
     ProblemError
         Unreadable file or a malformed table (:func:`gtmodel._tables.read_table`: the line and
         column named), missing columns (named), fewer than 2 or more than
-        :data:`MAX_SAMPLES` rows, a sample step other than ``dt``
+        :data:`MAX_SAMPLES` rows or :data:`MAX_BYTES` bytes, a sample step other than ``dt``
         (within :data:`DT_TOLERANCE`; the last step may be shorter), decreasing times.
     """
     where = f"the trajectory file {path}"
     try:
-        table = read_table(path, "the trajectory file", max_rows=MAX_SAMPLES)
+        table = read_table(path, "the trajectory file", max_rows=MAX_SAMPLES, max_bytes=MAX_BYTES)
     except InputError as exc:
         raise origin.fail(field_name, f"a readable CSV table ({exc})") from None
     header, data = table.columns, table.data
@@ -180,9 +182,11 @@ class TrackingKind(ProblemKind):
             data = read_toml(source, ProblemError, "problem file")
         except ProblemError as exc:
             raise file.wrap("trajectory.problem", exc) from None
-        kind = SOURCE_KINDS.get(data.get("kind"))
+        named = data.get("kind")  # type-checked here: a list or table is not a kind (it was an unhashable key)
+        kind = SOURCE_KINDS.get(named) if isinstance(named, str) else None
         if kind is None:
-            raise file.fail("trajectory.problem", f"a problem file of kind {' or '.join(SOURCE_KINDS)} ({source} is of kind {data.get('kind')!r})")
+            shown = repr(named) if isinstance(named, str) and len(named) <= 40 else f"a {type(named).__name__}, not a kind name"
+            raise file.fail("trajectory.problem", f"a problem file of kind {' or '.join(SOURCE_KINDS)} ({source} is of kind {shown})")
         try:
             sdoc = validate_document(kind.schema, data, source)
             sname = sdoc.name or source.stem

@@ -172,6 +172,8 @@ BAD = [
     ("missing_problem", _edit('problem = "l1_time_optimal.toml"', 'problem = "nowhere.toml"'), r"field 'trajectory\.problem': expected an existing file"),
     ("missing_file", _edit('problem = "l1_time_optimal.toml"', 'file = "nowhere.csv"'), r"field 'trajectory\.file': expected an existing file"),
     ("wrong_kind", _edit('problem = "l1_time_optimal.toml"', 'problem = "l1_calibration.toml"'), r"field 'trajectory\.problem': expected a problem file of kind point_to_point or path_constrained \(.*l1_calibration\.toml is of kind 'calibration'\)"),
+    ("kind_is_a_list", lambda text: text.replace('problem = "l1_time_optimal.toml"', 'problem = "listkind.toml"'),
+     r"field 'trajectory\.problem': expected a problem file of kind .*listkind\.toml is of kind a list, not a kind name\)"),
     ("itself", _edit('problem = "l1_time_optimal.toml"', 'problem = "l1_tracking.toml"'), r"field 'trajectory\.problem': expected a problem file of kind point_to_point or path_constrained"),
     ("unknown_field", _edit("settle_time = 1.0", "settle_time = 1.0\nsettle = 2.0"), r"unknown field 'trajectory\.settle' \(allowed here: file, problem, settle_time\)"),
     ("unknown_table", _edit("[sensors]", "[sensor]"), r"unknown field 'sensor'"),
@@ -192,8 +194,9 @@ BAD = [
 
 @pytest.mark.parametrize("case, edit, match", BAD, ids=[c[0] for c in BAD])
 def test_bad_tracking_problem(tmp_path, case, edit, match):
-    for name in ("l1_time_optimal.toml", "l1_calibration.toml", "l1_tracking.toml"):
-        (tmp_path / name).symlink_to(PROBLEMS_DIR / name)
+    for name in ("l1_time_optimal.toml", "l1_calibration.toml", "l1_tracking.toml"):  # copies: a data file stays in the problem's folder
+        (tmp_path / name).write_text((PROBLEMS_DIR / name).read_text())
+    (tmp_path / "listkind.toml").write_text((PROBLEMS_DIR / "l1_time_optimal.toml").read_text().replace('kind = "point_to_point"', 'kind = ["point_to_point"]'))
     assert_bad_problem(tmp_path, TRACKING_FILE, case, edit, match)
 
 

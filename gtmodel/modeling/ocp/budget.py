@@ -1,0 +1,179 @@
+"""The memory a collocation NLP will need, estimated and checked before it is built.
+
+A transcription with ``N`` elements of ``d`` collocation points of a DAE with ``nx`` states,
+``nz`` algebraic variables and ``nu`` inputs has about
+
+- variables: ``N (d (nx + nz + nu) + nx)`` (the states also at each element's start),
+- constraint Jacobian nonzeros: ``N d (nx + nz) (nx + nz + nu + d + 1)`` (each collocation
+  equation couples the ``d + 1`` state values of its element with the point's variables).
+
+The memory of building and solving it (CasADi's expression graphs and functions, IPOPT's
+vectors, the sparse factorisation of its KKT matrix) grows linearly in these; measured on
+``problems/l1_time_optimal.toml`` with ``points = 9`` (226 MB peak at 100 elements, 521 MB
+at 400, about 110 kB per collocation point: 2,000 bytes per variable and 800 per Jacobian
+nonzero, on a 150 MB base) the estimate below follows the peak resident memory, and
+``elements = 10000, points = 9`` (which grew to 5.6 GB and was killed) is refused at once.
+
+The limit is :data:`MEMORY_SHARE` of the memory available when the check runs (the least of
+Linux ``MemAvailable`` or the free physical pages, a cgroup's memory limit minus its use, and
+``ulimit -v`` minus the process's virtual size), or the number of megabytes in the
+environment variable :data:`MEMORY_ENV`.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+from gtmodel.errors import InputError
+
+__all__ = ["NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "memory_limit", "check_memory"]
+
+#: Environment variable: the memory limit of one NLP in megabytes (default: a share of what is available).
+MEMORY_ENV = "GTMODEL_MAX_MEMORY_MB"
+#: Share of the available memory one NLP may take by default.
+MEMORY_SHARE = 0.8
+_BASE = 150e6
+_PER_VARIABLE = 2000.0
+_PER_NONZERO = 800.0
+
+
+@dataclass(frozen=True)
+class NlpSize:
+    """Estimated size of a collocation NLP.
+
+    Parameters
+    ----------
+    variables : int
+        Number of NLP variables.
+    nonzeros : int
+        Nonzeros of the constraint Jacobian.
+    bytes : float
+        Peak memory of building and solving it [bytes].
+    """
+
+    variables: int
+    nonzeros: int
+    bytes: float
+
+
+def estimate(elements: int, points: int, nx: int, nz: int, nu: int) -> NlpSize:
+    """The size and memory of a collocation NLP (formulas in the module docstring).
+
+    Parameters
+    ----------
+    elements, points : int
+        Finite elements ``N`` and collocation points per element ``d``.
+    nx, nz, nu : int
+        States, algebraic variables and inputs of the DAE.
+
+    Returns
+    -------
+    NlpSize
+    """
+    n, d = int(elements), int(points)
+    variables = n * (d * (nx + nz + nu) + nx)
+    nonzeros = n * d * (nx + nz) * (nx + nz + nu + d + 1)
+    return NlpSize(variables, nonzeros, _BASE + _PER_VARIABLE * variables + _PER_NONZERO * nonzeros)
+
+
+def _read_number(path: str) -> float | None:
+    try:
+        with open(path, encoding="ascii") as fh:
+            text = fh.read().strip()
+    except OSError:
+        return None
+    return float(text) if text.isdigit() else None
+
+
+def _available() -> float | None:
+    """Memory this process may still take [bytes]: the least of the system's available
+    memory, the cgroup's limit minus its use (v2 and v1), and ``RLIMIT_AS`` minus this
+    process's virtual size; None when none is known."""
+    known: list[float] = []
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    known.append(float(line.split()[1]) * 1024.0)
+    except OSError:
+        try:
+            known.append(float(os.sysconf("SC_AVPHYS_PAGES")) * float(os.sysconf("SC_PAGE_SIZE")))
+        except (ValueError, OSError, AttributeError):
+            pass
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        limit, usage = _read_number(limit_file), _read_number(usage_file)
+        if limit is not None and limit < 1 << 60:
+            known.append(max(0.0, limit - (usage or 0.0)))
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY:
+            with open("/proc/self/statm", encoding="ascii") as fh:
+                virtual = float(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+            known.append(max(0.0, soft - virtual))
+    except (ImportError, OSError, ValueError, IndexError):
+        pass
+    return min(known) if known else None
+
+
+def memory_limit() -> float | None:
+    """The memory one NLP may take [bytes].
+
+    Returns
+    -------
+    float or None
+        ``$GTMODEL_MAX_MEMORY_MB`` megabytes when set, else :data:`MEMORY_SHARE` of the
+        available memory; None when neither is known (no check then).
+
+    Raises
+    ------
+    InputError
+        ``$GTMODEL_MAX_MEMORY_MB`` is not a positive number.
+    """
+    text = os.environ.get(MEMORY_ENV, "").strip()
+    if text:
+        try:
+            value = float(text)
+        except ValueError:
+            value = -1.0
+        if not value > 0:
+            raise InputError(f"{MEMORY_ENV}: expected a positive number of megabytes, got {text[:40]!r}")
+        return value * 1e6
+    available = _available()
+    return None if available is None else MEMORY_SHARE * available
+
+
+def check_memory(elements: int, points: int, nx: int, nz: int, nu: int) -> NlpSize:
+    """Refuse a collocation NLP whose estimated memory exceeds :func:`memory_limit`.
+
+    Parameters
+    ----------
+    elements, points : int
+        Finite elements and collocation points per element.
+    nx, nz, nu : int
+        States, algebraic variables and inputs of the DAE.
+
+    Returns
+    -------
+    NlpSize
+        The estimate (within the limit).
+
+    Raises
+    ------
+    InputError
+        The estimate exceeds the limit: the message names ``elements`` and ``points`` (in a
+        problem file ``collocation.elements``/``collocation.points`` or
+        ``transcription.elements``), the estimate and the limit, and how to raise it.
+    """
+    size = estimate(elements, points, nx, nz, nu)
+    limit = memory_limit()
+    if limit is not None and size.bytes > limit:
+        raise InputError(
+            f"elements = {elements}, points = {points}: the NLP would have {size.variables} variables and "
+            f"{size.nonzeros} Jacobian nonzeros and need about {size.bytes / 1e6:.0f} MB, more than the limit of "
+            f"{limit / 1e6:.0f} MB ({'$' + MEMORY_ENV if os.environ.get(MEMORY_ENV, '').strip() else f'{MEMORY_SHARE:.0%} of the available memory'}); "
+            f"use fewer elements or points (collocation.elements, collocation.points in a problem file), or set {MEMORY_ENV}")
+    return size

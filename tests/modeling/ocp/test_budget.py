@@ -1,0 +1,69 @@
+"""The NLP size estimate checked before a collocation NLP is built (gtmodel.modeling.ocp.budget).
+
+Independent reference: the NLP CasADi builds (number of variables, structural nonzeros of
+the constraint Jacobian ``casadi.jacobian(g, w)``), and the refusal happening before any of it
+is built (a limit of 1 MB that no build could meet).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import pytest
+
+from gtmodel.errors import InputError
+from gtmodel.modeling import Model, Optimization
+from gtmodel.modeling.ocp.budget import MEMORY_ENV, check_memory, estimate, memory_limit
+from gtmodel.modeling.ocp.collocation import CollocationTranscription
+
+
+def _double_integrator() -> Optimization:
+    m = Model("di")
+    x, v, u = m.state("x"), m.state("v"), m.input("u")
+    m.equation(m.der(x), v)
+    m.equation(m.der(v), u)
+    opt = Optimization(m, final_time=1.0)
+    opt.set_objective(lagrange=u**2)
+    return opt
+
+
+@pytest.mark.parametrize(("elements", "points"), [(20, 3), (10, 9), (40, 1)])
+def test_the_estimate_follows_the_nlp_casadi_builds(elements, points):
+    tr = CollocationTranscription(_double_integrator(), elements=elements, points=points, verify=False, derivatives="casadi")
+    w, g = tr.nlp.w, tr.nlp.g
+    nnz = ca.jacobian(g, w).nnz()
+    assert abs(tr.size.variables - w.numel()) <= 2  # the final time's copies aside
+    assert nnz <= tr.size.nonzeros <= 1.3 * nnz  # an upper bound, not far above
+
+
+def test_an_nlp_beyond_the_limit_is_refused_before_it_is_built(monkeypatch):
+    monkeypatch.setenv(MEMORY_ENV, "1")
+    with pytest.raises(InputError, match=r"elements = 10000, points = 9: the NLP would have 290000 variables and 2340000 Jacobian nonzeros and need about "
+                                          r"2602 MB, more than the limit of 1 MB \(\$GTMODEL_MAX_MEMORY_MB\); use fewer elements or points \(collocation\.elements"):
+        CollocationTranscription(_double_integrator(), elements=10000, points=9, verify=False)
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "lots"])
+def test_a_bad_limit_is_named(monkeypatch, value):
+    monkeypatch.setenv(MEMORY_ENV, value)
+    with pytest.raises(InputError, match="GTMODEL_MAX_MEMORY_MB: expected a positive number of megabytes"):
+        memory_limit()
+
+
+def test_default_limit_is_a_share_of_the_available_memory(monkeypatch):
+    monkeypatch.delenv(MEMORY_ENV, raising=False)
+    limit = memory_limit()
+    assert limit is None or limit > 0
+    assert check_memory(50, 3, 6, 0, 3) == estimate(50, 3, 6, 0, 3)  # a shipped problem's size passes
+
+
+def test_ulimit_v_lowers_the_limit(tmp_path):
+    """Under ``ulimit -v`` (RLIMIT_AS) the limit follows it (reference: the rlimit set in a child)."""
+    import subprocess
+    import sys
+
+    code = ("import resource; resource.setrlimit(resource.RLIMIT_AS, (3_000_000_000, resource.RLIM_INFINITY)); "
+            "from gtmodel.modeling.ocp.budget import memory_limit; print(memory_limit())")
+    env = {k: v for k, v in __import__("os").environ.items() if k != MEMORY_ENV}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert 0 < float(out.stdout) <= 0.8 * 3_000_000_000
