@@ -451,7 +451,7 @@ def _schema(args: argparse.Namespace) -> int:
 
 def _codegen(args: argparse.Namespace) -> int:
     from gtmodel.codegen import check, check_controller, generate, load_controller
-    from gtmodel.codegen.generate import check_out_dir
+    from gtmodel.codegen.out_dir import check_out_dir
 
     check_out_dir(args.out)  # the rule of solve --out: never a folder of the user's own files
 

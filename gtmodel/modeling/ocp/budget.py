@@ -23,6 +23,11 @@ environment variable :data:`MEMORY_ENV`.
 from __future__ import annotations
 
 import os
+
+try:  # POSIX only: the address-space limit (ulimit -v)
+    import resource
+except ImportError:  # pragma: no cover
+    resource = None
 from dataclasses import dataclass
 
 from gtmodel.errors import InputError
@@ -107,8 +112,8 @@ def _available() -> float | None:
         if limit is not None and limit < 1 << 60:
             known.append(max(0.0, limit - (usage or 0.0)))
     try:
-        import resource
-
+        if resource is None:
+            raise ImportError("no resource module on this platform")
         soft = resource.getrlimit(resource.RLIMIT_AS)[0]
         if soft != resource.RLIM_INFINITY:
             with open("/proc/self/statm", encoding="ascii") as fh:
