@@ -4,7 +4,8 @@
   that is not one plain path component (``../../x``, ``/tmp/x``, ``a/b``, ``..``) is refused
   with exit 2 naming the field, and nothing is written outside ``results/``.
 - The process exits 128 + the number of the first signal received (130 SIGINT, 143
-  SIGTERM); a run that finished before the signal keeps its code.
+  SIGTERM); a run that finished before the signal keeps its code. A real signal while the
+  kind writes its files leaves ``--out`` holding the interrupted summary alone.
 
 Independent reference: the file system (what exists after the run, outside and inside
 ``results/``), POSIX path rules (a component has no ``/``; ``.`` and ``..`` name other
@@ -14,6 +15,7 @@ folders) and the shell's convention for a process ended by a signal (128 + its n
 from __future__ import annotations
 
 import json
+import os
 import signal
 
 import pytest
@@ -22,10 +24,11 @@ from gtmodel import _signals
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, main
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem
-from gtmodel.problems.results import MAX_FILE_NAME, is_file_name
+from gtmodel.problems.results import MARKER, MAX_FILE_NAME, is_file_name
 from gtmodel.problems.study.design import load_study
 
 from ..conftest import PROBLEMS_DIR
+from .study.study_fixtures import write_base
 
 BASE = PROBLEMS_DIR / "l1_time_optimal.toml"
 STUDIES_DIR = PROBLEMS_DIR.parent / "studies"
@@ -96,3 +99,29 @@ def test_the_process_exits_128_plus_the_first_signal(monkeypatch, first, code):
 def test_without_a_signal_130_stays_130(monkeypatch):
     monkeypatch.setattr(_signals._state, "count", 0)
     assert _signals.process_exit_code(EXIT_INTERRUPTED) == 130
+
+
+@pytest.mark.parametrize(("sig", "process_code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_the_kind_writes_leaves_the_interrupted_summary_alone(tmp_path, monkeypatch, capsys, sig, process_code):
+    """A real signal to this process, sent by the kind's writer halfway through its files."""
+    from gtmodel.problems.kinds import path_constrained
+
+    write = path_constrained.PathConstrainedKind.write
+
+    def write_then_signal(self, declaration, solution, out, plots, name):
+        written = write(self, declaration, solution, out, plots, name)  # the data files are in the partial folder
+        os.kill(os.getpid(), sig)  # the handler raises KeyboardInterrupt here (an interruptible section)
+        return written
+
+    base = write_base(tmp_path, grid=50)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text(json.dumps({"status": "optimal", "files": ["summary.json"], "written_by": MARKER}))
+    monkeypatch.setattr(path_constrained.PathConstrainedKind, "write", write_then_signal)
+    code = main(["solve", str(base), "--out", str(out), "-q", "--no-plots"])
+    err = capsys.readouterr().err
+    assert (code, _signals.process_exit_code(code)) == (EXIT_INTERRUPTED, process_code), err
+    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]  # no half-written data file of the run
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["base.toml", "out"]  # no partial folder or lock left
+    assert "Traceback" not in err
