@@ -2,7 +2,8 @@
 
 SIGINT and SIGTERM are handled (:mod:`gtmodel._signals`) before anything else of gtmodel
 is imported, so an interrupt during start-up, like one at any later moment, ends the run
-with status ``interrupted`` and exit code 130 (``docs/reliability.md``). Only a signal in
+with status ``interrupted`` and exit code 130, or 143 when the first signal was SIGTERM
+(:func:`gtmodel._signals.process_exit_code`, ``docs/reliability.md``). Only a signal in
 the first milliseconds, while Python itself starts, ends the process by the signal
 (like SIGKILL: the earlier result folder is left as it was).
 """
@@ -23,7 +24,8 @@ def main() -> int:
     Returns
     -------
     int
-        The exit code (:data:`gtmodel.status.EXIT_CODES`; 130 interrupted).
+        The exit code (:data:`gtmodel.status.EXIT_CODES`; interrupted: 130 for SIGINT, 143
+        for SIGTERM).
     """
     _signals.install()
     try:
@@ -35,7 +37,7 @@ def main() -> int:
         code = 130
     for sig in _signals.SIGNALS:  # the run has ended and reported: its outcome stands
         signal.signal(sig, signal.SIG_IGN)
-    return code
+    return _signals.process_exit_code(code)
 
 
 if __name__ == "__main__":

@@ -30,11 +30,13 @@ from contextlib import contextmanager
 from types import FrameType
 from typing import Any, Iterator
 
-__all__ = ["SIGNALS", "handler", "install", "restore", "installed", "received", "reset", "interruptible", "protected",
-           "settled", "raise_if_pending"]
+__all__ = ["SIGNALS", "SIGNAL_EXIT_CODES", "handler", "install", "restore", "installed", "received", "reset", "interruptible", "protected",
+           "settled", "raise_if_pending", "process_exit_code"]
 
-#: The signals that stop a run (status ``interrupted``, exit code 130).
+#: The signals that stop a run (status ``interrupted``; the process exits 130 for SIGINT, 143 for SIGTERM).
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: Exit code of a run the first signal stopped, by signal: 128 + its number, as a shell reports a process the signal ended.
+SIGNAL_EXIT_CODES = {signal.SIGINT.name: 128 + signal.SIGINT, signal.SIGTERM.name: 128 + signal.SIGTERM}
 
 
 class _State:
@@ -146,6 +148,28 @@ def received() -> bool:
     bool
     """
     return _state.count > 0
+
+
+def process_exit_code(code: int) -> int:
+    """The exit code of the process for a run that returned ``code``.
+
+    A run stopped by a signal returns 130 (:data:`gtmodel.status.EXIT_CODES`, status
+    ``interrupted``); the process then exits with the code of the *first* signal received
+    (:data:`SIGNAL_EXIT_CODES`: 130 for SIGINT, 143 for SIGTERM), as a shell or a job
+    scheduler expects. Any other code (a run that finished before the signal) stands.
+
+    Parameters
+    ----------
+    code : int
+        The code the command returned.
+
+    Returns
+    -------
+    int
+    """
+    if code == SIGNAL_EXIT_CODES[signal.SIGINT.name] and _state.count:
+        return SIGNAL_EXIT_CODES.get(_state.name, code)
+    return code
 
 
 @contextmanager

@@ -57,7 +57,8 @@ Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
 2 invalid input (also an output that cannot be written, or an ``--out`` another run is
 writing), 3 internal error, 130 interrupted (Ctrl-C, SIGTERM: at any moment, also during
-start-up and repeated; the handlers come first, :mod:`gtmodel.__main__`). What each
+start-up and repeated; the handlers come first, :mod:`gtmodel.__main__`; the process
+exits 143 when the first signal was SIGTERM). What each
 outcome leaves in ``--out``: ``docs/reliability.md``.
 
 Fast start: this module imports only the standard library and gtmodel's base modules;
@@ -83,7 +84,7 @@ from gtmodel import __version__, _signals
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.problems.overrides import parse_override
-from gtmodel.problems.results import failure_summary, output_lock
+from gtmodel.problems.results import failure_summary, is_file_name, output_lock
 from gtmodel.problems.study.preflight import check_output_folder, check_problem_files
 from gtmodel.status import Status, exit_code_table
 
@@ -308,7 +309,7 @@ def _toml_name(path: Path) -> str:
         name = read_toml(path, ProblemError, "problem file").get("name")
     except GtModelError:
         name = None
-    return name if isinstance(name, str) and name.strip() else path.stem
+    return name if is_file_name(name) else path.stem  # a name that would climb out of results/: the run refuses it
 
 
 def _solve_target(args: argparse.Namespace) -> Path:
@@ -693,4 +694,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover - ``python -m gtmodel.cli``: gtmodel/__init__.py installed the handlers
-    sys.exit(main())
+    sys.exit(_signals.process_exit_code(main()))

@@ -21,7 +21,9 @@ status             exit  meaning
 ``error``          1     the solver failed (numerical failure, exception)
 ``invalid_input``  2     bad input: file, field, argument, degenerate data
 ``internal_error`` 3     a defect of gtmodel (please report it)
-``interrupted``    130   stopped by the user (Ctrl-C, SIGINT or SIGTERM)
+``interrupted``    130   stopped by the user (Ctrl-C, SIGINT or SIGTERM); the ``gtmodel``
+                         process exits 143 when the first signal was SIGTERM
+                         (:func:`gtmodel._signals.process_exit_code`)
 =================  ====  ===================================================
 """
 

@@ -39,10 +39,35 @@ except ImportError:  # pragma: no cover - Windows
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
-__all__ = ["check_output_folder", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields"]
+__all__ = ["check_output_folder", "is_file_name", "MAX_FILE_NAME", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields"]
 
 #: The ``written_by`` field of every ``summary.json`` gtmodel writes (how a result folder is recognised).
 MARKER = f"gtmodel {__version__}"
+
+
+#: Longest name that becomes a file or folder name [bytes of UTF-8] (well inside the 255 of common file systems).
+MAX_FILE_NAME = 100
+
+
+def is_file_name(value: Any) -> bool:
+    """Whether ``value`` can name a file or folder of its own: one plain path component.
+
+    A name that becomes a folder (``results/<name>``) or a file of a result folder must not
+    climb out of it or name another place: a string of 1 to :data:`MAX_FILE_NAME` bytes
+    (UTF-8), without ``/``, ``\\``, control characters or a leading or trailing space,
+    and neither ``.`` nor ``..``.
+
+    Parameters
+    ----------
+    value : Any
+        A field's value as read from the file.
+
+    Returns
+    -------
+    bool
+    """
+    return (isinstance(value, str) and value not in ("", ".", "..") and value == value.strip()
+            and not any(c in "/\\" or not c.isprintable() for c in value) and len(value.encode("utf-8")) <= MAX_FILE_NAME)
 
 
 def json_safe(value: Any) -> Any:

@@ -23,8 +23,8 @@ from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
 from gtmodel.problems.registry import KINDS, get_kind, get_schema
-from gtmodel.problems.results import (MARKER, ResultFolder, _is_run_summary, check_output_folder, failure_summary, json_safe,
-                                     output_lock, write_json)
+from gtmodel.problems.results import (MARKER, ResultFolder, _is_run_summary, check_output_folder, failure_summary, is_file_name,
+                                     json_safe, output_lock, write_json)
 from gtmodel.report.result_page import REPORT_FILE, write_report
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 from gtmodel.problems.schema import validate_document
@@ -408,7 +408,7 @@ def _peek_name(path: Path) -> str:
         name = read_toml(path, ProblemError, "problem file").get("name") if path.is_file() else None
     except GtModelError:
         name = None
-    return name if isinstance(name, str) and name.strip() else path.stem
+    return name if is_file_name(name) else path.stem
 
 
 def _peek_kind(path: Path) -> str | None:

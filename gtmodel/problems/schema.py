@@ -26,6 +26,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 from pydantic_core import PydanticCustomError
 
 from gtmodel.errors import ProblemError
+from gtmodel.problems.results import MAX_FILE_NAME, is_file_name
 
 __all__ = [
     "Section",
@@ -39,6 +40,7 @@ __all__ = [
     "Expressions",
     "Text",
     "NonEmptyText",
+    "FileName",
     "validate_document",
     "problem_error",
     "MAX_LENGTH_M",
@@ -281,6 +283,10 @@ Text = Annotated[str, _strict("a string", lambda v: isinstance(v, str))]
 #: A non-empty string.
 NonEmptyText = Annotated[str, _strict("a non-empty string", lambda v: isinstance(v, str) and bool(v)), Field(min_length=1)]
 
+#: A name that becomes a file or folder name (:func:`is_file_name`).
+FileName = Annotated[str, _strict(f"a name of 1 to {MAX_FILE_NAME} bytes of printable characters without '/' or '\\', "
+                                   "not '.' or '..' (it names a folder or file)", is_file_name), Field(min_length=1)]
+
 
 def _describe(description: str, unit: str) -> str | None:
     text = description + (f" [{unit}]" if unit and f"[{unit}]" not in description else "")
@@ -319,7 +325,7 @@ class ProblemSchema(Section):
         Free text.
     """
 
-    name: NonEmptyText | None = Field(default=None, description="problem name (default: the file name without .toml)")
+    name: FileName | None = Field(default=None, description="problem name, the default result folder results/<name> (default: the file name without .toml)")
     description: Text = Field(default="", description="free text")
 
 

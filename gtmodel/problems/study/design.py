@@ -42,7 +42,8 @@ from gtmodel._toml import read_toml
 from gtmodel.errors import ProblemError
 from gtmodel.problems.study.analyses import ANALYSES
 from gtmodel.problems.study.preflight import check_problem_files
-from gtmodel.problems.schema import Flag, NonEmptyText, Section, Text, integer, number, problem_error
+from gtmodel.problems.results import is_file_name
+from gtmodel.problems.schema import FileName, Flag, NonEmptyText, Section, Text, integer, number, problem_error
 
 __all__ = ["CaseSpec", "Study", "StudySchema", "load_study", "comparison_study", "expand_design", "value_text", "MAX_CASES"]
 
@@ -159,7 +160,7 @@ class StudySchema(Section):
         The cases.
     """
 
-    name: NonEmptyText | None = None
+    name: FileName | None = None
     description: Text = ""
     base: NonEmptyText
     analysis: NonEmptyText = "generic"
@@ -365,7 +366,7 @@ def _problem_name(path: Path) -> str:
         name = read_toml(path, ProblemError, "problem file").get("name")
     except ProblemError:
         return path.stem
-    return name if isinstance(name, str) and name.strip() else path.stem
+    return name if is_file_name(name) else path.stem
 
 
 def _linspace(r: RangeSpec) -> list[Any]:

@@ -12,7 +12,7 @@ from pydantic import Field
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
-from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, integer, matrix, number, vector
+from gtmodel.problems.schema import FileName, NonEmptyText, ProblemSchema, Section, integer, matrix, number, vector
 
 __all__ = ["PoseAccuracyFile", "MAX_TOLERANCE_UM"]
 
@@ -50,7 +50,7 @@ Tolerance3 = Annotated[
 class CaseSection(Section):
     """``[[cases]]``: one tolerance case (a column of Table 4.2)."""
 
-    name: NonEmptyText = Field(description="case name (file and column names)")
+    name: FileName = Field(description="case name (file and column names)")
     semi_axes_um: Tolerance3
     link_um: vector(3, nonnegative=True, bound=MAX_TOLERANCE_UM, unit="um", description="link-length tolerances l_i (Appendix A.3)") = [0.0, 0.0, 0.0]
     reference_range_um: vector(2, positive=True, bound=1e6, unit="um", description="the published [min, max] of the map, compared in the result") | None = None
