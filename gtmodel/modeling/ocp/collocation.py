@@ -12,11 +12,15 @@ Conventions:
 * Path constraints and variable bounds of inputs/algebraics are enforced at the
   collocation points; state bounds also at element boundaries.
 * Point constraints and the Mayer term at the final time use the final state and, for
-  inputs/algebraics, the last element's polynomial at ``tau = 1`` (for Radau a
-  collocation point; for Legendre an extrapolation).
-* Point constraints at the start time use the initial state and, for inputs/algebraics,
-  the first element's Lagrange polynomial through its collocation points evaluated at
-  ``tau = 0`` (an extrapolation for both schemes).
+  inputs/algebraics, the last collocation point (for Radau ``tau = 1``; for Legendre the
+  inputs held from the last point, the algebraic variables consistent with them).
+* Point constraints at the start time use the initial state, the inputs of the first
+  collocation point (held: an extrapolation could leave the bounds) and the algebraic
+  variables consistent with them
+  (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`; the extrapolated
+  polynomial does not satisfy the algebraic equations). The result's tables hold the
+  same values at the start (and, for Legendre, at the element ends), and say at each time
+  which kind of point it is (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
 * The Lagrange term uses the quadrature of the collocation points.
 
 Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
@@ -519,6 +523,29 @@ class CollocationTranscription:
         """
         return resolve_function(self, name, warm_start)
 
+    def _at_points(self, colloc: CollocationData, t: np.ndarray, xs: np.ndarray, us: np.ndarray, zs: np.ndarray,
+                   pvec: np.ndarray, tf: float) -> None:
+        """Inputs and algebraics at the mesh times that are no collocation points, as the NLP defines them (in place).
+
+        The inputs there are held from the nearest collocation point of the element; the
+        algebraic variables are consistent with the states and those inputs
+        (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`, as in the
+        point constraints).
+        """
+        kinds = colloc.point_kinds()
+        off = np.flatnonzero(~np.char.startswith(kinds, "collocation"))
+        if not off.size:
+            return
+        d = colloc.points
+        flat_u = colloc.uc.reshape(-1, colloc.uc.shape[2])
+        ends = np.cumsum(np.char.endswith(kinds, "boundary"))  # element ends up to each time
+        for i in off:  # the start: the first element's first point; a Legendre element end: its last
+            k, j = (0, 0) if kinds[i] == "start" else (int(ends[i]) - 1, d - 1)
+            if us.shape[1]:
+                us[i] = flat_u[k * d + j]
+            if zs.shape[1] and self.nlp.consistent is not None:
+                zs[i] = np.asarray(self.nlp.consistent(t[i], xs[i], zs[i], us[i], pvec, tf), dtype=float).reshape(-1)
+
     def _result(
         self,
         w: np.ndarray,
@@ -556,6 +583,7 @@ class CollocationTranscription:
         )
         t = colloc.mesh()
         xs, us, zs = colloc.evaluate(t)
+        self._at_points(colloc, t, xs, us, zs, pvec, tf)
         params = {k: pvec[s].copy() for k, s in dae.p_vars.items()}
         try:
             outs = _eval_outputs(dae, t, xs, zs, us, pvec)

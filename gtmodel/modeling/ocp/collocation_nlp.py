@@ -18,7 +18,11 @@ sparse factorisation linear in the mesh and is the structure stage-wise solvers 
 The NLP is built from matrices with one column per element (the decision vector reshaped)
 and the model equations, the Lagrange term and the integrals at all ``N d`` collocation
 points are one mapped call each (``Function.map``): a few CasADi operations whatever the
-mesh. The same NLP built point by point in Python cost about 5 ms per collocation point
+mesh. At the points that are no collocation points (the start time; for Legendre the
+element ends) the inputs are held from the nearest collocation point and the algebraic
+variables are made consistent with the states there (:func:`consistent_algebraics`), so
+that a start condition on an algebraic variable constrains the motion, not an
+extrapolation. The same NLP built point by point in Python cost about 5 ms per collocation point
 (the hanging chain's 150 points: 0.8 s against 0.04 s; the expressions are identical).
 """
 
@@ -209,6 +213,9 @@ class CollocationNLP:
     special : casadi.SX
         The values of the timed variables and integrals (``Optimization.special_symbols``
         order) as expressions of ``w`` and ``p``.
+    consistent : casadi.Function or None
+        :func:`consistent_algebraics` of the model (the algebraic variables at a point that
+        is no collocation point).
     """
 
     w: ca.SX
@@ -238,6 +245,7 @@ class CollocationNLP:
     npath: int
     block_sizes: list = field(default_factory=list)
     special: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
+    consistent: ca.Function | None = None
 
 
 def element_scaling(N: int, fractions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -473,10 +481,14 @@ def transcribe(
     J = ca.mtimes(lagr_fn.map(M)(t_pts, X_pts, Z_pts, U_pts, P, T_pts), weights_pts.T)
 
     L0, L1 = ca.DM(np.asarray(co["L0"], dtype=float)), ca.DM(np.asarray(co["L1"], dtype=float))
-    u_start = ca.mtimes(U_pts[:, 0:d], L0) if nu else ca.SX(0, 1)
-    z_start = ca.mtimes(Z_pts[:, 0:d], L0) if nz else ca.SX(0, 1)
-    u_final = ca.mtimes(U_pts[:, M - d:M], L1) if nu else ca.SX(0, 1)
-    z_final = ca.mtimes(Z_pts[:, M - d:M], L1) if nz else ca.SX(0, 1)
+    # the inputs at the start (and a Legendre final time), no collocation points: held from the
+    # nearest point (an extrapolation of the polynomial could leave the bounds imposed at the points)
+    u_start = U_pts[:, 0] if nu else ca.SX(0, 1)
+    u_final = U_pts[:, M - 1] if nu else ca.SX(0, 1)
+    consistent = consistent_algebraics(dae, opt.final_time, subst)
+    z_start = consistent(t0, X0[:, 0], ca.mtimes(Z_pts[:, 0:d], L0), u_start, P, T_first) if nz else ca.SX(0, 1)
+    z_final = (consistent(T, XN, ca.mtimes(Z_pts[:, M - d:M], L1), u_final, P, T) if nz and float(co["root"][-1]) != 1.0
+               else ca.mtimes(Z_pts[:, M - d:M], L1) if nz else ca.SX(0, 1))
     ends: list[tuple[int, ca.SX]] = []
     if start_c:
         e = start_fn(t0, X0[:, 0], z_start, u_start, P, T_first)
@@ -529,7 +541,48 @@ def transcribe(
         npath=int(path_expr.numel()),
         block_sizes=sizes,
         special=s_val,
+        consistent=consistent,
     )
+
+
+#: Newton steps of :func:`consistent_algebraics` (exact after the first for algebraic
+#: equations linear in the algebraic variables, as those of composed components are).
+CONSISTENCY_NEWTON_STEPS = 2
+
+
+def consistent_algebraics(dae: FlatDAE, final_time: ca.SX, subst: Any) -> ca.Function:
+    """The algebraic variables at a point that is no collocation point, consistent with the states there.
+
+    The transcription has algebraic variables at the collocation points only; at the start
+    time (and, for Legendre, the final time) their polynomial's extrapolation ``z_e`` does
+    not satisfy the algebraic equations ``0 = g(t, x, z, u, p)`` with the states there, so a
+    condition on an algebraic variable (a load's speed tied to the motor's by a gear) would
+    hold on the extrapolation and not on the motion. This function takes
+    :data:`CONSISTENCY_NEWTON_STEPS` Newton steps on ``g`` in ``z`` from ``z_e``:
+    ``z <- z - (dg/dz)^-1 g(t, x, z, u, p)`` (the initialisation system of the index-1 DAE
+    at that point, the states and inputs given; the DAE is index 1, so ``dg/dz`` is
+    regular).
+
+    Parameters
+    ----------
+    dae : FlatDAE
+        The flat (index-1) model.
+    final_time : casadi.SX
+        The final-time symbol of the optimisation.
+    subst : callable
+        Replaces ``der()`` of the states by the right-hand side.
+
+    Returns
+    -------
+    casadi.Function
+        ``(t, x, z_e, u, p, final_time) -> z`` (column vectors of the model's sizes).
+    """
+    g = subst(dae.alg_expr)
+    g_jac = ca.jacobian(g, dae.z)
+    z = dae.z
+    for _ in range(CONSISTENCY_NEWTON_STEPS):
+        z = z - ca.solve(ca.substitute(g_jac, dae.z, z), ca.substitute(g, dae.z, z))
+    return ca.Function("consistent_algebraics", [dae.t, dae.x, dae.z, dae.u, dae.p, final_time], [z])
 
 
 class _ElementVars:

@@ -49,12 +49,19 @@ __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VA
 
 
 def _scalar_variables(model: Model) -> dict[str, tuple[str, ca.SX]]:
-    """Scalar states, inputs and algebraics by name: ``name -> (kind, symbol)``."""
+    """Scalar states, inputs, algebraics and outputs by name: ``name -> (kind, symbol or expression)``.
+
+    The outputs of a reduced model are the aliases the reduction eliminated (``motor.phi``
+    of a motor behind a gear): every variable of the user's model can be named.
+    """
     out = {}
     for kind in ("state", "input", "algebraic"):
         for name, sym in model.variables(kind).items():
             if sym.numel() == 1:
                 out[name] = (kind, sym)
+    for name, expr in model.outputs.items():
+        if expr.numel() == 1 and name not in out:
+            out[name] = ("output", expr)
     return out
 
 
@@ -288,7 +295,8 @@ class OptimalControlKind(ProblemKind):
             "objective_sense": d.sense,
             "constraints": list(d.constraints),
             "parameters": dict(d.named_parameters),
-            "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name},
+            "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name,
+                      "states": list(d.model.flatten().x_names)},
             "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
