@@ -537,7 +537,7 @@ class CollocationTranscription:
         if not off.size:
             return
         d = colloc.points
-        flat_u = colloc.uc.reshape(-1, colloc.uc.shape[2])
+        flat_u = colloc.uc.reshape(colloc.elements * d, colloc.uc.shape[2])
         ends = np.cumsum(np.char.endswith(kinds, "boundary"))  # element ends up to each time
         for i in off:  # the start: the first element's first point; a Legendre element end: its last
             k, j = (0, 0) if kinds[i] == "start" else (int(ends[i]) - 1, d - 1)
