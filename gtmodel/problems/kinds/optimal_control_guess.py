@@ -126,7 +126,7 @@ def declare_initial_guess(
     elif section.method == "file":
         path = _table_path(file, section)
         try:
-            data = read_table(path, "initial guess")
+            data = read_table(path, "initial guess", text_columns=("point",))
             outputs = list(opt.model.outputs)
             ignore = outputs + [k for k, n in _alias_map(outputs).items()]
             guess_from_table(opt, data.columns, data.data, section.time_column, aliases=vkeys, ignore=ignore)
