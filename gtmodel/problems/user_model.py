@@ -69,7 +69,7 @@ def _import(path: Path) -> Any:
     return module
 
 
-def load_user_model(path: str | Path, class_name: str) -> Model:
+def load_user_model(path: str | Path, class_name: str, reduce: bool = True) -> Model:
     """Import a model file and build the model of one of its classes.
 
     Parameters
@@ -79,6 +79,10 @@ def load_user_model(path: str | Path, class_name: str) -> Model:
     class_name : str
         Name of a class at the top level of the file (see the module docstring for the
         protocol).
+    reduce : bool, optional
+        Reduce a model that does not flatten (:func:`reduced_model`; default). False: the
+        model as written, unchecked (for :class:`~gtmodel.modeling.Optimization`, which
+        reduces it itself and keeps the model as written).
 
     Returns
     -------
@@ -130,7 +134,7 @@ def load_user_model(path: str | Path, class_name: str) -> Model:
         if not isinstance(model, Model):
             raise ModelError(f"{p}: {class_name}().{method}() returned a {type(model).__name__}, not a gtmodel.modeling.Model")
     try:
-        model = reduced_model(model)
+        model = reduced_model(model) if reduce else model
     except GtModelError as exc:
         raise ModelError(f"{p}: class {class_name}: {exc}") from None
     _log.debug("loaded model %r from %s:%s", model.name, p, class_name)

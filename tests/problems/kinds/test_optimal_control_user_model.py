@@ -103,7 +103,7 @@ def solved(tmp_path_factory):
     level = logger.level
     logger.setLevel(logging.INFO)
     try:
-        outcome = run_problem(folder / "dc_move.toml", folder / "out", plots=False)
+        outcome = run_problem(folder / "dc_move.toml", folder / "out", plots=True)
     finally:
         logger.removeHandler(handler)
         logger.setLevel(level)
@@ -117,6 +117,27 @@ def test_the_class_as_written_solves_and_the_states_chosen_are_named(solved):
     states = summary["model"]["states"]
     assert states == ["inductor.i", "emf.phi", "motor.w"]
     assert any("reduced to index 1" in r and "inductor.i, emf.phi, motor.w" in r for r in records)
+
+
+def test_variables_plot_shows_the_states_as_written_by_default(solved):
+    # [output] variables defaults, for a reduced model, to the states of the model as written
+    outcome, folder, _ = solved
+    assert outcome.problem.declaration.variables[:3] == ("inductor.i", "emf.phi", "motor.phi")
+    assert {"load.phi", "load.w"} <= set(outcome.problem.declaration.variables)
+    assert "variables.png" in outcome.summary["files"] and (folder / "out" / "variables.png").stat().st_size > 0
+
+
+def test_output_variables_named_in_the_file(tmp_path):
+    (tmp_path / "dc_motor.py").write_text(MODEL)
+    (tmp_path / "p.toml").write_text(PROBLEM + '[output]\nvariables = ["load.phi", "motor.phi"]\n')
+    from gtmodel.problems import load_problem
+
+    assert load_problem(tmp_path / "p.toml").declaration.variables == ("load.phi", "motor.phi")
+    (tmp_path / "q.toml").write_text(PROBLEM + '[output]\nvariables = ["load.phy"]\n')
+    from gtmodel.errors import ProblemError
+
+    with pytest.raises(ProblemError, match=r"field 'output.variables\[0\]': expected one of the model's names \(.*load\.phi, load\.w, .*\), got 'load.phy'"):
+        load_problem(tmp_path / "q.toml")
 
 
 def test_table_holds_every_variable_and_the_conditions_at_t0(solved):
