@@ -14,95 +14,19 @@ states, algebraics, inputs, parameters) and :attr:`Optimization.final_time`.
 
 from __future__ import annotations
 
-import logging
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value, expand_names
+from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
 from gtmodel.modeling.simulation.model import Model
 from gtmodel.modeling.ocp.initial import model_initial_conditions
 from gtmodel.modeling.ocp.terms import Constraint, Integral, Timed
+from gtmodel.modeling.ocp.written import affine_guess, reduce_written
 
 __all__ = ["Optimization", "Constraint", "Timed", "Integral"]
-
-_log = logging.getLogger("gtmodel")
-
-
-def user_substitution(model: Model, reduced: Model) -> tuple[ca.SX, ca.SX]:
-    """The symbols of a model and their values in its reduced model (:func:`~gtmodel.modeling.structural_simplify`).
-
-    Parameters
-    ----------
-    model : Model
-        The model as written.
-    reduced : Model
-        Its reduced model: every scalar variable of ``model`` is there a state, an
-        algebraic variable or an output (an eliminated alias), under its own name or the
-        identifier :func:`structural_simplify` made of it (``T[0]`` -> ``T_0``).
-
-    Returns
-    -------
-    src, dst : casadi.SX
-        Column vectors of equal length: ``time``, the parameters, inputs, states (and their
-        ``der()``) and algebraic variables of ``model``, and what replaces each.
-
-    Raises
-    ------
-    ModelError
-        A variable of ``model`` has no counterpart in ``reduced`` (should not happen).
-    """
-    from gtmodel.modeling.structure.index_reduction import _ident
-
-    found = {**reduced._outputs, **{n: v.sym for n, v in reduced._vars.items()}}
-
-    def value(nm: str) -> ca.SX:
-        for cand in (nm, _ident(nm)):
-            if cand in found:
-                return found[cand]
-        raise ModelError(f"model {model.name!r}: variable {nm!r} has no counterpart in the reduced model")
-
-    src, dst = [model.time], [reduced.time]
-    for var in model._vars.values():
-        names = expand_names(var.name, var.size)
-        for j, nm in enumerate(names):
-            src.append(ca.vec(var.sym)[j])
-            dst.append(value(nm))
-        if var.kind == "state":
-            der = ca.vec(model.der(var.sym))
-            for j, nm in enumerate(names):
-                r = reduced._vars.get(nm) or reduced._vars.get(_ident(nm))
-                if r is not None and r.kind == "state":
-                    d = reduced.der(r.sym)
-                elif f"der({nm})" in found or _ident(f"der({nm})") in found:
-                    d = value(f"der({nm})")
-                else:  # an eliminated alias: the time derivative of its expression
-                    d = _time_derivative(value(nm), reduced, found)
-                if d is not None:
-                    src.append(der[j])
-                    dst.append(d)
-    return ca.vertcat(*src), ca.vertcat(*dst)
-
-
-def _time_derivative(e: ca.SX, reduced: Model, found: dict[str, ca.SX]) -> ca.SX | None:
-    """``d e / dt`` by the chain rule over the reduced model's states (``der()``) and algebraics (their dummy
-    derivatives ``der_<name>``); None if ``e`` depends on a variable without a derivative (an input)."""
-    from gtmodel.modeling.structure.index_reduction import _ident
-
-    out = ca.SX(0)
-    for nm, v in reduced._vars.items():
-        if v.kind in ("parameter",) or not ca.depends_on(e, v.sym):
-            continue
-        if v.kind == "state":
-            d = reduced.der(v.sym)
-        elif v.kind == "algebraic" and _ident(f"der({nm})") in found:
-            d = found[_ident(f"der({nm})")]
-        else:
-            return None
-        out = out + ca.jtimes(e, v.sym, d)
-    return out
 
 
 class Optimization:
@@ -111,13 +35,10 @@ class Optimization:
     Parameters
     ----------
     model : Model
-        The dynamic model, as the user wrote it: a model that
-        :meth:`~gtmodel.modeling.Model.flatten` refuses (aliases between states, higher
-        index) is reduced as :meth:`~gtmodel.modeling.Model.simulate` reduces it
-        (:func:`~gtmodel.modeling.structural_simplify`); :attr:`model` is then the reduced
-        model, :attr:`user_model` the one given, and expressions may use the symbols of
-        either (those of ``model`` as given are substituted by their values in the reduced
-        model: a state, an algebraic variable, or an eliminated alias's expression).
+        The dynamic model as written: one that ``flatten()`` refuses (higher index) is
+        reduced as ``simulate()`` reduces it (:mod:`gtmodel.modeling.ocp.written`);
+        :attr:`model` is the reduced model, :attr:`user_model` the one given, and
+        expressions may use the symbols of either.
     start_time : float, optional
         Start time ``t0``, s; default 0.
     final_time : float, optional
@@ -157,17 +78,10 @@ class Optimization:
             raise InputError("start_time and final_time must be numbers") from exc
         if not (np.isfinite(t0) and np.isfinite(tf)):
             raise InputError("start_time and final_time must be finite")
-        #: The model as given (before any reduction).
-        self.user_model = model
+        self.user_model = model  # as given, before any reduction
         self._user_subst: tuple[ca.SX, ca.SX] | None = None
         if not model._flattens():
-            from gtmodel.modeling.structure.index_reduction import structural_simplify
-
-            reduced = structural_simplify(model)
-            self._user_subst = user_substitution(model, reduced)
-            _log.info("model %r reduced to index 1 (structural_simplify): states %s", model.name,
-                      ", ".join(reduced.flatten().x_names))
-            model = reduced
+            model, self._user_subst = reduce_written(model)
         self.model = model
         self.start_time = t0
         self.free_final_time = bool(free_final_time)
@@ -239,10 +153,7 @@ class Optimization:
 
     def _to_reduced(self, e: ca.SX) -> ca.SX:
         """``e`` with the symbols of the model as given replaced by their values in the reduced model."""
-        if self._user_subst is None or not e.numel():
-            return e
-        src, dst = self._user_subst
-        return ca.substitute(e, src, dst)
+        return e if self._user_subst is None or not e.numel() else ca.substitute(e, *self._user_subst)
 
     @property
     def point_constraints(self) -> list[Constraint]:
@@ -586,9 +497,8 @@ class Optimization:
         Parameters
         ----------
         variable : casadi.SX
-            A declared state/input/algebraic symbol, or elements of one; an output of the
-            model (an eliminated alias of a reduced model) is bounded by the path
-            constraint ``lb <= output <= ub`` at the collocation points.
+            A declared state/input/algebraic symbol, or elements of one; an output (an
+            eliminated alias) is bounded by a path constraint.
         lb, ub : float, array_like or casadi.SX, optional
             Bounds, scalar or one per selected element; ``-inf``/``inf`` (the
             defaults) leave a side open. A bound that is an expression of model
@@ -635,48 +545,14 @@ class Optimization:
         cur_lb[idx], cur_ub[idx] = lbv, ubv
         self.bounds[name] = (cur_lb, cur_ub)
 
-    def _guess_through_output(self, e: ca.SX, values: Any) -> tuple[ca.SX, Any]:
-        """The variable ``v`` of a scalar expression ``e = a v + b`` and the guess of ``v`` from that of ``e``."""
-        if e.is_symbolic():
-            return e, values
-        syms = [s for s in ca.symvar(e) if ca.depends_on(e, s)]
-        varying = [s for s in syms if not self._is_parameter(s)]
-        if len(varying) != 1 or not ca.is_linear(e, varying[0]):
-            raise ModelError(f"set_initial_guess: {e} is not a variable of the model nor affine in one variable")
-        v = varying[0]
-        pv = self._parameter_values()
-        a = float(ca.evalf(ca.substitute(ca.jacobian(e, v), pv[0], pv[1])))
-        b = float(ca.evalf(ca.substitute(ca.substitute(e, v, ca.SX(0)), pv[0], pv[1])))
-        if a == 0.0:
-            raise ModelError(f"set_initial_guess: {e} does not depend on {v}")
-        if callable(values):
-            return v, lambda t, f=values: (np.asarray(f(t), dtype=float) - b) / a
-        if isinstance(values, tuple):
-            return v, (values[0], (np.asarray(values[1], dtype=float) - b) / a)
-        return v, (np.asarray(values, dtype=float) - b) / a
-
-    def _is_parameter(self, s: ca.SX) -> bool:
-        return any(ca.depends_on(s, p) for p in self.model.variables("parameter").values())
-
-    def _parameter_values(self) -> tuple[ca.SX, ca.SX]:
-        """The parameter symbols and their values (the problem's, else the model's)."""
-        flat = self.model.flatten()
-        values = np.array(flat.p_value, dtype=float)
-        for name, val in self.parameters.items():
-            sl = flat.p_vars[name]
-            values[sl] = np.ravel(val)
-        return flat.p, ca.SX(ca.DM(values))
-
     def set_initial_guess(self, variable: Any, values: Any) -> None:
         """Set the initial guess of a state, input or algebraic variable, or of ``final_time``.
 
         Parameters
         ----------
         variable : casadi.SX
-            A declared state/input/algebraic symbol (whole variable), or
-            :attr:`final_time`, or a scalar output that is ``a v + b`` of one scalar
-            variable ``v`` (an eliminated alias, ``load.phi = emf.phi / ratio``): the guess
-            of ``v`` is then ``(values - b) / a``.
+            A declared state/input/algebraic symbol (whole variable), :attr:`final_time`,
+            or a scalar output ``a v + b`` of one variable ``v`` (guessing ``v``).
         values : float, array_like, tuple or callable
             A constant (scalar or ``(n,)``); a trajectory ``(t, values)`` with ``t`` of
             shape ``(K,)`` (absolute times, s) and ``values`` of shape ``(K,)`` or
@@ -695,9 +571,9 @@ class Optimization:
             lo, hi = self.final_time_bounds
             self.final_time_guess = float(np.clip(v, lo, hi))
             return
-        if isinstance(variable, ca.SX) and variable.numel() == 1 and not variable.is_symbolic():
-            variable, values = self._guess_through_output(self._to_reduced(variable), values)
-        elif self._user_subst is not None and isinstance(variable, ca.SX):
+        if isinstance(variable, ca.SX) and variable.numel() == 1:  # an output a v + b: a guess of v
+            variable, values = affine_guess(self._to_reduced(variable), values, self.model, self.parameters)
+        elif isinstance(variable, ca.SX):
             variable = self._to_reduced(variable)
         kind, name, idx = self.model.locate(variable)
         if kind == "parameter":
