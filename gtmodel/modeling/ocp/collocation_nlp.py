@@ -490,6 +490,15 @@ def transcribe(
     z_final = (consistent(T, XN, ca.mtimes(Z_pts[:, M - d:M], L1), u_final, P, T) if nz and float(co["root"][-1]) != 1.0
                else ca.mtimes(Z_pts[:, M - d:M], L1) if nz else ca.SX(0, 1))
     ends: list[tuple[int, ca.SX]] = []
+    # the path constraints and the bounds of the algebraic variables hold at the start too (the
+    # tables write its consistent values; the collocation points impose them everywhere else)
+    if path_lb.size:
+        e = point_fn(t0, X0[:, 0], z_start, u_start, P, T_first)[2]
+        ends.append((con(e, path_lb, path_ub), e))
+    z_bounded = np.flatnonzero(np.isfinite(z_lb) | np.isfinite(z_ub)) if nz else np.zeros(0, dtype=int)
+    if z_bounded.size:
+        e = z_start[z_bounded.tolist()]
+        ends.append((con(e, z_lb[z_bounded], z_ub[z_bounded]), e))
     if start_c:
         e = start_fn(t0, X0[:, 0], z_start, u_start, P, T_first)
         ends.append((con(e, np.concatenate([c.lb for c in start_c]), np.concatenate([c.ub for c in start_c])), e))

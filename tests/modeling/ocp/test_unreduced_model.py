@@ -154,3 +154,20 @@ def test_bounds_and_guesses_on_an_output(user_model):
     assert float(opt.path_constraints[-1].ub[0]) == 30.0
     opt.set_initial_guess(out, 90.0)
     assert float(np.ravel(opt.initial_guesses["load.phi"])[0]) == pytest.approx(np.pi / 2, rel=1e-12)
+
+
+def test_path_bounds_on_algebraic_variables_hold_at_t0_too(user_model):
+    # reference: the bound itself, at every written time (t0 is no collocation point: the
+    # bound is imposed on the algebraic variables consistent with the start there)
+    opt = Optimization(user_model, final_time=T_FINAL)
+    m = opt.model
+    u, z = m.variables("input")["source.v"], m.variables("algebraic")
+    for name, value in {"load.phi": 0.0, "load.w": 0.0}.items():
+        opt.add_point_constraint(z[name], at="start", lb=value, ub=value)
+    opt.add_point_constraint(z["load.phi"], at="final", lb=1.0, ub=1.0)
+    opt.set_bounds(z["resistor.v"], -5.0, 5.0)  # the voltage over the resistor: |i| <= 5 A
+    opt.set_bounds(u, -V_MAX, V_MAX)
+    opt.set_objective(lagrange=u**2)
+    res = solve(opt, elements=40, points=3)
+    assert res.status == "optimal"
+    assert np.max(np.abs(res.algebraics["resistor.v"])) <= 5.0 + 1e-7
