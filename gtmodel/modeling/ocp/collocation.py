@@ -12,15 +12,18 @@ Conventions:
 * Path constraints and variable bounds of inputs/algebraics are enforced at the
   collocation points; state bounds also at element boundaries.
 * Point constraints and the Mayer term at the final time use the final state and, for
-  inputs/algebraics, the last collocation point (for Radau ``tau = 1``; for Legendre the
-  inputs held from the last point, the algebraic variables consistent with them).
-* Point constraints at the start time use the initial state, the inputs of the first
-  collocation point (held: an extrapolation could leave the bounds) and the algebraic
-  variables consistent with them
+  inputs/algebraics, the last element's polynomial at ``tau = 1`` (for Radau a
+  collocation point; for Legendre an extrapolation, bounded, and the algebraic variables
+  consistent with it).
+* Point constraints at the start time use the initial state, for the inputs the first
+  element's Lagrange polynomial through its collocation points evaluated at ``tau = 0``
+  (an extrapolation for both schemes; the input bounds are imposed on it too), and the
+  algebraic variables consistent with them
   (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`; the extrapolated
-  polynomial does not satisfy the algebraic equations). The result's tables hold the
-  same values at the start (and, for Legendre, at the element ends), and say at each time
-  which kind of point it is (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
+  polynomial does not satisfy the algebraic equations; their bounds and the path
+  constraints are imposed there too). The result's tables hold the same values at the
+  start, and say at each time which kind of point it is
+  (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
 * The Lagrange term uses the quadrature of the collocation points.
 
 Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
@@ -525,24 +528,16 @@ class CollocationTranscription:
 
     def _at_points(self, colloc: CollocationData, t: np.ndarray, xs: np.ndarray, us: np.ndarray, zs: np.ndarray,
                    pvec: np.ndarray, tf: float) -> None:
-        """Inputs and algebraics at the mesh times that are no collocation points, as the NLP defines them (in place).
+        """Algebraics at the mesh times that are no collocation points, as the NLP defines them (in place).
 
-        The inputs there are held from the nearest collocation point of the element; the
-        algebraic variables are consistent with the states and those inputs
+        The inputs there are the element's polynomial (``us`` as evaluated); the algebraic
+        variables are made consistent with the states and inputs
         (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`, as in the
         point constraints).
         """
         kinds = colloc.point_kinds()
         off = np.flatnonzero(~np.char.startswith(kinds, "collocation"))
-        if not off.size:
-            return
-        d = colloc.points
-        flat_u = colloc.uc.reshape(colloc.elements * d, colloc.uc.shape[2])
-        ends = np.cumsum(np.char.endswith(kinds, "boundary"))  # element ends up to each time
-        for i in off:  # the start: the first element's first point; a Legendre element end: its last
-            k, j = (0, 0) if kinds[i] == "start" else (int(ends[i]) - 1, d - 1)
-            if us.shape[1]:
-                us[i] = flat_u[k * d + j]
+        for i in off:
             if zs.shape[1] and self.nlp.consistent is not None:
                 zs[i] = np.asarray(self.nlp.consistent(t[i], xs[i], zs[i], us[i], pvec, tf), dtype=float).reshape(-1)
 

@@ -18,11 +18,12 @@ sparse factorisation linear in the mesh and is the structure stage-wise solvers 
 The NLP is built from matrices with one column per element (the decision vector reshaped)
 and the model equations, the Lagrange term and the integrals at all ``N d`` collocation
 points are one mapped call each (``Function.map``): a few CasADi operations whatever the
-mesh. At the points that are no collocation points (the start time; for Legendre the
-element ends) the inputs are held from the nearest collocation point and the algebraic
-variables are made consistent with the states there (:func:`consistent_algebraics`), so
+mesh. At the start time (and, for Legendre, the final time), which is no collocation
+point, the inputs are the first (last) element's polynomial and the algebraic variables
+are made consistent with the states and inputs there (:func:`consistent_algebraics`), so
 that a start condition on an algebraic variable constrains the motion, not an
-extrapolation. The same NLP built point by point in Python cost about 5 ms per collocation point
+extrapolation; the bounds of inputs and algebraic variables and the path constraints are
+imposed there too. The same NLP built point by point in Python cost about 5 ms per collocation point
 (the hanging chain's 150 points: 0.8 s against 0.04 s; the expressions are identical).
 """
 
@@ -481,10 +482,10 @@ def transcribe(
     J = ca.mtimes(lagr_fn.map(M)(t_pts, X_pts, Z_pts, U_pts, P, T_pts), weights_pts.T)
 
     L0, L1 = ca.DM(np.asarray(co["L0"], dtype=float)), ca.DM(np.asarray(co["L1"], dtype=float))
-    # the inputs at the start (and a Legendre final time), no collocation points: held from the
-    # nearest point (an extrapolation of the polynomial could leave the bounds imposed at the points)
-    u_start = U_pts[:, 0] if nu else ca.SX(0, 1)
-    u_final = U_pts[:, M - 1] if nu else ca.SX(0, 1)
+    # the inputs at the start (and a Legendre final time), no collocation points: the element's
+    # polynomial through its points, extrapolated (as the verification's simulation applies it)
+    u_start = ca.mtimes(U_pts[:, 0:d], L0) if nu else ca.SX(0, 1)
+    u_final = ca.mtimes(U_pts[:, M - d:M], L1) if nu else ca.SX(0, 1)
     consistent = consistent_algebraics(dae, opt.final_time, subst)
     z_start = consistent(t0, X0[:, 0], ca.mtimes(Z_pts[:, 0:d], L0), u_start, P, T_first) if nz else ca.SX(0, 1)
     z_final = (consistent(T, XN, ca.mtimes(Z_pts[:, M - d:M], L1), u_final, P, T) if nz and float(co["root"][-1]) != 1.0
@@ -495,10 +496,14 @@ def transcribe(
     if path_lb.size:
         e = point_fn(t0, X0[:, 0], z_start, u_start, P, T_first)[2]
         ends.append((con(e, path_lb, path_ub), e))
-    z_bounded = np.flatnonzero(np.isfinite(z_lb) | np.isfinite(z_ub)) if nz else np.zeros(0, dtype=int)
-    if z_bounded.size:
-        e = z_start[z_bounded.tolist()]
-        ends.append((con(e, z_lb[z_bounded], z_ub[z_bounded]), e))
+    extrapolated = [("z", z_start, z_lb, z_ub), ("u", u_start, u_lb, u_ub)]
+    if float(co["root"][-1]) != 1.0:  # Legendre: the final time is no collocation point either
+        extrapolated += [("z", z_final, z_lb, z_ub), ("u", u_final, u_lb, u_ub)]
+    for _, vals, lo, hi in extrapolated:  # the bounds of inputs and algebraics hold there too
+        bounded = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi)) if vals.numel() else np.zeros(0, dtype=int)
+        if bounded.size:
+            e = vals[bounded.tolist()]
+            ends.append((con(e, lo[bounded], hi[bounded]), e))
     if start_c:
         e = start_fn(t0, X0[:, 0], z_start, u_start, P, T_first)
         ends.append((con(e, np.concatenate([c.lb for c in start_c]), np.concatenate([c.ub for c in start_c])), e))

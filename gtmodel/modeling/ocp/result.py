@@ -167,11 +167,11 @@ class CollocationData:
         -------
         numpy.ndarray of str
             Shape ``(K,)``: ``"start"`` (the start time, no collocation point: states as
-            solved, inputs held from the first collocation point, algebraic variables
-            consistent with them), ``"collocation"`` (an interior collocation point),
+            solved, inputs the first element's polynomial, algebraic variables consistent
+            with them), ``"collocation"`` (an interior collocation point),
             ``"collocation_boundary"`` (an element end that is a collocation point: Radau),
-            ``"boundary"`` (an element end that is none: Legendre; inputs held from the
-            element's last point, algebraic variables consistent).
+            ``"boundary"`` (an element end that is none: Legendre; inputs the element's
+            polynomial, algebraic variables consistent with them).
         """
         inner = sum(1 for c in self.tau_root[1:] if c < 1.0 - 1e-12)
         end = "collocation_boundary" if inner < len(self.tau_root) - 1 else "boundary"
