@@ -52,6 +52,7 @@ class DCMotorGearLoad(Component):
         connect(self.gear.flange_b, self.load.flange_a)
         connect(self.load.flange_b, self.damper.flange_a)
         connect(self.damper.flange_b, self.fixed.flange)
+        self.output("power", self.source.v * self.source.i)
 '''
 
 PROBLEM = '''name = "dc_move"
@@ -88,6 +89,7 @@ value = 0.5
 elements = 40
 '''
 RATIO = 50.0
+GUESS = '"motor.phi" = "100 * time"\n'
 
 
 @pytest.fixture(scope="module")
@@ -193,3 +195,18 @@ def test_codegen_of_the_class_as_written(solved, tmp_path, check):
     assert main(args + (["--check"] if check else [])) == 0
     header = next(tmp_path.glob("*.h")).read_text()
     assert "States x: inductor.i, emf.phi, motor.w" in header
+
+
+def test_a_guess_on_an_output_that_is_no_affine_function_of_one_variable_is_refused(tmp_path):
+    # source.i = -inductor.i (an eliminated alias): a guess of it guesses inductor.i; the
+    # declared output power = source.v source.i is a product: refused, naming the field
+    from gtmodel.errors import ProblemError
+    from gtmodel.problems import load_problem
+
+    (tmp_path / "dc_motor.py").write_text(MODEL)
+    (tmp_path / "p.toml").write_text(PROBLEM.replace(GUESS, GUESS + '"source.i" = "0.1"\n'))
+    guess = load_problem(tmp_path / "p.toml").declaration.optimization.initial_guesses["inductor.i"]
+    assert float(np.ravel(guess(0.2) if callable(guess) else guess)[0]) == pytest.approx(-0.1, rel=1e-12)
+    (tmp_path / "q.toml").write_text(PROBLEM.replace(GUESS, GUESS + '"power" = "0.1"\n'))
+    with pytest.raises(ProblemError, match=r"field 'initial_guess.values.power': .*not a variable of the model nor affine in one"):
+        load_problem(tmp_path / "q.toml")
