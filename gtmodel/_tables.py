@@ -243,7 +243,8 @@ def _number(source: str, lineno: int, column: str, text: str) -> float:
 
 
 def read_table(
-    path: str | Path, what: str = "table", header: Sequence[str] | None = None, max_rows: int | None = None, max_bytes: int | None = None
+    path: str | Path, what: str = "table", header: Sequence[str] | None = None, max_rows: int | None = None, max_bytes: int | None = None,
+    text_columns: Sequence[str] = (),
 ) -> Table:
     """Read a CSV table of numbers (format in the module docstring), strictly validated.
 
@@ -261,6 +262,9 @@ def read_table(
         Largest file size accepted [bytes]: checked on the file's size before reading and
         while reading (a file whose size the system does not report is read at most this
         far); default :data:`DEFAULT_MAX_BYTES`.
+    text_columns : sequence of str, optional
+        Columns of text, left out of the table if present (e.g. ``"point"`` of a result's
+        ``trajectories.csv``: which kind of collocation point each time is).
 
     Returns
     -------
@@ -344,9 +348,12 @@ def read_table(
                 raise InputError(f"{source}: line {lineno}: {len(fields)} values, expected {width} (one per header column: "
                                  f"{_excerpt(','.join(columns))})")
             for name, cell in zip(columns, fields):
-                _number(source, lineno, name, cell)
-        rows.append(fields)
+                if name not in text_columns:
+                    _number(source, lineno, name, cell)
+        rows.append([f for name, f in zip(columns, fields) if name not in text_columns])
         linenos.append(lineno)
+    columns = tuple(c for c in columns if c not in text_columns)
+    width = len(columns)
     data = np.array(rows, dtype=float) if rows else np.empty((0, width))
     return Table(source, columns, data.reshape(len(rows), width), np.array(linenos, dtype=int), header_line, tuple(comments))
 

@@ -307,13 +307,20 @@ def _frame(t: np.ndarray, *groups: Mapping[str, np.ndarray]) -> Any:
 
 
 def _write_columns(path: Path, cols: Mapping[str, np.ndarray]) -> None:
-    """Write named float columns as CSV, byte for byte as ``pandas.DataFrame(cols).to_csv(path, index=False)``.
+    """Write named float (or string) columns as CSV, byte for byte as ``pandas.DataFrame(cols).to_csv(path, index=False)``.
 
     Without importing pandas (~1 s at a ``gtmodel solve`` process's start): the header row,
     then each value as pandas writes it (``numpy`` ``astype(str)``, the shortest repr; NaN
     as an empty field), ``csv`` minimal quoting, ``\n`` line ends.
     """
-    text = [np.where(np.isnan(c), "", c.astype(str)) for c in (np.asarray(v, dtype=float) for v in cols.values())]
+    def as_text(v: Any) -> np.ndarray:
+        a = np.asarray(v)
+        if a.dtype.kind in "US":
+            return a.astype(str)
+        c = a.astype(float)
+        return np.where(np.isnan(c), "", c.astype(str))
+
+    text = [as_text(v) for v in cols.values()]
     with open(path, "w", newline="", encoding="utf-8") as fh:
         writer = csv.writer(fh, lineterminator="\n")
         writer.writerow(list(cols))

@@ -12,8 +12,13 @@ or ``gtmodel codegen --model models/cart_pendulum.py:CartPendulum``):
 * the instance must be a :class:`gtmodel.modeling.Model` (e.g. a subclass that declares
   its variables and equations in ``__init__``), or have a method ``build()`` or
   ``to_model()`` (a component of :mod:`gtmodel.modeling`) returning one;
-* the model must flatten (:meth:`~gtmodel.modeling.Model.flatten`): its parameters
-  have default values, which a problem file may override by name.
+* the model is reduced as :meth:`~gtmodel.modeling.Model.simulate` reduces it: a model
+  that :meth:`~gtmodel.modeling.Model.flatten` refuses (alias equations between states,
+  higher index: a motor, a gear and a load composed from library components) goes through
+  :func:`~gtmodel.modeling.structural_simplify`; the states it chose are logged (and the
+  problem's summary names them); every variable of the user's model keeps its name (a
+  state, an algebraic variable, or an output for an eliminated alias);
+* its parameters have default values, which a problem file may override by name.
 
 Every failure (missing file, syntax error, an exception while importing or
 instantiating, class not defined, not a Model, a model that does not flatten) is one
@@ -31,9 +36,9 @@ from pathlib import Path
 from typing import Any
 
 from gtmodel.errors import GtModelError, ModelError
-from gtmodel.modeling import Model
+from gtmodel.modeling import Model, structural_simplify
 
-__all__ = ["load_user_model", "split_model_reference", "ModelFileError", "BUILD_METHODS"]
+__all__ = ["load_user_model", "reduced_model", "split_model_reference", "ModelFileError", "BUILD_METHODS"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -64,7 +69,7 @@ def _import(path: Path) -> Any:
     return module
 
 
-def load_user_model(path: str | Path, class_name: str) -> Model:
+def load_user_model(path: str | Path, class_name: str, reduce: bool = True) -> Model:
     """Import a model file and build the model of one of its classes.
 
     Parameters
@@ -74,11 +79,16 @@ def load_user_model(path: str | Path, class_name: str) -> Model:
     class_name : str
         Name of a class at the top level of the file (see the module docstring for the
         protocol).
+    reduce : bool, optional
+        Reduce a model that does not flatten (:func:`reduced_model`; default). False: the
+        model as written, unchecked (for :class:`~gtmodel.modeling.Optimization`, which
+        reduces it itself and keeps the model as written).
 
     Returns
     -------
     Model
-        The model (checked to flatten).
+        The model, reduced to index 1 by :func:`~gtmodel.modeling.structural_simplify` if
+        :meth:`~gtmodel.modeling.Model.flatten` refuses it as written (checked to flatten).
 
     Raises
     ------
@@ -124,11 +134,41 @@ def load_user_model(path: str | Path, class_name: str) -> Model:
         if not isinstance(model, Model):
             raise ModelError(f"{p}: {class_name}().{method}() returned a {type(model).__name__}, not a gtmodel.modeling.Model")
     try:
-        model.flatten()
+        model = reduced_model(model) if reduce else model
     except GtModelError as exc:
         raise ModelError(f"{p}: class {class_name}: {exc}") from None
     _log.debug("loaded model %r from %s:%s", model.name, p, class_name)
     return model
+
+
+def reduced_model(model: Model) -> Model:
+    """The model as ``simulate()`` integrates it: itself if it flattens, else reduced to index 1.
+
+    Parameters
+    ----------
+    model : Model
+        A model, e.g. ``Component().to_model()`` of composed library components.
+
+    Returns
+    -------
+    Model
+        ``model`` if :meth:`~gtmodel.modeling.Model.flatten` accepts it, else
+        :func:`~gtmodel.modeling.structural_simplify` of it (the states it chose are logged at
+        INFO level; every variable keeps its name as a state, an algebraic variable or an
+        output).
+
+    Raises
+    ------
+    ModelError
+        The model is structurally singular (naming the equations and variables) or cannot
+        be reduced.
+    """
+    if model._flattens():
+        return model
+    reduced = structural_simplify(model)
+    flat = reduced.flatten()
+    _log.info("model %r reduced to index 1 (structural_simplify): states %s", model.name, ", ".join(flat.x_names))
+    return reduced
 
 
 def split_model_reference(ref: str) -> tuple[Path, str]:

@@ -84,6 +84,8 @@ class OptimalControl:
         After :meth:`solve` of a problem with data fits: the residual statistics and the
         estimates with standard deviations
         (:func:`gtmodel.modeling.ocp.estimation.estimate_statistics`).
+    variables : tuple of str
+        The variables plotted in ``variables.png`` (``[output] variables``).
     """
 
     name: str
@@ -101,10 +103,11 @@ class OptimalControl:
     refinement: Refinement = field(default_factory=Refinement)
     benchmark: dict[str, Any] | None = None
     estimation: dict[str, Any] | None = None
+    variables: tuple[str, ...] = ()
 
     @property
     def model(self) -> Model:
-        """The user's model."""
+        """The user's model (reduced to index 1 if it was written of higher index)."""
         return self.optimization.model
 
     @fill_doc(**SHARED_DOCS)

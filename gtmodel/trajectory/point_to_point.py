@@ -376,10 +376,9 @@ def build_optimization(problem: PointToPoint) -> tuple[Optimization, Model]:
             opt.add_path_constraint(c.expr, lb=c.lb, ub=c.ub, name=text)
         else:
             opt.add_point_constraint(c.expr, at=c.at, lb=c.lb, ub=c.ub, name=text)
+    # the force at the start time is the first element's polynomial extrapolated to it: the
+    # collocation transcription bounds it too, so the sampled forces stay within the limits
     opt.set_bounds(tau, -problem.force_limit, problem.force_limit)
-    # the force at the start time is the first element's polynomial extrapolated to it:
-    # bound it too, so that the sampled forces stay within the limits everywhere
-    opt.add_point_constraint(tau, at="start", lb=-problem.force_limit, ub=problem.force_limit, name="tau(start)")
     T_ddot = model.der(T_dot)
     # poses as NLP parameters: re-solves for new poses reuse the NLP (resolve_point_to_point)
     poses = (("start", model.parameter(START_POSE, problem.start)), ("final", model.parameter(END_POSE, problem.end)))

@@ -28,7 +28,7 @@ BAD = {
     "build_raises": ("class Osc:\n    def build(self):\n        raise KeyError('k')\n", ModelError, r"Osc\(\)\.build\(\) raised KeyError"),
     "init_needs_arguments": ("class Osc:\n    def __init__(self, k):\n        pass\n", ModelError, r"Osc\(\) raised TypeError"),
     "does_not_flatten": ("class Osc(Model):\n    def __init__(self):\n        super().__init__('osc')\n        self.state('x')\n",
-                         ModelError, "class Osc: model 'osc' has 0 scalar equations but 1 states"),
+                         ModelError, r"class Osc: model 'osc' is under-determined \(0 scalar equations, 1 unknowns\); variables \['x'\]"),
     "syntax_error": ("class Osc(:\n", ModelFileError, "syntax error at line 13"),
     "import_raises": ("import not_a_module_anywhere\n", ModelFileError, "importing it raised ModuleNotFoundError"),
     "exit_on_import": ("raise SystemExit(3)\n", ModelFileError, "importing it raised SystemExit"),

@@ -86,7 +86,7 @@ def test_plot_refuses_a_name_the_result_does_not_have(transfer, names, match):
 def test_to_dataframe_has_time_and_every_variable(transfer):
     _, _, r = transfer
     df = r.to_dataframe()
-    assert list(df.columns) == ["t", "x", "v", "u", "kinetic"]
+    assert list(df.columns) == ["t", "point", "x", "v", "u", "kinetic"]  # point: start, collocation, boundary (which kind of time)
     np.testing.assert_allclose(df["x"], 3 * r.t**2 - 2 * r.t**3, atol=1e-7)
     sampled = r.to_dataframe(dt=0.25)
     np.testing.assert_allclose(sampled["t"], [0.0, 0.25, 0.5, 0.75, 1.0])

@@ -134,7 +134,7 @@ def test_warm_started_sweep_reuses_the_nlp(coarse_solution):
 
 
 def test_refinement_splits_the_mesh_and_keeps_the_best_verified_pass():
-    """``refinement``: the 12-element motion refined against a 2e-2 tolerance.
+    """``refinement``: the 12-element motion refined against a 1.5e-2 tolerance (its first pass deviates by 1.9e-2).
 
     Independent check: each pass's deviation is that of a CVODES simulation under the pass's
     optimal inputs (:mod:`gtmodel.modeling.ocp.verification`); the returned pass is the one
@@ -143,13 +143,13 @@ def test_refinement_splits_the_mesh_and_keeps_the_best_verified_pass():
     from gtmodel.trajectory.settings import Refinement
 
     p = PointToPoint("L1", start=START, end=END, force_limit=[450, 450, 450], elements=12,
-                     refinement=Refinement(refine=True, tolerance=2e-2, max_passes=3))
+                     refinement=Refinement(refine=True, tolerance=1.5e-2, max_passes=3))
     solution = solve_point_to_point(p)
     passes = solution.result.refinement
     deviations = [e["max_scaled_deviation"] for e in passes if "max_scaled_deviation" in e]
     assert len(passes) >= 2 and passes[-1]["elements"] > 12
     assert solution.result.verification.max_scaled_deviation == min(deviations)
-    assert deviations[0] > 2e-2 and min(deviations) < deviations[0]
+    assert deviations[0] > 1.5e-2 and min(deviations) < deviations[0]
     assert solution.transcription is None  # a refined solve keeps no NLP for sweeps
     assert solution.result.solve_time == pytest.approx(sum(e["solve_time"] for e in passes))  # every pass counted
 

@@ -13,10 +13,17 @@ Conventions:
   collocation points; state bounds also at element boundaries.
 * Point constraints and the Mayer term at the final time use the final state and, for
   inputs/algebraics, the last element's polynomial at ``tau = 1`` (for Radau a
-  collocation point; for Legendre an extrapolation).
-* Point constraints at the start time use the initial state and, for inputs/algebraics,
-  the first element's Lagrange polynomial through its collocation points evaluated at
-  ``tau = 0`` (an extrapolation for both schemes).
+  collocation point; for Legendre an extrapolation, bounded, and the algebraic variables
+  consistent with it).
+* Point constraints at the start time use the initial state, for the inputs the first
+  element's Lagrange polynomial through its collocation points evaluated at ``tau = 0``
+  (an extrapolation for both schemes; the input bounds are imposed on it too), and the
+  algebraic variables consistent with them
+  (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`; the extrapolated
+  polynomial does not satisfy the algebraic equations; their bounds and the path
+  constraints are imposed there too). The result's tables hold the same values at the
+  start, and say at each time which kind of point it is
+  (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
 * The Lagrange term uses the quadrature of the collocation points.
 
 Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
@@ -523,6 +530,21 @@ class CollocationTranscription:
         """
         return resolve_function(self, name, warm_start)
 
+    def _at_points(self, colloc: CollocationData, t: np.ndarray, xs: np.ndarray, us: np.ndarray, zs: np.ndarray,
+                   pvec: np.ndarray, tf: float) -> None:
+        """Algebraics at the mesh times that are no collocation points, as the NLP defines them (in place).
+
+        The inputs there are the element's polynomial (``us`` as evaluated); the algebraic
+        variables are made consistent with the states and inputs
+        (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`, as in the
+        point constraints).
+        """
+        kinds = colloc.point_kinds()
+        off = np.flatnonzero(~np.char.startswith(kinds, "collocation"))
+        for i in off:
+            if zs.shape[1] and self.nlp.consistent is not None:
+                zs[i] = np.asarray(self.nlp.consistent(t[i], xs[i], zs[i], us[i], pvec, tf), dtype=float).reshape(-1)
+
     def _result(
         self,
         w: np.ndarray,
@@ -560,6 +582,7 @@ class CollocationTranscription:
         )
         t = colloc.mesh()
         xs, us, zs = colloc.evaluate(t)
+        self._at_points(colloc, t, xs, us, zs, pvec, tf)
         params = {k: pvec[s].copy() for k, s in dae.p_vars.items()}
         try:
             outs = _eval_outputs(dae, t, xs, zs, us, pvec)

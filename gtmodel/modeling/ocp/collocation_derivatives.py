@@ -240,7 +240,9 @@ def assembled_derivatives(
     jr, jc, hr, hc = (np.asarray(a, dtype=np.int64) for a in (jr, jc, hr, hc))
     jac = _Assembly()
     jac.add(rows[:, jr], cols[:, jc], np.arange(M)[:, None] * nj + np.arange(nj)[None, :])
-    je_r, je_c = (np.asarray(a, dtype=np.int64) for a in je.sparsity().get_triplet())
+    # the sparsity of the functions' outputs, as evaluated (a structural entry of the SX that
+    # is identically zero, e.g. the Hessian of abs(v) at the start, is dropped there)
+    je_r, je_c = (np.asarray(a, dtype=np.int64) for a in je_val.sparsity().get_triplet())
     jac.add(e_rows[je_r] if je_r.size else je_r, je_c, M * nj + np.arange(je_r.size))
     one = M * nj + len(je_r)
     nom_x = np.asarray(noms["x"], dtype=float)
@@ -271,7 +273,7 @@ def assembled_derivatives(
     hess = _Assembly()
     R, C_ = cols[:, hr], cols[:, hc]
     hess.add(np.minimum(R, C_), np.maximum(R, C_), np.arange(M)[:, None] * nh + np.arange(nh)[None, :])
-    he_r, he_c = he.sparsity().get_triplet()
+    he_r, he_c = he_val.sparsity().get_triplet()
     hess.add(he_r, he_c, M * nh + np.arange(len(he_r)))
     hvals = ca.vertcat(_nz(hm), _nz(he_val))
     hess_mx = hess.matrix(hvals, M * nh + len(he_r), nw, nw)

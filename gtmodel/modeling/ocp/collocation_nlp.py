@@ -18,7 +18,12 @@ sparse factorisation linear in the mesh and is the structure stage-wise solvers 
 The NLP is built from matrices with one column per element (the decision vector reshaped)
 and the model equations, the Lagrange term and the integrals at all ``N d`` collocation
 points are one mapped call each (``Function.map``): a few CasADi operations whatever the
-mesh. The same NLP built point by point in Python cost about 5 ms per collocation point
+mesh. At the start time (and, for Legendre, the final time), which is no collocation
+point, the inputs are the first (last) element's polynomial and the algebraic variables
+are made consistent with the states and inputs there (:func:`consistent_algebraics`), so
+that a start condition on an algebraic variable constrains the motion, not an
+extrapolation; the bounds of inputs and algebraic variables and the path constraints are
+imposed there too. The same NLP built point by point in Python cost about 5 ms per collocation point
 (the hanging chain's 150 points: 0.8 s against 0.04 s; the expressions are identical).
 """
 
@@ -209,6 +214,9 @@ class CollocationNLP:
     special : casadi.SX
         The values of the timed variables and integrals (``Optimization.special_symbols``
         order) as expressions of ``w`` and ``p``.
+    consistent : casadi.Function or None
+        :func:`consistent_algebraics` of the model (the algebraic variables at a point that
+        is no collocation point).
     """
 
     w: ca.SX
@@ -238,6 +246,7 @@ class CollocationNLP:
     npath: int
     block_sizes: list = field(default_factory=list)
     special: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
+    consistent: ca.Function | None = None
 
 
 def element_scaling(N: int, fractions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -473,11 +482,28 @@ def transcribe(
     J = ca.mtimes(lagr_fn.map(M)(t_pts, X_pts, Z_pts, U_pts, P, T_pts), weights_pts.T)
 
     L0, L1 = ca.DM(np.asarray(co["L0"], dtype=float)), ca.DM(np.asarray(co["L1"], dtype=float))
+    # the inputs at the start (and a Legendre final time), no collocation points: the element's
+    # polynomial through its points, extrapolated (as the verification's simulation applies it)
     u_start = ca.mtimes(U_pts[:, 0:d], L0) if nu else ca.SX(0, 1)
-    z_start = ca.mtimes(Z_pts[:, 0:d], L0) if nz else ca.SX(0, 1)
     u_final = ca.mtimes(U_pts[:, M - d:M], L1) if nu else ca.SX(0, 1)
-    z_final = ca.mtimes(Z_pts[:, M - d:M], L1) if nz else ca.SX(0, 1)
+    consistent = consistent_algebraics(dae, opt.final_time, subst)
+    z_start = consistent(t0, X0[:, 0], ca.mtimes(Z_pts[:, 0:d], L0), u_start, P, T_first) if nz else ca.SX(0, 1)
+    z_final = (consistent(T, XN, ca.mtimes(Z_pts[:, M - d:M], L1), u_final, P, T) if nz and float(co["root"][-1]) != 1.0
+               else ca.mtimes(Z_pts[:, M - d:M], L1) if nz else ca.SX(0, 1))
     ends: list[tuple[int, ca.SX]] = []
+    # the path constraints and the bounds of the algebraic variables hold at the start too (the
+    # tables write its consistent values; the collocation points impose them everywhere else)
+    if path_lb.size:
+        e = point_fn(t0, X0[:, 0], z_start, u_start, P, T_first)[2]
+        ends.append((con(e, path_lb, path_ub), e))
+    extrapolated = [("z", z_start, z_lb, z_ub), ("u", u_start, u_lb, u_ub)]
+    if float(co["root"][-1]) != 1.0:  # Legendre: the final time is no collocation point either
+        extrapolated += [("z", z_final, z_lb, z_ub), ("u", u_final, u_lb, u_ub)]
+    for _, vals, lo, hi in extrapolated:  # the bounds of inputs and algebraics hold there too
+        bounded = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi)) if vals.numel() else np.zeros(0, dtype=int)
+        if bounded.size:
+            e = vals[bounded.tolist()]
+            ends.append((con(e, lo[bounded], hi[bounded]), e))
     if start_c:
         e = start_fn(t0, X0[:, 0], z_start, u_start, P, T_first)
         ends.append((con(e, np.concatenate([c.lb for c in start_c]), np.concatenate([c.ub for c in start_c])), e))
@@ -529,7 +555,48 @@ def transcribe(
         npath=int(path_expr.numel()),
         block_sizes=sizes,
         special=s_val,
+        consistent=consistent,
     )
+
+
+#: Newton steps of :func:`consistent_algebraics` (exact after the first for algebraic
+#: equations linear in the algebraic variables, as those of composed components are).
+CONSISTENCY_NEWTON_STEPS = 2
+
+
+def consistent_algebraics(dae: FlatDAE, final_time: ca.SX, subst: Any) -> ca.Function:
+    """The algebraic variables at a point that is no collocation point, consistent with the states there.
+
+    The transcription has algebraic variables at the collocation points only; at the start
+    time (and, for Legendre, the final time) their polynomial's extrapolation ``z_e`` does
+    not satisfy the algebraic equations ``0 = g(t, x, z, u, p)`` with the states there, so a
+    condition on an algebraic variable (a load's speed tied to the motor's by a gear) would
+    hold on the extrapolation and not on the motion. This function takes
+    :data:`CONSISTENCY_NEWTON_STEPS` Newton steps on ``g`` in ``z`` from ``z_e``:
+    ``z <- z - (dg/dz)^-1 g(t, x, z, u, p)`` (the initialisation system of the index-1 DAE
+    at that point, the states and inputs given; the DAE is index 1, so ``dg/dz`` is
+    regular).
+
+    Parameters
+    ----------
+    dae : FlatDAE
+        The flat (index-1) model.
+    final_time : casadi.SX
+        The final-time symbol of the optimisation.
+    subst : callable
+        Replaces ``der()`` of the states by the right-hand side.
+
+    Returns
+    -------
+    casadi.Function
+        ``(t, x, z_e, u, p, final_time) -> z`` (column vectors of the model's sizes).
+    """
+    g = subst(dae.alg_expr)
+    g_jac = ca.jacobian(g, dae.z)
+    z = dae.z
+    for _ in range(CONSISTENCY_NEWTON_STEPS):
+        z = z - ca.solve(ca.substitute(g_jac, dae.z, z), ca.substitute(g, dae.z, z))
+    return ca.Function("consistent_algebraics", [dae.t, dae.x, dae.z, dae.u, dae.p, final_time], [z])
 
 
 class _ElementVars:

@@ -14,7 +14,6 @@ states, algebraics, inputs, parameters) and :attr:`Optimization.final_time`.
 
 from __future__ import annotations
 
-import logging
 from typing import Any
 
 import casadi as ca
@@ -25,10 +24,9 @@ from gtmodel.modeling.dae import FlatDAE, _as_sx, _vector_value
 from gtmodel.modeling.simulation.model import Model
 from gtmodel.modeling.ocp.initial import model_initial_conditions
 from gtmodel.modeling.ocp.terms import Constraint, Integral, Timed
+from gtmodel.modeling.ocp.written import affine_guess, reduce_written
 
 __all__ = ["Optimization", "Constraint", "Timed", "Integral"]
-
-_log = logging.getLogger("gtmodel")
 
 
 class Optimization:
@@ -37,7 +35,10 @@ class Optimization:
     Parameters
     ----------
     model : Model
-        The dynamic model.
+        The dynamic model as written: one that ``flatten()`` refuses (higher index) is
+        reduced as ``simulate()`` reduces it (:mod:`gtmodel.modeling.ocp.written`);
+        :attr:`model` is the reduced model, :attr:`user_model` the one given, and
+        expressions may use the symbols of either.
     start_time : float, optional
         Start time ``t0``, s; default 0.
     final_time : float, optional
@@ -77,6 +78,10 @@ class Optimization:
             raise InputError("start_time and final_time must be numbers") from exc
         if not (np.isfinite(t0) and np.isfinite(tf)):
             raise InputError("start_time and final_time must be finite")
+        self.user_model = model  # as given, before any reduction
+        self._user_subst: tuple[ca.SX, ca.SX] | None = None
+        if not model._flattens():
+            model, self._user_subst = reduce_written(model)
         self.model = model
         self.start_time = t0
         self.free_final_time = bool(free_final_time)
@@ -141,10 +146,14 @@ class Optimization:
         return self._flat
 
     def _expr(self, expr: Any, what: str, special: bool = True) -> ca.SX:
-        e = _as_sx(expr, what)
+        e = self._to_reduced(_as_sx(expr, what))
         extra = [self._final_time] + ([v.symbol for v in self.special_symbols()] if special else [])
         self.model.check_symbols(e, what, extra=extra)
         return e
+
+    def _to_reduced(self, e: ca.SX) -> ca.SX:
+        """``e`` with the symbols of the model as given replaced by their values in the reduced model."""
+        return e if self._user_subst is None or not e.numel() else ca.substitute(e, *self._user_subst)
 
     @property
     def point_constraints(self) -> list[Constraint]:
@@ -488,7 +497,8 @@ class Optimization:
         Parameters
         ----------
         variable : casadi.SX
-            A declared state/input/algebraic symbol, or elements of one.
+            A declared state/input/algebraic symbol, or elements of one; an output (an
+            eliminated alias) is bounded by a path constraint.
         lb, ub : float, array_like or casadi.SX, optional
             Bounds, scalar or one per selected element; ``-inf``/``inf`` (the
             defaults) leave a side open. A bound that is an expression of model
@@ -504,6 +514,10 @@ class Optimization:
         InputError
             If a bound has the wrong size or is NaN.
         """
+        variable = self._to_reduced(_as_sx(variable, "variable"))
+        if not all(variable[i].is_symbolic() for i in range(variable.numel())):  # an output, an eliminated alias
+            self.add_path_constraint(variable, lb, ub, name=f"bounds of {variable}")
+            return
         kind, name, idx = self.model.locate(variable)
         if kind == "parameter":
             raise ModelError(f"set_bounds: {name!r} is a parameter; bounds apply to states, inputs, algebraics")
@@ -537,8 +551,8 @@ class Optimization:
         Parameters
         ----------
         variable : casadi.SX
-            A declared state/input/algebraic symbol (whole variable), or
-            :attr:`final_time`.
+            A declared state/input/algebraic symbol (whole variable), :attr:`final_time`,
+            or a scalar output ``a v + b`` of one variable ``v`` (guessing ``v``).
         values : float, array_like, tuple or callable
             A constant (scalar or ``(n,)``); a trajectory ``(t, values)`` with ``t`` of
             shape ``(K,)`` (absolute times, s) and ``values`` of shape ``(K,)`` or
@@ -549,13 +563,18 @@ class Optimization:
         InputError
             If the values have the wrong shape.
         ModelError
-            If ``variable`` is not a state, input, algebraic or ``final_time``.
+            If ``variable`` is not a state, input, algebraic or ``final_time``, nor affine
+            in one of them.
         """
         if isinstance(variable, ca.SX) and variable.numel() == 1 and ca.is_equal(variable, self._final_time):
             v = float(np.asarray(values, dtype=float).reshape(-1)[0])
             lo, hi = self.final_time_bounds
             self.final_time_guess = float(np.clip(v, lo, hi))
             return
+        if isinstance(variable, ca.SX) and variable.numel() == 1:  # an output a v + b: a guess of v
+            variable, values = affine_guess(self._to_reduced(variable), values, self.model, self.parameters)
+        elif isinstance(variable, ca.SX):
+            variable = self._to_reduced(variable)
         kind, name, idx = self.model.locate(variable)
         if kind == "parameter":
             raise ModelError(f"set_initial_guess: {name!r} is a parameter; use set_parameter")

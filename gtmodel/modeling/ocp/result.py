@@ -160,6 +160,24 @@ class CollocationData:
         b = self.breaks()
         return np.concatenate([[self.t0], (b[:-1, None] + local[None, :] * np.diff(b)[:, None]).reshape(-1)])
 
+    def point_kinds(self) -> np.ndarray:
+        """What each time of :meth:`mesh` is in the transcription.
+
+        Returns
+        -------
+        numpy.ndarray of str
+            Shape ``(K,)``: ``"start"`` (the start time, no collocation point: states as
+            solved, inputs the first element's polynomial, algebraic variables consistent
+            with them), ``"collocation"`` (an interior collocation point),
+            ``"collocation_boundary"`` (an element end that is a collocation point: Radau),
+            ``"boundary"`` (an element end that is none: Legendre; inputs the element's
+            polynomial, algebraic variables consistent with them).
+        """
+        inner = sum(1 for c in self.tau_root[1:] if c < 1.0 - 1e-12)
+        end = "collocation_boundary" if inner < len(self.tau_root) - 1 else "boundary"
+        per = np.array(["collocation"] * inner + [end])
+        return np.concatenate([np.array(["start"]), np.tile(per, self.elements)]).astype("<U20")
+
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Evaluate the collocation polynomials.
 
@@ -381,6 +399,13 @@ class OptimizationResult(StatusResult):
 
         return plot_result(self, names, path=path, bounds=bounds, units=units, title=title)
 
+    def _point_kinds(self) -> np.ndarray | None:
+        """The kind of each time of :attr:`t` (:meth:`CollocationData.point_kinds`), None without collocation data."""
+        if self.collocation is None:
+            return None
+        kinds = self.collocation.point_kinds()
+        return kinds if kinds.size == np.size(self.t) else None
+
     def to_dataframe(self, dt: float | None = None) -> Any:
         """Trajectories as a pandas DataFrame.
 
@@ -392,11 +417,15 @@ class OptimizationResult(StatusResult):
         Returns
         -------
         pandas.DataFrame
-            Column ``"t"`` then one column per scalar element of states, inputs,
+            Column ``"t"``, on the mesh a column ``"point"`` (what each time is:
+            :meth:`CollocationData.point_kinds`), then one column per scalar element of states, inputs,
             algebraics and outputs (``"T[0]"`` style names for vectors).
         """
         if dt is None:
-            return _frame(self.t, self.states, self.inputs, self.algebraics, self.outputs)
+            frame = _frame(self.t, self.states, self.inputs, self.algebraics, self.outputs)
+            if self._point_kinds() is not None:
+                frame.insert(1, "point", self._point_kinds())
+            return frame
         s = self.resample(dt)
         return _frame(s["t"], s["states"], s["inputs"], s["algebraics"], s["outputs"])
 
@@ -418,6 +447,8 @@ class OptimizationResult(StatusResult):
         p = Path(path)
         if dt is None:
             cols = _columns(self.t, self.states, self.inputs, self.algebraics, self.outputs)
+            if self._point_kinds() is not None:
+                cols = {"t": cols.pop("t"), "point": self._point_kinds(), **cols}
         else:
             s = self.resample(dt)
             cols = _columns(s["t"], s["states"], s["inputs"], s["algebraics"], s["outputs"])

@@ -228,7 +228,7 @@ def _refusal(model: Any, detail: str) -> ModelError:
     return ModelError(
         f"model {model.name!r}: {detail}; the model is structurally regular but of higher index (or has alias "
         "equations between states): flatten() needs an index-1 DAE: reduce it with "
-        "gtmodel.modeling.structural_simplify(model) (simulate() does)"
+        "gtmodel.modeling.structural_simplify(model) (simulate(), Optimization, problem files and codegen --model do)"
     )
 
 

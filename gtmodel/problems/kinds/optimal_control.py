@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._docstrings import fill_doc
-from gtmodel.errors import GtModelError
+from gtmodel.errors import GtModelError, ModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.modeling.ocp.initial import InitialConditionConflict, fixed_starts
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
@@ -49,13 +49,34 @@ __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VA
 
 
 def _scalar_variables(model: Model) -> dict[str, tuple[str, ca.SX]]:
-    """Scalar states, inputs and algebraics by name: ``name -> (kind, symbol)``."""
+    """Scalar states, inputs, algebraics and outputs by name: ``name -> (kind, symbol or expression)``.
+
+    The outputs of a reduced model are the aliases the reduction eliminated (``motor.phi``
+    of a motor behind a gear): every variable of the user's model can be named.
+    """
     out = {}
     for kind in ("state", "input", "algebraic"):
         for name, sym in model.variables(kind).items():
             if sym.numel() == 1:
                 out[name] = (kind, sym)
+    for name, expr in model.outputs.items():
+        if expr.numel() == 1 and name not in out:
+            out[name] = ("output", expr)
     return out
+
+
+def _shown_variables(file: ProblemFile, names: list[str], opt: Optimization, variables: dict[str, tuple[str, ca.SX]],
+                     vkeys: dict[str, str]) -> tuple[str, ...]:
+    """The variables of ``variables.png``: ``[output] variables`` checked by name; by default, for a
+    reduced model, the scalar states of the model as written (the variables the user thinks in)."""
+    for k, key in enumerate(names):
+        if key not in vkeys:
+            raise _unknown(file, f"output.variables[{k}]", key, variables)
+    if names:
+        return tuple(vkeys[k] for k in names)
+    if opt.user_model is opt.model:
+        return ()
+    return tuple(n for n, sym in opt.user_model.variables("state").items() if sym.numel() == 1 and n in variables)
 
 
 def _final_time(file: ProblemFile, opt: OptimizationSection) -> dict[str, Any]:
@@ -156,16 +177,19 @@ class OptimalControlKind(ProblemKind):
         """
         path = Path(file.reference("model.file", doc.model.file))
         try:
-            model = load_user_model(path, doc.model.class_)
+            written = load_user_model(path, doc.model.class_, reduce=False)  # Optimization reduces it
         except ModelFileError as exc:
             raise file.wrap("model.file", exc) from None
         except GtModelError as exc:
             raise file.wrap("model.class", exc) from None
         final_time = _final_time(file, doc.optimization)  # its ProblemError already names the file and field
         try:
-            opt = Optimization(model, **final_time)
+            opt = Optimization(written, **final_time)
+        except ModelError as exc:
+            raise file.wrap("model.class", ModelError(f"{path}: class {doc.model.class_}: {exc}")) from None
         except GtModelError as exc:
             raise file.wrap("optimization.final_time", exc) from None
+        model = opt.model  # the model as written, or reduced to index 1 (simulate()'s reduction)
         params = model.variables("parameter")
         pkeys = _aliases(params)
         for key, value in doc.model.parameters.items():
@@ -241,6 +265,7 @@ class OptimalControlKind(ProblemKind):
             raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement splits '
                             'collocation elements; shooting is verified as it is: raise transcription.intervals or steps, '
                             'or refine with method = "collocation")', True)
+        shown = _shown_variables(file, doc.output.variables, opt, variables, vkeys)
         bench = doc.benchmark.model_dump() if doc.benchmark is not None else None
         if bench is not None and bench["sign"] not in (1.0, -1.0):
             raise file.fail("benchmark.sign", "1 or -1", bench["sign"])
@@ -251,7 +276,7 @@ class OptimalControlKind(ProblemKind):
             objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
             refinement=Refinement(doc.transcription.refine, doc.transcription.tolerance, doc.transcription.max_elements, doc.transcription.max_passes),
-            benchmark=bench,
+            benchmark=bench, variables=shown,
         )
 
     @fill_doc(**KIND_DOCS)
@@ -288,7 +313,8 @@ class OptimalControlKind(ProblemKind):
             "objective_sense": d.sense,
             "constraints": list(d.constraints),
             "parameters": dict(d.named_parameters),
-            "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name},
+            "model": {"file": str(d.model_file), "class": d.class_name, "name": d.model.name,
+                      "states": list(d.model.flatten().x_names)},
             "free_parameters": sorted(d.optimization.free_parameters),
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
@@ -310,8 +336,13 @@ class OptimalControlKind(ProblemKind):
         r.to_csv(out / "trajectories.csv")
         written.files.append("trajectories.csv")
         if plots:
-            for group, fname in (("states", "states.png"), ("inputs", "inputs.png")):
-                signals = {k: v for k, v in getattr(r, group).items() if np.ndim(v) == 1}
+            values = {**r.states, **r.algebraics, **r.outputs, **r.inputs}
+            shown = {k: values[k] for k in d.variables if k in values and np.ndim(values[k]) == 1}
+            for group, fname, signals in (
+                ("states", "states.png", {k: v for k, v in r.states.items() if np.ndim(v) == 1}),
+                ("inputs", "inputs.png", {k: v for k, v in r.inputs.items() if np.ndim(v) == 1}),
+                ("variables", "variables.png", shown),
+            ):
                 if signals:
                     plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds, units=d.model.units)
                     written.files.append(fname)

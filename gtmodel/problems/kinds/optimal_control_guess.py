@@ -18,8 +18,9 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._tables import read_table
-from gtmodel.errors import GtModelError
+from gtmodel.errors import GtModelError, ModelError
 from gtmodel.modeling import Optimization, parse_expression
+from gtmodel.modeling.ocp.written import affine_guess
 from gtmodel.modeling.ocp.guesses import guess_by_simulation, guess_from_table
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.kinds.schemas.optimal_control import InitialGuessSection
@@ -126,7 +127,7 @@ def declare_initial_guess(
     elif section.method == "file":
         path = _table_path(file, section)
         try:
-            data = read_table(path, "initial guess")
+            data = read_table(path, "initial guess", text_columns=("point",))
             outputs = list(opt.model.outputs)
             ignore = outputs + [k for k, n in _alias_map(outputs).items()]
             guess_from_table(opt, data.columns, data.data, section.time_column, aliases=vkeys, ignore=ignore)
@@ -151,7 +152,10 @@ def declare_initial_guess(
         if key not in vkeys:
             raise file.fail(f"initial_guess.values.{key}", f"one of the model's variables ({', '.join(sorted(variables))})", key)
         f = time_function(file, f"initial_guess.values.{key}", value, opt, table)
-        opt.set_initial_guess(variables[vkeys[key]][1], f if callable(f) else np.array([f]))
+        try:
+            opt.set_initial_guess(variables[vkeys[key]][1], f if callable(f) else np.array([f]))
+        except GtModelError as exc:  # an output that is no affine function of one variable
+            raise file.wrap(f"initial_guess.values.{key}", exc) from None
 
 
 def _alias_map(names: Any) -> dict[str, str]:
@@ -163,7 +167,18 @@ def _linear_guess(opt: Optimization, boundary: dict[str, dict[str, float]], vari
     t0, tf = opt.start_time, opt.final_time_guess
     start, final = boundary["start"], boundary["final"]
     for key, (kind, sym) in variables.items():
+        if kind == "output" and not _guessable(opt, sym):
+            continue  # an output that is no affine function of one variable: nothing to guess through
         if key in start and key in final:
             opt.set_initial_guess(sym, ([t0, tf], [start[key], final[key]]))
         elif key in start or key in final:
             opt.set_initial_guess(sym, start.get(key, final.get(key)))
+
+
+def _guessable(opt: Optimization, expr: ca.SX) -> bool:
+    """Whether a guess of ``expr`` is a guess of one variable (``a v + b``, :func:`~gtmodel.modeling.ocp.written.affine_guess`)."""
+    try:
+        affine_guess(expr, 0.0, opt.model, opt.parameters)
+    except ModelError:
+        return False
+    return True

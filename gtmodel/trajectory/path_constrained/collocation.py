@@ -126,8 +126,7 @@ def solve_path_collocation(
     opt = Optimization(model, final_time=final_time_guess, free_final_time=True, final_time_guess=final_time_guess, final_time_bounds=final_time_bounds)
     opt.set_objective(mayer=opt.final_time, lagrange=wp * ca.sumsqr(tau))
     F = constraints.force_limit
-    opt.add_path_constraint(tau, lb=-F, ub=F, name="tau")
-    opt.add_point_constraint(tau, at="start", lb=-F, ub=F, name="tau(start)")
+    opt.add_path_constraint(tau, lb=-F, ub=F, name="tau")  # at the start too (the transcription imposes it there)
     opt.add_point_constraint(ca.vertcat(s, sd), at="start", lb=0.0, ub=0.0, name="rest(start)")
     opt.add_point_constraint(ca.vertcat(s - 1.0, sd), at="final", lb=0.0, ub=0.0, name="rest(final)")
 

@@ -101,8 +101,10 @@ def test_to_csv_header_and_rows(min_energy_result, tmp_path):
 
 def test_to_dataframe_on_mesh(min_energy_result):
     df = min_energy_result.to_dataframe()
-    assert list(df.columns) == ["t", "x", "v", "u", "kinetic"]
+    assert list(df.columns) == ["t", "point", "x", "v", "u", "kinetic"]
     assert len(df) == min_energy_result.t.size
+    d = min_energy_result.collocation.points  # Radau: t0, then d points per element, the last its end
+    assert list(df["point"][: d + 1]) == ["start"] + ["collocation"] * (d - 1) + ["collocation_boundary"]
 
 
 @pytest.mark.parametrize(

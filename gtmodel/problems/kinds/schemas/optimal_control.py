@@ -284,6 +284,21 @@ class BenchmarkSection(Section):
     sign: number(ge=-1, le=1, description="objective = sign * published: 1, or -1 for a maximum written as minimise its negative") = 1.0
 
 
+class OutputSection(Section):
+    """``[output]``: what the result folder shows besides the solution's own variables.
+
+    Parameters
+    ----------
+    variables : list of str
+        Variables of the model (states, algebraic variables, inputs, outputs, the aliases a
+        reduction eliminated) plotted in ``variables.png``; every variable is a column of
+        ``trajectories.csv``. Default: for a model reduced to index 1, the states of the
+        model as written (``load.phi``, not only the states the reduction chose).
+    """
+
+    variables: list[NonEmptyText] = Field(default_factory=list, description='variables plotted in variables.png, e.g. ["load.phi", "load.w"]; default for a reduced model: its states as written')
+
+
 @fill_doc(**KIND_DOCS)
 class OptimalControlFile(ProblemSchema):
     """An ``optimal_control`` problem file.
@@ -318,6 +333,8 @@ class OptimalControlFile(ProblemSchema):
         ``[benchmark]``: a published optimum to compare with (benchmark problems).
     solver : SolverSection
         ``[solver]``: IPOPT settings.
+    output : OutputSection
+        ``[output]``: the variables plotted in ``variables.png``.
     """
 
     kind: Literal["optimal_control"]
@@ -335,3 +352,4 @@ class OptimalControlFile(ProblemSchema):
     collocation: CollocationSection = CollocationSection()
     benchmark: BenchmarkSection | None = None
     solver: SolverSection = SolverSection()
+    output: OutputSection = OutputSection()
