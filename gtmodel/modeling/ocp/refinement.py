@@ -327,6 +327,7 @@ def solve_refined(
         if best is None or v.max_scaled_deviation <= best.verification.max_scaled_deviation:
             best = result
         entry["max_scaled_deviation"] = v.max_scaled_deviation
+        entry["verification_time"] = v.time_s
         entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
         new, info = refine_mesh(result, tol, max_elements)
         entry["switches_s"] = info["switches"]
@@ -351,6 +352,8 @@ def solve_refined(
         result = best
     result.refinement = history
     result.solve_time = float(sum(e["solve_time"] for e in history))  # every pass's solve, not the returned one's alone
+    if result.verification is not None:  # and every pass's verification
+        result.verification.time_s = float(sum(e.get("verification_time", 0.0) for e in history))
     if result.status == Status.OPTIMAL and len(history) == max_passes and history[-1].get("split"):
         _log.warning("mesh refinement of %s stopped at the pass limit (%d) with elements still to split", optimization.model.name, max_passes)
     return result
