@@ -102,13 +102,13 @@ class VerificationSection(Section):
         ``"auto"`` (CVODES for an ODE, IDAS with algebraic variables), ``"cvodes"`` or
         ``"idas"``: SUNDIALS BDF with Newton iterations on the model's Jacobian.
     rtol : float, optional
-        Relative tolerance of the integrator (absolute: ``1e-2 rtol``); default ``1e-4``
+        Relative tolerance of the integrator (absolute: ``1e-2 rtol``); default ``1e-3``
         times the verification tolerance within ``[1e-10, 1e-6]``.
     """
 
     enabled: Flag = Field(True, description="verify the solution by simulation (off: the summary says skipped, never verified)")
     integrator: choice("auto", "cvodes", "idas", description="SUNDIALS integrator (BDF, Newton on the model's Jacobian); auto: cvodes for ODEs, idas with algebraic variables") = "auto"
-    rtol: number(gt=0, lt=1, description="relative tolerance of the integrator (default 1e-4 x the verification tolerance, within [1e-10, 1e-6])") | None = None
+    rtol: number(gt=0, lt=1, description="relative tolerance of the integrator (default 1e-3 x the verification tolerance, within [1e-10, 1e-6])") | None = None
 
 
 class SolverSection(Section):
