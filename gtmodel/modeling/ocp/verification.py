@@ -220,7 +220,7 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
     tau = ca.SX.sym("tau")
     tk, hk = ca.SX.sym("t_k"), ca.SX.sym("h_k")
     U = ca.SX.sym("U", nu, d)
-    nodes = col.tau_root[1:]
+    nodes = [float(v) for v in col.tau_root[1:]]  # Python floats: SX / numpy scalar converts through DM each time
     basis = []
     for j in range(d):
         b = ca.SX(1)
@@ -331,16 +331,17 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         local = F.map(N)(x0=col.xc[:, 0, :].T, z0=z0, p=P)
         xl = np.array(local["xf"], dtype=float).reshape(nx, N, taus.size).transpose(1, 2, 0)
         element_errors = np.max(np.abs(xl - poly) / scale, axis=(1, 2))
-        xg = np.zeros_like(poly)
-        x0 = col.xc[0, 0, :]
+        # the global simulation: element after element, each from where the previous ended, in
+        # one call (mapaccum: the integrator restarts at every element boundary, where the
+        # input polynomials jump, and no Python loop runs between the elements)
         m = len(integrals[0]) if integrals else 0
-        q_sim = np.zeros(m)
-        for k in range(N):
-            out = F(x0=x0, z0=z0[:, k], p=P[:, k])
-            xg[k] = np.array(out["xf"], dtype=float).reshape(nx, taus.size).T
-            x0 = xg[k, -1]
-            if m:
-                q_sim += np.array(out["qf"], dtype=float).reshape(m, taus.size)[:, -1]
+        xs, zs, ps = ca.MX.sym("x0", nx), ca.MX.sym("z0", dae.nz), ca.MX.sym("p", P.shape[0])
+        step = F(x0=xs, z0=zs, p=ps)
+        q_end = step["qf"][:, -1] if m else ca.MX(0, 1)
+        chain = ca.Function("verify_chain", [xs, zs, ps], [step["xf"][:, -1], ca.vec(step["xf"]), q_end]).mapaccum(N)
+        _, xf_all, q_all = chain(col.xc[0, 0, :], z0, P)
+        xg = np.array(xf_all, dtype=float).reshape(nx, taus.size, N, order="F").transpose(2, 1, 0)
+        q_sim = np.array(q_all, dtype=float).reshape(m, N).sum(axis=1) if m else np.zeros(0)
         dev = np.abs(xg - poly)
         if not np.all(np.isfinite(dev)):
             raise RuntimeError("the simulation returned non-finite states")
