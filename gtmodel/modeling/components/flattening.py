@@ -227,12 +227,21 @@ class _Flattening:
                 elif f"{members[0][0].path}.{var.name}" not in dropped:
                     eqs.extend((f"{label}.{var.name}[{k}]", syms[0] - s) for k, s in enumerate(syms[1:], 1))
         # flows of unconnected connectors are zero; so are those of the root's own connectors
+        open_: list[str] = []
         for conn in all_conns:
             if conn.owner is self.root or id(conn) not in inside_connected:
-                for var in conn.variables():
-                    if var.is_flow:
-                        eqs.append((f"{conn.path}.{var.name} (unconnected)", conn._symbols[var.name]))
-        return self._final_model(eqs, dropped)
+                flows = [var for var in conn.variables() if var.is_flow]
+                for var in flows:
+                    eqs.append((f"{conn.path}.{var.name} (unconnected)", conn._symbols[var.name]))
+                if flows and conn.owner is not self.root and id(conn) not in inside_connected:
+                    open_.append(f"{conn.path} ({', '.join(v.name for v in flows)} = 0)")
+        model = self._final_model(eqs, dropped)
+        if open_:
+            text = (f"component {self.name}: connector(s) left open (no connect(), so their flow is zero, as if nothing "
+                    f"were attached): {', '.join(open_)}")
+            _log.warning("%s", text)
+            model.warnings.append(text)
+        return model
 
     def _connection_sets(self) -> tuple[list[list[tuple[Connector, int]]], set[int]]:
         sets: list[list[tuple[Connector, int]]] = []
