@@ -13,6 +13,7 @@ machines are noisy:
 - ``solve_s`` (IPOPT; summed over the refinement passes) and ``verification_s`` (the
   verification by simulation, summed over the passes too), medians over the repeats, and
   their ratio ``verification_over_solve`` (the verification should cost at most the solve);
+  ``verification_cpu_s``: its CPU time (the wall times on a shared machine mostly measure waiting);
 - ``whole_call_s``: gtmodel's whole call, cold: flattening, transcription, solve and
   verification (:meth:`gtmodel.trajectory.model_ocp.OptimalControl.solve` of a freshly
   loaded problem; refinement passes and, with ``[[data]]``, the estimates' statistics
@@ -344,13 +345,14 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
     CLI, gtmodel, ...), every call cold (the problem loaded again, everything built again);
     the times are the medians and the ratio is the ratio of the medians.
     """
-    walls, cpus, peers, clis, solves, checks = [], [], [], [], [], []
+    walls, cpus, peers, clis, solves, checks, check_cpus = [], [], [], [], [], [], []
     for _ in range(repeat):
         problem, res, wall, cpu = gtmodel_solve(path)
         walls.append(wall)
         cpus.append(cpu)
         solves.append(res.solve_time)
         checks.append(res.verification.time_s if res.verification is not None else float("nan"))
+        check_cpus.append(res.verification.cpu_s if res.verification is not None else float("nan"))
         if rockit:
             peers.append(rockit_solve(load_problem(path).declaration))
         if cli:
@@ -378,6 +380,7 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         "solve_s": float(np.median(solves)),
         "verification_s": float(np.median(checks)) if v is not None else None,
         "verification_over_solve": float(np.median(checks) / np.median(solves)) if v is not None else None,
+        "verification_cpu_s": float(np.median(check_cpus)) if v is not None else None,
         "repeat": repeat,
         "whole_call_s": whole,
         "whole_call_cpu_s": whole_cpu,

@@ -272,6 +272,7 @@ def solve_refined(
             best = result
         entry["max_scaled_deviation"] = v.max_scaled_deviation
         entry["verification_time"] = v.time_s
+        entry["verification_cpu_time"] = v.cpu_s
         entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
         new, info = refine_mesh(result, tol, max_elements)
         entry["switches_s"] = info["switches"]
@@ -298,6 +299,7 @@ def solve_refined(
     result.solve_time = float(sum(e["solve_time"] for e in history))  # every pass's solve, not the returned one's alone
     if result.verification is not None:  # and every pass's verification
         result.verification.time_s = float(sum(e.get("verification_time", 0.0) for e in history))
+        result.verification.cpu_s = float(sum(e.get("verification_cpu_time", 0.0) for e in history))
     if result.status == Status.OPTIMAL and len(history) == max_passes and history[-1].get("split"):
         _log.warning("mesh refinement of %s stopped at the pass limit (%d) with elements still to split", optimization.model.name, max_passes)
     return result
