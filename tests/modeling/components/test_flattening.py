@@ -1,4 +1,4 @@
-"""Flattening names what a user left open: connectors with no connect() (their flow is zero, silently).
+"""Flattening names what a user left open: connectors with no connect() (their flow is zero, silently), floating subsystems.
 
 Reference: the Modelica Language Specification 3.6, sec. 9.2 (an unconnected connector's
 flow variables are set to zero), and a DC motor whose circuit is broken at one pin: no
@@ -60,3 +60,31 @@ def test_the_broken_motor_indeed_never_moves():
 
     res = structural_simplify(_motor(True)).simulate(np.linspace(0.0, 0.5, 11))
     assert np.max(np.abs(res.x["rotor.w"] if "rotor.w" in res.x else res.z["rotor.w"])) < 1e-9
+
+
+def test_a_subsystem_that_floats_is_named_at_flatten(caplog):
+    # the user's mistake: the load (gear and inertia) never connected to the motor's shaft
+    class Drive(Component):
+        source = el.ConstantVoltage(V=12.0)
+        ground = el.Ground()
+        emf = el.EMF(k=0.5)
+        rotor = rot.Inertia(J=0.01)
+        gear = rot.IdealGear(ratio=10.0)
+        load = rot.Inertia(J=1.0)
+
+        def equations(self):
+            connect(self.source.p, self.emf.p)
+            connect(self.emf.n, self.source.n)
+            connect(self.source.n, self.ground.p)
+            connect(self.emf.flange, self.rotor.flange_a)
+            connect(self.gear.flange_b, self.load.flange_a)
+
+    with caplog.at_level(logging.WARNING, logger="gtmodel"):
+        model = Drive().to_model("drive")
+    assert model.warnings == [
+        "component drive: subsystem(s) that float (no connect() joins them to the rest, and none of their components "
+        "fixes a potential as Ground or Fixed do): {gear, load}",
+        "component drive: connector(s) left open (no connect(), so their flow is zero, as if nothing were attached): "
+        "gear.flange_a (tau = 0)",
+    ]
+    assert [r.getMessage() for r in caplog.records if r.getMessage().startswith("component drive")] == model.warnings
