@@ -10,6 +10,10 @@ machines are noisy:
   ``relative_error`` to the published value, ``iterations`` (IPOPT; summed over the
   refinement passes), ``verified`` and ``max_scaled_deviation`` (the verification by
   simulation, :mod:`gtmodel.modeling.ocp.verification`), ``elements`` (after refinement);
+- ``solve_s`` (IPOPT; summed over the refinement passes) and ``verification_s`` (the
+  verification by simulation, summed over the passes too), medians over the repeats, and
+  their ratio ``verification_over_solve`` (the verification should cost at most the solve);
+  ``verification_cpu_s``: its CPU time (the wall times on a shared machine mostly measure waiting);
 - ``whole_call_s``: gtmodel's whole call, cold: flattening, transcription, solve and
   verification (:meth:`gtmodel.trajectory.model_ocp.OptimalControl.solve` of a freshly
   loaded problem; refinement passes and, with ``[[data]]``, the estimates' statistics
@@ -341,11 +345,14 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
     CLI, gtmodel, ...), every call cold (the problem loaded again, everything built again);
     the times are the medians and the ratio is the ratio of the medians.
     """
-    walls, cpus, peers, clis = [], [], [], []
+    walls, cpus, peers, clis, solves, checks, check_cpus = [], [], [], [], [], [], []
     for _ in range(repeat):
         problem, res, wall, cpu = gtmodel_solve(path)
         walls.append(wall)
         cpus.append(cpu)
+        solves.append(res.solve_time)
+        checks.append(res.verification.time_s if res.verification is not None else float("nan"))
+        check_cpus.append(res.verification.cpu_s if res.verification is not None else float("nan"))
         if rockit:
             peers.append(rockit_solve(load_problem(path).declaration))
         if cli:
@@ -370,6 +377,10 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         "verified": bool(v is not None and v.passed),
         "max_scaled_deviation": float(v.max_scaled_deviation) if v is not None else None,
         "tolerance": float(v.tolerance) if v is not None else None,
+        "solve_s": float(np.median(solves)),
+        "verification_s": float(np.median(checks)) if v is not None else None,
+        "verification_over_solve": float(np.median(checks) / np.median(solves)) if v is not None else None,
+        "verification_cpu_s": float(np.median(check_cpus)) if v is not None else None,
         "repeat": repeat,
         "whole_call_s": whole,
         "whole_call_cpu_s": whole_cpu,
@@ -427,7 +438,7 @@ def main(argv: list[str] | None = None) -> int:
         compile_bytecode()
     rows = []
     head = (f"{'problem':28s} {'published':>12s} {'objective':>12s} {'rel.err':>8s} {'it':>5s} {'verified':>8s} {'dev':>8s} "
-            f"{'whole s':>8s} {'cli s':>6s} {'cli-whole':>9s} {'rockit s':>8s} {'rockit rel':>10s} {'ratio':>6s} {'cpu ratio':>9s}")
+            f"{'solve s':>8s} {'verify s':>8s} {'whole s':>8s} {'cli s':>6s} {'cli-whole':>9s} {'rockit s':>8s} {'rockit rel':>10s} {'ratio':>6s} {'cpu ratio':>9s}")
     print(head)
     for f in files:
         r = run_one(Path(f), cli=not a.no_cli, rockit=not a.no_rockit, repeat=a.repeat)
@@ -435,7 +446,8 @@ def main(argv: list[str] | None = None) -> int:
         dev = r["max_scaled_deviation"]
         nan = float("nan")
         print(f"{r['name']:28s} {r['published']:12.7g} {r['objective']:12.7g} {r['relative_error']:8.1e} {r['iterations']:5d} "
-              f"{str(r['verified']):>8s} {dev if dev is not None else nan:8.1e} {r['whole_call_s']:8.3f} "
+              f"{str(r['verified']):>8s} {dev if dev is not None else nan:8.1e} {r['solve_s']:8.3f} "
+              f"{r['verification_s'] if r['verification_s'] is not None else nan:8.3f} {r['whole_call_s']:8.3f} "
               f"{r.get('cli_s', nan):6.2f} {r.get('cli_minus_whole_call_s', nan):9.2f} {r.get('rockit_whole_call_s', nan):8.3f} "
               f"{r.get('rockit_relative_error', nan):10.1e} {r.get('ratio_to_rockit', nan):6.3f} {r.get('ratio_to_rockit_cpu', nan):9.3f}",
               flush=True)

@@ -236,14 +236,26 @@ def _print_summary(summary: dict, out: Path) -> None:
         if summary.get(key) is not None:
             lines.append(f"{label:<12} {fmt.format(summary[key])}")
     ver = summary.get("verification")
-    if isinstance(ver, dict):
+    if isinstance(ver, dict) and ver.get("status") == "skipped":
+        lines.append(f"verified     skipped ({ver.get('message')})")
+    elif isinstance(ver, dict):
         dev = ver.get("max_scaled_deviation")
         dev_text = f"{dev:.2e}" if isinstance(dev, float) else str(dev)
         verdict = "passed" if ver.get("passed") else "FAILED"
-        lines.append(f"verified     {verdict}: deviation {dev_text} (tolerance {ver.get('tolerance'):.0e}) from a simulation")
+        took = f" in {ver['time_s']:.3f} s" if isinstance(ver.get("time_s"), float) else ""
+        lines.append(f"verified     {verdict}: deviation {dev_text} (tolerance {ver.get('tolerance'):.0e}) from a simulation{took}")
         for name, c in (ver.get("integrals") or {}).items():
             if not c.get("passed"):
                 lines.append(f"             integral({name}): {c['collocation']:.6g} in the NLP, {c['simulated']:.6g} simulated")
+        if ver.get("remedy"):
+            lines.append(f"             likely remedy: {ver['remedy']}")
+    bench = summary.get("benchmark")
+    if isinstance(bench, dict) and "relative_error" in bench:
+        flag = "within" if bench.get("within_tolerance", True) else "BEYOND"
+        lines.append(f"benchmark    {bench['value']:.7g} vs published {bench['published']:.7g}: relative error "
+                     f"{bench['relative_error']:.1e}, {flag} tolerance {bench.get('tolerance', float('nan')):.0e}")
+    for w in summary.get("warnings") or []:
+        lines.append(f"warning      {w}")
     if summary.get("refinement"):
         last = summary["refinement"][-1]
         lines.append(f"refined      {len(summary['refinement'])} passes, {last.get('elements')} elements")

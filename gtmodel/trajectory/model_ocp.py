@@ -125,14 +125,18 @@ class OptimalControl:
         d = self
         if d.refinement.tolerance is not None:
             d.optimization.verification_tolerance = d.refinement.tolerance
+        d.optimization.verification_rtol = d.refinement.rtol
+        d.optimization.verification_integrator = d.refinement.integrator
+        check = d.refinement.verify
         options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
         if isinstance(d.method, MultipleShooting):
             m = d.method
             shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
-                                             steps=m.steps, verbose=verbose, solver_options=options)
+                                             steps=m.steps, verbose=verbose, solver_options=options, verify=check)
             same = isinstance(previous, OptimizationResult) and previous.collocation is not None
             return self._estimated(shooting, shooting.solve(initial_guess=previous if warm_start and same else None))
         kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal}
+        single = {**kwargs, "verify": check}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
         if d.refinement.refine:
             result = solve_refined(
@@ -149,7 +153,7 @@ class OptimalControl:
             final = CollocationTranscription(d.optimization, elements=col.elements, points=col.points, scheme=col.scheme,
                                              mesh=col.fractions, **kwargs)
             return self._estimated(final, result)
-        tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **kwargs)
+        tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **single)
         return self._estimated(tr, tr.solve(initial_guess=guess))
 
     def _estimated(self, transcription: Any, result: OptimizationResult) -> OptimizationResult:

@@ -116,6 +116,16 @@ class Refinement:
         Limit on the elements of a refined mesh.
     max_passes : int
         Limit on the solves of the refinement.
+    verify : bool
+        Verify the solution by simulation (default); off, nothing is verified and the
+        result's ``verification`` is None (its summary block says ``skipped``); refused with
+        ``refine`` (refinement is driven by the verification).
+    integrator : str or None
+        The verifying integrator, ``"cvodes"`` or ``"idas"``; None: CVODES for an ODE,
+        IDAS with algebraic variables.
+    rtol : float or None
+        Relative tolerance of the verifying integrator; None for
+        :func:`gtmodel.modeling.ocp.verification.integrator_rtol` of the tolerance.
 
     Raises
     ------
@@ -127,12 +137,21 @@ class Refinement:
     tolerance: float | None = None
     max_elements: int = 400
     max_passes: int = 10
+    verify: bool = True
+    integrator: str | None = None
+    rtol: float | None = None
 
     def __post_init__(self) -> None:
         _positive_int("max_elements", self.max_elements)
         _positive_int("max_passes", self.max_passes)
         if self.tolerance is not None and not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
             raise InputError(f"tolerance: expected a number in (0, 1), got {self.tolerance!r}")
+        if self.refine and not self.verify:
+            raise InputError("verify: mesh refinement (refine = true) is driven by the verification; it cannot be off")
+        if self.integrator not in (None, "cvodes", "idas"):
+            raise InputError(f"integrator: expected 'cvodes' or 'idas', got {self.integrator!r}")
+        if self.rtol is not None and not (isinstance(self.rtol, (int, float)) and 0 < self.rtol < 1):
+            raise InputError(f"rtol: expected a number in (0, 1), got {self.rtol!r}")
 
 
 def objective_scaling(objective: float, duration: float, factor: float) -> float:

@@ -227,12 +227,74 @@ class _Flattening:
                 elif f"{members[0][0].path}.{var.name}" not in dropped:
                     eqs.extend((f"{label}.{var.name}[{k}]", syms[0] - s) for k, s in enumerate(syms[1:], 1))
         # flows of unconnected connectors are zero; so are those of the root's own connectors
+        open_: list[str] = []
         for conn in all_conns:
             if conn.owner is self.root or id(conn) not in inside_connected:
-                for var in conn.variables():
-                    if var.is_flow:
-                        eqs.append((f"{conn.path}.{var.name} (unconnected)", conn._symbols[var.name]))
-        return self._final_model(eqs, dropped)
+                flows = [var for var in conn.variables() if var.is_flow]
+                for var in flows:
+                    eqs.append((f"{conn.path}.{var.name} (unconnected)", conn._symbols[var.name]))
+                if flows and conn.owner is not self.root and id(conn) not in inside_connected and id(conn) in self._pure(conn.owner, True):
+                    open_.append(f"{conn.path} ({', '.join(v.name for v in flows)} = 0)")
+        model = self._final_model(eqs, dropped)
+        parts = self._unconnected_parts()
+        if parts:
+            text = (f"component {self.name}: subsystem(s) that float (no connect() joins them to the rest, and none of "
+                    f"their components fixes a potential as Ground or Fixed do): " + "; ".join("{" + ", ".join(p) + "}" for p in parts))
+            _log.warning("%s", text)
+            model.warnings.append(text)
+        if open_:
+            text = (f"component {self.name}: connector(s) left open (no connect(), so their flow is zero, as if nothing "
+                    f"were attached): {', '.join(open_)}")
+            _log.warning("%s", text)
+            model.warnings.append(text)
+        return model
+
+    def _unconnected_parts(self) -> list[list[str]]:
+        """Paths of the groups of sub-components that connect() joins, when there are several, that float (no reference in them)."""
+        nodes = [c for c in self.nodes if c is not self.root and c.connectors()]
+        parent = {id(c): id(c) for c in nodes}
+
+        def find(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        for pairs in self.pairs.values():
+            for a, b in pairs:
+                if id(a.owner) in parent and id(b.owner) in parent:
+                    parent[find(id(a.owner))] = find(id(b.owner))
+        groups: dict[int, list[_ComponentBase]] = {}
+        for c in nodes:
+            groups.setdefault(find(id(c)), []).append(c)
+        parts = list(groups.values())
+        if len(parts) < 2:
+            return []
+        # a part floats when no component of it fixes a potential (Ground's p.v = 0, Fixed's flange.phi = phi0)
+        return [[c.path for c in part] for part in parts if not any(self._pure(c, False) for c in part)]
+
+    def _pure(self, comp: _ComponentBase, flow: bool) -> set[int]:
+        """Connectors of ``comp`` (by id) that one of its equations relates through their flows only
+        (``flow``: two connectors or more, ``p.i + n.i = 0``, a gear's torques; an open one makes the
+        component carry nothing) or whose potentials alone it fixes (not ``flow``: one connector, a
+        reference such as ``p.v = 0``), with parameters and time."""
+        params = {e.element_hash() for d in self.declared if d.kind == "parameter" for e in ca.symvar(d.sym)}
+        params.add(self.scratch.time.element_hash())
+        owner: dict[int, int] = {}
+        for conn in comp.connectors().values():
+            for var in conn.variables():
+                if var.is_flow == flow:
+                    owner.update({e.element_hash(): id(conn) for e in ca.symvar(conn._symbols[var.name])})
+        found: set[int] = set()
+        for c, _, res in self.equations:
+            if c is not comp:
+                continue
+            hashes = [v.element_hash() for v in ca.symvar(res)]
+            mine = [owner[h] for h in hashes if h in owner]
+            # flows of two connectors or more (a balance), potentials of one connector (a fixed value)
+            if mine and all(h in owner or h in params for h in hashes) and (len(set(mine)) > 1) == flow:
+                found.update(mine)
+        return found
 
     def _connection_sets(self) -> tuple[list[list[tuple[Connector, int]]], set[int]]:
         sets: list[list[tuple[Connector, int]]] = []

@@ -262,6 +262,8 @@ class CollocationTranscription:
         self._scale, self._lbw, self._ubw, self._lbg, self._ubg = nlp.scale, nlp.lbw, nlp.ubw, nlp.lbg, nlp.ubg
         self._fg = ca.Function("fg", [wv, P_nlp], [nlp.f, gv])
         self.special_function = ca.Function("special", [wv, P_nlp], [nlp.special])
+        #: The objective's Lagrange term as the NLP integrates it (its quadrature), signed as the NLP minimises it.
+        self.lagrange_function = ca.Function("lagrange_value", [wv, P_nlp], [nlp.f - nlp.mayer])
         self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
         self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()),
                     None if self.fractions is None else tuple(self.fractions.tolist()))
@@ -429,10 +431,11 @@ class CollocationTranscription:
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
         res.lam_w, res.lam_g = lam
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-            self.check(res, special=np.array(self.special_function(w_opt, pvec), dtype=float).reshape(-1))
+            self.check(res, special=np.array(self.special_function(w_opt, pvec), dtype=float).reshape(-1),
+                       lagrange=float(self.lagrange_function(w_opt, pvec)))
         return res
 
-    def check(self, result: OptimizationResult, special: np.ndarray | None = None) -> OptimizationResult:
+    def check(self, result: OptimizationResult, special: np.ndarray | None = None, lagrange: float | None = None) -> OptimizationResult:
         """Verify a solution by simulation and downgrade it to ``check_failed`` if it fails.
 
         Sets ``result.verification`` (:func:`gtmodel.modeling.ocp.verification.verify`
@@ -448,13 +451,16 @@ class CollocationTranscription:
             The values of the problem's timed variables and integrals in the NLP (in the
             order of :meth:`Optimization.special_symbols`); given, the integrals are
             verified too (their simulated quadrature against these values).
+        lagrange : float, optional
+            The NLP's value of the objective's Lagrange term (its quadrature, signed as
+            minimised); given, verified against the simulation's quadrature too.
 
         Returns
         -------
         OptimizationResult
             ``result``, changed in place.
         """
-        return check_result(result, self.optimization, special)
+        return check_result(result, self.optimization, special, lagrange=lagrange)
 
     def objective_at_guess(self, parameters: Mapping[str, Any] | None = None) -> float:
         """The NLP objective at the problem's declared initial guess (e.g. to choose its scaling).

@@ -123,6 +123,12 @@ class Optimization:
     #: Tolerance of the verification by simulation of this problem's solutions, a positive
     #: number (:mod:`gtmodel.modeling.ocp.verification`); None: ``defaults["ocp.verification_tolerance"]``.
     verification_tolerance: float | None = None
+    #: Relative tolerance of the verifying integrator; None: ``1e-3`` times the verification
+    #: tolerance within ``[1e-10, 1e-6]`` (:func:`gtmodel.modeling.ocp.verification.integrator_rtol`).
+    verification_rtol: float | None = None
+    #: The verifying SUNDIALS integrator, ``"cvodes"`` or ``"idas"``; None: CVODES for an
+    #: ODE, IDAS with algebraic variables.
+    verification_integrator: str | None = None
 
     @property
     def final_time(self) -> ca.SX:

@@ -43,7 +43,7 @@ from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
-from gtmodel.modeling.ocp.verification import verify
+from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, switch_elements, verify
 from gtmodel.status import Status
 
 __all__ = ["solve_refined", "refine_mesh", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION", "SPURIOUS", "SPURIOUS_DEVIATION"]
@@ -54,66 +54,10 @@ _log = logging.getLogger("gtmodel")
 MAX_ELEMENTS = 400
 #: Default limit on refinement passes (solves).
 MAX_PASSES = 10
-#: An element holds a switch when an input changes by more than this fraction of its
-#: range over the horizon between the collocation points of the element.
-SWITCH_FRACTION = 0.25
 #: A verification deviation this many times the tolerance, and above
 #: :data:`SPURIOUS_DEVIATION`, marks a spurious minimum of the NLP rather than a
 #: discretisation error: the next pass starts from a repaired guess.
 SPURIOUS = 100.0
-#: Scaled deviation above which a failed verification is taken for a spurious minimum (the
-#: hanging chain's: 0.24; the L1 motions on 12 elements: up to 0.06).
-SPURIOUS_DEVIATION = 0.1
-
-
-def switch_elements(result: OptimizationResult) -> dict[int, float]:
-    """Elements whose inputs switch inside them, and where, as a fraction of the element.
-
-    An input switches inside element ``k`` when it changes by more than
-    :data:`SWITCH_FRACTION` of its range over the horizon between the element's own
-    collocation points (a jump between elements is represented exactly: each element has
-    its own polynomial). Where the levels before and after are those of the neighbouring
-    elements (``a``, ``b``), the switch ``tau_s`` is the one that keeps the input's
-    integral over the element: ``a tau_s + b (1 - tau_s) = sum_j B_j u_j`` with the
-    quadrature weights ``B_j`` of the scheme (a bang-bang input acts on the model through
-    its integral); otherwise where its polynomial crosses the middle of its values.
-
-    Parameters
-    ----------
-    result : OptimizationResult
-        A collocation result.
-
-    Returns
-    -------
-    dict of int to float
-        Element index -> ``tau_s`` in [0.02, 0.98] (the earliest over the inputs that
-        switch there).
-    """
-    col = result.collocation
-    if col is None or col.uc.shape[2] == 0:
-        return {}
-    uc = col.uc  # (N, d, nu)
-    N = col.elements
-    span = uc.max(axis=(0, 1)) - uc.min(axis=(0, 1))
-    span = np.where(span > 0, span, np.inf)
-    change = (uc.max(axis=1) - uc.min(axis=1)) / span
-    B = collocation_coefficients(col.points, col.scheme)["B"]
-    taus = np.linspace(0.0, 1.0, 401)
-    basis = lagrange_basis(col.tau_root[1:], taus)
-    out: dict[int, float] = {}
-    for k, i in zip(*np.nonzero(change > SWITCH_FRACTION)):
-        a = uc[k - 1, -1, i] if k > 0 else uc[k, 0, i]
-        b = uc[k + 1, 0, i] if k < N - 1 else uc[k, -1, i]
-        if abs(a - b) > SWITCH_FRACTION * span[i]:
-            tau = (float(B @ uc[k, :, i]) - b) / (a - b)
-        else:
-            u = basis @ uc[k, :, i]
-            mid = 0.5 * (uc[k, :, i].max() + uc[k, :, i].min())
-            sgn = np.sign(u - mid)
-            cross = np.nonzero(sgn[1:] != sgn[:-1])[0]
-            tau = float(taus[cross[0] + 1]) if cross.size else 0.5
-        out[int(k)] = min(out.get(int(k), 1.0), float(np.clip(tau, 0.02, 0.98)))
-    return out
 
 
 def switch_times(result: OptimizationResult) -> list[float]:
@@ -327,6 +271,8 @@ def solve_refined(
         if best is None or v.max_scaled_deviation <= best.verification.max_scaled_deviation:
             best = result
         entry["max_scaled_deviation"] = v.max_scaled_deviation
+        entry["verification_time"] = v.time_s
+        entry["verification_cpu_time"] = v.cpu_s
         entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
         new, info = refine_mesh(result, tol, max_elements)
         entry["switches_s"] = info["switches"]
@@ -351,6 +297,9 @@ def solve_refined(
         result = best
     result.refinement = history
     result.solve_time = float(sum(e["solve_time"] for e in history))  # every pass's solve, not the returned one's alone
+    if result.verification is not None:  # and every pass's verification
+        result.verification.time_s = float(sum(e.get("verification_time", 0.0) for e in history))
+        result.verification.cpu_s = float(sum(e.get("verification_cpu_time", 0.0) for e in history))
     if result.status == Status.OPTIMAL and len(history) == max_passes and history[-1].get("split"):
         _log.warning("mesh refinement of %s stopped at the pass limit (%d) with elements still to split", optimization.model.name, max_passes)
     return result

@@ -252,6 +252,7 @@ class ShootingTranscription:
                 f = self._point_function(f"point_{at}", [ca.vertcat(*[c.expr for c in cs])], (s_sym,))
                 con(f(t0 + k * h, X[k], Z[k], u_node(k), Pm, T, s_val), np.concatenate([c.lb for c in cs]),
                     np.concatenate([c.ub for c in cs]))
+        J_lagrange = J
         mayer = self._point_function("mayer", [opt.objective_sign * opt.mayer], (s_sym,))
         J = J + mayer(T, X[N], Z[N], u_node(N), Pm, T, s_val)
 
@@ -277,6 +278,7 @@ class ShootingTranscription:
         gv = ca.vertcat(*g) if g else ca.MX(0, 1)
         self._fg = ca.Function("fg", [w, P], [J, gv])
         self.special_function = ca.Function("special", [w, P], [s_val])
+        self.lagrange_function = ca.Function("lagrange_value", [w, P], [J_lagrange])
         # the result's samples: node states and the states/inputs at the Radau points of each interval
         tau = np.array(ca.collocation_points(_SAMPLE_POINTS, "radau"), dtype=float)
         xs, us, zs = [], [], []
@@ -388,7 +390,7 @@ class ShootingTranscription:
         res.lam_w, res.lam_g = lam
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
             special = np.array(self.special_function(w, pvec), dtype=float).reshape(-1)
-            check_result(res, opt, special, what="multiple shooting solve")
+            check_result(res, opt, special, what="multiple shooting solve", lagrange=float(self.lagrange_function(w, pvec)))
         return res
 
     def _result(self, w: np.ndarray, pvec: np.ndarray, status: str, message: str, stats: dict, solve_time: float) -> OptimizationResult:

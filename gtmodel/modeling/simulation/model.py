@@ -126,6 +126,9 @@ class Model(EventsMixin):
         self._der_substituted: set[int] = set()  # equations whose der() stands for the ODE rhs
         self._initial_equations: list[tuple[str, ca.SX]] = []
         self._hashes: set[int] = {self._time.element_hash()}  # of every declared symbol element
+        #: What flattening found doubtful (connectors left open), kept through reduction and
+        #: repeated in the summary of a problem solved on the model.
+        self.warnings: list[str] = []
 
     # ------------------------------------------------------------------ declarations
     @property

@@ -593,6 +593,7 @@ def build_model(
         The reduced model.
     """
     new = type(model)(model.name)
+    new.warnings = list(getattr(model, "warnings", []))
     old, rep = [aug.system.t], [new.time]
     bounds: dict[str, tuple[float, float]] = {}
     for var in model._vars.values():

@@ -25,6 +25,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import logging
 import re
 
 import casadi as ca
@@ -33,7 +34,9 @@ import numpy as np
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError, ModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
+from gtmodel.modeling.ocp.diagnostics import solution_warnings
 from gtmodel.modeling.ocp.initial import InitialConditionConflict, fixed_starts
+from gtmodel.modeling.ocp.verification import skipped
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.optimal_control_data import declare_data
 from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
@@ -46,6 +49,8 @@ from gtmodel.trajectory.model_ocp import MultipleShooting, OptimalControl
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
+
+_log = logging.getLogger("gtmodel")
 
 
 def _scalar_variables(model: Model) -> dict[str, tuple[str, ca.SX]]:
@@ -261,6 +266,8 @@ class OptimalControlKind(ProblemKind):
             if opt.model.flatten().nz and tr.integrator in ("rk", "cvodes"):
                 raise file.fail("transcription.integrator", "collocation or idas for a model with algebraic variables", tr.integrator)
             method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
+        if doc.verification.integrator == "cvodes" and opt.model.flatten().nz:
+            raise file.fail("verification.integrator", "idas or auto for a model with algebraic variables (CVODES takes none)", "cvodes")
         if tr.refine and tr.method == "multiple_shooting":
             raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement splits '
                             'collocation elements; shooting is verified as it is: raise transcription.intervals or steps, '
@@ -275,7 +282,7 @@ class OptimalControlKind(ProblemKind):
             solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
-            refinement=Refinement(doc.transcription.refine, doc.transcription.tolerance, doc.transcription.max_elements, doc.transcription.max_passes),
+            refinement=_refinement(file, doc),
             benchmark=bench, variables=shown,
         )
 
@@ -319,18 +326,27 @@ class OptimalControlKind(ProblemKind):
             "model_parameters": {k: float(np.ravel(v)[0]) if np.size(v) == 1 else np.ravel(v).tolist() for k, v in r.parameters.items()},
             "free_final_time": d.optimization.free_final_time,
             **({"estimation": d.estimation} if d.estimation is not None else {}),
-            "transcription": _transcription_summary(d.method),
+            "transcription": _transcription_summary(d.method, r),
             **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
                if isinstance(d.method, Collocation) else {}),
             **verification_fields(r),
             **_variable_fields(d, r),
         })
+        warnings = solution_warnings(d.optimization, r)
+        if not d.refinement.verify and r.status in ("optimal", "acceptable"):
+            written.fields["verification"] = skipped("not verified: [verification] enabled = false")
         if d.benchmark is not None:
             b = d.benchmark
             value = b["sign"] * r.objective
-            written.fields["benchmark"] = {
-                **b, "value": value, "relative_error": abs(value - b["published"]) / max(abs(b["published"]), 1e-300),
-            }
+            rel = abs(value - b["published"]) / max(abs(b["published"]), 1e-300)
+            within = bool(rel <= b["tolerance"])
+            written.fields["benchmark"] = {**b, "value": value, "relative_error": rel, "within_tolerance": within}
+            if not within and r.status in ("optimal", "acceptable", "check_failed"):
+                warnings.append(f"benchmark: {b['quantity']} {value:.7g} is {100 * rel:.3g} % away from the published "
+                                f"{b['published']:.7g} ({b['source']}), beyond benchmark.tolerance {b['tolerance']:g}")
+        for w in warnings:
+            _log.warning("%s: warning: %s", name, w)
+        written.fields["warnings"] = warnings
         if r.status not in ("optimal", "acceptable", "check_failed"):
             return written
         r.to_csv(out / "trajectories.csv")
@@ -349,12 +365,29 @@ class OptimalControlKind(ProblemKind):
         return written
 
 
-def _transcription_summary(method: Collocation | MultipleShooting) -> dict[str, Any]:
-    """The summary's ``transcription`` block (``collocation`` keeps its former keys)."""
+def _refinement(file: ProblemFile, doc: Any) -> Refinement:
+    """``[transcription]`` refinement and ``[verification]`` settings, checked together."""
+    tr, ver = doc.transcription, doc.verification
+    if tr.refine and not ver.enabled:
+        raise file.fail("verification.enabled", "true with transcription.refine = true (refinement is driven by the verification)", False)
+    return Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes, verify=ver.enabled,
+                      integrator=None if ver.integrator == "auto" else ver.integrator, rtol=ver.rtol)
+
+
+def _transcription_summary(method: Collocation | MultipleShooting, result: OptimizationResult) -> dict[str, Any]:
+    """The summary's ``transcription`` block (``collocation`` keeps its former keys, the declared mesh).
+
+    ``elements`` is the mesh of the solution (after refinement), ``declared_elements``
+    the file's when refinement changed it.
+    """
     if isinstance(method, MultipleShooting):
         return {"method": "multiple_shooting", "intervals": method.intervals, "controls": method.controls,
                 "integrator": method.integrator or "default", "steps": method.steps}
-    return {"method": "collocation", "elements": method.elements, "points": method.points, "scheme": method.scheme}
+    col = result.collocation
+    elements = col.elements if col is not None else method.elements
+    return {"method": "collocation", "elements": elements, "points": method.points, "scheme": method.scheme,
+            **({"declared_elements": method.elements} if elements != method.elements else {})}
+
 
 
 def _variable_fields(d: OptimalControl, r: OptimizationResult) -> dict[str, Any]:

@@ -11,7 +11,7 @@ from pydantic import Field
 
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, Section, choice, integer, number, vector
 
-__all__ = ["MAX_TIME_S", "RobotReference", "MotionSection", "CollocationSection", "RefinementSection", "SolverSection", "OcpSolverSection"]
+__all__ = ["MAX_TIME_S", "RobotReference", "MotionSection", "CollocationSection", "RefinementSection", "VerificationSection", "SolverSection", "OcpSolverSection"]
 
 #: Longest final time accepted [s].
 MAX_TIME_S = 1.0e4
@@ -85,6 +85,30 @@ class RefinementSection(Section):
     tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation (default 1e-2)") | None = None
     max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
+
+
+class VerificationSection(Section):
+    """``[verification]``: how a solution is verified by simulation (:mod:`gtmodel.modeling.ocp.verification`).
+
+    The tolerance of the check itself is ``[transcription] tolerance`` (mesh refinement
+    uses it too).
+
+    Parameters
+    ----------
+    enabled : bool
+        Verify the solution (default). Off, the summary's ``verification`` block says
+        ``"status": "skipped"`` (never passed) and the CLI prints ``skipped``.
+    integrator : str
+        ``"auto"`` (CVODES for an ODE, IDAS with algebraic variables), ``"cvodes"`` or
+        ``"idas"``: SUNDIALS BDF with Newton iterations on the model's Jacobian.
+    rtol : float, optional
+        Relative tolerance of the integrator (absolute: ``1e-2 rtol``); default ``1e-3``
+        times the verification tolerance within ``[1e-10, 1e-6]``.
+    """
+
+    enabled: Flag = Field(True, description="verify the solution by simulation (off: the summary says skipped, never verified)")
+    integrator: choice("auto", "cvodes", "idas", description="SUNDIALS integrator (BDF, Newton on the model's Jacobian); auto: cvodes for ODEs, idas with algebraic variables") = "auto"
+    rtol: number(gt=0, lt=1, description="relative tolerance of the integrator (default 1e-3 x the verification tolerance, within [1e-10, 1e-6])") | None = None
 
 
 class SolverSection(Section):

@@ -14,7 +14,7 @@ from pydantic_core import PydanticCustomError
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.problems.base import KIND_DOCS
-from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, RefinementSection, SolverSection
+from gtmodel.problems.kinds.schemas.motion import MAX_TIME_S, CollocationSection, RefinementSection, SolverSection, VerificationSection
 from gtmodel.problems.schema import MAX_NAMED_NUMBER, Expressions, Flag, NonEmptyText, ProblemSchema, Section, Text, choice, integer, number, vector
 
 __all__ = [
@@ -276,12 +276,16 @@ class BenchmarkSection(Section):
     sign : float
         ``objective = sign * published`` (``-1`` where a maximum is written as the
         minimum of its negative).
+    tolerance : float
+        Largest relative error to the published value; beyond it the result is printed
+        and flagged (a warning in the CLI and the summary's ``warnings``).
     """
 
     source: NonEmptyText = Field(description='where the value is published, e.g. "COPS 3.0, problem 4 (Dolan, More, Munson 2004)"')
     published: number(description="the published optimum")
     quantity: Text = Field("objective", description='what the value is, e.g. "final time [s]"')
     sign: number(ge=-1, le=1, description="objective = sign * published: 1, or -1 for a maximum written as minimise its negative") = 1.0
+    tolerance: number(gt=0, lt=1, description="largest relative error to the published value; beyond it the result is flagged") = 1e-4
 
 
 class OutputSection(Section):
@@ -327,6 +331,8 @@ class OptimalControlFile(ProblemSchema):
     transcription : TranscriptionSection
         ``[transcription]``: collocation or multiple shooting, verification tolerance and
         mesh refinement.
+    verification : VerificationSection
+        ``[verification]``: whether and with which integrator the solution is verified.
     collocation : CollocationSection
         ``[collocation]``: the collocation mesh.
     benchmark : BenchmarkSection, optional
@@ -349,6 +355,7 @@ class OptimalControlFile(ProblemSchema):
     initial_guess: InitialGuessSection = InitialGuessSection()
     data: list[DataSection] = Field(default_factory=list, description="[[data]] tables: measurements fitted by least squares (parameter estimation)")
     transcription: TranscriptionSection = TranscriptionSection()
+    verification: VerificationSection = VerificationSection()
     collocation: CollocationSection = CollocationSection()
     benchmark: BenchmarkSection | None = None
     solver: SolverSection = SolverSection()
