@@ -51,9 +51,10 @@ from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, Ou
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
 from gtmodel.errors import CodegenError, InputError
+from gtmodel.estimation.mpc import MPCController
 from gtmodel.estimation.tracking import TrackingController
 
-__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "LoopStep", "tracking_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "LoopStep", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
 
 log = logging.getLogger("gtmodel")
 
@@ -179,6 +180,34 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
                     t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
 
 
+def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
+    """The loop step of a real-time MPC (:func:`gtmodel.estimation.mpc.mpc_controller`).
+
+    Parameters
+    ----------
+    controller : MPCController
+        The MPC (its solver is code-generated inside the step).
+    name : str, optional
+        Controller name for the header.
+
+    Returns
+    -------
+    LoopStep
+        Its :meth:`~gtmodel.estimation.mpc.MPCController.function`, period, input bounds,
+        first input ``u*_0``, first warm start, ``GT_NOT_CONVERGED`` when the SQP result is
+        not finite, and the reference as the check's samples.
+    """
+    c = controller
+    text = (f"Real-time nonlinear MPC: horizon {c.horizon} periods of {c.dt!r} s, {c.blocks} input blocks, "
+            f"{c.sqp_iterations} SQP iteration(s) per period\n"
+            "(CasADi sqpmethod with qrqp, Gauss-Newton Hessian, single shooting, warm start shifted by one period;\n"
+            "tracking of the reference x*, u* sampled at the period; gtmodel.estimation.mpc).\n"
+            f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
+    return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.w_initial, description=text,
+                    fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
+
+
 def _c_array(values: Any) -> str:
     """C initialiser of a real array (infinite entries as ``INFINITY``; at least one entry)."""
     vals = np.asarray(values, dtype=float).reshape(-1)
@@ -198,7 +227,7 @@ def _spec(step: LoopStep) -> FunctionSpec:
             ArgSpec("u_last", "vector", "u_last", "the last input")]
     outs = [OutputSpec("u", "u", f"input ({', '.join(step.u_names[:12])}), saturated")]
     if step.nw:
-        args.append(ArgSpec("w", "vector", "w", "inner memory (warm start)"))
+        args.append(ArgSpec("w_start", "vector", "w", "inner memory (warm start)"))  # not 'w': the wrapper's work array
         outs.append(OutputSpec("w_next", "w_next", "inner memory of the next period"))
     return FunctionSpec(
         "control", lambda source: source.function, args=tuple(args), outputs=tuple(outs),
@@ -246,7 +275,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     phash = _hash(step)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; controller {step.name} sha256:{phash}; real {real}"
     P = prefix.upper()
-    ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w": "mem->w"}
+    ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
     outs = {"u": "u_new", "w_next": "w_new"}
     call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
     values = dict(
