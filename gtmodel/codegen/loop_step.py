@@ -348,14 +348,24 @@ def _samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.n
            "x": rows + scale * rng.standard_normal(rows.shape),
            "u_last": rng.uniform(lo, hi, (n, step.nu))}
     if step.nw:
-        out["w"] = np.tile(step.w_init, (n, 1))
+        out["w_start"] = np.tile(step.w_init, (n, 1))  # the C argument's name (the Function's input: w)
     return out
 
 
 def _reference(step: LoopStep, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     n = len(inputs["t"])
-    f = step.function.map(n)
-    res = f.call({k: np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()})
+    args = {("w" if k == "w_start" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()}
+    try:
+        res = step.function.map(n).call(args)
+    except RuntimeError:  # a sample whose evaluation fails (an MPC's solver meeting NaN): ok = 0 for it alone
+        res = {name: np.zeros((step.function.numel_out(name), n)) for name in step.function.name_out()}
+        for i in range(n):
+            try:
+                one = step.function.call({k: v[:, i] for k, v in args.items()})
+            except RuntimeError:
+                continue
+            for name in res:
+                res[name][:, i] = np.asarray(one[name]).reshape(-1)
     ok = np.asarray(res["ok"]).reshape(-1) > 0.5
     out = {"u": np.asarray(res["u"]).T}
     if step.nw:

@@ -166,7 +166,7 @@ class MPCController:
         plugin : {"sqpmethod", "ipopt"}, optional
             ``sqpmethod`` with exactly ``iterations`` SQP iterations (default
             ``sqp_iterations``), Gauss-Newton Hessian, ``qrqp``; ``ipopt`` to convergence
-            (tolerance 1e-10, exact Hessian).
+            (tolerance 1e-10, exact Hessian, bounds not relaxed).
         iterations : int, optional
             SQP iterations (``sqpmethod`` only).
 
@@ -184,7 +184,7 @@ class MPCController:
         nlp, hess = self._nlp()
         if plugin == "ipopt":
             return ca.nlpsol("mpc_ipopt", "ipopt", nlp, {"print_time": False, "ipopt": {
-                "print_level": 0, "tol": 1e-10, "max_iter": 500, "sb": "yes"}})
+                "print_level": 0, "tol": 1e-10, "max_iter": 500, "sb": "yes", "bound_relax_factor": 0.0}})
         if plugin != "sqpmethod":
             raise InputError(f"plugin: expected 'sqpmethod' or 'ipopt', got {plugin!r}")
         k = self.sqp_iterations if iterations is None else int(iterations)
