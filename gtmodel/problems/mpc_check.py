@@ -141,8 +141,8 @@ def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, 
     library : pathlib.Path
         The compiled library.
     repeat : int, optional
-        Runs of the whole motion (``_init`` before each; the step times of all runs are
-        kept, the tracking figures are those of the first run).
+        Runs of the whole motion (``_init`` before each; the step times and statuses of
+        all runs are kept, the tracking figures are those of the first run).
     clock : callable, optional
         Clock of the step times (see :func:`run_controller_loop`).
 
@@ -154,11 +154,13 @@ def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, 
     args = (setup.plant_step, setup.x_ref[0], setup.t, setup.x_ref)
     kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES, clock=clock)
     first = run_controller_loop(controller, *args, **kw)
-    times = [first.step_s]
+    times, statuses = [first.step_s], [first.status]
     for _ in range(max(int(repeat), 1) - 1):
         reset()
-        times.append(run_controller_loop(controller, *args, **kw).step_s)
-    first.step_s = np.concatenate(times)
+        again = run_controller_loop(controller, *args, **kw)
+        times.append(again.step_s)
+        statuses.append(again.status)
+    first.step_s, first.status = np.concatenate(times), np.concatenate(statuses)
     c = setup.controller
     ff = run_controller_loop(lambda t, x: (0, np.clip(c.u_ref[min(int(round((t - c.t0) / c.dt)), c.length - 1)], c.u_lb, c.u_ub)),
                              *args, **kw)
