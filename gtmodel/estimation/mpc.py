@@ -259,7 +259,10 @@ class MPCController:
             the reference window at ``k = floor((t - t_0) / dt)`` (clamped; a NaN ``t`` gives
             ``ok = 0``), ``sqp_iterations`` SQP iterations from the warm start ``w``, ``u``
             the first block saturated at the bounds, ``w_next`` the solution shifted by one
-            period, ``ok`` 1 when ``u`` and ``w_next`` are finite. ``u_last`` is not used
+            period, ``ok`` 1 when ``u``, ``w_next`` and the cost of the solution are finite (the
+            generated SQP does not stop on a NaN of the prediction: a state outside the
+            model's domain leaves the warm start as its result, whose cost is NaN then).
+            ``u_last`` is not used
             (the safe input of the C memory on failure).
         """
         nx, nu, n = self.nx, self.nu, self.length
@@ -277,12 +280,14 @@ class MPCController:
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
         lbx, ubx = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
         sol = self.nlp_solver("sqpmethod")(x0=w, p=p, lbx=lbx, ubx=ubx)["x"]
+        nlp, _ = self._nlp()
+        cost = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"]])(sol, p)  # NaN when the prediction fails
         sol = saturate(sol, lbx, ubx)
         b = self.horizon // self.blocks
         shift = [min((j * b + 1) // b, self.blocks - 1) for j in range(self.blocks)]
         w_next = ca.vertcat(*[sol[s * nu:(s + 1) * nu] for s in shift])
         u = sol[:nu]
-        ok = (ca.sum1(ca.fabs(sol)) + ca.fabs(t)) < math.inf
+        ok = (ca.sum1(ca.fabs(sol)) + ca.fabs(t) + ca.fabs(cost)) < math.inf
         return ca.Function("control", [t, x, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
 
