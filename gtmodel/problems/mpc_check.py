@@ -63,7 +63,12 @@ class MPCCheck:
         return self.mpc.rms_error / self.feedforward.rms_error
 
     def summary_lines(self) -> list[str]:
-        """Human-readable summary."""
+        """Human-readable summary.
+
+        Returns
+        -------
+        list of str
+        """
         return (["closed loop, generated C MPC:"] + ["  " + line for line in self.mpc.summary_lines()]
                 + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}",
                    f"RMS ratio MPC / feedforward: {self.ratio_to_feedforward:.4g}",

@@ -39,8 +39,15 @@ from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.estimation.closed_loop.controller_loop import mismatched_robot
 from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, MPCController, mpc_controller
+from gtmodel.modeling import explicit_ode
 from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.run import load_problem
+from gtmodel.problems.user_model import load_user_model, split_model_reference
+from gtmodel.robots.model import gantry_tau_model
+from gtmodel.trajectory.point_to_point import solve_point_to_point
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
 
 __all__ = ["MPCFile", "MPCSetup", "load_mpc_file"]
@@ -164,9 +171,6 @@ def _reference(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, dt: float
     if ref.problem is not None:
         if not robot:
             raise file.fail("reference.problem", "a reference.file for a user model (reference.problem is a robot's point_to_point problem)")
-        from gtmodel.problems.run import load_problem
-        from gtmodel.trajectory.point_to_point import solve_point_to_point
-
         source = file.data_file("reference.problem", ref.problem)
         try:
             loaded = load_problem(source, dict(ref.overrides))
@@ -228,20 +232,15 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         raise problem_error(path, exc, MPCFile) from None
     file = ProblemFile(path)
     m = doc.mpc
-    from gtmodel.estimation.closed_loop.controller_loop import mismatched_robot
-    from gtmodel.modeling import explicit_ode
 
     robot = ":" not in m.model
     if robot:
-        from gtmodel.problems.references import robot_parameters
-        from gtmodel.robots.model import gantry_tau_model
 
         params = robot_parameters(file, "mpc.model", m.model)
         ode = explicit_ode(gantry_tau_model(params, states="tcp"))
         plant = explicit_ode(gantry_tau_model(mismatched_robot(params, doc.check.mass_factor, doc.check.friction_factor), states="tcp"))
         plant_p = plant.p_default
     else:
-        from gtmodel.problems.user_model import load_user_model, split_model_reference
 
         model_path, cls = split_model_reference(m.model)
         model_path = file.data_file("mpc.model", str(model_path))

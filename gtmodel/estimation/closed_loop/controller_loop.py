@@ -61,6 +61,8 @@ class LoopSummary:
         The states whose error is summarised.
     u_lb, u_ub : numpy.ndarray
         ``(nu,)`` the input bounds checked.
+    status_names : dict of int to str, optional
+        Names of the status codes (for :attr:`status_counts`).
     """
 
     t: np.ndarray
@@ -119,7 +121,12 @@ class LoopSummary:
                 "p99": float(np.percentile(rest, 99)), "max": float(np.max(rest))}
 
     def summary_lines(self) -> list[str]:
-        """Human-readable summary, one figure per line."""
+        """Human-readable summary, one figure per line.
+
+        Returns
+        -------
+        list of str
+        """
         st = self.step_times()
         return [f"tracking error: RMS {self.rms_error:.4g}, max {self.max_error:.4g} (states {list(self.error_states)})",
                 f"input bound violations: {self.bound_violations}",
