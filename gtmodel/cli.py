@@ -515,7 +515,7 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
           f"{controller.nx} states, {controller.nu} inputs, input bounds {controller.u_lb.tolist()} .. {controller.u_ub.tolist()}")
     if not args.check:
         return EXIT_OK
-    report = check_loop_step(generated, n=min(args.samples, 2000), seed=args.seed)
+    report = check_loop_step(generated, n=min(args.samples, 2000), seed=args.seed, timing=True)
     print("\n".join(report.summary_lines()))
     return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
 

@@ -25,7 +25,11 @@ The stages, each importing only those below it (an import-linter contract):
   controller files;
 - :mod:`~gtmodel.codegen.check`: the self-checks, with one helper that writes, compiles,
   runs and parses a C program;
-- :mod:`~gtmodel.codegen.model_code`: the same for a user's model.
+- :mod:`~gtmodel.codegen.model_code`: the same for a user's model (its explicit ODE and
+  fixed steps);
+- :mod:`~gtmodel.codegen.loop_step`: the one step interface of the loop's controllers
+  (``<prefix>_init``, ``<prefix>_step`` on a caller-owned memory) around one CasADi Function
+  (the tracking controller; an MPC).
 """
 
 from __future__ import annotations
@@ -38,6 +42,7 @@ from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate
 from gtmodel.codegen.model_code import check_model, generate_model
+from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step
 from gtmodel.codegen.robot import load_robot, parameter_hash
 from gtmodel.codegen.specs import FUNCTION_SPECS
 
@@ -45,6 +50,9 @@ __all__ = [
     "generate",
     "generate_model",
     "check_model",
+    "LoopStep",
+    "generate_loop_step",
+    "check_loop_step",
     "compile_shared",
     "find_compiler",
     "load_library",

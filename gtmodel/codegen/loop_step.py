@@ -6,7 +6,8 @@ Every controller that runs in the loop (the tracking controller of
 ``control(t (1,1), x (nx,1), u_last (nu,1)[, w (nw,1)]) -> (u (nu,1)[, w_next (nw,1)], ok (1,1))``
 
 (``w`` an inner memory the step carries from one period to the next, e.g. an MPC's shifted
-warm start; ``ok`` 1 when the result is valid, e.g. the QP solved), described by a
+warm start, the C argument ``w_start`` of ``<prefix>_control``; ``ok`` 1 when the result is
+valid, e.g. the QP solved), described by a
 :class:`LoopStep`. :func:`generate_loop_step` writes it through the one codegen path
 (:func:`gtmodel.codegen.generate.write_library`: CasADi's code generator, a plain-C wrapper
 ``<prefix>_control`` with argument checks and status codes) and adds, from
@@ -47,6 +48,7 @@ import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport, StatusProbe
+from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
@@ -394,7 +396,7 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     x0 = np.asarray(samples["x"][0], dtype=float)
     t0 = float(samples["t"][0, 0])
     ref = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": safe[None, :],
-                            **({"w": step.w_init[None, :]} if step.nw else {})})["u"][0]
+                            **({"w_start": step.w_init[None, :]} if step.nw else {})})["u"][0]
     run("valid state after init (u equals Python)", "GT_OK", t0, x0, ref)
     bad = x0.copy()
     bad[0] = math.nan
@@ -407,7 +409,8 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     return probes
 
 
-def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build_dir: str | Path | None = None) -> CheckReport:
+def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build_dir: str | Path | None = None,
+                    timing: bool = False) -> CheckReport:
     """Compile a loop controller strictly and compare it with Python; probe the step contract.
 
     Parameters
@@ -420,6 +423,8 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
         Seed of the random generator.
     build_dir : str or pathlib.Path, optional
         Build folder (default ``<out_dir>/build``).
+    timing : bool, optional
+        Also time ``<prefix>_control`` in a C loop (ns/call).
 
     Returns
     -------
@@ -451,6 +456,9 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     spec = FunctionSpec(**{**spec.__dict__, "reference": lambda source, inputs: _reference(source, inputs)})
     cf = library["control"]
     results = (compare(spec, cf, step, samples, generated.real),)
+    if timing:
+        times = time_functions(generated, library.path, {"control": samples}, build)
+        results = tuple(type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results)
     probes = []
     for a in spec.args:
         row = np.array(samples[a.name][0], dtype=float)

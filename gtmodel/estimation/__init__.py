@@ -17,7 +17,9 @@ Rooms by job (lower rooms never import higher ones; an import-linter contract ch
 * :mod:`~gtmodel.estimation.ilc`: iterative learning control, its lifted-system stability
   and the ILC experiment (uses ``filters`` and ``closed_loop``);
 * :mod:`~gtmodel.estimation.fusion`: the tracker + IMU sensors, sine paths and the fusion
-  study (uses ``filters``).
+  study (uses ``filters``);
+* :mod:`~gtmodel.estimation.tracking`: the tracking controller of any model (feedforward
+  plus time-varying LQR along an optimal motion, one CasADi Function for the loop).
 
 Lower layers only: robots, modeling and the base modules.
 """

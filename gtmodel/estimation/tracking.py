@@ -13,12 +13,15 @@ builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
   (Anderson & Moore, Optimal Control: Linear Quadratic Methods, sec. 2.4)
   ``P_N = Q_f``, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``,
   ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``;
-* the law ``u = sat(u*_k - K_k (x - x*_k))``, saturated at the input bounds.
+* the law ``u = sat(u*_k - K_k (x - x*_k))``, saturated at the input bounds; after the
+  reference ends, its final state is held: the input that holds it (least squares
+  ``f(x*_end, u) = 0``, e.g. zero voltage for a motor at rest) and the stationary LQR gain
+  there (before the start, the first sample).
 
 :meth:`TrackingController.function` is ONE CasADi Function of the step interface shared
 by the loop controllers (:mod:`gtmodel.codegen.loop_step`): ``control(t, x, u_last) -> (u,
 ok)``, the tables (references and gains) constant inside it, indexed by the period
-``k = floor((t - t_0) / dt)`` (held at the first and last sample outside the table);
+``k = floor((t - t_0) / dt)`` (the first sample before the start, the held end after it);
 :func:`gtmodel.codegen.loop_step.generate_loop_step` writes it as C. :func:`dlqr` is the
 time-invariant LQR (the stationary solution of the same recursion).
 """
@@ -176,6 +179,14 @@ class TrackingController:
         Scalar names of states and inputs.
     Q, R, Qf : numpy.ndarray
         The weights the gains were computed with.
+    x_hold : numpy.ndarray
+        ``(nx,)`` the state held after the reference ends: its last given sample ``x*_end``
+        (at the reference's end time, which the period grid need not hit).
+    u_hold : numpy.ndarray
+        ``(nu,)`` the input that holds it (least squares ``f(x*_end, u) = 0``), saturated.
+    K_hold : numpy.ndarray
+        ``(nu, nx)`` the stationary LQR gain at ``(x*_end, u_hold)`` (``K_{N-1}`` if the
+        pair is not stabilisable there).
     """
 
     dt: float
@@ -190,6 +201,9 @@ class TrackingController:
     Q: np.ndarray
     R: np.ndarray
     Qf: np.ndarray
+    x_hold: np.ndarray
+    u_hold: np.ndarray
+    K_hold: np.ndarray
 
     @property
     def nx(self) -> int:
@@ -218,17 +232,20 @@ class TrackingController:
         -------
         casadi.Function
             ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``:
-            ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N - 1`` (a NaN ``t`` gives
-            ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``; ``ok`` is 1 when ``u`` is
+            ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N`` (a NaN ``t`` gives
+            ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
+            reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
+            :attr:`K_hold`; ``ok`` is 1 when ``u`` is
             finite. ``u_last`` is not used by this law (the interface is shared with the
             MPC, whose warm start it is). The tables are constants of the graph, indexed
             parametrically (the generated C looks them up; no heap).
         """
         n, nx, nu = self.length, self.nx, self.nu
         t, x, u_last = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu)
-        k = ca.fmin(ca.fmax(ca.floor((t - self.t0) / self.dt + INDEX_EPS), 0), n - 1)
+        k = ca.fmin(ca.fmax(ca.floor((t - self.t0) / self.dt + INDEX_EPS), 0), n)
         k = ca.if_else(t == t, k, 0)  # a NaN time reads sample 0; ok is then 0 below
-        table = np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)])  # row k: x*_k, u*_k, K_k (row-major)
+        table = np.vstack([np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)]),  # row k: x*_k, u*_k, K_k (row-major)
+                           np.hstack([self.x_hold, self.u_hold, self.K_hold.reshape(-1)])])  # row N: hold the end
         width = table.shape[1]
         values = ca.MX(ca.DM(table.reshape(-1)))
         base = width * k
@@ -303,8 +320,8 @@ def tracking_controller(
         Input weight, ``(nu,)`` or ``(nu, nu)`` positive definite; default ``1 / s_j^2``
         with ``s_j`` half the bound range (finite bounds) or the reference's range.
     Qf : array_like, optional
-        Terminal weight; default the stationary Riccati solution at the last sample if it
-        exists, else ``Q``.
+        Terminal weight; default the stationary Riccati solution at the held end
+        (:attr:`TrackingController.x_hold`, ``u_hold``) if it exists, else ``Q``.
     u_lb, u_ub : array_like, optional
         ``(nu,)`` saturation bounds; default the model's declared input bounds.
     p : array_like, optional
@@ -333,8 +350,9 @@ def tracking_controller(
     if n < 2:
         raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than one period ({dt:g} s)")
     grid = tt[0] + dt * np.arange(n)
-    xs = _sampled(tt, np.asarray(x_ref, dtype=float).reshape(tt.size, -1), grid, "x_ref")
-    us = _sampled(tt, np.asarray(u_ref, dtype=float).reshape(tt.size, -1), grid, "u_ref")
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(tt.size, -1), np.asarray(u_ref, dtype=float).reshape(tt.size, -1)
+    xs = _sampled(tt, x_given, grid, "x_ref")
+    us = _sampled(tt, u_given, grid, "u_ref")
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
     lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
@@ -355,17 +373,22 @@ def tracking_controller(
     step = ode.step(dt, method, substeps=substeps)
     xsym, usym, psym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
     xn = step(xsym, usym, psym)[0]
-    jac = ca.Function("AB", [xsym, usym, psym], [ca.jacobian(xn, xsym), ca.jacobian(xn, usym)]).map(n)
-    Aa, Bb = jac(xs.T, us.T, np.tile(pv.reshape(-1, 1), (1, n)))
+    ab = ca.Function("AB", [xsym, usym, psym], [ca.jacobian(xn, xsym), ca.jacobian(xn, usym)])
+    Aa, Bb = ab.map(n)(xs.T, us.T, np.tile(pv.reshape(-1, 1), (1, n)))
     A = np.asarray(Aa).reshape(ode.nx, n, ode.nx).transpose(1, 0, 2)  # [A_0 A_1 ...] side by side
     B = np.asarray(Bb).reshape(ode.nx, n, ode.nu).transpose(1, 0, 2)
-    if Qf is None:
-        try:
-            _, Qfm = dlqr(A[-1], B[-1], Qm, Rm)
-        except InputError:
-            Qfm = Qm
-    else:
-        Qfm = _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
+    # after the end: the input that holds the final state (least squares f(x*_N, u) = 0) and the stationary gain there
+    fx = ca.Function("fB", [xsym, usym, psym], [ode.f(xsym, usym, psym), ca.jacobian(ode.f(xsym, usym, psym), usym)])
+    x_hold = x_given[-1]
+    rest, Bc = (np.asarray(v) for v in fx(x_hold, u_given[-1], pv))
+    u_hold = saturate(u_given[-1] - np.linalg.lstsq(Bc, rest.ravel(), rcond=None)[0], lb, ub)
+    Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
+    try:
+        K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
+    except InputError:
+        K_hold, P_hold = None, Qm
+    Qfm = P_hold if Qf is None else _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
     K, _ = riccati_gains(A, B, Qm, Rm, Qfm)
     return TrackingController(dt=float(dt), t0=float(tt[0]), x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
-                              x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm)
+                              x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm,
+                              x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1), K_hold=K[-1] if K_hold is None else K_hold)

@@ -19,7 +19,7 @@ from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen import compile_shared, generate, load_library, parameter_hash
 from gtmodel.codegen.build import find_compiler
 from gtmodel.codegen.model_code import MODEL_TOLERANCE, STRICT_EXTRA, check_model, generate_model, model_parameter_hash
-from gtmodel.errors import InputError, ModelError
+from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling import Model
 from gtmodel.problems.user_model import load_user_model
 from gtmodel.robots import load_parameters
@@ -235,3 +235,53 @@ def test_cli_codegen_composed_axis_check_passes(tmp_path, capsys):
 def test_check_model_compiles_pedantically():
     # reference: the robot code's strict set (filter_check.STRICT_FLAGS = compile_shared's + -pedantic)
     assert STRICT_EXTRA == ("-pedantic",)
+
+
+class NewtonLoop:
+    """An algebraic loop through a nonlinear equation: z + 0.5 sin(z) = x (Newton inside the C)."""
+
+    def build(self):
+        m = Model("newton_loop")
+        x = m.state("x", start=1.0)
+        z = m.algebraic("z", start=0.5)
+        u = m.input("u")
+        m.equation(m.der(x), u - z)
+        m.equation(z + 0.5 * ca.sin(z), x)
+        return m
+
+
+def test_newton_model_c_gives_not_converged_never_nan(tmp_path):
+    # reference: the same explicit ODE from Python (1e-12) and simulate() over the horizon;
+    # a state whose Newton solve overflows gives GT_NOT_CONVERGED with the outputs untouched
+    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["ode", "step_implicit"], substeps=1)
+    report = check_model(gen, n=200)
+    assert report.passed, "\n".join(report.summary_lines())
+    lib = load_library(gen, compile_shared(gen, tmp_path / "build2", werror=True))
+    status, (xdot,) = lib["ode"].call_rows(np.array([[1.0], [1e308]]), np.zeros((2, 1)), fill=-7.0)
+    assert status.tolist() == [0, 6] and xdot[1, 0] == -7.0 and np.isfinite(xdot[0, 0])
+    status, (x_next,) = lib["step_implicit"].call_rows(np.array([[1e308]]), np.zeros((1, 1)), fill=-7.0)
+    assert status.tolist() == [6] and x_next[0, 0] == -7.0
+
+
+def test_dc_motor_steps_over_the_horizon_equal_simulate(tmp_path):
+    # the composed DC motor (29 algebraic variables eliminated): C steps iterated over 250
+    # periods of 4 ms against IDAS (simulate) within HORIZON_TOLERANCE
+    gen = generate_model(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"), tmp_path / "src")
+    report = check_model(gen, n=200)
+    horizon = [r for r in report.functions if "periods" in r.name]
+    assert report.passed, "\n".join(report.summary_lines())
+    assert [r.name for r in horizon] == ["step_rk4 over 250 periods vs simulate()", "step_implicit over 250 periods vs simulate()"]
+    assert "#define GT_DC_MOTOR_DT 0.004" in gen.header.read_text() and "const double x[3], const double u[1], double xdot[3]" in gen.header.read_text()
+
+
+def test_horizon_check_fails_when_simulate_fails(tmp_path):
+    # no reference, no success: a simulate() that fails makes the horizon check (and the report) fail
+    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["step_rk4"], substeps=1)
+
+    def failing(*args, **kwargs):
+        raise ConvergenceError("IDAS gave up")
+
+    gen.parameters.model.simulate = failing
+    report = check_model(gen, n=20)
+    assert not report.passed
+    assert [r.name for r in report.functions if not r.ok] == ["step_rk4 over 250 periods vs simulate() (simulate failed)"]

@@ -99,10 +99,21 @@ def test_input_is_saturated_at_the_bounds(motor):
     c = tracking_controller(ode, t, x, u, u_lb=[-7.0], u_ub=[7.0], Q=Q_ANGLE)
     far = c.x_ref[100] + np.array([0.0, 50.0, 0.0])
     assert c(100 * DT, far) == pytest.approx([-7.0]) and c(100 * DT, c.x_ref[100] - [0.0, 50.0, 0.0]) == pytest.approx([7.0])
-    # on the reference the input is the feedforward, held outside the table
+    # on the reference the input is the feedforward; before it the first sample, after it the held end
     assert c(100 * DT, c.x_ref[100]) == pytest.approx(c.u_ref[100], abs=1e-12)
     assert c(-1.0, c.x_ref[0]) == pytest.approx(c.u_ref[0], abs=1e-12)
-    assert c(99.0, c.x_ref[-1]) == pytest.approx(c.u_ref[-1], abs=1e-12)
+    assert c(99.0, c.x_hold) == pytest.approx(c.u_hold, abs=1e-12)
+
+
+def test_held_end_input_holds_the_final_state(motor):
+    # reference: the model itself, f(x_end, u_hold) = 0 where the input can hold the state;
+    # the motor's end state of this reference is at rest in current only if u_hold balances it
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u)
+    np.testing.assert_array_equal(c.x_hold, x[-1])
+    rest = np.asarray(ode.f(c.x_hold, c.u_hold, ode.p_default)).ravel()
+    # one input, three states: the current equation is balanced, the others are what they are
+    assert abs(rest[0]) < 1e-9 * (1 + abs(c.u_hold[0]))
 
 
 @pytest.mark.parametrize("t, x", [(np.nan, [0.0, 0.0, 0.0]), (0.1, [np.nan, 0.0, 0.0])], ids=["t_nan", "x_nan"])

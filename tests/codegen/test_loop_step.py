@@ -1,0 +1,162 @@
+"""The loop-step C interface (``<prefix>_init``/``<prefix>_step``) of generated controllers.
+
+References: the controller's CasADi Function evaluated from Python (C equal to 1e-12), the
+status contract (GT_BAD_ARGUMENT on NULL/non-finite input, the safe input = the last input
+saturated on every failure), and ``gtmodel codegen --controller RESULT_DIR`` on a result
+folder written here from a simulated motion of the DC motor of ``models/dc_motor.py``.
+"""
+
+from __future__ import annotations
+
+import csv
+import ctypes
+import json
+import re
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from gtmodel.codegen.build import compile_shared, load_library
+from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step, load_loop_step, tracking_step
+from gtmodel.errors import InputError
+from gtmodel.estimation.tracking import tracking_controller
+from gtmodel.modeling import explicit_ode
+from gtmodel.problems.user_model import load_user_model
+
+from ..conftest import REPO
+
+MOTOR = REPO / "models" / "dc_motor.py"
+OK, BAD, NUMERIC, NOT_CONVERGED = (STATUS_CODES[k][0] for k in ("GT_OK", "GT_BAD_ARGUMENT", "GT_NUMERIC_ERROR", "GT_NOT_CONVERGED"))
+
+
+@pytest.fixture(scope="module")
+def motion():
+    ode = explicit_ode(load_user_model(MOTOR, "DCMotorModel"))
+    t = np.linspace(0.0, 0.4, 41)
+    u = (6.0 * np.sin(2 * np.pi * t / 0.4))[:, None]
+    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
+    return ode, t, x, u
+
+
+def _compiled(step: LoopStep, folder, prefix):
+    gen = generate_loop_step(step, folder, prefix=prefix)
+    lib = load_library(gen, compile_shared(gen, folder / "build", werror=True))
+    return gen, lib
+
+
+def test_tracking_controller_c_equals_python_and_keeps_the_contract(tmp_path, motion):
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0], Q=[1e-2, 1.0, 1e-4])
+    gen = generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_tracking")
+    report = check_loop_step(gen, n=300)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert report.functions[0].max_abs_diff <= 1e-12 and len(report.probes) == 9
+    text = gen.header.read_text()
+    assert "int gt_tracking_step(gt_tracking_memory *mem, double t, const double *x, double *u);" in text
+    assert "#define GT_TRACKING_DT 0.004" in text and "malloc" not in gen.source.read_text()
+
+
+def _call(init, step, memory, t, x, nu, real=ctypes.c_double):
+    mem = memory()
+    assert init(ctypes.byref(mem)) == OK
+    u = (real * nu)()
+    status = step(ctypes.byref(mem), t, (real * len(x))(*x), u)
+    return status, np.array(u[:]), mem
+
+
+def test_overflow_gives_a_status_and_the_safe_input(tmp_path, motion):
+    # no bounds: a state of 1e308 overflows the law to inf; the step must not hand it out
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-np.inf], u_ub=[np.inf], Q=[1e-2, 1.0, 1e-4])
+    gen, lib = _compiled(tracking_step(c), tmp_path / "src", "gt_t")
+    memory, init, step = load_loop_step(gen, lib)
+    status, got, mem = _call(init, step, memory, 0.1, [0.0, 1e308, 0.0], 1)
+    assert status == NUMERIC and got == pytest.approx(c.u_initial) and mem.status == NUMERIC and mem.steps == 1
+
+
+def _counting_step():
+    """A step with an inner memory (a counter, as an MPC's warm start) that fails for x[0] > 5."""
+    t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", 2), ca.MX.sym("u_last", 1), ca.MX.sym("w", 1)
+    f = ca.Function("control", [t, x, u_last, w], [3.0 * x[0] + w, w + 1, x[0] <= 5], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+    return LoopStep(name="counter", function=f, dt=0.004, u_lb=np.array([-4.0]), u_ub=np.array([4.0]), u_init=np.array([9.0]),
+                    x_names=["a", "b"], u_names=["v"], w_init=np.array([0.5]), fail_status="GT_NOT_CONVERGED",
+                    x_samples=np.zeros((1, 2)))
+
+
+def test_inner_memory_and_failure_status(tmp_path):
+    gen, lib = _compiled(_counting_step(), tmp_path / "src", "gt_count")
+    memory, init, step = load_loop_step(gen, lib)
+    mem = memory()
+    init(ctypes.byref(mem))
+    u = (ctypes.c_double * 1)()
+    results = [(step(ctypes.byref(mem), 0.0, (ctypes.c_double * 2)(*xs), u), u[0], mem.w[0]) for xs in ([1.0, 0.0], [0.2, 0.0], [6.0, 0.0])]
+    # 3*1 + 0.5 = 3.5; 3*0.2 + 1.5 = 2.1; x[0] = 6 fails: the last input 2.1 (saturated), memory kept
+    assert results == [(OK, 3.5, 1.5), (OK, pytest.approx(2.1), 2.5), (NOT_CONVERGED, pytest.approx(2.1), 2.5)]
+    assert mem.steps == 3 and mem.status == NOT_CONVERGED
+    assert mem.u_last[0] == pytest.approx(2.1)
+    report = check_loop_step(gen, n=50)
+    assert report.passed, "\n".join(report.summary_lines())
+
+
+def test_initial_input_is_saturated(tmp_path):
+    gen, lib = _compiled(_counting_step(), tmp_path / "src", "gt_count")
+    memory, init, step = load_loop_step(gen, lib)
+    status, got, _ = _call(init, step, memory, np.nan, [0.0, 0.0], 1)
+    assert status == BAD and got[0] == 4.0  # u_init 9 saturated at 4
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        ({"dt": 0.0}, r"dt: expected a positive loop period in seconds, got 0\.0"),
+        ({"u_lb": np.array([5.0])}, "u_lb <= u_ub"),
+        ({"u_init": np.array([1.0, 2.0])}, "u_init: expected 1 values, got 2"),
+        ({"fail_status": "GT_OK"}, "fail_status: expected a failure status"),
+        ({"function": ca.Function("f", [T := ca.MX.sym("t")], [2 * T])}, r"function: expected inputs \['t', 'x', 'u_last'\]"),
+    ],
+    ids=["dt", "bounds", "u_init", "status", "interface"],
+)
+def test_bad_loop_step(tmp_path, change, match):
+    step = LoopStep(**{**_counting_step().__dict__, **change})
+    with pytest.raises(InputError, match=match):
+        generate_loop_step(step, tmp_path)
+
+
+def _result_folder(root, ode, t, x, u, kind="optimal_control"):
+    root.mkdir()
+    with open(root / "trajectories.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["t", *ode.x_names, *ode.u_names])
+        w.writerows([[t[k], *x[k], *u[k]] for k in range(t.size)])
+    (root / "problem.toml").write_text('[bounds]\n"src.v" = [-10.0, 10.0]\n')
+    (root / "summary.json").write_text(json.dumps({
+        "kind": kind, "status": "optimal", "problem": str(root / "problem.toml"),
+        "model": {"file": str(MOTOR), "class": "DCMotorModel"}, "model_parameters": {"r.R": 0.5}}))
+    return root
+
+
+def test_cli_codegen_controller_result_folder(tmp_path, capsys, motion):
+    folder = _result_folder(tmp_path / "result", *motion)
+    code = main(["codegen", "--controller", str(folder), "--out", str(tmp_path / "c"), "--check", "-n", "200", "--q", "0.01,1,1e-4"])
+    out = capsys.readouterr().out
+    assert code == EXIT_OK, out
+    assert "PASSED" in out and "101 samples at 0.004 s" in out and "input bounds [-10.0] .. [10.0]" in out
+
+
+@pytest.mark.parametrize(
+    "kind, args, match",
+    [
+        ("point_to_point", [], r"summary\.json: kind: expected an optimal_control result, got 'point_to_point'"),
+        ("optimal_control", ["--q", "1,x"], r"--q: expected comma-separated numbers, got '1,x'"),
+        ("optimal_control", ["--robot", "L1"], r"--controller RESULT_DIR generates the tracking controller alone"),
+    ],
+    ids=["kind", "weights", "robot"],
+)
+def test_cli_codegen_controller_bad_result(tmp_path, capsys, motion, kind, args, match):
+    folder = _result_folder(tmp_path / "result", *motion, kind=kind)
+    code = main(["codegen", "--controller", str(folder), "--out", str(tmp_path / "c"), *args])
+    err = capsys.readouterr().err
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err and re.search(match, err), err
