@@ -14,9 +14,10 @@ error names the file and the field, the CLI exits with 2):
     an unknown variable is refused), ``u_lb`` / ``u_ub`` (default: the reference problem's
     force limits, else the model's declared bounds).
 ``[reference]``
-    The motion tracked: ``problem`` (a ``point_to_point`` problem file of the robot, solved
-    first; ``overrides`` its dotted fields, e.g. a tighter force limit for the plan than
-    the actuators' bounds) or ``file`` (a CSV table with ``t`` and the model's state and
+    The motion tracked: ``problem`` (a ``point_to_point`` problem file of the robot, or an
+    ``optimal_control`` problem file of the user's model, solved first; ``overrides`` its
+    dotted fields, e.g. a tighter force limit for the plan than the actuators' bounds; the
+    default input bounds are that problem's without the overrides) or ``file`` (a CSV table with ``t`` and the model's state and
     input names); ``settle_time`` [s] the last sample held.
 ``[check]``
     The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
@@ -44,7 +45,7 @@ from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, MPCController, mpc_
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.references import robot_parameters
-from gtmodel.problems.run import load_problem
+from gtmodel.problems.run import load_problem, solve_problem
 from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
@@ -79,7 +80,7 @@ class MPCSection(Section):
 class ReferenceSection(Section):
     """``[reference]``: the motion tracked (exactly one of ``problem`` and ``file``)."""
 
-    problem: NonEmptyText | None = Field(default=None, description="a point_to_point problem file (relative to this file), solved first")
+    problem: NonEmptyText | None = Field(default=None, description="a point_to_point (robot) or optimal_control (user model) problem file, relative to this file, solved first")
     overrides: dict[str, Any] = Field(default_factory=dict, description="dotted fields of that problem replaced, e.g. 'limits.force'")
     file: NonEmptyText | None = Field(default=None, description="a CSV table: t and the model's state and input names")
     settle_time: number(ge=0, le=60.0, unit="s", description="the last sample held this long") = 0.5
@@ -167,26 +168,32 @@ def _diag(file: ProblemFile, field: str, weights: dict[str, float], names: list[
 def _reference(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     ref = doc.reference
     if (ref.problem is None) == (ref.file is None):
-        raise file.fail("reference", "exactly one of reference.problem (a point_to_point problem file) and reference.file (a CSV table)")
+        raise file.fail("reference", "exactly one of reference.problem (a problem file solved first) and reference.file (a CSV table)")
     if ref.problem is not None:
-        if not robot:
-            raise file.fail("reference.problem", "a reference.file for a user model (reference.problem is a robot's point_to_point problem)")
         source = file.data_file("reference.problem", ref.problem)
         try:
             loaded = load_problem(source, dict(ref.overrides))
         except GtModelError as exc:
             raise file.wrap("reference.problem", exc) from None
-        if loaded.kind != "point_to_point":
-            raise file.fail("reference.problem", "a point_to_point problem file", loaded.kind)
-        solution = solve_point_to_point(loaded.declaration)
+        wanted = "point_to_point" if robot else "optimal_control"
+        if loaded.kind != wanted:
+            raise file.fail("reference.problem", f"a problem file of kind {wanted} (for this model)", loaded.kind)
+        solution = solve_point_to_point(loaded.declaration) if robot else solve_problem(loaded)
         if not solution.success:
             raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
-        tr = solution.trajectory(dt)
-        bound = np.asarray(load_problem(source).declaration.force_limit, dtype=float)
-        t = tr["t"]
-        x = np.column_stack([tr[c] for c in _TCP_STATES])
-        u = np.column_stack([tr[c] for c in _TCP_INPUTS])
-        limits = np.vstack([-bound, bound])
+        if robot:
+            tr = solution.trajectory(dt)
+            bound = np.asarray(load_problem(source).declaration.force_limit, dtype=float)
+            t = tr["t"]
+            x = np.column_stack([tr[c] for c in _TCP_STATES])
+            u = np.column_stack([tr[c] for c in _TCP_INPUTS])
+            limits = np.vstack([-bound, bound])
+        else:
+            t = np.asarray(solution.t, dtype=float).reshape(-1)
+            x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
+            u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
+            declared = load_problem(source).data.get("bounds", {})
+            limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
     else:
         source = file.data_file("reference.file", ref.file)
         table = read_table(source, "the reference table")

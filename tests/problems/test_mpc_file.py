@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
 import pytest
+
+from gtmodel._tables import write_table
 
 from gtmodel.cli import main
 from gtmodel.errors import ProblemError
@@ -70,5 +73,19 @@ def test_motor_file_builds_its_controller():
     c = setup.controller
     assert (c.horizon, c.blocks, c.sqp_iterations, c.dt) == (20, 20, 1, 0.004)
     assert c.x_names == ["ind.i", "emf.phi", "rotor.w"] and c.u_names == ["src.v"]
-    assert (c.u_lb.tolist(), c.u_ub.tolist()) == ([-12.0], [12.0])
+    assert (c.u_lb.tolist(), c.u_ub.tolist()) == ([-24.0], [24.0])  # problems/dc_motor_move.toml's bounds, not the override
+    assert np.max(np.abs(c.u_ref)) <= 20.0 + 1e-6  # planned with the override's 20 V
     assert setup.loop["error_states"] == [1] and setup.loop["delay"] == 1
+
+
+def test_reference_table_of_a_user_model(tmp_path):
+    # [reference] file: a CSV of t and the model's variables, sampled onto the period
+    t = np.linspace(0.0, 0.2, 11)
+    write_table(tmp_path / "ref.csv", ["t", "ind.i", "emf.phi", "rotor.w", "src.v"], np.column_stack([t, 0 * t, t, 1 + 0 * t, 2 + 0 * t]))
+    text = MOTOR.replace('problem = "../../problems/dc_motor_move.toml"', 'file = "ref.csv"').replace('model = "../../models/', f'model = "{REPO}/models/')
+    text = "\n".join(line for line in text.splitlines() if not line.startswith("overrides"))
+    (tmp_path / "m.toml").write_text(text + '\n')
+    c = load_mpc_file(tmp_path / "m.toml").controller
+    assert c.length == 51 + int(round(0.3 / 0.004))  # 0.2 s at 4 ms, then the settling hold
+    np.testing.assert_allclose(c.x_ref[:51, 1], np.arange(51) * 0.004, atol=1e-12)  # linear in t: sampled exactly
+    assert np.isinf(c.u_ub[0])  # no bounds declared: the model's (none)
