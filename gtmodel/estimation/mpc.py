@@ -310,7 +310,7 @@ def mpc_controller(
     u_lb: Any = None,
     u_ub: Any = None,
     p: Any = None,
-    method: str = "euler",
+    method: str = "rk4",
     substeps: int = 1,
     blocks: int | None = None,
     sqp_iterations: int = 1,
@@ -338,7 +338,7 @@ def mpc_controller(
     p : array_like, optional
         ``(np,)`` model parameters of the prediction; default ``ode.p_default``.
     method : {"euler", "rk4", "implicit_euler", "radau2"}, optional
-        Prediction step (explicit Euler on ``f``, or :meth:`ExplicitODE.step`).
+        Prediction step (default ``"rk4"``; ``"euler"``: explicit Euler on ``f``, the cheapest; the others: :meth:`ExplicitODE.step`, ``implicit_euler`` and ``radau2`` for stiff models).
     substeps : int, optional
         Steps of ``method`` within one period.
     blocks : int, optional

@@ -68,7 +68,7 @@ class MPCSection(Section):
     blocks: int | None = Field(default=None, ge=1, strict=True, description="input blocks over the horizon (a divisor; default the horizon)")
     sqp_iterations: int = Field(default=1, ge=1, le=100, strict=True, description="SQP iterations per period (1: real-time iteration)")
     solver: choice(*MPC_SOLVERS, description="NLP solver of the step (qrqp QPs)") = "sqpmethod"
-    method: choice(*MPC_METHODS, description="prediction step over one period") = "euler"
+    method: choice(*MPC_METHODS, description="prediction step over one period (euler: cheapest; implicit_euler, radau2: stiff models)") = "rk4"
     substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
     state_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
     input_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of R by input name")
@@ -192,8 +192,12 @@ def _reference(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, dt: float
             t = np.asarray(solution.t, dtype=float).reshape(-1)
             x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
             u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
-            declared = load_problem(source).data.get("bounds", {})
-            limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
+            declared = {} if doc.mpc.u_lb is not None and doc.mpc.u_ub is not None else load_problem(source).data.get("bounds", {})
+            try:
+                limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
+            except (TypeError, ValueError, IndexError):
+                raise file.fail("reference.problem", "a problem whose [bounds] of the inputs are [lo, hi] numbers "
+                                "(else give mpc.u_lb and mpc.u_ub)") from None
     else:
         source = file.data_file("reference.file", ref.file)
         table = read_table(source, "the reference table")
