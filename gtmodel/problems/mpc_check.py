@@ -156,7 +156,7 @@ def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, 
     MPCCheck
     """
     controller, reset, memory_bytes = compiled_step(generated, library)
-    args = (setup.plant_step, setup.x_ref[0], setup.t, setup.x_ref)
+    args = (setup.plant_step, setup.plant_x0, setup.t, setup.x_ref)
     kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES, clock=clock)
     first = run_controller_loop(controller, *args, **kw)
     times, statuses = [first.step_s], [first.status]

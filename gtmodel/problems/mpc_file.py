@@ -22,7 +22,8 @@ error names the file and the field, the CLI exits with 2):
 ``[check]``
     The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
     ``mass_factor``, ``friction_factor`` (the robot plant; a user model: ``parameter_factor``
-    on every parameter), ``noise`` (one standard deviation per state), ``disturbance`` and
+    on every parameter), ``compliance`` (the robot: the tool structure of eq. 6.14 in the
+    plant, the tool position tracked, the controller measuring ``T``, ``T_dot``), ``noise`` (one standard deviation per state), ``disturbance`` and
     ``disturbance_time``, ``delay`` (samples), ``seed``, ``error_states``.
 """
 
@@ -40,7 +41,7 @@ from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError, ProblemError
-from gtmodel.estimation.closed_loop.controller_loop import mismatched_robot
+from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
 from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, MPCController, mpc_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.base import ProblemFile
@@ -97,6 +98,7 @@ class CheckSection(Section):
     disturbance_time: number(ge=0, le=1e4, unit="s", description="time of the step disturbance") = 0.0
     delay: int = Field(default=1, ge=0, le=100, strict=True, description="input delay [samples]")
     seed: int = Field(default=0, ge=0, strict=True)
+    compliance: bool = Field(default=False, strict=True, description="robot: the tool structure of eq. 6.14 (7.4 / 11.5 Hz modes) in the plant")
     error_states: list[str] = Field(default_factory=list, description="states summarised by the tracking error (default all)")
 
 
@@ -142,6 +144,8 @@ class MPCSetup:
         The reference at the loop period (settling included).
     loop : dict
         Keyword arguments of :func:`~gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`.
+    plant_x0 : numpy.ndarray
+        The plant's initial state (the reference's first state; the structure at rest).
     """
 
     name: str
@@ -152,6 +156,7 @@ class MPCSetup:
     x_ref: np.ndarray
     u_ref: np.ndarray
     loop: dict
+    plant_x0: np.ndarray
 
 
 def _diag(file: ProblemFile, field: str, weights: dict[str, float], names: list[str]) -> np.ndarray | None:
@@ -290,5 +295,11 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
                 disturbance=np.asarray(c.disturbance, dtype=float) if c.disturbance else None, disturbance_time=c.disturbance_time,
                 delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None)
     grid = controller.t0 + controller.dt * np.arange(controller.length)
-    return MPCSetup(name=doc.name, controller=controller, plant_step=plant.step(m.period, "rk4", substeps=4), plant_p=plant_p,
-                    t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop)
+    plant_step, plant_x0 = plant.step(m.period, "rk4", substeps=4), xs[0].copy()
+    if c.compliance:
+        if not robot:
+            raise file.fail("check.compliance", "false for a user model (the tool structure of eq. 6.14 is the robot's)", True)
+        plant_step, loop["output"], loop["measured"] = compliant_plant(plant, dt=m.period)
+        plant_x0 = np.r_[xs[0], np.zeros(4)]
+    return MPCSetup(name=doc.name, controller=controller, plant_step=plant_step, plant_p=plant_p,
+                    t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0)

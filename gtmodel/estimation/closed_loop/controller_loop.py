@@ -31,9 +31,10 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError
+from gtmodel.estimation.closed_loop.plant import ToolStructure
 from gtmodel.robots.parameters import RobotParameters
 
-__all__ = ["LoopSummary", "run_controller_loop", "mismatched_robot", "BOUND_TOLERANCE"]
+__all__ = ["LoopSummary", "run_controller_loop", "mismatched_robot", "compliant_plant", "BOUND_TOLERANCE"]
 
 #: Slack of the bound-violation count (relative to ``1 + |bound|``).
 BOUND_TOLERANCE = 1e-9
@@ -184,6 +185,8 @@ def run_controller_loop(
     seed: int = 0,
     status_names: dict[int, str] | None = None,
     clock: Callable[[], float] = time.perf_counter,
+    measured: int | None = None,
+    output: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> LoopSummary:
     """Run a controller against a simulated plant, sample by sample.
 
@@ -192,9 +195,10 @@ def run_controller_loop(
     controller : callable
         ``controller(t, x_measured) -> (status, u)``; ``u`` ``(nu,)``.
     plant_step : casadi.Function
-        ``step(x, u, p) -> (x_next, ...)`` over one period of the plant's model (its own parameters).
+        ``step(x, u, p) -> (x_next, ...)`` over one period of the plant's model (its own
+        parameters; at least two outputs, the first the next state).
     x0 : array_like
-        ``(nx,)`` initial plant state.
+        Initial plant state.
     t : array_like
         ``(K,)`` equally spaced sample times [s] (the loop period apart).
     x_ref : array_like
@@ -204,7 +208,7 @@ def run_controller_loop(
     plant_p : array_like, optional
         ``(np,)`` the plant's parameters (default none).
     noise_std : float or array_like, optional
-        Standard deviation of the measurement noise per state (default 0).
+        Standard deviation of the measurement noise per measured state (default 0).
     disturbance : array_like, optional
         ``(nu,)`` input offset added from ``disturbance_time`` on (default none).
     disturbance_time : float, optional
@@ -223,6 +227,12 @@ def run_controller_loop(
         The clock of the step times [s] (default ``time.perf_counter``, wall time;
         ``time.thread_time``: the CPU time of this thread, without the preemptions of a
         shared machine).
+    measured : int, optional
+        The controller sees the first ``measured`` plant states (default all; a plant with
+        states the controller does not model, e.g. :func:`compliant_plant`).
+    output : callable, optional
+        ``output(x_plant) -> (nx_ref,)``: the plant's tracked coordinates compared with
+        ``x_ref`` and recorded as :attr:`LoopSummary.x` (default the plant state itself).
 
     Returns
     -------
@@ -236,7 +246,9 @@ def run_controller_loop(
     tt = np.asarray(t, dtype=float).reshape(-1)
     xr = np.asarray(x_ref, dtype=float)
     x = np.asarray(x0, dtype=float).reshape(-1).copy()
-    nx = x.size
+    nm = x.size if measured is None else int(measured)
+    out = (lambda v: v) if output is None else output
+    nx = np.asarray(out(x), dtype=float).size
     if tt.size < 2 or xr.shape != (tt.size, nx):
         raise InputError(f"t, x_ref: expected at least two times and an ({tt.size}, {nx}) reference, got {xr.shape}")
     if isinstance(delay, bool) or not isinstance(delay, (int, np.integer)) or delay < 0:
@@ -244,7 +256,7 @@ def run_controller_loop(
     lb, ub = np.asarray(u_lb, dtype=float).reshape(-1), np.asarray(u_ub, dtype=float).reshape(-1)
     nu = lb.size
     pv = np.zeros(0) if plant_p is None else np.asarray(plant_p, dtype=float).reshape(-1)
-    sigma = np.broadcast_to(np.asarray(noise_std, dtype=float), (nx,))
+    sigma = np.broadcast_to(np.asarray(noise_std, dtype=float), (nm,))
     dist = np.zeros(nu) if disturbance is None else np.asarray(disturbance, dtype=float).reshape(nu)
     rng = np.random.default_rng(seed)
     K = tt.size
@@ -252,8 +264,8 @@ def run_controller_loop(
     pending: list[np.ndarray] = []
     applied = None if u_before is None else np.asarray(u_before, dtype=float).reshape(nu)
     for k in range(K):
-        xs[k] = x
-        y = x + sigma * rng.standard_normal(nx)
+        xs[k] = np.asarray(out(x), dtype=float).reshape(-1)
+        y = x[:nm] + sigma * rng.standard_normal(nm)
         start = clock()
         code, u = controller(float(tt[k]), y)
         times[k] = clock() - start
@@ -269,3 +281,69 @@ def run_controller_loop(
     return LoopSummary(t=tt, x=xs, x_ref=xr, u=us, status=status, step_s=times,
                        error_states=tuple(range(nx)) if error_states is None else tuple(int(i) for i in error_states),
                        u_lb=lb, u_ub=ub, status_names=dict(status_names or {}))
+
+
+def compliant_plant(ode: Any, structure: ToolStructure | None = None, dt: float = 0.004, substeps: int = 4) -> tuple[ca.Function, Callable, int]:
+    """A TCP-state robot model with the tool structure of Dressler (2012), eq. 6.14, as a plant.
+
+    States ``[T (3), T_dot (3), d (2), d_dot (2)]``: the rigid body ``T_ddot = f(T, T_dot, tau)``
+    of ``ode`` (TCP states), and one structural mode per direction x, y driven by the
+    kinematic acceleration, ``M d'' + D d' + K d = B a_kin`` (:class:`ToolStructure`). The
+    controller measures ``T``, ``T_dot`` (encoders, forward kinematics); the tool is at
+    ``T + (d, 0)``.
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The rigid-body model in TCP states (``gantry_tau_model(..., states="tcp")``), the plant's
+        own parameters.
+    structure : ToolStructure, optional
+        The modes (default the ILC operating point of ch. 7.3: 7.4 / 11.5 Hz).
+    dt : float, optional
+        Loop period [s].
+    substeps : int, optional
+        RK4 steps per period.
+
+    Returns
+    -------
+    step : casadi.Function
+        ``step(x (10,1), u (3,1), p) -> (x_next, converged)`` (the interface of
+        :meth:`ExplicitODE.step <gtmodel.modeling.simulation.explicit.ExplicitODE.step>`; ``converged`` 1).
+    output : callable
+        ``output(x) -> (6,)``: tool position ``T + (d, 0)`` and velocity ``T_dot + (d_dot, 0)``.
+    measured : int
+        6 (the states the controller sees).
+
+    Raises
+    ------
+    InputError
+        A model that is not in TCP states (6 states, 3 inputs).
+    """
+    if ode.nx != 6 or ode.nu != 3:
+        raise InputError(f"ode: expected a TCP-state robot model (6 states, 3 inputs), got {ode.nx} states and {ode.nu} inputs")
+    pm = (structure or ToolStructure()).physical_model()
+    M, D, K, B = (np.asarray(getattr(pm, n), dtype=float) for n in ("M", "D", "K", "B"))
+    Minv = np.linalg.inv(M)
+    x, u, p = ca.SX.sym("x", 10), ca.SX.sym("u", 3), ca.SX.sym("p", ode.np)
+
+    def rhs(v):
+        rigid = ode.f(v[:6], u, p)
+        a_kin = rigid[3:5]
+        d, d_dot = v[6:8], v[8:10]
+        d_ddot = ca.mtimes(ca.DM(Minv), ca.mtimes(ca.DM(B), a_kin) - ca.mtimes(ca.DM(D), d_dot) - ca.mtimes(ca.DM(K), d))
+        return ca.vertcat(rigid, d_dot, d_ddot)
+
+    h, xn = dt / substeps, x
+    for _ in range(substeps):
+        k1 = rhs(xn)
+        k2 = rhs(xn + h / 2 * k1)
+        k3 = rhs(xn + h / 2 * k2)
+        k4 = rhs(xn + h * k3)
+        xn = xn + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    step = ca.Function("compliant_step", [x, u, p], [xn, ca.DM(1.0)], ["x", "u", "p"], ["x_next", "converged"])
+
+    def output(v: np.ndarray) -> np.ndarray:
+        v = np.asarray(v, dtype=float).reshape(-1)
+        return np.r_[v[:2] + v[6:8], v[2], v[3:5] + v[8:10], v[5]]
+
+    return step, output, 6
