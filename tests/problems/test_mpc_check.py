@@ -9,6 +9,8 @@ status and the last input, saturated, never NaN).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -35,9 +37,12 @@ def test_l1_mpc_halves_the_feedforward_error_without_bound_violations(l1):
     assert check.mpc.status_counts == {"GT_OK": setup.t.size}
 
 
-def test_converged_rti_agrees_with_ipopt_at_closed_loop_states(l1):
+def test_converged_rti_agrees_with_ipopt_near_the_reference(l1):
+    # states 1 mm and 10 mm/s off the reference while every axis moves (the plant's state is the
+    # tool's with the compliance model; the MPC's is T, T_dot)
     setup, _, _, check = l1
-    assert np.max(ipopt_agreement(setup, check.mpc, samples=3, iterations=20, min_speed=0.05)) <= 1e-6
+    near = dataclasses.replace(check.mpc, x=check.mpc.x_ref + np.array([1e-3, -1e-3, 1e-3, 0.01, -0.01, 0.01]))
+    assert np.max(ipopt_agreement(setup, near, samples=3, iterations=20, min_speed=0.2)) <= 1e-6
 
 
 @pytest.mark.parametrize("bad", [np.full(6, 100.0), np.r_[1e300, 0, 0, 0, 0, 0]], ids=["out of the workspace", "overflow"])
