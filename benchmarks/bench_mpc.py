@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gtmodel.estimation.mpc import QP_ROW
 from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
 from gtmodel.problems.mpc_file import load_mpc_file
 
@@ -54,7 +55,7 @@ def python_step_s(setup, summary) -> float:
     for k in np.linspace(0, summary.t.size - 1, PYTHON_STATES).round().astype(int):
         p = c.parameters(summary.t[k], summary.x[k])
         t0 = time.perf_counter()
-        sol = solver(x0=w, p=p, lbx=lbx, ubx=ubx)
+        sol = solver(x0=w, p=p, lbx=lbx, ubx=ubx, **QP_ROW)
         times.append(time.perf_counter() - t0)
         w = np.asarray(sol["x"]).reshape(-1)
     return statistics.median(times)

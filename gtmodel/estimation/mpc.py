@@ -43,12 +43,15 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.tracking import _sampled, _weight, saturate
 
-__all__ = ["MPC_METHODS", "MPC_SOLVERS", "MPCController", "mpc_controller"]
+__all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
 
 #: Prediction steps: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
 MPC_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
 #: NLP solvers of the generated step (``fatrop`` needs the multiple-shooting order: not offered).
 MPC_SOLVERS = ("sqpmethod",)
+#: Bounds of the NLP's one constraint row ``g = w_0``, never active (a workaround of CasADi 3.8's
+#: ``qrqp``, which reads and writes past its work block on a QP without constraint rows).
+QP_ROW = {"lbg": -math.inf, "ubg": math.inf}
 #: Added to ``(t - t_0) / dt`` before ``floor`` (a time on the grid reads its own sample).
 INDEX_EPS = 1e-9
 
@@ -152,11 +155,14 @@ class MPCController:
             res.append(ca.mtimes(Lf if j == H - 1 else Lq, x - xr[:, j]))
         r = ca.vertcat(*res)
         w, p = ca.vec(W), ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
-        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", 0)
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", 1)
         jr = ca.jacobian(r, w)
         hess = ca.Function("nlp_hess_l", [w, p, lam_f, lam_g], [2 * lam_f * ca.densify(ca.mtimes(jr.T, jr))],
                            ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
-        return {"x": w, "p": p, "f": ca.sumsqr(r), "g": ca.MX(0, 1)}, hess
+        # g: one inactive linear row (bounds -inf, inf; see QP_ROW): CasADi 3.8's qrqp reads and
+        # writes one entry past its work block on a QP with bounds only (valgrind:
+        # casadi_qrqp_dual_blocking); with one constraint row it stays inside
+        return {"x": w, "p": p, "f": ca.sumsqr(r), "g": w[0]}, hess
 
     def nlp_solver(self, plugin: str = "sqpmethod", iterations: int | None = None) -> ca.Function:
         """The horizon NLP as a CasADi ``nlpsol``: ``sqpmethod`` + ``qrqp`` (the generated one) or ``ipopt``.
@@ -245,7 +251,7 @@ class MPCController:
         """
         solver = self.nlp_solver(plugin, iterations)
         sol = solver(x0=self.w_initial if w0 is None else np.asarray(w0, dtype=float), p=self.parameters(t, x),
-                     lbx=np.tile(self.u_lb, self.blocks), ubx=np.tile(self.u_ub, self.blocks))
+                     lbx=np.tile(self.u_lb, self.blocks), ubx=np.tile(self.u_ub, self.blocks), **QP_ROW)
         w = np.asarray(sol["x"]).reshape(-1)
         return w[: self.nu].copy(), w
 
@@ -279,7 +285,7 @@ class MPCController:
         xr, ur = self._window(t, lookup)
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
         lbx, ubx = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
-        sol = self.nlp_solver("sqpmethod")(x0=w, p=p, lbx=lbx, ubx=ubx)["x"]
+        sol = self.nlp_solver("sqpmethod")(x0=w, p=p, lbx=lbx, ubx=ubx, **QP_ROW)["x"]
         nlp, _ = self._nlp()
         cost = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"]])(sol, p)  # NaN when the prediction fails
         sol = saturate(sol, lbx, ubx)
