@@ -52,6 +52,12 @@
     (:func:`gtmodel.problems.controller.tracking_from_result`: feedforward + time-varying
     LQR at the loop period, saturated) as C with the loop-step interface
     (:mod:`gtmodel.codegen.loop_step`: ``gt_tracking_init``, ``gt_tracking_step``).
+``gtmodel codegen --mpc FILE.toml --out DIR [--check]``
+    The real-time nonlinear MPC of an MPC file (:mod:`gtmodel.problems.mpc_file`: ``[mpc]``,
+    ``[reference]``, ``[check]``) as C with the same loop-step interface (``gt_<name>_init``,
+    ``gt_<name>_step``; CasADi's ``sqpmethod`` + ``qrqp`` generated inside); ``--check``
+    compares it with Python and runs it in closed loop against the mismatched plant
+    (:mod:`gtmodel.problems.mpc_check`).
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
@@ -171,6 +177,8 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
                     help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library; "
                     "or an optimal_control result folder: its tracking controller (feedforward + time-varying LQR) alone")
+    cg.add_argument("--mpc", type=Path, default=None, metavar="FILE",
+                    help="an MPC file (TOML: [mpc], [reference], [check]): its real-time MPC step as C (docs/model_in_the_loop.md)")
     cg.add_argument("--period", type=float, default=None, metavar="S",
                     help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
     cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
@@ -469,6 +477,8 @@ def _codegen(args: argparse.Namespace) -> int:
     check_out_dir(args.out)  # the rule of solve --out: never a folder of the user's own files
 
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    if args.mpc is not None:
+        return _codegen_mpc(args)
     if args.model is not None:
         return _codegen_model(args, functions)
     if args.controller is not None and args.controller.is_dir():
@@ -497,6 +507,27 @@ def _codegen(args: argparse.Namespace) -> int:
         controller_report = check_controller(generated, seed=args.seed, timing=True)
         print("\n".join(controller_report.summary_lines()))
         passed = passed and controller_report.passed
+    return EXIT_OK if passed else EXIT_NOT_OPTIMAL
+
+
+def _codegen_mpc(args: argparse.Namespace) -> int:
+    from gtmodel.codegen.loop_step import check_loop_step
+    from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
+    from gtmodel.problems.mpc_file import load_mpc_file
+
+    if args.model is not None or args.robot is not None or args.controller is not None:
+        raise GtModelError("--mpc generates the MPC of its file alone: give it without --model, --robot and --controller")
+    setup = load_mpc_file(args.mpc)
+    generated, library = build_mpc(setup, args.out)
+    print(f"wrote {generated.source}, {generated.header}, {generated.casadi_source}")
+    print(generated.version)
+    if not args.check:
+        return EXIT_OK
+    report = check_loop_step(generated, n=min(args.samples, 200), seed=args.seed)
+    print("\n".join(report.summary_lines()))
+    loop = closed_loop_check(setup, generated, library)
+    print("\n".join(loop.summary_lines()))
+    passed = report.passed and loop.mpc.bound_violations == 0 and loop.ratio_to_feedforward < 1.0
     return EXIT_OK if passed else EXIT_NOT_OPTIMAL
 
 

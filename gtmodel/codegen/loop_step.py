@@ -53,9 +53,10 @@ from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, Ou
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
 from gtmodel.errors import CodegenError, InputError
+from gtmodel.estimation.mpc import MPCController
 from gtmodel.estimation.tracking import TrackingController
 
-__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "LoopStep", "tracking_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "LoopStep", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
 
 log = logging.getLogger("gtmodel")
 
@@ -179,6 +180,34 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
                     x_names=list(c.x_names), u_names=list(c.u_names), description=text,
                     t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
+
+
+def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
+    """The loop step of a real-time MPC (:func:`gtmodel.estimation.mpc.mpc_controller`).
+
+    Parameters
+    ----------
+    controller : MPCController
+        The MPC (its solver is code-generated inside the step).
+    name : str, optional
+        Controller name for the header.
+
+    Returns
+    -------
+    LoopStep
+        Its :meth:`~gtmodel.estimation.mpc.MPCController.function`, period, input bounds,
+        first input ``u*_0``, first warm start, ``GT_NOT_CONVERGED`` when the SQP result is
+        not finite, and the reference as the check's samples.
+    """
+    c = controller
+    text = (f"Real-time nonlinear MPC: horizon {c.horizon} periods of {c.dt!r} s, {c.blocks} input blocks, "
+            f"{c.sqp_iterations} SQP iteration(s) per period\n"
+            "(CasADi sqpmethod with qrqp, Gauss-Newton Hessian, single shooting, warm start shifted by one period;\n"
+            "tracking of the reference x*, u* sampled at the period; gtmodel.estimation.mpc).\n"
+            f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
+    return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.w_initial, description=text,
+                    fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
 
 
 def _c_array(values: Any) -> str:
@@ -321,14 +350,24 @@ def _samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.n
            "x": rows + scale * rng.standard_normal(rows.shape),
            "u_last": rng.uniform(lo, hi, (n, step.nu))}
     if step.nw:
-        out["w_start"] = np.tile(step.w_init, (n, 1))
+        out["w_start"] = np.tile(step.w_init, (n, 1))  # the C argument's name (the Function's input: w)
     return out
 
 
 def _reference(step: LoopStep, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     n = len(inputs["t"])
-    f = step.function.map(n)
-    res = f.call({("w" if k == "w_start" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()})
+    args = {("w" if k == "w_start" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()}
+    try:
+        res = step.function.map(n).call(args)
+    except RuntimeError:  # a sample whose evaluation fails (an MPC's solver meeting NaN): ok = 0 for it alone
+        res = {name: np.zeros((step.function.numel_out(name), n)) for name in step.function.name_out()}
+        for i in range(n):
+            try:
+                one = step.function.call({k: v[:, i] for k, v in args.items()})
+            except RuntimeError:
+                continue
+            for name in res:
+                res[name][:, i] = np.asarray(one[name]).reshape(-1)
     ok = np.asarray(res["ok"]).reshape(-1) > 0.5
     out = {"u": np.asarray(res["u"]).T}
     if step.nw:
