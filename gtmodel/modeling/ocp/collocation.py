@@ -66,6 +66,13 @@ IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
 #: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
 #: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
 BANDED_MIN_ELEMENTS = 300
+#: What an IPOPT failure means and what to try, appended to the result's message.
+IPOPT_HINTS = {
+    "Restoration_Failed": "IPOPT's feasibility restoration could not reduce the constraint violation: the constraints may "
+                          "be infeasible or degenerate (e.g. bounds that duplicate an equality such as u1^2 + u2^2 = 1), "
+                          "or the guess far from feasible (start from a coarser mesh's solution)",
+    "Search_Direction_Becomes_Too_Small": "IPOPT's steps became too small: often scaling (set nominal values)",
+}
 #: fatrop's unified return status -> gtmodel status (success is ``optimal``).
 _FATROP_STATUS = {"SOLVER_RET_LIMITED": Status.MAX_ITERATIONS, "SOLVER_RET_NAN": Status.ERROR}
 
@@ -446,6 +453,8 @@ class CollocationTranscription:
         else:
             message = error_msg or str(stats.get("return_status", "unknown"))
             status = Status.ERROR if error_msg else normalize_ipopt_status(message)
+            if message in IPOPT_HINTS:
+                message = f"{message}: {IPOPT_HINTS[message]}"
         if not np.all(np.isfinite(w_opt)):
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
