@@ -49,16 +49,11 @@ __all__ = ["CollocationTranscription", "solve"]
 
 _log = logging.getLogger("gtmodel")
 
-#: nlpsol plugins a transcription can be solved with. ``"fatrop"`` (CasADi's fatrop plugin)
-#: solves the NLP ordered stage by stage (``transcribe(..., stagewise=True)``: one stage per
-#: element, its start state and final-time copy the stage's state, its collocation-point
-#: variables the stage's controls) with the structure given explicitly (``N``, ``nx``,
-#: ``nu``, ``ng``). The plugin takes no ``jac_g``/``hess_lag`` options, so it differentiates
-#: the NLP's expression graph itself (CasADi's SX interpreter), not the compiled point
-#: derivatives IPOPT is given; what that costs is measured by ``benchmarks/bench_solve.py``.
+#: nlpsol plugins a transcription can be solved with. ``"fatrop"``: the NLP ordered stage by
+#: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
+#: ``jac_g``/``hess_lag``, so it differentiates the NLP graph itself (docs/verification.md).
 SOLVERS = ("ipopt", "fatrop")
-#: Options of the IPOPT defaults that fatrop does not have (dropped for it); its objective
-#: scaling ``obj_scaling_factor`` is applied to the objective handed to it instead.
+#: IPOPT options fatrop lacks (dropped; ``obj_scaling_factor`` scales the objective it is given).
 IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
 #: Default mesh size from which a free final time is copied per element (banded KKT). L1
 #: minimum-time problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared
@@ -68,9 +63,8 @@ IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
 BANDED_MIN_ELEMENTS = 300
 #: What an IPOPT failure means and what to try, appended to the result's message.
 IPOPT_HINTS = {
-    "Restoration_Failed": "IPOPT's feasibility restoration could not reduce the constraint violation: the constraints may "
-                          "be infeasible or degenerate (e.g. bounds that duplicate an equality such as u1^2 + u2^2 = 1), "
-                          "or the guess far from feasible (start from a coarser mesh's solution)",
+    "Restoration_Failed": "IPOPT's feasibility restoration could not reduce the constraint violation: infeasible or degenerate "
+                          "constraints (e.g. bounds duplicating an equality such as u1^2 + u2^2 = 1) or a guess far from feasible",
     "Search_Direction_Becomes_Too_Small": "IPOPT's steps became too small: often scaling (set nominal values)",
 }
 #: fatrop's unified return status -> gtmodel status (success is ``optimal``).
