@@ -10,11 +10,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.errors import InputError
+from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling import CollocationTranscription, Optimization
 from gtmodel.modeling.ocp.collocation import SOLVERS
+from gtmodel.problems import load_problem
 from gtmodel.trajectory.settings import NLP_SOLVERS
 
+from ...conftest import PROBLEMS_DIR
 from .._builders import double_integrator, min_energy_problem, rest_to_rest
 from .test_optimization import _free_parameter_problem
 
@@ -74,6 +76,13 @@ def test_bad_solver_arguments_are_refused(kw, match):
 def test_free_parameters_are_refused_with_fatrop():
     with pytest.raises(InputError, match="free parameters are shared by all elements"):
         CollocationTranscription(_free_parameter_problem(), elements=5, solver="fatrop")
+
+
+def test_an_integral_constraint_coupling_all_elements_is_refused():
+    # the isoperimetric form of the hanging chain: integral(...) == L sums over every element
+    chain = load_problem(PROBLEMS_DIR / "benchmarks" / "hanging_chain.toml").declaration.optimization
+    with pytest.raises(SolverError, match="couple elements beyond neighbouring ones"):
+        CollocationTranscription(chain, elements=4, solver="fatrop")
 
 
 def test_warm_start_is_ipopts():
