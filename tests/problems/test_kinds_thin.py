@@ -71,7 +71,7 @@ def test_point_to_point_method_and_solver_settings_are_objects():
     (lambda: Collocation(elements=0), "elements: expected a positive integer"),
     (lambda: Collocation(points=10), "points: expected an integer in 1..9"),
     (lambda: Collocation(scheme="euler"), "scheme: expected one of radau, legendre"),
-    (lambda: SolverSettings(name="fatrop"), "name: expected one of ipopt"),
+    (lambda: SolverSettings(name="snopt"), "name: expected one of ipopt, fatrop"),
     (lambda: SolverSettings(tol=0.0), "tol: expected a positive finite number"),
 ])
 def test_settings_name_the_bad_value(build, match):

@@ -57,20 +57,26 @@ __all__ = ["CollocationTranscription", "solve"]
 
 _log = logging.getLogger("gtmodel")
 
-#: nlpsol plugins a transcription can be solved with. CasADi's fatrop plugin is not one:
-#: it takes no ``jac_g``/``hess_lag`` options, so it would differentiate the whole NLP graph
-#: itself (interpreted), which issue 17 measured only matching IPOPT before the compiled
-#: derivatives made IPOPT's evaluations 5x cheaper. Its own linear algebra is no faster
-#: here either: on the L1 problem written stage by stage (50 elements, final-time copies,
-#: ``structure_detection="auto"``) it took 52 iterations to the same final time (1e-11),
-#: 0.35 s of them in computing search directions, against IPOPT + MUMPS's ~0.3 s (issue 17).
-SOLVERS = ("ipopt",)
+#: nlpsol plugins a transcription can be solved with. ``"fatrop"``: the NLP ordered stage by
+#: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
+#: ``jac_g``/``hess_lag``, so it differentiates the NLP graph itself (docs/verification.md).
+SOLVERS = ("ipopt", "fatrop")
+#: IPOPT options fatrop lacks (dropped; ``obj_scaling_factor`` scales the objective it is given).
+IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
 #: Default mesh size from which a free final time is copied per element (banded KKT). L1
 #: minimum-time problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared
 #: variable 13.0 ms at 50 elements and 127 ms at 400 (9.7x for 8x the mesh), copies 14.0
 #: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
 #: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
 BANDED_MIN_ELEMENTS = 300
+#: What an IPOPT failure means and what to try, appended to the result's message.
+IPOPT_HINTS = {
+    "Restoration_Failed": "IPOPT's feasibility restoration could not reduce the constraint violation: infeasible or degenerate "
+                          "constraints (e.g. bounds duplicating an equality such as u1^2 + u2^2 = 1) or a guess far from feasible",
+    "Search_Direction_Becomes_Too_Small": "IPOPT's steps became too small: often scaling (set nominal values)",
+}
+#: fatrop's unified return status -> gtmodel status (success is ``optimal``).
+_FATROP_STATUS = {"SOLVER_RET_LIMITED": Status.MAX_ITERATIONS, "SOLVER_RET_NAN": Status.ERROR}
 
 
 def _fname(name: str) -> str:
@@ -120,8 +126,11 @@ class CollocationTranscription:
         cached by a hash of the source (:func:`gtmodel._compiler.compiled_function`);
         the same values, several times faster per evaluation. Without a compiler (or
         with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
-    solver : {"ipopt"}, optional
+    solver : {"ipopt", "fatrop"}, optional
         The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options.
+        ``"fatrop"`` transcribes stage by stage with final-time copies (``banded``) and
+        differentiates the NLP graph itself (``derivatives`` and ``compile`` apply to IPOPT);
+        not with free parameters.
     banded : bool, optional
         A free final time as one copy per element tied by equalities, so that the KKT
         matrix is banded, or as one variable shared by all elements (a dense row and
@@ -190,8 +199,13 @@ class CollocationTranscription:
         if solver not in SOLVERS:
             raise InputError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
         self.plugin = solver
+        self.objective_scale = 1.0  # fatrop: the factor its objective is multiplied by (obj_scaling_factor)
         self.compile = bool(compile)
         self.banded = self.elements >= BANDED_MIN_ELEMENTS if banded is None else bool(banded)
+        if solver == "fatrop":
+            if banded is False:
+                raise InputError("solver fatrop: a free final time must be copied per element (banded=True), its stage structure has no shared variable")
+            self.banded = True
         self.verbose = bool(verbose)
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
@@ -242,18 +256,19 @@ class CollocationTranscription:
     # ------------------------------------------------------------------ build
     def _build(self) -> None:
         opt, dae = self.optimization, self.dae
-        co = collocation_coefficients(self.points, self.scheme)
-        self._co = co
-        assembled = self.derivatives == "assembled"
+        self._co = co = collocation_coefficients(self.points, self.scheme)
+        stagewise = self.plugin == "fatrop"
+        assembled = self.derivatives == "assembled" and not stagewise
         free_index = self._free_index()
-        if self.banded and opt.free_final_time:
+        if self.banded and opt.free_final_time and not stagewise:
             # N copies of the final time: scaled by sqrt(N), IPOPT's regularisation of the
             # Hessian, delta_w |step|^2, weighs a common change of all copies as it would
-            # weigh a change of one shared variable
+            # weigh a change of one shared variable (not for fatrop: L1, 400 elements, 185
+            # iterations with it, 110 without; 47 and 51 on 50 elements)
             self.nominal["tf"] = self.nominal["tf"] * np.sqrt(self.elements)
         nlp = transcribe(
             opt, dae, self.elements, self.points, co, self.nominal, free_index, inline_points=not assembled, final_time_copies=self.banded,
-            fractions=self.fractions,
+            fractions=self.fractions, stagewise=stagewise,
         )
         self.nlp = nlp
         wv, gv, P_nlp = nlp.w, nlp.g, nlp.p
@@ -268,7 +283,7 @@ class CollocationTranscription:
         self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()),
                     None if self.fractions is None else tuple(self.fractions.tolist()))
         self.derivative_functions: dict[str, ca.Function] = {}
-        self.evaluation = "CasADi interpreter (whole NLP graph)"
+        self.evaluation = "CasADi interpreter (whole NLP graph" + (", differentiated by the fatrop plugin)" if stagewise else ")")
         if assembled:
             jac_g, hess_lag, self.evaluation = assembled_derivatives(
                 nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions
@@ -282,11 +297,22 @@ class CollocationTranscription:
         """A ``casadi.nlpsol`` of this NLP with ``options`` (the derivative functions are shared)."""
         nlp = self.nlp
         nlp_options = {**options, **self.derivative_functions}
+        f = nlp.f
+        if self.plugin == "fatrop":
+            inner = {k: v for k, v in options["fatrop"].items() if k not in IPOPT_ONLY}
+            self.objective_scale = float(inner.pop("obj_scaling_factor", 1.0))
+            f = f * self.objective_scale
+            nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
         try:
             return ca.nlpsol(
-                f"{_fname(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": nlp.f, "g": nlp.g}, nlp_options
+                f"{_fname(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options
             )
         except RuntimeError as exc:
+            if "structure of A" in str(exc) or "Structure" in str(exc):
+                raise SolverError(
+                    f"solver fatrop: the problem's constraints couple elements beyond neighbouring ones (timed values or "
+                    f"integrals in constraints), which fatrop's stage structure cannot hold; use solver ipopt ({exc})"
+                ) from exc
             raise SolverError(f"could not build the {self.plugin} solver: {exc}") from exc
 
     # ------------------------------------------------------------------ guesses
@@ -424,8 +450,18 @@ class CollocationTranscription:
             w_opt = w0
         solve_time = _time.perf_counter() - t_start
         stats = dict(solver.stats())
-        message = error_msg or str(stats.get("return_status", "unknown"))
-        status = Status.ERROR if error_msg else normalize_ipopt_status(message)
+        if self.plugin == "fatrop":
+            message = error_msg or f"fatrop: {stats.get('unified_return_status', 'unknown')} (return flag {stats.get('return_status')})"
+            status = Status.ERROR if error_msg else _FATROP_STATUS.get(str(stats.get("unified_return_status")), Status.ERROR)
+            if stats.get("success") and not error_msg:
+                status = Status.OPTIMAL
+            if lam[0] is not None:  # multipliers of the problem as declared, not of the scaled objective
+                lam = (lam[0] / self.objective_scale, lam[1] / self.objective_scale)
+        else:
+            message = error_msg or str(stats.get("return_status", "unknown"))
+            status = Status.ERROR if error_msg else normalize_ipopt_status(message)
+            if message in IPOPT_HINTS:
+                message = f"{message}: {IPOPT_HINTS[message]}"
         if not np.all(np.isfinite(w_opt)):
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
@@ -511,7 +547,14 @@ class CollocationTranscription:
         -------
         casadi.Function
             IPOPT with :data:`~gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`.
+
+        Raises
+        ------
+        InputError
+            With a solver other than IPOPT.
         """
+        if self.plugin != "ipopt":
+            raise InputError(f"warm_start: IPOPT's warm start (multipliers and a small barrier parameter); not with solver {self.plugin}")
         if self._warm_solver is None:
             opts = {**self.options, self.plugin: {**self.options[self.plugin], **WARM_START_OPTIONS}}
             self._warm_solver = self._nlpsol(opts)

@@ -217,6 +217,9 @@ class CollocationNLP:
     consistent : casadi.Function or None
         :func:`consistent_algebraics` of the model (the algebraic variables at a point that
         is no collocation point).
+    stages : dict or None
+        With ``stagewise``: the stage structure of fatrop (``N`` and the per-stage state,
+        control and path-constraint counts ``nx``, ``nu``, ``ng``, each of length ``N + 1``).
     """
 
     w: ca.SX
@@ -247,6 +250,7 @@ class CollocationNLP:
     block_sizes: list = field(default_factory=list)
     special: ca.SX = field(default_factory=lambda: ca.SX(0, 1))
     consistent: ca.Function | None = None
+    stages: dict | None = None
 
 
 def element_scaling(N: int, fractions: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -285,6 +289,7 @@ def transcribe(
     inline_points: bool,
     final_time_copies: bool = True,
     fractions: np.ndarray | None = None,
+    stagewise: bool = False,
 ) -> CollocationNLP:
     """Transcribe ``opt`` by direct collocation (see the module docstring).
 
@@ -310,13 +315,28 @@ def transcribe(
     fractions : numpy.ndarray or None, optional
         Element lengths as fractions of the horizon, shape ``(N,)``, summing to 1 (a
         refined mesh); default uniform.
+    stagewise : bool, optional
+        Order the constraints as fatrop's optimal-control structure requires (see
+        :func:`_stage_order`): per element first the gap-closing equalities (continuity of
+        the states and the final-time copy, ``x_{k+1} - F(x_k, u_k)``, unit coefficient on the
+        next element's variables), then the collocation equations, path constraints and
+        the element's point constraints; the point constraints at the final time and the
+        Mayer term read the last element's end state (equal to the final state wherever the
+        continuity holds). Needs ``final_time_copies`` and no free parameters. Default False.
 
     Returns
     -------
     CollocationNLP
+
+    Raises
+    ------
+    InputError
+        ``stagewise`` with free parameters (shared by all stages).
     """
     nx, nz, nu = dae.nx, dae.nz, dae.nu
     t0 = opt.start_time
+    if stagewise and free_index.size:
+        raise InputError("solver fatrop: free parameters are shared by all elements, which fatrop's stage structure cannot hold")
     args = [dae.t, dae.x, dae.z, dae.u, dae.p, opt.final_time]
 
     def subst(e: ca.SX) -> ca.SX:
@@ -452,9 +472,12 @@ def transcribe(
     R = ca.vertcat(ca.repmat(h_pts, nx, 1) * F - xp, A_alg, P_path)  # (nr, M)
     nr = int(R.shape[0])
     cont = ca.horzcat(X0[:, 1:], XN) - ca.mtimes(K_end, X_all)
+    if stagewise:  # fatrop's gap-closing form x_{k+1} - F(x_k, u_k): unit coefficient on the scaled next state
+        cont = cont / ca.DM(np.tile(np.asarray(noms["x"], dtype=float)[:, None], (1, N)))
     parts = [ca.reshape(R, nr * d, N), cont]
     if copies:
-        parts.append(ca.horzcat((Trow[0, 1:] - Trow[0, :N - 1]) / tf_nom, ca.SX(1, 1)))
+        tie = E[nx:nx + 1, 1:] - E[nx:nx + 1, :N - 1] if stagewise else (Trow[0, 1:] - Trow[0, :N - 1]) / tf_nom
+        parts.append(ca.horzcat(tie, ca.SX(1, 1)))
     g_el = ca.vec(ca.vertcat(*parts))
     n_gel = N * (nr * d + nx + ntf) - ntf  # the last element has no copy to tie
     g_el = g_el[0:n_gel]
@@ -491,27 +514,35 @@ def transcribe(
     z_final = (consistent(T, XN, ca.mtimes(Z_pts[:, M - d:M], L1), u_final, P, T) if nz and float(co["root"][-1]) != 1.0
                else ca.mtimes(Z_pts[:, M - d:M], L1) if nz else ca.SX(0, 1))
     ends: list[tuple[int, ca.SX]] = []
+    at: list[str] = []  # the stage of each of ``ends`` for fatrop's order: "start" (element 0) or "final" (element N - 1)
     # the path constraints and the bounds of the algebraic variables hold at the start too (the
     # tables write its consistent values; the collocation points impose them everywhere else)
     if path_lb.size:
         e = point_fn(t0, X0[:, 0], z_start, u_start, P, T_first)[2]
         ends.append((con(e, path_lb, path_ub), e))
-    extrapolated = [("z", z_start, z_lb, z_ub), ("u", u_start, u_lb, u_ub)]
+        at.append("start")
+    extrapolated = [("start", z_start, z_lb, z_ub), ("start", u_start, u_lb, u_ub)]
     if float(co["root"][-1]) != 1.0:  # Legendre: the final time is no collocation point either
-        extrapolated += [("z", z_final, z_lb, z_ub), ("u", u_final, u_lb, u_ub)]
-    for _, vals, lo, hi in extrapolated:  # the bounds of inputs and algebraics hold there too
+        extrapolated += [("final", z_final, z_lb, z_ub), ("final", u_final, u_lb, u_ub)]
+    for where, vals, lo, hi in extrapolated:  # the bounds of inputs and algebraics hold there too
         bounded = np.flatnonzero(np.isfinite(lo) | np.isfinite(hi)) if vals.numel() else np.zeros(0, dtype=int)
         if bounded.size:
             e = vals[bounded.tolist()]
             ends.append((con(e, lo[bounded], hi[bounded]), e))
+            at.append(where)
     if start_c:
         e = start_fn(t0, X0[:, 0], z_start, u_start, P, T_first)
         ends.append((con(e, np.concatenate([c.lb for c in start_c]), np.concatenate([c.ub for c in start_c])), e))
+        at.append("start")
+    # the final state as the final constraints and the Mayer term see it: with ``stagewise``
+    # the last element's end state (a variable of stage N - 1, as are u_final, z_final, T)
+    XF = ca.mtimes(K_end, X_all[:, N - 1]) if stagewise else XN
     if final_c:
-        e = final_fn(T, XN, z_final, u_final, P, T)
+        e = final_fn(T, XF, z_final, u_final, P, T)
         ends.append((con(e, np.concatenate([c.lb for c in final_c]), np.concatenate([c.ub for c in final_c])), e))
+        at.append("final")
     start_args = PointArgs(ca.SX(t0), X0[:, 0], z_start, u_start, T_first)
-    final_args = PointArgs(T, XN, z_final, u_final, T)
+    final_args = PointArgs(T, XF, z_final, u_final, T)
     element_vars = _ElementVars(X_all, Up, Zp, Trow, nx, nu, nz, d)
     quadrature = (PointArgs(t_pts, X_pts, Z_pts, U_pts, T_pts), weights_pts)
     s_sym, s_val = special_values(opt, fn, P, element_vars, (start_args, final_args), quadrature, co, fractions)
@@ -519,25 +550,38 @@ def transcribe(
     def final_value(name: str, exprs: list[ca.SX]) -> ca.SX:
         """``exprs`` with model variables at the final time and timed variables/integrals by value."""
         f = ca.Function(name, [*args, s_sym], [subst(ca.vertcat(*exprs))])
-        return f(T, XN, z_final, u_final, P, T, s_val)
+        return f(T, XF, z_final, u_final, P, T, s_val)
 
     if timed_c:
         e = final_value("point_timed", [c.expr for c in timed_c])
         ends.append((con(e, np.concatenate([c.lb for c in timed_c]), np.concatenate([c.ub for c in timed_c])), e))
+        at.append("final")
     mayer = final_value("mayer", [sign * opt.mayer])
     J = J + mayer
     cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
+    g_all, lbg_all, ubg_all, stages = ca.vertcat(*g), cat(lbg), cat(ubg), None
+    if stagewise:
+        order, stages = _stage_order(N, nr * d, nx, ntf, [(first, int(e.numel())) for first, e in ends], at)
+        inverse = np.empty(order.size, dtype=int)
+        inverse[order] = np.arange(order.size)
+        g_all, lbg_all, ubg_all = g_all[order.tolist()], lbg_all[order], ubg_all[order]
+        rows_point = [(k, j, int(inverse[r])) for k, j, r in rows_point]
+        rows_cont = [(k, int(inverse[r])) for k, r in rows_cont]
+        rows_tf = [(k, int(inverse[r])) for k, r in rows_tf]
+        ends = [(int(inverse[first]), e) for first, e in ends]
+        stages["nx"] = [nx + ntf] * N + [nx]
+        stages["nu"] = [d * (nx + nu + nz)] * N + [0]
     return CollocationNLP(
         w=w_sym,
-        g=ca.vertcat(*g),
+        g=g_all,
         f=J,
         p=P_nlp,
         p_model=P,
         lbw=cat(lbw_l),
         ubw=cat(ubw_l),
         scale=cat(scale_l),
-        lbg=cat(lbg),
-        ubg=cat(ubg),
+        lbg=lbg_all,
+        ubg=ubg_all,
         blocks=blocks,
         offsets=offsets,
         rows_point=rows_point,
@@ -556,6 +600,7 @@ def transcribe(
         block_sizes=sizes,
         special=s_val,
         consistent=consistent,
+        stages=stages,
     )
 
 
@@ -597,6 +642,35 @@ def consistent_algebraics(dae: FlatDAE, final_time: ca.SX, subst: Any) -> ca.Fun
     for _ in range(CONSISTENCY_NEWTON_STEPS):
         z = z - ca.solve(ca.substitute(g_jac, dae.z, z), ca.substitute(g, dae.z, z))
     return ca.Function("consistent_algebraics", [dae.t, dae.x, dae.z, dae.u, dae.p, final_time], [z])
+
+
+def _stage_order(N: int, n_points: int, nx: int, ntf: int, ends: list[tuple[int, int]], at: list[str]) -> tuple[np.ndarray, dict]:
+    """The permutation of the constraints into fatrop's stage order, and the path constraints per stage.
+
+    The standard order holds per element ``k`` the ``n_points`` rows of its collocation
+    points, then its ``nx`` continuity rows and (``ntf``, all but the last element) the
+    final-time tie; then the point constraints (``ends``: ``(first row, count)``, each at the
+    ``"start"`` or ``"final"`` point as ``at`` says). Stage ``k`` of fatrop is: the gap-closing rows (continuity,
+    tie), then the point rows, then the start constraints (``k = 0``) or the final and timed
+    ones (``k = N - 1``); stage ``N`` (the final state) has none.
+    """
+    size_el = n_points + nx + ntf
+    rest = [np.arange(first, first + n) for first, n in ends]
+    first_ends = [r for r, where in zip(rest, at) if where == "start"]
+    last_ends = [r for r, where in zip(rest, at) if where == "final"]
+    order, ng_stage = [], []
+    for k in range(N):
+        base = k * size_el
+        dyn = np.arange(base + n_points, base + n_points + nx + (ntf if k < N - 1 else 0))
+        path = [np.arange(base, base + n_points)]
+        if k == 0:
+            path += first_ends
+        if k == N - 1:
+            path += last_ends
+        path_rows = np.concatenate(path)
+        order += [dyn, path_rows]
+        ng_stage.append(int(path_rows.size))
+    return np.concatenate(order).astype(int), {"N": N, "ng": ng_stage + [0]}
 
 
 class _ElementVars:

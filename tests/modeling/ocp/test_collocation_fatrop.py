@@ -1,0 +1,95 @@
+"""Tests of ``solver="fatrop"``: the collocation NLP ordered stage by stage and solved by CasADi's fatrop plugin.
+
+References: the closed forms of the double integrator (minimum energy: cost 12; minimum
+time with |u| <= 1: tf = 2) and IPOPT on the same transcription (a second method: the
+same optimum to 1e-6).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtmodel.errors import InputError, SolverError
+from gtmodel.modeling import CollocationTranscription, Optimization
+from gtmodel.modeling.ocp.collocation import SOLVERS
+from gtmodel.problems import load_problem
+from gtmodel.trajectory.settings import NLP_SOLVERS
+
+from ...conftest import PROBLEMS_DIR
+from .._builders import double_integrator, min_energy_problem, rest_to_rest
+from .test_optimization import _free_parameter_problem
+
+
+def _min_time() -> Optimization:
+    m, x, v, u = double_integrator()
+    opt = Optimization(m, free_final_time=True, final_time_bounds=(0.5, 5.0), final_time_guess=1.0)
+    opt.objective = opt.final_time
+    opt.set_bounds(u, -1.0, 1.0)
+    rest_to_rest(opt, x, v)
+    return opt
+
+
+PROBLEMS = [
+    # (name, builder, closed-form objective, transcription arguments)
+    ("min_energy_radau", min_energy_problem, 12.0, {"scheme": "radau"}),
+    ("min_energy_legendre", min_energy_problem, 12.0, {"scheme": "legendre"}),
+    ("min_time", _min_time, 2.0, {}),
+    ("min_time_scaled", _min_time, 2.0, {"nominal": {"x": 2.0, "v": 0.5, "final_time": 3.0}}),
+]
+
+
+@pytest.mark.parametrize("name, build, expected, kw", PROBLEMS, ids=[p[0] for p in PROBLEMS])
+def test_fatrop_reaches_ipopts_optimum_on_the_same_transcription(name, build, expected, kw):
+    ip = CollocationTranscription(build(), elements=20, **kw).solve()
+    fa = CollocationTranscription(build(), elements=20, solver="fatrop", **kw).solve()
+    assert (ip.status, fa.status) == ("optimal", "optimal"), fa.message
+    assert fa.objective == pytest.approx(ip.objective, rel=1e-6, abs=1e-6)
+    assert fa.objective == pytest.approx(expected, rel=1e-4)
+    np.testing.assert_allclose(fa.states["x"], ip.states["x"], atol=1e-5)
+    assert fa.max_constraint_violation < 1e-6
+    assert fa.verification.passed
+
+
+def test_stage_structure_is_one_stage_per_element():
+    tr = CollocationTranscription(_min_time(), elements=7, solver="fatrop")
+    st = tr.nlp.stages
+    # stage k: the start state and the final-time copy, then d (nx + nu) point variables; stage N: the final state
+    assert (st["N"], st["nx"], st["nu"]) == (7, [3] * 7 + [2], [9] * 7 + [0])
+    assert sum(st["nx"]) + sum(st["nu"]) == tr.nlp.w.numel()
+    assert sum(st["ng"]) + sum(st["nx"][1:]) == tr.nlp.g.numel()
+    assert tr.banded
+
+
+BAD = [
+    ({"solver": "fatrop", "banded": False}, "banded=True"),
+    ({"solver": "knitro"}, "solver must be one of ipopt, fatrop"),
+]
+
+
+@pytest.mark.parametrize("kw, match", BAD, ids=["shared_final_time", "unknown"])
+def test_bad_solver_arguments_are_refused(kw, match):
+    with pytest.raises(InputError, match=match):
+        CollocationTranscription(_min_time(), elements=5, **kw)
+
+
+def test_free_parameters_are_refused_with_fatrop():
+    with pytest.raises(InputError, match="free parameters are shared by all elements"):
+        CollocationTranscription(_free_parameter_problem(), elements=5, solver="fatrop")
+
+
+def test_an_integral_constraint_coupling_all_elements_is_refused():
+    # the isoperimetric form of the hanging chain: integral(...) == L sums over every element
+    chain = load_problem(PROBLEMS_DIR / "benchmarks" / "hanging_chain.toml").declaration.optimization
+    with pytest.raises(SolverError, match="couple elements beyond neighbouring ones"):
+        CollocationTranscription(chain, elements=4, solver="fatrop")
+
+
+def test_warm_start_is_ipopts():
+    tr = CollocationTranscription(min_energy_problem(), elements=5, solver="fatrop")
+    with pytest.raises(InputError, match="not with solver fatrop"):
+        tr.warm_solver()
+
+
+def test_problem_settings_offer_the_transcriptions_solvers():
+    assert NLP_SOLVERS == SOLVERS
