@@ -40,6 +40,7 @@ import numpy as np
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.dae import FlatDAE
+from gtmodel.modeling.ocp.collocation_stages import stage_order
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import lagrange_basis
 from gtmodel.modeling.ocp.timed import PointArgs, special_values
@@ -317,7 +318,7 @@ def transcribe(
         refined mesh); default uniform.
     stagewise : bool, optional
         Order the constraints as fatrop's optimal-control structure requires (see
-        :func:`_stage_order`): per element first the gap-closing equalities (continuity of
+        :func:`~gtmodel.modeling.ocp.collocation_stages.stage_order`): per element first the gap-closing equalities (continuity of
         the states and the final-time copy, ``x_{k+1} - F(x_k, u_k)``, unit coefficient on the
         next element's variables), then the collocation equations, path constraints and
         the element's point constraints; the point constraints at the final time and the
@@ -561,7 +562,7 @@ def transcribe(
     cat = lambda parts: np.concatenate(parts) if parts else np.zeros(0)  # noqa: E731
     g_all, lbg_all, ubg_all, stages = ca.vertcat(*g), cat(lbg), cat(ubg), None
     if stagewise:
-        order, stages = _stage_order(N, nr * d, nx, ntf, [(first, int(e.numel())) for first, e in ends], at)
+        order, stages = stage_order(N, nr * d, nx, ntf, [(first, int(e.numel())) for first, e in ends], at)
         inverse = np.empty(order.size, dtype=int)
         inverse[order] = np.arange(order.size)
         g_all, lbg_all, ubg_all = g_all[order.tolist()], lbg_all[order], ubg_all[order]
@@ -642,35 +643,6 @@ def consistent_algebraics(dae: FlatDAE, final_time: ca.SX, subst: Any) -> ca.Fun
     for _ in range(CONSISTENCY_NEWTON_STEPS):
         z = z - ca.solve(ca.substitute(g_jac, dae.z, z), ca.substitute(g, dae.z, z))
     return ca.Function("consistent_algebraics", [dae.t, dae.x, dae.z, dae.u, dae.p, final_time], [z])
-
-
-def _stage_order(N: int, n_points: int, nx: int, ntf: int, ends: list[tuple[int, int]], at: list[str]) -> tuple[np.ndarray, dict]:
-    """The permutation of the constraints into fatrop's stage order, and the path constraints per stage.
-
-    The standard order holds per element ``k`` the ``n_points`` rows of its collocation
-    points, then its ``nx`` continuity rows and (``ntf``, all but the last element) the
-    final-time tie; then the point constraints (``ends``: ``(first row, count)``, each at the
-    ``"start"`` or ``"final"`` point as ``at`` says). Stage ``k`` of fatrop is: the gap-closing rows (continuity,
-    tie), then the point rows, then the start constraints (``k = 0``) or the final and timed
-    ones (``k = N - 1``); stage ``N`` (the final state) has none.
-    """
-    size_el = n_points + nx + ntf
-    rest = [np.arange(first, first + n) for first, n in ends]
-    first_ends = [r for r, where in zip(rest, at) if where == "start"]
-    last_ends = [r for r, where in zip(rest, at) if where == "final"]
-    order, ng_stage = [], []
-    for k in range(N):
-        base = k * size_el
-        dyn = np.arange(base + n_points, base + n_points + nx + (ntf if k < N - 1 else 0))
-        path = [np.arange(base, base + n_points)]
-        if k == 0:
-            path += first_ends
-        if k == N - 1:
-            path += last_ends
-        path_rows = np.concatenate(path)
-        order += [dyn, path_rows]
-        ng_stage.append(int(path_rows.size))
-    return np.concatenate(order).astype(int), {"N": N, "ng": ng_stage + [0]}
 
 
 class _ElementVars:

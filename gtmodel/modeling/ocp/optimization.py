@@ -6,10 +6,9 @@ Lagrange integrand), path and point constraints, variable bounds, parameter valu
 initial guesses. Transcription to an NLP lives in :mod:`gtmodel.modeling.ocp.collocation`.
 A model parameter declared free (:meth:`Optimization.free_parameter`) is a decision
 variable of the problem (constant in time, within bounds): parameter estimation from data
-is an optimisation with free parameters and a data-fit objective.
-
-Expressions may use every symbol the model declared (``time``, states, ``der()`` of
-states, algebraics, inputs, parameters) and :attr:`Optimization.final_time`.
+is an optimisation with free parameters and a data-fit objective. Expressions may use every
+symbol the model declared (``time``, states, ``der()`` of states, algebraics, inputs,
+parameters) and :attr:`Optimization.final_time`.
 """
 
 from __future__ import annotations
@@ -118,16 +117,13 @@ class Optimization:
         self.parameters: dict[str, np.ndarray] = {}
         self.free_parameters: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray | None]] = {}
         self._flat: FlatDAE | None = None
-
     # ------------------------------------------------------------------ helpers
-    #: Tolerance of the verification by simulation of this problem's solutions, a positive
-    #: number (:mod:`gtmodel.modeling.ocp.verification`); None: ``defaults["ocp.verification_tolerance"]``.
+    #: The verification by simulation (:mod:`gtmodel.modeling.ocp.verification`): its tolerance
+    #: (None: ``defaults["ocp.verification_tolerance"]``), the integrator's relative tolerance (None:
+    #: 1e-3 x the tolerance within [1e-10, 1e-6]) and the SUNDIALS integrator, ``"cvodes"`` or
+    #: ``"idas"`` (None: CVODES for an ODE, IDAS with algebraic variables).
     verification_tolerance: float | None = None
-    #: Relative tolerance of the verifying integrator; None: ``1e-3`` times the verification
-    #: tolerance within ``[1e-10, 1e-6]`` (:func:`gtmodel.modeling.ocp.verification.integrator_rtol`).
     verification_rtol: float | None = None
-    #: The verifying SUNDIALS integrator, ``"cvodes"`` or ``"idas"``; None: CVODES for an
-    #: ODE, IDAS with algebraic variables.
     verification_integrator: str | None = None
 
     @property

@@ -1,0 +1,59 @@
+"""fatrop's stage order of the collocation NLP (:func:`gtmodel.modeling.ocp.collocation_nlp.transcribe`
+with ``stagewise``): one stage per element, its gap-closing rows first, then its path rows."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["stage_order"]
+
+
+def stage_order(N: int, n_points: int, nx: int, ntf: int, ends: list[tuple[int, int]], at: list[str]) -> tuple[np.ndarray, dict]:
+    """The permutation of the constraints into fatrop's stage order, and the path constraints per stage.
+
+    The standard order holds per element ``k`` the ``n_points`` rows of its collocation
+    points, then its ``nx`` continuity rows and (``ntf``, all but the last element) the
+    final-time tie; then the point constraints (``ends``: ``(first row, count)``, each at the
+    ``"start"`` or ``"final"`` point as ``at`` says). Stage ``k`` of fatrop is: the gap-closing rows (continuity,
+    tie), then the point rows, then the start constraints (``k = 0``) or the final and timed
+    ones (``k = N - 1``); stage ``N`` (the final state) has none.
+
+    Parameters
+    ----------
+    N : int
+        Number of elements (stages with constraints).
+    n_points : int
+        Collocation rows per element.
+    nx : int
+        Number of states (continuity rows per element).
+    ntf : int
+        Final-time tie rows per element (0 or 1; none after the last element).
+    ends : list of tuple of int
+        ``(first row, count)`` of each block of point constraints, in the standard order.
+    at : list of str
+        ``"start"`` or ``"final"`` for each of ``ends``.
+
+    Returns
+    -------
+    order : numpy.ndarray
+        The rows of the standard order in stage order, shape ``(number of rows,)``.
+    stages : dict
+        ``{"N": N, "ng": [path rows per stage, ..., 0]}`` (fatrop's ``ng``, length ``N + 1``).
+    """
+    size_el = n_points + nx + ntf
+    rest = [np.arange(first, first + n) for first, n in ends]
+    first_ends = [r for r, where in zip(rest, at) if where == "start"]
+    last_ends = [r for r, where in zip(rest, at) if where == "final"]
+    order, ng_stage = [], []
+    for k in range(N):
+        base = k * size_el
+        dyn = np.arange(base + n_points, base + n_points + nx + (ntf if k < N - 1 else 0))
+        path = [np.arange(base, base + n_points)]
+        if k == 0:
+            path += first_ends
+        if k == N - 1:
+            path += last_ends
+        path_rows = np.concatenate(path)
+        order += [dyn, path_rows]
+        ng_stage.append(int(path_rows.size))
+    return np.concatenate(order).astype(int), {"N": N, "ng": ng_stage + [0]}
