@@ -40,8 +40,7 @@ from gtmodel.modeling.simulation.model import Model
 from gtmodel.modeling.simulation.explicit import ExplicitODE, explicit_ode
 from gtmodel.modeling.ocp import collocation as _collocation
 from gtmodel.modeling.ocp import expressions as _expressions
-from gtmodel.modeling.ocp.collocation import CollocationTranscription
-from gtmodel.modeling.ocp.collocation_solve import solve
+from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult
 from gtmodel.modeling.ocp.declare import apply_to, optimization_names

@@ -30,6 +30,7 @@ from typing import Any, Callable, Sequence
 import casadi as ca
 import numpy as np
 
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.plant import ToolStructure
 from gtmodel.robots.parameters import RobotParameters
@@ -283,7 +284,7 @@ def run_controller_loop(
                        u_lb=lb, u_ub=ub, status_names=dict(status_names or {}))
 
 
-def compliant_plant(ode: Any, structure: ToolStructure | None = None, dt: float = 0.004, substeps: int = 4) -> tuple[ca.Function, Callable, int]:
+def compliant_plant(ode: Any, structure: ToolStructure | None = None, dt: float = LOOP_PERIOD_S, substeps: int = 4) -> tuple[ca.Function, Callable, int]:
     """A TCP-state robot model with the tool structure of Dressler (2012), eq. 6.14, as a plant.
 
     States ``[T (3), T_dot (3), d (2), d_dot (2)]``: the rigid body ``T_ddot = f(T, T_dot, tau)``

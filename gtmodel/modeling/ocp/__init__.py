@@ -36,8 +36,7 @@ from gtmodel.modeling.ocp.expressions import (
     parse_expression,
     parse_objective,
 )
-from gtmodel.modeling.ocp.collocation import CollocationTranscription
-from gtmodel.modeling.ocp.collocation_solve import solve
+from gtmodel.modeling.ocp.collocation import CollocationTranscription, solve
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.modeling.ocp.guesses import guess_by_simulation, guess_from_table

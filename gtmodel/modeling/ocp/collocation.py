@@ -46,10 +46,12 @@ from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
+from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, IPOPT_ONLY, SOLVERS
+from gtmodel.modeling.ocp.guesses import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
-from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, _vector_value
+from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
 from gtmodel.modeling.ocp.optimization import Optimization
-from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
+from gtmodel.modeling.ocp.result import IPOPT_HINTS, CollocationData, OptimizationResult, normalize_ipopt_status
 from gtmodel.modeling.ocp.verification import check_result
 from gtmodel.status import Status
 
@@ -57,31 +59,12 @@ __all__ = ["CollocationTranscription", "solve"]
 
 _log = logging.getLogger("gtmodel")
 
-#: nlpsol plugins a transcription can be solved with. ``"fatrop"``: the NLP ordered stage by
-#: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
-#: ``jac_g``/``hess_lag``, so it differentiates the NLP graph itself (docs/verification.md).
-SOLVERS = ("ipopt", "fatrop")
-#: IPOPT options fatrop lacks (dropped; ``obj_scaling_factor`` scales the objective it is given).
-IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
 #: Default mesh size from which a free final time is copied per element (banded KKT). L1
 #: minimum-time problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared
 #: variable 13.0 ms at 50 elements and 127 ms at 400 (9.7x for 8x the mesh), copies 14.0
 #: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
 #: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
 BANDED_MIN_ELEMENTS = 300
-#: What an IPOPT failure means and what to try, appended to the result's message.
-IPOPT_HINTS = {
-    "Restoration_Failed": "IPOPT's feasibility restoration could not reduce the constraint violation: infeasible or degenerate "
-                          "constraints (e.g. bounds duplicating an equality such as u1^2 + u2^2 = 1) or a guess far from feasible",
-    "Search_Direction_Becomes_Too_Small": "IPOPT's steps became too small: often scaling (set nominal values)",
-}
-#: fatrop's unified return status -> gtmodel status (success is ``optimal``).
-_FATROP_STATUS = {"SOLVER_RET_LIMITED": Status.MAX_ITERATIONS, "SOLVER_RET_NAN": Status.ERROR}
-
-
-def _fname(name: str) -> str:
-    """``name`` as a C identifier (CasADi Function names)."""
-    return "".join(ch if ch.isalnum() else "_" for ch in name)
 
 
 class CollocationTranscription:
@@ -305,7 +288,7 @@ class CollocationTranscription:
             nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
         try:
             return ca.nlpsol(
-                f"{_fname(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options
+                f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options
             )
         except RuntimeError as exc:
             if "structure of A" in str(exc) or "Structure" in str(exc):
@@ -452,7 +435,7 @@ class CollocationTranscription:
         stats = dict(solver.stats())
         if self.plugin == "fatrop":
             message = error_msg or f"fatrop: {stats.get('unified_return_status', 'unknown')} (return flag {stats.get('return_status')})"
-            status = Status.ERROR if error_msg else _FATROP_STATUS.get(str(stats.get("unified_return_status")), Status.ERROR)
+            status = Status.ERROR if error_msg else FATROP_STATUS.get(str(stats.get("unified_return_status")), Status.ERROR)
             if stats.get("success") and not error_msg:
                 status = Status.OPTIMAL
             if lam[0] is not None:  # multipliers of the problem as declared, not of the scaled objective
@@ -663,18 +646,55 @@ class CollocationTranscription:
         )
 
 
-def _guess_fn(spec: Any, size: int, name: str, default: np.ndarray) -> Any:
-    """Turn a guess specification into ``f(t) -> (size,)``."""
-    if spec is None:
-        return lambda t: default
-    if callable(spec):
-        return lambda t: _vector_value(spec(t), size, f"initial guess of {name!r}")
-    if isinstance(spec, tuple) and len(spec) == 2:
-        tg = np.asarray(spec[0], dtype=float).reshape(-1)
-        vg = np.asarray(spec[1], dtype=float).reshape(tg.size, -1)
-        if vg.shape[1] != size:
-            raise InputError(f"initial guess of {name!r}: expected {size} columns, got {vg.shape[1]}")
-        return lambda t: np.array([np.interp(t, tg, vg[:, i]) for i in range(size)])
-    const = _vector_value(spec, size, f"initial guess of {name!r}")
-    return lambda t: const
+def solve(
+    optimization: Optimization,
+    elements: int = 50,
+    points: int = 3,
+    scheme: str = "radau",
+    verbose: bool = False,
+    solver_options: Mapping[str, Any] | None = None,
+    initial_guess: OptimizationResult | Mapping[str, Any] | None = None,
+) -> OptimizationResult:
+    """Transcribe by direct collocation and solve with IPOPT.
 
+    Parameters
+    ----------
+    optimization : Optimization
+        The declared problem.
+    elements : int, optional
+        Number of uniform elements; default 50.
+    points : int, optional
+        Collocation points per element; default 3.
+    scheme : {"radau", "legendre"}, optional
+        Collocation scheme; default ``"radau"``.
+    verbose : bool, optional
+        Show IPOPT output; default False.
+    solver_options : mapping, optional
+        IPOPT/CasADi options merged over the defaults (see
+        :class:`CollocationTranscription`).
+    initial_guess : OptimizationResult or mapping, optional
+        See :meth:`CollocationTranscription.solve`.
+
+    Returns
+    -------
+    OptimizationResult
+        The result; ``success`` is True only for status ``"optimal"``.
+
+    Raises
+    ------
+    InputError
+        On invalid transcription arguments or guesses.
+    ModelError
+        If the model cannot be flattened.
+    SolverError
+        If the NLP solver cannot be built.
+    """
+    tr = CollocationTranscription(
+        optimization,
+        elements=elements,
+        points=points,
+        scheme=scheme,
+        verbose=verbose,
+        solver_options=solver_options,
+    )
+    return tr.solve(initial_guess=initial_guess)

@@ -5,7 +5,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["stage_order"]
+from gtmodel.status import Status
+
+__all__ = ["stage_order", "SOLVERS", "IPOPT_ONLY", "FATROP_STATUS"]
+
+#: nlpsol plugins a transcription can be solved with. ``"fatrop"``: the NLP ordered stage by
+#: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
+#: ``jac_g``/``hess_lag``, so it differentiates the NLP graph itself (docs/verification.md).
+SOLVERS = ("ipopt", "fatrop")
+#: IPOPT options fatrop lacks (dropped; ``obj_scaling_factor`` scales the objective it is given).
+IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
+#: fatrop's unified return status -> gtmodel status (success is ``optimal``).
+FATROP_STATUS = {"SOLVER_RET_LIMITED": Status.MAX_ITERATIONS, "SOLVER_RET_NAN": Status.ERROR}
 
 
 def stage_order(N: int, n_points: int, nx: int, ntf: int, ends: list[tuple[int, int]], at: list[str]) -> tuple[np.ndarray, dict]:

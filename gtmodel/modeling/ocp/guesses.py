@@ -23,6 +23,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
+from gtmodel.modeling.dae import _vector_value
 from gtmodel.modeling.ocp.optimization import Optimization
 
 __all__ = ["guess_from_table", "guess_by_simulation"]
@@ -193,3 +194,19 @@ def guess_by_simulation(
             if name in _whole_variables(opt):
                 opt.set_initial_guess(model.variables(_kind(opt, name))[name], (sim.t, np.asarray(values).reshape(K, -1)))
     return sim
+
+
+def _guess_fn(spec: Any, size: int, name: str, default: np.ndarray) -> Any:
+    """Turn a guess specification into ``f(t) -> (size,)``."""
+    if spec is None:
+        return lambda t: default
+    if callable(spec):
+        return lambda t: _vector_value(spec(t), size, f"initial guess of {name!r}")
+    if isinstance(spec, tuple) and len(spec) == 2:
+        tg = np.asarray(spec[0], dtype=float).reshape(-1)
+        vg = np.asarray(spec[1], dtype=float).reshape(tg.size, -1)
+        if vg.shape[1] != size:
+            raise InputError(f"initial guess of {name!r}: expected {size} columns, got {vg.shape[1]}")
+        return lambda t: np.array([np.interp(t, tg, vg[:, i]) for i in range(size)])
+    const = _vector_value(spec, size, f"initial guess of {name!r}")
+    return lambda t: const

@@ -37,6 +37,14 @@ _IPOPT_STATUS = {
 }
 
 
+#: What an IPOPT failure means and what to try, appended to the result's message.
+IPOPT_HINTS = {
+    "Restoration_Failed": "IPOPT's feasibility restoration could not reduce the constraint violation: infeasible or degenerate "
+                          "constraints (e.g. bounds duplicating an equality such as u1^2 + u2^2 = 1) or a guess far from feasible",
+    "Search_Direction_Becomes_Too_Small": "IPOPT's steps became too small: often scaling (set nominal values)",
+}
+
+
 def normalize_ipopt_status(return_status: str) -> Status:
     """Map an IPOPT ``return_status`` string to a gtmodel status.
 

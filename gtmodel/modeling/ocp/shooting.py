@@ -43,7 +43,7 @@ import numpy as np
 
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
-from gtmodel.modeling.ocp.collocation import _guess_fn
+from gtmodel.modeling.ocp.guesses import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.optimization import Integral, Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
