@@ -12,7 +12,6 @@ model's declared bounds) and builds the feedforward + time-varying LQR controlle
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from pathlib import Path
@@ -20,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, ProblemError
@@ -50,15 +50,11 @@ def is_result_folder(path: Path) -> bool:
 
 
 def _table(path: Path) -> dict[str, np.ndarray]:
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.reader(fh))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the trajectory table ({exc.strerror})") from None
-    if len(rows) < 3 or "t" not in rows[0]:
+    """The columns of a result's ``trajectories.csv`` (the one CSV reader: caps, line-numbered errors; the text column ``point`` left out)."""
+    table = read_table(path, "trajectory table", text_columns=("point",))
+    if "t" not in table.columns or table.data.shape[0] < 2:
         raise InputError(f"{path}: expected a header row with a 't' column and at least two rows")
-    data = np.array([[float(v) if v else math.nan for v in r] for r in rows[1:]], dtype=float)
-    return {name: data[:, j] for j, name in enumerate(rows[0])}
+    return {name: table.data[:, j] for j, name in enumerate(table.columns)}
 
 
 def _bounds(problem: Path, ode: ExplicitODE) -> tuple[np.ndarray, np.ndarray]:
