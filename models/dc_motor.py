@@ -1,12 +1,20 @@
 """A DC motor with a gearbox driving a load, composed from the library's components.
 
 A user model for ``gtmodel codegen --model models/dc_motor.py:DCMotorModel`` (the explicit
-ODE, its fixed steps over the 4 ms loop) and the tracking controller of an optimal motion.
+ODE, its fixed steps over the 4 ms loop), the tracking controller and MPC of an optimal
+motion (``problems/dc_motor_move.toml``, ``codegen/mpc/dc_motor_mpc.toml``) and the
+benchmark ``problems/benchmarks/dc_motor_min_energy.toml``.
 Modelica Standard Library names: a :class:`~gtmodel.modeling.library.electrical.SignalVoltage`
 (input ``src.v`` [V]) drives the armature (``Resistor`` R, ``Inductor`` L: the electrical
 time constant L/R = 1.7 ms, shorter than the loop period), an ``EMF`` (k) turns the current
 into torque on the rotor ``Inertia``; an ``IdealGear`` of ratio 50 drives the load
 ``Inertia`` with viscous friction (``Damper`` to the ``Fixed`` housing).
+
+The component values below are the default parameter set (the 4 ms loop's motor); a problem
+file sets another by its parameters' names in ``[model.parameters]``: the benchmark's smaller
+motor, R = 2 Ohm, L = 3.4 mH (the same 1.7 ms), rotor 2e-5 kg m^2, gear 10:1, load
+1e-3 kg m^2 on a bearing of 1e-3 N m s/rad, is
+``{"r.R" = 2.0, "ind.L" = 3.4e-3, "rotor.J" = 2e-5, "gear.ratio" = 10.0, "load.J" = 1e-3, "friction.d" = 1e-3}``.
 
 The composed model is of higher index (the gear ties the rotor and load angles), so the
 class :class:`DCMotorModel` builds it reduced by
