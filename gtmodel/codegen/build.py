@@ -29,6 +29,8 @@ __all__ = [
     "find_compiler",
     "compile_shared",
     "load_library",
+    "STRICT_EXTRA",
+    "load_strict",
     "CompiledFunction",
     "CompiledLibrary",
 ]
@@ -41,6 +43,9 @@ COMMON_FLAGS = ("-std=c99", "-O2", "-fPIC")
 WRAPPER_WARNINGS = ("-Wall", "-Wextra")
 #: Warnings for the CasADi-generated part (the same: its unused parameters are marked ``(void)``).
 CASADI_WARNINGS = ("-Wall", "-Wextra")
+#: Flags :func:`load_strict` adds to :func:`compile_shared`'s ``-std=c99 -O2 -Wall -Wextra
+#: -Werror``: the robot code's strict set (ISO C, no extensions).
+STRICT_EXTRA = ("-pedantic",)
 
 
 
@@ -329,3 +334,32 @@ def load_library(generated: GeneratedCode, path: str | Path) -> CompiledLibrary:
         The library cannot be loaded.
     """
     return CompiledLibrary(generated, Path(path))
+
+
+def load_strict(generated: GeneratedCode, build_dir: str | Path | None = None) -> CompiledLibrary:
+    """Compile generated code under the strict flags (``-Werror`` and :data:`STRICT_EXTRA`) and load it.
+
+    The build of the self-checks of a user model's and a loop controller's code
+    (:func:`~gtmodel.codegen.model_code.check_model`,
+    :func:`~gtmodel.codegen.loop_step.check_loop_step`).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        What was generated.
+    build_dir : str or pathlib.Path or None, optional
+        Folder for objects and the library; default ``<out_dir>/build``.
+
+    Returns
+    -------
+    CompiledLibrary
+        The loaded library.
+
+    Raises
+    ------
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        Compilation (a warning included) or loading failed.
+    """
+    return load_library(generated, compile_shared(generated, build_dir, werror=True, extra_flags=STRICT_EXTRA))

@@ -45,9 +45,9 @@ import casadi as ca
 import numpy as np
 
 import gtmodel
-from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
+from gtmodel.codegen.build import CompiledLibrary, load_strict
 from gtmodel.codegen.check.compare import compare, probe
-from gtmodel.codegen.check.report import CheckReport, StatusProbe
+from gtmodel.codegen.check.report import CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
@@ -65,7 +65,6 @@ LOOP_KIND = "loop_step"
 #: Largest accepted ``|C - Python|`` of the inner step (absolute, or relative to ``|Python|``).
 LOOP_TOLERANCE = 1e-12
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_STRICT_EXTRA = ("-pedantic",)
 
 
 @dataclass(frozen=True)
@@ -449,7 +448,7 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InputError(f"n: expected a positive number of samples, got {n!r}")
     build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
-    library = load_library(generated, compile_shared(generated, build, werror=True, extra_flags=_STRICT_EXTRA))
+    library = load_strict(generated, build)
     step: LoopStep = generated.parameters
     samples = _samples(step, int(n), np.random.default_rng(seed))
     spec = generated.specs[0]
@@ -458,7 +457,7 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     results = (compare(spec, cf, step, samples, generated.real),)
     if timing:
         times = time_functions(generated, library.path, {"control": samples}, build)
-        results = tuple(type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results)
+        results = tuple(with_timings(results, times))
     probes = []
     for a in spec.args:
         row = np.array(samples[a.name][0], dtype=float)

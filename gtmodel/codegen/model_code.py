@@ -48,10 +48,10 @@ import casadi as ca
 import numpy as np
 
 import gtmodel
-from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
+from gtmodel.codegen.build import STRICT_EXTRA, CompiledLibrary, load_strict
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.check.compare import compare, probe
-from gtmodel.codegen.check.report import CheckReport
+from gtmodel.codegen.check.report import CheckReport, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
@@ -84,9 +84,6 @@ SUBSTEPS = 4
 HORIZON_PERIODS = 250
 #: Largest accepted ``|C - Python|`` of a model function (absolute, or relative to ``|Python|``).
 MODEL_TOLERANCE = 1e-12
-#: Flags :func:`check_model` adds to :func:`~gtmodel.codegen.build.compile_shared`'s
-#: ``-std=c99 -O2 -Wall -Wextra -Werror``: the robot code's strict set (ISO C, no extensions).
-STRICT_EXTRA = ("-pedantic",)
 #: Range of the random time samples of the check [s].
 TIME_RANGE = 10.0
 _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -513,7 +510,7 @@ def check_model(
         raise InputError(f"n: expected a positive number of samples, got {n!r}")
     build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
     if library is None:
-        library = load_library(generated, compile_shared(generated, build, werror=True, extra_flags=STRICT_EXTRA))
+        library = load_strict(generated, build)
     source: ModelSource = generated.parameters
     rng = np.random.default_rng(seed)
     data = _sample(source.dae, int(n), rng)
@@ -529,7 +526,7 @@ def check_model(
                 probes.append(probe(cf, spec, samples[spec.name], f"{a.name}[0] = {bad}", "GT_BAD_ARGUMENT", {a.name: row}))
     if timing:
         times = time_functions(generated, library.path, samples, build)
-        results = [type(r)(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]
+        results = with_timings(results, times)
     results += check_horizon(generated, library, int(horizon))
     report = CheckReport(
         robot=source.name, prefix=generated.prefix, n=int(n), seed=seed, functions=tuple(results),

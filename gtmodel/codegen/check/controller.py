@@ -31,7 +31,7 @@ import numpy as np
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.check.filter import FILTER_CYCLES, filter_checks, filter_probes, filter_record, time_filters
 from gtmodel.codegen.check.lead_through import check_record, lead_through_checks, lead_through_probes, lead_through_record, time_lead_through
-from gtmodel.codegen.check.report import SENTINEL, CheckReport, FunctionCheck, StatusProbe, run_check, status_probe
+from gtmodel.codegen.check.report import SENTINEL, CheckReport, FunctionCheck, StatusProbe, run_check, status_probe, with_timings
 from gtmodel.codegen.check.run import c_function, pointer, time_program, timing_block
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
@@ -474,7 +474,7 @@ def check_controller(
             times.update(time_filters(controller_part(generated), library.path, recs, build))
         if lead is not None:
             times.update(time_lead_through(controller_part(generated), library.path, lead, build))
-        results = [FunctionCheck(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results]
+        results = with_timings(results, times)
     lengths = [len(r["z"]) for r in recs.values()] + ([len(lead["F_h"])] if lead is not None else [])
     n = len(inputs["y"]) if c.kalman_step is not None else (len(inputs["k"]) if c.ilc_correction is not None else max(lengths))
     report = ControllerCheckReport(

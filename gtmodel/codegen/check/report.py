@@ -9,7 +9,7 @@ function is reported OK only when it is within its tolerance as printed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Sequence
 
@@ -17,7 +17,7 @@ import numpy as np
 
 from gtmodel.codegen.declarations import STATUS_CODES
 
-__all__ = ["SENTINEL", "FLOAT_RELATIVE_TOLERANCE", "FunctionCheck", "StatusProbe", "CheckReport", "within", "run_check", "status_probe"]
+__all__ = ["SENTINEL", "FLOAT_RELATIVE_TOLERANCE", "FunctionCheck", "StatusProbe", "CheckReport", "within", "with_timings", "run_check", "status_probe"]
 
 #: Value pre-filled into output buffers to detect writes on a non-OK status.
 SENTINEL = 1234.5678
@@ -287,6 +287,24 @@ class CheckReport:
             lines.append(f"C unit tests: {self.harness}")
         lines.append("PASSED" if self.passed else "FAILED")
         return lines
+
+
+def with_timings(results: Sequence[FunctionCheck], times: dict[str, float]) -> list[FunctionCheck]:
+    """The comparisons with their C timings (:attr:`FunctionCheck.ns_per_call`) filled in.
+
+    Parameters
+    ----------
+    results : sequence of FunctionCheck
+        The comparisons.
+    times : dict
+        Mean time per call [ns] by function name; a name missing gives None (not timed).
+
+    Returns
+    -------
+    list of FunctionCheck
+        The same comparisons (of their own class), each with ``ns_per_call = times.get(name)``.
+    """
+    return [replace(r, ns_per_call=times.get(r.name)) for r in results]
 
 
 def run_check(name: str, n: int, pairs: Sequence[tuple[np.ndarray, np.ndarray]], real: str, tol: float, unit: str,

@@ -23,7 +23,7 @@ import numpy as np
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.check.compare import compare, edge_probes, row_args, sample_inputs
 from gtmodel.codegen.check.harness import HARNESS_FUNCTIONS, run_harness_unit_tests
-from gtmodel.codegen.check.report import CheckReport, FunctionCheck, StatusProbe
+from gtmodel.codegen.check.report import CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.run import time_program, timing_block
 from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.codegen.generate import GeneratedCode, robot_part
@@ -202,9 +202,7 @@ def check(
     extra: dict[str, float] = {}
     if timing:
         times = time_functions(generated, library.path, data, build)
-        results = [
-            FunctionCheck(**{**r.__dict__, "ns_per_call": times.get(r.name)}) for r in results
-        ]
+        results = with_timings(results, times)
         extra = {k: v for k, v in times.items() if k not in generated.functions}
     harness = run_harness_unit_tests(generated, build / "harness") if timing else None
     if timing and harness is None:
