@@ -32,7 +32,7 @@ from gtmodel.codegen.build import CompiledLibrary, compile_shared, load_library
 from gtmodel.codegen.check.filter import FILTER_CYCLES, filter_checks, filter_probes, filter_record, time_filters
 from gtmodel.codegen.check.lead_through import check_record, lead_through_checks, lead_through_probes, lead_through_record, time_lead_through
 from gtmodel.codegen.check.report import SENTINEL, CheckReport, FunctionCheck, StatusProbe, run_check, status_probe, with_timings
-from gtmodel.codegen.check.run import c_function, pointer, time_program, timing_block
+from gtmodel.codegen.check.run import c_array, c_function, pointer, time_program, timing_block
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.generate import GeneratedCode, controller_part
@@ -317,7 +317,7 @@ def time_controller(generated: GeneratedCode, library: Path, inputs: dict[str, n
     p, real = generated.prefix, generated.real
     nx, ny, nz = c.kalman_sizes
     y = inputs["y"] if c.kalman_step is not None else np.zeros((1, 1))
-    ytext = ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in y)
+    ytext = c_array(y, rows=True)
     blocks = []
     if c.kalman_step is not None:
         blocks.append(_timing_block("kalman_step", f"{real} x[{nx}] = {{0}}, z[{nz}];",

@@ -27,10 +27,10 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from gtmodel._compiler import find_compiler, run_compiler
 from gtmodel.codegen.build import CompiledLibrary
 from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe, run_check, status_probe
-from gtmodel.codegen.check.run import c_function, compile_program, pointer, time_program
+from gtmodel.codegen.check.run import (HEAP_WRAP, STRICT_FLAGS, c_array, c_function, compile_program, pointer, run_record_program,
+                                       strict_objects, time_program)
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.emit import fill
@@ -63,10 +63,6 @@ QUATERNION_SLICE = slice(9, 13)
 QUATERNION_NORM_TOLERANCE = 1e-14
 #: Steps per timed block of :func:`time_filters` (its ``best`` figure).
 TIMING_BLOCK = 100
-#: Compiler flags of the stand-alone filter program and of the library objects it links.
-STRICT_FLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
-#: Link flag of the stand-alone program: the heap calls go through the counter of ``harness/heap_watch.h``.
-HEAP_WRAP = "-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free"
 #: Sensor figures of the record (Cvitanic (2021), Table 7 order of magnitude): tracker
 #: position [m], tracker orientation (quaternion components), gyro [rad/s], accelerometer [m/s^2].
 POSITION_NOISE, QUATERNION_NOISE, GYRO_NOISE, ACCELEROMETER_NOISE = 6.4e-6, 1e-5, 1e-3, 0.012
@@ -370,14 +366,6 @@ def filter_probes(library: CompiledLibrary, name: str, record: dict[str, np.ndar
     return probes
 
 
-def _c_array(values: np.ndarray, rows: bool = False) -> str:
-    """C initialiser of the values (flattened), or with ``rows`` of a 2-D table with a brace per row."""
-    values = np.asarray(values, dtype=float)
-    if rows:
-        return ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in values)
-    return ", ".join(f"{float(v)!r}" for v in np.ravel(values))
-
-
 def time_filters(generated: GeneratedCode, library: Path, records: dict[str, dict[str, np.ndarray]], build_dir: str | Path,
                  budget_s: float = 0.1) -> dict[str, float]:
     """Time the filter steps in a C loop over their records (ns per step).
@@ -414,9 +402,9 @@ def time_filters(generated: GeneratedCode, library: Path, records: dict[str, dic
     for name, rec in records.items():
         stem, N = name[:-5], len(rec["z"])
         nx, nz = rec["x0"].size, rec["z"].shape[1]
-        tables += [f"static const {real} Z_{stem}[{N}][{nz}] = {{{_c_array(rec['z'], rows=True)}}};",
-                   f"static const {real} X0_{stem}[{nx}] = {{{_c_array(rec['x0'])}}};",
-                   f"static const {real} P0_{stem}[{nx * nx}] = {{{_c_array(rec['P0'])}}};"]
+        tables += [f"static const {real} Z_{stem}[{N}][{nz}] = {{{c_array(rec['z'], rows=True)}}};",
+                   f"static const {real} X0_{stem}[{nx}] = {{{c_array(rec['x0'])}}};",
+                   f"static const {real} P0_{stem}[{nx * nx}] = {{{c_array(rec['P0'])}}};"]
         for label, call in ((name, f"{p}_{name}(s.x, s.P, Z_{stem}[i % {N}], s.x, s.P)"), (f"{stem}_update", f"{p}_{stem}_update(&s, Z_{stem}[i % {N}])")):
             restart = f"if (i % {N} == 0) status |= {p}_{stem}_init(&s, X0_{stem}, P0_{stem});"
             block = (f"if (i % {TIMING_BLOCK} == 0) tb = now_ns(); status |= {call}; sink += s.x[0]; "
@@ -478,15 +466,9 @@ def build_filter_program(generated: GeneratedCode, name: str, record: dict[str, 
     build = Path(build_dir)
     build.mkdir(parents=True, exist_ok=True)
     text = fill("template_filter_run.c", PREFIX=p, STEM=stem, HEADER=generated.header.name, N=len(record["z"]), REAL=generated.real,
-                NX=nx, NZ=nz, NX2=nx * nx, Z=_c_array(record["z"], rows=True), X0=_c_array(record["x0"]), P0=_c_array(record["P0"]))
+                NX=nx, NZ=nz, NX2=nx * nx, Z=c_array(record["z"], rows=True), X0=c_array(record["x0"]), P0=c_array(record["P0"]))
     if objects is None:  # the library's sources, compiled here with the strict flags
-        cc = find_compiler()
-        objects = []
-        for c_file in generated.c_sources:
-            obj = build / (c_file.stem + ".strict.o")
-            run_compiler([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-c", str(c_file), "-o", str(obj)],
-                         f"compiling {c_file.name} with {' '.join(STRICT_FLAGS)}")
-            objects.append(obj)
+        objects = strict_objects(generated, build)
     return compile_program(generated, f"{p}_{stem}_run", text, build, flags=STRICT_FLAGS, objects=tuple(objects), link_flags=(HEAP_WRAP,))
 
 
@@ -514,11 +496,5 @@ def run_filter_program(program: str | Path, out_file: str | Path, nx: int, valgr
     run : FilterTrace
         Statuses, states and covariances written by the program (empty if none).
     """
-    cmd = [str(program), str(out_file)]
-    if valgrind:
-        cmd = ["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full", *cmd]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-    width = 1 + nx + nx * nx
-    data = np.fromfile(out_file, dtype=np.float64) if Path(out_file).is_file() else np.zeros(0)
-    data = data[: data.size // width * width].reshape(-1, width)
+    proc, data = run_record_program(program, out_file, 1 + nx + nx * nx, valgrind, timeout)
     return proc, FilterTrace(data[:, 0].astype(int), data[:, 1:1 + nx], data[:, 1 + nx:].reshape(-1, nx, nx))

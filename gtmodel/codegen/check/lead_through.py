@@ -24,11 +24,11 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from gtmodel._compiler import find_compiler, run_compiler
 from gtmodel.codegen.build import CompiledLibrary
-from gtmodel.codegen.check.filter import HEAP_WRAP, STRICT_FLAGS, TIMING_BLOCK
+from gtmodel.codegen.check.filter import TIMING_BLOCK
 from gtmodel.codegen.check.report import SENTINEL, FunctionCheck, StatusProbe, run_check, status_probe
-from gtmodel.codegen.check.run import c_function, compile_program, pointer, time_program
+from gtmodel.codegen.check.run import (HEAP_WRAP, STRICT_FLAGS, c_array, c_function, compile_program, pointer, run_record_program,
+                                       strict_objects, time_program)
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.emit import fill
@@ -282,19 +282,12 @@ def lead_through_probes(library: CompiledLibrary, record: dict[str, np.ndarray])
     return probes
 
 
-def _c_array(values: np.ndarray, rows: bool = False) -> str:
-    values = np.asarray(values, dtype=float)
-    if rows:
-        return ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in values)
-    return ", ".join(f"{float(v)!r}" for v in np.ravel(values))
-
-
 def _tables(record: dict[str, np.ndarray], real: str) -> list[str]:
     N = len(record["F_h"])
     return [f"#define LT_N {N}",
-            f"static const {real} FH[{N}][6] = {{{_c_array(record['F_h'], rows=True)}}};",
-            f"static const {real} FT[{N}][6] = {{{_c_array(record['F_t'], rows=True)}}};",
-            f"static const {real} NN[{N}][3] = {{{_c_array(record['n_n'], rows=True)}}};"]
+            f"static const {real} FH[{N}][6] = {{{c_array(record['F_h'], rows=True)}}};",
+            f"static const {real} FT[{N}][6] = {{{c_array(record['F_t'], rows=True)}}};",
+            f"static const {real} NN[{N}][3] = {{{c_array(record['n_n'], rows=True)}}};"]
 
 
 def time_lead_through(generated: GeneratedCode, library: Path, record: dict[str, np.ndarray], build_dir: str | Path,
@@ -383,15 +376,8 @@ def build_lead_through_program(generated: GeneratedCode, record: dict[str, np.nd
     build.mkdir(parents=True, exist_ok=True)
     text = fill("template_lead_through_run.c", PREFIX=p, HEADER=generated.header.name, REAL=generated.real,
                 TABLES="\n".join(_tables(record, generated.real)))
-    cc = find_compiler()
-    objects = []
-    for c_file in generated.c_sources:
-        obj = build / (c_file.stem + ".strict.o")
-        run_compiler([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-c", str(c_file), "-o", str(obj)],
-                     f"compiling {c_file.name} with {' '.join(STRICT_FLAGS)}")
-        objects.append(obj)
-    return compile_program(generated, f"{p}_lead_through_run", text, build, flags=STRICT_FLAGS, objects=tuple(objects),
-                           link_flags=(HEAP_WRAP,))
+    return compile_program(generated, f"{p}_lead_through_run", text, build, flags=STRICT_FLAGS,
+                           objects=strict_objects(generated, build), link_flags=(HEAP_WRAP,))
 
 
 def run_lead_through_program(program: str | Path, out_file: str | Path, valgrind: bool = False,
@@ -416,9 +402,4 @@ def run_lead_through_program(program: str | Path, out_file: str | Path, valgrind
     rows : numpy.ndarray, shape (N, 18)
         Per step: status, state (8), ``V_tool`` (6), ``n`` (3).
     """
-    cmd = [str(program), str(out_file)]
-    if valgrind:
-        cmd = ["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full", *cmd]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-    data = np.fromfile(out_file, dtype=np.float64) if Path(out_file).is_file() else np.zeros(0)
-    return proc, data[: data.size // 18 * 18].reshape(-1, 18)
+    return run_record_program(program, out_file, 18, valgrind, timeout)

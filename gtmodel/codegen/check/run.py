@@ -26,12 +26,18 @@ from gtmodel.codegen.emit import fill, harness_dir
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.errors import CodegenError
 
-__all__ = ["PROGRAM_FLAGS", "compile_program", "run_program", "time_program", "timing_block", "c_function", "pointer"]
+__all__ = ["PROGRAM_FLAGS", "STRICT_FLAGS", "HEAP_WRAP", "compile_program", "strict_objects", "run_program", "run_record_program",
+           "time_program", "timing_block", "c_function", "pointer", "c_array"]
 
 log = logging.getLogger("gtmodel")
 
 #: Flags of a check program: the library's own (:data:`~gtmodel.codegen.build.COMMON_FLAGS`) and its warnings.
 PROGRAM_FLAGS = (*COMMON_FLAGS, *WRAPPER_WARNINGS)
+#: Compiler flags of a stand-alone run program (the KF/EKF steps', the lead-through step's) and
+#: of the library objects it links (:func:`strict_objects`).
+STRICT_FLAGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
+#: Link flag of a stand-alone run program: the heap calls go through the counter of ``harness/heap_watch.h``.
+HEAP_WRAP = "-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free"
 
 
 def compile_program(generated: GeneratedCode, name: str, text: str, build_dir: str | Path, *, library: Path | None = None,
@@ -85,6 +91,36 @@ def compile_program(generated: GeneratedCode, name: str, text: str, build_dir: s
     run_compiler([*cc, *flags, *inc, "-c", str(src), "-o", str(obj)], f"compiling {src.name} with {' '.join(flags)}")
     run_compiler([*cc, *map(str, objects), str(obj), *link_flags, "-lm", "-o", str(exe)], f"linking {exe.name}")
     return exe
+
+
+def strict_objects(generated: GeneratedCode, build_dir: str | Path) -> tuple[Path, ...]:
+    """Compile the generated library's sources to objects with :data:`STRICT_FLAGS` (no ``-fPIC``).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        The generated library.
+    build_dir : str or pathlib.Path
+        Folder for the objects ``<source stem>.strict.o`` (it must exist).
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        The objects, in the order of ``generated.c_sources``.
+
+    Raises
+    ------
+    CodegenError
+        A compilation failed (the message holds the compiler output).
+    """
+    cc = find_compiler()
+    objects = []
+    for c_file in generated.c_sources:
+        obj = Path(build_dir) / (c_file.stem + ".strict.o")
+        run_compiler([*cc, *STRICT_FLAGS, "-I", str(generated.out_dir), "-c", str(c_file), "-o", str(obj)],
+                     f"compiling {c_file.name} with {' '.join(STRICT_FLAGS)}")
+        objects.append(obj)
+    return tuple(objects)
 
 
 def run_program(program: Path, what: str, timeout: float = 600) -> list[list[str]]:
@@ -150,6 +186,38 @@ def timing_block(label: str, decl: Sequence[str], call: str, budget_s: float, ca
         f'        printf("{label}\\t%.3f\\n", (t1 - t0) / (double)n);',
         "    }",
     ])
+
+
+def run_record_program(program: str | Path, out_file: str | Path, width: int, valgrind: bool = False,
+                       timeout: float = 600) -> tuple[subprocess.CompletedProcess, np.ndarray]:
+    """Run a stand-alone run program (optionally under valgrind's memcheck) and read the rows it writes.
+
+    Parameters
+    ----------
+    program : str or pathlib.Path
+        The executable, called as ``PROGRAM OUT_FILE``.
+    out_file : str or pathlib.Path
+        Binary file of float64 rows it writes.
+    width : int
+        Doubles per row.
+    valgrind : bool, optional
+        Run under ``valgrind --tool=memcheck --error-exitcode=99 --leak-check=full``.
+    timeout : float, optional
+        Seconds.
+
+    Returns
+    -------
+    proc : subprocess.CompletedProcess
+        Exit code, stdout and stderr (valgrind's report).
+    rows : numpy.ndarray, shape (N, width)
+        The complete rows written (none if the file is missing).
+    """
+    cmd = [str(program), str(out_file)]
+    if valgrind:
+        cmd = ["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full", *cmd]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    data = np.fromfile(out_file, dtype=np.float64) if Path(out_file).is_file() else np.zeros(0)
+    return proc, data[: data.size // width * width].reshape(-1, width)
 
 
 def time_program(generated: GeneratedCode, library: Path, name: str, blocks: Sequence[str], build_dir: str | Path,
@@ -231,3 +299,24 @@ def pointer(a: np.ndarray | None) -> int | None:
         Its address.
     """
     return None if a is None else a.ctypes.data
+
+
+def c_array(values: np.ndarray, rows: bool = False) -> str:
+    """C initialiser of a table of a check program: the values flattened, or with ``rows`` a brace per row.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        The values (2-D with ``rows``).
+    rows : bool, optional
+        One ``{...}`` per row, rows separated by ``,\\n``.
+
+    Returns
+    -------
+    str
+        The values as ``repr(float(v))`` (they read back exactly), comma-separated.
+    """
+    values = np.asarray(values, dtype=float)
+    if rows:
+        return ",\n".join("{" + ", ".join(f"{float(v)!r}" for v in row) + "}" for row in values)
+    return ", ".join(f"{float(v)!r}" for v in np.ravel(values))
