@@ -38,13 +38,11 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
+from gtmodel.estimation.reference import INDEX_EPS, period_index, sample_reference
+from gtmodel.estimation.reference import sampled as _sampled  # noqa: F401  (imported by gtmodel.estimation.mpc)
 from gtmodel.modeling import ExplicitODE
 
-__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate"]
-
-#: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
-#: point) selects sample ``k``, not ``k - 1``.
-INDEX_EPS = 1e-6
+__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
 
 
 def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -242,8 +240,7 @@ class TrackingController:
         """
         n, nx, nu = self.length, self.nx, self.nu
         t, x, u_last = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu)
-        k = ca.fmin(ca.fmax(ca.floor((t - self.t0) / self.dt + INDEX_EPS), 0), n)
-        k = ca.if_else(t == t, k, 0)  # a NaN time reads sample 0; ok is then 0 below
+        k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
         table = np.vstack([np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)]),  # row k: x*_k, u*_k, K_k (row-major)
                            np.hstack([self.x_hold, self.u_hold, self.K_hold.reshape(-1)])])  # row N: hold the end
         width = table.shape[1]
@@ -276,13 +273,6 @@ class TrackingController:
         return np.asarray(u).reshape(-1)
 
 
-def _sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:
-    """``values`` (``(M, n)`` on ``t``) linearly interpolated on ``grid``."""
-    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
-        raise InputError(f"{name}: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
-    return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])]) if values.shape[1] else np.zeros((grid.size, 0))
-
-
 def tracking_controller(
     ode: ExplicitODE,
     t: Any,
@@ -297,6 +287,7 @@ def tracking_controller(
     p: Any = None,
     method: str = "rk4",
     substeps: int = 1,
+    time_varying: bool = True,
 ) -> TrackingController:
     """Feedforward and time-varying LQR along a reference motion of a model.
 
@@ -330,6 +321,11 @@ def tracking_controller(
         The fixed step whose Jacobians are the ``A_k``, ``B_k``.
     substeps : int, optional
         Its steps within one period.
+    time_varying : bool, optional
+        True (default): the gains ``K_k`` of the backward Riccati recursion along the
+        reference. False: one time-invariant LQR gain for every sample, :func:`dlqr` of the
+        linearisation at the held end (``x*_end``, the input that holds it), i.e.
+        :attr:`TrackingController.K_hold`.
 
     Returns
     -------
@@ -339,20 +335,13 @@ def tracking_controller(
     ------
     InputError
         Shapes or values out of range, times not increasing, a reference shorter than
-        one period, ``R`` not positive definite.
+        one period, ``R`` not positive definite; ``time_varying=False`` at an end where the
+        linearisation is not stabilisable.
     """
-    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
-        raise InputError(f"dt: expected a positive loop period in seconds, got {dt!r}")
-    tt = np.asarray(t, dtype=float).reshape(-1)
-    if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
-        raise InputError("t: expected at least two increasing finite reference times")
-    n = int(math.floor((tt[-1] - tt[0]) / dt + INDEX_EPS)) + 1
-    if n < 2:
-        raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than one period ({dt:g} s)")
-    grid = tt[0] + dt * np.arange(n)
-    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(tt.size, -1), np.asarray(u_ref, dtype=float).reshape(tt.size, -1)
-    xs = _sampled(tt, x_given, grid, "x_ref")
-    us = _sampled(tt, u_given, grid, "u_ref")
+    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=2)
+    n = xs.shape[0]
+    m = np.asarray(t).size
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
     lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
@@ -385,10 +374,12 @@ def tracking_controller(
     Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
     try:
         K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
-    except InputError:
+    except InputError as exc:
+        if not time_varying:
+            raise InputError(f"time_varying: a time-invariant LQR needs a stabilisable linearisation at the held end ({exc})") from None
         K_hold, P_hold = None, Qm
     Qfm = P_hold if Qf is None else _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
-    K, _ = riccati_gains(A, B, Qm, Rm, Qfm)
-    return TrackingController(dt=float(dt), t0=float(tt[0]), x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
+    K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
+    return TrackingController(dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
                               x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm,
                               x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1), K_hold=K[-1] if K_hold is None else K_hold)
