@@ -179,6 +179,8 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
                if np.any(c.K != c.K[0]) else
                "(feedforward u* and reference x* sampled at the period, one time-invariant LQR gain K (the discrete\n"
                "Riccati equation at the held end, on the model's fixed-step Jacobians); gtmodel.estimation.tracking).\n")
+            + ("One period of input delay compensated: x and t replaced by the state predicted at t + dt\n"
+               "by the model's fixed step from u_last (the input acting until this one arrives).\n" if c.delay else "")
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
                     x_names=list(c.x_names), u_names=list(c.u_names), description=text,

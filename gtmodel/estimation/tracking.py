@@ -185,6 +185,14 @@ class TrackingController:
     K_hold : numpy.ndarray
         ``(nu, nx)`` the stationary LQR gain at ``(x*_end, u_hold)`` (``K_{N-1}`` if the
         pair is not stabilisable there).
+    delay : int, optional
+        Input delay [periods] the law compensates: 0 (default) or 1. With 1, the input
+        computed at ``t_k`` acts from ``t_{k+1}``: the law predicts the state then,
+        ``x^_{k+1} = F(x, u_last)`` (:attr:`predict`, the input acting now being the last
+        one), and applies ``u = sat(u*_{k+1} - K_{k+1} (x^_{k+1} - x*_{k+1}))``.
+    predict : casadi.Function, optional
+        ``predict(x (nx,1), u (nu,1)) -> x_next``: the model's fixed step over one period
+        (the one linearised), needed when ``delay`` is 1.
     """
 
     dt: float
@@ -202,6 +210,8 @@ class TrackingController:
     x_hold: np.ndarray
     u_hold: np.ndarray
     K_hold: np.ndarray
+    delay: int = 0
+    predict: Any = None
 
     @property
     def nx(self) -> int:
@@ -234,12 +244,17 @@ class TrackingController:
             ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
             reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
             :attr:`K_hold`; ``ok`` is 1 when ``u`` is
-            finite. ``u_last`` is not used by this law (the interface is shared with the
-            MPC, whose warm start it is). The tables are constants of the graph, indexed
-            parametrically (the generated C looks them up; no heap).
+            finite. ``u_last`` is not used by this law without a delay (the interface is
+            shared with the MPC, whose warm start it is); with :attr:`delay` 1 it is the
+            input acting until the new one arrives: ``x`` is replaced by
+            ``predict(x, u_last)`` and ``t`` by ``t + dt``. The tables are constants of the
+            graph, indexed parametrically (the generated C looks them up; no heap).
         """
         n, nx, nu = self.length, self.nx, self.nu
         t, x, u_last = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu)
+        t_in, x_in = t, x
+        if self.delay:
+            t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
         k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
         table = np.vstack([np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)]),  # row k: x*_k, u*_k, K_k (row-major)
                            np.hstack([self.x_hold, self.u_hold, self.K_hold.reshape(-1)])])  # row N: hold the end
@@ -250,11 +265,11 @@ class TrackingController:
         us = ca.vertcat(*[values[base + nx + j] for j in range(nu)])
         gain = ca.vertcat(*[ca.horzcat(*[values[base + nx + nu + i * nx + j] for j in range(nx)]) for i in range(nu)])
         u = saturate(us - ca.mtimes(gain, x - xs), self.u_lb, self.u_ub)
-        total = ca.sum1(ca.fabs(u)) + ca.fabs(t)
+        total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         ok = total < math.inf  # 0 for NaN or infinite entries
-        return ca.Function("control", [t, x, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
+        return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
 
-    def __call__(self, t: float, x: Any) -> np.ndarray:
+    def __call__(self, t: float, x: Any, u_last: Any = None) -> np.ndarray:
         """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
 
         Parameters
@@ -263,13 +278,15 @@ class TrackingController:
             Time [s].
         x : array_like
             ``(nx,)`` measured state.
+        u_last : array_like, optional
+            ``(nu,)`` the input acting now (used with :attr:`delay` 1; default :attr:`u_initial`).
 
         Returns
         -------
         numpy.ndarray
             ``(nu,)`` the saturated input.
         """
-        u, _ = self.function()(t, np.asarray(x, dtype=float), self.u_initial)
+        u, _ = self.function()(t, np.asarray(x, dtype=float), self.u_initial if u_last is None else np.asarray(u_last, dtype=float))
         return np.asarray(u).reshape(-1)
 
 
@@ -288,6 +305,7 @@ def tracking_controller(
     method: str = "rk4",
     substeps: int = 1,
     time_varying: bool = True,
+    delay: int = 0,
 ) -> TrackingController:
     """Feedforward and time-varying LQR along a reference motion of a model.
 
@@ -326,6 +344,9 @@ def tracking_controller(
         reference. False: one time-invariant LQR gain for every sample, :func:`dlqr` of the
         linearisation at the held end (``x*_end``, the input that holds it), i.e.
         :attr:`TrackingController.K_hold`.
+    delay : {0, 1}, optional
+        Input delay [periods] the law compensates by predicting the state one period ahead
+        with the same fixed step (see :attr:`TrackingController.delay`; default 0).
 
     Returns
     -------
@@ -338,6 +359,8 @@ def tracking_controller(
         one period, ``R`` not positive definite; ``time_varying=False`` at an end where the
         linearisation is not stabilisable.
     """
+    if isinstance(delay, bool) or delay not in (0, 1):
+        raise InputError(f"delay: expected 0 or 1 period of input delay to compensate, got {delay!r}")
     t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=2)
     n = xs.shape[0]
     m = np.asarray(t).size
@@ -380,6 +403,7 @@ def tracking_controller(
         K_hold, P_hold = None, Qm
     Qfm = P_hold if Qf is None else _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
     K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
-    return TrackingController(dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
+    predict = ca.Function("predict", [xsym, usym], [step(xsym, usym, ca.DM(pv))[0]], ["x", "u"], ["x_next"])
+    return TrackingController(delay=int(delay), predict=predict if delay else None, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
                               x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm,
                               x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1), K_hold=K[-1] if K_hold is None else K_hold)

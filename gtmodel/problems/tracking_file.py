@@ -12,7 +12,9 @@ error names the file and the field, the CLI exits with 2):
     an unknown variable refused; default Bryson's rule), ``u_lb`` / ``u_ub`` (default: the
     reference problem's bounds, else the model's declared ones), ``time_varying`` (default
     true: the gains of the backward discrete Riccati recursion along the reference; false:
-    one time-invariant LQR gain, that of the held end).
+    one time-invariant LQR gain, that of the held end), ``input_delay`` (0 default, or 1:
+    the input computed at ``t_k`` acts from ``t_{k+1}``, and the law applies the gain to
+    the state predicted then by the model's step from the last input).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``, as in an MPC file
     (:mod:`gtmodel.problems.loop_file`).
@@ -54,6 +56,7 @@ class ControllerSection(Section):
     u_lb: list[float] | None = Field(default=None, description="input lower bounds")
     u_ub: list[float] | None = Field(default=None, description="input upper bounds")
     time_varying: bool = Field(default=True, strict=True, description="time-varying LQR along the reference (false: the held end's time-invariant LQR)")
+    input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
 
 
 class TrackingFile(Section):
@@ -136,7 +139,7 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
     u_lb, u_ub = input_bounds(file, "controller", c.u_lb, c.u_ub, limits, ode)
     try:
         controller = tracking_controller(ode, t, x_ref, u_ref, dt=c.period, Q=Q, R=R, Qf=Qf, u_lb=u_lb, u_ub=u_ub,
-                                         method=c.method, substeps=c.substeps, time_varying=c.time_varying)
+                                         method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
     return loop_setup(file, doc.name, controller, model, doc.check, c.period)
