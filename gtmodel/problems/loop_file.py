@@ -49,7 +49,7 @@ from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
 
-__all__ = ["ReferenceSection", "CheckSection", "LoopModel", "LoopSetup", "loop_model", "weight_diagonal",
+__all__ = ["LoopModel", "LoopSetup", "loop_model", "weight_diagonal",
            "loop_reference", "input_bounds", "loop_setup"]
 
 _TCP_STATES = ("x", "y", "z", "xd", "yd", "zd")

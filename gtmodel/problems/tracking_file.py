@@ -40,7 +40,7 @@ from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_file import CheckSection, LoopSetup, ReferenceSection, input_bounds, loop_model, loop_reference, loop_setup, weight_diagonal
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
 
-__all__ = ["ControllerSection", "TrackingFile", "load_tracking_file", "is_tracking_file"]
+__all__ = ["TrackingFile", "load_tracking_file", "is_tracking_file"]
 
 
 class ControllerSection(Section):
