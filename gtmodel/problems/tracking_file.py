@@ -40,7 +40,7 @@ from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_file import CheckSection, LoopSetup, ReferenceSection, input_bounds, loop_model, loop_reference, loop_setup, weight_diagonal
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
 
-__all__ = ["TrackingFile", "load_tracking_file", "is_tracking_file"]
+__all__ = ["TrackingFile", "load_tracking_file"]
 
 
 class ControllerSection(Section):
@@ -81,21 +81,6 @@ class TrackingFile(Section):
     controller: ControllerSection
     reference: ReferenceSection
     check: CheckSection = CheckSection()
-
-
-def is_tracking_file(path: Path) -> bool:
-    """Whether a ``--controller`` argument is a tracking-controller file (a ``.toml`` file).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The argument.
-
-    Returns
-    -------
-    bool
-    """
-    return Path(path).suffix.lower() == ".toml"
 
 
 def load_tracking_file(path: str | Path) -> LoopSetup:
