@@ -53,7 +53,7 @@
     LQR at the loop period, saturated) as C with the loop-step interface
     (:mod:`gtmodel.codegen.loop_step`: ``gt_tracking_init``, ``gt_tracking_step``);
     ``--check`` compares it with Python and runs it in closed loop against the model
-    (parameters ``F`` times the solve's, default the nominal plant; one-sample delay).
+    (parameters ``F`` times the solve's, default the nominal plant; no delay, no noise; the error over all states).
 ``gtmodel codegen --controller FILE.toml --out DIR [--check]``
     The tracking controller of a tracking-controller file (:mod:`gtmodel.problems.tracking_file`:
     ``[controller]``, ``[reference]``, ``[check]`` as an MPC file's) as C (``gt_<name>_init``,
@@ -194,7 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
     cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
     cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
-    cg.add_argument("--mismatch", type=float, default=None, metavar="FACTOR", help="a result folder's tracking controller with --check: the closed loop's plant parameters / the model's (default 1, the nominal plant; one-sample input delay)")
+    cg.add_argument("--mismatch", type=float, default=None, metavar="FACTOR", help="a result folder's tracking controller with --check: the closed loop's plant parameters / the model's (default 1, the nominal plant; no input delay, no noise)")
     cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")

@@ -152,8 +152,9 @@ def result_loop_setup(result_dir: str | Path, controller: TrackingController, od
     """The closed loop of a result folder's tracking controller: the model itself as the plant.
 
     The loop of a tracking-controller file's ``[check]`` (:func:`gtmodel.problems.loop_file.loop_setup`)
-    with its defaults (a one-sample input delay, no noise, no disturbance) and the plant's
-    parameters ``parameter_factor`` times the solve's (default 1: the nominal plant).
+    without input delay (the result's controller does not compensate one), noise or disturbance,
+    the error over all states, and the plant's parameters ``parameter_factor`` times the
+    solve's (default 1: the nominal plant).
 
     Parameters
     ----------
@@ -170,6 +171,6 @@ def result_loop_setup(result_dir: str | Path, controller: TrackingController, od
     -------
     LoopSetup
     """
-    check = CheckSection(parameter_factor=parameter_factor)
+    check = CheckSection(parameter_factor=parameter_factor, delay=0)
     model = LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * parameter_factor, robot=False)
     return loop_setup(ProblemFile(Path(result_dir) / "summary.json"), f"tracking of {ode.name}", controller, model, check, controller.dt)
