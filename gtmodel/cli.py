@@ -47,11 +47,20 @@
     right-hand side, outputs and fixed steps over the loop period) with its own parameter
     hash; ``--check`` compiles it with ``-Werror``, compares it with the model evaluated
     from Python and iterates each step over a horizon against ``simulate()``.
-``gtmodel codegen --controller RESULT_DIR --out DIR [--check]``
+``gtmodel codegen --controller RESULT_DIR --out DIR [--check] [--mismatch F]``
     The tracking controller of an ``optimal_control`` result folder
     (:func:`gtmodel.problems.controller.tracking_from_result`: feedforward + time-varying
     LQR at the loop period, saturated) as C with the loop-step interface
-    (:mod:`gtmodel.codegen.loop_step`: ``gt_tracking_init``, ``gt_tracking_step``).
+    (:mod:`gtmodel.codegen.loop_step`: ``gt_tracking_init``, ``gt_tracking_step``);
+    ``--check`` compares it with Python and runs it in closed loop against the model
+    (parameters ``F`` times the solve's, default the nominal plant; no delay, no noise; the error over all states).
+``gtmodel codegen --controller FILE.toml --out DIR [--check]``
+    The tracking controller of a tracking-controller file (:mod:`gtmodel.problems.tracking_file`:
+    ``[controller]``, ``[reference]``, ``[check]`` as an MPC file's) as C (``gt_<name>_init``,
+    ``gt_<name>_step``); ``--check`` compares it with Python and runs it in closed loop against
+    the file's plant (:mod:`gtmodel.problems.loop_check`): tracking RMS/max, the ratio to the
+    feedforward alone, bound violations, failed steps, step times; exit 1 when the C differs,
+    a bound is violated, a step fails or the ratio is not below 1.
 ``gtmodel codegen --mpc FILE.toml --out DIR [--check]``
     The real-time nonlinear MPC of an MPC file (:mod:`gtmodel.problems.mpc_file`: ``[mpc]``,
     ``[reference]``, ``[check]``) as C with the same loop-step interface (``gt_<name>_init``,
@@ -176,13 +185,16 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
     cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
                     help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library; "
-                    "or an optimal_control result folder: its tracking controller (feedforward + time-varying LQR) alone")
+                    "or a tracking-controller file (.toml: [controller], [reference], [check]; docs/model_in_the_loop.md) or an "
+                    "optimal_control result folder: its tracking controller (feedforward + time-varying LQR, saturated) alone, "
+                    "with --check also run in closed loop against the plant simulated in Python")
     cg.add_argument("--mpc", type=Path, default=None, metavar="FILE",
                     help="an MPC file (TOML: [mpc], [reference], [check]): its real-time MPC step as C (docs/model_in_the_loop.md)")
     cg.add_argument("--period", type=float, default=None, metavar="S",
                     help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
     cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
     cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
+    cg.add_argument("--mismatch", type=float, default=None, metavar="FACTOR", help="a result folder's tracking controller with --check: the closed loop's plant parameters / the model's (default 1, the nominal plant; no input delay, no noise)")
     cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")

@@ -1,12 +1,14 @@
 """The routes of ``gtmodel codegen`` (:mod:`gtmodel.cli` dispatches here): the robot and
 controller-file code, a user's model (``--model``), the tracking controller of a result
-folder (``--controller DIR``) and a declared MPC (``--mpc FILE.toml``). Like every
+folder (``--controller DIR``) or of a tracking-controller file (``--controller FILE.toml``)
+and a declared MPC (``--mpc FILE.toml``). Like every
 sub-command, each route imports the layers it needs when it runs (the CLI starts fast).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 
 from gtmodel.errors import GtModelError
 from gtmodel.status import Status
@@ -45,10 +47,12 @@ def codegen_command(args: argparse.Namespace) -> int:
         return _codegen_mpc(args)
     if args.model is not None:
         return _codegen_model(args, functions)
+    if args.controller is not None and args.controller.suffix.lower() == ".toml":
+        return _codegen_tracking_file(args)
     if args.controller is not None and args.controller.is_dir():
         return _codegen_tracking(args)
-    if args.period is not None or args.q is not None or args.r is not None:
-        raise GtModelError("--period, --q and --r apply to --model (--period) and to a --controller result folder")
+    if args.period is not None or args.q is not None or args.r is not None or args.mismatch is not None:
+        raise GtModelError("--period, --q, --r and --mismatch apply to --model (--period) and to a --controller result folder")
     controller = load_controller(args.controller) if args.controller is not None else None
     if args.robot is None and functions is None and controller is not None and controller.kalman_step is None and controller.ilc_correction is None:
         functions = []  # the fusion filters and the lead-through step need no robot: the controller alone
@@ -95,6 +99,45 @@ def _codegen_mpc(args: argparse.Namespace) -> int:
     return EXIT_OK if passed else EXIT_NOT_OPTIMAL
 
 
+def _loop_verdict(report, loop) -> int:
+    """Print a tracking controller's C-vs-Python report and closed loop; the exit code (1: C differs, a bound
+    violated, a failed step, or no better than the feedforward alone)."""
+    print("\n".join(report.summary_lines()))
+    print("\n".join(loop.summary_lines()))
+    failures = [why for why, bad in (("the C differs from Python", not report.passed),
+                                     (f"{loop.closed.bound_violations} input bound violations", loop.closed.bound_violations > 0),
+                                     (f"{loop.failed_steps} failed steps", loop.failed_steps > 0),
+                                     (f"RMS ratio to the feedforward {loop.ratio_to_feedforward:.4g} not below 1", not loop.ratio_to_feedforward < 1.0))
+                if bad]
+    print("closed-loop check: " + ("PASSED" if not failures else "FAILED (" + "; ".join(failures) + ")"))
+    return EXIT_OK if not failures else EXIT_NOT_OPTIMAL
+
+
+def _codegen_tracking_file(args: argparse.Namespace) -> int:
+    from gtmodel.codegen.loop_step import check_loop_step, generate_loop_step, tracking_step
+    from gtmodel.problems.loop_check import closed_loop_check
+    from gtmodel.problems.tracking_file import load_tracking_file
+
+    given = [flag for flag, value in (("--model", args.model), ("--robot", args.robot), ("--functions", args.functions),
+                                      ("--retime-n-max", args.retime_n_max), ("--period", args.period), ("--q", args.q),
+                                      ("--r", args.r), ("--mismatch", args.mismatch),
+                                      ("--real", None if args.real == "double" else args.real)) if value is not None]
+    if given:
+        raise GtModelError(f"--controller FILE.toml generates the tracking controller of its file alone: give it without {', '.join(given)} "
+                           "(the period, weights and plant are the file's)")
+    setup = load_tracking_file(args.controller)
+    c = setup.controller
+    generated = generate_loop_step(tracking_step(c, setup.name), args.out, prefix=f"gt_{setup.name}")
+    print(f"wrote {', '.join(str(p) for p in generated.files)}")
+    print(generated.version)
+    print(f"tracking controller {setup.name}: {c.length} samples at {c.dt:g} s, {c.nx} states, {c.nu} inputs, "
+          f"input bounds {c.u_lb.tolist()} .. {c.u_ub.tolist()}")
+    if not args.check:
+        return EXIT_OK
+    report = check_loop_step(generated, n=min(args.samples, 2000), seed=args.seed, timing=True)
+    return _loop_verdict(report, closed_loop_check(setup, generated, report.library, label="tracking controller"))
+
+
 def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int:
     from gtmodel.codegen.model_code import check_model, generate_model
     from gtmodel.problems.user_model import load_user_model, split_model_reference
@@ -114,7 +157,8 @@ def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int
 
 def _codegen_tracking(args: argparse.Namespace) -> int:
     from gtmodel.codegen.loop_step import check_loop_step, generate_loop_step, tracking_step
-    from gtmodel.problems.controller import is_result_folder, tracking_from_result
+    from gtmodel.problems.controller import is_result_folder, result_loop_setup, tracking_from_result
+    from gtmodel.problems.loop_check import closed_loop_check
 
     if args.robot is not None or args.functions is not None or args.retime_n_max is not None:
         raise GtModelError("--controller RESULT_DIR generates the tracking controller alone: give it without --robot, --functions, --retime-n-max")
@@ -129,6 +173,8 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
             except ValueError:
                 raise GtModelError(f"--{flag}: expected comma-separated numbers, got {text!r}") from None
     controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}), **weights)
+    if args.mismatch is not None and not (math.isfinite(args.mismatch) and 0 < args.mismatch <= 10):
+        raise GtModelError(f"--mismatch: expected a factor in (0, 10] on the plant's parameters, got {args.mismatch!r}")
     generated = generate_loop_step(tracking_step(controller, f"tracking of {ode.name}"), args.out, prefix="gt_tracking", real=args.real)
     print(f"wrote {', '.join(str(p) for p in generated.files)}")
     print(generated.version)
@@ -137,5 +183,9 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
     if not args.check:
         return EXIT_OK
     report = check_loop_step(generated, n=min(args.samples, 2000), seed=args.seed, timing=True)
-    print("\n".join(report.summary_lines()))
-    return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
+    if args.real != "double":  # the closed loop calls the step with doubles (ctypes), as the MPC's
+        print("\n".join(report.summary_lines()))
+        print("closed loop: not run for --real float")
+        return EXIT_OK if report.passed else EXIT_NOT_OPTIMAL
+    setup = result_loop_setup(args.controller, controller, ode, 1.0 if args.mismatch is None else args.mismatch)
+    return _loop_verdict(report, closed_loop_check(setup, generated, report.library, label="tracking controller"))

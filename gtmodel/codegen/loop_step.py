@@ -173,9 +173,14 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
     """
     c = controller
     text = (f"Tracking controller: u = sat(u*_k - K_k (x - x*_k)), k = floor((t - {c.t0!r}) / {c.dt!r}) held in 0..{c.length - 1}\n"
-            "(feedforward u* and reference x* sampled at the period, time-varying LQR gains K_k from the\n"
-            "backward discrete Riccati recursion on the model's fixed-step Jacobians; gtmodel.estimation.tracking).\n"
-            f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
+            + ("(feedforward u* and reference x* sampled at the period, time-varying LQR gains K_k from the\n"
+               "backward discrete Riccati recursion on the model's fixed-step Jacobians; gtmodel.estimation.tracking).\n"
+               if np.any(c.K != c.K[0]) else
+               "(feedforward u* and reference x* sampled at the period, one time-invariant LQR gain K (the discrete\n"
+               "Riccati equation at the held end, on the model's fixed-step Jacobians); gtmodel.estimation.tracking).\n")
+            + ("One period of input delay compensated: x and t replaced by the state predicted at t + dt\n"
+               "by the model's fixed step from u_last (the input acting until this one arrives).\n" if c.delay else "")
+            + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
                     x_names=list(c.x_names), u_names=list(c.u_names), description=text,
                     t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)

@@ -38,13 +38,11 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
+from gtmodel.estimation.reference import INDEX_EPS, period_index, sample_reference
+from gtmodel.estimation.reference import sampled as _sampled  # noqa: F401  (imported by gtmodel.estimation.mpc)
 from gtmodel.modeling import ExplicitODE
 
-__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate"]
-
-#: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
-#: point) selects sample ``k``, not ``k - 1``.
-INDEX_EPS = 1e-6
+__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
 
 
 def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -187,6 +185,14 @@ class TrackingController:
     K_hold : numpy.ndarray
         ``(nu, nx)`` the stationary LQR gain at ``(x*_end, u_hold)`` (``K_{N-1}`` if the
         pair is not stabilisable there).
+    delay : int, optional
+        Input delay [periods] the law compensates: 0 (default) or 1. With 1, the input
+        computed at ``t_k`` acts from ``t_{k+1}``: the law predicts the state then,
+        ``x^_{k+1} = F(x, u_last)`` (:attr:`predict`, the input acting now being the last
+        one), and applies ``u = sat(u*_{k+1} - K_{k+1} (x^_{k+1} - x*_{k+1}))``.
+    predict : casadi.Function, optional
+        ``predict(x (nx,1), u (nu,1)) -> x_next``: the model's fixed step over one period
+        (the one linearised), needed when ``delay`` is 1.
     """
 
     dt: float
@@ -204,6 +210,8 @@ class TrackingController:
     x_hold: np.ndarray
     u_hold: np.ndarray
     K_hold: np.ndarray
+    delay: int = 0
+    predict: Any = None
 
     @property
     def nx(self) -> int:
@@ -236,14 +244,18 @@ class TrackingController:
             ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
             reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
             :attr:`K_hold`; ``ok`` is 1 when ``u`` is
-            finite. ``u_last`` is not used by this law (the interface is shared with the
-            MPC, whose warm start it is). The tables are constants of the graph, indexed
-            parametrically (the generated C looks them up; no heap).
+            finite. ``u_last`` is not used by this law without a delay (the interface is
+            shared with the MPC, whose warm start it is); with :attr:`delay` 1 it is the
+            input acting until the new one arrives: ``x`` is replaced by
+            ``predict(x, u_last)`` and ``t`` by ``t + dt``. The tables are constants of the
+            graph, indexed parametrically (the generated C looks them up; no heap).
         """
         n, nx, nu = self.length, self.nx, self.nu
         t, x, u_last = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu)
-        k = ca.fmin(ca.fmax(ca.floor((t - self.t0) / self.dt + INDEX_EPS), 0), n)
-        k = ca.if_else(t == t, k, 0)  # a NaN time reads sample 0; ok is then 0 below
+        t_in, x_in = t, x
+        if self.delay:
+            t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
+        k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
         table = np.vstack([np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)]),  # row k: x*_k, u*_k, K_k (row-major)
                            np.hstack([self.x_hold, self.u_hold, self.K_hold.reshape(-1)])])  # row N: hold the end
         width = table.shape[1]
@@ -253,11 +265,11 @@ class TrackingController:
         us = ca.vertcat(*[values[base + nx + j] for j in range(nu)])
         gain = ca.vertcat(*[ca.horzcat(*[values[base + nx + nu + i * nx + j] for j in range(nx)]) for i in range(nu)])
         u = saturate(us - ca.mtimes(gain, x - xs), self.u_lb, self.u_ub)
-        total = ca.sum1(ca.fabs(u)) + ca.fabs(t)
+        total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         ok = total < math.inf  # 0 for NaN or infinite entries
-        return ca.Function("control", [t, x, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
+        return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
 
-    def __call__(self, t: float, x: Any) -> np.ndarray:
+    def __call__(self, t: float, x: Any, u_last: Any = None) -> np.ndarray:
         """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
 
         Parameters
@@ -266,21 +278,16 @@ class TrackingController:
             Time [s].
         x : array_like
             ``(nx,)`` measured state.
+        u_last : array_like, optional
+            ``(nu,)`` the input acting now (used with :attr:`delay` 1; default :attr:`u_initial`).
 
         Returns
         -------
         numpy.ndarray
             ``(nu,)`` the saturated input.
         """
-        u, _ = self.function()(t, np.asarray(x, dtype=float), self.u_initial)
+        u, _ = self.function()(t, np.asarray(x, dtype=float), self.u_initial if u_last is None else np.asarray(u_last, dtype=float))
         return np.asarray(u).reshape(-1)
-
-
-def _sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:
-    """``values`` (``(M, n)`` on ``t``) linearly interpolated on ``grid``."""
-    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
-        raise InputError(f"{name}: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
-    return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])]) if values.shape[1] else np.zeros((grid.size, 0))
 
 
 def tracking_controller(
@@ -297,6 +304,8 @@ def tracking_controller(
     p: Any = None,
     method: str = "rk4",
     substeps: int = 1,
+    time_varying: bool = True,
+    delay: int = 0,
 ) -> TrackingController:
     """Feedforward and time-varying LQR along a reference motion of a model.
 
@@ -330,6 +339,14 @@ def tracking_controller(
         The fixed step whose Jacobians are the ``A_k``, ``B_k``.
     substeps : int, optional
         Its steps within one period.
+    time_varying : bool, optional
+        True (default): the gains ``K_k`` of the backward Riccati recursion along the
+        reference. False: one time-invariant LQR gain for every sample, :func:`dlqr` of the
+        linearisation at the held end (``x*_end``, the input that holds it), i.e.
+        :attr:`TrackingController.K_hold`.
+    delay : {0, 1}, optional
+        Input delay [periods] the law compensates by predicting the state one period ahead
+        with the same fixed step (see :attr:`TrackingController.delay`; default 0).
 
     Returns
     -------
@@ -339,20 +356,15 @@ def tracking_controller(
     ------
     InputError
         Shapes or values out of range, times not increasing, a reference shorter than
-        one period, ``R`` not positive definite.
+        one period, ``R`` not positive definite; ``time_varying=False`` at an end where the
+        linearisation is not stabilisable.
     """
-    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
-        raise InputError(f"dt: expected a positive loop period in seconds, got {dt!r}")
-    tt = np.asarray(t, dtype=float).reshape(-1)
-    if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
-        raise InputError("t: expected at least two increasing finite reference times")
-    n = int(math.floor((tt[-1] - tt[0]) / dt + INDEX_EPS)) + 1
-    if n < 2:
-        raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than one period ({dt:g} s)")
-    grid = tt[0] + dt * np.arange(n)
-    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(tt.size, -1), np.asarray(u_ref, dtype=float).reshape(tt.size, -1)
-    xs = _sampled(tt, x_given, grid, "x_ref")
-    us = _sampled(tt, u_given, grid, "u_ref")
+    if isinstance(delay, bool) or delay not in (0, 1):
+        raise InputError(f"delay: expected 0 or 1 period of input delay to compensate, got {delay!r}")
+    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=2)
+    n = xs.shape[0]
+    m = np.asarray(t).size
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
     lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
@@ -385,10 +397,13 @@ def tracking_controller(
     Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
     try:
         K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
-    except InputError:
+    except InputError as exc:
+        if not time_varying:
+            raise InputError(f"time_varying: a time-invariant LQR needs a stabilisable linearisation at the held end ({exc})") from None
         K_hold, P_hold = None, Qm
     Qfm = P_hold if Qf is None else _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
-    K, _ = riccati_gains(A, B, Qm, Rm, Qfm)
-    return TrackingController(dt=float(dt), t0=float(tt[0]), x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
+    K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
+    predict = ca.Function("predict", [xsym, usym], [step(xsym, usym, ca.DM(pv))[0]], ["x", "u"], ["x_next"])
+    return TrackingController(delay=int(delay), predict=predict if delay else None, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
                               x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm,
                               x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1), K_hold=K[-1] if K_hold is None else K_hold)

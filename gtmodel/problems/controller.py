@@ -25,9 +25,11 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, ProblemError
 from gtmodel.estimation.tracking import TrackingController, tracking_controller
 from gtmodel.modeling import ExplicitODE, explicit_ode
+from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.loop_file import CheckSection, LoopModel, LoopSetup, loop_setup
 from gtmodel.problems.user_model import load_user_model
 
-__all__ = ["RESULT_TABLE", "is_result_folder", "tracking_from_result"]
+__all__ = ["RESULT_TABLE", "is_result_folder", "tracking_from_result", "result_loop_setup"]
 
 #: The table of an ``optimal_control`` result folder.
 RESULT_TABLE = "trajectories.csv"
@@ -144,3 +146,31 @@ def tracking_from_result(
         dt=dt, Q=Q, R=R, u_lb=lb, u_ub=ub, method=method, substeps=substeps,
     )
     return controller, ode
+
+
+def result_loop_setup(result_dir: str | Path, controller: TrackingController, ode: ExplicitODE, parameter_factor: float = 1.0) -> LoopSetup:
+    """The closed loop of a result folder's tracking controller: the model itself as the plant.
+
+    The loop of a tracking-controller file's ``[check]`` (:func:`gtmodel.problems.loop_file.loop_setup`)
+    without input delay (the result's controller does not compensate one), noise or disturbance,
+    the error over all states, and the plant's parameters ``parameter_factor`` times the
+    solve's (default 1: the nominal plant).
+
+    Parameters
+    ----------
+    result_dir : str or pathlib.Path
+        The result folder (named in errors).
+    controller : TrackingController
+        From :func:`tracking_from_result`.
+    ode : ExplicitODE
+        Its model (the solve's parameter values as defaults).
+    parameter_factor : float, optional
+        Plant parameters / model parameters.
+
+    Returns
+    -------
+    LoopSetup
+    """
+    check = CheckSection(parameter_factor=parameter_factor, delay=0)
+    model = LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * parameter_factor, robot=False)
+    return loop_setup(ProblemFile(Path(result_dir) / "summary.json"), f"tracking of {ode.name}", controller, model, check, controller.dt)

@@ -13,66 +13,44 @@ by IPOPT at a sample of the closed loop's states after repeated SQP iterations t
 
 from __future__ import annotations
 
-import ctypes
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from gtmodel.codegen.build import compile_shared, load_library
-from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.generate import GeneratedCode
-from gtmodel.codegen.loop_step import generate_loop_step, load_loop_step, mpc_step
+from gtmodel.codegen.loop_step import mpc_step
 from gtmodel.errors import InputError
-from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
+from gtmodel.estimation.closed_loop.controller_loop import LoopSummary
+from gtmodel.problems import loop_check
+from gtmodel.problems.loop_check import STATUS_NAMES, LoopCheck, compiled_step
 from gtmodel.problems.mpc_file import MPCSetup
 
-__all__ = ["MPCCheck", "build_mpc", "compiled_step", "closed_loop_check", "ipopt_agreement"]
-
-#: Status names by code.
-STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
+__all__ = ["MPCCheck", "STATUS_NAMES", "build_mpc", "compiled_step", "closed_loop_check", "ipopt_agreement"]
 
 
-@dataclass
-class MPCCheck:
-    """Closed-loop figures of a generated MPC.
+class MPCCheck(LoopCheck):
+    """Closed-loop figures of a generated MPC (:class:`~gtmodel.problems.loop_check.LoopCheck`; :attr:`mpc` the C MPC's run).
 
     Parameters
     ----------
-    mpc : LoopSummary
+    closed : LoopSummary
         The generated C step in the loop.
     feedforward : LoopSummary
         The feedforward alone on the same plant.
     memory_bytes : int
-        ``sizeof(<prefix>_memory)`` (the caller's static memory).
+        ``sizeof(<prefix>_memory)``.
     work_bytes : int
-        Stack work arrays of one step (CasADi's ``sz_arg``, ``sz_res`` pointers, ``sz_iw``
-        integers, ``sz_w`` reals).
+        Stack work arrays of one step.
+    label : str
+        ``"MPC"``.
     """
 
-    mpc: LoopSummary
-    feedforward: LoopSummary
-    memory_bytes: int
-    work_bytes: int
-
     @property
-    def ratio_to_feedforward(self) -> float:
-        """RMS tracking error of the MPC over that of the feedforward alone."""
-        return self.mpc.rms_error / self.feedforward.rms_error
-
-    def summary_lines(self) -> list[str]:
-        """Human-readable summary.
-
-        Returns
-        -------
-        list of str
-        """
-        return (["closed loop, generated C MPC:"] + ["  " + line for line in self.mpc.summary_lines()]
-                + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}",
-                   f"RMS ratio MPC / feedforward: {self.ratio_to_feedforward:.4g}",
-                   f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"])
+    def mpc(self) -> LoopSummary:
+        """The generated C MPC's run (:attr:`closed`)."""
+        return self.closed
 
 
 def build_mpc(setup: MPCSetup, out_dir: str | Path, prefix: str | None = None) -> tuple[GeneratedCode, Path]:
@@ -93,49 +71,11 @@ def build_mpc(setup: MPCSetup, out_dir: str | Path, prefix: str | None = None) -
     library : pathlib.Path
         The compiled shared library.
     """
-    generated = generate_loop_step(mpc_step(setup.controller, setup.name), out_dir, prefix=prefix or f"gt_{setup.name}")
-    return generated, compile_shared(generated, Path(out_dir) / "build")
-
-
-def compiled_step(generated: GeneratedCode, library: Path) -> tuple[Any, Any, int]:
-    """The compiled step as ``controller(t, x) -> (status, u)`` with its own memory, and a reset.
-
-    Parameters
-    ----------
-    generated : GeneratedCode
-        From :func:`build_mpc`.
-    library : pathlib.Path
-        The compiled library.
-
-    Returns
-    -------
-    controller : callable
-        ``controller(t, x) -> (status, u)`` calling ``<prefix>_step`` through ctypes.
-    reset : callable
-        ``reset()`` calls ``<prefix>_init`` (returns its status).
-    memory_bytes : int
-        ``sizeof(<prefix>_memory)``.
-    """
-    memory, init, step = load_loop_step(generated, load_library(generated, library))
-    mem = memory()
-    nx, nu = generated.parameters.nx, generated.parameters.nu
-    x_buf, u_buf = (ctypes.c_double * nx)(), (ctypes.c_double * nu)()
-    ref = ctypes.byref(mem)
-
-    def controller(t: float, x: np.ndarray) -> tuple[int, np.ndarray]:
-        x_buf[:] = [float(v) for v in x]
-        code = step(ref, t, x_buf, u_buf)
-        return code, np.array(u_buf[:])
-
-    def reset() -> int:
-        return init(ref)
-
-    reset()
-    return controller, reset, ctypes.sizeof(memory)
+    return loop_check.build_step(mpc_step(setup.controller, setup.name), out_dir, prefix or f"gt_{setup.name}")
 
 
 def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.perf_counter) -> MPCCheck:
-    """Run the generated MPC and the feedforward alone against the file's plant.
+    """Run the generated MPC and the feedforward alone against the file's plant (:func:`gtmodel.problems.loop_check.closed_loop_check`).
 
     Parameters
     ----------
@@ -149,29 +89,14 @@ def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, 
         Runs of the whole motion (``_init`` before each; the step times and statuses of
         all runs are kept, the tracking figures are those of the first run).
     clock : callable, optional
-        Clock of the step times (see :func:`run_controller_loop`).
+        Clock of the step times (see :func:`~gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`).
 
     Returns
     -------
     MPCCheck
     """
-    controller, reset, memory_bytes = compiled_step(generated, library)
-    args = (setup.plant_step, setup.plant_x0, setup.t, setup.x_ref)
-    kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES, clock=clock)
-    first = run_controller_loop(controller, *args, **kw)
-    times, statuses = [first.step_s], [first.status]
-    for _ in range(max(int(repeat), 1) - 1):
-        reset()
-        again = run_controller_loop(controller, *args, **kw)
-        times.append(again.step_s)
-        statuses.append(again.status)
-    first.step_s, first.status = np.concatenate(times), np.concatenate(statuses)
-    c = setup.controller
-    ff = run_controller_loop(lambda t, x: (0, np.clip(c.u_ref[min(int(round((t - c.t0) / c.dt)), c.length - 1)], c.u_lb, c.u_ub)),
-                             *args, **kw)
-    sz = generated.work_sizes["control"]
-    work = 8 * (sz[0] + sz[1]) + 8 * sz[2] + 8 * sz[3]
-    return MPCCheck(mpc=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work)
+    check = loop_check.closed_loop_check(setup, generated, library, repeat=repeat, clock=clock, label="MPC")
+    return MPCCheck(**check.__dict__)
 
 
 def ipopt_agreement(setup: MPCSetup, summary: LoopSummary, samples: int = 5, iterations: int = 20, min_speed: float = 0.0) -> np.ndarray:

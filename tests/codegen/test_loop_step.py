@@ -144,6 +144,18 @@ def test_cli_codegen_controller_result_folder(tmp_path, capsys, motion):
     out = capsys.readouterr().out
     assert code == EXIT_OK, out
     assert "PASSED" in out and "101 samples at 0.004 s" in out and "input bounds [-10.0] .. [10.0]" in out
+    # the closed loop of the file route on the nominal plant (one-sample delay): the figures and the verdict
+    assert "RMS ratio tracking controller / feedforward" in out and "closed-loop check: PASSED" in out
+
+
+def test_delay_compensating_controller_c_equals_python(tmp_path, motion):
+    # the predicted state (the model's RK4 step from u_last) is in the generated C too
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0], Q=[1e-2, 1.0, 1e-4], delay=1)
+    gen = generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_tracking")
+    report = check_loop_step(gen, n=300)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert report.functions[0].max_abs_diff <= 1e-12 and "One period of input delay compensated" in gen.header.read_text()
 
 
 @pytest.mark.parametrize(
@@ -152,8 +164,9 @@ def test_cli_codegen_controller_result_folder(tmp_path, capsys, motion):
         ("point_to_point", [], r"summary\.json: kind: expected an optimal_control result, got 'point_to_point'"),
         ("optimal_control", ["--q", "1,x"], r"--q: expected comma-separated numbers, got '1,x'"),
         ("optimal_control", ["--robot", "L1"], r"--controller RESULT_DIR generates the tracking controller alone"),
+        ("optimal_control", ["--mismatch", "0"], r"--mismatch: expected a factor in \(0, 10\] on the plant's parameters, got 0\.0"),
     ],
-    ids=["kind", "weights", "robot"],
+    ids=["kind", "weights", "robot", "mismatch"],
 )
 def test_cli_codegen_controller_bad_result(tmp_path, capsys, motion, kind, args, match):
     folder = _result_folder(tmp_path / "result", *motion, kind=kind)

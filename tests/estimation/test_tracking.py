@@ -141,3 +141,55 @@ def test_bad_arguments(motor, kwargs, match):
     args = {"t": t, "x_ref": x, "u_ref": u, **kwargs}
     with pytest.raises(InputError, match=match):
         tracking_controller(ode, **args)
+
+
+@pytest.fixture(scope="module")
+def pendulum():
+    # a nonlinear model: the cart pendulum swinging under a sine force (A_k, B_k vary along the motion)
+    ode = explicit_ode(load_user_model(REPO / "models" / "cart_pendulum.py", "CartPendulum"))
+    t = np.linspace(0.0, 0.5, 51)
+    u = (2.0 * np.sin(2 * np.pi * t / 0.5))[:, None]
+    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
+    return ode, t, x, u
+
+
+def test_time_invariant_gain_is_python_controls_dlqr_at_the_held_end(pendulum):
+    # python-control's dlqr on the Jacobians of the same RK4 step at (x*_end, u_hold), independently formed here
+    ode, t, x, u = pendulum
+    c = tracking_controller(ode, t, x, u, u_lb=[-50.0], u_ub=[50.0], time_varying=False)
+    xs, us = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
+    xn = ode.step(DT, "rk4")(xs, us, ode.p_default)[0]
+    A, B = (np.asarray(m) for m in ca.Function("AB", [xs, us], [ca.jacobian(xn, xs), ca.jacobian(xn, us)])(c.x_hold, c.u_hold))
+    K_ref, _, _ = control.dlqr(A, B, c.Q, c.R)
+    np.testing.assert_allclose(c.K, np.broadcast_to(K_ref, c.K.shape), rtol=1e-8)
+    varying = tracking_controller(ode, t, x, u, u_lb=[-50.0], u_ub=[50.0])
+    assert np.max(np.abs(varying.K[0] - K_ref)) > 1e-3 * np.max(np.abs(K_ref))  # the recursion's gains differ along the swing
+
+
+def test_compensated_delay_reproduces_the_undelayed_loop(pendulum):
+    # reference: the same law without delay on the same plant. With the plant the prediction's own step and an
+    # input acting one period late, the compensated law sees the true state at t_{k+1}: its inputs are the
+    # undelayed loop's from the state x_1 on (identical up to round-off)
+    ode, t, x, u = pendulum
+    kw = dict(u_lb=[-50.0], u_ub=[50.0])
+    plain, delayed = tracking_controller(ode, t, x, u, **kw), tracking_controller(ode, t, x, u, delay=1, **kw)
+    step, p = ode.step(DT, "rk4"), ode.p_default
+    f, g = plain.function(), delayed.function()
+    x_true = x[0] + np.array([0.01, 0.02, 0.0, 0.0])
+    u_now = delayed.u_initial
+    x_next = np.asarray(step(x_true, u_now, p)[0]).ravel()  # the state when the first computed input starts to act
+    got, want, xw = [], [], x_next.copy()
+    for k in range(40):
+        u_new = np.asarray(g(k * DT, x_true, u_now)[0]).ravel()
+        want.append(np.asarray(f((k + 1) * DT, xw, plain.u_initial)[0]).ravel())
+        got.append(u_new)
+        x_true = np.asarray(step(x_true, u_now, p)[0]).ravel()
+        xw = np.asarray(step(xw, want[-1], p)[0]).ravel()
+        u_now = u_new
+    np.testing.assert_allclose(np.array(got), np.array(want), rtol=1e-9, atol=1e-9)
+
+
+def test_delay_other_than_0_or_1_is_refused(pendulum):
+    ode, t, x, u = pendulum
+    with pytest.raises(InputError, match=r"delay: expected 0 or 1 period of input delay to compensate, got 2"):
+        tracking_controller(ode, t, x, u, delay=2)

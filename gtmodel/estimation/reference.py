@@ -1,0 +1,137 @@
+"""The reference of a loop controller: a table sampled at the loop period and indexed by time.
+
+A loop controller (the tracking controller of :mod:`gtmodel.estimation.tracking`, the MPC of
+:mod:`gtmodel.estimation.mpc`) tracks a motion ``x*(t), u*(t)`` given at some times (an
+optimal control result's mesh, a CSV table). :func:`sample_reference` puts it on the loop's
+grid ``t_k = t_0 + k dt`` (linear interpolation of each column), and :func:`period_index`
+is the row read at time ``t``: ``k = floor((t - t_0) / dt + eps)`` clamped to ``0 .. last``,
+the same expression for a number (Python) and a CasADi expression (the generated C, where
+a NaN ``t`` reads row 0 and the controller's ``ok`` flags it).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError
+
+__all__ = ["INDEX_EPS", "sampled", "sample_reference", "period_index"]
+
+#: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
+#: point) selects sample ``k``, not ``k - 1``.
+INDEX_EPS = 1e-6
+
+
+def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:
+    """The columns of a table linearly interpolated on a time grid.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        ``(M,)`` increasing times of the rows [s].
+    values : numpy.ndarray
+        ``(M, n)`` finite values, one row per time.
+    grid : numpy.ndarray
+        ``(N,)`` times to sample [s] (outside ``t``: the first or last row).
+    name : str
+        Name of ``values`` in the error message.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, n)``.
+
+    Raises
+    ------
+    InputError
+        ``values`` not a finite ``(M, n)`` array.
+    """
+    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
+        raise InputError(f"{name}: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
+    return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])]) if values.shape[1] else np.zeros((grid.size, 0))
+
+
+def sample_reference(t: Any, x_ref: Any, u_ref: Any, dt: float, min_samples: int = 1, eps: float = INDEX_EPS) -> tuple[float, np.ndarray, np.ndarray]:
+    """A reference motion sampled at the loop period from its first time to its last.
+
+    Parameters
+    ----------
+    t : array_like
+        ``(M,)`` increasing finite times [s], ``M >= 2``.
+    x_ref : array_like
+        ``(M, nx)`` states (or ``(M * nx,)``).
+    u_ref : array_like
+        ``(M, nu)`` inputs.
+    dt : float
+        Loop period [s], > 0.
+    min_samples : int, optional
+        Fewest samples ``N`` of the grid accepted (default 1).
+    eps : float, optional
+        Slack of the last grid point (default :data:`INDEX_EPS`).
+
+    Returns
+    -------
+    t0 : float
+        Time of the first sample [s].
+    x : numpy.ndarray
+        ``(N, nx)`` states at ``t_0 + k dt``, ``N = floor((t_M - t_0) / dt + eps) + 1``.
+    u : numpy.ndarray
+        ``(N, nu)`` inputs there.
+
+    Raises
+    ------
+    InputError
+        ``dt`` not positive, times not increasing, a reference shorter than
+        ``min_samples - 1`` periods, non-finite values.
+    """
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt: expected a positive loop period in seconds, got {dt!r}")
+    tt = np.asarray(t, dtype=float).reshape(-1)
+    if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
+        raise InputError("t: expected at least two increasing finite reference times")
+    n = int(math.floor((tt[-1] - tt[0]) / dt + eps)) + 1
+    if n < min_samples:
+        span = "one period" if min_samples == 2 else f"{min_samples - 1} periods"
+        raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than {span} ({dt:g} s)")
+    grid = tt[0] + dt * np.arange(n)
+    xs = sampled(tt, np.asarray(x_ref, dtype=float).reshape(tt.size, -1), grid, "x_ref")
+    us = sampled(tt, np.asarray(u_ref, dtype=float).reshape(tt.size, -1), grid, "u_ref")
+    return float(tt[0]), xs, us
+
+
+def period_index(t: Any, t0: float, dt: float, last: int, eps: float = INDEX_EPS) -> Any:
+    """The row of a sampled reference read at time ``t``: ``floor((t - t_0) / dt + eps)`` clamped to ``0 .. last``.
+
+    Parameters
+    ----------
+    t : float or casadi.MX or casadi.SX
+        Time [s].
+    t0 : float
+        Time of row 0 [s].
+    dt : float
+        Loop period [s].
+    last : int
+        Largest row (``N - 1``, or ``N`` with a row after the reference such as a held end).
+    eps : float, optional
+        Slack (default :data:`INDEX_EPS`).
+
+    Returns
+    -------
+    int or casadi expression
+        The row; for a CasADi expression a NaN ``t`` gives row 0 (a number raises).
+
+    Raises
+    ------
+    InputError
+        A numeric ``t`` that is not finite.
+    """
+    if isinstance(t, (ca.MX, ca.SX)):
+        k = ca.fmin(ca.fmax(ca.floor((t - t0) / dt + eps), 0), last)
+        return ca.if_else(t == t, k, 0)
+    if not math.isfinite(float(t)):
+        raise InputError(f"t: expected a finite time, got {t!r}")
+    return int(min(max(math.floor((float(t) - t0) / dt + eps), 0), last))

@@ -1,0 +1,206 @@
+"""A loop controller's generated C checked in closed loop (``gtmodel codegen --mpc | --controller FILE.toml --check``).
+
+:func:`build_step` generates a loop step (:func:`gtmodel.codegen.loop_step.generate_loop_step`)
+and compiles it; :func:`compiled_step` loads it through ctypes (``<prefix>_init`` /
+``<prefix>_step`` with the caller's memory); :func:`closed_loop_check` runs it against the
+plant of a loop-controller file's ``[check]`` (:mod:`gtmodel.problems.loop_file`,
+:func:`gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`), beside the
+feedforward alone (``u*`` of the reference, saturated) on the same plant, noise and
+disturbance. The same check serves the MPC (:mod:`gtmodel.problems.mpc_check`) and the
+tracking controller (:mod:`gtmodel.problems.tracking_file`).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gtmodel.codegen.build import compile_shared, load_library
+from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, load_loop_step
+from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
+from gtmodel.estimation.reference import period_index
+from gtmodel.problems.loop_file import LoopSetup
+
+__all__ = ["STATUS_NAMES", "LoopCheck", "build_step", "compiled_step", "closed_loop_check", "feedforward_law"]
+
+#: Status names by code.
+STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
+
+
+@dataclass
+class LoopCheck:
+    """Closed-loop figures of a generated loop controller.
+
+    Parameters
+    ----------
+    closed : LoopSummary
+        The generated C step in the loop.
+    feedforward : LoopSummary
+        The feedforward alone on the same plant.
+    memory_bytes : int
+        ``sizeof(<prefix>_memory)`` (the caller's static memory).
+    work_bytes : int
+        Stack work arrays of one step (CasADi's ``sz_arg``, ``sz_res`` pointers, ``sz_iw``
+        integers, ``sz_w`` reals).
+    label : str
+        What the controller is, for the summary (e.g. ``"MPC"``).
+    """
+
+    closed: LoopSummary
+    feedforward: LoopSummary
+    memory_bytes: int
+    work_bytes: int
+    label: str = "controller"
+
+    @property
+    def ratio_to_feedforward(self) -> float:
+        """RMS tracking error of the controller over that of the feedforward alone."""
+        return self.closed.rms_error / self.feedforward.rms_error
+
+    @property
+    def failed_steps(self) -> int:
+        """Calls of the step that did not return ``GT_OK``."""
+        return int(np.count_nonzero(self.closed.status != STATUS_CODES["GT_OK"][0]))
+
+    def summary_lines(self) -> list[str]:
+        """Human-readable summary.
+
+        Returns
+        -------
+        list of str
+        """
+        return ([f"closed loop, generated C {self.label}:"] + ["  " + line for line in self.closed.summary_lines()]
+                + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}",
+                   f"RMS ratio {self.label} / feedforward: {self.ratio_to_feedforward:.4g}",
+                   f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"])
+
+
+def build_step(step: LoopStep, out_dir: str | Path, prefix: str) -> tuple[GeneratedCode, Path]:
+    """Generate and compile a loop step.
+
+    Parameters
+    ----------
+    step : LoopStep
+        The controller (:func:`~gtmodel.codegen.loop_step.tracking_step`, :func:`~gtmodel.codegen.loop_step.mpc_step`).
+    out_dir : str or pathlib.Path
+        Folder of the C files (the shared library in ``out_dir/build``).
+    prefix : str
+        C prefix.
+
+    Returns
+    -------
+    generated : GeneratedCode
+    library : pathlib.Path
+        The compiled shared library.
+
+    Raises
+    ------
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        Generation or compilation failed.
+    """
+    generated = generate_loop_step(step, out_dir, prefix=prefix)
+    return generated, compile_shared(generated, Path(out_dir) / "build")
+
+
+def compiled_step(generated: GeneratedCode, library: Path) -> tuple[Any, Any, int]:
+    """The compiled step as ``controller(t, x) -> (status, u)`` with its own memory, and a reset.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        From :func:`build_step`.
+    library : pathlib.Path
+        The compiled library.
+
+    Returns
+    -------
+    controller : callable
+        ``controller(t, x) -> (status, u)`` calling ``<prefix>_step`` through ctypes.
+    reset : callable
+        ``reset()`` calls ``<prefix>_init`` (returns its status).
+    memory_bytes : int
+        ``sizeof(<prefix>_memory)``.
+    """
+    memory, init, step = load_loop_step(generated, load_library(generated, library))
+    mem = memory()
+    nx, nu = generated.parameters.nx, generated.parameters.nu
+    x_buf, u_buf = (ctypes.c_double * nx)(), (ctypes.c_double * nu)()
+    ref = ctypes.byref(mem)
+
+    def controller(t: float, x: np.ndarray) -> tuple[int, np.ndarray]:
+        x_buf[:] = [float(v) for v in x]
+        code = step(ref, t, x_buf, u_buf)
+        return code, np.array(u_buf[:])
+
+    def reset() -> int:
+        return init(ref)
+
+    reset()
+    return controller, reset, ctypes.sizeof(memory)
+
+
+def feedforward_law(controller: Any) -> Any:
+    """The feedforward alone of a loop controller: ``u*_k`` of its reference at time ``t``, saturated.
+
+    Parameters
+    ----------
+    controller : Any
+        ``t0``, ``dt``, ``length``, ``u_ref`` ``(N, nu)``, ``u_lb``, ``u_ub``.
+
+    Returns
+    -------
+    callable
+        ``law(t, x) -> (0, u)`` (the state is not used).
+    """
+    c = controller
+    return lambda t, x: (0, np.clip(c.u_ref[period_index(t, c.t0, c.dt, c.length - 1)], c.u_lb, c.u_ub))
+
+
+def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.perf_counter,
+                      label: str = "controller") -> LoopCheck:
+    """Run the generated controller and the feedforward alone against the file's plant.
+
+    Parameters
+    ----------
+    setup : LoopSetup
+        The file's controller, plant and loop options.
+    generated : GeneratedCode
+        From :func:`build_step`.
+    library : pathlib.Path
+        The compiled library.
+    repeat : int, optional
+        Runs of the whole motion (``_init`` before each; the step times and statuses of
+        all runs are kept, the tracking figures are those of the first run).
+    clock : callable, optional
+        Clock of the step times (see :func:`run_controller_loop`).
+    label : str, optional
+        What the controller is, for the summary.
+
+    Returns
+    -------
+    LoopCheck
+    """
+    controller, reset, memory_bytes = compiled_step(generated, library)
+    args = (setup.plant_step, setup.plant_x0, setup.t, setup.x_ref)
+    kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES, clock=clock)
+    first = run_controller_loop(controller, *args, **kw)
+    times, statuses = [first.step_s], [first.status]
+    for _ in range(max(int(repeat), 1) - 1):
+        reset()
+        again = run_controller_loop(controller, *args, **kw)
+        times.append(again.step_s)
+        statuses.append(again.status)
+    first.step_s, first.status = np.concatenate(times), np.concatenate(statuses)
+    ff = run_controller_loop(feedforward_law(setup.controller), *args, **kw)
+    sz = generated.work_sizes["control"]
+    work = 8 * (sz[0] + sz[1]) + 8 * sz[2] + 8 * sz[3]
+    return LoopCheck(closed=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work, label=label)

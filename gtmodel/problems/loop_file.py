@@ -1,0 +1,386 @@
+"""What every loop-controller file shares: the model, ``[reference]``, ``[check]`` and the plant.
+
+A loop-controller file (the MPC file of :mod:`gtmodel.problems.mpc_file`, the tracking
+controller file of :mod:`gtmodel.problems.tracking_file`) declares a controller section of
+its own and these two tables, validated on load (pydantic, unknown fields refused; every
+error names the file and the field, the CLI exits with 2):
+
+``[reference]``
+    The motion tracked: ``problem`` (a ``point_to_point`` problem file of the robot, or an
+    ``optimal_control`` problem file of the user's model, solved first; ``overrides`` its
+    dotted fields, e.g. a tighter force limit for the plan than the actuators' bounds; the
+    default input bounds are that problem's without the overrides) or ``file`` (a CSV table
+    with ``t`` and the model's state and input names); ``settle_time`` [s] the last sample held.
+``[check]``
+    The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
+    ``mass_factor``, ``friction_factor`` (the robot plant; a user model: ``parameter_factor``
+    on every parameter), ``compliance`` (the robot: the tool structure of eq. 6.14 in the
+    plant, the tool position tracked, the controller measuring ``T``, ``T_dot``), ``noise``
+    (one standard deviation per state), ``disturbance`` and ``disturbance_time``, ``delay``
+    (samples), ``seed``, ``error_states``.
+
+The model is ``"L1"`` (a Gantry-Tau parameter set: its rigid-body dynamics with friction in
+TCP states ``T``, ``T_dot`` and input ``tau``, :func:`gtmodel.robots.model.gantry_tau_model`)
+or ``"FILE.py:Class"`` (a user's model), reduced to its explicit ODE
+(:func:`gtmodel.modeling.explicit_ode`) by :func:`loop_model`; :func:`loop_reference` reads
+or solves the reference, :func:`input_bounds` gives the saturation and :func:`loop_setup`
+the plant of the check.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import Field
+
+from gtmodel._tables import read_table
+from gtmodel.errors import GtModelError
+from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
+from gtmodel.modeling import ExplicitODE, explicit_ode
+from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.run import load_problem, solve_problem
+from gtmodel.problems.schema import NonEmptyText, Section, number
+from gtmodel.problems.user_model import load_user_model, split_model_reference
+from gtmodel.robots.model import gantry_tau_model
+from gtmodel.trajectory.point_to_point import solve_point_to_point
+
+__all__ = ["LoopModel", "LoopSetup", "loop_model", "weight_diagonal",
+           "loop_reference", "input_bounds", "loop_setup"]
+
+_TCP_STATES = ("x", "y", "z", "xd", "yd", "zd")
+_TCP_INPUTS = ("tau1", "tau2", "tau3")
+
+
+class ReferenceSection(Section):
+    """``[reference]``: the motion tracked (exactly one of ``problem`` and ``file``)."""
+
+    problem: NonEmptyText | None = Field(default=None, description="a point_to_point (robot) or optimal_control (user model) problem file, relative to this file, solved first")
+    overrides: dict[str, Any] = Field(default_factory=dict, description="dotted fields of that problem replaced, e.g. 'limits.force'")
+    file: NonEmptyText | None = Field(default=None, description="a CSV table: t and the model's state and input names")
+    settle_time: number(ge=0, le=60.0, unit="s", description="the last sample held this long") = 0.5
+
+
+class CheckSection(Section):
+    """``[check]``: the closed loop of ``--check``."""
+
+    mass_factor: number(gt=0, le=10.0, description="plant masses / model masses (robot)") = 1.1
+    friction_factor: number(gt=0, le=10.0, description="plant friction / model friction (robot)") = 1.1
+    parameter_factor: number(gt=0, le=10.0, description="plant parameters / model parameters (user model)") = 1.1
+    noise: list[float] = Field(default_factory=list, description="measurement noise standard deviation per state (default none)")
+    disturbance: list[float] = Field(default_factory=list, description="input step disturbance (default none)")
+    disturbance_time: number(ge=0, le=1e4, unit="s", description="time of the step disturbance") = 0.0
+    delay: int = Field(default=1, ge=0, le=100, strict=True, description="input delay [samples]")
+    seed: int = Field(default=0, ge=0, strict=True)
+    compliance: bool = Field(default=False, strict=True, description="robot: the tool structure of eq. 6.14 (7.4 / 11.5 Hz modes) in the plant")
+    error_states: list[str] = Field(default_factory=list, description="states summarised by the tracking error (default all)")
+
+
+@dataclass
+class LoopModel:
+    """The controller's model and the plant of the check.
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The controller's model.
+    plant : ExplicitODE
+        The plant's model (a robot: masses and friction scaled; a user model: ``ode`` itself).
+    plant_p : numpy.ndarray
+        ``(np,)`` the plant's parameters.
+    robot : bool
+        True for a Gantry-Tau parameter set (TCP states), False for a user model.
+    """
+
+    ode: ExplicitODE
+    plant: ExplicitODE
+    plant_p: np.ndarray
+    robot: bool
+
+
+@dataclass
+class LoopSetup:
+    """What a loop-controller file builds: the controller, the plant of the check and the loop options.
+
+    Parameters
+    ----------
+    name : str
+        Controller name.
+    controller : Any
+        The controller (an :class:`~gtmodel.estimation.mpc.MPCController` or a
+        :class:`~gtmodel.estimation.tracking.TrackingController`: ``t0``, ``dt``,
+        ``length``, ``u_ref``, ``u_lb``, ``u_ub``).
+    plant_step : casadi.Function
+        ``step(x, u, p) -> (x_next, ...)`` of the mismatched plant over one period.
+    plant_p : numpy.ndarray
+        Its parameters.
+    t, x_ref, u_ref : numpy.ndarray
+        The reference at the loop period (settling included).
+    loop : dict
+        Keyword arguments of :func:`~gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`.
+    plant_x0 : numpy.ndarray
+        The plant's initial state (the reference's first state; the structure at rest).
+    """
+
+    name: str
+    controller: Any
+    plant_step: Any
+    plant_p: np.ndarray
+    t: np.ndarray
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    loop: dict
+    plant_x0: np.ndarray
+
+
+def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -> LoopModel:
+    """The model of a loop-controller file and the mismatched plant of its ``[check]``.
+
+    Parameters
+    ----------
+    file : ProblemFile
+        The file (for its folder and its errors).
+    field : str
+        Dotted name of the model field, e.g. ``"mpc.model"``.
+    model : str
+        A robot parameter set (``"L1"`` or a TOML file) or ``"FILE.py:Class"``.
+    check : CheckSection
+        The file's ``[check]`` (its mismatch factors).
+
+    Returns
+    -------
+    LoopModel
+
+    Raises
+    ------
+    ProblemError
+        Naming the file and ``field``: an unknown parameter set, a model file that cannot be
+        loaded or reduced.
+    """
+    if ":" not in model:
+        params = robot_parameters(file, field, model)
+        ode = explicit_ode(gantry_tau_model(params, states="tcp"))
+        plant = explicit_ode(gantry_tau_model(mismatched_robot(params, check.mass_factor, check.friction_factor), states="tcp"))
+        return LoopModel(ode=ode, plant=plant, plant_p=plant.p_default, robot=True)
+    model_path, cls = split_model_reference(model)
+    model_path = Path(file.reference(field, str(model_path)))  # Python the user runs, as optimal_control's model.file (not a data file)
+    try:
+        ode = explicit_ode(load_user_model(model_path, cls))
+    except GtModelError as exc:
+        raise file.wrap(field, exc) from None
+    return LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * check.parameter_factor, robot=False)
+
+
+def weight_diagonal(file: ProblemFile, field: str, weights: dict[str, float], names: list[str]) -> np.ndarray | None:
+    """A weight table by variable name as the diagonal of a weight matrix.
+
+    Parameters
+    ----------
+    file : ProblemFile
+        The file (for its errors).
+    field : str
+        Dotted name of the table, e.g. ``"controller.state_weights"``.
+    weights : dict of str to float
+        Weight by variable name (a variable not named weighs 0).
+    names : list of str
+        The model's variables in order.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        ``(len(names),)``, or None for an empty table (the controller's default).
+
+    Raises
+    ------
+    ProblemError
+        ``<field>.<name>``: a variable the model does not have, a weight not finite or negative.
+    """
+    if not weights:
+        return None
+    for key, value in weights.items():
+        if key not in names:
+            raise file.fail(f"{field}.{key}", f"a variable of the model ({', '.join(names)})", key)
+        if not (math.isfinite(value) and value >= 0):
+            raise file.fail(f"{field}.{key}", "a finite weight >= 0", value)
+    return np.array([float(weights.get(n, 0.0)) for n in names])
+
+
+def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, dt: float, bounds_field: str | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """The reference motion of ``[reference]``, with the settling hold, and the reference problem's input bounds.
+
+    Parameters
+    ----------
+    file : ProblemFile
+        The file.
+    ref : ReferenceSection
+        Its ``[reference]``.
+    model : LoopModel
+        The controller's model.
+    dt : float
+        Loop period [s] (of the robot's sampled trajectory and the settling hold).
+    bounds_field : str, optional
+        The controller section whose ``u_lb``, ``u_ub`` are needed from the reference
+        problem's ``[bounds]`` (a user model), e.g. ``"mpc"``; None when both are given.
+
+    Returns
+    -------
+    t : numpy.ndarray
+        ``(M,)`` times [s].
+    x, u : numpy.ndarray
+        ``(M, nx)``, ``(M, nu)`` the states and inputs in the model's order.
+    limits : numpy.ndarray or None
+        ``(2, nu)`` the reference problem's input bounds (without the overrides), None for
+        a table or when ``bounds_field`` is None for a user model.
+
+    Raises
+    ------
+    ProblemError
+        Naming ``reference``, ``reference.problem`` or ``reference.file``: neither or both,
+        a problem of the wrong kind, one that does not solve, a table without the columns.
+    """
+    ode, robot = model.ode, model.robot
+    if (ref.problem is None) == (ref.file is None):
+        raise file.fail("reference", "exactly one of reference.problem (a problem file solved first) and reference.file (a CSV table)")
+    if ref.problem is not None:
+        # a problem file the user wrote, resolved as a model file is (relative to this file): the shipped loop-controller
+        # files in codegen/ name their references in problems/; its data files stay confined when it loads
+        source = Path(file.reference("reference.problem", ref.problem))
+        try:
+            loaded = load_problem(source, dict(ref.overrides))
+        except GtModelError as exc:
+            raise file.wrap("reference.problem", exc) from None
+        wanted = "point_to_point" if robot else "optimal_control"
+        if loaded.kind != wanted:
+            raise file.fail("reference.problem", f"a problem file of kind {wanted} (for this model)", loaded.kind)
+        solution = solve_point_to_point(loaded.declaration) if robot else solve_problem(loaded)
+        if not solution.success:
+            raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
+        if robot:
+            tr = solution.trajectory(dt)
+            bound = np.asarray(load_problem(source).declaration.force_limit, dtype=float)
+            t = tr["t"]
+            x = np.column_stack([tr[c] for c in _TCP_STATES])
+            u = np.column_stack([tr[c] for c in _TCP_INPUTS])
+            limits = np.vstack([-bound, bound])
+        else:
+            t = np.asarray(solution.t, dtype=float).reshape(-1)
+            x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
+            u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
+            limits = None
+            if bounds_field is not None:
+                declared = load_problem(source).data.get("bounds", {})
+                try:
+                    limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
+                except (TypeError, ValueError, IndexError):
+                    raise file.fail("reference.problem", "a problem whose [bounds] of the inputs are [lo, hi] numbers "
+                                    f"(else give {bounds_field}.u_lb and {bounds_field}.u_ub)") from None
+    else:
+        source = file.data_file("reference.file", ref.file)
+        table = read_table(source, "the reference table")
+        cols = {n: table.data[:, i] for i, n in enumerate(table.columns)}
+        missing = [n for n in ["t", *ode.x_names, *ode.u_names] if n not in cols]
+        if missing:
+            raise file.fail("reference.file", f"a table with the columns t, {', '.join(ode.x_names + ode.u_names)} (missing {missing[0]!r})")
+        t = np.asarray(cols["t"], dtype=float)
+        x = np.column_stack([cols[n] for n in ode.x_names])
+        u = np.column_stack([cols[n] for n in ode.u_names])
+        limits = None
+    n = int(round(ref.settle_time / dt))
+    t = np.r_[t, t[-1] + dt * np.arange(1, n + 1)]
+    x = np.vstack([x, np.tile(x[-1] * np.r_[np.ones(3), np.zeros(3)] if robot else x[-1], (n, 1))]) if n else x
+    u = np.vstack([u, np.tile(u[-1], (n, 1))]) if n else u
+    return t, x, u, limits
+
+
+def input_bounds(file: ProblemFile, section: str, u_lb: list[float] | None, u_ub: list[float] | None,
+                 limits: np.ndarray | None, ode: ExplicitODE) -> tuple[np.ndarray, np.ndarray]:
+    """The saturation bounds: the file's ``u_lb``/``u_ub``, else the reference problem's, else the model's.
+
+    Parameters
+    ----------
+    file : ProblemFile
+        The file.
+    section : str
+        The controller section, e.g. ``"mpc"`` (the fields ``<section>.u_lb``, ``<section>.u_ub``).
+    u_lb, u_ub : list of float or None
+        The file's bounds.
+    limits : numpy.ndarray or None
+        ``(2, nu)`` the reference problem's (:func:`loop_reference`).
+    ode : ExplicitODE
+        The model (its declared bounds).
+
+    Returns
+    -------
+    lb, ub : numpy.ndarray
+        ``(nu,)`` each.
+
+    Raises
+    ------
+    ProblemError
+        ``<section>.u_lb`` / ``<section>.u_ub`` of another length than the model's inputs.
+    """
+    lb = np.asarray(u_lb, dtype=float) if u_lb is not None else (limits[0] if limits is not None else ode.u_lb)
+    ub = np.asarray(u_ub, dtype=float) if u_ub is not None else (limits[1] if limits is not None else ode.u_ub)
+    for field, v in ((f"{section}.u_lb", lb), (f"{section}.u_ub", ub)):
+        if v.size != ode.nu:
+            raise file.fail(field, f"{ode.nu} bounds ({', '.join(ode.u_names)})", v.tolist())
+    return lb, ub
+
+
+def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, check: CheckSection, dt: float) -> LoopSetup:
+    """The closed loop of ``[check]`` around a built controller.
+
+    Parameters
+    ----------
+    file : ProblemFile
+        The file.
+    name : str
+        Controller name.
+    controller : Any
+        The controller (``t0``, ``dt``, ``length``, ``x_ref``, ``u_ref``, ``u_lb``, ``u_ub``).
+    model : LoopModel
+        Its model and the plant.
+    check : CheckSection
+        The file's ``[check]``.
+    dt : float
+        Loop period [s].
+
+    Returns
+    -------
+    LoopSetup
+        The plant: the mismatched model's RK4 step (4 substeps per period), or with
+        ``compliance`` the tool structure of Dressler (2012), eq. 6.14
+        (:func:`~gtmodel.estimation.closed_loop.controller_loop.compliant_plant`).
+
+    Raises
+    ------
+    ProblemError
+        ``check.noise`` / ``check.disturbance`` of the wrong length, an unknown
+        ``check.error_states`` entry, ``check.compliance`` for a user model.
+    """
+    ode, c = model.ode, check
+    names_x = list(ode.x_names)
+    for field, v, size in (("check.noise", c.noise, ode.nx), ("check.disturbance", c.disturbance, ode.nu)):
+        if v and len(v) != size:
+            raise file.fail(field, f"{size} numbers", v)
+    unknown = [s for s in c.error_states if s not in names_x]
+    if unknown:
+        raise file.fail(f"check.error_states.{unknown[0]}", f"a state of the model ({', '.join(names_x)})", unknown[0])
+    xs = controller.x_ref
+    loop = dict(u_lb=controller.u_lb, u_ub=controller.u_ub, noise_std=np.asarray(c.noise or np.zeros(ode.nx), dtype=float),
+                disturbance=np.asarray(c.disturbance, dtype=float) if c.disturbance else None, disturbance_time=c.disturbance_time,
+                delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None)
+    grid = controller.t0 + controller.dt * np.arange(controller.length)
+    plant_step, plant_x0 = model.plant.step(dt, "rk4", substeps=4), xs[0].copy()
+    if c.compliance:
+        if not model.robot:
+            raise file.fail("check.compliance", "false for a user model (the tool structure of eq. 6.14 is the robot's)", True)
+        plant_step, loop["output"], loop["measured"] = compliant_plant(model.plant, dt=dt)
+        plant_x0 = np.r_[xs[0], np.zeros(4)]
+    return LoopSetup(name=name, controller=controller, plant_step=plant_step, plant_p=model.plant_p,
+                     t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0)

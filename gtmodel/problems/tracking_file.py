@@ -1,0 +1,130 @@
+"""A tracking-controller file: a declared ``[controller]`` for ``gtmodel codegen --controller FILE.toml --out DIR [--check]``.
+
+A TOML file with three tables, validated on load (pydantic, unknown fields refused; every
+error names the file and the field, the CLI exits with 2):
+
+``[controller]``
+    ``model`` (a Gantry-Tau parameter set such as ``"L1"``: its rigid-body dynamics with
+    friction in TCP states ``T``, ``T_dot`` and input ``tau``; or ``"FILE.py:Class"`` a
+    user's model), ``period`` [s] (> 0, default the 4 ms loop), ``method`` and ``substeps``
+    (the fixed step whose Jacobians are the linearisation ``A_k``, ``B_k``),
+    ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name,
+    an unknown variable refused; default Bryson's rule), ``u_lb`` / ``u_ub`` (default: the
+    reference problem's bounds, else the model's declared ones), ``time_varying`` (default
+    true: the gains of the backward discrete Riccati recursion along the reference; false:
+    one time-invariant LQR gain, that of the held end), ``input_delay`` (0 default, or 1:
+    the input computed at ``t_k`` acts from ``t_{k+1}``, and the law applies the gain to
+    the state predicted then by the model's step from the last input).
+``[reference]``, ``[check]``
+    The motion tracked and the closed loop of ``--check``, as in an MPC file
+    (:mod:`gtmodel.problems.loop_file`).
+
+The controller is the feedforward ``u*_k`` plus the time-varying LQR
+(:func:`gtmodel.estimation.tracking.tracking_controller`; Anderson & Moore, Optimal Control:
+Linear Quadratic Methods, sec. 2.4), saturated at the input bounds, generated as C through
+:func:`gtmodel.codegen.loop_step.tracking_step` (the loop-step interface of the MPC).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import Field, ValidationError
+
+from gtmodel._toml import read_toml
+from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.estimation.tracking import tracking_controller
+from gtmodel.modeling.simulation.explicit import STEP_METHODS
+from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.loop_file import CheckSection, LoopSetup, ReferenceSection, input_bounds, loop_model, loop_reference, loop_setup, weight_diagonal
+from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
+
+__all__ = ["TrackingFile", "load_tracking_file"]
+
+
+class ControllerSection(Section):
+    """``[controller]``: the model, the period, the weights and the bounds of the tracking controller."""
+
+    model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
+    period: number(gt=0, le=1.0, unit="s", description="loop period") = LOOP_PERIOD_S
+    method: choice(*STEP_METHODS, description="the fixed step linearised along the reference") = "rk4"
+    substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
+    state_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
+    input_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of R by input name (default 1 / (half the bound range)^2)")
+    terminal_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Qf by state name (default: the stationary Riccati solution at the held end)")
+    u_lb: list[float] | None = Field(default=None, description="input lower bounds")
+    u_ub: list[float] | None = Field(default=None, description="input upper bounds")
+    time_varying: bool = Field(default=True, strict=True, description="time-varying LQR along the reference (false: the held end's time-invariant LQR)")
+    input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
+
+
+class TrackingFile(Section):
+    """A tracking-controller file (see the module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Name of the controller (the C prefix is ``gt_<name>``).
+    description : str
+        Free text.
+    controller : ControllerSection
+        ``[controller]``.
+    reference : ReferenceSection
+        ``[reference]``.
+    check : CheckSection
+        ``[check]``.
+    """
+
+    name: NonEmptyText
+    description: str = ""
+    controller: ControllerSection
+    reference: ReferenceSection
+    check: CheckSection = CheckSection()
+
+
+def load_tracking_file(path: str | Path) -> LoopSetup:
+    """Read, validate and build a tracking-controller file (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The TOML file.
+
+    Returns
+    -------
+    LoopSetup
+        Its :class:`~gtmodel.estimation.tracking.TrackingController`, the plant of the
+        check and the loop options.
+
+    Raises
+    ------
+    ProblemError
+        Naming the file and the field: unreadable TOML, an unknown or invalid field, a
+        period <= 0, an unknown variable in a weight table, a missing ``[reference]``, a
+        reference that cannot be read or solved, a controller that cannot be built (e.g.
+        a time-invariant LQR where the end is not stabilisable).
+    """
+    path = Path(path)
+    data = read_toml(path, ProblemError, "tracking-controller file")
+    try:
+        doc = TrackingFile.model_validate(dict(data))
+    except ValidationError as exc:
+        raise problem_error(path, exc, TrackingFile) from None
+    file = ProblemFile(path)
+    c = doc.controller
+    model = loop_model(file, "controller.model", c.model, doc.check)
+    ode = model.ode
+    names_x, names_u = list(ode.x_names), list(ode.u_names)
+    Q = weight_diagonal(file, "controller.state_weights", c.state_weights, names_x)
+    R = weight_diagonal(file, "controller.input_weights", c.input_weights, names_u)
+    Qf = weight_diagonal(file, "controller.terminal_weights", c.terminal_weights, names_x)
+    t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, c.period,
+                                             bounds_field=None if c.u_lb is not None and c.u_ub is not None else "controller")
+    u_lb, u_ub = input_bounds(file, "controller", c.u_lb, c.u_ub, limits, ode)
+    try:
+        controller = tracking_controller(ode, t, x_ref, u_ref, dt=c.period, Q=Q, R=R, Qf=Qf, u_lb=u_lb, u_ub=u_ub,
+                                         method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay)
+    except GtModelError as exc:
+        raise file.wrap("controller", exc) from None
+    return loop_setup(file, doc.name, controller, model, doc.check, c.period)
