@@ -42,14 +42,16 @@ import numpy as np
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.mpc_constraints import MPCConstraints, mpc_constraints
+from gtmodel.estimation.mpc_fatrop import fatrop_problem
 from gtmodel.estimation.tracking import _sampled, _weight, saturate
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
 
 #: Prediction steps: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
 MPC_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
-#: NLP solvers of the generated step (``fatrop`` needs the multiple-shooting order: not offered).
-MPC_SOLVERS = ("sqpmethod",)
+#: NLP solvers of the generated step: ``sqpmethod`` (single shooting, Gauss-Newton SQP) or
+#: ``fatrop`` (multiple shooting in stage order, interior point; :mod:`gtmodel.estimation.mpc_fatrop`).
+MPC_SOLVERS = ("sqpmethod", "fatrop")
 #: Bounds of the NLP's one constraint row ``g = w_0``, never active (a workaround of CasADi 3.8's
 #: ``qrqp``, which reads and writes past its work block on a QP without constraint rows).
 QP_ROW = {"lbg": -math.inf, "ubg": math.inf}
@@ -286,8 +288,9 @@ class MPCController:
             ``(nx,)`` state.
         w0 : array_like, optional
             ``(nw,)`` start (default :attr:`w_initial`).
-        plugin : {"ipopt", "sqpmethod"}, optional
-            See :meth:`nlp_solver`.
+        plugin : {"ipopt", "sqpmethod", "fatrop"}, optional
+            See :meth:`nlp_solver`; ``fatrop``: the multiple-shooting NLP of
+            :func:`~gtmodel.estimation.mpc_fatrop.fatrop_problem` (the generated step's with ``solver = "fatrop"``).
         iterations : int, optional
             SQP iterations (``sqpmethod``).
 
@@ -298,6 +301,12 @@ class MPCController:
         w : numpy.ndarray
             ``(nw,)`` the blocked inputs.
         """
+        if plugin == "fatrop":
+            solver, first, b = fatrop_problem(self, _sqrt_psd)
+            z0 = first(x, self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1))
+            z = np.asarray(solver(x0=z0, p=self.parameters(t, x), **{k: b[k] for k in ("lbx", "ubx", "lbg", "ubg")})["x"]).reshape(-1)
+            w = z[b["inputs"]]
+            return w[: self.nu].copy(), w
         solver = self.nlp_solver(plugin, iterations)
         start = np.r_[self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1), np.zeros(self.n_slack)]
         sol = solver(x0=start, p=self.parameters(t, x), **self.bounds())
@@ -336,11 +345,20 @@ class MPCController:
         xr, ur = self._window(t, lookup)
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
         lbx, ubx = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
-        full = self.nlp_solver("sqpmethod")(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **self.bounds())["x"]
-        nlp, _ = self._nlp()
-        cost, g = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]])(full, p)  # NaN when the prediction fails
+        if self.solver == "fatrop":
+            solver, first, b = fatrop_problem(self, _sqrt_psd)
+            z = solver(x0=first(x, w), p=p, **{k: b[k] for k in ("lbx", "ubx", "lbg", "ubg")})["x"]
+            cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
+        else:
+            full = self.nlp_solver("sqpmethod")(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **self.bounds())["x"]
+            nlp, _ = self._nlp()
+            cost, rows = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]])(full, p)  # NaN when the prediction fails
+            rows = rows[1:]
         if self.constraints is not None and self.constraints.hard:  # an infeasible QP's result violates the rows
-            cost = ca.if_else(ca.mmin(g[1:]) >= -HARD_TOLERANCE, cost, math.inf)
+            if rows is None:  # the rows of the single shooting at fatrop's inputs
+                nlp, _ = self._nlp()
+                rows = ca.Function("g", [nlp["x"], nlp["p"]], [nlp["g"]])(full, p)[1:]
+            cost = ca.if_else(ca.mmin(rows) >= -HARD_TOLERANCE, cost, math.inf)
         sol = saturate(full[: self.nw], lbx, ubx)
         b = self.horizon // self.blocks
         shift = [min((j * b + 1) // b, self.blocks - 1) for j in range(self.blocks)]
@@ -412,8 +430,9 @@ def mpc_controller(
         Input blocks, a divisor of ``horizon`` (default ``horizon``: one input per period).
     sqp_iterations : int, optional
         SQP iterations per period, ``>= 1`` (default 1: the real-time iteration).
-    solver : {"sqpmethod"}, optional
-        NLP solver (``qrqp`` QPs).
+    solver : {"sqpmethod", "fatrop"}, optional
+        NLP solver (:data:`MPC_SOLVERS`): ``sqpmethod`` (``qrqp`` QPs, ``daqp`` with
+        constraints) or ``fatrop`` (multiple shooting, ``blocks = horizon``).
     x_lb, x_ub : array_like or dict, optional
         ``(nx,)`` bounds of the predicted states, or tables ``{state name: bound}``
         (default none; :func:`~gtmodel.estimation.mpc_constraints.mpc_constraints`).
@@ -451,6 +470,8 @@ def mpc_controller(
         raise InputError(f"method: expected one of {', '.join(MPC_METHODS)}, got {method!r}")
     if solver not in MPC_SOLVERS:
         raise InputError(f"solver: expected one of {', '.join(MPC_SOLVERS)}, got {solver!r}")
+    if solver == "fatrop" and blocks != horizon:
+        raise InputError(f"blocks: expected the horizon {horizon} with solver fatrop (one input per stage), got {blocks}")
     tt = np.asarray(t, dtype=float).reshape(-1)
     if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
         raise InputError("t: expected at least two increasing finite reference times")
@@ -488,6 +509,9 @@ def mpc_controller(
     cons = mpc_constraints(list(ode.x_names), list(ode.u_names), xs, us, x_lb=x_lb, x_ub=x_ub, path=path, path_lb=path_lb,
                            path_ub=path_ub, path_names=path_names, hard=hard_constraints, weight=constraint_weight,
                            cost_scale=horizon * float(np.max(np.diag(Qm) * x_scale**2)))
+    if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
+        raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
+                         "stage's input that the last state's constraint uses); give sqpmethod")
     return MPCController(dt=float(dt), t0=float(tt[0]), x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons)

@@ -141,3 +141,37 @@ def test_problem_constraints_of_the_robot():
     assert (lb[:3].tolist(), ub[:3].tolist()) == ([-1.0] * 3, [1.0] * 3)
     h = np.asarray(path([-0.2, 2.75, -0.4, 0, 0, 0], [0, 0, 0])).ravel()
     assert np.all(h[:3] > -1.0) and np.all(h[:3] < 1.0) and np.all(h[3:] >= lb[3:])  # the start pose is inside
+
+
+@pytest.fixture(scope="module")
+def fatrop_integrator(integrator):
+    ode, t, soft, *_ = integrator
+    kw = dict(horizon=H, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0], method="euler", solver="fatrop")
+    return {hard: mpc_controller(ode, t, soft.x_ref, soft.u_ref, x_ub={"x": BOUND}, hard_constraints=hard, **kw) for hard in (False, True)}
+
+
+@pytest.mark.parametrize("hard", [False, True], ids=["soft", "hard"])
+def test_fatrop_step_agrees_with_scipy(integrator, fatrop_integrator, hard):
+    # the multiple-shooting NLP by fatrop (interior point to 1e-8) in the loop-step Function against SLSQP
+    _, t, soft, *_ = integrator
+    c = fatrop_integrator[hard]
+    u, _, ok = c.function()(t[40], FEASIBLE, c.u_initial, c.w_initial)
+    ref = _scipy_first_input(soft, 40, FEASIBLE)
+    assert float(ok) == 1.0
+    assert abs(float(u) - ref) <= 1e-5 * (1 + abs(ref))
+
+
+def test_fatrop_hard_infeasible_fails_soft_solves(fatrop_integrator):
+    # the safe-input contract for fatrop: an infeasible hard problem gives ok = 0 (its result violates the rows)
+    flags = [float(c.function()(0.16, INFEASIBLE, c.u_initial, c.w_initial)[2]) for c in (fatrop_integrator[False], fatrop_integrator[True])]
+    assert flags == [1.0, 0.0]
+
+
+def test_fatrop_refuses_input_dependent_constraints(integrator):
+    import casadi as ca
+
+    ode, t, soft, *_ = integrator
+    x, u = ca.SX.sym("x", 2), ca.SX.sym("u")
+    path = ca.Function("h", [x, u], [x[1] + 0.01 * u])
+    with pytest.raises(InputError, match="solver: fatrop takes state and path constraints of the states only"):
+        mpc_controller(ode, t, soft.x_ref, soft.u_ref, path=path, path_ub=[1.0], solver="fatrop")
