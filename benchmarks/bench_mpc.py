@@ -5,7 +5,8 @@ Usage: python benchmarks/bench_mpc.py [FILE.toml ...] [--json] [--steps 10000]
 For each MPC file (default every ``codegen/mpc/*.toml``: the L1 and the composed DC motor),
 measured side by side in one run, because these machines are noisy:
 
-- the generated C step (``gt_<name>_step`` through ctypes: CasADi's ``sqpmethod`` + ``qrqp``
+- the generated C step (``gt_<name>_step`` through ctypes: CasADi's ``sqpmethod`` + ``qrqp`` (``daqp`` with
+  state or path constraints; ``fatrop`` for ``solver = "fatrop"``)
   code-generated, one SQP iteration per period by default) in the closed loop of the file's
   ``[check]`` (mismatched plant, noise, step disturbance, one-sample delay), the motion run
   again from ``_init`` until at least ``--steps`` steps: per-step time, median, p99 and
@@ -36,7 +37,6 @@ from pathlib import Path
 
 import numpy as np
 
-from gtmodel.estimation.mpc import QP_ROW
 from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
 from gtmodel.problems.mpc_file import load_mpc_file
 
@@ -49,13 +49,13 @@ def python_step_s(setup, summary) -> float:
     """Median wall time [s] of one MPC step solved in Python by IPOPT (warm-started from the last solution)."""
     c = setup.controller
     solver = c.nlp_solver("ipopt")
-    lbx, ubx = np.tile(c.u_lb, c.blocks), np.tile(c.u_ub, c.blocks)
-    w = c.w_initial
+    bounds = c.bounds()
+    w = np.r_[c.w_initial, np.zeros(c.n_slack)]
     times = []
     for k in np.linspace(0, summary.t.size - 1, PYTHON_STATES).round().astype(int):
         p = c.parameters(summary.t[k], summary.x[k])
         t0 = time.perf_counter()
-        sol = solver(x0=w, p=p, lbx=lbx, ubx=ubx, **QP_ROW)
+        sol = solver(x0=w, p=p, **bounds)
         times.append(time.perf_counter() - t0)
         w = np.asarray(sol["x"]).reshape(-1)
     return statistics.median(times)
@@ -72,7 +72,8 @@ def bench(path: Path, steps: int, build: Path) -> dict:
     py = python_step_s(setup, wall.mpc)
     c = setup.controller
     return {
-        "name": setup.name, "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
+        "name": setup.name, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": 0 if c.constraints is None else c.horizon * len(c.constraints.sides),
+        "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
         "steps": int(wall.mpc.step_s.size), "first_step_s": st["first"],
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],
         "cpu_step_median_s": cst["median"], "cpu_step_p99_s": cst["p99"], "cpu_step_max_s": cst["max"],
@@ -99,8 +100,8 @@ def main() -> None:
         for path in files:
             r = bench(path, args.steps, Path(tmp))
             rows.append(r)
-            print(f"{r['name']}: horizon {r['horizon']} x {r['period_s'] * 1e3:g} ms, {r['blocks']} input blocks, "
-                  f"{r['sqp_iterations']} SQP iteration(s), {r['steps']} C steps")
+            print(f"{r['name']}: {r['solver']} {r['qpsol']}, horizon {r['horizon']} x {r['period_s'] * 1e3:g} ms, {r['blocks']} input blocks, "
+                  f"{r['sqp_iterations']} SQP iteration(s), {r['constraint_rows']} constraint rows, {r['steps']} C steps")
             print(f"  C step wall: median {r['step_median_s'] * 1e6:.1f} us, p99 {r['step_p99_s'] * 1e6:.1f} us, "
                   f"max {r['step_max_s'] * 1e6:.1f} us (first {r['first_step_s'] * 1e6:.1f} us)")
             print(f"  C step CPU : median {r['cpu_step_median_s'] * 1e6:.1f} us, p99 {r['cpu_step_p99_s'] * 1e6:.1f} us, "

@@ -85,7 +85,7 @@ def compile_shared(
     cc = find_compiler()
     build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
     build.mkdir(parents=True, exist_ok=True)
-    inc = ["-I", str(generated.out_dir)]
+    inc = ["-I", str(generated.out_dir)] + [a for d in generated.include_dirs for a in ("-isystem", d)]
     extra = list(extra_flags)
     obj_casadi = build / f"{generated.prefix}_casadi.o"
     obj_wrap = build / f"{generated.prefix}.o"
@@ -100,7 +100,7 @@ def compile_shared(
     )
     suffix = ".dylib" if sys.platform == "darwin" else ".so"
     lib = build / f"lib{generated.prefix}{suffix}"
-    _run([*cc, "-shared", *extra, str(obj_casadi), str(obj_wrap), "-o", str(lib), "-lm"], f"linking {lib.name}")
+    _run([*cc, "-shared", *extra, str(obj_casadi), str(obj_wrap), "-o", str(lib), *generated.link_flags, "-lm"], f"linking {lib.name}")
     log.info("codegen: built %s", lib)
     return lib
 

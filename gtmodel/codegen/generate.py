@@ -114,6 +114,11 @@ class GeneratedCode:
     retime_n_max : int
         ``<PREFIX>_RETIME_N_MAX`` of the re-timing function ``<prefix>_retime``
         (:mod:`gtmodel.codegen.retime`); 0 when it was not generated.
+    include_dirs : tuple of str
+        Folders of the headers of a solver library the CasADi source includes (e.g. DAQP's
+        or fatrop's, from the casadi wheel); empty for plain C.
+    link_flags : tuple of str
+        Linker arguments of those libraries.
     """
 
     out_dir: Path
@@ -135,6 +140,8 @@ class GeneratedCode:
     newton: dict[str, tuple[float, int]] = field(default_factory=dict, repr=False)
     controller: Controller | None = field(default=None, repr=False)
     retime_n_max: int = 0
+    include_dirs: tuple[str, ...] = ()
+    link_flags: tuple[str, ...] = ()
 
     @property
     def c_sources(self) -> tuple[Path, Path]:

@@ -56,7 +56,7 @@ from gtmodel.errors import CodegenError, InputError
 from gtmodel.estimation.mpc import MPCController
 from gtmodel.estimation.tracking import TrackingController
 
-__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "LoopStep", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
 
 log = logging.getLogger("gtmodel")
 
@@ -243,6 +243,36 @@ def _spec(step: LoopStep) -> FunctionSpec:
     )
 
 
+#: Solver libraries of the casadi wheel that CasADi's generated C may include: the header it
+#: includes -> the linker arguments (``{lib}``: the wheel's folder). DAQP statically (its
+#: ``libdaqpstat.a``), fatrop and BLASFEO as the wheel's shared libraries (found by rpath).
+SOLVER_LIBRARIES = {
+    "daqp/api.h": ("{lib}/libdaqpstat.a",),
+    "fatrop/ocp/OCPCInterface.h": ("-L{lib}", "-lfatrop", "-lblasfeo", "-Wl,-rpath,{lib}"),
+}
+
+
+def solver_libraries(source: str | Path) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Include folders and linker arguments of the solver libraries a CasADi-generated C file includes.
+
+    Parameters
+    ----------
+    source : str or pathlib.Path
+        The generated C file.
+
+    Returns
+    -------
+    include_dirs : tuple of str
+        The casadi wheel's ``include`` folder when a library of :data:`SOLVER_LIBRARIES` is included.
+    link_flags : tuple of str
+        Their linker arguments (empty: plain C).
+    """
+    text = Path(source).read_text()
+    lib = Path(ca.__file__).resolve().parent
+    flags = [a.format(lib=lib) for header, args in SOLVER_LIBRARIES.items() if f"#include <{header}>" in text for a in args]
+    return ((str(lib / "include"),) if flags else ()), tuple(flags)
+
+
 def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_controller", real: str = "double") -> GeneratedCode:
     """Generate C for a loop controller: the inner step and the memory interface.
 
@@ -295,10 +325,12 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
         prefix, (spec,), step, out_dir, real, lambda wrapped: fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header)),
         extra_source=memory)
     log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
+    include_dirs, link_flags = solver_libraries(out / f"{prefix}_casadi.c")
     return GeneratedCode(
         out_dir=out, prefix=prefix, functions=("control",), source=out / f"{prefix}.c", header=out / f"{prefix}.h",
         casadi_source=out / f"{prefix}_casadi.c", casadi_header=out / f"{prefix}_casadi.h", parameters=step, friction="",
         parameter_hash=phash, version=version, specs=(spec,), work_sizes=sizes, signatures=signatures, real=real, kind=LOOP_KIND,
+        include_dirs=include_dirs, link_flags=link_flags,
     )
 
 

@@ -12,7 +12,13 @@ error names the file and the field, the CLI exits with 2):
     ``solver`` (``"sqpmethod"``: CasADi's SQP with ``qrqp``), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
     an unknown variable is refused), ``u_lb`` / ``u_ub`` (default: the reference problem's
-    force limits, else the model's declared bounds).
+    force limits, else the model's declared bounds); the state bounds and path constraints
+    on the predicted states (:mod:`gtmodel.estimation.mpc_constraints`): the reference
+    problem's as its file declares them (``problem_constraints``, default true: the states'
+    ``[bounds]`` and ``[optimization] constraints`` of an ``optimal_control`` file, the cart
+    travel, joint-angle and velocity limits of a ``point_to_point`` one), tightened by
+    ``state_lb`` / ``state_ub`` (tables by state name), soft by default (an exact penalty
+    with slacks, weight ``constraint_weight``) or ``hard_constraints = true``.
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``: the tables shared by every
     loop-controller file, :mod:`gtmodel.problems.loop_file`.
@@ -20,7 +26,11 @@ error names the file and the field, the CLI exits with 2):
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from pydantic import Field, ValidationError
 
@@ -28,8 +38,11 @@ from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
+from gtmodel.estimation.mpc_constraints import problem_constraints
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_file import CheckSection, LoopSetup, ReferenceSection, input_bounds, loop_model, loop_reference, loop_setup, weight_diagonal
+from gtmodel.problems.run import load_problem
+from gtmodel.trajectory.point_to_point import build_optimization
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
 
 __all__ = ["MPCFile", "MPCSetup", "load_mpc_file"]
@@ -54,6 +67,11 @@ class MPCSection(Section):
     terminal_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Qf by state name (default Q)")
     u_lb: list[float] | None = Field(default=None, description="input lower bounds")
     u_ub: list[float] | None = Field(default=None, description="input upper bounds")
+    state_lb: dict[str, float] = Field(default_factory=dict, description="lower bounds of the predicted states by state name (with the reference problem's)")
+    state_ub: dict[str, float] = Field(default_factory=dict, description="upper bounds of the predicted states by state name (with the reference problem's)")
+    problem_constraints: bool = Field(default=True, strict=True, description="impose the reference problem's state bounds and path constraints on the horizon")
+    hard_constraints: bool = Field(default=False, strict=True, description="state and path constraints hard (default soft: an exact penalty with slacks)")
+    constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
 
 
 class MPCFile(Section):
@@ -83,6 +101,34 @@ class MPCFile(Section):
 #: What an MPC file builds (:class:`~gtmodel.problems.loop_file.LoopSetup` with an
 #: :class:`~gtmodel.estimation.mpc.MPCController` as its controller).
 MPCSetup = LoopSetup
+
+
+def _constraints(file: ProblemFile, doc: MPCFile, names_x: list[str], names_u: list[str], robot: bool) -> dict[str, Any]:
+    """The state bounds and path constraints of the MPC: the reference problem's (as its file declares them,
+    without the overrides of the plan), tightened by ``mpc.state_lb`` / ``mpc.state_ub``."""
+    m = doc.mpc
+    x_lb, x_ub, out = np.full(len(names_x), -np.inf), np.full(len(names_x), np.inf), {}
+    if m.problem_constraints and doc.reference.problem is not None:
+        source = Path(file.reference("reference.problem", doc.reference.problem))
+        loaded = load_problem(source)
+        opt = build_optimization(loaded.declaration)[0] if robot else loaded.declaration.optimization
+        try:
+            x_lb, x_ub, path, lb, ub, names = problem_constraints(opt, names_x, names_u)
+        except GtModelError as exc:
+            raise file.wrap("mpc.problem_constraints", exc) from None
+        out = dict(path=path, path_lb=lb, path_ub=ub, path_names=names)
+    for field, table, pick in (("mpc.state_lb", m.state_lb, np.maximum), ("mpc.state_ub", m.state_ub, np.minimum)):
+        for key, value in table.items():
+            if key not in names_x:
+                raise file.fail(f"{field}.{key}", f"a state of the model ({', '.join(names_x)})", key)
+            if math.isnan(value):
+                raise file.fail(f"{field}.{key}", "a number", value)
+            bound = x_lb if field.endswith("lb") else x_ub
+            bound[names_x.index(key)] = pick(bound[names_x.index(key)], value)
+    bad = np.flatnonzero(x_lb > x_ub)
+    if bad.size:
+        raise file.fail(f"mpc.state_lb.{names_x[bad[0]]}", "a lower bound <= the upper bound", float(x_lb[bad[0]]))
+    return dict(out, x_lb=x_lb, x_ub=x_ub)
 
 
 def load_mpc_file(path: str | Path) -> MPCSetup:
@@ -123,9 +169,11 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
     t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, m.period,
                                              bounds_field=None if m.u_lb is not None and m.u_ub is not None else "mpc")
     u_lb, u_ub = input_bounds(file, "mpc", m.u_lb, m.u_ub, limits, ode)
+    cons = _constraints(file, doc, names_x, names_u, model.robot)
     try:
         controller = mpc_controller(ode, t, x_ref, u_ref, horizon=m.horizon, dt=m.period, Q=Q, R=R, Qf=Qf, u_lb=u_lb, u_ub=u_ub,
-                                    method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations, solver=m.solver)
+                                    method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations, solver=m.solver,
+                                    hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight, **cons)
     except GtModelError as exc:
         raise file.wrap("mpc", exc) from None
     return loop_setup(file, doc.name, controller, model, doc.check, m.period)

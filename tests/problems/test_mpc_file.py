@@ -34,6 +34,8 @@ BAD = [
     ("blocks not a divisor", L1, "blocks = 5 ", "blocks = 3 ", "mpc.blocks"),
     ("sqp iterations 0", MOTOR, "sqp_iterations = 1", "sqp_iterations = 0", "mpc.sqp_iterations"),
     ("solver unknown", MOTOR, 'solver = "sqpmethod"', 'solver = "osqp"', "mpc.solver"),
+    ("unknown bounded state", MOTOR, 'input_weights = {', 'state_ub = { "rotor.x" = 80.0 }\ninput_weights = {', "mpc.state_ub.rotor.x"),
+    ("crossed state bounds", MOTOR, 'input_weights = {', 'state_lb = { "rotor.w" = 9.0 }\nstate_ub = { "rotor.w" = 8.0 }\ninput_weights = {', "mpc.state_lb.rotor.w"),
     ("unknown error state", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["phi"]', "check.error_states.phi"),
 ]
 

@@ -1,0 +1,44 @@
+"""The loop step's safe-input contract for every MPC solver, as generated C (slow: three compiles).
+
+Reference: the contract of :mod:`gtmodel.codegen.loop_step`: a failed solve returns a failure
+status and the last input, saturated, never NaN. The failure is forced by a hard state bound
+that the start cannot meet (the double integrator at 5 m/s, 5 cm before a position bound,
+cannot stop in time under |u| <= 50) for the QP solvers with constraints (DAQP, fatrop), and
+by a state whose prediction overflows for the unconstrained qrqp step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtmodel.codegen.build import load_library
+from gtmodel.codegen.build import compile_shared
+from gtmodel.codegen.loop_step import generate_loop_step, mpc_step
+from gtmodel.estimation.mpc import mpc_controller
+from gtmodel.modeling import explicit_ode
+from gtmodel.problems.mpc_check import compiled_step
+
+from ..modeling._builders import double_integrator
+
+pytestmark = pytest.mark.slow
+
+DT = 0.004
+CASES = [("sqpmethod", {}, [1e300, 1e300]), ("sqpmethod", {"x_ub": {"x": 0.5}, "hard_constraints": True}, [0.45, 5.0]),
+         ("fatrop", {"x_ub": {"x": 0.5}, "hard_constraints": True}, [0.45, 5.0])]
+
+
+@pytest.mark.parametrize("solver, kwargs, bad", CASES, ids=["qrqp overflow", "daqp infeasible", "fatrop infeasible"])
+def test_failed_step_returns_the_last_input_saturated(tmp_path, solver, kwargs, bad):
+    ode = explicit_ode(double_integrator()[0])
+    t = DT * np.arange(101)
+    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
+    c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=20, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
+                       method="euler", solver=solver, **kwargs)
+    generated = generate_loop_step(mpc_step(c, "di"), tmp_path, prefix="gt_di")
+    controller, _, _ = compiled_step(generated, compile_shared(generated, tmp_path / "build"))
+    status, u_ok = controller(t[40], [0.3, 1.0])
+    assert status == 0 and np.all(np.isfinite(u_ok))
+    status, u = controller(t[41], bad)
+    assert status != 0
+    np.testing.assert_array_equal(u, np.clip(u_ok, -50.0, 50.0))
