@@ -67,6 +67,15 @@ _log = logging.getLogger("gtmodel")
 BANDED_MIN_ELEMENTS = 300
 
 
+def _scaled_hessian(hess_l: ca.Function, objective_scale: float) -> ca.Function:
+    """fatrop's ``nlp_hess_l`` of the objective multiplied by ``objective_scale`` (``hess_l`` itself for 1)."""
+    if objective_scale == 1.0:
+        return hess_l
+    x, p, lam_f, lam_g = hess_l.mx_in()
+    return ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], hess_l(x, p, objective_scale * lam_f, lam_g),
+                       hess_l.name_in(), hess_l.name_out())
+
+
 class CollocationTranscription:
     """An optimisation problem transcribed once by direct collocation, solvable repeatedly.
 
@@ -241,7 +250,7 @@ class CollocationTranscription:
         opt, dae = self.optimization, self.dae
         self._co = co = collocation_coefficients(self.points, self.scheme)
         stagewise = self.plugin == "fatrop"
-        assembled = self.derivatives == "assembled" and not stagewise
+        assembled = self.derivatives == "assembled"
         free_index = self._free_index()
         if self.banded and opt.free_final_time and not stagewise:
             # N copies of the final time: scaled by sqrt(N), IPOPT's regularisation of the
@@ -269,7 +278,7 @@ class CollocationTranscription:
         self.evaluation = "CasADi interpreter (whole NLP graph" + (", differentiated by the fatrop plugin)" if stagewise else ")")
         if assembled:
             jac_g, hess_lag, self.evaluation = assembled_derivatives(
-                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions
+                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions, stagewise
             )
             self.derivative_functions = {"jac_g": jac_g, "hess_lag": hess_lag}
         self.solver = self._nlpsol(self.options)
@@ -286,6 +295,9 @@ class CollocationTranscription:
             self.objective_scale = float(inner.pop("obj_scaling_factor", 1.0))
             f = f * self.objective_scale
             nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
+            if self.derivative_functions:  # the plugin has no jac_g/hess_lag options: its function cache, by name
+                nlp_options["cache"] = {"nlp_jac_g": self.derivative_functions["jac_g"],
+                                        "nlp_hess_l": _scaled_hessian(self.derivative_functions["hess_lag"], self.objective_scale)}
         try:
             return ca.nlpsol(
                 f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options
