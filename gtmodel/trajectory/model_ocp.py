@@ -169,7 +169,8 @@ class OptimalControl:
         if guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS:
             coarse = self.coarse_solve(kwargs)
             guess = coarse if coarse.status in ("optimal", "acceptable") else None
-        result = tr.solve(initial_guess=guess)
+        # fatrop starts its barrier small from the coarse solution (collocation_stages.FATROP_WARM_START_OPTIONS)
+        result = tr.solve(initial_guess=guess, warm_start=tr.plugin == "fatrop" and coarse is not None and guess is coarse)
         if coarse is not None:  # the coarse pass is part of this solve's cost
             result.solve_time += coarse.solve_time
             result.stats["coarse_start"] = {"elements": coarse.collocation.elements, "status": str(coarse.status),

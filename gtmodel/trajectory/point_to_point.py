@@ -42,6 +42,7 @@ from gtmodel.robots.kinematic_expressions import (
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status
+from gtmodel.trajectory.model_ocp import COARSE_START_ELEMENTS, COARSE_START_MIN_ELEMENTS
 from gtmodel.trajectory.rest_to_rest import bang_bang_duration, check_holding_forces, trapezoid_profile
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings, objective_scaling
 
@@ -602,6 +603,22 @@ def _scale_objective(tr: CollocationTranscription, problem: PointToPoint, option
     return scaling
 
 
+def _coarse_start(opt: Optimization, problem: PointToPoint, common: dict[str, Any], options: dict[str, Any]) -> OptimizationResult | None:
+    """fatrop on :data:`~gtmodel.trajectory.model_ocp.COARSE_START_MIN_ELEMENTS` elements or more: the problem solved on
+    :data:`~gtmodel.trajectory.model_ocp.COARSE_START_ELEMENTS` (unverified), the warm start of the fine mesh; else None.
+
+    Not for IPOPT: the L1 minimum-time problem on 400 elements took it 580 iterations from the
+    interpolated 50-element solution against 99 from the declared guess (fatrop, warm-started
+    with a small barrier parameter: 34 against 110).
+    """
+    if problem.solver.name != "fatrop" or problem.method.elements < COARSE_START_MIN_ELEMENTS:
+        return None
+    coarse = CollocationTranscription(opt, elements=COARSE_START_ELEMENTS, points=problem.method.points,
+                                      scheme=problem.method.scheme, verify=False, **common)
+    _scale_objective(coarse, problem, options)
+    return coarse.solve(parameters=problem.named_parameters)
+
+
 def _structure(problem: PointToPoint) -> tuple:
     """What must be equal for two declarations to share one transcription."""
     skip = {"named_parameters", "w", "name", "parameters", "guess", "origin"}
@@ -682,6 +699,13 @@ def solve_point_to_point(
                                    max_passes=ref.max_passes, initial_guess=guess,
                                    parameters=problem.named_parameters, **common)
         else:
-            result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
+            coarse = _coarse_start(opt, problem, common, options) if guess is None else None
+            start = coarse if coarse is not None and coarse.status in ("optimal", "acceptable") else guess
+            result = tr.solve(parameters=problem.named_parameters, initial_guess=start, warm_start=start is not None and start is coarse)
+            if coarse is not None:  # the coarse pass is part of this solve's cost
+                result.solve_time += coarse.solve_time
+                result.stats["coarse_start"] = {"elements": coarse.collocation.elements, "status": str(coarse.status),
+                                                "iterations": coarse.iterations, "solve_time": coarse.solve_time, "used": start is coarse,
+                                                "t_proc_total": coarse.stats.get("t_proc_total")}
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
     return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)

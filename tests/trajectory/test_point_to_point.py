@@ -6,6 +6,8 @@ numerical quadrature of the sampled force polynomials for the exact energy integ
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -169,3 +171,22 @@ def test_an_energy_weight_does_not_stall_the_solver(w):
     assert sol.result.status == "optimal" and sol.result.iterations < WEIGHT_ITERATIONS
     # the energy term dominates: longer than the minimum time 0.6754 s, less energy than its 403 185 N^2 s
     assert sol.result.final_time > 1.0 and sol.energy < 3.0e5
+
+
+def test_fatrop_on_a_fine_mesh_starts_from_the_coarse_solve(monkeypatch):
+    # second path: the cold fatrop solve of the same 60-element NLP, and IPOPT's optimum on it (to 1e-6)
+    from gtmodel.trajectory import point_to_point as ptp
+
+    decl = load_problem(PROBLEMS_DIR / "l1_time_optimal.toml").declaration
+    fine = dataclasses.replace(decl, solver=dataclasses.replace(decl.solver, name="fatrop"), elements=60)
+    cold = solve_point_to_point(fine).result
+    assert "coarse_start" not in cold.stats  # below the threshold: the declared guess
+    monkeypatch.setattr(ptp, "COARSE_START_MIN_ELEMENTS", 60)
+    res = solve_point_to_point(fine).result
+    ipopt = solve_point_to_point(dataclasses.replace(decl, elements=60)).result
+    assert (cold.status, res.status, ipopt.status) == ("optimal", "optimal", "optimal")
+    coarse = res.stats["coarse_start"]
+    assert coarse["used"] and coarse["elements"] == 50 and coarse["status"] == "optimal"
+    assert res.solve_time >= coarse["solve_time"]  # the coarse pass is counted in the solve
+    assert res.final_time == pytest.approx(cold.final_time, rel=1e-6)
+    assert res.final_time == pytest.approx(ipopt.final_time, rel=1e-6)

@@ -46,7 +46,7 @@ from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
-from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, IPOPT_ONLY, SOLVERS
+from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS
 from gtmodel.modeling.ocp.guesses import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
@@ -65,6 +65,15 @@ _log = logging.getLogger("gtmodel")
 #: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
 #: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
 BANDED_MIN_ELEMENTS = 300
+
+
+def _scaled_hessian(hess_l: ca.Function, objective_scale: float) -> ca.Function:
+    """fatrop's ``nlp_hess_l`` of the objective multiplied by ``objective_scale`` (``hess_l`` itself for 1)."""
+    if objective_scale == 1.0:
+        return hess_l
+    x, p, lam_f, lam_g = hess_l.mx_in()
+    return ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], hess_l(x, p, objective_scale * lam_f, lam_g),
+                       hess_l.name_in(), hess_l.name_out())
 
 
 class CollocationTranscription:
@@ -111,9 +120,11 @@ class CollocationTranscription:
         with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
     solver : {"ipopt", "fatrop"}, optional
         The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options.
-        ``"fatrop"`` transcribes stage by stage with final-time copies (``banded``) and
-        differentiates the NLP graph itself (``derivatives`` and ``compile`` apply to IPOPT);
-        not with free parameters.
+        ``"fatrop"`` transcribes stage by stage with final-time copies (``banded``), with the
+        same assembled (``compile``: compiled) derivatives, passed through the plugin's
+        function cache (:func:`~gtmodel.modeling.ocp.collocation_derivatives.assembled_derivatives`
+        with ``stagewise``; with ``derivatives="casadi"`` the plugin differentiates the NLP
+        graph itself); not with free parameters.
     banded : bool, optional
         A free final time as one copy per element tied by equalities, so that the KKT
         matrix is banded, or as one variable shared by all elements (a dense row and
@@ -241,7 +252,7 @@ class CollocationTranscription:
         opt, dae = self.optimization, self.dae
         self._co = co = collocation_coefficients(self.points, self.scheme)
         stagewise = self.plugin == "fatrop"
-        assembled = self.derivatives == "assembled" and not stagewise
+        assembled = self.derivatives == "assembled"
         free_index = self._free_index()
         if self.banded and opt.free_final_time and not stagewise:
             # N copies of the final time: scaled by sqrt(N), IPOPT's regularisation of the
@@ -269,7 +280,7 @@ class CollocationTranscription:
         self.evaluation = "CasADi interpreter (whole NLP graph" + (", differentiated by the fatrop plugin)" if stagewise else ")")
         if assembled:
             jac_g, hess_lag, self.evaluation = assembled_derivatives(
-                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions
+                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions, stagewise
             )
             self.derivative_functions = {"jac_g": jac_g, "hess_lag": hess_lag}
         self.solver = self._nlpsol(self.options)
@@ -286,6 +297,9 @@ class CollocationTranscription:
             self.objective_scale = float(inner.pop("obj_scaling_factor", 1.0))
             f = f * self.objective_scale
             nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
+            if self.derivative_functions:  # the plugin has no jac_g/hess_lag options: its function cache, by name
+                nlp_options["cache"] = {"nlp_jac_g": self.derivative_functions["jac_g"],
+                                        "nlp_hess_l": _scaled_hessian(self.derivative_functions["hess_lag"], self.objective_scale)}
         try:
             return ca.nlpsol(
                 f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options
@@ -361,7 +375,11 @@ class CollocationTranscription:
             With a previous result of this transcription as ``initial_guess``: start
             IPOPT from its primal point *and multipliers* with a small barrier parameter
             (:data:`gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`), a true
-            warm start. Default False (the primal point only, a cold barrier).
+            warm start. With fatrop (whose plugin takes no start multipliers): a result of
+            this or another transcription of the problem (a coarser mesh) as
+            ``initial_guess``, its primal point with the barrier parameter started small
+            (:data:`~gtmodel.modeling.ocp.collocation_stages.FATROP_WARM_START_OPTIONS`).
+            Default False (the primal point only, a cold barrier).
 
         Returns
         -------
@@ -415,7 +433,11 @@ class CollocationTranscription:
 
         solver = self.solver
         warm: dict[str, np.ndarray] = {}
-        if warm_start:
+        if warm_start and self.plugin == "fatrop":
+            if not (isinstance(initial_guess, OptimizationResult) and initial_guess.collocation is not None):
+                raise InputError("warm_start: initial_guess must be a collocation result of this problem (fatrop starts from its primal point)")
+            solver = self.warm_solver()
+        elif warm_start:
             if not (isinstance(initial_guess, OptimizationResult) and initial_guess.transcription_key == self.key
                     and initial_guess.lam_g is not None):
                 raise InputError("warm_start: initial_guess must be a result of this transcription (with its multipliers)")
@@ -529,17 +551,12 @@ class CollocationTranscription:
         Returns
         -------
         casadi.Function
-            IPOPT with :data:`~gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`.
-
-        Raises
-        ------
-        InputError
-            With a solver other than IPOPT.
+            IPOPT with :data:`~gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`,
+            fatrop with :data:`~gtmodel.modeling.ocp.collocation_stages.FATROP_WARM_START_OPTIONS`.
         """
-        if self.plugin != "ipopt":
-            raise InputError(f"warm_start: IPOPT's warm start (multipliers and a small barrier parameter); not with solver {self.plugin}")
         if self._warm_solver is None:
-            opts = {**self.options, self.plugin: {**self.options[self.plugin], **WARM_START_OPTIONS}}
+            warm = WARM_START_OPTIONS if self.plugin == "ipopt" else FATROP_WARM_START_OPTIONS
+            opts = {**self.options, self.plugin: {**self.options[self.plugin], **warm}}
             self._warm_solver = self._nlpsol(opts)
         return self._warm_solver
 

@@ -11,6 +11,12 @@ size. The point derivatives can be compiled to C (:func:`gtmodel._compiler.compi
 cached by a hash of the generated source, so the compiler runs once per model and the
 cache serves every mesh size and every later process). The point constraints at the start
 and final time and the Mayer term (few) are differentiated directly.
+
+The same assembly serves both NLP solvers: IPOPT takes ``jac_g`` and the upper triangle of
+the Hessian (nlpsol's ``jac_g``/``hess_lag`` options); fatrop (the NLP ordered stage by
+stage) takes ``jac_g`` and the whole symmetric Hessian with the Lagrangian's gradient
+(``nlp_hess_l``, passed through nlpsol's function ``cache``: its plugin has no
+``hess_lag`` option), from the same point functions and the same compiled libraries.
 """
 
 from __future__ import annotations
@@ -132,6 +138,7 @@ def assembled_derivatives(
     free_index: np.ndarray,
     compile: bool,
     fractions: np.ndarray | None = None,
+    stagewise: bool = False,
 ) -> tuple[ca.Function, ca.Function, str]:
     """The ``jac_g`` and ``hess_lag`` Functions of ``casadi.nlpsol`` for ``nlp``.
 
@@ -155,11 +162,20 @@ def assembled_derivatives(
         Evaluate the point derivatives through compiled C (cached), else interpreted.
     fractions : numpy.ndarray or None, optional
         Element lengths as fractions of the horizon (a refined mesh); default uniform.
+    stagewise : bool, optional
+        ``nlp`` is fatrop's stage-wise transcription (``transcribe(..., stagewise=True)``:
+        its continuity rows have a unit coefficient on the scaled states), and the Hessian
+        is returned as fatrop's plugin asks for it (below). Default False (IPOPT's).
 
     Returns
     -------
-    jac_g, hess_lag : casadi.Function
-        ``(x, p) -> (g, jac_g_x)`` and ``(x, p, lam_f, lam_g) -> triu_hess_gamma_x_x``.
+    jac_g : casadi.Function
+        ``(x, p) -> (g, jac_g_x)``, named ``nlp_jac_g``.
+    hess_lag : casadi.Function
+        Named ``nlp_hess_l``. IPOPT's: ``(x, p, lam_f, lam_g) -> triu_hess_gamma_x_x`` (the
+        upper triangle); with ``stagewise``: ``(x, p, lam_f, lam_g) -> (grad_gamma_x,
+        hess_gamma_x_x)``, the gradient ``lam_f grad f + jac_g' lam_g`` and the whole
+        symmetric Hessian of ``gamma = lam_f f + lam_g' g``.
     how : str
         How the point derivatives are evaluated (compiled, cached, interpreted and why).
     """
@@ -258,10 +274,11 @@ def assembled_derivatives(
         sel = C[r_, pj] != 0.0
         jac.add(pfirst[sel, None] + ix, xoff[pk[sel], r_][:, None] + ix, one, -C[r_, pj[sel]][:, None] * nom_x)
     ck, cfirst = (np.array([t[i] for t in nlp.rows_cont], dtype=np.int64) for i in range(2))
-    jac.add(cfirst[:, None] + ix, xoff[ck + 1, 0][:, None] + ix, one, nom_x)
+    nom_c = np.ones(nx) if stagewise else nom_x  # stage-wise continuity: x_{k+1} - F(x_k, u_k) in scaled states
+    jac.add(cfirst[:, None] + ix, xoff[ck + 1, 0][:, None] + ix, one, nom_c)
     for r_ in range(d + 1):
         if D[r_] != 0.0:
-            jac.add(cfirst[:, None] + ix, xoff[ck, r_][:, None] + ix, one, -D[r_] * nom_x)
+            jac.add(cfirst[:, None] + ix, xoff[ck, r_][:, None] + ix, one, -D[r_] * nom_c)
     if nlp.rows_tf:
         tk, trow = (np.array([t[i] for t in nlp.rows_tf], dtype=np.int64) for i in range(2))
         toff = np.array([offs[("tf", k, 0)] for k in range(N)], dtype=np.int64)
@@ -272,13 +289,25 @@ def assembled_derivatives(
 
     hess = _Assembly()
     R, C_ = cols[:, hr], cols[:, hc]
-    hess.add(np.minimum(R, C_), np.maximum(R, C_), np.arange(M)[:, None] * nh + np.arange(nh)[None, :])
-    he_r, he_c = he_val.sparsity().get_triplet()
-    hess.add(he_r, he_c, M * nh + np.arange(len(he_r)))
+    src = np.arange(M)[:, None] * nh + np.arange(nh)[None, :]
+    hess.add(np.minimum(R, C_), np.maximum(R, C_), src)
+    he_r, he_c = (np.asarray(a, dtype=np.int64) for a in he_val.sparsity().get_triplet())
+    he_src = M * nh + np.arange(len(he_r))
+    hess.add(he_r, he_c, he_src)
+    if stagewise:  # fatrop: the whole symmetric matrix, the same values mirrored below the diagonal
+        off, he_off = R != C_, he_r != he_c
+        hess.add(np.maximum(R, C_)[off], np.minimum(R, C_)[off], src[off])
+        hess.add(he_c[he_off], he_r[he_off], he_src[he_off])
     hvals = ca.vertcat(_nz(hm), _nz(he_val))
     hess_mx = hess.matrix(hvals, M * nh + len(he_r), nw, nw)
 
     g_fn = ca.Function("nlp_g", [nlp.w, nlp.p], [nlp.g])
     jac_g = ca.Function("nlp_jac_g", [w, P], [g_fn(w, P), jac_mx], ["x", "p"], ["g", "jac_g_x"])
-    hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hess_mx], ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+    names_in = ["x", "p", "lam_f", "lam_g"]
+    if stagewise:
+        grad_f = ca.Function("nlp_grad_f_sx", [nlp.w, nlp.p], [ca.gradient(nlp.f, nlp.w)])
+        grad_l = lam_f * grad_f(w, P) + ca.mtimes(jac_mx.T, lam_g)
+        hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [grad_l, hess_mx], names_in, ["grad_gamma_x", "hess_gamma_x_x"])
+    else:
+        hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hess_mx], names_in, ["triu_hess_gamma_x_x"])
     return jac_g, hess_lag, how

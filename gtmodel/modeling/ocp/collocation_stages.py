@@ -7,14 +7,21 @@ import numpy as np
 
 from gtmodel.status import Status
 
-__all__ = ["stage_order", "SOLVERS", "IPOPT_ONLY", "FATROP_STATUS"]
+__all__ = ["stage_order", "SOLVERS", "IPOPT_ONLY", "FATROP_STATUS", "FATROP_WARM_START_OPTIONS"]
 
 #: nlpsol plugins a transcription can be solved with. ``"fatrop"``: the NLP ordered stage by
 #: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
-#: ``jac_g``/``hess_lag``, so it differentiates the NLP graph itself (docs/verification.md).
+#: ``jac_g``/``hess_lag`` options, so the assembled derivatives are put in its function cache
+#: under the names it asks for (``nlp_jac_g``, ``nlp_hess_l``; docs/verification.md).
 SOLVERS = ("ipopt", "fatrop")
 #: IPOPT options fatrop lacks (dropped; ``obj_scaling_factor`` scales the objective it is given).
 IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
+#: fatrop options of a warm start from a solution of the problem (of this or a coarser mesh,
+#: interpolated): the barrier parameter starts at 1e-3 instead of 0.1. L1 minimum time on 400
+#: elements from the 50-element solution: 34 iterations and 1.2 CPU-s, against 86 and 2.9 s with
+#: mu_init 0.1 and 110 and 4.2 s from the declared guess (mu_init 1e-2: 38, 1e-4: 41, 1e-5: 49
+#: iterations, the last at a neighbouring local optimum).
+FATROP_WARM_START_OPTIONS = {"mu_init": 1e-3}
 #: fatrop's unified return status -> gtmodel status (success is ``optimal``).
 FATROP_STATUS = {"SOLVER_RET_LIMITED": Status.MAX_ITERATIONS, "SOLVER_RET_NAN": Status.ERROR}
 

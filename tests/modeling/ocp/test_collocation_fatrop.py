@@ -7,6 +7,7 @@ same optimum to 1e-6).
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -51,6 +52,47 @@ def test_fatrop_reaches_ipopts_optimum_on_the_same_transcription(name, build, ex
     assert fa.verification.passed
 
 
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("GTMODEL_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
+        mp.delenv("GTMODEL_COMPILE", raising=False)
+        yield
+
+
+def _outputs(tr, function, rng):
+    args = [rng.uniform(0.5, 1.5, tr._lbw.size), tr.dae.p_value]
+    if function == "nlp_hess_l":
+        args += [1.3, rng.standard_normal(tr._lbg.size)]
+    out = tr.solver.get_function(function)(*args)
+    return [np.array(ca.DM(o)) for o in out]
+
+
+@pytest.mark.parametrize("scaling", [1.0, 40.0])
+@pytest.mark.parametrize("function", ["nlp_jac_g", "nlp_hess_l"])
+def test_fatrop_is_given_the_compiled_derivatives_with_the_plugins_values(cache, function, scaling):
+    # second method: the fatrop plugin differentiating the whole NLP graph itself (derivatives="casadi"),
+    # at a random point; the Hessian's outputs are the Lagrangian's gradient and the whole symmetric matrix
+    kw = dict(elements=4, solver="fatrop", nominal={"x": 2.0, "v": 0.5, "final_time": 3.0},
+              solver_options={"obj_scaling_factor": scaling})
+    a = CollocationTranscription(_min_time(), compile=True, **kw)
+    b = CollocationTranscription(_min_time(), derivatives="casadi", **kw)
+    assert a.evaluation.startswith("compiled C")
+    va, vb = _outputs(a, function, np.random.default_rng(0)), _outputs(b, function, np.random.default_rng(0))
+    assert [v.shape for v in va] == [v.shape for v in vb]
+    np.testing.assert_allclose(np.concatenate([v.ravel() for v in va]), np.concatenate([v.ravel() for v in vb]), rtol=0, atol=1e-11)
+
+
+def test_a_second_fatrop_transcription_compiles_nothing(cache):
+    # the compiled point derivatives are IPOPT's: one library per model, whatever the mesh and the solver
+    CollocationTranscription(_min_time(), elements=3, compile=True)
+    again = CollocationTranscription(_min_time(), elements=9, compile=True, solver="fatrop")
+    assert "already loaded" in again.evaluation
+    # the plugin is given them (its function cache), it differentiates nothing itself
+    assert hash(again.solver.get_function("nlp_jac_g")) == hash(again.derivative_functions["jac_g"])
+    assert hash(again.solver.get_function("nlp_hess_l")) == hash(again.derivative_functions["hess_lag"])
+
+
 def test_stage_structure_is_one_stage_per_element():
     tr = CollocationTranscription(_min_time(), elements=7, solver="fatrop")
     st = tr.nlp.stages
@@ -85,10 +127,23 @@ def test_an_integral_constraint_coupling_all_elements_is_refused():
         CollocationTranscription(chain, elements=4, solver="fatrop")
 
 
-def test_warm_start_is_ipopts():
+def test_warm_start_from_a_coarse_mesh_reaches_the_cold_optimum_in_fewer_iterations():
+    # second path: the cold solve of the same 40-element NLP (and the closed form tf = 2)
+    coarse = CollocationTranscription(_min_time(), elements=10, solver="fatrop").solve()
+    tr = CollocationTranscription(_min_time(), elements=40, solver="fatrop")
+    cold, warm = tr.solve(), tr.solve(initial_guess=coarse, warm_start=True)
+    assert (coarse.status, cold.status, warm.status) == ("optimal", "optimal", "optimal")
+    assert warm.objective == pytest.approx(cold.objective, rel=1e-6)
+    assert warm.objective == pytest.approx(2.0, rel=1e-6)
+    assert warm.iterations < cold.iterations  # 7 against 13 (the barrier started at 1e-3)
+    assert tr.warm_solver() is tr.warm_solver()  # built once
+
+
+@pytest.mark.parametrize("guess", [None, {"final_time": 2.0}], ids=["none", "mapping"])
+def test_fatrop_warm_start_needs_a_result(guess):
     tr = CollocationTranscription(min_energy_problem(), elements=5, solver="fatrop")
-    with pytest.raises(InputError, match="not with solver fatrop"):
-        tr.warm_solver()
+    with pytest.raises(InputError, match="warm_start: initial_guess must be a collocation result"):
+        tr.solve(initial_guess=guess, warm_start=True)
 
 
 def test_problem_settings_offer_the_transcriptions_solvers():

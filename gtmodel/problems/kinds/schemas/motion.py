@@ -138,13 +138,12 @@ class OcpSolverSection(SolverSection):
     name : str
         The NLP solver: ``"ipopt"`` (IPOPT with MUMPS, the project's assembled
         derivatives, default) or ``"fatrop"`` (the NLP ordered stage by stage, one stage
-        per element; CasADi's fatrop plugin differentiates the NLP itself, it cannot take
-        the compiled derivatives, so ``jit`` applies to IPOPT only).
+        per element; given the same assembled derivatives as IPOPT, ``jit`` applies to both).
     jit : bool
         Evaluate the constraint Jacobian and Lagrangian Hessian through C generated from
         their CasADi graph, compiled once with the system compiler and cached (the same
         values, about 5x faster per evaluation); the interpreter without a compiler.
     """
 
-    name: choice("ipopt", "fatrop", description="NLP solver (fatrop: stage-wise interior point; jit applies to ipopt)") = "ipopt"
+    name: choice("ipopt", "fatrop", description="NLP solver (fatrop: stage-wise interior point)") = "ipopt"
     jit: Flag = Field(default=True, description="compiled (cached) C for the NLP derivatives")
