@@ -114,11 +114,9 @@ class GeneratedCode:
     retime_n_max : int
         ``<PREFIX>_RETIME_N_MAX`` of the re-timing function ``<prefix>_retime``
         (:mod:`gtmodel.codegen.retime`); 0 when it was not generated.
-    include_dirs : tuple of str
-        Folders of the headers of a solver library the CasADi source includes (e.g. DAQP's
-        or fatrop's, from the casadi wheel); empty for plain C.
-    link_flags : tuple of str
-        Linker arguments of those libraries.
+    include_dirs, link_flags : tuple of str
+        Header folders and linker arguments of the solver libraries the CasADi source
+        includes (DAQP's, fatrop's, from the casadi wheel); empty for plain C.
     """
 
     out_dir: Path

@@ -18,6 +18,7 @@ from gtmodel.modeling import CollocationTranscription, Model, Optimization, Opti
 from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
+from gtmodel.modeling.ocp.coarse_start import solve_from_coarse
 from gtmodel.modeling.ocp.refinement import solve_refined
 
 __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "COARSE_START_ELEMENTS"]
@@ -165,16 +166,8 @@ class OptimalControl:
                                              mesh=col.fractions, **kwargs)
             return self._estimated(final, result)
         tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **single)
-        coarse = None
-        if guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS:
-            coarse = self.coarse_solve(kwargs)
-            guess = coarse if coarse.status in ("optimal", "acceptable") else None
-        # fatrop starts its barrier small from the coarse solution (collocation_stages.FATROP_WARM_START_OPTIONS)
-        result = tr.solve(initial_guess=guess, warm_start=tr.plugin == "fatrop" and coarse is not None and guess is coarse)
-        if coarse is not None:  # the coarse pass is part of this solve's cost
-            result.solve_time += coarse.solve_time
-            result.stats["coarse_start"] = {"elements": coarse.collocation.elements, "status": str(coarse.status),
-                                            "iterations": coarse.iterations, "solve_time": coarse.solve_time, "used": guess is not None}
+        coarse = (lambda: self.coarse_solve(kwargs)) if guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS else None
+        result = solve_from_coarse(tr, coarse, initial_guess=guess)
         return self._estimated(tr, result)
 
     def coarse_solve(self, kwargs: dict[str, Any]) -> OptimizationResult:

@@ -46,7 +46,7 @@ from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
-from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS
+from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
 from gtmodel.modeling.ocp.guesses import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
@@ -59,21 +59,11 @@ __all__ = ["CollocationTranscription", "solve"]
 
 _log = logging.getLogger("gtmodel")
 
-#: Default mesh size from which a free final time is copied per element (banded KKT). L1
-#: minimum-time problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared
-#: variable 13.0 ms at 50 elements and 127 ms at 400 (9.7x for 8x the mesh), copies 14.0
-#: and 94 ms (6.7x); the copies' path takes 61/66/166/93 iterations at 50/100/200/400
-#: elements against 49/65/103/96, so below a few hundred elements one variable is faster.
+#: Default mesh size from which a free final time is copied per element (banded KKT). L1 minimum-time
+#: problem, IPOPT + MUMPS, CPU time per iteration (issue 17): one shared variable 13.0 ms at 50 elements and
+#: 127 ms at 400 (9.7x for 8x the mesh), copies 14.0 and 94 ms (6.7x); the copies take 61/66/166/93
+#: iterations at 50/100/200/400 elements against 49/65/103/96: below a few hundred one variable is faster.
 BANDED_MIN_ELEMENTS = 300
-
-
-def _scaled_hessian(hess_l: ca.Function, objective_scale: float) -> ca.Function:
-    """fatrop's ``nlp_hess_l`` of the objective multiplied by ``objective_scale`` (``hess_l`` itself for 1)."""
-    if objective_scale == 1.0:
-        return hess_l
-    x, p, lam_f, lam_g = hess_l.mx_in()
-    return ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], hess_l(x, p, objective_scale * lam_f, lam_g),
-                       hess_l.name_in(), hess_l.name_out())
 
 
 class CollocationTranscription:
@@ -120,11 +110,8 @@ class CollocationTranscription:
         with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
     solver : {"ipopt", "fatrop"}, optional
         The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options.
-        ``"fatrop"`` transcribes stage by stage with final-time copies (``banded``), with the
-        same assembled (``compile``: compiled) derivatives, passed through the plugin's
-        function cache (:func:`~gtmodel.modeling.ocp.collocation_derivatives.assembled_derivatives`
-        with ``stagewise``; with ``derivatives="casadi"`` the plugin differentiates the NLP
-        graph itself); not with free parameters.
+        ``"fatrop"``: stage by stage with final-time copies (``banded``), the same derivatives
+        (:func:`~gtmodel.modeling.ocp.collocation_stages.fatrop_cache`); not with free parameters.
     banded : bool, optional
         A free final time as one copy per element tied by equalities, so that the KKT
         matrix is banded, or as one variable shared by all elements (a dense row and
@@ -298,12 +285,9 @@ class CollocationTranscription:
             f = f * self.objective_scale
             nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
             if self.derivative_functions:  # the plugin has no jac_g/hess_lag options: its function cache, by name
-                nlp_options["cache"] = {"nlp_jac_g": self.derivative_functions["jac_g"],
-                                        "nlp_hess_l": _scaled_hessian(self.derivative_functions["hess_lag"], self.objective_scale)}
+                nlp_options["cache"] = fatrop_cache(self.derivative_functions, self.objective_scale)
         try:
-            return ca.nlpsol(
-                f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options
-            )
+            return ca.nlpsol(f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options)
         except RuntimeError as exc:
             if "structure of A" in str(exc) or "Structure" in str(exc):
                 raise SolverError(
@@ -372,12 +356,10 @@ class CollocationTranscription:
             variable names (and ``"final_time"``) to guesses in the formats of
             :meth:`Optimization.set_initial_guess`. Default: the problem's guesses.
         warm_start : bool, optional
-            With a previous result of this transcription as ``initial_guess``: start
-            IPOPT from its primal point *and multipliers* with a small barrier parameter
-            (:data:`gtmodel.modeling.ocp.collocation_function.WARM_START_OPTIONS`), a true
-            warm start. With fatrop (whose plugin takes no start multipliers): a result of
-            this or another transcription of the problem (a coarser mesh) as
-            ``initial_guess``, its primal point with the barrier parameter started small
+            IPOPT, with a previous result of this transcription as ``initial_guess``: from its
+            primal point *and multipliers* with a small barrier parameter (:data:`WARM_START_OPTIONS`
+            of :mod:`~gtmodel.modeling.ocp.collocation_function`); fatrop (no start multipliers):
+            from a result of any mesh of the problem, the barrier started small
             (:data:`~gtmodel.modeling.ocp.collocation_stages.FATROP_WARM_START_OPTIONS`).
             Default False (the primal point only, a cold barrier).
 

@@ -3,11 +3,12 @@ with ``stagewise``): one stage per element, its gap-closing rows first, then its
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
 from gtmodel.status import Status
 
-__all__ = ["stage_order", "SOLVERS", "IPOPT_ONLY", "FATROP_STATUS", "FATROP_WARM_START_OPTIONS"]
+__all__ = ["stage_order", "fatrop_cache", "SOLVERS", "IPOPT_ONLY", "FATROP_STATUS", "FATROP_WARM_START_OPTIONS"]
 
 #: nlpsol plugins a transcription can be solved with. ``"fatrop"``: the NLP ordered stage by
 #: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
@@ -75,3 +76,28 @@ def stage_order(N: int, n_points: int, nx: int, ntf: int, ends: list[tuple[int, 
         order += [dyn, path_rows]
         ng_stage.append(int(path_rows.size))
     return np.concatenate(order).astype(int), {"N": N, "ng": ng_stage + [0]}
+
+
+def fatrop_cache(derivatives: dict[str, ca.Function], objective_scale: float) -> dict[str, ca.Function]:
+    """fatrop's function cache (nlpsol's ``cache`` option) of the assembled derivatives: its plugin takes no
+    ``jac_g``/``hess_lag`` options, so they go in under the names it asks for.
+
+    Parameters
+    ----------
+    derivatives : dict
+        ``{"jac_g": ..., "hess_lag": ...}`` of
+        :func:`~gtmodel.modeling.ocp.collocation_derivatives.assembled_derivatives` (with ``stagewise``).
+    objective_scale : float
+        The factor fatrop's objective is multiplied by (its Hessian's ``lam_f`` is scaled by it).
+
+    Returns
+    -------
+    dict
+        ``{"nlp_jac_g": ..., "nlp_hess_l": ...}``.
+    """
+    hess_l = derivatives["hess_lag"]
+    if objective_scale != 1.0:
+        x, p, lam_f, lam_g = hess_l.mx_in()
+        hess_l = ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], hess_l(x, p, objective_scale * lam_f, lam_g),
+                             hess_l.name_in(), hess_l.name_out())
+    return {"nlp_jac_g": derivatives["jac_g"], "nlp_hess_l": hess_l}
