@@ -72,7 +72,7 @@ def bench(path: Path, steps: int, build: Path) -> dict:
     py = python_step_s(setup, wall.mpc)
     c = setup.controller
     return {
-        "name": setup.name, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": 0 if c.constraints is None else c.horizon * len(c.constraints.sides),
+        "name": setup.name, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
         "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
         "steps": int(wall.mpc.step_s.size), "first_step_s": st["first"],
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],

@@ -168,6 +168,12 @@ class MPCController:
         """
         return "daqp" if self.constraints is not None else "qrqp"
 
+    @property
+    def constraint_rows(self) -> int:
+        """Constraint rows of the horizon problem (sides times constrained predicted states; 0 without constraints)."""
+        c = self.constraints
+        return 0 if c is None else len(c.stages(self.horizon)) * len(c.sides)
+
     def bounds(self) -> dict[str, np.ndarray]:
         """``lbx``, ``ubx``, ``lbg``, ``ubg`` of the NLP of :meth:`nlp_solver` (the input bounds, slacks ``>= 0``, rows ``>= 0``).
 
@@ -177,7 +183,7 @@ class MPCController:
             Keyword arguments of the ``nlpsol`` call.
         """
         ns = self.n_slack
-        rows = 0 if self.constraints is None else self.horizon * len(self.constraints.sides)
+        rows = self.constraint_rows
         return {"lbx": np.r_[np.tile(self.u_lb, self.blocks), np.zeros(ns)], "ubx": np.r_[np.tile(self.u_ub, self.blocks), np.full(ns, np.inf)],
                 "lbg": np.r_[QP_ROW["lbg"], np.zeros(rows)], "ubg": np.r_[QP_ROW["ubg"], np.full(rows, np.inf)]}
 
@@ -192,12 +198,13 @@ class MPCController:
         Lq, Lf, Lr = (ca.DM(_sqrt_psd(m)) for m in (self.Q, self.Qf, self.R))
         c = self.constraints
         x, res, rows = x0, [], []
+        stages = set() if c is None else set(c.stages(H))
         for j in range(H):
             u = W[:, j // b]
             res.append(ca.mtimes(Lr, u - ur[:, j]))
             x = self.step(x, u)
             res.append(ca.mtimes(Lf if j == H - 1 else Lq, x - xr[:, j]))
-            if c is not None:  # x_{j+1} with the input of its own period (the last one's at the end)
+            if j + 1 in stages:  # x_{j+1} with the input of its own period (the last one's at the end)
                 rows.append(c.rows(x, W[:, min(j + 1, H - 1) // b]) + (s if self.n_slack else 0))
         r = ca.vertcat(*res)
         w, p = ca.vertcat(ca.vec(W), s), ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
@@ -416,6 +423,7 @@ def mpc_controller(
     path_names: list[str] | None = None,
     hard_constraints: bool = False,
     constraint_weight: float | None = None,
+    constraint_every: int = 1,
 ) -> MPCController:
     """A real-time nonlinear MPC of a model along a reference motion (see the module docstring).
 
@@ -463,6 +471,9 @@ def mpc_controller(
     constraint_weight : float, optional
         ``rho`` of the penalty (default :data:`~gtmodel.estimation.mpc_constraints.DEFAULT_PENALTY`
         times ``H max_i(Q_ii scale_i^2)``).
+    constraint_every : int, optional
+        Constrain every ``constraint_every``-th predicted state and the last (default 1: all;
+        :func:`~gtmodel.estimation.mpc_constraints.mpc_constraints`).
 
     Returns
     -------
@@ -524,7 +535,7 @@ def mpc_controller(
     step = ca.Function("F", [xsym, usym], [xn], ["x", "u"], ["x_next"])
     cons = mpc_constraints(list(ode.x_names), list(ode.u_names), xs, us, x_lb=x_lb, x_ub=x_ub, path=path, path_lb=path_lb,
                            path_ub=path_ub, path_names=path_names, hard=hard_constraints, weight=constraint_weight,
-                           cost_scale=horizon * float(np.max(np.diag(Qm) * x_scale**2)))
+                           cost_scale=horizon * float(np.max(np.diag(Qm) * x_scale**2)), every=constraint_every)
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")

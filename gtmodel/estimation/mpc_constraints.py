@@ -2,7 +2,7 @@
 
 The constrained quantities ``c(x, u)`` (``m`` scalars: the states with a finite bound, then
 the path constraints ``lb <= h(x, u) <= ub``) are imposed on the predicted states
-``x_1..x_H`` of the horizon (with the input of the same period, ``u_{min(j, H-1)}``), each
+``x_1..x_H`` of the horizon (or every ``every``-th of them and ``x_H``) (with the input of the same period, ``u_{min(j, H-1)}``), each
 finite side as one row, scaled by ``sigma_i`` (the spread of ``c_i`` along the reference,
 at least ``1e-3 (1 + max |c_i|)``, as the default weights of Bryson's rule):
 
@@ -65,6 +65,9 @@ class MPCConstraints:
         No slacks.
     weight : float
         ``rho`` of the penalty (unused when ``hard``).
+    every : int
+        The predicted states constrained: ``x_j`` for ``j`` a multiple of ``every`` and the
+        last, ``x_H`` (1: every predicted state).
     """
 
     function: ca.Function = field(repr=False)
@@ -74,6 +77,22 @@ class MPCConstraints:
     names: list[str]
     hard: bool = False
     weight: float = 1.0
+    every: int = 1
+
+    def stages(self, horizon: int) -> list[int]:
+        """The indices ``j`` (``1..H``) of the predicted states ``x_j`` with constraint rows.
+
+        Parameters
+        ----------
+        horizon : int
+            ``H``.
+
+        Returns
+        -------
+        list of int
+            Increasing, ending with ``H``.
+        """
+        return [j for j in range(1, horizon + 1) if j % self.every == 0 or j == horizon]
 
     @property
     def size(self) -> int:
@@ -213,6 +232,7 @@ def mpc_constraints(
     hard: bool = False,
     weight: float | None = None,
     cost_scale: float = 1.0,
+    every: int = 1,
 ) -> MPCConstraints | None:
     """The constrained quantities of an MPC: state bounds and path constraints (see the module docstring).
 
@@ -236,6 +256,9 @@ def mpc_constraints(
         ``rho``; default ``DEFAULT_PENALTY * cost_scale``.
     cost_scale : float, optional
         ``H max_i(Q_ii scale_i^2)`` of the tracking cost.
+    every : int, optional
+        Constrain every ``every``-th predicted state and the last (default 1: all of them;
+        fewer rows, a cheaper QP, where the constraints are far from active between them).
 
     Returns
     -------
@@ -246,8 +269,10 @@ def mpc_constraints(
     ------
     InputError
         An unknown state name in a table, bounds of the wrong size, ``lb > ub``, a
-        non-positive weight.
+        non-positive weight, ``every < 1``.
     """
+    if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
+        raise InputError(f"constraint_every: expected an integer >= 1, got {every!r}")
     nx, nu = len(x_names), len(u_names)
     lbx = _bounds_by_name(x_lb, x_names, "state_lb", -np.inf) if isinstance(x_lb, dict) or x_lb is None else np.asarray(x_lb, float).reshape(-1)
     ubx = _bounds_by_name(x_ub, x_names, "state_ub", np.inf) if isinstance(x_ub, dict) or x_ub is None else np.asarray(x_ub, float).reshape(-1)
@@ -277,4 +302,4 @@ def mpc_constraints(
     rho = DEFAULT_PENALTY * float(cost_scale) if weight is None else float(weight)
     if not (math.isfinite(rho) and rho > 0):
         raise InputError(f"constraint_weight: expected a positive penalty weight, got {weight!r}")
-    return MPCConstraints(function=f, lb=np.asarray(lb), ub=np.asarray(ub), scale=scale, names=names, hard=bool(hard), weight=rho)
+    return MPCConstraints(function=f, lb=np.asarray(lb), ub=np.asarray(ub), scale=scale, names=names, hard=bool(hard), weight=rho, every=int(every))

@@ -58,11 +58,12 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
     cons = c.constraints
     nr = 0 if cons is None else len(cons.sides)
     ns = 0 if cons is None or cons.hard else nr
+    stages = set() if cons is None else set(cons.stages(H))  # the predicted states with rows (x_H always)
     Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
     x0p, xr, ur = ca.MX.sym("x0", nx), ca.MX.sym("xr", nx, H), ca.MX.sym("ur", nu, H)
     X = [ca.MX.sym(f"x{k}", nx) for k in range(H + 1)]
     U = [ca.MX.sym(f"u{k}", nu) for k in range(H)]
-    S = [ca.MX.sym(f"s{k}", ns if k >= 1 else 0) for k in range(H + 1)]
+    S = [ca.MX.sym(f"s{k}", ns if k in stages else 0) for k in range(H + 1)]
     XE = ca.MX.sym("xe", nx)
     w, g, lbx, ubx, lbg, ubg, f = [], [], [], [], [], [], 0
     rho = 0.0 if cons is None else cons.weight
@@ -78,7 +79,7 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
             g.append(X[0] - x0p)
             lbg.append(np.zeros(nx))
             ubg.append(np.zeros(nx))
-        elif cons is not None:
+        elif k in stages:
             g.append(cons.rows(X[k], U[k]) + (S[k] if ns else 0))
             lbg.append(np.zeros(nr))
             ubg.append(np.full(nr, np.inf))
@@ -102,8 +103,8 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
         n_stage = H + 2
     z = ca.vertcat(*w)
     p = ca.vertcat(x0p, ca.vec(xr), ca.vec(ur))
-    ng = [nx] + [nr] * (H - 1) + ([nr, 0] if cons is not None else [0])
-    nus = [nu] + [nu + ns] * (H - 1) + ([ns, 0] if cons is not None else [0])
+    ng = [nx] + [nr if k in stages else 0 for k in range(1, H)] + ([nr, 0] if cons is not None else [0])
+    nus = [nu] + [nu + S[k].numel() for k in range(1, H)] + ([ns, 0] if cons is not None else [0])
     opts = {"structure_detection": "manual", "N": n_stage - 1, "nx": [nx] * n_stage, "nu": nus, "ng": ng,
             "expand": True, "print_time": False, "error_on_fail": False,
             "fatrop": {"print_level": 0, "max_iter": FATROP_MAX_ITER, "tol": FATROP_TOL}}

@@ -18,7 +18,8 @@ error names the file and the field, the CLI exits with 2):
     ``[bounds]`` and ``[optimization] constraints`` of an ``optimal_control`` file, the cart
     travel, joint-angle and velocity limits of a ``point_to_point`` one), tightened by
     ``state_lb`` / ``state_ub`` (tables by state name), soft by default (an exact penalty
-    with slacks, weight ``constraint_weight``) or ``hard_constraints = true``.
+    with slacks, weight ``constraint_weight``) or ``hard_constraints = true``, on every
+    predicted state or every ``constraint_every``-th and the last.
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``: the tables shared by every
     loop-controller file, :mod:`gtmodel.problems.loop_file`.
@@ -72,6 +73,7 @@ class MPCSection(Section):
     problem_constraints: bool = Field(default=True, strict=True, description="impose the reference problem's state bounds and path constraints on the horizon")
     hard_constraints: bool = Field(default=False, strict=True, description="state and path constraints hard (default soft: an exact penalty with slacks)")
     constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
+    constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
 
 
 class MPCFile(Section):
@@ -173,7 +175,8 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
     try:
         controller = mpc_controller(ode, t, x_ref, u_ref, horizon=m.horizon, dt=m.period, Q=Q, R=R, Qf=Qf, u_lb=u_lb, u_ub=u_ub,
                                     method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations, solver=m.solver,
-                                    hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight, **cons)
+                                    hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
+                                    constraint_every=m.constraint_every, **cons)
     except GtModelError as exc:
         raise file.wrap("mpc", exc) from None
     return loop_setup(file, doc.name, controller, model, doc.check, m.period)

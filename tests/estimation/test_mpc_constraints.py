@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.optimize import minimize
+from scipy.optimize import Bounds, LinearConstraint, minimize
 
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
@@ -41,25 +41,37 @@ def integrator():
     return ode, t, soft, hard, free
 
 
-def _scipy_first_input(c, k, x0):
-    """The horizon QP in NumPy, solved by SLSQP: x_{j+1} = A x_j + B u_j, x_j[0] <= BOUND."""
+def _scipy_first_input(c, k, x0, stages=range(1, H + 1), whole=False, method="SLSQP"):
+    """The horizon QP in NumPy, solved by SciPy's SLSQP (or ``method="trust-constr"``): x_{j+1} = A x_j + B u_j, x_j[0] <= BOUND for j in ``stages``
+    (the first input, or with ``whole`` all ``H``). The predictions as matrices, ``X = Phi x0 + G u``, so
+    that the cost's and constraints' gradients are exact."""
     A, B = np.array([[1.0, DT], [0.0, 1.0]]), np.array([0.0, DT])
+    Phi = np.vstack([np.linalg.matrix_power(A, j + 1) for j in range(H)])  # (2H, 2)
+    G = np.zeros((2 * H, H))
+    for j in range(H):
+        for i in range(j + 1):
+            G[2 * j:2 * j + 2, i] = np.linalg.matrix_power(A, j - i) @ B
+    W = np.kron(np.eye(H), c.Q)
+    W[-2:, -2:] = c.Qf
+    e0 = Phi @ x0 - c.x_ref[np.minimum(k + 1 + np.arange(H), c.length - 1)].reshape(-1)
+    rows = 2 * (np.asarray(stages) - 1)  # the positions x_j[0]
+    sc = c.u_ub[0]  # SLSQP on the inputs over their bound
 
-    def predict(w):
-        x, out = x0.copy(), []
-        for uj in w:
-            x = A @ x + B * uj
-            out.append(x)
-        return np.array(out)
+    def cost(v):
+        e = e0 + G @ (sc * v)
+        return float(e @ W @ e + c.R[0, 0] * sc**2 * v @ v), sc * 2 * (G.T @ (W @ e)) + 2 * c.R[0, 0] * sc**2 * v
 
-    def cost(w):
-        e = predict(w) - c.x_ref[np.minimum(k + 1 + np.arange(H), c.length - 1)]
-        return float(np.einsum("ji,ik,jk->", e[:-1], c.Q, e[:-1]) + e[-1] @ c.Qf @ e[-1] + c.R[0, 0] * w @ w)
-
-    r = minimize(cost, np.zeros(H), method="SLSQP", bounds=[(-50.0, 50.0)] * H,
-                 constraints=[{"type": "ineq", "fun": lambda w: BOUND - predict(w)[:, 0]}], options={"ftol": 1e-15, "maxiter": 1000})
+    if method == "trust-constr":  # an interior point on the convex QP, its exact Hessian
+        r = minimize(cost, np.zeros(H), jac=True, hess=lambda v: 2 * sc**2 * (G.T @ W @ G + c.R[0, 0] * np.eye(H)), method=method,
+                     bounds=Bounds(c.u_lb[0] / sc, 1.0), constraints=[LinearConstraint(sc * G[rows], -np.inf, BOUND - (Phi @ x0)[rows])],
+                     options={"gtol": 1e-12, "xtol": 1e-14, "maxiter": 5000})
+    else:
+        r = minimize(cost, np.zeros(H), jac=True, method="SLSQP", bounds=[(c.u_lb[0] / sc, 1.0)] * H,
+                     constraints=[{"type": "ineq", "fun": lambda v: BOUND - (Phi @ x0 + G @ (sc * v))[rows],
+                                   "jac": lambda v: -sc * G[rows]}],
+                     options={"ftol": 1e-15 * max(1.0, cost(np.zeros(H))[0]), "maxiter": 1000})  # ftol is absolute
     assert r.success
-    return r.x[0]
+    return sc * r.x if whole else sc * r.x[0]
 
 
 @pytest.mark.parametrize("which", ["soft", "hard"])
@@ -175,3 +187,34 @@ def test_fatrop_refuses_input_dependent_constraints(integrator):
     path = ca.Function("h", [x, u], [x[1] + 0.01 * u])
     with pytest.raises(InputError, match="solver: fatrop takes state and path constraints of the states only"):
         mpc_controller(ode, t, soft.x_ref, soft.u_ref, path=path, path_ub=[1.0], solver="fatrop")
+
+
+@pytest.mark.parametrize("solver", ["sqpmethod", "fatrop"])
+def test_constraint_every_kth_state_agrees_with_scipy(integrator, solver):
+    # a reference that rises above the bound and falls back within the horizon; rows on x_7, x_14 and
+    # x_20 only: SLSQP on the same thinned QP (a second method), whose optimum is not the one
+    # constrained on every state (x_1..x_6 may cross the bound)
+    ode, t, *_ = integrator
+    x_ref = np.column_stack([0.45 + 0.1 * np.sin(2 * np.pi * t / 0.08), 0.1 * 2 * np.pi / 0.08 * np.cos(2 * np.pi * t / 0.08)])
+    kw = dict(x_ub={"x": BOUND}, horizon=H, Q=[1e4, 0.0], R=[1e-6], u_lb=[-5e3], u_ub=[5e3], method="euler", hard_constraints=True)
+    c = mpc_controller(ode, t, x_ref, np.zeros((t.size, 1)), solver=solver, constraint_every=7, **kw)
+    every = mpc_controller(ode, t, x_ref, np.zeros((t.size, 1)), **kw)
+    assert c.constraints.stages(H) == [7, 14, 20]
+    x0 = x_ref[0]
+    _, w = c.solve(t[0], x0, plugin="fatrop" if solver == "fatrop" else "sqpmethod", iterations=3)
+    ref = _scipy_first_input(c, 0, x0, stages=[7, 14, 20], whole=True, method="trust-constr")
+    assert np.max(np.abs(w - ref)) <= 1e-4 * (1 + np.max(np.abs(ref)))
+    assert np.max(np.abs(ref - _scipy_first_input(every, 0, x0, whole=True, method="trust-constr"))) > 1.0  # N: not the everywhere-constrained optimum
+
+
+def test_constraint_rows_count_the_constrained_states(integrator):
+    ode, t, soft, *_ = integrator
+    c = mpc_controller(ode, t, soft.x_ref, soft.u_ref, x_ub={"x": BOUND}, horizon=H, constraint_every=7)
+    assert (c.constraint_rows, soft.constraint_rows, c.bounds()["lbg"].size) == (3, H, 1 + 3)
+
+
+@pytest.mark.parametrize("every", [0, -1, 1.5, True])
+def test_bad_constraint_every_is_refused(integrator, every):
+    ode, t, soft, *_ = integrator
+    with pytest.raises(InputError, match="constraint_every: expected an integer >= 1"):
+        mpc_controller(ode, t, soft.x_ref, soft.u_ref, x_ub={"x": BOUND}, constraint_every=every)
