@@ -244,17 +244,30 @@ def assembled_derivatives(
     hr, hc = hess_fn.sparsity_out(0).get_triplet()
     nj, nh = len(jr), len(hr)
 
-    # the end point constraints and the Mayer term, differentiated directly (few entries)
+    # the end point constraints and the Mayer term, differentiated directly in the few variables they read
+    # (e_cols); for fatrop compiled as the point functions are (the start's path constraints are a point's: L1
+    # robot, 89 us of the Hessian's 400 interpreted). IPOPT's stay interpreted: a timed constraint or an
+    # integral reads the mesh, and a compiled library per mesh size would cost IPOPT more than it gains.
     e_all = ca.vertcat(*[e for _, e in nlp.ends]) if nlp.ends else ca.SX(0, 1)
     e_rows = np.concatenate([first + np.arange(int(e.numel())) for first, e in nlp.ends]) if nlp.ends else np.zeros(0, dtype=int)
     lam_e = ca.SX.sym("lam_e", int(e_all.numel()))
     lam_fs = ca.SX.sym("lam_f")
-    je = ca.jacobian(e_all, nlp.w)
-    he = ca.triu(ca.hessian(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), nlp.w)[0])
-    ends_jac = ca.Function("ends_jac", [nlp.w, nlp.p], [je])
-    ends_hess = ca.Function("ends_hess", [nlp.w, nlp.p, lam_fs, lam_e], [he])
-    je_val = ends_jac(w, P)
-    he_val = ends_hess(w, P, lam_f, lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1))
+    w_index = {nlp.w[i].element_hash(): i for i in range(nw)}  # the symbols' identities
+    e_vars = (w_index.get(v.element_hash()) for v in ca.symvar(ca.vertcat(e_all, nlp.mayer)))
+    e_cols = np.array(sorted(i for i in e_vars if i is not None), dtype=np.int64)
+    v_e = nlp.w[e_cols.tolist()] if e_cols.size else ca.SX.sym("v_e", 0)
+    he_loc, ge_loc = ca.hessian(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), v_e)
+    ends_jac = ca.Function(f"{casadi_name(dae.name)}_ends_jac", [v_e, nlp.p], [ca.jacobian(e_all, v_e), ca.densify(e_all)],
+                           ["v", "p"], ["jac", "e"])
+    ends_hess = ca.Function(f"{casadi_name(dae.name)}_ends_hess", [v_e, nlp.p, lam_fs, lam_e], [ca.triu(he_loc), ca.densify(ge_loc)],
+                            ["v", "p", "lam_f", "lam_e"], ["hess", "grad"])
+    if compile and stagewise:
+        ends_jac, _ = compiled_function(ends_jac, COMPILE_FLAGS, "collocation")
+        ends_hess, how_e = compiled_function(ends_hess, COMPILE_FLAGS, "collocation")
+        how = f"{how}; end terms: {how_e}"
+    w_e = w[e_cols.tolist()] if e_cols.size else ca.MX(0, 1)
+    je_val, e_val = ends_jac(w_e, P)
+    he_val, ge_val = ends_hess(w_e, P, lam_f, lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1))
 
     # Jacobian: values = [point jacobians (M nj), end jacobian, 1]
     jr, jc, hr, hc = (np.asarray(a, dtype=np.int64) for a in (jr, jc, hr, hc))
@@ -269,7 +282,7 @@ def assembled_derivatives(
     # the sparsity of the functions' outputs, as evaluated (a structural entry of the SX that
     # is identically zero, e.g. the Hessian of abs(v) at the start, is dropped there)
     je_r, je_c = (np.asarray(a, dtype=np.int64) for a in je_val.sparsity().get_triplet())
-    jac.add(e_rows[je_r] if je_r.size else je_r, je_c, M * nj + np.arange(je_r.size))
+    jac.add(e_rows[je_r] if je_r.size else je_r, e_cols[je_c] if je_c.size else je_c, M * nj + np.arange(je_r.size))
     one = M * nj + len(je_r)
     nom_x = np.asarray(noms["x"], dtype=float)
     ix = np.arange(nx)
@@ -301,7 +314,7 @@ def assembled_derivatives(
     R, C_ = cols[:, hr], cols[:, hc]
     src = np.arange(M)[:, None] * nh + np.arange(nh)[None, :]
     hess.add(np.minimum(R, C_), np.maximum(R, C_), src)
-    he_r, he_c = (np.asarray(a, dtype=np.int64) for a in he_val.sparsity().get_triplet())
+    he_r, he_c = (e_cols[np.asarray(a, dtype=np.int64)] for a in he_val.sparsity().get_triplet())
     he_src = M * nh + np.arange(len(he_r))
     hess.add(he_r, he_c, he_src)
     if stagewise:  # fatrop: the whole symmetric matrix, the same values mirrored below the diagonal
@@ -313,37 +326,33 @@ def assembled_derivatives(
 
     names_in = ["x", "p", "lam_f", "lam_g"]
     if stagewise:
-        return _stagewise_functions(nlp, w, P, lam_f, lam_g, (jm, rm, gm), jac_mx, hess_mx, lin, (rows, cols, e_rows)), how
+        return _stagewise_functions((w, P, lam_f, lam_g), (rm, gm, e_val, ge_val), jac_mx, hess_mx, lin, (rows, cols, e_rows, e_cols)), how
     g_fn = ca.Function("nlp_g", [nlp.w, nlp.p], [nlp.g])
     jac_g = ca.Function("nlp_jac_g", [w, P], [g_fn(w, P), jac_mx], ["x", "p"], ["g", "jac_g_x"])
     hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hess_mx], names_in, ["triu_hess_gamma_x_x"])
     return {"jac_g": jac_g, "hess_lag": hess_lag}, how
 
 
-def _stagewise_functions(nlp: CollocationNLP, w: ca.MX, P: ca.MX, lam_f: ca.MX, lam_g: ca.MX, point: tuple, jac_mx: ca.MX,
-                         hess_mx: ca.MX, lin: _Assembly, index: tuple) -> dict[str, ca.Function]:
-    """fatrop's ``nlp_g``, ``nlp_jac_g`` and ``nlp_hess_l``: the constraints assembled as the Jacobian is (the point
-    residuals of the same mapped call, the linear terms as one constant matrix, the few end constraints), the
-    Lagrangian's gradient from the point Hessians' own pass (the point gradients, the linear terms' transpose)."""
-    jm, rm, gm = point
-    rows, cols, e_rows = index
+def _stagewise_functions(inputs: tuple, values: tuple, jac_mx: ca.MX, hess_mx: ca.MX, lin: _Assembly, index: tuple) -> dict[str, ca.Function]:
+    """fatrop's ``nlp_g``, ``nlp_jac_g`` and ``nlp_hess_l`` (``inputs``: the symbols ``x, p, lam_f, lam_g``): the
+    constraints assembled as the Jacobian is (the point and end residuals of the Jacobians' own pass, the linear
+    terms as one constant matrix), the Lagrangian's gradient from the Hessians' own pass (the point and end
+    gradients, the linear terms' transpose)."""
+    w, P, lam_f, lam_g = inputs
+    rm, gm, e_val, ge_val = values
+    rows, cols, e_rows, e_cols = index
     M, nr = rows.shape
     nv = cols.shape[1]
     nw, ng = int(w.numel()), int(lam_g.numel())
     A = lin.matrix(ca.DM(1), 1, ng, nw)  # constant: the linear terms' coefficients
-    e_all = ca.vertcat(*[e for _, e in nlp.ends]) if nlp.ends else ca.SX(0, 1)
-    lam_e = ca.SX.sym("lam_e", int(e_all.numel()))
-    lam_fs = ca.SX.sym("lam_f")
-    ends_g = ca.Function("ends_g", [nlp.w, nlp.p], [ca.densify(e_all)])
-    ends_grad = ca.Function("ends_grad", [nlp.w, nlp.p, lam_fs, lam_e], [ca.densify(ca.gradient(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), nlp.w))])
     g = _Assembly()
     g.add(rows, 0, np.arange(M)[:, None] * nr + np.arange(nr)[None, :])
     g.add(e_rows, 0, M * nr + np.arange(e_rows.size))
-    g_val = ca.densify(g.matrix(ca.vertcat(_nz(rm), ends_g(w, P)), M * nr + e_rows.size, ng, 1) + ca.mtimes(A, w))
+    g_val = ca.densify(g.matrix(ca.vertcat(_nz(rm), e_val), M * nr + e_rows.size, ng, 1) + ca.mtimes(A, w))
     grad = _Assembly()
     grad.add(cols, 0, np.arange(M)[:, None] * nv + np.arange(nv)[None, :])
-    lam_ends = lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1)
-    grad_l = ca.densify(grad.matrix(_nz(gm), M * nv, nw, 1) + ends_grad(w, P, lam_f, lam_ends) + ca.mtimes(A.T, lam_g))
+    grad.add(e_cols, 0, M * nv + np.arange(e_cols.size))
+    grad_l = ca.densify(grad.matrix(ca.vertcat(_nz(gm), ge_val), M * nv + e_cols.size, nw, 1) + ca.mtimes(A.T, lam_g))
     nlp_g = ca.Function("nlp_g", [w, P], [g_val], ["x", "p"], ["g"])
     jac_g = ca.Function("nlp_jac_g", [w, P], [g_val, jac_mx], ["x", "p"], ["g", "jac_g_x"])
     hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [grad_l, hess_mx], ["x", "p", "lam_f", "lam_g"], ["grad_gamma_x", "hess_gamma_x_x"])
