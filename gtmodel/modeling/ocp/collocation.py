@@ -266,10 +266,9 @@ class CollocationTranscription:
         self.derivative_functions: dict[str, ca.Function] = {}
         self.evaluation = "CasADi interpreter (whole NLP graph" + (", differentiated by the fatrop plugin)" if stagewise else ")")
         if assembled:
-            jac_g, hess_lag, self.evaluation = assembled_derivatives(
+            self.derivative_functions, self.evaluation = assembled_derivatives(
                 nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions, stagewise
             )
-            self.derivative_functions = {"jac_g": jac_g, "hess_lag": hess_lag}
         self.solver = self._nlpsol(self.options)
         self._warm_solver: ca.Function | None = None
         _log.debug("collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel())

@@ -114,11 +114,14 @@ def _local_functions(nlp: CollocationNLP, opt: Optimization, dae: Any, N: int, n
     v = ca.vertcat(xs, zs, us, ts, ps)
     jac_r = ca.jacobian(r, v)
     lag = ca.dot(lam_r, r) + lam_f * b * h * nlp.lagr_fn(t, x, z, u, P_loc, T)
-    hess_r = ca.triu(ca.hessian(lag, v)[0])
+    hess_lag, grad_lag = ca.hessian(lag, v)
     local_in = [xs, zs, us, ts, ps, P, c, tn, n_el]
     names = ["xs", "zs", "us", "ts", "ps", "p", "c", "tf_nominal", "elements"]
-    jac_fn = ca.Function(f"{casadi_name(dae.name)}_point_jac", local_in, [jac_r], names, ["jac"])
-    hess_fn = ca.Function(f"{casadi_name(dae.name)}_point_hess", local_in + [b, lam_f, lam_r], [hess_r], names + ["b", "lam_f", "lam_r"], ["hess"])
+    # the second outputs (the point's residuals, its Lagrangian's gradient) are fatrop's (constraints and
+    # gradient in the same pass); IPOPT's calls leave them unused, one library serves both solvers
+    jac_fn = ca.Function(f"{casadi_name(dae.name)}_point_jac", local_in, [jac_r, ca.densify(r)], names, ["jac", "r"])
+    hess_fn = ca.Function(f"{casadi_name(dae.name)}_point_hess", local_in + [b, lam_f, lam_r], [ca.triu(hess_lag), ca.densify(grad_lag)],
+                          names + ["b", "lam_f", "lam_r"], ["hess", "grad"])
     return jac_fn, hess_fn
 
 
@@ -139,8 +142,8 @@ def assembled_derivatives(
     compile: bool,
     fractions: np.ndarray | None = None,
     stagewise: bool = False,
-) -> tuple[ca.Function, ca.Function, str]:
-    """The ``jac_g`` and ``hess_lag`` Functions of ``casadi.nlpsol`` for ``nlp``.
+) -> tuple[dict[str, ca.Function], str]:
+    """The ``jac_g`` and ``hess_lag`` Functions of ``casadi.nlpsol`` for ``nlp`` (and fatrop's ``g``).
 
     Parameters
     ----------
@@ -169,13 +172,14 @@ def assembled_derivatives(
 
     Returns
     -------
-    jac_g : casadi.Function
-        ``(x, p) -> (g, jac_g_x)``, named ``nlp_jac_g``.
-    hess_lag : casadi.Function
-        Named ``nlp_hess_l``. IPOPT's: ``(x, p, lam_f, lam_g) -> triu_hess_gamma_x_x`` (the
-        upper triangle); with ``stagewise``: ``(x, p, lam_f, lam_g) -> (grad_gamma_x,
-        hess_gamma_x_x)``, the gradient ``lam_f grad f + jac_g' lam_g`` and the whole
-        symmetric Hessian of ``gamma = lam_f f + lam_g' g``.
+    functions : dict of casadi.Function
+        ``"jac_g"``: ``(x, p) -> (g, jac_g_x)``, named ``nlp_jac_g``. ``"hess_lag"``: named
+        ``nlp_hess_l``; IPOPT's ``(x, p, lam_f, lam_g) -> triu_hess_gamma_x_x`` (the upper
+        triangle); with ``stagewise`` ``(x, p, lam_f, lam_g) -> (grad_gamma_x,
+        hess_gamma_x_x)``, the gradient ``lam_f grad f + jac_g' lam_g`` (from the point
+        Hessians' own pass) and the whole symmetric Hessian of ``gamma = lam_f f + lam_g' g``.
+        With ``stagewise`` also ``"g"``: ``(x, p) -> g``, named ``nlp_g``, assembled as the
+        Jacobian is (the point residuals of the same compiled pass; IPOPT's ``g`` is the NLP graph's).
     how : str
         How the point derivatives are evaluated (compiled, cached, interpreted and why).
     """
@@ -234,32 +238,51 @@ def assembled_derivatives(
         float(noms["tf"][0]),
         float(N) if fractions is None else ca.DM(nel).T,
     ]
-    jm = jac_fn.map(M, "serial")(*args)
-    hm = hess_fn.map(M, "serial")(*args, ca.DM(bw).T, lam_f, gather(lam_g, rows))
+    jm, rm = jac_fn.map(M, "serial")(*args)
+    hm, gm = hess_fn.map(M, "serial")(*args, ca.DM(bw).T, lam_f, gather(lam_g, rows))
     jr, jc = jac_fn.sparsity_out(0).get_triplet()
     hr, hc = hess_fn.sparsity_out(0).get_triplet()
     nj, nh = len(jr), len(hr)
 
-    # the end point constraints and the Mayer term, differentiated directly (few entries)
+    # the end point constraints and the Mayer term, differentiated directly in the few variables they read
+    # (e_cols); for fatrop compiled as the point functions are (the start's path constraints are a point's: L1
+    # robot, 89 us of the Hessian's 400 interpreted). IPOPT's stay interpreted: a timed constraint or an
+    # integral reads the mesh, and a compiled library per mesh size would cost IPOPT more than it gains.
     e_all = ca.vertcat(*[e for _, e in nlp.ends]) if nlp.ends else ca.SX(0, 1)
     e_rows = np.concatenate([first + np.arange(int(e.numel())) for first, e in nlp.ends]) if nlp.ends else np.zeros(0, dtype=int)
     lam_e = ca.SX.sym("lam_e", int(e_all.numel()))
     lam_fs = ca.SX.sym("lam_f")
-    je = ca.jacobian(e_all, nlp.w)
-    he = ca.triu(ca.hessian(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), nlp.w)[0])
-    ends_jac = ca.Function("ends_jac", [nlp.w, nlp.p], [je])
-    ends_hess = ca.Function("ends_hess", [nlp.w, nlp.p, lam_fs, lam_e], [he])
-    je_val = ends_jac(w, P)
-    he_val = ends_hess(w, P, lam_f, lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1))
+    w_index = {nlp.w[i].element_hash(): i for i in range(nw)}  # the symbols' identities
+    e_vars = (w_index.get(v.element_hash()) for v in ca.symvar(ca.vertcat(e_all, nlp.mayer)))
+    e_cols = np.array(sorted(i for i in e_vars if i is not None), dtype=np.int64)
+    v_e = nlp.w[e_cols.tolist()] if e_cols.size else ca.SX.sym("v_e", 0)
+    he_loc, ge_loc = ca.hessian(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), v_e)
+    ends_jac = ca.Function(f"{casadi_name(dae.name)}_ends_jac", [v_e, nlp.p], [ca.jacobian(e_all, v_e), ca.densify(e_all)],
+                           ["v", "p"], ["jac", "e"])
+    ends_hess = ca.Function(f"{casadi_name(dae.name)}_ends_hess", [v_e, nlp.p, lam_fs, lam_e], [ca.triu(he_loc), ca.densify(ge_loc)],
+                            ["v", "p", "lam_f", "lam_e"], ["hess", "grad"])
+    if compile and stagewise:
+        ends_jac, _ = compiled_function(ends_jac, COMPILE_FLAGS, "collocation")
+        ends_hess, how_e = compiled_function(ends_hess, COMPILE_FLAGS, "collocation")
+        how = f"{how}; end terms: {how_e}"
+    w_e = w[e_cols.tolist()] if e_cols.size else ca.MX(0, 1)
+    je_val, e_val = ends_jac(w_e, P)
+    he_val, ge_val = ends_hess(w_e, P, lam_f, lam_g[e_rows.tolist()] if e_rows.size else ca.MX(0, 1))
 
     # Jacobian: values = [point jacobians (M nj), end jacobian, 1]
     jr, jc, hr, hc = (np.asarray(a, dtype=np.int64) for a in (jr, jc, hr, hc))
     jac = _Assembly()
+    lin = _Assembly()  # the linear terms alone (fatrop's constraints and gradient): constant coefficients
+
+    def linear(row: Any, col: Any, coefficient: Any) -> None:
+        jac.add(row, col, one, coefficient)
+        lin.add(row, col, 0, coefficient)
+
     jac.add(rows[:, jr], cols[:, jc], np.arange(M)[:, None] * nj + np.arange(nj)[None, :])
     # the sparsity of the functions' outputs, as evaluated (a structural entry of the SX that
     # is identically zero, e.g. the Hessian of abs(v) at the start, is dropped there)
     je_r, je_c = (np.asarray(a, dtype=np.int64) for a in je_val.sparsity().get_triplet())
-    jac.add(e_rows[je_r] if je_r.size else je_r, je_c, M * nj + np.arange(je_r.size))
+    jac.add(e_rows[je_r] if je_r.size else je_r, e_cols[je_c] if je_c.size else je_c, M * nj + np.arange(je_r.size))
     one = M * nj + len(je_r)
     nom_x = np.asarray(noms["x"], dtype=float)
     ix = np.arange(nx)
@@ -272,18 +295,18 @@ def assembled_derivatives(
     pk, pj, pfirst = (np.array([t[i] for t in nlp.rows_point], dtype=np.int64) for i in range(3))
     for r_ in range(d + 1):  # collocation polynomial: - sum_r C[r, j] x_{k,r}
         sel = C[r_, pj] != 0.0
-        jac.add(pfirst[sel, None] + ix, xoff[pk[sel], r_][:, None] + ix, one, -C[r_, pj[sel]][:, None] * nom_x)
+        linear(pfirst[sel, None] + ix, xoff[pk[sel], r_][:, None] + ix, -C[r_, pj[sel]][:, None] * nom_x)
     ck, cfirst = (np.array([t[i] for t in nlp.rows_cont], dtype=np.int64) for i in range(2))
     nom_c = np.ones(nx) if stagewise else nom_x  # stage-wise continuity: x_{k+1} - F(x_k, u_k) in scaled states
-    jac.add(cfirst[:, None] + ix, xoff[ck + 1, 0][:, None] + ix, one, nom_c)
+    linear(cfirst[:, None] + ix, xoff[ck + 1, 0][:, None] + ix, nom_c)
     for r_ in range(d + 1):
         if D[r_] != 0.0:
-            jac.add(cfirst[:, None] + ix, xoff[ck, r_][:, None] + ix, one, -D[r_] * nom_c)
+            linear(cfirst[:, None] + ix, xoff[ck, r_][:, None] + ix, -D[r_] * nom_c)
     if nlp.rows_tf:
         tk, trow = (np.array([t[i] for t in nlp.rows_tf], dtype=np.int64) for i in range(2))
         toff = np.array([offs[("tf", k, 0)] for k in range(N)], dtype=np.int64)
-        jac.add(trow, toff[tk + 1], one, 1.0)
-        jac.add(trow, toff[tk], one, -1.0)
+        linear(trow, toff[tk + 1], 1.0)
+        linear(trow, toff[tk], -1.0)
     jvals = ca.vertcat(_nz(jm), _nz(je_val), ca.MX(1))
     jac_mx = jac.matrix(jvals, one + 1, ng, nw)
 
@@ -291,7 +314,7 @@ def assembled_derivatives(
     R, C_ = cols[:, hr], cols[:, hc]
     src = np.arange(M)[:, None] * nh + np.arange(nh)[None, :]
     hess.add(np.minimum(R, C_), np.maximum(R, C_), src)
-    he_r, he_c = (np.asarray(a, dtype=np.int64) for a in he_val.sparsity().get_triplet())
+    he_r, he_c = (e_cols[np.asarray(a, dtype=np.int64)] for a in he_val.sparsity().get_triplet())
     he_src = M * nh + np.arange(len(he_r))
     hess.add(he_r, he_c, he_src)
     if stagewise:  # fatrop: the whole symmetric matrix, the same values mirrored below the diagonal
@@ -301,13 +324,36 @@ def assembled_derivatives(
     hvals = ca.vertcat(_nz(hm), _nz(he_val))
     hess_mx = hess.matrix(hvals, M * nh + len(he_r), nw, nw)
 
-    g_fn = ca.Function("nlp_g", [nlp.w, nlp.p], [nlp.g])
-    jac_g = ca.Function("nlp_jac_g", [w, P], [g_fn(w, P), jac_mx], ["x", "p"], ["g", "jac_g_x"])
     names_in = ["x", "p", "lam_f", "lam_g"]
     if stagewise:
-        grad_f = ca.Function("nlp_grad_f_sx", [nlp.w, nlp.p], [ca.gradient(nlp.f, nlp.w)])
-        grad_l = lam_f * grad_f(w, P) + ca.mtimes(jac_mx.T, lam_g)
-        hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [grad_l, hess_mx], names_in, ["grad_gamma_x", "hess_gamma_x_x"])
-    else:
-        hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hess_mx], names_in, ["triu_hess_gamma_x_x"])
-    return jac_g, hess_lag, how
+        return _stagewise_functions((w, P, lam_f, lam_g), (rm, gm, e_val, ge_val), jac_mx, hess_mx, lin, (rows, cols, e_rows, e_cols)), how
+    g_fn = ca.Function("nlp_g", [nlp.w, nlp.p], [nlp.g])
+    jac_g = ca.Function("nlp_jac_g", [w, P], [g_fn(w, P), jac_mx], ["x", "p"], ["g", "jac_g_x"])
+    hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hess_mx], names_in, ["triu_hess_gamma_x_x"])
+    return {"jac_g": jac_g, "hess_lag": hess_lag}, how
+
+
+def _stagewise_functions(inputs: tuple, values: tuple, jac_mx: ca.MX, hess_mx: ca.MX, lin: _Assembly, index: tuple) -> dict[str, ca.Function]:
+    """fatrop's ``nlp_g``, ``nlp_jac_g`` and ``nlp_hess_l`` (``inputs``: the symbols ``x, p, lam_f, lam_g``): the
+    constraints assembled as the Jacobian is (the point and end residuals of the Jacobians' own pass, the linear
+    terms as one constant matrix), the Lagrangian's gradient from the Hessians' own pass (the point and end
+    gradients, the linear terms' transpose)."""
+    w, P, lam_f, lam_g = inputs
+    rm, gm, e_val, ge_val = values
+    rows, cols, e_rows, e_cols = index
+    M, nr = rows.shape
+    nv = cols.shape[1]
+    nw, ng = int(w.numel()), int(lam_g.numel())
+    A = lin.matrix(ca.DM(1), 1, ng, nw)  # constant: the linear terms' coefficients
+    g = _Assembly()
+    g.add(rows, 0, np.arange(M)[:, None] * nr + np.arange(nr)[None, :])
+    g.add(e_rows, 0, M * nr + np.arange(e_rows.size))
+    g_val = ca.densify(g.matrix(ca.vertcat(_nz(rm), e_val), M * nr + e_rows.size, ng, 1) + ca.mtimes(A, w))
+    grad = _Assembly()
+    grad.add(cols, 0, np.arange(M)[:, None] * nv + np.arange(nv)[None, :])
+    grad.add(e_cols, 0, M * nv + np.arange(e_cols.size))
+    grad_l = ca.densify(grad.matrix(ca.vertcat(_nz(gm), ge_val), M * nv + e_cols.size, nw, 1) + ca.mtimes(A.T, lam_g))
+    nlp_g = ca.Function("nlp_g", [w, P], [g_val], ["x", "p"], ["g"])
+    jac_g = ca.Function("nlp_jac_g", [w, P], [g_val, jac_mx], ["x", "p"], ["g", "jac_g_x"])
+    hess_lag = ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [grad_l, hess_mx], ["x", "p", "lam_f", "lam_g"], ["grad_gamma_x", "hess_gamma_x_x"])
+    return {"g": nlp_g, "jac_g": jac_g, "hess_lag": hess_lag}

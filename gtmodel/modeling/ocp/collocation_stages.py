@@ -85,7 +85,7 @@ def fatrop_cache(derivatives: dict[str, ca.Function], objective_scale: float) ->
     Parameters
     ----------
     derivatives : dict
-        ``{"jac_g": ..., "hess_lag": ...}`` of
+        ``{"g": ..., "jac_g": ..., "hess_lag": ...}`` of
         :func:`~gtmodel.modeling.ocp.collocation_derivatives.assembled_derivatives` (with ``stagewise``).
     objective_scale : float
         The factor fatrop's objective is multiplied by (its Hessian's ``lam_f`` is scaled by it).
@@ -93,11 +93,11 @@ def fatrop_cache(derivatives: dict[str, ca.Function], objective_scale: float) ->
     Returns
     -------
     dict
-        ``{"nlp_jac_g": ..., "nlp_hess_l": ...}``.
+        ``{"nlp_g": ..., "nlp_jac_g": ..., "nlp_hess_l": ...}``.
     """
     hess_l = derivatives["hess_lag"]
     if objective_scale != 1.0:
         x, p, lam_f, lam_g = hess_l.mx_in()
         hess_l = ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], hess_l(x, p, objective_scale * lam_f, lam_g),
                              hess_l.name_in(), hess_l.name_out())
-    return {"nlp_jac_g": derivatives["jac_g"], "nlp_hess_l": hess_l}
+    return {"nlp_g": derivatives["g"], "nlp_jac_g": derivatives["jac_g"], "nlp_hess_l": hess_l}

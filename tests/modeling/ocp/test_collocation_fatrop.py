@@ -64,33 +64,41 @@ def _outputs(tr, function, rng):
     args = [rng.uniform(0.5, 1.5, tr._lbw.size), tr.dae.p_value]
     if function == "nlp_hess_l":
         args += [1.3, rng.standard_normal(tr._lbg.size)]
-    out = tr.solver.get_function(function)(*args)
+    out = tr.solver.get_function(function).call(args)
     return [np.array(ca.DM(o)) for o in out]
 
 
 @pytest.mark.parametrize("scaling", [1.0, 40.0])
-@pytest.mark.parametrize("function", ["nlp_jac_g", "nlp_hess_l"])
+@pytest.mark.parametrize("function", ["nlp_g", "nlp_jac_g", "nlp_hess_l"])
 def test_fatrop_is_given_the_compiled_derivatives_with_the_plugins_values(cache, function, scaling):
     # second method: the fatrop plugin differentiating the whole NLP graph itself (derivatives="casadi"),
-    # at a random point; the Hessian's outputs are the Lagrangian's gradient and the whole symmetric matrix
+    # at a random point; the Hessian's outputs are the Lagrangian's gradient and the whole symmetric matrix;
+    # the constraints are assembled from the compiled point residuals (nlp_g, and jac_g's first output)
     kw = dict(elements=4, solver="fatrop", nominal={"x": 2.0, "v": 0.5, "final_time": 3.0},
               solver_options={"obj_scaling_factor": scaling})
     a = CollocationTranscription(_min_time(), compile=True, **kw)
     b = CollocationTranscription(_min_time(), derivatives="casadi", **kw)
     assert a.evaluation.startswith("compiled C")
+    fa, fb = a.solver.get_function(function), b.solver.get_function(function)
+    # the runtime reads the outputs in the plugin's own sparsity (the constraints and the gradient dense)
+    assert [fa.sparsity_out(i).is_dense() for i in range(fa.n_out())] == [fb.sparsity_out(i).is_dense() for i in range(fb.n_out())]
     va, vb = _outputs(a, function, np.random.default_rng(0)), _outputs(b, function, np.random.default_rng(0))
     assert [v.shape for v in va] == [v.shape for v in vb]
     np.testing.assert_allclose(np.concatenate([v.ravel() for v in va]), np.concatenate([v.ravel() for v in vb]), rtol=0, atol=1e-11)
 
 
 def test_a_second_fatrop_transcription_compiles_nothing(cache):
-    # the compiled point derivatives are IPOPT's: one library per model, whatever the mesh and the solver
+    # the compiled point derivatives are IPOPT's: one library per model, whatever the mesh and the solver;
+    # fatrop adds its end terms' (start and final constraints, Mayer term), compiled once too
     CollocationTranscription(_min_time(), elements=3, compile=True)
+    first = CollocationTranscription(_min_time(), elements=5, compile=True, solver="fatrop")
+    assert first.evaluation.count("already loaded") == 1
     again = CollocationTranscription(_min_time(), elements=9, compile=True, solver="fatrop")
-    assert "already loaded" in again.evaluation
+    assert again.evaluation.count("already loaded") == 2
     # the plugin is given them (its function cache), it differentiates nothing itself
     assert hash(again.solver.get_function("nlp_jac_g")) == hash(again.derivative_functions["jac_g"])
     assert hash(again.solver.get_function("nlp_hess_l")) == hash(again.derivative_functions["hess_lag"])
+    assert hash(again.solver.get_function("nlp_g")) == hash(again.derivative_functions["g"])
 
 
 def test_stage_structure_is_one_stage_per_element():
