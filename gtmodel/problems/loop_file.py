@@ -35,21 +35,22 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, ValidationError
 
 from gtmodel._tables import read_table
-from gtmodel.errors import GtModelError
+from gtmodel._toml import read_toml
+from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.run import load_problem, solve_problem
-from gtmodel.problems.schema import NonEmptyText, Section, number
+from gtmodel.problems.schema import NonEmptyText, Section, number, problem_error
 from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
 
-__all__ = ["LoopModel", "LoopSetup", "loop_model", "weight_diagonal",
+__all__ = ["LoopFile", "LoopInputs", "LoopModel", "LoopSetup", "read_loop_file", "loop_inputs", "loop_model", "weight_diagonal",
            "loop_reference", "input_bounds", "loop_setup"]
 
 _TCP_STATES = ("x", "y", "z", "xd", "yd", "zd")
@@ -384,3 +385,123 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         plant_x0 = np.r_[xs[0], np.zeros(4)]
     return LoopSetup(name=name, controller=controller, plant_step=plant_step, plant_p=model.plant_p,
                      t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0)
+
+
+class LoopFile(Section):
+    """The tables every loop-controller file has; each kind adds its controller's table
+    (:class:`~gtmodel.problems.mpc_file.MPCFile`, :class:`~gtmodel.problems.tracking_file.TrackingFile`).
+
+    Parameters
+    ----------
+    name : str
+        Name of the controller (the C prefix is ``gt_<name>``).
+    description : str
+        Free text.
+    reference : ReferenceSection
+        ``[reference]``.
+    check : CheckSection
+        ``[check]``.
+    """
+
+    name: NonEmptyText
+    description: str = ""
+    reference: ReferenceSection
+    check: CheckSection = CheckSection()
+
+
+def read_loop_file(path: str | Path, kind: type[LoopFile], what: str) -> tuple[Any, ProblemFile]:
+    """Read and validate a loop-controller file (unknown fields refused).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The TOML file.
+    kind : type
+        A :class:`LoopFile` subclass.
+    what : str
+        The kind of file, for messages (``"MPC file"``).
+
+    Returns
+    -------
+    doc : LoopFile
+        The validated document.
+    file : ProblemFile
+        The file, for errors naming it and for relative references.
+
+    Raises
+    ------
+    ProblemError
+        Unreadable TOML, an unknown or invalid field (naming the file and the field).
+    """
+    path = Path(path)
+    data = read_toml(path, ProblemError, what)
+    try:
+        doc = kind.model_validate(dict(data))
+    except ValidationError as exc:
+        raise problem_error(path, exc, kind) from None
+    return doc, ProblemFile(path)
+
+
+@dataclass
+class LoopInputs:
+    """What every controller kind builds from its file before the controller itself.
+
+    Parameters
+    ----------
+    model : LoopModel
+        The controller's model and the plant's.
+    Q, R, Qf : numpy.ndarray or None
+        Diagonals of the weights by the file's tables (None: the controller's default).
+    t : numpy.ndarray
+        ``(M,)`` reference times [s].
+    x_ref, u_ref : numpy.ndarray
+        ``(M, nx)``, ``(M, nu)`` the reference.
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` saturation bounds (:func:`input_bounds`).
+    """
+
+    model: LoopModel
+    Q: np.ndarray | None
+    R: np.ndarray | None
+    Qf: np.ndarray | None
+    t: np.ndarray
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    u_lb: np.ndarray
+    u_ub: np.ndarray
+
+
+def loop_inputs(file: ProblemFile, doc: LoopFile, section: str) -> LoopInputs:
+    """The model, weights, reference and input bounds of a controller's table ``section``.
+
+    Parameters
+    ----------
+    file : ProblemFile
+        The file.
+    doc : LoopFile
+        Its document; ``getattr(doc, section)`` has ``model``, ``period``,
+        ``state_weights``, ``input_weights``, ``terminal_weights``, ``u_lb``, ``u_ub``.
+    section : str
+        The controller's table (``"mpc"``, ``"controller"``).
+
+    Returns
+    -------
+    LoopInputs
+
+    Raises
+    ------
+    ProblemError
+        Naming the file and the field: the model, an unknown variable in a weight table,
+        the reference (:func:`loop_reference`), bounds of the wrong length.
+    """
+    sec = getattr(doc, section)
+    model = loop_model(file, f"{section}.model", sec.model, doc.check)
+    ode = model.ode
+    names_x, names_u = list(ode.x_names), list(ode.u_names)
+    Q = weight_diagonal(file, f"{section}.state_weights", sec.state_weights, names_x)
+    R = weight_diagonal(file, f"{section}.input_weights", sec.input_weights, names_u)
+    Qf = weight_diagonal(file, f"{section}.terminal_weights", sec.terminal_weights, names_x)
+    t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, sec.period,
+                                             bounds_field=None if sec.u_lb is not None and sec.u_ub is not None else section)
+    u_lb, u_ub = input_bounds(file, section, sec.u_lb, sec.u_ub, limits, ode)
+    return LoopInputs(model=model, Q=Q, R=R, Qf=Qf, t=t, x_ref=x_ref, u_ref=u_ref, u_lb=u_lb, u_ub=u_ub)

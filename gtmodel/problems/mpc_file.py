@@ -33,18 +33,17 @@ from typing import Any
 
 import numpy as np
 
-from pydantic import Field, ValidationError
+from pydantic import Field
 
-from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
-from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.errors import GtModelError
 from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
 from gtmodel.estimation.mpc_constraints import problem_constraints
 from gtmodel.problems.base import ProblemFile
-from gtmodel.problems.loop_file import CheckSection, LoopSetup, ReferenceSection, input_bounds, loop_model, loop_reference, loop_setup, weight_diagonal
+from gtmodel.problems.loop_file import LoopFile, LoopSetup, loop_inputs, loop_setup, read_loop_file
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
-from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
+from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
 __all__ = ["MPCFile", "MPCSetup", "load_mpc_file"]
 
@@ -76,8 +75,8 @@ class MPCSection(Section):
     constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
 
 
-class MPCFile(Section):
-    """An MPC file (see the module docstring).
+class MPCFile(LoopFile):
+    """An MPC file (see the module docstring): :class:`~gtmodel.problems.loop_file.LoopFile` and its controller's table.
 
     Parameters
     ----------
@@ -85,19 +84,15 @@ class MPCFile(Section):
         Name of the controller (the C prefix is ``gt_<name>``).
     description : str
         Free text.
-    mpc : MPCSection
-        ``[mpc]``.
     reference : ReferenceSection
         ``[reference]``.
     check : CheckSection
         ``[check]``.
+    mpc : MPCSection
+        ``[mpc]``.
     """
 
-    name: NonEmptyText
-    description: str = ""
     mpc: MPCSection
-    reference: ReferenceSection
-    check: CheckSection = CheckSection()
 
 
 #: What an MPC file builds (:class:`~gtmodel.problems.loop_file.LoopSetup` with an
@@ -152,31 +147,18 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         horizon < 1, a period <= 0, an unknown variable in a weight table, blocks that do
         not divide the horizon, a reference that cannot be read or solved.
     """
-    path = Path(path)
-    data = read_toml(path, ProblemError, "MPC file")
-    try:
-        doc = MPCFile.model_validate(dict(data))
-    except ValidationError as exc:
-        raise problem_error(path, exc, MPCFile) from None
-    file = ProblemFile(path)
+    doc, file = read_loop_file(path, MPCFile, "MPC file")
     m = doc.mpc
-    model = loop_model(file, "mpc.model", m.model, doc.check)
-    ode = model.ode
-    names_x, names_u = list(ode.x_names), list(ode.u_names)
-    Q = weight_diagonal(file, "mpc.state_weights", m.state_weights, names_x)
-    R = weight_diagonal(file, "mpc.input_weights", m.input_weights, names_u)
-    Qf = weight_diagonal(file, "mpc.terminal_weights", m.terminal_weights, names_x)
     if m.blocks is not None and m.horizon % m.blocks:
         raise file.fail("mpc.blocks", f"a divisor of the horizon {m.horizon}", m.blocks)
-    t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, m.period,
-                                             bounds_field=None if m.u_lb is not None and m.u_ub is not None else "mpc")
-    u_lb, u_ub = input_bounds(file, "mpc", m.u_lb, m.u_ub, limits, ode)
-    cons = _constraints(file, doc, names_x, names_u, model.robot)
+    i = loop_inputs(file, doc, "mpc")
+    ode = i.model.ode
+    cons = _constraints(file, doc, list(ode.x_names), list(ode.u_names), i.model.robot)
     try:
-        controller = mpc_controller(ode, t, x_ref, u_ref, horizon=m.horizon, dt=m.period, Q=Q, R=R, Qf=Qf, u_lb=u_lb, u_ub=u_ub,
-                                    method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations, solver=m.solver,
-                                    hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
+        controller = mpc_controller(ode, i.t, i.x_ref, i.u_ref, horizon=m.horizon, dt=m.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb,
+                                    u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
+                                    solver=m.solver, hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
                                     constraint_every=m.constraint_every, **cons)
     except GtModelError as exc:
         raise file.wrap("mpc", exc) from None
-    return loop_setup(file, doc.name, controller, model, doc.check, m.period)
+    return loop_setup(file, doc.name, controller, i.model, doc.check, m.period)

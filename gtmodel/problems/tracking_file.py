@@ -29,16 +29,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field, ValidationError
+from pydantic import Field
 
-from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
-from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.errors import GtModelError
 from gtmodel.estimation.tracking import tracking_controller
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
-from gtmodel.problems.base import ProblemFile
-from gtmodel.problems.loop_file import CheckSection, LoopSetup, ReferenceSection, input_bounds, loop_model, loop_reference, loop_setup, weight_diagonal
-from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
+from gtmodel.problems.loop_file import LoopFile, LoopSetup, loop_inputs, loop_setup, read_loop_file
+from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
 __all__ = ["TrackingFile", "load_tracking_file"]
 
@@ -59,8 +57,8 @@ class ControllerSection(Section):
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
 
 
-class TrackingFile(Section):
-    """A tracking-controller file (see the module docstring).
+class TrackingFile(LoopFile):
+    """A tracking-controller file (see the module docstring): :class:`~gtmodel.problems.loop_file.LoopFile` and its controller's table.
 
     Parameters
     ----------
@@ -68,19 +66,15 @@ class TrackingFile(Section):
         Name of the controller (the C prefix is ``gt_<name>``).
     description : str
         Free text.
-    controller : ControllerSection
-        ``[controller]``.
     reference : ReferenceSection
         ``[reference]``.
     check : CheckSection
         ``[check]``.
+    controller : ControllerSection
+        ``[controller]``.
     """
 
-    name: NonEmptyText
-    description: str = ""
     controller: ControllerSection
-    reference: ReferenceSection
-    check: CheckSection = CheckSection()
 
 
 def load_tracking_file(path: str | Path) -> LoopSetup:
@@ -105,26 +99,12 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
         reference that cannot be read or solved, a controller that cannot be built (e.g.
         a time-invariant LQR where the end is not stabilisable).
     """
-    path = Path(path)
-    data = read_toml(path, ProblemError, "tracking-controller file")
-    try:
-        doc = TrackingFile.model_validate(dict(data))
-    except ValidationError as exc:
-        raise problem_error(path, exc, TrackingFile) from None
-    file = ProblemFile(path)
+    doc, file = read_loop_file(path, TrackingFile, "tracking-controller file")
     c = doc.controller
-    model = loop_model(file, "controller.model", c.model, doc.check)
-    ode = model.ode
-    names_x, names_u = list(ode.x_names), list(ode.u_names)
-    Q = weight_diagonal(file, "controller.state_weights", c.state_weights, names_x)
-    R = weight_diagonal(file, "controller.input_weights", c.input_weights, names_u)
-    Qf = weight_diagonal(file, "controller.terminal_weights", c.terminal_weights, names_x)
-    t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, c.period,
-                                             bounds_field=None if c.u_lb is not None and c.u_ub is not None else "controller")
-    u_lb, u_ub = input_bounds(file, "controller", c.u_lb, c.u_ub, limits, ode)
+    i = loop_inputs(file, doc, "controller")
     try:
-        controller = tracking_controller(ode, t, x_ref, u_ref, dt=c.period, Q=Q, R=R, Qf=Qf, u_lb=u_lb, u_ub=u_ub,
+        controller = tracking_controller(i.model.ode, i.t, i.x_ref, i.u_ref, dt=c.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb, u_ub=i.u_ub,
                                          method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
-    return loop_setup(file, doc.name, controller, model, doc.check, c.period)
+    return loop_setup(file, doc.name, controller, i.model, doc.check, c.period)
