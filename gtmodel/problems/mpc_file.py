@@ -199,12 +199,15 @@ def _reference(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, dt: float
             t = np.asarray(solution.t, dtype=float).reshape(-1)
             x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
             u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
+            # the prediction is the model the reference was planned with: the problem's [model.parameters]
+            ode.p_default = ode.dae.parameter_vector({k: v for k, v in solution.parameters.items() if k in ode.dae.p_vars})
             declared = {} if doc.mpc.u_lb is not None and doc.mpc.u_ub is not None else load_problem(source).data.get("bounds", {})
             try:
                 limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
             except (TypeError, ValueError, IndexError):
                 raise file.fail("reference.problem", "a problem whose [bounds] of the inputs are [lo, hi] numbers "
                                 "(else give mpc.u_lb and mpc.u_ub)") from None
+            limits = np.vstack([np.maximum(limits[0], ode.u_lb), np.minimum(limits[1], ode.u_ub)])  # within the model's declared bounds
     else:
         source = file.data_file("reference.file", ref.file)
         table = read_table(source, "the reference table")
@@ -267,7 +270,6 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         except GtModelError as exc:
             raise file.wrap("mpc.model", exc) from None
         plant = ode
-        plant_p = ode.p_default * doc.check.parameter_factor
     names_x, names_u = list(ode.x_names), list(ode.u_names)
     Q = _diag(file, "mpc.state_weights", m.state_weights, names_x)
     R = _diag(file, "mpc.input_weights", m.input_weights, names_u)
@@ -275,6 +277,8 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
     if m.blocks is not None and m.horizon % m.blocks:
         raise file.fail("mpc.blocks", f"a divisor of the horizon {m.horizon}", m.blocks)
     t, x_ref, u_ref, limits = _reference(file, doc, ode, robot, m.period)
+    if not robot:
+        plant_p = ode.p_default * doc.check.parameter_factor  # after _reference: the reference problem's parameters
     u_lb = np.asarray(m.u_lb, dtype=float) if m.u_lb is not None else (limits[0] if limits is not None else ode.u_lb)
     u_ub = np.asarray(m.u_ub, dtype=float) if m.u_ub is not None else (limits[1] if limits is not None else ode.u_ub)
     for field, v in (("mpc.u_lb", u_lb), ("mpc.u_ub", u_ub)):
