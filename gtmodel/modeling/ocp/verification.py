@@ -549,8 +549,8 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
                integrator=optimization.verification_integrator)
     result.verification = v
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-        _log.warning("%s of %s: %s was %s, but %s; likely remedy: %s", what, result.dae.name, result.message, result.status,
-                     v.message, v.remedy)
-        result.message = f"{result.message}; verification failed: {v.message}; likely remedy: {v.remedy}"
+        remedy = f"; likely remedy: {v.remedy}" if v.remedy else ""  # none when the verifying simulation itself failed
+        _log.warning("%s of %s: %s was %s, but %s%s", what, result.dae.name, result.message, result.status, v.message, remedy)
+        result.message = f"{result.message}; verification failed: {v.message}{remedy}"
         result.status = Status.CHECK_FAILED
     return result

@@ -224,3 +224,17 @@ def test_a_failed_verification_names_the_likely_remedy():
     assert switching.status == Status.CHECK_FAILED
     assert switching.verification.remedy.startswith("an input jumps inside 1 element(s) (near t = 1")
     assert "likely remedy: an input jumps inside" in switching.message
+
+
+@pytest.mark.slow  # ~5 s: a 40-element solve
+def test_a_verifying_simulation_that_fails_gives_no_empty_remedy():
+    # a motor behind a diode (tests/fixtures/user_models): IDAS's consistent initialisation of the
+    # diode's voltage from the first collocation point's value fails (IDA_CONV_FAIL), so the
+    # solution is check_failed; the message said "likely remedy: " with nothing after it
+    from gtmodel.problems.run import load_problem, solve_problem
+
+    from ...conftest import REPO
+
+    result = solve_problem(load_problem(REPO / "tests" / "fixtures" / "user_models" / "diode_move.toml"))
+    assert result.status == "check_failed"
+    assert "the verifying simulation failed" in result.message and "likely remedy" not in result.message
