@@ -52,6 +52,7 @@ from gtmodel.modeling.structure.index_reduction import structural_simplify
 __all__ = [
     "ExplicitODE",
     "explicit_ode",
+    "damped_newton",
     "STEP_METHODS",
     "NEWTON_ITERATIONS",
     "NEWTON_TOLERANCE",
@@ -86,20 +87,36 @@ def _converged(residual: ca.SX, unknowns: ca.SX, tol: float) -> ca.SX:
     return (ca.sum1(ca.fabs(residual)) <= tol * (1.0 + size)) * (size < math.inf)
 
 
-def _newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int, tol: float, simplified: bool = False) -> tuple[ca.SX, ca.SX]:
-    """``iterations`` unrolled Newton steps on ``residual(v) = 0`` from ``v0``; (solution, converged).
+def damped_newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int = NEWTON_ITERATIONS,
+                  tol: float = NEWTON_TOLERANCE) -> tuple[ca.SX, ca.SX]:
+    """``iterations`` unrolled, damped Newton steps on ``residual(v) = 0`` from ``v0``, as one SX graph.
 
-    The full iteration is damped (:data:`DAMPING_FACTOR`); the simplified one is not.
+    Parameters
+    ----------
+    residual : casadi.SX
+        ``(n, 1)`` residual, a function of ``v`` (and of other symbols, kept).
+    v : casadi.SX
+        ``(n, 1)`` the unknowns (pure symbols).
+    v0 : array_like or casadi.SX
+        ``(n,)`` the start (numbers, or an expression of other symbols).
+    iterations : int, optional
+        Newton steps unrolled (default :data:`NEWTON_ITERATIONS`).
+    tol : float, optional
+        Convergence test ``sum|residual| <= tol (1 + sum|v|)`` (default :data:`NEWTON_TOLERANCE`).
 
-    ``simplified``: the Jacobian at ``v0`` for every step (the simplified Newton iteration of
-    implicit Runge-Kutta codes, Hairer & Wanner, Solving ODE II, sec. IV.8): one
-    factorisation shared by the steps, a third of the generated code of the full iteration."""
-    if simplified:
-        jac0 = ca.substitute(ca.jacobian(residual, v), v, ca.SX(v0))
-        vk = ca.SX(v0)
-        for _ in range(iterations):
-            vk = vk - ca.solve(jac0, ca.substitute(residual, v, vk))
-        return vk, _converged(ca.substitute(residual, v, vk), vk, tol)
+    Returns
+    -------
+    solution : casadi.SX
+        ``(n, 1)`` the last iterate.
+    converged : casadi.SX
+        1 where the test holds at it and all is finite, else 0.
+
+    Notes
+    -----
+    Deuflhard, *Newton Methods for Nonlinear Problems* (2004), sec. 3.1 (damped Newton): a
+    step that does not decrease ``sum|r|`` (or gives a non-finite residual) is rejected and a
+    shorter one tried in the next iteration.
+    """
     # damped Newton (Deuflhard, *Newton Methods for Nonlinear Problems*, 2004, sec. 3.1): the trial
     # v + lam d (d the Newton step) is taken where its residual is finite and smaller (sum|r|), else
     # v stays and lam times sqrt(|r| / |r_trial|), within [DAMPING_FACTOR^-4, 1 / DAMPING_FACTOR],
@@ -120,6 +137,23 @@ def _newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int, tol: float, sim
         shrink = ca.if_else(nt < ca.inf, shrink, 1.0 / DAMPING_FACTOR**4)
         lam = ca.if_else(accept, ca.fmin(1.0, DAMPING_FACTOR * lam), lam * shrink)
     return vk, _converged(rk, vk, tol)
+
+
+def _newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int, tol: float, simplified: bool = False) -> tuple[ca.SX, ca.SX]:
+    """``iterations`` unrolled Newton steps on ``residual(v) = 0`` from ``v0``; (solution, converged).
+
+    The full iteration is damped (:data:`DAMPING_FACTOR`); the simplified one is not.
+
+    ``simplified``: the Jacobian at ``v0`` for every step (the simplified Newton iteration of
+    implicit Runge-Kutta codes, Hairer & Wanner, Solving ODE II, sec. IV.8): one
+    factorisation shared by the steps, a third of the generated code of the full iteration."""
+    if simplified:
+        jac0 = ca.substitute(ca.jacobian(residual, v), v, ca.SX(v0))
+        vk = ca.SX(v0)
+        for _ in range(iterations):
+            vk = vk - ca.solve(jac0, ca.substitute(residual, v, vk))
+        return vk, _converged(ca.substitute(residual, v, vk), vk, tol)
+    return damped_newton(residual, v, v0, iterations, tol)
 
 
 def _blocks(jac: ca.SX) -> list[tuple[list[int], list[int]]]:
