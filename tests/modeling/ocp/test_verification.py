@@ -240,12 +240,12 @@ def test_a_verifying_simulation_that_fails_gives_no_empty_remedy(monkeypatch):
     assert "the verifying simulation failed" in res.message and "likely remedy" not in res.message
 
 
-@pytest.mark.slow  # ~20 s: a 40-element solve and IDAS through a stiff diode
+@pytest.mark.slow  # ~35 s: a 40-element solve, its refinement and IDAS through a stiff diode
 def test_a_diode_circuit_is_verified_from_consistent_element_starts():
     # a motor behind a diode (tests/fixtures/user_models): IDAS's initialisation from the first
     # collocation point's diode voltage failed (IDA_CONV_FAIL: no reference at all); from the
     # algebraic variables made consistent with each element's start (damped Newton) it simulates,
-    # and the deviation it finds is the input's switch inside elements (reference: the IDAS run)
+    # and the refined mesh passes it (reference: the IDAS run)
     from gtmodel.problems.run import load_problem, solve_problem
 
     from ...conftest import REPO
