@@ -173,7 +173,7 @@ class CompiledFunction:
                     raise CodegenError(f"{self.spec.name}: {decl.name}: expected {N} values, got {vals.size}")
                 columns.append([int(v) for v in vals])
                 continue
-            arr = np.ascontiguousarray(np.reshape(a, (N, -1)), dtype=self.dtype)
+            arr = np.ascontiguousarray(np.reshape(a, (N, -1) if N else (0, n)), dtype=self.dtype)  # no rows: no call
             if arr.shape[1] != n:
                 raise CodegenError(f"{self.spec.name}: {decl.name}: expected rows of {n} values, got {arr.shape[1]}")
             base = arr.ctypes.data

@@ -91,17 +91,21 @@ _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _RESERVED = frozenset(
     "t x z u arg res iw w i k flag iterations x_next residual valid pre converged auto break case char const continue "
     "default do double else enum extern float for goto if inline int long register restrict return short signed sizeof "
-    "static struct switch typedef union unsigned void volatile while".split()
+    "static struct switch typedef union unsigned void volatile while "
+    # identifiers and macros of the headers the wrapper includes (math.h, stddef.h, errno.h, ...)
+    "main errno assert offsetof bool true false mem status sink".split()
 )
 
 
 def _c_names(names: Sequence[str]) -> dict[str, str]:
     """C parameter names of outputs: the name with non-identifier characters as ``_``
-    (``"mass.a"`` of a composed model: ``mass_a``), ``y_<name>`` if reserved, unique."""
+    (``"mass.a"`` of a composed model: ``mass_a``), ``y_<name>`` if reserved, a possible macro
+    (no lowercase letter: ``NULL``, ``GT_OK``) or the generated code's (``casadi_*``, ``gt_*``), unique."""
     out: dict[str, str] = {}
     for name in names:
         c = re.sub(r"[^A-Za-z0-9_]", "_", name)
-        if c in _RESERVED or c.startswith(("in_", "out_", "st_")) or c[0].isdigit():
+        # a name without a lowercase letter may be a macro (NULL, GT_OK, NAN, EOF); casadi_/gt_ the generated code's
+        if c in _RESERVED or c.startswith(("in_", "out_", "st_", "casadi", "gt_")) or c[0].isdigit() or c == c.upper():
             c = f"y_{c}"
         base, k = c, 1
         while c in out.values():
@@ -524,9 +528,14 @@ def check_model(
                 row = np.array(samples[spec.name][a.name][0], dtype=float)
                 row[0] = bad
                 probes.append(probe(cf, spec, samples[spec.name], f"{a.name}[0] = {bad}", "GT_BAD_ARGUMENT", {a.name: row}))
-    if timing:
-        times = time_functions(generated, library.path, samples, build)
-        results = with_timings(results, times)
+    if timing:  # timed on a row the C accepts (a Newton that does not converge there would stop the timing program)
+        accepted = {}
+        for spec in generated.specs:
+            inp = samples[spec.name]
+            status, _ = library[spec.name].call_rows(*[inp[a.name] for a in spec.args])
+            first = np.flatnonzero(status == 0)[:1]
+            accepted[spec.name] = {k: np.asarray(v)[first] for k, v in inp.items()}
+        results = with_timings(results, time_functions(generated, library.path, accepted, build))
     results += check_horizon(generated, library, int(horizon))
     report = CheckReport(
         robot=source.name, prefix=generated.prefix, n=int(n), seed=seed, functions=tuple(results),

@@ -95,12 +95,16 @@ class LoopModel:
         ``(np,)`` the plant's parameters.
     robot : bool
         True for a Gantry-Tau parameter set (TCP states), False for a user model.
+    parameter_factor : float
+        A user model's plant parameters over the model's (``[check] parameter_factor``;
+        applied again when the reference problem sets the model's parameters).
     """
 
     ode: ExplicitODE
     plant: ExplicitODE
     plant_p: np.ndarray
     robot: bool
+    parameter_factor: float = 1.0
 
 
 @dataclass
@@ -173,7 +177,7 @@ def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -
         ode = explicit_ode(load_user_model(model_path, cls))
     except GtModelError as exc:
         raise file.wrap(field, exc) from None
-    return LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * check.parameter_factor, robot=False)
+    return LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * check.parameter_factor, robot=False, parameter_factor=check.parameter_factor)
 
 
 def weight_diagonal(file: ProblemFile, field: str, weights: dict[str, float], names: list[str]) -> np.ndarray | None:
@@ -272,6 +276,9 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
             t = np.asarray(solution.t, dtype=float).reshape(-1)
             x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
             u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
+            # the prediction is the model the reference was planned with: the problem's [model.parameters]
+            ode.p_default = ode.dae.parameter_vector({k: v for k, v in solution.parameters.items() if k in ode.dae.p_vars})
+            model.plant_p = ode.p_default * model.parameter_factor
             limits = None
             if bounds_field is not None:
                 declared = load_problem(source).data.get("bounds", {})
@@ -280,6 +287,7 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
                 except (TypeError, ValueError, IndexError):
                     raise file.fail("reference.problem", "a problem whose [bounds] of the inputs are [lo, hi] numbers "
                                     f"(else give {bounds_field}.u_lb and {bounds_field}.u_ub)") from None
+                limits = np.vstack([np.maximum(limits[0], ode.u_lb), np.minimum(limits[1], ode.u_ub)])  # within the model's declared bounds
     else:
         source = file.data_file("reference.file", ref.file)
         table = read_table(source, "the reference table")

@@ -57,6 +57,7 @@ from gtmodel.modeling.dae import casadi_name
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
+from gtmodel.modeling.simulation.explicit import damped_newton
 from gtmodel.status import Status
 
 __all__ = ["Verification", "verify", "check_result", "problem_integrals", "integrator_rtol", "skipped", "switch_elements",
@@ -221,11 +222,15 @@ def _check_taus(root: np.ndarray) -> np.ndarray:
 
 
 def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: float,
-                        integrands: ca.Function | None = None, plugin: str | None = None) -> tuple[ca.Function, str]:
+                        integrands: ca.Function | None = None, plugin: str | None = None) -> tuple[ca.Function, str, ca.Function | None]:
     """``F(x0, z0, p=[model p, U (nu d), t_k, h_k]) -> xf (nx, len(taus)), qf`` on the scaled element.
 
     ``integrands(t, x, z, u, p)``: the integrands integrated as quadratures (``qf`` their
-    integrals over the element, at each of ``taus``).
+    integrals over the element, at each of ``taus``). The third value (None without algebraic
+    variables), ``consistent(x0, z_guess, p) -> z0``: the algebraic variables at the element's
+    start consistent with ``x0`` (damped Newton from the guess, the guess kept where it does not
+    converge). IDAS's own initialisation takes a few undamped Newton steps: from the first
+    collocation point's values it fails on a diode's exponential (IDA_CONV_FAIL).
     """
     dae, col = result.dae, result.collocation
     d = col.points
@@ -261,7 +266,12 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
     if plugin == "cvodes":
         opts.update(linear_multistep_method="bdf", nonlinear_solver_iteration="newton")
     F = ca.integrator(f"{casadi_name(dae.name)}_verify", plugin, spec, 0.0, list(taus), opts)
-    return F, f"{plugin} (rtol {rtol:g})"
+    consistent = None
+    if dae.nz:
+        guess = ca.SX.sym("z_guess", dae.nz)
+        z0, ok = damped_newton(ca.substitute(ode[1], tau, 0.0), dae.z, guess)
+        consistent = ca.Function("consistent_start", [dae.x, guess, p_all], [ca.if_else(ok, z0, guess)])
+    return F, f"{plugin} (rtol {rtol:g})", consistent
 
 
 def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float | None = None,
@@ -341,7 +351,9 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     z0 = col.zc[:, 0, :].T if dae.nz else np.zeros((0, N))
     message = ""
     try:
-        F, how = _element_integrator(result, taus, rtol, integrals[1] if integrals else None, integrator)
+        F, how, consistent = _element_integrator(result, taus, rtol, integrals[1] if integrals else None, integrator)
+        if consistent is not None:
+            z0 = np.asarray(consistent.map(N)(col.xc[:, 0, :].T, z0, P), dtype=float)
         local = F.map(N)(x0=col.xc[:, 0, :].T, z0=z0, p=P)
         xl = np.array(local["xf"], dtype=float).reshape(nx, N, taus.size).transpose(1, 2, 0)
         element_errors = np.max(np.abs(xl - poly) / scale, axis=(1, 2))
@@ -549,8 +561,8 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
                integrator=optimization.verification_integrator)
     result.verification = v
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-        _log.warning("%s of %s: %s was %s, but %s; likely remedy: %s", what, result.dae.name, result.message, result.status,
-                     v.message, v.remedy)
-        result.message = f"{result.message}; verification failed: {v.message}; likely remedy: {v.remedy}"
+        remedy = f"; likely remedy: {v.remedy}" if v.remedy else ""  # none when the verifying simulation itself failed
+        _log.warning("%s of %s: %s was %s, but %s%s", what, result.dae.name, result.message, result.status, v.message, remedy)
+        result.message = f"{result.message}; verification failed: {v.message}{remedy}"
         result.status = Status.CHECK_FAILED
     return result

@@ -16,7 +16,9 @@ semi-explicit DAE ``xdot = F(t, x, z, u, p)``, ``0 = g(t, x, z, u, p)``
 * **by Newton's method inside the graph** for the blocks that are not affine in their
   variables (an algebraic loop through a nonlinear equation): a bounded number of
   unrolled Newton steps (:data:`NEWTON_ITERATIONS`) from the variables' start values,
-  with the Jacobian of the residual by CasADi's AD; the Functions then carry a
+  with the Jacobian of the residual by CasADi's AD, damped (a step that does not decrease the
+  residual is shortened, :data:`DAMPING_FACTOR`, so that a diode's exponential from a start far
+  from its root gives no overflow and NaN); the Functions then carry a
   ``converged`` output (``1`` when the final residual is below :data:`NEWTON_TOLERANCE`
   relative to ``1 + |z|``, ``0`` otherwise or when anything is non-finite).
 
@@ -50,16 +52,21 @@ from gtmodel.modeling.structure.index_reduction import structural_simplify
 __all__ = [
     "ExplicitODE",
     "explicit_ode",
+    "damped_newton",
     "STEP_METHODS",
     "NEWTON_ITERATIONS",
     "NEWTON_TOLERANCE",
     "STEP_NEWTON_ITERATIONS",
 ]
 
-#: Unrolled Newton steps of the algebraic blocks that are not affine in their variables.
-NEWTON_ITERATIONS = 12
+#: Unrolled (damped) Newton steps of the algebraic blocks that are not affine in their variables
+#: (20: a diode's exponential from a zero start, 1 mA to 1 kA through a 1e4 Ohm leakage resistance).
+NEWTON_ITERATIONS = 20
 #: Convergence test of a Newton solve: ``sum|residual| <= NEWTON_TOLERANCE (1 + sum|unknowns|)``.
 NEWTON_TOLERANCE = 1e-10
+#: Factor by which the damped algebraic Newton iteration grows its step (up to the full Newton
+#: step) after an accepted one; a rejected one shrinks it by 1/DAMPING_FACTOR to DAMPING_FACTOR^-4.
+DAMPING_FACTOR = 4.0
 #: Unrolled Newton steps of an implicit integrator step (one suffices for a linear model).
 STEP_NEWTON_ITERATIONS = 6
 #: Fixed-step methods of :meth:`ExplicitODE.step`: name -> (implicit, order).
@@ -80,8 +87,62 @@ def _converged(residual: ca.SX, unknowns: ca.SX, tol: float) -> ca.SX:
     return (ca.sum1(ca.fabs(residual)) <= tol * (1.0 + size)) * (size < math.inf)
 
 
+def damped_newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int = NEWTON_ITERATIONS,
+                  tol: float = NEWTON_TOLERANCE) -> tuple[ca.SX, ca.SX]:
+    """``iterations`` unrolled, damped Newton steps on ``residual(v) = 0`` from ``v0``, as one SX graph.
+
+    Parameters
+    ----------
+    residual : casadi.SX
+        ``(n, 1)`` residual, a function of ``v`` (and of other symbols, kept).
+    v : casadi.SX
+        ``(n, 1)`` the unknowns (pure symbols).
+    v0 : array_like or casadi.SX
+        ``(n,)`` the start (numbers, or an expression of other symbols).
+    iterations : int, optional
+        Newton steps unrolled (default :data:`NEWTON_ITERATIONS`).
+    tol : float, optional
+        Convergence test ``sum|residual| <= tol (1 + sum|v|)`` (default :data:`NEWTON_TOLERANCE`).
+
+    Returns
+    -------
+    solution : casadi.SX
+        ``(n, 1)`` the last iterate.
+    converged : casadi.SX
+        1 where the test holds at it and all is finite, else 0.
+
+    Notes
+    -----
+    Deuflhard, *Newton Methods for Nonlinear Problems* (2004), sec. 3.1 (damped Newton): a
+    step that does not decrease ``sum|r|`` (or gives a non-finite residual) is rejected and a
+    shorter one tried in the next iteration.
+    """
+    # damped Newton (Deuflhard, *Newton Methods for Nonlinear Problems*, 2004, sec. 3.1): the trial
+    # v + lam d (d the Newton step) is taken where its residual is finite and smaller (sum|r|), else
+    # v stays and lam times sqrt(|r| / |r_trial|), within [DAMPING_FACTOR^-4, 1 / DAMPING_FACTOR],
+    # is tried next (the least for a non-finite trial); lam grows by DAMPING_FACTOR per accepted
+    # step back to 1 (the plain Newton step: a model the plain iteration solves monotonically gets
+    # the same numbers). Without it, Newton from a start far from the root of a stiff exponential (a
+    # diode's i = I_s (exp(v / V_t) - 1)) jumps to where exp overflows and gives NaN. One residual
+    # and one Jacobian per iteration, as the plain iteration.
+    jac = ca.jacobian(residual, v)
+    vk, rk, lam = ca.SX(v0), ca.substitute(residual, v, ca.SX(v0)), ca.SX(1.0)
+    for _ in range(iterations):
+        trial = vk + lam * -ca.solve(ca.substitute(jac, v, vk), rk)
+        rt = ca.substitute(residual, v, trial)
+        nt = ca.sum1(ca.fabs(rt))
+        accept = ca.logic_or(nt < ca.sum1(ca.fabs(rk)), nt <= tol * (1.0 + ca.sum1(ca.fabs(trial))))
+        vk, rk = ca.if_else(accept, trial, vk), ca.if_else(accept, rt, rk)
+        shrink = ca.fmax(1.0 / DAMPING_FACTOR**4, ca.fmin(1.0 / DAMPING_FACTOR, ca.sqrt(ca.sum1(ca.fabs(rk)) / nt)))
+        shrink = ca.if_else(nt < ca.inf, shrink, 1.0 / DAMPING_FACTOR**4)
+        lam = ca.if_else(accept, ca.fmin(1.0, DAMPING_FACTOR * lam), lam * shrink)
+    return vk, _converged(rk, vk, tol)
+
+
 def _newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int, tol: float, simplified: bool = False) -> tuple[ca.SX, ca.SX]:
     """``iterations`` unrolled Newton steps on ``residual(v) = 0`` from ``v0``; (solution, converged).
+
+    The full iteration is damped (:data:`DAMPING_FACTOR`); the simplified one is not.
 
     ``simplified``: the Jacobian at ``v0`` for every step (the simplified Newton iteration of
     implicit Runge-Kutta codes, Hairer & Wanner, Solving ODE II, sec. IV.8): one
@@ -92,11 +153,7 @@ def _newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int, tol: float, sim
         for _ in range(iterations):
             vk = vk - ca.solve(jac0, ca.substitute(residual, v, vk))
         return vk, _converged(ca.substitute(residual, v, vk), vk, tol)
-    update = v - ca.solve(ca.jacobian(residual, v), residual)
-    vk = ca.SX(v0)
-    for _ in range(iterations):
-        vk = ca.substitute(update, v, vk)
-    return vk, _converged(ca.substitute(residual, v, vk), vk, tol)
+    return damped_newton(residual, v, v0, iterations, tol)
 
 
 def _blocks(jac: ca.SX) -> list[tuple[list[int], list[int]]]:

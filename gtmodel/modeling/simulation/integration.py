@@ -31,7 +31,7 @@ import numpy as np
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
-from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value
+from gtmodel.modeling.dae import SimulationResult, _eval_outputs, _unpack, _vector_value, casadi_name
 
 __all__ = [
     "simulate_model",
@@ -292,7 +292,7 @@ def _integrate_once(name: str, dae: Any, plugin: str, opts: dict, t: np.ndarray,
     if dae.nz:
         ddict["z"] = dae.z
         ddict["alg"] = dae.alg_expr
-    F = ca.integrator(f"{name}_sim", plugin, ddict, float(t[0]), list(t), opts)
+    F = ca.integrator(f"{casadi_name(name)}_sim", plugin, ddict, float(t[0]), list(t), opts)
     res = F(x0=x0, z0=z0, p=pv, u=u_cas)
     return np.array(res["xf"]).reshape(dae.nx, n).T, np.array(res["zf"]).reshape(dae.nz, n).T
 
@@ -321,7 +321,7 @@ def _integrate_segments(name: str, dae: Any, plugin: str, opts: dict, t: np.ndar
         if F is None:  # a uniform grid needs one per segment length
             if len(cache) >= 64:
                 cache.pop(next(iter(cache)))
-            F = cache[key] = ca.integrator(f"{name}_segment", plugin, ddict, 0.0, list(fracs), time_scaled(opts, h_s))
+            F = cache[key] = ca.integrator(f"{casadi_name(name)}_segment", plugin, ddict, 0.0, list(fracs), time_scaled(opts, h_s))
         res = F(x0=xs[a] if a else x0, z0=zs[a] if a else z0, p=np.concatenate([pv, [t[a], h_s]]), u=u_int[a])
         xs[a:b + 1] = np.array(res["xf"]).reshape(dae.nx, len(fracs)).T
         zs[a:b + 1] = np.array(res["zf"]).reshape(dae.nz, len(fracs)).T

@@ -34,7 +34,7 @@ import numpy as np
 
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import ConvergenceError, InputError
-from gtmodel.modeling.dae import SimulationResult, _vector_value, expand_names
+from gtmodel.modeling.dae import SimulationResult, _vector_value, casadi_name, expand_names
 from gtmodel.modeling.structure.index_reduction import (
     AugmentedDAE,
     Selection,
@@ -122,7 +122,7 @@ def _integrate(aug: AugmentedDAE, sel: Selection, tf: np.ndarray, v0: np.ndarray
         dae["x"], dae["ode"], x0 = ca.SX.sym("_none"), ca.SX(0), np.zeros(1)
         opts["init_xdot"] = [0.0]
     try:
-        F = ca.integrator(f"{s.name}_dd", "idas", dae, float(tf[0]), list(tf), opts)
+        F = ca.integrator(f"{casadi_name(s.name)}_dd", "idas", dae, float(tf[0]), list(tf), opts)
         out = F(x0=x0, z0=v0[algs], p=pv, u=u_cas)
     except RuntimeError as exc:
         lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()

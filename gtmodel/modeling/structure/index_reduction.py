@@ -565,6 +565,14 @@ def _fixed_of_kept(system: ScalarDAE) -> dict[str, float]:
     return {k: v for k, (_, v) in out.items()}
 
 
+def _model_class(model: Any) -> type:
+    """The class of a reduced model: gtmodel's own model class (the first of ``model``'s classes from gtmodel).
+
+    A user's subclass (``class CartPendulum(Model)`` whose ``__init__`` takes no name and declares
+    the equations) cannot be instantiated empty; the reduced model is a plain model either way."""
+    return next((c for c in type(model).__mro__ if c.__module__.startswith("gtmodel.")), type(model))
+
+
 def build_model(
     model: Any, aug: AugmentedDAE, sel: Selection, states: list[int], algs: list[int], values: np.ndarray,
     direct: bool = False,
@@ -592,7 +600,7 @@ def build_model(
     Model
         The reduced model.
     """
-    new = type(model)(model.name)
+    new = _model_class(model)(model.name)  # a user's subclass may take no name (its __init__ declares the model)
     new.warnings = list(getattr(model, "warnings", []))
     old, rep = [aug.system.t], [new.time]
     bounds: dict[str, tuple[float, float]] = {}

@@ -224,3 +224,32 @@ def test_a_failed_verification_names_the_likely_remedy():
     assert switching.status == Status.CHECK_FAILED
     assert switching.verification.remedy.startswith("an input jumps inside 1 element(s) (near t = 1")
     assert "likely remedy: an input jumps inside" in switching.message
+
+
+def test_a_verifying_simulation_that_fails_gives_no_empty_remedy(monkeypatch):
+    # the simulation itself fails (as IDAS's initialisation did on a diode): the status is
+    # check_failed with the integrator's message; the message said "likely remedy: " with nothing after it
+    import gtmodel.modeling.ocp.verification as verification
+
+    def failing(*args, **kwargs):
+        raise RuntimeError('IDACalcIC returned "IDA_CONV_FAIL"')
+
+    monkeypatch.setattr(verification, "_element_integrator", failing)
+    res = CollocationTranscription(step_response(2, 1), elements=2, points=1).solve()
+    assert res.status == Status.CHECK_FAILED
+    assert "the verifying simulation failed" in res.message and "likely remedy" not in res.message
+
+
+@pytest.mark.slow  # ~35 s: a 40-element solve, its refinement and IDAS through a stiff diode
+def test_a_diode_circuit_is_verified_from_consistent_element_starts():
+    # a motor behind a diode (tests/fixtures/user_models): IDAS's initialisation from the first
+    # collocation point's diode voltage failed (IDA_CONV_FAIL: no reference at all); from the
+    # algebraic variables made consistent with each element's start (damped Newton) it simulates,
+    # and the refined mesh passes it (reference: the IDAS run)
+    from gtmodel.problems.run import load_problem, solve_problem
+
+    from ...conftest import REPO
+
+    result = solve_problem(load_problem(REPO / "tests" / "fixtures" / "user_models" / "diode_move.toml"))
+    assert "the verifying simulation failed" not in result.message
+    assert np.isfinite(result.verification.max_scaled_deviation)

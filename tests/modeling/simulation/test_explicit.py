@@ -164,3 +164,42 @@ def _no_state() -> Model:
 def test_bad_arguments(motor, call, error, match):
     with pytest.raises(error, match=match):
         call(motor[1])
+
+
+@pytest.mark.parametrize("current", [1e-3, 1e-1, 1.0, 10.0, 1e3, -1.0])
+def test_diode_voltage_by_the_damped_newton_from_zero(current):
+    # a Shockley diode (I_s 1e-9 A, V_t 26 mV, leakage 1e4 Ohm) in series with a motor, v from v = 0:
+    # the plain Newton step from 0 is about i x 1e4 V, where exp overflows (NaN before the damping);
+    # reference: the root of the same equation by SciPy's brentq
+    from scipy.optimize import brentq
+
+    model = load_user_model(REPO / "tests" / "fixtures" / "user_models" / "diode_motor.py", "Diode2Motor")
+    ode = explicit_ode(model)
+    u, R, L = 6.0, 1.0, 2e-3
+    out = ode.full(t=0.0, x=[current, 0.0, 0.0], u=u, p=ode.p_default)
+    assert float(out["converged"]) == 1.0
+    v_diode = u - R * current - L * float(out["xdot"][0])  # emf.v = 0 at rest: L di/dt = u - v_d - R i
+    root = brentq(lambda v: 1e-9 * np.expm1(v / 0.026) + v / 1e4 - current, -1e8, 2.0, xtol=1e-14)
+    assert v_diode == pytest.approx(root, rel=1e-8, abs=1e-9)
+
+
+def test_model_subclass_without_a_name_argument_reduces():
+    # a higher-index model written by equations in a subclass whose __init__ takes no name (the
+    # Cartesian pendulum, index 3): structural_simplify made type(model)(name) and raised TypeError;
+    # reference: the dummy-derivative state count of the pendulum, 2 (Mattsson & Soederlind 1993)
+    class CartesianPendulum2(Model):
+        def __init__(self):
+            super().__init__("cartesian pendulum")  # no CasADi name either: the integrators' names are made valid
+            x, y = self.state("x", start=1.0), self.state("y", start=0.0)
+            vx, vy = self.state("vx"), self.state("vy")
+            lam = self.algebraic("lam")
+            self.equation(self.der(x), vx)
+            self.equation(self.der(y), vy)
+            self.equation(self.der(vx), -lam * x)
+            self.equation(self.der(vy), -lam * y - 9.81)
+            self.equation(x**2 + y**2, 1.0)
+
+    ode = explicit_ode(CartesianPendulum2())
+    assert ode.nx == 2
+    res = CartesianPendulum2().simulate(np.linspace(0.0, 0.2, 11))
+    assert res.x["x"][-1] ** 2 + res.x["y"][-1] ** 2 == pytest.approx(1.0, abs=1e-6)
