@@ -65,6 +65,25 @@ class LoopCheck:
         return self.closed.rms_error / self.feedforward.rms_error
 
     @property
+    def plant_diverged(self) -> bool:
+        """Whether the plant diverged under the controller or under the feedforward (then the ratio means nothing)."""
+        return self.closed.diverged or self.feedforward.diverged
+
+    def failures(self) -> list[str]:
+        """Why the closed loop fails the check (empty: it passes): a diverged plant, input bound violations,
+        failed steps, or an RMS error not below the feedforward's.
+
+        Returns
+        -------
+        list of str
+        """
+        return [why for why, bad in (
+            ("the plant diverged (a stiff model's explicit plant step? [check] plant_method = \"radau2\")", self.plant_diverged),
+            (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
+            (f"{self.failed_steps} failed steps", self.failed_steps > 0),
+            (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below 1", not self.ratio_to_feedforward < 1.0)) if bad]
+
+    @property
     def failed_steps(self) -> int:
         """Calls of the step that did not return ``GT_OK``."""
         return int(np.count_nonzero(self.closed.status != STATUS_CODES["GT_OK"][0]))

@@ -42,10 +42,11 @@ from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
 from gtmodel.modeling import ExplicitODE, explicit_ode
+from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.run import load_problem, solve_problem
-from gtmodel.problems.schema import NonEmptyText, Section, number, problem_error
+from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
 from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
@@ -79,6 +80,8 @@ class CheckSection(Section):
     seed: int = Field(default=0, ge=0, strict=True)
     compliance: bool = Field(default=False, strict=True, description="robot: the tool structure of eq. 6.14 (7.4 / 11.5 Hz modes) in the plant")
     error_states: list[str] = Field(default_factory=list, description="states summarised by the tracking error (default all)")
+    plant_method: choice(*STEP_METHODS, description="the plant's fixed step (radau2, implicit_euler: stiff models; not with compliance)") = "rk4"
+    plant_substeps: int = Field(default=4, ge=1, le=1000, strict=True, description="plant steps per loop period")
 
 
 @dataclass
@@ -362,7 +365,7 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
     Returns
     -------
     LoopSetup
-        The plant: the mismatched model's RK4 step (4 substeps per period), or with
+        The plant: the mismatched model's ``check.plant_method`` step (default RK4, 4 substeps per period), or with
         ``compliance`` the tool structure of Dressler (2012), eq. 6.14
         (:func:`~gtmodel.estimation.closed_loop.controller_loop.compliant_plant`).
 
@@ -385,10 +388,13 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
                 disturbance=np.asarray(c.disturbance, dtype=float) if c.disturbance else None, disturbance_time=c.disturbance_time,
                 delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None)
     grid = controller.t0 + controller.dt * np.arange(controller.length)
-    plant_step, plant_x0 = model.plant.step(dt, "rk4", substeps=4), xs[0].copy()
+    plant_step, plant_x0 = model.plant.step(dt, c.plant_method, substeps=c.plant_substeps), xs[0].copy()
     if c.compliance:
         if not model.robot:
             raise file.fail("check.compliance", "false for a user model (the tool structure of eq. 6.14 is the robot's)", True)
+        if (c.plant_method, c.plant_substeps) != ("rk4", 4):
+            raise file.fail("check.plant_method", "the default rk4 with 4 substeps with check.compliance (the compliant plant has its own step)",
+                            c.plant_method)
         plant_step, loop["output"], loop["measured"] = compliant_plant(model.plant, dt=dt)
         plant_x0 = np.r_[xs[0], np.zeros(4)]
     return LoopSetup(name=name, controller=controller, plant_step=plant_step, plant_p=model.plant_p,

@@ -37,6 +37,8 @@ BAD = [
     ("unknown bounded state", MOTOR, 'input_weights = {', 'state_ub = { "rotor.x" = 80.0 }\ninput_weights = {', "mpc.state_ub.rotor.x"),
     ("crossed state bounds", MOTOR, 'input_weights = {', 'state_lb = { "rotor.w" = 9.0 }\nstate_ub = { "rotor.w" = 8.0 }\ninput_weights = {', "mpc.state_lb.rotor.w"),
     ("constraint_every 0", L1, "constraint_every = 4", "constraint_every = 0", "mpc.constraint_every"),
+    ("plant method unknown", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["emf.phi"]\nplant_method = "rk5"', "check.plant_method"),
+    ("plant method with compliance", L1, "compliance = true", 'compliance = true\nplant_method = "radau2"', "check.plant_method"),
     ("unknown error state", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["phi"]', "check.error_states.phi"),
 ]
 

@@ -35,10 +35,12 @@ from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.plant import ToolStructure
 from gtmodel.robots.parameters import RobotParameters
 
-__all__ = ["LoopSummary", "run_controller_loop", "mismatched_robot", "compliant_plant", "BOUND_TOLERANCE"]
+__all__ = ["LoopSummary", "run_controller_loop", "mismatched_robot", "compliant_plant", "BOUND_TOLERANCE", "DIVERGED"]
 
 #: Slack of the bound-violation count (relative to ``1 + |bound|``).
 BOUND_TOLERANCE = 1e-9
+#: A plant state beyond this many times ``1 + max |x_ref|`` of its column has diverged (:attr:`LoopSummary.diverged`).
+DIVERGED = 1e6
 
 
 @dataclass
@@ -98,6 +100,16 @@ class LoopSummary:
     def max_error(self) -> float:
         """Largest :attr:`error_norm`."""
         return float(np.max(self.error_norm))
+
+    @property
+    def diverged(self) -> bool:
+        """Whether the plant ran away: a state not finite, or beyond :data:`DIVERGED` times ``1 + max |x_ref|`` of its column.
+
+        A run whose plant diverged says nothing of the controller (an explicit plant step
+        unstable on a stiff model diverges under any input); the checks refuse it.
+        """
+        scale = 1.0 + np.max(np.abs(self.x_ref), axis=0)
+        return bool(not np.all(np.isfinite(self.x)) or np.any(np.abs(self.x) > DIVERGED * scale))
 
     @property
     def bound_violations(self) -> int:

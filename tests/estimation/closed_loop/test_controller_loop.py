@@ -59,3 +59,21 @@ def test_bad_arguments(kwargs, match):
     args.update(kwargs)
     with pytest.raises(InputError, match=match):
         run_controller_loop(lambda t, y: (0, [0.0]), INTEGRATOR, [0.0], T, args["x_ref"], [-1.0], [1.0], delay=args["delay"])
+
+
+# x_{k+1} = 10 x_k + u_k: an unstable plant step (as an explicit step on a stiff model); the closed form x_k = 10^k x_0
+GROWING = ca.Function("step", [x, u, p], [10.0 * x + u])
+
+
+@pytest.mark.parametrize("plant, steps, diverged", [(INTEGRATOR, 6, False), (GROWING, 6, False), (GROWING, 8, True)],
+                         ids=["bounded", "10^5 x_0: not yet", "10^7 x_0: diverged"])
+def test_a_runaway_plant_is_flagged(plant, steps, diverged):
+    # DIVERGED = 1e6 times 1 + max |x_ref| (here 1): 10^5 stays under it, 10^7 is beyond
+    r = run_controller_loop(lambda t, y: (0, [0.0]), plant, [1.0], np.arange(float(steps)), np.ones((steps, 1)), [-1.0], [1.0], delay=0)
+    assert r.diverged is diverged
+
+
+def test_a_non_finite_plant_state_is_flagged():
+    nan_step = ca.Function("step", [x, u, p], [x / (x - 1.0) + u])  # 1 / 0 at x = 1
+    r = run_controller_loop(lambda t, y: (0, [0.0]), nan_step, [1.0], T, np.ones((6, 1)), [-1.0], [1.0], delay=0)
+    assert r.diverged

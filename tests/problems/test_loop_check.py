@@ -1,0 +1,34 @@
+"""The verdict of a loop controller's closed-loop check (gtmodel.problems.loop_check.LoopCheck.failures).
+
+References: closed loops built by hand on the plant x_{k+1} = a x_k + u_k (closed forms: a = 1 bounded,
+a = 10 runaway), so that each reason of a failure is present or absent by construction.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
+from gtmodel.problems.loop_check import LoopCheck
+
+x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)
+T = np.arange(8.0)
+
+
+def _run(a, law):
+    step = ca.Function("step", [x, u, p], [a * x + u])
+    return run_controller_loop(law, step, [1.0], T, np.ones((T.size, 1)), [-1.0], [1.0], delay=0)
+
+
+@pytest.mark.parametrize("closed, feedforward, reasons", [
+    (_run(1.0, lambda t, y: (0, [0.0])), _run(1.0, lambda t, y: (0, [0.5])), []),
+    (_run(10.0, lambda t, y: (0, [0.0])), _run(10.0, lambda t, y: (0, [0.0])), ["the plant diverged", "not below 1"]),
+    (_run(1.0, lambda t, y: (0, [0.0])), _run(10.0, lambda t, y: (0, [0.0])), ["the plant diverged"]),
+    (_run(1.0, lambda t, y: (6, [2.0])), _run(1.0, lambda t, y: (0, [1.0])), ["8 input bound violations", "8 failed steps", "not below 1"]),
+], ids=["passes", "both run away", "feedforward runs away (ratio ~1e-7)", "bounds and failed steps"])
+def test_failures_name_each_reason(closed, feedforward, reasons):
+    check = LoopCheck(closed=closed, feedforward=feedforward, memory_bytes=0, work_bytes=0)
+    found = check.failures()
+    assert len(found) == len(reasons) and all(r in f for r, f in zip(reasons, found))
