@@ -303,7 +303,9 @@ class ExplicitODE:
 
     def _timeless(self, outputs: list[str], name: str) -> ca.Function:
         if self.time_dependent:
-            raise ModelError(f"model {self.name!r} depends on time explicitly: use ExplicitODE.full(t, x, u, p)")
+            raise ModelError(f"model {self.name!r} depends on time explicitly (a time-varying source in its equations): the loop's "
+                             f"f(x, u, p), steps, tracking controller and MPC need a time-invariant model; make the time-varying "
+                             f"signal an input (electrical.SignalVoltage, rotational.Torque, translational.Force driven by an input), or evaluate ExplicitODE.full(t, x, u, p)")
         x, u, p = ca.SX.sym("x", self.nx), ca.SX.sym("u", self.nu), ca.SX.sym("p", self.np)
         res = self.full(t=0.0, x=x, u=u, p=p)
         return ca.Function(name, [x, u, p], [res[o] for o in outputs], ["x", "u", "p"], outputs)
