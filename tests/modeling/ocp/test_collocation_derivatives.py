@@ -12,14 +12,6 @@ from .._builders import double_integrator, rest_to_rest
 from .test_optimization import _free_parameter_problem
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GTMODEL_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
-        mp.delenv("GTMODEL_COMPILE", raising=False)
-        yield
-
-
 def _values(tr, function, rng):
     args = [rng.uniform(0.5, 1.5, tr._lbw.size), tr.dae.p_value]
     if function == "nlp_hess_l":

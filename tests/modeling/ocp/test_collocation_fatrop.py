@@ -52,14 +52,6 @@ def test_fatrop_reaches_ipopts_optimum_on_the_same_transcription(name, build, ex
     assert fa.verification.passed
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("GTMODEL_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
-        mp.delenv("GTMODEL_COMPILE", raising=False)
-        yield
-
-
 def _outputs(tr, function, rng):
     args = [rng.uniform(0.5, 1.5, tr._lbw.size), tr.dae.p_value]
     if function == "nlp_hess_l":
