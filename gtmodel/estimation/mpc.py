@@ -43,7 +43,8 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.estimation.mpc_fatrop import fatrop_problem
-from gtmodel.estimation.tracking import _sampled, _weight, saturate
+from gtmodel.estimation.reference import SampledReference, period_index, sample_reference
+from gtmodel.estimation.tracking import _weight, saturate
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
 
@@ -69,7 +70,7 @@ def _sqrt_psd(m: np.ndarray) -> np.ndarray:
 
 
 @dataclass
-class MPCController:
+class MPCController(SampledReference):
     """A nonlinear MPC along a reference sampled at the loop period (see the module docstring).
 
     Parameters
@@ -119,24 +120,9 @@ class MPCController:
     constraints: MPCConstraints | None = None
 
     @property
-    def nx(self) -> int:
-        """Number of states."""
-        return self.x_ref.shape[1]
-
-    @property
-    def nu(self) -> int:
-        """Number of inputs."""
-        return self.u_ref.shape[1]
-
-    @property
     def nw(self) -> int:
         """Length of the warm start ``w`` (the blocked inputs, ``nu * blocks``)."""
         return self.nu * self.blocks
-
-    @property
-    def length(self) -> int:
-        """Number of reference samples ``N``."""
-        return self.x_ref.shape[0]
 
     @property
     def u_initial(self) -> np.ndarray:
@@ -279,7 +265,7 @@ class MPCController:
         numpy.ndarray
             ``(nx + H (nx + nu),)``.
         """
-        k = int(min(max(math.floor((t - self.t0) / self.dt + INDEX_EPS), 0), self.length - 1))
+        k = period_index(t, self.t0, self.dt, self.length - 1, eps=INDEX_EPS)
         table = np.hstack([self.x_ref, self.u_ref])
         xr, ur = self._window(t, lambda j, c: table[min(k + j, self.length - 1), c])
         return np.concatenate([np.asarray(x, dtype=float).reshape(-1), np.ravel(xr), np.ravel(ur)])
@@ -356,8 +342,7 @@ class MPCController:
         """
         nx, nu, n = self.nx, self.nu, self.length
         t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.nw)
-        k = ca.fmin(ca.fmax(ca.floor((t - self.t0) / self.dt + INDEX_EPS), 0), n - 1)
-        k = ca.if_else(t == t, k, 0)
+        k = period_index(t, self.t0, self.dt, n - 1, eps=INDEX_EPS)  # a NaN time reads row 0; ok is then 0
         table = np.hstack([self.x_ref, self.u_ref])
         values = ca.MX(ca.DM(table.reshape(-1)))
         width = table.shape[1]
@@ -491,21 +476,13 @@ def mpc_controller(
         raise InputError(f"blocks: expected a divisor of the horizon {horizon}, got {blocks}")
     sqp_iterations = _positive_int(sqp_iterations, "sqp_iterations")
     substeps = _positive_int(substeps, "substeps")
-    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
-        raise InputError(f"dt: expected a positive loop period in seconds, got {dt!r}")
     if method not in MPC_METHODS:
         raise InputError(f"method: expected one of {', '.join(MPC_METHODS)}, got {method!r}")
     if solver not in MPC_SOLVERS:
         raise InputError(f"solver: expected one of {', '.join(MPC_SOLVERS)}, got {solver!r}")
     if solver == "fatrop" and blocks != horizon:
         raise InputError(f"blocks: expected the horizon {horizon} with solver fatrop (one input per stage), got {blocks}")
-    tt = np.asarray(t, dtype=float).reshape(-1)
-    if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
-        raise InputError("t: expected at least two increasing finite reference times")
-    n = int(math.floor((tt[-1] - tt[0]) / dt + INDEX_EPS)) + 1
-    grid = tt[0] + dt * np.arange(n)
-    xs = _sampled(tt, np.asarray(x_ref, dtype=float).reshape(tt.size, -1), grid, "x_ref")
-    us = _sampled(tt, np.asarray(u_ref, dtype=float).reshape(tt.size, -1), grid, "u_ref")
+    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, eps=INDEX_EPS)
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
     lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
@@ -539,6 +516,6 @@ def mpc_controller(
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")
-    return MPCController(dt=float(dt), t0=float(tt[0]), x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
+    return MPCController(dt=float(dt), t0=t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons)

@@ -12,6 +12,7 @@ a NaN ``t`` reads row 0 and the controller's ``ok`` flags it).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -19,11 +20,48 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "sampled", "sample_reference", "period_index"]
+__all__ = ["INDEX_EPS", "SampledReference", "sampled", "sample_reference", "period_index"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
 #: point) selects sample ``k``, not ``k - 1``.
 INDEX_EPS = 1e-6
+
+
+@dataclass
+class SampledReference:
+    """A reference sampled at the loop period: the part every loop controller shares.
+
+    Parameters
+    ----------
+    dt : float
+        Loop period [s].
+    t0 : float
+        Time of the first sample [s].
+    x_ref : numpy.ndarray
+        ``(N, nx)`` reference states at ``t_0 + k dt``.
+    u_ref : numpy.ndarray
+        ``(N, nu)`` reference inputs there.
+    """
+
+    dt: float
+    t0: float
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+
+    @property
+    def nx(self) -> int:
+        """Number of states."""
+        return self.x_ref.shape[1]
+
+    @property
+    def nu(self) -> int:
+        """Number of inputs."""
+        return self.u_ref.shape[1]
+
+    @property
+    def length(self) -> int:
+        """Number of reference samples ``N``."""
+        return self.x_ref.shape[0]
 
 
 def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:

@@ -38,8 +38,7 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.estimation.reference import INDEX_EPS, period_index, sample_reference
-from gtmodel.estimation.reference import sampled as _sampled  # noqa: F401  (imported by gtmodel.estimation.mpc)
+from gtmodel.estimation.reference import INDEX_EPS, SampledReference, period_index, sample_reference
 from gtmodel.modeling import ExplicitODE
 
 __all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
@@ -156,7 +155,7 @@ def _weight(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray
 
 
 @dataclass
-class TrackingController:
+class TrackingController(SampledReference):
     """Feedforward plus time-varying LQR along a reference, sampled at the loop period.
 
     Parameters
@@ -195,10 +194,6 @@ class TrackingController:
         (the one linearised), needed when ``delay`` is 1.
     """
 
-    dt: float
-    t0: float
-    x_ref: np.ndarray
-    u_ref: np.ndarray
     K: np.ndarray
     u_lb: np.ndarray
     u_ub: np.ndarray
@@ -212,21 +207,6 @@ class TrackingController:
     K_hold: np.ndarray
     delay: int = 0
     predict: Any = None
-
-    @property
-    def nx(self) -> int:
-        """Number of states."""
-        return self.x_ref.shape[1]
-
-    @property
-    def nu(self) -> int:
-        """Number of inputs."""
-        return self.u_ref.shape[1]
-
-    @property
-    def length(self) -> int:
-        """Number of samples ``N``."""
-        return self.x_ref.shape[0]
 
     @property
     def u_initial(self) -> np.ndarray:
