@@ -20,7 +20,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "SampledReference", "sampled", "sample_reference", "period_index"]
+__all__ = ["INDEX_EPS", "SampledReference", "hold_input", "sampled", "sample_reference", "period_index"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
 #: point) selects sample ``k``, not ``k - 1``.
@@ -62,6 +62,44 @@ class SampledReference:
     def length(self) -> int:
         """Number of reference samples ``N``."""
         return self.x_ref.shape[0]
+
+
+def hold_input(f: ca.Function, x: Any, u_guess: Any, p: Any, iterations: int = 10) -> np.ndarray:
+    """The input that holds a state at rest: least squares ``f(x, u) = 0`` in ``u`` (Gauss-Newton from ``u_guess``).
+
+    What a reference holds after its motion ends (its last input, mid-braking in a
+    minimum-time motion, would drive the plant away; the feedforward and the MPC's input
+    cost need the equilibrium input).
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``f(x (nx,1), u (nu,1), p (np,1)) -> xdot (nx,1)``, the explicit ODE.
+    x : array_like
+        ``(nx,)`` the held state.
+    u_guess : array_like
+        ``(nu,)`` the start (e.g. the reference's last input).
+    p : array_like
+        ``(np,)`` parameters.
+    iterations : int, optional
+        Gauss-Newton steps (one is exact for a model affine in ``u``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(nu,)`` not saturated (a state no admissible input holds is the caller's to judge).
+    """
+    xs, us, ps = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("u", f.size1_in(1)), ca.SX.sym("p", f.size1_in(2))
+    r = f(xs, us, ps)
+    step = ca.Function("hold_step", [xs, us, ps], [r, ca.jacobian(r, us)])
+    u = np.asarray(u_guess, dtype=float).reshape(-1).copy()
+    for _ in range(iterations):
+        rest, jac = (np.asarray(v, dtype=float) for v in step(x, u, p))
+        du = np.linalg.lstsq(jac, rest.ravel(), rcond=None)[0]
+        u = u - du
+        if not np.all(np.isfinite(u)) or np.max(np.abs(du)) <= 1e-12 * (1.0 + np.max(np.abs(u))):
+            break
+    return u
 
 
 def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:

@@ -38,7 +38,7 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.estimation.reference import INDEX_EPS, SampledReference, period_index, sample_reference
+from gtmodel.estimation.reference import INDEX_EPS, SampledReference, hold_input, period_index, sample_reference
 from gtmodel.modeling import ExplicitODE
 
 __all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
@@ -370,10 +370,8 @@ def tracking_controller(
     A = np.asarray(Aa).reshape(ode.nx, n, ode.nx).transpose(1, 0, 2)  # [A_0 A_1 ...] side by side
     B = np.asarray(Bb).reshape(ode.nx, n, ode.nu).transpose(1, 0, 2)
     # after the end: the input that holds the final state (least squares f(x*_N, u) = 0) and the stationary gain there
-    fx = ca.Function("fB", [xsym, usym, psym], [ode.f(xsym, usym, psym), ca.jacobian(ode.f(xsym, usym, psym), usym)])
     x_hold = x_given[-1]
-    rest, Bc = (np.asarray(v) for v in fx(x_hold, u_given[-1], pv))
-    u_hold = saturate(u_given[-1] - np.linalg.lstsq(Bc, rest.ravel(), rcond=None)[0], lb, ub)
+    u_hold = saturate(hold_input(ode.f, x_hold, u_given[-1], pv), lb, ub)
     Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
     try:
         K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)

@@ -10,7 +10,7 @@ error names the file and the field, the CLI exits with 2):
     ``optimal_control`` problem file of the user's model, solved first; ``overrides`` its
     dotted fields, e.g. a tighter force limit for the plan than the actuators' bounds; the
     default input bounds are that problem's without the overrides) or ``file`` (a CSV table
-    with ``t`` and the model's state and input names); ``settle_time`` [s] the last sample held.
+    with ``t`` and the model's state and input names); ``settle_time`` [s] the end held: its state (the robot at rest) with the input that holds it (:func:`~gtmodel.estimation.reference.hold_input`).
 ``[check]``
     The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
     ``mass_factor``, ``friction_factor`` (the robot plant; a user model: ``parameter_factor``
@@ -41,6 +41,7 @@ from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
+from gtmodel.estimation.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.base import ProblemFile
@@ -64,7 +65,7 @@ class ReferenceSection(Section):
     problem: NonEmptyText | None = Field(default=None, description="a point_to_point (robot) or optimal_control (user model) problem file, relative to this file, solved first")
     overrides: dict[str, Any] = Field(default_factory=dict, description="dotted fields of that problem replaced, e.g. 'limits.force'")
     file: NonEmptyText | None = Field(default=None, description="a CSV table: t and the model's state and input names")
-    settle_time: number(ge=0, le=60.0, unit="s", description="the last sample held this long") = 0.5
+    settle_time: number(ge=0, le=60.0, unit="s", description="the end state held this long, with the input that holds it") = 0.5
 
 
 class CheckSection(Section):
@@ -303,9 +304,11 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         u = np.column_stack([cols[n] for n in ode.u_names])
         limits = None
     n = int(round(ref.settle_time / dt))
-    t = np.r_[t, t[-1] + dt * np.arange(1, n + 1)]
-    x = np.vstack([x, np.tile(x[-1] * np.r_[np.ones(3), np.zeros(3)] if robot else x[-1], (n, 1))]) if n else x
-    u = np.vstack([u, np.tile(u[-1], (n, 1))]) if n else u
+    if n:  # the end held: its state (the robot at rest) and the input that holds it there, not the last (braking) input
+        x_end = x[-1] * np.r_[np.ones(3), np.zeros(3)] if robot else x[-1]
+        t = np.r_[t, t[-1] + dt * np.arange(1, n + 1)]
+        x = np.vstack([x, np.tile(x_end, (n, 1))])
+        u = np.vstack([u, np.tile(hold_input(ode.f, x_end, u[-1], ode.p_default), (n, 1))])
     return t, x, u, limits
 
 

@@ -1,0 +1,32 @@
+"""The reference of a loop controller (gtmodel.estimation.reference): the input that holds the end.
+
+References: the L1's holding forces at rest, J^T G of the numeric inverse dynamics
+(``GantryTau3Dynamics.gravity_forces``, Dressler (2012), Table 6.2; a second implementation
+of eq. 6.7), against the least-squares equilibrium input of the symbolic model's explicit
+ODE; a mass on a spring, whose holding force is c s in closed form.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.estimation.reference import hold_input
+from gtmodel.modeling import explicit_ode
+from gtmodel.robots.dynamics import GantryTau3Dynamics
+from gtmodel.robots.model import gantry_tau_model
+
+
+@pytest.mark.parametrize("T", [[-0.2, 2.75, -0.4], [0.3, 2.4, -0.6]])
+def test_the_l1_held_at_rest_needs_its_gravity_forces(T):
+    ode = explicit_ode(gantry_tau_model("L1"))
+    u = hold_input(ode.f, np.r_[T, 0.0, 0.0, 0.0], np.zeros(3), ode.p_default)
+    np.testing.assert_allclose(u, GantryTau3Dynamics("L1").gravity_forces(T), rtol=1e-8, atol=1e-8)
+
+
+def test_a_mass_on_a_spring_is_held_by_c_s():
+    # x = (s, v), xdot = (v, (u - c s) / m): held at s = 0.3 by u = c s, whatever the start guess
+    x, u, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("p", 2)  # p = (m, c)
+    f = ca.Function("f", [x, u, p], [ca.vertcat(x[1], (u - p[1] * x[0]) / p[0])])
+    assert hold_input(f, [0.3, 0.0], [-50.0], [2.0, 40.0]) == pytest.approx([12.0], rel=1e-12)
