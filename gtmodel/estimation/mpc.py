@@ -99,6 +99,11 @@ class MPCController(SampledReference):
         NLP solver of the step (:data:`MPC_SOLVERS`).
     constraints : MPCConstraints or None
         State bounds and path constraints on the predicted states (:mod:`gtmodel.estimation.mpc_constraints`).
+    delay : int, optional
+        Input delay [periods] the step compensates: 0 (default) or 1. With 1 the input
+        computed at ``t`` acts from ``t + dt``: the horizon starts from the state then,
+        predicted by :attr:`step` from ``u_last`` (the input acting until the new one
+        arrives), as :class:`~gtmodel.estimation.tracking.TrackingController` does.
     """
 
     dt: float
@@ -118,6 +123,7 @@ class MPCController(SampledReference):
     sqp_iterations: int = 1
     solver: str = "sqpmethod"
     constraints: MPCConstraints | None = None
+    delay: int = 0
 
     @property
     def nw(self) -> int:
@@ -337,11 +343,15 @@ class MPCController(SampledReference):
             model's domain leaves the warm start as its result, whose cost is NaN then) and,
             with hard constraints, every constraint row holds to :data:`HARD_TOLERANCE`
             (scaled) at the result (an infeasible QP's result does not).
-            ``u_last`` is not used
-            (the safe input of the C memory on failure).
+            ``u_last`` is the safe input of the C memory on failure and, with :attr:`delay` 1,
+            the input acting until this one arrives: ``x`` is replaced by ``step(x, u_last)``
+            and ``t`` by ``t + dt``.
         """
         nx, nu, n = self.nx, self.nu, self.length
         t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.nw)
+        t_in, x_in = t, x
+        if self.delay:  # the input computed now acts from t + dt: the horizon starts from the state then
+            t, x = t + self.dt, self.step(x, u_last)
         k = period_index(t, self.t0, self.dt, n - 1, eps=INDEX_EPS)  # a NaN time reads row 0; ok is then 0
         table = np.hstack([self.x_ref, self.u_ref])
         values = ca.MX(ca.DM(table.reshape(-1)))
@@ -373,7 +383,7 @@ class MPCController(SampledReference):
         w_next = ca.vertcat(*[sol[s * nu:(s + 1) * nu] for s in shift])
         u = sol[:nu]
         ok = (ca.sum1(ca.fabs(sol)) + ca.fabs(t) + ca.fabs(cost)) < math.inf
-        return ca.Function("control", [t, x, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+        return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
 
 def _positive_int(value: Any, name: str, low: int = 1) -> int:
@@ -400,6 +410,7 @@ def mpc_controller(
     blocks: int | None = None,
     sqp_iterations: int = 1,
     solver: str = "sqpmethod",
+    delay: int = 0,
     x_lb: Any = None,
     x_ub: Any = None,
     path: ca.Function | None = None,
@@ -442,6 +453,8 @@ def mpc_controller(
     solver : {"sqpmethod", "fatrop"}, optional
         NLP solver (:data:`MPC_SOLVERS`): ``sqpmethod`` (``qrqp`` QPs, ``daqp`` with
         constraints) or ``fatrop`` (multiple shooting, ``blocks = horizon``).
+    delay : int, optional
+        Input delay [periods] the step compensates, 0 (default) or 1 (:attr:`MPCController.delay`).
     x_lb, x_ub : array_like or dict, optional
         ``(nx,)`` bounds of the predicted states, or tables ``{state name: bound}``
         (default none; :func:`~gtmodel.estimation.mpc_constraints.mpc_constraints`).
@@ -478,6 +491,8 @@ def mpc_controller(
     substeps = _positive_int(substeps, "substeps")
     if method not in MPC_METHODS:
         raise InputError(f"method: expected one of {', '.join(MPC_METHODS)}, got {method!r}")
+    if delay not in (0, 1) or isinstance(delay, bool):
+        raise InputError(f"delay: expected 0 or 1 (periods of input delay the step compensates), got {delay!r}")
     if solver not in MPC_SOLVERS:
         raise InputError(f"solver: expected one of {', '.join(MPC_SOLVERS)}, got {solver!r}")
     if solver == "fatrop" and blocks != horizon:
@@ -518,4 +533,5 @@ def mpc_controller(
                          "stage's input that the last state's constraint uses); give sqpmethod")
     return MPCController(dt=float(dt), t0=t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names),
-                         u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons)
+                         u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
+                         delay=int(delay))

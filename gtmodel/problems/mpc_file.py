@@ -72,6 +72,7 @@ class MPCSection(Section):
     problem_constraints: bool = Field(default=True, strict=True, description="impose the reference problem's state bounds and path constraints on the horizon")
     hard_constraints: bool = Field(default=False, strict=True, description="state and path constraints hard (default soft: an exact penalty with slacks)")
     constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
+    input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the step compensates by predicting the state one period ahead (0 or 1)")
     constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
 
 
@@ -158,7 +159,7 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         controller = mpc_controller(ode, i.t, i.x_ref, i.u_ref, horizon=m.horizon, dt=m.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb,
                                     u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
                                     solver=m.solver, hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
-                                    constraint_every=m.constraint_every, **cons)
+                                    constraint_every=m.constraint_every, delay=m.input_delay, **cons)
     except GtModelError as exc:
         raise file.wrap("mpc", exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period)
