@@ -51,6 +51,10 @@ class LoopCheck:
         integers, ``sz_w`` reals).
     label : str
         What the controller is, for the summary (e.g. ``"MPC"``).
+    max_ratio : float
+        The largest RMS ratio to the feedforward that passes (exclusive; default 1).
+    step_budget_s : float
+        The largest 99th-percentile step time that passes [s] (default no limit).
     """
 
     closed: LoopSummary
@@ -58,6 +62,8 @@ class LoopCheck:
     memory_bytes: int
     work_bytes: int
     label: str = "controller"
+    max_ratio: float = 1.0
+    step_budget_s: float = float("inf")
 
     @property
     def ratio_to_feedforward(self) -> float:
@@ -71,7 +77,8 @@ class LoopCheck:
 
     def failures(self) -> list[str]:
         """Why the closed loop fails the check (empty: it passes): a diverged plant, input bound violations,
-        failed steps, or an RMS error not below the feedforward's.
+        failed steps, an RMS error not below :attr:`max_ratio` times the feedforward's, or a
+        99th-percentile step time above :attr:`step_budget_s`.
 
         Returns
         -------
@@ -81,7 +88,15 @@ class LoopCheck:
             ("the plant diverged (a stiff model's explicit plant step? [check] plant_method = \"radau2\")", self.plant_diverged),
             (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
-            (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below 1", not self.ratio_to_feedforward < 1.0)) if bad]
+            (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)",
+             not self.ratio_to_feedforward < self.max_ratio),
+            (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
+             "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s)) if bad]
+
+    @property
+    def step_p99_s(self) -> float:
+        """99th percentile of the step times after the first [s] (:meth:`LoopSummary.step_times`)."""
+        return self.closed.step_times()["p99"]
 
     @property
     def failed_steps(self) -> int:
@@ -97,7 +112,8 @@ class LoopCheck:
         """
         return ([f"closed loop, generated C {self.label}:"] + ["  " + line for line in self.closed.summary_lines()]
                 + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}",
-                   f"RMS ratio {self.label} / feedforward: {self.ratio_to_feedforward:.4g}",
+                   f"RMS ratio {self.label} / feedforward: {self.ratio_to_feedforward:.4g} (passes below {self.max_ratio:g})",
+                   f"step time budget (99th percentile): {self.step_budget_s * 1e6:.1f} us",
                    f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"])
 
 
@@ -222,4 +238,6 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path,
     ff = run_controller_loop(feedforward_law(setup.controller), *args, **kw)
     sz = generated.work_sizes["control"]
     work = 8 * (sz[0] + sz[1]) + 8 * sz[2] + 8 * sz[3]
-    return LoopCheck(closed=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work, label=label)
+    budget = setup.max_step_time if setup.max_step_time is not None else float(setup.controller.dt)
+    return LoopCheck(closed=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work, label=label,
+                     max_ratio=float(setup.max_ratio), step_budget_s=float(budget))

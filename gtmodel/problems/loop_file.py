@@ -83,6 +83,9 @@ class CheckSection(Section):
     error_states: list[str] = Field(default_factory=list, description="states summarised by the tracking error (default all)")
     plant_method: choice(*STEP_METHODS, description="the plant's fixed step (radau2, implicit_euler: stiff models; not with compliance)") = "rk4"
     plant_substeps: int = Field(default=4, ge=1, le=1000, strict=True, description="plant steps per loop period")
+    max_ratio: number(gt=0, le=1.0, description="the check passes with an RMS tracking error below this fraction of the feedforward's alone") = 1.0
+    max_step_time: float | None = Field(default=None, gt=0, le=10.0, allow_inf_nan=False,
+                                        description="s: the largest 99th-percentile step time of the generated C that passes (default the period)")
 
 
 @dataclass
@@ -133,6 +136,12 @@ class LoopSetup:
         Keyword arguments of :func:`~gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`.
     plant_x0 : numpy.ndarray
         The plant's initial state (the reference's first state; the structure at rest).
+    max_ratio : float, optional
+        The check passes with an RMS tracking error below this fraction of the feedforward's
+        (``[check] max_ratio``; default 1: better than the feedforward alone).
+    max_step_time : float or None, optional
+        The largest 99th-percentile step time that passes [s] (``[check] max_step_time``;
+        default None: the loop period).
     """
 
     name: str
@@ -144,6 +153,8 @@ class LoopSetup:
     u_ref: np.ndarray
     loop: dict
     plant_x0: np.ndarray
+    max_ratio: float = 1.0
+    max_step_time: float | None = None
 
 
 def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -> LoopModel:
@@ -401,7 +412,8 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         plant_step, loop["output"], loop["measured"] = compliant_plant(model.plant, dt=dt)
         plant_x0 = np.r_[xs[0], np.zeros(4)]
     return LoopSetup(name=name, controller=controller, plant_step=plant_step, plant_p=model.plant_p,
-                     t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0)
+                     t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0,
+                     max_ratio=c.max_ratio, max_step_time=c.max_step_time)
 
 
 class LoopFile(Section):

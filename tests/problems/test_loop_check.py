@@ -1,7 +1,8 @@
 """The verdict of a loop controller's closed-loop check (gtmodel.problems.loop_check.LoopCheck.failures).
 
 References: closed loops built by hand on the plant x_{k+1} = a x_k + u_k (closed forms: a = 1 bounded,
-a = 10 runaway), so that each reason of a failure is present or absent by construction.
+a = 10 runaway), so that each reason of a failure is present or absent by construction; the declared
+thresholds ([check] max_ratio, max_step_time) against a ratio and step times known to be above them.
 """
 
 from __future__ import annotations
@@ -32,3 +33,29 @@ def test_failures_name_each_reason(closed, feedforward, reasons):
     check = LoopCheck(closed=closed, feedforward=feedforward, memory_bytes=0, work_bytes=0)
     found = check.failures()
     assert len(found) == len(reasons) and all(r in f for r, f in zip(reasons, found))
+
+
+PASSING = (_run(1.0, lambda t, y: (0, [0.1])), _run(1.0, lambda t, y: (0, [0.5])))  # errors 0.1 k and 0.5 k: ratio 0.2
+
+
+@pytest.mark.parametrize("limits, reasons", [
+    ({}, []),
+    ({"max_ratio": 1e-9}, ["not below 1e-09 ([check] max_ratio)"]),
+    ({"step_budget_s": 0.0}, ["step time"]),
+    ({"max_ratio": 1e-9, "step_budget_s": 0.0}, ["max_ratio", "above the budget 0.0 us"]),
+], ids=["defaults", "ratio above the declared", "slower than the budget", "both"])
+def test_declared_limits_fail_the_check(limits, reasons):
+    check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, **limits)
+    found = check.failures()
+    assert len(found) == len(reasons) and all(r in f for r, f in zip(reasons, found))
+
+
+def test_step_p99_is_the_summary_figure():
+    check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0)
+    assert check.step_p99_s == PASSING[0].step_times()["p99"] > 0.0
+
+
+def test_ratio_is_the_closed_form():
+    check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, max_ratio=0.2)
+    assert check.ratio_to_feedforward == pytest.approx(0.2, rel=1e-12)
+    assert any("not below 0.2" in f for f in check.failures())
