@@ -45,6 +45,10 @@ class MPCCheck(LoopCheck):
         Stack work arrays of one step.
     label : str
         ``"MPC"``.
+    max_ratio : float
+        The largest RMS ratio to the feedforward that passes (exclusive).
+    step_budget_s : float
+        The largest 99th-percentile step time that passes [s].
     """
 
     @property

@@ -40,7 +40,7 @@ BAD = [
     ("plant method unknown", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["emf.phi"]\nplant_method = "rk5"', "check.plant_method"),
     ("plant method with compliance", L1, "compliance = true", 'compliance = true\nplant_method = "radau2"', "check.plant_method"),
     ("unknown error state", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["phi"]', "check.error_states.phi"),
-    ("max_ratio above 1", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["emf.phi"]\nmax_ratio = 1.5', "check.max_ratio"),
+    ("max_ratio above 1", MOTOR, "max_ratio = 0.5", "max_ratio = 1.5", "check.max_ratio"),
     ("max_step_time negative", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["emf.phi"]\nmax_step_time = -1e-3', "check.max_step_time"),
 ]
 
