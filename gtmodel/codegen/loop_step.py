@@ -56,7 +56,7 @@ from gtmodel.errors import CodegenError, InputError
 from gtmodel.estimation.mpc import MPCController
 from gtmodel.estimation.tracking import TrackingController
 
-__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
 
 log = logging.getLogger("gtmodel")
 
@@ -252,6 +252,42 @@ SOLVER_LIBRARIES = {
 }
 
 
+#: Bytes of the per-thread static arena that takes the allocations of a QP solver that allocates its work
+#: in every QP (DAQP, whose setup mallocs; :data:`SOLVER_LIBRARIES`): the library is linked with
+#: :data:`HEAP_WRAP_FLAGS`, so the step makes no heap call (``<prefix>_heap_stats`` counts those that did
+#: not fit; the closed-loop check fails on any). The L1 MPC's QP (15 variables, 60 rows) peaks at a few
+#: kB; a compile-time ``-DGT_HEAP_ARENA_BYTES=...`` changes it.
+HEAP_ARENA_BYTES = 262144
+#: Linker arguments that send the allocator calls of the library's objects to the arena.
+HEAP_WRAP_FLAGS = ("-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free",)
+#: The header's declaration of ``<prefix>_heap_stats`` (with the arena).
+_HEAP_DOC = """/*
+ * The QP solver's allocations (DAQP sets up its work in every QP) go to a per-thread static
+ * arena of GT_HEAP_ARENA_BYTES ({arena} unless defined at compile time), not to the heap: link
+ * the library with -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free (gtmodel's build
+ * does). Writes the arena's peak use [bytes], the allocations that did not fit and went to the
+ * heap (0 expected) and the arena's size [bytes], of the calling thread.
+ * Returns GT_OK, or GT_BAD_ARGUMENT (a NULL pointer).
+ */
+int {prefix}_heap_stats(unsigned long *peak_bytes, unsigned long *heap_calls, unsigned long *arena_bytes);"""
+
+
+def uses_heap_arena(casadi_source: str | Path) -> bool:
+    """Whether a loop step's CasADi source calls a QP solver that allocates (DAQP), so that its
+    library carries the heap arena (:data:`HEAP_ARENA_BYTES`).
+
+    Parameters
+    ----------
+    casadi_source : str or pathlib.Path
+        The generated ``<prefix>_casadi.c``.
+
+    Returns
+    -------
+    bool
+    """
+    return "#include <daqp/api.h>" in Path(casadi_source).read_text()
+
+
 def solver_libraries(source: str | Path) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Include folders and linker arguments of the solver libraries a CasADi-generated C file includes.
 
@@ -321,11 +357,22 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
         ULB=_c_array(step.u_lb), UUB=_c_array(step.u_ub), U0=_c_array(step.u_init), W0=_c_array(step.w_init), CALL=call,
     )
     memory = "\n" + fill("template_loop_step.c", **values)
-    out, _, sizes, signatures = write_library(
-        prefix, (spec,), step, out_dir, real, lambda wrapped: fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header)),
-        extra_source=memory)
+
+    def header(wrapped: Any) -> str:
+        arena = uses_heap_arena(Path(out_dir) / f"{prefix}_casadi.c")  # written before the header
+        return fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header),
+                    HEAP=_HEAP_DOC.format(arena=HEAP_ARENA_BYTES, prefix=prefix) if arena else "")
+
+    out, _, sizes, signatures = write_library(prefix, (spec,), step, out_dir, real, header, extra_source=memory)
     log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
     include_dirs, link_flags = solver_libraries(out / f"{prefix}_casadi.c")
+    if uses_heap_arena(out / f"{prefix}_casadi.c"):
+        try:
+            with open(out / f"{prefix}.c", "a") as f:
+                f.write("\n" + fill("template_heap_arena.c", GP=prefix, ARENA=HEAP_ARENA_BYTES))
+        except OSError as exc:
+            raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
+        link_flags = (*link_flags, *HEAP_WRAP_FLAGS)
     return GeneratedCode(
         out_dir=out, prefix=prefix, functions=("control",), source=out / f"{prefix}.c", header=out / f"{prefix}.h",
         casadi_source=out / f"{prefix}_casadi.c", casadi_header=out / f"{prefix}_casadi.h", parameters=step, friction="",

@@ -28,7 +28,7 @@ from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_cont
 from gtmodel.estimation.reference import period_index
 from gtmodel.problems.loop_file import LoopSetup
 
-__all__ = ["STATUS_NAMES", "LoopCheck", "build_step", "compiled_step", "closed_loop_check", "feedforward_law"]
+__all__ = ["STATUS_NAMES", "LoopCheck", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
 
 #: Status names by code.
 STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
@@ -55,6 +55,12 @@ class LoopCheck:
         The largest RMS ratio to the feedforward that passes (exclusive; default 1).
     step_budget_s : float
         The largest 99th-percentile step time that passes [s] (default no limit).
+    heap : tuple of int or None
+        ``(peak bytes, heap calls, arena bytes)`` of the QP solver's arena (:func:`heap_stats`);
+        None: the step has none (no allocating solver).
+    clock : str
+        Name of the clock of the step times (``"thread_time"``: thread CPU time,
+        ``"perf_counter"``: wall time).
     """
 
     closed: LoopSummary
@@ -64,6 +70,8 @@ class LoopCheck:
     label: str = "controller"
     max_ratio: float = 1.0
     step_budget_s: float = float("inf")
+    heap: tuple[int, int, int] | None = None
+    clock: str = "perf_counter"
 
     @property
     def ratio_to_feedforward(self) -> float:
@@ -77,8 +85,9 @@ class LoopCheck:
 
     def failures(self) -> list[str]:
         """Why the closed loop fails the check (empty: it passes): a diverged plant, input bound violations,
-        failed steps, an RMS error not below :attr:`max_ratio` times the feedforward's, or a
-        99th-percentile step time above :attr:`step_budget_s`.
+        failed steps, an RMS error not below :attr:`max_ratio` times the feedforward's, a
+        99th-percentile step time above :attr:`step_budget_s`, or a QP solver's allocation
+        that went to the heap (:attr:`heap`).
 
         Returns
         -------
@@ -91,7 +100,9 @@ class LoopCheck:
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)",
              not self.ratio_to_feedforward < self.max_ratio),
             (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
-             "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s)) if bad]
+             "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s),
+            (f"{self.heap[1] if self.heap else 0} allocations of the QP solver on the heap (its arena of "
+             f"{self.heap[2] if self.heap else 0} bytes too small)", bool(self.heap and self.heap[1] > 0))) if bad]
 
     @property
     def step_p99_s(self) -> float:
@@ -113,8 +124,11 @@ class LoopCheck:
         return ([f"closed loop, generated C {self.label}:"] + ["  " + line for line in self.closed.summary_lines()]
                 + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}",
                    f"RMS ratio {self.label} / feedforward: {self.ratio_to_feedforward:.4g} (passes below {self.max_ratio:g})",
-                   f"step time budget (99th percentile): {self.step_budget_s * 1e6:.1f} us",
-                   f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"])
+                   f"step time budget (99th percentile): {self.step_budget_s * 1e6:.1f} us; step times by time.{self.clock}"
+                   + (" (the thread's CPU time)" if self.clock == "thread_time" else ""),
+                   f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"]
+                + ([f"QP solver's allocations: arena peak {self.heap[0]} of {self.heap[2]} bytes (per thread), {self.heap[1]} on the heap"]
+                   if self.heap else []))
 
 
 def build_step(step: LoopStep, out_dir: str | Path, prefix: str) -> tuple[GeneratedCode, Path]:
@@ -183,6 +197,34 @@ def compiled_step(generated: GeneratedCode, library: Path) -> tuple[Any, Any, in
     return controller, reset, ctypes.sizeof(memory)
 
 
+def heap_stats(generated: GeneratedCode, library: Path) -> tuple[int, int, int] | None:
+    """The heap arena's figures of a compiled loop step whose QP solver allocates (``<prefix>_heap_stats``,
+    :data:`~gtmodel.codegen.loop_step.HEAP_ARENA_BYTES`), of the calling thread.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        From :func:`build_step`.
+    library : pathlib.Path
+        The compiled library.
+
+    Returns
+    -------
+    tuple of int or None
+        ``(peak bytes, heap calls, arena bytes)``; None when the step has no arena (its solver
+        does not allocate).
+    """
+    lib = ctypes.CDLL(str(library))
+    fn = getattr(lib, f"{generated.prefix}_heap_stats", None)
+    if fn is None:
+        return None
+    ul = ctypes.c_ulong
+    peak, calls, size = ul(), ul(), ul()
+    fn.argtypes, fn.restype = [ctypes.POINTER(ul)] * 3, ctypes.c_int
+    fn(ctypes.byref(peak), ctypes.byref(calls), ctypes.byref(size))
+    return int(peak.value), int(calls.value), int(size.value)
+
+
 def feedforward_law(controller: Any) -> Any:
     """The feedforward alone of a loop controller: ``u*_k`` of its reference at time ``t``, saturated.
 
@@ -200,7 +242,7 @@ def feedforward_law(controller: Any) -> Any:
     return lambda t, x: (0, np.clip(c.u_ref[period_index(t, c.t0, c.dt, c.length - 1)], c.u_lb, c.u_ub))
 
 
-def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.perf_counter,
+def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.thread_time,
                       label: str = "controller") -> LoopCheck:
     """Run the generated controller and the feedforward alone against the file's plant.
 
@@ -216,7 +258,10 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path,
         Runs of the whole motion (``_init`` before each; the step times and statuses of
         all runs are kept, the tracking figures are those of the first run).
     clock : callable, optional
-        Clock of the step times (see :func:`run_controller_loop`).
+        Clock of the step times (see :func:`run_controller_loop`); default the calling
+        thread's CPU time (``time.thread_time``): the step's own computation, which the
+        period budget (``[check] max_step_time``) is about, without the preemptions of a
+        shared machine (``time.perf_counter`` for wall time).
     label : str, optional
         What the controller is, for the summary.
 
@@ -240,4 +285,5 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path,
     work = 8 * (sz[0] + sz[1]) + 8 * sz[2] + 8 * sz[3]
     budget = setup.max_step_time if setup.max_step_time is not None else float(setup.controller.dt)
     return LoopCheck(closed=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work, label=label,
-                     max_ratio=float(setup.max_ratio), step_budget_s=float(budget))
+                     max_ratio=float(setup.max_ratio), step_budget_s=float(budget), heap=heap_stats(generated, library),
+                     clock=getattr(clock, "__name__", str(clock)))

@@ -49,6 +49,10 @@ class MPCCheck(LoopCheck):
         The largest RMS ratio to the feedforward that passes (exclusive).
     step_budget_s : float
         The largest 99th-percentile step time that passes [s].
+    heap : tuple of int or None
+        The QP solver's arena figures (:func:`~gtmodel.problems.loop_check.heap_stats`).
+    clock : str
+        Name of the clock of the step times.
     """
 
     @property
@@ -78,7 +82,7 @@ def build_mpc(setup: MPCSetup, out_dir: str | Path, prefix: str | None = None) -
     return loop_check.build_step(mpc_step(setup.controller, setup.name), out_dir, prefix or f"gt_{setup.name}")
 
 
-def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.perf_counter) -> MPCCheck:
+def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.thread_time) -> MPCCheck:
     """Run the generated MPC and the feedforward alone against the file's plant (:func:`gtmodel.problems.loop_check.closed_loop_check`).
 
     Parameters
@@ -93,7 +97,8 @@ def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path, 
         Runs of the whole motion (``_init`` before each; the step times and statuses of
         all runs are kept, the tracking figures are those of the first run).
     clock : callable, optional
-        Clock of the step times (see :func:`~gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`).
+        Clock of the step times (see :func:`~gtmodel.estimation.closed_loop.controller_loop.run_controller_loop`);
+        default the thread's CPU time (:func:`gtmodel.problems.loop_check.closed_loop_check`).
 
     Returns
     -------

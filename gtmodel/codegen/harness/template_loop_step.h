@@ -56,4 +56,5 @@ int @GP@_init(@GP@_memory *mem);
 int @GP@_step(@GP@_memory *mem, @REAL@ t, const @REAL@ *x, @REAL@ *u);
 
 @PROTOTYPES@
+@HEAP@
 @CLOSE@
