@@ -14,6 +14,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -84,19 +85,28 @@ def test_a_killed_worker_loses_nothing_and_duplicates_nothing(cluster, tmp_path)
     victim_address, victim = next(iter(workers.items()))
     killed: list[list[str]] = []
     records = []
+    done = threading.Event()
     with distributed.Client(address, timeout="60s") as monitor:
 
-        def on_case(record):
-            records.append(record)
-            deadline = time.monotonic() + 30
-            while not killed and time.monotonic() < deadline:
+        def kill_when_busy():
+            # from the study's start, not from its first finished case: on a loaded machine the victim
+            # may run its cases before the first one is reported, and then never be seen processing
+            deadline = time.monotonic() + 120
+            while not done.is_set() and time.monotonic() < deadline:
                 running = monitor.processing(workers=[victim_address]).get(victim_address, [])
                 if running:  # the scheduler says the victim is processing a case: kill it now
                     os.killpg(victim.pid, signal.SIGKILL)
                     killed.append(list(running))
-                time.sleep(0.02)
+                    return
+                time.sleep(0.01)
 
-        outcome = run_study(study, tmp_path / "out", scheduler=address, on_case=on_case)
+        watcher = threading.Thread(target=kill_when_busy, daemon=True)
+        watcher.start()
+        try:
+            outcome = run_study(study, tmp_path / "out", scheduler=address, on_case=records.append)
+        finally:
+            done.set()
+            watcher.join(30)
     assert killed and killed[0], "the victim worker was not processing a case"
     assert victim.wait(10) is not None  # it is gone for good (no nanny left to restart it)
     table = outcome.table
