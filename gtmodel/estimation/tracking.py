@@ -29,6 +29,7 @@ time-invariant LQR (the stationary solution of the same recursion).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -192,6 +193,18 @@ class TrackingController(SampledReference):
     predict : casadi.Function, optional
         ``predict(x (nx,1), u (nu,1)) -> x_next``: the model's fixed step over one period
         (the one linearised), needed when ``delay`` is 1.
+    integral_states : tuple of int, optional
+        Indices of the states with integral action (default none): the integrator state
+        ``xi (ni,)``, ``xi_{k+1} = xi_k + dt (x - x*_k)[integral_states]``, is the step's
+        inner memory, and the law is ``u = sat(u*_k - K_k (x - x*_k) - Ki_k xi_k)``; the
+        integration stops while the input saturates (conditional integration, against
+        wind-up).
+    Ki : numpy.ndarray, optional
+        ``(N, nu, ni)`` integral gains (with ``integral_states``).
+    Ki_hold : numpy.ndarray, optional
+        ``(nu, ni)`` the integral gain after the reference ends.
+    Qi : numpy.ndarray, optional
+        ``(ni, ni)`` the integrator states' weight the gains were computed with.
     """
 
     K: np.ndarray
@@ -207,6 +220,15 @@ class TrackingController(SampledReference):
     K_hold: np.ndarray
     delay: int = 0
     predict: Any = None
+    integral_states: tuple[int, ...] = ()
+    Ki: np.ndarray | None = None
+    Ki_hold: np.ndarray | None = None
+    Qi: np.ndarray | None = None
+
+    @property
+    def ni(self) -> int:
+        """Number of integrator states (0: no integral action)."""
+        return len(self.integral_states)
 
     @property
     def u_initial(self) -> np.ndarray:
@@ -219,7 +241,9 @@ class TrackingController(SampledReference):
         Returns
         -------
         casadi.Function
-            ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``:
+            ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``, with
+            integral action ``control(t, x, u_last, w (ni,1)) -> (u, w_next (ni,1), ok)``
+            (``w`` the integrator state, see :attr:`integral_states`):
             ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N`` (a NaN ``t`` gives
             ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
             reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
@@ -230,26 +254,39 @@ class TrackingController(SampledReference):
             ``predict(x, u_last)`` and ``t`` by ``t + dt``. The tables are constants of the
             graph, indexed parametrically (the generated C looks them up; no heap).
         """
-        n, nx, nu = self.length, self.nx, self.nu
-        t, x, u_last = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu)
+        n, nx, nu, ni = self.length, self.nx, self.nu, self.ni
+        t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", ni)
         t_in, x_in = t, x
         if self.delay:
             t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
         k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
-        table = np.vstack([np.hstack([self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)]),  # row k: x*_k, u*_k, K_k (row-major)
-                           np.hstack([self.x_hold, self.u_hold, self.K_hold.reshape(-1)])])  # row N: hold the end
+        rows = [self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)] + ([self.Ki.reshape(n, nu * ni)] if ni else [])
+        hold = [self.x_hold, self.u_hold, self.K_hold.reshape(-1)] + ([self.Ki_hold.reshape(-1)] if ni else [])
+        table = np.vstack([np.hstack(rows),  # row k: x*_k, u*_k, K_k (row-major)[, Ki_k]
+                           np.hstack(hold)])  # row N: hold the end
         width = table.shape[1]
         values = ca.MX(ca.DM(table.reshape(-1)))
         base = width * k
         xs = ca.vertcat(*[values[base + j] for j in range(nx)])
         us = ca.vertcat(*[values[base + nx + j] for j in range(nu)])
         gain = ca.vertcat(*[ca.horzcat(*[values[base + nx + nu + i * nx + j] for j in range(nx)]) for i in range(nu)])
-        u = saturate(us - ca.mtimes(gain, x - xs), self.u_lb, self.u_ub)
+        free = us - ca.mtimes(gain, x - xs)
+        if ni:
+            off = base + nx + nu + nu * nx
+            gain_i = ca.vertcat(*[ca.horzcat(*[values[off + i * ni + j] for j in range(ni)]) for i in range(nu)])
+            free = free - ca.mtimes(gain_i, w)
+        u = saturate(free, self.u_lb, self.u_ub)
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
-        ok = total < math.inf  # 0 for NaN or infinite entries
-        return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
+        if not ni:
+            ok = total < math.inf  # 0 for NaN or infinite entries
+            return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
+        error = ca.vertcat(*[x[i] - xs[i] for i in self.integral_states])
+        unsaturated = ca.sum1(ca.fabs(u - free)) == 0  # conditional integration: hold xi while the input saturates
+        w_next = ca.if_else(unsaturated, w + self.dt * error, w)
+        ok = (total + ca.sum1(ca.fabs(w_next))) < math.inf
+        return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
-    def __call__(self, t: float, x: Any, u_last: Any = None) -> np.ndarray:
+    def __call__(self, t: float, x: Any, u_last: Any = None, w: Any = None) -> np.ndarray:
         """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
 
         Parameters
@@ -260,13 +297,18 @@ class TrackingController(SampledReference):
             ``(nx,)`` measured state.
         u_last : array_like, optional
             ``(nu,)`` the input acting now (used with :attr:`delay` 1; default :attr:`u_initial`).
+        w : array_like, optional
+            ``(ni,)`` the integrator state (with :attr:`integral_states`; default zeros).
 
         Returns
         -------
         numpy.ndarray
             ``(nu,)`` the saturated input.
         """
-        u, _ = self.function()(t, np.asarray(x, dtype=float), self.u_initial if u_last is None else np.asarray(u_last, dtype=float))
+        args = [t, np.asarray(x, dtype=float), self.u_initial if u_last is None else np.asarray(u_last, dtype=float)]
+        if self.ni:
+            args.append(np.zeros(self.ni) if w is None else np.asarray(w, dtype=float))
+        u = self.function()(*args)[0]
         return np.asarray(u).reshape(-1)
 
 
@@ -286,6 +328,7 @@ def tracking_controller(
     substeps: int = 1,
     time_varying: bool = True,
     delay: int = 0,
+    integral_weights: Mapping[str, float] | None = None,
 ) -> TrackingController:
     """Feedforward and time-varying LQR along a reference motion of a model.
 
@@ -327,6 +370,14 @@ def tracking_controller(
     delay : {0, 1}, optional
         Input delay [periods] the law compensates by predicting the state one period ahead
         with the same fixed step (see :attr:`TrackingController.delay`; default 0).
+    integral_weights : mapping of str to float, optional
+        Integral action on the named states (``ode.x_names``), each with its weight ``> 0``
+        on the integrator state ``xi_i = sum dt (x_i - x*_i)`` (default none; see
+        :attr:`TrackingController.integral_states`). The gains ``[K_k, Ki_k]`` are the
+        LQR's of the model augmented with the integrators, ``xi_{k+1} = xi_k + dt C (x_k -
+        x*_k)`` (as ``control.dlqr(..., integral_action=dt C)``), with the weight
+        ``blkdiag(Q, Qi)``; after the end, the augmented stationary LQR (Franklin, Powell &
+        Workman, Digital Control of Dynamic Systems, 3rd ed., sec. 8.5).
 
     Returns
     -------
@@ -337,7 +388,8 @@ def tracking_controller(
     InputError
         Shapes or values out of range, times not increasing, a reference shorter than
         one period, ``R`` not positive definite; ``time_varying=False`` at an end where the
-        linearisation is not stabilisable.
+        linearisation is not stabilisable; an integral weight of a state the model does not
+        have, or not a finite number > 0.
     """
     if isinstance(delay, bool) or delay not in (0, 1):
         raise InputError(f"delay: expected 0 or 1 period of input delay to compensate, got {delay!r}")
@@ -373,15 +425,47 @@ def tracking_controller(
     x_hold = x_given[-1]
     u_hold = saturate(hold_input(ode.f, x_hold, u_given[-1], pv), lb, ub)
     Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
+    idx, Qi = _integral(integral_weights, list(ode.x_names))
+    if idx:  # the model augmented with the integrators of the selected states' errors
+        C = np.eye(ode.nx)[list(idx)]
+        ni = len(idx)
+        A = np.stack([np.block([[a, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]]) for a in A])
+        B = np.concatenate([B, np.zeros((n, ni, ode.nu))], axis=1)
+        Ah = np.block([[Ah, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]])
+        Bh = np.vstack([Bh, np.zeros((ni, ode.nu))])
+        Qm = scipy.linalg.block_diag(Qm, Qi)
     try:
         K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
     except InputError as exc:
         if not time_varying:
             raise InputError(f"time_varying: a time-invariant LQR needs a stabilisable linearisation at the held end ({exc})") from None
         K_hold, P_hold = None, Qm
-    Qfm = P_hold if Qf is None else _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
+    if Qf is None:
+        Qfm = P_hold
+    else:
+        Qfm = _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
+        Qfm = scipy.linalg.block_diag(Qfm, Qi) if idx else Qfm
     K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
+    K_hold = K[-1] if K_hold is None else K_hold
+    nx = ode.nx
+    integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
     predict = ca.Function("predict", [xsym, usym], [step(xsym, usym, ca.DM(pv))[0]], ["x", "u"], ["x_next"])
-    return TrackingController(delay=int(delay), predict=predict if delay else None, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K, u_lb=lb.copy(), u_ub=ub.copy(),
-                              x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm, R=Rm, Qf=Qfm,
-                              x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1), K_hold=K[-1] if K_hold is None else K_hold)
+    return TrackingController(delay=int(delay), predict=predict if delay else None, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
+                              u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
+                              Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
+                              K_hold=K_hold[:, :nx], **integral)
+
+
+def _integral(weights: Mapping[str, float] | None, names: list[str]) -> tuple[tuple[int, ...], np.ndarray | None]:
+    """The integrated states' indices (in the model's order) and their weight ``Qi``, from weights by name."""
+    if not weights:
+        return (), None
+    if not isinstance(weights, Mapping):
+        raise InputError(f"integral_weights: expected a mapping of state names to weights, got {type(weights).__name__}")
+    for name, value in weights.items():
+        if name not in names:
+            raise InputError(f"integral_weights: {name!r} is not a state of the model ({', '.join(names)})")
+        if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0):
+            raise InputError(f"integral_weights[{name!r}]: expected a finite weight > 0, got {value!r}")
+    idx = tuple(i for i, name in enumerate(names) if name in weights)
+    return idx, np.diag([float(weights[names[i]]) for i in idx])

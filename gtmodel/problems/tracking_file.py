@@ -14,7 +14,9 @@ error names the file and the field, the CLI exits with 2):
     true: the gains of the backward discrete Riccati recursion along the reference; false:
     one time-invariant LQR gain, that of the held end), ``input_delay`` (0 default, or 1:
     the input computed at ``t_k`` acts from ``t_{k+1}``, and the law applies the gain to
-    the state predicted then by the model's step from the last input).
+    the state predicted then by the model's step from the last input), ``integral_weights``
+    (a table by state name: integral action on those states, each weight > 0 that of its
+    integrated error; default none).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``, as in an MPC file
     (:mod:`gtmodel.problems.loop_file`).
@@ -35,7 +37,7 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError
 from gtmodel.estimation.tracking import tracking_controller
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
-from gtmodel.problems.loop_file import LoopFile, LoopSetup, loop_inputs, loop_setup, read_loop_file
+from gtmodel.problems.loop_file import LoopFile, LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
 __all__ = ["TrackingFile", "load_tracking_file"]
@@ -55,6 +57,7 @@ class ControllerSection(Section):
     u_ub: list[float] | None = Field(default=None, description="input upper bounds")
     time_varying: bool = Field(default=True, strict=True, description="time-varying LQR along the reference (false: the held end's time-invariant LQR)")
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
+    integral_weights: dict[str, float] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
 
 
 class TrackingFile(LoopFile):
@@ -97,14 +100,20 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
         Naming the file and the field: unreadable TOML, an unknown or invalid field, a
         period <= 0, an unknown variable in a weight table, a missing ``[reference]``, a
         reference that cannot be read or solved, a controller that cannot be built (e.g.
-        a time-invariant LQR where the end is not stabilisable).
+        a time-invariant LQR where the end is not stabilisable), an integral weight of a
+        state the model does not have or not > 0.
     """
     doc, file = read_loop_file(path, TrackingFile, "tracking-controller file")
     c = doc.controller
     i = loop_inputs(file, doc, "controller")
+    weight_diagonal(file, "controller.integral_weights", c.integral_weights, list(i.model.ode.x_names))
+    for name, value in c.integral_weights.items():
+        if not value > 0:
+            raise file.fail(f"controller.integral_weights.{name}", "a finite weight > 0 (a state without integral action is left out)", value)
     try:
         controller = tracking_controller(i.model.ode, i.t, i.x_ref, i.u_ref, dt=c.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb, u_ub=i.u_ub,
-                                         method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay)
+                                         method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay,
+                                         integral_weights=c.integral_weights or None)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, c.period)

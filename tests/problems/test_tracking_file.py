@@ -48,6 +48,8 @@ BAD = [
     ("missing reference", MOTOR, _REFERENCE, "", "reference"),
     ("bounds of another length", MOTOR, "period = 0.004", "period = 0.004\nu_lb = [-1.0, -2.0]\nu_ub = [1.0, 2.0]", "controller.u_lb"),
     ("unknown error state", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["phi"]', "check.error_states.phi"),
+    ("integral of an unknown state", MOTOR, '"emf.phi" = 1e4 }', '"phi" = 1e4 }', "controller.integral_weights.phi"),
+    ("integral weight 0", MOTOR, '"emf.phi" = 1e4 }', '"emf.phi" = 0.0 }', "controller.integral_weights.emf.phi"),
 ]
 
 
@@ -116,12 +118,15 @@ def motor_loop(motor, tmp_path_factory):
 def test_motor_closed_loop_c_equals_python_and_beats_the_feedforward(motor, motor_loop):
     generated, library = motor_loop
     check = closed_loop_check(motor, generated, library, label="tracking controller")
-    # the same loop (plant, noise, delay, disturbance) with the Function evaluated from Python, u_last carried as the C memory does
+    # the same loop (plant, noise, delay, disturbance) with the Function evaluated from Python, u_last and the
+    # integrator state (the file's integral action on the angle) carried as the C memory does
     c, law = motor.controller, motor.controller.function()
-    memory = {"u": c.u_initial}
+    assert c.integral_states == (1,)
+    memory = {"u": c.u_initial, "w": np.zeros(c.ni)}
 
     def python(t, x):
-        memory["u"] = np.asarray(law(t, x, memory["u"])[0]).ravel()
+        out = law(t, x, memory["u"], memory["w"])
+        memory["u"], memory["w"] = np.asarray(out[0]).ravel(), np.asarray(out[1]).ravel()
         return 0, memory["u"]
 
     ref = run_controller_loop(python, motor.plant_step, motor.plant_x0, motor.t, motor.x_ref, **dict(motor.loop, plant_p=motor.plant_p))
