@@ -32,6 +32,7 @@ STRUCTURES = [
     pytest.param("cubic_motor.py", "Cubic4Motor", "cubic_resistor_newton", marks=pytest.mark.slow),  # ~6 s: the Newton's code
     ("keyword_names.py", "Plant2In3Out", "c_keyword_names"),
     ("pendulum_thermal.py", "PendulumHeat6", "pendulum_thermal_own_connector"),
+    ("belt_cart.py", "BeltCart", "electrical_rotational_translational"),
 ]
 
 
@@ -82,6 +83,7 @@ def test_check_reports_a_model_python_refuses_everywhere(tmp_path):
 @pytest.mark.parametrize("stem, model, problem", [
     ("two_mass", "two_mass_drive.py:TwoMass2Drive", "two_mass_move.toml"),
     ("keyword", "keyword_names.py:Plant2In3Out", "keyword_move.toml"),
+    ("belt", "belt_cart.py:BeltCart", "belt_move.toml"),
 ])
 def test_user_model_full_path_to_the_loop(tmp_path, capsys, stem, model, problem):
     # the user's path of docs/model_in_the_loop.md, no C by hand: explicit C, solve, tracking C, MPC C;
