@@ -13,7 +13,9 @@ measured side by side in one run, because these machines are noisy:
   max, the first step of the first run apart, in wall time (``step_*_s``) and in the CPU
   time of this thread (``cpu_step_*_s``: the step's own work, without the preemptions of
   a shared machine). The ctypes call is inside the timing (about 1-2 us);
-- its static memory: ``sizeof(<prefix>_memory)`` and the stack work arrays of one step;
+- its static memory: ``sizeof(<prefix>_memory)`` and the stack work arrays of one step, and with
+  DAQP the per-thread arena its allocations go to (``arena_bytes``, its peak use
+  ``arena_peak_bytes`` and the allocations that did not fit it, ``heap_calls``, 0 expected);
 - the tracking error RMS of the MPC over that of the feedforward alone on the same plant
   (``tracking_rms_ratio_to_feedforward``) and the applied-input bound violations;
 - ``ratio_to_python``: the same horizon problem solved per step in Python by CasADi + IPOPT
@@ -78,6 +80,8 @@ def bench(path: Path, steps: int, build: Path) -> dict:
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],
         "cpu_step_median_s": cst["median"], "cpu_step_p99_s": cst["p99"], "cpu_step_max_s": cst["max"],
         "memory_bytes": wall.memory_bytes, "work_bytes": wall.work_bytes,
+        "arena_bytes": wall.heap[2] if wall.heap else 0, "arena_peak_bytes": wall.heap[0] if wall.heap else 0,
+        "heap_calls": wall.heap[1] if wall.heap else 0,
         "tracking_rms": wall.mpc.rms_error, "feedforward_rms": wall.feedforward.rms_error,
         "tracking_rms_ratio_to_feedforward": wall.ratio_to_feedforward,
         "bound_violations": wall.mpc.bound_violations + cpu.mpc.bound_violations,
@@ -106,7 +110,9 @@ def main() -> None:
                   f"max {r['step_max_s'] * 1e6:.1f} us (first {r['first_step_s'] * 1e6:.1f} us)")
             print(f"  C step CPU : median {r['cpu_step_median_s'] * 1e6:.1f} us, p99 {r['cpu_step_p99_s'] * 1e6:.1f} us, "
                   f"max {r['cpu_step_max_s'] * 1e6:.1f} us")
-            print(f"  static memory {r['memory_bytes']} B + stack work {r['work_bytes']} B; statuses {r['status_counts']}")
+            print(f"  static memory {r['memory_bytes']} B + stack work {r['work_bytes']} B"
+                  + (f" + QP arena {r['arena_bytes']} B per thread (peak {r['arena_peak_bytes']} B, {r['heap_calls']} heap calls)" if r["arena_bytes"] else "")
+                  + f"; statuses {r['status_counts']}")
             print(f"  tracking RMS {r['tracking_rms']:.4g} vs feedforward {r['feedforward_rms']:.4g}: "
                   f"ratio {r['tracking_rms_ratio_to_feedforward']:.4g}; bound violations {r['bound_violations']}")
             print(f"  Python (CasADi + IPOPT) per step: median {r['python_step_median_s'] * 1e3:.2f} ms = "
