@@ -28,8 +28,11 @@ from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_cont
 from gtmodel.estimation.reference import period_index
 from gtmodel.problems.loop_file import LoopSetup
 
-__all__ = ["STATUS_NAMES", "LoopCheck", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
+__all__ = ["AUTHORITY_WARNING", "STATUS_NAMES", "LoopCheck", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
 
+#: Fraction of the reference's samples at an input bound above which the check's summary notes the
+#: feedback's lack of authority (a minimum-time plan at the bounds: bang-bang).
+AUTHORITY_WARNING = 0.2
 #: Status names by code.
 STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
 
@@ -61,6 +64,10 @@ class LoopCheck:
     clock : str
         Name of the clock of the step times (``"thread_time"``: thread CPU time,
         ``"perf_counter"``: wall time).
+    reference_at_bounds : float
+        Fraction of the reference's samples whose feedforward input is at an input bound
+        (:func:`reference_at_bounds`); above :data:`AUTHORITY_WARNING` the summary says that
+        the feedback has little authority left.
     """
 
     closed: LoopSummary
@@ -72,6 +79,7 @@ class LoopCheck:
     step_budget_s: float = float("inf")
     heap: tuple[int, int, int] | None = None
     clock: str = "perf_counter"
+    reference_at_bounds: float = 0.0
 
     @property
     def ratio_to_feedforward(self) -> float:
@@ -128,7 +136,10 @@ class LoopCheck:
                    + (" (the thread's CPU time)" if self.clock == "thread_time" else ""),
                    f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"]
                 + ([f"QP solver's allocations: arena peak {self.heap[0]} of {self.heap[2]} bytes (per thread), {self.heap[1]} on the heap"]
-                   if self.heap else []))
+                   if self.heap else [])
+                + ([f"note: the feedforward is at an input bound in {100 * self.reference_at_bounds:.0f} % of the samples: the feedback has "
+                    "little authority there (plan with margin below the bounds: a controller or MPC file's [reference] overrides, docs/model_in_the_loop.md)"]
+                   if self.reference_at_bounds > AUTHORITY_WARNING else []))
 
 
 def build_step(step: LoopStep, out_dir: str | Path, prefix: str) -> tuple[GeneratedCode, Path]:
@@ -195,6 +206,33 @@ def compiled_step(generated: GeneratedCode, library: Path) -> tuple[Any, Any, in
 
     reset()
     return controller, reset, ctypes.sizeof(memory)
+
+
+def reference_at_bounds(u_ref: np.ndarray, u_lb: np.ndarray, u_ub: np.ndarray, rtol: float = 1e-3) -> float:
+    """Fraction of the samples whose feedforward input is at a bound (within ``rtol`` of the bound range,
+    or of ``1 + |bound|`` for a one-sided one), in any component.
+
+    Parameters
+    ----------
+    u_ref : numpy.ndarray
+        ``(N, nu)`` the feedforward.
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` the input bounds (infinite: none).
+    rtol : float, optional
+        Closeness to a bound, relative (default 1e-3).
+
+    Returns
+    -------
+    float
+        In ``[0, 1]``.
+    """
+    u = np.atleast_2d(np.asarray(u_ref, dtype=float))
+    lb, ub = np.asarray(u_lb, dtype=float), np.asarray(u_ub, dtype=float)
+    finite = np.isfinite(lb) & np.isfinite(ub)
+    one_sided = 1.0 + np.abs(np.where(np.isfinite(lb), lb, np.where(np.isfinite(ub), ub, 0.0)))
+    scale = np.where(finite, ub - lb, one_sided)  # ub - lb is inf, not NaN, where a bound is infinite
+    at = (u <= lb + rtol * scale) | (u >= ub - rtol * scale)
+    return float(np.mean(np.any(at, axis=1))) if u.size else 0.0
 
 
 def heap_stats(generated: GeneratedCode, library: Path) -> tuple[int, int, int] | None:
@@ -286,4 +324,5 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path,
     budget = setup.max_step_time if setup.max_step_time is not None else float(setup.controller.dt)
     return LoopCheck(closed=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work, label=label,
                      max_ratio=float(setup.max_ratio), step_budget_s=float(budget), heap=heap_stats(generated, library),
-                     clock=getattr(clock, "__name__", str(clock)))
+                     clock=getattr(clock, "__name__", str(clock)),
+                     reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub))

@@ -53,6 +53,8 @@ class MPCCheck(LoopCheck):
         The QP solver's arena figures (:func:`~gtmodel.problems.loop_check.heap_stats`).
     clock : str
         Name of the clock of the step times.
+    reference_at_bounds : float
+        Fraction of the reference's samples at an input bound.
     """
 
     @property

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
-from gtmodel.problems.loop_check import LoopCheck
+from gtmodel.problems.loop_check import LoopCheck, reference_at_bounds
 
 x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)
 T = np.arange(8.0)
@@ -59,3 +59,20 @@ def test_ratio_is_the_closed_form():
     check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, max_ratio=0.2)
     assert check.ratio_to_feedforward == pytest.approx(0.2, rel=1e-12)
     assert any("not below 0.2" in f for f in check.failures())
+
+
+@pytest.mark.parametrize("u_ref, lb, ub, expected", [
+    ([[0.0], [1.0], [-1.0], [0.5]], [-1.0], [1.0], 0.5),  # two of four samples at a bound
+    ([[0.9995], [0.0]], [-1.0], [1.0], 0.5),  # within 1e-3 of the range 2
+    ([[5.0, 0.0], [0.0, 0.0]], [-np.inf, -1.0], [5.0, 1.0], 0.5),  # a one-sided bound: within 1e-3 (1 + 5)
+    ([[3.0], [4.0]], [-np.inf], [np.inf], 0.0),  # no bounds
+], ids=["two of four", "within tolerance", "one-sided", "unbounded"])
+def test_reference_at_bounds_counts_samples(u_ref, lb, ub, expected):
+    assert reference_at_bounds(np.array(u_ref), np.array(lb), np.array(ub)) == expected
+
+
+def test_summary_notes_a_reference_at_its_bounds():
+    check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, reference_at_bounds=0.6)
+    assert any("at an input bound in 60 %" in line for line in check.summary_lines()) and check.failures() == []
+    quiet = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, reference_at_bounds=0.1)
+    assert not any("input bound in" in line for line in quiet.summary_lines())
