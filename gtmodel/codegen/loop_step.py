@@ -210,9 +210,12 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
             f"{c.sqp_iterations} SQP iteration(s) per period\n"
             "(CasADi sqpmethod with qrqp, Gauss-Newton Hessian, single shooting, warm start shifted by one period;\n"
             "tracking of the reference x*, u* sampled at the period; gtmodel.estimation.mpc).\n"
-            f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
+            + (f"Offset-free: an input disturbance d estimated each period (gain {c.disturbance_gain:g}) from the\n"
+               "one-period prediction error; the memory w holds the warm start, d, the last x and u_last, a flag.\n"
+               if c.disturbance_gain else "")
+            + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
-                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.w_initial, description=text,
+                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text,
                     fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
 
 

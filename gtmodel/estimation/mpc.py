@@ -104,6 +104,17 @@ class MPCController(SampledReference):
         computed at ``t`` acts from ``t + dt``: the horizon starts from the state then,
         predicted by :attr:`step` from ``u_last`` (the input acting until the new one
         arrives), as :class:`~gtmodel.estimation.tracking.TrackingController` does.
+    disturbance_gain : float, optional
+        Offset-free MPC (default 0: off): an input disturbance ``d``, ``x_{k+1} = F(x_k, u_k
+        + d)``, estimated each period from the one-period prediction error of the last
+        measured state, ``d += gain (B'B + eps I)^{-1} B' (x - F(x_prev, u_act + d))``
+        (``B = dF/du`` there, ``u_act`` the input that acted over the period), and predicted
+        with: the horizon's inputs are the ones the plant sees, ``v = u + d`` (their bounds
+        shifted by ``d``, their reference the planned ``u*``), and the applied input is the
+        optimum less ``d``, saturated (Pannocchia & Rawlings, AIChE
+        J. 49 (2003), the input-disturbance model; Maeder, Borrelli & Morari, Automatica 45
+        (2009)). The estimator's state is kept in the step's memory after the warm start
+        (:attr:`memory_initial`).
     """
 
     dt: float
@@ -124,11 +135,25 @@ class MPCController(SampledReference):
     solver: str = "sqpmethod"
     constraints: MPCConstraints | None = None
     delay: int = 0
+    disturbance_gain: float = 0.0
 
     @property
     def nw(self) -> int:
         """Length of the warm start ``w`` (the blocked inputs, ``nu * blocks``)."""
         return self.nu * self.blocks
+
+    @property
+    def n_memory(self) -> int:
+        """Length of the step's memory: the warm start, and with :attr:`disturbance_gain` the estimate
+        ``d (nu)``, the last measured state ``(nx)``, the last ``u_last (nu)`` and a flag (1 once a step ran)."""
+        return self.nw + (2 * self.nu + self.nx + 1 if self.disturbance_gain else 0)
+
+    @property
+    def memory_initial(self) -> np.ndarray:
+        """``(n_memory,)`` the step's first memory: :attr:`w_initial` (and a zero estimate, the reference's first
+        state as the last state, ``u_initial``, flag 0)."""
+        extra = np.r_[np.zeros(self.nu), self.x_ref[0], self.u_initial, 0.0] if self.disturbance_gain else np.zeros(0)
+        return np.r_[self.w_initial, extra]
 
     @property
     def u_initial(self) -> np.ndarray:
@@ -348,11 +373,13 @@ class MPCController(SampledReference):
             the input acting until this one arrives: ``x`` is replaced by ``step(x, u_last)``
             and ``t`` by ``t + dt``.
         """
-        nx, nu, n = self.nx, self.nu, self.length
-        t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.nw)
+        nx, nu, n, nw = self.nx, self.nu, self.length, self.nw
+        t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.n_memory)
         t_in, x_in = t, x
+        w = mem[:nw]
+        d = self._disturbance(x, u_last, mem) if self.disturbance_gain else None
         if self.delay:  # the input computed now acts from t + dt: the horizon starts from the state then
-            t, x = t + self.dt, self.step(x, u_last)
+            t, x = t + self.dt, self.step(x, u_last if d is None else u_last + d)
         k = period_index(t, self.t0, self.dt, n - 1, eps=INDEX_EPS)  # a NaN time reads row 0; ok is then 0
         table = np.hstack([self.x_ref, self.u_ref])
         values = ca.MX(ca.DM(table.reshape(-1)))
@@ -362,14 +389,21 @@ class MPCController(SampledReference):
             return values[width * ca.fmin(k + j, n - 1) + c]
 
         xr, ur = self._window(t, lookup)
-        p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
         lbx, ubx = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
+        if d is not None:  # the horizon's inputs are the plant's, v = u + d: their bounds shifted by d, their reference u* as planned
+            shift = ca.repmat(d, self.blocks, 1)
+            lbx, ubx = ca.DM(lbx) + shift, ca.DM(ubx) + shift
+        p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
         if self.solver == "fatrop":
             solver, first, b = fatrop_problem(self, _sqrt_psd)
             z = solver(x0=first(x, w), p=p, **{k: b[k] for k in ("lbx", "ubx", "lbg", "ubg")})["x"]
             cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
         else:
-            full = self.nlp_solver("sqpmethod")(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **self.bounds())["x"]
+            bounds = self.bounds()
+            if d is not None:
+                pad = ca.DM.zeros(self.n_slack)
+                bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
+            full = self.nlp_solver("sqpmethod")(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **bounds)["x"]
             nlp, _ = self._nlp()
             cost, rows = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]])(full, p)  # NaN when the prediction fails
             rows = rows[1:]
@@ -380,11 +414,31 @@ class MPCController(SampledReference):
             cost = ca.if_else(ca.mmin(rows) >= -HARD_TOLERANCE, cost, math.inf)
         sol = saturate(full[: self.nw], lbx, ubx)
         b = self.horizon // self.blocks
-        shift = [min((j * b + 1) // b, self.blocks - 1) for j in range(self.blocks)]
-        w_next = ca.vertcat(*[sol[s * nu:(s + 1) * nu] for s in shift])
+        moved = [min((j * b + 1) // b, self.blocks - 1) for j in range(self.blocks)]
+        w_next = ca.vertcat(*[sol[s * nu:(s + 1) * nu] for s in moved])
         u = sol[:nu]
         ok = (ca.sum1(ca.fabs(sol)) + ca.fabs(t) + ca.fabs(cost)) < math.inf
-        return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+        if d is not None:  # the input less the estimate; the estimate, this measurement and the input acting now, for the next period
+            u = saturate(u - d, self.u_lb, self.u_ub)
+            ok = ca.logic_and(ok, ca.sum1(ca.fabs(d)) < math.inf)
+            w_next = ca.vertcat(w_next, d, x_in, u_last, 1.0)
+        return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+
+    def _disturbance(self, x: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
+        """The input-disturbance estimate of this period (see :attr:`disturbance_gain`) from the memory ``mem``."""
+        nx, nu, nw = self.nx, self.nu, self.nw
+        d, x_prev, u_prev, ran = mem[nw:nw + nu], mem[nw + nu:nw + nu + nx], mem[nw + nu + nx:nw + 2 * nu + nx], mem[-1]
+        # the input that acted over the last period: the one computed then (u_last now) without a delay, with a
+        # one-period delay the one computed a period earlier (u_last then, kept in the memory)
+        u_act = u_last if self.delay == 0 else u_prev
+        xs, us = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
+        B = ca.Function("B", [xs, us], [ca.jacobian(self.step(xs, us), us)])(x_prev, u_act + d)
+        btb = ca.mtimes(B.T, B)
+        eps = 1e-9 * (ca.trace(btb) / nu + 1e-300)
+        gain = ca.solve(btb + eps * ca.DM.eye(nu), B.T)  # (B'B + eps I)^{-1} B': least squares of the state error
+        innovation = x - self.step(x_prev, u_act + d)
+        # before the first step there is no last state (the memory holds the reference's first one): the estimate stays
+        return ca.if_else(ran > 0.5, d + self.disturbance_gain * ca.mtimes(gain, innovation), d)
 
 
 def _positive_int(value: Any, name: str, low: int = 1) -> int:
@@ -421,6 +475,7 @@ def mpc_controller(
     hard_constraints: bool = False,
     constraint_weight: float | None = None,
     constraint_every: int = 1,
+    disturbance_gain: float = 0.0,
 ) -> MPCController:
     """A real-time nonlinear MPC of a model along a reference motion (see the module docstring).
 
@@ -473,6 +528,10 @@ def mpc_controller(
     constraint_every : int, optional
         Constrain every ``constraint_every``-th predicted state and the last (default 1: all;
         :func:`~gtmodel.estimation.mpc_constraints.mpc_constraints`).
+    disturbance_gain : float, optional
+        In ``[0, 1]``: the input-disturbance estimate's gain per period (default 0: none;
+        :attr:`MPCController.disturbance_gain`). Not with ``solver="fatrop"`` nor with
+        constraints that depend on the inputs.
 
     Returns
     -------
@@ -532,7 +591,14 @@ def mpc_controller(
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")
+    if isinstance(disturbance_gain, bool) or not isinstance(disturbance_gain, (int, float)) or not 0.0 <= disturbance_gain <= 1.0:
+        raise InputError(f"disturbance_gain: expected a number in [0, 1] (0: no disturbance estimate), got {disturbance_gain!r}")
+    if disturbance_gain and solver == "fatrop":
+        raise InputError("disturbance_gain: the disturbance estimate is built for sqpmethod; give solver sqpmethod")
+    if disturbance_gain and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
+        raise InputError("disturbance_gain: the estimate shifts the horizon's inputs by d, which constraints of the inputs "
+                         "would see; give state constraints only or no estimate")
     return MPCController(dt=float(dt), t0=t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
-                         delay=int(delay))
+                         delay=int(delay), disturbance_gain=float(disturbance_gain))

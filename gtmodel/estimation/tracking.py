@@ -128,8 +128,8 @@ def saturate(u: Any, lb: Any, ub: Any) -> Any:
     ----------
     u : array_like or casadi.MX or casadi.SX
         Input, ``(nu,)`` or ``(nu, 1)``.
-    lb, ub : array_like
-        ``(nu,)`` bounds.
+    lb, ub : array_like or casadi.MX or casadi.SX or casadi.DM
+        ``(nu,)`` bounds (CasADi expressions with a CasADi ``u``).
 
     Returns
     -------
@@ -137,7 +137,8 @@ def saturate(u: Any, lb: Any, ub: Any) -> Any:
         The saturated input.
     """
     if isinstance(u, (ca.MX, ca.SX)):
-        return ca.fmin(ca.fmax(u, ca.DM(np.asarray(lb, float))), ca.DM(np.asarray(ub, float)))
+        lo, hi = (b if isinstance(b, (ca.MX, ca.SX, ca.DM)) else ca.DM(np.asarray(b, float)) for b in (lb, ub))
+        return ca.fmin(ca.fmax(u, lo), hi)
     return np.minimum(np.maximum(np.asarray(u, dtype=float), lb), ub)
 
 

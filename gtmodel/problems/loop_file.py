@@ -14,10 +14,13 @@ error names the file and the field, the CLI exits with 2):
 ``[check]``
     The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
     ``mass_factor``, ``friction_factor`` (the robot plant; a user model: ``parameter_factor``
-    on every parameter), ``compliance`` (the robot: the tool structure of eq. 6.14 in the
+    on every parameter, ``parameter_factors`` a table by parameter name replacing it for
+    those), ``compliance`` (the robot: the tool structure of eq. 6.14 in the
     plant, the tool position tracked, the controller measuring ``T``, ``T_dot``), ``noise``
     (one standard deviation per state), ``disturbance`` and ``disturbance_time``, ``delay``
-    (samples), ``seed``, ``error_states``.
+    (samples), ``seed``, ``error_states``, ``plant_method`` / ``plant_substeps``, and the
+    acceptance: ``max_ratio`` (the RMS ratio to the feedforward below it, default 1) and
+    ``max_step_time`` (the 99th-percentile step time at most it, default the period).
 
 The model is ``"L1"`` (a Gantry-Tau parameter set: its rigid-body dynamics with friction in
 TCP states ``T``, ``T_dot`` and input ``tau``, :func:`gtmodel.robots.model.gantry_tau_model`)
@@ -74,6 +77,7 @@ class CheckSection(Section):
     mass_factor: number(gt=0, le=10.0, description="plant masses / model masses (robot)") = 1.1
     friction_factor: number(gt=0, le=10.0, description="plant friction / model friction (robot)") = 1.1
     parameter_factor: number(gt=0, le=10.0, description="plant parameters / model parameters (user model)") = 1.1
+    parameter_factors: dict[str, float] = Field(default_factory=dict, description="plant / model factors of single parameters by name, replacing parameter_factor for them (user model; e.g. a geometry known exactly: 1.0)")
     noise: list[float] = Field(default_factory=list, description="measurement noise standard deviation per state (default none)")
     disturbance: list[float] = Field(default_factory=list, description="input step disturbance (default none)")
     disturbance_time: number(ge=0, le=1e4, unit="s", description="time of the step disturbance") = 0.0
@@ -102,16 +106,17 @@ class LoopModel:
         ``(np,)`` the plant's parameters.
     robot : bool
         True for a Gantry-Tau parameter set (TCP states), False for a user model.
-    parameter_factor : float
-        A user model's plant parameters over the model's (``[check] parameter_factor``;
-        applied again when the reference problem sets the model's parameters).
+    parameter_factor : float or numpy.ndarray
+        A user model's plant parameters over the model's, one factor or ``(np,)`` per parameter
+        (``[check] parameter_factor`` and ``parameter_factors``; applied again when the
+        reference problem sets the model's parameters).
     """
 
     ode: ExplicitODE
     plant: ExplicitODE
     plant_p: np.ndarray
     robot: bool
-    parameter_factor: float = 1.0
+    parameter_factor: Any = 1.0
 
 
 @dataclass
@@ -182,6 +187,8 @@ def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -
         loaded or reduced.
     """
     if ":" not in model:
+        if check.parameter_factors:
+            raise file.fail("check.parameter_factors", "no table for a robot (its plant: mass_factor, friction_factor)", check.parameter_factors)
         params = robot_parameters(file, field, model)
         ode = explicit_ode(gantry_tau_model(params, states="tcp"))
         plant = explicit_ode(gantry_tau_model(mismatched_robot(params, check.mass_factor, check.friction_factor), states="tcp"))
@@ -192,7 +199,15 @@ def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -
         ode = explicit_ode(load_user_model(model_path, cls))
     except GtModelError as exc:
         raise file.wrap(field, exc) from None
-    return LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * check.parameter_factor, robot=False, parameter_factor=check.parameter_factor)
+    factor = np.full(ode.np, float(check.parameter_factor))
+    names = ode.dae.p_vars
+    for name, value in check.parameter_factors.items():
+        if name not in names:
+            raise file.fail(f"check.parameter_factors.{name}", f"a parameter of the model ({', '.join(names)})", name)
+        if not (math.isfinite(value) and 0 < value <= 10.0):
+            raise file.fail(f"check.parameter_factors.{name}", "a factor > 0 and <= 10", value)
+        factor[names[name]] = value
+    return LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * factor, robot=False, parameter_factor=factor)
 
 
 def weight_diagonal(file: ProblemFile, field: str, weights: dict[str, float], names: list[str]) -> np.ndarray | None:

@@ -19,7 +19,9 @@ error names the file and the field, the CLI exits with 2):
     travel, joint-angle and velocity limits of a ``point_to_point`` one), tightened by
     ``state_lb`` / ``state_ub`` (tables by state name), soft by default (an exact penalty
     with slacks, weight ``constraint_weight``) or ``hard_constraints = true``, on every
-    predicted state or every ``constraint_every``-th and the last.
+    predicted state or every ``constraint_every``-th and the last; ``disturbance_gain``
+    (default 0; in ``[0, 1]``: offset-free MPC, an input disturbance estimated from the
+    one-period prediction error, :attr:`gtmodel.estimation.mpc.MPCController.disturbance_gain`).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``: the tables shared by every
     loop-controller file, :mod:`gtmodel.problems.loop_file`.
@@ -74,6 +76,7 @@ class MPCSection(Section):
     constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the step compensates by predicting the state one period ahead (0 or 1)")
     constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
+    disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
 
 
 class MPCFile(LoopFile):
@@ -159,7 +162,7 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         controller = mpc_controller(ode, i.t, i.x_ref, i.u_ref, horizon=m.horizon, dt=m.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb,
                                     u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
                                     solver=m.solver, hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
-                                    constraint_every=m.constraint_every, delay=m.input_delay, **cons)
+                                    constraint_every=m.constraint_every, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain), **cons)
     except GtModelError as exc:
-        raise file.wrap("mpc", exc) from None
+        raise file.wrap("mpc.disturbance_gain" if "disturbance_gain" in str(exc) else "mpc", exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period)

@@ -41,6 +41,11 @@ BAD = [
     ("plant method with compliance", L1, "compliance = true", 'compliance = true\nplant_method = "radau2"', "check.plant_method"),
     ("unknown error state", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["phi"]', "check.error_states.phi"),
     ("max_ratio above 1", MOTOR, "max_ratio = 0.5", "max_ratio = 1.5", "check.max_ratio"),
+    ("disturbance gain above 1", MOTOR, "disturbance_gain = 0.3", "disturbance_gain = 1.5", "mpc.disturbance_gain"),
+    ("disturbance gain with fatrop", MOTOR, 'solver = "sqpmethod"', 'solver = "fatrop"', "mpc.disturbance_gain"),
+    ("unknown parameter factor", MOTOR, "parameter_factor = 1.1", 'parameter_factor = 1.1\nparameter_factors = { "r.X" = 1.0 }', "check.parameter_factors.r.X"),
+    ("parameter factor 0", MOTOR, "parameter_factor = 1.1", 'parameter_factor = 1.1\nparameter_factors = { "r.R" = 0.0 }', "check.parameter_factors.r.R"),
+    ("parameter factors of a robot", L1, "mass_factor = 1.1", 'mass_factor = 1.1\nparameter_factors = { "m" = 1.0 }', "check.parameter_factors"),
     ("max_step_time negative", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["emf.phi"]\nmax_step_time = -1e-3', "check.max_step_time"),
 ]
 
@@ -96,3 +101,16 @@ def test_reference_table_of_a_user_model(tmp_path):
     assert c.length == 51 + int(round(0.3 / 0.004))  # 0.2 s at 4 ms, then the settling hold
     np.testing.assert_allclose(c.x_ref[:51, 1], np.arange(51) * 0.004, atol=1e-12)  # linear in t: sampled exactly
     assert np.isinf(c.u_ub[0])  # no bounds declared: the model's (none)
+
+
+def test_parameter_factors_replace_the_common_factor(tmp_path):
+    # the plant's parameters: every one 1.1 times the model's, the gear ratio (a geometry known exactly) 1.0 times
+    path = _write(tmp_path, MOTOR, "parameter_factor = 1.1", 'parameter_factor = 1.1\nparameter_factors = { "gear.ratio" = 1.0 }')
+    try:
+        setup = load_mpc_file(path)
+    finally:
+        path.unlink()
+    shipped = load_mpc_file(MPC_DIR / "dc_motor_mpc.toml")
+    ratio = setup.plant_p[:7] / shipped.plant_p[:7]  # fixed.phi0 (the 8th) is 0
+    names = ["r.R", "ind.L", "emf.k", "rotor.J", "gear.ratio", "load.J", "friction.d"]
+    np.testing.assert_allclose(ratio, [1.0, 1.0, 1.0, 1.0, 1 / 1.1, 1.0, 1.0], rtol=1e-12, err_msg=str(names))
