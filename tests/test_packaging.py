@@ -44,3 +44,32 @@ def test_every_runtime_lower_bound_is_pinned_in_the_minimum_environment(name, bo
 def test_ci_makes_fresh_environments_for_the_newest_and_the_minimum_versions():
     assert CI.count(" -m venv ") == 2
     assert "pip install -c .ci/constraints-minimum.txt \".[test]\"" in CI
+
+
+def _package_data_patterns() -> list[str]:
+    """``[tool.setuptools.package-data]`` as paths under the repository, e.g. ``gtmodel/robots/data/*.toml``."""
+    table = PYPROJECT["tool"]["setuptools"]["package-data"]
+    return [f"{package.replace('.', '/')}/{pattern}" for package, patterns in table.items() for pattern in patterns]
+
+
+_DATA_FILES = sorted(p.relative_to(REPO).as_posix() for p in (REPO / "gtmodel").rglob("*")
+                     if p.is_file() and p.suffix not in {".py", ".pyc"} and "__pycache__" not in p.parts)
+
+
+@pytest.mark.parametrize("path", _DATA_FILES)
+def test_every_file_the_package_reads_is_package_data(path):
+    """A data file under gtmodel/ that no package-data pattern names is missing from the wheel: the
+    installed package would not find it (issue 44: the ILC thesis table read from tests/)."""
+    from fnmatch import fnmatchcase
+
+    assert any(fnmatchcase(path, pattern) for pattern in _package_data_patterns()), (
+        f"{path} is not package data: add it to [tool.setuptools.package-data] in pyproject.toml")
+
+
+def test_no_module_reads_the_checkout_outside_the_package():
+    """Run-time files are package data: no module of gtmodel/ builds a path to the repository's
+    tests/ folder (the fidelity report, a maintainer's tool that rewrites docs/, reads the checkout
+    by design)."""
+    offenders = [p.relative_to(REPO).as_posix() for p in (REPO / "gtmodel").rglob("*.py")
+                 if re.search(r"""["']tests["']\s*/|/\s*["']tests["']""", p.read_text(encoding="utf-8"))]
+    assert offenders == []

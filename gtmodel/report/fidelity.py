@@ -243,7 +243,7 @@ def _ilc_rows(d: dict[str, Any], tag: str, model: dict[str, Any]) -> list[tuple[
         return [(f"{src}, Table 7.2 / (7.28) [{tag}]", "see the thesis", "not run", "-", "not run", "run the problem, then collect")]
     c = ilc["cases"]
     rows: list[tuple[str, ...]] = []
-    table = thesis_table_7_2()  # Dressler (2012), Table 7.2 and (7.28): tests/reference/gantry_tau_L1.toml [ilc.table_7_2]
+    table = thesis_table_7_2()  # Dressler (2012), Table 7.2 and (7.28): package data gtmodel/estimation/ilc/data/thesis_ilc.toml
     thesis_sigma = {name: table[name]["sigma_max"] for name in CASES}
     for name in CASES:
         if name not in c:
@@ -642,7 +642,7 @@ def render(data: dict[str, Any]) -> str:
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
             + RULES + "\n" + NOT_DIGITISED + "\n"
             "`[l1_ilc_thesis]`: the ILC set-up the thesis' text "
-            "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading, Case 2B's Kalman filter on model (7.21) with z_kin as input); `[l1_ilc]`: the quick variant. Table 7.2's thesis figures are read from `tests/reference/gantry_tau_L1.toml` `[ilc.table_7_2]`.\n\n"
+            "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading, Case 2B's Kalman filter on model (7.21) with z_kin as input); `[l1_ilc]`: the quick variant. Table 7.2's thesis figures are read from the package data `gtmodel/estimation/ilc/data/thesis_ilc.toml`.\n\n"
             "| thesis figure | thesis | ours | tolerance | verdict | measured cause of a difference |\n|---|---|---|---|---|---|\n")
     body = "\n".join("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in r[:6]) + " |" for r in rows(data))
     return head + body + "\n"

@@ -1,17 +1,16 @@
-"""The thesis' ILC figures, read from the repository's reference data (one copy of the numbers).
+"""The thesis' ILC figures, read from the package's data (one copy of the numbers).
 
 Dressler (2012), section 7.4: Table 7.2 (tool-side error (7.25), mean of iterations 5-10
 relative to iteration 0, x and y), eq. (7.28) (Case 1's sigma_max per actuator), the
 sigma_max of Cases 2A, 2B and 3 in the text, and Case 1's actuator error after five
 iterations ("about 2 %", Fig. 7.7). They live in table ``[ilc.table_7_2]`` of
-``tests/reference/gantry_tau_L1.toml`` (the repository's copy of the reference figures);
+``gtmodel/estimation/ilc/data/thesis_ilc.toml``, package data that an installed wheel carries;
 the ``ilc`` kind's summary and the fidelity report both read them here.
 """
 
 from __future__ import annotations
 
 import functools
-import logging
 from pathlib import Path
 from typing import Any
 
@@ -20,10 +19,9 @@ from gtmodel.errors import InputError
 
 __all__ = ["REFERENCE_FILE", "thesis_table_7_2"]
 
-_log = logging.getLogger("gtmodel")
 
-#: The reference data holding ``[ilc.table_7_2]`` (in the checkout, beside the tests that use it).
-REFERENCE_FILE = Path(__file__).resolve().parents[3] / "tests" / "reference" / "gantry_tau_L1.toml"
+#: The package data holding ``[ilc.table_7_2]`` (installed with the package).
+REFERENCE_FILE = Path(__file__).resolve().parent / "data" / "thesis_ilc.toml"
 _PREFIX = "case_"
 
 
@@ -58,17 +56,14 @@ def thesis_table_7_2(path: str | Path | None = None) -> dict[str, dict[str, Any]
     dict of str to dict
         Per case name (``"1"``, ``"2A"``, ``"2B"``, ``"3"``): ``tool_x``, ``tool_y`` (fractions of
         iteration 0), ``sigma_max`` (list: per actuator for Case 1, one figure otherwise) and,
-        for Case 1, ``actuator_relative_error``. Empty when the default file is absent (an
-        installed package without the repository's tests); a copy, safe to change.
+        for Case 1, ``actuator_relative_error``; a copy, safe to change.
 
     Raises
     ------
     InputError
-        A given file that cannot be read, or a file without a valid ``[ilc.table_7_2]``.
+        A file (the default one included: a broken installation) that is missing or cannot be
+        read, or a file without a valid ``[ilc.table_7_2]``.
     """
     if path is None:
-        if not REFERENCE_FILE.is_file():
-            _log.warning("the thesis' Table 7.2 is not available: %s is missing", REFERENCE_FILE)
-            return {}
         path = REFERENCE_FILE
     return {k: dict(v) for k, v in _read(str(path)).items()}

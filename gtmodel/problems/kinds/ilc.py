@@ -223,7 +223,7 @@ actuator correction of the first case when it learns on the actuators, for
             "cases": cases,
             "worst_sigma_max": float(worst),
             "estimators": _estimator_figures(declaration),
-            "thesis": thesis_table_7_2(),  # Dressler (2012), Table 7.2, from tests/reference/gantry_tau_L1.toml
+            "thesis": thesis_table_7_2(),  # Dressler (2012), Table 7.2, from the package data (estimation/ilc/data)
             "solve_time_s": solution.solve_time,
         }
         written = Written(fields)

@@ -1,4 +1,4 @@
-"""The thesis' Table 7.2 figures come from the reference data, one copy.
+"""The thesis' Table 7.2 figures come from the package data, one copy.
 
 Independent reference: Dressler (2012), section 7.4, Table 7.2 (x 13.3 / 12.6 / 13.3 / 10.3 %,
 y 36.1 / 23.9 / 25.2 / 24.9 %) and eq. (7.28) (0.90, 0.91, 0.93), typed here from the thesis
@@ -6,6 +6,8 @@ to check the reference file; the kind and the fidelity report read only the file
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import pytest
 
@@ -37,3 +39,19 @@ def test_bad_reference_file_names_the_table(tmp_path, text, match):
     f.write_text(text)
     with pytest.raises(InputError, match=match):
         thesis_table_7_2(f)
+
+
+def test_the_default_file_is_package_data():
+    import gtmodel
+    from gtmodel.estimation.ilc import thesis
+
+    assert thesis.REFERENCE_FILE.is_relative_to(Path(gtmodel.__file__).resolve().parent)
+
+
+def test_a_missing_default_file_is_an_error_not_an_empty_table(monkeypatch, tmp_path):
+    """A broken installation fails loudly: no summary row silently says "not in the thesis"."""
+    from gtmodel.estimation.ilc import thesis
+
+    monkeypatch.setattr(thesis, "REFERENCE_FILE", tmp_path / "absent.toml")
+    with pytest.raises(InputError, match="absent.toml"):
+        thesis_table_7_2()
