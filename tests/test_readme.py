@@ -58,4 +58,4 @@ def test_ci_runs_the_slow_tests_after_the_readme_command():
     """The slow-marked tests are left out of the default run; CI runs them after it."""
     lines = [ln.strip() for ln in (REPO / ".ci" / "run").read_text().splitlines()]
     readme_line = next(i for i, ln in enumerate(lines) if "pytest" in ln)
-    assert any(ln.endswith("python -m pytest -m slow") for ln in lines[readme_line + 1 :])
+    assert any(ln.endswith("python -P -m pytest -m slow") for ln in lines[readme_line + 1 :])
