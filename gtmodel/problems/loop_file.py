@@ -345,14 +345,15 @@ def loop_samples(file: ProblemFile, field: str, duration: float, settle_time: fl
     if not (math.isfinite(duration) and duration >= 0):
         raise file.fail("reference", "a reference motion of finite length", duration)
     samples = int(math.floor(duration / dt + 1e-6)) + 1 + int(round(settle_time / dt))
-    what = f"{duration:g} s of motion and reference.settle_time = {settle_time:g} s at {dt:g} s: {samples} periods"
+    settle = f" and reference.settle_time = {settle_time:g} s" if settle_time else ""
+    what = f"{duration:g} s of motion{settle} at {dt:g} s: {samples} periods"
+    remedy = "a longer period, a shorter motion" + (" or settle_time" if settle_time else "")
     if samples > MAX_LOOP_SAMPLES:
         raise file.fail(field, f"a period giving at most {MAX_LOOP_SAMPLES} loop periods over the reference ({what}; each a sample "
-                               "the controller stores and the generated C holds, and a period of the closed-loop check); a longer period, "
-                               "a shorter motion or settle_time", dt)
+                               f"the controller stores and the generated C holds, and a period of the closed-loop check); {remedy}", dt)
     if samples * per_sample > MAX_TABLE_NUMBERS:
         raise file.fail(field, f"a period giving at most {MAX_TABLE_NUMBERS} numbers in the generated C's tables ({what} of "
-                               f"{per_sample} numbers each: {samples * per_sample}); a longer period, a shorter motion or settle_time", dt)
+                               f"{per_sample} numbers each: {samples * per_sample}); {remedy}", dt)
     return samples
 
 
