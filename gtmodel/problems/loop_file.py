@@ -676,6 +676,7 @@ def loop_inputs(file: ProblemFile, doc: LoopFile, section: str, per_sample: Call
     ode = model.ode
     width = per_sample(ode) if per_sample is not None else ode.nx + ode.nu
     loop_samples(file, f"{section}.period", 0.0, doc.reference.settle_time, sec.period, width)
+    input_bounds(file, section, sec.u_lb, sec.u_ub, None, ode)  # the file's bounds against the model's, before the reference is solved
     if before_reference is not None:
         before_reference(model)
     names_x, names_u = list(ode.x_names), list(ode.u_names)

@@ -89,6 +89,8 @@ BAD = [
     ("u_lb nan", "mpc", MPC_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [nan]\nu_ub = [24.0]", "mpc.u_lb[0]"),
     ("u_ub 1e300", "tracking", TRK_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [-24.0]\nu_ub = [1e300]", "controller.u_ub[0]"),
     ("u_ub -inf", "mpc", MPC_L1, "period = 0.004 ", "period = 0.004\nu_ub = [450.0, -inf, 450.0] ", "mpc.u_ub[1]"),
+    ("u_lb of another length", "tracking", TRK_L1, "period = 0.004 ", "period = 0.004\nu_lb = [-1.0, -1.0] ", "controller.u_lb"),
+    ("u_lb above the model's upper bound", "mpc", MPC_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [5.0]\nu_ub = [-5.0]", "mpc.u_lb[0]"),
     ("state bound nan", "mpc", MPC_MOTOR, "input_weights =", 'state_ub = { "rotor.w" = nan }\ninput_weights =', "mpc.state_ub.rotor.w"),
     ("state bound 1e300", "mpc", MPC_MOTOR, "input_weights =", 'state_lb = { "rotor.w" = -1e300 }\ninput_weights =', "mpc.state_lb.rotor.w"),
     # names: C identifiers of at most 40 characters
@@ -220,3 +222,21 @@ def test_qp_entries_hand_counted(horizon, blocks, nx, nu, solver, expected):
 
 def test_the_shipped_horizons_are_far_below_the_limit():
     assert qp_entries(20, 5, 6, 3, "sqpmethod") < MAX_QP_ENTRIES / 50
+
+
+def _doc(x: float) -> str:
+    """A number as the page writes it (1e-5, 1e12)."""
+    return f"{x:g}".replace("e-0", "e-").replace("e+0", "e").replace("e+", "e")
+
+
+@pytest.mark.parametrize("text", [
+    f"| `period` | {_doc(loop_file.MIN_PERIOD_S)} .. {_doc(loop_file.MAX_PERIOD_S)} s |",
+    f"| `state_weights`, `input_weights`, `terminal_weights` | 0 .. {_doc(loop_file.MAX_WEIGHT)} each |",
+    f"magnitude <= {_doc(loop_file.MAX_MAGNITUDE)}",
+    f"at most {MAX_LOOP_SAMPLES:,}",
+    f"at most {MAX_TABLE_NUMBERS:,}",
+    f"at most {MAX_QP_ENTRIES:,}",
+], ids=["period", "weights", "magnitude", "periods", "tables", "qp"])
+def test_the_documented_ranges_are_the_declared_ones(text):
+    # docs/model_in_the_loop.md's table against the constants the schema declares
+    assert text in (REPO / "docs" / "model_in_the_loop.md").read_text()
