@@ -151,11 +151,14 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
     from gtmodel.codegen.loop_step import check_loop_step, generate_loop_step, tracking_step
     from gtmodel.problems.controller import is_result_folder, result_loop_setup, tracking_from_result
     from gtmodel.problems.loop_check import closed_loop_check
+    from gtmodel.problems.loop_file import MAX_PERIOD_S, MAX_WEIGHT, MIN_PERIOD_S
 
     if args.robot is not None or args.functions is not None or args.retime_n_max is not None:
         raise GtModelError("--controller RESULT_DIR generates the tracking controller alone: give it without --robot, --functions, --retime-n-max")
     if not is_result_folder(args.controller):
         raise GtModelError(f"--controller {args.controller}: a folder must be a result folder (with summary.json)")
+    if args.period is not None and not MIN_PERIOD_S <= args.period <= MAX_PERIOD_S:  # the ranges of a tracking-controller file
+        raise GtModelError(f"--period: expected a loop period of {MIN_PERIOD_S:g} to {MAX_PERIOD_S:g} s, got {args.period!r}")
     weights = {}
     for flag in ("q", "r"):
         text = getattr(args, flag)
@@ -164,6 +167,8 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
                 weights[flag.upper()] = [float(v) for v in text.split(",")]
             except ValueError:
                 raise GtModelError(f"--{flag}: expected comma-separated numbers, got {text!r}") from None
+            if not all(0 <= v <= MAX_WEIGHT for v in weights[flag.upper()]):
+                raise GtModelError(f"--{flag}: expected comma-separated finite weights of 0 to {MAX_WEIGHT:g}, got {text!r}")
     controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}), **weights)
     if args.mismatch is not None and not (math.isfinite(args.mismatch) and 0 < args.mismatch <= 10):
         raise GtModelError(f"--mismatch: expected a factor in (0, 10] on the plant's parameters, got {args.mismatch!r}")

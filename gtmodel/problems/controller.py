@@ -26,7 +26,7 @@ from gtmodel.errors import InputError, ProblemError
 from gtmodel.estimation.tracking import TrackingController, tracking_controller
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.problems.base import ProblemFile
-from gtmodel.problems.loop_file import CheckSection, LoopModel, LoopSetup, loop_setup
+from gtmodel.problems.loop_file import CheckSection, LoopModel, LoopSetup, loop_samples, loop_setup
 from gtmodel.problems.user_model import load_user_model
 
 __all__ = ["RESULT_TABLE", "is_result_folder", "tracking_from_result", "result_loop_setup"]
@@ -111,6 +111,9 @@ def tracking_from_result(
     InputError
         Not an ``optimal_control`` result of a solved problem, a missing table or column,
         non-numeric bounds.
+    ProblemError
+        Too many loop periods at ``dt`` (:func:`~gtmodel.problems.loop_file.loop_samples`,
+        naming the table and its ``t``).
     ModelFileError, ModelError
         The model file cannot be loaded or reduced.
     """
@@ -141,6 +144,9 @@ def tracking_from_result(
     keep = np.append(np.diff(t) > 0, True)  # a mesh point written twice (element boundary): the later one
     rows = keep & np.all(np.isfinite(np.column_stack([table[n] for n in ["t"] + ode.x_names + ode.u_names])), axis=1)
     lb, ub = _bounds(Path(summary.get("problem", "")), ode)
+    # the size before the gains are computed: the loop periods and the generated C's tables (x*, u*, K per sample)
+    loop_samples(ProblemFile(folder / RESULT_TABLE), "t", float(np.ptp(t[rows])) if rows.any() else 0.0, 0.0, dt,
+                 ode.nx + ode.nu + ode.nu * ode.nx)
     controller = tracking_controller(
         ode, t[rows], np.column_stack([table[n][rows] for n in ode.x_names]), np.column_stack([table[n][rows] for n in ode.u_names]),
         dt=dt, Q=Q, R=R, u_lb=lb, u_ub=ub, method=method, substeps=substeps,

@@ -6,12 +6,13 @@ error names the file and the field, the CLI exits with 2):
 ``[mpc]``
     ``model`` (a Gantry-Tau parameter set such as ``"L1"``, its rigid-body dynamics with
     friction in TCP states ``T``, ``T_dot`` and input ``tau`` (:func:`gtmodel.robots.model.gantry_tau_model`),
-    or ``"FILE.py:Class"`` a user's model), ``horizon`` (periods, >= 1), ``period`` [s]
-    (> 0, default the 4 ms loop), ``blocks`` (input blocks, a divisor of the horizon;
-    default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
+    or ``"FILE.py:Class"`` a user's model), ``horizon`` (periods, 1 .. 1000; with the
+    model's sizes at most :data:`MAX_QP_ENTRIES` entries of the horizon problem,
+    :func:`qp_entries`), ``period`` [s] (1e-5 .. 1, default the 4 ms loop), ``blocks``
+    (input blocks, a divisor of the horizon; default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
     ``solver`` (``"sqpmethod"``: CasADi's SQP with ``qrqp``), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
-    an unknown variable is refused), ``u_lb`` / ``u_ub`` (default: the reference problem's
+    an unknown variable is refused; each weight 0 .. 1e12), ``u_lb`` / ``u_ub`` (default: the reference problem's
     force limits, else the model's declared bounds); the state bounds and path constraints
     on the predicted states (:mod:`gtmodel.estimation.mpc_constraints`): the reference
     problem's as its file declares them (``problem_constraints``, default true: the states'
@@ -29,7 +30,6 @@ error names the file and the field, the CLI exits with 2):
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
@@ -42,15 +42,49 @@ from gtmodel.errors import GtModelError
 from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
 from gtmodel.estimation.mpc_constraints import problem_constraints
 from gtmodel.problems.base import ProblemFile
-from gtmodel.problems.loop_file import LoopFile, LoopSetup, loop_inputs, loop_setup, read_loop_file
+from gtmodel.problems.loop_file import (Bounds, LoopFile, LoopModel, LoopSetup, Period, StateBounds, Weights, loop_inputs,
+                                        loop_setup, read_loop_file)
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
-__all__ = ["MPCFile", "MPCSetup", "load_mpc_file"]
+__all__ = ["MPCFile", "MPCSetup", "load_mpc_file", "qp_entries", "MAX_HORIZON", "MAX_QP_ENTRIES"]
 
 #: Longest horizon accepted [periods].
 MAX_HORIZON = 1000
+#: Most entries of the dense parts of the horizon problem (:func:`qp_entries`): the generated C
+#: grows with them, about 64 bytes each beyond a base of about 0.5 MB (measured on the composed
+#: motor, nx = 3, nu = 1, blocks = horizon: horizon 20: 0.68 MB, 100: 3.97 MB, 200: 12.8 MB,
+#: 400: 46 MB of C, before compiling); the limit, about 15 MB of C, admits the motor's horizon
+#: up to 223 with one block per period, the L1's (nx = 6, nu = 3) up to 83, or 1000 with 5 blocks.
+MAX_QP_ENTRIES = 250_000
+
+
+def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
+    """The entries of the dense parts of the MPC's horizon problem, estimated before it is built.
+
+    ``sqpmethod`` (single shooting): the Jacobian of the ``horizon (nx + nu)`` residuals by
+    the ``nu blocks`` inputs (every predicted state depends on every earlier input) and the
+    Gauss-Newton Hessian ``(nu blocks)^2``; ``fatrop`` (multiple shooting in stage order):
+    ``horizon (nx + nu)^2``, one stage's blocks per period.
+
+    Parameters
+    ----------
+    horizon, blocks : int
+        Periods predicted and input blocks.
+    nx, nu : int
+        States and inputs of the model.
+    solver : str
+        :data:`~gtmodel.estimation.mpc.MPC_SOLVERS`.
+
+    Returns
+    -------
+    int
+    """
+    if solver == "fatrop":
+        return horizon * (nx + nu) ** 2
+    n = nu * blocks
+    return horizon * (nx + nu) * n + n * n
 
 
 class MPCSection(Section):
@@ -58,19 +92,19 @@ class MPCSection(Section):
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
     horizon: int = Field(ge=1, le=MAX_HORIZON, strict=True, description="prediction horizon [periods]")
-    period: number(gt=0, le=1.0, unit="s", description="loop period = prediction step") = LOOP_PERIOD_S
-    blocks: int | None = Field(default=None, ge=1, strict=True, description="input blocks over the horizon (a divisor; default the horizon)")
+    period: Period = LOOP_PERIOD_S
+    blocks: int | None = Field(default=None, ge=1, le=MAX_HORIZON, strict=True, description="input blocks over the horizon (a divisor; default the horizon)")
     sqp_iterations: int = Field(default=1, ge=1, le=100, strict=True, description="SQP iterations per period (1: real-time iteration)")
     solver: choice(*MPC_SOLVERS, description="NLP solver of the step (qrqp QPs)") = "sqpmethod"
     method: choice(*MPC_METHODS, description="prediction step over one period (euler: cheapest; implicit_euler, radau2: stiff models)") = "rk4"
     substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
-    state_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
-    input_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of R by input name")
-    terminal_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Qf by state name (default Q)")
-    u_lb: list[float] | None = Field(default=None, description="input lower bounds")
-    u_ub: list[float] | None = Field(default=None, description="input upper bounds")
-    state_lb: dict[str, float] = Field(default_factory=dict, description="lower bounds of the predicted states by state name (with the reference problem's)")
-    state_ub: dict[str, float] = Field(default_factory=dict, description="upper bounds of the predicted states by state name (with the reference problem's)")
+    state_weights: Weights = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
+    input_weights: Weights = Field(default_factory=dict, description="diagonal of R by input name")
+    terminal_weights: Weights = Field(default_factory=dict, description="diagonal of Qf by state name (default Q)")
+    u_lb: Bounds = Field(default=None, description="input lower bounds")
+    u_ub: Bounds = Field(default=None, description="input upper bounds")
+    state_lb: StateBounds = Field(default_factory=dict, description="lower bounds of the predicted states by state name (with the reference problem's)")
+    state_ub: StateBounds = Field(default_factory=dict, description="upper bounds of the predicted states by state name (with the reference problem's)")
     problem_constraints: bool = Field(default=True, strict=True, description="impose the reference problem's state bounds and path constraints on the horizon")
     hard_constraints: bool = Field(default=False, strict=True, description="state and path constraints hard (default soft: an exact penalty with slacks)")
     constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
@@ -85,7 +119,7 @@ class MPCFile(LoopFile):
     Parameters
     ----------
     name : str
-        Name of the controller (the C prefix is ``gt_<name>``).
+        Name of the controller, a C identifier of at most 40 characters (the C prefix is ``gt_<name>``).
     description : str
         Free text.
     reference : ReferenceSection
@@ -122,8 +156,6 @@ def _constraints(file: ProblemFile, doc: MPCFile, names_x: list[str], names_u: l
         for key, value in table.items():
             if key not in names_x:
                 raise file.fail(f"{field}.{key}", f"a state of the model ({', '.join(names_x)})", key)
-            if math.isnan(value):
-                raise file.fail(f"{field}.{key}", "a number", value)
             bound = x_lb if field.endswith("lb") else x_ub
             bound[names_x.index(key)] = pick(bound[names_x.index(key)], value)
     bad = np.flatnonzero(x_lb > x_ub)
@@ -147,15 +179,28 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
     Raises
     ------
     ProblemError
-        Naming the file and the field: unreadable TOML, an unknown or invalid field, a
-        horizon < 1, a period <= 0, an unknown variable in a weight table, blocks that do
-        not divide the horizon, a reference that cannot be read or solved.
+        Naming the file and the field: unreadable TOML, an unknown or invalid field (a
+        number not finite or out of its documented range, e.g. a horizon outside 1..1000, a
+        period outside 1e-5..1 s, a weight above 1e12), an unknown variable in a weight table,
+        blocks that do not divide the horizon, a horizon problem above
+        :data:`MAX_QP_ENTRIES` (:func:`qp_entries`, before the reference is solved), too many
+        loop periods (:func:`~gtmodel.problems.loop_file.loop_samples`), a reference that
+        cannot be read or solved.
     """
     doc, file = read_loop_file(path, MPCFile, "MPC file")
     m = doc.mpc
     if m.blocks is not None and m.horizon % m.blocks:
         raise file.fail("mpc.blocks", f"a divisor of the horizon {m.horizon}", m.blocks)
-    i = loop_inputs(file, doc, "mpc")
+
+    def qp_size(model: LoopModel) -> None:
+        blocks = m.horizon if m.blocks is None else m.blocks
+        entries = qp_entries(m.horizon, blocks, model.ode.nx, model.ode.nu, m.solver)
+        if entries > MAX_QP_ENTRIES:
+            raise file.fail("mpc.horizon", f"a horizon problem of at most {MAX_QP_ENTRIES} entries (horizon {m.horizon}, blocks {blocks}, "
+                                           f"{model.ode.nx} states, {model.ode.nu} inputs, solver {m.solver}: about {entries}; the generated C "
+                                           "grows with them, about 64 bytes each); fewer periods or input blocks", m.horizon)
+
+    i = loop_inputs(file, doc, "mpc", before_reference=qp_size)
     ode = i.model.ode
     cons = _constraints(file, doc, list(ode.x_names), list(ode.u_names), i.model.robot)
     try:

@@ -19,6 +19,7 @@ messages stay as precise as the hand-written readers they replace.
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
 
@@ -41,6 +42,8 @@ __all__ = [
     "Text",
     "NonEmptyText",
     "FileName",
+    "Identifier",
+    "MAX_IDENTIFIER",
     "validate_document",
     "problem_error",
     "MAX_LENGTH_M",
@@ -100,9 +103,12 @@ def number(
         The field type (use as ``x: number(...) = default``).
     """
 
+    limits = " and ".join(f"{op} {_fmt(b)}" for op, b in ((">", gt), (">=", ge), ("<", lt), ("<=", le)) if b is not None)
+    finite = "a finite number" + (f" {limits}" if limits else "")
+
     def check(v: Any) -> Any:
         if not _is_number(v) or not math.isfinite(v):
-            raise _fail("a finite number")
+            raise _fail(finite)  # the range said at once: "expected a finite number >= 0 and <= 1e+07, got nan"
         if gt is not None and not v > gt:
             raise _fail(what or ("a positive number" if gt == 0 else f"a number > {_fmt(gt)}"))
         if ge is not None and not v >= ge:
@@ -286,6 +292,19 @@ NonEmptyText = Annotated[str, _strict("a non-empty string", lambda v: isinstance
 #: A name that becomes a file or folder name (:func:`is_file_name`).
 FileName = Annotated[str, _strict(f"a name of 1 to {MAX_FILE_NAME} bytes of printable characters without '/' or '\\', "
                                    "not '.' or '..' (it names a folder or file)", is_file_name), Field(min_length=1)]
+
+
+#: Longest name that becomes a C identifier (:data:`Identifier`): ``gt_<name>_heap_stats``, the
+#: longest symbol a loop controller's C declares, stays within the 63 significant characters
+#: C99 guarantees for external identifiers.
+MAX_IDENTIFIER = 40
+_C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+#: A name that becomes part of C identifiers (a loop controller's ``name``: the prefix ``gt_<name>``).
+Identifier = Annotated[str, _strict(f"a C identifier of 1 to {MAX_IDENTIFIER} characters (ASCII letters, digits and '_', "
+                                    "not starting with a digit; it becomes the C prefix gt_<name>)",
+                                    lambda v: isinstance(v, str) and len(v) <= MAX_IDENTIFIER and _C_IDENTIFIER.fullmatch(v) is not None),
+                       Field(min_length=1, max_length=MAX_IDENTIFIER)]
 
 
 def _describe(description: str, unit: str) -> str | None:

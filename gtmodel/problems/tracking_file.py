@@ -6,17 +6,17 @@ error names the file and the field, the CLI exits with 2):
 ``[controller]``
     ``model`` (a Gantry-Tau parameter set such as ``"L1"``: its rigid-body dynamics with
     friction in TCP states ``T``, ``T_dot`` and input ``tau``; or ``"FILE.py:Class"`` a
-    user's model), ``period`` [s] (> 0, default the 4 ms loop), ``method`` and ``substeps``
+    user's model), ``period`` [s] (1e-5 .. 1, default the 4 ms loop), ``method`` and ``substeps``
     (the fixed step whose Jacobians are the linearisation ``A_k``, ``B_k``),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name,
-    an unknown variable refused; default Bryson's rule), ``u_lb`` / ``u_ub`` (default: the
+    an unknown variable refused, each weight 0 .. 1e12; default Bryson's rule), ``u_lb`` / ``u_ub`` (default: the
     reference problem's bounds, else the model's declared ones), ``time_varying`` (default
     true: the gains of the backward discrete Riccati recursion along the reference; false:
     one time-invariant LQR gain, that of the held end), ``input_delay`` (0 default, or 1:
     the input computed at ``t_k`` acts from ``t_{k+1}``, and the law applies the gain to
     the state predicted then by the model's step from the last input), ``integral_weights``
-    (a table by state name: integral action on those states, each weight > 0 that of its
-    integrated error; default none).
+    (a table by state name: integral action on those states, each weight in (0, 1e12] that of
+    its integrated error; default none).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``, as in an MPC file
     (:mod:`gtmodel.problems.loop_file`).
@@ -37,7 +37,8 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError
 from gtmodel.estimation.tracking import tracking_controller
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
-from gtmodel.problems.loop_file import LoopFile, LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
+from gtmodel.problems.loop_file import (MAX_WEIGHT, Bounds, LoopFile, LoopSetup, Period, Weights, loop_inputs, loop_setup, read_loop_file,
+                                        weight_diagonal)
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
 __all__ = ["TrackingFile", "load_tracking_file"]
@@ -47,17 +48,17 @@ class ControllerSection(Section):
     """``[controller]``: the model, the period, the weights and the bounds of the tracking controller."""
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
-    period: number(gt=0, le=1.0, unit="s", description="loop period") = LOOP_PERIOD_S
+    period: Period = LOOP_PERIOD_S
     method: choice(*STEP_METHODS, description="the fixed step linearised along the reference") = "rk4"
     substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
-    state_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
-    input_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of R by input name (default 1 / (half the bound range)^2)")
-    terminal_weights: dict[str, float] = Field(default_factory=dict, description="diagonal of Qf by state name (default: the stationary Riccati solution at the held end)")
-    u_lb: list[float] | None = Field(default=None, description="input lower bounds")
-    u_ub: list[float] | None = Field(default=None, description="input upper bounds")
+    state_weights: Weights = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
+    input_weights: Weights = Field(default_factory=dict, description="diagonal of R by input name (default 1 / (half the bound range)^2)")
+    terminal_weights: Weights = Field(default_factory=dict, description="diagonal of Qf by state name (default: the stationary Riccati solution at the held end)")
+    u_lb: Bounds = Field(default=None, description="input lower bounds")
+    u_ub: Bounds = Field(default=None, description="input upper bounds")
     time_varying: bool = Field(default=True, strict=True, description="time-varying LQR along the reference (false: the held end's time-invariant LQR)")
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
-    integral_weights: dict[str, float] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
+    integral_weights: dict[str, number(gt=0, le=MAX_WEIGHT)] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
 
 
 class TrackingFile(LoopFile):
@@ -66,7 +67,7 @@ class TrackingFile(LoopFile):
     Parameters
     ----------
     name : str
-        Name of the controller (the C prefix is ``gt_<name>``).
+        Name of the controller, a C identifier of at most 40 characters (the C prefix is ``gt_<name>``).
     description : str
         Free text.
     reference : ReferenceSection
@@ -97,19 +98,19 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
     Raises
     ------
     ProblemError
-        Naming the file and the field: unreadable TOML, an unknown or invalid field, a
-        period <= 0, an unknown variable in a weight table, a missing ``[reference]``, a
-        reference that cannot be read or solved, a controller that cannot be built (e.g.
-        a time-invariant LQR where the end is not stabilisable), an integral weight of a
-        state the model does not have or not > 0.
+        Naming the file and the field: unreadable TOML, an unknown or invalid field (a
+        number not finite or out of its documented range, e.g. a period outside 1e-5..1 s,
+        a weight above 1e12, an integral weight not > 0), an unknown variable in a weight
+        table, a missing ``[reference]``, too many loop periods or gains in the generated
+        C (:func:`~gtmodel.problems.loop_file.loop_samples`), a reference that cannot be
+        read or solved, a controller that cannot be built (e.g. a time-invariant LQR where
+        the end is not stabilisable), an integral weight of a state the model does not have.
     """
     doc, file = read_loop_file(path, TrackingFile, "tracking-controller file")
     c = doc.controller
-    i = loop_inputs(file, doc, "controller")
-    weight_diagonal(file, "controller.integral_weights", c.integral_weights, list(i.model.ode.x_names))
-    for name, value in c.integral_weights.items():
-        if not value > 0:
-            raise file.fail(f"controller.integral_weights.{name}", "a finite weight > 0 (a state without integral action is left out)", value)
+    ni = len(c.integral_weights)
+    i = loop_inputs(file, doc, "controller", per_sample=lambda ode: ode.nx + ode.nu + ode.nu * (ode.nx + ni),  # x*, u*, K, Ki per sample
+                    before_reference=lambda model: weight_diagonal(file, "controller.integral_weights", c.integral_weights, list(model.ode.x_names)))
     try:
         controller = tracking_controller(i.model.ode, i.t, i.x_ref, i.u_ref, dt=c.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb, u_ub=i.u_ub,
                                          method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay,

@@ -3,7 +3,7 @@
 References: the optimal motion of ``problems/dc_motor_move.toml`` itself (the controller on
 the nominal model reproduces it, its feedforward alone does not under a 10 % parameter
 mismatch), and the result folder's fields (a wrong status or a missing column is refused
-by name).
+by name); the loop-file ranges (:mod:`gtmodel.problems.loop_file`) for the route's flags and size.
 """
 
 from __future__ import annotations
@@ -14,7 +14,9 @@ import shutil
 import numpy as np
 import pytest
 
-from gtmodel.errors import InputError
+from gtmodel._tables import write_table
+from gtmodel.cli import main
+from gtmodel.errors import InputError, ProblemError
 from gtmodel.problems.controller import tracking_from_result
 from gtmodel.problems.run import run_problem
 
@@ -91,3 +93,35 @@ def test_missing_column_is_named(result, tmp_path):
     (folder / "trajectories.csv").write_text("\n".join(ln.replace("rotor.w", "rotor_w", 1) for ln in lines[:1]) + "\n" + "\n".join(lines[1:]) + "\n")
     with pytest.raises(InputError, match=r"trajectories\.csv: no column 'rotor\.w'"):
         tracking_from_result(folder)
+
+
+def _fake_result(folder, duration: float):
+    """A result folder of the composed motor without a solve: the summary's fields and a table of ``duration`` s."""
+    folder.mkdir()
+    (folder / "summary.json").write_text(json.dumps({"kind": "optimal_control", "status": "optimal",
+                                                     "model": {"file": str(REPO / "models" / "dc_motor.py"), "class": "DCMotorModel"}}))
+    t = np.linspace(0.0, duration, 11)
+    write_table(folder / "trajectories.csv", ["t", "ind.i", "emf.phi", "rotor.w", "src.v"], np.column_stack([t, 0 * t, t, 0 * t, 0 * t]))
+    return folder
+
+
+@pytest.mark.parametrize("flags, match", [
+    (["--period", "1e-12"], "--period: expected a loop period of 1e-05 to 1 s, got 1e-12"),
+    (["--period", "nan"], "--period: expected a loop period"),
+    (["--q", "1,nan,1"], "--q: expected comma-separated finite weights of 0 to 1e+12"),
+    (["--r", "1e300"], "--r: expected comma-separated finite weights"),
+    (["--q", "1,-1,1"], "--q: expected comma-separated finite weights"),
+], ids=["period 1e-12", "period nan", "q nan", "r 1e300", "q negative"])
+def test_result_folder_flags_out_of_range_exit_2_before_anything_is_built(tmp_path, capsys, flags, match):
+    # the ranges of a tracking-controller file (gtmodel.problems.loop_file) hold for the flags of the result-folder route
+    out = tmp_path / "out"
+    assert main(["codegen", "--controller", str(_fake_result(tmp_path / "result", 0.2)), *flags, "--out", str(out), "--check"]) == 2
+    assert match in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_result_too_long_for_the_period_is_refused_before_the_gains(tmp_path):
+    # 10 s at 10 us: 1,000,001 periods > MAX_LOOP_SAMPLES, refused before the Riccati recursion
+    folder = _fake_result(tmp_path / "result", 10.0)
+    with pytest.raises(ProblemError, match=r"trajectories\.csv: field 't': expected a period giving at most 100000 loop periods.*1000001 periods"):
+        tracking_from_result(folder, dt=1e-5)
