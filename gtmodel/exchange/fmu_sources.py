@@ -132,7 +132,20 @@ _DIRECTIVE = re.compile(r"^[ \t\f\v]*#[ \t\f\v]*([A-Za-z_]\w*)(.*)$", re.MULTILI
 def check_source_text(path: Path, src_dir: Path) -> None:
     """The text filter (first line): refuse ``#include`` (``include_next``, ``import``,
     ``embed``) of absolute paths, ``..`` or macros, and ``#pragma GCC dependency``, in any
-    file under ``sources/``, read as the preprocessor reads it (:func:`_phase3`)."""
+    file under ``sources/``, read as the preprocessor reads it (:func:`_phase3`).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``.fmu`` file (for the messages).
+    src_dir : pathlib.Path
+        The unpacked ``sources/`` folder.
+
+    Raises
+    ------
+    InputError
+        Naming the file and the directive (escaped, at most 80 characters of it).
+    """
     for file in sorted(p for p in src_dir.rglob("*") if p.is_file()):
         text = _phase3(file.read_bytes().decode("latin-1"))
         where = f"{path}: sources/{file.relative_to(src_dir).as_posix()}"
