@@ -161,7 +161,8 @@ def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLi
         raise FileNotFoundError(f"no executable {cmd[0]!r}")
     if os.name != "posix":  # no process groups to kill: the plain way
         return subprocess.run([exe, *cmd[1:]], capture_output=True, text=True, timeout=timeout, cwd=cwd)
-    guard = [sys.executable, "-I", "-S", "-c", _GUARD, str(os.getpid()), exe, *cmd[1:]]
+    # without a Python to run the guard (an embedded interpreter): the child leads its group itself
+    guard = [sys.executable, "-I", "-S", "-c", _GUARD, str(os.getpid()), exe, *cmd[1:]] if sys.executable else [exe, *cmd[1:]]
     proc = subprocess.Popen(guard, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, errors="replace", cwd=cwd, start_new_session=True)
     with _GROUPS_LOCK:
