@@ -123,7 +123,8 @@ def _kill_all() -> None:
         _kill_group(pgid)
 
 
-def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLike | None = None) -> subprocess.CompletedProcess:
+def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLike | None = None,
+              text: bool = True) -> subprocess.CompletedProcess:
     """Run a child process to its end, its output captured; nothing of it outlives the call.
 
     The one way gtmodel starts a child (compilers, ``make``, the check programs): the child
@@ -142,12 +143,14 @@ def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLi
         Seconds; None waits for ever.
     cwd : path-like, optional
         Working folder of the child.
+    text : bool, optional
+        Output as text (invalid UTF-8 replaced), else as bytes.
 
     Returns
     -------
     subprocess.CompletedProcess
         Exit code (128 + the signal's number when a signal ended the child), standard
-        output and error as text.
+        output and error.
 
     Raises
     ------
@@ -160,11 +163,11 @@ def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLi
     if exe is None:
         raise FileNotFoundError(f"no executable {cmd[0]!r}")
     if os.name != "posix":  # no process groups to kill: the plain way
-        return subprocess.run([exe, *cmd[1:]], capture_output=True, text=True, timeout=timeout, cwd=cwd)
+        return subprocess.run([exe, *cmd[1:]], capture_output=True, text=text, timeout=timeout, cwd=cwd)
     # without a Python to run the guard (an embedded interpreter): the child leads its group itself
     guard = [sys.executable, "-I", "-S", "-c", _GUARD, str(os.getpid()), exe, *cmd[1:]] if sys.executable else [exe, *cmd[1:]]
     proc = subprocess.Popen(guard, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, errors="replace", cwd=cwd, start_new_session=True)
+                            text=text, errors="replace" if text else None, cwd=cwd, start_new_session=True)
     with _GROUPS_LOCK:
         _GROUPS.add(proc.pid)
     deadline = None if timeout is None else time.monotonic() + timeout

@@ -9,9 +9,11 @@ view, in four steps per source file (each through :func:`gtmodel._compiler.run_c
    every file the preprocessor read (its line markers and its dependency list) must lie in
    the unpacked folder, gtmodel's FMI headers or a system include directory of the compiler
    (``cc -E -Wp,-v``); ``__has_include``/``__has_include_next``/``__has_embed`` are poisoned
-   (``#pragma GCC poison``, which also catches names built by macros and token pasting), so
-   no existence of an outside file is probed; inline assembly (``asm``, ``__asm__``) in the
-   FMU's own code is refused;
+   (``#pragma GCC poison``, which also catches names built by macros and token pasting): a
+   use located in the FMU refuses it, so no existence of an outside file is probed (a system
+   header probing its own headers, as glibc's do with ``_GNU_SOURCE``, is preprocessed
+   again without the poison); inline assembly (``asm``, ``__asm__``) in the FMU's own code
+   is refused;
 2. **compile** the checked preprocessed text (``-x cpp-output -S``): no header is read again;
 3. **scan the assembly** the compiler wrote for assembler-level inclusion (``.incbin``,
    ``.include``) and for assembler macros and loops that could build them (``.macro``,
@@ -21,8 +23,9 @@ view, in four steps per source file (each through :func:`gtmodel._compiler.run_c
 
 Before these, a text filter over every file under ``sources/`` (line splices joined,
 comments removed, digraphs read as the compiler reads them) refuses ``#include`` of
-absolute paths, ``..`` or macros and ``#pragma GCC dependency``, with a message naming the
-file. Compiler messages are shown only for locations inside the unpacked FMU; others are
+absolute paths, ``..`` or macros and ``#pragma GCC dependency``/``pch_preprocess``, with a
+message naming the file; the preprocessed text is refused with ``#pragma GCC
+pch_preprocess`` (which would make the compile step load a file as a precompiled header). Compiler messages are shown only for locations inside the unpacked FMU; others are
 replaced by a generic sentence.
 """
 
@@ -32,12 +35,13 @@ import logging
 import os
 import re
 import shutil
+import subprocess
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Callable
 
-from gtmodel._compiler import find_compiler, run_compiler
+from gtmodel._compiler import FIX, find_compiler, run_child, run_compiler
 from gtmodel.errors import CodegenError, CompilerNotFoundError, InputError
 from gtmodel.exchange.fmu_archive import ArchiveLimits, inside
 from gtmodel.exchange.fmu_export import INCLUDE_DIR, fmi_platform
@@ -156,10 +160,10 @@ def check_source_text(path: Path, src_dir: Path) -> None:
                 if name is None or name.startswith("/") or ".." in name or "\\" in name or ":" in name:
                     raise InputError(f"{where} includes {rest[:80].encode('unicode_escape').decode('ascii')!r}: an #{word} must "
                                      "name a header by a relative path without '..'; the FMU is refused")
-            elif word == "pragma" and re.search(r"\bdependency\b", rest):
-                raise InputError(f"{where} has '#pragma GCC dependency', which makes the compiler look at another file; the FMU is refused")
-        if re.search(r"_Pragma\s*\([^)]*\bdependency\b", text):
-            raise InputError(f"{where} has '_Pragma(\"GCC dependency ...\")', which makes the compiler look at another file; the FMU is refused")
+            elif word == "pragma" and (p := re.search(r"\b(dependency|pch_preprocess)\b", rest)):
+                raise InputError(f"{where} has '#pragma GCC {p.group(1)}', which makes the compiler look at another file; the FMU is refused")
+        if p := re.search(r"_Pragma\s*\([^)]*\b(dependency|pch_preprocess)\b", text):
+            raise InputError(f"{where} has '_Pragma(\"GCC {p.group(1)} ...\")', which makes the compiler look at another file; the FMU is refused")
 
 
 def system_include_dirs(cc: list[str]) -> tuple[Path, ...]:
@@ -213,6 +217,18 @@ def _files_read(i_text: str, d_file: Path) -> list[str]:
     return [f for f in dict.fromkeys(files) if not (f.startswith("<") and f.endswith(">"))]
 
 
+def _own_code(i_text: str, folder: Path) -> list[str]:
+    """The preprocessed lines that come from files of the FMU (per the line markers), without markers and blank lines."""
+    own, lines = False, []
+    for text in i_text.splitlines():
+        m = _MARKER.match(text)
+        if m:
+            own = _within(Path(os.path.realpath(_unescape(m.group(1)))), (folder,))
+        elif own and text.strip():
+            lines.append(text)
+    return lines
+
+
 def _asm_in_own_code(i_text: str, folder: Path) -> tuple[str, int] | None:
     """The first FMU file and line (per the line markers) whose preprocessed code has ``asm``."""
     current, own, line = "", False, 0
@@ -227,6 +243,36 @@ def _asm_in_own_code(i_text: str, folder: Path) -> tuple[str, int] | None:
             return current, line
         line += 1
     return None
+
+
+def _poisoned_in(stderr: str, folder: Path) -> str | None:
+    """The first use of a poisoned name located in the FMU (``sources/x.c:2:5``), if any."""
+    for line in stderr.splitlines():
+        m = _LOCATION.match(line)
+        if m and "poisoned" in line and _within(Path(os.path.realpath(m.group("file"))), (folder,)):
+            return f"{Path(os.path.realpath(m.group('file'))).relative_to(folder).as_posix()}:{m.group('line')}"
+    return None
+
+
+def _preprocess(cmd: list[str], i_file: Path, d_file: Path, path: Path, name: str, allowed: tuple[Path, ...]) -> tuple[int, str, str]:
+    """Run the preprocessor; refuse the FMU when it read a file outside ``allowed``.
+
+    Returns the exit code, the whole standard error and the preprocessed text."""
+    i_file.unlink(missing_ok=True)
+    d_file.unlink(missing_ok=True)
+    try:  # the text on standard output: the compiler removes an output file when it reports an error
+        proc = run_child(cmd, timeout=300, text=False)
+    except FileNotFoundError:
+        raise CompilerNotFoundError(f"no C compiler: {cmd[0]!r} cannot be run; {FIX}") from None
+    except subprocess.TimeoutExpired:
+        raise CodegenError(f"{path}: preprocessing sources/{name} did not finish within 300 s") from None
+    i_text = proc.stdout.decode("latin-1")
+    outside = [str(f) for f in (Path(os.path.realpath(f)) for f in _files_read(i_text, d_file)) if not _within(f, allowed)]
+    if outside:
+        raise InputError(f"{path}: compiling sources/{name} reads {outside[0].encode('unicode_escape').decode('ascii')!r}, "
+                         "outside the FMU and the compiler's system include directories; the FMU is refused")
+    i_file.write_bytes(proc.stdout)
+    return proc.returncode, proc.stderr.decode("utf-8", "replace"), i_text
 
 
 def _shown(stderr: str, folder: Path) -> str:
@@ -322,25 +368,23 @@ def build_from_sources(path: Path, folder: Path, root: ET.Element, ident: str, v
             name = src.relative_to(src_dir).as_posix()
             base = f"{path}: building the FMU's binary from its {len(sources)} C source(s)"
             i_file, d_file, s_file, o_file = (build / f"{k}.{x}" for x in ("i", "d", "s", "o"))
-            try:
-                run_compiler([*cc, f"-I{INCLUDE_DIR}", f"-I{src_dir}", *plain, *flags, "-include", str(poison), "-E", "-MD",
-                              "-MF", str(d_file), "-o", str(i_file), str(src)], f"{base}: preprocessing sources/{name}")
-                failed = None
-            except CompilerNotFoundError:
-                raise
-            except CodegenError as exc:
-                failed = exc
-            i_text = i_file.read_bytes().decode("latin-1") if i_file.is_file() else ""
-            read = [Path(os.path.realpath(f)) for f in _files_read(i_text, d_file)]
-            outside = [str(f) for f in read if not _within(f, allowed)]
-            if outside:
-                raise InputError(f"{path}: compiling sources/{name} reads {outside[0].encode('unicode_escape').decode('ascii')!r}, "
-                                 "outside the FMU and the compiler's system include directories; the FMU is refused")
-            if failed is not None and "poisoned" in str(failed):
-                raise InputError(f"{path}: {_shown(str(failed).split(chr(10), 1)[-1], folder)}: __has_include (__has_include_next, "
-                                 "__has_embed) would probe files outside the FMU; the FMU is refused")
-            if failed is not None:
-                raise _failed(base, f"preprocessing sources/{name}", failed, folder) from None
+            stage = f"preprocessing sources/{name}"
+            pre = [*cc, f"-I{INCLUDE_DIR}", f"-I{src_dir}", *plain, *flags, "-E", "-MD", "-MF", str(d_file), str(src)]
+            code, err, i_text = _preprocess([*pre[:-1], "-include", str(poison), pre[-1]], i_file, d_file, path, name, allowed)
+            if code and _poisoned_in(err, folder):
+                raise InputError(f"{path}: {_poisoned_in(err, folder)}: __has_include (__has_include_next, __has_embed) would "
+                                 "probe files outside the FMU; the FMU is refused")
+            if code and "poisoned" in err:  # only a system header probes its own headers (glibc with _GNU_SOURCE): again, unpoisoned
+                poisoned_view = _own_code(i_text, folder)
+                code, err, i_text = _preprocess(pre, i_file, d_file, path, name, allowed)
+                if not code and _own_code(i_text, folder) != poisoned_view:
+                    raise InputError(f"{path}: the preprocessed code of sources/{name} changes with the answers of __has_include "
+                                     "in a system header; the FMU is refused")
+            if code:
+                raise _failed(base, stage, CodegenError("\n" + err), folder)
+            if re.search(r"(?m)^[ \t]*#[ \t]*pragma\b[^\n]*\bpch_preprocess\b", i_text):  # the compiler would load that file as a PCH
+                raise InputError(f"{path}: the preprocessed sources/{name} has '#pragma GCC pch_preprocess', which makes the "
+                                 "compiler read another file; the FMU is refused")
             asm = _asm_in_own_code(i_text, folder)
             if asm:
                 raise InputError(f"{path}: {Path(os.path.realpath(asm[0])).relative_to(folder).as_posix()}:{asm[1]} has inline assembly "

@@ -29,7 +29,7 @@ _LINES = [line for line in (Path(SECRET).read_text(errors="replace").splitlines(
 _READS = r"compiling sources/evil.c reads '/etc/passwd', outside the FMU and the compiler's system include directories"
 _TEXT = r"sources/evil.c includes .*: an #include must name a header by a relative path without '..'"
 _ASM = r"sources/evil.c:\d+ has inline assembly \(asm\)"
-_POISON = r"sources/evil.c:\d+:\d+: error: attempt to use poisoned .*__has_include.*: __has_include \(__has_include_next, __has_embed\) would probe files outside the FMU"
+_POISON = r"sources/evil.c:\d+: __has_include \(__has_include_next, __has_embed\) would probe files outside the FMU; the FMU is refused"
 
 # (case, content of sources/evil.c compiled with the FMU, regex of the message)
 HOSTILE = [
@@ -45,6 +45,9 @@ HOSTILE = [
     ("has_include_by_a_macro", f'#define H __has_include\n#if H(<{SECRET}>)\nint leak = 1;\n#endif\n', _POISON),
     ("pragma_dependency", f'#pragma GCC dependency "{SECRET}"\n', r"'#pragma GCC dependency'"),
     ("pragma_operator_dependency", f'_Pragma("GCC dependency \\"{SECRET}\\"")\n', r"_Pragma\(\"GCC dependency"),
+    ("pragma_pch_preprocess", f'#pragma GCC pch_preprocess "{SECRET}"\n', r"'#pragma GCC pch_preprocess'"),
+    ("pragma_operator_pch_preprocess_pasted", f'#define S(x) #x\n#define Q(a, b) S(GCC a##b "{SECRET}")\n_Pragma(Q(pch_, preprocess))\nint x;\n',
+     r"the preprocessed sources/evil.c has '#pragma GCC pch_preprocess'"),
     ("incbin_in_asm", f'__asm__(".incbin \\"{SECRET}\\"");\n', _ASM),
     ("include_in_asm", f'__asm__(".include \\"{SECRET}\\"");\n', _ASM),
     ("asm_by_a_macro", f'#define A __asm__\nA(".incbin \\"{SECRET}\\"");\n', _ASM),
@@ -116,3 +119,16 @@ def test_system_include_directories_are_the_compilers():
 def test_phase3_reads_the_text_as_the_preprocessor_does(text, expected):
     """Reference: C11 5.1.1.2 translation phases 1-3 and 6.4.6 digraphs."""
     assert _phase3(text) == expected
+
+
+def test_a_system_header_probing_its_own_headers_does_not_refuse_the_fmu(sources, tmp_path):  # noqa: F811
+    """glibc's unistd.h and sys/stat.h use __has_include under _GNU_SOURCE: preprocessed again without the poison."""
+    fmu = _fmu(sources, tmp_path, "gnu", "#define _GNU_SOURCE\n#include <unistd.h>\n#include <sys/stat.h>\nint gtm_pid(void) { return (int)getpid(); }\n")
+    assert import_fmu(fmu).built_from_sources
+
+
+def test_fmu_code_that_depends_on_a_system_headers_probe_is_refused(sources, tmp_path):  # noqa: F811
+    """An FMU hiding __has_include behind a macro defined only when a system header's own probe succeeds (linux/stat.h's guard)."""
+    text = ('#define _GNU_SOURCE\n#include <sys/stat.h>\n#ifdef _LINUX_STAT_H\n#if __has_include("/etc/passwd")\nint leak = 1;\n#endif\n#endif\n')
+    with pytest.raises(InputError, match=r"evil.c:4: __has_include|changes with the answers of __has_include in a system header"):
+        import_fmu(_fmu(sources, tmp_path, "hidden", text))
