@@ -96,40 +96,41 @@ def _sources(path: Path, folder: Path, root: ET.Element, ident: str, limits: Arc
     return once, flags
 
 
+#: Where a comment, a GNU raw string, a string or a character literal starts.
+_START = re.compile(r"/\*|//|(?<!\w)(?:u8|[uUL])?R\"(?P<d>[^()\\\s]{0,16})\(|[\"']")
+#: The rest of a string or character literal (an unterminated one ends at the line's end).
+_REST = {'"': re.compile(r'(?:[^"\\\n]|\\.)*"?'), "'": re.compile(r"(?:[^'\\\n]|\\.)*'?")}
+
+
 def _phase3(text: str) -> str:
     """The text as the preprocessor tokenises it: line splices joined (also with blanks before
     the newline), comments replaced by one space (string and character literals, also GNU
-    raw strings, kept), digraphs ``%:`` read as ``#``."""
+    raw strings, kept), digraphs ``%:`` read as ``#``. Linear in the text's length."""
     text = re.sub(r"(?:\\|\?\?/)[ \t\f\v]*\r?\n", "", text.replace("\r\n", "\n"))
-    out: list[str] = []
-    i, n = 0, len(text)
-    while i < n:
-        c = text[i]
-        if c == "/" and text.startswith("/*", i):
-            j = text.find("*/", i + 2)
+    out, pos, n = [], 0, len(text)
+    while (m := _START.search(text, pos)) is not None:
+        out.append(text[pos:m.start()])
+        start, tok = m.start(), m.group(0)
+        if tok == "/*":
+            end = text.find("*/", start + 2)
             out.append(" ")
-            i = n if j < 0 else j + 2
-        elif c == "/" and text.startswith("//", i):
-            j = text.find("\n", i)
-            i = n if j < 0 else j
-        elif c == '"' and (raw := _RAW.match(text, i)) and re.search(r"(?<!\w)(?:u8|[uUL])?R$", text[max(0, i - 4):i]):
-            j = text.find(f"){raw.group(1)}\"", raw.end())  # a GNU raw string R"d(...)d": no escapes, no comments inside
-            j = n if j < 0 else j + len(raw.group(1)) + 2
-            out.append(text[i:j])
-            i = j
-        elif c in "\"'":
-            j = i + 1
-            while j < n and text[j] != c and text[j] != "\n":
-                j += 2 if text[j] == "\\" else 1
-            out.append(text[i:j + 1])
-            i = j + 1
+            pos = n if end < 0 else end + 2
+            continue
+        if tok == "//":
+            end = text.find("\n", start)
+            pos = n if end < 0 else end
+            continue
+        if m.group("d") is not None:  # raw: no escapes, no comments, up to )delimiter"
+            end = text.find(f"){m.group('d')}\"", m.end())
+            end = n if end < 0 else end + len(m.group("d")) + 2
         else:
-            out.append(c)
-            i += 1
+            end = _REST[tok].match(text, m.end()).end()
+        out.append(text[start:end])
+        pos = end
+    out.append(text[pos:])
     return "".join(out).replace("%:", "#")
 
 
-_RAW = re.compile(r'"([^()\\\s]{0,16})\(')
 _DIRECTIVE = re.compile(r"^[ \t\f\v]*#[ \t\f\v]*([A-Za-z_]\w*)(.*)$", re.MULTILINE)
 
 
