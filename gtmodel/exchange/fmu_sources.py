@@ -54,7 +54,7 @@ _log = logging.getLogger("gtmodel")
 POISONED = ("__has_include", "__has_include_next", "__has_include__", "__has_include_next__", "__has_embed")
 #: Assembler directives refused in the assembly of a source FMU (case-insensitive, as the assembler reads them).
 ASM_REFUSED = ("incbin", "include", "macro", "irp", "irpc", "rept", "altmacro", "purgem")
-_ASM_DIRECTIVE = re.compile(r"(?im)(?:^|[\s;:\"'])\.(" + "|".join(ASM_REFUSED) + r")\b")
+_ASM_DIRECTIVE = re.compile(r"(?i)\.(" + "|".join(ASM_REFUSED) + r")\b")  # anywhere: also inside a string (conservative)
 _ASM_KEYWORD = re.compile(r"\b(asm|__asm|__asm__)\b")
 _MARKER = re.compile(r'^# \d+ "((?:[^"\\]|\\.)*)"((?: \d+)*)\s*$')
 _LITERAL = re.compile(r'"(?:[^"\\\n]|\\.)*"|\'(?:[^\'\\\n]|\\.)*\'')
