@@ -1,21 +1,33 @@
-"""The system C compiler, and CasADi Functions compiled to cached shared libraries.
+"""The system C compiler, child processes, and CasADi Functions compiled to cached shared libraries.
 
 Base-layer utilities (no gtmodel imports above :mod:`gtmodel.errors`), used by the C code
 generator (:mod:`gtmodel.codegen.build`) and by numeric code that evaluates a CasADi graph
 on many samples (:mod:`gtmodel.calibration.identification`). The compiled code
 is generated from the one CasADi graph by :class:`casadi.CodeGenerator`; it is never a
 second model.
+
+Every child process gtmodel starts (compilers, ``make``, the check programs) goes through
+:func:`run_child`: it runs in a process group of its own under a small guard process, and
+the whole group is killed when gtmodel stops it (time-out, SIGINT/SIGTERM turned into
+:class:`KeyboardInterrupt`, any exception), when gtmodel exits (``atexit``) and, on Linux,
+when gtmodel dies without running any clean-up (SIGKILL): the guard asks the kernel for a
+signal when its parent dies (``prctl(PR_SET_PDEATHSIG)``) and then kills its group, so
+that a compiler's own children (``cc1``, ``as``, ``ld``) go too.
 """
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import logging
 import os
 import shlex
 import shutil
+import signal
 import subprocess
+import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -23,7 +35,7 @@ import casadi as ca
 
 from gtmodel.errors import CodegenError, CompilerNotFoundError
 
-__all__ = ["find_compiler", "run_compiler", "cache_dir", "compiled_function"]
+__all__ = ["find_compiler", "run_child", "run_compiler", "cache_dir", "compiled_function"]
 
 log = logging.getLogger("gtmodel")
 
@@ -64,6 +76,126 @@ def find_compiler() -> list[str]:
     raise CompilerNotFoundError(f"no C compiler found (CC unset, no gcc or cc on PATH); {FIX}")
 
 
+#: The guard between gtmodel and a child: leader of the child's process group; kills the
+#: group when gtmodel dies (Linux: parent-death signal) or when it is signalled itself.
+_GUARD = r"""
+import os, signal, sys
+def stop(signum=None, frame=None):
+    os.killpg(0, signal.SIGKILL)
+for s in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT):
+    signal.signal(s, stop)
+if sys.platform.startswith("linux"):
+    import ctypes
+    ctypes.CDLL(None).prctl(1, signal.SIGTERM, 0, 0, 0)  # PR_SET_PDEATHSIG
+if os.getppid() != int(sys.argv[1]):  # gtmodel died before the parent-death signal was set
+    stop()
+try:
+    pid = os.posix_spawn(sys.argv[2], sys.argv[2:], os.environ)
+except OSError as e:
+    sys.stderr.write("gtmodel: cannot run %r: %s\n" % (sys.argv[2], e.strerror))
+    os._exit(127)
+while True:
+    try:
+        status = os.waitpid(pid, 0)[1]
+        break
+    except ChildProcessError:
+        os._exit(127)
+code = os.waitstatus_to_exitcode(status)
+os._exit(code if code >= 0 else 128 - code)
+"""
+#: Process groups of the children running now (killed at exit).
+_GROUPS: set[int] = set()
+_GROUPS_LOCK = threading.Lock()
+
+
+def _kill_group(pgid: int) -> None:
+    try:
+        os.killpg(pgid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+@atexit.register
+def _kill_all() -> None:
+    with _GROUPS_LOCK:
+        groups = list(_GROUPS)
+    for pgid in groups:
+        _kill_group(pgid)
+
+
+def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLike | None = None,
+              text: bool = True) -> subprocess.CompletedProcess:
+    """Run a child process to its end, its output captured; nothing of it outlives the call.
+
+    The one way gtmodel starts a child (compilers, ``make``, the check programs): the child
+    runs under a guard in a process group of its own (so a signal sent to gtmodel's PID
+    alone reaches gtmodel, which stops the child). The whole group (the child and whatever
+    it started, e.g. ``cc1`` under ``gcc``) is killed with SIGKILL when the call ends by
+    a time-out or an exception (a SIGINT/SIGTERM raised as :class:`KeyboardInterrupt` by
+    :mod:`gtmodel._signals`), when the child has ended (stragglers), at gtmodel's exit, and
+    on Linux when gtmodel dies without clean-up (the guard's parent-death signal).
+
+    Parameters
+    ----------
+    cmd : list of str
+        The command; the first word is looked up on ``PATH``.
+    timeout : float, optional
+        Seconds; None waits for ever.
+    cwd : path-like, optional
+        Working folder of the child.
+    text : bool, optional
+        Output as text (invalid UTF-8 replaced), else as bytes.
+
+    Returns
+    -------
+    subprocess.CompletedProcess
+        Exit code (128 + the signal's number when a signal ended the child), standard
+        output and error.
+
+    Raises
+    ------
+    FileNotFoundError
+        The command's first word is no executable.
+    subprocess.TimeoutExpired
+        It did not end within ``timeout`` (the group is killed).
+    """
+    exe = shutil.which(cmd[0]) if os.sep not in cmd[0] else (cmd[0] if os.access(cmd[0], os.X_OK) and os.path.isfile(cmd[0]) else None)
+    if exe is None:
+        raise FileNotFoundError(f"no executable {cmd[0]!r}")
+    if os.name != "posix":  # no process groups to kill: the plain way
+        return subprocess.run([exe, *cmd[1:]], capture_output=True, text=text, timeout=timeout, cwd=cwd)
+    # without a Python to run the guard (an embedded interpreter): the child leads its group itself
+    guard = [sys.executable, "-I", "-S", "-c", _GUARD, str(os.getpid()), exe, *cmd[1:]] if sys.executable else [exe, *cmd[1:]]
+    proc = subprocess.Popen(guard, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=text, errors="replace" if text else None, cwd=cwd, start_new_session=True)
+    with _GROUPS_LOCK:
+        _GROUPS.add(proc.pid)
+    deadline = None if timeout is None else time.monotonic() + timeout
+    try:
+        while True:  # until the pipes close: a straggler holding them open is killed once the child ended
+            try:
+                out, err = proc.communicate(timeout=0.25 if deadline is None else max(0.0, min(0.25, deadline - time.monotonic())))
+                break
+            except subprocess.TimeoutExpired:
+                if proc.poll() is not None:
+                    _kill_group(proc.pid)
+                elif deadline is not None and time.monotonic() >= deadline:
+                    _kill_group(proc.pid)
+                    proc.communicate()
+                    raise subprocess.TimeoutExpired(cmd, timeout) from None
+    except subprocess.TimeoutExpired:
+        raise
+    except BaseException:  # KeyboardInterrupt (a signal), anything: the group goes
+        _kill_group(proc.pid)
+        proc.communicate()
+        raise
+    finally:
+        _kill_group(proc.pid)  # stragglers a finished child left running
+        with _GROUPS_LOCK:
+            _GROUPS.discard(proc.pid)
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
 def run_compiler(cmd: list[str], what: str) -> str:
     """Run a compiler command; its failure is one error with the first 40 lines of output.
 
@@ -88,7 +220,7 @@ def run_compiler(cmd: list[str], what: str) -> str:
     """
     log.debug("codegen: %s", " ".join(shlex.quote(c) for c in cmd))
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+        proc = run_child(cmd, timeout=300)
     except FileNotFoundError:
         raise CompilerNotFoundError(f"no C compiler: {cmd[0]!r} cannot be run; {FIX}") from None
     except subprocess.TimeoutExpired:

@@ -12,7 +12,8 @@ that :mod:`gtmodel.exchange.explicit_ops` simulates, linearises and connects to 
 models and components, and :mod:`gtmodel.exchange.explicit_ocp` uses in optimal control.
 
 An FMU without a binary for this platform but with C sources (a source FMU) is built with
-the C compiler of :mod:`gtmodel._compiler`.
+the C compiler of :mod:`gtmodel._compiler`, confined to the FMU's own files by the
+compiler's own view (:mod:`gtmodel.exchange.fmu_sources`).
 """
 
 from __future__ import annotations
@@ -29,11 +30,11 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from gtmodel._compiler import find_compiler, run_compiler
-from gtmodel.errors import CodegenError, CompilerNotFoundError, InputError
+from gtmodel.errors import InputError
 from gtmodel.exchange.explicit import ExplicitModel
 from gtmodel.exchange.fmu_archive import ArchiveLimits, extract_fmu, inside, plain_identifier
-from gtmodel.exchange.fmu_export import INCLUDE_DIR, fmi_platform
+from gtmodel.exchange.fmu_export import fmi_platform
+from gtmodel.exchange.fmu_sources import build_from_sources
 
 __all__ = ["ImportedFmu", "import_fmu", "DERIVATIVES"]
 
@@ -96,94 +97,6 @@ def _read_description(path: Path, folder: Path, limits: ArchiveLimits) -> ET.Ele
     return _parse_xml(path, md, "modelDescription.xml", limits)
 
 
-def _sources(path: Path, folder: Path, root: ET.Element, ident: str, limits: ArchiveLimits) -> tuple[list[Path], list[str]]:
-    """The C sources to build (each once) and the compiler's ``-D``/``-I`` flags, all inside ``sources/``."""
-    src_dir = folder / "sources"
-    listed: list[Path] = []
-    flags: list[str] = []
-    bd = src_dir / "buildDescription.xml"
-    if bd.is_file():  # FMI 3.0: the build configuration of this model identifier (else the first)
-        configs = list(_parse_xml(path, bd, "sources/buildDescription.xml", limits).iter("BuildConfiguration"))
-        chosen = [c for c in configs if c.get("modelIdentifier") == ident] or configs[:1]
-        for config in chosen:
-            for fileset in config.iter("SourceFileSet"):
-                for f in fileset.iter("SourceFile"):
-                    listed.append(inside(path, src_dir, f.get("name"), "buildDescription SourceFile"))
-                for d in fileset.iter("PreprocessorDefinition"):
-                    key = d.get("name", "")
-                    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]{0,99}", key):
-                        raise InputError(f"{path}: buildDescription PreprocessorDefinition name {key[:100]!r} is not a C identifier; the FMU is refused")
-                    value = d.get("value")
-                    if value is not None and (len(value) > 200 or any(ord(c) < 32 or ord(c) == 127 for c in value)):
-                        raise InputError(f"{path}: buildDescription PreprocessorDefinition {key} has a value with control "
-                                         "characters or over 200 characters; the FMU is refused")
-                    flags.append(f"-D{key}" if value is None else f"-D{key}={value}")
-                for inc in fileset.iter("IncludeDirectory"):
-                    flags.append(f"-I{inside(path, src_dir, inc.get('name'), 'buildDescription IncludeDirectory')}")
-    else:  # FMI 2.0: <SourceFiles> of the model exchange interface (also listed again under CoSimulation)
-        for f in root.findall("ModelExchange/SourceFiles/File"):
-            listed.append(inside(path, src_dir, f.get("name"), "SourceFiles File"))
-    if not listed and src_dir.is_dir():
-        listed = sorted(src_dir.glob("*.c"))
-    once = list(dict.fromkeys(p for p in listed if p.suffix == ".c"))  # each source once, in order
-    return once, flags
-
-
-_INCLUDE = re.compile(rb"^[ \t]*#[ \t]*(?:include|include_next|import|embed)\b[ \t]*(.*)$", re.MULTILINE)
-
-
-def _check_includes(path: Path, src_dir: Path) -> None:
-    """Refuse ``#include`` of absolute paths, ``..`` or macros in any file under ``sources/``:
-    the compiler must read nothing outside the unpacked FMU but the system headers."""
-    for file in sorted(p for p in src_dir.rglob("*") if p.is_file()):
-        for m in _INCLUDE.finditer(file.read_bytes()):
-            target = m.group(1).split(b"//")[0].strip()
-            name = target[1:-1] if target[:1] in (b'"', b"<") and target[-1:] in (b'"', b">") else None
-            if name is None or name.startswith(b"/") or b".." in name or b"\\" in name or b":" in name:
-                shown = target[:80].decode("ascii", "backslashreplace")
-                raise InputError(f"{path}: sources/{file.relative_to(src_dir).as_posix()} includes {shown!r}: "
-                                 "an #include must name a header by a relative path without '..'; the FMU is refused")
-
-
-def _first_error(msg: str) -> str:
-    """The compiler's first ``error:`` line (file, line and message), shortened and escaped."""
-    for line in msg.splitlines():
-        if "error" in line:
-            return line.strip()[:300].encode("unicode_escape").decode("ascii")
-    return msg.strip().splitlines()[-1][:300].encode("unicode_escape").decode("ascii") if msg.strip() else "(no output)"
-
-
-def _build_from_sources(path: Path, folder: Path, root: ET.Element, ident: str, version: str, limits: ArchiveLimits) -> Path:
-    """Compile the FMU's C sources into ``binaries/<platform>/<id><ext>`` (a source FMU)."""
-    plat, ext = fmi_platform(version)
-    src_dir = folder / "sources"
-    sources, flags = _sources(path, folder, root, ident, limits) if src_dir.is_dir() else ([], [])
-    present = sorted(p.name for p in (folder / "binaries").glob("*")) if (folder / "binaries").is_dir() else []
-    missing = [s for s in sources if not s.is_file()]
-    if not sources or missing:
-        what = f"missing source {missing[0].relative_to(src_dir.resolve()).as_posix()!r}" if missing else "no C sources to build one"
-        raise InputError(
-            f"{path}: no binary for this platform ({plat}) and {what} "
-            f"(binaries for: {', '.join(present) or 'none'})"
-        )
-    _check_includes(path, src_dir)
-    out = inside(path, folder / "binaries", f"{plat}/{ident}{ext}", "binary")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    # a shared library exports the plain fmi3 names (the standard header's override of a source FMU's prefix)
-    plain = ["-DFMI3_OVERRIDE_FUNCTION_PREFIX"] if version == "3.0" else []
-    cmd = [*find_compiler(), "-shared", "-fPIC", "-O1", f"-I{INCLUDE_DIR}", f"-I{src_dir}", *plain, *flags,
-           *map(str, sources), "-o", str(out), "-lm"]
-    try:
-        run_compiler(cmd, f"{path}: building the FMU's binary from its sources")
-    except CompilerNotFoundError:
-        raise
-    except CodegenError as exc:
-        raise CodegenError(f"{path}: building the FMU's binary from its {len(sources)} C source(s) failed: "
-                           f"{_first_error(str(exc).split(chr(10), 1)[-1])}") from None
-    _log.info("built %s from the sources of %s", out.name, path)
-    return out
-
-
 def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = None,
                limits: ArchiveLimits | None = None) -> ImportedFmu:
     """Load an FMU (FMI 2.0 / 3.0 model exchange) as an explicit model.
@@ -218,8 +131,12 @@ def import_fmu(path: str | Path, derivatives: str = "auto", name: str | None = N
         states; the message names it), no binary for this
         platform and no sources, ``derivatives="directional"`` for an FMU without them, or
         CasADi cannot load it.
+        When building a source FMU: a file the preprocessor reads outside the FMU and the system
+        include directories, ``__has_include``, inline assembly or assembler-level inclusion
+        (:func:`gtmodel.exchange.fmu_sources.build_from_sources`); nothing outside is quoted.
     CodegenError
-        Building a source FMU failed: the message names the compiler's first error.
+        Building a source FMU failed: the message names the compiler's first error located
+        in the FMU (or says that none is).
     """
     path = Path(path)
     if derivatives not in DERIVATIVES:
@@ -278,7 +195,7 @@ def _load(path: Path, folder: Path, derivatives: str, name: str | None, limits: 
     plat, ext = fmi_platform(version)
     built = False
     if not inside(path, folder / "binaries", f"{plat}/{ident}{ext}", "binary").is_file():
-        _build_from_sources(path, folder, root, ident, version, limits)
+        build_from_sources(path, folder, root, ident, version, limits, _parse_xml)
         built = True
     provides = (me.get("providesDirectionalDerivatives") or me.get("providesDirectionalDerivative") or "false") == "true"
     if derivatives == "directional" and not provides:

@@ -8,9 +8,9 @@ against a generated 3-link library and runs it.
 from __future__ import annotations
 
 import shutil
-import subprocess
 from pathlib import Path
 
+from gtmodel._compiler import run_child
 from gtmodel.codegen.emit import harness_dir
 from gtmodel.codegen.generate import GeneratedCode
 
@@ -81,9 +81,9 @@ def run_harness_unit_tests(generated: GeneratedCode, build_dir: str | Path, harn
         "make", "-s", "-C", str(folder), f"BUILD={build}", f"GEN={generated.out_dir.resolve()}",
         f"PREFIX={generated.prefix}", f"TEST_T={{{', '.join(repr(float(x)) for x in T)}}}", str(target),
     ]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    proc = run_child(cmd)
     if proc.returncode != 0:
         return False, f"build failed: {(proc.stderr or proc.stdout).strip().splitlines()[-1:]}"
-    run = subprocess.run([str(target)], capture_output=True, text=True, timeout=120)
+    run = run_child([str(target)], timeout=120)
     last = run.stdout.strip().splitlines()[-1] if run.stdout.strip() else f"exit {run.returncode}"
     return run.returncode == 0, f"ran {folder / 'unit_test.c'}: {last}"

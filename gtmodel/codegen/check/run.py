@@ -20,7 +20,7 @@ from typing import Sequence
 
 import numpy as np
 
-from gtmodel._compiler import find_compiler, run_compiler
+from gtmodel._compiler import find_compiler, run_child, run_compiler
 from gtmodel.codegen.build import COMMON_FLAGS, WRAPPER_WARNINGS, CompiledLibrary
 from gtmodel.codegen.emit import fill, harness_dir
 from gtmodel.codegen.generate import GeneratedCode
@@ -147,7 +147,7 @@ def run_program(program: Path, what: str, timeout: float = 600) -> list[list[str
         not finish in time.
     """
     try:
-        run = subprocess.run([str(program)], capture_output=True, text=True, timeout=timeout)
+        run = run_child([str(program)], timeout=timeout)
     except subprocess.TimeoutExpired:
         raise CodegenError(f"{what}: did not finish within {timeout:g} s") from None
     if run.returncode != 0:
@@ -215,7 +215,7 @@ def run_record_program(program: str | Path, out_file: str | Path, width: int, va
     cmd = [str(program), str(out_file)]
     if valgrind:
         cmd = ["valgrind", "--tool=memcheck", "--error-exitcode=99", "--leak-check=full", *cmd]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    proc = run_child(cmd, timeout=timeout)
     data = np.fromfile(out_file, dtype=np.float64) if Path(out_file).is_file() else np.zeros(0)
     return proc, data[: data.size // width * width].reshape(-1, width)
 
