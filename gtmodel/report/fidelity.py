@@ -29,6 +29,7 @@ from typing import Any, Callable
 import numpy as np
 import scipy.optimize
 
+from gtmodel._repository import checkout
 from gtmodel.errors import InputError
 from gtmodel.estimation.ilc.thesis import thesis_table_7_2
 from gtmodel.report.fidelity_d1 import D1_PROBLEMS, d1_rows
@@ -43,7 +44,7 @@ __all__ = ["PROBLEMS", "LEARNING_FACTOR_HZ", "collect", "learning_factors", "loa
 PROBLEMS = ("l1_ilc", "l1_ilc_thesis", "l1_ilc_fitted", "kr500_state_estimation", "kr500_correction_stability", "d1_error_models", "kr500_table_10",
             "kr500_table_2")
 PROBLEMS = tuple(dict.fromkeys(PROBLEMS + D1_PROBLEMS))  # the D1 error-model runs (gtmodel.report.fidelity_d1)
-REPO = Path(__file__).resolve().parents[2]
+REPO = checkout()  # the checkout the tool rewrites, not site-packages (gtmodel._repository)
 FIGURES = REPO / "docs" / "fidelity_figures.json"
 PAGE = REPO / "docs" / "fidelity.md"
 CASES = ("1", "2A", "2B", "3")
@@ -615,7 +616,16 @@ def load() -> dict[str, Any]:
     -------
     dict
         The collected figures (:func:`collect`) with the fits (:mod:`gtmodel.report.fidelity_fits`; None if absent).
+
+    Raises
+    ------
+    InputError
+        ``docs/fidelity_figures.json`` is not in the checkout (:func:`gtmodel._repository.checkout`:
+        the tool works on a gtmodel checkout, not on an installed package).
     """
+    if not FIGURES.is_file():
+        raise InputError(f"{FIGURES}: not found; the fidelity report works on a gtmodel checkout "
+                         "(run it from one, or set GTMODEL_REPOSITORY)")
     data = json.loads(FIGURES.read_text(encoding="utf-8"))
     data["fits"] = json.loads(FITS.read_text(encoding="utf-8")) if FITS.is_file() else None
     return data

@@ -43,6 +43,7 @@ from typing import Any
 
 import scipy.optimize
 
+from gtmodel._repository import checkout
 from gtmodel.estimation.fusion.limits import velocity_limit
 from gtmodel.estimation.fusion.study import APPENDIX_B, FusionStudy
 from gtmodel.estimation.fusion.tracker_imu import TABLE_7
@@ -51,7 +52,7 @@ from gtmodel.report.fidelity_rules import Row
 __all__ = ["FITS", "D1_THESIS_FILE", "D1_FITTED_FILE", "QA_BRACKET", "QP_BRACKET", "TABLE_8_RATIOS", "TABLE_9_RATIOS", "TABLE_10_3_AXIS", "ratios", "fit_table_8", "predict",
            "fit_rows"]
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = checkout()  # the checkout the tool rewrites, not site-packages (gtmodel._repository)
 FITS = REPO / "docs" / "fidelity_fits.json"
 #: The D1 set-up the thesis' text defines, and the same with the cart compliance fitted to Table 5.8.
 D1_THESIS_FILE = REPO / "problems" / "thesis" / "d1_error_models_thesis.toml"
