@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import ctypes
+import dataclasses
 import json
 import re
 
@@ -53,7 +54,8 @@ def test_tracking_controller_c_equals_python_and_keeps_the_contract(tmp_path, mo
     gen = generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_tracking")
     report = check_loop_step(gen, n=300)
     assert report.passed, "\n".join(report.summary_lines())
-    assert report.functions[0].max_abs_diff <= 1e-12 and len(report.probes) == 9
+    assert report.functions[0].max_abs_diff <= 1e-12 and len(report.probes) == 11
+    assert [f.name for f in report.functions] == ["control", "memory_reset"] and report.functions[1].max_abs_diff <= 1e-12
     text = gen.header.read_text()
     assert "int gt_tracking_step(gt_tracking_memory *mem, double t, const double *x, double *u);" in text
     assert "#define GT_TRACKING_DT 0.004" in text and "malloc" not in gen.source.read_text()
@@ -67,14 +69,17 @@ def _call(init, step, memory, t, x, nu, real=ctypes.c_double):
     return status, np.array(u[:]), mem
 
 
-def test_overflow_gives_a_status_and_the_safe_input(tmp_path, motion):
-    # no bounds: a state of 1e308 overflows the law to inf; the step must not hand it out
+@pytest.mark.parametrize("plausible, expected", [(False, NUMERIC), (True, BAD)], ids=["any finite state", "plausible states"])
+def test_overflow_gives_a_status_and_the_safe_input(tmp_path, motion, plausible, expected):
+    # no bounds: a state of 1e308 overflows the law to inf; the step must not hand it out. With the
+    # controller's plausible measurement (1e6 state scales beyond the reference) it is rejected before
     ode, t, x, u = motion
     c = tracking_controller(ode, t, x, u, u_lb=[-np.inf], u_ub=[np.inf], Q=[1e-2, 1.0, 1e-4])
-    gen, lib = _compiled(tracking_step(c), tmp_path / "src", "gt_t")
+    loop = tracking_step(c)
+    gen, lib = _compiled(loop if plausible else dataclasses.replace(loop, x_range=None), tmp_path / "src", "gt_t")
     memory, init, step = load_loop_step(gen, lib)
     status, got, mem = _call(init, step, memory, 0.1, [0.0, 1e308, 0.0], 1)
-    assert status == NUMERIC and got == pytest.approx(c.u_initial) and mem.status == NUMERIC and mem.steps == 1
+    assert status == expected and got == pytest.approx(c.u_initial) and mem.status == expected and mem.steps == 1
 
 
 def _counting_step():
