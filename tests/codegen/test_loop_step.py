@@ -234,8 +234,9 @@ def _glitch_mpc(folder):
     x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
     c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=4, Q=[1.0, 0.01], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
                        method="euler", disturbance_gain=0.5)
-    gen, lib = _compiled(mpc_step(c, "di"), folder, "gt_di")
-    return c, gen, lib
+    gen = generate_loop_step(mpc_step(c, "di"), folder, prefix="gt_di")
+    report = check_loop_step(gen, n=50)  # its strict build is the library of the test
+    return c, gen, report
 
 
 def _mpc_loop(c, call, glitch=None, n=60):
@@ -252,12 +253,11 @@ def _mpc_loop(c, call, glitch=None, n=60):
 def test_mpc_spike_and_poisoned_memory_recover(tmp_path):
     # fast variant of tests/codegen/test_loop_step_glitch.py. References: the spike-free run of the
     # same step; the contract probes of check_loop_step (C equal to the Functions from Python)
-    c, gen, lib = _glitch_mpc(tmp_path / "src")
-    report = check_loop_step(gen, n=50)
+    c, gen, report = _glitch_mpc(tmp_path / "src")
     assert report.passed, "\n".join(report.summary_lines())
     assert [f.name for f in report.functions] == ["control", "memory_reset", "predict"]
     assert {p.expected for p in report.probes} >= {"GT_MEASUREMENT_REJECTED", "GT_MEMORY_RESET"}
-    loaded = load_loop_step(gen, lib)
+    loaded = load_loop_step(gen, load_library(gen, report.library))
     call, mem = _memory_step(*loaded, 2, 1)
     free_status, free = _mpc_loop(c, call)
     assert np.all(free_status == OK)
