@@ -54,7 +54,7 @@ import numpy as np
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, load_strict
 from gtmodel.codegen.check.compare import compare, probe
-from gtmodel.codegen.check.report import CheckReport, StatusProbe, with_timings
+from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
@@ -442,7 +442,8 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     inf = math.inf
 
     def bounds(r: np.ndarray | None, n: int, row: int) -> str:
-        return _c_array(np.full(n, -inf if row == 0 else inf) if r is None else np.asarray(r, dtype=float)[row])
+        v = np.full(n, -inf if row == 0 else inf) if r is None else np.asarray(r, dtype=float)[row]
+        return _c_array(np.where(np.abs(v) > 3.0e38, np.sign(v) * inf, v) if real == "float" else v)  # beyond FLT_MAX: none
     values = dict(
         GP=prefix, P=P, NAME=step.name, VERSION=version, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
         DT=repr(float(step.dt)), OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
@@ -570,6 +571,7 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     memory, init, fstep = load_loop_step(generated, library)
     real = ctypes.c_float if generated.real == "float" else ctypes.c_double
     safe = np.clip(step.u_init, step.u_lb, step.u_ub)
+    rtol, atol = (FLOAT_RELATIVE_TOLERANCE, FLOAT_RELATIVE_TOLERANCE) if generated.real == "float" else (1e-9, 1e-12)  # as the comparison
     probes = []
 
     def run(case: str, expected: str, t: float, x: np.ndarray | None, want: np.ndarray | None, null_mem: bool = False,
@@ -583,7 +585,7 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
         xa = None if x is None else (real * step.nx)(*x.tolist())
         status = fstep(None if null_mem else ctypes.byref(mem), t, xa, u)
         got = np.array(u[:], dtype=float)
-        untouched = bool(np.all(got == 12345.0)) if want is None else bool(np.allclose(got, want, rtol=1e-9, atol=1e-12))
+        untouched = bool(np.all(got == 12345.0)) if want is None else bool(np.allclose(got, want, rtol=rtol, atol=atol))
         probes.append(StatusProbe("step", case, expected, int(status), untouched, int(status) == STATUS_CODES[expected][0] and untouched))
 
     x0 = np.asarray(samples["x"][0], dtype=float)

@@ -281,3 +281,12 @@ def test_mpc_spike_and_poisoned_memory_recover(tmp_path):
     status, got = _mpc_loop(c, call, poison)
     assert status[20] == MEMORY_RESET and np.all(np.delete(status, 20) == OK) and np.all(np.abs(got) <= 50.0)
     assert np.max(np.abs(got - free)[25:]) <= 0.01 * 50.0  # the estimate, reset to zero, converges again (gain 0.5)
+
+
+def test_single_precision_step_keeps_the_contract(tmp_path, motion):
+    # float: the plausible ranges as float constants (beyond FLT_MAX: none), the probes at the float tolerance (1e-4)
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-np.inf], u_ub=[np.inf], Q=[1e-2, 1.0, 1e-4], integral_weights={"emf.phi": 1e3})
+    report = check_loop_step(generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_f", real="float"), n=50)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert {p.expected for p in report.probes} >= {"GT_MEMORY_RESET"}
