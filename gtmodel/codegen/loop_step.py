@@ -29,8 +29,8 @@ writes the safe input: the last input, saturated. A memory that is non-finite or
 that got into it, a write from outside) is reset before the step to the reference's at ``t``
 (:attr:`LoopStep.reset`, generated as ``PREFIX_memory_reset``) and the step returns
 ``GT_MEMORY_RESET`` with ``u`` computed from it. :func:`check_loop_step` compiles it strictly,
-compares ``<prefix>_control`` (and ``<prefix>_memory_reset``) with the Functions evaluated
-from Python on random inputs and probes the step contract.
+compares ``<prefix>_control`` (and ``<prefix>_memory_reset``, ``<prefix>_predict``) with the
+Functions evaluated from Python on random inputs and probes the step contract.
 
 To reuse it (an MPC): build the Function above, wrap it in a :class:`LoopStep` (``w_init``
 the first warm start, ``fail_status="GT_NOT_CONVERGED"``), call :func:`generate_loop_step`
@@ -103,8 +103,8 @@ class LoopStep:
     x_samples : numpy.ndarray
         ``(M, nx)`` states about which the check samples (e.g. the reference).
     x_range : numpy.ndarray or None
-        ``(2, nx)`` the plausible measurement, lowest and highest (``_step`` rejects one outside
-        with ``GT_BAD_ARGUMENT``); None: any finite one.
+        ``(2, nx)`` the plausible measurement, lowest and highest (``_step`` rejects one outside:
+        ``GT_BAD_ARGUMENT``, or with :attr:`predict` ``GT_MEASUREMENT_REJECTED``); None: any finite one.
     u_range, w_range : numpy.ndarray or None
         ``(2, nu)``, ``(2, nw)`` the plausible memory ``u_last``, ``w`` (``_step`` resets a memory
         outside, or non-finite, and returns ``GT_MEMORY_RESET``); None: any finite one.
@@ -280,7 +280,7 @@ def _c_array(values: Any) -> str:
 
 
 def _hash(step: LoopStep) -> str:
-    """Short hash of the controller: its Function's serialisation, bounds and period."""
+    """Short hash of the controller: its Functions' serialisations, bounds, plausible ranges and period."""
     ranges = [None if r is None else np.asarray(r).tolist() for r in (step.x_range, step.u_range, step.w_range)]
     text = (step.function.serialize() + "".join("" if f is None else f.serialize() for f in (step.reset, step.predict))
             + repr((step.dt, np.asarray(step.u_lb).tolist(), np.asarray(step.u_ub).tolist(), ranges)))
@@ -637,7 +637,7 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     Returns
     -------
     CheckReport
-        ``control`` (and ``memory_reset``): the largest ``|C - Python|`` (:data:`LOOP_TOLERANCE`,
+        ``control`` (and ``memory_reset``, ``predict``): the largest ``|C - Python|`` (:data:`LOOP_TOLERANCE`,
         absolute or relative) on random times, states about the reference and last inputs;
         probes: non-finite inputs of ``control``, and of ``_step``: ``GT_OK`` with ``u`` equal
         to Python after ``_init``, ``GT_BAD_ARGUMENT`` with the safe input for a NaN time and a
