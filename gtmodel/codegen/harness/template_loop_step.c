@@ -83,6 +83,13 @@ int @GP@_step(@GP@_memory *mem, @REAL@ t, const @REAL@ *x, @REAL@ *u)
         else status = GT_BAD_ARGUMENT;
     }
     if (status == GT_OK) status = @CALL@;
+    if (status == GT_OK && !rejected && !reset && !@GP@_within(w_new, @GP@_w_lo, @GP@_w_hi, @NW@)
+        && @PREDICT@ == GT_OK && @GP@_within(x_hat, @GP@_x_lo, @GP@_x_hi, @NX@)) {
+        /* a measurement that drives the memory absurd is absurd too: the prediction replaces it */
+        rejected = 1;
+        x = x_hat;
+        status = @CALL@;
+    }
     for (i = 0; status == GT_OK && i < @NU@; ++i) {
         if (!isfinite(u_new[i])) status = GT_NUMERIC_ERROR;
     }

@@ -54,8 +54,8 @@ int @GP@_init(@GP@_memory *mem);
  *   by many scales; gtmodel.estimation.reference.MEASUREMENT_LIMIT, MEMORY_LIMIT) and was
  *   reset to the reference's at t (as @GP@_init at the first period) before this step;
  * GT_MEASUREMENT_REJECTED, u written (a controller with @GP@_predict only): x was non-finite
- *   or absurd (outside the reference's range widened by MEASUREMENT_LIMIT state scales) and
- *   the state the memory predicts for now replaced it;
+ *   or absurd (outside the reference's range widened by MEASUREMENT_LIMIT state scales, or
+ *   driving the memory absurd) and the state the memory predicts for now replaced it;
  * on any other status u holds the safe input (the last input, saturated) and the memory is
  * kept (unless u or mem is NULL): GT_BAD_ARGUMENT (a NULL pointer, a non-finite t, a
  * non-finite or absurd x without a prediction, or with a memory that is not plausible
