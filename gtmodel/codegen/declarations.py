@@ -55,6 +55,8 @@ STATUS_CODES: dict[str, tuple[int, str]] = {
     "GT_NOT_CONVERGED": (6, "Newton's method did not converge within the iteration limit; outputs untouched"),
     "GT_INFEASIBLE": (7, "no motion along the path satisfies the limits (re-timing); outputs untouched"),
     "GT_TOO_LARGE": (8, "more grid points than the size fixed at generation (re-timing N_MAX); outputs untouched"),
+    "GT_MEMORY_RESET": (9, "a loop controller's memory was non-finite or absurd and was reset to the reference's; outputs written from it"),
+    "GT_MEASUREMENT_REJECTED": (10, "a loop controller's measurement was non-finite or absurd; outputs written from the state its memory predicts"),
 }
 
 #: Largest accepted |C - Python| of an inverse kinematics [m, rad].

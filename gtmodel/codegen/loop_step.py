@@ -18,12 +18,19 @@ valid, e.g. the QP solved), described by a
     int PREFIX_step(PREFIX_memory *mem, real t, const real *x, real *u);
 
 No heap: the memory is the caller's, of static size. ``PREFIX_step`` returns ``GT_OK`` with
-``u`` saturated at the input bounds; ``GT_BAD_ARGUMENT`` for a NULL pointer or a non-finite
-``t`` or ``x``; ``GT_NUMERIC_ERROR`` for a non-finite result; the :attr:`LoopStep.fail_status`
-(e.g. ``GT_NOT_CONVERGED``) when ``ok`` is 0. On every failure it writes the safe input:
-the last input, saturated. :func:`check_loop_step` compiles it strictly, compares
-``<prefix>_control`` with the Function evaluated from Python on random inputs and probes
-the step contract.
+``u`` saturated at the input bounds; ``GT_BAD_ARGUMENT`` for a NULL pointer, a non-finite
+``t`` or a non-finite or absurd ``x`` (outside :attr:`LoopStep.x_range`: the measurement is
+rejected, the memory untouched; with a :attr:`LoopStep.predict`, generated as ``PREFIX_predict``,
+the state the memory predicts replaces it instead and the step returns
+``GT_MEASUREMENT_REJECTED`` with ``u`` computed from it); ``GT_NUMERIC_ERROR`` for a non-finite result; the
+:attr:`LoopStep.fail_status` (e.g. ``GT_NOT_CONVERGED``) when ``ok`` is 0. On every failure it
+writes the safe input: the last input, saturated. A memory that is non-finite or absurd
+(``u_last`` outside :attr:`LoopStep.u_range`, ``w`` outside :attr:`LoopStep.w_range`: a glitch
+that got into it, a write from outside) is reset before the step to the reference's at ``t``
+(:attr:`LoopStep.reset`, generated as ``PREFIX_memory_reset``) and the step returns
+``GT_MEMORY_RESET`` with ``u`` computed from it. :func:`check_loop_step` compiles it strictly,
+compares ``<prefix>_control`` (and ``<prefix>_memory_reset``, ``<prefix>_predict``) with the
+Functions evaluated from Python on random inputs and probes the step contract.
 
 To reuse it (an MPC): build the Function above, wrap it in a :class:`LoopStep` (``w_init``
 the first warm start, ``fail_status="GT_NOT_CONVERGED"``), call :func:`generate_loop_step`
@@ -47,7 +54,7 @@ import numpy as np
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, load_strict
 from gtmodel.codegen.check.compare import compare, probe
-from gtmodel.codegen.check.report import CheckReport, StatusProbe, with_timings
+from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
@@ -95,6 +102,21 @@ class LoopStep:
         Times sampled by the check [s].
     x_samples : numpy.ndarray
         ``(M, nx)`` states about which the check samples (e.g. the reference).
+    x_range : numpy.ndarray or None
+        ``(2, nx)`` the plausible measurement, lowest and highest (``_step`` rejects one outside:
+        ``GT_BAD_ARGUMENT``, or with :attr:`predict` ``GT_MEASUREMENT_REJECTED``); None: any finite one.
+    u_range, w_range : numpy.ndarray or None
+        ``(2, nu)``, ``(2, nw)`` the plausible memory ``u_last``, ``w`` (``_step`` resets a memory
+        outside, or non-finite, and returns ``GT_MEMORY_RESET``); None: any finite one.
+    reset : casadi.Function or None
+        ``reset(t, x) -> (u_last[, w])``: the memory reset to the reference's at time ``t`` [s]
+        (e.g. :meth:`gtmodel.estimation.mpc.MPCController.memory_reset`); None: the first memory
+        (``u_init`` saturated, ``w_init``).
+    predict : casadi.Function or None
+        ``predict(u_last, w) -> x``: the state the memory predicts for now, which replaces a
+        non-finite or absurd measurement (``_step`` returns ``GT_MEASUREMENT_REJECTED`` with ``u``
+        computed from it; e.g. :meth:`gtmodel.estimation.mpc.MPCController.memory_predict`);
+        None: such a measurement is refused (``GT_BAD_ARGUMENT``, the safe input).
     """
 
     name: str
@@ -110,6 +132,11 @@ class LoopStep:
     fail_status: str = "GT_NUMERIC_ERROR"
     t_range: tuple[float, float] = (0.0, 1.0)
     x_samples: np.ndarray = field(default_factory=lambda: np.zeros((1, 0)))
+    x_range: np.ndarray | None = None
+    u_range: np.ndarray | None = None
+    w_range: np.ndarray | None = None
+    reset: ca.Function | None = None
+    predict: ca.Function | None = None
 
     @property
     def nx(self) -> int:
@@ -151,6 +178,24 @@ class LoopStep:
                 raise InputError(f"{label}: expected {n} values, got {np.size(v)}")
         if not (np.all(np.isfinite(self.u_init)) and np.all(np.isfinite(self.w_init)) and np.all(np.asarray(self.u_lb) <= np.asarray(self.u_ub))):
             raise InputError("u_init, w_init: expected finite values; u_lb <= u_ub")
+        for label, r, n in (("x_range", self.x_range, self.nx), ("u_range", self.u_range, self.nu), ("w_range", self.w_range, self.nw)):
+            if r is not None and (np.shape(r) != (2, n) or np.any(np.isnan(r)) or np.any(np.asarray(r)[0] > np.asarray(r)[1])):
+                raise InputError(f"{label}: expected a (2, {n}) array of the lowest and highest plausible values, got shape {np.shape(r)}")
+        if not (self.u_range is None or np.all((self.u_range[0] <= self.u_init) & (self.u_init <= self.u_range[1]))) or not (
+                self.w_range is None or np.all((self.w_range[0] <= self.w_init) & (self.w_init <= self.w_range[1]))):
+            raise InputError("u_init, w_init: expected the first memory inside u_range, w_range")
+        if self.reset is not None:
+            outs = ["u_last"] + (["w"] if self.nw else [])
+            if not isinstance(self.reset, ca.Function) or self.reset.name_in() != ["t", "x"] or self.reset.name_out() != outs:
+                raise InputError(f"reset: expected a casadi.Function reset(t, x) -> ({', '.join(outs)})")
+            if self.reset.numel_in("t") != 1 or self.reset.numel_in("x") != self.nx or self.reset.numel_out("u_last") != self.nu or (
+                    self.nw and self.reset.numel_out("w") != self.nw):
+                raise InputError("reset: t a scalar, x, u_last and w as long as the step's")
+        if self.predict is not None and not (
+                isinstance(self.predict, ca.Function) and self.nw and self.predict.name_in() == ["u_last", "w"]
+                and self.predict.name_out() == ["x"] and self.predict.numel_in("u_last") == self.nu
+                and self.predict.numel_in("w") == self.nw and self.predict.numel_out("x") == self.nx):
+            raise InputError("predict: expected a casadi.Function predict(u_last, w) -> x of the step's sizes (with an inner memory)")
         if self.fail_status not in STATUS_CODES or self.fail_status == "GT_OK":
             raise InputError(f"fail_status: expected a failure status of {', '.join(STATUS_CODES)}, got {self.fail_status!r}")
 
@@ -185,7 +230,7 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
                     x_names=list(c.x_names), u_names=list(c.u_names), w_init=np.zeros(c.ni), description=text,
-                    t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
+                    t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
 
 
 def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
@@ -216,7 +261,14 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
                     x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text,
-                    fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref)
+                    fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
+
+
+def _guards(controller: TrackingController | MPCController) -> dict[str, Any]:
+    """The plausible measurement and memory of a controller and its memory reset (the LoopStep's fields)."""
+    lim = controller.limits()
+    return {"x_range": lim["x"], "u_range": lim["u_last"], "w_range": lim["memory"] if lim["memory"].shape[1] else None,
+            "reset": controller.memory_reset(), "predict": getattr(controller, "memory_predict", lambda: None)()}
 
 
 def _c_array(values: Any) -> str:
@@ -228,9 +280,37 @@ def _c_array(values: Any) -> str:
 
 
 def _hash(step: LoopStep) -> str:
-    """Short hash of the controller: its Function's serialisation, bounds and period."""
-    text = step.function.serialize() + repr((step.dt, np.asarray(step.u_lb).tolist(), np.asarray(step.u_ub).tolist()))
+    """Short hash of the controller: its Functions' serialisations, bounds, plausible ranges and period."""
+    ranges = [None if r is None else np.asarray(r).tolist() for r in (step.x_range, step.u_range, step.w_range)]
+    text = (step.function.serialize() + "".join("" if f is None else f.serialize() for f in (step.reset, step.predict))
+            + repr((step.dt, np.asarray(step.u_lb).tolist(), np.asarray(step.u_ub).tolist(), ranges)))
     return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _reset_spec(step: LoopStep) -> FunctionSpec:
+    """The memory reset's C function ``<prefix>_memory_reset(t, x, u_last[, w_reset])``."""
+    outs = [OutputSpec("u_last", "u_last", "the last input of the reset memory")]
+    if step.nw:
+        outs.append(OutputSpec("w_reset", "w", "the inner memory reset"))  # not 'w': the wrapper's work array
+    return FunctionSpec(
+        "memory_reset", lambda source: source.reset,
+        args=(ArgSpec("t", "vector", "t", "time [s]"), ArgSpec("x", "vector", "x", "measured state")),
+        outputs=tuple(outs), tolerance=LOOP_TOLERANCE, relative_tolerance=LOOP_TOLERANCE, kind=LOOP_KIND,
+        doc=f"The memory of the loop controller {step.name} reset to the reference's at t (called by _step on a "
+            "non-finite or absurd memory).",
+    )
+
+
+def _predict_spec(step: LoopStep) -> FunctionSpec:
+    """The prediction's C function ``<prefix>_predict(u_last, w_start, x_hat)``."""
+    return FunctionSpec(
+        "predict", lambda source: source.predict,
+        args=(ArgSpec("u_last", "vector", "u_last", "the last input"), ArgSpec("w_start", "vector", "w", "inner memory")),
+        outputs=(OutputSpec("x_hat", "x", "the state the memory predicts for now"),), tolerance=LOOP_TOLERANCE,
+        relative_tolerance=LOOP_TOLERANCE, kind=LOOP_KIND,
+        doc=f"The state the memory of the loop controller {step.name} predicts (called by _step in place of a "
+            "non-finite or absurd measurement).",
+    )
 
 
 def _spec(step: LoopStep) -> FunctionSpec:
@@ -332,7 +412,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     -------
     GeneratedCode
         ``kind = "loop_step"``, ``parameters`` the :class:`LoopStep`, ``functions``
-        ``("control",)``.
+        ``("control",)``, then ``"memory_reset"`` and ``"predict"`` with a :attr:`LoopStep.reset`, :attr:`LoopStep.predict`.
 
     Raises
     ------
@@ -349,17 +429,29 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     if not isinstance(prefix, str) or not _IDENT.match(prefix):
         raise InputError(f"prefix: expected a C identifier such as 'gt_tracking', got {prefix!r}")
     spec = _spec(step)
+    specs = (spec,) + ((_reset_spec(step),) if step.reset is not None else ()) + ((_predict_spec(step),) if step.predict is not None else ())
     phash = _hash(step)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; controller {step.name} sha256:{phash}; real {real}"
     P = prefix.upper()
     ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
     outs = {"u": "u_new", "w_next": "w_new"}
     call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
+    reset = ("GT_NUMERIC_ERROR /* no reset function: the first memory */" if step.reset is None else
+             f"{prefix}_memory_reset(tt, x, mem->u_last" + (", mem->w)" if step.nw else ")"))
+    predict = "GT_BAD_ARGUMENT /* no prediction */" if step.predict is None else f"{prefix}_predict(mem->u_last, mem->w, x_hat)"
+    inf = math.inf
+
+    def bounds(r: np.ndarray | None, n: int, row: int) -> str:
+        v = np.full(n, -inf if row == 0 else inf) if r is None else np.asarray(r, dtype=float)[row]
+        return _c_array(np.where(np.abs(v) > 3.0e38, np.sign(v) * inf, v) if real == "float" else v)  # beyond FLT_MAX: none
     values = dict(
         GP=prefix, P=P, NAME=step.name, VERSION=version, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
         DT=repr(float(step.dt)), OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
         DESCRIPTION="\n".join(f" * {line}".rstrip() for line in (step.description or step.name).splitlines()),
         ULB=_c_array(step.u_lb), UUB=_c_array(step.u_ub), U0=_c_array(step.u_init), W0=_c_array(step.w_init), CALL=call,
+        RESET=reset, PREDICT=predict, XLO=bounds(step.x_range, step.nx, 0), XHI=bounds(step.x_range, step.nx, 1),
+        ULO=bounds(step.u_range, step.nu, 0), UHI=bounds(step.u_range, step.nu, 1),
+        WLO=bounds(step.w_range, step.nw, 0), WHI=bounds(step.w_range, step.nw, 1),
     )
     memory = "\n" + fill("template_loop_step.c", **values)
 
@@ -368,7 +460,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
         return fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header),
                     HEAP=_HEAP_DOC.format(arena=HEAP_ARENA_BYTES, prefix=prefix) if arena else "")
 
-    out, _, sizes, signatures = write_library(prefix, (spec,), step, out_dir, real, header, extra_source=memory)
+    out, _, sizes, signatures = write_library(prefix, specs, step, out_dir, real, header, extra_source=memory)
     log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
     include_dirs, link_flags = solver_libraries(out / f"{prefix}_casadi.c")
     if uses_heap_arena(out / f"{prefix}_casadi.c"):
@@ -379,9 +471,9 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
             raise CodegenError(f"cannot write generated code to {out}: {exc.strerror}") from None
         link_flags = (*link_flags, *HEAP_WRAP_FLAGS)
     return GeneratedCode(
-        out_dir=out, prefix=prefix, functions=("control",), source=out / f"{prefix}.c", header=out / f"{prefix}.h",
+        out_dir=out, prefix=prefix, functions=tuple(s.name for s in specs), source=out / f"{prefix}.c", header=out / f"{prefix}.h",
         casadi_source=out / f"{prefix}_casadi.c", casadi_header=out / f"{prefix}_casadi.h", parameters=step, friction="",
-        parameter_hash=phash, version=version, specs=(spec,), work_sizes=sizes, signatures=signatures, real=real, kind=LOOP_KIND,
+        parameter_hash=phash, version=version, specs=specs, work_sizes=sizes, signatures=signatures, real=real, kind=LOOP_KIND,
         include_dirs=include_dirs, link_flags=link_flags,
     )
 
@@ -463,22 +555,37 @@ def _reference(step: LoopStep, inputs: dict[str, np.ndarray]) -> dict[str, np.nd
     return {k: np.where(ok[:, None], v, np.nan) for k, v in out.items()}
 
 
+def _reset_memory(step: LoopStep, t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The memory ``_step`` resets to at ``(t, x)``: :attr:`LoopStep.reset` (or the first memory), ``u_last`` saturated."""
+    if step.reset is None:
+        u, w = step.u_init, step.w_init
+    else:
+        res = step.reset.call({"t": t, "x": x})
+        u, w = np.asarray(res["u_last"]).reshape(-1), (np.asarray(res["w"]).reshape(-1) if step.nw else np.zeros(0))
+    return np.clip(u, step.u_lb, step.u_ub), w
+
+
 def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples: dict[str, np.ndarray]) -> list[StatusProbe]:
     """The step contract through the memory functions: NULLs, non-finite input, the safe input, equality with Python."""
     step: LoopStep = generated.parameters
     memory, init, fstep = load_loop_step(generated, library)
     real = ctypes.c_float if generated.real == "float" else ctypes.c_double
     safe = np.clip(step.u_init, step.u_lb, step.u_ub)
+    rtol, atol = (FLOAT_RELATIVE_TOLERANCE, FLOAT_RELATIVE_TOLERANCE) if generated.real == "float" else (1e-9, 1e-12)  # as the comparison
     probes = []
 
-    def run(case: str, expected: str, t: float, x: np.ndarray | None, want: np.ndarray | None, null_mem: bool = False) -> None:
+    def run(case: str, expected: str, t: float, x: np.ndarray | None, want: np.ndarray | None, null_mem: bool = False,
+            poison: bool = False) -> None:
         mem = memory()
         init(ctypes.byref(mem))
+        if poison:  # NaN written into the memory
+            mem.u_last[0] = math.nan
+            mem.w[0] = math.nan
         u = (real * step.nu)(*([12345.0] * step.nu))
         xa = None if x is None else (real * step.nx)(*x.tolist())
         status = fstep(None if null_mem else ctypes.byref(mem), t, xa, u)
         got = np.array(u[:], dtype=float)
-        untouched = bool(np.all(got == 12345.0)) if want is None else bool(np.allclose(got, want, rtol=1e-9, atol=1e-12))
+        untouched = bool(np.all(got == 12345.0)) if want is None else bool(np.allclose(got, want, rtol=rtol, atol=atol))
         probes.append(StatusProbe("step", case, expected, int(status), untouched, int(status) == STATUS_CODES[expected][0] and untouched))
 
     x0 = np.asarray(samples["x"][0], dtype=float)
@@ -486,12 +593,25 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     ref = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": safe[None, :],
                             **({"w_start": step.w_init[None, :]} if step.nw else {})})["u"][0]
     run("valid state after init (u equals Python)", "GT_OK", t0, x0, ref)
+    if step.predict is None:  # a rejected measurement: the safe input
+        rejected, want, how = "GT_BAD_ARGUMENT", safe, "u = the last input, saturated"
+    else:  # the state the memory predicts in its place
+        x_hat = np.asarray(step.predict(safe, step.w_init)).reshape(-1)
+        rejected, how = "GT_MEASUREMENT_REJECTED", "u equals Python at the state the memory predicts"
+        want = _reference(step, {"t": np.array([[t0]]), "x": x_hat[None, :], "u_last": safe[None, :], "w_start": step.w_init[None, :]})["u"][0]
     bad = x0.copy()
     bad[0] = math.nan
-    run("x[0] = nan (u = the last input, saturated)", "GT_BAD_ARGUMENT", t0, bad, safe)
+    run(f"x[0] = nan ({how})", rejected, t0, bad, want)
     run("t = nan (u = the last input, saturated)", "GT_BAD_ARGUMENT", math.nan, x0, safe)
     run("x NULL (u = the last input, saturated)", "GT_BAD_ARGUMENT", t0, None, safe)
     run("mem NULL (u untouched)", "GT_BAD_ARGUMENT", t0, x0, None, null_mem=True)
+    if step.x_range is not None and np.isfinite(step.x_range[1, 0]):
+        far = x0.copy()
+        far[0] = 10.0 * abs(step.x_range[1, 0]) + 1.0
+        run(f"x[0] beyond x_range ({how})", rejected, t0, far, want)
+    u_r, w_r = _reset_memory(step, t0, x0)
+    again = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": u_r[None, :], **({"w_start": w_r[None, :]} if step.nw else {})})
+    run("NaN in the memory (reset: u equals Python from the reset memory)", "GT_MEMORY_RESET", t0, x0, again["u"][0], poison=True)
     init_null = init(None)
     probes.append(StatusProbe("init", "mem NULL", "GT_BAD_ARGUMENT", int(init_null), True, int(init_null) == STATUS_CODES["GT_BAD_ARGUMENT"][0]))
     return probes
@@ -517,11 +637,14 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     Returns
     -------
     CheckReport
-        ``control``: the largest ``|C - Python|`` (:data:`LOOP_TOLERANCE`, absolute or
-        relative) on random times, states about the reference and last inputs; probes:
-        non-finite inputs of ``control``, and of ``_step``: ``GT_OK`` with ``u`` equal to
-        Python after ``_init``, ``GT_BAD_ARGUMENT`` with the safe input for a NaN state or
-        time and a NULL state, a NULL memory (``u`` untouched) and ``_init(NULL)``.
+        ``control`` (and ``memory_reset``, ``predict``): the largest ``|C - Python|`` (:data:`LOOP_TOLERANCE`,
+        absolute or relative) on random times, states about the reference and last inputs;
+        probes: non-finite inputs of ``control``, and of ``_step``: ``GT_OK`` with ``u`` equal
+        to Python after ``_init``, ``GT_BAD_ARGUMENT`` with the safe input for a NaN time and a
+        NULL state, for a NaN state and one beyond :attr:`LoopStep.x_range` the same or, with a
+        :attr:`LoopStep.predict`, ``GT_MEASUREMENT_REJECTED`` with ``u`` equal to Python at the
+        predicted state, a NULL memory (``u`` untouched), ``GT_MEMORY_RESET`` with ``u`` equal to Python from the reset memory for NaN
+        written into the memory, and ``_init(NULL)``.
 
     Raises
     ------
@@ -543,9 +666,10 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     spec = generated.specs[0]
     spec = FunctionSpec(**{**spec.__dict__, "reference": lambda source, inputs: _reference(source, inputs)})
     cf = library["control"]
-    results = (compare(spec, cf, step, samples, generated.real),)
+    results = (compare(spec, cf, step, samples, generated.real),) + tuple(
+        compare(s, library[s.name], step, samples, generated.real) for s in generated.specs[1:])
     if timing:
-        times = time_functions(generated, library.path, {"control": samples}, build)
+        times = time_functions(generated, library.path, {s.name: samples for s in generated.specs}, build)
         results = tuple(with_timings(results, times))
     probes = []
     for a in spec.args:

@@ -43,7 +43,8 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.estimation.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.estimation.mpc_fatrop import fatrop_problem
-from gtmodel.estimation.reference import SampledReference, period_index, sample_reference
+from gtmodel.estimation.reference import (MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, plausible_range,
+                                         reference_scales, sample_reference)
 from gtmodel.estimation.tracking import _weight, saturate
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
@@ -424,19 +425,92 @@ class MPCController(SampledReference):
             w_next = ca.vertcat(w_next, d, x_in, u_last, 1.0)
         return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
-    def _disturbance(self, x: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
-        """The input-disturbance estimate of this period (see :attr:`disturbance_gain`) from the memory ``mem``."""
+    def limits(self) -> dict[str, np.ndarray]:
+        """The plausible ranges the generated step checks its measurement and its memory against
+        (:mod:`gtmodel.codegen.loop_step`: a measurement outside is rejected, a memory outside is reset).
+
+        Returns
+        -------
+        dict
+            ``"x"`` ``(2, nx)``: the reference's range widened by :data:`~gtmodel.estimation.reference.MEASUREMENT_LIMIT`
+            state scales (:func:`~gtmodel.estimation.reference.reference_scales`); ``"u_last"`` ``(2, nu)``: the input
+            bounds (where infinite, the reference's range widened by ``MEASUREMENT_LIMIT`` input scales);
+            ``"memory"`` ``(2, n_memory)``: the warm start within those widened by the estimate's range ``D =
+            MEMORY_LIMIT u_scale`` (:data:`~gtmodel.estimation.reference.MEMORY_LIMIT`; ``MEASUREMENT_LIMIT u_scale``
+            for an input without bounds; the warm start is saturated at the bounds shifted by the estimate), and with
+            :attr:`disturbance_gain` the estimate within ``[-D, D]``, the last state as ``"x"``, the last input as
+            ``"u_last"``, the flag in ``[0, 1]``.
+        """
+        x_scale, u_scale = reference_scales(self.x_ref, self.u_ref, self.u_lb, self.u_ub)
+        x = plausible_range(self.x_ref, x_scale, MEASUREMENT_LIMIT)
+        u = plausible_range(self.u_ref, u_scale, MEASUREMENT_LIMIT, self.u_lb, self.u_ub)
+        d = np.where(np.isfinite(self.u_lb) & np.isfinite(self.u_ub), MEMORY_LIMIT, MEASUREMENT_LIMIT) * u_scale
+        parts = [np.tile(u + np.vstack([-d, d]), (1, self.blocks))]
+        if self.disturbance_gain:
+            parts += [np.vstack([-d, d]), x, u, np.array([[0.0], [1.0]])]
+        return {"x": x, "u_last": u, "memory": np.hstack(parts)}
+
+    def memory_reset(self) -> ca.Function:
+        """The step's memory reset to the reference's at the current period (what ``_init`` sets at the first).
+
+        Returns
+        -------
+        casadi.Function
+            ``reset(t (1,1), x (nx,1)) -> (u_last (nu,1), w (n_memory,1))``: ``u_last = u*_k`` saturated
+            (``k = floor((t - t_0) / dt)``, clamped), the warm start ``u*`` saturated at the first period of each
+            input block of the horizon (which starts at ``t + dt`` with :attr:`delay` 1), and with
+            :attr:`disturbance_gain` a zero estimate, ``x`` as the last state, ``u_last`` as the last input and
+            the flag 0 (the estimate is not updated by the next step).
+        """
+        t, x = ca.MX.sym("t"), ca.MX.sym("x", self.nx)
+        n, nu, b = self.length, self.nu, self.horizon // self.blocks
+        values = ca.MX(ca.DM(self.u_ref.reshape(-1)))
+
+        def u_star(k: Any) -> ca.MX:
+            return saturate(ca.vertcat(*[values[nu * ca.fmin(k, n - 1) + i] for i in range(nu)]), self.u_lb, self.u_ub)
+
+        u_last = u_star(period_index(t, self.t0, self.dt, n - 1, eps=INDEX_EPS))
+        k = period_index(t + self.delay * self.dt, self.t0, self.dt, n - 1, eps=INDEX_EPS)
+        w = ca.vertcat(*[u_star(k + s * b) for s in range(self.blocks)])
+        if self.disturbance_gain:
+            w = ca.vertcat(w, ca.DM.zeros(nu), x, u_last, 0.0)
+        return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
+
+    def memory_predict(self) -> ca.Function | None:
+        """The state the step's memory predicts for now: what replaces a rejected measurement (with :attr:`disturbance_gain`).
+
+        Returns
+        -------
+        casadi.Function or None
+            ``predict(u_last (nu,1), w (n_memory,1)) -> x (nx,1)``: :attr:`step` from the last measured state
+            with the input that acted over the last period plus the estimate (the prediction of the estimate's
+            innovation, see :attr:`disturbance_gain`), so that the estimate is unchanged by a step fed with it;
+            None without the estimate (the memory holds no state).
+        """
+        if not self.disturbance_gain:
+            return None
+        u_last, mem = ca.MX.sym("u_last", self.nu), ca.MX.sym("w", self.n_memory)
+        d, x_prev, u_act, _ = self._estimator_memory(u_last, mem)
+        return ca.Function("predict", [u_last, mem], [self.step(x_prev, u_act + d)], ["u_last", "w"], ["x"])
+
+    def _estimator_memory(self, u_last: ca.MX, mem: ca.MX) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX]:
+        """The estimate ``d``, the last measured state, the input that acted over the last period and the flag, from the memory."""
         nx, nu, nw = self.nx, self.nu, self.nw
         d, x_prev, u_prev, ran = mem[nw:nw + nu], mem[nw + nu:nw + nu + nx], mem[nw + nu + nx:nw + 2 * nu + nx], mem[-1]
         # the input that acted over the last period: the one computed then (u_last now) without a delay, with a
         # one-period delay the one computed a period earlier (u_last then, kept in the memory)
-        u_act = u_last if self.delay == 0 else u_prev
+        return d, x_prev, (u_last if self.delay == 0 else u_prev), ran
+
+    def _disturbance(self, x: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
+        """The input-disturbance estimate of this period (see :attr:`disturbance_gain`) from the memory ``mem``."""
+        nx, nu = self.nx, self.nu
+        d, x_prev, u_act, ran = self._estimator_memory(u_last, mem)
         xs, us = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
         B = ca.Function("B", [xs, us], [ca.jacobian(self.step(xs, us), us)])(x_prev, u_act + d)
         btb = ca.mtimes(B.T, B)
         eps = 1e-9 * (ca.trace(btb) / nu + 1e-300)
         gain = ca.solve(btb + eps * ca.DM.eye(nu), B.T)  # (B'B + eps I)^{-1} B': least squares of the state error
-        innovation = x - self.step(x_prev, u_act + d)
+        innovation = x - self.memory_predict()(u_last, mem)  # the measurement less the state the memory predicts
         # before the first step there is no last state (the memory holds the reference's first one): the estimate stays
         return ca.if_else(ran > 0.5, d + self.disturbance_gain * ca.mtimes(gain, innovation), d)
 
@@ -567,10 +641,7 @@ def mpc_controller(
     pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
     if pv.size != ode.np:
         raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
-    x_scale = np.maximum(np.ptp(xs, axis=0), 1e-3 * (1.0 + np.max(np.abs(xs), axis=0)))
-    finite = np.isfinite(lb) & np.isfinite(ub)
-    u_scale = np.where(finite, 0.5 * (np.where(finite, ub, 0) - np.where(finite, lb, 0)),
-                       np.maximum(np.ptp(us, axis=0), 1e-3 * (1 + np.max(np.abs(us), axis=0))))
+    x_scale, u_scale = reference_scales(xs, us, lb, ub)
     Qm = _weight(Q, ode.nx, 1.0 / x_scale**2, "Q")
     Rm = _weight(R, ode.nu, 1.0 / u_scale**2, "R")
     if np.min(np.linalg.eigvalsh(Rm)) <= 0:

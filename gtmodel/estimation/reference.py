@@ -20,11 +20,21 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "SampledReference", "hold_input", "sampled", "sample_reference", "period_index"]
+__all__ = ["INDEX_EPS", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "sampled", "sample_reference", "period_index",
+           "reference_scales", "plausible_range"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
 #: point) selects sample ``k``, not ``k - 1``.
 INDEX_EPS = 1e-6
+#: A value more than this many scales (:func:`reference_scales`) outside its reference's range is
+#: absurd: a measured state (the generated step rejects it: ``GT_BAD_ARGUMENT``, the safe input,
+#: its memory untouched; :mod:`gtmodel.codegen.loop_step`), an input without bounds in the memory.
+MEASUREMENT_LIMIT = 1e6
+#: An estimate in a loop controller's memory more than this many scales from zero is absurd (an
+#: MPC's input-disturbance estimate: input scales, half the bound range; a tracking controller's
+#: integrator state: state scales times the reference's duration): the generated step resets the
+#: memory (``GT_MEMORY_RESET``).
+MEMORY_LIMIT = 10.0
 
 
 @dataclass
@@ -211,3 +221,58 @@ def period_index(t: Any, t0: float, dt: float, last: int, eps: float = INDEX_EPS
     if not math.isfinite(float(t)):
         raise InputError(f"t: expected a finite time, got {t!r}")
     return int(min(max(math.floor((float(t) - t0) / dt + eps), 0), last))
+
+
+def reference_scales(x_ref: np.ndarray, u_ref: np.ndarray, u_lb: np.ndarray, u_ub: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The scales of a loop controller's states and inputs (its default weights, Bryson's rule, and its memory's limits).
+
+    Parameters
+    ----------
+    x_ref, u_ref : numpy.ndarray
+        ``(N, nx)``, ``(N, nu)`` the sampled reference.
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds (``-inf``/``inf``: none).
+
+    Returns
+    -------
+    x_scale : numpy.ndarray
+        ``(nx,)`` the reference's range of each state, at least ``1e-3 (1 + max |x*|)``.
+    u_scale : numpy.ndarray
+        ``(nu,)`` half the bound range where both bounds are finite, else as ``x_scale`` of ``u*``.
+    """
+    xs, us = np.asarray(x_ref, dtype=float), np.asarray(u_ref, dtype=float)
+    lb, ub = np.asarray(u_lb, dtype=float), np.asarray(u_ub, dtype=float)
+    x_scale = np.maximum(np.ptp(xs, axis=0), 1e-3 * (1.0 + np.max(np.abs(xs), axis=0)))
+    finite = np.isfinite(lb) & np.isfinite(ub)
+    u_scale = np.where(finite, 0.5 * (np.where(finite, ub, 0) - np.where(finite, lb, 0)),
+                       np.maximum(np.ptp(us, axis=0), 1e-3 * (1 + np.max(np.abs(us), axis=0))))
+    return x_scale, u_scale
+
+
+def plausible_range(values: np.ndarray, scale: np.ndarray, factor: float, lb: Any = None, ub: Any = None) -> np.ndarray:
+    """The plausible range of a loop controller's quantity: its reference's range widened by ``factor`` scales.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        ``(N, n)`` the reference's values (states or inputs).
+    scale : numpy.ndarray
+        ``(n,)`` their scales (:func:`reference_scales`).
+    factor : float
+        Scales beyond the range (e.g. :data:`MEASUREMENT_LIMIT`).
+    lb, ub : array_like, optional
+        ``(n,)`` bounds that replace the widened range where finite (an input's).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2, n)``: the lowest and the highest plausible value.
+    """
+    v = np.asarray(values, dtype=float)
+    width = factor * np.asarray(scale, dtype=float)
+    lo, hi = np.min(v, axis=0) - width, np.max(v, axis=0) + width
+    if lb is not None:
+        lo = np.where(np.isfinite(lb), lb, lo)
+    if ub is not None:
+        hi = np.where(np.isfinite(ub), ub, hi)
+    return np.vstack([lo, hi])

@@ -39,7 +39,8 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.estimation.reference import INDEX_EPS, SampledReference, hold_input, period_index, sample_reference
+from gtmodel.estimation.reference import (INDEX_EPS, MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, hold_input, period_index,
+                                         plausible_range, reference_scales, sample_reference)
 from gtmodel.modeling import ExplicitODE
 
 __all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
@@ -287,6 +288,45 @@ class TrackingController(SampledReference):
         ok = (total + ca.sum1(ca.fabs(w_next))) < math.inf
         return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
+    def limits(self) -> dict[str, np.ndarray]:
+        """The plausible ranges the generated step checks its measurement and its memory against
+        (:mod:`gtmodel.codegen.loop_step`: a measurement outside is rejected, a memory outside is reset).
+
+        Returns
+        -------
+        dict
+            ``"x"`` ``(2, nx)``: the reference's range widened by :data:`~gtmodel.estimation.reference.MEASUREMENT_LIMIT`
+            state scales (:func:`~gtmodel.estimation.reference.reference_scales`); ``"u_last"`` ``(2, nu)``: the input
+            bounds (where infinite, the reference's range widened by ``MEASUREMENT_LIMIT`` input scales);
+            ``"memory"`` ``(2, ni)``: the integrator states within ``MEMORY_LIMIT`` scales of their states times the
+            reference's duration (at least 1 s; :data:`~gtmodel.estimation.reference.MEMORY_LIMIT`).
+        """
+        x_scale, u_scale = reference_scales(self.x_ref, self.u_ref, self.u_lb, self.u_ub)
+        xi = MEMORY_LIMIT * x_scale[list(self.integral_states)] * max(self.dt * self.length, 1.0)
+        return {"x": plausible_range(self.x_ref, x_scale, MEASUREMENT_LIMIT),
+                "u_last": plausible_range(self.u_ref, u_scale, MEASUREMENT_LIMIT, self.u_lb, self.u_ub),
+                "memory": np.vstack([-xi, xi])}
+
+    def memory_reset(self) -> ca.Function:
+        """The step's memory reset to the reference's at the current period (what ``_init`` sets at the first).
+
+        Returns
+        -------
+        casadi.Function
+            ``reset(t (1,1), x (nx,1)) -> (u_last (nu,1)[, w (ni,1)])``: ``u_last = u*_k`` saturated
+            (``k = floor((t - t_0) / dt)`` clamped to ``0 .. N``, row ``N`` the held end's :attr:`u_hold`), and
+            with :attr:`integral_states` zero integrator states (``x`` is not used: the interface of
+            :meth:`gtmodel.estimation.mpc.MPCController.memory_reset`).
+        """
+        t, x = ca.MX.sym("t"), ca.MX.sym("x", self.nx)
+        nu = self.nu
+        values = ca.MX(ca.DM(np.vstack([self.u_ref, self.u_hold]).reshape(-1)))
+        k = period_index(t, self.t0, self.dt, self.length)
+        u_last = saturate(ca.vertcat(*[values[nu * k + i] for i in range(nu)]), self.u_lb, self.u_ub)
+        if not self.ni:
+            return ca.Function("reset", [t, x], [u_last], ["t", "x"], ["u_last"])
+        return ca.Function("reset", [t, x], [u_last, ca.DM.zeros(self.ni)], ["t", "x"], ["u_last", "w"])
+
     def __call__(self, t: float, x: Any, u_last: Any = None, w: Any = None) -> np.ndarray:
         """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
 
@@ -407,10 +447,7 @@ def tracking_controller(
     pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
     if pv.size != ode.np:
         raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
-    x_span = np.ptp(xs, axis=0)
-    x_scale = np.maximum(x_span, 1e-3 * (1.0 + np.max(np.abs(xs), axis=0)))
-    finite = np.isfinite(lb) & np.isfinite(ub)
-    u_scale = np.where(finite, 0.5 * (np.where(finite, ub, 0) - np.where(finite, lb, 0)), np.maximum(np.ptp(us, axis=0), 1e-3 * (1 + np.max(np.abs(us), axis=0))))
+    x_scale, u_scale = reference_scales(xs, us, lb, ub)
     Qm = _weight(Q, ode.nx, 1.0 / x_scale**2, "Q")
     Rm = _weight(R, ode.nu, 1.0 / u_scale**2, "R")
     if np.min(np.linalg.eigvalsh(Rm)) <= 0:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import ctypes
+import dataclasses
 import json
 import re
 
@@ -20,16 +21,20 @@ import pytest
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen.build import compile_shared, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
-from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step, load_loop_step, tracking_step
+from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step, load_loop_step, mpc_step, tracking_step
 from gtmodel.errors import InputError
+from gtmodel.estimation.mpc import mpc_controller
+from gtmodel.estimation.reference import period_index
 from gtmodel.estimation.tracking import tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
 from ..conftest import REPO
+from ..modeling._builders import double_integrator
 
 MOTOR = REPO / "models" / "dc_motor.py"
 OK, BAD, NUMERIC, NOT_CONVERGED = (STATUS_CODES[k][0] for k in ("GT_OK", "GT_BAD_ARGUMENT", "GT_NUMERIC_ERROR", "GT_NOT_CONVERGED"))
+MEMORY_RESET, REJECTED = (STATUS_CODES[k][0] for k in ("GT_MEMORY_RESET", "GT_MEASUREMENT_REJECTED"))
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +58,8 @@ def test_tracking_controller_c_equals_python_and_keeps_the_contract(tmp_path, mo
     gen = generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_tracking")
     report = check_loop_step(gen, n=300)
     assert report.passed, "\n".join(report.summary_lines())
-    assert report.functions[0].max_abs_diff <= 1e-12 and len(report.probes) == 9
+    assert report.functions[0].max_abs_diff <= 1e-12 and len(report.probes) == 11
+    assert [f.name for f in report.functions] == ["control", "memory_reset"] and report.functions[1].max_abs_diff <= 1e-12
     text = gen.header.read_text()
     assert "int gt_tracking_step(gt_tracking_memory *mem, double t, const double *x, double *u);" in text
     assert "#define GT_TRACKING_DT 0.004" in text and "malloc" not in gen.source.read_text()
@@ -67,14 +73,17 @@ def _call(init, step, memory, t, x, nu, real=ctypes.c_double):
     return status, np.array(u[:]), mem
 
 
-def test_overflow_gives_a_status_and_the_safe_input(tmp_path, motion):
-    # no bounds: a state of 1e308 overflows the law to inf; the step must not hand it out
+@pytest.mark.parametrize("plausible, expected", [(False, NUMERIC), (True, BAD)], ids=["any finite state", "plausible states"])
+def test_overflow_gives_a_status_and_the_safe_input(tmp_path, motion, plausible, expected):
+    # no bounds: a state of 1e308 overflows the law to inf; the step must not hand it out. With the
+    # controller's plausible measurement (1e6 state scales beyond the reference) it is rejected before
     ode, t, x, u = motion
     c = tracking_controller(ode, t, x, u, u_lb=[-np.inf], u_ub=[np.inf], Q=[1e-2, 1.0, 1e-4])
-    gen, lib = _compiled(tracking_step(c), tmp_path / "src", "gt_t")
+    loop = tracking_step(c)
+    gen, lib = _compiled(loop if plausible else dataclasses.replace(loop, x_range=None), tmp_path / "src", "gt_t")
     memory, init, step = load_loop_step(gen, lib)
     status, got, mem = _call(init, step, memory, 0.1, [0.0, 1e308, 0.0], 1)
-    assert status == NUMERIC and got == pytest.approx(c.u_initial) and mem.status == NUMERIC and mem.steps == 1
+    assert status == expected and got == pytest.approx(c.u_initial) and mem.status == expected and mem.steps == 1
 
 
 def _counting_step():
@@ -116,8 +125,12 @@ def test_initial_input_is_saturated(tmp_path):
         ({"u_init": np.array([1.0, 2.0])}, "u_init: expected 1 values, got 2"),
         ({"fail_status": "GT_OK"}, "fail_status: expected a failure status"),
         ({"function": ca.Function("f", [T := ca.MX.sym("t")], [2 * T])}, r"function: expected inputs \['t', 'x', 'u_last'\]"),
+        ({"x_range": np.zeros((2, 3))}, r"x_range: expected a \(2, 2\) array of the lowest and highest plausible values, got shape \(2, 3\)"),
+        ({"w_range": np.array([[1.0], [2.0]])}, "u_init, w_init: expected the first memory inside u_range, w_range"),
+        ({"reset": ca.Function("reset", [T], [T], ["t"], ["u_last"])}, r"reset: expected a casadi.Function reset\(t, x\) -> \(u_last, w\)"),
+        ({"predict": ca.Function("predict", [T], [T], ["w"], ["x"])}, r"predict: expected a casadi.Function predict\(u_last, w\) -> x"),
     ],
-    ids=["dt", "bounds", "u_init", "status", "interface"],
+    ids=["dt", "bounds", "u_init", "status", "interface", "x_range", "w_range", "reset", "predict"],
 )
 def test_bad_loop_step(tmp_path, change, match):
     step = LoopStep(**{**_counting_step().__dict__, **change})
@@ -173,3 +186,109 @@ def test_cli_codegen_controller_bad_result(tmp_path, capsys, motion, kind, args,
     code = main(["codegen", "--controller", str(folder), "--out", str(tmp_path / "c"), *args])
     err = capsys.readouterr().err
     assert code == EXIT_BAD_INPUT and "Traceback" not in err and re.search(match, err), err
+
+
+def _memory_step(memory, init, step, nx, nu):
+    """A call ``(t, x) -> (status, u)`` on one memory after ``_init``, and the memory."""
+    mem = memory()
+    assert init(ctypes.byref(mem)) == OK
+    u = (ctypes.c_double * nu)()
+
+    def call(t, x):
+        return step(ctypes.byref(mem), t, (ctypes.c_double * nx)(*x), u), np.array(u[:])
+
+    return call, mem
+
+
+@pytest.mark.parametrize("value", [np.nan, 1e150], ids=["nan", "1e150"])
+def test_tracking_integrator_poisoned_is_reset(tmp_path, motion, value):
+    # reference: the law from Python with the reset memory (u_last = u*_k saturated, integrator 0)
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0], Q=[1e-2, 1.0, 1e-4], integral_weights={"emf.phi": 1e3})
+    gen, lib = _compiled(tracking_step(c), tmp_path / "src", "gt_ti")
+    call, mem = _memory_step(*load_loop_step(gen, lib), 3, 1)
+    assert call(0.1, x[10])[0] == OK
+    mem.w[0] = value
+    status, got = call(0.104, x[10])
+    u_reset = np.clip(u[period_index(0.104, 0.0, 0.004, c.length - 1)], -10, 10)
+    want = c(0.104, x[10], u_reset, np.zeros(1))
+    assert status == MEMORY_RESET and got == pytest.approx(want, rel=1e-12, abs=1e-12) and mem.status == MEMORY_RESET
+    assert call(0.108, x[10])[0] == OK
+
+
+def test_tracking_absurd_measurement_keeps_the_integrator(tmp_path, motion):
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0], Q=[1e-2, 1.0, 1e-4], integral_weights={"emf.phi": 1e3})
+    gen, lib = _compiled(tracking_step(c), tmp_path / "src", "gt_ti")
+    call, mem = _memory_step(*load_loop_step(gen, lib), 3, 1)
+    _, u_ok = call(0.1, x[10] + np.array([0.0, 0.01, 0.0]))
+    xi = mem.w[0]
+    status, got = call(0.104, [1e150, 0.0, 0.0])  # beyond 1e6 state scales: rejected, no prediction (no state in the memory)
+    assert status == BAD and got == pytest.approx(u_ok) and mem.w[0] == xi
+
+
+def _glitch_mpc(folder):
+    """A small offset-free MPC (double integrator, horizon 4) as C: quick to build."""
+    ode = explicit_ode(double_integrator()[0])
+    t = 0.004 * np.arange(101)
+    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
+    c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=4, Q=[1.0, 0.01], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
+                       method="euler", disturbance_gain=0.5)
+    gen = generate_loop_step(mpc_step(c, "di"), folder, prefix="gt_di")
+    report = check_loop_step(gen, n=50)  # its strict build is the library of the test
+    return c, gen, report
+
+
+def _mpc_loop(c, call, glitch=None, n=60):
+    """The MPC against its own model (a plant 1 m/s^2 off, its estimate takes it): the inputs and statuses."""
+    x, us, statuses = np.zeros(2), [], []
+    for k in range(n):
+        status, u = call(0.004 * k, x if glitch is None else glitch(k, x.copy()))
+        us.append(u[0])
+        statuses.append(status)
+        x = np.asarray(c.step(x, u + 1.0)).reshape(-1)
+    return np.array(statuses), np.array(us)
+
+
+def test_mpc_spike_and_poisoned_memory_recover(tmp_path):
+    # fast variant of tests/codegen/test_loop_step_glitch.py. References: the spike-free run of the
+    # same step; the contract probes of check_loop_step (C equal to the Functions from Python)
+    c, gen, report = _glitch_mpc(tmp_path / "src")
+    assert report.passed, "\n".join(report.summary_lines())
+    assert [f.name for f in report.functions] == ["control", "memory_reset", "predict"]
+    assert {p.expected for p in report.probes} >= {"GT_MEASUREMENT_REJECTED", "GT_MEMORY_RESET"}
+    loaded = load_loop_step(gen, load_library(gen, report.library))
+    call, mem = _memory_step(*loaded, 2, 1)
+    free_status, free = _mpc_loop(c, call)
+    assert np.all(free_status == OK)
+
+    def spike(k, x):
+        if k == 20:
+            x[0] = 1e150
+        if k == 30:
+            x[1] = 1e3  # inside the measurement limit, but it drives the estimate beyond its range (1.25e5 > 500 N)
+        return x
+
+    call, mem = _memory_step(*loaded, 2, 1)
+    status, got = _mpc_loop(c, call, spike)
+    assert status[20] == REJECTED and status[30] == REJECTED and np.all(np.delete(status, [20, 30]) == OK)
+    assert np.max(np.abs(got - free)[25:]) <= 0.01 * 50.0
+
+    def poison(k, x):
+        if k == 20:
+            mem.w[4] = np.nan  # the disturbance estimate
+        return x
+
+    call, mem = _memory_step(*loaded, 2, 1)
+    status, got = _mpc_loop(c, call, poison)
+    assert status[20] == MEMORY_RESET and np.all(np.delete(status, 20) == OK) and np.all(np.abs(got) <= 50.0)
+    assert np.max(np.abs(got - free)[25:]) <= 0.01 * 50.0  # the estimate, reset to zero, converges again (gain 0.5)
+
+
+def test_single_precision_step_keeps_the_contract(tmp_path, motion):
+    # float: the plausible ranges as float constants (beyond FLT_MAX: none), the probes at the float tolerance (1e-4)
+    ode, t, x, u = motion
+    c = tracking_controller(ode, t, x, u, u_lb=[-np.inf], u_ub=[np.inf], Q=[1e-2, 1.0, 1e-4], integral_weights={"emf.phi": 1e3})
+    report = check_loop_step(generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_f", real="float"), n=50)
+    assert report.passed, "\n".join(report.summary_lines())
+    assert {p.expected for p in report.probes} >= {"GT_MEMORY_RESET"}

@@ -48,10 +48,20 @@ int @GP@_init(@GP@_memory *mem);
 
 /*
  * One period of the loop: the input u[@P@_NU] at time t [s] from the measured state
- * x[@P@_NX], saturated at the input bounds. Returns GT_OK with u written; on any other
- * status u holds the safe input (the last input, saturated) unless u or mem is NULL:
- * GT_BAD_ARGUMENT (a NULL pointer, a non-finite t or x), GT_NUMERIC_ERROR (a non-finite
- * result), or the inner step's failure status (e.g. GT_NOT_CONVERGED).
+ * x[@P@_NX], saturated at the input bounds. Returns GT_OK with u written, or:
+ * GT_MEMORY_RESET, u written: the memory (u_last, w) was non-finite or absurd (outside the
+ *   plausible ranges fixed at generation: the input bounds, the reference's range widened
+ *   by many scales; gtmodel.estimation.reference.MEASUREMENT_LIMIT, MEMORY_LIMIT) and was
+ *   reset to the reference's at t (as @GP@_init at the first period) before this step;
+ * GT_MEASUREMENT_REJECTED, u written (a controller with @GP@_predict only): x was non-finite
+ *   or absurd (outside the reference's range widened by MEASUREMENT_LIMIT state scales, or
+ *   driving the memory absurd) and the state the memory predicts for now replaced it;
+ * on any other status u holds the safe input (the last input, saturated) and the memory is
+ * kept (unless u or mem is NULL): GT_BAD_ARGUMENT (a NULL pointer, a non-finite t, a
+ * non-finite or absurd x without a prediction, or with a memory that is not plausible
+ * either: the measurement is rejected, the memory reset at the next valid one),
+ * GT_NUMERIC_ERROR (a non-finite result), or the inner step's failure status (e.g.
+ * GT_NOT_CONVERGED; also after a reset of the memory or with a predicted state).
  */
 int @GP@_step(@GP@_memory *mem, @REAL@ t, const @REAL@ *x, @REAL@ *u);
 
