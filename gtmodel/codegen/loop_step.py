@@ -36,7 +36,6 @@ import ctypes
 import hashlib
 import logging
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -52,6 +51,7 @@ from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.estimation.mpc import MPCController
 from gtmodel.estimation.tracking import TrackingController
@@ -64,7 +64,6 @@ log = logging.getLogger("gtmodel")
 LOOP_KIND = "loop_step"
 #: Largest accepted ``|C - Python|`` of the inner step (absolute, or relative to ``|Python|``).
 LOOP_TOLERANCE = 1e-12
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 @dataclass(frozen=True)
@@ -346,8 +345,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     step.validate()
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
-    if not isinstance(prefix, str) or not _IDENT.match(prefix):
-        raise InputError(f"prefix: expected a C identifier such as 'gt_tracking', got {prefix!r}")
+    check_c_identifier(prefix, "prefix", "gt_tracking")
     spec = _spec(step)
     phash = _hash(step)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; controller {step.name} sha256:{phash}; real {real}"
@@ -355,17 +353,18 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
     outs = {"u": "u_new", "w_next": "w_new"}
     call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
+    names = dict(NAME=step.name, VERSION=version)
     values = dict(
-        GP=prefix, P=P, NAME=step.name, VERSION=version, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
+        GP=prefix, P=P, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
         DT=repr(float(step.dt)), OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
-        DESCRIPTION="\n".join(f" * {line}".rstrip() for line in (step.description or step.name).splitlines()),
+        DESCRIPTION="\n".join(f" * {c_comment(line)}".rstrip() for line in (step.description or step.name).splitlines()),
         ULB=_c_array(step.u_lb), UUB=_c_array(step.u_ub), U0=_c_array(step.u_init), W0=_c_array(step.w_init), CALL=call,
     )
-    memory = "\n" + fill("template_loop_step.c", **values)
+    memory = "\n" + fill("template_loop_step.c", names, **values)
 
     def header(wrapped: Any) -> str:
         arena = uses_heap_arena(Path(out_dir) / f"{prefix}_casadi.c")  # written before the header
-        return fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header),
+        return fill("template_loop_step.h", names, **values, PROTOTYPES="\n".join(wrapped.header),
                     HEAP=_HEAP_DOC.format(arena=HEAP_ARENA_BYTES, prefix=prefix) if arena else "")
 
     out, _, sizes, signatures = write_library(prefix, (spec,), step, out_dir, real, header, extra_source=memory)
