@@ -15,7 +15,7 @@ XML attribute / text (FMU description)  :func:`xml_attr` (quoted) / :func:`xml_t
 HTML text and attributes (reports)      :func:`html_text`
 JSON inside ``<script>`` (reports)      :func:`json_script`
 TOML basic string / comment written     :func:`toml_string` (quoted) / :func:`toml_comment`
-CSV header name, CSV comment            :func:`csv_name` (validated) / :func:`csv_comment`
+CSV text cell, header name, comment     :func:`csv_field` / :func:`csv_name` (validated) / :func:`csv_comment`
 ======================================  ===============================================
 
 Every function takes any ``str`` (lone surrogates and NUL included) and returns text that,
@@ -34,7 +34,7 @@ from typing import Any
 from gtmodel.errors import InputError
 
 __all__ = ["C_IDENTIFIER", "check_c_identifier", "c_string", "c_comment", "xml_attr", "xml_text", "html_text",
-           "json_script", "toml_string", "toml_comment", "csv_name", "csv_comment"]
+           "json_script", "toml_string", "toml_comment", "csv_field", "csv_name", "csv_comment"]
 
 #: A C identifier (ASCII letters, digits and ``_``, not starting with a digit); matched with ``fullmatch``.
 C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
@@ -293,6 +293,29 @@ def csv_comment(text: str) -> str:
         The text with line breaks and control characters as spaces.
     """
     return _one_line(text)
+
+
+def csv_field(value: Any) -> str:
+    """``str(value)`` as one field of one CSV line (RFC 4180 quoting where needed).
+
+    Line breaks and other control characters become spaces (a table is read line by
+    line); a field holding a comma or a quote, or with spaces at either end, is quoted
+    with its quotes doubled. ``csv.reader`` reads the field back.
+
+    Parameters
+    ----------
+    value : Any
+        A cell (e.g. a case name).
+
+    Returns
+    -------
+    str
+        E.g. ``csv_field('3, held')`` -> ``'"3, held"'``.
+    """
+    text = _one_line(value)
+    if any(c in text for c in ',"') or text != text.strip():
+        return '"' + text.replace('"', '""') + '"'
+    return text
 
 
 def csv_name(name: Any, where: str) -> str:

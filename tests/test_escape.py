@@ -9,6 +9,7 @@ surrogates); the C strings of one run are batched into one program (one compile 
 
 from __future__ import annotations
 
+import csv
 import html
 import json
 import subprocess
@@ -20,8 +21,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gtmodel._escape import (c_comment, c_string, check_c_identifier, csv_comment, csv_name, html_text, json_script,
-                             toml_comment, toml_string, xml_attr, xml_text)
+from gtmodel._escape import (c_comment, c_string, check_c_identifier, csv_comment, csv_field, csv_name, html_text,
+                             json_script, toml_comment, toml_string, xml_attr, xml_text)
 from gtmodel.codegen.build import find_compiler
 from gtmodel.errors import InputError
 
@@ -174,3 +175,14 @@ def test_check_c_identifier_refuses(value):
 def test_csv_name_refuses(name):
     with pytest.raises(InputError, match=r"out.csv: column name .*: expected a non-empty name without commas"):
         csv_name(name, "out.csv")
+
+
+@QUICK
+@given(st.lists(TEXTS, min_size=2, max_size=4))  # (one empty cell alone is an empty line: no row)
+def test_csv_fields_read_back_as_one_row_by_the_csv_module(cells):
+    """Python's csv reader (RFC 4180) gives the cells back, line breaks and control characters as spaces."""
+    line = ",".join(csv_field(c) for c in cells)
+    assert len(line.splitlines()) <= 1
+    expected = ["".join(" " if c < " " or "\x7f" <= c <= "\x9f" or c in "\u2028\u2029" or "\ud800" <= c <= "\udfff" else c
+                        for c in cell) for cell in cells]
+    assert next(csv.reader([line])) == expected
