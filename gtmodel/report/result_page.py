@@ -167,7 +167,8 @@ def _inside(folder: Path, name: Any) -> str | None:
     """Why ``name`` may not contribute to the page of ``folder`` (None: a regular file inside it).
 
     A result folder contributes only regular files inside it: a relative name without
-    ``..``, no symbolic link on the way, and a path that resolves inside the folder.
+    ``..``, no symbolic link on the way, a file with one link (a hard link may be a file
+    elsewhere) and a path that resolves inside the folder.
     """
     if not isinstance(name, str) or not name or "\x00" in name:
         return "not a file name"
@@ -187,6 +188,8 @@ def _inside(folder: Path, name: Any) -> str | None:
             return "a symbolic link"
     if not stat.S_ISREG(mode):
         return "not a regular file"
+    if path.lstat().st_nlink > 1:
+        return "a hard link (its content may be a file outside the folder)"
     if not path.resolve().is_relative_to(folder.resolve()):
         return "outside the result folder"
     return None

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 import re
 import shutil
 from pathlib import Path
@@ -215,8 +216,10 @@ def linked_folder(tmp_path):
     (out / "fits.csv").unlink()
     (out / "fits.csv").symlink_to(outside)
     (out / "sub").symlink_to(tmp_path)
+    (out / "notes.md").unlink(missing_ok=True)
+    os.link(outside, out / "notes.md")  # a hard link to a file outside
     summary = json.loads((out / "summary.json").read_text())
-    summary["files"] += ["../outside.csv", "/etc/passwd", "sub/outside.csv"]
+    summary["files"] += ["notes.md", "../outside.csv", "/etc/passwd", "sub/outside.csv"]
     (out / "summary.json").write_text(json.dumps(summary))
     return out
 
@@ -228,9 +231,11 @@ def test_a_result_folder_contributes_only_regular_files_inside_it(linked_folder)
     assert base64.b64encode(passwd).decode() not in page and passwd.decode().splitlines()[0] not in page
     assert "secret" not in page and "<img" not in page
     warnings = re.findall(r"<li>(.*?)</li>", re.search(r"<ul class='warnings'>(.*?)</ul>", page, re.S).group(1))
-    assert [w.split(":")[0] for w in warnings[2:]] == ["fits.csv", "states.png", "../outside.csv", "/etc/passwd", "sub/outside.csv"]
-    assert [w.split(": ")[1].split(",")[0] for w in warnings[2:]] == [
-        "a symbolic link", "a symbolic link", "outside the result folder", "outside the result folder", "a symbolic link"]
+    assert [w.split(":")[0] for w in warnings[2:]] == ["fits.csv", "states.png", "notes.md", "../outside.csv", "/etc/passwd",
+                                                       "sub/outside.csv"]
+    assert [w.split(": ")[1].split(" (")[0].split(",")[0] for w in warnings[2:]] == [
+        "a symbolic link", "a symbolic link", "a hard link", "outside the result folder", "outside the result folder",
+        "a symbolic link"]
 
 
 def test_report_command_never_inlines_a_linked_file(solved, tmp_path, capsys):
