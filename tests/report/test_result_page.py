@@ -13,10 +13,13 @@ import json
 import os
 import re
 import shutil
+from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gtmodel.cli import main
 from gtmodel.errors import InputError
@@ -329,3 +332,55 @@ def test_a_report_with_hostile_units_and_column_names_draws_every_figure(browser
     assert shown["messages"] == []
     assert shown["figures"] == shown["drawn"] == 3 and shown["traces"] == [3, 3, 1]
     assert shown["title"] == "demo: check_failed"
+
+
+#: Units and column names: arbitrary Unicode with script-block breakers mixed in (a column name
+#: holds no comma, quote or line break: the CSV reader's rule, gtmodel._escape.csv_name).
+_NAME_PARTS = st.one_of(st.text(st.characters(blacklist_categories=("Cc", "Cs", "Zl", "Zp")), max_size=6),
+                        st.sampled_from(["<!--", "<script>", "</script>", "<!--<script>", "&", "]]>", "*/", "\\"]))
+_NAMES = st.lists(_NAME_PARTS, min_size=1, max_size=5).map("".join).map(lambda s: s.replace(",", ";").replace('"', "'").strip())
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(units=st.lists(_NAMES.map(lambda s: s + "\u2028\u2029"), min_size=2, max_size=2), column=_NAMES.filter(
+    lambda s: s and not s.startswith("#") and s not in ("t", "x", "u") and not re.fullmatch(r"(t|time)(_s| ?\[s\])?", s, re.I)))
+def test_any_unit_and_column_name_stays_inside_its_script_block(tmp_path_factory, units, column):
+    """Arbitrary units and column names: Python's HTML parser (independent of the writer) finds
+    one JSON block per figure container, each parsing back to the names given."""
+    out = _folder(tmp_path_factory.mktemp("names"), summary={"units": {"x": units[0], "u": units[1]}})
+    rows = [f"t,x,u,{column}"] + [f"{a!r},{a!r},{-a!r},{2 * a!r}" for a in (0.0, 0.5, 1.0)]
+    (out / "trajectories.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    page = render_report(out, plotly_js=STUB_JS)
+    blocks = _ScriptBlocks.of(page)
+    assert len(blocks) == page.count('<div class="gt-figure"') == 3
+    specs = [json.loads(b) for b in blocks]
+    assert [tr["name"] for s in specs for tr in s["data"] if "bound" not in tr["name"]] == ["x", "u", column]
+    assert [s["layout"]["yaxis"]["title"]["text"] for s in specs[:2]] == [f"x [{units[0]}]" if units[0] else "x",
+                                                                            f"u [{units[1]}]" if units[1] else "u"]
+
+
+class _ScriptBlocks(HTMLParser):
+    """The text of every ``<script type="application/json">`` element, as an HTML parser sees it."""
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=False)
+        self.blocks: list[str] = []
+        self._inside = False
+
+    @classmethod
+    def of(cls, page: str) -> list[str]:
+        parser = cls()
+        parser.feed(page)
+        return parser.blocks
+
+    def handle_starttag(self, tag, attrs):
+        self._inside = tag == "script" and ("type", "application/json") in attrs
+        if self._inside:
+            self.blocks.append("")
+
+    def handle_endtag(self, tag):
+        self._inside = False
+
+    def handle_data(self, data):
+        if self._inside:
+            self.blocks[-1] += data
