@@ -2,8 +2,8 @@
 
 A name (of a model, variable, unit, parameter set, CSV column, ...) or a description may
 come from a user's file and hold anything. Where it becomes an identifier (a C symbol, a
-macro prefix) it is validated with :func:`check_c_identifier` or mapped with
-:func:`gtmodel.modeling.dae.casadi_name` before anything is written; everywhere else it
+macro prefix, an FMU's ``modelIdentifier``) it is validated with :func:`check_c_identifier`
+or mapped with :func:`casadi_name` before anything is written; everywhere else it
 passes through the function of this module for the language it lands in:
 
 ======================================  ===============================================
@@ -33,7 +33,7 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["C_IDENTIFIER", "check_c_identifier", "c_string", "c_comment", "xml_attr", "xml_text", "html_text",
+__all__ = ["C_IDENTIFIER", "casadi_name", "check_c_identifier", "c_string", "c_comment", "xml_attr", "xml_text", "html_text",
            "json_script", "toml_string", "toml_comment", "csv_field", "csv_name", "csv_comment"]
 
 #: A C identifier (ASCII letters, digits and ``_``, not starting with a digit); matched with ``fullmatch``.
@@ -73,6 +73,43 @@ def check_c_identifier(value: Any, what: str, example: str = "gt_model") -> str:
         raise InputError(f"{what}: expected a C identifier (ASCII letters, digits, '_'; not starting with a digit) "
                          f"such as {example!r}, got {shown!r}")
     return value
+
+
+def casadi_name(name: str) -> str:
+    """A model name as a valid CasADi Function name and C identifier (the one mapping).
+
+    Also importable as ``gtmodel.modeling.dae.casadi_name``.
+
+    CasADi accepts a letter followed by letters, digits and non-consecutive underscores; C
+    symbols of generated code are built from the same text. Every character outside
+    ``[A-Za-z0-9]`` becomes ``_``, runs of ``_`` become one, ``_`` at either end is dropped and
+    ``m_`` is put in front of a name that does not start with a letter: ``my-model`` ->
+    ``my_model``, ``cart__pole`` -> ``cart_pole``, ``x.y`` -> ``x_y``, ``2dof`` -> ``m_2dof``.
+
+    Parameters
+    ----------
+    name : str
+        The model's name as the user wrote it.
+
+    Returns
+    -------
+    str
+        The mapped name.
+
+    Raises
+    ------
+    InputError
+        ``name`` is not a string, is longer than 200 characters, holds a control character,
+        or has no ASCII letter or digit at all (nothing to map); the message shows it escaped.
+    """
+    if not isinstance(name, str):
+        raise InputError(f"model name: expected a string, got {type(name).__name__}")
+    shown = name[:60].encode("unicode_escape").decode("ascii")
+    if len(name) > 200 or any(ord(c) < 32 or ord(c) == 127 for c in name) or not re.search(r"[A-Za-z0-9]", name):
+        raise InputError(f"model name {shown!r}: expected at most 200 printable characters with a letter or digit "
+                         "(mapped to a C and CasADi name: other characters become '_')")
+    mapped = re.sub(r"_+", "_", re.sub(r"[^A-Za-z0-9]", "_", name)).strip("_")
+    return mapped if mapped[0].isalpha() else f"m_{mapped}"
 
 
 def c_string(text: str) -> str:

@@ -43,7 +43,7 @@ import casadi as ca
 import numpy as np
 
 import gtmodel
-from gtmodel._escape import check_c_identifier
+from gtmodel._escape import casadi_name, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
@@ -56,7 +56,6 @@ from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.out_dir import check_out_dir
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.robots.friction import DEFAULT_FRICTION_WIDTH, check_friction_form
-from gtmodel.modeling.dae import casadi_name
 
 __all__ = ["GeneratedCode", "generate", "REAL_TYPES", "controller_part", "robot_part", "write_library", "check_out_dir"]
 
