@@ -151,10 +151,9 @@ def c_comment(text: str) -> str:
     """``text`` as one line of plain ASCII inside a C comment.
 
     Printable ASCII is kept; every other character (newline, NUL, non-ASCII), every
-    ``\\``, ``"`` and ``'`` (so the text cannot close a literal either) and the second
-    character of ``*/``, ``/*`` and ``??`` (a trigraph could splice lines) are written as
-    ``\\uXXXX`` (``\\UXXXXXXXX`` beyond the BMP), as is a ``*``, ``/`` or ``?`` at either
-    end (the template's text around it). Readable, not reversible.
+    ``\\`` and the second character of ``*/``, ``/*`` and ``??`` (a trigraph could splice
+    lines) are written as ``\\uXXXX`` (``\\UXXXXXXXX`` beyond the BMP), as is a ``*``, ``/``
+    or ``?`` at either end (the template's text around it). Readable, not reversible.
 
     Parameters
     ----------
@@ -173,7 +172,7 @@ def c_comment(text: str) -> str:
     for i, c in enumerate(text):
         edge = (i == 0 or i == len(text) - 1) and c in "*/?"
         pair = prev + c in ("*/", "/*", "??")
-        if edge or pair or c in "\\\"'" or not " " <= c <= "~":
+        if edge or pair or c == "\\" or not " " <= c <= "~":
             out.append(_code_point(c))
             prev = ""
         else:
