@@ -46,6 +46,7 @@ from typing import Sequence
 import numpy as np
 import numpy.typing  # noqa: F401  (np.typing in annotations)
 
+from gtmodel._escape import csv_comment, csv_name
 from gtmodel.errors import InputError
 
 __all__ = ["Table", "read_table", "write_table"]
@@ -370,7 +371,8 @@ def write_table(path: str | Path, columns: Sequence[str], data: np.typing.ArrayL
     data : array_like, shape (N, len(columns))
         Values.
     comments : sequence of str, optional
-        Comment lines written above the header (each after a ``#``; newlines become spaces).
+        Comment lines written above the header (each after a ``#``; line breaks and control
+        characters become spaces, :func:`gtmodel._escape.csv_comment`).
     integer_columns : sequence of int, optional
         Columns written as integers.
     what : str, optional
@@ -384,11 +386,12 @@ def write_table(path: str | Path, columns: Sequence[str], data: np.typing.ArrayL
     Raises
     ------
     InputError
-        The file cannot be written.
+        The file cannot be written, or a column name would not read back as one column
+        (:func:`gtmodel._escape.csv_name`: a comma, quote, line break, ...).
     """
     path = Path(path)
-    lines = ["#" + str(c).replace("\n", " ") for c in comments]
-    lines.append(",".join(columns))
+    lines = ["#" + csv_comment(c) for c in comments]
+    lines.append(",".join(csv_name(c, f"{path}: {what}") for c in columns))
     for row in np.asarray(data, dtype=float):
         lines.append(",".join(str(int(x)) if j in integer_columns else repr(float(x)) for j, x in enumerate(row)))
     try:

@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -44,6 +43,7 @@ import casadi as ca
 import numpy as np
 
 import gtmodel
+from gtmodel._escape import casadi_name, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
@@ -61,7 +61,6 @@ __all__ = ["GeneratedCode", "generate", "REAL_TYPES", "controller_part", "robot_
 
 log = logging.getLogger("gtmodel")
 
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 #: Selectable floating-point types of the generated code.
 REAL_TYPES = ("double", "float")
@@ -209,8 +208,7 @@ def _resolve_specs(functions: Iterable[str | FunctionSpec], kind: str) -> tuple[
     if len(set(names)) != len(names):
         raise InputError(f"functions: duplicate names in {names}")
     for s in specs:
-        if not _IDENT.match(s.name):
-            raise InputError(f"functions: {s.name!r} is not a valid C identifier")
+        check_c_identifier(s.name, "functions", "ik")
         if s.kind != kind:
             raise InputError(f"functions: {s.name!r} is declared for a {s.kind} robot, not a {kind} robot")
     return tuple(specs)
@@ -422,9 +420,8 @@ def generate(
     """
     model = RobotModel(load_robot(robot), friction)
     if prefix is None:
-        prefix = "gt_" + re.sub(r"[^A-Za-z0-9_]", "_", model.name)
-    if not isinstance(prefix, str) or not _IDENT.match(prefix):
-        raise InputError(f"prefix: expected a C identifier such as 'gt_L1', got {prefix!r}")
+        prefix = "gt_" + casadi_name(model.name)
+    check_c_identifier(prefix, "prefix", "gt_L1")
 
     check_friction_form(friction, DEFAULT_FRICTION_WIDTH)
     if real not in REAL_TYPES:

@@ -43,7 +43,6 @@ import ctypes
 import hashlib
 import logging
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -59,6 +58,7 @@ from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.estimation.mpc import MPCController
 from gtmodel.estimation.tracking import TrackingController
@@ -71,7 +71,6 @@ log = logging.getLogger("gtmodel")
 LOOP_KIND = "loop_step"
 #: Largest accepted ``|C - Python|`` of the inner step (absolute, or relative to ``|Python|``).
 LOOP_TOLERANCE = 1e-12
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
 @dataclass(frozen=True)
@@ -426,8 +425,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     step.validate()
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
-    if not isinstance(prefix, str) or not _IDENT.match(prefix):
-        raise InputError(f"prefix: expected a C identifier such as 'gt_tracking', got {prefix!r}")
+    check_c_identifier(prefix, "prefix", "gt_tracking")
     spec = _spec(step)
     specs = (spec,) + ((_reset_spec(step),) if step.reset is not None else ()) + ((_predict_spec(step),) if step.predict is not None else ())
     phash = _hash(step)
@@ -436,6 +434,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
     outs = {"u": "u_new", "w_next": "w_new"}
     call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
+<<<<<<< HEAD
     reset = ("GT_NUMERIC_ERROR /* no reset function: the first memory */" if step.reset is None else
              f"{prefix}_memory_reset(tt, x, mem->u_last" + (", mem->w)" if step.nw else ")"))
     predict = "GT_BAD_ARGUMENT /* no prediction */" if step.predict is None else f"{prefix}_predict(mem->u_last, mem->w, x_hat)"
@@ -444,20 +443,23 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     def bounds(r: np.ndarray | None, n: int, row: int) -> str:
         v = np.full(n, -inf if row == 0 else inf) if r is None else np.asarray(r, dtype=float)[row]
         return _c_array(np.where(np.abs(v) > 3.0e38, np.sign(v) * inf, v) if real == "float" else v)  # beyond FLT_MAX: none
+=======
+    names = dict(NAME=step.name, VERSION=version)
+>>>>>>> names
     values = dict(
-        GP=prefix, P=P, NAME=step.name, VERSION=version, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
+        GP=prefix, P=P, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
         DT=repr(float(step.dt)), OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
-        DESCRIPTION="\n".join(f" * {line}".rstrip() for line in (step.description or step.name).splitlines()),
+        DESCRIPTION="\n".join(f" * {c_comment(line)}".rstrip() for line in (step.description or step.name).splitlines()),
         ULB=_c_array(step.u_lb), UUB=_c_array(step.u_ub), U0=_c_array(step.u_init), W0=_c_array(step.w_init), CALL=call,
         RESET=reset, PREDICT=predict, XLO=bounds(step.x_range, step.nx, 0), XHI=bounds(step.x_range, step.nx, 1),
         ULO=bounds(step.u_range, step.nu, 0), UHI=bounds(step.u_range, step.nu, 1),
         WLO=bounds(step.w_range, step.nw, 0), WHI=bounds(step.w_range, step.nw, 1),
     )
-    memory = "\n" + fill("template_loop_step.c", **values)
+    memory = "\n" + fill("template_loop_step.c", names, **values)
 
     def header(wrapped: Any) -> str:
         arena = uses_heap_arena(Path(out_dir) / f"{prefix}_casadi.c")  # written before the header
-        return fill("template_loop_step.h", **values, PROTOTYPES="\n".join(wrapped.header),
+        return fill("template_loop_step.h", names, **values, PROTOTYPES="\n".join(wrapped.header),
                     HEAP=_HEAP_DOC.format(arena=HEAP_ARENA_BYTES, prefix=prefix) if arena else "")
 
     out, _, sizes, signatures = write_library(prefix, specs, step, out_dir, real, header, extra_source=memory)

@@ -58,6 +58,7 @@ from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
 from gtmodel.codegen.check.report import FunctionCheck
 from gtmodel.codegen.declarations import StatusCheck
 from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel._escape import check_c_identifier
 from gtmodel.errors import CodegenError, GtModelError, InputError
 from gtmodel.modeling import Component, ExplicitODE, FlatDAE, Model, explicit_ode
 from gtmodel.modeling.dae import casadi_name
@@ -86,7 +87,6 @@ HORIZON_PERIODS = 250
 MODEL_TOLERANCE = 1e-12
 #: Range of the random time samples of the check [s].
 TIME_RANGE = 10.0
-_IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 #: Names an output's C parameter may not take (arguments, wrapper locals, C keywords): ``y_<name>`` then.
 _RESERVED = frozenset(
     "t x z u arg res iw w i k flag iterations x_next residual valid pre converged auto break case char const continue "
@@ -274,10 +274,11 @@ def model_specs(ode: ExplicitODE, dt: float = LOOP_PERIOD_S, substeps: int = SUB
 
 def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE, real: str, dt: float, substeps: int) -> str:
     P = prefix.upper()
+    names = dict(NAME=dae.name, VERSION=version, STATES=", ".join(dae.x_names) or "none",
+                 ALGEBRAIC=", ".join(dae.z_names) or "none", INPUTS=", ".join(dae.u_names) or "none",
+                 PARAMETERS=", ".join(f"{n} = {v!r}" for n, v in zip(dae.p_names, dae.p_value.tolist())) or "none")
     return fill(
-        "template_model_header.h", GP=prefix, P=P, NAME=dae.name, VERSION=version, HASH=phash, REAL=real,
-        STATES=", ".join(dae.x_names) or "none", ALGEBRAIC=", ".join(dae.z_names) or "none", INPUTS=", ".join(dae.u_names) or "none",
-        PARAMETERS=", ".join(f"{n} = {v!r}" for n, v in zip(dae.p_names, dae.p_value.tolist())) or "none",
+        "template_model_header.h", names, GP=prefix, P=P, HASH=phash, REAL=real,
         NX=dae.nx, NZ=dae.nz, NU=dae.nu, NY=len(dae.output_names), DT=repr(float(dt)), SUBSTEPS=substeps,
         OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
         PROTOTYPES="\n".join(functions.header),
@@ -339,8 +340,7 @@ def generate_model(
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
     prefix = prefix if prefix is not None else "gt_" + casadi_name(model.name)
-    if not isinstance(prefix, str) or not _IDENT.match(prefix):
-        raise InputError(f"prefix: expected a C identifier such as 'gt_cart_pendulum', got {prefix!r}")
+    check_c_identifier(prefix, "prefix", "gt_cart_pendulum")
     if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not np.isfinite(dt) or dt <= 0:
         raise InputError(f"dt: expected a positive period in seconds, got {dt!r}")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
-from xml.sax.saxutils import quoteattr
 
+from gtmodel._escape import xml_attr
 from gtmodel.exchange.explicit import ExplicitModel
 
 __all__ = ["ValueReferences", "model_description"]
@@ -63,7 +63,7 @@ class ValueReferences:
 
 def _attr(**kw: object) -> str:
     """XML attributes; ``None`` and ``""`` are left out, except ``dependencies`` (empty: none)."""
-    return " ".join(f"{k}={quoteattr(str(v))}" for k, v in kw.items()
+    return " ".join(f"{k}={xml_attr(str(v))}" for k, v in kw.items()
                     if v is not None and (v != "" or k.startswith("dependencies")))
 
 

@@ -19,11 +19,11 @@ import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 import casadi as ca
 import numpy as np
 
+from gtmodel._escape import xml_attr
 from gtmodel.errors import InputError
 from gtmodel.exchange.explicit import fmi_identifier
 from gtmodel.exchange.fmu_export import _compile, _cwd, fmi_platform
@@ -153,7 +153,7 @@ def export_step_fmu(
 
 def _description(name: str, ident: str, guid: str, dt: float, x_names: list[str], x0: np.ndarray,
                  u_names: list[str], y_names: list[str]) -> str:
-    q = quoteattr
+    q = xml_attr
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<fmiModelDescription fmiVersion="2.0" modelName={q(name)} guid={q(guid)} generationTool="gtmodel" '
              'variableNamingConvention="structured" numberOfEventIndicators="0">',

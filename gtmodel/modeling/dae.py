@@ -8,7 +8,6 @@ element names, symbol and value checks, unpacking of sampled trajectories).
 from __future__ import annotations
 
 import csv
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,47 +17,13 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._lazy import lazy_module
+from gtmodel._escape import casadi_name
 from gtmodel.errors import InputError
 
 #: pandas, imported on first use (~0.5 s of CPU, only for DataFrames).
 pd = lazy_module("pandas")
 
 __all__ = ["FlatDAE", "SimulationResult", "expand_names", "fixed_flags", "casadi_name"]
-
-
-def casadi_name(name: str) -> str:
-    """A model name as a valid CasADi Function name and C identifier (the one mapping).
-
-    CasADi accepts a letter followed by letters, digits and non-consecutive underscores; C
-    symbols of generated code are built from the same text. Every character outside
-    ``[A-Za-z0-9]`` becomes ``_``, runs of ``_`` become one, ``_`` at either end is dropped and
-    ``m_`` is put in front of a name that does not start with a letter: ``my-model`` ->
-    ``my_model``, ``cart__pole`` -> ``cart_pole``, ``x.y`` -> ``x_y``, ``2dof`` -> ``m_2dof``.
-
-    Parameters
-    ----------
-    name : str
-        The model's name as the user wrote it.
-
-    Returns
-    -------
-    str
-        The mapped name.
-
-    Raises
-    ------
-    InputError
-        ``name`` is not a string, is longer than 200 characters, holds a control character,
-        or has no ASCII letter or digit at all (nothing to map); the message shows it escaped.
-    """
-    if not isinstance(name, str):
-        raise InputError(f"model name: expected a string, got {type(name).__name__}")
-    shown = name[:60].encode("unicode_escape").decode("ascii")
-    if len(name) > 200 or any(ord(c) < 32 or ord(c) == 127 for c in name) or not re.search(r"[A-Za-z0-9]", name):
-        raise InputError(f"model name {shown!r}: expected at most 200 printable characters with a letter or digit "
-                         "(mapped to a C and CasADi name: other characters become '_')")
-    mapped = re.sub(r"_+", "_", re.sub(r"[^A-Za-z0-9]", "_", name)).strip("_")
-    return mapped if mapped[0].isalpha() else f"m_{mapped}"
 
 
 def expand_names(name: str, size: int) -> list[str]:

@@ -71,7 +71,7 @@ def named_parameters(file: ProblemFile, values: Mapping[str, float], reserved: s
         A name that is not an identifier or shadows a model name.
     """
     for key in values:
-        if not _IDENT.match(key):
+        if not _IDENT.fullmatch(key):
             raise file.fail(f"parameters.{key}", "an identifier (letters, digits, _) as the parameter name", key)
         if key in reserved:
             raise file.fail(f"parameters.{key}", "a name that is not a model variable", key)

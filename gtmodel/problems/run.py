@@ -187,11 +187,15 @@ def add_report(folder: str | Path) -> Path:
     Raises
     ------
     ResultWriteError
-        ``folder`` is not a result folder (no run's ``summary.json``), is in use by a run,
-        or cannot be written (names the folder).
+        ``folder`` is not a result folder (no run's ``summary.json``, or a symbolic link in
+        its place), is in use by a run, or cannot be written (names the folder). Files of
+        the folder that are symbolic links or lead outside it are left out of the page with
+        a warning in it (:func:`gtmodel.report.result_page.render_report`).
     """
     folder = Path(folder)
     summary_path = folder / "summary.json"
+    if summary_path.is_symlink():
+        raise ResultWriteError(f"{summary_path}: a symbolic link; a result folder contributes only regular files inside it")
     if not _is_run_summary(summary_path):
         raise ResultWriteError(f"{folder}: not a gtmodel result folder (no summary.json of a run); give the folder a "
                                "`gtmodel solve` wrote")

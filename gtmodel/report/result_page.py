@@ -24,19 +24,24 @@ from __future__ import annotations
 
 import base64
 import csv
-import html
 import json
+import logging
 import math
+import os
 import re
-from pathlib import Path
+import stat
+from pathlib import Path, PurePosixPath
 from typing import Any, Mapping
 
 from plotly.offline import get_plotlyjs
 
+from gtmodel._escape import html_text, json_script
 from gtmodel.errors import InputError
 from gtmodel.status import Status
 
 __all__ = ["REPORT_FILE", "MAX_POINTS", "MAX_CSV_BYTES", "render_report", "write_report", "read_csv_columns"]
+
+log = logging.getLogger("gtmodel")
 
 #: The page's file name in a result folder.
 REPORT_FILE = "report.html"
@@ -74,8 +79,7 @@ document.querySelectorAll("script.gt-figure-spec").forEach(function (node) {
 """
 
 
-def _esc(value: Any) -> str:
-    return html.escape(str(value), quote=True)
+_esc = html_text
 
 
 def _fmt(value: Any) -> str:
@@ -125,7 +129,7 @@ def read_csv_columns(path: str | Path) -> tuple[list[str], dict[str, list[Any]]]
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
+        text = _read_regular(path).decode("utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read the table ({exc})") from None
     rows = [(i + 1, r) for i, r in enumerate(csv.reader(text.splitlines())) if r and not r[0].lstrip().startswith("#")]
@@ -145,6 +149,75 @@ def read_csv_columns(path: str | Path) -> tuple[list[str], dict[str, list[Any]]]
         except ValueError:
             columns[name] = raw
     return header, columns
+
+
+def _read_regular(path: Path) -> bytes:
+    """The bytes of a regular file, never through a symbolic link (``O_NOFOLLOW``; a FIFO or device refused)."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise OSError(f"{path}: not a regular file")
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            return fh.read()
+    finally:
+        os.close(fd)
+
+
+def _inside(folder: Path, name: Any) -> str | None:
+    """Why ``name`` may not contribute to the page of ``folder`` (None: a regular file inside it).
+
+    A result folder contributes only regular files inside it: a relative name without
+    ``..``, no symbolic link on the way, a file with one link (a hard link may be a file
+    elsewhere) and a path that resolves inside the folder.
+    """
+    if not isinstance(name, str) or not name or "\x00" in name:
+        return "not a file name"
+    parts = PurePosixPath(name).parts
+    if not parts:
+        return "not a file name"
+    if PurePosixPath(name).is_absolute() or ".." in parts or "\\" in name:
+        return "outside the result folder"
+    path = folder
+    for part in parts:
+        path = path / part
+        try:
+            mode = path.lstat().st_mode
+        except OSError:
+            return "missing"
+        if stat.S_ISLNK(mode):
+            return "a symbolic link"
+    if not stat.S_ISREG(mode):
+        return "not a regular file"
+    if path.lstat().st_nlink > 1:
+        return "a hard link (its content may be a file outside the folder)"
+    if not path.resolve().is_relative_to(folder.resolve()):
+        return "outside the result folder"
+    return None
+
+
+def _folder_files(folder: Path, summary: Mapping[str, Any]) -> tuple[list[str], list[str]]:
+    """The files of the folder the page shows (``summary["files"]``, else the folder's entries) and the refusals.
+
+    Returns
+    -------
+    files : list of str
+        Names of regular files inside the folder (:func:`_inside`).
+    refused : list of str
+        One warning per name left out for a reason other than being missing (a symbolic
+        link, outside the folder, not a regular file), for the page's warnings.
+    """
+    listed = summary.get("files")
+    names = list(listed) if isinstance(listed, (list, tuple)) and listed else sorted(p.name for p in folder.iterdir())
+    files, refused = [], []
+    for name in names:
+        why = _inside(folder, name)
+        if why is None:
+            files.append(name)
+        elif why != "missing":
+            shown = str(name)[:120].encode("unicode_escape").decode("ascii")
+            refused.append(f"{shown}: {why}, not shown (a result folder contributes only regular files inside it)")
+            log.warning("report: %s", refused[-1])
+    return files, refused
 
 
 def _time_column(header: list[str], columns: Mapping[str, list[Any]]) -> str | None:
@@ -228,7 +301,7 @@ class _Page:
     def figure(self, spec: Mapping[str, Any]) -> None:
         self.figures += 1
         div = f"gt-figure-{self.figures}"
-        payload = json.dumps(spec, allow_nan=False).replace("</", "<\\/")
+        payload = json_script(spec)
         self.add(f'<div class="gt-figure" id="{div}"></div>'
                  f'<script type="application/json" class="gt-figure-spec" data-target="{div}">{payload}</script>')
 
@@ -309,7 +382,7 @@ def _variables(summary: Mapping[str, Any], header: list[str]) -> dict[str, list[
 
 def _csv_section(page: _Page, folder: Path, name: str, summary: Mapping[str, Any]) -> None:
     path = folder / name
-    size = path.stat().st_size
+    size = path.lstat().st_size
     if size > MAX_CSV_BYTES:
         page.add(f"<h3>{_esc(name)}</h3><p class='muted'>{size / 1e6:.0f} MB: too large to show (limit {MAX_CSV_BYTES / 1e6:.0f} MB)</p>")
         return
@@ -387,7 +460,7 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
     folder = Path(folder)
     if summary is None:
         try:
-            summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+            summary = json.loads(_read_regular(folder / "summary.json").decode("utf-8"))
         except (OSError, ValueError) as exc:
             raise InputError(f"{folder}: no readable summary.json, not a result folder ({exc})") from None
     if not isinstance(summary, Mapping):
@@ -404,7 +477,8 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
            and summary.get(k) is not None]
     if key:
         page.add("<p>" + " &middot; ".join(f"<b>{_esc(k)}</b> {_esc(_fmt(v))}" for k, v in key) + "</p>")
-    warnings = _warnings(summary)
+    files, refused = _folder_files(folder, summary)
+    warnings = _warnings(summary) + refused
     page.add('<h2 id="warnings">Warnings</h2>')
     page.add("<ul class='warnings'>" + "".join(f"<li>{_esc(w)}</li>" for w in warnings) + "</ul>" if warnings
              else "<p class='muted'>none</p>")
@@ -414,7 +488,6 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
         page.add("<h2>Benchmark</h2>")
         page.table(["field", "value"], [[k, v] for k, v in summary["benchmark"].items()])
     _summary_section(page, summary)
-    files = [f for f in summary.get("files") or sorted(p.name for p in folder.iterdir()) if (folder / f).is_file()]
     csvs = [f for f in files if f.endswith(".csv")]
     if csvs:
         page.add('<h2 id="trajectories">Trajectories and tables</h2>')
@@ -422,16 +495,16 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
             _csv_section(page, folder, f, summary)
     _variables_section(page, summary)
     for f in (f for f in files if f.endswith(".md")):
-        page.add(f"<h3>{_esc(f)}</h3><pre>{_esc((folder / f).read_text(encoding='utf-8', errors='replace'))}</pre>")
+        page.add(f"<h3>{_esc(f)}</h3><pre>{_esc(_read_regular(folder / f).decode('utf-8', errors='replace'))}</pre>")
     pngs = [f for f in files if f.endswith(".png")]
     if pngs:
         page.add('<h2 id="plots">Plots</h2>')
         for f in pngs:
-            data = base64.b64encode((folder / f).read_bytes()).decode("ascii")
+            data = base64.b64encode(_read_regular(folder / f)).decode("ascii")
             page.add(f"<h3>{_esc(f)}</h3><img class='png' alt='{_esc(f)}' src='data:image/png;base64,{data}'>")
     others = [f for f in files if not f.endswith((".csv", ".png", ".md")) and f not in ("summary.json", REPORT_FILE)]
     if others:
-        page.add("<h2>Other files</h2><ul>" + "".join(f"<li>{_esc(f)} ({(folder / f).stat().st_size} bytes)</li>" for f in others)
+        page.add("<h2>Other files</h2><ul>" + "".join(f"<li>{_esc(f)} ({(folder / f).lstat().st_size} bytes)</li>" for f in others)
                  + "</ul>")
     page.add(f"<h2>summary.json</h2><details><summary>show</summary><pre>{_esc(json.dumps(summary, indent=2))}</pre></details>")
     title = _esc(f"{name}: {status}")

@@ -13,6 +13,7 @@ import ctypes
 import dataclasses
 import json
 import re
+import subprocess
 
 import casadi as ca
 import numpy as np
@@ -292,3 +293,32 @@ def test_single_precision_step_keeps_the_contract(tmp_path, motion):
     report = check_loop_step(generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_f", real="float"), n=50)
     assert report.passed, "\n".join(report.summary_lines())
     assert {p.expected for p in report.probes} >= {"GT_MEMORY_RESET"}
+
+HOSTILE_NAME = ('p"; } int system(const char *); __attribute__((constructor)) static void pwn(void) '
+                '{ system("touch PWNED"); } const char *gt_q(void) { return "')
+
+
+def _exported(library) -> list[str]:
+    out = subprocess.run(["nm", "-D", "--defined-only", str(library)], check=True, capture_output=True, text=True).stdout
+    return sorted(line.split()[-1] for line in out.splitlines() if line.strip())
+
+
+def test_a_hostile_controller_name_and_description_stay_text(tmp_path, monkeypatch):
+    """The issue's name as the controller's name, a description breaking comments and lines: the C
+    builds with -Werror, exports what a plain name's does (nm), behaves alike (the step of
+    test_inner_memory_and_failure_status), holds the name byte for byte in its version, creates no file."""
+    monkeypatch.chdir(tmp_path)
+    plain = _counting_step()
+    hostile = dataclasses.replace(plain, name=HOSTILE_NAME, description=f"{HOSTILE_NAME}\n*/ #include </etc/passwd>\n??/\n\\")
+    runs = []
+    for step, folder in ((plain, "plain"), (hostile, "hostile")):
+        gen, lib = _compiled(step, tmp_path / folder, "gt_count")
+        memory, init, call = load_loop_step(gen, lib)
+        mem = memory()
+        init(ctypes.byref(mem))
+        u = (ctypes.c_double * 1)()
+        outs = [(call(ctypes.byref(mem), 0.0, (ctypes.c_double * 2)(*xs), u), u[0]) for xs in ([1.0, 0.0], [6.0, 0.0])]
+        runs.append((_exported(lib.path), outs, lib.version()))
+    assert runs[0][:2] == runs[1][:2]
+    assert f"controller {HOSTILE_NAME} sha256:" in runs[1][2]
+    assert not list(tmp_path.rglob("PWNED"))

@@ -14,6 +14,8 @@ import subprocess
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen import compile_shared, generate, load_library, parameter_hash
@@ -285,3 +287,90 @@ def test_horizon_check_fails_when_simulate_fails(tmp_path):
     report = check_model(gen, n=20)
     assert not report.passed
     assert [r.name for r in report.functions if not r.ok] == ["step_rk4 over 250 periods vs simulate() (simulate failed)"]
+
+
+# --------------------------------------------------------------------------- names are text, never code
+#: The model name of issue 44: written unescaped it closed the version literal and added a constructor.
+HOSTILE_NAME = ('p"; } int system(const char *); __attribute__((constructor)) static void pwn(void) '
+                '{ system("touch PWNED"); } const char *gt_q(void) { return "')
+HOSTILE_FILE = f'''
+from gtmodel.modeling import Model
+
+class Hostile(Model):
+    def __init__(self):
+        super().__init__({HOSTILE_NAME!r})
+        q = self.state("q", start=1.0)
+        u = self.input("u")
+        self.equation(self.der(q), -2.0 * q + u)
+'''
+
+
+def _named_model(name: str) -> Model:
+    m = Model(name)
+    q = m.state("q", start=1.0)
+    u = m.input("u")
+    m.equation(m.der(q), -2.0 * q + u)
+    m.output("y", q * q)
+    return m
+
+
+def _exported(library) -> list[str]:
+    """Defined dynamic symbols of a shared library (binutils' nm, independent of gtmodel's loader)."""
+    out = subprocess.run(["nm", "-D", "--defined-only", str(library)], check=True, capture_output=True, text=True).stdout
+    return sorted(line.split()[-1] for line in out.splitlines() if line.strip())
+
+
+def test_codegen_model_with_a_hostile_name_writes_it_as_text(tmp_path, monkeypatch, capsys):
+    """``codegen --model`` with the issue's name: an identifier prefix, the name a C literal, no file created.
+
+    Independent checks: gcc -Werror builds both libraries; nm lists the same exported symbols as
+    for a plain name; the compiled version string (read through ctypes) holds the name byte for
+    byte; loading the library (where a constructor would run) creates no file."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "hostile.py").write_text(HOSTILE_FILE)
+    assert main(["codegen", "--model", f"{tmp_path / 'hostile.py'}:Hostile", "--out", str(tmp_path / "cli")]) == EXIT_OK
+    (header,) = (tmp_path / "cli").glob("gt_*[!i].h")
+    assert re.fullmatch(r"gt_[A-Za-z0-9_]+\.h", header.name)
+    symbols, versions = [], []
+    for name in (HOSTILE_NAME, "plain"):
+        gen = generate_model(_named_model(name), tmp_path / ("hostile" if name != "plain" else "plain"), prefix="gt_m")
+        lib_path = compile_shared(gen, gen.out_dir / "build", werror=True)
+        lib = load_library(gen, lib_path)
+        symbols.append(_exported(lib_path))
+        versions.append(lib.version())
+    assert symbols[0] == symbols[1] and "gt_m_ode" in symbols[0]
+    assert f"model {HOSTILE_NAME} sha256:" in versions[0]
+    assert not list(tmp_path.rglob("PWNED"))
+    assert '#define GT_M_MODEL "p\\"; } int system(const char *);' in (tmp_path / "hostile" / "gt_m.h").read_text()
+
+
+@settings(max_examples=5, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.text(st.characters(blacklist_categories=("Cc", "Cs")), min_size=1, max_size=60).filter(
+    lambda s: re.search(r"[A-Za-z0-9]", s)).map(lambda s: s + "*/ ??= %:include \\"))
+def test_any_model_name_leaves_the_c_unchanged_but_for_its_literals(tmp_path_factory, name):
+    """Arbitrary printable Unicode names: the wrapper compiles with -Werror -pedantic (trigraphs on,
+    syntax only) and the header defines the same macros, with the same values but the name's
+    literals and hash, as for a plain name (gcc -dM -E: the preprocessor's own view); the
+    literal, read back by a decoder of its own, is the name's UTF-8."""
+    macros, literal = _macros(tmp_path_factory.mktemp("names"), name)
+    assert macros == _macros(tmp_path_factory.mktemp("plain"), "plain")[0]
+    assert _c_literal_bytes(literal) == name.encode("utf-8")
+
+
+def _macros(folder, name: str) -> tuple[dict[str, str], str]:
+    """The GT_ macros of a model's header but its name, version and hash; the GT_M_MODEL literal."""
+    cc = find_compiler()
+    gen = generate_model(_named_model(name), folder / "src", functions=["ode"], prefix="gt_m")
+    flags = ["-std=c99", "-trigraphs", "-Wall", "-Wextra", "-pedantic", "-Werror", f"-I{gen.out_dir}"]
+    subprocess.run([*cc, *flags, "-fsyntax-only", str(gen.source)], check=True, capture_output=True)
+    out = subprocess.run([*cc, *flags, "-dM", "-E", str(gen.header)], check=True, capture_output=True, text=True).stdout
+    defined = dict(line[len("#define "):].partition(" ")[::2] for line in out.splitlines())
+    literal = defined.pop("GT_M_MODEL")
+    return {k: v for k, v in defined.items() if k.startswith("GT_") and k not in ("GT_M_VERSION", "GT_M_PARAMETER_HASH")}, literal
+
+
+def _c_literal_bytes(literal: str) -> bytes:
+    """The bytes of a C string literal of printable ASCII with octal and one-character escapes (a reader of its own)."""
+    assert literal[0] == literal[-1] == '"'
+    return re.sub(rb"\\([0-7]{3}|.)", lambda m: bytes([int(m.group(1), 8)]) if len(m.group(1)) == 3 else m.group(1),
+                  literal[1:-1].encode("ascii"))

@@ -222,3 +222,23 @@ def test_a_hostile_model_name_exports_and_imports(tmp_path, name, version):
     assert imported.model.name == name
     sim = simulate_explicit(imported.model, np.linspace(0.0, 1.0, 3), rtol=1e-11, atol=1e-13)
     np.testing.assert_allclose(sim.x["x"], np.exp(-np.linspace(0.0, 1.0, 3)), rtol=1e-8)
+
+
+HOSTILE_NAME = ('p"; } int system(const char *); __attribute__((constructor)) static void pwn(void) '
+                '{ system("touch PWNED"); } const char *gt_q(void) { return "')
+HOSTILE_UNIT = "m\"/><x a='1'/>]]>\x01\t&amp;\u2028"
+
+
+@pytest.mark.parametrize("version", ["2.0", "3.0"])
+def test_hostile_names_and_units_are_xml_text(tmp_path, version):
+    """The issue's model name and a unit holding markup and a control character: the description
+    parses (fmpy, expat) with the name and unit as given, the control character as U+FFFD."""
+    m = Model(HOSTILE_NAME)
+    x = m.state("x", start=1.0, unit=HOSTILE_UNIT)
+    m.equation(m.der(x), -x)
+    fmu = export_fmu(m, tmp_path / "n.fmu", version=version, interface="me", binary=False)
+    md = fmpy.read_model_description(str(fmu.path))
+    assert md.modelName == HOSTILE_NAME
+    shown = HOSTILE_UNIT.replace("\x01", "\ufffd")
+    assert {u.name for u in md.unitDefinitions} == {shown, f"{shown}/s"}  # the state's and its derivative's
+    assert re.fullmatch(r"[A-Za-z0-9_]+", md.coSimulation.modelIdentifier if md.coSimulation else md.modelExchange.modelIdentifier)

@@ -10,12 +10,16 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 import re
 import shutil
+from html.parser import HTMLParser
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from gtmodel.cli import main
 from gtmodel.errors import InputError
@@ -28,7 +32,7 @@ SPEC = re.compile(r'<script type="application/json" class="gt-figure-spec" data-
 
 
 def _specs(page: str) -> list[dict]:
-    return [json.loads(body.replace("<\\/", "</")) for _, body in SPEC.findall(page)]
+    return [json.loads(body) for _, body in SPEC.findall(page)]
 
 
 def _folder(tmp_path: Path, n: int = 11, summary: dict | None = None) -> Path:
@@ -172,6 +176,93 @@ def test_report_command_refuses_a_folder_no_run_wrote(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
 
 
+# --------------------------------------------------------------------------- hostile names and folders
+#: Units and column names that end or alter a script block or a JavaScript string unless escaped.
+HOSTILE = ["<!--<script>", "</script><script>document.title='pwned'</script>\u2028\u2029", "a & b > c", "<!--"]
+
+
+def _hostile_folder(tmp_path: Path) -> Path:
+    """A result folder whose units and CSV column names hold script-block breakers."""
+    out = _folder(tmp_path, summary={"units": {"x": HOSTILE[0], "u": HOSTILE[1]},
+                                     "variables": {"states": ["x", HOSTILE[0]], "inputs": ["u", HOSTILE[3]]}})
+    t = np.linspace(0.0, 1.0, 5)
+    rows = [f"t,x,u,{HOSTILE[0]},{HOSTILE[3]},{HOSTILE[2]}"] + [",".join(repr(float(v)) for v in (a, a, -a, 2 * a, 3 * a, 4 * a)) for a in t]
+    (out / "trajectories.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return out
+
+
+def test_script_blocks_hold_hostile_units_and_column_names_exactly(tmp_path):
+    """Every figure's JSON block ends where it should (no ``<`` inside) and parses back to the names given.
+
+    Independent check: the block count equals the figure containers, and ``json.loads`` of each
+    block returns the unit and column strings byte for byte."""
+    page = render_report(_hostile_folder(tmp_path), plotly_js=STUB_JS)
+    blocks = SPEC.findall(page)
+    assert len(blocks) == page.count('<div class="gt-figure"') == 3  # states, inputs, other columns
+    assert not any(c in body for _, body in blocks for c in "<>&\u2028\u2029")
+    specs = [json.loads(body) for _, body in blocks]
+    names = [tr["name"] for s in specs for tr in s["data"] if "bound" not in tr["name"]]
+    assert names == ["x", HOSTILE[0], "u", HOSTILE[3], HOSTILE[2]]
+    assert specs[0]["layout"]["yaxis"]["title"]["text"] == f"x [{HOSTILE[0]}]"
+    assert specs[1]["layout"]["yaxis"]["title"]["text"] == f"u [{HOSTILE[1]}]"
+    assert page.count("<script") == page.count("</script>") == 2 + len(blocks)  # Plotly, the drawing script, the blocks
+
+
+@pytest.fixture()
+def linked_folder(tmp_path):
+    """A result folder with ``states.png -> /etc/passwd``, a CSV linked from outside and listed names outside it."""
+    out = _folder(tmp_path)
+    outside = tmp_path / "outside.csv"
+    outside.write_text("t,secret\n0,42\n1,43\n")
+    (out / "states.png").unlink()
+    (out / "states.png").symlink_to("/etc/passwd")
+    (out / "fits.csv").unlink()
+    (out / "fits.csv").symlink_to(outside)
+    (out / "sub").symlink_to(tmp_path)
+    (out / "notes.md").unlink(missing_ok=True)
+    os.link(outside, out / "notes.md")  # a hard link to a file outside
+    summary = json.loads((out / "summary.json").read_text())
+    summary["files"] += ["notes.md", "../outside.csv", "/etc/passwd", "sub/outside.csv"]
+    (out / "summary.json").write_text(json.dumps(summary))
+    return out
+
+
+def test_a_result_folder_contributes_only_regular_files_inside_it(linked_folder):
+    """Links and names leading outside are left out, each with a warning in the page; nothing of theirs is inlined."""
+    page = render_report(linked_folder, plotly_js=STUB_JS)
+    passwd = Path("/etc/passwd").read_bytes()
+    assert base64.b64encode(passwd).decode() not in page and passwd.decode().splitlines()[0] not in page
+    assert "secret" not in page and "<img" not in page
+    warnings = re.findall(r"<li>(.*?)</li>", re.search(r"<ul class='warnings'>(.*?)</ul>", page, re.S).group(1))
+    assert [w.split(":")[0] for w in warnings[2:]] == ["fits.csv", "states.png", "notes.md", "../outside.csv", "/etc/passwd",
+                                                       "sub/outside.csv"]
+    assert [w.split(": ")[1].split(" (")[0].split(",")[0] for w in warnings[2:]] == [
+        "a symbolic link", "a symbolic link", "a hard link", "outside the result folder", "outside the result folder",
+        "a symbolic link"]
+
+
+def test_report_command_never_inlines_a_linked_file(solved, tmp_path, capsys):
+    """``gtmodel report`` on a folder holding ``states.png -> /etc/passwd``: exit 0, the link named, not inlined."""
+    folder = tmp_path / "copy"
+    shutil.copytree(solved, folder)
+    (folder / "states.png").unlink()
+    (folder / "states.png").symlink_to("/etc/passwd")
+    assert main(["report", str(folder)]) == 0
+    page = (folder / REPORT_FILE).read_text()
+    assert "states.png: a symbolic link, not shown" in page
+    assert Path("/etc/passwd").read_text().splitlines()[0] not in page
+    assert base64.b64encode(Path("/etc/passwd").read_bytes()).decode() not in page
+
+
+def test_report_command_refuses_a_linked_summary(solved, tmp_path, capsys):
+    folder = tmp_path / "copy"
+    shutil.copytree(solved, folder)
+    (folder / "summary.json").rename(tmp_path / "elsewhere.json")
+    (folder / "summary.json").symlink_to(tmp_path / "elsewhere.json")
+    assert main(["report", str(folder)]) == 2
+    assert "summary.json: a symbolic link" in capsys.readouterr().err
+
+
 # --------------------------------------------------------------------------- in a browser
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
@@ -208,6 +299,7 @@ def open_page(browser, path: Path) -> dict:
         "traces": page.evaluate("Array.from(document.querySelectorAll('div.gt-figure')).map(d => (d.data || []).length)"),
         "images": page.evaluate("Array.from(document.images).map(i => i.complete && i.naturalWidth > 0)"),
         "status": page.locator("span.status").first.inner_text(),
+        "title": page.title(),
     }
     page.close()
     return shown
@@ -226,3 +318,69 @@ def test_the_report_of_a_shipped_problem_opens_in_chromium(browser, path, tmp_pa
     assert shown["images"] == [True] * len(pngs)
     if summary["kind"] in ("optimal_control", "point_to_point", "path_constrained"):
         assert shown["figures"] >= 1
+
+
+def test_a_report_with_hostile_units_and_column_names_draws_every_figure(browser, tmp_path):
+    """``<!--<script>`` and ``</script>`` in units and column names: every figure drawn, no console error."""
+    out = _hostile_folder(tmp_path)
+    (out / "states.png").unlink()
+    summary = json.loads((out / "summary.json").read_text())
+    summary["files"].remove("states.png")
+    (out / "summary.json").write_text(json.dumps(summary))
+    (out / REPORT_FILE).write_text(render_report(out), encoding="utf-8")
+    shown = open_page(browser, out / REPORT_FILE)
+    assert shown["messages"] == []
+    assert shown["figures"] == shown["drawn"] == 3 and shown["traces"] == [3, 3, 1]
+    assert shown["title"] == "demo: check_failed"
+
+
+#: Units and column names: arbitrary Unicode with script-block breakers mixed in (a column name
+#: holds no comma, quote or line break: the CSV reader's rule, gtmodel._escape.csv_name).
+_NAME_PARTS = st.one_of(st.text(st.characters(blacklist_categories=("Cc", "Cs", "Zl", "Zp")), max_size=6),
+                        st.sampled_from(["<!--", "<script>", "</script>", "<!--<script>", "&", "]]>", "*/", "\\"]))
+_NAMES = st.lists(_NAME_PARTS, min_size=1, max_size=5).map("".join).map(lambda s: s.replace(",", ";").replace('"', "'").strip())
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(units=st.lists(_NAMES.map(lambda s: s + "\u2028\u2029"), min_size=2, max_size=2), column=_NAMES.filter(
+    lambda s: s and not s.startswith("#") and s not in ("t", "x", "u") and not re.fullmatch(r"(t|time)(_s| ?\[s\])?", s, re.I)))
+def test_any_unit_and_column_name_stays_inside_its_script_block(tmp_path_factory, units, column):
+    """Arbitrary units and column names: Python's HTML parser (independent of the writer) finds
+    one JSON block per figure container, each parsing back to the names given."""
+    out = _folder(tmp_path_factory.mktemp("names"), summary={"units": {"x": units[0], "u": units[1]}})
+    rows = [f"t,x,u,{column}"] + [f"{a!r},{a!r},{-a!r},{2 * a!r}" for a in (0.0, 0.5, 1.0)]
+    (out / "trajectories.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    page = render_report(out, plotly_js=STUB_JS)
+    blocks = _ScriptBlocks.of(page)
+    assert len(blocks) == page.count('<div class="gt-figure"') == 3
+    specs = [json.loads(b) for b in blocks]
+    assert [tr["name"] for s in specs for tr in s["data"] if "bound" not in tr["name"]] == ["x", "u", column]
+    assert [s["layout"]["yaxis"]["title"]["text"] for s in specs[:2]] == [f"x [{units[0]}]" if units[0] else "x",
+                                                                            f"u [{units[1]}]" if units[1] else "u"]
+
+
+class _ScriptBlocks(HTMLParser):
+    """The text of every ``<script type="application/json">`` element, as an HTML parser sees it."""
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=False)
+        self.blocks: list[str] = []
+        self._inside = False
+
+    @classmethod
+    def of(cls, page: str) -> list[str]:
+        parser = cls()
+        parser.feed(page)
+        return parser.blocks
+
+    def handle_starttag(self, tag, attrs):
+        self._inside = tag == "script" and ("type", "application/json") in attrs
+        if self._inside:
+            self.blocks.append("")
+
+    def handle_endtag(self, tag):
+        self._inside = False
+
+    def handle_data(self, data):
+        if self._inside:
+            self.blocks[-1] += data

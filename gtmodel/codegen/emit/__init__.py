@@ -26,8 +26,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterable
+from typing import TYPE_CHECKING, Iterable, Mapping
 
+from gtmodel._escape import c_comment, c_string
 from gtmodel.errors import CodegenError
 
 from gtmodel.codegen.declarations import STATUS_CODES
@@ -38,6 +39,8 @@ if TYPE_CHECKING:  # annotations only
 __all__ = ["Fragment", "harness_dir", "template", "fill", "header_guard", "c_float"]
 
 _MARKER = re.compile(r"@([A-Z][A-Z0-9_]*)@")
+#: A marker in quotes (a C string literal: group 2) or alone (group 3).
+_QUOTED_OR_MARKER = re.compile(r'("@([A-Z][A-Z0-9_]*)@")|@([A-Z][A-Z0-9_]*)@')
 #: A marker alone on its line: with an empty value the whole line goes (an optional block of lines).
 _BLOCK = re.compile(r"^@([A-Z][A-Z0-9_]*)@\n", re.M)
 #: Start of the comment that documents a template file (not part of the emitted C).
@@ -133,15 +136,21 @@ def template(name: str) -> str:
     return text
 
 
-def fill(name: str, **values: object) -> str:
+def fill(name: str, names: Mapping[str, str] | None = None, **values: object) -> str:
     """A C template file with its ``@NAME@`` markers replaced.
 
     Parameters
     ----------
     name : str
         Template file name in the harness folder (see :func:`template`).
+    names : Mapping[str, str], optional
+        ``NAME=text`` per marker whose value is a name or free text (a model or controller
+        name, a version string holding one): where the marker stands in quotes
+        (``"@NAME@"``) the quotes and marker become :func:`gtmodel._escape.c_string` of the
+        text, anywhere else (comments) :func:`gtmodel._escape.c_comment` of it. Nothing a
+        user wrote reaches the C any other way.
     **values : object
-        ``NAME=value`` per marker (more are ignored: one set of values may serve a
+        C code ``NAME=value`` per marker (more are ignored: one set of values may serve a
         header and a source template); each value is inserted as ``str(value)``. A
         marker alone on its line stands for a block of lines: with an empty value the
         line is removed.
@@ -154,14 +163,25 @@ def fill(name: str, **values: object) -> str:
     Raises
     ------
     CodegenError
-        The file is missing, or a marker of the file has no value.
+        The file is missing, a marker of the file has no value, or one is given both
+        as a name and as code.
     """
     text = template(name)
-    missing = sorted(set(_MARKER.findall(text)) - set(values))
-    if missing:
-        raise CodegenError(f"C template {name}: no value for the markers {missing}")
-    text = _BLOCK.sub(lambda m: m.group(0) if str(values[m.group(1)]) else "", text)
-    return _MARKER.sub(lambda m: str(values[m.group(1)]), text)
+    names = dict(names or {})
+    both = sorted(set(names) & set(values))
+    missing = sorted(set(_MARKER.findall(text)) - set(values) - set(names))
+    if missing or both:
+        raise CodegenError(f"C template {name}: no value for the markers {missing}" if missing
+                           else f"C template {name}: markers {both} given both as names and as code")
+    text = _BLOCK.sub(lambda m: m.group(0) if m.group(1) in names or str(values[m.group(1)]) else "", text)
+
+    def one(m: re.Match) -> str:
+        key = m.group(2) or m.group(3)
+        if key in names:
+            return c_string(names[key]) if m.group(2) else c_comment(names[key])
+        return f'"{values[key]}"' if m.group(2) else str(values[key])  # code (an identifier in "@GP@.h")
+
+    return _QUOTED_OR_MARKER.sub(one, text)
 
 
 def header_guard(P: str) -> tuple[str, str]:

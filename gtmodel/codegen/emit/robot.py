@@ -22,6 +22,7 @@ from gtmodel.codegen.declarations import CONTROLLER_KIND, STATUS_CODES, THRESHOL
 from gtmodel.codegen.emit import c_float as _c_float
 from gtmodel.codegen.emit import Fragment, fill, header_guard
 from gtmodel.codegen.robot import RobotModel
+from gtmodel._escape import c_comment, c_string
 from gtmodel.errors import CodegenError
 
 __all__ = ["functions_fragment", "header_text", "wrapper_text"]
@@ -69,7 +70,7 @@ def _c_params(spec: FunctionSpec, funcs: dict, real: str) -> str:
 
 def _comment_block(lines: Sequence[str], indent: str = "") -> str:
     out = [f"{indent}/*"]
-    out += [f"{indent} *{(' ' + l) if l else ''}" for l in lines]
+    out += [f"{indent} *{(' ' + c_comment(l)) if l else ''}" for l in lines]
     out.append(f"{indent} */")
     return "\n".join(out)
 
@@ -186,7 +187,7 @@ def header_text(gen_prefix: str, functions: Fragment, version: str, phash: str, 
     P = gen_prefix.upper()
     robot = any(spec.kind != CONTROLLER_KIND for spec in functions.specs)
     robot_doc = [
-        f" * Robot: {model.description}",
+        f" * Robot: {c_comment(model.description)}",
         f" * Friction form of the dynamics: {friction}" if model.kind == "three_link" else " * Kinematics only.",
     ] if robot else []
     tolerances = [
@@ -203,11 +204,11 @@ def header_text(gen_prefix: str, functions: Fragment, version: str, phash: str, 
             f"#define {N}_TOLERANCE {_c_float(tol)}",
             f"#define {N}_MAX_ITER {int(max_iter)}",
         ]
+    names = dict(VERSION=version, WHAT=f"the {model.name} Gantry-Tau model." if robot else "gtmodel controller functions (no robot model).")
     return fill(
-        "template_header.h", GP=gen_prefix, P=P, VERSION=version, HASH=phash, REAL=real, IS_FLOAT=1 if real == "float" else 0,
-        WHAT=f"the {model.name} Gantry-Tau model." if robot else "gtmodel controller functions (no robot model).",
+        "template_header.h", names, GP=gen_prefix, P=P, HASH=phash, REAL=real, IS_FLOAT=1 if real == "float" else 0,
         SOURCE="the CasADi model" if robot else "the controller's CasADi Functions",
-        ROBOT_DOC="\n".join(robot_doc), ROBOT_DEFINE=f'#define {P}_ROBOT "{model.name}"' if robot else "",
+        ROBOT_DOC="\n".join(robot_doc), ROBOT_DEFINE=f'#define {P}_ROBOT {c_string(model.name)}' if robot else "",
         OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
         ROBOT_TOLERANCES="\n".join(tolerances), NEWTON_DEFINES="\n".join(newton_defines),
         PROTOTYPES="\n".join(functions.header), EXTRA="\n".join(extra),

@@ -152,7 +152,7 @@ class Model(EventsMixin):
         unit: str = "",
         fixed: Any = False,
     ) -> ca.SX:
-        if not isinstance(name, str) or not _NAME_RE.match(name) or any(keyword.iskeyword(n) for n in name.split(".")):
+        if not isinstance(name, str) or not _NAME_RE.fullmatch(name) or any(keyword.iskeyword(n) for n in name.split(".")):
             raise InputError(f"{kind} name must be an identifier, got {name!r}")
         if name in self._vars or name in self._outputs or name in ("time", "t", "final_time"):
             raise ModelError(f"model {self.name!r}: name {name!r} is already declared or reserved")
@@ -509,7 +509,7 @@ class Model(EventsMixin):
         ModelError
             If the name is taken or ``expr`` contains unknown symbols.
         """
-        if not isinstance(name, str) or not _NAME_RE.match(name):
+        if not isinstance(name, str) or not _NAME_RE.fullmatch(name):
             raise InputError(f"output name must be an identifier, got {name!r}")
         if name in self._vars or name in self._outputs:
             raise ModelError(f"model {self.name!r}: name {name!r} is already declared")

@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._escape import toml_comment, toml_string
 from gtmodel._docstrings import fill_doc
 from gtmodel.calibration.automated import (
     AutomatedCalibrationDeclaration,
@@ -283,11 +284,11 @@ def _write_calibrated(r: AutomatedCalibrationResult, out: Path, name: str, field
     }
     k = res.model.kinematics
     fmt = lambda a: np.array2string(np.asarray(a), separator=", ", precision=10, max_line_width=400).replace("\n", "")  # noqa: E731
-    lines = [f"# Calibrated by gtmodel ({name}, automated calibration) from {c.source}, {res.n_poses} poses; SI units",
+    lines = ["# " + toml_comment(f"Calibrated by gtmodel ({name}, automated calibration) from {c.source}, {res.n_poses} poses; SI units"),
              "# Kinematics only: add [dynamics] and [limits] for a complete parameter set.",
-             "[kinematics]", f'source = "gtmodel automated calibration {name}"', 'model = "modified"',
+             "[kinematics]", f"source = {toml_string(f'gtmodel automated calibration {name}')}", 'model = "modified"',
              f"L = {fmt(k.L)}", f"As = {fmt(k.As)}", f"v = {fmt(k.v)}", "", "# standard deviations:"]
-    lines += [f"#   {n} = {float(v):.3e}" for n, v in res.std.items()]
+    lines += ["# " + toml_comment(f"  {n} = {float(v):.3e}") for n, v in res.std.items()]
     (out / "parameters.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
     errors = [f"{e!r}" for e in c.validation_errors]
     (out / "errors.csv").write_text("# validation poses (every second measured pose), eq. 5.5\nerror_m\n" + "\n".join(errors) + "\n", encoding="utf-8")

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from gtmodel._escape import toml_comment, toml_string
 from gtmodel._geometry import rotation_to_zyz
 from gtmodel.calibration import tcp_errors
 from gtmodel.errors import GtModelError
@@ -254,19 +255,19 @@ def _write_parameters(res: Any, path: Path, decl: Any, title: str) -> None:
     """Calibrated parameters as TOML; a 3-link result is a complete robot parameter set."""
     model = res.model
     lines = [
-        f"# Calibrated by gtmodel ({title}), {decl.solver}, {res.n_poses} poses; {decl.source}",
+        "# " + toml_comment(f"Calibrated by gtmodel ({title}), {decl.solver}, {res.n_poses} poses; {decl.source}"),
         "# Frame: the measurement frame (Dressler (2012), eqs. 5.3-5.4). SI units.",
     ]
     if isinstance(model, ThreeLinkClosure):
         k = model.kinematics
         robot = model.robot
         lines += [
-            f'name = "{title}_calibrated"',
-            f'description = "calibrated {model.model} 3-link model"',
+            f"name = {toml_string(f'{title}_calibrated')}",
+            f"description = {toml_string(f'calibrated {model.model} 3-link model')}",
             "",
             "[kinematics]",
-            f'source = "gtmodel calibration {title}"',
-            f'model = "{model.model}"',
+            f"source = {toml_string(f'gtmodel calibration {title}')}",
+            f"model = {toml_string(model.model)}",
             f"L = {np.array2string(k.L, separator=', ', precision=10, max_line_width=200)}",
             f"As = {np.array2string(k.As, separator=', ', precision=10, max_line_width=400)}".replace("\n", ""),
             f"v = {np.array2string(k.v, separator=', ', precision=10, max_line_width=400)}".replace("\n", ""),
@@ -276,7 +277,7 @@ def _write_parameters(res: Any, path: Path, decl: Any, title: str) -> None:
             lines += [
                 "",
                 "[dynamics]",
-                f'source = "copied from the start parameter set {robot.name}"',
+                f"source = {toml_string(f'copied from the start parameter set {robot.name}')}",
                 f"m_p = {d.m_p!r}",
                 f"m_c = {list(map(float, d.m_c))}",
                 f"m_a = {list(map(float, d.m_a))}",
@@ -285,15 +286,15 @@ def _write_parameters(res: Any, path: Path, decl: Any, title: str) -> None:
                 f"g = {d.g!r}",
                 "",
                 "[limits]",
-                f'source = "copied from the start parameter set {robot.name}"',
+                f"source = {toml_string(f'copied from the start parameter set {robot.name}')}",
                 f"cart_travel = {lim.cart_travel.tolist()}",
                 f"joint_angle_max_deg = {float(np.rad2deg(lim.joint_angle_max))!r}",
             ]
         # the parameter-set schema has no table for them: comments
         lines += ["", "# standard deviations (from the Jacobian and the residual variance):"]
-        lines += [f"#   {n} = {float(s):.3e}" for n, s in res.std.items()]
+        lines += ["# " + toml_comment(f"  {n} = {float(s):.3e}") for n, s in res.std.items()]
     else:
-        lines += [f'model = "{model.name}"', ""]
+        lines += [f"model = {toml_string(model.name)}", ""]
         lines += calibrated_tables(res.parameters, res.std, "  # name = value [m, rad, 1]", "  # from the Jacobian and the residual variance")
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._escape import csv_field, toml_comment, toml_string
 from gtmodel.calibration import read_motion_log
 from gtmodel.calibration.identification import THESIS_TABLE_6_3, VARIANTS
 from gtmodel.calibration.identification.declared import DynamicIdentificationDeclaration, DynamicIdentificationOutcome
@@ -254,7 +255,7 @@ class DynamicIdentificationKind(ProblemKind):
             cols = ["variant", "parameter", "estimate", "std", "unit", "truth", "z"]
             lines = [",".join(cols)]
             for r in csv_rows:
-                lines.append(",".join(str(r.get(c, "")) if not isinstance(r.get(c), float) else repr(r[c]) for c in cols))
+                lines.append(",".join(csv_field(r.get(c, "")) if not isinstance(r.get(c), float) else repr(r[c]) for c in cols))
             (out / "identification.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
             written.files.append("identification.csv")
         if plots and first is not None:
@@ -292,22 +293,22 @@ def _write_parameters(path: Path, decl: DynamicIdentificationDeclaration, varian
 
     sym = not VARIANTS[variant].asymmetric
     lines = [
-        f"# Identified by gtmodel ({name}), variant {variant}; {decl.source}",
+        "# " + toml_comment(f"Identified by gtmodel ({name}), variant {variant}; {decl.source}"),
         "# Dressler (2012), eqs. 6.7-6.8, Table 6.3. SI units. Kinematics, limits and the parameters the",
-        f"# variant does not estimate are copied from the parameter set {robot.name} (link masses 0 unless estimated).",
-        f'name = "{robot.name}_identified"',
-        f'description = "{robot.name} with dynamics identified by gtmodel ({variant})"',
-        f'frame = "{robot.frame}"',
+        "# " + toml_comment(f"variant does not estimate are copied from the parameter set {robot.name} (link masses 0 unless estimated)."),
+        f"name = {toml_string(f'{robot.name}_identified')}",
+        f"description = {toml_string(f'{robot.name} with dynamics identified by gtmodel ({variant})')}",
+        f"frame = {toml_string(robot.frame)}",
         "",
         "[kinematics]",
-        f'source = "copied from {robot.name}"',
-        f'model = "{k.model}"',
+        f"source = {toml_string(f'copied from {robot.name}')}",
+        f"model = {toml_string(k.model)}",
         f"L = {arr(k.L)}",
         f"As = {arr(k.As)}",
         f"v = {arr(k.v[0]) if k.model == 'ideal' else arr(k.v)}",
         "",
         "[dynamics]",
-        f'source = "gtmodel dynamic identification {name}, variant {variant}"',
+        f"source = {toml_string(f'gtmodel dynamic identification {name}, variant {variant}')}",
         f"m_p = {float(p.get('m_p', d.m_p))!r}",
         f"m_c = {vec('m_c', d.m_c)}",
         f"m_a = {vec('m_a', np.zeros(3))}",
@@ -317,7 +318,7 @@ def _write_parameters(path: Path, decl: DynamicIdentificationDeclaration, varian
     ]
     a = d.asymmetric
     if a is not None:
-        lines += ["", "[dynamics.asymmetric_friction]", f'source = "copied from {robot.name}"' if sym else f'source = "gtmodel dynamic identification {name}, variant {variant}"']
+        lines += ["", "[dynamics.asymmetric_friction]", f"source = {toml_string(f'copied from {robot.name}')}" if sym else f"source = {toml_string(f'gtmodel dynamic identification {name}, variant {variant}')}"]
         for key in ("f_c_plus", "f_c_minus", "f_v_plus", "f_v_minus"):
             default = getattr(a, key)
             if variant == "model_4" and key.startswith("f_c"):
@@ -330,13 +331,13 @@ def _write_parameters(path: Path, decl: DynamicIdentificationDeclaration, varian
     lines += [
         "",
         "[limits]",
-        f'source = "copied from {robot.name}"',
+        f"source = {toml_string(f'copied from {robot.name}')}",
         f"cart_travel = {arr(lim.cart_travel)}",
         f"joint_angle_max_deg = {float(np.rad2deg(lim.joint_angle_max))!r}",
         "",
         "# standard deviations of the estimated parameters (least squares):",
     ]
-    lines += [f"#   {n} = {float(s):.6g}" for n, s in zip(res.names, res.std)]
+    lines += ["# " + toml_comment(f"  {n} = {float(s):.6g}") for n, s in zip(res.names, res.std)]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 

@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._escape import toml_comment, toml_string
 from gtmodel.calibration import grid_poses
 from gtmodel.report.calibration import plot_error_histogram
 from gtmodel.calibration.elasto_geometric import compliance_selection
@@ -273,9 +274,9 @@ def _write(decl: ElastoGeometricDeclaration, solution: ElastoGeometricOutcome, o
 def _write_parameters(path: Path, decl: ElastoGeometricDeclaration, st: Any, name: str) -> None:
     """``parameters.toml``: the calibrated geometric and compliance parameters with std."""
     lines = [
-        f"# Elasto-geometric calibration ({name}), {decl.solver}, {st.calibration.n_poses} poses; {decl.source}",
+        "# " + toml_comment(f"Elasto-geometric calibration ({name}), {decl.solver}, {st.calibration.n_poses} poses; {decl.source}"),
         "# Frame: the measurement frame (Dressler (2012), eqs. 5.3-5.4). SI units: m, m/N, N.",
-        f'model = "{st.elasto.model.name}"',
+        f"model = {toml_string(st.elasto.model.name)}",
         "",
     ] + calibrated_tables(st.elasto.parameters, st.elasto.std)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")

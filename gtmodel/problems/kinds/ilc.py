@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from gtmodel._escape import csv_field
 from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError, UnreachablePoseError
 from gtmodel.estimation import (
@@ -237,7 +238,7 @@ actuator correction of the first case when it learns on the actuators, for
             smax = max(c.sigma_max for c in r.stability.values())
             rho = max(c.rho for c in r.stability.values())
             cells = [f"{v:.4f}" for v in (*act, tool[0], tool[1])]
-            lines.append(",".join([case.name, case.signal, *cells, f"{smax:.4f}", f"{rho:.4f}"]))
+            lines.append(",".join([csv_field(case.name), csv_field(case.signal), *cells, f"{smax:.4f}", f"{rho:.4f}"]))
             th = fields["thesis"].get(case.name)
             thesis = (f"tool x {th['tool_x']:.3f}, y {th['tool_y']:.3f}; sigma_max {', '.join(f'{v:.2f}' for v in th['sigma_max'])}"
                       + (f"; actuator about {th['actuator_relative_error']:.0%} at k = 5" if "actuator_relative_error" in th else "")
@@ -250,7 +251,7 @@ actuator correction of the first case when it learns on the actuators, for
         it = ["case,iteration,actuator_1_m,actuator_2_m,actuator_3_m,tool_x_m,tool_y_m,tool_z_m"]
         for case, r, _, _ in rows:
             for k, (a, t) in enumerate(zip(r.actuator_error, r.tool_error)):
-                it.append(",".join([case.name, str(k), *(f"{v:.9g}" for v in (*a, *t))]))
+                it.append(",".join([csv_field(case.name), str(k), *(f"{v:.9g}" for v in (*a, *t))]))
         (out / "ilc_iterations.csv").write_text("\n".join(it) + "\n", encoding="utf-8")
         written.files += ["table_7_2.md", "table_7_2.csv", "ilc_iterations.csv"]
         written.files += _exports(declaration, solution, out)

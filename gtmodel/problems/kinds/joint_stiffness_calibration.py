@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._escape import csv_field
 from gtmodel.calibration import DeflectionData, DeflectionNoise, synthetic_deflections
 from gtmodel.calibration.joint_stiffness import (
     TABLE_1_POSES_DEG,
@@ -236,7 +237,7 @@ class JointStiffnessKind(ProblemKind):
                 **{k: (v if isinstance(v, str) else float(v)) for k, v in r.extra.items()},
             }
             for j in range(6):
-                cells = [m, str(j + 1), f"{r.k_theta[j]:.9g}", f"{r.std_k_theta[j]:.9g}",
+                cells = [csv_field(m), str(j + 1), f"{r.k_theta[j]:.9g}", f"{r.std_k_theta[j]:.9g}",
                          f"{ratio[j]:.9g}" if ratio is not None else "", f"{TABLE_2_K_THETA[m][j]:.9g}"]
                 lines.append(",".join(cells))
         fields: dict[str, Any] = {

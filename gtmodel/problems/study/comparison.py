@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
+from gtmodel._escape import csv_field
 from gtmodel.problems.base import Column
 from gtmodel.problems.registry import KINDS
 from gtmodel.status import Status
@@ -111,8 +112,8 @@ def write_comparison(cases: Sequence[StudyCase], out_dir: str | Path, plots: boo
         except (TypeError, ValueError):
             return str(v)
 
-    csv = [",".join(c.key for c in cols)]
-    csv += [",".join("" if value(c, col) is None else str(value(c, col)) for col in cols) for c in cases]
+    csv = [",".join(csv_field(c.key) for c in cols)]
+    csv += [",".join("" if value(c, col) is None else csv_field(value(c, col)) for col in cols) for c in cases]
     (out_dir / "comparison.csv").write_text("\n".join(csv) + "\n", encoding="utf-8")
     md = ["| " + " | ".join(c.header for c in cols) + " |", "|" + "---|" * len(cols)]
     md += ["| " + " | ".join(fmt(value(c, col), col) for col in cols) + " |" for c in cases]

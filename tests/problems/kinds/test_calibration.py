@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import re
 import time
+import tomllib
 
 import pytest
 
+from gtmodel._escape import toml_string
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem, run_problem
 from gtmodel.calibration.comparison import CalibrationDeclaration
@@ -295,3 +297,17 @@ def test_measured_orientation_range_against_scipy_euler():
     e = rots.as_euler("ZYZ", degrees=True)
     assert measured_orientation_range_deg(data) == pytest.approx(list(e.max(axis=0) - e.min(axis=0)), abs=1e-9)
     assert measured_orientation_range_deg(MeasurementSet(q=np.zeros((2, 3)), T=np.zeros((2, 3)))) is None
+
+
+def test_a_problem_name_with_quotes_and_brackets_reads_back_from_the_parameters_file(tmp_path):
+    """The problem's name goes into ``parameters.toml`` as a TOML string (gtmodel._escape.toml_string):
+    tomllib reads the calibrated set's name back exactly, and no table is injected."""
+    shown = 'l1 "quoted" ] [evil] x = "1'  # a name that names a folder: printable, no '/' or '\\'
+    text = _edit('name = "l1_calibration"', f"name = {toml_string(shown)}")(L1_FILE.read_text())
+    problem = tmp_path / "quoted.toml"
+    problem.write_text(text, encoding="utf-8")
+    outcome = run_problem(problem, tmp_path / "out")
+    data = tomllib.loads((tmp_path / "out" / "parameters.toml").read_text(encoding="utf-8"))
+    assert outcome.summary["name"] == shown
+    assert data["name"] == f"{shown}_calibrated" and "evil" not in data
+    assert load_parameters(tmp_path / "out" / "parameters.toml").kinematics.model == "modified"
