@@ -434,7 +434,6 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     ins = {"t": "tt", "x": "x", "u_last": "mem->u_last", "w_start": "mem->w"}
     outs = {"u": "u_new", "w_next": "w_new"}
     call = f"{prefix}_control(" + ", ".join([ins[a.name] for a in spec.args] + [outs[o.name] for o in spec.outputs]) + ")"
-<<<<<<< HEAD
     reset = ("GT_NUMERIC_ERROR /* no reset function: the first memory */" if step.reset is None else
              f"{prefix}_memory_reset(tt, x, mem->u_last" + (", mem->w)" if step.nw else ")"))
     predict = "GT_BAD_ARGUMENT /* no prediction */" if step.predict is None else f"{prefix}_predict(mem->u_last, mem->w, x_hat)"
@@ -443,9 +442,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     def bounds(r: np.ndarray | None, n: int, row: int) -> str:
         v = np.full(n, -inf if row == 0 else inf) if r is None else np.asarray(r, dtype=float)[row]
         return _c_array(np.where(np.abs(v) > 3.0e38, np.sign(v) * inf, v) if real == "float" else v)  # beyond FLT_MAX: none
-=======
     names = dict(NAME=step.name, VERSION=version)
->>>>>>> names
     values = dict(
         GP=prefix, P=P, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),
         DT=repr(float(step.dt)), OPEN=header_guard(P)[0], CLOSE=header_guard(P)[1],
