@@ -377,6 +377,36 @@ class ClosureModel(ABC):
             {"abstol": 1e-5 * POSE_TOLERANCE, "max_iter": int(max_iter), "error_on_fail": False},
         )
 
+    @cached_property
+    def _pose_residual_jacobian(self) -> ca.Function:
+        x, par = self._pose_residual.sx_in()
+        return ca.Function("pose_residual_jacobian", [x, par], [ca.jacobian(self._pose_residual(x, par), x)])
+
+    def _pose_lm(self, x0: np.ndarray, par: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Levenberg-Marquardt (MINPACK ``lmder``) on one pose's closure equations from ``x0``.
+
+        The fallback of :meth:`fk_newton` where Newton's full step fails. A model whose plate
+        orientation the closure equations barely determine (the joined arms of
+        :class:`~gtmodel.robots.armwise.ArmwiseClosure`: Jacobian condition ~5e9, smallest
+        singular value ~2e-9 m^2/rad) gives a first Newton step along the near-null direction
+        of ~0.1 rad that changes with rounding of the parameters at 1e-10 (i.e. with the BLAS
+        kernel that calibrated them); a damped step decreases the residual every iteration
+        and reaches ~1e-15 m^2 from the same start. Returns ``(x, residual)``.
+        """
+        import scipy.optimize  # only on this fallback path
+
+        def fun(z: np.ndarray) -> np.ndarray:
+            return np.array(self._pose_residual(z, par)).ravel()
+
+        def jac(z: np.ndarray) -> np.ndarray:
+            return np.array(self._pose_residual_jacobian(z, par))
+
+        try:
+            sol = scipy.optimize.least_squares(fun, x0, jac=jac, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
+        except (ValueError, np.linalg.LinAlgError):
+            return np.full_like(x0, np.nan), np.full(self.n_links, np.nan)
+        return sol.x, sol.fun
+
     def fk_newton(
         self,
         q: np.typing.ArrayLike,
@@ -384,7 +414,7 @@ class ClosureModel(ABC):
         R0: np.typing.ArrayLike | None = None,
         max_iter: int = POSE_MAX_ITER,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Forward kinematics by Newton's method from a start pose (generic for every model).
+        """Forward kinematics by Newton's method from a start pose (generic for every model), damped where it fails.
 
         Parameters
         ----------
@@ -407,8 +437,9 @@ class ClosureModel(ABC):
         Raises
         ------
         ConvergenceError
-            If Newton's method does not reach :data:`POSE_TOLERANCE` within ``max_iter``
-            iterations, naming the pose (row).
+            If neither Newton's method (``max_iter`` iterations) nor, at a pose where it
+            fails, Levenberg-Marquardt from the same start reaches :data:`POSE_TOLERANCE`,
+            naming the pose (row).
         InputError
             If the shapes do not match.
         """
@@ -424,6 +455,9 @@ class ClosureModel(ABC):
         par = np.vstack([qa.T, np.repeat(p[:, None], N, axis=1), R0a.transpose(0, 2, 1).reshape(N, 9).T])
         x = np.array(solver.map(N)(x0, par))
         res = np.array(self._pose_residual.map(N)(x, par))
+        bad = np.flatnonzero(~np.all(np.abs(res) <= POSE_TOLERANCE, axis=0) | ~np.all(np.isfinite(x), axis=0))
+        for k in bad:  # Newton's full step left the basin: Levenberg-Marquardt from the same start
+            x[:, k], res[:, k] = self._pose_lm(x0[:, k], par[:, k])
         bad = np.flatnonzero(~np.all(np.abs(res) <= POSE_TOLERANCE, axis=0) | ~np.all(np.isfinite(x), axis=0))
         if bad.size:
             k = int(bad[0])
