@@ -20,6 +20,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.robots.closure import ClosureModel
+from gtmodel.robots.pose_rank import closure_inverse_condition
 
 __all__ = ["ArmwiseClosure"]
 
@@ -161,7 +162,7 @@ class ArmwiseClosure(ClosureModel):
         """Forward kinematics: Newton on the joined closure equations from a source's FK.
 
         The start is the FK of the source whose closure equations determine its pose best
-        (largest worst-pose :meth:`~gtmodel.robots.closure.ClosureModel.closure_inverse_condition`;
+        (largest worst-pose :func:`~gtmodel.robots.pose_rank.closure_inverse_condition`;
         the first in arm order among equals) of those whose own FK succeeds at every pose.
         Where the joined equations leave a direction undetermined (a source whose arm's links
         coincide), :meth:`~gtmodel.robots.closure.ClosureModel.fk_newton` takes the solution
@@ -194,7 +195,7 @@ class ArmwiseClosure(ClosureModel):
             except GtModelError as exc:
                 last = exc
                 continue
-            starts.append((float(np.min(s.closure_inverse_condition(q, T0, R0))), T0, R0))
+            starts.append((float(np.min(closure_inverse_condition(s, q, T0, R0))), T0, R0))
         if not starts:
             assert last is not None
             raise last

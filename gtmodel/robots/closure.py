@@ -45,6 +45,7 @@ from gtmodel._geometry import (  # noqa: F401 - re-exported: part of the robots 
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
+from gtmodel.robots.pose_rank import POSE_RANK_RTOL, inverse_condition, jacobian_function, min_norm_gauss_newton
 
 __all__ = [
     "ClosureModel",
@@ -56,7 +57,6 @@ __all__ = [
     "rotation_vector_to_rotation",
     "POSE_TOLERANCE",
     "POSE_MAX_ITER",
-    "POSE_RANK_RTOL",
 ]
 
 #: Acceptance of :meth:`ClosureModel.fk_newton`: max |closure residual| [m^2], about 2.5e-9 m
@@ -66,10 +66,6 @@ __all__ = [
 POSE_TOLERANCE = 1e-8
 #: Iteration limit of :meth:`ClosureModel.pose_function`.
 POSE_MAX_ITER = 30
-#: Rank decision of :meth:`ClosureModel.fk_newton`: singular values of the closure Jacobian below
-#: this fraction of the largest are directions the equations do not determine. Well-posed Gantry-Tau
-#: models have condition ~20 (D1 six-link: 19); an arm whose links coincide gives 1e9-1e15.
-POSE_RANK_RTOL = 1e-8
 
 
 # ------------------------------------------------------------------ the interface
@@ -384,73 +380,7 @@ class ClosureModel(ABC):
 
     @cached_property
     def _pose_residual_jacobian(self) -> ca.Function:
-        x, par = self._pose_residual.sx_in()
-        return ca.Function("pose_residual_jacobian", [x, par], [ca.jacobian(self._pose_residual(x, par), x)])
-
-    def _inverse_condition(self, x: np.ndarray, par: np.ndarray) -> np.ndarray:
-        """Per pose (column of ``x``, ``par`` as in :meth:`fk_newton`): smallest over largest singular value of the closure Jacobian."""
-        n = x.shape[1]
-        J = np.array(self._pose_residual_jacobian.map(n)(x, par)).reshape(self.n_links, n, x.shape[0]).transpose(1, 0, 2)
-        sv = np.linalg.svd(J, compute_uv=False)
-        return sv[:, -1] / sv[:, 0]
-
-    def closure_inverse_condition(self, q: np.typing.ArrayLike, T: np.typing.ArrayLike, R: np.typing.ArrayLike) -> np.ndarray:
-        """How well the closure equations determine the pose: ``sigma_min / sigma_max`` of their Jacobian.
-
-        The Jacobian of the closure residuals ``|A - B|^2 - L^2`` (Dressler (2012), eq. 4.14)
-        with respect to ``T`` and, for models with orientation, a rotation vector about ``R``.
-        Near 0 (below :data:`POSE_RANK_RTOL`): a direction the equations do not determine
-        (e.g. an arm whose links coincide).
-
-        Parameters
-        ----------
-        q : array_like, shape (n_q,) or (N, n_q)
-            Actuator values [m, rad].
-        T : array_like, shape (3,) or (N, 3)
-            TCP positions [m].
-        R : array_like, shape (3, 3) or (N, 3, 3)
-            Plate orientations.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N,)
-            The inverse condition number per pose (1: perfectly conditioned).
-
-        Raises
-        ------
-        InputError
-            If the shapes do not match.
-        """
-        qa, _ = as_rows(q, "q", self.n_q)
-        N = qa.shape[0]
-        Ta = np.broadcast_to(np.asarray(T, dtype=float), (N, 3))
-        Ra = np.broadcast_to(np.asarray(R, dtype=float), (N, 3, 3))
-        x = np.zeros((self.pose_unknowns(), N))
-        x[:3] = Ta.T
-        par = np.vstack([qa.T, np.repeat(self.parameter_vector()[:, None], N, axis=1), Ra.transpose(0, 2, 1).reshape(N, 9).T])
-        return self._inverse_condition(x, par)
-
-    def _pose_min_norm(self, x0: np.ndarray, par: np.ndarray, max_iter: int) -> np.ndarray:
-        """Gauss-Newton with minimum-norm steps (rank relative to the largest singular value), poses as columns.
-
-        For closure equations that do not determine the pose (:data:`POSE_RANK_RTOL`): each
-        step is ``-pinv(J) r`` with the singular values below ``POSE_RANK_RTOL * sigma_max``
-        dropped, so the iterate moves only in the directions the equations determine and
-        stops at the solution nearest (in ``(T [m], r [rad])``) to the start.
-        """
-        x = x0.copy()
-        n = x.shape[1]
-        res_f, jac_f = self._pose_residual.map(n), self._pose_residual_jacobian.map(n)
-        for _ in range(int(max_iter)):
-            r = np.array(res_f(x, par))
-            if not np.all(np.isfinite(r)) or np.all(np.abs(r) <= 1e-5 * POSE_TOLERANCE):
-                break
-            J = np.array(jac_f(x, par)).reshape(r.shape[0], n, x.shape[0]).transpose(1, 0, 2)
-            dx = -np.einsum("kij,jk->ik", np.linalg.pinv(J, rcond=POSE_RANK_RTOL), r)
-            x = x + dx
-            if np.all(np.abs(dx) <= 1e-15 * (1.0 + np.abs(x))):
-                break
-        return x
+        return jacobian_function(self._pose_residual)
 
     def fk_newton(
         self,
@@ -462,7 +392,7 @@ class ClosureModel(ABC):
         """Forward kinematics by Newton's method from a start pose (generic for every model).
 
         Where the closure Jacobian at the start is rank-deficient (smallest singular value
-        below :data:`POSE_RANK_RTOL` times the largest: the equations do not determine the
+        below :data:`~gtmodel.robots.pose_rank.POSE_RANK_RTOL` times the largest: the equations do not determine the
         pose), the pose is the solution nearest to the start, by Gauss-Newton with
         minimum-norm steps; Newton's full steps there follow rounding (the D1 model 5 of
         problems/thesis/d1_error_models_thesis.toml: condition ~5e9, a first step of 0.1 rad
@@ -510,9 +440,10 @@ class ClosureModel(ABC):
         # closure equations that do not determine the pose at the start (the joined arms of an
         # ArmwiseClosure whose source collapsed an arm's links onto one line): Newton's steps along
         # the undetermined directions are set by rounding, so the pose is the nearest solution instead
-        deficient = np.flatnonzero(~(self._inverse_condition(x0, par) >= POSE_RANK_RTOL))
+        deficient = np.flatnonzero(~(inverse_condition(self._pose_residual_jacobian, x0, par) >= POSE_RANK_RTOL))
         if deficient.size:
-            x[:, deficient] = self._pose_min_norm(x0[:, deficient], par[:, deficient], max_iter)
+            x[:, deficient] = min_norm_gauss_newton(self._pose_residual, self._pose_residual_jacobian, x0[:, deficient],
+                                                    par[:, deficient], max_iter, 1e-5 * POSE_TOLERANCE)
             res[:, deficient] = np.array(self._pose_residual.map(deficient.size)(x[:, deficient], par[:, deficient]))
             bad = np.flatnonzero(~np.all(np.abs(res) <= POSE_TOLERANCE, axis=0) | ~np.all(np.isfinite(x), axis=0))
         if bad.size:

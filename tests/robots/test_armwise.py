@@ -12,7 +12,8 @@ import pytest
 from gtmodel.errors import InputError
 from gtmodel.robots import load_six_link
 from gtmodel.robots.armwise import ArmwiseClosure
-from gtmodel.robots.closure import POSE_RANK_RTOL, ThreeLinkClosure
+from gtmodel.robots.closure import ThreeLinkClosure
+from gtmodel.robots.pose_rank import POSE_RANK_RTOL, closure_inverse_condition
 
 Q = np.array([[0.0, 0.0, 0.0], [0.2, -0.1, 0.3], [-0.4, -0.3, -0.2]])
 
@@ -93,8 +94,8 @@ def test_a_source_with_coincident_links_leaves_the_joined_pose_to_the_determined
     p = d1.parameter_vector()
     flat, other = _coincident_links(d1), d1.with_parameters(p + 2e-4 * np.sin(np.arange(p.size)))
     q = np.vstack([Q, [0.3, 0.3, -0.3]])
-    assert np.all(flat.closure_inverse_condition(q, *flat.fk(q)) < POSE_RANK_RTOL)
-    assert np.all(d1.closure_inverse_condition(q, *d1.fk(q)) > 1e-2)  # condition ~19
+    assert np.all(closure_inverse_condition(flat, q, *flat.fk(q)) < POSE_RANK_RTOL)
+    assert np.all(closure_inverse_condition(d1, q, *d1.fk(q)) > 1e-2)  # condition ~19
     joined = ArmwiseClosure([flat, other, flat])
     T, R = joined.fk(q)
     pj = joined.parameter_vector()
