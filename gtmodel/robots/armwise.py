@@ -7,7 +7,8 @@ actuators for arms 1 and 3 (model 3) and with the piecewise-linear actuator for 
 (model 4). :class:`ArmwiseClosure` takes arm ``i``'s joint points and link lengths from
 ``sources[i]``; its parameters are the parameters those arms depend on, under their
 sources' names. The plate pose solves all joined closure equations (the generic Newton FK,
-started from a source's own FK).
+started from the best-determined source's own FK; where the joined equations leave a direction
+undetermined, the assembly nearest to that start, :mod:`gtmodel.robots.pose_rank`).
 """
 
 from __future__ import annotations
