@@ -1,4 +1,4 @@
-"""Results that once moved with the CPU's OpenBLAS kernel hold under other kernels (slow: ~2 x 60 s).
+"""Results that once moved with the CPU's OpenBLAS kernel hold under other kernels (slow: 10-80 s per kernel).
 
 The D1 thesis calibration (tests/problems/kinds/test_d1_error_models_thesis.py) and the spurious
 hanging-chain minimum (tests/problems/test_benchmarks.py) ended differently with another kernel:
