@@ -7,7 +7,8 @@ actuators for arms 1 and 3 (model 3) and with the piecewise-linear actuator for 
 (model 4). :class:`ArmwiseClosure` takes arm ``i``'s joint points and link lengths from
 ``sources[i]``; its parameters are the parameters those arms depend on, under their
 sources' names. The plate pose solves all joined closure equations (the generic Newton FK,
-started from a source's own FK).
+started from the best-determined source's own FK; where the joined equations leave a direction
+undetermined, the assembly nearest to that start, :mod:`gtmodel.robots.pose_rank`).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.robots.closure import ClosureModel
+from gtmodel.robots.pose_rank import closure_inverse_condition
 
 __all__ = ["ArmwiseClosure"]
 
@@ -160,7 +162,12 @@ class ArmwiseClosure(ClosureModel):
     def fk(self, q: np.typing.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """Forward kinematics: Newton on the joined closure equations from a source's FK.
 
-        The start is the FK of the first source whose own FK succeeds at every pose.
+        The start is the FK of the source whose closure equations determine its pose best
+        (largest worst-pose :func:`~gtmodel.robots.pose_rank.closure_inverse_condition`;
+        the first in arm order among equals) of those whose own FK succeeds at every pose.
+        Where the joined equations leave a direction undetermined (a source whose arm's links
+        coincide), :meth:`~gtmodel.robots.closure.ClosureModel.fk_newton` takes the solution
+        nearest to that start: the well-determined source fixes what the others leave free.
 
         Parameters
         ----------
@@ -182,15 +189,19 @@ class ArmwiseClosure(ClosureModel):
             No source's FK gives a start.
         """
         last: GtModelError | None = None
+        starts = []
         for s in self.sources:
             try:
                 T0, R0 = s.fk(q)
             except GtModelError as exc:
                 last = exc
                 continue
-            return self.fk_newton(q, T0, R0)
-        assert last is not None
-        raise last
+            starts.append((float(np.min(closure_inverse_condition(s, q, T0, R0))), T0, R0))
+        if not starts:
+            assert last is not None
+            raise last
+        _, T0, R0 = max(starts, key=lambda c: c[0])  # the best-determined source; the first of equals
+        return self.fk_newton(q, T0, R0)
 
     def __repr__(self) -> str:
         return f"ArmwiseClosure({', '.join(s.name for s in self.sources)})"

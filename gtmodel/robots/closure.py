@@ -45,6 +45,7 @@ from gtmodel._geometry import (  # noqa: F401 - re-exported: part of the robots 
 from gtmodel.errors import ConvergenceError, InputError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
 from gtmodel.robots.parameters import KinematicParameters, RobotParameters, load_parameters
+from gtmodel.robots.pose_rank import POSE_RANK_RTOL, inverse_condition, jacobian_function, min_norm_gauss_newton
 
 __all__ = [
     "ClosureModel",
@@ -377,6 +378,10 @@ class ClosureModel(ABC):
             {"abstol": 1e-5 * POSE_TOLERANCE, "max_iter": int(max_iter), "error_on_fail": False},
         )
 
+    @cached_property
+    def _pose_residual_jacobian(self) -> ca.Function:
+        return jacobian_function(self._pose_residual)
+
     def fk_newton(
         self,
         q: np.typing.ArrayLike,
@@ -385,6 +390,13 @@ class ClosureModel(ABC):
         max_iter: int = POSE_MAX_ITER,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Forward kinematics by Newton's method from a start pose (generic for every model).
+
+        Where the closure Jacobian at the start is rank-deficient (smallest singular value
+        below :data:`~gtmodel.robots.pose_rank.POSE_RANK_RTOL` times the largest: the equations do not determine the
+        pose), the pose is the solution nearest to the start, by Gauss-Newton with
+        minimum-norm steps; Newton's full steps there follow rounding (the D1 model 5 of
+        problems/thesis/d1_error_models_thesis.toml: condition ~5e9, a first step of 0.1 rad
+        that 1e-10 of parameter rounding, i.e. the BLAS kernel, decided).
 
         Parameters
         ----------
@@ -407,8 +419,8 @@ class ClosureModel(ABC):
         Raises
         ------
         ConvergenceError
-            If Newton's method does not reach :data:`POSE_TOLERANCE` within ``max_iter``
-            iterations, naming the pose (row).
+            If the iteration (``max_iter`` steps) does not reach :data:`POSE_TOLERANCE`,
+            naming the pose (row).
         InputError
             If the shapes do not match.
         """
@@ -425,6 +437,15 @@ class ClosureModel(ABC):
         x = np.array(solver.map(N)(x0, par))
         res = np.array(self._pose_residual.map(N)(x, par))
         bad = np.flatnonzero(~np.all(np.abs(res) <= POSE_TOLERANCE, axis=0) | ~np.all(np.isfinite(x), axis=0))
+        # closure equations that do not determine the pose at the start (the joined arms of an
+        # ArmwiseClosure whose source collapsed an arm's links onto one line): Newton's steps along
+        # the undetermined directions are set by rounding, so the pose is the nearest solution instead
+        deficient = np.flatnonzero(~(inverse_condition(self._pose_residual_jacobian, x0, par) >= POSE_RANK_RTOL))
+        if deficient.size:
+            x[:, deficient] = min_norm_gauss_newton(self._pose_residual, self._pose_residual_jacobian, x0[:, deficient],
+                                                    par[:, deficient], max_iter, 1e-5 * POSE_TOLERANCE)
+            res[:, deficient] = np.array(self._pose_residual.map(deficient.size)(x[:, deficient], par[:, deficient]))
+            bad = np.flatnonzero(~np.all(np.abs(res) <= POSE_TOLERANCE, axis=0) | ~np.all(np.isfinite(x), axis=0))
         if bad.size:
             k = int(bad[0])
             raise ConvergenceError(

@@ -13,6 +13,7 @@ from gtmodel.errors import InputError
 from gtmodel.robots import load_six_link
 from gtmodel.robots.armwise import ArmwiseClosure
 from gtmodel.robots.closure import ThreeLinkClosure
+from gtmodel.robots.pose_rank import POSE_RANK_RTOL, closure_inverse_condition
 
 Q = np.array([[0.0, 0.0, 0.0], [0.2, -0.1, 0.3], [-0.4, -0.3, -0.2]])
 
@@ -72,3 +73,37 @@ def test_bad_sources(d1, sources, match):
 def test_with_parameters_checks_the_size(d1):
     with pytest.raises(InputError, match=r"p: expected 21 finite values"):
         ArmwiseClosure([d1[0]] * 3).with_parameters(np.zeros(3))
+
+
+def _coincident_links(model):
+    """The model with every link of an arm on its first link (joint points and length): what a free-B0
+    six-link calibration converges to, as each link's least-squares problem is the same function of
+    the same data (problems/thesis/d1_error_models_thesis.toml, model 3)."""
+    names = model.parameter_names()
+    v = dict(zip(names, model.parameter_vector()))
+    for first, link in (("2a", "2b"), ("3a", "3b"), ("3a", "3c")):
+        v.update({n: v[n.replace(f"_{link}", f"_{first}")] for n in names if f"_{link}" in n})
+    return model.with_parameters([v[n] for n in names])
+
+
+def test_a_source_with_coincident_links_leaves_the_joined_pose_to_the_determined_one():
+    """Independent checks: the singular values of the closure Jacobian (numpy's SVD); the pose is the
+    same under 1e-10 of parameter rounding (what another BLAS kernel changes), where Newton's full
+    steps from the same start meet a singular Jacobian (NaN)."""
+    d1 = load_six_link("D1_six_link")
+    p = d1.parameter_vector()
+    flat, other = _coincident_links(d1), d1.with_parameters(p + 2e-4 * np.sin(np.arange(p.size)))
+    q = np.vstack([Q, [0.3, 0.3, -0.3]])
+    assert np.all(closure_inverse_condition(flat, q, *flat.fk(q)) < POSE_RANK_RTOL)
+    assert np.all(closure_inverse_condition(d1, q, *d1.fk(q)) > 1e-2)  # condition ~19
+    joined = ArmwiseClosure([flat, other, flat])
+    T, R = joined.fk(q)
+    pj = joined.parameter_vector()
+    rounded = joined.with_parameters(pj * (1 + 1e-10 * np.random.default_rng(0).standard_normal(pj.size)))
+    assert np.abs(rounded.fk(q)[0] - T).max() < 1e-8
+    T0, R0 = other.fk(q)
+    # the nearest assembly to the determined source's pose: its orientation (which the flat arms leave free)
+    assert np.abs(R - R0).max() < 2e-4 and np.abs(T - T0).max() < 5e-4
+    x0 = np.vstack([T0.T, np.zeros((3, q.shape[0]))])
+    par = np.vstack([q.T, np.repeat(pj[:, None], q.shape[0], axis=1), R0.transpose(0, 2, 1).reshape(-1, 9).T])
+    assert not np.all(np.isfinite(np.array(joined.pose_function().map(q.shape[0])(x0, par))))
