@@ -212,9 +212,9 @@ def _rows_of(tag: str, d: dict[str, Any], fit: dict[str, Any] | None = None) -> 
         4: "as model 3, and the cart-side joint offsets a_ij are constants of the start model (a free a_ij slides into the same valley), "
            "so arm 3's residual stays at the start's geometric error",
         5: "model 5 joins model 3's arms 1 and 3 with model 4's arm 2 (ArmwiseClosure): most of model 3's error sits in arm 2's plate "
-           "joints (the B0 valley, its least determined parameter), which model 4 replaces; the thesis file's max (408 um) is at a "
-           "pose with cart 3 at the end of its travel, where model 3 errs as much (405 um) and model 3 with B0 held 53 um: arms 1 and 3 "
-           "carry B0 valley errors there too (the thesis saw its peaks at the workspace edge as well)"
+           "joints (the B0 valley, its least determined parameter), which model 4 replaces; arms 1 and 3 carry B0 valley errors too: "
+           "model 3's free B0 make each arm's links coincide, so the joined closure is nearly singular (condition about 5e9) and "
+           "its forward kinematics moves only in the directions the equations fix (gtmodel.robots.pose_rank), from model 4's pose"
            + (f"; from model 3 with B0 held: {_um(held5.get('mean_error_m'))}/{_um(held5.get('max_error_m'))} um" if held5 else ""),
     }
     for k in range(1, 6):
