@@ -32,8 +32,9 @@ the plant of the check.
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +49,7 @@ from gtmodel.estimation.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.loop_bounds import DeclaredBounds, accept_reference, dae_bounds, summary_bounds
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.run import load_problem, solve_problem
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number, problem_error
@@ -55,9 +57,11 @@ from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
 
-__all__ = ["LoopFile", "LoopInputs", "LoopModel", "LoopSetup", "read_loop_file", "loop_inputs", "loop_model", "weight_diagonal",
+__all__ = ["RESULT_TABLE", "LoopFile", "LoopInputs", "LoopModel", "LoopReference", "LoopSetup", "read_loop_file", "loop_inputs", "loop_model", "weight_diagonal",
            "loop_reference", "input_bounds", "loop_setup"]
 
+#: The table of an ``optimal_control`` result folder (``[reference] file`` may name it as written).
+RESULT_TABLE = "trajectories.csv"
 _TCP_STATES = ("x", "y", "z", "xd", "yd", "zd")
 _TCP_INPUTS = ("tau1", "tau2", "tau3")
 
@@ -69,6 +73,8 @@ class ReferenceSection(Section):
     overrides: dict[str, Any] = Field(default_factory=dict, description="dotted fields of that problem replaced, e.g. 'limits.force'")
     file: NonEmptyText | None = Field(default=None, description="a CSV table: t and the model's state and input names")
     settle_time: number(ge=0, le=60.0, unit="s", description="the end state held this long, with the input that holds it") = 0.5
+    accept_unverified: bool = Field(default=False, strict=True, description="track a reference whose verification failed or was skipped "
+                                    "(default false: refused); the summary and the verdict repeat it")
 
 
 class CheckSection(Section):
@@ -147,6 +153,16 @@ class LoopSetup:
     max_step_time : float or None, optional
         The largest 99th-percentile step time that passes [s] (``[check] max_step_time``;
         default None: the loop period).
+    bounds : DeclaredBounds or None, optional
+        The declared bounds the check counts on the plant (states, inputs, algebraic variables
+        and outputs; :func:`loop_reference`); None: the input bounds alone.
+    names : tuple of list of str, optional
+        ``(x_names, u_names, y_names)`` of the plant (the columns of its states, inputs and outputs).
+    outputs : casadi.Function or None, optional
+        ``h(x, u, p) -> y`` of the plant (its algebraic variables and outputs, for their bounds;
+        None: none counted).
+    notes : list of str, optional
+        What the summary and the verdict repeat (an unverified reference accepted, unknown bounds).
     """
 
     name: str
@@ -160,6 +176,10 @@ class LoopSetup:
     plant_x0: np.ndarray
     max_ratio: float = 1.0
     max_step_time: float | None = None
+    bounds: DeclaredBounds | None = None
+    names: tuple = ((), (), ())
+    outputs: Any = None
+    notes: list[str] = field(default_factory=list)
 
 
 def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -> LoopModel:
@@ -244,9 +264,55 @@ def weight_diagonal(file: ProblemFile, field: str, weights: dict[str, float], na
     return np.array([float(weights.get(n, 0.0)) for n in names])
 
 
-def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, dt: float, bounds_field: str | None = None
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-    """The reference motion of ``[reference]``, with the settling hold, and the reference problem's input bounds.
+@dataclass
+class LoopReference:
+    """The reference of ``[reference]`` (:func:`loop_reference`).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        ``(M,)`` times [s].
+    x, u : numpy.ndarray
+        ``(M, nx)``, ``(M, nu)`` the states and inputs in the model's order (the settling hold included).
+    limits : numpy.ndarray or None
+        ``(2, nu)`` the declared input bounds (the reference problem's, without the overrides, within
+        the model's; a result folder's; the model's), None when ``bounds_field`` is None for a user model.
+    bounds : DeclaredBounds
+        Every declared bound of the model's variables (states, inputs, algebraic variables and
+        outputs), :mod:`gtmodel.problems.loop_bounds`.
+    notes : list of str
+        What the controller's summary repeats (an unverified reference accepted; where the bounds come from).
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    limits: np.ndarray | None
+    bounds: DeclaredBounds
+    notes: list[str]
+
+
+def _result_summary(table: Path) -> dict[str, Any] | None:
+    """The ``summary.json`` beside a table when the table is an ``optimal_control`` result folder's ``trajectories.csv``."""
+    summary_file = table.parent / "summary.json"
+    if table.name != RESULT_TABLE or not summary_file.is_file():
+        return None
+    try:
+        summary = json.loads(summary_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return summary if isinstance(summary, dict) and summary.get("kind") == "optimal_control" else None
+
+
+def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, dt: float, bounds_field: str | None = None) -> LoopReference:
+    """The reference motion of ``[reference]``, with the settling hold, its declared bounds and whether it was verified.
+
+    A reference problem solved here, or a result folder's ``trajectories.csv`` (as gtmodel
+    writes it: the text column ``point``, a time written twice at an element boundary), is
+    taken when verified, or unverified through ``[reference] accept_unverified = true``
+    (:func:`~gtmodel.problems.loop_bounds.accept_reference`); a result folder's table also
+    gives the solve's parameter values (the prediction's) and the bounds its ``summary.json``
+    records.
 
     Parameters
     ----------
@@ -255,30 +321,27 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
     ref : ReferenceSection
         Its ``[reference]``.
     model : LoopModel
-        The controller's model.
+        The controller's model (its parameter defaults set to the reference's).
     dt : float
         Loop period [s] (of the robot's sampled trajectory and the settling hold).
     bounds_field : str, optional
-        The controller section whose ``u_lb``, ``u_ub`` are needed from the reference
-        problem's ``[bounds]`` (a user model), e.g. ``"mpc"``; None when both are given.
+        The controller section whose ``u_lb``, ``u_ub`` are needed from the declared bounds
+        (a user model), e.g. ``"mpc"``; None when both are given.
 
     Returns
     -------
-    t : numpy.ndarray
-        ``(M,)`` times [s].
-    x, u : numpy.ndarray
-        ``(M, nx)``, ``(M, nu)`` the states and inputs in the model's order.
-    limits : numpy.ndarray or None
-        ``(2, nu)`` the reference problem's input bounds (without the overrides), None for
-        a table or when ``bounds_field`` is None for a user model.
+    LoopReference
 
     Raises
     ------
     ProblemError
         Naming ``reference``, ``reference.problem`` or ``reference.file``: neither or both,
-        a problem of the wrong kind, one that does not solve, a table without the columns.
+        a problem of the wrong kind, one that does not solve, an unverified one without
+        ``accept_unverified``, a table without the columns.
     """
     ode, robot = model.ode, model.robot
+    names = list(ode.x_names) + list(ode.u_names) + list(ode.y_names)
+    notes: list[str] = []
     if (ref.problem is None) == (ref.file is None):
         raise file.fail("reference", "exactly one of reference.problem (a problem file solved first) and reference.file (a CSV table)")
     if ref.problem is not None:
@@ -293,49 +356,76 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         if loaded.kind != wanted:
             raise file.fail("reference.problem", f"a problem file of kind {wanted} (for this model)", loaded.kind)
         solution = solve_point_to_point(loaded.declaration) if robot else solve_problem(loaded)
-        if not solution.success:
-            raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
         if robot:
+            if not solution.success:
+                raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
             tr = solution.trajectory(dt)
             bound = np.asarray(load_problem(source).declaration.force_limit, dtype=float)
             t = tr["t"]
             x = np.column_stack([tr[c] for c in _TCP_STATES])
             u = np.column_stack([tr[c] for c in _TCP_INPUTS])
             limits = np.vstack([-bound, bound])
+            bounds = DeclaredBounds(source="the reference problem's force limits")
+            for j, n in enumerate(ode.u_names):
+                bounds.add(n, -bound[j], bound[j])
         else:
+            note = accept_reference(file, "reference.problem", solution.status, getattr(solution, "verification", None), ref.accept_unverified)
+            notes += [note] if note else []
             t = np.asarray(solution.t, dtype=float).reshape(-1)
             x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
             u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
             # the prediction is the model the reference was planned with: the problem's [model.parameters]
             ode.p_default = ode.dae.parameter_vector({k: v for k, v in solution.parameters.items() if k in ode.dae.p_vars})
             model.plant_p = ode.p_default * model.parameter_factor
-            limits = None
-            if bounds_field is not None:
-                declared = load_problem(source).data.get("bounds", {})
-                try:
-                    limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
-                except (TypeError, ValueError, IndexError):
-                    raise file.fail("reference.problem", "a problem whose [bounds] of the inputs are [lo, hi] numbers "
-                                    f"(else give {bounds_field}.u_lb and {bounds_field}.u_ub)") from None
-                limits = np.vstack([np.maximum(limits[0], ode.u_lb), np.minimum(limits[1], ode.u_ub)])  # within the model's declared bounds
+            opt = load_problem(source).declaration.optimization  # as the file declares it: without the plan's overrides
+            bounds = dae_bounds(opt.flat(), opt, source="the reference problem's [bounds] over the model's").restricted(names)
+            limits = _input_limits(bounds, ode)
     else:
         source = file.data_file("reference.file", ref.file)
-        table = read_table(source, "the reference table")
+        table = read_table(source, "the reference table", text_columns=("point",))
         cols = {n: table.data[:, i] for i, n in enumerate(table.columns)}
         missing = [n for n in ["t", *ode.x_names, *ode.u_names] if n not in cols]
         if missing:
             raise file.fail("reference.file", f"a table with the columns t, {', '.join(ode.x_names + ode.u_names)} (missing {missing[0]!r})")
         t = np.asarray(cols["t"], dtype=float)
-        x = np.column_stack([cols[n] for n in ode.x_names])
-        u = np.column_stack([cols[n] for n in ode.u_names])
-        limits = None
+        keep = np.append(np.diff(t) > 0, True) if t.size else np.zeros(0, bool)  # a mesh time written twice (element boundary): the later row
+        t = t[keep]
+        x = np.column_stack([cols[n][keep] for n in ode.x_names])
+        u = np.column_stack([cols[n][keep] for n in ode.u_names])
+        bounds = dae_bounds(ode.dae)
+        summary = _result_summary(source)
+        if summary is not None:  # a result folder's own table: its solve's verification, parameters and bounds
+            note = accept_reference(file, "reference.file", summary.get("status", ""), summary.get("verification"), ref.accept_unverified)
+            notes += [note] if note else []
+            values = {k: v for k, v in (summary.get("model_parameters") or {}).items() if k in ode.dae.p_vars}
+            if values and not robot:
+                ode.p_default = ode.dae.parameter_vector(values)
+                model.plant_p = ode.p_default * model.parameter_factor
+            recorded = summary_bounds(summary, source=f"the result's summary.json ({source.parent.name})")
+            for n in recorded.names:
+                bounds.add(n, recorded.lb[n], recorded.ub[n])
+            bounds.source = recorded.source if recorded.names else bounds.source
+        else:
+            notes.append(f"reference: the table {source.name} (not a result folder's: no verification to check)")
+        bounds = bounds.restricted(names)
+        limits = _input_limits(bounds, ode)
+    unknown = bounds.unknown(list(ode.u_names))
+    if unknown and bounds_field is not None:
+        notes.append(f"input bounds unknown: {', '.join(unknown)} (declared by neither the model nor the reference; "
+                     f"give {bounds_field}.u_lb / {bounds_field}.u_ub): their violations are not counted")
     n = int(round(ref.settle_time / dt))
     if n:  # the end held: its state (the robot at rest) and the input that holds it there, not the last (braking) input
         x_end = x[-1] * np.r_[np.ones(3), np.zeros(3)] if robot else x[-1]
         t = np.r_[t, t[-1] + dt * np.arange(1, n + 1)]
         x = np.vstack([x, np.tile(x_end, (n, 1))])
         u = np.vstack([u, np.tile(hold_input(ode.f, x_end, u[-1], ode.p_default), (n, 1))])
-    return t, x, u, limits
+    return LoopReference(t=t, x=x, u=u, limits=limits, bounds=bounds, notes=notes)
+
+
+def _input_limits(bounds: DeclaredBounds, ode: ExplicitODE) -> np.ndarray:
+    """``(2, nu)`` the declared input bounds within the model's."""
+    lb, ub = bounds.vectors(list(ode.u_names))
+    return np.vstack([np.maximum(lb, ode.u_lb), np.minimum(ub, ode.u_ub)])
 
 
 def input_bounds(file: ProblemFile, section: str, u_lb: list[float] | None, u_ub: list[float] | None,
@@ -373,7 +463,8 @@ def input_bounds(file: ProblemFile, section: str, u_lb: list[float] | None, u_ub
     return lb, ub
 
 
-def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, check: CheckSection, dt: float) -> LoopSetup:
+def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, check: CheckSection, dt: float,
+               bounds: DeclaredBounds | None = None, notes: list[str] | None = None) -> LoopSetup:
     """The closed loop of ``[check]`` around a built controller.
 
     Parameters
@@ -390,6 +481,11 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         The file's ``[check]``.
     dt : float
         Loop period [s].
+    bounds : DeclaredBounds, optional
+        The declared bounds the check counts on the plant (:attr:`LoopReference.bounds`);
+        default the controller's input bounds alone.
+    notes : list of str, optional
+        What the summary and the verdict repeat (:attr:`LoopReference.notes`).
 
     Returns
     -------
@@ -416,6 +512,8 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
     loop = dict(u_lb=controller.u_lb, u_ub=controller.u_ub, noise_std=np.asarray(c.noise or np.zeros(ode.nx), dtype=float),
                 disturbance=np.asarray(c.disturbance, dtype=float) if c.disturbance else None, disturbance_time=c.disturbance_time,
                 delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None)
+    if c.delay and getattr(controller, "u_initial", None) is not None:  # before the first computed input arrives: the C memory's u_last
+        loop["u_before"] = np.asarray(controller.u_initial, dtype=float)
     grid = controller.t0 + controller.dt * np.arange(controller.length)
     plant_step, plant_x0 = model.plant.step(dt, c.plant_method, substeps=c.plant_substeps), xs[0].copy()
     if c.compliance:
@@ -426,9 +524,20 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
                             c.plant_method)
         plant_step, loop["output"], loop["measured"] = compliant_plant(model.plant, dt=dt)
         plant_x0 = np.r_[xs[0], np.zeros(4)]
+    counted = DeclaredBounds(source="the controller's input bounds") if bounds is None else bounds.restricted(bounds.names)
+    for j, n in enumerate(ode.u_names):  # an input without a declared bound: the controller's saturation
+        if n not in counted.lb:
+            counted.add(n, controller.u_lb[j], controller.u_ub[j])
+    outputs = None
+    if not c.compliance and ode.y_names and any(n in counted.lb for n in ode.y_names):
+        try:
+            outputs = model.plant.h
+        except GtModelError:  # a model of the time: its outputs are not counted
+            outputs = None
     return LoopSetup(name=name, controller=controller, plant_step=plant_step, plant_p=model.plant_p,
                      t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0,
-                     max_ratio=c.max_ratio, max_step_time=c.max_step_time)
+                     max_ratio=c.max_ratio, max_step_time=c.max_step_time, bounds=counted,
+                     names=(list(ode.x_names), list(ode.u_names), list(ode.y_names)), outputs=outputs, notes=list(notes or []))
 
 
 class LoopFile(Section):
@@ -502,6 +611,10 @@ class LoopInputs:
         ``(M, nx)``, ``(M, nu)`` the reference.
     u_lb, u_ub : numpy.ndarray
         ``(nu,)`` saturation bounds (:func:`input_bounds`).
+    bounds : DeclaredBounds
+        Every declared bound (:attr:`LoopReference.bounds`).
+    notes : list of str
+        What the summary repeats (:attr:`LoopReference.notes`).
     """
 
     model: LoopModel
@@ -513,6 +626,8 @@ class LoopInputs:
     u_ref: np.ndarray
     u_lb: np.ndarray
     u_ub: np.ndarray
+    bounds: DeclaredBounds = field(default_factory=DeclaredBounds)
+    notes: list[str] = field(default_factory=list)
 
 
 def loop_inputs(file: ProblemFile, doc: LoopFile, section: str) -> LoopInputs:
@@ -545,7 +660,6 @@ def loop_inputs(file: ProblemFile, doc: LoopFile, section: str) -> LoopInputs:
     Q = weight_diagonal(file, f"{section}.state_weights", sec.state_weights, names_x)
     R = weight_diagonal(file, f"{section}.input_weights", sec.input_weights, names_u)
     Qf = weight_diagonal(file, f"{section}.terminal_weights", sec.terminal_weights, names_x)
-    t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, sec.period,
-                                             bounds_field=None if sec.u_lb is not None and sec.u_ub is not None else section)
-    u_lb, u_ub = input_bounds(file, section, sec.u_lb, sec.u_ub, limits, ode)
-    return LoopInputs(model=model, Q=Q, R=R, Qf=Qf, t=t, x_ref=x_ref, u_ref=u_ref, u_lb=u_lb, u_ub=u_ub)
+    ref = loop_reference(file, doc.reference, model, sec.period, bounds_field=None if sec.u_lb is not None and sec.u_ub is not None else section)
+    u_lb, u_ub = input_bounds(file, section, sec.u_lb, sec.u_ub, ref.limits, ode)
+    return LoopInputs(model=model, Q=Q, R=R, Qf=Qf, t=ref.t, x_ref=ref.x, u_ref=ref.u, u_lb=u_lb, u_ub=u_ub, bounds=ref.bounds, notes=ref.notes)
