@@ -10,7 +10,16 @@ error names the file and the field, the CLI exits with 2):
     ``optimal_control`` problem file of the user's model, solved first; ``overrides`` its
     dotted fields, e.g. a tighter force limit for the plan than the actuators' bounds; the
     default input bounds are that problem's without the overrides) or ``file`` (a CSV table
-    with ``t`` and the model's state and input names); ``settle_time`` [s] the end held: its state (the robot at rest) with the input that holds it (:func:`~gtmodel.estimation.reference.hold_input`).
+    with ``t`` and the model's state and input names, e.g. a result folder's
+    ``trajectories.csv`` as written: its ``point`` column and repeated times are read as such,
+    its ``summary.json`` gives the solve's status, parameters and bounds); ``settle_time`` [s]
+    the end held: its state (the robot at rest) with the input that holds it
+    (:func:`~gtmodel.estimation.reference.hold_input`); ``accept_unverified`` (default false)
+    takes a reference whose verification failed or was skipped, which the check's summary
+    and verdict repeat (:mod:`gtmodel.problems.loop_bounds`). The declared bounds of the
+    model and the reference (states, inputs, algebraic variables and outputs) are carried
+    into the controller unless its file overrides them; an input bound declared nowhere is
+    named in the summary.
 ``[check]``
     The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
     ``mass_factor``, ``friction_factor`` (the robot plant; a user model: ``parameter_factor``
@@ -20,7 +29,8 @@ error names the file and the field, the CLI exits with 2):
     (one standard deviation per state), ``disturbance`` and ``disturbance_time``, ``delay``
     (samples), ``seed``, ``error_states``, ``plant_method`` / ``plant_substeps``, and the
     acceptance: ``max_ratio`` (the RMS ratio to the feedforward below it, default 1) and
-    ``max_step_time`` (the 99th-percentile step time at most it, default the period).
+    ``max_step_time`` (the 99th-percentile step time at most it, default the period); every
+    declared bound is counted on the plant (:func:`gtmodel.problems.loop_check.plant_bounds`).
 
 The model is ``"L1"`` (a Gantry-Tau parameter set: its rigid-body dynamics with friction in
 TCP states ``T``, ``T_dot`` and input ``tau``, :func:`gtmodel.robots.model.gantry_tau_model`)

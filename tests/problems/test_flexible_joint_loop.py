@@ -75,6 +75,7 @@ def test_penalty_is_exact_along_the_loop(setups):
     c = setups[0].controller
     check = _loop(setups[0])
     hard = replace(c, constraints=replace(c.constraints, hard=True))
+    lams = []
     for k in (5, 20, 40, 60):
         t, x = check.closed.t[k], check.closed.x[k]
         sol = hard.nlp_solver("ipopt")(x0=c.w_initial, p=c.parameters(t, x), **hard.bounds())
@@ -82,3 +83,5 @@ def test_penalty_is_exact_along_the_loop(setups):
         u_soft, _ = c.solve(t, x, plugin="sqpmethod", iterations=30)
         np.testing.assert_allclose(u_soft, np.asarray(sol["x"]).ravel()[: c.nu], rtol=0, atol=1e-4 * 24)
         assert lam < c.constraints.weight
+        lams.append(lam)
+    assert max(lams) > 1.0  # the current limit is active along the motion (multipliers up to ~4e3, rho 4.9e7)
