@@ -110,10 +110,20 @@ def test_output_bounds_are_mpc_rows(result, tmp_path):
     shutil.copytree(result, folder)
     summary = json.loads((folder / "summary.json").read_text())
     summary["bounds"]["r.i"] = [-30.0, None]
+    summary["bounds"]["rotor.w"] = [-400.0, 400.0]  # a state's bound: a row of the state itself
     (folder / "summary.json").write_text(json.dumps(summary))
     setup = load_mpc_file(_mpc_file(tmp_path, "m.toml", f'file = "{folder}/trajectories.csv"'))
     c = setup.controller.constraints
-    assert c.names == ["r.i"] and (c.lb.tolist(), c.ub.tolist()) == ([-30.0], [np.inf])
+    assert c.names == ["rotor.w", "r.i"] and (c.lb.tolist(), c.ub.tolist()) == ([-400.0, -30.0], [400.0, np.inf])
     x = np.array([3.5, 1.0, 2.0])
-    assert float(c.function(x, [5.0])) == pytest.approx(3.5, rel=1e-12)
+    np.testing.assert_allclose(np.asarray(c.function(x, [5.0])).ravel(), [2.0, 3.5], rtol=1e-12)
     assert setup.bounds.lb["r.i"] == -30.0 and setup.outputs is not None
+
+
+@pytest.mark.parametrize("route", [["--mpc", "codegen/mpc/dc_motor_mpc.toml"], ["--controller", "codegen/controllers/dc_motor_tracking.toml"]],
+                         ids=["mpc file", "controller file"])
+def test_accept_unverified_flag_is_a_result_folders(route, tmp_path, capsys):
+    from gtmodel.cli import main
+
+    assert main(["codegen", *[str(REPO / a) if a.endswith(".toml") else a for a in route], "--out", str(tmp_path / "o"), "--accept-unverified"]) == 2
+    assert "--accept-unverified applies to a --controller result folder" in capsys.readouterr().err
