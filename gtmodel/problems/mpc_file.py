@@ -11,12 +11,16 @@ error names the file and the field, the CLI exits with 2):
     default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
     ``solver`` (``"sqpmethod"``: CasADi's SQP with ``qrqp``), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
-    an unknown variable is refused), ``u_lb`` / ``u_ub`` (default: the reference problem's
-    force limits, else the model's declared bounds); the state bounds and path constraints
+    an unknown variable is refused), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
+    :mod:`gtmodel.problems.loop_bounds`: the reference problem's force limits or ``[bounds]``
+    over the model's, a result folder's recorded ones, else the model's; one declared nowhere is
+    named in the summary); the state bounds and path constraints
     on the predicted states (:mod:`gtmodel.estimation.mpc_constraints`): the reference
     problem's as its file declares them (``problem_constraints``, default true: the states'
     ``[bounds]`` and ``[optimization] constraints`` of an ``optimal_control`` file, the cart
-    travel, joint-angle and velocity limits of a ``point_to_point`` one), tightened by
+    travel, joint-angle and velocity limits of a ``point_to_point`` one; a table's: the
+    declared state bounds), the declared bounds of algebraic variables and outputs as rows of
+    the model's ``h(x, u)``, tightened by
     ``state_lb`` / ``state_ub`` (tables by state name), soft by default (an exact penalty
     with slacks, weight ``constraint_weight``) or ``hard_constraints = true``, on every
     predicted state or every ``constraint_every``-th and the last; ``disturbance_gain``

@@ -83,3 +83,17 @@ def test_penalty_is_exact_along_the_loop(setups):
     np.testing.assert_allclose(u_soft, u_hard, rtol=0, atol=1e-4 * 24)
     assert np.all(lams < c.constraints.weight)
     assert np.max(lams) > 1.0  # the current limit is active along the motion (multipliers up to ~4e3, rho 4.9e7)
+
+
+@pytest.mark.slow  # builds the MPC's C with DAQP once (about 2 min)
+def test_generated_c_passes_the_check(setups, tmp_path_factory):
+    from gtmodel.codegen.loop_step import check_loop_step
+    from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
+
+    setup = setups[0]
+    generated, library = build_mpc(setup, tmp_path_factory.mktemp("flexible_c"))
+    report = check_loop_step(generated, n=50, seed=0)
+    check = closed_loop_check(setup, generated, library)
+    current = {b.name: b for b in check.bounds}["ind.i"]
+    assert report.passed and check.failures() == [] and check.ratio_to_feedforward < 0.5 and current.samples == 0
+    assert check.summary_lines()[0].startswith("notes: reference NOT verified")
