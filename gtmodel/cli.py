@@ -195,6 +195,8 @@ def build_parser() -> argparse.ArgumentParser:
     cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
     cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
     cg.add_argument("--mismatch", type=float, default=None, metavar="FACTOR", help="a result folder's tracking controller with --check: the closed loop's plant parameters / the model's (default 1, the nominal plant; no input delay, no noise)")
+    cg.add_argument("--accept-unverified", action="store_true", help="a result folder's tracking controller: take a result whose verification "
+                    "failed or was skipped (default: refused); the check's summary and verdict repeat it")
     cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
     cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
     cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")

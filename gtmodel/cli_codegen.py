@@ -43,6 +43,9 @@ def codegen_command(args: argparse.Namespace) -> int:
     check_out_dir(args.out)  # the rule of solve --out: never a folder of the user's own files
 
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    if getattr(args, "accept_unverified", False) and not (args.controller is not None and args.controller.is_dir()):
+        raise GtModelError("--accept-unverified applies to a --controller result folder (a controller or MPC file says "
+                           "[reference] accept_unverified = true)")
     if args.mpc is not None:
         return _codegen_mpc(args)
     if args.model is not None:
@@ -101,7 +104,8 @@ def _loop_verdict(report, loop) -> int:
     print("\n".join(report.summary_lines()))
     print("\n".join(loop.summary_lines()))
     failures = (["the C differs from Python"] if not report.passed else []) + loop.failures()
-    print("closed-loop check: " + ("PASSED" if not failures else "FAILED (" + "; ".join(failures) + ")"))
+    notes = "".join(f" [{n}]" for n in getattr(loop, "notes", []))  # an unverified reference accepted, unknown bounds: in the verdict too
+    print("closed-loop check: " + ("PASSED" if not failures else "FAILED (" + "; ".join(failures) + ")") + notes)
     return EXIT_OK if not failures else EXIT_NOT_OPTIMAL
 
 
@@ -169,7 +173,8 @@ def _codegen_tracking(args: argparse.Namespace) -> int:
                 raise GtModelError(f"--{flag}: expected comma-separated numbers, got {text!r}") from None
             if not all(0 <= v <= MAX_WEIGHT for v in weights[flag.upper()]):
                 raise GtModelError(f"--{flag}: expected comma-separated finite weights of 0 to {MAX_WEIGHT:g}, got {text!r}")
-    controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}), **weights)
+    controller, ode = tracking_from_result(args.controller, **({} if args.period is None else {"dt": args.period}), **weights,
+                                           accept_unverified=bool(getattr(args, "accept_unverified", False)))
     if args.mismatch is not None and not (math.isfinite(args.mismatch) and 0 < args.mismatch <= 10):
         raise GtModelError(f"--mismatch: expected a factor in (0, 10] on the plant's parameters, got {args.mismatch!r}")
     generated = generate_loop_step(tracking_step(controller, f"tracking of {ode.name}"), args.out, prefix="gt_tracking", real=args.real)

@@ -38,7 +38,7 @@ PAGES = [REPO / "README.md", *sorted(DOCS.glob("*.md"))]
 #: Pages whose blocks all run only in the slow run, with the reason.
 SLOW_PAGES = {"modeling.md": "the modelling tutorial solves several optimal control problems (about a minute)"}
 #: Repository folders the blocks refer to by relative path.
-LINKED = ("problems", "studies", "models", "codegen")
+LINKED = ("problems", "studies", "models", "codegen", "tests")  # tests: the users' model fixtures some pages run
 FENCE = re.compile(r"^```([^\n`]*)\n(.*?)^```\s*$", re.S | re.M)
 KNOWN_FLAGS = {"norun", "slow"}
 

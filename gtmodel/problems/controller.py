@@ -5,9 +5,13 @@ The folder a ``gtmodel solve`` of an ``optimal_control`` problem wrote holds
 file) and ``trajectories.csv`` (the optimal states and inputs by scalar name on the
 collocation mesh). :func:`tracking_from_result` rebuilds the model, reduces it to its
 explicit ODE (:func:`gtmodel.modeling.explicit_ode`) with the solve's parameter values,
-takes the input bounds of the problem file's ``[bounds]`` (numbers; intersected with the
-model's declared bounds) and builds the feedforward + time-varying LQR controller of
-:func:`gtmodel.estimation.tracking.tracking_controller` at the loop period.
+takes the bounds the summary records (the NLP's: the problem file's ``[bounds]`` over the
+model's; the input bounds intersected with the model's declared ones) and builds the
+feedforward + time-varying LQR controller of
+:func:`gtmodel.estimation.tracking.tracking_controller` at the loop period. A result that
+failed its verification (``check_failed``) or was not verified is taken only with
+``accept_unverified`` (``--accept-unverified``), which the check's summary and verdict repeat;
+an input bound recorded nowhere is named in them (its violations are not counted).
 """
 
 from __future__ import annotations
@@ -20,20 +24,17 @@ from typing import Any
 import numpy as np
 
 from gtmodel._tables import read_table
-from gtmodel._toml import read_toml
 from gtmodel.defaults import LOOP_PERIOD_S
-from gtmodel.errors import InputError, ProblemError
+from gtmodel.errors import InputError
 from gtmodel.estimation.tracking import TrackingController, tracking_controller
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.problems.base import ProblemFile
-from gtmodel.problems.loop_file import CheckSection, LoopModel, LoopSetup, loop_samples, loop_setup
+from gtmodel.problems.loop_bounds import SOLVED, DeclaredBounds, dae_bounds, summary_bounds, unverified_reason
+from gtmodel.problems.loop_file import RESULT_TABLE, CheckSection, LoopModel, LoopSetup, loop_samples, loop_setup
 from gtmodel.problems.user_model import load_user_model
 
-__all__ = ["RESULT_TABLE", "is_result_folder", "tracking_from_result", "result_loop_setup"]
+__all__ = ["RESULT_TABLE", "is_result_folder", "tracking_from_result", "result_bounds", "result_loop_setup"]
 
-#: The table of an ``optimal_control`` result folder.
-RESULT_TABLE = "trajectories.csv"
-_SOLVED = ("optimal", "acceptable")
 
 
 def is_result_folder(path: Path) -> bool:
@@ -59,23 +60,6 @@ def _table(path: Path) -> dict[str, np.ndarray]:
     return {name: table.data[:, j] for j, name in enumerate(table.columns)}
 
 
-def _bounds(problem: Path, ode: ExplicitODE) -> tuple[np.ndarray, np.ndarray]:
-    """Input bounds: the model's, intersected with the problem file's numeric ``[bounds]``."""
-    lb, ub = ode.u_lb.copy(), ode.u_ub.copy()
-    if not problem.is_file():
-        return lb, ub
-    bounds = read_toml(problem, ProblemError, "problem file").get("bounds", {})
-    for j, name in enumerate(ode.u_names):
-        pair = bounds.get(name, bounds.get(name.split("[", 1)[0]))
-        if pair is None:
-            continue
-        values = [float(v) if not isinstance(v, str) else {"inf": math.inf, "-inf": -math.inf}.get(v.strip().lower(), math.nan) for v in pair]
-        if len(values) != 2 or any(math.isnan(v) for v in values):
-            raise InputError(f"{problem}: [bounds] {name}: expected two numbers for the controller's saturation, got {pair!r}")
-        lb[j], ub[j] = max(lb[j], values[0]), min(ub[j], values[1])
-    return lb, ub
-
-
 def tracking_from_result(
     result_dir: str | Path,
     dt: float = LOOP_PERIOD_S,
@@ -83,6 +67,7 @@ def tracking_from_result(
     substeps: int = 1,
     Q: Any = None,
     R: Any = None,
+    accept_unverified: bool = False,
 ) -> tuple[TrackingController, ExplicitODE]:
     """Feedforward + time-varying LQR along the optimal motion of an ``optimal_control`` result.
 
@@ -99,18 +84,21 @@ def tracking_from_result(
     Q, R : array_like, optional
         LQR weights (default Bryson's rule, see
         :func:`~gtmodel.estimation.tracking.tracking_controller`).
+    accept_unverified : bool, optional
+        Take a result whose verification failed or was skipped (default False: refused).
 
     Returns
     -------
     controller : TrackingController
+        Saturated at the input bounds of :func:`result_bounds`.
     ode : ExplicitODE
         The model's explicit ODE with the solve's parameter values as defaults.
 
     Raises
     ------
     InputError
-        Not an ``optimal_control`` result of a solved problem, a missing table or column,
-        non-numeric bounds.
+        Not an ``optimal_control`` result of a solved problem, an unverified one without
+        ``accept_unverified``, a missing table or column, non-numeric bounds.
     ProblemError
         Too many loop periods at ``dt`` (:func:`~gtmodel.problems.loop_file.loop_samples`,
         naming the table and its ``t``).
@@ -125,8 +113,13 @@ def tracking_from_result(
         raise InputError(f"{summary_file}: cannot read the result summary ({exc})") from None
     if summary.get("kind") != "optimal_control":
         raise InputError(f"{summary_file}: kind: expected an optimal_control result, got {summary.get('kind')!r}")
-    if summary.get("status") not in _SOLVED:
-        raise InputError(f"{summary_file}: status: expected a solved problem ({' or '.join(_SOLVED)}), got {summary.get('status')!r}")
+    status = summary.get("status")
+    if status not in (*SOLVED, "check_failed"):
+        raise InputError(f"{summary_file}: status: expected a solved problem ({' or '.join(SOLVED)}), got {status!r}")
+    why = unverified_reason(status, summary.get("verification"))
+    if why is not None and not accept_unverified:
+        raise InputError(f"{summary_file}: expected a verified result ({why}); give --accept-unverified to track it unverified, "
+                         "or solve again with the remedy the solve names (more [collocation] elements, [transcription] refine = true)")
     model_ref = summary.get("model") or {}
     if not model_ref.get("file") or not model_ref.get("class"):
         raise InputError(f"{summary_file}: model: expected the model file and class of the solve")
@@ -143,7 +136,9 @@ def tracking_from_result(
     t = table["t"]
     keep = np.append(np.diff(t) > 0, True)  # a mesh point written twice (element boundary): the later one
     rows = keep & np.all(np.isfinite(np.column_stack([table[n] for n in ["t"] + ode.x_names + ode.u_names])), axis=1)
-    lb, ub = _bounds(Path(summary.get("problem", "")), ode)
+    bounds, _ = result_bounds(folder, ode, summary)
+    lb, ub = bounds.vectors(list(ode.u_names))
+    lb, ub = np.maximum(lb, ode.u_lb), np.minimum(ub, ode.u_ub)
     # the size before the gains are computed: the loop periods and the generated C's tables (x*, u*, K per sample)
     loop_samples(ProblemFile(folder / RESULT_TABLE), "t", float(np.ptp(t[rows])) if rows.any() else 0.0, 0.0, dt,
                  ode.nx + ode.nu + ode.nu * ode.nx)
@@ -152,6 +147,49 @@ def tracking_from_result(
         dt=dt, Q=Q, R=R, u_lb=lb, u_ub=ub, method=method, substeps=substeps,
     )
     return controller, ode
+
+
+def result_bounds(result_dir: str | Path, ode: ExplicitODE, summary: dict[str, Any] | None = None) -> tuple[DeclaredBounds, list[str]]:
+    """The bounds a result folder's summary records over the model's declared ones, and the notes of its check.
+
+    Parameters
+    ----------
+    result_dir : str or pathlib.Path
+        The result folder.
+    ode : ExplicitODE
+        Its model (the names kept: states, inputs, algebraic variables and outputs).
+    summary : dict, optional
+        Its parsed ``summary.json`` (default read from the folder).
+
+    Returns
+    -------
+    bounds : DeclaredBounds
+    notes : list of str
+        An unverified result (taken by ``accept_unverified``), input bounds recorded nowhere.
+
+    Raises
+    ------
+    InputError
+        An unreadable ``summary.json``.
+    """
+    folder = Path(result_dir)
+    if summary is None:
+        try:
+            summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise InputError(f"{folder / 'summary.json'}: cannot read the result summary ({exc})") from None
+    bounds = dae_bounds(ode.dae)
+    recorded = summary_bounds(summary, source=f"the result's summary.json ({folder.name})")
+    for name in recorded.names:
+        bounds.add(name, recorded.lb[name], recorded.ub[name])
+    bounds = bounds.restricted(list(ode.x_names) + list(ode.u_names) + list(ode.y_names))
+    why = unverified_reason(summary.get("status", ""), summary.get("verification"))
+    notes = [] if why is None else [f"reference NOT verified ({why}); accepted by --accept-unverified"]
+    unknown = bounds.unknown(list(ode.u_names))
+    if unknown:
+        notes.append(f"input bounds unknown: {', '.join(unknown)} (recorded by neither the model nor the result's summary): "
+                     "their violations are not counted")
+    return bounds, notes
 
 
 def result_loop_setup(result_dir: str | Path, controller: TrackingController, ode: ExplicitODE, parameter_factor: float = 1.0) -> LoopSetup:
@@ -179,4 +217,6 @@ def result_loop_setup(result_dir: str | Path, controller: TrackingController, od
     """
     check = CheckSection(parameter_factor=parameter_factor, delay=0)
     model = LoopModel(ode=ode, plant=ode, plant_p=ode.p_default * parameter_factor, robot=False)
-    return loop_setup(ProblemFile(Path(result_dir) / "summary.json"), f"tracking of {ode.name}", controller, model, check, controller.dt)
+    bounds, notes = result_bounds(result_dir, ode)
+    return loop_setup(ProblemFile(Path(result_dir) / "summary.json"), f"tracking of {ode.name}", controller, model, check, controller.dt,
+                      bounds=bounds, notes=notes)

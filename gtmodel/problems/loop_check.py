@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import ctypes
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -24,11 +24,12 @@ from gtmodel.codegen.build import compile_shared, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, load_loop_step
+from gtmodel.estimation.closed_loop.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
 from gtmodel.estimation.reference import period_index
 from gtmodel.problems.loop_file import LoopSetup
 
-__all__ = ["AUTHORITY_WARNING", "STATUS_NAMES", "LoopCheck", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
+__all__ = ["AUTHORITY_WARNING", "STATUS_NAMES", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
 
 #: Fraction of the reference's samples at an input bound above which the check's summary notes the
 #: feedback's lack of authority (a minimum-time plan at the bounds: bang-bang).
@@ -68,6 +69,14 @@ class LoopCheck:
         Fraction of the reference's samples whose feedforward input is at an input bound
         (:func:`reference_at_bounds`); above :data:`AUTHORITY_WARNING` the summary says that
         the feedback has little authority left.
+    bounds : list of BoundExcess
+        Every declared bound on the plant under the controller (states, inputs, algebraic
+        variables and outputs; :func:`~gtmodel.estimation.closed_loop.bounds.bound_report`):
+        one beyond :data:`~gtmodel.estimation.closed_loop.bounds.EXCESS_TOLERANCE` fails the check.
+    bounds_feedforward : list of BoundExcess
+        The same under the feedforward alone (for comparison; not a failure).
+    notes : list of str
+        What the summary and the verdict repeat (an unverified reference accepted, unknown bounds).
     """
 
     closed: LoopSummary
@@ -80,6 +89,9 @@ class LoopCheck:
     heap: tuple[int, int, int] | None = None
     clock: str = "perf_counter"
     reference_at_bounds: float = 0.0
+    bounds: list[BoundExcess] = field(default_factory=list)
+    bounds_feedforward: list[BoundExcess] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def ratio_to_feedforward(self) -> float:
@@ -101,12 +113,16 @@ class LoopCheck:
         -------
         list of str
         """
+        diverged = self.plant_diverged
         return [why for why, bad in (
-            ("the plant diverged (a stiff model's explicit plant step? [check] plant_method = \"radau2\")", self.plant_diverged),
+            ("the plant diverged (a stiff model's explicit plant step? [check] plant_method = \"radau2\"; the RMS errors "
+             "of a runaway run say nothing)", diverged),
             (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
+            *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)", True)
+              for b in self.bounds if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)",
-             not self.ratio_to_feedforward < self.max_ratio),
+             not diverged and not self.ratio_to_feedforward < self.max_ratio),
             (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
              "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s),
             (f"{self.heap[1] if self.heap else 0} allocations of the QP solver on the heap (its arena of "
@@ -129,9 +145,22 @@ class LoopCheck:
         -------
         list of str
         """
-        return ([f"closed loop, generated C {self.label}:"] + ["  " + line for line in self.closed.summary_lines()]
-                + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}",
-                   f"RMS ratio {self.label} / feedforward: {self.ratio_to_feedforward:.4g} (passes below {self.max_ratio:g})",
+        if self.plant_diverged:
+            runaway = [name for name, run in (("controller", self.closed), ("feedforward", self.feedforward)) if run.diverged]
+            ratio = (f"RMS ratio {self.label} / feedforward: none (the plant diverged under the {' and the '.join(runaway)}: "
+                     f"no figure of a runaway run counts; limit {self.max_ratio:g})")
+        else:
+            r = self.ratio_to_feedforward
+            ratio = f"RMS ratio {self.label} / feedforward: {r:.4g} ({'below' if r < self.max_ratio else 'NOT below'} the limit {self.max_ratio:g})"
+        held = [f"  {b.line()}" for b in self.bounds]
+        ff_beyond = [b.name for b in self.bounds_feedforward if b.beyond_tolerance]
+        return ([f"notes: {n}" for n in self.notes]
+                + [f"closed loop, generated C {self.label}:"] + ["  " + line for line in self.closed.summary_lines()]
+                + ([f"declared bounds on the plant under the {self.label} (tolerance {100 * EXCESS_TOLERANCE:g} %):"] + held if held
+                   else ["declared bounds on the plant: none"])
+                + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}"]
+                + ([f"  beyond a declared bound by more than {100 * EXCESS_TOLERANCE:g} %: {', '.join(ff_beyond)}"] if ff_beyond else [])
+                + [ratio,
                    f"step time budget (99th percentile): {self.step_budget_s * 1e6:.1f} us; step times by time.{self.clock}"
                    + (" (the thread's CPU time)" if self.clock == "thread_time" else ""),
                    f"static memory: {self.memory_bytes} bytes (memory struct) + {self.work_bytes} bytes of stack work arrays"]
@@ -280,6 +309,37 @@ def feedforward_law(controller: Any) -> Any:
     return lambda t, x: (0, np.clip(c.u_ref[period_index(t, c.t0, c.dt, c.length - 1)], c.u_lb, c.u_ub))
 
 
+def plant_bounds(setup: LoopSetup, run: LoopSummary) -> list[BoundExcess]:
+    """The declared bounds of a loop-controller file on the plant of one run, per variable.
+
+    The states (the run's plant states, when they are the model's: not the tool coordinates
+    of a compliant robot plant), the applied inputs and the plant's algebraic variables and
+    outputs ``h(x, u, p)`` (with the plant's parameters), against :attr:`LoopSetup.bounds`.
+
+    Parameters
+    ----------
+    setup : LoopSetup
+        The file's bounds, names and plant.
+    run : LoopSummary
+        A closed-loop run.
+
+    Returns
+    -------
+    list of BoundExcess
+        :func:`~gtmodel.estimation.closed_loop.bounds.bound_report`; empty without bounds.
+    """
+    if setup.bounds is None:
+        return []
+    x_names, u_names, y_names = setup.names
+    values = {n: run.u[:, j] for j, n in enumerate(u_names) if j < run.u.shape[1]}
+    if "output" not in setup.loop and len(x_names) == run.x.shape[1]:
+        values.update({n: run.x[:, j] for j, n in enumerate(x_names)})
+        if setup.outputs is not None and y_names and np.all(np.isfinite(run.x)):
+            y = np.asarray(setup.outputs.map(run.t.size)(run.x.T, run.u.T, setup.plant_p), dtype=float).T
+            values.update({n: y[:, j] for j, n in enumerate(y_names)})
+    return bound_report(values, setup.bounds.lb, setup.bounds.ub)
+
+
 def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path, repeat: int = 1, clock: Any = time.thread_time,
                       label: str = "controller") -> LoopCheck:
     """Run the generated controller and the feedforward alone against the file's plant.
@@ -325,4 +385,5 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path,
     return LoopCheck(closed=first, feedforward=ff, memory_bytes=memory_bytes, work_bytes=work, label=label,
                      max_ratio=float(setup.max_ratio), step_budget_s=float(budget), heap=heap_stats(generated, library),
                      clock=getattr(clock, "__name__", str(clock)),
-                     reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub))
+                     reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub),
+                     bounds=plant_bounds(setup, first), bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes))

@@ -10,7 +10,16 @@ error names the file and the field, the CLI exits with 2):
     ``optimal_control`` problem file of the user's model, solved first; ``overrides`` its
     dotted fields, e.g. a tighter force limit for the plan than the actuators' bounds; the
     default input bounds are that problem's without the overrides) or ``file`` (a CSV table
-    with ``t`` and the model's state and input names); ``settle_time`` [s] the end held: its state (the robot at rest) with the input that holds it (:func:`~gtmodel.estimation.reference.hold_input`).
+    with ``t`` and the model's state and input names, e.g. a result folder's
+    ``trajectories.csv`` as written: its ``point`` column and repeated times are read as such,
+    its ``summary.json`` gives the solve's status, parameters and bounds); ``settle_time`` [s]
+    the end held: its state (the robot at rest) with the input that holds it
+    (:func:`~gtmodel.estimation.reference.hold_input`); ``accept_unverified`` (default false)
+    takes a reference whose verification failed or was skipped, which the check's summary
+    and verdict repeat (:mod:`gtmodel.problems.loop_bounds`). The declared bounds of the
+    model and the reference (states, inputs, algebraic variables and outputs) are carried
+    into the controller unless its file overrides them; an input bound declared nowhere is
+    named in the summary.
 ``[check]``
     The closed loop of ``--check`` (:mod:`gtmodel.estimation.closed_loop.controller_loop`):
     ``mass_factor``, ``friction_factor`` (the robot plant; a user model: ``parameter_factor``
@@ -20,7 +29,8 @@ error names the file and the field, the CLI exits with 2):
     (one standard deviation per state), ``disturbance`` and ``disturbance_time``, ``delay``
     (samples), ``seed``, ``error_states``, ``plant_method`` / ``plant_substeps``, and the
     acceptance: ``max_ratio`` (the RMS ratio to the feedforward below it, default 1) and
-    ``max_step_time`` (the 99th-percentile step time at most it, default the period).
+    ``max_step_time`` (the 99th-percentile step time at most it, default the period); every
+    declared bound is counted on the plant (:func:`gtmodel.problems.loop_check.plant_bounds`).
 
 Every number is finite and in a declared range, checked on load before anything is solved,
 built or written (the ranges of the tables below and of the controller tables):
@@ -44,8 +54,8 @@ the plant of the check.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
@@ -60,48 +70,22 @@ from gtmodel.estimation.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.loop_bounds import DeclaredBounds, input_limits, accept_reference, dae_bounds, input_bounds, summary_bounds
+from gtmodel.problems.loop_limits import (MAX_LOOP_SAMPLES, MAX_MAGNITUDE, MAX_PERIOD_S, MAX_TABLE_NUMBERS, MAX_WEIGHT, MIN_PERIOD_S,
+                                          Bounds, Period, StateBounds, Weights, loop_samples)
 from gtmodel.problems.references import robot_parameters
 from gtmodel.problems.run import load_problem, solve_problem
-from gtmodel.problems.schema import MAX_FORCE_N, Identifier, NonEmptyText, Section, choice, number, problem_error
+from gtmodel.problems.schema import Identifier, NonEmptyText, Section, choice, number, problem_error
 from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
 
-__all__ = ["LoopFile", "LoopInputs", "LoopModel", "LoopSetup", "read_loop_file", "loop_inputs", "loop_model", "weight_diagonal",
+__all__ = ["RESULT_TABLE", "LoopFile", "LoopInputs", "LoopModel", "LoopReference", "LoopSetup", "read_loop_file", "loop_inputs", "loop_model", "weight_diagonal",
            "loop_reference", "input_bounds", "loop_setup", "loop_samples", "MIN_PERIOD_S", "MAX_PERIOD_S", "MAX_WEIGHT",
            "MAX_MAGNITUDE", "MAX_LOOP_SAMPLES", "MAX_TABLE_NUMBERS", "Period", "Weights", "Bounds", "StateBounds"]
 
-#: Shortest loop period of a loop-controller file [s] (100 kHz; a shorter one is a unit slip:
-#: ``period = 1e-12`` asked numpy for 2.18 TiB of reference samples).
-MIN_PERIOD_S = 1e-5
-#: Longest loop period [s].
-MAX_PERIOD_S = 1.0
-#: Largest weight of a weight table (``state_weights``, ``input_weights``, ``terminal_weights``,
-#: ``integral_weights``): the shipped files' largest is 1e8 (1 mm of TCP error against 100 N);
-#: 1e12 leaves four decades for other units, and keeps the QP's and the Riccati recursion's
-#: products of weights and squared scales (``Q`` times ``B^T P B``) far from overflow.
-MAX_WEIGHT = 1e12
-#: Largest magnitude of a number in the units of the model's states and inputs in a loop file
-#: (input bounds, state bounds, noise, disturbance): :data:`~gtmodel.problems.schema.MAX_FORCE_N`.
-MAX_MAGNITUDE = MAX_FORCE_N
-#: Most loop periods of a loop-controller file's reference (the motion sampled at the period and
-#: the settling hold): each is a row of the reference the controller stores, a sample of the
-#: generated C's tables and a period of the closed-loop check (400 s at the 4 ms loop, 1 s at
-#: :data:`MIN_PERIOD_S`; the shipped files have 132 to 352).
-MAX_LOOP_SAMPLES = 100_000
-#: Most numbers in the tables the generated C holds (samples times the numbers of each: ``x*``,
-#: ``u*``, a tracking controller's gains): about 25 bytes of C source each, 50 MB at the limit.
-MAX_TABLE_NUMBERS = 2_000_000
-
-#: A loop period [s] in ``MIN_PERIOD_S .. MAX_PERIOD_S``.
-Period = number(ge=MIN_PERIOD_S, le=MAX_PERIOD_S, unit="s", description="loop period")
-#: A weight table by variable name: finite weights in ``0 .. MAX_WEIGHT``.
-Weights = dict[str, number(ge=0, le=MAX_WEIGHT, description="weight")]
-#: Input bounds, one finite number of magnitude <= ``MAX_MAGNITUDE`` per input (None: the default).
-Bounds = list[number(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)] | None
-#: State bounds by state name, finite numbers of magnitude <= ``MAX_MAGNITUDE``.
-StateBounds = dict[str, number(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
-
+#: The table of an ``optimal_control`` result folder (``[reference] file`` may name it as written).
+RESULT_TABLE = "trajectories.csv"
 _TCP_STATES = ("x", "y", "z", "xd", "yd", "zd")
 _TCP_INPUTS = ("tau1", "tau2", "tau3")
 
@@ -113,6 +97,8 @@ class ReferenceSection(Section):
     overrides: dict[str, Any] = Field(default_factory=dict, description="dotted fields of that problem replaced, e.g. 'limits.force'")
     file: NonEmptyText | None = Field(default=None, description="a CSV table: t and the model's state and input names")
     settle_time: number(ge=0, le=60.0, unit="s", description="the end state held this long, with the input that holds it") = 0.5
+    accept_unverified: bool = Field(default=False, strict=True, description="track a reference whose verification failed or was skipped "
+                                    "(default false: refused); the summary and the verdict repeat it")
 
 
 class CheckSection(Section):
@@ -193,6 +179,16 @@ class LoopSetup:
     max_step_time : float or None, optional
         The largest 99th-percentile step time that passes [s] (``[check] max_step_time``;
         default None: the loop period).
+    bounds : DeclaredBounds or None, optional
+        The declared bounds the check counts on the plant (states, inputs, algebraic variables
+        and outputs; :func:`loop_reference`); None: the input bounds alone.
+    names : tuple of list of str, optional
+        ``(x_names, u_names, y_names)`` of the plant (the columns of its states, inputs and outputs).
+    outputs : casadi.Function or None, optional
+        ``h(x, u, p) -> y`` of the plant (its algebraic variables and outputs, for their bounds;
+        None: none counted).
+    notes : list of str, optional
+        What the summary and the verdict repeat (an unverified reference accepted, unknown bounds).
     """
 
     name: str
@@ -206,6 +202,10 @@ class LoopSetup:
     plant_x0: np.ndarray
     max_ratio: float = 1.0
     max_step_time: float | None = None
+    bounds: DeclaredBounds | None = None
+    names: tuple = ((), (), ())
+    outputs: Any = None
+    notes: list[str] = field(default_factory=list)
 
 
 def loop_model(file: ProblemFile, field: str, model: str, check: CheckSection) -> LoopModel:
@@ -307,59 +307,56 @@ def weight_diagonal(file: ProblemFile, field: str, weights: dict[str, float], na
     return np.array([float(weights.get(n, 0.0)) for n in names])
 
 
-def loop_samples(file: ProblemFile, field: str, duration: float, settle_time: float, dt: float, per_sample: int) -> int:
-    """The loop periods of a reference, refused above :data:`MAX_LOOP_SAMPLES` and :data:`MAX_TABLE_NUMBERS`.
-
-    The estimate before anything is sampled, built or run: ``floor(duration / dt) + 1 +
-    round(settle_time / dt)`` periods (the reference the controller stores, the rows of the
-    generated C's tables and the periods of the closed-loop check), each with ``per_sample``
-    numbers in the generated C.
+@dataclass
+class LoopReference:
+    """The reference of ``[reference]`` (:func:`loop_reference`).
 
     Parameters
     ----------
-    file : ProblemFile
-        The file (for its errors).
-    field : str
-        The period's field, e.g. ``"mpc.period"``.
-    duration : float
-        The reference motion's length [s] (0: the settling hold alone, before it is known).
-    settle_time : float
-        ``reference.settle_time`` [s].
-    dt : float
-        Loop period [s].
-    per_sample : int
-        Numbers of each sample in the generated C (``nx + nu``; a tracking controller's gains
-        add ``nu (nx + n_integral)``).
-
-    Returns
-    -------
-    int
-        The number of loop periods.
-
-    Raises
-    ------
-    ProblemError
-        Naming the file and ``field``: more periods or table numbers than the limits (the
-        estimate, the limit and the remedy in the message); a duration that is not finite.
+    t : numpy.ndarray
+        ``(M,)`` times [s].
+    x, u : numpy.ndarray
+        ``(M, nx)``, ``(M, nu)`` the states and inputs in the model's order (the settling hold included).
+    limits : numpy.ndarray or None
+        ``(2, nu)`` the declared input bounds (the reference problem's, without the overrides, within
+        the model's; a result folder's; the model's), None when ``bounds_field`` is None for a user model.
+    bounds : DeclaredBounds
+        Every declared bound of the model's variables (states, inputs, algebraic variables and
+        outputs), :mod:`gtmodel.problems.loop_bounds`.
+    notes : list of str
+        What the controller's summary repeats (an unverified reference accepted; where the bounds come from).
     """
-    if not (math.isfinite(duration) and duration >= 0):
-        raise file.fail("reference", "a reference motion of finite length", duration)
-    samples = int(math.floor(duration / dt + 1e-6)) + 1 + int(round(settle_time / dt))
-    settle = f" and reference.settle_time = {settle_time:g} s" if settle_time else ""
-    what = f"{duration:g} s of motion{settle} at {dt:g} s: {samples} periods"
-    remedy = "a longer period, a shorter motion" + (" or settle_time" if settle_time else "")
-    if samples > MAX_LOOP_SAMPLES:
-        raise file.fail(field, f"a period giving at most {MAX_LOOP_SAMPLES} loop periods over the reference ({what}; each a sample "
-                               f"the controller stores and the generated C holds, and a period of the closed-loop check); {remedy}", dt)
-    if samples * per_sample > MAX_TABLE_NUMBERS:
-        raise file.fail(field, f"a period giving at most {MAX_TABLE_NUMBERS} numbers in the generated C's tables ({what} of "
-                               f"{per_sample} numbers each: {samples * per_sample}); {remedy}", dt)
-    return samples
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    limits: np.ndarray | None
+    bounds: DeclaredBounds
+    notes: list[str]
+
+
+def _result_summary(table: Path) -> dict[str, Any] | None:
+    """The ``summary.json`` beside a table when the table is an ``optimal_control`` result folder's ``trajectories.csv``."""
+    summary_file = table.parent / "summary.json"
+    if table.name != RESULT_TABLE or not summary_file.is_file():
+        return None
+    try:
+        summary = json.loads(summary_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return summary if isinstance(summary, dict) and summary.get("kind") == "optimal_control" else None
 
 
 def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, dt: float, bounds_field: str | None = None,
-                   period_field: str = "period", per_sample: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
-    """The reference motion of ``[reference]``, with the settling hold, and the reference problem's input bounds.
+                   period_field: str = "period", per_sample: int | None = None) -> LoopReference:
+    """The reference motion of ``[reference]``, with the settling hold, its declared bounds and whether it was verified.
+
+    A reference problem solved here, or a result folder's ``trajectories.csv`` (as gtmodel
+    writes it: the text column ``point``, a time written twice at an element boundary), is
+    taken when verified, or unverified through ``[reference] accept_unverified = true``
+    (:func:`~gtmodel.problems.loop_bounds.accept_reference`); a result folder's table also
+    gives the solve's parameter values (the prediction's) and the bounds its ``summary.json``
+    records.
 
     Parameters
     ----------
@@ -368,12 +365,12 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
     ref : ReferenceSection
         Its ``[reference]``.
     model : LoopModel
-        The controller's model.
+        The controller's model (its parameter defaults set to the reference's).
     dt : float
         Loop period [s] (of the robot's sampled trajectory and the settling hold).
     bounds_field : str, optional
-        The controller section whose ``u_lb``, ``u_ub`` are needed from the reference
-        problem's ``[bounds]`` (a user model), e.g. ``"mpc"``; None when both are given.
+        The controller section whose ``u_lb``, ``u_ub`` are needed from the declared bounds
+        (a user model), e.g. ``"mpc"``; None when both are given.
     period_field : str, optional
         The period's dotted field, named when the reference has too many periods
         (:func:`loop_samples`, checked once its length is known, before it is sampled).
@@ -382,24 +379,22 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
 
     Returns
     -------
-    t : numpy.ndarray
-        ``(M,)`` times [s].
-    x, u : numpy.ndarray
-        ``(M, nx)``, ``(M, nu)`` the states and inputs in the model's order.
-    limits : numpy.ndarray or None
-        ``(2, nu)`` the reference problem's input bounds (without the overrides), None for
-        a table or when ``bounds_field`` is None for a user model.
+    LoopReference
 
     Raises
     ------
     ProblemError
-        Naming ``reference.problem`` or ``reference.file``: a problem of the wrong kind, one
-        that does not solve, a table without the columns; naming ``period_field``: too many
-        periods (:func:`loop_samples`). (Neither or both of ``problem`` and ``file``:
-        :func:`read_loop_file`.)
+        Naming ``reference``, ``reference.problem`` or ``reference.file``: neither or both,
+        a problem of the wrong kind, one that does not solve, an unverified one without
+        ``accept_unverified``, a table without the columns; naming ``period_field``: too many
+        periods (:func:`loop_samples`).
     """
     ode, robot = model.ode, model.robot
     width = ode.nx + ode.nu if per_sample is None else per_sample
+    names = list(ode.x_names) + list(ode.u_names) + list(ode.y_names)
+    notes: list[str] = []
+    if (ref.problem is None) == (ref.file is None):
+        raise file.fail("reference", "exactly one of reference.problem (a problem file solved first) and reference.file (a CSV table)")
     if ref.problem is not None:
         # a problem file the user wrote, resolved as a model file is (relative to this file): the shipped loop-controller
         # files in codegen/ name their references in problems/; its data files stay confined when it loads
@@ -412,95 +407,77 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         if loaded.kind != wanted:
             raise file.fail("reference.problem", f"a problem file of kind {wanted} (for this model)", loaded.kind)
         solution = solve_point_to_point(loaded.declaration) if robot else solve_problem(loaded)
-        if not solution.success:
-            raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
-        loop_samples(file, period_field, float(solution.result.final_time - solution.result.t[0]) if robot
-                     else float(solution.t[-1] - solution.t[0]), ref.settle_time, dt, width)
         if robot:
+            if not solution.success:
+                raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
+            loop_samples(file, period_field, float(solution.result.final_time - solution.result.t[0]), ref.settle_time, dt, width)
             tr = solution.trajectory(dt)
             bound = np.asarray(load_problem(source).declaration.force_limit, dtype=float)
             t = tr["t"]
             x = np.column_stack([tr[c] for c in _TCP_STATES])
             u = np.column_stack([tr[c] for c in _TCP_INPUTS])
             limits = np.vstack([-bound, bound])
+            bounds = DeclaredBounds(source="the reference problem's force limits")
+            for j, n in enumerate(ode.u_names):
+                bounds.add(n, -bound[j], bound[j])
         else:
+            note = accept_reference(file, "reference.problem", solution.status, getattr(solution, "verification", None), ref.accept_unverified)
+            notes += [note] if note else []
+            loop_samples(file, period_field, float(solution.t[-1] - solution.t[0]), ref.settle_time, dt, width)
             t = np.asarray(solution.t, dtype=float).reshape(-1)
             x = np.column_stack([np.asarray(solution.states[n], dtype=float).reshape(-1) for n in ode.x_names])
             u = np.column_stack([np.asarray(solution.inputs[n], dtype=float).reshape(-1) for n in ode.u_names])
             # the prediction is the model the reference was planned with: the problem's [model.parameters]
             ode.p_default = ode.dae.parameter_vector({k: v for k, v in solution.parameters.items() if k in ode.dae.p_vars})
             model.plant_p = ode.p_default * model.parameter_factor
-            limits = None
-            if bounds_field is not None:
-                declared = load_problem(source).data.get("bounds", {})
-                try:
-                    limits = np.array([[float(declared.get(n, [-np.inf, np.inf])[i]) for n in ode.u_names] for i in (0, 1)])
-                except (TypeError, ValueError, IndexError):
-                    raise file.fail("reference.problem", "a problem whose [bounds] of the inputs are [lo, hi] numbers "
-                                    f"(else give {bounds_field}.u_lb and {bounds_field}.u_ub)") from None
-                limits = np.vstack([np.maximum(limits[0], ode.u_lb), np.minimum(limits[1], ode.u_ub)])  # within the model's declared bounds
+            opt = load_problem(source).declaration.optimization  # as the file declares it: without the plan's overrides
+            bounds = dae_bounds(opt.flat(), opt, source="the reference problem's [bounds] over the model's").restricted(names)
+            limits = input_limits(bounds, ode)
     else:
         source = file.data_file("reference.file", ref.file)
-        table = read_table(source, "the reference table")
+        table = read_table(source, "the reference table", text_columns=("point",))
         cols = {n: table.data[:, i] for i, n in enumerate(table.columns)}
         missing = [n for n in ["t", *ode.x_names, *ode.u_names] if n not in cols]
         if missing:
             raise file.fail("reference.file", f"a table with the columns t, {', '.join(ode.x_names + ode.u_names)} (missing {missing[0]!r})")
         t = np.asarray(cols["t"], dtype=float)
         loop_samples(file, period_field, float(t[-1] - t[0]) if t.size else 0.0, ref.settle_time, dt, width)
-        x = np.column_stack([cols[n] for n in ode.x_names])
-        u = np.column_stack([cols[n] for n in ode.u_names])
-        limits = None
+        keep = np.append(np.diff(t) > 0, True) if t.size else np.zeros(0, bool)  # a mesh time written twice (element boundary): the later row
+        t = t[keep]
+        x = np.column_stack([cols[n][keep] for n in ode.x_names])
+        u = np.column_stack([cols[n][keep] for n in ode.u_names])
+        bounds = dae_bounds(ode.dae)
+        summary = _result_summary(source)
+        if summary is not None:  # a result folder's own table: its solve's verification, parameters and bounds
+            note = accept_reference(file, "reference.file", summary.get("status", ""), summary.get("verification"), ref.accept_unverified)
+            notes += [note] if note else []
+            values = {k: v for k, v in (summary.get("model_parameters") or {}).items() if k in ode.dae.p_vars}
+            if values and not robot:
+                ode.p_default = ode.dae.parameter_vector(values)
+                model.plant_p = ode.p_default * model.parameter_factor
+            recorded = summary_bounds(summary, source=f"the result's summary.json ({source.parent.name})")
+            for n in recorded.names:
+                bounds.add(n, recorded.lb[n], recorded.ub[n])
+            bounds.source = recorded.source if recorded.names else bounds.source
+        else:
+            notes.append(f"reference: the table {source.name} (not a result folder's: no verification to check)")
+        bounds = bounds.restricted(names)
+        limits = input_limits(bounds, ode)
+    unknown = bounds.unknown(list(ode.u_names))
+    if unknown and bounds_field is not None:
+        notes.append(f"input bounds unknown: {', '.join(unknown)} (declared by neither the model nor the reference; "
+                     f"give {bounds_field}.u_lb / {bounds_field}.u_ub): their violations are not counted")
     n = int(round(ref.settle_time / dt))
     if n:  # the end held: its state (the robot at rest) and the input that holds it there, not the last (braking) input
         x_end = x[-1] * np.r_[np.ones(3), np.zeros(3)] if robot else x[-1]
         t = np.r_[t, t[-1] + dt * np.arange(1, n + 1)]
         x = np.vstack([x, np.tile(x_end, (n, 1))])
         u = np.vstack([u, np.tile(hold_input(ode.f, x_end, u[-1], ode.p_default), (n, 1))])
-    return t, x, u, limits
+    return LoopReference(t=t, x=x, u=u, limits=limits, bounds=bounds, notes=notes)
 
 
-def input_bounds(file: ProblemFile, section: str, u_lb: list[float] | None, u_ub: list[float] | None,
-                 limits: np.ndarray | None, ode: ExplicitODE) -> tuple[np.ndarray, np.ndarray]:
-    """The saturation bounds: the file's ``u_lb``/``u_ub``, else the reference problem's, else the model's.
-
-    Parameters
-    ----------
-    file : ProblemFile
-        The file.
-    section : str
-        The controller section, e.g. ``"mpc"`` (the fields ``<section>.u_lb``, ``<section>.u_ub``).
-    u_lb, u_ub : list of float or None
-        The file's bounds.
-    limits : numpy.ndarray or None
-        ``(2, nu)`` the reference problem's (:func:`loop_reference`).
-    ode : ExplicitODE
-        The model (its declared bounds).
-
-    Returns
-    -------
-    lb, ub : numpy.ndarray
-        ``(nu,)`` each.
-
-    Raises
-    ------
-    ProblemError
-        ``<section>.u_lb`` / ``<section>.u_ub`` of another length than the model's inputs,
-        a lower bound above its upper bound (``<section>.u_lb[i]``).
-    """
-    lb = np.asarray(u_lb, dtype=float) if u_lb is not None else (limits[0] if limits is not None else ode.u_lb)
-    ub = np.asarray(u_ub, dtype=float) if u_ub is not None else (limits[1] if limits is not None else ode.u_ub)
-    for field, v in ((f"{section}.u_lb", lb), (f"{section}.u_ub", ub)):
-        if v.size != ode.nu:
-            raise file.fail(field, f"{ode.nu} bounds ({', '.join(ode.u_names)})", v.tolist())
-    crossed = np.flatnonzero(~(lb <= ub))
-    if crossed.size:
-        j = int(crossed[0])
-        raise file.fail(f"{section}.u_lb[{j}]", f"a lower bound <= the upper bound {float(ub[j]):g} ({ode.u_names[j]})", float(lb[j]))
-    return lb, ub
-
-
-def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, check: CheckSection, dt: float) -> LoopSetup:
+def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, check: CheckSection, dt: float,
+               bounds: DeclaredBounds | None = None, notes: list[str] | None = None) -> LoopSetup:
     """The closed loop of ``[check]`` around a built controller.
 
     Parameters
@@ -517,6 +494,11 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         The file's ``[check]``.
     dt : float
         Loop period [s].
+    bounds : DeclaredBounds, optional
+        The declared bounds the check counts on the plant (:attr:`LoopReference.bounds`);
+        default the controller's input bounds alone.
+    notes : list of str, optional
+        What the summary and the verdict repeat (:attr:`LoopReference.notes`).
 
     Returns
     -------
@@ -536,14 +518,27 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
     loop = dict(u_lb=controller.u_lb, u_ub=controller.u_ub, noise_std=np.asarray(c.noise or np.zeros(ode.nx), dtype=float),
                 disturbance=np.asarray(c.disturbance, dtype=float) if c.disturbance else None, disturbance_time=c.disturbance_time,
                 delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None)
+    if c.delay and getattr(controller, "u_initial", None) is not None:  # before the first computed input arrives: the C memory's u_last
+        loop["u_before"] = np.asarray(controller.u_initial, dtype=float)
     grid = controller.t0 + controller.dt * np.arange(controller.length)
     plant_step, plant_x0 = model.plant.step(dt, c.plant_method, substeps=c.plant_substeps), xs[0].copy()
     if c.compliance:
         plant_step, loop["output"], loop["measured"] = compliant_plant(model.plant, dt=dt)
         plant_x0 = np.r_[xs[0], np.zeros(4)]
+    counted = DeclaredBounds(source="the controller's input bounds") if bounds is None else bounds.restricted(bounds.names)
+    for j, n in enumerate(ode.u_names):  # an input without a declared bound: the controller's saturation
+        if n not in counted.lb:
+            counted.add(n, controller.u_lb[j], controller.u_ub[j])
+    outputs = None
+    if not c.compliance and ode.y_names and any(n in counted.lb for n in ode.y_names):
+        try:
+            outputs = model.plant.h
+        except GtModelError:  # a model of the time: its outputs are not counted
+            outputs = None
     return LoopSetup(name=name, controller=controller, plant_step=plant_step, plant_p=model.plant_p,
                      t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0,
-                     max_ratio=c.max_ratio, max_step_time=c.max_step_time)
+                     max_ratio=c.max_ratio, max_step_time=c.max_step_time, bounds=counted,
+                     names=(list(ode.x_names), list(ode.u_names), list(ode.y_names)), outputs=outputs, notes=list(notes or []))
 
 
 class LoopFile(Section):
@@ -626,6 +621,10 @@ class LoopInputs:
         ``(M, nx)``, ``(M, nu)`` the reference.
     u_lb, u_ub : numpy.ndarray
         ``(nu,)`` saturation bounds (:func:`input_bounds`).
+    bounds : DeclaredBounds
+        Every declared bound (:attr:`LoopReference.bounds`).
+    notes : list of str
+        What the summary repeats (:attr:`LoopReference.notes`).
     """
 
     model: LoopModel
@@ -637,6 +636,8 @@ class LoopInputs:
     u_ref: np.ndarray
     u_lb: np.ndarray
     u_ub: np.ndarray
+    bounds: DeclaredBounds = field(default_factory=DeclaredBounds)
+    notes: list[str] = field(default_factory=list)
 
 
 def loop_inputs(file: ProblemFile, doc: LoopFile, section: str, per_sample: Callable[[ExplicitODE], int] | None = None,
@@ -683,8 +684,7 @@ def loop_inputs(file: ProblemFile, doc: LoopFile, section: str, per_sample: Call
     Q = weight_diagonal(file, f"{section}.state_weights", sec.state_weights, names_x)
     R = weight_diagonal(file, f"{section}.input_weights", sec.input_weights, names_u)
     Qf = weight_diagonal(file, f"{section}.terminal_weights", sec.terminal_weights, names_x)
-    t, x_ref, u_ref, limits = loop_reference(file, doc.reference, model, sec.period,
-                                             bounds_field=None if sec.u_lb is not None and sec.u_ub is not None else section,
-                                             period_field=f"{section}.period", per_sample=width)
-    u_lb, u_ub = input_bounds(file, section, sec.u_lb, sec.u_ub, limits, ode)
-    return LoopInputs(model=model, Q=Q, R=R, Qf=Qf, t=t, x_ref=x_ref, u_ref=u_ref, u_lb=u_lb, u_ub=u_ub)
+    ref = loop_reference(file, doc.reference, model, sec.period, bounds_field=None if sec.u_lb is not None and sec.u_ub is not None else section,
+                         period_field=f"{section}.period", per_sample=width)
+    u_lb, u_ub = input_bounds(file, section, sec.u_lb, sec.u_ub, ref.limits, ode)
+    return LoopInputs(model=model, Q=Q, R=R, Qf=Qf, t=ref.t, x_ref=ref.x, u_ref=ref.u, u_lb=u_lb, u_ub=u_ub, bounds=ref.bounds, notes=ref.notes)

@@ -55,6 +55,11 @@ class MPCCheck(LoopCheck):
         Name of the clock of the step times.
     reference_at_bounds : float
         Fraction of the reference's samples at an input bound.
+    bounds, bounds_feedforward : list of BoundExcess
+        Every declared bound on the plant under the MPC and under the feedforward alone
+        (:func:`~gtmodel.problems.loop_check.plant_bounds`).
+    notes : list of str
+        What the summary and the verdict repeat.
     """
 
     @property

@@ -12,12 +12,16 @@ error names the file and the field, the CLI exits with 2):
     (input blocks, a divisor of the horizon; default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
     ``solver`` (``"sqpmethod"``: CasADi's SQP with ``qrqp``), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
-    an unknown variable is refused; each weight 0 .. 1e12), ``u_lb`` / ``u_ub`` (default: the reference problem's
-    force limits, else the model's declared bounds); the state bounds and path constraints
+    an unknown variable is refused; each weight 0 .. 1e12), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
+    :mod:`gtmodel.problems.loop_bounds`: the reference problem's force limits or ``[bounds]``
+    over the model's, a result folder's recorded ones, else the model's; one declared nowhere is
+    named in the summary); the state bounds and path constraints
     on the predicted states (:mod:`gtmodel.estimation.mpc_constraints`): the reference
     problem's as its file declares them (``problem_constraints``, default true: the states'
     ``[bounds]`` and ``[optimization] constraints`` of an ``optimal_control`` file, the cart
-    travel, joint-angle and velocity limits of a ``point_to_point`` one), tightened by
+    travel, joint-angle and velocity limits of a ``point_to_point`` one; a table's: the
+    declared state bounds), the declared bounds of algebraic variables and outputs as rows of
+    the model's ``h(x, u)``, tightened by
     ``state_lb`` / ``state_ub`` (tables by state name), soft by default (an exact penalty
     with slacks, weight ``constraint_weight``) or ``hard_constraints = true``, on every
     predicted state or every ``constraint_every``-th and the last; ``disturbance_gain``
@@ -33,8 +37,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import numpy as np
-
 from pydantic import Field
 
 from gtmodel.defaults import LOOP_PERIOD_S
@@ -42,6 +46,7 @@ from gtmodel.errors import GtModelError
 from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
 from gtmodel.estimation.mpc_constraints import problem_constraints
 from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.loop_bounds import DeclaredBounds
 from gtmodel.problems.loop_file import (Bounds, LoopFile, LoopModel, LoopSetup, Period, StateBounds, Weights, loop_inputs,
                                         loop_setup, read_loop_file)
 from gtmodel.problems.run import load_problem
@@ -138,10 +143,13 @@ class MPCFile(LoopFile):
 MPCSetup = LoopSetup
 
 
-def _constraints(file: ProblemFile, doc: MPCFile, names_x: list[str], names_u: list[str], robot: bool) -> dict[str, Any]:
+def _constraints(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, declared: DeclaredBounds) -> dict[str, Any]:
     """The state bounds and path constraints of the MPC: the reference problem's (as its file declares them,
-    without the overrides of the plan), tightened by ``mpc.state_lb`` / ``mpc.state_ub``."""
+    without the overrides of the plan) or, for a table, the declared bounds (a result folder's summary, the
+    model's); the declared bounds of the model's algebraic variables and outputs as rows of ``h(x, u)``;
+    tightened by ``mpc.state_lb`` / ``mpc.state_ub``."""
     m = doc.mpc
+    names_x, names_u = list(ode.x_names), list(ode.u_names)
     x_lb, x_ub, out = np.full(len(names_x), -np.inf), np.full(len(names_x), np.inf), {}
     if m.problem_constraints and doc.reference.problem is not None:
         source = Path(file.reference("reference.problem", doc.reference.problem))
@@ -152,6 +160,22 @@ def _constraints(file: ProblemFile, doc: MPCFile, names_x: list[str], names_u: l
         except GtModelError as exc:
             raise file.wrap("mpc.problem_constraints", exc) from None
         out = dict(path=path, path_lb=lb, path_ub=ub, path_names=names)
+    elif m.problem_constraints and not robot:
+        x_lb, x_ub = declared.vectors(names_x)
+    outputs = [n for n in ode.y_names if n in declared.lb] if m.problem_constraints and not robot else []
+    if outputs:  # bounds of algebraic variables and outputs (e.g. a resistor's current): rows of y = h(x, u)
+        try:
+            h = ode.h
+        except GtModelError as exc:
+            raise file.wrap("mpc.problem_constraints", exc) from None
+        xs, us = ca.SX.sym("x", len(names_x)), ca.SX.sym("u", len(names_u))
+        y = h(xs, us, ode.p_default)
+        rows = ca.vertcat(*[y[list(ode.y_names).index(n)] for n in outputs])
+        lo, hi = declared.vectors(outputs)
+        if out.get("path") is not None:
+            rows = ca.vertcat(out["path"](xs, us), rows)
+            lo, hi, outputs = np.r_[out["path_lb"], lo], np.r_[out["path_ub"], hi], list(out["path_names"]) + outputs
+        out = dict(path=ca.Function("path", [xs, us], [rows], ["x", "u"], ["h"]), path_lb=lo, path_ub=hi, path_names=outputs)
     for field, table, pick in (("mpc.state_lb", m.state_lb, np.maximum), ("mpc.state_ub", m.state_ub, np.minimum)):
         for key, value in table.items():
             if key not in names_x:
@@ -202,7 +226,7 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
 
     i = loop_inputs(file, doc, "mpc", before_reference=qp_size)
     ode = i.model.ode
-    cons = _constraints(file, doc, list(ode.x_names), list(ode.u_names), i.model.robot)
+    cons = _constraints(file, doc, ode, i.model.robot, i.bounds)
     try:
         controller = mpc_controller(ode, i.t, i.x_ref, i.u_ref, horizon=m.horizon, dt=m.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb,
                                     u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
@@ -210,4 +234,4 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
                                     constraint_every=m.constraint_every, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain), **cons)
     except GtModelError as exc:
         raise file.wrap("mpc.disturbance_gain" if "disturbance_gain" in str(exc) else "mpc", exc) from None
-    return loop_setup(file, doc.name, controller, i.model, doc.check, m.period)
+    return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)

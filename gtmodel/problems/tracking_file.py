@@ -117,4 +117,4 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
                                          integral_weights=c.integral_weights or None)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
-    return loop_setup(file, doc.name, controller, i.model, doc.check, c.period)
+    return loop_setup(file, doc.name, controller, i.model, doc.check, c.period, bounds=i.bounds, notes=i.notes)

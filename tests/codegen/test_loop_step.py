@@ -148,7 +148,9 @@ def _result_folder(root, ode, t, x, u, kind="optimal_control"):
     (root / "problem.toml").write_text('[bounds]\n"src.v" = [-10.0, 10.0]\n')
     (root / "summary.json").write_text(json.dumps({
         "kind": kind, "status": "optimal", "problem": str(root / "problem.toml"),
-        "model": {"file": str(MOTOR), "class": "DCMotorModel"}, "model_parameters": {"r.R": 0.5}}))
+        "model": {"file": str(MOTOR), "class": "DCMotorModel"}, "model_parameters": {"r.R": 0.5},
+        # as gtmodel solve writes them: the verification (a result is tracked verified) and the NLP's bounds
+        "verification": {"passed": True, "status": "passed"}, "bounds": {"src.v": [-10.0, 10.0]}}))
     return root
 
 

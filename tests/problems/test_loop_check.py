@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
+from gtmodel.estimation.closed_loop.bounds import bound_report
 from gtmodel.problems.loop_check import LoopCheck, reference_at_bounds
 
 x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)
@@ -25,7 +26,7 @@ def _run(a, law):
 
 @pytest.mark.parametrize("closed, feedforward, reasons", [
     (_run(1.0, lambda t, y: (0, [0.0])), _run(1.0, lambda t, y: (0, [0.5])), []),
-    (_run(10.0, lambda t, y: (0, [0.0])), _run(10.0, lambda t, y: (0, [0.0])), ["the plant diverged", "not below 1"]),
+    (_run(10.0, lambda t, y: (0, [0.0])), _run(10.0, lambda t, y: (0, [0.0])), ["the plant diverged"]),  # no ratio of runaway runs
     (_run(1.0, lambda t, y: (0, [0.0])), _run(10.0, lambda t, y: (0, [0.0])), ["the plant diverged"]),
     (_run(1.0, lambda t, y: (6, [2.0])), _run(1.0, lambda t, y: (0, [1.0])), ["8 input bound violations", "8 failed steps", "not below 1"]),
 ], ids=["passes", "both run away", "feedforward runs away (ratio ~1e-7)", "bounds and failed steps"])
@@ -76,3 +77,29 @@ def test_summary_notes_a_reference_at_its_bounds():
     assert any("at an input bound in 60 %" in line for line in check.summary_lines()) and check.failures() == []
     quiet = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, reference_at_bounds=0.1)
     assert not any("input bound in" in line for line in quiet.summary_lines())
+
+
+def test_a_diverged_plant_prints_no_ratio():
+    # both run away (a = 10: x_k = 10^k): the summary names the divergence and prints no ratio that could read as passing
+    check = LoopCheck(closed=_run(10.0, lambda t, y: (0, [0.0])), feedforward=_run(10.0, lambda t, y: (0, [0.0])),
+                      memory_bytes=0, work_bytes=0, max_ratio=0.5)
+    ratio = [line for line in check.summary_lines() if line.startswith("RMS ratio")]
+    assert len(ratio) == 1 and "none (the plant diverged" in ratio[0] and "below the limit" not in ratio[0]
+
+
+def test_declared_bounds_beyond_one_percent_fail_per_variable():
+    # x_k = 1 + 0.1 k (a = 1, u = 0.1): the largest state 1.7 at k = 7; bounds by hand: x <= 1.69 (0.6 % excess: held),
+    # x <= 1.5 (13.3 % excess, samples k = 6, 7 beyond 1.515), u <= 0.1 (held exactly)
+    closed = _run(1.0, lambda t, y: (0, [0.1]))
+    values = {"x": closed.x[:, 0], "u": closed.u[:, 0]}
+    lenient, strict = (bound_report(values, {"x": -np.inf, "u": -1.0}, {"x": hi, "u": 0.1}) for hi in (1.69, 1.5))
+    assert [b.beyond_tolerance for b in lenient] == [False, False] and lenient[0].relative == pytest.approx(0.01 / 1.69, rel=1e-9)
+    assert strict[0].samples == 2 and strict[0].excess == pytest.approx(0.2, rel=1e-9) and strict[0].value == pytest.approx(1.7)
+    check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, bounds=strict)
+    assert [f for f in check.failures() if f.startswith("x beyond its bound by 0.2 (13.3 %")]
+    assert any("x in [-inf, 1.5]: max excess 0.2" in line for line in check.summary_lines())
+
+
+def test_notes_head_the_summary():
+    check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, notes=["reference NOT verified (x)"])
+    assert check.summary_lines()[0] == "notes: reference NOT verified (x)"
