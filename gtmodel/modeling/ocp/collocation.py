@@ -47,7 +47,7 @@ from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
-from gtmodel.modeling.ocp.guesses import _guess_fn
+from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
 from gtmodel.modeling.ocp.optimization import Optimization
@@ -300,30 +300,29 @@ class CollocationTranscription:
         opt, dae, co = self.optimization, self.dae, self._co
         N, t0 = self.elements, opt.start_time
         n_el, c0 = element_scaling(N, self.fractions)
-        fns = {}
+        kinds = [kind for kind, _k, _j in self._blocks]
+        ks = np.array([k for _kind, k, _j in self._blocks], dtype=int)
+        js = np.array([j for _kind, _k, j in self._blocks], dtype=int)
+        inner = ks < N
+        t = np.full(len(kinds), float(tf_guess))
+        t[inner] = t0 + (c0[ks[inner]] + co["root"][js[inner]]) * (tf_guess - t0) / n_el[ks[inner]]
+        values: dict[str, np.ndarray] = {}  # per kind: (blocks of that kind, size); all times at once (one point set)
         for cat, vars_, start in (("x", dae.x_vars, dae.x_start), ("z", dae.z_vars, dae.z_start), ("u", dae.u_vars, None)):
+            rows = [i for i, kind in enumerate(kinds) if kind == cat]
+            block = np.zeros((len(rows), sum(sl.stop - sl.start for sl in vars_.values())))
             for name, sl in vars_.items():
-                n = sl.stop - sl.start
-                if start is None:
-                    kind_syms = self.optimization.model._vars[name]
-                    default = kind_syms.start.copy()
-                else:
-                    default = start[sl].copy()
-                fns[(cat, name)] = (sl, _guess_fn(guesses.get(name), n, name, default))
-        w0 = []
-        for (kind, k, j), size in zip(self._blocks, self._block_sizes):
+                default = self.optimization.model._vars[name].start.copy() if start is None else start[sl].copy()
+                block[:, sl] = guess_values(guesses.get(name), sl.stop - sl.start, name, default, t)[rows]
+            values[cat] = block
+        w0, row = [], {"x": 0, "z": 0, "u": 0}
+        for kind in kinds:
             if kind == "tf":
                 w0.append(np.array([tf_guess]))
-                continue
-            if kind == "pf":
+            elif kind == "pf":
                 w0.append(self._free_start(pvec))
-                continue
-            t = t0 + (c0[k] + co["root"][j]) * (tf_guess - t0) / n_el[k] if k < N else tf_guess
-            vals = np.zeros(size)
-            for (cat, _name), (sl, f) in fns.items():
-                if cat == kind:
-                    vals[sl] = f(t)
-            w0.append(vals)
+            else:
+                w0.append(values[kind][row[kind]])
+                row[kind] += 1
         w = np.concatenate(w0) if w0 else np.zeros(0)
         lo, hi = self._lbw, self._ubw
         return np.clip(w / self._scale, lo, hi)  # the NLP works with variable / nominal
@@ -386,18 +385,8 @@ class CollocationTranscription:
             elif initial_guess.collocation is not None:
                 res = initial_guess
                 tf_guess = float(np.clip(res.final_time, *opt.final_time_bounds))
-                span_old = res.final_time - opt.start_time
-
-                def from_result(cat: str, name: str, res: OptimizationResult = res) -> Any:
-                    def f(t: float) -> np.ndarray:
-                        s = opt.start_time + (t - opt.start_time) / (tf_guess - opt.start_time) * span_old
-                        return np.asarray(res.sample([s])[cat][name], dtype=float).reshape(-1)
-
-                    return f
-
-                for cat, vars_ in (("states", dae.x_vars), ("inputs", dae.u_vars), ("algebraics", dae.z_vars)):
-                    for name in vars_:
-                        guesses[name] = from_result(cat, name)
+                sampled = ResultGuess(res, opt.start_time, tf_guess)  # one evaluation for all variables and points
+                guesses.update({name: sampled for name in sampled.names()})
         elif isinstance(initial_guess, Mapping):
             for name, value in initial_guess.items():
                 if name == "final_time":
