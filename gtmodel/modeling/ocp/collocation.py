@@ -42,9 +42,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._timing import add_phase, timed
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
-from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
+from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives, assembled_oracle
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
 from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
@@ -190,10 +191,12 @@ class CollocationTranscription:
         self.verbose = bool(verbose)
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
-        self.dae: FlatDAE = optimization.flat()
-        self.size = check_memory(self.elements, self.points, self.dae.nx, self.dae.nz, self.dae.nu)  # before any of it is built
-        self.nominal = self._nominal_values(nominal)
-        self._build()
+        self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
+        with timed(self._unreported, "build"):
+            self.dae: FlatDAE = optimization.flat()
+            self.size = check_memory(self.elements, self.points, self.dae.nx, self.dae.nz, self.dae.nu)  # before any of it is built
+            self.nominal = self._nominal_values(nominal)
+            self._build()
 
     def _nominal_values(self, nominal: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
         """Per-kind scale vectors ``{"x", "z", "u", "tf"}`` from the ``nominal`` mapping."""
@@ -285,8 +288,12 @@ class CollocationTranscription:
             nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
             if self.derivative_functions:  # the plugin has no jac_g/hess_lag options: its function cache, by name
                 nlp_options["cache"] = fatrop_cache(self.derivative_functions, self.objective_scale)
+        problem = {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}
+        if self.plugin != "fatrop" and {"jac_g", "hess_lag"} <= set(self.derivative_functions):
+            problem, more = assembled_oracle(nlp, f, casadi_name(self.dae.name))  # the build's cost (CPU) a third
+            nlp_options.update(more)
         try:
-            return ca.nlpsol(f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options)
+            return ca.nlpsol(f"{casadi_name(self.dae.name)}_collocation", self.plugin, problem, nlp_options)
         except RuntimeError as exc:
             if "structure of A" in str(exc) or "Structure" in str(exc):
                 raise SolverError(
@@ -379,6 +386,8 @@ class CollocationTranscription:
         guesses: dict[str, Any] = dict(opt.initial_guesses)
         tf_guess = opt.final_time_guess
         w0 = None
+        phases, self._unreported = self._unreported, {}
+        guess_wall, guess_cpu = _time.perf_counter(), _time.process_time()
         if isinstance(initial_guess, OptimizationResult):
             if initial_guess.transcription_key == self.key and initial_guess.w is not None:
                 w0 = np.clip(initial_guess.w, self._lbw, self._ubw)
@@ -413,7 +422,8 @@ class CollocationTranscription:
                 raise InputError("warm_start: initial_guess must be a result of this transcription (with its multipliers)")
             solver = self.warm_solver()
             warm = {"lam_x0": initial_guess.lam_w, "lam_g0": initial_guess.lam_g}
-        t_start = _time.perf_counter()
+        add_phase(phases, "guess", _time.perf_counter() - guess_wall, _time.process_time() - guess_cpu)
+        t_start, cpu_start = _time.perf_counter(), _time.process_time()
         error_msg = None
         lam = (None, None)
         try:
@@ -424,6 +434,7 @@ class CollocationTranscription:
             error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
             w_opt = w0
         solve_time = _time.perf_counter() - t_start
+        add_phase(phases, "solve", solve_time, _time.process_time() - cpu_start)
         stats = dict(solver.stats())
         if self.plugin == "fatrop":
             message = error_msg or f"fatrop: {stats.get('unified_return_status', 'unknown')} (return flag {stats.get('return_status')})"
@@ -441,9 +452,11 @@ class CollocationTranscription:
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
         res.lam_w, res.lam_g = lam
+        res.timing = phases
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-            self.check(res, special=np.array(self.special_function(w_opt, pvec), dtype=float).reshape(-1),
-                       lagrange=float(self.lagrange_function(w_opt, pvec)))
+            with timed(phases, "verification"):
+                self.check(res, special=np.array(self.special_function(w_opt, pvec), dtype=float).reshape(-1),
+                           lagrange=float(self.lagrange_function(w_opt, pvec)))
         return res
 
     def check(self, result: OptimizationResult, special: np.ndarray | None = None, lagrange: float | None = None) -> OptimizationResult:

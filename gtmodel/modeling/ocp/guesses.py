@@ -220,12 +220,29 @@ class ResultGuess:
         self._cache: tuple[bytes, dict[str, np.ndarray]] | None = None
 
     def names(self) -> list[str]:
-        """The variables this result guesses (its states, inputs and algebraic variables)."""
+        """The variables this result guesses.
+
+        Returns
+        -------
+        list of str
+            Its states, inputs and algebraic variables.
+        """
         dae = self.result.dae
         return [*dae.x_vars, *dae.u_vars, *dae.z_vars]
 
     def values(self, t: np.ndarray) -> dict[str, np.ndarray]:
-        """Every variable at times ``t`` (s, shape ``(K,)``): name -> ``(K, size)``; one evaluation per ``t``."""
+        """Every variable at times ``t``, from one evaluation of the polynomials (kept for the same ``t``).
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times on the new horizon, s, shape ``(K,)``.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            Name -> values, shape ``(K, size)``.
+        """
         t = np.asarray(t, dtype=float).reshape(-1)
         key = t.tobytes()
         if self._cache is None or self._cache[0] != key:
