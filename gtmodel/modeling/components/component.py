@@ -349,7 +349,7 @@ class Component(_ComponentBase):
         """
         self._context().equation(self, lhs, rhs, name)
 
-    def output(self, name: str, expr: Any) -> None:
+    def output(self, name: str, expr: Any, unit: str = "") -> None:
         """Declare an output (derived variable) of this component, named ``path.name``.
 
         Parameters
@@ -358,13 +358,15 @@ class Component(_ComponentBase):
             Identifier.
         expr : casadi.SX or float
             Expression of the component's symbols (``der()`` allowed).
+        unit : str, optional
+            SI unit (e.g. ``"N"``), carried to the flat model's :attr:`~gtmodel.modeling.Model.units`.
 
         Raises
         ------
         ModelError
             If ``expr`` uses unknown symbols or the name is taken.
         """
-        self._context().output(self, name, expr)
+        self._context().output(self, name, expr, unit)
 
     def model_call(self, method: str, *args: Any, **kwargs: Any) -> Any:
         """Call a method of the flattened :class:`~gtmodel.modeling.Model` from a component.

@@ -559,7 +559,7 @@ def explicit_ode(model: Any, name: str | None = None, iterations: int = NEWTON_I
     pv = np.asarray(dae.p_value, dtype=float).copy()
     if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(pv))):
         raise ModelError(f"model {m.name!r}: start and parameter values must be finite")
-    names = dae.x_names + dae.u_names + dae.p_names + dae.output_names
+    names = dae.x_names + dae.z_names + dae.u_names + dae.p_names + dae.output_names
     return ExplicitODE(
         name=m.name, full=full, dae=dae, x_names=list(dae.x_names), u_names=list(dae.u_names), p_names=list(dae.p_names),
         y_names=list(dae.output_names), x0=x0, u0=u0, p_default=pv,

@@ -119,6 +119,12 @@ def test_the_class_as_written_solves_and_the_states_chosen_are_named(solved):
     states = summary["model"]["states"]
     assert states == ["inductor.i", "emf.phi", "motor.w"]
     assert any("reduced to index 1" in r and "inductor.i, emf.phi, motor.w" in r for r in records)
+    # the library components' units (MSL declarations) carried to the summary and the report's unit column
+    assert {n: summary["units"][n] for n in (*states, "source.v")} == {"inductor.i": "A", "emf.phi": "rad", "motor.w": "rad/s",
+                                                                      "source.v": "V"}
+    from gtmodel.problems.run import add_report
+
+    assert "<tr><td>inductor.i</td><td>states</td><td>A</td>" in add_report(folder / "out").read_text()
 
 
 def test_variables_plot_shows_the_states_as_written_by_default(solved):
@@ -194,7 +200,7 @@ def test_codegen_of_the_class_as_written(solved, tmp_path, check):
     args = ["codegen", "--model", f"{folder / 'dc_motor.py'}:DCMotorGearLoad", "--out", str(tmp_path)]
     assert main(args + (["--check"] if check else [])) == 0
     header = next(tmp_path.glob("*.h")).read_text()
-    assert "States x: inductor.i, emf.phi, motor.w" in header
+    assert "States x: inductor.i [A], emf.phi [rad], motor.w [rad/s]" in header and "Inputs u: source.v [V]" in header
 
 
 def test_a_guess_on_an_output_that_is_no_affine_function_of_one_variable_is_refused(tmp_path):
