@@ -20,6 +20,7 @@ from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 from gtmodel.modeling.ocp.coarse_start import solve_from_coarse
+from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
 
 __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "COARSE_START_ELEMENTS"]
@@ -156,6 +157,8 @@ class OptimalControl:
                 add_phase(phases, "solve", -ver.time_s, -ver.cpu_s)
                 add_phase(phases, "verification", ver.time_s, ver.cpu_s)
             result.timing = phases
+            if result.dae is not None:
+                result.message = without_inputs(d.optimization, result.dae, result.message)
             return self._estimated(shooting, result)
         kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal}
         single = {**kwargs, "verify": check}

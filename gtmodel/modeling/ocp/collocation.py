@@ -47,6 +47,7 @@ from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives, assembled_oracle
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
+from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
 from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
@@ -448,6 +449,7 @@ class CollocationTranscription:
             status = Status.ERROR if error_msg else normalize_ipopt_status(message)
             if message in IPOPT_HINTS:
                 message = f"{message}: {IPOPT_HINTS[message]}"
+            message = without_inputs(opt, dae, message)
         if not np.all(np.isfinite(w_opt)):
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
