@@ -309,8 +309,7 @@ class CollocationTranscription:
         N, t0 = self.elements, opt.start_time
         n_el, c0 = element_scaling(N, self.fractions)
         kinds = [kind for kind, _k, _j in self._blocks]
-        ks = np.array([k for _kind, k, _j in self._blocks], dtype=int)
-        js = np.array([j for _kind, _k, j in self._blocks], dtype=int)
+        ks, js = (np.array([b[i] for b in self._blocks], dtype=int) for i in (1, 2))
         inner = ks < N
         t = np.full(len(kinds), float(tf_guess))
         t[inner] = t0 + (c0[ks[inner]] + co["root"][js[inner]]) * (tf_guess - t0) / n_el[ks[inner]]
@@ -332,8 +331,7 @@ class CollocationTranscription:
                 w0.append(values[kind][row[kind]])
                 row[kind] += 1
         w = np.concatenate(w0) if w0 else np.zeros(0)
-        lo, hi = self._lbw, self._ubw
-        return np.clip(w / self._scale, lo, hi)  # the NLP works with variable / nominal
+        return np.clip(w / self._scale, self._lbw, self._ubw)  # the NLP works with variable / nominal
 
     def _free_start(self, pvec: np.ndarray) -> np.ndarray:
         """Initial guess of the free parameter elements: their start, else the value clipped into the bounds."""

@@ -21,7 +21,6 @@ from 1; newlines in the text count as one character), followed by the text and a
 from __future__ import annotations
 
 import ast
-import difflib
 import math
 import re
 from collections.abc import Callable, Collection, Mapping
@@ -31,6 +30,7 @@ from typing import Any
 import casadi as ca
 
 from gtmodel.errors import GtModelError, InputError, ProblemError
+from gtmodel.modeling.ocp.suggestions import close_names
 
 __all__ = [
     "FUNCTIONS",
@@ -40,47 +40,8 @@ __all__ = [
     "parse_expression",
     "parse_objective",
     "parse_constraint",
-    "close_names",
-    "MSL_NAMES",
 ]
 
-#: Names a user writes for a variable that the Modelica Standard Library (and so the library's
-#: components) calls otherwise: last part of a dotted name -> the MSL's (``link.omega`` is ``link.w``).
-MSL_NAMES: dict[str, str] = {
-    "omega": "w", "theta": "phi", "angle": "phi", "speed": "w", "angular_velocity": "w", "alpha": "a",
-    "acceleration": "a", "torque": "tau", "position": "s", "x": "s", "velocity": "v", "force": "f",
-    "current": "i", "voltage": "v", "inertia": "J", "mass": "m",
-}
-
-
-def close_names(name: str, known: Collection[str], n: int = 4) -> list[str]:
-    """Known names a mistyped one likely means, best first.
-
-    A name whose last part is another library's word for an MSL variable (``omega``,
-    ``theta``, ``torque``, ...: :data:`MSL_NAMES`) first suggests the MSL name on the same path
-    (``link.omega`` -> ``link.w``); then the closest by :func:`difflib.get_close_matches`.
-
-    Parameters
-    ----------
-    name : str
-        The unknown name.
-    known : collection of str
-        The names that exist.
-    n : int, optional
-        At most this many suggestions (default 4).
-
-    Returns
-    -------
-    list of str
-        Suggestions, possibly empty.
-    """
-    known = set(known)
-    head, _, last = str(name).rpartition(".")
-    msl = MSL_NAMES.get(last.lower())
-    out = [f"{head}.{msl}" if head else msl] if msl and (f"{head}.{msl}" if head else msl) in known else []
-    ranked = sorted(difflib.get_close_matches(str(name), sorted(known), n=n),
-                    key=lambda c: (-difflib.SequenceMatcher(None, str(name), c).ratio(), c))
-    return (out + [c for c in ranked if c not in out])[:n]
 
 _Fn = Callable[..., ca.SX]
 #: Whitelisted functions: name -> (minimum, maximum number of arguments (None: any), CasADi function).

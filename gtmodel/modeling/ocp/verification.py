@@ -10,7 +10,7 @@ collocation points, the same polynomial :meth:`OptimizationResult.sample` evalua
 drive the model in SUNDIALS through ``casadi.integrator`` (the integrator chosen by the
 model: CVODES for an ODE and for a DAE whose algebraic variables are eliminated
 symbolically, IDAS for a nonlinear algebraic loop; CVODES's BDF for a model stiff along the
-solution, its Adams method otherwise: :func:`_cvodes_method`), element by element with the model written in the element's
+solution, its Adams method otherwise: :func:`~gtmodel.modeling.ocp.verification_methods.cvodes_method`), element by element with the model written in the element's
 scaled time ``t = t_k + tau h_k``, ``tau in [0, 1]`` (one integrator serves every
 element). Two simulations are compared with the collocation polynomials at the
 collocation points, the element ends and the midpoints between them:
@@ -62,7 +62,9 @@ from gtmodel.modeling.dae import casadi_name
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
-from gtmodel.modeling.simulation.explicit import damped_newton, eliminated_algebraics
+from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
+                                                        cvodes_method, explicit_algebraics)
+from gtmodel.modeling.simulation.explicit import damped_newton
 from gtmodel.status import Status
 
 __all__ = ["Verification", "verify", "check_result", "problem_integrals", "integrator_rtol", "skipped", "switch_elements",
@@ -88,19 +90,6 @@ SPURIOUS_DEVIATION = 0.1
 #: Newton iteration on the model's Jacobian (CasADi's algorithmic derivative).
 INTEGRATORS = ("cvodes", "idas")
 
-#: Floor of the integrals' relative test, as a fraction of the integral of the integrand's
-#: modulus (:func:`_checked_integrals`): an integral that cancels to about zero is held to
-#: ``tolerance * INTEGRAL_FLOOR * integral |f| dt``, not to its own (vanishing) value.
-INTEGRAL_FLOOR = 1e-2
-
-#: The simulated integrals' own accuracy, in units of the quadrature's absolute tolerance per
-#: second of the horizon (:func:`_checked_integrals`): below it the simulation cannot tell two values apart.
-QUADRATURE_NOISE = 10.0
-
-#: Stiffness threshold of the verifying CVODES (:func:`_cvodes_method`): BDF with Newton iterations
-#: where an element holds more than this many of the model's fastest time constants
-#: (``h_k max |lambda(df/dx)|`` along the solution), Adams with functional iterations otherwise.
-STIFF_STEPS = 20.0
 
 
 def integrator_rtol(tolerance: float) -> float:
@@ -271,7 +260,7 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
     p_all = ca.vertcat(dae.p, ca.vec(U), tk, hk)
     quad = integrands is not None and integrands.numel_out() > 0
     q_expr = integrands(t_of, dae.x, dae.z, u_tau, dae.p) if quad else None
-    z_expr = _explicit_algebraics(dae, plugin)
+    z_expr = explicit_algebraics(dae, plugin)
     if z_expr is not None:  # z eliminated: the ODE alone, for CVODES
         z_sub = ca.substitute(z_expr, ca.vertcat(dae.t, dae.u), ca.vertcat(t_of, u_tau))
         ode[0] = ca.substitute(ode[0], dae.z, z_sub)
@@ -288,7 +277,7 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
         opts["quad_err_con"] = True
     method = ""
     if plugin == "cvodes":
-        method, cv_opts = _cvodes_method(result, spec["ode"], dae.x, p_all, tau)
+        method, cv_opts = cvodes_method(result, spec["ode"], dae.x, p_all, tau)
         opts.update(cv_opts)
     F = ca.integrator(f"{casadi_name(dae.name)}_verify", plugin, spec, 0.0, list(taus), opts)
     consistent = None
@@ -297,54 +286,6 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
         z0, ok = damped_newton(ca.substitute(ode[1], tau, 0.0), dae.z, guess)
         consistent = ca.Function("consistent_start", [dae.x, guess, p_all], [ca.if_else(ok, z0, guess)])
     return F, f"{plugin}{method} (rtol {rtol:g})", consistent
-
-
-def _explicit_algebraics(dae: Any, plugin: str | None) -> ca.SX | None:
-    """The algebraic variables eliminated symbolically (:func:`~gtmodel.modeling.simulation.explicit.eliminated_algebraics`),
-    unless IDAS is asked for, there are none, or a block needs Newton's method (then IDAS integrates the DAE).
-
-    A composed component's algebraic variables (connections, Kirchhoff's and Newton's laws, a
-    gear) are affine in themselves: the 3-state DC motor of ``dc_motor_min_energy`` has 29, and
-    IDAS on the 32-variable DAE cost 0.18 CPU-s where CVODES on the 3-state ODE costs a fraction.
-    """
-    if plugin == "idas" or not dae.nz:
-        return None
-    return eliminated_algebraics(dae)
-
-
-def _cvodes_method(result: OptimizationResult, rhs: ca.SX, x: ca.SX, p_all: ca.SX, tau: ca.SX) -> tuple[str, dict[str, Any]]:
-    """CVODES' method by the model's stiffness along the solution: BDF with Newton iterations, or Adams with
-    functional iterations; ``(label, options)``.
-
-    ``rhs`` is the ODE in the element's scaled time (``dx/dtau = h_k f``), so the eigenvalues of
-    its Jacobian ``dF/dx`` at a collocation point are ``h_k`` times the model's there: their
-    largest modulus ``rho`` is how many of the model's fastest time constants fit in an element.
-    An explicit (Adams) method is stable for steps up to about ``1 / rho`` of the element, so
-    where ``rho > STIFF_STEPS`` somewhere along the solution the model is stiff there (a DC
-    motor's 1.7 ms electrical time constant in 5 ms elements: rho = 3; in a 1 s element
-    of the coarse start: 600), and BDF with Newton iterations on the Jacobian (CasADi's
-    derivative) takes steps of the trajectory's scale instead; otherwise Adams, with no
-    Jacobian and no linear solve. The eigenvalues are those of the collocated solution
-    (``x`` at every collocation point, the element's inputs there): a linearisation along it.
-    """
-    col = result.collocation
-    N, d = col.elements, col.points
-    J = ca.Function("stiffness_jacobian", [x, p_all, tau], [ca.jacobian(rhs, x)])
-    breaks = col.breaks()
-    pvec = result.dae.parameter_vector(result.parameters)
-    nu = result.dae.nu
-    U = np.stack([col.uc[k].T.reshape(-1, order="F") for k in range(N)], axis=1) if nu else np.zeros((0, N))
-    P = np.vstack([np.tile(pvec[:, None], (1, N)), U, breaks[None, :-1], np.diff(breaks)[None, :]])
-    taus = np.asarray(col.tau_root[1:], dtype=float)
-    xs = col.xc[:, 1:, :].reshape(N * d, -1).T  # (nx, N d): element k's points k d .. k d + d - 1
-    jac = np.asarray(J.map(N * d)(xs, np.repeat(P, d, axis=1), np.tile(taus, N)[None, :]), dtype=float)
-    nx = x.numel()
-    blocks = jac.reshape(nx, N * d, nx).transpose(1, 0, 2) if nx else np.zeros((0, 0, 0))
-    finite = np.all(np.isfinite(blocks), axis=(1, 2))
-    rho = float(np.max(np.abs(np.linalg.eigvals(blocks[finite])))) if finite.any() and nx else 0.0
-    if rho > STIFF_STEPS or not finite.all():
-        return f", BDF: stiff, h |lambda| up to {rho:.3g}", {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}
-    return f", Adams: non-stiff, h |lambda| up to {rho:.3g}", {"linear_multistep_method": "adams", "nonlinear_solver_iteration": "functional"}
 
 
 def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float | None = None,
@@ -373,7 +314,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         variables are eliminated symbolically (every block affine in its own variables: a
         composed component's connections and laws), IDAS for the others (a nonlinear
         algebraic loop). CVODES's method follows the stiffness along the solution
-        (:func:`_cvodes_method`: BDF with Newton iterations, or Adams with functional iterations).
+        (:func:`~gtmodel.modeling.ocp.verification_methods.cvodes_method`: BDF with Newton iterations, or Adams with functional iterations).
 
     Returns
     -------
@@ -400,7 +341,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         raise InputError(f"verify: rtol must be a number in (0, 1), got {rtol!r}")
     if integrator is not None and integrator not in INTEGRATORS:
         raise InputError(f"verify: integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}")
-    if integrator == "cvodes" and result.dae.nz and _explicit_algebraics(result.dae, integrator) is None:
+    if integrator == "cvodes" and result.dae.nz and explicit_algebraics(result.dae, integrator) is None:
         raise InputError(f"verify: integrator 'cvodes' takes no algebraic variables that a nonlinear algebraic loop keeps "
                          f"({result.dae.name} has {result.dae.nz}, not all eliminated symbolically); use 'idas'")
     start = _time.perf_counter()
@@ -475,7 +416,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_flat[where[i]])}
         for i in range(nx)
     }
-    checked = _checked_integrals(result, integrals, q_sim, tolerance, pvec, rtol) if integrals else {}
+    checked = checked_integrals(result, integrals, q_sim, tolerance, pvec, rtol) if integrals else {}
     passed = bool(np.all(scaled <= tolerance)) and all(c["passed"] for c in checked.values())
     bad_integral = next((n for n, c in checked.items() if not c["passed"]), None)
     if not passed and bool(np.all(scaled <= tolerance)):
@@ -500,48 +441,6 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     )
     out.time_s, out.cpu_s = _time.perf_counter() - start, _time.process_time() - cpu_start
     return out
-
-
-def _checked_integrals(result: OptimizationResult, integrals: tuple[list[str], ca.Function, np.ndarray], q_sim: np.ndarray,
-                       tolerance: float, pvec: np.ndarray, rtol: float) -> dict[str, dict[str, Any]]:
-    """The integrals' test: relative, ``|I_sim - I_col| <= tolerance * max(|I_col|, INTEGRAL_FLOOR * A) + e``.
-
-    ``A`` is the integral of the integrand's modulus (the collocation quadrature of ``|f|``
-    at the collocation points, ``sum_k h_k sum_j B_j |f(t_kj)|``): the floor, scaled by the
-    problem, serves an integral that cancels to about zero (an isoperimetric ``integral(u) == 0``);
-    for an integrand of one sign (an energy, ``u^2``) ``A = |I|`` and the test is relative.
-    ``e = QUADRATURE_NOISE * atol * (tf - t0)`` is what the simulation itself can tell apart
-    (its quadrature's absolute tolerance ``atol = 1e-2 rtol`` over the horizon): an integral
-    that vanishes at the optimum (a fit to noise-free data, 1e-9; an effort of 1e-44) is
-    compared with a simulated value accurate to ``atol`` only.
-    Was ``tolerance * max(1, |I_col|)``: absolute below 1, so that at tolerance 1e-2 an energy
-    of 0.27 passed 3.7 % off, and one of 0.001 any error below ten times its value.
-    """
-    names, integrands, values = integrals
-    magnitude = _integral_magnitudes(result, integrands, pvec)
-    noise = QUADRATURE_NOISE * 1e-2 * rtol * (result.collocation.tf - result.collocation.t0)
-    out = {}
-    for name, col_value, sim_value, a in zip(names, np.asarray(values, dtype=float), q_sim, magnitude):
-        gap = abs(float(sim_value) - float(col_value))
-        reference = max(abs(float(col_value)), INTEGRAL_FLOOR * float(a))
-        out[name] = {"collocation": float(col_value), "simulated": float(sim_value), "abs_deviation": gap,
-                     "rel_deviation": gap / reference if reference > 0 else (0.0 if gap == 0 else float("inf")),
-                     "passed": bool(gap <= tolerance * reference + noise)}
-    return out
-
-
-def _integral_magnitudes(result: OptimizationResult, integrands: ca.Function, pvec: np.ndarray) -> np.ndarray:
-    """``A_i = integral |f_i| dt`` by the collocation quadrature of the result's points, shape ``(m,)``."""
-    col = result.collocation
-    N, d = col.elements, col.points
-    B = np.asarray(collocation_coefficients(d, col.scheme)["B"], dtype=float).reshape(-1)
-    breaks = col.breaks()
-    h = np.diff(breaks)
-    t = (breaks[:-1, None] + np.asarray(col.tau_root[1:], dtype=float)[None, :] * h[:, None]).reshape(1, -1)
-    x = col.xc[:, 1:, :].reshape(N * d, -1).T
-    z, u = col.zc.reshape(N * d, -1).T, col.uc.reshape(N * d, -1).T
-    f = np.asarray(integrands.map(N * d)(t, x, z, u, pvec), dtype=float).reshape(-1, N * d)
-    return np.abs(f) @ (h[:, None] * B[None, :]).reshape(-1)
 
 
 def switch_elements(result: OptimizationResult) -> dict[int, float]:

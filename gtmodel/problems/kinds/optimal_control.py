@@ -35,7 +35,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError, ModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.modeling.ocp.diagnostics import solution_warnings
-from gtmodel.modeling.ocp.expressions import MSL_NAMES, close_names
+from gtmodel.modeling.ocp.suggestions import MSL_NAMES, close_names
 from gtmodel.modeling.ocp.initial import InitialConditionConflict, fixed_starts
 from gtmodel.modeling.ocp.verification import skipped
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written

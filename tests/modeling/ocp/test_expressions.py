@@ -337,6 +337,6 @@ def test_time_points_and_integrals_need_the_callbacks_of_an_optimization():
     ("theta", ["phi", "theta_dot"], ["phi", "theta_dot"]),
 ])
 def test_close_names_put_the_msl_name_first(name, known, expected):
-    from gtmodel.modeling.ocp.expressions import close_names
+    from gtmodel.modeling.ocp.suggestions import close_names
 
     assert close_names(name, known) == expected
