@@ -13,7 +13,11 @@ machines are noisy:
 - ``solve_s`` (IPOPT; summed over the refinement passes) and ``verification_s`` (the
   verification by simulation, summed over the passes too), medians over the repeats, and
   their ratio ``verification_over_solve`` (the verification should cost at most the solve);
-  ``verification_cpu_s``: its CPU time (the wall times on a shared machine mostly measure waiting);
+  ``verification_cpu_s`` and ``solve_cpu_s``: their CPU times (the wall times on a shared machine
+  mostly measure waiting; the solve's from the result's ``timing``, a coarse start's IPOPT call
+  included), ``verification_over_solve_cpu`` their ratio (at most 1 is the aim),
+  ``whole_call_over_solve_cpu`` the whole call's CPU over the solve's, and ``timing`` the
+  result's phases (:mod:`gtmodel._timing`);
 - ``whole_call_s``: gtmodel's whole call, cold: flattening, transcription, solve and
   verification (:meth:`gtmodel.trajectory.model_ocp.OptimalControl.solve` of a freshly
   loaded problem; refinement passes and, with ``[[data]]``, the estimates' statistics
@@ -79,9 +83,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel.problems import load_problem
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this checkout's gtmodel (as the CLI processes below), not another installed one
+
+from gtmodel.problems import load_problem  # noqa: E402
 BENCHMARKS = ROOT / "problems" / "benchmarks"
 
 
@@ -338,6 +343,18 @@ def gtmodel_solve(path: Path) -> tuple[Any, Any, float, float]:
     return problem, res, time.perf_counter() - start, time.process_time() - cpu
 
 
+def solve_cpu(res: Any) -> float:
+    """The solver's CPU time of a result, s: its ``timing["solve"]`` (the IPOPT calls, a coarse start's
+    included); refined, the passes' ``timing["solve"]`` (or ``solve_cpu_time``) when they record it, else their
+    solve (wall) time."""
+    if "solve" in res.timing:
+        return float(res.timing["solve"]["cpu_s"])
+    passes = [p.get("timing", {}).get("solve", {}).get("cpu_s", p.get("solve_cpu_time")) for p in res.refinement]
+    if passes and all(v is not None for v in passes):  # each pass's phases, where the refinement records them
+        return float(sum(passes))
+    return float(res.solve_time)
+
+
 def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, Any]:
     """Solve one benchmark file with gtmodel (and rockit, and the CLI); the figures of one row.
 
@@ -345,12 +362,13 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
     CLI, gtmodel, ...), every call cold (the problem loaded again, everything built again);
     the times are the medians and the ratio is the ratio of the medians.
     """
-    walls, cpus, peers, clis, solves, checks, check_cpus = [], [], [], [], [], [], []
+    walls, cpus, peers, clis, solves, checks, check_cpus, solve_cpus = [], [], [], [], [], [], [], []
     for _ in range(repeat):
         problem, res, wall, cpu = gtmodel_solve(path)
         walls.append(wall)
         cpus.append(cpu)
         solves.append(res.solve_time)
+        solve_cpus.append(solve_cpu(res))
         checks.append(res.verification.time_s if res.verification is not None else float("nan"))
         check_cpus.append(res.verification.cpu_s if res.verification is not None else float("nan"))
         if rockit:
@@ -381,6 +399,10 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         "verification_s": float(np.median(checks)) if v is not None else None,
         "verification_over_solve": float(np.median(checks) / np.median(solves)) if v is not None else None,
         "verification_cpu_s": float(np.median(check_cpus)) if v is not None else None,
+        "solve_cpu_s": float(np.median(solve_cpus)),
+        "verification_over_solve_cpu": float(np.median(check_cpus) / np.median(solve_cpus)) if v is not None else None,
+        "whole_call_over_solve_cpu": float(np.median(cpus) / np.median(solve_cpus)),
+        "timing": res.timing,
         "repeat": repeat,
         "whole_call_s": whole,
         "whole_call_cpu_s": whole_cpu,
@@ -438,7 +460,8 @@ def main(argv: list[str] | None = None) -> int:
         compile_bytecode()
     rows = []
     head = (f"{'problem':28s} {'published':>12s} {'objective':>12s} {'rel.err':>8s} {'it':>5s} {'verified':>8s} {'dev':>8s} "
-            f"{'solve s':>8s} {'verify s':>8s} {'whole s':>8s} {'cli s':>6s} {'cli-whole':>9s} {'rockit s':>8s} {'rockit rel':>10s} {'ratio':>6s} {'cpu ratio':>9s}")
+            f"{'solve s':>8s} {'verify s':>8s} {'whole s':>8s} {'cli s':>6s} {'cli-whole':>9s} {'rockit s':>8s} {'rockit rel':>10s} {'ratio':>6s} {'cpu ratio':>9s} "
+            f"{'solve cpu':>9s} {'verify cpu':>10s} {'whole/solve cpu':>15s}")
     print(head)
     for f in files:
         r = run_one(Path(f), cli=not a.no_cli, rockit=not a.no_rockit, repeat=a.repeat)
@@ -449,7 +472,9 @@ def main(argv: list[str] | None = None) -> int:
               f"{str(r['verified']):>8s} {dev if dev is not None else nan:8.1e} {r['solve_s']:8.3f} "
               f"{r['verification_s'] if r['verification_s'] is not None else nan:8.3f} {r['whole_call_s']:8.3f} "
               f"{r.get('cli_s', nan):6.2f} {r.get('cli_minus_whole_call_s', nan):9.2f} {r.get('rockit_whole_call_s', nan):8.3f} "
-              f"{r.get('rockit_relative_error', nan):10.1e} {r.get('ratio_to_rockit', nan):6.3f} {r.get('ratio_to_rockit_cpu', nan):9.3f}",
+              f"{r.get('rockit_relative_error', nan):10.1e} {r.get('ratio_to_rockit', nan):6.3f} {r.get('ratio_to_rockit_cpu', nan):9.3f} "
+              f"{r['solve_cpu_s']:9.3f} {r['verification_cpu_s'] if r['verification_cpu_s'] is not None else nan:10.3f} "
+              f"{r['whole_call_over_solve_cpu']:15.2f}",
               flush=True)
     if a.json:
         print(json.dumps({"problems": rows}))

@@ -93,7 +93,7 @@ import os
 import sys
 import traceback
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 from gtmodel import __version__, _signals
 from gtmodel._toml import read_toml
@@ -276,6 +276,11 @@ def _print_summary(summary: dict, out: Path) -> None:
         flag = "within" if bench.get("within_tolerance", True) else "BEYOND"
         lines.append(f"benchmark    {bench['value']:.7g} vs published {bench['published']:.7g}: relative error "
                      f"{bench['relative_error']:.1e}, {flag} tolerance {bench.get('tolerance', float('nan')):.0e}")
+    solve = (summary.get("timing") or {}).get("solve")
+    if isinstance(solve, dict) and summary.get("solve_time_s") is not None:  # the solver's own time: wall and CPU
+        lines = [f"solve time   {summary['solve_time_s']:.3f} s wall, {solve['cpu_s']:.3f} s CPU (the solver's calls)"
+                 if line.startswith("solve time") else line for line in lines]
+    lines += _timing_lines(summary.get("timing"))
     for w in summary.get("warnings") or []:
         lines.append(f"warning      {w}")
     if summary.get("refinement"):
@@ -286,6 +291,15 @@ def _print_summary(summary: dict, out: Path) -> None:
         lines.append(f"at bound     {frac} of the samples (tau1, tau2, tau3)")
     lines.append(f"results in   {out}/ ({', '.join(summary.get('files', ['summary.json']))})")
     print("\n".join(lines))
+
+
+def _timing_lines(timing: Any) -> list[str]:
+    """The run's CPU seconds per phase (``summary.json``'s ``timing``), the whole run's first."""
+    if not isinstance(timing, dict) or "total" not in timing:
+        return []
+    total = timing["total"]
+    parts = ", ".join(f"{name} {entry['cpu_s']:.2f}" for name, entry in timing.items() if name != "total")
+    return [f"{'time':<12} {total['cpu_s']:.2f} s CPU ({total['wall_s']:.2f} s wall): {parts}"]
 
 
 def _progress(args: argparse.Namespace) -> tuple[bool, bool]:

@@ -42,7 +42,7 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import casadi as ca
 import numpy as np
@@ -272,10 +272,18 @@ def model_specs(ode: ExplicitODE, dt: float = LOOP_PERIOD_S, substeps: int = SUB
     return tuple(specs)
 
 
-def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE, real: str, dt: float, substeps: int) -> str:
+def _with_units(names: Sequence[str], units: Mapping[str, str]) -> str:
+    """``name [unit], ...`` (a name without a declared unit bare), or ``none``: the header's lists."""
+    return ", ".join(f"{n} [{units[n]}]" if units.get(n) else n for n in names) or "none"
+
+
+def _header_text(prefix: str, functions, version: str, phash: str, dae: FlatDAE, real: str, dt: float, substeps: int,
+                 units: Mapping[str, str] | None = None) -> str:
     P = prefix.upper()
-    names = dict(NAME=dae.name, VERSION=version, STATES=", ".join(dae.x_names) or "none",
-                 ALGEBRAIC=", ".join(dae.z_names) or "none", INPUTS=", ".join(dae.u_names) or "none",
+    units = units or {}
+    names = dict(NAME=dae.name, VERSION=version, STATES=_with_units(dae.x_names, units),
+                 ALGEBRAIC=_with_units(dae.z_names, units), INPUTS=_with_units(dae.u_names, units),
+                 OUTPUTS=_with_units(dae.output_names, units),
                  PARAMETERS=", ".join(f"{n} = {v!r}" for n, v in zip(dae.p_names, dae.p_value.tolist())) or "none")
     return fill(
         "template_model_header.h", names, GP=prefix, P=P, HASH=phash, REAL=real,
@@ -357,7 +365,7 @@ def generate_model(
     phash = model_parameter_hash(dae)
     version = f"gtmodel {gtmodel.__version__}; casadi {ca.__version__}; model {dae.name} sha256:{phash}; real {real}"
     out, _, sizes, signatures = write_library(
-        prefix, specs, source, out_dir, real, lambda wrapped: _header_text(prefix, wrapped, version, phash, dae, real, float(dt), int(substeps)))
+        prefix, specs, source, out_dir, real, lambda wrapped: _header_text(prefix, wrapped, version, phash, dae, real, float(dt), int(substeps), ode.units))
     header, wrapper = out / f"{prefix}.h", out / f"{prefix}.c"
     log.info("codegen: wrote %s (%s) for model %s", wrapper, ", ".join(s.name for s in specs), dae.name)
     return GeneratedCode(

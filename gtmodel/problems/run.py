@@ -13,11 +13,13 @@ import json
 import logging
 import os
 import shutil
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
 from gtmodel import _signals
+from gtmodel._timing import add_phase, merge_phases, ordered_phases, phase_sum, timed
 from gtmodel._toml import read_toml
 from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
@@ -110,7 +112,8 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
     return solution
 
 
-def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True, report: bool = False) -> dict[str, Any]:
+def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True, report: bool = False,
+                  timing: Mapping[str, Mapping[str, float]] | None = None) -> dict[str, Any]:
     """Write the result folder of a solved problem, replacing the folder only when complete.
 
     Data files and plots are written only when the solver returned a solution, never
@@ -129,6 +132,11 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
     report : bool, optional
         Also write ``report.html``, the folder's page (:mod:`gtmodel.report.result_page`;
         default False; ``gtmodel solve`` writes it unless ``--no-report``).
+    timing : mapping, optional
+        The run's phase times so far, ``phase -> {"wall_s", "cpu_s"}`` (s; :func:`run_problem`'s
+        ``load``, the solution's ``build``, ``guess``, ``solve``, ...); default the solution's
+        own (its ``timing`` attribute, if any). ``summary.json`` gets them as ``timing``, with
+        ``writing`` (this call up to ``summary.json`` itself) and ``total`` (their sum).
 
     Returns
     -------
@@ -142,6 +150,8 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         left as it was.
     """
     kind = get_kind(problem.kind)
+    phases = {k: dict(v) for k, v in (timing if timing is not None else getattr(solution, "timing", None) or {}).items()}
+    wall, cpu = time.perf_counter(), time.process_time()
     with ResultFolder(out_dir) as folder:
         try:
             written = kind.write(problem.declaration, solution, folder.path, plots, problem.name)
@@ -152,6 +162,8 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
             summary["status"] = kind.status(solution)
             if report:
                 _write_report(folder.path, summary)
+            add_phase(phases, "writing", time.perf_counter() - wall, time.process_time() - cpu)
+            summary["timing"] = ordered_phases(phases)
             return folder.commit(summary)
         except OSError as exc:  # a ResultWriteError too: one message, naming the target
             raise folder.write_error(exc) from None
@@ -306,15 +318,22 @@ def run_problem(
         what = "it is a folder" if path.is_dir() else "no such file"
         return _failed(path, target, None, ProblemError(f"{path}: cannot read the problem file ({what})"), Status.INVALID_INPUT,
                        write=False)
+    phases: dict[str, dict[str, float]] = {}
     try:
-        problem = load_problem(path, overrides)
+        with timed(phases, "load"):
+            problem = load_problem(path, overrides)
         target = Path(out) if out is not None else Path("results") / problem.name
         label = f"solving {problem.name} ({problem.kind})"
         _log.info("%s ...", label)
-        with Heartbeat(label, enabled=heartbeat):
+        call: dict[str, dict[str, float]] = {}
+        with Heartbeat(label, enabled=heartbeat), timed(call, "other"):
             solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
+        own = getattr(solution, "timing", None) or {}
+        merge_phases(phases, own)
+        rest = phase_sum(own)  # what the solve call spent outside its timed phases (flattening, the kind's own work)
+        add_phase(phases, "other", call["other"]["wall_s"] - rest["wall_s"], call["other"]["cpu_s"] - rest["cpu_s"])
         with InterruptGuard() as guard:
-            summary = write_results(problem, solution, target, plots=plots, report=report)
+            summary = write_results(problem, solution, target, plots=plots, report=report, timing=phases)
             guard.check()
         return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
     except KeyboardInterrupt as exc:

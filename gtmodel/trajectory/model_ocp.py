@@ -14,11 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
+from gtmodel._timing import add_phase, timed
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 from gtmodel.modeling.ocp.coarse_start import solve_from_coarse
+from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
 
 __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "COARSE_START_ELEMENTS"]
@@ -143,19 +145,33 @@ class OptimalControl:
         options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
         if isinstance(d.method, MultipleShooting):
             m = d.method
-            shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
-                                             steps=m.steps, verbose=verbose, solver_options=options, verify=check)
+            phases: dict[str, dict[str, float]] = {}
+            with timed(phases, "build"):
+                shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
+                                                 steps=m.steps, verbose=verbose, solver_options=options, verify=check)
             same = isinstance(previous, OptimizationResult) and previous.collocation is not None
-            return self._estimated(shooting, shooting.solve(initial_guess=previous if warm_start and same else None))
+            with timed(phases, "solve"):  # its guess and verification included, the verification moved out below
+                result = shooting.solve(initial_guess=previous if warm_start and same else None)
+            ver = result.verification
+            if getattr(ver, "cpu_s", None) is not None:
+                add_phase(phases, "solve", -ver.time_s, -ver.cpu_s)
+                add_phase(phases, "verification", ver.time_s, ver.cpu_s)
+            result.timing = phases
+            if result.dae is not None:
+                result.message = without_inputs(d.optimization, result.dae, result.message)
+            return self._estimated(shooting, result)
         kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal}
         single = {**kwargs, "verify": check}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
         if d.refinement.refine:
-            result = solve_refined(
-                d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
-                max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                initial_guess=guess, **kwargs,
-            )
+            phases = {}
+            with timed(phases, "refinement"):  # every pass: its build, guess, solve and verification
+                result = solve_refined(
+                    d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
+                    max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                    initial_guess=guess, **kwargs,
+                )
+            result.timing = phases
             self.estimation = None
             col = result.collocation
             if not d.optimization.data_fits or col is None:
@@ -193,5 +209,6 @@ class OptimalControl:
         """Keep the statistics of a data fit (:attr:`estimation`) of a solved problem."""
         self.estimation = None
         if self.optimization.data_fits and result.status in ("optimal", "acceptable"):
-            self.estimation = estimate_statistics(transcription, result)
+            with timed(result.timing, "estimation"):
+                self.estimation = estimate_statistics(transcription, result)
         return result

@@ -274,6 +274,10 @@ def test_dc_motor_steps_over_the_horizon_equal_simulate(tmp_path):
     assert report.passed, "\n".join(report.summary_lines())
     assert [r.name for r in horizon] == ["step_rk4 over 250 periods vs simulate()", "step_implicit over 250 periods vs simulate()"]
     assert "#define GT_DC_MOTOR_DT 0.004" in gen.header.read_text() and "const double x[3], const double u[1], double xdot[3]" in gen.header.read_text()
+    # the library's units, as the components declare them (MSL: A, rad, rad/s, V, N.m)
+    text = gen.header.read_text()
+    assert " * States x: ind.i [A], emf.phi [rad], rotor.w [rad/s]\n" in text and " * Inputs u: src.v [V]\n" in text
+    assert "emf.flange.tau [N.m]" in text and " * Outputs y: rotor.phi [rad], " in text
 
 
 def test_horizon_check_fails_when_simulate_fails(tmp_path):

@@ -62,10 +62,10 @@ def test_bad_transcription_and_benchmark_fields_name_the_field(tmp_path, case, o
     assert_bad_problem(tmp_path, PROBLEMS_DIR / "benchmarks" / "hanging_chain.toml", case, replace_once(old, new), match)
 
 
-#: Relative tolerance to the published value, 1e-4 unless listed. Orbit raising: the mesh-converged
-#: optimum of Bryson and Ho's data is r(tf) = 1.52528 (25 to 400 elements agree to 5e-6), 2.1e-4
-#: below the 1.5256 quoted for it (Bryson and Ho plot 1.525).
-PUBLISHED_RTOL = {"orbit_raising": 3e-4}
+#: Relative tolerance to the published value, 1e-4 unless listed. Orbit raising: Bryson and Ho give
+#: r(tf) = 1.525 (three digits: half a unit of the last is 3.3e-4, the file's benchmark.tolerance); the
+#: mesh-converged optimum of their data is 1.525278 (25 to 800 elements agree to 5e-6).
+PUBLISHED_RTOL = {"orbit_raising": 3.3e-4}
 
 
 @pytest.mark.slow

@@ -72,3 +72,27 @@ def test_unreadable_problem_files(tmp_path, content, match):
     f.write_bytes(content)
     with pytest.raises(ProblemError, match=match):
         load_problem(f)
+
+
+def test_the_summary_times_every_phase_and_the_cli_prints_the_solvers_time(tmp_path, capsys):
+    """summary.json's timing: each phase's wall and CPU seconds, their total the sum (counted here), the solve
+    phase the solver's call (the result's solve_time, its wall time); the CLI prints both."""
+    import json
+
+    from gtmodel.cli import main
+    from gtmodel.problems import run_problem
+
+    from .kinds.test_optimal_control_diagnostics import MIN_TIME, _write
+
+    path = _write(tmp_path, MIN_TIME)
+    outcome = run_problem(path, tmp_path / "out", plots=False)
+    timing = json.loads((tmp_path / "out" / "summary.json").read_text())["timing"]
+    assert list(timing) == ["load", "build", "guess", "solve", "verification", "other", "writing", "total"]
+    assert all(set(v) == {"wall_s", "cpu_s"} and v["wall_s"] >= 0 and v["cpu_s"] >= 0 for v in timing.values())
+    sums = [sum(v[key] for k, v in timing.items() if k != "total") for key in ("wall_s", "cpu_s")]
+    assert [timing["total"]["wall_s"], timing["total"]["cpu_s"]] == pytest.approx(sums, abs=1e-5)
+    assert timing["solve"]["wall_s"] == pytest.approx(outcome.solution.solve_time, abs=1e-6)
+    assert outcome.solution.timing["verification"]["cpu_s"] >= outcome.solution.verification.cpu_s
+    main(["solve", str(path), "--no-plots", "--out", str(tmp_path / "cli")])
+    out = capsys.readouterr().out
+    assert "s CPU (the solver's calls)" in out and "\ntime         " in out and "verification " in out

@@ -39,5 +39,5 @@ def test_fine_mesh_starts_from_the_coarse_solve(monkeypatch):
     assert res.solve_time >= coarse["solve_time"]  # the coarse pass is counted in the solve
     # (iterations are not compared here: on 16 elements the coarse start saves none, 37 against 31; at
     # 400 elements it does, 19 against 51: benchmarks/bench_large_mesh.py and docs/verification.md)
-    # the published r(tf) = 1.5256 (Bryson and Ho's data) to the 3e-4 of test_benchmarks.PUBLISHED_RTOL
-    assert res.objective == pytest.approx(load_problem(ORBIT).declaration.benchmark["published"], rel=3e-4)
+    # the published r(tf) = 1.525 (Bryson and Ho's three digits) to the 3.3e-4 of test_benchmarks.PUBLISHED_RTOL
+    assert res.objective == pytest.approx(load_problem(ORBIT).declaration.benchmark["published"], rel=3.3e-4)

@@ -1,7 +1,7 @@
 /*@template (stripped when filled: gtmodel.codegen.emit.fill)
  * The public header <prefix>.h of a user model's library (gtmodel.codegen.model_code).
  * Markers: @GP@ the C prefix, @P@ its upper case (the include guard), @NAME@ the model, @VERSION@, @HASH@,
- * @REAL@, @STATES@ @ALGEBRAIC@ @INPUTS@ @PARAMETERS@ the names (and values) listed,
+ * @REAL@, @STATES@ @ALGEBRAIC@ @INPUTS@ @OUTPUTS@ @PARAMETERS@ the names (with their units, and values) listed,
  * @NX@ @NZ@ @NU@ @NY@ the sizes, @DT@ the step period, @SUBSTEPS@ the method's steps in it; blocks: @OPEN@ and @CLOSE@ (template_header_guard.h), @PROTOTYPES@.
  */
 /* @GP@.h: C API of the user model @NAME@.
@@ -15,6 +15,7 @@
  * States x: @STATES@
  * Algebraic variables z (eliminated): @ALGEBRAIC@
  * Inputs u: @INPUTS@
+ * Outputs y: @OUTPUTS@
  * Parameters (embedded): @PARAMETERS@
  * Floating-point type: @REAL@
  *

@@ -209,6 +209,10 @@ class Component(_ComponentBase):
             initial condition, Modelica's ``fixed``; ``None`` where no start applies),
             ``unit`` and ``description``.
         """
+        return pd.DataFrame(self._declaration_rows(), columns=["name", "kind", "value", "fixed", "unit", "description"])
+
+    def _declaration_rows(self) -> list[dict[str, Any]]:
+        """The rows of :meth:`describe` as dicts (without pandas: its import is a gtmodel solve process's ~0.6 CPU-s)."""
         rows: list[dict[str, Any]] = []
 
         def walk(comp: Component, pre: str) -> None:
@@ -235,7 +239,7 @@ class Component(_ComponentBase):
                 walk(sub, f"{pre}{sname}.")
 
         walk(self, "")
-        return pd.DataFrame(rows, columns=["name", "kind", "value", "fixed", "unit", "description"])
+        return rows
 
     def _value(self, name: str) -> np.ndarray:
         value = self._values[name]
@@ -349,7 +353,7 @@ class Component(_ComponentBase):
         """
         self._context().equation(self, lhs, rhs, name)
 
-    def output(self, name: str, expr: Any) -> None:
+    def output(self, name: str, expr: Any, unit: str = "") -> None:
         """Declare an output (derived variable) of this component, named ``path.name``.
 
         Parameters
@@ -358,13 +362,15 @@ class Component(_ComponentBase):
             Identifier.
         expr : casadi.SX or float
             Expression of the component's symbols (``der()`` allowed).
+        unit : str, optional
+            SI unit (e.g. ``"N"``), carried to the flat model's :attr:`~gtmodel.modeling.Model.units`.
 
         Raises
         ------
         ModelError
             If ``expr`` uses unknown symbols or the name is taken.
         """
-        self._context().output(self, name, expr)
+        self._context().output(self, name, expr, unit)
 
     def model_call(self, method: str, *args: Any, **kwargs: Any) -> Any:
         """Call a method of the flattened :class:`~gtmodel.modeling.Model` from a component.
@@ -441,8 +447,8 @@ class Component(_ComponentBase):
             Malformed equations (size mismatch).
         """
         model = _Flattening(self, name or type(self).__name__).run()
-        model.exchange_metadata = {str(row.name): (str(row.unit or ""), str(row.description or ""))
-                                   for row in self.describe().itertuples(index=False) if row.unit or row.description}
+        model.exchange_metadata = {str(row["name"]): (str(row.get("unit") or ""), str(row.get("description") or ""))
+                                   for row in self._declaration_rows() if row.get("unit") or row.get("description")}
         return model
 
     def __repr__(self) -> str:

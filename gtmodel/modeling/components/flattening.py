@@ -51,6 +51,7 @@ class _Declared:
     ub: Any = None
     value: Any = None
     fixed: Any = None
+    unit: str = ""
 
 
 @dataclass
@@ -63,6 +64,7 @@ class _Flattening:
     declared: list[_Declared] = field(default_factory=list)
     equations: list[tuple[_ComponentBase, str, ca.SX]] = field(default_factory=list)
     outputs: list[tuple[str, ca.SX]] = field(default_factory=list)
+    output_units: dict[str, str] = field(default_factory=dict)
     pairs: dict[int, list[tuple[Connector, Connector]]] = field(default_factory=dict)
     nodes: list[_ComponentBase] = field(default_factory=list)
     calls: list[tuple[_ComponentBase, str, tuple, dict, Any]] = field(default_factory=list)
@@ -79,7 +81,8 @@ class _Flattening:
             sym = m.parameter(full, attrs["value"])
         else:
             extra = {} if kind == "input" or attrs.get("fixed") is None else {"fixed": attrs["fixed"]}
-            sym = getattr(m, kind)(full, shape=size, start=attrs.get("start"), lb=attrs.get("lb"), ub=attrs.get("ub"), **extra)
+            sym = getattr(m, kind)(full, shape=size, start=attrs.get("start"), lb=attrs.get("lb"), ub=attrs.get("ub"),
+                                   unit=attrs.get("unit") or "", **extra)
         self.declared.append(_Declared(full, kind, sym, size, **attrs))
         self.known.update(sym[i].element_hash() for i in range(size))
         if kind == "state":
@@ -106,9 +109,11 @@ class _Flattening:
                     else:
                         comp._symbols[name] = self._declare(pre + name, "parameter", decl.size, value=value)
                 elif isinstance(decl, Variable):
-                    comp._symbols[name] = self._declare(pre + name, decl.kind, decl.size, **comp._attributes[name])
+                    comp._symbols[name] = self._declare(pre + name, decl.kind, decl.size, **comp._attributes[name],
+                                                        unit=decl.unit or "")
             for cname, conn in comp.connectors().items():
-                conn._symbols = {v.name: self._declare(f"{pre}{cname}.{v.name}", "algebraic", v.size) for v in conn.variables()}
+                conn._symbols = {v.name: self._declare(f"{pre}{cname}.{v.name}", "algebraic", v.size, unit=v.unit or "")
+                                 for v in conn.variables()}
         except GtModelError as exc:
             raise ModelError(f"component {comp._label()}: {exc}") from None
         for sname, sub in comp.components().items():
@@ -132,8 +137,12 @@ class _Flattening:
             # symbols declared on the scratch model by other means (model_call, event passes)
             self.scratch.check_symbols(expr, what)
 
-    def output(self, comp: _ComponentBase, name: str, expr: Any) -> None:
+    def output(self, comp: _ComponentBase, name: str, expr: Any, unit: str = "") -> None:
         full = f"{comp.path}.{name}" if comp.path else name
+        if not isinstance(unit, str):
+            raise InputError(f"component {comp._label()}: output {full!r} unit: expected a string such as 'N', got {unit!r}")
+        if unit:
+            self.output_units[full] = unit
         e = _as_sx(expr, f"output {full!r}")
         self._check_symbols(e, f"component {comp._label()}: output {full!r}")
         if any(n == full for n, _ in self.outputs):
@@ -352,7 +361,7 @@ class _Flattening:
                 sym = model.parameter(d.name, d.value)
             else:
                 extra = {} if d.kind == "input" or d.fixed is None else {"fixed": d.fixed}
-                sym = getattr(model, d.kind)(d.name, shape=d.size, start=d.start, lb=d.lb, ub=d.ub, **extra)
+                sym = getattr(model, d.kind)(d.name, shape=d.size, start=d.start, lb=d.lb, ub=d.ub, unit=d.unit, **extra)
             old.append(d.sym)
             new.append(sym)
             if d.kind == "state":
@@ -385,7 +394,7 @@ class _Flattening:
         for (label, _), res in zip(eqs, exprs[: len(eqs)]):
             model.equation(res, 0.0, name=label)
         for (oname, _), e in zip(self.outputs, exprs[len(eqs):]):
-            model.output(oname, e)
+            model.output(oname, e, unit=self.output_units.get(oname, ""))
         _log.debug(
             "flattened component %s: %d variables (%d connector potentials dropped), %d equations",
             self.name, len(self.declared) - len(dropped), len(dropped), len(eqs),

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+from gtmodel._timing import merge_phases
 from gtmodel.modeling.ocp.result import OptimizationResult
 
 __all__ = ["solve_from_coarse"]
@@ -40,7 +41,9 @@ def solve_from_coarse(transcription: Any, coarse: Callable[[], OptimizationResul
     Returns
     -------
     OptimizationResult
-        The fine mesh's result; its ``solve_time`` includes the coarse pass's, and
+        The fine mesh's result; its ``solve_time`` includes the coarse pass's, its
+        ``timing`` the coarse pass's phases (build, guess, solve: ``timing["solve"]`` is
+        ``solve_time``), and
         ``stats["coarse_start"]`` records the pass (elements, status, iterations, solve
         time, CPU time, whether it was used).
     """
@@ -49,6 +52,7 @@ def solve_from_coarse(transcription: Any, coarse: Callable[[], OptimizationResul
     result = transcription.solve(initial_guess=first if used else initial_guess,
                                  warm_start=used and transcription.plugin == "fatrop", **solve_kwargs)
     if first is not None:  # the coarse pass is part of this solve's cost
+        merge_phases(result.timing, first.timing)  # its build, guess and solve into the fine mesh's phases
         result.solve_time += first.solve_time
         result.stats["coarse_start"] = {"elements": first.collocation.elements, "status": str(first.status),
                                         "iterations": first.iterations, "solve_time": first.solve_time, "used": used,

@@ -42,12 +42,14 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel._timing import add_phase, timed
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
-from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
+from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives, assembled_oracle
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
+from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
-from gtmodel.modeling.ocp.guesses import _guess_fn
+from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
 from gtmodel.modeling.ocp.optimization import Optimization
@@ -190,10 +192,12 @@ class CollocationTranscription:
         self.verbose = bool(verbose)
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
-        self.dae: FlatDAE = optimization.flat()
-        self.size = check_memory(self.elements, self.points, self.dae.nx, self.dae.nz, self.dae.nu)  # before any of it is built
-        self.nominal = self._nominal_values(nominal)
-        self._build()
+        self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
+        with timed(self._unreported, "build"):
+            self.dae: FlatDAE = optimization.flat()
+            self.size = check_memory(self.elements, self.points, self.dae.nx, self.dae.nz, self.dae.nu)  # before any of it is built
+            self.nominal = self._nominal_values(nominal)
+            self._build()
 
     def _nominal_values(self, nominal: Mapping[str, Any] | None) -> dict[str, np.ndarray]:
         """Per-kind scale vectors ``{"x", "z", "u", "tf"}`` from the ``nominal`` mapping."""
@@ -285,8 +289,12 @@ class CollocationTranscription:
             nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
             if self.derivative_functions:  # the plugin has no jac_g/hess_lag options: its function cache, by name
                 nlp_options["cache"] = fatrop_cache(self.derivative_functions, self.objective_scale)
+        problem = {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}
+        if self.plugin != "fatrop" and {"jac_g", "hess_lag"} <= set(self.derivative_functions):
+            problem, more = assembled_oracle(nlp, f, casadi_name(self.dae.name))  # the build's cost (CPU) a third
+            nlp_options.update(more)
         try:
-            return ca.nlpsol(f"{casadi_name(self.dae.name)}_collocation", self.plugin, {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}, nlp_options)
+            return ca.nlpsol(f"{casadi_name(self.dae.name)}_collocation", self.plugin, problem, nlp_options)
         except RuntimeError as exc:
             if "structure of A" in str(exc) or "Structure" in str(exc):
                 raise SolverError(
@@ -300,33 +308,30 @@ class CollocationTranscription:
         opt, dae, co = self.optimization, self.dae, self._co
         N, t0 = self.elements, opt.start_time
         n_el, c0 = element_scaling(N, self.fractions)
-        fns = {}
+        kinds = [kind for kind, _k, _j in self._blocks]
+        ks, js = (np.array([b[i] for b in self._blocks], dtype=int) for i in (1, 2))
+        inner = ks < N
+        t = np.full(len(kinds), float(tf_guess))
+        t[inner] = t0 + (c0[ks[inner]] + co["root"][js[inner]]) * (tf_guess - t0) / n_el[ks[inner]]
+        values: dict[str, np.ndarray] = {}  # per kind: (blocks of that kind, size); all times at once (one point set)
         for cat, vars_, start in (("x", dae.x_vars, dae.x_start), ("z", dae.z_vars, dae.z_start), ("u", dae.u_vars, None)):
+            rows = [i for i, kind in enumerate(kinds) if kind == cat]
+            block = np.zeros((len(rows), sum(sl.stop - sl.start for sl in vars_.values())))
             for name, sl in vars_.items():
-                n = sl.stop - sl.start
-                if start is None:
-                    kind_syms = self.optimization.model._vars[name]
-                    default = kind_syms.start.copy()
-                else:
-                    default = start[sl].copy()
-                fns[(cat, name)] = (sl, _guess_fn(guesses.get(name), n, name, default))
-        w0 = []
-        for (kind, k, j), size in zip(self._blocks, self._block_sizes):
+                default = self.optimization.model._vars[name].start.copy() if start is None else start[sl].copy()
+                block[:, sl] = guess_values(guesses.get(name), sl.stop - sl.start, name, default, t)[rows]
+            values[cat] = block
+        w0, row = [], {"x": 0, "z": 0, "u": 0}
+        for kind in kinds:
             if kind == "tf":
                 w0.append(np.array([tf_guess]))
-                continue
-            if kind == "pf":
+            elif kind == "pf":
                 w0.append(self._free_start(pvec))
-                continue
-            t = t0 + (c0[k] + co["root"][j]) * (tf_guess - t0) / n_el[k] if k < N else tf_guess
-            vals = np.zeros(size)
-            for (cat, _name), (sl, f) in fns.items():
-                if cat == kind:
-                    vals[sl] = f(t)
-            w0.append(vals)
+            else:
+                w0.append(values[kind][row[kind]])
+                row[kind] += 1
         w = np.concatenate(w0) if w0 else np.zeros(0)
-        lo, hi = self._lbw, self._ubw
-        return np.clip(w / self._scale, lo, hi)  # the NLP works with variable / nominal
+        return np.clip(w / self._scale, self._lbw, self._ubw)  # the NLP works with variable / nominal
 
     def _free_start(self, pvec: np.ndarray) -> np.ndarray:
         """Initial guess of the free parameter elements: their start, else the value clipped into the bounds."""
@@ -380,24 +385,16 @@ class CollocationTranscription:
         guesses: dict[str, Any] = dict(opt.initial_guesses)
         tf_guess = opt.final_time_guess
         w0 = None
+        phases, self._unreported = self._unreported, {}
+        guess_wall, guess_cpu = _time.perf_counter(), _time.process_time()
         if isinstance(initial_guess, OptimizationResult):
             if initial_guess.transcription_key == self.key and initial_guess.w is not None:
                 w0 = np.clip(initial_guess.w, self._lbw, self._ubw)
             elif initial_guess.collocation is not None:
                 res = initial_guess
                 tf_guess = float(np.clip(res.final_time, *opt.final_time_bounds))
-                span_old = res.final_time - opt.start_time
-
-                def from_result(cat: str, name: str, res: OptimizationResult = res) -> Any:
-                    def f(t: float) -> np.ndarray:
-                        s = opt.start_time + (t - opt.start_time) / (tf_guess - opt.start_time) * span_old
-                        return np.asarray(res.sample([s])[cat][name], dtype=float).reshape(-1)
-
-                    return f
-
-                for cat, vars_ in (("states", dae.x_vars), ("inputs", dae.u_vars), ("algebraics", dae.z_vars)):
-                    for name in vars_:
-                        guesses[name] = from_result(cat, name)
+                sampled = ResultGuess(res, opt.start_time, tf_guess)  # one evaluation for all variables and points
+                guesses.update({name: sampled for name in sampled.names()})
         elif isinstance(initial_guess, Mapping):
             for name, value in initial_guess.items():
                 if name == "final_time":
@@ -424,7 +421,8 @@ class CollocationTranscription:
                 raise InputError("warm_start: initial_guess must be a result of this transcription (with its multipliers)")
             solver = self.warm_solver()
             warm = {"lam_x0": initial_guess.lam_w, "lam_g0": initial_guess.lam_g}
-        t_start = _time.perf_counter()
+        add_phase(phases, "guess", _time.perf_counter() - guess_wall, _time.process_time() - guess_cpu)
+        t_start, cpu_start = _time.perf_counter(), _time.process_time()
         error_msg = None
         lam = (None, None)
         try:
@@ -435,6 +433,7 @@ class CollocationTranscription:
             error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
             w_opt = w0
         solve_time = _time.perf_counter() - t_start
+        add_phase(phases, "solve", solve_time, _time.process_time() - cpu_start)
         stats = dict(solver.stats())
         if self.plugin == "fatrop":
             message = error_msg or f"fatrop: {stats.get('unified_return_status', 'unknown')} (return flag {stats.get('return_status')})"
@@ -448,13 +447,16 @@ class CollocationTranscription:
             status = Status.ERROR if error_msg else normalize_ipopt_status(message)
             if message in IPOPT_HINTS:
                 message = f"{message}: {IPOPT_HINTS[message]}"
+            message = without_inputs(opt, dae, message)
         if not np.all(np.isfinite(w_opt)):
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
         res.lam_w, res.lam_g = lam
+        res.timing = phases
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-            self.check(res, special=np.array(self.special_function(w_opt, pvec), dtype=float).reshape(-1),
-                       lagrange=float(self.lagrange_function(w_opt, pvec)))
+            with timed(phases, "verification"):
+                self.check(res, special=np.array(self.special_function(w_opt, pvec), dtype=float).reshape(-1),
+                           lagrange=float(self.lagrange_function(w_opt, pvec)))
         return res
 
     def check(self, result: OptimizationResult, special: np.ndarray | None = None, lagrange: float | None = None) -> OptimizationResult:

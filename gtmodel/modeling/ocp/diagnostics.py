@@ -9,6 +9,9 @@
   :data:`MAGNITUDE_FACTOR` times the model's own scale of it (``max(1, |start|, finite
   |bounds|)``): a missing bound or a wrong unit, not an optimum.
 
+:func:`without_inputs` names the cause of a failed solve of a model that has no inputs (IPOPT
+reports only ``Not_Enough_Degrees_Of_Freedom``).
+
 The model's own warnings (``Model.warnings``: connectors left open at flattening) come
 first. Each warning is one sentence naming the variable, the value and the fix; the problem
 kinds print them (CLI) and write them to ``summary.json`` (``warnings``).
@@ -20,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["solution_warnings", "MAGNITUDE_FACTOR"]
+__all__ = ["solution_warnings", "without_inputs", "MAGNITUDE_FACTOR"]
 
 #: A solution value more than this many times the model's scale of the variable is flagged.
 MAGNITUDE_FACTOR = 1e3
@@ -76,3 +79,42 @@ def solution_warnings(optimization: Any, result: Any) -> list[str]:
                     f"scale of it ({scale:.4g}: its start value and bounds): a missing bound or a wrong unit? "
                     f"bound it in [bounds] or check the model")
     return out
+
+
+#: IPOPT outcomes that a model without inputs ends in: more equality constraints than unknowns, or none met.
+_NO_FREEDOM = ("Not_Enough_Degrees_Of_Freedom", "Infeasible_Problem_Detected", "Restoration_Failed")
+
+
+def without_inputs(optimization: Any, dae: Any, message: str) -> str:
+    """The status message of a failed solve, with the cause named when the model has no inputs.
+
+    IPOPT says ``Not_Enough_Degrees_Of_Freedom`` (or infeasible) and nothing about the model: a
+    model whose inputs were forgotten (a ``ConstantVoltage`` where a ``SignalVoltage`` was
+    meant) leaves nothing to choose but the final time, the free parameters and unset start
+    values, too few for the boundary conditions.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The problem (free final time, free parameters).
+    dae : FlatDAE
+        Its flat model.
+    message : str
+        The solver's message.
+
+    Returns
+    -------
+    str
+        ``message``, followed by the cause when the model has no inputs and the solve ended
+        in one of IPOPT's outcomes for too few unknowns; else unchanged.
+    """
+    if dae.nu or not any(m in message for m in _NO_FREEDOM) or "has no inputs" in message:
+        return message
+    free = ["the final time"] if optimization.free_final_time else []
+    free += ["the free parameters"] if optimization.free_parameters else []
+    free.append("the start values the boundary conditions leave free")
+    kind = "a minimum-time problem (free final time)" if optimization.free_final_time else "an optimal control problem"
+    choice = free[0] if len(free) == 1 else f"{', '.join(free[:-1])} and {free[-1]}"
+    return (f"{message}: the model {dae.name!r} has no inputs, so in {kind} nothing but {choice} can be chosen "
+            "to meet the boundary conditions and constraints; declare the input that drives it (Model.input, or an "
+            "input component such as SignalVoltage, Torque or Force instead of a constant source)")

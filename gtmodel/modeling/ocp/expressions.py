@@ -21,7 +21,6 @@ from 1; newlines in the text count as one character), followed by the text and a
 from __future__ import annotations
 
 import ast
-import difflib
 import math
 import re
 from collections.abc import Callable, Collection, Mapping
@@ -31,6 +30,7 @@ from typing import Any
 import casadi as ca
 
 from gtmodel.errors import GtModelError, InputError, ProblemError
+from gtmodel.modeling.ocp.suggestions import close_names
 
 __all__ = [
     "FUNCTIONS",
@@ -41,6 +41,7 @@ __all__ = [
     "parse_objective",
     "parse_constraint",
 ]
+
 
 _Fn = Callable[..., ca.SX]
 #: Whitelisted functions: name -> (minimum, maximum number of arguments (None: any), CasADi function).
@@ -286,9 +287,7 @@ class _Parser:
 
     def undefined(self, node: ast.AST, what: str) -> ProblemError:
         n = node.id if isinstance(node, ast.Name) else "?"
-        known = sorted(set(self.names) | set(FUNCTIONS) | set(_CONSTANTS))
-        close = sorted(difflib.get_close_matches(n, known, n=4),
-                       key=lambda c: (-difflib.SequenceMatcher(None, n, c).ratio(), c))
+        close = close_names(n, set(self.names) | set(FUNCTIONS) | set(_CONSTANTS))
         hint = ("did you mean " + ", ".join(f"'{c}'" for c in close) + "?") if close else (
             "known names: " + ", ".join(sorted(self.names)[:30]) + ("..." if len(self.names) > 30 else ""))
         return self.fail(f"undefined {what}", node, hint)

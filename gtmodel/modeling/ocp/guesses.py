@@ -26,7 +26,7 @@ from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling.dae import _vector_value
 from gtmodel.modeling.ocp.optimization import Optimization
 
-__all__ = ["guess_from_table", "guess_by_simulation"]
+__all__ = ["guess_from_table", "guess_by_simulation", "guess_values", "ResultGuess"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -194,6 +194,112 @@ def guess_by_simulation(
             if name in _whole_variables(opt):
                 opt.set_initial_guess(model.variables(_kind(opt, name))[name], (sim.t, np.asarray(values).reshape(K, -1)))
     return sim
+
+
+class ResultGuess:
+    """The guesses of every state, input and algebraic variable from one result, sampled once per point set.
+
+    A coarse solution interpolated onto a fine mesh (:mod:`gtmodel.modeling.ocp.coarse_start`):
+    its collocation polynomials are evaluated at all the fine mesh's points in one call
+    (:meth:`~gtmodel.modeling.ocp.result.CollocationData.evaluate`), not once per variable
+    and point; the time axis is stretched from ``[start_time, tf_guess]`` onto the result's
+    horizon (a free final time).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A result holding collocation data (``result.collocation``, ``result.dae``).
+    start_time : float
+        The problem's start time, s.
+    tf_guess : float
+        The final time the guess is built for, s.
+    """
+
+    def __init__(self, result: Any, start_time: float, tf_guess: float) -> None:
+        self.result, self.start_time, self.tf_guess = result, float(start_time), float(tf_guess)
+        self._cache: tuple[bytes, dict[str, np.ndarray]] | None = None
+
+    def names(self) -> list[str]:
+        """The variables this result guesses.
+
+        Returns
+        -------
+        list of str
+            Its states, inputs and algebraic variables.
+        """
+        dae = self.result.dae
+        return [*dae.x_vars, *dae.u_vars, *dae.z_vars]
+
+    def values(self, t: np.ndarray) -> dict[str, np.ndarray]:
+        """Every variable at times ``t``, from one evaluation of the polynomials (kept for the same ``t``).
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            Times on the new horizon, s, shape ``(K,)``.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            Name -> values, shape ``(K, size)``.
+        """
+        t = np.asarray(t, dtype=float).reshape(-1)
+        key = t.tobytes()
+        if self._cache is None or self._cache[0] != key:
+            res, t0 = self.result, self.start_time
+            s = t0 + (t - t0) / (self.tf_guess - t0) * (res.final_time - t0)
+            xs, us, zs = res.collocation.evaluate(np.clip(s, res.collocation.t0, res.collocation.tf))
+            dae = res.dae
+            out = {name: xs[:, sl] for name, sl in dae.x_vars.items()}
+            out.update({name: us[:, sl] for name, sl in dae.u_vars.items()})
+            out.update({name: zs[:, sl] for name, sl in dae.z_vars.items()})
+            self._cache = (key, out)
+        return self._cache[1]
+
+
+def guess_values(spec: Any, size: int, name: str, default: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """A guess specification evaluated at all times of a mesh at once.
+
+    Parameters
+    ----------
+    spec : None, float, array_like, (t, values) tuple, callable or ResultGuess
+        As :meth:`Optimization.set_initial_guess` (a callable ``f(t) -> (size,)`` is called per
+        time: a user's function of a scalar time); a :class:`ResultGuess` is evaluated once
+        for all times and variables.
+    size : int
+        Scalar elements of the variable.
+    name : str
+        The variable's name (for messages).
+    default : numpy.ndarray
+        The value without a guess, shape ``(size,)``.
+    t : numpy.ndarray
+        Times, s, shape ``(K,)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(K, size)``.
+
+    Raises
+    ------
+    InputError
+        If a tuple guess has the wrong number of columns, or a value the wrong size.
+    """
+    t = np.asarray(t, dtype=float).reshape(-1)
+    if isinstance(spec, ResultGuess):
+        return np.asarray(spec.values(t)[name], dtype=float).reshape(t.size, size)
+    if spec is None:
+        return np.broadcast_to(np.asarray(default, dtype=float).reshape(1, size), (t.size, size))
+    if isinstance(spec, tuple) and len(spec) == 2:
+        tg = np.asarray(spec[0], dtype=float).reshape(-1)
+        vg = np.asarray(spec[1], dtype=float).reshape(tg.size, -1)
+        if vg.shape[1] != size:
+            raise InputError(f"initial guess of {name!r}: expected {size} columns, got {vg.shape[1]}")
+        return np.column_stack([np.interp(t, tg, vg[:, i]) for i in range(size)]) if size else np.zeros((t.size, 0))
+    if callable(spec):
+        return np.array([_vector_value(spec(ti), size, f"initial guess of {name!r}") for ti in t]).reshape(t.size, size)
+    const = _vector_value(spec, size, f"initial guess of {name!r}")
+    return np.broadcast_to(const.reshape(1, size), (t.size, size))
 
 
 def _guess_fn(spec: Any, size: int, name: str, default: np.ndarray) -> Any:

@@ -285,6 +285,10 @@ class OptimizationResult(StatusResult):
     refinement : list of dict
         The mesh refinement passes that led to this result (elements, objective, error
         per pass; :mod:`gtmodel.modeling.ocp.refinement`), empty without refinement.
+    timing : dict
+        Wall and CPU seconds per phase of the run that produced it, ``phase ->
+        {"wall_s", "cpu_s"}`` (:mod:`gtmodel._timing`: ``build``, ``guess``, ``solve`` (the
+        solver's call, as :attr:`solve_time`), ``verification``, ...); empty when not timed.
     """
 
     iterations: int
@@ -308,6 +312,7 @@ class OptimizationResult(StatusResult):
     lam_g: np.ndarray | None = field(default=None, repr=False)
     verification: Any = field(default=None, repr=False)
     refinement: list[dict[str, Any]] = field(default_factory=list, repr=False)
+    timing: dict[str, dict[str, float]] = field(default_factory=dict, repr=False)
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.

@@ -7,8 +7,10 @@ equations but is no solution of them: the COPS hanging chain on 20 elements ends
 optimal inputs do to the model. :func:`verify` checks: the inputs, interpolated as the
 transcription defines them (per element the Lagrange polynomial through the ``d``
 collocation points, the same polynomial :meth:`OptimizationResult.sample` evaluates),
-drive the model in SUNDIALS (CVODES for an ODE, IDAS with algebraic variables) through
-``casadi.integrator``, element by element with the model written in the element's
+drive the model in SUNDIALS through ``casadi.integrator`` (the integrator chosen by the
+model: CVODES for an ODE and for a DAE whose algebraic variables are eliminated
+symbolically, IDAS for a nonlinear algebraic loop; CVODES's BDF for a model stiff along the
+solution, its Adams method otherwise: :func:`~gtmodel.modeling.ocp.verification_methods.cvodes_method`), element by element with the model written in the element's
 scaled time ``t = t_k + tau h_k``, ``tau in [0, 1]`` (one integrator serves every
 element). Two simulations are compared with the collocation polynomials at the
 collocation points, the element ends and the midpoints between them:
@@ -36,7 +38,10 @@ loosely, deviates from the variable-step simulation and fails.
 The integrals of the problem (``integral()`` in constraints: isoperimetric constraints;
 :meth:`~gtmodel.modeling.Optimization.integral`) are checked the same way: the integrand
 is integrated as a quadrature of the simulation, and the value the NLP used (its
-collocation quadrature) passes when ``|I_sim - I_col| <= tolerance * max(1, |I_col|)``. A
+collocation quadrature) passes when ``|I_sim - I_col| <= tolerance * max(|I_col|, 0.01 A) + e``,
+relative, with a floor scaled by the problem: ``A`` is the integral of the integrand's
+modulus (:data:`INTEGRAL_FLOOR`, for an integral that cancels to about zero), ``e`` the
+simulated quadrature's own accuracy (:data:`QUADRATURE_NOISE`, for one that vanishes). A
 spurious minimum that satisfies an integral constraint only at the collocation points (the
 hanging chain's length with the input oscillating between them) is caught here.
 """
@@ -57,11 +62,13 @@ from gtmodel.modeling.dae import casadi_name
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
+from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
+                                                        cvodes_method, explicit_algebraics)
 from gtmodel.modeling.simulation.explicit import damped_newton
 from gtmodel.status import Status
 
 __all__ = ["Verification", "verify", "check_result", "problem_integrals", "integrator_rtol", "skipped", "switch_elements",
-           "INTEGRATOR_RTOL", "INTEGRATORS", "SWITCH_FRACTION", "SPURIOUS_DEVIATION"]
+           "INTEGRATOR_RTOL", "INTEGRATORS", "SWITCH_FRACTION", "SPURIOUS_DEVIATION", "INTEGRAL_FLOOR", "QUADRATURE_NOISE", "STIFF_STEPS"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -82,6 +89,7 @@ SPURIOUS_DEVIATION = 0.1
 #: The verifying integrators: SUNDIALS' CVODES (ODEs) and IDAS (DAEs), both BDF with a
 #: Newton iteration on the model's Jacobian (CasADi's algorithmic derivative).
 INTEGRATORS = ("cvodes", "idas")
+
 
 
 def integrator_rtol(tolerance: float) -> float:
@@ -250,28 +258,34 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
     t_of = tk + tau * hk
     ode = ca.substitute([dae.ode_expr, dae.alg_expr], [dae.t, dae.u], [t_of, u_tau])
     p_all = ca.vertcat(dae.p, ca.vec(U), tk, hk)
-    spec: dict[str, Any] = {"x": dae.x, "p": p_all, "t": tau, "ode": hk * ode[0]}
     quad = integrands is not None and integrands.numel_out() > 0
+    q_expr = integrands(t_of, dae.x, dae.z, u_tau, dae.p) if quad else None
+    z_expr = explicit_algebraics(dae, plugin)
+    if z_expr is not None:  # z eliminated: the ODE alone, for CVODES
+        z_sub = ca.substitute(z_expr, ca.vertcat(dae.t, dae.u), ca.vertcat(t_of, u_tau))
+        ode[0] = ca.substitute(ode[0], dae.z, z_sub)
+        q_expr = ca.substitute(q_expr, dae.z, z_sub) if quad else None
+        plugin = "cvodes"
+    spec: dict[str, Any] = {"x": dae.x, "p": p_all, "t": tau, "ode": hk * ode[0]}
     if quad:
-        spec["quad"] = hk * integrands(t_of, dae.x, dae.z, u_tau, dae.p)
+        spec["quad"] = hk * q_expr
     plugin = plugin or ("idas" if dae.nz else "cvodes")
-    if dae.nz:
+    if plugin == "idas" and dae.nz:
         spec.update(z=dae.z, alg=ode[1])
-    # BDF with Newton iterations on the model's Jacobian (CasADi differentiates the graph):
-    # stiff models (a DC motor's 1.7 ms electrical time constant) take steps of the
-    # trajectory's scale, not of the fastest eigenvalue's
     opts: dict[str, Any] = {"abstol": rtol * 1e-2, "reltol": rtol, "max_num_steps": 100000}
     if quad:  # the integrals' error controlled too (not by default in SUNDIALS)
         opts["quad_err_con"] = True
+    method = ""
     if plugin == "cvodes":
-        opts.update(linear_multistep_method="bdf", nonlinear_solver_iteration="newton")
+        method, cv_opts = cvodes_method(result, spec["ode"], dae.x, p_all, tau)
+        opts.update(cv_opts)
     F = ca.integrator(f"{casadi_name(dae.name)}_verify", plugin, spec, 0.0, list(taus), opts)
     consistent = None
-    if dae.nz:
+    if dae.nz and plugin == "idas":
         guess = ca.SX.sym("z_guess", dae.nz)
         z0, ok = damped_newton(ca.substitute(ode[1], tau, 0.0), dae.z, guess)
         consistent = ca.Function("consistent_start", [dae.x, guess, p_all], [ca.if_else(ok, z0, guess)])
-    return F, f"{plugin} (rtol {rtol:g})", consistent
+    return F, f"{plugin}{method} (rtol {rtol:g})", consistent
 
 
 def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float | None = None,
@@ -296,8 +310,11 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         Function ``(t, x, z, u, p) -> (m,)`` (final time substituted) and the values the
         NLP used, shape ``(m,)``.
     integrator : {"cvodes", "idas"}, optional
-        The SUNDIALS integrator; default CVODES for an ODE, IDAS with algebraic variables
-        (which CVODES cannot take).
+        The SUNDIALS integrator; default CVODES for an ODE and for a DAE whose algebraic
+        variables are eliminated symbolically (every block affine in its own variables: a
+        composed component's connections and laws), IDAS for the others (a nonlinear
+        algebraic loop). CVODES's method follows the stiffness along the solution
+        (:func:`~gtmodel.modeling.ocp.verification_methods.cvodes_method`: BDF with Newton iterations, or Adams with functional iterations).
 
     Returns
     -------
@@ -324,8 +341,9 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         raise InputError(f"verify: rtol must be a number in (0, 1), got {rtol!r}")
     if integrator is not None and integrator not in INTEGRATORS:
         raise InputError(f"verify: integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}")
-    if integrator == "cvodes" and result.dae.nz:
-        raise InputError(f"verify: integrator 'cvodes' takes no algebraic variables ({result.dae.name} has {result.dae.nz}); use 'idas'")
+    if integrator == "cvodes" and result.dae.nz and explicit_algebraics(result.dae, integrator) is None:
+        raise InputError(f"verify: integrator 'cvodes' takes no algebraic variables that a nonlinear algebraic loop keeps "
+                         f"({result.dae.name} has {result.dae.nz}, not all eliminated symbolically); use 'idas'")
     start = _time.perf_counter()
     dae, col = result.dae, result.collocation
     N, d, nx = col.elements, col.points, dae.nx
@@ -352,6 +370,8 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     message = ""
     try:
         F, how, consistent = _element_integrator(result, taus, rtol, integrals[1] if integrals else None, integrator)
+        if F.size1_in("z0") == 0:  # the algebraic variables eliminated: an ODE
+            z0 = np.zeros((0, N))
         try:
             local = F.map(N)(x0=col.xc[:, 0, :].T, z0=z0, p=P)
         except RuntimeError:
@@ -367,7 +387,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         # one call (mapaccum: the integrator restarts at every element boundary, where the
         # input polynomials jump, and no Python loop runs between the elements)
         m = len(integrals[0]) if integrals else 0
-        xs, zs, ps = ca.MX.sym("x0", nx), ca.MX.sym("z0", dae.nz), ca.MX.sym("p", P.shape[0])
+        xs, zs, ps = ca.MX.sym("x0", nx), ca.MX.sym("z0", z0.shape[0]), ca.MX.sym("p", P.shape[0])
         step = F(x0=xs, z0=zs, p=ps)
         q_end = step["qf"][:, -1] if m else ca.MX(0, 1)
         chain = ca.Function("verify_chain", [xs, zs, ps], [step["xf"][:, -1], ca.vec(step["xf"]), q_end]).mapaccum(N)
@@ -396,12 +416,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_flat[where[i]])}
         for i in range(nx)
     }
-    checked: dict[str, dict[str, Any]] = {}
-    if integrals:
-        for name, col_value, sim_value in zip(integrals[0], np.asarray(integrals[2], dtype=float), q_sim):
-            gap = abs(float(sim_value) - float(col_value))
-            checked[name] = {"collocation": float(col_value), "simulated": float(sim_value), "abs_deviation": gap,
-                             "passed": bool(gap <= tolerance * max(1.0, abs(float(col_value))))}
+    checked = checked_integrals(result, integrals, q_sim, tolerance, pvec, rtol) if integrals else {}
     passed = bool(np.all(scaled <= tolerance)) and all(c["passed"] for c in checked.values())
     bad_integral = next((n for n, c in checked.items() if not c["passed"]), None)
     if not passed and bool(np.all(scaled <= tolerance)):
@@ -409,8 +424,8 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         what = (f"the objective's integral({bad_integral.split(': ', 1)[1]})" if bad_integral.startswith("objective: ")
                 else f"integral({bad_integral})")
         message = (f"{what} is {c['collocation']:.6g} in the collocation NLP but {c['simulated']:.6g} "
-                   f"in the simulation under the optimal inputs (deviation {c['abs_deviation']:.3g} > tolerance "
-                   f"{tolerance:g} x max(1, |value|))")
+                   f"in the simulation under the optimal inputs (deviation {c['abs_deviation']:.3g}, relative "
+                   f"{c['rel_deviation']:.3g} > tolerance {tolerance:g})")
     elif not passed:
         worst = int(np.argmax(scaled))
         message = (

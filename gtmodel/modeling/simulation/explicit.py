@@ -53,6 +53,7 @@ __all__ = [
     "ExplicitODE",
     "explicit_ode",
     "damped_newton",
+    "eliminated_algebraics",
     "STEP_METHODS",
     "NEWTON_ITERATIONS",
     "NEWTON_TOLERANCE",
@@ -208,6 +209,31 @@ def _eliminate(dae: FlatDAE, iterations: int, tol: float) -> tuple[ca.SX, ca.SX,
     rn = ca.substitute(rn, z, z_expr)
     vsol, ok = _newton(rn, vn, vn0, iterations, tol)
     return ca.substitute(z_expr, vn, vsol), ok, len(newton_vars)
+
+
+def eliminated_algebraics(dae: FlatDAE) -> ca.SX | None:
+    """The algebraic variables of ``dae`` as expressions of ``(t, x, u, p)`` where every block is affine in its own.
+
+    The symbolic elimination of :func:`explicit_ode` (block triangular form, each block solved
+    by a division or a small linear solve), for a caller that integrates the ODE
+    ``xdot = F(t, x, z(t, x, u, p), u, p)`` itself (the verification's simulation).
+
+    Parameters
+    ----------
+    dae : FlatDAE
+        The model.
+
+    Returns
+    -------
+    casadi.SX or None
+        ``z`` as an expression, shape ``(nz, 1)``; None when a block needs Newton's method
+        (a nonlinear algebraic loop) or the equations are structurally singular.
+    """
+    try:
+        z_expr, _ok, n_newton = _eliminate(dae, NEWTON_ITERATIONS, NEWTON_TOLERANCE)
+    except ModelError:
+        return None
+    return None if n_newton else z_expr
 
 
 def _scalar_meta(meta: dict[str, str], names: list[str]) -> dict[str, str]:
@@ -533,7 +559,7 @@ def explicit_ode(model: Any, name: str | None = None, iterations: int = NEWTON_I
     pv = np.asarray(dae.p_value, dtype=float).copy()
     if not (np.all(np.isfinite(x0)) and np.all(np.isfinite(pv))):
         raise ModelError(f"model {m.name!r}: start and parameter values must be finite")
-    names = dae.x_names + dae.u_names + dae.p_names + dae.output_names
+    names = dae.x_names + dae.z_names + dae.u_names + dae.p_names + dae.output_names
     return ExplicitODE(
         name=m.name, full=full, dae=dae, x_names=list(dae.x_names), u_names=list(dae.u_names), p_names=list(dae.p_names),
         y_names=list(dae.output_names), x0=x0, u0=u0, p_default=pv,

@@ -122,6 +122,7 @@ class Model(EventsMixin):
         self._time = ca.SX.sym("time")
         self._equations: list[tuple[str, ca.SX]] = []
         self._outputs: dict[str, ca.SX] = {}
+        self._output_units: dict[str, str] = {}  # the outputs declared with a unit
         self._events: EventSpec | None = None  # modes and when-clauses (gtmodel.modeling.structure.events)
         self._der_substituted: set[int] = set()  # equations whose der() stands for the ODE rhs
         self._initial_equations: list[tuple[str, ca.SX]] = []
@@ -133,8 +134,10 @@ class Model(EventsMixin):
     # ------------------------------------------------------------------ declarations
     @property
     def units(self) -> dict[str, str]:
-        """SI unit of every state, algebraic variable and input declared with one, by name."""
-        return {name: var.unit for name, var in self._vars.items() if var.unit}
+        """SI unit of every state, algebraic variable, input and output declared with one, by name."""
+        out = {name: var.unit for name, var in self._vars.items() if var.unit}
+        out.update({name: u for name, u in getattr(self, "_output_units", {}).items() if u and name in self._outputs})
+        return out
 
     @property
     def time(self) -> ca.SX:
@@ -486,7 +489,7 @@ class Model(EventsMixin):
         self.check_symbols(res, f"initial equation {label!r}")
         self._initial_equations.append((label, res))
 
-    def output(self, name: str, expr: Any) -> ca.SX:
+    def output(self, name: str, expr: Any, unit: str = "") -> ca.SX:
         """Declare a named derived variable (energy, force, ...).
 
         Parameters
@@ -496,6 +499,8 @@ class Model(EventsMixin):
         expr : casadi.SX or float
             Expression of declared symbols (``der()`` allowed; replaced by the ODE
             right-hand side on flattening).
+        unit : str, optional
+            SI unit (e.g. ``"J"``), shown with the output (:attr:`units`); default none.
 
         Returns
         -------
@@ -511,11 +516,15 @@ class Model(EventsMixin):
         """
         if not isinstance(name, str) or not _NAME_RE.fullmatch(name):
             raise InputError(f"output name must be an identifier, got {name!r}")
+        if not isinstance(unit, str):
+            raise InputError(f"output {name!r} unit: expected a string such as 'J', got {unit!r}")
         if name in self._vars or name in self._outputs:
             raise ModelError(f"model {self.name!r}: name {name!r} is already declared")
         e = _as_sx(expr, f"output {name!r}")
         self.check_symbols(e, f"output {name!r}")
         self._outputs[name] = e
+        if unit:
+            self._output_units[name] = unit
         return e
 
     # ------------------------------------------------------------------ queries

@@ -604,18 +604,20 @@ def build_model(
     new.warnings = list(getattr(model, "warnings", []))
     old, rep = [aug.system.t], [new.time]
     bounds: dict[str, tuple[float, float]] = {}
+    units: dict[str, str] = {}  # the declared unit of every scalar kept (a derivative's is not declared)
     for var in model._vars.values():
         if var.kind in ("parameter", "input"):
             sym = (
                 new.parameter(var.name, var.start)
                 if var.kind == "parameter"
-                else new.input(var.name, var.size, lb=var.lb, ub=var.ub, start=var.start)
+                else new.input(var.name, var.size, lb=var.lb, ub=var.ub, start=var.start, unit=var.unit)
             )
             old.append(var.sym)
             rep.append(sym)
         else:
             for j, nm in enumerate(expand_names(var.name, var.size)):
                 bounds[nm] = (float(var.lb[j]), float(var.ub[j]))
+                units[nm] = var.unit
     taken: set[str] = set(new._vars)
     new_syms: dict[int, ca.SX] = {}
     fixed = _fixed_of_kept(aug.system)
@@ -626,13 +628,14 @@ def build_model(
             decl = new.state if kind == "state" else new.algebraic
             fix = aug.order[v] == 0 and nm in fixed  # a fixed start stays one (of the kept alias)
             start = fixed[nm] if fix else values[v]
+            unit = units.get(nm, "") if aug.order[v] == 0 else ""
             try:
-                sym = decl(nm, start=start, lb=lb, ub=ub, fixed=fix)
+                sym = decl(nm, start=start, lb=lb, ub=ub, fixed=fix, unit=unit)
             except (InputError, ModelError):
                 cand, k = _ident(nm), 1
                 while cand in taken:
                     cand, k = f"{_ident(nm)}_{k}", k + 1
-                sym = decl(cand, start=start, lb=lb, ub=ub, fixed=fix)
+                sym = decl(cand, start=start, lb=lb, ub=ub, fixed=fix, unit=unit)
             taken.update(new._vars)
             new_syms[v] = sym
     if direct:  # no dummy: the der() of the states stay der() of the new model
@@ -653,13 +656,14 @@ def build_model(
     for r, nm in zip(sub(aug.res), aug.eq_names):
         new.equation(r, 0.0, name=nm, substitute_der=re.sub(r"\[\d+\]$", "", nm) in subst)
     s = aug.system
+    output_units = getattr(model, "_output_units", {})
     for nm, e in zip(s.outputs, sub(list(s.outputs.values()))):
-        new.output(nm, e)
+        new.output(nm, e, unit=output_units.get(nm, ""))
     for nm, e in zip(s.aliases, sub([s.observed[nm] for nm in s.aliases])):
         for oname in (nm, _ident(nm)):
             if oname not in new._vars and oname not in new._outputs:
                 try:
-                    new.output(oname, e)
+                    new.output(oname, e, unit=units.get(nm, ""))
                     break
                 except InputError:
                     continue

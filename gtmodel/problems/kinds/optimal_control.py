@@ -35,6 +35,7 @@ from gtmodel._docstrings import fill_doc
 from gtmodel.errors import GtModelError, ModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
 from gtmodel.modeling.ocp.diagnostics import solution_warnings
+from gtmodel.modeling.ocp.suggestions import MSL_NAMES, close_names
 from gtmodel.modeling.ocp.initial import InitialConditionConflict, fixed_starts
 from gtmodel.modeling.ocp.verification import skipped
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
@@ -144,7 +145,12 @@ def _objective(file: ProblemFile, opt: OptimizationSection, data: bool) -> tuple
 
 
 def _unknown(file: ProblemFile, field_: str, name: str, known: Any) -> Exception:
-    return file.fail(field_, f"one of the model's names ({', '.join(sorted(known)) or 'none'})", name)
+    close = close_names(name, known)
+    hint = f"did you mean {', '.join(repr(c) for c in close)}? " if close else ""
+    last = str(name).rpartition(".")[2]
+    if close and MSL_NAMES.get(last.lower()) and close[0].endswith("." + MSL_NAMES[last.lower()]):
+        hint += f"(the Modelica Standard Library's name of {last} is {MSL_NAMES[last.lower()]}) "
+    return file.fail(field_, f"one of the model's names: {hint}(all: {', '.join(sorted(known)) or 'none'})", name)
 
 
 class OptimalControlKind(ProblemKind):

@@ -88,3 +88,35 @@ def test_a_subsystem_that_floats_is_named_at_flatten(caplog):
         "gear.flange_a (tau = 0)",
     ]
     assert [r.getMessage() for r in caplog.records if r.getMessage().startswith("component drive")] == model.warnings
+
+
+class _Loaded(Component):
+    """An inertia driven by a torque, with an output of the user's own declared in N.m.s (an angular momentum)."""
+
+    torque = rot.Torque()
+    body = rot.Inertia(J=0.5)
+
+    def equations(self):
+        connect(self.torque.flange, self.body.flange_a)
+        self.output("momentum", self.body.J * self.body.w, unit="N.m.s")
+
+
+def test_the_declared_units_reach_the_flat_model():
+    # the library's declarations (MSL units: rad, rad/s, N.m), a connector's, and the user's output
+    m = _Loaded().to_model("loaded")
+    assert {k: m.units[k] for k in ("torque.tau", "body.phi", "body.w", "body.a", "body.flange_a.tau", "momentum")} == {
+        "torque.tau": "N.m", "body.phi": "rad", "body.w": "rad/s", "body.a": "rad/s2", "body.flange_a.tau": "N.m",
+        "momentum": "N.m.s"}
+
+
+def test_a_unit_that_is_no_string_is_refused_naming_the_output():
+    class Bad(Component):
+        body = rot.Inertia()
+
+        def equations(self):
+            self.output("momentum", self.body.w, unit=3)
+
+    from gtmodel.errors import InputError
+
+    with pytest.raises(InputError, match=r"output 'momentum' unit: expected a string such as 'N', got 3"):
+        Bad().to_model("bad")

@@ -328,3 +328,15 @@ def test_time_points_and_integrals_need_the_callbacks_of_an_optimization():
     c = parse_constraint("x(0.5) + integral(x^2) <= x(final_time)", names, static=["final_time", "start_time"], specials=specials)
     assert c.at == "timed" and c.ub == 0.0 and len(seen) == 2 and seen[1] == "final"
     assert float(ca.DM(ca.evalf(seen[0]))) == 0.5
+
+
+@pytest.mark.parametrize("name, known, expected", [
+    ("link.omega", ["link.w", "link.phi", "motor.w"], ["link.w"]),  # the MSL's name on the same path first
+    ("link.omega", ["link.phi", "motor.w"], []),  # no link.w: nothing close
+    ("tua1", ["tau1", "tau2", "x"], ["tau1"]),  # difflib (ratio 0.75; tau2 0.5 is below its cutoff 0.6)
+    ("theta", ["phi", "theta_dot"], ["phi", "theta_dot"]),
+])
+def test_close_names_put_the_msl_name_first(name, known, expected):
+    from gtmodel.modeling.ocp.suggestions import close_names
+
+    assert close_names(name, known) == expected

@@ -12,8 +12,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Optimization
-from gtmodel.modeling.ocp.collocation import _guess_fn
-from gtmodel.modeling.ocp.guesses import guess_by_simulation, guess_from_table
+from gtmodel.modeling.ocp.guesses import guess_by_simulation, guess_from_table, guess_values
 
 from .._builders import double_integrator
 
@@ -27,7 +26,7 @@ def _opt():
 
 
 def _at(opt, name, t):
-    return _guess_fn(opt.initial_guesses[name], 1, name, np.zeros(1))(t)[0]
+    return guess_values(opt.initial_guesses[name], 1, name, np.zeros(1), np.array([t]))[0, 0]
 
 
 def test_guess_by_simulation_follows_the_closed_form():
@@ -70,3 +69,38 @@ def test_bad_tables(columns, data, match):
 def test_simulation_with_an_unknown_input():
     with pytest.raises(InputError, match=r"'F' is not an input of model 'double_integrator' \(inputs: u\)"):
         guess_by_simulation(_opt(), {"F": 1.0})
+
+
+def test_a_coarse_result_is_sampled_once_for_the_fine_mesh(monkeypatch):
+    """A coarse solution guesses the fine mesh with one evaluation of its polynomials for every
+    variable and point (was one per variable and point); the values are those of
+    OptimizationResult.sample, the second method, at each of the fine mesh's times."""
+    from gtmodel.modeling.ocp.guesses import ResultGuess
+    from gtmodel.modeling.ocp.result import CollocationData
+
+    from .._builders import min_energy_problem
+
+    opt = min_energy_problem()
+    coarse = CollocationTranscription(opt, elements=4).solve()
+    fine = CollocationTranscription(opt, elements=12)
+    calls = []
+    evaluate = CollocationData.evaluate
+    monkeypatch.setattr(CollocationData, "evaluate", lambda self, t: (self is coarse.collocation and calls.append(np.size(t))) or evaluate(self, t))
+    fine.solve(initial_guess=coarse)
+    assert calls == [len(fine.nlp.blocks)]  # one point set: the time of every block of the NLP vector
+    t = np.linspace(0.0, 1.0, 7)
+    sampled = ResultGuess(coarse, 0.0, 1.0).values(t)
+    by_point = coarse.sample(t)
+    np.testing.assert_allclose(sampled["x"][:, 0], by_point["states"]["x"], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(sampled["u"][:, 0], by_point["inputs"]["u"], rtol=0, atol=1e-14)
+
+
+def test_a_result_guess_is_stretched_onto_another_final_time():
+    """A result of horizon 1 s guessing a 2 s horizon: the value at 2 t is the result's at t (linear map)."""
+    from gtmodel.modeling.ocp.guesses import ResultGuess
+
+    from .._builders import min_energy_problem
+
+    coarse = CollocationTranscription(min_energy_problem(), elements=4).solve()
+    t = np.array([0.0, 0.3, 1.0])
+    np.testing.assert_allclose(ResultGuess(coarse, 0.0, 2.0).values(2 * t)["x"][:, 0], coarse.sample(t)["states"]["x"], atol=1e-14)

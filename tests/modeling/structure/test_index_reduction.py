@@ -190,3 +190,32 @@ def test_reduction_errors(build, match):
 def test_reduced_simulation_bad_arguments(call, match):
     with pytest.raises(InputError, match=match):
         call()
+
+
+def test_the_reduction_keeps_the_declared_units():
+    # the DC motor of models/dc_motor.py (index 2 through its gear): the states the reduction chose, the
+    # input, an algebraic variable kept and an alias that became an output keep the library's units
+    from gtmodel.modeling.library import electrical as el
+    from gtmodel.modeling.library import rotational as rot
+    from gtmodel.modeling import Component, connect
+
+    class Motor(Component):
+        src, gnd, r, ind, emf = el.SignalVoltage(), el.Ground(), el.Resistor(R=0.5), el.Inductor(L=1e-3), el.EMF(k=0.05)
+        rotor, gear, load = rot.Inertia(J=1e-4), rot.IdealGear(ratio=10.0), rot.Inertia(J=0.01)
+
+        def equations(self):
+            connect(self.src.p, self.r.p)
+            connect(self.r.n, self.ind.p)
+            connect(self.ind.n, self.emf.p)
+            connect(self.emf.n, self.src.n)
+            connect(self.src.n, self.gnd.p)
+            connect(self.emf.flange, self.rotor.flange_a)
+            connect(self.rotor.flange_b, self.gear.flange_a)
+            connect(self.gear.flange_b, self.load.flange_a)
+
+    reduced = structural_simplify(Motor().to_model("motor"))
+    units = reduced.units
+    assert all(units[n] == u for n, u in {"ind.i": "A", "src.v": "V", "load.phi": "rad"}.items())
+    states = reduced.flatten().x_names
+    assert {units.get(s) for s in states} <= {"A", "rad", "rad/s"} and all(s in units for s in states)
+    assert units["rotor.phi"] == "rad" and "rotor.phi" in reduced.outputs  # an alias kept as an output

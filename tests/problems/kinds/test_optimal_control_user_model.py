@@ -119,6 +119,12 @@ def test_the_class_as_written_solves_and_the_states_chosen_are_named(solved):
     states = summary["model"]["states"]
     assert states == ["inductor.i", "emf.phi", "motor.w"]
     assert any("reduced to index 1" in r and "inductor.i, emf.phi, motor.w" in r for r in records)
+    # the library components' units (MSL declarations) carried to the summary and the report's unit column
+    assert {n: summary["units"][n] for n in (*states, "source.v")} == {"inductor.i": "A", "emf.phi": "rad", "motor.w": "rad/s",
+                                                                      "source.v": "V"}
+    from gtmodel.problems.run import add_report
+
+    assert "<tr><td>inductor.i</td><td>states</td><td>A</td>" in add_report(folder / "out").read_text()
 
 
 def test_variables_plot_shows_the_states_as_written_by_default(solved):
@@ -138,7 +144,7 @@ def test_output_variables_named_in_the_file(tmp_path):
     (tmp_path / "q.toml").write_text(PROBLEM + '[output]\nvariables = ["load.phy"]\n')
     from gtmodel.errors import ProblemError
 
-    with pytest.raises(ProblemError, match=r"field 'output.variables\[0\]': expected one of the model's names \(.*load\.phi, load\.w, .*\), got 'load.phy'"):
+    with pytest.raises(ProblemError, match=r"field 'output.variables\[0\]': expected one of the model's names: did you mean 'load.phi'.*\? \(all: .*load\.phi, load\.w, .*\), got 'load.phy'"):
         load_problem(tmp_path / "q.toml")
 
 
@@ -194,7 +200,7 @@ def test_codegen_of_the_class_as_written(solved, tmp_path, check):
     args = ["codegen", "--model", f"{folder / 'dc_motor.py'}:DCMotorGearLoad", "--out", str(tmp_path)]
     assert main(args + (["--check"] if check else [])) == 0
     header = next(tmp_path.glob("*.h")).read_text()
-    assert "States x: inductor.i, emf.phi, motor.w" in header
+    assert "States x: inductor.i [A], emf.phi [rad], motor.w [rad/s]" in header and "Inputs u: source.v [V]" in header
 
 
 def test_a_guess_on_an_output_that_is_no_affine_function_of_one_variable_is_refused(tmp_path):
@@ -210,3 +216,19 @@ def test_a_guess_on_an_output_that_is_no_affine_function_of_one_variable_is_refu
     (tmp_path / "q.toml").write_text(PROBLEM.replace(GUESS, GUESS + '"power" = "0.1"\n'))
     with pytest.raises(ProblemError, match=r"field 'initial_guess.values.power': .*not a variable of the model nor affine in one"):
         load_problem(tmp_path / "q.toml")
+
+
+@pytest.mark.parametrize("wrong, suggested", [
+    ("load.omega", r"did you mean 'load\.w'.*\? \(the Modelica Standard Library's name of omega is w\)"),
+    ("load.theta", r"did you mean 'load\.phi'.*\? \(the Modelica Standard Library's name of theta is phi\)"),
+    ("load.ww", r"did you mean 'load\.w'.*\? \(all: "),
+])
+def test_an_unknown_name_suggests_the_models_close_and_msl_names(tmp_path, wrong, suggested):
+    # the user's mistake: another library's name (omega, theta) or a typo for a library component's variable
+    from gtmodel.errors import ProblemError
+    from gtmodel.problems import load_problem
+
+    (tmp_path / "dc_motor.py").write_text(MODEL)
+    (tmp_path / "p.toml").write_text(PROBLEM.replace('"load.w" = 0.0\n\n[bounds]', f'"{wrong}" = 0.0\n\n[bounds]'))
+    with pytest.raises(ProblemError, match=rf"field 'boundary\.final\.{wrong}': expected one of the model's names: {suggested}"):
+        load_problem(tmp_path / "p.toml")

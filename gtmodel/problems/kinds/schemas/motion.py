@@ -107,7 +107,7 @@ class VerificationSection(Section):
     """
 
     enabled: Flag = Field(True, description="verify the solution by simulation (off: the summary says skipped, never verified)")
-    integrator: choice("auto", "cvodes", "idas", description="SUNDIALS integrator (BDF, Newton on the model's Jacobian); auto: cvodes for ODEs, idas with algebraic variables") = "auto"
+    integrator: choice("auto", "cvodes", "idas", description="SUNDIALS integrator; auto: cvodes (BDF where the model is stiff along the solution, else Adams) for ODEs and for algebraic variables eliminated symbolically, idas for a nonlinear algebraic loop") = "auto"
     rtol: number(gt=0, lt=1, description="relative tolerance of the integrator (default 1e-3 x the verification tolerance, within [1e-10, 1e-6])") | None = None
 
 
