@@ -25,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from gtmodel.errors import ModelError
 from gtmodel.modeling.dae import FlatDAE
@@ -114,37 +115,34 @@ def fixed_steps(problem: dict[str, ca.SX], steps: int, method: str) -> ca.Functi
     """
     x, p, t, zout = problem["x"], problem["p"], problem["t"], problem["zout"]
     f = ca.Function("rhs", [x, p, t], [problem["ode"], problem["quad"]])
-    zf_fn = ca.Function("z_of", [x, p, t], [zout])
     dt = 1.0 / steps
-    x0 = ca.SX.sym("x0", x.numel())
-    q = ca.SX.zeros(problem["quad"].numel(), 1)
-    xc, ok = x0, ca.SX(1.0)
-    xs, zs = [], []
-    for i in range(steps):
-        tk = i * dt
-        if method == "rk":
-            k1, q1 = f(xc, p, tk)
-            k2, q2 = f(xc + dt / 2 * k1, p, tk + dt / 2)
-            k3, q3 = f(xc + dt / 2 * k2, p, tk + dt / 2)
-            k4, q4 = f(xc + dt * k3, p, tk + dt)
-            xc = xc + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            q = q + dt / 6 * (q1 + 2 * q2 + 2 * q3 + q4)
-        else:  # Radau IIA, 2 stages: stage derivatives K1, K2
-            n = x.numel()
-            kk = ca.SX.sym("K", 2 * n)
-            ks = (kk[:n], kk[n:])
-            stages = [xc + dt * (_RADAU_A[i][0] * ks[0] + _RADAU_A[i][1] * ks[1]) for i in range(2)]
-            res = ca.vertcat(*[ks[j] - f(stages[j], p, tk + _RADAU_C[j] * dt)[0] for j in range(2)])
-            k0 = f(xc, p, tk)[0]
-            k_sol, ok_k = _newton(res, kk, ca.vertcat(k0, k0), STEP_NEWTON_ITERATIONS, NEWTON_TOLERANCE * max(1.0, 1.0 / dt),
-                                  simplified=True)
-            k1, k2 = k_sol[:n], k_sol[n:]
-            s1 = xc + dt * (_RADAU_A[0][0] * k1 + _RADAU_A[0][1] * k2)
-            xc = xc + dt * (_RADAU_A[1][0] * k1 + _RADAU_A[1][1] * k2)
-            q = q + dt * (_RADAU_A[1][0] * f(s1, p, tk + _RADAU_C[0] * dt)[1] + _RADAU_A[1][1] * f(xc, p, tk + dt)[1])
-            ok = ok * ok_k
-        xs.append(xc)
-        zs.append(zf_fn(xc, p, (i + 1) * dt))
-    z0 = ca.SX.sym("z0", zout.numel())  # unused: the algebraic variables follow from x
-    return ca.Function("interval", [x0, z0, p], [xc, zs[-1], q, ca.horzcat(*xs), ca.horzcat(*zs), ok],
+    n = x.numel()
+    xc, tk = ca.SX.sym("x", n), ca.SX.sym("t")
+    if method == "rk":
+        k1, q1 = f(xc, p, tk)
+        k2, q2 = f(xc + dt / 2 * k1, p, tk + dt / 2)
+        k3, q3 = f(xc + dt / 2 * k2, p, tk + dt / 2)
+        k4, q4 = f(xc + dt * k3, p, tk + dt)
+        x_next = xc + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        dq = dt / 6 * (q1 + 2 * q2 + 2 * q3 + q4)
+        ok = ca.SX(1.0)
+    else:  # Radau IIA, 2 stages: stage derivatives K1, K2
+        kk = ca.SX.sym("K", 2 * n)
+        ks = (kk[:n], kk[n:])
+        stages = [xc + dt * (_RADAU_A[i][0] * ks[0] + _RADAU_A[i][1] * ks[1]) for i in range(2)]
+        res = ca.vertcat(*[ks[j] - f(stages[j], p, tk + _RADAU_C[j] * dt)[0] for j in range(2)])
+        k0 = f(xc, p, tk)[0]
+        k_sol, ok = _newton(res, kk, ca.vertcat(k0, k0), STEP_NEWTON_ITERATIONS, NEWTON_TOLERANCE * max(1.0, 1.0 / dt),
+                            simplified=True)
+        k1, k2 = k_sol[:n], k_sol[n:]
+        s1 = xc + dt * (_RADAU_A[0][0] * k1 + _RADAU_A[0][1] * k2)
+        x_next = xc + dt * (_RADAU_A[1][0] * k1 + _RADAU_A[1][1] * k2)
+        dq = dt * (_RADAU_A[1][0] * f(s1, p, tk + _RADAU_C[0] * dt)[1] + _RADAU_A[1][1] * f(x_next, p, tk + dt)[1])
+    z_next = ca.substitute(zout, ca.vertcat(x, t), ca.vertcat(x_next, tk + dt))
+    # one step as an SX function, repeated by mapaccum: the graph (and its derivatives) of one step,
+    # not of all of them (64 unrolled Radau steps of a 5-state drive took 3.6 GB to build)
+    step = ca.Function("step", [xc, p, tk], [x_next, dq, z_next, ok])
+    x0, z0, pm = ca.MX.sym("x0", n), ca.MX.sym("z0", zout.numel()), ca.MX.sym("p", p.numel())
+    xs, dqs, zs, oks = step.mapaccum("steps", steps)(x0, pm, ca.DM(np.arange(steps) * dt).T)
+    return ca.Function("interval", [x0, z0, pm], [xs[:, -1], zs[:, -1], ca.sum2(dqs), xs, zs, ca.mmin(oks)],
                        ["x0", "z0", "p"], ["xf", "zf", "qf", "xs", "zs", "ok"])
