@@ -460,7 +460,7 @@ class ShootingTranscription:
             xs, us, zs, T, p_all, zn, un, ok = (np.array(v, dtype=float) for v in self._samples(w, pvec))
         except RuntimeError as exc:  # the integrator failed at this point
             text = str(exc).strip().splitlines()
-            message = f"{message}; the {self.integrator} integrator failed at the returned point: {text[-1] if text else exc!r}"
+            message = f"{message}; the {self.integrator} integrator failed at the returned point: {text[-1] if text else repr(exc)}"
             _log.warning("multiple shooting of %s: %s", dae.name, message)
             return OptimizationResult(status=Status.ERROR, message=message, iterations=int(stats.get("iter_count", 0) or 0),
                                       solve_time=solve_time, objective=float("nan"), final_time=float("nan"), max_constraint_violation=float("nan"),
