@@ -11,20 +11,36 @@ more parameter of the integrator.
 
 * Path constraints, variable bounds and the algebraic equations are imposed at the nodes
   (the inputs at the last node are those of the last interval, or its end value when
-  piecewise linear).
+  piecewise linear); with ``"rk"``/``"radau"`` also at every integration step's end inside
+  the intervals (a motor current's bound is not only held at the nodes). Every written row
+  is checked against them; a row beyond a bound by more than :data:`ROW_TOLERANCE` (relative)
+  is reported in the result's ``warnings`` (and the summary's), never silently written.
 * The Lagrange term and :meth:`Optimization.integral` s are the integrator's quadratures.
 * A timed variable at an interior time is integrated from the start of its interval to
   that time (the same integrator with the step scaled by the fraction of the interval).
-* Integrators: ``"rk"`` (fixed-step classical Runge-Kutta 4, ``steps`` per interval,
-  written as one SX function, as CasADi's ``rk`` plugin integrates), ``"collocation"``
-  (CasADi's fixed-step implicit integrator, DAEs), both with exact Hessians;
-  ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step) with a limited-memory Hessian
-  (second-order sensitivities of SUNDIALS are slow).
+* Integrators: ``"rk"`` (fixed-step classical Runge-Kutta 4, ``steps`` per interval) and
+  ``"radau"`` (fixed-step 2-stage Radau IIA, implicit and L-stable, for stiff models: a DC
+  motor's armature) integrate the model's explicit form, the algebraic variables
+  eliminated symbolically as codegen eliminates them
+  (:mod:`gtmodel.modeling.ocp.shooting_steps`), so DAEs too, without a rootfinder; one step
+  is an SX function repeated by ``mapaccum``; ``"collocation"`` (CasADi's fixed-step
+  implicit integrator with a rootfinder, DAEs whose algebraic equations are not affine in
+  their variables), with exact Hessians; ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step)
+  with a limited-memory Hessian (second-order sensitivities of SUNDIALS are slow). The
+  default is ``"rk"`` for ODEs, ``"radau"`` for DAEs made explicit, ``"collocation"`` else.
+* The memory of the NLP is estimated before anything is built
+  (:func:`gtmodel.modeling.ocp.budget.check_shooting_memory`): too many intervals times
+  steps are refused at once.
+* A failure (the NLP solver's, or the integrator's at the returned point) is a result with
+  a :class:`~gtmodel.status.Status` and a message, never an exception.
 
 The solution is returned as an :class:`~gtmodel.modeling.ocp.result.OptimizationResult`
 whose :class:`~gtmodel.modeling.ocp.result.CollocationData` holds, per interval, the node
 state and the integrated states at the three Radau points of the interval (and the
-inputs there), so ``sample``/``to_csv`` interpolate the integrated trajectory. Every
+inputs there; with ``"rk"``/``"radau"`` and 3 or more steps, the ends of up to 4 of its
+integration steps instead), with the node's algebraic variables and inputs, so
+``sample``/``to_csv`` interpolate the integrated trajectory and the start row is
+consistent with the start state. Every
 solution is verified by simulation (:mod:`gtmodel.modeling.ocp.verification`, as a
 collocation solution is): the piecewise constant or linear inputs drive the model in
 CVODES or IDAS from the initial state, and the nodes and the integrated samples are
@@ -78,10 +94,11 @@ class ShootingTranscription:
     controls : {"constant", "linear"}, optional
         Inputs piecewise constant (one value per interval) or piecewise linear
         (continuous, one value per node); default ``"constant"``.
-    integrator : {"rk", "collocation", "cvodes", "idas"}, optional
-        Integrator plugin; default ``"rk"`` for ODEs, ``"collocation"`` for DAEs.
+    integrator : {"rk", "radau", "collocation", "cvodes", "idas"}, optional
+        Integrator; default ``"rk"`` for ODEs, ``"radau"`` for DAEs whose algebraic
+        variables are eliminated symbolically, ``"collocation"`` for other DAEs.
     steps : int, optional
-        Fixed steps per interval of ``"rk"``/``"collocation"``; default 4.
+        Fixed steps per interval of ``"rk"``/``"radau"``/``"collocation"``; default 4.
     verbose : bool, optional
         Show IPOPT output; default False.
     solver_options : mapping, optional
@@ -99,8 +116,10 @@ class ShootingTranscription:
     Raises
     ------
     InputError
-        If an argument is invalid (``"rk"``/``"cvodes"`` for a model with algebraic
-        variables).
+        If an argument is invalid (``"cvodes"``, or CasADi's ``"rk"`` plugin through
+        ``integrator_options``, for a model with algebraic variables; ``"rk"``/``"radau"``
+        for one whose algebraic variables cannot be eliminated symbolically), or the NLP's
+        estimated memory exceeds the limit (:func:`~gtmodel.modeling.ocp.budget.check_shooting_memory`).
     ModelError
         If the model cannot be flattened.
     SolverError
