@@ -376,7 +376,7 @@ class ShootingTranscription:
             self.solver = ca.nlpsol(f"{casadi_name(dae.name)}_shooting", "ipopt", self.nlp, self.options)
         except RuntimeError as exc:
             raise SolverError(f"could not build the ipopt solver: {exc}") from exc
-        self.key = (id(self), "multiple_shooting", N, self.controls, int(w.numel()))
+        self.key = (id(self), "multiple_shooting", N, self.controls, int(w.numel()), self.integrator)
         _log.debug("multiple shooting NLP for %s: %d variables, %d constraints", dae.name, w.numel(), gv.numel())
 
     # ------------------------------------------------------------------ guesses

@@ -385,6 +385,12 @@ def _refinement(file: ProblemFile, doc: Any) -> Refinement:
                       integrator=None if ver.integrator == "auto" else ver.integrator, rtol=ver.rtol)
 
 
+def _used_integrator(result: OptimizationResult) -> str:
+    """The integrator a multiple-shooting solve chose by default (the last entry of its transcription key)."""
+    key = result.transcription_key or ()
+    return str(key[-1]) if len(key) > 5 and key[1] == "multiple_shooting" else "default"
+
+
 def _transcription_summary(method: Collocation | MultipleShooting, result: OptimizationResult) -> dict[str, Any]:
     """The summary's ``transcription`` block (``collocation`` keeps its former keys, the declared mesh).
 
@@ -393,7 +399,7 @@ def _transcription_summary(method: Collocation | MultipleShooting, result: Optim
     """
     if isinstance(method, MultipleShooting):
         return {"method": "multiple_shooting", "intervals": method.intervals, "controls": method.controls,
-                "integrator": method.integrator or "default", "steps": method.steps}
+                "integrator": method.integrator or _used_integrator(result), "steps": method.steps}
     col = result.collocation
     elements = col.elements if col is not None else method.elements
     return {"method": "collocation", "elements": elements, "points": method.points, "scheme": method.scheme,
