@@ -171,7 +171,7 @@ def test_multiple_shooting_from_the_file(folder):
     outcome = run_problem(folder / "ms.toml", folder / "out", plots=False)
     assert outcome.status == Status.OPTIMAL
     assert outcome.summary["transcription"] == {"method": "multiple_shooting", "intervals": 8, "controls": "linear",
-                                                "integrator": "default", "steps": 4}
+                                                "integrator": "rk", "steps": 4}
     assert outcome.summary["objective"] == pytest.approx(np.sqrt(0.5 * 2.0**3 / 3.0), rel=1e-7)
     check = outcome.summary["verification"]  # CVODES under the piecewise-linear inputs, integral included
     assert check["passed"] and "piecewise linear" in check["method"] and check["max_abs_deviation"] < 1e-6
