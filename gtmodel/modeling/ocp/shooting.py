@@ -11,8 +11,8 @@ more parameter of the integrator.
 
 * Path constraints, variable bounds and the algebraic equations are imposed at the nodes
   (the inputs at the last node are those of the last interval, or its end value when
-  piecewise linear); with ``"rk"``/``"radau"`` also at every integration step's end inside
-  the intervals (a motor current's bound is not only held at the nodes). Every written row
+  piecewise linear); with ``"rk"``/``"radau"`` the inequalities also at every integration
+  step's end inside the intervals (a motor current's bound is not only held at the nodes). Every written row
   is checked against them; a row beyond a bound by more than :data:`ROW_TOLERANCE` (relative)
   is reported in the result's ``warnings`` (and the summary's), never silently written.
 * The Lagrange term and :meth:`Optimization.integral` s are the integrator's quadratures.
@@ -260,7 +260,9 @@ class ShootingTranscription:
         # bounds and path constraints at every step's end between the nodes (explicit form), and
         # checked at the written rows (all integrators)
         self._check_fn, self._check_lb, self._check_ub, self._check_names = self._checked_function(paths, path_lb, path_ub)
-        finite = np.flatnonzero(np.isfinite(self._check_lb) | np.isfinite(self._check_ub))
+        # inequalities only: an equality path constraint held at every step's end would over-determine
+        # the piecewise inputs (it is still checked at the written rows)
+        finite = np.flatnonzero((np.isfinite(self._check_lb) | np.isfinite(self._check_ub)) & (self._check_lb < self._check_ub))
         inner = self.explicit and self.steps > 1 and finite.size > 0
         if inner:
             c_inner = np.arange(1, self.steps) / self.steps  # the step ends inside an interval
