@@ -48,9 +48,9 @@ class MultipleShooting:
     controls : {"constant", "linear"}
         Input parametrisation per interval.
     integrator : str or None
-        Integrator plugin (None: rk for ODEs, collocation for DAEs).
+        Integrator (None: rk for ODEs, radau for DAEs made explicit, else collocation).
     steps : int
-        Fixed steps per interval of rk/collocation.
+        Fixed steps per interval of rk/radau/collocation.
     """
 
     intervals: int = 50

@@ -13,7 +13,8 @@
 reports only ``Not_Enough_Degrees_Of_Freedom``).
 
 The model's own warnings (``Model.warnings``: connectors left open at flattening) come
-first. Each warning is one sentence naming the variable, the value and the fix; the problem
+first, then the transcription's (``OptimizationResult.warnings``: a bound exceeded between
+shooting nodes). Each warning is one sentence naming the variable, the value and the fix; the problem
 kinds print them (CLI) and write them to ``summary.json`` (``warnings``).
 """
 
@@ -53,7 +54,7 @@ def solution_warnings(optimization: Any, result: Any) -> list[str]:
     col, dae = getattr(result, "collocation", None), getattr(result, "dae", None)
     if col is None or dae is None or result.status not in ("optimal", "acceptable", "check_failed"):
         return []
-    out: list[str] = list(getattr(optimization.model, "warnings", []))
+    out: list[str] = list(getattr(optimization.model, "warnings", [])) + list(getattr(result, "warnings", []))
     u_lb, u_ub = optimization.bounds_vectors(dae, "u")
     x_lb, x_ub = optimization.bounds_vectors(dae, "x")
     u_peak = _peaks(np.asarray(col.uc, dtype=float).reshape(-1, dae.nu)) if dae.nu else np.zeros(0)

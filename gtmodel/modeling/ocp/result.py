@@ -120,6 +120,11 @@ class CollocationData:
         parametrisation (``"constant"`` or ``"linear"``): ``xc`` then holds the node
         states and the integrated states at ``tau_root[1:]`` (samples of the integrated
         trajectory, not a polynomial), ``uc`` the inputs there.
+    zn, un : numpy.ndarray or None, optional
+        Multiple shooting: the algebraic variables and inputs at each interval's start
+        (its node), shapes ``(N, nz)`` and ``(N, nu)``; :meth:`evaluate` then interpolates
+        them with the samples (the start row consistent with the start state, not
+        extrapolated from the interval's samples). None otherwise.
     """
 
     t0: float
@@ -133,6 +138,8 @@ class CollocationData:
     zc: np.ndarray
     fractions: np.ndarray | None = None
     shooting: str | None = None
+    zn: np.ndarray | None = None
+    un: np.ndarray | None = None
 
     def breaks(self) -> np.ndarray:
         """Element boundaries ``t_0 < t_1 < ... < t_N = tf``.
@@ -223,12 +230,17 @@ class CollocationData:
         xs, us, zs = np.zeros((t.size, nx)), np.zeros((t.size, nu)), np.zeros((t.size, nz))
         lx = lagrange_basis(self.tau_root, tau)
         lu = lagrange_basis(self.tau_root[1:], tau)
+        # multiple shooting: inputs and algebraic variables through the node values too
+        uc = self.uc if self.un is None else np.concatenate([self.un[:, None, :], self.uc], axis=1)
+        zc = self.zc if self.zn is None else np.concatenate([self.zn[:, None, :], self.zc], axis=1)
+        bu = lu if self.un is None else lx
+        bz = lu if self.zn is None else lx
         for i in range(t.size):
             xs[i] = lx[i] @ self.xc[k[i]]
             if nu:
-                us[i] = lu[i] @ self.uc[k[i]]
+                us[i] = bu[i] @ uc[k[i]]
             if nz:
-                zs[i] = lu[i] @ self.zc[k[i]]
+                zs[i] = bz[i] @ zc[k[i]]
         return xs, us, zs
 
 
@@ -289,6 +301,11 @@ class OptimizationResult(StatusResult):
         Wall and CPU seconds per phase of the run that produced it, ``phase ->
         {"wall_s", "cpu_s"}`` (:mod:`gtmodel._timing`: ``build``, ``guess``, ``solve`` (the
         solver's call, as :attr:`solve_time`), ``verification``, ...); empty when not timed.
+    warnings : list of str
+        What the transcription found wrong with the returned solution that its status does
+        not say (multiple shooting: a bound or path constraint exceeded between the
+        shooting nodes, a stage Newton iteration that did not converge); the problem kinds
+        print them and write them to ``summary.json`` (``warnings``).
     """
 
     iterations: int
@@ -313,6 +330,7 @@ class OptimizationResult(StatusResult):
     verification: Any = field(default=None, repr=False)
     refinement: list[dict[str, Any]] = field(default_factory=list, repr=False)
     timing: dict[str, dict[str, float]] = field(default_factory=dict, repr=False)
+    warnings: list[str] = field(default_factory=list, repr=False)
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.

@@ -11,20 +11,36 @@ more parameter of the integrator.
 
 * Path constraints, variable bounds and the algebraic equations are imposed at the nodes
   (the inputs at the last node are those of the last interval, or its end value when
-  piecewise linear).
+  piecewise linear); with ``"rk"``/``"radau"`` the inequalities also at every integration
+  step's end inside the intervals (a motor current's bound is not only held at the nodes). Every written row
+  is checked against them; a row beyond a bound by more than :data:`ROW_TOLERANCE` (relative)
+  is reported in the result's ``warnings`` (and the summary's), never silently written.
 * The Lagrange term and :meth:`Optimization.integral` s are the integrator's quadratures.
 * A timed variable at an interior time is integrated from the start of its interval to
   that time (the same integrator with the step scaled by the fraction of the interval).
-* Integrators: ``"rk"`` (fixed-step classical Runge-Kutta 4, ``steps`` per interval,
-  written as one SX function, as CasADi's ``rk`` plugin integrates), ``"collocation"``
-  (CasADi's fixed-step implicit integrator, DAEs), both with exact Hessians;
-  ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step) with a limited-memory Hessian
-  (second-order sensitivities of SUNDIALS are slow).
+* Integrators: ``"rk"`` (fixed-step classical Runge-Kutta 4, ``steps`` per interval) and
+  ``"radau"`` (fixed-step 2-stage Radau IIA, implicit and L-stable, for stiff models: a DC
+  motor's armature) integrate the model's explicit form, the algebraic variables
+  eliminated symbolically as codegen eliminates them
+  (:mod:`gtmodel.modeling.ocp.shooting_steps`), so DAEs too, without a rootfinder; one step
+  is an SX function repeated by ``mapaccum``; ``"collocation"`` (CasADi's fixed-step
+  implicit integrator with a rootfinder, DAEs whose algebraic equations are not affine in
+  their variables), with exact Hessians; ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step)
+  with a limited-memory Hessian (second-order sensitivities of SUNDIALS are slow). The
+  default is ``"rk"`` for ODEs, ``"radau"`` for DAEs made explicit, ``"collocation"`` else.
+* The memory of the NLP is estimated before anything is built
+  (:func:`gtmodel.modeling.ocp.budget.check_shooting_memory`): too many intervals times
+  steps are refused at once.
+* A failure (the NLP solver's, or the integrator's at the returned point) is a result with
+  a :class:`~gtmodel.status.Status` and a message, never an exception.
 
 The solution is returned as an :class:`~gtmodel.modeling.ocp.result.OptimizationResult`
 whose :class:`~gtmodel.modeling.ocp.result.CollocationData` holds, per interval, the node
 state and the integrated states at the three Radau points of the interval (and the
-inputs there), so ``sample``/``to_csv`` interpolate the integrated trajectory. Every
+inputs there; with ``"rk"``/``"radau"`` and 3 or more steps, the ends of up to 4 of its
+integration steps instead), with the node's algebraic variables and inputs, so
+``sample``/``to_csv`` interpolate the integrated trajectory and the start row is
+consistent with the start state. Every
 solution is verified by simulation (:mod:`gtmodel.modeling.ocp.verification`, as a
 collocation solution is): the piecewise constant or linear inputs drive the model in
 CVODES or IDAS from the initial state, and the nodes and the integrated samples are
@@ -47,18 +63,23 @@ from gtmodel.modeling.ocp.guesses import _guess_fn
 from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.optimization import Integral, Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
+from gtmodel.modeling.ocp.budget import check_shooting_memory
+from gtmodel.modeling.ocp.shooting_steps import EXPLICIT_INTEGRATORS, ExplicitAlgebraics, explicit_algebraics, fixed_steps
 from gtmodel.modeling.ocp.verification import check_result
 from gtmodel.status import Status
 
-__all__ = ["ShootingTranscription", "INTEGRATORS", "CONTROLS"]
+__all__ = ["ShootingTranscription", "INTEGRATORS", "CONTROLS", "ROW_TOLERANCE"]
 
 _log = logging.getLogger("gtmodel")
 
 #: Integrator plugins of the shooting intervals.
-INTEGRATORS = ("rk", "collocation", "cvodes", "idas")
+INTEGRATORS = ("rk", "radau", "collocation", "cvodes", "idas")
 #: Input parametrisations per interval.
 CONTROLS = ("constant", "linear")
 _SAMPLE_POINTS = 3  # Radau points per interval in the result's CollocationData
+#: A written row exceeds a bound or path constraint when beyond it by more than this times
+#: ``max(1, |bound|)`` (IPOPT holds them at the nodes to its tolerance, far below).
+ROW_TOLERANCE = 1e-6
 
 
 class ShootingTranscription:
@@ -73,10 +94,11 @@ class ShootingTranscription:
     controls : {"constant", "linear"}, optional
         Inputs piecewise constant (one value per interval) or piecewise linear
         (continuous, one value per node); default ``"constant"``.
-    integrator : {"rk", "collocation", "cvodes", "idas"}, optional
-        Integrator plugin; default ``"rk"`` for ODEs, ``"collocation"`` for DAEs.
+    integrator : {"rk", "radau", "collocation", "cvodes", "idas"}, optional
+        Integrator; default ``"rk"`` for ODEs, ``"radau"`` for DAEs whose algebraic
+        variables are eliminated symbolically, ``"collocation"`` for other DAEs.
     steps : int, optional
-        Fixed steps per interval of ``"rk"``/``"collocation"``; default 4.
+        Fixed steps per interval of ``"rk"``/``"radau"``/``"collocation"``; default 4.
     verbose : bool, optional
         Show IPOPT output; default False.
     solver_options : mapping, optional
@@ -94,8 +116,10 @@ class ShootingTranscription:
     Raises
     ------
     InputError
-        If an argument is invalid (``"rk"``/``"cvodes"`` for a model with algebraic
-        variables).
+        If an argument is invalid (``"cvodes"``, or CasADi's ``"rk"`` plugin through
+        ``integrator_options``, for a model with algebraic variables; ``"rk"``/``"radau"``
+        for one whose algebraic variables cannot be eliminated symbolically), or the NLP's
+        estimated memory exceeds the limit (:func:`~gtmodel.modeling.ocp.budget.check_shooting_memory`).
     ModelError
         If the model cannot be flattened.
     SolverError
@@ -122,15 +146,27 @@ class ShootingTranscription:
             raise InputError(f"controls must be one of {', '.join(CONTROLS)}, got {controls!r}")
         if not isinstance(steps, (int, np.integer)) or isinstance(steps, bool) or steps < 1:
             raise InputError(f"steps must be a positive integer, got {steps!r}")
+        if integrator is not None and integrator not in INTEGRATORS:
+            raise InputError(f"integrator must be one of {', '.join(INTEGRATORS)}, got {integrator!r}")
         self.optimization = optimization
         self.dae: FlatDAE = optimization.flat()
-        default = "rk" if self.dae.nz == 0 else "collocation"
-        self.integrator = integrator or default
-        if self.integrator not in INTEGRATORS:
-            raise InputError(f"integrator must be one of {', '.join(INTEGRATORS)}, got {self.integrator!r}")
-        if self.dae.nz and self.integrator in ("rk", "cvodes"):
-            raise InputError(f"integrator {self.integrator!r} integrates ODEs only; the model has algebraic variables "
-                             "(use 'collocation' or 'idas')")
+        dae = self.dae
+        # the memory this NLP needs, before any of it is built (budget.check_shooting_memory)
+        self.size = check_shooting_memory(int(intervals), int(steps), dae.nx, dae.nz, dae.nu)
+        eliminated = explicit_algebraics(dae) if dae.nz else ExplicitAlgebraics(ca.SX(0, 1))
+        self._z_expr = eliminated.z
+        self.integrator = integrator or ("rk" if dae.nz == 0 else "radau" if eliminated.z is not None else "collocation")
+        plugin_rk = self.integrator == "rk" and bool(integrator_options)
+        if dae.nz and (self.integrator == "cvodes" or plugin_rk):
+            raise InputError(f"integrator {self.integrator!r}{' with integrator_options (CasADi plugin)' if plugin_rk else ''} "
+                             "integrates ODEs only; the model has algebraic variables (use 'rk' or 'radau' on the explicit "
+                             "form, 'collocation' or 'idas')")
+        if self.integrator in EXPLICIT_INTEGRATORS and eliminated.z is None:
+            raise InputError(f"integrator {self.integrator!r} integrates the explicit form, but the algebraic variables of "
+                             f"{dae.name!r} cannot be eliminated symbolically ({eliminated.reason}): use 'collocation' or 'idas'")
+        if self.integrator == "radau" and integrator_options:
+            raise InputError("integrator_options apply to CasADi's integrator plugins (rk, collocation, cvodes, idas), not to 'radau'")
+        self.explicit = self.integrator in EXPLICIT_INTEGRATORS and not plugin_rk
         self.intervals, self.controls, self.steps = int(intervals), controls, int(steps)
         self.verbose = bool(verbose)
         options = dict(solver_options or {})
@@ -143,7 +179,11 @@ class ShootingTranscription:
 
     # ------------------------------------------------------------------ build
     def _interval_function(self) -> ca.Function:
-        """The integrator over one interval: ``(x0, z0, p = [ua, ub, P, T, k, frac]) -> (xf, zf, qf)``."""
+        """The integrator over one interval: ``(x0, z0, p = [ua, ub, P, T, k, frac]) -> (xf, zf, qf[, xs, zs, ok])``.
+
+        On the explicit form (``"rk"``, ``"radau"``: :func:`~gtmodel.modeling.ocp.shooting_steps.fixed_steps`)
+        also the states and algebraic variables at every step's end and the stage Newton's
+        convergence flag."""
         opt, dae = self.optimization, self.dae
         nu, N, t0 = dae.nu, self.intervals, opt.start_time
         tau = ca.SX.sym("tau")
@@ -156,11 +196,15 @@ class ShootingTranscription:
         f = self._point_function("interval", [dae.ode_expr, dae.alg_expr, ca.vertcat(*integrands)])
         ode, alg, quad = f(t, dae.x, dae.z, u, dae.p, T)
         p = ca.vertcat(ua, ub, dae.p, T, k, frac)
+        if self.explicit:  # z(t, x, u, p) substituted: an ODE, integrated by fixed steps
+            z_of = ca.substitute(self._z_expr, ca.vertcat(dae.t, dae.u), ca.vertcat(t, u)) if dae.nz else ca.SX(0, 1)
+            if dae.nz:
+                ode, quad = ca.substitute([ode, quad], [dae.z], [z_of])
+            problem = {"x": dae.x, "p": p, "t": tau, "ode": frac * h * ode, "quad": frac * h * quad, "zout": z_of}
+            return fixed_steps(problem, self.steps, self.integrator)
         problem = {"x": dae.x, "p": p, "t": tau, "ode": frac * h * ode, "quad": frac * h * quad}
         if dae.nz:
             problem.update(z=dae.z, alg=alg)
-        if self.integrator == "rk" and not self.integrator_options:
-            return _rk4(problem, self.steps)
         opts = {"number_of_finite_elements": self.steps} if self.integrator in ("rk", "collocation") else {}
         opts.update(self.integrator_options)
         try:
@@ -209,6 +253,24 @@ class ShootingTranscription:
 
         J = ca.MX(0)
         quads = ca.MX.zeros(len(opt.integrals), 1)
+        paths = [c.expr for c in opt.path_constraints]
+        node_fn = self._point_function("node", [dae.alg_expr, ca.vertcat(*paths) if paths else ca.SX(0, 1)])
+        path_lb = np.concatenate([c.lb for c in opt.path_constraints]) if paths else np.zeros(0)
+        path_ub = np.concatenate([c.ub for c in opt.path_constraints]) if paths else np.zeros(0)
+        # bounds and path constraints at every step's end between the nodes (explicit form), and
+        # checked at the written rows (all integrators)
+        self._check_fn, self._check_lb, self._check_ub, self._check_names = self._checked_function(paths, path_lb, path_ub)
+        # inequalities only: an equality path constraint held at every step's end would over-determine
+        # the piecewise inputs (it is still checked at the written rows)
+        finite = np.flatnonzero((np.isfinite(self._check_lb) | np.isfinite(self._check_ub)) & (self._check_lb < self._check_ub))
+        inner = self.explicit and self.steps > 1 and finite.size > 0
+        if inner:
+            c_inner = np.arange(1, self.steps) / self.steps  # the step ends inside an interval
+            ins = self._check_fn.sx_in()
+            inner_map = ca.Function("between", ins, [self._check_fn(*ins)[finite.tolist()]]).map(self.steps - 1)
+            inner_lb = np.tile(self._check_lb[finite], self.steps - 1)
+            inner_ub = np.tile(self._check_ub[finite], self.steps - 1)
+        steps_x, steps_z, oks = [], [], []
         for k in range(N):
             ua, ub = u_pair(k)
             r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, 1.0))
@@ -216,10 +278,15 @@ class ShootingTranscription:
             J = J + r["qf"][0]
             if opt.integrals:
                 quads = quads + r["qf"][1:]
-        paths = [c.expr for c in opt.path_constraints]
-        node_fn = self._point_function("node", [dae.alg_expr, ca.vertcat(*paths) if paths else ca.SX(0, 1)])
-        path_lb = np.concatenate([c.lb for c in opt.path_constraints]) if paths else np.zeros(0)
-        path_ub = np.concatenate([c.ub for c in opt.path_constraints]) if paths else np.zeros(0)
+            if self.explicit:
+                steps_x.append(r["xs"])
+                steps_z.append(r["zs"])
+                oks.append(r["ok"])
+            if inner:
+                u_in = ca.repmat(ua, 1, self.steps - 1) if self.controls == "constant" else \
+                    ca.mtimes(ua, ca.DM(1 - c_inner).T) + ca.mtimes(ub, ca.DM(c_inner).T)
+                t_in = t0 + (k + ca.DM(c_inner).T) * h
+                con(ca.vec(inner_map(t_in, r["xs"][:, :-1], r["zs"][:, :-1], u_in, Pm, T)), inner_lb, inner_ub)
         for k in range(N + 1):
             alg, path = node_fn(t0 + k * h, X[k], Z[k], u_node(k), Pm, T)
             con(alg, 0.0, 0.0)
@@ -279,25 +346,39 @@ class ShootingTranscription:
         self._fg = ca.Function("fg", [w, P], [J, gv])
         self.special_function = ca.Function("special", [w, P], [s_val])
         self.lagrange_function = ca.Function("lagrange_value", [w, P], [J_lagrange])
-        # the result's samples: node states and the states/inputs at the Radau points of each interval
-        tau = np.array(ca.collocation_points(_SAMPLE_POINTS, "radau"), dtype=float)
+        # the result's samples: node states, and the states/inputs at the ends of (up to
+        # _SAMPLE_POINTS + 1) integration steps of each interval (explicit form, 3 steps or more:
+        # points where the bounds were imposed), else at the Radau points, integrated there
+        samples_at_steps = self.explicit and self.steps >= _SAMPLE_POINTS
+        if samples_at_steps:
+            d = min(self.steps, _SAMPLE_POINTS + 1)
+            ends = [int(round((j + 1) * self.steps / d)) for j in range(d)]
+            tau = np.array(ends, dtype=float) / self.steps
+        else:
+            tau = np.array(ca.collocation_points(_SAMPLE_POINTS, "radau"), dtype=float)
         xs, us, zs = [], [], []
         for k in range(N):
             ua, ub = u_pair(k)
             xs.append(X[k])
-            for c in tau:
-                r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, float(c)))
-                xs.append(r["xf"])
+            for j, c in enumerate(tau):
+                if samples_at_steps:
+                    xs.append(steps_x[k][:, ends[j] - 1])
+                    zs.append(steps_z[k][:, ends[j] - 1])
+                else:
+                    r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, float(c)))
+                    xs.append(r["xf"])
+                    zs.append(r["zf"] if nz else ca.MX(0, 1))
                 us.append(ua if self.controls == "constant" else (1 - c) * ua + c * ub)
-                zs.append(r["zf"] if nz else ca.MX(0, 1))
-        self._samples = ca.Function("samples", [w, P], [ca.horzcat(*xs), ca.horzcat(*us), ca.horzcat(*zs), T, Pm])
+        ok = ca.horzcat(*oks) if oks else ca.MX.ones(1, N)
+        self._samples = ca.Function("samples", [w, P], [ca.horzcat(*xs), ca.horzcat(*us), ca.horzcat(*zs), T, Pm,
+                                                        ca.horzcat(*Z[:N]), ca.horzcat(*[u_pair(k)[0] for k in range(N)]), ok])
         self._tau = tau
         self.nlp = {"x": w, "p": P, "f": J, "g": gv}
         try:
             self.solver = ca.nlpsol(f"{casadi_name(dae.name)}_shooting", "ipopt", self.nlp, self.options)
         except RuntimeError as exc:
             raise SolverError(f"could not build the ipopt solver: {exc}") from exc
-        self.key = (id(self), "multiple_shooting", N, self.controls, int(w.numel()))
+        self.key = (id(self), "multiple_shooting", N, self.controls, int(w.numel()), self.integrator)
         _log.debug("multiple shooting NLP for %s: %d variables, %d constraints", dae.name, w.numel(), gv.numel())
 
     # ------------------------------------------------------------------ guesses
@@ -394,14 +475,17 @@ class ShootingTranscription:
         return res
 
     def _result(self, w: np.ndarray, pvec: np.ndarray, status: str, message: str, stats: dict, solve_time: float) -> OptimizationResult:
-        opt, dae, N, d = self.optimization, self.dae, self.intervals, _SAMPLE_POINTS
+        opt, dae, N, d = self.optimization, self.dae, self.intervals, len(self._tau)
         try:
             f_val, g_val = (np.array(v, dtype=float).reshape(-1) for v in self._fg(w, pvec))
-            xs, us, zs, T, p_all = (np.array(v, dtype=float) for v in self._samples(w, pvec))
+            xs, us, zs, T, p_all, zn, un, ok = (np.array(v, dtype=float) for v in self._samples(w, pvec))
         except RuntimeError as exc:  # the integrator failed at this point
-            _log.warning("multiple shooting: evaluating the solution of %s failed: %s", dae.name, exc)
-            return OptimizationResult(status=Status.ERROR, message=str(exc).splitlines()[-1], iterations=int(stats.get("iter_count", 0) or 0),
+            text = str(exc).strip().splitlines()
+            message = f"{message}; the {self.integrator} integrator failed at the returned point: {text[-1] if text else repr(exc)}"
+            _log.warning("multiple shooting of %s: %s", dae.name, message)
+            return OptimizationResult(status=Status.ERROR, message=message, iterations=int(stats.get("iter_count", 0) or 0),
                                       solve_time=solve_time, objective=float("nan"), final_time=float("nan"), max_constraint_violation=float("nan"),
+                                      t=np.zeros(0), states={}, inputs={}, algebraics={}, outputs={},
                                       last_iterate=True, stats=stats, dae=dae, w=w.copy(), transcription_key=self.key)
         viol = [0.0]
         if g_val.size:
@@ -415,10 +499,20 @@ class ShootingTranscription:
             xc=xs.reshape(dae.nx, N, d + 1).transpose(1, 2, 0),
             uc=us.reshape(dae.nu, N, d).transpose(1, 2, 0),
             zc=zs.reshape(dae.nz, N, d).transpose(1, 2, 0), shooting=self.controls,
+            zn=zn.reshape(dae.nz, N).T, un=un.reshape(dae.nu, N).T,
         )
         t = colloc.mesh()
         x, u, z = colloc.evaluate(t)
         pvec = p_all.reshape(-1)
+        warnings = []
+        if status in (Status.OPTIMAL, Status.ACCEPTABLE):
+            warnings = self._row_warnings(t, x, z, u, pvec, tf)
+            bad = np.flatnonzero(ok.reshape(-1) < 0.5)
+            if bad.size:
+                warnings.append(f"the {self.integrator} integrator's stage Newton iteration did not converge on {bad.size} of {N} "
+                                f"shooting intervals (first at t = {colloc.breaks()[bad[0]]:.6g} s): more transcription.steps")
+            for text in warnings:
+                _log.warning("multiple shooting solve of %s: %s", dae.name, text)
         try:
             outs = _eval_outputs(dae, t, x, z, u, pvec)
         except RuntimeError:
@@ -431,8 +525,41 @@ class ShootingTranscription:
             max_constraint_violation=float(max(viol)) if np.all(np.isfinite(g_val)) else float("nan"),
             t=t, states=_unpack(dae.x_vars, x), inputs=_unpack(dae.u_vars, u), algebraics=_unpack(dae.z_vars, z), outputs=outs,
             parameters={k: pvec[s].copy() for k, s in dae.p_vars.items()}, last_iterate=status not in ("optimal", "acceptable"),
-            stats=stats, collocation=colloc, dae=dae, w=w.copy(), transcription_key=self.key,
+            stats=stats, collocation=colloc, dae=dae, w=w.copy(), transcription_key=self.key, warnings=warnings,
         )
+
+    def _checked_function(self, paths: list[ca.SX], path_lb: np.ndarray, path_ub: np.ndarray) -> tuple[ca.Function, np.ndarray, np.ndarray, list[str]]:
+        """``check(t, x, z, u, p, tf) -> [path constraints; x; z]``, its bounds and a name per entry."""
+        opt, dae = self.optimization, self.dae
+        x_lb, x_ub = opt.bounds_vectors(dae, "x")
+        z_lb, z_ub = opt.bounds_vectors(dae, "z")
+        names = [c.name or "path constraint" for c in opt.path_constraints for _ in range(int(c.expr.numel()))]
+        names += [f"state {n!r}" for n in dae.x_names] + [f"algebraic variable {n!r}" for n in dae.z_names]
+        exprs = [*paths, dae.x, dae.z]
+        fn = self._point_function("check", [ca.vertcat(*exprs)])
+        return (fn, np.concatenate([path_lb, x_lb, z_lb]).astype(float), np.concatenate([path_ub, x_ub, z_ub]).astype(float), names)
+
+    def _row_warnings(self, t: np.ndarray, x: np.ndarray, z: np.ndarray, u: np.ndarray, pvec: np.ndarray, tf: float) -> list[str]:
+        """One sentence per bound or path constraint that the written rows exceed beyond :data:`ROW_TOLERANCE`."""
+        lb, ub = self._check_lb, self._check_ub
+        if not (np.isfinite(lb).any() or np.isfinite(ub).any()) or t.size == 0:
+            return []
+        vals = np.array(self._check_fn.map(t.size)(t.reshape(1, -1), x.T, z.T, u.T, pvec, tf), dtype=float)  # (m, K)
+        with np.errstate(invalid="ignore"):
+            over = np.maximum(vals - ub[:, None], lb[:, None] - vals)  # > 0 outside the bounds
+        finite = np.where(np.isfinite(lb), np.abs(lb), 0.0), np.where(np.isfinite(ub), np.abs(ub), 0.0)
+        tol = ROW_TOLERANCE * np.maximum(1.0, np.maximum(*finite))[:, None]
+        out = []
+        remedy = ("more transcription.intervals or steps" if self.explicit and self.steps > 1 else
+                  "integrator = \"radau\" or \"rk\" (3 or more transcription.steps) imposes the bounds at every integration step; "
+                  "or more transcription.intervals")
+        for i in np.flatnonzero(np.any(over > tol, axis=1)):
+            j = int(np.nanargmax(over[i]))
+            side, bound = ("upper", ub[i]) if vals[i, j] > ub[i] else ("lower", lb[i])
+            count = int(np.sum(over[i] > tol[i]))
+            out.append(f"{self._check_names[i]} exceeds its {side} bound {bound:.6g} between the shooting nodes: {vals[i, j]:.6g} "
+                       f"at t = {t[j]:.6g} s ({count} of {t.size} written rows beyond the tolerance {tol[i, 0]:.2g}); {remedy}")
+        return out
 
 
 def _sampled(result: OptimizationResult, group: str, name: str) -> Any:
@@ -442,28 +569,3 @@ def _sampled(result: OptimizationResult, group: str, name: str) -> Any:
         return np.asarray(result.sample([min(t, result.final_time)])[group][name], dtype=float).reshape(-1)
 
     return f
-
-
-def _rk4(problem: dict[str, ca.SX], steps: int) -> ca.Function:
-    """Classical Runge-Kutta 4 over ``[0, 1]`` in ``steps`` steps, with the quadratures: ``(x0, z0, p) -> (xf, zf, qf)``.
-
-    The same method as ``casadi.integrator(..., "rk", ...)``, as one SX function, so that
-    its derivatives in the NLP are SX functions too (the cart-pendulum swing-up, 50 intervals:
-    1.1 s CPU to build and solve against 3.0 s with the plugin, the same optimum).
-    """
-    x, p, t = problem["x"], problem["p"], problem["t"]
-    f = ca.Function("rhs", [x, p, t], [problem["ode"], problem["quad"]])
-    dt = 1.0 / steps
-    xk = ca.SX.sym("x0", x.numel())
-    q = ca.SX.zeros(problem["quad"].numel(), 1)
-    xc = xk
-    for i in range(steps):
-        tk = i * dt
-        k1, q1 = f(xc, p, tk)
-        k2, q2 = f(xc + dt / 2 * k1, p, tk + dt / 2)
-        k3, q3 = f(xc + dt / 2 * k2, p, tk + dt / 2)
-        k4, q4 = f(xc + dt * k3, p, tk + dt)
-        xc = xc + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        q = q + dt / 6 * (q1 + 2 * q2 + 2 * q3 + q4)
-    z0 = ca.SX.sym("z0", 0)
-    return ca.Function("interval", [xk, z0, p], [xc, ca.SX(0, 1), q], ["x0", "z0", "p"], ["xf", "zf", "qf"])

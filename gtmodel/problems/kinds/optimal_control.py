@@ -32,11 +32,13 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._docstrings import fill_doc
-from gtmodel.errors import GtModelError, ModelError
+from gtmodel.errors import GtModelError, InputError, ModelError
 from gtmodel.modeling import Model, Optimization, OptimizationResult, apply_to, optimization_names, parse_expression
+from gtmodel.modeling.ocp.budget import check_shooting_memory
 from gtmodel.modeling.ocp.diagnostics import solution_warnings
 from gtmodel.modeling.ocp.suggestions import MSL_NAMES, close_names
 from gtmodel.modeling.ocp.initial import InitialConditionConflict, fixed_starts
+from gtmodel.modeling.ocp.shooting_steps import EXPLICIT_INTEGRATORS, explicit_algebraics
 from gtmodel.modeling.ocp.verification import skipped
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.optimal_control_data import declare_data
@@ -269,8 +271,17 @@ class OptimalControlKind(ProblemKind):
         if tr.method == "multiple_shooting":
             if doc.nominal:
                 raise file.fail("nominal", 'no nominal values with [transcription] method = "multiple_shooting" (scaling is for collocation)')
-            if opt.model.flatten().nz and tr.integrator in ("rk", "cvodes"):
-                raise file.fail("transcription.integrator", "collocation or idas for a model with algebraic variables", tr.integrator)
+            flat = opt.model.flatten()
+            if flat.nz and tr.integrator == "cvodes":
+                raise file.fail("transcription.integrator", "rk, radau, collocation or idas for a model with algebraic variables "
+                                "(CVODES takes none)", tr.integrator)
+            if flat.nz and tr.integrator in EXPLICIT_INTEGRATORS and explicit_algebraics(flat).z is None:
+                raise file.fail("transcription.integrator", "collocation or idas: the algebraic variables cannot be eliminated "
+                                f"symbolically for {tr.integrator} ({explicit_algebraics(flat).reason})", tr.integrator)
+            try:  # refused at load, before anything is built
+                check_shooting_memory(tr.intervals, tr.steps, flat.nx, flat.nz, flat.nu)
+            except InputError as exc:
+                raise file.wrap("transcription.intervals", exc) from None
             method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
         if doc.verification.integrator == "cvodes" and opt.model.flatten().nz:
             raise file.fail("verification.integrator", "idas or auto for a model with algebraic variables (CVODES takes none)", "cvodes")
@@ -380,6 +391,12 @@ def _refinement(file: ProblemFile, doc: Any) -> Refinement:
                       integrator=None if ver.integrator == "auto" else ver.integrator, rtol=ver.rtol)
 
 
+def _used_integrator(result: OptimizationResult) -> str:
+    """The integrator a multiple-shooting solve chose by default (the last entry of its transcription key)."""
+    key = result.transcription_key or ()
+    return str(key[-1]) if len(key) > 5 and key[1] == "multiple_shooting" else "default"
+
+
 def _transcription_summary(method: Collocation | MultipleShooting, result: OptimizationResult) -> dict[str, Any]:
     """The summary's ``transcription`` block (``collocation`` keeps its former keys, the declared mesh).
 
@@ -388,7 +405,7 @@ def _transcription_summary(method: Collocation | MultipleShooting, result: Optim
     """
     if isinstance(method, MultipleShooting):
         return {"method": "multiple_shooting", "intervals": method.intervals, "controls": method.controls,
-                "integrator": method.integrator or "default", "steps": method.steps}
+                "integrator": method.integrator or _used_integrator(result), "steps": method.steps}
     col = result.collocation
     elements = col.elements if col is not None else method.elements
     return {"method": "collocation", "elements": elements, "points": method.points, "scheme": method.scheme,

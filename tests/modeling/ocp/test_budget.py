@@ -67,3 +67,28 @@ def test_ulimit_v_lowers_the_limit(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=60)
     assert out.returncode == 0, out.stderr
     assert 0 < float(out.stdout) <= 0.8 * 3_000_000_000
+
+
+def test_the_shooting_estimate_counts_the_nlp_casadi_builds():
+    # reference: the variables of the multiple-shooting NLP CasADi builds (states, inputs, no algebraics)
+    from gtmodel.modeling.ocp.shooting import ShootingTranscription
+
+    tr = ShootingTranscription(_double_integrator(), intervals=20, steps=4, verify=False)
+    assert tr.size.variables == tr.nlp["x"].numel()
+    assert ca.jacobian(tr.nlp["g"], tr.nlp["x"]).nnz() <= tr.size.nonzeros
+
+
+@pytest.mark.parametrize(("intervals", "steps"), [(10000, 1000), (2000, 1000)])
+def test_a_shooting_nlp_beyond_the_limit_is_refused_at_once(monkeypatch, intervals, steps):
+    # the 10,000 x 1,000 (still building after 142 CPU-s, 820 MB) under a 4 GB limit: refused
+    # before anything is built, naming the fields (reference: the process time of the refusal)
+    import time
+
+    from gtmodel.modeling.ocp.shooting import ShootingTranscription
+
+    monkeypatch.setenv(MEMORY_ENV, "4000")
+    start = time.process_time()
+    with pytest.raises(InputError, match=rf"intervals = {intervals}, steps = {steps}: the multiple-shooting NLP would integrate "
+                                         rf"{intervals * steps} steps .* more than the limit of 4000 MB .*transcription\.intervals, transcription\.steps"):
+        ShootingTranscription(_double_integrator(), intervals=intervals, steps=steps)
+    assert time.process_time() - start < 0.5

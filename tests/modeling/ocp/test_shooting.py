@@ -77,26 +77,56 @@ def test_maximise_with_an_isoperimetric_constraint_and_a_timed_variable():
     assert check["passed"] and check["simulated"] == pytest.approx(0.5, rel=1e-4)  # the integrator's rtol 1e-6
 
 
-def test_a_dae_with_the_collocation_integrator():
-    # x' = w, 0 = w - u: the double integrator's energy problem through an algebraic variable
+def _dae_energy(cubic=False):
+    # x' = v, v' = w, 0 = w - u (or w^3 + w - u, which only Newton solves): the double
+    # integrator's energy problem through an algebraic variable
     m = Model("dae")
     x, v, w, u = m.state("x"), m.state("v"), m.algebraic("w"), m.input("u")
     m.equation(m.der(x), v)
     m.equation(m.der(v), w)
-    m.equation(w - u, 0)
+    m.equation((w**3 if cubic else 0) + w - u, 0)
     opt = Optimization(m, final_time=1.0)
     opt.set_objective(lagrange=w**2)
     rest_to_rest(opt, x, v)
-    r = ShootingTranscription(opt, intervals=10, controls="linear").solve()
+    return opt
+
+
+@pytest.mark.parametrize("integrator", [None, "rk", "radau", "collocation"])
+def test_a_dae_with_each_integrator(integrator):
+    # reference: the continuous optimum u = 6 - 12 t, cost 12 (piecewise-linear inputs represent it);
+    # rk and radau integrate the explicit form (w = u eliminated as codegen eliminates it)
+    tr = ShootingTranscription(_dae_energy(), intervals=10, controls="linear", integrator=integrator)
+    r = tr.solve()
+    assert tr.integrator == (integrator or "radau") and tr.explicit == (tr.integrator in ("rk", "radau"))
     assert r.status == "optimal" and r.objective == pytest.approx(12.0, rel=1e-6)
-    with pytest.raises(InputError, match="integrates ODEs only"):
-        ShootingTranscription(opt, integrator="rk")
+    # the algebraic variable of every written row (the start row included) is consistent: w = u
+    assert np.max(np.abs(r.algebraics["w"] - r.inputs["u"])) < 1e-8
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"integrator": "cvodes"}, "integrates ODEs only"),
+    ({"integrator": "rk", "integrator_options": {"number_of_finite_elements": 2}}, "integrates ODEs only"),
+    ({"integrator": "radau", "integrator_options": {"abstol": 1e-8}}, "not to 'radau'"),
+])
+def test_dae_integrator_refusals(kwargs, match):
+    with pytest.raises(InputError, match=match):
+        ShootingTranscription(_dae_energy(), **kwargs)
+
+
+@pytest.mark.parametrize("integrator", ["rk", "radau"])
+def test_explicit_form_refused_where_only_newton_eliminates(integrator):
+    with pytest.raises(InputError, match="cannot be eliminated symbolically .*Newton.*use 'collocation' or 'idas'"):
+        ShootingTranscription(_dae_energy(cubic=True), integrator=integrator)
+
+
+def test_default_for_a_dae_that_only_newton_eliminates():
+    assert ShootingTranscription(_dae_energy(cubic=True), intervals=4).integrator == "collocation"
 
 
 @pytest.mark.parametrize("kwargs, match", [
     ({"intervals": 0}, "intervals must be a positive integer"),
     ({"controls": "cubic"}, "controls must be one of constant, linear"),
-    ({"integrator": "euler"}, "integrator must be one of rk, collocation, cvodes, idas"),
+    ({"integrator": "euler"}, "integrator must be one of rk, radau, collocation, cvodes, idas"),
     ({"steps": 0}, "steps must be a positive integer"),
 ])
 def test_bad_arguments(kwargs, match):

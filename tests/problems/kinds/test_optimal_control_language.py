@@ -171,7 +171,7 @@ def test_multiple_shooting_from_the_file(folder):
     outcome = run_problem(folder / "ms.toml", folder / "out", plots=False)
     assert outcome.status == Status.OPTIMAL
     assert outcome.summary["transcription"] == {"method": "multiple_shooting", "intervals": 8, "controls": "linear",
-                                                "integrator": "default", "steps": 4}
+                                                "integrator": "rk", "steps": 4}
     assert outcome.summary["objective"] == pytest.approx(np.sqrt(0.5 * 2.0**3 / 3.0), rel=1e-7)
     check = outcome.summary["verification"]  # CVODES under the piecewise-linear inputs, integral included
     assert check["passed"] and "piecewise linear" in check["method"] and check["max_abs_deviation"] < 1e-6
@@ -181,7 +181,10 @@ def test_multiple_shooting_from_the_file(folder):
 BAD_TRANSCRIPTION = [
     ("unknown_method", '[transcription]\nmethod = "single_shooting"\n', r"field 'transcription\.method': expected one of collocation, multiple_shooting"),
     ("nominal_with_shooting", '[transcription]\nmethod = "multiple_shooting"\n[nominal]\nu = 2.0\n', r"field 'nominal': expected no nominal values"),
-    ("integrator_unknown", '[transcription]\nmethod = "multiple_shooting"\nintegrator = "euler"\n', r"field 'transcription\.integrator': expected one of rk, collocation, cvodes, idas"),
+    ("integrator_unknown", '[transcription]\nmethod = "multiple_shooting"\nintegrator = "euler"\n', r"field 'transcription\.integrator': expected one of rk, radau, collocation, cvodes, idas"),
+    ("shooting_too_large", '[transcription]\nmethod = "multiple_shooting"\nintervals = 10000\nsteps = 1000\n',
+     r"transcription\.intervals.*intervals = 10000, steps = 1000: the multiple-shooting NLP would integrate 10000000 steps .*"
+     r"use fewer intervals or steps \(transcription\.intervals, transcription\.steps"),
     ("intervals_zero", '[transcription]\nmethod = "multiple_shooting"\nintervals = 0\n', r"field 'transcription\.intervals': expected an integer in 1\.\.10000"),
     ("steps_zero", '[transcription]\nmethod = "multiple_shooting"\nsteps = 0\n', r"field 'transcription\.steps': expected an integer in 1\.\.1000"),
     ("refine_with_shooting", '[transcription]\nmethod = "multiple_shooting"\nrefine = true\n', r"field 'transcription\.refine': expected false with method = \"multiple_shooting\" \(mesh refinement splits collocation elements; shooting is verified as it is: raise transcription\.intervals"),
