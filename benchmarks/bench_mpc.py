@@ -96,9 +96,9 @@ class AcadosPeer:
     ``t + dt``) is done here with the same step; the input-disturbance estimate is not (acados has none).
     """
 
-    def __init__(self, c, problem: Path, qp: str):
+    def __init__(self, c, problem: Path, qp: str, warm: str = "shift"):
         self.c, self.qp = c, qp
-        self.proc = subprocess.Popen([str(ACADOS_ENV), "python", str(ACADOS_PEER), str(problem), "--qp", qp,
+        self.proc = subprocess.Popen([str(ACADOS_ENV), "python", str(ACADOS_PEER), str(problem), "--qp", qp, "--warm", warm,
                                       "--build", str(problem.parent / f"acados_{qp.lower()}")],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                                      env={**os.environ, "OMP_NUM_THREADS": "1"})

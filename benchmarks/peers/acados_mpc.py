@@ -22,8 +22,9 @@ The closed loop stays in gtmodel's process (the same plant, noise, disturbance, 
 check); this script answers it through stdin/stdout, one line per request:
 
 - ``step p...``: one real-time iteration at ``p`` from the warm start shifted by one period (the
-  last solution's ``x_{j+1}``, ``u_{j+1}``; its last entries kept), the call's CPU time of this
-  thread recorded; answers ``status u...``;
+  last solution's ``x_{j+1}``, ``u_{j+1}``; its last entries kept; with ``--warm rollout`` the
+  inputs shifted and the states they predict from ``p``'s ``x``, as gtmodel's single shooting),
+  the call's CPU time of this thread recorded; answers ``status u...``;
 - ``converge p...``: real-time iterations at ``p`` until the first input moves by less than
   1e-13 relative (at most 200; no shift); answers ``status iterations u...``;
 - ``reset w...``: the next ``step`` starts from ``u_j`` = the inputs ``w`` (``nu * H``) and the
@@ -100,6 +101,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("problem", help="the .npz exported by bench_mpc.py")
     ap.add_argument("--qp", default="PARTIAL_CONDENSING_HPIPM", help="acados qp_solver")
+    ap.add_argument("--warm", choices=("shift", "rollout"), default="shift",
+                    help="warm start of a step: the last solution's states and inputs shifted (default), or its inputs shifted and "
+                         "the states they predict from the new x (the single-shooting warm start of gtmodel's step)")
     ap.add_argument("--build", default=None, help="folder of acados' generated code (default beside the problem)")
     args = ap.parse_args()
     problem = dict(np.load(args.problem))
@@ -154,6 +158,8 @@ def main() -> None:
         if pending is not None:
             rollout(vals[:nx], pending)
             pending = None
+        elif cmd == "step" and args.warm == "rollout":
+            rollout(vals[:nx], [solver.get(min(j + 1, H - 1), "u") for j in range(H)])
         elif cmd == "step":
             shift()
         if cmd == "step":
