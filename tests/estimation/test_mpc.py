@@ -19,6 +19,7 @@ from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
 from ..conftest import REPO
+from ..modeling._builders import double_integrator
 
 DT = 0.004
 #: The SQP iterated to convergence against IPOPT: first input, relative to 1 + |u_IPOPT|.
@@ -136,7 +137,6 @@ def test_one_real_time_iteration_is_the_full_gauss_newton_step(blocks, x0, at_bo
     # search cut, no regularisation) and qrqp solves the QP to its optimum, with and without active bounds
     # (a second method: IPOPT to 1e-10). acados' SQP-RTI from the same rollout gives the same first input
     # on the L1 (1e-8, benchmarks/bench_mpc.py), so the RTI itself does not make gtmodel track worse.
-    from ..modeling._builders import double_integrator
     ode = explicit_ode(double_integrator()[0])
     t = DT * np.arange(101)
     x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
