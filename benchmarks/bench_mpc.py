@@ -1,6 +1,6 @@
 """Real-time MPC step as generated C against the same MPC solved per step in Python (a benchmark, not a test).
 
-Usage: python benchmarks/bench_mpc.py [FILE.toml ...] [--json] [--steps 10000]
+Usage: python benchmarks/bench_mpc.py [FILE.toml ...] [--json] [--steps 10000] [--no-acados]
 
 For each MPC file (default every ``codegen/mpc/*.toml``: the L1 and the composed DC motor),
 measured side by side in one run, because these machines are noisy:
@@ -22,6 +22,23 @@ measured side by side in one run, because these machines are noisy:
   (the same NLP Function; warm-started from the previous step's solution; at 50 states of
   the closed loop), its median wall time per step over the C step's median.
 
+- beside it, acados (SQP-RTI, issue 46) on the same horizon problem, in its own venv
+  (``benchmarks/acados_env.sh``; the peer ``benchmarks/peers/acados_mpc.py``, fed through a pipe
+  by the same closed loop: the same plant, noise, disturbance, delay and error; the step's
+  Function ``F`` saved by CasADi, the same weights, reference window, bounds, horizon and
+  period): the thread CPU of acados' solve call per step, its tracking RMS, and the first input
+  of its SQP iterated to convergence against gtmodel's (30 Gauss-Newton iterations) at 5 states
+  of its run. acados 0.2.2 has neither move blocking nor per-stage constraint rows: it always
+  solves the unblocked problem without rows and without the input-disturbance estimate, so
+  each file gives two rows, ``configuration`` ``"unblocked"`` (gtmodel on the same NLP: like
+  for like) and ``"shipped"`` (the file's blocks and rows), both against that acados run. Keys:
+  ``acados_cpu_step_median_s``, ``acados_cpu_step_p99_s``, ``acados_cpu_step_max_s``,
+  ``acados_tracking_rms``, ``acados_first_control_rel_diff``, ``acados_config`` (QP solver
+  ``PARTIAL_CONDENSING_HPIPM``, acados' default), the same as ``acados_fastest_*`` for
+  ``FULL_CONDENSING_QPOASES``, and ``ratio_to_acados_median``, ``ratio_to_acados_p99``,
+  ``tracking_rms_ratio_to_acados`` (printed first); ``acados_skipped`` with the reason instead
+  when the venv cannot be made (or ``--no-acados``).
+
 With ``--json`` the last line of stdout is one JSON object
 ``{"mpc": [{"name", "horizon", "period_s", "step_median_s", "step_p99_s", "step_max_s",
 "tracking_rms_ratio_to_feedforward", "bound_violations", "ratio_to_python", ...}, ...]}``.
@@ -32,19 +49,100 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import statistics
+import subprocess
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
+from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
+from gtmodel.problems.loop_check import STATUS_NAMES
 from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
 from gtmodel.problems.mpc_file import load_mpc_file
 
 ROOT = Path(__file__).resolve().parents[1]
 #: States of the closed loop at which the Python (IPOPT) step is timed.
 PYTHON_STATES = 50
+#: acados' venv maker and the peer run inside it (issue 46).
+ACADOS_ENV = ROOT / "benchmarks" / "acados_env.sh"
+ACADOS_PEER = ROOT / "benchmarks" / "peers" / "acados_mpc.py"
+#: acados' QP solvers measured: its default and its fastest on these dense QPs.
+ACADOS_QPS = ("PARTIAL_CONDENSING_HPIPM", "FULL_CONDENSING_QPOASES")
+#: States of the closed loop at which the converged first inputs are compared.
+AGREEMENT_STATES = 5
+
+
+def _num(v) -> str:
+    return repr(float(v))
+
+
+def export_problem(c, folder: Path) -> Path:
+    """The controller's horizon problem for the acados peer: ``problem.npz`` and the step's CasADi file."""
+    folder.mkdir(parents=True, exist_ok=True)
+    c.step.save(str(folder / "step.casadi"))
+    path = folder / "problem.npz"
+    np.savez(path, Q=c.Q, R=c.R, Qf=c.Qf, u_lb=c.u_lb, u_ub=c.u_ub, horizon=c.horizon, period=c.dt, step="step.casadi")
+    return path
+
+
+class AcadosPeer:
+    """The acados peer (``benchmarks/peers/acados_mpc.py`` in its venv) as a controller ``(t, x) -> (status, u)``.
+
+    The delay compensation of the gtmodel step (``delay = 1``: the horizon from ``F(x, u_last)`` at
+    ``t + dt``) is done here with the same step; the input-disturbance estimate is not (acados has none).
+    """
+
+    def __init__(self, c, problem: Path, qp: str, warm: str = "shift"):
+        self.c, self.qp = c, qp
+        self.proc = subprocess.Popen([str(ACADOS_ENV), "python", str(ACADOS_PEER), str(problem), "--qp", qp, "--warm", warm,
+                                      "--build", str(problem.parent / f"acados_{qp.lower()}")],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                                     env={**os.environ, "OMP_NUM_THREADS": "1"})
+        self.u_last = c.u_initial
+
+    def _ask(self, line: str) -> list[str]:
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+        answer = self.proc.stdout.readline()
+        if not answer:
+            raise RuntimeError(f"acados peer ({self.qp}) ended without an answer")
+        return answer.split()
+
+    def _p(self, t: float, x: np.ndarray) -> str:
+        if self.c.delay:
+            t, x = t + self.c.dt, np.asarray(self.c.step(x, self.u_last)).reshape(-1)
+        return " ".join(map(_num, self.c.parameters(t, x)))
+
+    def reset(self) -> None:
+        """The next step from the gtmodel step's first warm start (``u*_0`` everywhere)."""
+        self.u_last = self.c.u_initial
+        self.proc.stdin.write("reset " + " ".join(map(_num, np.tile(self.c.u_initial, self.c.horizon))) + "\n")
+
+    def __call__(self, t: float, x: np.ndarray) -> tuple[int, np.ndarray]:
+        words = self._ask(f"step {self._p(t, x)}")
+        self.u_last = np.array([float(v) for v in words[1:]])
+        return (0 if words[0] == "0" else 1), self.u_last
+
+    def converged(self, t: float, x: np.ndarray) -> np.ndarray:
+        """The first input of acados' SQP iterated to convergence at ``(t, x)`` (no delay compensation)."""
+        self.reset()
+        return np.array([float(v) for v in self._ask(f"converge {' '.join(map(_num, self.c.parameters(t, x)))}")[2:]])
+
+    def step_times(self) -> np.ndarray:
+        """The thread CPU times [s] of the steps since the last call."""
+        return np.asarray(json.loads(" ".join(self._ask("stats")))["cpu_step_s"])
+
+    def close(self) -> None:
+        """End the peer."""
+        try:
+            self.proc.stdin.write("quit\n")
+            self.proc.stdin.close()
+        finally:
+            self.proc.wait(timeout=60)
 
 
 def python_step_s(setup, summary) -> float:
@@ -63,9 +161,73 @@ def python_step_s(setup, summary) -> float:
     return statistics.median(times)
 
 
-def bench(path: Path, steps: int, build: Path) -> dict:
-    """All figures of one MPC file."""
+def acados_available() -> str:
+    """Empty when acados' venv is there or can be made (:data:`ACADOS_ENV`), else the reason."""
+    try:
+        out = subprocess.run([str(ACADOS_ENV)], capture_output=True, text=True, timeout=1800)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return f"acados venv: {e}"
+    return "" if out.returncode == 0 else (out.stderr.strip().splitlines() or ["acados_env.sh failed"])[-1]
+
+
+def acados_figures(setup, build: Path, repeat: int) -> dict:
+    """acados SQP-RTI on the unblocked horizon problem without constraint rows, in the file's closed loop, per QP solver.
+
+    Returns, per QP solver of :data:`ACADOS_QPS`, the thread CPU per step (the solve call,
+    median, p99, max over ``repeat`` runs of the motion), the tracking RMS of the first run and
+    the largest relative difference of the converged first input from the gtmodel SQP's
+    (30 iterations, Gauss-Newton) at :data:`AGREEMENT_STATES` states of that run.
+    """
+    c = replace(setup.controller, blocks=setup.controller.horizon, constraints=None, disturbance_gain=0.0)
+    problem = export_problem(c, build / f"{setup.name}_acados")
+    args = (setup.plant_step, setup.plant_x0, setup.t, setup.x_ref)
+    kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES)
+    out = {}
+    for qp in ACADOS_QPS:
+        peer = AcadosPeer(c, problem, qp)
+        try:
+            runs = []
+            for _ in range(max(repeat, 1)):
+                peer.reset()
+                runs.append(run_controller_loop(peer, *args, **kw))
+            cpu = peer.step_times()
+            rel = 0.0
+            for k in np.linspace(0, setup.t.size - 1, AGREEMENT_STATES + 2)[1:-1].round().astype(int):
+                t, x = runs[0].t[k], runs[0].x[k]
+                ua = peer.converged(t, x)
+                ug, _ = c.solve(t, x, plugin="sqpmethod", iterations=30)
+                rel = max(rel, float(np.max(np.abs(ua - ug)) / max(np.max(np.abs(ug)), 1e-300)))
+        finally:
+            peer.close()
+        out[qp] = {"cpu_step_median_s": float(np.median(cpu)), "cpu_step_p99_s": float(np.percentile(cpu, 99)),
+                   "cpu_step_max_s": float(np.max(cpu[1:])), "tracking_rms": runs[0].rms_error, "first_control_rel_diff": rel}
+    return out
+
+
+def acados_keys(row: dict, acados: dict | str) -> dict:
+    """The acados keys of a row: its default QP solver's figures and the ratios (or ``acados_skipped``)."""
+    if isinstance(acados, str):
+        return {**row, "acados_skipped": acados}
+    a, fast = acados[ACADOS_QPS[0]], acados[ACADOS_QPS[1]]
+    return {**row, "acados_config": f"SQP_RTI {ACADOS_QPS[0]}, GAUSS_NEWTON, DISCRETE (the same step), N = {row['horizon']}, no blocking, "
+                                     "no constraint rows, no disturbance estimate",
+            "acados_cpu_step_median_s": a["cpu_step_median_s"], "acados_cpu_step_p99_s": a["cpu_step_p99_s"],
+            "acados_cpu_step_max_s": a["cpu_step_max_s"], "acados_tracking_rms": a["tracking_rms"],
+            "acados_first_control_rel_diff": max(a["first_control_rel_diff"], fast["first_control_rel_diff"]),
+            "acados_fastest_config": f"SQP_RTI {ACADOS_QPS[1]}", "acados_fastest_cpu_step_median_s": fast["cpu_step_median_s"],
+            "acados_fastest_cpu_step_p99_s": fast["cpu_step_p99_s"], "acados_fastest_tracking_rms": fast["tracking_rms"],
+            "ratio_to_acados_median": row["cpu_step_median_s"] / a["cpu_step_median_s"],
+            "ratio_to_acados_p99": row["cpu_step_p99_s"] / a["cpu_step_p99_s"],
+            "tracking_rms_ratio_to_acados": row["tracking_rms"] / a["tracking_rms"]}
+
+
+def bench(path: Path, steps: int, build: Path, unblocked: bool = False) -> dict:
+    """All figures of one MPC file (``unblocked``: one input per period, no constraint rows, no disturbance estimate)."""
     setup = load_mpc_file(path)
+    if unblocked:
+        c = setup.controller
+        setup = replace(setup, name=setup.name + "_unblocked",
+                        controller=replace(c, blocks=c.horizon, constraints=None, disturbance_gain=0.0))
     generated, library = build_mpc(setup, build / setup.name)
     repeat = -(-steps // setup.t.size)
     wall = closed_loop_check(setup, generated, library, repeat=repeat, clock=time.perf_counter)
@@ -74,7 +236,7 @@ def bench(path: Path, steps: int, build: Path) -> dict:
     py = python_step_s(setup, wall.mpc)
     c = setup.controller
     return {
-        "name": setup.name, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
+        "name": setup.name, "configuration": "unblocked" if unblocked else "shipped", "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
         "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
         "steps": int(wall.mpc.step_s.size), "first_step_s": st["first"],
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],
@@ -90,33 +252,53 @@ def bench(path: Path, steps: int, build: Path) -> dict:
     }
 
 
+def _print_row(r: dict) -> None:
+    """The figures of one row, the ratio to acados first."""
+    if "acados_skipped" in r:
+        print(f"{r['name']}: acados skipped ({r['acados_skipped']})")
+    else:
+        print(f"{r['name']}: C step CPU / acados SQP-RTI + HPIPM: median {r['ratio_to_acados_median']:.2f}x, p99 {r['ratio_to_acados_p99']:.2f}x; "
+              f"tracking RMS {r['tracking_rms_ratio_to_acados']:.2f}x acados'")
+        print(f"  acados {r['acados_config']}: CPU median {r['acados_cpu_step_median_s'] * 1e6:.1f} us, p99 {r['acados_cpu_step_p99_s'] * 1e6:.1f} us, "
+              f"max {r['acados_cpu_step_max_s'] * 1e6:.1f} us, tracking RMS {r['acados_tracking_rms']:.4g}; converged first input "
+              f"{r['acados_first_control_rel_diff']:.1e} relative from gtmodel's")
+        print(f"  acados {r['acados_fastest_config']}: CPU median {r['acados_fastest_cpu_step_median_s'] * 1e6:.1f} us, "
+              f"p99 {r['acados_fastest_cpu_step_p99_s'] * 1e6:.1f} us, tracking RMS {r['acados_fastest_tracking_rms']:.4g}")
+    print(f"{r['name']}: {r['solver']} {r['qpsol']}, horizon {r['horizon']} x {r['period_s'] * 1e3:g} ms, {r['blocks']} input blocks, "
+          f"{r['sqp_iterations']} SQP iteration(s), {r['constraint_rows']} constraint rows, {r['steps']} C steps")
+    print(f"  C step wall: median {r['step_median_s'] * 1e6:.1f} us, p99 {r['step_p99_s'] * 1e6:.1f} us, "
+          f"max {r['step_max_s'] * 1e6:.1f} us (first {r['first_step_s'] * 1e6:.1f} us)")
+    print(f"  C step CPU : median {r['cpu_step_median_s'] * 1e6:.1f} us, p99 {r['cpu_step_p99_s'] * 1e6:.1f} us, "
+          f"max {r['cpu_step_max_s'] * 1e6:.1f} us")
+    print(f"  static memory {r['memory_bytes']} B + stack work {r['work_bytes']} B"
+          + (f" + QP arena {r['arena_bytes']} B per thread (peak {r['arena_peak_bytes']} B, {r['heap_calls']} heap calls)" if r["arena_bytes"] else "")
+          + f"; statuses {r['status_counts']}")
+    print(f"  tracking RMS {r['tracking_rms']:.4g} vs feedforward {r['feedforward_rms']:.4g}: "
+          f"ratio {r['tracking_rms_ratio_to_feedforward']:.4g}; bound violations {r['bound_violations']}")
+    print(f"  Python (CasADi + IPOPT) per step: median {r['python_step_median_s'] * 1e3:.2f} ms = "
+          f"{r['ratio_to_python']:.0f}x the C step")
+
+
 def main() -> None:
     """Run the benchmark (see the module docstring)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*", type=Path, help="MPC files (default codegen/mpc/*.toml)")
     ap.add_argument("--json", action="store_true", help="end with one JSON line")
     ap.add_argument("--steps", type=int, default=10000, help="at least this many C steps per MPC (default 10000)")
+    ap.add_argument("--no-acados", action="store_true", help="without the acados peer")
     args = ap.parse_args()
     logging.getLogger("gtmodel").setLevel(logging.WARNING)
     files = args.files or sorted((ROOT / "codegen" / "mpc").glob("*.toml"))
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench_mpc_") as tmp:
+        skipped = "--no-acados" if args.no_acados else acados_available()
         for path in files:
-            r = bench(path, args.steps, Path(tmp))
-            rows.append(r)
-            print(f"{r['name']}: {r['solver']} {r['qpsol']}, horizon {r['horizon']} x {r['period_s'] * 1e3:g} ms, {r['blocks']} input blocks, "
-                  f"{r['sqp_iterations']} SQP iteration(s), {r['constraint_rows']} constraint rows, {r['steps']} C steps")
-            print(f"  C step wall: median {r['step_median_s'] * 1e6:.1f} us, p99 {r['step_p99_s'] * 1e6:.1f} us, "
-                  f"max {r['step_max_s'] * 1e6:.1f} us (first {r['first_step_s'] * 1e6:.1f} us)")
-            print(f"  C step CPU : median {r['cpu_step_median_s'] * 1e6:.1f} us, p99 {r['cpu_step_p99_s'] * 1e6:.1f} us, "
-                  f"max {r['cpu_step_max_s'] * 1e6:.1f} us")
-            print(f"  static memory {r['memory_bytes']} B + stack work {r['work_bytes']} B"
-                  + (f" + QP arena {r['arena_bytes']} B per thread (peak {r['arena_peak_bytes']} B, {r['heap_calls']} heap calls)" if r["arena_bytes"] else "")
-                  + f"; statuses {r['status_counts']}")
-            print(f"  tracking RMS {r['tracking_rms']:.4g} vs feedforward {r['feedforward_rms']:.4g}: "
-                  f"ratio {r['tracking_rms_ratio_to_feedforward']:.4g}; bound violations {r['bound_violations']}")
-            print(f"  Python (CasADi + IPOPT) per step: median {r['python_step_median_s'] * 1e3:.2f} ms = "
-                  f"{r['ratio_to_python']:.0f}x the C step")
+            setup = load_mpc_file(path)
+            acados = skipped or acados_figures(setup, Path(tmp), max(1, -(-args.steps // setup.t.size)))
+            for unblocked in (True, False):
+                r = acados_keys(bench(path, args.steps, Path(tmp), unblocked), acados)
+                rows.append(r)
+                _print_row(r)
     if args.json:
         print(json.dumps({"mpc": rows}))
 

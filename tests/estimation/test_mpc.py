@@ -19,6 +19,7 @@ from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
 from ..conftest import REPO
+from ..modeling._builders import double_integrator
 
 DT = 0.004
 #: The SQP iterated to convergence against IPOPT: first input, relative to 1 + |u_IPOPT|.
@@ -126,3 +127,23 @@ def test_delay_compensation_stops_the_input_chattering(motor, delay, chatter):
     run = run_controller_loop(controller, ode.step(DT, "rk4", substeps=4), x[0], c.t0 + DT * np.arange(c.length), c.x_ref, **kw)
     change = np.mean(np.abs(np.diff(run.u[run.t > 0.4], axis=0)))  # V per period over the last third
     assert bool(change > 1.0) == chatter  # measured 4.9 and 0.19 V per period
+
+
+@pytest.mark.parametrize("blocks", [20, 5])
+@pytest.mark.parametrize("x0, at_bound", [([0.0, 0.0], False), ([-0.5, -12.0], True)], ids=["inside", "at-bound"])
+def test_one_real_time_iteration_is_the_full_gauss_newton_step(blocks, x0, at_bound):
+    # issue 46: on a linear model with a quadratic cost the Gauss-Newton QP IS the horizon problem, so one
+    # SQP iteration from any warm start must land on IPOPT's optimum: the step is taken whole (no line
+    # search cut, no regularisation) and qrqp solves the QP to its optimum, with and without active bounds
+    # (a second method: IPOPT to 1e-10). acados' SQP-RTI from the same rollout gives the same first input
+    # on the L1 (1e-8, benchmarks/bench_mpc.py), so the RTI itself does not make gtmodel track worse.
+    ode = explicit_ode(double_integrator()[0])
+    t = DT * np.arange(101)
+    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
+    c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=20, blocks=blocks, Q=[1.0, 1e-3], R=[1e-4],
+                       u_lb=[-50.0], u_ub=[50.0], method="euler")
+    w0 = np.full(c.nw, 37.0)  # far from the optimum
+    u_one, w_one = c.solve(0.02, x0, w0=w0, plugin="sqpmethod", iterations=1)
+    u_ip, w_ip = c.solve(0.02, x0, plugin="ipopt")
+    assert np.any(np.isclose(np.abs(w_ip), 50.0, atol=1e-6)) == at_bound
+    assert np.max(np.abs(w_one - w_ip)) <= IPOPT_AGREEMENT * (1 + np.max(np.abs(w_ip)))
