@@ -14,11 +14,14 @@ with ``tau_load = Fc tanh(w_l / w_eps) + dv w_l`` (two-mass drive) or ``m g l si
 Minimum final time T from rest to rest with ``|v| <= v_max`` and ``|i| <= i_max``; the
 voltage piecewise constant on N intervals, each integrated by ``S`` classical Runge-Kutta
 (RK4) steps, the current bound enforced at every step's end (not the nodes alone), IPOPT.
-The references are the solves at N = 800, beside those at N = 400 (the difference is the
-discretisation's, O(1/N): a switch inside an interval).
+The references are the solves on the finest mesh (800 intervals; the two-mass drive, whose
+friction makes the solve slow: 400), beside the coarser ones (the difference is the
+discretisation's, O(1/N): a switch inside an interval; 100 -> 400 -> 800 intervals of the
+rigid drive: 0.26871, 0.26604, 0.26572 s). The flexible joint starts from T = 0.35 s: from
+0.3 or 0.5 s IPOPT ends in a local optimum at 0.648 s (the link swinging back once).
 
-Run ``python benchmarks/drive_references.py`` (about 2 CPU-minutes); it writes
-``tests/modeling/ocp/data/drive_references.json`` which ``tests/modeling/ocp/test_drives.py`` reads.
+Run ``python benchmarks/drive_references.py`` (several CPU-minutes); it writes
+``tests/problems/data/drive_references.json``, which ``tests/problems/test_drive_models.py`` reads.
 """
 
 from __future__ import annotations
@@ -34,11 +37,13 @@ import casadi as ca
 #: The problems' data (SI units), as ``models/drives.py`` and ``problems/drive_*.toml`` declare them.
 DRIVES = {
     "drive_motor_gear_load": {"R": 0.5, "L": 0.85e-3, "k": 0.05, "Jm": 1e-4, "n": 50.0, "Jl": 0.01, "df": 0.02,
-                              "rigid": True, "vmax": 24.0, "imax": 10.0, "phi_l": math.pi / 2},
+                              "rigid": True, "vmax": 24.0, "imax": 10.0, "phi_l": math.pi / 2, "intervals": (100, 400, 800)},
     "drive_two_mass": {"R": 1.0, "L": 2e-3, "k": 0.1, "Jm": 5e-5, "n": 20.0, "c": 50.0, "d": 0.2, "Jl": 0.05,
-                       "load": "friction", "Fc": 0.3, "w_eps": 0.05, "dv": 0.05, "vmax": 24.0, "imax": 8.0, "phi_l": 1.0},
+                       "load": "friction", "Fc": 0.3, "w_eps": 0.05, "dv": 0.05, "vmax": 24.0, "imax": 8.0, "phi_l": 1.0,
+                       "intervals": (100, 400)},
     "drive_flexible_joint": {"R": 1.0, "L": 1e-3, "k": 0.05, "Jm": 1e-5, "n": 50.0, "c": 200.0, "d": 0.5, "Jl": 0.5,
-                             "load": "gravity", "mgl": 1.0 * 9.81 * 0.2, "vmax": 24.0, "imax": 8.0, "phi_l": 1.0},
+                             "load": "gravity", "mgl": 1.0 * 9.81 * 0.2, "vmax": 24.0, "imax": 8.0, "phi_l": 1.0,
+                             "intervals": (100, 400, 800), "t_guess": 0.35},
 }
 
 
@@ -117,17 +122,19 @@ def solve(p: dict, intervals: int, steps: int = 2, guess: dict | None = None, t_
 
 
 def main(out: pathlib.Path) -> dict:
-    """Solve every drive at 100, 400 and 800 intervals (each from the previous) and write the references."""
+    """Solve every drive on its meshes (each from the previous) and write the references (the finest mesh's)."""
     refs = {}
     for name, p in DRIVES.items():
         runs = {}
         prev = None
-        for n in (100, 400, 800):
-            prev = solve(p, n, guess=prev)
+        for n in p["intervals"]:
+            prev = solve(p, n, guess=prev, t_guess=p.get("t_guess", 0.3))
             runs[n] = prev
             print(f"{name}: N = {n}: T = {prev['T']:.7f} s ({prev['status']}, {prev['cpu_s']:.1f} CPU-s)", flush=True)
-        refs[name] = {"final_time": runs[800]["T"], "final_time_400": runs[400]["T"], "status": runs[800]["status"],
-                      "method": "direct multiple shooting, plain CasADi, piecewise-constant voltage on 800 intervals, "
+        finest = p["intervals"][-1]
+        refs[name] = {"final_time": runs[finest]["T"], "status": runs[finest]["status"],
+                      "by_intervals": {str(n): r["T"] for n, r in runs.items()},
+                      "method": f"direct multiple shooting, plain CasADi, piecewise-constant voltage on {finest} intervals, "
                                 "2 RK4 steps each, the current bound at every step, IPOPT tol 1e-10"}
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(refs, indent=2) + "\n")
@@ -136,4 +143,4 @@ def main(out: pathlib.Path) -> dict:
 
 if __name__ == "__main__":
     root = pathlib.Path(__file__).resolve().parents[1]
-    main(pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else root / "tests" / "modeling" / "ocp" / "data" / "drive_references.json")
+    main(pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else root / "tests" / "problems" / "data" / "drive_references.json")

@@ -285,6 +285,8 @@ class OptimizationResult(StatusResult):
     refinement : list of dict
         The mesh refinement passes that led to this result (elements, objective, error
         per pass; :mod:`gtmodel.modeling.ocp.refinement`), empty without refinement.
+    refinement_stop : str
+        Why the refinement ended and which pass it returned (``""`` without refinement).
     """
 
     iterations: int
@@ -308,6 +310,7 @@ class OptimizationResult(StatusResult):
     lam_g: np.ndarray | None = field(default=None, repr=False)
     verification: Any = field(default=None, repr=False)
     refinement: list[dict[str, Any]] = field(default_factory=list, repr=False)
+    refinement_stop: str = ""
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.
