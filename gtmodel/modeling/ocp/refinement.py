@@ -23,9 +23,21 @@ A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
 minimum of the NLP (the COPS hanging chain on 20 elements: its length shrinks inside the
 first element): the next pass starts from a repaired guess instead of the spurious
 trajectory (the inputs of the failing elements interpolated from their neighbours', the
-states simulated under those inputs). The result of the pass with the smallest
-verification deviation (normally the last) is returned with ``refinement``: one dict per pass (elements, objective, status, largest
-defect, switches, verification deviation).
+states simulated under those inputs). Each pass starts from the previous solution interpolated onto its mesh, with IPOPT's barrier
+parameter started at :data:`WARM_MU` so that it stays near it. A pass whose objective is
+worse by more than :data:`WORSE` than an earlier pass whose simulation reaches its final state
+(:func:`end_deviation` within :data:`ANCHOR_END`: no spurious minimum) has left for another
+local optimum: it is rejected and the earlier pass refined instead. The refinement stops at the
+verification passing, at ``max_passes``, or at its CPU budget (``max_cpu_s``), and returns the
+verified pass with the best objective, else the pass with the smallest deviation, with
+``refinement`` (one dict per pass: elements, points, objective, status, largest element error,
+deviation, end deviation, bound violation, CPU and wall time, what was done) and
+``refinement_stop`` (why it ended, which pass it returned). ``start``: a single solve whose
+verification failed, refined from without solving it again (``refine_on_failure``).
+
+Not done: the degree is the same in every element (the transcription takes one number of
+points), so this is h-refinement; the p-part of hp/ph methods (Patterson, Hager and Rao 2015,
+raising the degree of smooth elements) is not.
 """
 
 from __future__ import annotations

@@ -39,6 +39,10 @@ is integrated as a quadrature of the simulation, and the value the NLP used (its
 collocation quadrature) passes when ``|I_sim - I_col| <= tolerance * max(1, |I_col|)``. A
 spurious minimum that satisfies an integral constraint only at the collocation points (the
 hanging chain's length with the input oscillating between them) is caught here.
+
+The state bounds are checked on the simulation too, between the collocation points
+(:func:`bound_violations`, :func:`check_bounds`): the transcription enforces them at its
+points only, and a stiff motor's current limited there can overshoot inside an element.
 """
 
 from __future__ import annotations
