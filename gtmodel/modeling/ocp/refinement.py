@@ -378,6 +378,10 @@ def solve_refined(
                                                or v.passed):
             anchor = result
         new, info = refine_mesh(base, tol, max_elements)
+        if not info["split"] and not base.verification.passed and base.verification.bounds:
+            # every element within the tolerance but a bound violated between the nodes: the element holding
+            # the violation halved
+            new, info = _split_at(base, float(base.verification.bounds["at_time_s"]), new, info, max_elements)
         if base is not result:  # at least as fine as the rejected pass's mesh
             new = _finer(new, mesh if mesh is not None else np.full(n_elements, 1.0 / n_elements))
         entry["switches_s"] = info["switches"]
@@ -407,8 +411,9 @@ def solve_refined(
     verified = [r for r in passes if r.verification is not None and r.verification.passed and r.status == Status.OPTIMAL]
     if verified:
         best = min(verified, key=lambda r: _minimised(optimization, r))
-    else:
-        solved = [r for r in passes if r.verification is not None]
+    else:  # the smallest deviation, of the passes not rejected as another local optimum
+        kept = [r for r, e in zip(passes, history) if "rejected" not in e]
+        solved = [r for r in kept if r.verification is not None]
         best = min(solved, key=lambda r: r.verification.max_scaled_deviation) if solved else passes[-1]
     k = passes.index(best) + 1
     if best is not passes[-1]:
@@ -447,6 +452,17 @@ class _Mesh:
 
     elements: int
     points: int
+
+
+def _split_at(result: OptimizationResult, t: float, fractions: np.ndarray, info: dict[str, Any],
+              max_elements: int) -> tuple[np.ndarray, dict[str, Any]]:
+    """The mesh with the element of ``result`` that holds time ``t`` halved (unchanged at ``max_elements``)."""
+    breaks = result.collocation.breaks()
+    k = int(np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, len(breaks) - 2))
+    if len(fractions) >= max_elements:
+        return fractions, info
+    fractions = np.concatenate([fractions[:k], [fractions[k] / 2, fractions[k] / 2], fractions[k + 1:]])
+    return fractions, {**info, "split": [k]}
 
 
 def _finer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
