@@ -378,10 +378,6 @@ def solve_refined(
                                                or v.passed):
             anchor = result
         new, info = refine_mesh(base, tol, max_elements)
-        if not info["split"] and not base.verification.passed and base.verification.bounds:
-            # every element within the tolerance but a bound violated between the nodes: the element holding
-            # the violation halved
-            new, info = _split_at(base, float(base.verification.bounds["at_time_s"]), new, info, max_elements)
         if base is not result:  # at least as fine as the rejected pass's mesh
             new = _finer(new, mesh if mesh is not None else np.full(n_elements, 1.0 / n_elements))
         entry["switches_s"] = info["switches"]
@@ -452,17 +448,6 @@ class _Mesh:
 
     elements: int
     points: int
-
-
-def _split_at(result: OptimizationResult, t: float, fractions: np.ndarray, info: dict[str, Any],
-              max_elements: int) -> tuple[np.ndarray, dict[str, Any]]:
-    """The mesh with the element of ``result`` that holds time ``t`` halved (unchanged at ``max_elements``)."""
-    breaks = result.collocation.breaks()
-    k = int(np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, len(breaks) - 2))
-    if len(fractions) >= max_elements:
-        return fractions, info
-    fractions = np.concatenate([fractions[:k], [fractions[k] / 2, fractions[k] / 2], fractions[k + 1:]])
-    return fractions, {**info, "split": [k]}
 
 
 def _finer(a: np.ndarray, b: np.ndarray) -> np.ndarray:

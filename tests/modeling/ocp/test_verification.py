@@ -262,7 +262,7 @@ def test_bound_violations_between_the_nodes_against_the_closed_form():
     res = CollocationTranscription(step_response(10, 3), elements=10).solve()
     out = bound_violations(res, np.array([-np.inf]), np.array([0.8]))
     assert out["variable"] == "x" and out["at_time_s"] == pytest.approx(2.0)
-    assert out["max_violation"] == pytest.approx(1 - np.exp(-2.0) - 0.8, abs=1e-4) and out["passed"] is False
+    assert out["max_violation"] == pytest.approx(1 - np.exp(-2.0) - 0.8, abs=1e-4) and out["within_tolerance"] is False
     assert bound_violations(res, np.array([-np.inf]), np.array([np.inf])) == {}
     assert bound_violations(res, np.array([-1.0]), np.array([1.0]))["max_violation"] == 0.0
 
