@@ -141,8 +141,11 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
     switches = switch_elements(result)
     for k, tau in switches.items():
         if frac[k] > tolerance:
-            # the switch explains the element's defect: one cut, at the switch
-            plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), [tau])
+            # the switch explains the element's defect: a cut at the switch; where the element's defect is
+            # 10 tolerances or more (a stiff state, a motor current, following the switch), the two parts
+            # halved too, so that the next pass resolves the transient after the switch as well
+            cuts = [tau] if errors[k] < 10 else [tau / 2, tau, (1 + tau) / 2]
+            plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), cuts)
     budget = max_elements - N
     split: list[int] = []
     for k in sorted(plans, key=lambda k: -plans[k][0]):
