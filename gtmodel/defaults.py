@@ -49,6 +49,13 @@ Keys
     hanging chain on 20 elements: 0.24) and keeps the shipped L1 motions on the thesis'
     50-element mesh, whose bang-bang forces switch inside elements (largest deviation
     3.6e-3 to 4.0e-3 of the TCP velocity); ask for 1e-3 or less with ``refine``.
+``ocp.refine_max_cpu_s``
+    Budget of CPU time [s] of a mesh refinement
+    (:func:`gtmodel.modeling.ocp.refinement.solve_refined`; a problem file:
+    ``[transcription] max_cpu_s``): no pass starts once it is spent or the last pass's
+    cost would overrun it, and the best verified pass is returned. 90 s: the drive models
+    of ``problems/drive_*.toml`` end their refinement in 5 to 60 CPU-s (two verified, the
+    flexible joint stopped by its own rule at deviation 0.013).
 ``ipopt.warm_start``
     IPOPT options of warm starts: start from the given primal-dual point with a small
     barrier parameter and without pushing it off the bounds.
@@ -92,6 +99,7 @@ _FACTORY: dict[str, Any] = {
     "nlp.tol": 1e-8,
     "ipopt.options": {"mumps_mem_percent": 20},
     "ocp.verification_tolerance": 1e-2,
+    "ocp.refine_max_cpu_s": 90.0,
     "ipopt.warm_start": {
         "warm_start_init_point": "yes",
         "mu_init": 1e-4,

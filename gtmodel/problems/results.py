@@ -180,7 +180,8 @@ def verification_fields(result: Any) -> dict[str, Any]:
     dict
         ``{"verification": {...}}`` when the result was verified (``passed``,
         ``tolerance``, largest deviations, per-state deviations, integrator), plus
-        ``{"refinement": [...]}`` (one entry per pass) when its mesh was refined; else
+        ``{"refinement": [...]}`` (one entry per pass) and ``"refinement_stop"`` (why it
+        ended, which pass was returned) when its mesh was refined; else
         ``{"verification": None}`` for a collocation result that was not verified.
     """
     if not hasattr(result, "verification"):
@@ -189,6 +190,8 @@ def verification_fields(result: Any) -> dict[str, Any]:
     out: dict[str, Any] = {"verification": v.to_dict() if v is not None else None}
     if getattr(result, "refinement", None):
         out["refinement"] = json_safe(result.refinement)
+        if getattr(result, "refinement_stop", None):
+            out["refinement_stop"] = str(result.refinement_stop)
     return out
 
 

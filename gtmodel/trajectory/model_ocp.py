@@ -9,6 +9,7 @@ transcribes and solves it.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,9 @@ from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 from gtmodel.modeling.ocp.coarse_start import solve_from_coarse
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.status import Status
+
+_log = logging.getLogger("gtmodel")
 
 __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "COARSE_START_ELEMENTS"]
 
@@ -169,7 +173,7 @@ class OptimalControl:
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                     max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    initial_guess=guess, **kwargs,
+                    initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, **kwargs,
                 )
             result.timing = phases
             self.estimation = None
@@ -184,6 +188,19 @@ class OptimalControl:
         tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **single)
         coarse = (lambda: self.coarse_solve(kwargs)) if guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS else None
         result = solve_from_coarse(tr, coarse, initial_guess=guess)
+        if d.refinement.on_failure and check and result.status == Status.CHECK_FAILED and not d.optimization.data_fits:
+            # the verification failed: refined from this solution within the budget (refine_on_failure)
+            _log.warning("%s: the verification failed; refining the mesh from this solution (refine_on_failure; "
+                         "at most %d passes, %s CPU-s)", d.optimization.model.name, d.refinement.max_passes,
+                         "the default" if d.refinement.max_cpu_s is None else f"{d.refinement.max_cpu_s:g}")
+            phases = {k: dict(v) for k, v in result.timing.items()}  # the single solve's, then every pass's
+            with timed(phases, "refinement"):
+                result = solve_refined(
+                    d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
+                    max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                    max_cpu_s=d.refinement.max_cpu_s, start=result, **kwargs,
+                )
+            result.timing = phases
         return self._estimated(tr, result)
 
     def coarse_solve(self, kwargs: dict[str, Any]) -> OptimizationResult:

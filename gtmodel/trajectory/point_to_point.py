@@ -690,11 +690,19 @@ def solve_point_to_point(
                 common["solver_options"] = {**options, "obj_scaling_factor": scaling}
             result = solve_refined(opt, elements=problem.method.elements, points=problem.method.points,
                                    scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
-                                   max_passes=ref.max_passes, initial_guess=guess,
+                                   max_passes=ref.max_passes, initial_guess=guess, max_cpu_s=ref.max_cpu_s,
                                    parameters=problem.named_parameters, **common)
         else:
             fine = problem.solver.name == "fatrop" and problem.method.elements >= COARSE_START_MIN_ELEMENTS and guess is None
             result = solve_from_coarse(tr, (lambda: _coarse_start(opt, problem, common, options)) if fine else None,
                                        initial_guess=guess, parameters=problem.named_parameters)
+            if ref.on_failure and ref.verify and result.status == Status.CHECK_FAILED:
+                # the verification failed: refined from this solution within the budget (refine_on_failure)
+                _log.warning("%s: the verification failed; refining the mesh from this solution (refine_on_failure)", problem.name)
+                tr = None  # the result's mesh is no longer this transcription's
+                result = solve_refined(opt, elements=problem.method.elements, points=problem.method.points,
+                                       scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
+                                       max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, start=result,
+                                       parameters=problem.named_parameters, **common)
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
     return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)

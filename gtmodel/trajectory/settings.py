@@ -128,6 +128,13 @@ class Refinement:
     rtol : float or None
         Relative tolerance of the verifying integrator; None for
         :func:`gtmodel.modeling.ocp.verification.integrator_rtol` of the tolerance.
+    on_failure : bool
+        Without ``refine``, a solve whose verification fails is refined from
+        (:func:`gtmodel.modeling.ocp.refinement.solve_refined` with ``start``), within the
+        limits; default True.
+    max_cpu_s : float or None
+        CPU-time budget of a refinement [s]; None for
+        ``defaults["ocp.refine_max_cpu_s"]``.
 
     Raises
     ------
@@ -142,9 +149,13 @@ class Refinement:
     verify: bool = True
     integrator: str | None = None
     rtol: float | None = None
+    on_failure: bool = True
+    max_cpu_s: float | None = None
 
     def __post_init__(self) -> None:
         _positive_int("max_elements", self.max_elements)
+        if self.max_cpu_s is not None and not (isinstance(self.max_cpu_s, (int, float)) and self.max_cpu_s > 0):
+            raise InputError(f"max_cpu_s: expected a positive number of seconds, got {self.max_cpu_s!r}")
         _positive_int("max_passes", self.max_passes)
         if self.tolerance is not None and not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
             raise InputError(f"tolerance: expected a number in (0, 1), got {self.tolerance!r}")

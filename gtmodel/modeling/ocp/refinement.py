@@ -23,9 +23,21 @@ A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
 minimum of the NLP (the COPS hanging chain on 20 elements: its length shrinks inside the
 first element): the next pass starts from a repaired guess instead of the spurious
 trajectory (the inputs of the failing elements interpolated from their neighbours', the
-states simulated under those inputs). The result of the pass with the smallest
-verification deviation (normally the last) is returned with ``refinement``: one dict per pass (elements, objective, status, largest
-defect, switches, verification deviation).
+states simulated under those inputs). Each pass starts from the previous solution interpolated onto its mesh, with IPOPT's barrier
+parameter started at :data:`WARM_MU` so that it stays near it. A pass whose objective is
+worse by more than :data:`WORSE` than an earlier pass whose simulation reaches its final state
+(:func:`end_deviation` within :data:`ANCHOR_END`: no spurious minimum) has left for another
+local optimum: it is rejected and the earlier pass refined instead. The refinement stops at the
+verification passing, at ``max_passes``, or at its CPU budget (``max_cpu_s``), and returns the
+verified pass with the best objective, else the pass with the smallest deviation, with
+``refinement`` (one dict per pass: elements, points, objective, status, largest element error,
+deviation, end deviation, bound violation, CPU and wall time, what was done) and
+``refinement_stop`` (why it ended, which pass it returned). ``start``: a single solve whose
+verification failed, refined from without solving it again (``refine_on_failure``).
+
+Not done: the degree is the same in every element (the transcription takes one number of
+points), so this is h-refinement; the p-part of hp/ph methods (Patterson, Hager and Rao 2015,
+raising the degree of smooth elements) is not.
 """
 
 from __future__ import annotations
@@ -33,6 +45,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import logging
+import time as _time
 from typing import Any
 
 import numpy as np
@@ -46,7 +59,7 @@ from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, switch_elements, verify
 from gtmodel.status import Status
 
-__all__ = ["solve_refined", "refine_mesh", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION", "SPURIOUS", "SPURIOUS_DEVIATION"]
+__all__ = ["solve_refined", "refine_mesh", "end_deviation", "WORSE", "ANCHOR_END", "WARM_MU", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION", "SPURIOUS", "SPURIOUS_DEVIATION"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -128,8 +141,11 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
     switches = switch_elements(result)
     for k, tau in switches.items():
         if frac[k] > tolerance:
-            # the switch explains the element's defect: one cut, at the switch
-            plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), [tau])
+            # the switch explains the element's defect: a cut at the switch; where the element's defect is
+            # 10 tolerances or more (a stiff state, a motor current, following the switch), the two parts
+            # halved too, so that the next pass resolves the transient after the switch as well
+            cuts = [tau] if errors[k] < 10 else [tau / 2, tau, (1 + tau) / 2]
+            plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), cuts)
     budget = max_elements - N
     split: list[int] = []
     for k in sorted(plans, key=lambda k: -plans[k][0]):
@@ -187,6 +203,55 @@ def _repaired_guess(result: OptimizationResult, tolerance: float) -> dict[str, A
     return guess
 
 
+def end_deviation(result: OptimizationResult) -> float:
+    """Scaled deviation of the simulated final state from the transcribed one (inf without a simulation).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A verified collocation result.
+
+    Returns
+    -------
+    float
+        ``max_i |x_sim,i(t_f) - x_col,i(t_f)| / max(1, max |x_col,i|)``: small, the optimal
+        inputs take the model where the solution says (its final conditions hold), even if it
+        deviates on the way (a stiff current's transient inside an element).
+    """
+    v, col = result.verification, result.collocation
+    if v is None or col is None or v.simulated.size == 0:
+        return float("inf")
+    end = lagrange_basis(col.tau_root, np.array([1.0])) @ col.xc[-1]  # (1, nx)
+    scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
+    return float(np.max(np.abs(np.asarray(v.simulated)[-1] - end[0]) / scale))
+
+
+def _minimised(optimization: Optimization, result: OptimizationResult) -> float:
+    """The objective as the NLP minimises it (``sign * objective``; inf without one)."""
+    value = result.objective
+    return float("inf") if value is None or not np.isfinite(value) else float(optimization.objective_sign * value)
+
+
+def _pass_entry(n_pass: int, tr: CollocationTranscription, result: OptimizationResult, cpu: float, wall: float) -> dict[str, Any]:
+    """One pass of the refinement as the summary and the log report it."""
+    entry: dict[str, Any] = {
+        "pass": n_pass, "elements": tr.elements, "points": tr.points, "status": str(result.status), "objective": result.objective,
+        "final_time": result.final_time, "iterations": result.iterations, "solve_time": result.solve_time,
+        "cpu_s": cpu, "wall_s": wall,
+    }
+    v = result.verification
+    if v is not None:
+        entry["verified"] = bool(v.passed)
+        entry["max_scaled_deviation"] = v.max_scaled_deviation
+        entry["verification_time"] = v.time_s
+        entry["verification_cpu_time"] = v.cpu_s
+        entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
+        entry["end_deviation"] = end_deviation(result)
+        if v.bounds:
+            entry["max_bound_violation"] = v.bounds["max_scaled_violation"]
+    return entry
+
+
 def solve_refined(
     optimization: Optimization,
     elements: int = 50,
@@ -197,6 +262,8 @@ def solve_refined(
     tolerance: float | None = None,
     initial_guess: OptimizationResult | dict[str, Any] | None = None,
     parameters: dict[str, Any] | None = None,
+    max_cpu_s: float | None = None,
+    start: OptimizationResult | None = None,
     **transcription: Any,
 ) -> OptimizationResult:
     """Solve by collocation with adaptive h-refinement of the mesh (see the module docstring).
@@ -214,7 +281,7 @@ def solve_refined(
     max_elements : int, optional
         Limit on the elements of a refined mesh; default :data:`MAX_ELEMENTS`.
     max_passes : int, optional
-        Limit on the solves; default :data:`MAX_PASSES`.
+        Limit on the solves (``start`` counted as one); default :data:`MAX_PASSES`.
     tolerance : float, optional
         Verification tolerance, set as the problem's
         :attr:`Optimization.verification_tolerance`; default the problem's (or
@@ -223,6 +290,13 @@ def solve_refined(
         Guess of the first pass (see :meth:`CollocationTranscription.solve`).
     parameters : mapping of str to float or array_like, optional
         Parameter values of every pass (see :meth:`CollocationTranscription.solve`).
+    max_cpu_s : float, optional
+        Budget of CPU time [s] of the refinement (this process; the passes' solves and
+        verifications): no pass starts once it is spent or the last pass's cost would
+        overrun it. Default ``defaults["ocp.refine_max_cpu_s"]``.
+    start : OptimizationResult, optional
+        A verified solution of ``optimization`` already at hand (a single solve whose
+        verification failed): the first pass, refined from, not solved again.
     **transcription
         Further arguments of :class:`CollocationTranscription` (``solver_options``,
         ``nominal``, ``verbose``, ...).
@@ -230,19 +304,24 @@ def solve_refined(
     Returns
     -------
     OptimizationResult
-        The result of the pass with the smallest verification deviation (normally the
-        last), with ``refinement`` (one dict per pass) and ``solve_time`` the sum over the
-        passes; ``check_failed`` if the limits
-        stopped the refinement before the verification passed.
+        The verified pass with the best objective if one passed, else the pass with the
+        smallest verification deviation (``check_failed``); ``refinement`` holds one dict
+        per pass (elements, points, status, objective, largest element error and deviation,
+        the simulation's end deviation and bound violation, CPU and wall time, what was
+        done next) and ``refinement_stop`` why it ended; ``solve_time`` is the sum over the
+        passes.
 
     Raises
     ------
     InputError
-        On invalid limits, tolerance or transcription arguments.
+        On invalid limits, tolerance, budget or transcription arguments.
     """
     for label, value, lo in (("max_elements", max_elements, elements), ("max_passes", max_passes, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
             raise InputError(f"{label}: expected an integer >= {lo}, got {value!r}")
+    budget = defaults["ocp.refine_max_cpu_s"] if max_cpu_s is None else max_cpu_s
+    if isinstance(budget, bool) or not isinstance(budget, (int, float, np.integer, np.floating)) or not budget > 0:
+        raise InputError(f"max_cpu_s: expected a positive number of seconds, got {budget!r}")
     if tolerance is not None:
         optimization.verification_tolerance = tolerance
     tol = optimization.verification_tolerance
@@ -252,54 +331,130 @@ def solve_refined(
         raise InputError(f"tolerance: expected a positive number, got {tol!r}") from None
     if not (np.isfinite(tol) and tol > 0):
         raise InputError(f"tolerance: expected a positive number, got {tol!r}")
+    name = optimization.model.name
+    cpu0 = _time.process_time()
     mesh: np.ndarray | None = None
     guess: Any = initial_guess
     history: list[dict[str, Any]] = []
-    result: OptimizationResult | None = None
-    best: OptimizationResult | None = None  # the last pass that ended with a solution
-    for n_pass in range(int(max_passes)):
-        tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=True, **transcription)
-        result = tr.solve(parameters=parameters, initial_guess=guess)
-        v = result.verification
-        entry: dict[str, Any] = {
-            "pass": n_pass + 1, "elements": tr.elements, "status": str(result.status), "objective": result.objective,
-            "final_time": result.final_time, "iterations": result.iterations, "solve_time": result.solve_time,
-        }
+    passes: list[OptimizationResult] = []
+    anchor: OptimizationResult | None = None  # the best pass that reaches its end by simulation: no later pass may be worse
+    stop = "the verification passed and no element is left to split"
+    n_elements = elements
+    warm = False
+    for n_pass in range(1, int(max_passes) + 1):
+        c0, w0 = _time.process_time(), _time.perf_counter()
+        if n_pass == 1 and start is not None:
+            result, n_elements = start, start.collocation.elements if start.collocation is not None else elements
+            tr_points, cpu, wall = points, float(start.solve_time or 0.0) + (start.verification.cpu_s if start.verification else 0.0), 0.0
+        else:
+            options = dict(transcription)
+            if warm and options.get("solver", "ipopt") == "ipopt":
+                # started from the previous pass: a small barrier parameter keeps IPOPT near it (the default
+                # 0.1 pushes the start off its active bounds, and a drive's NLP wandered 600 iterations into a
+                # local optimum 38 % slower)
+                options["solver_options"] = {"mu_init": WARM_MU, **dict(options.get("solver_options") or {})}
+            tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=True, **options)
+            result = tr.solve(parameters=parameters, initial_guess=guess)
+            n_elements, tr_points = tr.elements, tr.points
+            cpu, wall = _time.process_time() - c0, _time.perf_counter() - w0
+        entry = _pass_entry(n_pass, _Mesh(n_elements, tr_points), result, cpu, wall)
         history.append(entry)
+        passes.append(result)
+        v = result.verification
+        _log.info("mesh refinement of %s: pass %d, %d elements x %d points, %s, objective %.10g, largest element error %.3g, "
+                  "deviation %.3g, %.1f CPU-s", name, n_pass, n_elements, tr_points, result.status, result.objective
+                  if result.objective is not None else float("nan"), entry.get("max_element_error", float("nan")),
+                  entry.get("max_scaled_deviation", float("nan")), cpu)
         if v is None:  # the solve failed: nothing to refine from
+            stop = f"pass {n_pass} ended {result.status} without a solution to refine"
             break
-        if best is None or v.max_scaled_deviation <= best.verification.max_scaled_deviation:
-            best = result
-        entry["max_scaled_deviation"] = v.max_scaled_deviation
-        entry["verification_time"] = v.time_s
-        entry["verification_cpu_time"] = v.cpu_s
-        entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
-        new, info = refine_mesh(result, tol, max_elements)
+        base = result
+        if anchor is not None and _minimised(optimization, result) > _minimised(optimization, anchor) + WORSE * max(1.0, abs(_minimised(optimization, anchor))):
+            # refinement changes a solution that reaches its end by the discretisation error only: a pass
+            # this much worse has left for another local optimum; the next pass refines the anchor instead
+            k = passes.index(anchor) + 1
+            entry["rejected"] = (f"objective {result.objective:.10g} worse than pass {k}'s {anchor.objective:.10g}, whose "
+                                 "simulation reaches its end: another local optimum; pass {k} refined instead").replace("{k}", str(k))
+            _log.warning("mesh refinement of %s: %s", name, entry["rejected"])
+            base = anchor
+        elif entry["end_deviation"] <= ANCHOR_END and (anchor is None or _minimised(optimization, result) <= _minimised(optimization, anchor)
+                                               or v.passed):
+            anchor = result
+        new, info = refine_mesh(base, tol, max_elements)
+        if base is not result:  # at least as fine as the rejected pass's mesh
+            new = _finer(new, mesh if mesh is not None else np.full(n_elements, 1.0 / n_elements))
         entry["switches_s"] = info["switches"]
-        if not info["split"]:
+        if base is not result and history[-2].get("rejected") and len(new) == n_elements:
+            stop = f"pass {n_pass} left pass {passes.index(anchor) + 1}'s optimum again on the same mesh"
+            break
+        if not info["split"] and base is result:
+            stop = ("the verification passed and no element is left to split" if v.passed else
+                    f"no element left to split within {max_elements} elements")
             break
         entry["split"] = len(info["split"])
+        spent = _time.process_time() - cpu0
+        if n_pass == max_passes:
+            stop = f"the pass limit ({max_passes})"
+            break
+        if spent + cpu > budget:
+            stop = f"the CPU budget ({budget:g} s; {spent:.1f} s spent, the last pass took {cpu:.1f} s)"
+            break
         mesh = new
-        if v.max_scaled_deviation > max(SPURIOUS * tol, SPURIOUS_DEVIATION):
-            # not a discretisation error but a spurious minimum of the NLP: start the next
-            # pass away from it (its own trajectory would lead back)
+        if base is result and v.max_scaled_deviation > max(SPURIOUS * tol, SPURIOUS_DEVIATION) and entry["end_deviation"] > SPURIOUS_DEVIATION:
+            # not a discretisation error but a spurious minimum of the NLP (its simulation does not reach its
+            # end): start the next pass away from it (its own trajectory would lead back)
             entry["restart"] = "inputs of the failing elements interpolated, states simulated"
-            guess = _repaired_guess(result, tol)
+            guess, warm = _repaired_guess(result, tol), False
         else:
-            guess = _guess_from(result)
-        _log.info("mesh refinement of %s: pass %d, %d elements, objective %.10g, splitting %d", tr.dae.name, n_pass + 1,
-                  tr.elements, result.objective, len(info["split"]))
-    assert result is not None
-    if best is not None and best is not result:
-        _log.warning("mesh refinement of %s: the last pass ended %s (deviation %s); returning the verified closest pass",
-                     optimization.model.name, result.status,
-                     "none" if result.verification is None else f"{result.verification.max_scaled_deviation:.3g}")
-        result = best
+            guess, warm = _guess_from(base), True
+    verified = [r for r in passes if r.verification is not None and r.verification.passed and r.status == Status.OPTIMAL]
+    if verified:
+        best = min(verified, key=lambda r: _minimised(optimization, r))
+    else:  # the smallest deviation, of the passes not rejected as another local optimum
+        kept = [r for r, e in zip(passes, history) if "rejected" not in e]
+        solved = [r for r in kept if r.verification is not None]
+        best = min(solved, key=lambda r: r.verification.max_scaled_deviation) if solved else passes[-1]
+    k = passes.index(best) + 1
+    if best is not passes[-1]:
+        _log.warning("mesh refinement of %s: returning pass %d (%s, objective %s) rather than the last (%s)", name, k,
+                     "verified" if verified else "the smallest deviation", best.objective, passes[-1].status)
+    result = copy.copy(best)
     result.refinement = history
-    result.solve_time = float(sum(e["solve_time"] for e in history))  # every pass's solve, not the returned one's alone
+    result.refinement_stop = f"{stop}; returned pass {k} of {len(passes)}"
+    _log.info("mesh refinement of %s ended: %s", name, result.refinement_stop)
+    result.solve_time = float(sum(e["solve_time"] or 0.0 for e in history))  # every pass's solve, not the returned one's alone
     if result.verification is not None:  # and every pass's verification
+        result.verification = copy.copy(result.verification)
         result.verification.time_s = float(sum(e.get("verification_time", 0.0) for e in history))
         result.verification.cpu_s = float(sum(e.get("verification_cpu_time", 0.0) for e in history))
-    if result.status == Status.OPTIMAL and len(history) == max_passes and history[-1].get("split"):
-        _log.warning("mesh refinement of %s stopped at the pass limit (%d) with elements still to split", optimization.model.name, max_passes)
+    if not verified:
+        result.message = f"{result.message}; mesh refinement stopped at {stop} before a pass verified"
     return result
+
+
+#: IPOPT's initial barrier parameter in a pass started from the previous one.
+WARM_MU = 1e-4
+
+#: A pass whose minimised objective exceeds that of an earlier pass whose simulation reaches its
+#: end by more than this fraction (of ``max(1, |objective|)``) has left for another local optimum.
+WORSE = 2e-3
+#: A pass whose simulation ends within this scaled deviation of its final state is no spurious
+#: minimum: later passes, which change it by the discretisation error, may not be worse than it by
+#: more than :data:`WORSE` (the flexible-joint drive's first pass: 0.063, its current off by 2 A
+#: inside elements; the hanging chain's spurious minimum misses its end).
+ANCHOR_END = SPURIOUS_DEVIATION
+
+
+@dataclasses.dataclass
+class _Mesh:
+    """What :func:`_pass_entry` reads of a transcription."""
+
+    elements: int
+    points: int
+
+
+def _finer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The common refinement of two meshes given by their relative element lengths."""
+    edges = np.unique(np.round(np.concatenate([np.cumsum(a), np.cumsum(b), [0.0]]), 12))
+    edges = edges[(edges >= 0) & (edges <= 1)]
+    return np.diff(edges)

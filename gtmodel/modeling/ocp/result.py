@@ -306,6 +306,8 @@ class OptimizationResult(StatusResult):
         not say (multiple shooting: a bound or path constraint exceeded between the
         shooting nodes, a stage Newton iteration that did not converge); the problem kinds
         print them and write them to ``summary.json`` (``warnings``).
+    refinement_stop : str
+        Why the refinement ended and which pass it returned (``""`` without refinement).
     """
 
     iterations: int
@@ -331,6 +333,7 @@ class OptimizationResult(StatusResult):
     refinement: list[dict[str, Any]] = field(default_factory=list, repr=False)
     timing: dict[str, dict[str, float]] = field(default_factory=dict, repr=False)
     warnings: list[str] = field(default_factory=list, repr=False)
+    refinement_stop: str = ""
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.

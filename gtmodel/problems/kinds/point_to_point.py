@@ -128,7 +128,8 @@ class PointToPointKind(ProblemKind):
                 start_time=t0,
                 method=Collocation(col.elements, col.points, col.scheme),
                 solver=SolverSettings(sol.name, sol.max_iter, sol.tol, sol.jit),
-                refinement=Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes),
+                refinement=Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes, on_failure=tr.refine_on_failure,
+                                      max_cpu_s=tr.max_cpu_s),
             )
         except (InputError, UnreachablePoseError) as exc:
             raise _field_error(file, exc) from None

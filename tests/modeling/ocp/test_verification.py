@@ -13,8 +13,8 @@ import pytest
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
-from gtmodel.modeling.ocp.refinement import refine_mesh, solve_refined, switch_times
-from gtmodel.modeling.ocp.verification import verify
+from gtmodel.modeling.ocp.refinement import end_deviation, refine_mesh, solve_refined, switch_times
+from gtmodel.modeling.ocp.verification import bound_violations, verify
 from gtmodel.status import Status
 
 
@@ -143,7 +143,8 @@ def test_refine_mesh_splits_elements_above_the_tolerance():
     assert info["split"] == [] and len(capped) == 4
 
 
-@pytest.mark.parametrize("kwargs, match", [({"max_elements": 5}, "max_elements"), ({"max_passes": 0}, "max_passes")])
+@pytest.mark.parametrize("kwargs, match", [({"max_elements": 5}, "max_elements"), ({"max_passes": 0}, "max_passes"),
+                                           ({"max_cpu_s": 0.0}, "max_cpu_s"), ({"max_cpu_s": True}, "max_cpu_s")])
 def test_bad_refinement_limits_are_refused(kwargs, match):
     with pytest.raises(InputError, match=match):
         solve_refined(step_response(10, 3), elements=10, **kwargs)
@@ -266,3 +267,41 @@ def test_a_diode_circuit_is_verified_from_consistent_element_starts():
     result = solve_problem(load_problem(REPO / "tests" / "fixtures" / "user_models" / "diode_move.toml"))
     assert "the verifying simulation failed" not in result.message
     assert np.isfinite(result.verification.max_scaled_deviation)
+
+
+def test_bound_violations_between_the_nodes_against_the_closed_form():
+    # x = 1 - exp(-t) (closed form) reaches 1 - exp(-2) = 0.8647 at t = 2 s: an upper bound of 0.8 is exceeded
+    # by the simulation by 0.0647 at the end (the last check point), scaled by max(1, max |x|) = 1
+    res = CollocationTranscription(step_response(10, 3), elements=10).solve()
+    out = bound_violations(res, np.array([-np.inf]), np.array([0.8]))
+    assert out["variable"] == "x" and out["at_time_s"] == pytest.approx(2.0)
+    assert out["max_violation"] == pytest.approx(1 - np.exp(-2.0) - 0.8, abs=1e-4) and out["within_tolerance"] is False
+    assert bound_violations(res, np.array([-np.inf]), np.array([np.inf])) == {}
+    assert bound_violations(res, np.array([-1.0]), np.array([1.0]))["max_violation"] == 0.0
+
+
+def test_end_deviation_of_a_verified_solution_is_the_simulations():
+    # the closed form x(2) = 1 - exp(-2): the collocated end and the simulated end agree to the scheme's accuracy
+    res = CollocationTranscription(step_response(10, 3), elements=10).solve()
+    assert end_deviation(res) < 1e-6
+
+
+def test_refinement_reports_every_pass_and_why_it_stopped():
+    # the double integrator's refinement (analytic 2 s), each pass with its mesh, errors and CPU time
+    opt = min_time_double_integrator()
+    opt.verification_tolerance = 1e-6
+    res = solve_refined(opt, elements=11, max_passes=2)
+    assert [e["pass"] for e in res.refinement] == [1, 2]
+    assert {"elements", "points", "objective", "max_element_error", "max_scaled_deviation", "cpu_s", "wall_s",
+            "end_deviation"} <= set(res.refinement[0])
+    assert "pass limit (2)" in res.refinement_stop or "verification passed" in res.refinement_stop
+
+
+def test_refinement_from_a_start_does_not_solve_it_again():
+    # the start is pass 1 as given (its objective kept), refinement continues from it
+    opt = min_time_double_integrator()
+    start = CollocationTranscription(opt, elements=11).solve()
+    opt.verification_tolerance = 1e-6
+    res = solve_refined(opt, elements=11, start=start, max_passes=3)
+    assert res.refinement[0]["objective"] == start.objective and res.refinement[0]["elements"] == 11
+    assert res.final_time <= start.final_time + 1e-9  # never worse than its feasible start

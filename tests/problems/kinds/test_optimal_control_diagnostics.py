@@ -132,7 +132,7 @@ def test_a_skipped_verification_is_never_reported_verified(tmp_path, capsys):
 
 
 def test_the_verifying_integrator_is_chosen_in_the_file(tmp_path):
-    text = MIN_TIME.replace("[collocation]", "[transcription]\ntolerance = 1e-6\n\n[collocation]")
+    text = MIN_TIME.replace("[collocation]", "[transcription]\ntolerance = 1e-6\nrefine_on_failure = false\n\n[collocation]")
     outcome, summary = _solve(tmp_path, text + '\n[verification]\nintegrator = "idas"\nrtol = 1e-9\n')
     assert outcome.status == Status.CHECK_FAILED  # the switch inside an element of 11 (2.00087 s)
     assert summary["verification"]["integrator"] == "idas (rtol 1e-09)"
@@ -152,3 +152,15 @@ BAD = [
 def test_bad_verification_and_benchmark_fields_name_the_field(tmp_path, case, extra, match):
     f = _write(tmp_path, MIN_TIME)
     assert_bad_problem(tmp_path, f, case, lambda text: text + "\n" + extra, match)
+
+
+def test_a_failed_verification_is_refined_by_default(tmp_path):
+    # refine_on_failure (default): the 11-element solve (2.00087 s, check_failed at 1e-6) is the first pass, the
+    # refinement puts a boundary on the switch; the analytic minimum is 2 s (Bryson and Ho 1975, sec. 7.3)
+    text = MIN_TIME.replace("[collocation]", "[transcription]\ntolerance = 1e-6\n\n[collocation]")
+    outcome, summary = _solve(tmp_path, text)
+    assert outcome.status == Status.OPTIMAL and summary["verification"]["passed"] is True
+    first = summary["refinement"][0]
+    assert first["elements"] == 11 and first["status"] == "check_failed"
+    assert summary["objective"] == pytest.approx(2.0, abs=1e-6) and summary["objective"] <= first["objective"]
+    assert "returned pass" in summary["refinement_stop"]

@@ -79,12 +79,19 @@ class RefinementSection(Section):
         Limit on the elements of a refined mesh.
     max_passes : int
         Limit on the solves of the refinement.
+    refine_on_failure : bool
+        A single solve (``refine = false``) whose verification fails is refined from, within
+        the limits (default; as GPOPS-II, which always refines to its mesh tolerance).
+    max_cpu_s : float, optional
+        CPU-time budget of a refinement [s]; default ``defaults["ocp.refine_max_cpu_s"]``.
     """
 
     refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; also with [[data]]; not with multiple shooting)")
     tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation (default 1e-2)") | None = None
     max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
+    refine_on_failure: Flag = Field(True, description="collocation: a single solve whose verification fails is refined from (as refine = true, within max_passes and max_cpu_s); false: it ends check_failed")
+    max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 90): no pass starts once it is spent, the best verified pass is returned") | None = None
 
 
 class VerificationSection(Section):

@@ -256,6 +256,10 @@ class TranscriptionSection(RefinementSection):
         Limit on the elements of a refined mesh.
     max_passes : int
         Limit on the solves of the refinement.
+    refine_on_failure : bool
+        A single collocation solve whose verification fails is refined from (default).
+    max_cpu_s : float, optional
+        CPU-time budget of a refinement [s]; default ``defaults["ocp.refine_max_cpu_s"]``.
     """
 
     method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"

@@ -1,0 +1,58 @@
+"""The drive family of ``models/drives.py`` and ``problems/drive_*.toml``: minimum time with voltage and current limits.
+
+Independent reference: ``benchmarks/drive_references.py``, a direct multiple-shooting solve
+written in plain CasADi on the hand-written ODEs (no gtmodel code), the current bound enforced
+at every integration step; its values are kept in ``tests/problems/data/drive_references.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import pytest
+
+from gtmodel.modeling.ocp.refinement import WORSE
+from gtmodel.problems import load_problem, run_problem
+
+REPO = Path(__file__).resolve().parents[2]
+REFERENCES = json.loads((REPO / "tests" / "problems" / "data" / "drive_references.json").read_text())
+DRIVES = ["drive_motor_gear_load", "drive_two_mass", "drive_flexible_joint"]
+
+
+@pytest.mark.parametrize("name, states", [
+    ("drive_motor_gear_load", ["ind.i", "emf.phi", "rotor.w"]),
+    ("drive_two_mass", ["ind.i", "emf.phi", "rotor.w", "load.w", "friction.phi_rel"]),
+    ("drive_flexible_joint", ["ind.i", "emf.phi", "rotor.w", "link.phi", "link.w"]),
+])
+def test_drive_model_is_reduced_to_its_states(name, states):
+    # the composed models are of index 2 (the gear ties two angles); reduction keeps these states
+    problem = load_problem(REPO / "problems" / f"{name}.toml")
+    assert problem.declaration.optimization.model.flatten().x_names == states
+
+
+@pytest.mark.parametrize("name", DRIVES)
+def test_drive_reference_is_converged_in_its_mesh(name):
+    # the reference's own discretisation error, O(1/N) (a switch inside a piecewise-constant interval), estimated
+    # from its two finest meshes: |T_fine - T_coarse| N_coarse / (N_fine - N_coarse), at most a quarter of 1 %
+    (n_c, t_c), (n_f, t_f) = sorted(((int(k), v) for k, v in REFERENCES[name]["by_intervals"].items()))[-2:]
+    assert REFERENCES[name]["status"] == "Solve_Succeeded"
+    assert abs(t_f - t_c) * n_c / (n_f - n_c) <= 2.5e-3 * t_f
+
+
+@pytest.mark.slow  # 10 to 90 CPU-s each: a solve, its verification and refinement from it (refine_on_failure)
+@pytest.mark.parametrize("name", DRIVES)
+def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_path):
+    cpu = time.process_time()
+    outcome = run_problem(REPO / "problems" / f"{name}.toml", tmp_path / "out", plots=False)
+    cpu = time.process_time() - cpu
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["objective"] == pytest.approx(REFERENCES[name]["final_time"], rel=5e-3)
+    passes = summary.get("refinement", [])
+    kept = [e["objective"] for e in passes if "rejected" not in e and e.get("end_deviation", 1.0) <= 0.1]
+    # never worse than a start whose simulation reaches its end, by more than the rejection margin
+    assert not kept or summary["objective"] <= min(kept) + WORSE * max(1.0, min(kept)) or summary["verification"]["passed"]
+    assert cpu <= 150.0
+    if name == "drive_motor_gear_load":
+        assert str(outcome.status) == "optimal" and summary["verification"]["passed"] is True
