@@ -16,6 +16,7 @@ along it.
 
 from __future__ import annotations
 
+import functools
 import logging
 from dataclasses import InitVar, dataclass, field, fields, replace
 from pathlib import Path
@@ -584,12 +585,8 @@ def _energy(result: OptimizationResult) -> float:
     nodes, weights = np.polynomial.legendre.leggauss(c.points + 1)
     x = (nodes + 1) / 2
     basis = lagrange_basis(c.tau_root[1:], x)  # (n, d)
-    h = (c.tf - c.t0) / c.elements
-    total = 0.0
-    for k in range(c.elements):
-        u = basis @ c.uc[k]  # (n, nu)
-        total += h * np.sum(weights / 2 * np.sum(u**2, axis=1))
-    return float(total)
+    u = np.einsum("nd,kdu->knu", basis, np.asarray(c.uc, dtype=float))  # (elements, n, nu) at the Gauss nodes
+    return float((c.tf - c.t0) / c.elements * np.sum(weights / 2 * np.sum(u**2, axis=2)))
 
 
 def _scale_objective(tr: CollocationTranscription, problem: PointToPoint, options: dict[str, Any]) -> float | None:
@@ -616,14 +613,9 @@ def _coarse_start(opt: Optimization, problem: PointToPoint, common: dict[str, An
 def _structure(problem: PointToPoint) -> tuple:
     """What must be equal for two declarations to share one transcription."""
     skip = {"named_parameters", "w", "name", "parameters", "guess", "origin"}
-    out = []
-    for f in fields(problem):
-        if f.name in skip:
-            continue
-        v = getattr(problem, f.name)
-        out.append((f.name, tuple(np.ravel(v)) if isinstance(v, np.ndarray) else v if not isinstance(v, RobotParameters) else v.name))
-    out.append(("parameter_names", tuple(sorted(problem.named_parameters))))
-    return tuple(out)
+    key = lambda v: tuple(np.ravel(v)) if isinstance(v, np.ndarray) else v.name if isinstance(v, RobotParameters) else v  # noqa: E731
+    return tuple((f.name, key(getattr(problem, f.name))) for f in fields(problem) if f.name not in skip) + (
+        ("parameter_names", tuple(sorted(problem.named_parameters))),)
 
 
 def solve_point_to_point(
@@ -683,15 +675,15 @@ def solve_point_to_point(
         tr = CollocationTranscription(opt, elements=problem.method.elements, points=problem.method.points,
                                       scheme=problem.method.scheme, **common)
         scaling = _scale_objective(tr, problem, options)
+        refined = functools.partial(solve_refined, opt, elements=problem.method.elements, points=problem.method.points,
+                                    scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
+                                    max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, parameters=problem.named_parameters)
         if ref.refine:
             # each pass is a new mesh (with the first mesh's objective scaling), so no NLP is kept for a sweep to reuse
             tr = None
             if scaling is not None:
                 common["solver_options"] = {**options, "obj_scaling_factor": scaling}
-            result = solve_refined(opt, elements=problem.method.elements, points=problem.method.points,
-                                   scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
-                                   max_passes=ref.max_passes, initial_guess=guess, max_cpu_s=ref.max_cpu_s,
-                                   parameters=problem.named_parameters, **common)
+            result = refined(initial_guess=guess, **common)
         else:
             fine = problem.solver.name == "fatrop" and problem.method.elements >= COARSE_START_MIN_ELEMENTS and guess is None
             result = solve_from_coarse(tr, (lambda: _coarse_start(opt, problem, common, options)) if fine else None,
@@ -700,9 +692,6 @@ def solve_point_to_point(
                 # the verification failed: refined from this solution within the budget (refine_on_failure)
                 _log.warning("%s: the verification failed; refining the mesh from this solution (refine_on_failure)", problem.name)
                 tr = None  # the result's mesh is no longer this transcription's
-                result = solve_refined(opt, elements=problem.method.elements, points=problem.method.points,
-                                       scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
-                                       max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, start=result,
-                                       parameters=problem.named_parameters, **common)
+                result = refined(start=result, **common)
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
     return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)
