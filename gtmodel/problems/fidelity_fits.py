@@ -13,7 +13,8 @@ Each fit is to one thesis table, whose quantity the report then holds fixed to p
   (:func:`fit_l1_stiffness_y`, Case 1 of the thesis' ILC set-up alone); ``problems/thesis/l1_ilc_fitted.toml`` holds it and
   its run predicts the other cases of Table 7.2.
 
-About 30 s; ``tests/report/test_fidelity_fits.py`` checks (slow) that it reproduces the stored file.
+A few minutes (the Table 8 fit on five noise seeds under both readings of the path's feed);
+``tests/report/test_fidelity_fits.py`` checks (slow) that it reproduces the stored file.
 """
 
 from __future__ import annotations
@@ -34,10 +35,11 @@ from gtmodel.calibration import grid_poses
 from gtmodel.calibration.cart_compliance import transverse_forces
 from gtmodel.problems.run import run_problem
 from gtmodel.report.fidelity_d1 import THESIS_FINAL_COST, THESIS_N_CALIBRATION, length_error_um
-from gtmodel.report.fidelity_fits import D1_THESIS_FILE, FITS, fit_table_8, predict
+from gtmodel.estimation.fusion.study import FusionStudy
+from gtmodel.report.fidelity_fits import D1_THESIS_FILE, FITS, best_acceleration_ratio, fit_table_8, other_crossing, predict
 from gtmodel.robots.closure import ThreeLinkClosure
 
-__all__ = ["L1_THESIS_FILE", "L1_FITTED_FILE", "TABLE_7_2_CASE_1_TOOL_Y", "d1_model_1_arms", "fit_d1_cart_compliance", "l1_case_1",
+__all__ = ["SEEDS", "FEEDS", "seed_spread", "L1_THESIS_FILE", "L1_FITTED_FILE", "TABLE_7_2_CASE_1_TOOL_Y", "d1_model_1_arms", "fit_d1_cart_compliance", "l1_case_1",
            "fit_l1_stiffness_y", "compute", "main"]
 
 #: The ILC set-up the thesis' text defines, and the same with the static TCP stiffness in y fitted to Table 7.2's Case 1 tool y.
@@ -164,17 +166,58 @@ def fit_l1_stiffness_y() -> dict[str, Any]:
     return {"stiffness_y_N_per_m": k, "case_1": l1_case_1(k), "thesis_set_up": l1_case_1(STIFFNESS_Y_BRACKET[1]), "target": TABLE_7_2_CASE_1_TOOL_Y}
 
 
+#: The noise seeds of the spread of the Table 8 fit (issue 47: at least five), and both readings of the sine path's speed.
+SEEDS = (1, 2, 3, 4, 5)
+FEEDS = ("tangential", "x")
+
+
+def seed_spread(seeds: tuple[int, ...] = SEEDS, feeds: tuple[str, ...] = FEEDS) -> dict[str, Any]:
+    """The Table 8 fit and its Table 9 predictions on every noise seed, under both readings of the feed.
+
+    Parameters
+    ----------
+    seeds : tuple of int, optional
+        Noise seeds of :class:`~gtmodel.estimation.fusion.study.FusionStudy`.
+    feeds : tuple of str, optional
+        ``"tangential"`` (the thesis' stated constant tangential speed, Cvitanic (2021), sec. 4.2) and ``"x"``.
+
+    Returns
+    -------
+    dict
+        Per feed, per seed (as a string): ``reached`` (the 2/3 acceleration ratio is reachable), ``least_acceleration_ratio``,
+        ``q_p``, ``q_a``, ``table_8``, ``table_9`` (:func:`gtmodel.report.fidelity_fits.predict`'s ratios, Table 10 left out) and
+        ``other_crossing`` (:func:`gtmodel.report.fidelity_fits.other_crossing`).
+    """
+    out: dict[str, Any] = {}
+    for feed in feeds:
+        out[feed] = {}
+        for seed in seeds:
+            study = FusionStudy(seed=seed, feed=feed)
+            fit = fit_table_8(study)
+            t9 = predict(fit, study, table_10=False)["table_9"]
+            out[feed][str(seed)] = {k: fit[k] for k in ("reached", "least_acceleration_ratio", "q_p", "q_a", "table_8")} | {
+                "table_9": {q: v["ratio"] for q, v in t9.items()}, "other_crossing": other_crossing(fit, study)}
+    return out
+
+
 def compute() -> dict[str, Any]:
     """The fit and the predictions (what ``docs/fidelity_fits.json`` holds).
 
     Returns
     -------
     dict
-        ``command``, ``cvitanic_tables_8_10``: ``fit`` (:func:`fit_table_8`) and ``predicted`` (:func:`predict`);
+        ``command``, ``cvitanic_tables_8_10``: ``fit`` (:func:`fit_table_8`, at the thesis' tangential feed, seed 1) and
+        ``predicted`` (:func:`predict`), ``x_feed`` (the same at the feed along x), ``seeds`` (:func:`seed_spread`), ``table_8_at_implied_noise``
+        (:func:`~gtmodel.report.fidelity_fits.best_acceleration_ratio` with Table 7's bias and without);
         ``d1_cart_compliance`` (:func:`fit_d1_cart_compliance`); ``l1_stiffness_y`` (:func:`fit_l1_stiffness_y`).
     """
     fit = fit_table_8()
-    return {"command": "python -m gtmodel.problems.fidelity_fits", "cvitanic_tables_8_10": {"fit": fit, "predicted": predict(fit)},
+    x_fit = fit_table_8(FusionStudy(feed="x"))
+    return {"command": "python -m gtmodel.problems.fidelity_fits", "cvitanic_tables_8_10": {"fit": fit, "predicted": predict(fit),
+                                                                                        "x_feed": {"fit": x_fit, "predicted": predict(x_fit, FusionStudy(feed="x"))},
+                                                                                        "seeds": seed_spread(),
+                                                                                        "table_8_at_implied_noise": [best_acceleration_ratio(),
+                                                                                                                     best_acceleration_ratio(bias=0.0)]},
             "d1_cart_compliance": fit_d1_cart_compliance(), "l1_stiffness_y": fit_l1_stiffness_y()}
 
 

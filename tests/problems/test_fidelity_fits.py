@@ -1,6 +1,6 @@
 """``python -m gtmodel.problems.fidelity_fits`` reproduces ``docs/fidelity_fits.json`` (the fits the fidelity page renders).
 
-Independent reference: the stored file, written by the same command; recomputed here (slow, about 10 s).
+Independent reference: the stored file, written by the same command; recomputed here (slow, a few minutes).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ def stored():
 
 @pytest.mark.slow
 def test_the_command_reproduces_the_stored_fits(stored):
-    # python -m gtmodel.problems.fidelity_fits (about 10 s): the same fit and predictions as docs/fidelity_fits.json
+    # python -m gtmodel.problems.fidelity_fits (a few minutes): the same fit and predictions as docs/fidelity_fits.json
     got, want = _flat(run_fits.compute()), _flat(stored)
     assert {k: v for k, v in got.items() if isinstance(v, float)} == pytest.approx({k: v for k, v in want.items() if isinstance(v, float)}, rel=1e-6, abs=1e-6)
     assert {k: v for k, v in got.items() if not isinstance(v, float)} == {k: v for k, v in want.items() if not isinstance(v, float)}

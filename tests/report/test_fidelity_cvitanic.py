@@ -1,7 +1,7 @@
 """The fidelity rows of Cvitanic (2021), Tables 2 and 10 (gtmodel.report.fidelity): verdicts from the figures, and collect on a real run.
 
-Independent reference: hand-made figures whose verdict is known (every limit within one decade,
-or one two decades off; Table 2's ordering present or absent), and the summary the
+Independent reference: hand-made figures whose verdict is known (every limit within half a decade on our Q, which
+the thesis does not print, or one two decades off; Table 2's ordering present or absent), and the summary the
 ``joint_stiffness_calibration`` kind writes for problems/thesis/kr500_table_2.toml (read back by ``collect``).
 """
 
@@ -14,6 +14,7 @@ import pytest
 
 from gtmodel.problems import run_problem
 from gtmodel.report import fidelity
+from gtmodel.report.fidelity_rules import Row, apply_rules
 
 from ..conftest import PROBLEMS_DIR
 from ..conftest import replace_once as _edit
@@ -27,15 +28,16 @@ def _limit(motion, limit, verdict, tuning="white_jerk"):
 
 
 def _row(limits):
-    rows = fidelity._table_10_rows({"table_10": SWEEP}, None if limits is None else {"limits": limits})
+    rows = apply_rules([r if isinstance(r, Row) else Row(*r) for r in fidelity._table_10_rows({"table_10": SWEEP}, None if limits is None else {"limits": limits})])
     return next(r for r in rows if "accel_bias_m_s2" in r[0])
 
 
 @pytest.mark.parametrize("limits, verdict", [
-    ([_limit("3-axis", 0.002, "reproduced"), _limit("5-axis", 0.003, "reproduced")], "reproduced"),
+    # within half a decade, but on our white-jerk Q, which the thesis does not print (issue 47): differs
+    ([_limit("3-axis", 0.002, "reproduced"), _limit("5-axis", 0.003, "reproduced")], "differs"),
     ([_limit("3-axis", 0.1, "differs"), _limit("5-axis", 0.003, "reproduced"), _limit("3-axis", 0.002, "reproduced", "appendix_b")], "differs"),
     (None, "not run"),
-], ids=["both_within_a_decade", "ours_two_decades_off", "not_run"])
+], ids=["within_half_a_decade_on_our_q", "ours_two_decades_off", "not_run"])
 def test_table_10_row_verdict(limits, verdict):
     row = _row(limits)
     assert row[4] == verdict and row[1] == "< 0.001 / < 0.001"
