@@ -25,11 +25,11 @@ A row of :mod:`gtmodel.report.fidelity` is a :class:`Row`. Its verdict is one of
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DECADES", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Mechanism", "Row",
+__all__ = ["figure_text", "VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DECADES", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Mechanism", "Row",
            "cases_differ_as_thesis", "pattern_as_thesis", "limit_within", "apply_rules", "delay_pole_magnitude", "largest_stable_delay"]
 
 #: The verdicts a row can carry, from the strongest.
@@ -366,3 +366,25 @@ def largest_stable_delay(gain: float, max_delay: int = 60) -> int:
     """
     stable = [d for d in range(1, max_delay + 1) if delay_pole_magnitude(gain, d) < 1.0]
     return max(stable) if stable else 0
+
+
+def figure_text(x: Any, digits: int = 3) -> str:
+    """A figure as the page prints it: ``digits`` significant digits, lists joined by " / ", None as "n/a".
+
+    Parameters
+    ----------
+    x : float, int, str, list, tuple or None
+        The figure.
+    digits : int, optional
+        Significant digits of a float (default 3).
+
+    Returns
+    -------
+    str
+        The text.
+    """
+    if x is None:
+        return "n/a"
+    if isinstance(x, (list, tuple)):
+        return " / ".join(figure_text(v, digits) for v in x)
+    return f"{x:.{digits}g}" if isinstance(x, float) else str(x)
