@@ -1,4 +1,6 @@
 """Moved to :mod:`gtmodel.control.reference`; this path is kept for existing code."""
 
+import gtmodel.control.reference as _moved
 from gtmodel.control.reference import *  # noqa: F401,F403
-from gtmodel.control.reference import __all__  # noqa: F401
+
+__all__ = list(_moved.__all__)
