@@ -1,7 +1,7 @@
 """The ONE C step interface of the loop controllers: a CasADi Function behind a memory struct.
 
 Every controller that runs in the loop (the tracking controller of
-:mod:`gtmodel.estimation.tracking`, a real-time MPC) is ONE CasADi Function of the form
+:mod:`gtmodel.control.tracking`, a real-time MPC) is ONE CasADi Function of the form
 
 ``control(t (1,1), x (nx,1), u_last (nu,1)[, w (nw,1)]) -> (u (nu,1)[, w_next (nw,1)], ok (1,1))``
 
@@ -60,8 +60,8 @@ from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
-from gtmodel.estimation.mpc import MPCController
-from gtmodel.estimation.tracking import TrackingController
+from gtmodel.control.mpc import MPCController
+from gtmodel.control.tracking import TrackingController
 
 __all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
 
@@ -109,12 +109,12 @@ class LoopStep:
         outside, or non-finite, and returns ``GT_MEMORY_RESET``); None: any finite one.
     reset : casadi.Function or None
         ``reset(t, x) -> (u_last[, w])``: the memory reset to the reference's at time ``t`` [s]
-        (e.g. :meth:`gtmodel.estimation.mpc.MPCController.memory_reset`); None: the first memory
+        (e.g. :meth:`gtmodel.control.mpc.MPCController.memory_reset`); None: the first memory
         (``u_init`` saturated, ``w_init``).
     predict : casadi.Function or None
         ``predict(u_last, w) -> x``: the state the memory predicts for now, which replaces a
         non-finite or absurd measurement (``_step`` returns ``GT_MEASUREMENT_REJECTED`` with ``u``
-        computed from it; e.g. :meth:`gtmodel.estimation.mpc.MPCController.memory_predict`);
+        computed from it; e.g. :meth:`gtmodel.control.mpc.MPCController.memory_predict`);
         None: such a measurement is refused (``GT_BAD_ARGUMENT``, the safe input).
     """
 
@@ -200,7 +200,7 @@ class LoopStep:
 
 
 def tracking_step(controller: TrackingController, name: str = "tracking") -> LoopStep:
-    """The loop step of a tracking controller (:func:`gtmodel.estimation.tracking.tracking_controller`).
+    """The loop step of a tracking controller (:func:`gtmodel.control.tracking.tracking_controller`).
 
     Parameters
     ----------
@@ -212,16 +212,16 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
     Returns
     -------
     LoopStep
-        Its :meth:`~gtmodel.estimation.tracking.TrackingController.function`, period,
+        Its :meth:`~gtmodel.control.tracking.TrackingController.function`, period,
         input bounds, first input ``u*_0`` and the reference as the check's samples.
     """
     c = controller
     text = (f"Tracking controller: u = sat(u*_k - K_k (x - x*_k)), k = floor((t - {c.t0!r}) / {c.dt!r}) held in 0..{c.length - 1}\n"
             + ("(feedforward u* and reference x* sampled at the period, time-varying LQR gains K_k from the\n"
-               "backward discrete Riccati recursion on the model's fixed-step Jacobians; gtmodel.estimation.tracking).\n"
+               "backward discrete Riccati recursion on the model's fixed-step Jacobians; gtmodel.control.tracking).\n"
                if np.any(c.K != c.K[0]) else
                "(feedforward u* and reference x* sampled at the period, one time-invariant LQR gain K (the discrete\n"
-               "Riccati equation at the held end, on the model's fixed-step Jacobians); gtmodel.estimation.tracking).\n")
+               "Riccati equation at the held end, on the model's fixed-step Jacobians); gtmodel.control.tracking).\n")
             + ("One period of input delay compensated: x and t replaced by the state predicted at t + dt\n"
                "by the model's fixed step from u_last (the input acting until this one arrives).\n" if c.delay else "")
             + (f"Integral action on {', '.join(c.x_names[i] for i in c.integral_states)}: u -= Ki_k xi, the integrator state xi\n"
@@ -233,7 +233,7 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
 
 
 def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
-    """The loop step of a real-time MPC (:func:`gtmodel.estimation.mpc.mpc_controller`).
+    """The loop step of a real-time MPC (:func:`gtmodel.control.mpc.mpc_controller`).
 
     Parameters
     ----------
@@ -245,7 +245,7 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
     Returns
     -------
     LoopStep
-        Its :meth:`~gtmodel.estimation.mpc.MPCController.function`, period, input bounds,
+        Its :meth:`~gtmodel.control.mpc.MPCController.function`, period, input bounds,
         first input ``u*_0``, first warm start, ``GT_NOT_CONVERGED`` when the SQP result is
         not finite, and the reference as the check's samples.
     """
@@ -253,7 +253,7 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
     text = (f"Real-time nonlinear MPC: horizon {c.horizon} periods of {c.dt!r} s, {c.blocks} input blocks, "
             f"{c.sqp_iterations} SQP iteration(s) per period\n"
             "(CasADi sqpmethod with qrqp, Gauss-Newton Hessian, single shooting, warm start shifted by one period;\n"
-            "tracking of the reference x*, u* sampled at the period; gtmodel.estimation.mpc).\n"
+            "tracking of the reference x*, u* sampled at the period; gtmodel.control.mpc).\n"
             + (f"Offset-free: an input disturbance d estimated each period (gain {c.disturbance_gain:g}) from the\n"
                "one-period prediction error; the memory w holds the warm start, d, the last x and u_last, a flag.\n"
                if c.disturbance_gain else "")

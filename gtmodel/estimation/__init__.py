@@ -17,11 +17,13 @@ Rooms by job (lower rooms never import higher ones; an import-linter contract ch
 * :mod:`~gtmodel.estimation.ilc`: iterative learning control, its lifted-system stability
   and the ILC experiment (uses ``filters`` and ``closed_loop``);
 * :mod:`~gtmodel.estimation.fusion`: the tracker + IMU sensors, sine paths and the fusion
-  study (uses ``filters``);
-* :mod:`~gtmodel.estimation.tracking`: the tracking controller of any model (feedforward
-  plus time-varying LQR along an optimal motion, one CasADi Function for the loop).
+  study (uses ``filters``).
 
-Lower layers only: robots, modeling and the base modules.
+The loop's controllers (tracking, MPC, their references and the plant bounds) live in
+:mod:`gtmodel.control`; the former paths ``gtmodel.estimation.mpc``, ``.mpc_constraints``,
+``.mpc_fatrop``, ``.tracking``, ``.reference`` and ``.closed_loop.bounds`` re-export from it.
+
+Lower layers only: control (the former paths above), robots, modeling and the base modules.
 """
 
 from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter

@@ -8,7 +8,7 @@ explicit ODE (:func:`gtmodel.modeling.explicit_ode`) with the solve's parameter 
 takes the bounds the summary records (the NLP's: the problem file's ``[bounds]`` over the
 model's; the input bounds intersected with the model's declared ones) and builds the
 feedforward + time-varying LQR controller of
-:func:`gtmodel.estimation.tracking.tracking_controller` at the loop period. A result that
+:func:`gtmodel.control.tracking.tracking_controller` at the loop period. A result that
 failed its verification (``check_failed``) or was not verified is taken only with
 ``accept_unverified`` (``--accept-unverified``), which the check's summary and verdict repeat;
 an input bound recorded nowhere is named in them (its violations are not counted).
@@ -26,7 +26,7 @@ import numpy as np
 from gtmodel._tables import read_table
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.estimation.tracking import TrackingController, tracking_controller
+from gtmodel.control.tracking import TrackingController, tracking_controller
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import SOLVED, DeclaredBounds, dae_bounds, summary_bounds, unverified_reason
@@ -83,7 +83,7 @@ def tracking_from_result(
         Its steps within one period.
     Q, R : array_like, optional
         LQR weights (default Bryson's rule, see
-        :func:`~gtmodel.estimation.tracking.tracking_controller`).
+        :func:`~gtmodel.control.tracking.tracking_controller`).
     accept_unverified : bool, optional
         Take a result whose verification failed or was skipped (default False: refused).
 

@@ -2,7 +2,7 @@
 
 A loop controller (the MPC, the tracking controller) keeps the bounds that the model and the
 reference problem declare, and its closed-loop check counts their violations on the plant
-(:func:`gtmodel.estimation.closed_loop.bounds.bound_report`). :class:`DeclaredBounds` holds
+(:func:`gtmodel.control.bounds.bound_report`). :class:`DeclaredBounds` holds
 them by scalar name (states, inputs, algebraic variables and outputs) with where they came
 from:
 

@@ -24,9 +24,9 @@ from gtmodel.codegen.build import compile_shared, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.generate import GeneratedCode
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, load_loop_step
-from gtmodel.estimation.closed_loop.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
+from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
-from gtmodel.estimation.reference import period_index
+from gtmodel.control.reference import period_index
 from gtmodel.problems.loop_file import LoopSetup
 
 __all__ = ["AUTHORITY_WARNING", "STATUS_NAMES", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
@@ -71,8 +71,8 @@ class LoopCheck:
         the feedback has little authority left.
     bounds : list of BoundExcess
         Every declared bound on the plant under the controller (states, inputs, algebraic
-        variables and outputs; :func:`~gtmodel.estimation.closed_loop.bounds.bound_report`):
-        one beyond :data:`~gtmodel.estimation.closed_loop.bounds.EXCESS_TOLERANCE` fails the check.
+        variables and outputs; :func:`~gtmodel.control.bounds.bound_report`):
+        one beyond :data:`~gtmodel.control.bounds.EXCESS_TOLERANCE` fails the check.
     bounds_feedforward : list of BoundExcess
         The same under the feedforward alone (for comparison; not a failure).
     notes : list of str
@@ -326,7 +326,7 @@ def plant_bounds(setup: LoopSetup, run: LoopSummary) -> list[BoundExcess]:
     Returns
     -------
     list of BoundExcess
-        :func:`~gtmodel.estimation.closed_loop.bounds.bound_report`; empty without bounds.
+        :func:`~gtmodel.control.bounds.bound_report`; empty without bounds.
     """
     if setup.bounds is None:
         return []

@@ -14,7 +14,7 @@ error names the file and the field, the CLI exits with 2):
     ``trajectories.csv`` as written: its ``point`` column and repeated times are read as such,
     its ``summary.json`` gives the solve's status, parameters and bounds); ``settle_time`` [s]
     the end held: its state (the robot at rest) with the input that holds it
-    (:func:`~gtmodel.estimation.reference.hold_input`); ``accept_unverified`` (default false)
+    (:func:`~gtmodel.control.reference.hold_input`); ``accept_unverified`` (default false)
     takes a reference whose verification failed or was skipped, which the check's summary
     and verdict repeat (:mod:`gtmodel.problems.loop_bounds`). The declared bounds of the
     model and the reference (states, inputs, algebraic variables and outputs) are carried
@@ -66,7 +66,7 @@ from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
-from gtmodel.estimation.reference import hold_input
+from gtmodel.control.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.base import ProblemFile
@@ -160,8 +160,8 @@ class LoopSetup:
     name : str
         Controller name.
     controller : Any
-        The controller (an :class:`~gtmodel.estimation.mpc.MPCController` or a
-        :class:`~gtmodel.estimation.tracking.TrackingController`: ``t0``, ``dt``,
+        The controller (an :class:`~gtmodel.control.mpc.MPCController` or a
+        :class:`~gtmodel.control.tracking.TrackingController`: ``t0``, ``dt``,
         ``length``, ``u_ref``, ``u_lb``, ``u_ub``).
     plant_step : casadi.Function
         ``step(x, u, p) -> (x_next, ...)`` of the mismatched plant over one period.

@@ -16,7 +16,7 @@ error names the file and the field, the CLI exits with 2):
     :mod:`gtmodel.problems.loop_bounds`: the reference problem's force limits or ``[bounds]``
     over the model's, a result folder's recorded ones, else the model's; one declared nowhere is
     named in the summary); the state bounds and path constraints
-    on the predicted states (:mod:`gtmodel.estimation.mpc_constraints`): the reference
+    on the predicted states (:mod:`gtmodel.control.mpc_constraints`): the reference
     problem's as its file declares them (``problem_constraints``, default true: the states'
     ``[bounds]`` and ``[optimization] constraints`` of an ``optimal_control`` file, the cart
     travel, joint-angle and velocity limits of a ``point_to_point`` one; a table's: the
@@ -26,7 +26,7 @@ error names the file and the field, the CLI exits with 2):
     with slacks, weight ``constraint_weight``) or ``hard_constraints = true``, on every
     predicted state or every ``constraint_every``-th and the last; ``disturbance_gain``
     (default 0; in ``[0, 1]``: offset-free MPC, an input disturbance estimated from the
-    one-period prediction error, :attr:`gtmodel.estimation.mpc.MPCController.disturbance_gain`).
+    one-period prediction error, :attr:`gtmodel.control.mpc.MPCController.disturbance_gain`).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``: the tables shared by every
     loop-controller file, :mod:`gtmodel.problems.loop_file`.
@@ -43,8 +43,8 @@ from pydantic import Field
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError
-from gtmodel.estimation.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
-from gtmodel.estimation.mpc_constraints import problem_constraints
+from gtmodel.control.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
+from gtmodel.control.mpc_constraints import problem_constraints
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds
 from gtmodel.problems.loop_file import (Bounds, LoopFile, LoopModel, LoopSetup, Period, StateBounds, Weights, loop_inputs,
@@ -80,7 +80,7 @@ def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
     nx, nu : int
         States and inputs of the model.
     solver : str
-        :data:`~gtmodel.estimation.mpc.MPC_SOLVERS`.
+        :data:`~gtmodel.control.mpc.MPC_SOLVERS`.
 
     Returns
     -------
@@ -139,7 +139,7 @@ class MPCFile(LoopFile):
 
 
 #: What an MPC file builds (:class:`~gtmodel.problems.loop_file.LoopSetup` with an
-#: :class:`~gtmodel.estimation.mpc.MPCController` as its controller).
+#: :class:`~gtmodel.control.mpc.MPCController` as its controller).
 MPCSetup = LoopSetup
 
 

@@ -22,7 +22,7 @@ error names the file and the field, the CLI exits with 2):
     (:mod:`gtmodel.problems.loop_file`).
 
 The controller is the feedforward ``u*_k`` plus the time-varying LQR
-(:func:`gtmodel.estimation.tracking.tracking_controller`; Anderson & Moore, Optimal Control:
+(:func:`gtmodel.control.tracking.tracking_controller`; Anderson & Moore, Optimal Control:
 Linear Quadratic Methods, sec. 2.4), saturated at the input bounds, generated as C through
 :func:`gtmodel.codegen.loop_step.tracking_step` (the loop-step interface of the MPC).
 """
@@ -35,7 +35,7 @@ from pydantic import Field
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError
-from gtmodel.estimation.tracking import tracking_controller
+from gtmodel.control.tracking import tracking_controller
 from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.loop_file import (MAX_WEIGHT, Bounds, LoopFile, LoopSetup, Period, Weights, loop_inputs, loop_setup, read_loop_file,
                                         weight_diagonal)
@@ -92,7 +92,7 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
     Returns
     -------
     LoopSetup
-        Its :class:`~gtmodel.estimation.tracking.TrackingController`, the plant of the
+        Its :class:`~gtmodel.control.tracking.TrackingController`, the plant of the
         check and the loop options.
 
     Raises

@@ -24,9 +24,9 @@ from gtmodel.codegen.build import compile_shared, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step, load_loop_step, mpc_step, tracking_step
 from gtmodel.errors import InputError
-from gtmodel.estimation.mpc import mpc_controller
-from gtmodel.estimation.reference import period_index
-from gtmodel.estimation.tracking import tracking_controller
+from gtmodel.control.mpc import mpc_controller
+from gtmodel.control.reference import period_index
+from gtmodel.control.tracking import tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 

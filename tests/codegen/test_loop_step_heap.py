@@ -16,7 +16,7 @@ import pytest
 from gtmodel.codegen.build import compile_shared
 from gtmodel.codegen.loop_step import HEAP_ARENA_BYTES, generate_loop_step, mpc_step, uses_heap_arena
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
-from gtmodel.estimation.mpc import mpc_controller
+from gtmodel.control.mpc import mpc_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.loop_check import LoopCheck, compiled_step, heap_stats
 

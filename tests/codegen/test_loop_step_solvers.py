@@ -15,7 +15,7 @@ import pytest
 from gtmodel.codegen.build import load_library
 from gtmodel.codegen.build import compile_shared
 from gtmodel.codegen.loop_step import generate_loop_step, mpc_step
-from gtmodel.estimation.mpc import mpc_controller
+from gtmodel.control.mpc import mpc_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.mpc_check import compiled_step
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
-from gtmodel.estimation.closed_loop.bounds import bound_report
+from gtmodel.control.bounds import bound_report
 from gtmodel.problems.loop_check import LoopCheck, reference_at_bounds
 
 x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.mpc import mpc_controller
+from gtmodel.control.mpc import mpc_controller
 from gtmodel.modeling import explicit_ode
 
 from ..modeling._builders import double_integrator

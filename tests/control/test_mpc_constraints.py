@@ -1,4 +1,4 @@
-"""State bounds and path constraints of the real-time MPC (gtmodel.estimation.mpc_constraints).
+"""State bounds and path constraints of the real-time MPC (gtmodel.control.mpc_constraints).
 
 References: the double integrator x'' = u with a position bound, explicit Euler over 4 ms, so
 that the horizon problem is a convex QP; it is built again here in NumPy (prediction by the
@@ -15,8 +15,8 @@ from scipy.optimize import Bounds, LinearConstraint, minimize
 
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
-from gtmodel.estimation.mpc import mpc_controller
-from gtmodel.estimation.mpc_constraints import problem_constraints
+from gtmodel.control.mpc import mpc_controller
+from gtmodel.control.mpc_constraints import problem_constraints
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.tracking import dlqr, riccati_gains, tracking_controller
+from gtmodel.control.tracking import dlqr, riccati_gains, tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 

@@ -1,4 +1,4 @@
-"""Real-time nonlinear MPC (gtmodel.estimation.mpc) of the composed DC motor, evaluated from Python.
+"""Real-time nonlinear MPC (gtmodel.control.mpc) of the composed DC motor, evaluated from Python.
 
 References: the same horizon problem solved to convergence by IPOPT (the SQP iterated at a
 fixed state must reach IPOPT's first input); the feedforward alone on the same mismatched
@@ -14,7 +14,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
-from gtmodel.estimation.mpc import mpc_controller
+from gtmodel.control.mpc import mpc_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 

@@ -1,4 +1,4 @@
-"""The reference of a loop controller (gtmodel.estimation.reference): the input that holds the end.
+"""The reference of a loop controller (gtmodel.control.reference): the input that holds the end.
 
 References: the L1's holding forces at rest, J^T G of the numeric inverse dynamics
 (``GantryTau3Dynamics.gravity_forces``, Dressler (2012), Table 6.2; a second implementation
@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.estimation.reference import hold_input
+from gtmodel.control.reference import hold_input
 from gtmodel.modeling import explicit_ode
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.model import gantry_tau_model

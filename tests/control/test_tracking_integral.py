@@ -15,7 +15,7 @@ import pytest
 import scipy.linalg
 
 from gtmodel.errors import InputError
-from gtmodel.estimation.tracking import tracking_controller
+from gtmodel.control.tracking import tracking_controller
 from gtmodel.modeling import explicit_ode
 
 from ..modeling._builders import double_integrator

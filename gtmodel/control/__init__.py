@@ -1,0 +1,71 @@
+"""The loop's controllers: tracking (feedforward + TV-LQR) and real-time MPC of any model.
+
+A loop controller follows a reference motion (an optimal control result, a table) at the
+loop period (4 ms by default) and is ONE CasADi Function ``control(t, x, u_last, w) ->
+(u, w_next, ok)``, the loop step that :mod:`gtmodel.codegen.loop_step` turns into C and the
+loop files of :mod:`gtmodel.problems` declare and check.
+
+Modules by job:
+
+* :mod:`~gtmodel.control.reference`: the reference sampled at the loop period and the row
+  read at time ``t`` (shared by both controllers);
+* :mod:`~gtmodel.control.tracking`: the tracking controller (feedforward plus time-varying
+  LQR along the reference, Riccati recursion);
+* :mod:`~gtmodel.control.mpc`: the real-time nonlinear MPC (single shooting, SQP with a
+  Gauss-Newton Hessian, generated solver inside the Function);
+* :mod:`~gtmodel.control.mpc_constraints`: the MPC's state bounds and path constraints,
+  soft (exact penalty) or hard;
+* :mod:`~gtmodel.control.mpc_fatrop`: the MPC's horizon problem by multiple shooting in
+  fatrop's stage order;
+* :mod:`~gtmodel.control.bounds`: violations of declared bounds on a closed loop's plant,
+  counted by the loop check.
+
+The names below are imported on first use (:mod:`gtmodel._lazy`). The former paths
+``gtmodel.estimation.mpc`` etc. are kept as thin modules re-exporting from here.
+
+Lower layers only: modeling and the base modules.
+"""
+
+from gtmodel._lazy import lazy_exports
+
+__all__ = [
+    "INDEX_EPS",
+    "MEASUREMENT_LIMIT",
+    "MEMORY_LIMIT",
+    "SampledReference",
+    "hold_input",
+    "sampled",
+    "sample_reference",
+    "period_index",
+    "reference_scales",
+    "plausible_range",
+    "TrackingController",
+    "tracking_controller",
+    "dlqr",
+    "riccati_gains",
+    "saturate",
+    "DEFAULT_PENALTY",
+    "MPCConstraints",
+    "problem_constraints",
+    "MPC_METHODS",
+    "MPC_SOLVERS",
+    "QP_ROW",
+    "MPCController",
+    "mpc_controller",
+    "EXCESS_TOLERANCE",
+    "BoundExcess",
+    "bound_report",
+]
+
+# ``mpc_constraints`` (the function) is not exported here: the package attribute of that
+# name is the submodule :mod:`gtmodel.control.mpc_constraints`.
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "INDEX_EPS": "reference", "MEASUREMENT_LIMIT": "reference", "MEMORY_LIMIT": "reference", "SampledReference": "reference",
+    "hold_input": "reference", "sampled": "reference", "sample_reference": "reference", "period_index": "reference",
+    "reference_scales": "reference", "plausible_range": "reference",
+    "TrackingController": "tracking", "tracking_controller": "tracking", "dlqr": "tracking", "riccati_gains": "tracking",
+    "saturate": "tracking",
+    "DEFAULT_PENALTY": "mpc_constraints", "MPCConstraints": "mpc_constraints", "problem_constraints": "mpc_constraints",
+    "MPC_METHODS": "mpc", "MPC_SOLVERS": "mpc", "QP_ROW": "mpc", "MPCController": "mpc", "mpc_controller": "mpc",
+    "EXCESS_TOLERANCE": "bounds", "BoundExcess": "bounds", "bound_report": "bounds",
+})

@@ -1,0 +1,278 @@
+"""The reference of a loop controller: a table sampled at the loop period and indexed by time.
+
+A loop controller (the tracking controller of :mod:`gtmodel.control.tracking`, the MPC of
+:mod:`gtmodel.control.mpc`) tracks a motion ``x*(t), u*(t)`` given at some times (an
+optimal control result's mesh, a CSV table). :func:`sample_reference` puts it on the loop's
+grid ``t_k = t_0 + k dt`` (linear interpolation of each column), and :func:`period_index`
+is the row read at time ``t``: ``k = floor((t - t_0) / dt + eps)`` clamped to ``0 .. last``,
+the same expression for a number (Python) and a CasADi expression (the generated C, where
+a NaN ``t`` reads row 0 and the controller's ``ok`` flags it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError
+
+__all__ = ["INDEX_EPS", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "sampled", "sample_reference", "period_index",
+           "reference_scales", "plausible_range"]
+
+#: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
+#: point) selects sample ``k``, not ``k - 1``.
+INDEX_EPS = 1e-6
+#: A value more than this many scales (:func:`reference_scales`) outside its reference's range is
+#: absurd: a measured state (the generated step rejects it: ``GT_BAD_ARGUMENT``, the safe input,
+#: its memory untouched; :mod:`gtmodel.codegen.loop_step`), an input without bounds in the memory.
+MEASUREMENT_LIMIT = 1e6
+#: An estimate in a loop controller's memory more than this many scales from zero is absurd (an
+#: MPC's input-disturbance estimate: input scales, half the bound range; a tracking controller's
+#: integrator state: state scales times the reference's duration): the generated step resets the
+#: memory (``GT_MEMORY_RESET``).
+MEMORY_LIMIT = 10.0
+
+
+@dataclass
+class SampledReference:
+    """A reference sampled at the loop period: the part every loop controller shares.
+
+    Parameters
+    ----------
+    dt : float
+        Loop period [s].
+    t0 : float
+        Time of the first sample [s].
+    x_ref : numpy.ndarray
+        ``(N, nx)`` reference states at ``t_0 + k dt``.
+    u_ref : numpy.ndarray
+        ``(N, nu)`` reference inputs there.
+    """
+
+    dt: float
+    t0: float
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+
+    @property
+    def nx(self) -> int:
+        """Number of states."""
+        return self.x_ref.shape[1]
+
+    @property
+    def nu(self) -> int:
+        """Number of inputs."""
+        return self.u_ref.shape[1]
+
+    @property
+    def length(self) -> int:
+        """Number of reference samples ``N``."""
+        return self.x_ref.shape[0]
+
+
+def hold_input(f: ca.Function, x: Any, u_guess: Any, p: Any, iterations: int = 10) -> np.ndarray:
+    """The input that holds a state at rest: least squares ``f(x, u) = 0`` in ``u`` (Gauss-Newton from ``u_guess``).
+
+    What a reference holds after its motion ends (its last input, mid-braking in a
+    minimum-time motion, would drive the plant away; the feedforward and the MPC's input
+    cost need the equilibrium input).
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``f(x (nx,1), u (nu,1), p (np,1)) -> xdot (nx,1)``, the explicit ODE.
+    x : array_like
+        ``(nx,)`` the held state.
+    u_guess : array_like
+        ``(nu,)`` the start (e.g. the reference's last input).
+    p : array_like
+        ``(np,)`` parameters.
+    iterations : int, optional
+        Gauss-Newton steps (one is exact for a model affine in ``u``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(nu,)`` not saturated (a state no admissible input holds is the caller's to judge).
+    """
+    xs, us, ps = ca.SX.sym("x", f.size1_in(0)), ca.SX.sym("u", f.size1_in(1)), ca.SX.sym("p", f.size1_in(2))
+    r = f(xs, us, ps)
+    step = ca.Function("hold_step", [xs, us, ps], [r, ca.jacobian(r, us)])
+    u = np.asarray(u_guess, dtype=float).reshape(-1).copy()
+    for _ in range(iterations):
+        rest, jac = (np.asarray(v, dtype=float) for v in step(x, u, p))
+        du = np.linalg.lstsq(jac, rest.ravel(), rcond=None)[0]
+        u = u - du
+        if not np.all(np.isfinite(u)) or np.max(np.abs(du)) <= 1e-12 * (1.0 + np.max(np.abs(u))):
+            break
+    return u
+
+
+def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:
+    """The columns of a table linearly interpolated on a time grid.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        ``(M,)`` increasing times of the rows [s].
+    values : numpy.ndarray
+        ``(M, n)`` finite values, one row per time.
+    grid : numpy.ndarray
+        ``(N,)`` times to sample [s] (outside ``t``: the first or last row).
+    name : str
+        Name of ``values`` in the error message.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, n)``.
+
+    Raises
+    ------
+    InputError
+        ``values`` not a finite ``(M, n)`` array.
+    """
+    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
+        raise InputError(f"{name}: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
+    return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])]) if values.shape[1] else np.zeros((grid.size, 0))
+
+
+def sample_reference(t: Any, x_ref: Any, u_ref: Any, dt: float, min_samples: int = 1, eps: float = INDEX_EPS) -> tuple[float, np.ndarray, np.ndarray]:
+    """A reference motion sampled at the loop period from its first time to its last.
+
+    Parameters
+    ----------
+    t : array_like
+        ``(M,)`` increasing finite times [s], ``M >= 2``.
+    x_ref : array_like
+        ``(M, nx)`` states (or ``(M * nx,)``).
+    u_ref : array_like
+        ``(M, nu)`` inputs.
+    dt : float
+        Loop period [s], > 0.
+    min_samples : int, optional
+        Fewest samples ``N`` of the grid accepted (default 1).
+    eps : float, optional
+        Slack of the last grid point (default :data:`INDEX_EPS`).
+
+    Returns
+    -------
+    t0 : float
+        Time of the first sample [s].
+    x : numpy.ndarray
+        ``(N, nx)`` states at ``t_0 + k dt``, ``N = floor((t_M - t_0) / dt + eps) + 1``.
+    u : numpy.ndarray
+        ``(N, nu)`` inputs there.
+
+    Raises
+    ------
+    InputError
+        ``dt`` not positive, times not increasing, a reference shorter than
+        ``min_samples - 1`` periods, non-finite values.
+    """
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating)) or not math.isfinite(dt) or dt <= 0:
+        raise InputError(f"dt: expected a positive loop period in seconds, got {dt!r}")
+    tt = np.asarray(t, dtype=float).reshape(-1)
+    if tt.size < 2 or not np.all(np.isfinite(tt)) or np.any(np.diff(tt) <= 0):
+        raise InputError("t: expected at least two increasing finite reference times")
+    n = int(math.floor((tt[-1] - tt[0]) / dt + eps)) + 1
+    if n < min_samples:
+        span = "one period" if min_samples == 2 else f"{min_samples - 1} periods"
+        raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than {span} ({dt:g} s)")
+    grid = tt[0] + dt * np.arange(n)
+    xs = sampled(tt, np.asarray(x_ref, dtype=float).reshape(tt.size, -1), grid, "x_ref")
+    us = sampled(tt, np.asarray(u_ref, dtype=float).reshape(tt.size, -1), grid, "u_ref")
+    return float(tt[0]), xs, us
+
+
+def period_index(t: Any, t0: float, dt: float, last: int, eps: float = INDEX_EPS) -> Any:
+    """The row of a sampled reference read at time ``t``: ``floor((t - t_0) / dt + eps)`` clamped to ``0 .. last``.
+
+    Parameters
+    ----------
+    t : float or casadi.MX or casadi.SX
+        Time [s].
+    t0 : float
+        Time of row 0 [s].
+    dt : float
+        Loop period [s].
+    last : int
+        Largest row (``N - 1``, or ``N`` with a row after the reference such as a held end).
+    eps : float, optional
+        Slack (default :data:`INDEX_EPS`).
+
+    Returns
+    -------
+    int or casadi expression
+        The row; for a CasADi expression a NaN ``t`` gives row 0 (a number raises).
+
+    Raises
+    ------
+    InputError
+        A numeric ``t`` that is not finite.
+    """
+    if isinstance(t, (ca.MX, ca.SX)):
+        k = ca.fmin(ca.fmax(ca.floor((t - t0) / dt + eps), 0), last)
+        return ca.if_else(t == t, k, 0)
+    if not math.isfinite(float(t)):
+        raise InputError(f"t: expected a finite time, got {t!r}")
+    return int(min(max(math.floor((float(t) - t0) / dt + eps), 0), last))
+
+
+def reference_scales(x_ref: np.ndarray, u_ref: np.ndarray, u_lb: np.ndarray, u_ub: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The scales of a loop controller's states and inputs (its default weights, Bryson's rule, and its memory's limits).
+
+    Parameters
+    ----------
+    x_ref, u_ref : numpy.ndarray
+        ``(N, nx)``, ``(N, nu)`` the sampled reference.
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds (``-inf``/``inf``: none).
+
+    Returns
+    -------
+    x_scale : numpy.ndarray
+        ``(nx,)`` the reference's range of each state, at least ``1e-3 (1 + max |x*|)``.
+    u_scale : numpy.ndarray
+        ``(nu,)`` half the bound range where both bounds are finite, else as ``x_scale`` of ``u*``.
+    """
+    xs, us = np.asarray(x_ref, dtype=float), np.asarray(u_ref, dtype=float)
+    lb, ub = np.asarray(u_lb, dtype=float), np.asarray(u_ub, dtype=float)
+    x_scale = np.maximum(np.ptp(xs, axis=0), 1e-3 * (1.0 + np.max(np.abs(xs), axis=0)))
+    finite = np.isfinite(lb) & np.isfinite(ub)
+    u_scale = np.where(finite, 0.5 * (np.where(finite, ub, 0) - np.where(finite, lb, 0)),
+                       np.maximum(np.ptp(us, axis=0), 1e-3 * (1 + np.max(np.abs(us), axis=0))))
+    return x_scale, u_scale
+
+
+def plausible_range(values: np.ndarray, scale: np.ndarray, factor: float, lb: Any = None, ub: Any = None) -> np.ndarray:
+    """The plausible range of a loop controller's quantity: its reference's range widened by ``factor`` scales.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        ``(N, n)`` the reference's values (states or inputs).
+    scale : numpy.ndarray
+        ``(n,)`` their scales (:func:`reference_scales`).
+    factor : float
+        Scales beyond the range (e.g. :data:`MEASUREMENT_LIMIT`).
+    lb, ub : array_like, optional
+        ``(n,)`` bounds that replace the widened range where finite (an input's).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(2, n)``: the lowest and the highest plausible value.
+    """
+    v = np.asarray(values, dtype=float)
+    width = factor * np.asarray(scale, dtype=float)
+    lo, hi = np.min(v, axis=0) - width, np.max(v, axis=0) + width
+    if lb is not None:
+        lo = np.where(np.isfinite(lb), lb, lo)
+    if ub is not None:
+        hi = np.where(np.isfinite(ub), ub, hi)
+    return np.vstack([lo, hi])

@@ -1,0 +1,509 @@
+"""A trajectory-tracking controller for any model: feedforward plus time-varying LQR.
+
+From an optimal motion ``x*(t), u*(t)`` of a model (e.g. an ``optimal_control`` result) and
+the model's explicit ODE (:func:`gtmodel.modeling.explicit_ode`), :func:`tracking_controller`
+builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
+
+* the reference sampled at ``t_k = t_0 + k dt``: ``x*_k``, ``u*_k`` (linear interpolation of
+  the given samples);
+* the discretised linearisation along it: ``A_k = d step / d x``, ``B_k = d step / d u`` at
+  ``(x*_k, u*_k)``, the Jacobians (CasADi AD) of the model's fixed step
+  (:meth:`~gtmodel.modeling.ExplicitODE.step`, the same one the generated C integrates);
+* the time-varying LQR gains from the backward discrete Riccati recursion
+  (Anderson & Moore, Optimal Control: Linear Quadratic Methods, sec. 2.4)
+  ``P_N = Q_f``, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``,
+  ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``;
+* the law ``u = sat(u*_k - K_k (x - x*_k))``, saturated at the input bounds; after the
+  reference ends, its final state is held: the input that holds it (least squares
+  ``f(x*_end, u) = 0``, e.g. zero voltage for a motor at rest) and the stationary LQR gain
+  there (before the start, the first sample).
+
+:meth:`TrackingController.function` is ONE CasADi Function of the step interface shared
+by the loop controllers (:mod:`gtmodel.codegen.loop_step`): ``control(t, x, u_last) -> (u,
+ok)``, the tables (references and gains) constant inside it, indexed by the period
+``k = floor((t - t_0) / dt)`` (the first sample before the start, the held end after it);
+:func:`gtmodel.codegen.loop_step.generate_loop_step` writes it as C. :func:`dlqr` is the
+time-invariant LQR (the stationary solution of the same recursion).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.linalg
+
+from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.errors import InputError
+from gtmodel.control.reference import (INDEX_EPS, MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, hold_input, period_index,
+                                         plausible_range, reference_scales, sample_reference)
+from gtmodel.modeling import ExplicitODE
+
+__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
+
+
+def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Time-invariant discrete LQR: the gain of ``u = -K x`` minimising ``sum x'Qx + u'Ru``.
+
+    Parameters
+    ----------
+    A : array_like
+        ``(nx, nx)`` state matrix of ``x_{k+1} = A x_k + B u_k``.
+    B : array_like
+        ``(nx, nu)`` input matrix.
+    Q : array_like
+        ``(nx, nx)`` state weight, symmetric positive semi-definite.
+    R : array_like
+        ``(nu, nu)`` input weight, symmetric positive definite.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        ``(nu, nx)`` gain, ``K = (R + B'PB)^{-1} B'PA``.
+    P : numpy.ndarray
+        ``(nx, nx)`` stabilising solution of the discrete algebraic Riccati equation
+        (:func:`scipy.linalg.solve_discrete_are`).
+
+    Raises
+    ------
+    InputError
+        Inconsistent shapes, or no stabilising solution (the pair is not stabilisable).
+    """
+    A, B, Q, R = (np.atleast_2d(np.asarray(v, dtype=float)) for v in (A, B, Q, R))
+    nx, nu = B.shape
+    if A.shape != (nx, nx) or Q.shape != (nx, nx) or R.shape != (nu, nu):
+        raise InputError(f"dlqr: expected A ({nx}, {nx}), B ({nx}, {nu}), Q ({nx}, {nx}), R ({nu}, {nu}); "
+                         f"got {A.shape}, {B.shape}, {Q.shape}, {R.shape}")
+    try:
+        P = scipy.linalg.solve_discrete_are(A, B, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise InputError(f"dlqr: no stabilising solution of the Riccati equation ({exc})") from None
+    K = np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
+    return K, P
+
+
+def riccati_gains(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, Qf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Time-varying LQR gains by the backward discrete Riccati recursion.
+
+    Parameters
+    ----------
+    A : numpy.ndarray
+        ``(N, nx, nx)`` state matrices ``A_k``.
+    B : numpy.ndarray
+        ``(N, nx, nu)`` input matrices ``B_k``.
+    Q : numpy.ndarray
+        ``(nx, nx)`` stage state weight.
+    R : numpy.ndarray
+        ``(nu, nu)`` input weight (positive definite).
+    Qf : numpy.ndarray
+        ``(nx, nx)`` terminal weight ``P_N``.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        ``(N, nu, nx)`` gains, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``.
+    P : numpy.ndarray
+        ``(N + 1, nx, nx)`` cost-to-go matrices, ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``
+        (symmetrised).
+    """
+    n, nx, nu = B.shape
+    K = np.zeros((n, nu, nx))
+    P = np.zeros((n + 1, nx, nx))
+    P[n] = Qf
+    for k in range(n - 1, -1, -1):
+        Pk = P[k + 1]
+        K[k] = np.linalg.solve(R + B[k].T @ Pk @ B[k], B[k].T @ Pk @ A[k])
+        Pn = Q + A[k].T @ Pk @ (A[k] - B[k] @ K[k])
+        P[k] = 0.5 * (Pn + Pn.T)
+    return K, P
+
+
+def saturate(u: Any, lb: Any, ub: Any) -> Any:
+    """``min(max(u, lb), ub)`` element-wise (NumPy arrays or CasADi expressions; infinite bounds bound nothing).
+
+    Parameters
+    ----------
+    u : array_like or casadi.MX or casadi.SX
+        Input, ``(nu,)`` or ``(nu, 1)``.
+    lb, ub : array_like or casadi.MX or casadi.SX or casadi.DM
+        ``(nu,)`` bounds (CasADi expressions with a CasADi ``u``).
+
+    Returns
+    -------
+    same type as ``u``
+        The saturated input.
+    """
+    if isinstance(u, (ca.MX, ca.SX)):
+        lo, hi = (b if isinstance(b, (ca.MX, ca.SX, ca.DM)) else ca.DM(np.asarray(b, float)) for b in (lb, ub))
+        return ca.fmin(ca.fmax(u, lo), hi)
+    return np.minimum(np.maximum(np.asarray(u, dtype=float), lb), ub)
+
+
+def _weight(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
+    """A weight matrix: None (the default diagonal), a vector (the diagonal) or a matrix."""
+    if value is None:
+        return np.diag(default)
+    w = np.asarray(value, dtype=float)
+    if w.ndim == 1 and w.size == size:
+        w = np.diag(w)
+    if w.shape != (size, size) or not np.all(np.isfinite(w)):
+        raise InputError(f"{name}: expected {size} diagonal entries or a ({size}, {size}) matrix of finite numbers, got shape {w.shape}")
+    if not np.allclose(w, w.T) or np.min(np.linalg.eigvalsh(0.5 * (w + w.T))) < 0:
+        raise InputError(f"{name}: expected a symmetric positive semi-definite weight")
+    return w
+
+
+@dataclass
+class TrackingController(SampledReference):
+    """Feedforward plus time-varying LQR along a reference, sampled at the loop period.
+
+    Parameters
+    ----------
+    dt : float
+        Loop period [s].
+    t0 : float
+        Time of the first sample [s].
+    x_ref : numpy.ndarray
+        ``(N, nx)`` reference states ``x*_k`` at ``t_0 + k dt``.
+    u_ref : numpy.ndarray
+        ``(N, nu)`` feedforward ``u*_k``.
+    K : numpy.ndarray
+        ``(N, nu, nx)`` gains of ``u = u*_k - K_k (x - x*_k)``.
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds of the saturation (``-inf``/``inf``: none).
+    x_names, u_names : list of str
+        Scalar names of states and inputs.
+    Q, R, Qf : numpy.ndarray
+        The weights the gains were computed with.
+    x_hold : numpy.ndarray
+        ``(nx,)`` the state held after the reference ends: its last given sample ``x*_end``
+        (at the reference's end time, which the period grid need not hit).
+    u_hold : numpy.ndarray
+        ``(nu,)`` the input that holds it (least squares ``f(x*_end, u) = 0``), saturated.
+    K_hold : numpy.ndarray
+        ``(nu, nx)`` the stationary LQR gain at ``(x*_end, u_hold)`` (``K_{N-1}`` if the
+        pair is not stabilisable there).
+    delay : int, optional
+        Input delay [periods] the law compensates: 0 (default) or 1. With 1, the input
+        computed at ``t_k`` acts from ``t_{k+1}``: the law predicts the state then,
+        ``x^_{k+1} = F(x, u_last)`` (:attr:`predict`, the input acting now being the last
+        one), and applies ``u = sat(u*_{k+1} - K_{k+1} (x^_{k+1} - x*_{k+1}))``.
+    predict : casadi.Function, optional
+        ``predict(x (nx,1), u (nu,1)) -> x_next``: the model's fixed step over one period
+        (the one linearised), needed when ``delay`` is 1.
+    integral_states : tuple of int, optional
+        Indices of the states with integral action (default none): the integrator state
+        ``xi (ni,)``, ``xi_{k+1} = xi_k + dt (x - x*_k)[integral_states]``, is the step's
+        inner memory, and the law is ``u = sat(u*_k - K_k (x - x*_k) - Ki_k xi_k)``; the
+        integration stops while the input saturates (conditional integration, against
+        wind-up).
+    Ki : numpy.ndarray, optional
+        ``(N, nu, ni)`` integral gains (with ``integral_states``).
+    Ki_hold : numpy.ndarray, optional
+        ``(nu, ni)`` the integral gain after the reference ends.
+    Qi : numpy.ndarray, optional
+        ``(ni, ni)`` the integrator states' weight the gains were computed with.
+    """
+
+    K: np.ndarray
+    u_lb: np.ndarray
+    u_ub: np.ndarray
+    x_names: list[str]
+    u_names: list[str]
+    Q: np.ndarray
+    R: np.ndarray
+    Qf: np.ndarray
+    x_hold: np.ndarray
+    u_hold: np.ndarray
+    K_hold: np.ndarray
+    delay: int = 0
+    predict: Any = None
+    integral_states: tuple[int, ...] = ()
+    Ki: np.ndarray | None = None
+    Ki_hold: np.ndarray | None = None
+    Qi: np.ndarray | None = None
+
+    @property
+    def ni(self) -> int:
+        """Number of integrator states (0: no integral action)."""
+        return len(self.integral_states)
+
+    @property
+    def u_initial(self) -> np.ndarray:
+        """``(nu,)`` the input before the first step: ``u*_0`` saturated."""
+        return saturate(self.u_ref[0], self.u_lb, self.u_ub)
+
+    def function(self) -> ca.Function:
+        """The controller as ONE CasADi Function of the loop-step interface.
+
+        Returns
+        -------
+        casadi.Function
+            ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``, with
+            integral action ``control(t, x, u_last, w (ni,1)) -> (u, w_next (ni,1), ok)``
+            (``w`` the integrator state, see :attr:`integral_states`):
+            ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N`` (a NaN ``t`` gives
+            ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
+            reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
+            :attr:`K_hold`; ``ok`` is 1 when ``u`` is
+            finite. ``u_last`` is not used by this law without a delay (the interface is
+            shared with the MPC, whose warm start it is); with :attr:`delay` 1 it is the
+            input acting until the new one arrives: ``x`` is replaced by
+            ``predict(x, u_last)`` and ``t`` by ``t + dt``. The tables are constants of the
+            graph, indexed parametrically (the generated C looks them up; no heap).
+        """
+        n, nx, nu, ni = self.length, self.nx, self.nu, self.ni
+        t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", ni)
+        t_in, x_in = t, x
+        if self.delay:
+            t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
+        k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
+        rows = [self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)] + ([self.Ki.reshape(n, nu * ni)] if ni else [])
+        hold = [self.x_hold, self.u_hold, self.K_hold.reshape(-1)] + ([self.Ki_hold.reshape(-1)] if ni else [])
+        table = np.vstack([np.hstack(rows),  # row k: x*_k, u*_k, K_k (row-major)[, Ki_k]
+                           np.hstack(hold)])  # row N: hold the end
+        width = table.shape[1]
+        values = ca.MX(ca.DM(table.reshape(-1)))
+        base = width * k
+        xs = ca.vertcat(*[values[base + j] for j in range(nx)])
+        us = ca.vertcat(*[values[base + nx + j] for j in range(nu)])
+        gain = ca.vertcat(*[ca.horzcat(*[values[base + nx + nu + i * nx + j] for j in range(nx)]) for i in range(nu)])
+        free = us - ca.mtimes(gain, x - xs)
+        if ni:
+            off = base + nx + nu + nu * nx
+            gain_i = ca.vertcat(*[ca.horzcat(*[values[off + i * ni + j] for j in range(ni)]) for i in range(nu)])
+            free = free - ca.mtimes(gain_i, w)
+        u = saturate(free, self.u_lb, self.u_ub)
+        total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
+        if not ni:
+            ok = total < math.inf  # 0 for NaN or infinite entries
+            return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
+        error = ca.vertcat(*[x[i] - xs[i] for i in self.integral_states])
+        unsaturated = ca.sum1(ca.fabs(u - free)) == 0  # conditional integration: hold xi while the input saturates
+        w_next = ca.if_else(unsaturated, w + self.dt * error, w)
+        ok = (total + ca.sum1(ca.fabs(w_next))) < math.inf
+        return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+
+    def limits(self) -> dict[str, np.ndarray]:
+        """The plausible ranges the generated step checks its measurement and its memory against
+        (:mod:`gtmodel.codegen.loop_step`: a measurement outside is rejected, a memory outside is reset).
+
+        Returns
+        -------
+        dict
+            ``"x"`` ``(2, nx)``: the reference's range widened by :data:`~gtmodel.control.reference.MEASUREMENT_LIMIT`
+            state scales (:func:`~gtmodel.control.reference.reference_scales`); ``"u_last"`` ``(2, nu)``: the input
+            bounds (where infinite, the reference's range widened by ``MEASUREMENT_LIMIT`` input scales);
+            ``"memory"`` ``(2, ni)``: the integrator states within ``MEMORY_LIMIT`` scales of their states times the
+            reference's duration (at least 1 s; :data:`~gtmodel.control.reference.MEMORY_LIMIT`).
+        """
+        x_scale, u_scale = reference_scales(self.x_ref, self.u_ref, self.u_lb, self.u_ub)
+        xi = MEMORY_LIMIT * x_scale[list(self.integral_states)] * max(self.dt * self.length, 1.0)
+        return {"x": plausible_range(self.x_ref, x_scale, MEASUREMENT_LIMIT),
+                "u_last": plausible_range(self.u_ref, u_scale, MEASUREMENT_LIMIT, self.u_lb, self.u_ub),
+                "memory": np.vstack([-xi, xi])}
+
+    def memory_reset(self) -> ca.Function:
+        """The step's memory reset to the reference's at the current period (what ``_init`` sets at the first).
+
+        Returns
+        -------
+        casadi.Function
+            ``reset(t (1,1), x (nx,1)) -> (u_last (nu,1)[, w (ni,1)])``: ``u_last = u*_k`` saturated
+            (``k = floor((t - t_0) / dt)`` clamped to ``0 .. N``, row ``N`` the held end's :attr:`u_hold`), and
+            with :attr:`integral_states` zero integrator states (``x`` is not used: the interface of
+            :meth:`gtmodel.control.mpc.MPCController.memory_reset`).
+        """
+        t, x = ca.MX.sym("t"), ca.MX.sym("x", self.nx)
+        nu = self.nu
+        values = ca.MX(ca.DM(np.vstack([self.u_ref, self.u_hold]).reshape(-1)))
+        k = period_index(t, self.t0, self.dt, self.length)
+        u_last = saturate(ca.vertcat(*[values[nu * k + i] for i in range(nu)]), self.u_lb, self.u_ub)
+        if not self.ni:
+            return ca.Function("reset", [t, x], [u_last], ["t", "x"], ["u_last"])
+        return ca.Function("reset", [t, x], [u_last, ca.DM.zeros(self.ni)], ["t", "x"], ["u_last", "w"])
+
+    def __call__(self, t: float, x: Any, u_last: Any = None, w: Any = None) -> np.ndarray:
+        """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        x : array_like
+            ``(nx,)`` measured state.
+        u_last : array_like, optional
+            ``(nu,)`` the input acting now (used with :attr:`delay` 1; default :attr:`u_initial`).
+        w : array_like, optional
+            ``(ni,)`` the integrator state (with :attr:`integral_states`; default zeros).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(nu,)`` the saturated input.
+        """
+        args = [t, np.asarray(x, dtype=float), self.u_initial if u_last is None else np.asarray(u_last, dtype=float)]
+        if self.ni:
+            args.append(np.zeros(self.ni) if w is None else np.asarray(w, dtype=float))
+        u = self.function()(*args)[0]
+        return np.asarray(u).reshape(-1)
+
+
+def tracking_controller(
+    ode: ExplicitODE,
+    t: Any,
+    x_ref: Any,
+    u_ref: Any,
+    dt: float = LOOP_PERIOD_S,
+    Q: Any = None,
+    R: Any = None,
+    Qf: Any = None,
+    u_lb: Any = None,
+    u_ub: Any = None,
+    p: Any = None,
+    method: str = "rk4",
+    substeps: int = 1,
+    time_varying: bool = True,
+    delay: int = 0,
+    integral_weights: Mapping[str, float] | None = None,
+) -> TrackingController:
+    """Feedforward and time-varying LQR along a reference motion of a model.
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model (:func:`gtmodel.modeling.explicit_ode`).
+    t : array_like
+        ``(M,)`` increasing reference times [s] (e.g. an optimal control result's mesh).
+    x_ref : array_like
+        ``(M, nx)`` reference states in the order of ``ode.x_names``.
+    u_ref : array_like
+        ``(M, nu)`` reference inputs in the order of ``ode.u_names``.
+    dt : float, optional
+        Loop period [s] (default :data:`gtmodel.defaults.LOOP_PERIOD_S`).
+    Q : array_like, optional
+        State weight: ``(nx,)`` diagonal or ``(nx, nx)``; default Bryson's rule,
+        ``1 / s_i^2`` with ``s_i`` the range of state ``i`` along the reference (at least
+        ``1e-3 (1 + max|x_i|)``).
+    R : array_like, optional
+        Input weight, ``(nu,)`` or ``(nu, nu)`` positive definite; default ``1 / s_j^2``
+        with ``s_j`` half the bound range (finite bounds) or the reference's range.
+    Qf : array_like, optional
+        Terminal weight; default the stationary Riccati solution at the held end
+        (:attr:`TrackingController.x_hold`, ``u_hold``) if it exists, else ``Q``.
+    u_lb, u_ub : array_like, optional
+        ``(nu,)`` saturation bounds; default the model's declared input bounds.
+    p : array_like, optional
+        ``(np,)`` model parameters; default ``ode.p_default``.
+    method : {"rk4", "implicit_euler", "radau2"}, optional
+        The fixed step whose Jacobians are the ``A_k``, ``B_k``.
+    substeps : int, optional
+        Its steps within one period.
+    time_varying : bool, optional
+        True (default): the gains ``K_k`` of the backward Riccati recursion along the
+        reference. False: one time-invariant LQR gain for every sample, :func:`dlqr` of the
+        linearisation at the held end (``x*_end``, the input that holds it), i.e.
+        :attr:`TrackingController.K_hold`.
+    delay : {0, 1}, optional
+        Input delay [periods] the law compensates by predicting the state one period ahead
+        with the same fixed step (see :attr:`TrackingController.delay`; default 0).
+    integral_weights : mapping of str to float, optional
+        Integral action on the named states (``ode.x_names``), each with its weight ``> 0``
+        on the integrator state ``xi_i = sum dt (x_i - x*_i)`` (default none; see
+        :attr:`TrackingController.integral_states`). The gains ``[K_k, Ki_k]`` are the
+        LQR's of the model augmented with the integrators, ``xi_{k+1} = xi_k + dt C (x_k -
+        x*_k)`` (as ``control.dlqr(..., integral_action=dt C)``), with the weight
+        ``blkdiag(Q, Qi)``; after the end, the augmented stationary LQR (Franklin, Powell &
+        Workman, Digital Control of Dynamic Systems, 3rd ed., sec. 8.5).
+
+    Returns
+    -------
+    TrackingController
+
+    Raises
+    ------
+    InputError
+        Shapes or values out of range, times not increasing, a reference shorter than
+        one period, ``R`` not positive definite; ``time_varying=False`` at an end where the
+        linearisation is not stabilisable; an integral weight of a state the model does not
+        have, or not a finite number > 0.
+    """
+    if isinstance(delay, bool) or delay not in (0, 1):
+        raise InputError(f"delay: expected 0 or 1 period of input delay to compensate, got {delay!r}")
+    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=2)
+    n = xs.shape[0]
+    m = np.asarray(t).size
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
+    if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
+        raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
+    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
+    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
+    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
+        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
+    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
+    if pv.size != ode.np:
+        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
+    x_scale, u_scale = reference_scales(xs, us, lb, ub)
+    Qm = _weight(Q, ode.nx, 1.0 / x_scale**2, "Q")
+    Rm = _weight(R, ode.nu, 1.0 / u_scale**2, "R")
+    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
+        raise InputError("R: expected a positive definite input weight")
+    step = ode.step(dt, method, substeps=substeps)
+    xsym, usym, psym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
+    xn = step(xsym, usym, psym)[0]
+    ab = ca.Function("AB", [xsym, usym, psym], [ca.jacobian(xn, xsym), ca.jacobian(xn, usym)])
+    Aa, Bb = ab.map(n)(xs.T, us.T, np.tile(pv.reshape(-1, 1), (1, n)))
+    A = np.asarray(Aa).reshape(ode.nx, n, ode.nx).transpose(1, 0, 2)  # [A_0 A_1 ...] side by side
+    B = np.asarray(Bb).reshape(ode.nx, n, ode.nu).transpose(1, 0, 2)
+    # after the end: the input that holds the final state (least squares f(x*_N, u) = 0) and the stationary gain there
+    x_hold = x_given[-1]
+    u_hold = saturate(hold_input(ode.f, x_hold, u_given[-1], pv), lb, ub)
+    Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
+    idx, Qi = _integral(integral_weights, list(ode.x_names))
+    if idx:  # the model augmented with the integrators of the selected states' errors
+        C = np.eye(ode.nx)[list(idx)]
+        ni = len(idx)
+        A = np.stack([np.block([[a, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]]) for a in A])
+        B = np.concatenate([B, np.zeros((n, ni, ode.nu))], axis=1)
+        Ah = np.block([[Ah, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]])
+        Bh = np.vstack([Bh, np.zeros((ni, ode.nu))])
+        Qm = scipy.linalg.block_diag(Qm, Qi)
+    try:
+        K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
+    except InputError as exc:
+        if not time_varying:
+            raise InputError(f"time_varying: a time-invariant LQR needs a stabilisable linearisation at the held end ({exc})") from None
+        K_hold, P_hold = None, Qm
+    if Qf is None:
+        Qfm = P_hold
+    else:
+        Qfm = _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
+        Qfm = scipy.linalg.block_diag(Qfm, Qi) if idx else Qfm
+    K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
+    K_hold = K[-1] if K_hold is None else K_hold
+    nx = ode.nx
+    integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
+    predict = ca.Function("predict", [xsym, usym], [step(xsym, usym, ca.DM(pv))[0]], ["x", "u"], ["x_next"])
+    return TrackingController(delay=int(delay), predict=predict if delay else None, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
+                              u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
+                              Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
+                              K_hold=K_hold[:, :nx], **integral)
+
+
+def _integral(weights: Mapping[str, float] | None, names: list[str]) -> tuple[tuple[int, ...], np.ndarray | None]:
+    """The integrated states' indices (in the model's order) and their weight ``Qi``, from weights by name."""
+    if not weights:
+        return (), None
+    if not isinstance(weights, Mapping):
+        raise InputError(f"integral_weights: expected a mapping of state names to weights, got {type(weights).__name__}")
+    for name, value in weights.items():
+        if name not in names:
+            raise InputError(f"integral_weights: {name!r} is not a state of the model ({', '.join(names)})")
+        if not (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0):
+            raise InputError(f"integral_weights[{name!r}]: expected a finite weight > 0, got {value!r}")
+    idx = tuple(i for i, name in enumerate(names) if name in weights)
+    return idx, np.diag([float(weights[names[i]]) for i in idx])
