@@ -81,8 +81,10 @@ def test_each_benchmark_reaches_its_published_optimum_verified(path):
 
 
 def _started_at(text: str) -> str:
-    """The file's ``[initial_guess]`` replaced by the trajectory in ``spurious.csv`` (method "file")."""
-    return text.split("[initial_guess]")[0] + '[initial_guess]\nmethod = "file"\nfile = "spurious.csv"\n\n[collocation]' + text.split("[collocation]")[1]
+    """The file's ``[initial_guess]`` replaced by the trajectory in ``spurious.csv`` (method "file"), and the
+    verification's flag kept as the outcome (``refine_on_failure = false``: the default would refine from it)."""
+    return (text.split("[initial_guess]")[0] + '[initial_guess]\nmethod = "file"\nfile = "spurious.csv"\n\n[collocation]' + text.split("[collocation]")[1]
+            + "\n[transcription]\nrefine_on_failure = false\n")
 
 
 #: Each case starts at its spurious minimum: the collocation values of a run from the linear guess
