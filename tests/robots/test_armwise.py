@@ -88,8 +88,9 @@ def _coincident_links(model):
 
 def test_a_source_with_coincident_links_leaves_the_joined_pose_to_the_determined_one():
     """Independent checks: the singular values of the closure Jacobian (numpy's SVD); the pose is the
-    same under 1e-10 of parameter rounding (what another BLAS kernel changes), where Newton's full
-    steps from the same start meet a singular Jacobian (NaN)."""
+    same under 1e-10 of parameter rounding (what another BLAS kernel changes). Plain Newton from the
+    same start meets the singular Jacobian: NaN on one machine, an arbitrary finite orientation on a
+    fresh CI environment, so it is not asserted."""
     d1 = load_six_link("D1_six_link")
     p = d1.parameter_vector()
     flat, other = _coincident_links(d1), d1.with_parameters(p + 2e-4 * np.sin(np.arange(p.size)))
@@ -104,6 +105,3 @@ def test_a_source_with_coincident_links_leaves_the_joined_pose_to_the_determined
     T0, R0 = other.fk(q)
     # the nearest assembly to the determined source's pose: its orientation (which the flat arms leave free)
     assert np.abs(R - R0).max() < 2e-4 and np.abs(T - T0).max() < 5e-4
-    x0 = np.vstack([T0.T, np.zeros((3, q.shape[0]))])
-    par = np.vstack([q.T, np.repeat(pj[:, None], q.shape[0], axis=1), R0.transpose(0, 2, 1).reshape(-1, 9).T])
-    assert not np.all(np.isfinite(np.array(joined.pose_function().map(q.shape[0])(x0, par))))
