@@ -43,9 +43,9 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_fatrop import fatrop_problem
-from gtmodel.control.reference import (MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, plausible_range,
+from gtmodel.control.reference import (MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index,
                                          reference_scales, sample_reference)
-from gtmodel.control.tracking import _weight, saturate
+from gtmodel.control.tracking import saturate, tracking_weights, weight_matrix
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
 
@@ -441,9 +441,7 @@ class MPCController(SampledReference):
             :attr:`disturbance_gain` the estimate within ``[-D, D]``, the last state as ``"x"``, the last input as
             ``"u_last"``, the flag in ``[0, 1]``.
         """
-        x_scale, u_scale = reference_scales(self.x_ref, self.u_ref, self.u_lb, self.u_ub)
-        x = plausible_range(self.x_ref, x_scale, MEASUREMENT_LIMIT)
-        u = plausible_range(self.u_ref, u_scale, MEASUREMENT_LIMIT, self.u_lb, self.u_ub)
+        _, u_scale, x, u = self.plausible_ranges(self.u_lb, self.u_ub)
         d = np.where(np.isfinite(self.u_lb) & np.isfinite(self.u_ub), MEMORY_LIMIT, MEASUREMENT_LIMIT) * u_scale
         parts = [np.tile(u + np.vstack([-d, d]), (1, self.blocks))]
         if self.disturbance_gain:
@@ -634,19 +632,9 @@ def mpc_controller(
     t0, xs, us = sample_reference(t, x_ref, u_ref, dt, eps=INDEX_EPS)
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
-    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
-    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
-    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
-        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
-    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
-    if pv.size != ode.np:
-        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
-    x_scale, u_scale = reference_scales(xs, us, lb, ub)
-    Qm = _weight(Q, ode.nx, 1.0 / x_scale**2, "Q")
-    Rm = _weight(R, ode.nu, 1.0 / u_scale**2, "R")
-    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
-        raise InputError("R: expected a positive definite input weight")
-    Qfm = Qm if Qf is None else _weight(Qf, ode.nx, Qm, "Qf")
+    lb, ub, pv, Qm, Rm = tracking_weights(ode, xs, us, u_lb, u_ub, p, Q, R)
+    x_scale, _ = reference_scales(xs, us, lb, ub)
+    Qfm = Qm if Qf is None else weight_matrix(Qf, ode.nx, Qm, "Qf")
     xsym, usym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
     if method == "euler":
         h = dt / substeps

@@ -73,6 +73,27 @@ class SampledReference:
         """Number of reference samples ``N``."""
         return self.x_ref.shape[0]
 
+    def plausible_ranges(self, u_lb: np.ndarray, u_ub: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The scales and plausible ranges a generated step checks its measurement and last input against.
+
+        Parameters
+        ----------
+        u_lb, u_ub : numpy.ndarray
+            ``(nu,)`` the input bounds (may be infinite).
+
+        Returns
+        -------
+        x_scale, u_scale : numpy.ndarray
+            ``(nx,)``, ``(nu,)`` (:func:`reference_scales`).
+        x, u : numpy.ndarray
+            ``(2, nx)``: the reference's range widened by :data:`MEASUREMENT_LIMIT` state scales;
+            ``(2, nu)``: the input bounds, where infinite the reference's range widened by
+            ``MEASUREMENT_LIMIT`` input scales (:func:`plausible_range`).
+        """
+        x_scale, u_scale = reference_scales(self.x_ref, self.u_ref, u_lb, u_ub)
+        return (x_scale, u_scale, plausible_range(self.x_ref, x_scale, MEASUREMENT_LIMIT),
+                plausible_range(self.u_ref, u_scale, MEASUREMENT_LIMIT, u_lb, u_ub))
+
 
 def hold_input(f: ca.Function, x: Any, u_guess: Any, p: Any, iterations: int = 10) -> np.ndarray:
     """The input that holds a state at rest: least squares ``f(x, u) = 0`` in ``u`` (Gauss-Newton from ``u_guess``).

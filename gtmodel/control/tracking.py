@@ -39,11 +39,11 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.control.reference import (INDEX_EPS, MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, hold_input, period_index,
-                                         plausible_range, reference_scales, sample_reference)
+from gtmodel.control.reference import (INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index,
+                                         reference_scales, sample_reference)
 from gtmodel.modeling import ExplicitODE
 
-__all__ = ["TrackingController", "tracking_controller", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
+__all__ = ["TrackingController", "tracking_controller", "tracking_weights", "weight_matrix", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
 
 
 def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -143,8 +143,30 @@ def saturate(u: Any, lb: Any, ub: Any) -> Any:
     return np.minimum(np.maximum(np.asarray(u, dtype=float), lb), ub)
 
 
-def _weight(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
-    """A weight matrix: None (the default diagonal), a vector (the diagonal) or a matrix."""
+def weight_matrix(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
+    """A weight matrix of a tracking problem: None (the default diagonal), a vector (the diagonal) or a matrix.
+
+    Parameters
+    ----------
+    value : None, array_like
+        ``(size,)`` the diagonal or ``(size, size)`` the matrix; None: ``diag(default)``.
+    size : int
+        Its dimension.
+    default : numpy.ndarray
+        ``(size,)`` the default diagonal (or a ``(size, size)`` matrix when ``value`` is None).
+    name : str
+        The argument's name in messages (``"Q"``, ``"R"``, ``"Qf"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(size, size)`` symmetric positive semi-definite.
+
+    Raises
+    ------
+    InputError
+        Another shape, non-finite entries, or not symmetric positive semi-definite.
+    """
     if value is None:
         return np.diag(default)
     w = np.asarray(value, dtype=float)
@@ -155,6 +177,57 @@ def _weight(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray
     if not np.allclose(w, w.T) or np.min(np.linalg.eigvalsh(0.5 * (w + w.T))) < 0:
         raise InputError(f"{name}: expected a symmetric positive semi-definite weight")
     return w
+
+
+def tracking_weights(ode: ExplicitODE, xs: np.ndarray, us: np.ndarray, u_lb: Any, u_ub: Any, p: Any, Q: Any,
+                     R: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The input bounds, parameters and weights of a tracking problem: what the TV-LQR and the MPC share.
+
+    The weights default to Bryson's rule on the sampled reference's scales
+    (:func:`~gtmodel.control.reference.reference_scales`): ``Q = diag(1 / x_scale^2)``,
+    ``R = diag(1 / u_scale^2)``.
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model (its declared input bounds, default parameters).
+    xs, us : numpy.ndarray
+        ``(N, nx)``, ``(N, nu)`` the sampled reference.
+    u_lb, u_ub : array_like or None
+        ``(nu,)`` input bounds (None: the model's).
+    p : array_like or None
+        ``(np,)`` parameter values (None: the model's defaults).
+    Q, R : array_like or None
+        State and input weights (:func:`weight_matrix`).
+
+    Returns
+    -------
+    lb, ub : numpy.ndarray
+        ``(nu,)`` each.
+    p : numpy.ndarray
+        ``(np,)``.
+    Q, R : numpy.ndarray
+        ``(nx, nx)``, ``(nu, nu)``.
+
+    Raises
+    ------
+    InputError
+        Bounds of another length, crossed or NaN; parameters of another length; a weight
+        :func:`weight_matrix` refuses; ``R`` not positive definite.
+    """
+    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
+    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
+    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
+        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
+    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
+    if pv.size != ode.np:
+        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
+    x_scale, u_scale = reference_scales(xs, us, lb, ub)
+    Qm = weight_matrix(Q, ode.nx, 1.0 / x_scale**2, "Q")
+    Rm = weight_matrix(R, ode.nu, 1.0 / u_scale**2, "R")
+    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
+        raise InputError("R: expected a positive definite input weight")
+    return lb, ub, pv, Qm, Rm
 
 
 @dataclass
@@ -301,11 +374,9 @@ class TrackingController(SampledReference):
             ``"memory"`` ``(2, ni)``: the integrator states within ``MEMORY_LIMIT`` scales of their states times the
             reference's duration (at least 1 s; :data:`~gtmodel.control.reference.MEMORY_LIMIT`).
         """
-        x_scale, u_scale = reference_scales(self.x_ref, self.u_ref, self.u_lb, self.u_ub)
+        x_scale, _, x, u = self.plausible_ranges(self.u_lb, self.u_ub)
         xi = MEMORY_LIMIT * x_scale[list(self.integral_states)] * max(self.dt * self.length, 1.0)
-        return {"x": plausible_range(self.x_ref, x_scale, MEASUREMENT_LIMIT),
-                "u_last": plausible_range(self.u_ref, u_scale, MEASUREMENT_LIMIT, self.u_lb, self.u_ub),
-                "memory": np.vstack([-xi, xi])}
+        return {"x": x, "u_last": u, "memory": np.vstack([-xi, xi])}
 
     def memory_reset(self) -> ca.Function:
         """The step's memory reset to the reference's at the current period (what ``_init`` sets at the first).
@@ -440,18 +511,7 @@ def tracking_controller(
     x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
-    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
-    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
-    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
-        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
-    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
-    if pv.size != ode.np:
-        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
-    x_scale, u_scale = reference_scales(xs, us, lb, ub)
-    Qm = _weight(Q, ode.nx, 1.0 / x_scale**2, "Q")
-    Rm = _weight(R, ode.nu, 1.0 / u_scale**2, "R")
-    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
-        raise InputError("R: expected a positive definite input weight")
+    lb, ub, pv, Qm, Rm = tracking_weights(ode, xs, us, u_lb, u_ub, p, Q, R)
     step = ode.step(dt, method, substeps=substeps)
     xsym, usym, psym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
     xn = step(xsym, usym, psym)[0]
@@ -481,7 +541,7 @@ def tracking_controller(
     if Qf is None:
         Qfm = P_hold
     else:
-        Qfm = _weight(Qf, ode.nx, np.ones(ode.nx), "Qf")
+        Qfm = weight_matrix(Qf, ode.nx, np.ones(ode.nx), "Qf")
         Qfm = scipy.linalg.block_diag(Qfm, Qi) if idx else Qfm
     K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
     K_hold = K[-1] if K_hold is None else K_hold
