@@ -647,7 +647,8 @@ def check_bounds(result: OptimizationResult, optimization: Any) -> None:
     ----------
     result : OptimizationResult
         A verified result; changed in place (``verification.bounds``). A violation beyond
-        the tolerance is logged and reported, not failed (see the code's comment).
+        the tolerance is logged and added to ``result.warnings`` (the summary's ``warnings``),
+        not failed (see the code's comment).
     optimization : Optimization
         The problem (its state bounds).
     """
@@ -660,6 +661,9 @@ def check_bounds(result: OptimizationResult, optimization: Any) -> None:
         # between the collocation points (a motor's current overshoots its limit by 0.1-1 A in the first
         # 0.5 ms after the voltage's jump, and halving that element does not settle it)
         b = v.bounds
-        _log.warning("verification of %s: state %r reaches %.6g against its bound %.6g at t = %.6g s in the simulation "
-                     "(between the collocation points; scaled violation %.3g > tolerance %g)", result.dae.name,
-                     b["variable"], b["value"], b["bound"], b["at_time_s"], b["max_scaled_violation"], v.tolerance)
+        text = (f"state {b['variable']!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
+                f"in the simulation under the optimal inputs (between the collocation points; scaled violation "
+                f"{b['max_scaled_violation']:.3g} > tolerance {v.tolerance:g}): the plan keeps the bound at its points only")
+        _log.warning("verification of %s: %s", result.dae.name, text)
+        if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log
+            result.warnings.append(text)
