@@ -662,7 +662,7 @@ def check_bounds(result: OptimizationResult, optimization: Any) -> None:
         # 0.5 ms after the voltage's jump, and halving that element does not settle it)
         b = v.bounds
         text = (f"state {b['variable']!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
-                f"in the simulation under the optimal inputs (between the collocation points; scaled violation "
+                f"in the simulation under the optimal inputs (between the transcription's points; scaled violation "
                 f"{b['max_scaled_violation']:.3g} > tolerance {v.tolerance:g}): the plan keeps the bound at its points only")
         _log.warning("verification of %s: %s", result.dae.name, text)
         if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log
