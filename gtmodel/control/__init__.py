@@ -7,6 +7,8 @@ loop files of :mod:`gtmodel.problems` declare and check.
 
 Modules by job:
 
+* :mod:`~gtmodel.control.problem`: the :class:`TrackingProblem` both controllers build
+  from (model, sampled reference, bounds, parameters, scales, weights, prediction step);
 * :mod:`~gtmodel.control.reference`: the reference sampled at the loop period and the row
   read at time ``t`` (shared by both controllers);
 * :mod:`~gtmodel.control.tracking`: the tracking controller (feedforward plus time-varying
@@ -39,6 +41,10 @@ __all__ = [
     "period_index",
     "reference_scales",
     "plausible_range",
+    "PREDICTION_METHODS",
+    "TrackingProblem",
+    "tracking_problem",
+    "weight_matrix",
     "TrackingController",
     "tracking_controller",
     "dlqr",
@@ -63,6 +69,7 @@ __getattr__, __dir__ = lazy_exports(__name__, {
     "INDEX_EPS": "reference", "MEASUREMENT_LIMIT": "reference", "MEMORY_LIMIT": "reference", "SampledReference": "reference",
     "hold_input": "reference", "sampled": "reference", "sample_reference": "reference", "period_index": "reference",
     "reference_scales": "reference", "plausible_range": "reference",
+    "PREDICTION_METHODS": "problem", "TrackingProblem": "problem", "tracking_problem": "problem", "weight_matrix": "problem",
     "TrackingController": "tracking", "tracking_controller": "tracking", "dlqr": "tracking", "riccati_gains": "tracking",
     "saturate": "tracking",
     "DEFAULT_PENALTY": "mpc_constraints", "MPCConstraints": "mpc_constraints", "problem_constraints": "mpc_constraints",

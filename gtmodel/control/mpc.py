@@ -43,14 +43,14 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_fatrop import fatrop_problem
-from gtmodel.control.reference import (MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index,
-                                         reference_scales, sample_reference)
-from gtmodel.control.tracking import saturate, tracking_weights, weight_matrix
+from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
+from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index
+from gtmodel.control.tracking import saturate
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
 
-#: Prediction steps: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
-MPC_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
+#: Prediction steps: explicit Euler on ``f`` or the ExplicitODE's fixed steps (the tracking problem's).
+MPC_METHODS = PREDICTION_METHODS
 #: NLP solvers of the generated step: ``sqpmethod`` (single shooting, Gauss-Newton SQP) or
 #: ``fatrop`` (multiple shooting in stage order, interior point; :mod:`gtmodel.control.mpc_fatrop`).
 MPC_SOLVERS = ("sqpmethod", "fatrop")
@@ -629,24 +629,14 @@ def mpc_controller(
         raise InputError(f"solver: expected one of {', '.join(MPC_SOLVERS)}, got {solver!r}")
     if solver == "fatrop" and blocks != horizon:
         raise InputError(f"blocks: expected the horizon {horizon} with solver fatrop (one input per stage), got {blocks}")
-    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, eps=INDEX_EPS)
-    if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
-        raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
-    lb, ub, pv, Qm, Rm = tracking_weights(ode, xs, us, u_lb, u_ub, p, Q, R)
-    x_scale, _ = reference_scales(xs, us, lb, ub)
-    Qfm = Qm if Qf is None else weight_matrix(Qf, ode.nx, Qm, "Qf")
+    prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, eps=INDEX_EPS)
+    xs, us, lb, ub, Qm, Rm = prob.x_ref, prob.u_ref, prob.u_lb, prob.u_ub, prob.Q, prob.R
+    Qfm = prob.terminal_weight(Qf, Qm)
+    step = prob.prediction(method, substeps, "F")
     xsym, usym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
-    if method == "euler":
-        h = dt / substeps
-        xn = xsym
-        for _ in range(substeps):
-            xn = xn + h * ode.f(xn, usym, pv)
-    else:
-        xn = ode.step(dt, method, substeps=substeps)(xsym, usym, pv)[0]
-    step = ca.Function("F", [xsym, usym], [xn], ["x", "u"], ["x_next"])
     cons = mpc_constraints(list(ode.x_names), list(ode.u_names), xs, us, x_lb=x_lb, x_ub=x_ub, path=path, path_lb=path_lb,
                            path_ub=path_ub, path_names=path_names, hard=hard_constraints, weight=constraint_weight,
-                           cost_scale=horizon * float(np.max(np.diag(Qm) * x_scale**2)), every=constraint_every)
+                           cost_scale=horizon * float(np.max(np.diag(Qm) * prob.x_scale**2)), every=constraint_every)
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")
@@ -657,7 +647,7 @@ def mpc_controller(
     if disturbance_gain and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("disturbance_gain: the estimate shifts the horizon's inputs by d, which constraints of the inputs "
                          "would see; give state constraints only or no estimate")
-    return MPCController(dt=float(dt), t0=t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
-                         Q=Qm, R=Rm, Qf=Qfm, u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names),
+    return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
+                         Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
                          delay=int(delay), disturbance_gain=float(disturbance_gain))

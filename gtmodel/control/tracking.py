@@ -39,11 +39,11 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.control.reference import (INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index,
-                                         reference_scales, sample_reference)
+from gtmodel.control.problem import tracking_problem, weight_matrix
+from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index
 from gtmodel.modeling import ExplicitODE
 
-__all__ = ["TrackingController", "tracking_controller", "tracking_weights", "weight_matrix", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
+__all__ = ["TrackingController", "tracking_controller", "weight_matrix", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
 
 
 def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -141,93 +141,6 @@ def saturate(u: Any, lb: Any, ub: Any) -> Any:
         lo, hi = (b if isinstance(b, (ca.MX, ca.SX, ca.DM)) else ca.DM(np.asarray(b, float)) for b in (lb, ub))
         return ca.fmin(ca.fmax(u, lo), hi)
     return np.minimum(np.maximum(np.asarray(u, dtype=float), lb), ub)
-
-
-def weight_matrix(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
-    """A weight matrix of a tracking problem: None (the default diagonal), a vector (the diagonal) or a matrix.
-
-    Parameters
-    ----------
-    value : None, array_like
-        ``(size,)`` the diagonal or ``(size, size)`` the matrix; None: ``diag(default)``.
-    size : int
-        Its dimension.
-    default : numpy.ndarray
-        ``(size,)`` the default diagonal (or a ``(size, size)`` matrix when ``value`` is None).
-    name : str
-        The argument's name in messages (``"Q"``, ``"R"``, ``"Qf"``).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``(size, size)`` symmetric positive semi-definite.
-
-    Raises
-    ------
-    InputError
-        Another shape, non-finite entries, or not symmetric positive semi-definite.
-    """
-    if value is None:
-        return np.diag(default)
-    w = np.asarray(value, dtype=float)
-    if w.ndim == 1 and w.size == size:
-        w = np.diag(w)
-    if w.shape != (size, size) or not np.all(np.isfinite(w)):
-        raise InputError(f"{name}: expected {size} diagonal entries or a ({size}, {size}) matrix of finite numbers, got shape {w.shape}")
-    if not np.allclose(w, w.T) or np.min(np.linalg.eigvalsh(0.5 * (w + w.T))) < 0:
-        raise InputError(f"{name}: expected a symmetric positive semi-definite weight")
-    return w
-
-
-def tracking_weights(ode: ExplicitODE, xs: np.ndarray, us: np.ndarray, u_lb: Any, u_ub: Any, p: Any, Q: Any,
-                     R: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The input bounds, parameters and weights of a tracking problem: what the TV-LQR and the MPC share.
-
-    The weights default to Bryson's rule on the sampled reference's scales
-    (:func:`~gtmodel.control.reference.reference_scales`): ``Q = diag(1 / x_scale^2)``,
-    ``R = diag(1 / u_scale^2)``.
-
-    Parameters
-    ----------
-    ode : ExplicitODE
-        The model (its declared input bounds, default parameters).
-    xs, us : numpy.ndarray
-        ``(N, nx)``, ``(N, nu)`` the sampled reference.
-    u_lb, u_ub : array_like or None
-        ``(nu,)`` input bounds (None: the model's).
-    p : array_like or None
-        ``(np,)`` parameter values (None: the model's defaults).
-    Q, R : array_like or None
-        State and input weights (:func:`weight_matrix`).
-
-    Returns
-    -------
-    lb, ub : numpy.ndarray
-        ``(nu,)`` each.
-    p : numpy.ndarray
-        ``(np,)``.
-    Q, R : numpy.ndarray
-        ``(nx, nx)``, ``(nu, nu)``.
-
-    Raises
-    ------
-    InputError
-        Bounds of another length, crossed or NaN; parameters of another length; a weight
-        :func:`weight_matrix` refuses; ``R`` not positive definite.
-    """
-    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
-    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
-    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
-        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
-    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
-    if pv.size != ode.np:
-        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
-    x_scale, u_scale = reference_scales(xs, us, lb, ub)
-    Qm = weight_matrix(Q, ode.nx, 1.0 / x_scale**2, "Q")
-    Rm = weight_matrix(R, ode.nu, 1.0 / u_scale**2, "R")
-    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
-        raise InputError("R: expected a positive definite input weight")
-    return lb, ub, pv, Qm, Rm
 
 
 @dataclass
@@ -505,23 +418,19 @@ def tracking_controller(
     """
     if isinstance(delay, bool) or delay not in (0, 1):
         raise InputError(f"delay: expected 0 or 1 period of input delay to compensate, got {delay!r}")
-    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=2)
+    prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, min_samples=2)
+    xs, us, lb, ub, pv, Qm, Rm = prob.x_ref, prob.u_ref, prob.u_lb, prob.u_ub, prob.p, prob.Q, prob.R
     n = xs.shape[0]
-    m = np.asarray(t).size
-    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
-    if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
-        raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
-    lb, ub, pv, Qm, Rm = tracking_weights(ode, xs, us, u_lb, u_ub, p, Q, R)
-    step = ode.step(dt, method, substeps=substeps)
+    step = prob.step(method, substeps)
     xsym, usym, psym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
-    xn = step(xsym, usym, psym)[0]
+    xn = step.call([xsym, usym, psym])[0]
     ab = ca.Function("AB", [xsym, usym, psym], [ca.jacobian(xn, xsym), ca.jacobian(xn, usym)])
     Aa, Bb = ab.map(n)(xs.T, us.T, np.tile(pv.reshape(-1, 1), (1, n)))
     A = np.asarray(Aa).reshape(ode.nx, n, ode.nx).transpose(1, 0, 2)  # [A_0 A_1 ...] side by side
     B = np.asarray(Bb).reshape(ode.nx, n, ode.nu).transpose(1, 0, 2)
     # after the end: the input that holds the final state (least squares f(x*_N, u) = 0) and the stationary gain there
-    x_hold = x_given[-1]
-    u_hold = saturate(hold_input(ode.f, x_hold, u_given[-1], pv), lb, ub)
+    x_hold = prob.x_given[-1]
+    u_hold = saturate(hold_input(ode.f, x_hold, prob.u_given[-1], pv), lb, ub)
     Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
     idx, Qi = _integral(integral_weights, list(ode.x_names))
     if idx:  # the model augmented with the integrators of the selected states' errors
@@ -538,17 +447,13 @@ def tracking_controller(
         if not time_varying:
             raise InputError(f"time_varying: a time-invariant LQR needs a stabilisable linearisation at the held end ({exc})") from None
         K_hold, P_hold = None, Qm
-    if Qf is None:
-        Qfm = P_hold
-    else:
-        Qfm = weight_matrix(Qf, ode.nx, np.ones(ode.nx), "Qf")
-        Qfm = scipy.linalg.block_diag(Qfm, Qi) if idx else Qfm
+    Qfm = prob.terminal_weight(Qf, P_hold)
+    Qfm = scipy.linalg.block_diag(Qfm, Qi) if idx and Qf is not None else Qfm
     K = riccati_gains(A, B, Qm, Rm, Qfm)[0] if time_varying else np.tile(K_hold, (n, 1, 1))
     K_hold = K[-1] if K_hold is None else K_hold
     nx = ode.nx
     integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
-    predict = ca.Function("predict", [xsym, usym], [step(xsym, usym, ca.DM(pv))[0]], ["x", "u"], ["x_next"])
-    return TrackingController(delay=int(delay), predict=predict if delay else None, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
+    return TrackingController(delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
                               K_hold=K_hold[:, :nx], **integral)

@@ -1,0 +1,260 @@
+"""The tracking problem both loop controllers build from: model, sampled reference, bounds, parameters, scales, weights.
+
+The TV-LQR tracking controller (:func:`gtmodel.control.tracking.tracking_controller`) and
+the MPC (:func:`gtmodel.control.mpc.mpc_controller`) track the same thing: a model's
+reference motion sampled at the loop period, within input bounds, with the model's
+parameters, weighted by ``Q`` and ``R`` (Bryson's rule on the reference's scales by
+default). :func:`tracking_problem` checks and builds that once; each controller adds only
+its own law (the Riccati gains, the horizon problem), so a change to the cost's weights or
+the prediction step is made here, once, for both (python-control's ``create_mpc_iosystem``
+reusing its ``OptimalControlProblem`` is the pattern).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.errors import InputError
+from gtmodel.control.reference import INDEX_EPS, reference_scales, sample_reference
+from gtmodel.modeling import ExplicitODE
+
+__all__ = ["PREDICTION_METHODS", "TrackingProblem", "tracking_problem", "weight_matrix"]
+
+#: Prediction steps over one period: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
+PREDICTION_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
+
+
+def weight_matrix(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
+    """A weight matrix of a tracking problem: None (the default diagonal), a vector (the diagonal) or a matrix.
+
+    Parameters
+    ----------
+    value : None, array_like
+        ``(size,)`` the diagonal or ``(size, size)`` the matrix; None: ``diag(default)``.
+    size : int
+        Its dimension.
+    default : numpy.ndarray
+        ``(size,)`` the default diagonal (or a ``(size, size)`` matrix when ``value`` is None).
+    name : str
+        The argument's name in messages (``"Q"``, ``"R"``, ``"Qf"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(size, size)`` symmetric positive semi-definite.
+
+    Raises
+    ------
+    InputError
+        Another shape, non-finite entries, or not symmetric positive semi-definite.
+    """
+    if value is None:
+        return np.diag(default)
+    w = np.asarray(value, dtype=float)
+    if w.ndim == 1 and w.size == size:
+        w = np.diag(w)
+    if w.shape != (size, size) or not np.all(np.isfinite(w)):
+        raise InputError(f"{name}: expected {size} diagonal entries or a ({size}, {size}) matrix of finite numbers, got shape {w.shape}")
+    if not np.allclose(w, w.T) or np.min(np.linalg.eigvalsh(0.5 * (w + w.T))) < 0:
+        raise InputError(f"{name}: expected a symmetric positive semi-definite weight")
+    return w
+
+
+@dataclass
+class TrackingProblem:
+    """A model's reference motion sampled at the loop period, with its bounds, parameters, scales and weights.
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model.
+    dt : float
+        Loop period [s].
+    t0 : float
+        Time of the first sample [s].
+    x_ref, u_ref : numpy.ndarray
+        ``(N, nx)``, ``(N, nu)`` the reference at ``t0 + k dt``.
+    x_given, u_given : numpy.ndarray
+        ``(M, nx)``, ``(M, nu)`` the reference as given (its last row is the end held).
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds (``-inf`` / ``inf``: none).
+    p : numpy.ndarray
+        ``(np,)`` parameter values of the model.
+    x_scale, u_scale : numpy.ndarray
+        ``(nx,)``, ``(nu,)`` the scales of :func:`~gtmodel.control.reference.reference_scales`.
+    Q, R : numpy.ndarray
+        ``(nx, nx)`` state and ``(nu, nu)`` positive definite input weights.
+    """
+
+    ode: ExplicitODE = field(repr=False)
+    dt: float
+    t0: float
+    x_ref: np.ndarray
+    u_ref: np.ndarray
+    x_given: np.ndarray
+    u_given: np.ndarray
+    u_lb: np.ndarray
+    u_ub: np.ndarray
+    p: np.ndarray
+    x_scale: np.ndarray
+    u_scale: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+
+    @property
+    def x_names(self) -> list[str]:
+        """The model's state names, in the order of the columns."""
+        return list(self.ode.x_names)
+
+    @property
+    def u_names(self) -> list[str]:
+        """The model's input names, in the order of the columns."""
+        return list(self.ode.u_names)
+
+    def terminal_weight(self, Qf: Any, default: np.ndarray) -> np.ndarray:
+        """The terminal weight: ``Qf`` as given (:func:`weight_matrix`) or ``default``.
+
+        Parameters
+        ----------
+        Qf : array_like or None
+            ``(nx,)`` diagonal or ``(nx, nx)``; None: ``default``.
+        default : numpy.ndarray
+            ``(nx, nx)`` the controller's default (the MPC: ``Q``; the TV-LQR: the stationary
+            Riccati solution at the held end).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(nx, nx)``.
+
+        Raises
+        ------
+        InputError
+            A weight :func:`weight_matrix` refuses.
+        """
+        return default if Qf is None else weight_matrix(Qf, self.ode.nx, np.ones(self.ode.nx), "Qf")
+
+    def step(self, method: str = "rk4", substeps: int = 1) -> ca.Function:
+        """The model's fixed step over one period, its parameters free: ``F(x, u, p) -> x_next``.
+
+        Parameters
+        ----------
+        method : {"euler", "rk4", "implicit_euler", "radau2"}, optional
+            :data:`PREDICTION_METHODS` (``"euler"``: explicit Euler on ``f``; the others:
+            :meth:`~gtmodel.modeling.simulation.explicit.ExplicitODE.step`).
+        substeps : int, optional
+            Steps of ``method`` within one period.
+
+        Returns
+        -------
+        casadi.Function
+            ``(x (nx,1), u (nu,1), p (np,1)) -> x_next (nx,1)``, first output the next state.
+
+        Raises
+        ------
+        InputError
+            An unknown method.
+        """
+        if method != "euler":
+            return self.ode.step(self.dt, method, substeps=substeps)
+        ode = self.ode
+        x, u, p = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
+        h, xn = self.dt / substeps, x
+        for _ in range(substeps):
+            xn = xn + h * ode.f(xn, u, p)
+        return ca.Function("euler_step", [x, u, p], [xn], ["x", "u", "p"], ["x_next"])
+
+    def prediction(self, method: str = "rk4", substeps: int = 1, name: str = "F") -> ca.Function:
+        """The step of :meth:`step` at the problem's parameters: ``F(x, u) -> x_next``.
+
+        Parameters
+        ----------
+        method : str, optional
+            :data:`PREDICTION_METHODS`.
+        substeps : int, optional
+            Steps of ``method`` within one period.
+        name : str, optional
+            The Function's name (the MPC's ``"F"``, the tracking law's ``"predict"``).
+
+        Returns
+        -------
+        casadi.Function
+            ``(x (nx,1), u (nu,1)) -> x_next (nx,1)``, inputs ``x``, ``u``, output ``x_next``.
+
+        Raises
+        ------
+        InputError
+            An unknown method.
+        """
+        x, u = ca.SX.sym("x", self.ode.nx), ca.SX.sym("u", self.ode.nu)
+        return ca.Function(name, [x, u], [self.step(method, substeps).call([x, u, self.p])[0]], ["x", "u"], ["x_next"])
+
+
+def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float = LOOP_PERIOD_S, Q: Any = None, R: Any = None,
+                     u_lb: Any = None, u_ub: Any = None, p: Any = None, min_samples: int = 1, eps: float = INDEX_EPS) -> TrackingProblem:
+    """The tracking problem of a model along a reference (what the TV-LQR and the MPC share).
+
+    The reference is sampled at the loop period from its first time to its last
+    (:func:`~gtmodel.control.reference.sample_reference`); the weights default to Bryson's
+    rule on its scales (:func:`~gtmodel.control.reference.reference_scales`): ``Q =
+    diag(1 / x_scale^2)``, ``R = diag(1 / u_scale^2)`` (Bryson & Ho, *Applied Optimal
+    Control*, 1975, sec. 5.4).
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model (:func:`gtmodel.modeling.explicit_ode`).
+    t : array_like
+        ``(M,)`` increasing reference times [s].
+    x_ref, u_ref : array_like
+        ``(M, nx)``, ``(M, nu)`` reference states and inputs in the order of ``ode.x_names``, ``ode.u_names``.
+    dt : float, optional
+        Loop period [s] (default :data:`gtmodel.defaults.LOOP_PERIOD_S`).
+    Q, R : array_like, optional
+        State and input weights, diagonals or matrices (:func:`weight_matrix`; default Bryson's rule).
+    u_lb, u_ub : array_like, optional
+        ``(nu,)`` input bounds (default the model's declared ones).
+    p : array_like, optional
+        ``(np,)`` parameter values (default ``ode.p_default``).
+    min_samples : int, optional
+        Fewest loop periods plus one the reference must span (the TV-LQR: 2).
+    eps : float, optional
+        Slack of the last grid point (default :data:`~gtmodel.control.reference.INDEX_EPS`;
+        the MPC's grid: its own).
+
+    Returns
+    -------
+    TrackingProblem
+
+    Raises
+    ------
+    InputError
+        A bad period or reference (times not increasing, too short, another number of
+        columns than the model's states and inputs, a model without inputs); bounds of
+        another length, crossed or NaN; parameters of another length; a weight
+        :func:`weight_matrix` refuses; ``R`` not positive definite.
+    """
+    t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=min_samples, eps=eps)
+    if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
+        raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
+    m = np.asarray(t).size
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
+    lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
+    ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
+    if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
+        raise InputError(f"u_lb, u_ub: expected {ode.nu} bounds each with u_lb <= u_ub")
+    pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
+    if pv.size != ode.np:
+        raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
+    x_scale, u_scale = reference_scales(xs, us, lb, ub)
+    Qm = weight_matrix(Q, ode.nx, 1.0 / x_scale**2, "Q")
+    Rm = weight_matrix(R, ode.nu, 1.0 / u_scale**2, "R")
+    if np.min(np.linalg.eigvalsh(Rm)) <= 0:
+        raise InputError("R: expected a positive definite input weight")
+    return TrackingProblem(ode=ode, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, x_given=x_given, u_given=u_given, u_lb=lb.copy(),
+                           u_ub=ub.copy(), p=pv, x_scale=x_scale, u_scale=u_scale, Q=Qm, R=Rm)
