@@ -167,8 +167,8 @@ def build_parser() -> argparse.ArgumentParser:
     rep.add_argument("folder", type=Path, help="a result folder written by gtmodel solve, e.g. results/l1_time_optimal")
     rep.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
 
-    schema = sub.add_parser("schema", help="JSON Schema of a problem kind, the list of kinds, or the reference docs")
-    schema.add_argument("kind", nargs="?", default=None, help="a problem kind (gtmodel schema --list prints them)")
+    schema = sub.add_parser("schema", help="JSON Schema of a problem or loop-controller file kind, the list of kinds, or the reference docs")
+    schema.add_argument("kind", nargs="?", default=None, help="a problem kind or a loop-controller file kind such as mpc (gtmodel schema --list prints them)")
     schema.add_argument("--out", type=Path, default=None, help="write the schema to this file (default: standard output)")
     schema.add_argument("--list", action="store_true", help="print the kinds, one per line")
     schema.add_argument("--docs", type=Path, default=None, metavar="DIR", help="write DIR/problem_files.md and DIR/schemas/*.schema.json")
@@ -473,7 +473,7 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def _schema(args: argparse.Namespace) -> int:
-    from gtmodel.problems.registry import KINDS, kind_titles
+    from gtmodel.problems.registry import all_kinds, kind_titles
 
     if args.list:
         print("\n".join(f"{name:<30} {title}" for name, title in kind_titles().items()))
@@ -485,7 +485,7 @@ def _schema(args: argparse.Namespace) -> int:
             print(f"wrote {p}")
         return EXIT_OK
     if args.kind is None:
-        raise GtModelError(f"schema: give a kind ({', '.join(KINDS)}), --list or --docs DIR")
+        raise GtModelError(f"schema: give a kind ({', '.join(all_kinds())}), --list or --docs DIR")
     text = json.dumps(json_schema(args.kind), indent=2) + "\n"
     if args.out is None:
         sys.stdout.write(text)

@@ -1,5 +1,8 @@
 """The problem-file reference and the JSON Schemas, generated from the kinds' schemas.
 
+The kinds are the problem kinds (:data:`~gtmodel.problems.registry.KINDS`) and the
+loop-controller file kinds (:data:`~gtmodel.problems.registry.LOOP_KINDS`: the MPC file,
+the tracking-controller file, the estimator + ILC bundle), from the same declarations.
 ``docs/problem_files.md`` and ``docs/schemas/<kind>.schema.json`` are written by
 :func:`write_docs` (``gtmodel schema --docs docs``); a test fails when they are stale.
 Editors validate problem files as they are typed from the JSON Schema: with taplo /
@@ -15,7 +18,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from gtmodel.problems.registry import KINDS, get_kind
+from gtmodel.problems.registry import KINDS, LOOP_KINDS, all_kinds, canonical_kind, get_kind, get_schema
 
 __all__ = ["json_schema", "reference_markdown", "write_docs"]
 
@@ -26,7 +29,7 @@ def json_schema(kind: str) -> dict[str, Any]:
     Parameters
     ----------
     kind : str
-        A registered kind, e.g. ``"point_to_point"``.
+        A registered kind, e.g. ``"point_to_point"``, or a loop-controller file kind (``"mpc"``).
 
     Returns
     -------
@@ -38,13 +41,24 @@ def json_schema(kind: str) -> dict[str, Any]:
     ProblemError
         Unknown kind.
     """
-    k = get_kind(kind)
-    schema = k.schema.model_json_schema(mode="validation")
+    kind = canonical_kind(kind)
+    schema = get_schema(kind).model_json_schema(mode="validation")
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["$id"] = f"https://gtmodel.invalid/schemas/{kind}.schema.json"
-    schema["title"] = f"gtmodel problem file, kind {kind}"
-    schema["description"] = k.title or (k.__doc__ or "").strip()
+    schema["title"] = f"gtmodel {_what(kind)}, kind {kind}"
+    schema["description"] = _title(kind)
     return schema
+
+
+def _what(kind: str) -> str:
+    return LOOP_KINDS[kind].what if kind in LOOP_KINDS else "problem file"
+
+
+def _title(kind: str) -> str:
+    if kind in LOOP_KINDS:
+        return f"{LOOP_KINDS[kind].title}. Generated and checked by: {LOOP_KINDS[kind].command}"
+    k = get_kind(kind)
+    return k.title or (k.__doc__ or "").strip()
 
 
 def _type(prop: dict[str, Any], defs: dict[str, Any]) -> str:
@@ -132,12 +146,17 @@ def reference_markdown() -> str:
         "",
         "Kinds: " + ", ".join(f"[`{k}`](#{k})" for k in KINDS) + ".",
         "",
+        "Loop-controller files (declared as the kinds are, generated and checked by `gtmodel codegen`,",
+        "not solved; `gtmodel schema KIND` gives their schemas too): "
+        + ", ".join(f"[`{k}`](#{k})" for k in LOOP_KINDS) + ".",
+        "",
     ]
-    for name, kind in KINDS.items():
-        schema = kind.schema.model_json_schema(mode="validation")
+    for name in all_kinds():
+        model = get_schema(name)
+        schema = model.model_json_schema(mode="validation")
         defs = schema.get("$defs", {})
-        lines += [f"## {name}", "", kind.title or (kind.__doc__ or "").strip(), ""]
-        tables: list[tuple[str, type[BaseModel]]] = [("", kind.schema)]
+        lines += [f"## {name}", "", _title(name), ""]
+        tables: list[tuple[str, type[BaseModel]]] = [("", model)]
         while tables:
             dotted, model = tables.pop(0)
             sub_schema = schema if not dotted else defs.get(model.__name__, {})
@@ -169,7 +188,7 @@ def write_docs(folder: str | Path) -> list[Path]:
     (folder / "schemas").mkdir(parents=True, exist_ok=True)
     written = [folder / "problem_files.md"]
     written[0].write_text(reference_markdown(), encoding="utf-8")
-    for kind in KINDS:
+    for kind in all_kinds():
         target = folder / "schemas" / f"{kind}.schema.json"
         target.write_text(json.dumps(json_schema(kind), indent=2) + "\n", encoding="utf-8")
         written.append(target)

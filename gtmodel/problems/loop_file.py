@@ -1,9 +1,12 @@
-"""What every loop-controller file shares: the model, ``[reference]``, ``[check]`` and the plant.
+"""What every loop-controller file shares: the model, ``[reference]``, ``[check]``, the plant and the one reader.
 
 A loop-controller file (the MPC file of :mod:`gtmodel.problems.mpc_file`, the tracking
-controller file of :mod:`gtmodel.problems.tracking_file`) declares a controller section of
-its own and these two tables, validated on load (pydantic, unknown fields refused; every
-error names the file and the field, the CLI exits with 2):
+controller file of :mod:`gtmodel.problems.tracking_file`) is a declared kind
+(:data:`gtmodel.problems.registry.LOOP_KINDS`, its light schema in
+:mod:`gtmodel.problems.kinds.schemas`, ``gtmodel schema --list``): a controller section of
+its own and these two tables (:mod:`gtmodel.problems.kinds.schemas.loop`), validated on
+load by :func:`read_loop_file` (pydantic, unknown fields refused; every error names the
+file and the field, the CLI exits with 2):
 
 ``[reference]``
     The motion tracked: ``problem`` (a ``point_to_point`` problem file of the robot, or an
@@ -60,7 +63,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-from pydantic import Field, ValidationError
+from pydantic import ValidationError
 
 from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
@@ -68,60 +71,27 @@ from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
 from gtmodel.control.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
-from gtmodel.modeling.simulation.explicit import STEP_METHODS
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds, input_limits, accept_reference, dae_bounds, input_bounds, summary_bounds
 from gtmodel.problems.loop_limits import (MAX_LOOP_SAMPLES, MAX_MAGNITUDE, MAX_PERIOD_S, MAX_TABLE_NUMBERS, MAX_WEIGHT, MIN_PERIOD_S,
                                           Bounds, Period, StateBounds, Weights, loop_samples)
 from gtmodel.problems.references import robot_parameters
+from gtmodel.problems.registry import get_loop_kind
 from gtmodel.problems.run import load_problem, solve_problem
-from gtmodel.problems.schema import Identifier, NonEmptyText, Section, choice, number, problem_error
+from gtmodel.problems.kinds.schemas.loop import CheckSection, LoopFile, ReferenceSection
+from gtmodel.problems.schema import problem_error
 from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.robots.model import gantry_tau_model
 from gtmodel.trajectory.point_to_point import solve_point_to_point
 
 __all__ = ["RESULT_TABLE", "LoopFile", "LoopInputs", "LoopModel", "LoopReference", "LoopSetup", "read_loop_file", "loop_inputs", "loop_model", "weight_diagonal",
            "loop_reference", "input_bounds", "loop_setup", "loop_samples", "MIN_PERIOD_S", "MAX_PERIOD_S", "MAX_WEIGHT",
-           "MAX_MAGNITUDE", "MAX_LOOP_SAMPLES", "MAX_TABLE_NUMBERS", "Period", "Weights", "Bounds", "StateBounds"]
+           "MAX_MAGNITUDE", "MAX_LOOP_SAMPLES", "MAX_TABLE_NUMBERS", "Period", "Weights", "Bounds", "StateBounds", "ReferenceSection", "CheckSection"]
 
 #: The table of an ``optimal_control`` result folder (``[reference] file`` may name it as written).
 RESULT_TABLE = "trajectories.csv"
 _TCP_STATES = ("x", "y", "z", "xd", "yd", "zd")
 _TCP_INPUTS = ("tau1", "tau2", "tau3")
-
-
-class ReferenceSection(Section):
-    """``[reference]``: the motion tracked (exactly one of ``problem`` and ``file``)."""
-
-    problem: NonEmptyText | None = Field(default=None, description="a point_to_point (robot) or optimal_control (user model) problem file, relative to this file, solved first")
-    overrides: dict[str, Any] = Field(default_factory=dict, description="dotted fields of that problem replaced, e.g. 'limits.force'")
-    file: NonEmptyText | None = Field(default=None, description="a CSV table: t and the model's state and input names")
-    settle_time: number(ge=0, le=60.0, unit="s", description="the end state held this long, with the input that holds it") = 0.5
-    accept_unverified: bool = Field(default=False, strict=True, description="track a reference whose verification failed or was skipped "
-                                    "(default false: refused); the summary and the verdict repeat it")
-
-
-class CheckSection(Section):
-    """``[check]``: the closed loop of ``--check``."""
-
-    mass_factor: number(gt=0, le=10.0, description="plant masses / model masses (robot)") = 1.1
-    friction_factor: number(gt=0, le=10.0, description="plant friction / model friction (robot)") = 1.1
-    parameter_factor: number(gt=0, le=10.0, description="plant parameters / model parameters (user model)") = 1.1
-    parameter_factors: dict[str, number(gt=0, le=10.0)] = Field(default_factory=dict, description="plant / model factors of single parameters by name, replacing parameter_factor for them (user model; e.g. a geometry known exactly: 1.0)")
-    noise: list[number(ge=0, le=MAX_MAGNITUDE)] = Field(default_factory=list, max_length=10_000,
-                                                        description="measurement noise standard deviation per state, each >= 0 (default none)")
-    disturbance: list[number(ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)] = Field(default_factory=list, max_length=10_000,
-                                                                           description="input step disturbance per input (default none)")
-    disturbance_time: number(ge=0, le=1e4, unit="s", description="time of the step disturbance") = 0.0
-    delay: int = Field(default=1, ge=0, le=100, strict=True, description="input delay [samples]")
-    seed: int = Field(default=0, ge=0, le=2**63 - 1, strict=True)
-    compliance: bool = Field(default=False, strict=True, description="robot: the tool structure of eq. 6.14 (7.4 / 11.5 Hz modes) in the plant")
-    error_states: list[str] = Field(default_factory=list, description="states summarised by the tracking error (default all)")
-    plant_method: choice(*STEP_METHODS, description="the plant's fixed step (radau2, implicit_euler: stiff models; not with compliance)") = "rk4"
-    plant_substeps: int = Field(default=4, ge=1, le=1000, strict=True, description="plant steps per loop period")
-    max_ratio: number(gt=0, le=1.0, description="the check passes with an RMS tracking error below this fraction of the feedforward's alone") = 1.0
-    max_step_time: float | None = Field(default=None, gt=0, le=10.0, allow_inf_nan=False,
-                                        description="s: the largest 99th-percentile step time of the generated C that passes (default the period)")
 
 
 @dataclass
@@ -541,39 +511,19 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
                      names=(list(ode.x_names), list(ode.u_names), list(ode.y_names)), outputs=outputs, notes=list(notes or []))
 
 
-class LoopFile(Section):
-    """The tables every loop-controller file has; each kind adds its controller's table
-    (:class:`~gtmodel.problems.mpc_file.MPCFile`, :class:`~gtmodel.problems.tracking_file.TrackingFile`).
-
-    Parameters
-    ----------
-    name : str
-        Name of the controller (the C prefix is ``gt_<name>``).
-    description : str
-        Free text.
-    reference : ReferenceSection
-        ``[reference]``.
-    check : CheckSection
-        ``[check]``.
-    """
-
-    name: Identifier
-    description: str = ""
-    reference: ReferenceSection
-    check: CheckSection = CheckSection()
-
-
-def read_loop_file(path: str | Path, kind: type[LoopFile], what: str) -> tuple[Any, ProblemFile]:
-    """Read and validate a loop-controller file (unknown fields refused).
+def read_loop_file(path: str | Path, kind: type[LoopFile] | str, what: str | None = None) -> tuple[Any, ProblemFile]:
+    """Read and validate a loop-controller file (unknown fields refused): the one reader of every loop kind.
 
     Parameters
     ----------
     path : str or pathlib.Path
         The TOML file.
-    kind : type
-        A :class:`LoopFile` subclass.
-    what : str
-        The kind of file, for messages (``"MPC file"``).
+    kind : str or type
+        A loop-controller file kind of :data:`gtmodel.problems.registry.LOOP_KINDS`
+        (``"mpc"``, ``"tracking_controller"``: its declared schema), or a :class:`LoopFile`
+        subclass.
+    what : str, optional
+        The kind of file, for messages (default the declared kind's, ``"MPC file"``).
 
     Returns
     -------
@@ -591,7 +541,10 @@ def read_loop_file(path: str | Path, kind: type[LoopFile], what: str) -> tuple[A
         ``reference.overrides`` with ``reference.file``.
     """
     path = Path(path)
-    data = read_toml(path, ProblemError, what)
+    if isinstance(kind, str):
+        declared = get_loop_kind(kind)
+        kind, what = declared.schema_class(), what or declared.what
+    data = read_toml(path, ProblemError, what or "loop-controller file")
     try:
         doc = kind.model_validate(dict(data))
     except ValidationError as exc:

@@ -39,24 +39,18 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from pydantic import Field
-
-from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError
-from gtmodel.control.mpc import MPC_METHODS, MPC_SOLVERS, mpc_controller
+from gtmodel.control.mpc import mpc_controller
 from gtmodel.control.mpc_constraints import problem_constraints
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds
-from gtmodel.problems.loop_file import (Bounds, LoopFile, LoopModel, LoopSetup, Period, StateBounds, Weights, loop_inputs,
-                                        loop_setup, read_loop_file)
+from gtmodel.problems.kinds.schemas.mpc import MAX_HORIZON, MPCFile, MPCSection
+from gtmodel.problems.loop_file import LoopModel, LoopSetup, loop_inputs, loop_setup, read_loop_file
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
-from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
-__all__ = ["MPCFile", "MPCSetup", "load_mpc_file", "qp_entries", "MAX_HORIZON", "MAX_QP_ENTRIES"]
+__all__ = ["MPCFile", "MPCSection", "MPCSetup", "load_mpc_file", "qp_entries", "MAX_HORIZON", "MAX_QP_ENTRIES"]
 
-#: Longest horizon accepted [periods].
-MAX_HORIZON = 1000
 #: Most entries of the dense parts of the horizon problem (:func:`qp_entries`): the generated C
 #: grows with them, about 64 bytes each beyond a base of about 0.5 MB (measured on the composed
 #: motor, nx = 3, nu = 1, blocks = horizon: horizon 20: 0.68 MB, 100: 3.97 MB, 200: 12.8 MB,
@@ -90,52 +84,6 @@ def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
         return horizon * (nx + nu) ** 2
     n = nu * blocks
     return horizon * (nx + nu) * n + n * n
-
-
-class MPCSection(Section):
-    """``[mpc]``: the model, the horizon and the weights."""
-
-    model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
-    horizon: int = Field(ge=1, le=MAX_HORIZON, strict=True, description="prediction horizon [periods]")
-    period: Period = LOOP_PERIOD_S
-    blocks: int | None = Field(default=None, ge=1, le=MAX_HORIZON, strict=True, description="input blocks over the horizon (a divisor; default the horizon)")
-    sqp_iterations: int = Field(default=1, ge=1, le=100, strict=True, description="SQP iterations per period (1: real-time iteration)")
-    solver: choice(*MPC_SOLVERS, description="NLP solver of the step (qrqp QPs)") = "sqpmethod"
-    method: choice(*MPC_METHODS, description="prediction step over one period (euler: cheapest; implicit_euler, radau2: stiff models)") = "rk4"
-    substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
-    state_weights: Weights = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
-    input_weights: Weights = Field(default_factory=dict, description="diagonal of R by input name")
-    terminal_weights: Weights = Field(default_factory=dict, description="diagonal of Qf by state name (default Q)")
-    u_lb: Bounds = Field(default=None, description="input lower bounds")
-    u_ub: Bounds = Field(default=None, description="input upper bounds")
-    state_lb: StateBounds = Field(default_factory=dict, description="lower bounds of the predicted states by state name (with the reference problem's)")
-    state_ub: StateBounds = Field(default_factory=dict, description="upper bounds of the predicted states by state name (with the reference problem's)")
-    problem_constraints: bool = Field(default=True, strict=True, description="impose the reference problem's state bounds and path constraints on the horizon")
-    hard_constraints: bool = Field(default=False, strict=True, description="state and path constraints hard (default soft: an exact penalty with slacks)")
-    constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
-    input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the step compensates by predicting the state one period ahead (0 or 1)")
-    constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
-    disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
-
-
-class MPCFile(LoopFile):
-    """An MPC file (see the module docstring): :class:`~gtmodel.problems.loop_file.LoopFile` and its controller's table.
-
-    Parameters
-    ----------
-    name : str
-        Name of the controller, a C identifier of at most 40 characters (the C prefix is ``gt_<name>``).
-    description : str
-        Free text.
-    reference : ReferenceSection
-        ``[reference]``.
-    check : CheckSection
-        ``[check]``.
-    mpc : MPCSection
-        ``[mpc]``.
-    """
-
-    mpc: MPCSection
 
 
 #: What an MPC file builds (:class:`~gtmodel.problems.loop_file.LoopSetup` with an
@@ -211,7 +159,7 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         loop periods (:func:`~gtmodel.problems.loop_file.loop_samples`), a reference that
         cannot be read or solved.
     """
-    doc, file = read_loop_file(path, MPCFile, "MPC file")
+    doc, file = read_loop_file(path, "mpc")
     m = doc.mpc
     if m.blocks is not None and m.horizon % m.blocks:
         raise file.fail("mpc.blocks", f"a divisor of the horizon {m.horizon}", m.blocks)

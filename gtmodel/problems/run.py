@@ -24,7 +24,7 @@ from gtmodel._toml import read_toml
 from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
-from gtmodel.problems.registry import KINDS, get_kind, get_schema
+from gtmodel.problems.registry import KINDS, LOOP_KINDS, RENAMED, canonical_kind, get_kind, get_schema
 from gtmodel.problems.results import (MARKER, ResultFolder, _is_run_summary, check_output_folder, failure_summary, is_file_name,
                                      json_safe, output_lock, write_json)
 from gtmodel.report.result_page import REPORT_FILE, write_report
@@ -66,11 +66,16 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
     for key, value in (overrides or {}).items():
         data = apply_override(data, key, value, path)
     file = ProblemFile(path)
-    kind_name = data.get("kind")
+    kind_name = canonical_kind(data.get("kind"), str(path))  # a renamed kind's former name: the new one, with a warning
     if not isinstance(kind_name, str) or kind_name not in KINDS:
         if "kind" not in data:
             raise ProblemError(f"{path}: missing field 'kind'")
+        if isinstance(kind_name, str) and kind_name in LOOP_KINDS:
+            raise file.fail("kind", f"a problem kind ({', '.join(KINDS)}); {kind_name!r} names a loop-controller file "
+                                    f"({LOOP_KINDS[kind_name].what}), generated and checked by {LOOP_KINDS[kind_name].command}", kind_name)
         raise file.fail("kind", f"one of {', '.join(KINDS)}", kind_name)
+    if data.get("kind") != kind_name:
+        data = {**data, "kind": kind_name}
     doc = validate_document(get_schema(kind_name), data, path)  # before the kind (its solvers) is imported
     name = doc.name or path.stem
     declaration = get_kind(kind_name).load(doc, file, name)
@@ -439,4 +444,5 @@ def _peek_kind(path: Path) -> str | None:
         kind = read_toml(path, ProblemError, "problem file").get("kind")
     except GtModelError:
         return None
+    kind = RENAMED.get(kind, kind) if isinstance(kind, str) else kind
     return kind if isinstance(kind, str) and kind in KINDS else None

@@ -31,54 +31,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import Field
-
-from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import GtModelError
 from gtmodel.control.tracking import tracking_controller
-from gtmodel.modeling.simulation.explicit import STEP_METHODS
-from gtmodel.problems.loop_file import (MAX_WEIGHT, Bounds, LoopFile, LoopSetup, Period, Weights, loop_inputs, loop_setup, read_loop_file,
-                                        weight_diagonal)
-from gtmodel.problems.schema import NonEmptyText, Section, choice, number
+from gtmodel.problems.kinds.schemas.tracking_controller import ControllerSection, TrackingFile
+from gtmodel.problems.loop_file import LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
 
-__all__ = ["TrackingFile", "load_tracking_file"]
-
-
-class ControllerSection(Section):
-    """``[controller]``: the model, the period, the weights and the bounds of the tracking controller."""
-
-    model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
-    period: Period = LOOP_PERIOD_S
-    method: choice(*STEP_METHODS, description="the fixed step linearised along the reference") = "rk4"
-    substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
-    state_weights: Weights = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
-    input_weights: Weights = Field(default_factory=dict, description="diagonal of R by input name (default 1 / (half the bound range)^2)")
-    terminal_weights: Weights = Field(default_factory=dict, description="diagonal of Qf by state name (default: the stationary Riccati solution at the held end)")
-    u_lb: Bounds = Field(default=None, description="input lower bounds")
-    u_ub: Bounds = Field(default=None, description="input upper bounds")
-    time_varying: bool = Field(default=True, strict=True, description="time-varying LQR along the reference (false: the held end's time-invariant LQR)")
-    input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
-    integral_weights: dict[str, number(gt=0, le=MAX_WEIGHT)] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
-
-
-class TrackingFile(LoopFile):
-    """A tracking-controller file (see the module docstring): :class:`~gtmodel.problems.loop_file.LoopFile` and its controller's table.
-
-    Parameters
-    ----------
-    name : str
-        Name of the controller, a C identifier of at most 40 characters (the C prefix is ``gt_<name>``).
-    description : str
-        Free text.
-    reference : ReferenceSection
-        ``[reference]``.
-    check : CheckSection
-        ``[check]``.
-    controller : ControllerSection
-        ``[controller]``.
-    """
-
-    controller: ControllerSection
+__all__ = ["ControllerSection", "TrackingFile", "load_tracking_file"]
 
 
 def load_tracking_file(path: str | Path) -> LoopSetup:
@@ -106,7 +64,7 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
         read or solved, a controller that cannot be built (e.g. a time-invariant LQR where
         the end is not stabilisable), an integral weight of a state the model does not have.
     """
-    doc, file = read_loop_file(path, TrackingFile, "tracking-controller file")
+    doc, file = read_loop_file(path, "tracking_controller")
     c = doc.controller
     ni = len(c.integral_weights)
     i = loop_inputs(file, doc, "controller", per_sample=lambda ode: ode.nx + ode.nu + ode.nu * (ode.nx + ni),  # x*, u*, K, Ki per sample

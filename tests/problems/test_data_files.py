@@ -19,7 +19,7 @@ from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem
 
 from ..conftest import PROBLEMS_DIR, replace_once as _edit
-from .kinds.test_tracking import _trajectory
+from .kinds.test_replay import _trajectory
 
 MARKER = "FOREIGN-CONTENT-51c9"
 TRACKING = (PROBLEMS_DIR / "l1_tracking.toml").read_text()

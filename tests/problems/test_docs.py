@@ -15,6 +15,7 @@ jsonschema = pytest.importorskip("jsonschema")
 
 from gtmodel.cli import EXIT_BAD_INPUT, main  # noqa: E402
 from gtmodel.problems import KINDS  # noqa: E402
+from gtmodel.problems.registry import LOOP_KINDS  # noqa: E402
 from gtmodel.problems.docs import json_schema, reference_markdown  # noqa: E402
 
 from ..conftest import PROBLEMS_DIR, REPO  # noqa: E402
@@ -61,7 +62,7 @@ def test_reference_page_documents_every_kind():
 def test_schema_list_prints_every_kind(capsys):
     assert main(["schema", "--list"]) == 0
     printed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    assert printed == list(KINDS)
+    assert printed == [*KINDS, *LOOP_KINDS]  # the problem kinds, then the loop-controller files (issue 45)
 
 
 def test_schema_out_writes_the_schema(tmp_path, capsys):
@@ -70,7 +71,7 @@ def test_schema_out_writes_the_schema(tmp_path, capsys):
     assert json.loads(out.read_text()) == json_schema("point_to_point")
 
 
-@pytest.mark.parametrize("args, match", [(["schema", "teleport"], "unknown problem kind 'teleport'"), (["schema"], "give a kind")])
+@pytest.mark.parametrize("args, match", [(["schema", "teleport"], "unknown kind 'teleport': expected one of point_to_point"), (["schema"], "give a kind")])
 def test_schema_bad_arguments(args, match, capsys):
     assert main(args) == EXIT_BAD_INPUT
     assert match in capsys.readouterr().err

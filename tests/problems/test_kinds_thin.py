@@ -20,7 +20,7 @@ from gtmodel.trajectory.settings import Collocation, SolverSettings
 from ..conftest import PROBLEMS_DIR
 
 #: Kinds that simulate (or filter) and optimise nothing: their success is ``completed``.
-SIMULATION_KINDS = ("tracking", "state_estimation", "correction_stability")
+SIMULATION_KINDS = ("replay", "state_estimation", "correction_stability")
 
 
 @pytest.mark.parametrize("name", list(KINDS))
@@ -31,7 +31,7 @@ def test_empty_fields_start_with_the_column_keys(name):
     assert len(set(kind.empty_fields)) == len(kind.empty_fields)
 
 
-@pytest.mark.parametrize("name", [n for n in KINDS if n != "tracking"])
+@pytest.mark.parametrize("name", [n for n in KINDS if n != "replay"])
 def test_kinds_solve_through_the_declaration(name):
     # no pass-through solve in the kinds: ProblemKind.solve calls the declaration's own
     assert type(KINDS[name]).solve is ProblemKind.solve
@@ -47,11 +47,11 @@ def test_default_solve_passes_the_arguments_on():
 
 @pytest.mark.parametrize("name", list(KINDS))
 def test_declarations_live_in_the_domain_packages(name):
-    # the one exception: tracking's declaration holds another problem file's kind
+    # the one exception: replay's declaration holds another problem file's kind
     files = [p for p in sorted(PROBLEMS_DIR.glob("*.toml")) if tomllib.loads(p.read_text())["kind"] == name]
     decl = load_problem(files[0]).declaration
     module = type(decl).__module__
-    assert module.startswith("gtmodel.problems.kinds.tracking") if name == "tracking" else not module.startswith("gtmodel.problems")
+    assert module.startswith("gtmodel.problems.kinds.replay") if name == "replay" else not module.startswith("gtmodel.problems")
 
 
 def test_simulation_statuses_are_completed_not_optimal():

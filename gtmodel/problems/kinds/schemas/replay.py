@@ -1,6 +1,7 @@
-"""The schema of a ``tracking`` problem file (light: validated before the kind's solvers are imported).
+"""The schema of a ``replay`` problem file (light: validated before the kind's solvers are imported).
 
-The kind is :mod:`gtmodel.problems.kinds.tracking`; the field reference is
+The kind is :mod:`gtmodel.problems.kinds.replay` (formerly ``tracking``: a file with
+``kind = "tracking"`` is read as ``replay`` with a deprecation warning); the field reference is
 ``docs/problem_files.md``.
 """
 
@@ -15,7 +16,7 @@ from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.kinds.schemas.closed_loop import RobotSection, SensorsSection, StructureSection
 from gtmodel.problems.schema import NonEmptyText, ProblemSchema, Section, number
 
-__all__ = ["TrackingFile", "MAX_SETTLE_S"]
+__all__ = ["ReplayFile", "MAX_SETTLE_S"]
 
 #: Longest accepted settling time [s].
 MAX_SETTLE_S = 60.0
@@ -30,8 +31,8 @@ class TrajectorySection(Section):
 
 
 @fill_doc(**KIND_DOCS)
-class TrackingFile(ProblemSchema):
-    """A ``tracking`` problem file.
+class ReplayFile(ProblemSchema):
+    """A ``replay`` problem file.
 
     Parameters
     ----------
@@ -46,7 +47,7 @@ class TrackingFile(ProblemSchema):
         ``[sensors]``: noise and range.
     """
 
-    kind: Literal["tracking"]
+    kind: Literal["replay"]
     trajectory: TrajectorySection
     robot: RobotSection
     structure: StructureSection = StructureSection()

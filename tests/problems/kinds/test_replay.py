@@ -1,4 +1,4 @@
-"""Kind ``tracking``: the shipped replay end to end, a replayed trajectory file, bad input.
+"""Kind ``replay`` (formerly ``tracking``): the shipped replay end to end, a replayed trajectory file, bad input.
 
 Independent references: the summary figures recomputed from ``tracking.csv`` (a second
 reading of the run), the static actuator error after the settling hold against the closed
@@ -19,7 +19,7 @@ import pytest
 
 from gtmodel.errors import ProblemError
 from gtmodel.problems import load_problem, run_problem
-from gtmodel.problems.kinds.tracking import TrackingDeclaration
+from gtmodel.problems.kinds.replay import ReplayDeclaration
 from gtmodel.robots import GantryTau3Kinematics
 from gtmodel.status import Status
 
@@ -112,7 +112,7 @@ def test_trajectory_file_is_replayed(tmp_path):
     f = tmp_path / "file.toml"
     f.write_text(_file_problem(csv))
     d = load_problem(f).declaration
-    assert isinstance(d, TrackingDeclaration) and d.source == csv
+    assert isinstance(d, ReplayDeclaration) and d.source == csv
     code, summary = solve_through_cli(f, tmp_path / "out", "--no-plots")
     assert code == 0 and summary["status"] == "completed" and summary["source_status"] == "file"
     assert summary["motion_samples"] == 150 and summary["accelerometer_clipped_samples"] == 0
@@ -212,3 +212,16 @@ def test_invalid_referenced_problem_is_named_with_its_field(tmp_path):
 
 def test_status_is_an_enum_member(shipped):
     assert shipped[0].status is Status.COMPLETED
+
+
+def test_former_kind_name_is_read_as_replay_with_a_deprecation_warning(tmp_path, caplog):
+    # the L1 replay was kind "tracking" (issue 45): such a file still loads, as the replay, and says so in the log
+    for name in ("l1_time_optimal.toml", "l1_calibration.toml"):
+        (tmp_path / name).write_text((PROBLEMS_DIR / name).read_text())
+    old = tmp_path / "old.toml"
+    old.write_text(TRACKING_FILE.read_text().replace('kind = "replay"', 'kind = "tracking"'))
+    with caplog.at_level("WARNING", logger="gtmodel"):
+        problem = load_problem(old)
+    assert problem.kind == "replay" and isinstance(problem.declaration, ReplayDeclaration)
+    assert any("kind = 'tracking' is deprecated: it is now kind = 'replay'" in r.getMessage() and str(old) in r.getMessage()
+               for r in caplog.records)

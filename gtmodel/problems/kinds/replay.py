@@ -1,4 +1,4 @@
-"""Kind ``tracking``: replay a planned trajectory through the closed-loop L1 at 4 ms.
+"""Kind ``replay`` (formerly ``tracking``, still read with a deprecation warning): replay a planned trajectory through the closed-loop L1 at 4 ms.
 
 Dressler (2012), ch. 7.3, with the plant of :mod:`gtmodel.estimation.closed_loop.plant` (actuators
 (6.11), fk, structure (6.14) at the ILC operating point: 7.4 Hz in x, 11.5 Hz in y,
@@ -39,12 +39,12 @@ from gtmodel.estimation.closed_loop.replay import TrackingSolution, replay
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.closed_loop_common import build_plant
 from gtmodel.problems.kinds.path_constrained import PathConstrainedKind
-from gtmodel.problems.kinds.schemas.tracking import TrackingFile
+from gtmodel.problems.kinds.schemas.replay import ReplayFile
 from gtmodel.problems.kinds.point_to_point import PointToPointKind
 from gtmodel.problems.schema import validate_document
 from gtmodel.report.tracking import plot_actuator_error, plot_deflection, plot_tool_error, plot_tool_path
 
-__all__ = ["TrackingFile", "TrackingDeclaration", "TrackingSolution", "TrackingKind", "read_trajectory", "REQUIRED_COLUMNS"]
+__all__ = ["ReplayFile", "ReplayDeclaration", "TrackingSolution", "ReplayKind", "read_trajectory", "REQUIRED_COLUMNS"]
 
 #: Columns a replayed trajectory must have.
 REQUIRED_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3")
@@ -61,8 +61,8 @@ SOURCE_KINDS = {"point_to_point": PointToPointKind(), "path_constrained": PathCo
 
 
 @dataclass(frozen=True)
-class TrackingDeclaration:
-    """A validated ``tracking`` problem.
+class ReplayDeclaration:
+    """A validated ``replay`` problem.
 
     Parameters
     ----------
@@ -77,7 +77,7 @@ class TrackingDeclaration:
     source_problem : tuple or None
         ``(kind, declaration, name)`` of a referenced problem, or None.
     origin : ProblemFile
-        The tracking problem file (for error messages at solve time).
+        The replay problem file (for error messages at solve time).
     """
 
     plant: TrackingPlant
@@ -136,12 +136,12 @@ def read_trajectory(path: Path, origin: ProblemFile, field_name: str, dt: float 
     return cols
 
 
-class TrackingKind(ProblemKind):
+class ReplayKind(ProblemKind):
     """Replay of a planned trajectory through the closed-loop L1 (:class:`~gtmodel.estimation.TrackingPlant`)."""
 
-    name = "tracking"
-    schema = TrackingFile
-    title = "closed-loop tracking of a planned trajectory at 4 ms: actuators, structure, sensors (Dressler (2012), ch. 7.3)"
+    name = "replay"
+    schema = ReplayFile
+    title = "replay of a planned trajectory through the closed-loop L1 at 4 ms: actuators, structure, sensors (Dressler (2012), ch. 7.3)"
     columns = (
         Column("actuator_error_max_abs_m", "max |q - q_ref| [m]", "{:.3e}"),
         Column("tool_error_max_abs_m", "max |z - T_ref| [m]", "{:.3e}"),
@@ -149,7 +149,7 @@ class TrackingKind(ProblemKind):
     )
 
     @fill_doc(**KIND_DOCS)
-    def load(self, doc: TrackingFile, file: ProblemFile, name: str) -> TrackingDeclaration:
+    def load(self, doc: ReplayFile, file: ProblemFile, name: str) -> ReplayDeclaration:
         """Build the plant and read (or load the problem of) the trajectory (see :meth:`ProblemKind.load`).
 
         Parameters
@@ -158,7 +158,7 @@ class TrackingKind(ProblemKind):
 
         Returns
         -------
-        TrackingDeclaration
+        ReplayDeclaration
 
         Raises
         ------
@@ -176,7 +176,7 @@ class TrackingKind(ProblemKind):
             source = file.data_file("trajectory.file", tr.file)
             columns = read_trajectory(source, file, "trajectory.file", plant.dt)
             self._check_robot(plant, columns, file, "trajectory.file")
-            return TrackingDeclaration(plant, tr.settle_time, source, columns, None, file)
+            return ReplayDeclaration(plant, tr.settle_time, source, columns, None, file)
         source = file.data_file("trajectory.problem", tr.problem)
         try:
             data = read_toml(source, ProblemError, "problem file")
@@ -193,7 +193,7 @@ class TrackingKind(ProblemKind):
             declaration = kind.load(sdoc, ProblemFile(source), sname)
         except GtModelError as exc:
             raise file.wrap("trajectory.problem", exc) from None
-        return TrackingDeclaration(plant, tr.settle_time, source, None, (kind, declaration, sname), file)
+        return ReplayDeclaration(plant, tr.settle_time, source, None, (kind, declaration, sname), file)
 
     @staticmethod
     def _check_robot(plant: TrackingPlant, cols: dict[str, np.ndarray], file: ProblemFile, field_name: str) -> None:
@@ -207,12 +207,12 @@ class TrackingKind(ProblemKind):
             k = int(np.argmax(dev))
             raise file.fail(field_name, f"x, y, z = fk(q1, q2, q3) of robot.parameters within {FK_TOLERANCE} m (row {k + 1} is {dev[k]:.3g} m off: another robot?)")
 
-    def solve(self, declaration: TrackingDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> TrackingSolution:
+    def solve(self, declaration: ReplayDeclaration, *, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> TrackingSolution:
         """Solve the referenced problem (if any), then simulate the replay.
 
         Parameters
         ----------
-        declaration : TrackingDeclaration
+        declaration : ReplayDeclaration
             From :meth:`load`.
         verbose : bool, optional
             Solver progress of the referenced problem.
@@ -247,12 +247,12 @@ class TrackingKind(ProblemKind):
         return replay(d.plant, q, d.settle_time, d.source.name, source_status)
 
     @fill_doc(**KIND_DOCS)
-    def write(self, declaration: TrackingDeclaration, solution: TrackingSolution, out: Path, plots: bool, name: str) -> Written:
+    def write(self, declaration: ReplayDeclaration, solution: TrackingSolution, out: Path, plots: bool, name: str) -> Written:
         """Summary fields, ``tracking.csv`` and plots of a replay.
 
         Parameters
         ----------
-        declaration : TrackingDeclaration
+        declaration : ReplayDeclaration
             The declaration.
         solution : TrackingSolution
             Its solution.
