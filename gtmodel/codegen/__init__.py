@@ -2,8 +2,8 @@
 
 ``generate`` writes C and a header for the model functions of a robot (3-link sets: ``ik``,
 ``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
-``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``) and, with a
-``Controller``, the controller of the 4 ms loop (Kalman step, ILC correction) and the KF/EKF
+``gravity``; the six-link ``fk``/``ik``; the F1 Newton ``ik``/``fk``) and, with an
+``EstimatorILCBundle`` (formerly ``Controller``), the Kalman step, the ILC correction and the KF/EKF
 steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.specs.filter`), with
 ``retime_n_max`` the online re-timing along a path (:mod:`gtmodel.codegen.retime`);
 ``compile_shared``
@@ -37,7 +37,7 @@ from __future__ import annotations
 from gtmodel.codegen.build import CompiledLibrary, compile_shared, find_compiler, load_library
 from gtmodel.codegen.check import CheckReport, FunctionCheck, StatusProbe, check
 from gtmodel.codegen.check.controller import ControllerCheckReport, check_controller
-from gtmodel.codegen.controller import Controller
+from gtmodel.codegen.controller import Controller, EstimatorILCBundle
 from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate
@@ -57,6 +57,7 @@ __all__ = [
     "find_compiler",
     "load_library",
     "check",
+    "EstimatorILCBundle",
     "Controller",
     "check_controller",
     "ControllerCheckReport",

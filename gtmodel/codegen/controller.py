@@ -29,7 +29,8 @@ Both return the shared status codes (:data:`~gtmodel.codegen.declarations.STATUS
 (``<PREFIX>_KALMAN_NX``, ``_NY``, ``_NZ``, ``<PREFIX>_ILC_LENGTH``, ``<PREFIX>_ILC_D``) and
 the sample time ``<PREFIX>_CONTROLLER_DT``.
 
-A :class:`Controller` holds the Functions (and the learned table); it is passed to
+An :class:`EstimatorILCBundle` (formerly ``Controller``, still an alias) holds the Functions
+(and the learned table); it is passed to
 :func:`gtmodel.codegen.generate` (``controller=``) or saved to / loaded from a controller
 file (:mod:`gtmodel.codegen.controller_file`) for ``gtmodel codegen --controller FILE``.
 """
@@ -54,6 +55,7 @@ __all__ = [
     "CONTROLLER_FUNCTIONS",
     "DEFAULT_DT",
     "ILC_TABLE_TOLERANCE",
+    "EstimatorILCBundle",
     "Controller",
 ]
 
@@ -89,8 +91,14 @@ def _check_function(f: Any, where: str, inputs: tuple[str, ...], outputs: tuple[
 
 
 @dataclass(frozen=True)
-class Controller:
-    """The controller functions of the 4 ms loop to generate as C (Dressler (2012), ch. 7).
+class EstimatorILCBundle:
+    """The estimator and ILC functions of the 4 ms loop to generate as C (Dressler (2012), ch. 7): one bundle.
+
+    The Kalman step and the learned ILC correction, the fusion's KF/EKF steps and the
+    lead-through step, any of them, with their sample time (the ``estimator_ilc`` file kind
+    of :data:`gtmodel.problems.registry.LOOP_KINDS`). Named ``Controller`` before (that name
+    is kept as an alias); the loop's tracking and MPC controllers are
+    :mod:`gtmodel.control`'s.
 
     Parameters
     ----------
@@ -286,3 +294,7 @@ class Controller:
         if self.lead_through_step is not None:
             out.append(lead_through_spec(self.lead_through_step, CONTROLLER_KIND))
         return tuple(out)
+
+
+#: The former name of :class:`EstimatorILCBundle` (kept for existing code).
+Controller = EstimatorILCBundle

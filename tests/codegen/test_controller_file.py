@@ -126,3 +126,11 @@ def test_an_npz_bomb_is_refused_by_its_declared_size(tmp_path):
         zf.writestr("kalman_step.npy", bytes(2 * MAX_BYTES))
     with pytest.raises(InputError, match=rf"controller file .*bomb.npz: {2 * MAX_BYTES} bytes \(unpacked\), expected at most {MAX_BYTES}"):
         load_controller(bomb)
+
+
+def test_the_bundle_keeps_its_former_name():
+    # issue 45: codegen.Controller is named for what it bundles; the former name is the same class
+    import gtmodel.codegen as codegen
+    from gtmodel.codegen.controller import Controller, EstimatorILCBundle
+
+    assert codegen.EstimatorILCBundle is codegen.Controller is Controller is EstimatorILCBundle

@@ -46,7 +46,7 @@ from gtmodel.estimation import (
     time_window,
 )
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
-from gtmodel.codegen import Controller, save_controller
+from gtmodel.codegen import EstimatorILCBundle, save_controller
 from gtmodel.estimation import ilc_correction_function
 from gtmodel.estimation.filters.model_kalman import ModelKalman
 from gtmodel.estimation.ilc.iteration import error_measure
@@ -260,7 +260,7 @@ actuator correction of the first case when it learns on the actuators, for
             table = np.asarray(first.correction)
             kalman = declaration.experiment.estimators["kalman_triple_integrator"]  # the one CasADi step of the generated C
             save_controller(out / "controller.json",
-                            Controller(kalman_step=kalman.step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table,
+                            EstimatorILCBundle(kalman_step=kalman.step_function(), ilc_correction=ilc_correction_function(table), ilc_table=table,
                                        dt=declaration.experiment.plant.dt),
                             description=f"{name}: stationary Kalman step (x, y) and the learned actuator correction of case "
                                         f"{first.case.name}; gtmodel codegen --robot L1 --controller controller.json")

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from gtmodel._docstrings import fill_doc
-from gtmodel.codegen.controller import Controller
+from gtmodel.codegen.controller import EstimatorILCBundle
 from gtmodel.codegen.controller_file import save_controller
 from gtmodel.errors import InputError
 from gtmodel.estimation.lead_through.contact import PegHole, Surface
@@ -213,7 +213,7 @@ class LeadThroughKind(ProblemKind):
             fields["peg_max_insertion_m"] = s.peg.max_insertion
             _write_csv(out / "peg_in_hole.csv", run_table(s.peg.run))
             written.files.append("peg_in_hole.csv")
-        save_controller(out / "controller.json", Controller(lead_through_step=d.law.step_function(), dt=d.law.dt),
+        save_controller(out / "controller.json", EstimatorILCBundle(lead_through_step=d.law.step_function(), dt=d.law.dt),
                         description=f"{name}: lead-through step ({d.law.task}); gtmodel codegen --controller controller.json")
         written.files.append("controller.json")
         fields["controller"] = {"file": "controller.json", "function": "lead_through_step"}
