@@ -27,7 +27,7 @@ from ..conftest import PROBLEMS_DIR, REPO
 
 #: Shipped loop-controller files by kind.
 SHIPPED = {
-    "mpc": [REPO / "codegen" / "mpc" / "dc_motor_mpc.toml", *sorted((REPO / "tests" / "fixtures" / "user_models").glob("*_mpc.toml"))],
+    "mpc": [*sorted((REPO / "codegen" / "mpc").glob("*.toml")), *sorted((REPO / "tests" / "fixtures" / "user_models").glob("*_mpc.toml"))],
     "tracking_controller": sorted((REPO / "codegen" / "controllers").glob("*.toml")),
 }
 
@@ -130,3 +130,47 @@ def test_docs_schemas_hold_every_kind():
 
 def test_a_replay_file_is_shipped():
     assert tomllib.loads((PROBLEMS_DIR / "l1_tracking.toml").read_text())["kind"] == "replay"
+
+
+@pytest.mark.parametrize("name, path", [(k, p) for k, files in SHIPPED.items() for p in files if "codegen" in p.parts],
+                         ids=lambda v: getattr(v, "name", v))
+def test_shipped_loop_files_name_their_schema(name, path):
+    # as the shipped problem files do: an editor validates them as they are typed
+    first = path.read_text(encoding="utf-8").splitlines()[0]
+    assert first == f"#:schema ../../docs/schemas/{name}.schema.json" and (path.parent / first.split()[1]).resolve().is_file()
+
+
+def test_generated_loop_step_is_the_declared_output(tmp_path):
+    # the --out contract of the loop kinds against what generate_loop_step writes (a tracking controller of the
+    # dc motor, no compile): the declared files, nothing else
+    import numpy as np
+
+    from gtmodel.codegen.loop_step import generate_loop_step, tracking_step
+    from gtmodel.control.tracking import tracking_controller
+    from gtmodel.modeling import explicit_ode
+    from gtmodel.problems.user_model import load_user_model
+
+    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
+    t = np.linspace(0.0, 0.1, 11)
+    u = np.full((11, 1), 2.0)
+    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
+    generate_loop_step(tracking_step(tracking_controller(ode, t, x, u, dt=0.004), "m"), tmp_path, prefix="gt_m")
+    declared = {f.format(prefix="gt_m") for f in LOOP_KINDS["tracking_controller"].output if not f.endswith("/")}
+    assert {p.name for p in tmp_path.iterdir()} == declared
+    assert LOOP_KINDS["mpc"].output == LOOP_KINDS["tracking_controller"].output
+
+
+def test_a_saved_bundle_validates_against_its_schema(tmp_path):
+    # a second validator (jsonschema) and the declared schema on what save_controller writes; load_controller reads it back
+    import numpy as np
+
+    from gtmodel.codegen import EstimatorILCBundle, load_controller, save_controller
+    from gtmodel.estimation.ilc.iteration import ilc_correction_function
+
+    table = np.array([[1e-4, -2e-4, 0.0], [3e-4, 0.0, 1e-5]])
+    bundle = EstimatorILCBundle(ilc_correction=ilc_correction_function(table), ilc_table=table)
+    path = save_controller(tmp_path / "c.json", bundle, description="test")
+    data = json.loads(path.read_text())
+    jsonschema.Draft202012Validator(json_schema("estimator_ilc")).validate(data)
+    get_schema("estimator_ilc").model_validate(data)
+    assert load_controller(path).ilc_table.shape == (2, 3)
