@@ -26,7 +26,7 @@ from gtmodel.problems import loop_file
 from gtmodel.problems.loop_file import MAX_LOOP_SAMPLES, MAX_TABLE_NUMBERS, loop_samples
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.mpc_file import MAX_QP_ENTRIES, load_mpc_file, qp_entries
-from gtmodel.problems.tracking_file import load_tracking_file
+from gtmodel.problems.registry import LOOP_KINDS
 
 from ..conftest import REPO
 
@@ -40,41 +40,41 @@ _TABLE_REFERENCE = 'file = "ref.csv"'
 BAD = [
     # [check]: NaN, inf and negative magnitudes (issue 44: built for 78 s, then GT_BAD_ARGUMENT)
     ("noise nan", "mpc", MPC_MOTOR, "noise = [1e-3, 1e-3, 1e-2]", "noise = [nan, 0.0, 0.0]", "check.noise[0]"),
-    ("noise inf", "tracking", TRK_MOTOR, "noise = [1e-3, 1e-3, 1e-2]", "noise = [1e-3, inf, 1e-2]", "check.noise[1]"),
+    ("noise inf", "tracking_controller", TRK_MOTOR, "noise = [1e-3, 1e-3, 1e-2]", "noise = [1e-3, inf, 1e-2]", "check.noise[1]"),
     ("noise negative", "mpc", MPC_L1, "noise = [1e-6,", "noise = [-1e-6,", "check.noise[0]"),
-    ("noise huge", "tracking", TRK_L1, "noise = [1e-6,", "noise = [1e300,", "check.noise[0]"),
+    ("noise huge", "tracking_controller", TRK_L1, "noise = [1e-6,", "noise = [1e300,", "check.noise[0]"),
     ("noise not a list", "mpc", MPC_MOTOR, "noise = [1e-3, 1e-3, 1e-2]", 'noise = "high"', "check.noise"),
     ("noise of another length", "mpc", MPC_MOTOR, "noise = [1e-3, 1e-3, 1e-2]", "noise = [1e-3]", "check.noise"),
     ("disturbance nan", "mpc", MPC_MOTOR, "disturbance = [-1.0]", "disturbance = [nan]", "check.disturbance[0]"),
-    ("disturbance -inf", "tracking", TRK_L1, "disturbance = [20.0,", "disturbance = [-inf,", "check.disturbance[0]"),
+    ("disturbance -inf", "tracking_controller", TRK_L1, "disturbance = [20.0,", "disturbance = [-inf,", "check.disturbance[0]"),
     ("disturbance huge", "mpc", MPC_L1, "disturbance = [20.0,", "disturbance = [1e300,", "check.disturbance[0]"),
-    ("disturbance of another length", "tracking", TRK_MOTOR, "disturbance = [-1.0]", "disturbance = [-1.0, 2.0]", "check.disturbance"),
+    ("disturbance of another length", "tracking_controller", TRK_MOTOR, "disturbance = [-1.0]", "disturbance = [-1.0, 2.0]", "check.disturbance"),
     ("disturbance time nan", "mpc", MPC_MOTOR, "disturbance_time = 0.1", "disturbance_time = nan", "check.disturbance_time"),
     ("mass factor inf", "mpc", MPC_L1, "mass_factor = 1.1", "mass_factor = inf", "check.mass_factor"),
-    ("parameter factor nan", "tracking", TRK_MOTOR, "parameter_factor = 1.1", 'parameter_factor = 1.1\nparameter_factors = { "r.R" = nan }',
+    ("parameter factor nan", "tracking_controller", TRK_MOTOR, "parameter_factor = 1.1", 'parameter_factor = 1.1\nparameter_factors = { "r.R" = nan }',
      "check.parameter_factors.r.R"),
     ("parameter factor huge", "mpc", MPC_MOTOR, "parameter_factor = 1.1", 'parameter_factor = 1.1\nparameter_factors = { "r.R" = 1e300 }',
      "check.parameter_factors.r.R"),
     ("max_step_time inf", "mpc", MPC_MOTOR, "max_ratio = 0.5", "max_ratio = 0.5\nmax_step_time = inf", "check.max_step_time"),
-    ("unknown error state", "tracking", TRK_L1, 'error_states = ["T[0]"', 'error_states = ["T[7]"', "check.error_states.T[7]"),
+    ("unknown error state", "tracking_controller", TRK_L1, 'error_states = ["T[0]"', 'error_states = ["T[7]"', "check.error_states.T[7]"),
     ("compliance of a user model", "mpc", MPC_MOTOR, "\ndelay = 1", "\ndelay = 1\ncompliance = true", "check.compliance"),
     # weights: finite, >= 0, <= 1e12
     ("state weight 1e300", "mpc", MPC_L1, '"T[0]" = 1e8', '"T[0]" = 1e300', "mpc.state_weights.T[0]"),
-    ("state weight above 1e12", "tracking", TRK_L1, '"T[1]" = 1e8', '"T[1]" = 2e12', "controller.state_weights.T[1]"),
+    ("state weight above 1e12", "tracking_controller", TRK_L1, '"T[1]" = 1e8', '"T[1]" = 2e12', "controller.state_weights.T[1]"),
     ("input weight nan", "mpc", MPC_MOTOR, '"src.v" = 1e-3', '"src.v" = nan', "mpc.input_weights.src.v"),
-    ("input weight inf", "tracking", TRK_MOTOR, '"src.v" = 1e-3', '"src.v" = inf', "controller.input_weights.src.v"),
+    ("input weight inf", "tracking_controller", TRK_MOTOR, '"src.v" = 1e-3', '"src.v" = inf', "controller.input_weights.src.v"),
     ("terminal weight negative", "mpc", MPC_MOTOR, "input_weights =", 'terminal_weights = { "emf.phi" = -1.0 }\ninput_weights =',
      "mpc.terminal_weights.emf.phi"),
     ("weight not a number", "mpc", MPC_MOTOR, '"src.v" = 1e-3', '"src.v" = "high"', "mpc.input_weights.src.v"),
-    ("integral weight 1e300", "tracking", TRK_MOTOR, '"emf.phi" = 1e4 }', '"emf.phi" = 1e300 }', "controller.integral_weights.emf.phi"),
-    ("integral weight nan", "tracking", TRK_MOTOR, '"emf.phi" = 1e4 }', '"emf.phi" = nan }', "controller.integral_weights.emf.phi"),
-    ("integral of an unknown state", "tracking", TRK_MOTOR, '"emf.phi" = 1e4 }', '"phi" = 1e4 }', "controller.integral_weights.phi"),
+    ("integral weight 1e300", "tracking_controller", TRK_MOTOR, '"emf.phi" = 1e4 }', '"emf.phi" = 1e300 }', "controller.integral_weights.emf.phi"),
+    ("integral weight nan", "tracking_controller", TRK_MOTOR, '"emf.phi" = 1e4 }', '"emf.phi" = nan }', "controller.integral_weights.emf.phi"),
+    ("integral of an unknown state", "tracking_controller", TRK_MOTOR, '"emf.phi" = 1e4 }', '"phi" = 1e4 }', "controller.integral_weights.phi"),
     ("constraint weight nan", "mpc", MPC_L1, "constraint_every = 4", "constraint_every = 4\nconstraint_weight = nan", "mpc.constraint_weight"),
     # the period: 1e-5 .. 1 s (issue 44: 1e-12 s ended in "out of memory", 2.18 TiB)
     ("period 1e-12", "mpc", MPC_L1, "period = 0.004 ", "period = 1e-12 ", "mpc.period"),
-    ("period below 1e-5", "tracking", TRK_MOTOR, "period = 0.004", "period = 9e-6", "controller.period"),
+    ("period below 1e-5", "tracking_controller", TRK_MOTOR, "period = 0.004", "period = 9e-6", "controller.period"),
     ("period nan", "mpc", MPC_MOTOR, "period = 0.004", "period = nan", "mpc.period"),
-    ("period inf", "tracking", TRK_L1, "period = 0.004 ", "period = inf ", "controller.period"),
+    ("period inf", "tracking_controller", TRK_L1, "period = 0.004 ", "period = inf ", "controller.period"),
     ("period above 1 s", "mpc", MPC_MOTOR, "period = 0.004", "period = 2.0", "mpc.period"),
     # the horizon: 1 .. 1000, blocks too, and the horizon problem's size estimate
     ("horizon 1e6", "mpc", MPC_L1, "horizon = 20 ", "horizon = 1000000 ", "mpc.horizon"),
@@ -87,29 +87,30 @@ BAD = [
      "mpc.period"),  # with settle_time 60 s below
     # bounds: finite, |.| <= 1e7
     ("u_lb nan", "mpc", MPC_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [nan]\nu_ub = [24.0]", "mpc.u_lb[0]"),
-    ("u_ub 1e300", "tracking", TRK_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [-24.0]\nu_ub = [1e300]", "controller.u_ub[0]"),
+    ("u_ub 1e300", "tracking_controller", TRK_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [-24.0]\nu_ub = [1e300]", "controller.u_ub[0]"),
     ("u_ub -inf", "mpc", MPC_L1, "period = 0.004 ", "period = 0.004\nu_ub = [450.0, -inf, 450.0] ", "mpc.u_ub[1]"),
-    ("u_lb of another length", "tracking", TRK_L1, "period = 0.004 ", "period = 0.004\nu_lb = [-1.0, -1.0] ", "controller.u_lb"),
+    ("u_lb of another length", "tracking_controller", TRK_L1, "period = 0.004 ", "period = 0.004\nu_lb = [-1.0, -1.0] ", "controller.u_lb"),
     ("u_lb above the model's upper bound", "mpc", MPC_MOTOR, "period = 0.004", "period = 0.004\nu_lb = [5.0]\nu_ub = [-5.0]", "mpc.u_lb[0]"),
     ("state bound nan", "mpc", MPC_MOTOR, "input_weights =", 'state_ub = { "rotor.w" = nan }\ninput_weights =', "mpc.state_ub.rotor.w"),
     ("state bound 1e300", "mpc", MPC_MOTOR, "input_weights =", 'state_lb = { "rotor.w" = -1e300 }\ninput_weights =', "mpc.state_lb.rotor.w"),
     # names: C identifiers of at most 40 characters
     ("name with a hyphen", "mpc", MPC_L1, 'name = "l1_mpc"', 'name = "l1-mpc"', "name"),
-    ("name that is C code", "tracking", TRK_L1, 'name = "l1_tracking"', 'name = "p\\"; } int system(const char *); /*"', "name"),
+    ("name that is C code", "tracking_controller", TRK_L1, 'name = "l1_tracking"', 'name = "p\\"; } int system(const char *); /*"', "name"),
     ("name with a newline", "mpc", MPC_MOTOR, 'name = "dc_motor_mpc"', 'name = "dc_motor_mpc\\n"', "name"),
-    ("name starting with a digit", "tracking", TRK_MOTOR, 'name = "dc_motor_tracking"', 'name = "2motor"', "name"),
+    ("name starting with a digit", "tracking_controller", TRK_MOTOR, 'name = "dc_motor_tracking"', 'name = "2motor"', "name"),
     ("name of 41 characters", "mpc", MPC_MOTOR, 'name = "dc_motor_mpc"', f'name = "{"a" * 41}"', "name"),
     ("name empty", "mpc", MPC_MOTOR, 'name = "dc_motor_mpc"', 'name = ""', "name"),
-    ("name not a string", "tracking", TRK_MOTOR, 'name = "dc_motor_tracking"', "name = 3", "name"),
+    ("name not a string", "tracking_controller", TRK_MOTOR, 'name = "dc_motor_tracking"', "name = 3", "name"),
     # overrides only with a reference problem
     ("overrides with a table", "mpc", MPC_MOTOR, 'problem = "../../problems/dc_motor_move.toml"', _TABLE_REFERENCE, "reference.overrides"),
-    ("overrides with a table (tracking)", "tracking", TRK_L1, 'problem = "../../problems/l1_time_optimal.toml"', _TABLE_REFERENCE,
+    ("overrides with a table (tracking)", "tracking_controller", TRK_L1, 'problem = "../../problems/l1_time_optimal.toml"', _TABLE_REFERENCE,
      "reference.overrides"),
-    ("both problem and file", "tracking", TRK_MOTOR, 'problem = "../../problems/dc_motor_move.toml"',
+    ("both problem and file", "tracking_controller", TRK_MOTOR, 'problem = "../../problems/dc_motor_move.toml"',
      'problem = "../../problems/dc_motor_move.toml"\n' + _TABLE_REFERENCE, "reference"),
 ]
 
-LOADERS = {"mpc": load_mpc_file, "tracking": load_tracking_file}
+#: The declared kinds' readers (gtmodel.problems.registry.LOOP_KINDS), the ones gtmodel codegen calls.
+LOADERS = {name: LOOP_KINDS[name].read for name in ("mpc", "tracking_controller")}
 
 
 def _text(text: str, old: str, new: str) -> str:
@@ -141,7 +142,7 @@ def test_bad_loop_file_is_refused_at_load_naming_file_and_field(tmp_path, no_sol
 
 @pytest.mark.parametrize("route, kind, text, old, new", [
     ("--mpc", "mpc", MPC_MOTOR, "noise = [1e-3, 1e-3, 1e-2]", "noise = [nan, 0.0, 0.0]"),
-    ("--controller", "tracking", TRK_L1, "period = 0.004 ", "period = 1e-12 "),
+    ("--controller", "tracking_controller", TRK_L1, "period = 0.004 ", "period = 1e-12 "),
     ("--mpc", "mpc", MPC_L1, '"T[0]" = 1e8', '"T[0]" = 1e300'),
 ], ids=["mpc noise nan", "tracking period 1e-12", "mpc weight 1e300"])
 def test_bad_loop_file_exits_2_and_writes_nothing(tmp_path, capsys, no_solve, route, kind, text, old, new):

@@ -20,9 +20,14 @@ kind                                declaration (with its ``solve``)
 ``ilc``                             :mod:`gtmodel.estimation.ilc.cases`
 ``state_estimation``                :mod:`gtmodel.estimation.fusion.declared`
 ``correction_stability``            :mod:`gtmodel.estimation.closed_loop.declared`
-``tracking``                        here (it solves another problem file first), replayed
+``replay`` (formerly ``tracking``)  here (it solves another problem file first), replayed
                                     by :mod:`gtmodel.estimation.closed_loop.replay`
 ==================================  ====================================================
+
+The loop-controller files (``mpc``, ``tracking_controller``, ``estimator_ilc``) are declared
+kinds too, with light schemas here (:mod:`gtmodel.problems.kinds.schemas.loop`, ``mpc``,
+``tracking_controller``, ``estimator_ilc``), listed in
+:data:`gtmodel.problems.registry.LOOP_KINDS` and built by code generation, not solved.
 
 The method and solver settings of the optimisation kinds are
 :class:`gtmodel.trajectory.settings.Collocation` and
