@@ -318,7 +318,9 @@ def test_out_naming_a_file_is_found_before_the_solve_with_one_message(tmp_path, 
 def test_schema_list_prints_every_kind_with_its_title(capsys):
     """``schema --list`` reads the titles from the kinds' sources (no import): they must be the kinds' own."""
     from gtmodel.problems import KINDS
+    from gtmodel.problems.registry import LOOP_KINDS
 
     assert main(["schema", "--list"]) == 0
     listed = [line.split(None, 1) for line in capsys.readouterr().out.splitlines()]
-    assert listed == [[name, kind.title] for name, kind in KINDS.items()]
+    # the problem kinds, then the loop-controller file kinds (issue 45), each with its declared title
+    assert listed == [[name, kind.title] for name, kind in KINDS.items()] + [[name, kind.title] for name, kind in LOOP_KINDS.items()]
