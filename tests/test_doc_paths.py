@@ -16,8 +16,9 @@ from .conftest import REPO
 
 SOURCES = [REPO / "README.md", REPO / "codegen" / "README.md", *sorted((REPO / "docs").glob("*.md")),
            *sorted((REPO / "notebooks").glob("*.ipynb")), REPO / "notebooks" / "README.md"]
+#: A dotted name not followed by ``/`` (``"gtmodel.controller/1"`` is a file format's name, not a path).
+PATH_RE = re.compile(r"\bgtmodel(?:\.[A-Za-z_][A-Za-z0-9_]*)+(?![\w/])")
 #: Placeholders of the prose (``from gtmodel.PACKAGE import NAME``), not paths.
-PATH_RE = re.compile(r"\bgtmodel(?:\.[A-Za-z_][A-Za-z0-9_]*)+")
 PLACEHOLDERS = {"gtmodel.PACKAGE"}
 PATHS = sorted({m.group(0) for src in SOURCES for m in PATH_RE.finditer(src.read_text(encoding="utf-8"))} - PLACEHOLDERS)
 
