@@ -249,7 +249,7 @@ def test_solving_a_user_model_problem_imports_only_what_it_needs(tmp_path):
     assert proc.stdout.splitlines()[-2:] == ["EXIT 0", "IMPORTED []"], proc.stdout + proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["status"] == "optimal" and abs(summary["final_time_s"] - 2.0) < 1e-6
-    assert (tmp_path / "out" / "trajectories.csv").read_text().startswith("t,")
+    assert (tmp_path / "out" / "trajectories.csv").read_text().startswith("t [s],")  # each column's unit in its header
 
 
 #: Libraries a problem file with a bad field must not import: it is reported by its kind's
