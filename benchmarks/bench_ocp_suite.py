@@ -1,6 +1,6 @@
 """The published optimal-control benchmark set, solved by gtmodel and by rockit (a benchmark, not a test).
 
-Usage: python benchmarks/bench_ocp_suite.py [FILE ...] [--json] [--no-cli] [--no-rockit] [--repeat N]
+Usage: python benchmarks/bench_ocp_suite.py [FILE ...] [--json] [--no-cli] [--no-rockit] [--repeat N] [--drives]
 
 Every problem file of ``problems/benchmarks/`` (or the files given) names its source and
 its published optimum (``[benchmark]``). Measured side by side in one run, because these
@@ -97,6 +97,8 @@ sys.path.insert(0, str(ROOT))  # this checkout's gtmodel (as the CLI processes b
 
 from gtmodel.problems import load_problem  # noqa: E402
 BENCHMARKS = ROOT / "problems" / "benchmarks"
+#: The stiff motor and drive problems (``--drives``): no published optimum, timed for the verification's cost.
+DRIVES = [ROOT / "problems" / "dc_motor_move.toml", *sorted((ROOT / "problems").glob("drive_*.toml"))]
 
 
 def _fn(opt: Any, dae: Any, exprs: list, specials: Any = None) -> Any:
@@ -330,6 +332,15 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
             "status": status if stats.get("success", False) else str(stats.get("return_status", status))}
 
 
+def rockit_or_failure(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
+    """:func:`rockit_solve`, or a row saying why rockit failed (its exception: a drive of ``--drives``)."""
+    try:
+        return rockit_solve(decl, mesh)
+    except Exception as exc:  # noqa: BLE001 - rockit's own exceptions, reported in the row, not raised
+        return {"objective": float("nan"), "iterations": -1, "whole_call_s": float("nan"), "whole_call_cpu_s": float("nan"),
+                "status": f"failed: {type(exc).__name__}: {str(exc)[:100]}"}
+
+
 def cli_time(path: Path) -> dict[str, Any]:
     """A user's fresh process ``python -m gtmodel solve FILE --no-plots --quiet --out TMP``: its wall time,
     its CPU time (user + system of the child: interpreter start, imports, problem layer, solve, result
@@ -393,13 +404,13 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         checks.append(res.verification.time_s if res.verification is not None else float("nan"))
         check_cpus.append(res.verification.cpu_s if res.verification is not None else float("nan"))
         if rockit:
-            peers.append(rockit_solve(load_problem(path).declaration))
+            peers.append(rockit_or_failure(load_problem(path).declaration))
         if cli:
             clis.append(cli_time(path))
     decl = problem.declaration
     bench = decl.benchmark
-    if bench is None:
-        raise SystemExit(f"{path}: no [benchmark] table (source and published value)")
+    if bench is None:  # a stiff drive of --drives: timed, no published value to compare with
+        bench = {"sign": 1.0, "published": float("nan"), "source": "none (no [benchmark] table)"}
     whole, whole_cpu = float(np.median(walls)), float(np.median(cpus))
     value = bench["sign"] * res.objective
     pub = bench["published"]
@@ -444,7 +455,7 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         # not timed, not in the ratio: rockit on the mesh gtmodel's refinement ended with
         # (rockit has no refinement), to show both transcriptions reach the same optimum there
         br = np.asarray(res.collocation.breaks(), dtype=float)
-        fine = rockit_solve(load_problem(path).declaration, mesh=(br - br[0]) / (br[-1] - br[0]))
+        fine = rockit_or_failure(load_problem(path).declaration, mesh=(br - br[0]) / (br[-1] - br[0]))
         fv = bench["sign"] * fine["objective"]
         row.update({"rockit_refined_mesh_objective": fv, "rockit_refined_mesh_relative_error": abs(fv - pub) / abs(pub),
                     "rockit_refined_mesh_status": fine["status"]})
@@ -482,11 +493,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="end with one JSON line {'problems': [...]}")
     ap.add_argument("--no-cli", action="store_true", help="skip the gtmodel solve processes")
     ap.add_argument("--no-rockit", action="store_true", help="skip rockit")
+    ap.add_argument("--drives", action="store_true", help="also the stiff drives (problems/dc_motor_move.toml, problems/drive_*.toml; "
+                    "no published value: their times and the verification against the solve)")
     ap.add_argument("--repeat", type=int, default=1, help="cold calls per side and problem; the medians are reported (default 1)")
     a = ap.parse_args(argv)
     if a.repeat < 1:
         ap.error("--repeat: expected a positive integer")
     files = a.files or sorted(BENCHMARKS.glob("*.toml"))
+    if a.drives:
+        files = [*files, *DRIVES]
     if not a.no_cli:
         compile_bytecode()
     rows = []
