@@ -358,12 +358,16 @@ def cli_time(path: Path) -> dict[str, Any]:
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         out = {"wall": wall, "cpu": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), "exit": proc.returncode}
         try:
-            timing = json.loads((Path(tmp) / "out" / "summary.json").read_text()).get("timing", {})
+            summary = json.loads((Path(tmp) / "out" / "summary.json").read_text())
         except (OSError, ValueError):
-            timing = {}
-        nan = float("nan")
+            summary = {}
+        timing, nan = summary.get("timing", {}), float("nan")
         for key, phase in (("solve_cpu", "solve"), ("verification_cpu", "verification"), ("run_cpu", "total")):
             out[key] = float(timing.get(phase, {}).get("cpu_s", nan))
+        passes = summary.get("refinement") or []
+        if passes and all(p.get("solve_cpu_time") is not None for p in passes):  # refined: every pass's solver and verification
+            out["solve_cpu"] = float(sum(p["solve_cpu_time"] for p in passes))
+            out["verification_cpu"] = float(sum(p.get("verification_cpu_time") or 0.0 for p in passes))
         return out
 
 
