@@ -383,11 +383,11 @@ def solve_cpu(res: Any) -> float:
     """The solver's CPU time of a result, s: its ``timing["solve"]`` (the IPOPT calls, a coarse start's
     included); refined, the passes' ``timing["solve"]`` (or ``solve_cpu_time``) when they record it, else their
     solve (wall) time."""
+    passes = [p.get("timing", {}).get("solve", {}).get("cpu_s", p.get("solve_cpu_time")) for p in res.refinement]
+    if passes and all(v is not None for v in passes):  # each pass's solver (a refinement after a failed check: its start's too)
+        return float(sum(passes))
     if "solve" in res.timing:
         return float(res.timing["solve"]["cpu_s"])
-    passes = [p.get("timing", {}).get("solve", {}).get("cpu_s", p.get("solve_cpu_time")) for p in res.refinement]
-    if passes and all(v is not None for v in passes):  # each pass's phases, where the refinement records them
-        return float(sum(passes))
     return float(res.solve_time)
 
 
