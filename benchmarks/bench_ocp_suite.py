@@ -1,6 +1,6 @@
 """The published optimal-control benchmark set, solved by gtmodel and by rockit (a benchmark, not a test).
 
-Usage: python benchmarks/bench_ocp_suite.py [FILE ...] [--json] [--no-cli] [--no-rockit] [--repeat N]
+Usage: python benchmarks/bench_ocp_suite.py [FILE ...] [--json] [--no-cli] [--no-rockit] [--repeat N] [--drives]
 
 Every problem file of ``problems/benchmarks/`` (or the files given) names its source and
 its published optimum (``[benchmark]``). Measured side by side in one run, because these
@@ -36,7 +36,16 @@ machines are noisy:
   reach the same optimum on the same mesh;
 - ``cli_s``: the wall time of a user's ``python -m gtmodel solve FILE --no-plots --out TMP``
   process (imports, problem layer, solve, result folder); ``cli_minus_whole_call_s`` is
-  what the process adds to the in-process whole call.
+  what the process adds to the in-process whole call;
+- the honest ratio, from that fresh process alone: ``process_cpu_s``, the whole process's
+  CPU time (user + system of the child: interpreter start, imports, loading and reducing the
+  model, building, solving, verifying, writing the folder); ``process_solver_cpu_s``, the
+  solver's CPU time in the same process (its ``summary.json``, ``timing.solve``: the IPOPT
+  calls, a coarse start's included); ``process_over_solver_cpu``, their ratio (the aim: at
+  most 3); ``process_run_cpu_s`` (``timing.total``: load to writing) and
+  ``process_verification_cpu_s`` (``timing.verification``, at most the solver's is the aim).
+  A table at the end prints these, the in-process ``whole_call_over_solve_cpu`` and the
+  ratios to rockit.
 
 How the comparison is kept fair: both sides start from the same loaded problem file (each
 call loads it again, so nothing built by one call serves the next), both timers start
@@ -88,6 +97,8 @@ sys.path.insert(0, str(ROOT))  # this checkout's gtmodel (as the CLI processes b
 
 from gtmodel.problems import load_problem  # noqa: E402
 BENCHMARKS = ROOT / "problems" / "benchmarks"
+#: The stiff motor and drive problems (``--drives``): no published optimum, timed for the verification's cost.
+DRIVES = [ROOT / "problems" / "dc_motor_move.toml", *sorted((ROOT / "problems").glob("drive_*.toml"))]
 
 
 def _fn(opt: Any, dae: Any, exprs: list, specials: Any = None) -> Any:
@@ -321,8 +332,21 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
             "status": status if stats.get("success", False) else str(stats.get("return_status", status))}
 
 
-def cli_time(path: Path) -> tuple[float, float, int]:
-    """Wall time, CPU time (user + system) and exit code of ``python -m gtmodel solve FILE --no-plots --out TMP``."""
+def rockit_or_failure(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
+    """:func:`rockit_solve`, or a row saying why rockit failed (its exception: a drive of ``--drives``)."""
+    try:
+        return rockit_solve(decl, mesh)
+    except Exception as exc:  # noqa: BLE001 - rockit's own exceptions, reported in the row, not raised
+        return {"objective": float("nan"), "iterations": -1, "whole_call_s": float("nan"), "whole_call_cpu_s": float("nan"),
+                "status": f"failed: {type(exc).__name__}: {str(exc)[:100]}"}
+
+
+def cli_time(path: Path) -> dict[str, Any]:
+    """A user's fresh process ``python -m gtmodel solve FILE --no-plots --quiet --out TMP``: its wall time,
+    its CPU time (user + system of the child: interpreter start, imports, problem layer, solve, result
+    folder), exit code, and from the ``summary.json`` it wrote (``timing``) the solver's CPU time (the IPOPT
+    calls), the verification's and the run's (``total``: load to writing, the interpreter and imports before
+    the problem file is read left out)."""
     env = dict(os.environ)
     env["PYTHONPATH"] = str(ROOT) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     with tempfile.TemporaryDirectory(prefix="gtmodel_bench_") as tmp:
@@ -332,7 +356,19 @@ def cli_time(path: Path) -> tuple[float, float, int]:
                               env=env, capture_output=True, text=True)
         wall = time.perf_counter() - start
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), proc.returncode
+        out = {"wall": wall, "cpu": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), "exit": proc.returncode}
+        try:
+            summary = json.loads((Path(tmp) / "out" / "summary.json").read_text())
+        except (OSError, ValueError):
+            summary = {}
+        timing, nan = summary.get("timing", {}), float("nan")
+        for key, phase in (("solve_cpu", "solve"), ("verification_cpu", "verification"), ("run_cpu", "total")):
+            out[key] = float(timing.get(phase, {}).get("cpu_s", nan))
+        passes = summary.get("refinement") or []
+        if passes and all(p.get("solve_cpu_time") is not None for p in passes):  # refined: every pass's solver and verification
+            out["solve_cpu"] = float(sum(p["solve_cpu_time"] for p in passes))
+            out["verification_cpu"] = float(sum(p.get("verification_cpu_time") or 0.0 for p in passes))
+        return out
 
 
 def gtmodel_solve(path: Path) -> tuple[Any, Any, float, float]:
@@ -347,11 +383,11 @@ def solve_cpu(res: Any) -> float:
     """The solver's CPU time of a result, s: its ``timing["solve"]`` (the IPOPT calls, a coarse start's
     included); refined, the passes' ``timing["solve"]`` (or ``solve_cpu_time``) when they record it, else their
     solve (wall) time."""
+    passes = [p.get("timing", {}).get("solve", {}).get("cpu_s", p.get("solve_cpu_time")) for p in res.refinement]
+    if passes and all(v is not None for v in passes):  # each pass's solver (a refinement after a failed check: its start's too)
+        return float(sum(passes))
     if "solve" in res.timing:
         return float(res.timing["solve"]["cpu_s"])
-    passes = [p.get("timing", {}).get("solve", {}).get("cpu_s", p.get("solve_cpu_time")) for p in res.refinement]
-    if passes and all(v is not None for v in passes):  # each pass's phases, where the refinement records them
-        return float(sum(passes))
     return float(res.solve_time)
 
 
@@ -372,13 +408,13 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         checks.append(res.verification.time_s if res.verification is not None else float("nan"))
         check_cpus.append(res.verification.cpu_s if res.verification is not None else float("nan"))
         if rockit:
-            peers.append(rockit_solve(load_problem(path).declaration))
+            peers.append(rockit_or_failure(load_problem(path).declaration))
         if cli:
             clis.append(cli_time(path))
     decl = problem.declaration
     bench = decl.benchmark
-    if bench is None:
-        raise SystemExit(f"{path}: no [benchmark] table (source and published value)")
+    if bench is None:  # a stiff drive of --drives: timed, no published value to compare with
+        bench = {"sign": 1.0, "published": float("nan"), "source": "none (no [benchmark] table)"}
     whole, whole_cpu = float(np.median(walls)), float(np.median(cpus))
     value = bench["sign"] * res.objective
     pub = bench["published"]
@@ -423,16 +459,26 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         # not timed, not in the ratio: rockit on the mesh gtmodel's refinement ended with
         # (rockit has no refinement), to show both transcriptions reach the same optimum there
         br = np.asarray(res.collocation.breaks(), dtype=float)
-        fine = rockit_solve(load_problem(path).declaration, mesh=(br - br[0]) / (br[-1] - br[0]))
+        fine = rockit_or_failure(load_problem(path).declaration, mesh=(br - br[0]) / (br[-1] - br[0]))
         fv = bench["sign"] * fine["objective"]
         row.update({"rockit_refined_mesh_objective": fv, "rockit_refined_mesh_relative_error": abs(fv - pub) / abs(pub),
                     "rockit_refined_mesh_status": fine["status"]})
     if cli:
-        row["cli_s"] = float(np.median([c[0] for c in clis]))
-        row["cli_cpu_s"] = float(np.median([c[1] for c in clis]))
-        row["cli_exit"] = max(c[2] for c in clis)
+        row["cli_s"] = float(np.median([c["wall"] for c in clis]))
+        row["cli_cpu_s"] = float(np.median([c["cpu"] for c in clis]))
+        row["cli_exit"] = max(c["exit"] for c in clis)
         row["cli_minus_whole_call_s"] = row["cli_s"] - whole
         row["cli_minus_whole_call_cpu_s"] = row["cli_cpu_s"] - whole_cpu
+        # the fresh process against its own solver (both from the same process: its rusage, its summary.json)
+        ratios = [c["cpu"] / c["solve_cpu"] for c in clis]
+        row.update({
+            "process_cpu_s": row["cli_cpu_s"],
+            "process_solver_cpu_s": float(np.median([c["solve_cpu"] for c in clis])),
+            "process_verification_cpu_s": float(np.median([c["verification_cpu"] for c in clis])),
+            "process_run_cpu_s": float(np.median([c["run_cpu"] for c in clis])),
+            "process_over_solver_cpu": float(np.median(ratios)),
+            "process_over_solver_cpu_all": ratios,
+        })
     return row
 
 
@@ -451,11 +497,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="end with one JSON line {'problems': [...]}")
     ap.add_argument("--no-cli", action="store_true", help="skip the gtmodel solve processes")
     ap.add_argument("--no-rockit", action="store_true", help="skip rockit")
+    ap.add_argument("--drives", action="store_true", help="also the stiff drives (problems/dc_motor_move.toml, problems/drive_*.toml; "
+                    "no published value: their times and the verification against the solve)")
     ap.add_argument("--repeat", type=int, default=1, help="cold calls per side and problem; the medians are reported (default 1)")
     a = ap.parse_args(argv)
     if a.repeat < 1:
         ap.error("--repeat: expected a positive integer")
     files = a.files or sorted(BENCHMARKS.glob("*.toml"))
+    if a.drives:
+        files = [*files, *DRIVES]
     if not a.no_cli:
         compile_bytecode()
     rows = []
@@ -476,9 +526,33 @@ def main(argv: list[str] | None = None) -> int:
               f"{r['solve_cpu_s']:9.3f} {r['verification_cpu_s'] if r['verification_cpu_s'] is not None else nan:10.3f} "
               f"{r['whole_call_over_solve_cpu']:15.2f}",
               flush=True)
+    print_time_table(rows)
     if a.json:
         print(json.dumps({"problems": rows}))
     return 0
+
+
+def print_time_table(rows: list[dict[str, Any]]) -> None:
+    """Where the time goes, CPU s: the fresh process against its solver, the verification against the solve, rockit.
+
+    ``process``: the user's fresh ``gtmodel solve`` process, all of it (``process_cpu_s``);
+    ``solver``: its IPOPT calls (``process_solver_cpu_s``, its summary.json); ``process/solver``
+    (``process_over_solver_cpu``); ``run``: its summary's ``total``, load to writing
+    (``process_run_cpu_s``); ``verify``: its verification (``process_verification_cpu_s``) and
+    ``verify/solver``; ``call/solve``: the in-process whole call over its solve
+    (``whole_call_over_solve_cpu``); ``rockit``: the in-process whole call over rockit's
+    (``ratio_to_rockit``, wall; ``ratio_to_rockit_cpu``, CPU).
+    """
+    nan = float("nan")
+    print()
+    print(f"{'CPU s (a fresh process; in process)':36s} {'process':>8s} {'solver':>7s} {'process/solver':>14s} {'run':>6s} "
+          f"{'verify':>7s} {'verify/solver':>13s} {'call/solve':>10s} {'rockit':>7s} {'rockit cpu':>10s}")
+    for r in rows:
+        solver, check = r.get("process_solver_cpu_s", nan), r.get("process_verification_cpu_s", nan)
+        print(f"{r['name']:36s} {r.get('process_cpu_s', nan):8.3f} {solver:7.3f} {r.get('process_over_solver_cpu', nan):14.2f} "
+              f"{r.get('process_run_cpu_s', nan):6.3f} {check:7.3f} {check / solver if solver else nan:13.2f} "
+              f"{r['whole_call_over_solve_cpu']:10.2f} {r.get('ratio_to_rockit', nan):7.3f} {r.get('ratio_to_rockit_cpu', nan):10.3f}",
+              flush=True)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,12 @@ Format
 - Units are SI and part of the column name where a format names them (``t_s``, ``q1_m``,
   ``tau1_N``, ``theta1_deg``: degrees only where the name says so); the ``trajectory.csv``
   of the trajectory problems uses its short names ``t, x, y, z, q1, ...`` in s and m.
+- A column name may end in its unit in square brackets after a space, ``name [unit]``
+  (``t [s]``, ``ind.i [A]``, ``T[0] [m]``; the ``trajectories.csv`` of a model's result
+  writes them so, :func:`split_unit`): the column is ``name`` (:attr:`Table.columns`) and the unit is
+  kept (:attr:`Table.units`); a header without units (a file written before) reads as before.
+  A units header keeps the file one header line and one row per sample, so that pandas'
+  ``read_csv`` and NumPy's ``loadtxt(skiprows=1)`` read it as they read any table.
 - Every data row holds exactly one value per header column, each a decimal number
   (``[+-]digits[.digits][e[+-]digits]``, spaces around it allowed). NaN, inf, empty fields,
   thousands separators and quotes are errors.
@@ -39,7 +45,7 @@ line number in the file) and, for a value, the column.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
@@ -49,11 +55,13 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel._escape import csv_comment, csv_name
 from gtmodel.errors import InputError
 
-__all__ = ["Table", "read_table", "write_table"]
+__all__ = ["Table", "read_table", "write_table", "split_unit", "with_unit"]
 
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 _NUMBER_RE = re.compile(_NUMBER)
 _NONFINITE_RE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+#: ``name [unit]``: a space, then the unit in brackets at the end (``T[0]`` alone is a name).
+_UNIT_RE = re.compile(r"(\S(?:.*\S)?) \[([^\[\],]*)\]")
 #: Largest file :func:`read_table` reads when its caller sets no smaller cap [bytes].
 DEFAULT_MAX_BYTES = 256_000_000
 #: Lines beyond ``max_rows`` a table may have (header, comments, empty lines at the end).
@@ -86,6 +94,8 @@ class Table:
         The 1-based line number of the header.
     comments : tuple of str
         The ``#`` lines above the header, without the ``#``.
+    units : dict of str to str
+        Column name -> unit, for the columns whose header named one (``name [unit]``).
     """
 
     source: str
@@ -94,6 +104,7 @@ class Table:
     lines: np.ndarray
     header_line: int
     comments: tuple[str, ...] = ()
+    units: dict[str, str] = field(default_factory=dict)
 
     @property
     def n_rows(self) -> int:
@@ -243,6 +254,41 @@ def _number(source: str, lineno: int, column: str, text: str) -> float:
     raise InputError(f"{source}: line {lineno}, column '{_excerpt(column)}': expected a decimal number, got '{_excerpt(text)}'")
 
 
+def split_unit(column: str) -> tuple[str, str | None]:
+    """A header cell's name and unit: ``"ind.i [A]"`` -> ``("ind.i", "A")``, ``"t"`` -> ``("t", None)``.
+
+    Parameters
+    ----------
+    column : str
+        A column name as written, surrounding spaces ignored.
+
+    Returns
+    -------
+    tuple
+        ``(name, unit)``; ``unit`` is None without a ``" [unit]"`` ending (``"T[0]"`` is a name).
+    """
+    text = column.strip()
+    m = _UNIT_RE.fullmatch(text)
+    return (m.group(1), m.group(2).strip()) if m else (text, None)
+
+
+def with_unit(name: str, unit: str | None) -> str:
+    """The header cell of column ``name`` with its unit: ``name [unit]`` (``name`` alone without one).
+
+    Parameters
+    ----------
+    name : str
+        The column name.
+    unit : str or None
+        Its unit (e.g. ``"A"``, ``"rad/s"``); None or empty: no unit written.
+
+    Returns
+    -------
+    str
+    """
+    return f"{name} [{unit}]" if unit else name
+
+
 def read_table(
     path: str | Path, what: str = "table", header: Sequence[str] | None = None, max_rows: int | None = None, max_bytes: int | None = None,
     text_columns: Sequence[str] = (),
@@ -314,7 +360,9 @@ def read_table(
     header_line = k + 1
     if not lines[k].strip():
         raise InputError(f"{source}: line {header_line}: empty line where the header {expected} was expected")
-    columns = tuple(c.strip() for c in lines[k].split(","))
+    named = [split_unit(c) for c in lines[k].split(",")]
+    columns = tuple(name for name, _ in named)
+    units = {name: unit for name, unit in named if unit}
     if header is not None and columns != tuple(header):
         raise InputError(f"{source}: line {header_line}: expected the header {expected}, got {_excerpt(','.join(columns))}")
     seen: set[str] = set()
@@ -356,7 +404,8 @@ def read_table(
     columns = tuple(c for c in columns if c not in text_columns)
     width = len(columns)
     data = np.array(rows, dtype=float) if rows else np.empty((0, width))
-    return Table(source, columns, data.reshape(len(rows), width), np.array(linenos, dtype=int), header_line, tuple(comments))
+    return Table(source, columns, data.reshape(len(rows), width), np.array(linenos, dtype=int), header_line, tuple(comments),
+                 {c: u for c, u in units.items() if c in columns})
 
 
 def write_table(path: str | Path, columns: Sequence[str], data: np.typing.ArrayLike, comments: Sequence[str] = (), integer_columns: Sequence[int] = (), what: str = "table") -> Path:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel._tables import read_table, write_table
+from gtmodel._tables import read_table, split_unit, with_unit, write_table
 from gtmodel.errors import GtModelError, InputError
 
 GOOD = "# robot: L1\n# date: 2011-05-03\nt_s, q1_m ,tau1_N\n0.0,0.1,-2.5\n# a note between rows\n0.004,+.2,3e-1\n\n\n"
@@ -138,3 +138,32 @@ def test_empty_lines_beyond_the_row_cap_are_refused_before_splitting(tmp_path):
     with pytest.raises(InputError, match=r"more than 10010 lines, expected at most 10 data rows"):
         read_table(p, max_rows=10)
     assert read_table(_write(tmp_path, "a\n1\n" + "\n" * 9_000), max_rows=10).n_rows == 1  # trailing empty lines within the slack
+
+
+@pytest.mark.parametrize(
+    "cell, expected",
+    [("t [s]", ("t", "s")), ("ind.i [A]", ("ind.i", "A")), ("T[0]", ("T[0]", None)), ("T[0] [m]", ("T[0]", "m")),
+     (" x ", ("x", None)), ("w [rad/s]", ("w", "rad/s")), ("a[b]", ("a[b]", None))],
+    ids=["time", "scalar", "vector-element", "vector-element-unit", "spaces", "compound", "no-space"],
+)
+def test_split_unit(cell, expected):
+    """Written out by hand: the unit is a bracketed ending after a space; ``T[0]`` stays a name."""
+    assert split_unit(cell) == expected
+    name, unit = expected
+    assert split_unit(with_unit(name, unit)) == expected  # the writer's form reads back
+
+
+@pytest.mark.parametrize(
+    "header", ["t,point,ind.i,T[0]", "t [s],point,ind.i [A],T[0] [m]"], ids=["before-units", "with-units"]
+)
+def test_headers_with_and_without_units_read_alike(tmp_path, header):
+    """A result table written before units (plain names) and one with ``name [unit]`` give the same columns and
+    numbers (pandas' read_csv, a second reader, sees one header row and the same shape)."""
+    import pandas as pd
+
+    path = _write(tmp_path, header + "\n0,start,1.5,2\n0.1,collocation,2.5,3\n")
+    table = read_table(path, text_columns=("point",))
+    assert table.columns == ("t", "ind.i", "T[0]")
+    np.testing.assert_array_equal(table.data, [[0.0, 1.5, 2.0], [0.1, 2.5, 3.0]])
+    assert table.units == ({} if "[s]" not in header else {"t": "s", "ind.i": "A", "T[0]": "m"})
+    assert pd.read_csv(path).shape == (2, 4)

@@ -18,6 +18,7 @@ import numpy as np
 
 from gtmodel._lazy import lazy_module
 from gtmodel._escape import casadi_name
+from gtmodel._tables import with_unit
 from gtmodel.errors import InputError
 
 #: pandas, imported on first use (~0.5 s of CPU, only for DataFrames).
@@ -271,12 +272,14 @@ def _frame(t: np.ndarray, *groups: Mapping[str, np.ndarray]) -> Any:
     return pd.DataFrame(_columns(t, *groups))
 
 
-def _write_columns(path: Path, cols: Mapping[str, np.ndarray]) -> None:
+def _write_columns(path: Path, cols: Mapping[str, np.ndarray], units: Mapping[str, str] | None = None) -> None:
     """Write named float (or string) columns as CSV, byte for byte as ``pandas.DataFrame(cols).to_csv(path, index=False)``.
 
     Without importing pandas (~1 s at a ``gtmodel solve`` process's start): the header row,
     then each value as pandas writes it (``numpy`` ``astype(str)``, the shortest repr; NaN
-    as an empty field), ``csv`` minimal quoting, ``\n`` line ends.
+    as an empty field), ``csv`` minimal quoting, ``\n`` line ends. With ``units`` (name ->
+    unit) a column's header is ``name [unit]`` (:func:`gtmodel._tables.with_unit`, read back
+    by :func:`gtmodel._tables.read_table`).
     """
     def as_text(v: Any) -> np.ndarray:
         a = np.asarray(v)
@@ -288,7 +291,7 @@ def _write_columns(path: Path, cols: Mapping[str, np.ndarray]) -> None:
     text = [as_text(v) for v in cols.values()]
     with open(path, "w", newline="", encoding="utf-8") as fh:
         writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(list(cols))
+        writer.writerow([with_unit(c, (units or {}).get(c)) for c in cols])
         writer.writerows(zip(*text))
 
 

@@ -117,6 +117,26 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
     return solution
 
 
+def solution_timing(solution: Any) -> dict[str, dict[str, float]]:
+    """A solution's phase times (:mod:`gtmodel._timing`): its ``timing``, else its optimisation result's
+    (``solution.result.timing``: a point-to-point solution), else none.
+
+    Parameters
+    ----------
+    solution : object
+        What a kind's ``solve`` returned.
+
+    Returns
+    -------
+    dict
+        ``phase -> {"wall_s", "cpu_s"}`` (empty when the solution records none).
+    """
+    own = getattr(solution, "timing", None)
+    if not own:
+        own = getattr(getattr(solution, "result", None), "timing", None)
+    return own if isinstance(own, dict) else {}
+
+
 def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: bool = True, report: bool = False,
                   timing: Mapping[str, Mapping[str, float]] | None = None) -> dict[str, Any]:
     """Write the result folder of a solved problem, replacing the folder only when complete.
@@ -155,7 +175,7 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         left as it was.
     """
     kind = get_kind(problem.kind)
-    phases = {k: dict(v) for k, v in (timing if timing is not None else getattr(solution, "timing", None) or {}).items()}
+    phases = {k: dict(v) for k, v in (timing if timing is not None else solution_timing(solution)).items()}
     wall, cpu = time.perf_counter(), time.process_time()
     with ResultFolder(out_dir) as folder:
         try:
@@ -333,7 +353,7 @@ def run_problem(
         call: dict[str, dict[str, float]] = {}
         with Heartbeat(label, enabled=heartbeat), timed(call, "other"):
             solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
-        own = getattr(solution, "timing", None) or {}
+        own = solution_timing(solution)
         merge_phases(phases, own)
         rest = phase_sum(own)  # what the solve call spent outside its timed phases (flattening, the kind's own work)
         add_phase(phases, "other", call["other"]["wall_s"] - rest["wall_s"], call["other"]["cpu_s"] - rest["cpu_s"])

@@ -36,6 +36,7 @@ from typing import Any, Mapping
 from plotly.offline import get_plotlyjs
 
 from gtmodel._escape import html_text, json_script
+from gtmodel._tables import split_unit
 from gtmodel.errors import InputError
 from gtmodel.status import Status
 
@@ -108,7 +109,8 @@ def read_csv_columns(path: str | Path) -> tuple[list[str], dict[str, list[Any]]]
     Lenient where :func:`gtmodel._tables.read_table` is strict, since a result table may
     hold text columns (case names) and empty or non-finite values: a column whose values
     all read as numbers (``nan``, ``inf`` and empty fields as NaN) is numeric, any other
-    column text. Lines starting with ``#`` are skipped.
+    column text. Lines starting with ``#`` are skipped. A header cell ``name [unit]`` names
+    the column ``name`` (:func:`gtmodel._tables.split_unit`; the summary holds the units).
 
     Parameters
     ----------
@@ -135,7 +137,7 @@ def read_csv_columns(path: str | Path) -> tuple[list[str], dict[str, list[Any]]]
     rows = [(i + 1, r) for i, r in enumerate(csv.reader(text.splitlines())) if r and not r[0].lstrip().startswith("#")]
     if not rows:
         raise InputError(f"{path}: no header row")
-    header = [h.strip() for h in rows[0][1]]
+    header = [split_unit(h)[0] for h in rows[0][1]]  # "name [unit]" (a model result's units) or "name"
     body: list[list[str]] = []
     for lineno, row in rows[1:]:
         if len(row) != len(header):

@@ -20,7 +20,7 @@ from gtmodel.modeling import CollocationTranscription, Model, Optimization, Opti
 from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
-from gtmodel.modeling.ocp.coarse_start import solve_from_coarse
+from gtmodel.modeling.ocp.coarse_start import linear_quadratic, solve_from_coarse
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
 from gtmodel.status import Status
@@ -37,7 +37,7 @@ __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "C
 #: beside ``u1^2 + u2^2 = 1``, a degenerate NLP), 400 elements: 640 iterations and 29 s from
 #: the linear guess, 33 iterations and 1.1 s (plus 2.8 s on 50 elements) from the coarse
 #: solve (``benchmarks/bench_large_mesh.py``). A coarse solve that fails is not used.
-COARSE_START_MIN_ELEMENTS = 200
+COARSE_START_MIN_ELEMENTS = 200  # not for a linear-quadratic problem (coarse_start.linear_quadratic)
 COARSE_START_ELEMENTS = 50
 
 
@@ -186,7 +186,8 @@ class OptimalControl:
                                              mesh=col.fractions, **kwargs)
             return self._estimated(final, result)
         tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **single)
-        coarse = (lambda: self.coarse_solve(kwargs)) if guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS else None
+        coarse = (lambda: self.coarse_solve(kwargs)) if (guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS
+                                                         and not linear_quadratic(d.optimization, tr.dae)) else None
         result = solve_from_coarse(tr, coarse, initial_guess=guess)
         if d.refinement.on_failure and check and result.status == Status.CHECK_FAILED and not d.optimization.data_fits:
             # the verification failed: refined from this solution within the budget (refine_on_failure)

@@ -27,6 +27,7 @@ import numpy as np
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
 from gtmodel._tables import read_table
+from gtmodel._timing import merge_phases, timed
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
@@ -655,10 +656,8 @@ def solve_point_to_point(
     :data:`SOLVER_OPTIONS`; neither changes the problem, only the path IPOPT takes.
     """
     options = {"max_iter": problem.solver.max_iter, "tol": problem.solver.tol, **SOLVER_OPTIONS}
-    if not problem.free_final_time:
-        # the objective scaling is tuned for a cost in seconds (free final time); a
-        # fixed-time energy cost (~1e5 N^2 s) needs none
-        options.pop("obj_scaling_factor")
+    if not problem.free_final_time:  # the objective scaling is tuned for a cost in seconds (free final time); a
+        options.pop("obj_scaling_factor")  # fixed-time energy cost (~1e5 N^2 s) needs none
     ref = problem.refinement
     if previous is not None and previous.transcription is not None and _structure(previous.problem) == _structure(problem):
         tr = previous.transcription
@@ -666,7 +665,9 @@ def solve_point_to_point(
         _scale_objective(tr, problem, options)
         result = tr.solve(parameters=problem.named_parameters, initial_guess=guess)
     else:
-        opt, _ = build_optimization(problem)
+        phases: dict[str, dict[str, float]] = {}
+        with timed(phases, "build"):  # the robot's model and the problem's expressions (the NLP's build: the transcription's)
+            opt, _ = build_optimization(problem)
         if ref.tolerance is not None:
             opt.verification_tolerance = ref.tolerance
         guess = previous.result if (warm_start and previous is not None) else None
@@ -679,19 +680,21 @@ def solve_point_to_point(
                                     scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
                                     max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, parameters=problem.named_parameters)
         if ref.refine:
-            # each pass is a new mesh (with the first mesh's objective scaling), so no NLP is kept for a sweep to reuse
-            tr = None
+            tr = None  # each pass is a new mesh (with the first mesh's objective scaling): no NLP kept for a sweep to reuse
             if scaling is not None:
                 common["solver_options"] = {**options, "obj_scaling_factor": scaling}
-            result = refined(initial_guess=guess, **common)
+            with timed(phases, "refinement"):  # every pass: its build, guess, solve and verification
+                result = refined(initial_guess=guess, **common)
         else:
             fine = problem.solver.name == "fatrop" and problem.method.elements >= COARSE_START_MIN_ELEMENTS and guess is None
             result = solve_from_coarse(tr, (lambda: _coarse_start(opt, problem, common, options)) if fine else None,
                                        initial_guess=guess, parameters=problem.named_parameters)
-            if ref.on_failure and ref.verify and result.status == Status.CHECK_FAILED:
-                # the verification failed: refined from this solution within the budget (refine_on_failure)
+            merge_phases(phases, result.timing)
+            if ref.on_failure and ref.verify and result.status == Status.CHECK_FAILED:  # refined from this solution within the budget
                 _log.warning("%s: the verification failed; refining the mesh from this solution (refine_on_failure)", problem.name)
                 tr = None  # the result's mesh is no longer this transcription's
-                result = refined(start=result, **common)
+                with timed(phases, "refinement"):
+                    result = refined(start=result, **common)
+        result.timing = phases  # as a model's OCP: build, guess, solve, verification, refinement (CPU and wall)
     _log.info("%s: %s after %d iterations, final time %.4f s", problem.name, result.status, result.iterations, result.final_time)
     return PointToPointSolution(problem=problem, result=result, energy=_energy(result), transcription=tr)

@@ -384,3 +384,12 @@ class _ScriptBlocks(HTMLParser):
     def handle_data(self, data):
         if self._inside:
             self.blocks[-1] += data
+
+
+@pytest.mark.parametrize("header", ["t,point,ind.i", "t [s],point,ind.i [A]"], ids=["before-units", "with-units"])
+def test_unit_headers_name_the_same_columns(tmp_path, header):
+    """A table with ``name [unit]`` headers and one written before units give the same columns (written out by hand)."""
+    path = tmp_path / "trajectories.csv"
+    path.write_text(header + "\n0,start,1.5\n0.5,collocation,2\n")
+    names, cols = read_csv_columns(path)
+    assert names == ["t", "point", "ind.i"] and cols["ind.i"] == [1.5, 2.0] and cols["point"] == ["start", "collocation"]

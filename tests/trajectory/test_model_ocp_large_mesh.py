@@ -41,3 +41,24 @@ def test_fine_mesh_starts_from_the_coarse_solve(monkeypatch):
     # 400 elements it does, 19 against 51: benchmarks/bench_large_mesh.py and docs/verification.md)
     # the published r(tf) = 1.525 (Bryson and Ho's three digits) to the 3.3e-4 of test_benchmarks.PUBLISHED_RTOL
     assert res.objective == pytest.approx(load_problem(ORBIT).declaration.benchmark["published"], rel=3.3e-4)
+
+
+@pytest.mark.parametrize(
+    "file, expected",
+    [("dc_motor_min_energy.toml", True), ("orbit_raising.toml", False)],
+    ids=["linear-motor-energy", "orbit-raising"],
+)
+def test_linear_quadratic_problems_skip_the_coarse_start(file, expected):
+    """A linear model with a quadratic objective is a QP (no coarse pass); orbit raising is not (CasADi's
+    is_linear/is_quadratic, checked against the problems' closed forms: x' = A x + B v and integral(v^2))."""
+    from gtmodel.modeling.ocp.coarse_start import linear_quadratic
+
+    decl = load_problem(PROBLEMS_DIR / "benchmarks" / file).declaration
+    assert linear_quadratic(decl.optimization, decl.optimization.flat()) is expected
+
+
+def test_a_linear_quadratic_fine_mesh_solves_without_a_coarse_pass():
+    """dc_motor_min_energy on 200 elements: no coarse pass, the closed-form optimum 0.2667243572 to 1e-4."""
+    res = load_problem(PROBLEMS_DIR / "benchmarks" / "dc_motor_min_energy.toml").declaration.solve()
+    assert res.status == "optimal" and "coarse_start" not in res.stats
+    assert res.objective == pytest.approx(0.2667243572, rel=1e-4)

@@ -237,7 +237,7 @@ def _pass_entry(n_pass: int, tr: CollocationTranscription, result: OptimizationR
     entry: dict[str, Any] = {
         "pass": n_pass, "elements": tr.elements, "points": tr.points, "status": str(result.status), "objective": result.objective,
         "final_time": result.final_time, "iterations": result.iterations, "solve_time": result.solve_time,
-        "cpu_s": cpu, "wall_s": wall,
+        "solve_cpu_time": (result.timing.get("solve") or {}).get("cpu_s"), "cpu_s": cpu, "wall_s": wall,
     }
     v = result.verification
     if v is not None:

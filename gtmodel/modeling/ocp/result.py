@@ -14,7 +14,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -463,7 +463,7 @@ class OptimizationResult(StatusResult):
         s = self.resample(dt)
         return _frame(s["t"], s["states"], s["inputs"], s["algebraics"], s["outputs"])
 
-    def to_csv(self, path: str | Path, dt: float | None = None) -> Path:
+    def to_csv(self, path: str | Path, dt: float | None = None, units: Mapping[str, str] | None = None) -> Path:
         """Write the trajectories to a CSV file (header row, SI units).
 
         Parameters
@@ -472,6 +472,11 @@ class OptimizationResult(StatusResult):
             Output file.
         dt : float, optional
             Uniform sample period, s; default the collocation mesh.
+        units : Mapping[str, str], optional
+            Variable name (scalar, ``"ind.i"``, or its vector's, ``"T"`` for ``"T[0]"``) -> unit
+            (e.g. ``model.units``): the header then names each column's unit, ``ind.i [A]``,
+            and time's, ``t [s]`` (:func:`gtmodel._tables.split_unit` reads them back);
+            default plain names.
 
         Returns
         -------
@@ -486,5 +491,7 @@ class OptimizationResult(StatusResult):
         else:
             s = self.resample(dt)
             cols = _columns(s["t"], s["states"], s["inputs"], s["algebraics"], s["outputs"])
-        _write_columns(p, cols)  # the columns of to_dataframe(dt), without importing pandas
+        if units is not None:
+            units = {c: units.get(c, units.get(c.split("[", 1)[0])) for c in cols if c != "point"} | {"t": "s"}
+        _write_columns(p, cols, units)  # the columns of to_dataframe(dt), without importing pandas
         return p

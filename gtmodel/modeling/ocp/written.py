@@ -154,17 +154,18 @@ def affine_guess(e: ca.SX, values: Any, model: Model, parameters: dict[str, np.n
     """
     if e.is_symbolic():
         return e, values
-    params = list(model.variables("parameter").values())
+    declared = model.variables("parameter")
+    params = list(declared.values())
     varying = [s for s in ca.symvar(e) if not any(ca.depends_on(s, p) for p in params)]
     if len(varying) != 1 or not ca.is_linear(e, varying[0]):
         raise ModelError(f"set_initial_guess: {e} is not a variable of the model nor affine in one variable")
     v = varying[0]
-    flat = model.flatten()
-    pv = np.array(flat.p_value, dtype=float)
-    for name, val in parameters.items():
-        pv[flat.p_vars[name]] = np.ravel(val)
-    a = float(ca.evalf(ca.substitute(ca.jacobian(e, v), flat.p, ca.DM(pv))))
-    b = float(ca.evalf(ca.substitute(ca.substitute(e, v, ca.SX(0)), flat.p, ca.DM(pv))))
+    # the parameters' values (the problem's, else the model's starts: flatten()'s p_value) without flattening the model
+    p_sym = ca.vertcat(*[ca.vec(p) for p in params]) if params else ca.SX(0, 1)
+    pv = np.concatenate([np.ravel(np.asarray(parameters[n] if n in parameters else model._vars[n].start, dtype=float))
+                         for n in declared]) if params else np.zeros(0)
+    a = float(ca.evalf(ca.substitute(ca.jacobian(e, v), p_sym, ca.DM(pv))))
+    b = float(ca.evalf(ca.substitute(ca.substitute(e, v, ca.SX(0)), p_sym, ca.DM(pv))))
     if a == 0.0:
         raise ModelError(f"set_initial_guess: {e} does not depend on {v}")
     if callable(values):

@@ -52,7 +52,7 @@ from gtmodel.modeling.simulation.integration import (
     integrator_options,
     simulate_model,
 )
-from gtmodel.modeling.structure.analysis import check_structure, eliminate_aliases, scalarize
+from gtmodel.modeling.structure.analysis import eliminate_aliases, require_regular, scalarize
 
 __all__ = ["simulate_structured", "consistent_start", "SWITCH_RATIO", "CHECK_POINTS"]
 
@@ -198,7 +198,7 @@ def _check_grid(t_grid: Any, integrator: str) -> np.ndarray:
 def _initial_point(model: Any, t: np.ndarray, x0: Any, u: Any, p: Mapping[str, Any] | None, z0: Any) -> tuple:
     """Structural passes and the consistent initial values (steps 1-3 of the module docstring)."""
     full = scalarize(model)
-    check_structure(full)  # on the user's own equations, so that the message names them
+    require_regular(full)  # on the user's own equations, so that the message names them
     system = eliminate_aliases(full)
     aug = pantelides(system)
     pv, p_slices = _parameter_vector(model, p)

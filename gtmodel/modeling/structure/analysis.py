@@ -46,6 +46,8 @@ __all__ = [
     "matching",
     "dulmage_mendelsohn",
     "check_structure",
+    "require_regular",
+    "pattern_rows",
     "eliminate_aliases",
 ]
 
@@ -250,6 +252,73 @@ def sparsity_pattern(residuals: list[ca.SX], syms: list[ca.SX]) -> sps.csr_matri
     sp = ca.jacobian(_cat(residuals), _cat(syms)).sparsity()
     rows, cols = sp.get_triplet()
     return sps.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, m))
+
+
+def pattern_rows(residuals: list[ca.SX], syms: list[ca.SX]) -> list[list[int]]:
+    """The structural incidence of :func:`sparsity_pattern` as lists: the columns of each residual, ascending.
+
+    The same pattern (the CasADi Jacobian sparsity) without SciPy's sparse matrices, for the
+    passes that only walk the rows (alias elimination, Pantelides): importing SciPy's sparse
+    package costs ~0.15 CPU-s, a sixth of a small problem file's whole solve.
+
+    Parameters
+    ----------
+    residuals : list of casadi.SX
+        Scalar residuals.
+    syms : list of casadi.SX
+        Scalar symbols (columns).
+
+    Returns
+    -------
+    list of list of int
+        ``len(residuals)`` lists of column indices.
+    """
+    n, m = len(residuals), len(syms)
+    if n == 0 or m == 0:
+        return [[] for _ in range(n)]
+    indptr, cols = ca.jacobian(_cat(residuals), _cat(syms)).sparsity().get_crs()
+    return [list(cols[indptr[e]:indptr[e + 1]]) for e in range(n)]
+
+
+def _merged_sparsity(system: ScalarDAE) -> ca.Sparsity:
+    """The incidence of :func:`incidence` (``der(x)`` merged into ``x``) as a CasADi sparsity."""
+    n, k = len(system.eq_res), len(system.var_syms)
+    if n == 0 or k == 0:
+        return ca.Sparsity(n, k)
+    res = _cat(system.eq_res)
+    rows, cols = ca.jacobian(res, _cat(system.var_syms)).sparsity().get_triplet()
+    if system.der_syms:
+        idx = sorted(system.der_syms)
+        drows, dcols = ca.jacobian(res, _cat([system.der_syms[i] for i in idx])).sparsity().get_triplet()
+        rows, cols = list(rows) + list(drows), list(cols) + [idx[c] for c in dcols]
+    return ca.Sparsity.triplet(n, k, list(rows), list(cols))  # duplicates merged
+
+
+def require_regular(system: ScalarDAE | Any) -> None:
+    """:func:`check_structure` without building its incidence when the structure is regular.
+
+    Pantelides' test (a perfect matching of the merged incidence) as CasADi's structural
+    rank (:func:`casadi.sprank`, the maximum matching of CSparse's ``cs_maxtrans``): equal
+    to the number of equations and of unknowns, the model passes at the cost of one Jacobian
+    sparsity; otherwise :func:`check_structure` names the equations and variables (with
+    SciPy's matching and the Dulmage-Mendelsohn decomposition).
+
+    Parameters
+    ----------
+    system : ScalarDAE or Model
+        A scalar DAE, or a model (scalarised here).
+
+    Raises
+    ------
+    ModelError
+        As :func:`check_structure`: over-determined, under-determined or structurally singular.
+    """
+    sys_ = system if isinstance(system, ScalarDAE) else scalarize(system)
+    sp = _merged_sparsity(sys_)
+    n, k = sp.size1(), sp.size2()
+    if n == k and (n == 0 or ca.sprank(sp) == n):
+        return
+    check_structure(sys_)
 
 
 def incidence(system: ScalarDAE, merge_derivatives: bool = True) -> Incidence:
@@ -504,7 +573,7 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
         A new scalar DAE without the alias equations and the eliminated unknowns.
     """
     n = system.n_vars
-    pat = sparsity_pattern(system.eq_res, system.var_syms)
+    rows = pattern_rows(system.eq_res, system.var_syms)
     parent = list(range(n))
     sign_to_parent = [1.0] * n
 
@@ -517,7 +586,7 @@ def eliminate_aliases(system: ScalarDAE) -> ScalarDAE:
 
     kept_res, kept_names = [], []
     for e, (res, name) in enumerate(zip(system.eq_res, system.eq_names)):
-        cols = pat.indices[pat.indptr[e]:pat.indptr[e + 1]]
+        cols = rows[e]
         sign = None
         if len(cols) == 2:
             i, j = int(cols[0]), int(cols[1])

@@ -33,18 +33,19 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel._lazy import lazy_module
 from gtmodel.errors import ConvergenceError, InputError, ModelError
 from gtmodel.modeling.dae import _vector_value, expand_names
 from gtmodel.modeling.structure.events import transfer_events
 from gtmodel.modeling.structure.analysis import (
     ScalarDAE,
-    check_structure,
     eliminate_aliases,
     matching,
+    pattern_rows,
+    require_regular,
     scalarize,
     sparsity_pattern,
 )
+from gtmodel.modeling.structure.pivoting import pivoted_qr
 from gtmodel.modeling.structure.initialization import (
     InconsistentInitialisation,
     fill_order,
@@ -52,8 +53,6 @@ from gtmodel.modeling.structure.initialization import (
     solve_initial,
 )
 
-#: Imported on first use (PEP 562 lazy module): the solve path of a problem file need not pay for it.
-sla = lazy_module("scipy.linalg")
 
 __all__ = [
     "AugmentedDAE",
@@ -161,8 +160,7 @@ def _differentiate(aug: AugmentedDAE, e: int) -> int:
     aug.eq_diff.append(None)
     aug.eq_pred.append(e)
     aug.eq_diff[e] = k
-    cols = sparsity_pattern([dr], aug.syms).indices
-    aug.incidence.append(sorted(int(c) for c in cols))
+    aug.incidence.append(sorted(pattern_rows([dr], aug.syms)[0]))
     return k
 
 
@@ -205,8 +203,7 @@ def pantelides(system: ScalarDAE) -> AugmentedDAE:
         aug.diff.append(None)
         aug.pred.append(i)
         aug.diff[i] = k
-    pat = sparsity_pattern(aug.res, aug.syms)
-    aug.incidence = [sorted(int(c) for c in pat.indices[pat.indptr[e]:pat.indptr[e + 1]]) for e in range(pat.shape[0])]
+    aug.incidence = [sorted(cols) for cols in pattern_rows(aug.res, aug.syms)]
     assign: dict[int, int] = {}
 
     def augment(e: int, ceq: set[int], cvar: set[int]) -> bool:
@@ -311,8 +308,7 @@ def select_dummies(aug: AugmentedDAE, point: tuple | None = None, avoid: frozens
                 for pool in ([cols] if len(cols) < len(cand) else []) + [list(range(len(cand)))]:
                     if len(pool) < len(g):
                         continue
-                    _, R, piv = sla.qr(G[:, pool], pivoting=True, mode="economic")
-                    d = np.abs(np.diag(R))
+                    d, piv = pivoted_qr(G[:, pool])
                     if len(d) >= len(g) and d[len(g) - 1] > 1e-10 * max(d[0], 1e-300):
                         chosen = sorted(cand[pool[k]] for k in piv[: len(g)])
                         break
@@ -383,8 +379,7 @@ def selection_quality(sel: Selection, blocks: list[np.ndarray]) -> float:
         G = np.atleast_2d(np.asarray(G, dtype=float)).reshape(len(eqs), len(cand))
         cols = [cand.index(v) for v in chosen]
         det = abs(np.linalg.det(G[:, cols]))
-        _, R, _ = sla.qr(G, pivoting=True, mode="economic")
-        best = float(np.prod(np.abs(np.diag(R))[: len(eqs)]))
+        best = float(np.prod(pivoted_qr(G)[0][: len(eqs)]))
         q = min(q, det / best if best > 0 else 0.0)
     return float(q)
 
@@ -478,7 +473,7 @@ def structural_simplify(model: Any, point: tuple | None = None, keep_states: tup
         model (InconsistentInitialisation, naming them).
     """
     full = scalarize(model)
-    check_structure(full)  # on the user's own equations, so that the message names them
+    require_regular(full)  # on the user's own equations, so that the message names them
     system = eliminate_aliases(full)
     if not system.aliases:
         try:

@@ -366,7 +366,7 @@ class OptimalControlKind(ProblemKind):
         written.fields["warnings"] = warnings
         if r.status not in ("optimal", "acceptable", "check_failed"):
             return written
-        r.to_csv(out / "trajectories.csv")
+        r.to_csv(out / "trajectories.csv", units=d.model.units or {})  # headers "name [unit]" (gtmodel._tables.split_unit)
         written.files.append("trajectories.csv")
         if plots:
             values = {**r.states, **r.algebraics, **r.outputs, **r.inputs}

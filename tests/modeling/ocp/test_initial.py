@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gtmodel._tables import split_unit
 from gtmodel.errors import ModelError
 from gtmodel.modeling import Component, Optimization, connect, solve
 from gtmodel.modeling.library import translational as tr
@@ -176,7 +177,7 @@ def test_problem_file_starts_at_the_fixed_start(folder):
     assert outcome.status == Status.OPTIMAL
     assert outcome.summary["objective"] == pytest.approx(3.0, rel=1e-6)
     first = open(folder / "out" / "trajectories.csv").read().splitlines()
-    header, values = first[0].split(","), first[1].split(",")  # (a text column says which kind of point)
+    header, values = [split_unit(h)[0] for h in first[0].split(",")], first[1].split(",")  # ("mass.s [m]"; a text column: the point)
     assert float(values[header.index("mass.s")]) == pytest.approx(3.0, abs=1e-9)
 
 

@@ -20,7 +20,10 @@ from gtmodel.modeling.structure.analysis import (
     eliminate_aliases,
     incidence,
     matching,
+    pattern_rows,
+    require_regular,
     scalarize,
+    sparsity_pattern,
 )
 
 
@@ -112,6 +115,8 @@ def _singular():
 def test_structural_errors_name_equations_and_variables(build, match):
     with pytest.raises(ModelError, match=match):
         check_structure(build())
+    with pytest.raises(ModelError, match=match):  # the SciPy-free test (CasADi's structural rank) gives the same message
+        require_regular(build())
     with pytest.raises(ModelError, match=match):  # simulate gives the same single message
         build().simulate([0.0, 1.0])
 
@@ -212,3 +217,18 @@ def test_composed_model_connection_aliases_are_eliminated():
 def test_bad_arguments(call, match):
     with pytest.raises(InputError, match=match):
         call()
+
+
+def test_require_regular_passes_a_regular_model_without_scipy_matrices():
+    """A regular model passes CasADi's structural-rank test (second method: SciPy's matching of check_structure)."""
+    system = scalarize(small_dae())
+    check_structure(system)
+    assert require_regular(system) is None
+
+
+def test_pattern_rows_are_the_rows_of_the_sparse_pattern():
+    """The row lists equal the CSR rows of :func:`sparsity_pattern` (the same Jacobian sparsity, read two ways)."""
+    system = scalarize(small_dae())
+    pat = sparsity_pattern(system.eq_res, system.var_syms)
+    expected = [list(pat.indices[pat.indptr[e]:pat.indptr[e + 1]]) for e in range(pat.shape[0])]
+    assert pattern_rows(system.eq_res, system.var_syms) == expected

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm as scipy_expm
 
+from gtmodel._tables import read_table
 from gtmodel.problems import load_problem, run_problem
 from gtmodel.problems.kinds.optimal_control import OptimalControl
 from gtmodel.status import Status
@@ -55,9 +56,9 @@ def test_result_folder_of_the_swing_up(solved):
 
 def test_force_within_bounds_and_rail_respected(solved):
     _, out = solved
-    data = np.genfromtxt(out / "trajectories.csv", delimiter=",", names=True)
-    assert np.max(np.abs(data["F"])) <= 20.0 + 1e-6
-    assert np.max(np.abs(data["s"])) <= 1.0 + 1e-6
+    data = read_table(out / "trajectories.csv", text_columns=("point",))  # headers "F [N]" or "F" (before units)
+    assert np.max(np.abs(data.column("F"))) <= 20.0 + 1e-6
+    assert np.max(np.abs(data.column("s"))) <= 1.0 + 1e-6
 
 
 def test_optimal_force_replayed_by_idas_swings_the_pendulum_up(solved):

@@ -19,6 +19,7 @@ import shutil
 import numpy as np
 import pytest
 
+from gtmodel._tables import split_unit
 from gtmodel.cli import main
 from gtmodel.problems import run_problem
 from gtmodel.status import Status
@@ -152,7 +153,9 @@ def test_table_holds_every_variable_and_the_conditions_at_t0(solved):
     # reference: the gear's kinematics at t = 0 (the motor does not start moving: the issue's
     # 4.81 rad/s), the bound of the input at every written time (the 29.7 V)
     _, folder, _ = solved
-    rows = list(csv.DictReader(open(folder / "out" / "trajectories.csv")))
+    raw = list(csv.DictReader(open(folder / "out" / "trajectories.csv")))
+    assert {"t [s]", "load.phi [rad]", "load.w [rad/s]", "source.v [V]"} <= set(raw[0])  # units in the header
+    rows = [{split_unit(k)[0]: v for k, v in r.items()} for r in raw]
     first = rows[0]
     assert first["point"] == "start" and {r["point"] for r in rows[1:]} == {"collocation", "collocation_boundary"}
     assert {"load.phi", "load.w", "motor.phi", "motor.w", "emf.phi", "source.v"} <= set(first)

@@ -68,6 +68,16 @@ def test_result_folder_of_a_solve(coarse):
     assert set(outcome.summary["files"]) == files == {p.name for p in out.iterdir()}
 
 
+def test_summary_times_the_phases_of_a_model_ocp(coarse):
+    """The time line of a point-to-point solve has the phases of a model's OCP (build, guess, solve,
+    verification; CPU and wall), the solve the solver's own figure (second record: the summary's solve_time_s)."""
+    outcome, _ = coarse
+    timing = outcome.summary["timing"]
+    assert {"load", "build", "guess", "solve", "verification", "writing", "total"} <= set(timing)
+    assert all(timing[p]["cpu_s"] > 0 and timing[p]["wall_s"] > 0 for p in ("build", "solve", "verification"))
+    assert timing["solve"]["wall_s"] == pytest.approx(outcome.summary["solve_time_s"], rel=1e-3, abs=1e-3)
+
+
 def test_force_figures_are_those_of_the_csv(coarse):
     outcome, out = coarse
     header = (out / "trajectory.csv").read_text().splitlines()[0].split(",")
