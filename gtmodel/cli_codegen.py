@@ -82,8 +82,8 @@ def codegen_command(args: argparse.Namespace) -> int:
 
 
 def _codegen_mpc(args: argparse.Namespace) -> int:
-    from gtmodel.codegen.loop_step import check_loop_step
-    from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
+    from gtmodel.codegen.check.loop_step import check_loop_step
+    from gtmodel.codegen.check.mpc import build_mpc, closed_loop_check
     from gtmodel.problems.mpc_file import load_mpc_file
 
     if args.model is not None or args.robot is not None or args.controller is not None:
@@ -110,8 +110,9 @@ def _loop_verdict(report, loop) -> int:
 
 
 def _codegen_tracking_file(args: argparse.Namespace) -> int:
-    from gtmodel.codegen.loop_step import check_loop_step, generate_loop_step, tracking_step
-    from gtmodel.problems.loop_check import closed_loop_check
+    from gtmodel.codegen.check.loop_step import check_loop_step
+    from gtmodel.codegen.loop_step import generate_loop_step, tracking_step
+    from gtmodel.codegen.check.closed_loop import closed_loop_check
     from gtmodel.problems.tracking_file import load_tracking_file
 
     given = [flag for flag, value in (("--model", args.model), ("--robot", args.robot), ("--functions", args.functions),
@@ -152,9 +153,10 @@ def _codegen_model(args: argparse.Namespace, functions: list[str] | None) -> int
 
 
 def _codegen_tracking(args: argparse.Namespace) -> int:
-    from gtmodel.codegen.loop_step import check_loop_step, generate_loop_step, tracking_step
+    from gtmodel.codegen.check.loop_step import check_loop_step
+    from gtmodel.codegen.loop_step import generate_loop_step, tracking_step
     from gtmodel.problems.controller import is_result_folder, result_loop_setup, tracking_from_result
-    from gtmodel.problems.loop_check import closed_loop_check
+    from gtmodel.codegen.check.closed_loop import closed_loop_check
     from gtmodel.problems.loop_file import MAX_PERIOD_S, MAX_WEIGHT, MIN_PERIOD_S
 
     if args.robot is not None or args.functions is not None or args.retime_n_max is not None:

@@ -42,7 +42,8 @@ from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
 from gtmodel.codegen.generate import GeneratedCode, generate
 from gtmodel.codegen.model_code import check_model, generate_model
-from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step
+from gtmodel.codegen.check.loop_step import check_loop_step
+from gtmodel.codegen.loop_step import LoopStep, generate_loop_step
 from gtmodel.codegen.robot import load_robot, parameter_hash
 from gtmodel.codegen.specs import FUNCTION_SPECS
 
