@@ -135,6 +135,57 @@ class LoopStep:
     reset: ca.Function | None = None
     predict: ca.Function | None = None
 
+    #: The :class:`~gtmodel.codegen.sources.CodeSource` kind (``GeneratedCode.kind`` of its code).
+    kind = LOOP_KIND
+
+    def summary(self) -> str:
+        """One line saying what the source generates: the loop step of this controller."""
+        return f"the {self.dt:g} s loop step of {self.name} (<prefix>_init, <prefix>_step on a caller-owned memory)"
+
+    def specs(self) -> tuple[FunctionSpec, ...]:
+        """The declarations of the generated functions: ``control``, then ``memory_reset`` and ``predict`` when given."""
+        return (_spec(self),) + ((_reset_spec(self),) if self.reset is not None else ()) + ((_predict_spec(self),) if self.predict is not None else ())
+
+    def reference(self, name: str, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The Python evaluation of ``control`` (``memory_reset``, ``predict``) on ``(n, size)`` inputs by C argument name.
+
+        Parameters
+        ----------
+        name : str
+            ``"control"``, ``"memory_reset"`` or ``"predict"``.
+        inputs : dict
+            ``{C argument: (n, size)}``.
+
+        Returns
+        -------
+        dict
+            ``{output: (n, size)}`` (``control``'s rows NaN where ``ok`` is 0).
+        """
+        f = {"control": self.function, "memory_reset": self.reset, "predict": self.predict}[name]
+        spec = {s.name: s for s in self.specs()}[name]
+        n = len(next(iter(inputs.values())))
+        args = {a.casadi_input: np.asarray(inputs[a.name], dtype=float).reshape(n, -1).T for a in spec.args}
+        failed = np.zeros(n, dtype=bool)
+        try:
+            res = f.map(n).call(args)
+        except RuntimeError:  # a sample whose evaluation fails (an MPC's solver meeting NaN): NaN for it alone
+            res = {out: np.zeros((f.numel_out(out), n)) for out in f.name_out()}
+            for i in range(n):
+                try:
+                    one = f.call({k: v[:, i] for k, v in args.items()})
+                except RuntimeError:
+                    failed[i] = True
+                    continue
+                for out in res:
+                    res[out][:, i] = np.asarray(one[out]).reshape(-1)
+        if "ok" in f.name_out():
+            failed |= np.asarray(res["ok"]).reshape(-1) <= 0.5
+        return {o.name: np.where(failed[:, None], np.nan, np.asarray(res[o.casadi_output]).T) for o in spec.outputs}
+
+    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+        """Write the loop step's library (:func:`generate_loop_step`; prefix default ``gt_controller``)."""
+        return generate_loop_step(self, out_dir, prefix=prefix or "gt_controller", real=real)
+
     @property
     def nx(self) -> int:
         """Number of states."""

@@ -1,0 +1,534 @@
+"""The one front door of code generation: a :class:`CodeSource` per kind of code, :func:`generate_code`, :func:`check_code`.
+
+Every kind of generated code is a source that supplies its function declarations
+(:meth:`CodeSource.specs`, each a :class:`~gtmodel.codegen.declarations.FunctionSpec` with
+its C signature and status checks), the Python reference the check compares the C with
+(:meth:`CodeSource.reference`), a one-line :meth:`CodeSource.summary` of what it generates
+(the header's first line, ``gtmodel codegen``'s) and its writer (:meth:`CodeSource.generate`,
+through the one library writer :func:`gtmodel.codegen.generate.write_library`):
+
+=====================  ================================================================
+source                 what it generates
+=====================  ================================================================
+:class:`RobotSource`   a robot's kinematics and inverse dynamics (``gtmodel codegen robot``)
+:class:`UserModelSource`  a user's model: explicit ODE, outputs, fixed steps (``... model``)
+:class:`~gtmodel.codegen.loop_step.LoopStep`  a loop controller's step: the tracking controller
+                       (TV-LQR) or an MPC (``... tracking``, ``... mpc``)
+:class:`ControllerSource`  a controller bundle of a ``.json``/``.npz`` file: Kalman step, ILC
+                       table, the fusion KF/EKF filters, the lead-through step (``... controller``)
+=====================  ================================================================
+
+:func:`generate_code` dispatches on the source's type; :func:`check_code` on the generated
+code's source and returns one :class:`CodeCheck` whose :attr:`CodeCheck.status` is the shared
+:class:`~gtmodel.status.Status` (every part's report has one: ``CheckReport.status``,
+``LoopCheck.status``). The former front doors (:func:`gtmodel.codegen.generate.generate`,
+:func:`~gtmodel.codegen.model_code.generate_model`,
+:func:`~gtmodel.codegen.loop_step.generate_loop_step`, ``generate(controller=)``) stay as the
+sources' writers; :func:`generate` and :func:`check` here are the package's
+``gtmodel.codegen.generate`` / ``gtmodel.codegen.check``, which keep their former calls.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping, Protocol, Sequence, runtime_checkable
+
+import numpy as np
+
+from gtmodel.codegen.check.closed_loop import closed_loop_check
+from gtmodel.codegen.check.controller import check_controller
+from gtmodel.codegen.check.loop_step import check_loop_step
+from gtmodel.codegen.check.mpc import closed_loop_check as mpc_closed_loop_check
+from gtmodel.codegen.check.robot import check as check_robot
+from gtmodel.codegen.controller import Controller
+from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
+from gtmodel.codegen.generate import GeneratedCode, generate as generate_robot
+from gtmodel.codegen.loop_step import LOOP_KIND, LoopStep, generate_loop_step, mpc_step, tracking_step
+from gtmodel.codegen.model_code import MODEL_KIND, ModelSource, check_model, generate_model, model_specs
+from gtmodel.codegen.robot import RobotModel, load_robot
+from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
+from gtmodel.control.mpc import MPCController
+from gtmodel.control.tracking import TrackingController
+from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.modeling import Component, Model, explicit_ode
+from gtmodel.errors import InputError
+from gtmodel.status import Status
+
+__all__ = ["CodeSource", "RobotSource", "UserModelSource", "ControllerSource", "CodeCheck", "as_source", "source_of",
+           "generate_code", "check_code", "generate", "check"]
+
+log = logging.getLogger("gtmodel")
+
+
+@runtime_checkable
+class CodeSource(Protocol):
+    """What a kind of generated code is made from (see the module table).
+
+    Attributes
+    ----------
+    kind : str
+        The :attr:`GeneratedCode.kind` its code carries (``"robot"``, ``"model"``,
+        ``"loop_step"``, ``"controller"``).
+    """
+
+    kind: str
+
+    def summary(self) -> str:
+        """One line saying what the source generates."""
+
+    def specs(self) -> tuple[FunctionSpec, ...]:
+        """The declarations of the generated functions (C signatures, status checks, tolerances)."""
+
+    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The Python evaluation of the generated function ``name`` on ``(n, size)`` inputs (what the check compares with)."""
+
+    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+        """Write the C files into ``out_dir``."""
+
+
+@dataclass(frozen=True)
+class RobotSource:
+    """A robot's model functions (kinematics, inverse dynamics), optionally with a controller bundle and the re-timing.
+
+    Parameters
+    ----------
+    robot : str or pathlib.Path or RobotParameters or SixLinkClosure or F1Closure
+        The robot (:func:`gtmodel.codegen.robot.load_robot`): ``"L1"``, ``"D1"``, ``"L1_ideal"``,
+        ``"D1_six_link"``, ``"F1"`` or a parameter TOML path.
+    friction : str
+        Friction form of ``inverse_dynamics`` (``"exact"``, ``"tanh"``, ``"piecewise"``).
+    functions : sequence of str, optional
+        A subset of the robot kind's functions (default all).
+    newton_tolerance : float, optional
+        Tolerance of the Newton loops (default per function).
+    max_iter : int, optional
+        Iteration limit of the Newton loops.
+    controller : Controller, optional
+        A controller bundle generated into the same library.
+    retime_n_max : int, optional
+        Also the online re-timing with at most this many grid points.
+    """
+
+    robot: Any = "L1"
+    friction: str = "exact"
+    functions: Sequence[str] | None = None
+    newton_tolerance: float | None = None
+    max_iter: int | None = None
+    controller: Controller | None = None
+    retime_n_max: int | None = None
+    kind: str = field(default="robot", init=False)
+
+    def model(self) -> RobotModel:
+        """The symbolic robot model (:class:`~gtmodel.codegen.robot.RobotModel`)."""
+        return RobotModel(load_robot(self.robot), self.friction)
+
+    def summary(self) -> str:
+        """One line saying what the source generates."""
+        return f"kinematics and inverse dynamics of the robot {self.robot}" + (" with a controller bundle" if self.controller else "")
+
+    def specs(self) -> tuple[FunctionSpec, ...]:
+        """The declarations of the robot's functions (the kind's table, :data:`gtmodel.codegen.specs.SPECS_BY_KIND`), then the controller's."""
+        kind = self.model().kind
+        table = SPECS_BY_KIND[kind]
+        names = default_functions(kind) if self.functions is None else self.functions
+        return tuple(table[n] for n in names) + (self.controller.specs() if self.controller else ())
+
+    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The Python evaluation of the robot function ``name`` (:attr:`FunctionSpec.reference` on the model)."""
+        model = self.model()
+        return SPECS_BY_KIND[model.kind][name].reference(model, inputs)
+
+    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+        """Write the robot's library (:func:`gtmodel.codegen.generate.generate`)."""
+        return generate_robot(self.robot, out_dir, functions=self.functions, prefix=prefix, friction=self.friction, real=real,
+                              newton_tolerance=self.newton_tolerance, max_iter=self.max_iter, controller=self.controller,
+                              retime_n_max=self.retime_n_max)
+
+
+@dataclass(frozen=True)
+class UserModelSource:
+    """A user's model: its explicit ODE, outputs and fixed steps (:mod:`gtmodel.codegen.model_code`).
+
+    Parameters
+    ----------
+    model : Model or Component
+        The model (e.g. from :func:`gtmodel.problems.user_model.load_user_model`).
+    dt : float
+        Period of the fixed-step functions [s] (default the 4 ms loop).
+    functions : sequence of str, optional
+        A subset of :data:`gtmodel.codegen.model_code.MODEL_FUNCTIONS`.
+    """
+
+    model: Any
+    dt: float = LOOP_PERIOD_S
+    functions: Sequence[str] | None = None
+    kind: str = field(default=MODEL_KIND, init=False)
+
+    def _source(self) -> ModelSource:
+        model = self.model.to_model() if isinstance(self.model, Component) else self.model
+        return ModelSource(model, explicit_ode(model), self.dt)
+
+    def summary(self) -> str:
+        """One line saying what the source generates."""
+        return f"the explicit ODE, outputs and fixed {self.dt:g} s steps of the model {getattr(self.model, 'name', self.model)}"
+
+    def specs(self) -> tuple[FunctionSpec, ...]:
+        """The declarations of the model's functions (:func:`gtmodel.codegen.model_code.model_specs`)."""
+        specs = model_specs(self._source().ode, self.dt)
+        return specs if self.functions is None else tuple(s for s in specs if s.name in self.functions)
+
+    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The Python evaluation of the model function ``name`` (CasADi, on the same ODE)."""
+        source = self._source()
+        spec = {s.name: s for s in model_specs(source.ode, self.dt)}[name]
+        return spec.reference(source, inputs)
+
+    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+        """Write the model's library (:func:`gtmodel.codegen.model_code.generate_model`)."""
+        return generate_model(self.model, out_dir, functions=self.functions, prefix=prefix, real=real, dt=self.dt)
+
+
+@dataclass(frozen=True)
+class ControllerSource:
+    """A controller bundle alone (:class:`~gtmodel.codegen.controller.Controller`: Kalman step, ILC table, fusion filters, lead-through).
+
+    Parameters
+    ----------
+    controller : Controller
+        The bundle (e.g. :func:`gtmodel.codegen.controller_file.load_controller`).
+    """
+
+    controller: Controller
+    kind: str = field(default=CONTROLLER_KIND, init=False)
+
+    def summary(self) -> str:
+        """One line saying what the source generates."""
+        return f"the controller bundle's steps ({', '.join(self.controller.functions)})"
+
+    def specs(self) -> tuple[FunctionSpec, ...]:
+        """The bundle's declarations (:meth:`Controller.specs`)."""
+        return tuple(self.controller.specs())
+
+    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The Python evaluation of the bundle's function ``name`` (its CasADi Function)."""
+        spec = {s.name: s for s in self.specs()}[name]
+        if spec.reference is None:
+            raise InputError(f"{name}: the controller's function is checked over a run (check_controller), not row by row")
+        return spec.reference(self.controller, inputs)
+
+    def default_prefix(self) -> str:
+        """``gt`` for the lead-through step alone, else ``gt_fusion`` (as ``gtmodel codegen --controller`` names them)."""
+        return "gt" if self.controller.functions == ("lead_through_step",) else "gt_fusion"
+
+    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+        """Write the bundle's library (:func:`gtmodel.codegen.generate.generate` with ``functions=[]``)."""
+        return generate_robot(out_dir=out_dir, functions=[], prefix=prefix or self.default_prefix(), real=real, controller=self.controller)
+
+
+def as_source(obj: Any) -> CodeSource:
+    """The code source of an object: a source itself, a loop controller, a controller bundle or a user model.
+
+    Parameters
+    ----------
+    obj : CodeSource or TrackingController or MPCController or Controller or Model or Component
+        A :class:`CodeSource` is returned as is; a tracking controller or an MPC becomes its
+        :class:`~gtmodel.codegen.loop_step.LoopStep`; a controller bundle a :class:`ControllerSource`;
+        a model a :class:`UserModelSource`.
+
+    Returns
+    -------
+    CodeSource
+
+    Raises
+    ------
+    InputError
+        Nothing code is generated from.
+    """
+    if isinstance(obj, (RobotSource, UserModelSource, ControllerSource, LoopStep)):
+        return obj
+    if isinstance(obj, TrackingController):
+        return tracking_step(obj)
+    if isinstance(obj, MPCController):
+        return mpc_step(obj)
+    if isinstance(obj, Controller):
+        return ControllerSource(obj)
+    if isinstance(obj, (Model, Component)):
+        return UserModelSource(obj)
+    raise InputError(f"source: expected a CodeSource (RobotSource, UserModelSource, LoopStep, ControllerSource), a tracking "
+                     f"controller, an MPC, a controller bundle or a model, got {type(obj).__name__}")
+
+
+def source_of(generated: GeneratedCode) -> CodeSource:
+    """The source a library was generated from (what :func:`check_code` dispatches on).
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        From :func:`generate_code` or a former front door.
+
+    Returns
+    -------
+    CodeSource
+        The :class:`~gtmodel.codegen.loop_step.LoopStep`, a :class:`UserModelSource`, a
+        :class:`ControllerSource` (no robot function) or a :class:`RobotSource`.
+    """
+    p = generated.parameters
+    if isinstance(p, LoopStep):
+        return p
+    if isinstance(p, ModelSource):
+        return UserModelSource(p.model, p.dt, generated.functions)
+    robot_functions = tuple(s.name for s in generated.specs if s.kind != CONTROLLER_KIND)
+    if generated.controller is not None and not robot_functions:
+        return ControllerSource(generated.controller)
+    return RobotSource(p, generated.friction, robot_functions, controller=generated.controller,
+                       retime_n_max=generated.retime_n_max or None)
+
+
+def generate_code(source: Any, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+    """Generate the C of any source: the one front door.
+
+    Parameters
+    ----------
+    source : CodeSource or object
+        A source, or what :func:`as_source` turns into one.
+    out_dir : str or pathlib.Path
+        Folder to write into (created if missing).
+    real : {"double", "float"}, optional
+        Floating-point type.
+    prefix : str, optional
+        C symbol prefix (default the source's).
+
+    Returns
+    -------
+    GeneratedCode
+        The files and declarations; :func:`source_of` gives the source back.
+
+    Raises
+    ------
+    InputError
+        Not a source, or a bad option.
+    CodegenError
+        CasADi's code generation or writing the files failed.
+    """
+    src = as_source(source)
+    if isinstance(src, LoopStep):
+        return generate_loop_step(src, out_dir, prefix=prefix or "gt_controller", real=real)
+    return src.generate(out_dir, real=real, prefix=prefix)
+
+
+@dataclass
+class CodeCheck:
+    """Every part of one library's check, with one verdict.
+
+    Parameters
+    ----------
+    source : CodeSource
+        What was generated.
+    reports : tuple
+        The parts' reports, each with a ``status`` and ``summary_lines()``: C against Python
+        (:class:`~gtmodel.codegen.check.report.CheckReport`, the controller bundle's run
+        :class:`~gtmodel.codegen.check.controller.ControllerCheckReport`) and, for a loop
+        controller given a plant, the closed loop
+        (:class:`~gtmodel.codegen.check.closed_loop.LoopCheck`).
+    """
+
+    source: Any
+    reports: tuple = ()
+
+    @property
+    def status(self) -> Status:
+        """The worst of the parts' statuses (``converged`` when every part passed; ``check_failed`` otherwise)."""
+        return Status.worst([r.status for r in self.reports]) if self.reports else Status.CONVERGED
+
+    @property
+    def passed(self) -> bool:
+        """Whether every part passed."""
+        return self.status.success
+
+    def failures(self) -> list[str]:
+        """Why the check fails (empty: it passes).
+
+        Returns
+        -------
+        list of str
+        """
+        out = []
+        for r in self.reports:
+            if hasattr(r, "failures"):
+                out += r.failures()
+            elif not r.passed:
+                out.append("the C differs from Python" if isinstance(self.source, LoopStep) else f"{type(r).__name__} failed")
+        return out
+
+    def summary_lines(self) -> list[str]:
+        """The parts' summaries; with a closed loop the verdict ``closed-loop check: PASSED | FAILED (why) [notes]``.
+
+        Returns
+        -------
+        list of str
+        """
+        lines = [line for r in self.reports for line in r.summary_lines()]
+        loops = [r for r in self.reports if hasattr(r, "failures")]
+        if loops:
+            notes = "".join(f" [{n}]" for r in loops for n in getattr(r, "notes", []))
+            failures = self.failures()
+            lines.append("closed-loop check: " + ("PASSED" if not failures else "FAILED (" + "; ".join(failures) + ")") + notes)
+        return lines
+
+
+def check_code(generated: GeneratedCode, *, n: int = 1000, seed: int = 0, timing: bool = False, plant: Any = None,
+               label: str = "controller", progress: Callable[[str], None] | None = None) -> CodeCheck:
+    """Check generated code against its Python reference, dispatching on its source; one shared status.
+
+    A robot's functions: :func:`gtmodel.codegen.check.robot.check` (with the controller bundle's
+    run, :func:`~gtmodel.codegen.check.controller.check_controller`, when it has one); a user
+    model: :func:`~gtmodel.codegen.model_code.check_model`; a controller bundle alone:
+    :func:`~gtmodel.codegen.check.controller.check_controller`; a loop controller:
+    :func:`~gtmodel.codegen.check.loop_step.check_loop_step` and, with a ``plant``, the closed loop
+    :func:`~gtmodel.codegen.check.closed_loop.closed_loop_check` (the MPC's,
+    :func:`gtmodel.codegen.check.mpc.closed_loop_check`, for an MPC), in ``double`` and ``float`` alike.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        What was generated.
+    n : int, optional
+        Random inputs per function (default 1000).
+    seed : int, optional
+        Random seed.
+    timing : bool, optional
+        Also time the functions in C.
+    plant : LoopSetup, optional
+        A loop-controller file's setup (:func:`gtmodel.problems.loop_file.read_loop_file`): the
+        closed loop runs against its plant. Only for a loop controller.
+    label : str, optional
+        What the loop controller is, for the closed loop's summary (``"MPC"`` is the MPC's check).
+    progress : callable, optional
+        ``progress(line)`` before each part and while the closed loop runs.
+
+    Returns
+    -------
+    CodeCheck
+        The parts' reports and :attr:`CodeCheck.status`.
+
+    Raises
+    ------
+    InputError
+        A plant for code that is not a loop controller's.
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        Compilation failed.
+    """
+    say = progress or (lambda line: None)
+    source = source_of(generated)
+    reports: list = []
+    if plant is not None and not isinstance(source, LoopStep):
+        raise InputError("plant: a closed loop applies to a loop controller's code (tracking controller, MPC)")
+    if isinstance(source, LoopStep):
+        say(f"compiling {generated.prefix} and comparing it with Python on {n} random inputs")
+        reports.append(check_loop_step(generated, n=n, seed=seed, timing=timing))
+        if plant is not None:
+            say(f"closed loop of {label} against the plant simulated in Python ({np.size(plant.t)} periods, and the feedforward alone)")
+            if label == "MPC":
+                reports.append(mpc_closed_loop_check(plant, generated, reports[0].library, progress=progress))
+            else:
+                reports.append(closed_loop_check(plant, generated, reports[0].library, label=label, progress=progress))
+    elif isinstance(source, UserModelSource):
+        say(f"compiling {generated.prefix} and comparing it with Python on {n} random inputs per function")
+        reports.append(check_model(generated, n=n, seed=seed, timing=timing))
+    else:
+        if isinstance(source, RobotSource) and source.functions:
+            say(f"compiling {generated.prefix} and comparing it with Python on {n} random inputs per function")
+            reports.append(check_robot(generated, n=n, seed=seed, timing=timing))
+        if generated.controller is not None:
+            say(f"running the controller bundle of {generated.prefix} over a run in C and in Python")
+            reports.append(check_controller(generated, seed=seed, timing=timing))
+    result = CodeCheck(source, tuple(reports))
+    log.info("codegen check of %s: %s", generated.prefix, result.status)
+    return result
+
+
+def generate(source: Any = None, out_dir: str | Path | None = None, **options: Any) -> GeneratedCode:
+    """``gtmodel.codegen.generate``: a source's code (:func:`generate_code`), or a robot's as before.
+
+    Parameters
+    ----------
+    source : CodeSource or object or str or pathlib.Path or RobotParameters, optional
+        A source or what :func:`as_source` takes (then ``options`` are ``real`` and ``prefix``);
+        otherwise the robot of :func:`gtmodel.codegen.generate.generate` (also as ``robot=``;
+        default ``"L1"``), with its options (``functions``, ``friction``, ``controller``, ...).
+    out_dir : str or pathlib.Path, optional
+        Folder to write into (the robot's default ``codegen_out``).
+    **options
+        Passed on.
+
+    Returns
+    -------
+    GeneratedCode
+
+    Raises
+    ------
+    InputError
+        A bad source or option.
+    CodegenError
+        Generation failed.
+    """
+    if source is not None and not isinstance(source, (str, Path)) and _is_source(source):
+        if out_dir is None:
+            raise InputError("out_dir: expected the folder to write into")
+        return generate_code(source, out_dir, **options)
+    if source is not None:
+        options["robot"] = source
+    if out_dir is not None:
+        options["out_dir"] = out_dir
+    return generate_robot(**options)
+
+
+def _is_source(obj: Any) -> bool:
+    try:
+        as_source(obj)
+    except InputError:
+        return False
+    return True
+
+
+def check(generated: GeneratedCode, *args: Any, **options: Any) -> Any:
+    """``gtmodel.codegen.check``: the check of any generated code, dispatching on its source; its report has a ``status``.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        What was generated.
+    *args, **options
+        The source's check's options (``n``, ``seed``, ``library``, ``build_dir``, ``timing``, ...).
+
+    Returns
+    -------
+    CheckReport
+        Of the robot's functions (:func:`gtmodel.codegen.check.robot.check`, as before), a user
+        model's (:func:`~gtmodel.codegen.model_code.check_model`), a loop controller's
+        (:func:`~gtmodel.codegen.check.loop_step.check_loop_step`) or a controller bundle's
+        alone (:func:`~gtmodel.codegen.check.controller.check_controller`, its ``cycles``); each
+        with :attr:`~gtmodel.codegen.check.report.CheckReport.status` (the shared
+        :class:`~gtmodel.status.Status`). :func:`check_code` joins the parts and the closed loop.
+
+    Raises
+    ------
+    InputError
+        Bad options.
+    CompilerNotFoundError
+        No C compiler.
+    CodegenError
+        Compilation failed.
+    """
+    source = source_of(generated)
+    if isinstance(source, LoopStep):
+        return check_loop_step(generated, *args, **options)
+    if isinstance(source, UserModelSource):
+        return check_model(generated, *args, **options)
+    if isinstance(source, ControllerSource):
+        return check_controller(generated, *args, **options)
+    return check_robot(generated, *args, **options)
