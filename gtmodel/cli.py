@@ -173,35 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
     schema.add_argument("--list", action="store_true", help="print the kinds, one per line")
     schema.add_argument("--docs", type=Path, default=None, metavar="DIR", help="write DIR/problem_files.md and DIR/schemas/*.schema.json")
 
-    cg = sub.add_parser("codegen", help="generate C for the real-time kinematics and inverse dynamics")
-    cg.add_argument("--robot", default=None, help="L1, D1, L1_ideal, D1_six_link, F1 or a parameter TOML path (default L1; "
-                    "none with a --controller of the KF/EKF filters only)")
-    cg.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model instead of a robot, e.g. models/cart_pendulum.py:CartPendulum")
-    cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
-    cg.add_argument("--friction", default="exact", choices=("exact", "tanh", "piecewise"), help="friction form in inverse_dynamics")
-    cg.add_argument("--real", default="double", choices=("double", "float"), help="floating-point type (default double)")
-    cg.add_argument("--newton-tolerance", type=float, default=None, help="tolerance of the Newton loops (default per function)")
-    cg.add_argument("--max-iter", type=int, default=None, help="iteration limit of the Newton loops (default 20)")
-    cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
-    cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
-                    help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library; "
-                    "or a tracking-controller file (.toml: [controller], [reference], [check]; docs/model_in_the_loop.md) or an "
-                    "optimal_control result folder: its tracking controller (feedforward + time-varying LQR, saturated) alone, "
-                    "with --check also run in closed loop against the plant simulated in Python")
-    cg.add_argument("--mpc", type=Path, default=None, metavar="FILE",
-                    help="an MPC file (TOML: [mpc], [reference], [check]): its real-time MPC step as C (docs/model_in_the_loop.md)")
-    cg.add_argument("--period", type=float, default=None, metavar="S",
-                    help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
-    cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
-    cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
-    cg.add_argument("--mismatch", type=float, default=None, metavar="FACTOR", help="a result folder's tracking controller with --check: the closed loop's plant parameters / the model's (default 1, the nominal plant; no input delay, no noise)")
-    cg.add_argument("--accept-unverified", action="store_true", help="a result folder's tracking controller: take a result whose verification "
-                    "failed or was skipped (default: refused); the check's summary and verdict repeat it")
-    cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
-    cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
-    cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
-    cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
-    cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    from gtmodel.cli_codegen import add_codegen_parser  # its sub-commands (robot, model, tracking, mpc, controller)
+
+    add_codegen_parser(sub)
 
     fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 / 3.0, model exchange and co-simulation), sources and a binary")
     what = fx.add_mutually_exclusive_group(required=True)

@@ -447,7 +447,7 @@ def check_code(generated: GeneratedCode, *, n: int = 1000, seed: int = 0, timing
             say(f"running the controller bundle of {generated.prefix} over a run in C and in Python")
             reports.append(check_controller(generated, seed=seed, timing=timing))
     result = CodeCheck(source, tuple(reports))
-    log.info("codegen check of %s: %s", generated.prefix, result.status)
+    log.debug("codegen check of %s: %s", generated.prefix, result.status)
     return result
 
 
