@@ -26,7 +26,9 @@ The stages, each importing only those below it (an import-linter contract):
 - :mod:`~gtmodel.codegen.controller`: the ``Controller`` and its declarations;
 - :mod:`~gtmodel.codegen.emit`: the C, one ``Fragment`` (header lines, source lines, specs)
   per part, the hand-written C in template files of ``harness/``;
-- :mod:`~gtmodel.codegen.generate`: the four files of a library from the fragments;
+- :mod:`~gtmodel.codegen.writer`: the one library writer (``write_library``, ``GeneratedCode``),
+  over the generic emitter :mod:`~gtmodel.codegen.emit.wrapper`;
+- :mod:`~gtmodel.codegen.generate`: the robot's writer, the four files of its library from the fragments;
 - :mod:`~gtmodel.codegen.build`, :mod:`~gtmodel.codegen.retime`,
   :mod:`~gtmodel.codegen.controller_file`: compiling and loading, calling the re-timing,
   controller files;
@@ -48,7 +50,7 @@ from gtmodel.codegen.check.controller import ControllerCheckReport, check_contro
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.controller_file import load_controller, save_controller
 from gtmodel.codegen.declarations import FunctionSpec, NewtonLoop
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.model_code import check_model, generate_model
 from gtmodel.codegen.check.loop_step import check_loop_step
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step

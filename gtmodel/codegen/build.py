@@ -18,7 +18,7 @@ import numpy as np
 
 from gtmodel._compiler import find_compiler
 from gtmodel._compiler import run_compiler as _run
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.errors import CodegenError
 

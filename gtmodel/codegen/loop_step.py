@@ -9,7 +9,7 @@ Every controller that runs in the loop (the tracking controller of
 warm start, the C argument ``w_start`` of ``<prefix>_control``; ``ok`` 1 when the result is
 valid, e.g. the QP solved), described by a
 :class:`LoopStep`. :func:`generate_loop_step` writes it through the one codegen path
-(:func:`gtmodel.codegen.generate.write_library`: CasADi's code generator, a plain-C wrapper
+(:func:`gtmodel.codegen.writer.write_library`: CasADi's code generator, a plain-C wrapper
 ``<prefix>_control`` with argument checks and status codes) and adds, from
 ``harness/template_loop_step.h``/``.c``, the fixed interface of the loop::
 
@@ -55,7 +55,7 @@ import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
-from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController

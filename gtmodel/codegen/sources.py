@@ -5,7 +5,7 @@ Every kind of generated code is a source that supplies its function declarations
 its C signature and status checks), the Python reference the check compares the C with
 (:meth:`CodeSource.reference`), a one-line :meth:`CodeSource.summary` of what it generates
 (the header's first line, ``gtmodel codegen``'s) and its writer (:meth:`CodeSource.generate`,
-through the one library writer :func:`gtmodel.codegen.generate.write_library`):
+through the one library writer :func:`gtmodel.codegen.writer.write_library`):
 
 =====================  ================================================================
 source                 what it generates
@@ -44,8 +44,9 @@ from gtmodel.codegen.check.mpc import closed_loop_check as mpc_closed_loop_check
 from gtmodel.codegen.check.robot import check as check_robot
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
-from gtmodel.codegen.generate import GeneratedCode, generate as generate_robot
-from gtmodel.codegen.loop_step import LOOP_KIND, LoopStep, generate_loop_step, mpc_step, tracking_step
+from gtmodel.codegen.generate import generate as generate_robot
+from gtmodel.codegen.writer import GeneratedCode
+from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, mpc_step, tracking_step
 from gtmodel.codegen.model_code import MODEL_KIND, ModelSource, check_model, generate_model, model_specs
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions

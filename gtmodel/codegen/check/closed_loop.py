@@ -28,7 +28,7 @@ import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import build_step
 from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
 from gtmodel.control.reference import period_index
@@ -266,34 +266,6 @@ def reference_at_bounds(u_ref: np.ndarray, u_lb: np.ndarray, u_ub: np.ndarray, r
     scale = np.where(finite, ub - lb, one_sided)  # ub - lb is inf, not NaN, where a bound is infinite
     at = (u <= lb + rtol * scale) | (u >= ub - rtol * scale)
     return float(np.mean(np.any(at, axis=1))) if u.size else 0.0
-
-
-def heap_stats(generated: GeneratedCode, library: Path) -> tuple[int, int, int] | None:
-    """The heap arena's figures of a compiled loop step whose QP solver allocates (``<prefix>_heap_stats``,
-    :data:`~gtmodel.codegen.loop_step.HEAP_ARENA_BYTES`), of the calling thread.
-
-    Parameters
-    ----------
-    generated : GeneratedCode
-        From :func:`build_step`.
-    library : pathlib.Path
-        The compiled library.
-
-    Returns
-    -------
-    tuple of int or None
-        ``(peak bytes, heap calls, arena bytes)``; None when the step has no arena (its solver
-        does not allocate).
-    """
-    lib = ctypes.CDLL(str(library))
-    fn = getattr(lib, f"{generated.prefix}_heap_stats", None)
-    if fn is None:
-        return None
-    ul = ctypes.c_ulong
-    peak, calls, size = ul(), ul(), ul()
-    fn.argtypes, fn.restype = [ctypes.POINTER(ul)] * 3, ctypes.c_int
-    fn(ctypes.byref(peak), ctypes.byref(calls), ctypes.byref(size))
-    return int(peak.value), int(calls.value), int(size.value)
 
 
 def feedforward_law(controller: Any) -> Any:

@@ -24,7 +24,7 @@ from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, FunctionSpec
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import LOOP_KIND, LoopStep
 from gtmodel.errors import CodegenError, InputError
 

@@ -23,7 +23,7 @@ import numpy as np
 from gtmodel.codegen.build import CompiledLibrary
 from gtmodel.codegen.check import closed_loop as loop_check
 from gtmodel.codegen.check.closed_loop import STATUS_NAMES, LoopCheck, compiled_step
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import build_step, mpc_step
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary
