@@ -58,10 +58,7 @@ from gtmodel.codegen.emit.retime import check_retime_n_max, retime_fragment, ret
 from gtmodel.codegen.emit.robot import header_text
 from gtmodel.codegen.emit.wrapper import _arg_size, _check_every, _out_function, functions_fragment, wrapper_text
 from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
-from gtmodel.codegen.writer import hoist_invariants as _hoist_invariants
-from gtmodel.codegen.writer import prepare as _prepare
-from gtmodel.codegen.writer import prepare_part as _prepare_part
-from gtmodel.codegen.writer import residual_part as _residual_part
+from gtmodel.codegen.writer import _hoist_invariants, _prepare, _prepare_part, _residual_part
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.out_dir import check_out_dir
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions

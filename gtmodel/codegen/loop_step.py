@@ -139,11 +139,21 @@ class LoopStep:
     kind = LOOP_KIND
 
     def summary(self) -> str:
-        """One line saying what the source generates: the loop step of this controller."""
+        """One line saying what the source generates: the loop step of this controller.
+
+        Returns
+        -------
+        str
+        """
         return f"the {self.dt:g} s loop step of {self.name} (<prefix>_init, <prefix>_step on a caller-owned memory)"
 
     def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the generated functions: ``control``, then ``memory_reset`` and ``predict`` when given."""
+        """The declarations of the generated functions: ``control``, then ``memory_reset`` and ``predict`` when given.
+
+        Returns
+        -------
+        tuple of FunctionSpec
+        """
         return (_spec(self),) + ((_reset_spec(self),) if self.reset is not None else ()) + ((_predict_spec(self),) if self.predict is not None else ())
 
     def reference(self, name: str, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -183,7 +193,29 @@ class LoopStep:
         return {o.name: np.where(failed[:, None], np.nan, np.asarray(res[o.casadi_output]).T) for o in spec.outputs}
 
     def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the loop step's library (:func:`generate_loop_step`; prefix default ``gt_controller``)."""
+        """Write the loop step's library (:func:`generate_loop_step`; prefix default ``gt_controller``).
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            Folder to write into (created if missing).
+        real : {"double", "float"}, optional
+            Floating-point type.
+        prefix : str, optional
+            C symbol prefix (default the source's).
+
+        Returns
+        -------
+        GeneratedCode
+            The files and declarations.
+
+        Raises
+        ------
+        InputError
+            A bad option or declaration.
+        CodegenError
+            CasADi's code generation or writing the files failed.
+        """
         return generate_loop_step(self, out_dir, prefix=prefix or "gt_controller", real=real)
 
     @property

@@ -77,16 +77,61 @@ class CodeSource(Protocol):
     kind: str
 
     def summary(self) -> str:
-        """One line saying what the source generates."""
+        """One line saying what the source generates.
+
+        Returns
+        -------
+        str
+        """
 
     def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the generated functions (C signatures, status checks, tolerances)."""
+        """The declarations of the generated functions (C signatures, status checks, tolerances).
+
+        Returns
+        -------
+        tuple of FunctionSpec
+        """
 
     def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the generated function ``name`` on ``(n, size)`` inputs (what the check compares with)."""
+        """The Python evaluation of the generated function ``name`` on ``(n, size)`` inputs (what the check compares with).
+
+        Parameters
+        ----------
+        name : str
+            A generated function's name.
+        inputs : mapping of str to numpy.ndarray
+            ``{C argument: (n, size)}`` inputs.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``{output: (n, size)}``.
+        """
 
     def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the C files into ``out_dir``."""
+        """Write the C files into ``out_dir``.
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            Folder to write into (created if missing).
+        real : {"double", "float"}, optional
+            Floating-point type.
+        prefix : str, optional
+            C symbol prefix (default the source's).
+
+        Returns
+        -------
+        GeneratedCode
+            The files and declarations.
+
+        Raises
+        ------
+        InputError
+            A bad option or declaration.
+        CodegenError
+            CasADi's code generation or writing the files failed.
+        """
 
 
 @dataclass(frozen=True)
@@ -122,27 +167,77 @@ class RobotSource:
     kind: str = field(default="robot", init=False)
 
     def model(self) -> RobotModel:
-        """The symbolic robot model (:class:`~gtmodel.codegen.robot.RobotModel`)."""
+        """The symbolic robot model (:class:`~gtmodel.codegen.robot.RobotModel`).
+
+        Returns
+        -------
+        RobotModel
+        """
         return RobotModel(load_robot(self.robot), self.friction)
 
     def summary(self) -> str:
-        """One line saying what the source generates."""
+        """One line saying what the source generates.
+
+        Returns
+        -------
+        str
+        """
         return f"kinematics and inverse dynamics of the robot {self.robot}" + (" with a controller bundle" if self.controller else "")
 
     def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the robot's functions (the kind's table, :data:`gtmodel.codegen.specs.SPECS_BY_KIND`), then the controller's."""
+        """The declarations of the robot's functions (the kind's table, :data:`gtmodel.codegen.specs.SPECS_BY_KIND`), then the controller's.
+
+        Returns
+        -------
+        tuple of FunctionSpec
+        """
         kind = self.model().kind
         table = SPECS_BY_KIND[kind]
         names = default_functions(kind) if self.functions is None else self.functions
         return tuple(table[n] for n in names) + (self.controller.specs() if self.controller else ())
 
     def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the robot function ``name`` (:attr:`FunctionSpec.reference` on the model)."""
+        """The Python evaluation of the robot function ``name`` (:attr:`FunctionSpec.reference` on the model).
+
+        Parameters
+        ----------
+        name : str
+            A generated function's name.
+        inputs : mapping of str to numpy.ndarray
+            ``{C argument: (n, size)}`` inputs.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``{output: (n, size)}``.
+        """
         model = self.model()
         return SPECS_BY_KIND[model.kind][name].reference(model, inputs)
 
     def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the robot's library (:func:`gtmodel.codegen.generate.generate`)."""
+        """Write the robot's library (:func:`gtmodel.codegen.generate.generate`).
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            Folder to write into (created if missing).
+        real : {"double", "float"}, optional
+            Floating-point type.
+        prefix : str, optional
+            C symbol prefix (default the source's).
+
+        Returns
+        -------
+        GeneratedCode
+            The files and declarations.
+
+        Raises
+        ------
+        InputError
+            A bad option or declaration.
+        CodegenError
+            CasADi's code generation or writing the files failed.
+        """
         return generate_robot(self.robot, out_dir, functions=self.functions, prefix=prefix, friction=self.friction, real=real,
                               newton_tolerance=self.newton_tolerance, max_iter=self.max_iter, controller=self.controller,
                               retime_n_max=self.retime_n_max)
@@ -172,22 +267,67 @@ class UserModelSource:
         return ModelSource(model, explicit_ode(model), self.dt)
 
     def summary(self) -> str:
-        """One line saying what the source generates."""
+        """One line saying what the source generates.
+
+        Returns
+        -------
+        str
+        """
         return f"the explicit ODE, outputs and fixed {self.dt:g} s steps of the model {getattr(self.model, 'name', self.model)}"
 
     def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the model's functions (:func:`gtmodel.codegen.model_code.model_specs`)."""
+        """The declarations of the model's functions (:func:`gtmodel.codegen.model_code.model_specs`).
+
+        Returns
+        -------
+        tuple of FunctionSpec
+        """
         specs = model_specs(self._source().ode, self.dt)
         return specs if self.functions is None else tuple(s for s in specs if s.name in self.functions)
 
     def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the model function ``name`` (CasADi, on the same ODE)."""
+        """The Python evaluation of the model function ``name`` (CasADi, on the same ODE).
+
+        Parameters
+        ----------
+        name : str
+            A generated function's name.
+        inputs : mapping of str to numpy.ndarray
+            ``{C argument: (n, size)}`` inputs.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``{output: (n, size)}``.
+        """
         source = self._source()
         spec = {s.name: s for s in model_specs(source.ode, self.dt)}[name]
         return spec.reference(source, inputs)
 
     def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the model's library (:func:`gtmodel.codegen.model_code.generate_model`)."""
+        """Write the model's library (:func:`gtmodel.codegen.model_code.generate_model`).
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            Folder to write into (created if missing).
+        real : {"double", "float"}, optional
+            Floating-point type.
+        prefix : str, optional
+            C symbol prefix (default the source's).
+
+        Returns
+        -------
+        GeneratedCode
+            The files and declarations.
+
+        Raises
+        ------
+        InputError
+            A bad option or declaration.
+        CodegenError
+            CasADi's code generation or writing the files failed.
+        """
         return generate_model(self.model, out_dir, functions=self.functions, prefix=prefix, real=real, dt=self.dt)
 
 
@@ -205,26 +345,76 @@ class ControllerSource:
     kind: str = field(default=CONTROLLER_KIND, init=False)
 
     def summary(self) -> str:
-        """One line saying what the source generates."""
+        """One line saying what the source generates.
+
+        Returns
+        -------
+        str
+        """
         return f"the controller bundle's steps ({', '.join(self.controller.functions)})"
 
     def specs(self) -> tuple[FunctionSpec, ...]:
-        """The bundle's declarations (:meth:`Controller.specs`)."""
+        """The bundle's declarations (:meth:`Controller.specs`).
+
+        Returns
+        -------
+        tuple of FunctionSpec
+        """
         return tuple(self.controller.specs())
 
     def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the bundle's function ``name`` (its CasADi Function)."""
+        """The Python evaluation of the bundle's function ``name`` (its CasADi Function).
+
+        Parameters
+        ----------
+        name : str
+            A generated function's name.
+        inputs : mapping of str to numpy.ndarray
+            ``{C argument: (n, size)}`` inputs.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``{output: (n, size)}``.
+        """
         spec = {s.name: s for s in self.specs()}[name]
         if spec.reference is None:
             raise InputError(f"{name}: the controller's function is checked over a run (check_controller), not row by row")
         return spec.reference(self.controller, inputs)
 
     def default_prefix(self) -> str:
-        """``gt`` for the lead-through step alone, else ``gt_fusion`` (as ``gtmodel codegen --controller`` names them)."""
+        """``gt`` for the lead-through step alone, else ``gt_fusion`` (as ``gtmodel codegen --controller`` names them).
+
+        Returns
+        -------
+        str
+        """
         return "gt" if self.controller.functions == ("lead_through_step",) else "gt_fusion"
 
     def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the bundle's library (:func:`gtmodel.codegen.generate.generate` with ``functions=[]``)."""
+        """Write the bundle's library (:func:`gtmodel.codegen.generate.generate` with ``functions=[]``).
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            Folder to write into (created if missing).
+        real : {"double", "float"}, optional
+            Floating-point type.
+        prefix : str, optional
+            C symbol prefix (default the source's).
+
+        Returns
+        -------
+        GeneratedCode
+            The files and declarations.
+
+        Raises
+        ------
+        InputError
+            A bad option or declaration.
+        CodegenError
+            CasADi's code generation or writing the files failed.
+        """
         return generate_robot(out_dir=out_dir, functions=[], prefix=prefix or self.default_prefix(), real=real, controller=self.controller)
 
 

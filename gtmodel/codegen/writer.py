@@ -2,7 +2,7 @@
 
 Every source of generated code (:mod:`gtmodel.codegen.sources`) ends here or in the robot's
 writer :func:`gtmodel.codegen.generate.generate`, which uses the same preparation of the
-Functions (:func:`prepare`: renamed, dense inputs checked, common subexpressions merged; the
+Functions (``_prepare``: renamed, dense inputs checked, common subexpressions merged; the
 parts of a Newton loop with their invariants hoisted) and the same emitter
 (:mod:`gtmodel.codegen.emit.wrapper`). :class:`GeneratedCode` describes what was written.
 """
@@ -23,7 +23,7 @@ from gtmodel.codegen.emit.wrapper import _arg_size, _out_function, functions_fra
 from gtmodel.codegen.robot import RobotModel
 from gtmodel.errors import CodegenError
 
-__all__ = ["REAL_TYPES", "GeneratedCode", "write_library", "prepare", "prepare_part", "hoist_invariants", "residual_part"]
+__all__ = ["REAL_TYPES", "GeneratedCode", "write_library"]
 
 log = logging.getLogger("gtmodel")
 
@@ -195,7 +195,7 @@ def _renamed(f: ca.Function, cname: str) -> ca.Function:
     return ca.Function(cname, ins, outs, f.name_in(), f.name_out())
 
 
-def prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
+def _prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
     """Validate ``f`` against ``spec`` and return it renamed to ``cname`` with dense outputs."""
     if not isinstance(f, ca.Function):
         raise CodegenError(f"{spec.name}: build() returned {type(f).__name__}, expected casadi.Function")
@@ -214,7 +214,7 @@ def prepare(spec: FunctionSpec, f: ca.Function, cname: str) -> ca.Function:
     return _renamed(f, cname)
 
 
-def prepare_part(spec: FunctionSpec, part: str, f: ca.Function, cname: str, size: int, outputs: Sequence[str]) -> ca.Function:
+def _prepare_part(spec: FunctionSpec, part: str, f: ca.Function, cname: str, size: int, outputs: Sequence[str]) -> ca.Function:
     """Validate one Function of a Newton loop (inputs ``x`` and public ones) and rename it."""
     if not isinstance(f, ca.Function):
         raise CodegenError(f"{spec.name}: newton.{part} returned {type(f).__name__}, expected casadi.Function")
@@ -233,7 +233,7 @@ def prepare_part(spec: FunctionSpec, part: str, f: ca.Function, cname: str, size
     return _renamed(f, cname)
 
 
-def hoist_invariants(parts: dict[str, ca.Function], cname: str) -> dict[str, ca.Function]:
+def _hoist_invariants(parts: dict[str, ca.Function], cname: str) -> dict[str, ca.Function]:
     """Move what a Newton step computes from the fixed inputs alone out of the loop.
 
     ``casadi.extract_parametric`` replaces every subexpression of the step that depends
@@ -262,7 +262,7 @@ def hoist_invariants(parts: dict[str, ca.Function], cname: str) -> dict[str, ca.
     )
 
 
-def residual_part(step: ca.Function, cname: str) -> ca.Function:
+def _residual_part(step: ca.Function, cname: str) -> ca.Function:
     """The residual (and ``valid``) outputs of a Newton step Function alone.
 
     Used at the convergence tests of a loop that tests every ``k > 1`` steps: the test
@@ -336,7 +336,7 @@ def write_library(
     funcs, cnames = {}, {}
     for spec in specs:
         cnames[spec.name] = f"{prefix}_cg_{spec.name}"
-        funcs[spec.name] = prepare(spec, spec.build(source), cnames[spec.name])
+        funcs[spec.name] = _prepare(spec, spec.build(source), cnames[spec.name])
         cg.add(funcs[spec.name])
     try:
         cg.generate(str(out) + "/")
