@@ -36,7 +36,8 @@ The stages, each importing only those below it (an import-linter contract):
   runs and parses a C program;
 - :mod:`~gtmodel.codegen.model_code`: the same for a user's model (its explicit ODE and
   fixed steps);
-- :mod:`~gtmodel.codegen.sources`: the front door over all of the above;
+- :mod:`~gtmodel.codegen.sources`, :mod:`~gtmodel.codegen.verdict`: the front door over all of
+  the above (``generate_code``, ``check_code``);
 - :mod:`~gtmodel.codegen.loop_step`: the one step interface of the loop's controllers
   (``<prefix>_init``, ``<prefix>_step`` on a caller-owned memory) around one CasADi Function
   (the tracking controller; an MPC).
@@ -56,8 +57,8 @@ from gtmodel.codegen.check.loop_step import check_loop_step
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step
 from gtmodel.codegen.robot import load_robot, parameter_hash
 from gtmodel.codegen.specs import FUNCTION_SPECS
-from gtmodel.codegen.sources import (CodeCheck, CodeSource, ControllerSource, RobotSource, UserModelSource, check, check_code,
-                                     generate, generate_code)
+from gtmodel.codegen.sources import CodeSource, ControllerSource, RobotSource, UserModelSource, generate, generate_code
+from gtmodel.codegen.verdict import CodeCheck, check, check_code
 
 __all__ = [
     "CodeSource",

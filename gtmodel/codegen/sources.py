@@ -18,14 +18,15 @@ source                 what it generates
                        table, the fusion KF/EKF filters, the lead-through step (``... controller``)
 =====================  ================================================================
 
-:func:`generate_code` dispatches on the source's type; :func:`check_code` on the generated
-code's source and returns one :class:`CodeCheck` whose :attr:`CodeCheck.status` is the shared
+:func:`generate_code` dispatches on the source's type;
+:func:`gtmodel.codegen.verdict.check_code` on the generated code's source (:func:`source_of`)
+and returns one :class:`~gtmodel.codegen.verdict.CodeCheck` whose status is the shared
 :class:`~gtmodel.status.Status` (every part's report has one: ``CheckReport.status``,
 ``LoopCheck.status``). The former front doors (:func:`gtmodel.codegen.generate.generate`,
 :func:`~gtmodel.codegen.model_code.generate_model`,
 :func:`~gtmodel.codegen.loop_step.generate_loop_step`, ``generate(controller=)``) stay as the
-sources' writers; :func:`generate` and :func:`check` here are the package's
-``gtmodel.codegen.generate`` / ``gtmodel.codegen.check``, which keep their former calls.
+sources' writers; :func:`generate` here and :func:`gtmodel.codegen.verdict.check` are the
+package's ``gtmodel.codegen.generate`` / ``gtmodel.codegen.check``, which keep their former calls.
 """
 
 from __future__ import annotations
@@ -33,21 +34,16 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, Protocol, Sequence, runtime_checkable
+from typing import Any, Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
-from gtmodel.codegen.check.closed_loop import closed_loop_check
-from gtmodel.codegen.check.controller import check_controller
-from gtmodel.codegen.check.loop_step import check_loop_step
-from gtmodel.codegen.check.mpc import closed_loop_check as mpc_closed_loop_check
-from gtmodel.codegen.check.robot import check as check_robot
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
 from gtmodel.codegen.generate import generate as generate_robot
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, mpc_step, tracking_step
-from gtmodel.codegen.model_code import MODEL_KIND, ModelSource, check_model, generate_model, model_specs
+from gtmodel.codegen.model_code import MODEL_KIND, ModelSource, generate_model, model_specs
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.control.mpc import MPCController
@@ -55,10 +51,8 @@ from gtmodel.control.tracking import TrackingController
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.modeling import Component, Model, explicit_ode
 from gtmodel.errors import InputError
-from gtmodel.status import Status
 
-__all__ = ["CodeSource", "RobotSource", "UserModelSource", "ControllerSource", "CodeCheck", "as_source", "source_of",
-           "generate_code", "check_code", "generate", "check"]
+__all__ = ["CodeSource", "RobotSource", "UserModelSource", "ControllerSource", "as_source", "source_of", "generate_code", "generate"]
 
 log = logging.getLogger("gtmodel")
 
@@ -509,139 +503,6 @@ def generate_code(source: Any, out_dir: str | Path, *, real: str = "double", pre
     return src.generate(out_dir, real=real, prefix=prefix)
 
 
-@dataclass
-class CodeCheck:
-    """Every part of one library's check, with one verdict.
-
-    Parameters
-    ----------
-    source : CodeSource
-        What was generated.
-    reports : tuple
-        The parts' reports, each with a ``status`` and ``summary_lines()``: C against Python
-        (:class:`~gtmodel.codegen.check.report.CheckReport`, the controller bundle's run
-        :class:`~gtmodel.codegen.check.controller.ControllerCheckReport`) and, for a loop
-        controller given a plant, the closed loop
-        (:class:`~gtmodel.codegen.check.closed_loop.LoopCheck`).
-    """
-
-    source: Any
-    reports: tuple = ()
-
-    @property
-    def status(self) -> Status:
-        """The worst of the parts' statuses (``converged`` when every part passed; ``check_failed`` otherwise)."""
-        return Status.worst([r.status for r in self.reports]) if self.reports else Status.CONVERGED
-
-    @property
-    def passed(self) -> bool:
-        """Whether every part passed."""
-        return self.status.success
-
-    def failures(self) -> list[str]:
-        """Why the check fails (empty: it passes).
-
-        Returns
-        -------
-        list of str
-        """
-        out = []
-        for r in self.reports:
-            if hasattr(r, "failures"):
-                out += r.failures()
-            elif not r.passed:
-                out.append("the C differs from Python" if isinstance(self.source, LoopStep) else f"{type(r).__name__} failed")
-        return out
-
-    def summary_lines(self) -> list[str]:
-        """The parts' summaries; with a closed loop the verdict ``closed-loop check: PASSED | FAILED (why) [notes]``.
-
-        Returns
-        -------
-        list of str
-        """
-        lines = [line for r in self.reports for line in r.summary_lines()]
-        loops = [r for r in self.reports if hasattr(r, "failures")]
-        if loops:
-            notes = "".join(f" [{n}]" for r in loops for n in getattr(r, "notes", []))
-            failures = self.failures()
-            lines.append("closed-loop check: " + ("PASSED" if not failures else "FAILED (" + "; ".join(failures) + ")") + notes)
-        return lines
-
-
-def check_code(generated: GeneratedCode, *, n: int = 1000, seed: int = 0, timing: bool = False, plant: Any = None,
-               label: str = "controller", progress: Callable[[str], None] | None = None) -> CodeCheck:
-    """Check generated code against its Python reference, dispatching on its source; one shared status.
-
-    A robot's functions: :func:`gtmodel.codegen.check.robot.check` (with the controller bundle's
-    run, :func:`~gtmodel.codegen.check.controller.check_controller`, when it has one); a user
-    model: :func:`~gtmodel.codegen.model_code.check_model`; a controller bundle alone:
-    :func:`~gtmodel.codegen.check.controller.check_controller`; a loop controller:
-    :func:`~gtmodel.codegen.check.loop_step.check_loop_step` and, with a ``plant``, the closed loop
-    :func:`~gtmodel.codegen.check.closed_loop.closed_loop_check` (the MPC's,
-    :func:`gtmodel.codegen.check.mpc.closed_loop_check`, for an MPC), in ``double`` and ``float`` alike.
-
-    Parameters
-    ----------
-    generated : GeneratedCode
-        What was generated.
-    n : int, optional
-        Random inputs per function (default 1000).
-    seed : int, optional
-        Random seed.
-    timing : bool, optional
-        Also time the functions in C.
-    plant : LoopSetup, optional
-        A loop-controller file's setup (:func:`gtmodel.problems.loop_file.read_loop_file`): the
-        closed loop runs against its plant. Only for a loop controller.
-    label : str, optional
-        What the loop controller is, for the closed loop's summary (``"MPC"`` is the MPC's check).
-    progress : callable, optional
-        ``progress(line)`` before each part and while the closed loop runs.
-
-    Returns
-    -------
-    CodeCheck
-        The parts' reports and :attr:`CodeCheck.status`.
-
-    Raises
-    ------
-    InputError
-        A plant for code that is not a loop controller's.
-    CompilerNotFoundError
-        No C compiler.
-    CodegenError
-        Compilation failed.
-    """
-    say = progress or (lambda line: None)
-    source = source_of(generated)
-    reports: list = []
-    if plant is not None and not isinstance(source, LoopStep):
-        raise InputError("plant: a closed loop applies to a loop controller's code (tracking controller, MPC)")
-    if isinstance(source, LoopStep):
-        say(f"compiling {generated.prefix} and comparing it with Python on {n} random inputs")
-        reports.append(check_loop_step(generated, n=n, seed=seed, timing=timing))
-        if plant is not None:
-            say(f"closed loop of {label} against the plant simulated in Python ({np.size(plant.t)} periods, and the feedforward alone)")
-            if label == "MPC":
-                reports.append(mpc_closed_loop_check(plant, generated, reports[0].library, progress=progress))
-            else:
-                reports.append(closed_loop_check(plant, generated, reports[0].library, label=label, progress=progress))
-    elif isinstance(source, UserModelSource):
-        say(f"compiling {generated.prefix} and comparing it with Python on {n} random inputs per function")
-        reports.append(check_model(generated, n=n, seed=seed, timing=timing))
-    else:
-        if isinstance(source, RobotSource) and source.functions:
-            say(f"compiling {generated.prefix} and comparing it with Python on {n} random inputs per function")
-            reports.append(check_robot(generated, n=n, seed=seed, timing=timing))
-        if generated.controller is not None:
-            say(f"running the controller bundle of {generated.prefix} over a run in C and in Python")
-            reports.append(check_controller(generated, seed=seed, timing=timing))
-    result = CodeCheck(source, tuple(reports))
-    log.debug("codegen check of %s: %s", generated.prefix, result.status)
-    return result
-
-
 def generate(source: Any = None, out_dir: str | Path | None = None, **options: Any) -> GeneratedCode:
     """``gtmodel.codegen.generate``: a source's code (:func:`generate_code`), or a robot's as before.
 
@@ -684,42 +545,3 @@ def _is_source(obj: Any) -> bool:
     except InputError:
         return False
     return True
-
-
-def check(generated: GeneratedCode, *args: Any, **options: Any) -> Any:
-    """``gtmodel.codegen.check``: the check of any generated code, dispatching on its source; its report has a ``status``.
-
-    Parameters
-    ----------
-    generated : GeneratedCode
-        What was generated.
-    *args, **options
-        The source's check's options (``n``, ``seed``, ``library``, ``build_dir``, ``timing``, ...).
-
-    Returns
-    -------
-    CheckReport
-        Of the robot's functions (:func:`gtmodel.codegen.check.robot.check`, as before), a user
-        model's (:func:`~gtmodel.codegen.model_code.check_model`), a loop controller's
-        (:func:`~gtmodel.codegen.check.loop_step.check_loop_step`) or a controller bundle's
-        alone (:func:`~gtmodel.codegen.check.controller.check_controller`, its ``cycles``); each
-        with :attr:`~gtmodel.codegen.check.report.CheckReport.status` (the shared
-        :class:`~gtmodel.status.Status`). :func:`check_code` joins the parts and the closed loop.
-
-    Raises
-    ------
-    InputError
-        Bad options.
-    CompilerNotFoundError
-        No C compiler.
-    CodegenError
-        Compilation failed.
-    """
-    source = source_of(generated)
-    if isinstance(source, LoopStep):
-        return check_loop_step(generated, *args, **options)
-    if isinstance(source, UserModelSource):
-        return check_model(generated, *args, **options)
-    if isinstance(source, ControllerSource):
-        return check_controller(generated, *args, **options)
-    return check_robot(generated, *args, **options)
