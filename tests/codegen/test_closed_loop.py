@@ -57,3 +57,17 @@ def test_the_float_memory_has_float32_reals(runs):
     assert ctypes.sizeof(memory) >= ctypes.sizeof(ctypes.c_float) * (step.nu + max(step.nw, 1))
     assert library.real_type is ctypes.c_float
     assert library.work_bytes("control") < load_library(runs["double"][0], runs["double"][1].reports[0].library).work_bytes("control")
+
+
+def test_the_loop_reports_its_periods_while_it_runs(monkeypatch):
+    """With the interval at 0 every period reports; the count is the calls made (the law's own result unchanged)."""
+    import numpy as np
+
+    from gtmodel.codegen.check import closed_loop
+
+    monkeypatch.setattr(closed_loop, "PROGRESS_INTERVAL_S", 0.0)
+    lines: list[str] = []
+    law = closed_loop._reporting(lambda t, x: (0, np.array([t])), "closed loop, generated C MPC", 3, lines.append)
+    results = [law(0.5 * k, np.zeros(1)) for k in range(3)]
+    assert [r[1][0] for r in results] == [0.0, 0.5, 1.0]
+    assert [line.rsplit(": ", 1)[1].split(",")[0] for line in lines] == ["1 of 3 periods", "2 of 3 periods", "3 of 3 periods"]
