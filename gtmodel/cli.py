@@ -17,17 +17,13 @@
     (finished cases are not rerun); ``DIR/table.parquet``, ``table.csv``, ``summary.json``.
 ``gtmodel schema KIND [--out FILE]`` / ``gtmodel schema --list`` / ``gtmodel schema --docs DIR``
     The JSON Schema of a kind's problem files; the kinds; the reference page and schemas.
-``gtmodel codegen --robot L1 --out DIR [--check]``
-    Generate C for the real-time kinematics and inverse dynamics (3-link sets, also a
-    calibration's ``parameters.toml``; ``D1_six_link``; ``F1``); ``--check`` compiles it,
-    compares every function with the Python model on random and edge-case inputs, prints
-    the largest error and ns/call and runs the C unit tests. ``--controller FILE`` adds the
-    controller of the 4 ms loop (Kalman step, ILC correction) from a controller file
-    (:mod:`gtmodel.codegen.controller_file`); ``--check`` then also runs it over a whole run.
-    A controller of the fusion filters only (KF/EKF steps) and no ``--robot``: the library
-    holds the controller alone, prefix ``gt_fusion`` (``gtmodel codegen --controller fusion.json --out DIR``);
-    a controller of the lead-through step alone (the ``controller.json`` of a ``lead_through``
-    run), prefix ``gt``.
+``gtmodel codegen {robot,model,tracking,mpc,controller} ... --out DIR [--check]``
+    Generate C for the 4 ms loop (:mod:`gtmodel.cli_codegen`, one sub-command per kind of
+    code, each with its own options: a robot's kinematics and inverse dynamics, a user's
+    model, a tracking controller or an MPC with the loop-step interface, a controller
+    bundle); ``--check`` compiles it, compares it with Python and, for a loop controller,
+    runs it in closed loop (:func:`gtmodel.codegen.check_code`, one status). The former flat
+    forms (``--robot``, ``--model``, ``--controller``, ``--mpc``) keep working.
 ``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS] | --controller FILE) --out NAME.fmu``
     Export a model as an FMU (:func:`gtmodel.exchange.export_fmu`, docs/fmu.md): FMI 2.0
     or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
@@ -42,31 +38,6 @@
     objective, verification, warnings, zoomable trajectories with their bounds, the
     model's variables, the plots; :mod:`gtmodel.report.result_page`). ``gtmodel solve``
     writes it for a single problem unless ``--no-report``.
-``gtmodel codegen --model FILE:CLASS --out DIR [--check]``
-    Generate C for a user's model (:mod:`gtmodel.codegen.model_code`: its explicit ODE
-    right-hand side, outputs and fixed steps over the loop period) with its own parameter
-    hash; ``--check`` compiles it with ``-Werror``, compares it with the model evaluated
-    from Python and iterates each step over a horizon against ``simulate()``.
-``gtmodel codegen --controller RESULT_DIR --out DIR [--check] [--mismatch F]``
-    The tracking controller of an ``optimal_control`` result folder
-    (:func:`gtmodel.problems.controller.tracking_from_result`: feedforward + time-varying
-    LQR at the loop period, saturated) as C with the loop-step interface
-    (:mod:`gtmodel.codegen.loop_step`: ``gt_tracking_init``, ``gt_tracking_step``);
-    ``--check`` compares it with Python and runs it in closed loop against the model
-    (parameters ``F`` times the solve's, default the nominal plant; no delay, no noise; the error over all states).
-``gtmodel codegen --controller FILE.toml --out DIR [--check]``
-    The tracking controller of a tracking-controller file (:mod:`gtmodel.problems.tracking_file`:
-    ``[controller]``, ``[reference]``, ``[check]`` as an MPC file's) as C (``gt_<name>_init``,
-    ``gt_<name>_step``); ``--check`` compares it with Python and runs it in closed loop against
-    the file's plant (:mod:`gtmodel.problems.loop_check`): tracking RMS/max, the ratio to the
-    feedforward alone, bound violations, failed steps, step times; exit 1 when the C differs,
-    a bound is violated, a step fails or the ratio is not below 1.
-``gtmodel codegen --mpc FILE.toml --out DIR [--check]``
-    The real-time nonlinear MPC of an MPC file (:mod:`gtmodel.problems.mpc_file`: ``[mpc]``,
-    ``[reference]``, ``[check]``) as C with the same loop-step interface (``gt_<name>_init``,
-    ``gt_<name>_step``; CasADi's ``sqpmethod`` + ``qrqp`` generated inside); ``--check``
-    compares it with Python and runs it in closed loop against the mismatched plant
-    (:mod:`gtmodel.problems.mpc_check`).
 
 Exit codes come from one table, :data:`gtmodel.status.EXIT_CODES` (printed by
 ``gtmodel --help``): 0 optimal, 1 solved but not optimal / infeasible / solver failure,
@@ -173,35 +144,9 @@ def build_parser() -> argparse.ArgumentParser:
     schema.add_argument("--list", action="store_true", help="print the kinds, one per line")
     schema.add_argument("--docs", type=Path, default=None, metavar="DIR", help="write DIR/problem_files.md and DIR/schemas/*.schema.json")
 
-    cg = sub.add_parser("codegen", help="generate C for the real-time kinematics and inverse dynamics")
-    cg.add_argument("--robot", default=None, help="L1, D1, L1_ideal, D1_six_link, F1 or a parameter TOML path (default L1; "
-                    "none with a --controller of the KF/EKF filters only)")
-    cg.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model instead of a robot, e.g. models/cart_pendulum.py:CartPendulum")
-    cg.add_argument("--out", type=Path, required=True, help="output folder for the C files")
-    cg.add_argument("--friction", default="exact", choices=("exact", "tanh", "piecewise"), help="friction form in inverse_dynamics")
-    cg.add_argument("--real", default="double", choices=("double", "float"), help="floating-point type (default double)")
-    cg.add_argument("--newton-tolerance", type=float, default=None, help="tolerance of the Newton loops (default per function)")
-    cg.add_argument("--max-iter", type=int, default=None, help="iteration limit of the Newton loops (default 20)")
-    cg.add_argument("--functions", default=None, help="comma-separated subset of the functions (default all of the robot)")
-    cg.add_argument("--controller", type=Path, default=None, metavar="FILE",
-                    help="controller file (.json/.npz: Kalman step, learned ILC table) whose functions are added to the library; "
-                    "or a tracking-controller file (.toml: [controller], [reference], [check]; docs/model_in_the_loop.md) or an "
-                    "optimal_control result folder: its tracking controller (feedforward + time-varying LQR, saturated) alone, "
-                    "with --check also run in closed loop against the plant simulated in Python")
-    cg.add_argument("--mpc", type=Path, default=None, metavar="FILE",
-                    help="an MPC file (TOML: [mpc], [reference], [check]): its real-time MPC step as C (docs/model_in_the_loop.md)")
-    cg.add_argument("--period", type=float, default=None, metavar="S",
-                    help="loop period of --model's steps and a result folder's tracking controller (default 0.004 s)")
-    cg.add_argument("--q", default=None, metavar="Q1,Q2,...", help="a result folder's tracking controller: diagonal of the LQR state weight (default Bryson's rule on the reference's ranges)")
-    cg.add_argument("--r", default=None, metavar="R1,...", help="a result folder's tracking controller: diagonal of the LQR input weight (default 1/(half the bound range)^2)")
-    cg.add_argument("--mismatch", type=float, default=None, metavar="FACTOR", help="a result folder's tracking controller with --check: the closed loop's plant parameters / the model's (default 1, the nominal plant; no input delay, no noise)")
-    cg.add_argument("--accept-unverified", action="store_true", help="a result folder's tracking controller: take a result whose verification "
-                    "failed or was skipped (default: refused); the check's summary and verdict repeat it")
-    cg.add_argument("--retime-n-max", type=int, default=None, metavar="N_MAX", help="also generate <prefix>_retime (online time-optimal re-timing along a path, at most N_MAX grid points; 3-link sets)")
-    cg.add_argument("--check", action="store_true", help="compile with gcc, compare with the Python model, time each function, run the C unit tests")
-    cg.add_argument("-n", "--samples", type=int, default=10000, help="random valid inputs per function for --check (default 10000)")
-    cg.add_argument("--seed", type=int, default=0, help="random seed for --check")
-    cg.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    from gtmodel.cli_codegen import add_codegen_parser  # its sub-commands (robot, model, tracking, mpc, controller)
+
+    add_codegen_parser(sub)
 
     fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 / 3.0, model exchange and co-simulation), sources and a binary")
     what = fx.add_mutually_exclusive_group(required=True)

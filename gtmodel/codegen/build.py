@@ -12,13 +12,13 @@ import ctypes
 import logging
 import sys
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from gtmodel._compiler import find_compiler
 from gtmodel._compiler import run_compiler as _run
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.errors import CodegenError
 
@@ -33,6 +33,7 @@ __all__ = [
     "load_strict",
     "CompiledFunction",
     "CompiledLibrary",
+    "LoopStepRunner",
 ]
 
 log = logging.getLogger("gtmodel")
@@ -247,7 +248,15 @@ class CompiledFunction:
 
 
 class CompiledLibrary:
-    """A loaded generated library: its functions by name, its version string.
+    """A loaded generated library: the ONE owner of its ctypes interface.
+
+    Its functions by name (:class:`CompiledFunction`), its version string and status names,
+    the real type of the build (``double`` or ``float``: every array passed through it has
+    that type, so a ``--real float`` library is called as it is), the stack work of a
+    function and, for a loop controller (:func:`gtmodel.codegen.loop_step.generate_loop_step`),
+    the memory interface ``<prefix>_memory``, ``<prefix>_init``, ``<prefix>_step``
+    (:meth:`loop_interface`, :meth:`loop_runner`) and the QP arena's figures
+    (:meth:`heap_stats`). Every check of generated code calls the C through it.
 
     Parameters
     ----------
@@ -311,6 +320,152 @@ class CompiledLibrary:
             E.g. ``"GT_UNREACHABLE"``.
         """
         return self._status_string(int(status)).decode()
+
+    @property
+    def real_type(self) -> type:
+        """The ctypes type of the library's reals (``ctypes.c_float`` for ``real = "float"``, else ``ctypes.c_double``)."""
+        return ctypes.c_float if getattr(self.generated, "real", "double") == "float" else ctypes.c_double
+
+    def work_bytes(self, name: str) -> int:
+        """Stack work arrays of one call of a generated function [bytes].
+
+        Parameters
+        ----------
+        name : str
+            A function of :attr:`GeneratedCode.work_sizes` (e.g. ``"control"``).
+
+        Returns
+        -------
+        int
+            CasADi's ``sz_arg`` + ``sz_res`` pointers, ``sz_iw`` integers (``casadi_int``,
+            ``long long``) and ``sz_w`` reals of the library's real type.
+        """
+        sz = self.generated.work_sizes[name]
+        return (ctypes.sizeof(ctypes.c_void_p) * (sz[0] + sz[1]) + ctypes.sizeof(ctypes.c_longlong) * sz[2]
+                + ctypes.sizeof(self.real_type) * sz[3])
+
+    def loop_interface(self) -> tuple[type, Any, Any]:
+        """The memory struct type and the ``_init`` / ``_step`` functions of a loop controller's library.
+
+        Returns
+        -------
+        memory : type
+            A ``ctypes.Structure`` of the layout of ``<prefix>_memory`` (reals of :attr:`real_type`).
+        init : callable
+            ``init(ctypes.byref(mem)) -> int``.
+        step : callable
+            ``step(ctypes.byref(mem), t, x_ptr, u_ptr) -> int`` (``x_ptr``, ``u_ptr`` arrays of
+            :attr:`real_type`, or None).
+
+        Raises
+        ------
+        CodegenError
+            Not a loop controller's library (no ``<prefix>_init`` / ``<prefix>_step``).
+        """
+        step = self.generated.parameters
+        if not all(hasattr(step, a) for a in ("nx", "nu", "nw")):
+            raise CodegenError(f"{self.path}: not a loop controller's library (no memory interface)")
+        real = self.real_type
+        memory = type("Memory", (ctypes.Structure,), {"_fields_": [
+            ("u_last", real * step.nu), ("w", real * max(step.nw, 1)), ("steps", ctypes.c_long), ("status", ctypes.c_int)]})
+        p = self.generated.prefix
+        try:
+            init, fstep = getattr(self.cdll, f"{p}_init"), getattr(self.cdll, f"{p}_step")
+        except AttributeError as exc:
+            raise CodegenError(f"{self.path}: cannot load {p}_init/{p}_step: {exc}") from None
+        init.argtypes, init.restype = [ctypes.POINTER(memory)], ctypes.c_int
+        fstep.argtypes, fstep.restype = [ctypes.POINTER(memory), real, ctypes.POINTER(real), ctypes.POINTER(real)], ctypes.c_int
+        return memory, init, fstep
+
+    def loop_runner(self) -> "LoopStepRunner":
+        """The loop controller's step with its own memory, as the closed loop calls it.
+
+        Returns
+        -------
+        LoopStepRunner
+            ``runner(t, x) -> (status, u)``, ``runner.reset()``, ``runner.memory_bytes``.
+
+        Raises
+        ------
+        CodegenError
+            Not a loop controller's library.
+        """
+        return LoopStepRunner(self)
+
+    def heap_stats(self) -> tuple[int, int, int] | None:
+        """The heap arena's figures of a loop step whose QP solver allocates (``<prefix>_heap_stats``), of the calling thread.
+
+        Returns
+        -------
+        tuple of int or None
+            ``(peak bytes, heap calls, arena bytes)``; None when the library has no arena.
+        """
+        fn = getattr(self.cdll, f"{self.generated.prefix}_heap_stats", None)
+        if fn is None:
+            return None
+        ul = ctypes.c_ulong
+        peak, calls, size = ul(), ul(), ul()
+        fn.argtypes, fn.restype = [ctypes.POINTER(ul)] * 3, ctypes.c_int
+        fn(ctypes.byref(peak), ctypes.byref(calls), ctypes.byref(size))
+        return int(peak.value), int(calls.value), int(size.value)
+
+
+class LoopStepRunner:
+    """A loop controller's compiled ``<prefix>_step`` with its own memory (:meth:`CompiledLibrary.loop_runner`).
+
+    The state and input arrays have the library's real type: a ``float`` build computes in
+    float32 from the double state rounded once (relative 6e-8), and returns float32 inputs.
+
+    Parameters
+    ----------
+    library : CompiledLibrary
+        A loop controller's loaded library.
+
+    Attributes
+    ----------
+    memory_bytes : int
+        ``sizeof(<prefix>_memory)`` (the caller's static memory).
+    """
+
+    def __init__(self, library: CompiledLibrary) -> None:
+        memory, self._init, self._step = library.loop_interface()
+        self._mem = memory()
+        self._ref = ctypes.byref(self._mem)
+        step, real = library.generated.parameters, library.real_type
+        self._x, self._u = (real * step.nx)(), (real * step.nu)()
+        self.memory_bytes = ctypes.sizeof(memory)
+        self.reset()
+
+    def __call__(self, t: float, x: np.ndarray) -> tuple[int, np.ndarray]:
+        """One step: ``(status, u)`` for the measured state ``x`` ``(nx,)`` at time ``t`` [s].
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        x : numpy.ndarray
+            ``(nx,)`` measured state.
+
+        Returns
+        -------
+        status : int
+            The step's status code.
+        u : numpy.ndarray
+            ``(nu,)`` the input (float64 copy).
+        """
+        self._x[:] = [float(v) for v in x]
+        code = self._step(self._ref, t, self._x, self._u)
+        return code, np.array(self._u[:], dtype=float)
+
+    def reset(self) -> int:
+        """Call ``<prefix>_init`` on the memory.
+
+        Returns
+        -------
+        int
+            Its status.
+        """
+        return self._init(self._ref)
 
 
 def load_library(generated: GeneratedCode, path: str | Path) -> CompiledLibrary:

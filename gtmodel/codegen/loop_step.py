@@ -9,7 +9,7 @@ Every controller that runs in the loop (the tracking controller of
 warm start, the C argument ``w_start`` of ``<prefix>_control``; ``ok`` 1 when the result is
 valid, e.g. the QP solved), described by a
 :class:`LoopStep`. :func:`generate_loop_step` writes it through the one codegen path
-(:func:`gtmodel.codegen.generate.write_library`: CasADi's code generator, a plain-C wrapper
+(:func:`gtmodel.codegen.writer.write_library`: CasADi's code generator, a plain-C wrapper
 ``<prefix>_control`` with argument checks and status codes) and adds, from
 ``harness/template_loop_step.h``/``.c``, the fixed interface of the loop::
 
@@ -30,16 +30,17 @@ that got into it, a write from outside) is reset before the step to the referenc
 (:attr:`LoopStep.reset`, generated as ``PREFIX_memory_reset``) and the step returns
 ``GT_MEMORY_RESET`` with ``u`` computed from it. :func:`check_loop_step` compiles it strictly,
 compares ``<prefix>_control`` (and ``<prefix>_memory_reset``, ``<prefix>_predict``) with the
-Functions evaluated from Python on random inputs and probes the step contract.
+Functions evaluated from Python on random inputs and probes the step contract (it lives in the
+check harness, :mod:`gtmodel.codegen.check.loop_step`, with the closed-loop check
+:mod:`gtmodel.codegen.check.closed_loop`).
 
 To reuse it (an MPC): build the Function above, wrap it in a :class:`LoopStep` (``w_init``
 the first warm start, ``fail_status="GT_NOT_CONVERGED"``), call :func:`generate_loop_step`
-and :func:`check_loop_step`; nothing else is C.
+and :func:`~gtmodel.codegen.check.loop_step.check_loop_step`; nothing else is C.
 """
 
 from __future__ import annotations
 
-import ctypes
 import hashlib
 import logging
 import math
@@ -51,19 +52,16 @@ import casadi as ca
 import numpy as np
 
 import gtmodel
-from gtmodel.codegen.build import CompiledLibrary, load_strict
-from gtmodel.codegen.check.compare import compare, probe
-from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, CheckReport, StatusProbe, with_timings
-from gtmodel.codegen.check.robot import time_functions
+from gtmodel.codegen.build import CompiledLibrary, compile_shared
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
-from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController
 from gtmodel.control.tracking import TrackingController
 
-__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "check_loop_step", "load_loop_step"]
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "build_step", "load_loop_step"]
 
 log = logging.getLogger("gtmodel")
 
@@ -136,6 +134,89 @@ class LoopStep:
     w_range: np.ndarray | None = None
     reset: ca.Function | None = None
     predict: ca.Function | None = None
+
+    #: The :class:`~gtmodel.codegen.sources.CodeSource` kind (``GeneratedCode.kind`` of its code).
+    kind = LOOP_KIND
+
+    def summary(self) -> str:
+        """One line saying what the source generates: the loop step of this controller.
+
+        Returns
+        -------
+        str
+        """
+        return f"the {self.dt:g} s loop step of {self.name} (<prefix>_init, <prefix>_step on a caller-owned memory)"
+
+    def specs(self) -> tuple[FunctionSpec, ...]:
+        """The declarations of the generated functions: ``control``, then ``memory_reset`` and ``predict`` when given.
+
+        Returns
+        -------
+        tuple of FunctionSpec
+        """
+        return (_spec(self),) + ((_reset_spec(self),) if self.reset is not None else ()) + ((_predict_spec(self),) if self.predict is not None else ())
+
+    def reference(self, name: str, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The Python evaluation of ``control`` (``memory_reset``, ``predict``) on ``(n, size)`` inputs by C argument name.
+
+        Parameters
+        ----------
+        name : str
+            ``"control"``, ``"memory_reset"`` or ``"predict"``.
+        inputs : dict
+            ``{C argument: (n, size)}``.
+
+        Returns
+        -------
+        dict
+            ``{output: (n, size)}`` (``control``'s rows NaN where ``ok`` is 0).
+        """
+        f = {"control": self.function, "memory_reset": self.reset, "predict": self.predict}[name]
+        spec = {s.name: s for s in self.specs()}[name]
+        n = len(next(iter(inputs.values())))
+        args = {a.casadi_input: np.asarray(inputs[a.name], dtype=float).reshape(n, -1).T for a in spec.args}
+        failed = np.zeros(n, dtype=bool)
+        try:
+            res = f.map(n).call(args)
+        except RuntimeError:  # a sample whose evaluation fails (an MPC's solver meeting NaN): NaN for it alone
+            res = {out: np.zeros((f.numel_out(out), n)) for out in f.name_out()}
+            for i in range(n):
+                try:
+                    one = f.call({k: v[:, i] for k, v in args.items()})
+                except RuntimeError:
+                    failed[i] = True
+                    continue
+                for out in res:
+                    res[out][:, i] = np.asarray(one[out]).reshape(-1)
+        if "ok" in f.name_out():
+            failed |= np.asarray(res["ok"]).reshape(-1) <= 0.5
+        return {o.name: np.where(failed[:, None], np.nan, np.asarray(res[o.casadi_output]).T) for o in spec.outputs}
+
+    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
+        """Write the loop step's library (:func:`generate_loop_step`; prefix default ``gt_controller``).
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            Folder to write into (created if missing).
+        real : {"double", "float"}, optional
+            Floating-point type.
+        prefix : str, optional
+            C symbol prefix (default the source's).
+
+        Returns
+        -------
+        GeneratedCode
+            The files and declarations.
+
+        Raises
+        ------
+        InputError
+            A bad option or declaration.
+        CodegenError
+            CasADi's code generation or writing the files failed.
+        """
+        return generate_loop_step(self, out_dir, prefix=prefix or "gt_controller", real=real)
 
     @property
     def nx(self) -> int:
@@ -480,6 +561,9 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
 def load_loop_step(generated: GeneratedCode, library: CompiledLibrary) -> tuple[type, Any, Any]:
     """The memory struct type and the ``_init`` / ``_step`` functions of a compiled loop controller (ctypes).
 
+    A thin wrapper of :meth:`gtmodel.codegen.build.CompiledLibrary.loop_interface` (the one owner of
+    a built library's ctypes interface; the reals of the library's type, ``float`` included).
+
     Parameters
     ----------
     generated : GeneratedCode
@@ -504,182 +588,35 @@ def load_loop_step(generated: GeneratedCode, library: CompiledLibrary) -> tuple[
     """
     if generated.kind != LOOP_KIND or not isinstance(generated.parameters, LoopStep):
         raise InputError("generated: expected the code of a loop controller (from generate_loop_step)")
-    step: LoopStep = generated.parameters
-    real = ctypes.c_float if generated.real == "float" else ctypes.c_double
-    memory = type("Memory", (ctypes.Structure,), {"_fields_": [
-        ("u_last", real * step.nu), ("w", real * max(step.nw, 1)), ("steps", ctypes.c_long), ("status", ctypes.c_int)]})
-    lib = ctypes.CDLL(str(library.path))
-    init = getattr(lib, f"{generated.prefix}_init")
-    init.argtypes, init.restype = [ctypes.POINTER(memory)], ctypes.c_int
-    fstep = getattr(lib, f"{generated.prefix}_step")
-    fstep.argtypes, fstep.restype = [ctypes.POINTER(memory), real, ctypes.POINTER(real), ctypes.POINTER(real)], ctypes.c_int
-    return memory, init, fstep
+    return library.loop_interface()
 
 
-def _samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    """Random inputs of the inner step: times in (and a little beyond) ``t_range``, states about ``x_samples``."""
-    t0, t1 = step.t_range
-    span = max(t1 - t0, step.dt)
-    xs = step.x_samples if step.x_samples.size else np.zeros((1, step.nx))
-    rows = xs[rng.integers(0, xs.shape[0], n)]
-    scale = 0.1 * (1.0 + np.max(np.abs(xs), axis=0))
-    lo = np.where(np.isfinite(step.u_lb), step.u_lb, step.u_init - 1.0)
-    hi = np.where(np.isfinite(step.u_ub), step.u_ub, step.u_init + 1.0)
-    out = {"t": rng.uniform(t0 - 0.05 * span, t1 + 0.05 * span, (n, 1)),
-           "x": rows + scale * rng.standard_normal(rows.shape),
-           "u_last": rng.uniform(lo, hi, (n, step.nu))}
-    if step.nw:
-        out["w_start"] = np.tile(step.w_init, (n, 1))  # the C argument's name (the Function's input: w)
-    return out
-
-
-def _reference(step: LoopStep, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    n = len(inputs["t"])
-    args = {("w" if k == "w_start" else k): np.asarray(v, dtype=float).reshape(n, -1).T for k, v in inputs.items()}
-    try:
-        res = step.function.map(n).call(args)
-    except RuntimeError:  # a sample whose evaluation fails (an MPC's solver meeting NaN): ok = 0 for it alone
-        res = {name: np.zeros((step.function.numel_out(name), n)) for name in step.function.name_out()}
-        for i in range(n):
-            try:
-                one = step.function.call({k: v[:, i] for k, v in args.items()})
-            except RuntimeError:
-                continue
-            for name in res:
-                res[name][:, i] = np.asarray(one[name]).reshape(-1)
-    ok = np.asarray(res["ok"]).reshape(-1) > 0.5
-    out = {"u": np.asarray(res["u"]).T}
-    if step.nw:
-        out["w_next"] = np.asarray(res["w_next"]).T
-    return {k: np.where(ok[:, None], v, np.nan) for k, v in out.items()}
-
-
-def _reset_memory(step: LoopStep, t: float, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The memory ``_step`` resets to at ``(t, x)``: :attr:`LoopStep.reset` (or the first memory), ``u_last`` saturated."""
-    if step.reset is None:
-        u, w = step.u_init, step.w_init
-    else:
-        res = step.reset.call({"t": t, "x": x})
-        u, w = np.asarray(res["u_last"]).reshape(-1), (np.asarray(res["w"]).reshape(-1) if step.nw else np.zeros(0))
-    return np.clip(u, step.u_lb, step.u_ub), w
-
-
-def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples: dict[str, np.ndarray]) -> list[StatusProbe]:
-    """The step contract through the memory functions: NULLs, non-finite input, the safe input, equality with Python."""
-    step: LoopStep = generated.parameters
-    memory, init, fstep = load_loop_step(generated, library)
-    real = ctypes.c_float if generated.real == "float" else ctypes.c_double
-    safe = np.clip(step.u_init, step.u_lb, step.u_ub)
-    rtol, atol = (FLOAT_RELATIVE_TOLERANCE, FLOAT_RELATIVE_TOLERANCE) if generated.real == "float" else (1e-9, 1e-12)  # as the comparison
-    probes = []
-
-    def run(case: str, expected: str, t: float, x: np.ndarray | None, want: np.ndarray | None, null_mem: bool = False,
-            poison: bool = False) -> None:
-        mem = memory()
-        init(ctypes.byref(mem))
-        if poison:  # NaN written into the memory
-            mem.u_last[0] = math.nan
-            mem.w[0] = math.nan
-        u = (real * step.nu)(*([12345.0] * step.nu))
-        xa = None if x is None else (real * step.nx)(*x.tolist())
-        status = fstep(None if null_mem else ctypes.byref(mem), t, xa, u)
-        got = np.array(u[:], dtype=float)
-        untouched = bool(np.all(got == 12345.0)) if want is None else bool(np.allclose(got, want, rtol=rtol, atol=atol))
-        probes.append(StatusProbe("step", case, expected, int(status), untouched, int(status) == STATUS_CODES[expected][0] and untouched))
-
-    x0 = np.asarray(samples["x"][0], dtype=float)
-    t0 = float(samples["t"][0, 0])
-    ref = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": safe[None, :],
-                            **({"w_start": step.w_init[None, :]} if step.nw else {})})["u"][0]
-    run("valid state after init (u equals Python)", "GT_OK", t0, x0, ref)
-    if step.predict is None:  # a rejected measurement: the safe input
-        rejected, want, how = "GT_BAD_ARGUMENT", safe, "u = the last input, saturated"
-    else:  # the state the memory predicts in its place
-        x_hat = np.asarray(step.predict(safe, step.w_init)).reshape(-1)
-        rejected, how = "GT_MEASUREMENT_REJECTED", "u equals Python at the state the memory predicts"
-        want = _reference(step, {"t": np.array([[t0]]), "x": x_hat[None, :], "u_last": safe[None, :], "w_start": step.w_init[None, :]})["u"][0]
-    bad = x0.copy()
-    bad[0] = math.nan
-    run(f"x[0] = nan ({how})", rejected, t0, bad, want)
-    run("t = nan (u = the last input, saturated)", "GT_BAD_ARGUMENT", math.nan, x0, safe)
-    run("x NULL (u = the last input, saturated)", "GT_BAD_ARGUMENT", t0, None, safe)
-    run("mem NULL (u untouched)", "GT_BAD_ARGUMENT", t0, x0, None, null_mem=True)
-    if step.x_range is not None and np.isfinite(step.x_range[1, 0]):
-        far = x0.copy()
-        far[0] = 10.0 * abs(step.x_range[1, 0]) + 1.0
-        run(f"x[0] beyond x_range ({how})", rejected, t0, far, want)
-    u_r, w_r = _reset_memory(step, t0, x0)
-    again = _reference(step, {"t": np.array([[t0]]), "x": x0[None, :], "u_last": u_r[None, :], **({"w_start": w_r[None, :]} if step.nw else {})})
-    run("NaN in the memory (reset: u equals Python from the reset memory)", "GT_MEMORY_RESET", t0, x0, again["u"][0], poison=True)
-    init_null = init(None)
-    probes.append(StatusProbe("init", "mem NULL", "GT_BAD_ARGUMENT", int(init_null), True, int(init_null) == STATUS_CODES["GT_BAD_ARGUMENT"][0]))
-    return probes
-
-
-def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build_dir: str | Path | None = None,
-                    timing: bool = False) -> CheckReport:
-    """Compile a loop controller strictly and compare it with Python; probe the step contract.
+def build_step(step: LoopStep, out_dir: str | Path, prefix: str, real: str = "double") -> tuple[GeneratedCode, Path]:
+    """Generate and compile a loop step.
 
     Parameters
     ----------
-    generated : GeneratedCode
-        From :func:`generate_loop_step`.
-    n : int, optional
-        Random inputs of the inner step (default 500).
-    seed : int, optional
-        Seed of the random generator.
-    build_dir : str or pathlib.Path, optional
-        Build folder (default ``<out_dir>/build``).
-    timing : bool, optional
-        Also time ``<prefix>_control`` in a C loop (ns/call).
+    step : LoopStep
+        The controller (:func:`tracking_step`, :func:`mpc_step`).
+    out_dir : str or pathlib.Path
+        Folder of the C files (the shared library in ``out_dir/build``).
+    prefix : str
+        C prefix.
+    real : {"double", "float"}, optional
+        Floating-point type.
 
     Returns
     -------
-    CheckReport
-        ``control`` (and ``memory_reset``, ``predict``): the largest ``|C - Python|`` (:data:`LOOP_TOLERANCE`,
-        absolute or relative) on random times, states about the reference and last inputs;
-        probes: non-finite inputs of ``control``, and of ``_step``: ``GT_OK`` with ``u`` equal
-        to Python after ``_init``, ``GT_BAD_ARGUMENT`` with the safe input for a NaN time and a
-        NULL state, for a NaN state and one beyond :attr:`LoopStep.x_range` the same or, with a
-        :attr:`LoopStep.predict`, ``GT_MEASUREMENT_REJECTED`` with ``u`` equal to Python at the
-        predicted state, a NULL memory (``u`` untouched), ``GT_MEMORY_RESET`` with ``u`` equal to Python from the reset memory for NaN
-        written into the memory, and ``_init(NULL)``.
+    generated : GeneratedCode
+    library : pathlib.Path
+        The compiled shared library.
 
     Raises
     ------
-    InputError
-        Not a loop controller's code, ``n`` not positive.
     CompilerNotFoundError
         No C compiler.
     CodegenError
-        Compilation failed.
+        Generation or compilation failed.
     """
-    if generated.kind != LOOP_KIND or not isinstance(generated.parameters, LoopStep):
-        raise InputError("generated: expected the code of a loop controller (from generate_loop_step)")
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise InputError(f"n: expected a positive number of samples, got {n!r}")
-    build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
-    library = load_strict(generated, build)
-    step: LoopStep = generated.parameters
-    samples = _samples(step, int(n), np.random.default_rng(seed))
-    spec = generated.specs[0]
-    spec = FunctionSpec(**{**spec.__dict__, "reference": lambda source, inputs: _reference(source, inputs)})
-    cf = library["control"]
-    results = (compare(spec, cf, step, samples, generated.real),) + tuple(
-        compare(s, library[s.name], step, samples, generated.real) for s in generated.specs[1:])
-    if timing:
-        times = time_functions(generated, library.path, {s.name: samples for s in generated.specs}, build)
-        results = tuple(with_timings(results, times))
-    probes = []
-    for a in spec.args:
-        row = np.array(samples[a.name][0], dtype=float)
-        row[0] = np.nan
-        probes.append(probe(cf, spec, samples, f"{a.name}[0] = nan", "GT_BAD_ARGUMENT", {a.name: row}))
-    try:
-        probes += _contract_probes(generated, library, samples)
-    except (OSError, AttributeError) as exc:
-        raise CodegenError(f"loop controller {generated.prefix}: cannot load _init/_step: {exc}") from None
-    report = CheckReport(robot=step.name, prefix=generated.prefix, n=int(n), seed=seed, functions=results, probes=tuple(probes),
-                         version=library.version(), library=library.path)
-    log.info("codegen check of loop controller %s: %s", generated.prefix, "passed" if report.passed else "FAILED")
-    return report
+    generated = generate_loop_step(step, out_dir, prefix=prefix, real=real)
+    return generated, compile_shared(generated, Path(out_dir) / "build")

@@ -54,7 +54,7 @@ from gtmodel.codegen.check.compare import compare, probe
 from gtmodel.codegen.check.report import CheckReport, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import ArgSpec, FunctionSpec, OutputSpec
-from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
 from gtmodel.codegen.check.report import FunctionCheck
 from gtmodel.codegen.declarations import StatusCheck
 from gtmodel.defaults import LOOP_PERIOD_S

@@ -17,7 +17,7 @@ import gtmodel
 from gtmodel.codegen import FUNCTION_SPECS, FunctionSpec, check, compile_shared, generate, load_library, parameter_hash
 from gtmodel.codegen.check import SENTINEL
 from gtmodel.codegen.declarations import ArgSpec, OutputSpec
-from gtmodel.codegen.generate import _hoist_invariants, _renamed, _residual_part
+from gtmodel.codegen.writer import _hoist_invariants, _renamed, _residual_part
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import F1_SPECS
 from gtmodel.errors import CodegenError, InputError

@@ -22,7 +22,8 @@ import pytest
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
 from gtmodel.codegen.build import compile_shared, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
-from gtmodel.codegen.loop_step import LoopStep, check_loop_step, generate_loop_step, load_loop_step, mpc_step, tracking_step
+from gtmodel.codegen.check.loop_step import check_loop_step
+from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, load_loop_step, mpc_step, tracking_step
 from gtmodel.errors import InputError
 from gtmodel.control.mpc import mpc_controller
 from gtmodel.control.reference import period_index

@@ -87,7 +87,7 @@ def test_penalty_is_exact_along_the_loop(setups):
 
 @pytest.mark.slow  # builds the MPC's C with DAQP once (about 2 min)
 def test_generated_c_passes_the_check(setups, tmp_path_factory):
-    from gtmodel.codegen.loop_step import check_loop_step
+    from gtmodel.codegen.check.loop_step import check_loop_step
     from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
 
     setup = setups[0]

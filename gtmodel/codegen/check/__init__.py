@@ -9,7 +9,15 @@
 - :mod:`~gtmodel.codegen.check.robot`: :func:`check` of the robot functions and their timing;
 - :mod:`~gtmodel.codegen.check.harness`: the C unit tests of the hand-written harness;
 - :mod:`~gtmodel.codegen.check.controller`: :func:`check_controller` over a run of the 4 ms loop;
-- :mod:`~gtmodel.codegen.check.filter`: the KF/EKF steps over a measurement record.
+- :mod:`~gtmodel.codegen.check.filter`: the KF/EKF steps over a measurement record;
+- :mod:`~gtmodel.codegen.check.loop_step`: a loop controller's step against Python and its contract;
+- :mod:`~gtmodel.codegen.check.closed_loop`, :mod:`~gtmodel.codegen.check.mpc`: a loop
+  controller (the MPC's with its IPOPT agreement) in closed loop against a plant simulated in
+  Python, beside the feedforward alone, in the library's real type.
+
+Every report has a ``status``, the shared :class:`~gtmodel.status.Status`;
+:func:`gtmodel.codegen.check_code` joins them. The C is called through the library's one
+ctypes owner, :class:`gtmodel.codegen.build.CompiledLibrary`.
 """
 
 from __future__ import annotations

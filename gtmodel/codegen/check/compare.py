@@ -20,7 +20,7 @@ import numpy as np
 
 from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe, tolerance_rule, within
 from gtmodel.codegen.declarations import STATUS_CODES, FunctionSpec
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.robot import RobotModel
 from gtmodel.codegen.specs import SPECS_BY_KIND
 from gtmodel.errors import CodegenError, SingularConfigurationError

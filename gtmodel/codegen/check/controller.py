@@ -35,7 +35,8 @@ from gtmodel.codegen.check.report import SENTINEL, CheckReport, FunctionCheck, S
 from gtmodel.codegen.check.run import c_array, c_function, pointer, time_program, timing_block
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
-from gtmodel.codegen.generate import GeneratedCode, controller_part
+from gtmodel.codegen.generate import controller_part
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import InputError
 
 __all__ = [

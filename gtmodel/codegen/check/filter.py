@@ -34,7 +34,7 @@ from gtmodel.codegen.check.run import (HEAP_WRAP, STRICT_FLAGS, c_array, c_funct
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.emit import fill
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import InputError
 from gtmodel.estimation.filters.end_effector import EndEffectorModel
 

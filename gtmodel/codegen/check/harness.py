@@ -12,7 +12,7 @@ from pathlib import Path
 
 from gtmodel._compiler import run_child
 from gtmodel.codegen.emit import harness_dir
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 
 __all__ = ["HARNESS_FUNCTIONS", "HARNESS_FILES", "harness_dir", "harness_applies", "run_harness_unit_tests"]
 

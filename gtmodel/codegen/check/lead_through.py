@@ -32,7 +32,7 @@ from gtmodel.codegen.check.run import (HEAP_WRAP, STRICT_FLAGS, c_array, c_funct
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.emit import fill
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import InputError
 
 __all__ = ["LEAD_THROUGH_CYCLES", "lead_through_record", "check_record", "python_lead_through_run", "c_lead_through_run",

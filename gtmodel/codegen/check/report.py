@@ -16,6 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.status import Status
 
 __all__ = ["SENTINEL", "FLOAT_RELATIVE_TOLERANCE", "FunctionCheck", "StatusProbe", "CheckReport", "within", "with_timings", "run_check", "status_probe"]
 
@@ -254,6 +255,11 @@ class CheckReport:
             and all(p.passed for p in self.probes)
             and self.harness_passed is not False
         )
+
+    @property
+    def status(self) -> Status:
+        """The shared status of the check: ``converged`` when it :attr:`passed`, else ``check_failed``."""
+        return Status.CONVERGED if self.passed else Status.CHECK_FAILED
 
     def summary_lines(self) -> list[str]:
         """Printable lines: one per function, then the status probes and the verdict.

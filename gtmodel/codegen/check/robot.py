@@ -26,7 +26,8 @@ from gtmodel.codegen.check.harness import HARNESS_FUNCTIONS, run_harness_unit_te
 from gtmodel.codegen.check.report import CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.run import time_program, timing_block
 from gtmodel.codegen.declarations import FunctionSpec
-from gtmodel.codegen.generate import GeneratedCode, robot_part
+from gtmodel.codegen.generate import robot_part
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import InputError
 
 __all__ = ["check", "timed_rows", "time_functions"]

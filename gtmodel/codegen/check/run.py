@@ -23,7 +23,7 @@ import numpy as np
 from gtmodel._compiler import find_compiler, run_child, run_compiler
 from gtmodel.codegen.build import COMMON_FLAGS, WRAPPER_WARNINGS, CompiledLibrary
 from gtmodel.codegen.emit import fill, harness_dir
-from gtmodel.codegen.generate import GeneratedCode
+from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import CodegenError
 
 __all__ = ["PROGRAM_FLAGS", "STRICT_FLAGS", "HEAP_WRAP", "compile_program", "strict_objects", "run_program", "run_record_program",

@@ -13,7 +13,8 @@ and its line goes when the block is empty). Code that depends on the declaration
 argument checks, calls and Newton loops of each wrapper) is built line by line in Python
 and enters the templates as such blocks. The modules of this subpackage:
 
-- :mod:`~gtmodel.codegen.emit.robot`: header and wrapper text of the model functions;
+- :mod:`~gtmodel.codegen.emit.wrapper`: the generic writer (wrapped functions, wrapper source);
+- :mod:`~gtmodel.codegen.emit.robot`: the header of a robot's library;
 - :mod:`~gtmodel.codegen.emit.controller`: the Kalman state and ILC sizes of the controller;
 - :mod:`~gtmodel.codegen.emit.filter`: the KF/EKF state struct and its ``_init``/``_update``;
 - :mod:`~gtmodel.codegen.emit.retime`: the online re-timing function.
