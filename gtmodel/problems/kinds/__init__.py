@@ -25,6 +25,6 @@ kind                                declaration (with its ``solve``)
 ==================================  ====================================================
 
 The method and solver settings of the optimisation kinds are
-:class:`gtmodel.trajectory.settings.Collocation` and
-:class:`gtmodel.trajectory.settings.SolverSettings`.
+:class:`gtmodel.modeling.ocp.methods.Collocation` and
+:class:`gtmodel.modeling.ocp.methods.SolverSettings`.
 """
