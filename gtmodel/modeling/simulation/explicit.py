@@ -262,8 +262,9 @@ class ExplicitODE:
         ``full(t, x, u, p) -> (xdot, y, converged)``, shapes ``(1,1), (nx,1), (nu,1),
         (np,1) -> (nx,1), (ny,1), (1,1)``; ``converged`` is 1 when every algebraic Newton
         solve converged (always 1 when ``newton == 0``).
-    dae : FlatDAE
-        The reduced, flattened model the ODE was built from.
+    dae : FlatDAE or None
+        The reduced, flattened model the ODE was built from; None for one that arrived as a
+        Function (an imported FMU, a connection of explicit models: :meth:`from_function`).
     x_names, u_names, p_names, y_names : list of str
         Scalar names (``"load.w"``, ``"T[0]"``) of states, inputs, parameters and outputs.
     x0 : numpy.ndarray
@@ -285,6 +286,18 @@ class ExplicitODE:
     time_dependent : bool
         The right-hand side or outputs depend on time explicitly (``f``/``h`` then refuse;
         use :attr:`full`).
+    descriptions : dict of str to str
+        Description per scalar name (missing: none).
+    indicators : casadi.Function or None
+        ``c(t, x, u, p) -> c (nw, 1)``: the when-clauses' zero-crossing functions (an FMU's
+        event indicators); None without events.
+    jump : casadi.Function or None
+        ``jump(t, x, u, p, fire (nw, 1)) -> x_new``: the reinits of the clauses whose
+        ``fire`` entry is 1, right-hand sides at the values before the event.
+    directions : list of int
+        Per clause: 1 fires when ``c`` becomes ``> 0``, -1 when ``< 0``, 0 both.
+    event_names : list of str
+        The clauses' names.
     """
 
     name: str
@@ -306,6 +319,49 @@ class ExplicitODE:
     algebraic: int = 0
     newton: int = 0
     time_dependent: bool = False
+    descriptions: dict[str, str] = field(default_factory=dict)
+    indicators: ca.Function | None = None
+    jump: ca.Function | None = None
+    directions: list[int] = field(default_factory=list)
+    event_names: list[str] = field(default_factory=list)
+
+    @classmethod
+    def from_function(cls, name: str, f: ca.Function, x_names: list[str], u_names: list[str], p_names: list[str],
+                      y_names: list[str], x0: Any, u0: Any, p_default: Any, **metadata: Any) -> "ExplicitODE":
+        """An explicit ODE given as a Function ``f(t, x, u, p) -> (xdot, y)`` (an imported FMU, a connection).
+
+        Parameters
+        ----------
+        name : str
+            Model name.
+        f : casadi.Function
+            ``f(t, x, u, p) -> (xdot, y)``, shapes ``(1,1), (nx,1), (nu,1), (np,1) -> (nx,1), (ny,1)``.
+        x_names, u_names, p_names, y_names : list of str
+            Scalar names of states, inputs, parameters and outputs.
+        x0, u0, p_default : array_like
+            ``(nx,)``, ``(nu,)``, ``(np,)`` start values of states and inputs, parameter values.
+        **metadata
+            Further fields (``units``, ``descriptions``, ``algebraic``, events).
+
+        Returns
+        -------
+        ExplicitODE
+            No flat model behind it (``dae`` None), bounds infinite, ``converged`` always 1.
+        """
+        kind = ca.SX if f.is_a("SXFunction") else ca.MX
+        t, x, u, p = (kind.sym(n, f.size1_in(i)) for i, n in enumerate(("t", "x", "u", "p")))
+        xdot, y = f(t, x, u, p)
+        full = ca.Function("explicit_ode", [t, x, u, p], [xdot, y, kind(1)], ["t", "x", "u", "p"], ["xdot", "y", "converged"])
+        try:
+            timed = bool(ca.depends_on(ca.vertcat(xdot, y), t))
+        except RuntimeError:  # an external Function (an FMU) is opaque: assume it may depend on time
+            timed = True
+        inf = lambda n: (np.full(n, -np.inf), np.full(n, np.inf))  # noqa: E731
+        (x_lb, x_ub), (u_lb, u_ub) = inf(len(x_names)), inf(len(u_names))
+        return cls(name=name, full=full, dae=None, x_names=list(x_names), u_names=list(u_names), p_names=list(p_names),
+                   y_names=list(y_names), x0=np.asarray(x0, float).reshape(-1), u0=np.asarray(u0, float).reshape(-1),
+                   p_default=np.asarray(p_default, float).reshape(-1), x_lb=x_lb, x_ub=x_ub, u_lb=u_lb, u_ub=u_ub,
+                   time_dependent=timed, **metadata)
 
     @property
     def nx(self) -> int:
@@ -357,6 +413,33 @@ class ExplicitODE:
             The model depends on time explicitly.
         """
         return self._timeless(["y"], "h")
+
+    @cached_property
+    def rhs(self) -> ca.Function:
+        """``f(t, x, u, p) -> (xdot, y)``: right-hand side and outputs with time (what an FMU evaluates).
+
+        Shapes ``(1,1), (nx,1), (nu,1), (np,1) -> (nx,1), (ny,1)``; :attr:`full` without ``converged``.
+        """
+        sym = ca.SX.sym if self.full.is_a("SXFunction") else ca.MX.sym
+        t, x, u, p = (sym(n, k) for n, k in (("t", 1), ("x", self.nx), ("u", self.nu), ("p", self.np)))
+        out = self.full(t=t, x=x, u=u, p=p)
+        return ca.Function("f", [t, x, u, p], [out["xdot"], out["y"]], ["t", "x", "u", "p"], ["xdot", "y"])
+
+    def derivative_function(self) -> ca.Function:
+        """Forward directional derivative of :attr:`rhs` (CasADi AD, an FMU's ``GetDirectionalDerivative``).
+
+        Returns
+        -------
+        casadi.Function
+            ``df(t, x, u, p, dx, du, dp) -> (dxdot, dy)``, the Jacobian of ``rhs`` times the
+            seeds (time is not seeded).
+        """
+        f = self.rhs
+        t, x, u, p = (ca.MX.sym(n, f.size1_in(i)) for i, n in enumerate(("t", "x", "u", "p")))
+        dx, du, dp = ca.MX.sym("dx", self.nx), ca.MX.sym("du", self.nu), ca.MX.sym("dp", self.np)
+        outs = f(t, x, u, p)
+        douts = f.forward(1)(t, x, u, p, *outs, ca.MX(1, 1), dx, du, dp)
+        return ca.Function("df", [t, x, u, p, dx, du, dp], list(douts), ["t", "x", "u", "p", "dx", "du", "dp"], ["dxdot", "dy"])
 
     @cached_property
     def converged(self) -> ca.Function:
