@@ -30,7 +30,7 @@ import numpy as np
 from gtmodel.errors import InputError
 from gtmodel.modeling import ExplicitODE
 from gtmodel.exchange.explicit_ops import _values
-from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, merge_options
+from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_operators, merge_options
 from gtmodel.modeling.ocp.result import normalize_ipopt_status
 from gtmodel.status import StatusResult
 
@@ -178,13 +178,12 @@ def solve_explicit_ocp(
     Tc = tfs * ca.DM(tau).T
     xdot_c = ca.horzcat(*[em.rhs(Tc[c], Xc[:, c], U[:, c], ca.DM(pv))[0] for c in range(K * d)])
     g, J = [], ca.MX(0)
+    K_der, K_end = element_operators(co, nx)  # the collocation equations of gtmodel's own transcription
     for k in range(K):
         base = k * (d + 1)
-        Xk = [X[:, base + r] for r in range(d + 1)]
-        for j in range(1, d + 1):
-            g.append(sum(co["C"][r, j] * Xk[r] for r in range(d + 1)) - h * xdot_c[:, k * d + j - 1])
-        nxt = X[:, base + d + 1]
-        g.append(nxt - sum(co["D"][r] * Xk[r] for r in range(d + 1)))
+        Xk = ca.vec(X[:, base:base + d + 1])  # the element start and its points, stacked
+        g.append(ca.mtimes(K_der, Xk) - h * ca.vec(xdot_c[:, k * d:(k + 1) * d]))
+        g.append(X[:, base + d + 1] - ca.mtimes(K_end, Xk))
     if lagrange is not None:
         for c in range(K * d):
             v = {n: Xc[i, c] for i, n in enumerate(em.x_names)}
