@@ -31,8 +31,8 @@ __all__ = ["Collocation", "MultipleShooting", "SolverSettings", "Refinement", "V
 #: Collocation point families.
 SCHEMES = ("radau", "legendre")
 #: NLP solvers of the collocation transcriptions: IPOPT (with the project's assembled, compiled
-#: derivatives) and fatrop (the NLP ordered stage by stage;
-#: :data:`gtmodel.modeling.ocp.collocation.SOLVERS`, equal, checked by the tests).
+#: derivatives) and fatrop (the NLP ordered stage by stage); the transcription's
+#: :data:`gtmodel.modeling.ocp.collocation_stages.SOLVERS` is this tuple.
 NLP_SOLVERS = ("ipopt", "fatrop")
 
 
