@@ -474,7 +474,7 @@ def _export_fmu(args: argparse.Namespace) -> int:
     em = fmu.model
     print(f"wrote {fmu.path} (FMI {fmu.version} {' + '.join(fmu.interfaces)}, binary {fmu.platform or 'none: sources only'})")
     print(f"model {em.name}: {em.nx} states, {len(em.u_names)} inputs, {len(em.p_names)} parameters, {em.ny} outputs"
-          + (f", {em.algebraic_eliminated} algebraic variables solved inside" if em.algebraic_eliminated else ""))
+          + (f", {em.algebraic} algebraic variables solved inside" if em.algebraic else ""))
     if fmu.step is not None:
         print(f"co-simulation: fixed-step RK4, step <= {fmu.step:g} s")
     return EXIT_OK

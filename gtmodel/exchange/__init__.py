@@ -6,7 +6,8 @@
   :func:`export_step_fmu`: a discrete-time controller step (the 4 ms Kalman step) as an
   FMI 2.0 co-simulation FMU (:mod:`gtmodel.exchange.fmu_step`).
 * :func:`import_fmu`: an FMU (FMI 2.0 / 3.0 model exchange) loaded by CasADi's
-  ``DaeBuilder`` as an :class:`ExplicitModel` (:mod:`gtmodel.exchange.fmu_import`; the
+  ``DaeBuilder`` as an explicit model (:class:`ExplicitModel`, the modelling layer's
+  :class:`~gtmodel.modeling.ExplicitODE`; :mod:`gtmodel.exchange.fmu_import`; the
   archive unpacked as untrusted input under :class:`ArchiveLimits`,
   :mod:`gtmodel.exchange.fmu_archive`), which
   :func:`simulate_explicit`, :func:`linearize_explicit`, :func:`connect_explicit` (with

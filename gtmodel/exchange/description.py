@@ -16,7 +16,7 @@ import uuid
 from dataclasses import dataclass
 
 from gtmodel._escape import xml_attr
-from gtmodel.exchange.explicit import ExplicitModel
+from gtmodel.modeling import ExplicitODE
 
 __all__ = ["ValueReferences", "model_description"]
 
@@ -29,7 +29,7 @@ class ValueReferences:
     ----------
     x, dx, u, p, y : list of int
         Value references of states, their derivatives, inputs, parameters and outputs, in
-        the order of :class:`~gtmodel.exchange.explicit.ExplicitModel`'s names.
+        the order of :class:`~gtmodel.modeling.ExplicitODE`'s names.
     time : int or None
         Value reference of the independent variable (FMI 3.0 only).
     """
@@ -42,12 +42,12 @@ class ValueReferences:
     time: int | None = None
 
     @classmethod
-    def contiguous(cls, em: ExplicitModel) -> "ValueReferences":
+    def contiguous(cls, em: ExplicitODE) -> "ValueReferences":
         """The layout of gtmodel's own wrapper: states, derivatives, inputs, parameters, outputs.
 
         Parameters
         ----------
-        em : ExplicitModel
+        em : ExplicitODE
             The model.
 
         Returns
@@ -67,16 +67,16 @@ def _attr(**kw: object) -> str:
                     if v is not None and (v != "" or k.startswith("dependencies")))
 
 
-def _deps(em: ExplicitModel, with_parameters: bool = False) -> tuple[list[list[int]], list[list[int]]]:
+def _deps(em: ExplicitODE, with_parameters: bool = False) -> tuple[list[list[int]], list[list[int]]]:
     """Per derivative and per output: indices into ``[x; u]`` (``[x; u; p]``) they depend on."""
     out = []
     for o in range(2):
-        rows = [[] for _ in range(em.f.size1_out(o))]
+        rows = [[] for _ in range(em.rhs.size1_out(o))]
         offset = 0
         for i in (1, 2, 3) if with_parameters else (1, 2):
-            for r, c in zip(*em.f.jac_sparsity(o, i).get_triplet()):
+            for r, c in zip(*em.rhs.jac_sparsity(o, i).get_triplet()):
                 rows[r].append(offset + c)
-            offset += em.f.size1_in(i)
+            offset += em.rhs.size1_in(i)
         out.append([sorted(set(r)) for r in rows])
     return out[0], out[1]
 
@@ -86,7 +86,7 @@ def _fmt(v: float) -> str:
 
 
 def model_description(
-    em: ExplicitModel,
+    em: ExplicitODE,
     version: str,
     identifier: str,
     vr: ValueReferences,
@@ -100,7 +100,7 @@ def model_description(
 
     Parameters
     ----------
-    em : ExplicitModel
+    em : ExplicitODE
         The model (names, start values, units, descriptions).
     version : {"2.0", "3.0"}
         FMI version.
@@ -131,11 +131,11 @@ def model_description(
     desc = lambda n: em.descriptions.get(n, "")  # noqa: E731
     # (name, vr, causality, variability, initial, start, unit, description, derivative-of index or None)
     rows: list[tuple] = []
-    for n, r, v in zip(em.p_names, vr.p, em.p_value):
+    for n, r, v in zip(em.p_names, vr.p, em.p_default):
         rows.append((n, r, "parameter", "tunable", "exact", v, unit_of(n), desc(n), None))
-    for i, (n, r, v) in enumerate(zip(em.x_names, vr.x, em.x_start)):
+    for i, (n, r, v) in enumerate(zip(em.x_names, vr.x, em.x0)):
         rows.append((n, r, "local", "continuous", "exact", v, unit_of(n), desc(n), None))
-    for n, r, v in zip(em.u_names, vr.u, em.u_start):
+    for n, r, v in zip(em.u_names, vr.u, em.u0):
         rows.append((n, r, "input", "continuous", None, v, unit_of(n), desc(n), None))
     for i, (n, r) in enumerate(zip(em.x_names, vr.dx)):
         du = f"{unit_of(n)}/s" if unit_of(n) else ""

@@ -1,6 +1,7 @@
 """A gtmodel model as the explicit ODE an FMU carries: ``xdot, y = F(t, x, u, p)``.
 
-Both FMU writers (:mod:`gtmodel.exchange.fmu_export`) start from an :class:`ExplicitModel`:
+Both FMU writers (:mod:`gtmodel.exchange.fmu_export`) start from the model's
+:class:`~gtmodel.modeling.ExplicitODE` (``ExplicitModel`` here, the same class):
 the model is flattened (:meth:`gtmodel.modeling.Model.flatten`), after alias elimination
 and index reduction (:func:`gtmodel.modeling.structural_simplify`) when it needs them, and
 its algebraic variables ``z`` are eliminated as for every explicit model
@@ -13,15 +14,13 @@ for a :class:`~gtmodel.modeling.Component`, from its declarations
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+import dataclasses
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.modeling import Component, Model, explicit_ode
+from gtmodel.modeling import Component, ExplicitODE, Model, explicit_ode
 from gtmodel.modeling.dae import casadi_name
 
 __all__ = ["ExplicitModel", "explicit_model", "fmi_identifier"]
@@ -47,79 +46,11 @@ def fmi_identifier(name: str) -> str:
         return "model"
 
 
-@dataclass
-class ExplicitModel:
-    """The explicit ODE of a model and the FMI metadata of its scalar variables.
-
-    Parameters
-    ----------
-    name : str
-        Model name.
-    f : casadi.Function
-        ``f(t, x, u, p) -> (xdot, y)``, shapes ``(1,1), (nx,1), (nu,1), (np,1) ->
-        (nx,1), (ny,1)``.
-    x_names, u_names, p_names, y_names : list of str
-        Scalar names (``"T[0]"`` style) of states, inputs, parameters and outputs.
-    x_start, u_start, p_value : numpy.ndarray
-        Start values of the states and inputs, parameter values (SI units).
-    units, descriptions : dict of str to str
-        Unit and description per scalar name (missing: none).
-    algebraic_eliminated : int
-        Number of algebraic variables eliminated inside ``f`` (:func:`gtmodel.modeling.explicit_ode`).
-    indicators : casadi.Function or None
-        ``c(t, x, u, p) -> c (nw, 1)``: the when-clauses' zero-crossing functions (the FMU's
-        event indicators); ``None`` without events.
-    jump : casadi.Function or None
-        ``jump(t, x, u, p, fire (nw, 1)) -> x_new``: the reinits of the clauses whose
-        ``fire`` entry is 1, right-hand sides at the values before the event.
-    directions : list of int
-        Per clause: 1 fires when ``c`` becomes ``> 0``, -1 when ``< 0``, 0 both.
-    event_names : list of str
-        The clauses' names.
-    """
-
-    name: str
-    f: ca.Function
-    x_names: list[str]
-    u_names: list[str]
-    p_names: list[str]
-    y_names: list[str]
-    x_start: np.ndarray
-    u_start: np.ndarray
-    p_value: np.ndarray
-    units: dict[str, str] = field(default_factory=dict)
-    descriptions: dict[str, str] = field(default_factory=dict)
-    algebraic_eliminated: int = 0
-    indicators: ca.Function | None = None
-    jump: ca.Function | None = None
-    directions: list[int] = field(default_factory=list)
-    event_names: list[str] = field(default_factory=list)
-
-    @property
-    def nx(self) -> int:
-        """Number of states."""
-        return len(self.x_names)
-
-    @property
-    def ny(self) -> int:
-        """Number of scalar outputs."""
-        return len(self.y_names)
-
-    def derivative_function(self) -> ca.Function:
-        """Forward directional derivative of :attr:`f` (CasADi AD, for ``GetDirectionalDerivative``).
-
-        Returns
-        -------
-        casadi.Function
-            ``df(t, x, u, p, dx, du, dp) -> (dxdot, dy)``, the Jacobian of ``f`` times the
-            seeds (time is not seeded).
-        """
-        t, x, u, p = (ca.MX.sym(n, self.f.size1_in(i)) for i, n in enumerate(("t", "x", "u", "p")))
-        dx, du, dp = ca.MX.sym("dx", self.nx), ca.MX.sym("du", len(self.u_names)), ca.MX.sym("dp", len(self.p_names))
-        fwd = self.f.forward(1)
-        outs = self.f(t, x, u, p)
-        douts = fwd(t, x, u, p, *outs, ca.MX(1, 1), dx, du, dp)
-        return ca.Function("df", [t, x, u, p, dx, du, dp], list(douts), ["t", "x", "u", "p", "dx", "du", "dp"], ["dxdot", "dy"])
+#: The explicit model of an FMU is the modelling layer's :class:`~gtmodel.modeling.ExplicitODE`
+#: (one class: ``f(x, u, p)``, steps and the loop's Functions, plus descriptions and events for
+#: an FMU; :attr:`~gtmodel.modeling.ExplicitODE.rhs` is ``f(t, x, u, p) -> (xdot, y)``); the
+#: former name is kept.
+ExplicitModel = ExplicitODE
 
 
 def _metadata(source: Any, model_units: dict[str, str]) -> tuple[dict[str, str], dict[str, str]]:
@@ -183,8 +114,9 @@ def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
 
     Returns
     -------
-    ExplicitModel
-        ``f(t, x, u, p) -> (xdot, y)`` and the metadata.
+    ExplicitODE
+        The model's explicit ODE (:func:`~gtmodel.modeling.explicit_ode`; ``rhs(t, x, u, p) ->
+        (xdot, y)``) with the FMU's metadata: units, descriptions, events.
 
     Raises
     ------
@@ -209,25 +141,12 @@ def explicit_model(model: Any, name: str | None = None) -> ExplicitModel:
         raise ModelError(f"model {m.name!r}: when-clauses are exported for models that flatten as they are "
                          "(no index reduction, no initial equations)")
     ode = explicit_ode(m)
-    reduced_units = ode.units
     dae = ode.dae
-    t, x, u, p = (ca.SX.sym(n, k) for n, k in (("t", 1), ("x", ode.nx), ("u", ode.nu), ("p", ode.np)))
-    out = ode.full(t=t, x=x, u=u, p=p)
-    f = ca.Function("f", [t, x, u, p], [out["xdot"], out["y"]], ["t", "x", "u", "p"], ["xdot", "y"])
-    u_start = ode.u0
-    units, descriptions = _metadata(source, reduced_units)
+    units, descriptions = _metadata(source, ode.units)
     names = dae.x_names + dae.u_names + dae.p_names + dae.output_names
-    em = ExplicitModel(
-        name=name or m.name, f=f, x_names=list(dae.x_names), u_names=list(dae.u_names), p_names=list(dae.p_names),
-        y_names=list(dae.output_names), x_start=np.asarray(dae.x_start, float).copy(), u_start=u_start,
-        p_value=np.asarray(dae.p_value, float).copy(), units=_expand(units, names), descriptions=_expand(descriptions, names),
-        algebraic_eliminated=dae.nz,
-    )
+    em = dataclasses.replace(ode, name=name or m.name, units=_expand(units, names), descriptions=_expand(descriptions, names))
     if whens:
         if dae.nz:
             raise ModelError(f"model {m.name!r}: when-clauses are exported for models without algebraic variables")
         _add_events(em, dae, whens)
-    bad = [v for v in (*em.x_start, *em.p_value) if not math.isfinite(v)]
-    if bad:
-        raise ModelError(f"model {m.name!r}: start and parameter values must be finite")
     return em

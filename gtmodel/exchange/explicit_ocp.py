@@ -28,9 +28,9 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.exchange.explicit import ExplicitModel
+from gtmodel.modeling import ExplicitODE
 from gtmodel.exchange.explicit_ops import _values
-from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, merge_options
+from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_operators, merge_options
 from gtmodel.modeling.ocp.result import normalize_ipopt_status
 from gtmodel.status import StatusResult
 
@@ -88,7 +88,7 @@ def _bounds(names: list[str], given: Mapping[str, tuple[float, float]] | None, w
 
 
 def solve_explicit_ocp(
-    em: ExplicitModel,
+    em: ExplicitODE,
     final_time: float = 1.0,
     free_final_time: bool = False,
     final_time_bounds: tuple[float, float] = (1e-3, 1e3),
@@ -113,7 +113,7 @@ def solve_explicit_ocp(
 
     Parameters
     ----------
-    em : ExplicitModel
+    em : ExplicitODE
         The model (``import_fmu(...).model``, or a gtmodel model's ``explicit_model``).
     final_time : float, optional
         Final time [s] (the guess of a free one); default 1.
@@ -176,15 +176,14 @@ def solve_explicit_ocp(
     tau = np.array([(k + co["tau"][j]) / K for k in range(K) for j in range(d)])
     Xc = ca.horzcat(*[X[:, c] for c in cols])
     Tc = tfs * ca.DM(tau).T
-    xdot_c = ca.horzcat(*[em.f(Tc[c], Xc[:, c], U[:, c], ca.DM(pv))[0] for c in range(K * d)])
+    xdot_c = ca.horzcat(*[em.rhs(Tc[c], Xc[:, c], U[:, c], ca.DM(pv))[0] for c in range(K * d)])
     g, J = [], ca.MX(0)
+    K_der, K_end = element_operators(co, nx)  # the collocation equations of gtmodel's own transcription
     for k in range(K):
         base = k * (d + 1)
-        Xk = [X[:, base + r] for r in range(d + 1)]
-        for j in range(1, d + 1):
-            g.append(sum(co["C"][r, j] * Xk[r] for r in range(d + 1)) - h * xdot_c[:, k * d + j - 1])
-        nxt = X[:, base + d + 1]
-        g.append(nxt - sum(co["D"][r] * Xk[r] for r in range(d + 1)))
+        Xk = ca.vec(X[:, base:base + d + 1])  # the element start and its points, stacked
+        g.append(ca.mtimes(K_der, Xk) - h * ca.vec(xdot_c[:, k * d:(k + 1) * d]))
+        g.append(X[:, base + d + 1] - ca.mtimes(K_end, Xk))
     if lagrange is not None:
         for c in range(K * d):
             v = {n: Xc[i, c] for i, n in enumerate(em.x_names)}
@@ -210,7 +209,7 @@ def solve_explicit_ocp(
         xf[i] = float(final[em.x_names[i]])
     s = np.linspace(0, 1, X.shape[1])
     xg = (x0[:, None] + (xf - x0)[:, None] * s[None, :]).T.reshape(-1)
-    ug = np.where(np.isfinite(ulb) & np.isfinite(uub), 0.5 * (ulb + uub), np.clip(em.u_start, ulb, uub))
+    ug = np.where(np.isfinite(ulb) & np.isfinite(uub), 0.5 * (ulb + uub), np.clip(em.u0, ulb, uub))
     w0 = np.concatenate([xg, np.tile(ug, K * d)] + ([[final_time]] if free_final_time else []))
     if guess is not None:
         try:

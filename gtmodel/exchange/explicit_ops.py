@@ -1,14 +1,14 @@
 """Simulate, linearise and connect explicit models (imported FMUs and gtmodel models).
 
-An :class:`~gtmodel.exchange.explicit.ExplicitModel` is ``xdot, y = f(t, x, u, p)``: an FMU
-loaded by :func:`~gtmodel.exchange.fmu_import.import_fmu` (its ``f`` calls the FMU's
-binary) or a gtmodel model or component reduced by
-:func:`~gtmodel.exchange.explicit.explicit_model`. CasADi's ``f`` is an MX-callable
-function either way, so the same code serves both:
+An explicit model (:class:`~gtmodel.modeling.ExplicitODE`, ``ExplicitODE`` in this
+package) is ``xdot, y = rhs(t, x, u, p)``: an FMU loaded by
+:func:`~gtmodel.exchange.fmu_import.import_fmu` (its ``rhs`` calls the FMU's binary) or a
+gtmodel model or component reduced by :func:`~gtmodel.exchange.explicit.explicit_model`.
+CasADi's ``rhs`` is an MX-callable function either way, so the same code serves both:
 
 * :func:`simulate_explicit`: CasADi's CVODES on a time grid, inputs held over each interval
   (gtmodel's convention, :meth:`gtmodel.modeling.Model.simulate`);
-* :func:`linearize_explicit`: ``A, B, C, D`` from ``f``'s Jacobian (the FMU's directional
+* :func:`linearize_explicit`: ``A, B, C, D`` from ``rhs``'s Jacobian (the FMU's directional
   derivatives or finite differences, :attr:`ImportedFmu.derivatives`) as a
   :class:`~gtmodel.modeling.simulation.linear.Linearization`;
 * :func:`connect_explicit`: causal connections (an output drives an input) between
@@ -24,17 +24,17 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import ConvergenceError, InputError, ModelError
-from gtmodel.exchange.explicit import ExplicitModel, explicit_model, fmi_identifier
-from gtmodel.modeling import Component, Model, SimulationResult
+from gtmodel.exchange.explicit import explicit_model, fmi_identifier
+from gtmodel.modeling import Component, ExplicitODE, Model, SimulationResult
 from gtmodel.modeling.simulation.linear import Linearization
 
 __all__ = ["simulate_explicit", "linearize_explicit", "connect_explicit"]
 
 
-def _values(em: ExplicitModel, kind: str, given: Any) -> np.ndarray:
+def _values(em: ExplicitODE, kind: str, given: Any) -> np.ndarray:
     """Default values of ``kind`` (x, u, p) with a mapping or vector of overrides."""
     names = {"x": em.x_names, "u": em.u_names, "p": em.p_names}[kind]
-    base = {"x": em.x_start, "u": em.u_start, "p": em.p_value}[kind].astype(float).copy()
+    base = {"x": em.x0, "u": em.u0, "p": em.p_default}[kind].astype(float).copy()
     if given is None:
         return base
     if isinstance(given, Mapping):
@@ -53,7 +53,7 @@ def _values(em: ExplicitModel, kind: str, given: Any) -> np.ndarray:
 
 
 def simulate_explicit(
-    em: ExplicitModel,
+    em: ExplicitODE,
     t_grid: Any,
     x0: Any = None,
     u: Any = None,
@@ -65,7 +65,7 @@ def simulate_explicit(
 
     Parameters
     ----------
-    em : ExplicitModel
+    em : ExplicitODE
         The model (e.g. ``import_fmu(...).model``).
     t_grid : array_like
         Increasing time grid, shape ``(N,)``, s.
@@ -102,7 +102,7 @@ def simulate_explicit(
             raise InputError(f"u: expected shape ({n - 1}, {nu}) or ({n}, {nu}), got {arr.shape}")
         u_int = arr[: n - 1]
     ts, xs, us, ps = ca.MX.sym("t"), ca.MX.sym("x", em.nx), ca.MX.sym("u", nu), ca.MX.sym("p", len(em.p_names))
-    xdot, _ = em.f(ts, xs, us, ps)
+    xdot, _ = em.rhs(ts, xs, us, ps)
     dae = {"t": ts, "x": xs, "u": us, "p": ps, "ode": xdot}
     try:
         F = ca.integrator(f"{fmi_identifier(em.name)}_sim", "cvodes", dae, float(t[0]), list(t), {"abstol": atol, "reltol": rtol})
@@ -112,7 +112,7 @@ def simulate_explicit(
         lines = [ln for ln in str(exc).splitlines() if "returned" in ln] or str(exc).splitlines()
         raise ConvergenceError(f"simulation of {em.name!r} with cvodes failed: {lines[0].strip() if lines else exc}") from None
     u_all = np.vstack([u_int, u_int[-1:]]) if nu else np.zeros((n, 0))
-    fmap = em.f.map(n)
+    fmap = em.rhs.map(n)
     _, y = fmap(t.reshape(1, -1), x_traj.T, u_all.T, np.tile(pv.reshape(-1, 1), (1, n)))
     y = np.array(y).reshape(em.ny, n).T
     return SimulationResult(
@@ -122,12 +122,12 @@ def simulate_explicit(
     )
 
 
-def linearize_explicit(em: ExplicitModel, x: Any = None, u: Any = None, p: Any = None, t: float = 0.0) -> Linearization:
+def linearize_explicit(em: ExplicitODE, x: Any = None, u: Any = None, p: Any = None, t: float = 0.0) -> Linearization:
     """Linearise ``xdot, y = f(t, x, u, p)`` about an operating point.
 
     Parameters
     ----------
-    em : ExplicitModel
+    em : ExplicitODE
         The model.
     x, u, p : mapping or array_like, optional
         Operating point by scalar name or full vectors; default the start values.
@@ -147,30 +147,30 @@ def linearize_explicit(em: ExplicitModel, x: Any = None, u: Any = None, p: Any =
     """
     xv, uv, pv = _values(em, "x", x), _values(em, "u", u), _values(em, "p", p)
     xs, us = ca.MX.sym("x", em.nx), ca.MX.sym("u", len(em.u_names))
-    xdot, y = em.f(t, xs, us, pv)
+    xdot, y = em.rhs(t, xs, us, pv)
     J = ca.Function("J", [xs, us], [ca.jacobian(xdot, xs), ca.jacobian(xdot, us), ca.jacobian(y, xs), ca.jacobian(y, us)])
     A, B, C, D = (np.array(m, dtype=float) for m in J(xv, uv))
     return Linearization(A=A, B=B, C=C, D=D, x_names=list(em.x_names), u_names=list(em.u_names),
                          y_names=list(em.y_names), x=xv, z=np.zeros(0), u=uv)
 
 
-def _as_explicit(obj: Any, name: str) -> ExplicitModel:
-    if isinstance(obj, ExplicitModel):
+def _as_explicit(obj: Any, name: str) -> ExplicitODE:
+    if isinstance(obj, ExplicitODE):
         return obj
-    if hasattr(obj, "model") and isinstance(obj.model, ExplicitModel):  # an ImportedFmu
+    if hasattr(obj, "model") and isinstance(obj.model, ExplicitODE):  # an ImportedFmu
         return obj.model
     if isinstance(obj, (Model, Component)):
         return explicit_model(obj)
-    raise InputError(f"models[{name!r}]: expected an ExplicitModel, ImportedFmu, Model or Component, got {type(obj).__name__}")
+    raise InputError(f"models[{name!r}]: expected an ExplicitODE, ImportedFmu, Model or Component, got {type(obj).__name__}")
 
 
-def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str, str]], name: str = "connected") -> ExplicitModel:
+def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str, str]], name: str = "connected") -> ExplicitODE:
     """Connect models causally: each connection feeds an output into an input.
 
     Parameters
     ----------
     models : mapping of str to model
-        Instance name -> :class:`ExplicitModel`, :class:`~gtmodel.exchange.fmu_import.ImportedFmu`,
+        Instance name -> :class:`ExplicitODE`, :class:`~gtmodel.exchange.fmu_import.ImportedFmu`,
         gtmodel :class:`~gtmodel.modeling.Model` or :class:`~gtmodel.modeling.Component`.
     connections : sequence of (str, str)
         ``("a.y", "b.u")``: output ``y`` of instance ``a`` drives input ``u`` of ``b``
@@ -180,7 +180,7 @@ def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str,
 
     Returns
     -------
-    ExplicitModel
+    ExplicitODE
         States, free inputs, parameters and outputs of all instances, names prefixed by the
         instance name (``"fmu.x"``); the outputs are evaluated in dependency order.
 
@@ -213,8 +213,8 @@ def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str,
     outs: dict[str, tuple[ca.MX, ca.MX]] = {}
     ys: dict[str, ca.MX] = {}  # outputs known so far: first those that do not depend on inputs
     for k, e in ems.items():
-        if e.ny and e.u_names and e.f.jac_sparsity(1, 2).nnz() == 0:
-            ys[k] = e.f(t, xs[k], ca.DM.zeros(len(e.u_names)), ps[k])[1]
+        if e.ny and e.u_names and e.rhs.jac_sparsity(1, 2).nnz() == 0:
+            ys[k] = e.rhs(t, xs[k], ca.DM.zeros(len(e.u_names)), ps[k])[1]
     pending = list(ems)
     while pending:
         progressed = False
@@ -237,7 +237,7 @@ def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str,
             if not ok:
                 continue
             uk = ca.vertcat(*u_parts) if u_parts else ca.MX(0, 1)
-            outs[k] = tuple(e.f(t, xs[k], uk, ps[k]))
+            outs[k] = tuple(e.rhs(t, xs[k], uk, ps[k]))
             ys.setdefault(k, outs[k][1])
             pending.remove(k)
             progressed = True
@@ -251,12 +251,11 @@ def connect_explicit(models: Mapping[str, Any], connections: Sequence[tuple[str,
     f = ca.Function(fmi_identifier(name), [t, xall, uf, pall], [xdot, y], ["t", "x", "u", "p"], ["xdot", "y"])
     pre = lambda k, names: [f"{k}.{n}" for n in names]  # noqa: E731
     meta = lambda attr: {f"{k}.{n}": v for k in order for n, v in getattr(ems[k], attr).items()}  # noqa: E731
-    return ExplicitModel(
-        name=name, f=f, x_names=[n for k in order for n in pre(k, ems[k].x_names)], u_names=[f"{k}.{n}" for k, n in free],
-        p_names=[n for k in order for n in pre(k, ems[k].p_names)], y_names=[n for k in order for n in pre(k, ems[k].y_names)],
-        x_start=np.concatenate([ems[k].x_start for k in order]),
-        u_start=np.array([ems[k].u_start[ems[k].u_names.index(n)] for k, n in free], dtype=float),
-        p_value=np.concatenate([ems[k].p_value for k in order]) if order else np.zeros(0),
-        units=meta("units"), descriptions=meta("descriptions"),
-        algebraic_eliminated=sum(ems[k].algebraic_eliminated for k in order),
+    return ExplicitODE.from_function(
+        name, f, [n for k in order for n in pre(k, ems[k].x_names)], [f"{k}.{n}" for k, n in free],
+        [n for k in order for n in pre(k, ems[k].p_names)], [n for k in order for n in pre(k, ems[k].y_names)],
+        np.concatenate([ems[k].x0 for k in order]),
+        np.array([ems[k].u0[ems[k].u_names.index(n)] for k, n in free], dtype=float),
+        np.concatenate([ems[k].p_default for k in order]) if order else np.zeros(0),
+        units=meta("units"), descriptions=meta("descriptions"), algebraic=sum(ems[k].algebraic for k in order),
     )

@@ -51,7 +51,8 @@ import numpy as np
 from gtmodel._compiler import find_compiler, run_compiler
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.exchange.description import ValueReferences, model_description
-from gtmodel.exchange.explicit import ExplicitModel, explicit_model, fmi_identifier
+from gtmodel.modeling import ExplicitODE
+from gtmodel.exchange.explicit import explicit_model, fmi_identifier
 
 __all__ = ["ExportedFmu", "export_fmu", "fmi_platform"]
 
@@ -76,7 +77,7 @@ class ExportedFmu:
         ``"ModelExchange"`` and/or ``"CoSimulation"``.
     identifier : str
         ``modelIdentifier``.
-    model : ExplicitModel
+    model : ExplicitODE
         The exported explicit ODE and its variable names.
     platform : str
         Platform folder of the binary (e.g. ``"linux64"``, ``"x86_64-linux"``), ``""`` if
@@ -89,7 +90,7 @@ class ExportedFmu:
     version: str
     interfaces: tuple[str, ...]
     identifier: str
-    model: ExplicitModel
+    model: ExplicitODE
     platform: str
     step: float | None
 
@@ -131,10 +132,10 @@ def _compile(sources: list[Path], out: Path, build: Path, what: str) -> None:
     run_compiler([*cc, *flags, *(str(s) for s in sources), "-o", str(out), "-lm"], what)
 
 
-def _codegen(em: ExplicitModel, ident: str, build: Path) -> tuple[Path, Path]:
+def _codegen(em: ExplicitODE, ident: str, build: Path) -> tuple[Path, Path]:
     """CasADi C of ``f`` and its forward derivative as ``<id>_model.c/.h``."""
     cg = ca.CodeGenerator(f"{ident}_model.c", {"with_header": True, "prefix": f"{ident}_"})
-    functions = [(em.f, "f"), (em.derivative_function(), "df")]
+    functions = [(em.rhs, "f"), (em.derivative_function(), "df")]
     if em.indicators is not None:  # when-clauses: event indicators and the jump map
         functions += [(em.indicators, "ind"), (em.jump, "jump")]
     for fn, suffix in functions:  # C names <id>_f, <id>_df (, <id>_ind, <id>_jump)
@@ -145,14 +146,14 @@ def _codegen(em: ExplicitModel, ident: str, build: Path) -> tuple[Path, Path]:
     return build / f"{ident}_model.c", build / f"{ident}_model.h"
 
 
-def _fmi2_files(em: ExplicitModel, ident: str, build: Path, step: float, me: bool, cs: bool) -> tuple[dict, str]:
+def _fmi2_files(em: ExplicitODE, ident: str, build: Path, step: float, me: bool, cs: bool) -> tuple[dict, str]:
     """Sources and description of gtmodel's FMI 2.0 wrapper: {local path: archive path}, XML."""
     c_model, h_model = _codegen(em, ident, build)
     vr = ValueReferences.contiguous(em)
     start = np.zeros(2 * em.nx + len(em.u_names) + len(em.p_names) + em.ny + 1)
-    start[vr.x] = em.x_start
-    start[vr.u] = em.u_start
-    start[vr.p] = em.p_value
+    start[vr.x] = em.x0
+    start[vr.u] = em.u0
+    start[vr.p] = em.p_default
     guid = "{" + str(uuid.uuid4()) + "}"
     subs = {"@ID@": ident, "@NX@": str(em.nx), "@NU@": str(len(em.u_names)), "@NP@": str(len(em.p_names)),
             "@NY@": str(em.ny), "@STEP@": repr(float(step)), "@GUID@": guid, "@NZ@": str(len(em.directions)),
@@ -244,15 +245,15 @@ def _add_fmi3_co_simulation(wrap: Path, step: float) -> None:
     wrap.write_text(f"#define GT_STEP {float(step)!r}\n" + text)
 
 
-def _fmi3_files(em: ExplicitModel, ident: str, build: Path, cs: bool = False, step: float = 1e-3) -> tuple[dict, str]:
+def _fmi3_files(em: ExplicitODE, ident: str, build: Path, cs: bool = False, step: float = 1e-3) -> tuple[dict, str]:
     """CasADi's FMI 3.0 model-exchange sources (with co-simulation added) and gtmodel's description."""
     dae = ca.DaeBuilder(ident)
     t = dae.add("time", "independent")
-    p = [dae.add(n, "parameter", "tunable", {"start": float(v)}) for n, v in zip(em.p_names, em.p_value)]
-    x = [dae.add(n, {"start": float(v)}) for n, v in zip(em.x_names, em.x_start)]
-    u = [dae.add(n, "input", {"start": float(v)}) for n, v in zip(em.u_names, em.u_start)]
+    p = [dae.add(n, "parameter", "tunable", {"start": float(v)}) for n, v in zip(em.p_names, em.p_default)]
+    x = [dae.add(n, {"start": float(v)}) for n, v in zip(em.x_names, em.x0)]
+    u = [dae.add(n, "input", {"start": float(v)}) for n, v in zip(em.u_names, em.u0)]
     y = [dae.add(n, "output") for n in em.y_names]
-    xdot, yv = em.f(t, ca.vertcat(*x), ca.vertcat(*u) if u else ca.MX(0, 1), ca.vertcat(*p) if p else ca.MX(0, 1))
+    xdot, yv = em.rhs(t, ca.vertcat(*x), ca.vertcat(*u) if u else ca.MX(0, 1), ca.vertcat(*p) if p else ca.MX(0, 1))
     for i, xi in enumerate(x):
         dae.eq(dae.der(xi), xdot[i])
     for i, yi in enumerate(y):

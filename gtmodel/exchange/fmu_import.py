@@ -7,7 +7,8 @@ control problem) come from the FMU's directional derivatives when the FMU declar
 ``providesDirectionalDerivative(s)``, otherwise from CasADi's finite differences; which
 one is used is :attr:`ImportedFmu.derivatives`.
 
-The result is an :class:`~gtmodel.exchange.explicit.ExplicitModel` (:attr:`ImportedFmu.model`)
+The result is an explicit model, :class:`~gtmodel.modeling.ExplicitODE` (``ExplicitODE``,
+:meth:`~gtmodel.modeling.ExplicitODE.from_function`; :attr:`ImportedFmu.model`)
 that :mod:`gtmodel.exchange.explicit_ops` simulates, linearises and connects to gtmodel
 models and components, and :mod:`gtmodel.exchange.explicit_ocp` uses in optimal control.
 
@@ -31,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.exchange.explicit import ExplicitModel
+from gtmodel.modeling import ExplicitODE
 from gtmodel.exchange.fmu_archive import ArchiveLimits, extract_fmu, inside, plain_identifier
 from gtmodel.exchange.fmu_export import fmi_platform
 from gtmodel.exchange.fmu_sources import build_from_sources
@@ -54,7 +55,7 @@ class ImportedFmu:
         The ``.fmu`` file.
     version : str
         FMI version (``"2.0"`` or ``"3.0"``).
-    model : ExplicitModel
+    model : ExplicitODE
         ``f(t, x, u, p) -> (xdot, y)`` evaluating the FMU, with the names, start values,
         units and descriptions of its variables.
     derivatives : str
@@ -67,7 +68,7 @@ class ImportedFmu:
 
     path: Path
     version: str
-    model: ExplicitModel
+    model: ExplicitODE
     derivatives: str
     folder: Path
     built_from_sources: bool = False
@@ -219,10 +220,9 @@ def _load(path: Path, folder: Path, derivatives: str, name: str | None, limits: 
             units[n] = dae.unit(n)
         if dae.description(n):
             descriptions[n] = dae.description(n)
-    em = ExplicitModel(
-        name=name or root.get("modelName", ident), f=f, x_names=x_names, u_names=u_names, p_names=p_names,
-        y_names=y_names, x_start=start(x_names), u_start=start(u_names), p_value=start(p_names),
-        units=units, descriptions=descriptions,
+    em = ExplicitODE.from_function(
+        name or root.get("modelName", ident), f, x_names, u_names, p_names, y_names, start(x_names), start(u_names),
+        start(p_names), units=units, descriptions=descriptions,
     )
     how = "directional derivatives of the FMU" if use_dd else "finite differences (CasADi)"
     return ImportedFmu(path=path, version=version, model=em, derivatives=how, folder=folder, built_from_sources=built)

@@ -1,5 +1,11 @@
 """Optimal motion on top of the modelling layer: point-to-point time/energy-optimal motion.
 
+Point-to-point and path-constrained motion of the robots, paths, milling, exports, and the
+``optimal_control`` declaration of a user's model (:mod:`~gtmodel.trajectory.model_ocp`). The
+method objects (:class:`Collocation`, :class:`MultipleShooting`, :class:`SolverSettings`,
+:class:`Refinement`) live beside the transcriptions in :mod:`gtmodel.modeling.ocp.methods`
+and are re-exported here.
+
 The names below are imported on first use (:mod:`gtmodel._lazy`): a problem that needs only
 :mod:`gtmodel.trajectory.model_ocp` does not import the robot models and path planners.
 """
@@ -27,6 +33,11 @@ __all__ = [
     "MillingProcess",
     "SpindleAngleResult",
     "optimise_spindle_angle",
+    "Collocation",
+    "MultipleShooting",
+    "SolverSettings",
+    "Refinement",
+    "OptimalControl",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, {
@@ -35,4 +46,7 @@ __getattr__, __dir__ = lazy_exports(__name__, {
     "Path": "path", "Polyline": "path", "SplinePath": "path", "StraightLine": "path",
     "PathConstrainedProblem": "path_constrained", "PathConstraints": "path_constrained", "PathSolution": "path_constrained", "solve_path_collocation": "path_constrained", "solve_path_convex": "path_constrained",
     "MillingProcess": "milling", "SpindleAngleResult": "milling", "optimise_spindle_angle": "milling",
+    # the method objects live in gtmodel.modeling.ocp.methods, re-exported by trajectory.settings
+    "Collocation": "settings", "MultipleShooting": "settings", "SolverSettings": "settings", "Refinement": "settings",
+    "OptimalControl": "model_ocp",
 })

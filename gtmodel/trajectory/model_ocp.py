@@ -2,9 +2,11 @@
 
 :class:`OptimalControl` (what the ``optimal_control`` problem kind loads) holds the
 :class:`~gtmodel.modeling.Optimization` declared on a user's model, the collocation
-transcription (:class:`~gtmodel.trajectory.settings.Collocation`) and IPOPT's settings
-(:class:`~gtmodel.trajectory.settings.SolverSettings`); :meth:`OptimalControl.solve`
-transcribes and solves it.
+transcription (:class:`~gtmodel.modeling.ocp.methods.Collocation` or
+:class:`~gtmodel.modeling.ocp.methods.MultipleShooting`, re-exported here) and IPOPT's settings
+(:class:`~gtmodel.modeling.ocp.methods.SolverSettings`); :meth:`OptimalControl.solve`
+transcribes and solves it, passing the verification settings to the transcription (the
+declared :class:`~gtmodel.modeling.Optimization` is not changed by a solve).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from gtmodel._timing import add_phase, timed
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
-from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
+from gtmodel.modeling.ocp.methods import Collocation, MultipleShooting, Refinement, SolverSettings
 from gtmodel.modeling.ocp.coarse_start import linear_quadratic, solve_from_coarse
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
@@ -39,28 +41,6 @@ __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "C
 #: solve (``benchmarks/bench_large_mesh.py``). A coarse solve that fails is not used.
 COARSE_START_MIN_ELEMENTS = 200  # not for a linear-quadratic problem (coarse_start.linear_quadratic)
 COARSE_START_ELEMENTS = 50
-
-
-@dataclass(frozen=True)
-class MultipleShooting:
-    """The method: direct multiple shooting (:class:`~gtmodel.modeling.ocp.shooting.ShootingTranscription`).
-
-    Parameters
-    ----------
-    intervals : int
-        Shooting intervals.
-    controls : {"constant", "linear"}
-        Input parametrisation per interval.
-    integrator : str or None
-        Integrator (None: rk for ODEs, radau for DAEs made explicit, else collocation).
-    steps : int
-        Fixed steps per interval of rk/radau/collocation.
-    """
-
-    intervals: int = 50
-    controls: str = "constant"
-    integrator: str | None = None
-    steps: int = 4
 
 
 @dataclass
@@ -141,11 +121,7 @@ class OptimalControl:
         OptimizationResult
         """
         d = self
-        if d.refinement.tolerance is not None:
-            d.optimization.verification_tolerance = d.refinement.tolerance
-        d.optimization.verification_rtol = d.refinement.rtol
-        d.optimization.verification_integrator = d.refinement.integrator
-        check = d.refinement.verify
+        check = d.refinement.verification if d.refinement.verify else False  # passed down, never set on the declaration
         options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
         if isinstance(d.method, MultipleShooting):
             m = d.method
@@ -173,7 +149,7 @@ class OptimalControl:
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                     max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, **kwargs,
+                    initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, verification=d.refinement.verification, **kwargs,
                 )
             result.timing = phases
             self.estimation = None
@@ -199,7 +175,7 @@ class OptimalControl:
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                     max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    max_cpu_s=d.refinement.max_cpu_s, start=result, **kwargs,
+                    max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification, **kwargs,
                 )
             result.timing = phases
         return self._estimated(tr, result)

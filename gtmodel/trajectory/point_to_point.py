@@ -47,7 +47,8 @@ from gtmodel.robots.parameters import RobotParameters, load_parameters
 from gtmodel.status import Status
 from gtmodel.trajectory.model_ocp import COARSE_START_ELEMENTS, COARSE_START_MIN_ELEMENTS
 from gtmodel.trajectory.rest_to_rest import bang_bang_duration, check_holding_forces, trapezoid_profile
-from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings, objective_scaling
+from gtmodel.modeling.ocp.methods import Collocation, Refinement, SolverSettings
+from gtmodel.trajectory.settings import objective_scaling
 
 __all__ = [
     "PointToPoint",
@@ -668,17 +669,16 @@ def solve_point_to_point(
         phases: dict[str, dict[str, float]] = {}
         with timed(phases, "build"):  # the robot's model and the problem's expressions (the NLP's build: the transcription's)
             opt, _ = build_optimization(problem)
-        if ref.tolerance is not None:
-            opt.verification_tolerance = ref.tolerance
         guess = previous.result if (warm_start and previous is not None) else None
         common = {"verbose": verbose, "solver_options": options, "nominal": {"tau": problem.force_limit},
                   "compile": problem.solver.jit, "solver": problem.solver.name}
         tr = CollocationTranscription(opt, elements=problem.method.elements, points=problem.method.points,
-                                      scheme=problem.method.scheme, **common)
+                                      scheme=problem.method.scheme, verify=ref.verification, **common)
         scaling = _scale_objective(tr, problem, options)
         refined = functools.partial(solve_refined, opt, elements=problem.method.elements, points=problem.method.points,
                                     scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
-                                    max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, parameters=problem.named_parameters)
+                                    max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, parameters=problem.named_parameters,
+                                    verification=ref.verification)
         if ref.refine:
             tr = None  # each pass is a new mesh (with the first mesh's objective scaling): no NLP kept for a sweep to reuse
             if scaling is not None:

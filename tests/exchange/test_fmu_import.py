@@ -128,7 +128,7 @@ def test_source_fmu_is_built_on_import(tmp_path):
     fmu = export_fmu(_cart_pendulum(), tmp_path / "src.fmu", interface="me", binary=False)
     imp = import_fmu(fmu.path)
     assert imp.built_from_sources
-    assert np.isfinite(np.array(imp.model.f(0, [0, 0, 0.5, 0], 0.0, imp.model.p_value)[0], dtype=float)).all()
+    assert np.isfinite(np.array(imp.model.rhs(0, [0, 0, 0.5, 0], 0.0, imp.model.p_default)[0], dtype=float)).all()
 
 
 @pytest.mark.parametrize(

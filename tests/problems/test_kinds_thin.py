@@ -15,7 +15,7 @@ from gtmodel.problems.registry import _SCHEMAS, KINDS, get_schema
 from gtmodel.problems.run import load_problem
 from gtmodel.status import Status
 from gtmodel.trajectory import PointToPoint
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
 
 from ..conftest import PROBLEMS_DIR
 

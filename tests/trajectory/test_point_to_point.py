@@ -142,7 +142,7 @@ def test_refinement_splits_the_mesh_and_keeps_the_best_verified_pass():
     optimal inputs (:mod:`gtmodel.modeling.ocp.verification`); the returned pass is the one
     closest to it, and its mesh has more elements than the first.
     """
-    from gtmodel.trajectory.settings import Refinement
+    from gtmodel.modeling.ocp.methods import Refinement
 
     p = PointToPoint("L1", start=START, end=END, force_limit=[450, 450, 450], elements=12,
                      refinement=Refinement(refine=True, tolerance=1.5e-2, max_passes=3))

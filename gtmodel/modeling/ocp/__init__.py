@@ -14,6 +14,9 @@
   layout); :mod:`~gtmodel.modeling.ocp.collocation_derivatives`: its Jacobian and Hessian
   assembled from per-point derivatives; :mod:`~gtmodel.modeling.ocp.collocation_function`:
   warm-started re-solves as one CasADi Function;
+* :mod:`~gtmodel.modeling.ocp.methods`: how a problem is solved, apart from what it is:
+  :class:`Collocation`, :class:`MultipleShooting`, :class:`SolverSettings`,
+  :class:`Refinement` and the :class:`VerificationSettings` passed to a transcription;
 * :mod:`~gtmodel.modeling.ocp.shooting`: :class:`ShootingTranscription`, direct multiple
   shooting (piecewise-constant or piecewise-linear inputs, a CasADi integrator per interval);
 * :mod:`~gtmodel.modeling.ocp.timed`: the values of timed variables ``x(t)`` and integrals
@@ -28,6 +31,7 @@
 from __future__ import annotations
 
 from gtmodel.modeling.ocp.optimization import Constraint, Optimization
+from gtmodel.modeling.ocp.methods import Collocation, MultipleShooting, Refinement, SolverSettings, VerificationSettings
 from gtmodel.modeling.ocp.declare import apply_to, optimization_names
 from gtmodel.modeling.ocp.expressions import (
     Objective,
@@ -63,4 +67,9 @@ __all__ = [
     "Verification",
     "verify",
     "solve_refined",
+    "Collocation",
+    "MultipleShooting",
+    "SolverSettings",
+    "Refinement",
+    "VerificationSettings",
 ]

@@ -54,7 +54,7 @@ from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, eleme
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import IPOPT_HINTS, CollocationData, OptimizationResult, normalize_ipopt_status
-from gtmodel.modeling.ocp.verification import check_result
+from gtmodel.modeling.ocp.verification import check_result, verify_settings
 from gtmodel.status import Status
 
 __all__ = ["CollocationTranscription", "solve"]
@@ -123,10 +123,10 @@ class CollocationTranscription:
         Relative element lengths, shape ``(N,)`` (positive; normalised to sum to 1), for
         a non-uniform mesh (mesh refinement, :mod:`gtmodel.modeling.ocp.refinement`);
         ``elements`` is then ``N``. Default: ``elements`` uniform elements.
-    verify : bool, optional
-        Verify every solution by simulation (:func:`gtmodel.modeling.ocp.verification.verify`,
-        with the problem's :attr:`Optimization.verification_tolerance`): the result's
-        ``verification``; a solution that fails it is ``check_failed``. Default True.
+    verify : bool or VerificationSettings, optional
+        Verify every solution by simulation (:func:`~gtmodel.modeling.ocp.verification.verify`) with these
+        :class:`~gtmodel.modeling.ocp.methods.VerificationSettings` (True: the problem's own; never written
+        onto it): the result's ``verification``; a failing solution is ``check_failed``. Default True.
 
     Raises
     ------
@@ -154,7 +154,7 @@ class CollocationTranscription:
         solver: str = "ipopt",
         banded: bool | None = None,
         mesh: Any = None,
-        verify: bool = True,
+        verify: Any = True,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -165,7 +165,7 @@ class CollocationTranscription:
                 raise InputError(f"mesh: expected positive finite relative element lengths, got {mesh!r}")
             self.fractions = f / f.sum()
             elements = int(f.size)
-        self.verify = bool(verify)
+        self.verify, self.verify_settings = bool(verify), verify_settings(verify)  # settings None: the declaration's
         if not isinstance(elements, (int, np.integer)) or isinstance(elements, bool) or elements < 1:
             raise InputError(f"elements must be a positive integer, got {elements!r}")
         if not isinstance(points, (int, np.integer)) or isinstance(points, bool) or not 1 <= points <= 9:
@@ -462,8 +462,8 @@ class CollocationTranscription:
     def check(self, result: OptimizationResult, special: np.ndarray | None = None, lagrange: float | None = None) -> OptimizationResult:
         """Verify a solution by simulation and downgrade it to ``check_failed`` if it fails.
 
-        Sets ``result.verification`` (:func:`gtmodel.modeling.ocp.verification.verify`
-        with the problem's :attr:`Optimization.verification_tolerance`); an ``optimal``
+        Sets ``result.verification`` (:func:`gtmodel.modeling.ocp.verification.verify` with
+        this transcription's verification settings, else the problem's); an ``optimal``
         or ``acceptable`` result whose verification fails becomes ``check_failed`` with
         the verification's message.
 
@@ -484,7 +484,7 @@ class CollocationTranscription:
         OptimizationResult
             ``result``, changed in place.
         """
-        return check_result(result, self.optimization, special, lagrange=lagrange)
+        return check_result(result, self.optimization, special, lagrange=lagrange, settings=self.verify_settings)
 
     def objective_at_guess(self, parameters: Mapping[str, Any] | None = None) -> float:
         """The NLP objective at the problem's declared initial guess (e.g. to choose its scaling).

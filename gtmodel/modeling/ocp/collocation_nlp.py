@@ -45,7 +45,8 @@ from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import lagrange_basis
 from gtmodel.modeling.ocp.timed import PointArgs, special_values
 
-__all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "CollocationNLP", "transcribe", "element_scaling"]
+__all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coefficients", "element_operators", "CollocationNLP",
+           "transcribe", "element_scaling"]
 
 #: CasADi-level nlpsol options passed through unchanged (others are options of the solver plugin).
 CASADI_OPTIONS = {
@@ -172,6 +173,29 @@ def _coefficients(d: int, scheme: str) -> dict[str, np.ndarray]:
         "L0": lagrange_basis(tau, np.array([0.0]))[0],
         "L1": lagrange_basis(tau, np.array([1.0]))[0],
     }
+
+
+def element_operators(co: Mapping[str, np.ndarray], nx: int) -> tuple[ca.DM, ca.DM]:
+    """The collocation equations of one element as two sparse matrices on its stacked states.
+
+    Parameters
+    ----------
+    co : mapping
+        :func:`collocation_coefficients` of the scheme (its ``C`` and ``D``).
+    nx : int
+        States.
+
+    Returns
+    -------
+    tuple of casadi.DM
+        ``K_der (nx d, nx (d + 1))``: applied to ``[x_0; x_1; ...; x_d]`` (the element start and
+        its points), the polynomial's derivative at the points, ``sum_r C[r, j] x_r``, which
+        the collocation equations set to ``h f(t_j, x_j, ...)``; ``K_end (nx, nx (d + 1))``: its
+        value at the element end, ``sum_r D[r] x_r``, the next element's start.
+    """
+    eye = np.eye(int(nx))
+    K_der = ca.DM(ca.sparsify(ca.DM(np.kron(np.asarray(co["C"], dtype=float)[:, 1:].T, eye))))
+    return K_der, ca.DM(ca.sparsify(ca.DM(np.kron(np.asarray(co["D"], dtype=float)[None, :], eye))))
 
 
 @dataclass
@@ -465,9 +489,7 @@ def transcribe(
     U_pts = ca.reshape(Up, nu, M)
     Z_pts = ca.reshape(Zp, nz, M)
     X_all = ca.vertcat(X0, Xp)  # (nx (d + 1), N): the element start, then its points
-    eye = np.eye(nx)
-    K_der = ca.DM(ca.sparsify(ca.DM(np.kron(np.asarray(co["C"], dtype=float)[:, 1:].T, eye))))
-    K_end = ca.DM(ca.sparsify(ca.DM(np.kron(np.asarray(co["D"], dtype=float)[None, :], eye))))
+    K_der, K_end = element_operators(co, nx)
     xp = ca.reshape(ca.mtimes(K_der, X_all), nx, M)
     F, A_alg, P_path = point_call.map(M)(t_pts, X_pts, Z_pts, U_pts, P, T_pts)
     R = ca.vertcat(ca.repmat(h_pts, nx, 1) * F - xp, A_alg, P_path)  # (nr, M)

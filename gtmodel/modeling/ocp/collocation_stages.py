@@ -6,6 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from gtmodel.modeling.ocp.methods import NLP_SOLVERS
 from gtmodel.status import Status
 
 __all__ = ["stage_order", "fatrop_cache", "SOLVERS", "IPOPT_ONLY", "FATROP_STATUS", "FATROP_WARM_START_OPTIONS"]
@@ -14,7 +15,7 @@ __all__ = ["stage_order", "fatrop_cache", "SOLVERS", "IPOPT_ONLY", "FATROP_STATU
 #: stage (``transcribe(..., stagewise=True)``), structure given explicitly; its plugin takes no
 #: ``jac_g``/``hess_lag`` options, so the assembled derivatives are put in its function cache
 #: under the names it asks for (``nlp_jac_g``, ``nlp_hess_l``; docs/verification.md).
-SOLVERS = ("ipopt", "fatrop")
+SOLVERS = NLP_SOLVERS  # one list, the method objects' (SolverSettings.name)
 #: IPOPT options fatrop lacks (dropped; ``obj_scaling_factor`` scales the objective it is given).
 IPOPT_ONLY = ("perturb_always_cd", "sb", "mumps_mem_percent", "linear_solver")
 #: fatrop options of a warm start from a solution of the problem (of this or a coarser mesh,

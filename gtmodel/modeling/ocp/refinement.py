@@ -54,6 +54,7 @@ from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
+from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, switch_elements, verify
@@ -264,6 +265,7 @@ def solve_refined(
     parameters: dict[str, Any] | None = None,
     max_cpu_s: float | None = None,
     start: OptimizationResult | None = None,
+    verification: VerificationSettings | None = None,
     **transcription: Any,
 ) -> OptimizationResult:
     """Solve by collocation with adaptive h-refinement of the mesh (see the module docstring).
@@ -283,9 +285,9 @@ def solve_refined(
     max_passes : int, optional
         Limit on the solves (``start`` counted as one); default :data:`MAX_PASSES`.
     tolerance : float, optional
-        Verification tolerance, set as the problem's
-        :attr:`Optimization.verification_tolerance`; default the problem's (or
-        ``defaults["ocp.verification_tolerance"]``).
+        Verification tolerance (over ``verification``'s); default the problem's
+        :attr:`Optimization.verification_tolerance` (or ``defaults["ocp.verification_tolerance"]``).
+        Passed to every pass's transcription, not written onto the problem.
     initial_guess : OptimizationResult or mapping, optional
         Guess of the first pass (see :meth:`CollocationTranscription.solve`).
     parameters : mapping of str to float or array_like, optional
@@ -297,6 +299,9 @@ def solve_refined(
     start : OptimizationResult, optional
         A verified solution of ``optimization`` already at hand (a single solve whose
         verification failed): the first pass, refined from, not solved again.
+    verification : VerificationSettings, optional
+        The verification's settings (tolerance, integrator, its rtol), each None field the
+        problem's own (:meth:`~gtmodel.modeling.ocp.methods.VerificationSettings.over`).
     **transcription
         Further arguments of :class:`CollocationTranscription` (``solver_options``,
         ``nominal``, ``verbose``, ...).
@@ -322,9 +327,10 @@ def solve_refined(
     budget = defaults["ocp.refine_max_cpu_s"] if max_cpu_s is None else max_cpu_s
     if isinstance(budget, bool) or not isinstance(budget, (int, float, np.integer, np.floating)) or not budget > 0:
         raise InputError(f"max_cpu_s: expected a positive number of seconds, got {budget!r}")
+    settings = (verification or VerificationSettings()).over(optimization)
     if tolerance is not None:
-        optimization.verification_tolerance = tolerance
-    tol = optimization.verification_tolerance
+        settings = dataclasses.replace(settings, tolerance=tolerance)
+    tol = settings.tolerance
     try:
         tol = float(defaults["ocp.verification_tolerance"] if tol is None else tol)
     except (TypeError, ValueError):
@@ -353,7 +359,7 @@ def solve_refined(
                 # 0.1 pushes the start off its active bounds, and a drive's NLP wandered 600 iterations into a
                 # local optimum 38 % slower)
                 options["solver_options"] = {"mu_init": WARM_MU, **dict(options.get("solver_options") or {})}
-            tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=True, **options)
+            tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
             result = tr.solve(parameters=parameters, initial_guess=guess)
             n_elements, tr_points = tr.elements, tr.points
             cpu, wall = _time.process_time() - c0, _time.perf_counter() - w0

@@ -65,7 +65,7 @@ from gtmodel.modeling.ocp.optimization import Integral, Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
 from gtmodel.modeling.ocp.budget import check_shooting_memory
 from gtmodel.modeling.ocp.shooting_steps import EXPLICIT_INTEGRATORS, ExplicitAlgebraics, explicit_algebraics, fixed_steps
-from gtmodel.modeling.ocp.verification import check_result
+from gtmodel.modeling.ocp.verification import check_result, verify_settings
 from gtmodel.status import Status
 
 __all__ = ["ShootingTranscription", "INTEGRATORS", "CONTROLS", "ROW_TOLERANCE"]
@@ -106,12 +106,13 @@ class ShootingTranscription:
         :class:`~gtmodel.modeling.ocp.collocation.CollocationTranscription`).
     integrator_options : mapping, optional
         Options of ``casadi.integrator`` (e.g. ``{"abstol": 1e-10}`` for ``"cvodes"``).
-    verify : bool, optional
+    verify : bool or VerificationSettings, optional
         Verify every solution by simulation (:func:`gtmodel.modeling.ocp.verification.verify`:
         the piecewise constant or linear inputs drive the model in CVODES or IDAS, compared
-        with the nodes and the integrator's sample points, with the problem's
-        :attr:`Optimization.verification_tolerance`): the result's ``verification``; a
-        solution that fails it is ``check_failed``. Default True.
+        with the nodes and the integrator's sample points) with these settings
+        (:class:`~gtmodel.modeling.ocp.methods.VerificationSettings`; True: the problem's
+        :attr:`Optimization.verification_tolerance`, ...; the declaration is never changed):
+        the result's ``verification``; a solution that fails it is ``check_failed``. Default True.
 
     Raises
     ------
@@ -136,7 +137,7 @@ class ShootingTranscription:
         verbose: bool = False,
         solver_options: Mapping[str, Any] | None = None,
         integrator_options: Mapping[str, Any] | None = None,
-        verify: bool = True,
+        verify: Any = True,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -174,7 +175,7 @@ class ShootingTranscription:
             options.setdefault("hessian_approximation", "limited-memory")
         self.options = merge_options(verbose, options, "ipopt")
         self.integrator_options = dict(integrator_options or {})
-        self.verify = bool(verify)
+        self.verify, self.verify_settings = bool(verify), verify_settings(verify)  # settings None: the declaration's own
         self._build()
 
     # ------------------------------------------------------------------ build
@@ -471,7 +472,8 @@ class ShootingTranscription:
         res.lam_w, res.lam_g = lam
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
             special = np.array(self.special_function(w, pvec), dtype=float).reshape(-1)
-            check_result(res, opt, special, what="multiple shooting solve", lagrange=float(self.lagrange_function(w, pvec)))
+            check_result(res, opt, special, what="multiple shooting solve", lagrange=float(self.lagrange_function(w, pvec)),
+                         settings=self.verify_settings)
         return res
 
     def _result(self, w: np.ndarray, pvec: np.ndarray, status: str, message: str, stats: dict, solve_time: float) -> OptimizationResult:

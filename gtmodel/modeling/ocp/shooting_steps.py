@@ -30,13 +30,11 @@ import numpy as np
 from gtmodel.errors import ModelError
 from gtmodel.modeling.dae import FlatDAE
 from gtmodel.modeling.simulation.explicit import (
-    _RADAU_A,
-    _RADAU_C,
     NEWTON_ITERATIONS,
     NEWTON_TOLERANCE,
     STEP_NEWTON_ITERATIONS,
     _eliminate,
-    _newton,
+    fixed_step,
 )
 
 __all__ = ["ExplicitAlgebraics", "explicit_algebraics", "fixed_steps", "EXPLICIT_INTEGRATORS"]
@@ -103,7 +101,8 @@ def fixed_steps(problem: dict[str, ca.SX], steps: int, method: str) -> ca.Functi
     method : {"rk", "radau"}
         Classical Runge-Kutta 4, or the 2-stage Radau IIA method by
         :data:`~gtmodel.modeling.simulation.explicit.STEP_NEWTON_ITERATIONS` simplified
-        Newton steps.
+        Newton steps (:func:`~gtmodel.modeling.simulation.explicit.fixed_step`, the code of
+        :meth:`~gtmodel.modeling.simulation.explicit.ExplicitODE.step`).
 
     Returns
     -------
@@ -118,26 +117,8 @@ def fixed_steps(problem: dict[str, ca.SX], steps: int, method: str) -> ca.Functi
     dt = 1.0 / steps
     n = x.numel()
     xc, tk = ca.SX.sym("x", n), ca.SX.sym("t")
-    if method == "rk":
-        k1, q1 = f(xc, p, tk)
-        k2, q2 = f(xc + dt / 2 * k1, p, tk + dt / 2)
-        k3, q3 = f(xc + dt / 2 * k2, p, tk + dt / 2)
-        k4, q4 = f(xc + dt * k3, p, tk + dt)
-        x_next = xc + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        dq = dt / 6 * (q1 + 2 * q2 + 2 * q3 + q4)
-        ok = ca.SX(1.0)
-    else:  # Radau IIA, 2 stages: stage derivatives K1, K2
-        kk = ca.SX.sym("K", 2 * n)
-        ks = (kk[:n], kk[n:])
-        stages = [xc + dt * (_RADAU_A[i][0] * ks[0] + _RADAU_A[i][1] * ks[1]) for i in range(2)]
-        res = ca.vertcat(*[ks[j] - f(stages[j], p, tk + _RADAU_C[j] * dt)[0] for j in range(2)])
-        k0 = f(xc, p, tk)[0]
-        k_sol, ok = _newton(res, kk, ca.vertcat(k0, k0), STEP_NEWTON_ITERATIONS, NEWTON_TOLERANCE * max(1.0, 1.0 / dt),
-                            simplified=True)
-        k1, k2 = k_sol[:n], k_sol[n:]
-        s1 = xc + dt * (_RADAU_A[0][0] * k1 + _RADAU_A[0][1] * k2)
-        x_next = xc + dt * (_RADAU_A[1][0] * k1 + _RADAU_A[1][1] * k2)
-        dq = dt * (_RADAU_A[1][0] * f(s1, p, tk + _RADAU_C[0] * dt)[1] + _RADAU_A[1][1] * f(x_next, p, tk + dt)[1])
+    x_next, dq, ok = fixed_step(lambda xs, ts: (*f(xs, p, ts), ca.SX(1.0)), xc, tk, dt, "rk4" if method == "rk" else "radau2",
+                                STEP_NEWTON_ITERATIONS, NEWTON_TOLERANCE)
     z_next = ca.substitute(zout, ca.vertcat(x, t), ca.vertcat(x_next, tk + dt))
     # one step as an SX function, repeated by mapaccum: the graph (and its derivatives) of one step,
     # not of all of them (64 unrolled Radau steps of a 5-state drive took 3.6 GB to build)

@@ -64,6 +64,7 @@ from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.dae import casadi_name
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
+from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
 from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
@@ -561,8 +562,33 @@ def problem_integrals(optimization: Any, result: OptimizationResult, special: np
     return [n for n, _, _ in terms], integrands, np.array([v for _, _, v in terms])
 
 
+def verify_settings(verify: Any) -> VerificationSettings | None:
+    """A transcription's ``verify`` argument checked: None for a bool, else the settings.
+
+    Parameters
+    ----------
+    verify : bool or VerificationSettings
+        True or False (verify with the declaration's settings, or not at all), or the
+        settings to verify with (:class:`~gtmodel.modeling.ocp.methods.VerificationSettings`).
+
+    Returns
+    -------
+    VerificationSettings or None
+        The settings given, None for a bool.
+
+    Raises
+    ------
+    InputError
+        ``verify`` is neither.
+    """
+    if isinstance(verify, (bool, VerificationSettings)):
+        return None if isinstance(verify, bool) else verify
+    raise InputError(f"verify: expected True, False or a VerificationSettings, got {type(verify).__name__}")
+
+
 def check_result(result: OptimizationResult, optimization: Any, special: np.ndarray | None = None,
-                 what: str = "collocation solve", lagrange: float | None = None) -> OptimizationResult:
+                 what: str = "collocation solve", lagrange: float | None = None,
+                 settings: VerificationSettings | None = None) -> OptimizationResult:
     """Verify a solution (:func:`verify`) and downgrade it to ``check_failed`` if it fails.
 
     Parameters
@@ -570,7 +596,9 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
     result : OptimizationResult
         A solution of a transcription of ``optimization`` (collocation or multiple shooting).
     optimization : Optimization
-        The problem (its :attr:`~gtmodel.modeling.Optimization.verification_tolerance`).
+        The problem (its :attr:`~gtmodel.modeling.Optimization.verification_tolerance`,
+        ``verification_rtol`` and ``verification_integrator`` where ``settings`` leaves
+        them None; read, never written).
     special : numpy.ndarray, optional
         The NLP's values of the timed variables and integrals (see
         :func:`problem_integrals`); given, the integrals are verified too.
@@ -579,6 +607,9 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
     lagrange : float, optional
         The NLP's value of the objective's Lagrange term ``sign * integral(lagrange)``
         (its quadrature); given, it is verified as an integral too.
+    settings : VerificationSettings, optional
+        The transcription's verification settings (the solve's, passed down); None: the
+        declaration's.
 
     Returns
     -------
@@ -587,9 +618,9 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
         ``acceptable`` status that fails it ``check_failed`` with the verification's
         message.
     """
-    v = verify(result, optimization.verification_tolerance, rtol=optimization.verification_rtol,
-               integrals=problem_integrals(optimization, result, special, lagrange),
-               integrator=optimization.verification_integrator)
+    use = (settings or VerificationSettings()).over(optimization)
+    v = verify(result, use.tolerance, rtol=use.rtol, integrals=problem_integrals(optimization, result, special, lagrange),
+               integrator=use.integrator)
     result.verification = v
     check_bounds(result, optimization)
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):

@@ -53,6 +53,7 @@ __all__ = [
     "ExplicitODE",
     "explicit_ode",
     "damped_newton",
+    "fixed_step",
     "eliminated_algebraics",
     "STEP_METHODS",
     "NEWTON_ITERATIONS",
@@ -155,6 +156,63 @@ def _newton(residual: ca.SX, v: ca.SX, v0: Any, iterations: int, tol: float, sim
             vk = vk - ca.solve(jac0, ca.substitute(residual, v, vk))
         return vk, _converged(ca.substitute(residual, v, vk), vk, tol)
     return damped_newton(residual, v, v0, iterations, tol)
+
+
+def fixed_step(rhs: Any, x: ca.SX, t: Any, dt: float, method: str, iterations: int = STEP_NEWTON_ITERATIONS,
+               tolerance: float = NEWTON_TOLERANCE) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """One step of a fixed-step method, the one Runge-Kutta code of :meth:`ExplicitODE.step` and the shooting intervals.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(x, t) -> (xdot (nx,1), q (nq,1), ok (1,1))``: the right-hand side, integrands
+        integrated along with the state by the method's weights, and a flag (1 when the
+        evaluation converged) multiplied over the stages.
+    x : casadi.SX
+        ``(nx, 1)`` the state at the start of the step.
+    t : casadi.SX or float
+        The time at the start of the step.
+    dt : float
+        The step length.
+    method : {"rk4", "implicit_euler", "radau2"}
+        Explicit Runge-Kutta 4 (order 4); implicit Euler (order 1, L-stable); the 2-stage
+        Radau IIA method (order 3, L-stable, stiffly accurate; Hairer & Wanner, *Solving ODE
+        II*, sec. IV.5). The implicit stages by ``iterations`` unrolled simplified Newton
+        steps (the exact Jacobian at the predictor, factorised once; sec. IV.8).
+    iterations : int, optional
+        Newton steps of an implicit method.
+    tolerance : float, optional
+        Convergence test of the implicit stage equations (Radau's scaled by ``max(1, 1/dt)``).
+
+    Returns
+    -------
+    tuple of casadi.SX
+        ``x_next (nx,1)``, ``dq (nq,1)`` the integrands' increment, ``ok (1,1)`` the
+        product of the stage Newton's and every evaluation's flags.
+    """
+    if method == "rk4":
+        k1, q1, o1 = rhs(x, t)
+        k2, q2, o2 = rhs(x + dt / 2 * k1, t + dt / 2)
+        k3, q3, o3 = rhs(x + dt / 2 * k2, t + dt / 2)
+        k4, q4, o4 = rhs(x + dt * k3, t + dt)
+        return x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4), dt / 6 * (q1 + 2 * q2 + 2 * q3 + q4), o1 * o2 * o3 * o4
+    n = x.numel()
+    if method == "implicit_euler":
+        v = ca.SX.sym("v", n)  # the new state
+        v_sol, ok = _newton(v - x - dt * rhs(v, t + dt)[0], v, x + dt * rhs(x, t)[0], iterations, tolerance, simplified=True)
+        _, q, o = rhs(v_sol, t + dt)
+        return v_sol, dt * q, ok * o
+    kk = ca.SX.sym("K", 2 * n)  # radau2: stage derivatives K1, K2
+    ks = (kk[:n], kk[n:])
+    stages = [x + dt * (_RADAU_A[i][0] * ks[0] + _RADAU_A[i][1] * ks[1]) for i in range(2)]
+    res = ca.vertcat(*[ks[i] - rhs(stages[i], t + _RADAU_C[i] * dt)[0] for i in range(2)])
+    k0 = rhs(x, t)[0]
+    k_sol, ok = _newton(res, kk, ca.vertcat(k0, k0), iterations, tolerance * max(1.0, 1.0 / dt), simplified=True)
+    k1, k2 = k_sol[:n], k_sol[n:]
+    s1 = x + dt * (_RADAU_A[0][0] * k1 + _RADAU_A[0][1] * k2)
+    x_next = x + dt * (_RADAU_A[1][0] * k1 + _RADAU_A[1][1] * k2)
+    (_, q1, o1), (_, q2, o2) = rhs(s1, t + _RADAU_C[0] * dt), rhs(x_next, t + dt)
+    return x_next, dt * (_RADAU_A[1][0] * q1 + _RADAU_A[1][1] * q2), ok * o1 * o2
 
 
 def _blocks(jac: ca.SX) -> list[tuple[list[int], list[int]]]:
@@ -262,8 +320,9 @@ class ExplicitODE:
         ``full(t, x, u, p) -> (xdot, y, converged)``, shapes ``(1,1), (nx,1), (nu,1),
         (np,1) -> (nx,1), (ny,1), (1,1)``; ``converged`` is 1 when every algebraic Newton
         solve converged (always 1 when ``newton == 0``).
-    dae : FlatDAE
-        The reduced, flattened model the ODE was built from.
+    dae : FlatDAE or None
+        The reduced, flattened model the ODE was built from; None for one that arrived as a
+        Function (an imported FMU, a connection of explicit models: :meth:`from_function`).
     x_names, u_names, p_names, y_names : list of str
         Scalar names (``"load.w"``, ``"T[0]"``) of states, inputs, parameters and outputs.
     x0 : numpy.ndarray
@@ -285,6 +344,18 @@ class ExplicitODE:
     time_dependent : bool
         The right-hand side or outputs depend on time explicitly (``f``/``h`` then refuse;
         use :attr:`full`).
+    descriptions : dict of str to str
+        Description per scalar name (missing: none).
+    indicators : casadi.Function or None
+        ``c(t, x, u, p) -> c (nw, 1)``: the when-clauses' zero-crossing functions (an FMU's
+        event indicators); None without events.
+    jump : casadi.Function or None
+        ``jump(t, x, u, p, fire (nw, 1)) -> x_new``: the reinits of the clauses whose
+        ``fire`` entry is 1, right-hand sides at the values before the event.
+    directions : list of int
+        Per clause: 1 fires when ``c`` becomes ``> 0``, -1 when ``< 0``, 0 both.
+    event_names : list of str
+        The clauses' names.
     """
 
     name: str
@@ -306,6 +377,49 @@ class ExplicitODE:
     algebraic: int = 0
     newton: int = 0
     time_dependent: bool = False
+    descriptions: dict[str, str] = field(default_factory=dict)
+    indicators: ca.Function | None = None
+    jump: ca.Function | None = None
+    directions: list[int] = field(default_factory=list)
+    event_names: list[str] = field(default_factory=list)
+
+    @classmethod
+    def from_function(cls, name: str, f: ca.Function, x_names: list[str], u_names: list[str], p_names: list[str],
+                      y_names: list[str], x0: Any, u0: Any, p_default: Any, **metadata: Any) -> "ExplicitODE":
+        """An explicit ODE given as a Function ``f(t, x, u, p) -> (xdot, y)`` (an imported FMU, a connection).
+
+        Parameters
+        ----------
+        name : str
+            Model name.
+        f : casadi.Function
+            ``f(t, x, u, p) -> (xdot, y)``, shapes ``(1,1), (nx,1), (nu,1), (np,1) -> (nx,1), (ny,1)``.
+        x_names, u_names, p_names, y_names : list of str
+            Scalar names of states, inputs, parameters and outputs.
+        x0, u0, p_default : array_like
+            ``(nx,)``, ``(nu,)``, ``(np,)`` start values of states and inputs, parameter values.
+        **metadata
+            Further fields (``units``, ``descriptions``, ``algebraic``, events).
+
+        Returns
+        -------
+        ExplicitODE
+            No flat model behind it (``dae`` None), bounds infinite, ``converged`` always 1.
+        """
+        kind = ca.SX if f.is_a("SXFunction") else ca.MX
+        t, x, u, p = (kind.sym(n, f.size1_in(i)) for i, n in enumerate(("t", "x", "u", "p")))
+        xdot, y = f(t, x, u, p)
+        full = ca.Function("explicit_ode", [t, x, u, p], [xdot, y, kind(1)], ["t", "x", "u", "p"], ["xdot", "y", "converged"])
+        try:
+            timed = bool(ca.depends_on(ca.vertcat(xdot, y), t))
+        except RuntimeError:  # an external Function (an FMU) is opaque: assume it may depend on time
+            timed = True
+        inf = lambda n: (np.full(n, -np.inf), np.full(n, np.inf))  # noqa: E731
+        (x_lb, x_ub), (u_lb, u_ub) = inf(len(x_names)), inf(len(u_names))
+        return cls(name=name, full=full, dae=None, x_names=list(x_names), u_names=list(u_names), p_names=list(p_names),
+                   y_names=list(y_names), x0=np.asarray(x0, float).reshape(-1), u0=np.asarray(u0, float).reshape(-1),
+                   p_default=np.asarray(p_default, float).reshape(-1), x_lb=x_lb, x_ub=x_ub, u_lb=u_lb, u_ub=u_ub,
+                   time_dependent=timed, **metadata)
 
     @property
     def nx(self) -> int:
@@ -357,6 +471,33 @@ class ExplicitODE:
             The model depends on time explicitly.
         """
         return self._timeless(["y"], "h")
+
+    @cached_property
+    def rhs(self) -> ca.Function:
+        """``f(t, x, u, p) -> (xdot, y)``: right-hand side and outputs with time (what an FMU evaluates).
+
+        Shapes ``(1,1), (nx,1), (nu,1), (np,1) -> (nx,1), (ny,1)``; :attr:`full` without ``converged``.
+        """
+        sym = ca.SX.sym if self.full.is_a("SXFunction") else ca.MX.sym
+        t, x, u, p = (sym(n, k) for n, k in (("t", 1), ("x", self.nx), ("u", self.nu), ("p", self.np)))
+        out = self.full(t=t, x=x, u=u, p=p)
+        return ca.Function("f", [t, x, u, p], [out["xdot"], out["y"]], ["t", "x", "u", "p"], ["xdot", "y"])
+
+    def derivative_function(self) -> ca.Function:
+        """Forward directional derivative of :attr:`rhs` (CasADi AD, an FMU's ``GetDirectionalDerivative``).
+
+        Returns
+        -------
+        casadi.Function
+            ``df(t, x, u, p, dx, du, dp) -> (dxdot, dy)``, the Jacobian of ``rhs`` times the
+            seeds (time is not seeded).
+        """
+        f = self.rhs
+        t, x, u, p = (ca.MX.sym(n, f.size1_in(i)) for i, n in enumerate(("t", "x", "u", "p")))
+        dx, du, dp = ca.MX.sym("dx", self.nx), ca.MX.sym("du", self.nu), ca.MX.sym("dp", self.np)
+        outs = f(t, x, u, p)
+        douts = f.forward(1)(t, x, u, p, *outs, ca.MX(1, 1), dx, du, dp)
+        return ca.Function("df", [t, x, u, p, dx, du, dp], list(douts), ["t", "x", "u", "p", "dx", "du", "dp"], ["dxdot", "dy"])
 
     @cached_property
     def converged(self) -> ca.Function:
@@ -426,33 +567,10 @@ class ExplicitODE:
         return ca.Function(f"step_{method}", [x, u, p], [xk, ok], ["x", "u", "p"], ["x_next", "converged"])
 
     def _single_step(self, dt: float, method: str, iterations: int, tolerance: float) -> ca.Function:
-        """One step of ``method`` over ``dt`` (see :meth:`step`)."""
-        f = self.f
-        ok_f = self.converged
+        """One step of ``method`` over ``dt`` (see :meth:`step`; :func:`fixed_step`)."""
+        f, ok_f = self.f, self.converged
         x, u, p = ca.SX.sym("x", self.nx), ca.SX.sym("u", self.nu), ca.SX.sym("p", self.np)
-        if method == "rk4":
-            k1 = f(x, u, p)
-            k2 = f(x + dt / 2 * k1, u, p)
-            k3 = f(x + dt / 2 * k2, u, p)
-            k4 = f(x + dt * k3, u, p)
-            x_next = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            ok = ok_f(x, u, p) * ok_f(x + dt / 2 * k1, u, p) * ok_f(x + dt / 2 * k2, u, p) * ok_f(x + dt * k3, u, p)
-        elif method == "implicit_euler":
-            v = ca.SX.sym("v", self.nx)  # the new state
-            res = v - x - dt * f(v, u, p)
-            v_sol, ok = _newton(res, v, x + dt * f(x, u, p), iterations, tolerance, simplified=True)
-            x_next = v_sol
-            ok = ok * ok_f(v_sol, u, p)
-        else:  # radau2: stage derivatives K1, K2
-            kk = ca.SX.sym("K", 2 * self.nx)
-            ks = (kk[: self.nx], kk[self.nx:])
-            stages = [x + dt * (_RADAU_A[i][0] * ks[0] + _RADAU_A[i][1] * ks[1]) for i in range(2)]
-            res = ca.vertcat(*[ks[i] - f(stages[i], u, p) for i in range(2)])
-            k0 = f(x, u, p)
-            k_sol, ok = _newton(res, kk, ca.vertcat(k0, k0), iterations, tolerance * max(1.0, 1.0 / dt), simplified=True)
-            k1, k2 = k_sol[: self.nx], k_sol[self.nx:]
-            x_next = x + dt * (_RADAU_A[1][0] * k1 + _RADAU_A[1][1] * k2)
-            ok = ok * ok_f(x + dt * (_RADAU_A[0][0] * k1 + _RADAU_A[0][1] * k2), u, p) * ok_f(x_next, u, p)
+        x_next, _, ok = fixed_step(lambda xs, _t: (f(xs, u, p), ca.SX(0, 1), ok_f(xs, u, p)), x, 0.0, dt, method, iterations, tolerance)
         ok = ok * (ca.sum1(ca.fabs(x_next)) < math.inf)  # 0 for a NaN or infinite entry
         return ca.Function(f"step_{method}", [x, u, p], [x_next, ok], ["x", "u", "p"], ["x_next", "converged"])
 

@@ -30,6 +30,6 @@ kinds too, with light schemas here (:mod:`gtmodel.problems.kinds.schemas.loop`, 
 :data:`gtmodel.problems.registry.LOOP_KINDS` and built by code generation, not solved.
 
 The method and solver settings of the optimisation kinds are
-:class:`gtmodel.trajectory.settings.Collocation` and
-:class:`gtmodel.trajectory.settings.SolverSettings`.
+:class:`gtmodel.modeling.ocp.methods.Collocation` and
+:class:`gtmodel.modeling.ocp.methods.SolverSettings`.
 """

@@ -48,8 +48,9 @@ from gtmodel.problems.references import named_parameters
 from gtmodel.problems.results import verification_fields
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
-from gtmodel.trajectory.model_ocp import MultipleShooting, OptimalControl
-from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
+from gtmodel.modeling.ocp.methods import MultipleShooting
+from gtmodel.trajectory.model_ocp import OptimalControl
+from gtmodel.modeling.ocp.methods import Collocation, Refinement, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
 

@@ -32,7 +32,7 @@ from gtmodel.trajectory import (
 )
 from gtmodel.trajectory.export import write_c_header
 from gtmodel.trajectory.path_constrained.declared import PATH_METHODS, PathConstrainedDeclaration
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
 
 __all__ = [
     "PATH_METHODS",

@@ -20,7 +20,7 @@ from gtmodel.trajectory.path_constrained.collocation import solve_path_collocati
 from gtmodel.trajectory.path_constrained.constraints import PathConstraints
 from gtmodel.trajectory.path_constrained.convex import solve_path_convex
 from gtmodel.trajectory.path_constrained.solution import PathSolution
-from gtmodel.trajectory.settings import Collocation, SolverSettings
+from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
 
 __all__ = ["PathConstrainedDeclaration", "PATH_METHODS"]
 

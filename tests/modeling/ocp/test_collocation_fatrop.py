@@ -15,7 +15,7 @@ from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling import CollocationTranscription, Optimization
 from gtmodel.modeling.ocp.collocation import SOLVERS
 from gtmodel.problems import load_problem
-from gtmodel.trajectory.settings import NLP_SOLVERS
+from gtmodel.modeling.ocp.methods import NLP_SOLVERS
 
 from ...conftest import PROBLEMS_DIR
 from .._builders import double_integrator, min_energy_problem, rest_to_rest

@@ -15,6 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gtmodel.errors import InputError, ModelError
+from gtmodel.exchange import ExplicitModel, explicit_model
 from gtmodel.modeling import Model, explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
@@ -203,3 +204,24 @@ def test_model_subclass_without_a_name_argument_reduces():
     assert ode.nx == 2
     res = CartesianPendulum2().simulate(np.linspace(0.0, 0.2, 11))
     assert res.x["x"][-1] ** 2 + res.x["y"][-1] ** 2 == pytest.approx(1.0, abs=1e-6)
+
+
+def test_one_explicit_model_class_for_the_loop_and_the_fmu(motor):
+    """The FMU's explicit model is this class (exchange.ExplicitModel an alias), with the same equations."""
+    model, ode = motor
+    em = explicit_model(model)
+    x, u = np.array([0.3, 0.1, 2.0]), np.array([4.0])
+    assert ExplicitModel is type(ode) is type(em)
+    assert np.allclose(np.array(em.rhs(0.0, x, u, em.p_default)[0], float).ravel(),
+                       np.array(ode.f(x, u, ode.p_default), float).ravel(), rtol=1e-14, atol=0)
+
+
+def test_from_function_steps_like_the_reduced_model(motor):
+    """An ODE given as a Function (an FMU, a connection) steps as the one reduced from the model (second path)."""
+    _, ode = motor
+    given = type(ode).from_function("given", ode.rhs, ode.x_names, ode.u_names, ode.p_names, ode.y_names,
+                                    ode.x0, ode.u0, ode.p_default)
+    x, u = np.array([0.3, 0.1, 2.0]), np.array([4.0])
+    same = [np.array(o.step(1e-3)(x, u, o.p_default)[0], float).ravel() for o in (ode, given)]
+    assert given.dae is None and not given.time_dependent and np.all(np.isinf(given.x_ub))
+    assert np.allclose(same[0], same[1], rtol=1e-13, atol=0)
