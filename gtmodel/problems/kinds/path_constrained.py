@@ -31,6 +31,7 @@ from gtmodel.trajectory import (
     StraightLine,
 )
 from gtmodel.trajectory.export import write_c_header
+from gtmodel.trajectory.point_to_point import TRAJECTORY_UNITS
 from gtmodel.trajectory.path_constrained.declared import PATH_METHODS, PathConstrainedDeclaration
 from gtmodel.trajectory.settings import Collocation, SolverSettings
 
@@ -199,6 +200,7 @@ class PathConstrainedKind(ProblemKind):
             "message": solution.message,
             "final_time_s": solution.final_time if solution.success else None,
             "energy": solution.energy if solution.success else None,
+            "units": dict(TRAJECTORY_UNITS),
             "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
             "iterations": solution.iterations,
             "solve_time_s": solution.solve_time,

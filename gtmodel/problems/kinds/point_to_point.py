@@ -22,7 +22,7 @@ from gtmodel.problems.kinds.motion_common import MOTION_EXTRA_EMPTY_FIELDS, forc
 from gtmodel.problems.kinds.schemas.point_to_point import PointToPointFile
 from gtmodel.problems.references import named_parameters, robot_parameters
 from gtmodel.report.trajectory import OVERLAY_FILES, plot_forces, plot_overlay, plot_tcp_path
-from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution
+from gtmodel.trajectory.point_to_point import TRAJECTORY_UNITS, PointToPoint, PointToPointSolution
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
 from gtmodel.trajectory.export import write_c_header
 
@@ -233,6 +233,7 @@ def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -
         "message": r.message,
         "final_time_s": r.final_time,
         "energy": solution.energy,
+        "units": dict(TRAJECTORY_UNITS),
         "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
         "iterations": r.iterations,
         "solve_time_s": r.solve_time,
