@@ -14,7 +14,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.report._figure import new_figure, save
+from gtmodel.report._figure import new_figure, save, scale_to_data
 
 __all__ = ["plot_signals", "plot_result", "MAX_PANELS"]
 
@@ -43,7 +43,9 @@ def plot_signals(
     title : str, optional
         Figure title.
     bounds : Mapping[str, tuple of float], optional
-        Name -> ``(lo, hi)``; finite bounds are drawn.
+        Name -> ``(lo, hi)``; finite bounds near the data are drawn (dashed), a far one is
+        named at the panel's edge: the axes are scaled to the data
+        (:func:`gtmodel.report._figure.scale_to_data`).
     units : Mapping[str, str], optional
         Name -> SI unit, shown on the y labels as ``name [unit]`` (e.g. :attr:`Model.units
         <gtmodel.modeling.Model.units>`).
@@ -59,11 +61,9 @@ def plot_signals(
     fig, axes = new_figure(rows, cols, size=(5.2 * cols, 2.4 * rows + 0.6), squeeze=False)
     axes = axes.ravel()
     for ax, name in zip(axes, names):
-        ax.plot(t, np.asarray(signals[name], dtype=float).reshape(-1), label=name)
-        lo, hi = (bounds or {}).get(name, (-np.inf, np.inf))
-        for b in (lo, hi):
-            if np.isfinite(b):
-                ax.axhline(b, color="k", linestyle="--", linewidth=0.8)
+        values = np.asarray(signals[name], dtype=float).reshape(-1)
+        ax.plot(t, values, label=name)
+        scale_to_data(ax, values, (bounds or {}).get(name, (-np.inf, np.inf)))
         unit = (units or {}).get(name)
         ax.set_ylabel(f"{name} [{unit}]" if unit else name)
         ax.grid(True)

@@ -451,9 +451,7 @@ def _csv_section(page: _Page, folder: Path, name: str, summary: Mapping[str, Any
 def _files_section(page: _Page, folder: Path, files: list[str], summary: Mapping[str, Any]) -> None:
     """The folder's files, each with what it holds (``summary["file_descriptions"]``) and its size."""
     described = summary.get("file_descriptions") if isinstance(summary.get("file_descriptions"), Mapping) else {}
-    own = {"summary.json": "status, message, figures and settings of the run (this page's source)",
-           REPORT_FILE: "this page"}
-    rows = [[f, str(described.get(f) or own.get(f) or "—"), (folder / f).lstat().st_size] for f in files]
+    rows = [[f, str(described.get(f) or "—"), (folder / f).lstat().st_size] for f in files]
     page.add('<h2 id="files">Files</h2>')
     page.table(["file", "what it holds", "bytes"], rows)
 

@@ -418,11 +418,12 @@ def test_l1_time_optimal_opens_on_its_status_and_trajectories_with_units(browser
 
 
 def test_the_page_lists_every_file_with_its_description(tmp_path):
-    out = _folder(tmp_path, summary={"file_descriptions": {"fits.csv": "gains per case", "states.png": "the states"}})
+    out = _folder(tmp_path, summary={"file_descriptions": {"summary.json": "the run", "fits.csv": "gains per case",
+                                                           "states.png": "the states"}})
     page = render_report(out, plotly_js=STUB_JS)
     files = re.search(r'<h2 id="files">Files</h2>(.*?)</table>', page, re.S).group(1)
     rows = re.findall(r"<tr><td>([^<]*)</td><td>([^<]*)</td>", files)
-    assert rows == [("summary.json", "status, message, figures and settings of the run (this page&#x27;s source)"),
+    assert rows == [("summary.json", "the run"),
                     ("fits.csv", "gains per case"), ("states.png", "the states"), ("trajectories.csv", "—")]
 
 
