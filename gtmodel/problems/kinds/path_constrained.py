@@ -83,6 +83,13 @@ class PathConstrainedKind(ProblemKind):
     name = "path_constrained"
     schema = PathConstrainedFile
     title = "time-optimal motion along a given TCP path (Dressler (2012), ch. 3.5; Verscheure et al. (2009))"
+    file_descriptions = {
+        "trajectory.csv": "the trajectory sampled every 4 ms: t [s], TCP x, y, z [m], actuators q [m], qd [m/s], forces tau [N], TCP velocity [m/s]",
+        "trajectory.h": "the same samples as a C header, the feedforward table of the generated loop",
+        "tcp_path.png": "the TCP path in space along the given path",
+        "forces.png": "actuator forces against time with their limits",
+        "profile.png": "the path speed profile: s_dot against the path parameter s",
+    }
     columns = trajectory_columns()
     extra_empty_fields = MOTION_EXTRA_EMPTY_FIELDS
 

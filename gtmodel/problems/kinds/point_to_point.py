@@ -43,6 +43,12 @@ class PointToPointKind(ProblemKind):
     name = "point_to_point"
     schema = PointToPointFile
     title = "free-path time/energy-optimal motion between two poses (Dressler (2012), ch. 3.5)"
+    file_descriptions = {
+        "trajectory.csv": "the trajectory sampled every 4 ms: t [s], TCP x, y, z [m], actuators q [m], qd [m/s], forces tau [N], TCP velocity [m/s]",
+        "trajectory.h": "the same samples as a C header, the feedforward table of the generated loop",
+        "tcp_path.png": "the TCP path in space between the start and end poses",
+        "forces.png": "actuator forces against time with their limits",
+    }
     columns = trajectory_columns()
     extra_empty_fields = MOTION_EXTRA_EMPTY_FIELDS
 

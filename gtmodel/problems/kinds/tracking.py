@@ -142,6 +142,13 @@ class TrackingKind(ProblemKind):
     name = "tracking"
     schema = TrackingFile
     title = "closed-loop tracking of a planned trajectory at 4 ms: actuators, structure, sensors (Dressler (2012), ch. 7.3)"
+    file_descriptions = {
+        "tracking.csv": "the closed-loop run every 4 ms: actuator and TCP references, actual, kinematic and measured positions, accelerations",
+        "actuator_error.png": "actuator tracking errors against time",
+        "tool_error.png": "tool (TCP) tracking errors against time",
+        "deflection.png": "structural deflections against time",
+        "tool_path.png": "reference and simulated tool path",
+    }
     columns = (
         Column("actuator_error_max_abs_m", "max |q - q_ref| [m]", "{:.3e}"),
         Column("tool_error_max_abs_m", "max |z - T_ref| [m]", "{:.3e}"),
