@@ -61,7 +61,6 @@ __all__ = [
     "SAMPLE_TIME",
     "SOLVER_OPTIONS",
     "TRAJECTORY_COLUMNS",
-    "TRAJECTORY_UNITS",
     "GUESS_MAX_ROWS",
     "GUESS_MAX_BYTES",
     "START_POSE",
@@ -94,11 +93,6 @@ START_POSE, END_POSE = "T_start_pose", "T_end_pose"
 GUESS_MAX_ROWS = 100_000
 GUESS_MAX_BYTES = 20_000_000
 TRAJECTORY_COLUMNS = ("t", "x", "y", "z", "q1", "q2", "q3", "qd1", "qd2", "qd3", "tau1", "tau2", "tau3")
-#: SI unit of each column of ``trajectory.csv`` (TCP position and velocity, actuator
-#: positions, speeds and forces; a path-constrained file adds the path parameter ``s`` in [0, 1]).
-TRAJECTORY_UNITS = {"t": "s", **dict.fromkeys(("x", "y", "z", "q1", "q2", "q3"), "m"),
-                    **dict.fromkeys(("qd1", "qd2", "qd3", "xd", "yd", "zd"), "m/s"), **dict.fromkeys(("tau1", "tau2", "tau3"), "N"),
-                    "s": "1", "s_dot": "1/s", "s_ddot": "1/s^2"}
 
 
 #: The objective of Dressler (2012), ch. 3.5 (Table 3.1) in the problem language.

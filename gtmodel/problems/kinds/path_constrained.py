@@ -30,8 +30,7 @@ from gtmodel.trajectory import (
     SplinePath,
     StraightLine,
 )
-from gtmodel.trajectory.export import write_c_header
-from gtmodel.trajectory.point_to_point import TRAJECTORY_UNITS
+from gtmodel.trajectory.export import TRAJECTORY_UNITS, write_c_header
 from gtmodel.trajectory.path_constrained.declared import PATH_METHODS, PathConstrainedDeclaration
 from gtmodel.trajectory.settings import Collocation, SolverSettings
 

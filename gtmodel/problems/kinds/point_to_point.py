@@ -22,9 +22,9 @@ from gtmodel.problems.kinds.motion_common import MOTION_EXTRA_EMPTY_FIELDS, forc
 from gtmodel.problems.kinds.schemas.point_to_point import PointToPointFile
 from gtmodel.problems.references import named_parameters, robot_parameters
 from gtmodel.report.trajectory import OVERLAY_FILES, plot_forces, plot_overlay, plot_tcp_path
-from gtmodel.trajectory.point_to_point import TRAJECTORY_UNITS, PointToPoint, PointToPointSolution
+from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution
 from gtmodel.trajectory.settings import Collocation, Refinement, SolverSettings
-from gtmodel.trajectory.export import write_c_header
+from gtmodel.trajectory.export import TRAJECTORY_UNITS, write_c_header
 
 __all__ = ["PointToPointKind", "PointToPointFile", "point_to_point_summary"]
 
