@@ -189,14 +189,7 @@ def test_signals_at_random_moments_always_give_130_or_the_finished_result(tmp_pa
         shutil.rmtree(out, ignore_errors=True)
         _earlier_result(out)
         proc = _start("solve", str(base), "--out", str(out), "-q")
-        # the moments count from when gtmodel handles signals: before that (Python starting, a
-        # few ms idle, over 0.3 s on the loaded machine) a signal ends the process by itself,
-        # as documented (docs/reliability.md), exit -2 with the earlier result left as it was:
-        # the one failure seen (exit -2 beside the earlier, complete summary) was that moment
-        deadline = time.monotonic() + 30
-        while not _handles_signals(proc.pid) and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.002)
-        time.sleep(rng.uniform(0.0, 5.7))
+        time.sleep(rng.uniform(0.3, 6.0))
         sent = [rng.choice([signal.SIGINT, signal.SIGTERM]) for _ in range(rng.randint(1, 3))]
         for s in sent:
             proc.send_signal(s)
