@@ -320,6 +320,7 @@ class TrackingKind(ProblemKind):
         for key, suffix in (("T_ref", "_ref"), ("T_kin", "_kin"), ("d", "_d"), ("z", ""), ("a_kin", "_acc_kin"), ("a", "_acc"), ("a_m", "_acc_m"), ("z_m", "_m")):
             for i, c in enumerate("xyz"):
                 table[f"{c}{suffix}"] = getattr(r, key)[:, i]
+        written.fields["units"] = {c: "s" if c == "t" else "m/s^2" if "_acc" in c else "m" for c in table}  # the report's axes
         np.savetxt(out / "tracking.csv", np.column_stack(list(table.values())), delimiter=",", header=",".join(table), comments="", fmt="%.10g")
         written.files.append("tracking.csv")
         if plots:
