@@ -28,12 +28,7 @@ LAZY_OK = ("matplotlib", "sklearn", "dask", "distributed")
 #: problem layer pulls in CasADi, SciPy, pandas and matplotlib: 4-6 s) when it runs.
 #: (``gtmodel/cli_codegen.py`` holds the routes of ``gtmodel codegen``, likewise.)
 #: ``gtmodel/__main__.py`` installs the signal handlers before it imports the command (issue 26).
-#: The notebook conveniences ``OptimizationResult.plot`` and ``Linearization.bode_plot`` /
-#: ``step_plot`` call the report layer that draws them (the one exception of the layers
-#: contract, ``ignore_imports`` in pyproject.toml).
-LAZY_GTMODEL_OK = {"gtmodel/cli.py": ("gtmodel.",), "gtmodel/cli_codegen.py": ("gtmodel.",), "gtmodel/__main__.py": ("gtmodel.cli",),
-                   "gtmodel/modeling/ocp/result.py": ("gtmodel.report.model_trajectory",),
-                   "gtmodel/modeling/simulation/linear.py": ("gtmodel.report.linear",)}
+LAZY_GTMODEL_OK = {"gtmodel/cli.py": ("gtmodel.",), "gtmodel/cli_codegen.py": ("gtmodel.",), "gtmodel/__main__.py": ("gtmodel.cli",)}
 MAX_LINES = 700
 
 

@@ -23,6 +23,7 @@ import os
 import stat
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from fnmatch import fnmatchcase
 from pathlib import Path
 from typing import Any, ClassVar, Collection, Mapping
 
@@ -31,7 +32,11 @@ from gtmodel.errors import ProblemError
 from gtmodel.problems.schema import ProblemSchema
 from gtmodel.status import Status
 
-__all__ = ["ProblemFile", "Column", "ProblemKind", "Problem", "Written", "KIND_DOCS"]
+__all__ = ["ProblemFile", "Column", "ProblemKind", "Problem", "Written", "KIND_DOCS", "COMMON_FILES"]
+
+#: The files of every result folder, with what they hold (:attr:`ProblemKind.file_descriptions`).
+COMMON_FILES = {"summary.json": "status, message, figures and settings of the run (always written)",
+                "report.html": "this folder on one page: status, trajectories, tables, plots and files (gtmodel report)"}
 
 #: Docstring sections shared by every kind (inserted by :func:`fill_doc`): the arguments of
 #: :meth:`ProblemKind.load` and the top-level fields of every problem file.
@@ -267,6 +272,34 @@ class ProblemKind(ABC):
     #: Summary fields that are None when a case failed before solving, besides the keys of
     #: :attr:`columns`.
     extra_empty_fields: ClassVar[tuple[str, ...]] = ()
+    #: Every file its :meth:`write` may put in a result folder: name (an :mod:`fnmatch`
+    #: pattern for a file per case, ``"ilc_tool_path_case_*.png"``) -> one line saying what
+    #: it holds. ``summary.json`` and ``report.html`` are every kind's (:data:`COMMON_FILES`).
+    #: The run writes them into ``summary.json`` (``file_descriptions``) and the report lists
+    #: them; a test fails for a kind that writes a file it does not describe.
+    file_descriptions: ClassVar[Mapping[str, str]] = {}
+
+    def describe_files(self, names: Collection[str]) -> dict[str, str]:
+        """What each file of a result folder holds, from :attr:`file_descriptions`.
+
+        Parameters
+        ----------
+        names : collection of str
+            File names in the folder.
+
+        Returns
+        -------
+        dict of str to str
+            Name -> its description, for the names described (:data:`COMMON_FILES` or a
+            pattern of :attr:`file_descriptions`); an undescribed name is left out.
+        """
+        patterns = {**COMMON_FILES, **self.file_descriptions}
+        out = {}
+        for name in names:
+            text = patterns.get(name) or next((d for pat, d in patterns.items() if fnmatchcase(name, pat)), None)
+            if text:
+                out[name] = text
+        return out
 
     @property
     def empty_fields(self) -> tuple[str, ...]:

@@ -185,6 +185,8 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
                 summary["overrides"] = dict(problem.overrides)
             summary.update(written.fields)
             summary["status"] = kind.status(solution)
+            names = {p.name for p in folder.path.iterdir()} | {"summary.json"} | ({REPORT_FILE} if report else set())
+            summary["file_descriptions"] = kind.describe_files(sorted(names))
             if report:
                 _write_report(folder.path, summary)
             add_phase(phases, "writing", time.perf_counter() - wall, time.process_time() - cpu)

@@ -12,10 +12,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 
-__all__ = ["new_figure", "save", "panel_size"]
+__all__ = ["new_figure", "save", "panel_size", "panel_grid", "shared_legend", "scale_to_data"]
 
 
 def _size(size: Any) -> tuple[float, float]:
@@ -109,3 +111,85 @@ def save(fig: Any, path: str | Path | None, **savefig: Any) -> Any:
     if path is not None:
         fig.savefig(Path(path), dpi=defaults["plot.dpi"], **savefig)
     return fig
+
+
+def panel_grid(n: int, max_cols: int = 2) -> tuple[int, int]:
+    """``(rows, cols)`` of a near-square grid of ``n`` panels, at most ``max_cols`` wide.
+
+    Parameters
+    ----------
+    n : int
+        Number of panels (at least one is laid out).
+    max_cols : int, optional
+        Most panels per row (default 2).
+
+    Returns
+    -------
+    tuple of int
+    """
+    cols = max(1, min(max_cols, n))
+    return max(1, -(-n // cols)), cols
+
+
+def shared_legend(fig: Any, ax: Any, **legend: Any) -> Any:
+    """One legend for panels that draw the same lines: ``ax``'s entries, once, below the figure's panels.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    ax : matplotlib.axes.Axes
+        A panel holding every labelled line.
+    **legend
+        Further arguments of :meth:`~matplotlib.figure.Figure.legend` (``fontsize``, ...).
+
+    Returns
+    -------
+    matplotlib.legend.Legend
+    """
+    handles, labels = ax.get_legend_handles_labels()
+    return fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4) or 1, **legend)
+
+
+def scale_to_data(ax: Any, values: Any, bounds: tuple[float, float] = (-np.inf, np.inf), reach: float = 0.5) -> list[float]:
+    """Y limits from the data, the bounds near it drawn (dashed) and the far ones named at the edge.
+
+    A bound within ``reach`` times the data's range of it is drawn and kept in view; one
+    farther away would flatten the data to a line, so it is written at the panel's top or
+    bottom (``"upper bound 1000 (off scale)"``) instead.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The panel.
+    values : array_like
+        The plotted values (NaN ignored).
+    bounds : tuple of float, optional
+        ``(lo, hi)``; infinite or NaN: none.
+    reach : float, optional
+        How far from the data (in data ranges) a bound is still drawn (default 0.5).
+
+    Returns
+    -------
+    list of float
+        The bounds drawn.
+    """
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    lo_d, hi_d = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+    span = hi_d - lo_d or max(abs(hi_d), 1.0) * 0.1
+    drawn, low, high = [], lo_d, hi_d
+    for side, b in zip(("lower", "upper"), bounds):
+        if b is None or not np.isfinite(b):
+            continue
+        if lo_d - reach * span <= b <= hi_d + reach * span:
+            ax.axhline(b, color="k", linestyle="--", linewidth=0.8)
+            drawn.append(float(b))
+            low, high = min(low, b), max(high, b)
+        else:
+            above = b > hi_d
+            ax.text(0.99, 0.97 if above else 0.03, f"{side} bound {b:.4g} (off scale)", transform=ax.transAxes,
+                    ha="right", va="top" if above else "bottom", fontsize="x-small", color="0.3")
+    pad = 0.08 * ((high - low) or span)
+    ax.set_ylim(low - pad, high + pad)
+    return drawn

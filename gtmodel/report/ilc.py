@@ -22,7 +22,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.report._figure import new_figure, save
+from gtmodel.report._figure import new_figure, panel_grid, save, shared_legend
 
 __all__ = ["plot_error_measure", "plot_tool_path", "plot_iteration_errors", "plot_convergence", "case_title", "SIGNAL_TITLES"]
 
@@ -92,7 +92,8 @@ def plot_error_measure(
     Returns
     -------
     matplotlib.figure.Figure
-        The figure, written to ``path``: one axes per case, titled by :func:`case_title`.
+        The figure, written to ``path``: one axes per case (two per row), titled by
+        :func:`case_title`, one legend below them.
 
     Raises
     ------
@@ -102,8 +103,11 @@ def plot_error_measure(
     if not measures:
         raise InputError("measures: expected at least one case")
     data = {name: _columns(m, f"measures[{name!r}]") for name, m in measures.items()}
-    fig, axes = new_figure(1, len(data), sharey=True, size=(4.2 * len(data), 3.6))
-    axes = np.atleast_1d(axes)
+    rows, cols_ = panel_grid(len(data))
+    fig, axes = new_figure(rows, cols_, sharey=True, size=(4.6 * cols_, 2.9 * rows + 1.0), squeeze=False)
+    axes = axes.ravel()
+    for ax in axes[len(data):]:
+        ax.set_visible(False)
     for ax, (name, m) in zip(axes, data.items()):
         cols = labels if labels is not None else [str(j + 1) for j in range(m.shape[1])]
         values = m / np.where(m[0] > 0, m[0], 1.0) if relative else m
@@ -112,8 +116,9 @@ def plot_error_measure(
         ax.set_title(case_title(name, (signals or {}).get(name)))
         ax.set_xlabel("iteration")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize="small")
-    axes[0].set_ylabel("error measure relative to iteration 0" if relative else "error measure [m]")
+    shared_legend(fig, axes[0], fontsize="small")
+    for ax in axes[::cols_]:
+        ax.set_ylabel("error measure relative to iteration 0" if relative else "error measure [m]")
     fig.suptitle(title or "ILC error measure (7.25)")
     return save(fig, path)
 
@@ -245,8 +250,9 @@ def plot_convergence(cases: Mapping[str, Mapping[str, Any]], path: str | Path, t
     Returns
     -------
     matplotlib.figure.Figure
-        One panel per case: ``|Q^-1|``, the loop gain and their product ``|Q| g`` against
-        frequency; the lifted figures in the legend.
+        One panel per case (two per row): ``|Q^-1|``, the loop gain and their product
+        ``|Q| g`` against frequency, the lifted figures written in the panel; one legend
+        below the panels.
 
     Raises
     ------
@@ -255,8 +261,11 @@ def plot_convergence(cases: Mapping[str, Mapping[str, Any]], path: str | Path, t
     """
     if not cases:
         raise InputError("cases: expected at least one case")
-    fig, axes = new_figure(1, len(cases), sharey=True, size=(4.2 * len(cases), 3.6))
-    axes = np.atleast_1d(axes)
+    rows, cols = panel_grid(len(cases))
+    fig, axes = new_figure(rows, cols, sharey=True, size=(4.6 * cols, 2.9 * rows + 1.0), squeeze=False)
+    axes = axes.ravel()
+    for ax in axes[len(cases):]:
+        ax.set_visible(False)
     for ax, (name, c) in zip(axes, cases.items()):
         f, q, g = (np.asarray(c[k], dtype=float) for k in ("freqs_hz", "q", "loop_gain"))
         ax.semilogy(f, 1.0 / np.maximum(np.abs(q), 1e-12), label="|Q^-1|")
@@ -271,7 +280,8 @@ def plot_convergence(cases: Mapping[str, Mapping[str, Any]], path: str | Path, t
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylim(1e-2, 1e2)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize="x-small", loc="upper right")
-    axes[0].set_ylabel("magnitude")
+    shared_legend(fig, axes[0], fontsize="small")
+    for ax in axes[::cols]:
+        ax.set_ylabel("magnitude")
     fig.suptitle(title or "ILC monotone convergence (7.16)")
     return save(fig, path)

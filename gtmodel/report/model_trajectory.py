@@ -1,7 +1,8 @@
 """Plots of an optimal trajectory of a user's model (kind ``optimal_control``): one panel per signal.
 
-:func:`plot_result` is :meth:`OptimizationResult.plot <gtmodel.modeling.OptimizationResult.plot>`:
-any variable of a result by name, with the bounds the solve respected.
+:func:`plot_result` (``gtmodel.report.plot_result(result, "load.phi", ...)`` in a notebook):
+any variable of a :class:`~gtmodel.modeling.OptimizationResult` by name, with the bounds the
+solve respected.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from gtmodel.errors import InputError
-from gtmodel.report._figure import new_figure, save
+from gtmodel.report._figure import new_figure, save, scale_to_data
 
 __all__ = ["plot_signals", "plot_result", "MAX_PANELS"]
 
@@ -42,7 +43,9 @@ def plot_signals(
     title : str, optional
         Figure title.
     bounds : Mapping[str, tuple of float], optional
-        Name -> ``(lo, hi)``; finite bounds are drawn.
+        Name -> ``(lo, hi)``; finite bounds near the data are drawn (dashed), a far one is
+        named at the panel's edge: the axes are scaled to the data
+        (:func:`gtmodel.report._figure.scale_to_data`).
     units : Mapping[str, str], optional
         Name -> SI unit, shown on the y labels as ``name [unit]`` (e.g. :attr:`Model.units
         <gtmodel.modeling.Model.units>`).
@@ -58,11 +61,9 @@ def plot_signals(
     fig, axes = new_figure(rows, cols, size=(5.2 * cols, 2.4 * rows + 0.6), squeeze=False)
     axes = axes.ravel()
     for ax, name in zip(axes, names):
-        ax.plot(t, np.asarray(signals[name], dtype=float).reshape(-1), label=name)
-        lo, hi = (bounds or {}).get(name, (-np.inf, np.inf))
-        for b in (lo, hi):
-            if np.isfinite(b):
-                ax.axhline(b, color="k", linestyle="--", linewidth=0.8)
+        values = np.asarray(signals[name], dtype=float).reshape(-1)
+        ax.plot(t, values, label=name)
+        scale_to_data(ax, values, (bounds or {}).get(name, (-np.inf, np.inf)))
         unit = (units or {}).get(name)
         ax.set_ylabel(f"{name} [{unit}]" if unit else name)
         ax.grid(True)
@@ -96,19 +97,17 @@ def _element_bounds(lb: Any, ub: Any, name: str, size: int) -> dict[str, tuple[f
     return {k: (float(a), float(b)) for k, a, b in zip(keys, lo, hi) if not (np.isnan(a) and np.isnan(b))}
 
 
-def plot_result(result: Any, names: Any = (), path: str | Path | None = None, bounds: Mapping[str, Any] | None = None,
-                units: Mapping[str, str] | None = None, title: str = "") -> Any:
+def plot_result(result: Any, *names: str, bounds: Mapping[str, Any] | None = None, units: Mapping[str, str] | None = None,
+                path: str | Path | None = None, title: str = "") -> Any:
     """Variables of an optimal control result against time, with their bounds.
 
     Parameters
     ----------
     result : gtmodel.modeling.OptimizationResult
         The result (its values on the collocation mesh ``result.t``).
-    names : str or sequence of str, optional
+    *names : str
         Scalar names of states, inputs, algebraic variables or outputs (``"load.phi"``;
         ``"T[0]"`` for an element of a vector variable); default every state and input.
-    path : str, pathlib.Path or None, optional
-        PNG file to write (default none).
     bounds : Mapping[str, tuple], optional
         Variable name -> ``(lo, hi)``, scalars or one value per element (NaN or inf: open),
         drawn over the model's own bounds (``result.dae``); pass an
@@ -116,6 +115,8 @@ def plot_result(result: Any, names: Any = (), path: str | Path | None = None, bo
         ``set_bounds``.
     units : Mapping[str, str], optional
         Name -> SI unit for the axis labels (e.g. ``model.units``).
+    path : str, pathlib.Path or None, optional
+        PNG file to write (default none).
     title : str, optional
         Figure title (default the model's name).
 
@@ -131,8 +132,6 @@ def plot_result(result: Any, names: Any = (), path: str | Path | None = None, bo
     """
     groups = {g: getattr(result, g) for g in ("states", "inputs", "algebraics", "outputs")}
     pool = _scalar_columns(groups)
-    if isinstance(names, str):
-        names = [names]
     names = list(names) or list(_scalar_columns({g: groups[g] for g in ("states", "inputs")}))
     missing = [n for n in names if n not in pool]
     if missing:

@@ -1,19 +1,24 @@
 """One self-contained HTML page of a result folder: ``report.html`` (``gtmodel report DIR``).
 
-The page shows what the folder holds, for every kind: the status and message, the
-objective and the other summary fields, the verification block, the warnings, the
-benchmark comparison, the trajectories of every CSV table with a time column as zoomable
-Plotly figures (one panel per column, panels sharing the time axis; the bounds of the
-variables drawn as dashed lines where ``summary.json`` has them), the model's variables
-with their units and bounds, the other tables, the kind's PNG plots and the whole
-``summary.json``. Plotly's script is inlined (about 4.7 MB), so the page needs no network
-and no other file: it can be mailed or archived alone.
+The page opens on what a reader asks first: the status and message, the objective and the
+final time, the warnings, then the trajectories of every CSV table with a time column as
+zoomable Plotly figures (one panel per column, panels sharing the time axis, every axis
+titled with its unit, the bounds of the variables drawn as dashed lines where
+``summary.json`` has them). Below come the verification block, the benchmark comparison,
+the other summary fields, the model's variables with their units and bounds, the other
+tables, the kind's PNG plots, the folder's files with what each holds (``summary.json``'s
+``file_descriptions``) and the whole ``summary.json``.
+
+Plotly's *basic* bundle (scatter, bar and pie traces: :data:`PLOTLY_JS`, plotly.js
+4.1.1, MIT licence beside it, vendored from the ``plotly.js-basic-dist-min`` package) is
+inlined, about 1.2 MB, so the page needs no network and no other file: it can be mailed
+or archived alone.
 
 The optimal-control summary names its variable groups (``variables``: states, inputs,
 algebraics, outputs), their ``units`` and ``bounds``; other kinds' tables are plotted
-column by column. A trace holds at most :data:`MAX_POINTS` samples (every k-th sample of
-a longer table, said in the figure's title); a CSV file larger than :data:`MAX_CSV_BYTES`
-is listed, not read.
+column by column, with the units their ``units`` field gives. A trace holds at most
+:data:`MAX_POINTS` samples (every k-th sample of a longer table, said in the figure's
+title); a CSV file larger than :data:`MAX_CSV_BYTES` is listed, not read.
 
 This module renders and writes the page only; where it may be written (a result folder's
 rules, ``summary.json`` listing it) is the problem layer's business
@@ -33,19 +38,19 @@ import stat
 from pathlib import Path, PurePosixPath
 from typing import Any, Mapping
 
-from plotly.offline import get_plotlyjs
-
 from gtmodel._escape import html_text, json_script
 from gtmodel._tables import split_unit
 from gtmodel.errors import InputError
 from gtmodel.status import Status
 
-__all__ = ["REPORT_FILE", "MAX_POINTS", "MAX_CSV_BYTES", "render_report", "write_report", "read_csv_columns"]
+__all__ = ["REPORT_FILE", "PLOTLY_JS", "MAX_POINTS", "MAX_CSV_BYTES", "render_report", "write_report", "read_csv_columns"]
 
 log = logging.getLogger("gtmodel")
 
 #: The page's file name in a result folder.
 REPORT_FILE = "report.html"
+#: Plotly's basic bundle (plotly.js 4.1.1: scatter, bar, pie), inlined in every page; its MIT licence beside it.
+PLOTLY_JS = Path(__file__).resolve().parent / "assets" / "plotly-basic.min.js"
 #: Most samples of one trace (a longer table is thinned to every k-th row).
 MAX_POINTS = 4000
 #: Largest CSV file read into the page, bytes.
@@ -54,6 +59,8 @@ MAX_CSV_BYTES = 50_000_000
 MAX_PANELS = 16
 #: Rows of a table without a time column shown in the page.
 MAX_TABLE_ROWS = 200
+#: Height of one row of panels in a figure, px.
+_PANEL_HEIGHT = 190
 
 _TIME_COLUMNS = re.compile(r"^(t|time)(_s| ?\[s\])?$", re.IGNORECASE)
 _GROUPS = ("states", "inputs", "algebraics", "outputs")
@@ -256,9 +263,23 @@ def _json_list(values: list[float]) -> list[float | None]:
     return [v if math.isfinite(v) else None for v in values]
 
 
+def _unit(units: Mapping[str, str], name: str) -> str:
+    """The unit of a column (``"T[1]"`` takes ``T``'s), ``""`` where the summary names none."""
+    unit = units.get(name, units.get(_base(name)))
+    return str(unit) if unit not in (None, "") else ""
+
+
+def _axis_title(name: str, unit: str) -> str:
+    return f"{name} [{unit}]" if unit else name
+
+
 def _figure_spec(title: str, t: list[float], panels: list[tuple[str, list[float]]], bounds: Mapping[str, Any],
                  units: Mapping[str, str], t_label: str) -> dict[str, Any]:
-    """A Plotly figure: one panel per signal, shared time axis, bounds as dashed lines."""
+    """A Plotly figure: one panel per signal, all panels on one time axis, bounds as dashed lines.
+
+    Up to four panels are stacked; more are laid out in two columns (a row of panels
+    :data:`_PANEL_HEIGHT` high), every panel's axes titled with their units.
+    """
     n = len(t)
     step = max(1, math.ceil(n / MAX_POINTS))
     idx = list(range(0, n, step))
@@ -266,27 +287,31 @@ def _figure_spec(title: str, t: list[float], panels: list[tuple[str, list[float]
         idx.append(n - 1)
     ts = _json_list([t[i] for i in idx])
     t_span = [min(t), max(t)] if t else [0.0, 1.0]
+    cols = 1 if len(panels) <= 4 else 2
+    rows = math.ceil(len(panels) / cols)
     data: list[dict[str, Any]] = []
     layout: dict[str, Any] = {
         "title": {"text": title + (f" (every {step}th of {n} samples)" if step > 1 else "")},
-        "grid": {"rows": len(panels), "columns": 1, "pattern": "coupled", "roworder": "top to bottom"},
-        "height": 140 + 170 * len(panels),
+        "grid": {"rows": rows, "columns": cols, "pattern": "independent", "roworder": "top to bottom",
+                 "xgap": 0.12, "ygap": 0.35},
+        "height": 110 + _PANEL_HEIGHT * rows,
         "showlegend": False,
-        "margin": {"l": 80, "r": 20, "t": 60, "b": 50},
+        "margin": {"l": 80, "r": 20, "t": 50, "b": 40},
         "hovermode": "x unified",
     }
     for k, (name, values) in enumerate(panels):
-        axis = "y" if k == 0 else f"y{k + 1}"
+        suffix = "" if k == 0 else str(k + 1)
+        xaxis, yaxis = f"x{suffix}", f"y{suffix}"
         data.append({"type": "scatter", "mode": "lines", "name": name, "x": ts, "y": _json_list([values[i] for i in idx]),
-                     "xaxis": "x", "yaxis": axis, "line": {"color": "#1f77b4"}})
+                     "xaxis": xaxis, "yaxis": yaxis, "line": {"color": "#1f77b4"}})
         for side, b in zip(("lower bound", "upper bound"), _bound_pair(bounds, name)):
             if b is not None:
                 data.append({"type": "scatter", "mode": "lines", "name": f"{name} {side}", "x": t_span, "y": [b, b],
-                             "xaxis": "x", "yaxis": axis, "line": {"color": "#444", "dash": "dash", "width": 1},
+                             "xaxis": xaxis, "yaxis": yaxis, "line": {"color": "#444", "dash": "dash", "width": 1},
                              "hoverinfo": "name+y"})
-        unit = units.get(name, units.get(_base(name)))
-        layout["yaxis" if k == 0 else f"yaxis{k + 1}"] = {"title": {"text": f"{name} [{unit}]" if unit else name}}
-    layout["xaxis"] = {"title": {"text": t_label}}
+        layout[f"yaxis{suffix}"] = {"title": {"text": _axis_title(name, _unit(units, name)), "font": {"size": 12}}}
+        layout[f"xaxis{suffix}"] = {"title": {"text": t_label, "font": {"size": 11}, "standoff": 2},
+                                    **({} if k == 0 else {"matches": "x"})}
     return {"data": data, "layout": layout}
 
 
@@ -382,36 +407,55 @@ def _variables(summary: Mapping[str, Any], header: list[str]) -> dict[str, list[
     return out
 
 
-def _csv_section(page: _Page, folder: Path, name: str, summary: Mapping[str, Any]) -> None:
+def _csv_section(page: _Page, folder: Path, name: str, summary: Mapping[str, Any], figures: bool) -> bool:
+    """Draw a CSV table: its figures (``figures=True``; a table with a time column) or the table itself.
+
+    Returns
+    -------
+    bool
+        Whether the table is a time series (drawn as figures, not as a table).
+    """
     path = folder / name
     size = path.lstat().st_size
     if size > MAX_CSV_BYTES:
-        page.add(f"<h3>{_esc(name)}</h3><p class='muted'>{size / 1e6:.0f} MB: too large to show (limit {MAX_CSV_BYTES / 1e6:.0f} MB)</p>")
-        return
+        if not figures:
+            page.add(f"<h3>{_esc(name)}</h3><p class='muted'>{size / 1e6:.0f} MB: too large to show (limit {MAX_CSV_BYTES / 1e6:.0f} MB)</p>")
+        return False
     try:
         header, columns = read_csv_columns(path)
     except InputError as exc:
-        page.add(f"<h3>{_esc(name)}</h3><p class='muted'>not shown: {_esc(exc)}</p>")
-        return
+        if not figures:
+            page.add(f"<h3>{_esc(name)}</h3><p class='muted'>not shown: {_esc(exc)}</p>")
+        return False
     n = len(next(iter(columns.values()), []))
     time = _time_column(header, columns)
     numeric = [h for h in header if h != time and all(isinstance(v, float) for v in columns[h])]
     if time is not None and numeric and n > 1:
-        bounds = summary.get("bounds") if isinstance(summary.get("bounds"), Mapping) else {}
-        units = summary.get("units") if isinstance(summary.get("units"), Mapping) else {}
-        for group, cols in _variables(summary, numeric).items():
-            for start in range(0, len(cols), MAX_PANELS):
-                chunk = cols[start:start + MAX_PANELS]
-                title = f"{name}: {group}" if group else name
-                if len(cols) > MAX_PANELS:
-                    title += f" ({start + 1}-{start + len(chunk)} of {len(cols)})"
-                page.figure(_figure_spec(title, columns[time], [(c, columns[c]) for c in chunk], bounds, units, f"{time} [s]"))
-        return
-    page.add(f"<h3>{_esc(name)}</h3>")
-    more = f" (first {MAX_TABLE_ROWS} of {n} rows)" if n > MAX_TABLE_ROWS else ""
-    page.table(header, [[columns[h][i] for h in header] for i in range(min(n, MAX_TABLE_ROWS))])
-    if more:
-        page.add(f"<p class='muted'>{_esc(more.strip())}</p>")
+        if figures:
+            bounds = summary.get("bounds") if isinstance(summary.get("bounds"), Mapping) else {}
+            units = summary.get("units") if isinstance(summary.get("units"), Mapping) else {}
+            for group, cols in _variables(summary, numeric).items():
+                for start in range(0, len(cols), MAX_PANELS):
+                    chunk = cols[start:start + MAX_PANELS]
+                    title = f"{name}: {group}" if group else name
+                    if len(cols) > MAX_PANELS:
+                        title += f" ({start + 1}-{start + len(chunk)} of {len(cols)})"
+                    page.figure(_figure_spec(title, columns[time], [(c, columns[c]) for c in chunk], bounds, units, f"{time} [s]"))
+        return True
+    if not figures:
+        page.add(f"<h3>{_esc(name)}</h3>")
+        page.table(header, [[columns[h][i] for h in header] for i in range(min(n, MAX_TABLE_ROWS))])
+        if n > MAX_TABLE_ROWS:
+            page.add(f"<p class='muted'>first {MAX_TABLE_ROWS} of {n} rows</p>")
+    return False
+
+
+def _files_section(page: _Page, folder: Path, files: list[str], summary: Mapping[str, Any]) -> None:
+    """The folder's files, each with what it holds (``summary["file_descriptions"]``) and its size."""
+    described = summary.get("file_descriptions") if isinstance(summary.get("file_descriptions"), Mapping) else {}
+    rows = [[f, str(described.get(f) or "—"), (folder / f).lstat().st_size] for f in files]
+    page.add('<h2 id="files">Files</h2>')
+    page.table(["file", "what it holds", "bytes"], rows)
 
 
 def _variables_section(page: _Page, summary: Mapping[str, Any]) -> None:
@@ -446,8 +490,8 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
     summary : Mapping[str, Any], optional
         Its summary; default the folder's ``summary.json``.
     plotly_js : str, optional
-        Plotly's script to inline; default :func:`plotly.offline.get_plotlyjs` (a test
-        may pass a stand-in).
+        Plotly's script to inline; default the vendored basic bundle :data:`PLOTLY_JS` (a
+        test may pass a stand-in).
 
     Returns
     -------
@@ -468,9 +512,12 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
     if not isinstance(summary, Mapping):
         raise InputError(f"{folder / 'summary.json'}: expected a JSON object")
     if plotly_js is None:
-        plotly_js = get_plotlyjs()
+        plotly_js = PLOTLY_JS.read_text(encoding="utf-8")
     page = _Page()
     name, kind, status = summary.get("name", folder.name), summary.get("kind"), summary.get("status", "unknown")
+    files, refused = _folder_files(folder, summary)
+    warnings = _warnings(summary) + refused
+    page.add('<section id="status">')
     page.add(f"<h1>{_esc(name)}</h1><p>{_esc(kind or 'result')} &middot; <span class='status {_status_class(status)}'>"
              f"{_esc(status)}</span> {_esc(summary.get('message', ''))}</p>")
     if summary.get("description"):
@@ -479,23 +526,27 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
            and summary.get(k) is not None]
     if key:
         page.add("<p>" + " &middot; ".join(f"<b>{_esc(k)}</b> {_esc(_fmt(v))}" for k, v in key) + "</p>")
-    files, refused = _folder_files(folder, summary)
-    warnings = _warnings(summary) + refused
-    page.add('<h2 id="warnings">Warnings</h2>')
     page.add("<ul class='warnings'>" + "".join(f"<li>{_esc(w)}</li>" for w in warnings) + "</ul>" if warnings
-             else "<p class='muted'>none</p>")
+             else "<p class='muted' id='warnings'>no warnings</p>")
+    page.add("</section>")
+    csvs = [f for f in files if f.endswith(".csv")]
+    page.add('<section id="trajectories"><h2>Trajectories</h2>')
+    series = [f for f in csvs if _csv_section(page, folder, f, summary, figures=True)]
+    if not series:
+        page.add("<p class='muted'>no table with a time column in this folder</p>")
+    page.add("</section>")
     if "verification" in summary:
         _verification_section(page, summary["verification"])
     if isinstance(summary.get("benchmark"), Mapping):
         page.add("<h2>Benchmark</h2>")
         page.table(["field", "value"], [[k, v] for k, v in summary["benchmark"].items()])
     _summary_section(page, summary)
-    csvs = [f for f in files if f.endswith(".csv")]
-    if csvs:
-        page.add('<h2 id="trajectories">Trajectories and tables</h2>')
-        for f in csvs:
-            _csv_section(page, folder, f, summary)
     _variables_section(page, summary)
+    tables = [f for f in csvs if f not in series]
+    if tables or any(f.endswith(".md") for f in files):
+        page.add('<h2 id="tables">Tables</h2>')
+    for f in tables:
+        _csv_section(page, folder, f, summary, figures=False)
     for f in (f for f in files if f.endswith(".md")):
         page.add(f"<h3>{_esc(f)}</h3><pre>{_esc(_read_regular(folder / f).decode('utf-8', errors='replace'))}</pre>")
     pngs = [f for f in files if f.endswith(".png")]
@@ -504,10 +555,7 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
         for f in pngs:
             data = base64.b64encode(_read_regular(folder / f)).decode("ascii")
             page.add(f"<h3>{_esc(f)}</h3><img class='png' alt='{_esc(f)}' src='data:image/png;base64,{data}'>")
-    others = [f for f in files if not f.endswith((".csv", ".png", ".md")) and f not in ("summary.json", REPORT_FILE)]
-    if others:
-        page.add("<h2>Other files</h2><ul>" + "".join(f"<li>{_esc(f)} ({(folder / f).lstat().st_size} bytes)</li>" for f in others)
-                 + "</ul>")
+    _files_section(page, folder, files, summary)
     page.add(f"<h2>summary.json</h2><details><summary>show</summary><pre>{_esc(json.dumps(summary, indent=2))}</pre></details>")
     title = _esc(f"{name}: {status}")
     return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"

@@ -16,7 +16,13 @@ import numpy as np
 from gtmodel import __version__
 from gtmodel.errors import InputError
 
-__all__ = ["write_c_header", "read_c_header"]
+__all__ = ["write_c_header", "read_c_header", "TRAJECTORY_UNITS"]
+
+#: SI unit of each column of ``trajectory.csv`` (TCP position and velocity, actuator
+#: positions, speeds and forces; a path-constrained file adds the path parameter ``s`` in [0, 1]).
+TRAJECTORY_UNITS = {"t": "s", **dict.fromkeys(("x", "y", "z", "q1", "q2", "q3"), "m"),
+                    **dict.fromkeys(("qd1", "qd2", "qd3", "xd", "yd", "zd"), "m/s"), **dict.fromkeys(("tau1", "tau2", "tau3"), "N"),
+                    "s": "1", "s_dot": "1/s", "s_ddot": "1/s^2"}
 
 _IDENT = re.compile(r"[^A-Za-z0-9_]")
 

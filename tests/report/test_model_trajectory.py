@@ -34,9 +34,25 @@ def test_each_signal_in_its_panel(tmp_path, n):
 
 def test_finite_bounds_are_drawn(tmp_path):
     t, signals = _signals(2)
-    fig = plot_signals(t, signals, tmp_path / "s.png", bounds={"s0": (-0.5, np.inf), "s1": (-1.0, 1.0)})
+    fig = plot_signals(t, signals, tmp_path / "s.png", bounds={"s0": (-0.2, np.inf), "s1": (-1.0, 1.0)})
     dashed = [sorted(float(ln.get_ydata()[0]) for ln in ax.get_lines() if ln.get_linestyle() == "--") for ax in fig.axes[:2]]
-    assert dashed == [[-0.5], [-1.0, 1.0]]
+    assert dashed == [[-0.2], [1.0]]  # s1 = sin(t + 1) >= 0.14: its lower bound -1 is named, not drawn
+    assert [tx.get_text() for tx in fig.axes[1].texts] == ["lower bound -1 (off scale)"]
+
+
+@pytest.mark.parametrize("bounds", [(0.0, 1e3), (-1e4, 2.0), (1.0, 1.06)], ids=["goddard-like upper", "far lower", "near both"])
+def test_axes_are_scaled_to_the_data_not_to_far_bounds(tmp_path, bounds):
+    """Goddard's h and v looked flat when the axes reached a bound 10-1000x beyond the data:
+    the y range is now the data's (max - min of the plotted values, independently computed)
+    plus the near bounds and a margin of at most 10 % of it."""
+    t = np.linspace(0.0, 1.0, 50)
+    y = 1.0 + 0.05 * t**2
+    fig = plot_signals(t, {"h": y}, tmp_path / "h.png", bounds={"h": bounds})
+    lo, hi = fig.axes[0].get_ylim()
+    span = y.max() - y.min()
+    near = [b for b in bounds if y.min() - 0.5 * span <= b <= y.max() + 0.5 * span]  # within half the data's range
+    low, high = min([y.min(), *near]), max([y.max(), *near])
+    assert low - 0.1 * (high - low) <= lo <= low and high <= hi <= high + 0.1 * (high - low)
 
 
 @pytest.mark.parametrize(

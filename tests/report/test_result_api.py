@@ -1,4 +1,4 @@
-"""The results API for notebooks: result.plot(), result.to_dataframe(), Bode and step plots of a linearisation.
+"""The results API for notebooks: gtmodel.report.plot_result, result.to_dataframe(), Bode and step plots of a linearisation.
 
 References: the minimum-energy rest-to-rest transfer of the double integrator over 1 s
 has the closed form ``u = 6 - 12 t``, ``x = 3 t^2 - 2 t^3``, ``v = 6 t - 6 t^2``
@@ -12,9 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.errors import InputError
+from gtmodel.errors import GtModelError, InputError
 from gtmodel.modeling import Model, Optimization, solve
 from gtmodel.modeling.simulation.linear import linearize
+from gtmodel.report import bode_plot, plot_result, step_plot
 from gtmodel.report.linear import plot_bode
 
 from ._figures import assert_line
@@ -47,7 +48,7 @@ def _dashed(ax) -> list[float]:
 
 def test_plot_draws_the_named_variables_against_the_closed_form(transfer):
     _, _, r = transfer
-    fig = r.plot("x", "u", "kinetic")
+    fig = plot_result(r, "x", "u", "kinetic")
     t = r.t
     x_ref, u_ref = 3 * t**2 - 2 * t**3, 6 - 12 * t
     axes = [ax for ax in fig.axes if ax.get_visible()]
@@ -62,8 +63,8 @@ def test_plot_draws_the_named_variables_against_the_closed_form(transfer):
 def test_plot_draws_the_model_bounds_and_those_given(transfer):
     """``v <= 2`` is the model's; ``-7 <= u <= 8`` comes with ``bounds=opt.bounds``, not otherwise."""
     _, opt, r = transfer
-    without = r.plot("v", "u")
-    with_opt = r.plot("v", "u", bounds=opt.bounds, units={"v": "m/s", "u": "N"})
+    without = plot_result(r, "v", "u")
+    with_opt = plot_result(r, "v", "u", bounds=opt.bounds, units={"v": "m/s", "u": "N"})
     assert [_dashed(ax) for ax in without.axes[:2]] == [[2.0], []]
     assert [_dashed(ax) for ax in with_opt.axes[:2]] == [[2.0], [-7.0, 8.0]]
     assert [ax.get_ylabel() for ax in with_opt.axes[:2]] == ["v [m/s]", "u [N]"]
@@ -71,7 +72,7 @@ def test_plot_draws_the_model_bounds_and_those_given(transfer):
 
 def test_plot_writes_a_png_and_defaults_to_states_and_inputs(transfer, tmp_path):
     _, _, r = transfer
-    fig = r.plot(path=tmp_path / "r.png")
+    fig = plot_result(r, path=tmp_path / "r.png")
     assert (tmp_path / "r.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert [ax.get_ylabel() for ax in fig.axes if ax.get_visible()] == ["x", "v", "u"]
 
@@ -80,7 +81,7 @@ def test_plot_writes_a_png_and_defaults_to_states_and_inputs(transfer, tmp_path)
                                           (("x", "load.phi"), "'load.phi' is no variable")])
 def test_plot_refuses_a_name_the_result_does_not_have(transfer, names, match):
     with pytest.raises(InputError, match=match):
-        transfer[2].plot(*names)
+        plot_result(transfer[2], *names)
 
 
 def test_to_dataframe_has_time_and_every_variable(transfer):
@@ -105,7 +106,7 @@ def oscillator():
 
 def test_bode_plot_is_the_closed_form_frequency_response(oscillator):
     w = np.logspace(-1, 2, 60)
-    fig = oscillator.bode_plot(omega=w)
+    fig = bode_plot(oscillator, omega=w)
     mag, phase = fig.axes[0].get_lines()[0], fig.axes[1].get_lines()[0]
     g = 1.0 / (M * (1j * w) ** 2 + D * (1j * w) + K)
     assert mag.get_label() == "f -> x"
@@ -116,12 +117,12 @@ def test_bode_plot_is_the_closed_form_frequency_response(oscillator):
 
 def test_bode_plot_in_hz(oscillator):
     w = np.array([1.0, 10.0])
-    line = oscillator.bode_plot(omega=w, hz=True).axes[0].get_lines()[0]
+    line = bode_plot(oscillator, omega=w, hz=True).axes[0].get_lines()[0]
     np.testing.assert_allclose(line.get_xdata(), w / (2 * np.pi))
 
 
 def test_step_plot_settles_at_the_static_gain(oscillator, tmp_path):
-    fig = oscillator.step_plot(T=np.linspace(0.0, 30.0, 3001), path=tmp_path / "step.png")
+    fig = step_plot(oscillator, T=np.linspace(0.0, 30.0, 3001), path=tmp_path / "step.png")
     line = fig.axes[0].get_lines()[0]
     wn, zeta = np.sqrt(K / M), D / (2 * np.sqrt(K * M))
     wd, t = wn * np.sqrt(1 - zeta**2), line.get_xdata()
@@ -133,3 +134,12 @@ def test_step_plot_settles_at_the_static_gain(oscillator, tmp_path):
 def test_what_is_no_system_is_refused():
     with pytest.raises(InputError, match="expected a Linearization or a python-control system, got str"):
         plot_bode("not a system")
+
+
+@pytest.mark.parametrize("call, match", [(lambda r, lin: r.plot("x"), r"gtmodel\.report import plot_result"),
+                                         (lambda r, lin: lin.bode_plot(), r"gtmodel\.report import bode_plot"),
+                                         (lambda r, lin: lin.step_plot(), r"gtmodel\.report import step_plot")])
+def test_the_former_methods_name_the_report_function(transfer, oscillator, call, match):
+    """The modelling layer does not draw: its former plot methods say where the plot went."""
+    with pytest.raises(GtModelError, match=match):
+        call(transfer[2], oscillator)

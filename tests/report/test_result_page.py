@@ -393,3 +393,51 @@ def test_unit_headers_name_the_same_columns(tmp_path, header):
     path.write_text(header + "\n0,start,1.5\n0.5,collocation,2\n")
     names, cols = read_csv_columns(path)
     assert names == ["t", "point", "ind.i"] and cols["ind.i"] == [1.5, 2.0] and cols["point"] == ["start", "collocation"]
+
+
+# --------------------------------------------------------------------------- what a reader sees first
+#: The page's budget: Plotly's basic bundle (1.19 MB) and the folder's data and plots.
+MAX_PAGE_BYTES = 2_000_000
+_AXES = """Array.from(document.querySelectorAll('div.gt-figure')).flatMap(d => Object.keys(d._fullLayout)
+  .filter(k => /^[xy]axis\\d*$/.test(k)).map(k => d._fullLayout[k].title.text))"""
+
+
+def test_l1_time_optimal_opens_on_its_status_and_trajectories_with_units(browser, tmp_path):
+    """The page of problems/l1_time_optimal.toml in Chromium: under 2 MB; the first section holds
+    the status, the second the trajectory figure, inside the first screen (900 px); every axis of
+    every figure titled ``name [unit]`` (the units of summary.json, read independently here)."""
+    out = tmp_path / "l1"
+    code, summary = solve_through_cli(PROBLEMS_DIR / "l1_time_optimal.toml", out)
+    assert code == 0
+    page_path = out / REPORT_FILE
+    assert page_path.stat().st_size < MAX_PAGE_BYTES
+    page = browser.new_page(viewport={"width": 1280, "height": 900})
+    page.goto(page_path.resolve().as_uri())
+    page.wait_for_load_state("load")
+    sections = page.evaluate("Array.from(document.querySelectorAll('body > section')).map(s => s.id)")
+    status = page.locator("section#status span.status").inner_text()
+    top = page.evaluate("document.querySelector('section#trajectories div.gt-figure .main-svg').getBoundingClientRect().top")
+    titles = page.evaluate(_AXES)
+    page.close()
+    assert sections[:2] == ["status", "trajectories"] and status == summary["status"]
+    assert 0 < top < 900
+    header = (out / "trajectory.csv").read_text().splitlines()[0].split(",")
+    expected = {f"{c} [{summary['units'][c]}]" for c in header}
+    assert set(titles) == expected  # t [s] on the time axes, every column with its unit
+
+
+def test_the_page_lists_every_file_with_its_description(tmp_path):
+    out = _folder(tmp_path, summary={"file_descriptions": {"summary.json": "the run", "fits.csv": "gains per case",
+                                                           "states.png": "the states"}})
+    page = render_report(out, plotly_js=STUB_JS)
+    files = re.search(r'<h2 id="files">Files</h2>(.*?)</table>', page, re.S).group(1)
+    rows = re.findall(r"<tr><td>([^<]*)</td><td>([^<]*)</td>", files)
+    assert rows == [("summary.json", "the run"),
+                    ("fits.csv", "gains per case"), ("states.png", "the states"), ("trajectories.csv", "—")]
+
+
+def test_trajectories_come_before_verification_and_tables(tmp_path):
+    page = render_report(_folder(tmp_path), plotly_js=STUB_JS)
+    order = [page.index(mark) for mark in ('<section id="status">', '<section id="trajectories">', 'class="gt-figure"',
+                                           'id="verification"', 'id="tables"', 'id="plots"', 'id="files"')]
+    assert order == sorted(order)

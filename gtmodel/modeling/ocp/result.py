@@ -18,7 +18,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from gtmodel.errors import InputError
+from gtmodel.errors import GtModelError, InputError
 from gtmodel.status import Status, StatusResult
 from gtmodel.modeling.dae import FlatDAE, _columns, _eval_outputs, _frame, _unpack, _write_columns
 
@@ -395,43 +395,25 @@ class OptimizationResult(StatusResult):
         n = int(np.floor((tf - t0) / dt + 1e-9)) + 1
         return self.sample(t0 + dt * np.arange(n))
 
-    def plot(self, *names: str, bounds: Any = None, units: Any = None, path: str | Path | None = None, title: str = "") -> Any:
-        """Plot variables against time, one panel each, with their bounds (matplotlib).
+    def plot(self, *args: Any, **kwargs: Any) -> Any:
+        """Moved to the report layer: ``gtmodel.report.plot_result(result, *names, ...)``.
 
-        ``result.plot("load.phi", "source.v")`` in a notebook; drawn by
-        :func:`gtmodel.report.model_trajectory.plot_result` (the report layer, imported
-        when called).
+        The modelling layer never draws (nor imports the report layer that does); the
+        plot of a result is :func:`gtmodel.report.plot_result`, with the same arguments
+        after the result.
 
         Parameters
         ----------
-        *names : str
-            Scalar names of states, inputs, algebraic variables or outputs (``"T[0]"``
-            for an element of a vector); default every state and input.
-        bounds : Mapping[str, tuple], optional
-            Name -> ``(lo, hi)`` drawn over the model's own bounds, e.g. ``opt.bounds``
-            (those set with :meth:`Optimization.set_bounds
-            <gtmodel.modeling.Optimization.set_bounds>`).
-        units : Mapping[str, str], optional
-            Name -> unit for the axis labels (e.g. ``model.units``).
-        path : str or pathlib.Path, optional
-            Also write the figure to this PNG file.
-        title : str, optional
-            Figure title (default the model's name).
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            The figure (not registered with pyplot: display it in a notebook as the
-            cell's value, or ``fig.savefig``).
+        *args, **kwargs : Any
+            Not used.
 
         Raises
         ------
-        InputError
-            A name that is no variable of the result.
+        GtModelError
+            Always, naming the function that draws a result.
         """
-        from gtmodel.report.model_trajectory import plot_result  # the one layer that draws (pyproject: ignore_imports)
-
-        return plot_result(self, names, path=path, bounds=bounds, units=units, title=title)
+        raise GtModelError("result.plot() moved to the report layer: from gtmodel.report import plot_result; "
+                           "plot_result(result, *names, bounds=..., units=..., path=..., title=...)")
 
     def _point_kinds(self) -> np.ndarray | None:
         """The kind of each time of :attr:`t` (:meth:`CollocationData.point_kinds`), None without collocation data."""

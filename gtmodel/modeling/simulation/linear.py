@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel._lazy import lazy_module
-from gtmodel.errors import ConvergenceError, InputError, ModelError
+from gtmodel.errors import ConvergenceError, GtModelError, InputError, ModelError
 from gtmodel.modeling.dae import FlatDAE, _vector_value
 from gtmodel.modeling.structure.index_reduction import structural_simplify
 from gtmodel.modeling.simulation.model import Model
@@ -92,55 +92,39 @@ class Linearization:
             self.A, self.B, self.C, self.D, states=clean(self.x_names), inputs=clean(self.u_names), outputs=clean(self.y_names)
         )
 
-    def bode_plot(self, path: Any = None, omega: Any = None, hz: bool = False, title: str = "") -> Any:
-        """Bode plot of every input-output pair, computed by python-control (matplotlib figure).
+    def bode_plot(self, *args: Any, **kwargs: Any) -> Any:
+        """Moved to the report layer: ``gtmodel.report.bode_plot(linearization, ...)``.
 
-        Drawn by :func:`gtmodel.report.linear.plot_bode` (the report layer, imported when
-        called) from :func:`control.frequency_response` of :meth:`to_state_space`.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path, optional
-            Also write the figure to this PNG file.
-        omega : array_like, optional
-            Frequencies [rad/s], shape ``(K,)``; default python-control's choice.
-        hz : bool, optional
-            Frequency axis in Hz.
-        title : str, optional
-            Figure title.
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-            Magnitude [dB] and phase [deg] axes.
-        """
-        from gtmodel.report.linear import plot_bode  # the one layer that draws (pyproject: ignore_imports)
-
-        return plot_bode(self, path=path, omega=omega, hz=hz, title=title)
-
-    def step_plot(self, path: Any = None, T: Any = None, title: str = "") -> Any:
-        """Unit step responses of every input-output pair, computed by python-control.
-
-        Drawn by :func:`gtmodel.report.linear.plot_step` (the report layer, imported when
-        called) from :func:`control.step_response` of :meth:`to_state_space`.
+        The modelling layer never draws (nor imports the report layer that does).
 
         Parameters
         ----------
-        path : str or pathlib.Path, optional
-            Also write the figure to this PNG file.
-        T : float or array_like, optional
-            Final time [s] or time points, shape ``(K,)``; default python-control's choice.
-        title : str, optional
-            Figure title.
+        *args, **kwargs : Any
+            Not used.
 
-        Returns
-        -------
-        matplotlib.figure.Figure
-            One axes per output.
+        Raises
+        ------
+        GtModelError
+            Always, naming the function that draws a Bode plot.
         """
-        from gtmodel.report.linear import plot_step  # the one layer that draws (pyproject: ignore_imports)
+        raise GtModelError("bode_plot() moved to the report layer: from gtmodel.report import bode_plot; "
+                           "bode_plot(linearization, path=..., omega=..., hz=..., title=...)")
 
-        return plot_step(self, path=path, T=T, title=title)
+    def step_plot(self, *args: Any, **kwargs: Any) -> Any:
+        """Moved to the report layer: ``gtmodel.report.step_plot(linearization, ...)``.
+
+        Parameters
+        ----------
+        *args, **kwargs : Any
+            Not used.
+
+        Raises
+        ------
+        GtModelError
+            Always, naming the function that draws step responses.
+        """
+        raise GtModelError("step_plot() moved to the report layer: from gtmodel.report import step_plot; "
+                           "step_plot(linearization, path=..., T=..., title=...)")
 
 
 def _selection(dae: FlatDAE, names: Sequence[str] | None) -> tuple[ca.SX, list[str]]:

@@ -116,6 +116,14 @@ class AutomatedCalibrationKind(ProblemKind):
     name = "automated_calibration"
     schema = AutomatedCalibrationFile
     title = "automated calibration: workspace, evenly spread poses accepted by eq. 5.14 and a simulated calibration, CSV/RAPID program (Dressler (2012), ch. 5.6)"
+    file_descriptions = {
+        "poses.csv": "the planned calibration poses: carts [m] and TCP [m]",
+        "calibration_poses.mod": "the poses as an ABB RAPID program module",
+        "simulated_parameters.csv": "per parameter: truth, a-priori value, calibrated mean, spread and predicted standard deviation of the simulated calibrations",
+        "parameters.toml": "the calibrated parameters from the simulated measurements",
+        "errors.csv": "TCP error of every validation pose (eq. 5.5) [m]",
+        "workspace.png": "the workspace and the accepted poses",
+    }
     columns = (
         Column("n_poses", "poses", "{:d}"),
         Column("workspace_ratio", "workspace ratio", "{:.3f}"),

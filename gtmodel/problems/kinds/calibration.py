@@ -148,6 +148,11 @@ class CalibrationKind(ProblemKind):
     name = "calibration"
     schema = CalibrationFile
     title = "kinematic calibration from closure equations, models compared on validation poses (Dressler (2012), ch. 5)"
+    file_descriptions = {
+        "parameters.toml": "the calibrated robot parameters, loadable as a robot file",
+        "errors.csv": "TCP error of every validation pose per calibrated model [m]",
+        "error_histogram.png": "histogram of the validation TCP errors per model",
+    }
     columns = calibration_columns()
     extra_empty_fields = ("rms_error_m", "n_calibration", "n_validation", "rank", "n_parameters", "iterations")
 

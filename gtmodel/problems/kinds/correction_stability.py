@@ -225,6 +225,14 @@ class CorrectionStabilityKind(ProblemKind):
     name = "correction_stability"
     schema = CorrectionStabilityFile
     title = "stability of real-time pose-offset corrections: predicted vs simulated largest P gain (Cvitanic (2021), eqs. (30)-(33))"
+    file_descriptions = {
+        "table_14.md": "Table 14: predicted and simulated largest stable P gain per pose and direction (Markdown)",
+        "table_14.csv": "Table 14 as CSV",
+        "calibration_fits.csv": "mass-spring-damper fits per validation pose and direction: m, c, k, natural frequency, damping ratio",
+        "offset_response.png": "response to a pose-offset step per direction",
+        "loop_error.png": "loop errors of the simulated correction runs",
+        "gains.png": "largest stable P gain, predicted against simulated",
+    }
     columns = (
         Column("poses_within_one_increment", "poses within 1 increment", "{:d}"),
         Column("min_x_over_y", "min x/y gain", "{:.3g}"),

@@ -83,6 +83,11 @@ class DynamicIdentificationKind(ProblemKind):
     name = "dynamic_identification"
     schema = DynamicIdentificationFile
     title = "masses and friction from a servo log, Table 6.3 model variants (Dressler (2012), ch. 6.2)"
+    file_descriptions = {
+        "parameters.toml": "identified masses and friction of the first model variant",
+        "identification.csv": "every model variant's parameter estimates with their standard deviation, unit and the truth (Table 6.3)",
+        "residuals.png": "measured against predicted actuator forces and their residuals",
+    }
     columns = (
         Column("max_z", "max |error|/std", "{:.3g}"),
         Column("condition_number", "condition", "{:.4g}"),

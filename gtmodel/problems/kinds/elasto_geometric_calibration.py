@@ -95,6 +95,14 @@ class ElastoGeometricKind(ProblemKind):
     name = "elasto_geometric_calibration"
     schema = ElastoGeometricFile
     title = "compliant robot: geometric-only vs elasto-geometric calibration (Dressler (2012), ch. 5.3, 6.3)"
+    file_descriptions = {
+        "parameters.toml": "the elasto-geometric calibrated parameters, loadable as a robot file",
+        "errors.csv": "TCP error of every validation pose, geometric-only and elasto-geometric [m]",
+        "calibration_measurements.csv": "the simulated measurements the calibration used",
+        "validation_measurements.csv": "the simulated measurements of the validation poses",
+        "error_histogram.png": "histogram of the validation TCP errors of both calibrations",
+        "stiffness_map.png": "TCP compliance over the workspace",
+    }
     columns = calibration_columns()
     extra_empty_fields = ("geometric_mean_error_m", "geometric_max_error_m", "elasto_geometric_mean_error_m",
                     "elasto_geometric_max_error_m", "noise_floor_mean_error_m", "noise_floor_max_error_m", "n_calibration",

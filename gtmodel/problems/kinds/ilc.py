@@ -79,6 +79,19 @@ class ILCKind(ProblemKind):
     name = "ilc"
     schema = ILCFile
     title = "iterative learning control on the simulated L1 (Dressler (2012), section 7.3, eqs. 7.2-7.25, Table 7.2)"
+    file_descriptions = {
+        "table_7_2.md": "Table 7.2: mean error of iterations 5-10 relative to iteration 0, per case (Markdown)",
+        "table_7_2.csv": "Table 7.2 as CSV",
+        "ilc_iterations.csv": "error measure (7.25) per case and iteration, actuator and tool side [m]",
+        "controller.json": "the stationary Kalman step and the learned actuator correction (gtmodel codegen --controller)",
+        "ilc_lifted.npz": "the lifted system matrices of the monotone-convergence check (7.15)/(7.16)",
+        "ilc_estimators.npz": "the estimators' matrices (Kalman gains, observers) used for the learning signals",
+        "ilc_signals_case_*.npz": "a case's reference, learned input u and learning signal eps per iteration",
+        "ilc_actuator_errors.png": "actuator-side error measure per iteration and case (Figs. 7.7-7.10)",
+        "ilc_tool_errors.png": "tool-side error measure per iteration and case (Figs. 7.7-7.10)",
+        "ilc_convergence.png": "monotone-convergence picture per case: |Q^-1|, loop gain and their product (7.16)",
+        "ilc_tool_path_case_*.png": "a case's tool path over the iterations against the reference square (Fig. 7.11)",
+    }
     columns = (
         Column("worst_sigma_max", "worst sigma_max", "{:.3f}"),
         Column("solve_time_s", "solve time [s]", "{:.2f}"),

@@ -129,6 +129,10 @@ class JointStiffnessKind(ProblemKind):
     name = "joint_stiffness_calibration"
     schema = JointStiffnessFile
     title = "serial-arm joint stiffnesses by CP, CP x10 and DPP (Cvitanic (2021), eqs. (3)-(5), Table 2)"
+    file_descriptions = {
+        "stiffness.csv": "identified joint stiffnesses per method and joint with their spread, ratio to the truth and the thesis' Table 2 [N m/rad]",
+        "joint_stiffness.png": "the identified joint stiffnesses per method against the true ones",
+    }
     columns = (
         Column("n_measurements", "measurements", "{}"),
         Column("solve_time_s", "solve time [s]", "{:.3f}"),

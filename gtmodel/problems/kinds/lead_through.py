@@ -92,6 +92,18 @@ class LeadThroughKind(ProblemKind):
     name = "lead_through"
     schema = LeadThroughFile
     title = "lead-through programming with tool force feedback: surface tracking, peg-in-hole, contact stability (Dressler (2012), ch. 8)"
+    file_descriptions = {
+        "controller.json": "the lead-through step function (gtmodel codegen --controller controller.json)",
+        "surface_tracking.csv": "the surface-tracking run: positions, forces and corrections every sample",
+        "correction_ranges.csv": "measures of the surface-tracking runs over the correction ranges",
+        "stability.csv": "the contact loop's stability figures",
+        "peg_in_hole.csv": "the peg-in-hole run: positions, forces and corrections every sample",
+        "surface_tracking.png": "position and force while tracking the surface (Figure 8.4)",
+        "surface_path.png": "the tool path over the surface, contact marked",
+        "correction_ranges.png": "position and force over the correction ranges",
+        "stability.png": "the contact loop's stability margin against the used gain",
+        "peg_in_hole.png": "insertion depth and forces of the peg-in-hole runs",
+    }
     columns = (
         Column("force_error_n", "max |f - f_ref| [N]", "{:.3f}"),
         Column("peg_max_insertion_m", "peg depth [m]", "{:.4f}"),

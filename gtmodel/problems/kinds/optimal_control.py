@@ -162,6 +162,12 @@ class OptimalControlKind(ProblemKind):
     name = "optimal_control"
     schema = OptimalControlFile
     title = "optimal control or parameter estimation on the user's own model ([model] file and class), by direct collocation or multiple shooting"
+    file_descriptions = {
+        "trajectories.csv": "time, kind of point, states, inputs, algebraic variables and outputs, headers with units",
+        "states.png": "the states against time with their bounds",
+        "inputs.png": "the inputs against time with their bounds",
+        "variables.png": "algebraic variables and outputs against time with their bounds",
+    }
     columns = (
         Column("final_time_s", "T_final [s]", "{:.4f}"),
         Column("objective", "objective", "{:.6g}"),

@@ -30,7 +30,7 @@ from gtmodel.trajectory import (
     SplinePath,
     StraightLine,
 )
-from gtmodel.trajectory.export import write_c_header
+from gtmodel.trajectory.export import TRAJECTORY_UNITS, write_c_header
 from gtmodel.trajectory.path_constrained.declared import PATH_METHODS, PathConstrainedDeclaration
 from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
 
@@ -82,6 +82,13 @@ class PathConstrainedKind(ProblemKind):
     name = "path_constrained"
     schema = PathConstrainedFile
     title = "time-optimal motion along a given TCP path (Dressler (2012), ch. 3.5; Verscheure et al. (2009))"
+    file_descriptions = {
+        "trajectory.csv": "the trajectory sampled every 4 ms: t [s], TCP x, y, z [m], actuators q [m], qd [m/s], forces tau [N], TCP velocity [m/s]",
+        "trajectory.h": "the same samples as a C header, the feedforward table of the generated loop",
+        "tcp_path.png": "the TCP path in space along the given path",
+        "forces.png": "actuator forces against time with their limits",
+        "profile.png": "the path speed profile: s_dot against the path parameter s",
+    }
     columns = trajectory_columns()
     extra_empty_fields = MOTION_EXTRA_EMPTY_FIELDS
 
@@ -199,6 +206,7 @@ class PathConstrainedKind(ProblemKind):
             "message": solution.message,
             "final_time_s": solution.final_time if solution.success else None,
             "energy": solution.energy if solution.success else None,
+            "units": dict(TRAJECTORY_UNITS),
             "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
             "iterations": solution.iterations,
             "solve_time_s": solution.solve_time,

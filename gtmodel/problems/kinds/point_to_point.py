@@ -24,7 +24,7 @@ from gtmodel.problems.references import named_parameters, robot_parameters
 from gtmodel.report.trajectory import OVERLAY_FILES, plot_forces, plot_overlay, plot_tcp_path
 from gtmodel.trajectory.point_to_point import PointToPoint, PointToPointSolution
 from gtmodel.modeling.ocp.methods import Collocation, Refinement, SolverSettings
-from gtmodel.trajectory.export import write_c_header
+from gtmodel.trajectory.export import TRAJECTORY_UNITS, write_c_header
 
 __all__ = ["PointToPointKind", "PointToPointFile", "point_to_point_summary"]
 
@@ -43,6 +43,12 @@ class PointToPointKind(ProblemKind):
     name = "point_to_point"
     schema = PointToPointFile
     title = "free-path time/energy-optimal motion between two poses (Dressler (2012), ch. 3.5)"
+    file_descriptions = {
+        "trajectory.csv": "the trajectory sampled every 4 ms: t [s], TCP x, y, z [m], actuators q [m], qd [m/s], forces tau [N], TCP velocity [m/s]",
+        "trajectory.h": "the same samples as a C header, the feedforward table of the generated loop",
+        "tcp_path.png": "the TCP path in space between the start and end poses",
+        "forces.png": "actuator forces against time with their limits",
+    }
     columns = trajectory_columns()
     extra_empty_fields = MOTION_EXTRA_EMPTY_FIELDS
 
@@ -233,6 +239,7 @@ def point_to_point_summary(decl: PointToPoint, solution: PointToPointSolution) -
         "message": r.message,
         "final_time_s": r.final_time,
         "energy": solution.energy,
+        "units": dict(TRAJECTORY_UNITS),
         "energy_units": "N^2 s (sum_i integral tau_i^2 dt)",
         "iterations": r.iterations,
         "solve_time_s": r.solve_time,

@@ -77,6 +77,13 @@ class PoseAccuracyKind(ProblemKind):
     name = "pose_accuracy"
     schema = PoseAccuracyFile
     title = "worst-case TCP error from actuator tolerances: geometric method, exact NLP, Monte-Carlo, inverse (Dressler (2012), ch. 4.3, App. A)"
+    file_descriptions = {
+        "map_*.csv": "a case's worst-case TCP error over the workspace grid: geometric, parallelepiped, face areas [m]",
+        "map_*.png": "a case's accuracy map over the workspace",
+        "faces_*.png": "a case's parallelepiped face areas along a line",
+        "error_set_*.png": "a case's TCP error set at a pose",
+        "checks.csv": "the geometric method checked against the exact NLP and Monte-Carlo at chosen poses",
+    }
     columns = (
         Column("max_error_m", "largest worst case [m]", "{:.4e}"),
         Column("min_error_m", "smallest worst case [m]", "{:.4e}"),

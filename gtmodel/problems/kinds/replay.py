@@ -142,6 +142,13 @@ class ReplayKind(ProblemKind):
     name = "replay"
     schema = ReplayFile
     title = "replay of a planned trajectory through the closed-loop L1 at 4 ms: actuators, structure, sensors (Dressler (2012), ch. 7.3)"
+    file_descriptions = {
+        "tracking.csv": "the closed-loop run every 4 ms: actuator and TCP references, actual, kinematic and measured positions, accelerations",
+        "actuator_error.png": "actuator tracking errors against time",
+        "tool_error.png": "tool (TCP) tracking errors against time",
+        "deflection.png": "structural deflections against time",
+        "tool_path.png": "reference and simulated tool path",
+    }
     columns = (
         Column("actuator_error_max_abs_m", "max |q - q_ref| [m]", "{:.3e}"),
         Column("tool_error_max_abs_m", "max |z - T_ref| [m]", "{:.3e}"),
@@ -313,6 +320,7 @@ class ReplayKind(ProblemKind):
         for key, suffix in (("T_ref", "_ref"), ("T_kin", "_kin"), ("d", "_d"), ("z", ""), ("a_kin", "_acc_kin"), ("a", "_acc"), ("a_m", "_acc_m"), ("z_m", "_m")):
             for i, c in enumerate("xyz"):
                 table[f"{c}{suffix}"] = getattr(r, key)[:, i]
+        written.fields["units"] = {c: "s" if c == "t" else "m/s^2" if "_acc" in c else "m" for c in table}  # the report's axes
         np.savetxt(out / "tracking.csv", np.column_stack(list(table.values())), delimiter=",", header=",".join(table), comments="", fmt="%.10g")
         written.files.append("tracking.csv")
         if plots:

@@ -309,6 +309,24 @@ class StateEstimationKind(ProblemKind):
     name = "state_estimation"
     schema = StateEstimationFile
     title = "laser tracker + IMU state estimation: KF/EKF/UKF/PF fusion vs sensors, Tables 8-10 (Cvitanic (2021), sec. 4.2-4.3)"
+    file_descriptions = {
+        "table_8.md": "Table 8: position and velocity error of tracker, IMU and fusion (Markdown, thesis beside ours)",
+        "table_8.csv": "Table 8 as CSV",
+        "table_9.md": "Table 9: the same with a 10x noisier tracker (Markdown)",
+        "table_9.csv": "Table 9 as CSV",
+        "table_10.md": "Table 10: sweeps of sensor rate and noise (Markdown)",
+        "table_10.csv": "Table 10 as CSV",
+        "table_10_limits.md": "where the fused velocity stops paying, per motion, tuning and parameter (Markdown)",
+        "table_10_limits.csv": "the limits of Table 10 as CSV",
+        "filter_comparison.md": "KF, EKF, UKF and particle filter compared (Markdown)",
+        "filter_comparison.csv": "the filter comparison as CSV",
+        "fusion_baseline_*.csv": "a baseline run's truth and estimates every sample",
+        "sensor_records_*.csv": "a baseline run's raw sensor records (tracker, IMU), for an independent re-run",
+        "filter_setup_*.npz": "a baseline run's filter set-up: x0, P0, Q, R, dt (and F, H for the linear model)",
+        "velocity_*.png": "true, measured and fused velocity of a motion (style of Fig. 24)",
+        "angular_acceleration.png": "angular acceleration, true against fused (Fig. 25)",
+        "table_10.png": "the Table 10 sweeps (Fig. 26)",
+    }
     columns = (
         Column("velocity_fusion_3_axis_mm_s", "v fused 3-axis [mm/s]", "{:.4g}"),
         Column("velocity_fusion_5_axis_mm_s", "v fused 5-axis [mm/s]", "{:.4g}"),

@@ -98,6 +98,14 @@ class VisionCalibrationKind(ProblemKind):
     name = "vision_calibration"
     schema = VisionCalibrationFile
     title = "kinematic calibration from stereo camera images (bundle adjustment), compared with the laser tracker (Dressler (2012), ch. 5.5)"
+    file_descriptions = {
+        "vision_tcp.csv": "TCP positions reconstructed from the stereo images, per pose [m]",
+        "parameters.toml": "robot parameters calibrated from the camera measurements",
+        "parameters_tracker.toml": "robot parameters calibrated from the laser-tracker measurements of the same poses",
+        "camera_views.png": "the calibration pattern as both cameras see it",
+        "reconstruction.png": "reconstructed TCP positions and their measurement error",
+        "vision_errors.png": "vision against laser-tracker calibration: TCP errors per pose",
+    }
     columns = (
         Column("vision_measurement_error_mean_m", "vision error [m]", "{:.3e}"),
         Column("vision_calibration_mean_error_m", "vision calibration [m]", "{:.3e}"),
