@@ -28,7 +28,7 @@ SHIPPED = {
     "dynamic_identification": ("l1_dynamic_identification.toml", False),
     "joint_stiffness_calibration": ("kr500_joint_stiffness.toml", True),
     "vision_calibration": ("l1_vision_calibration.toml", True),
-    "tracking": ("l1_tracking.toml", True),
+    "replay": ("l1_tracking.toml", True),
     "ilc": ("l1_ilc.toml", True),
     "state_estimation": ("kr500_state_estimation.toml", True),
     "correction_stability": ("kr500_correction_stability.toml", True),
