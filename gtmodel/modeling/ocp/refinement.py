@@ -9,7 +9,9 @@ choose the elements to split:
 * the *element defect*: the largest scaled deviation of an element's own simulation
   under the optimal inputs from its collocated start (``Verification.element_errors``).
   An element above the tolerance is split into 2, 3 or 4 equal parts (by how far it is
-  above: below ``10 tol``, ``100 tol``, beyond).
+  above: below ``10 tol``, ``100 tol``, beyond). When every element is within the tolerance but
+  the simulation over the horizon is not (the local errors add up), the elements are compared
+  with ``tol * tol / deviation`` instead, so that the largest contributors are split.
 * a *switch*: an input that crosses most of its range within one element (a bang-bang
   switch, which no polynomial represents: the collocation smooths it, and a model that
   integrates the input, such as the double integrator, shows no defect while the
@@ -110,7 +112,8 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
         A verified collocation result (``result.verification`` set).
     tolerance : float
         Verification tolerance (scaled deviation); switches are located to
-        ``tolerance`` times the horizon.
+        ``tolerance`` times the horizon. Where the verification's deviation exceeds it with
+        every element defect within it, the elements are held to ``tolerance**2 / deviation``.
     max_elements : int
         Limit on the elements of the new mesh (the worst elements are split first).
 
@@ -132,8 +135,16 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
         raise InputError("refine_mesh: the result holds no collocation data or verification")
     N = col.elements
     frac = np.full(N, 1.0 / N) if col.fractions is None else np.asarray(col.fractions, dtype=float)
-    errors = np.asarray(v.element_errors, dtype=float) / tolerance
-    errors = np.where(np.isfinite(errors), errors, 1e6)
+    errors = np.asarray(v.element_errors, dtype=float)
+    errors = np.where(np.isfinite(errors), errors, 1e6 * tolerance)
+    deviation = float(v.max_scaled_deviation)
+    if np.isfinite(deviation) and deviation > tolerance >= errors.max(initial=0.0):
+        # every element within the tolerance, the simulation over the horizon not: the local errors add up
+        # (a stiff state's deviations after each switch). The local target is lowered by the ratio of the two
+        # (the error equidistributed; Betts, *Practical Methods*, ch. 4, mesh refinement), so that the elements that
+        # contribute most are split rather than the refinement stopping with nothing to split
+        tolerance = tolerance * tolerance / deviation
+    errors = errors / tolerance
     plans: dict[int, tuple[float, list[float]]] = {}
     for k in np.nonzero(errors > 1.0)[0]:
         parts = 2 if errors[k] < 10 else 3 if errors[k] < 100 else 4

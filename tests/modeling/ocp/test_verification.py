@@ -143,6 +143,22 @@ def test_refine_mesh_splits_elements_above_the_tolerance():
     assert info["split"] == [] and len(capped) == 4
 
 
+def test_refinement_splits_where_the_local_errors_add_up_beyond_the_tolerance():
+    # x' = -x + 1 on 4 elements of one point: every element's own error (0.060 at most) within 0.07, the
+    # simulation's deviation over the horizon (0.084) not; the deviation recomputed from the closed form 1 - exp(-t)
+    res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
+    v = res.verification
+    col = res.collocation
+    nodes = np.concatenate([col.xc[:, 0, 0], col.xc[-1:, -1, 0]])  # one point: the polynomials are linear
+    deviation = np.abs(np.interp(v.t, col.breaks(), nodes) - (1.0 - np.exp(-v.t)))
+    assert v.max_scaled_deviation == pytest.approx(deviation.max(), rel=1e-5)
+    assert v.element_errors.max() < 0.07 < v.max_scaled_deviation
+    fractions, info = refine_mesh(res, tolerance=0.07, max_elements=100)
+    assert info["split"] == [0] and fractions.sum() == pytest.approx(1.0)
+    refined = solve_refined(step_response(4, 1), elements=4, points=1, tolerance=0.07)
+    assert refined.verification.passed and refined.status == Status.OPTIMAL and len(refined.refinement) >= 2
+
+
 @pytest.mark.parametrize("kwargs, match", [({"max_elements": 5}, "max_elements"), ({"max_passes": 0}, "max_passes"),
                                            ({"max_cpu_s": 0.0}, "max_cpu_s"), ({"max_cpu_s": True}, "max_cpu_s")])
 def test_bad_refinement_limits_are_refused(kwargs, match):
