@@ -41,7 +41,7 @@ def test_drive_reference_is_converged_in_its_mesh(name):
     assert abs(t_f - t_c) * n_c / (n_f - n_c) <= 2.5e-3 * t_f
 
 
-@pytest.mark.slow  # 10 to 90 CPU-s each: a solve, its verification and refinement from it (refine_on_failure)
+@pytest.mark.slow  # 3 to 50 CPU-s each: a solve, its verification and refinement from it (refine_on_failure)
 @pytest.mark.parametrize("name", DRIVES)
 def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_path):
     cpu = time.process_time()
@@ -53,6 +53,5 @@ def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_
     kept = [e["objective"] for e in passes if "rejected" not in e and e.get("end_deviation", 1.0) <= 0.1]
     # never worse than a start whose simulation reaches its end, by more than the rejection margin
     assert not kept or summary["objective"] <= min(kept) + WORSE * max(1.0, min(kept)) or summary["verification"]["passed"]
-    assert cpu <= 150.0
-    if name == "drive_motor_gear_load":
-        assert str(outcome.status) == "optimal" and summary["verification"]["passed"] is True
+    assert cpu <= 120.0  # issue 49: the whole process within 120 CPU-s
+    assert str(outcome.status) == "optimal" and summary["verification"]["passed"] is True

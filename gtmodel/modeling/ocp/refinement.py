@@ -27,8 +27,7 @@ first element): the next pass starts from a repaired guess instead of the spurio
 trajectory (the inputs of the failing elements interpolated from their neighbours', the
 states simulated under those inputs). Each pass starts from the previous solution interpolated onto its mesh, with IPOPT's barrier
 parameter started at :data:`WARM_MU` and its start not pushed off its bounds (:data:`WARM_PUSH`)
-so that it stays near it. A pass that verifies but ends ``acceptable`` is solved once more on
-its mesh from itself (IPOPT stopped at its acceptable level). A pass whose objective is
+so that it stays near it. A pass whose objective is
 worse by more than :data:`WORSE` than an earlier pass whose simulation reaches its final state
 (:func:`end_deviation` within :data:`ANCHOR_END`: no spurious minimum) has left for another
 local optimum: it is rejected and the earlier pass refined instead. The refinement stops at the
@@ -403,15 +402,10 @@ def solve_refined(
         if base is not result and history[-2].get("rejected") and len(new) == n_elements:
             stop = f"pass {n_pass} left pass {passes.index(anchor) + 1}'s optimum again on the same mesh"
             break
-        polish = base is result and v.passed and result.status != Status.OPTIMAL and "polish" not in history[-2 if len(history) > 1 else -1]
-        if not info["split"] and base is result and not polish:
+        if not info["split"] and base is result:
             stop = ("the verification passed and no element is left to split" if v.passed else
                     f"no element left to split within {max_elements} elements")
             break
-        if not info["split"] and polish:
-            # verified, but IPOPT stopped at its acceptable level (a flat direction of a bang-bang input): solved
-            # again on the same mesh from it, once; refined on from there if that moves it out of the tolerance
-            entry["polish"] = f"verified but {result.status}: solved again on the same mesh from it"
         entry["split"] = len(info["split"])
         spent = _time.process_time() - cpu0
         if n_pass == max_passes:
