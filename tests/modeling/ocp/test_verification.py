@@ -13,6 +13,7 @@ import pytest
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling.ocp import refinement
 from gtmodel.modeling.ocp.refinement import end_deviation, refine_mesh, solve_refined, switch_times
 from gtmodel.modeling.ocp.verification import bound_violations, verify
 from gtmodel.status import Status
@@ -130,6 +131,25 @@ def test_refinement_locates_the_bang_bang_switch():
     assert abs(ts - 1.0) <= max(1e-6, widths.min())  # to the mesh's accuracy
     assert res.refinement[0]["elements"] == 11 and res.refinement[-1]["elements"] == res.collocation.elements
     assert len(res.refinement) >= 2
+
+
+def test_warm_passes_start_on_the_previous_passs_bounds(monkeypatch):
+    # every pass after the first starts from the previous one with a small barrier parameter and without IPOPT's
+    # push off the bounds (the bang-bang input sits on them); the outcome still the closed form's 2 s
+    seen = []
+    real = refinement.CollocationTranscription
+
+    def spy(*args, **kwargs):
+        seen.append(dict(kwargs.get("solver_options") or {}))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    opt = min_time_double_integrator()
+    opt.verification_tolerance = 1e-6
+    res = solve_refined(opt, elements=11)
+    assert res.final_time == pytest.approx(2.0, abs=1e-6) and len(seen) >= 2
+    assert "mu_init" not in seen[0] and "bound_push" not in seen[0]
+    assert all(o["mu_init"] == refinement.WARM_MU and o.items() >= refinement.WARM_PUSH.items() for o in seen[1:])
 
 
 def test_refine_mesh_splits_elements_above_the_tolerance():
