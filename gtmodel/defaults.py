@@ -54,8 +54,7 @@ Keys
     (:func:`gtmodel.modeling.ocp.refinement.solve_refined`; a problem file:
     ``[transcription] max_cpu_s``): no pass starts once it is spent or the last pass's
     cost would overrun it, and the best verified pass is returned. 90 s: the drive models
-    of ``problems/drive_*.toml`` end their refinement in 5 to 60 CPU-s (two verified, the
-    flexible joint stopped by its own rule at deviation 0.013).
+    of ``problems/drive_*.toml`` end their refinement verified in 2 to 35 CPU-s.
 ``ipopt.warm_start``
     IPOPT options of warm starts: start from the given primal-dual point with a small
     barrier parameter and without pushing it off the bounds.

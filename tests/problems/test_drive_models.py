@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from gtmodel.modeling.ocp.refinement import WORSE
+from gtmodel.modeling.ocp.refinement import ANCHOR_END, WORSE
 from gtmodel.problems import load_problem, run_problem
 
 REPO = Path(__file__).resolve().parents[2]
@@ -41,7 +41,7 @@ def test_drive_reference_is_converged_in_its_mesh(name):
     assert abs(t_f - t_c) * n_c / (n_f - n_c) <= 2.5e-3 * t_f
 
 
-@pytest.mark.slow  # 10 to 90 CPU-s each: a solve, its verification and refinement from it (refine_on_failure)
+@pytest.mark.slow  # 3 to 50 CPU-s each: a solve, its verification and refinement from it (refine_on_failure)
 @pytest.mark.parametrize("name", DRIVES)
 def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_path):
     cpu = time.process_time()
@@ -50,9 +50,10 @@ def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["objective"] == pytest.approx(REFERENCES[name]["final_time"], rel=5e-3)
     passes = summary.get("refinement", [])
-    kept = [e["objective"] for e in passes if "rejected" not in e and e.get("end_deviation", 1.0) <= 0.1]
-    # never worse than a start whose simulation reaches its end, by more than the rejection margin
-    assert not kept or summary["objective"] <= min(kept) + WORSE * max(1.0, min(kept)) or summary["verification"]["passed"]
-    assert cpu <= 150.0
-    if name == "drive_motor_gear_load":
-        assert str(outcome.status) == "optimal" and summary["verification"]["passed"] is True
+    tol = summary["verification"]["tolerance"]
+    feasible = [e["objective"] for e in passes if e.get("end_deviation", 1.0) <= ANCHOR_END and e.get("max_bound_violation", 0.0) <= tol]
+    # never worse than a pass feasible by simulation (its end reached, the current limit kept between the nodes),
+    # by more than the rejection margin
+    assert not feasible or summary["objective"] <= min(feasible) + WORSE * max(1.0, min(feasible))
+    assert cpu <= 120.0  # issue 49: the whole process within 120 CPU-s
+    assert str(outcome.status) == "optimal" and summary["verification"]["passed"] is True

@@ -13,6 +13,7 @@ import pytest
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling.ocp import refinement
 from gtmodel.modeling.ocp.refinement import end_deviation, refine_mesh, solve_refined, switch_times
 from gtmodel.modeling.ocp.verification import bound_violations, verify
 from gtmodel.status import Status
@@ -132,6 +133,25 @@ def test_refinement_locates_the_bang_bang_switch():
     assert len(res.refinement) >= 2
 
 
+def test_warm_passes_start_on_the_previous_passs_bounds(monkeypatch):
+    # every pass after the first starts from the previous one with a small barrier parameter and without IPOPT's
+    # push off the bounds (the bang-bang input sits on them); the outcome still the closed form's 2 s
+    seen = []
+    real = refinement.CollocationTranscription
+
+    def spy(*args, **kwargs):
+        seen.append(dict(kwargs.get("solver_options") or {}))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    opt = min_time_double_integrator()
+    opt.verification_tolerance = 1e-6
+    res = solve_refined(opt, elements=11)
+    assert res.final_time == pytest.approx(2.0, abs=1e-6) and len(seen) >= 2
+    assert "mu_init" not in seen[0] and "bound_push" not in seen[0]
+    assert all(o["mu_init"] == refinement.WARM_MU and o.items() >= refinement.WARM_PUSH.items() for o in seen[1:])
+
+
 def test_refine_mesh_splits_elements_above_the_tolerance():
     res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
     errors = res.verification.element_errors
@@ -141,6 +161,22 @@ def test_refine_mesh_splits_elements_above_the_tolerance():
     assert info["split"] == [] and len(same) == 4
     capped, info = refine_mesh(res, tolerance=1e-12, max_elements=4)
     assert info["split"] == [] and len(capped) == 4
+
+
+def test_refinement_splits_where_the_local_errors_add_up_beyond_the_tolerance():
+    # x' = -x + 1 on 4 elements of one point: every element's own error (0.060 at most) within 0.07, the
+    # simulation's deviation over the horizon (0.084) not; the deviation recomputed from the closed form 1 - exp(-t)
+    res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
+    v = res.verification
+    col = res.collocation
+    nodes = np.concatenate([col.xc[:, 0, 0], col.xc[-1:, -1, 0]])  # one point: the polynomials are linear
+    deviation = np.abs(np.interp(v.t, col.breaks(), nodes) - (1.0 - np.exp(-v.t)))
+    assert v.max_scaled_deviation == pytest.approx(deviation.max(), rel=1e-5)
+    assert v.element_errors.max() < 0.07 < v.max_scaled_deviation
+    fractions, info = refine_mesh(res, tolerance=0.07, max_elements=100)
+    assert info["split"] == [0] and fractions.sum() == pytest.approx(1.0)
+    refined = solve_refined(step_response(4, 1), elements=4, points=1, tolerance=0.07)
+    assert refined.verification.passed and refined.status == Status.OPTIMAL and len(refined.refinement) >= 2
 
 
 @pytest.mark.parametrize("kwargs, match", [({"max_elements": 5}, "max_elements"), ({"max_passes": 0}, "max_passes"),
