@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from gtmodel.report.fidelity_rules import Row
+from gtmodel.estimation.fusion.limits import THESIS_TABLE_10
+from gtmodel.report.fidelity_rules import Row, limit_verdict
 from gtmodel.report.fidelity_rules import figure_text as _f
 
 __all__ = ["table_10_rows", "table_2_rows"]
@@ -65,6 +66,11 @@ def _thesis_limit(text: str) -> float | None:
     return float(text.split()[1]) if text.startswith("<") else None
 
 
+def _verdict(r: dict[str, Any]) -> str:
+    """The page's rule on one collected limit (:func:`~gtmodel.report.fidelity_rules.limit_verdict`, the thesis' limit of its motion)."""
+    return limit_verdict({**r, "thesis_limit": THESIS_TABLE_10[r["parameter"]][r["motion"] == "5-axis"]})
+
+
 def _limit_text(r: dict[str, Any]) -> str:
     if r["stops_at"] is None:
         return f"> {_f(r['search'][1])}"
@@ -96,7 +102,7 @@ def table_10_rows(f: dict[str, Any], t10: dict[str, Any] | None) -> list[tuple[s
                           for r in f["table_10"] if r["parameter"] == par)
         found = [r for r in limits if r["parameter"] == par]
         if not found:
-            out.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", f"Table 7 offsets: {sweep or 'not run'}", "one decade",
+            out.append((f"{src}, Table 10: limit of {par} (3-axis / 5-axis)", f"{l3} / {l5}", f"Table 7 offsets: {sweep or 'not run'}", "half a decade",
                         "not run", "run problems/thesis/kr500_table_10.toml, then collect"))
             continue
         ours = "; ".join(f"{r['motion'] + (' (tool normal to the path)' if r['motion'] == '5-axis' else '')} "
@@ -104,8 +110,8 @@ def table_10_rows(f: dict[str, Any], t10: dict[str, Any] | None) -> list[tuple[s
                          f"{' vs the centred regression' if r.get('baseline') == 'centred' else ''} {_limit_text(r)}" for r in found)
         sweep = (f"kr500_state_estimation at the Table 7 offsets, its 5-axis a 10 deg turn about a fixed axis"
                  f"{', error axis (1, 1, 1)' if par.startswith('transform') else ''}: {sweep or 'not run'}")
-        own = [r for r in found if r["tuning"] == "white_jerk" and r.get("baseline", "causal") == "causal" and r["verdict"] != "N/A"]
-        verdict = "reproduced" if own and all(r["verdict"] == "reproduced" for r in own) else "differs"
+        own = [r for r in found if r["tuning"] == "white_jerk" and r.get("baseline", "causal") == "causal" and _verdict(r) != "N/A"]
+        verdict = "reproduced" if own and all(_verdict(r) == "reproduced" for r in own) else "differs"
         text = dict(zip(("3-axis", "5-axis"), (l3, l5)))
         pairs = tuple((r["limit"] if r["stops_at"] is not None else None, _thesis_limit(text[r["motion"]])) for r in own
                       if _thesis_limit(text[r["motion"]]) is not None)

@@ -30,7 +30,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 __all__ = ["figure_text", "VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DECADES", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Mechanism", "Row",
-           "cases_differ_as_thesis", "pattern_as_thesis", "limit_within", "apply_rules", "delay_pole_magnitude", "largest_stable_delay"]
+           "cases_differ_as_thesis", "pattern_as_thesis", "limit_within", "limit_verdict", "apply_rules", "delay_pole_magnitude", "largest_stable_delay"]
 
 #: The verdicts a row can carry, from the strongest.
 VERDICTS = ("reproduced", "predicted", "structure reproduced", "check of a reading", "differs")
@@ -242,6 +242,33 @@ def limit_within(ours: float | None, thesis: float, decades: float = LIMIT_DECAD
     bool
     """
     return ours is not None and ours > 0 and abs(np.log10(ours / thesis)) <= decades + 1e-12
+
+
+def limit_verdict(row: dict[str, Any]) -> str:
+    """The verdict of one searched Table 10 limit against the thesis: the page's rule (:func:`limit_within`), for every report.
+
+    The one rule for Table 10's limits (the fidelity page and the result folder's ``table_10_limits.md`` of
+    :func:`gtmodel.report.fusion.write_limits_table`): a thesis "< x" passes only within :data:`LIMIT_DECADES`.
+
+    Parameters
+    ----------
+    row : dict
+        A row of :func:`gtmodel.estimation.fusion.limits.velocity_limit`: ``thesis_limit`` (None: N/A,
+        ``inf``: "no constraint", else the thesis' "< x"), ``stops_at`` (None: fusion pays over the whole
+        search) and ``limit`` (the geometric mean of the final bracket).
+
+    Returns
+    -------
+    str
+        ``"N/A"`` (the thesis has no limit for the motion), ``"reproduced"`` (a "no constraint" where fusion
+        pays over the whole search, or a limit within half a decade) or ``"differs"``.
+    """
+    thesis, stops = row["thesis_limit"], row["stops_at"]
+    if thesis is None:
+        return "N/A"
+    if np.isinf(thesis):
+        return "reproduced" if stops is None else "differs"
+    return "reproduced" if limit_within(row["limit"] if stops is not None else None, thesis) else "differs"
 
 
 def _demote(r: Row, groups: dict[str, list[Case]]) -> Row:
