@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 
 from gtmodel.problems import run_problem
@@ -101,3 +102,22 @@ def test_table_2_rows_from_a_real_run(tmp_path):
     assert data["kr500_table_2"]["monte_carlo"]["seeds"] == 3 and data["kr500_table_2"]["dpp_step2"] == "tcp_translation"
     assert rows[0][2].startswith("3 seeds: median CP / DPP") and rows[0][4] == "differs" and len(rows[0][5]) > 20
     assert "CP with rotations x10 below DPP" in rows[1][0]
+
+
+def test_thesis_metric_is_the_norm_of_per_axis_mean_abs_errors(tmp_path):
+    # closed form for white Gaussian noise sigma per axis: sqrt(3 * 2 / pi) sigma = 1.382 sigma (std sqrt(3 (1 - 2 / pi)) = 1.044
+    # sigma), which the thesis' sensor columns match (Table 9: 0.889 / 0.64 mm = 1.389) where the mean 3-D norm gives 1.596 sigma
+    rng = np.random.default_rng(0)
+    n, sigma = 200_000, 0.64e-3
+    cols, data = ["t"], [np.arange(n) * 1e-3]
+    for q in ("position", "velocity", "acceleration"):
+        for a in "xyz":
+            truth = np.sin(np.arange(n) * 1e-3)
+            cols += [f"{q}_{a}_true", f"{q}_{a}_sensor", f"{q}_{a}_fusion"]
+            data += [truth, truth + sigma * rng.standard_normal(n), truth + 0.5 * sigma * rng.standard_normal(n)]
+    np.savetxt(tmp_path / "fusion_baseline_3_axis.csv", np.column_stack(data), delimiter=",", header=",".join(cols), comments="")
+    m = fidelity.thesis_metric(tmp_path / "fusion_baseline_3_axis.csv")
+    assert m["position_mm"]["sensor"]["mean"] == pytest.approx(math.sqrt(6 / math.pi) * 0.64, rel=5e-3)
+    assert m["position_mm"]["sensor"]["std"] == pytest.approx(math.sqrt(3 * (1 - 2 / math.pi)) * 0.64, rel=5e-3)
+    assert m["acceleration_m_s2"]["fusion"]["mean"] == pytest.approx(math.sqrt(6 / math.pi) * 0.32e-3, rel=5e-3)
+    assert 0.889 / 0.64 == pytest.approx(math.sqrt(6 / math.pi), rel=6e-3)  # the thesis' Table 9 sensor column
