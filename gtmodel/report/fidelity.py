@@ -38,7 +38,7 @@ from gtmodel.report.fidelity_fits import FITS, fit_rows
 from gtmodel.report.fidelity_kr500 import table_2_rows as _table_2_rows
 from gtmodel.report.fidelity_kr500 import table_10_rows as _table_10_rows
 from gtmodel.report.fidelity_rules import figure_text as _f
-from gtmodel.report.fidelity_rules import (NOT_DIGITISED, NOT_DIGITISED_ROW, RULES, Case, Mechanism, Row, apply_rules, delay_pole_magnitude,
+from gtmodel.report.fidelity_rules import (NOT_DIGITISED, NOT_DIGITISED_ROW, REVISITED, RULES, Case, Mechanism, Row, apply_rules, delay_pole_magnitude,
                                            largest_stable_delay)
 from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
 
@@ -611,7 +611,7 @@ def render(data: dict[str, Any]) -> str:
             "The fitted quantities and the rows predicted with them come from `docs/fidelity_fits.json`, which "
             "`python -m gtmodel.problems.fidelity_fits` writes (a slow test checks that it reproduces the file). "
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
-            + RULES + "\n" + NOT_DIGITISED + "\n"
+            + RULES + "\n" + REVISITED + "\n" + NOT_DIGITISED + "\n"
             "`[l1_ilc_thesis]`: the ILC set-up the thesis' text "
             "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading, Case 2B's Kalman filter on model (7.21) with z_kin as input); `[l1_ilc]`: the quick variant. Table 7.2's thesis figures are read from the package data `gtmodel/estimation/ilc/data/thesis_ilc.toml`.\n\n"
             "| thesis figure | thesis | ours | tolerance | verdict | measured cause of a difference |\n|---|---|---|---|---|---|\n")
