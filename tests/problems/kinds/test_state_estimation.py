@@ -181,7 +181,7 @@ BAD = [
     ("feed_zero", _edit("feed_rate_mm_s = 42.33", "feed_rate_mm_s = 0.0"), r"field 'sensors\.feed_rate_mm_s': expected a positive number"),
     ("unknown_rotation_law", _edit("rotation_amplitude_deg = 10.0", 'rotation_amplitude_deg = 10.0\nrotation_law = "spin"'),
      r"field 'path\.rotation_law': expected one of sine, normal"),
-    ("unknown_feed", _edit('feed = "tangential"', 'feed = "arc"'),
+    ("unknown_feed", _edit('\nfeed = "tangential"', '\nfeed = "arc"'),
      r"field 'path\.feed': expected one of x, tangential"),
     ("unknown_motion", _edit('sweep_motions = ["3-axis", "5-axis"]', 'sweep_motions = ["planar"]'), r"field 'study\.sweep_motions\[0\]': expected one of 3-axis, 5-axis"),
     ("unknown_tuning", _edit("[study.sweep]", '[study.limits]\ntunings = ["thesis"]\n\n[study.sweep]'), r"field 'study\.limits\.tunings\[0\]': expected one of white_jerk, appendix_b"),
@@ -253,7 +253,7 @@ def test_table_10_transform_rows_at_constant_tangential_speed(tmp_path):
     text = _edit('centred = ["sample_time_s"]', "centred = []")(text)
     rows = {}
     for feed in ("x", "tangential"):
-        (tmp_path / f"{feed}.toml").write_text(_edit('feed = "tangential"', f'feed = "{feed}"')(text))
+        (tmp_path / f"{feed}.toml").write_text(_edit('\nfeed = "tangential"', f'\nfeed = "{feed}"')(text))
         outcome = run_problem(tmp_path / f"{feed}.toml", tmp_path / feed)
         rows[feed] = {(r["motion"], r["parameter"]): r for r in outcome.summary["table_10_limits"]}
     orient = {f: rows[f][("3-axis", "transform_orientation_error_deg")] for f in rows}
