@@ -29,8 +29,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["figure_text", "VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DECADES", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Mechanism", "Row",
-           "cases_differ_as_thesis", "pattern_as_thesis", "limit_within", "apply_rules", "delay_pole_magnitude", "largest_stable_delay"]
+__all__ = ["figure_text", "VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DECADES", "REVISITED", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Mechanism", "Row",
+           "cases_differ_as_thesis", "pattern_as_thesis", "limit_within", "limit_verdict", "apply_rules", "delay_pole_magnitude", "largest_stable_delay"]
 
 #: The verdicts a row can carry, from the strongest.
 VERDICTS = ("reproduced", "predicted", "structure reproduced", "check of a reading", "differs")
@@ -65,12 +65,33 @@ RULES = (
     "that mechanism gives here (the change in um against the deflection in um). Otherwise the row *differs*, with the numbers.\n"
     "- No row is better than *differs* if it rests on a quantity the thesis does not print: a tuning of ours (e.g. the 5-axis EKF Q "
     "of Table 10) or a model taken equal to the simulated plant (e.g. Fig. 7.1's Kalman model): the row names it.\n"
-    f"- A limit of a thesis' '<' row (Table 10) passes only within half a decade ({LIMIT_DECADES:g} in log10) of the thesis' value.\n"
+    f"- A limit of a thesis' '<' row (Table 10) passes only within half a decade ({LIMIT_DECADES:g} in log10) of the thesis' value, "
+    "on every noise seed it was run on. Each Table 10 cell (3-axis, 5-axis) is its own row, its verdict on the tuning the thesis "
+    "states (the 3-axis KF: Appendix B's Q; the 5-axis EKF: none printed, so ours, and the row differs).\n"
     "- *check of a reading*: the figure is the set-up's input read back, or the figure a quantity was fitted or chosen to give "
     "(it cannot fail); it checks how the thesis' text is read, not a reproduction.\n"
     "- *differs*: with the measured cause and the deciding number the thesis does not print.\n"
     "- *variant*: the figure of a set-up other than the declared one, shown beside it; it carries no verdict. *not run*: the result "
     "folder was missing. *self-check*: the run's own checks (NEES, status), not a thesis figure: no verdict, not counted.\n"
+)
+
+#: The three largest groups of *differs* rows, revisited after the thesis' stated readings and the seed spread (issue 47, item 5).
+REVISITED = (
+    "The three largest groups of *differs* rows, revisited (issue 47, item 5): "
+    "(1) Cvitanic (2021), Tables 8-10 (17 rows). Re-run at the thesis' stated path (constant tangential speed, sec. 4.2.2) and, for "
+    "the 3-axis KF, its stated tuning (Appendix B's Q), Table 10 judged per cell: the 3-axis sample-time limit moves from > 0.1 s "
+    "(feed along x) to 0.029 s (+0.47 decades) on seeds 1-4 and 0.034 s (+0.53) on seed 5, so it is not within half a decade on every "
+    "seed and differs; the 5-axis cells rest on our EKF Q (the thesis prints none); the 5-axis gyro-bias limit leaves half a decade "
+    "(2.7 -> 8.6 deg/s), its former agreement a product of the feed along x. The thesis' 'mean error' matches the norm of "
+    "the per-axis mean absolute errors (1.382 sigma: its sensor columns 0.0089 mm, 0.889 mm, 0.070 deg/s), which accounts for the "
+    "sensor columns, not for the fusion gaps. "
+    "(2) Dressler (2012), the ILC rows (16), unchanged (items 1-2 do not concern them): the tool rows are set by the actuator lag every "
+    "case learns (2.74 / 2.64 mm RMS at k = 0) against a structural deflection of 0.85 / 1.7 um RMS, and Fig. 7.7 by the (6.11) "
+    "servos (1.43 / 1.39 / 1.1 Hz from the printed models, where the text says about 1.1 Hz for all three); the deciding figures "
+    "(Figs. 6.10, 7.8, 7.9) cannot be digitised here. "
+    "(3) Dressler (2012), the D1 rows (13), unchanged: the synthetic truth carries Table 4.1's actuator errors, not the thesis' unmodelled "
+    "per-arm residual (Table 5.8's 73 / 60 / 19 um; the cart compliance that would give it moves cart 1 by up to 10 mm), and model 3 "
+    "falls into the plate-joint valley (scaled Jacobian condition 4.2e4). Each row gives its measured cause and deciding number.\n"
 )
 
 #: Why the ILC group's deciding figures are not digitised (Dressler (2012), Figs. 6.10, 7.8, 7.9; the seeds' text, checked).
@@ -242,6 +263,33 @@ def limit_within(ours: float | None, thesis: float, decades: float = LIMIT_DECAD
     bool
     """
     return ours is not None and ours > 0 and abs(np.log10(ours / thesis)) <= decades + 1e-12
+
+
+def limit_verdict(row: dict[str, Any]) -> str:
+    """The verdict of one searched Table 10 limit against the thesis: the page's rule (:func:`limit_within`), for every report.
+
+    The one rule for Table 10's limits (the fidelity page and the result folder's ``table_10_limits.md`` of
+    :func:`gtmodel.report.fusion.write_limits_table`): a thesis "< x" passes only within :data:`LIMIT_DECADES`.
+
+    Parameters
+    ----------
+    row : dict
+        A row of :func:`gtmodel.estimation.fusion.limits.velocity_limit`: ``thesis_limit`` (None: N/A,
+        ``inf``: "no constraint", else the thesis' "< x"), ``stops_at`` (None: fusion pays over the whole
+        search) and ``limit`` (the geometric mean of the final bracket).
+
+    Returns
+    -------
+    str
+        ``"N/A"`` (the thesis has no limit for the motion), ``"reproduced"`` (a "no constraint" where fusion
+        pays over the whole search, or a limit within half a decade) or ``"differs"``.
+    """
+    thesis, stops = row["thesis_limit"], row["stops_at"]
+    if thesis is None:
+        return "N/A"
+    if np.isinf(thesis):
+        return "reproduced" if stops is None else "differs"
+    return "reproduced" if limit_within(row["limit"] if stops is not None else None, thesis) else "differs"
 
 
 def _demote(r: Row, groups: dict[str, list[Case]]) -> Row:

