@@ -23,6 +23,7 @@ from gtmodel.problems.tracking_file import load_tracking_file
 
 from ..conftest import REPO
 
+FIXTURES = REPO / "tests" / "fixtures" / "user_models"
 DRIVES = ["motor_gear_load", "two_mass", "flexible_joint", "belt"]
 ROUTES = {"mpc": (REPO / "codegen" / "mpc", "mpc", load_mpc_file, mpc_step),
           "tracking": (REPO / "codegen" / "controllers", "tracking", load_tracking_file, tracking_step)}
@@ -55,3 +56,27 @@ def test_generated_c_tracks_and_keeps_every_declared_bound(drive, route, tmp_pat
     assert [b.name for b in check.bounds if b.beyond_tolerance] == []
     assert not check.plant_diverged and check.ratio_to_feedforward <= 0.5
     assert [f for f in check.failures() if "step time" not in f] == []  # the step time: shared 2-core machine, reported
+
+
+@pytest.mark.slow  # the refined solve of the fixture's lift (about 1 min)
+def test_the_refined_flexible_plan_keeps_the_current_limit(tmp_path):
+    # the fixture's lift refined to a verified plan (refine_on_failure, the default): its MPC (the current rows, the plant
+    # 20 % off) once drew 11.1 A of 10 in the first period, under the plan's first 20 V sample held before the first
+    # computed input arrived; the input holding the start at rest acts then now. References: the feedforward alone on the
+    # same plant (ratio) and the plant's own current column against the declared 10 A.
+    from .test_flexible_joint_loop import _loop
+
+    tag = tmp_path.name
+    move, mpc = FIXTURES / f"_test_refined_move_{tag}.toml", FIXTURES / f"_test_refined_mpc_{tag}.toml"  # beside the fixture
+    move.write_text((FIXTURES / "flexible_move.toml").read_text().replace("refine_on_failure = false", "refine_on_failure = true"))
+    mpc.write_text((FIXTURES / "flexible_mpc.toml").read_text().replace('problem = "flexible_move.toml"', f'problem = "{move.name}"')
+                   .replace("accept_unverified = true", ""))
+    try:
+        setup = load_mpc_file(mpc)
+    finally:
+        move.unlink()
+        mpc.unlink()
+    check = _loop(setup)
+    current = {b.name: b for b in check.bounds}["ind.i"]
+    assert not setup.notes and check.ratio_to_feedforward < 0.5  # verified: no note
+    assert current.relative <= 0.01 and check.closed.u[0, 0] == pytest.approx(0.0, abs=1e-9)
