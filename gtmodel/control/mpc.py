@@ -44,7 +44,7 @@ from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
-from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index
+from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
 from gtmodel.control.tracking import saturate
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
@@ -116,6 +116,10 @@ class MPCController(SampledReference):
         J. 49 (2003), the input-disturbance model; Maeder, Borrelli & Morari, Automatica 45
         (2009)). The estimator's state is kept in the step's memory after the warm start
         (:attr:`memory_initial`).
+    u_start : numpy.ndarray or None, optional
+        ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`, the
+        memory's ``u_last``): :func:`~gtmodel.control.reference.start_input`, the input that
+        holds a start at rest; None: ``u*_0``.
     """
 
     dt: float
@@ -137,6 +141,7 @@ class MPCController(SampledReference):
     constraints: MPCConstraints | None = None
     delay: int = 0
     disturbance_gain: float = 0.0
+    u_start: np.ndarray | None = None
 
     @property
     def nw(self) -> int:
@@ -158,8 +163,8 @@ class MPCController(SampledReference):
 
     @property
     def u_initial(self) -> np.ndarray:
-        """``(nu,)`` the input before the first step: ``u*_0`` saturated."""
-        return saturate(self.u_ref[0], self.u_lb, self.u_ub)
+        """``(nu,)`` the input before the first step: :attr:`u_start` (default ``u*_0``) saturated."""
+        return saturate(self.u_ref[0] if self.u_start is None else self.u_start, self.u_lb, self.u_ub)
 
     @property
     def w_initial(self) -> np.ndarray:
@@ -650,4 +655,5 @@ def mpc_controller(
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
-                         delay=int(delay), disturbance_gain=float(disturbance_gain))
+                         delay=int(delay), disturbance_gain=float(disturbance_gain),
+                         u_start=start_input(ode.f, prob.x_given[0], us[0], prob.p))
