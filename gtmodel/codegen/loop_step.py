@@ -333,7 +333,11 @@ def _spec(step: LoopStep) -> FunctionSpec:
 SOLVER_LIBRARIES = {
     "daqp/api.h": ("{lib}/libdaqpstat.a",),
     "fatrop/ocp/OCPCInterface.h": ("-L{lib}", "-lfatrop", "-lblasfeo", "-Wl,-rpath,{lib}"),
+    "hpipm_d_ocp_qp_ipm.h": ("-L{lib}", "-lhpipm", "-lblasfeo", "-Wl,-rpath,{lib}"),
 }
+#: Headers of the solver libraries whose generated call allocates its work in every QP (DAQP's setup;
+#: HPIPM's dimensions, QP, solution and workspace in CasADi's runtime): the step's heap arena takes them.
+ARENA_HEADERS = ("daqp/api.h", "hpipm_d_ocp_qp_ipm.h")
 
 
 #: Bytes of the per-thread static arena that takes the allocations of a QP solver that allocates its work
@@ -369,7 +373,8 @@ def uses_heap_arena(casadi_source: str | Path) -> bool:
     -------
     bool
     """
-    return "#include <daqp/api.h>" in Path(casadi_source).read_text()
+    text = Path(casadi_source).read_text()
+    return any(f"#include <{h}>" in text for h in ARENA_HEADERS)
 
 
 def solver_libraries(source: str | Path) -> tuple[tuple[str, ...], tuple[str, ...]]:
