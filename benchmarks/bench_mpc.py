@@ -30,8 +30,10 @@ measured side by side in one run, because these machines are noisy:
   of its SQP iterated to convergence against gtmodel's (30 Gauss-Newton iterations) at 5 states
   of its run. acados 0.2.2 has neither move blocking nor per-stage constraint rows: it always
   solves the unblocked problem without rows and without the input-disturbance estimate, so
-  each file gives two rows, ``configuration`` ``"unblocked"`` (gtmodel on the same NLP: like
-  for like) and ``"shipped"`` (the file's blocks and rows), both against that acados run. Keys:
+  each file gives three rows, ``configuration`` ``"unblocked hpipm"`` (gtmodel on the same NLP,
+  ``solver = "hpipm"``: the real-time iteration on the multiple-shooting QP by HPIPM, as acados'),
+  ``"unblocked"`` (the same NLP by the file's solver, single shooting, dense QP) and ``"shipped"``
+  (the file's blocks and rows), all against that acados run. Keys:
   ``acados_cpu_step_median_s``, ``acados_cpu_step_p99_s``, ``acados_cpu_step_max_s``,
   ``acados_tracking_rms``, ``acados_first_control_rel_diff``, ``acados_config`` (QP solver
   ``PARTIAL_CONDENSING_HPIPM``, acados' default), the same as ``acados_fastest_*`` for
@@ -221,13 +223,14 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
             "tracking_rms_ratio_to_acados": row["tracking_rms"] / a["tracking_rms"]}
 
 
-def bench(path: Path, steps: int, build: Path, unblocked: bool = False) -> dict:
-    """All figures of one MPC file (``unblocked``: one input per period, no constraint rows, no disturbance estimate)."""
+def bench(path: Path, steps: int, build: Path, unblocked: bool = False, solver: str = "") -> dict:
+    """All figures of one MPC file (``unblocked``: one input per period, no constraint rows, no disturbance estimate;
+    ``solver``: another NLP solver of the step, e.g. ``"hpipm"``)."""
     setup = load_mpc_file(path)
     if unblocked:
         c = setup.controller
-        setup = replace(setup, name=setup.name + "_unblocked",
-                        controller=replace(c, blocks=c.horizon, constraints=None, disturbance_gain=0.0))
+        setup = replace(setup, name=setup.name + "_unblocked" + (f"_{solver}" if solver else ""),
+                        controller=replace(c, blocks=c.horizon, constraints=None, disturbance_gain=0.0, solver=solver or c.solver))
     generated, library = build_mpc(setup, build / setup.name)
     repeat = -(-steps // setup.t.size)
     wall = closed_loop_check(setup, generated, library, repeat=repeat, clock=time.perf_counter)
@@ -236,7 +239,7 @@ def bench(path: Path, steps: int, build: Path, unblocked: bool = False) -> dict:
     py = python_step_s(setup, wall.mpc)
     c = setup.controller
     return {
-        "name": setup.name, "configuration": "unblocked" if unblocked else "shipped", "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
+        "name": setup.name, "configuration": ("unblocked" + (f" {solver}" if solver else "")) if unblocked else "shipped", "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
         "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
         "steps": int(wall.mpc.step_s.size), "first_step_s": st["first"],
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],
@@ -295,8 +298,8 @@ def main() -> None:
         for path in files:
             setup = load_mpc_file(path)
             acados = skipped or acados_figures(setup, Path(tmp), max(1, -(-args.steps // setup.t.size)))
-            for unblocked in (True, False):
-                r = acados_keys(bench(path, args.steps, Path(tmp), unblocked), acados)
+            for unblocked, solver in ((True, "hpipm"), (True, ""), (False, "")):
+                r = acados_keys(bench(path, args.steps, Path(tmp), unblocked, solver), acados)
                 rows.append(r)
                 _print_row(r)
     if args.json:

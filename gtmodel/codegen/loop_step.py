@@ -43,6 +43,7 @@ import ctypes
 import hashlib
 import logging
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -360,6 +361,36 @@ _HEAP_DOC = """/*
 int {prefix}_heap_stats(unsigned long *peak_bytes, unsigned long *heap_calls, unsigned long *arena_bytes);"""
 
 
+#: HPIPM's IPM options that CasADi 3.8.2's generated HPIPM call leaves unset in its stack copy of
+#: ``struct d_ocp_qp_ipm_arg`` (fields of the wheel's newer HPIPM headers), with the library's
+#: defaults (``d_ocp_qp_ipm_arg_set_default``, every mode): unset, ``dual_gap_max`` is stack
+#: garbage and every QP runs to the iteration limit and fails (measured: residuals 1e-13, status 1).
+HPIPM_UNSET_OPTIONS = {"dual_gap_max": "1e15", "lam0_min": "1e-9", "t0_min": "1e-9", "t0_init": "2", "update_fact_exit": "1"}
+
+
+def patch_hpipm_options(casadi_source: str | Path) -> bool:
+    """Set the HPIPM options CasADi's generated C leaves unset (:data:`HPIPM_UNSET_OPTIONS`), in place.
+
+    Parameters
+    ----------
+    casadi_source : str or pathlib.Path
+        A CasADi-generated C file.
+
+    Returns
+    -------
+    bool
+        Whether the file calls HPIPM (and was patched).
+    """
+    path = Path(casadi_source)
+    text = path.read_text()
+    if "#include <hpipm_d_ocp_qp_ipm.h>" not in text:
+        return False
+    extra = "".join(f" p.hpipm_options.{k} = {v};" for k, v in HPIPM_UNSET_OPTIONS.items())
+    text = re.sub(r"(p\.hpipm_options\.mode = \d+;)", lambda m: m.group(1) + extra, text)
+    path.write_text(text)
+    return True
+
+
 def uses_heap_arena(casadi_source: str | Path) -> bool:
     """Whether a loop step's CasADi source calls a QP solver that allocates (DAQP), so that its
     library carries the heap arena (:data:`HEAP_ARENA_BYTES`).
@@ -465,6 +496,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
                     HEAP=_HEAP_DOC.format(arena=HEAP_ARENA_BYTES, prefix=prefix) if arena else "")
 
     out, _, sizes, signatures = write_library(prefix, specs, step, out_dir, real, header, extra_source=memory)
+    patch_hpipm_options(out / f"{prefix}_casadi.c")
     log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
     include_dirs, link_flags = solver_libraries(out / f"{prefix}_casadi.c")
     if uses_heap_arena(out / f"{prefix}_casadi.c"):

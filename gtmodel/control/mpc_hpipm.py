@@ -36,6 +36,7 @@ taken (:func:`gtmodel.control.mpc.mpc_controller` refuses them with this solver)
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import casadi as ca
@@ -43,6 +44,9 @@ import numpy as np
 
 __all__ = ["HPIPM_MAX_ITER", "HPIPM_MODE", "hpipm_rti"]
 
+#: The box of the predicted states: the reference's range widened by this many state scales
+#: (:func:`~gtmodel.control.reference.reference_scales`) each side.
+STATE_BOX = float(os.environ.get("GT_HPIPM_BOX", 10.0))
 #: Interior-point iterations of HPIPM per QP at most (acados' default), and its mode.
 HPIPM_MAX_ITER, HPIPM_MODE = 50, "speed"
 
@@ -90,7 +94,7 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
         parts += [ws[k * nu:(k + 1) * nu], xk]
     start = ca.Function("start", [x0, ws], [ca.vertcat(*parts)])
     opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu] * H + [0], "ng": [0] * (H + 1), "error_on_fail": False,
-            "print_time": False, "hpipm": {"iter_max": HPIPM_MAX_ITER, "mode": HPIPM_MODE}}
+            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER}}
     qp = ca.conic("mpc_hpipm", "hpipm", {"h": hess.sparsity(), "a": jac.sparsity()}, opts)
     u_idx = np.concatenate([np.arange(k * (nu + nx), k * (nu + nx) + nu) for k in range(H)])
     x_idx = np.setdiff1d(np.arange(z.numel()), u_idx)
@@ -98,10 +102,12 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     LBU, UBU = ca.MX.sym("lbu", nu * H), ca.MX.sym("ubu", nu * H)
     Z = start(X0, W)
     # HPIPM bounds every variable (CasADi's interface replaces an infinite bound by 1e8, with which its
-    # interior point stops at its iteration limit): the predicted states within the plausible range of
-    # the step's measurement, the inputs within their bounds or, where none, their plausible range
+    # interior point stops at its iteration limit): the predicted states within STATE_BOX scales of the
+    # reference's range, the inputs within their bounds or, where none, their plausible range
     lim = c.limits()
-    x_lo, x_hi = ca.DM(np.tile(lim["x"][0], H)), ca.DM(np.tile(lim["x"][1], H))
+    x_scale, _, _, _ = c.plausible_ranges(c.u_lb, c.u_ub)
+    x_lo = ca.DM(np.tile(np.min(c.x_ref, axis=0) - STATE_BOX * x_scale, H))
+    x_hi = ca.DM(np.tile(np.max(c.x_ref, axis=0) + STATE_BOX * x_scale, H))
     u_lo = ca.fmax(LBU, ca.DM(np.tile(lim["u_last"][0], H)))
     u_hi = ca.fmin(UBU, ca.DM(np.tile(lim["u_last"][1], H)))
     lam = []
