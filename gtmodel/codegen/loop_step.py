@@ -43,7 +43,6 @@ import ctypes
 import hashlib
 import logging
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -59,6 +58,7 @@ from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.generate import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.codegen.hpipm_source import patch_hpipm_options
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController
@@ -359,36 +359,6 @@ _HEAP_DOC = """/*
  * Returns GT_OK, or GT_BAD_ARGUMENT (a NULL pointer).
  */
 int {prefix}_heap_stats(unsigned long *peak_bytes, unsigned long *heap_calls, unsigned long *arena_bytes);"""
-
-
-#: HPIPM's IPM options that CasADi 3.8.2's generated HPIPM call leaves unset in its stack copy of
-#: ``struct d_ocp_qp_ipm_arg`` (fields of the wheel's newer HPIPM headers), with the library's
-#: defaults (``d_ocp_qp_ipm_arg_set_default``, every mode): unset, ``dual_gap_max`` is stack
-#: garbage and every QP runs to the iteration limit and fails (measured: residuals 1e-13, status 1).
-HPIPM_UNSET_OPTIONS = {"dual_gap_max": "1e15", "lam0_min": "1e-9", "t0_min": "1e-9", "t0_init": "2", "update_fact_exit": "1"}
-
-
-def patch_hpipm_options(casadi_source: str | Path) -> bool:
-    """Set the HPIPM options CasADi's generated C leaves unset (:data:`HPIPM_UNSET_OPTIONS`), in place.
-
-    Parameters
-    ----------
-    casadi_source : str or pathlib.Path
-        A CasADi-generated C file.
-
-    Returns
-    -------
-    bool
-        Whether the file calls HPIPM (and was patched).
-    """
-    path = Path(casadi_source)
-    text = path.read_text()
-    if "#include <hpipm_d_ocp_qp_ipm.h>" not in text:
-        return False
-    extra = "".join(f" p.hpipm_options.{k} = {v};" for k, v in HPIPM_UNSET_OPTIONS.items())
-    text = re.sub(r"(p\.hpipm_options\.mode = \d+;)", lambda m: m.group(1) + extra, text)
-    path.write_text(text)
-    return True
 
 
 def uses_heap_arena(casadi_source: str | Path) -> bool:

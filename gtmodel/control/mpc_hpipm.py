@@ -85,7 +85,8 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     p = ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
     hess = ca.evalf(ca.substitute(ca.hessian(f, z)[0], ca.vertcat(z, p), ca.DM.zeros(z.numel() + p.numel())))
     jac = ca.sparsify(ca.jacobian(g, z))  # the -I blocks of x_{k+1} diagonal, as the conic requires
-    lin = ca.Function("lin", [z, p], [g, jac, ca.gradient(f, z), f], ["z", "p"], ["g", "jac", "grad", "f"])
+    lin = ca.Function("lin", [z, p], [g, jac, ca.gradient(f, z)], ["z", "p"], ["g", "jac", "grad"])
+    cost_f = ca.Function("cost", [z, p], [f], ["z", "p"], ["f"])  # apart: a call of lin computes all its outputs
     # the states predicted from the warm start's inputs
     ws = ca.SX.sym("w", nu * H)
     xk, parts = x0, []
@@ -112,14 +113,14 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     u_hi = ca.fmin(UBU, ca.DM(np.tile(lim["u_last"][1], H)))
     lam = []
     for _ in range(k_it):
-        gz, jz, grad, _ = lin(Z, P)
+        gz, jz, grad = lin(Z, P)
         lb, ub = ca.MX(z.numel(), 1), ca.MX(z.numel(), 1)
         lb[u_idx], ub[u_idx] = u_lo - Z[u_idx], u_hi - Z[u_idx]
         lb[x_idx], ub[x_idx] = x_lo - Z[x_idx], x_hi - Z[x_idx]
         sol = qp(h=hess, g=grad, a=jz, lba=-gz, uba=-gz, lbx=lb, ubx=ub)
         Z = Z + sol["x"]
         lam.append(sol["lam_a"])
-    _, _, _, cost = lin(Z, P)
+    cost = cost_f(Z, P)
     # the multipliers are an output: CasADi 3.8.2's HPIPM runtime writes them unconditionally (a call
     # whose lam_a output is unused gets a NULL pointer there and crashes)
     return ca.Function("rti", [X0, W, P, LBU, UBU], [Z[u_idx], cost, ca.vertcat(*lam)], ["x0", "w", "p", "lbu", "ubu"],
