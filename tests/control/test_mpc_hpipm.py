@@ -95,3 +95,18 @@ def test_generated_step_matches_the_function_without_heap(motor, tmp_path):
         want.append(u_last)
     assert statuses == [0] * 6
     np.testing.assert_allclose(np.array(got), np.array(want), rtol=1e-9, atol=1e-9)
+
+
+def test_disturbance_estimate_and_delay_as_with_sqpmethod(motor):
+    # the estimate shifts the input bounds and the delay moves the horizon's start; both are the step's, not the
+    # solver's: with hpipm the step equals sqpmethod's (single shooting, one Gauss-Newton iteration) to 1e-8
+    *_, c = motor
+    hp = dataclasses.replace(c, disturbance_gain=0.3, delay=1)
+    ss = dataclasses.replace(hp, solver="sqpmethod")
+    mem = hp.memory_initial.copy()
+    mem[hp.nw:hp.nw + hp.nu] = 0.5  # an estimate of 0.5 V
+    mem[-1] = 1.0
+    xk, tk, u_last = c.x_ref[40] + np.array([0.1, 0.01, 0.5]), c.t0 + 40 * DT, np.array([3.0])
+    got = [np.asarray(v).ravel() for v in hp.function()(tk, xk, u_last, mem)]
+    want = [np.asarray(v).ravel() for v in ss.function()(tk, xk, u_last, mem)]
+    np.testing.assert_allclose(np.concatenate(got), np.concatenate(want), rtol=1e-8, atol=1e-8)
