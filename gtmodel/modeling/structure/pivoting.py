@@ -6,14 +6,18 @@ Jacobian block (a few rows). LAPACK's ``dgeqp3`` through ``scipy.linalg.qr`` giv
 importing SciPy's linear algebra costs ~0.12 CPU-s (its array-API layer), more than
 reducing a drive model; NumPy has no pivoted QR. Here: Householder reflections with the
 column of largest remaining norm first (the norms recomputed at each step, not downdated;
-ties to the first column, as LAPACK's ``idamax``).
+norms equal to ``TIE_RTOL`` tie, and a tie goes to the column first in ``G``'s order, so that
+round-off never picks between equal candidates).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["pivoted_qr"]
+__all__ = ["pivoted_qr", "TIE_RTOL"]
+
+#: Relative difference of two column norms below which they tie (the first column wins).
+TIE_RTOL = 1e-10
 
 
 def pivoted_qr(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -41,7 +45,10 @@ def pivoted_qr(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     diag = np.zeros(k_max)
     for k in range(k_max):
         norms = np.linalg.norm(A[k:, k:], axis=0)
-        j = k + int(np.argmax(norms))
+        # a tie within round-off goes to the column first in G's own order: the reflections' rounding
+        # (and the swaps so far) must not decide which of two equal candidates becomes a state
+        tied = np.flatnonzero(norms >= norms.max() * (1.0 - TIE_RTOL))
+        j = k + int(tied[np.argmin(piv[k:][tied])])
         if j != k:
             A[:, [k, j]] = A[:, [j, k]]
             piv[[k, j]] = piv[[j, k]]
