@@ -16,7 +16,8 @@ import tomllib
 
 import pytest
 
-from gtmodel.codegen.loop_step import check_loop_step, mpc_step, tracking_step
+from gtmodel.codegen.check.loop_step import check_loop_step
+from gtmodel.codegen.loop_step import mpc_step, tracking_step
 from gtmodel.problems import loop_check
 from gtmodel.problems.mpc_file import load_mpc_file
 from gtmodel.problems.tracking_file import load_tracking_file
