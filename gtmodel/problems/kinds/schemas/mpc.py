@@ -22,7 +22,7 @@ MAX_HORIZON = 1000
 #: The prediction steps of :data:`gtmodel.control.mpc.MPC_METHODS` (a test keeps them equal).
 MPC_METHOD_NAMES = ("euler", "rk4", "implicit_euler", "radau2")
 #: The NLP solvers of :data:`gtmodel.control.mpc.MPC_SOLVERS` (a test keeps them equal).
-MPC_SOLVER_NAMES = ("sqpmethod", "fatrop")
+MPC_SOLVER_NAMES = ("sqpmethod", "fatrop", "hpipm")
 
 
 class MPCSection(Section):
