@@ -106,6 +106,10 @@ def switch_times(result: OptimizationResult) -> list[float]:
     return sorted(times)
 
 
+SWITCH_EDGE = 0.03
+"""A switch within this fraction of an element's edge is taken as on the boundary (the element graded, not cut at it)."""
+
+
 def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int) -> tuple[np.ndarray, dict[str, Any]]:
     """The next mesh: elements split where the defect exceeds the tolerance or an input switches.
 
@@ -154,6 +158,15 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
         plans[int(k)] = (float(errors[k]), list(np.arange(1, parts) / parts))
     switches = switch_elements(result)
     for k, tau in switches.items():
+        if min(tau, 1.0 - tau) < SWITCH_EDGE:
+            # the jump is on the element's boundary already (the level before it is the neighbour's): a cut at it
+            # leaves a sliver that resolves nothing. Where the element's defect exceeds the tolerance, the
+            # transient after the jump (a motor current against its limit, faster than the element) is: the
+            # element graded towards the jump, short parts first (Betts, *Practical Methods*, ch. 4; issue 49)
+            if errors[k] > 1.0:
+                cuts = [0.15, 0.45] if tau < 0.5 else [0.55, 0.85]
+                plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), cuts)
+            continue
         if frac[k] > tolerance:
             # the switch explains the element's defect: a cut at the switch; where the element's defect is
             # 10 tolerances or more (a stiff state, a motor current, following the switch), the two parts
