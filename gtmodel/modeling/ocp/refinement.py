@@ -18,7 +18,11 @@ choose the elements to split:
   optimum is missed by O(h)). Such an element, if longer than ``tol`` times the horizon,
   is split where the input's collocation polynomial crosses the middle of its range
   within the element, so that the switch moves onto an element boundary. Repeated, this
-  locates the switch time to the width of the element that holds it.
+  locates the switch time to the width of the element that holds it. A switch estimated at
+  an element's edge (:data:`SWITCH_EDGE`: the jump is on the boundary already) is not cut
+  into a sliver; if the element's defect exceeds ``tol`` (a stiff state, such as a motor
+  current against its limit, after the jump) the element is graded towards the jump
+  (parts 0.15, 0.30, 0.55 of it), so that the transient after it is resolved.
 
 A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
 :data:`SPURIOUS_DEVIATION` has found a spurious
