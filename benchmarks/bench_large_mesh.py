@@ -1,16 +1,24 @@
 """Time per IPOPT iteration on a large mesh, and where it goes (a benchmark, not a test).
 
-Usage: python benchmarks/bench_large_mesh.py [problem.toml] [--json] [--grid 50,400]
+Usage: python benchmarks/bench_large_mesh.py [problem.toml] [--json] [--grid 50,400] [--repeat 3] [--marginal-only]
 
 The problem (default ``problems/benchmarks/orbit_raising.toml``, Bryson and Ho's orbit
 raising) is transcribed by collocation on each mesh of ``--grid`` and solved by IPOPT.
 Measured side by side in one run:
 
-- ``marginal_ms_per_iteration`` (CPU): ``(t(30) - t(10)) / (i(30) - i(10))``, the process CPU
-  time of a solve limited to 30 iterations minus that of one limited to 10, per iteration
-  between them, so that the one-off work (MUMPS's analysis, IPOPT's set-up) is left out;
+- ``marginal_ms_per_iteration`` (CPU): ``(t(30) - t(10)) / (i(30) - i(10))``, the CPU time of
+  a solve limited to 30 iterations minus that of one limited to 10, per iteration between
+  them, so that the one-off work (MUMPS's analysis, IPOPT's set-up) is left out: the median
+  over ``--repeat`` alternated repeats (default 3), with its spread
+  ``marginal_spread`` = (max - min) / median and the repeats themselves; ``t`` is the CPU
+  time of this process read around the solve call (``time.process_time``), with
+  ``OMP_NUM_THREADS=1`` set before CasADi is loaded (IPOPT's ``t_proc_total`` and a threaded
+  BLAS under MUMPS made the figure vary 4.7-73.7 ms between runs at 800 elements);
   ``derivatives_ms_per_iteration``: the part of it in evaluating the NLP functions and
-  derivatives (CasADi's ``t_proc_nlp_*``), the rest is IPOPT and MUMPS;
+  derivatives, its share of the 30-iteration solve's CPU (CasADi's ``t_proc_nlp_*``, nested
+  inside that solve on the same clock, over ``t_proc_total``) times the marginal figure, so
+  that it never exceeds it (a difference of the parts of two runs, each with its own noise, once
+  exceeded the difference of their totals); ``ipopt_mumps_ms_per_iteration`` the rest;
   ``build_s``: building the transcription in Python (and its derivative functions);
 - ``ratio_largest_over_smallest``: the marginal time per iteration at the largest mesh over
   that at the smallest (linear growth in the mesh is the grid ratio, 8 for 50 -> 400);
@@ -28,30 +36,55 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import time
-from pathlib import Path
 
-from gtmodel.modeling import CollocationTranscription
-from gtmodel.problems import load_problem
-from gtmodel.trajectory.model_ocp import COARSE_START_ELEMENTS
+os.environ.setdefault("OMP_NUM_THREADS", "1")  # before CasADi and its BLAS are loaded: one thread, so CPU is this solve's
+
+import statistics  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+from gtmodel.modeling import CollocationTranscription  # noqa: E402
+from gtmodel.problems import load_problem  # noqa: E402
+from gtmodel.trajectory.model_ocp import COARSE_START_ELEMENTS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = ROOT / "problems/benchmarks/orbit_raising.toml"
 
 
-def marginal(opt, elements: int) -> dict:
-    """Marginal CPU ms per iteration (and its derivative part) and the build time on ``elements`` elements."""
-    runs = []
+def transcriptions(opt, elements: int) -> tuple[dict, float]:
+    """The transcriptions limited to 10 and 30 iterations on ``elements`` elements, and the build time [s] of the first."""
+    out, build = {}, 0.0
     for it in (10, 30):
         t = time.perf_counter()
-        tr = CollocationTranscription(opt, elements=elements, solver_options={"record_time": True, "max_iter": it}, verify=False)
-        build = time.perf_counter() - t
+        out[it] = CollocationTranscription(opt, elements=elements, solver_options={"record_time": True, "max_iter": it}, verify=False)
+        build = build or time.perf_counter() - t
+    return out, build
+
+
+def one_marginal(trs: dict) -> tuple[float, float]:
+    """One repeat: the marginal CPU ms per iteration and its derivative part (see the module docstring)."""
+    runs = {}
+    for it, tr in trs.items():
+        c0 = time.process_time()
         r = tr.solve()
+        cpu = time.process_time() - c0
         s = r.stats
-        runs.append((r.iterations, s["t_proc_total"], sum(v for k, v in s.items() if k.startswith("t_proc_nlp_")), build))
-    (i1, t1, e1, b1), (i2, t2, e2, _) = runs
-    n = max(i2 - i1, 1)
-    return {"marginal_ms_per_iteration": 1e3 * (t2 - t1) / n, "derivatives_ms_per_iteration": 1e3 * (e2 - e1) / n, "build_s": b1}
+        share = min(1.0, sum(v for k, v in s.items() if k.startswith("t_proc_nlp_")) / max(s["t_proc_total"], 1e-300))
+        runs[it] = (r.iterations, cpu, share)
+    (i1, t1, _), (i2, t2, share) = runs[10], runs[30]
+    total = 1e3 * (t2 - t1) / max(i2 - i1, 1)
+    return total, share * total
+
+
+def summarise(reps: list[tuple[float, float]], build: float) -> dict:
+    """The median of the repeats' marginal figures, their spread and the parts (never above the total)."""
+    tot = [t for t, _ in reps]
+    med = statistics.median(tot)
+    der = statistics.median([d for _, d in reps])
+    der = min(der, med)
+    return {"marginal_ms_per_iteration": med, "marginal_repeats_ms": tot,
+            "marginal_spread": (max(tot) - min(tot)) / med if med > 0 else float("nan"),
+            "derivatives_ms_per_iteration": der, "ipopt_mumps_ms_per_iteration": med - der, "build_s": build}
 
 
 def whole(opt, elements: int, coarse: bool) -> dict:
@@ -69,20 +102,33 @@ def main() -> None:
     ap.add_argument("problem", nargs="?", default=str(DEFAULT))
     ap.add_argument("--json", action="store_true", help="print one JSON object on the last line")
     ap.add_argument("--grid", default="50,400", help="elements of the meshes")
+    ap.add_argument("--marginal-only", action="store_true", help="only the per-iteration figures (no whole solves)")
+    ap.add_argument("--repeat", type=int, default=3, help="repeats of the marginal measurement, alternated over the meshes (default 3)")
     a = ap.parse_args()
     grid = [int(x) for x in a.grid.split(",")]
     print(f"load average {os.getloadavg()[0]:.2f} (2 cores shared)")
     opt = load_problem(a.problem).declaration.optimization
     out: dict = {"problem": Path(a.problem).name, "per_mesh": {}}
+    built = {n: transcriptions(opt, n) for n in grid}
+    reps: dict = {n: [] for n in grid}
+    for _ in range(max(a.repeat, 1)):  # alternated: each mesh once per round, so that the machine's load falls on all
+        for n in grid:
+            reps[n].append(one_marginal(built[n][0]))
     for n in grid:
-        m = marginal(opt, n)
+        m = summarise(reps[n], built[n][1])
         out["per_mesh"][str(n)] = m
-        print(f"{n:5d} elements: {m['marginal_ms_per_iteration']:8.2f} CPU ms/iteration ({m['derivatives_ms_per_iteration']:.2f} in "
-              f"derivatives, the rest IPOPT + MUMPS); transcription built in {m['build_s']:.2f} s")
+        print(f"{n:5d} elements: {m['marginal_ms_per_iteration']:8.2f} CPU ms/iteration (median of {len(reps[n])}, spread "
+              f"{100 * m['marginal_spread']:.0f} %; {m['derivatives_ms_per_iteration']:.2f} in derivatives, "
+              f"{m['ipopt_mumps_ms_per_iteration']:.2f} IPOPT + MUMPS); transcription built in {m['build_s']:.2f} s")
     lo, hi = out["per_mesh"][str(grid[0])], out["per_mesh"][str(grid[-1])]
     out["ratio_largest_over_smallest"] = hi["marginal_ms_per_iteration"] / lo["marginal_ms_per_iteration"]
     out["mesh_ratio"] = grid[-1] / grid[0]
     print(f"per-iteration time x{out['ratio_largest_over_smallest']:.1f} for x{out['mesh_ratio']:.0f} the mesh")
+    if a.marginal_only:
+        out["load_average"] = os.getloadavg()[0]
+        if a.json:
+            print(json.dumps(out))
+        return
     degenerate = load_problem(a.problem).declaration.optimization
     inputs = degenerate.model.variables("input")
     if not {"u1", "u2"} <= set(inputs):

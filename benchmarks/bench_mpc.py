@@ -30,8 +30,13 @@ measured side by side in one run, because these machines are noisy:
   of its SQP iterated to convergence against gtmodel's (30 Gauss-Newton iterations) at 5 states
   of its run. acados 0.2.2 has neither move blocking nor per-stage constraint rows: it always
   solves the unblocked problem without rows and without the input-disturbance estimate, so
-  each file gives two rows, ``configuration`` ``"unblocked"`` (gtmodel on the same NLP: like
-  for like) and ``"shipped"`` (the file's blocks and rows), both against that acados run. Keys:
+  each file gives three rows, ``configuration`` ``"unblocked hpipm"`` (gtmodel on the same NLP,
+  ``solver = "hpipm"``: the real-time iteration on the multiple-shooting QP by HPIPM, as acados'),
+  ``"unblocked"`` (the same NLP by the file's solver, single shooting, dense QP) and ``"shipped"``
+  (the file's blocks and rows), all against that acados run. The CPU per step is measured in
+  ``--rounds`` alternated rounds (default 3: acados' two peers, then each configuration, each
+  round about ``--steps / rounds`` steps), so that the machine's load falls on all of them, and
+  pooled (``cpu_steps`` steps of each configuration). Keys:
   ``acados_cpu_step_median_s``, ``acados_cpu_step_p99_s``, ``acados_cpu_step_max_s``,
   ``acados_tracking_rms``, ``acados_first_control_rel_diff``, ``acados_config`` (QP solver
   ``PARTIAL_CONDENSING_HPIPM``, acados' default), the same as ``acados_fastest_*`` for
@@ -72,6 +77,8 @@ ACADOS_ENV = ROOT / "benchmarks" / "acados_env.sh"
 ACADOS_PEER = ROOT / "benchmarks" / "peers" / "acados_mpc.py"
 #: acados' QP solvers measured: its default and its fastest on these dense QPs.
 ACADOS_QPS = ("PARTIAL_CONDENSING_HPIPM", "FULL_CONDENSING_QPOASES")
+#: The configurations of each file: (unblocked, solver); "" the file's solver.
+CONFIGURATIONS = ((True, "hpipm"), (True, ""), (False, ""))
 #: States of the closed loop at which the converged first inputs are compared.
 AGREEMENT_STATES = 5
 
@@ -170,37 +177,54 @@ def acados_available() -> str:
     return "" if out.returncode == 0 else (out.stderr.strip().splitlines() or ["acados_env.sh failed"])[-1]
 
 
-def acados_figures(setup, build: Path, repeat: int) -> dict:
-    """acados SQP-RTI on the unblocked horizon problem without constraint rows, in the file's closed loop, per QP solver.
-
-    Returns, per QP solver of :data:`ACADOS_QPS`, the thread CPU per step (the solve call,
-    median, p99, max over ``repeat`` runs of the motion), the tracking RMS of the first run and
-    the largest relative difference of the converged first input from the gtmodel SQP's
-    (30 iterations, Gauss-Newton) at :data:`AGREEMENT_STATES` states of that run.
-    """
+def acados_open(setup, build: Path) -> tuple:
+    """The acados peers of :data:`ACADOS_QPS` on the unblocked horizon problem without constraint rows, and their runs so far."""
     c = replace(setup.controller, blocks=setup.controller.horizon, constraints=None, disturbance_gain=0.0)
     problem = export_problem(c, build / f"{setup.name}_acados")
+    peers = {}
+    try:
+        for qp in ACADOS_QPS:
+            peers[qp] = AcadosPeer(c, problem, qp)
+    except Exception:
+        for peer in peers.values():
+            peer.close()
+        raise
+    return c, peers, {qp: [] for qp in ACADOS_QPS}
+
+
+def acados_round(setup, peers: dict, runs: dict, repeat: int) -> None:
+    """One round: each acados peer runs the file's closed loop ``repeat`` times (its step CPU kept by the peer)."""
     args = (setup.plant_step, setup.plant_x0, setup.t, setup.x_ref)
     kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES)
+    for qp, peer in peers.items():
+        for _ in range(max(repeat, 1)):
+            peer.reset()
+            runs[qp].append(run_controller_loop(peer, *args, **kw))
+
+
+def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
+    """acados' figures per QP solver after the rounds, and the peers closed.
+
+    Returns, per QP solver of :data:`ACADOS_QPS`, the thread CPU per step (the solve call,
+    median, p99, max over all its runs), the tracking RMS of the first run and the largest
+    relative difference of the converged first input from the gtmodel SQP's (30 iterations,
+    Gauss-Newton) at :data:`AGREEMENT_STATES` states of that run.
+    """
     out = {}
-    for qp in ACADOS_QPS:
-        peer = AcadosPeer(c, problem, qp)
-        try:
-            runs = []
-            for _ in range(max(repeat, 1)):
-                peer.reset()
-                runs.append(run_controller_loop(peer, *args, **kw))
+    try:
+        for qp, peer in peers.items():
             cpu = peer.step_times()
             rel = 0.0
             for k in np.linspace(0, setup.t.size - 1, AGREEMENT_STATES + 2)[1:-1].round().astype(int):
-                t, x = runs[0].t[k], runs[0].x[k]
+                t, x = runs[qp][0].t[k], runs[qp][0].x[k]
                 ua = peer.converged(t, x)
                 ug, _ = c.solve(t, x, plugin="sqpmethod", iterations=30)
                 rel = max(rel, float(np.max(np.abs(ua - ug)) / max(np.max(np.abs(ug)), 1e-300)))
-        finally:
+            out[qp] = {"cpu_step_median_s": float(np.median(cpu)), "cpu_step_p99_s": float(np.percentile(cpu, 99)),
+                       "cpu_step_max_s": float(np.max(cpu[1:])), "tracking_rms": runs[qp][0].rms_error, "first_control_rel_diff": rel}
+    finally:
+        for peer in peers.values():
             peer.close()
-        out[qp] = {"cpu_step_median_s": float(np.median(cpu)), "cpu_step_p99_s": float(np.percentile(cpu, 99)),
-                   "cpu_step_max_s": float(np.max(cpu[1:])), "tracking_rms": runs[0].rms_error, "first_control_rel_diff": rel}
     return out
 
 
@@ -221,32 +245,46 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
             "tracking_rms_ratio_to_acados": row["tracking_rms"] / a["tracking_rms"]}
 
 
-def bench(path: Path, steps: int, build: Path, unblocked: bool = False) -> dict:
-    """All figures of one MPC file (``unblocked``: one input per period, no constraint rows, no disturbance estimate)."""
+def prepare(path: Path, build: Path, unblocked: bool = False, solver: str = "") -> tuple:
+    """One configuration of an MPC file, generated and compiled (``unblocked``: one input per period, no constraint rows,
+    no disturbance estimate; ``solver``: another NLP solver of the step, e.g. ``"hpipm"``)."""
     setup = load_mpc_file(path)
     if unblocked:
         c = setup.controller
-        setup = replace(setup, name=setup.name + "_unblocked",
-                        controller=replace(c, blocks=c.horizon, constraints=None, disturbance_gain=0.0))
+        setup = replace(setup, name=setup.name + "_unblocked" + (f"_{solver}" if solver else ""),
+                        controller=replace(c, blocks=c.horizon, constraints=None, disturbance_gain=0.0, solver=solver or c.solver))
     generated, library = build_mpc(setup, build / setup.name)
-    repeat = -(-steps // setup.t.size)
-    wall = closed_loop_check(setup, generated, library, repeat=repeat, clock=time.perf_counter)
+    label = ("unblocked" + (f" {solver}" if solver else "")) if unblocked else "shipped"
+    return setup, generated, library, label
+
+
+def cpu_round(prepared: tuple, repeat: int) -> np.ndarray:
+    """One round of the generated step in the file's closed loop, ``repeat`` motions: its thread CPU per step (the first apart)."""
+    setup, generated, library, _ = prepared
     cpu = closed_loop_check(setup, generated, library, repeat=repeat, clock=time.thread_time)
-    st, cst = wall.mpc.step_times(), cpu.mpc.step_times()
+    return cpu.mpc.step_s[1:], cpu.mpc.bound_violations
+
+
+def bench(prepared: tuple, cpu: np.ndarray, violations: int) -> dict:
+    """All figures of one configuration: the wall-time run here, the CPU per step ``cpu`` pooled over the alternated rounds."""
+    setup, generated, library, label = prepared
+    wall = closed_loop_check(setup, generated, library, repeat=1, clock=time.perf_counter)  # one motion: wall time, tracking
+    st = wall.mpc.step_times()
     py = python_step_s(setup, wall.mpc)
     c = setup.controller
     return {
-        "name": setup.name, "configuration": "unblocked" if unblocked else "shipped", "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
+        "name": setup.name, "configuration": label, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
         "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
         "steps": int(wall.mpc.step_s.size), "first_step_s": st["first"],
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],
-        "cpu_step_median_s": cst["median"], "cpu_step_p99_s": cst["p99"], "cpu_step_max_s": cst["max"],
+        "cpu_steps": int(cpu.size), "cpu_step_median_s": float(np.median(cpu)), "cpu_step_p99_s": float(np.percentile(cpu, 99)),
+        "cpu_step_max_s": float(np.max(cpu)),
         "memory_bytes": wall.memory_bytes, "work_bytes": wall.work_bytes,
         "arena_bytes": wall.heap[2] if wall.heap else 0, "arena_peak_bytes": wall.heap[0] if wall.heap else 0,
         "heap_calls": wall.heap[1] if wall.heap else 0,
         "tracking_rms": wall.mpc.rms_error, "feedforward_rms": wall.feedforward.rms_error,
         "tracking_rms_ratio_to_feedforward": wall.ratio_to_feedforward,
-        "bound_violations": wall.mpc.bound_violations + cpu.mpc.bound_violations,
+        "bound_violations": wall.mpc.bound_violations + violations,
         "status_counts": wall.mpc.status_counts,
         "python_step_median_s": py, "ratio_to_python": py / st["median"],
     }
@@ -286,6 +324,7 @@ def main() -> None:
     ap.add_argument("--json", action="store_true", help="end with one JSON line")
     ap.add_argument("--steps", type=int, default=10000, help="at least this many C steps per MPC (default 10000)")
     ap.add_argument("--no-acados", action="store_true", help="without the acados peer")
+    ap.add_argument("--rounds", type=int, default=3, help="alternated rounds of the CPU measurement (default 3)")
     args = ap.parse_args()
     logging.getLogger("gtmodel").setLevel(logging.WARNING)
     files = args.files or sorted((ROOT / "codegen" / "mpc").glob("*.toml"))
@@ -293,10 +332,24 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench_mpc_") as tmp:
         skipped = "--no-acados" if args.no_acados else acados_available()
         for path in files:
+            prepared = [prepare(path, Path(tmp), unblocked, solver) for unblocked, solver in CONFIGURATIONS]
             setup = load_mpc_file(path)
-            acados = skipped or acados_figures(setup, Path(tmp), max(1, -(-args.steps // setup.t.size)))
-            for unblocked in (True, False):
-                r = acados_keys(bench(path, args.steps, Path(tmp), unblocked), acados)
+            per_round = max(1, -(-args.steps // (setup.t.size * args.rounds)))
+            opened = None if skipped else acados_open(setup, Path(tmp))
+            cpu = [[] for _ in prepared]
+            violations = [0 for _ in prepared]
+            try:
+                for _ in range(args.rounds):  # alternated: acados, then each configuration, per round
+                    if opened:
+                        acados_round(setup, opened[1], opened[2], per_round)
+                    for i, prep in enumerate(prepared):
+                        times, bad = cpu_round(prep, per_round)
+                        cpu[i].append(times)
+                        violations[i] += bad
+            finally:
+                acados = skipped or acados_finish(setup, *opened)
+            for i, prep in enumerate(prepared):
+                r = acados_keys(bench(prep, np.concatenate(cpu[i]), violations[i]), acados)
                 rows.append(r)
                 _print_row(r)
     if args.json:

@@ -15,7 +15,10 @@ constant L/R is 1 to 2 ms, far below the motion's 0.1 to 0.4 s (stiff).
   component: ``tau = Fc tanh(w / w_eps) + dv w``);
 * :class:`FlexibleJointModel`: motor, gear 50:1, a torsional spring-damper (c = 200 N m/rad,
   d = 0.5 N m s/rad) and a link (0.5 kg m^2) under gravity (:class:`GravityTorque`, the
-  user's own component: ``tau = m g l sin(phi)``, phi from the hanging position).
+  user's own component: ``tau = m g l sin(phi)``, phi from the hanging position);
+* :class:`BeltDriveModel`: motor, a pulley (``IdealRollingWheel``, radius 2 cm) driving a
+  cart on a viscous rail and, through the belt's spring-damper (4000 N/m, 20 N s/m), a
+  payload: rotational into translational (the belt cart of ``tests/fixtures/user_models``).
 
 Each class builds the model reduced by :func:`gtmodel.modeling.structural_simplify` (the gear
 ties two angles: index 2 before reduction).
@@ -29,6 +32,7 @@ from gtmodel.modeling import Component, Model, connect, structural_simplify
 from gtmodel.modeling.components.component import Parameter
 from gtmodel.modeling.library import electrical as el
 from gtmodel.modeling.library import rotational as rot
+from gtmodel.modeling.library import translational as tr
 
 
 class SmoothFriction(rot.PartialCompliantWithRelativeStates):
@@ -146,6 +150,32 @@ class FlexibleJoint(_Armature):
         connect(self.link.flange_b, self.gravity.flange)
 
 
+class BeltDrive(_Armature):
+    """Motor (R = 1.2 Ohm, L = 2 mH, k = 0.08 N m/A, 4e-5 kg m^2), pulley radius 0.02 m, cart 1.5 kg on a rail
+    3 N s/m, belt 4000 N/m and 20 N s/m, payload 0.8 kg."""
+
+    r = el.Resistor(R=1.2)
+    ind = el.Inductor(L=2e-3)
+    emf = el.EMF(k=0.08)
+    rotor = rot.Inertia(J=4e-5)
+    pulley = rot.IdealRollingWheel(radius=0.02)
+    cart = tr.Mass(m=1.5)
+    belt = tr.SpringDamper(c=4000.0, d=20.0)
+    payload = tr.Mass(m=0.8)
+    rail = tr.Damper(d=3.0)
+    ground = tr.Fixed()
+
+    def equations(self) -> None:
+        """Armature, pulley, cart on its rail, belt and payload."""
+        super().equations()
+        connect(self.rotor.flange_b, self.pulley.flangeR)
+        connect(self.pulley.flangeT, self.cart.flange_a)
+        connect(self.cart.flange_b, self.belt.flange_a)
+        connect(self.belt.flange_b, self.payload.flange_a)
+        connect(self.cart.flange_a, self.rail.flange_b)
+        connect(self.rail.flange_a, self.ground.flange)
+
+
 class MotorGearLoadModel:
     """:class:`MotorGearLoad`, reduced to index 1."""
 
@@ -188,3 +218,18 @@ class FlexibleJointModel:
             angle and speed (their names as reduction keeps them); input ``src.v`` [V].
         """
         return structural_simplify(FlexibleJoint().to_model("flexible_joint"))
+
+
+class BeltDriveModel:
+    """:class:`BeltDrive`, reduced to index 1."""
+
+    def build(self) -> Model:
+        """The reduced model.
+
+        Returns
+        -------
+        Model
+            States: the current ``ind.i`` [A], the motor angle and speed, the payload's position [m] and speed
+            [m/s] (their names as reduction keeps them); input ``src.v`` [V].
+        """
+        return structural_simplify(BeltDrive().to_model("belt_drive"))

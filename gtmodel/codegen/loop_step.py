@@ -56,6 +56,7 @@ from gtmodel.codegen.build import CompiledLibrary, compile_shared
 from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
+from gtmodel.codegen.hpipm_source import patch_hpipm_options
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController
@@ -414,7 +415,11 @@ def _spec(step: LoopStep) -> FunctionSpec:
 SOLVER_LIBRARIES = {
     "daqp/api.h": ("{lib}/libdaqpstat.a",),
     "fatrop/ocp/OCPCInterface.h": ("-L{lib}", "-lfatrop", "-lblasfeo", "-Wl,-rpath,{lib}"),
+    "hpipm_d_ocp_qp_ipm.h": ("-L{lib}", "-lhpipm", "-lblasfeo", "-Wl,-rpath,{lib}"),
 }
+#: Headers of the solver libraries whose generated call allocates its work in every QP (DAQP's setup;
+#: HPIPM's dimensions, QP, solution and workspace in CasADi's runtime): the step's heap arena takes them.
+ARENA_HEADERS = ("daqp/api.h", "hpipm_d_ocp_qp_ipm.h")
 
 
 #: Bytes of the per-thread static arena that takes the allocations of a QP solver that allocates its work
@@ -450,7 +455,8 @@ def uses_heap_arena(casadi_source: str | Path) -> bool:
     -------
     bool
     """
-    return "#include <daqp/api.h>" in Path(casadi_source).read_text()
+    text = Path(casadi_source).read_text()
+    return any(f"#include <{h}>" in text for h in ARENA_HEADERS)
 
 
 def solver_libraries(source: str | Path) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -541,6 +547,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
                     HEAP=_HEAP_DOC.format(arena=HEAP_ARENA_BYTES, prefix=prefix) if arena else "")
 
     out, _, sizes, signatures = write_library(prefix, specs, step, out_dir, real, header, extra_source=memory)
+    patch_hpipm_options(out / f"{prefix}_casadi.c")
     log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
     include_dirs, link_flags = solver_libraries(out / f"{prefix}_casadi.c")
     if uses_heap_arena(out / f"{prefix}_casadi.c"):

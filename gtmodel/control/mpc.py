@@ -43,8 +43,9 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_fatrop import fatrop_problem
+from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
-from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index
+from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
 from gtmodel.control.tracking import saturate
 
 __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_controller"]
@@ -52,8 +53,9 @@ __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_control
 #: Prediction steps: explicit Euler on ``f`` or the ExplicitODE's fixed steps (the tracking problem's).
 MPC_METHODS = PREDICTION_METHODS
 #: NLP solvers of the generated step: ``sqpmethod`` (single shooting, Gauss-Newton SQP) or
-#: ``fatrop`` (multiple shooting in stage order, interior point; :mod:`gtmodel.control.mpc_fatrop`).
-MPC_SOLVERS = ("sqpmethod", "fatrop")
+#: ``fatrop`` (multiple shooting in stage order, interior point; :mod:`gtmodel.control.mpc_fatrop`) or ``hpipm``
+#: (multiple shooting, real-time iteration with HPIPM's Riccati QP; :mod:`gtmodel.control.mpc_hpipm`).
+MPC_SOLVERS = ("sqpmethod", "fatrop", "hpipm")
 #: Bounds of the NLP's one constraint row ``g = w_0``, never active (a workaround of CasADi 3.8's
 #: ``qrqp``, which reads and writes past its work block on a QP without constraint rows).
 QP_ROW = {"lbg": -math.inf, "ubg": math.inf}
@@ -116,6 +118,10 @@ class MPCController(SampledReference):
         J. 49 (2003), the input-disturbance model; Maeder, Borrelli & Morari, Automatica 45
         (2009)). The estimator's state is kept in the step's memory after the warm start
         (:attr:`memory_initial`).
+    u_start : numpy.ndarray or None, optional
+        ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`, the
+        memory's ``u_last``): :func:`~gtmodel.control.reference.start_input`, the input that
+        holds a start at rest; None: ``u*_0``.
     """
 
     dt: float
@@ -137,6 +143,7 @@ class MPCController(SampledReference):
     constraints: MPCConstraints | None = None
     delay: int = 0
     disturbance_gain: float = 0.0
+    u_start: np.ndarray | None = None
 
     @property
     def nw(self) -> int:
@@ -158,8 +165,8 @@ class MPCController(SampledReference):
 
     @property
     def u_initial(self) -> np.ndarray:
-        """``(nu,)`` the input before the first step: ``u*_0`` saturated."""
-        return saturate(self.u_ref[0], self.u_lb, self.u_ub)
+        """``(nu,)`` the input before the first step: :attr:`u_start` (default ``u*_0``) saturated."""
+        return saturate(self.u_ref[0] if self.u_start is None else self.u_start, self.u_lb, self.u_ub)
 
     @property
     def w_initial(self) -> np.ndarray:
@@ -314,14 +321,15 @@ class MPCController(SampledReference):
             ``(nx,)`` state.
         w0 : array_like, optional
             ``(nw,)`` start (default :attr:`w_initial`).
-        plugin : {"ipopt", "sqpmethod", "fatrop"}, optional
+        plugin : {"ipopt", "sqpmethod", "fatrop", "hpipm"}, optional
             See :meth:`nlp_solver`; ``ipopt`` with soft constraints solves the hard form first
             and takes its solution when IPOPT succeeds with multipliers summing below the
             penalty weight (then it is the soft problem's too: the exact penalty), else the
             soft form; ``fatrop``: the multiple-shooting NLP of
-            :func:`~gtmodel.control.mpc_fatrop.fatrop_problem` (the generated step's with ``solver = "fatrop"``).
+            :func:`~gtmodel.control.mpc_fatrop.fatrop_problem` (the generated step's with ``solver = "fatrop"``);
+            ``hpipm``: ``iterations`` real-time iterations of :func:`~gtmodel.control.mpc_hpipm.hpipm_rti`.
         iterations : int, optional
-            SQP iterations (``sqpmethod``).
+            SQP iterations (``sqpmethod``, ``hpipm``).
 
         Returns
         -------
@@ -330,6 +338,11 @@ class MPCController(SampledReference):
         w : numpy.ndarray
             ``(nw,)`` the blocked inputs.
         """
+        if plugin == "hpipm":
+            w_start = self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1)
+            lbu, ubu = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
+            w = np.asarray(hpipm_rti(self, _sqrt_psd, iterations)(x, w_start, self.parameters(t, x), lbu, ubu)[0]).reshape(-1)
+            return w[: self.nu].copy(), w
         if plugin == "fatrop":
             solver, first, b = fatrop_problem(self, _sqrt_psd)
             z0 = first(x, self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1))
@@ -395,7 +408,10 @@ class MPCController(SampledReference):
             shift = ca.repmat(d, self.blocks, 1)
             lbx, ubx = ca.DM(lbx) + shift, ca.DM(ubx) + shift
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
-        if self.solver == "fatrop":
+        if self.solver == "hpipm":
+            full, cost, _ = hpipm_rti(self, _sqrt_psd)(x, w, p, lbx, ubx)
+            rows = None
+        elif self.solver == "fatrop":
             solver, first, b = fatrop_problem(self, _sqrt_psd)
             z = solver(x0=first(x, w), p=p, **{k: b[k] for k in ("lbx", "ubx", "lbg", "ubg")})["x"]
             cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
@@ -578,9 +594,10 @@ def mpc_controller(
         Input blocks, a divisor of ``horizon`` (default ``horizon``: one input per period).
     sqp_iterations : int, optional
         SQP iterations per period, ``>= 1`` (default 1: the real-time iteration).
-    solver : {"sqpmethod", "fatrop"}, optional
+    solver : {"sqpmethod", "fatrop", "hpipm"}, optional
         NLP solver (:data:`MPC_SOLVERS`): ``sqpmethod`` (``qrqp`` QPs, ``daqp`` with
-        constraints) or ``fatrop`` (multiple shooting, ``blocks = horizon``).
+        constraints), ``fatrop`` (multiple shooting, ``blocks = horizon``) or ``hpipm``
+        (multiple shooting, ``blocks = horizon``, no state or path constraints).
     delay : int, optional
         Input delay [periods] the step compensates, 0 (default) or 1 (:attr:`MPCController.delay`).
     x_lb, x_ub : array_like or dict, optional
@@ -627,8 +644,8 @@ def mpc_controller(
         raise InputError(f"delay: expected 0 or 1 (periods of input delay the step compensates), got {delay!r}")
     if solver not in MPC_SOLVERS:
         raise InputError(f"solver: expected one of {', '.join(MPC_SOLVERS)}, got {solver!r}")
-    if solver == "fatrop" and blocks != horizon:
-        raise InputError(f"blocks: expected the horizon {horizon} with solver fatrop (one input per stage), got {blocks}")
+    if solver in ("fatrop", "hpipm") and blocks != horizon:
+        raise InputError(f"blocks: expected the horizon {horizon} with solver {solver} (one input per stage), got {blocks}")
     prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, eps=INDEX_EPS)
     xs, us, lb, ub, Qm, Rm = prob.x_ref, prob.u_ref, prob.u_lb, prob.u_ub, prob.Q, prob.R
     Qfm = prob.terminal_weight(Qf, Qm)
@@ -640,6 +657,8 @@ def mpc_controller(
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")
+    if solver == "hpipm" and cons is not None:
+        raise InputError("solver: hpipm takes no state or path constraints (its QP has input bounds only); give sqpmethod or fatrop")
     if isinstance(disturbance_gain, bool) or not isinstance(disturbance_gain, (int, float)) or not 0.0 <= disturbance_gain <= 1.0:
         raise InputError(f"disturbance_gain: expected a number in [0, 1] (0: no disturbance estimate), got {disturbance_gain!r}")
     if disturbance_gain and solver == "fatrop":
@@ -650,4 +669,5 @@ def mpc_controller(
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
-                         delay=int(delay), disturbance_gain=float(disturbance_gain))
+                         delay=int(delay), disturbance_gain=float(disturbance_gain),
+                         u_start=start_input(ode.f, prob.x_given[0], us[0], prob.p))

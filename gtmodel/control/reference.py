@@ -20,7 +20,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "sampled", "sample_reference", "period_index",
+__all__ = ["INDEX_EPS", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "sampled", "sample_reference", "period_index",
            "reference_scales", "plausible_range"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
@@ -131,6 +131,43 @@ def hold_input(f: ca.Function, x: Any, u_guess: Any, p: Any, iterations: int = 1
         if not np.all(np.isfinite(u)) or np.max(np.abs(du)) <= 1e-12 * (1.0 + np.max(np.abs(u))):
             break
     return u
+
+
+def start_input(f: ca.Function, x0: Any, u0: Any, p: Any, rtol: float = 1e-6) -> np.ndarray:
+    """The input acting before a loop's first computed input arrives: the one that holds a start at rest.
+
+    A plant that rests at the reference's first state before the loop starts is held there
+    by :func:`hold_input`, not by the plan's first input ``u*_0`` (a minimum-time plan's first
+    input charges a motor's inductance within a fraction of a period: held for the whole
+    period, a zero-order hold of it drives the current far beyond the plan's, issue 49).
+    A start that no input holds (``max |f(x_0, u, p)|`` above ``rtol (1 + max |f(x_0, u*_0, p)|)``,
+    a motion already under way) keeps ``u*_0``.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``f(x (nx,1), u (nu,1), p (np,1)) -> xdot (nx,1)``, the explicit ODE.
+    x0 : array_like
+        ``(nx,)`` the reference's first state.
+    u0 : array_like
+        ``(nu,)`` the reference's first input ``u*_0`` (and the start of the least squares).
+    p : array_like
+        ``(np,)`` parameters.
+    rtol : float, optional
+        Relative residual below which ``x0`` counts as held at rest.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(nu,)`` not saturated.
+    """
+    u0 = np.asarray(u0, dtype=float).reshape(-1)
+    held = hold_input(f, x0, u0, p)
+    if not np.all(np.isfinite(held)):
+        return u0.copy()
+    rest = np.max(np.abs(np.asarray(f(x0, held, p), dtype=float)), initial=0.0)
+    moving = np.max(np.abs(np.asarray(f(x0, u0, p), dtype=float)), initial=0.0)
+    return held if rest <= rtol * (1.0 + moving) else u0.copy()
 
 
 def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:

@@ -40,7 +40,7 @@ import scipy.linalg
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.problem import tracking_problem, weight_matrix
-from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index
+from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
 
 __all__ = ["TrackingController", "tracking_controller", "weight_matrix", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
@@ -193,6 +193,10 @@ class TrackingController(SampledReference):
         ``(nu, ni)`` the integral gain after the reference ends.
     Qi : numpy.ndarray, optional
         ``(ni, ni)`` the integrator states' weight the gains were computed with.
+    u_start : numpy.ndarray or None, optional
+        ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`):
+        :func:`~gtmodel.control.reference.start_input`, the input that holds a start at rest;
+        None: ``u*_0``.
     """
 
     K: np.ndarray
@@ -212,6 +216,7 @@ class TrackingController(SampledReference):
     Ki: np.ndarray | None = None
     Ki_hold: np.ndarray | None = None
     Qi: np.ndarray | None = None
+    u_start: np.ndarray | None = None
 
     @property
     def ni(self) -> int:
@@ -220,8 +225,8 @@ class TrackingController(SampledReference):
 
     @property
     def u_initial(self) -> np.ndarray:
-        """``(nu,)`` the input before the first step: ``u*_0`` saturated."""
-        return saturate(self.u_ref[0], self.u_lb, self.u_ub)
+        """``(nu,)`` the input before the first step: :attr:`u_start` (default ``u*_0``) saturated."""
+        return saturate(self.u_ref[0] if self.u_start is None else self.u_start, self.u_lb, self.u_ub)
 
     def function(self) -> ca.Function:
         """The controller as ONE CasADi Function of the loop-step interface.
@@ -456,7 +461,7 @@ def tracking_controller(
     return TrackingController(delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
-                              K_hold=K_hold[:, :nx], **integral)
+                              K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), **integral)
 
 
 def _integral(weights: Mapping[str, float] | None, names: list[str]) -> tuple[tuple[int, ...], np.ndarray | None]:

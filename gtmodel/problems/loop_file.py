@@ -438,11 +438,13 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         notes.append(f"input bounds unknown: {', '.join(unknown)} (declared by neither the model nor the reference; "
                      f"give {bounds_field}.u_lb / {bounds_field}.u_ub): their violations are not counted")
     n = int(round(ref.settle_time / dt))
-    if n:  # the end held: its state (the robot at rest) and the input that holds it there, not the last (braking) input
+    if n:  # the end held: its state (the robot at rest) and the input that holds it there, not the last (braking) input,
+        # from just after the end on (a loop sample after the end reads the hold, not the plan's last input interpolated
+        # towards it: a minimum-time drive's final voltage spike held a period drove the belt drive's current to 9.7 A of 8)
         x_end = x[-1] * np.r_[np.ones(3), np.zeros(3)] if robot else x[-1]
-        t = np.r_[t, t[-1] + dt * np.arange(1, n + 1)]
-        x = np.vstack([x, np.tile(x_end, (n, 1))])
-        u = np.vstack([u, np.tile(hold_input(ode.f, x_end, u[-1], ode.p_default), (n, 1))])
+        t = np.r_[t, t[-1] + 1e-9 * dt, t[-1] + dt * np.arange(1, n + 1)]
+        x = np.vstack([x, np.tile(x_end, (n + 1, 1))])
+        u = np.vstack([u, np.tile(hold_input(ode.f, x_end, u[-1], ode.p_default), (n + 1, 1))])
     return LoopReference(t=t, x=x, u=u, limits=limits, bounds=bounds, notes=notes)
 
 

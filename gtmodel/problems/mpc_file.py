@@ -64,7 +64,7 @@ def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
 
     ``sqpmethod`` (single shooting): the Jacobian of the ``horizon (nx + nu)`` residuals by
     the ``nu blocks`` inputs (every predicted state depends on every earlier input) and the
-    Gauss-Newton Hessian ``(nu blocks)^2``; ``fatrop`` (multiple shooting in stage order):
+    Gauss-Newton Hessian ``(nu blocks)^2``; ``fatrop`` and ``hpipm`` (multiple shooting in stage order):
     ``horizon (nx + nu)^2``, one stage's blocks per period.
 
     Parameters
@@ -80,7 +80,7 @@ def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
     -------
     int
     """
-    if solver == "fatrop":
+    if solver in ("fatrop", "hpipm"):
         return horizon * (nx + nu) ** 2
     n = nu * blocks
     return horizon * (nx + nu) * n + n * n

@@ -25,10 +25,10 @@ pytestmark = pytest.mark.slow
 
 DT = 0.004
 CASES = [("sqpmethod", {}, [1e300, 1e300]), ("sqpmethod", {"x_ub": {"x": 0.5}, "hard_constraints": True}, [0.45, 5.0]),
-         ("fatrop", {"x_ub": {"x": 0.5}, "hard_constraints": True}, [0.45, 5.0])]
+         ("fatrop", {"x_ub": {"x": 0.5}, "hard_constraints": True}, [0.45, 5.0]), ("hpipm", {}, [1e300, 1e300])]
 
 
-@pytest.mark.parametrize("solver, kwargs, bad", CASES, ids=["qrqp overflow", "daqp infeasible", "fatrop infeasible"])
+@pytest.mark.parametrize("solver, kwargs, bad", CASES, ids=["qrqp overflow", "daqp infeasible", "fatrop infeasible", "hpipm overflow"])
 def test_failed_step_returns_the_last_input_saturated(tmp_path, solver, kwargs, bad):
     ode = explicit_ode(double_integrator()[0])
     t = DT * np.arange(101)

@@ -42,7 +42,7 @@ BAD = [
     ({"sqp_iterations": 0}, "sqp_iterations: expected an integer >= 1"),
     ({"dt": 0.0}, "dt: expected a positive loop period"),
     ({"method": "euler2"}, "method: expected one of"),
-    ({"solver": "osqp"}, "solver: expected one of sqpmethod, fatrop"),
+    ({"solver": "osqp"}, "solver: expected one of sqpmethod, fatrop, hpipm"),
     ({"solver": "fatrop", "horizon": 20, "blocks": 5}, "blocks: expected the horizon 20 with solver fatrop"),
     ({"R": [0.0]}, "R: expected a positive definite"),
 ]

@@ -1,4 +1,4 @@
-"""The reference of a loop controller (gtmodel.control.reference): the input that holds the end.
+"""The reference of a loop controller (gtmodel.control.reference): the input that holds the end (and the start).
 
 References: the L1's holding forces at rest, J^T G of the numeric inverse dynamics
 (``GantryTau3Dynamics.gravity_forces``, Dressler (2012), Table 6.2; a second implementation
@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.control.reference import hold_input
+from gtmodel.control.reference import hold_input, start_input
 from gtmodel.modeling import explicit_ode
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.model import gantry_tau_model
@@ -30,3 +30,13 @@ def test_a_mass_on_a_spring_is_held_by_c_s():
     x, u, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("p", 2)  # p = (m, c)
     f = ca.Function("f", [x, u, p], [ca.vertcat(x[1], (u - p[1] * x[0]) / p[0])])
     assert hold_input(f, [0.3, 0.0], [-50.0], [2.0, 40.0]) == pytest.approx([12.0], rel=1e-12)
+
+
+@pytest.mark.parametrize("x0, u0, expected", [
+    ([0.3, 0.0], [-50.0], [12.0]),   # at rest on the spring: the holding force c s (closed form), not the plan's first input
+    ([0.3, 1.0], [-50.0], [-50.0]),  # already moving (no input holds it): the plan's first input kept
+])
+def test_the_input_before_the_loop_holds_a_start_at_rest(x0, u0, expected):
+    x, u, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("p", 2)  # p = (m, c)
+    f = ca.Function("f", [x, u, p], [ca.vertcat(x[1], (u - p[1] * x[0]) / p[0])])
+    assert start_input(f, x0, u0, [2.0, 40.0]) == pytest.approx(expected, rel=1e-12)

@@ -1,26 +1,31 @@
-"""Column-pivoted QR (Businger & Golub 1965) for the dummy-derivative choice, in NumPy alone.
+"""Column-pivoted QR (Businger & Golub 1965) for the dummy-derivative choice.
 
 The dummy-derivative selection (:func:`gtmodel.modeling.structure.index_reduction.select_dummies`)
 needs the pivot order and the magnitudes of ``diag(R)`` of ``G P = Q R`` for a small dense
-Jacobian block (a few rows). LAPACK's ``dgeqp3`` through ``scipy.linalg.qr`` gives them, but
-importing SciPy's linear algebra costs ~0.12 CPU-s (its array-API layer), more than
-reducing a drive model; NumPy has no pivoted QR. Here: Householder reflections with the
-column of largest remaining norm first (the norms recomputed at each step, not downdated;
-ties to the first column, as LAPACK's ``idamax``).
+Jacobian block (a few rows). Both come from LAPACK's ``dgeqp3`` (``scipy.linalg.qr``),
+imported on first use. A NumPy re-implementation was tried and dropped: these blocks hold
+columns whose norms tie but for round-off (e.g. the two-mass drive's, 0.577109856824761 against
+...7612 at the fourth step), and which of them becomes a state then depends on the rounding of
+the norm updates; a re-implementation picked other states than LAPACK for three shipped models,
+and a user's files name their states (``error_states`` of an MPC file).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from gtmodel._lazy import lazy_module
+
 __all__ = ["pivoted_qr"]
+
+#: Imported on first use (PEP 562 lazy module): a model without dummy derivatives need not pay for it.
+sla = lazy_module("scipy.linalg")
 
 
 def pivoted_qr(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``|diag(R)|`` and the column permutation of the column-pivoted QR ``G[:, piv] = Q R``.
 
-    Golub & Van Loan, *Matrix Computations* (4th ed.), algorithm 5.4.1 (Householder QR with
-    column pivoting), the trailing column norms recomputed at every step.
+    Golub & Van Loan, *Matrix Computations* (4th ed.), algorithm 5.4.1, as LAPACK's ``dgeqp3``.
 
     Parameters
     ----------
@@ -34,24 +39,6 @@ def pivoted_qr(G: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     piv : numpy.ndarray
         ``(n,)`` int column order: the first ``min(m, n)`` are the pivot columns in order.
     """
-    A = np.array(G, dtype=float, ndmin=2, copy=True)
-    m, n = A.shape
-    piv = np.arange(n)
-    k_max = min(m, n)
-    diag = np.zeros(k_max)
-    for k in range(k_max):
-        norms = np.linalg.norm(A[k:, k:], axis=0)
-        j = k + int(np.argmax(norms))
-        if j != k:
-            A[:, [k, j]] = A[:, [j, k]]
-            piv[[k, j]] = piv[[j, k]]
-        x = A[k:, k]
-        alpha = float(np.linalg.norm(x))
-        diag[k] = alpha
-        if alpha == 0.0:
-            continue
-        v = x.copy()
-        v[0] += np.copysign(alpha, x[0] if x[0] != 0 else 1.0)
-        v /= np.linalg.norm(v)
-        A[k:, k:] -= 2.0 * np.outer(v, v @ A[k:, k:])
-    return diag, piv
+    A = np.array(G, dtype=float, ndmin=2)
+    _, R, piv = sla.qr(A, pivoting=True, mode="economic")
+    return np.abs(np.diag(R)), np.asarray(piv, dtype=int)

@@ -1,0 +1,128 @@
+"""The MPC's real-time iteration on the stage structure, each QP by HPIPM's Riccati recursion (``solver = "hpipm"``).
+
+The same optimal control problem as :mod:`gtmodel.control.mpc` (one input per period: no
+move blocking), with the predicted states kept as variables (multiple shooting; Bock &
+Plitt, IFAC 1984), in the order HPIPM's OCP QP takes them: ``z = [u_0, x_1, u_1, ...,
+x_{H-1}, u_{H-1}, x_H]`` (the measured state ``x_0`` is a parameter, not a variable), the
+rows the gaps ``F(x_k, u_k) - x_{k+1} = 0``. HPIPM bounds every variable (CasADi's interface
+replaces an infinite bound by 1e8, with which HPIPM's interior point does not converge): the
+predicted states are kept within the plausible range of the step's measurement
+(:meth:`MPCController.limits`, the reference's range widened by
+:data:`~gtmodel.control.reference.MEASUREMENT_LIMIT` scales: never active on a sane horizon), an
+input without bounds within its plausible range. The cost is the single shooting's sum of
+squares ``sum ||L_R (u_k - u*_k)||^2 + ||L_Q (x_{k+1} - x*_{k+1})||^2`` (``L_{Q_f}`` at the
+last state), linear residuals in ``z``: its Gauss-Newton Hessian is the exact one and
+constant, block-diagonal ``2 diag(R, Q, R, ..., Q_f)``.
+
+One iteration (the real-time iteration of Diehl, Bock & Schloeder, SIAM J. Control Optim.
+43 (2005), as acados' SQP-RTI): the gaps and their Jacobians ``A_k = dF/dx``, ``B_k =
+dF/du`` at ``z``, the QP in ``dz`` with the input bounds shifted by ``z``, solved by
+HPIPM (Frison & Diehl, IFAC 2020: an interior-point method whose linear algebra is a
+Riccati recursion over the stages, ``O(H (nx + nu)^3)``, on BLASFEO) through CasADi's
+``hpipm`` conic with the stage structure given (``N = H``, ``nx = [0, nx, ...]``,
+``nu = [nu, ..., nu, 0]``, ``ng = 0``), and the full step ``z + dz``. ``sqp_iterations``
+such iterations per period. The states start from the warm start's inputs predicted from
+``x_0`` (no gaps at the first iteration: its QP is the single shooting's, so the converged
+point is the same).
+
+CasADi 3.8.2 generates C for the conic; it includes ``hpipm_d_ocp_qp_ipm.h`` and links the
+wheel's ``libhpipm`` and ``libblasfeo`` (:data:`gtmodel.codegen.loop_step.SOLVER_LIBRARIES`);
+its work (dimensions, QP, solution, IPM workspace) is allocated in every QP, which the generated
+step sends to its static arena (:data:`gtmodel.codegen.loop_step.HEAP_ARENA_BYTES`). A QP that
+HPIPM does not solve (iteration limit, a NaN) makes the generated call return an error: the
+step returns its failure status and the last input. State or path constraint rows are not
+taken (:func:`gtmodel.control.mpc.mpc_controller` refuses them with this solver).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["HPIPM_MAX_ITER", "HPIPM_MODE", "hpipm_rti"]
+
+#: The box of the predicted states: the reference's range widened by this many state scales
+#: (:func:`~gtmodel.control.reference.reference_scales`) each side.
+STATE_BOX = 10.0
+#: Interior-point iterations of HPIPM per QP at most (acados' default), and its mode: ``speed_abs`` (the
+#: absolute formulation, residuals not computed in the iterations) took 0.80x the generated L1 step's
+#: time of ``speed`` and 0.60x ``balance``'s, the same first input to 1e-9 (2026-11-23, one state sweep).
+HPIPM_MAX_ITER, HPIPM_MODE = 50, "speed_abs"
+
+
+def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Function:
+    """The MPC's real-time iteration(s) by HPIPM on the multiple-shooting QP (see the module docstring).
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC (``blocks == horizon``, no constraints).
+    sqrt_psd : callable
+        ``L`` with ``L^T L = M`` of a weight matrix (the single shooting's factor).
+    iterations : int, optional
+        Iterations (default ``c.sqp_iterations``).
+
+    Returns
+    -------
+    casadi.Function
+        ``rti(x0 (nx,1), w (nu H,1), p, lbu (nu H,1), ubu (nu H,1)) -> (u (nu H,1), f (1,1), lam)``:
+        ``w`` the warm start's inputs, ``p`` as :meth:`MPCController.parameters`, ``lbu``/``ubu``
+        the inputs' bounds; ``u`` the inputs after the iterations, ``f`` the cost there (NaN
+        when the prediction fails), ``lam`` ``(iterations H nx,1)`` the gaps' multipliers of each QP.
+    """
+    H, nx, nu = c.horizon, c.nx, c.nu
+    k_it = c.sqp_iterations if iterations is None else int(iterations)
+    Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
+    x0, xr, ur = ca.SX.sym("x0", nx), ca.SX.sym("xr", nx, H), ca.SX.sym("ur", nu, H)
+    U = [ca.SX.sym(f"u{k}", nu) for k in range(H)]
+    X = [x0] + [ca.SX.sym(f"x{k}", nx) for k in range(1, H + 1)]
+    z = ca.vertcat(*[e for k in range(H) for e in (U[k], X[k + 1])])
+    g = ca.vertcat(*[c.step(X[k], U[k]) - X[k + 1] for k in range(H)])
+    r = ca.vertcat(*[e for k in range(H) for e in (ca.mtimes(Lr, U[k] - ur[:, k]),
+                                                    ca.mtimes(Lf if k == H - 1 else Lq, X[k + 1] - xr[:, k]))])
+    f = ca.sumsqr(r)
+    p = ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
+    hess = ca.evalf(ca.substitute(ca.hessian(f, z)[0], ca.vertcat(z, p), ca.DM.zeros(z.numel() + p.numel())))
+    jac = ca.sparsify(ca.jacobian(g, z))  # the -I blocks of x_{k+1} diagonal, as the conic requires
+    lin = ca.Function("lin", [z, p], [g, jac, ca.gradient(f, z)], ["z", "p"], ["g", "jac", "grad"])
+    cost_f = ca.Function("cost", [z, p], [f], ["z", "p"], ["f"])  # apart: a call of lin computes all its outputs
+    # the states predicted from the warm start's inputs
+    ws = ca.SX.sym("w", nu * H)
+    xk, parts = x0, []
+    for k in range(H):
+        xk = c.step(xk, ws[k * nu:(k + 1) * nu])
+        parts += [ws[k * nu:(k + 1) * nu], xk]
+    start = ca.Function("start", [x0, ws], [ca.vertcat(*parts)])
+    opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu] * H + [0], "ng": [0] * (H + 1), "error_on_fail": False,
+            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER}}
+    qp = ca.conic("mpc_hpipm", "hpipm", {"h": hess.sparsity(), "a": jac.sparsity()}, opts)
+    u_idx = np.concatenate([np.arange(k * (nu + nx), k * (nu + nx) + nu) for k in range(H)])
+    x_idx = np.setdiff1d(np.arange(z.numel()), u_idx)
+    X0, W, P = ca.MX.sym("x0", nx), ca.MX.sym("w", nu * H), ca.MX.sym("p", p.numel())
+    LBU, UBU = ca.MX.sym("lbu", nu * H), ca.MX.sym("ubu", nu * H)
+    Z = start(X0, W)
+    # HPIPM bounds every variable (CasADi's interface replaces an infinite bound by 1e8, with which its
+    # interior point stops at its iteration limit): the predicted states within STATE_BOX scales of the
+    # reference's range, the inputs within their bounds or, where none, their plausible range
+    lim = c.limits()
+    x_scale, _, _, _ = c.plausible_ranges(c.u_lb, c.u_ub)
+    x_lo = ca.DM(np.tile(np.min(c.x_ref, axis=0) - STATE_BOX * x_scale, H))
+    x_hi = ca.DM(np.tile(np.max(c.x_ref, axis=0) + STATE_BOX * x_scale, H))
+    u_lo = ca.fmax(LBU, ca.DM(np.tile(lim["u_last"][0], H)))
+    u_hi = ca.fmin(UBU, ca.DM(np.tile(lim["u_last"][1], H)))
+    lam = []
+    for _ in range(k_it):
+        gz, jz, grad = lin(Z, P)
+        lb, ub = ca.MX(z.numel(), 1), ca.MX(z.numel(), 1)
+        lb[u_idx], ub[u_idx] = u_lo - Z[u_idx], u_hi - Z[u_idx]
+        lb[x_idx], ub[x_idx] = x_lo - Z[x_idx], x_hi - Z[x_idx]
+        sol = qp(h=hess, g=grad, a=jz, lba=-gz, uba=-gz, lbx=lb, ubx=ub)
+        Z = Z + sol["x"]
+        lam.append(sol["lam_a"])
+    cost = cost_f(Z, P)
+    # the multipliers are an output: CasADi 3.8.2's HPIPM runtime writes them unconditionally (a call
+    # whose lam_a output is unused gets a NULL pointer there and crashes)
+    return ca.Function("rti", [X0, W, P, LBU, UBU], [Z[u_idx], cost, ca.vertcat(*lam)], ["x0", "w", "p", "lbu", "ubu"],
+                       ["u", "f", "lam"])
