@@ -18,7 +18,11 @@ choose the elements to split:
   optimum is missed by O(h)). Such an element, if longer than ``tol`` times the horizon,
   is split where the input's collocation polynomial crosses the middle of its range
   within the element, so that the switch moves onto an element boundary. Repeated, this
-  locates the switch time to the width of the element that holds it.
+  locates the switch time to the width of the element that holds it. A switch estimated at
+  an element's edge (:data:`SWITCH_EDGE`: the jump is on the boundary already) is not cut
+  into a sliver; if the element's defect exceeds ``tol`` (a stiff state, such as a motor
+  current against its limit, after the jump) the element is graded towards the jump
+  (parts 0.15, 0.30, 0.55 of it), so that the transient after it is resolved.
 
 A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
 :data:`SPURIOUS_DEVIATION` has found a spurious
@@ -106,6 +110,10 @@ def switch_times(result: OptimizationResult) -> list[float]:
     return sorted(times)
 
 
+SWITCH_EDGE = 0.03
+"""A switch within this fraction of an element's edge is taken as on the boundary (the element graded, not cut at it)."""
+
+
 def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int) -> tuple[np.ndarray, dict[str, Any]]:
     """The next mesh: elements split where the defect exceeds the tolerance or an input switches.
 
@@ -154,6 +162,15 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
         plans[int(k)] = (float(errors[k]), list(np.arange(1, parts) / parts))
     switches = switch_elements(result)
     for k, tau in switches.items():
+        if min(tau, 1.0 - tau) < SWITCH_EDGE:
+            # the jump is on the element's boundary already (the level before it is the neighbour's): a cut at it
+            # leaves a sliver that resolves nothing. Where the element's defect exceeds the tolerance, the
+            # transient after the jump (a motor current against its limit, faster than the element) is: the
+            # element graded towards the jump, short parts first (Betts, *Practical Methods*, ch. 4; issue 49)
+            if errors[k] > 1.0:
+                cuts = [0.15, 0.45] if tau < 0.5 else [0.55, 0.85]
+                plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), cuts)
+            continue
         if frac[k] > tolerance:
             # the switch explains the element's defect: a cut at the switch; where the element's defect is
             # 10 tolerances or more (a stiff state, a motor current, following the switch), the two parts

@@ -163,6 +163,20 @@ def test_refine_mesh_splits_elements_above_the_tolerance():
     assert info["split"] == [] and len(capped) == 4
 
 
+@pytest.mark.parametrize("tau, parts", [(0.02, [0.15, 0.3, 0.55]), (0.98, [0.55, 0.3, 0.15])])
+def test_a_jump_on_an_element_edge_grades_the_element_towards_it(monkeypatch, tau, parts):
+    # a switch estimated at the clip (the jump on the boundary, issue 49's two-mass drive) is not cut into a sliver:
+    # the element over the tolerance is graded towards the jump (independent check: the cut fractions written out)
+    res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
+    errors = res.verification.element_errors
+    k = int(np.argmax(errors))
+    monkeypatch.setattr(refinement, "switch_elements", lambda result: {k: tau})
+    fractions, info = refine_mesh(res, tolerance=0.5 * float(errors[k]), max_elements=100)
+    assert k in info["split"] and fractions[k:k + 3] == pytest.approx(0.25 * np.asarray(parts))
+    within, info = refine_mesh(res, tolerance=2.0 * float(errors.max()), max_elements=100)
+    assert info["split"] == [] and len(within) == 4
+
+
 def test_refinement_splits_where_the_local_errors_add_up_beyond_the_tolerance():
     # x' = -x + 1 on 4 elements of one point: every element's own error (0.060 at most) within 0.07, the
     # simulation's deviation over the horizon (0.084) not; the deviation recomputed from the closed form 1 - exp(-t)
