@@ -61,6 +61,7 @@ from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController
 from gtmodel.control.tracking import TrackingController
+from gtmodel.control.reference import FLOAT_PERIOD_LIMIT
 
 __all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "build_step", "load_loop_step"]
 
@@ -503,7 +504,8 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     Raises
     ------
     InputError
-        A bad step (:meth:`LoopStep.validate`), prefix or real type.
+        A bad step (:meth:`LoopStep.validate`), prefix or real type; ``real = "float"`` for a
+        reference reaching beyond :data:`~gtmodel.control.reference.FLOAT_PERIOD_LIMIT` periods.
     CodegenError
         CasADi's code generation or writing the files failed.
     """
@@ -512,6 +514,10 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     step.validate()
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
+    periods = max(abs(step.t_range[0]), abs(step.t_range[1])) / step.dt
+    if real == "float" and periods > FLOAT_PERIOD_LIMIT:
+        raise InputError(f"real: 'float' cannot index {periods:.0f} periods of {step.dt:g} s (times up to {max(map(abs, step.t_range)):g} s): "
+                         f"float32 round-off of (t - t0) / dt exceeds the period slack beyond {FLOAT_PERIOD_LIMIT} periods; use real = 'double'")
     check_c_identifier(prefix, "prefix", "gt_tracking")
     spec = _spec(step)
     specs = (spec,) + ((_reset_spec(step),) if step.reset is not None else ()) + ((_predict_spec(step),) if step.predict is not None else ())

@@ -32,6 +32,8 @@ from gtmodel._lazy import lazy_exports
 
 __all__ = [
     "INDEX_EPS",
+    "PERIOD_EPS",
+    "FLOAT_PERIOD_LIMIT",
     "MEASUREMENT_LIMIT",
     "MEMORY_LIMIT",
     "SampledReference",
@@ -66,7 +68,7 @@ __all__ = [
 # ``mpc_constraints`` (the function) is not exported here: the package attribute of that
 # name is the submodule :mod:`gtmodel.control.mpc_constraints`.
 __getattr__, __dir__ = lazy_exports(__name__, {
-    "INDEX_EPS": "reference", "MEASUREMENT_LIMIT": "reference", "MEMORY_LIMIT": "reference", "SampledReference": "reference",
+    "INDEX_EPS": "reference", "PERIOD_EPS": "reference", "FLOAT_PERIOD_LIMIT": "reference", "MEASUREMENT_LIMIT": "reference", "MEMORY_LIMIT": "reference", "SampledReference": "reference",
     "hold_input": "reference", "sampled": "reference", "sample_reference": "reference", "period_index": "reference",
     "reference_scales": "reference", "plausible_range": "reference",
     "PREDICTION_METHODS": "problem", "TrackingProblem": "problem", "tracking_problem": "problem", "weight_matrix": "problem",

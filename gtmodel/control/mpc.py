@@ -305,7 +305,7 @@ class MPCController(SampledReference):
         numpy.ndarray
             ``(nx + H (nx + nu),)``.
         """
-        k = period_index(t, self.t0, self.dt, self.length - 1, eps=INDEX_EPS)
+        k = period_index(t, self.t0, self.dt, self.length - 1)
         table = np.hstack([self.x_ref, self.u_ref])
         xr, ur = self._window(t, lambda j, c: table[min(k + j, self.length - 1), c])
         return np.concatenate([np.asarray(x, dtype=float).reshape(-1), np.ravel(xr), np.ravel(ur)])
@@ -394,7 +394,7 @@ class MPCController(SampledReference):
         d = self._disturbance(x, u_last, mem) if self.disturbance_gain else None
         if self.delay:  # the input computed now acts from t + dt: the horizon starts from the state then
             t, x = t + self.dt, self.step(x, u_last if d is None else u_last + d)
-        k = period_index(t, self.t0, self.dt, n - 1, eps=INDEX_EPS)  # a NaN time reads row 0; ok is then 0
+        k = period_index(t, self.t0, self.dt, n - 1)  # a NaN time reads row 0; ok is then 0
         table = np.hstack([self.x_ref, self.u_ref])
         values = ca.MX(ca.DM(table.reshape(-1)))
         width = table.shape[1]
@@ -483,8 +483,8 @@ class MPCController(SampledReference):
         def u_star(k: Any) -> ca.MX:
             return saturate(ca.vertcat(*[values[nu * ca.fmin(k, n - 1) + i] for i in range(nu)]), self.u_lb, self.u_ub)
 
-        u_last = u_star(period_index(t, self.t0, self.dt, n - 1, eps=INDEX_EPS))
-        k = period_index(t + self.delay * self.dt, self.t0, self.dt, n - 1, eps=INDEX_EPS)
+        u_last = u_star(period_index(t, self.t0, self.dt, n - 1))
+        k = period_index(t + self.delay * self.dt, self.t0, self.dt, n - 1)
         w = ca.vertcat(*[u_star(k + s * b) for s in range(self.blocks)])
         if self.disturbance_gain:
             w = ca.vertcat(w, ca.DM.zeros(nu), x, u_last, 0.0)

@@ -20,12 +20,20 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "sampled", "sample_reference", "period_index",
+__all__ = ["INDEX_EPS", "PERIOD_EPS", "FLOAT_PERIOD_LIMIT", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "sampled", "sample_reference", "period_index",
            "reference_scales", "plausible_range"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
 #: point) selects sample ``k``, not ``k - 1``.
 INDEX_EPS = 1e-6
+#: Slack, in periods, of :func:`period_index` (the row a loop controller reads at time ``t``): a
+#: call up to 0.1 % of a period before a grid time reads that grid time's row. It covers clock
+#: jitter and the round-off of ``(t - t_0) / dt`` in the generated C, float32 included: at
+#: ``k`` periods that round-off is about ``4 k 2^-23`` periods, below this slack up to
+#: :data:`FLOAT_PERIOD_LIMIT` periods (a float build of a longer reference is refused).
+PERIOD_EPS = 1e-3
+#: Most periods from time 0 a ``real = "float"`` loop step may index (``4 k 2^-23 <= PERIOD_EPS``).
+FLOAT_PERIOD_LIMIT = int(PERIOD_EPS / (4 * 2.0 ** -23))
 #: A value more than this many scales (:func:`reference_scales`) outside its reference's range is
 #: absurd: a measured state (the generated step rejects it: ``GT_BAD_ARGUMENT``, the safe input,
 #: its memory untouched; :mod:`gtmodel.codegen.loop_step`), an input without bounds in the memory.
@@ -247,7 +255,7 @@ def sample_reference(t: Any, x_ref: Any, u_ref: Any, dt: float, min_samples: int
     return float(tt[0]), xs, us
 
 
-def period_index(t: Any, t0: float, dt: float, last: int, eps: float = INDEX_EPS) -> Any:
+def period_index(t: Any, t0: float, dt: float, last: int, eps: float = PERIOD_EPS) -> Any:
     """The row of a sampled reference read at time ``t``: ``floor((t - t_0) / dt + eps)`` clamped to ``0 .. last``.
 
     Parameters
@@ -261,7 +269,7 @@ def period_index(t: Any, t0: float, dt: float, last: int, eps: float = INDEX_EPS
     last : int
         Largest row (``N - 1``, or ``N`` with a row after the reference such as a held end).
     eps : float, optional
-        Slack (default :data:`INDEX_EPS`).
+        Slack in periods (default :data:`PERIOD_EPS`; float32 round-off needs it).
 
     Returns
     -------

@@ -26,7 +26,7 @@ from gtmodel.codegen.check.loop_step import check_loop_step
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, load_loop_step, mpc_step, tracking_step
 from gtmodel.errors import InputError
 from gtmodel.control.mpc import mpc_controller
-from gtmodel.control.reference import period_index
+from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, period_index
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
@@ -296,6 +296,17 @@ def test_single_precision_step_keeps_the_contract(tmp_path, motion):
     report = check_loop_step(generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_f", real="float"), n=50)
     assert report.passed, "\n".join(report.summary_lines())
     assert {p.expected for p in report.probes} >= {"GT_MEMORY_RESET"}
+
+def test_a_float_step_refuses_a_reference_longer_than_float32_can_index(tmp_path, motion):
+    """Beyond FLOAT_PERIOD_LIMIT periods float32's round-off of (t - t0) / dt exceeds the period
+    slack (a grid time would read the row before it): refused before anything is written."""
+    ode, t, x, u = motion
+    step = tracking_step(tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0], Q=[1e-2, 1.0, 1e-4]))
+    long_step = dataclasses.replace(step, t_range=(0.0, step.dt * (FLOAT_PERIOD_LIMIT + 10)))
+    with pytest.raises(InputError, match="real: 'float' cannot index .* periods .* use real = 'double'"):
+        generate_loop_step(long_step, tmp_path / "src", prefix="gt_f", real="float")
+    assert not (tmp_path / "src").exists()
+
 
 HOSTILE_NAME = ('p"; } int system(const char *); __attribute__((constructor)) static void pwn(void) '
                 '{ system("touch PWNED"); } const char *gt_q(void) { return "')

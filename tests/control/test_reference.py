@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.control.reference import hold_input, start_input
+from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, PERIOD_EPS, hold_input, period_index, start_input
 from gtmodel.modeling import explicit_ode
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.model import gantry_tau_model
@@ -40,3 +40,21 @@ def test_the_input_before_the_loop_holds_a_start_at_rest(x0, u0, expected):
     x, u, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("p", 2)  # p = (m, c)
     f = ca.Function("f", [x, u, p], [ca.vertcat(x[1], (u - p[1] * x[0]) / p[0])])
     assert start_input(f, x0, u0, [2.0, 40.0]) == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("dt", [0.004, 0.001, 0.0125])
+def test_float32_grid_times_read_their_own_period(dt):
+    """Every grid time t = k dt, rounded to float32 and divided in float32 as the float C does,
+    reads row k under the period slack, up to the float limit (independent check: integer k)."""
+    k = np.arange(0, FLOAT_PERIOD_LIMIT + 1)
+    t, step = (k * dt).astype(np.float32), np.float32(dt)
+    rows = np.floor(t / step + np.float32(PERIOD_EPS)).astype(np.int64)
+    np.testing.assert_array_equal(rows, k)
+
+
+@pytest.mark.parametrize("k", [0, 1, 7, 250, 1999])
+def test_period_index_reads_the_row_of_a_grid_time_and_of_a_time_just_before(k):
+    dt = 0.004
+    assert period_index(k * dt, 0.0, dt, 10_000) == k
+    assert period_index(k * dt - 0.5 * PERIOD_EPS * dt, 0.0, dt, 10_000) == k  # within the slack: jitter
+    assert period_index(k * dt - 2 * PERIOD_EPS * dt, 0.0, dt, 10_000) == max(k - 1, 0)
