@@ -195,20 +195,19 @@ def _route(args: argparse.Namespace) -> str:
     return "robot"
 
 
-def _reference_line(path: Path) -> str | None:
-    """What the file's ``[reference]`` plans (a problem re-planned with overrides), said before it is solved."""
-    from gtmodel._toml import read_toml
+def _reference_line(path: Path, kind: str) -> str | None:
+    """What the file's ``[reference]`` plans (a problem re-planned with overrides), said before it is solved.
 
-    try:
-        ref = read_toml(Path(path), GtModelError, "loop-controller file").get("reference", {})
-    except (GtModelError, OSError):
-        return None  # the loader names the error
-    if not isinstance(ref, dict) or not isinstance(ref.get("problem"), str):
+    The file is read and validated first (:func:`gtmodel.problems.loop_file.read_loop_file`), so
+    that a bad file is refused, naming its field, before any progress line.
+    """
+    from gtmodel.problems.loop_file import read_loop_file
+
+    ref = read_loop_file(Path(path), kind)[0].reference
+    if ref.problem is None:
         return None
-    overrides = ref.get("overrides") or {}
-    how = (" with " + ", ".join(f"{k} = {v}" for k, v in overrides.items()) + " (the file's [reference] overrides)") if isinstance(
-        overrides, dict) and overrides else ""
-    return (f"the reference is re-planned: {ref['problem']} solved here{how}; a solver's line that follows is this "
+    how = (" with " + ", ".join(f"{k} = {v}" for k, v in ref.overrides.items()) + " (the file's [reference] overrides)") if ref.overrides else ""
+    return (f"the reference is re-planned: {ref.problem} solved here{how}; a solver's line that follows is this "
             "re-planned reference's, not the problem file's own plan")
 
 
@@ -293,7 +292,7 @@ def _codegen_mpc(args: argparse.Namespace) -> int:
 
     if args.model is not None or args.robot is not None or args.controller is not None:
         raise GtModelError("--mpc generates the MPC of its file alone: give it without --model, --robot and --controller")
-    planned = _reference_line(args.mpc)
+    planned = _reference_line(args.mpc, "mpc")
     with _step(args, f"reading {args.mpc}" + (f"; {planned}" if planned else ""), f"reading {args.mpc}"):
         setup = load_mpc_file(args.mpc)
     with _step(args, f"generating and compiling the MPC {setup.name} (CasADi's sqpmethod + qrqp inside one step)",
@@ -316,7 +315,7 @@ def _codegen_tracking_file(args: argparse.Namespace) -> int:
     if given:
         raise GtModelError(f"--controller FILE.toml generates the tracking controller of its file alone: give it without {', '.join(given)} "
                            "(the period, weights and plant are the file's)")
-    planned = _reference_line(args.controller)
+    planned = _reference_line(args.controller, "tracking_controller")
     with _step(args, f"reading {args.controller} and computing the LQR gains" + (f"; {planned}" if planned else ""),
                f"reading {args.controller}"):
         setup = load_tracking_file(args.controller)

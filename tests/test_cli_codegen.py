@@ -11,6 +11,7 @@ import pytest
 
 from gtmodel.cli import build_parser, main
 from gtmodel.cli_codegen import SUBCOMMANDS, _reference_line, _route
+from gtmodel.errors import GtModelError
 
 from .conftest import REPO
 
@@ -81,6 +82,22 @@ def test_quiet_says_nothing(tmp_path, capsys):
 
 
 def test_the_re_planned_reference_is_announced():
-    line = _reference_line(REPO / "codegen" / "mpc" / "l1_mpc.toml")
+    line = _reference_line(REPO / "codegen" / "mpc" / "l1_mpc.toml", "mpc")
     assert line.startswith("the reference is re-planned: ../../problems/l1_time_optimal.toml solved here with limits.force = [400.0, 400.0, 400.0]")
-    assert _reference_line(REPO / "missing.toml") is None
+    with pytest.raises(GtModelError, match="missing.toml"):
+        _reference_line(REPO / "missing.toml", "mpc")
+
+
+@pytest.mark.parametrize("sub, name, field", [
+    ("mpc", "codegen/mpc/dc_motor_mpc.toml", "mpc.period"),
+    ("tracking", "codegen/controllers/dc_motor_tracking.toml", "controller.period"),
+])
+def test_a_bad_file_is_refused_before_any_progress_line(sub, name, field, tmp_path, capsys):
+    """A bad period: exit 2 naming the field, and no line announcing a re-planned reference
+    (nothing was planned), nothing written."""
+    text = (REPO / name).read_text().replace("period = 0.004", "period = -0.004", 1).replace('"../../', f'"{REPO.as_posix()}/')
+    (tmp_path / "bad.toml").write_text(text)
+    assert main(["codegen", sub, str(tmp_path / "bad.toml"), "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert f"field '{field}'" in err and "re-planned" not in err and "reading" not in err
+    assert not (tmp_path / "c").exists()
