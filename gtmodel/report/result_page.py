@@ -16,9 +16,13 @@ or archived alone.
 
 The optimal-control summary names its variable groups (``variables``: states, inputs,
 algebraics, outputs), their ``units`` and ``bounds``; other kinds' tables are plotted
-column by column, with the units their ``units`` field gives. A trace holds at most
-:data:`MAX_POINTS` samples (every k-th sample of a longer table, said in the figure's
-title); a CSV file larger than :data:`MAX_CSV_BYTES` is listed, not read.
+column by column, with the units their ``units`` field gives. A page stays under
+:data:`PAGE_LIMIT` bytes: its traces share :data:`MAX_PAGE_SAMPLES` samples (at most
+:data:`MAX_POINTS` each); a longer trace is min-max decimated (each bucket of rows keeps its
+smallest and largest value, so peaks and bound touches survive; said in the figure's title,
+the full data in the CSV file) and values keep 6 significant digits; the PNG plots are
+inlined while the page stays under the limit, else shown from the folder beside the page
+(said under each). A CSV file larger than :data:`MAX_CSV_BYTES` is listed, not read.
 
 This module renders and writes the page only; where it may be written (a result folder's
 rules, ``summary.json`` listing it) is the problem layer's business
@@ -38,12 +42,15 @@ import stat
 from pathlib import Path, PurePosixPath
 from typing import Any, Mapping
 
+import numpy as np
+
 from gtmodel._escape import html_text, json_script
 from gtmodel._tables import split_unit
 from gtmodel.errors import InputError
 from gtmodel.status import Status
 
-__all__ = ["REPORT_FILE", "PLOTLY_JS", "MAX_POINTS", "MAX_CSV_BYTES", "render_report", "write_report", "read_csv_columns"]
+__all__ = ["REPORT_FILE", "PLOTLY_JS", "MAX_POINTS", "MAX_PAGE_SAMPLES", "PAGE_LIMIT", "MAX_CSV_BYTES", "decimate", "render_report",
+           "write_report", "read_csv_columns"]
 
 log = logging.getLogger("gtmodel")
 
@@ -51,8 +58,14 @@ log = logging.getLogger("gtmodel")
 REPORT_FILE = "report.html"
 #: Plotly's basic bundle (plotly.js 4.1.1: scatter, bar, pie), inlined in every page; its MIT licence beside it.
 PLOTLY_JS = Path(__file__).resolve().parent / "assets" / "plotly-basic.min.js"
-#: Most samples of one trace (a longer table is thinned to every k-th row).
+#: Most samples of one trace (a longer table is min-max decimated, :func:`decimate`).
 MAX_POINTS = 4000
+#: Most samples of all the traces of one page together (each trace at least :data:`MIN_POINTS`).
+MAX_PAGE_SAMPLES = 24_000
+#: Fewest samples a trace is decimated to.
+MIN_POINTS = 400
+#: Largest page, bytes: PNG plots beyond it are shown from the folder, not inlined.
+PAGE_LIMIT = 2_000_000
 #: Largest CSV file read into the page, bytes.
 MAX_CSV_BYTES = 50_000_000
 #: Most panels of one figure (further columns go to the next figure).
@@ -259,8 +272,50 @@ def _bound_pair(bounds: Mapping[str, Any], name: str) -> tuple[float | None, flo
     return out[0], out[1]
 
 
-def _json_list(values: list[float]) -> list[float | None]:
-    return [v if math.isfinite(v) else None for v in values]
+def _json_list(values: Any) -> list[float | None]:
+    """Finite values to 6 significant digits (what a plot shows), others ``None`` (a gap)."""
+    return [float(f"{v:.6g}") if math.isfinite(v) else None for v in map(float, values)]
+
+
+def decimate(x: Any, y: Any, points: int) -> tuple[np.ndarray, np.ndarray]:
+    """Min-max decimation of a trace for display: each bucket of rows keeps its smallest and largest value.
+
+    Parameters
+    ----------
+    x, y : array_like
+        ``(n,)`` the samples (time, value); ``y`` may hold NaN (never chosen over a number).
+    points : int
+        Most samples kept, at least 4 (the first and the last sample always among them).
+
+    Returns
+    -------
+    x, y : numpy.ndarray
+        ``(m,)`` the kept samples in their order, ``m <= points`` (all of them when
+        ``n <= points``): the extremes of ``y`` over every bucket of ``ceil(n / b)`` rows,
+        ``b = (points - 2) // 2`` buckets, so that no peak is lost.
+
+    Raises
+    ------
+    InputError
+        ``points`` below 4, or ``x`` and ``y`` of different lengths.
+    """
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if isinstance(points, bool) or not isinstance(points, int) or points < 4:
+        raise InputError(f"points: expected an integer >= 4, got {points!r}")
+    if x.shape != y.shape or x.ndim != 1:
+        raise InputError(f"x, y: expected two arrays of one shape (n,), got {x.shape} and {y.shape}")
+    n = x.size
+    if n <= points:
+        return x, y
+    buckets = (points - 2) // 2
+    size = math.ceil(n / buckets)
+    pad = buckets * size - n
+    low = np.concatenate([np.where(np.isnan(y), np.inf, y), np.full(pad, np.inf)]).reshape(buckets, size)
+    high = np.concatenate([np.where(np.isnan(y), -np.inf, y), np.full(pad, -np.inf)]).reshape(buckets, size)
+    start = np.arange(buckets) * size
+    keep = np.unique(np.concatenate([[0, n - 1], np.minimum(start + low.argmin(axis=1), n - 1),
+                                     np.minimum(start + high.argmax(axis=1), n - 1)]))
+    return x[keep], y[keep]
 
 
 def _unit(units: Mapping[str, str], name: str) -> str:
@@ -280,18 +335,12 @@ def _figure_spec(title: str, t: list[float], panels: list[tuple[str, list[float]
     Up to four panels are stacked; more are laid out in two columns (a row of panels
     :data:`_PANEL_HEIGHT` high), every panel's axes titled with their units.
     """
-    n = len(t)
-    step = max(1, math.ceil(n / MAX_POINTS))
-    idx = list(range(0, n, step))
-    if idx and idx[-1] != n - 1:
-        idx.append(n - 1)
-    ts = _json_list([t[i] for i in idx])
     t_span = [min(t), max(t)] if t else [0.0, 1.0]
     cols = 1 if len(panels) <= 4 else 2
     rows = math.ceil(len(panels) / cols)
     data: list[dict[str, Any]] = []
     layout: dict[str, Any] = {
-        "title": {"text": title + (f" (every {step}th of {n} samples)" if step > 1 else "")},
+        "title": {"text": title},
         "grid": {"rows": rows, "columns": cols, "pattern": "independent", "roworder": "top to bottom",
                  "xgap": 0.12, "ygap": 0.35},
         "height": 110 + _PANEL_HEIGHT * rows,
@@ -302,35 +351,91 @@ def _figure_spec(title: str, t: list[float], panels: list[tuple[str, list[float]
     for k, (name, values) in enumerate(panels):
         suffix = "" if k == 0 else str(k + 1)
         xaxis, yaxis = f"x{suffix}", f"y{suffix}"
-        data.append({"type": "scatter", "mode": "lines", "name": name, "x": ts, "y": _json_list([values[i] for i in idx]),
+        data.append({"type": "scatter", "mode": "lines", "name": name, "x": list(t), "y": list(values),
                      "xaxis": xaxis, "yaxis": yaxis, "line": {"color": "#1f77b4"}})
         for side, b in zip(("lower bound", "upper bound"), _bound_pair(bounds, name)):
             if b is not None:
                 data.append({"type": "scatter", "mode": "lines", "name": f"{name} {side}", "x": t_span, "y": [b, b],
                              "xaxis": xaxis, "yaxis": yaxis, "line": {"color": "#444", "dash": "dash", "width": 1},
-                             "hoverinfo": "name+y"})
+                             "hoverinfo": "name+y", "_bound": True})
         layout[f"yaxis{suffix}"] = {"title": {"text": _axis_title(name, _unit(units, name)), "font": {"size": 12}}}
         layout[f"xaxis{suffix}"] = {"title": {"text": t_label, "font": {"size": 11}, "standoff": 2},
                                     **({} if k == 0 else {"matches": "x"})}
     return {"data": data, "layout": layout}
 
 
+class _Png:
+    """A PNG plot of the folder, inlined or shown from the folder when the page is assembled (:meth:`_Page.html`)."""
+
+    def __init__(self, name: str, data: bytes) -> None:
+        self.name, self.data = name, data
+
+    def html(self, inline: bool) -> str:
+        if inline:
+            src = "data:image/png;base64," + base64.b64encode(self.data).decode("ascii")
+            return f"<h3>{_esc(self.name)}</h3><img class='png' alt='{_esc(self.name)}' src='{src}'>"
+        return (f"<h3>{_esc(self.name)}</h3><img class='png' alt='{_esc(self.name)}' src='{_esc(self.name)}'>"
+                f"<p class='muted'>shown from the file beside this page (not inlined: the page stays under "
+                f"{PAGE_LIMIT / 1e6:g} MB)</p>")
+
+
 class _Page:
-    """The page being assembled: sections of HTML and the figures' specifications."""
+    """The page being assembled: sections of HTML, the figures' specifications and the PNG plots.
+
+    Figures and PNGs are placeholders until :meth:`html`, which shares the page's samples
+    among the traces (:data:`MAX_PAGE_SAMPLES`, :func:`decimate`) and inlines PNGs while the
+    page stays under :data:`PAGE_LIMIT`.
+    """
 
     def __init__(self) -> None:
-        self.parts: list[str] = []
-        self.figures = 0
+        self.parts: list[Any] = []
+        self.figures: list[dict[str, Any]] = []
 
     def add(self, text: str) -> None:
         self.parts.append(text)
 
-    def figure(self, spec: Mapping[str, Any]) -> None:
-        self.figures += 1
-        div = f"gt-figure-{self.figures}"
-        payload = json_script(spec)
-        self.add(f'<div class="gt-figure" id="{div}"></div>'
-                 f'<script type="application/json" class="gt-figure-spec" data-target="{div}">{payload}</script>')
+    def figure(self, spec: dict[str, Any]) -> None:
+        self.figures.append(spec)
+        self.parts.append(spec)
+
+    def png(self, name: str, data: bytes) -> None:
+        self.parts.append(_Png(name, data))
+
+    def _traces(self) -> list[dict[str, Any]]:
+        return [tr for spec in self.figures for tr in spec["data"] if not tr.get("_bound")]
+
+    def _figure_html(self, k: int, spec: dict[str, Any], points: int) -> str:
+        n = 0
+        for tr in spec["data"]:
+            bound = tr.pop("_bound", False)
+            if not bound:
+                n = max(n, len(tr["x"]))
+                x, y = decimate(tr["x"], tr["y"], points)
+                tr["x"], tr["y"] = _json_list(x), _json_list(y)
+        if n > points:
+            spec["layout"]["title"]["text"] += f" (min-max decimated to at most {points} of {n} samples; every sample in the CSV file)"
+        div = f"gt-figure-{k}"
+        return (f'<div class="gt-figure" id="{div}"></div>'
+                f'<script type="application/json" class="gt-figure-spec" data-target="{div}">{json_script(spec)}</script>')
+
+    def html(self, head: str, tail: str) -> str:
+        """The page: ``head``, the parts (figures decimated, PNGs inlined within the limit), ``tail``."""
+        traces = len(self._traces())
+        points = min(MAX_POINTS, max(MIN_POINTS, MAX_PAGE_SAMPLES // max(traces, 1)))
+        out: list[Any] = []
+        figures = 0
+        for part in self.parts:
+            if isinstance(part, dict):
+                figures += 1
+                part = self._figure_html(figures, part, points)
+            out.append(part)
+        size = len(head) + len(tail) + sum(len(p) for p in out if isinstance(p, str))
+        for i, part in enumerate(out):
+            if isinstance(part, _Png):
+                inline = size + 4 * len(part.data) // 3 + 200 <= PAGE_LIMIT
+                out[i] = part.html(inline)
+                size += len(out[i])
+        return head + "\n".join(out) + tail
 
     def table(self, header: list[str], rows: list[list[Any]]) -> None:
         head = "".join(f"<th>{_esc(h)}</th>" for h in header)
@@ -553,16 +658,15 @@ def render_report(folder: str | Path, summary: Mapping[str, Any] | None = None, 
     if pngs:
         page.add('<h2 id="plots">Plots</h2>')
         for f in pngs:
-            data = base64.b64encode(_read_regular(folder / f)).decode("ascii")
-            page.add(f"<h3>{_esc(f)}</h3><img class='png' alt='{_esc(f)}' src='data:image/png;base64,{data}'>")
+            page.png(f, _read_regular(folder / f))
     _files_section(page, folder, files, summary)
     page.add(f"<h2>summary.json</h2><details><summary>show</summary><pre>{_esc(json.dumps(summary, indent=2))}</pre></details>")
     title = _esc(f"{name}: {status}")
-    return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
-            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
-            f"<link rel='icon' href='data:,'><title>{title}</title><style>{_CSS}</style>"
-            f"<script>{plotly_js}</script></head>\n<body>\n" + "\n".join(page.parts)
-            + f"\n<script>{_SCRIPT}</script>\n</body></html>\n")
+    return page.html("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+                     "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+                     f"<link rel='icon' href='data:,'><title>{title}</title><style>{_CSS}</style>"
+                     f"<script>{plotly_js}</script></head>\n<body>\n",
+                     f"\n<script>{_SCRIPT}</script>\n</body></html>\n")
 
 
 def write_report(folder: str | Path, summary: Mapping[str, Any] | None = None, path: str | Path | None = None) -> Path:

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from gtmodel.cli import main
 from gtmodel.errors import InputError
-from gtmodel.report.result_page import MAX_POINTS, REPORT_FILE, read_csv_columns, render_report
+from gtmodel.report.result_page import MAX_POINTS, REPORT_FILE, decimate, read_csv_columns, render_report
 
 from ..conftest import PROBLEMS_DIR, solve_through_cli
 
@@ -66,9 +66,12 @@ def test_trajectory_figures_hold_the_table_and_the_bounds(tmp_path):
     _, cols = read_csv_columns(out / "trajectories.csv")
     assert [s["layout"]["title"]["text"] for s in specs] == ["trajectories.csv: states", "trajectories.csv: inputs"]
     states, inputs = specs
-    assert [(tr["name"], tr["y"]) for tr in states["data"]] == [("x", cols["x"]), ("x upper bound", [0.75, 0.75])]
-    assert [(tr["name"], tr["y"]) for tr in inputs["data"]] == [("u", cols["u"]), ("u lower bound", [-0.5, -0.5])]
-    assert states["data"][0]["x"] == cols["t"]
+    assert [tr["name"] for tr in states["data"]] == ["x", "x upper bound"] and states["data"][1]["y"] == [0.75, 0.75]
+    assert [tr["name"] for tr in inputs["data"]] == ["u", "u lower bound"] and inputs["data"][1]["y"] == [-0.5, -0.5]
+    np.testing.assert_allclose(states["data"][0]["y"], cols["x"], rtol=5e-6)  # 6 significant digits
+    np.testing.assert_allclose(inputs["data"][0]["y"], cols["u"], rtol=5e-6)
+    np.testing.assert_allclose(states["data"][0]["x"], cols["t"], rtol=5e-6)
+    assert all("_bound" not in tr for tr in states["data"] + inputs["data"])
     assert states["layout"]["yaxis"]["title"]["text"] == "x [m]"
 
 
@@ -88,14 +91,49 @@ def test_tables_and_plots_of_the_folder_are_in_the_page(tmp_path):
     assert base64.b64encode((out / "states.png").read_bytes()).decode() in page
 
 
-def test_a_long_table_is_thinned_to_max_points_with_its_last_sample(tmp_path):
+def test_a_long_table_is_min_max_decimated_keeping_its_peaks(tmp_path):
+    """Independent check: NumPy's min and max of the raw column, and its first and last sample."""
     n = 3 * MAX_POINTS + 7
     out = _folder(tmp_path, n=n)
-    trace = _specs(render_report(out, plotly_js=STUB_JS))[0]["data"][0]
+    spec = _specs(render_report(out, plotly_js=STUB_JS))[0]
+    trace = spec["data"][0]
     _, cols = read_csv_columns(out / "trajectories.csv")
-    assert len(trace["x"]) == len(range(0, n, 4)) + 1 <= MAX_POINTS  # every 4th sample, and the last
-    assert trace["x"][-1] == cols["t"][-1]
-    assert trace["y"][:3] == [cols["x"][0], cols["x"][4], cols["x"][8]]
+    assert len(trace["x"]) <= MAX_POINTS < n
+    assert trace["x"][0] == cols["t"][0] and trace["x"][-1] == pytest.approx(cols["t"][-1])
+    assert max(trace["y"]) == pytest.approx(max(cols["x"]), rel=5e-6) and min(trace["y"]) == pytest.approx(min(cols["x"]), rel=5e-6)
+    assert f"min-max decimated to at most {MAX_POINTS} of {n} samples" in spec["layout"]["title"]["text"]  # 2 traces: MAX_POINTS each
+
+
+@pytest.mark.parametrize("points", [4, 5, 10, 101, 1000])
+def test_decimation_keeps_every_bucket_extreme(points):
+    """A random walk with NaN gaps: the kept samples hold the global min and max, the ends, in order."""
+    rng = np.random.default_rng(points)
+    y = np.cumsum(rng.normal(size=5003))
+    y[rng.integers(0, y.size, 40)] = np.nan
+    x = np.arange(y.size) * 0.004
+    xs, ys = decimate(x, y, points)
+    assert xs.size <= points and xs[0] == x[0] and xs[-1] == x[-1] and np.all(np.diff(xs) > 0)
+    assert np.nanmax(ys) == np.nanmax(y) and np.nanmin(ys) == np.nanmin(y)
+
+
+@pytest.mark.parametrize("x, y, points, match", [
+    ([0.0, 1.0], [0.0, 1.0], 3, "points: expected an integer >= 4"),
+    ([0.0, 1.0], [0.0, 1.0], 4.0, "points: expected an integer >= 4"),
+    ([0.0, 1.0], [0.0], 4, "x, y: expected two arrays of one shape"),
+])
+def test_decimation_refuses_bad_arguments(x, y, points, match):
+    with pytest.raises(InputError, match=match):
+        decimate(x, y, points)
+
+
+def test_a_page_over_its_limit_shows_its_pngs_from_the_folder(tmp_path, monkeypatch):
+    """A PNG that would take the page beyond PAGE_LIMIT is linked, not inlined, and the page says so."""
+    from gtmodel.report import result_page
+
+    out = _folder(tmp_path)
+    monkeypatch.setattr(result_page, "PAGE_LIMIT", len(render_report(out, plotly_js=STUB_JS)) - 10)
+    page = render_report(out, plotly_js=STUB_JS)
+    assert "src='states.png'" in page and "shown from the file beside this page" in page and "data:image/png" not in page
 
 
 def test_without_variable_groups_every_column_is_a_panel(tmp_path):
@@ -312,6 +350,7 @@ def test_the_report_of_a_shipped_problem_opens_in_chromium(browser, path, tmp_pa
     assert code in (0, 1)
     shown = open_page(browser, out / REPORT_FILE)
     pngs = [f for f in summary["files"] if f.endswith(".png")]
+    assert (out / REPORT_FILE).stat().st_size < MAX_PAGE_BYTES  # the state estimation's was 8.2 MB, lead-through's 4.1 MB
     assert shown["messages"] == []
     assert shown["status"] == summary["status"]
     assert shown["drawn"] == shown["figures"] and all(n > 0 for n in shown["traces"])
