@@ -46,6 +46,19 @@ _LAW_FIELDS = {"task": "task", "mass": "M", "damping": "D", "force_gain": "K", "
                "max_angular_speed": "max_angular_speed", "loop_period": "dt"}
 
 
+#: Units of :func:`run_table`'s columns (``summary.json``'s ``units``: the report's axes): positions
+#: [m], forces [N] and torques [N m] (``*_r*``), the handle velocity ``xs0..xs5`` and ``V_tool``
+#: [m/s, rad/s], the flags and unit normals dimensionless.
+RUN_UNITS: dict[str, str] = {
+    "t": "s", **{c: "m" for c in "xyz"},
+    **{f"{f}_{a}": ("N m" if a.startswith("r") else "N") for f in ("fc", "ft", "fh") for a in ("x", "y", "z", "rx", "ry", "rz")},
+    **{f"{f}_{a}": "1" for f in ("nn", "n") for a in "xyz"},
+    **{f"xs{i}": ("m/s" if i < 3 else "rad/s" if i < 6 else "1") for i in range(8)},
+    **{f"v_{a}": ("rad/s" if a.startswith("r") else "m/s") for a in ("x", "y", "z", "rx", "ry", "rz")},
+    "contact": "1",
+}
+
+
 def run_table(run: LeadThroughRun) -> dict[str, np.ndarray]:
     """The columns of a run's CSV: time, TCP position, wrenches, controller state and outputs.
 
@@ -189,7 +202,7 @@ class LeadThroughKind(ProblemKind):
             "task": d.law.task, "sample_time_s": d.law.dt,
             "servo": {"bandwidth_hz": d.servo.bandwidth_hz, "delay_samples": d.servo.delay_samples,
                       "assumed": "first-order velocity servo; the thesis gives no figure for the IRB 140"},
-            "force_error_n": None, "peg_max_insertion_m": None,
+            "force_error_n": None, "peg_max_insertion_m": None, "units": dict(RUN_UNITS),
         }
         written = Written(fields)
         n = d.law.nominal_normal

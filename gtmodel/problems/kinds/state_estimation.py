@@ -462,6 +462,7 @@ class StateEstimationKind(ProblemKind):
             "notes": r.notes,
             "velocity_fusion_3_axis_mm_s": (vel.get("3-axis") or {}).get("fusion"),
             "velocity_fusion_5_axis_mm_s": (vel.get("5-axis") or {}).get("fusion"),
+            "units": column_units(),
         }
         if r.table_10_limits:
             fields["table_10_limits"] = r.table_10_limits
@@ -533,6 +534,28 @@ def failed_checks(checks: dict[str, Any]) -> list[str]:
         Empty when every applicable self-check (:data:`SELF_CHECKS`) holds.
     """
     return [f"{m}: {k}" for m, c in checks.items() for k in SELF_CHECKS if c.get(k) is False]
+
+
+#: SI units of the fused quantities (the columns ``<quantity>_<axis>_<true|sensor|fusion>`` of
+#: ``fusion_baseline_<motion>.csv``).
+QUANTITY_UNITS = {"position": "m", "velocity": "m/s", "acceleration": "m/s^2", "angular_velocity": "rad/s", "angular_acceleration": "rad/s^2"}
+#: Units of the columns of ``sensor_records_<motion>.csv`` (tracker position, orientation
+#: quaternion, gyroscope, accelerometer) and the time: with :data:`QUANTITY_UNITS`,
+#: ``summary.json``'s ``units`` (the report's axes).
+RECORD_UNITS = {"t": "s", **{f"p_{c}": "m" for c in "xyz"}, **{f"q_{c}": "1" for c in "wxyz"}, **{f"w_{c}": "rad/s" for c in "xyz"},
+                **{f"a_{c}": "m/s^2" for c in "xyz"}}
+
+
+def column_units() -> dict[str, str]:
+    """The unit of every column of the kind's CSV files (``summary.json``'s ``units``).
+
+    Returns
+    -------
+    dict of str to str
+        :data:`RECORD_UNITS` and ``<quantity>_<axis>_<source>`` for every quantity of
+        :data:`QUANTITY_UNITS`, axis ``x, y, z`` and source ``true, sensor, fusion``.
+    """
+    return {**RECORD_UNITS, **{f"{q}_{c}_{src}": u for q, u in QUANTITY_UNITS.items() for c in "xyz" for src in ("true", "sensor", "fusion")}}
 
 
 def _baseline_csv(r: FusionStudyResult, out: Path) -> list[str]:

@@ -14,7 +14,7 @@ from gtmodel.modeling import Model
 
 
 class GoddardRocket(Model):
-    """States h (height), v (velocity), m (mass); input T (thrust)."""
+    """States h (height), v (velocity), m (mass); input T (thrust); all in COPS' scaled units (unit "1": h0 = m0 = g0 = 1)."""
 
     def __init__(self) -> None:
         super().__init__("goddard_rocket")
@@ -23,10 +23,10 @@ class GoddardRocket(Model):
         vc = self.parameter("vc", 620.0)
         c = 0.5 * (g0 * h0) ** 0.5
         Dc = 0.5 * vc * m0 / g0
-        h = self.state("h", start=1.0)
-        v = self.state("v", start=0.0)
-        m = self.state("m", start=1.0)
-        T = self.input("T", start=1.75)
+        h = self.state("h", unit="1", start=1.0)
+        v = self.state("v", unit="1", start=0.0)
+        m = self.state("m", unit="1", start=1.0)
+        T = self.input("T", unit="1", start=1.75)
         drag = Dc * v**2 * ca.exp(-hc * (h - h0) / h0)
         self.equation(self.der(h), v, name="height")
         self.equation(self.der(v), (T - drag) / m - g0 * (h0 / h) ** 2, name="momentum")
