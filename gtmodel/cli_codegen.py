@@ -297,7 +297,7 @@ def _codegen_mpc(args: argparse.Namespace) -> int:
         setup = load_mpc_file(args.mpc)
     with _step(args, f"generating and compiling the MPC {setup.name} (CasADi's sqpmethod + qrqp inside one step)",
                f"generating and compiling {setup.name}"):
-        generated, _ = build_step(mpc_step(setup.controller, setup.name), args.out, f"gt_{setup.name}", real=args.real)
+        generated, _ = build_step(mpc_step(setup.controller, setup.name, real=args.real), args.out, f"gt_{setup.name}", real=args.real)
     print(f"wrote {generated.source}, {generated.header}, {generated.casadi_source}")
     print(generated.version)
     if not args.check:

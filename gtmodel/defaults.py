@@ -67,11 +67,13 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["LOOP_PERIOD_S", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "defaults", "reset_defaults", "get"]
+__all__ = ["LOOP_PERIOD_S", "REAL_TYPES", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "defaults", "reset_defaults", "get"]
 
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
 LOOP_PERIOD_S = 0.004
+#: Selectable floating-point types of generated code (``real=``; CasADi's ``casadi_real``).
+REAL_TYPES = ("double", "float")
 #: The selectable forms of the sign function of the friction model, and the default
 #: velocity width [m/s] of the smooth ("tanh") and piecewise-linear forms: those of
 #: :mod:`gtmodel.robots.friction` (equal, checked by the tests), here so that problem

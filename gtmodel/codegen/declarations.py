@@ -219,6 +219,11 @@ class NewtonLoop:
     check_every: int = 1
 
 
+#: Single-precision code: accepted |C - Python| <= FLOAT_RELATIVE_TOLERANCE (1 + |Python|)
+#: (the default of :attr:`FunctionSpec.float_tolerance`).
+FLOAT_RELATIVE_TOLERANCE = 1e-4
+
+
 @dataclass(frozen=True)
 class FunctionSpec:
     """Declaration of one generated C function.
@@ -257,6 +262,9 @@ class FunctionSpec:
         For a function solved by Newton's method: the loop (``build`` is then unused).
     kind : str
         Robot kind the function belongs to (see :data:`ROBOT_KINDS`).
+    float_tolerance : float
+        Single-precision code: the accepted ``|C - Python| <= float_tolerance (1 + |Python|)``
+        (default :data:`FLOAT_RELATIVE_TOLERANCE`; an MPC's from its QP's conditioning).
     """
 
     name: str
@@ -275,4 +283,5 @@ class FunctionSpec:
     relative_tolerance: float = 0.0
     newton: NewtonLoop | None = None
     kind: str = "three_link"
+    float_tolerance: float = FLOAT_RELATIVE_TOLERANCE
 

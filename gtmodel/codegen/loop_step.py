@@ -53,7 +53,7 @@ import numpy as np
 
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared
-from gtmodel.codegen.declarations import STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
+from gtmodel.codegen.declarations import FLOAT_RELATIVE_TOLERANCE, STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
 from gtmodel.codegen.hpipm_source import patch_hpipm_options
@@ -116,6 +116,13 @@ class LoopStep:
         non-finite or absurd measurement (``_step`` returns ``GT_MEASUREMENT_REJECTED`` with ``u``
         computed from it; e.g. :meth:`gtmodel.control.mpc.MPCController.memory_predict`);
         None: such a measurement is refused (``GT_BAD_ARGUMENT``, the safe input).
+    real : {"double", "float"} or None
+        The real type :attr:`function` was built for (an MPC's QP tolerances, :func:`mpc_step`);
+        generating in the other is refused. None: either.
+    float_tolerance : float
+        Single-precision check of ``control``: ``|C - Python| <= float_tolerance (1 + |Python|)``
+        (default :data:`~gtmodel.codegen.declarations.FLOAT_RELATIVE_TOLERANCE`; an MPC's from its
+        QP's conditioning, :meth:`~gtmodel.control.mpc.MPCController.float_tolerance`).
     """
 
     name: str
@@ -136,6 +143,8 @@ class LoopStep:
     w_range: np.ndarray | None = None
     reset: ca.Function | None = None
     predict: ca.Function | None = None
+    real: str | None = None
+    float_tolerance: float = FLOAT_RELATIVE_TOLERANCE
 
     #: The :class:`~gtmodel.codegen.sources.CodeSource` kind (``GeneratedCode.kind`` of its code).
     kind = LOOP_KIND
@@ -315,7 +324,7 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
                     t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
 
 
-def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
+def mpc_step(controller: MPCController, name: str = "mpc", real: str = "double") -> LoopStep:
     """The loop step of a real-time MPC (:func:`gtmodel.control.mpc.mpc_controller`).
 
     Parameters
@@ -324,6 +333,11 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
         The MPC (its solver is code-generated inside the step).
     name : str, optional
         Controller name for the header.
+    real : {"double", "float"}, optional
+        Real type the step is generated in: ``"float"`` relaxes ``qrqp``'s stopping tolerances
+        to :data:`~gtmodel.control.mpc.QP_FLOAT_TOLERANCE` and compares the C with Python within
+        :meth:`~gtmodel.control.mpc.MPCController.float_tolerance` (at least
+        :data:`~gtmodel.codegen.declarations.FLOAT_RELATIVE_TOLERANCE`).
 
     Returns
     -------
@@ -331,8 +345,15 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
         Its :meth:`~gtmodel.control.mpc.MPCController.function`, period, input bounds,
         first input ``u*_0``, first warm start, ``GT_NOT_CONVERGED`` when the SQP result is
         not finite, and the reference as the check's samples.
+
+    Raises
+    ------
+    InputError
+        Another real type.
     """
     c = controller
+    if real not in REAL_TYPES:
+        raise InputError(f"real: expected 'double' or 'float', got {real!r}")
     text = (f"Real-time nonlinear MPC: horizon {c.horizon} periods of {c.dt!r} s, {c.blocks} input blocks, "
             f"{c.sqp_iterations} SQP iteration(s) per period\n"
             "(CasADi sqpmethod with qrqp, Gauss-Newton Hessian, single shooting, warm start shifted by one period;\n"
@@ -341,8 +362,9 @@ def mpc_step(controller: MPCController, name: str = "mpc") -> LoopStep:
                "one-period prediction error; the memory w holds the warm start, d, the last x and u_last, a flag.\n"
                if c.disturbance_gain else "")
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
-    return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
-                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text,
+    ftol = max(FLOAT_RELATIVE_TOLERANCE, c.float_tolerance()) if real == "float" else FLOAT_RELATIVE_TOLERANCE
+    return LoopStep(name=name, function=c.function(real), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text, real=real, float_tolerance=ftol,
                     fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
 
 
@@ -405,7 +427,7 @@ def _spec(step: LoopStep) -> FunctionSpec:
     return FunctionSpec(
         "control", lambda source: source.function, args=tuple(args), outputs=tuple(outs),
         checks=(StatusCheck("ok", ">", "0.5", step.fail_status),), tolerance=LOOP_TOLERANCE,
-        relative_tolerance=LOOP_TOLERANCE, kind=LOOP_KIND,
+        relative_tolerance=LOOP_TOLERANCE, kind=LOOP_KIND, float_tolerance=step.float_tolerance,
         doc=f"The inner step of the loop controller {step.name} (called by _step; the memory functions are the interface).",
     )
 
@@ -504,7 +526,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     Raises
     ------
     InputError
-        A bad step (:meth:`LoopStep.validate`), prefix or real type; ``real = "float"`` for a
+        A bad step (:meth:`LoopStep.validate`), prefix or real type (or not the one :attr:`LoopStep.real` was built for); ``real = "float"`` for a
         reference reaching beyond :data:`~gtmodel.control.reference.FLOAT_PERIOD_LIMIT` periods.
     CodegenError
         CasADi's code generation or writing the files failed.
@@ -514,6 +536,9 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
     step.validate()
     if real not in REAL_TYPES:
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
+    if step.real is not None and step.real != real:
+        raise InputError(f"real: the step of {step.name} was built for real = {step.real!r} (its QP tolerances), got {real!r}; "
+                         f"build it with mpc_step(controller, real={real!r})")
     periods = max(abs(step.t_range[0]), abs(step.t_range[1])) / step.dt
     if real == "float" and periods > FLOAT_PERIOD_LIMIT:
         raise InputError(f"real: 'float' cannot index {periods:.0f} periods of {step.dt:g} s (times up to {max(map(abs, step.t_range)):g} s): "
@@ -534,7 +559,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
 
     def bounds(r: np.ndarray | None, n: int, row: int) -> str:
         v = np.full(n, -inf if row == 0 else inf) if r is None else np.asarray(r, dtype=float)[row]
-        return _c_array(np.where(np.abs(v) > 3.0e38, np.sign(v) * inf, v) if real == "float" else v)  # beyond FLT_MAX: none
+        return _c_array(np.where(np.abs(v) > 3.0e38, np.copysign(inf, v), v) if real == "float" else v)  # beyond FLT_MAX: none
     names = dict(NAME=step.name, VERSION=version)
     values = dict(
         GP=prefix, P=P, REAL=real, NX=step.nx, NU=step.nu, NW=step.nw, NW1=max(step.nw, 1),

@@ -48,7 +48,7 @@ from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
 from gtmodel.control.mpc import MPCController
 from gtmodel.control.tracking import TrackingController
-from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.modeling import Component, Model, explicit_ode
 from gtmodel.errors import InputError
 
@@ -412,7 +412,7 @@ class ControllerSource:
         return generate_robot(out_dir=out_dir, functions=[], prefix=prefix or self.default_prefix(), real=real, controller=self.controller)
 
 
-def as_source(obj: Any) -> CodeSource:
+def as_source(obj: Any, real: str = "double") -> CodeSource:
     """The code source of an object: a source itself, a loop controller, a controller bundle or a user model.
 
     Parameters
@@ -421,6 +421,8 @@ def as_source(obj: Any) -> CodeSource:
         A :class:`CodeSource` is returned as is; a tracking controller or an MPC becomes its
         :class:`~gtmodel.codegen.loop_step.LoopStep`; a controller bundle a :class:`ControllerSource`;
         a model a :class:`UserModelSource`.
+    real : {"double", "float"}, optional
+        The real type an MPC's step is built for (:func:`~gtmodel.codegen.loop_step.mpc_step`).
 
     Returns
     -------
@@ -436,7 +438,7 @@ def as_source(obj: Any) -> CodeSource:
     if isinstance(obj, TrackingController):
         return tracking_step(obj)
     if isinstance(obj, MPCController):
-        return mpc_step(obj)
+        return mpc_step(obj, real=real)
     if isinstance(obj, Controller):
         return ControllerSource(obj)
     if isinstance(obj, (Model, Component)):
@@ -497,7 +499,7 @@ def generate_code(source: Any, out_dir: str | Path, *, real: str = "double", pre
     CodegenError
         CasADi's code generation or writing the files failed.
     """
-    src = as_source(source)
+    src = as_source(source, real=real if real in REAL_TYPES else "double")  # a bad real type: refused below
     if isinstance(src, LoopStep):
         return generate_loop_step(src, out_dir, prefix=prefix or "gt_controller", real=real)
     return src.generate(out_dir, real=real, prefix=prefix)

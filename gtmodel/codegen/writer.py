@@ -21,6 +21,7 @@ from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.codegen.emit.casadi_source import _static_helpers, _void_unused_parameters, _work_sizes
 from gtmodel.codegen.emit.wrapper import _arg_size, _out_function, functions_fragment, wrapper_text
 from gtmodel.codegen.robot import RobotModel
+from gtmodel.defaults import REAL_TYPES  # noqa: F401  (re-exported: the codegen modules' import)
 from gtmodel.errors import CodegenError
 
 __all__ = ["REAL_TYPES", "GeneratedCode", "write_library"]
@@ -28,8 +29,6 @@ __all__ = ["REAL_TYPES", "GeneratedCode", "write_library"]
 log = logging.getLogger("gtmodel")
 
 
-#: Selectable floating-point types of the generated code.
-REAL_TYPES = ("double", "float")
 
 
 @dataclass(frozen=True)

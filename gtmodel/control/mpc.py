@@ -39,7 +39,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_fatrop import fatrop_problem
@@ -62,6 +62,11 @@ QP_ROW = {"lbg": -math.inf, "ubg": math.inf}
 #: Largest scaled violation of a hard constraint row at the step's result with ``ok = 1`` (a
 #: larger one: the QP was infeasible, or the linearisation of the real-time iteration missed).
 HARD_TOLERANCE = 1e-3
+#: ``qrqp``'s primal and dual stopping tolerances (``constr_viol_tol``, ``dual_inf_tol``) in a
+#: single-precision step (``real="float"``): its default 1e-8 lies below float32's round-off of
+#: the QP's residuals (epsilon 1.2e-7 times their size), so the active-set loop ran to its
+#: iteration limit each period (p99 9.7 ms on ``codegen/mpc/dc_motor_mpc.toml``, 0.12 ms with 1e-4).
+QP_FLOAT_TOLERANCE = 1e-4
 #: Added to ``(t - t_0) / dt`` before ``floor`` (a time on the grid reads its own sample).
 INDEX_EPS = 1e-9
 
@@ -247,7 +252,7 @@ class MPCController(SampledReference):
                            ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
         return {"x": w, "p": p, "f": f, "g": g}, hess
 
-    def nlp_solver(self, plugin: str = "sqpmethod", iterations: int | None = None) -> ca.Function:
+    def nlp_solver(self, plugin: str = "sqpmethod", iterations: int | None = None, real: str = "double") -> ca.Function:
         """The horizon NLP as a CasADi ``nlpsol``: ``sqpmethod`` + ``qrqp`` (the generated one) or ``ipopt``.
 
         Parameters
@@ -258,6 +263,9 @@ class MPCController(SampledReference):
             (tolerance 1e-10, exact Hessian, bounds not relaxed).
         iterations : int, optional
             SQP iterations (``sqpmethod`` only).
+        real : {"double", "float"}, optional
+            Real type the solver is generated in (``sqpmethod`` only): ``"float"`` sets ``qrqp``'s
+            ``constr_viol_tol`` and ``dual_inf_tol`` to :data:`QP_FLOAT_TOLERANCE` (default: CasADi's 1e-8).
 
         Returns
         -------
@@ -269,8 +277,10 @@ class MPCController(SampledReference):
         Raises
         ------
         InputError
-            Another plugin.
+            Another plugin, or another real type.
         """
+        if real not in REAL_TYPES:
+            raise InputError(f"real: expected one of {REAL_TYPES}, got {real!r}")
         nlp, hess = self._nlp()
         if plugin == "ipopt":
             return ca.nlpsol("mpc_ipopt", "ipopt", nlp, {"print_time": False, "ipopt": {
@@ -282,7 +292,51 @@ class MPCController(SampledReference):
             "qpsol": self.qpsol, "hess_lag": hess, "max_iter": k, "min_iter": k, "tol_pr": 1e-14, "tol_du": 1e-14,
             "print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
             "error_on_fail": False,
-            "qpsol_options": {"error_on_fail": False, **({} if self.qpsol == "daqp" else {"print_iter": False, "print_header": False, "print_info": False})}})
+            "qpsol_options": {"error_on_fail": False, **({} if self.qpsol == "daqp" else {"print_iter": False, "print_header": False, "print_info": False}),
+                              **({"constr_viol_tol": QP_FLOAT_TOLERANCE, "dual_inf_tol": QP_FLOAT_TOLERANCE}
+                                 if real == "float" and self.qpsol == "qrqp" else {})}})
+
+    def float_tolerance(self, rows: int = 20) -> float:
+        """How far a single-precision step may differ from its double-precision Python reference.
+
+        Both stop the QP of each SQP iteration once its dual infeasibility ``|H w + g|`` is
+        below ``tau`` (:data:`QP_FLOAT_TOLERANCE`; ``qrqp`` only, else 0), each within
+        ``tau / lambda_min(H)`` of the QP's solution, and float32 adds a forward error of about
+        ``eps cond(H)`` relative (Higham, *Accuracy and Stability of Numerical Algorithms*,
+        2002, Thm. 7.2; ``eps = 2^-23``). ``H`` is the Gauss-Newton Hessian of the blocked
+        inputs, evaluated at ``rows`` reference rows spread over the reference.
+
+        Parameters
+        ----------
+        rows : int, optional
+            Reference rows evaluated (default 20; at least 1).
+
+        Returns
+        -------
+        float
+            ``max over rows of 2 tau / lambda_min(H) + eps cond(H)``; the check bounds each
+            output by it times ``(1 + |Python|)``.  ``inf`` when ``H`` is singular somewhere.
+
+        Raises
+        ------
+        InputError
+            ``rows`` not a positive integer.
+        """
+        if isinstance(rows, bool) or not isinstance(rows, (int, np.integer)) or rows < 1:
+            raise InputError(f"rows: expected a positive number of reference rows, got {rows!r}")
+        nlp, hess = self._nlp()
+        tau = QP_FLOAT_TOLERANCE if self.solver == "sqpmethod" and self.qpsol == "qrqp" else 0.0
+        eps = float(np.finfo(np.float32).eps)
+        worst = 0.0
+        for k in np.unique(np.linspace(0, self.length - 1, int(rows)).astype(int)):
+            u = saturate(self.u_ref[k], self.u_lb, self.u_ub)
+            w = np.r_[np.tile(u, self.blocks), np.zeros(self.n_slack)]
+            h = np.array(hess(w, self.parameters(self.t0 + k * self.dt, self.x_ref[k]), 1.0, np.zeros(nlp["g"].numel())))
+            lam = np.linalg.eigvalsh(h[: self.nw, : self.nw])
+            if not lam[0] > 0.0:
+                return math.inf
+            worst = max(worst, 2.0 * tau / lam[0] + eps * lam[-1] / lam[0])
+        return float(worst)
 
     def _window(self, t: Any, lookup) -> tuple[Any, Any]:
         """Reference rows ``k+1..k+H`` (states) and ``k..k+H-1`` (inputs) by ``lookup(row, column)``."""
@@ -368,8 +422,14 @@ class MPCController(SampledReference):
         w = np.asarray(sol["x"]).reshape(-1)[: self.nw]
         return w[: self.nu].copy(), w
 
-    def function(self) -> ca.Function:
+    def function(self, real: str = "double") -> ca.Function:
         """The MPC as ONE CasADi Function of the loop-step interface (:mod:`gtmodel.codegen.loop_step`).
+
+        Parameters
+        ----------
+        real : {"double", "float"}, optional
+            Real type the Function is generated in: the QP solver's tolerances
+            (:meth:`nlp_solver`; ``sqpmethod`` only).
 
         Returns
         -------
@@ -386,6 +446,11 @@ class MPCController(SampledReference):
             ``u_last`` is the safe input of the C memory on failure and, with :attr:`delay` 1,
             the input acting until this one arrives: ``x`` is replaced by ``step(x, u_last)``
             and ``t`` by ``t + dt``.
+
+        Raises
+        ------
+        InputError
+            Another real type.
         """
         nx, nu, n, nw = self.nx, self.nu, self.length, self.nw
         t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.n_memory)
@@ -420,7 +485,7 @@ class MPCController(SampledReference):
             if d is not None:
                 pad = ca.DM.zeros(self.n_slack)
                 bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
-            full = self.nlp_solver("sqpmethod")(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **bounds)["x"]
+            full = self.nlp_solver("sqpmethod", real=real)(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **bounds)["x"]
             nlp, _ = self._nlp()
             cost, rows = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]])(full, p)  # NaN when the prediction fails
             rows = rows[1:]

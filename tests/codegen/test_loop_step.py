@@ -231,13 +231,19 @@ def test_tracking_absurd_measurement_keeps_the_integrator(tmp_path, motion):
     assert status == BAD and got == pytest.approx(u_ok) and mem.w[0] == xi
 
 
-def _glitch_mpc(folder):
-    """A small offset-free MPC (double integrator, horizon 4) as C: quick to build."""
+def _glitch_mpc_controller():
+    """A small offset-free MPC (double integrator, horizon 4): quick to build; with its time and reference."""
     ode = explicit_ode(double_integrator()[0])
     t = 0.004 * np.arange(101)
     x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
     c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=4, Q=[1.0, 0.01], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
                        method="euler", disturbance_gain=0.5)
+    return c, t, x_ref
+
+
+def _glitch_mpc(folder):
+    """The MPC of :func:`_glitch_mpc_controller` as C, checked."""
+    c, _, _ = _glitch_mpc_controller()
     gen = generate_loop_step(mpc_step(c, "di"), folder, prefix="gt_di")
     report = check_loop_step(gen, n=50)  # its strict build is the library of the test
     return c, gen, report
@@ -296,6 +302,31 @@ def test_single_precision_step_keeps_the_contract(tmp_path, motion):
     report = check_loop_step(generate_loop_step(tracking_step(c), tmp_path / "src", prefix="gt_f", real="float"), n=50)
     assert report.passed, "\n".join(report.summary_lines())
     assert {p.expected for p in report.probes} >= {"GT_MEMORY_RESET"}
+
+def test_a_float_mpc_step_passes_within_its_derived_tolerance(tmp_path):
+    """The float step of an MPC: qrqp stops at QP_FLOAT_TOLERANCE, the check compares within
+    MPCController.float_tolerance (>= 1e-4); its declaration carries that tolerance."""
+    c, _, _ = _glitch_mpc_controller()
+    step = mpc_step(c, "di", real="float")
+    assert step.real == "float" and step.float_tolerance == pytest.approx(max(1e-4, c.float_tolerance()))
+    gen = generate_loop_step(step, tmp_path / "src", prefix="gt_df", real="float")
+    assert gen.specs[0].float_tolerance == step.float_tolerance
+    report = check_loop_step(gen, n=50)
+    assert report.passed, "\n".join(report.summary_lines())
+
+
+@pytest.mark.parametrize("built, asked", [("double", "float"), ("float", "double")])
+def test_an_mpc_step_is_generated_only_in_its_own_real_type(tmp_path, built, asked):
+    c, _, _ = _glitch_mpc_controller()
+    with pytest.raises(InputError, match=f"real: the step of di was built for real = '{built}'"):
+        generate_loop_step(mpc_step(c, "di", real=built), tmp_path / "src", prefix="gt_di", real=asked)
+
+
+def test_mpc_step_refuses_another_real_type():
+    c, _, _ = _glitch_mpc_controller()
+    with pytest.raises(InputError, match="real: expected 'double' or 'float', got 'half'"):
+        mpc_step(c, "di", real="half")
+
 
 def test_a_float_step_refuses_a_reference_longer_than_float32_can_index(tmp_path, motion):
     """Beyond FLOAT_PERIOD_LIMIT periods float32's round-off of (t - t0) / dt exceeds the period

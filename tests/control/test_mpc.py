@@ -147,3 +147,42 @@ def test_one_real_time_iteration_is_the_full_gauss_newton_step(blocks, x0, at_bo
     u_ip, w_ip = c.solve(0.02, x0, plugin="ipopt")
     assert np.any(np.isclose(np.abs(w_ip), 50.0, atol=1e-6)) == at_bound
     assert np.max(np.abs(w_one - w_ip)) <= IPOPT_AGREEMENT * (1 + np.max(np.abs(w_ip)))
+
+
+def _linear_mpc(blocks: int = 4):
+    """An MPC of the double integrator (Euler step): its horizon cost is quadratic in the inputs."""
+    ode = explicit_ode(double_integrator()[0])
+    t = DT * np.arange(101)
+    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
+    return mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=8, blocks=blocks, Q=[1.0, 0.01], R=[1e-4],
+                          u_lb=[-50.0], u_ub=[50.0], method="euler")
+
+
+def test_float_tolerance_from_the_exact_hessian():
+    """Reference: the exact Hessian of the NLP's objective (CasADi's second derivative, not the
+    Gauss-Newton product the solver uses; equal for this linear model), its eigenvalues by NumPy:
+    2 tau / lambda_min + eps32 cond."""
+    import casadi as ca
+
+    from gtmodel.control.mpc import QP_FLOAT_TOLERANCE
+
+    c = _linear_mpc()
+    nlp, _ = c._nlp()
+    hess = ca.Function("h", [nlp["x"], nlp["p"]], [ca.hessian(nlp["f"], nlp["x"])[0]])
+    h = np.array(hess(np.r_[c.w_initial, np.zeros(c.n_slack)], c.parameters(c.t0, c.x_ref[0])))[: c.nw, : c.nw]
+    lam = np.linalg.eigvalsh(h)
+    expected = 2 * QP_FLOAT_TOLERANCE / lam[0] + np.finfo(np.float32).eps * lam[-1] / lam[0]
+    assert c.float_tolerance() == pytest.approx(expected, rel=1e-6)
+    assert c.float_tolerance(rows=1) == pytest.approx(expected, rel=1e-6)  # linear: the same Hessian on every row
+
+
+@pytest.mark.parametrize("rows", [0, -1, 2.5, True])
+def test_float_tolerance_refuses_bad_rows(rows):
+    with pytest.raises(InputError, match="rows: expected a positive number of reference rows"):
+        _linear_mpc().float_tolerance(rows=rows)
+
+
+@pytest.mark.parametrize("plugin, real, match", [("sqpmethod", "half", "real: expected one of"), ("qpoases", "double", "plugin: expected")])
+def test_nlp_solver_refuses_bad_options(motor, plugin, real, match):
+    with pytest.raises(InputError, match=match):
+        motor[-1].nlp_solver(plugin, real=real)

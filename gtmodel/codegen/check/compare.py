@@ -18,7 +18,7 @@ from typing import Mapping
 import casadi as ca
 import numpy as np
 
-from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, SENTINEL, FunctionCheck, StatusProbe, tolerance_rule, within
+from gtmodel.codegen.check.report import SENTINEL, FunctionCheck, StatusProbe, tolerance_rule, within
 from gtmodel.codegen.declarations import STATUS_CODES, FunctionSpec
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.robot import RobotModel
@@ -248,7 +248,7 @@ def _diffs(spec: FunctionSpec, out, ref: Mapping[str, np.ndarray], real: str) ->
         val = np.asarray(val, dtype=float)
         if val.size == 0:
             continue
-        a, r, q, good = within(val, np.reshape(ref[o.name], val.shape), real, spec.tolerance, spec.relative_tolerance)
+        a, r, q, good = within(val, np.reshape(ref[o.name], val.shape), real, spec.tolerance, spec.relative_tolerance, spec.float_tolerance)
         if not np.isfinite(a):
             return np.inf, np.inf, np.inf, False
         worst_abs, worst_rel, worst_ratio, ok = max(worst_abs, a), max(worst_rel, r), max(worst_ratio, q), ok and good
@@ -288,7 +288,7 @@ def compare(spec: FunctionSpec, cf, model: RobotModel, inputs: Mapping[str, np.n
     refused = n - rows.size
     not_ok = int(np.sum(~good))
     passed = bool(all_ok and not_ok == 0 and rows.size > 0)
-    tol = FLOAT_RELATIVE_TOLERANCE if real == "float" else spec.tolerance
+    tol = spec.float_tolerance if real == "float" else spec.tolerance
     return FunctionCheck(spec.name, int(rows.size), worst_abs, tol, spec.unit, not_ok, passed, worst_rel, None, refused,
                          tolerance_rule(real, spec.relative_tolerance), worst_ratio)
 

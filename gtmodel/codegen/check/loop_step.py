@@ -21,7 +21,7 @@ import numpy as np
 
 from gtmodel.codegen.build import CompiledLibrary, load_strict
 from gtmodel.codegen.check.compare import compare, probe
-from gtmodel.codegen.check.report import FLOAT_RELATIVE_TOLERANCE, CheckReport, StatusProbe, with_timings
+from gtmodel.codegen.check.report import CheckReport, StatusProbe, with_timings
 from gtmodel.codegen.check.robot import time_functions
 from gtmodel.codegen.declarations import STATUS_CODES, FunctionSpec
 from gtmodel.codegen.writer import GeneratedCode
@@ -81,7 +81,8 @@ def _contract_probes(generated: GeneratedCode, library: CompiledLibrary, samples
     memory, init, fstep = library.loop_interface()
     real = library.real_type
     safe = np.clip(step.u_init, step.u_lb, step.u_ub)
-    rtol, atol = (FLOAT_RELATIVE_TOLERANCE, FLOAT_RELATIVE_TOLERANCE) if generated.real == "float" else (1e-9, 1e-12)  # as the comparison
+    ftol = generated.specs[0].float_tolerance
+    rtol, atol = (ftol, ftol) if generated.real == "float" else (1e-9, 1e-12)  # as the comparison
     probes = []
 
     def run(case: str, expected: str, t: float, x: np.ndarray | None, want: np.ndarray | None, null_mem: bool = False,

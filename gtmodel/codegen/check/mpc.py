@@ -94,7 +94,7 @@ def build_mpc(setup: MPCSetup, out_dir: str | Path, prefix: str | None = None, r
     library : pathlib.Path
         The compiled shared library.
     """
-    return build_step(mpc_step(setup.controller, setup.name), out_dir, prefix or f"gt_{setup.name}", real=real)
+    return build_step(mpc_step(setup.controller, setup.name, real=real), out_dir, prefix or f"gt_{setup.name}", real=real)
 
 
 def closed_loop_check(setup: MPCSetup, generated: GeneratedCode, library: Path | CompiledLibrary, repeat: int = 1,

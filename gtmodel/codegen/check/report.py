@@ -15,22 +15,21 @@ from typing import Sequence
 
 import numpy as np
 
-from gtmodel.codegen.declarations import STATUS_CODES
+from gtmodel.codegen.declarations import FLOAT_RELATIVE_TOLERANCE, STATUS_CODES
 from gtmodel.status import Status
 
 __all__ = ["SENTINEL", "FLOAT_RELATIVE_TOLERANCE", "FunctionCheck", "StatusProbe", "CheckReport", "within", "with_timings", "run_check", "status_probe"]
 
 #: Value pre-filled into output buffers to detect writes on a non-OK status.
 SENTINEL = 1234.5678
-#: Single-precision code: accepted |C - Python| <= FLOAT_RELATIVE_TOLERANCE (1 + |Python|).
-FLOAT_RELATIVE_TOLERANCE = 1e-4
 #: The rule of :data:`FLOAT_RELATIVE_TOLERANCE`, as printed after the tolerance.
 FLOAT_RULE = "x (1 + |Python|)"
 
 _STATUS_NAMES = {v[0]: k for k, v in STATUS_CODES.items()}
 
 
-def within(c: np.ndarray, r: np.ndarray, real: str, tol: float, rtol: float = 0.0) -> tuple[float, float, float, bool]:
+def within(c: np.ndarray, r: np.ndarray, real: str, tol: float, rtol: float = 0.0,
+           float_tol: float = FLOAT_RELATIVE_TOLERANCE) -> tuple[float, float, float, bool]:
     """Compare C outputs with their Python values against a tolerance.
 
     Parameters
@@ -41,12 +40,14 @@ def within(c: np.ndarray, r: np.ndarray, real: str, tol: float, rtol: float = 0.
         Python values, the same shape.
     real : {"double", "float"}
         Floating-point type of the C code: ``"float"`` bounds each element by
-        :data:`FLOAT_RELATIVE_TOLERANCE` ``(1 + |r|)``.
+        ``float_tol (1 + |r|)``.
     tol : float
         Absolute tolerance (double precision).
     rtol : float, optional
         Relative tolerance (double precision): an element within ``max(tol, rtol |r|)``
         passes; 0 (default): absolute only.
+    float_tol : float, optional
+        Relative tolerance of single-precision code (default :data:`FLOAT_RELATIVE_TOLERANCE`).
 
     Returns
     -------
@@ -67,7 +68,7 @@ def within(c: np.ndarray, r: np.ndarray, real: str, tol: float, rtol: float = 0.
         return np.inf, np.inf, np.inf, False
     nz = np.abs(r) > 0
     rel = float((d[nz] / np.abs(r[nz])).max()) if nz.any() else 0.0
-    bound = FLOAT_RELATIVE_TOLERANCE * (1.0 + np.abs(r)) if real == "float" else np.maximum(tol, rtol * np.abs(r))
+    bound = float_tol * (1.0 + np.abs(r)) if real == "float" else np.maximum(tol, rtol * np.abs(r))
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(d == 0, 0.0, d / bound)
     return float(d.max()), rel, float(ratio.max()), bool(np.all(d <= bound))
