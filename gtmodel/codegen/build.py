@@ -274,23 +274,17 @@ class CompiledLibrary:
         except OSError as exc:
             raise CodegenError(f"cannot load {self.path}: {exc}") from None
         p = generated.prefix
-        self._version = getattr(self.cdll, f"{p}_version")
-        self._version.restype = ctypes.c_char_p
-        self._version.argtypes = []
-        self._status_string = getattr(self.cdll, f"{p}_status_string")
-        self._status_string.restype = ctypes.c_char_p
-        self._status_string.argtypes = [ctypes.c_int]
+        self._version = self.bind("version", ctypes.c_char_p, [])
+        self._status_string = self.bind("status_string", ctypes.c_char_p, [ctypes.c_int])
         self.functions: dict[str, CompiledFunction] = {}
         real = getattr(generated, "real", "double")
         dptr = ctypes.POINTER(ctypes.c_float if real == "float" else ctypes.c_double)
         for spec in generated.specs:
             sizes_in, sizes_out = generated.signatures[spec.name]
-            cf = getattr(self.cdll, f"{p}_{spec.name}")
-            cf.restype = ctypes.c_int
             types = [ctypes.c_int if n == 0 else dptr for n in sizes_in] + [dptr] * len(sizes_out)
             if spec.newton is not None:
                 types.append(ctypes.POINTER(ctypes.c_int))
-            cf.argtypes = types
+            cf = self.bind(spec.name, ctypes.c_int, types)
             self.functions[spec.name] = CompiledFunction(cf, spec, sizes_in, sizes_out, real)
 
     def __getitem__(self, name: str) -> CompiledFunction:
@@ -344,6 +338,42 @@ class CompiledLibrary:
         return (ctypes.sizeof(ctypes.c_void_p) * (sz[0] + sz[1]) + ctypes.sizeof(ctypes.c_longlong) * sz[2]
                 + ctypes.sizeof(self.real_type) * sz[3])
 
+    def bind(self, name: str, restype: Any, argtypes: Sequence[Any], optional: bool = False) -> Any:
+        """The exported C function ``<prefix>_<name>`` with its ctypes signature set.
+
+        The one place outside this class's constructor where a symbol of a generated library
+        is looked up (the checks, the re-timing function, the loop interface).
+
+        Parameters
+        ----------
+        name : str
+            The function's name without the prefix, e.g. ``"kalman_update"``.
+        restype : ctypes type or None
+            Its return type.
+        argtypes : sequence of ctypes types
+            Its argument types, in C order.
+        optional : bool, optional
+            Return None when the library does not export it (default: raise).
+
+        Returns
+        -------
+        ctypes function or None
+            The bound function (None: not exported and ``optional``).
+
+        Raises
+        ------
+        CodegenError
+            The library does not export ``<prefix>_<name>`` (and not ``optional``).
+        """
+        symbol = f"{self.generated.prefix}_{name}"
+        fn = getattr(self.cdll, symbol, None)
+        if fn is None:
+            if optional:
+                return None
+            raise CodegenError(f"{self.path}: the library does not export {symbol}")
+        fn.restype, fn.argtypes = restype, list(argtypes)
+        return fn
+
     def loop_interface(self) -> tuple[type, Any, Any]:
         """The memory struct type and the ``_init`` / ``_step`` functions of a loop controller's library.
 
@@ -368,13 +398,8 @@ class CompiledLibrary:
         real = self.real_type
         memory = type("Memory", (ctypes.Structure,), {"_fields_": [
             ("u_last", real * step.nu), ("w", real * max(step.nw, 1)), ("steps", ctypes.c_long), ("status", ctypes.c_int)]})
-        p = self.generated.prefix
-        try:
-            init, fstep = getattr(self.cdll, f"{p}_init"), getattr(self.cdll, f"{p}_step")
-        except AttributeError as exc:
-            raise CodegenError(f"{self.path}: cannot load {p}_init/{p}_step: {exc}") from None
-        init.argtypes, init.restype = [ctypes.POINTER(memory)], ctypes.c_int
-        fstep.argtypes, fstep.restype = [ctypes.POINTER(memory), real, ctypes.POINTER(real), ctypes.POINTER(real)], ctypes.c_int
+        init = self.bind("init", ctypes.c_int, [ctypes.POINTER(memory)])
+        fstep = self.bind("step", ctypes.c_int, [ctypes.POINTER(memory), real, ctypes.POINTER(real), ctypes.POINTER(real)])
         return memory, init, fstep
 
     def loop_runner(self) -> "LoopStepRunner":
@@ -400,12 +425,11 @@ class CompiledLibrary:
         tuple of int or None
             ``(peak bytes, heap calls, arena bytes)``; None when the library has no arena.
         """
-        fn = getattr(self.cdll, f"{self.generated.prefix}_heap_stats", None)
+        ul = ctypes.c_ulong
+        fn = self.bind("heap_stats", ctypes.c_int, [ctypes.POINTER(ul)] * 3, optional=True)
         if fn is None:
             return None
-        ul = ctypes.c_ulong
         peak, calls, size = ul(), ul(), ul()
-        fn.argtypes, fn.restype = [ctypes.POINTER(ul)] * 3, ctypes.c_int
         fn(ctypes.byref(peak), ctypes.byref(calls), ctypes.byref(size))
         return int(peak.value), int(calls.value), int(size.value)
 

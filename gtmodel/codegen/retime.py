@@ -144,18 +144,12 @@ class RetimeFunction:
         self.Work = type("RetimeWork", (ctypes.Structure,), {"_fields_": work_fields})
         self.work = self.Work()
         dptr, iptr = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
-        self.cfunc = getattr(library.cdll, f"{gen.prefix}_retime")
-        self.cfunc.restype = ctypes.c_int
-        self.cfunc.argtypes = [ctypes.c_int, dptr, dptr, dptr, dptr, iptr, ctypes.c_int, ctypes.c_double,
-                               ctypes.POINTER(self.Limits), ctypes.POINTER(self.Work), dptr, dptr, ctypes.POINTER(self.Info)]
-        bytes_ = getattr(library.cdll, f"{gen.prefix}_retime_work_bytes")
-        bytes_.restype = ctypes.c_ulong
-        bytes_.argtypes = []
+        self.cfunc = library.bind("retime", ctypes.c_int, [ctypes.c_int, dptr, dptr, dptr, dptr, iptr, ctypes.c_int, ctypes.c_double,
+                                                           ctypes.POINTER(self.Limits), ctypes.POINTER(self.Work), dptr, dptr, ctypes.POINTER(self.Info)])
+        bytes_ = library.bind("retime_work_bytes", ctypes.c_ulong, [])
         if int(bytes_()) != ctypes.sizeof(self.Work):
             raise CodegenError(f"{gen.prefix}_retime_work: {int(bytes_())} bytes in C, {ctypes.sizeof(self.Work)} in the ctypes mirror")
-        self._init = getattr(library.cdll, f"{gen.prefix}_retime_limits_init")
-        self._init.restype = ctypes.c_int
-        self._init.argtypes = [ctypes.POINTER(self.Limits)]
+        self._init = library.bind("retime_limits_init", ctypes.c_int, [ctypes.POINTER(self.Limits)])
 
     def limits(self, limits: Mapping[str, Any], viscous_friction: bool = True, constrain_end: bool = True) -> Any:
         """The C limits struct from a mapping of limit kinds.

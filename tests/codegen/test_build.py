@@ -6,8 +6,10 @@ for the values printed by the C test program.
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +18,8 @@ from gtmodel.codegen import compile_shared, find_compiler
 from gtmodel.codegen.build import COMMON_FLAGS
 from gtmodel.errors import CodegenError, CompilerNotFoundError
 from gtmodel.robots.kinematics import GantryTau3Kinematics
+
+from ..conftest import REPO
 
 needs_gcc = pytest.mark.skipif(shutil.which("gcc") is None and shutil.which("cc") is None, reason="no C compiler")
 
@@ -120,3 +124,24 @@ def test_compiler_error_is_reported(built, tmp_path):
     with pytest.raises(CodegenError, match="compiling broken.c failed"):
         compile_shared(gen2, tmp_path / "build")
     assert "-std=c99" in COMMON_FLAGS
+
+
+#: Loading a shared library or looking up its symbols: only CompiledLibrary does it (the C
+#: library ``ctypes.CDLL(None)`` for prctl/errno is not a generated library).
+_LIBRARY_ACCESS = re.compile(r"\.cdll\b|ctypes\.CDLL\((?!None)|ctypes\.cdll\.|LoadLibrary")
+_OWNER = Path("gtmodel/codegen/build.py")
+
+
+@pytest.mark.parametrize("module", sorted(p.relative_to(REPO) for p in (REPO / "gtmodel").rglob("*.py") if p.relative_to(REPO) != _OWNER),
+                         ids=str)
+def test_only_compiled_library_loads_generated_code(module):
+    """Source scan: every other module calls generated C through CompiledLibrary (its functions,
+    loop_interface, bind), so one class owns the ctypes interface (float builds included)."""
+    assert not _LIBRARY_ACCESS.findall((REPO / module).read_text())
+
+
+def test_bind_names_a_missing_symbol(built):
+    generated, library = built("L1")
+    with pytest.raises(CodegenError, match=f"does not export {generated.prefix}_no_such_function"):
+        library.bind("no_such_function", None, [])
+    assert library.bind("no_such_function", None, [], optional=True) is None

@@ -278,11 +278,13 @@ def c_function(library: CompiledLibrary, name: str, nargs: int, int_first: bool 
     -------
     ctypes function
         Called with :func:`pointer` values (None for NULL).
+
+    Raises
+    ------
+    CodegenError
+        The library does not export ``<prefix>_<name>``.
     """
-    f = getattr(library.cdll, f"{library.generated.prefix}_{name}")
-    f.restype = ctypes.c_int
-    f.argtypes = ([ctypes.c_int] if int_first else [ctypes.c_void_p]) + [ctypes.c_void_p] * (nargs - 1)
-    return f
+    return library.bind(name, ctypes.c_int, ([ctypes.c_int] if int_first else [ctypes.c_void_p]) + [ctypes.c_void_p] * (nargs - 1))
 
 
 def pointer(a: np.ndarray | None) -> int | None:
