@@ -29,6 +29,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from gtmodel.estimation.fusion.limits import LIMIT_DECADES
+
 __all__ = ["figure_text", "VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DECADES", "REVISITED", "NOT_DIGITISED", "NOT_DIGITISED_ROW", "Case", "Mechanism", "Row",
            "cases_differ_as_thesis", "pattern_as_thesis", "limit_within", "limit_verdict", "apply_rules", "delay_pole_magnitude", "largest_stable_delay"]
 
@@ -36,8 +38,8 @@ __all__ = ["figure_text", "VERDICTS", "STATUSES", "DECLARED", "RULES", "LIMIT_DE
 VERDICTS = ("reproduced", "predicted", "structure reproduced", "check of a reading", "differs")
 #: Labels of rows that carry no verdict.
 STATUSES = ("variant", "not run", "not attempted", "self-check")
-#: The largest distance [decades] between our limit and the thesis' "< limit" with which a limit row passes.
-LIMIT_DECADES = 0.5
+#: The largest distance [decades] between our limit and the thesis' "< limit" with which a limit row passes:
+#: the one constant of :mod:`gtmodel.estimation.fusion.limits` (its own verdicts use it too).
 #: The verdicts a row can only keep if it rests on nothing the thesis does not print.
 _KIND = ("reproduced", "predicted", "structure reproduced")
 #: Per figure family, the set-up whose rows carry the verdicts (the other set-ups' rows are variants).
