@@ -121,8 +121,8 @@ def test_thesis_table_10_file_searches_both_motions_with_both_tunings():
 @pytest.mark.slow
 def test_table_10_limit_of_the_accelerometer_bias_on_the_thesis_file(tmp_path):
     # a part of problems/thesis/kr500_table_10.toml (~20 s): the 3-axis accelerometer bias, both tunings.
-    # Independent reference: the thesis' Table 10 (< 0.001 m/s^2); the thesis' own Q (Appendix B) lands within
-    # one decade of it (0.93 decades above: a narrow pass, the bracket after 2 bisections straddles the decade),
+    # Independent reference: the thesis' Table 10 (< 0.001 m/s^2); the thesis' own Q (Appendix B) lands 0.93
+    # decades above it: beyond half a decade (LIMIT_DECADES), so it differs (one decade passed it narrowly before);
     # our white-jerk Q a decade or more higher (it keeps the bias out of the velocity longer).
     text = THESIS_FILE.read_text()
     text = text.replace(text[text.index("[study.sweep]"):text.index("[study.limits]")], "[study.sweep]\n" + "\n".join(f"{k} = []" for k in TABLE_7) + "\n\n")
@@ -135,7 +135,7 @@ def test_table_10_limit_of_the_accelerometer_bias_on_the_thesis_file(tmp_path):
     outcome = run_problem(tmp_path / "t10.toml", tmp_path / "out")
     rows = {r["tuning"]: r for r in outcome.summary["table_10_limits"]}
     assert outcome.exit_code == 0 and set(rows) == {"white_jerk", "appendix_b"}
-    assert rows["appendix_b"]["verdict"] == "reproduced" and abs(rows["appendix_b"]["decades_from_thesis"]) <= 1.0
+    assert 0.5 < rows["appendix_b"]["decades_from_thesis"] <= 1.0 and rows["appendix_b"]["verdict"] == "differs"
     assert rows["white_jerk"]["limit"] >= 10 * rows["appendix_b"]["limit"]
     ev = {t: {e["value"]: e for e in r["evaluations"]} for t, r in rows.items()}  # the bracket: fusion pays below it, not at its top
     wrong = [t for t, r in rows.items() if not (ev[t][r["pays_up_to"]]["fusion"] < ev[t][r["pays_up_to"]]["sensor"]
