@@ -42,6 +42,7 @@ import numpy as np
 from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
+from gtmodel.control.mpc_memory import disturbance_estimate, memory_predict, memory_reset
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
@@ -114,15 +115,10 @@ class MPCController(SampledReference):
         arrives), as :class:`~gtmodel.control.tracking.TrackingController` does.
     disturbance_gain : float, optional
         Offset-free MPC (default 0: off): an input disturbance ``d``, ``x_{k+1} = F(x_k, u_k
-        + d)``, estimated each period from the one-period prediction error of the last
-        measured state, ``d += gain (B'B + eps I)^{-1} B' (x - F(x_prev, u_act + d))``
-        (``B = dF/du`` there, ``u_act`` the input that acted over the period), and predicted
-        with: the horizon's inputs are the ones the plant sees, ``v = u + d`` (their bounds
-        shifted by ``d``, their reference the planned ``u*``), and the applied input is the
-        optimum less ``d``, saturated (Pannocchia & Rawlings, AIChE
-        J. 49 (2003), the input-disturbance model; Maeder, Borrelli & Morari, Automatica 45
-        (2009)). The estimator's state is kept in the step's memory after the warm start
-        (:attr:`memory_initial`).
+        + d)``, estimated each period (:mod:`gtmodel.control.mpc_memory`) and predicted with:
+        the horizon's inputs are the ones the plant sees, ``v = u + d`` (their bounds shifted
+        by ``d``, their reference the planned ``u*``), the applied input is the optimum less
+        ``d``, saturated. The estimator's state is kept in the step's memory after the warm start.
     u_start : numpy.ndarray or None, optional
         ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`, the
         memory's ``u_last``): :func:`~gtmodel.control.reference.start_input`, the input that
@@ -456,7 +452,7 @@ class MPCController(SampledReference):
         t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.n_memory)
         t_in, x_in = t, x
         w = mem[:nw]
-        d = self._disturbance(x, u_last, mem) if self.disturbance_gain else None
+        d = disturbance_estimate(self, x, u_last, mem) if self.disturbance_gain else None
         if self.delay:  # the input computed now acts from t + dt: the horizon starts from the state then
             t, x = t + self.dt, self.step(x, u_last if d is None else u_last + d)
         k = period_index(t, self.t0, self.dt, n - 1)  # a NaN time reads row 0; ok is then 0
@@ -541,19 +537,7 @@ class MPCController(SampledReference):
             :attr:`disturbance_gain` a zero estimate, ``x`` as the last state, ``u_last`` as the last input and
             the flag 0 (the estimate is not updated by the next step).
         """
-        t, x = ca.MX.sym("t"), ca.MX.sym("x", self.nx)
-        n, nu, b = self.length, self.nu, self.horizon // self.blocks
-        values = ca.MX(ca.DM(self.u_ref.reshape(-1)))
-
-        def u_star(k: Any) -> ca.MX:
-            return saturate(ca.vertcat(*[values[nu * ca.fmin(k, n - 1) + i] for i in range(nu)]), self.u_lb, self.u_ub)
-
-        u_last = u_star(period_index(t, self.t0, self.dt, n - 1))
-        k = period_index(t + self.delay * self.dt, self.t0, self.dt, n - 1)
-        w = ca.vertcat(*[u_star(k + s * b) for s in range(self.blocks)])
-        if self.disturbance_gain:
-            w = ca.vertcat(w, ca.DM.zeros(nu), x, u_last, 0.0)
-        return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
+        return memory_reset(self)
 
     def memory_predict(self) -> ca.Function | None:
         """The state the step's memory predicts for now: what replaces a rejected measurement (with :attr:`disturbance_gain`).
@@ -568,30 +552,7 @@ class MPCController(SampledReference):
         """
         if not self.disturbance_gain:
             return None
-        u_last, mem = ca.MX.sym("u_last", self.nu), ca.MX.sym("w", self.n_memory)
-        d, x_prev, u_act, _ = self._estimator_memory(u_last, mem)
-        return ca.Function("predict", [u_last, mem], [self.step(x_prev, u_act + d)], ["u_last", "w"], ["x"])
-
-    def _estimator_memory(self, u_last: ca.MX, mem: ca.MX) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX]:
-        """The estimate ``d``, the last measured state, the input that acted over the last period and the flag, from the memory."""
-        nx, nu, nw = self.nx, self.nu, self.nw
-        d, x_prev, u_prev, ran = mem[nw:nw + nu], mem[nw + nu:nw + nu + nx], mem[nw + nu + nx:nw + 2 * nu + nx], mem[-1]
-        # the input that acted over the last period: the one computed then (u_last now) without a delay, with a
-        # one-period delay the one computed a period earlier (u_last then, kept in the memory)
-        return d, x_prev, (u_last if self.delay == 0 else u_prev), ran
-
-    def _disturbance(self, x: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
-        """The input-disturbance estimate of this period (see :attr:`disturbance_gain`) from the memory ``mem``."""
-        nx, nu = self.nx, self.nu
-        d, x_prev, u_act, ran = self._estimator_memory(u_last, mem)
-        xs, us = ca.MX.sym("x", nx), ca.MX.sym("u", nu)
-        B = ca.Function("B", [xs, us], [ca.jacobian(self.step(xs, us), us)])(x_prev, u_act + d)
-        btb = ca.mtimes(B.T, B)
-        eps = 1e-9 * (ca.trace(btb) / nu + 1e-300)
-        gain = ca.solve(btb + eps * ca.DM.eye(nu), B.T)  # (B'B + eps I)^{-1} B': least squares of the state error
-        innovation = x - self.memory_predict()(u_last, mem)  # the measurement less the state the memory predicts
-        # before the first step there is no last state (the memory holds the reference's first one): the estimate stays
-        return ca.if_else(ran > 0.5, d + self.disturbance_gain * ca.mtimes(gain, innovation), d)
+        return memory_predict(self)
 
 
 def _positive_int(value: Any, name: str, low: int = 1) -> int:
