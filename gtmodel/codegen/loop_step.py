@@ -53,6 +53,7 @@ import numpy as np
 
 import gtmodel
 from gtmodel.codegen.build import CompiledLibrary, compile_shared
+from gtmodel.codegen.code_source import CodeSource
 from gtmodel.codegen.declarations import FLOAT_RELATIVE_TOLERANCE, STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
@@ -74,7 +75,7 @@ LOOP_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
-class LoopStep:
+class LoopStep(CodeSource):
     """A loop controller: its CasADi Function and what the memory functions need.
 
     Parameters
@@ -149,41 +150,19 @@ class LoopStep:
     #: The :class:`~gtmodel.codegen.sources.CodeSource` kind (``GeneratedCode.kind`` of its code).
     kind = LOOP_KIND
 
-    def summary(self) -> str:
-        """One line saying what the source generates: the loop step of this controller.
-
-        Returns
-        -------
-        str
-        """
+    def _summary(self) -> str:
         return f"the {self.dt:g} s loop step of {self.name} (<prefix>_init, <prefix>_step on a caller-owned memory)"
 
-    def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the generated functions: ``control``, then ``memory_reset`` and ``predict`` when given.
-
-        Returns
-        -------
-        tuple of FunctionSpec
-        """
+    def _specs(self) -> tuple[FunctionSpec, ...]:
+        # control, then memory_reset and predict when given
         return (_spec(self),) + ((_reset_spec(self),) if self.reset is not None else ()) + ((_predict_spec(self),) if self.predict is not None else ())
 
-    def reference(self, name: str, inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of ``control`` (``memory_reset``, ``predict``) on ``(n, size)`` inputs by C argument name.
+    def _target(self, spec: FunctionSpec) -> ca.Function:
+        return {"control": self.function, "memory_reset": self.reset, "predict": self.predict}[spec.name]
 
-        Parameters
-        ----------
-        name : str
-            ``"control"``, ``"memory_reset"`` or ``"predict"``.
-        inputs : dict
-            ``{C argument: (n, size)}``.
-
-        Returns
-        -------
-        dict
-            ``{output: (n, size)}`` (``control``'s rows NaN where ``ok`` is 0).
-        """
-        f = {"control": self.function, "memory_reset": self.reset, "predict": self.predict}[name]
-        spec = {s.name: s for s in self.specs()}[name]
+    def _evaluate(self, spec: FunctionSpec, inputs: Any) -> dict[str, np.ndarray]:
+        # the Function mapped over the samples; control's rows NaN where ok is 0 or the evaluation fails
+        f = self._target(spec)
         n = len(next(iter(inputs.values())))
         args = {a.casadi_input: np.asarray(inputs[a.name], dtype=float).reshape(n, -1).T for a in spec.args}
         failed = np.zeros(n, dtype=bool)
@@ -203,30 +182,7 @@ class LoopStep:
             failed |= np.asarray(res["ok"]).reshape(-1) <= 0.5
         return {o.name: np.where(failed[:, None], np.nan, np.asarray(res[o.casadi_output]).T) for o in spec.outputs}
 
-    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the loop step's library (:func:`generate_loop_step`; prefix default ``gt_controller``).
-
-        Parameters
-        ----------
-        out_dir : str or pathlib.Path
-            Folder to write into (created if missing).
-        real : {"double", "float"}, optional
-            Floating-point type.
-        prefix : str, optional
-            C symbol prefix (default the source's).
-
-        Returns
-        -------
-        GeneratedCode
-            The files and declarations.
-
-        Raises
-        ------
-        InputError
-            A bad option or declaration.
-        CodegenError
-            CasADi's code generation or writing the files failed.
-        """
+    def _write(self, out_dir: str | Path, real: str, prefix: str | None) -> GeneratedCode:
         return generate_loop_step(self, out_dir, prefix=prefix or "gt_controller", real=real)
 
     @property

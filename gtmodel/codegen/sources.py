@@ -1,6 +1,7 @@
 """The one front door of code generation: a :class:`CodeSource` per kind of code, :func:`generate_code`, :func:`check_code`.
 
-Every kind of generated code is a source that supplies its function declarations
+Every kind of generated code is a source (:class:`~gtmodel.codegen.code_source.CodeSource`,
+the base class) that supplies its function declarations
 (:meth:`CodeSource.specs`, each a :class:`~gtmodel.codegen.declarations.FunctionSpec` with
 its C signature and status checks), the Python reference the check compares the C with
 (:meth:`CodeSource.reference`), a one-line :meth:`CodeSource.summary` of what it generates
@@ -34,15 +35,14 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Protocol, Sequence, runtime_checkable
+from typing import Any, Sequence
 
-import numpy as np
-
+from gtmodel.codegen.code_source import CodeSource
 from gtmodel.codegen.controller import Controller
 from gtmodel.codegen.declarations import CONTROLLER_KIND, FunctionSpec
 from gtmodel.codegen.generate import generate as generate_robot
 from gtmodel.codegen.writer import GeneratedCode
-from gtmodel.codegen.loop_step import LoopStep, generate_loop_step, mpc_step, tracking_step
+from gtmodel.codegen.loop_step import LoopStep, mpc_step, tracking_step
 from gtmodel.codegen.model_code import MODEL_KIND, ModelSource, generate_model, model_specs
 from gtmodel.codegen.robot import RobotModel, load_robot
 from gtmodel.codegen.specs import SPECS_BY_KIND, default_functions
@@ -57,79 +57,8 @@ __all__ = ["CodeSource", "RobotSource", "UserModelSource", "ControllerSource", "
 log = logging.getLogger("gtmodel")
 
 
-@runtime_checkable
-class CodeSource(Protocol):
-    """What a kind of generated code is made from (see the module table).
-
-    Attributes
-    ----------
-    kind : str
-        The :attr:`GeneratedCode.kind` its code carries (``"robot"``, ``"model"``,
-        ``"loop_step"``, ``"controller"``).
-    """
-
-    kind: str
-
-    def summary(self) -> str:
-        """One line saying what the source generates.
-
-        Returns
-        -------
-        str
-        """
-
-    def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the generated functions (C signatures, status checks, tolerances).
-
-        Returns
-        -------
-        tuple of FunctionSpec
-        """
-
-    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the generated function ``name`` on ``(n, size)`` inputs (what the check compares with).
-
-        Parameters
-        ----------
-        name : str
-            A generated function's name.
-        inputs : mapping of str to numpy.ndarray
-            ``{C argument: (n, size)}`` inputs.
-
-        Returns
-        -------
-        dict of str to numpy.ndarray
-            ``{output: (n, size)}``.
-        """
-
-    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the C files into ``out_dir``.
-
-        Parameters
-        ----------
-        out_dir : str or pathlib.Path
-            Folder to write into (created if missing).
-        real : {"double", "float"}, optional
-            Floating-point type.
-        prefix : str, optional
-            C symbol prefix (default the source's).
-
-        Returns
-        -------
-        GeneratedCode
-            The files and declarations.
-
-        Raises
-        ------
-        InputError
-            A bad option or declaration.
-        CodegenError
-            CasADi's code generation or writing the files failed.
-        """
-
-
 @dataclass(frozen=True)
-class RobotSource:
+class RobotSource(CodeSource):
     """A robot's model functions (kinematics, inverse dynamics), optionally with a controller bundle and the re-timing.
 
     Parameters
@@ -169,76 +98,27 @@ class RobotSource:
         """
         return RobotModel(load_robot(self.robot), self.friction)
 
-    def summary(self) -> str:
-        """One line saying what the source generates.
-
-        Returns
-        -------
-        str
-        """
+    def _summary(self) -> str:
         return f"kinematics and inverse dynamics of the robot {self.robot}" + (" with a controller bundle" if self.controller else "")
 
-    def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the robot's functions (the kind's table, :data:`gtmodel.codegen.specs.SPECS_BY_KIND`), then the controller's.
-
-        Returns
-        -------
-        tuple of FunctionSpec
-        """
+    def _specs(self) -> tuple[FunctionSpec, ...]:
+        # the robot kind's table (gtmodel.codegen.specs.SPECS_BY_KIND), then the controller's
         kind = self.model().kind
         table = SPECS_BY_KIND[kind]
         names = default_functions(kind) if self.functions is None else self.functions
         return tuple(table[n] for n in names) + (self.controller.specs() if self.controller else ())
 
-    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the robot function ``name`` (:attr:`FunctionSpec.reference` on the model).
+    def _target(self, spec: FunctionSpec) -> Any:
+        return self.controller if spec.kind == CONTROLLER_KIND else self.model()
 
-        Parameters
-        ----------
-        name : str
-            A generated function's name.
-        inputs : mapping of str to numpy.ndarray
-            ``{C argument: (n, size)}`` inputs.
-
-        Returns
-        -------
-        dict of str to numpy.ndarray
-            ``{output: (n, size)}``.
-        """
-        model = self.model()
-        return SPECS_BY_KIND[model.kind][name].reference(model, inputs)
-
-    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the robot's library (:func:`gtmodel.codegen.generate.generate`).
-
-        Parameters
-        ----------
-        out_dir : str or pathlib.Path
-            Folder to write into (created if missing).
-        real : {"double", "float"}, optional
-            Floating-point type.
-        prefix : str, optional
-            C symbol prefix (default the source's).
-
-        Returns
-        -------
-        GeneratedCode
-            The files and declarations.
-
-        Raises
-        ------
-        InputError
-            A bad option or declaration.
-        CodegenError
-            CasADi's code generation or writing the files failed.
-        """
+    def _write(self, out_dir: str | Path, real: str, prefix: str | None) -> GeneratedCode:
         return generate_robot(self.robot, out_dir, functions=self.functions, prefix=prefix, friction=self.friction, real=real,
                               newton_tolerance=self.newton_tolerance, max_iter=self.max_iter, controller=self.controller,
                               retime_n_max=self.retime_n_max)
 
 
 @dataclass(frozen=True)
-class UserModelSource:
+class UserModelSource(CodeSource):
     """A user's model: its explicit ODE, outputs and fixed steps (:mod:`gtmodel.codegen.model_code`).
 
     Parameters
@@ -260,124 +140,44 @@ class UserModelSource:
         model = self.model.to_model() if isinstance(self.model, Component) else self.model
         return ModelSource(model, explicit_ode(model), self.dt)
 
-    def summary(self) -> str:
-        """One line saying what the source generates.
-
-        Returns
-        -------
-        str
-        """
+    def _summary(self) -> str:
         return f"the explicit ODE, outputs and fixed {self.dt:g} s steps of the model {getattr(self.model, 'name', self.model)}"
 
-    def specs(self) -> tuple[FunctionSpec, ...]:
-        """The declarations of the model's functions (:func:`gtmodel.codegen.model_code.model_specs`).
-
-        Returns
-        -------
-        tuple of FunctionSpec
-        """
+    def _specs(self) -> tuple[FunctionSpec, ...]:
         specs = model_specs(self._source().ode, self.dt)
         return specs if self.functions is None else tuple(s for s in specs if s.name in self.functions)
 
-    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the model function ``name`` (CasADi, on the same ODE).
+    def _target(self, spec: FunctionSpec) -> Any:
+        return self._source()
 
-        Parameters
-        ----------
-        name : str
-            A generated function's name.
-        inputs : mapping of str to numpy.ndarray
-            ``{C argument: (n, size)}`` inputs.
-
-        Returns
-        -------
-        dict of str to numpy.ndarray
-            ``{output: (n, size)}``.
-        """
-        source = self._source()
-        spec = {s.name: s for s in model_specs(source.ode, self.dt)}[name]
-        return spec.reference(source, inputs)
-
-    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the model's library (:func:`gtmodel.codegen.model_code.generate_model`).
-
-        Parameters
-        ----------
-        out_dir : str or pathlib.Path
-            Folder to write into (created if missing).
-        real : {"double", "float"}, optional
-            Floating-point type.
-        prefix : str, optional
-            C symbol prefix (default the source's).
-
-        Returns
-        -------
-        GeneratedCode
-            The files and declarations.
-
-        Raises
-        ------
-        InputError
-            A bad option or declaration.
-        CodegenError
-            CasADi's code generation or writing the files failed.
-        """
+    def _write(self, out_dir: str | Path, real: str, prefix: str | None) -> GeneratedCode:
         return generate_model(self.model, out_dir, functions=self.functions, prefix=prefix, real=real, dt=self.dt)
 
 
 @dataclass(frozen=True)
-class ControllerSource:
-    """A controller bundle alone (:class:`~gtmodel.codegen.controller.Controller`: Kalman step, ILC table, fusion filters, lead-through).
+class ControllerSource(CodeSource):
+    """A controller bundle alone (:class:`~gtmodel.codegen.controller.EstimatorILCBundle`: Kalman step, ILC table, fusion filters, lead-through).
 
     Parameters
     ----------
-    controller : Controller
+    controller : EstimatorILCBundle
         The bundle (e.g. :func:`gtmodel.codegen.controller_file.load_controller`).
     """
 
     controller: Controller
     kind: str = field(default=CONTROLLER_KIND, init=False)
 
-    def summary(self) -> str:
-        """One line saying what the source generates.
-
-        Returns
-        -------
-        str
-        """
+    def _summary(self) -> str:
         return f"the controller bundle's steps ({', '.join(self.controller.functions)})"
 
-    def specs(self) -> tuple[FunctionSpec, ...]:
-        """The bundle's declarations (:meth:`Controller.specs`).
-
-        Returns
-        -------
-        tuple of FunctionSpec
-        """
+    def _specs(self) -> tuple[FunctionSpec, ...]:
         return tuple(self.controller.specs())
 
-    def reference(self, name: str, inputs: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The Python evaluation of the bundle's function ``name`` (its CasADi Function).
-
-        Parameters
-        ----------
-        name : str
-            A generated function's name.
-        inputs : mapping of str to numpy.ndarray
-            ``{C argument: (n, size)}`` inputs.
-
-        Returns
-        -------
-        dict of str to numpy.ndarray
-            ``{output: (n, size)}``.
-        """
-        spec = {s.name: s for s in self.specs()}[name]
-        if spec.reference is None:
-            raise InputError(f"{name}: the controller's function is checked over a run (check_controller), not row by row")
-        return spec.reference(self.controller, inputs)
+    def _target(self, spec: FunctionSpec) -> Any:
+        return self.controller
 
     def default_prefix(self) -> str:
-        """``gt`` for the lead-through step alone, else ``gt_fusion`` (as ``gtmodel codegen --controller`` names them).
+        """``gt`` for the lead-through step alone, else ``gt_fusion`` (as ``gtmodel codegen controller`` names them).
 
         Returns
         -------
@@ -385,30 +185,7 @@ class ControllerSource:
         """
         return "gt" if self.controller.functions == ("lead_through_step",) else "gt_fusion"
 
-    def generate(self, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> GeneratedCode:
-        """Write the bundle's library (:func:`gtmodel.codegen.generate.generate` with ``functions=[]``).
-
-        Parameters
-        ----------
-        out_dir : str or pathlib.Path
-            Folder to write into (created if missing).
-        real : {"double", "float"}, optional
-            Floating-point type.
-        prefix : str, optional
-            C symbol prefix (default the source's).
-
-        Returns
-        -------
-        GeneratedCode
-            The files and declarations.
-
-        Raises
-        ------
-        InputError
-            A bad option or declaration.
-        CodegenError
-            CasADi's code generation or writing the files failed.
-        """
+    def _write(self, out_dir: str | Path, real: str, prefix: str | None) -> GeneratedCode:
         return generate_robot(out_dir=out_dir, functions=[], prefix=prefix or self.default_prefix(), real=real, controller=self.controller)
 
 
@@ -433,7 +210,7 @@ def as_source(obj: Any, real: str = "double") -> CodeSource:
     InputError
         Nothing code is generated from.
     """
-    if isinstance(obj, (RobotSource, UserModelSource, ControllerSource, LoopStep)):
+    if isinstance(obj, CodeSource):
         return obj
     if isinstance(obj, TrackingController):
         return tracking_step(obj)
@@ -500,8 +277,6 @@ def generate_code(source: Any, out_dir: str | Path, *, real: str = "double", pre
         CasADi's code generation or writing the files failed.
     """
     src = as_source(source, real=real if real in REAL_TYPES else "double")  # a bad real type: refused below
-    if isinstance(src, LoopStep):
-        return generate_loop_step(src, out_dir, prefix=prefix or "gt_controller", real=real)
     return src.generate(out_dir, real=real, prefix=prefix)
 
 
