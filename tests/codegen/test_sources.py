@@ -80,3 +80,21 @@ def test_the_robot_reference_round_trips(robot_code):
 def test_as_source_refuses_what_is_no_source(bad, match):
     with pytest.raises(InputError, match=match):
         as_source(bad)
+
+
+@pytest.mark.parametrize("name, match", [
+    ("jacobian", "expected one of the generated functions ik, fk, got 'jacobian'"),
+    ("kf_step", "expected one of the generated functions ik, fk"),
+])
+def test_reference_names_a_function_the_source_does_not_generate(robot_code, name, match):
+    with pytest.raises(InputError, match=match):
+        source_of(robot_code).reference(name, {"q": np.zeros((1, 3))})
+
+
+@pytest.mark.parametrize("route", ["alone", "in a robot source"])
+def test_a_bundle_function_is_checked_over_a_run_by_either_route(filter_code, route):
+    """The bundle's kf_step has no row-by-row reference (check_controller runs it): said alike alone and inside a robot's library."""
+    alone = source_of(filter_code)
+    src = alone if route == "alone" else RobotSource("L1", functions=("fk",), controller=alone.controller)
+    with pytest.raises(InputError, match="kf_step: the function is checked over a run"):
+        src.reference("kf_step", sample_inputs(filter_code, n=4, seed=3)["kf_step"])
