@@ -43,7 +43,7 @@ class CartPendulum(Model):
             name="cart_momentum",
         )
         self.equation(l * self.der(omega) + self.der(v) * ca.cos(theta) + g * ca.sin(theta), 0, name="pole_moment")
-        self.output("tip_x", s + l * ca.sin(theta))  # m
-        self.output("tip_y", -l * ca.cos(theta))  # m, hinge height 0
+        self.output("tip_x", s + l * ca.sin(theta), unit="m")
+        self.output("tip_y", -l * ca.cos(theta), unit="m")  # hinge height 0
         kinetic = 0.5 * m_cart * v**2 + 0.5 * m_pole * ((v + l * omega * ca.cos(theta)) ** 2 + (l * omega * ca.sin(theta)) ** 2)
-        self.output("energy", kinetic - m_pole * g * l * ca.cos(theta))  # J, potential zero at the hinge height
+        self.output("energy", kinetic - m_pole * g * l * ca.cos(theta), unit="J")  # potential zero at the hinge height

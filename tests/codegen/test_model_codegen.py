@@ -280,6 +280,24 @@ def test_dc_motor_steps_over_the_horizon_equal_simulate(tmp_path):
     assert "emf.flange.tau [N.m]" in text and " * Outputs y: rotor.phi [rad], " in text
 
 
+#: The derivatives the DC motor's index reduction keeps, by hand (di/dt, angular velocity and
+#: acceleration): the header names them with these units (docs/modeling.md, section 6).
+DC_MOTOR_DERIVATIVES = ["der_ind_i [A/s]", "der_emf_phi [rad/s]", "der_rotor_w [rad/s2]", "der2_emf_phi [rad/s2]", "der2_load_phi [rad/s2]"]
+
+
+@pytest.fixture(scope="module")
+def dc_motor_algebraics(tmp_path_factory):
+    """The header's list of the DC motor's algebraic variables, ``name [unit]`` each."""
+    gen = generate_model(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"), tmp_path_factory.mktemp("dc_motor"))
+    line = next(line for line in gen.header.read_text().splitlines() if line.startswith(" * Algebraic variables z"))
+    return line.split(": ", 1)[1].split(", ")
+
+
+@pytest.mark.parametrize("entry", DC_MOTOR_DERIVATIVES)
+def test_the_header_names_the_kept_derivatives_with_their_units(dc_motor_algebraics, entry):
+    assert entry in dc_motor_algebraics
+
+
 def test_horizon_check_fails_when_simulate_fails(tmp_path):
     # no reference, no success: a simulate() that fails makes the horizon check (and the report) fail
     gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["step_rk4"], substeps=1)

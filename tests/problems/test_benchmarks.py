@@ -19,7 +19,7 @@ from gtmodel.problems import load_problem
 from gtmodel.problems.run import run_problem
 from gtmodel.status import Status
 
-from ..conftest import PROBLEMS_DIR, assert_bad_problem, replace_once
+from ..conftest import PROBLEMS_DIR, assert_bad_problem, replace_once, solve_through_cli
 
 BENCHMARKS = sorted((PROBLEMS_DIR / "benchmarks").glob("*.toml"))
 CATEGORIES = ("minimum time", "maximum final state", "isoperimetric", "bang-bang", "singular arc", "state constraint", "parameter estimation")
@@ -125,3 +125,77 @@ def test_the_spurious_hanging_chain_minimum_is_flagged(tmp_path, case, edit, cau
         (length,) = (c for name, c in ver["integrals"].items() if not name.startswith("objective: "))  # the objective's is checked too
         assert not length["passed"] and abs(length["simulated"] - length["collocation"]) > 0.1
     assert summary["benchmark"]["relative_error"] > 1e-3
+
+
+#: The units each benchmark model declares, as its source states them (docstrings of
+#: problems/benchmarks/models/): SI where the source gives SI (the brachistochrone: m, m/s,
+#: rad), "1" for the quantities COPS and Bryson and Ho give scaled or without units (as the
+#: Goddard rocket), angles in rad; the tumour model in the units of its parameters (volumes in
+#: mm^3 from d in 1/(mm^2 day); the dose in mg/kg from G in kg/(mg day); y, the dose over days).
+BENCHMARK_MODEL_UNITS = [
+    ("brachistochrone.py", "Brachistochrone", {"x": "m", "y": "m", "v": "m/s", "theta": "rad"}),
+    ("bryson_denham.py", "BrysonDenham", {"x": "1", "v": "1", "u": "1"}),
+    ("catalyst_mixing.py", "CatalystMixing", {"x1": "1", "x2": "1", "u": "1"}),
+    ("chain.py", "Chain", {"x": "1", "u": "1"}),
+    ("chain.py", "HangingChain", {"x": "1", "length": "1", "u": "1"}),
+    ("double_integrator.py", "DoubleIntegrator", {"x": "1", "v": "1", "u": "1"}),
+    ("gas_oil.py", "GasOilODE", {"y1": "1", "y2": "1"}),
+    ("orbit.py", "OrbitRaising", {"r": "1", "theta": "rad", "vr": "1", "vt": "1", "u1": "1", "u2": "1"}),
+    ("robot_arm.py", "RobotArm", {"rho": "1", "theta": "rad", "phi": "rad", "rho_d": "1", "theta_d": "rad/s", "phi_d": "rad/s",
+                                  "u_rho": "1", "u_theta": "1", "u_phi": "1"}),
+    ("rocket.py", "GoddardRocket", {"h": "1", "v": "1", "m": "1", "T": "1"}),
+    ("steering.py", "ParticleSteering", {"y1": "1", "y2": "1", "y3": "1", "y4": "1", "u": "rad"}),
+    ("tumor.py", "TumorAntiangiogenesis", {"p": "mm3", "q": "mm3", "y": "mg.d/kg", "u": "mg/kg"}),
+]
+
+
+@pytest.mark.parametrize("file, cls, units", BENCHMARK_MODEL_UNITS, ids=[c for _, c, _ in BENCHMARK_MODEL_UNITS])
+def test_each_benchmark_model_declares_the_units_of_its_source(file, cls, units):
+    from gtmodel.problems.user_model import load_user_model
+
+    model = load_user_model(PROBLEMS_DIR / "benchmarks" / "models" / file, cls)
+    assert model.units == units
+
+
+def test_the_gas_oil_copies_carry_the_units_of_the_ode():
+    from gtmodel.problems.user_model import load_user_model
+
+    model = load_user_model(PROBLEMS_DIR / "benchmarks" / "models" / "gas_oil.py", "GasOil")
+    names = [n for n, v in model._vars.items() if v.kind == "state"] + list(model.outputs)
+    assert len(names) == 41 and {model.units.get(n) for n in names} == {"1"}  # 20 measurement times x 2 states, sse
+
+
+@pytest.mark.parametrize("path", BENCHMARKS, ids=[p.stem for p in BENCHMARKS])
+def test_every_variable_of_a_benchmark_has_a_unit(path):
+    # what the result's summary.json "units", CSV headers and report axes are made of
+    model = load_problem(path).declaration.model
+    names = [n for n, v in model._vars.items() if v.kind != "parameter"] + list(model.outputs)
+    assert [n for n in names if not model.units.get(n)] == []
+
+
+#: Derivatives the DC motor's reduction keeps, their units by hand (rate of the current, angular
+#: velocity and acceleration).
+DC_MOTOR_DERIVATIVE_UNITS = {"der_ind_i": "A/s", "der_emf_phi": "rad/s", "der_rotor_w": "rad/s2", "der2_load_phi": "rad/s2"}
+
+
+@pytest.fixture(scope="module")
+def dc_motor_result(tmp_path_factory):
+    out = tmp_path_factory.mktemp("dc_motor_min_energy") / "res"
+    code, summary = solve_through_cli(PROBLEMS_DIR / "benchmarks" / "dc_motor_min_energy.toml", out)
+    header = (out / "trajectories.csv").read_text().splitlines()[0].split(",")
+    return code, summary, header
+
+
+def test_every_column_of_a_result_has_its_unit_in_the_summary_and_the_csv(dc_motor_result):
+    code, summary, header = dc_motor_result
+    names = [n for group in summary["variables"].values() for n in group]
+    assert code == 0
+    assert [n for n in names if not summary["units"].get(n)] == []
+    assert [c for c in header if c != "point" and not re.fullmatch(r".+ \[[^\]]+\]", c)] == []
+
+
+@pytest.mark.parametrize("name, unit", DC_MOTOR_DERIVATIVE_UNITS.items())
+def test_a_kept_derivative_reaches_the_summary_and_the_csv_with_its_unit(dc_motor_result, name, unit):
+    _, summary, header = dc_motor_result
+    assert summary["units"][name] == unit
+    assert f"{name} [{unit}]" in header

@@ -67,6 +67,7 @@ def test_y_labels_carry_the_units(tmp_path, units, labels):
 
 
 def test_cart_pendulum_model_declares_its_units():
-    """The shipped user model gives every state and its input a unit, so its plots show them."""
+    """The shipped user model gives every state, its input and its outputs a unit, so its plots show them."""
     model = load_user_model(ROOT / "models" / "cart_pendulum.py", "CartPendulum")
-    assert model.units == {"s": "m", "v": "m/s", "theta": "rad", "omega": "rad/s", "F": "N"}
+    # the tip's coordinates are lengths (s + l sin(theta), -l cos(theta)), the energy is kinetic plus potential
+    assert model.units == {"s": "m", "v": "m/s", "theta": "rad", "omega": "rad/s", "F": "N", "tip_x": "m", "tip_y": "m", "energy": "J"}

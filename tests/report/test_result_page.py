@@ -344,17 +344,6 @@ def open_page(browser, path: Path) -> dict:
     return shown
 
 
-#: Shipped problems some of whose axes have no unit yet (known gap, kept exact so that fixing one
-#: shows here): the benchmark models declare none, and the component models' derivative and
-#: relative variables (``der_ind_i``, ``shaft.phi_rel``) get none from their components.
-AXES_WITHOUT_UNITS = {
-    "brachistochrone.toml", "bryson_denham.toml", "catalyst_mixing.toml", "dc_motor_min_energy.toml", "double_integrator_min_time.toml",
-    "gas_oil.toml", "hanging_chain.toml", "orbit_raising.toml", "particle_steering.toml", "robot_arm.toml", "tumor_antiangiogenesis.toml",
-    "cart_pendulum_swing_up.toml", "dc_motor_move.toml", "drive_belt.toml", "drive_flexible_joint.toml", "drive_motor_gear_load.toml",
-    "drive_two_mass.toml",
-}
-
-
 @pytest.mark.parametrize("path", [pytest.param(p, id=p.name, marks=() if p.name in QUICK else pytest.mark.slow) for p in SHIPPED])
 def test_the_report_of_a_shipped_problem_opens_in_chromium(browser, path, tmp_path):
     out = tmp_path / "res"
@@ -364,7 +353,7 @@ def test_the_report_of_a_shipped_problem_opens_in_chromium(browser, path, tmp_pa
     pngs = [f for f in summary["files"] if f.endswith(".png")]
     assert (out / REPORT_FILE).stat().st_size < MAX_PAGE_BYTES  # the state estimation's was 8.2 MB, lead-through's 4.1 MB
     unitless = [a for a in shown["axes"] if not re.search(r" \[[^\]]+\]$", a)]
-    assert bool(unitless) == (path.name in AXES_WITHOUT_UNITS), unitless  # every other axis titled "name [unit]"
+    assert unitless == []  # every axis titled "name [unit]"
     assert shown["messages"] == []
     assert shown["status"] == summary["status"]
     assert shown["drawn"] == shown["figures"] and all(n > 0 for n in shown["traces"])

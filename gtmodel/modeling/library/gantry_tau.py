@@ -140,7 +140,7 @@ class Cart(Component):
             self.flange.f + ca.dot(v, self.frame_b.f) + self.m * ca.dot(v, self.g) - f_fric,
             name="newton",
         )
-        self.output("f_friction", f_fric)
+        self.output("f_friction", f_fric, unit="N")
 
 
 class Link(Component):
@@ -190,7 +190,7 @@ class Link(Component):
         self.equation(self.m * self.der(self.v_mid), self.frame_a.f + self.frame_b.f + self.m * self.g, name="newton")
         self.equation(self.frame_b.f - self.frame_a.f, 2 * self.f_rod * d / self.L, name="moment")
         self.equation(ca.dot(d, d), self.L**2, name="length")
-        self.output("length_error", ca.sqrt(ca.dot(d, d)) - self.L)
+        self.output("length_error", ca.sqrt(ca.dot(d, d)) - self.L, unit="m")
 
 
 class Plate(Component):

@@ -46,6 +46,7 @@ from gtmodel.modeling.structure.analysis import (
     sparsity_pattern,
 )
 from gtmodel.modeling.structure.pivoting import pivoted_qr
+from gtmodel.modeling.units import derivative_unit
 from gtmodel.modeling.structure.initialization import (
     InconsistentInitialisation,
     fill_order,
@@ -560,6 +561,13 @@ def _fixed_of_kept(system: ScalarDAE) -> dict[str, float]:
     return {k: v for k, (_, v) in out.items()}
 
 
+def _base(aug: AugmentedDAE, v: int) -> int:
+    """The unknown that variable ``v`` of ``aug`` is a derivative of (``v`` itself if it is one)."""
+    while aug.pred[v] is not None:
+        v = aug.pred[v]
+    return v
+
+
 def _model_class(model: Any) -> type:
     """The class of a reduced model: gtmodel's own model class (the first of ``model``'s classes from gtmodel).
 
@@ -599,7 +607,7 @@ def build_model(
     new.warnings = list(getattr(model, "warnings", []))
     old, rep = [aug.system.t], [new.time]
     bounds: dict[str, tuple[float, float]] = {}
-    units: dict[str, str] = {}  # the declared unit of every scalar kept (a derivative's is not declared)
+    units: dict[str, str] = {}  # the declared unit of every scalar kept (a derivative's: derivative_unit)
     for var in model._vars.values():
         if var.kind in ("parameter", "input"):
             sym = (
@@ -623,7 +631,7 @@ def build_model(
             decl = new.state if kind == "state" else new.algebraic
             fix = aug.order[v] == 0 and nm in fixed  # a fixed start stays one (of the kept alias)
             start = fixed[nm] if fix else values[v]
-            unit = units.get(nm, "") if aug.order[v] == 0 else ""
+            unit = derivative_unit(units.get(aug.names[_base(aug, v)], ""), aug.order[v])
             try:
                 sym = decl(nm, start=start, lb=lb, ub=ub, fixed=fix, unit=unit)
             except (InputError, ModelError):

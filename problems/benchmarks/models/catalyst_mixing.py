@@ -10,12 +10,12 @@ from gtmodel.modeling import Model
 
 
 class CatalystMixing(Model):
-    """States x1, x2 (mole fractions of A and B); input u (catalyst mix)."""
+    """States x1, x2 (mole fractions of A and B); input u (fraction of the first catalyst); all unit "1"."""
 
     def __init__(self) -> None:
         super().__init__("catalyst_mixing")
-        x1 = self.state("x1", start=1.0)
-        x2 = self.state("x2")
-        u = self.input("u", start=0.5)
+        x1 = self.state("x1", unit="1", start=1.0)
+        x2 = self.state("x2", unit="1")
+        u = self.input("u", unit="1", start=0.5)
         self.equation(self.der(x1), u * (10 * x2 - x1), name="A")
         self.equation(self.der(x2), u * (x1 - 10 * x2) - (1 - u) * x2, name="B")

@@ -5,7 +5,8 @@ A chain of length ``L`` hangs between ``x(0) = a`` and ``x(1) = b``; its potenti
 ``integral(sqrt(1 + u^2)) = L`` (isoperimetric) is an ``integral()`` constraint of the
 problem file on :class:`Chain`; :class:`HangingChain` carries it as the state ``length``,
 ``length' = sqrt(1 + u^2)``, with ``length(0) = 0`` and ``length(1) = L`` (the same problem
-written without integral constraints).
+written without integral constraints). COPS states the problem without units: every
+variable is dimensionless, unit ``"1"``.
 """
 
 from __future__ import annotations
@@ -20,9 +21,9 @@ class HangingChain(Model):
 
     def __init__(self) -> None:
         super().__init__("hanging_chain")
-        x = self.state("x")
-        length = self.state("length")
-        u = self.input("u")
+        x = self.state("x", unit="1")
+        length = self.state("length", unit="1")
+        u = self.input("u", unit="1")
         self.equation(self.der(x), u, name="slope")
         self.equation(self.der(length), ca.sqrt(1 + u**2), name="arc_length")
 
@@ -32,6 +33,6 @@ class Chain(Model):
 
     def __init__(self) -> None:
         super().__init__("chain")
-        x = self.state("x")
-        u = self.input("u")
+        x = self.state("x", unit="1")
+        u = self.input("u", unit="1")
         self.equation(self.der(x), u, name="slope")

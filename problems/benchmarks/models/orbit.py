@@ -5,7 +5,8 @@ magnitude ``T`` in a direction given by the unit vector ``(u1, u2)`` (radial, ta
 its mass falls at the rate ``mdot``. In the normalised units of Bryson and Ho (``mu = r0 =
 m0 = 1``): ``T = 0.1405``, ``mdot = 0.0749``, final time 3.32 (about 193 days for the
 Earth-Mars transfer of the source). Polar coordinates: radius ``r``, polar angle ``theta``,
-radial velocity ``vr`` and tangential velocity ``vt``.
+radial velocity ``vr`` and tangential velocity ``vt``. Units: the normalised ones of the source
+(unit ``"1"``), the polar angle in ``rad``, the thrust direction ``(u1, u2)`` dimensionless.
 """
 
 from __future__ import annotations
@@ -22,12 +23,12 @@ class OrbitRaising(Model):
         thrust = self.parameter("thrust", 0.1405)
         mdot = self.parameter("mdot", 0.0749)
         m0 = self.parameter("m0", 1.0)
-        r = self.state("r", start=1.0)
-        theta = self.state("theta", start=0.0)
-        vr = self.state("vr", start=0.0)
-        vt = self.state("vt", start=1.0)
-        u1 = self.input("u1", start=0.0)
-        u2 = self.input("u2", start=1.0)
+        r = self.state("r", unit="1", start=1.0)
+        theta = self.state("theta", unit="rad", start=0.0)
+        vr = self.state("vr", unit="1", start=0.0)
+        vt = self.state("vt", unit="1", start=1.0)
+        u1 = self.input("u1", unit="1", start=0.0)
+        u2 = self.input("u2", unit="1", start=1.0)
         accel = thrust / (m0 - mdot * self.time)
         self.equation(self.der(r), vr, name="radius")
         self.equation(self.der(theta), vt / r, name="angle")

@@ -251,3 +251,14 @@ class Miswired(Component):
 def test_incompatible_connection_names_both_connectors():
     with pytest.raises(ModelError, match=r"incompatible connectors force.flange .*cart.frame_b"):
         Miswired().to_model()
+
+
+#: The outputs of the L1's components and their units: a cart's friction force (f_c sigma +
+#: f_v q_dot, f_c in N), a link's length error (|B - A| - L, lengths in m).
+OUTPUT_UNITS = {**{f"cart{i}.f_friction": "N" for i in (1, 2, 3)}, **{f"link{i}.length_error": "m" for i in (1, 2, 3)}}
+
+
+def test_the_l1_outputs_carry_their_units():
+    model = l1_component(l1_parameters(None), friction="tanh").to_model()
+    units = model.units
+    assert {n: units.get(n) for n in model.outputs} == OUTPUT_UNITS

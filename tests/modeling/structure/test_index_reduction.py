@@ -192,9 +192,8 @@ def test_reduced_simulation_bad_arguments(call, match):
         call()
 
 
-def test_the_reduction_keeps_the_declared_units():
-    # the DC motor of models/dc_motor.py (index 2 through its gear): the states the reduction chose, the
-    # input, an algebraic variable kept and an alias that became an output keep the library's units
+def _reduced_motor():
+    """The DC motor of models/dc_motor.py without its friction (index 2 through its gear), reduced."""
     from gtmodel.modeling.library import electrical as el
     from gtmodel.modeling.library import rotational as rot
     from gtmodel.modeling import Component, connect
@@ -213,9 +212,48 @@ def test_the_reduction_keeps_the_declared_units():
             connect(self.rotor.flange_b, self.gear.flange_a)
             connect(self.gear.flange_b, self.load.flange_a)
 
-    reduced = structural_simplify(Motor().to_model("motor"))
+    return structural_simplify(Motor().to_model("motor"))
+
+
+def test_the_reduction_keeps_the_declared_units():
+    # the states the reduction chose, the input, an algebraic variable kept and an alias that
+    # became an output keep the library's units
+    reduced = _reduced_motor()
     units = reduced.units
     assert all(units[n] == u for n, u in {"ind.i": "A", "src.v": "V", "load.phi": "rad"}.items())
     states = reduced.flatten().x_names
     assert {units.get(s) for s in states} <= {"A", "rad", "rad/s"} and all(s in units for s in states)
     assert units["rotor.phi"] == "rad" and "rotor.phi" in reduced.outputs  # an alias kept as an output
+
+
+#: The derivatives the reduction of the DC motor keeps as variables and their units by hand:
+#: the physical quantity each one is (MSL units: di/dt in A/s, angular acceleration in rad/s2).
+MOTOR_DERIVATIVE_UNITS = {
+    "der_ind_i": "A/s",  # rate of the armature current
+    "der_emf_phi": "rad/s",  # rotor angular velocity
+    "der2_emf_phi": "rad/s2",  # rotor angular acceleration
+    "der_rotor_w": "rad/s2",
+    "der_load_phi": "rad/s",
+    "der2_load_phi": "rad/s2",
+    "der_load_w": "rad/s2",
+}
+
+
+@pytest.fixture(scope="module")
+def motor_units():
+    reduced = _reduced_motor()
+    return {n for n, v in reduced._vars.items() if v.kind == "algebraic" and n.startswith("der")}, reduced.units
+
+
+@pytest.mark.parametrize("name, unit", MOTOR_DERIVATIVE_UNITS.items())
+def test_a_derivative_the_reduction_keeps_has_the_unit_of_its_variable_per_second(motor_units, name, unit):
+    # a dummy derivative der(x) is x's unit / s (der2: / s2), not a variable without a unit
+    kept, units = motor_units
+    assert name in kept
+    assert units.get(name) == unit
+
+
+def test_every_derivative_the_reduction_keeps_has_a_unit(motor_units):
+    kept, units = motor_units
+    assert sorted(n for n in kept if not units.get(n)) == []
+    assert kept == set(MOTOR_DERIVATIVE_UNITS)  # the table above is the whole list
