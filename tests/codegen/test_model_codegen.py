@@ -252,6 +252,7 @@ class NewtonLoop:
         return m
 
 
+@pytest.mark.slow  # 15 s: compiles and runs the Newton model C
 def test_newton_model_c_gives_not_converged_never_nan(tmp_path):
     # reference: the same explicit ODE from Python (1e-12) and simulate() over the horizon;
     # a state whose Newton solve overflows gives GT_NOT_CONVERGED with the outputs untouched

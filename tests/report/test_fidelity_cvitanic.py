@@ -104,6 +104,7 @@ def test_table_2_rows_from_a_real_run(tmp_path):
     assert "CP with rotations x10 below DPP" in rows[1][0]
 
 
+@pytest.mark.slow  # 16 s: a state-estimation run
 def test_thesis_metric_is_the_norm_of_per_axis_mean_abs_errors(tmp_path):
     # closed form for white Gaussian noise sigma per axis: sqrt(3 * 2 / pi) sigma = 1.382 sigma (std sqrt(3 (1 - 2 / pi)) = 1.044
     # sigma), which the thesis' sensor columns match (Table 9: 0.889 / 0.64 mm = 1.389) where the mean 3-D norm gives 1.596 sigma

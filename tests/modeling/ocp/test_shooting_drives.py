@@ -117,6 +117,7 @@ def test_the_models_are_daes_that_codegen_makes_explicit(motor):
     assert ShootingTranscription(opt, intervals=4, verify=False).integrator == "radau"
 
 
+@pytest.mark.slow  # 14-15 s each: 20 intervals of 8 Radau steps with the exact Hessian (the default run stays under ~6 min)
 @pytest.mark.parametrize("controls, within", [("constant", 0.05), ("linear", 0.005)])
 def test_motor_minimum_time_against_collocation(motor, controls, within):
     # reference: the collocation optimum; inputs held constant over 20 intervals are slower (the
