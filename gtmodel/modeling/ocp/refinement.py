@@ -40,7 +40,8 @@ verification passing, at ``max_passes``, or at its CPU budget (``max_cpu_s``). A
 nothing left to split but ended IPOPT's ``acceptable`` (IPOPT stopped after ``acceptable_iter``
 iterations at its looser level, not at its tolerance: on the flexible-joint drive 1.6 % above
 where the same start converges) is not where the refinement ends: the next pass re-solves its
-mesh from it with that early stop off (``acceptable_iter = 0``), once per such pass. It returns the
+mesh from it with that early stop off (``acceptable_iter = 0``), once per such pass, within what is left
+of the CPU budget (IPOPT's ``max_cpu_time``). It returns the
 verified and ``optimal`` pass with the best objective, else the verified ``acceptable`` pass with
 the best objective, else the pass with the smallest deviation, with
 ``refinement`` (one dict per pass: elements, points, objective, status, largest element error,
@@ -409,7 +410,10 @@ def solve_refined(
                 # for optima 2-3 % slower, and its refinement ended unverified; with WARM_PUSH, verified)
                 options["solver_options"] = {"mu_init": WARM_MU, **WARM_PUSH, **dict(options.get("solver_options") or {})}
                 if polish:
-                    options["solver_options"]["acceptable_iter"] = 0
+                    # without the early stop IPOPT may iterate long (the flexible joint under another BLAS kernel: 1608
+                    # iterations, 99 CPU-s, past the budget): held to what is left of the budget
+                    left = max(budget - (_time.process_time() - cpu0), 1.0)
+                    options["solver_options"].update(acceptable_iter=0, max_cpu_time=float(left))
             tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
             result = tr.solve(parameters=parameters, initial_guess=guess)
             n_elements, tr_points = tr.elements, tr.points

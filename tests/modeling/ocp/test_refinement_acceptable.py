@@ -54,8 +54,8 @@ def test_a_verified_acceptable_pass_is_re_solved_once_without_the_early_stop(mon
         return real(*args, **kwargs)
 
     monkeypatch.setattr(refinement, "CollocationTranscription", spy)
-    res = solve_refined(opt, elements=10, start=start, max_passes=4)
-    assert len(seen) == solves and all(o["acceptable_iter"] == 0 for o in seen)
+    res = solve_refined(opt, elements=10, start=start, max_passes=4, max_cpu_s=90.0)
+    assert len(seen) == solves and all(o["acceptable_iter"] == 0 and 0 < o["max_cpu_time"] <= 90.0 for o in seen)
     assert [bool(e.get("polished")) for e in res.refinement] == [False] + [True] * solves
     assert res.status == Status.OPTIMAL if solves else res.status == status
     assert res.final_time == pytest.approx(2.0, abs=1e-6) and res.verification.passed
