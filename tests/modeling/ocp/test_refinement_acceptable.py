@@ -1,0 +1,83 @@
+"""Refinement from a pass that verified at IPOPT's acceptable level: its mesh re-solved once, the best verified returned.
+
+Independent reference: the analytic minimum-time double integrator (final time 2 s, switch at
+1 s; Bryson and Ho 1975, sec. 7.3); on 10 uniform elements of the 2 s horizon the switch is on
+an element boundary, so that the solution verifies and nothing is left to split.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling.ocp import refinement
+from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.status import Status
+
+
+class DoubleIntegrator(Model):
+    def __init__(self) -> None:
+        super().__init__("double_integrator")
+        x, v, u = self.state("x"), self.state("v"), self.input("u")
+        self.equation(self.der(x), v)
+        self.equation(self.der(v), u)
+
+
+def min_time_double_integrator() -> Optimization:
+    m = DoubleIntegrator()
+    opt = Optimization(m, final_time=3.0, free_final_time=True, final_time_bounds=(0.5, 10.0))
+    x, v = m.variables("state")["x"], m.variables("state")["v"]
+    opt.set_objective(mayer=opt.final_time)
+    opt.set_bounds(m.variables("input")["u"], -1.0, 1.0)
+    for sym, at, value in ((x, "start", 0.0), (v, "start", 0.0), (x, "final", 1.0), (v, "final", 0.0)):
+        opt.add_point_constraint(sym, at=at, lb=value, ub=value)
+    opt.verification_tolerance = 1e-6
+    return opt
+
+
+@pytest.mark.parametrize("status, solves", [(Status.ACCEPTABLE, 1), (Status.OPTIMAL, 0)])
+def test_a_verified_acceptable_pass_is_re_solved_once_without_the_early_stop(monkeypatch, status, solves):
+    # a verified pass that IPOPT left at its acceptable level is no end of the refinement: its mesh is solved again
+    # from it, acceptable_iter 0; a verified optimal pass is the end
+    opt = min_time_double_integrator()
+    start = CollocationTranscription(opt, elements=10).solve()
+    assert start.verification.passed and start.final_time == pytest.approx(2.0, abs=1e-6)
+    start = copy.copy(start)
+    start.status = status
+    seen = []
+    real = refinement.CollocationTranscription
+
+    def spy(*args, **kwargs):
+        seen.append(dict(kwargs.get("solver_options") or {}))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    res = solve_refined(opt, elements=10, start=start, max_passes=4, max_cpu_s=90.0)
+    assert len(seen) == solves and all(o["acceptable_iter"] == 0 and 0 < o["max_cpu_time"] <= 90.0 for o in seen)
+    assert [bool(e.get("polished")) for e in res.refinement] == [False] + [True] * solves
+    assert res.status == Status.OPTIMAL if solves else res.status == status
+    assert res.final_time == pytest.approx(2.0, abs=1e-6) and res.verification.passed
+
+
+def test_of_verified_acceptable_passes_the_best_objective_is_returned(monkeypatch):
+    # with no verified optimal pass, the verified acceptable pass with the best objective is returned (it was the pass
+    # with the smallest deviation, acceptable or not): every solve reported acceptable, the start's objective set 1 %
+    # above its re-solve's (the analytic 2 s)
+    opt = min_time_double_integrator()
+    start = CollocationTranscription(opt, elements=10).solve()
+    start = copy.copy(start)
+    start.status, start.objective, start.final_time = Status.ACCEPTABLE, 2.02, 2.02
+    real = refinement.CollocationTranscription
+
+    class Acceptable(real):
+        def solve(self, *args, **kwargs):
+            result = super().solve(*args, **kwargs)
+            result.status = Status.ACCEPTABLE
+            return result
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", Acceptable)
+    res = solve_refined(opt, elements=10, start=start, max_passes=4)
+    assert len(res.refinement) == 2 and res.status == Status.ACCEPTABLE
+    assert res.final_time == pytest.approx(2.0, abs=1e-6) and "returned pass 2 of 2" in res.refinement_stop
