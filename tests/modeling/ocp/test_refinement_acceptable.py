@@ -11,34 +11,22 @@ import copy
 
 import pytest
 
-from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling import CollocationTranscription, Optimization
 from gtmodel.modeling.ocp import refinement
 from gtmodel.modeling.ocp.refinement import solve_refined
 from gtmodel.status import Status
 
-
-class DoubleIntegrator(Model):
-    def __init__(self) -> None:
-        super().__init__("double_integrator")
-        x, v, u = self.state("x"), self.state("v"), self.input("u")
-        self.equation(self.der(x), v)
-        self.equation(self.der(v), u)
+from .test_verification import min_time_double_integrator as min_time_problem
 
 
 def min_time_double_integrator() -> Optimization:
-    m = DoubleIntegrator()
-    opt = Optimization(m, final_time=3.0, free_final_time=True, final_time_bounds=(0.5, 10.0))
-    x, v = m.variables("state")["x"], m.variables("state")["v"]
-    opt.set_objective(mayer=opt.final_time)
-    opt.set_bounds(m.variables("input")["u"], -1.0, 1.0)
-    for sym, at, value in ((x, "start", 0.0), (v, "start", 0.0), (x, "final", 1.0), (v, "final", 0.0)):
-        opt.add_point_constraint(sym, at=at, lb=value, ub=value)
+    opt = min_time_problem()
     opt.verification_tolerance = 1e-6
     return opt
 
 
 @pytest.mark.parametrize("status, solves", [(Status.ACCEPTABLE, 1), (Status.OPTIMAL, 0)])
-def test_a_verified_acceptable_pass_is_re_solved_once_without_the_early_stop(monkeypatch, status, solves):
+def test_a_verified_acceptable_pass_is_re_solved_once_without_the_early_stop(refinement_solves, status, solves):
     # a verified pass that IPOPT left at its acceptable level is no end of the refinement: its mesh is solved again
     # from it, acceptable_iter 0; a verified optimal pass is the end
     opt = min_time_double_integrator()
@@ -46,14 +34,7 @@ def test_a_verified_acceptable_pass_is_re_solved_once_without_the_early_stop(mon
     assert start.verification.passed and start.final_time == pytest.approx(2.0, abs=1e-6)
     start = copy.copy(start)
     start.status = status
-    seen = []
-    real = refinement.CollocationTranscription
-
-    def spy(*args, **kwargs):
-        seen.append(dict(kwargs.get("solver_options") or {}))
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    seen = refinement_solves
     res = solve_refined(opt, elements=10, start=start, max_passes=4, max_cpu_s=90.0)
     assert len(seen) == solves and all(o["acceptable_iter"] == 0 and 0 < o["max_cpu_time"] <= 90.0 for o in seen)
     assert [bool(e.get("polished")) for e in res.refinement] == [False] + [True] * solves

@@ -133,17 +133,10 @@ def test_refinement_locates_the_bang_bang_switch():
     assert len(res.refinement) >= 2
 
 
-def test_warm_passes_start_on_the_previous_passs_bounds(monkeypatch):
+def test_warm_passes_start_on_the_previous_passs_bounds(refinement_solves):
     # every pass after the first starts from the previous one with a small barrier parameter and without IPOPT's
     # push off the bounds (the bang-bang input sits on them); the outcome still the closed form's 2 s
-    seen = []
-    real = refinement.CollocationTranscription
-
-    def spy(*args, **kwargs):
-        seen.append(dict(kwargs.get("solver_options") or {}))
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    seen = refinement_solves
     opt = min_time_double_integrator()
     opt.verification_tolerance = 1e-6
     res = solve_refined(opt, elements=11)
