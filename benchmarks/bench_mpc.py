@@ -46,7 +46,9 @@ measured side by side in one run, because these machines are noisy:
 
 With ``--json`` the last line of stdout is one JSON object
 ``{"mpc": [{"name", "horizon", "period_s", "step_median_s", "step_p99_s", "step_max_s",
-"tracking_rms_ratio_to_feedforward", "bound_violations", "ratio_to_python", ...}, ...]}``.
+"tracking_rms_ratio_to_feedforward", "bound_violations", "ratio_to_python", "hpipm_libraries", ...}, ...]}``
+(``hpipm_libraries``: the folder of ``GTMODEL_HPIPM`` the hpipm step linked, built by
+``benchmarks/hpipm_build.sh``, or ``"casadi wheel"``; gtmodel/codegen/hpipm_source.py).
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gtmodel.codegen.hpipm_source import HPIPM_ENV, hpipm_libraries
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
 from gtmodel.problems.loop_check import STATUS_NAMES
 from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
@@ -287,6 +290,7 @@ def bench(prepared: tuple, cpu: np.ndarray, violations: int) -> dict:
         "bound_violations": wall.mpc.bound_violations + violations,
         "status_counts": wall.mpc.status_counts,
         "python_step_median_s": py, "ratio_to_python": py / st["median"],
+        "hpipm_libraries": (hpipm_libraries() and os.environ[HPIPM_ENV]) or "casadi wheel" if c.solver == "hpipm" else "",
     }
 
 
@@ -304,6 +308,8 @@ def _print_row(r: dict) -> None:
               f"p99 {r['acados_fastest_cpu_step_p99_s'] * 1e6:.1f} us, tracking RMS {r['acados_fastest_tracking_rms']:.4g}")
     print(f"{r['name']}: {r['solver']} {r['qpsol']}, horizon {r['horizon']} x {r['period_s'] * 1e3:g} ms, {r['blocks']} input blocks, "
           f"{r['sqp_iterations']} SQP iteration(s), {r['constraint_rows']} constraint rows, {r['steps']} C steps")
+    if r["hpipm_libraries"]:
+        print(f"  HPIPM + BLASFEO: {r['hpipm_libraries']}")
     print(f"  C step wall: median {r['step_median_s'] * 1e6:.1f} us, p99 {r['step_p99_s'] * 1e6:.1f} us, "
           f"max {r['step_max_s'] * 1e6:.1f} us (first {r['first_step_s'] * 1e6:.1f} us)")
     print(f"  C step CPU : median {r['cpu_step_median_s'] * 1e6:.1f} us, p99 {r['cpu_step_p99_s'] * 1e6:.1f} us, "

@@ -57,7 +57,7 @@ from gtmodel.codegen.code_source import CodeSource
 from gtmodel.codegen.declarations import FLOAT_RELATIVE_TOLERANCE, STATUS_CODES, ArgSpec, FunctionSpec, OutputSpec, StatusCheck
 from gtmodel.codegen.emit import fill, header_guard
 from gtmodel.codegen.writer import REAL_TYPES, GeneratedCode, write_library
-from gtmodel.codegen.hpipm_source import patch_hpipm_options
+from gtmodel.codegen.hpipm_source import hpipm_libraries, patch_hpipm_memory, patch_hpipm_options
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController
@@ -451,11 +451,20 @@ def solver_libraries(source: str | Path) -> tuple[tuple[str, ...], tuple[str, ..
     include_dirs : tuple of str
         The casadi wheel's ``include`` folder when a library of :data:`SOLVER_LIBRARIES` is included.
     link_flags : tuple of str
-        Their linker arguments (empty: plain C).
+        Their linker arguments (empty: plain C); for HPIPM the static libraries of
+        :data:`~gtmodel.codegen.hpipm_source.HPIPM_ENV` when it is set.
+
+    Raises
+    ------
+    CodegenError
+        :data:`~gtmodel.codegen.hpipm_source.HPIPM_ENV` names a folder without them.
     """
     text = Path(source).read_text()
     lib = Path(ca.__file__).resolve().parent
-    flags = [a.format(lib=lib) for header, args in SOLVER_LIBRARIES.items() if f"#include <{header}>" in text for a in args]
+    static = hpipm_libraries() if "#include <hpipm_d_ocp_qp_ipm.h>" in text else None
+    # with HPIPM_ENV: HPIPM and BLASFEO linked into the step, hidden (the process's other HPIPM does not bind them)
+    libraries = {**SOLVER_LIBRARIES, "hpipm_d_ocp_qp_ipm.h": (*map(str, static), "-Wl,--exclude-libs,ALL")} if static else SOLVER_LIBRARIES
+    flags = [a.format(lib=lib) for header, args in libraries.items() if f"#include <{header}>" in text for a in args]
     return ((str(lib / "include"),) if flags else ()), tuple(flags)
 
 
@@ -535,6 +544,7 @@ def generate_loop_step(step: LoopStep, out_dir: str | Path, prefix: str = "gt_co
 
     out, _, sizes, signatures = write_library(prefix, specs, step, out_dir, real, header, extra_source=memory)
     patch_hpipm_options(out / f"{prefix}_casadi.c")
+    patch_hpipm_memory(out / f"{prefix}_casadi.c")
     log.info("codegen: wrote %s for loop controller %s", out / f"{prefix}.c", step.name)
     include_dirs, link_flags = solver_libraries(out / f"{prefix}_casadi.c")
     if uses_heap_arena(out / f"{prefix}_casadi.c"):

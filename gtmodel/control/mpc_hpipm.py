@@ -23,12 +23,17 @@ Riccati recursion over the stages, ``O(H (nx + nu)^3)``, on BLASFEO) through Cas
 ``nu = [nu, ..., nu, 0]``, ``ng = 0``), and the full step ``z + dz``. ``sqp_iterations``
 such iterations per period. The states start from the warm start's inputs predicted from
 ``x_0`` (no gaps at the first iteration: its QP is the single shooting's, so the converged
-point is the same).
+point is the same; acados' SQP-RTI keeps its last states, shifted, instead: that prediction is
+0.9 % of the generated L1 step's instructions, callgrind 2026-11-25, so it stays).
 
 CasADi 3.8.2 generates C for the conic; it includes ``hpipm_d_ocp_qp_ipm.h`` and links the
-wheel's ``libhpipm`` and ``libblasfeo`` (:data:`gtmodel.codegen.loop_step.SOLVER_LIBRARIES`);
-its work (dimensions, QP, solution, IPM workspace) is allocated in every QP, which the generated
-step sends to its static arena (:data:`gtmodel.codegen.loop_step.HEAP_ARENA_BYTES`). A QP that
+wheel's ``libhpipm`` and ``libblasfeo`` (:data:`gtmodel.codegen.loop_step.SOLVER_LIBRARIES`),
+or with ``GTMODEL_HPIPM`` a static HPIPM and a BLASFEO built for the machine
+(:mod:`gtmodel.codegen.hpipm_source`: the wheel's BLASFEO has generic kernels, and HPIPM's
+interior point is 80 % of the step); HPIPM's memory (dimensions, QP, solution, IPM workspace) is
+created at a thread's first QP (:func:`~gtmodel.codegen.hpipm_source.patch_hpipm_memory`; CasADi's
+runtime sets it up in every QP) in the generated step's static arena
+(:data:`gtmodel.codegen.loop_step.HEAP_ARENA_BYTES`). A QP that
 HPIPM does not solve (iteration limit, a NaN) makes the generated call return an error: the
 step returns its failure status and the last input. State or path constraint rows are not
 taken (:func:`gtmodel.control.mpc.mpc_controller` refuses them with this solver).

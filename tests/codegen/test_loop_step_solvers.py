@@ -42,3 +42,25 @@ def test_failed_step_returns_the_last_input_saturated(tmp_path, solver, kwargs, 
     status, u = controller(t[41], bad)
     assert status != 0
     np.testing.assert_array_equal(u, np.clip(u_ok, -50.0, 50.0))
+
+
+@pytest.mark.parametrize("solver, kwargs, bad", [CASES[0], CASES[3]], ids=["qrqp overflow", "hpipm overflow"])
+def test_failed_step_leaves_no_trace_in_the_next(tmp_path, solver, kwargs, bad):
+    # reference: a second controller of the same library (its own memory, the same thread) that never saw the failure;
+    # the failed step keeps the memory, so the next good step must be the same to the bit (the hpipm step keeps
+    # HPIPM's memory per thread across QPs: gtmodel.codegen.hpipm_source.patch_hpipm_memory)
+    ode = explicit_ode(double_integrator()[0])
+    t = DT * np.arange(101)
+    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
+    c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=20, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
+                       method="euler", solver=solver, **kwargs)
+    generated = generate_loop_step(mpc_step(c, "di"), tmp_path, prefix="gt_di")
+    library = compile_shared(generated, tmp_path / "build")
+    failed, _, _ = compiled_step(generated, library)
+    clean, _, _ = compiled_step(generated, library)
+    first = [failed(t[40], [0.3, 1.0]), clean(t[40], [0.3, 1.0])]
+    status, _ = failed(t[41], bad)
+    assert status != 0
+    after = [failed(t[42], [0.32, 0.9]), clean(t[42], [0.32, 0.9])]
+    assert [s for s, _ in first + after] == [0, 0, 0, 0]
+    np.testing.assert_array_equal(after[0][1], after[1][1])
