@@ -411,8 +411,8 @@ HEAP_ARENA_BYTES = 262144
 HEAP_WRAP_FLAGS = ("-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free",)
 #: The header's declaration of ``<prefix>_heap_stats`` (with the arena).
 _HEAP_DOC = """/*
- * The QP solver's allocations (DAQP sets up its work in every QP) go to a per-thread static
- * arena of GT_HEAP_ARENA_BYTES ({arena} unless defined at compile time), not to the heap: link
+ * The QP solver's allocations (DAQP sets up its work in every QP; HPIPM's memory is made at the
+ * calling thread's first QP and kept for its later ones) go to a per-thread static arena of GT_HEAP_ARENA_BYTES ({arena} unless defined at compile time), not to the heap: link
  * the library with -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free (gtmodel's build
  * does). Writes the arena's peak use [bytes], the allocations that did not fit and went to the
  * heap (0 expected) and the arena's size [bytes], of the calling thread.
@@ -422,7 +422,7 @@ int {prefix}_heap_stats(unsigned long *peak_bytes, unsigned long *heap_calls, un
 
 
 def uses_heap_arena(casadi_source: str | Path) -> bool:
-    """Whether a loop step's CasADi source calls a QP solver that allocates (DAQP), so that its
+    """Whether a loop step's CasADi source calls a QP solver that allocates (DAQP, HPIPM), so that its
     library carries the heap arena (:data:`HEAP_ARENA_BYTES`).
 
     Parameters

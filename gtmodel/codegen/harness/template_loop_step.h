@@ -13,8 +13,9 @@
  * @VERSION@
  * Floating-point type: @REAL@
  *
- * Every function returns a status code (GT_OK = 0). No heap, no global state: the
- * controller's memory is the caller's @GP@_memory.
+ * Every function returns a status code (GT_OK = 0). No heap: the controller's memory is
+ * the caller's @GP@_memory; a QP solver's work, where the step has one, is per-thread static
+ * storage (see @GP@_heap_stats where it is declared), so threads may run steps concurrently.
  */
 @OPEN@
 
