@@ -1,6 +1,6 @@
 """Solve time of the minimum-time OCP against the same NLP written directly in casadi.Opti (a benchmark, not a test).
 
-Usage: python benchmarks/bench_solve.py [problem.toml] [--json] [--repeat 3] [--grid 50,100,200,400] [--no-acados]
+Usage: python benchmarks/bench_solve.py [problem.toml] [--json] [--repeat 3] [--grid 50,100,200,400] [--no-acados] [--published]
 
 Measured side by side in one run, because these machines are noisy:
 - ``solve_s``: gtmodel's solve of the problem (default ``problems/l1_time_optimal.toml``),
@@ -25,6 +25,10 @@ Measured side by side in one run, because these machines are noisy:
   ``acados_final_time_rel_diff`` (from gtmodel's: the discretisations differ, see the peer's
   docstring), ``acados_config``; ``acados_skipped`` with the reason instead when acados' venv cannot
   be made (or ``--no-acados``) or the problem is not one the peer is written for;
+- with ``--published``, ``acados_published``: the same peer (:data:`ACADOS_PUBLISHED_ARGS`) and gtmodel's
+  solve on the published minimum-time benchmarks :data:`ACADOS_PUBLISHED` (COPS 3.0 robot arm, published
+  9.14101; Bryson and Ho's double integrator, 2), each final time against its published value, the CPU of
+  both and ``ratio_cpu_to_acados`` per file (:func:`published_rows`);
 - ``final_time_s`` and ``peer_final_time_s``: the two optima;
 - ``ms_per_iteration``: gtmodel's solve time per IPOPT iteration at 50, 100, 200 and 400
   elements (the cost of one iteration should grow linearly with the mesh);
@@ -73,6 +77,12 @@ ACADOS_PEER = ROOT / "benchmarks" / "peers" / "acados_ocp.py"
 #: 87 iterations, MIRROR 171, CONVEXIFY and PROJECT_REDUC_HESS end in HPIPM's NaN), full steps (MERIT_BACKTRACKING
 #: took 176 iterations).
 ACADOS_ARGS = ("--controls", "constant", "--regularize", "PROJECT", "--globalization", "FIXED_STEP")
+#: Published minimum-time benchmarks of ``problems/benchmarks/`` the peer also solves (``--published``), and its
+#: options there: the final constraints an exact L1 penalty and a Levenberg-Marquardt term of 1 (from the files'
+#: guessed final times, shorter than the optimum, the first linearised QPs have no solution reaching the final
+#: state, and HPIPM returns NaN; without the term the double integrator's second QP does).
+ACADOS_PUBLISHED = ("robot_arm", "double_integrator_min_time")
+ACADOS_PUBLISHED_ARGS = ACADOS_ARGS + ("--soft", "1000", "--levenberg", "1")
 
 
 def peer_opti(decl, expand: bool = False) -> tuple[float, float, int, str, float]:
@@ -142,14 +152,7 @@ def peer_opti(decl, expand: bool = False) -> tuple[float, float, int, str, float
 
 
 def export_acados(decl, folder: Path) -> Path:
-    """The minimum-time problem of ``decl`` for the acados peer (:data:`ACADOS_PEER`): ``problem.npz`` and its functions.
-
-    The same model equations as gtmodel's NLP (the flattened DAE's explicit ODE, its parameters
-    substituted), saved by CasADi's ``Function.save``: ``ode(x, u) -> x'``, ``path(x, u)`` (the
-    path constraints), ``start(x, u)`` and ``final(x, u)`` (the point constraints, ``x'``
-    substituted: the rest-to-rest accelerations depend on the force); the bounds, the Radau points,
-    the force scale (gtmodel's ``force_limit``) and the initial guess (gtmodel's: the declared
-    guesses at the nodes and collocation times of the guessed final time).
+    """The minimum-time point-to-point problem ``decl`` for the acados peer: :func:`export_acados_ocp` of its Optimization.
 
     Parameters
     ----------
@@ -162,23 +165,59 @@ def export_acados(decl, folder: Path) -> Path:
     -------
     pathlib.Path
         ``folder / "problem.npz"``.
+    """
+    opt, _ = build_optimization(decl)
+    return export_acados_ocp(opt, decl.method, {**opt.parameters, **decl.named_parameters},
+                             np.asarray(decl.force_limit, dtype=float), folder)
+
+
+def export_acados_ocp(opt, method, parameters: dict, u_nom: np.ndarray, folder: Path) -> Path:
+    """A minimum-time :class:`~gtmodel.modeling.Optimization` for the acados peer (:data:`ACADOS_PEER`): ``problem.npz`` and its functions.
+
+    The same model equations as gtmodel's NLP (the flattened DAE's explicit ODE, its parameters
+    substituted), saved by CasADi's ``Function.save``: ``ode(x, u) -> x'``, ``path(x, u)`` (the
+    path constraints), ``start(x, u)`` and ``final(x, u)`` (the point constraints, ``x'``
+    substituted: a rest-to-rest acceleration depends on the input); the state and input bounds, the
+    Radau points, the input scale and the initial guess (gtmodel's: the declared guesses, else the
+    variables' start values, at the nodes and collocation times of the guessed final time, clipped
+    into the bounds).
+
+    Parameters
+    ----------
+    opt : gtmodel.modeling.Optimization
+        Objective ``final_time`` alone, free final time, no algebraic variables or free parameters.
+    method : object
+        Its transcription (``elements``, ``points``, ``scheme`` = ``"radau"``).
+    parameters : dict
+        The model's parameter values.
+    u_nom : numpy.ndarray
+        The inputs' scale (the peer's controls are ``u / u_nom``).
+    folder : pathlib.Path
+        Where the files go.
+
+    Returns
+    -------
+    pathlib.Path
+        ``folder / "problem.npz"``.
 
     Raises
     ------
     ValueError
-        The problem is not a pure minimum-time one on a Radau mesh, or its equations depend on time.
+        The problem is not one the peer is written for.
     """
-    opt, _ = build_optimization(decl)
+    from gtmodel.modeling.ocp.guesses import guess_values
+
     dae = opt.flat()
-    N, d = decl.method.elements, decl.method.points
-    if decl.method.scheme != "radau" or not opt.free_final_time:
-        raise ValueError("the acados peer is written for a free final time and Radau collocation")
-    co = collocation_coefficients(d, decl.method.scheme)
-    pvec = ca.DM(dae.parameter_vector({**opt.parameters, **decl.named_parameters}))
+    N, d = method.elements, method.points
+    if method.scheme != "radau" or not opt.free_final_time or dae.nz or opt.free_parameters or opt.special_symbols():
+        raise ValueError("the acados peer is written for a free final time, Radau collocation, no algebraic variables, "
+                         "free parameters or timed variables")
+    co = collocation_coefficients(d, method.scheme)
+    pvec = ca.DM(dae.parameter_vector(parameters))
     x, u = ca.SX.sym("x", dae.nx), ca.SX.sym("u", dae.nu)
 
     def fn(name, exprs):
-        e = ca.substitute(ca.vertcat(*exprs), dae.xdot, dae.ode_expr)
+        e = ca.substitute(ca.vertcat(*exprs), dae.xdot, dae.ode_expr) if exprs else ca.SX(0, 1)
         e = ca.substitute(e, ca.vertcat(dae.x, dae.u, dae.p), ca.vertcat(x, u, pvec))
         if ca.depends_on(e, ca.vertcat(dae.t, opt.final_time)):
             raise ValueError(f"{name} depends on time: the acados peer is written for time-invariant equations")
@@ -191,25 +230,37 @@ def export_acados(decl, folder: Path) -> Path:
         raise ValueError("the acados peer is written for the objective final_time alone")
     folder.mkdir(parents=True, exist_ok=True)
     starts = [c for c in opt.point_constraints if c.at == "start"]
-    finals = [c for c in opt.point_constraints if c.at != "start"]
+    finals = [c for c in opt.point_constraints if c.at == "final"]
+    if len(starts) + len(finals) != len(opt.point_constraints):
+        raise ValueError("the acados peer is written for point constraints at the start and final times only")
     funcs = {"ode": fn("ode", [dae.ode_expr]), "path": fn("path", [c.expr for c in opt.path_constraints]),
              "start": fn("start", [c.expr for c in starts]), "final": fn("final", [c.expr for c in finals])}
     for name, f in funcs.items():
         f.save(str(folder / f"{name}.casadi"))
+    x_lb, x_ub = opt.bounds_vectors(dae, "x")
     u_lb, u_ub = opt.bounds_vectors(dae, "u")
-    u_nom = np.asarray(decl.force_limit, dtype=float)
     tfg, t0 = opt.final_time_guess, opt.start_time
-    guess = {name: opt.initial_guesses[name] for name in ("T", "T_dot", "tau")}
-    tk = t0 + np.arange(N + 1) * (tfg - t0) / N
-    x_guess = np.array([np.concatenate([np.ravel(guess["T"](t)), np.ravel(guess["T_dot"](t))]) for t in tk])
-    u_guess = np.array([[np.clip(np.ravel(guess["tau"](t0 + (k + co["tau"][j]) * (tfg - t0) / N)) / u_nom, -1, 1)
-                         for j in range(d)] for k in range(N)])
+
+    def guess(kind, t):
+        out = []
+        for name, sl in (dae.x_vars if kind == "x" else dae.u_vars).items():
+            default = np.asarray(opt.model._vars[name].start, dtype=float).reshape(-1)
+            out.append(guess_values(opt.initial_guesses.get(name), sl.stop - sl.start, name, default, t))
+        lo, hi = (x_lb, x_ub) if kind == "x" else (u_lb, u_ub)
+        return np.clip(np.hstack(out), lo, hi)
+
+    x_guess = guess("x", t0 + np.arange(N + 1) * (tfg - t0) / N)
+    tc = np.array([t0 + (k + co["tau"][j]) * (tfg - t0) / N for k in range(N) for j in range(d)])
+    u_guess = (guess("u", tc) / u_nom).reshape(N, d, dae.nu)
     cat = np.concatenate
+
+    def bounds(cs, i):
+        return cat([np.ravel(c.lb if i == 0 else c.ub) for c in cs]) if cs else np.zeros(0)
+
     path = folder / "problem.npz"
-    np.savez(path, N=N, d=d, tau=co["tau"], L0=co["L0"], u_nom=u_nom, u_lb=u_lb / u_nom, u_ub=u_ub / u_nom,
-             path_lb=cat([c.lb for c in opt.path_constraints]), path_ub=cat([c.ub for c in opt.path_constraints]),
-             start_lb=cat([c.lb for c in starts]), start_ub=cat([c.ub for c in starts]),
-             final_lb=cat([c.lb for c in finals]), final_ub=cat([c.ub for c in finals]),
+    np.savez(path, N=N, d=d, tau=co["tau"], L0=co["L0"], u_nom=u_nom, u_lb=u_lb / u_nom, u_ub=u_ub / u_nom, x_lb=x_lb, x_ub=x_ub,
+             path_lb=bounds(opt.path_constraints, 0), path_ub=bounds(opt.path_constraints, 1),
+             start_lb=bounds(starts, 0), start_ub=bounds(starts, 1), final_lb=bounds(finals, 0), final_ub=bounds(finals, 1),
              tf_bounds=np.asarray(opt.final_time_bounds, float), tf_guess=tfg, x_guess=x_guess, u_guess=u_guess,
              **{f"{name}_file": f"{name}.casadi" for name in funcs})
     return path
@@ -224,16 +275,18 @@ def acados_available() -> str:
     return "" if out.returncode == 0 else (out.stderr.strip().splitlines() or ["acados_env.sh failed"])[-1]
 
 
-def acados_peer(decl, repeat: int) -> dict | str:
-    """The acados peer (:data:`ACADOS_PEER` in its venv) on ``decl``: its JSON answer, or the reason it did not run.
+def acados_peer(export, repeat: int, args: tuple = ACADOS_ARGS) -> dict | str:
+    """The acados peer (:data:`ACADOS_PEER` in its venv) on an exported problem: its JSON answer, or the reason it did not run.
 
     Parameters
     ----------
-    decl : PointToPoint
-        The minimum-time problem (exported by :func:`export_acados` to a temporary folder, where acados
-        also generates and compiles its solver).
+    export : callable
+        ``export(folder) -> problem.npz`` (:func:`export_acados` or :func:`export_acados_ocp` bound to
+        a problem), called with a temporary folder, where acados also generates and compiles its solver.
     repeat : int
         Solves from the guess (the peer reports the median thread CPU).
+    args : tuple of str
+        The peer's options.
 
     Returns
     -------
@@ -245,15 +298,64 @@ def acados_peer(decl, repeat: int) -> dict | str:
         return reason
     with tempfile.TemporaryDirectory(prefix="gtmodel_acados_ocp_") as tmp:
         try:
-            problem = export_acados(decl, Path(tmp))
+            problem = export(Path(tmp))
         except ValueError as e:
             return f"not run: {e}"
-        out = subprocess.run([str(ACADOS_ENV), "python", str(ACADOS_PEER), str(problem), "--repeat", str(repeat), *ACADOS_ARGS],
+        out = subprocess.run([str(ACADOS_ENV), "python", str(ACADOS_PEER), str(problem), "--repeat", str(repeat), *args],
                              capture_output=True, text=True, timeout=3600, env={**os.environ, "OMP_NUM_THREADS": "1"})
     lines = out.stdout.strip().splitlines()
     if out.returncode != 0 or not lines:
         return f"the acados peer failed (exit {out.returncode}): " + " | ".join(out.stderr.strip().splitlines()[-3:])
     return json.loads(lines[-1])
+
+
+def published_rows(repeat: int) -> dict:
+    """acados and gtmodel on the published minimum-time benchmarks :data:`ACADOS_PUBLISHED`, each against its published value.
+
+    Parameters
+    ----------
+    repeat : int
+        Solves per figure (gtmodel: after one warm-up solve, the median solver CPU of its
+        ``timing``, refinement passes included; acados: the peer's median).
+
+    Returns
+    -------
+    dict
+        Per file: ``published``, ``elements``; ``acados_final_time_s``, ``acados_rel_diff_published``,
+        ``acados_status``, ``acados_iterations``, ``acados_solve_cpu_s`` (or ``acados_skipped``);
+        ``final_time_s``, ``rel_diff_published``, ``solve_cpu_s``, ``refinement_passes`` (gtmodel's);
+        ``ratio_cpu_to_acados``.
+    """
+    import functools
+    import tomllib
+
+    from bench_ocp_suite import solve_cpu  # the suite's solver CPU of a result (refinement passes included)
+
+    rows = {}
+    for name in ACADOS_PUBLISHED:
+        path = ROOT / "problems" / "benchmarks" / f"{name}.toml"
+        published = float(tomllib.loads(path.read_text())["benchmark"]["published"])
+        decl = load_problem(path).declaration
+        opt = decl.optimization
+        row = {"published": published, "elements": decl.method.elements}
+        load_problem(path).declaration.solve()  # compile (or load the cached) derivatives once
+        runs = [load_problem(path).declaration.solve() for _ in range(max(1, repeat))]
+        r = runs[0]
+        row.update({"final_time_s": float(r.final_time), "rel_diff_published": abs(float(r.final_time) - published) / published,
+                    "status": str(r.status), "refinement_passes": len(r.refinement),
+                    "solve_cpu_s": statistics.median(solve_cpu(x) for x in runs)})
+        export = functools.partial(export_acados_ocp, opt, decl.method, opt.parameters, np.ones(opt.flat().nu))
+        a = acados_peer(export, repeat, ACADOS_PUBLISHED_ARGS)
+        if isinstance(a, str):
+            row["acados_skipped"] = a
+        else:
+            row.update({"acados_final_time_s": a["final_time_s"],
+                        "acados_rel_diff_published": abs(a["final_time_s"] - published) / published,
+                        "acados_status": a["status"], "acados_iterations": a["iterations"], "acados_solve_cpu_s": a["solve_cpu_s"],
+                        "acados_final_state_violation": a["final_state_violation"], "acados_config": a["config"],
+                        "ratio_cpu_to_acados": row["solve_cpu_s"] / a["solve_cpu_s"]})
+        rows[name] = row
+    return rows
 
 
 def ours(decl) -> tuple[float, float, int, str, float, dict | None]:
@@ -282,6 +384,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="solves per figure (median)")
     ap.add_argument("--grid", default="50,100,200,400", help="elements of the per-iteration grid")
     ap.add_argument("--no-acados", action="store_true", help="skip the acados peer")
+    ap.add_argument("--published", action="store_true", help="also acados and gtmodel on ACADOS_PUBLISHED, against the published optima")
     a = ap.parse_args()
     decl = load_problem(a.problem).declaration
     ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}  # CPU time in the stats, as the peer's
@@ -322,7 +425,7 @@ def main() -> None:
     out["speedup_cpu"] = out["peer_solve_cpu_s"] / out["solve_cpu_s"]
     print(f"speedup over the shipped Opti: CPU {out['speedup_cpu']:.1f}x (wall {out['speedup']:.1f}x); final times differ by "
           f"{out['final_time_rel_diff']:.2e} (relative; {out['opti_expand_final_time_rel_diff']:.2e} from Opti expand=True)")
-    acados = "skipped (--no-acados)" if a.no_acados else acados_peer(decl, a.repeat)
+    acados = "skipped (--no-acados)" if a.no_acados else acados_peer(lambda folder: export_acados(decl, folder), a.repeat)
     if isinstance(acados, str):
         out["acados_skipped"] = acados
         print(f"acados: {acados}")
@@ -383,6 +486,17 @@ def main() -> None:
           f"CPU per iteration {keys[-1]} / {keys[0]} elements (IPOPT): {out['cpu_per_iteration_400_over_50']:.1f}x")
     print(f"fatrop without the NLP's functions: {out['fatrop_solver_cpu_s']:.3f} CPU-s, {out['fatrop_speedup_bound_cpu']:.1f}x the peer "
           "(the speedup if the derivatives cost nothing)")
+    if a.published and not a.no_acados:
+        out["acados_published"] = published_rows(a.repeat)
+        for name, row in out["acados_published"].items():
+            if "acados_skipped" in row:
+                print(f"{name}: acados {row['acados_skipped']}")
+                continue
+            print(f"{name} ({row['elements']} elements; published {row['published']:g}): gtmodel T_f {row['final_time_s']:.7f} "
+                  f"({row['rel_diff_published']:.1e} rel., {row['solve_cpu_s']:.4f} CPU-s, {row['refinement_passes']} refinement passes), "
+                  f"acados T_f {row['acados_final_time_s']:.7f} ({row['acados_rel_diff_published']:.1e} rel., "
+                  f"{row['acados_solve_cpu_s']:.4f} CPU-s, {row['acados_iterations']} iterations, status {row['acados_status']}); "
+                  f"CPU ratio {row['ratio_cpu_to_acados']:.2f}x")
     out["load_average"] = os.getloadavg()[0]
     if a.json:
         print(json.dumps(out))

@@ -32,14 +32,22 @@ stage-0 nonlinear constraint of its own:
   dynamics and the row ``u_f - U_{N-1,d} = 0`` of stage ``N - 1``; rows that do not apply at a stage
   have the bounds +-BIG. acados 0.2.2 does not solve this form: HPIPM returns NaN at the second
   SQP iteration (qp_status 3), whatever the regularisation, globalisation, step length, HPIPM
-  mode, mu0 or BIG; the dense FULL_CONDENSING_HPIPM goes on but stalls (stationarity 5e-6 after
-  500 iterations, T 0.67545 s, 208 s);
+  mode, mu0, BIG, Levenberg-Marquardt term or softening (the first step takes T to 0.496 s,
+  shorter than the optimum; without the ``BIG`` rows it fails at the 10th); the dense
+  FULL_CONDENSING_HPIPM goes on but stalls (stationarity 5e-6 after 500 iterations, T 0.67545 s, 208 s);
 - ``--controls constant`` (acados' usual form, the one measured): the force constant over an
   interval (``nu`` scaled controls). The end accelerations cannot then be zero without a whole
   interval at rest, and are left out: in the continuous problem they bind nothing (the force may
   jump at the ends), so both discretisations tend to the same optimum as the mesh is refined, and
   at a given mesh acados' final time is the shorter (0.6716 s against gtmodel's 0.6754 s at 50
   intervals).
+
+Problems without path constraints have no ``h``; the model's finite state bounds hold at every node
+(and the final time's bounds too: at stage 0 alone HPIPM let a QP step of the double integrator take
+``T`` to -830); with ``--soft W`` the final point constraints (and the rows of ``h``) are an exact L1
+penalty of weight ``W`` (``final_state_violation`` reports what is left of them): from a guessed final
+time shorter than the optimum (the COPS robot arm's 9 s) the first linearised QP cannot reach the final
+state, and HPIPM then returns NaN rather than a sign of infeasibility.
 
 The solve: ``SQP`` (not RTI) with the exact Hessian (``--hessian``), regularised by
 ``--regularize``, ``--globalization``, ``PARTIAL_CONDENSING_HPIPM``, tolerances ``--tol`` (1e-8:
@@ -115,9 +123,10 @@ def build(problem: dict, funcs: dict, folder: str, hessian: str, regularize: str
     levenberg : float
         acados' ``levenberg_marquardt`` (a multiple of the identity added to the Hessian).
     soft : float
-        When positive, every row of ``h`` and ``h_e`` is soft with this L1 weight (an exact
-        penalty: the same optimum when the weight exceeds the multipliers, and the linearised
-        QPs of the first iterations stay feasible); 0: hard.
+        When positive, the final point constraints (state bounds and rows of ``h_e``) and the
+        rows of ``h`` are soft with this L1 weight (an exact penalty: the same optimum when the
+        weight exceeds their multipliers, and the linearised QPs stay feasible when the guessed
+        final time is too short to reach the final state, where acados' HPIPM returns NaN); 0: hard.
     qp : str
         acados' ``qp_solver``.
     controls : {"polynomial", "constant"}
@@ -170,7 +179,10 @@ def build(problem: dict, funcs: dict, folder: str, hessian: str, regularize: str
     else:  # the rows of the point constraints that depend on the force (the end accelerations) are left out
         h, h_e = g, path(y, zero_u)
         lh_e, uh_e = problem["path_lb"], problem["path_ub"]
-    model.con_h_expr, model.con_h_expr_e = h, h_e
+    if h.numel():
+        model.con_h_expr = h
+    if h_e.numel():
+        model.con_h_expr_e = h_e
     model.cost_expr_ext_cost = ca.SX(0)
     model.cost_expr_ext_cost_e = Tf
     ocp = AcadosOcp()
@@ -186,22 +198,46 @@ def build(problem: dict, funcs: dict, folder: str, hessian: str, regularize: str
     idx0 += [n] + ([n + 1] if poly else [])
     lb0 += [problem["tf_bounds"][0]] + ([0.0] if poly else [])
     ub0 += [problem["tf_bounds"][1]] + ([0.0] if poly else [])
+    # the model's finite state bounds: along the horizon, and at stage 0 and N where no point constraint fixes the state
+    x_lb, x_ub = np.asarray(problem["x_lb"], float), np.asarray(problem["x_ub"], float)
+    finite = [i for i in range(n) if np.isfinite(x_lb[i]) or np.isfinite(x_ub[i])]
+    idxe, lbe, ube = list(fb["idx"]), list(fb["lbx"]), list(fb["ubx"])
+    for i in finite:
+        if i not in idx0:
+            idx0.append(i), lb0.append(max(x_lb[i], -BIG)), ub0.append(min(x_ub[i], BIG))
+        if i not in idxe:
+            idxe.append(i), lbe.append(max(x_lb[i], -BIG)), ube.append(min(x_ub[i], BIG))
+    # the final time's bounds at every stage too: with them at stage 0 alone, HPIPM's first QP of the double
+    # integrator (no h) returned a step to T = -830 as solved
+    tf_lo, tf_hi = (float(v) for v in problem["tf_bounds"])
+    c.idxbx = np.array(finite + [n])
+    c.lbx = np.r_[np.maximum(x_lb[finite], -BIG), tf_lo]
+    c.ubx = np.r_[np.minimum(x_ub[finite], BIG), tf_hi]
+    if n not in idxe:
+        idxe.append(n), lbe.append(tf_lo), ube.append(tf_hi)
     c.idxbx_0, c.lbx_0, c.ubx_0 = np.array(idx0), np.array(lb0, float), np.array(ub0, float)
     c.idxbxe_0 = np.array([i for i in range(len(idx0)) if lb0[i] == ub0[i]])
-    c.idxbx_e, c.lbx_e, c.ubx_e = np.array(fb["idx"]), np.array(fb["lbx"], float), np.array(fb["ubx"], float)
+    if idxe:
+        c.idxbx_e, c.lbx_e, c.ubx_e = np.array(idxe), np.array(lbe, float), np.array(ube, float)
     nh = h.numel()
     dims = {"nx": x.numel(), "nu": nU, "nh": nh, "ng": ng, "ns": len(sb["rows"]) if poly else 0, "m": m, "n": n, "poly": poly,
             "start_nl": sb, "final_nl": fb}
-    c.lh, c.uh = np.full(nh, -BIG), np.full(nh, BIG)  # the stage bounds are set per stage after the build
-    c.lh[:ng], c.uh[:ng] = problem["path_lb"], problem["path_ub"]
-    c.lh_e, c.uh_e = np.asarray(lh_e, float), np.asarray(uh_e, float)
-    if soft > 0:
-        nhe = ocp.constraints.lh_e.size
-        c.idxsh, c.idxsh_e = np.arange(nh), np.arange(nhe)
-        ocp.cost.zl = ocp.cost.zu = np.full(nh, soft)
-        ocp.cost.Zl = ocp.cost.Zu = np.zeros(nh)
-        ocp.cost.zl_e = ocp.cost.zu_e = np.full(nhe, soft)
-        ocp.cost.Zl_e = ocp.cost.Zu_e = np.zeros(nhe)
+    if nh:
+        c.lh, c.uh = np.full(nh, -BIG), np.full(nh, BIG)  # the stage bounds are set per stage after the build
+        c.lh[:ng], c.uh[:ng] = problem["path_lb"], problem["path_ub"]
+    if h_e.numel():
+        c.lh_e, c.uh_e = np.asarray(lh_e, float), np.asarray(uh_e, float)
+    if soft > 0:  # the final point constraints (state bounds and rows of h_e) and the rows of h as an exact L1 penalty
+        if nh:
+            c.idxsh = np.arange(nh)
+            ocp.cost.zl = ocp.cost.zu = np.full(nh, soft)
+            ocp.cost.Zl = ocp.cost.Zu = np.zeros(nh)
+        nsbx_e, nhe = len(fb["idx"]), int(h_e.numel())
+        c.idxsbx_e = np.arange(nsbx_e)
+        if nhe:
+            c.idxsh_e = np.arange(nhe)
+        ocp.cost.zl_e = ocp.cost.zu_e = np.full(nsbx_e + nhe, soft)
+        ocp.cost.Zl_e = ocp.cost.Zu_e = np.zeros(nsbx_e + nhe)
     o = ocp.solver_options
     o.tf = 1.0
     o.integrator_type = "IRK"
@@ -323,9 +359,10 @@ def initialise(solver: AcadosOcpSolver, problem: dict, dims: dict) -> None:
         if k < N:
             solver.set(k, "u", ug[k].reshape(-1) if dims["poly"] else ug[k, -1])
             solver.set(k, "p", np.array([k / N]))
-            lh, uh = stage_bounds(problem, dims, k)
-            solver.constraints_set(k, "lh", lh)
-            solver.constraints_set(k, "uh", uh)
+            if dims["nh"]:
+                lh, uh = stage_bounds(problem, dims, k)
+                solver.constraints_set(k, "lh", lh)
+                solver.constraints_set(k, "uh", uh)
         for field in ("lam", "pi") if k < N else ("lam",):
             try:
                 solver.set(k, field, np.zeros_like(solver.get(k, field)))
@@ -345,12 +382,15 @@ def main() -> None:
     ap.add_argument("--controls", choices=("polynomial", "constant"), default="polynomial",
                     help="the force within an interval: gtmodel's polynomial (clock state) or constant")
     ap.add_argument("--globalization", default="MERIT_BACKTRACKING", choices=("MERIT_BACKTRACKING", "FIXED_STEP"))
+    ap.add_argument("--soft", type=float, default=0.0, help="L1 weight of the softened final constraints (0: hard)")
+    ap.add_argument("--levenberg", type=float, default=0.0, help="acados levenberg_marquardt")
     args = ap.parse_args()
     problem = dict(np.load(args.problem))
     here = os.path.dirname(os.path.abspath(args.problem))
     funcs = {k: ca.Function.load(os.path.join(here, str(problem[f"{k}_file"]))) for k in ("ode", "path", "start", "final")}
     folder = args.build or os.path.join(here, "acados_ocp_build")
-    solver, dims = build(problem, funcs, folder, args.hessian, args.regularize, args.tol, args.globalization, controls=args.controls)
+    solver, dims = build(problem, funcs, folder, args.hessian, args.regularize, args.tol, args.globalization, args.levenberg, args.soft,
+                         controls=args.controls)
     N, n = int(problem["N"]), dims["n"]
     cpu, tot, its, statuses = [], [], [], []
     for _ in range(max(1, args.repeat)):
@@ -363,12 +403,15 @@ def main() -> None:
         statuses.append(int(status))
     res = solver.get_residuals()
     xs = np.array([solver.get(k, "x") for k in range(N + 1)])
+    fb = dims["final_nl"]
+    final_violation = float(np.max(np.abs(xs[N, fb["idx"]] - np.clip(xs[N, fb["idx"]], fb["lbx"], fb["ubx"])), initial=0.0))
     print(json.dumps({
         "solve_cpu_s": statistics.median(cpu), "time_tot_s": statistics.median(tot), "cpu_s_all": cpu,
         "iterations": its[0], "status": statuses[0], "statuses": statuses,
-        "final_time_s": float(xs[0, n]), "residuals": [float(r) for r in np.ravel(res)],
+        "final_time_s": float(xs[0, n]), "final_state_violation": final_violation, "residuals": [float(r) for r in np.ravel(res)],
         "config": f"acados 0.2.2 SQP, {args.hessian} Hessian ({args.regularize}), IRK GAUSS_RADAU_IIA {int(problem['d'])} stages x 1 step, "
-                  f"N = {N}, forces {args.controls} per interval, PARTIAL_CONDENSING_HPIPM, {args.globalization}, tol {args.tol:g}, "
+                  f"N = {N}, forces {args.controls} per interval{f', final constraints soft (L1 {args.soft:g})' if args.soft else ''}"
+                  f"{f', Levenberg-Marquardt {args.levenberg:g}' if args.levenberg else ''}, PARTIAL_CONDENSING_HPIPM, {args.globalization}, tol {args.tol:g}, "
                   "T a state with zero dynamics (time-scaled)",
     }), flush=True)
 
