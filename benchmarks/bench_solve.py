@@ -1,6 +1,6 @@
 """Solve time of the minimum-time OCP against the same NLP written directly in casadi.Opti (a benchmark, not a test).
 
-Usage: python benchmarks/bench_solve.py [problem.toml] [--json] [--repeat 3] [--grid 50,100,200,400]
+Usage: python benchmarks/bench_solve.py [problem.toml] [--json] [--repeat 3] [--grid 50,100,200,400] [--no-acados] [--published]
 
 Measured side by side in one run, because these machines are noisy:
 - ``solve_s``: gtmodel's solve of the problem (default ``problems/l1_time_optimal.toml``),
@@ -14,7 +14,21 @@ Measured side by side in one run, because these machines are noisy:
 - ``best_solve_cpu_s`` and ``best_config``: the project's fastest configuration measured here
   (IPOPT or fatrop), ``best_ratio_cpu_to_opti_expand``; ``cpu_per_iteration_400_over_50``: the
   CPU per IPOPT iteration at the grid's largest mesh over the smallest (``ms_per_iteration_cpu_ratio``);
-- ``acados_skipped``: the reason the acados peer of the offline solve is not run (:data:`ACADOS_SKIPPED`);
+- ``acados_solve_cpu_s`` (and ``ratio_cpu_to_acados`` = ``best_solve_cpu_s`` / it): acados (0.2.2, in its
+  own venv, ``benchmarks/acados_env.sh``) on the same problem exported by :func:`export_acados` (the same
+  model equations, bounds, boundary conditions, path constraints and initial guess), solved by
+  ``benchmarks/peers/acados_ocp.py`` (:data:`ACADOS_ARGS`): time-scaled (``T`` a state with zero
+  dynamics), ``N`` = the element count of GAUSS_RADAU_IIA IRK intervals (3 stages, as gtmodel's
+  3 Radau points), the force constant per interval, SQP to convergence (1e-8) with the exact Hessian,
+  PARTIAL_CONDENSING_HPIPM; the thread CPU of ``solver.solve()``, median of ``--repeat`` solves from
+  the guess; ``acados_iterations``, ``acados_status``, ``acados_final_time_s``,
+  ``acados_final_time_rel_diff`` (from gtmodel's: the discretisations differ, see the peer's
+  docstring), ``acados_config``; ``acados_skipped`` with the reason instead when acados' venv cannot
+  be made (or ``--no-acados``) or the problem is not one the peer is written for;
+- with ``--published``, ``acados_published``: the same peer (:data:`ACADOS_PUBLISHED_ARGS`) and gtmodel's
+  solve on the published minimum-time benchmarks :data:`ACADOS_PUBLISHED` (COPS 3.0 robot arm, published
+  9.14101; Bryson and Ho's double integrator, 2), each final time against its published value, the CPU of
+  both and ``ratio_cpu_to_acados`` per file (:func:`published_rows`);
 - ``final_time_s`` and ``peer_final_time_s``: the two optima;
 - ``ms_per_iteration``: gtmodel's solve time per IPOPT iteration at 50, 100, 200 and 400
   elements (the cost of one iteration should grow linearly with the mesh);
@@ -40,6 +54,8 @@ import dataclasses
 import json
 import os
 import statistics
+import subprocess
+import tempfile
 import time
 from pathlib import Path
 
@@ -52,10 +68,21 @@ from gtmodel.trajectory import point_to_point as ptp
 from gtmodel.trajectory.point_to_point import SOLVER_OPTIONS, build_optimization, solve_point_to_point
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Why the acados peer of the offline solve is not run (issue 46, item 1).
-ACADOS_SKIPPED = ("not set up: an acados minimum-time OCP of the L1 (the model exported as an acados model with an "
-                  "implicit Runge-Kutta integrator, time-scaled, SQP to convergence) is not written yet; the acados venv "
-                  "(benchmarks/acados_env.sh) serves the MPC peer only")
+#: acados' venv maker and the offline minimum-time peer run inside it (issue 46, item 1).
+ACADOS_ENV = ROOT / "benchmarks" / "acados_env.sh"
+ACADOS_PEER = ROOT / "benchmarks" / "peers" / "acados_ocp.py"
+#: The peer's options (see its docstring): the force constant per interval (acados' usual form; gtmodel's
+#: polynomial per interval, with a clock state, makes acados 0.2.2's HPIPM return NaN at the second SQP iteration
+#: whatever the regularisation, globalisation or step), the exact Hessian projected to positive definite (PROJECT:
+#: 65 iterations; with the final time bounded at stage 0 only, 87, MIRROR 171, CONVEXIFY and PROJECT_REDUC_HESS
+#: ended in HPIPM's NaN), full steps (MERIT_BACKTRACKING took 176 iterations).
+ACADOS_ARGS = ("--controls", "constant", "--regularize", "PROJECT", "--globalization", "FIXED_STEP")
+#: Published minimum-time benchmarks of ``problems/benchmarks/`` the peer also solves (``--published``), and its
+#: options there: the final constraints an exact L1 penalty and a Levenberg-Marquardt term of 1 (from the files'
+#: guessed final times, shorter than the optimum, the first linearised QPs have no solution reaching the final
+#: state, and HPIPM returns NaN; without the term the double integrator's second QP does).
+ACADOS_PUBLISHED = ("robot_arm", "double_integrator_min_time")
+ACADOS_PUBLISHED_ARGS = ACADOS_ARGS + ("--soft", "1000", "--levenberg", "1")
 
 
 def peer_opti(decl, expand: bool = False) -> tuple[float, float, int, str, float]:
@@ -124,6 +151,213 @@ def peer_opti(decl, expand: bool = False) -> tuple[float, float, int, str, float
     return float(st["t_wall_total"]), float(sol.value(tf)), int(st["iter_count"]), str(st["return_status"]), float(st["t_proc_total"])
 
 
+def export_acados(decl, folder: Path) -> Path:
+    """The minimum-time point-to-point problem ``decl`` for the acados peer: :func:`export_acados_ocp` of its Optimization.
+
+    Parameters
+    ----------
+    decl : PointToPoint
+        A minimum-time problem (objective ``final_time``, free final time, Radau collocation).
+    folder : pathlib.Path
+        Where the files go.
+
+    Returns
+    -------
+    pathlib.Path
+        ``folder / "problem.npz"``.
+    """
+    opt, _ = build_optimization(decl)
+    return export_acados_ocp(opt, decl.method, {**opt.parameters, **decl.named_parameters},
+                             np.asarray(decl.force_limit, dtype=float), folder)
+
+
+def export_acados_ocp(opt, method, parameters: dict, u_nom: np.ndarray, folder: Path) -> Path:
+    """A minimum-time :class:`~gtmodel.modeling.Optimization` for the acados peer (:data:`ACADOS_PEER`): ``problem.npz`` and its functions.
+
+    The same model equations as gtmodel's NLP (the flattened DAE's explicit ODE, its parameters
+    substituted), saved by CasADi's ``Function.save``: ``ode(x, u) -> x'``, ``path(x, u)`` (the
+    path constraints), ``start(x, u)`` and ``final(x, u)`` (the point constraints, ``x'``
+    substituted: a rest-to-rest acceleration depends on the input); the state and input bounds, the
+    Radau points, the input scale and the initial guess (gtmodel's: the declared guesses, else the
+    variables' start values, at the nodes and collocation times of the guessed final time, clipped
+    into the bounds).
+
+    Parameters
+    ----------
+    opt : gtmodel.modeling.Optimization
+        Objective ``final_time`` alone, free final time, no algebraic variables or free parameters.
+    method : object
+        Its transcription (``elements``, ``points``, ``scheme`` = ``"radau"``).
+    parameters : dict
+        The model's parameter values.
+    u_nom : numpy.ndarray
+        The inputs' scale (the peer's controls are ``u / u_nom``).
+    folder : pathlib.Path
+        Where the files go.
+
+    Returns
+    -------
+    pathlib.Path
+        ``folder / "problem.npz"``.
+
+    Raises
+    ------
+    ValueError
+        The problem is not one the peer is written for.
+    """
+    from gtmodel.modeling.ocp.guesses import guess_values
+
+    dae = opt.flat()
+    N, d = method.elements, method.points
+    if method.scheme != "radau" or not opt.free_final_time or dae.nz or opt.free_parameters or opt.special_symbols():
+        raise ValueError("the acados peer is written for a free final time, Radau collocation, no algebraic variables, "
+                         "free parameters or timed variables")
+    co = collocation_coefficients(d, method.scheme)
+    pvec = ca.DM(dae.parameter_vector(parameters))
+    x, u = ca.SX.sym("x", dae.nx), ca.SX.sym("u", dae.nu)
+
+    def fn(name, exprs):
+        e = ca.substitute(ca.vertcat(*exprs), dae.xdot, dae.ode_expr) if exprs else ca.SX(0, 1)
+        e = ca.substitute(e, ca.vertcat(dae.x, dae.u, dae.p), ca.vertcat(x, u, pvec))
+        if ca.depends_on(e, ca.vertcat(dae.t, opt.final_time)):
+            raise ValueError(f"{name} depends on time: the acados peer is written for time-invariant equations")
+        return ca.Function(name, [x, u], [e])
+
+    lagr = fn("lagrange", [opt.lagrange])
+    rng = np.random.default_rng(0)
+    if any(abs(float(lagr(rng.normal(size=dae.nx), rng.normal(size=dae.nu)))) > 0 for _ in range(3)) or \
+            not ca.is_equal(opt.mayer, opt.final_time):
+        raise ValueError("the acados peer is written for the objective final_time alone")
+    folder.mkdir(parents=True, exist_ok=True)
+    starts = [c for c in opt.point_constraints if c.at == "start"]
+    finals = [c for c in opt.point_constraints if c.at == "final"]
+    if len(starts) + len(finals) != len(opt.point_constraints):
+        raise ValueError("the acados peer is written for point constraints at the start and final times only")
+    funcs = {"ode": fn("ode", [dae.ode_expr]), "path": fn("path", [c.expr for c in opt.path_constraints]),
+             "start": fn("start", [c.expr for c in starts]), "final": fn("final", [c.expr for c in finals])}
+    for name, f in funcs.items():
+        f.save(str(folder / f"{name}.casadi"))
+    x_lb, x_ub = opt.bounds_vectors(dae, "x")
+    u_lb, u_ub = opt.bounds_vectors(dae, "u")
+    tfg, t0 = opt.final_time_guess, opt.start_time
+
+    def guess(kind, t):
+        out = []
+        for name, sl in (dae.x_vars if kind == "x" else dae.u_vars).items():
+            default = np.asarray(opt.model._vars[name].start, dtype=float).reshape(-1)
+            out.append(guess_values(opt.initial_guesses.get(name), sl.stop - sl.start, name, default, t))
+        lo, hi = (x_lb, x_ub) if kind == "x" else (u_lb, u_ub)
+        return np.clip(np.hstack(out), lo, hi)
+
+    x_guess = guess("x", t0 + np.arange(N + 1) * (tfg - t0) / N)
+    tc = np.array([t0 + (k + co["tau"][j]) * (tfg - t0) / N for k in range(N) for j in range(d)])
+    u_guess = (guess("u", tc) / u_nom).reshape(N, d, dae.nu)
+    cat = np.concatenate
+
+    def bounds(cs, i):
+        return cat([np.ravel(c.lb if i == 0 else c.ub) for c in cs]) if cs else np.zeros(0)
+
+    path = folder / "problem.npz"
+    np.savez(path, N=N, d=d, tau=co["tau"], L0=co["L0"], u_nom=u_nom, u_lb=u_lb / u_nom, u_ub=u_ub / u_nom, x_lb=x_lb, x_ub=x_ub,
+             path_lb=bounds(opt.path_constraints, 0), path_ub=bounds(opt.path_constraints, 1),
+             start_lb=bounds(starts, 0), start_ub=bounds(starts, 1), final_lb=bounds(finals, 0), final_ub=bounds(finals, 1),
+             tf_bounds=np.asarray(opt.final_time_bounds, float), tf_guess=tfg, x_guess=x_guess, u_guess=u_guess,
+             **{f"{name}_file": f"{name}.casadi" for name in funcs})
+    return path
+
+
+def acados_available() -> str:
+    """Empty when acados' venv is there or can be made (:data:`ACADOS_ENV`), else the reason."""
+    try:
+        out = subprocess.run([str(ACADOS_ENV)], capture_output=True, text=True, timeout=1800)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return f"acados venv: {e}"
+    return "" if out.returncode == 0 else (out.stderr.strip().splitlines() or ["acados_env.sh failed"])[-1]
+
+
+def acados_peer(export, repeat: int, args: tuple = ACADOS_ARGS) -> dict | str:
+    """The acados peer (:data:`ACADOS_PEER` in its venv) on an exported problem: its JSON answer, or the reason it did not run.
+
+    Parameters
+    ----------
+    export : callable
+        ``export(folder) -> problem.npz`` (:func:`export_acados` or :func:`export_acados_ocp` bound to
+        a problem), called with a temporary folder, where acados also generates and compiles its solver.
+    repeat : int
+        Solves from the guess (the peer reports the median thread CPU).
+    args : tuple of str
+        The peer's options.
+
+    Returns
+    -------
+    dict or str
+        ``solve_cpu_s``, ``time_tot_s``, ``iterations``, ``status``, ``final_time_s``, ``config``; or the reason.
+    """
+    reason = acados_available()
+    if reason:
+        return reason
+    with tempfile.TemporaryDirectory(prefix="gtmodel_acados_ocp_") as tmp:
+        try:
+            problem = export(Path(tmp))
+        except ValueError as e:
+            return f"not run: {e}"
+        out = subprocess.run([str(ACADOS_ENV), "python", str(ACADOS_PEER), str(problem), "--repeat", str(repeat), *args],
+                             capture_output=True, text=True, timeout=3600, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    lines = out.stdout.strip().splitlines()
+    if out.returncode != 0 or not lines:
+        return f"the acados peer failed (exit {out.returncode}): " + " | ".join(out.stderr.strip().splitlines()[-3:])
+    return json.loads(lines[-1])
+
+
+def published_rows(repeat: int) -> dict:
+    """acados and gtmodel on the published minimum-time benchmarks :data:`ACADOS_PUBLISHED`, each against its published value.
+
+    Parameters
+    ----------
+    repeat : int
+        Solves per figure (gtmodel: after one warm-up solve, the median solver CPU of its
+        ``timing``, refinement passes included; acados: the peer's median).
+
+    Returns
+    -------
+    dict
+        Per file: ``published``, ``elements``; ``acados_final_time_s``, ``acados_rel_diff_published``,
+        ``acados_status``, ``acados_iterations``, ``acados_solve_cpu_s`` (or ``acados_skipped``);
+        ``final_time_s``, ``rel_diff_published``, ``solve_cpu_s``, ``refinement_passes`` (gtmodel's);
+        ``ratio_cpu_to_acados``.
+    """
+    import functools
+    import tomllib
+
+    from bench_ocp_suite import solve_cpu  # the suite's solver CPU of a result (refinement passes included)
+
+    rows = {}
+    for name in ACADOS_PUBLISHED:
+        path = ROOT / "problems" / "benchmarks" / f"{name}.toml"
+        published = float(tomllib.loads(path.read_text())["benchmark"]["published"])
+        decl = load_problem(path).declaration
+        opt = decl.optimization
+        row = {"published": published, "elements": decl.method.elements}
+        load_problem(path).declaration.solve()  # compile (or load the cached) derivatives once
+        runs = [load_problem(path).declaration.solve() for _ in range(max(1, repeat))]
+        r = runs[0]
+        row.update({"final_time_s": float(r.final_time), "rel_diff_published": abs(float(r.final_time) - published) / published,
+                    "status": str(r.status), "refinement_passes": len(r.refinement),
+                    "solve_cpu_s": statistics.median(solve_cpu(x) for x in runs)})
+        export = functools.partial(export_acados_ocp, opt, decl.method, opt.parameters, np.ones(opt.flat().nu))
+        a = acados_peer(export, repeat, ACADOS_PUBLISHED_ARGS)
+        if isinstance(a, str):
+            row["acados_skipped"] = a
+        else:
+            row.update({"acados_final_time_s": a["final_time_s"],
+                        "acados_rel_diff_published": abs(a["final_time_s"] - published) / published,
+                        "acados_status": a["status"], "acados_iterations": a["iterations"], "acados_solve_cpu_s": a["solve_cpu_s"],
+                        "acados_final_state_violation": a["final_state_violation"], "acados_config": a["config"],
+                        "ratio_cpu_to_acados": row["solve_cpu_s"] / a["solve_cpu_s"]})
+        rows[name] = row
+    return rows
+
+
 def ours(decl) -> tuple[float, float, int, str, float, dict | None]:
     """gtmodel's solve (the solver call); returns (solve s, final time, iterations, status, CPU s, its coarse start or None, its stats)."""
     s = solve_point_to_point(decl)
@@ -149,6 +383,8 @@ def main() -> None:
     ap.add_argument("--json", action="store_true", help="print one JSON object on the last line")
     ap.add_argument("--repeat", type=int, default=3, help="solves per figure (median)")
     ap.add_argument("--grid", default="50,100,200,400", help="elements of the per-iteration grid")
+    ap.add_argument("--no-acados", action="store_true", help="skip the acados peer")
+    ap.add_argument("--published", action="store_true", help="also acados and gtmodel on ACADOS_PUBLISHED, against the published optima")
     a = ap.parse_args()
     decl = load_problem(a.problem).declaration
     ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}  # CPU time in the stats, as the peer's
@@ -179,7 +415,6 @@ def main() -> None:
         "opti_expand_solve_s": statistics.median(p[0] for p in fast),
         "opti_expand_iterations": fast[0][2], "opti_expand_status": fast[0][3], "opti_expand_final_time_s": fast[0][1],
         "opti_expand_final_time_rel_diff": abs(mine[0][1] - fast[0][1]) / abs(fast[0][1]),
-        "acados_skipped": ACADOS_SKIPPED,
     }
     out["ratio_cpu_to_opti_expand"] = out["solve_cpu_s"] / out["opti_expand_solve_cpu_s"]
     print(f"gtmodel (IPOPT) CPU / Opti expand=True CPU: {out['ratio_cpu_to_opti_expand']:.3f}x (the fastest Opti; goal <= 0.1)")
@@ -190,7 +425,18 @@ def main() -> None:
     out["speedup_cpu"] = out["peer_solve_cpu_s"] / out["solve_cpu_s"]
     print(f"speedup over the shipped Opti: CPU {out['speedup_cpu']:.1f}x (wall {out['speedup']:.1f}x); final times differ by "
           f"{out['final_time_rel_diff']:.2e} (relative; {out['opti_expand_final_time_rel_diff']:.2e} from Opti expand=True)")
-    print(f"acados: skipped ({ACADOS_SKIPPED})")
+    acados = "skipped (--no-acados)" if a.no_acados else acados_peer(lambda folder: export_acados(decl, folder), a.repeat)
+    if isinstance(acados, str):
+        out["acados_skipped"] = acados
+        print(f"acados: {acados}")
+    else:
+        out.update({"acados_solve_cpu_s": acados["solve_cpu_s"], "acados_time_tot_s": acados["time_tot_s"],
+                    "acados_iterations": acados["iterations"], "acados_status": acados["status"],
+                    "acados_final_time_s": acados["final_time_s"],
+                    "acados_final_time_rel_diff": abs(acados["final_time_s"] - mine[0][1]) / abs(mine[0][1]),
+                    "acados_config": acados["config"]})
+        print(f"{'acados':14s} {acados['solve_cpu_s']:10.3f} {'':>10s} {acados['iterations']:5d} {acados['final_time_s']:14.10f}  "
+              f"{acados['status']} ({acados['config']}; final time {out['acados_final_time_rel_diff']:.2e} relative from gtmodel's)")
     ms, ms_cpu = {}, {}
     for n in (int(x) for x in a.grid.split(",")):
         dn = dataclasses.replace(decl, elements=n)  # the shortcut (an InitVar): replacing ``method`` alone is undone by it
@@ -229,6 +475,10 @@ def main() -> None:
     out["best_solve_cpu_s"], out["best_config"] = best
     out["best_ratio_cpu_to_opti_expand"] = best[0] / out["opti_expand_solve_cpu_s"]
     out["cpu_per_iteration_400_over_50"] = out["ms_per_iteration_cpu_ratio"]
+    if "acados_solve_cpu_s" in out:
+        out["ratio_cpu_to_acados"] = out["best_solve_cpu_s"] / out["acados_solve_cpu_s"]
+        print(f"best gtmodel CPU / acados CPU: {out['ratio_cpu_to_acados']:.3f}x (goal <= 1; acados {out['acados_solve_cpu_s']:.3f} CPU-s, "
+              f"{out['acados_iterations']} SQP iterations, status {out['acados_status']})")
     print(f"fatrop     {out['fatrop_solve_s']:10.3f} {fruns[0][2]:5d} {fruns[0][1]:14.10f}  {fruns[0][3]}  "
           f"({out['fatrop_speedup']:.1f}x the Opti peer, CPU {out['fatrop_speedup_cpu']:.1f}x; {keys[-1]} elements {out['fatrop_solve_s_largest']:.3f} s, "
           f"{out['fatrop_scaling_400_over_50']:.1f}x the {decl.method.elements}-element time, CPU {out['fatrop_scaling_400_over_50_cpu']:.1f}x, {bruns[0][2]} iterations, {bruns[0][3]})")
@@ -236,6 +486,17 @@ def main() -> None:
           f"CPU per iteration {keys[-1]} / {keys[0]} elements (IPOPT): {out['cpu_per_iteration_400_over_50']:.1f}x")
     print(f"fatrop without the NLP's functions: {out['fatrop_solver_cpu_s']:.3f} CPU-s, {out['fatrop_speedup_bound_cpu']:.1f}x the peer "
           "(the speedup if the derivatives cost nothing)")
+    if a.published and not a.no_acados:
+        out["acados_published"] = published_rows(a.repeat)
+        for name, row in out["acados_published"].items():
+            if "acados_skipped" in row:
+                print(f"{name}: acados {row['acados_skipped']}")
+                continue
+            print(f"{name} ({row['elements']} elements; published {row['published']:g}): gtmodel T_f {row['final_time_s']:.7f} "
+                  f"({row['rel_diff_published']:.1e} rel., {row['solve_cpu_s']:.4f} CPU-s, {row['refinement_passes']} refinement passes), "
+                  f"acados T_f {row['acados_final_time_s']:.7f} ({row['acados_rel_diff_published']:.1e} rel., "
+                  f"{row['acados_solve_cpu_s']:.4f} CPU-s, {row['acados_iterations']} iterations, status {row['acados_status']}); "
+                  f"CPU ratio {row['ratio_cpu_to_acados']:.2f}x")
     out["load_average"] = os.getloadavg()[0]
     if a.json:
         print(json.dumps(out))
