@@ -28,14 +28,19 @@ CASES = [("sqpmethod", {}, [1e300, 1e300]), ("sqpmethod", {"x_ub": {"x": 0.5}, "
          ("fatrop", {"x_ub": {"x": 0.5}, "hard_constraints": True}, [0.45, 5.0]), ("hpipm", {}, [1e300, 1e300])]
 
 
-@pytest.mark.parametrize("solver, kwargs, bad", CASES, ids=["qrqp overflow", "daqp infeasible", "fatrop infeasible", "hpipm overflow"])
-def test_failed_step_returns_the_last_input_saturated(tmp_path, solver, kwargs, bad):
+def _double_integrator_step(tmp_path, solver, kwargs):
+    """The reference times and the generated MPC step of the double integrator, rest to 1 in 0.2 s."""
     ode = explicit_ode(double_integrator()[0])
     t = DT * np.arange(101)
     x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
     c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=20, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
                        method="euler", solver=solver, **kwargs)
-    generated = generate_loop_step(mpc_step(c, "di"), tmp_path, prefix="gt_di")
+    return t, generate_loop_step(mpc_step(c, "di"), tmp_path, prefix="gt_di")
+
+
+@pytest.mark.parametrize("solver, kwargs, bad", CASES, ids=["qrqp overflow", "daqp infeasible", "fatrop infeasible", "hpipm overflow"])
+def test_failed_step_returns_the_last_input_saturated(tmp_path, solver, kwargs, bad):
+    t, generated = _double_integrator_step(tmp_path, solver, kwargs)
     controller, _, _ = compiled_step(generated, compile_shared(generated, tmp_path / "build"))
     status, u_ok = controller(t[40], [0.3, 1.0])
     assert status == 0 and np.all(np.isfinite(u_ok))
@@ -49,12 +54,7 @@ def test_failed_step_leaves_no_trace_in_the_next(tmp_path, solver, kwargs, bad):
     # reference: a second controller of the same library (its own memory, the same thread) that never saw the failure;
     # the failed step keeps the memory, so the next good step must be the same to the bit (the hpipm step keeps
     # HPIPM's memory per thread across QPs: gtmodel.codegen.hpipm_source.patch_hpipm_memory)
-    ode = explicit_ode(double_integrator()[0])
-    t = DT * np.arange(101)
-    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])
-    c = mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=20, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0],
-                       method="euler", solver=solver, **kwargs)
-    generated = generate_loop_step(mpc_step(c, "di"), tmp_path, prefix="gt_di")
+    t, generated = _double_integrator_step(tmp_path, solver, kwargs)
     library = compile_shared(generated, tmp_path / "build")
     failed, _, _ = compiled_step(generated, library)
     clean, _, _ = compiled_step(generated, library)
