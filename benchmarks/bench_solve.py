@@ -67,9 +67,10 @@ from gtmodel.problems import load_problem
 from gtmodel.trajectory import point_to_point as ptp
 from gtmodel.trajectory.point_to_point import SOLVER_OPTIONS, build_optimization, solve_point_to_point
 
+from bench_mpc import ACADOS_ENV, acados_available  # the one check of acados' venv (benchmarks/ is on sys.path)
+
 ROOT = Path(__file__).resolve().parents[1]
 #: acados' venv maker and the offline minimum-time peer run inside it (issue 46, item 1).
-ACADOS_ENV = ROOT / "benchmarks" / "acados_env.sh"
 ACADOS_PEER = ROOT / "benchmarks" / "peers" / "acados_ocp.py"
 #: The peer's options (see its docstring): the force constant per interval (acados' usual form; gtmodel's
 #: polynomial per interval, with a clock state, makes acados 0.2.2's HPIPM return NaN at the second SQP iteration
@@ -264,15 +265,6 @@ def export_acados_ocp(opt, method, parameters: dict, u_nom: np.ndarray, folder: 
              tf_bounds=np.asarray(opt.final_time_bounds, float), tf_guess=tfg, x_guess=x_guess, u_guess=u_guess,
              **{f"{name}_file": f"{name}.casadi" for name in funcs})
     return path
-
-
-def acados_available() -> str:
-    """Empty when acados' venv is there or can be made (:data:`ACADOS_ENV`), else the reason."""
-    try:
-        out = subprocess.run([str(ACADOS_ENV)], capture_output=True, text=True, timeout=1800)
-    except (OSError, subprocess.TimeoutExpired) as e:
-        return f"acados venv: {e}"
-    return "" if out.returncode == 0 else (out.stderr.strip().splitlines() or ["acados_env.sh failed"])[-1]
 
 
 def acados_peer(export, repeat: int, args: tuple = ACADOS_ARGS) -> dict | str:
