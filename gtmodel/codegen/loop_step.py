@@ -61,10 +61,11 @@ from gtmodel.codegen.hpipm_source import hpipm_libraries, patch_hpipm_memory, pa
 from gtmodel._escape import c_comment, check_c_identifier
 from gtmodel.errors import CodegenError, InputError
 from gtmodel.control.mpc import MPCController
+from gtmodel.control.position_loop import PoseCorrection, ReferenceStreaming
 from gtmodel.control.tracking import TrackingController
 from gtmodel.control.reference import FLOAT_PERIOD_LIMIT
 
-__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "generate_loop_step", "build_step", "load_loop_step"]
+__all__ = ["LOOP_KIND", "LOOP_TOLERANCE", "SOLVER_LIBRARIES", "HEAP_ARENA_BYTES", "HEAP_WRAP_FLAGS", "uses_heap_arena", "LoopStep", "solver_libraries", "tracking_step", "mpc_step", "position_step", "generate_loop_step", "build_step", "load_loop_step"]
 
 log = logging.getLogger("gtmodel")
 
@@ -322,6 +323,39 @@ def mpc_step(controller: MPCController, name: str = "mpc", real: str = "double")
     return LoopStep(name=name, function=c.function(real), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
                     x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text, real=real, float_tolerance=ftol,
                     fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
+
+
+def position_step(controller: PoseCorrection | ReferenceStreaming, name: str = "position") -> LoopStep:
+    """The loop step of a controller behind a robot's position interface (:mod:`gtmodel.control.position_loop`).
+
+    Parameters
+    ----------
+    controller : PoseCorrection or ReferenceStreaming
+        Cvitanic's pose correction from a tracker, or a streamed reference with its ILC correction.
+    name : str, optional
+        Controller name for the header.
+
+    Returns
+    -------
+    LoopStep
+        Its Function, period, saturation bounds, first output, the plausible measurement and
+        memory (:meth:`~gtmodel.control.position_loop.PoseCorrection.limits`) and sampled
+        measurements for the check.
+
+    Raises
+    ------
+    InputError
+        Not one of the two controllers.
+    """
+    c = controller
+    if not isinstance(c, (PoseCorrection, ReferenceStreaming)):
+        raise InputError(f"controller: expected a PoseCorrection or a ReferenceStreaming, got {type(c).__name__}")
+    lim = c.limits()
+    t_end = c.dt * (c.length - 1) if isinstance(c, ReferenceStreaming) else 1.0
+    return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb, u_ub=c.u_ub, u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), description=c.description + "\nStates x: "
+                    + ", ".join(c.x_names) + "\nInputs u: " + ", ".join(c.u_names), t_range=(0.0, t_end), x_samples=c.samples(),
+                    x_range=lim["x"], u_range=lim["u_last"])
 
 
 def _guards(controller: TrackingController | MPCController) -> dict[str, Any]:

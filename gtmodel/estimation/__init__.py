@@ -27,7 +27,7 @@ Lower layers only: control (the former paths above), robots, modeling and the ba
 """
 
 from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter
-from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, run_ilc
+from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, next_correction, run_ilc
 from gtmodel.estimation.filters.kalman import ExtendedKalmanFilter, KalmanFilter, StationaryKalman, tune_position_noise
 from gtmodel.estimation.filters.end_effector import IMU_ROTATION, IMU_TRANSLATION_M, EndEffectorModel, constant_acceleration
 from gtmodel.estimation.filters.gaussian import FilterRun
@@ -45,7 +45,7 @@ from gtmodel.estimation.ilc.experiment import REQUIREMENTS, SIGNALS, ILCCase, IL
 
 __all__: list[str] = []
 __all__ += ["lifted_matrix", "time_window", "QFilter", "LearningFilter", "ILCStability", "stability"]
-__all__ += ["error_measure", "ILCResult", "run_ilc", "ilc_correction_function"]
+__all__ += ["error_measure", "ILCResult", "run_ilc", "next_correction", "ilc_correction_function"]
 __all__ += ["ToolStructure", "SensorModel", "TrackingPlant", "TrackingResponse"]
 __all__ += ["ComplementaryFilter", "THESIS_CUTOFFS_HZ"]
 __all__ += ["StationaryKalman", "tune_position_noise"]

@@ -11,7 +11,7 @@
 
 from __future__ import annotations
 
-from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, run_ilc
+from gtmodel.estimation.ilc.iteration import ILCResult, error_measure, ilc_correction_function, next_correction, run_ilc
 from gtmodel.estimation.ilc.lifted import ILCStability, LearningFilter, QFilter, RobustQFilter, lifted_matrix, stability, time_window
 from gtmodel.estimation.ilc.thesis import thesis_table_7_2
 from gtmodel.estimation.ilc.experiment import Q_DESIGNS, REQUIREMENTS, SIGNALS, ILCCase, ILCCaseResult, ILCExperiment, ILCReference
@@ -20,6 +20,7 @@ __all__ = [
     "error_measure",
     "ILCResult",
     "run_ilc",
+    "next_correction",
     "ilc_correction_function",
     "lifted_matrix",
     "time_window",

@@ -35,7 +35,7 @@ from gtmodel._arrays import as_finite, as_signal, positive_float
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["error_measure", "ILCResult", "run_ilc", "ilc_correction_function"]
+__all__ = ["error_measure", "ILCResult", "run_ilc", "next_correction", "ilc_correction_function"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -235,7 +235,7 @@ def run_ilc(
                 f"to {m[j]:.4g} (trial {k}), beyond divergence_factor = {factor:g}"
             )
             break
-        u = _as_2d(Q.apply(u + _as_2d(L.apply(eps), "L.apply", shape)), "Q.apply", shape)
+        u = next_correction(u, eps, Q, L)
         next_u = u.copy()
     else:
         first, last = measures[0], measures[-1]
@@ -255,6 +255,39 @@ def run_ilc(
         logs={key: np.stack(v) for key, v in logs.items()},
         next_u=next_u,
     )
+
+
+def next_correction(u: Any, eps: Any, Q: Any, L: Any) -> np.ndarray:
+    """One update of the ILC law, Dressler (2012), eq. 7.2: ``u_{k+1} = Q (u_k + L eps_k)``, column by column.
+
+    The step :func:`run_ilc` repeats; alone, it is the next iteration of a trial run
+    elsewhere, e.g. on a robot whose cycle log gives ``eps`` (``gtmodel loop``).
+
+    Parameters
+    ----------
+    u : array_like, shape (N, d)
+        The correction of the trial (rows are cycles, columns axes or directions).
+    eps : array_like, shape (N, d)
+        The trial's learning signal (reference minus measured, per cycle).
+    Q : QFilter or object with ``apply``
+        The robustness filter (:class:`~gtmodel.estimation.ilc.lifted.QFilter`).
+    L : LearningFilter or object with ``apply``
+        The learning filter (:class:`~gtmodel.estimation.ilc.lifted.LearningFilter`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, d)
+        The next correction.
+
+    Raises
+    ------
+    InputError
+        ``u`` or ``eps`` not finite, of different shapes, or a filter's output of another shape.
+    """
+    u = as_signal(u, "u", vector=True)
+    shape = u.shape
+    eps = _as_2d(as_signal(eps, "eps", vector=True), "eps", shape)
+    return _as_2d(Q.apply(u + _as_2d(L.apply(eps), "L.apply", shape)), "Q.apply", shape)
 
 
 def ilc_correction_function(table: Any) -> ca.Function:
