@@ -47,7 +47,7 @@ def parse_override(text: str) -> tuple[str, list[Any]]:
     return field, values
 
 
-def apply_override(data: dict[str, Any], field: str, value: Any, path: Path) -> dict[str, Any]:
+def apply_override(data: dict[str, Any], field: str, value: Any, path: Path, create: bool = False) -> dict[str, Any]:
     """A copy of a problem document with one field replaced.
 
     A field without a dot is looked up in ``[parameters]`` first (named parameters of
@@ -63,6 +63,10 @@ def apply_override(data: dict[str, Any], field: str, value: Any, path: Path) -> 
         New value.
     path : pathlib.Path
         The file (for messages).
+    create : bool, optional
+        Set the field even where the file leaves it (and its table) to the default: a
+        command-line option such as ``gtmodel loop --listen``; the schema validates the
+        result, so a field the kind does not have is still refused (default False).
 
     Returns
     -------
@@ -72,7 +76,8 @@ def apply_override(data: dict[str, Any], field: str, value: Any, path: Path) -> 
     Raises
     ------
     ProblemError
-        If the field does not exist in the file (an override never adds fields silently).
+        If the field does not exist in the file and ``create`` is False (an override never
+        adds fields silently), or a part of its path is not a table.
     """
     out = copy.deepcopy(data)
     parts = field.split(".")
@@ -80,10 +85,14 @@ def apply_override(data: dict[str, Any], field: str, value: Any, path: Path) -> 
         parts = ["parameters", field]
     node: Any = out
     for part in parts[:-1]:
+        if create and isinstance(node, dict) and part not in node:
+            node[part] = {}
         if not isinstance(node, dict) or part not in node:
             raise ProblemError(f"{path}: cannot sweep '{field}': no table '{part}' in the file")
         node = node[part]
-    if not isinstance(node, dict) or parts[-1] not in node:
+    if not isinstance(node, dict):
+        raise ProblemError(f"{path}: cannot set '{field}': '{'.'.join(parts[:-1])}' is not a table in the file")
+    if parts[-1] not in node and not create:
         raise ProblemError(f"{path}: cannot sweep '{field}': the field is not in the file (declare it, e.g. in [parameters])")
     node[parts[-1]] = value
     return out

@@ -37,7 +37,7 @@ __all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "wri
 _log = logging.getLogger("gtmodel")
 
 
-def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Problem:
+def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None, settings: Mapping[str, Any] | None = None) -> Problem:
     """Read and validate a problem file.
 
     Parameters
@@ -47,6 +47,10 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
     overrides : Mapping[str, Any], optional
         Fields to replace before validation (dotted names; a bare name is looked up in
         ``[parameters]`` first), e.g. ``{"w": 0.001}``.
+    settings : Mapping[str, Any], optional
+        Fields set from the command line (dotted names), also where the file leaves them to
+        their default (e.g. ``{"interface.listen": "0.0.0.0:49152"}`` from ``gtmodel loop
+        --listen``); validated by the schema like the file's own.
 
     Returns
     -------
@@ -65,6 +69,8 @@ def load_problem(path: str | Path, overrides: Mapping[str, Any] | None = None) -
     data = read_toml(path, ProblemError, "problem file")
     for key, value in (overrides or {}).items():
         data = apply_override(data, key, value, path)
+    for key, value in (settings or {}).items():
+        data = apply_override(data, key, value, path, create=True)
     file = ProblemFile(path)
     kind_name = canonical_kind(data.get("kind"), str(path))  # a renamed kind's former name: the new one, with a warning
     if not isinstance(kind_name, str) or kind_name not in KINDS:
@@ -307,6 +313,7 @@ def run_problem(
     warm_start: bool = False,
     heartbeat: bool = False,
     report: bool = False,
+    settings: Mapping[str, Any] | None = None,
 ) -> RunOutcome:
     """Load, solve and write one problem; every outcome becomes a status and a summary.
 
@@ -330,6 +337,8 @@ def run_problem(
         Log a line every few seconds while solving (when nothing else shows progress).
     report : bool, optional
         Also write ``report.html`` (:func:`write_results`).
+    settings : Mapping[str, Any], optional
+        Command-line settings of fields (:func:`load_problem`).
 
     Returns
     -------
@@ -348,7 +357,7 @@ def run_problem(
     phases: dict[str, dict[str, float]] = {}
     try:
         with timed(phases, "load"):
-            problem = load_problem(path, overrides)
+            problem = load_problem(path, overrides, settings)
         target = Path(out) if out is not None else Path("results") / problem.name
         label = f"solving {problem.name} ({problem.kind})"
         _log.info("%s ...", label)
