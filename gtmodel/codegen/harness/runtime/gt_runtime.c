@@ -379,13 +379,14 @@ static void *gt_cycle(void *arg)
         }
 #if GT_RT_INTERFACE == GT_RT_RSI
         t = (double)(int64_t)(seq - seq0) / 1000.0;
+#else
+        t = has_tm ? (double)(int32_t)(tm - tm0) / 1000.0 : (double)(S.cycles - cycles0) * GT_RT_PERIOD_S;
+#endif
+        (void)seq0; /* each interface uses some of these */
         (void)has_tm;
         (void)tm0;
         (void)cycles0;
         (void)start;
-#else
-        t = has_tm ? (double)(int32_t)(tm - tm0) / 1000.0 : (double)(S.cycles - cycles0) * GT_RT_PERIOD_S;
-#endif
         e.t = t;
         if (!have_last) { /* the start: zero corrections, or the robot's planned position */
             int ok = 1;
@@ -519,11 +520,10 @@ static double gt_number_arg(const char *name, const char *text, double lo, doubl
 
 static int gt_udp(struct sockaddr_in *a, const char *what)
 {
-    int fd = socket(AF_INET, SOCK_DGRAM, 0), one = 1;
+    int fd = socket(AF_INET, SOCK_DGRAM, 0); /* no SO_REUSEADDR: a second runtime on the port is a bind error */
     socklen_t len = sizeof *a;
     char where[96];
     if (fd < 0) gt_fail(3, "cannot open a UDP socket", strerror(errno));
-    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
     if (bind(fd, (struct sockaddr *)a, sizeof *a) != 0) {
         char ip[INET_ADDRSTRLEN] = "?";
         inet_ntop(AF_INET, &a->sin_addr, ip, sizeof ip);
