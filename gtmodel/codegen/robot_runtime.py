@@ -11,7 +11,7 @@ messages ``gt_egm.c`` through the vendored nanopb 0.4.9.1 and ``egm.pb.c`` gener
 ``egm.proto``, the ``GTS1`` sensor stream ``gt_sensor_stream.c``) and writes
 ``gt_runtime_config.h`` (field indices, limits as C initialisers, validated names only);
 :func:`build_runtime` compiles one executable with the system C compiler
-(``-std=c11 -O2 -Wall -Wextra -Werror -pthread``). :func:`gtmodel.control.runtime.run_loop`
+(``-std=c11 -O2 -Wall -Wextra -Wpedantic -Wshadow -Werror -pthread``). :func:`gtmodel.control.runtime.run_loop`
 runs it.
 
 The executable's rules (the module docstring of ``gt_runtime.c`` and ``docs/robot.md``):
@@ -56,7 +56,7 @@ from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import CodegenError, InputError
 
 __all__ = ["RSI_INPUTS", "RSI_OUTPUTS", "EGM_INPUTS", "EGM_OUTPUTS", "SENSOR_INPUTS", "DEFAULT_PORTS", "RUNTIME_FLAGS",
-           "RUNTIME_SOURCES", "RuntimeSpec", "RobotRuntime", "build_runtime"]
+           "RUNTIME_SOURCES", "BUILD_FLAGS", "RuntimeSpec", "RobotRuntime", "build_runtime"]
 
 log = logging.getLogger("gtmodel")
 
@@ -374,7 +374,7 @@ static const char *const gt_rt_u_names[GT_RT_NU] = {{{", ".join(c_string(f) for 
 
 
 #: Flags of the runtime's build (with the step's include folders and link flags).
-BUILD_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-pthread")
+BUILD_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Werror", "-pthread")
 
 
 def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> Path:
@@ -403,7 +403,7 @@ def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "dou
     CompilerNotFoundError
         No C compiler.
     CodegenError
-        Writing or compiling failed (a warning included).
+        Writing or compiling failed (a warning included: :data:`BUILD_FLAGS`).
     """
     if not isinstance(source, RobotRuntime):
         raise InputError(f"source: expected a RobotRuntime, got {type(source).__name__}")

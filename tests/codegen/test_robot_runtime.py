@@ -298,7 +298,9 @@ def test_sensor_stream_parser_table_and_hostile_inputs(parsers, tmp_path):
             k = rng.randrange(len(d))
             d[k] = rng.choice(b" \x00\n.-+eE9x") if rng.random() < 0.7 else rng.randrange(256)
         cases.append(("sensor", bytes(d)))
+    cases += [("sensor", b"GTS1 1 0 " + b"7" * 10**6), ("sensor", b"GTS1 1 0 1\x00" + b"1" * 500), ("sensor", b"\x00" * 64)]
     results = _run_cases(parsers, tmp_path, cases)
+    assert [r[0] for r in results[-3:]] == [TOO_LONG, MALFORMED, MALFORMED]
     wrong = [(data[:80], got, vals) for (data, code, values), (got, _, n, vals) in zip(SENSOR_TABLE, results)
              if got != code or (values is not None and vals != values)]
     assert wrong == []

@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import socket
+import subprocess
 import time
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
@@ -249,14 +251,53 @@ def test_max_cycles_ends_the_run(exes, tmp_path):
     assert replies[20:] == [None] * 5
 
 
-def test_sigterm_ends_the_run_with_the_log_flushed(exes, tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_ends_the_run_with_the_log_flushed(exes, tmp_path, sig):
     def script(peer: Peer):
         for k in range(50):
             peer.exchange(rob(1000 + 4 * k))
-        os.kill(peer.pid, signal.SIGTERM)
+        os.kill(peer.pid, sig)
     run, _ = session(exes["rsi_plain"], tmp_path / "run", script, idle_timeout=60)
-    assert run.status == Status.INTERRUPTED and run.stats["signal"] == "SIGTERM" and run.exit_code == 0
-    assert read_cycle_log(run.log_path)["cycle"].tolist() == list(range(1, 51))
+    assert run.status == Status.INTERRUPTED and run.stats["signal"] == sig.name and run.exit_code == 0
+    assert read_cycle_log(run.log_path)["cycle"].tolist() == list(range(1, 51)) and run.stats["log"]["written"] == 50
+
+
+def test_a_crash_is_a_status(exes, tmp_path):
+    def script(peer: Peer):
+        peer.exchange(rob(1000))
+        os.kill(peer.pid, signal.SIGKILL)
+    run, _ = session(exes["rsi_plain"], tmp_path / "run", script, idle_timeout=60)
+    assert run.status == Status.ERROR and "killed by signal 9 (SIGKILL)" in run.message and run.exit_code == -9
+
+
+def test_without_the_privilege_the_runtime_runs_on_and_says_why(exes, tmp_path):
+    wrapper = []
+    if os.geteuid() == 0:  # root: drop the capabilities a real-time request needs
+        if shutil.which("setpriv") is None:
+            pytest.skip("root without setpriv: cannot drop CAP_SYS_NICE")
+        wrapper = ["setpriv", "--bounding-set", "-sys_nice,-ipc_lock", "--inh-caps", "-sys_nice,-ipc_lock"]
+    out = tmp_path / "run"
+    out.mkdir()
+    proc = subprocess.Popen([*wrapper, str(exes["rsi_plain"]), "--out", str(out), "--listen", "127.0.0.1:0", "--idle-timeout", "0.3"],
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        peer = Peer(read_ready(out, 20))
+        replies = [peer.exchange(rob(1000 + 4 * k)) for k in range(10)]
+        peer.close()
+        assert proc.wait(30) == 0, proc.stderr.read()
+    finally:
+        proc.kill()
+        proc.wait()
+    stats = json.loads((out / "runtime_stats.json").read_text())
+    if stats["realtime"]["sched_fifo"]:
+        pytest.skip("this user may ask for SCHED_FIFO (rtprio limit): nothing refused")
+    assert None not in replies and stats["replies"] == 10
+    assert stats["realtime"]["granted"] is False and "SCHED_FIFO: Operation not permitted" in stats["realtime"]["reason"]
+
+
+def test_realtime_not_asked_is_said(exes, tmp_path):
+    run, _ = session(exes["rsi_plain"], tmp_path / "run", rsi_script(3, sensor=False), realtime=False)
+    assert run.summary["realtime"] == {"granted": False, "reason": "not asked (--no-realtime)"} and run.summary["replies"] == 3
 
 
 def test_time_limit_stops_a_run_that_never_ends(exes, tmp_path):

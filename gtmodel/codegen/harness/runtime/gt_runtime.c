@@ -81,6 +81,8 @@
 #define GT_RT_RING 8192u /* entries: 32 s of cycles at 4 ms; the writer drains every 5 ms */
 #define GT_RT_MAX_DATAGRAM 4096
 #define GT_RT_NSTATUS 32
+#define GT_RT_CYCLE_STACK (1u << 20)  /* the step's CasADi work arrays live on it */
+#define GT_RT_WRITER_STACK (256u << 10)
 
 typedef struct {
     uint64_t cycle, seq;
@@ -93,6 +95,7 @@ typedef struct {
 static gt_rt_entry gt_ring[GT_RT_RING];
 static atomic_uint_fast64_t gt_ring_head, gt_ring_tail; /* head: producer (cycle), tail: consumer (writer) */
 static atomic_int gt_stop, gt_cycle_done, gt_writer_stop;
+static const char *gt_cycle_end; /* set by the cycle thread before gt_cycle_done, read by main after the join */
 
 typedef struct {
     uint64_t packets, cycles, replies, malformed, too_long, non_finite, duplicate_or_old, missing_field, held;
@@ -289,7 +292,7 @@ static void *gt_cycle(void *arg)
         n = recvfrom(gt_fd, buf, sizeof buf, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
         if (n < 0) {
             if (have_seq && gt_now() - last_rx > O.idle_timeout) {
-                S.end = "idle_timeout";
+                gt_cycle_end = "idle_timeout";
                 break;
             }
             continue;
@@ -481,7 +484,7 @@ static void *gt_cycle(void *arg)
         e.flags = flags;
         gt_log_push(&e);
         if (O.max_cycles > 0 && S.cycles >= O.max_cycles) {
-            S.end = "max_cycles";
+            gt_cycle_end = "max_cycles";
             break;
         }
     }
@@ -607,7 +610,7 @@ static void gt_paths(const char *out)
 int main(int argc, char **argv)
 {
     pthread_t cycle, writer;
-    pthread_attr_t attr;
+    pthread_attr_t attr, wattr, plain;
     sigset_t set;
     const char *signal_name = NULL;
     char tmp[4200];
@@ -673,8 +676,19 @@ int main(int argc, char **argv)
         if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) S.realtime_mlock = 1;
         else snprintf(S.realtime_reason, sizeof S.realtime_reason, "mlockall: %s", strerror(errno));
     }
-    if (pthread_create(&writer, NULL, gt_writer, NULL) != 0) gt_fail(3, "cannot start the log thread", NULL);
+    /* threads with small stacks (the cycle's buffers are static): locked memory stays small */
+    pthread_attr_init(&wattr);
+    pthread_attr_setstacksize(&wattr, GT_RT_WRITER_STACK);
+    err = pthread_create(&writer, &wattr, gt_writer, NULL);
+    if (err != 0 && S.realtime_mlock) { /* the locked stack over RLIMIT_MEMLOCK: on without locking */
+        munlockall();
+        S.realtime_mlock = 0;
+        snprintf(S.realtime_reason, sizeof S.realtime_reason, "mlockall: undone (thread stacks over the locked-memory limit)");
+        err = pthread_create(&writer, &wattr, gt_writer, NULL);
+    }
+    if (err != 0) gt_fail(3, "cannot start the log thread", strerror(err));
     pthread_attr_init(&attr);
+    pthread_attr_setstacksize(&attr, GT_RT_CYCLE_STACK);
     err = -1;
     if (O.realtime) {
         struct sched_param sp;
@@ -689,7 +703,17 @@ int main(int argc, char **argv)
             snprintf(S.realtime_reason + used, sizeof S.realtime_reason - used, "%sSCHED_FIFO: %s", used ? "; " : "", strerror(err));
         }
     }
-    if (err != 0 && pthread_create(&cycle, NULL, gt_cycle, NULL) != 0) gt_fail(3, "cannot start the cycle thread", NULL);
+    if (err != 0) {
+        pthread_attr_init(&plain);
+        pthread_attr_setstacksize(&plain, GT_RT_CYCLE_STACK);
+        err = pthread_create(&cycle, &plain, gt_cycle, NULL);
+        if (err != 0 && S.realtime_mlock) {
+            munlockall();
+            S.realtime_mlock = 0;
+            err = pthread_create(&cycle, &plain, gt_cycle, NULL);
+        }
+        if (err != 0) gt_fail(3, "cannot start the cycle thread", strerror(err));
+    }
     /* ready: the ports (0 asked: the kernel's) */
     snprintf(tmp, sizeof tmp, "%s.tmp", O.ready_path);
     f = fopen(tmp, "w");
@@ -707,6 +731,7 @@ int main(int argc, char **argv)
         }
     }
     pthread_join(cycle, NULL);
+    if (S.end == NULL) S.end = gt_cycle_end;
     atomic_store(&gt_writer_stop, 1);
     pthread_join(writer, NULL);
     if (fclose(gt_log_file) != 0) ++S.log_write_errors;
