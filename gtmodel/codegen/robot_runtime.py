@@ -136,7 +136,8 @@ class RuntimeSpec:
         ``(nu,)`` the bounds of every reply [mm or deg]; finite, ``|.| <= 1e6``; RSI
         corrections must allow zero (``lower <= 0 <= upper``).
     rate : sequence of float
-        ``(nu,)`` the largest change of a reply per cycle [mm or deg per cycle], positive, finite.
+        ``(nu,)`` the largest change of a reply per cycle [mm or deg per cycle], positive, finite
+        (RSI: at least 1e-6, its numbers' last decimal).
     egm_mode : {"joint", "cartesian", "path_correction"}, optional
         EGM's reply: ``EgmSensor`` planned joints, ``EgmSensor`` planned Cartesian position,
         or ``EgmSensorPathCorr``.
@@ -213,6 +214,8 @@ class RuntimeSpec:
             raise InputError(f"lower, upper: expected lower <= upper per output, got {list(self.lower)} and {list(self.upper)}")
         if any(r <= 0 for r in self.rate):
             raise InputError(f"rate: expected positive rates per cycle, got {list(self.rate)}")
+        if self.interface == "rsi" and any(r < 1e-6 for r in self.rate):
+            raise InputError(f"rate: RSI's numbers have 6 decimals; expected rates of at least 1e-6 per cycle, got {list(self.rate)}")
         if self.interface == "rsi" and any(lo > 0 or hi < 0 for lo, hi in zip(self.lower, self.upper)):
             raise InputError("lower, upper: RSI corrections start at zero; expected lower <= 0 <= upper")
         if self.correction not in ("relative", "absolute"):

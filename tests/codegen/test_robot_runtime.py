@@ -50,6 +50,7 @@ BAD_SPECS = [
     ({"upper": [1, float("inf")]}, "upper: expected finite values"),
     ({"rate": [0.1, float("nan")]}, "rate: expected finite values"),
     ({"rate": [0.1, 0.0]}, "rate: expected positive"),
+    ({"rate": [0.1, 1e-7]}, "rate: RSI's numbers have 6 decimals"),
     ({"lower": [2, -1], "upper": [1, 1]}, "lower, upper: expected lower <= upper"),
     ({"lower": [0.5, -1]}, "RSI corrections start at zero"),
     ({"correction": "incremental"}, "correction: expected 'relative' or 'absolute'"),

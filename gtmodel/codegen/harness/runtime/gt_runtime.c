@@ -10,7 +10,8 @@
  * robot -> parse (gt_rsi.c / gt_egm.c; bounded, no heap) -> checks (finite, IPOC/seqno strictly
  * newer, every input field present, sensor sample not older than GT_RT_STALE_CYCLES cycles)
  * -> x from the fields -> PREFIX_step -> limits (lower/upper, then the rate per cycle around
- * the last reply: nothing changes a value after them) -> compose -> sendto the sender.
+ * the last reply: nothing changes a value after them; RSI's %.6f numbers are put on the 1e-6 grid
+ * by moving from the last reply towards the limited value, never past it) -> compose -> sendto.
  *
  * Safety rules: a malformed or too long datagram gets no reply (nothing to echo); a non-finite
  * field, a duplicate or older IPOC/seqno, a missing input field: the held reply (the last
@@ -213,6 +214,27 @@ static double gt_limit(double v, double last, int i, uint32_t *flags)
     }
     return y;
 }
+
+#if GT_RT_INTERFACE == GT_RT_RSI
+/* RSI numbers travel as %.6f: the reply moves from the last one (on the 1e-6 grid, as the robot
+ * holds it) towards y by whole micro-units, never past y, so that what the robot holds is exactly
+ * the reply logged, a relative robot's sum of increments never drifts, and the limits hold for
+ * the printed values too. */
+static double gt_rsi_grid(double y, double last, int i)
+{
+    long long k = llround(last * 1e6); /* the last reply, on the grid */
+    double d = (y - last) * 1e6;
+    long long s = (long long)(d + (d > 0 ? 1e-6 : d < 0 ? -1e-6 : 0.0)); /* towards zero; noise of whole units forgiven */
+    long long r = (long long)floor(gt_rt_rate[i] * 1e6 + 1e-6);           /* the limits in whole units */
+    long long hi = (long long)floor(gt_rt_upper[i] * 1e6 + 1e-6) - k;
+    long long lo = (long long)ceil(gt_rt_lower[i] * 1e6 - 1e-6) - k;
+    if (s > r) s = r;
+    if (s < -r) s = -r;
+    if (s > hi) s = hi > 0 ? hi : 0;
+    if (s < lo) s = lo < 0 ? lo : 0;
+    return (double)(k + s) / 1e6;
+}
+#endif
 
 /* the reply of a fallback: hold the last, or one rate step towards the target */
 static void gt_fallback(const double *last, const double *target, double *y, uint32_t *flags)
@@ -454,6 +476,9 @@ static void *gt_cycle(void *arg)
                 flags |= F_DEADLINE_HELD;
                 for (i = 0; i < GT_RT_NU; ++i) y[i] = last[i];
             }
+#if GT_RT_INTERFACE == GT_RT_RSI
+            for (i = 0; i < GT_RT_NU; ++i) y[i] = gt_rsi_grid(y[i], last[i], i);
+#endif
             for (i = 0; i < GT_RT_NREPLY; ++i) values[i] = 0.0;
             for (i = 0; i < GT_RT_NU; ++i) {
                 e.sent[i] = GT_RT_RELATIVE ? y[i] - last[i] : y[i];
