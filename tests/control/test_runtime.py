@@ -60,7 +60,11 @@ def exes(tmp_path_factory):
         return build_runtime(source, tmp_path_factory.mktemp(name))
     egm_step = _step(3, 3, lambda x: (x + 5.0, ca.SX(1)))
     pc_step = _step(1, 3, lambda x: (ca.vertcat(x[0], -x[0], 100.0), ca.SX(1)))
+    cart_step = _step(3, 3, lambda x: (x + ca.DM([1.0, -1.0, 0.5]), ca.SX(1)))
     return {
+        "egm_cart": build("egm_cart", RobotRuntime(cart_step, RuntimeSpec(
+            interface="egm", egm_mode="cartesian", inputs=[f"feedback.cartesian.{a}" for a in "xyz"],
+            outputs=[f"planned.cartesian.{a}" for a in "xyz"], lower=[-2000.0] * 3, upper=[2000.0] * 3, rate=[0.4] * 3))),
         "rsi": build("rsi", _rsi()),
         "rsi_ramp": build("rsi_ramp", _rsi("ramp", "absolute")),
         "rsi_plain": build("rsi_plain", _rsi(sensor=False)),
@@ -411,3 +415,40 @@ def test_egm_path_correction_replies_with_egm_sensor_path_corr(exes, tmp_path):
     pos = np.array([[m.pathCorr.pos.x, m.pathCorr.pos.y, m.pathCorr.pos.z] for m in msgs])
     assert np.allclose(pos[0], [0.25, -0.25, 0.25]) and np.allclose(pos[-1], [0.6, -0.6, 1.0])
     assert run.status == Status.COMPLETED and json.dumps(run.summary)
+
+
+def test_egm_cartesian_guidance_echoes_the_orientation(exes, tmp_path):
+    def script(peer: Peer):
+        out = []
+        for k in range(1, 6):
+            r = egm.EgmRobot()
+            r.header.seqno, r.header.tm = k, 4 * k
+            r.feedBack.cartesian.pos.x, r.feedBack.cartesian.pos.y, r.feedBack.cartesian.pos.z = 500.0, 0.0, 800.0
+            p = r.planned.cartesian
+            p.pos.x, p.pos.y, p.pos.z = 500.0, 0.0, 800.0
+            p.orient.u0, p.orient.u1, p.orient.u2, p.orient.u3 = 0.0, 1.0, 0.0, 0.0
+            out.append(peer.exchange(r.SerializeToString()))
+        return out
+    run, out = session(exes["egm_cart"], tmp_path / "run", script)
+    msgs = [egm.EgmSensor.FromString(r) for r in out]
+    pos = np.array([[m.planned.cartesian.pos.x, m.planned.cartesian.pos.y, m.planned.cartesian.pos.z] for m in msgs])
+    # from the planned start, at 0.4 mm per cycle towards feedback + (1, -1, 0.5)
+    assert np.allclose(pos, [[500.0 + min(0.4 * k, 1.0), -min(0.4 * k, 1.0), 800.0 + min(0.4 * k, 0.5)] for k in range(1, 6)])
+    assert [(m.planned.cartesian.orient.u0, m.planned.cartesian.orient.u1) for m in msgs] == [(0.0, 1.0)] * 5
+    assert run.summary["replies"] == 5 and not any(m.planned.joints.joints for m in msgs)
+
+
+def test_sensor_samples_that_are_old_malformed_or_non_finite_are_dropped_and_counted(exes, tmp_path):
+    def script(peer: Peer):
+        send = lambda line: peer.sensor_sock.sendto(line, peer.sensor_addr)  # noqa: E731
+        replies = []
+        for line in (b"GTS1 5 0.0 0.5\n", b"GTS1 3 0.0 0.7\n", b"GTS1 5 0.0 0.7\n", b"GTS1 6 0.0 nan\n", b"GTS1 7 0.0\n",
+                     b"GTS1 8 0.0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17\n", b"garbage", b"GTS1 9 0.0 0.25\n"):
+            send(line)
+        time.sleep(0.05)
+        replies.append(peer.exchange(rob(1000)))
+        return replies
+    run, replies = session(exes["rsi"], tmp_path / "run", script)
+    assert run.stats["sensor"] == {"accepted": 2, "malformed": 3, "non_finite": 1, "duplicate_or_old": 2, "too_few_values": 0}
+    log = read_cycle_log(run.log_path)
+    assert log["x:sensor.0"].tolist() == [0.25] and replies[0] is not None  # the newest valid sample
