@@ -253,21 +253,49 @@ static void gt_fallback(const double *last, const double *target, double *y, uin
     }
 }
 
+/* ---- the sensor stream (the cycle thread only): the newest valid sample and its age in robot cycles ---- */
+static gt_sensor_sample gt_latest;
+static int gt_have_sensor;
+static uint64_t gt_sensor_seq;
+static int32_t gt_sensor_age;
+
+static void gt_drain_sensor(int32_t age_of_new)
+{
+    static char sbuf[GT_SENSOR_MAX_LEN + 1];
+    static gt_sensor_sample sample;
+    int k;
+    if (gt_sensor_fd < 0) return;
+    for (k = 0; k < 256; ++k) {
+        ssize_t m = recv(gt_sensor_fd, sbuf, sizeof sbuf, MSG_DONTWAIT | MSG_TRUNC);
+        int r;
+        if (m < 0) break;
+        r = gt_sensor_parse(sbuf, (size_t)m > GT_SENSOR_MAX_LEN ? GT_SENSOR_MAX_LEN + 1 : (size_t)m, &sample);
+        if (r == GT_SENSOR_NON_FINITE) ++S.sensor_non_finite;
+        else if (r != GT_SENSOR_OK) ++S.sensor_malformed;
+        else if (gt_have_sensor && sample.seq <= gt_sensor_seq) ++S.sensor_old;
+        else if (sample.n < GT_RT_NSENSOR) ++S.sensor_short;
+        else {
+            gt_latest = sample;
+            gt_sensor_seq = sample.seq;
+            gt_have_sensor = 1;
+            gt_sensor_age = age_of_new;
+            ++S.sensor_accepted;
+        }
+    }
+}
+
 /* ---- the cycle ---- */
 static void *gt_cycle(void *arg)
 {
     static unsigned char buf[GT_RT_MAX_DATAGRAM + 1];
     static unsigned char reply[GT_RT_MAX_DATAGRAM];
-    static char sbuf[GT_SENSOR_MAX_LEN + 1];
     static gt_rt_memory mem;
     static gt_rt_entry e;
-    static gt_sensor_sample sample, latest;
     static double last[GT_RT_NU], target[GT_RT_NU], y[GT_RT_NU], field[64];
     static gt_rt_real xr[GT_RT_NX], ur[GT_RT_NU];
-    int have_last = 0, have_seq = 0, have_sensor = 0, have_t0 = 0;
-    uint64_t last_seq = 0, sensor_seq = 0, seq0 = 0, cycles0 = 0;
+    int have_last = 0, have_seq = 0, have_t0 = 0;
+    uint64_t last_seq = 0, seq0 = 0, cycles0 = 0;
     uint32_t tm0 = 0;
-    int32_t sensor_age = 0;
     double last_rx = 0.0, start = gt_now();
     (void)arg;
     gt_rt_step_init(&mem);
@@ -291,44 +319,26 @@ static void *gt_cycle(void *arg)
             nfd = 2;
         }
         if (poll(pf, (nfds_t)nfd, 20) < 0 && errno != EINTR) break;
-        if (gt_sensor_fd >= 0) { /* drain the sensor stream: keep the newest valid sample */
-            int k;
-            for (k = 0; k < 256; ++k) {
-                ssize_t m = recv(gt_sensor_fd, sbuf, sizeof sbuf, MSG_DONTWAIT | MSG_TRUNC);
-                int r;
-                if (m < 0) break;
-                r = gt_sensor_parse(sbuf, (size_t)m > GT_SENSOR_MAX_LEN ? GT_SENSOR_MAX_LEN + 1 : (size_t)m, &sample);
-                if (r == GT_SENSOR_NON_FINITE) ++S.sensor_non_finite;
-                else if (r != GT_SENSOR_OK) ++S.sensor_malformed;
-                else if (have_sensor && sample.seq <= sensor_seq) ++S.sensor_old;
-                else if (sample.n < GT_RT_NSENSOR) ++S.sensor_short;
-                else {
-                    latest = sample;
-                    sensor_seq = sample.seq;
-                    have_sensor = 1;
-                    sensor_age = -1; /* 0 at the next robot cycle */
-                    ++S.sensor_accepted;
-                }
-            }
-        }
         n = recvfrom(gt_fd, buf, sizeof buf, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
         if (n < 0) {
+            gt_drain_sensor(-1); /* a sample between robot cycles: age 0 at the next one */
             if (have_seq && gt_now() - last_rx > O.idle_timeout) {
                 gt_cycle_end = "idle_timeout";
                 break;
             }
             continue;
         }
-        t_rx = gt_now();
+        t_rx = gt_now(); /* the reply latency runs from here: the datagram in the runtime's hands */
         last_rx = t_rx;
         ++S.packets;
-        ++sensor_age;
+        ++gt_sensor_age;
+        gt_drain_sensor(0);
         memset(&e, 0, sizeof e);
         e.cycle = S.packets;
         for (i = 0; i < GT_RT_NX; ++i) e.x[i] = NAN;
         for (i = 0; i < GT_RT_NU; ++i) e.u[i] = e.y[i] = e.sent[i] = NAN;
         e.status = -1;
-        e.sensor_age = have_sensor ? sensor_age : -1;
+        e.sensor_age = gt_have_sensor ? gt_sensor_age : -1;
 #if GT_RT_INTERFACE == GT_RT_RSI
         {
             static gt_rsi_rob rob;
@@ -373,7 +383,7 @@ static void *gt_cycle(void *arg)
                 if (!(present_mask & ((uint64_t)1 << src))) present = 0;
                 e.x[i] = field[src];
             } else {
-                e.x[i] = have_sensor ? latest.value[-1 - src] : NAN;
+                e.x[i] = gt_have_sensor ? gt_latest.value[-1 - src] : NAN;
             }
         }
         if (code == 3) {
@@ -437,7 +447,7 @@ static void *gt_cycle(void *arg)
             gt_log_push(&e);
             continue;
         }
-        if (GT_RT_NSENSOR > 0 && (!have_sensor || sensor_age > GT_RT_STALE_CYCLES)) stale = 1;
+        if (GT_RT_NSENSOR > 0 && (!gt_have_sensor || gt_sensor_age > GT_RT_STALE_CYCLES)) stale = 1;
         if (flags & (F_NON_FINITE | F_DUPLICATE_OR_OLD | F_MISSING_FIELD)) { /* never the step: the held reply */
             ++S.held;
             flags |= F_HELD;
@@ -491,7 +501,7 @@ static void *gt_cycle(void *arg)
 #else
             rlen = gt_egm_compose(reply, sizeof reply, GT_RT_EGM_MODE, (uint32_t)seq, (uint32_t)(1000.0 * (t_rx - start)), values,
                                   GT_RT_NREPLY, has_orient ? orient : NULL,
-                                  (uint32_t)(have_sensor && sensor_age > 0 ? 1000.0 * GT_RT_PERIOD_S * sensor_age : 0));
+                                  (uint32_t)(gt_have_sensor && gt_sensor_age > 0 ? 1000.0 * GT_RT_PERIOD_S * gt_sensor_age : 0));
 #endif
             if (rlen < 0) {
                 ++S.compose_errors;
