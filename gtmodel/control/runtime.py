@@ -23,12 +23,14 @@ faults seen and what was done, real-time scheduling granted or why not) and the 
 
 from __future__ import annotations
 
+import atexit
 import json
 import logging
 import math
 import os
 import signal
 import subprocess
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -225,6 +227,23 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
     }
 
 
+#: Process groups of the runtimes running now: killed at this process's exit (the runtime also
+#: ends by itself when this process dies: ``--exit-with-parent``).
+_RUNNING: set[int] = set()
+_RUNNING_LOCK = threading.Lock()
+
+
+@atexit.register
+def _kill_running() -> None:
+    with _RUNNING_LOCK:
+        groups = list(_RUNNING)
+    for pgid in groups:
+        try:
+            os.killpg(pgid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+
 def _check_out_dir(out: Path) -> None:
     if out.exists() and not out.is_dir():
         raise InputError(f"out_dir: {out} is a file, expected a folder")
@@ -298,7 +317,7 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
         raise InputError(f"executable: {exe} is not an executable file (build it with gtmodel.codegen.robot_runtime.build_runtime)")
     out = Path(out_dir)
     _check_out_dir(out)
-    cmd = [str(exe.resolve()), "--out", str(out.resolve()), "--idle-timeout", repr(float(idle_timeout))]
+    cmd = [str(exe.resolve()), "--out", str(out.resolve()), "--idle-timeout", repr(float(idle_timeout)), "--exit-with-parent"]
     if listen is not None:
         cmd += ["--listen", f"{listen[0]}:{int(listen[1])}"]
     if sensor_port is not None:
@@ -313,6 +332,8 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     timed_out = False
     proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             errors="replace", start_new_session=True)
+    with _RUNNING_LOCK:
+        _RUNNING.add(proc.pid)
     try:
         try:
             _, err = proc.communicate(timeout=time_limit)
@@ -328,6 +349,8 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
             os.killpg(proc.pid, signal.SIGKILL)  # stragglers of the group
         except (ProcessLookupError, PermissionError):
             pass
+        with _RUNNING_LOCK:
+            _RUNNING.discard(proc.pid)
     code = proc.returncode
     err = (err or "").strip()
     stats: dict[str, Any] = {}

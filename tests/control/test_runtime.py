@@ -16,6 +16,7 @@ import shutil
 import signal
 import socket
 import subprocess
+import sys
 import time
 import xml.etree.ElementTree as ET
 from concurrent.futures import ThreadPoolExecutor
@@ -452,3 +453,25 @@ def test_sensor_samples_that_are_old_malformed_or_non_finite_are_dropped_and_cou
     assert run.stats["sensor"] == {"accepted": 2, "malformed": 3, "non_finite": 1, "duplicate_or_old": 2, "too_few_values": 0}
     log = read_cycle_log(run.log_path)
     assert log["x:sensor.0"].tolist() == [0.25] and replies[0] is not None  # the newest valid sample
+
+
+def test_the_runtime_ends_cleanly_when_the_python_that_started_it_is_killed(exes, tmp_path):
+    out = tmp_path / "run"
+    code = f"from gtmodel.control.runtime import run_loop; run_loop({str(exes['rsi_plain'])!r}, {str(out)!r}, listen=('127.0.0.1', 0), idle_timeout=60)"
+    parent = subprocess.Popen([sys.executable, "-c", code])
+    try:
+        ready = read_ready(out, 30)
+        parent.kill()
+        parent.wait(10)
+        deadline = time.monotonic() + 10
+        while not (out / "runtime_stats.json").exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        parent.kill()
+        parent.wait()
+    stats = json.loads((out / "runtime_stats.json").read_text())
+    assert stats["end"] == "signal" and stats["signal"] == "SIGTERM"
+    with pytest.raises(ProcessLookupError):
+        for _ in range(100):  # the runtime's process is gone
+            os.kill(ready["pid"], 0)
+            time.sleep(0.05)

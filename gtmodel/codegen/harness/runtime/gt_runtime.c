@@ -4,7 +4,7 @@
  * (<prefix>.c, PREFIX_step) and gt_runtime_config.h (the interface, the field maps, the limits).
  *
  *   gt_runtime --out DIR [--listen HOST:PORT] [--sensor-port PORT] [--idle-timeout S]
- *              [--max-cycles N] [--reply-deadline S] [--no-realtime]
+ *              [--max-cycles N] [--reply-deadline S] [--no-realtime] [--exit-with-parent]
  *
  * The cycle (one thread, SCHED_FIFO and mlockall where permitted): receive a datagram from the
  * robot -> parse (gt_rsi.c / gt_egm.c; bounded, no heap) -> checks (finite, IPOC/seqno strictly
@@ -56,6 +56,9 @@
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 
 #include "gt_runtime_config.h"
 #include "gt_egm.h"
@@ -661,9 +664,16 @@ int main(int argc, char **argv)
             O.realtime = 0;
             continue;
         }
+        if (strcmp(a, "--exit-with-parent") == 0) { /* SIGTERM (a clean end) when the starting process dies */
+#ifdef __linux__
+            pid_t parent = getppid();
+            if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || getppid() != parent) gt_fail(3, "--exit-with-parent", "the parent is gone");
+#endif
+            continue;
+        }
         if (v == NULL) {
             fprintf(stderr, "gt_runtime: %s: expected a value (usage: gt_runtime --out DIR [--listen HOST:PORT] [--sensor-port PORT] "
-                            "[--idle-timeout S] [--max-cycles N] [--reply-deadline S] [--no-realtime])\n", a);
+                            "[--idle-timeout S] [--max-cycles N] [--reply-deadline S] [--no-realtime] [--exit-with-parent])\n", a);
             return 2;
         }
         ++i;
