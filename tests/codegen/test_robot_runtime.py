@@ -108,8 +108,9 @@ def test_egm_joint_configuration_starts_from_the_planned_joints(tmp_path):
     assert "gt_rt_u_reply[GT_RT_NU] = {1, 0}" in cfg and "#define GT_RT_NREPLY 2" in cfg
 
 
-def test_build_runtime_makes_one_executable(tmp_path):
-    exe = build_runtime(RobotRuntime(_step(2, 2), RuntimeSpec(**GOOD)), tmp_path)
+@pytest.mark.parametrize("real", ["double", "float"])
+def test_build_runtime_makes_one_executable(tmp_path, real):
+    exe = build_runtime(RobotRuntime(_step(2, 2), RuntimeSpec(**GOOD)), tmp_path, real=real)
     assert exe.is_file() and os.access(exe, os.X_OK)
     proc = subprocess.run([str(exe), "--listen", "127.0.0.1:0"], capture_output=True, text=True, timeout=10)
     assert proc.returncode == 2 and "--out DIR is required" in proc.stderr and proc.stderr.count("\n") == 1
