@@ -40,7 +40,10 @@ The stages, each importing only those below it (an import-linter contract):
   the above (``generate_code``, ``check_code``);
 - :mod:`~gtmodel.codegen.loop_step`: the one step interface of the loop's controllers
   (``<prefix>_init``, ``<prefix>_step`` on a caller-owned memory) around one CasADi Function
-  (the tracking controller; an MPC).
+  (the tracking controller; an MPC);
+- :mod:`~gtmodel.codegen.robot_runtime`: a loop step behind KUKA RSI or ABB EGM over UDP
+  (``RobotRuntime``, a ``CodeSource``; ``build_runtime`` compiles the one executable that
+  :func:`gtmodel.control.runtime.run_loop` runs), just below the front door.
 """
 
 from __future__ import annotations

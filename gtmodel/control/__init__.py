@@ -21,6 +21,8 @@ Modules by job:
   fatrop's stage order;
 * :mod:`~gtmodel.control.bounds`: violations of declared bounds on a closed loop's plant,
   counted by the loop check.
+* :mod:`~gtmodel.control.runtime`: the compiled robot runtime (RSI/EGM over UDP, built by
+  :mod:`gtmodel.codegen.robot_runtime`) run as a child process, its cycle log and counts read.
 
 The names below are imported on first use (:mod:`gtmodel._lazy`). The former paths
 ``gtmodel.estimation.mpc`` etc. are kept as thin modules re-exporting from here.
