@@ -1,28 +1,31 @@
 """The project's plant models behind the robot protocols, stepped once per 4 ms cycle.
 
 :class:`KR500CorrectionPlant` (for RSI): the KR 500-3 executing the programmed sine path of
-Cvitanic (2021), sec. 4.2.2 / 5 (50.8 mm amplitude, 0.0098 / mm spatial frequency,
-42.33 mm/s feed; here the x loop's path ``x = 50.8 sin(2 pi 0.0098 y)`` with the feed along
-y, ramped in over :data:`FEED_RAMP_S`), with a TCP path error the programmed path does not
-know about, and the sensor's corrections applied as the controller does:
+Cvitanic (2021), sec. 5.4.1, eq. (33), ``50.8 sin(2 pi 0.0098 s)`` mm across the feed ``s``
+at 42.33 mm/s (here the feed along the world y axis and the offset along x, the thesis'
+"y directional" wave; the feed ramped in over :data:`FEED_RAMP_S`), with a TCP path error
+the programmed path does not know about, and the sensor's corrections applied as the
+controller does:
 
 - the robot's path following lags the programmed path (a first-order lag of time constant
   ``lag_s``, 10 ms by default: an ASSUMPTION standing for the servo and interpolator lag;
-  it gives ``A w lag`` = 1.3 mm across the sine and ``feed lag`` = 0.42 mm along the feed);
+  it gives ``A w lag`` = 1.3 mm across the sine and ``feed lag`` = 0.42 mm along the feed;
+  the thesis measured an average positioning error of 0.5 mm on this robot, sec. 4.2.3);
 - the payload sags the TCP by a static deflection (``deflection_mm``, (0, 0, -0.5) mm by
   default: an ASSUMPTION, about 100 kg on the z stiffness of Table 16);
 - corrections (RSI's ``RKorr``, summed when relative) reach the commanded position
   ``delay_cycles`` = 12 cycles after the cycle they answer; with the one cycle the reply
-  itself takes, the loop through the protocol sees the 13 cycles (52 ms) of
-  Cvitanic (2021), sec. 5, eq. (33);
+  itself takes, the loop through the protocol sees the 13 cycles (52 ms) of the measured
+  controller delay, Cvitanic (2021), sec. 5.3.2, in the loop of sec. 5.3.5 (the project's
+  :mod:`~gtmodel.estimation.closed_loop.correction_loop`, "sec. 5, eq. (33)");
 - the TCP responds to the commanded position through the two-mode "truth"
-  :func:`~gtmodel.estimation.closed_loop.correction.truth_model` at a Table 13 pose
+  :func:`~gtmodel.estimation.closed_loop.correction.truth_model` at the first Table 13 pose
   (:class:`~gtmodel.estimation.closed_loop.correction.OffsetResponseModel`, eqs. (8),
   (30)-(32)): the commanded position is followed exactly at constant rate, with the
   deflection under the equivalent force of its second difference;
 - a laser tracker measures the TRUE TCP with the Table 7 noise (0.0064 mm per axis and
-  sample, :class:`~gtmodel.estimation.fusion.tracker_imu.SensorSpec`) at 1000 Hz (the TCP is
-  held between the 4 ms cycles of the plant).
+  sample, :class:`~gtmodel.estimation.fusion.tracker_imu.SensorSpec`) at 1000 Hz, sec. 4.2.2
+  (the TCP is held between the 4 ms cycles of the plant); optionally the IMU (``imu=True``).
 
 The robot reports ``RIst`` = the commanded position (its encoders do not see the
 deflection), ``RSol`` = the programmed path before the correction (so a sensor side forms
@@ -130,6 +133,21 @@ class SimPlant(ABC):
     def sensor_noise_m(self) -> float:
         """Standard deviation of the sensor stream's noise per axis and sample [m]."""
 
+    def sensor_values(self, rng: np.random.Generator) -> np.ndarray:
+        """One sample of the sensor stream: the true position plus noise [m] (x, y, z first).
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The noise.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or more
+            The values of a ``GTS1`` line.
+        """
+        return self.true_position() + rng.normal(0.0, self.sensor_noise_m, 3)
+
     @abstractmethod
     def error_mm(self) -> float:
         """The tracking error of the current cycle [mm] (the summary's RMS and max are over these).
@@ -168,8 +186,8 @@ def _update(u: np.ndarray, offset: np.ndarray, mode: str) -> np.ndarray:
 class KR500CorrectionPlant(SimPlant):
     """The KR 500 on the sine path with pose-offset corrections (module docstring).
 
-    Cvitanic (2021), sec. 4.2.2 (the path), sec. 5, eqs. (8), (30)-(33) (the response and
-    its 13-cycle delay), Tables 16-17 (the modes), Table 7 (the tracker noise).
+    Cvitanic (2021), sec. 5.4.1, eq. (33) (the path), sec. 5.3.2 (the 52 ms delay), eqs. (8),
+    (30)-(32) (the response), Tables 16-17 (the modes), Table 7 (the tracker and IMU noise).
 
     Parameters
     ----------
@@ -195,6 +213,12 @@ class KR500CorrectionPlant(SimPlant):
         Tracker noise per axis and sample [mm] (Table 7: 0.0064), >= 0.
     dt : float, optional
         Cycle time [s] (0.004).
+    imu : bool, optional
+        Append the IMU to the sensor stream (default False): accelerometer ``ax, ay, az``
+        [m/s^2] (the TCP's acceleration, the second difference of the true TCP over the last
+        cycles, gravity-free) and gyro ``wx, wy, wz`` [rad/s] (the orientation is held: 0),
+        each with the Table 7 bias and noise (``sigma = density sqrt(1 / 0.001 s)``); the IMU
+        sits at the tracker target with the base frame's axes (an ASSUMPTION).
 
     Raises
     ------
@@ -209,7 +233,7 @@ class KR500CorrectionPlant(SimPlant):
     def __init__(self, rng: np.random.Generator, pose_deg=None, start_mm=(1800.0, 0.0, 1200.0), amplitude_mm: float = SINE_AMPLITUDE_M * 1e3,
                  spatial_frequency_per_mm: float = SINE_SPATIAL_FREQUENCY_PER_M / 1e3, feed_mm_s: float = FEED_RATE_M_S * 1e3,
                  lag_s: float = 0.010, deflection_mm=(0.0, 0.0, -0.5), delay_cycles: int = DELAY_CYCLES - 1,
-                 tracker_noise_mm: float = SensorSpec().position_noise_mm, dt: float = 0.004) -> None:
+                 tracker_noise_mm: float = SensorSpec().position_noise_mm, dt: float = 0.004, imu: bool = False) -> None:
         pose = np.asarray(VALIDATION_POSES_DEG[0] if pose_deg is None else pose_deg, dtype=float)
         for name, v in (("amplitude_mm", amplitude_mm), ("spatial_frequency_per_mm", spatial_frequency_per_mm), ("feed_mm_s", feed_mm_s), ("dt", dt)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
@@ -246,6 +270,9 @@ class KR500CorrectionPlant(SimPlant):
         self._rest = self.programmed.copy()
         self.commanded = self.programmed.copy()
         self.true = self._respond()
+        self._history = [self.true.copy(), self.true.copy()]
+        self.imu = bool(imu)
+        self._spec = SensorSpec()
 
     def _path(self, s: float) -> np.ndarray:
         return self.start + np.array([self.amplitude * math.sin(2 * math.pi * self.spatial_frequency * s), s, 0.0])
@@ -291,6 +318,7 @@ class KR500CorrectionPlant(SimPlant):
         a = math.exp(-self.dt / self.lag_s) if self.lag_s > 0 else 0.0
         self.lagged = a * self.lagged + (1 - a) * self.programmed
         self.commanded = self.lagged + self.applied[:3]
+        self._history = [self._history[1], self.true]
         self.true = self._respond()
 
     def true_position(self) -> np.ndarray:
@@ -306,6 +334,27 @@ class KR500CorrectionPlant(SimPlant):
     def sensor_noise_m(self) -> float:
         """The tracker's noise per axis [m]."""
         return self.tracker_noise
+
+    def sensor_values(self, rng: np.random.Generator) -> np.ndarray:
+        """The tracker's position [m], then (``imu=True``) the accelerometer [m/s^2] and the gyro [rad/s].
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The noise.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,) or (9,)
+        """
+        pos = self.true + rng.normal(0.0, self.tracker_noise, 3)
+        if not self.imu:
+            return pos
+        sp = self._spec
+        acc = (self.true - 2 * self._history[1] + self._history[0]) / self.dt**2
+        acc = acc + sp.accel_bias + rng.normal(0.0, sp.accel_std, 3)
+        gyro = sp.gyro_bias + rng.normal(0.0, sp.gyro_std, 3)
+        return np.concatenate([pos, acc, gyro])
 
     def error_mm(self) -> float:
         """``|programmed - true TCP|`` [mm] (the TCP path error at the cycle).
@@ -335,8 +384,9 @@ class KR500CorrectionPlant(SimPlant):
         return {"pose_j2_j3_deg": self.pose_deg.tolist(), "start_mm": (self.start * 1e3).tolist(), "amplitude_mm": self.amplitude * 1e3,
                 "spatial_frequency_per_mm": self.spatial_frequency / 1e3, "feed_mm_s": self.feed * 1e3, "sine_axis": "x", "feed_axis": "y",
                 "lag_s": self.lag_s, "deflection_mm": (self.deflection * 1e3).tolist(), "delay_cycles": self.delay_cycles,
-                "tracker_noise_mm": self.tracker_noise * 1e3,
-                "source": "Cvitanic (2021), sec. 4.2.2 (path), sec. 5 eqs. (8), (30)-(33), Tables 7, 13, 16, 17; lag and deflection assumed"}
+                "tracker_noise_mm": self.tracker_noise * 1e3, "imu": self.imu,
+                "source": "Cvitanic (2021), sec. 5.4.1 eq. (33) (path), sec. 5.3.2 (52 ms delay), eqs. (8), (30)-(32), Tables 7, 13, 16, 17; "
+                          "lag and deflection assumed"}
 
 
 class L1ServoPlant(SimPlant):

@@ -306,9 +306,9 @@ class _Run:
             self.stopped_at = cyc.k + 1
 
     def sensor_sample(self, t: float) -> None:
-        meas = self.plant.true_position() + self.rng.normal(0.0, self.plant.sensor_noise_m, 3)
-        self.measured = meas
-        text = f"GTS1 {self.sensor_seq} {t:.6f} {meas[0]:.9f} {meas[1]:.9f} {meas[2]:.9f}\n".encode("ascii")
+        values = self.plant.sensor_values(self.rng)
+        self.measured = values[:3]
+        text = (f"GTS1 {self.sensor_seq} {t:.6f} " + " ".join(f"{v:.10g}" for v in values[:16]) + "\n").encode("ascii")
         if self._send(self.sensor, text, self.sensor_target):
             self.c["sensor_samples_sent"] += 1
         self.sensor_seq += 1

@@ -83,11 +83,13 @@ class _Peer(threading.Thread):
 
 
 class RsiPeer(_Peer):
-    def __init__(self, gain: float = 0.0, misbehave: dict[int, bytes] | None = None, silent: bool = False) -> None:
+    def __init__(self, gain: float = 0.0, misbehave: dict[int, bytes] | None = None, silent: bool = False, constant=None) -> None:
         super().__init__()
         self.gain = gain
         self.misbehave = dict(misbehave or {})
+        self.misbehaved: list[int] = []
         self.silent = silent
+        self.constant = None if constant is None else np.asarray(constant, dtype=float)
 
     def answer(self, data: bytes) -> bytes | None:
         if self.silent:
@@ -99,7 +101,10 @@ class RsiPeer(_Peer):
             return None
         if self.replied in self.misbehave:
             bad = self.misbehave.pop(self.replied)
+            self.misbehaved.append(ipoc)
             return bad.replace(b"{ipoc}", str(ipoc).encode())
+        if self.constant is not None:
+            return rsi.compose_sen(ipoc, self.constant)
         corr = np.zeros(6)
         if self.gain and self.latest is not None and np.all(np.isfinite(fields["RSol"])):
             corr[:3] = self.gain * (fields["RSol"][:3] - self.latest)
