@@ -5,8 +5,8 @@
 client) from one thread with absolute deadlines on :func:`time.monotonic` (never a sleep of
 a period: no drift). Each period ``dt`` (4 ms) is split into ticks of the sensor stream
 (1 ms): every tick sends one ``GTS1`` sample of the plant's sensor (the contract's format,
-``GTS1 <seq> <t_s> <x> <y> <z>``, positions in m in the robot base frame) to
-``sensor_target``; every ``dt`` the robot closes the last cycle (late or not), steps the
+``GTS1 <seq> <t_s> <x> <y> <z>``, positions in m in the robot base frame, then the IMU's
+``ax ay az`` [m/s^2] and ``wx wy wz`` [rad/s] when the plant has one) to ``sensor_target``; every ``dt`` the robot closes the last cycle (late or not), steps the
 plant with the reply, and sends its packet. Between ticks it waits in :func:`select.select`
 for replies.
 
@@ -375,12 +375,14 @@ class _Run:
                     self.drain()
                 continue
             now = time.monotonic()
-            self.send_pending(now)
+            self.send_pending(min(now, deadline))  # what is due before the tick goes first, the rest after it (in time order)
             if now < deadline:
                 continue
-            if now - deadline > self.period:
+            if now - deadline > self.period:  # the process stalled: the robot's clock (and what it holds back) moves on from now
                 self.c["clock_slips"] += 1
-                t0 += now - deadline
+                shift = now - deadline
+                t0 += shift
+                self.pending = [(due + shift, k, packet) for due, k, packet in self.pending]
                 deadline = now
             if tick % tpc == 0:
                 k = tick // tpc

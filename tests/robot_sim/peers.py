@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import socket
 import threading
+import time
 
 import numpy as np
 
@@ -76,6 +77,7 @@ class _Peer(threading.Thread):
         return self
 
     def __exit__(self, *exc) -> None:
+        time.sleep(0.05)  # the last datagrams in flight
         self.running = False
         self.join(2.0)
         self.sock.close()

@@ -42,12 +42,13 @@ def test_lost_dropped_delayed_and_reordered_cycles_are_late(faulty):
     result, _ = faulty
     late = {int(k) for k, flag in zip(result.column("cycle"), result.column("late")) if flag}
     must = {10, 11, 12, 20, 21, 30, 31, 32, 50, 51}
-    assert must <= late and result.summary["packets_sent"] == 147
+    assert (sorted(must - late), result.summary["packets_sent"]) == ([], 147), result.summary["clock_slips"]
 
 
 def test_duplicates_and_garbage_reached_the_peer(faulty):
+    """147 packets (150 cycles, 3 lost), 5 duplicates, 10 garbage datagrams; the NaN packets parse."""
     result, peer = faulty
-    assert result.summary["duplicate_replies"] >= 4 and peer.unparsed >= 10
+    assert (peer.received, peer.unparsed, result.summary["duplicate_replies"] + result.summary["stale_replies"] >= 5) == (162, 10, True)
 
 
 def test_the_ipoc_jumps_by_ten_cycles(faulty):
