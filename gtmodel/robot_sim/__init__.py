@@ -15,5 +15,17 @@ faults on the robot's side of the link and record what happened.
   rules (late replies, RSI's stop), the record;
 - :mod:`~gtmodel.robot_sim.cli`: ``gtmodel robot-sim``.
 
-Nothing is imported here: ``from gtmodel.robot_sim.run import simulate``.
+The names below are imported on first use (:mod:`gtmodel._lazy`), so ``gtmodel robot-sim``
+and ``import gtmodel.robot_sim.cli`` stay light.
 """
+
+from gtmodel._lazy import lazy_exports
+
+__all__ = ["simulate", "SimResult", "FaultRule", "FaultSchedule", "parse_faults", "SimPlant", "KR500CorrectionPlant", "L1ServoPlant",
+           "make_plant", "RobotState", "Command"]
+
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "simulate": "run", "SimResult": "run", "FaultRule": "faults", "FaultSchedule": "faults", "parse_faults": "faults",
+    "SimPlant": "plants", "KR500CorrectionPlant": "plants", "L1ServoPlant": "plants", "make_plant": "plants",
+    "RobotState": "state", "Command": "state",
+})
