@@ -24,6 +24,15 @@
     bundle); ``--check`` compiles it, compares it with Python and, for a loop controller,
     runs it in closed loop (:func:`gtmodel.codegen.check_code`, one status). The former flat
     forms (``--robot``, ``--model``, ``--controller``, ``--mpc``) keep working.
+``gtmodel loop FILE.toml [--out DIR] [--listen HOST:PORT] [--sensor-port PORT] [--idle-timeout S] [--max-cycles N]``
+    Run a ``robot_loop`` file (:mod:`gtmodel.cli_loop`, docs/robot.md): its controller's step
+    generated as C and checked, the runtime built around it and run behind KUKA RSI or ABB
+    EGM over UDP until the robot stops sending (or Ctrl-C); ``DIR/summary.json`` (cycles, late
+    and held replies, latency percentiles, faults and what was done) and the cycle log.
+``gtmodel robot-sim --interface rsi|egm --plant kr500|l1 --to HOST:PORT --duration S --out DIR``
+    A robot-side simulator of the interface (:mod:`gtmodel.robot_sim`): the project's plant
+    behind the protocol, sending from its own 4 ms clock, with injected faults; the
+    rehearsal of ``gtmodel loop``.
 ``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS] | --controller FILE) --out NAME.fmu``
     Export a model as an FMU (:func:`gtmodel.exchange.export_fmu`, docs/fmu.md): FMI 2.0
     or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
@@ -92,7 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
     -------
     argparse.ArgumentParser
         Parser with the sub-commands ``solve``, ``study``, ``report``, ``schema``, ``codegen``,
-        ``export-fmu`` and ``import-fmu``.
+        ``loop``, ``robot-sim``, ``export-fmu`` and ``import-fmu``.
     """
     parser = argparse.ArgumentParser(
         prog="gtmodel",
@@ -147,6 +156,12 @@ def build_parser() -> argparse.ArgumentParser:
     from gtmodel.cli_codegen import add_codegen_parser  # its sub-commands (robot, model, tracking, mpc, controller)
 
     add_codegen_parser(sub)
+    from gtmodel.cli_loop import add_loop_parser  # gtmodel loop FILE --out DIR: the loop behind RSI / EGM
+
+    add_loop_parser(sub)
+    from gtmodel.robot_sim.cli import add_robot_sim_parser  # gtmodel robot-sim: a simulated robot behind RSI / EGM
+
+    add_robot_sim_parser(sub)
 
     fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 / 3.0, model exchange and co-simulation), sources and a binary")
     what = fx.add_mutually_exclusive_group(required=True)
@@ -373,6 +388,37 @@ def _solve(args: argparse.Namespace) -> int:
     return _guarded(target, run, on_interrupt)
 
 
+def _loop(args: argparse.Namespace) -> int:
+    """``gtmodel loop``: a robot_loop file run as ``gtmodel solve`` runs a problem, with the command line's settings."""
+    check_problem_files([args.file])  # before anything is imported or written
+    kind = _toml_kind(args.file)
+    if kind != "robot_loop":
+        raise GtModelError(f"{args.file}: kind: expected a robot_loop file for gtmodel loop (docs/robot.md), got {kind!r}"
+                           + ("; solve it with gtmodel solve" if kind else ""))
+    target = args.out if args.out is not None else Path("results") / _toml_name(args.file)
+    args.out = target
+    named = [Path(args.correction_file).resolve().parent] if args.correction_file is not None else []  # named on the command line
+    _data_dirs(list(args.data_dir) + [d for d in named if d.is_dir()])
+
+    def run() -> int:
+        from gtmodel.cli_loop import loop_command
+
+        return loop_command(args)
+
+    def on_interrupt() -> None:
+        from gtmodel.problems.run import write_failure
+
+        summary = failure_summary(args.file, KeyboardInterrupt(), Status.INTERRUPTED, name=target.name)
+        summary["kind"] = kind
+        written, _, why = write_failure(target, summary)
+        if written:
+            print(f"gtmodel: wrote {target / 'summary.json'} (status interrupted)", file=sys.stderr)
+        elif why:
+            print(f"gtmodel: could not write {target / 'summary.json'}: {why}", file=sys.stderr)
+
+    return _guarded(target, run, on_interrupt)
+
+
 def _toml_kind(path: Path) -> str | None:
     try:
         kind = read_toml(path, ProblemError, "problem file").get("kind")
@@ -564,6 +610,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _solve(args)
         if args.command == "study":
             return _study(args)
+        if args.command == "loop":
+            return _loop(args)
         with _signals.interruptible():
             if args.command == "schema":
                 return _schema(args)
@@ -573,6 +621,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return _export_fmu(args)
             if args.command == "import-fmu":
                 return _import_fmu(args)
+            if args.command == "robot-sim":
+                from gtmodel.robot_sim.cli import robot_sim_command
+
+                return robot_sim_command(args)
             from gtmodel.cli_codegen import codegen_command
 
             return codegen_command(args)

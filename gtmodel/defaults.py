@@ -67,7 +67,7 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["LOOP_PERIOD_S", "REAL_TYPES", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "defaults", "reset_defaults", "get"]
+__all__ = ["LOOP_PERIOD_S", "REAL_TYPES", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "INTERFACE_PORTS", "defaults", "reset_defaults", "get"]
 
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
@@ -87,6 +87,10 @@ PATH_METHODS = ("convex", "collocation")
 #: Standard gravity [m/s^2] (that of :mod:`gtmodel.estimation.closed_loop.plant`, equal,
 #: checked by the tests; here for the problem schemas' defaults).
 STANDARD_GRAVITY = 9.80665
+#: The robot interfaces' usual UDP ports, where the sensor side listens and the robot sends:
+#: KUKA RSI's 49152 (the Ethernet object's ``PORT`` in KUKA's examples) and ABB EGM's 6510
+#: (the UC device's remote port in ABB's examples); for the loop files' schema and the runtime.
+INTERFACE_PORTS = {"rsi": 49152, "egm": 6510}
 
 _FACTORY: dict[str, Any] = {
     "loop.period": LOOP_PERIOD_S,

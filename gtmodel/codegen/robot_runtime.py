@@ -54,6 +54,7 @@ from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import CodegenError, InputError
+from gtmodel.defaults import INTERFACE_PORTS
 
 __all__ = ["RSI_INPUTS", "RSI_OUTPUTS", "EGM_INPUTS", "EGM_OUTPUTS", "SENSOR_INPUTS", "DEFAULT_PORTS", "RUNTIME_FLAGS",
            "RUNTIME_SOURCES", "BUILD_FLAGS", "RuntimeSpec", "RobotRuntime", "build_runtime"]
@@ -86,7 +87,7 @@ EGM_OUTPUTS: dict[str, tuple[str, ...]] = {
 #: The values of the ``GTS1`` sensor stream.
 SENSOR_INPUTS: tuple[str, ...] = tuple(f"sensor.{i}" for i in range(16))
 #: The usual ports the sensor side listens on (the robot sends to them).
-DEFAULT_PORTS = {"rsi": 49152, "egm": 6510}
+DEFAULT_PORTS = INTERFACE_PORTS
 #: Flags of a cycle-log row (bit values of its ``flags`` column; ``gt_runtime.c``).
 RUNTIME_FLAGS = {"sent": 1, "step": 2, "held": 4, "fallback_stale": 8, "fallback_step": 16, "ramp": 32, "malformed": 64,
                  "non_finite": 128, "duplicate_or_old": 256, "missing_field": 512, "deadline_held": 1024, "late_dropped": 2048,

@@ -78,6 +78,11 @@ class PoseCorrection:
     reference_includes_correction : bool, optional
         The programmed pose the robot reports (``RSol``) already holds the corrections sent so
         far (then ``r = RSol - u_last``); default False.
+    x_names : list of str, optional
+        The measurement's fields (default ``RSol.X``, ``RSol.Y``, ``RSol.Z``, ``sensor.0`` ...
+        ``sensor.2``: the programmed position, then the tracker's).
+    u_names : list of str, optional
+        The reply's fields (default ``RKorr.X``, ``RKorr.Y``, ``RKorr.Z``).
 
     Raises
     ------

@@ -274,7 +274,7 @@ def _stop(proc: subprocess.Popen, grace: float = 3.0) -> None:
 
 def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, int] | None = None, sensor_port: int | None = None,
              idle_timeout: float = 2.0, max_cycles: int | None = None, time_limit: float | None = None,
-             reply_deadline: float | None = None, realtime: bool = True) -> LoopRun:
+             reply_deadline: float | None = None, realtime: bool = True, end_on_signal: bool = False) -> LoopRun:
     """Run the robot runtime until it ends, and read its counts and log.
 
     Parameters
@@ -299,6 +299,11 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
         Override of the generated reply deadline [s].
     realtime : bool, optional
         Ask for SCHED_FIFO and mlockall (the runtime says in its counts whether granted).
+    end_on_signal : bool, optional
+        A SIGINT/SIGTERM of this process (a :class:`KeyboardInterrupt`) ends the run as a
+        signal to the runtime does: the runtime is stopped, its log flushed, and the run
+        returned with status ``interrupted`` (``gtmodel loop``: Ctrl-C ends the loop and the
+        result folder is written). Default False: the interrupt is raised after the stop.
 
     Returns
     -------
@@ -310,7 +315,8 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     InputError
         ``executable`` is not an executable file, or ``out_dir`` holds foreign files.
     KeyboardInterrupt
-        A SIGINT/SIGTERM of this process (the runtime is stopped first, its log flushed).
+        A SIGINT/SIGTERM of this process without ``end_on_signal`` (the runtime is stopped
+        first, its log flushed).
     """
     exe = Path(executable)
     if not (exe.is_file() and os.access(exe, os.X_OK)):
@@ -341,6 +347,11 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
             timed_out = True
             _stop(proc)
             _, err = proc.communicate()
+    except KeyboardInterrupt:
+        _stop(proc)
+        if not end_on_signal:
+            raise
+        _, err = proc.communicate()
     except BaseException:
         _stop(proc)
         raise

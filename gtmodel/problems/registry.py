@@ -57,6 +57,7 @@ _CLASSES: dict[str, str] = {
     "lead_through": "gtmodel.problems.kinds.lead_through:LeadThroughKind",
     "pose_accuracy": "gtmodel.problems.kinds.pose_accuracy:PoseAccuracyKind",
     "automated_calibration": "gtmodel.problems.kinds.automated_calibration:AutomatedCalibrationKind",
+    "robot_loop": "gtmodel.problems.kinds.robot_loop:RobotLoopKind",
 }
 
 #: Kind name -> ``module:class`` of its schema in a light module (pydantic, no solver); the
@@ -76,6 +77,7 @@ _SCHEMAS: dict[str, str] = {
     "lead_through": "gtmodel.problems.kinds.schemas.lead_through:LeadThroughFile",
     "pose_accuracy": "gtmodel.problems.kinds.schemas.pose_accuracy:PoseAccuracyFile",
     "automated_calibration": "gtmodel.problems.kinds.schemas.automated_calibration:AutomatedCalibrationFile",
+    "robot_loop": "gtmodel.problems.kinds.schemas.robot_loop:RobotLoopFile",
 }
 
 

@@ -1,0 +1,247 @@
+"""Kind ``robot_loop``: the loop file, and ``gtmodel loop`` against the robot-side simulators.
+
+References (independent of the runtime's code):
+- the simulators of :mod:`gtmodel.robot_sim` (the robot's side, written from the public
+  protocol descriptions; their truth records the TCP the tracker saw);
+- the open loop on the same plant, noise and seed (Cvitanic (2021), sec. 5: the correction
+  must at least halve the TCP path error, issue 48);
+- the offline ILC on the same plant model stepped without the network, the same law
+  (Dressler (2012), eq. 7.2: ``u_1 = Q (u_0 + L eps_0)``): one iteration through EGM and the
+  log must reduce the tracking error as the offline iteration does, within 20 %.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gtmodel.errors import ProblemError
+from gtmodel.estimation.ilc.iteration import error_measure, next_correction
+from gtmodel.estimation.ilc.lifted import LearningFilter, QFilter, time_window
+from gtmodel.problems.run import load_problem
+from gtmodel.robot_sim.plants import make_plant
+from gtmodel.robot_sim.run import simulate
+from gtmodel.robot_sim.state import Command
+from gtmodel.status import Status
+
+from ...conftest import REPO
+
+LOOPS = REPO / "loops"
+RSI_FILE = LOOPS / "kr500_rsi_correction.toml"
+EGM_FILE = LOOPS / "l1_egm_ilc.toml"
+
+
+def _copy(tmp_path: Path, source: Path, replace: dict[str, str]) -> Path:
+    text = source.read_text(encoding="utf-8")
+    for old, new in replace.items():
+        assert old in text, old
+        text = text.replace(old, new)
+    target = tmp_path / source.name
+    target.write_text(text, encoding="utf-8")
+    if (source.parent / "data").is_dir() and not (tmp_path / "data").exists():
+        shutil.copytree(source.parent / "data", tmp_path / "data")
+    return target
+
+
+@pytest.mark.parametrize("path", [RSI_FILE, EGM_FILE], ids=lambda p: p.stem)
+def test_shipped_loop_files_load(path):
+    problem = load_problem(path)
+    d = problem.declaration
+    assert (problem.kind, d.spec.interface, len(d.spec.outputs)) == ("robot_loop", tomllib.loads(path.read_text())["interface"]["type"], 3)
+
+
+def test_settings_from_the_command_line_reach_the_declaration():
+    d = load_problem(RSI_FILE, settings={"interface.listen": "127.0.0.1:40000", "interface.sensor_port": 40010}).declaration
+    assert (d.listen, d.sensor_port) == (("127.0.0.1", 40000), 40010)
+
+
+BAD = [
+    ({'type = "rsi"': 'type = "kuka"'}, RSI_FILE, r"'interface.type': expected one of rsi, egm"),
+    ({'listen = "127.0.0.1:49152"': 'listen = "localhost:49152"'}, RSI_FILE, r"'interface.listen': expected HOST:PORT with an IPv4 address"),
+    ({'listen = "127.0.0.1:49152"': 'listen = "127.0.0.1:70000"'}, RSI_FILE, r"'interface.listen': expected HOST:PORT.*got '127.0.0.1:70000'"),
+    ({'sensor_port = 49153': 'sensor_port = 49152'}, RSI_FILE, r"'interface.sensor_port': expected a port other than the listen port"),
+    ({'sen_type = "ImFree"': 'sen_type = "Im\\"/><x"'}, RSI_FILE, r"'interface.sen_type': expected 1 to 32 ASCII letters, digits or '_'"),
+    ({'gain = [0.04, 0.04, 0.04]': 'gain = [0.04, 1.5, 0.04]'}, RSI_FILE, r"'controller.gain': expected numbers of magnitude <= 1"),
+    ({'gain = [0.04, 0.04, 0.04]': 'gain = [0.04, 0.04]'}, RSI_FILE, r"'controller.gain': expected a list of 3 finite numbers"),
+    ({'rate = [0.1, 0.1, 0.1]': 'rate = [0.1, 0.1]'}, RSI_FILE, r"'limits': expected one value per output in each of lower, upper, rate"),
+    ({'lower = [-5.0, -5.0, -5.0]': 'lower = [6.0, -5.0, -5.0]'}, RSI_FILE, r"'limits': expected lower <= upper per output"),
+    ({'period = 0.004                     # s, the KR C4': 'period = -0.004                    # s, the KR C4'}, RSI_FILE,
+     r"'interface.period': expected a positive number"),
+    ({'type = "pose_correction"': 'type = "streaming"'}, RSI_FILE, r"'controller': expected a trajectory for streaming"),
+    ({'trajectory = "data/l1_square.csv"': 'trajectory = "data/missing.csv"'}, EGM_FILE, r"controller.trajectory"),
+    ({'trajectory = "data/l1_square.csv"': 'trajectory = "../../../etc/passwd"'}, EGM_FILE, r"controller.trajectory"),
+    ({'lower = [-110.0, 25.0, 0.0]': 'lower = [-110.0, 25.0]'}, EGM_FILE, r"'limits': expected one value per output in each of lower, upper, rate"),
+    ({'upper = [-65.0, 70.0, 45.0]': 'upper = [-95.0, 70.0, 45.0]'}, EGM_FILE, r"'controller.trajectory': reference: expected every row within the bounds"),
+    ({'type = "pose_correction"': 'type = "pose_correction"\ntrajectory = "x.csv"'}, RSI_FILE,
+     r"'controller': expected no trajectory or correction_file for a pose_correction"),
+    ({'fallback = "hold"': 'fallback = "hold"\n[ilc]'}, RSI_FILE, r"expected no \[ilc\] table"),
+    ({'type = "rsi"': 'type = "egm"'}, RSI_FILE, r"expected interface.type = \"rsi\" for a pose_correction"),
+    ({'gamma = 0.9': 'gamma = 5.0'}, EGM_FILE, r"'ilc.gamma': expected a number <= 2"),
+]
+
+
+@pytest.mark.parametrize("replace, source, match", BAD, ids=[m for _, _, m in BAD])
+def test_bad_loop_files_are_refused_naming_the_field(tmp_path, replace, source, match):
+    with pytest.raises(ProblemError, match=match):
+        load_problem(_copy(tmp_path, source, replace))
+
+
+def test_a_correction_file_of_another_length_is_refused(tmp_path):
+    path = _copy(tmp_path, EGM_FILE, {})
+    (tmp_path / "short.csv").write_text("t,q1,q2,q3\n0,0,0,0\n0.004,0,0,0\n", encoding="utf-8")
+    with pytest.raises(ProblemError, match=r"'controller.correction_file': expected the trajectory's 352 rows"):
+        load_problem(path, settings={"controller.correction_file": "short.csv"})
+
+
+# -- gtmodel loop against the simulators (a child process each, as a user runs them) ---------------------
+
+
+def _free_port(pair: bool = False) -> int:
+    for _ in range(50):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port < 65000 and (not pair or _port_free(port + 1)):
+            return port
+    raise RuntimeError("no free UDP port pair")
+
+
+def _port_free(port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
+def _bound(port: int) -> bool:
+    """Whether a UDP socket is bound to the port (Linux: /proc/net/udp)."""
+    try:
+        rows = Path("/proc/net/udp").read_text().splitlines()[1:]
+    except OSError:
+        return not _port_free(port)
+    return any(int(r.split()[1].split(":")[1], 16) == port for r in rows)
+
+
+class Loop:
+    """``gtmodel loop FILE --out DIR --listen 127.0.0.1:PORT`` as a child process, ready when its runtime is bound."""
+
+    def __init__(self, path: Path, out: Path, port: int, *extra: str) -> None:
+        self.out = out
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
+        self.proc = subprocess.Popen([sys.executable, "-m", "gtmodel", "loop", str(path), "--out", str(out), "--listen", f"127.0.0.1:{port}",
+                                      "--no-report", "-q", *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        deadline = time.monotonic() + 240.0
+        while not _bound(port):
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                self.proc.kill()
+                raise AssertionError(f"gtmodel loop did not start: {self.proc.communicate()}")
+            time.sleep(0.1)
+
+    def finish(self) -> dict:
+        out, err = self.proc.communicate(timeout=120)
+        assert self.proc.returncode == 0, (out, err)
+        return json.loads((self.out / "summary.json").read_text())
+
+
+def _rsi_run(tmp_path: Path, name: str, gain: str, faults: str | None = None, duration: float = 4.0):
+    port = _free_port(pair=True)
+    path = _copy(tmp_path / name, RSI_FILE, {"gain = [0.04, 0.04, 0.04]": f"gain = {gain}"}) if gain else RSI_FILE
+    loop = Loop(path, tmp_path / f"{name}_loop", port, "--sensor-port", str(port + 1), "--idle-timeout", "1.0")
+    sim = simulate("rsi", "kr500", ("127.0.0.1", port), ("127.0.0.1", port + 1), duration_s=duration, seed=3, faults=faults,
+                   out_dir=tmp_path / f"{name}_sim")
+    return loop.finish(), sim
+
+
+@pytest.fixture(scope="module")
+def kr500_runs(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("kr500")
+    (tmp / "open").mkdir()
+    return {"open": _rsi_run(tmp, "open", "[0.0, 0.0, 0.0]"), "closed": _rsi_run(tmp, "closed", "")}
+
+
+@pytest.mark.slow
+def test_kr500_correction_halves_the_tcp_path_error(kr500_runs):
+    """Issue 48: with the loop closed the TCP path error is at most half the open-loop error (same plant, noise, seed)."""
+    (_, open_sim), (closed, closed_sim) = kr500_runs["open"], kr500_runs["closed"]
+    assert (closed["status"], closed_sim.status, open_sim.status) == ("completed", Status.COMPLETED, Status.COMPLETED)
+    ratio = closed_sim.summary["error_rms_mm"] / open_sim.summary["error_rms_mm"]
+    assert ratio <= 0.5, (closed_sim.summary["error_rms_mm"], open_sim.summary["error_rms_mm"])
+
+
+@pytest.mark.slow
+def test_kr500_every_reply_echoes_and_keeps_its_limits(kr500_runs):
+    summary, sim = kr500_runs["closed"]
+    loop = summary["loop"]
+    assert (loop["missing_replies"], loop["late_replies"], sim.summary["late"], sim.summary["mismatched_replies"]) == (0, 0, 0, 0)
+    assert loop["log"]["dropped"] == 0 and loop["log"]["rows"] == loop["cycles"] == sim.summary["cycles_sent"]
+
+
+@pytest.mark.slow
+def test_faults_end_in_the_documented_fallbacks_without_a_crash(tmp_path):
+    faults = "garbage:rate=0.02;nan:rate=0.02;duplicate:rate=0.02;loss:rate=0.02;reorder:rate=0.01;delay:cycles=300-310;stop:at=700"
+    summary, sim = _rsi_run(tmp_path, "faults", "", faults=faults, duration=4.0)
+    loop = summary["loop"]
+    assert summary["status"] == "completed" and loop["end"] == "idle_timeout"
+    seen = {k: v["count"] for k, v in loop["faults"].items() if v["count"]}
+    assert {"malformed", "non_finite", "duplicate_or_old"} <= set(seen), seen
+    from gtmodel.control.runtime import read_cycle_log
+
+    log = read_cycle_log(tmp_path / "faults_loop" / "cycle_log.csv")
+    reply = np.column_stack([log[f"reply:RKorr.{a}"] for a in "XYZ"])
+    sent = np.isfinite(reply).all(axis=1)
+    assert np.all(np.abs(reply[sent]) <= 5.0 + 1e-9)  # the file's limits, in every reply sent
+    assert np.all(np.abs(np.diff(reply[sent], axis=0)) <= 0.1 + 1e-9)  # its rate per cycle
+    assert np.all(np.isfinite(np.column_stack([log[c] for c in log if c.startswith("x:")])[(log["flags"].astype(int) & 2) > 0]))
+    assert loop["log"]["dropped"] == 0 and loop["log"]["rows"] == loop["packets"]  # the log complete up to the stop
+
+
+def _offline_ilc_ratio(reference_mm: np.ndarray, ilc: dict, dt: float) -> float:
+    """One ILC iteration on the L1 servo plant stepped without the network (the simulators' model, no noise)."""
+    def trial(u: np.ndarray) -> np.ndarray:
+        plant = make_plant("l1", np.random.default_rng(0), encoder_noise_mm=0.0, gauge_noise_mm=0.0)
+        y = np.zeros_like(reference_mm)
+        for k in range(len(reference_mm)):
+            y[k] = plant.state().joints_actual[:3]
+            plant.step(Command(cart=None, joints=reference_mm[k] + u[k], mode="absolute", positions=True))
+        return reference_mm - y
+
+    window = time_window(len(reference_mm), lead=ilc["lead"], tukey_points=ilc["tukey_points"], alpha=ilc["tukey_alpha"])
+    eps0 = trial(np.zeros_like(reference_mm))
+    u1 = next_correction(np.zeros_like(reference_mm), eps0, QFilter(ilc["q_cutoff_hz"], dt=dt, window=window),
+                         LearningFilter(ilc["gamma"], ilc["delta"]))
+    mask = window >= 1.0
+    return float(np.mean(error_measure(trial(u1), mask)) / np.mean(error_measure(eps0, mask)))
+
+
+@pytest.mark.slow
+def test_l1_one_ilc_iteration_through_egm_reduces_the_error_as_offline(tmp_path):
+    """Dressler's experiment loop closed through EGM: run 0, learn from its log, run 1 with the learned correction."""
+    results = []
+    correction: list[str] = []
+    for i in range(2):
+        port = _free_port()
+        loop = Loop(EGM_FILE, tmp_path / f"loop{i}", port, "--idle-timeout", "0.5", *correction)
+        sim = simulate("egm", "l1", ("127.0.0.1", port), duration_s=1.6, seed=i, out_dir=tmp_path / f"sim{i}")
+        results.append((loop.finish(), sim))
+        correction = ["--correction-file", str(tmp_path / f"loop{i}" / "ilc_next.csv")]
+    states = [(s["status"], sim.status, s["loop"]["missing_replies"]) for s, sim in results]
+    assert states == [("completed", Status.COMPLETED, 0)] * 2
+    results = [s for s, _ in results]
+    through_egm = np.mean(results[1]["ilc"]["error_rms"]) / np.mean(results[0]["ilc"]["error_rms"])
+    doc = tomllib.loads(EGM_FILE.read_text())
+    reference = np.loadtxt(LOOPS / "data" / "l1_square.csv", delimiter=",", skiprows=1)[:, 1:]
+    offline = _offline_ilc_ratio(reference, doc["ilc"], doc["interface"]["period"])
+    assert through_egm < 1.0
+    assert abs(through_egm - offline) <= 0.2 * offline, (through_egm, offline)
