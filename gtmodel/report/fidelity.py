@@ -35,6 +35,7 @@ from gtmodel.estimation.ilc.thesis import thesis_table_7_2
 from gtmodel.report.fidelity_d1 import D1_PROBLEMS, d1_rows
 from gtmodel.report.fidelity_d1 import extract as extract_d1
 from gtmodel.report.fidelity_fits import FITS, fit_rows
+from gtmodel.report.fidelity_fits5 import five_axis_rows
 from gtmodel.report.fidelity_kr500 import table_2_rows as _table_2_rows
 from gtmodel.report.fidelity_kr500 import table_10_rows as _table_10_rows
 from gtmodel.report.fidelity_rules import figure_text as _f
@@ -566,7 +567,7 @@ def rows(data: dict[str, Any]) -> list[tuple[str, ...]]:
         With :func:`gtmodel.report.fidelity_rules.apply_rules` applied (the page's rules).
     """
     out = (_ilc_rows(data, "l1_ilc_thesis", data["model"]) + _fitted_ilc_rows(data) + _ilc_rows(data, "l1_ilc", data["model"]) + _fusion_rows(data)
-           + fit_rows(data.get("fits")) + _correction_rows(data) + _other_rows(data) + _table_2_rows(data) + d1_rows(data))
+           + fit_rows(data.get("fits")) + five_axis_rows(data.get("fits")) + _correction_rows(data) + _other_rows(data) + _table_2_rows(data) + d1_rows(data))
     return apply_rules([r if isinstance(r, Row) else Row(*r) for r in out])
 
 
