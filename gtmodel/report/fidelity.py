@@ -377,6 +377,10 @@ def _fitted_ilc_rows(d: dict[str, Any]) -> list[Row]:
             continue
         r = r._replace(figure=r.figure.replace(" [l1_ilc_fitted]", " (predicted from the Case 1 tool y fit) [l1_ilc_fitted]"),
                        verdict="predicted" if r.verdict == "reproduced" else r.verdict)
+        if "Fig. 7.7" in r.figure and (d.get("l1_ilc_thesis") or {}).get("cases", {}).get("1", {}).get("actuator_k5") == d["l1_ilc_fitted"]["cases"].get("1", {}).get("actuator_k5"):
+            out.append(r._replace(verdict="variant", cause=f"{held}. The fitted stiffness does not enter this figure (equal to [l1_ilc_thesis]'s to every "
+                                  "digit): not a prediction of the fit, the [l1_ilc_thesis] row carries its verdict"))
+            continue
         if "Table 7.2: Case 1 tool" in r.figure:  # y is the fit; x is predicted
             r = r._replace(verdict="check of a reading", reading=True, cause=f"{held}; tool y is the fit, tool x predicted")
         else:

@@ -198,3 +198,15 @@ def test_the_page_says_why_the_ilc_figures_are_not_digitised(figures):
     ilc = [r for r in fidelity.rows(figures) if r.figure.endswith("[l1_ilc_thesis]") and ("Table 7.2: Case" in r.figure or "Fig. 7.7" in r.figure)]
     assert rules.NOT_DIGITISED in page and len(ilc) == 5
     assert [r.figure for r in ilc if r.verdict == "differs" and rules.NOT_DIGITISED_ROW not in r.cause] == []
+
+
+@pytest.mark.parametrize("fitted, verdict", [(None, "variant"), ([0.02, 0.02, 0.02], "predicted"), ([0.163, 0.163, 0.3], "differs")],
+                         ids=["equal_to_the_thesis_set_up", "moved_within", "moved_off"])
+def test_a_fitted_row_the_fit_does_not_enter_is_a_variant(figures, fitted, verdict):
+    # Fig. 7.7 of [l1_ilc_fitted]: the fitted y stiffness leaves the actuator error of [l1_ilc_thesis] unchanged to every digit, so the
+    # row is the same figure, not a prediction (counted once, on the declared set-up); a figure the fit moves keeps its own verdict
+    data = copy.deepcopy(figures)
+    if fitted is not None:
+        data["l1_ilc_fitted"]["cases"]["1"]["actuator_k5"] = fitted
+    row = next(r for r in fidelity.rows(data) if "Fig. 7.7" in r.figure and r.figure.endswith("[l1_ilc_fitted]"))
+    assert row.verdict == verdict
