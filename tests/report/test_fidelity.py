@@ -210,3 +210,13 @@ def test_a_fitted_row_the_fit_does_not_enter_is_a_variant(figures, fitted, verdi
         data["l1_ilc_fitted"]["cases"]["1"]["actuator_k5"] = fitted
     row = next(r for r in fidelity.rows(data) if "Fig. 7.7" in r.figure and r.figure.endswith("[l1_ilc_fitted]"))
     assert row.verdict == verdict
+
+
+@pytest.mark.parametrize("orientation, text", [(None, "never worse than the tracker (the thesis: 9.2)"), (9.0, "worse than the tracker in 1 of")],
+                         ids=["as_stored", "one_fit_worse"])
+def test_the_orientation_row_gives_the_5_axis_fits_measurement(figures, orientation, text):
+    data = copy.deepcopy(figures)
+    if orientation is not None:
+        data["fits"]["cvitanic_5_axis"]["runs"][0]["table_8"]["orientation_deg"] = orientation
+    row = next(r for r in fidelity.rows(data) if "Table 8: orientation 5-axis" in r.figure)
+    assert row.verdict == "differs" and text in row.cause
