@@ -39,7 +39,7 @@ from gtmodel.report.fidelity_fits5 import five_axis_rows
 from gtmodel.report.fidelity_kr500 import table_2_rows as _table_2_rows
 from gtmodel.report.fidelity_kr500 import table_10_rows as _table_10_rows
 from gtmodel.report.fidelity_rules import figure_text as _f
-from gtmodel.report.fidelity_rules import (NOT_DIGITISED, NOT_DIGITISED_ROW, REVISITED, RULES, Case, Mechanism, Row, apply_rules, delay_pole_magnitude,
+from gtmodel.report.fidelity_rules import (NOT_DIGITISED, NOT_DIGITISED_ROW, REVISITED, RULES, STATUSES, VERDICTS, Case, Mechanism, Row, apply_rules, delay_pole_magnitude,
                                            largest_stable_delay)
 from gtmodel.robots.actuator_dynamics import actuator_models, load_dynamics_models
 
@@ -632,8 +632,13 @@ def render(data: dict[str, Any]) -> str:
             "`[l1_ilc_thesis]`: the ILC set-up the thesis' text "
             "defines (two rounds, 2.5 s corrected, robust 30 Hz Q in Cases 2/3, Matlab's filter reading, Case 2B's Kalman filter on model (7.21) with z_kin as input); `[l1_ilc]`: the quick variant. Table 7.2's thesis figures are read from the package data `gtmodel/estimation/ilc/data/thesis_ilc.toml`.\n\n"
             "| thesis figure | thesis | ours | tolerance | verdict | measured cause of a difference |\n|---|---|---|---|---|---|\n")
-    body = "\n".join("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in r[:6]) + " |" for r in rows(data))
-    return head + body + "\n"
+    table = rows(data)
+    n = {v: sum(r.verdict == v for r in table) for v in VERDICTS + STATUSES}
+    counts = (f"Counts of the {len(table)} rows below: " + ", ".join(f"{v} {n[v]}" for v in VERDICTS) + "; no verdict: "
+              + ", ".join(f"{v} {n[v]}" for v in STATUSES) + " (self-checks are not thesis rows).\n\n")
+    body = "\n".join("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in r[:6]) + " |" for r in table)
+    i = head.index("| thesis figure |")
+    return head[:i] + counts + head[i:] + body + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:

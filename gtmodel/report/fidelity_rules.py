@@ -83,20 +83,26 @@ RULES = (
 #: The three largest groups of *differs* rows, revisited after the thesis' stated readings and the seed spread (issue 47, item 5).
 REVISITED = (
     "The three largest groups of *differs* rows, revisited (issue 47, item 5): "
-    "(1) Cvitanic (2021), Tables 8-10 (17 rows). Re-run at the thesis' stated path (constant tangential speed, sec. 4.2.2) and, for "
+    "(1) Cvitanic (2021), Tables 8-10 (20 rows). Re-run at the thesis' stated path (constant tangential speed, sec. 4.2.2) and, for "
     "the 3-axis KF, its stated tuning (Appendix B's Q), Table 10 judged per cell: the 3-axis sample-time limit moves from > 0.1 s "
     "(feed along x) to 0.029 s (+0.47 decades) on seeds 1-4 and 0.034 s (+0.53) on seed 5, so it is not within half a decade on every "
     "seed and differs; the 5-axis cells rest on our EKF Q (the thesis prints none); the 5-axis gyro-bias limit leaves half a decade "
     "(2.7 -> 8.6 deg/s), its former agreement a product of the feed along x. The thesis' 'mean error' matches the norm of "
     "the per-axis mean absolute errors (1.382 sigma: its sensor columns 0.0089 mm, 0.889 mm, 0.070 deg/s), which accounts for the "
-    "sensor columns, not for the fusion gaps. "
-    "(2) Dressler (2012), the ILC rows (16), unchanged (items 1-2 do not concern them): the tool rows are set by the actuator lag every "
+    "sensor columns, not for the fusion gaps. Table 9's 5-axis columns, predicted from the 5-axis EKF's Q fitted to Table 8's "
+    "5-axis columns the same way (seeds 1-5, the quantities Table 8 does not fix swept), differ: acceleration 0.53-0.59 against "
+    "0.245, angular velocity 0.18-0.31 against 0.5; the position, 0.50-0.52 against 0.461, is within 20 % but on a fit that leaves "
+    "the velocity less improved than the acceleration (0.74-0.78 against 0.62-0.64), against section 4.3.2. "
+    "(2) Dressler (2012), the ILC rows (15; the [l1_ilc_fitted] Fig. 7.7 row, which the fit does not enter, is a variant), "
+    "unchanged (items 1-2 do not concern them): the tool rows are set by the actuator lag every "
     "case learns (2.74 / 2.64 mm RMS at k = 0) against a structural deflection of 0.85 / 1.7 um RMS, and Fig. 7.7 by the (6.11) "
     "servos (1.43 / 1.39 / 1.1 Hz from the printed models, where the text says about 1.1 Hz for all three); the deciding figures "
     "(Figs. 6.10, 7.8, 7.9) cannot be digitised here. "
     "(3) Dressler (2012), the D1 rows (13), unchanged: the synthetic truth carries Table 4.1's actuator errors, not the thesis' unmodelled "
     "per-arm residual (Table 5.8's 73 / 60 / 19 um; the cart compliance that would give it moves cart 1 by up to 10 mm), and model 3 "
-    "falls into the plate-joint valley (scaled Jacobian condition 4.2e4). Each row gives its measured cause and deciding number.\n"
+    "falls into the plate-joint valley (scaled Jacobian condition 4.2e4). Each row gives its measured cause and deciding number. "
+    "Issue 47 asks for at least 8 thesis rows reproduced or predicted and at most 35 that differ: the counts above the table fall "
+    "short of both, and no rule was loosened to reach them.\n"
 )
 
 #: Why the ILC group's deciding figures are not digitised (Dressler (2012), Figs. 6.10, 7.8, 7.9; the seeds' text, checked).

@@ -220,3 +220,14 @@ def test_the_orientation_row_gives_the_5_axis_fits_measurement(figures, orientat
         data["fits"]["cvitanic_5_axis"]["runs"][0]["table_8"]["orientation_deg"] = orientation
     row = next(r for r in fidelity.rows(data) if "Table 8: orientation 5-axis" in r.figure)
     assert row.verdict == "differs" and text in row.cause
+
+
+def test_the_counts_line_counts_the_table():
+    # counted here from the page's own table (the verdict column), independently of render()
+    page = fidelity.PAGE.read_text(encoding="utf-8").splitlines()
+    verdicts = [line.split(" | ")[4].strip() for line in page if line.startswith("| ") and not line.startswith("| thesis figure")]
+    got = collections.Counter(verdicts)
+    line = next(x for x in page if x.startswith("Counts of the "))
+    assert line == (f"Counts of the {len(verdicts)} rows below: " + ", ".join(f"{v} {got.get(v, 0)}" for v in rules.VERDICTS) + "; no verdict: "
+                    + ", ".join(f"{v} {got.get(v, 0)}" for v in rules.STATUSES) + " (self-checks are not thesis rows).")
+    assert sum(got.values()) == len(verdicts) and set(got) <= set(rules.VERDICTS + rules.STATUSES)
