@@ -5,7 +5,8 @@ Each fit is to one thesis table, whose quantity the report then holds fixed to p
 
 - Cvitanic (2021), Tables 8-10: the 3-axis KF's diagonal ``Q`` fitted to Table 8
   (:func:`gtmodel.report.fidelity_fits.fit_table_8`), Tables 9 and 10 predicted
-  (:func:`gtmodel.report.fidelity_fits.predict`);
+  (:func:`gtmodel.report.fidelity_fits.predict`); the 5-axis EKF's fitted to Table 8's 5-axis columns, Table 9's
+  5-axis columns predicted (:mod:`gtmodel.report.fidelity_fits5`);
 - Dressler (2012), Table 5.8: the D1 carts' transverse compliance (:mod:`gtmodel.calibration.cart_compliance`)
   fitted on model 1 of the thesis' set-up (:func:`fit_d1_cart_compliance`, which runs the ``calibration``
   kind, hence this layer); ``problems/thesis/d1_error_models_fitted.toml`` holds it and its run predicts Table 5.3;
@@ -13,7 +14,7 @@ Each fit is to one thesis table, whose quantity the report then holds fixed to p
   (:func:`fit_l1_stiffness_y`, Case 1 of the thesis' ILC set-up alone); ``problems/thesis/l1_ilc_fitted.toml`` holds it and
   its run predicts the other cases of Table 7.2.
 
-A few minutes (the Table 8 fit on five noise seeds under both readings of the path's feed);
+About ten minutes (the Table 8 fit on five noise seeds under both readings of the path's feed, the 5-axis fit on five seeds and a sweep);
 ``tests/report/test_fidelity_fits.py`` checks (slow) that it reproduces the stored file.
 """
 
@@ -37,6 +38,7 @@ from gtmodel.problems.run import run_problem
 from gtmodel.report.fidelity_d1 import THESIS_FINAL_COST, THESIS_N_CALIBRATION, length_error_um
 from gtmodel.estimation.fusion.study import FusionStudy
 from gtmodel.report.fidelity_fits import D1_THESIS_FILE, FITS, best_acceleration_ratio, fit_table_8, other_crossing, predict
+from gtmodel.report.fidelity_fits5 import five_axis_spread
 from gtmodel.robots.closure import ThreeLinkClosure
 
 __all__ = ["SEEDS", "FEEDS", "seed_spread", "L1_THESIS_FILE", "L1_FITTED_FILE", "TABLE_7_2_CASE_1_TOOL_Y", "d1_model_1_arms", "fit_d1_cart_compliance", "l1_case_1",
@@ -209,6 +211,7 @@ def compute() -> dict[str, Any]:
         ``command``, ``cvitanic_tables_8_10``: ``fit`` (:func:`fit_table_8`, at the thesis' tangential feed, seed 1) and
         ``predicted`` (:func:`predict`), ``x_feed`` (the same at the feed along x), ``seeds`` (:func:`seed_spread`), ``table_8_at_implied_noise``
         (:func:`~gtmodel.report.fidelity_fits.best_acceleration_ratio` with Table 7's bias and without);
+        ``cvitanic_5_axis`` (:func:`~gtmodel.report.fidelity_fits5.five_axis_spread`: the 5-axis EKF's Q fitted to Table 8, Table 9 predicted);
         ``d1_cart_compliance`` (:func:`fit_d1_cart_compliance`); ``l1_stiffness_y`` (:func:`fit_l1_stiffness_y`).
     """
     fit = fit_table_8()
@@ -218,7 +221,7 @@ def compute() -> dict[str, Any]:
                                                                                         "seeds": seed_spread(),
                                                                                         "table_8_at_implied_noise": [best_acceleration_ratio(),
                                                                                                                      best_acceleration_ratio(bias=0.0)]},
-            "d1_cart_compliance": fit_d1_cart_compliance(), "l1_stiffness_y": fit_l1_stiffness_y()}
+            "cvitanic_5_axis": five_axis_spread(), "d1_cart_compliance": fit_d1_cart_compliance(), "l1_stiffness_y": fit_l1_stiffness_y()}
 
 
 
