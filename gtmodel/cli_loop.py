@@ -109,8 +109,7 @@ def print_loop_summary(summary: dict[str, Any], out: Path) -> None:
         lines.append("real time    " + ("SCHED_FIFO and locked memory" if rt.get("granted") else f"not granted ({rt.get('reason')})"))
     if summary.get("ilc"):
         lines.append(f"ILC          next correction in ilc_next.csv (tracking error RMS {summary['ilc'].get('error_rms')})")
-    files = [f for f in summary.get("files", ["summary.json"]) if not f.startswith("code/")]
-    lines.append(f"results in   {out}/ ({', '.join(files)}, code/)")
+    lines.append(f"results in   {out}/ ({', '.join(summary.get('files', ['summary.json']))})")
     print("\n".join(lines))
 
 
@@ -136,7 +135,7 @@ def loop_command(args: argparse.Namespace) -> int:
         if args.debug and outcome.error is not None:
             traceback.print_exception(outcome.error)
         print(f"gtmodel: internal error: {outcome.summary['message']} (rerun with --debug for the traceback)", file=sys.stderr)
-    elif status in (Status.INVALID_INPUT, Status.INTERRUPTED):
+    elif status is Status.INVALID_INPUT or (status is Status.INTERRUPTED and not outcome.summary.get("loop")):
         print(f"gtmodel: error: {outcome.summary['message']}", file=sys.stderr)
     else:
         print_loop_summary(outcome.summary, outcome.out)

@@ -335,7 +335,7 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     if not realtime:
         cmd += ["--no-realtime"]
     log.info("runtime: %s", " ".join(cmd))
-    timed_out = False
+    timed_out = signalled = False
     proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             errors="replace", start_new_session=True)
     with _RUNNING_LOCK:
@@ -347,10 +347,11 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
             timed_out = True
             _stop(proc)
             _, err = proc.communicate()
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         _stop(proc)
         if not end_on_signal:
             raise
+        signalled = str(exc) or "a signal"
         _, err = proc.communicate()
     except BaseException:
         _stop(proc)
@@ -386,7 +387,8 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     elif code != 0 or not stats:
         status, message = Status.ERROR, err or f"the runtime ended with exit code {code} and wrote no counts"
     elif stats.get("end") == "signal":
-        status, message = Status.INTERRUPTED, f"stopped by {stats.get('signal')}; log and counts complete"
+        by = f"{signalled} to this process (the runtime stopped with SIGTERM)" if signalled else stats.get("signal")
+        status, message = Status.INTERRUPTED, f"stopped by {by}; log and counts complete"
     else:
         status, message = Status.COMPLETED, f"ended by {stats.get('end')} after {stats.get('cycles', 0)} cycles"
     return LoopRun(status=status, message=message, summary=summary, log_path=log_path, stats=stats, exit_code=code)

@@ -278,6 +278,11 @@ class ProblemKind(ABC):
     #: The run writes them into ``summary.json`` (``file_descriptions``) and the report lists
     #: them; a test fails for a kind that writes a file it does not describe.
     file_descriptions: ClassVar[Mapping[str, str]] = {}
+    #: A signal (SIGINT, SIGTERM) ends the kind's solve as a normal end rather than
+    #: interrupting the run: the solution says ``interrupted`` and its results are written
+    #: (the robot loop of ``gtmodel loop``: Ctrl-C stops serving the robot, the log and the
+    #: summary are kept). Default False: a signal interrupts the run.
+    ends_on_signal: ClassVar[bool] = False
 
     def describe_files(self, names: Collection[str]) -> dict[str, str]:
         """What each file of a result folder holds, from :attr:`file_descriptions`.

@@ -114,12 +114,15 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
     GtModelError
         Bad input discovered while building or solving (e.g. degenerate data).
     KeyboardInterrupt
-        Ctrl-C, SIGINT or SIGTERM during the solve (also when the solver swallowed it).
+        Ctrl-C, SIGINT or SIGTERM during the solve (also when the solver swallowed it), unless
+        the kind ends on a signal (:attr:`~gtmodel.problems.base.ProblemKind.ends_on_signal`:
+        the loop of ``gtmodel loop``, whose solution then says ``interrupted`` and is written).
     """
     kind = get_kind(problem.kind)
     with InterruptGuard() as guard:
         solution = kind.solve(problem.declaration, verbose=verbose, previous=previous, warm_start=warm_start)
-        guard.check()
+        if not kind.ends_on_signal:
+            guard.check()
     return solution
 
 
@@ -370,7 +373,8 @@ def run_problem(
         add_phase(phases, "other", call["other"]["wall_s"] - rest["wall_s"], call["other"]["cpu_s"] - rest["cpu_s"])
         with InterruptGuard() as guard:
             summary = write_results(problem, solution, target, plots=plots, report=report, timing=phases)
-            guard.check()
+            if not get_kind(problem.kind).ends_on_signal:  # a loop's signal ended its run: its results stand
+                guard.check()
         return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
     except KeyboardInterrupt as exc:
         return _failed(path, target, problem, exc, Status.INTERRUPTED)

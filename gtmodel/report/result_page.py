@@ -208,6 +208,8 @@ def _inside(folder: Path, name: Any) -> str | None:
             return "missing"
         if stat.S_ISLNK(mode):
             return "a symbolic link"
+    if stat.S_ISDIR(mode):
+        return "a folder"
     if not stat.S_ISREG(mode):
         return "not a regular file"
     if path.lstat().st_nlink > 1:
@@ -235,7 +237,7 @@ def _folder_files(folder: Path, summary: Mapping[str, Any]) -> tuple[list[str], 
         why = _inside(folder, name)
         if why is None:
             files.append(name)
-        elif why != "missing":
+        elif why not in ("missing", "a folder"):  # a kind's sub-folder (gtmodel loop's code/) is not shown, nor suspicious
             shown = str(name)[:120].encode("unicode_escape").decode("ascii")
             refused.append(f"{shown}: {why}, not shown (a result folder contributes only regular files inside it)")
             log.warning("report: %s", refused[-1])

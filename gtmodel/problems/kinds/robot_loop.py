@@ -158,9 +158,10 @@ class RobotLoopKind(ProblemKind):
         "cycle_log.csv": "one row per cycle: cycle, IPOC or sequence, time, flags, reply latency, the measurement, the step's output and the reply sent",
         "runtime_stats.json": "the runtime's own counters at exit (cycles, replies, faults by kind, fallbacks, real-time scheduling)",
         "ilc_next.csv": "streaming with [ilc]: the next iteration's learned correction per cycle (the next run's --correction-file)",
-        "code/*": "the generated C: the step, the runtime and its configuration (gt_runtime_config.h), nanopb, the program gt_runtime; "
+        "code": "the generated C: the step, the runtime and its configuration (gt_runtime_config.h), nanopb, the program gt_runtime; "
                   "code/build the step's check",
     }
+    ends_on_signal = True
     columns = (
         Column("cycles", "cycles", "{:d}"),
         Column("latency_p99_ms", "reply p99 [ms]", "{:.3f}"),
@@ -282,7 +283,7 @@ class RobotLoopKind(ProblemKind):
                 files.append(item)
         if (solution.work / "code").is_dir():
             shutil.copytree(solution.work / "code", out / "code", symlinks=True)
-            files += sorted(p.relative_to(out).as_posix() for p in (out / "code").rglob("*") if p.is_file() and not p.is_symlink())
+            files.append("code")
         shutil.rmtree(solution.work, ignore_errors=True)
         d = declaration
         lat = solution.summary.get("reply_latency_ms") or {}

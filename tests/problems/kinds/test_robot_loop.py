@@ -138,7 +138,7 @@ class Loop:
     """``gtmodel loop FILE --out DIR --listen 127.0.0.1:PORT`` as a child process, ready when its runtime is bound."""
 
     def __init__(self, path: Path, out: Path, port: int, *extra: str) -> None:
-        self.out = out
+        self.out, self.port = out, port
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
         self.proc = subprocess.Popen([sys.executable, "-m", "gtmodel", "loop", str(path), "--out", str(out), "--listen", f"127.0.0.1:{port}",
                                       "--no-report", "-q", *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
@@ -245,3 +245,17 @@ def test_l1_one_ilc_iteration_through_egm_reduces_the_error_as_offline(tmp_path)
     offline = _offline_ilc_ratio(reference, doc["ilc"], doc["interface"]["period"])
     assert through_egm < 1.0
     assert abs(through_egm - offline) <= 0.2 * offline, (through_egm, offline)
+
+
+@pytest.mark.slow
+def test_ctrl_c_ends_the_loop_with_its_folder_written(tmp_path):
+    """SIGINT to ``gtmodel loop`` stops the runtime cleanly: exit 130 (interrupted), summary and cycle log written."""
+    import signal
+
+    loop = Loop(EGM_FILE, tmp_path / "loop", _free_port())
+    sim = simulate("egm", "l1", ("127.0.0.1", loop.port), duration_s=0.4, seed=0, out_dir=tmp_path / "sim")
+    loop.proc.send_signal(signal.SIGINT)
+    loop.proc.communicate(timeout=60)
+    summary = json.loads((tmp_path / "loop" / "summary.json").read_text())
+    assert (loop.proc.returncode, summary["status"], summary["loop"]["end"], sim.status) == (130, "interrupted", "signal", Status.COMPLETED)
+    assert summary["loop"]["cycles"] == sim.summary["cycles_sent"] and (tmp_path / "loop" / "cycle_log.csv").is_file()
