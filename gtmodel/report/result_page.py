@@ -208,10 +208,8 @@ def _inside(folder: Path, name: Any) -> str | None:
             return "missing"
         if stat.S_ISLNK(mode):
             return "a symbolic link"
-    if stat.S_ISDIR(mode):
-        return "a folder"
     if not stat.S_ISREG(mode):
-        return "not a regular file"
+        return "a folder" if stat.S_ISDIR(mode) else "not a regular file"
     if path.lstat().st_nlink > 1:
         return "a hard link (its content may be a file outside the folder)"
     if not path.resolve().is_relative_to(folder.resolve()):
