@@ -54,7 +54,7 @@ from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import CodegenError, InputError
-from gtmodel.defaults import INTERFACE_PORTS
+from gtmodel.defaults import INTERFACE_PORTS, LOOP_PERIOD_S
 
 __all__ = ["RSI_INPUTS", "RSI_OUTPUTS", "EGM_INPUTS", "EGM_OUTPUTS", "SENSOR_INPUTS", "DEFAULT_PORTS", "RUNTIME_FLAGS",
            "RUNTIME_SOURCES", "BUILD_FLAGS", "RuntimeSpec", "RobotRuntime", "build_runtime"]
@@ -176,7 +176,7 @@ class RuntimeSpec:
     fallback: str = "hold"
     stale_cycles: int = 10
     reply_deadline_s: float = 0.002
-    period: float = 0.004
+    period: float = LOOP_PERIOD_S
 
     def __post_init__(self) -> None:
         if self.interface not in ("rsi", "egm"):

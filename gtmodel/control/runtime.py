@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.status import Status, StatusResult
 
@@ -188,7 +189,7 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
         ``faults`` (per fault ``count`` and ``action``), ``fallback``, ``limit_clamps``,
         ``sensor``, ``step_status``, ``log`` (rows, dropped), ``realtime`` (granted, reason), ``end``.
     """
-    period = float(stats.get("period_s", 0.004))
+    period = float(stats.get("period_s", LOOP_PERIOD_S))
     latency = np.zeros(0)
     rows = 0
     if columns is not None and "flags" in columns:

@@ -50,6 +50,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel._lazy import lazy_module
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.correction import DELAY_CYCLES, VALIDATION_POSES_DEG, WRIST_JOINTS_DEG, joint_angles, truth_model
@@ -98,7 +99,7 @@ class SimPlant(ABC):
     name = ""
     error_name = ""
     record_columns: tuple[str, ...] = ()
-    dt = 0.004
+    dt = LOOP_PERIOD_S
 
     @abstractmethod
     def state(self) -> RobotState:
@@ -233,7 +234,7 @@ class KR500CorrectionPlant(SimPlant):
     def __init__(self, rng: np.random.Generator, pose_deg=None, start_mm=(1800.0, 0.0, 1200.0), amplitude_mm: float = SINE_AMPLITUDE_M * 1e3,
                  spatial_frequency_per_mm: float = SINE_SPATIAL_FREQUENCY_PER_M / 1e3, feed_mm_s: float = FEED_RATE_M_S * 1e3,
                  lag_s: float = 0.010, deflection_mm=(0.0, 0.0, -0.5), delay_cycles: int = DELAY_CYCLES - 1,
-                 tracker_noise_mm: float = SensorSpec().position_noise_mm, dt: float = 0.004, imu: bool = False) -> None:
+                 tracker_noise_mm: float = SensorSpec().position_noise_mm, dt: float = LOOP_PERIOD_S, imu: bool = False) -> None:
         pose = np.asarray(VALIDATION_POSES_DEG[0] if pose_deg is None else pose_deg, dtype=float)
         for name, v in (("amplitude_mm", amplitude_mm), ("spatial_frequency_per_mm", spatial_frequency_per_mm), ("feed_mm_s", feed_mm_s), ("dt", dt)):
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):

@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.robot_sim import egm, rsi
 from gtmodel.robot_sim.faults import FAULT_KINDS, FaultSchedule
@@ -442,7 +443,7 @@ def _write(out: Path, columns: tuple[str, ...], rows: list, summary: dict) -> No
 
 def simulate(interface: str, plant: str | SimPlant, target: tuple[str, int], sensor_target: tuple[str, int] | None = None,
              duration_s: float = 10.0, faults: str | FaultSchedule | None = None, seed: int = 0, out_dir: str | Path | None = None,
-             correction: str = "relative", period: float = 0.004, late_limit: int | None = None, sen_type: str = rsi.DEFAULT_SEN_TYPE,
+             correction: str = "relative", period: float = LOOP_PERIOD_S, late_limit: int | None = None, sen_type: str = rsi.DEFAULT_SEN_TYPE,
              plant_options: dict | None = None, bind_host: str | None = None) -> SimResult:
     """Play the robot of an interface with a plant for ``duration_s``, against the sensor side at ``target``.
 

@@ -218,7 +218,10 @@ def test_the_harness_ships_with_the_package():
     assert folder == Path(gtmodel.codegen.__file__).resolve().parent / "harness"
     assert all((folder / name).is_file() for name in HARNESS_FILES)
     package_data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
-    assert package_data["gtmodel.codegen"] == ["harness/Makefile", "harness/*.c", "harness/*.h"]
+    assert package_data["gtmodel.codegen"][:3] == ["harness/Makefile", "harness/*.c", "harness/*.h"]
+    # the robot runtime (gtmodel.codegen.robot_runtime): its C, ABB's egm.proto with its nanopb options, the vendored nanopb
+    assert set(package_data["gtmodel.codegen"][3:]) == {"harness/runtime/*.c", "harness/runtime/*.h", "harness/runtime/egm.proto",
+                                                         "harness/runtime/egm.options", "harness/runtime/nanopb/*"}
     assert "include ../gtmodel/codegen/harness/Makefile" in (HARNESS / "Makefile").read_text()
 
 

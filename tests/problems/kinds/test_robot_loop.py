@@ -141,7 +141,7 @@ class Loop:
         self.out, self.port = out, port
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
         self.proc = subprocess.Popen([sys.executable, "-m", "gtmodel", "loop", str(path), "--out", str(out), "--listen", f"127.0.0.1:{port}",
-                                      "--no-report", "-q", *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+                                      "-q", *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         deadline = time.monotonic() + 240.0
         while not _bound(port):
             if self.proc.poll() is not None or time.monotonic() > deadline:
@@ -152,7 +152,7 @@ class Loop:
     def finish(self) -> dict:
         out, err = self.proc.communicate(timeout=120)
         assert self.proc.returncode == 0, (out, err)
-        return json.loads((self.out / "summary.json").read_text())
+        return {**json.loads((self.out / "summary.json").read_text()), "loop_folder": str(self.out)}
 
 
 def _rsi_run(tmp_path: Path, name: str, gain: str, faults: str | None = None, duration: float = 4.0):
@@ -186,6 +186,21 @@ def test_kr500_every_reply_echoes_and_keeps_its_limits(kr500_runs):
     loop = summary["loop"]
     assert (loop["missing_replies"], loop["late_replies"], sim.summary["late"], sim.summary["mismatched_replies"]) == (0, 0, 0, 0)
     assert loop["log"]["dropped"] == 0 and loop["log"]["rows"] == loop["cycles"] == sim.summary["cycles_sent"]
+
+
+@pytest.mark.slow
+def test_kr500_every_file_of_the_folder_is_described_and_shown(kr500_runs, tmp_path_factory):
+    """As every kind's (tests/problems/test_base.py): a loop's folder is checked here, where a robot serves it."""
+    import html
+
+    summary, _ = kr500_runs["closed"]
+    out = Path(summary["loop_folder"])
+    on_disk = sorted(p.name for p in out.iterdir())
+    described = summary["file_descriptions"]
+    page = (out / "report.html").read_text(encoding="utf-8")
+    files_section = page[page.index('<h2 id="files">'):]
+    shown = [f for f in on_disk if (out / f).is_file() and html.escape(described[f], quote=True) not in files_section]
+    assert ([f for f in on_disk if f not in described], sorted(summary["files"]) == on_disk, shown) == ([], True, [])
 
 
 @pytest.mark.slow

@@ -18,7 +18,7 @@ from typing import Annotated, Literal
 from pydantic import BeforeValidator, Field, model_validator
 
 from gtmodel._docstrings import fill_doc
-from gtmodel.defaults import INTERFACE_PORTS
+from gtmodel.defaults import INTERFACE_PORTS, LOOP_PERIOD_S
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.schema import Flag, NonEmptyText, ProblemSchema, Section, _fail, choice, integer, number, vector
 
@@ -89,7 +89,7 @@ class InterfaceSection(Section):
                                    "(default 127.0.0.1 and the interface's usual port: RSI 49152, EGM 6510; gtmodel loop --listen overrides)")
     sensor_port: integer(1, 65535, description="UDP port of the sensor stream (the tracker's GTS1 datagrams) on the listen address "
                                               "(default: the listen port + 1; only a pose correction reads it)") | None = None
-    period: number(gt=0, le=0.1, unit="s", description="the robot's interpolation cycle") = 0.004
+    period: number(gt=0, le=0.1, unit="s", description="the robot's interpolation cycle") = LOOP_PERIOD_S
     idle_timeout: number(gt=0, le=3600, unit="s", description="the run ends when the robot has sent nothing this long after its first packet") = 2.0
     max_cycles: integer(0, 100_000_000, description="the run ends after this many cycles (0: no limit)") = 0
     time_limit: number(gt=0, le=86400, unit="s", description="the run ends after this long in any case") = 3600.0
