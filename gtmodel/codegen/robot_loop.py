@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from gtmodel._escape import C_IDENTIFIER
 from gtmodel._tables import write_table
 from gtmodel.codegen.loop_step import position_step
 from gtmodel.codegen.robot_runtime import RobotRuntime, RuntimeSpec, build_runtime
@@ -45,6 +46,8 @@ _log = logging.getLogger("gtmodel")
 
 #: Samples of the code check of the step before it runs.
 CHECK_SAMPLES = 300
+#: Longest loop name used in the C prefix ``gt_<name>`` (a longer or non-identifier name gives ``gt_loop``).
+MAX_C_NAME = 40
 
 
 @dataclass(frozen=True)
@@ -125,8 +128,11 @@ class RobotLoopDeclaration:
         """
         d = self
         work = Path(tempfile.mkdtemp(prefix="gtmodel-loop-"))
-        prefix = f"gt_{d.name}" if d.name.isidentifier() and d.name.isascii() else "gt_loop"
-        source = RobotRuntime(position_step(d.controller, d.name if d.name.isidentifier() else "loop"), d.spec)
+        # the file's name becomes the C prefix only as a plain, short C identifier (C99: 63 significant characters
+        # for gt_<name>_heap_stats and the like); any other name gives the prefix gt_loop
+        c_name = d.name if C_IDENTIFIER.fullmatch(d.name) and len(d.name) <= MAX_C_NAME else "loop"
+        prefix = f"gt_{c_name}"
+        source = RobotRuntime(position_step(d.controller, c_name), d.spec)
         generated = source.generate(work / "code", prefix=prefix)
         check = check_code(generated, n=CHECK_SAMPLES)
         if not check.passed:
