@@ -10,8 +10,15 @@ components, its reduction nor its transcriptions), with states ``x = (i, phi_m, 
     J_l w_l'  = tau_s - tau_load(phi_l, w_l)             load or link
 
 with ``tau_load = Fc tanh(w_l / w_eps) + dv w_l`` (two-mass drive) or ``m g l sin(phi_l)``
-(flexible joint); the rigid drive: ``(J_m + J_l / n^2) w_m' = k i - d_f w_m / n^2``.
-Minimum final time T from rest to rest with ``|v| <= v_max`` and ``|i| <= i_max``; the
+(flexible joint); the rigid drive: ``(J_m + J_l / n^2) w_m' = k i - d_f w_m / n^2``. The belt drive
+(states ``(i, phi_m, w_m, s_p, v_p)``: a pulley of radius r, no gear, carries the cart rigidly, ``s_c = r phi_m``)::
+
+    (J_m + m_c r^2) w_m' = k i - r (d_r v_c + F_b)      rotor and cart on its viscous rail
+    F_b     = c (s_c - s_p) + d (v_c - v_p)              belt
+    m_p v_p' = F_b                                       payload
+
+Minimum final time T (the belt: ``T + w int v^2 dt``, its problem's energy term) from rest to rest with
+``|v| <= v_max`` and ``|i| <= i_max``; the
 voltage piecewise constant on N intervals, each integrated by ``S`` classical Runge-Kutta
 (RK4) steps, the current bound enforced at every step's end (not the nodes alone), IPOPT.
 The references are the solves on the finest mesh (800 intervals; the two-mass drive, whose
@@ -20,7 +27,7 @@ discretisation's, O(1/N): a switch inside an interval; 100 -> 400 -> 800 interva
 rigid drive: 0.26871, 0.26604, 0.26572 s). The flexible joint starts from T = 0.35 s: from
 0.3 or 0.5 s IPOPT ends in a local optimum at 0.648 s (the link swinging back once).
 
-Run ``python benchmarks/drive_references.py`` (several CPU-minutes); it writes
+Run ``python benchmarks/drive_references.py [--only=drive_belt,...]`` (several CPU-minutes); it writes
 ``tests/problems/data/drive_references.json``, which ``tests/problems/test_drive_models.py`` reads.
 """
 
@@ -44,6 +51,9 @@ DRIVES = {
     "drive_flexible_joint": {"R": 1.0, "L": 1e-3, "k": 0.05, "Jm": 1e-5, "n": 50.0, "c": 200.0, "d": 0.5, "Jl": 0.5,
                              "load": "gravity", "mgl": 1.0 * 9.81 * 0.2, "vmax": 24.0, "imax": 8.0, "phi_l": 1.0,
                              "intervals": (100, 400, 800), "t_guess": 0.35},
+    "drive_belt": {"R": 1.2, "L": 2e-3, "k": 0.08, "Jm": 4e-5, "r": 0.02, "mc": 1.5, "dr": 3.0, "c": 4000.0, "d": 20.0,
+                   "mp": 0.8, "load": "belt", "s_p": 0.3, "energy": 1e-4, "vmax": 24.0, "imax": 8.0,
+                   "intervals": (100, 400, 800)},
 }
 
 
@@ -52,7 +62,13 @@ def ode(p: dict) -> tuple[ca.Function, list[float], list[float]]:
     x, v = ca.SX.sym("x", 3 if p.get("rigid") else 5), ca.SX.sym("v")
     i, phi_m, w_m = x[0], x[1], x[2]
     di = (v - p["R"] * i - p["k"] * w_m) / p["L"]
-    if p.get("rigid"):
+    if p.get("load") == "belt":
+        s_p, v_p, r = x[3], x[4], p["r"]
+        s_c, v_c = r * phi_m, r * w_m
+        f_b = p["c"] * (s_c - s_p) + p["d"] * (v_c - v_p)
+        rhs = ca.vertcat(di, w_m, (p["k"] * i - r * (p["dr"] * v_c + f_b)) / (p["Jm"] + p["mc"] * r**2), v_p, f_b / p["mp"])
+        final = [0.0, p["s_p"] / r, 0.0, p["s_p"], 0.0]
+    elif p.get("rigid"):
         n = p["n"]
         dw = (p["k"] * i - p["df"] * w_m / n**2) / (p["Jm"] + p["Jl"] / n**2)
         rhs = ca.vertcat(di, w_m, dw)
@@ -72,7 +88,7 @@ def ode(p: dict) -> tuple[ca.Function, list[float], list[float]]:
 
 
 def solve(p: dict, intervals: int, steps: int = 2, guess: dict | None = None, t_guess: float = 0.3) -> dict:
-    """Minimum time by multiple shooting (RK4, ``steps`` per interval); returns T, the solver's status and the trajectory."""
+    """Minimum time by multiple shooting (RK4, ``steps`` per interval); returns T, the objective, the solver's status and the trajectory."""
     f, x0, xf = ode(p)
     nx = len(x0)
     opti = ca.Opti()
@@ -94,7 +110,8 @@ def solve(p: dict, intervals: int, steps: int = 2, guess: dict | None = None, t_
         opti.subject_to(X[:, j + 1] == xk)
     opti.subject_to(opti.bounded(-p["vmax"], V, p["vmax"]))
     opti.subject_to(opti.bounded(0.02, T, 2.0))
-    opti.minimize(T)
+    # the belt's problem adds an energy term: the voltage is constant on each interval of length T / intervals
+    opti.minimize(T + p.get("energy", 0.0) * ca.sumsqr(V) * T / intervals)
     if guess is None:  # a straight line of the angles, the other states at rest
         opti.set_initial(T, t_guess)
         for r in range(nx):
@@ -117,14 +134,22 @@ def solve(p: dict, intervals: int, steps: int = 2, guess: dict | None = None, t_
         status = opti.stats()["return_status"]
     import numpy as np
 
-    return {"T": float(sol.value(T)), "status": status, "cpu_s": time.process_time() - start,
+    return {"T": float(sol.value(T)), "objective": float(sol.value(opti.f)), "status": status, "cpu_s": time.process_time() - start,
             "X": np.atleast_2d(sol.value(X)), "V": np.atleast_1d(sol.value(V))}
 
 
-def main(out: pathlib.Path) -> dict:
-    """Solve every drive on its meshes (each from the previous) and write the references (the finest mesh's)."""
-    refs = {}
+def main(out: pathlib.Path, only: list[str] | None = None) -> dict:
+    """Solve the drives (``only`` these; default all) on their meshes, each from the previous, and write the references.
+
+    A reference is the finest mesh's solve; the others of ``out`` are kept when ``only`` names some.
+    """
+    unknown = sorted(set(only or []) - set(DRIVES))
+    if unknown:
+        raise SystemExit(f"drive_references.py: unknown drive(s) {unknown}; expected some of {sorted(DRIVES)}")
+    refs = json.loads(out.read_text()) if only and out.exists() else {}
     for name, p in DRIVES.items():
+        if only and name not in only:
+            continue
         runs = {}
         prev = None
         for n in p["intervals"]:
@@ -132,8 +157,9 @@ def main(out: pathlib.Path) -> dict:
             runs[n] = prev
             print(f"{name}: N = {n}: T = {prev['T']:.7f} s ({prev['status']}, {prev['cpu_s']:.1f} CPU-s)", flush=True)
         finest = p["intervals"][-1]
-        refs[name] = {"final_time": runs[finest]["T"], "status": runs[finest]["status"],
+        refs[name] = {"final_time": runs[finest]["T"], "objective": runs[finest]["objective"], "status": runs[finest]["status"],
                       "by_intervals": {str(n): r["T"] for n, r in runs.items()},
+                      "objective_by_intervals": {str(n): r["objective"] for n, r in runs.items()},
                       "method": f"direct multiple shooting, plain CasADi, piecewise-constant voltage on {finest} intervals, "
                                 "2 RK4 steps each, the current bound at every step, IPOPT tol 1e-10"}
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -143,4 +169,6 @@ def main(out: pathlib.Path) -> dict:
 
 if __name__ == "__main__":
     root = pathlib.Path(__file__).resolve().parents[1]
-    main(pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else root / "tests" / "problems" / "data" / "drive_references.json")
+    args = [a for a in sys.argv[1:] if not a.startswith("--only=")]
+    names = [n for a in sys.argv[1:] if a.startswith("--only=") for n in a.removeprefix("--only=").split(",")]
+    main(pathlib.Path(args[0]) if args else root / "tests" / "problems" / "data" / "drive_references.json", names or None)

@@ -2,7 +2,8 @@
 
 Independent reference: ``benchmarks/drive_references.py``, a direct multiple-shooting solve
 written in plain CasADi on the hand-written ODEs (no gtmodel code), the current bound enforced
-at every integration step; its values are kept in ``tests/problems/data/drive_references.json``.
+at every integration step; its values are kept in ``tests/problems/data/drive_references.json``. The belt drive's
+objective adds an energy term (``final_time + 1e-4 * integral(src_v^2)``): its objective is compared, not its final time.
 """
 
 from __future__ import annotations
@@ -18,13 +19,14 @@ from gtmodel.problems import load_problem, run_problem
 
 REPO = Path(__file__).resolve().parents[2]
 REFERENCES = json.loads((REPO / "tests" / "problems" / "data" / "drive_references.json").read_text())
-DRIVES = ["drive_motor_gear_load", "drive_two_mass", "drive_flexible_joint"]
+DRIVES = ["drive_motor_gear_load", "drive_two_mass", "drive_flexible_joint", "drive_belt"]
 
 
 @pytest.mark.parametrize("name, states", [
     ("drive_motor_gear_load", ["ind.i", "emf.phi", "rotor.w"]),
     ("drive_two_mass", ["ind.i", "emf.phi", "rotor.w", "load.w", "friction.phi_rel"]),
     ("drive_flexible_joint", ["ind.i", "emf.phi", "rotor.w", "link.phi", "link.w"]),
+    ("drive_belt", ["ind.i", "emf.phi", "rotor.w", "payload.s", "payload.v"]),
 ])
 def test_drive_model_is_reduced_to_its_states(name, states):
     # the composed models are of index 2 (the gear ties two angles); reduction keeps these states
@@ -62,7 +64,8 @@ def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_
     outcome = run_problem(REPO / "problems" / f"{name}.toml", tmp_path / "out", plots=False)
     cpu = time.process_time() - cpu
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert summary["objective"] == pytest.approx(REFERENCES[name]["final_time"], rel=5e-3)
+    reference = REFERENCES[name].get("objective", REFERENCES[name]["final_time"])  # the minimum time's objective is T
+    assert summary["objective"] == pytest.approx(reference, rel=5e-3)
     passes = summary.get("refinement", [])
     tol = summary["verification"]["tolerance"]
     feasible = [e["objective"] for e in passes if e.get("end_deviation", 1.0) <= ANCHOR_END and e.get("max_bound_violation", 0.0) <= tol]
