@@ -76,12 +76,16 @@ def lazy_module(name: str) -> ModuleType:
     Raises
     ------
     ModuleNotFoundError
-        No module of that name is installed.
+        No module of that name is installed (for a submodule of a package not yet imported:
+        no such package; the submodule itself is then looked for on first use).
     """
     module = sys.modules.get(name)
     if module is not None:
         return module
-    spec = importlib.util.find_spec(name)
+    top = name.partition(".")[0]
+    # finding a submodule imports its package (SciPy's: ~0.01 CPU-s), so a submodule of a package not yet
+    # imported is looked for on first use, its package now (without importing it)
+    spec = importlib.util.find_spec(top if top != name and top not in sys.modules else name)
     if spec is None or spec.loader is None:
         raise ModuleNotFoundError(f"No module named {name!r}", name=name)
     return _LazyModule(name)

@@ -313,8 +313,8 @@ def decimate(x: Any, y: Any, points: int) -> tuple[np.ndarray, np.ndarray]:
     low = np.concatenate([np.where(np.isnan(y), np.inf, y), np.full(pad, np.inf)]).reshape(buckets, size)
     high = np.concatenate([np.where(np.isnan(y), -np.inf, y), np.full(pad, -np.inf)]).reshape(buckets, size)
     start = np.arange(buckets) * size
-    keep = np.unique(np.concatenate([[0, n - 1], np.minimum(start + low.argmin(axis=1), n - 1),
-                                     np.minimum(start + high.argmax(axis=1), n - 1)]))
+    keep = np.flatnonzero(np.bincount(np.concatenate([[0, n - 1], np.minimum(start + low.argmin(axis=1), n - 1),  # sorted, once each
+                                                      np.minimum(start + high.argmax(axis=1), n - 1)]), minlength=n))
     return x[keep], y[keep]
 
 

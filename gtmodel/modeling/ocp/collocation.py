@@ -572,7 +572,7 @@ class CollocationTranscription:
         point constraints).
         """
         kinds = colloc.point_kinds()
-        off = np.flatnonzero(~np.char.startswith(kinds, "collocation"))
+        off = np.flatnonzero([not str(k).startswith("collocation") for k in kinds])  # not np.char (an import)
         for i in off:
             if zs.shape[1] and self.nlp.consistent is not None:
                 zs[i] = np.asarray(self.nlp.consistent(t[i], xs[i], zs[i], us[i], pvec, tf), dtype=float).reshape(-1)

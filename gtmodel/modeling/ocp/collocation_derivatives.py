@@ -284,7 +284,7 @@ def assembled_derivatives(
     lam_fs = ca.SX.sym("lam_f")
     # the columns of w the end terms read: the structural nonzero columns of their Jacobian (one sparsity
     # pass, not a Python loop over every symbol of w)
-    e_cols = np.unique(np.asarray(ca.jacobian_sparsity(ca.vertcat(e_all, nlp.mayer), nlp.w).get_col(), dtype=np.int64))
+    e_cols = _sorted_unique(np.asarray(ca.jacobian_sparsity(ca.vertcat(e_all, nlp.mayer), nlp.w).get_col(), dtype=np.int64))[0]
     v_e = nlp.w[e_cols.tolist()] if e_cols.size else ca.SX.sym("v_e", 0)
     he_loc, ge_loc = ca.hessian(lam_fs * nlp.mayer + ca.dot(lam_e, e_all), v_e)
     ends_jac = ca.Function(f"{casadi_name(dae.name)}_ends_jac", [v_e, nlp.p], [ca.jacobian(e_all, v_e), ca.densify(e_all)],
