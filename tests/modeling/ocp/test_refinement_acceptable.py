@@ -62,3 +62,29 @@ def test_of_verified_acceptable_passes_the_best_objective_is_returned(monkeypatc
     res = solve_refined(opt, elements=10, start=start, max_passes=4)
     assert len(res.refinement) == 2 and res.status == Status.ACCEPTABLE
     assert res.final_time == pytest.approx(2.0, abs=1e-6) and "returned pass 2 of 2" in res.refinement_stop
+
+
+def test_a_pass_stopped_at_the_acceptable_level_is_continued_warm_to_the_tolerance(monkeypatch):
+    # a pass IPOPT stopped at its acceptable level (here: reported so) is continued in the same pass from its
+    # primal-dual point (warm start: its multipliers), acceptable_iter 0, within POLISH_CPU_S; the continuation's
+    # optimum is the pass's result (the analytic 2 s)
+    opt = min_time_double_integrator()
+    real = refinement.CollocationTranscription
+    calls: list[dict] = []
+
+    class FirstAcceptable(real):
+        def solve(self, *args, **kwargs):
+            result = super().solve(*args, **kwargs)
+            calls.append({"warm_start": kwargs.get("warm_start", False), **self.options["ipopt"]})
+            if not kwargs.get("warm_start"):
+                result.status = Status.ACCEPTABLE
+                result.stats = {**result.stats, "return_status": "Solved_To_Acceptable_Level"}
+            return result
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", FirstAcceptable)
+    res = solve_refined(opt, elements=10, max_passes=1)
+    assert [c["warm_start"] for c in calls] == [False, True]
+    assert calls[1]["acceptable_iter"] == 0 and 0 < calls[1]["max_cpu_time"] <= refinement.POLISH_CPU_S
+    assert res.status == Status.OPTIMAL and res.verification.passed
+    assert res.refinement[0]["continued"]["status"] == "optimal"
+    assert res.final_time == pytest.approx(2.0, abs=1e-6)
