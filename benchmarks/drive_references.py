@@ -17,6 +17,12 @@ with ``tau_load = Fc tanh(w_l / w_eps) + dv w_l`` (two-mass drive) or ``m g l si
     F_b     = c (s_c - s_p) + d (v_c - v_p)              belt
     m_p v_p' = F_b                                       payload
 
+The ball-screw drive (states ``(i, w_m, phi_c, phi_s, w_s)``: a coupling of twist ``phi_c`` between rotor
+and screw, a screw of lead l carrying the table, ``s = l phi_s / (2 pi)``, ``rho = l / (2 pi)``)::
+
+    J_m w_m'              = k i - tau_c,   tau_c = c phi_c + d (w_m - w_s),   phi_c' = w_m - w_s
+    (J_s + m rho^2) w_s'  = tau_c - rho (Fc tanh(rho w_s / v_eps) + dv rho w_s)
+
 Minimum final time T (the belt: ``T + w int v^2 dt``, its problem's energy term) from rest to rest with
 ``|v| <= v_max`` and ``|i| <= i_max``; the
 voltage piecewise constant on N intervals, each integrated by ``S`` classical Runge-Kutta
@@ -54,6 +60,9 @@ DRIVES = {
     "drive_belt": {"R": 1.2, "L": 2e-3, "k": 0.08, "Jm": 4e-5, "r": 0.02, "mc": 1.5, "dr": 3.0, "c": 4000.0, "d": 20.0,
                    "mp": 0.8, "load": "belt", "s_p": 0.3, "energy": 1e-4, "vmax": 24.0, "imax": 8.0,
                    "intervals": (100, 400, 800)},
+    "drive_ball_screw": {"R": 0.8, "L": 1.5e-3, "k": 0.12, "Jm": 2e-4, "c": 100.0, "d": 0.05, "Js": 1e-4, "lead": 0.01,
+                         "m": 20.0, "Fc": 20.0, "v_eps": 0.002, "dv": 50.0, "load": "screw", "s": 0.2, "vmax": 48.0,
+                         "imax": 10.0, "intervals": (100, 400, 800, 1600), "t_guess": 0.5},
 }
 
 
@@ -62,7 +71,14 @@ def ode(p: dict) -> tuple[ca.Function, list[float], list[float]]:
     x, v = ca.SX.sym("x", 3 if p.get("rigid") else 5), ca.SX.sym("v")
     i, phi_m, w_m = x[0], x[1], x[2]
     di = (v - p["R"] * i - p["k"] * w_m) / p["L"]
-    if p.get("load") == "belt":
+    if p.get("load") == "screw":
+        w_c, phi_c, phi_s, w_s, rho = x[1], x[2], x[3], x[4], p["lead"] / (2 * math.pi)
+        tau_c = p["c"] * phi_c + p["d"] * (w_c - w_s)
+        f_table = p["Fc"] * ca.tanh(rho * w_s / p["v_eps"]) + p["dv"] * rho * w_s
+        rhs = ca.vertcat((v - p["R"] * i - p["k"] * w_c) / p["L"], (p["k"] * i - tau_c) / p["Jm"], w_c - w_s, w_s,
+                         (tau_c - rho * f_table) / (p["Js"] + p["m"] * rho**2))
+        final = [0.0, 0.0, 0.0, p["s"] / rho, 0.0]
+    elif p.get("load") == "belt":
         s_p, v_p, r = x[3], x[4], p["r"]
         s_c, v_c = r * phi_m, r * w_m
         f_b = p["c"] * (s_c - s_p) + p["d"] * (v_c - v_p)

@@ -18,13 +18,19 @@ constant L/R is 1 to 2 ms, far below the motion's 0.1 to 0.4 s (stiff).
   user's own component: ``tau = m g l sin(phi)``, phi from the hanging position);
 * :class:`BeltDriveModel`: motor, a pulley (``IdealRollingWheel``, radius 2 cm) driving a
   cart on a viscous rail and, through the belt's spring-damper (4000 N/m, 20 N s/m), a
-  payload: rotational into translational (the belt cart of ``tests/fixtures/user_models``).
+  payload: rotational into translational (the belt cart of ``tests/fixtures/user_models``);
+* :class:`BallScrewDriveModel`: motor, a compliant coupling (100 N m/rad), the screw's
+  inertia and a ball screw of 10 mm lead (``IdealRollingWheel`` of radius lead / 2 pi, the
+  MSL's ``IdealGearR2T`` with ratio 2 pi / lead) moving a 20 kg table against smooth Coulomb
+  and viscous friction (:class:`SmoothLinearFriction`, the user's own component).
 
 Each class builds the model reduced by :func:`gtmodel.modeling.structural_simplify` (the gear
 ties two angles: index 2 before reduction).
 """
 
 from __future__ import annotations
+
+import math
 
 import casadi as ca
 
@@ -50,6 +56,23 @@ class SmoothFriction(rot.PartialCompliantWithRelativeStates):
         """The base's equations and the friction law."""
         super().equations()
         self.equation(self.tau, self.Fc * ca.tanh(self.w_rel / self.w_eps) + self.dv * self.w_rel, name="friction")
+
+
+class SmoothLinearFriction(tr.PartialCompliantWithRelativeStates):
+    """Coulomb friction smoothed by tanh plus viscous friction on a slide: ``f = Fc tanh(v_rel / v_eps) + dv v_rel``.
+
+    Connected between the ground (``flange_a``) and a moving flange (``flange_b``): ``v_rel`` is its speed [m/s] and
+    ``f`` [N] brakes it.
+    """
+
+    Fc = Parameter(1.0, unit="N", description="Coulomb friction force", lb=0.0)
+    v_eps = Parameter(0.002, unit="m/s", description="speed of the tanh smoothing", lb=1e-9)
+    dv = Parameter(0.0, unit="N.s/m", description="viscous friction coefficient", lb=0.0)
+
+    def equations(self) -> None:
+        """The base's equations and the friction law."""
+        super().equations()
+        self.equation(self.f, self.Fc * ca.tanh(self.v_rel / self.v_eps) + self.dv * self.v_rel, name="friction")
 
 
 class GravityTorque(Component):
@@ -176,6 +199,32 @@ class BeltDrive(_Armature):
         connect(self.rail.flange_a, self.ground.flange)
 
 
+class BallScrewDrive(_Armature):
+    """Motor (R = 0.8 Ohm, L = 1.5 mH, k = 0.12 N m/A, 2e-4 kg m^2), coupling 100 N m/rad and 0.05 N m s/rad, screw
+    1e-4 kg m^2 with a lead of 10 mm, table 20 kg with Coulomb 20 N (tanh, 2 mm/s) and viscous 50 N s/m friction."""
+
+    r = el.Resistor(R=0.8)
+    ind = el.Inductor(L=1.5e-3)
+    emf = el.EMF(k=0.12)
+    rotor = rot.Inertia(J=2e-4)
+    coupling = rot.SpringDamper(c=100.0, d=0.05)
+    screw_j = rot.Inertia(J=1e-4)
+    screw = rot.IdealRollingWheel(radius=0.01 / (2.0 * math.pi))  # lead / 2 pi: 10 mm of travel per turn
+    table = tr.Mass(m=20.0)
+    friction = SmoothLinearFriction(Fc=20.0, v_eps=0.002, dv=50.0)
+    ground = tr.Fixed()
+
+    def equations(self) -> None:
+        """Armature, coupling, screw, table and its friction."""
+        super().equations()
+        connect(self.rotor.flange_b, self.coupling.flange_a)
+        connect(self.coupling.flange_b, self.screw_j.flange_a)
+        connect(self.screw_j.flange_b, self.screw.flangeR)
+        connect(self.screw.flangeT, self.table.flange_a)
+        connect(self.table.flange_b, self.friction.flange_b)
+        connect(self.friction.flange_a, self.ground.flange)
+
+
 class MotorGearLoadModel:
     """:class:`MotorGearLoad`, reduced to index 1."""
 
@@ -233,3 +282,18 @@ class BeltDriveModel:
             [m/s] (their names as reduction keeps them); input ``src.v`` [V].
         """
         return structural_simplify(BeltDrive().to_model("belt_drive"))
+
+
+class BallScrewDriveModel:
+    """:class:`BallScrewDrive`, reduced to index 1."""
+
+    def build(self) -> Model:
+        """The reduced model.
+
+        Returns
+        -------
+        Model
+            States: the current ``ind.i`` [A], the motor speed, the coupling's twist and the screw's angle and
+            speed (their names as reduction keeps them); input ``src.v`` [V].
+        """
+        return structural_simplify(BallScrewDrive().to_model("ball_screw_drive"))

@@ -19,7 +19,7 @@ from gtmodel.problems import load_problem, run_problem
 
 REPO = Path(__file__).resolve().parents[2]
 REFERENCES = json.loads((REPO / "tests" / "problems" / "data" / "drive_references.json").read_text())
-DRIVES = ["drive_motor_gear_load", "drive_two_mass", "drive_flexible_joint", "drive_belt"]
+DRIVES = ["drive_motor_gear_load", "drive_two_mass", "drive_flexible_joint", "drive_belt", "drive_ball_screw"]
 
 
 @pytest.mark.parametrize("name, states", [
@@ -27,6 +27,7 @@ DRIVES = ["drive_motor_gear_load", "drive_two_mass", "drive_flexible_joint", "dr
     ("drive_two_mass", ["ind.i", "emf.phi", "rotor.w", "load.w", "friction.phi_rel"]),
     ("drive_flexible_joint", ["ind.i", "emf.phi", "rotor.w", "link.phi", "link.w"]),
     ("drive_belt", ["ind.i", "emf.phi", "rotor.w", "payload.s", "payload.v"]),
+    ("drive_ball_screw", ["ind.i", "rotor.w", "coupling.phi_rel", "screw_j.phi", "screw_j.w"]),
 ])
 def test_drive_model_is_reduced_to_its_states(name, states):
     # the composed models are of index 2 (the gear ties two angles); reduction keeps these states
