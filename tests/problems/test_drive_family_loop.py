@@ -1,13 +1,14 @@
 """The drive family of issue 49 taken through the tracking controller and the MPC as C, each on a plant 20 % off.
 
 For each drive of ``models/drives.py`` (motor + gear + load, two-mass with a compliant shaft, flexible joint with
-gravity, belt drive) the shipped ``codegen/mpc/drive_<drive>_mpc.toml`` (the problem's current limit as soft MPC
-rows) and ``codegen/controllers/drive_<drive>_tracking.toml`` are loaded (their verified references solved), their
-loop step generated and compiled, and the C run against the file's mismatched plant (inertias +20 %, stiffness -20 %
-where the drive has them). Independent checks: the feedforward alone on the same plant (the RMS ratio at most 0.5),
-the plant's own columns against every declared bound (none exceeded by more than 1 %, counted by the check), the
-step's C against its CasADi Function at random arguments (``check_loop_step``). The L1's drives with compliance are
-the shipped ``l1_mpc.toml`` / ``l1_tracking.toml`` (``tests/problems/test_mpc_check.py``, ``tests/test_cli_codegen.py``).
+gravity, belt drive, ball-screw axis with a compliant coupling) the shipped ``codegen/mpc/drive_<drive>_mpc.toml``
+(the problem's current limit as soft MPC rows) and ``codegen/controllers/drive_<drive>_tracking.toml`` are loaded
+(their verified references solved), their loop step generated and compiled, and the C run against the file's
+mismatched plant (inertias or masses +20 %, stiffness -20 % where the drive has them). Independent checks: the
+feedforward alone on the same plant (the RMS ratio at most 0.5), the plant's own columns against every declared bound
+(none exceeded by more than 1 %, counted by the check), the step's C against its CasADi Function at random arguments
+(``check_loop_step``). The L1's drives with compliance are the shipped ``l1_mpc.toml`` / ``l1_tracking.toml``
+(``tests/problems/test_mpc_check.py``, ``tests/test_cli_codegen.py``).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from gtmodel.problems.tracking_file import load_tracking_file
 from ..conftest import REPO
 
 FIXTURES = REPO / "tests" / "fixtures" / "user_models"
-DRIVES = ["motor_gear_load", "two_mass", "flexible_joint", "belt"]
+DRIVES = ["motor_gear_load", "two_mass", "flexible_joint", "belt", "ball_screw"]
 ROUTES = {"mpc": (REPO / "codegen" / "mpc", "mpc", load_mpc_file, mpc_step),
           "tracking": (REPO / "codegen" / "controllers", "tracking", load_tracking_file, tracking_step)}
 
