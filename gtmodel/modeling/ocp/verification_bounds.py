@@ -123,7 +123,8 @@ def bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.nda
     Returns
     -------
     dict of int to float
-        Element -> ``tau`` in (0, 1), the first crossing, for the elements whose polynomials cross.
+        Element -> ``tau`` in (0, 1), the first crossing, for the elements whose polynomials cross inside
+        (within the bounds at the element's start).
     """
     col = result.collocation
     if col is None or not elements:
@@ -136,7 +137,7 @@ def bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.nda
     for k in elements:
         x = basis @ col.xc[k]  # (401, nx)
         over = np.max(np.maximum(np.maximum(x - upper, lower - x), 0.0) / scale, axis=1) > level
-        if over[1:-1].any():
+        if not over[0] and over[1:-1].any():
             out[int(k)] = float(taus[1 + int(np.argmax(over[1:-1]))])
     return out
 
