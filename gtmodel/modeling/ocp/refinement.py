@@ -23,6 +23,12 @@ choose the elements to split:
   into a sliver; if the element's defect exceeds ``tol`` (a stiff state, such as a motor
   current against its limit, after the jump) the element is graded towards the jump
   (parts 0.15, 0.30, 0.55 of it), so that the transient after it is resolved.
+* a *state bound* exceeded between the nodes: once nothing else is left to split, an element whose
+  verifying simulation exceeds a state bound by more than the tolerance (scaled as the deviations;
+  :mod:`~gtmodel.modeling.ocp.verification_bounds`) is cut where its state's polynomial first crosses
+  the bound, at its input's switch, and into 2 to 4 parts (Betts, *Practical Methods*, ch. 4; GPOPS-II).
+  A pass is verified only if it keeps the bounds too; if no pass does, the verified pass that keeps them
+  best is returned, its ``verification.bounds`` holding a ``remedy`` (issue 49: the drives' motor current).
 
 A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
 :data:`SPURIOUS_DEVIATION` has found a spurious
