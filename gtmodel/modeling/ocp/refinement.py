@@ -23,6 +23,12 @@ choose the elements to split:
   into a sliver; if the element's defect exceeds ``tol`` (a stiff state, such as a motor
   current against its limit, after the jump) the element is graded towards the jump
   (parts 0.15, 0.30, 0.55 of it), so that the transient after it is resolved.
+* a *state bound* exceeded between the nodes: once nothing else is left to split, an element whose
+  verifying simulation exceeds a state bound by more than the tolerance (scaled as the deviations;
+  :mod:`~gtmodel.modeling.ocp.verification_bounds`) is cut where its state's polynomial first crosses
+  the bound, at its input's switch, and into 2 to 4 parts (Betts, *Practical Methods*, ch. 4; GPOPS-II).
+  A pass is verified only if it keeps the bounds too; if no pass does, the verified pass that keeps them
+  best is returned, its ``verification.bounds`` holding a ``remedy`` (issue 49: the drives' motor current).
 
 A pass whose deviation exceeds :data:`SPURIOUS` times the tolerance and
 :data:`SPURIOUS_DEVIATION` has found a spurious
@@ -79,6 +85,7 @@ from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, switch_elements, verify
+from gtmodel.modeling.ocp.verification_bounds import bound_crossings, element_bound_violations
 from gtmodel.status import Status
 
 __all__ = ["solve_refined", "refine_mesh", "end_deviation", "WORSE", "ANCHOR_END", "WARM_MU", "WARM_PUSH", "POLISH_CPU_S", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION", "SPURIOUS", "SPURIOUS_DEVIATION"]
@@ -127,7 +134,8 @@ SWITCH_EDGE = 0.03
 """A switch within this fraction of an element's edge is taken as on the boundary (the element graded, not cut at it)."""
 
 
-def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int) -> tuple[np.ndarray, dict[str, Any]]:
+def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int,
+                bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
     """The next mesh: elements split where the defect exceeds the tolerance or an input switches.
 
     Parameters
@@ -140,6 +148,10 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
         every element defect within it, the elements are held to ``tolerance**2 / deviation``.
     max_elements : int
         Limit on the elements of the new mesh (the worst elements are split first).
+    bounds : tuple of numpy.ndarray, optional
+        The states' lower and upper bounds, each shape ``(nx,)``: an element whose simulation
+        exceeds them by more than ``tolerance`` (scaled as the deviations) is cut where its
+        polynomial crosses the bound and at its input's switch (else halved).
 
     Returns
     -------
@@ -162,6 +174,7 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
     errors = np.asarray(v.element_errors, dtype=float)
     errors = np.where(np.isfinite(errors), errors, 1e6 * tolerance)
     deviation = float(v.max_scaled_deviation)
+    limit = tolerance  # the bound check's tolerance (the deviations' may be lowered below)
     if np.isfinite(deviation) and deviation > tolerance >= errors.max(initial=0.0):
         # every element within the tolerance, the simulation over the horizon not: the local errors add up
         # (a stiff state's deviations after each switch). The local target is lowered by the ratio of the two
@@ -190,6 +203,24 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int)
             # halved too, so that the next pass resolves the transient after the switch as well
             cuts = [tau] if errors[k] < 10 else [tau / 2, tau, (1 + tau) / 2]
             plans[k] = (max(plans.get(k, (0.0, []))[0], 1e3), cuts)
+    if bounds is not None and not plans:
+        # nothing else to split, but the simulation exceeds a state bound between the points by more than the
+        # tolerance (Betts, ch. 4: a path constraint violated between the grid points refines the grid there): the
+        # element cut where its state's polynomial crosses the bound (a current's junction with its limited arc, a
+        # kink that no polynomial follows) and at its input's switch, else halved. Only then, so that the passes up to
+        # the deviations' verification are those without the check (cut with the others, the two-mass drive's second
+        # pass left for a local optimum 1.2 % slower)
+        over = element_bound_violations(result, *bounds) / limit
+        over = over if over.size == N else np.zeros(N)
+        bad = [int(k) for k in np.nonzero(over > 1.0)[0]]
+        crossings = bound_crossings(result, *bounds, bad, 0.25 * limit)
+        for k in bad:
+            parts = 2 if over[k] < 3 else 3 if over[k] < 10 else 4
+            cuts = [tau for tau in (crossings.get(k), switches.get(k)) if tau is not None and min(tau, 1.0 - tau) >= SWITCH_EDGE]
+            for tau in np.arange(1, parts) / parts:
+                if all(abs(tau - c) >= 2 * SWITCH_EDGE for c in cuts):
+                    cuts.append(float(tau))
+            plans[k] = (1e3 * over[k], sorted(cuts))
     budget = max_elements - N
     split: list[int] = []
     for k in sorted(plans, key=lambda k: -plans[k][0]):
@@ -392,6 +423,7 @@ def solve_refined(
         raise InputError(f"tolerance: expected a positive number, got {tol!r}")
     name = optimization.model.name
     cpu0 = _time.process_time()
+    state_bounds: tuple[np.ndarray, np.ndarray] | None = None
     mesh: np.ndarray | None = None
     guess: Any = initial_guess
     history: list[dict[str, Any]] = []
@@ -475,7 +507,9 @@ def solve_refined(
         elif _feasible(entry, tol) and (anchor is None or _minimised(optimization, result) <= _minimised(optimization, anchor)
                                                or v.passed):
             anchor = result
-        new, info = refine_mesh(base, tol, max_elements)
+        if state_bounds is None and result.dae is not None and result.dae.nx:
+            state_bounds = optimization.bounds_vectors(result.dae, "x")
+        new, info = refine_mesh(base, tol, max_elements, bounds=state_bounds)
         if base is not result:  # at least as fine as the rejected pass's mesh
             new = _finer(new, mesh if mesh is not None else np.full(n_elements, 1.0 / n_elements))
         entry["switches_s"] = info["switches"]
@@ -509,11 +543,18 @@ def solve_refined(
             guess, warm = _repaired_guess(result, tol), False
         else:
             guess, warm = _guess_from(base), True
-    verified = [r for r in passes if r.verification is not None and r.verification.passed and r.status == Status.OPTIMAL]
-    # else a verified pass at IPOPT's acceptable level: the best of them, not the smallest deviation (the flexible
-    # joint's pass 9, 0.3347391, over its pass 4, 0.3358544, whose deviation was smaller by 3e-4)
-    verified = verified or [r for r in passes if r.verification is not None and r.verification.passed and r.status == Status.ACCEPTABLE]
-    if verified:
+    # verified: the deviations within the tolerance and the state bounds kept between the nodes (_kept); else a verified
+    # pass at IPOPT's acceptable level: the best of them, not the smallest deviation (the flexible joint's pass 9,
+    # 0.3347391, over its pass 4, 0.3358544, whose deviation was smaller by 3e-4); else, the bounds not kept by any
+    # pass, the same choice among the passes whose deviations verified (its verification says that the bounds are not kept)
+    verified: list[OptimizationResult] = []
+    for kept in (True, False):
+        for status in (Status.OPTIMAL, Status.ACCEPTABLE):
+            verified = verified or [r for r in passes if r.verification is not None and r.verification.passed
+                                    and r.status == status and (_kept(r) or not kept)]
+    if verified and not _kept(verified[0]):  # the bounds kept by none: the pass that keeps them best
+        best = min(verified, key=lambda r: r.verification.bounds["max_scaled_violation"])
+    elif verified:
         best = min(verified, key=lambda r: _minimised(optimization, r))
     else:  # the smallest deviation, of the passes not rejected as another local optimum
         kept = [r for r, e in zip(passes, history) if "rejected" not in e]
@@ -534,7 +575,17 @@ def solve_refined(
         result.verification.cpu_s = float(sum(e.get("verification_cpu_time", 0.0) for e in history))
     if not verified:
         result.message = f"{result.message}; mesh refinement stopped at {stop} before a pass verified"
+    elif not _kept(result):  # said in the verification (summary.json verification.bounds), not only the warnings
+        result.verification.bounds = {**result.verification.bounds, "remedy": (
+            f"mesh refinement stopped at {stop} before a pass kept the bound between the points: a larger max_cpu_s "
+            f"or max_passes in [transcription] (now {budget:g} CPU-s, {max_passes} passes)")}
     return result
+
+
+def _kept(result: OptimizationResult) -> bool:
+    """The verifying simulation keeps the state bounds between the nodes within the tolerance (or none are checked)."""
+    v = result.verification
+    return v is not None and (not v.bounds or bool(v.bounds["within_tolerance"]))
 
 
 #: CPU limit [s] of the continuation of a pass that IPOPT stopped at its acceptable level.

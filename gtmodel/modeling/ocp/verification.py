@@ -46,8 +46,9 @@ spurious minimum that satisfies an integral constraint only at the collocation p
 hanging chain's length with the input oscillating between them) is caught here.
 
 The state bounds are checked on the simulation too, between the collocation points
-(:func:`bound_violations`, :func:`check_bounds`): the transcription enforces them at its
-points only, and a stiff motor's current limited there can overshoot inside an element.
+(:mod:`gtmodel.modeling.ocp.verification_bounds`: :func:`bound_violations`, :func:`check_bounds`): the
+transcription enforces them at its points only, and a stiff motor's current limited there can overshoot
+inside an element.
 """
 
 from __future__ import annotations
@@ -67,12 +68,13 @@ from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
+from gtmodel.modeling.ocp.verification_bounds import bound_violations, check_bounds, element_bound_violations
 from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
                                                         cvodes_method, explicit_algebraics)
 from gtmodel.modeling.simulation.explicit import damped_newton
 from gtmodel.status import Status
 
-__all__ = ["Verification", "verify", "check_result", "bound_violations", "check_bounds", "problem_integrals", "integrator_rtol", "skipped",
+__all__ = ["Verification", "verify", "check_result", "bound_violations", "element_bound_violations", "check_bounds", "problem_integrals", "integrator_rtol", "skipped",
            "switch_elements", "INTEGRATOR_RTOL", "INTEGRATORS", "SWITCH_FRACTION", "SPURIOUS_DEVIATION", "INTEGRAL_FLOOR", "QUADRATURE_NOISE",
            "STIFF_STEPS"]
 
@@ -629,72 +631,3 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
         result.message = f"{result.message}; verification failed: {v.message}{remedy}"
         result.status = Status.CHECK_FAILED
     return result
-
-
-def bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray) -> dict[str, Any]:
-    """The largest violation of the state bounds by the verifying simulation, between the nodes included.
-
-    The transcription enforces the bounds at its points only; the simulation under the optimal
-    inputs (:attr:`Verification.simulated`, at the collocation points, their midpoints and the
-    element ends) shows what the model does between them (a motor current limited at the
-    collocation points that overshoots inside the first element, as the inductor's current does
-    when the voltage is at its bound). The violation of state ``i`` is scaled as the deviations
-    are, by ``max(1, max |x_col,i|)``, and compared with the same tolerance.
-
-    Parameters
-    ----------
-    result : OptimizationResult
-        A verified result (``result.verification`` with its simulation).
-    lower, upper : numpy.ndarray
-        The states' bounds, shape ``(nx,)`` (``-inf`` / ``inf`` where there is none), as
-        :meth:`~gtmodel.modeling.Optimization.bounds_vectors` gives them.
-
-    Returns
-    -------
-    dict
-        ``{}`` without bounded states or simulation; else ``{"max_violation"`` (model units),
-        ``"max_scaled_violation"``, ``"variable"``, ``"at_time_s"``, ``"value"``, ``"bound"``,
-        ``"within_tolerance"}`` (scaled violation within the verification's tolerance).
-    """
-    v, col = result.verification, result.collocation
-    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
-    if v is None or col is None or v.simulated.size == 0 or not (np.isfinite(lower).any() or np.isfinite(upper).any()):
-        return {}
-    sim = np.asarray(v.simulated, dtype=float)
-    excess = np.maximum(np.maximum(sim - upper[None, :], lower[None, :] - sim), 0.0)  # (K, nx)
-    scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
-    scaled = excess / scale[None, :]
-    k, i = np.unravel_index(int(np.argmax(scaled)), scaled.shape)
-    value = float(sim[k, i])
-    return {"max_violation": float(excess[k, i]), "max_scaled_violation": float(scaled[k, i]),
-            "variable": result.dae.x_names[i], "at_time_s": float(v.t[k]), "value": value,
-            "bound": float(upper[i] if value > upper[i] else lower[i]), "within_tolerance": bool(scaled[k, i] <= v.tolerance)}
-
-
-def check_bounds(result: OptimizationResult, optimization: Any) -> None:
-    """Add the between-node bound check (:func:`bound_violations`) to ``result.verification``, warning if violated.
-
-    Parameters
-    ----------
-    result : OptimizationResult
-        A verified result; changed in place (``verification.bounds``). A violation beyond
-        the tolerance is logged and added to ``result.warnings`` (the summary's ``warnings``),
-        not failed (see the code's comment).
-    optimization : Optimization
-        The problem (its state bounds).
-    """
-    v = result.verification
-    if v is None or result.dae is None or not result.dae.nx:
-        return
-    v.bounds = bound_violations(result, *optimization.bounds_vectors(result.dae, "x"))
-    if v.bounds and not v.bounds["within_tolerance"]:
-        # reported, not failed: inside an element the simulation follows the input polynomial extrapolated
-        # between the collocation points (a motor's current overshoots its limit by 0.1-1 A in the first
-        # 0.5 ms after the voltage's jump, and halving that element does not settle it)
-        b = v.bounds
-        text = (f"state {b['variable']!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
-                f"in the simulation under the optimal inputs (between the transcription's points; scaled violation "
-                f"{b['max_scaled_violation']:.3g} > tolerance {v.tolerance:g}): the plan keeps the bound at its points only")
-        _log.warning("verification of %s: %s", result.dae.name, text)
-        if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log
-            result.warnings.append(text)

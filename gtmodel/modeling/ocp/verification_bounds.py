@@ -1,0 +1,168 @@
+"""The state bounds checked on the verifying simulation, between the transcription's points (:mod:`gtmodel.modeling.ocp.verification`).
+
+The transcription enforces the state bounds at its points only. The simulation under the optimal
+inputs (:attr:`~gtmodel.modeling.ocp.verification.Verification.simulated`, at the collocation
+points, their midpoints and the element ends) shows what the model does between them: on the
+drives of ``problems/drive_*.toml`` the motor current, limited at the collocation points, overshoots
+its limit by 0.5 to 1 A inside the element where the voltage leaves its bound (the input's
+polynomial there swings past the bound too, and the current's polynomial follows it).
+
+* :func:`bound_violations`: the largest violation, scaled as the deviations are;
+* :func:`element_bound_violations`: the largest per element, which mesh refinement
+  (:mod:`gtmodel.modeling.ocp.refinement`) splits where it exceeds the tolerance;
+* :func:`check_bounds`: both added to a result's verification, a violation beyond the tolerance
+  reported in its warnings.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
+
+__all__ = ["bound_violations", "element_bound_violations", "bound_crossings", "check_bounds"]
+
+_log = logging.getLogger("gtmodel")
+
+
+def _scaled_excess(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(excess, scaled)``, shape ``(K, nx)``: the simulation's violation of the bounds (model units) and scaled; None without."""
+    v, col = result.verification, result.collocation
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    if v is None or col is None or v.simulated.size == 0 or not (np.isfinite(lower).any() or np.isfinite(upper).any()):
+        return None
+    sim = np.asarray(v.simulated, dtype=float)
+    excess = np.maximum(np.maximum(sim - upper[None, :], lower[None, :] - sim), 0.0)
+    scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
+    return excess, excess / scale[None, :]
+
+
+def bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray) -> dict[str, Any]:
+    """The largest violation of the state bounds by the verifying simulation, between the nodes included.
+
+    The violation of state ``i`` is scaled as the deviations are, by ``max(1, max |x_col,i|)``,
+    and compared with the verification's tolerance.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A verified result (``result.verification`` with its simulation).
+    lower, upper : numpy.ndarray
+        The states' bounds, shape ``(nx,)`` (``-inf`` / ``inf`` where there is none), as
+        :meth:`~gtmodel.modeling.Optimization.bounds_vectors` gives them.
+
+    Returns
+    -------
+    dict
+        ``{}`` without bounded states or simulation; else ``{"max_violation"`` (model units),
+        ``"max_scaled_violation"``, ``"variable"``, ``"at_time_s"``, ``"value"``, ``"bound"``,
+        ``"within_tolerance"}`` (scaled violation within the verification's tolerance).
+    """
+    out = _scaled_excess(result, lower, upper)
+    if out is None:
+        return {}
+    excess, scaled = out
+    v = result.verification
+    k, i = np.unravel_index(int(np.argmax(scaled)), scaled.shape)
+    value = float(v.simulated[k, i])
+    return {"max_violation": float(excess[k, i]), "max_scaled_violation": float(scaled[k, i]),
+            "variable": result.dae.x_names[i], "at_time_s": float(v.t[k]), "value": value,
+            "bound": float(upper[i] if value > upper[i] else lower[i]), "within_tolerance": bool(scaled[k, i] <= v.tolerance)}
+
+
+def element_bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Per element, the largest scaled violation of the state bounds by the verifying simulation.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A verified result (``result.verification`` with its simulation, sampled element by
+        element, the same number of samples in each).
+    lower, upper : numpy.ndarray
+        The states' bounds, shape ``(nx,)`` (as for :func:`bound_violations`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(N,)`` over the elements (or shooting intervals), scaled as in
+        :func:`bound_violations`; zeros without bounded states, empty without a simulation.
+    """
+    col = result.collocation
+    out = _scaled_excess(result, lower, upper)
+    if col is None:
+        return np.zeros(0)
+    if out is None:
+        v = result.verification
+        return np.zeros(col.elements) if v is not None and v.simulated.size else np.zeros(0)
+    scaled = out[1]
+    return scaled.reshape(col.elements, -1).max(axis=1)
+
+
+def bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray, elements: list[int],
+                    level: float) -> dict[int, float]:
+    """Where, in each of ``elements``, the collocated states first exceed their bounds by ``level`` (scaled).
+
+    The collocation polynomials are evaluated on 401 points of each element; the first point where a
+    state's scaled violation exceeds ``level`` estimates where the state reaches its bound (a motor
+    current's junction with its limited arc, the kink that a polynomial overshoots).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A collocation result.
+    lower, upper : numpy.ndarray
+        The states' bounds, shape ``(nx,)``.
+    elements : list of int
+        The elements looked at.
+    level : float
+        Scaled violation (as :func:`bound_violations` scales it) counted as a crossing.
+
+    Returns
+    -------
+    dict of int to float
+        Element -> ``tau`` in (0, 1), the first crossing, for the elements whose polynomials cross inside
+        (within the bounds at the element's start).
+    """
+    col = result.collocation
+    if col is None or not elements:
+        return {}
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    taus = np.linspace(0.0, 1.0, 401)
+    basis = lagrange_basis(col.tau_root, taus)
+    scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
+    out: dict[int, float] = {}
+    for k in elements:
+        x = basis @ col.xc[k]  # (401, nx)
+        over = np.max(np.maximum(np.maximum(x - upper, lower - x), 0.0) / scale, axis=1) > level
+        if not over[0] and over[1:-1].any():
+            out[int(k)] = float(taus[1 + int(np.argmax(over[1:-1]))])
+    return out
+
+
+def check_bounds(result: OptimizationResult, optimization: Any) -> None:
+    """Add the between-node bound check (:func:`bound_violations`) to ``result.verification``, warning if violated.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A verified result; changed in place (``verification.bounds``). A violation beyond the
+        tolerance is logged and added to ``result.warnings`` (the summary's ``warnings``).
+    optimization : Optimization
+        The problem (its state bounds).
+    """
+    v = result.verification
+    if v is None or result.dae is None or not result.dae.nx:
+        return
+    lower, upper = optimization.bounds_vectors(result.dae, "x")
+    v.bounds = bound_violations(result, lower, upper)
+    if v.bounds and not v.bounds["within_tolerance"]:
+        b = v.bounds
+        text = (f"state {b['variable']!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
+                f"in the simulation under the optimal inputs (between the transcription's points; scaled violation "
+                f"{b['max_scaled_violation']:.3g} > tolerance {v.tolerance:g}): the plan keeps the bound at its points only")
+        _log.warning("verification of %s: %s", result.dae.name, text)
+        if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log
+            result.warnings.append(text)
