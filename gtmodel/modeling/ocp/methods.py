@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 
 __all__ = ["Collocation", "MultipleShooting", "SolverSettings", "Refinement", "VerificationSettings", "SCHEMES", "NLP_SOLVERS"]
@@ -220,7 +221,7 @@ class Refinement:
     refine: bool = False
     tolerance: float | None = None
     max_elements: int = 400
-    max_passes: int = 10
+    max_passes: int = defaults["ocp.refine_max_passes"]
     verify: bool = True
     integrator: str | None = None
     rtol: float | None = None

@@ -95,7 +95,7 @@ _log = logging.getLogger("gtmodel")
 #: Default limit on the elements of a refined mesh.
 MAX_ELEMENTS = 400
 #: Default limit on refinement passes (solves).
-MAX_PASSES = 10
+MAX_PASSES = defaults["ocp.refine_max_passes"]
 #: A verification deviation this many times the tolerance, and above
 #: :data:`SPURIOUS_DEVIATION`, marks a spurious minimum of the NLP rather than a
 #: discretisation error: the next pass starts from a repaired guess.

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
+from gtmodel.defaults import defaults
 from gtmodel.problems.schema import MAX_LENGTH_M, Flag, NonEmptyText, Section, choice, integer, number, vector
 
 __all__ = ["MAX_TIME_S", "RobotReference", "MotionSection", "CollocationSection", "RefinementSection", "VerificationSection", "SolverSection", "OcpSolverSection"]
@@ -89,7 +90,7 @@ class RefinementSection(Section):
     refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; also with [[data]]; not with multiple shooting)")
     tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation (default 1e-2)") | None = None
     max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
-    max_passes: integer(1, 100, description="limit on the solves of the refinement") = 10
+    max_passes: integer(1, 100, description="limit on the solves of the refinement") = defaults["ocp.refine_max_passes"]
     refine_on_failure: Flag = Field(True, description="collocation: a single solve whose verification fails is refined from (as refine = true, within max_passes and max_cpu_s); false: it ends check_failed")
     max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 90): no pass starts once it is spent, the best verified pass is returned") | None = None
 
