@@ -165,11 +165,15 @@ class OptimalControl:
         coarse = (lambda: self.coarse_solve(kwargs)) if (guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS
                                                          and not linear_quadratic(d.optimization, tr.dae)) else None
         result = solve_from_coarse(tr, coarse, initial_guess=guess)
-        if d.refinement.on_failure and check and result.status == Status.CHECK_FAILED and not d.optimization.data_fits:
+        bounds = getattr(result.verification, "bounds", None) or {}
+        # a state bound exceeded between the nodes beyond the tolerance fails as the deviations do: refinement splits there
+        exceeded = result.status in (Status.OPTIMAL, Status.ACCEPTABLE) and not bounds.get("within_tolerance", True)
+        if d.refinement.on_failure and check and (result.status == Status.CHECK_FAILED or exceeded) and not d.optimization.data_fits:
             # the verification failed: refined from this solution within the budget (refine_on_failure)
-            _log.warning("%s: the verification failed; refining the mesh from this solution (refine_on_failure; "
-                         "at most %d passes, %s CPU-s)", d.optimization.model.name, d.refinement.max_passes,
-                         "the default" if d.refinement.max_cpu_s is None else f"{d.refinement.max_cpu_s:g}")
+            _log.warning("%s: the verification %s; refining the mesh from this solution (refine_on_failure; "
+                         "at most %d passes, %s CPU-s)", d.optimization.model.name,
+                         "failed" if result.status == Status.CHECK_FAILED else "found a state bound exceeded between the nodes",
+                         d.refinement.max_passes, "the default" if d.refinement.max_cpu_s is None else f"{d.refinement.max_cpu_s:g}")
             phases = {k: dict(v) for k, v in result.timing.items()}  # the single solve's, then every pass's
             with timed(phases, "refinement"):
                 result = solve_refined(

@@ -36,3 +36,31 @@ def test_solving_twice_with_other_settings_leaves_the_declaration_unchanged(meth
     assert (first.verification.tolerance, first.verification.integrator) == (0.5, "idas (rtol 1e-06)")
     assert second.verification.tolerance == 0.05
     assert second.verification.integrator.startswith("cvodes") and second.verification.integrator.endswith("(rtol 1e-08)")
+
+
+@pytest.mark.parametrize("within, refined", [(True, False), (False, True)])
+def test_a_bound_exceeded_between_the_nodes_is_refined_from_like_a_failed_verification(monkeypatch, within, refined):
+    # issue 49: a single solve that verifies but whose simulation exceeds a state bound between the nodes is refined
+    # from (refine_on_failure), as a failed verification is; the single solve here is the real double integrator's,
+    # its between-node check replaced by one that holds or not (the refinement itself: test_verification_bounds.py)
+    from gtmodel.modeling.ocp.result import OptimizationResult
+    from gtmodel.trajectory import model_ocp
+
+    real, calls = model_ocp.solve_from_coarse, []
+
+    def single(*args, **kwargs):
+        result = real(*args, **kwargs)
+        result.verification.bounds = {"within_tolerance": within, "max_scaled_violation": 0.0 if within else 0.05}
+        return result
+
+    def refine(*args, start: OptimizationResult, **kwargs):
+        calls.append(start)
+        return start
+
+    monkeypatch.setattr(model_ocp, "solve_from_coarse", single)
+    monkeypatch.setattr(model_ocp, "solve_refined", refine)
+    # the file asks for refine = true; here a single solve with refine_on_failure (the default)
+    decl = dataclasses.replace(load_problem(DOUBLE_INTEGRATOR).declaration, method=Collocation(elements=8), refinement=Refinement())
+    result = decl.solve()
+    assert str(result.status) == "optimal" and result.verification.passed
+    assert len(calls) == int(refined) and all(c is result for c in calls)
