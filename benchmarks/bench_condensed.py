@@ -1,7 +1,7 @@
 """Condensed Radau collocation (each element's collocation states eliminated by Newton's method) against gtmodel's transcription (a benchmark, not a test).
 
 Usage: OMP_NUM_THREADS=1 python benchmarks/bench_condensed.py [problem.toml] [--elements 50,400] [--solver fatrop,ipopt]
-[--repeat 3] [--json]
+[--repeat 3] [--compile-assembly] [--json]
 
 The question (issue 46, item 3): does a transcription whose stages hold only the element start state, the
 final-time copy and the inputs (7 states and 9 inputs per stage on the L1 Gantry-Tau, instead of 7 and 27
@@ -22,19 +22,49 @@ element, compiled): ``S = -G_X^-1 G_p``, ``J = o_p + o_X S``; the Hessian of ``l
 The NLP's Jacobian and Hessian are assembled from them (a first-order surrogate of ``o`` around the point,
 ``casadi.no_grad``, differentiated by CasADi, plus the elements' quadratic terms) and given to fatrop through
 its function cache (``nlp_g``, ``nlp_jac_g``, ``nlp_hess_l``: gtmodel's own route, ``collocation_stages.fatrop_cache``)
-and to IPOPT as ``jac_g``/``hess_lag``; all compiled (``jit``, gcc -O2). The peer: gtmodel's solve of the same
+and to IPOPT as ``jac_g``/``hess_lag``; the element functions compiled (``jit``, gcc -O2), their assembly
+interpreted (with ``--compile-assembly`` compiled too: faster, but its code grows with the mesh). The peer: gtmodel's solve of the same
 problem on the same mesh with the same solver (``[solver] name``), measured in the same run, alternated.
 
-Measured (2 cores shared with two other processes, load average 3-5; CPU time, median of 3; casadi 3.8.2;
-L1 minimum time, ``problems/l1_time_optimal.toml``):
+Measured (2 cores shared with two other processes; process CPU time, medians of 3 after a warm-up, the two
+alternated; casadi 3.8.2; L1 minimum time, ``problems/l1_time_optimal.toml``; gtmodel's optimum 0.6754484421 s):
 
-=================================  ==========  ==========  ===========  ==============
-configuration                       CPU [s]     iterations  ms/iteration  final time [s]
-=================================  ==========  ==========  ===========  ==============
-see ``RESULTS`` below (filled from the run written there)
-=================================  ==========  ==========  ===========  ==============
+``OMP_NUM_THREADS=1 python benchmarks/bench_condensed.py --elements 50`` (this file: element functions compiled, their
+assembly into the NLP's Jacobian and Hessian interpreted by CasADi's MX virtual machine):
 
-Why it does not pay here: see ``VERDICT``.
+====================  ===========  ==========  ============  =====================================
+50 elements           CPU [s]      iterations  ms/iteration  final time [s]
+====================  ===========  ==========  ============  =====================================
+condensed, fatrop     0.993        55          18.1          0.6754484421 (6.7e-15 rel. from gtmodel)
+gtmodel, fatrop       0.198        51          3.87          0.6754484421
+condensed, IPOPT      1.541        66          23.4          0.6754484421 (4.2e-12)
+gtmodel, IPOPT        0.252        49          5.14          0.6754484421
+====================  ===========  ==========  ============  =====================================
+
+CPU per iteration of the condensed fatrop solve: Hessian 10.2 ms, Jacobian 4.8 ms, constraints 1.8 ms (their
+assembly interpreted). With the assembly compiled too (the same functions, ``jit`` on the NLP's ``nlp_g``,
+``nlp_jac_g``, ``nlp_hess_l``, ``--compile-assembly``; IPOPT's ``nlp_g`` was left interpreted there: 1.71 CPU-s): gcc -O2 needs ~2 min at 50 elements and did not finish in
+24 min at 400, the generated code growing with the mesh): fatrop 0.424 CPU-s, 55 iterations, 7.7 ms/iteration
+(constraints 1.7, Jacobian 2.0, Hessian 2.7 ms, fatrop's own work and its plugin's 1.3 ms against 3.5 ms on
+gtmodel's transcription), the same optimum; the rootfinder with CasADi's own derivatives of it (reverse over
+forward through ``fast_newton``), all compiled: 1.51 CPU-s, 27 ms/iteration (Hessian 21.6 ms).
+
+RESULTS_400
+
+VERDICT. Condensing pays in the solver (fatrop's own work per iteration 1.3 ms against 3.5 ms: Riccati on 16
+stage variables instead of 34) and loses more in the functions: each element's exact first and second derivatives
+by the implicit function theorem are ~95,000 SX instructions (``el_hess`` 68,687: the 18-by-16 sensitivity
+``S``, the adjoint ``mu``, ``Z' W Z``; ``el_jac`` 25,993), against the transcription's per-point derivatives, and
+every call of ``nlp_g``, ``nlp_jac_g`` and ``nlp_hess_l`` solves the element's Newton iteration again (the plugins
+keep no state between calls). Best measured: 0.424 s against gtmodel's 0.198-0.218 s. The goal (<= 0.1x Opti
+``expand=True``, ~0.098 s) is out of reach this way: fatrop's 55 iterations at 1.3 ms are 0.072 s before any
+function, leaving ~10 microseconds per element and iteration for a Newton solve and second-order sensitivities.
+acados (this structure in C with HPIPM) takes 0.36 s, 65 iterations, 5.5 ms each with 3 inputs per stage. And
+the condensed NLP is not robust on coarse meshes: on 12 elements (h = 0.056 s) the element's full-step Newton
+iteration from the straight line fails near the friction's steep tanh and neither solver converges (IPOPT:
+3000 iterations; fatrop: 375, ``SOLVER_RET_UNKNOWN``), where gtmodel's transcription solves in 40 iterations;
+mesh refinement and the coarse start rely on such meshes. Fewer iterations (a better start) would help either
+transcription alike.
 
 Medians of ``--repeat`` solves after one warm-up; with ``--json`` the last line of stdout is one JSON object
 (per mesh and solver: ``condensed_cpu_s``, ``condensed_iterations``, ``condensed_ms_per_iteration``,
@@ -65,11 +95,11 @@ from bench_solve import export_acados, ours, with_solver  # the same problem fun
 ROOT = Path(__file__).resolve().parents[1]
 #: The rootfinder of the collocation equations of one element and its tolerance.
 ROOTFINDER = ("fast_newton", {"abstol": 1e-13, "max_iter": 30, "error_on_fail": False})
-#: Compilation of the NLP's functions (the element functions inlined).
+#: Compilation of the element functions.
 JIT = {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"], "verbose": False}}
 
 
-def element_functions(ode: ca.Function, path: ca.Function, final: ca.Function, N: int, d: int, u_nom: np.ndarray) -> dict:
+def element_functions(ode: ca.Function, path: ca.Function, final: ca.Function, N: int, d: int, u_nom: np.ndarray, jit: dict) -> dict:
     """The condensed element: its rootfinder and its outputs with first and second derivatives.
 
     Parameters
@@ -80,6 +110,8 @@ def element_functions(ode: ca.Function, path: ca.Function, final: ca.Function, N
         Elements (uniform mesh: ``h = T / N``) and Radau points per element.
     u_nom : numpy.ndarray
         The inputs' scale, shape (nu,): the NLP's inputs are ``u / u_nom``.
+    jit : dict
+        Function options compiling them (:data:`JIT`), or ``{}``.
 
     Returns
     -------
@@ -107,12 +139,14 @@ def element_functions(ode: ca.Function, path: ca.Function, final: ca.Function, N
     Z = ca.vertcat(ca.DM.eye(npar), S)
     H = ca.mtimes([Z.T, ca.substitute(W, mu, -ca.solve(A.T, ca.mtimes(oX.T, lam))), Z])
     Gf = ca.Function("G", [X, p], [G], {"cse": True})
-    return {"rf": ca.rootfinder("rf", ROOTFINDER[0], Gf, ROOTFINDER[1]),
-            "jac": ca.Function("el_jac", [p, X], [o, J], {"cse": True}),
-            "hess": ca.Function("el_hess", [p, X, lam], [H], {"cse": True}), "no": int(o.numel()), "npar": npar}
+    rf = ca.rootfinder("rf", ROOTFINDER[0], Gf, ROOTFINDER[1])
+    Xg, pm = ca.MX.sym("Xg", nx * d), ca.MX.sym("p", npar)
+    return {"rf": ca.Function("el_root", [Xg, pm], [rf(Xg, pm)], jit),
+            "jac": ca.Function("el_jac", [p, X], [o, J], {"cse": True, **jit}),
+            "hess": ca.Function("el_hess", [p, X, lam], [H], {"cse": True, **jit}), "no": int(o.numel()), "npar": npar}
 
 
-def condensed_solver(folder: Path, solver: str, jit: bool = True) -> dict:
+def condensed_solver(folder: Path, solver: str, jit: bool = True, compile_assembly: bool = False) -> dict:
     """The condensed NLP of the problem exported by :func:`bench_solve.export_acados` in ``folder``, and its solver.
 
     Stage ``k`` of fatrop: the states ``(x_k, T_k)``, the inputs ``U_k``; its rows: the continuity
@@ -126,7 +160,11 @@ def condensed_solver(folder: Path, solver: str, jit: bool = True) -> dict:
     solver : {"fatrop", "ipopt"}
         The nlpsol plugin.
     jit : bool, optional
-        Compile the NLP's functions (:data:`JIT`); default True (False: CasADi's interpreter, no compiler needed).
+        Compile the element functions (:data:`JIT`; the NLP's assembly of them is interpreted, a few mapped calls);
+        default True (False: CasADi's interpreter, no compiler needed).
+    compile_assembly : bool, optional
+        Compile the NLP's ``nlp_g``, ``nlp_jac_g`` and ``nlp_hess_l`` as well (their code grows with the mesh:
+        minutes of gcc at 50 elements, not finished in 24 min at 400). Default False.
 
     Returns
     -------
@@ -137,7 +175,7 @@ def condensed_solver(folder: Path, solver: str, jit: bool = True) -> dict:
     N, d = int(z["N"]), int(z["d"])
     ode, path, start, final = (ca.Function.load(str(folder / f"{n}.casadi")) for n in ("ode", "path", "start", "final"))
     nx, nu, u_nom = int(ode.size1_in(0)), int(ode.size1_in(1)), z["u_nom"]
-    el = element_functions(ode, path, final, N, d, u_nom)
+    el = element_functions(ode, path, final, N, d, u_nom, JIT if jit else {})
     npar, no, npath = el["npar"], el["no"], int(path.size1_out(0)) * d
     tau = np.array(ca.collocation_points(d, "radau"))
     w = ca.MX.sym("w", N * npar + nx)
@@ -149,7 +187,8 @@ def condensed_solver(folder: Path, solver: str, jit: bool = True) -> dict:
     Xs = ca.no_grad(el["rf"].map(N, "serial")(guess, E0))
     Ov, Jv = (ca.no_grad(v) for v in el["jac"].map(N, "serial")(E0, Xs))
     dE = E - E0
-    O = Ov + ca.horzcat(*[ca.mtimes(Jv[:, k * npar:(k + 1) * npar], dE[:, k]) for k in range(N)])  # value and Jacobian exact
+    Jk, dk = ca.MX.sym("J", no, npar), ca.MX.sym("dE", npar)
+    O = Ov + ca.Function("lin", [Jk, dk], [ca.mtimes(Jk, dk)]).map(N, "serial")(Jv, dE)  # value and Jacobian exact
     cont = Xnext - O[:nx, :]
     tie = Tk[:, 1:] - Tk[:, :-1]
     u_start = ca.mtimes(ca.reshape(Uk[:, 0], nu, d), ca.DM(z["L0"])) * u_nom
@@ -182,32 +221,32 @@ def condensed_solver(folder: Path, solver: str, jit: bool = True) -> dict:
     tf_index = nx + (N - 1) * npar
     scale = SOLVER_OPTIONS["obj_scaling_factor"]
     f = w[tf_index] * (scale if solver == "fatrop" else 1.0)  # fatrop has no obj_scaling_factor: gtmodel scales f
-    JIT = globals()["JIT"] if jit else {}  # noqa: N806
+    cj = JIT if compile_assembly else {}
     lam_f, lam_g, p0 = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.shape[0]), ca.MX.sym("p", 0, 1)
     Lam = ca.reshape(lam_g[sel.ravel(order="F").tolist()], no, N) * ca.DM(sign)
     Hv = ca.no_grad(el["hess"].map(N, "serial")(E0, Xs, Lam))
-    quad = sum(0.5 * ca.bilin(Hv[:, k * npar:(k + 1) * npar], dE[:, k], dE[:, k]) for k in range(N))
+    Hk = ca.MX.sym("H", npar, npar)
+    quad = ca.sum2(ca.Function("quad", [Hk, dk], [0.5 * ca.bilin(Hk, dk, dk)]).map(N, "serial")(Hv, dE))
     hess, grad = ca.hessian(lam_f * f + ca.dot(lam_g, g) + quad, w)
-    jac = ca.Function("nlp_jac_g", [w, p0], [g, ca.jacobian(g, w)], ["x", "p"], ["g", "jac_g_x"], JIT)
-    g_fn = ca.Function("nlp_g", [w, p0], [g], ["x", "p"], ["g"], JIT)
+    jac = ca.Function("nlp_jac_g", [w, p0], [g, ca.jacobian(g, w)], ["x", "p"], ["g", "jac_g_x"], cj)
+    g_fn = ca.Function("nlp_g", [w, p0], [g], ["x", "p"], ["g"], cj)
     opts = {"print_time": False, "record_time": True, "error_on_fail": False}
     if solver == "fatrop":
         opts.update({"structure_detection": "manual", "N": N, "nx": [nx + 1] * N + [nx], "nu": [nu * d] * N + [0], "ng": ng + [0],
                      "fatrop": {"max_iter": 3000, "tol": 1e-8, "print_level": 0},
                      "cache": {"nlp_g": g_fn, "nlp_jac_g": jac,
                                "nlp_hess_l": ca.Function("nlp_hess_l", [w, p0, lam_f, lam_g], [grad, hess], ["x", "p", "lam_f", "lam_g"],
-                                                         ["grad_gamma_x", "hess_gamma_x_x"], JIT)}})
+                                                         ["grad_gamma_x", "hess_gamma_x_x"], cj)}})
     else:
         opts.update({"jac_g": jac, "hess_lag": ca.Function("nlp_hess_l", [w, p0, lam_f, lam_g], [ca.triu(hess)],
-                                                           ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"], JIT),
+                                                           ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"], cj),
                      "ipopt": {"max_iter": 3000, "tol": 1e-8, "print_level": 0, "sb": "yes", "mumps_mem_percent": 20, **SOLVER_OPTIONS}})
     bound = lambda x, t, u: np.concatenate([x, [t], np.tile(u, d)])  # noqa: E731
     inf = np.inf
     lbw = np.concatenate([bound(z["x_lb"], z["tf_bounds"][0] if k == N - 1 else -inf, z["u_lb"]) for k in range(N)] + [z["x_lb"]])
     ubw = np.concatenate([bound(z["x_ub"], z["tf_bounds"][1] if k == N - 1 else inf, z["u_ub"]) for k in range(N)] + [z["x_ub"]])
     w0 = np.concatenate([np.concatenate([z["x_guess"][k], [float(z["tf_guess"])], z["u_guess"][k].ravel()]) for k in range(N)] + [z["x_guess"][N]])
-    # the constraints as a call of their compiled function (IPOPT's nlp_g would otherwise interpret the graph)
-    return {"solver": ca.nlpsol("condensed", solver, {"x": w, "f": f, "g": g_fn(w, p0) if solver == "ipopt" else g}, opts),
+    return {"solver": ca.nlpsol("condensed", solver, {"x": w, "f": f, "g": g_fn(w, p0) if compile_assembly else g}, opts),
             "args": {"x0": w0, "lbx": lbw, "ubx": ubw, "lbg": np.concatenate(lbg), "ubg": np.concatenate(ubg)}, "tf_index": tf_index}
 
 
@@ -227,6 +266,7 @@ def main() -> None:
     ap.add_argument("--elements", default="50,400", help="meshes")
     ap.add_argument("--solver", default="fatrop,ipopt", help="nlpsol plugins")
     ap.add_argument("--repeat", type=int, default=3, help="solves per figure (median)")
+    ap.add_argument("--compile-assembly", action="store_true", help="compile the NLP's functions too (slow to build)")
     ap.add_argument("--json", action="store_true", help="print one JSON object on the last line")
     a = ap.parse_args()
     decl = load_problem(a.problem).declaration
@@ -238,7 +278,7 @@ def main() -> None:
             folder = export_acados(dataclasses.replace(decl, elements=n), Path(tmp)).parent
             for solver in a.solver.split(","):
                 t = time.process_time()
-                c = condensed_solver(folder, solver)
+                c = condensed_solver(folder, solver, compile_assembly=a.compile_assembly)
                 build = time.process_time() - t
                 peer_decl = with_solver(decl, solver, n)
                 run_condensed(c), ours(peer_decl)  # warm-up (the peer compiles or loads its derivatives)
