@@ -49,7 +49,11 @@ assembly interpreted). With the assembly compiled too (the same functions, ``jit
 gtmodel's transcription), the same optimum; the rootfinder with CasADi's own derivatives of it (reverse over
 forward through ``fast_newton``), all compiled: 1.51 CPU-s, 27 ms/iteration (Hessian 21.6 ms).
 
-RESULTS_400
+``OMP_NUM_THREADS=1 python benchmarks/bench_condensed.py --elements 400 --solver fatrop --repeat 1``: condensed
+13.3 CPU-s, 76 iterations from the guess, 175 ms/iteration (Hessian 102, Jacobian 48, constraints 14, fatrop's own
+11 ms), final time 0.6711046399 s; gtmodel's fatrop 1.70 CPU-s (34 iterations from its 50-element coarse start,
+whose CPU is included: 50 ms/iteration), 0.6711046394 s (8.5e-10 relative); ratio 7.8x. CPU per iteration 400
+over 50 elements: 9.7x condensed (175 / 18.1; the goal <= 9x), fatrop's own work 8.4x (10.9 / 1.3 ms).
 
 VERDICT. Condensing pays in the solver (fatrop's own work per iteration 1.3 ms against 3.5 ms: Riccati on 16
 stage variables instead of 34) and loses more in the functions: each element's exact first and second derivatives
