@@ -42,9 +42,11 @@ gtmodel, IPOPT        0.252        49          5.14          0.6754484421
 ====================  ===========  ==========  ============  =====================================
 
 CPU per iteration of the condensed fatrop solve: Hessian 10.2 ms, Jacobian 4.8 ms, constraints 1.8 ms (their
-assembly interpreted). With the assembly compiled too (the same functions, ``jit`` on the NLP's ``nlp_g``,
-``nlp_jac_g``, ``nlp_hess_l``, ``--compile-assembly``; IPOPT's ``nlp_g`` was left interpreted there: 1.71 CPU-s): gcc -O2 needs ~2 min at 50 elements and did not finish in
-24 min at 400, the generated code growing with the mesh): fatrop 0.424 CPU-s, 55 iterations, 7.7 ms/iteration
+assembly interpreted). ``--compile-assembly`` (this file's mapped assembly compiled): fatrop 0.831 CPU-s, 55
+iterations, 15.1 ms/iteration (Hessian 8.5, Jacobian 3.7, constraints 1.7 ms), ratio 4.2x to gtmodel's 0.199 s. A
+prototype (not kept) with the assembly unrolled per element (one ``mtimes`` and one ``bilin`` per element instead of
+mapped calls) and compiled (gcc -O2: ~2 min at 50 elements, not finished in 24 min at 400, the code growing with
+the mesh; IPOPT's ``nlp_g`` left interpreted there: 1.71 CPU-s, 66 iterations): fatrop 0.424 CPU-s, 55 iterations, 7.7 ms/iteration
 (constraints 1.7, Jacobian 2.0, Hessian 2.7 ms, fatrop's own work and its plugin's 1.3 ms against 3.5 ms on
 gtmodel's transcription), the same optimum; the rootfinder with CasADi's own derivatives of it (reverse over
 forward through ``fast_newton``), all compiled: 1.51 CPU-s, 27 ms/iteration (Hessian 21.6 ms).
