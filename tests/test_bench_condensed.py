@@ -1,0 +1,54 @@
+"""The condensed collocation of benchmarks/bench_condensed.py solves gtmodel's NLP (the same discretisation).
+
+Independent check: gtmodel's own transcription (its variables include the collocation states) solved by IPOPT
+on the same problem and mesh; the condensed NLP (the collocation states eliminated by Newton's method, its
+derivatives by the implicit function theorem) must reach the same optimum.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+from gtmodel.problems import load_problem
+from gtmodel.trajectory.point_to_point import solve_point_to_point
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The benchmark's mesh (on 12 elements, h = 0.056 s, the element's Newton iteration from the straight line fails near
+#: the friction's steep tanh and neither solver converges: the condensed NLP is not robust on coarse meshes).
+ELEMENTS = 50
+
+
+@pytest.fixture(scope="module")
+def bench():
+    """benchmarks/bench_condensed.py as a module (its folder on the path, for bench_solve and bench_mpc)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        spec = importlib.util.spec_from_file_location("bench_condensed", ROOT / "benchmarks" / "bench_condensed.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+
+
+@pytest.fixture(scope="module")
+def problem(bench, tmp_path_factory):
+    """L1 minimum time on ELEMENTS elements: its export and gtmodel's IPOPT solve (the reference)."""
+    decl = dataclasses.replace(load_problem(ROOT / "problems" / "l1_time_optimal.toml").declaration, elements=ELEMENTS)
+    folder = bench.export_acados(decl, tmp_path_factory.mktemp("condensed")).parent
+    return folder, solve_point_to_point(bench.with_solver(decl, "ipopt")).result
+
+
+@pytest.mark.parametrize("solver", ["ipopt", "fatrop"])
+def test_condensed_optimum_is_the_transcriptions(bench, problem, solver):
+    """Condensed, interpreted (no compiler): gtmodel's IPOPT optimum (final time) to 1e-7 relative, both successful."""
+    folder, reference = problem
+    cpu, iterations, final_time, status, _ = bench.run_condensed(bench.condensed_solver(folder, solver, jit=False))
+    assert str(reference.status) == "optimal"
+    assert status in ("Solve_Succeeded", "SOLVER_RET_SUCCESS"), status
+    assert abs(final_time - reference.final_time) <= 1e-7 * reference.final_time
