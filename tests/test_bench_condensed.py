@@ -44,6 +44,7 @@ def problem(bench, tmp_path_factory):
     return folder, solve_point_to_point(bench.with_solver(decl, "ipopt")).result
 
 
+@pytest.mark.slow  # the condensed NLP interpreted: about 14 s for both solvers
 @pytest.mark.parametrize("solver", ["ipopt", "fatrop"])
 def test_condensed_optimum_is_the_transcriptions(bench, problem, solver):
     """Condensed, interpreted (no compiler): gtmodel's IPOPT optimum (final time) to 1e-7 relative, both successful."""
