@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import os
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -34,6 +36,20 @@ def verification_tolerance(value: float) -> Iterator[None]:
         yield
     finally:
         defaults["ocp.verification_tolerance"] = old
+
+
+@contextlib.contextmanager
+def benchmark_module(name: str) -> Iterator[object]:
+    """``benchmarks/<name>.py`` as a module, its folder on ``sys.path`` meanwhile (for the benchmarks it imports)."""
+    folder = REPO / "benchmarks"
+    sys.path.insert(0, str(folder))
+    try:
+        spec = importlib.util.spec_from_file_location(name, folder / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.path.remove(str(folder))
 
 
 def replace_once(old: str, new: str):

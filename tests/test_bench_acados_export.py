@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import casadi as ca
@@ -12,20 +10,16 @@ import pytest
 
 from gtmodel.problems import load_problem
 
+from .conftest import benchmark_module
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
 def bench_solve():
     """benchmarks/bench_solve.py as a module (its folder on the path, for bench_ocp_suite)."""
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    try:
-        spec = importlib.util.spec_from_file_location("bench_solve", ROOT / "benchmarks" / "bench_solve.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
+    with benchmark_module("bench_solve") as module:
         yield module
-    finally:
-        sys.path.remove(str(ROOT / "benchmarks"))
 
 
 def test_l1_export_is_the_nlp_model(bench_solve, tmp_path):

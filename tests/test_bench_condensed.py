@@ -8,14 +8,14 @@ derivatives by the implicit function theorem) must reach the same optimum.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
 
 from gtmodel.problems import load_problem
 from gtmodel.trajectory.point_to_point import solve_point_to_point
+
+from .conftest import benchmark_module
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The benchmark's mesh (on 12 elements, h = 0.056 s, the element's Newton iteration from the straight line fails near
@@ -26,14 +26,8 @@ ELEMENTS = 50
 @pytest.fixture(scope="module")
 def bench():
     """benchmarks/bench_condensed.py as a module (its folder on the path, for bench_solve and bench_mpc)."""
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    try:
-        spec = importlib.util.spec_from_file_location("bench_condensed", ROOT / "benchmarks" / "bench_condensed.py")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
+    with benchmark_module("bench_condensed") as module:
         yield module
-    finally:
-        sys.path.remove(str(ROOT / "benchmarks"))
 
 
 @pytest.fixture(scope="module")
