@@ -238,7 +238,13 @@ def _print_summary(summary: dict, out: Path) -> None:
                      f"{bench['relative_error']:.1e}, {flag} tolerance {bench.get('tolerance', float('nan')):.0e}")
     solve = (summary.get("timing") or {}).get("solve")
     if isinstance(solve, dict) and summary.get("solve_time_s") is not None:  # the solver's own time: wall and CPU
-        lines = [f"solve time   {summary['solve_time_s']:.3f} s wall, {solve['cpu_s']:.3f} s CPU (the solver's calls)"
+        passes = summary.get("refinement") or []
+        if passes and all(isinstance(p.get("solve_cpu_time"), (int, float)) for p in passes):
+            # a refined result's solve_time_s sums every pass's solve: its CPU the same passes' (timing.solve is the first's)
+            cpu, scope = sum(p["solve_cpu_time"] for p in passes), f"the solver's calls over {len(passes)} passes"
+        else:
+            cpu, scope = solve["cpu_s"], "the solver's calls"
+        lines = [f"solve time   {summary['solve_time_s']:.3f} s wall, {cpu:.3f} s CPU ({scope})"
                  if line.startswith("solve time") else line for line in lines]
     lines += _timing_lines(summary.get("timing"))
     for w in summary.get("warnings") or []:

@@ -345,3 +345,21 @@ def test_a_component_model_reduced_on_the_solve_path_imports_no_scipy_beyond_lin
     assert proc.stdout.splitlines()[-2:] == ["EXIT 0", "IMPORTED []"], proc.stdout + proc.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["status"] == "optimal" and abs(summary["objective"] - 0.2667243572) < 1e-4 * 0.2667243572
+
+
+@pytest.mark.parametrize("passes, expected", [
+    (None, "solve time   2.000 s wall, 0.500 s CPU (the solver's calls)"),
+    ([{"solve_cpu_time": 0.5, "elements": 10}, {"solve_cpu_time": 1.25, "elements": 14}],
+     "solve time   2.000 s wall, 1.750 s CPU (the solver's calls over 2 passes)"),
+])
+def test_printed_solve_time_wall_and_cpu_cover_the_same_solves(tmp_path, capsys, passes, expected):
+    # a refined result's solve_time_s sums every pass's solve; its CPU must sum the same passes (the summary's
+    # refinement history), not timing.solve (the first pass alone): the two figures checked against their sums by hand
+    from gtmodel.cli import _print_summary
+
+    summary = {"name": "p", "kind": "optimal_control", "status": "optimal", "message": "Solve_Succeeded",
+               "solve_time_s": 2.0, "timing": {"solve": {"wall_s": 0.6, "cpu_s": 0.5}}}
+    if passes is not None:
+        summary["refinement"] = passes
+    _print_summary(summary, tmp_path)
+    assert expected in capsys.readouterr().out
