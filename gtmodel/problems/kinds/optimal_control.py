@@ -252,6 +252,10 @@ class OptimalControlKind(ProblemKind):
             for key, value in getattr(doc.boundary, at).items():
                 if key not in vkeys:
                     raise _unknown(file, f"boundary.{at}.{key}", key, variables)
+                lo, hi = bounds.get(vkeys[key], (-np.inf, np.inf))
+                if not lo <= value <= hi:  # SciPy-style up-front: no solver run ends "infeasible" for a contradiction in the file
+                    raise file.fail(f"boundary.{at}.{key}", f"a value within [bounds] {vkeys[key]} = [{lo:g}, {hi:g}] "
+                                    "(the boundary value and the bound cannot both hold)", value)
                 opt.add_point_constraint(variables[vkeys[key]][1], at=at, lb=value, ub=value, name=f"boundary.{at}.{key}")
         objective, sense, objective_key = _objective(file, doc.optimization, bool(doc.data))
         apply_to(opt, objective, doc.optimization.constraints, names=table, origin=origin, prefix="optimization.", sense=sense,

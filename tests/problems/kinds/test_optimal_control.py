@@ -94,6 +94,9 @@ BAD = [
     # the field is named once (an earlier version wrapped the final-time message twice)
     ("initial_guess_outside_bounds", "bounds = [0.5, 5.0]", "bounds = [0.5, 0.6]",
      r"^(?!.*field '[^']*': .*field ').*field 'optimization\.final_time\.initial_guess': expected a time within"),
+    # a boundary value outside its own bound is refused on load, not left to the solver's "infeasible" (the rail is 1 m)
+    ("boundary_outside_bounds", "s = [-1.0, 1.0] ", "s = [-1.0, -0.5] ",
+     r"field 'boundary\.start\.s': expected a value within \[bounds\] s = \[-1, -0\.5\] \(the boundary value and the bound cannot both hold\), got 0\.0"),
     ("free_parameter_unknown", "[initial_guess]", "[free_parameters]\nlength = [0.3, 0.8]\n\n[initial_guess]", r"field 'free_parameters\.length': expected one of the model's names"),
 ]
 HELPERS = {
