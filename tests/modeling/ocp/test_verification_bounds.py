@@ -15,7 +15,7 @@ import pytest
 
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
 from gtmodel.modeling.ocp.refinement import refine_mesh
-from gtmodel.modeling.ocp.verification import verify
+from gtmodel.modeling.ocp.verification import check_result, verify
 from gtmodel.modeling.ocp.verification_bounds import bound_crossings, check_bounds, element_bound_violations, input_bound_violations
 
 LOWER, UPPER = np.array([-np.inf]), np.array([0.8])
@@ -151,26 +151,52 @@ def test_input_excess_is_reported_in_the_verification_and_warned(lag_problem):
     assert any("input 'u' reaches 34 against its bound 24 at t = 0.5 s" in w for w in res.warnings)
 
 
-@pytest.mark.parametrize("clipped", [True, False])
-def test_verifying_simulation_clips_the_input_as_a_hand_clipped_one(lag_problem, clipped):
-    # scipy's solve_ivp (independent of CasADi and SUNDIALS) under the switch_down quadratic, clipped by numpy.clip
-    # to [-24, 24] or not, from the collocated start; the verification's simulated states at its compared times
-    # (its integrator at rtol 1e-10: the two agree to 1e-6; clipped and not, they differ by up to 0.3)
+def hand_simulation(result, coefficients, clipped):
+    """scipy's solve_ivp of x' = -x + u from the collocated start, element 1's input the quadratic (clipped to |u| <= 24)."""
     from scipy.integrate import solve_ivp
 
-    opt, solved = lag_problem
-    res = with_input(solved, QUADRATICS["switch_down"][0])
-    c0, c1, c2 = QUADRATICS["switch_down"][0]
+    c0, c1, c2 = coefficients
 
     def u(t):
         tau = (t - H) / H
         p = c0 + c1 * tau + c2 * tau**2 if t >= H else 0.0
         return float(np.clip(p, -24.0, 24.0)) if clipped else p
 
-    x0 = float(res.collocation.xc[0, 0, 0])
-    first = solve_ivp(lambda t, x: -x + u(t), (0.0, H), [x0], rtol=1e-11, atol=1e-12, dense_output=True)
+    first = solve_ivp(lambda t, x: -x + u(t), (0.0, H), [float(result.collocation.xc[0, 0, 0])], rtol=1e-11, atol=1e-12, dense_output=True)
     second = solve_ivp(lambda t, x: -x + u(t), (H, 2 * H), first.y[:, -1], rtol=1e-11, atol=1e-12, dense_output=True)
+    return lambda t: (first if t <= H else second).sol(t)[0]
+
+
+def test_no_clipped_simulation_where_the_inputs_keep_their_bounds(lag_problem):
+    # 10 + tau is within |u| <= 24 everywhere (by hand): nothing to clip, no second simulation reported
+    opt, solved = lag_problem
+    res = check_result(with_input(solved, QUADRATICS["within"][0]), opt)
+    assert "clipped" not in res.verification.bounds and res.verification.bounds["inputs"]["u"]["within_tolerance"]
+
+
+def test_check_result_reports_the_clipped_simulations_deviation(lag_problem):
+    # the deviation of scipy's simulation under the hand-clipped input from the collocated states (the state polynomials
+    # at the verification's compared times), scaled by max(1, max |x_col|)
+    opt, solved = lag_problem
+    res = check_result(with_input(solved, QUADRATICS["switch_down"][0]), opt)
+    v = res.verification
+    x = hand_simulation(res, QUADRATICS["switch_down"][0], clipped=True)
+    poly = res.sample(v.t)["states"]["x"]
+    expected = np.max(np.abs(np.array([x(t) for t in v.t]) - poly)) / max(1.0, np.max(np.abs(res.collocation.xc)))
+    clipped = v.bounds["clipped"]
+    assert clipped["max_scaled_deviation"] == pytest.approx(expected, rel=1e-3) and clipped["within_tolerance"] is False
+    assert "clipped to their bounds" in clipped["method"] and any("inputs clipped to their bounds" in w for w in res.warnings)
+
+
+@pytest.mark.parametrize("clipped", [True, False])
+def test_verifying_simulation_clips_the_input_as_a_hand_clipped_one(lag_problem, clipped):
+    # scipy's solve_ivp (independent of CasADi and SUNDIALS) under the switch_down quadratic, clipped by numpy.clip
+    # to [-24, 24] or not, from the collocated start; the verification's simulated states at its compared times
+    # (its integrator at rtol 1e-10: the two agree to 1e-6; clipped and not, they differ by up to 0.3)
+    opt, solved = lag_problem
+    res = with_input(solved, QUADRATICS["switch_down"][0])
+    x = hand_simulation(res, QUADRATICS["switch_down"][0], clipped)
     v = verify(res, 1e-2, rtol=1e-10, input_bounds=opt.bounds_vectors(res.dae, "u") if clipped else None)
-    expected = np.array([(first if t <= H else second).sol(t)[0] for t in v.t])
+    expected = np.array([x(t) for t in v.t])
     np.testing.assert_allclose(v.simulated[:, 0], expected, atol=1e-6)
     assert ("clipped to their bounds" in v.method) == clipped
