@@ -241,7 +241,8 @@ def check_bounds(result: OptimizationResult, optimization: Any, clipped: Any = N
     if clipped is not None:
         if not clipped.simulated.size:
             return
-        worst = max(clipped.states, key=lambda n: clipped.states[n]["max_abs_deviation"])
+        scale = np.maximum(1.0, np.max(np.abs(result.collocation.xc), axis=(0, 1)))  # as the verification scales
+        worst = max(zip(result.dae.x_names, scale), key=lambda ns: clipped.states[ns[0]]["max_abs_deviation"] / ns[1])[0]
         scaled = float(clipped.max_scaled_deviation)
         c = {"method": clipped.method, "max_scaled_deviation": scaled, "variable": worst,
              "at_time_s": clipped.states[worst]["at_time_s"], "within_tolerance": bool(scaled <= v.tolerance)}
