@@ -331,7 +331,7 @@ def _pass_entry(n_pass: int, tr: CollocationTranscription, result: OptimizationR
         entry["verification_cpu_time"] = v.cpu_s
         entry["max_element_error"] = float(np.max(v.element_errors)) if v.element_errors.size else 0.0
         entry["end_deviation"] = end_deviation(result)
-        if v.bounds:
+        if "max_scaled_violation" in v.bounds:  # the states' (the inputs' under "inputs")
             entry["max_bound_violation"] = v.bounds["max_scaled_violation"]
     return entry
 
@@ -585,7 +585,7 @@ def solve_refined(
 def _kept(result: OptimizationResult) -> bool:
     """The verifying simulation keeps the state bounds between the nodes within the tolerance (or none are checked)."""
     v = result.verification
-    return v is not None and (not v.bounds or bool(v.bounds["within_tolerance"]))
+    return v is not None and bool(v.bounds.get("within_tolerance", True))
 
 
 #: CPU limit [s] of the continuation of a pass that IPOPT stopped at its acceptable level.

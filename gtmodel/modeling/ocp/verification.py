@@ -48,7 +48,13 @@ hanging chain's length with the input oscillating between them) is caught here.
 The state bounds are checked on the simulation too, between the collocation points
 (:mod:`gtmodel.modeling.ocp.verification_bounds`: :func:`bound_violations`, :func:`check_bounds`): the
 transcription enforces them at its points only, and a stiff motor's current limited there can overshoot
-inside an element.
+inside an element. So are the input bounds, on the inputs' polynomials (:func:`input_bound_violations`): where a
+bang-bang input leaves its bound, its polynomial swings past it between the points. Where it does beyond the
+tolerance, :func:`check_result` simulates the inputs clipped to their bounds too (``input_bounds``, what a
+saturating amplifier produces) and reports that simulation's deviation from the plan (``verification.bounds.clipped``,
+a warning beyond the tolerance). The verification's verdict remains the polynomial inputs': made the clipped
+simulation's, the refinement of the flexible-joint drive did not keep its current limit within the CPU budget
+(docs/verification.md, 2026-11-25).
 """
 
 from __future__ import annotations
@@ -68,13 +74,13 @@ from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
-from gtmodel.modeling.ocp.verification_bounds import bound_violations, check_bounds, element_bound_violations
+from gtmodel.modeling.ocp.verification_bounds import bound_violations, check_bounds, element_bound_violations, input_bound_violations
 from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
                                                         cvodes_method, explicit_algebraics)
 from gtmodel.modeling.simulation.explicit import damped_newton
 from gtmodel.status import Status
 
-__all__ = ["Verification", "verify", "check_result", "bound_violations", "element_bound_violations", "check_bounds", "problem_integrals", "integrator_rtol", "skipped",
+__all__ = ["Verification", "verify", "check_result", "bound_violations", "element_bound_violations", "check_bounds", "input_bound_violations", "problem_integrals", "integrator_rtol", "skipped",
            "switch_elements", "INTEGRATOR_RTOL", "INTEGRATORS", "SWITCH_FRACTION", "SPURIOUS_DEVIATION", "INTEGRAL_FLOOR", "QUADRATURE_NOISE",
            "STIFF_STEPS"]
 
@@ -243,8 +249,11 @@ def _check_taus(root: np.ndarray) -> np.ndarray:
 
 
 def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: float,
-                        integrands: ca.Function | None = None, plugin: str | None = None) -> tuple[ca.Function, str, ca.Function | None]:
+                        integrands: ca.Function | None = None, plugin: str | None = None,
+                        input_bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[ca.Function, str, ca.Function | None]:
     """``F(x0, z0, p=[model p, U (nu d), t_k, h_k]) -> xf (nx, len(taus)), qf`` on the scaled element.
+
+    ``input_bounds``: the inputs' polynomials clipped to these (lower, upper), each shape ``(nu,)``.
 
     ``integrands(t, x, z, u, p)``: the integrands integrated as quadratures (``qf`` their
     integrals over the element, at each of ``taus``). The third value (None without algebraic
@@ -268,6 +277,13 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
                 b = b * (tau - nodes[r]) / (nodes[j] - nodes[r])
         basis.append(b)
     u_tau = ca.mtimes(U, ca.vertcat(*basis)) if nu else ca.SX(0, 1)
+    if input_bounds is not None and nu:  # as a saturating amplifier: the polynomial's swing past a bound cut off
+        lo, hi = (np.asarray(b, dtype=float).reshape(-1) for b in input_bounds)
+        parts = [u_tau[i] for i in range(nu)]
+        for i in range(nu):
+            parts[i] = ca.fmax(parts[i], float(lo[i])) if np.isfinite(lo[i]) else parts[i]
+            parts[i] = ca.fmin(parts[i], float(hi[i])) if np.isfinite(hi[i]) else parts[i]
+        u_tau = ca.vertcat(*parts)
     t_of = tk + tau * hk
     ode = ca.substitute([dae.ode_expr, dae.alg_expr], [dae.t, dae.u], [t_of, u_tau])
     p_all = ca.vertcat(dae.p, ca.vec(U), tk, hk)
@@ -302,7 +318,8 @@ def _element_integrator(result: OptimizationResult, taus: np.ndarray, rtol: floa
 
 
 def verify(result: OptimizationResult, tolerance: float | None = None, rtol: float | None = None,
-           integrals: tuple[list[str], ca.Function, np.ndarray] | None = None, integrator: str | None = None) -> Verification:
+           integrals: tuple[list[str], ca.Function, np.ndarray] | None = None, integrator: str | None = None,
+           input_bounds: tuple[np.ndarray, np.ndarray] | None = None) -> Verification:
     """Simulate the optimal inputs with a variable-step integrator and compare with the transcribed states.
 
     See the module docstring for the method and the test.
@@ -328,6 +345,11 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         composed component's connections and laws), IDAS for the others (a nonlinear
         algebraic loop). CVODES's method follows the stiffness along the solution
         (:func:`~gtmodel.modeling.ocp.verification_methods.cvodes_method`: BDF with Newton iterations, or Adams with functional iterations).
+    input_bounds : tuple of numpy.ndarray, optional
+        The inputs' ``(lower, upper)`` bounds, each shape ``(nu,)`` (``-inf`` / ``inf`` where there is
+        none): the inputs' polynomials are clipped to them in the simulation, as a saturating amplifier
+        clips them (the transcription keeps them at the collocation points only, and a bang-bang
+        voltage's polynomial swings past its bound where it switches). Default: not clipped.
 
     Returns
     -------
@@ -382,7 +404,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     z0 = col.zc[:, 0, :].T if dae.nz else np.zeros((0, N))
     message = ""
     try:
-        F, how, consistent = _element_integrator(result, taus, rtol, integrals[1] if integrals else None, integrator)
+        F, how, consistent = _element_integrator(result, taus, rtol, integrals[1] if integrals else None, integrator, input_bounds)
         if F.size1_in("z0") == 0:  # the algebraic variables eliminated: an ODE
             z0 = np.zeros((0, N))
         try:
@@ -445,8 +467,11 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
             f"state {names[worst]!r} deviates by {abs_dev[worst]:.3g} (scaled {scaled[worst]:.3g} > tolerance {tolerance:g}) "
             f"at t = {states[names[worst]]['at_time_s']:.6g} s from its simulation under the optimal inputs"
         )
+    clipped = input_bounds is not None and dae.nu and bool(np.isfinite(np.concatenate([np.ravel(b) for b in input_bounds])).any())
     method = (f"the optimal inputs (piecewise {col.shooting}) drive the model from the initial state; compared at "
-              "the shooting nodes and the integrator's sample points" if shooting else Verification.method)
+              "the shooting nodes and the integrator's sample points" if shooting else
+              "the optimal inputs (collocation polynomials, clipped to their bounds as a saturating amplifier clips them) drive "
+              "the model from the initial state" if clipped else Verification.method)
     out = Verification(
         tolerance, passed, float(abs_dev.max()), float(rel_dev.max()), float(scaled.max()), states,
         element_errors, how, message, 0.0, t_check.reshape(-1), xg.reshape(-1, nx), checked,
@@ -625,6 +650,13 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
                integrator=use.integrator)
     result.verification = v
     check_bounds(result, optimization)
+    inputs = v.bounds.get("inputs", {})
+    if v.simulated.size and any(not b["within_tolerance"] for b in inputs.values()):
+        # an input's polynomial past its bound between the points: the plan simulated under the inputs clipped to their
+        # bounds (a saturating amplifier) too, its deviation from the plan reported beside the excess
+        clipped = verify(result, use.tolerance, rtol=use.rtol, integrator=use.integrator,
+                         input_bounds=optimization.bounds_vectors(result.dae, "u"))
+        check_bounds(result, optimization, clipped)
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
         remedy = f"; likely remedy: {v.remedy}" if v.remedy else ""  # none when the verifying simulation itself failed
         _log.warning("%s of %s: %s was %s, but %s%s", what, result.dae.name, result.message, result.status, v.message, remedy)

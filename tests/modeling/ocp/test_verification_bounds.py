@@ -1,17 +1,22 @@
-"""The state bounds checked between the nodes, per element, and mesh refinement where they are exceeded.
+"""The state and input bounds checked between the nodes, per element, and mesh refinement where they are exceeded.
 
-Independent reference: the closed form ``x(t) = 1 - exp(-t)`` of ``x' = -x + 1``, ``x(0) = 0``, against an
-upper bound of 0.8 (exceeded from ``t = ln 5`` on).
+Independent references: the closed form ``x(t) = 1 - exp(-t)`` of ``x' = -x + 1``, ``x(0) = 0``, against an
+upper bound of 0.8 (exceeded from ``t = ln 5`` on); for the inputs, quadratics evaluated by hand and scipy's
+``solve_ivp`` under a hand-clipped input (below).
 """
 
 from __future__ import annotations
+
+import copy
+import dataclasses
 
 import numpy as np
 import pytest
 
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
 from gtmodel.modeling.ocp.refinement import refine_mesh
-from gtmodel.modeling.ocp.verification_bounds import bound_crossings, element_bound_violations
+from gtmodel.modeling.ocp.verification import check_result, verify
+from gtmodel.modeling.ocp.verification_bounds import bound_crossings, check_bounds, element_bound_violations, input_bound_violations
 
 LOWER, UPPER = np.array([-np.inf]), np.array([0.8])
 
@@ -70,3 +75,128 @@ def test_refinement_cuts_where_the_bound_is_crossed(step):
     mesh, _ = refine_mesh(step, 1e-2, 400, bounds=(LOWER, UPPER))
     edges = 2.0 * np.cumsum(mesh)
     assert np.min(np.abs(edges - (-np.log(0.1975)))) <= 0.2 / 400 + 1e-9
+
+
+# --- the input bounds between the collocation points ---------------------------------------------------------------
+# Independent reference: quadratics in monomial form, whose values at the three Radau points are within |u| <= 24
+# while their maximum on the element is not, evaluated by hand (no Lagrange basis); the clipped simulation against
+# scipy's solve_ivp under the quadratic clipped by numpy.
+
+RADAU3 = np.array([(4 - np.sqrt(6)) / 10, (4 + np.sqrt(6)) / 10, 1.0])  # the Radau IIA points of degree 3, closed form
+H = 0.5  # two elements on [0, 1] s
+
+
+class Lag(Model):
+    """x' = -x + u."""
+
+    def __init__(self) -> None:
+        super().__init__("lag")
+        x, u = self.state("x"), self.input("u")
+        self.equation(self.der(x), -x + u)
+
+
+@pytest.fixture(scope="module")
+def lag_problem():
+    """x' = -x + u on [0, 1] s, x(0) = 0, |u| <= 24: its optimisation and a 2-element, 3-point solution."""
+    m = Lag()
+    opt = Optimization(m, final_time=1.0)
+    x, u = m.variables("state")["x"], m.variables("input")["u"]
+    opt.set_bounds(u, -24.0, 24.0)
+    opt.add_point_constraint(x, at="start", lb=0.0, ub=0.0)
+    opt.set_objective(lagrange=(x - 1.0) ** 2 + 1e-3 * u**2)
+    return opt, CollocationTranscription(opt, elements=2, points=3).solve()
+
+
+# (coefficients of p(tau) = c0 + c1 tau + c2 tau^2 in element 1, its largest excess over |u| <= 24 and where, in tau):
+# 34 - 70 tau + 20 tau^2 is 23.6, -2.8, -16 at the points and falls on [0, 1] (p' < 0): 34 at tau = 0, 10 over 24;
+# 25 - 100 (tau - 25/49)^2 is 12.4, 23.2, 1.0 at the points, its vertex 25 at tau = 25/49 (one of the 50 samples): 1 over;
+# -25 + 100 (tau - 25/49)^2, the mirror image: 1 under -24; 10 + tau is within the bounds: no excess, closest to 24 at the end
+QUADRATICS = {
+    "switch_down": ((34.0, -70.0, 20.0), 10.0, 0.0, 24.0),
+    "swing_over": ((25.0 - 100 * (25 / 49) ** 2, 200 * 25 / 49, -100.0), 1.0, 25 / 49, 24.0),
+    "swing_under": ((-25.0 + 100 * (25 / 49) ** 2, -200 * 25 / 49, 100.0), 1.0, 25 / 49, -24.0),
+    "within": ((10.0, 1.0, 0.0), 0.0, 1.0, 24.0),
+}
+
+
+def with_input(result, coefficients):
+    """``result`` with element 1's input the quadratic of ``coefficients`` at its collocation points (element 0's zero)."""
+    c0, c1, c2 = coefficients
+    uc = np.zeros_like(result.collocation.uc)
+    uc[1, :, 0] = c0 + c1 * RADAU3 + c2 * RADAU3**2
+    out = copy.copy(result)
+    out.collocation = dataclasses.replace(result.collocation, uc=uc)
+    out.verification = copy.copy(result.verification)
+    out.warnings = list(result.warnings)
+    return out
+
+
+@pytest.mark.parametrize("case", sorted(QUADRATICS))
+def test_input_excess_is_the_quadratics_by_hand(lag_problem, case):
+    coefficients, excess, tau, bound = QUADRATICS[case]
+    res = with_input(lag_problem[1], coefficients)
+    out = input_bound_violations(res, np.array([-24.0]), np.array([24.0]), 1e-2)["u"]
+    scale = max(1.0, np.max(np.abs(res.collocation.uc)))  # scaled as the state check: by max(1, max |u_col|)
+    expected = {"max_violation": excess, "at_time_s": H + tau * H, "bound": bound, "max_scaled_violation": excess / scale}
+    assert {k: out[k] for k in expected} == pytest.approx(expected, abs=1e-9)
+    assert out["within_tolerance"] == (excess / scale <= 1e-2)
+
+
+def test_input_excess_is_reported_in_the_verification_and_warned(lag_problem):
+    # the switch_down quadratic: 34 V at tau = 0 of element 1 (t = 0.5 s), 10 over its bound 24 (by hand, above)
+    opt, solved = lag_problem
+    res = with_input(solved, QUADRATICS["switch_down"][0])
+    check_bounds(res, opt)
+    assert res.verification.bounds["inputs"]["u"]["max_violation"] == pytest.approx(10.0)
+    assert any("input 'u' reaches 34 against its bound 24 at t = 0.5 s" in w for w in res.warnings)
+
+
+def hand_simulation(result, coefficients, clipped):
+    """scipy's solve_ivp of x' = -x + u from the collocated start, element 1's input the quadratic (clipped to |u| <= 24)."""
+    from scipy.integrate import solve_ivp
+
+    c0, c1, c2 = coefficients
+
+    def u(t):
+        tau = (t - H) / H
+        p = c0 + c1 * tau + c2 * tau**2 if t >= H else 0.0
+        return float(np.clip(p, -24.0, 24.0)) if clipped else p
+
+    first = solve_ivp(lambda t, x: -x + u(t), (0.0, H), [float(result.collocation.xc[0, 0, 0])], rtol=1e-11, atol=1e-12, dense_output=True)
+    second = solve_ivp(lambda t, x: -x + u(t), (H, 2 * H), first.y[:, -1], rtol=1e-11, atol=1e-12, dense_output=True)
+    return lambda t: (first if t <= H else second).sol(t)[0]
+
+
+def test_no_clipped_simulation_where_the_inputs_keep_their_bounds(lag_problem):
+    # 10 + tau is within |u| <= 24 everywhere (by hand): nothing to clip, no second simulation reported
+    opt, solved = lag_problem
+    res = check_result(with_input(solved, QUADRATICS["within"][0]), opt)
+    assert "clipped" not in res.verification.bounds and res.verification.bounds["inputs"]["u"]["within_tolerance"]
+
+
+def test_check_result_reports_the_clipped_simulations_deviation(lag_problem):
+    # the deviation of scipy's simulation under the hand-clipped input from the collocated states (the state polynomials
+    # at the verification's compared times), scaled by max(1, max |x_col|)
+    opt, solved = lag_problem
+    res = check_result(with_input(solved, QUADRATICS["switch_down"][0]), opt)
+    v = res.verification
+    x = hand_simulation(res, QUADRATICS["switch_down"][0], clipped=True)
+    poly = res.sample(v.t)["states"]["x"]
+    expected = np.max(np.abs(np.array([x(t) for t in v.t]) - poly)) / max(1.0, np.max(np.abs(res.collocation.xc)))
+    clipped = v.bounds["clipped"]
+    assert clipped["max_scaled_deviation"] == pytest.approx(expected, rel=1e-3) and clipped["within_tolerance"] is False
+    assert "clipped to their bounds" in clipped["method"] and any("inputs clipped to their bounds" in w for w in res.warnings)
+
+
+@pytest.mark.parametrize("clipped", [True, False])
+def test_verifying_simulation_clips_the_input_as_a_hand_clipped_one(lag_problem, clipped):
+    # scipy's solve_ivp (independent of CasADi and SUNDIALS) under the switch_down quadratic, clipped by numpy.clip
+    # to [-24, 24] or not, from the collocated start; the verification's simulated states at its compared times
+    # (its integrator at rtol 1e-10: the two agree to 1e-6; clipped and not, they differ by up to 0.3)
+    opt, solved = lag_problem
+    res = with_input(solved, QUADRATICS["switch_down"][0])
+    x = hand_simulation(res, QUADRATICS["switch_down"][0], clipped)
+    v = verify(res, 1e-2, rtol=1e-10, input_bounds=opt.bounds_vectors(res.dae, "u") if clipped else None)
+    expected = np.array([x(t) for t in v.t])
+    np.testing.assert_allclose(v.simulated[:, 0], expected, atol=1e-6)
+    assert ("clipped to their bounds" in v.method) == clipped

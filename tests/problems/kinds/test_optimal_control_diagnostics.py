@@ -105,7 +105,9 @@ def test_a_benchmark_value_beyond_its_tolerance_is_printed_and_flagged(tmp_path,
     bench = summary["benchmark"]
     assert not bench["within_tolerance"] and bench["tolerance"] == 1e-4
     assert bench["relative_error"] == pytest.approx(abs(summary["objective"] - 2.2) / 2.2)
-    (warning,) = summary["warnings"]
+    # beside it, the input's polynomial past |u| <= 1 in the switch's element and the clipped simulation's deviation
+    # (verification_bounds, tested in tests/modeling/ocp/test_verification_bounds.py)
+    (warning,) = [w for w in summary["warnings"] if w.startswith("benchmark:")]
     assert warning == (f"benchmark: final time [s] {summary['objective']:.7g} is {100 * bench['relative_error']:.3g} % away "
                        "from the published 2.2 (a misprint), beyond benchmark.tolerance 0.0001")
     out = capsys.readouterr().out
