@@ -75,9 +75,11 @@ def eliminable(opt: Optimization, dae: FlatDAE, free_index: np.ndarray) -> tuple
     if dae.nx and ca.depends_on(dae.alg_expr, dae.xdot):
         return None, "the algebraic equations read der() of a state"
     pf = ca.vertcat(*[dae.p[int(i)] for i in free_index]) if free_index.size else ca.SX(0, 1)
-    moving = ca.vertcat(dae.t, dae.x, dae.z, dae.u, pf)
-    if ca.depends_on(ca.jacobian(dae.alg_expr, dae.z), moving):
-        return None, "the Jacobian of the algebraic equations in the algebraic variables is not constant (nonlinear or state-dependent)"
+    jac = ca.jacobian(dae.alg_expr, dae.z)
+    if ca.depends_on(jac, dae.z):
+        return None, "a nonlinear algebraic loop: the algebraic equations are not linear in the algebraic variables"
+    if ca.depends_on(jac, ca.vertcat(dae.t, dae.x, dae.u, pf)):
+        return None, "the Jacobian of the algebraic equations in the algebraic variables is not constant (it depends on the motion)"
     mixed = ca.vertcat(dae.z, dae.xdot)
     for v in opt.timed_variables:
         if v.time not in ("start", "final") and ca.depends_on(v.expr, mixed):
