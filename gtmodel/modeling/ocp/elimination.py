@@ -5,9 +5,10 @@ mostly aliases and explicit linear relations (a drive's flexible joint: 5 states
 25 algebraic variables). Where every algebraic variable can be written as an expression
 ``z = z(t, x, u, p)`` (:func:`~gtmodel.modeling.simulation.explicit.eliminated_algebraics`:
 block-triangular form, each block solved by a division or a small linear solve) and the
-Jacobian ``dg/dz`` of the algebraic equations is constant (it depends on no state, input,
+Jacobian of each block in its own variables is constant (it depends on no state, input,
 algebraic variable, time or free parameter: no division by an expression the NLP's search
-could make zero), the collocation NLP carries only the states, inputs and free parameters
+could make zero; a block may read earlier ones nonlinearly, as a friction torque reads a
+speed), the collocation NLP carries only the states, inputs and free parameters
 (JModelica's alias and BLT elimination): :func:`reduced_problem` maps the problem and its
 model to a problem over a model without algebraic variables,
 
@@ -76,10 +77,20 @@ def eliminable(opt: Optimization, dae: FlatDAE, free_index: np.ndarray) -> tuple
         return None, "the algebraic equations read der() of a state"
     pf = ca.vertcat(*[dae.p[int(i)] for i in free_index]) if free_index.size else ca.SX(0, 1)
     jac = ca.jacobian(dae.alg_expr, dae.z)
-    if ca.depends_on(jac, dae.z):
-        return None, "a nonlinear algebraic loop: the algebraic equations are not linear in the algebraic variables"
-    if ca.depends_on(jac, ca.vertcat(dae.t, dae.x, dae.u, pf)):
-        return None, "the Jacobian of the algebraic equations in the algebraic variables is not constant (it depends on the motion)"
+    if ca.sprank(jac.sparsity()) < dae.nz:
+        return None, "the algebraic equations are structurally singular in the algebraic variables"
+    # block triangular form (as the elimination solves it): each block's Jacobian in its own variables
+    # must be constant; a nonlinearity in variables solved by earlier blocks (a friction's tanh of a
+    # speed) is substituted, as the NLP's constraints held it
+    moving = ca.vertcat(dae.t, dae.x, dae.z, dae.u, pf)
+    nb, rowperm, colperm, rowblock, colblock, _, _ = jac.sparsity().btf()
+    for b in range(nb):
+        rows, cols = list(rowperm[rowblock[b]:rowblock[b + 1]]), list(colperm[colblock[b]:colblock[b + 1]])
+        jb = jac[rows, cols]
+        if ca.depends_on(jb, ca.vertcat(*[dae.z[c] for c in cols])):
+            return None, "a nonlinear algebraic loop: a block of the algebraic equations is not linear in its variables"
+        if ca.depends_on(jb, moving):
+            return None, "the Jacobian of a block of the algebraic equations in its variables is not constant (it depends on the motion)"
     mixed = ca.vertcat(dae.z, dae.xdot)
     for v in opt.timed_variables:
         if v.time not in ("start", "final") and ca.depends_on(v.expr, mixed):
