@@ -67,7 +67,7 @@ class CollocationSection(Section):
     elements: integer(1, 10000, description="finite elements") = 50
     points: integer(1, 9, description="collocation points per element") = 3
     scheme: choice("radau", "legendre") = "radau"
-    eliminate_algebraics: Flag = Field(True, description="substitute the algebraic variables by their expressions of states, inputs and parameters where the algebraic equations are linear in them with a constant Jacobian (false: each an NLP variable at every collocation point)")
+    eliminate_algebraics: Flag = Field(True, description="substitute the algebraic variables by their expressions of states, inputs and parameters where each block of the algebraic equations is linear in its own variables with a constant Jacobian (false: each an NLP variable at every collocation point)")
 
 
 class RefinementSection(Section):
