@@ -140,7 +140,7 @@ class OptimalControl:
             if result.dae is not None:
                 result.message = without_inputs(d.optimization, result.dae, result.message)
             return self._estimated(shooting, result)
-        kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal}
+        kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal, "eliminate_algebraics": d.method.eliminate_algebraics}
         single = {**kwargs, "verify": check}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
         if d.refinement.refine:

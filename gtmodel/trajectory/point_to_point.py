@@ -671,7 +671,7 @@ def solve_point_to_point(
             opt, _ = build_optimization(problem)
         guess = previous.result if (warm_start and previous is not None) else None
         common = {"verbose": verbose, "solver_options": options, "nominal": {"tau": problem.force_limit},
-                  "compile": problem.solver.jit, "solver": problem.solver.name}
+                  "compile": problem.solver.jit, "solver": problem.solver.name, "eliminate_algebraics": problem.method.eliminate_algebraics}
         tr = CollocationTranscription(opt, elements=problem.method.elements, points=problem.method.points,
                                       scheme=problem.method.scheme, verify=ref.verification, **common)
         scaling = _scale_objective(tr, problem, options)

@@ -48,6 +48,7 @@ from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives, assembled_oracle
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
 from gtmodel.modeling.ocp.diagnostics import without_inputs
+from gtmodel.modeling.ocp.elimination import fill_algebraics, reduced_problem
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
 from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
@@ -127,6 +128,10 @@ class CollocationTranscription:
         Verify every solution by simulation (:func:`~gtmodel.modeling.ocp.verification.verify`) with these
         :class:`~gtmodel.modeling.ocp.methods.VerificationSettings` (True: the problem's own; never written
         onto it): the result's ``verification``; a failing solution is ``check_failed``. Default True.
+    eliminate_algebraics : bool, optional
+        Substitute the algebraic variables by their expressions of the states, inputs and parameters
+        where :mod:`~gtmodel.modeling.ocp.elimination` can (the NLP then has none; the result's are
+        evaluated at the solution); else each is an NLP variable at every collocation point. Default True.
 
     Raises
     ------
@@ -155,6 +160,7 @@ class CollocationTranscription:
         banded: bool | None = None,
         mesh: Any = None,
         verify: Any = True,
+        eliminate_algebraics: bool = True,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -189,7 +195,7 @@ class CollocationTranscription:
             if banded is False:
                 raise InputError("solver fatrop: a free final time must be copied per element (banded=True), its stage structure has no shared variable")
             self.banded = True
-        self.verbose = bool(verbose)
+        self.verbose, self.eliminate_algebraics = bool(verbose), bool(eliminate_algebraics)
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
@@ -251,8 +257,14 @@ class CollocationTranscription:
             # weigh a change of one shared variable (not for fatrop: L1, 400 elements, 185
             # iterations with it, 110 without; 47 and 51 on 50 elements)
             self.nominal["tf"] = self.nominal["tf"] * np.sqrt(self.elements)
+        self._noms = self.nominal
+        # the problem the NLP carries: the algebraic variables eliminated where they can be (elimination)
+        self.reduction = reduced_problem(opt, dae, free_index, self.scheme != "radau") if self.eliminate_algebraics else None
+        if self.reduction is not None:
+            opt, dae, self._noms = self.reduction.optimization, self.reduction.dae, {**self.nominal, "z": np.ones(0)}
+        self.nlp_dae = dae
         nlp = transcribe(
-            opt, dae, self.elements, self.points, co, self.nominal, free_index, inline_points=not assembled, final_time_copies=self.banded,
+            opt, dae, self.elements, self.points, co, self._noms, free_index, inline_points=not assembled, final_time_copies=self.banded,
             fractions=self.fractions, stagewise=stagewise,
         )
         self.nlp = nlp
@@ -271,7 +283,7 @@ class CollocationTranscription:
         self.evaluation = "CasADi interpreter (whole NLP graph" + (", differentiated by the fatrop plugin)" if stagewise else ")")
         if assembled:
             self.derivative_functions, self.evaluation = assembled_derivatives(
-                nlp, opt, dae, self.elements, self.points, co, self.nominal, free_index, self.compile, self.fractions, stagewise
+                nlp, opt, dae, self.elements, self.points, co, self._noms, free_index, self.compile, self.fractions, stagewise
             )
         self.solver = self._nlpsol(self.options)
         self._warm_solver: ca.Function | None = None
@@ -305,7 +317,7 @@ class CollocationTranscription:
 
     # ------------------------------------------------------------------ guesses
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
-        opt, dae, co = self.optimization, self.dae, self._co
+        opt, dae, co = self.optimization, self.nlp_dae, self._co  # no algebraic variables when eliminated
         N, t0 = self.elements, opt.start_time
         n_el, c0 = element_scaling(N, self.fractions)
         kinds = [kind for kind, _k, _j in self._blocks]
@@ -562,21 +574,6 @@ class CollocationTranscription:
         """
         return resolve_function(self, name, warm_start)
 
-    def _at_points(self, colloc: CollocationData, t: np.ndarray, xs: np.ndarray, us: np.ndarray, zs: np.ndarray,
-                   pvec: np.ndarray, tf: float) -> None:
-        """Algebraics at the mesh times that are no collocation points, as the NLP defines them (in place).
-
-        The inputs there are the element's polynomial (``us`` as evaluated); the algebraic
-        variables are made consistent with the states and inputs
-        (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`, as in the
-        point constraints).
-        """
-        kinds = colloc.point_kinds()
-        off = np.flatnonzero([not str(k).startswith("collocation") for k in kinds])  # not np.char (an import)
-        for i in off:
-            if zs.shape[1] and self.nlp.consistent is not None:
-                zs[i] = np.asarray(self.nlp.consistent(t[i], xs[i], zs[i], us[i], pvec, tf), dtype=float).reshape(-1)
-
     def _result(
         self,
         w: np.ndarray,
@@ -609,18 +606,19 @@ class CollocationTranscription:
             tau_root=co["root"].copy(),
             xc=np.array(xc).reshape(dae.nx, N, d + 1).transpose(1, 2, 0),
             uc=np.array(uc).reshape(dae.nu, N, d).transpose(1, 2, 0),
-            zc=np.array(zc).reshape(dae.nz, N, d).transpose(1, 2, 0),
+            zc=np.array(zc).reshape(-1, N, d).transpose(1, 2, 0),
             fractions=None if self.fractions is None else self.fractions.copy(),
         )
         t = colloc.mesh()
         xs, us, zs = colloc.evaluate(t)
-        self._at_points(colloc, t, xs, us, zs, pvec, tf)
+        zs = fill_algebraics(colloc, t, xs, us, zs, pvec, tf, self.nlp.consistent, self.reduction)
         params = {k: pvec[s].copy() for k, s in dae.p_vars.items()}
         try:
             outs = _eval_outputs(dae, t, xs, zs, us, pvec)
         except RuntimeError:
             outs = {}
         iterations = int(stats.get("iter_count", 0) or 0)
+        stats["eliminated_algebraics"] = self.reduction.eliminated if self.reduction is not None else 0
         if status != "optimal":
             _log.warning("collocation solve of %s ended with status %s (%s)", dae.name, status, message)
         return OptimizationResult(

@@ -55,6 +55,12 @@ class Collocation:
         Collocation points per element, 1..9.
     scheme : str
         ``"radau"`` or ``"legendre"``.
+    eliminate_algebraics : bool
+        Substitute the algebraic variables by their expressions of the states, inputs and
+        parameters where each block of the algebraic equations is linear with a constant
+        Jacobian (:mod:`~gtmodel.modeling.ocp.elimination`: the NLP carries none, the
+        result's are evaluated at the solution); False keeps each as an NLP variable at
+        every collocation point.
 
     Raises
     ------
@@ -65,6 +71,7 @@ class Collocation:
     elements: int = 50
     points: int = 3
     scheme: str = "radau"
+    eliminate_algebraics: bool = True
 
     def __post_init__(self) -> None:
         _positive_int("elements", self.elements)

@@ -278,7 +278,7 @@ class OptimalControlKind(ProblemKind):
         declare_initial_guess(file, doc.initial_guess, opt, boundary, variables, vkeys, table,
                               doc.optimization.final_time.initial_guess is not None)
         col, tr = doc.collocation, doc.transcription
-        method: Collocation | MultipleShooting = Collocation(col.elements, col.points, col.scheme)
+        method: Collocation | MultipleShooting = Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics)
         if tr.method == "multiple_shooting":
             if doc.nominal:
                 raise file.fail("nominal", 'no nominal values with [transcription] method = "multiple_shooting" (scaling is for collocation)')

@@ -174,7 +174,7 @@ class PathConstrainedKind(ProblemKind):
             w=method.w,
             configuration=configuration,
             viscous_friction=doc.robot.viscous_friction,
-            collocation=Collocation(col.elements, col.points, col.scheme),
+            collocation=Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics),
             final_time_guess=method.final_time_guess,
             final_time_bounds=(float(lo), float(hi)),
             solver=SolverSettings(max_iter=sol.max_iter, tol=sol.tol),

@@ -132,7 +132,7 @@ class PointToPointKind(ProblemKind):
                 guess=guess,
                 origin=str(file.path),
                 start_time=t0,
-                method=Collocation(col.elements, col.points, col.scheme),
+                method=Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics),
                 solver=SolverSettings(sol.name, sol.max_iter, sol.tol, sol.jit),
                 refinement=Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes, on_failure=tr.refine_on_failure,
                                       max_cpu_s=tr.max_cpu_s),

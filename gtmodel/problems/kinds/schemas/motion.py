@@ -57,11 +57,17 @@ class CollocationSection(Section):
         Collocation points per element, 1..9.
     scheme : str
         ``"radau"`` or ``"legendre"``.
+    eliminate_algebraics : bool
+        Substitute the model's algebraic variables by their expressions of the states,
+        inputs and parameters where each block of the algebraic equations is linear with a
+        constant Jacobian (the NLP then carries none; the result's are evaluated at the
+        solution); false keeps each as an NLP variable at every collocation point.
     """
 
     elements: integer(1, 10000, description="finite elements") = 50
     points: integer(1, 9, description="collocation points per element") = 3
     scheme: choice("radau", "legendre") = "radau"
+    eliminate_algebraics: Flag = Field(True, description="substitute the algebraic variables by their expressions of states, inputs and parameters where each block of the algebraic equations is linear in its own variables with a constant Jacobian (false: each an NLP variable at every collocation point)")
 
 
 class RefinementSection(Section):
