@@ -17,6 +17,7 @@ from gtmodel.modeling import CollocationTranscription, Model, Optimization
 from gtmodel.modeling.ocp.refinement import refine_mesh
 from gtmodel.modeling.ocp.verification import check_result, verify
 from gtmodel.modeling.ocp.verification_bounds import bound_crossings, check_bounds, element_bound_violations, input_bound_violations
+from gtmodel.status import Status
 
 LOWER, UPPER = np.array([-np.inf]), np.array([0.8])
 
@@ -174,18 +175,24 @@ def test_no_clipped_simulation_where_the_inputs_keep_their_bounds(lag_problem):
     assert "clipped" not in res.verification.bounds and res.verification.bounds["inputs"]["u"]["within_tolerance"]
 
 
-def test_check_result_reports_the_clipped_simulations_deviation(lag_problem):
+def test_check_result_verdict_is_the_clipped_simulation(lag_problem):
     # the deviation of scipy's simulation under the hand-clipped input from the collocated states (the state polynomials
-    # at the verification's compared times), scaled by max(1, max |x_col|)
+    # at the verification's compared times), scaled by max(1, max |x_col|): the verdict; the polynomial input's beside it
     opt, solved = lag_problem
     res = check_result(with_input(solved, QUADRATICS["switch_down"][0]), opt)
     v = res.verification
-    x = hand_simulation(res, QUADRATICS["switch_down"][0], clipped=True)
     poly = res.sample(v.t)["states"]["x"]
-    expected = np.max(np.abs(np.array([x(t) for t in v.t]) - poly)) / max(1.0, np.max(np.abs(res.collocation.xc)))
+    scale = max(1.0, np.max(np.abs(res.collocation.xc)))
+    expected = {clip: np.max(np.abs(np.array([x(t) for t in v.t]) - poly)) / scale
+                for clip, x in ((c, hand_simulation(res, QUADRATICS["switch_down"][0], clipped=c)) for c in (True, False))}
+    assert v.max_scaled_deviation == pytest.approx(expected[True], rel=1e-3) and not v.passed
     clipped = v.bounds["clipped"]
-    assert clipped["max_scaled_deviation"] == pytest.approx(expected, rel=1e-3) and clipped["within_tolerance"] is False
-    assert "clipped to their bounds" in clipped["method"] and any("inputs clipped to their bounds" in w for w in res.warnings)
+    assert clipped["verdict"] and clipped["max_scaled_deviation"] == v.max_scaled_deviation and clipped["within_tolerance"] is False
+    assert clipped["polynomial_inputs"]["max_scaled_deviation"] == pytest.approx(expected[False], rel=1e-3)
+    assert "clipped to their bounds" in v.method and "clipped to their bounds" in v.message
+    assert res.status == Status.CHECK_FAILED
+    # the input's excess reported, not warned: the verdict is the clipped input's
+    assert not v.bounds["inputs"]["u"]["within_tolerance"] and not any("input 'u'" in w for w in res.warnings)
 
 
 @pytest.mark.parametrize("clipped", [True, False])
