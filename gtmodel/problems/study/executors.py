@@ -103,9 +103,13 @@ def _execute_dask(units: Sequence[Sequence[CaseTask]], on_record: Callable[[Case
     cluster = None
     config = {"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}
     if sys.platform.startswith("linux"):
-        # fork: a worker starts with gtmodel imported (0.3 s instead of 13-16 s with spawn,
-        # measured on the 2-core machine); the workers' preload hook resets signals and logging
-        config["distributed.worker.multiprocessing-method"] = "fork"
+        # forkserver: the workers are forked from a single-threaded server process, not from this one, whose
+        # threads (Dask's event loop, logging) may hold a lock at the moment of a fork: a worker forked from
+        # here hung in its first log line's flush, the buffer lock of the stream inherited locked (seen
+        # 2026-11-25 in the test suite). Two workers start in 0.8 s (0.2 s forked from here, 13-16 s
+        # spawned; the 2-core machine); the workers' preload hook resets signals and logging. A script
+        # that starts a study needs Python's `if __name__ == "__main__":` guard, as with spawn
+        config["distributed.worker.multiprocessing-method"] = "forkserver"
     with dask.config.set(config):
         if scheduler is not None:
             try:
