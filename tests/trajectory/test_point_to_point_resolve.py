@@ -6,6 +6,8 @@ pose; the L1 minimum-time problem (problems/l1_time_optimal.toml, 50 elements).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -23,7 +25,13 @@ L1_FINAL_TIME = 0.6754484420835453
 
 @pytest.fixture(scope="module")
 def l1():
-    return solve_point_to_point(load_problem(ROOT / "problems/l1_time_optimal.toml").declaration)
+    # the re-solves of the same NLP are tested here, not its verification: on its 50 elements the plan deviates by 0.015
+    # under its forces clipped to their limits (the verification's verdict where a force's polynomial passes its limit
+    # between the collocation points), so it is verified at 0.02 and not refined (a refined result holds no NLP)
+    declaration = load_problem(ROOT / "problems/l1_time_optimal.toml").declaration
+    declaration = dataclasses.replace(declaration, refinement=dataclasses.replace(declaration.refinement, on_failure=False,
+                                                                                  tolerance=2e-2))
+    return solve_point_to_point(declaration)
 
 
 def test_l1_final_time_is_unchanged(l1):

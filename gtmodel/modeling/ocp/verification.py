@@ -50,11 +50,11 @@ The state bounds are checked on the simulation too, between the collocation poin
 transcription enforces them at its points only, and a stiff motor's current limited there can overshoot
 inside an element. So are the input bounds, on the inputs' polynomials (:func:`input_bound_violations`): where a
 bang-bang input leaves its bound, its polynomial swings past it between the points. Where it does beyond the
-tolerance, :func:`check_result` simulates the inputs clipped to their bounds too (``input_bounds``, what a
-saturating amplifier produces) and reports that simulation's deviation from the plan (``verification.bounds.clipped``,
-a warning beyond the tolerance). The verification's verdict remains the polynomial inputs': made the clipped
-simulation's, the refinement of the flexible-joint drive did not keep its current limit within the CPU budget
-(docs/verification.md, 2026-11-25).
+tolerance, the verdict of :func:`check_result` is the simulation under the inputs clipped to their bounds
+(``input_bounds``, what a saturating amplifier delivers; its ``method`` says so): its deviations, element defects,
+integrals and state bounds, so that a plan verified is one a saturating actuator reproduces, and mesh refinement
+refines where the clipped simulation deviates. ``verification.bounds.clipped`` says so and keeps the polynomial
+inputs' deviation beside it (docs/verification.md, 2026-11-25).
 """
 
 from __future__ import annotations
@@ -451,6 +451,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         names[i]: {"max_abs_deviation": float(abs_dev[i]), "max_rel_deviation": float(rel_dev[i]), "at_time_s": float(t_flat[where[i]])}
         for i in range(nx)
     }
+    clipped = input_bounds is not None and dae.nu and bool(np.isfinite(np.concatenate([np.ravel(b) for b in input_bounds])).any())
     checked = checked_integrals(result, integrals, q_sim, tolerance, pvec, rtol) if integrals else {}
     passed = bool(np.all(scaled <= tolerance)) and all(c["passed"] for c in checked.values())
     bad_integral = next((n for n, c in checked.items() if not c["passed"]), None)
@@ -466,8 +467,8 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         message = (
             f"state {names[worst]!r} deviates by {abs_dev[worst]:.3g} (scaled {scaled[worst]:.3g} > tolerance {tolerance:g}) "
             f"at t = {states[names[worst]]['at_time_s']:.6g} s from its simulation under the optimal inputs"
+            + (" clipped to their bounds" if clipped else "")
         )
-    clipped = input_bounds is not None and dae.nu and bool(np.isfinite(np.concatenate([np.ravel(b) for b in input_bounds])).any())
     method = (f"the optimal inputs (piecewise {col.shooting}) drive the model from the initial state; compared at "
               "the shooting nodes and the integrator's sample points" if shooting else
               "the optimal inputs (collocation polynomials, clipped to their bounds as a saturating amplifier clips them) drive "
@@ -618,6 +619,10 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
                  settings: VerificationSettings | None = None) -> OptimizationResult:
     """Verify a solution (:func:`verify`) and downgrade it to ``check_failed`` if it fails.
 
+    Where an input's polynomial exceeds its bounds between the collocation points beyond the tolerance
+    (:func:`input_bound_violations`), the verdict is the simulation under the inputs clipped to their bounds
+    (what a saturating amplifier delivers), the polynomial inputs' deviation kept in ``verification.bounds.clipped``.
+
     Parameters
     ----------
     result : OptimizationResult
@@ -646,17 +651,21 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
         message.
     """
     use = (settings or VerificationSettings()).over(optimization)
-    v = verify(result, use.tolerance, rtol=use.rtol, integrals=problem_integrals(optimization, result, special, lagrange),
-               integrator=use.integrator)
+    integrals = problem_integrals(optimization, result, special, lagrange)
+    v = verify(result, use.tolerance, rtol=use.rtol, integrals=integrals, integrator=use.integrator)
     result.verification = v
-    check_bounds(result, optimization)
-    inputs = v.bounds.get("inputs", {})
+    u_bounds = optimization.bounds_vectors(result.dae, "u") if result.dae.nu else None
+    inputs = input_bound_violations(result, *u_bounds, v.tolerance) if u_bounds is not None else {}
     if v.simulated.size and any(not b["within_tolerance"] for b in inputs.values()):
-        # an input's polynomial past its bound between the points: the plan simulated under the inputs clipped to their
-        # bounds (a saturating amplifier) too, its deviation from the plan reported beside the excess
-        clipped = verify(result, use.tolerance, rtol=use.rtol, integrator=use.integrator,
-                         input_bounds=optimization.bounds_vectors(result.dae, "u"))
-        check_bounds(result, optimization, clipped)
+        # an input's polynomial past its bound between the points: the verdict is the simulation under the inputs
+        # clipped to their bounds (what a saturating amplifier delivers); its deviations, element defects and state
+        # bounds are what refinement refines, the polynomial inputs' deviation kept beside it
+        polynomial = v
+        v = verify(result, use.tolerance, rtol=use.rtol, integrals=integrals, integrator=use.integrator, input_bounds=u_bounds)
+        result.verification = v
+        check_bounds(result, optimization, polynomial)
+    else:
+        check_bounds(result, optimization)
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
         remedy = f"; likely remedy: {v.remedy}" if v.remedy else ""  # none when the verifying simulation itself failed
         _log.warning("%s of %s: %s was %s, but %s%s", what, result.dae.name, result.message, result.status, v.message, remedy)

@@ -15,17 +15,18 @@ polynomial there swings past the bound too, and the current's polynomial follows
   it) over its bounds, sampled at :data:`INPUT_SAMPLES` points of each element: the transcription keeps
   the input bounds at the collocation points only, and in the element where a bang-bang voltage leaves
   its bound the polynomial swings past it (the drives of ``problems/drive_*.toml``, 2026-11-25: by 0.3
-  to 43 V, 1 to 91 % of the bound). Beside it, the deviation of the simulation under the inputs clipped to
-  their bounds (what a saturating amplifier produces;
+  to 43 V, 1 to 91 % of the bound). Beyond the tolerance, the verification's verdict is the simulation under the
+  inputs clipped to their bounds (what a saturating amplifier delivers;
   :func:`~gtmodel.modeling.ocp.verification.check_result`): the drives' plans verified under their polynomial
-  inputs deviate by 0.002 (the belt) to 0.099 (scaled) under the clipped ones;
+  inputs deviated by 0.002 (the belt) to 0.099 (scaled) under the clipped ones;
+* :func:`input_bound_crossings`: where in an element an input's polynomial leaves and re-enters its bounds (the
+  clipped input's kinks), where mesh refinement cuts an element whose clipped simulation deviates;
 * :func:`check_bounds`: all added to a result's verification, a violation beyond the tolerance
   reported in its warnings.
 """
 
 from __future__ import annotations
 
-import copy
 import logging
 from typing import Any
 
@@ -33,7 +34,7 @@ import numpy as np
 
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 
-__all__ = ["bound_violations", "element_bound_violations", "bound_crossings", "input_bound_violations", "check_bounds",
+__all__ = ["bound_violations", "element_bound_violations", "bound_crossings", "input_bound_crossings", "input_bound_violations", "check_bounds",
            "INPUT_SAMPLES"]
 
 _log = logging.getLogger("gtmodel")
@@ -156,6 +157,53 @@ def bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.nda
     return out
 
 
+def input_bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray, elements: list[int],
+                          level: float) -> dict[int, list[float]]:
+    """Where, in each of ``elements``, the inputs' polynomials leave and re-enter their bounds by ``level`` (scaled).
+
+    The inputs' Lagrange polynomials (as :func:`input_bound_violations` evaluates them) on 401 points of each
+    element; the first excess beyond ``level`` (scaled as there, by ``max(1, max |u_col|)``): where it starts
+    inside the element and where it ends (a bang-bang voltage's polynomial that swings past its bound from the
+    element's start up to its junction with the bound, the kink that the clipped input has there).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A collocation result.
+    lower, upper : numpy.ndarray
+        The inputs' bounds, shape ``(nu,)``.
+    elements : list of int
+        The elements looked at.
+    level : float
+        Scaled excess counted as outside the bound.
+
+    Returns
+    -------
+    dict of int to list of float
+        Element -> the ``tau`` in (0, 1) where the first excess starts (if inside) and ends (if inside), over the
+        inputs, sorted; elements whose polynomials stay within ``level`` are left out.
+    """
+    col = result.collocation
+    if col is None or not elements or col.uc.size == 0:
+        return {}
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    taus = np.linspace(0.0, 1.0, 401)
+    basis = lagrange_basis(col.tau_root[1:], taus)
+    scale = np.maximum(1.0, np.max(np.abs(col.uc), axis=(0, 1)))
+    out: dict[int, list[float]] = {}
+    for k in elements:
+        u = basis @ col.uc[k]  # (401, nu)
+        over = np.maximum(np.maximum(u - upper, lower - u), 0.0) / scale > level
+        cuts: set[float] = set()
+        for i in np.nonzero(over.any(axis=0))[0]:
+            first = int(np.argmax(over[:, i]))
+            end = first + int(np.argmin(over[first:, i])) if not over[first:, i].all() else taus.size
+            cuts.update(float(taus[j]) for j in (first, end) if 0 < j < taus.size - 1)
+        if cuts:
+            out[int(k)] = sorted(cuts)
+    return out
+
+
 def input_bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray, tolerance: float,
                            samples: int = INPUT_SAMPLES) -> dict[str, dict[str, Any]]:
     """Per bounded input, the largest excess of its polynomial over its bounds, between the collocation points.
@@ -213,15 +261,17 @@ def input_bound_violations(result: OptimizationResult, lower: np.ndarray, upper:
     return out
 
 
-def check_bounds(result: OptimizationResult, optimization: Any, clipped: Any = None) -> None:
+def check_bounds(result: OptimizationResult, optimization: Any, polynomial: Any = None) -> None:
     """Add the between-node bound checks to ``result.verification``, warning where a bound is exceeded.
 
     The states' (:func:`bound_violations`, on the verifying simulation) at the top level of
     ``verification.bounds``, the inputs' (:func:`input_bound_violations`, their polynomials) under its
-    ``"inputs"``; given, the simulation under the inputs clipped to their bounds under its ``"clipped"``
-    (``{"method", "max_scaled_deviation", "variable", "at_time_s", "within_tolerance"}``, the states'
-    largest deviation from the plan, scaled as the verification's, and ``"state_bounds"``, its
-    :func:`bound_violations`).
+    ``"inputs"``. Given ``polynomial``, ``result.verification`` is the verdict under the inputs clipped to
+    their bounds (what a saturating amplifier delivers; :func:`~gtmodel.modeling.ocp.verification.check_result`)
+    and ``"clipped"`` says so (``{"verdict": True, "method", "max_scaled_deviation", "variable", "at_time_s",
+    "within_tolerance", "polynomial_inputs"}``: the clipped simulation's largest deviation from the plan, scaled
+    as the verification's, and the polynomial inputs' ``{"max_scaled_deviation", "passed"}``); an input's
+    excess is then reported, not warned: the verdict is the clipped inputs'.
 
     Parameters
     ----------
@@ -230,51 +280,44 @@ def check_bounds(result: OptimizationResult, optimization: Any, clipped: Any = N
         tolerance is logged and added to ``result.warnings`` (the summary's ``warnings``).
     optimization : Optimization
         The problem (its state and input bounds).
-    clipped : Verification, optional
-        The verification of ``result`` under its inputs clipped to their bounds
-        (:func:`~gtmodel.modeling.ocp.verification.verify` with ``input_bounds``); its deviation
-        beyond the tolerance warned.
+    polynomial : Verification, optional
+        The verification of ``result`` under its inputs' polynomials, when ``result.verification`` is the
+        one under the inputs clipped to their bounds (:func:`~gtmodel.modeling.ocp.verification.verify`
+        with ``input_bounds``).
     """
     v = result.verification
     if v is None or result.dae is None:
         return
-    if clipped is not None:
-        if not clipped.simulated.size:
-            return
-        scale = np.maximum(1.0, np.max(np.abs(result.collocation.xc), axis=(0, 1)))  # as the verification scales
-        worst = max(zip(result.dae.x_names, scale), key=lambda ns: clipped.states[ns[0]]["max_abs_deviation"] / ns[1])[0]
-        scaled = float(clipped.max_scaled_deviation)
-        c = {"method": clipped.method, "max_scaled_deviation": scaled, "variable": worst,
-             "at_time_s": clipped.states[worst]["at_time_s"], "within_tolerance": bool(scaled <= v.tolerance)}
-        held = copy.copy(result)
-        held.verification = clipped
-        c["state_bounds"] = bound_violations(held, *optimization.bounds_vectors(result.dae, "x")) if result.dae.nx else {}
-        v.bounds = {**v.bounds, "clipped": c}
-        if not c["within_tolerance"]:
-            text = (f"under its inputs clipped to their bounds (a saturating amplifier; their polynomials exceed them between the "
-                    f"collocation points), the simulation deviates from the plan by {scaled:.3g} (scaled, > tolerance "
-                    f"{v.tolerance:g}), most in state {worst!r} at t = {c['at_time_s']:.6g} s: the plan is verified under the "
-                    "polynomial inputs only")
-            _log.warning("verification of %s: %s", result.dae.name, text)
-            if text not in result.warnings:
-                result.warnings.append(text)
-        return
     texts = []
+    under = "the inputs clipped to their bounds" if polynomial is not None else "the optimal inputs"
     if result.dae.nx:
         v.bounds = bound_violations(result, *optimization.bounds_vectors(result.dae, "x"))
         if v.bounds and not v.bounds["within_tolerance"]:
             b = v.bounds
             texts.append(f"state {b['variable']!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
-                         f"in the simulation under the optimal inputs (between the transcription's points; scaled violation "
+                         f"in the simulation under {under} (between the transcription's points; scaled violation "
                          f"{b['max_scaled_violation']:.3g} > tolerance {v.tolerance:g}): the plan keeps the bound at its points only")
     inputs = input_bound_violations(result, *optimization.bounds_vectors(result.dae, "u"), v.tolerance) if result.dae.nu else {}
     if inputs:
         v.bounds = {**v.bounds, "inputs": inputs}
+    if polynomial is not None and v.simulated.size:
+        scale = np.maximum(1.0, np.max(np.abs(result.collocation.xc), axis=(0, 1)))  # as the verification scales
+        worst = max(zip(result.dae.x_names, scale), key=lambda ns: v.states[ns[0]]["max_abs_deviation"] / ns[1])[0]
+        scaled = float(v.max_scaled_deviation)
+        v.bounds = {**v.bounds, "clipped": {
+            "verdict": True, "method": v.method, "max_scaled_deviation": scaled, "variable": worst,
+            "at_time_s": v.states[worst]["at_time_s"], "within_tolerance": bool(scaled <= v.tolerance),
+            "polynomial_inputs": {"max_scaled_deviation": float(polynomial.max_scaled_deviation), "passed": bool(polynomial.passed)}}}
     for name, b in inputs.items():
-        if not b["within_tolerance"]:
-            texts.append(f"the polynomial of input {name!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
-                         f"(between the collocation points, which keep it; scaled excess {b['max_scaled_violation']:.3g} > tolerance "
-                         f"{v.tolerance:g}): the verifying simulation drove the model with it, a saturating amplifier clips it")
+        if b["within_tolerance"]:
+            continue
+        if polynomial is not None:  # the verdict clipped it: reported (verification.bounds.inputs), not a warning
+            _log.info("verification of %s: the polynomial of input %r reaches %.6g against its bound %.6g at t = %.6g s; "
+                      "verified under it clipped to its bounds", result.dae.name, name, b["value"], b["bound"], b["at_time_s"])
+            continue
+        texts.append(f"the polynomial of input {name!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
+                     f"(between the collocation points, which keep it; scaled excess {b['max_scaled_violation']:.3g} > tolerance "
+                     f"{v.tolerance:g}): the verifying simulation drove the model with it, a saturating amplifier clips it")
     for text in texts:
         _log.warning("verification of %s: %s", result.dae.name, text)
         if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log

@@ -20,6 +20,7 @@ import pytest
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling.ocp.methods import VerificationSettings
 
 from .._builders import double_integrator
 
@@ -163,7 +164,10 @@ def test_speed_limit_at_half_of_a_free_horizon(method):
         opt.add_point_constraint(var, at=at, lb=value, ub=value)
     opt.set_objective(mayer=opt.final_time)
     opt.add_constraint(opt.timed(v, 0.5 * opt.final_time), ub=0.1)
-    tr = CollocationTranscription(opt, elements=20) if method == "collocation" else ShootingTranscription(opt, intervals=20)
+    # the verdict of the collocation solve is its simulation under the input clipped to |u| <= 1: with the switches
+    # inside elements of 20 it deviates by 0.024 in x (the polynomial input: within 0.01), checked at 0.03 here
+    tr = (CollocationTranscription(opt, elements=20, verify=VerificationSettings(tolerance=3e-2)) if method == "collocation"
+          else ShootingTranscription(opt, intervals=20))
     r = tr.solve()
     T = 2.0 * (2.0 * np.sqrt(0.505) - 0.1)
     assert r.status == "optimal" and r.final_time == pytest.approx(T, rel=5e-3 if method == "multiple_shooting" else 5e-4)

@@ -17,6 +17,7 @@ from gtmodel.modeling import CollocationTranscription, Model, Optimization
 from gtmodel.modeling.ocp.refinement import refine_mesh
 from gtmodel.modeling.ocp.verification import check_result, verify
 from gtmodel.modeling.ocp.verification_bounds import bound_crossings, check_bounds, element_bound_violations, input_bound_violations
+from gtmodel.status import Status
 
 LOWER, UPPER = np.array([-np.inf]), np.array([0.8])
 
@@ -174,18 +175,24 @@ def test_no_clipped_simulation_where_the_inputs_keep_their_bounds(lag_problem):
     assert "clipped" not in res.verification.bounds and res.verification.bounds["inputs"]["u"]["within_tolerance"]
 
 
-def test_check_result_reports_the_clipped_simulations_deviation(lag_problem):
+def test_check_result_verdict_is_the_clipped_simulation(lag_problem):
     # the deviation of scipy's simulation under the hand-clipped input from the collocated states (the state polynomials
-    # at the verification's compared times), scaled by max(1, max |x_col|)
+    # at the verification's compared times), scaled by max(1, max |x_col|): the verdict; the polynomial input's beside it
     opt, solved = lag_problem
     res = check_result(with_input(solved, QUADRATICS["switch_down"][0]), opt)
     v = res.verification
-    x = hand_simulation(res, QUADRATICS["switch_down"][0], clipped=True)
     poly = res.sample(v.t)["states"]["x"]
-    expected = np.max(np.abs(np.array([x(t) for t in v.t]) - poly)) / max(1.0, np.max(np.abs(res.collocation.xc)))
+    scale = max(1.0, np.max(np.abs(res.collocation.xc)))
+    expected = {clip: np.max(np.abs(np.array([x(t) for t in v.t]) - poly)) / scale
+                for clip, x in ((c, hand_simulation(res, QUADRATICS["switch_down"][0], clipped=c)) for c in (True, False))}
+    assert v.max_scaled_deviation == pytest.approx(expected[True], rel=1e-3) and not v.passed
     clipped = v.bounds["clipped"]
-    assert clipped["max_scaled_deviation"] == pytest.approx(expected, rel=1e-3) and clipped["within_tolerance"] is False
-    assert "clipped to their bounds" in clipped["method"] and any("inputs clipped to their bounds" in w for w in res.warnings)
+    assert clipped["verdict"] and clipped["max_scaled_deviation"] == v.max_scaled_deviation and clipped["within_tolerance"] is False
+    assert clipped["polynomial_inputs"]["max_scaled_deviation"] == pytest.approx(expected[False], rel=1e-3)
+    assert "clipped to their bounds" in v.method and "clipped to their bounds" in v.message
+    assert res.status == Status.CHECK_FAILED
+    # the input's excess reported, not warned: the verdict is the clipped input's
+    assert not v.bounds["inputs"]["u"]["within_tolerance"] and not any("input 'u'" in w for w in res.warnings)
 
 
 @pytest.mark.parametrize("clipped", [True, False])
@@ -200,3 +207,73 @@ def test_verifying_simulation_clips_the_input_as_a_hand_clipped_one(lag_problem,
     expected = np.array([x(t) for t in v.t])
     np.testing.assert_allclose(v.simulated[:, 0], expected, atol=1e-6)
     assert ("clipped to their bounds" in v.method) == clipped
+
+
+# --- refinement under the clipped verdict ---------------------------------------------------------------------------
+# A DC motor turned a quarter turn of a 50:1 gear in minimum time, |v| <= 24 V, |i| <= I A: the voltage's polynomial
+# swings past its bound where it leaves it (by 25 to 30 %). Independent check: scipy's solve_ivp of the motor's
+# equations written here in numpy, under the voltage's quadratic through its three Radau values (numpy.polyfit, the
+# points in closed form) clipped by numpy.clip, element after element from the initial state.
+
+MOTOR = {"R": 0.5, "L": 0.85e-3, "K": 0.05, "J": 4e-5}
+
+
+def min_time_motor(current_limit):
+    """The motor's minimum-time problem (states i, phi, w; input v) with |v| <= 24 V, |i| <= current_limit."""
+    R, L, K, J = MOTOR.values()
+    m = Model("motor")
+    i, phi, w = m.state("i"), m.state("phi"), m.state("w")
+    v = m.input("v")
+    m.equation(m.der(i), (v - R * i - K * w) / L)
+    m.equation(m.der(phi), w)
+    m.equation(m.der(w), K * i / J)
+    opt = Optimization(m, free_final_time=True, final_time_bounds=(0.02, 2.0), final_time_guess=0.3)
+    opt.objective = opt.final_time
+    opt.set_bounds(v, -24.0, 24.0)
+    opt.set_bounds(i, -current_limit, current_limit)
+    for s, end in ((i, 0.0), (phi, 50 * np.pi / 2), (w, 0.0)):
+        opt.add_point_constraint(s, at="start", lb=0.0, ub=0.0)
+        opt.add_point_constraint(s, at="final", lb=end, ub=end)
+    return opt
+
+
+def clipped_motor_simulation(result, times):
+    """scipy's simulation of the motor under the clipped voltage quadratics, the states (i, phi, w) at ``times``."""
+    from scipy.integrate import solve_ivp
+
+    R, L, K, J = MOTOR.values()
+    col = result.collocation
+    breaks = col.breaks()
+    x = np.zeros(3)
+    out = np.zeros((len(times), 3))
+    for k in range(col.elements):
+        t0, h = breaks[k], breaks[k + 1] - breaks[k]
+        c = np.polyfit(RADAU3, col.uc[k, :, 0], 2)
+
+        def rhs(t, s, c=c, t0=t0, h=h):
+            v = float(np.clip(np.polyval(c, (t - t0) / h), -24.0, 24.0))
+            return [(v - R * s[0] - K * s[2]) / L, s[2], K * s[0] / J]
+
+        inside = (times > t0) & (times <= breaks[k + 1])
+        sol = solve_ivp(rhs, (t0, breaks[k + 1]), x, method="Radau", rtol=1e-10, atol=1e-10, dense_output=True)
+        out[inside] = sol.sol(times[inside]).T
+        x = sol.y[:, -1]
+    return out
+
+
+@pytest.mark.parametrize("elements, current_limit", [(30, 10.0), (60, 10.0), (60, 8.0)])
+def test_refinement_verifies_the_motor_under_its_clipped_voltage(elements, current_limit):
+    from gtmodel.modeling.ocp.refinement import solve_refined
+
+    res = solve_refined(min_time_motor(current_limit), elements=elements, points=3)
+    v = res.verification
+    assert res.status == Status.OPTIMAL and v.passed and res.refinement[0]["verified"] is False
+    # the case is real: the voltage's polynomial beyond its bound by more than the tolerance, the verdict the clipped one
+    assert v.bounds["inputs"]["v"]["max_scaled_violation"] > 10 * v.tolerance and v.bounds["clipped"]["verdict"]
+    sim = clipped_motor_simulation(res, v.t)
+    states = res.sample(v.t)["states"]
+    poly = np.column_stack([states[n] for n in ("i", "phi", "w")])
+    scale = np.maximum(1.0, np.max(np.abs(res.collocation.xc), axis=(0, 1)))
+    deviation = np.max(np.abs(sim - poly) / scale)
+    assert deviation <= v.tolerance and deviation == pytest.approx(v.max_scaled_deviation, abs=1e-4)
+    assert np.max(np.abs(sim[:, 0])) <= current_limit * (1 + v.tolerance)  # the current limit kept by the clipped plan
