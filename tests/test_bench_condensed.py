@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from gtmodel.modeling.ocp.methods import Refinement
 from gtmodel.problems import load_problem
 from gtmodel.trajectory.point_to_point import solve_point_to_point
 
@@ -32,8 +33,13 @@ def bench():
 
 @pytest.fixture(scope="module")
 def problem(bench, tmp_path_factory):
-    """L1 minimum time on ELEMENTS elements: its export and gtmodel's IPOPT solve (the reference)."""
-    decl = dataclasses.replace(load_problem(ROOT / "problems" / "l1_time_optimal.toml").declaration, elements=ELEMENTS)
+    """L1 minimum time on ELEMENTS elements: its export and gtmodel's IPOPT solve (the reference).
+
+    The reference stays on the export's mesh (no refinement on a failed verification: the
+    50-element plan's forces, clipped between the points, deviate 0.015 and the shipped
+    problem refines it), so both solve the same NLP."""
+    decl = load_problem(ROOT / "problems" / "l1_time_optimal.toml").declaration
+    decl = dataclasses.replace(decl, elements=ELEMENTS, refinement=Refinement(on_failure=False))
     folder = bench.export_acados(decl, tmp_path_factory.mktemp("condensed")).parent
     return folder, solve_point_to_point(bench.with_solver(decl, "ipopt")).result
 
@@ -44,6 +50,6 @@ def test_condensed_optimum_is_the_transcriptions(bench, problem, solver):
     """Condensed, interpreted (no compiler): gtmodel's IPOPT optimum (final time) to 1e-7 relative, both successful."""
     folder, reference = problem
     cpu, iterations, final_time, status, _ = bench.run_condensed(bench.condensed_solver(folder, solver, jit=False))
-    assert str(reference.status) == "optimal"
+    assert str(reference.status) in ("optimal", "check_failed")  # solved; the verdict is the refinement's matter
     assert status in ("Solve_Succeeded", "SOLVER_RET_SUCCESS"), status
     assert abs(final_time - reference.final_time) <= 1e-7 * reference.final_time

@@ -39,10 +39,12 @@ def test_l1_mpc_halves_the_feedforward_error_without_bound_violations(l1):
 
 def test_converged_rti_agrees_with_ipopt_near_the_reference(l1):
     # states 1 mm and 10 mm/s off the reference while every axis moves (the plant's state is the
-    # tool's with the compliance model; the MPC's is T, T_dot)
+    # tool's with the compliance model; the MPC's is T, T_dot); 40 SQP iterations: on the refined
+    # reference plan (61 elements, 0.6715 s) the third state needs more than 20 (1.1e-6 after 20,
+    # 2e-11 after 40)
     setup, _, _, check = l1
     near = dataclasses.replace(check.mpc, x=check.mpc.x_ref + np.array([1e-3, -1e-3, 1e-3, 0.01, -0.01, 0.01]))
-    assert np.max(ipopt_agreement(setup, near, samples=3, iterations=20, min_speed=0.2)) <= 1e-6
+    assert np.max(ipopt_agreement(setup, near, samples=3, iterations=40, min_speed=0.2)) <= 1e-6
 
 
 @pytest.mark.parametrize("bad", [np.full(6, 100.0), np.r_[1e300, 0, 0, 0, 0, 0]], ids=["out of the workspace", "overflow"])
