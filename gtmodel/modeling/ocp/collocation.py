@@ -201,7 +201,6 @@ class CollocationTranscription:
         self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
         with timed(self._unreported, "build"):
             self.dae: FlatDAE = optimization.flat()
-            self.size = check_memory(self.elements, self.points, self.dae.nx, self.dae.nz, self.dae.nu)  # before any of it is built
             self.nominal = self._nominal_values(nominal)
             self._build()
 
@@ -263,6 +262,8 @@ class CollocationTranscription:
         if self.reduction is not None:
             opt, dae, self._noms = self.reduction.optimization, self.reduction.dae, {**self.nominal, "z": np.ones(0)}
         self.nlp_dae = dae
+        # before any of the NLP is built, with the algebraic variables it carries (none when eliminated)
+        self.size = check_memory(self.elements, self.points, dae.nx, dae.nz, dae.nu)
         nlp = transcribe(
             opt, dae, self.elements, self.points, co, self._noms, free_index, inline_points=not assembled, final_time_copies=self.banded,
             fractions=self.fractions, stagewise=stagewise,

@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 
 from gtmodel.modeling import Model, Optimization
+from gtmodel.errors import InputError
+from gtmodel.modeling.ocp.budget import MEMORY_ENV, estimate
 from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.elimination import eliminable, reduced_problem
 from gtmodel.problems import load_problem
@@ -53,6 +55,21 @@ def test_reduced_nlp_carries_no_algebraic_variable(pair):
     nz = full.dae.nz
     # independent count: the unreduced NLP has nz variables at each of the N d collocation points more
     assert (int(full.nlp.w.numel()) - int(reduced.nlp.w.numel()), res.stats["eliminated_algebraics"]) == (N * D * nz, nz)
+
+
+@pytest.mark.parametrize(("eliminate", "refused"), [(False, True), (True, False)])
+def test_memory_check_counts_the_algebraic_variables_the_nlp_carries(monkeypatch, eliminate, refused):
+    # independent: budget.estimate of the two sizes; a limit between them refuses only the unreduced NLP
+    opt = _motor()
+    dae = opt.flat()
+    full, reduced = estimate(N, D, dae.nx, dae.nz, dae.nu).bytes, estimate(N, D, dae.nx, 0, dae.nu).bytes
+    monkeypatch.setenv(MEMORY_ENV, str((full + reduced) / 2 / 1e6))
+    if refused:
+        with pytest.raises(InputError, match="more than the limit"):
+            CollocationTranscription(opt, elements=N, points=D, eliminate_algebraics=eliminate, verify=False)
+    else:
+        tr = CollocationTranscription(opt, elements=N, points=D, eliminate_algebraics=eliminate, verify=False)
+        assert tr.size == estimate(N, D, dae.nx, 0, dae.nu)
 
 
 @pytest.mark.parametrize("quantity", ["final_time", "objective"])
