@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import casadi as ca
+
 from gtmodel.modeling import Model, Optimization
 
 
@@ -51,3 +53,15 @@ def min_energy_over_distance_parameter():
     opt.add_point_constraint(x - dist, at="final", lb=0.0, ub=0.0)
     opt.add_point_constraint(v, at="final", lb=0.0, ub=0.0)
     return opt
+
+
+def nonlinear_loop():
+    """An algebraic loop through a nonlinear equation, z + 0.5 sin(z) = x, xdot = u - z (output zz = z)."""
+    m = Model("loop")
+    x = m.state("x", start=1.0)
+    z = m.algebraic("z", start=0.5)
+    u = m.input("u")
+    m.equation(m.der(x), u - z)
+    m.equation(z + 0.5 * ca.sin(z), x)
+    m.output("zz", z)
+    return m

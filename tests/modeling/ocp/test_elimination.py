@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import logging
 
-import casadi as ca
 import numpy as np
 import pytest
 
@@ -24,6 +23,7 @@ from gtmodel.problems import load_problem
 from gtmodel.status import Status
 
 from ...conftest import REPO
+from .._builders import nonlinear_loop
 
 MOTOR = REPO / "problems" / "drive_motor_gear_load.toml"
 N, D = 20, 3
@@ -136,13 +136,9 @@ def test_algebraic_bound_is_a_path_constraint_of_the_reduced_problem():
 
 
 def _loop() -> Optimization:
-    """A nonlinear algebraic loop, z + 0.5 sin(z) = x, xdot = u - z: drive x from 1 to 0 in 1 s at least effort."""
-    m = Model("loop")
-    x = m.state("x", start=1.0)
-    z = m.algebraic("z", start=0.5)
-    u = m.input("u")
-    m.equation(m.der(x), u - z)
-    m.equation(z + 0.5 * ca.sin(z), x)
+    """The nonlinear loop of :func:`nonlinear_loop`: drive x from 1 to 0 in 1 s at least effort."""
+    m = nonlinear_loop()
+    x, u = m.variables("state")["x"], m.variables("input")["u"]
     opt = Optimization(m, final_time=1.0)
     opt.set_objective(lagrange=u**2)
     opt.add_point_constraint(x, at="start", lb=1.0, ub=1.0)

@@ -20,6 +20,7 @@ from gtmodel.modeling import Model, explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
 from ...conftest import REPO
+from .._builders import nonlinear_loop
 
 MOTOR = REPO / "models" / "dc_motor.py"
 R, K, RATIO, D = 0.5, 0.05, 50.0, 0.02  # the model file's parameters
@@ -29,18 +30,6 @@ R, K, RATIO, D = 0.5, 0.05, 50.0, 0.02  # the model file's parameters
 def motor():
     model = load_user_model(MOTOR, "DCMotorModel")
     return model, explicit_ode(model)
-
-
-def _loop_model() -> Model:
-    """An algebraic loop through a nonlinear equation: z + 0.5 sin(z) = x, xdot = u - z."""
-    m = Model("loop")
-    x = m.state("x", start=1.0)
-    z = m.algebraic("z", start=0.5)
-    u = m.input("u")
-    m.equation(m.der(x), u - z)
-    m.equation(z + 0.5 * ca.sin(z), x)
-    m.output("zz", z)
-    return m
 
 
 def test_motor_is_eliminated_symbolically(motor):
@@ -85,7 +74,7 @@ def test_motor_f_integrated_by_scipy_equals_simulate(motor):
 
 def test_newton_loop_model_equals_simulate():
     # IDAS solves the same DAE with its own Newton; the explicit f carries an unrolled one
-    m = _loop_model()
+    m = nonlinear_loop()
     ode = explicit_ode(m)
     assert (ode.symbolic, ode.newton) == (False, 1)
     t = np.linspace(0.0, 2.0, 21)
@@ -99,7 +88,7 @@ def test_newton_loop_model_equals_simulate():
 @pytest.mark.parametrize("x, converged", [(1.0, 1.0), (50.0, 1.0), (np.nan, 0.0), (1e308, 0.0)])
 def test_newton_converged_flag(x, converged):
     # z + 0.5 sin z = x has one root for every finite x; NaN and an overflow are flagged
-    ode = explicit_ode(_loop_model())
+    ode = explicit_ode(nonlinear_loop())
     assert float(ode.converged(x, 0.0, [])) == converged
 
 
@@ -152,7 +141,7 @@ def _no_state() -> Model:
     [
         (lambda ode: explicit_ode("motor"), InputError, "model: expected a gtmodel Model or Component, got str"),
         (lambda ode: explicit_ode(_no_state()), ModelError, "'static' has no state"),
-        (lambda ode: explicit_ode(_loop_model(), iterations=0), InputError, "iterations: expected a positive"),
+        (lambda ode: explicit_ode(nonlinear_loop(), iterations=0), InputError, "iterations: expected a positive"),
         (lambda ode: ode.step(0.0), InputError, r"dt: expected a positive step length in seconds, got 0\.0"),
         (lambda ode: ode.step(float("nan")), InputError, "dt: expected a positive step length"),
         (lambda ode: ode.step(0.004, "euler"), InputError, "method: expected one of rk4, implicit_euler, radau2, got 'euler'"),
