@@ -165,7 +165,7 @@ class OptimalControlKind(ProblemKind):
     file_descriptions = {
         "trajectories.csv": "time, kind of point, states, inputs, algebraic variables and outputs, headers with units",
         "states.png": "the states against time with their bounds",
-        "inputs.png": "the inputs against time with their bounds",
+        "inputs.png": "the inputs against time with their bounds, as verified (between the points, clipped to the bounds)",
         "variables.png": "algebraic variables and outputs against time with their bounds",
     }
     columns = (
@@ -382,15 +382,58 @@ class OptimalControlKind(ProblemKind):
         if plots:
             values = {**r.states, **r.algebraics, **r.outputs, **r.inputs}
             shown = {k: values[k] for k in d.variables if k in values and np.ndim(values[k]) == 1}
-            for group, fname, signals in (
-                ("states", "states.png", {k: v for k, v in r.states.items() if np.ndim(v) == 1}),
-                ("inputs", "inputs.png", {k: v for k, v in r.inputs.items() if np.ndim(v) == 1}),
-                ("variables", "variables.png", shown),
+            t_in, applied = applied_inputs(r, d.optimization)
+            for group, fname, t, signals in (
+                ("states", "states.png", r.t, {k: v for k, v in r.states.items() if np.ndim(v) == 1}),
+                ("inputs as verified", "inputs.png", t_in, applied),
+                ("variables", "variables.png", r.t, shown),
             ):
                 if signals:
-                    plot_signals(r.t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds, units=d.model.units)
+                    plot_signals(t, signals, out / fname, title=f"{name}: {group}", bounds=d.bounds, units=d.model.units)
                     written.files.append(fname)
         return written
+
+
+def applied_inputs(result: OptimizationResult, optimization: Optimization,
+                   per_element: int = 10) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The scalar inputs as the verification applies them: the polynomials between the points, clipped to the bounds.
+
+    A collocation input is a polynomial on each element, which may pass its bound between the
+    collocation points; the verification simulates the model under it clipped to the bound, as
+    a saturating amplifier delivers it (:mod:`gtmodel.modeling.ocp.verification_bounds`), and so
+    does ``inputs.png``. Without polynomials (multiple shooting), the written samples.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A solution.
+    optimization : Optimization
+        Its problem (the input bounds: the model's, overridden by the problem's,
+        :meth:`Optimization.bounds_vectors`).
+    per_element : int, optional
+        Samples per interval between consecutive written times (at most 20,000 in all).
+
+    Returns
+    -------
+    t : numpy.ndarray
+        ``(K,)`` [s]: the written times and ``per_element - 1`` more between each two.
+    inputs : dict of str to numpy.ndarray
+        Scalar input name -> ``(K,)`` values.
+    """
+    t_mesh = np.asarray(result.t, dtype=float)
+    if result.collocation is None or result.dae is None or t_mesh.size < 2:
+        return t_mesh, {k: np.asarray(v) for k, v in result.inputs.items() if np.ndim(v) == 1}
+    n = max(1, min(int(per_element), 20_000 // (t_mesh.size - 1)))
+    frac = np.arange(n) / n
+    t = np.append((t_mesh[:-1, None] + frac[None, :] * np.diff(t_mesh)[:, None]).ravel(), t_mesh[-1])
+    lower, upper = optimization.bounds_vectors(result.dae, "u")
+    sampled = result.sample(t)["inputs"]
+    out = {}
+    for k, v in sampled.items():
+        sl = result.dae.u_vars[k]
+        if np.ndim(v) == 1 and sl.stop - sl.start == 1:
+            out[k] = np.clip(np.asarray(v, dtype=float), lower[sl.start], upper[sl.start])
+    return t, out
 
 
 def _refinement(file: ProblemFile, doc: Any) -> Refinement:

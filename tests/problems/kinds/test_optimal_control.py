@@ -18,7 +18,7 @@ from scipy.linalg import expm as scipy_expm
 
 from gtmodel._tables import read_table
 from gtmodel.problems import load_problem, run_problem
-from gtmodel.problems.kinds.optimal_control import OptimalControl
+from gtmodel.problems.kinds.optimal_control import OptimalControl, applied_inputs
 from gtmodel.status import Status
 
 from ...conftest import PROBLEMS_DIR, REPO, assert_bad_problem_through_cli, replace_once as _edit
@@ -191,3 +191,14 @@ def test_composed_model_with_hierarchical_names(tmp_path):
     W = np.trapezoid([np.outer(e, e) for e in expm], tau, axis=0)
     d = np.array([0.5, 0.0]) - scipy_expm(A * T) @ np.array([0.1, 0.0])
     assert outcome.summary["objective"] == pytest.approx(d @ np.linalg.solve(W, d), rel=1e-5)
+
+
+def test_inputs_plot_draws_the_inputs_as_verified():
+    # independent: the result's own polynomials (OptimizationResult.sample) and numpy.clip with the problem's
+    # bound |F| <= 20 N; the plot's samples include every written time
+    d = load_problem(BASE).declaration
+    result = d.solve()
+    t, inputs = applied_inputs(result, d.optimization)
+    assert set(inputs) == {"F"} and np.isin(result.t, t).all()
+    np.testing.assert_allclose(inputs["F"], np.clip(result.sample(t)["inputs"]["F"], -20.0, 20.0), rtol=0, atol=1e-12)
+    assert t.size == 10 * (result.t.size - 1) + 1 and np.all(np.diff(t) > 0)
