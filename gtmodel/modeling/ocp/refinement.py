@@ -169,7 +169,8 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int,
         Relative element lengths of the new mesh, shape ``(M,)`` (the old mesh if
         nothing is to be split or the limit is reached).
     info : dict
-        ``{"split": elements split, "switches": switch times [s] found}``.
+        ``{"split": elements split, "switches": switch times [s] found, "limited": elements to split that
+        ``max_elements`` leaves no room for}``.
 
     Raises
     ------
@@ -248,9 +249,11 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int,
             plans[k] = (1e3 * over[k], sorted(cuts))
     budget = max_elements - N
     split: list[int] = []
+    limited: list[int] = []  # elements to split whose cuts the element limit leaves no room for
     for k in sorted(plans, key=lambda k: -plans[k][0]):
         cuts = plans[k][1]
         if len(cuts) > budget:
+            limited.append(k)
             continue
         budget -= len(cuts)
         split.append(k)
@@ -261,7 +264,7 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int,
             new.extend(frac[k] * np.diff(edges))
         else:
             new.append(frac[k])
-    info = {"split": sorted(split), "switches": switch_times(result)}
+    info = {"split": sorted(split), "switches": switch_times(result), "limited": sorted(limited)}
     return np.asarray(new), info
 
 
@@ -551,7 +554,10 @@ def solve_refined(
             entry["polish"] = "ended acceptable: its mesh re-solved from it with IPOPT's acceptable stop off"
         elif not info["split"] and base is result:
             polish = False
-            stop = ("the verification passed and no element is left to split" if v.passed else
+            # elements still to split (for a deviation, a switch or a state bound between the nodes) that the element
+            # limit has no room for: the limit stopped it, not the mesh's convergence (said so, with its remedy)
+            stop = (f"the element limit ({max_elements} elements)" if info.get("limited") else
+                    "the verification passed and no element is left to split" if v.passed else
                     f"no element left to split within {max_elements} elements")
             break
         entry["split"] = len(info["split"])
@@ -604,9 +610,10 @@ def solve_refined(
     if not verified:
         result.message = f"{result.message}; mesh refinement stopped at {stop} before a pass verified"
     elif not _kept(result):  # said in the verification (summary.json verification.bounds), not only the warnings
+        remedy = (f"a larger max_elements in [transcription] (now {max_elements})" if stop.startswith("the element limit")
+                  else f"a larger max_cpu_s or max_passes in [transcription] (now {budget:g} CPU-s, {max_passes} passes)")
         result.verification.bounds = {**result.verification.bounds, "remedy": (
-            f"mesh refinement stopped at {stop} before a pass kept the bound between the points: a larger max_cpu_s "
-            f"or max_passes in [transcription] (now {budget:g} CPU-s, {max_passes} passes)")}
+            f"mesh refinement stopped at {stop} before a pass kept the bound between the points: {remedy}")}
     return result
 
 

@@ -70,6 +70,15 @@ def test_refinement_splits_the_elements_that_exceed_a_bound(step, with_bounds, s
     assert len(mesh) == 10 + (5 if with_bounds else 0) and mesh.sum() == pytest.approx(1.0)
 
 
+def test_refinement_names_the_elements_the_element_limit_leaves_unsplit(step):
+    # elements 8 and 9 exceed the bound (above); at max_elements = 10 (the mesh's own size) neither is split and both are
+    # named as left by the limit, the mesh unchanged; with room (400) none is left
+    mesh, info = refine_mesh(step, 1e-2, 10, bounds=(LOWER, UPPER))
+    assert info["split"] == [] and info["limited"] == [8, 9] and len(mesh) == 10
+    _, info = refine_mesh(step, 1e-2, 400, bounds=(LOWER, UPPER))
+    assert info["limited"] == []
+
+
 def test_refinement_cuts_where_the_bound_is_crossed(step):
     # element 8's first cut where x exceeds the bound by a quarter of the tolerance: 1 - exp(-t) = 0.8025,
     # t = -ln(0.1975) = 1.6220 s (closed form), to the 1/400 grid of the element (0.5 ms)
@@ -277,3 +286,17 @@ def test_refinement_verifies_the_motor_under_its_clipped_voltage(elements, curre
     deviation = np.max(np.abs(sim - poly) / scale)
     assert deviation <= v.tolerance and deviation == pytest.approx(v.max_scaled_deviation, abs=1e-4)
     assert np.max(np.abs(sim[:, 0])) <= current_limit * (1 + v.tolerance)  # the current limit kept by the clipped plan
+
+
+def test_refinement_stopped_by_the_element_limit_says_so_and_names_max_elements():
+    # the motor from 60 elements: pass 4 (71 elements) verifies, its current 0.044 (scaled) over the limit between the
+    # nodes, and would cut one element in 3 (to 74); max_elements = 72 leaves no room. The stop and the bound's remedy
+    # name the element limit and max_elements (they said "the verification passed and no element is left to split" and
+    # "a larger max_cpu_s or max_passes": neither helps at the limit; held-out drive held_heavy_flex, issue 49)
+    from gtmodel.modeling.ocp.refinement import solve_refined
+
+    res = solve_refined(min_time_motor(10.0), elements=60, points=3, max_elements=72)
+    assert res.status == Status.OPTIMAL and res.verification.passed and not res.verification.bounds["within_tolerance"]
+    assert res.refinement_stop.startswith("the element limit (72 elements)")
+    assert "a larger max_elements in [transcription] (now 72)" in res.verification.bounds["remedy"]
+    assert "max_passes" not in res.verification.bounds["remedy"]
