@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -300,3 +301,26 @@ def test_refinement_stopped_by_the_element_limit_says_so_and_names_max_elements(
     assert res.refinement_stop.startswith("the element limit (72 elements)")
     assert "a larger max_elements in [transcription] (now 72)" in res.verification.bounds["remedy"]
     assert "max_passes" not in res.verification.bounds["remedy"]
+
+
+STALL_BOUNDS = {"variable": "ind.i", "value": -5.11379, "bound": -5.0, "max_scaled_violation": 0.0228}
+
+
+@pytest.mark.parametrize("excess, stop, expected", [
+    # held_fast_current's last 8 passes (a held-out drive, issue 49): 0.0338 ... 0.0228, the current sawing at its
+    # junction with the bound arc: stalled, so a margin on the bound (-5 - (-5.11379 + 5) = -4.88621), not more passes
+    ([0.0338, 0.0296, 0.0267, 0.0253, 0.0242, 0.0276, 0.0228, 0.0240], "the pass limit (16)",
+     r"the excess has stalled \(0\.0228 scaled over the last 4 passes against 0\.0253 .*margin of the excess "
+     r"\(e\.g\. 'ind\.i' to -4\.88621 instead of -5\)"),
+    # halving every pass: still converging, so the limit that stopped it
+    ([0.64, 0.32, 0.16, 0.08, 0.04, 0.02, 0.016, 0.012], "the pass limit (16)", r"a larger max_cpu_s or max_passes .*16 passes\)$"),
+    ([0.64, 0.32, 0.16, 0.08, 0.04, 0.02, 0.016, 0.012], "the element limit (72 elements)", r"a larger max_elements .*\(now 72\)$"),
+    ([0.03, 0.03], "the pass limit (16)", r"a larger max_cpu_s or max_passes"),  # too few passes to tell
+])
+def test_bound_remedy_tells_a_stalled_excess_from_a_converging_one(excess, stop, expected):
+    from gtmodel.modeling.ocp.refinement import bound_remedy
+
+    history = [{"max_bound_violation": e} for e in excess]
+    text = bound_remedy(history, stop, STALL_BOUNDS, 100.0, 16, 72 if "72" in stop else 400)
+    assert text.startswith(f"mesh refinement stopped at {stop} before a pass kept the bound between the points: ")
+    assert re.search(expected, text), text
