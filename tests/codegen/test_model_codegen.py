@@ -27,6 +27,7 @@ from gtmodel.problems.user_model import load_user_model
 from gtmodel.robots import load_parameters
 
 from ..conftest import REPO, replace_once
+from ..modeling._builders import nonlinear_loop
 
 MODEL_FILE = REPO / "models" / "cart_pendulum.py"
 
@@ -239,24 +240,11 @@ def test_check_model_compiles_pedantically():
     assert STRICT_EXTRA == ("-pedantic",)
 
 
-class NewtonLoop:
-    """An algebraic loop through a nonlinear equation: z + 0.5 sin(z) = x (Newton inside the C)."""
-
-    def build(self):
-        m = Model("newton_loop")
-        x = m.state("x", start=1.0)
-        z = m.algebraic("z", start=0.5)
-        u = m.input("u")
-        m.equation(m.der(x), u - z)
-        m.equation(z + 0.5 * ca.sin(z), x)
-        return m
-
-
 @pytest.mark.slow  # 15 s: compiles and runs the Newton model C
 def test_newton_model_c_gives_not_converged_never_nan(tmp_path):
     # reference: the same explicit ODE from Python (1e-12) and simulate() over the horizon;
     # a state whose Newton solve overflows gives GT_NOT_CONVERGED with the outputs untouched
-    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["ode", "step_implicit"], substeps=1)
+    gen = generate_model(nonlinear_loop("newton_loop", output=False), tmp_path / "src", functions=["ode", "step_implicit"], substeps=1)
     report = check_model(gen, n=200)
     assert report.passed, "\n".join(report.summary_lines())
     lib = load_library(gen, compile_shared(gen, tmp_path / "build2", werror=True))
@@ -301,7 +289,7 @@ def test_the_header_names_the_kept_derivatives_with_their_units(dc_motor_algebra
 
 def test_horizon_check_fails_when_simulate_fails(tmp_path):
     # no reference, no success: a simulate() that fails makes the horizon check (and the report) fail
-    gen = generate_model(NewtonLoop().build(), tmp_path / "src", functions=["step_rk4"], substeps=1)
+    gen = generate_model(nonlinear_loop("newton_loop", output=False), tmp_path / "src", functions=["step_rk4"], substeps=1)
 
     def failing(*args, **kwargs):
         raise ConvergenceError("IDAS gave up")

@@ -55,13 +55,14 @@ def min_energy_over_distance_parameter():
     return opt
 
 
-def nonlinear_loop():
-    """An algebraic loop through a nonlinear equation, z + 0.5 sin(z) = x, xdot = u - z (output zz = z)."""
-    m = Model("loop")
+def nonlinear_loop(name="loop", output=True):
+    """An algebraic loop through a nonlinear equation, z + 0.5 sin(z) = x, xdot = u - z (output zz = z if ``output``)."""
+    m = Model(name)
     x = m.state("x", start=1.0)
     z = m.algebraic("z", start=0.5)
     u = m.input("u")
     m.equation(m.der(x), u - z)
     m.equation(z + 0.5 * ca.sin(z), x)
-    m.output("zz", z)
+    if output:
+        m.output("zz", z)
     return m
