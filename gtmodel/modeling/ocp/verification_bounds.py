@@ -27,7 +27,9 @@ polynomial there swings past the bound too, and the current's polynomial follows
 
 from __future__ import annotations
 
+import contextvars
 import logging
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -38,6 +40,10 @@ __all__ = ["bound_violations", "element_bound_violations", "bound_crossings", "i
            "INPUT_SAMPLES"]
 
 _log = logging.getLogger("gtmodel")
+
+#: True while mesh refinement solves its passes (:func:`gtmodel.modeling.ocp.verification.refinement_passes`): a
+#: pass's failed checks are logged at INFO, refinement reporting each pass and its end.
+REFINING: contextvars.ContextVar[bool] = contextvars.ContextVar("gtmodel_refining", default=False)
 
 #: Points per element (its ends included) at which :func:`input_bound_violations` samples the inputs' polynomials.
 INPUT_SAMPLES = 50
@@ -116,6 +122,25 @@ def element_bound_violations(result: OptimizationResult, lower: np.ndarray, uppe
     return scaled.reshape(col.elements, -1).max(axis=1)
 
 
+#: Where :func:`bound_crossings` and :func:`input_bound_crossings` evaluate an element's polynomials (its ends included).
+CROSSING_TAUS = np.linspace(0.0, 1.0, 401)
+
+
+def _beyond(coefficients: np.ndarray, tau_root: np.ndarray, lower: np.ndarray, upper: np.ndarray, elements: list[int],
+            level: float) -> Iterator[tuple[int, np.ndarray]]:
+    """Per element of ``elements``, ``(k, over)``: ``over`` (401, n) where its polynomials exceed the bounds by ``level``.
+
+    The polynomials through ``coefficients[k]`` (``(K, d, n)``, values at ``tau_root``) at :data:`CROSSING_TAUS`, the
+    excess scaled by ``max(1, max |coefficients|)`` per variable.
+    """
+    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    basis = lagrange_basis(tau_root, CROSSING_TAUS)
+    scale = np.maximum(1.0, np.max(np.abs(coefficients), axis=(0, 1)))
+    for k in elements:
+        v = basis @ coefficients[k]  # (401, n)
+        yield k, np.maximum(np.maximum(v - upper, lower - v), 0.0) / scale > level
+
+
 def bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray, elements: list[int],
                     level: float) -> dict[int, float]:
     """Where, in each of ``elements``, the collocated states first exceed their bounds by ``level`` (scaled).
@@ -144,16 +169,11 @@ def bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: np.nda
     col = result.collocation
     if col is None or not elements:
         return {}
-    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
-    taus = np.linspace(0.0, 1.0, 401)
-    basis = lagrange_basis(col.tau_root, taus)
-    scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
     out: dict[int, float] = {}
-    for k in elements:
-        x = basis @ col.xc[k]  # (401, nx)
-        over = np.max(np.maximum(np.maximum(x - upper, lower - x), 0.0) / scale, axis=1) > level
+    for k, over in _beyond(col.xc, col.tau_root, lower, upper, elements, level):
+        over = over.any(axis=1)
         if not over[0] and over[1:-1].any():
-            out[int(k)] = float(taus[1 + int(np.argmax(over[1:-1]))])
+            out[int(k)] = float(CROSSING_TAUS[1 + int(np.argmax(over[1:-1]))])
     return out
 
 
@@ -186,19 +206,13 @@ def input_bound_crossings(result: OptimizationResult, lower: np.ndarray, upper: 
     col = result.collocation
     if col is None or not elements or col.uc.size == 0:
         return {}
-    lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
-    taus = np.linspace(0.0, 1.0, 401)
-    basis = lagrange_basis(col.tau_root[1:], taus)
-    scale = np.maximum(1.0, np.max(np.abs(col.uc), axis=(0, 1)))
     out: dict[int, list[float]] = {}
-    for k in elements:
-        u = basis @ col.uc[k]  # (401, nu)
-        over = np.maximum(np.maximum(u - upper, lower - u), 0.0) / scale > level
+    for k, over in _beyond(col.uc, col.tau_root[1:], lower, upper, elements, level):
         cuts: set[float] = set()
         for i in np.nonzero(over.any(axis=0))[0]:
             first = int(np.argmax(over[:, i]))
-            end = first + int(np.argmin(over[first:, i])) if not over[first:, i].all() else taus.size
-            cuts.update(float(taus[j]) for j in (first, end) if 0 < j < taus.size - 1)
+            end = first + int(np.argmin(over[first:, i])) if not over[first:, i].all() else CROSSING_TAUS.size
+            cuts.update(float(CROSSING_TAUS[j]) for j in (first, end) if 0 < j < CROSSING_TAUS.size - 1)
         if cuts:
             out[int(k)] = sorted(cuts)
     return out
@@ -319,6 +333,6 @@ def check_bounds(result: OptimizationResult, optimization: Any, polynomial: Any 
                      f"(between the collocation points, which keep it; scaled excess {b['max_scaled_violation']:.3g} > tolerance "
                      f"{v.tolerance:g}): the verifying simulation drove the model with it, a saturating amplifier clips it")
     for text in texts:
-        _log.warning("verification of %s: %s", result.dae.name, text)
+        _log.log(logging.INFO if REFINING.get() else logging.WARNING, "verification of %s: %s", result.dae.name, text)
         if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log
             result.warnings.append(text)
