@@ -88,7 +88,7 @@ from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
-from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, switch_elements, verify
+from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements, verify
 from gtmodel.modeling.ocp.verification_bounds import bound_crossings, element_bound_violations, input_bound_crossings
 from gtmodel.status import Status
 
@@ -366,6 +366,7 @@ def _pass_entry(n_pass: int, tr: CollocationTranscription, result: OptimizationR
     return entry
 
 
+@refinement_passes
 def solve_refined(
     optimization: Optimization,
     elements: int = 50,

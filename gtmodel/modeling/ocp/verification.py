@@ -59,10 +59,11 @@ inputs' deviation beside it (docs/verification.md, 2026-11-25).
 
 from __future__ import annotations
 
+import functools
 import logging
 import time as _time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
@@ -74,7 +75,8 @@ from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
-from gtmodel.modeling.ocp.verification_bounds import bound_violations, check_bounds, element_bound_violations, input_bound_violations
+from gtmodel.modeling.ocp.verification_bounds import (REFINING, bound_violations, check_bounds, element_bound_violations,
+                                                       input_bound_violations)
 from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
                                                         cvodes_method, explicit_algebraics)
 from gtmodel.modeling.simulation.explicit import damped_newton
@@ -85,6 +87,24 @@ __all__ = ["Verification", "verify", "check_result", "bound_violations", "elemen
            "STIFF_STEPS"]
 
 _log = logging.getLogger("gtmodel")
+
+
+def refinement_passes(func: Callable) -> Callable:
+    """Decorator: the solves inside ``func`` are refinement passes, whose failed checks :func:`check_result` and
+    :func:`check_bounds` log at INFO.
+
+    A pass that fails its verification is what refinement refines (each pass and the end are logged by the
+    refinement itself); as a warning, with its "likely remedy: refine = true", it told a user who had refinement
+    on to turn it on, once per pass.
+    """
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        token = REFINING.set(True)
+        try:
+            return func(*args, **kwargs)
+        finally:
+            REFINING.reset(token)
+    return wrapper
 
 #: Tightest relative tolerance of the verifying integrator (its absolute tolerance is
 #: 1e-2 times the relative one): the default is :func:`integrator_rtol`, ``1e-3`` times the
@@ -668,7 +688,8 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
         check_bounds(result, optimization)
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
         remedy = f"; likely remedy: {v.remedy}" if v.remedy else ""  # none when the verifying simulation itself failed
-        _log.warning("%s of %s: %s was %s, but %s%s", what, result.dae.name, result.message, result.status, v.message, remedy)
+        _log.log(logging.INFO if REFINING.get() else logging.WARNING, "%s of %s: %s was %s, but %s%s", what, result.dae.name,
+                 result.message, result.status, v.message, remedy)
         result.message = f"{result.message}; verification failed: {v.message}{remedy}"
         result.status = Status.CHECK_FAILED
     return result

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import logging
 import re
 
 import numpy as np
@@ -324,3 +325,22 @@ def test_bound_remedy_tells_a_stalled_excess_from_a_converging_one(excess, stop,
     text = bound_remedy(history, stop, STALL_BOUNDS, 100.0, 16, 72 if "72" in stop else 400)
     assert text.startswith(f"mesh refinement stopped at {stop} before a pass kept the bound between the points: ")
     assert re.search(expected, text), text
+
+
+def test_refinement_passes_log_their_failed_checks_as_info_not_warnings(caplog):
+    # the motor from 30 elements: its first passes fail the verification (and exceed the current limit between the
+    # nodes), which refinement refines; outside a
+    # refinement the same failed check is a warning (the single solve below)
+    from gtmodel.modeling.ocp.refinement import solve_refined
+
+    with caplog.at_level(logging.INFO, logger="gtmodel"):
+        res = solve_refined(min_time_motor(10.0), elements=30, points=3)
+    checks = [r for r in caplog.records if "was optimal, but" in r.getMessage()]
+    assert res.status == Status.OPTIMAL and checks and {r.levelno for r in checks} == {logging.INFO}
+    # the passes' between-node bound reports too (check_bounds)
+    assert all(r.levelno == logging.INFO for r in caplog.records if r.getMessage().startswith("verification of "))
+    caplog.clear()
+    with caplog.at_level(logging.INFO, logger="gtmodel"):
+        single = CollocationTranscription(min_time_motor(10.0), elements=30, points=3).solve()
+    assert single.status == Status.CHECK_FAILED
+    assert [r.levelno for r in caplog.records if "was optimal, but" in r.getMessage()] == [logging.WARNING]
