@@ -149,7 +149,8 @@ class OptimalControl:
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                     max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, verification=d.refinement.verification, **kwargs,
+                    initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, verification=d.refinement.verification,
+                    objective_tolerance=d.refinement.objective_tolerance, **kwargs,
                 )
             result.timing = phases
             self.estimation = None
@@ -179,7 +180,8 @@ class OptimalControl:
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                     max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification, **kwargs,
+                    max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification,
+                    objective_tolerance=d.refinement.objective_tolerance, **kwargs,
                 )
             result.timing = phases
         return self._estimated(tr, result)

@@ -218,6 +218,11 @@ class Refinement:
     max_cpu_s : float or None
         CPU-time budget of a refinement [s]; None for
         ``defaults["ocp.refine_max_cpu_s"]``.
+    objective_tolerance : float or None
+        A refinement's verified pass with nothing left to split is solved again with every
+        element halved, and refined on from there while that improves the objective by more
+        than this fraction; 0: no such check; None for
+        ``defaults["ocp.refine_objective_tolerance"]``.
 
     Raises
     ------
@@ -234,12 +239,16 @@ class Refinement:
     rtol: float | None = None
     on_failure: bool = True
     max_cpu_s: float | None = None
+    objective_tolerance: float | None = None
 
     def __post_init__(self) -> None:
         _positive_int("max_elements", self.max_elements)
         if self.max_cpu_s is not None and not (isinstance(self.max_cpu_s, (int, float)) and self.max_cpu_s > 0):
             raise InputError(f"max_cpu_s: expected a positive number of seconds, got {self.max_cpu_s!r}")
         _positive_int("max_passes", self.max_passes)
+        if self.objective_tolerance is not None and (isinstance(self.objective_tolerance, bool) or not isinstance(
+                self.objective_tolerance, (int, float)) or not 0 <= self.objective_tolerance < 1):
+            raise InputError(f"objective_tolerance: expected a number in [0, 1) (0: no objective check), got {self.objective_tolerance!r}")
         if self.tolerance is not None and not (isinstance(self.tolerance, (int, float)) and 0 < self.tolerance < 1):
             raise InputError(f"tolerance: expected a number in (0, 1), got {self.tolerance!r}")
         if self.refine and not self.verify:

@@ -13,7 +13,7 @@ import pytest
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
-from gtmodel.modeling.ocp import refinement
+from gtmodel.modeling.ocp import refinement, refinement_mesh
 from gtmodel.modeling.ocp.refinement import end_deviation, refine_mesh, solve_refined, switch_times
 from gtmodel.modeling.ocp.verification import bound_violations, verify
 from gtmodel.status import Status
@@ -129,7 +129,11 @@ def test_refinement_locates_the_bang_bang_switch():
     (ts,) = switch_times(res)
     widths = np.diff(res.collocation.breaks())
     assert abs(ts - 1.0) <= max(1e-6, widths.min())  # to the mesh's accuracy
-    assert res.refinement[0]["elements"] == 11 and res.refinement[-1]["elements"] == res.collocation.elements
+    # the returned pass is marked; the last pass checks the objective on its verified predecessor's mesh halved
+    (returned,) = [e for e in res.refinement if e.get("returned")]
+    assert res.refinement[0]["elements"] == 11 and returned["elements"] == res.collocation.elements
+    assert res.refinement[-1]["objective_check"]["pass"] == len(res.refinement) - 1
+    assert res.refinement[-1]["elements"] == 2 * res.refinement[-2]["elements"]
     assert len(res.refinement) >= 2
 
 
@@ -163,7 +167,7 @@ def test_a_jump_on_an_element_edge_grades_the_element_towards_it(monkeypatch, ta
     res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
     errors = res.verification.element_errors
     k = int(np.argmax(errors))
-    monkeypatch.setattr(refinement, "switch_elements", lambda result: {k: tau})
+    monkeypatch.setattr(refinement_mesh, "switch_elements", lambda result: {k: tau})
     fractions, info = refine_mesh(res, tolerance=0.5 * float(errors[k]), max_elements=100)
     assert k in info["split"] and fractions[k:k + 3] == pytest.approx(0.25 * np.asarray(parts))
     within, info = refine_mesh(res, tolerance=2.0 * float(errors.max()), max_elements=100)

@@ -91,6 +91,11 @@ class RefinementSection(Section):
         the limits (default; as GPOPS-II, which always refines to its mesh tolerance).
     max_cpu_s : float, optional
         CPU-time budget of a refinement [s]; default ``defaults["ocp.refine_max_cpu_s"]``.
+    objective_tolerance : float, optional
+        A refinement's verified pass with nothing left to split is solved again with every
+        element halved, and refined on from there while that improves the objective by more
+        than this fraction; 0 ends at the first verified pass; default
+        ``defaults["ocp.refine_objective_tolerance"]`` (1e-3).
     """
 
     refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; also with [[data]]; not with multiple shooting)")
@@ -99,6 +104,7 @@ class RefinementSection(Section):
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = defaults["ocp.refine_max_passes"]
     refine_on_failure: Flag = Field(True, description="collocation: a single solve whose verification fails is refined from (as refine = true, within max_passes and max_cpu_s); false: it ends check_failed")
     max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 90): no pass starts once it is spent, the best verified pass is returned") | None = None
+    objective_tolerance: number(ge=0, lt=1, description="a refinement's verified pass with nothing left to split is solved again with every element halved, and refined on while that improves the objective by more than this fraction (default 1e-3; 0: no such check)") | None = None
 
 
 class VerificationSection(Section):

@@ -260,6 +260,10 @@ class TranscriptionSection(RefinementSection):
         A single collocation solve whose verification fails is refined from (default).
     max_cpu_s : float, optional
         CPU-time budget of a refinement [s]; default ``defaults["ocp.refine_max_cpu_s"]``.
+    objective_tolerance : float, optional
+        A refinement's verified pass with nothing left to split is solved again with every
+        element halved, and refined on from there while that improves the objective by more
+        than this fraction; 0 ends at the first verified pass; default 1e-3.
     """
 
     method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"
