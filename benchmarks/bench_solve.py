@@ -379,7 +379,7 @@ def main() -> None:
     ap.add_argument("--published", action="store_true", help="also acados and gtmodel on ACADOS_PUBLISHED, against the published optima")
     a = ap.parse_args()
     # the NLP on the file's mesh, as the peers solve it: no refinement after a failed verification
-    # (the L1's 50-element plan fails it under its clipped forces and would be refined to 61 elements)
+    # (the L1's 50-element plan fails it under its clipped forces and would be refined: 61 elements, then 122 to check its objective)
     decl = load_problem(a.problem).declaration
     decl = dataclasses.replace(decl, refinement=dataclasses.replace(decl.refinement, on_failure=False))
     ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}  # CPU time in the stats, as the peer's
