@@ -675,6 +675,7 @@ def mpc_controller(
     prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, eps=INDEX_EPS)
     xs, us, lb, ub, Qm, Rm = prob.x_ref, prob.u_ref, prob.u_lb, prob.u_ub, prob.Q, prob.R
     Qfm = prob.terminal_weight(Qf, Qm)
+    prob.check_step(method, substeps, "the MPC's prediction step")
     step = prob.prediction(method, substeps, "F")
     xsym, usym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
     cons = mpc_constraints(list(ode.x_names), list(ode.u_names), xs, us, x_lb=x_lb, x_ub=x_ub, path=path, path_lb=path_lb,

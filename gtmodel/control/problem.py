@@ -22,6 +22,7 @@ from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.reference import INDEX_EPS, reference_scales, sample_reference
 from gtmodel.modeling import ExplicitODE
+from gtmodel.modeling.simulation.step_stability import step_stability
 
 __all__ = ["PREDICTION_METHODS", "TrackingProblem", "tracking_problem", "weight_matrix"]
 
@@ -168,6 +169,30 @@ class TrackingProblem:
         for _ in range(substeps):
             xn = xn + h * ode.f(xn, u, p)
         return ca.Function("euler_step", [x, u, p], [xn], ["x", "u", "p"], ["x_next"])
+
+    def check_step(self, method: str, substeps: int, what: str) -> None:
+        """Refuse a prediction step that is unstable for the model along the reference.
+
+        Parameters
+        ----------
+        method : str
+            :data:`PREDICTION_METHODS` (the explicit ones are checked).
+        substeps : int
+            Steps of ``method`` within one period.
+        what : str
+            The step's role, for the message (``"the MPC's prediction step"``).
+
+        Raises
+        ------
+        InputError
+            A decaying mode of the model's Jacobian along the reference that the step amplifies
+            (:func:`~gtmodel.modeling.simulation.step_stability.step_stability`), naming the eigenvalue, where it
+            is and the substeps needed.
+        """
+        t = self.t0 + self.dt * np.arange(len(self.x_ref))
+        stability = step_stability(self.ode.f, self.dt, method, substeps, self.x_ref, self.u_ref, self.p, t=t)
+        if stability is not None and not stability.stable:
+            raise InputError(stability.message(f"{what} (method, substeps)", "substeps = {n}"))
 
     def prediction(self, method: str = "rk4", substeps: int = 1, name: str = "F") -> ca.Function:
         """The step of :meth:`step` at the problem's parameters: ``F(x, u) -> x_next``.

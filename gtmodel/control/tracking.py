@@ -426,6 +426,7 @@ def tracking_controller(
     prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, min_samples=2)
     xs, us, lb, ub, pv, Qm, Rm = prob.x_ref, prob.u_ref, prob.u_lb, prob.u_ub, prob.p, prob.Q, prob.R
     n = xs.shape[0]
+    prob.check_step(method, substeps, "the tracking controller's step")
     step = prob.step(method, substeps)
     xsym, usym, psym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
     xn = step.call([xsym, usym, psym])[0]

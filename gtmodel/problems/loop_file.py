@@ -71,6 +71,7 @@ from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
 from gtmodel.control.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
+from gtmodel.modeling.simulation.step_stability import step_stability
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds, input_limits, accept_reference, dae_bounds, input_bounds, summary_bounds
 from gtmodel.problems.loop_limits import (MAX_LOOP_SAMPLES, MAX_MAGNITUDE, MAX_PERIOD_S, MAX_TABLE_NUMBERS, MAX_WEIGHT, MIN_PERIOD_S,
@@ -489,11 +490,18 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
     xs = controller.x_ref
     loop = dict(u_lb=controller.u_lb, u_ub=controller.u_ub, noise_std=np.asarray(c.noise or np.zeros(ode.nx), dtype=float),
                 disturbance=np.asarray(c.disturbance, dtype=float) if c.disturbance else None, disturbance_time=c.disturbance_time,
-                delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None)
+                delay=c.delay, seed=c.seed, error_states=[names_x.index(s) for s in c.error_states] or None, state_names=names_x)
     if c.delay and getattr(controller, "u_initial", None) is not None:  # before the first computed input arrives: the C memory's u_last
         loop["u_before"] = np.asarray(controller.u_initial, dtype=float)
     grid = controller.t0 + controller.dt * np.arange(controller.length)
     plant_step, plant_x0 = model.plant.step(dt, c.plant_method, substeps=c.plant_substeps), xs[0].copy()
+    if not c.compliance and model.plant.nx == xs.shape[1]:
+        # the plant's own step must follow the mismatched model: an unstable RK4 plant diverges (or decays wrongly) under
+        # any controller, and the verdict would blame the controller (a held-out drive with L/R = 0.2 ms, issue 49)
+        stability = step_stability(model.plant.f, dt, c.plant_method, c.plant_substeps, xs, controller.u_ref, model.plant_p, t=grid)
+        if stability is not None and not stability.stable:
+            raise file.fail("check.plant_substeps", "a stable plant step: " + stability.message(
+                "the check's plant step (plant_method, plant_substeps)", "plant_substeps = {n}"), c.plant_substeps)
     if c.compliance:
         plant_step, loop["output"], loop["measured"] = compliant_plant(model.plant, dt=dt)
         plant_x0 = np.r_[xs[0], np.zeros(4)]

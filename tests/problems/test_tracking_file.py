@@ -152,3 +152,24 @@ def test_l1_tracking_file_halves_the_feedforward_error_in_closed_loop(tmp_path):
     check = closed_loop_check(setup, generated, compile_shared(generated, tmp_path / "build"), label="tracking controller")
     assert check.ratio_to_feedforward < 0.5
     assert check.closed.bound_violations == 0 and check.closed.status_counts == {"GT_OK": setup.t.size}
+
+
+@pytest.mark.parametrize("changes, field, match", [
+    # one 10 ms RK4 step against the motor's electrical pole (L/R = 1.7 ms: |lambda h| = 5.9 > 2.785)
+    ({"period = 0.004": "period = 0.02"}, "controller", r"rk4 with 2 substep\(s\) of 0.01 s meets the eigenvalue -5\d\d"),
+    # the controller implicit, the check's plant one RK4 step of 20 ms
+    ({"period = 0.004": "period = 0.02", 'method = "rk4"': 'method = "radau2"', "max_ratio = 0.5": "plant_substeps = 1\nmax_ratio = 0.5"},
+     "check.plant_substeps", r"a stable plant step: the check's plant step .* give plant_substeps = \d+ .*got 1"),
+], ids=["controller", "plant"])
+def test_an_unstable_explicit_step_is_refused_with_the_substeps_it_needs(tmp_path, changes, field, match):
+    # independent check of the deciding number: tests/modeling/simulation/test_step_stability.py (the step's own growth)
+    assert [MOTOR.count(old) for old in changes] == [1] * len(changes)
+    text = MOTOR
+    for old, new in changes.items():
+        text = text.replace(old, new)
+    path = _write(tmp_path, text, "[check]", "[check]")
+    try:
+        with pytest.raises(ProblemError, match=re.escape(str(path)) + f".*'{re.escape(field)}'.*" + match):
+            load_tracking_file(path)
+    finally:
+        path.unlink()
