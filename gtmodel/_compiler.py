@@ -196,6 +196,21 @@ def run_child(cmd: list[str], timeout: float | None = None, cwd: str | os.PathLi
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
+def _source_size(cmd: list[str]) -> str:
+    """What a compiler that timed out was given: the C sources' size, and how to make it smaller ("" without sources)."""
+    size = 0
+    for arg in cmd:
+        path = Path(arg)
+        if path.suffix == ".c" and path.is_file():
+            size += path.stat().st_size
+    if not size:
+        return ""
+    return (f" on {size / 1e6:.3g} MB of C; generated code that large comes from a large expression graph: an implicit "
+            "step ('radau2', 'implicit_euler') unrolled over its substeps and Newton iterations (15.9 MB for a 5-state "
+            "model's radau2 step with its Jacobian, against 1.6 MB for rk4), or many SQP iterations; use an explicit "
+            "method with the substeps its stability check names, or fewer substeps")
+
+
 def run_compiler(cmd: list[str], what: str) -> str:
     """Run a compiler command; its failure is one error with the first 40 lines of output.
 
@@ -224,7 +239,7 @@ def run_compiler(cmd: list[str], what: str) -> str:
     except FileNotFoundError:
         raise CompilerNotFoundError(f"no C compiler: {cmd[0]!r} cannot be run; {FIX}") from None
     except subprocess.TimeoutExpired:
-        raise CodegenError(f"{what}: the compiler did not finish within 300 s") from None
+        raise CodegenError(f"{what}: the compiler did not finish within 300 s{_source_size(cmd)}") from None
     if proc.returncode != 0:
         msg = (proc.stderr or proc.stdout).strip()
         lines = msg.splitlines()

@@ -16,7 +16,9 @@ from pathlib import Path
 
 import pytest
 
+from gtmodel import _compiler
 from gtmodel._compiler import run_child
+from gtmodel.errors import CodegenError
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and the parent-death signal are Linux's")
 
@@ -110,3 +112,18 @@ def test_exit_code_and_output_are_the_childs(cmd, expected):
 def test_a_missing_program_is_file_not_found():
     with pytest.raises(FileNotFoundError, match="no executable 'gtmodel-no-such-program'"):
         run_child(["gtmodel-no-such-program"])
+
+
+def test_a_compiler_timeout_names_the_size_of_the_c_and_how_to_shrink_it(tmp_path, monkeypatch):
+    # the held-out compliant screw's radau2 MPC step: 33.5-150 MB of C that gcc did not finish in 300 s (issue 49)
+    source = tmp_path / "step.c"
+    source.write_text("x" * 2_500_000)
+
+    def timeout(cmd, timeout):
+        raise subprocess.TimeoutExpired(cmd, timeout)
+
+    monkeypatch.setattr(_compiler, "run_child", timeout)
+    with pytest.raises(CodegenError, match=r"step: the compiler did not finish within 300 s on 2.5 MB of C; .*use an explicit method"):
+        _compiler.run_compiler(["gcc", "-c", str(source)], "step")
+    with pytest.raises(CodegenError, match=r"step: the compiler did not finish within 300 s$"):
+        _compiler.run_compiler(["gcc", "-c", str(tmp_path / "absent.c")], "step")
