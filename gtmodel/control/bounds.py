@@ -64,6 +64,8 @@ class BoundExcess:
         """
         if self.excess <= 0:
             return f"{self.name} in [{self.lb:g}, {self.ub:g}]: held"
+        if not math.isfinite(self.excess):  # a diverged plant (its states not finite): no figure to print
+            return f"{self.name} in [{self.lb:g}, {self.ub:g}]: not finite on the plant (diverged)"
         return (f"{self.name} in [{self.lb:g}, {self.ub:g}]: max excess {self.excess:.4g} ({100 * self.relative:.3g} %, value "
                 f"{self.value:.6g}), {self.samples} samples beyond {100 * EXCESS_TOLERANCE:g} %")
 

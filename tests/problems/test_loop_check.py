@@ -7,12 +7,15 @@ thresholds ([check] max_ratio, max_step_time) against a ratio and step times kno
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import casadi as ca
 import numpy as np
 import pytest
 
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
 from gtmodel.control.bounds import bound_report
+from gtmodel.codegen.check.closed_loop import reference_states_at_bounds
 from gtmodel.problems.loop_check import LoopCheck, reference_at_bounds
 
 x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)
@@ -77,6 +80,18 @@ def test_summary_notes_a_reference_at_its_bounds():
     assert any("at an input bound in 60 %" in line for line in check.summary_lines()) and check.failures() == []
     quiet = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, reference_at_bounds=0.1)
     assert not any("input bound in" in line for line in quiet.summary_lines())
+
+
+def test_summary_notes_a_reference_riding_a_state_bound():
+    # a minimum-time plan at its current limit: the feedback has no room on that state (held-out drives, issue 49)
+    x_ref = np.array([[0.0, 5.0], [1.0, 5.0], [2.0, 4.0], [3.0, 4.999]])
+    setup = SimpleNamespace(x_ref=x_ref, names=(["phi", "i"], ["v"], []),
+                            bounds=SimpleNamespace(lb={"i": -5.0, "phi": -10.0}, ub={"i": 5.0, "phi": 10.0}))
+    shares = reference_states_at_bounds(setup)
+    assert shares == {"i": 0.75}  # 5.0, 5.0 and 4.999 (within 1e-3 of 5): three of four samples; phi never at its bound
+    check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, states_at_bounds=shares)
+    assert any(line.startswith("note: the reference rides the declared bound of i in 75 % of the samples")
+               for line in check.summary_lines()) and check.failures() == []
 
 
 def test_a_diverged_plant_prints_no_ratio():

@@ -40,11 +40,15 @@ from gtmodel.status import Status
 #: ``bounds``, ``names``, ``outputs``, ``max_ratio``, ``max_step_time``, ``notes``).
 LoopSetup = Any
 
-__all__ = ["AUTHORITY_WARNING", "STATUS_NAMES", "PROGRESS_INTERVAL_S", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
+__all__ = ["AUTHORITY_WARNING", "STATE_AUTHORITY_WARNING", "reference_states_at_bounds", "STATUS_NAMES", "PROGRESS_INTERVAL_S", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
 
 #: Fraction of the reference's samples at an input bound above which the check's summary notes the
 #: feedback's lack of authority (a minimum-time plan at the bounds: bang-bang).
 AUTHORITY_WARNING = 0.2
+#: Fraction of the reference's samples at a declared state bound above which the summary notes it: a plan riding
+#: its current limit leaves the feedback no room on that state (a held-out drive's MPC at 0.91 of the feedforward,
+#: 0.021 with the limit planned 20 % lower; issue 49).
+STATE_AUTHORITY_WARNING = 0.05
 #: Status names by code.
 STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
 #: Seconds between the closed loop's progress lines (``progress`` of :func:`closed_loop_check`).
@@ -92,6 +96,9 @@ class LoopCheck:
         What the summary and the verdict repeat (an unverified reference accepted, unknown bounds).
     real : str
         The step's real type (``"double"`` or ``"float"``), for the summary.
+    states_at_bounds : dict of str to float
+        Per declared state bound the reference rides, the fraction of its samples there
+        (:func:`reference_states_at_bounds`); above :data:`STATE_AUTHORITY_WARNING` the summary notes it.
     """
 
     closed: LoopSummary
@@ -108,6 +115,7 @@ class LoopCheck:
     bounds_feedforward: list[BoundExcess] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     real: str = "double"
+    states_at_bounds: dict[str, float] = field(default_factory=dict)
 
     @property
     def status(self) -> Status:
@@ -189,7 +197,11 @@ class LoopCheck:
                    if self.heap else [])
                 + ([f"note: the feedforward is at an input bound in {100 * self.reference_at_bounds:.0f} % of the samples: the feedback has "
                     "little authority there (plan with margin below the bounds: a controller or MPC file's [reference] overrides, docs/model_in_the_loop.md)"]
-                   if self.reference_at_bounds > AUTHORITY_WARNING else []))
+                   if self.reference_at_bounds > AUTHORITY_WARNING else [])
+                + [f"note: the reference rides the declared bound of {name} in {100 * share:.0f} % of the samples: the feedback has no "
+                   "room there on a plant unlike the model (plan that state with margin below its bound: a controller or MPC file's "
+                   "[reference] overrides, docs/model_in_the_loop.md)"
+                   for name, share in self.states_at_bounds.items() if share > STATE_AUTHORITY_WARNING])
 
 
 def compiled_step(generated: GeneratedCode, library: Path | CompiledLibrary) -> tuple[Any, Any, int]:
@@ -266,6 +278,38 @@ def reference_at_bounds(u_ref: np.ndarray, u_lb: np.ndarray, u_ub: np.ndarray, r
     scale = np.where(finite, ub - lb, one_sided)  # ub - lb is inf, not NaN, where a bound is infinite
     at = (u <= lb + rtol * scale) | (u >= ub - rtol * scale)
     return float(np.mean(np.any(at, axis=1))) if u.size else 0.0
+
+
+def reference_states_at_bounds(setup: LoopSetup, rtol: float = 1e-3) -> dict[str, float]:
+    """Per declared state bound, the fraction of the reference's samples at it (within ``rtol`` of ``max(1, |bound|)``).
+
+    Parameters
+    ----------
+    setup : LoopSetup
+        The file's reference (``x_ref``), state names and declared bounds.
+    rtol : float, optional
+        Closeness to a bound, relative (default 1e-3).
+
+    Returns
+    -------
+    dict of str to float
+        State name to a fraction in ``(0, 1]``; the states never at a bound left out.
+    """
+    if setup.bounds is None or not setup.names:
+        return {}
+    out = {}
+    for j, name in enumerate(setup.names[0]):
+        if name not in setup.bounds.lb or j >= setup.x_ref.shape[1]:
+            continue
+        x = setup.x_ref[:, j]
+        lo, hi = float(setup.bounds.lb[name]), float(setup.bounds.ub.get(name, np.inf))
+        at = np.zeros(x.shape, dtype=bool)
+        for bound in (lo, hi):
+            if np.isfinite(bound):
+                at |= np.abs(x - bound) <= rtol * max(1.0, abs(bound))
+        if at.any():
+            out[name] = float(np.mean(at))
+    return out
 
 
 def feedforward_law(controller: Any) -> Any:
@@ -368,7 +412,8 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
                      max_ratio=float(setup.max_ratio), step_budget_s=float(budget), heap=lib.heap_stats(),
                      clock=getattr(clock, "__name__", str(clock)),
                      reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub),
-                     bounds=plant_bounds(setup, first), bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes))
+                     bounds=plant_bounds(setup, first), bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes),
+                     states_at_bounds=reference_states_at_bounds(setup))
 
 
 def _reporting(law: Any, what: str, n: int, progress: Any) -> Any:

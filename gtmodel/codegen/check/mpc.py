@@ -66,6 +66,8 @@ class MPCCheck(LoopCheck):
         What the summary and the verdict repeat.
     real : str
         The step's real type.
+    states_at_bounds : dict of str to float
+        Per declared state bound the reference rides, the fraction of its samples there.
     """
 
     @property

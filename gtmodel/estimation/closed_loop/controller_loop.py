@@ -67,6 +67,8 @@ class LoopSummary:
         ``(nu,)`` the input bounds checked.
     status_names : dict of int to str, optional
         Names of the status codes (for :attr:`status_counts`).
+    state_names : tuple of str, optional
+        Names of the states, in the order of the columns (for the summary; default none: indices).
     """
 
     t: np.ndarray
@@ -79,6 +81,7 @@ class LoopSummary:
     u_lb: np.ndarray
     u_ub: np.ndarray
     status_names: dict[int, str] = field(default_factory=dict)
+    state_names: tuple[str, ...] = ()
 
     @property
     def error(self) -> np.ndarray:
@@ -142,7 +145,9 @@ class LoopSummary:
         list of str
         """
         st = self.step_times()
-        return [f"tracking error: RMS {self.rms_error:.4g}, max {self.max_error:.4g} (states {list(self.error_states)})",
+        states = ([self.state_names[i] for i in self.error_states] if len(self.state_names) > max(self.error_states, default=-1)
+                  else list(self.error_states))
+        return [f"tracking error: RMS {self.rms_error:.4g}, max {self.max_error:.4g} (states {', '.join(map(str, states))})",
                 f"input bound violations: {self.bound_violations}",
                 f"status counts: {self.status_counts}",
                 f"step time: median {st['median'] * 1e6:.1f} us, p99 {st['p99'] * 1e6:.1f} us, max {st['max'] * 1e6:.1f} us "
@@ -198,6 +203,7 @@ def run_controller_loop(
     seed: int = 0,
     status_names: dict[int, str] | None = None,
     clock: Callable[[], float] = time.perf_counter,
+    state_names: Sequence[str] | None = None,
     measured: int | None = None,
     output: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> LoopSummary:
@@ -236,6 +242,8 @@ def run_controller_loop(
         Seed of the noise.
     status_names : dict of int to str, optional
         Names of the status codes for the counts.
+    state_names : sequence of str, optional
+        Names of the plant's states (for the summary; default none: indices).
     clock : callable, optional
         The clock of the step times [s] (default ``time.perf_counter``, wall time;
         ``time.thread_time``: the CPU time of this thread, without the preemptions of a
@@ -293,7 +301,8 @@ def run_controller_loop(
         x = np.asarray(plant_step(x, u_total, pv)[0]).reshape(-1)
     return LoopSummary(t=tt, x=xs, x_ref=xr, u=us, status=status, step_s=times,
                        error_states=tuple(range(nx)) if error_states is None else tuple(int(i) for i in error_states),
-                       u_lb=lb, u_ub=ub, status_names=dict(status_names or {}))
+                       u_lb=lb, u_ub=ub, status_names=dict(status_names or {}),
+                       state_names=tuple(state_names or ()))
 
 
 def compliant_plant(ode: Any, structure: ToolStructure | None = None, dt: float = LOOP_PERIOD_S, substeps: int = 4) -> tuple[ca.Function, Callable, int]:

@@ -44,6 +44,12 @@ def test_disturbance_bounds_and_statuses_are_counted():
     assert r.max_error == 4.0 and r.rms_error == pytest.approx(np.sqrt(np.mean(np.array([0, 0, 0, 3, 3.5, 4.0]) ** 2)))
 
 
+@pytest.mark.parametrize("names, shown", [(None, "(states 0)"), (["cart.s"], "(states cart.s)")])
+def test_the_summary_names_the_error_states(names, shown):
+    r = run_controller_loop(lambda t, y: (0, [0.0]), INTEGRATOR, [0.0], T, np.zeros((6, 1)), [-1.0], [1.0], state_names=names)
+    assert r.summary_lines()[0] == f"tracking error: RMS 0, max 0 {shown}"
+
+
 def test_mismatched_robot_scales_masses_and_friction():
     base = load_parameters("L1")
     m = mismatched_robot(base, 1.1, 0.9)
