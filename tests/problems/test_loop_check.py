@@ -7,6 +7,7 @@ thresholds ([check] max_ratio, max_step_time) against a ratio and step times kno
 
 from __future__ import annotations
 
+import dataclasses
 from types import SimpleNamespace
 
 import casadi as ca
@@ -15,7 +16,7 @@ import pytest
 
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
 from gtmodel.control.bounds import bound_report
-from gtmodel.codegen.check.closed_loop import reference_states_at_bounds
+from gtmodel.codegen.check.closed_loop import plant_bounds, reference_states_at_bounds
 from gtmodel.problems.loop_check import LoopCheck, reference_at_bounds
 
 x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)
@@ -92,6 +93,18 @@ def test_summary_notes_a_reference_riding_a_state_bound():
     check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, states_at_bounds=shares)
     assert any(line.startswith("note: the reference rides the declared bound of i in 75 % of the samples")
                for line in check.summary_lines()) and check.failures() == []
+
+
+def test_a_state_bound_exceeded_between_the_samples_is_counted():
+    # x_k = 1 + 0.1 k at the samples (max 1.7 of a 1.71 bound: held); a state inside period 3 at 1.8 (by hand) exceeds it
+    closed = _run(1.0, lambda t, y: (0, [0.1]))
+    closed.x_interior = np.zeros((closed.t.size, 1, 1)) + 1.0
+    closed.x_interior[3, 0, 0] = 1.8
+    setup = SimpleNamespace(bounds=SimpleNamespace(lb={"x": -np.inf}, ub={"x": 1.71}), names=(["x"], ["u"], []), loop={},
+                            outputs=None, plant_p=np.zeros(0))
+    (at_samples,) = plant_bounds(setup, dataclasses.replace(closed, x_interior=None))
+    (between,) = plant_bounds(setup, closed)
+    assert not at_samples.beyond_tolerance and between.value == pytest.approx(1.8) and between.beyond_tolerance
 
 
 def test_a_diverged_plant_prints_no_ratio():

@@ -333,7 +333,8 @@ def plant_bounds(setup: LoopSetup, run: LoopSummary) -> list[BoundExcess]:
     """The declared bounds of a loop-controller file on the plant of one run, per variable.
 
     The states (the run's plant states, when they are the model's: not the tool coordinates
-    of a compliant robot plant), the applied inputs and the plant's algebraic variables and
+    of a compliant robot plant; at the samples and, where the run recorded them, at the plant step's
+    substeps between them, :attr:`LoopSummary.x_interior`), the applied inputs and the plant's algebraic variables and
     outputs ``h(x, u, p)`` (with the plant's parameters), against :attr:`LoopSetup.bounds`.
 
     Parameters
@@ -353,7 +354,9 @@ def plant_bounds(setup: LoopSetup, run: LoopSummary) -> list[BoundExcess]:
     x_names, u_names, y_names = setup.names
     values = {n: run.u[:, j] for j, n in enumerate(u_names) if j < run.u.shape[1]}
     if "output" not in setup.loop and len(x_names) == run.x.shape[1]:
-        values.update({n: run.x[:, j] for j, n in enumerate(x_names)})
+        inner = run.x_interior if run.x_interior is not None and run.x_interior.ndim == 3 else np.zeros((0, 0, run.x.shape[1]))
+        # the samples and the plant's states between them (its step's substeps), where recorded
+        values.update({n: np.concatenate([run.x[:, j], inner[:, :, j].ravel()]) for j, n in enumerate(x_names)})
         if setup.outputs is not None and y_names and np.all(np.isfinite(run.x)):
             y = np.asarray(setup.outputs.map(run.t.size)(run.x.T, run.u.T, setup.plant_p), dtype=float).T
             values.update({n: y[:, j] for j, n in enumerate(y_names)})

@@ -69,6 +69,9 @@ class LoopSummary:
         Names of the status codes (for :attr:`status_counts`).
     state_names : tuple of str, optional
         Names of the states, in the order of the columns (for the summary; default none: indices).
+    x_interior : numpy.ndarray, optional
+        ``(K, m, nx)`` the plant's states inside each period (its step's substeps after the sample's,
+        ``interior`` of :func:`run_controller_loop`; default ``(K, 0, nx)``: none recorded).
     """
 
     t: np.ndarray
@@ -82,6 +85,7 @@ class LoopSummary:
     u_ub: np.ndarray
     status_names: dict[int, str] = field(default_factory=dict)
     state_names: tuple[str, ...] = ()
+    x_interior: np.ndarray | None = None
 
     @property
     def error(self) -> np.ndarray:
@@ -204,6 +208,7 @@ def run_controller_loop(
     status_names: dict[int, str] | None = None,
     clock: Callable[[], float] = time.perf_counter,
     state_names: Sequence[str] | None = None,
+    interior: Callable[..., Any] | None = None,
     measured: int | None = None,
     output: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> LoopSummary:
@@ -244,6 +249,10 @@ def run_controller_loop(
         Names of the status codes for the counts.
     state_names : sequence of str, optional
         Names of the plant's states (for the summary; default none: indices).
+    interior : callable, optional
+        ``interior(x, u, p) -> (nx, m)``: the plant's states inside a period from ``x`` under ``u`` (its step's
+        substeps; recorded as :attr:`LoopSummary.x_interior`, so that bounds are counted between the samples too).
+        Not with ``output``.
     clock : callable, optional
         The clock of the step times [s] (default ``time.perf_counter``, wall time;
         ``time.thread_time``: the CPU time of this thread, without the preemptions of a
@@ -282,6 +291,7 @@ def run_controller_loop(
     rng = np.random.default_rng(seed)
     K = tt.size
     xs, us, status, times = np.zeros((K, nx)), np.zeros((K, nu)), np.zeros(K, dtype=int), np.zeros(K)
+    inner: list[np.ndarray] = []
     pending: list[np.ndarray] = []
     applied = None if u_before is None else np.asarray(u_before, dtype=float).reshape(nu)
     for k in range(K):
@@ -298,11 +308,13 @@ def run_controller_loop(
             applied = pending[0]
         us[k] = applied
         u_total = applied + (dist if tt[k] >= disturbance_time else 0.0)
+        if interior is not None and output is None:
+            inner.append(np.asarray(interior(x, u_total, pv), dtype=float).reshape(x.size, -1).T)
         x = np.asarray(plant_step(x, u_total, pv)[0]).reshape(-1)
     return LoopSummary(t=tt, x=xs, x_ref=xr, u=us, status=status, step_s=times,
                        error_states=tuple(range(nx)) if error_states is None else tuple(int(i) for i in error_states),
                        u_lb=lb, u_ub=ub, status_names=dict(status_names or {}),
-                       state_names=tuple(state_names or ()))
+                       state_names=tuple(state_names or ()), x_interior=np.stack(inner) if inner else None)
 
 
 def compliant_plant(ode: Any, structure: ToolStructure | None = None, dt: float = LOOP_PERIOD_S, substeps: int = 4) -> tuple[ca.Function, Callable, int]:

@@ -83,3 +83,12 @@ def test_a_non_finite_plant_state_is_flagged():
     nan_step = ca.Function("step", [x, u, p], [x / (x - 1.0) + u])  # 1 / 0 at x = 1
     r = run_controller_loop(lambda t, y: (0, [0.0]), nan_step, [1.0], T, np.ones((6, 1)), [-1.0], [1.0], delay=0)
     assert r.diverged
+
+
+def test_the_plant_s_states_inside_each_period_are_recorded():
+    # interior(x, u, p): the integrator's states at the period's quarter points, x + u j / 4 (j = 1, 2, 3), by hand
+    quarters = ca.Function("interior", [x, u, p], [ca.horzcat(*[x + u * j / 4 for j in (1, 2, 3)])])
+    r = run_controller_loop(lambda t, y: (0, [1.0]), INTEGRATOR, [0.0], T, np.zeros((6, 1)), [-2.0], [2.0], delay=0, interior=quarters)
+    assert r.x_interior.shape == (6, 3, 1)
+    np.testing.assert_allclose(r.x_interior[:, :, 0], np.arange(6.0)[:, None] + [0.25, 0.5, 0.75])
+    assert run_controller_loop(lambda t, y: (0, [1.0]), INTEGRATOR, [0.0], T, np.zeros((6, 1)), [-2.0], [2.0]).x_interior is None
