@@ -72,6 +72,24 @@ def test_a_stiff_decay_needs_the_substeps_of_the_real_axis_limit(method, limit):
     assert _stability(ode, method, n).stable
 
 
+class TanhFriction(Model):
+    """v' = -c tanh(v / w) + u: a smooth Coulomb friction, stiff only within |v| < w (slope c / w at rest)."""
+
+    def __init__(self, c: float, w: float) -> None:
+        super().__init__("tanh_friction")
+        v, u = self.state("v"), self.input("u")
+        self.equation(self.der(v), -c * ca.tanh(v / w) + u)
+
+
+def test_a_mode_bounded_by_the_model_s_nonlinearity_is_not_refused():
+    # at rest c / w = 750 1/s (the L1's friction: -749 1/s) under one 4 ms Euler step: |1 + z| = 2 linearly, but a
+    # perturbation stops growing where the tanh saturates (|v| ~ w): the step chatters within the band, it does not diverge
+    ode = explicit_ode(TanhFriction(7.5, 0.01))
+    assert _stability(ode, "euler", 1).stable
+    # the same slope from a linear damper diverges: refused
+    assert not _stability(explicit_ode(Decay(750.0)), "euler", 1).stable
+
+
 def test_a_growing_mode_of_the_model_itself_is_not_the_step_s():
     # x' = +5000 x grows in the model too: the step follows it, nothing to refuse
     assert _stability(explicit_ode(Decay(-5000.0)), "rk4", 1).stable
