@@ -95,16 +95,20 @@ def test_summary_notes_a_reference_riding_a_state_bound():
                for line in check.summary_lines()) and check.failures() == []
 
 
-def test_a_state_bound_exceeded_between_the_samples_is_counted():
+def test_a_state_bound_exceeded_between_the_samples_is_reported_not_judged():
     # x_k = 1 + 0.1 k at the samples (max 1.7 of a 1.71 bound: held); a state inside period 3 at 1.8 (by hand) exceeds it
     closed = _run(1.0, lambda t, y: (0, [0.1]))
     closed.x_interior = np.zeros((closed.t.size, 1, 1)) + 1.0
     closed.x_interior[3, 0, 0] = 1.8
     setup = SimpleNamespace(bounds=SimpleNamespace(lb={"x": -np.inf}, ub={"x": 1.71}), names=(["x"], ["u"], []), loop={},
                             outputs=None, plant_p=np.zeros(0))
-    (at_samples,) = plant_bounds(setup, dataclasses.replace(closed, x_interior=None))
-    (between,) = plant_bounds(setup, closed)
+    (at_samples,) = plant_bounds(setup, closed)
+    (between,) = plant_bounds(setup, closed, between=True)
     assert not at_samples.beyond_tolerance and between.value == pytest.approx(1.8) and between.beyond_tolerance
+    assert plant_bounds(setup, dataclasses.replace(closed, x_interior=None), between=True) == []
+    check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, bounds=[at_samples], bounds_between=[between])
+    assert check.failures() == [] and any(line.startswith("  between the samples (the plant step's substeps; reported, not judged")
+                                          and "value 1.8" in line for line in check.summary_lines())
 
 
 def test_a_diverged_plant_prints_no_ratio():

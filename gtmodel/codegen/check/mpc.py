@@ -68,6 +68,8 @@ class MPCCheck(LoopCheck):
         The step's real type.
     states_at_bounds : dict of str to float
         Per declared state bound the reference rides, the fraction of its samples there.
+    bounds_between : list of BoundExcess
+        The declared state bounds counted between the samples (reported, not judged).
     """
 
     @property
