@@ -45,6 +45,7 @@ from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_memory import disturbance_estimate, memory_predict, memory_reset
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
+from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp
 from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
 from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
 from gtmodel.control.tracking import saturate
@@ -108,6 +109,10 @@ class MPCController(SampledReference):
         NLP solver of the step (:data:`MPC_SOLVERS`).
     constraints : MPCConstraints or None
         State bounds and path constraints on the predicted states (:mod:`gtmodel.control.mpc_constraints`).
+    substep_states : casadi.Function or None, optional
+        ``S(x (nx,1), u (nu,1)) -> (nx, substeps)``: the states after each substep of :attr:`step`
+        (its last column ``step``'s result; :meth:`~gtmodel.control.problem.TrackingProblem.substeps`),
+        where the constraints with ``between`` are imposed too; None: at the samples only.
     delay : int, optional
         Input delay [periods] the step compensates: 0 (default) or 1. With 1 the input
         computed at ``t`` acts from ``t + dt``: the horizon starts from the state then,
@@ -142,6 +147,7 @@ class MPCController(SampledReference):
     sqp_iterations: int = 1
     solver: str = "sqpmethod"
     constraints: MPCConstraints | None = None
+    substep_states: ca.Function | None = field(default=None, repr=False)
     delay: int = 0
     disturbance_gain: float = 0.0
     u_start: np.ndarray | None = None
@@ -197,9 +203,9 @@ class MPCController(SampledReference):
 
     @property
     def constraint_rows(self) -> int:
-        """Constraint rows of the horizon problem (sides times constrained predicted states; 0 without constraints)."""
+        """Constraint rows of the horizon problem (sides times constrained predicted states and the states inside their periods; 0 without constraints)."""
         c = self.constraints
-        return 0 if c is None else len(c.stages(self.horizon)) * len(c.sides)
+        return 0 if c is None else len(c.stages(self.horizon)) * len(c.sides) * (1 + between_rows(self))
 
     def bounds(self) -> dict[str, np.ndarray]:
         """``lbx``, ``ubx``, ``lbg``, ``ubg`` of the NLP of :meth:`nlp_solver` (the input bounds, slacks ``>= 0``, rows ``>= 0``).
@@ -216,37 +222,7 @@ class MPCController(SampledReference):
 
     def _nlp(self) -> tuple[dict[str, ca.MX], ca.Function]:
         """The NLP over the blocked inputs (and the slacks) and its Gauss-Newton Hessian Function."""
-        H, nx, nu, b = self.horizon, self.nx, self.nu, self.horizon // self.blocks
-        W = ca.MX.sym("w", nu, self.blocks)
-        s = ca.MX.sym("s", self.n_slack)
-        x0 = ca.MX.sym("x0", nx)
-        xr = ca.MX.sym("xr", nx, H)
-        ur = ca.MX.sym("ur", nu, H)
-        Lq, Lf, Lr = (ca.DM(_sqrt_psd(m)) for m in (self.Q, self.Qf, self.R))
-        c = self.constraints
-        x, res, rows = x0, [], []
-        stages = set() if c is None else set(c.stages(H))
-        for j in range(H):
-            u = W[:, j // b]
-            res.append(ca.mtimes(Lr, u - ur[:, j]))
-            x = self.step(x, u)
-            res.append(ca.mtimes(Lf if j == H - 1 else Lq, x - xr[:, j]))
-            if j + 1 in stages:  # x_{j+1} with the input of its own period (the last one's at the end)
-                rows.append(c.rows(x, W[:, min(j + 1, H - 1) // b]) + (s if self.n_slack else 0))
-        r = ca.vertcat(*res)
-        w, p = ca.vertcat(ca.vec(W), s), ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
-        # g: first one inactive linear row (bounds -inf, inf; see QP_ROW): CasADi 3.8's qrqp reads and
-        # writes one entry past its work block on a QP with bounds only (valgrind:
-        # casadi_qrqp_dual_blocking); with one constraint row it stays inside. Then the constraint rows >= 0
-        g = ca.vertcat(w[0], *rows)
-        rho = 0.0 if c is None else c.weight
-        f = ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s))
-        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
-        jr = ca.jacobian(r, w)
-        gn = ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(self.nw), rho * ca.DM.ones(self.n_slack)))
-        hess = ca.Function("nlp_hess_l", [w, p, lam_f, lam_g], [2 * lam_f * ca.densify(gn)],
-                           ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
-        return {"x": w, "p": p, "f": f, "g": g}, hess
+        return single_shooting_nlp(self, _sqrt_psd)
 
     def nlp_solver(self, plugin: str = "sqpmethod", iterations: int | None = None, real: str = "double") -> ca.Function:
         """The horizon NLP as a CasADi ``nlpsol``: ``sqpmethod`` + ``qrqp`` (the generated one) or ``ipopt``.
@@ -561,6 +537,12 @@ def _positive_int(value: Any, name: str, low: int = 1) -> int:
     return int(value)
 
 
+def _flag(value: Any, name: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name}: expected true or false, got {value!r}")
+    return bool(value)
+
+
 def mpc_controller(
     ode: Any,
     t: Any,
@@ -589,6 +571,7 @@ def mpc_controller(
     hard_constraints: bool = False,
     constraint_weight: float | None = None,
     constraint_every: int = 1,
+    constraint_substeps: bool = True,
     disturbance_gain: float = 0.0,
 ) -> MPCController:
     """A real-time nonlinear MPC of a model along a reference motion (see the module docstring).
@@ -643,6 +626,10 @@ def mpc_controller(
     constraint_every : int, optional
         Constrain every ``constraint_every``-th predicted state and the last (default 1: all;
         :func:`~gtmodel.control.mpc_constraints.mpc_constraints`).
+    constraint_substeps : bool, optional
+        Also constrain the states after each of the prediction's ``substeps`` within the
+        constrained periods (default True: the bounds between the samples, where a motor's
+        current peaks under a held voltage; no effect with one substep).
     disturbance_gain : float, optional
         In ``[0, 1]``: the input-disturbance estimate's gain per period (default 0: none;
         :attr:`MPCController.disturbance_gain`). Not with ``solver="fatrop"`` nor with
@@ -680,7 +667,9 @@ def mpc_controller(
     xsym, usym = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
     cons = mpc_constraints(list(ode.x_names), list(ode.u_names), xs, us, x_lb=x_lb, x_ub=x_ub, path=path, path_lb=path_lb,
                            path_ub=path_ub, path_names=path_names, hard=hard_constraints, weight=constraint_weight,
-                           cost_scale=horizon * float(np.max(np.diag(Qm) * prob.x_scale**2)), every=constraint_every)
+                           cost_scale=horizon * float(np.max(np.diag(Qm) * prob.x_scale**2)), every=constraint_every,
+                           between=_flag(constraint_substeps, "constraint_substeps"))
+    inside = prob.substeps(method, substeps) if cons is not None and cons.between and substeps > 1 else None
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")
@@ -696,5 +685,5 @@ def mpc_controller(
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
-                         delay=int(delay), disturbance_gain=float(disturbance_gain),
+                         substep_states=inside, delay=int(delay), disturbance_gain=float(disturbance_gain),
                          u_start=start_input(ode.f, prob.x_given[0], us[0], prob.p))

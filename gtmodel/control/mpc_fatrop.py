@@ -3,9 +3,11 @@
 The same optimal control problem as :mod:`gtmodel.control.mpc` (one input per period:
 no move blocking), with the predicted states as variables (Bock & Plitt, IFAC 1984):
 stage ``k = 0..H-1`` holds ``x_k``, ``u_k`` and the slacks ``s_k`` of the soft constraints
-on ``x_k`` (``k >= 1``), its rows are the gap ``x_{k+1} - F(x_k, u_k) = 0``, then (``k = 0``)
-the initial condition ``x_0 - x = 0`` or (``k >= 1``) the constraint rows of
-:class:`~gtmodel.control.mpc_constraints.MPCConstraints` at ``(x_k, u_k)``; stage ``H``
+on ``x_k`` (``k >= 1``) and inside period ``k``, its rows are the gap ``x_{k+1} - F(x_k, u_k) = 0``, then (``k = 0``)
+the initial condition ``x_0 - x = 0``, then (``k >= 1``) the constraint rows of
+:class:`~gtmodel.control.mpc_constraints.MPCConstraints` at ``(x_k, u_k)`` and (with ``between``)
+those of the states after the prediction's substeps inside period ``k``
+(:func:`~gtmodel.control.mpc_nlp.period_states`, functions of ``x_k``, ``u_k``); stage ``H``
 holds ``x_H``, the slacks of its constraint rows and those rows, and a last stage ``H + 1``
 only ``x_{H+1} = x_H`` (the gap rows of stage ``H``: fatrop's last stage has no inputs to
 hold slacks). The constraints must not depend on the input (the single shooting imposes
@@ -27,6 +29,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
+from gtmodel.control.mpc_nlp import between_rows, period_states
 
 __all__ = ["FATROP_MAX_ITER", "FATROP_TOL", "fatrop_problem"]
 
@@ -63,7 +67,10 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
     x0p, xr, ur = ca.MX.sym("x0", nx), ca.MX.sym("xr", nx, H), ca.MX.sym("ur", nu, H)
     X = [ca.MX.sym(f"x{k}", nx) for k in range(H + 1)]
     U = [ca.MX.sym(f"u{k}", nu) for k in range(H)]
-    S = [ca.MX.sym(f"s{k}", ns if k in stages else 0) for k in range(H + 1)]
+    inner = between_rows(c)  # the states inside period k (functions of x_k, u_k): rows of stage k
+    # constrained states of stage k: x_k (k >= 1; x_H at stage H) and those inside period k
+    n_con = [int(k in stages and k >= 1) + (inner if k < H and k + 1 in stages else 0) for k in range(H + 1)]
+    S = [ca.MX.sym(f"s{k}", ns if n_con[k] else 0) for k in range(H + 1)]
     XE = ca.MX.sym("xe", nx)
     w, g, lbx, ubx, lbg, ubg, f = [], [], [], [], [], [], 0
     rho = 0.0 if cons is None else cons.weight
@@ -71,7 +78,7 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
         w += [X[k], U[k], S[k]]
         lbx += [np.full(nx, -np.inf), c.u_lb, np.zeros(S[k].numel())]
         ubx += [np.full(nx, np.inf), c.u_ub, np.full(S[k].numel(), np.inf)]
-        xn = c.step(X[k], U[k])
+        xn, inside = period_states(c, X[k], U[k]) if k + 1 in stages else (c.step(X[k], U[k]), [])
         g.append(X[k + 1] - xn)
         lbg.append(np.zeros(nx))
         ubg.append(np.zeros(nx))
@@ -79,10 +86,11 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
             g.append(X[0] - x0p)
             lbg.append(np.zeros(nx))
             ubg.append(np.zeros(nx))
-        elif k in stages:
-            g.append(cons.rows(X[k], U[k]) + (S[k] if ns else 0))
-            lbg.append(np.zeros(nr))
-            ubg.append(np.full(nr, np.inf))
+        here = ([cons.rows(X[k], U[k])] if k >= 1 and k in stages else []) + [cons.rows(xi, U[k]) for xi in inside]
+        if here:  # x_k's rows, then those of the states inside period k (one slack per side and stage serves them all)
+            g += [r + (S[k] if ns else 0) for r in here]
+            lbg.append(np.zeros(nr * len(here)))
+            ubg.append(np.full(nr * len(here), np.inf))
         f = f + ca.sumsqr(ca.mtimes(Lr, U[k] - ur[:, k])) + ca.sumsqr(ca.mtimes(Lf if k == H - 1 else Lq, X[k + 1] - xr[:, k]))
         f = f + rho * (ca.sum1(S[k]) + ca.sumsqr(S[k]))
     w += [X[H], S[H]]
@@ -103,8 +111,8 @@ def fatrop_problem(c: Any, sqrt_psd: Any) -> tuple[ca.Function, ca.Function, dic
         n_stage = H + 2
     z = ca.vertcat(*w)
     p = ca.vertcat(x0p, ca.vec(xr), ca.vec(ur))
-    ng = [nx] + [nr if k in stages else 0 for k in range(1, H)] + ([nr, 0] if cons is not None else [0])
-    nus = [nu] + [nu + S[k].numel() for k in range(1, H)] + ([ns, 0] if cons is not None else [0])
+    ng = [nx + nr * n_con[0]] + [nr * n_con[k] for k in range(1, H)] + ([nr, 0] if cons is not None else [0])
+    nus = [nu + S[k].numel() for k in range(H)] + ([ns, 0] if cons is not None else [0])
     opts = {"structure_detection": "manual", "N": n_stage - 1, "nx": [nx] * n_stage, "nu": nus, "ng": ng,
             "expand": True, "print_time": False, "error_on_fail": False,
             "fatrop": {"print_level": 0, "max_iter": FATROP_MAX_ITER, "tol": FATROP_TOL}}

@@ -24,10 +24,56 @@ from gtmodel.control.reference import INDEX_EPS, reference_scales, sample_refere
 from gtmodel.modeling import ExplicitODE
 from gtmodel.modeling.simulation.step_stability import step_stability
 
-__all__ = ["PREDICTION_METHODS", "TrackingProblem", "tracking_problem", "weight_matrix"]
+__all__ = ["PREDICTION_METHODS", "TrackingProblem", "substep_states", "tracking_problem", "weight_matrix"]
 
 #: Prediction steps over one period: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
 PREDICTION_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
+
+
+def substep_states(ode: ExplicitODE, dt: float, method: str = "rk4", substeps: int = 1) -> ca.Function:
+    """The states after each substep of a fixed step over one period: ``S(x, u, p) -> (nx, substeps)``.
+
+    The last column is the step's result (:meth:`TrackingProblem.step`, the same operations);
+    the others are where the model is between the samples. The MPC imposes its constraint
+    rows there (:mod:`gtmodel.control.mpc_constraints`), the closed-loop check counts the
+    plant's declared bounds there (:func:`gtmodel.problems.loop_file.loop_setup`): the
+    flexible-joint drive's MPC held 9.98 A of 10 at the 4 ms samples and drew 13.23 A inside
+    a period (issue 49's loop trial).
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model.
+    dt : float
+        The period [s].
+    method : {"euler", "rk4", "implicit_euler", "radau2"}, optional
+        :data:`PREDICTION_METHODS` (``"euler"``: explicit Euler on ``f``; the others one
+        :meth:`~gtmodel.modeling.simulation.explicit.ExplicitODE.step` of ``dt / substeps``).
+    substeps : int, optional
+        Equal steps within ``dt``.
+
+    Returns
+    -------
+    casadi.Function
+        ``S(x (nx,1), u (nu,1), p (np,1)) -> x_substeps (nx, substeps)``.
+
+    Raises
+    ------
+    InputError
+        An unknown method, ``substeps`` below 1, a bad ``dt``.
+    """
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise InputError(f"substeps: expected a positive number of steps per period, got {substeps!r}")
+    if method not in PREDICTION_METHODS:
+        raise InputError(f"method: expected one of {', '.join(PREDICTION_METHODS)}, got {method!r}")
+    h = float(dt) / int(substeps)
+    x, u, p = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
+    single = None if method == "euler" else ode.step(h, method)
+    states, xk = [], x
+    for _ in range(int(substeps)):
+        xk = xk + h * ode.f(xk, u, p) if single is None else single(xk, u, p)[0]
+        states.append(xk)
+    return ca.Function("substeps", [x, u, p], [ca.horzcat(*states)], ["x", "u", "p"], ["x_substeps"])
 
 
 def weight_matrix(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:
@@ -218,6 +264,31 @@ class TrackingProblem:
         """
         x, u = ca.SX.sym("x", self.ode.nx), ca.SX.sym("u", self.ode.nu)
         return ca.Function(name, [x, u], [self.step(method, substeps).call([x, u, self.p])[0]], ["x", "u"], ["x_next"])
+
+    def substeps(self, method: str = "rk4", substeps: int = 1) -> ca.Function:
+        """The states after each substep of :meth:`prediction`, at the problem's parameters.
+
+        Parameters
+        ----------
+        method : str, optional
+            :data:`PREDICTION_METHODS`.
+        substeps : int, optional
+            Steps of ``method`` within one period.
+
+        Returns
+        -------
+        casadi.Function
+            ``(x (nx,1), u (nu,1)) -> x_substeps (nx, substeps)`` (:func:`substep_states`; the
+            last column is :meth:`prediction`'s ``x_next``).
+
+        Raises
+        ------
+        InputError
+            An unknown method.
+        """
+        x, u = ca.SX.sym("x", self.ode.nx), ca.SX.sym("u", self.ode.nu)
+        s = substep_states(self.ode, self.dt, method, substeps)(x, u, self.p)
+        return ca.Function("F_substeps", [x, u], [s], ["x", "u"], ["x_substeps"])
 
 
 def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float = LOOP_PERIOD_S, Q: Any = None, R: Any = None,

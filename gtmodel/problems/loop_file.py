@@ -70,6 +70,7 @@ from gtmodel._tables import read_table
 from gtmodel._toml import read_toml
 from gtmodel.errors import GtModelError, ProblemError
 from gtmodel.estimation.closed_loop.controller_loop import compliant_plant, mismatched_robot
+from gtmodel.control.problem import substep_states
 from gtmodel.control.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.step_stability import step_stability
@@ -530,13 +531,9 @@ def _interior_states(plant: ExplicitODE, dt: float, method: str, substeps: int) 
     A held-out drive's MPC passed its check at 5.028 A of 5 (0.57 %) counted at the 4 ms samples, and reached 5.087 A
     (1.74 %) between them (issue 49's loop trial): the plant's own substeps are where it is between the samples.
     """
-    single = plant.step(dt / substeps, method)
+    states = substep_states(plant, dt, method, substeps)
     x, u, p = ca.SX.sym("x", plant.nx), ca.SX.sym("u", plant.nu), ca.SX.sym("p", plant.np)
-    states, xk = [], x
-    for _ in range(substeps - 1):
-        xk = single(xk, u, p)[0]
-        states.append(xk)
-    return ca.Function("interior", [x, u, p], [ca.horzcat(*states)], ["x", "u", "p"], ["x_interior"])
+    return ca.Function("interior", [x, u, p], [states(x, u, p)[:, :-1]], ["x", "u", "p"], ["x_interior"])
 
 
 def read_loop_file(path: str | Path, kind: type[LoopFile] | str, what: str | None = None) -> tuple[Any, ProblemFile]:

@@ -24,7 +24,8 @@ error names the file and the field, the CLI exits with 2):
     the model's ``h(x, u)``, tightened by
     ``state_lb`` / ``state_ub`` (tables by state name), soft by default (an exact penalty
     with slacks, weight ``constraint_weight``) or ``hard_constraints = true``, on every
-    predicted state or every ``constraint_every``-th and the last; ``disturbance_gain``
+    predicted state or every ``constraint_every``-th and the last, and at the states after the
+    prediction's substeps inside those periods (``constraint_substeps``, default true); ``disturbance_gain``
     (default 0; in ``[0, 1]``: offset-free MPC, an input disturbance estimated from the
     one-period prediction error, :attr:`gtmodel.control.mpc.MPCController.disturbance_gain`).
 ``[reference]``, ``[check]``
@@ -179,7 +180,8 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         controller = mpc_controller(ode, i.t, i.x_ref, i.u_ref, horizon=m.horizon, dt=m.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb,
                                     u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
                                     solver=m.solver, hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
-                                    constraint_every=m.constraint_every, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain), **cons)
+                                    constraint_every=m.constraint_every,
+                                    constraint_substeps=m.constraint_substeps, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain), **cons)
     except GtModelError as exc:
         raise file.wrap("mpc.disturbance_gain" if "disturbance_gain" in str(exc) else "mpc", exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)

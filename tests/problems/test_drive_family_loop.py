@@ -6,7 +6,7 @@ gravity, belt drive, ball-screw axis with a compliant coupling) the shipped ``co
 (their verified references solved), their loop step generated and compiled, and the C run against the file's
 mismatched plant (inertias or masses +20 %, stiffness -20 % where the drive has them). Independent checks: the
 feedforward alone on the same plant (the RMS ratio at most 0.5), the plant's own columns against every declared bound
-(none exceeded by more than 1 %, counted by the check), the step's C against its CasADi Function at random arguments
+(none exceeded by more than 1 %, counted by the check at the samples and between them, at the plant's substeps), the step's C against its CasADi Function at random arguments
 (``check_loop_step``). The L1's drives with compliance are the shipped ``l1_mpc.toml`` / ``l1_tracking.toml``
 (``tests/problems/test_mpc_check.py``, ``tests/test_cli_codegen.py``).
 """
@@ -56,6 +56,7 @@ def test_generated_c_tracks_and_keeps_every_declared_bound(drive, route, tmp_pat
     assert report.passed and not setup.notes  # a verified reference: no accept_unverified note
     assert "ind.i" in bounds and "src.v" in bounds  # the declared current limit counted on the plant
     assert [b.name for b in check.bounds if b.beyond_tolerance] == []
+    assert check.bounds_between and [b.name for b in check.bounds_between if b.beyond_tolerance] == []  # at the plant's substeps
     assert not check.plant_diverged and check.ratio_to_feedforward <= 0.5
     assert [f for f in check.failures() if "step time" not in f] == []  # the step time: shared 2-core machine, reported
 

@@ -41,7 +41,8 @@ def _loop(setup):
     kw = dict(setup.loop, plant_p=setup.plant_p)
     run, ff = run_controller_loop(law, *args, **kw), run_controller_loop(feedforward_law(c), *args, **kw)
     return LoopCheck(closed=run, feedforward=ff, memory_bytes=0, work_bytes=0, label="MPC", max_ratio=setup.max_ratio,
-                     bounds=plant_bounds(setup, run), bounds_feedforward=plant_bounds(setup, ff), notes=setup.notes)
+                     bounds=plant_bounds(setup, run), bounds_feedforward=plant_bounds(setup, ff), notes=setup.notes,
+                     bounds_between=plant_bounds(setup, run, between=True))
 
 
 @pytest.fixture(scope="module")
@@ -63,6 +64,9 @@ def test_constrained_mpc_tracks_and_keeps_the_current_limit(setups):
     current = {b.name: b for b in check.bounds}["ind.i"]
     assert check.failures() == [] and check.ratio_to_feedforward < 0.5
     assert np.max(np.abs(check.closed.x[:, 0])) <= 10.0 * 1.01 and current.samples == 0  # the plant's own column
+    # and between the samples, at the plant's 1 ms substeps (the rows act at the prediction's substeps: 13.23 A there
+    # when they acted at the samples only)
+    assert np.max(np.abs(check.closed.x_interior[:, :, 0])) <= 10.0 * 1.01
     unconstrained = _loop(free)  # tracks as well but draws more current than declared: the check counts it
     assert np.max(np.abs(unconstrained.closed.x[:, 0])) > 10.1
     assert any(f.startswith("ind.i beyond its bound") for f in unconstrained.failures())

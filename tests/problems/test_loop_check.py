@@ -95,7 +95,7 @@ def test_summary_notes_a_reference_riding_a_state_bound():
                for line in check.summary_lines()) and check.failures() == []
 
 
-def test_a_state_bound_exceeded_between_the_samples_is_reported_not_judged():
+def test_a_state_bound_exceeded_between_the_samples_fails_the_check():
     # x_k = 1 + 0.1 k at the samples (max 1.7 of a 1.71 bound: held); a state inside period 3 at 1.8 (by hand) exceeds it
     closed = _run(1.0, lambda t, y: (0, [0.1]))
     closed.x_interior = np.zeros((closed.t.size, 1, 1)) + 1.0
@@ -107,8 +107,10 @@ def test_a_state_bound_exceeded_between_the_samples_is_reported_not_judged():
     assert not at_samples.beyond_tolerance and between.value == pytest.approx(1.8) and between.beyond_tolerance
     assert plant_bounds(setup, dataclasses.replace(closed, x_interior=None), between=True) == []
     check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, bounds=[at_samples], bounds_between=[between])
-    assert check.failures() == [] and any(line.startswith("  between the samples (the plant step's substeps; reported, not judged")
-                                          and "value 1.8" in line for line in check.summary_lines())
+    (why,) = check.failures()
+    assert why.startswith("x beyond its bound between the samples by 0.09 (5.26 % > 1 %")
+    assert any(line.startswith("  between the samples (the plant step's substeps): x in [-inf, 1.71]: max excess 0.09")
+               and "value 1.8" in line for line in check.summary_lines())
 
 
 def test_a_diverged_plant_prints_no_ratio():

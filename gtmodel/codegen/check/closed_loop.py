@@ -51,6 +51,12 @@ AUTHORITY_WARNING = 0.2
 STATE_AUTHORITY_WARNING = 0.05
 #: Status names by code.
 STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
+#: What to change when a declared bound is exceeded between the samples, by controller (:attr:`LoopCheck.label`).
+BETWEEN_REMEDY = {
+    "mpc": "the MPC's rows act at its prediction's substeps: [mpc] substeps as fine as the plant's, constraint_substeps = true",
+    "": "the controller has no constraint rows: plan with margin below the bound ([reference] overrides) or weight the variable more",
+}
+
 #: Seconds between the closed loop's progress lines (``progress`` of :func:`closed_loop_check`).
 PROGRESS_INTERVAL_S = 2.0
 
@@ -94,8 +100,8 @@ class LoopCheck:
         The same under the feedforward alone (for comparison; not a failure).
     bounds_between : list of BoundExcess
         The declared state bounds under the controller counted between the samples, at the plant step's
-        substeps (:func:`plant_bounds` with ``between``): reported, not a failure (the controller's rows act at
-        the samples).
+        substeps (:func:`plant_bounds` with ``between``): judged as :attr:`bounds` (an MPC's rows act at its
+        prediction's substeps too: ``constraint_substeps``).
     notes : list of str
         What the summary and the verdict repeat (an unverified reference accepted, unknown bounds).
     real : str
@@ -139,7 +145,7 @@ class LoopCheck:
 
     def failures(self) -> list[str]:
         """Why the closed loop fails the check (empty: it passes): a diverged plant, input bound violations,
-        failed steps, an RMS error not below :attr:`max_ratio` times the feedforward's, a
+        a declared bound exceeded beyond the tolerance at the samples or between them, failed steps, an RMS error not below :attr:`max_ratio` times the feedforward's, a
         99th-percentile step time above :attr:`step_budget_s`, or a QP solver's allocation
         that went to the heap (:attr:`heap`).
 
@@ -154,6 +160,9 @@ class LoopCheck:
             (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
             *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)", True)
               for b in self.bounds if b.beyond_tolerance and not diverged],
+            *[(f"{b.name} beyond its bound between the samples by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %; "
+               f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})", True)
+              for b in self.bounds_between if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)",
              not diverged and not self.ratio_to_feedforward < self.max_ratio),
@@ -189,8 +198,7 @@ class LoopCheck:
         held = [f"  {b.line()}" for b in self.bounds]
         between = [b for b in self.bounds_between if b.beyond_tolerance]
         if between:
-            held += [f"  between the samples (the plant step's substeps; reported, not judged: the rows act at the samples): {b.line()}"
-                     for b in between]
+            held += [f"  between the samples (the plant step's substeps): {b.line()}" for b in between]
         ff_beyond = [b.name for b in self.bounds_feedforward if b.beyond_tolerance]
         return ([f"notes: {n}" for n in self.notes]
                 + [f"closed loop, generated C {self.label}" + (" (real float: float32 step, double plant; the same criteria)" if self.real == "float" else "") + ":"] + ["  " + line for line in self.closed.summary_lines()]
@@ -354,8 +362,8 @@ def plant_bounds(setup: LoopSetup, run: LoopSummary, between: bool = False) -> l
     between : bool, optional
         The states between the samples instead: at the plant step's substeps (:attr:`LoopSummary.x_interior`;
         empty where the run recorded none). A held-out drive's MPC kept 5.028 A of 5 at the 4 ms samples and
-        reached 5.087 A between them; the shipped drives' MPCs, whose current rows act at the samples, overshoot
-        there by 10-40 % (the flexible joint: 9.98 A at the samples, 13.23 A inside its second period).
+        reached 5.087 A between them; the shipped drives' MPCs, their current rows at the samples only,
+        overshot there by up to 41 % (the flexible joint: 9.98 A at the samples, 13.23 A inside its second period).
 
     Returns
     -------

@@ -69,7 +69,7 @@ class MPCCheck(LoopCheck):
     states_at_bounds : dict of str to float
         Per declared state bound the reference rides, the fraction of its samples there.
     bounds_between : list of BoundExcess
-        The declared state bounds counted between the samples (reported, not judged).
+        The declared state bounds counted between the samples (judged as ``bounds``).
     """
 
     @property

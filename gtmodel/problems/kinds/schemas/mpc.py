@@ -70,6 +70,8 @@ class MPCSection(Section):
         Input delay [periods] the step compensates by predicting the state one period ahead (0 or 1).
     constraint_every : int, optional
         Constrain every k-th predicted state and the last (1: all).
+    constraint_substeps : bool, optional
+        Also constrain the states after each of the prediction's substeps within the constrained periods (between the samples).
     disturbance_gain : float, optional
         Offset-free MPC: the gain of the input-disturbance estimate per period (0: none).
     """
@@ -94,6 +96,7 @@ class MPCSection(Section):
     constraint_weight: number(gt=0, le=1e30, description="penalty weight rho of the soft constraints (default 100 H max_i Q_ii scale_i^2)") | None = None
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the step compensates by predicting the state one period ahead (0 or 1)")
     constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
+    constraint_substeps: bool = Field(default=True, strict=True, description="also constrain the states after each of the prediction's substeps within the constrained periods (between the samples)")
     disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
 
 

@@ -1,0 +1,121 @@
+"""The MPC's horizon problem by single shooting (``solver = "sqpmethod"``) and the states inside its periods.
+
+The NLP of :mod:`gtmodel.control.mpc` over the blocked inputs and the slacks: the states
+eliminated by the prediction ``x_{j+1} = F(x_j, u_j)``, the residuals of the quadratic cost
+and their Gauss-Newton Hessian, and the constraint rows of
+:class:`~gtmodel.control.mpc_constraints.MPCConstraints` at the constrained predicted states
+and, with ``between``, at the states after each substep of the prediction within the periods
+ending there (:func:`period_states`, shared with the multiple shooting of
+:mod:`gtmodel.control.mpc_fatrop`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["between_rows", "period_states", "single_shooting_nlp"]
+
+
+def between_rows(c: Any) -> int:
+    """States constrained inside each constrained period besides its end (0: the rows act at the samples only).
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC.
+
+    Returns
+    -------
+    int
+        ``substeps - 1`` of the prediction when the constraints have ``between`` and the
+        controller its :attr:`~gtmodel.control.mpc.MPCController.substep_states`, else 0.
+    """
+    cons = c.constraints
+    if cons is None or not cons.between or c.substep_states is None:
+        return 0
+    return int(c.substep_states.size2_out(0)) - 1
+
+
+def period_states(c: Any, x: Any, u: Any) -> tuple[Any, list[Any]]:
+    """The prediction over one period and the states between its samples that carry constraint rows.
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC.
+    x, u : casadi.MX
+        ``(nx,1)`` state at the period's start and ``(nu,1)`` its held input.
+
+    Returns
+    -------
+    x_next : casadi.MX
+        ``(nx,1)`` the predicted state at the period's end (:attr:`~gtmodel.control.mpc.MPCController.step`).
+    inside : list of casadi.MX
+        ``(nx,1)`` the states after each substep but the last (:func:`between_rows` of them;
+        the same operations as the step's, whose last column is ``x_next``).
+    """
+    m = between_rows(c)
+    if not m:
+        return c.step(x, u), []
+    s = c.substep_states(x, u)
+    return s[:, m], [s[:, i] for i in range(m)]
+
+
+def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Function]:
+    """The single-shooting NLP of an MPC over its blocked inputs (and slacks) and its Gauss-Newton Hessian.
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC.
+    sqrt_psd : callable
+        ``L`` with ``L^T L = M`` of a weight matrix.
+
+    Returns
+    -------
+    nlp : dict
+        ``x`` (``nw + n_slack``), ``p`` (:meth:`~gtmodel.control.mpc.MPCController.parameters`),
+        ``f``, ``g`` (one inactive row, then the constraint rows ``>= 0``: per constrained
+        predicted state ``x_j``, the rows of the states inside period ``j - 1`` then those of
+        ``x_j``).
+    hess : casadi.Function
+        ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``: ``2 lam_f (J_r^T J_r + diag(0, rho))``.
+    """
+    H, nx, nu, b = c.horizon, c.nx, c.nu, c.horizon // c.blocks
+    W = ca.MX.sym("w", nu, c.blocks)
+    s = ca.MX.sym("s", c.n_slack)
+    x0 = ca.MX.sym("x0", nx)
+    xr = ca.MX.sym("xr", nx, H)
+    ur = ca.MX.sym("ur", nu, H)
+    Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
+    cons = c.constraints
+    slack = s if c.n_slack else 0
+    x, res, rows = x0, [], []
+    stages = set() if cons is None else set(cons.stages(H))
+    for j in range(H):
+        u = W[:, j // b]
+        res.append(ca.mtimes(Lr, u - ur[:, j]))
+        if j + 1 in stages:
+            x, inside = period_states(c, x, u)
+            rows += [cons.rows(xi, u) + slack for xi in inside]  # between the samples: the period's own input
+            rows.append(cons.rows(x, W[:, min(j + 1, H - 1) // b]) + slack)  # x_{j+1} with the input of its own period
+        else:
+            x = c.step(x, u)
+        res.append(ca.mtimes(Lf if j == H - 1 else Lq, x - xr[:, j]))
+    r = ca.vertcat(*res)
+    w, p = ca.vertcat(ca.vec(W), s), ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
+    # g: first one inactive linear row (bounds -inf, inf; see QP_ROW): CasADi 3.8's qrqp reads and
+    # writes one entry past its work block on a QP with bounds only (valgrind:
+    # casadi_qrqp_dual_blocking); with one constraint row it stays inside. Then the constraint rows >= 0
+    g = ca.vertcat(w[0], *rows)
+    rho = 0.0 if cons is None else cons.weight
+    f = ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s))
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
+    jr = ca.jacobian(r, w)
+    gn = ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack)))
+    hess = ca.Function("nlp_hess_l", [w, p, lam_f, lam_g], [2 * lam_f * ca.densify(gn)],
+                       ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
+    return {"x": w, "p": p, "f": f, "g": g}, hess

@@ -1,0 +1,87 @@
+"""The MPC's constraint rows between the samples (gtmodel.control.mpc_nlp, ``constraint_substeps``).
+
+The DC motor of ``models/dc_motor.py`` (L/R = 1.7 ms) asked to reach 400 rad/s in 20 ms from
+rest under |v| <= 24 V, its current bounded to 10 A (hard rows), predicted by RK4 with four
+1 ms substeps per 4 ms period. Reference: the horizon's inputs simulated again by SciPy's
+``solve_ivp`` (RK45 at rtol 1e-10, a second integrator) on a fine grid inside every period.
+With rows at the samples only the current passes the bound between them; with the rows at
+the substeps it holds there, and within 1 % between those. The multiple shooting (fatrop)
+solves the same NLP.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from gtmodel.errors import InputError
+from gtmodel.control.mpc import mpc_controller
+from gtmodel.modeling import explicit_ode
+from gtmodel.problems.user_model import load_user_model
+
+from ..conftest import REPO
+
+DT, H, BOUND, SUBSTEPS, FINE = 0.004, 10, 10.0, 4, 400
+
+
+@pytest.fixture(scope="module")
+def motor():
+    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
+    t = DT * np.arange(101)
+    x_ref = np.zeros((101, 3))
+    x_ref[:, 2] = np.minimum(t / 0.02, 1.0) * 400.0
+    x_ref[:, 1] = np.cumsum(x_ref[:, 2]) * DT
+    kw = dict(horizon=H, Q=[0.0, 0.0, 1.0], R=[1e-6], u_lb=[-24.0], u_ub=[24.0], method="rk4", substeps=SUBSTEPS,
+              x_lb={"ind.i": -BOUND}, x_ub={"ind.i": BOUND}, hard_constraints=True)
+    return ode, {between: mpc_controller(ode, t, x_ref, np.zeros((101, 1)), constraint_substeps=between, **kw)
+                 for between in (False, True)}
+
+
+def _currents(ode, w):
+    """The current on a grid of FINE + 1 points per period under the inputs ``w`` held, from rest (solve_ivp)."""
+    x, out = np.zeros(3), []
+    for u in w:
+        r = solve_ivp(lambda _t, xx: np.asarray(ode.f(xx, [u], ode.p_default)).ravel(), (0.0, DT), x, rtol=1e-10, atol=1e-12,
+                      dense_output=True)
+        out.append(r.sol(np.linspace(0.0, DT, FINE + 1))[0])
+        x = r.y[:, -1]
+    return np.array(out)  # (H, FINE + 1)
+
+
+def test_rows_counted_per_substep(motor):
+    _, c = motor
+    assert c[False].constraint_rows == 2 * H
+    assert c[True].constraint_rows == 2 * H * SUBSTEPS
+    assert c[False].substep_states is None
+
+
+def test_samples_only_lets_the_current_pass_between(motor):
+    ode, c = motor
+    i = _currents(ode, c[False].solve(0.0, np.zeros(3))[1])
+    assert np.max(np.abs(i[:, -1])) <= BOUND * (1 + 2e-3)  # held at the samples
+    assert np.max(np.abs(i)) > 1.03 * BOUND  # 10.55 A between them
+
+
+def test_substep_rows_hold_the_bound_between_the_samples(motor):
+    ode, c = motor
+    i = _currents(ode, c[True].solve(0.0, np.zeros(3))[1])
+    at_substeps = i[:, FINE // SUBSTEPS::FINE // SUBSTEPS]
+    assert np.max(np.abs(at_substeps)) <= BOUND * (1 + 2e-3)  # RK4's error against RK45 at 1e-10
+    assert np.max(np.abs(i)) <= BOUND * 1.01  # 10.04 A between the substeps
+
+
+def test_fatrop_solves_the_same_nlp(motor):
+    _, c = motor
+    ref = c[True].solve(0.0, np.zeros(3))[1]
+    w = replace(c[True], solver="fatrop").solve(0.0, np.zeros(3), plugin="fatrop")[1]
+    np.testing.assert_allclose(w, ref, atol=1e-6 * 24.0)
+
+
+@pytest.mark.parametrize("value", ["yes", 1, None])
+def test_flag_refused(motor, value):
+    ode, c = motor
+    with pytest.raises(InputError, match="constraint_substeps: expected true or false"):
+        mpc_controller(ode, DT * np.arange(3), np.zeros((3, 3)), np.zeros((3, 1)), x_ub={"ind.i": BOUND}, constraint_substeps=value)
