@@ -111,7 +111,7 @@ class MPCController(SampledReference):
         State bounds and path constraints on the predicted states (:mod:`gtmodel.control.mpc_constraints`).
     substep_states : casadi.Function or None, optional
         ``S(x (nx,1), u (nu,1)) -> (nx, substeps)``: the states after each substep of :attr:`step`
-        (its last column ``step``'s result; :meth:`~gtmodel.control.problem.TrackingProblem.substeps`),
+        (its last column ``step``'s result; :meth:`~gtmodel.control.problem.TrackingProblem.prediction`),
         where the constraints with ``between`` are imposed too; None: at the samples only.
     delay : int, optional
         Input delay [periods] the step compensates: 0 (default) or 1. With 1 the input
@@ -669,7 +669,7 @@ def mpc_controller(
                            path_ub=path_ub, path_names=path_names, hard=hard_constraints, weight=constraint_weight,
                            cost_scale=horizon * float(np.max(np.diag(Qm) * prob.x_scale**2)), every=constraint_every,
                            between=_flag(constraint_substeps, "constraint_substeps"))
-    inside = prob.substeps(method, substeps) if cons is not None and cons.between and substeps > 1 else None
+    inside = prob.prediction(method, substeps, "F_substeps", every_substep=True) if cons is not None and cons.between and substeps > 1 else None
     if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")

@@ -240,7 +240,7 @@ class TrackingProblem:
         if stability is not None and not stability.stable:
             raise InputError(stability.message(f"{what} (method, substeps)", "substeps = {n}"))
 
-    def prediction(self, method: str = "rk4", substeps: int = 1, name: str = "F") -> ca.Function:
+    def prediction(self, method: str = "rk4", substeps: int = 1, name: str = "F", every_substep: bool = False) -> ca.Function:
         """The step of :meth:`step` at the problem's parameters: ``F(x, u) -> x_next``.
 
         Parameters
@@ -251,11 +251,15 @@ class TrackingProblem:
             Steps of ``method`` within one period.
         name : str, optional
             The Function's name (the MPC's ``"F"``, the tracking law's ``"predict"``).
+        every_substep : bool, optional
+            The states after each substep instead (:func:`substep_states`; the last column
+            is ``x_next``): where the MPC's constraint rows act between the samples.
 
         Returns
         -------
         casadi.Function
-            ``(x (nx,1), u (nu,1)) -> x_next (nx,1)``, inputs ``x``, ``u``, output ``x_next``.
+            ``(x (nx,1), u (nu,1)) -> x_next (nx,1)``, inputs ``x``, ``u``, output ``x_next``
+            (``x_substeps (nx, substeps)`` with ``every_substep``).
 
         Raises
         ------
@@ -263,32 +267,10 @@ class TrackingProblem:
             An unknown method.
         """
         x, u = ca.SX.sym("x", self.ode.nx), ca.SX.sym("u", self.ode.nu)
+        if every_substep:
+            states = substep_states(self.ode, self.dt, method, substeps)(x, u, self.p)
+            return ca.Function(name, [x, u], [states], ["x", "u"], ["x_substeps"])
         return ca.Function(name, [x, u], [self.step(method, substeps).call([x, u, self.p])[0]], ["x", "u"], ["x_next"])
-
-    def substeps(self, method: str = "rk4", substeps: int = 1) -> ca.Function:
-        """The states after each substep of :meth:`prediction`, at the problem's parameters.
-
-        Parameters
-        ----------
-        method : str, optional
-            :data:`PREDICTION_METHODS`.
-        substeps : int, optional
-            Steps of ``method`` within one period.
-
-        Returns
-        -------
-        casadi.Function
-            ``(x (nx,1), u (nu,1)) -> x_substeps (nx, substeps)`` (:func:`substep_states`; the
-            last column is :meth:`prediction`'s ``x_next``).
-
-        Raises
-        ------
-        InputError
-            An unknown method.
-        """
-        x, u = ca.SX.sym("x", self.ode.nx), ca.SX.sym("u", self.ode.nu)
-        s = substep_states(self.ode, self.dt, method, substeps)(x, u, self.p)
-        return ca.Function("F_substeps", [x, u], [s], ["x", "u"], ["x_substeps"])
 
 
 def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float = LOOP_PERIOD_S, Q: Any = None, R: Any = None,
