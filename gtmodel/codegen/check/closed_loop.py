@@ -53,7 +53,8 @@ STATE_AUTHORITY_WARNING = 0.05
 STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
 #: What to change when a declared bound is exceeded between the samples, by controller (:attr:`LoopCheck.label`).
 BETWEEN_REMEDY = {
-    "mpc": "the MPC's rows act at its prediction's substeps: [mpc] substeps as fine as the plant's, constraint_substeps = true",
+    "mpc": ("the MPC's rows act at its prediction's substeps with [mpc] substeps as fine as the plant's and constraint_substeps = "
+            "true; where they do, the plant needs more than the bound to follow the plan: plan with margin below it ([reference] overrides)"),
     "": "the controller has no constraint rows: plan with margin below the bound ([reference] overrides) or weight the variable more",
 }
 
