@@ -509,6 +509,7 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         plant_x0 = np.r_[xs[0], np.zeros(4)]
     elif c.plant_substeps > 1:  # its states at the step's substeps: the declared bounds counted between the samples too
         loop["interior"] = _interior_states(model.plant, dt, c.plant_method, c.plant_substeps)
+        notes = list(notes or []) + _row_points_note(controller, c.plant_substeps)
     counted = DeclaredBounds(source="the controller's input bounds") if bounds is None else bounds.restricted(bounds.names)
     for j, n in enumerate(ode.u_names):  # an input without a declared bound: the controller's saturation
         if n not in counted.lb:
@@ -523,6 +524,18 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
                      t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0,
                      max_ratio=c.max_ratio, max_step_time=c.max_step_time, bounds=counted,
                      names=(list(ode.x_names), list(ode.u_names), list(ode.y_names)), outputs=outputs, notes=list(notes or []))
+
+
+def _row_points_note(controller: Any, plant_substeps: int) -> list[str]:
+    """A note when an MPC's constraint rows act at fewer points per period than the check counts the plant's states."""
+    if getattr(controller, "constraints", None) is None:
+        return []
+    inside = getattr(controller, "substep_states", None)
+    points = 1 if inside is None else int(inside.size2_out(0))
+    if points >= plant_substeps:
+        return []
+    return [f"the MPC's constraint rows act at {points} point(s) per period, the check counts the plant's states at {plant_substeps}: "
+            f"a bound may be exceeded between the rows ([mpc] substeps = {plant_substeps} and constraint_substeps = true put them there)"]
 
 
 def _interior_states(plant: ExplicitODE, dt: float, method: str, substeps: int) -> ca.Function:

@@ -38,7 +38,13 @@ def _files(tmp_path, rows: bool):
 
 @pytest.mark.slow  # two solves and two closed loops (about 20 s)
 def test_current_limit_held_on_a_plant_20_percent_off(tmp_path):
-    constrained, free = (_loop(load_mpc_file(_files(tmp_path, rows))) for rows in (True, False))
+    setups = [load_mpc_file(_files(tmp_path, rows)) for rows in (True, False)]
+    constrained, free = (_loop(setup) for setup in setups)
     assert constrained.failures() == [] and constrained.ratio_to_feedforward < 0.5
+    # the rows at the prediction's 2 ms substeps, the plant counted at its 1 ms ones: said, and held there too
+    assert any(n.startswith("the MPC's constraint rows act at 2 point(s) per period, the check counts the plant's states at 4")
+               for n in setups[0].notes)
+    assert not any("constraint rows act" in n for n in setups[1].notes)  # no rows: nothing to say
+    assert np.max(np.abs(constrained.closed.x_interior[:, :, 0])) <= 30.0 * 1.01
     assert np.max(np.abs(constrained.closed.x[:, 0])) <= 30.0 * 1.01
     assert np.max(np.abs(free.closed.x[:, 0])) > 30.3 and any(f.startswith("ind.i beyond its bound") for f in free.failures())
