@@ -42,6 +42,16 @@ Measured side by side in one run, because these machines are noisy:
   functions (``t_proc_total`` less every ``t_proc_nlp_*``: fatrop's own work and its
   plugin's), and ``fatrop_speedup_bound_cpu`` (``peer_solve_cpu_s / fatrop_solver_cpu_s``):
   the CPU speedup fatrop would reach if the derivatives cost nothing.
+- ``fatrop_machine_blasfeo_solve_cpu_s``: the same 50-element fatrop solve in a child process with
+  ``LD_PRELOAD`` of the BLASFEO built for the machine (``libblasfeo.so.0`` in the folder
+  ``GTMODEL_HPIPM`` names, made by ``benchmarks/hpipm_build.sh``: BLASFEO 0.1.4.2, the wheel's
+  version, for ``X64_INTEL_HASWELL`` instead of the wheel's ``GENERIC``) under CasADi's fatrop
+  plugin; alternated, ``--repeat`` rounds, with a child loading the wheel's
+  (``fatrop_wheel_blasfeo_solve_cpu_s``); ``fatrop_machine_blasfeo_speedup`` (wheel over machine),
+  ``fatrop_machine_blasfeo_solver_cpu_s``, ``fatrop_machine_blasfeo_final_time_rel_diff`` (from
+  the wheel child's optimum) and ``fatrop_machine_blasfeo_library`` (the file the child had mapped:
+  the preload is checked, not assumed); it enters ``best_solve_cpu_s``. ``fatrop_machine_blasfeo_skipped``
+  with the reason instead where the folder or library is missing (:func:`machine_blasfeo`).
 Medians of ``--repeat`` solves; the ``*_cpu*`` keys are the same figures in process CPU time
 (both solvers are single-threaded), steadier than wall time on a shared machine. With
 ``--json`` the last line of stdout is one JSON object.
@@ -55,6 +65,7 @@ import json
 import os
 import statistics
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -62,6 +73,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from gtmodel.codegen.hpipm_source import HPIPM_ENV
 from gtmodel.modeling.ocp.collocation_nlp import IPOPT_DEFAULTS, collocation_coefficients
 from gtmodel.problems import load_problem
 from gtmodel.trajectory import point_to_point as ptp
@@ -364,6 +376,75 @@ def solver_cpu(stats: dict) -> float:
     return float(stats["t_proc_total"]) - sum(float(v) for k, v in stats.items() if k.startswith("t_proc_nlp_"))
 
 
+#: The shared BLASFEO built for the machine, in the folder of :data:`~gtmodel.codegen.hpipm_source.HPIPM_ENV`
+#: (``benchmarks/hpipm_build.sh``), with the soname of the wheel's: preloaded, CasADi's plugins bind to it.
+MACHINE_BLASFEO = "libblasfeo.so.0"
+
+
+def machine_blasfeo() -> Path | str:
+    """The machine's shared BLASFEO (:data:`MACHINE_BLASFEO` in the folder ``GTMODEL_HPIPM`` names), or why there is none."""
+    folder = os.environ.get(HPIPM_ENV, "").strip()
+    if not folder:
+        return f"{HPIPM_ENV} unset (export {HPIPM_ENV}=\"$(benchmarks/hpipm_build.sh)\" builds the folder)"
+    lib = Path(folder).expanduser() / MACHINE_BLASFEO
+    if not lib.is_file():
+        return f"{lib} missing (benchmarks/hpipm_build.sh links it from the folder's libblasfeo.a)"
+    return lib.resolve()
+
+
+def mapped_blasfeo() -> str:
+    """The files of the process' mapped ``libblasfeo`` (``/proc/self/maps``), resolved and joined by ``", "``; ``""`` if none."""
+    fields = (line.split() for line in Path("/proc/self/maps").read_text().splitlines())
+    return ", ".join(sorted({str(Path(f[5]).resolve()) for f in fields if len(f) >= 6 and Path(f[5]).name.startswith("libblasfeo.so")}))
+
+
+def fatrop_child(problem: str, repeat: int) -> dict:
+    """The 50-element fatrop solve of ``problem`` in this process (the child of :func:`fatrop_blasfeo_rounds`): medians of ``repeat``."""
+    decl = load_problem(problem).declaration
+    decl = dataclasses.replace(decl, refinement=dataclasses.replace(decl.refinement, on_failure=False))
+    ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}
+    fat = with_solver(decl, "fatrop")
+    ours(fat)
+    runs = [ours(fat) for _ in range(repeat)]
+    return {"cpu_s": statistics.median(r[4] for r in runs), "solver_cpu_s": statistics.median(solver_cpu(r[6]) for r in runs),
+            "iterations": runs[0][2], "status": runs[0][3], "final_time_s": runs[0][1], "library": mapped_blasfeo()}
+
+
+def fatrop_blasfeo_rounds(problem: str, lib: Path, rounds: int, repeat: int = 3) -> dict | str:
+    """The fatrop solve with the wheel's BLASFEO and with ``lib`` preloaded, children alternated ``rounds`` times.
+
+    Returns the keys ``fatrop_machine_blasfeo_*`` and ``fatrop_wheel_blasfeo_solve_cpu_s`` (medians over the
+    rounds), or the reason when a child failed or the preload did not take (its mapped library not ``lib``).
+    """
+    def child(preload: bool) -> dict | str:
+        env = {**os.environ, "OMP_NUM_THREADS": "1"}
+        env.pop("LD_PRELOAD", None)
+        if preload:
+            env["LD_PRELOAD"] = str(lib)
+        run = subprocess.run([sys.executable, __file__, problem, "--fatrop-child", "--repeat", str(repeat)], env=env,
+                             capture_output=True, text=True, timeout=600)
+        if run.returncode != 0:
+            return f"the child failed (exit {run.returncode}): {run.stderr.strip().splitlines()[-1:]}"
+        return json.loads(run.stdout.strip().splitlines()[-1])
+
+    wheel, machine = [], []
+    for _ in range(rounds):
+        for preload, into in ((False, wheel), (True, machine)):
+            r = child(preload)
+            if isinstance(r, str):
+                return r
+            into.append(r)
+    if machine[0]["library"] != str(lib) or wheel[0]["library"] == str(lib):
+        return f"the preload did not take: the child mapped {machine[0]['library'] or 'no libblasfeo'}, not {lib}"
+    cpu_w, cpu_m = statistics.median(r["cpu_s"] for r in wheel), statistics.median(r["cpu_s"] for r in machine)
+    return {"fatrop_machine_blasfeo_solve_cpu_s": cpu_m, "fatrop_wheel_blasfeo_solve_cpu_s": cpu_w,
+            "fatrop_machine_blasfeo_speedup": cpu_w / cpu_m,
+            "fatrop_machine_blasfeo_solver_cpu_s": statistics.median(r["solver_cpu_s"] for r in machine),
+            "fatrop_machine_blasfeo_iterations": machine[0]["iterations"], "fatrop_machine_blasfeo_status": machine[0]["status"],
+            "fatrop_machine_blasfeo_final_time_rel_diff": abs(machine[0]["final_time_s"] - wheel[0]["final_time_s"]) / abs(wheel[0]["final_time_s"]),
+            "fatrop_machine_blasfeo_library": str(lib)}
+
+
 def with_solver(decl, name: str, elements: int | None = None):
     """``decl`` solved by ``name`` (and on ``elements`` elements)."""
     return dataclasses.replace(decl, solver=dataclasses.replace(decl.solver, name=name), elements=elements or decl.method.elements)
@@ -377,7 +458,11 @@ def main() -> None:
     ap.add_argument("--grid", default="50,100,200,400", help="elements of the per-iteration grid")
     ap.add_argument("--no-acados", action="store_true", help="skip the acados peer")
     ap.add_argument("--published", action="store_true", help="also acados and gtmodel on ACADOS_PUBLISHED, against the published optima")
+    ap.add_argument("--fatrop-child", action="store_true", help=argparse.SUPPRESS)  # fatrop_blasfeo_rounds' child
     a = ap.parse_args()
+    if a.fatrop_child:
+        print(json.dumps(fatrop_child(a.problem, a.repeat)))
+        return
     # the NLP on the file's mesh, as the peers solve it: no refinement after a failed verification
     # (the L1's 50-element plan fails it under its clipped forces and would be refined: 61 elements, then 122 to check its objective)
     decl = load_problem(a.problem).declaration
@@ -465,8 +550,22 @@ def main() -> None:
     out["fatrop_coarse_start"] = bruns[0][5]
     out["fatrop_scaling_400_over_50"] = out["fatrop_solve_s_largest"] / out["fatrop_solve_s"]
     out["fatrop_scaling_400_over_50_cpu"] = out["fatrop_solve_cpu_s_largest"] / out["fatrop_solve_cpu_s"]
-    best = min((out["solve_cpu_s"], "gtmodel, IPOPT (MUMPS), compiled derivatives"),
-               (out["fatrop_solve_cpu_s"], "gtmodel, fatrop (stage-wise), compiled derivatives"))
+    lib = machine_blasfeo()
+    machine = fatrop_blasfeo_rounds(a.problem, lib, a.repeat) if isinstance(lib, Path) else lib
+    configs = [(out["solve_cpu_s"], "gtmodel, IPOPT (MUMPS), compiled derivatives"),
+               (out["fatrop_solve_cpu_s"], "gtmodel, fatrop (stage-wise), compiled derivatives")]
+    if isinstance(machine, str):
+        out["fatrop_machine_blasfeo_skipped"] = machine
+        print(f"fatrop with the machine's BLASFEO: skipped, {machine}")
+    else:
+        out.update(machine)
+        configs.append((machine["fatrop_machine_blasfeo_solve_cpu_s"],
+                        "gtmodel, fatrop (stage-wise), compiled derivatives, the machine's BLASFEO (LD_PRELOAD)"))
+        print(f"fatrop with the machine's BLASFEO ({lib}): {machine['fatrop_machine_blasfeo_solve_cpu_s']:.3f} CPU-s against "
+              f"{machine['fatrop_wheel_blasfeo_solve_cpu_s']:.3f} with the wheel's ({machine['fatrop_machine_blasfeo_speedup']:.2f}x; "
+              f"without the functions {machine['fatrop_machine_blasfeo_solver_cpu_s']:.3f}), "
+              f"{machine['fatrop_machine_blasfeo_iterations']} iterations, optimum {machine['fatrop_machine_blasfeo_final_time_rel_diff']:.1e} relative from the wheel's")
+    best = min(configs)
     out["best_solve_cpu_s"], out["best_config"] = best
     out["best_ratio_cpu_to_opti_expand"] = best[0] / out["opti_expand_solve_cpu_s"]
     out["cpu_per_iteration_400_over_50"] = out["ms_per_iteration_cpu_ratio"]
