@@ -45,11 +45,11 @@ import numpy as np
 from gtmodel._timing import add_phase, timed
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
-from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives, assembled_oracle
-from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, resolve_function
+from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
+from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, nlp_solver, resolve_function
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.elimination import fill_algebraics, reduced_problem
-from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, IPOPT_ONLY, SOLVERS, fatrop_cache
+from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, SOLVERS
 from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
 from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients, element_scaling, merge_options, transcribe
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
@@ -142,7 +142,8 @@ class CollocationTranscription:
     ModelError
         If the model cannot be flattened.
     SolverError
-        If CasADi cannot build the NLP solver.
+        If CasADi cannot build the NLP solver: raised where it is first needed (the first
+        :meth:`solve`, or :attr:`solver`), since it is built then.
     """
 
     def __init__(
@@ -286,35 +287,28 @@ class CollocationTranscription:
             self.derivative_functions, self.evaluation = assembled_derivatives(
                 nlp, opt, dae, self.elements, self.points, co, self._noms, free_index, self.compile, self.fractions, stagewise
             )
-        self.solver = self._nlpsol(self.options)
+        self._solver: ca.Function | None = None  # built when first needed (the solver property)
         self._warm_solver: ca.Function | None = None
         _log.debug("collocation NLP for %s: %d variables, %d constraints", dae.name, wv.numel(), gv.numel())
 
+    @property
+    def solver(self) -> ca.Function:
+        """The ``casadi.nlpsol`` of cold starts, built at first use as :meth:`warm_solver` is (a solve from a coarse
+        mesh never builds it: fatrop's plugin sets up its blocks in time quadratic in the elements, 3.6 CPU-s at 400).
+
+        Raises
+        ------
+        SolverError
+            If CasADi cannot build it (e.g. fatrop on constraints coupling elements beyond neighbouring ones).
+        """
+        if self._solver is None:
+            self._solver = self._nlpsol(self.options)
+        return self._solver
+
     def _nlpsol(self, options: Mapping[str, Any]) -> ca.Function:
-        """A ``casadi.nlpsol`` of this NLP with ``options`` (the derivative functions are shared)."""
-        nlp = self.nlp
-        nlp_options = {**options, **self.derivative_functions}
-        f = nlp.f
-        if self.plugin == "fatrop":
-            inner = {k: v for k, v in options["fatrop"].items() if k not in IPOPT_ONLY}
-            self.objective_scale = float(inner.pop("obj_scaling_factor", 1.0))
-            f = f * self.objective_scale
-            nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
-            if self.derivative_functions:  # the plugin has no jac_g/hess_lag options: its function cache, by name
-                nlp_options["cache"] = fatrop_cache(self.derivative_functions, self.objective_scale)
-        problem = {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}
-        if self.plugin != "fatrop" and {"jac_g", "hess_lag"} <= set(self.derivative_functions):
-            problem, more = assembled_oracle(nlp, f, casadi_name(self.dae.name))  # the build's cost (CPU) a third
-            nlp_options.update(more)
-        try:
-            return ca.nlpsol(f"{casadi_name(self.dae.name)}_collocation", self.plugin, problem, nlp_options)
-        except RuntimeError as exc:
-            if "structure of A" in str(exc) or "Structure" in str(exc):
-                raise SolverError(
-                    f"solver fatrop: the problem's constraints couple elements beyond neighbouring ones (timed values or "
-                    f"integrals in constraints), which fatrop's stage structure cannot hold; use solver ipopt ({exc})"
-                ) from exc
-            raise SolverError(f"could not build the {self.plugin} solver: {exc}") from exc
+        """A ``casadi.nlpsol`` of this NLP with ``options`` (:func:`~gtmodel.modeling.ocp.collocation_function.nlp_solver`)."""
+        solver, self.objective_scale = nlp_solver(self.nlp, self.plugin, options, self.derivative_functions, casadi_name(self.dae.name))
+        return solver
 
     # ------------------------------------------------------------------ guesses
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
@@ -422,19 +416,18 @@ class CollocationTranscription:
         if w0 is None:
             w0 = self._initial_w(guesses, tf_guess, pvec)
 
-        solver = self.solver
         warm: dict[str, np.ndarray] = {}
         if warm_start and self.plugin == "fatrop":
             if not (isinstance(initial_guess, OptimizationResult) and initial_guess.collocation is not None):
                 raise InputError("warm_start: initial_guess must be a collocation result of this problem (fatrop starts from its primal point)")
-            solver = self.warm_solver()
         elif warm_start:
             if not (isinstance(initial_guess, OptimizationResult) and initial_guess.transcription_key == self.key
                     and initial_guess.lam_g is not None):
                 raise InputError("warm_start: initial_guess must be a result of this transcription (with its multipliers)")
-            solver = self.warm_solver()
             warm = {"lam_x0": initial_guess.lam_w, "lam_g0": initial_guess.lam_g}
         add_phase(phases, "guess", _time.perf_counter() - guess_wall, _time.process_time() - guess_cpu)
+        with timed(phases, "build"):  # a solver built at its first use is part of the build
+            solver = self.warm_solver() if warm_start else self.solver
         t_start, cpu_start = _time.perf_counter(), _time.process_time()
         error_msg = None
         lam = (None, None)
@@ -538,7 +531,7 @@ class CollocationTranscription:
         """
         self._solver_options.update(solver_options)
         self.options = merge_options(self.verbose, self._solver_options, self.plugin)
-        self.solver = self._nlpsol(self.options)
+        self._solver = self._nlpsol(self.options)  # built now: bad options are refused here
         self._warm_solver = None
 
     def warm_solver(self) -> ca.Function:

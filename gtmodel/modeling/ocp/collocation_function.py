@@ -7,17 +7,22 @@ pushes the iterate back into the interior and may end at another local optimum (
 minimum-time problem after a 1 cm change of the end pose, issue 17). Starting from the
 primal point *and the multipliers* with a small barrier parameter keeps IPOPT close to
 the previous optimum's active set; the tests check that it reaches the cold-start optimum.
+Both the cold and the warm-start ``nlpsol`` of a transcription are built by :func:`nlp_solver`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import casadi as ca
 
 from gtmodel.defaults import defaults
+from gtmodel.errors import SolverError
+from gtmodel.modeling.ocp.collocation_derivatives import assembled_oracle
+from gtmodel.modeling.ocp.collocation_stages import IPOPT_ONLY, fatrop_cache
 
-__all__ = ["WARM_START_OPTIONS", "resolve_function"]
+__all__ = ["WARM_START_OPTIONS", "nlp_solver", "resolve_function"]
 
 #: IPOPT options of warm starts: the dict ``defaults["ipopt.warm_start"]`` of
 #: :mod:`gtmodel.defaults` (start from the given primal-dual point with a small barrier
@@ -67,3 +72,56 @@ def resolve_function(transcription: Any, name: str = "resolve", warm_start: bool
         ["p", "w0", "lam_w0", "lam_g0"],
         ["w", "lam_w", "lam_g", "objective", "final_time"],
     )
+
+
+def nlp_solver(nlp: Any, plugin: str, options: Mapping[str, Any], derivatives: Mapping[str, ca.Function],
+               name: str) -> tuple[ca.Function, float]:
+    """The ``casadi.nlpsol`` of a collocation NLP (its derivative functions shared), and fatrop's objective factor.
+
+    Parameters
+    ----------
+    nlp : CollocationNLP
+        The transcribed NLP (:func:`~gtmodel.modeling.ocp.collocation_nlp.transcribe`).
+    plugin : {"ipopt", "fatrop"}
+        The nlpsol plugin.
+    options : mapping
+        nlpsol options, the plugin's under its name (:func:`~gtmodel.modeling.ocp.collocation_nlp.merge_options`).
+    derivatives : mapping of str to casadi.Function
+        The assembled derivatives (empty: CasADi differentiates the NLP), IPOPT's as ``jac_g``/``hess_lag``
+        options, fatrop's through its function cache (:func:`~gtmodel.modeling.ocp.collocation_stages.fatrop_cache`).
+    name : str
+        The model's CasADi name (the solver is ``<name>_collocation``).
+
+    Returns
+    -------
+    solver : casadi.Function
+    objective_scale : float
+        fatrop: the factor its objective is multiplied by (its options' ``obj_scaling_factor``, which the plugin
+        lacks); IPOPT: 1.
+
+    Raises
+    ------
+    SolverError
+        If CasADi cannot build it; with fatrop, constraints coupling elements beyond neighbouring ones say so.
+    """
+    nlp_options, f, scale = {**options, **derivatives}, nlp.f, 1.0
+    if plugin == "fatrop":
+        inner = {k: v for k, v in options["fatrop"].items() if k not in IPOPT_ONLY}
+        scale = float(inner.pop("obj_scaling_factor", 1.0))
+        f = f * scale
+        nlp_options = {**options, "fatrop": inner, "structure_detection": "manual", **nlp.stages}
+        if derivatives:  # the plugin has no jac_g/hess_lag options: its function cache, by name
+            nlp_options["cache"] = fatrop_cache(dict(derivatives), scale)
+    problem = {"x": nlp.w, "p": nlp.p, "f": f, "g": nlp.g}
+    if plugin != "fatrop" and {"jac_g", "hess_lag"} <= set(derivatives):
+        problem, more = assembled_oracle(nlp, f, name)  # the build's cost (CPU) a third
+        nlp_options.update(more)
+    try:
+        return ca.nlpsol(f"{name}_collocation", plugin, problem, nlp_options), scale
+    except RuntimeError as exc:
+        if "structure of A" in str(exc) or "Structure" in str(exc):
+            raise SolverError(
+                f"solver fatrop: the problem's constraints couple elements beyond neighbouring ones (timed values or "
+                f"integrals in constraints), which fatrop's stage structure cannot hold; use solver ipopt ({exc})"
+            ) from exc
+        raise SolverError(f"could not build the {plugin} solver: {exc}") from exc

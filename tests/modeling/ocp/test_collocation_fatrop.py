@@ -123,8 +123,20 @@ def test_free_parameters_are_refused_with_fatrop():
 def test_an_integral_constraint_coupling_all_elements_is_refused():
     # the isoperimetric form of the hanging chain: integral(...) == L sums over every element
     chain = load_problem(PROBLEMS_DIR / "benchmarks" / "hanging_chain.toml").declaration.optimization
+    tr = CollocationTranscription(chain, elements=4, solver="fatrop")  # its nlpsol is built at the first use
     with pytest.raises(SolverError, match="couple elements beyond neighbouring ones"):
-        CollocationTranscription(chain, elements=4, solver="fatrop")
+        tr.solve()
+
+
+def test_a_solve_from_a_coarse_mesh_builds_only_the_warm_solver():
+    # fatrop's plugin sets up its blocks in time quadratic in the elements: the cold nlpsol a
+    # coarse start never calls is not built (and the build is counted in the solve's timing)
+    coarse = CollocationTranscription(_min_time(), elements=10, solver="fatrop").solve()
+    tr = CollocationTranscription(_min_time(), elements=40, solver="fatrop")
+    warm = tr.solve(initial_guess=coarse, warm_start=True)
+    assert warm.status == "optimal" and tr._solver is None and tr._warm_solver is not None
+    assert warm.timing["build"]["cpu_s"] > 0
+    assert tr.solver is not tr.warm_solver() and tr._solver is not None
 
 
 def test_warm_start_from_a_coarse_mesh_reaches_the_cold_optimum_in_fewer_iterations():
