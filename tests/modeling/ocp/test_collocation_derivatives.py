@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from gtmodel.modeling import CollocationTranscription, Optimization
+from gtmodel.modeling.dae import casadi_name
 
 from .._builders import double_integrator, rest_to_rest
 from .test_optimization import _free_parameter_problem
@@ -77,3 +78,17 @@ def test_without_a_compiler_the_interpreter_gives_the_same_values(monkeypatch, t
     assert a.evaluation.startswith("CasADi interpreter")
     va, vb = _values(a, "nlp_hess_l", np.random.default_rng(1)), _values(b, "nlp_hess_l", np.random.default_rng(1))
     np.testing.assert_array_equal(va, vb)
+
+
+@pytest.mark.parametrize("function, output", [("nlp_f", "f"), ("nlp_g", "g")])
+def test_objective_and_constraints_are_apart_and_equal_casadis(function, output):
+    # second method: CasADi's own nlp_f / nlp_g of the whole NLP graph (derivatives="casadi"); the assembled
+    # oracle's f must not evaluate the constraints (IPOPT asks for f and g in separate calls)
+    kw = dict(elements=4, points=3)
+    a = CollocationTranscription(_free_parameter_problem(), derivatives="assembled", **kw)
+    b = CollocationTranscription(_free_parameter_problem(), derivatives="casadi", **kw)
+    w = np.random.default_rng(1).uniform(0.5, 1.5, a._lbw.size)
+    fa, fb = (tr.solver.get_function(function) for tr in (a, b))
+    np.testing.assert_allclose(np.array(fa(w, a.dae.p_value)), np.array(fb(w, b.dae.p_value)), rtol=0, atol=1e-12)
+    calls = {fa.instruction_MX(k).which_function().name() for k in range(fa.n_instructions()) if fa.instruction_id(k) == ca.OP_CALL}
+    assert calls == {f"{casadi_name(a.dae.name)}_{output}"}
