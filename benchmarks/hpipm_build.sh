@@ -9,8 +9,8 @@
 #
 # Usage:   export GTMODEL_HPIPM="$(benchmarks/hpipm_build.sh [BLASFEO_SOURCE [HPIPM_SOURCE]])"
 #
-# Sources: the folders given (checked out at $BLASFEO_VERSION and $HPIPM_COMMIT here, when they are
-# git work trees), else cloned from https://github.com/giaf/blasfeo and https://github.com/giaf/hpipm
+# Sources: the folders given (copied, and the copies checked out at $BLASFEO_VERSION and $HPIPM_COMMIT
+# when they are git work trees; the folders themselves are only read), else cloned from https://github.com/giaf/blasfeo and https://github.com/giaf/hpipm
 # into the cache. BLASFEO at $BLASFEO_VERSION, the casadi 3.8.2 wheel's (0.1.4.2: the same
 # struct blasfeo_dmat and panel height 4 in double as its GENERIC build, so the shared library can
 # stand in for the wheel's); HPIPM at $HPIPM_COMMIT: its include/ equals the wheel's HPIPM headers,
@@ -40,12 +40,12 @@ if [ ! -f "$OUT/libhpipm.a" ] || [ ! -f "$OUT/libblasfeo.a" ]; then
     if [ ! -f "$HP_SRC/Makefile.rule" ]; then
         git clone -q https://github.com/giaf/hpipm "$HP_SRC" >&2 || fail "no HPIPM source (give its folder)"
     fi
-    checkout "$BF_SRC" "$BLASFEO_VERSION"
-    checkout "$HP_SRC" "$HPIPM_COMMIT"
     BUILD="$(mktemp -d)"
     trap 'rm -rf "$BUILD"' EXIT
     cp -r "$BF_SRC/." "$BUILD/blasfeo"
     cp -r "$HP_SRC/." "$BUILD/hpipm"
+    checkout "$BUILD/blasfeo" "$BLASFEO_VERSION"  # in the copies: a source folder given is only read
+    checkout "$BUILD/hpipm" "$HPIPM_COMMIT"
     make -C "$BUILD/blasfeo" -j"$(nproc)" static_library TARGET="$BT" BLAS_API=0 >&2 || fail "BLASFEO's build failed (TARGET=$BT)"
     make -C "$BUILD/hpipm" -j"$(nproc)" static_library TARGET="$HT" BLASFEO_PATH="$BUILD/blasfeo" >&2 \
         || fail "HPIPM's build failed (TARGET=$HT)"
