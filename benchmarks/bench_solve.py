@@ -398,12 +398,20 @@ def mapped_blasfeo() -> str:
     return ", ".join(sorted({str(Path(f[5]).resolve()) for f in fields if len(f) >= 6 and Path(f[5]).name.startswith("libblasfeo.so")}))
 
 
+def peer_declaration(problem: str):
+    """The problem's declaration as the peers solve it, on the file's mesh (no refinement after a failed verification).
+
+    The L1's 50-element plan fails its verification under the clipped forces and would be refined (61 elements,
+    then 122 to check its objective). Also sets gtmodel's solver options to record CPU time in the stats, as the peers'.
+    """
+    decl = load_problem(problem).declaration
+    ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}
+    return dataclasses.replace(decl, refinement=dataclasses.replace(decl.refinement, on_failure=False))
+
+
 def fatrop_child(problem: str, repeat: int) -> dict:
     """The 50-element fatrop solve of ``problem`` in this process (the child of :func:`fatrop_blasfeo_rounds`): medians of ``repeat``."""
-    decl = load_problem(problem).declaration
-    decl = dataclasses.replace(decl, refinement=dataclasses.replace(decl.refinement, on_failure=False))
-    ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}
-    fat = with_solver(decl, "fatrop")
+    fat = with_solver(peer_declaration(problem), "fatrop")
     ours(fat)
     runs = [ours(fat) for _ in range(repeat)]
     return {"cpu_s": statistics.median(r[4] for r in runs), "solver_cpu_s": statistics.median(solver_cpu(r[6]) for r in runs),
@@ -463,11 +471,7 @@ def main() -> None:
     if a.fatrop_child:
         print(json.dumps(fatrop_child(a.problem, a.repeat)))
         return
-    # the NLP on the file's mesh, as the peers solve it: no refinement after a failed verification
-    # (the L1's 50-element plan fails it under its clipped forces and would be refined: 61 elements, then 122 to check its objective)
-    decl = load_problem(a.problem).declaration
-    decl = dataclasses.replace(decl, refinement=dataclasses.replace(decl.refinement, on_failure=False))
-    ptp.SOLVER_OPTIONS = {**SOLVER_OPTIONS, "record_time": True}  # CPU time in the stats, as the peer's
+    decl = peer_declaration(a.problem)
     print(f"casadi {ca.__version__}; load average {os.getloadavg()[0]:.2f} (2 cores shared)")
     ours(decl)  # compile (or load the cached) derivatives once
     mine, peer, fast = [], [], []
