@@ -14,9 +14,13 @@ if _argv0 == "-m" or _argv0.replace("\\", "/").rsplit("/", 1)[-1] == "gtmodel":
 
 import logging
 
+from gtmodel._blas import limit_casadi_blas as _limit_casadi_blas
 from gtmodel.errors import GtModelError
 
 __version__ = "0.1.0"
 __all__ = ["GtModelError", "__version__"]
 
 logging.getLogger("gtmodel").addHandler(logging.NullHandler())
+# CasADi's own OpenBLAS (under IPOPT's MUMPS) to one thread unless OPENBLAS_NUM_THREADS & co.
+# say otherwise: its threads only spin on gtmodel's sparse NLPs (gtmodel/_blas.py)
+_limit_casadi_blas()
