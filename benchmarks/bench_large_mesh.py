@@ -11,9 +11,10 @@ Measured side by side in one run:
   them, so that the one-off work (MUMPS's analysis, IPOPT's set-up) is left out: the median
   over ``--repeat`` alternated repeats (default 3), with its spread
   ``marginal_spread`` = (max - min) / median and the repeats themselves; ``t`` is the CPU
-  time of this process read around the solve call (``time.process_time``), with
-  ``OMP_NUM_THREADS=1`` set before CasADi is loaded (IPOPT's ``t_proc_total`` and a threaded
-  BLAS under MUMPS made the figure vary 4.7-73.7 ms between runs at 800 elements);
+  time of this process read around the solve call (``time.process_time``), with CasADi's
+  OpenBLAS on one thread, as gtmodel sets it on import (:mod:`gtmodel._blas`; IPOPT's
+  ``t_proc_total`` and that BLAS threaded under MUMPS made the figure vary 4.7-73.7 ms between
+  runs at 800 elements);
   ``derivatives_ms_per_iteration``: the part of it in evaluating the NLP functions and
   derivatives, its share of the 30-iteration solve's CPU (CasADi's ``t_proc_nlp_*``, nested
   inside that solve on the same clock, over ``t_proc_total``) times the marginal figure, so
@@ -36,16 +37,14 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
+import time
+from pathlib import Path
 
-os.environ.setdefault("OMP_NUM_THREADS", "1")  # before CasADi and its BLAS are loaded: one thread, so CPU is this solve's
-
-import statistics  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-from gtmodel.modeling import CollocationTranscription  # noqa: E402
-from gtmodel.problems import load_problem  # noqa: E402
-from gtmodel.trajectory.model_ocp import COARSE_START_ELEMENTS  # noqa: E402
+from gtmodel._blas import casadi_blas_threads
+from gtmodel.modeling import CollocationTranscription
+from gtmodel.problems import load_problem
+from gtmodel.trajectory.model_ocp import COARSE_START_ELEMENTS
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = ROOT / "problems/benchmarks/orbit_raising.toml"
@@ -107,9 +106,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="repeats of the marginal measurement, alternated over the meshes (default 3)")
     a = ap.parse_args()
     grid = [int(x) for x in a.grid.split(",")]
-    print(f"load average {os.getloadavg()[0]:.2f} (2 cores shared)")
+    print(f"load average {os.getloadavg()[0]:.2f} (2 cores shared); CasADi's OpenBLAS on {casadi_blas_threads()} thread(s)")
     opt = load_problem(a.problem).declaration.optimization
-    out: dict = {"problem": Path(a.problem).name, "per_mesh": {}}
+    out: dict = {"problem": Path(a.problem).name, "per_mesh": {}, "casadi_blas_threads": casadi_blas_threads()}
     built = {n: transcriptions(opt, n) for n in grid}
     reps: dict = {n: [] for n in grid}
     for _ in range(max(a.repeat, 1)):  # alternated: each mesh once per round, so that the machine's load falls on all

@@ -53,7 +53,9 @@ Measured side by side in one run, because these machines are noisy:
   the preload is checked, not assumed); it enters ``best_solve_cpu_s``. ``fatrop_machine_blasfeo_skipped``
   with the reason instead where the folder or library is missing (:func:`machine_blasfeo`).
 Medians of ``--repeat`` solves; the ``*_cpu*`` keys are the same figures in process CPU time
-(both solvers are single-threaded), steadier than wall time on a shared machine. With
+(both solvers are single-threaded: CasADi's OpenBLAS under MUMPS is set to one thread when gtmodel is
+imported, for the Opti peers in this process too; ``casadi_blas_threads`` says so; before, without
+``OMP_NUM_THREADS=1``, its threads spun and doubled IPOPT's CPU at 400 elements), steadier than wall time on a shared machine. With
 ``--json`` the last line of stdout is one JSON object.
 """
 
@@ -73,6 +75,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from gtmodel._blas import casadi_blas_threads
 from gtmodel.codegen.hpipm_source import HPIPM_ENV
 from gtmodel.modeling.ocp.collocation_nlp import IPOPT_DEFAULTS, collocation_coefficients
 from gtmodel.problems import load_problem
@@ -482,6 +485,7 @@ def main() -> None:
     solve_s, peer_s = statistics.median(m[0] for m in mine), statistics.median(p[0] for p in peer)
     out = {
         "problem": Path(a.problem).name,
+        "casadi_blas_threads": casadi_blas_threads(),
         "elements": decl.method.elements,
         "solve_s": solve_s,
         "iterations": mine[0][2],
