@@ -51,7 +51,9 @@ def casadi_blas_library() -> ctypes.CDLL | None:
     spec = importlib.util.find_spec("casadi")  # the package's folder, without importing CasADi
     folders = list(spec.submodule_search_locations or []) if spec is not None else []
     files = sorted(p for f in folders for p in Path(f).glob(f"{_PREFIX}*") if p.is_file())
-    for path in sorted(files, key=lambda p: len(p.name)):  # the unversioned name first
+    # the name CasADi's plugins ask for first (their DT_NEEDED; the wheel holds copies, not links, under three names:
+    # the dynamic loader then hands the plugins this copy by its soname, checked in tests/test_blas.py)
+    for path in sorted(files, key=lambda p: (p.name != f"{_PREFIX}.so.0", len(p.name))):
         try:
             lib = ctypes.CDLL(str(path))
         except OSError:
