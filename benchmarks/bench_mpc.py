@@ -253,6 +253,11 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
     return out
 
 
+def _worst(a: dict, b: dict, key: str) -> float | None:
+    """The larger of two peers' ``key``; ``None`` (with ``acados_agreement_states`` 0) where neither had a state to compare."""
+    return max((v for v in (a[key], b[key]) if v is not None), default=None)
+
+
 def acados_keys(row: dict, acados: dict | str) -> dict:
     """The acados keys of a row: its default QP solver's figures and the ratios (or ``acados_skipped``)."""
     if isinstance(acados, str):
@@ -262,10 +267,8 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
                                      "no constraint rows, no disturbance estimate",
             "acados_cpu_step_median_s": a["cpu_step_median_s"], "acados_cpu_step_p99_s": a["cpu_step_p99_s"],
             "acados_cpu_step_max_s": a["cpu_step_max_s"], "acados_tracking_rms": a["tracking_rms"],
-            "acados_first_control_rel_diff": max((v for v in (a["first_control_rel_diff"], fast["first_control_rel_diff"]) if v is not None),
-                                                 default=None),  # null (and acados_agreement_states 0): nothing to compare
-            "acados_sqp_first_control_rel_diff": max((v for v in (a["sqp_first_control_rel_diff"], fast["sqp_first_control_rel_diff"])
-                                                      if v is not None), default=None),
+            "acados_first_control_rel_diff": _worst(a, fast, "first_control_rel_diff"),
+            "acados_sqp_first_control_rel_diff": _worst(a, fast, "sqp_first_control_rel_diff"),
             "acados_agreement_states": min(a["agreement_states"], fast["agreement_states"]),
             "acados_fastest_config": f"SQP_RTI {ACADOS_QPS[1]}", "acados_fastest_cpu_step_median_s": fast["cpu_step_median_s"],
             "acados_fastest_cpu_step_p99_s": fast["cpu_step_p99_s"], "acados_fastest_tracking_rms": fast["tracking_rms"],
