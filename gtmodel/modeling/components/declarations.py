@@ -3,6 +3,7 @@
 Used as class attributes of :class:`~gtmodel.modeling.components.component.Component` subclasses::
 
     c = Parameter(1e5, unit="N/m", description="spring constant", lb=0.0)
+    eps = Parameter(1e-6, unit="m", description="width of the smoothed gap", smoothing=True)
     s = State(unit="m", description="position")          # der(s) may appear
     f = Variable(unit="N", description="spring force")     # algebraic
     u = Input(unit="N", description="driving force")      # model input
@@ -43,11 +44,20 @@ class Parameter:
         Size ``n`` or ``(n,)``; inferred from ``default`` when omitted.
     lb, ub : float, optional
         Inclusive bounds checked on every value (Modelica ``min``/``max``).
+    smoothing : bool, optional
+        True marks a smoothing width (in the parameter's own unit): the component's
+        law is smooth for a width > 0 and its exact non-smooth law is the limit as the
+        width goes to 0 (the non-smooth elements of :mod:`gtmodel.modeling.library`).
+        Such a parameter is one number and must be > 0 (every value is checked, as a
+        strict lower bound 0); flattening passes the flag on to
+        ``Model.parameter(..., smoothing=True)``, so a solver finds the widths in
+        ``Model.smoothing``. Default False.
 
     Raises
     ------
     InputError
-        If the default is not finite numbers of the declared size or violates the bounds.
+        If the default is not finite numbers of the declared size or violates the bounds,
+        or (``smoothing``) is not one number > 0.
     """
 
     def __init__(
@@ -58,13 +68,19 @@ class Parameter:
         shape: Any = None,
         lb: float | None = None,
         ub: float | None = None,
+        smoothing: bool = False,
     ) -> None:
+        if not isinstance(smoothing, (bool, np.bool_)):
+            raise InputError(f"Parameter smoothing: expected True or False, got {smoothing!r}")
         self.name = ""
         self.unit = unit
         self.description = description
         self.lb = lb
         self.ub = ub
+        self.smoothing = bool(smoothing)
         self.size = None if shape is None else _shape_to_size(shape, "Parameter shape")
+        if self.smoothing and self.size not in (None, 1):
+            raise InputError(f"Parameter shape: a smoothing width is one number, got shape {shape!r}")
         self.default = self.validate(default, "Parameter default")
         self.size = self.default.size
 
@@ -95,7 +111,8 @@ class Parameter:
         ------
         InputError
             If ``value`` is not real finite numbers (bools and strings are rejected), has
-            another size, or is outside ``[lb, ub]``.
+            another size, is outside ``[lb, ub]``, or (a smoothing width) is not one
+            number > 0.
         """
         if isinstance(value, (bool, np.bool_, str, bytes)) or isinstance(value, (ca.SX, ca.MX)):
             raise InputError(f"{where}: expected a real number, got {type(value).__name__} {value!r}")
@@ -111,6 +128,8 @@ class Parameter:
             raise InputError(f"{where}: must be >= {self.lb}, got {value!r}")
         if self.ub is not None and np.any(arr > self.ub):
             raise InputError(f"{where}: must be <= {self.ub}, got {value!r}")
+        if getattr(self, "smoothing", False) and (arr.size != 1 or np.any(arr <= 0)):
+            raise InputError(f"{where}: a smoothing width must be one number > 0, got {value!r}")
         return arr
 
 

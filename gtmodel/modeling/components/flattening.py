@@ -52,6 +52,7 @@ class _Declared:
     value: Any = None
     fixed: Any = None
     unit: str = ""
+    smoothing: bool = False
 
 
 @dataclass
@@ -78,7 +79,7 @@ class _Flattening:
     def _declare(self, full: str, kind: str, size: int, **attrs: Any) -> ca.SX:
         m = self.scratch
         if kind == "parameter":
-            sym = m.parameter(full, attrs["value"])
+            sym = m.parameter(full, attrs["value"], smoothing=attrs.get("smoothing", False))
         else:
             extra = {} if kind == "input" or attrs.get("fixed") is None else {"fixed": attrs["fixed"]}
             sym = getattr(m, kind)(full, shape=size, start=attrs.get("start"), lb=attrs.get("lb"), ub=attrs.get("ub"),
@@ -106,8 +107,11 @@ class _Flattening:
                                 "declared by the enclosing component"
                             )
                         comp._symbols[name] = owner._symbols[value.name]
+                        if decl.smoothing:  # bound to a smoothing width: the enclosing parameter is one
+                            self._mark_smoothing(comp._symbols[name], f"{pre}{name} (bound to {value.name})")
                     else:
-                        comp._symbols[name] = self._declare(pre + name, "parameter", decl.size, value=value)
+                        comp._symbols[name] = self._declare(pre + name, "parameter", decl.size, value=value,
+                                                            smoothing=decl.smoothing)
                 elif isinstance(decl, Variable):
                     comp._symbols[name] = self._declare(pre + name, decl.kind, decl.size, **comp._attributes[name],
                                                         unit=decl.unit or "")
@@ -118,6 +122,13 @@ class _Flattening:
             raise ModelError(f"component {comp._label()}: {exc}") from None
         for sname, sub in comp.components().items():
             self._walk(sub, pre + sname)
+
+    def _mark_smoothing(self, sym: ca.SX, where: str) -> None:
+        """Mark the declared parameter ``sym`` a smoothing width (a sub-component's width is bound to it)."""
+        d = next(d for d in self.declared if d.kind == "parameter" and d.sym.element_hash() == sym.element_hash())
+        if not d.smoothing:
+            Parameter(d.value, smoothing=True).validate(d.value, where)  # one number > 0
+            d.smoothing = True
 
     # -------------------------------------------------------------- used by components
     def equation(self, comp: _ComponentBase, lhs: Any, rhs: Any, name: str | None) -> None:
@@ -358,7 +369,7 @@ class _Flattening:
             if d.name in dropped:
                 continue
             if d.kind == "parameter":
-                sym = model.parameter(d.name, d.value)
+                sym = model.parameter(d.name, d.value, smoothing=d.smoothing)
             else:
                 extra = {} if d.kind == "input" or d.fixed is None else {"fixed": d.fixed}
                 sym = getattr(model, d.kind)(d.name, shape=d.size, start=d.start, lb=d.lb, ub=d.ub, unit=d.unit, **extra)

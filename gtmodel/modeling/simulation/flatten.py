@@ -49,6 +49,7 @@ class _Var:
     unit: str = ""
     fixed: np.ndarray | None = None  # per element: the start is an initial condition (Modelica's fixed)
     given: bool = False  # the start was given (not the default 0)
+    smoothing: bool = False  # a parameter that is a smoothing width (Model.smoothing)
 
     @property
     def size(self) -> int:

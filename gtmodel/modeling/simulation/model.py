@@ -9,14 +9,13 @@ turns it into a semi-explicit DAE (:class:`FlatDAE`)::
 
 and ``simulate()`` integrates it with CasADi's IDAS or CVODES.
 
-Design note: ``casadi.DaeBuilder`` is not used because its 3.8 API is FMI/MX-oriented
-(variables addressed by name strings with causality/variability attributes, no
-symbolic elimination of equations that are implicit but linear in ``der()``), whereas a
-thin layer over SX symbols keeps every expression SX for AD and C generation.
+Design note: ``casadi.DaeBuilder`` is not used because its 3.8 API is FMI/MX-oriented (variables addressed by
+name strings with causality/variability attributes, no symbolic elimination of equations that are implicit but
+linear in ``der()``), whereas a thin layer over SX symbols keeps every expression SX for AD and C generation.
 
-Naming of scalar elements: a scalar variable ``m`` is called ``"m"``; element ``i`` of a
-vector variable ``T`` of size 3 is called ``"T[i]"``. These expanded names are used for
-``FlatDAE.x_names`` (etc.) and for the columns of data frames and CSV files.
+Naming of scalar elements: a scalar variable ``m`` is called ``"m"``; element ``i`` of a vector variable ``T``
+of size 3 is called ``"T[i]"``. These expanded names are used for ``FlatDAE.x_names`` (etc.) and for the columns
+of data frames and CSV files.
 """
 
 from __future__ import annotations
@@ -72,10 +71,9 @@ _DECLARE_DOCS = {
         """,
     "fixed": """
         fixed : bool or array_like of bool, optional
-            Whether ``start`` is an initial condition that :meth:`Model.simulate` must meet
-            (Modelica's ``fixed = true``: kept through alias elimination and index
-            reduction, an error if it contradicts the model or the other initial
-            conditions); default False: ``start`` is a guess, used as the initial value
+            Whether ``start`` is an initial condition that :meth:`Model.simulate` must meet (Modelica's ``fixed
+            = true``: kept through alias elimination and index reduction, an error if it contradicts the model
+            or the other initial conditions); default False: ``start`` is a guess, used as the initial value
             only where the initialisation has degrees of freedom left (see
             :mod:`gtmodel.modeling.structure.initialization`).
         """,
@@ -180,7 +178,8 @@ class Model(EventsMixin):
             self._hashes.update(s[i].element_hash() for i in range(size))
         return sym
 
-    def parameter(self, name: str, value: Any, shape: Any = None, min: Any = None, max: Any = None) -> ca.SX:  # noqa: A002
+    def parameter(self, name: str, value: Any, shape: Any = None, min: Any = None, max: Any = None,  # noqa: A002
+                  smoothing: bool = False) -> ca.SX:
         """Declare a parameter with a numeric default value.
 
         Parameters
@@ -196,6 +195,10 @@ class Model(EventsMixin):
             ``min=1e-6`` for a mass: a value outside it, the default or an override (a
             problem file's ``[model.parameters]``, :meth:`Optimization.set_parameter`), is
             refused naming the parameter. Default: unbounded.
+        smoothing : bool, optional
+            True: the parameter is a smoothing width, one number > 0 (every value checked),
+            whose limit 0 is the exact non-smooth law (listed in :attr:`smoothing`, kept by
+            the structural passes). Default False.
 
         Returns
         -------
@@ -205,8 +208,8 @@ class Model(EventsMixin):
         Raises
         ------
         InputError
-            If the name is not an identifier, the value/shape are inconsistent, or the
-            value lies outside ``[min, max]``.
+            If the name is not an identifier, the value/shape are inconsistent, the
+            value lies outside ``[min, max]``, or a smoothing width is not one number > 0.
         ModelError
             If the name is already declared, or ``min`` exceeds ``max``.
         """
@@ -217,9 +220,17 @@ class Model(EventsMixin):
         if arr.size == 0 or not np.all(np.isfinite(arr)):
             raise InputError(f"parameter {name!r}: value must be finite and non-empty, got {value!r}")
         size = arr.size if shape is None else _shape_to_size(shape, f"parameter {name!r}")
+        if not isinstance(smoothing, (bool, np.bool_)) or (smoothing and size != 1):
+            raise InputError(f"parameter {name!r}: smoothing must be True or False, and a smoothing width one number")
         sym = self._declare(name, "parameter", size, start=arr, lb=min, ub=max)
+        self._vars[name].smoothing = bool(smoothing)
         self.check_parameter(name, arr)
         return sym
+
+    @property
+    def smoothing(self) -> dict[str, float]:
+        """The smoothing-width parameters (``parameter(..., smoothing=True)``): name -> default, in declaration order."""
+        return {v.name: float(v.start[0]) for v in self._vars.values() if v.kind == "parameter" and v.smoothing}
 
     def check_parameter(self, name: str, value: Any) -> None:
         """Check a value of a parameter against its ``min``/``max`` range (:meth:`parameter`).
@@ -234,7 +245,7 @@ class Model(EventsMixin):
         Raises
         ------
         InputError
-            A value outside the range, naming the parameter, the value and the range.
+            A value outside the range (or a smoothing width not > 0), naming the parameter and the value.
         ModelError
             ``name`` is not a parameter of the model.
         """
@@ -242,6 +253,8 @@ class Model(EventsMixin):
         if var is None or var.kind != "parameter":
             raise ModelError(f"model {self.name!r} has no parameter {name!r}")
         v = np.asarray(value, dtype=float).reshape(-1)
+        if var.smoothing and not np.all(v > 0):
+            raise InputError(f"parameter {name!r}: a smoothing width must be > 0, got {', '.join(f'{x:g}' for x in v)}")
         bad = np.nonzero((v < var.lb) | (v > var.ub))[0] if v.size == var.lb.size else np.zeros(0, int)
         if bad.size:
             i = int(bad[0])
@@ -399,17 +412,13 @@ class Model(EventsMixin):
         known = self._hashes | {s[i].element_hash() for s in extra for i in range(s.numel())}
         unknown = [s for s in ca.symvar(expr) if s.element_hash() not in known]
         if unknown:
-            raise ModelError(
-                f"{what}: unknown symbol(s) {_symbol_names(unknown)} not declared by model {self.name!r}"
-            )
+            raise ModelError(f"{what}: unknown symbol(s) {_symbol_names(unknown)} not declared by model {self.name!r}")
 
     def _der_vector(self) -> ca.SX:
         ders = [v.der for v in self._vars.values() if v.kind == "state"]
         return ca.vertcat(*ders) if ders else ca.SX(0, 1)
 
-    def equation(
-        self, lhs: Any, rhs: Any = 0.0, name: str | None = None, substitute_der: bool = False
-    ) -> None:
+    def equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None, substitute_der: bool = False) -> None:
         """Add the equation ``lhs == rhs`` (residual ``lhs - rhs``).
 
         Parameters
@@ -420,11 +429,10 @@ class Model(EventsMixin):
         name : str, optional
             Label used in error messages; default ``"eq<k>"``.
         substitute_der : bool, optional
-            If true, ``der()`` in this equation stands for the ODE right-hand side
-            ``f(t, x, z, u, p)`` obtained from the other equations (substituted on
-            flattening), so the equation is algebraic: e.g. the locked mode of a
-            friction element, relative acceleration zero, which determines the friction
-            force (Otter, Elmqvist and Mattsson (1999)). Default false.
+            If true, ``der()`` in this equation stands for the ODE right-hand side ``f(t, x, z, u, p)`` obtained
+            from the other equations (substituted on flattening), so the equation is algebraic: e.g. the locked
+            mode of a friction element, relative acceleration zero, which determines the friction force (Otter,
+            Elmqvist and Mattsson (1999)). Default false.
 
         Raises
         ------
@@ -437,19 +445,15 @@ class Model(EventsMixin):
         a = _as_sx(lhs, f"equation {label!r} lhs")
         b = _as_sx(rhs, f"equation {label!r} rhs")
         if a.numel() != b.numel() and a.numel() != 1 and b.numel() != 1:
-            raise InputError(
-                f"equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}"
-            )
+            raise InputError(f"equation {label!r}: lhs has {a.numel()} elements but rhs has {b.numel()}")
         res = a - b
         if res.numel() == 0:
             raise InputError(f"equation {label!r} is empty")
         self.check_symbols(res, f"equation {label!r}")
         xdot = self._der_vector()
         if xdot.numel() and ca.depends_on(res, xdot) and not ca.is_linear(res, xdot):
-            raise ModelError(
-                f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
-                "only equations linear in der() are supported"
-            )
+            raise ModelError(f"model {self.name!r}: equation {label!r} is nonlinear in der() symbols; "
+                             "only equations linear in der() are supported")
         if substitute_der:
             self._der_substituted.add(len(self._equations))
         self._equations.append((label, res))
@@ -457,11 +461,10 @@ class Model(EventsMixin):
     def initial_equation(self, lhs: Any, rhs: Any = 0.0, name: str | None = None) -> None:
         """Add the initial equation ``lhs == rhs`` (Modelica's ``initial equation``).
 
-        Holds at the start time only; :meth:`simulate` then solves the consistent
-        initialisation (:mod:`gtmodel.modeling.structure.initialization`) instead of fixing every
-        state at its start value: the initial equations and the states named in an ``x0``
-        mapping must together fix the model's degrees of freedom. :meth:`flatten` (and so
-        ``Optimization``, which states its own point constraints) ignores them.
+        Holds at the start time only; :meth:`simulate` then solves the consistent initialisation
+        (:mod:`gtmodel.modeling.structure.initialization`) instead of fixing every state at its start value: the
+        initial equations and the states named in an ``x0`` mapping must together fix the model's degrees of
+        freedom. :meth:`flatten` (and so ``Optimization``, which states its own point constraints) ignores them.
 
         Parameters
         ----------
@@ -625,29 +628,26 @@ class Model(EventsMixin):
     ) -> SimulationResult:
         """Integrate the model on a time grid.
 
-        A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is
-        integrated with events (:func:`gtmodel.modeling.simulation.event_simulation.simulate_events`,
+        A model with when-clauses (:meth:`when`) or ``sign()`` in its equations is integrated with events
+        (:func:`gtmodel.modeling.simulation.event_simulation.simulate_events`,
         :func:`gtmodel.modeling.structure.discontinuities.sign_modes`), its events reported in
-        :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it
-        is reduced once first, keeping the reinit targets as states
-        (:func:`~gtmodel.modeling.simulation.event_simulation.simulate_events_reduced`: ``x0`` a
-        mapping, no ``z0``); with initial equations, fixed starts or ``x0`` entries that the
-        reduction could drop, the consistent start is solved first
-        (:func:`~gtmodel.modeling.simulation.structured_simulation.consistent_start`, the modes at their
-        start values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten` accepts
-        and that has no initial equations (nor fixed starts of algebraic variables) is simulated as it is. Otherwise
-        the structural
-        passes run first
-        (:func:`~gtmodel.modeling.simulation.structured_simulation.simulate_structured`): the structural
-        check (one error naming the equations and variables), alias elimination, index
-        reduction by Pantelides' algorithm with dummy derivatives (re-selected where the
-        selection turns singular), and the consistent initialisation with the
-        :meth:`initial_equation` s. Start values follow Modelica
-        (:mod:`gtmodel.modeling.structure.initialization`): every ``x0`` entry and every start
-        declared ``fixed=True`` (a component modifier's start value is) is an initial
-        condition, kept whichever states the index reduction selects; contradictory ones
-        are one error naming them; the remaining freedom (a model without initial
-        equations) is taken from the start values, given ones first.
+        :attr:`SimulationResult.events`; if it does not flatten (aliases, high index), it is reduced once first,
+        keeping the reinit targets as states
+        (:func:`~gtmodel.modeling.simulation.event_simulation.simulate_events_reduced`: ``x0`` a mapping, no
+        ``z0``); with initial equations, fixed starts or ``x0`` entries that the reduction could drop, the
+        consistent start is solved first
+        (:func:`~gtmodel.modeling.simulation.structured_simulation.consistent_start`, the modes at their start
+        values; clauses declared ``initial=True`` fire after it). Otherwise, a model that :meth:`flatten`
+        accepts and that has no initial equations (nor fixed starts of algebraic variables) is simulated as it
+        is. Otherwise the structural passes run first
+        (:func:`~gtmodel.modeling.simulation.structured_simulation.simulate_structured`): the structural check
+        (one error naming the equations and variables), alias elimination, index reduction by Pantelides'
+        algorithm with dummy derivatives (re-selected where the selection turns singular), and the consistent
+        initialisation with the :meth:`initial_equation` s. Start values follow Modelica
+        (:mod:`gtmodel.modeling.structure.initialization`): every ``x0`` entry and every start declared
+        ``fixed=True`` (a component modifier's start value is) is an initial condition, kept whichever states
+        the index reduction selects; contradictory ones are one error naming them; the remaining freedom (a
+        model without initial equations) is taken from the start values, given ones first.
 
         Parameters
         ----------

@@ -611,7 +611,7 @@ def build_model(
     for var in model._vars.values():
         if var.kind in ("parameter", "input"):
             sym = (
-                new.parameter(var.name, var.start)
+                new.parameter(var.name, var.start, smoothing=getattr(var, "smoothing", False))
                 if var.kind == "parameter"
                 else new.input(var.name, var.size, lb=var.lb, ub=var.ub, start=var.start, unit=var.unit)
             )
