@@ -12,13 +12,19 @@ Pantelides, dummy derivatives). A chain of masses and springs only is index 1.
 Components (Modelica Standard Library 4.0 names and equations):
 :class:`Mass`, :class:`Spring`, :class:`Damper`, :class:`SpringDamper`, :class:`Force`,
 :class:`Fixed`; the partial bases :class:`PartialTwoFlanges`, :class:`PartialCompliant`.
+Non-smooth elements with a declared smoothing width (``Model.smoothing``; laws and
+errors in each class): :class:`ElastoBacklash` (two-sided gap; MSL's one-sided analogue is
+``ElastoGap``) and :class:`Friction` (Coulomb, viscous and Stribeck, smoothed).
 The optional ``support`` flanges of the MSL sources are omitted (support fixed).
 """
 
 from __future__ import annotations
 
+import casadi as ca
+
 from gtmodel.modeling.components.component import Component, Input, Parameter, State, Variable
 from gtmodel.modeling.components.connectors import Connector, Flow, Potential
+from gtmodel.modeling.library.blocks import _Positive, smooth_dead_zone, smooth_sign, smooth_step
 
 __all__ = [
     "Flange",
@@ -33,6 +39,8 @@ __all__ = [
     "SpringDamper",
     "Force",
     "Fixed",
+    "ElastoBacklash",
+    "Friction",
 ]
 
 
@@ -266,3 +274,122 @@ class Fixed(Component):
     def equations(self) -> None:
         """``flange.s = s0``."""
         self.equation(self.flange.s, self.s0, name="position")
+
+
+class ElastoBacklash(PartialCompliantWithRelativeStates):
+    """Backlash in series with a stiff, damped contact (translational ``ElastoBacklash``), smoothed.
+
+    The translational counterpart of MSL ``Rotational.Components.ElastoBacklash`` (a
+    nut in a screw with play, a rack and pinion): a spring-damper that acts only outside
+    a total gap ``b`` (free play ``b/2`` to each side of ``s_rel0``). The MSL has no
+    translational element of this name; its ``Translational.Components.ElastoGap`` is the
+    one-sided contact (one wall), and this element is two such walls ``b`` apart. With
+    ``x = s_rel - s_rel0``:
+
+    * exact law: ``f = c dz(x) + d v_rel H(|x| - b/2)``, the dead zone
+      ``dz(x) = x - min(max(x, -b/2), b/2)`` and the contact indicator ``H`` (1 in contact);
+    * smooth law: ``f = c dz_eps(x) + d v_rel dz_eps'(x)`` with
+      ``dz_eps(x) = softplus(x - b/2) - softplus(-x - b/2)``,
+      ``softplus(y) = eps ln(1 + exp(y/eps))`` (:func:`~gtmodel.modeling.library.blocks.smooth_dead_zone`),
+      and ``dz_eps'(x) = s(x - b/2) + s(-x - b/2)``, ``s`` the logistic
+      (:func:`~gtmodel.modeling.library.blocks.smooth_step`), in ``(0, 1]``: the damping
+      acts in contact only, smoothly;
+    * worst-case error: spring force ``c eps ln 2`` (at a corner ``x = +-b/2``), below
+      ``c eps exp(-delta/eps)`` at a distance ``delta`` from both corners; damping factor
+      ``1/2`` at a corner, below ``2 exp(-delta/eps)`` away. The limit ``eps -> 0`` is the
+      exact law; with ``b = 0`` the smooth law is the linear spring-damper exactly.
+
+    As in the rotational element, MSL's clamp of the damping force (a contact that never
+    pulls) is not modelled.
+
+    Parameters
+    ----------
+    c : float, optional
+        Contact (spring) stiffness [N/m], >= 0 (default 1e6).
+    d : float, optional
+        Contact damping [N s/m], >= 0 (default 0).
+    b : float, optional
+        Total backlash [m], >= 0 (default 0).
+    s_rel0 : float, optional
+        Relative position at the middle of the gap [m] (default 0).
+    smoothing : float, optional
+        Smoothing width ``eps`` [m], > 0 (default 1e-6); listed in ``Model.smoothing``.
+    **modifiers
+        Further modifiers (start values of ``s_rel``, ...), see
+        :class:`~gtmodel.modeling.components.component.Component`.
+
+    Raises
+    ------
+    InputError
+        If ``c``, ``d`` or ``b`` is negative or ``smoothing <= 0``.
+    """
+
+    c = Parameter(1e6, unit="N/m", description="contact stiffness", lb=0.0)
+    d = Parameter(0.0, unit="N.s/m", description="contact damping", lb=0.0)
+    b = Parameter(0.0, unit="m", description="total backlash", lb=0.0)
+    s_rel0 = Parameter(0.0, unit="m", description="relative position at the middle of the gap")
+    smoothing = Parameter(1e-6, unit="m", description="smoothing width of the dead zone, > 0", smoothing=True)
+
+    def equations(self) -> None:
+        """``f = c dz_eps(x) + d v_rel dz_eps'(x)``, ``x = s_rel - s_rel0``, plus the base's equations."""
+        super().equations()
+        x, half, eps = self.s_rel - self.s_rel0, self.b / 2, self.smoothing
+        contact = smooth_step(x - half, eps) + smooth_step(-x - half, eps)
+        self.equation(self.f, self.c * smooth_dead_zone(x, -half, half, eps) + self.d * self.v_rel * contact,
+                      name="backlash")
+
+
+class Friction(PartialCompliantWithRelativeStates):
+    """Coulomb, viscous and Stribeck friction force, smoothed (connected between support and flange).
+
+    Connected between the support (``flange_a``, e.g. to :class:`Fixed`) and the moving
+    flange (``flange_b``): ``v_rel`` is the flange's speed relative to the support [m/s]
+    and ``f`` [N] brakes it. With ``v = v_rel``:
+
+    * exact law: ``f = (Fc + Fs exp(-(v/vs)^2)) sign(v) + dv v`` for ``v != 0``, and any
+      force in ``[-(Fc + Fs), Fc + Fs]`` at ``v = 0`` (stiction; breakaway force ``Fc + Fs``);
+    * smooth law: ``f = (Fc + Fs exp(-(v/vs)^2)) tanh(v/eps) + dv v``
+      (:func:`~gtmodel.modeling.library.blocks.smooth_sign`);
+    * worst-case error: ``Fc + Fs`` as ``v -> 0`` (the smooth force passes through 0
+      where the exact one jumps), below ``2 (Fc + Fs) exp(-2|v|/eps)`` at speed ``|v|``.
+      The limit ``eps -> 0`` is the exact law for ``v != 0``. The smooth law cannot
+      stick: under a force ``F`` below breakaway it creeps at about
+      ``eps artanh(F / (Fc + Fs))``.
+
+    ``Fs = 0`` is Coulomb and viscous friction without the Stribeck effect. The MSL's
+    stick-slip friction with events is :mod:`gtmodel.modeling.library.friction`.
+
+    Parameters
+    ----------
+    Fc : float, optional
+        Coulomb friction force [N], >= 0 (default 1).
+    Fs : float, optional
+        Stribeck excess of the breakaway force over ``Fc`` [N], >= 0 (default 0).
+    vs : float, optional
+        Stribeck speed [m/s], > 0 (default 0.01).
+    dv : float, optional
+        Viscous friction coefficient [N s/m], >= 0 (default 0).
+    smoothing : float, optional
+        Smoothing width ``eps`` [m/s], > 0 (default 1e-3); listed in ``Model.smoothing``.
+    **modifiers
+        Further modifiers (start values of ``s_rel``, ...), see
+        :class:`~gtmodel.modeling.components.component.Component`.
+
+    Raises
+    ------
+    InputError
+        If ``Fc``, ``Fs`` or ``dv`` is negative, or ``vs`` or ``smoothing`` is not > 0.
+    """
+
+    Fc = Parameter(1.0, unit="N", description="Coulomb friction force", lb=0.0)
+    Fs = Parameter(0.0, unit="N", description="Stribeck excess of the breakaway force over Fc", lb=0.0)
+    vs = _Positive(0.01, unit="m/s", description="Stribeck speed, > 0")
+    dv = Parameter(0.0, unit="N.s/m", description="viscous friction coefficient", lb=0.0)
+    smoothing = Parameter(1e-3, unit="m/s", description="smoothing width of sign(v), > 0", smoothing=True)
+
+    def equations(self) -> None:
+        """``f = (Fc + Fs exp(-(v_rel/vs)^2)) tanh(v_rel/eps) + dv v_rel``, plus the base's equations."""
+        super().equations()
+        v = self.v_rel
+        level = self.Fc + self.Fs * ca.exp(-((v / self.vs) ** 2))
+        self.equation(self.f, level * smooth_sign(v, self.smoothing) + self.dv * v, name="friction")
