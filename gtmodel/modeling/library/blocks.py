@@ -8,18 +8,23 @@ listed in ``Model.smoothing``). The exact non-smooth law is the limit as the wid
 Wiring: the enclosing component writes one equation that gives ``u`` and uses ``y`` in
 its own equations (a block has no connector: a signal is not a physical flange)::
 
+    class SignalTorque(rotational.Torque):   # extends Torque: tau from an equation, not a model input
+        tau = Variable(unit="N.m", description="accelerating torque, from a signal")
+
     class SaturatedServo(Component):
         motor = rotational.Inertia(J=1e-3)
-        drive = rotational.Torque()
+        drive = SignalTorque()
         limit = blocks.Limiter(uMax=2.0, uMin=-2.0, smoothing=1e-3)   # torque limit [N m]
         ...
         def equations(self):
+            connect(self.drive.flange, self.motor.flange_a)
             self.equation(self.limit.u, self.kp * (self.phi_ref - self.motor.phi))  # what u is
             self.equation(self.drive.tau, self.limit.y)                              # where y goes
 
-(``drive.tau`` of :class:`~gtmodel.modeling.library.rotational.Torque` is a model input
-unless an equation gives it, as here.) A ``u`` that no equation gives leaves the model
-one equation short: the structural check names it.
+(:class:`~gtmodel.modeling.library.rotational.Torque` declares ``tau`` an input of the
+model: an equation for it would over-determine the model, hence the redeclaration.) A
+``u`` that no equation gives leaves the model one equation short: the structural check
+names it. The worked example is in ``docs/own_model.md``, section 6.
 
 Smooth laws (symbolic; CasADi ``SX``/``MX``, or numbers as ``DM``), each written so that
 no ``exp`` overflows and every derivative, at every point, is that of an analytic branch
