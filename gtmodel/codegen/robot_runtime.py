@@ -91,9 +91,10 @@ DEFAULT_PORTS = INTERFACE_PORTS
 #: Flags of a cycle-log row (bit values of its ``flags`` column; ``gt_runtime.c``).
 RUNTIME_FLAGS = {"sent": 1, "step": 2, "held": 4, "fallback_stale": 8, "fallback_step": 16, "ramp": 32, "malformed": 64,
                  "non_finite": 128, "duplicate_or_old": 256, "missing_field": 512, "deadline_held": 1024, "late_dropped": 2048,
-                 "clamped": 4096, "no_safe_reply": 8192, "too_long": 16384}
+                 "clamped": 4096, "no_safe_reply": 8192, "too_long": 16384, "out_of_window": 32768, "resync": 65536, "unapplied": 131072,
+                 "sent_late": 262144}
 #: The runtime's C files copied next to the step (folder ``harness/runtime/`` of the package).
-RUNTIME_SOURCES = ("gt_runtime.c", "gt_rsi.c", "gt_rsi.h", "gt_egm.c", "gt_egm.h", "gt_sensor_stream.c", "gt_sensor_stream.h",
+RUNTIME_SOURCES = ("gt_runtime.c", "gt_guard.c", "gt_guard.h", "gt_rsi.c", "gt_rsi.h", "gt_egm.c", "gt_egm.h", "gt_sensor_stream.c", "gt_sensor_stream.h",
                    "egm.pb.c", "egm.pb.h", "egm.proto", "egm.options", "nanopb/pb.h", "nanopb/pb_common.c", "nanopb/pb_common.h",
                    "nanopb/pb_decode.c", "nanopb/pb_decode.h", "nanopb/pb_encode.c", "nanopb/pb_encode.h", "nanopb/LICENSE.txt",
                    "nanopb/README.md")
@@ -323,8 +324,8 @@ def _config(spec: RuntimeSpec, prefix: str) -> str:
             planned = "planned.joints." if spec.egm_mode == "joint" else "planned.cartesian."
             feedback = "feedback.joints." if spec.egm_mode == "joint" else "feedback.cartesian."
             names = [f.rsplit(".", 1)[1] for f in spec.outputs]
-            init = [EGM_INPUTS.index(planned + n) for n in names]
-            init2 = [EGM_INPUTS.index(feedback + n) for n in names]
+            init = [EGM_INPUTS.index(feedback + n) for n in names]  # the measured position first: the rate limit from it
+            init2 = [EGM_INPUTS.index(planned + n) for n in names]
     mode = {"joint": "GT_EGM_JOINT", "cartesian": "GT_EGM_CARTESIAN", "path_correction": "GT_EGM_PATH_CORRECTION"}[spec.egm_mode]
 
     def ints(v: list[int]) -> str:
@@ -364,7 +365,7 @@ typedef {prefix}_real gt_rt_real;
 static const int gt_rt_x_source[GT_RT_NX] = {{{ints(x_source)}}};
 /* u[i] -> reply slot gt_rt_u_reply[i] */
 static const int gt_rt_u_reply[GT_RT_NU] = {{{ints(slots)}}};
-/* the start of u[i]: packet field gt_rt_u_init[i], else gt_rt_u_init2[i]; -1: zero */
+/* the start of u[i]: packet field gt_rt_u_init[i] (EGM: the measured position), else gt_rt_u_init2[i] (planned); -1: zero */
 static const int gt_rt_u_init[GT_RT_NU] = {{{ints(init)}}};
 static const int gt_rt_u_init2[GT_RT_NU] = {{{ints(init2)}}};
 static const double gt_rt_lower[GT_RT_NU] = {{{_c_doubles(spec.lower)}}};
@@ -416,7 +417,7 @@ def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "dou
     exe = out / "gt_runtime"
     cc = find_compiler()
     inc = ["-I", str(out), "-I", str(out / "nanopb")] + [a for d in generated.include_dirs for a in ("-isystem", d)]
-    sources = [out / "gt_runtime.c", out / "gt_rsi.c", out / "gt_egm.c", out / "gt_sensor_stream.c", out / "egm.pb.c",
+    sources = [out / "gt_runtime.c", out / "gt_guard.c", out / "gt_rsi.c", out / "gt_egm.c", out / "gt_sensor_stream.c", out / "egm.pb.c",
                out / "nanopb" / "pb_common.c", out / "nanopb" / "pb_decode.c", out / "nanopb" / "pb_encode.c",
                generated.source, generated.casadi_source]
     run_compiler([*cc, *BUILD_FLAGS, *inc, *map(str, sources), "-o", str(exe), *generated.link_flags, "-lm"],

@@ -32,6 +32,7 @@ import signal
 import subprocess
 import threading
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,12 +51,14 @@ log = logging.getLogger("gtmodel")
 #: Bits of the cycle log's ``flags`` column (the C runtime's ``F_*``).
 FLAGS = {"sent": 1, "step": 2, "held": 4, "fallback_stale": 8, "fallback_step": 16, "ramp": 32, "malformed": 64, "non_finite": 128,
          "duplicate_or_old": 256, "missing_field": 512, "deadline_held": 1024, "late_dropped": 2048, "clamped": 4096,
-         "no_safe_reply": 8192, "too_long": 16384}
+         "no_safe_reply": 8192, "too_long": 16384, "out_of_window": 32768, "resync": 65536, "unapplied": 131072, "sent_late": 262144}
 #: The keys of ``runtime_stats.json``.
 STATS_KEYS = ("format", "interface", "end", "signal", "packets", "cycles", "replies", "malformed", "too_long", "non_finite",
               "duplicate_or_old", "missing_field", "held_replies", "fallback_cycles", "fallback", "deadline_held", "late_dropped",
               "no_safe_reply", "send_errors", "compose_errors", "limit_clamps", "sensor", "step_calls", "step_status", "log",
-              "realtime", "first_ipoc_or_seq", "last_ipoc_or_seq", "max_latency_us", "period_s", "reply_deadline_s", "stale_cycles")
+              "realtime", "source", "strangers", "sequence", "relative", "sent_late", "start_outside_limits", "silences", "alarms",
+              "events_dropped", "events", "first_ipoc_or_seq", "last_ipoc_or_seq", "max_latency_us", "period_s", "reply_deadline_s",
+              "stale_cycles")
 LOG_NAME, STATS_NAME, READY_NAME = "cycle_log.csv", "runtime_stats.json", "ready.json"
 #: What the runtime does with each fault (the summary's ``faults``).
 _ACTIONS = {
@@ -68,7 +71,12 @@ _ACTIONS = {
     "step_failed": "fallback ({rule}) instead of the step's output",
     "deadline_held": "held reply instead of the late computed one (still within the period)",
     "late_dropped": "no reply (the period had passed; the robot counts the cycle late)",
-    "no_safe_reply": "no reply (no start position to hold yet)",
+    "no_safe_reply": "no reply (no start position yet, or the robot's start more than one rate step outside [limits])",
+    "out_of_window": "held reply; the step is not called (the sequence resynchronises after consecutive consistent packets)",
+    "strangers": "never parsed, answered or logged; counted by address (summary: strangers)",
+    "before_lock": "no reply: not a valid packet, and no robot locked yet",
+    "unapplied": "the robot reported the reply late (RSI Delay): its increment taken back from the total",
+    "sent_late": "sent, but sendto returned after the period (the process stalled inside it)",
 }
 _OWN_FILES = {LOG_NAME, STATS_NAME, READY_NAME, READY_NAME + ".tmp", STATS_NAME + ".tmp", "summary.json"}
 
@@ -153,17 +161,21 @@ def read_cycle_log(path: str | Path) -> dict[str, np.ndarray]:
     """
     p = Path(path)
     try:
-        lines = p.read_text().splitlines()
+        with p.open() as f:  # read by NumPy's C reader: an hour's log (900,000 rows) without a Python object per number
+            header = f.readline().strip()
+            if not header:
+                raise InputError(f"{p}: empty cycle log (no header)")
+            names = header.split(",")
+            try:
+                with warnings.catch_warnings():  # a log of no rows: no warning, an empty table
+                    warnings.simplefilter("ignore", UserWarning)
+                    data = np.loadtxt(f, delimiter=",", dtype=float, ndmin=2)
+            except ValueError as exc:
+                raise InputError(f"{p}: a row that is not numbers or of the wrong length ({exc})") from None
     except OSError as exc:
         raise InputError(f"{p}: cannot read the cycle log: {exc.strerror or exc}") from None
-    if not lines:
-        raise InputError(f"{p}: empty cycle log (no header)")
-    names = lines[0].split(",")
-    rows = [ln for ln in lines[1:] if ln]
-    try:
-        data = np.array([[float(v) for v in ln.split(",")] for ln in rows], dtype=float).reshape(len(rows), -1) if rows else np.zeros((0, len(names)))
-    except ValueError as exc:
-        raise InputError(f"{p}: a row that is not numbers or of the wrong length ({exc})") from None
+    if data.size == 0:
+        data = np.zeros((0, len(names)))
     if data.shape[1] != len(names):
         raise InputError(f"{p}: expected {len(names)} values per row, got {data.shape[1]}")
     ints = {"cycle", "ipoc_or_seq", "flags", "status", "sensor_age"}
@@ -187,7 +199,12 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
         no reply), ``late_replies`` (sent later than the period), ``deadline_held``,
         ``reply_latency_ms`` (``p50``, ``p90``, ``p99``, ``max`` over the replies sent),
         ``faults`` (per fault ``count`` and ``action``), ``fallback``, ``limit_clamps``,
-        ``sensor``, ``step_status``, ``log`` (rows, dropped), ``realtime`` (granted, reason), ``end``.
+        ``sensor``, ``step_status``, ``log`` (rows, dropped, capped, bytes, max_bytes), ``realtime``
+        (granted, reason), ``end``; the network guard's ``source`` (the robot and tracker of the
+        session and how each was fixed), ``strangers`` (datagrams and addresses), ``sequence``
+        (out of the window, resynchronisations), ``start_outside_limits``, ``silences`` (count,
+        longest, events), ``alarms`` (holds of more than ``hold_alarm_cycles``, resynchronisations,
+        events) and ``events`` (all, at most 256; more in ``events_dropped``).
     """
     period = float(stats.get("period_s", LOOP_PERIOD_S))
     latency = np.zeros(0)
@@ -201,9 +218,14 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
     rule = stats.get("fallback", "hold")
     fallback = stats.get("fallback_cycles", {})
     counts = {k: stats.get(k, 0) for k in ("malformed", "too_long", "non_finite", "duplicate_or_old", "missing_field",
-                                            "deadline_held", "late_dropped", "no_safe_reply")}
+                                            "deadline_held", "late_dropped", "no_safe_reply", "sent_late")}
     counts["stale_sensor"] = fallback.get("stale_sensor", 0)
     counts["step_failed"] = fallback.get("step_failed", 0)
+    counts["out_of_window"] = stats.get("sequence", {}).get("out_of_window", 0)
+    counts["strangers"] = stats.get("strangers", {}).get("datagrams", 0)
+    counts["before_lock"] = stats.get("source", {}).get("before_lock", 0)
+    counts["unapplied"] = stats.get("relative", {}).get("unapplied", 0)
+    events = list(stats.get("events", []))
     faults = {k: {"count": int(v), "action": _ACTIONS[k].format(rule=rule)} for k, v in counts.items()}
     cycles = int(stats.get("cycles", 0))
     return {
@@ -225,6 +247,14 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
         "log": {"rows": rows, **stats.get("log", {})},
         "realtime": {"granted": bool(stats.get("realtime", {}).get("granted", False)),
                      "reason": stats.get("realtime", {}).get("reason", "")},
+        "source": stats.get("source", {}),
+        "strangers": stats.get("strangers", {"datagrams": 0, "addresses": []}),
+        "sequence": stats.get("sequence", {}),
+        "start_outside_limits": int(stats.get("start_outside_limits", 0)),
+        "silences": {**stats.get("silences", {"count": 0}), "events": [e for e in events if e.get("kind") == "silence"]},
+        "alarms": {**stats.get("alarms", {"holds": 0}), "events": [e for e in events if e.get("kind") in ("hold", "resync", "sensor_resync")]},
+        "events": events,
+        "events_dropped": int(stats.get("events_dropped", 0)),
     }
 
 
@@ -258,6 +288,19 @@ def _check_out_dir(out: Path) -> None:
         (out / name).unlink(missing_ok=True)
 
 
+#: The runtime's stderr lines said to the user as they come (``gtmodel loop``: through the ``gtmodel`` logger).
+_SAID = ("gt_runtime: alarm", "gt_runtime: warning")
+
+
+def _pump_stderr(stream: Any, lines: list[str]) -> None:
+    """Read the runtime's stderr as it comes: alarms and warnings logged at once, every line kept."""
+    for line in stream:
+        line = line.rstrip("\n")
+        lines.append(line)
+        if line.startswith(_SAID):
+            log.warning("%s", line)
+
+
 def _stop(proc: subprocess.Popen, grace: float = 3.0) -> None:
     """SIGTERM (the runtime flushes its log), then SIGKILL to the whole group."""
     if proc.poll() is None:
@@ -275,7 +318,8 @@ def _stop(proc: subprocess.Popen, grace: float = 3.0) -> None:
 
 def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, int] | None = None, sensor_port: int | None = None,
              idle_timeout: float = 2.0, max_cycles: int | None = None, time_limit: float | None = None,
-             reply_deadline: float | None = None, realtime: bool = True, end_on_signal: bool = False) -> LoopRun:
+             reply_deadline: float | None = None, realtime: bool = True, end_on_signal: bool = False, robot: str | None = None,
+             tracker: str | None = None, log_max_mb: float | None = None) -> LoopRun:
     """Run the robot runtime until it ends, and read its counts and log.
 
     Parameters
@@ -305,6 +349,14 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
         signal to the runtime does: the runtime is stopped, its log flushed, and the run
         returned with status ``interrupted`` (``gtmodel loop``: Ctrl-C ends the loop and the
         result folder is written). Default False: the interrupt is raised after the stop.
+    robot : str, optional
+        The robot's IPv4 address, optionally ``ADDR:PORT``: only its datagrams are answered
+        (None: the first valid packet's source is locked for the session).
+    tracker : str, optional
+        The sensor stream's source, the same way (None: the first valid sample's source).
+    log_max_mb : float, optional
+        The cycle log's cap [MB] (rows past it are counted in ``log.capped``, not written);
+        None: the runtime's default, 1024 MB.
 
     Returns
     -------
@@ -314,7 +366,8 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     Raises
     ------
     InputError
-        ``executable`` is not an executable file, or ``out_dir`` holds foreign files.
+        ``executable`` is not an executable file, ``out_dir`` holds foreign files, ``robot`` or
+        ``tracker`` is not a string, ``log_max_mb`` not a positive number.
     KeyboardInterrupt
         A SIGINT/SIGTERM of this process without ``end_on_signal`` (the runtime is stopped
         first, its log flushed).
@@ -335,25 +388,35 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
         cmd += ["--reply-deadline", repr(float(reply_deadline))]
     if not realtime:
         cmd += ["--no-realtime"]
+    for option, value in (("--robot", robot), ("--tracker", tracker)):
+        if value is not None:
+            if not isinstance(value, str):
+                raise InputError(f"{option[2:]}: expected an IPv4 address, optionally ADDR:PORT, got {value!r}")
+            cmd += [option, value]
+    if log_max_mb is not None:
+        if isinstance(log_max_mb, bool) or not isinstance(log_max_mb, (int, float)) or not 0 < log_max_mb <= 1e6:
+            raise InputError(f"log_max_mb: expected a number in (0, 1e6] MB, got {log_max_mb!r}")
+        cmd += ["--log-max-mb", repr(float(log_max_mb))]
     log.info("runtime: %s", " ".join(cmd))
     timed_out = signalled = False
-    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             errors="replace", start_new_session=True)
     with _RUNNING_LOCK:
         _RUNNING.add(proc.pid)
+    lines: list[str] = []
+    pump = threading.Thread(target=_pump_stderr, args=(proc.stderr, lines), daemon=True)
+    pump.start()
     try:
         try:
-            _, err = proc.communicate(timeout=time_limit)
+            proc.wait(timeout=time_limit)
         except subprocess.TimeoutExpired:
             timed_out = True
             _stop(proc)
-            _, err = proc.communicate()
     except KeyboardInterrupt as exc:
         _stop(proc)
         if not end_on_signal:
             raise
         signalled = str(exc) or "a signal"
-        _, err = proc.communicate()
     except BaseException:
         _stop(proc)
         raise
@@ -364,8 +427,11 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
             pass
         with _RUNNING_LOCK:
             _RUNNING.discard(proc.pid)
+    proc.wait()
+    pump.join(10.0)
     code = proc.returncode
-    err = (err or "").strip()
+    said = [ln for ln in lines if ln.startswith(_SAID)]
+    err = "\n".join(ln for ln in lines if not ln.startswith(_SAID)).strip()
     stats: dict[str, Any] = {}
     try:
         stats = json.loads((out / STATS_NAME).read_text())
@@ -379,6 +445,8 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
         except InputError as exc:
             log.warning("runtime: %s", exc)
     summary = summarize(stats, columns) if stats else {}
+    if summary:
+        summary["warnings"] = [ln for ln in said if ln.startswith(_SAID[1])]
     if timed_out:
         status, message = Status.MAX_ITERATIONS, f"stopped at the time limit of {time_limit:g} s"
     elif code == 2:

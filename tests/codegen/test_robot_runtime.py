@@ -99,12 +99,14 @@ def test_generate_writes_the_step_the_runtime_and_its_configuration(tmp_path):
     assert "gt_rt_rate[GT_RT_NU] = {0.1, 0.1}" in cfg and "#define GT_RT_NSENSOR 1" in cfg
 
 
-def test_egm_joint_configuration_starts_from_the_planned_joints(tmp_path):
+def test_egm_joint_configuration_starts_from_the_measured_joints(tmp_path):
     spec = RuntimeSpec(interface="egm", inputs=["feedback.joints.0", "feedback.joints.1"], outputs=["planned.joints.1", "planned.joints.0"],
                        lower=[-90, -90], upper=[90, 90], rate=[1, 1])
     RobotRuntime(_step(2, 2), spec).generate(tmp_path)
     cfg = (tmp_path / "gt_runtime_config.h").read_text()
-    assert f"gt_rt_u_init[GT_RT_NU] = {{{EGM_INPUTS.index('planned.joints.1')}, {EGM_INPUTS.index('planned.joints.0')}}}" in cfg
+    # the measured position first (the rate limit applies from where the robot is), the planned one when absent
+    assert f"gt_rt_u_init[GT_RT_NU] = {{{EGM_INPUTS.index('feedback.joints.1')}, {EGM_INPUTS.index('feedback.joints.0')}}}" in cfg
+    assert f"gt_rt_u_init2[GT_RT_NU] = {{{EGM_INPUTS.index('planned.joints.1')}, {EGM_INPUTS.index('planned.joints.0')}}}" in cfg
     assert "gt_rt_u_reply[GT_RT_NU] = {1, 0}" in cfg and "#define GT_RT_NREPLY 2" in cfg
 
 

@@ -62,6 +62,7 @@
 
 #include "gt_runtime_config.h"
 #include "gt_egm.h"
+#include "gt_guard.h"
 #include "gt_rsi.h"
 #include "gt_sensor_stream.h"
 
@@ -81,8 +82,18 @@
 #define F_CLAMPED 4096u
 #define F_NO_SAFE_REPLY 8192u
 #define F_TOO_LONG 16384u
+#define F_OUT_OF_WINDOW 32768u
+#define F_RESYNC 65536u
+#define F_UNAPPLIED 131072u
+#define F_SENT_LATE 262144u
 
 #define GT_RT_RING 8192u /* entries: 32 s of cycles at 4 ms; the writer drains every 5 ms */
+#define GT_RT_SEQ_WINDOW 250      /* cycles: a plausible jump of the robot's sequence, plus twice the cycles of a silence */
+#define GT_RT_RESYNC_PACKETS 5    /* consecutive consistent packets beyond the window that restart the sequence */
+#define GT_RT_SENSOR_WINDOW 10000 /* samples: a plausible jump of the tracker's seq, plus 20000 per second of silence */
+#define GT_RT_HOLD_ALARM 5        /* consecutive cycles without the step's reply that raise an alarm */
+#define GT_RT_MAX_EVENTS 256      /* events kept (silences, alarms, resynchronisations); more are counted */
+#define GT_RT_DRAIN 64            /* datagrams read per wake-up before the cycle looks at the clock again */
 #define GT_RT_MAX_DATAGRAM 4096
 #define GT_RT_NSTATUS 32
 #define GT_RT_CYCLE_STACK (1u << 20)  /* the step's CasADi work arrays live on it */
@@ -106,8 +117,9 @@ typedef struct {
     uint64_t fallback_stale, fallback_step, deadline_held, late_dropped, no_safe_reply, send_errors, compose_errors;
     uint64_t clamp_lower, clamp_upper, clamp_rate, step_calls, step_status[GT_RT_NSTATUS], step_status_other;
     uint64_t sensor_accepted, sensor_malformed, sensor_non_finite, sensor_old, sensor_short;
-    uint64_t log_written, log_dropped, log_write_errors, first_seq, last_seq;
-    double max_latency_us;
+    uint64_t log_written, log_dropped, log_write_errors, log_capped, log_bytes, first_seq, last_seq;
+    uint64_t before_lock, sensor_before_lock, unapplied, sent_late, start_outside, holds, hold_longest, silences, events_dropped;
+    double max_latency_us, silence_longest_s;
     int realtime_fifo, realtime_mlock;
     char realtime_reason[160];
     const char *end;
@@ -115,12 +127,32 @@ typedef struct {
 
 static gt_rt_stats S;
 
+/* events: written by the cycle thread only; the writer thread prints the alarms among those published */
+#define EV_SILENCE 0
+#define EV_HOLD 1
+#define EV_RESYNC 2
+#define EV_SENSOR_RESYNC 3
+#define EV_LOCK 4
+#define EV_SENSOR_LOCK 5
+static const char *const gt_event_names[] = {"silence", "hold", "resync", "sensor_resync", "lock", "sensor_lock"};
+typedef struct {
+    int kind;
+    uint64_t cycle, seq, cycles;
+    double t, length_s;
+    uint32_t reasons;
+} gt_rt_event;
+static gt_rt_event gt_events[GT_RT_MAX_EVENTS];
+static atomic_int gt_events_n;
+static gt_source gt_robot_src, gt_tracker_src;
+static gt_strangers gt_strangers_seen;
+static gt_seqwin gt_robot_seq, gt_sensor_seqw;
+
 static struct {
     char out[3072], log_path[4096], stats_path[4096], ready_path[4096];
     struct sockaddr_in listen, sensor;
     int sensor_port_given;
     double idle_timeout, reply_deadline;
-    uint64_t max_cycles;
+    uint64_t max_cycles, log_max_bytes;
     int realtime;
 } O;
 
@@ -153,29 +185,82 @@ static void gt_log_push(const gt_rt_entry *e)
     atomic_store_explicit(&gt_ring_head, head + 1, memory_order_release);
 }
 
+#define GT_RT_ROW_MAX ((GT_RT_NX + 4 * GT_RT_NU + 8) * 26)
+
+/* one row of the log, within the cap (--log-max-mb): a row past it is counted, not written */
 static void gt_write_row(const gt_rt_entry *e)
 {
-    int i, bad = 0;
-    bad |= fprintf(gt_log_file, "%llu,%llu,%.17g,%u,%d,%.17g,%d", (unsigned long long)e->cycle, (unsigned long long)e->seq, e->t,
-                   (unsigned)e->flags, (int)e->status, e->latency_us, (int)e->sensor_age) < 0;
-    for (i = 0; i < GT_RT_NX; ++i) bad |= fprintf(gt_log_file, ",%.17g", e->x[i]) < 0;
-    for (i = 0; i < GT_RT_NU; ++i) bad |= fprintf(gt_log_file, ",%.17g", e->u[i]) < 0;
-    for (i = 0; i < GT_RT_NU; ++i) bad |= fprintf(gt_log_file, ",%.17g", e->y[i]) < 0;
+    static char row[GT_RT_ROW_MAX];
+    size_t n = 0;
+    int i;
+#define GT_ROW(...) n += (size_t)snprintf(row + n, n < sizeof row ? sizeof row - n : 0, __VA_ARGS__)
+    GT_ROW("%llu,%llu,%.17g,%u,%d,%.17g,%d", (unsigned long long)e->cycle, (unsigned long long)e->seq, e->t, (unsigned)e->flags,
+           (int)e->status, e->latency_us, (int)e->sensor_age);
+    for (i = 0; i < GT_RT_NX; ++i) GT_ROW(",%.17g", e->x[i]);
+    for (i = 0; i < GT_RT_NU; ++i) GT_ROW(",%.17g", e->u[i]);
+    for (i = 0; i < GT_RT_NU; ++i) GT_ROW(",%.17g", e->y[i]);
 #if GT_RT_RELATIVE
-    for (i = 0; i < GT_RT_NU; ++i) bad |= fprintf(gt_log_file, ",%.17g", e->sent[i]) < 0;
+    for (i = 0; i < GT_RT_NU; ++i) GT_ROW(",%.17g", e->sent[i]);
 #endif
-    bad |= fputc('\n', gt_log_file) == EOF;
-    if (bad) ++S.log_write_errors;
-    else ++S.log_written;
+    GT_ROW("\n");
+#undef GT_ROW
+    if (n >= sizeof row) {
+        ++S.log_write_errors;
+        return;
+    }
+    if (O.log_max_bytes > 0 && S.log_bytes + n > O.log_max_bytes) {
+        ++S.log_capped;
+        return;
+    }
+    if (fwrite(row, 1, n, gt_log_file) != n) {
+        ++S.log_write_errors;
+        return;
+    }
+    S.log_bytes += n;
+    ++S.log_written;
+}
+
+static const char *const gt_flag_names[] = {"sent", "step", "held", "fallback_stale", "fallback_step", "ramp", "malformed", "non_finite",
+                                             "duplicate_or_old", "missing_field", "deadline_held", "late_dropped", "clamped", "no_safe_reply",
+                                             "too_long", "out_of_window", "resync", "unapplied", "sent_late"};
+
+static void gt_flag_text(uint32_t flags, char *out, size_t cap)
+{
+    size_t n = 0;
+    unsigned k;
+    out[0] = '\0';
+    for (k = 0; k < sizeof gt_flag_names / sizeof gt_flag_names[0]; ++k)
+        if ((flags & (1u << k)) && n < cap) n += (size_t)snprintf(out + n, cap - n, "%s%s", n ? ", " : "", gt_flag_names[k]);
+}
+
+/* the alarms among the events published since the last call, on stderr (the writer thread) */
+static void gt_print_alarms(int *printed)
+{
+    int n = atomic_load_explicit(&gt_events_n, memory_order_acquire);
+    for (; *printed < n; ++*printed) {
+        const gt_rt_event *ev = &gt_events[*printed];
+        if (ev->kind == EV_HOLD) {
+            char why[400];
+            gt_flag_text(ev->reasons, why, sizeof why);
+            fprintf(stderr, "gt_runtime: alarm: no reply of the step for %d cycles from cycle %llu (t %.3f s): %s "
+                            "(summary.json: loop.alarms)\n", GT_RT_HOLD_ALARM, (unsigned long long)ev->cycle, ev->t, why);
+        }
+        else if (ev->kind == EV_RESYNC || ev->kind == EV_SENSOR_RESYNC)
+            fprintf(stderr, "gt_runtime: alarm: the %s's sequence restarted at %llu (cycle %llu, t %.3f s) after %d consecutive packets "
+                            "beyond the window\n", ev->kind == EV_RESYNC ? "robot" : "tracker", (unsigned long long)ev->seq,
+                    (unsigned long long)ev->cycle, ev->t, GT_RT_RESYNC_PACKETS);
+    }
 }
 
 /* ---- the log writer: consumer side, an ordinary thread ---- */
 static void *gt_writer(void *arg)
 {
+    int printed = 0;
     (void)arg;
     for (;;) {
         uint64_t tail = atomic_load_explicit(&gt_ring_tail, memory_order_relaxed);
         uint64_t head = atomic_load_explicit(&gt_ring_head, memory_order_acquire);
+        gt_print_alarms(&printed);
         if (tail == head) {
             struct timespec ts = {0, 5000000};
             if (atomic_load(&gt_writer_stop) && tail == atomic_load_explicit(&gt_ring_head, memory_order_acquire)) break;
@@ -189,6 +274,7 @@ static void *gt_writer(void *arg)
             atomic_store_explicit(&gt_ring_tail, tail, memory_order_release);
         }
     }
+    gt_print_alarms(&printed);
     fflush(gt_log_file);
     return NULL;
 }
@@ -256,11 +342,33 @@ static void gt_fallback(const double *last, const double *target, double *y, uin
     }
 }
 
-/* ---- the sensor stream (the cycle thread only): the newest valid sample and its age in robot cycles ---- */
+/* ---- events (the cycle thread only; published for the writer's stderr lines) ---- */
+static double gt_start_time;
+
+static gt_rt_event *gt_event(int kind, uint64_t cycle, uint64_t seq, double t_rx, uint32_t reasons)
+{
+    int n = atomic_load_explicit(&gt_events_n, memory_order_relaxed);
+    gt_rt_event *ev;
+    if (n >= GT_RT_MAX_EVENTS) {
+        ++S.events_dropped;
+        return NULL;
+    }
+    ev = &gt_events[n];
+    memset(ev, 0, sizeof *ev);
+    ev->kind = kind;
+    ev->cycle = cycle;
+    ev->seq = seq;
+    ev->t = t_rx - gt_start_time;
+    ev->reasons = reasons;
+    atomic_store_explicit(&gt_events_n, n + 1, memory_order_release);
+    return ev;
+}
+
+/* ---- the sensor stream (the cycle thread only): the newest valid sample of the tracker and its age in robot cycles ---- */
 static gt_sensor_sample gt_latest;
 static int gt_have_sensor;
-static uint64_t gt_sensor_seq;
 static int32_t gt_sensor_age;
+static double gt_sensor_rx;
 
 static void gt_drain_sensor(int32_t age_of_new)
 {
@@ -269,23 +377,109 @@ static void gt_drain_sensor(int32_t age_of_new)
     int k;
     if (gt_sensor_fd < 0) return;
     for (k = 0; k < 256; ++k) {
-        ssize_t m = recv(gt_sensor_fd, sbuf, sizeof sbuf, MSG_DONTWAIT | MSG_TRUNC);
+        struct sockaddr_in from;
+        socklen_t fromlen = sizeof from;
+        ssize_t m = recvfrom(gt_sensor_fd, sbuf, sizeof sbuf, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
         int r;
+        double now;
         if (m < 0) break;
+        if (!gt_source_match(&gt_tracker_src, &from)) { /* a stranger: never parsed */
+            gt_strangers_count(&gt_strangers_seen, &from, 1);
+            continue;
+        }
         r = gt_sensor_parse(sbuf, (size_t)m > GT_SENSOR_MAX_LEN ? GT_SENSOR_MAX_LEN + 1 : (size_t)m, &sample);
         if (r == GT_SENSOR_NON_FINITE) ++S.sensor_non_finite;
         else if (r != GT_SENSOR_OK) ++S.sensor_malformed;
-        else if (gt_have_sensor && sample.seq <= gt_sensor_seq) ++S.sensor_old;
         else if (sample.n < GT_RT_NSENSOR) ++S.sensor_short;
         else {
-            gt_latest = sample;
-            gt_sensor_seq = sample.seq;
-            gt_have_sensor = 1;
-            gt_sensor_age = age_of_new;
-            ++S.sensor_accepted;
+            int q;
+            now = gt_now();
+            if (!gt_tracker_src.locked) {
+                gt_source_lock(&gt_tracker_src, &from);
+                gt_event(EV_SENSOR_LOCK, S.cycles, sample.seq, now, 0);
+            }
+            q = gt_seq_check(&gt_sensor_seqw, sample.seq, 64,
+                             (uint64_t)GT_RT_SENSOR_WINDOW + (uint64_t)(20000.0 * (gt_have_sensor ? now - gt_sensor_rx : 0.0)),
+                             GT_RT_RESYNC_PACKETS);
+            if (q == GT_SEQ_OLD) ++S.sensor_old;
+            else if (q == GT_SEQ_OUT) continue; /* counted in the window's out_of_window */
+            else {
+                if (q == GT_SEQ_RESYNC) gt_event(EV_SENSOR_RESYNC, S.cycles, sample.seq, now, 0);
+                gt_latest = sample;
+                gt_have_sensor = 1;
+                gt_sensor_age = age_of_new;
+                gt_sensor_rx = now;
+                ++S.sensor_accepted;
+            }
         }
     }
 }
+
+/* ---- the start of the replies ---- */
+static double gt_clamp(double v, int i)
+{
+    return v < gt_rt_lower[i] ? gt_rt_lower[i] : v > gt_rt_upper[i] ? gt_rt_upper[i] : v;
+}
+
+/* last[] = what the robot holds before the first reply: zero corrections (RSI, EGM path correction) or, for EGM
+ * guidance, the robot's MEASURED position (feedback; planned when the packet has none), so that the rate limit
+ * applies from where the robot is. Returns 1, 0 when a needed field is missing, 2 when the start is more than one
+ * rate step outside [lower, upper] (no reply can then keep both the limits and the rate: none is sent). */
+static int gt_start(const double *field, uint64_t present_mask, double *last, double *target)
+{
+    int i, ok = 1;
+    for (i = 0; i < GT_RT_NU; ++i) {
+        int a = gt_rt_u_init[i], b = gt_rt_u_init2[i];
+        double v = 0.0;
+        if (a >= 0 && (present_mask & ((uint64_t)1 << a)) && isfinite(field[a])) v = field[a];
+        else if (b >= 0 && (present_mask & ((uint64_t)1 << b)) && isfinite(field[b])) v = field[b];
+        else if (a >= 0) ok = 0;
+        if (ok && (v < gt_rt_lower[i] - gt_rt_rate[i] || v > gt_rt_upper[i] + gt_rt_rate[i])) ok = 2;
+        last[i] = v;
+        target[i] = gt_clamp(a >= 0 ? v : 0.0, i);
+    }
+    return ok;
+}
+
+/* compose the reply of y into reply[] (values: RSI relative the increments y - last; else y); the sent values in e->sent */
+static int gt_compose(unsigned char *reply, const double *y, const double *last, uint64_t seq, double t_rx, int has_orient,
+                      const double *orient, gt_rt_entry *e)
+{
+    double values[GT_RT_NREPLY];
+    int i;
+    for (i = 0; i < GT_RT_NREPLY; ++i) values[i] = 0.0;
+    for (i = 0; i < GT_RT_NU; ++i) {
+        e->sent[i] = GT_RT_RELATIVE ? y[i] - last[i] : y[i];
+        values[gt_rt_u_reply[i]] = e->sent[i];
+    }
+#if GT_RT_INTERFACE == GT_RT_RSI
+    (void)t_rx;
+    (void)has_orient;
+    (void)orient;
+    return gt_rsi_compose((char *)reply, GT_RT_MAX_DATAGRAM, GT_RT_SEN_TYPE, GT_RT_RSI_ELEMENTS, values, seq);
+#else
+    return gt_egm_compose(reply, GT_RT_MAX_DATAGRAM, GT_RT_EGM_MODE, (uint32_t)seq, (uint32_t)(1000.0 * (t_rx - gt_start_time)), values,
+                          GT_RT_NREPLY, has_orient ? orient : NULL,
+                          (uint32_t)(gt_have_sensor && gt_sensor_age > 0 ? 1000.0 * GT_RT_PERIOD_S * gt_sensor_age : 0));
+#endif
+}
+
+/* the held reply: the last one, within the limits (a start just outside them moves in at the rate) */
+static void gt_held(const double *last, double *y)
+{
+    int i;
+    uint32_t dummy = 0;
+    for (i = 0; i < GT_RT_NU; ++i) {
+        y[i] = gt_limit(last[i], last[i], i, &dummy);
+#if GT_RT_INTERFACE == GT_RT_RSI
+        y[i] = gt_rsi_grid(y[i], last[i], i);
+#endif
+    }
+}
+
+#define F_NOT_STEPPED (F_HELD | F_FALLBACK_STALE | F_FALLBACK_STEP | F_DEADLINE_HELD | F_LATE_DROPPED | F_NO_SAFE_REPLY)
+#define F_NEVER_STEP (F_NON_FINITE | F_DUPLICATE_OR_OLD | F_OUT_OF_WINDOW | F_MISSING_FIELD)
+#define GT_RSI_DELAY 36 /* Delay.D in gt_rsi.h's field order */
 
 /* ---- the cycle ---- */
 static void *gt_cycle(void *arg)
@@ -294,13 +488,21 @@ static void *gt_cycle(void *arg)
     static unsigned char reply[GT_RT_MAX_DATAGRAM];
     static gt_rt_memory mem;
     static gt_rt_entry e;
-    static double last[GT_RT_NU], target[GT_RT_NU], y[GT_RT_NU], field[64];
+    static double last[GT_RT_NU], target[GT_RT_NU], y[GT_RT_NU], pending[GT_RT_NU], field[64];
     static gt_rt_real xr[GT_RT_NX], ur[GT_RT_NU];
-    int have_last = 0, have_seq = 0, have_t0 = 0;
-    uint64_t last_seq = 0, seq0 = 0, cycles0 = 0;
-    uint32_t tm0 = 0;
-    double last_rx = 0.0, start = gt_now();
+    int have_last = 0, have_t0 = 0, have_rx = 0, have_pending = 0, have_delay = 0, hold_run = 0;
+    uint64_t seq0 = 0, cycles0 = 0, prev_seq = 0, required = 0;
+    uint32_t tm0 = 0, hold_reasons = 0;
+    double last_rx = 0.0, accept_rx = 0.0, prev_delay = 0.0, hold_t0 = 0.0;
+    gt_rt_event *hold_ev = NULL;
+    const uint64_t seq_step = GT_RT_INTERFACE == GT_RT_RSI ? (uint64_t)(llround(1000.0 * GT_RT_PERIOD_S) > 0 ? llround(1000.0 * GT_RT_PERIOD_S) : 1) : 1;
+    int i;
     (void)arg;
+    for (i = 0; i < GT_RT_NX; ++i)
+        if (gt_rt_x_source[i] >= 0) required |= (uint64_t)1 << gt_rt_x_source[i];
+#if GT_RT_RELATIVE
+    required |= (uint64_t)1 << GT_RSI_DELAY; /* relative corrections: the robot's count of late replies is needed */
+#endif
     gt_rt_step_init(&mem);
     while (!atomic_load(&gt_stop)) {
         struct pollfd pf[2];
@@ -308,12 +510,15 @@ static void *gt_cycle(void *arg)
         socklen_t fromlen = sizeof from;
         ssize_t n;
         double t_rx, t = 0.0, elapsed;
-        int i, code = 0, nfd = 1, present = 1, rlen = -1, stale = 0;
+        int code = 0, nfd = 1, rlen = -1, stale = 0, q, accepted;
         uint64_t seq = 0, present_mask = 0;
-        uint32_t flags = 0;
-        uint32_t tm = 0;
+        uint32_t flags = 0, tm = 0;
         int has_tm = 0, has_orient = 0;
         double orient[4] = {0, 0, 0, 0};
+        if (have_rx && gt_now() - last_rx > O.idle_timeout) { /* the robot's silence, whatever strangers send */
+            gt_cycle_end = "idle_timeout";
+            break;
+        }
         pf[0].fd = gt_fd;
         pf[0].events = POLLIN;
         if (gt_sensor_fd >= 0) {
@@ -325,23 +530,24 @@ static void *gt_cycle(void *arg)
         n = recvfrom(gt_fd, buf, sizeof buf, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
         if (n < 0) {
             gt_drain_sensor(-1); /* a sample between robot cycles: age 0 at the next one */
-            if (have_seq && gt_now() - last_rx > O.idle_timeout) {
-                gt_cycle_end = "idle_timeout";
-                break;
-            }
             continue;
         }
         t_rx = gt_now(); /* the reply latency runs from here: the datagram in the runtime's hands */
-        last_rx = t_rx;
+        if (!gt_source_match(&gt_robot_src, &from)) { /* a stranger: never parsed, answered or logged; counted */
+            gt_strangers_count(&gt_strangers_seen, &from, 0);
+            continue;
+        }
         ++S.packets;
-        ++gt_sensor_age;
-        gt_drain_sensor(0);
-        memset(&e, 0, sizeof e);
-        e.cycle = S.packets;
-        for (i = 0; i < GT_RT_NX; ++i) e.x[i] = NAN;
-        for (i = 0; i < GT_RT_NU; ++i) e.u[i] = e.y[i] = e.sent[i] = NAN;
-        e.status = -1;
-        e.sensor_age = gt_have_sensor ? gt_sensor_age : -1;
+        if (gt_robot_src.locked) { /* anything the robot sends keeps the session alive; a gap of two periods is a silence */
+            if (have_rx && t_rx - last_rx > 2.0 * GT_RT_PERIOD_S) {
+                gt_rt_event *ev = gt_event(EV_SILENCE, S.cycles + 1, 0, last_rx, 0);
+                ++S.silences;
+                if (ev) ev->length_s = t_rx - last_rx;
+                if (t_rx - last_rx > S.silence_longest_s) S.silence_longest_s = t_rx - last_rx;
+            }
+            last_rx = t_rx;
+            have_rx = 1;
+        }
 #if GT_RT_INTERFACE == GT_RT_RSI
         {
             static gt_rsi_rob rob;
@@ -365,51 +571,81 @@ static void *gt_cycle(void *arg)
             memcpy(orient, rob.orient, sizeof orient);
         }
 #endif
-        if (code == 1 || code == 2) { /* nothing to echo: no reply */
-            if (code == 2) {
-                ++S.too_long;
-                flags |= F_TOO_LONG;
-            }
+        if (code == 1 || code == 2) { /* nothing to echo: no reply; counted, not logged */
+            if (code == 2) ++S.too_long;
             ++S.malformed;
-            e.flags = flags | F_MALFORMED;
-            e.latency_us = 1e6 * (gt_now() - t_rx);
-            gt_log_push(&e);
             continue;
         }
-        ++S.cycles;
-        e.seq = seq;
-        if (!have_seq) S.first_seq = seq;
-        S.last_seq = seq;
-        for (i = 0; i < GT_RT_NX; ++i) {
-            int src = gt_rt_x_source[i];
-            if (src >= 0) {
-                if (!(present_mask & ((uint64_t)1 << src))) present = 0;
-                e.x[i] = field[src];
-            } else {
-                e.x[i] = gt_have_sensor ? gt_latest.value[-1 - src] : NAN;
+        if (!gt_robot_src.locked) { /* the session's robot: the first valid packet's source (or the named one's) */
+            if (code != 0 || (present_mask & required) != required) {
+                ++S.before_lock;
+                continue;
             }
+            gt_source_lock(&gt_robot_src, &from);
+            gt_event(EV_LOCK, S.cycles + 1, seq, t_rx, 0);
+            last_rx = t_rx;
+            have_rx = 1;
         }
-        if (code == 3) {
-            ++S.non_finite;
-            flags |= F_NON_FINITE;
-        } else if (have_seq &&
-#if GT_RT_INTERFACE == GT_RT_RSI
-                   !(seq > last_seq)
-#else
-                   !((int32_t)((uint32_t)seq - (uint32_t)last_seq) > 0)
-#endif
-        ) {
+        /* a cycle of the robot */
+        ++S.cycles;
+        ++gt_sensor_age;
+        gt_drain_sensor(0);
+        memset(&e, 0, sizeof e);
+        e.cycle = S.cycles;
+        e.seq = seq;
+        for (i = 0; i < GT_RT_NX; ++i) e.x[i] = NAN;
+        for (i = 0; i < GT_RT_NU; ++i) e.u[i] = e.y[i] = e.sent[i] = NAN;
+        e.status = -1;
+        e.sensor_age = gt_have_sensor ? gt_sensor_age : -1;
+        if (S.cycles == 1) S.first_seq = seq;
+        S.last_seq = seq;
+        /* the sequence: within the window of the last accepted packet (docs/robot.md, forged and restarted sequences) */
+        q = gt_seq_check(&gt_robot_seq, seq, GT_RT_INTERFACE == GT_RT_RSI ? 64 : 32,
+                         seq_step * ((uint64_t)GT_RT_SEQ_WINDOW + (uint64_t)(gt_robot_seq.have ? 2.0 * (t_rx - accept_rx) / GT_RT_PERIOD_S : 0.0)),
+                         GT_RT_RESYNC_PACKETS);
+        accepted = q == GT_SEQ_ACCEPT || q == GT_SEQ_RESYNC;
+        if (q == GT_SEQ_OLD) {
             ++S.duplicate_or_old;
             flags |= F_DUPLICATE_OR_OLD;
-        } else if (!present) {
-            ++S.missing_field;
-            flags |= F_MISSING_FIELD;
+        } else if (q == GT_SEQ_OUT) {
+            flags |= F_OUT_OF_WINDOW;
+        } else {
+            accept_rx = t_rx;
+            if (q == GT_SEQ_RESYNC) { /* a restarted robot: everything starts again from this packet */
+                flags |= F_RESYNC;
+                gt_event(EV_RESYNC, S.cycles, seq, t_rx, 0);
+                have_last = have_t0 = have_pending = have_delay = 0;
+                gt_rt_step_init(&mem);
+            }
+#if GT_RT_RELATIVE
+            /* the robot's count of late replies (Delay.D, cumulative): when it grew by the cycles since the last accepted
+             * packet, the reply to that packet came late and the robot did not apply its increment */
+            if ((present_mask & ((uint64_t)1 << GT_RSI_DELAY)) && isfinite(field[GT_RSI_DELAY])) {
+                if (have_pending && have_delay && field[GT_RSI_DELAY] - prev_delay >= (double)((seq - prev_seq) / seq_step) - 0.5) {
+                    for (i = 0; i < GT_RT_NU; ++i) last[i] -= pending[i];
+                    ++S.unapplied;
+                    flags |= F_UNAPPLIED;
+                }
+                prev_delay = field[GT_RSI_DELAY];
+                have_delay = 1;
+            }
+            have_pending = 0;
+            prev_seq = seq;
+#endif
+            if (code == 3) {
+                ++S.non_finite;
+                flags |= F_NON_FINITE;
+            } else if ((present_mask & required) != required) {
+                ++S.missing_field;
+                flags |= F_MISSING_FIELD;
+            }
         }
-        if (!have_seq || !(flags & F_DUPLICATE_OR_OLD)) {
-            last_seq = seq;
-            have_seq = 1;
-        }
-        if (!have_t0) {
+        if (accepted) /* the measurement of a packet in sequence; a held packet's is not logged */
+            for (i = 0; i < GT_RT_NX; ++i) {
+                int src = gt_rt_x_source[i];
+                e.x[i] = src >= 0 ? field[src] : gt_have_sensor ? gt_latest.value[-1 - src] : NAN;
+            }
+        if (accepted && !have_t0) {
             seq0 = seq;
             tm0 = tm;
             cycles0 = S.cycles;
@@ -420,105 +656,111 @@ static void *gt_cycle(void *arg)
 #else
         t = has_tm ? (double)(int32_t)(tm - tm0) / 1000.0 : (double)(S.cycles - cycles0) * GT_RT_PERIOD_S;
 #endif
-        (void)seq0; /* each interface uses some of these */
         (void)has_tm;
         (void)tm0;
         (void)cycles0;
-        (void)start;
+        (void)prev_seq;
+        (void)seq0;
+        (void)pending;
+        (void)prev_delay;
+        (void)have_delay;
         e.t = t;
-        if (!have_last) { /* the start: zero corrections, or the robot's planned position */
-            int ok = 1;
-            for (i = 0; i < GT_RT_NU; ++i) {
-                int a = gt_rt_u_init[i], b = gt_rt_u_init2[i];
-                double v = 0.0;
-                if (a >= 0 && (present_mask & ((uint64_t)1 << a)) && isfinite(field[a])) v = field[a];
-                else if (b >= 0 && (present_mask & ((uint64_t)1 << b)) && isfinite(field[b])) v = field[b];
-                else if (a >= 0) ok = 0;
-                last[i] = v;
-                target[i] = gt_rt_u_init[i] >= 0 ? v : (0.0 < gt_rt_lower[i] ? gt_rt_lower[i] : 0.0 > gt_rt_upper[i] ? gt_rt_upper[i] : 0.0);
-            }
-            if (ok) {
-                uint32_t dummy = 0;
-                for (i = 0; i < GT_RT_NU; ++i) last[i] = target[i] = gt_limit(last[i], last[i], i, &dummy);
-                have_last = 1;
-            }
+        if (!have_last && accepted && !(flags & F_NEVER_STEP)) { /* the start, from a packet in sequence only */
+            int r = gt_start(field, present_mask, last, target);
+            if (r == 1) have_last = 1;
+            else if (r == 2) ++S.start_outside;
         }
         if (!have_last) {
             ++S.no_safe_reply;
-            e.flags = flags | F_NO_SAFE_REPLY;
-            e.latency_us = 1e6 * (gt_now() - t_rx);
-            gt_log_push(&e);
-            continue;
-        }
-        if (GT_RT_NSENSOR > 0 && (!gt_have_sensor || gt_sensor_age > GT_RT_STALE_CYCLES)) stale = 1;
-        if (flags & (F_NON_FINITE | F_DUPLICATE_OR_OLD | F_MISSING_FIELD)) { /* never the step: the held reply */
-            ++S.held;
-            flags |= F_HELD;
-            for (i = 0; i < GT_RT_NU; ++i) y[i] = last[i];
-        } else if (stale) {
-            ++S.fallback_stale;
-            flags |= F_FALLBACK_STALE;
-            gt_fallback(last, target, y, &flags);
+            flags |= F_NO_SAFE_REPLY;
         } else {
-            int st;
-            for (i = 0; i < GT_RT_NX; ++i) xr[i] = (gt_rt_real)e.x[i];
-            st = gt_rt_step(&mem, (gt_rt_real)t, xr, ur);
-            ++S.step_calls;
-            flags |= F_STEP;
-            e.status = st;
-            if (st >= 0 && st < GT_RT_NSTATUS) ++S.step_status[st];
-            else ++S.step_status_other;
-            for (i = 0; i < GT_RT_NU; ++i) e.u[i] = (double)ur[i];
-            if (st == GT_OK || st == GT_MEMORY_RESET || st == GT_MEASUREMENT_REJECTED) {
-                for (i = 0; i < GT_RT_NU; ++i) y[i] = e.u[i];
-            } else {
-                ++S.fallback_step;
-                flags |= F_FALLBACK_STEP;
-                gt_fallback(last, target, y, &flags);
-            }
-        }
-        for (i = 0; i < GT_RT_NU; ++i) y[i] = gt_limit(y[i], last[i], i, &flags); /* the last change of a value */
-        elapsed = gt_now() - t_rx;
-        if (elapsed >= GT_RT_PERIOD_S) {
-            ++S.late_dropped;
-            flags |= F_LATE_DROPPED;
-        } else {
-            double values[GT_RT_NREPLY];
-            if (elapsed > O.reply_deadline && !(flags & F_HELD)) {
-                ++S.deadline_held;
-                flags |= F_DEADLINE_HELD;
+            if (GT_RT_NSENSOR > 0 && (!gt_have_sensor || gt_sensor_age > GT_RT_STALE_CYCLES)) stale = 1;
+            if (flags & F_NEVER_STEP) { /* never the step: the held reply */
+                ++S.held;
+                flags |= F_HELD;
                 for (i = 0; i < GT_RT_NU; ++i) y[i] = last[i];
+            } else if (stale) {
+                ++S.fallback_stale;
+                flags |= F_FALLBACK_STALE;
+                gt_fallback(last, target, y, &flags);
+            } else {
+                int st;
+                for (i = 0; i < GT_RT_NX; ++i) xr[i] = (gt_rt_real)e.x[i];
+                st = gt_rt_step(&mem, (gt_rt_real)t, xr, ur);
+                ++S.step_calls;
+                flags |= F_STEP;
+                e.status = st;
+                if (st >= 0 && st < GT_RT_NSTATUS) ++S.step_status[st];
+                else ++S.step_status_other;
+                for (i = 0; i < GT_RT_NU; ++i) e.u[i] = (double)ur[i];
+                if (st == GT_OK || st == GT_MEMORY_RESET || st == GT_MEASUREMENT_REJECTED) {
+                    for (i = 0; i < GT_RT_NU; ++i) y[i] = e.u[i];
+                } else {
+                    ++S.fallback_step;
+                    flags |= F_FALLBACK_STEP;
+                    gt_fallback(last, target, y, &flags);
+                }
             }
+            for (i = 0; i < GT_RT_NU; ++i) y[i] = gt_limit(y[i], last[i], i, &flags); /* the last change of a value */
 #if GT_RT_INTERFACE == GT_RT_RSI
             for (i = 0; i < GT_RT_NU; ++i) y[i] = gt_rsi_grid(y[i], last[i], i);
 #endif
-            for (i = 0; i < GT_RT_NREPLY; ++i) values[i] = 0.0;
-            for (i = 0; i < GT_RT_NU; ++i) {
-                e.sent[i] = GT_RT_RELATIVE ? y[i] - last[i] : y[i];
-                values[gt_rt_u_reply[i]] = e.sent[i];
+            rlen = gt_compose(reply, y, last, seq, t_rx, has_orient, orient, &e);
+            /* the deadline, measured with the reply composed, just before sendto */
+            elapsed = gt_now() - t_rx;
+            if (elapsed > O.reply_deadline && elapsed < GT_RT_PERIOD_S && !(flags & F_HELD)) {
+                ++S.deadline_held;
+                flags |= F_DEADLINE_HELD;
+                gt_held(last, y);
+                rlen = gt_compose(reply, y, last, seq, t_rx, has_orient, orient, &e);
+                elapsed = gt_now() - t_rx;
             }
-#if GT_RT_INTERFACE == GT_RT_RSI
-            rlen = gt_rsi_compose((char *)reply, sizeof reply, GT_RT_SEN_TYPE, GT_RT_RSI_ELEMENTS, values, seq);
-            (void)has_orient;
-            (void)orient;
-#else
-            rlen = gt_egm_compose(reply, sizeof reply, GT_RT_EGM_MODE, (uint32_t)seq, (uint32_t)(1000.0 * (t_rx - start)), values,
-                                  GT_RT_NREPLY, has_orient ? orient : NULL,
-                                  (uint32_t)(gt_have_sensor && gt_sensor_age > 0 ? 1000.0 * GT_RT_PERIOD_S * gt_sensor_age : 0));
-#endif
-            if (rlen < 0) {
+            if (elapsed >= GT_RT_PERIOD_S) {
+                ++S.late_dropped;
+                flags |= F_LATE_DROPPED;
+            } else if (rlen < 0) {
                 ++S.compose_errors;
             } else if (sendto(gt_fd, reply, (size_t)rlen, 0, (struct sockaddr *)&from, fromlen) != (ssize_t)rlen) {
                 ++S.send_errors;
             } else {
+                double sent_at = gt_now();
                 flags |= F_SENT;
                 ++S.replies;
-                for (i = 0; i < GT_RT_NU; ++i) last[i] = y[i]; /* the robot has it */
+                if (sent_at - t_rx >= GT_RT_PERIOD_S) { /* stalled inside sendto: sent, but past the period */
+                    ++S.sent_late;
+                    flags |= F_SENT_LATE;
+                }
+                for (i = 0; i < GT_RT_NU; ++i) {
+                    pending[i] = y[i] - last[i];
+                    last[i] = y[i]; /* the robot has it */
+                }
+                have_pending = accepted;
             }
         }
         for (i = 0; i < GT_RT_NU; ++i) e.y[i] = (flags & F_SENT) ? y[i] : NAN;
+        if (!(flags & F_SENT))
+            for (i = 0; i < GT_RT_NU; ++i) e.sent[i] = NAN;
         e.latency_us = 1e6 * (gt_now() - t_rx);
         if ((flags & F_SENT) && e.latency_us > S.max_latency_us) S.max_latency_us = e.latency_us;
+        /* a hold longer than GT_RT_HOLD_ALARM cycles: an alarm (summary.json and stderr) */
+        if (!(flags & F_SENT) || (flags & F_NOT_STEPPED)) {
+            if (hold_run == 0) hold_t0 = t_rx;
+            hold_reasons |= flags & ~(uint32_t)(F_SENT | F_STEP | F_CLAMPED);
+            if (++hold_run == GT_RT_HOLD_ALARM) {
+                hold_ev = gt_event(EV_HOLD, S.cycles + 1 - GT_RT_HOLD_ALARM, seq, hold_t0, hold_reasons);
+                ++S.holds;
+            }
+            if ((uint64_t)hold_run > S.hold_longest) S.hold_longest = (uint64_t)hold_run;
+            if (hold_ev) {
+                hold_ev->reasons |= hold_reasons;
+                hold_ev->cycles = (uint64_t)hold_run;
+                hold_ev->length_s = t_rx - hold_t0;
+            }
+        } else {
+            hold_run = 0;
+            hold_reasons = 0;
+            hold_ev = NULL;
+        }
         e.flags = flags;
         gt_log_push(&e);
         if (O.max_cycles > 0 && S.cycles >= O.max_cycles) {
@@ -587,6 +829,71 @@ static void gt_json_string(FILE *f, const char *s)
     fputc('"', f);
 }
 
+static void gt_write_source(FILE *f, const char *name, const gt_source *src)
+{
+    char text[64];
+    fprintf(f, "\"%s\": ", name);
+    if (src->locked || src->named) {
+        gt_address_text(&src->addr, text, sizeof text);
+        if (!src->locked && !src->named_port) *strrchr(text, ':') = '\0';
+        gt_json_string(f, text);
+    } else {
+        fprintf(f, "null");
+    }
+    fprintf(f, ", \"%s_rule\": \"%s\"", name, src->named_port ? "named" : src->named ? "named_address_first_port" : "first_valid_packet");
+}
+
+/* the guard's counts: the session's sources, the strangers, the sequences, silences, alarms and the events */
+static void gt_write_guard(FILE *f)
+{
+    int i, n = atomic_load(&gt_events_n);
+    char text[64], why[400];
+    fprintf(f, "  \"source\": {");
+    gt_write_source(f, "robot", &gt_robot_src);
+    fprintf(f, ", ");
+    gt_write_source(f, "tracker", &gt_tracker_src);
+    fprintf(f, ", \"before_lock\": %llu},\n", (unsigned long long)S.before_lock);
+    fprintf(f, "  \"strangers\": {\"datagrams\": %llu, \"other_addresses_datagrams\": %llu, \"addresses\": [",
+            (unsigned long long)gt_strangers_seen.total, (unsigned long long)gt_strangers_seen.other);
+    for (i = 0; i < gt_strangers_seen.n; ++i) {
+        struct sockaddr_in a;
+        memset(&a, 0, sizeof a);
+        a.sin_family = AF_INET;
+        a.sin_addr.s_addr = gt_strangers_seen.e[i].ip;
+        a.sin_port = gt_strangers_seen.e[i].port;
+        gt_address_text(&a, text, sizeof text);
+        fprintf(f, "%s{\"address\": ", i ? ", " : "");
+        gt_json_string(f, text);
+        fprintf(f, ", \"socket\": \"%s\", \"datagrams\": %llu}", gt_strangers_seen.e[i].socket ? "sensor" : "robot",
+                (unsigned long long)gt_strangers_seen.e[i].count);
+    }
+    fprintf(f, "]},\n");
+    fprintf(f, "  \"sequence\": {\"out_of_window\": %llu, \"resyncs\": %llu, \"window_cycles\": %d, \"resync_packets\": %d, "
+               "\"sensor_out_of_window\": %llu, \"sensor_resyncs\": %llu, \"sensor_window\": %d},\n",
+            (unsigned long long)gt_robot_seq.out_of_window, (unsigned long long)gt_robot_seq.resyncs, GT_RT_SEQ_WINDOW,
+            GT_RT_RESYNC_PACKETS, (unsigned long long)gt_sensor_seqw.out_of_window, (unsigned long long)gt_sensor_seqw.resyncs,
+            GT_RT_SENSOR_WINDOW);
+    fprintf(f, "  \"relative\": {\"unapplied\": %llu},\n  \"sent_late\": %llu,\n  \"start_outside_limits\": %llu,\n",
+            (unsigned long long)S.unapplied, (unsigned long long)S.sent_late, (unsigned long long)S.start_outside);
+    fprintf(f, "  \"silences\": {\"count\": %llu, \"longest_s\": %.9g},\n", (unsigned long long)S.silences, S.silence_longest_s);
+    fprintf(f, "  \"alarms\": {\"holds\": %llu, \"longest_hold_cycles\": %llu, \"hold_alarm_cycles\": %d},\n",
+            (unsigned long long)S.holds, (unsigned long long)S.hold_longest, GT_RT_HOLD_ALARM);
+    fprintf(f, "  \"events_dropped\": %llu,\n  \"events\": [", (unsigned long long)S.events_dropped);
+    for (i = 0; i < n; ++i) {
+        const gt_rt_event *ev = &gt_events[i];
+        fprintf(f, "%s\n    {\"kind\": \"%s\", \"cycle\": %llu, \"seq\": %llu, \"t\": %.6f", i ? "," : "", gt_event_names[ev->kind],
+                (unsigned long long)ev->cycle, (unsigned long long)ev->seq, ev->t);
+        if (ev->kind == EV_SILENCE || ev->kind == EV_HOLD) fprintf(f, ", \"length_s\": %.6f", ev->length_s);
+        if (ev->kind == EV_HOLD) {
+            gt_flag_text(ev->reasons, why, sizeof why);
+            fprintf(f, ", \"cycles\": %llu, \"reasons\": ", (unsigned long long)ev->cycles);
+            gt_json_string(f, why);
+        }
+        fprintf(f, "}");
+    }
+    fprintf(f, "%s],\n", n ? "\n  " : "");
+}
+
 static void gt_write_stats(const char *signal_name)
 {
     char tmp[4200];
@@ -624,8 +931,11 @@ static void gt_write_stats(const char *signal_name)
         first = 0;
     }
     if (S.step_status_other) fprintf(f, "%s\"other\": %llu", first ? "" : ", ", (unsigned long long)S.step_status_other);
-    fprintf(f, "},\n  \"log\": {\"written\": %llu, \"dropped\": %llu, \"write_errors\": %llu},\n", (unsigned long long)S.log_written,
-            (unsigned long long)S.log_dropped, (unsigned long long)S.log_write_errors);
+    fprintf(f, "},\n  \"log\": {\"written\": %llu, \"dropped\": %llu, \"write_errors\": %llu, \"capped\": %llu, \"bytes\": %llu, "
+               "\"max_bytes\": %llu},\n", (unsigned long long)S.log_written, (unsigned long long)S.log_dropped,
+            (unsigned long long)S.log_write_errors, (unsigned long long)S.log_capped, (unsigned long long)S.log_bytes,
+            (unsigned long long)O.log_max_bytes);
+    gt_write_guard(f);
     fprintf(f, "  \"realtime\": {\"granted\": %s, \"sched_fifo\": %s, \"mlockall\": %s, \"reason\": ",
             S.realtime_fifo && S.realtime_mlock ? "true" : "false", S.realtime_fifo ? "true" : "false", S.realtime_mlock ? "true" : "false");
     gt_json_string(f, S.realtime_reason);
@@ -657,6 +967,8 @@ int main(int argc, char **argv)
     O.idle_timeout = 2.0;
     O.reply_deadline = GT_RT_REPLY_DEADLINE_S;
     O.realtime = 1;
+    O.log_max_bytes = (uint64_t)1024 * 1048576u;
+    gt_start_time = gt_now();
     gt_parse_address("0.0.0.0:" GT_RT_DEFAULT_PORT, &O.listen);
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -673,7 +985,8 @@ int main(int argc, char **argv)
         }
         if (v == NULL) {
             fprintf(stderr, "gt_runtime: %s: expected a value (usage: gt_runtime --out DIR [--listen HOST:PORT] [--sensor-port PORT] "
-                            "[--idle-timeout S] [--max-cycles N] [--reply-deadline S] [--no-realtime] [--exit-with-parent])\n", a);
+                            "[--idle-timeout S] [--max-cycles N] [--reply-deadline S] [--robot ADDR[:PORT]] [--tracker ADDR[:PORT]] "
+                            "[--log-max-mb MB] [--no-realtime] [--exit-with-parent])\n", a);
             return 2;
         }
         ++i;
@@ -685,12 +998,25 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--idle-timeout") == 0) O.idle_timeout = gt_number_arg(a, v, 0.001, 1e6);
         else if (strcmp(a, "--max-cycles") == 0) O.max_cycles = (uint64_t)gt_number_arg(a, v, 0, 1e15);
         else if (strcmp(a, "--reply-deadline") == 0) O.reply_deadline = gt_number_arg(a, v, 0.0, GT_RT_PERIOD_S);
+        else if (strcmp(a, "--log-max-mb") == 0) O.log_max_bytes = (uint64_t)(gt_number_arg(a, v, 0.001, 1e6) * 1048576.0);
+        else if (strcmp(a, "--robot") == 0 || strcmp(a, "--tracker") == 0) {
+            if (gt_source_parse(v, a[2] == 'r' ? &gt_robot_src : &gt_tracker_src) != 0) {
+                fprintf(stderr, "gt_runtime: %s: expected an IPv4 address, optionally with :PORT (1..65535), got %s\n", a, v);
+                return 2;
+            }
+        }
         else {
             fprintf(stderr, "gt_runtime: unknown argument %s\n", a);
             return 2;
         }
     }
     if (O.out[0] == '\0') gt_fail(2, "--out DIR is required", NULL);
+    if (O.listen.sin_addr.s_addr == htonl(INADDR_ANY))
+        fprintf(stderr, "gt_runtime: warning: listening on every interface (0.0.0.0): any host that reaches this one may send; "
+                        "listen on the robot network's address only (docs/robot.md, the network rules)\n");
+    if (!gt_robot_src.named)
+        fprintf(stderr, "gt_runtime: warning: no robot address named (--robot): the first valid packet's source is the robot "
+                        "for this session\n");
     gt_fd = gt_udp(&O.listen, "robot");
     if (GT_RT_NSENSOR > 0) {
         uint16_t port = O.sensor_port_given ? ntohs(O.sensor.sin_port)

@@ -1,0 +1,323 @@
+"""The runtime on a hostile network: strangers, forged and restarted sequences, late replies the robot did not apply.
+
+Independent checks: the robot and the strangers are sockets of this test; what a stranger got is
+what its own socket received (counted here), what the robot holds is summed here from the
+replies it received, as a relative-mode KUKA controller sums them, with this test's own model of
+RSI's rule for late replies (a late reply is not applied and counted in ``<Delay D>``). The
+runtime's counts are compared against what the test sent.
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel import _egm_pb2 as egm
+from gtmodel.codegen.robot_runtime import RobotRuntime, RuntimeSpec, build_runtime
+from gtmodel.control.runtime import FLAGS, read_cycle_log, read_ready, run_loop
+
+from .test_runtime import LOWER, RATE, UPPER, _huge, _rsi, _step, egm_robot, rob, sen
+
+EGM_LOWER, EGM_UPPER, EGM_RATE = -90.0, 90.0, 0.5
+WINDOW, RESYNC = 250, 5  # gt_runtime.c: GT_RT_SEQ_WINDOW cycles, GT_RT_RESYNC_PACKETS
+
+
+@pytest.fixture(scope="module")
+def exes(tmp_path_factory):
+    egm_step = _step(3, 3, lambda x: (x + 5.0, ca.SX(1)))
+    return {
+        "rsi": build_runtime(_rsi(), tmp_path_factory.mktemp("rsi")),
+        "egm": build_runtime(RobotRuntime(egm_step, RuntimeSpec(
+            interface="egm", inputs=[f"feedback.joints.{i}" for i in range(3)], outputs=[f"planned.joints.{i}" for i in range(3)],
+            lower=[EGM_LOWER] * 3, upper=[EGM_UPPER] * 3, rate=[EGM_RATE] * 3)), tmp_path_factory.mktemp("egm")),
+    }
+
+
+def _sock(host: str = "127.0.0.1", timeout: float = 0.2) -> socket.socket:
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind((host, 0))
+    s.settimeout(timeout)
+    return s
+
+
+class Net:
+    """The robot's socket, its tracker's, and strangers', bound before the runtime starts (their addresses can be named)."""
+
+    def __init__(self, stranger_host: str = "127.0.0.1") -> None:
+        self.robot, self.tracker = _sock(), _sock()
+        self.stranger, self.stranger_tracker = _sock(stranger_host, 0.02), _sock(stranger_host, 0.02)
+        self.addr = {name: addr(getattr(self, name)) for name in ("robot", "tracker", "stranger", "stranger_tracker")}
+        self.stranger_got = 0
+        self.tracker_seq = 0
+        self.ready: dict = {}
+
+    def to_robot_port(self, sock: socket.socket, data: bytes, wait: bool = True) -> bytes | None:
+        sock.sendto(data, ("127.0.0.1", self.ready["listen_port"]))
+        if not wait:
+            return None
+        try:
+            return sock.recv(65536)
+        except socket.timeout:
+            return None
+
+    def exchange(self, data: bytes) -> bytes | None:
+        return self.to_robot_port(self.robot, data)
+
+    def stranger_sends(self, data: bytes) -> None:
+        if self.to_robot_port(self.stranger, data) is not None:
+            self.stranger_got += 1
+
+    def sample(self, value: float, sock: socket.socket | None = None, seq: int | None = None) -> None:
+        self.tracker_seq += 1
+        line = f"GTS1 {self.tracker_seq if seq is None else seq} 0.0 {value!r}\n".encode()
+        (sock or self.tracker).sendto(line, ("127.0.0.1", self.ready["sensor_port"]))
+
+    def close(self) -> None:
+        for s in (self.robot, self.tracker, self.stranger, self.stranger_tracker):
+            s.close()
+
+
+def session(exe, out, script, net: Net | None = None, **kw):
+    net = net or Net()
+    kw = {"listen": ("127.0.0.1", 0), "idle_timeout": 0.3, "time_limit": 120, **kw}
+    with ThreadPoolExecutor(1) as pool:
+        fut = pool.submit(run_loop, exe, out, **kw)
+        net.ready = read_ready(out, 20)
+        try:
+            data = script(net)
+            # a stranger's datagrams after the robot stopped must not keep the session alive
+        finally:
+            net.close()
+        return fut.result(150), data
+
+
+def addr(sock: socket.socket) -> str:
+    host, port = sock.getsockname()
+    return f"{host}:{port}"
+
+
+# ---- 1. one robot per session ----
+
+@pytest.mark.parametrize("stranger_host", ["127.0.0.1", "127.0.0.2"], ids=["another_port", "another_address"])
+def test_a_stranger_is_never_answered_and_never_reaches_the_step_or_the_log(exes, tmp_path, stranger_host):
+    def script(net: Net):
+        replies = []
+        for k in range(60):
+            net.sample(0.5)
+            replies.append(net.exchange(rob(1000 + 4 * k, -1.0, -1.0)))  # drives the total to the upper limit
+            net.stranger_sends(rob(1002 + 4 * k, 777.0, 777.0))  # in the robot's window, a measurement far away
+        return replies
+    net = Net(stranger_host)
+    run, replies = session(exes["rsi"], tmp_path / "run", script, net)
+    held = np.cumsum([sen(r)[1] for r in replies], axis=0)  # what the robot holds: its sum of increments
+    log = read_cycle_log(run.log_path)
+    got = (net.stranger_got, None in replies, run.stats["step_calls"], log["cycle"].size, run.summary["strangers"]["datagrams"])
+    assert got == (0, False, 60, 60, 60)
+    assert np.all(held <= UPPER + 1e-12) and np.all(held >= LOWER - 1e-12)
+    assert np.allclose(held[-1], [log["reply:RKorr.X"][-1], log["reply:AKorr.A1"][-1]], atol=1e-9)  # the robot's sum is the logged total
+    assert not np.any(log["x:RIst.X"] == 777.0)
+    assert run.summary["strangers"]["addresses"] == [{"address": net.addr["stranger"], "socket": "robot",
+                                                       "datagrams": 60}]
+    assert run.summary["source"]["robot"] == net.addr["robot"] and run.summary["source"]["robot_rule"] == "first_valid_packet"
+
+
+def test_a_stranger_sending_first_does_not_set_egm_start_when_the_robot_is_named(exes, tmp_path):
+    q_robot, q_stranger = [-100.0 + 50, 30.0, 5.0], [-67.0 + 50, 68.0, 43.0]
+    net = Net()
+
+    def script(net: Net):
+        for k in range(1, 6):
+            net.stranger_sends(egm_robot(k, q_stranger))
+        return [net.exchange(egm_robot(k, q_robot)) for k in range(1, 11)]
+    run, replies = session(exes["egm"], tmp_path / "run", script, net, robot=net.addr["robot"])
+    q = np.array([list(egm.EgmSensor.FromString(r).planned.joints.joints) for r in replies])
+    assert (net.stranger_got, run.summary["source"]["robot_rule"], run.summary["strangers"]["datagrams"]) == (0, "named", 5)
+    assert np.all(np.abs(q[0] - q_robot) <= EGM_RATE + 1e-12)  # from the robot's own measured position, at the rate
+    assert np.all(np.abs(np.diff(q, axis=0)) <= EGM_RATE + 1e-12)
+
+
+def test_tracker_samples_from_a_stranger_are_counted_not_used(exes, tmp_path):
+    def script(net: Net):
+        replies = []
+        for k in range(40):
+            net.sample(0.5)
+            net.stranger_tracker.sendto(f"GTS1 {10 ** 6 + k} 0.0 -5000.0\n".encode(), ("127.0.0.1", net.ready["sensor_port"]))
+            time.sleep(0.002)
+            replies.append(net.exchange(rob(1000 + 4 * k)))
+        return replies
+    net = Net()
+    run, replies = session(exes["rsi"], tmp_path / "run", script, net)
+    log = read_cycle_log(run.log_path)
+    sensor = log["x:sensor.0"][np.isfinite(log["x:sensor.0"])]
+    assert (None in replies, set(sensor.tolist()), run.summary["source"]["tracker"]) == (False, {0.5}, net.addr["tracker"])
+    assert [a["datagrams"] for a in run.summary["strangers"]["addresses"] if a["socket"] == "sensor"] == [40]
+
+
+def test_a_named_robot_address_and_bad_names(exes, tmp_path):
+    run = run_loop(exes["rsi"], tmp_path / "a", listen=("127.0.0.1", 0), robot="127.0.0.1:0", time_limit=10)
+    assert run.exit_code == 2 and "--robot: expected an IPv4 address, optionally with :PORT" in run.message
+
+
+# ---- 2. no freeze: forged and restarted sequences ----
+
+def _rsi_forged(forged: int):
+    def script(net: Net):
+        out = []
+        for k in range(10):
+            net.sample(0.5)
+            out.append(("valid", net.exchange(rob(1000 + 4 * k, -1.0, -1.0))))
+        net.sample(0.5)
+        out.append(("forged", net.exchange(rob(forged, -1.0, -1.0))))
+        for k in range(10, 20):
+            net.sample(0.5)
+            out.append(("valid", net.exchange(rob(1000 + 4 * k, -1.0, -1.0))))
+        return out
+    return script
+
+
+@pytest.mark.parametrize("forged", [2 ** 64 - 1, 10 ** 15, 1000 + 4 * 10 + 4 * (WINDOW + 1)], ids=["2^64-1", "1e15", "window+1"])
+def test_a_forged_ipoc_from_the_robot_is_held_once_and_the_step_runs_again(exes, tmp_path, forged):
+    run, out = session(exes["rsi"], tmp_path / "run", _rsi_forged(forged))
+    log = read_cycle_log(run.log_path)
+    stepped = (log["flags"] & FLAGS["step"]) != 0
+    # independent: the row of the forged IPOC is held and out of the window; every other row steps
+    assert log["flags"][10] & FLAGS["out_of_window"] and stepped.tolist() == [True] * 10 + [False] + [True] * 10
+    assert sen(out[10][1])[0] == forged and np.all(sen(out[10][1])[1] == 0.0)  # echoed, no increment
+    assert (run.summary["sequence"]["out_of_window"], run.summary["sequence"]["resyncs"], run.summary["alarms"]["holds"]) == (1, 0, 0)
+
+
+def test_a_forged_egm_seqno_is_held_once_and_the_step_runs_again(exes, tmp_path):
+    def script(net: Net):
+        q = [10.0, -20.0, 30.0]
+        seqs = list(range(1, 11)) + [10 + 2 ** 30] + list(range(11, 21))
+        return seqs, [net.exchange(egm_robot(s, q, tm=4 * (s % 1000))) for s in seqs]
+    run, (seqs, replies) = session(exes["egm"], tmp_path / "run", script)
+    log = read_cycle_log(run.log_path)
+    stepped = ((log["flags"] & FLAGS["step"]) != 0).tolist()
+    assert [egm.EgmSensor.FromString(r).header.seqno for r in replies] == seqs
+    assert stepped == [True] * 10 + [False] + [True] * 10 and run.summary["sequence"]["out_of_window"] == 1
+
+
+def test_a_restarted_robot_is_followed_after_the_documented_packets(exes, tmp_path):
+    def script(net: Net):
+        out = []
+        for k in range(10):
+            net.sample(0.5)
+            out.append(net.exchange(rob(1000 + 4 * k, -1.0, -1.0)))
+        for k in range(12):  # the robot restarted: its IPOC from another base, consistent
+            net.sample(0.5)
+            out.append(net.exchange(rob(9_000_000 + 4 * k, -1.0, -1.0)))
+        return out
+    run, out = session(exes["rsi"], tmp_path / "run", script)
+    log = read_cycle_log(run.log_path)
+    stepped = ((log["flags"] & FLAGS["step"]) != 0).tolist()
+    assert stepped == [True] * 10 + [False] * (RESYNC - 1) + [True] * (12 - RESYNC + 1)
+    assert run.summary["sequence"]["resyncs"] == 1 and [e["kind"] for e in run.summary["alarms"]["events"]] == ["resync"]
+    held = np.cumsum([sen(r)[1] for r in out[10 + RESYNC - 1:]], axis=0)  # after the restart the robot's sum starts from zero
+    assert np.all(np.abs(held) <= UPPER + 1e-12) and np.all(np.abs(np.diff(held, axis=0)) <= RATE + 1e-12)
+
+
+def test_a_forged_tracker_seq_does_not_switch_the_tracker_off(exes, tmp_path):
+    def script(net: Net):
+        out = []
+        for k in range(30):
+            if k == 5:
+                net.sample(0.5, seq=10 ** 12)
+                net.tracker_seq -= 1
+            net.sample(0.5)
+            time.sleep(0.002)
+            out.append(net.exchange(rob(1000 + 4 * k)))
+        return out
+    run, out = session(exes["rsi"], tmp_path / "run", script)
+    assert (run.summary["fallback"]["stale_sensor"], run.summary["sequence"]["sensor_out_of_window"], run.stats["step_calls"]) == (0, 1, 30)
+
+
+def test_a_long_hold_is_an_alarm_with_its_reason(exes, tmp_path, caplog):
+    def script(net: Net):
+        for k in range(5):
+            net.sample(0.5)
+            net.exchange(rob(1000 + 4 * k))
+        for k in range(5, 17):
+            net.sample(0.5)
+            net.exchange(rob(1000 + 4 * k, "NaN", 0.0))
+        for k in range(17, 20):
+            net.sample(0.5)
+            net.exchange(rob(1000 + 4 * k))
+    with caplog.at_level(logging.WARNING, logger="gtmodel"):
+        run, _ = session(exes["rsi"], tmp_path / "run", script)
+    alarm = run.summary["alarms"]
+    assert (alarm["holds"], alarm["longest_hold_cycles"], [(e["kind"], e["cycle"], e["cycles"], e["reasons"]) for e in alarm["events"]]) == (
+        1, 12, [("hold", 6, 12, "held, non_finite")])
+    assert any("gt_runtime: alarm: no reply of the step for 5 cycles from cycle 6" in r.getMessage() for r in caplog.records)
+
+
+# ---- 3. the robot's sum is the limited one; EGM starts from the measured position ----
+
+def test_relative_rsi_takes_back_the_increments_the_robot_reported_late(exes, tmp_path):
+    """The robot (this test) skips 1 reply in 4 as late, as RSI does, and counts it in <Delay D>."""
+    def script(net: Net):
+        rng = np.random.default_rng(5)
+        robot_sum, sums, delay, late = np.zeros(2), [], 0, 0
+        for k in range(240):
+            x = -1.0 if k < 120 else 3.0  # up to the upper limit, then down to the lower one
+            net.sample(0.5)
+            net.robot.sendto(rob(1000 + 4 * k, x, x).replace(b'<Delay D="0"/>', f'<Delay D="{delay}"/>'.encode()),
+                             ("127.0.0.1", net.ready["listen_port"]))
+            reply = net.robot.recv(65536)
+            if rng.random() < 0.25:  # late: not applied, counted
+                delay += 1
+                late += 1
+            else:
+                robot_sum = robot_sum + sen(reply)[1]
+            sums.append(robot_sum.copy())
+        return np.array(sums), late
+    run, (sums, late) = session(exes["rsi"], tmp_path / "run", script)
+    assert np.all(sums <= UPPER + 1e-9) and np.all(sums >= LOWER - 1e-9)
+    assert np.allclose(sums[-1], LOWER, atol=1e-9) and late > 30
+    # every late reply but possibly the last (its Delay never came) was accounted
+    assert run.summary["faults"]["unapplied"]["count"] in (late - 1, late)
+
+
+@pytest.mark.parametrize("start, replied", [(10.0, True), (90.3, True), (95.0, False)], ids=["inside", "within_one_rate_step", "outside"])
+def test_egm_starts_from_the_measured_position_and_replies_inside_the_limits(exes, tmp_path, start, replied):
+    def script(net: Net):
+        q, planned = [start, 0.0, 0.0], [50.0, 50.0, 50.0]  # the planned position elsewhere: the measured one counts
+        return [net.exchange(egm_robot(k, q, planned=planned)) for k in range(1, 6)]
+    run, replies = session(exes["egm"], tmp_path / "run", script)
+    if not replied:
+        assert replies == [None] * 5 and run.summary["start_outside_limits"] == 5 and run.summary["alarms"]["holds"] == 1
+        return
+    q = np.array([list(egm.EgmSensor.FromString(r).planned.joints.joints) for r in replies])
+    assert abs(q[0, 0] - start) <= EGM_RATE + 1e-12 and np.all((q >= EGM_LOWER) & (q <= EGM_UPPER))
+
+
+# ---- 5. the log: silences, cap ----
+
+def test_a_silence_of_the_robot_is_an_event_with_its_length(exes, tmp_path):
+    def script(net: Net):
+        for k in range(20):
+            net.sample(0.5)
+            net.exchange(rob(1000 + 4 * k))
+            if k == 9:
+                time.sleep(0.04)
+    run, _ = session(exes["rsi"], tmp_path / "run", script)
+    lengths = [e["length_s"] for e in run.summary["silences"]["events"]]
+    assert run.summary["silences"]["count"] >= 1 and max(lengths) >= 0.04
+    assert run.summary["silences"]["longest_s"] == pytest.approx(max(lengths), abs=1e-6)
+
+
+def test_the_log_stops_at_its_cap_and_counts_the_rest(exes, tmp_path):
+    def script(net: Net):
+        for k in range(50):
+            net.sample(0.5)
+            net.exchange(rob(1000 + 4 * k))
+    run, _ = session(exes["rsi"], tmp_path / "run", script, log_max_mb=0.002)
+    size = run.log_path.stat().st_size
+    log = run.summary["log"]
+    assert size <= 0.002 * 1048576 + 400 and log["capped"] > 0 and log["written"] + log["capped"] == 50 == run.summary["cycles"]
