@@ -2,7 +2,7 @@
 
 ::
 
-    gtmodel loop FILE.toml --out DIR [--listen HOST:PORT] [--sensor-port PORT]
+    gtmodel loop FILE.toml --out DIR [--listen HOST:PORT] [--robot ADDR[:PORT]] [--sensor-port PORT]
                  [--idle-timeout S] [--max-cycles N] [--correction-file CSV]
 
 runs a ``robot_loop`` file (:mod:`gtmodel.problems.kinds.robot_loop`): the controller's step
@@ -22,6 +22,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from gtmodel.errors import InputError
 from gtmodel.status import Status
 
 __all__ = ["add_loop_parser", "loop_settings", "print_loop_summary", "loop_command"]
@@ -46,6 +47,8 @@ def add_loop_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("file", type=Path, help="a robot_loop file (TOML), e.g. loops/kr500_rsi_correction.toml")
     p.add_argument("--out", type=Path, default=None, help="result folder (default: results/<name>)")
     p.add_argument("--listen", default=None, metavar="HOST:PORT", help="where the runtime listens (overrides [interface] listen)")
+    p.add_argument("--robot", default=None, metavar="ADDR[:PORT]", help="the robot controller's address: only its datagrams are answered "
+                   "(overrides [interface] robot; default the first valid packet's source)")
     p.add_argument("--sensor-port", type=int, default=None, metavar="PORT", help="UDP port of the sensor stream on the listen address (overrides [interface] sensor_port)")
     p.add_argument("--idle-timeout", type=float, default=None, metavar="S", help="end when the robot has sent nothing this long (overrides the file)")
     p.add_argument("--max-cycles", type=int, default=None, metavar="N", help="end after N cycles (overrides the file)")
@@ -69,11 +72,31 @@ def loop_settings(args: argparse.Namespace) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``interface.listen``, ``interface.sensor_port``, ``interface.idle_timeout``,
+        ``interface.listen``, ``interface.robot``, ``interface.sensor_port``, ``interface.idle_timeout``,
         ``interface.max_cycles``, ``controller.correction_file`` for the options given.
+
+    Raises
+    ------
+    InputError
+        An option's value of the wrong form (the message names the option, e.g. ``--listen``).
     """
+    from gtmodel.problems.kinds.schemas.robot_loop import parse_address, parse_source
+
+    for option, parse in (("listen", parse_address), ("robot", parse_source)):
+        value = getattr(args, option)
+        if value is not None:
+            try:
+                parse(value)
+            except ValueError as exc:
+                raise InputError(f"--{option}: {exc}") from None
+    for option, lo, hi in (("sensor_port", 1, 65535), ("max_cycles", 0, 100_000_000)):
+        value = getattr(args, option)
+        if value is not None and not lo <= value <= hi:
+            raise InputError(f"--{option.replace('_', '-')}: expected an integer in {lo}..{hi}, got {value}")
+    if args.idle_timeout is not None and not 0 < args.idle_timeout <= 3600:
+        raise InputError(f"--idle-timeout: expected a number in (0, 3600] s, got {args.idle_timeout}")
     out: dict[str, Any] = {}
-    for option, field in (("listen", "interface.listen"), ("sensor_port", "interface.sensor_port"),
+    for option, field in (("listen", "interface.listen"), ("robot", "interface.robot"), ("sensor_port", "interface.sensor_port"),
                           ("idle_timeout", "interface.idle_timeout"), ("max_cycles", "interface.max_cycles")):
         if getattr(args, option) is not None:
             out[field] = getattr(args, option)
@@ -128,8 +151,12 @@ def loop_command(args: argparse.Namespace) -> int:
     """
     from gtmodel.problems.run import run_problem
 
-    outcome = run_problem(args.file, args.out, plots=False, heartbeat=not args.quiet, report=not args.no_report,
-                          settings=loop_settings(args))
+    try:
+        settings = loop_settings(args)
+    except InputError as exc:
+        print(f"gtmodel: error: {exc}", file=sys.stderr)
+        return Status.INVALID_INPUT.exit_code
+    outcome = run_problem(args.file, args.out, plots=False, heartbeat=not args.quiet, report=not args.no_report, settings=settings)
     status = outcome.status
     if status is Status.INTERNAL_ERROR:
         if args.debug and outcome.error is not None:

@@ -22,6 +22,7 @@ iteration (:class:`ILCLaw`). Its :meth:`~RobotLoopDeclaration.solve` runs the fo
 from __future__ import annotations
 
 import logging
+import math
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,7 +41,7 @@ from gtmodel.estimation.ilc.iteration import error_measure, next_correction
 from gtmodel.estimation.ilc.lifted import LearningFilter, QFilter, time_window
 from gtmodel.status import Status, StatusResult
 
-__all__ = ["ILCLaw", "RobotLoopDeclaration", "RobotLoopRun", "next_iteration", "CHECK_SAMPLES"]
+__all__ = ["ILCLaw", "RobotLoopDeclaration", "RobotLoopRun", "next_iteration", "hour_of_log_mb", "CHECK_SAMPLES"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -100,6 +101,12 @@ class RobotLoopDeclaration:
         Cycle limit (0: none).
     ilc : ILCLaw or None
         The next iteration's law (streaming only).
+    robot : str or None, optional
+        The robot's address ``ADDR`` or ``ADDR:PORT`` (None: the first valid packet's source).
+    tracker : str or None, optional
+        The sensor stream's sender, the same way.
+    log_max_mb : float or None, optional
+        The cycle log's cap [MB] (None: :func:`hour_of_log_mb`).
     """
 
     name: str
@@ -111,6 +118,9 @@ class RobotLoopDeclaration:
     time_limit: float
     max_cycles: int
     ilc: ILCLaw | None = None
+    robot: str | None = None
+    tracker: str | None = None
+    log_max_mb: float | None = None
 
     def solve(self, verbose: bool = False, previous: Any = None, warm_start: bool = False) -> "RobotLoopRun":
         """Generate and check the step, build the runtime, serve the robot, learn the next ILC correction.
@@ -141,7 +151,9 @@ class RobotLoopDeclaration:
         executable = build_runtime(source, work / "code", prefix=prefix)
         _log.info("loop %s: listening on %s:%d (%s); the robot or gtmodel robot-sim sends there", d.name, *d.listen, d.spec.interface.upper())
         run = run_loop(executable, work / "run", listen=d.listen, sensor_port=d.sensor_port,
-                       idle_timeout=d.idle_timeout, max_cycles=d.max_cycles or None, time_limit=d.time_limit, end_on_signal=True)
+                       idle_timeout=d.idle_timeout, max_cycles=d.max_cycles or None, time_limit=d.time_limit, end_on_signal=True,
+                       robot=d.robot, tracker=d.tracker if d.sensor_port is not None else None,
+                       log_max_mb=d.log_max_mb if d.log_max_mb is not None else hour_of_log_mb(d.spec))
         result = RobotLoopRun(status=run.status, message=run.message, work=work, summary=dict(run.summary), check=check)
         if d.ilc is not None and isinstance(d.controller, ReferenceStreaming) and run.log_path is not None and run.summary.get("cycles"):
             result.ilc = next_iteration(d, read_cycle_log(run.log_path), work / "run")
@@ -178,6 +190,29 @@ class RobotLoopRun(StatusResult):
     ilc: dict[str, Any] = field(default_factory=dict)
 
 
+#: Bytes of a log row's leading columns at most (cycle, IPOC, t, flags, status, latency, sensor age) and of a number (``%.17g``).
+_ROW_HEAD, _NUMBER = 125, 25
+
+
+def hour_of_log_mb(spec: RuntimeSpec) -> float:
+    """The default cap of the cycle log: an hour of its widest rows at the spec's period.
+
+    Parameters
+    ----------
+    spec : RuntimeSpec
+        Its inputs and outputs give the row's columns (``x:``, ``u:``, ``reply:``, and ``sent:``
+        for relative RSI corrections), its period the rows per hour.
+
+    Returns
+    -------
+    float
+        Megabytes (2^20 bytes), rounded up to a whole one: e.g. 494 MB for the KR 500 file
+        (6 inputs, 3 relative outputs, 250 Hz).
+    """
+    numbers = len(spec.inputs) + len(spec.outputs) * (4 if spec.relative else 3)
+    return float(math.ceil(3600.0 / spec.period * (_ROW_HEAD + _NUMBER * numbers) / 1048576.0))
+
+
 def next_iteration(d: RobotLoopDeclaration, log: dict[str, np.ndarray], work: Path) -> dict[str, Any]:
     """The next ILC iteration learned from a loop's cycle log, Dressler (2012), eq. 7.2.
 
@@ -205,8 +240,9 @@ def next_iteration(d: RobotLoopDeclaration, log: dict[str, np.ndarray], work: Pa
     t = log["t"]
     rows = np.clip(np.floor(t / c.dt + 1e-6).astype(int), 0, c.length - 1)
     y = np.full(c.reference.shape, np.nan)
-    for j, name in enumerate(c.x_names):  # the last feedback logged in each streamed row
-        y[rows, j] = log[f"x:{name}"]
+    measured = np.all(np.isfinite(np.column_stack([log[f"x:{name}"] for name in c.x_names])), axis=1) if t.size else np.zeros(0, bool)
+    for j, name in enumerate(c.x_names):  # the last feedback logged in each streamed row (rows the runtime held have none)
+        y[rows[measured], j] = log[f"x:{name}"][measured]
     seen = np.all(np.isfinite(y), axis=1)
     if not np.any(seen):
         return {"message": "no feedback logged: no next iteration"}

@@ -41,6 +41,7 @@ from gtmodel.codegen.robot_loop import ILCLaw, RobotLoopDeclaration, RobotLoopRu
 from gtmodel.codegen.robot_runtime import RuntimeSpec
 from gtmodel.control.position_loop import PoseCorrection, ReferenceStreaming
 from gtmodel.errors import GtModelError
+from gtmodel.estimation.ilc.lifted import LearningFilter, QFilter, time_window
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
 from gtmodel.problems.kinds.schemas.robot_loop import DEFAULT_PORTS, RobotLoopFile, parse_address
 
@@ -61,6 +62,24 @@ def _read_table(path: Path, what: str, file: ProblemFile, field_name: str, width
         cols = f"{width} columns" if width is not None else "at least two columns"
         raise file.fail(field_name, f"at least two rows of {cols}, t then one per axis ({what})", f"{path}: shape {data.shape}")
     return data
+
+
+#: The ``[ilc]`` field an error of the ILC's filters is about (by the first word of its message).
+_ILC_FIELDS = {"cutoff_hz": "ilc.q_cutoff_hz", "tukey_points": "ilc.tukey_points", "lead": "ilc.lead", "alpha": "ilc.tukey_alpha",
+               "gamma": "ilc.gamma", "delta": "ilc.delta"}
+
+
+def _check_ilc(file: ProblemFile, ilc: ILCLaw, length: int, period: float) -> None:
+    """The ``[ilc]`` law against the trajectory and the period, before anything runs (the run learns with exactly these)."""
+    try:
+        window = time_window(length, lead=ilc.lead, tukey_points=ilc.tukey_points, alpha=ilc.tukey_alpha) if ilc.lead else None
+        QFilter(ilc.q_cutoff_hz, dt=period, window=window)
+        LearningFilter(ilc.gamma, ilc.delta)
+    except GtModelError as exc:
+        name = str(exc).split(":", 1)[0]
+        raise file.wrap(_ILC_FIELDS.get(name, "ilc"), exc) from None
+    if ilc.delta >= length:
+        raise file.fail("ilc.delta", f"a learning lead shorter than the trajectory ({length} rows)", ilc.delta)
 
 
 class RobotLoopKind(ProblemKind):
@@ -137,9 +156,14 @@ class RobotLoopKind(ProblemKind):
                                reply_deadline_s=it.reply_deadline, period=it.period)
         except GtModelError as exc:
             raise file.wrap("limits", exc) from None
+        ilc = ILCLaw(**doc.ilc.model_dump()) if doc.ilc is not None else None
+        if ilc is not None:
+            _check_ilc(file, ilc, controller.length, it.period)
+        if it.tracker is not None and sensor is None:
+            raise file.fail("interface.tracker", "no tracker for a streaming loop (only a pose correction reads the sensor stream)", it.tracker)
         return RobotLoopDeclaration(name=name, controller=controller, spec=spec, listen=listen, sensor_port=sensor,
-                                    idle_timeout=it.idle_timeout, time_limit=it.time_limit, max_cycles=it.max_cycles,
-                                    ilc=ILCLaw(**doc.ilc.model_dump()) if doc.ilc is not None else None)
+                                    idle_timeout=it.idle_timeout, time_limit=it.time_limit, max_cycles=it.max_cycles, ilc=ilc,
+                                    robot=it.robot, tracker=it.tracker, log_max_mb=it.log_max_mb)
 
     @fill_doc(**KIND_DOCS)
     def write(self, declaration: RobotLoopDeclaration, solution: RobotLoopRun, out: Path, plots: bool, name: str) -> Written:

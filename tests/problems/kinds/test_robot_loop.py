@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -25,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gtmodel.codegen.robot_loop import hour_of_log_mb
 from gtmodel.errors import ProblemError
 from gtmodel.estimation.ilc.iteration import error_measure, next_correction
 from gtmodel.estimation.ilc.lifted import LearningFilter, QFilter, time_window
@@ -61,8 +63,39 @@ def test_shipped_loop_files_load(path):
 
 
 def test_settings_from_the_command_line_reach_the_declaration():
-    d = load_problem(RSI_FILE, settings={"interface.listen": "127.0.0.1:40000", "interface.sensor_port": 40010}).declaration
-    assert (d.listen, d.sensor_port) == (("127.0.0.1", 40000), 40010)
+    d = load_problem(RSI_FILE, settings={"interface.listen": "127.0.0.1:40000", "interface.sensor_port": 40010,
+                                         "interface.robot": "127.0.0.5"}).declaration
+    assert (d.listen, d.sensor_port, d.robot, d.tracker, d.log_max_mb) == (("127.0.0.1", 40000), 40010, "127.0.0.5", None, None)
+
+
+def test_the_default_log_cap_fits_an_hour_at_250_hz():
+    """Independent: the widest row the runtime can write, counted here from its columns, times 900,000 rows (an hour at 4 ms).
+
+    Leading columns: cycle and IPOC (20 digits each), t and latency (%.17g: 24 characters), flags (6),
+    status and sensor age (11 each), 6 commas, the newline; then per number a comma and 24 characters.
+    """
+    d = load_problem(RSI_FILE).declaration
+    numbers = len(d.spec.inputs) + 4 * len(d.spec.outputs)  # x, u, reply, sent (relative)
+    widest_row = 20 + 20 + 24 + 6 + 11 + 24 + 11 + 6 + 1 + numbers * 25
+    assert hour_of_log_mb(d.spec) * 1048576 >= 900_000 * widest_row and hour_of_log_mb(d.spec) == 494.0
+
+
+CLI_BAD = [
+    (["--listen", "localhost:49152"], r"--listen: expected HOST:PORT with an IPv4 address"),
+    (["--listen", "127.0.0.1:0"], r"--listen: expected HOST:PORT"),
+    (["--robot", "robot.local"], r"--robot: expected an IPv4 address, optionally with :PORT"),
+    (["--sensor-port", "70000"], r"--sensor-port: expected an integer in 1..65535, got 70000"),
+    (["--idle-timeout", "0"], r"--idle-timeout: expected a number in \(0, 3600\] s"),
+]
+
+
+@pytest.mark.parametrize("argv, match", CLI_BAD, ids=[a[0] for a, _ in CLI_BAD])
+def test_bad_command_line_values_name_the_option_not_the_file(tmp_path, capsys, argv, match):
+    from gtmodel.cli import main
+
+    code = main(["loop", str(RSI_FILE), "--out", str(tmp_path / "out"), *argv])
+    err = capsys.readouterr().err
+    assert code == 2 and re.search(match, err) and "interface." not in err and not (tmp_path / "out").exists()
 
 
 BAD = [
@@ -87,6 +120,18 @@ BAD = [
     ({'fallback = "hold"': 'fallback = "hold"\n[ilc]'}, RSI_FILE, r"expected no \[ilc\] table"),
     ({'type = "rsi"': 'type = "egm"'}, RSI_FILE, r"expected interface.type = \"rsi\" for a pose_correction"),
     ({'gamma = 0.9': 'gamma = 5.0'}, EGM_FILE, r"'ilc.gamma': expected a number <= 2"),
+    # [ilc] against the trajectory (352 rows) and the period (Nyquist 125 Hz), refused on load, before the robot runs
+    ({'q_cutoff_hz = 10.0': 'q_cutoff_hz = 1000.0'}, EGM_FILE, r"l1_egm_ilc.toml: field 'ilc.q_cutoff_hz': cutoff_hz: expected a cut-off in \["),
+    ({'q_cutoff_hz = 10.0': 'q_cutoff_hz = 0.001'}, EGM_FILE, r"field 'ilc.q_cutoff_hz': cutoff_hz: expected a cut-off in \["),
+    ({'lead = 100': 'lead = 200'}, EGM_FILE, r"field 'ilc.lead': lead: the window \(lead-in \+ lead-out = 400 samples\) is longer"),
+    ({'tukey_points = 200': 'tukey_points = 300'}, EGM_FILE, r"field 'ilc.tukey_points': tukey_points: expected at most 2 \* lead = 200"),
+    ({'delta = 5 ': 'delta = 400 '}, EGM_FILE, r"field 'ilc.delta': expected a learning lead shorter than the trajectory \(352 rows\)"),
+    ({'period = 0.004                     # s\n': 'period = 0.004\nrobot = "192.168.1.300"\n'}, EGM_FILE,
+     r"'interface.robot': expected an IPv4 address, optionally with :PORT"),
+    ({'period = 0.004                     # s\n': 'period = 0.004\ntracker = "10.0.0.1:0"\n'}, EGM_FILE, r"'interface.tracker': expected an IPv4 address"),
+    ({'period = 0.004                     # s\n': 'period = 0.004\ntracker = "10.0.0.1"\n'}, EGM_FILE,
+     r"'interface.tracker': expected no tracker for a streaming loop"),
+    ({'period = 0.004                     # s\n': 'period = 0.004\nlog_max_mb = 0\n'}, EGM_FILE, r"'interface.log_max_mb': expected a positive number"),
 ]
 
 

@@ -22,7 +22,7 @@ from gtmodel.defaults import INTERFACE_PORTS, LOOP_PERIOD_S
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.schema import Flag, NonEmptyText, ProblemSchema, Section, _fail, choice, integer, number, vector
 
-__all__ = ["RobotLoopFile", "DEFAULT_PORTS", "parse_address", "MAX_AXES", "MAX_SEN_TYPE"]
+__all__ = ["RobotLoopFile", "DEFAULT_PORTS", "parse_address", "parse_source", "MAX_AXES", "MAX_SEN_TYPE"]
 
 #: The interfaces' usual ports (the sensor side listens, the robot sends to it).
 DEFAULT_PORTS = INTERFACE_PORTS
@@ -75,6 +75,50 @@ def _address(v: object) -> object:
 Address = Annotated[str, BeforeValidator(_address)]
 
 
+def parse_source(text: str) -> tuple[str, int | None]:
+    """A sender's address: ``"ADDR"`` or ``"ADDR:PORT"`` with an IPv4 address (nothing is looked up).
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"192.168.1.20"`` or ``"192.168.1.20:6511"``.
+
+    Returns
+    -------
+    tuple of (str, int or None)
+        The address and the port (None: any port of that address, the first valid packet's
+        locked for the session).
+
+    Raises
+    ------
+    ValueError
+        Another form, naming what was expected.
+    """
+    expected = "an IPv4 address, optionally with :PORT (1..65535), e.g. 192.168.1.20 or 192.168.1.20:6511"
+    if not isinstance(text, str) or text.count(":") > 1 or len(text) > 21:
+        raise ValueError(f"expected {expected}, got {text!r}")
+    host, _, port = text.partition(":")
+    try:
+        ipaddress.IPv4Address(host)
+    except ValueError:
+        raise ValueError(f"expected {expected}, got {text!r}") from None
+    if ":" in text and not (port.isdigit() and 1 <= int(port) <= 65535):
+        raise ValueError(f"expected {expected}, got {text!r}")
+    return host, (int(port) if port else None)
+
+
+def _source(v: object) -> object:
+    try:
+        parse_source(v)  # type: ignore[arg-type]
+    except ValueError:
+        raise _fail("an IPv4 address, optionally with :PORT (1..65535), e.g. 192.168.1.20 or 192.168.1.20:6511") from None
+    return v
+
+
+#: A sender's address ``ADDR`` or ``ADDR:PORT``.
+Source = Annotated[str, BeforeValidator(_source)]
+
+
 def _sen_type(v: object) -> object:
     if not (isinstance(v, str) and 0 < len(v) <= MAX_SEN_TYPE and v.replace("_", "").isalnum() and v.isascii()):
         raise _fail(f"1 to {MAX_SEN_TYPE} ASCII letters, digits or '_' (it is written into every reply)")
@@ -89,6 +133,12 @@ class InterfaceSection(Section):
                                    "(default 127.0.0.1 and the interface's usual port: RSI 49152, EGM 6510; gtmodel loop --listen overrides)")
     sensor_port: integer(1, 65535, description="UDP port of the sensor stream (the tracker's GTS1 datagrams) on the listen address "
                                               "(default: the listen port + 1; only a pose correction reads it)") | None = None
+    robot: Source | None = Field(default=None, description="the robot controller's address (ADDR or ADDR:PORT): only its datagrams are "
+                                 "answered (default: the first valid packet's source is locked for the session; docs/robot.md, the network rules)")
+    tracker: Source | None = Field(default=None, description="the sensor stream's sender (ADDR or ADDR:PORT; default: the first valid "
+                                   "sample's source is locked for the session)")
+    log_max_mb: number(gt=0, le=1e6, unit="MB", description="the cycle log's cap: rows past it are counted (loop.log.capped), not written "
+                                                           "(default: an hour of rows at the period)") | None = None
     period: number(gt=0, le=0.1, unit="s", description="the robot's interpolation cycle") = LOOP_PERIOD_S
     idle_timeout: number(gt=0, le=3600, unit="s", description="the run ends when the robot has sent nothing this long after its first packet") = 2.0
     max_cycles: integer(0, 100_000_000, description="the run ends after this many cycles (0: no limit)") = 0
