@@ -17,6 +17,7 @@ from scipy.special import expit
 from gtmodel.modeling import Component, connect
 from gtmodel.modeling.library import rotational as rot
 from gtmodel.modeling.library import translational as tr
+from gtmodel.modeling.structure.discontinuities import sign_modes
 from gtmodel.modeling.structure.index_reduction import structural_simplify
 
 JM, JL = 0.01, 0.05  # kg m^2
@@ -52,6 +53,13 @@ def test_widths_survive_structural_simplify():
     reduced = structural_simplify(model)
     assert reduced is not model
     assert reduced.smoothing == {"backlash.smoothing": 2e-4, "friction.smoothing": EPS_F}
+
+
+def test_the_smooth_laws_bring_no_events_into_the_simulation():
+    # the smooth laws use no sign()/fabs() (whose derivative is sign): neither the model nor its
+    # index-reduced form (differentiated equations) has a sign() for the event simulation to switch
+    model = BacklashDrive().to_model()
+    assert sign_modes(model) is None and sign_modes(structural_simplify(model)) is None
 
 
 def _rhs(torque: float):
