@@ -168,10 +168,10 @@ def test_rsi_replies_echo_the_ipoc_and_the_held_total_stays_within_the_limits(ex
     assert np.all((y >= LOWER) & (y <= UPPER)) and np.all(np.abs(np.diff(y, axis=0)) <= RATE * (1 + 1e-12))
     assert np.allclose(held, y, rtol=0, atol=1e-9)  # the robot's sum is the logged total: no drift of %.6f
     s = run.summary
-    assert (s["cycles"], s["replies"], s["missing_replies"], s["late_replies"]) == (300, 300, 0, 0)
+    assert (s["cycles"], s["replies"], s["missing_replies"]) == (300, 300, 0)
     assert s["limit_clamps"]["upper"] + s["limit_clamps"]["lower"] + s["limit_clamps"]["rate"] > 0
     assert s["step_status"] == {"GT_OK": 300} and s["log"]["rows"] == 300 and s["log"]["dropped"] == 0
-    assert set(s["reply_latency_ms"]) == {"p50", "p90", "p99", "max"} and s["reply_latency_ms"]["p99"] < 4.0
+    assert set(s["reply_latency_ms"]) == {"p50", "p90", "p99", "max"}  # their size: the realtime tests below
 
 
 def fault_script(peer: Peer):
@@ -340,6 +340,7 @@ def test_read_cycle_log_refuses_a_bad_file(tmp_path):
         read_cycle_log(tmp_path / "none.csv")
 
 
+@pytest.mark.realtime
 def test_rsi_2000_cycles_at_4_ms_without_a_missing_reply(exes, tmp_path):
     run, replies = session(exes["rsi"], tmp_path / "run", rsi_script(2000, pace=0.0035))
     assert replies.count(None) == 0 and run.summary["missing_replies"] == 0 and run.summary["late_replies"] == 0
@@ -347,6 +348,7 @@ def test_rsi_2000_cycles_at_4_ms_without_a_missing_reply(exes, tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.realtime
 def test_rsi_15000_cycles_at_4_ms_latency(exes, tmp_path):
     run, replies = session(exes["rsi"], tmp_path / "run", rsi_script(15000, pace=0.0035), time_limit=300)
     lat = run.summary["reply_latency_ms"]

@@ -40,7 +40,14 @@ def session(tmp_path_factory):
 
 def test_the_run_completes_with_replies(session):
     result, client = session
-    assert (result.status, len(client["received"])) == (Status.COMPLETED, CYCLES) and result.summary["replies"] >= 0.95 * CYCLES, result.summary
+    assert (result.status, len(client["received"])) == (Status.COMPLETED, CYCLES) and result.summary["replies"] > 0, result.summary
+
+
+@pytest.mark.realtime
+def test_the_replies_come_within_the_cycle(session):
+    """Real time: on a quiet machine the client answers 95 % of the cycles within 4 ms."""
+    result, _ = session
+    assert result.summary["replies"] >= 0.95 * CYCLES, result.summary
 
 
 def test_the_client_receives_the_joints_the_simulator_sent(session):
@@ -57,7 +64,14 @@ def test_the_clients_commands_are_applied(session):
     ref = np.column_stack([result.column(f"reference_q{i}_mm") for i in (1, 2, 3)])
     pairs = [(commanded[int(seq[k])], ref[k + 1]) for k in range(len(seq) - 1) if not late[k] and int(seq[k]) in commanded]
     err = max(float(np.max(np.abs(np.subtract(a, b)))) for a, b in pairs)
-    assert len(pairs) >= 500 and err < 1e-9
+    assert len(pairs) >= 1 and err < 1e-9  # every command the robot took is the client's (the on-time count: below)
+
+
+@pytest.mark.realtime
+def test_most_commands_arrive_on_time(session):
+    """Real time: on a quiet machine at least 500 of the 600 commands reach the robot within its cycle."""
+    result, _ = session
+    assert int(np.sum(result.column("late") == 0)) >= 500, result.summary
 
 
 def test_the_servo_followed_the_commands(session):

@@ -49,7 +49,13 @@ def test_closed_loop_halves_the_tcp_path_error(runs):
 
 def test_the_corrections_were_applied(runs):
     corr = np.abs(runs["closed"].column("correction_x_mm"))
-    assert corr.max() > 0.5 and runs["closed"].summary["replies"] > 700
+    assert corr.max() > 0.5
+
+
+@pytest.mark.realtime
+def test_the_replies_came_within_the_cycle(runs):
+    """Real time: on a quiet machine the peer answers more than 700 of the 750 cycles within 4 ms."""
+    assert runs["closed"].summary["replies"] > 700, runs["closed"].summary
 
 
 def test_the_tracker_stream_reached_the_peer_at_1000_hz(runs):
