@@ -264,7 +264,11 @@ def test_faults_end_in_the_documented_fallbacks_without_a_crash(tmp_path):
     assert np.all(np.abs(reply[sent]) <= 5.0 + 1e-9)  # the file's limits, in every reply sent
     assert np.all(np.abs(np.diff(reply[sent], axis=0)) <= 0.1 + 1e-9)  # its rate per cycle
     assert np.all(np.isfinite(np.column_stack([log[c] for c in log if c.startswith("x:")])[(log["flags"].astype(int) & 2) > 0]))
-    assert loop["log"]["dropped"] == 0 and loop["log"]["rows"] == loop["packets"]  # the log complete up to the stop
+    # the log complete up to the stop: a row per cycle, malformed datagrams counted, not logged
+    assert loop["log"]["dropped"] == 0 and loop["log"]["rows"] == loop["cycles"] == loop["packets"] - loop["faults"]["malformed"]["count"]
+    # independent: what the simulated robot held (its own sum of the increments it applied, late ones not) within the file's limits
+    held = np.column_stack([sim.column(f"correction_{a}_mm") for a in "xyz"])
+    assert np.all(np.abs(held) <= 5.0 + 1e-9), np.abs(held).max()
 
 
 def _offline_ilc_ratio(reference_mm: np.ndarray, ilc: dict, dt: float) -> float:
