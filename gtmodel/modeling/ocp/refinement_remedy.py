@@ -1,0 +1,122 @@
+"""What would finish a mesh refinement that stopped before a pass verified (:func:`refinement_remedy`).
+
+A single solve whose verification fails names refinement as its remedy; once refinement has run and stopped at
+one of its limits, that remedy is no help (issue 64: "refine = true", already on, printed after a stop at the
+CPU budget). The remedy then names the limit that stopped it, under its problem-file name (``max_cpu_s``,
+``max_elements``, ``max_passes`` in ``[transcription]``), and an estimate of what would finish, from the passes'
+own convergence: the verification's deviation of a collocation solution falls as a power of the element length
+where the solution is smooth, ``dev ~ C N^-p``; ``p`` is fitted to the last passes that changed the mesh, and the
+elements that would bring the deviation within the tolerance follow, with their CPU time at the last pass's cost
+per element. Where the deviation did not fall with the elements, no larger limit is promised: the cause is then
+not the mesh's resolution (a spurious minimum, a non-smooth law narrower than any element the limit allows).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+__all__ = ["refinement_remedy", "knob"]
+
+#: Margin on the estimated elements and CPU time (the power law is an estimate).
+MARGIN = 1.5
+
+
+def knob(stop: str) -> str | None:
+    """The ``[transcription]`` field whose limit stopped a refinement, or None (it ended for another reason).
+
+    Parameters
+    ----------
+    stop : str
+        The refinement's stop (:attr:`~gtmodel.modeling.OptimizationResult.refinement_stop` before ``"; returned"``).
+
+    Returns
+    -------
+    str or None
+        ``"max_cpu_s"``, ``"max_elements"`` or ``"max_passes"``.
+    """
+    if stop.startswith("the CPU budget"):
+        return "max_cpu_s"
+    if stop.startswith("the element limit") or stop.startswith("no element left to split within"):
+        return "max_elements"
+    if stop.startswith("the pass limit"):
+        return "max_passes"
+    return None
+
+
+def _convergence(history: list[dict[str, Any]]) -> tuple[float, int, float, int, float] | None:
+    """``(p, N0, d0, N1, d1)``: the deviation's order over the last two passes on different meshes, or None."""
+    passes = [(int(e["elements"]), float(e["max_scaled_deviation"])) for e in history
+              if e.get("max_scaled_deviation") is not None and math.isfinite(float(e["max_scaled_deviation"]))
+              and float(e["max_scaled_deviation"]) > 0 and "rejected" not in e]
+    best: dict[int, float] = {}
+    for n, d in passes:  # per mesh size its best pass (a polish re-solves the same mesh)
+        best[n] = min(d, best.get(n, math.inf))
+    sizes = sorted(best)
+    if len(sizes) < 2:
+        return None
+    n0, n1 = sizes[-2], sizes[-1]
+    d0, d1 = best[n0], best[n1]
+    if not d1 < d0:
+        return 0.0, n0, d0, n1, d1
+    return math.log(d0 / d1) / math.log(n1 / n0), n0, d0, n1, d1
+
+
+def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float, budget: float,
+                      max_passes: int, max_elements: int) -> str:
+    """What would finish a refinement that stopped before a pass verified: the limit that stopped it and by how much.
+
+    Parameters
+    ----------
+    history : list of dict
+        The passes' entries (``elements``, ``max_scaled_deviation``, ``cpu_s``; ``rejected`` for a pass rejected as
+        another local optimum).
+    stop : str
+        Why the refinement stopped.
+    tolerance : float
+        The verification tolerance.
+    budget : float
+        The CPU budget [s] it had (``max_cpu_s``).
+    max_passes, max_elements : int
+        Its pass and element limits.
+
+    Returns
+    -------
+    str
+        One sentence: the knob and its estimate, or why no larger limit would help.
+    """
+    which = knob(stop)
+    conv = _convergence(history)
+    spent = sum(float(e.get("cpu_s") or 0.0) for e in history)
+    now = {"max_cpu_s": f"{budget:g} CPU-s", "max_elements": f"{max_elements}", "max_passes": f"{max_passes}"}
+    if conv is None:
+        if which is None:
+            return f"refinement stopped at {stop}; a better [initial_guess] or more [collocation] elements to start from"
+        return f"a larger {which} in [transcription] (now {now[which]}); too few passes to estimate how much"
+    p, n0, d0, n1, d1 = conv
+    if p < 0.25:  # the deviation did not fall with the elements: not the mesh's resolution
+        return (f"the verification's deviation did not fall with the mesh ({d0:.3g} at {n0} elements, {d1:.3g} at {n1}): "
+                "larger limits are unlikely to finish it; the likely cause is a non-smooth law narrower than the elements "
+                "(a larger smoothing width in [model.parameters], or [continuation]) or a spurious minimum (a better [initial_guess])")
+    need = int(math.ceil(MARGIN * n1 * (d1 / tolerance) ** (1.0 / p)))
+    last = next((e for e in reversed(history) if e.get("cpu_s")), None)
+    per_element = float(last["cpu_s"]) / max(int(last["elements"]), 1) if last is not None else 0.0
+    # the passes from n1 to need, each about 1.5 times the last (refinement splits where it deviates), at the last
+    # pass's CPU per element
+    steps = max(1, int(math.ceil(math.log(max(need / n1, 1.0 + 1e-9)) / math.log(1.5))))
+    sizes = [n1 * (need / n1) ** ((k + 1) / steps) for k in range(steps)]
+    cpu = spent + MARGIN * per_element * sum(sizes)
+    estimate = (f"the deviation fell as N^-{p:.2g} ({d0:.3g} at {n0} elements, {d1:.3g} at {n1}), so about {need} elements "
+                f"and {cpu:.0f} CPU-s in all would bring it within {tolerance:g}")
+    if which == "max_cpu_s":  # at least twice what stopped it: the limit was reached, whatever the estimate says
+        cpu_knob = max(cpu, 2.0 * budget)
+        return f"max_cpu_s = {math.ceil(cpu_knob / 10) * 10:.0f} in [transcription] (now {budget:g}; {estimate})" + (
+            f", with max_elements >= {need} (now {max_elements})" if need > max_elements else "")
+    if which == "max_elements":
+        need = max(need, int(math.ceil(MARGIN * max_elements)))
+        return f"max_elements = {need} in [transcription] (now {max_elements}; {estimate})" + (
+            f", with max_cpu_s >= {math.ceil(cpu / 10) * 10:.0f} (now {budget:g})" if cpu > budget else "")
+    if which == "max_passes":
+        return f"max_passes = {max_passes + steps + 1} in [transcription] (now {max_passes}; {estimate})" + (
+            f", with max_cpu_s >= {math.ceil(cpu / 10) * 10:.0f} (now {budget:g})" if cpu > budget else "")
+    return f"refinement stopped at {stop} ({estimate})"

@@ -1,0 +1,62 @@
+"""The remedy of a refinement stopped at a limit: the knob that stopped it and an estimate of what would finish.
+
+Independent check: the deviations of the table follow ``d = C N^-p`` exactly (p = 2 and 3, chosen), so the
+elements that bring ``d`` to the tolerance are known in closed form, ``N = N1 (d1 / tol)^(1/p)``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+from gtmodel.modeling.ocp.refinement_remedy import MARGIN, knob, refinement_remedy
+
+
+def power_law(p, sizes=(50, 100, 200), c=100.0):
+    """Passes whose deviation is exactly ``c N^-p``, 0.01 CPU-s per element."""
+    return [{"elements": n, "max_scaled_deviation": c * n ** -p, "cpu_s": 0.01 * n} for n in sizes]
+
+
+@pytest.mark.parametrize("stop, field", [
+    ("the CPU budget (100 s; 102.2 s spent, the last pass took 22.4 s)", "max_cpu_s"),
+    ("the element limit (400 elements)", "max_elements"),
+    ("no element left to split within 400 elements", "max_elements"),
+    ("the pass limit (16)", "max_passes"),
+    ("pass 3 ended error without a solution to refine", None),
+])
+def test_knob_names_the_limit_that_stopped_it(stop, field):
+    assert knob(stop) == field
+
+
+@pytest.mark.parametrize("p", [2.0, 3.0])
+def test_element_estimate_is_the_power_laws_closed_form(p):
+    history = power_law(p)
+    d1 = history[-1]["max_scaled_deviation"]
+    closed = 200 * (d1 / 1e-2) ** (1 / p)  # the closed form of c N^-p = tol
+    text = refinement_remedy(history, "the element limit (200 elements)", 1e-2, 100.0, 16, 200)
+    need = int(re.search(r"max_elements = (\d+) in \[transcription\]", text).group(1))
+    assert need == max(math.ceil(MARGIN * closed), math.ceil(MARGIN * 200))
+    assert f"fell as N^-{p:.2g}" in text
+
+
+@pytest.mark.parametrize("stop, expected", [
+    ("the CPU budget (10 s; 12 s spent)", r"^max_cpu_s = \d+ in \[transcription\] \(now 10;"),
+    ("the pass limit (3)", r"^max_passes = \d+ in \[transcription\] \(now 3;"),
+])
+def test_remedy_names_the_knob_never_refine_true(stop, expected):
+    text = refinement_remedy(power_law(2.0), stop, 1e-2, 10.0, 3, 400)
+    assert re.search(expected, text) and "refine = true" not in text
+
+
+def test_cpu_remedy_is_at_least_twice_the_budget_that_stopped_it():
+    text = refinement_remedy(power_law(2.0), "the CPU budget (1000 s)", 1e-2, 1000.0, 16, 400)
+    assert int(re.search(r"max_cpu_s = (\d+)", text).group(1)) >= 2000
+
+
+def test_a_deviation_that_does_not_fall_promises_no_larger_limit():
+    history = [{"elements": 50, "max_scaled_deviation": 0.2, "cpu_s": 1.0}, {"elements": 80, "max_scaled_deviation": 0.3, "cpu_s": 2.0}]
+    text = refinement_remedy(history, "the CPU budget (100 s)", 1e-2, 100.0, 16, 400)
+    assert text.startswith("the verification's deviation did not fall with the mesh (0.2 at 50 elements, 0.3 at 80)")
+    assert "smoothing width" in text
