@@ -17,14 +17,16 @@ from pathlib import Path
 from typing import Any
 
 from gtmodel._docstrings import SHARED_DOCS, fill_doc
-from gtmodel._timing import add_phase, timed
+from gtmodel._timing import add_phase, merge_phases, timed
 from gtmodel.modeling import CollocationTranscription, Model, Optimization, OptimizationResult
 from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.modeling.ocp.methods import Collocation, MultipleShooting, Refinement, SolverSettings
 from gtmodel.modeling.ocp.coarse_start import linear_quadratic, solve_from_coarse
+from gtmodel.modeling.ocp.continuation import Continuation, continue_smoothing, record_final, smoothing_widths
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.errors import InputError
 from gtmodel.status import Status
 
 _log = logging.getLogger("gtmodel")
@@ -84,6 +86,9 @@ class OptimalControl:
         (:func:`gtmodel.modeling.ocp.estimation.estimate_statistics`).
     variables : tuple of str
         The variables plotted in ``variables.png`` (``[output] variables``).
+    continuation : Continuation
+        The continuation over the model's smoothing widths
+        (:mod:`gtmodel.modeling.ocp.continuation`; applied when the model declares any).
     """
 
     name: str
@@ -102,6 +107,7 @@ class OptimalControl:
     benchmark: dict[str, Any] | None = None
     estimation: dict[str, Any] | None = None
     variables: tuple[str, ...] = ()
+    continuation: Continuation = field(default_factory=Continuation)
 
     @property
     def model(self) -> Model:
@@ -124,6 +130,9 @@ class OptimalControl:
         check = d.refinement.verification if d.refinement.verify else False  # passed down, never set on the declaration
         options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
         if isinstance(d.method, MultipleShooting):
+            if d.solver.name != "ipopt":  # the solver named is the one that runs, or the call says why not
+                raise InputError(f"solver {d.solver.name!r}: multiple shooting is solved by IPOPT only (its NLP has no stage "
+                                 "structure for fatrop); solver = \"ipopt\", or method = \"collocation\" for fatrop")
             m = d.method
             phases: dict[str, dict[str, float]] = {}
             with timed(phases, "build"):
@@ -140,9 +149,12 @@ class OptimalControl:
             if result.dae is not None:
                 result.message = without_inputs(d.optimization, result.dae, result.message)
             return self._estimated(shooting, result)
-        kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal, "eliminate_algebraics": d.method.eliminate_algebraics}
+        kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal, "eliminate_algebraics": d.method.eliminate_algebraics,
+                  "solver": d.solver.name, "compile": d.solver.jit}
         single = {**kwargs, "verify": check}
         guess = previous if warm_start and isinstance(previous, OptimizationResult) and previous.collocation is not None else None
+        if d.continuation.enabled and smoothing_widths(d.optimization):
+            return self._estimated_final(self._continued(kwargs, check, guess), kwargs)
         if d.refinement.refine:
             phases = {}
             with timed(phases, "refinement"):  # every pass: its build, guess, solve and verification
@@ -153,15 +165,7 @@ class OptimalControl:
                     objective_tolerance=d.refinement.objective_tolerance, **kwargs,
                 )
             result.timing = phases
-            self.estimation = None
-            col = result.collocation
-            if not d.optimization.data_fits or col is None:
-                return result
-            # a data fit's statistics on the mesh of the returned pass (refinement only splits elements,
-            # so data times that were mesh points stay mesh points): its transcription rebuilt, not solved
-            final = CollocationTranscription(d.optimization, elements=col.elements, points=col.points, scheme=col.scheme,
-                                             mesh=col.fractions, **kwargs)
-            return self._estimated(final, result)
+            return self._estimated_final(result, kwargs)
         tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **single)
         coarse = (lambda: self.coarse_solve(kwargs)) if (guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS
                                                          and not linear_quadratic(d.optimization, tr.dae)) else None
@@ -185,6 +189,63 @@ class OptimalControl:
                 )
             result.timing = phases
         return self._estimated(tr, result)
+
+    def _estimated_final(self, result: OptimizationResult, kwargs: dict[str, Any]) -> OptimizationResult:
+        """A data fit's statistics on the mesh of a refined result (its transcription rebuilt, not solved)."""
+        self.estimation = None
+        col = result.collocation
+        if not self.optimization.data_fits or col is None:
+            return result
+        # refinement only splits elements, so data times that were mesh points stay mesh points
+        final = CollocationTranscription(self.optimization, elements=col.elements, points=col.points, scheme=col.scheme,
+                                         mesh=col.fractions, **kwargs)
+        return self._estimated(final, result)
+
+    def _continued(self, kwargs: dict[str, Any], check: Any, guess: OptimizationResult | None) -> OptimizationResult:
+        """The collocation solve of a model with smoothing widths: continued over them, then refined as declared.
+
+        The steps (:func:`~gtmodel.modeling.ocp.continuation.continue_smoothing`) on the declared mesh, one NLP whose
+        parameters are the widths, each solve warm from the last (its multipliers); then the declared widths from
+        the last step, verified; then mesh refinement from it where ``refine`` or ``refine_on_failure`` asks.
+        """
+        d = self
+        phases: dict[str, dict[str, float]] = {}
+        with timed(phases, "build"):
+            tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points,
+                                          scheme=d.method.scheme, **kwargs, verify=check)
+        verify = tr.verify
+
+        def solve(parameters: dict[str, float] | None, start: OptimizationResult | None) -> OptimizationResult:
+            warm = start is not None and start.lam_g is not None and start.transcription_key == tr.key
+            return tr.solve(parameters=parameters, initial_guess=start if start is not None else guess, warm_start=warm)
+
+        with timed(phases, "continuation"):
+            tr.verify = False  # the intermediate problems are not the user's: solved, not verified
+            try:
+                start, record = continue_smoothing(d.optimization, solve, d.continuation)
+            finally:
+                tr.verify = verify
+        result = solve(None, start)
+        merge_phases(phases, result.timing)
+        result.continuation = record_final(record, start, result)
+        failed = result.status == Status.CHECK_FAILED or (result.status in (Status.OPTIMAL, Status.ACCEPTABLE)
+                                                          and not (getattr(result.verification, "bounds", None) or {}).get("within_tolerance", True))
+        if check and result.verification is not None and (d.refinement.refine or (d.refinement.on_failure and failed
+                                                                                   and not d.optimization.data_fits)):
+            if not d.refinement.refine:
+                _log.info("%s: the verification at the declared smoothing failed; refining the mesh from this solution "
+                          "(refine_on_failure)", d.optimization.model.name)
+            continued = result.continuation
+            with timed(phases, "refinement"):
+                result = solve_refined(
+                    d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
+                    max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                    max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification,
+                    objective_tolerance=d.refinement.objective_tolerance, **kwargs,
+                )
+            result.continuation = continued
+        result.timing = phases
+        return result
 
     def coarse_solve(self, kwargs: dict[str, Any]) -> OptimizationResult:
         """The problem solved on :data:`COARSE_START_ELEMENTS` elements (unverified), the start of a fine mesh.

@@ -308,6 +308,10 @@ class OptimizationResult(StatusResult):
         print them and write them to ``summary.json`` (``warnings``).
     refinement_stop : str
         Why the refinement ended and which pass it returned (``""`` without refinement).
+    continuation : dict
+        The continuation over the model's smoothing widths that led to this result
+        (:func:`gtmodel.modeling.ocp.continuation.record_final`: the steps, the widths each element
+        ended at, the objective's change over the last step); empty without one.
     """
 
     iterations: int
@@ -334,6 +338,7 @@ class OptimizationResult(StatusResult):
     timing: dict[str, dict[str, float]] = field(default_factory=dict, repr=False)
     warnings: list[str] = field(default_factory=list, repr=False)
     refinement_stop: str = ""
+    continuation: dict[str, Any] = field(default_factory=dict, repr=False)
 
     def sample(self, t: Any) -> dict[str, Any]:
         """Evaluate the solution at given times with the collocation polynomials.

@@ -45,11 +45,12 @@ from gtmodel.problems.kinds.optimal_control_data import declare_data
 from gtmodel.problems.kinds.optimal_control_guess import declare_initial_guess
 from gtmodel.problems.kinds.schemas.optimal_control import MAX_VALUE, OptimalControlFile, OptimizationSection
 from gtmodel.problems.references import named_parameters
-from gtmodel.problems.results import verification_fields
+from gtmodel.problems.results import json_safe, verification_fields
 from gtmodel.problems.user_model import ModelFileError, load_user_model
 from gtmodel.report.model_trajectory import plot_signals
 from gtmodel.modeling.ocp.methods import MultipleShooting
 from gtmodel.trajectory.model_ocp import OptimalControl
+from gtmodel.modeling.ocp.continuation import Continuation
 from gtmodel.modeling.ocp.methods import Collocation, Refinement, SolverSettings
 
 __all__ = ["OptimalControlKind", "OptimalControlFile", "OptimalControl", "MAX_VALUE"]
@@ -296,6 +297,9 @@ class OptimalControlKind(ProblemKind):
             method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
         if doc.verification.integrator == "cvodes" and opt.model.flatten().nz:
             raise file.fail("verification.integrator", "idas or auto for a model with algebraic variables (CVODES takes none)", "cvodes")
+        if doc.solver.name != "ipopt" and tr.method == "multiple_shooting":
+            raise file.fail("solver.name", 'ipopt with method = "multiple_shooting" (fatrop solves the stage-wise '
+                            'collocation NLP only; method = "collocation" for fatrop)', doc.solver.name)
         if tr.refine and tr.method == "multiple_shooting":
             raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement splits '
                             'collocation elements; shooting is verified as it is: raise transcription.intervals or steps, '
@@ -307,11 +311,13 @@ class OptimalControlKind(ProblemKind):
         return OptimalControl(
             name=name, model_file=path, class_name=doc.model.class_, optimization=opt,
             method=method,
-            solver=SolverSettings(max_iter=doc.solver.max_iter, tol=doc.solver.tol), nominal={nkeys[k]: v for k, v in doc.nominal.items()},
+            solver=SolverSettings(name=doc.solver.name, max_iter=doc.solver.max_iter, tol=doc.solver.tol, jit=doc.solver.jit),
+            nominal={nkeys[k]: v for k, v in doc.nominal.items()},
             objective=objective or "", sense=sense or "minimize", constraints=tuple(doc.optimization.constraints),
             named_parameters=named, bounds=bounds,
             refinement=_refinement(file, doc),
             benchmark=bench, variables=shown,
+            continuation=_continuation(file, doc),
         )
 
     @fill_doc(**KIND_DOCS)
@@ -358,6 +364,7 @@ class OptimalControlKind(ProblemKind):
             **({"collocation": {"elements": d.method.elements, "points": d.method.points, "scheme": d.method.scheme}}
                if isinstance(d.method, Collocation) else {}),
             **verification_fields(r),
+            **({"continuation": json_safe(r.continuation)} if r.continuation else {}),
             **_variable_fields(d, r),
         })
         warnings = solution_warnings(d.optimization, r)
@@ -434,6 +441,14 @@ def applied_inputs(result: OptimizationResult, optimization: Optimization,
         if np.ndim(v) == 1 and sl.stop - sl.start == 1:
             out[k] = np.clip(np.asarray(v, dtype=float), lower[sl.start], upper[sl.start])
     return t, out
+
+
+def _continuation(file: ProblemFile, doc: Any) -> Continuation:
+    """``[continuation]`` as the declaration's :class:`~gtmodel.modeling.ocp.continuation.Continuation`."""
+    c = doc.continuation
+    if c.step > c.start_factor:
+        raise file.fail("continuation.step", f"at most continuation.start_factor ({c.start_factor:g})", c.step)
+    return Continuation(enabled=c.enabled, start_factor=c.start_factor, step=c.step)
 
 
 def _refinement(file: ProblemFile, doc: Any) -> Refinement:

@@ -314,6 +314,45 @@ class OutputSection(Section):
     variables: list[NonEmptyText] = Field(default_factory=list, description='variables plotted in variables.png, e.g. ["load.phi", "load.w"]; default for a reduced model: its states as written')
 
 
+class ModelSolverSection(SolverSection):
+    """``[solver]`` of an ``optimal_control`` problem: the NLP solver, its limits, how derivatives are evaluated.
+
+    Parameters
+    ----------
+    max_iter : int
+        IPOPT iteration limit.
+    tol : float
+        IPOPT tolerance.
+    name : str
+        ``"ipopt"`` (default) or ``"fatrop"`` (collocation only: the NLP ordered stage by stage; multiple
+        shooting is refused, saying so).
+    jit : bool
+        Compile the NLP's derivatives to C (cached; default false for a user's model: its first solve then
+        pays the compilation).
+    """
+
+    name: choice("ipopt", "fatrop", description="NLP solver (fatrop: stage-wise interior point, collocation only)") = "ipopt"
+    jit: Flag = Field(default=False, description="compiled (cached) C for the NLP derivatives")
+
+
+class ContinuationSection(Section):
+    """``[continuation]``: the continuation over the model's smoothing widths (non-smooth elements).
+
+    Parameters
+    ----------
+    enabled : bool
+        Continue over the widths when the model declares any (default true).
+    start_factor : float
+        The first solve's widths are the declared ones times this (default 100).
+    step : float
+        Each solve divides the widths by this (default 10), down to the declared ones.
+    """
+
+    enabled: Flag = Field(default=True, description="continue over the model's smoothing widths (when it declares any)")
+    start_factor: number(gt=1, le=1e6, description="first widths: the declared ones times this") = 100.0
+    step: number(gt=1, le=1e6, description="each step divides the widths by this") = 10.0
+
+
 @fill_doc(**KIND_DOCS)
 class OptimalControlFile(ProblemSchema):
     """An ``optimal_control`` problem file.
@@ -348,8 +387,10 @@ class OptimalControlFile(ProblemSchema):
         ``[collocation]``: the collocation mesh.
     benchmark : BenchmarkSection, optional
         ``[benchmark]``: a published optimum to compare with (benchmark problems).
-    solver : SolverSection
-        ``[solver]``: IPOPT settings.
+    solver : ModelSolverSection
+        ``[solver]``: the NLP solver and its settings.
+    continuation : ContinuationSection
+        ``[continuation]``: the continuation over the model's smoothing widths.
     output : OutputSection
         ``[output]``: the variables plotted in ``variables.png``.
     """
@@ -369,5 +410,6 @@ class OptimalControlFile(ProblemSchema):
     verification: VerificationSection = VerificationSection()
     collocation: CollocationSection = CollocationSection()
     benchmark: BenchmarkSection | None = None
-    solver: SolverSection = SolverSection()
+    solver: ModelSolverSection = ModelSolverSection()
+    continuation: ContinuationSection = ContinuationSection()
     output: OutputSection = OutputSection()
