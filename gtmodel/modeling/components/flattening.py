@@ -125,7 +125,7 @@ class _Flattening:
 
     def _mark_smoothing(self, sym: ca.SX, where: str) -> None:
         """Mark the declared parameter ``sym`` a smoothing width (a sub-component's width is bound to it)."""
-        d = next(d for d in self.declared if d.kind == "parameter" and d.sym.element_hash() == sym.element_hash())
+        d = next(d for d in self.declared if d.kind == "parameter" and d.size == 1 and d.sym.element_hash() == sym.element_hash())
         if not d.smoothing:
             Parameter(d.value, smoothing=True).validate(d.value, where)  # one number > 0
             d.smoothing = True

@@ -28,6 +28,7 @@ class SoftSpring(tr.PartialCompliant):
 class Chain(Component):
     """fixed -- soft spring -- mass -- soft spring (its width bound to the chain's) -- mass."""
 
+    gains = Parameter([1.0, 2.0], description="a vector parameter declared before the width (not a width)")
     width = Parameter(2e-3, unit="m", description="one width for the second spring")
     fixed = tr.Fixed()
     s1 = SoftSpring()
