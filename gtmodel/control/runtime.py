@@ -151,8 +151,8 @@ def read_cycle_log(path: str | Path) -> dict[str, np.ndarray]:
     Returns
     -------
     dict of str to numpy.ndarray
-        ``(N,)`` per column (``cycle``, ``ipoc_or_seq``, ``flags``, ``status``, ``sensor_age``
-        as int64; the others float64, NaN where no value exists).
+        ``(N,)`` per column (``cycle``, ``flags``, ``status``, ``sensor_age`` as int64,
+        ``ipoc_or_seq`` as uint64, exactly; the others float64, NaN where no value exists).
 
     Raises
     ------
@@ -176,10 +176,18 @@ def read_cycle_log(path: str | Path) -> dict[str, np.ndarray]:
         raise InputError(f"{p}: cannot read the cycle log: {exc.strerror or exc}") from None
     if data.size == 0:
         data = np.zeros((0, len(names)))
+    seq = None
+    if "ipoc_or_seq" in names and data.shape[0]:  # 64-bit counts (a forged IPOC 2^64-1 included) read exactly, not through float
+        with p.open() as f:
+            f.readline()
+            seq = np.loadtxt(f, delimiter=",", dtype=np.uint64, usecols=names.index("ipoc_or_seq"), ndmin=1)
     if data.shape[1] != len(names):
         raise InputError(f"{p}: expected {len(names)} values per row, got {data.shape[1]}")
-    ints = {"cycle", "ipoc_or_seq", "flags", "status", "sensor_age"}
-    return {n: (data[:, i].astype(np.int64) if n in ints else data[:, i]) for i, n in enumerate(names)}
+    ints = {"cycle", "flags", "status", "sensor_age"}
+    out = {n: (data[:, i].astype(np.int64) if n in ints or n == "ipoc_or_seq" and seq is None else data[:, i]) for i, n in enumerate(names)}
+    if seq is not None:
+        out["ipoc_or_seq"] = seq
+    return out
 
 
 def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
@@ -429,6 +437,7 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
             _RUNNING.discard(proc.pid)
     proc.wait()
     pump.join(10.0)
+    proc.stderr.close()
     code = proc.returncode
     said = [ln for ln in lines if ln.startswith(_SAID)]
     err = "\n".join(ln for ln in lines if not ln.startswith(_SAID)).strip()

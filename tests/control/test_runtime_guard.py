@@ -187,7 +187,8 @@ def test_a_forged_ipoc_from_the_robot_is_held_once_and_the_step_runs_again(exes,
     log = read_cycle_log(run.log_path)
     stepped = (log["flags"] & FLAGS["step"]) != 0
     # independent: the row of the forged IPOC is held and out of the window; every other row steps
-    assert log["flags"][10] & FLAGS["out_of_window"] and stepped.tolist() == [True] * 10 + [False] + [True] * 10
+    assert log["ipoc_or_seq"][10] == forged and log["flags"][10] & FLAGS["out_of_window"]
+    assert stepped.tolist() == [True] * 10 + [False] + [True] * 10
     assert sen(out[10][1])[0] == forged and np.all(sen(out[10][1])[1] == 0.0)  # echoed, no increment
     assert (run.summary["sequence"]["out_of_window"], run.summary["sequence"]["resyncs"], run.summary["alarms"]["holds"]) == (1, 0, 0)
 
@@ -321,3 +322,19 @@ def test_the_log_stops_at_its_cap_and_counts_the_rest(exes, tmp_path):
     size = run.log_path.stat().st_size
     log = run.summary["log"]
     assert size <= 0.002 * 1048576 + 400 and log["capped"] > 0 and log["written"] + log["capped"] == 50 == run.summary["cycles"]
+
+
+def test_a_flood_of_repeated_ipocs_from_the_robot_is_logged_by_its_first_rows(exes, tmp_path):
+    def script(net: Net):
+        for k in range(5):
+            net.sample(0.5)
+            net.exchange(rob(1000 + 4 * k))
+        for _ in range(300):  # the same IPOC again and again: held replies, 100 rows, the rest counted
+            net.exchange(rob(1016))
+        net.sample(0.5)
+        return net.exchange(rob(1020))
+    run, last = session(exes["rsi"], tmp_path / "run", script)
+    log = read_cycle_log(run.log_path)
+    assert (log["cycle"].size, run.summary["log"]["unlogged_repeats"], run.stats["duplicate_or_old"], run.summary["cycles"]) == (
+        5 + 100 + 1, 200, 300, 306)
+    assert last is not None and log["flags"][-1] & FLAGS["step"]  # the robot's next cycle steps

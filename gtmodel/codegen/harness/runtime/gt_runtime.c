@@ -93,7 +93,7 @@
 #define GT_RT_SENSOR_WINDOW 10000 /* samples: a plausible jump of the tracker's seq, plus 20000 per second of silence */
 #define GT_RT_HOLD_ALARM 5        /* consecutive cycles without the step's reply that raise an alarm */
 #define GT_RT_MAX_EVENTS 256      /* events kept (silences, alarms, resynchronisations); more are counted */
-#define GT_RT_DRAIN 64            /* datagrams read per wake-up before the cycle looks at the clock again */
+#define GT_RT_LOG_REPEATS 100     /* consecutive duplicate / out-of-window datagrams logged row by row; more are counted */
 #define GT_RT_MAX_DATAGRAM 4096
 #define GT_RT_NSTATUS 32
 #define GT_RT_CYCLE_STACK (1u << 20)  /* the step's CasADi work arrays live on it */
@@ -118,7 +118,7 @@ typedef struct {
     uint64_t clamp_lower, clamp_upper, clamp_rate, step_calls, step_status[GT_RT_NSTATUS], step_status_other;
     uint64_t sensor_accepted, sensor_malformed, sensor_non_finite, sensor_old, sensor_short;
     uint64_t log_written, log_dropped, log_write_errors, log_capped, log_bytes, first_seq, last_seq;
-    uint64_t before_lock, sensor_before_lock, unapplied, sent_late, start_outside, holds, hold_longest, silences, events_dropped;
+    uint64_t before_lock, log_unlogged_repeats, unapplied, sent_late, start_outside, holds, hold_longest, silences, events_dropped;
     double max_latency_us, silence_longest_s;
     int realtime_fifo, realtime_mlock;
     char realtime_reason[160];
@@ -490,7 +490,7 @@ static void *gt_cycle(void *arg)
     static gt_rt_entry e;
     static double last[GT_RT_NU], target[GT_RT_NU], y[GT_RT_NU], pending[GT_RT_NU], field[64];
     static gt_rt_real xr[GT_RT_NX], ur[GT_RT_NU];
-    int have_last = 0, have_t0 = 0, have_rx = 0, have_pending = 0, have_delay = 0, hold_run = 0;
+    int have_last = 0, have_t0 = 0, have_rx = 0, have_pending = 0, have_delay = 0, hold_run = 0, repeat_run = 0;
     uint64_t seq0 = 0, cycles0 = 0, prev_seq = 0, required = 0;
     uint32_t tm0 = 0, hold_reasons = 0;
     double last_rx = 0.0, accept_rx = 0.0, prev_delay = 0.0, hold_t0 = 0.0;
@@ -762,7 +762,10 @@ static void *gt_cycle(void *arg)
             hold_ev = NULL;
         }
         e.flags = flags;
-        gt_log_push(&e);
+        /* a flood of repeated or forged sequence numbers from the robot's address: its first rows logged, the rest counted */
+        repeat_run = (flags & (F_DUPLICATE_OR_OLD | F_OUT_OF_WINDOW)) ? repeat_run + 1 : 0;
+        if (repeat_run > GT_RT_LOG_REPEATS) ++S.log_unlogged_repeats;
+        else gt_log_push(&e);
         if (O.max_cycles > 0 && S.cycles >= O.max_cycles) {
             gt_cycle_end = "max_cycles";
             break;
@@ -932,9 +935,9 @@ static void gt_write_stats(const char *signal_name)
     }
     if (S.step_status_other) fprintf(f, "%s\"other\": %llu", first ? "" : ", ", (unsigned long long)S.step_status_other);
     fprintf(f, "},\n  \"log\": {\"written\": %llu, \"dropped\": %llu, \"write_errors\": %llu, \"capped\": %llu, \"bytes\": %llu, "
-               "\"max_bytes\": %llu},\n", (unsigned long long)S.log_written, (unsigned long long)S.log_dropped,
+               "\"max_bytes\": %llu, \"unlogged_repeats\": %llu},\n", (unsigned long long)S.log_written, (unsigned long long)S.log_dropped,
             (unsigned long long)S.log_write_errors, (unsigned long long)S.log_capped, (unsigned long long)S.log_bytes,
-            (unsigned long long)O.log_max_bytes);
+            (unsigned long long)O.log_max_bytes, (unsigned long long)S.log_unlogged_repeats);
     gt_write_guard(f);
     fprintf(f, "  \"realtime\": {\"granted\": %s, \"sched_fifo\": %s, \"mlockall\": %s, \"reason\": ",
             S.realtime_fifo && S.realtime_mlock ? "true" : "false", S.realtime_fifo ? "true" : "false", S.realtime_mlock ? "true" : "false");
