@@ -1,0 +1,170 @@
+"""The drive family solved by gtmodel's default path, each member against its independent reference (a benchmark, not a test).
+
+Usage: python benchmarks/bench_drive_family.py [--members N] [--seed S] [--json] [--cached] [--update-cache]
+[--only NAME,...] [--keep DIR]
+
+For each member of :func:`gtmodel.modeling.library.drive_family.drive_family` (the first N,
+default all 40), in this one process:
+
+- the problem file and model module are written (:func:`~gtmodel.modeling.library.drive_family.write_problem`)
+  and solved exactly as ``gtmodel solve FILE --no-plots`` solves them (:func:`gtmodel.problems.run_problem`:
+  collocation, verification, refinement, all at their defaults); ``status``, ``verified``
+  (``summary.json``'s ``verification.passed``), ``objective``, and ``cpu_s``: the process time
+  around the call (load, solve, verification, refinement, writing the folder);
+- its reference (``benchmarks/drive_family_reference.py``: the member's ODE written by hand,
+  direct multiple shooting in plain CasADi, RK4 steps with the bounds at every step, two
+  resolutions) solved in the same run, its CPU time ``reference_cpu_s`` the peer of ``cpu_s``
+  (``cpu_ratio = cpu_s / reference_cpu_s``); with ``--cached``, read from the cache
+  ``tests/modeling/library/data/drive_family_references.json`` when its parameter hash is the
+  member's (``reference_cpu_s`` then as measured when it was cached; ``reference_cached`` true);
+  ``--update-cache`` writes the references solved in the run to the cache;
+- ``relative_error``: gtmodel's objective against the reference's (the final time, or the copper loss);
+- ``worst_bound_excess``: gtmodel's answer re-simulated densely by SciPy on the hand-written
+  ODE under its own input (each element's polynomial, clipped to the voltage bound), the
+  largest excess of the current or speed over its bound anywhere, relative (0.01 = 1 %);
+  ``end_error`` the re-simulated end state's distance from the target (relative to each state's scale);
+- ``passed``: ``optimal``, verified, ``|relative_error| <= 0.5 %`` and ``worst_bound_excess <= 1 %``;
+  ``pass_rate`` over the members run. For a member that does not pass, the summary's message,
+  why refinement stopped and its warnings are printed.
+
+With ``--json`` the last line of stdout is ``{"members": [{"name", "status", "verified",
+"relative_error", "cpu_s", "worst_bound_excess", ...}], "pass_rate"}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this checkout's gtmodel
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # drive_family_reference
+
+import drive_family_reference as ref  # noqa: E402
+
+from gtmodel.modeling.library.drive_family import DriveMember, drive_family, write_problem  # noqa: E402
+from gtmodel.problems import run_problem  # noqa: E402
+
+#: The pass criteria of issue 64: relative error to the reference and bound excess between nodes.
+MAX_RELATIVE_ERROR = 5e-3
+MAX_BOUND_EXCESS = 1e-2
+
+
+def gtmodel_pieces(solution: Any, vmax: float) -> list[tuple[float, float, np.ndarray]] | None:
+    """The voltage of a collocation solution as pieces ``(t0, t1, coefficients in tau)`` (:func:`ref.resimulate`).
+
+    Each element's input polynomial through its collocation points (degree ``points - 1``),
+    as the solution holds it; None when the solution holds none.
+    """
+    col = getattr(solution, "collocation", None)
+    dae = getattr(solution, "dae", None)
+    if col is None or dae is None or col.shooting is not None or "src.v" not in dae.u_vars:
+        return None
+    j = dae.u_vars["src.v"].start
+    edges, tau = col.breaks(), np.asarray(col.tau_root[1:], dtype=float)
+    deg = tau.size - 1
+    return [(float(edges[k]), float(edges[k + 1]), np.polyfit(tau, col.uc[k, :, j], deg) if deg else col.uc[k, :, j].copy())
+            for k in range(col.elements)]
+
+
+def run_member(member: DriveMember, folder: Path, reference: dict | None) -> dict:
+    """Solve one member by ``gtmodel solve``'s path and compare it with its reference (solved here if None)."""
+    problem = write_problem(member, folder)
+    cpu = time.process_time()
+    outcome = run_problem(problem, folder / f"{member.name}_out", plots=False)
+    cpu = time.process_time() - cpu
+    summary = outcome.summary
+    p = member.parameters()
+    cached = reference is not None
+    if reference is None:
+        reference = ref.reference(p)
+    objective = summary.get("objective")
+    row: dict[str, Any] = {
+        "name": member.name, "status": str(outcome.status), "verified": bool((summary.get("verification") or {}).get("passed")),
+        "relative_error": None, "cpu_s": cpu, "worst_bound_excess": None, "objective": objective,
+        "reference_objective": reference["objective"], "reference_spread": reference["spread"],
+        "reference_status": reference["status"], "reference_cpu_s": reference["cpu_s"], "reference_cached": cached,
+        "cpu_ratio": cpu / reference["cpu_s"] if reference["cpu_s"] else None,
+        "reference_worst_bound_excess": reference["worst_bound_excess"], "end_error": None,
+        "elements": (summary.get("transcription") or {}).get("elements"),
+        "message": summary.get("message", ""), "refinement_stop": summary.get("refinement_stop", ""),
+        "warnings": summary.get("warnings", []), "reference": reference,
+    }
+    if objective is not None and np.isfinite(objective):
+        row["relative_error"] = (objective - reference["objective"]) / abs(reference["objective"])
+    pieces = gtmodel_pieces(outcome.solution, member.vmax) if outcome.solution is not None else None
+    if pieces:
+        sim = ref.resimulate(p, pieces)
+        row["worst_bound_excess"], row["end_error"] = sim["worst_bound_excess"], sim["end_error"]
+    row["passed"] = bool(row["status"] == "optimal" and row["verified"] and row["relative_error"] is not None
+                         and abs(row["relative_error"]) <= MAX_RELATIVE_ERROR and row["worst_bound_excess"] is not None
+                         and row["worst_bound_excess"] <= MAX_BOUND_EXCESS)
+    return row
+
+
+def _pct(x: float | None, fmt: str = "{:+.3f}") -> str:
+    return "-" if x is None else fmt.format(100 * x) + " %"
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Run the benchmark; print a line per member, the pass rate, and (``--json``) one JSON object."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--members", type=int, default=40, help="run the first N members (default 40)")
+    ap.add_argument("--seed", type=int, default=0, help="the family's seed (default 0)")
+    ap.add_argument("--json", action="store_true", help="print one JSON object on the last line")
+    ap.add_argument("--cached", action="store_true", help="use the cached references where fresh, not solved in this run")
+    ap.add_argument("--keep", type=Path, default=None, help="write the problem files and result folders here (kept)")
+    ap.add_argument("--only", default="", help="comma-separated member names (of the first N)")
+    ap.add_argument("--update-cache", action="store_true", help="add the references solved in this run to the cache")
+    a = ap.parse_args(argv)
+    logging.getLogger("gtmodel").setLevel(logging.ERROR)  # gtmodel solve --quiet: the rows say what happened
+    cache = ref.load_cache() if a.cached else {}
+    print(f"load average {os.getloadavg()[0]:.2f}; drive family seed {a.seed}, {a.members} member(s)", flush=True)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = a.keep or Path(tmp)
+        only = {n for n in a.only.split(",") if n}
+        for member in drive_family(max(a.members, 1), a.seed):
+            if only and member.name not in only:
+                continue
+            row = run_member(member, folder, ref.cached(cache, member.name, member.parameter_hash()))
+            rows.append(row)
+            if a.update_cache and not row["reference_cached"]:
+                fresh = ref.load_cache()  # re-read: another run may have added members meanwhile
+                fresh[member.name] = {"parameter_hash": member.parameter_hash(), **row.pop("reference")}
+                ref.CACHE.parent.mkdir(parents=True, exist_ok=True)
+                ref.CACHE.write_text(json.dumps(dict(sorted(fresh.items())), indent=1) + "\n")
+            row.pop("reference", None)
+            ratio = "-" if row["cpu_ratio"] is None else f"{row['cpu_ratio']:.2f}"
+            print(f"{row['name']:34s} {row['status']:14s} verified={str(row['verified']):5s} "
+                  f"error {_pct(row['relative_error']):>11s} (ref spread {_pct(row['reference_spread'])})  "
+                  f"{row['cpu_s']:7.1f} CPU-s (reference {row['reference_cpu_s']:.1f}{', cached' if row['reference_cached'] else ''}: "
+                  f"x{ratio})  excess {_pct(row['worst_bound_excess'], '{:.3f}'):>9s}  "
+                  f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
+            if not row["passed"]:
+                why = [row["message"], row["refinement_stop"], *row["warnings"]]
+                print("    " + "\n    ".join(w for w in why if w), flush=True)
+    passed = sum(r["passed"] for r in rows)
+    cpu = [r["cpu_s"] for r in rows]
+    out = {"members": rows, "pass_rate": passed / len(rows), "seed": a.seed,
+           "median_cpu_s": statistics.median(cpu), "max_cpu_s": max(cpu),
+           "median_cpu_ratio": statistics.median([r["cpu_ratio"] for r in rows if r["cpu_ratio"] is not None] or [float("nan")])}
+    print(f"pass rate {passed}/{len(rows)} = {100 * out['pass_rate']:.0f} %; CPU-s median {out['median_cpu_s']:.1f}, "
+          f"worst {out['max_cpu_s']:.1f}; median ratio to the reference's CPU {out['median_cpu_ratio']:.2f}")
+    if a.json:
+        print(json.dumps(out, default=float))
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,352 @@
+"""Independent references of the drive family (``gtmodel.modeling.library.drive_family``): plain CasADi and SciPy.
+
+No gtmodel code is used here: neither its components, its reduction nor its transcriptions.
+A member enters as its plain numbers (``DriveMember.parameters()``, a dict) and its ODE is
+written out by hand, states ``x = (i, phi_m, w_m, q, v)`` (current [A], motor angle [rad] and
+speed [rad/s], the load's position [rad or m] and speed), input ``u`` the voltage [V], ``G``
+the load's displacement per motor radian (``1/n``, ``lead / (2 pi)`` or the pulley radius)::
+
+    L i'     = u - R i - k w_m                              armature
+    Jm w_m'  = k i - G F                                    rotor (gear, screw or pulley)
+    M v'     = F - f(v) - g(q)                              load (inertia or mass)
+    F        = c (sp(delta - b/2) - sp(-delta - b/2)) + d delta' s(delta)     elastic backlash
+    delta    = G phi_m - q,    sp(z) = eps log(1 + exp(z / eps)),
+    f(v)     = (Fc + Fs exp(-(v/vs)^2)) tanh(v / eps_v) + dv v              friction
+    g(q)     = m g l sin(q) (a pendulum) or m g (a vertical axis) or 0
+
+with ``s(delta)`` the damping's engagement (:func:`backlash_force`), the same smooth laws
+as the library's ``ElastoBacklash`` and ``Friction`` at the member's smoothing widths. With
+``rigid`` true in the parameters (the closed-form checks of the tests) the transmission is
+rigid: ``(Jm + M G^2) w_m' = k i - G (f(G w_m) + g(q))``, ``q = G phi_m``.
+
+:func:`solve`: direct multiple shooting with ``casadi.Opti``: the voltage constant on each
+of N intervals, each integrated by S classical Runge-Kutta (RK4) steps (S chosen so that
+``h lambda <= 0.5`` for the fastest of the electrical, transmission and friction rates), the
+current and speed bounds enforced at every step's end, IPOPT (exact Hessian, tol 1e-9).
+Minimum time (the final time free) or minimum copper loss ``R integral(i^2)`` (the final
+time fixed; the integral by the same RK4 steps). :func:`reference` solves it at two
+resolutions, N and 2N from N's solution (:data:`RESOLUTIONS`, after a coarser N/2 that only
+measures the order of the discretisation error); the reference objective is their Richardson
+extrapolation with that order, beside the finer solve's own value and their spread.
+
+:func:`resimulate`: a dense SciPy re-simulation (``solve_ivp``, DOP853, rtol 1e-10) of an
+answer under its piecewise input (piecewise-constant for the reference; each element's
+input polynomial for gtmodel's collocation), interval by interval, reporting the worst bound
+excess anywhere (relative to the bound: 0.01 = 1 %; sampled at every integrator step and 40
+points per interval), the end state's distance from the target and the objective.
+
+Run ``python benchmarks/drive_family_reference.py [--members N] [--seed S] [--out FILE]``:
+it computes the references missing or stale (their parameter hash changed) from the cache
+``tests/modeling/library/data/drive_family_references.json`` and writes it back.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import pathlib
+import sys
+import time
+from typing import Any, Callable
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import solve_ivp
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+CACHE = ROOT / "tests" / "modeling" / "library" / "data" / "drive_family_references.json"
+#: The resolutions (intervals) of a reference, each solve started from the previous: the two finest are the
+#: reference's two resolutions, the coarsest only measures the order of their error for the extrapolation.
+RESOLUTIONS = (75, 150, 300)
+G_ACC = 9.81
+
+
+def _G(p: dict) -> float:  # noqa: N802 - the field's symbol
+    """The load's displacement per motor radian."""
+    if p["transmission"] == "gear":
+        return 1.0 / p["ratio"]
+    if p["transmission"] == "ball_screw":
+        return p["ratio"] / (2.0 * math.pi)
+    return p["ratio"]
+
+
+def _softplus(z: Any, eps: float) -> Any:
+    """``eps log(1 + exp(z / eps))`` written so that it does not overflow (CasADi or NumPy)."""
+    return ca.fmax(z, 0) + eps * ca.log1p(ca.exp(-ca.fabs(z) / eps))
+
+
+def backlash_force(delta: Any, rate: Any, p: dict) -> Any:
+    """The force (torque) of the elastic backlash on the load for the deflection ``delta`` and its rate.
+
+    ``c (sp(delta - b/2) - sp(-delta - b/2)) + d rate s`` with ``s = sigma((delta - b/2)/eps) +
+    sigma((-delta - b/2)/eps)`` (in contact on one side or the other, 0 inside the gap).
+    """
+    b, eps = p["backlash"], p["backlash_smoothing"]
+    elastic = p["c"] * (_softplus(delta - b / 2, eps) - _softplus(-delta - b / 2, eps))
+    engaged = 0.5 * (1 + ca.tanh((delta - b / 2) / (2 * eps))) + 0.5 * (1 + ca.tanh((-delta - b / 2) / (2 * eps)))
+    return elastic + p["d"] * rate * engaged
+
+
+def friction_force(v: Any, p: dict) -> Any:
+    """``(Fc + Fs exp(-(v/vs)^2)) tanh(v/eps) + dv v`` [N or N m]."""
+    return (p["Fc"] + p["Fs"] * ca.exp(-((v / p["vs"]) ** 2))) * ca.tanh(v / p["friction_smoothing"]) + p["dv"] * v
+
+
+def ode(p: dict) -> ca.Function:
+    """The member's ODE ``f(x, u) -> (x', R i^2)``, written out by hand (SX)."""
+    x, u = ca.SX.sym("x", 5), ca.SX.sym("u")
+    i, phi_m, w_m, q, v = (x[j] for j in range(5))
+    G = _G(p)
+    grav = p["gravity"] * ca.sin(q) if p["transmission"] == "gear" else p["gravity"]
+    di = (u - p["R"] * i - p["k"] * w_m) / p["L"]
+    if p.get("rigid"):  # a rigid transmission (the closed-form checks): q = G phi_m, one inertia Jm + M G^2
+        dw = (p["k"] * i - G * (friction_force(G * w_m, p) + grav)) / (p["Jm"] + p["load"] * G**2)
+        rhs = ca.vertcat(di, w_m, dw, G * w_m, G * dw)
+    else:
+        F = backlash_force(G * phi_m - q, G * w_m - v, p)
+        rhs = ca.vertcat(di, w_m, (p["k"] * i - G * F) / p["Jm"], v, (F - friction_force(v, p) - grav) / p["load"])
+    return ca.Function("f", [x, u], [rhs, p["R"] * i**2])
+
+
+def _deflection(force: float, p: dict) -> float:
+    """The deflection at which the elastic backlash at rest passes ``force`` (Newton on the smooth law)."""
+    d = ca.SX.sym("d")
+    g = ca.Function("g", [d], [backlash_force(d, 0.0, p) - force])
+    root = ca.rootfinder("r", "newton", g, {"abstol": 1e-12 * max(1.0, abs(force))})
+    start = np.sign(force) * (p["backlash"] / 2 + abs(force) / p["c"])
+    return float(root(start))
+
+
+def boundary(p: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Start and final state at rest (the load at 0 and at ``distance``; gravity held by the current)."""
+    G, out = _G(p), []
+    for q in (0.0, p["distance"]):
+        hold = p["gravity"] * math.sin(q) if p["transmission"] == "gear" else p["gravity"]
+        delta = _deflection(hold, p) if hold and not p.get("rigid") else 0.0
+        out.append(np.array([G * hold / p["k"], (q + delta) / G, 0.0, q, 0.0]))
+    return out[0], out[1]
+
+
+def _rates(p: dict) -> float:
+    """The fastest rate [1/s] of the drive: electrical, the transmission's mode, the friction's slope at rest."""
+    G = _G(p)
+    m_red = 1.0 / (1.0 / p["load"] + G**2 / p["Jm"])
+    mode = 0.0 if p.get("rigid") else math.sqrt(p["c"] / m_red) + p["d"] / m_red
+    fric = ((p["Fc"] + p["Fs"]) / p["friction_smoothing"] + p["dv"]) / p["load"]
+    return max(p["R"] / p["L"], mode, fric)
+
+
+def _substeps(p: dict, intervals: int) -> int:
+    """RK4 steps per interval so that ``h lambda <= 0.5`` over the longest horizon expected."""
+    horizon = 1.5 * p["final_time"]
+    return max(2, math.ceil(horizon / intervals * _rates(p) / 0.5))
+
+
+def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
+    """One multiple-shooting solve (see the module's docstring) at ``intervals`` intervals.
+
+    Returns a dict: ``objective``, ``final_time``, ``status`` (IPOPT's), ``cpu_s``, ``steps``,
+    ``X`` (5, N+1), ``U`` (N,).
+    """
+    f = ode(p)
+    x0, xf = boundary(p)
+    steps = _substeps(p, intervals)
+    G = _G(p)
+    wscale = p["wmax"] or p["vmax"] / p["k"]
+    scale = np.array([p["imax"], max(abs(xf[1]), 1.0), wscale, max(p["distance"], 1e-3), G * wscale])
+    # one interval: S RK4 steps, the current and speed at every step's end, the copper loss (RK4 quadrature)
+    xs, us, hs = ca.SX.sym("x", 5), ca.SX.sym("u"), ca.SX.sym("h")
+    xk, energy, cur, spd = xs * scale, 0, [], []
+    for _ in range(steps):
+        k1, e1 = f(xk, us)
+        k2, e2 = f(xk + hs / 2 * k1, us)
+        k3, e3 = f(xk + hs / 2 * k2, us)
+        k4, e4 = f(xk + hs * k3, us)
+        xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        energy = energy + hs / 6 * (e1 + 2 * e2 + 2 * e3 + e4)
+        cur.append(xk[0])
+        spd.append(xk[2])
+    step = ca.Function("step", [xs, us, hs], [xk / scale, energy, ca.vertcat(*cur), ca.vertcat(*spd)])
+    opti = ca.Opti()
+    X = opti.variable(5, intervals + 1)
+    U = opti.variable(1, intervals)
+    free = p["task"] == "min_time"
+    T = opti.variable() if free else p["final_time"]
+    h = T / (intervals * steps)
+    nxt, e, cur_all, spd_all = step.map(intervals)(X[:, :-1], U, ca.repmat(h, 1, intervals))
+    opti.subject_to(X[:, 1:] == nxt)
+    opti.subject_to(X[:, 0] == x0 / scale)
+    opti.subject_to(X[:, -1] == xf / scale)
+    opti.subject_to(opti.bounded(-p["vmax"], U, p["vmax"]))
+    opti.subject_to(opti.bounded(-p["imax"], ca.vec(cur_all), p["imax"]))
+    if p["wmax"]:
+        opti.subject_to(opti.bounded(-p["wmax"], ca.vec(spd_all), p["wmax"]))
+    if free:
+        opti.subject_to(opti.bounded(p["time_bounds"][0], T, p["time_bounds"][1]))
+        opti.minimize(T)
+    else:
+        opti.minimize(ca.sum2(e))
+    if guess is None:  # straight lines between the rest states, the holding voltage
+        s = np.linspace(0.0, 1.0, intervals + 1)
+        opti.set_initial(X, np.outer(x0 / scale, 1 - s) + np.outer(xf / scale, s))
+        opti.set_initial(U, p["R"] * x0[0])
+        if free:
+            opti.set_initial(T, p["final_time"])
+    else:  # the coarser solve's, on the same normalised time
+        s_old, s_new = np.linspace(0, 1, guess["X"].shape[1]), np.linspace(0, 1, intervals + 1)
+        opti.set_initial(X, np.vstack([np.interp(s_new, s_old, row) for row in guess["X"] / scale[:, None]]))
+        mid_old, mid_new = (s_old[:-1] + s_old[1:]) / 2, (s_new[:-1] + s_new[1:]) / 2
+        opti.set_initial(U, np.interp(mid_new, mid_old, guess["U"]))
+        if free:
+            opti.set_initial(T, guess["final_time"])
+    opti.solver("ipopt", {"print_time": False, "expand": True},
+                {"print_level": 0, "max_iter": 3000, "tol": 1e-9, "sb": "yes"})
+    start = time.process_time()
+    try:
+        sol = opti.solve()
+    except RuntimeError:
+        sol = opti.debug
+    status = opti.stats()["return_status"]
+    return {"objective": float(sol.value(opti.f)), "final_time": float(sol.value(T)) if free else p["final_time"],
+            "status": status, "cpu_s": time.process_time() - start, "steps": steps, "intervals": intervals,
+            "X": np.atleast_2d(sol.value(X)) * scale[:, None], "U": np.atleast_1d(sol.value(U)).astype(float)}
+
+
+def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
+    """The member's reference: :func:`solve` at each resolution, each started from the previous.
+
+    The objective is the Richardson extrapolation of the two finest solves with the order their
+    differences show (``p = log2((E_1 - E_2) / (E_2 - E_3))`` over the three resolutions, used when
+    the differences have one sign and ``0.5 <= p <= 3``; else the finest solve's value). A
+    piecewise-constant voltage makes the minimum time's error O(h) (a switch of the current
+    inside an interval; measured on the rigid closed form: 2.6 % and 1.3 % at 40 and 80
+    intervals) and a smooth optimum's O(h^2).
+
+    Returns a dict: ``objective`` (extrapolated), ``fine_objective`` and ``final_time`` (the
+    finest's), ``order`` (None: not extrapolated), ``status`` (IPOPT's, finest) and
+    ``coarse_status`` (the worst of the others), ``cpu_s`` (all solves), ``by_intervals``
+    (objective per resolution), ``spread`` (the two finest's difference, relative), ``U``
+    (the finest's voltages), and of its dense re-simulation ``worst_bound_excess``,
+    ``end_error``, ``simulated_objective``.
+    """
+    runs, prev = [], None
+    for n in resolutions:
+        prev = solve(p, n, guess=prev)
+        runs.append(prev)
+    fine, e = runs[-1], [r["objective"] for r in runs]
+    order, extrapolated = None, fine["objective"]
+    if len(e) >= 3 and (e[-3] - e[-2]) * (e[-2] - e[-1]) > 0:
+        ratio = resolutions[-1] / resolutions[-2]
+        observed = math.log((e[-3] - e[-2]) / (e[-2] - e[-1])) / math.log(ratio)
+        if 0.5 <= observed <= 3.0:
+            order = observed
+            extrapolated = e[-1] - (e[-2] - e[-1]) / (ratio**order - 1.0)
+    elif len(e) == 2:  # two resolutions only: the O(h) of a switch
+        order = 1.0
+        extrapolated = 2 * e[-1] - e[-2]
+    sim = resimulate(p, constant_pieces(fine["final_time"], fine["U"]))
+    ok = [r["status"] for r in runs[:-1] if r["status"] != "Solve_Succeeded"]
+    return {"objective": extrapolated, "fine_objective": fine["objective"], "order": order,
+            "final_time": fine["final_time"], "status": fine["status"], "coarse_status": ok[0] if ok else "Solve_Succeeded",
+            "cpu_s": sum(r["cpu_s"] for r in runs),
+            "by_intervals": {str(r["intervals"]): r["objective"] for r in runs},
+            "spread": (e[-2] - e[-1]) / abs(e[-1]), "steps": fine["steps"],
+            "U": fine["U"].tolist(), "worst_bound_excess": sim["worst_bound_excess"], "end_error": sim["end_error"],
+            "simulated_objective": sim["objective"]}
+
+
+def constant_pieces(final_time: float, U: Any) -> list[tuple[float, float, np.ndarray]]:
+    """Pieces of a voltage constant on equal intervals: ``(t0, t1, coefficients)`` (see :func:`resimulate`)."""
+    U = np.asarray(U, dtype=float)
+    edges = np.linspace(0.0, final_time, U.size + 1)
+    return [(edges[j], edges[j + 1], np.array([U[j]])) for j in range(U.size)]
+
+
+def resimulate(p: dict, pieces: list[tuple[float, float, np.ndarray]], per_piece: int = 40) -> dict:
+    """Dense re-simulation of an answer under its piecewise input, from the start state at rest.
+
+    ``pieces``: ``(t0, t1, coefficients)``, the input on ``[t0, t1]`` the polynomial
+    ``numpy.polyval(coefficients, (t - t0) / (t1 - t0))`` clipped to the voltage bound.
+    Returns ``worst_bound_excess`` (the largest ``|i| / i_max - 1`` and ``|w_m| / w_max - 1``,
+    at least 0), ``excess`` by bound, ``end_error`` (the end state's largest deviation from the
+    target, relative to the state's scale), ``objective`` (T, or the copper loss integrated
+    along) and the peak current and speed.
+    """
+    f = ode(p)
+    x0, xf = boundary(p)
+    ipeak, wpeak, energy = 0.0, 0.0, 0.0
+    x = x0.copy()
+    for t0, t1, coef in pieces:
+        span = t1 - t0
+
+        def u_of(t: float, c: np.ndarray = coef, a: float = t0, s: float = span) -> float:
+            return float(np.clip(np.polyval(c, (t - a) / s), -p["vmax"], p["vmax"]))
+
+        def rhs(t: float, y: np.ndarray, u_of: Callable = u_of) -> np.ndarray:
+            dx, e = f(y[:5], u_of(t))
+            return np.append(np.asarray(dx).ravel(), float(e))
+
+        sol = solve_ivp(rhs, (t0, t1), np.append(x, 0.0), method="DOP853", rtol=1e-10,
+                        atol=np.append(1e-10 * np.maximum(np.abs(xf), 1.0), 1e-12), dense_output=True)
+        if not sol.success:
+            return {"worst_bound_excess": math.inf, "excess": {}, "end_error": math.inf, "objective": math.nan,
+                    "peak_current": math.nan, "peak_speed": math.nan, "message": sol.message}
+        ts = np.union1d(sol.t, np.linspace(t0, t1, per_piece))
+        ys = sol.sol(ts)
+        ipeak, wpeak = max(ipeak, float(np.max(np.abs(ys[0])))), max(wpeak, float(np.max(np.abs(ys[2]))))
+        x, energy = sol.y[:5, -1], energy + sol.y[5, -1]
+    excess = {"ind.i": max(0.0, ipeak / p["imax"] - 1.0)}
+    if p["wmax"]:
+        excess["rotor.w"] = max(0.0, wpeak / p["wmax"] - 1.0)
+    wscale = p["wmax"] or p["vmax"] / p["k"]
+    scale = np.array([p["imax"], max(abs(xf[1]), 1.0), wscale, max(p["distance"], 1e-3), _G(p) * wscale])
+    return {"worst_bound_excess": max(excess.values()), "excess": excess,
+            "end_error": float(np.max(np.abs(x - xf) / scale)),
+            "objective": pieces[-1][1] if p["task"] == "min_time" else float(energy),
+            "peak_current": ipeak, "peak_speed": wpeak}
+
+
+def load_cache(path: pathlib.Path = CACHE) -> dict:
+    """The cached references by member name (empty without a cache file)."""
+    return json.loads(path.read_text()) if path.exists() else {}
+
+
+def cached(cache: dict, name: str, parameter_hash: str) -> dict | None:
+    """The cached reference of a member, or None when missing or computed for other numbers (stale)."""
+    entry = cache.get(name)
+    return entry if entry is not None and entry.get("parameter_hash") == parameter_hash else None
+
+
+def main(argv: list[str] | None = None) -> dict:
+    """Compute the family's missing or stale references and write the cache (see the module's docstring)."""
+    sys.path.insert(0, str(ROOT))
+    from gtmodel.modeling.library.drive_family import drive_family  # the members' numbers only
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--members", type=int, default=40, help="the first N members (default 40)")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--only", default="", help="comma-separated member names")
+    ap.add_argument("--out", type=pathlib.Path, default=CACHE)
+    ap.add_argument("--force", action="store_true", help="recompute even when cached")
+    a = ap.parse_args(argv)
+    cache = load_cache(a.out)
+    only = {n for n in a.only.split(",") if n}
+    for member in drive_family(max(a.members, 1), a.seed):
+        if only and member.name not in only:
+            continue
+        digest = member.parameter_hash()
+        if not a.force and cached(cache, member.name, digest):
+            continue
+        ref = reference(member.parameters())
+        cache[member.name] = {"parameter_hash": digest, **ref}
+        print(f"{member.name}: objective {ref['objective']:.7g} (spread {100 * ref['spread']:+.3f} %), {ref['status']}, "
+              f"{ref['cpu_s']:.1f} CPU-s, {ref['steps']} RK4 steps/interval, excess {100 * ref['worst_bound_excess']:.3f} %, "
+              f"end error {ref['end_error']:.1e}", flush=True)
+        a.out.parent.mkdir(parents=True, exist_ok=True)
+        a.out.write_text(json.dumps(dict(sorted(cache.items())), indent=1) + "\n")
+    return cache
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,117 @@
+"""The drive family's independent reference (``benchmarks/drive_family_reference.py``) and its cache.
+
+Independent checks: a closed form (a rigid drive whose only active limit is the current: the
+bang-bang minimum time of a double integrator, ``T = 2 sqrt(d / a_max)``); the dense SciPy
+re-simulation of the reference's own answer (its bounds held between the nodes, its end reached);
+the cache's parameter hashes against the generator's members now. The slow test solves members
+with gtmodel's default path (``gtmodel solve``'s: ``run_problem``) against the cached references.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from gtmodel.modeling.library.drive_family import drive_family, write_problem
+
+from ...conftest import benchmark_module
+
+FAMILY = {m.name: m for m in drive_family()}
+#: A rigid gear drive (10:1, motor 1e-4 kg m^2, load 0.01 kg m^2) with no friction, gravity or speed limit, a
+#: voltage limit far above what the motion needs (1000 V against 20 Ohm x 10 A + back EMF 8 V) and a fast armature
+#: (L/R = 1 ms): the current limit alone is active, a_max = k imax n / (Jl + Jm n^2) = 250 rad/s^2 at the load.
+RIGID = dict(name="rigid", transmission="gear", task="min_time", rigid=True, R=20.0, L=20e-3, k=0.05, Jm=1e-4, ratio=10.0,
+             c=1.0, d=0.0, backlash=0.0, backlash_smoothing=1e-3, load=0.01, gravity=0.0, Fc=0.0, Fs=0.0, vs=1.0, dv=0.0,
+             friction_smoothing=1.0, vmax=1000.0, imax=10.0, wmax=None, distance=1.0, final_time=0.15, time_bounds=[0.02, 1.0])
+
+
+@pytest.fixture(scope="module")
+def ref():
+    """benchmarks/drive_family_reference.py as a module."""
+    with benchmark_module("drive_family_reference") as module:
+        yield module
+
+
+@pytest.fixture(scope="module")
+def rigid(ref):
+    """The rigid drive's reference at 20, 40 and 80 intervals (about 4 CPU-s)."""
+    return ref.reference(RIGID, resolutions=(20, 40, 80))
+
+
+@pytest.fixture(scope="module")
+def cache(ref):
+    return ref.load_cache()
+
+
+def _cached_names() -> list[str]:
+    with benchmark_module("drive_family_reference") as module:
+        return sorted(module.load_cache())
+
+
+def test_rigid_drive_reference_meets_the_bang_bang_closed_form(rigid):
+    # T = 2 sqrt(d / a_max): the finest solve (80 intervals) above it (a piecewise-constant voltage cannot switch the
+    # current in no time: O(h); measured +1.28 %), the extrapolation with the observed order (1.09) within 0.3 %
+    # (measured +0.097 %)
+    a_max = RIGID["k"] * RIGID["imax"] * RIGID["ratio"] / (RIGID["load"] + RIGID["Jm"] * RIGID["ratio"] ** 2)
+    exact = 2.0 * math.sqrt(RIGID["distance"] / a_max)
+    assert rigid["status"] == "Solve_Succeeded" and rigid["coarse_status"] == "Solve_Succeeded"
+    assert 0.0 <= (rigid["fine_objective"] - exact) / exact <= 0.02 and 0.8 <= rigid["order"] <= 1.5
+    assert abs(rigid["objective"] - exact) / exact <= 3e-3
+
+
+def test_rigid_drive_reference_holds_its_bounds_between_the_nodes(rigid):
+    # the current bound at every RK4 step: SciPy's dense re-simulation (DOP853, 1e-10) finds it kept within 0.1 %,
+    # and the re-simulated end at rest at the target within 1e-4 of each state's scale
+    assert rigid["worst_bound_excess"] <= 1e-3 and rigid["end_error"] <= 1e-4
+
+
+def test_resimulation_sees_an_excess_between_the_nodes(ref):
+    # the rigid drive from rest under 300 V for 2 ms: the current rises to 300 / 20 (1 - exp(-2)) = 12.97 A (the back
+    # EMF below 0.3 V) against its 10 A bound: an excess of 29.7 % that the samples at the ends alone would not bound
+    sim = ref.resimulate(RIGID, [(0.0, 2e-3, np.array([300.0]))])
+    assert sim["worst_bound_excess"] == pytest.approx(15.0 * (1 - math.exp(-2.0)) / 10.0 - 1.0, rel=2e-3)
+
+
+@pytest.mark.parametrize("name", _cached_names())
+def test_cached_reference_is_fresh_and_converged(name, cache):
+    # the cache entry belongs to the member's numbers now (its parameter hash), IPOPT succeeded at both resolutions,
+    # the two resolutions agree within 1 %, the reference's own answer kept its bounds between the nodes (0.1 %)
+    # and ended at rest at the target (SciPy's dense re-simulation)
+    entry = cache[name]
+    assert name in FAMILY and entry["parameter_hash"] == FAMILY[name].parameter_hash()
+    assert entry["status"] == "Solve_Succeeded" and entry["coarse_status"] == "Solve_Succeeded"
+    assert abs(entry["spread"]) <= 1e-2
+    assert entry["worst_bound_excess"] <= 1e-3 and entry["end_error"] <= 1e-3
+
+
+def test_stale_cache_entry_is_detected(ref, cache):
+    # another member's hash (the numbers changed) gives no reference
+    name = next(iter(sorted(cache)), None)
+    if name is None:
+        pytest.skip("no cached reference")
+    assert ref.cached(cache, name, "0" * 16) is None and ref.cached(cache, name, cache[name]["parameter_hash"]) is cache[name]
+
+
+#: Three members solved by the slow test: the first of each transmission in the cache.
+SLOW = [n for n in _cached_names()][:3]
+
+
+@pytest.mark.slow  # gtmodel's default path on three members: minutes of CPU each on a shared machine
+@pytest.mark.parametrize("name", SLOW)
+def test_default_path_meets_the_reference(name, tmp_path, cache):
+    # optimal, verified, within 0.5 % of the independent reference, and its answer re-simulated by SciPy on the
+    # hand-written ODE under its own input within 1 % of every bound between the nodes
+    with benchmark_module("bench_drive_family") as bench:
+        row = bench.run_member(FAMILY[name], tmp_path, cache[name])
+    assert row["status"] == "optimal" and row["verified"], row
+    assert abs(row["relative_error"]) <= 5e-3 and row["worst_bound_excess"] <= 1e-2, row
+
+
+def test_written_problem_names_the_model_module(tmp_path):
+    # write_problem writes both files; the module rebuilds the same member (its parameters as written)
+    member = FAMILY[sorted(FAMILY)[0]]
+    path = write_problem(member, tmp_path)
+    assert path.exists() and (tmp_path / f"{member.name}.py").exists()
+    assert f"file = \"{member.name}.py\"" in path.read_text()
