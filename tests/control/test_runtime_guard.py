@@ -338,3 +338,84 @@ def test_a_flood_of_repeated_ipocs_from_the_robot_is_logged_by_its_first_rows(ex
     assert (log["cycle"].size, run.summary["log"]["unlogged_repeats"], run.stats["duplicate_or_old"], run.summary["cycles"]) == (
         5 + 100 + 1, 200, 300, 306)
     assert last is not None and log["flags"][-1] & FLAGS["step"]  # the robot's next cycle steps
+
+
+# ---- the judged flood: 60 s at 50,000 stranger datagrams per second ----
+
+FLOODER = r"""
+#include <arpa/inet.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+static double now(void) { struct timespec t; clock_gettime(CLOCK_MONOTONIC, &t); return t.tv_sec + 1e-9 * t.tv_nsec; }
+int main(int argc, char **argv) {  /* flood PORT RATE SECONDS: valid <Rob> datagrams from 127.0.0.2 to 127.0.0.1:PORT */
+    int fd = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in to = {0}, from = {0};
+    double rate = atof(argv[2]), seconds = atof(argv[3]), t0;
+    unsigned long long n = 0, answered = 0;
+    char buf[4096];
+    static const char msg[] = "<Rob Type=\"KUKA\"><RIst X=\"777\" Y=\"777\" Z=\"0\" A=\"0\" B=\"0\" C=\"0\"/><Delay D=\"0\"/><IPOC>1002</IPOC></Rob>";
+    (void)argc;
+    to.sin_family = from.sin_family = AF_INET;
+    to.sin_port = htons((unsigned short)atoi(argv[1]));
+    inet_pton(AF_INET, "127.0.0.1", &to.sin_addr);
+    inet_pton(AF_INET, "127.0.0.2", &from.sin_addr);
+    if (bind(fd, (struct sockaddr *)&from, sizeof from) != 0) return 3;
+    t0 = now();
+    while (now() - t0 < seconds) {
+        while (n < rate * (now() - t0)) { sendto(fd, msg, sizeof msg - 1, MSG_DONTWAIT, (struct sockaddr *)&to, sizeof to); ++n; }
+        while (recv(fd, buf, sizeof buf, MSG_DONTWAIT) > 0) ++answered;
+        usleep(200);
+    }
+    usleep(100000);
+    while (recv(fd, buf, sizeof buf, MSG_DONTWAIT) > 0) ++answered;
+    printf("%llu %llu %.3f\n", n, answered, now() - t0);
+    return 0;
+}
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.realtime
+def test_a_60_s_flood_of_strangers_leaves_the_robot_served_the_log_small_and_memory_flat(exes, tmp_path):
+    """Independent: the flooder (C, compiled here) counts what it sent and every reply it got; memory from /proc."""
+    import subprocess
+    import threading
+
+    from gtmodel._compiler import find_compiler
+
+    flooder = tmp_path / "flood"
+    (tmp_path / "flood.c").write_text(FLOODER)
+    subprocess.run([*find_compiler(), "-O2", "-o", str(flooder), str(tmp_path / "flood.c")], check=True)
+    seconds, rss, out = 60.0, [], {}
+
+    def script(net: Net):
+        net.sample(0.5)
+        replies = [net.exchange(rob(1000))]  # the robot first: locked
+        flood = subprocess.Popen([str(flooder), str(net.ready["listen_port"]), "50000", repr(seconds)], stdout=subprocess.PIPE, text=True)
+
+        def memory():
+            while flood.poll() is None:
+                status = open(f"/proc/{net.ready['pid']}/status").read()
+                rss.append(int(status.split("VmRSS:")[1].split()[0]))
+                time.sleep(1.0)
+        threading.Thread(target=memory, daemon=True).start()
+        start = time.monotonic()
+        for k in range(1, int(seconds / 0.004)):
+            net.sample(0.5)
+            replies.append(net.exchange(rob(1000 + 4 * k)))
+            time.sleep(max(0.0, start + 0.004 * k - time.monotonic()))
+        out["sent"], out["answered"], _ = flood.communicate(timeout=60)[0].split()
+        out["robot_done"] = time.monotonic()
+        return replies
+    run, replies = session(exes["rsi"], tmp_path / "run", script, time_limit=seconds + 120)
+    ended_after = time.monotonic() - out["robot_done"]
+    sent = int(out["sent"])
+    print(f"flood: {sent} sent ({sent / seconds:.0f}/s), {run.summary['strangers']['datagrams']} counted, {out['answered']} answered; "
+          f"robot {len(replies) - replies.count(None)} of {len(replies)} replies; log {run.log_path.stat().st_size} bytes; "
+          f"RSS {rss[0]}..{max(rss)} kB; ended {ended_after:.2f} s after the robot; p99 {run.summary['reply_latency_ms']['p99']:.3f} ms")
+    assert int(out["answered"]) == 0 and 0.99 * sent <= run.summary["strangers"]["datagrams"] <= sent and sent >= 0.95 * 50000 * seconds
+    assert replies.count(None) == 0 and run.summary["cycles"] == len(replies) == run.summary["log"]["rows"]
+    assert run.log_path.stat().st_size < 2_000_000 and max(rss) - rss[0] < 1024 and ended_after < 0.3 + 5.0
