@@ -39,7 +39,10 @@ Format
 - Empty lines are allowed only at the end of the file.
 
 Every error is an :class:`~gtmodel.errors.InputError` naming the file, the line (1-based
-line number in the file) and, for a value, the column.
+line number in the file) and, for a value, the column (by its number, 1-based, and by its
+name where the name is a plain short token, :func:`column_label`) and what was expected.
+A message never quotes a value of the file, nor a line of it: a file named by mistake (a
+``.env``, ``/etc/passwd``) must not end up in a terminal, a log or a ``summary.json``.
 """
 
 from __future__ import annotations
@@ -55,7 +58,7 @@ import numpy.typing  # noqa: F401  (np.typing in annotations)
 from gtmodel._escape import csv_comment, csv_name
 from gtmodel.errors import InputError
 
-__all__ = ["Table", "read_table", "write_table", "split_unit", "with_unit"]
+__all__ = ["Table", "read_table", "write_table", "split_unit", "with_unit", "column_label", "column_names", "is_token", "quotable", "label"]
 
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 _NUMBER_RE = re.compile(_NUMBER)
@@ -66,14 +69,111 @@ _UNIT_RE = re.compile(r"(\S(?:.*\S)?) \[([^\[\],]*)\]")
 DEFAULT_MAX_BYTES = 256_000_000
 #: Lines beyond ``max_rows`` a table may have (header, comments, empty lines at the end).
 _SLACK_LINES = 10_000
-#: Longest excerpt of a file's content a message quotes [characters].
-EXCERPT = 32
+#: Longest column name a message quotes [characters]; a longer one is named by its number alone.
+TOKEN = 24
+#: A column name a message may quote: a plain short token (letters, digits, ``_``, ``.``, an index ``[k]``).
+_TOKEN_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*(?:\[[0-9]+\])*")
 
 
-def _excerpt(text: str) -> str:
-    """A short, escaped excerpt of file content for a message (never a whole line)."""
-    short = text[:EXCERPT].encode("unicode_escape").decode("ascii")
-    return short + ("..." if len(text) > EXCERPT else "")
+def column_label(index: int, name: str | None = None) -> str:
+    """How a message names a column of a data file: its number, and its name only if that is a plain token.
+
+    The one place messages about a data file's columns are formatted: a header cell is the
+    file's content (the first line of a ``.env`` file read by mistake, a password), so it is
+    quoted only when it is a short plain name (``q1``, ``t_s``, ``T[0]``; at most
+    :data:`TOKEN` characters of letters, digits, ``_`` and ``.``), never otherwise.
+
+    Parameters
+    ----------
+    index : int
+        0-based position of the column.
+    name : str, optional
+        Its name as read from the header.
+
+    Returns
+    -------
+    str
+        ``"column 'q1'"`` or ``"column 3"`` (1-based).
+    """
+    return f"column '{name}'" if is_token(name) else f"column {index + 1}"
+
+
+def is_token(name: str | None) -> bool:
+    """Whether a name read from a data file may be quoted in a message (:func:`column_label`).
+
+    Parameters
+    ----------
+    name : str or None
+        A header cell.
+
+    Returns
+    -------
+    bool
+    """
+    return isinstance(name, str) and len(name) <= TOKEN and _TOKEN_RE.fullmatch(name) is not None
+
+
+def quotable(columns: Sequence[str]) -> bool:
+    """Whether a header's names may be quoted at all: two columns or more, every one a plain token (:func:`is_token`).
+
+    A line without a comma (a ``.env`` line, a password, a line of ``/etc/passwd``) is a
+    one-column "header" of a file that is no table: its name is never quoted.
+
+    Parameters
+    ----------
+    columns : sequence of str
+        The header's column names.
+
+    Returns
+    -------
+    bool
+    """
+    return len(columns) >= 2 and all(is_token(c) for c in columns)
+
+
+def label(columns: Sequence[str], index: int) -> str:
+    """:func:`column_label` of a column of a header: named only where the header is :func:`quotable`.
+
+    Parameters
+    ----------
+    columns : sequence of str
+        The header's column names.
+    index : int
+        0-based position of the column.
+
+    Returns
+    -------
+    str
+    """
+    return column_label(index, columns[index] if quotable(columns) else None)
+
+
+def column_names(columns: Sequence[str]) -> str:
+    """A data file's columns for a message: their names where the header is :func:`quotable`, else their count.
+
+    Parameters
+    ----------
+    columns : sequence of str
+        The header's column names.
+
+    Returns
+    -------
+    str
+        E.g. ``"t, q1, q2"`` or ``"3 columns, named by number"``.
+    """
+    if quotable(columns):
+        return ", ".join(columns)
+    return f"{len(columns)} column{'s' if len(columns) != 1 else ''}, named by number"
+
+
+def _what_is(text: str) -> str:
+    """What a cell holds, in words, without its content."""
+    s = text.strip()
+    if not s:
+        return "an empty field"
+    if _NONFINITE_RE.fullmatch(s):
+        return "NaN or infinity"
+    return f"{len(s)} character{'s' if len(s) != 1 else ''} of text"
 
 
 @dataclass(frozen=True)
@@ -190,9 +290,9 @@ class Table:
             ``"... missing column(s) <c1>, <c2>"``.
         """
         if allowed is not None:
-            for c in self.columns:
+            for k, c in enumerate(self.columns):
                 if c not in allowed:
-                    raise self.error(f"unknown column '{c}' (allowed: {', '.join(allowed)})")
+                    raise self.error(f"unknown {label(self.columns, k)} (allowed: {', '.join(allowed)})")
         missing = [c for c in required if c not in self.columns]
         if missing:
             raise self.error(f"missing column(s) {', '.join(missing)}{f' ({note})' if note else ''}")
@@ -232,7 +332,9 @@ class Table:
         row : int, optional
             0-based data row (its file line is named); None names the header line.
         column : str, optional
-            Column name (quoted in the message); several may be given joined by commas.
+            Column name, one the reader asked for (quoted in the message); several may be
+            given joined by commas. A name from the file itself is never passed here
+            (:func:`column_label`).
 
         Returns
         -------
@@ -245,13 +347,14 @@ class Table:
         return InputError(f"{self.source}: {where}: {message}")
 
 
-def _number(source: str, lineno: int, column: str, text: str) -> float:
+def _number(source: str, lineno: int, index: int, columns: Sequence[str], text: str) -> float:
     s = text.strip()
     if _NUMBER_RE.fullmatch(s):
         return float(s)
+    where = f"{source}: line {lineno}, {label(columns, index)}"
     if _NONFINITE_RE.fullmatch(s):
-        raise InputError(f"{source}: line {lineno}, column '{_excerpt(column)}': NaN/inf is not allowed, got '{_excerpt(s)}'")
-    raise InputError(f"{source}: line {lineno}, column '{_excerpt(column)}': expected a decimal number, got '{_excerpt(text)}'")
+        raise InputError(f"{where}: NaN/inf is not allowed, expected a finite decimal number")
+    raise InputError(f"{where}: expected a decimal number, got {_what_is(text)}")
 
 
 def split_unit(column: str) -> tuple[str, str | None]:
@@ -324,8 +427,8 @@ def read_table(
         name (or another header than ``header``); a row with another number of values than
         the header; a value that is not a finite decimal number; a comment-free empty line
         inside the data; more than ``max_rows`` rows. The message names the file, the line
-        (1-based) and the column, and quotes at most :data:`EXCERPT` characters of the
-        file's content, escaped.
+        (1-based), the column (:func:`column_label`) and what was expected, and never
+        quotes a value or a line of the file.
     """
     source = str(path)
     cap = DEFAULT_MAX_BYTES if max_bytes is None else max_bytes
@@ -364,14 +467,17 @@ def read_table(
     columns = tuple(name for name, _ in named)
     units = {name: unit for name, unit in named if unit}
     if header is not None and columns != tuple(header):
-        raise InputError(f"{source}: line {header_line}: expected the header {expected}, got {_excerpt(','.join(columns))}")
-    seen: set[str] = set()
-    for c in columns:
+        k_bad = next((j for j, (a, b) in enumerate(zip(columns, header)) if a != b), min(len(columns), len(header)))
+        got = (f"{len(columns)} columns" if len(columns) != len(header) else
+               f"{label(columns, k_bad)} is not '{header[k_bad]}'")
+        raise InputError(f"{source}: line {header_line}: expected the header {expected}, got {got}")
+    seen: dict[str, int] = {}
+    for j, c in enumerate(columns):
         if c == "":
-            raise InputError(f"{source}: line {header_line} (header): empty column name")
+            raise InputError(f"{source}: line {header_line} (header): empty column name (column {j + 1})")
         if c in seen:
-            raise InputError(f"{source}: line {header_line} (header): column '{_excerpt(c)}' appears twice")
-        seen.add(c)
+            raise InputError(f"{source}: line {header_line} (header): {label(columns, j)} appears twice (columns {seen[c] + 1} and {j + 1})")
+        seen[c] = j
     if max_rows is not None and n - k - 1 > max_rows:  # refuse a huge file before parsing it
         count = 0
         for j in range(k + 1, n):
@@ -394,11 +500,11 @@ def read_table(
             if not line.strip():
                 raise InputError(f"{source}: line {lineno}: empty line inside the data (allowed only at the end of the file)")
             if len(fields) != width:
-                raise InputError(f"{source}: line {lineno}: {len(fields)} values, expected {width} (one per header column: "
-                                 f"{_excerpt(','.join(columns))})")
-            for name, cell in zip(columns, fields):
+                raise InputError(f"{source}: line {lineno}: {len(fields)} values, expected {width} (one per column of the "
+                                 f"header, line {header_line})")
+            for index, (name, cell) in enumerate(zip(columns, fields)):
                 if name not in text_columns:
-                    _number(source, lineno, name, cell)
+                    _number(source, lineno, index, columns, cell)
         rows.append([f for name, f in zip(columns, fields) if name not in text_columns])
         linenos.append(lineno)
     columns = tuple(c for c in columns if c not in text_columns)

@@ -15,7 +15,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel._tables import read_table
+from gtmodel._tables import column_names, read_table
 from gtmodel.errors import GtModelError
 from gtmodel.modeling import Optimization
 from gtmodel.modeling.ocp.estimation import fit_data, least_squares
@@ -75,7 +75,7 @@ def declare_data(file: ProblemFile, tables: list[DataSection], opt: Optimization
             raise file.wrap(f"{key}.file", exc) from None
         cols = list(data.columns)
         if d.time_column not in cols:
-            raise file.fail(f"{key}.time_column", f"a column of {path.name} ({', '.join(cols)})", d.time_column)
+            raise file.fail(f"{key}.time_column", f"a column of {path.name} ({column_names(cols)})", d.time_column)
         t = data.data[:, cols.index(d.time_column)]
         if np.any(np.diff(t) <= 0):
             raise file.fail(f"{key}.file", f"times in column {d.time_column!r} increasing strictly", path.name)
@@ -92,7 +92,7 @@ def declare_data(file: ProblemFile, tables: list[DataSection], opt: Optimization
                 raise file.fail(f"{key}.measures", f"names of the model's outputs, states or algebraic variables ({', '.join(known)})", name)
             if col not in cols:
                 field = f"{key}.columns" if d.columns is not None else f"{key}.measures"
-                raise file.fail(field, f"a column of {path.name} ({', '.join(cols)})", col)
+                raise file.fail(field, f"a column of {path.name} ({column_names(cols)})", col)
             try:
                 fit_data(opt, table[name], t, data.data[:, cols.index(col)], std=stds[j], weight=weights[j], name=name)
             except GtModelError as exc:

@@ -180,13 +180,13 @@ def _first_cell(text: str, cell: str) -> str:
 
 
 BAD_CSV = [
-    ("not_a_number", lambda t: _first_cell(t, "x"), r"line 3, column 'theta1_deg': expected a decimal number, got 'x'"),
+    ("not_a_number", lambda t: _first_cell(t, "x"), r"line 3, column 'theta1_deg': expected a decimal number, got 1 character of text"),
     ("short_line", lambda t: t + "1,2,3\n", r"line 63: 3 values, expected 18"),
     ("bad_header", lambda t: t.replace("theta1_deg", "q1", 1), r"line 1: expected the header"),
     ("empty", lambda t: "", r"expected the header .*the file is empty"),
     ("header_only", lambda t: t.splitlines()[0] + "\n", r"expected at least 2 measurement lines, got 0"),
     ("not_utf8", lambda t: t.replace("# a comment line", "# caf\xe9", 1).encode("latin-1"), r"cannot read the data file \(not UTF-8"),
-    ("infinite", lambda t: _first_cell(t, "inf"), r"line 3, column 'theta1_deg': NaN/inf is not allowed, got 'inf'"),
+    ("infinite", lambda t: _first_cell(t, "inf"), r"line 3, column 'theta1_deg': NaN/inf is not allowed, expected a finite decimal number"),
 ]
 
 
