@@ -6,7 +6,8 @@ A :class:`RobotRuntime` is a :class:`~gtmodel.codegen.code_source.CodeSource` th
 ``x``, which reply fields its ``u`` fills, the limits and the fault rules). Its
 :meth:`~RobotRuntime.generate` writes the step through
 :func:`~gtmodel.codegen.loop_step.generate_loop_step`, copies the runtime's C
-(``harness/runtime/``: ``gt_runtime.c``, the RSI XML parser ``gt_rsi.c``, the EGM protobuf
+(``harness/runtime/``: ``gt_runtime.c`` with its report ``gt_runtime_report.c``, the network guard
+``gt_guard.c`` (one robot per session, strangers, the sequence window), the RSI XML parser ``gt_rsi.c``, the EGM protobuf
 messages ``gt_egm.c`` through the vendored nanopb 0.4.9.1 and ``egm.pb.c`` generated from ABB's
 ``egm.proto``, the ``GTS1`` sensor stream ``gt_sensor_stream.c``) and writes
 ``gt_runtime_config.h`` (field indices, limits as C initialisers, validated names only);
@@ -94,7 +95,7 @@ RUNTIME_FLAGS = {"sent": 1, "step": 2, "held": 4, "fallback_stale": 8, "fallback
                  "clamped": 4096, "no_safe_reply": 8192, "too_long": 16384, "out_of_window": 32768, "resync": 65536, "unapplied": 131072,
                  "sent_late": 262144}
 #: The runtime's C files copied next to the step (folder ``harness/runtime/`` of the package).
-RUNTIME_SOURCES = ("gt_runtime.c", "gt_guard.c", "gt_guard.h", "gt_rsi.c", "gt_rsi.h", "gt_egm.c", "gt_egm.h", "gt_sensor_stream.c", "gt_sensor_stream.h",
+RUNTIME_SOURCES = ("gt_runtime.c", "gt_runtime_report.c", "gt_runtime_state.h", "gt_guard.c", "gt_guard.h", "gt_rsi.c", "gt_rsi.h", "gt_egm.c", "gt_egm.h", "gt_sensor_stream.c", "gt_sensor_stream.h",
                    "egm.pb.c", "egm.pb.h", "egm.proto", "egm.options", "nanopb/pb.h", "nanopb/pb_common.c", "nanopb/pb_common.h",
                    "nanopb/pb_decode.c", "nanopb/pb_decode.h", "nanopb/pb_encode.c", "nanopb/pb_encode.h", "nanopb/LICENSE.txt",
                    "nanopb/README.md")
@@ -361,6 +362,7 @@ typedef {prefix}_real gt_rt_real;
 #define gt_rt_step {prefix}_step
 #define gt_rt_status_string {prefix}_status_string
 
+#ifndef GT_RT_CONFIG_NO_TABLES /* the tables: the cycle's (gt_runtime.c), not the report's */
 /* x[i] from packet field gt_rt_x_source[i] (>= 0) or sensor value -1 - gt_rt_x_source[i] */
 static const int gt_rt_x_source[GT_RT_NX] = {{{ints(x_source)}}};
 /* u[i] -> reply slot gt_rt_u_reply[i] */
@@ -373,6 +375,7 @@ static const double gt_rt_upper[GT_RT_NU] = {{{_c_doubles(spec.upper)}}};
 static const double gt_rt_rate[GT_RT_NU] = {{{_c_doubles(spec.rate)}}};
 static const char *const gt_rt_x_names[GT_RT_NX] = {{{", ".join(c_string(f) for f in spec.inputs)}}};
 static const char *const gt_rt_u_names[GT_RT_NU] = {{{", ".join(c_string(f) for f in spec.outputs)}}};
+#endif
 
 #endif
 """
@@ -417,7 +420,7 @@ def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "dou
     exe = out / "gt_runtime"
     cc = find_compiler()
     inc = ["-I", str(out), "-I", str(out / "nanopb")] + [a for d in generated.include_dirs for a in ("-isystem", d)]
-    sources = [out / "gt_runtime.c", out / "gt_guard.c", out / "gt_rsi.c", out / "gt_egm.c", out / "gt_sensor_stream.c", out / "egm.pb.c",
+    sources = [out / "gt_runtime.c", out / "gt_runtime_report.c", out / "gt_guard.c", out / "gt_rsi.c", out / "gt_egm.c", out / "gt_sensor_stream.c", out / "egm.pb.c",
                out / "nanopb" / "pb_common.c", out / "nanopb" / "pb_decode.c", out / "nanopb" / "pb_encode.c",
                generated.source, generated.casadi_source]
     run_compiler([*cc, *BUILD_FLAGS, *inc, *map(str, sources), "-o", str(exe), *generated.link_flags, "-lm"],

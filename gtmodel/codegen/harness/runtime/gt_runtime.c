@@ -4,7 +4,16 @@
  * (<prefix>.c, PREFIX_step) and gt_runtime_config.h (the interface, the field maps, the limits).
  *
  *   gt_runtime --out DIR [--listen HOST:PORT] [--sensor-port PORT] [--idle-timeout S]
- *              [--max-cycles N] [--reply-deadline S] [--no-realtime] [--exit-with-parent]
+ *              [--max-cycles N] [--reply-deadline S] [--robot ADDR[:PORT]] [--tracker ADDR[:PORT]]
+ *              [--log-max-mb MB] [--no-realtime] [--exit-with-parent]
+ *
+ * One robot per session (gt_guard.c): the named --robot or the first valid datagram's source is
+ * the only sender answered; any other is a stranger, never parsed, answered or logged, counted by
+ * address (the sensor socket likewise, --tracker). Sequence numbers (IPOC, seqno, the tracker's
+ * seq) within a window of the last accepted one reach the step; beyond it the held reply, and 5
+ * consecutive consistent datagrams beyond it restart the sequence (a restarted robot). Five or
+ * more cycles without the step's reply are an alarm (stderr, runtime_stats.json); gaps of more
+ * than two periods are silence events (gt_runtime_report.c writes both).
  *
  * The cycle (one thread, SCHED_FIFO and mlockall where permitted): receive a datagram from the
  * robot -> parse (gt_rsi.c / gt_egm.c; bounded, no heap) -> checks (finite, IPOC/seqno strictly
@@ -13,16 +22,18 @@
  * the last reply: nothing changes a value after them; RSI's %.6f numbers are put on the 1e-6 grid
  * by moving from the last reply towards the limited value, never past it) -> compose -> sendto.
  *
- * Safety rules: a malformed or too long datagram gets no reply (nothing to echo); a non-finite
- * field, a duplicate or older IPOC/seqno, a missing input field: the held reply (the last
- * reply again), the step is not called; stale sensor data or a failed step (a status other
+ * Safety rules: a malformed or too long datagram gets no reply (nothing to echo), counted, not
+ * logged; a non-finite field, a duplicate, older or out-of-window IPOC/seqno, a missing input
+ * field: the held reply (the last reply again), the step is not called; stale sensor data or a failed step (a status other
  * than GT_OK, GT_MEMORY_RESET, GT_MEASUREMENT_REJECTED): the fallback, hold (the last reply)
  * or ramp (towards zero for corrections: RSI and EGM path correction; towards the start value,
  * the robot's planned position in the first datagram, for EGM joint and Cartesian guidance)
- * at the rate limit. Relative RSI corrections: the runtime keeps the limited TOTAL correction
- * and sends its increment per cycle, so a robot that sums increments holds exactly the total.
+ * at the rate limit. Relative RSI corrections: the runtime keeps the limited TOTAL correction the
+ * robot applied and sends its increment per cycle, so a robot that sums increments holds exactly
+ * the total; an increment the robot reports late (Delay.D grew) is taken back. EGM guidance starts
+ * from the robot's measured position; no reply while that is more than a rate step outside the limits.
  *
- * Deadline rule: just before sendto the time since the datagram was received is measured.
+ * Deadline rule: with the reply composed, just before sendto, the time since the datagram was received is measured.
  * At most the reply deadline (default 2 ms of the 4 ms period): the computed reply. Beyond it
  * but within the period: the held reply (the last one again; a relative correction sends a
  * zero increment), counted deadline_held: it still reaches the robot within its cycle, so
@@ -32,7 +43,7 @@
  * The reply that is held is composed in microseconds, so only a stall of the whole process
  * longer than a period (what SCHED_FIFO and mlockall guard against) costs a cycle.
  *
- * The cycle log (DIR/cycle_log.csv) is written by a second, ordinary thread from a
+ * The cycle log (DIR/cycle_log.csv, at most --log-max-mb) is written by a second, ordinary thread from a
  * single-producer single-consumer ring (C11 atomics, no lock); an entry that finds the ring
  * full is dropped and counted. At exit DIR/runtime_stats.json holds the counts. Exit codes:
  * 0 a normal end (idle timeout, max cycles, SIGINT/SIGTERM), 2 bad arguments, 3 a setup error
@@ -66,95 +77,20 @@
 #include "gt_rsi.h"
 #include "gt_sensor_stream.h"
 
-/* flags of a log entry */
-#define F_SENT 1u
-#define F_STEP 2u
-#define F_HELD 4u
-#define F_FALLBACK_STALE 8u
-#define F_FALLBACK_STEP 16u
-#define F_RAMP 32u
-#define F_MALFORMED 64u
-#define F_NON_FINITE 128u
-#define F_DUPLICATE_OR_OLD 256u
-#define F_MISSING_FIELD 512u
-#define F_DEADLINE_HELD 1024u
-#define F_LATE_DROPPED 2048u
-#define F_CLAMPED 4096u
-#define F_NO_SAFE_REPLY 8192u
-#define F_TOO_LONG 16384u
-#define F_OUT_OF_WINDOW 32768u
-#define F_RESYNC 65536u
-#define F_UNAPPLIED 131072u
-#define F_SENT_LATE 262144u
-
-#define GT_RT_RING 8192u /* entries: 32 s of cycles at 4 ms; the writer drains every 5 ms */
-#define GT_RT_SEQ_WINDOW 250      /* cycles: a plausible jump of the robot's sequence, plus twice the cycles of a silence */
-#define GT_RT_RESYNC_PACKETS 5    /* consecutive consistent packets beyond the window that restart the sequence */
-#define GT_RT_SENSOR_WINDOW 10000 /* samples: a plausible jump of the tracker's seq, plus 20000 per second of silence */
-#define GT_RT_HOLD_ALARM 5        /* consecutive cycles without the step's reply that raise an alarm */
-#define GT_RT_MAX_EVENTS 256      /* events kept (silences, alarms, resynchronisations); more are counted */
-#define GT_RT_LOG_REPEATS 100     /* consecutive duplicate / out-of-window datagrams logged row by row; more are counted */
-#define GT_RT_MAX_DATAGRAM 4096
-#define GT_RT_NSTATUS 32
-#define GT_RT_CYCLE_STACK (1u << 20)  /* the step's CasADi work arrays live on it */
-#define GT_RT_WRITER_STACK (256u << 10)
-
-typedef struct {
-    uint64_t cycle, seq;
-    double t, latency_us;
-    uint32_t flags;
-    int32_t status, sensor_age;
-    double x[GT_RT_NX], u[GT_RT_NU], y[GT_RT_NU], sent[GT_RT_NU];
-} gt_rt_entry;
+#include "gt_runtime_state.h"
 
 static gt_rt_entry gt_ring[GT_RT_RING];
 static atomic_uint_fast64_t gt_ring_head, gt_ring_tail; /* head: producer (cycle), tail: consumer (writer) */
 static atomic_int gt_stop, gt_cycle_done, gt_writer_stop;
 static const char *gt_cycle_end; /* set by the cycle thread before gt_cycle_done, read by main after the join */
+gt_rt_stats gt_S;
+gt_rt_event gt_events[GT_RT_MAX_EVENTS];
+atomic_int gt_events_n;
+gt_source gt_robot_src, gt_tracker_src;
+gt_strangers gt_strangers_seen;
+gt_seqwin gt_robot_seq, gt_sensor_seqw;
+gt_rt_options gt_O;
 
-typedef struct {
-    uint64_t packets, cycles, replies, malformed, too_long, non_finite, duplicate_or_old, missing_field, held;
-    uint64_t fallback_stale, fallback_step, deadline_held, late_dropped, no_safe_reply, send_errors, compose_errors;
-    uint64_t clamp_lower, clamp_upper, clamp_rate, step_calls, step_status[GT_RT_NSTATUS], step_status_other;
-    uint64_t sensor_accepted, sensor_malformed, sensor_non_finite, sensor_old, sensor_short;
-    uint64_t log_written, log_dropped, log_write_errors, log_capped, log_bytes, first_seq, last_seq;
-    uint64_t before_lock, log_unlogged_repeats, unapplied, sent_late, start_outside, holds, hold_longest, silences, events_dropped;
-    double max_latency_us, silence_longest_s;
-    int realtime_fifo, realtime_mlock;
-    char realtime_reason[160];
-    const char *end;
-} gt_rt_stats;
-
-static gt_rt_stats S;
-
-/* events: written by the cycle thread only; the writer thread prints the alarms among those published */
-#define EV_SILENCE 0
-#define EV_HOLD 1
-#define EV_RESYNC 2
-#define EV_SENSOR_RESYNC 3
-#define EV_LOCK 4
-#define EV_SENSOR_LOCK 5
-static const char *const gt_event_names[] = {"silence", "hold", "resync", "sensor_resync", "lock", "sensor_lock"};
-typedef struct {
-    int kind;
-    uint64_t cycle, seq, cycles;
-    double t, length_s;
-    uint32_t reasons;
-} gt_rt_event;
-static gt_rt_event gt_events[GT_RT_MAX_EVENTS];
-static atomic_int gt_events_n;
-static gt_source gt_robot_src, gt_tracker_src;
-static gt_strangers gt_strangers_seen;
-static gt_seqwin gt_robot_seq, gt_sensor_seqw;
-
-static struct {
-    char out[3072], log_path[4096], stats_path[4096], ready_path[4096];
-    struct sockaddr_in listen, sensor;
-    int sensor_port_given;
-    double idle_timeout, reply_deadline;
-    uint64_t max_cycles, log_max_bytes;
-    int realtime;
-} O;
 
 static int gt_fd = -1, gt_sensor_fd = -1;
 static FILE *gt_log_file;
@@ -166,7 +102,7 @@ static double gt_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static void gt_fail(int code, const char *what, const char *detail)
+void gt_fail(int code, const char *what, const char *detail)
 {
     fprintf(stderr, "gt_runtime: %s%s%s\n", what, detail ? ": " : "", detail ? detail : "");
     exit(code);
@@ -178,7 +114,7 @@ static void gt_log_push(const gt_rt_entry *e)
     uint64_t head = atomic_load_explicit(&gt_ring_head, memory_order_relaxed);
     uint64_t tail = atomic_load_explicit(&gt_ring_tail, memory_order_acquire);
     if (head - tail >= GT_RT_RING) {
-        ++S.log_dropped;
+        ++gt_S.log_dropped;
         return;
     }
     gt_ring[head % GT_RT_RING] = *e;
@@ -205,51 +141,19 @@ static void gt_write_row(const gt_rt_entry *e)
     GT_ROW("\n");
 #undef GT_ROW
     if (n >= sizeof row) {
-        ++S.log_write_errors;
+        ++gt_S.log_write_errors;
         return;
     }
-    if (O.log_max_bytes > 0 && S.log_bytes + n > O.log_max_bytes) {
-        ++S.log_capped;
+    if (gt_O.log_max_bytes > 0 && gt_S.log_bytes + n > gt_O.log_max_bytes) {
+        ++gt_S.log_capped;
         return;
     }
     if (fwrite(row, 1, n, gt_log_file) != n) {
-        ++S.log_write_errors;
+        ++gt_S.log_write_errors;
         return;
     }
-    S.log_bytes += n;
-    ++S.log_written;
-}
-
-static const char *const gt_flag_names[] = {"sent", "step", "held", "fallback_stale", "fallback_step", "ramp", "malformed", "non_finite",
-                                             "duplicate_or_old", "missing_field", "deadline_held", "late_dropped", "clamped", "no_safe_reply",
-                                             "too_long", "out_of_window", "resync", "unapplied", "sent_late"};
-
-static void gt_flag_text(uint32_t flags, char *out, size_t cap)
-{
-    size_t n = 0;
-    unsigned k;
-    out[0] = '\0';
-    for (k = 0; k < sizeof gt_flag_names / sizeof gt_flag_names[0]; ++k)
-        if ((flags & (1u << k)) && n < cap) n += (size_t)snprintf(out + n, cap - n, "%s%s", n ? ", " : "", gt_flag_names[k]);
-}
-
-/* the alarms among the events published since the last call, on stderr (the writer thread) */
-static void gt_print_alarms(int *printed)
-{
-    int n = atomic_load_explicit(&gt_events_n, memory_order_acquire);
-    for (; *printed < n; ++*printed) {
-        const gt_rt_event *ev = &gt_events[*printed];
-        if (ev->kind == EV_HOLD) {
-            char why[400];
-            gt_flag_text(ev->reasons, why, sizeof why);
-            fprintf(stderr, "gt_runtime: alarm: no reply of the step for %d cycles from cycle %llu (t %.3f s): %s "
-                            "(summary.json: loop.alarms)\n", GT_RT_HOLD_ALARM, (unsigned long long)ev->cycle, ev->t, why);
-        }
-        else if (ev->kind == EV_RESYNC || ev->kind == EV_SENSOR_RESYNC)
-            fprintf(stderr, "gt_runtime: alarm: the %s's sequence restarted at %llu (cycle %llu, t %.3f s) after %d consecutive packets "
-                            "beyond the window\n", ev->kind == EV_RESYNC ? "robot" : "tracker", (unsigned long long)ev->seq,
-                    (unsigned long long)ev->cycle, ev->t, GT_RT_RESYNC_PACKETS);
-    }
+    gt_S.log_bytes += n;
+    ++gt_S.log_written;
 }
 
 /* ---- the log writer: consumer side, an ordinary thread ---- */
@@ -291,13 +195,13 @@ static double gt_limit(double v, double last, int i, uint32_t *flags)
         lo = hi = (last < gt_rt_lower[i]) ? rhi : rlo;
     }
     if (!(y >= lo)) { /* NaN too */
-        if (y < gt_rt_lower[i]) ++S.clamp_lower;
-        else ++S.clamp_rate;
+        if (y < gt_rt_lower[i]) ++gt_S.clamp_lower;
+        else ++gt_S.clamp_rate;
         y = lo;
         *flags |= F_CLAMPED;
     } else if (y > hi) {
-        if (y > gt_rt_upper[i]) ++S.clamp_upper;
-        else ++S.clamp_rate;
+        if (y > gt_rt_upper[i]) ++gt_S.clamp_upper;
+        else ++gt_S.clamp_rate;
         y = hi;
         *flags |= F_CLAMPED;
     }
@@ -350,7 +254,7 @@ static gt_rt_event *gt_event(int kind, uint64_t cycle, uint64_t seq, double t_rx
     int n = atomic_load_explicit(&gt_events_n, memory_order_relaxed);
     gt_rt_event *ev;
     if (n >= GT_RT_MAX_EVENTS) {
-        ++S.events_dropped;
+        ++gt_S.events_dropped;
         return NULL;
     }
     ev = &gt_events[n];
@@ -388,28 +292,28 @@ static void gt_drain_sensor(int32_t age_of_new)
             continue;
         }
         r = gt_sensor_parse(sbuf, (size_t)m > GT_SENSOR_MAX_LEN ? GT_SENSOR_MAX_LEN + 1 : (size_t)m, &sample);
-        if (r == GT_SENSOR_NON_FINITE) ++S.sensor_non_finite;
-        else if (r != GT_SENSOR_OK) ++S.sensor_malformed;
-        else if (sample.n < GT_RT_NSENSOR) ++S.sensor_short;
+        if (r == GT_SENSOR_NON_FINITE) ++gt_S.sensor_non_finite;
+        else if (r != GT_SENSOR_OK) ++gt_S.sensor_malformed;
+        else if (sample.n < GT_RT_NSENSOR) ++gt_S.sensor_short;
         else {
             int q;
             now = gt_now();
             if (!gt_tracker_src.locked) {
                 gt_source_lock(&gt_tracker_src, &from);
-                gt_event(EV_SENSOR_LOCK, S.cycles, sample.seq, now, 0);
+                gt_event(EV_SENSOR_LOCK, gt_S.cycles, sample.seq, now, 0);
             }
             q = gt_seq_check(&gt_sensor_seqw, sample.seq, 64,
                              (uint64_t)GT_RT_SENSOR_WINDOW + (uint64_t)(20000.0 * (gt_have_sensor ? now - gt_sensor_rx : 0.0)),
                              GT_RT_RESYNC_PACKETS);
-            if (q == GT_SEQ_OLD) ++S.sensor_old;
+            if (q == GT_SEQ_OLD) ++gt_S.sensor_old;
             else if (q == GT_SEQ_OUT) continue; /* counted in the window's out_of_window */
             else {
-                if (q == GT_SEQ_RESYNC) gt_event(EV_SENSOR_RESYNC, S.cycles, sample.seq, now, 0);
+                if (q == GT_SEQ_RESYNC) gt_event(EV_SENSOR_RESYNC, gt_S.cycles, sample.seq, now, 0);
                 gt_latest = sample;
                 gt_have_sensor = 1;
                 gt_sensor_age = age_of_new;
                 gt_sensor_rx = now;
-                ++S.sensor_accepted;
+                ++gt_S.sensor_accepted;
             }
         }
     }
@@ -515,7 +419,7 @@ static void *gt_cycle(void *arg)
         uint32_t flags = 0, tm = 0;
         int has_tm = 0, has_orient = 0;
         double orient[4] = {0, 0, 0, 0};
-        if (have_rx && gt_now() - last_rx > O.idle_timeout) { /* the robot's silence, whatever strangers send */
+        if (have_rx && gt_now() - last_rx > gt_O.idle_timeout) { /* the robot's silence, whatever strangers send */
             gt_cycle_end = "idle_timeout";
             break;
         }
@@ -537,13 +441,13 @@ static void *gt_cycle(void *arg)
             gt_strangers_count(&gt_strangers_seen, &from, 0);
             continue;
         }
-        ++S.packets;
+        ++gt_S.packets;
         if (gt_robot_src.locked) { /* anything the robot sends keeps the session alive; a gap of two periods is a silence */
             if (have_rx && t_rx - last_rx > 2.0 * GT_RT_PERIOD_S) {
-                gt_rt_event *ev = gt_event(EV_SILENCE, S.cycles + 1, 0, last_rx, 0);
-                ++S.silences;
+                gt_rt_event *ev = gt_event(EV_SILENCE, gt_S.cycles + 1, 0, last_rx, 0);
+                ++gt_S.silences;
                 if (ev) ev->length_s = t_rx - last_rx;
-                if (t_rx - last_rx > S.silence_longest_s) S.silence_longest_s = t_rx - last_rx;
+                if (t_rx - last_rx > gt_S.silence_longest_s) gt_S.silence_longest_s = t_rx - last_rx;
             }
             last_rx = t_rx;
             have_rx = 1;
@@ -572,40 +476,40 @@ static void *gt_cycle(void *arg)
         }
 #endif
         if (code == 1 || code == 2) { /* nothing to echo: no reply; counted, not logged */
-            if (code == 2) ++S.too_long;
-            ++S.malformed;
+            if (code == 2) ++gt_S.too_long;
+            ++gt_S.malformed;
             continue;
         }
         if (!gt_robot_src.locked) { /* the session's robot: the first valid packet's source (or the named one's) */
             if (code != 0 || (present_mask & required) != required) {
-                ++S.before_lock;
+                ++gt_S.before_lock;
                 continue;
             }
             gt_source_lock(&gt_robot_src, &from);
-            gt_event(EV_LOCK, S.cycles + 1, seq, t_rx, 0);
+            gt_event(EV_LOCK, gt_S.cycles + 1, seq, t_rx, 0);
             last_rx = t_rx;
             have_rx = 1;
         }
         /* a cycle of the robot */
-        ++S.cycles;
+        ++gt_S.cycles;
         ++gt_sensor_age;
         gt_drain_sensor(0);
         memset(&e, 0, sizeof e);
-        e.cycle = S.cycles;
+        e.cycle = gt_S.cycles;
         e.seq = seq;
         for (i = 0; i < GT_RT_NX; ++i) e.x[i] = NAN;
         for (i = 0; i < GT_RT_NU; ++i) e.u[i] = e.y[i] = e.sent[i] = NAN;
         e.status = -1;
         e.sensor_age = gt_have_sensor ? gt_sensor_age : -1;
-        if (S.cycles == 1) S.first_seq = seq;
-        S.last_seq = seq;
+        if (gt_S.cycles == 1) gt_S.first_seq = seq;
+        gt_S.last_seq = seq;
         /* the sequence: within the window of the last accepted packet (docs/robot.md, forged and restarted sequences) */
         q = gt_seq_check(&gt_robot_seq, seq, GT_RT_INTERFACE == GT_RT_RSI ? 64 : 32,
                          seq_step * ((uint64_t)GT_RT_SEQ_WINDOW + (uint64_t)(gt_robot_seq.have ? 2.0 * (t_rx - accept_rx) / GT_RT_PERIOD_S : 0.0)),
                          GT_RT_RESYNC_PACKETS);
         accepted = q == GT_SEQ_ACCEPT || q == GT_SEQ_RESYNC;
         if (q == GT_SEQ_OLD) {
-            ++S.duplicate_or_old;
+            ++gt_S.duplicate_or_old;
             flags |= F_DUPLICATE_OR_OLD;
         } else if (q == GT_SEQ_OUT) {
             flags |= F_OUT_OF_WINDOW;
@@ -613,7 +517,7 @@ static void *gt_cycle(void *arg)
             accept_rx = t_rx;
             if (q == GT_SEQ_RESYNC) { /* a restarted robot: everything starts again from this packet */
                 flags |= F_RESYNC;
-                gt_event(EV_RESYNC, S.cycles, seq, t_rx, 0);
+                gt_event(EV_RESYNC, gt_S.cycles, seq, t_rx, 0);
                 have_last = have_t0 = have_pending = have_delay = 0;
                 gt_rt_step_init(&mem);
             }
@@ -623,7 +527,7 @@ static void *gt_cycle(void *arg)
             if ((present_mask & ((uint64_t)1 << GT_RSI_DELAY)) && isfinite(field[GT_RSI_DELAY])) {
                 if (have_pending && have_delay && field[GT_RSI_DELAY] - prev_delay >= (double)((seq - prev_seq) / seq_step) - 0.5) {
                     for (i = 0; i < GT_RT_NU; ++i) last[i] -= pending[i];
-                    ++S.unapplied;
+                    ++gt_S.unapplied;
                     flags |= F_UNAPPLIED;
                 }
                 prev_delay = field[GT_RSI_DELAY];
@@ -633,10 +537,10 @@ static void *gt_cycle(void *arg)
             prev_seq = seq;
 #endif
             if (code == 3) {
-                ++S.non_finite;
+                ++gt_S.non_finite;
                 flags |= F_NON_FINITE;
             } else if ((present_mask & required) != required) {
-                ++S.missing_field;
+                ++gt_S.missing_field;
                 flags |= F_MISSING_FIELD;
             }
         }
@@ -648,13 +552,13 @@ static void *gt_cycle(void *arg)
         if (accepted && !have_t0) {
             seq0 = seq;
             tm0 = tm;
-            cycles0 = S.cycles;
+            cycles0 = gt_S.cycles;
             have_t0 = 1;
         }
 #if GT_RT_INTERFACE == GT_RT_RSI
         t = (double)(int64_t)(seq - seq0) / 1000.0;
 #else
-        t = has_tm ? (double)(int32_t)(tm - tm0) / 1000.0 : (double)(S.cycles - cycles0) * GT_RT_PERIOD_S;
+        t = has_tm ? (double)(int32_t)(tm - tm0) / 1000.0 : (double)(gt_S.cycles - cycles0) * GT_RT_PERIOD_S;
 #endif
         (void)has_tm;
         (void)tm0;
@@ -668,35 +572,35 @@ static void *gt_cycle(void *arg)
         if (!have_last && accepted && !(flags & F_NEVER_STEP)) { /* the start, from a packet in sequence only */
             int r = gt_start(field, present_mask, last, target);
             if (r == 1) have_last = 1;
-            else if (r == 2) ++S.start_outside;
+            else if (r == 2) ++gt_S.start_outside;
         }
         if (!have_last) {
-            ++S.no_safe_reply;
+            ++gt_S.no_safe_reply;
             flags |= F_NO_SAFE_REPLY;
         } else {
             if (GT_RT_NSENSOR > 0 && (!gt_have_sensor || gt_sensor_age > GT_RT_STALE_CYCLES)) stale = 1;
             if (flags & F_NEVER_STEP) { /* never the step: the held reply */
-                ++S.held;
+                ++gt_S.held;
                 flags |= F_HELD;
                 for (i = 0; i < GT_RT_NU; ++i) y[i] = last[i];
             } else if (stale) {
-                ++S.fallback_stale;
+                ++gt_S.fallback_stale;
                 flags |= F_FALLBACK_STALE;
                 gt_fallback(last, target, y, &flags);
             } else {
                 int st;
                 for (i = 0; i < GT_RT_NX; ++i) xr[i] = (gt_rt_real)e.x[i];
                 st = gt_rt_step(&mem, (gt_rt_real)t, xr, ur);
-                ++S.step_calls;
+                ++gt_S.step_calls;
                 flags |= F_STEP;
                 e.status = st;
-                if (st >= 0 && st < GT_RT_NSTATUS) ++S.step_status[st];
-                else ++S.step_status_other;
+                if (st >= 0 && st < GT_RT_NSTATUS) ++gt_S.step_status[st];
+                else ++gt_S.step_status_other;
                 for (i = 0; i < GT_RT_NU; ++i) e.u[i] = (double)ur[i];
                 if (st == GT_OK || st == GT_MEMORY_RESET || st == GT_MEASUREMENT_REJECTED) {
                     for (i = 0; i < GT_RT_NU; ++i) y[i] = e.u[i];
                 } else {
-                    ++S.fallback_step;
+                    ++gt_S.fallback_step;
                     flags |= F_FALLBACK_STEP;
                     gt_fallback(last, target, y, &flags);
                 }
@@ -708,26 +612,26 @@ static void *gt_cycle(void *arg)
             rlen = gt_compose(reply, y, last, seq, t_rx, has_orient, orient, &e);
             /* the deadline, measured with the reply composed, just before sendto */
             elapsed = gt_now() - t_rx;
-            if (elapsed > O.reply_deadline && elapsed < GT_RT_PERIOD_S && !(flags & F_HELD)) {
-                ++S.deadline_held;
+            if (elapsed > gt_O.reply_deadline && elapsed < GT_RT_PERIOD_S && !(flags & F_HELD)) {
+                ++gt_S.deadline_held;
                 flags |= F_DEADLINE_HELD;
                 gt_held(last, y);
                 rlen = gt_compose(reply, y, last, seq, t_rx, has_orient, orient, &e);
                 elapsed = gt_now() - t_rx;
             }
             if (elapsed >= GT_RT_PERIOD_S) {
-                ++S.late_dropped;
+                ++gt_S.late_dropped;
                 flags |= F_LATE_DROPPED;
             } else if (rlen < 0) {
-                ++S.compose_errors;
+                ++gt_S.compose_errors;
             } else if (sendto(gt_fd, reply, (size_t)rlen, 0, (struct sockaddr *)&from, fromlen) != (ssize_t)rlen) {
-                ++S.send_errors;
+                ++gt_S.send_errors;
             } else {
                 double sent_at = gt_now();
                 flags |= F_SENT;
-                ++S.replies;
+                ++gt_S.replies;
                 if (sent_at - t_rx >= GT_RT_PERIOD_S) { /* stalled inside sendto: sent, but past the period */
-                    ++S.sent_late;
+                    ++gt_S.sent_late;
                     flags |= F_SENT_LATE;
                 }
                 for (i = 0; i < GT_RT_NU; ++i) {
@@ -741,16 +645,16 @@ static void *gt_cycle(void *arg)
         if (!(flags & F_SENT))
             for (i = 0; i < GT_RT_NU; ++i) e.sent[i] = NAN;
         e.latency_us = 1e6 * (gt_now() - t_rx);
-        if ((flags & F_SENT) && e.latency_us > S.max_latency_us) S.max_latency_us = e.latency_us;
+        if ((flags & F_SENT) && e.latency_us > gt_S.max_latency_us) gt_S.max_latency_us = e.latency_us;
         /* a hold longer than GT_RT_HOLD_ALARM cycles: an alarm (summary.json and stderr) */
         if (!(flags & F_SENT) || (flags & F_NOT_STEPPED)) {
             if (hold_run == 0) hold_t0 = t_rx;
             hold_reasons |= flags & ~(uint32_t)(F_SENT | F_STEP | F_CLAMPED);
             if (++hold_run == GT_RT_HOLD_ALARM) {
-                hold_ev = gt_event(EV_HOLD, S.cycles + 1 - GT_RT_HOLD_ALARM, seq, hold_t0, hold_reasons);
-                ++S.holds;
+                hold_ev = gt_event(EV_HOLD, gt_S.cycles + 1 - GT_RT_HOLD_ALARM, seq, hold_t0, hold_reasons);
+                ++gt_S.holds;
             }
-            if ((uint64_t)hold_run > S.hold_longest) S.hold_longest = (uint64_t)hold_run;
+            if ((uint64_t)hold_run > gt_S.hold_longest) gt_S.hold_longest = (uint64_t)hold_run;
             if (hold_ev) {
                 hold_ev->reasons |= hold_reasons;
                 hold_ev->cycles = (uint64_t)hold_run;
@@ -764,9 +668,9 @@ static void *gt_cycle(void *arg)
         e.flags = flags;
         /* a flood of repeated or forged sequence numbers from the robot's address: its first rows logged, the rest counted */
         repeat_run = (flags & (F_DUPLICATE_OR_OLD | F_OUT_OF_WINDOW)) ? repeat_run + 1 : 0;
-        if (repeat_run > GT_RT_LOG_REPEATS) ++S.log_unlogged_repeats;
+        if (repeat_run > GT_RT_LOG_REPEATS) ++gt_S.log_unlogged_repeats;
         else gt_log_push(&e);
-        if (O.max_cycles > 0 && S.cycles >= O.max_cycles) {
+        if (gt_O.max_cycles > 0 && gt_S.cycles >= gt_O.max_cycles) {
             gt_cycle_end = "max_cycles";
             break;
         }
@@ -820,142 +724,13 @@ static int gt_udp(struct sockaddr_in *a, const char *what)
     return fd;
 }
 
-static void gt_json_string(FILE *f, const char *s)
-{
-    fputc('"', f);
-    for (; *s; ++s) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\') fprintf(f, "\\%c", c);
-        else if (c < 0x20 || c >= 0x7f) fprintf(f, "\\u%04x", c);
-        else fputc(c, f);
-    }
-    fputc('"', f);
-}
-
-static void gt_write_source(FILE *f, const char *name, const gt_source *src)
-{
-    char text[64];
-    fprintf(f, "\"%s\": ", name);
-    if (src->locked || src->named) {
-        gt_address_text(&src->addr, text, sizeof text);
-        if (!src->locked && !src->named_port) *strrchr(text, ':') = '\0';
-        gt_json_string(f, text);
-    } else {
-        fprintf(f, "null");
-    }
-    fprintf(f, ", \"%s_rule\": \"%s\"", name, src->named_port ? "named" : src->named ? "named_address_first_port" : "first_valid_packet");
-}
-
-/* the guard's counts: the session's sources, the strangers, the sequences, silences, alarms and the events */
-static void gt_write_guard(FILE *f)
-{
-    int i, n = atomic_load(&gt_events_n);
-    char text[64], why[400];
-    fprintf(f, "  \"source\": {");
-    gt_write_source(f, "robot", &gt_robot_src);
-    fprintf(f, ", ");
-    gt_write_source(f, "tracker", &gt_tracker_src);
-    fprintf(f, ", \"before_lock\": %llu},\n", (unsigned long long)S.before_lock);
-    fprintf(f, "  \"strangers\": {\"datagrams\": %llu, \"other_addresses_datagrams\": %llu, \"addresses\": [",
-            (unsigned long long)gt_strangers_seen.total, (unsigned long long)gt_strangers_seen.other);
-    for (i = 0; i < gt_strangers_seen.n; ++i) {
-        struct sockaddr_in a;
-        memset(&a, 0, sizeof a);
-        a.sin_family = AF_INET;
-        a.sin_addr.s_addr = gt_strangers_seen.e[i].ip;
-        a.sin_port = gt_strangers_seen.e[i].port;
-        gt_address_text(&a, text, sizeof text);
-        fprintf(f, "%s{\"address\": ", i ? ", " : "");
-        gt_json_string(f, text);
-        fprintf(f, ", \"socket\": \"%s\", \"datagrams\": %llu}", gt_strangers_seen.e[i].socket ? "sensor" : "robot",
-                (unsigned long long)gt_strangers_seen.e[i].count);
-    }
-    fprintf(f, "]},\n");
-    fprintf(f, "  \"sequence\": {\"out_of_window\": %llu, \"resyncs\": %llu, \"window_cycles\": %d, \"resync_packets\": %d, "
-               "\"sensor_out_of_window\": %llu, \"sensor_resyncs\": %llu, \"sensor_window\": %d},\n",
-            (unsigned long long)gt_robot_seq.out_of_window, (unsigned long long)gt_robot_seq.resyncs, GT_RT_SEQ_WINDOW,
-            GT_RT_RESYNC_PACKETS, (unsigned long long)gt_sensor_seqw.out_of_window, (unsigned long long)gt_sensor_seqw.resyncs,
-            GT_RT_SENSOR_WINDOW);
-    fprintf(f, "  \"relative\": {\"unapplied\": %llu},\n  \"sent_late\": %llu,\n  \"start_outside_limits\": %llu,\n",
-            (unsigned long long)S.unapplied, (unsigned long long)S.sent_late, (unsigned long long)S.start_outside);
-    fprintf(f, "  \"silences\": {\"count\": %llu, \"longest_s\": %.9g},\n", (unsigned long long)S.silences, S.silence_longest_s);
-    fprintf(f, "  \"alarms\": {\"holds\": %llu, \"longest_hold_cycles\": %llu, \"hold_alarm_cycles\": %d},\n",
-            (unsigned long long)S.holds, (unsigned long long)S.hold_longest, GT_RT_HOLD_ALARM);
-    fprintf(f, "  \"events_dropped\": %llu,\n  \"events\": [", (unsigned long long)S.events_dropped);
-    for (i = 0; i < n; ++i) {
-        const gt_rt_event *ev = &gt_events[i];
-        fprintf(f, "%s\n    {\"kind\": \"%s\", \"cycle\": %llu, \"seq\": %llu, \"t\": %.6f", i ? "," : "", gt_event_names[ev->kind],
-                (unsigned long long)ev->cycle, (unsigned long long)ev->seq, ev->t);
-        if (ev->kind == EV_SILENCE || ev->kind == EV_HOLD) fprintf(f, ", \"length_s\": %.6f", ev->length_s);
-        if (ev->kind == EV_HOLD) {
-            gt_flag_text(ev->reasons, why, sizeof why);
-            fprintf(f, ", \"cycles\": %llu, \"reasons\": ", (unsigned long long)ev->cycles);
-            gt_json_string(f, why);
-        }
-        fprintf(f, "}");
-    }
-    fprintf(f, "%s],\n", n ? "\n  " : "");
-}
-
-static void gt_write_stats(const char *signal_name)
-{
-    char tmp[4200];
-    FILE *f;
-    int i, first = 1;
-    snprintf(tmp, sizeof tmp, "%s.tmp", O.stats_path);
-    f = fopen(tmp, "w");
-    if (f == NULL) gt_fail(3, "cannot write the stats file", strerror(errno));
-    fprintf(f, "{\n  \"format\": \"gtmodel runtime stats 1\",\n  \"interface\": \"%s\",\n", GT_RT_INTERFACE_NAME);
-    fprintf(f, "  \"end\": \"%s\",\n  \"signal\": ", S.end ? S.end : "error");
-    if (signal_name) fprintf(f, "\"%s\",\n", signal_name);
-    else fprintf(f, "null,\n");
-    fprintf(f, "  \"packets\": %llu,\n  \"cycles\": %llu,\n  \"replies\": %llu,\n  \"malformed\": %llu,\n  \"too_long\": %llu,\n",
-            (unsigned long long)S.packets, (unsigned long long)S.cycles, (unsigned long long)S.replies,
-            (unsigned long long)S.malformed, (unsigned long long)S.too_long);
-    fprintf(f, "  \"non_finite\": %llu,\n  \"duplicate_or_old\": %llu,\n  \"missing_field\": %llu,\n  \"held_replies\": %llu,\n",
-            (unsigned long long)S.non_finite, (unsigned long long)S.duplicate_or_old, (unsigned long long)S.missing_field,
-            (unsigned long long)S.held);
-    fprintf(f, "  \"fallback_cycles\": {\"stale_sensor\": %llu, \"step_failed\": %llu},\n  \"fallback\": \"%s\",\n",
-            (unsigned long long)S.fallback_stale, (unsigned long long)S.fallback_step, GT_RT_RAMP ? "ramp" : "hold");
-    fprintf(f, "  \"deadline_held\": %llu,\n  \"late_dropped\": %llu,\n  \"no_safe_reply\": %llu,\n  \"send_errors\": %llu,\n  \"compose_errors\": %llu,\n",
-            (unsigned long long)S.deadline_held, (unsigned long long)S.late_dropped, (unsigned long long)S.no_safe_reply,
-            (unsigned long long)S.send_errors, (unsigned long long)S.compose_errors);
-    fprintf(f, "  \"limit_clamps\": {\"lower\": %llu, \"upper\": %llu, \"rate\": %llu},\n", (unsigned long long)S.clamp_lower,
-            (unsigned long long)S.clamp_upper, (unsigned long long)S.clamp_rate);
-    fprintf(f, "  \"sensor\": {\"accepted\": %llu, \"malformed\": %llu, \"non_finite\": %llu, \"duplicate_or_old\": %llu, \"too_few_values\": %llu},\n",
-            (unsigned long long)S.sensor_accepted, (unsigned long long)S.sensor_malformed, (unsigned long long)S.sensor_non_finite,
-            (unsigned long long)S.sensor_old, (unsigned long long)S.sensor_short);
-    fprintf(f, "  \"step_calls\": %llu,\n  \"step_status\": {", (unsigned long long)S.step_calls);
-    for (i = 0; i < GT_RT_NSTATUS; ++i) {
-        if (S.step_status[i] == 0) continue;
-        fprintf(f, "%s", first ? "" : ", ");
-        gt_json_string(f, gt_rt_status_string(i));
-        fprintf(f, ": %llu", (unsigned long long)S.step_status[i]);
-        first = 0;
-    }
-    if (S.step_status_other) fprintf(f, "%s\"other\": %llu", first ? "" : ", ", (unsigned long long)S.step_status_other);
-    fprintf(f, "},\n  \"log\": {\"written\": %llu, \"dropped\": %llu, \"write_errors\": %llu, \"capped\": %llu, \"bytes\": %llu, "
-               "\"max_bytes\": %llu, \"unlogged_repeats\": %llu},\n", (unsigned long long)S.log_written, (unsigned long long)S.log_dropped,
-            (unsigned long long)S.log_write_errors, (unsigned long long)S.log_capped, (unsigned long long)S.log_bytes,
-            (unsigned long long)O.log_max_bytes, (unsigned long long)S.log_unlogged_repeats);
-    gt_write_guard(f);
-    fprintf(f, "  \"realtime\": {\"granted\": %s, \"sched_fifo\": %s, \"mlockall\": %s, \"reason\": ",
-            S.realtime_fifo && S.realtime_mlock ? "true" : "false", S.realtime_fifo ? "true" : "false", S.realtime_mlock ? "true" : "false");
-    gt_json_string(f, S.realtime_reason);
-    fprintf(f, "},\n  \"first_ipoc_or_seq\": %llu,\n  \"last_ipoc_or_seq\": %llu,\n  \"max_latency_us\": %.17g,\n",
-            (unsigned long long)S.first_seq, (unsigned long long)S.last_seq, S.max_latency_us);
-    fprintf(f, "  \"period_s\": %.17g,\n  \"reply_deadline_s\": %.17g,\n  \"stale_cycles\": %d\n}\n", (double)GT_RT_PERIOD_S, O.reply_deadline,
-            (int)GT_RT_STALE_CYCLES);
-    if (fclose(f) != 0 || rename(tmp, O.stats_path) != 0) gt_fail(3, "cannot write the stats file", strerror(errno));
-}
-
 static void gt_paths(const char *out)
 {
-    if (strlen(out) >= sizeof O.out) gt_fail(2, "--out: path too long", NULL);
-    strcpy(O.out, out);
-    snprintf(O.log_path, sizeof O.log_path, "%s/cycle_log.csv", O.out);
-    snprintf(O.stats_path, sizeof O.stats_path, "%s/runtime_stats.json", O.out);
-    snprintf(O.ready_path, sizeof O.ready_path, "%s/ready.json", O.out);
+    if (strlen(out) >= sizeof gt_O.out) gt_fail(2, "--out: path too long", NULL);
+    strcpy(gt_O.out, out);
+    snprintf(gt_O.log_path, sizeof gt_O.log_path, "%s/cycle_log.csv", gt_O.out);
+    snprintf(gt_O.stats_path, sizeof gt_O.stats_path, "%s/runtime_stats.json", gt_O.out);
+    snprintf(gt_O.ready_path, sizeof gt_O.ready_path, "%s/ready.json", gt_O.out);
 }
 
 int main(int argc, char **argv)
@@ -967,16 +742,16 @@ int main(int argc, char **argv)
     char tmp[4200];
     FILE *f;
     int i, err;
-    O.idle_timeout = 2.0;
-    O.reply_deadline = GT_RT_REPLY_DEADLINE_S;
-    O.realtime = 1;
-    O.log_max_bytes = (uint64_t)1024 * 1048576u;
+    gt_O.idle_timeout = 2.0;
+    gt_O.reply_deadline = GT_RT_REPLY_DEADLINE_S;
+    gt_O.realtime = 1;
+    gt_O.log_max_bytes = (uint64_t)1024 * 1048576u;
     gt_start_time = gt_now();
-    gt_parse_address("0.0.0.0:" GT_RT_DEFAULT_PORT, &O.listen);
+    gt_parse_address("0.0.0.0:" GT_RT_DEFAULT_PORT, &gt_O.listen);
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "--no-realtime") == 0) {
-            O.realtime = 0;
+            gt_O.realtime = 0;
             continue;
         }
         if (strcmp(a, "--exit-with-parent") == 0) { /* SIGTERM (a clean end) when the starting process dies */
@@ -994,14 +769,14 @@ int main(int argc, char **argv)
         }
         ++i;
         if (strcmp(a, "--out") == 0) gt_paths(v);
-        else if (strcmp(a, "--listen") == 0) gt_parse_address(v, &O.listen);
+        else if (strcmp(a, "--listen") == 0) gt_parse_address(v, &gt_O.listen);
         else if (strcmp(a, "--sensor-port") == 0) {
-            O.sensor.sin_port = htons((uint16_t)gt_number_arg(a, v, 0, 65535));
-            O.sensor_port_given = 1;
-        } else if (strcmp(a, "--idle-timeout") == 0) O.idle_timeout = gt_number_arg(a, v, 0.001, 1e6);
-        else if (strcmp(a, "--max-cycles") == 0) O.max_cycles = (uint64_t)gt_number_arg(a, v, 0, 1e15);
-        else if (strcmp(a, "--reply-deadline") == 0) O.reply_deadline = gt_number_arg(a, v, 0.0, GT_RT_PERIOD_S);
-        else if (strcmp(a, "--log-max-mb") == 0) O.log_max_bytes = (uint64_t)(gt_number_arg(a, v, 0.001, 1e6) * 1048576.0);
+            gt_O.sensor.sin_port = htons((uint16_t)gt_number_arg(a, v, 0, 65535));
+            gt_O.sensor_port_given = 1;
+        } else if (strcmp(a, "--idle-timeout") == 0) gt_O.idle_timeout = gt_number_arg(a, v, 0.001, 1e6);
+        else if (strcmp(a, "--max-cycles") == 0) gt_O.max_cycles = (uint64_t)gt_number_arg(a, v, 0, 1e15);
+        else if (strcmp(a, "--reply-deadline") == 0) gt_O.reply_deadline = gt_number_arg(a, v, 0.0, GT_RT_PERIOD_S);
+        else if (strcmp(a, "--log-max-mb") == 0) gt_O.log_max_bytes = (uint64_t)(gt_number_arg(a, v, 0.001, 1e6) * 1048576.0);
         else if (strcmp(a, "--robot") == 0 || strcmp(a, "--tracker") == 0) {
             if (gt_source_parse(v, a[2] == 'r' ? &gt_robot_src : &gt_tracker_src) != 0) {
                 fprintf(stderr, "gt_runtime: %s: expected an IPv4 address, optionally with :PORT (1..65535), got %s\n", a, v);
@@ -1013,22 +788,22 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (O.out[0] == '\0') gt_fail(2, "--out DIR is required", NULL);
-    if (O.listen.sin_addr.s_addr == htonl(INADDR_ANY))
+    if (gt_O.out[0] == '\0') gt_fail(2, "--out DIR is required", NULL);
+    if (gt_O.listen.sin_addr.s_addr == htonl(INADDR_ANY))
         fprintf(stderr, "gt_runtime: warning: listening on every interface (0.0.0.0): any host that reaches this one may send; "
                         "listen on the robot network's address only (docs/robot.md, the network rules)\n");
     if (!gt_robot_src.named)
         fprintf(stderr, "gt_runtime: warning: no robot address named (--robot): the first valid packet's source is the robot "
                         "for this session\n");
-    gt_fd = gt_udp(&O.listen, "robot");
+    gt_fd = gt_udp(&gt_O.listen, "robot");
     if (GT_RT_NSENSOR > 0) {
-        uint16_t port = O.sensor_port_given ? ntohs(O.sensor.sin_port)
-                        : (ntohs(O.listen.sin_port) == 0 || ntohs(O.listen.sin_port) == 65535 ? 0 : (uint16_t)(ntohs(O.listen.sin_port) + 1));
-        O.sensor = O.listen;
-        O.sensor.sin_port = htons(port);
-        gt_sensor_fd = gt_udp(&O.sensor, "sensor");
+        uint16_t port = gt_O.sensor_port_given ? ntohs(gt_O.sensor.sin_port)
+                        : (ntohs(gt_O.listen.sin_port) == 0 || ntohs(gt_O.listen.sin_port) == 65535 ? 0 : (uint16_t)(ntohs(gt_O.listen.sin_port) + 1));
+        gt_O.sensor = gt_O.listen;
+        gt_O.sensor.sin_port = htons(port);
+        gt_sensor_fd = gt_udp(&gt_O.sensor, "sensor");
     }
-    gt_log_file = fopen(O.log_path, "w");
+    gt_log_file = fopen(gt_O.log_path, "w");
     if (gt_log_file == NULL) gt_fail(3, "cannot open the cycle log", strerror(errno));
     setvbuf(gt_log_file, NULL, _IOFBF, 1 << 16);
     fprintf(gt_log_file, "cycle,ipoc_or_seq,t,flags,status,latency_us,sensor_age");
@@ -1044,74 +819,74 @@ int main(int argc, char **argv)
     sigaddset(&set, SIGINT);
     sigaddset(&set, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &set, NULL);
-    strcpy(S.realtime_reason, "not asked (--no-realtime)");
-    if (O.realtime) {
-        S.realtime_reason[0] = '\0';
-        if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) S.realtime_mlock = 1;
-        else snprintf(S.realtime_reason, sizeof S.realtime_reason, "mlockall: %s", strerror(errno));
+    strcpy(gt_S.realtime_reason, "not asked (--no-realtime)");
+    if (gt_O.realtime) {
+        gt_S.realtime_reason[0] = '\0';
+        if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) gt_S.realtime_mlock = 1;
+        else snprintf(gt_S.realtime_reason, sizeof gt_S.realtime_reason, "mlockall: %s", strerror(errno));
     }
     /* threads with small stacks (the cycle's buffers are static): locked memory stays small */
     pthread_attr_init(&wattr);
     pthread_attr_setstacksize(&wattr, GT_RT_WRITER_STACK);
     err = pthread_create(&writer, &wattr, gt_writer, NULL);
-    if (err != 0 && S.realtime_mlock) { /* the locked stack over RLIMIT_MEMLOCK: on without locking */
+    if (err != 0 && gt_S.realtime_mlock) { /* the locked stack over RLIMIT_MEMLOCK: on without locking */
         munlockall();
-        S.realtime_mlock = 0;
-        snprintf(S.realtime_reason, sizeof S.realtime_reason, "mlockall: undone (thread stacks over the locked-memory limit)");
+        gt_S.realtime_mlock = 0;
+        snprintf(gt_S.realtime_reason, sizeof gt_S.realtime_reason, "mlockall: undone (thread stacks over the locked-memory limit)");
         err = pthread_create(&writer, &wattr, gt_writer, NULL);
     }
     if (err != 0) gt_fail(3, "cannot start the log thread", strerror(err));
     pthread_attr_init(&attr);
     pthread_attr_setstacksize(&attr, GT_RT_CYCLE_STACK);
     err = -1;
-    if (O.realtime) {
+    if (gt_O.realtime) {
         struct sched_param sp;
         sp.sched_priority = 80;
         pthread_attr_setinheritsched(&attr, PTHREAD_EXPLICIT_SCHED);
         pthread_attr_setschedpolicy(&attr, SCHED_FIFO);
         pthread_attr_setschedparam(&attr, &sp);
         err = pthread_create(&cycle, &attr, gt_cycle, NULL);
-        if (err == 0) S.realtime_fifo = 1;
+        if (err == 0) gt_S.realtime_fifo = 1;
         else {
-            size_t used = strlen(S.realtime_reason);
-            snprintf(S.realtime_reason + used, sizeof S.realtime_reason - used, "%sSCHED_FIFO: %s", used ? "; " : "", strerror(err));
+            size_t used = strlen(gt_S.realtime_reason);
+            snprintf(gt_S.realtime_reason + used, sizeof gt_S.realtime_reason - used, "%sSCHED_FIFO: %s", used ? "; " : "", strerror(err));
         }
     }
     if (err != 0) {
         pthread_attr_init(&plain);
         pthread_attr_setstacksize(&plain, GT_RT_CYCLE_STACK);
         err = pthread_create(&cycle, &plain, gt_cycle, NULL);
-        if (err != 0 && S.realtime_mlock) {
+        if (err != 0 && gt_S.realtime_mlock) {
             munlockall();
-            S.realtime_mlock = 0;
+            gt_S.realtime_mlock = 0;
             err = pthread_create(&cycle, &plain, gt_cycle, NULL);
         }
         if (err != 0) gt_fail(3, "cannot start the cycle thread", strerror(err));
     }
     /* ready: the ports (0 asked: the kernel's) */
-    snprintf(tmp, sizeof tmp, "%s.tmp", O.ready_path);
+    snprintf(tmp, sizeof tmp, "%s.tmp", gt_O.ready_path);
     f = fopen(tmp, "w");
     if (f == NULL) gt_fail(3, "cannot write the ready file", strerror(errno));
-    fprintf(f, "{\"listen_port\": %u, \"sensor_port\": %d, \"pid\": %ld}\n", (unsigned)ntohs(O.listen.sin_port),
-            gt_sensor_fd >= 0 ? (int)ntohs(O.sensor.sin_port) : -1, (long)getpid());
-    if (fclose(f) != 0 || rename(tmp, O.ready_path) != 0) gt_fail(3, "cannot write the ready file", strerror(errno));
+    fprintf(f, "{\"listen_port\": %u, \"sensor_port\": %d, \"pid\": %ld}\n", (unsigned)ntohs(gt_O.listen.sin_port),
+            gt_sensor_fd >= 0 ? (int)ntohs(gt_O.sensor.sin_port) : -1, (long)getpid());
+    if (fclose(f) != 0 || rename(tmp, gt_O.ready_path) != 0) gt_fail(3, "cannot write the ready file", strerror(errno));
     while (!atomic_load(&gt_cycle_done)) {
         struct timespec ts = {0, 50000000};
         int sig = sigtimedwait(&set, NULL, &ts);
         if (sig == SIGINT || sig == SIGTERM) {
             signal_name = sig == SIGINT ? "SIGINT" : "SIGTERM";
-            S.end = "signal";
+            gt_S.end = "signal";
             atomic_store(&gt_stop, 1);
         }
     }
     pthread_join(cycle, NULL);
-    if (S.end == NULL) S.end = gt_cycle_end;
+    if (gt_S.end == NULL) gt_S.end = gt_cycle_end;
     atomic_store(&gt_writer_stop, 1);
     pthread_join(writer, NULL);
-    if (fclose(gt_log_file) != 0) ++S.log_write_errors;
-    if (S.end == NULL) S.end = "error";
+    if (fclose(gt_log_file) != 0) ++gt_S.log_write_errors;
+    if (gt_S.end == NULL) gt_S.end = "error";
     gt_write_stats(signal_name);
     close(gt_fd);
     if (gt_sensor_fd >= 0) close(gt_sensor_fd);
-    return strcmp(S.end, "error") == 0 ? 1 : 0;
+    return strcmp(gt_S.end, "error") == 0 ? 1 : 0;
 }
