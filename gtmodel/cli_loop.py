@@ -127,6 +127,17 @@ def print_loop_summary(summary: dict[str, Any], out: Path) -> None:
         faults = {k: v.get("count") for k, v in (run.get("faults") or {}).items() if isinstance(v, dict) and v.get("count")}
         if faults:
             lines.append("faults       " + ", ".join(f"{k} {n}" for k, n in faults.items()) + " (summary.json: what was done)")
+        src, strangers = run.get("source") or {}, run.get("strangers") or {}
+        if src:
+            lines.append(f"robot        {src.get('robot')} ({src.get('robot_rule', '').replace('_', ' ')}); strangers: "
+                         f"{strangers.get('datagrams', 0)} datagrams from {len(strangers.get('addresses') or [])} addresses, none answered")
+        alarms, silences, seq = run.get("alarms") or {}, run.get("silences") or {}, run.get("sequence") or {}
+        if alarms.get("holds") or seq.get("resyncs") or seq.get("out_of_window"):
+            lines.append(f"alarms       {alarms.get('holds', 0)} holds of {alarms.get('hold_alarm_cycles')}+ cycles (longest "
+                         f"{alarms.get('longest_hold_cycles', 0)}), {seq.get('out_of_window', 0)} datagrams out of the sequence window, "
+                         f"{seq.get('resyncs', 0)} resynchronisations (summary.json: loop.alarms)")
+        if silences.get("count"):
+            lines.append(f"silences     {silences['count']} gaps over two periods, longest {1000 * silences.get('longest_s', 0):.1f} ms")
         lines.append(f"ended by     {run.get('end')}" + (f" ({run.get('signal')})" if run.get("signal") else ""))
         rt = run.get("realtime") or {}
         lines.append("real time    " + ("SCHED_FIFO and locked memory" if rt.get("granted") else f"not granted ({rt.get('reason')})"))

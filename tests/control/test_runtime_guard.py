@@ -419,3 +419,8 @@ def test_a_60_s_flood_of_strangers_leaves_the_robot_served_the_log_small_and_mem
     assert int(out["answered"]) == 0 and 0.99 * sent <= run.summary["strangers"]["datagrams"] <= sent and sent >= 0.95 * 50000 * seconds
     assert replies.count(None) == 0 and run.summary["cycles"] == len(replies) == run.summary["log"]["rows"]
     assert run.log_path.stat().st_size < 2_000_000 and max(rss) - rss[0] < 1024 and ended_after < 0.3 + 5.0
+
+
+def test_listening_on_every_interface_warns(exes, tmp_path):
+    run = run_loop(exes["rsi"], tmp_path / "run", listen=("0.0.0.0", 0), time_limit=1.0)
+    assert any("gt_runtime: warning: listening on every interface (0.0.0.0)" in w for w in run.summary["warnings"]), run.summary["warnings"]
