@@ -280,6 +280,10 @@ def _solve_one(args: argparse.Namespace, path: Path, target: Path) -> int:
     show, heartbeat = _progress(args)
     outcome = run_problem(path, target, verbose=show, plots=not args.no_plots, heartbeat=heartbeat, report=not args.no_report)
     status = outcome.status
+    if status is Status.INTERRUPTED and outcome.solution is not None:  # a refinement's verified pass: the result
+        _print_summary(outcome.summary, outcome.out)
+        print(f"gtmodel: interrupted ({outcome.summary.get('message')})", file=sys.stderr)
+        return status.exit_code
     if status is Status.INTERRUPTED:
         print("gtmodel: interrupted", file=sys.stderr)
     elif status is Status.INTERNAL_ERROR:
@@ -291,9 +295,21 @@ def _solve_one(args: argparse.Namespace, path: Path, target: Path) -> int:
     else:
         _print_summary(outcome.summary, outcome.out)
         return status.exit_code
-    if outcome.written:
-        print(f"gtmodel: wrote {outcome.out / 'summary.json'} (status {status})", file=sys.stderr)
+    _say_written(target, outcome.written, outcome.summary, "", outcome.out)
     return status.exit_code
+
+
+def _say_written(target: Path, written: bool, summary: dict, why: str, out: Path) -> None:
+    """Where a run that did not finish wrote its ``summary.json``, and that a complete earlier result was kept."""
+    from gtmodel.problems.results import kept_message
+
+    status = summary.get("status")
+    if written:
+        print(f"gtmodel: wrote {out / 'summary.json'} (status {status})", file=sys.stderr)
+    elif why:
+        print(f"gtmodel: could not write {out / 'summary.json'}: {why}", file=sys.stderr)
+    if written and out != target:
+        print(kept_message(target, out, status), file=sys.stderr)
 
 
 def _solve_study(args: argparse.Namespace, target: Path) -> int:
@@ -385,11 +401,7 @@ def _solve(args: argparse.Namespace) -> int:
         summary = failure_summary(path, KeyboardInterrupt(), Status.INTERRUPTED, name=target.name)
         if single:
             summary["kind"] = _toml_kind(args.problem[0])
-        written, _, why = write_failure(target, summary)
-        if written:
-            print(f"gtmodel: wrote {target / 'summary.json'} (status interrupted)", file=sys.stderr)
-        elif why:
-            print(f"gtmodel: could not write {target / 'summary.json'}: {why}", file=sys.stderr)
+        _say_written(target, *write_failure(target, summary))
 
     return _guarded(target, run, on_interrupt)
 
@@ -416,11 +428,7 @@ def _loop(args: argparse.Namespace) -> int:
 
         summary = failure_summary(args.file, KeyboardInterrupt(), Status.INTERRUPTED, name=target.name)
         summary["kind"] = kind
-        written, _, why = write_failure(target, summary)
-        if written:
-            print(f"gtmodel: wrote {target / 'summary.json'} (status interrupted)", file=sys.stderr)
-        elif why:
-            print(f"gtmodel: could not write {target / 'summary.json'}: {why}", file=sys.stderr)
+        _say_written(target, *write_failure(target, summary))
 
     return _guarded(target, run, on_interrupt)
 

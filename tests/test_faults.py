@@ -74,6 +74,14 @@ def _only_summary(out: Path) -> bool:
     return sorted(p.name for p in out.iterdir()) == ["summary.json"]
 
 
+def _earlier_kept(out: Path, status: str) -> bool:
+    """The earlier result byte for byte, and the run's own summary (status ``status``) alone in ``<out>.failed``."""
+    failed = out.parent / f"{out.name}.failed"
+    return ((out / "trajectory.csv").read_text() == "t,x\n0,0\n" and _summary(out)["status"] == "optimal"
+            and sorted(p.name for p in out.iterdir()) == ["summary.json", "trajectory.csv"]
+            and _summary(failed)["status"] == status and _only_summary(failed) and _summary(failed)["earlier_result_kept"] == str(out))
+
+
 def _no_partials(parent: Path) -> bool:
     return not [p for p in parent.iterdir() if ".partial-" in p.name or ".old-" in p.name or p.name.endswith(".lock")]
 
@@ -160,7 +168,7 @@ def test_a_read_only_out_is_refused_before_any_work(tmp_path, base):
 
 @pytest.mark.parametrize("signals", [(signal.SIGINT,), (signal.SIGTERM,), (signal.SIGINT, signal.SIGINT, signal.SIGTERM)],
                          ids=["sigint", "sigterm", "repeated"])
-def test_a_signal_during_start_up_ends_interrupted_with_130_or_143_and_the_earlier_result_gone(tmp_path, base, signals):
+def test_a_signal_during_start_up_ends_interrupted_with_130_or_143_and_the_earlier_result_kept(tmp_path, base, signals):
     out = tmp_path / "out"
     _earlier_result(out)
     proc = _start("solve", str(base), "--out", str(out), "-q")
@@ -176,7 +184,7 @@ def test_a_signal_during_start_up_ends_interrupted_with_130_or_143_and_the_earli
         proc.kill()
     assert proc.returncode == EXIT_BY_SIGNAL[signals[0]], err
     assert "Traceback" not in err and err.count("gtmodel: interrupted") == 1
-    assert _summary(out)["status"] == "interrupted" and _only_summary(out) and _no_partials(tmp_path)
+    assert _earlier_kept(out, "interrupted") and _no_partials(tmp_path)
 
 
 @pytest.mark.slow  # a solve long enough to be interrupted at random moments: about a minute
@@ -187,6 +195,7 @@ def test_signals_at_random_moments_always_give_130_or_the_finished_result(tmp_pa
     wrong = []
     for k in range(8):
         shutil.rmtree(out, ignore_errors=True)
+        shutil.rmtree(tmp_path / "out.failed", ignore_errors=True)
         _earlier_result(out)
         proc = _start("solve", str(base), "--out", str(out), "-q")
         time.sleep(rng.uniform(0.3, 6.0))
@@ -196,9 +205,9 @@ def test_signals_at_random_moments_always_give_130_or_the_finished_result(tmp_pa
             time.sleep(rng.uniform(0.0, 0.2))
         _, err = proc.communicate(timeout=120)
         summary = _summary(out)
-        interrupted = proc.returncode == EXIT_BY_SIGNAL[sent[0]] and summary["status"] == "interrupted" and _only_summary(out)
+        interrupted = proc.returncode == EXIT_BY_SIGNAL[sent[0]] and _earlier_kept(out, "interrupted")
         finished = (proc.returncode == 0 and summary["status"] == "optimal"  # written before the signal: it stands
-                    and all((out / f).exists() for f in summary["files"]))
+                    and all((out / f).exists() for f in summary["files"]) and not (tmp_path / "out.failed").exists())
         if not (interrupted or finished) or "Traceback" in err or not _no_partials(tmp_path):
             wrong.append((k, proc.returncode, summary["status"], err))
     assert not wrong
@@ -207,7 +216,7 @@ def test_signals_at_random_moments_always_give_130_or_the_finished_result(tmp_pa
 # ----------------------------------------------------------------------------- a failed write
 
 
-def test_a_write_failure_leaves_the_failed_runs_summary_alone_with_one_message(tmp_path, monkeypatch, capsys):
+def test_a_write_failure_keeps_the_earlier_result_and_writes_the_summary_beside_with_one_message(tmp_path, monkeypatch, capsys):
     """In this process: the kind's writer fails with ENOSPC (as on a full disk)."""
     from gtmodel.cli import main
     from gtmodel.problems.kinds import path_constrained
@@ -224,11 +233,11 @@ def test_a_write_failure_leaves_the_failed_runs_summary_alone_with_one_message(t
     assert code == 2
     assert err.splitlines()[0] == f"gtmodel: error: cannot write the result folder {out}: No space left on device"
     assert ".partial-" not in err and err.count("gtmodel: error") == 1
-    assert _summary(out)["status"] == "invalid_input" and _only_summary(out) and _no_partials(tmp_path)
+    assert _earlier_kept(out, "invalid_input") and _no_partials(tmp_path)
 
 
 @pytest.mark.slow  # a real full disk: a solve in a subprocess (about 5 s)
-def test_a_full_disk_leaves_no_earlier_result_looking_current(tmp_path, base):
+def test_a_full_disk_keeps_the_earlier_result_as_it_was(tmp_path, base):
     disk = tmp_path / "disk"
     mounted = _mount_tmpfs(disk, "size=64k")
     limit = None
@@ -242,8 +251,7 @@ def test_a_full_disk_leaves_no_earlier_result_looking_current(tmp_path, base):
         assert done.returncode == 2, done.stderr
         assert done.stderr.splitlines()[0].startswith(f"gtmodel: error: cannot write the result folder {out}: ")
         assert ".partial-" not in done.stderr and "Traceback" not in done.stderr
-        summary = _summary(out)
-        assert summary["status"] == "invalid_input" and _only_summary(out) and _no_partials(disk)
+        assert _earlier_kept(out, "invalid_input") and _no_partials(disk)
     finally:
         if mounted:
             _umount(disk)

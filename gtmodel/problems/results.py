@@ -2,11 +2,16 @@
 
 A run writes into a new hidden folder beside the target (``.<name>.partial-<pid>``) and
 replaces the target only when everything, ``summary.json`` last, is written. The rule for
-an earlier run's folder: **every finished run replaces it whole**, whatever its outcome
-(optimal, infeasible, invalid input, interrupted). So after a failed run the folder holds
-the failed run's ``summary.json`` alone and no file of the earlier run can look current.
-A process killed outright (SIGKILL, power loss) never reaches the replacement: the earlier
-folder stays intact, and the orphaned partial folder is removed by the next run.
+an earlier run's folder: **only a run that finished replaces it** (any status of exit code
+0 or 1 but ``error``; a loop's ``interrupted``, its normal end). A run that did not finish
+(invalid input, internal error, ``error``, interrupted) over a folder holding a complete
+result (one with data files, :func:`holds_result`) leaves that folder byte for byte as it
+was and writes its own folder beside it instead, ``<name>.failed`` (:func:`failed_folder`;
+its ``summary.json`` says ``"earlier_result_kept"``); a failed run over a new or empty
+folder, or over a folder holding only a failed run's summary, writes into the folder
+itself. A finished run that replaces the target removes the stale ``<name>.failed``
+beside it. A process killed outright (SIGKILL, power loss) never reaches the replacement:
+the earlier folder stays intact, and the orphaned partial folder is removed by the next run.
 
 The replacement swaps the two folders in one step (Linux ``renameat2`` with
 ``RENAME_EXCHANGE``), so a reader never finds the target missing; where that call is not
@@ -39,7 +44,8 @@ except ImportError:  # pragma: no cover - Windows
 from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
-__all__ = ["check_output_folder", "is_file_name", "MAX_FILE_NAME", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields"]
+__all__ = ["check_output_folder", "is_file_name", "MAX_FILE_NAME", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields",
+           "FAILED_SUFFIX", "failed_folder", "holds_result", "finished", "kept_message"]
 
 #: The ``written_by`` field of every ``summary.json`` gtmodel writes (how a result folder is recognised).
 MARKER = f"gtmodel {__version__}"
@@ -68,6 +74,101 @@ def is_file_name(value: Any) -> bool:
     """
     return (isinstance(value, str) and value not in ("", ".", "..") and value == value.strip()
             and not any(c in "/\\" or not c.isprintable() for c in value) and len(value.encode("utf-8")) <= MAX_FILE_NAME)
+
+
+#: What a run that did not finish adds to its result folder's name when it leaves an earlier complete result as it was.
+FAILED_SUFFIX = ".failed"
+
+#: Statuses of a run that did not finish: it never replaces an earlier complete result.
+UNFINISHED = frozenset({Status.INVALID_INPUT, Status.INTERNAL_ERROR, Status.ERROR, Status.INTERRUPTED})
+
+#: Files of a result folder that are not its data (a folder with nothing else holds no result).
+_NOT_DATA = frozenset({"summary.json", "report.html"})
+
+
+def failed_folder(target: str | Path) -> Path:
+    """The folder beside ``target`` that receives a run that did not finish over a complete result.
+
+    Parameters
+    ----------
+    target : str or pathlib.Path
+        The result folder (``--out``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``<target>.failed`` in the same folder.
+    """
+    target = Path(target)
+    return target.parent / f"{target.name}{FAILED_SUFFIX}"
+
+
+def finished(status: Status | str, ends_on_signal: bool = False) -> bool:
+    """Whether a run with this status finished, so that its folder may replace an earlier complete result.
+
+    Parameters
+    ----------
+    status : Status or str
+        The run's status.
+    ends_on_signal : bool, optional
+        The kind ends on a signal (a loop: ``interrupted`` is its normal end, its log complete).
+
+    Returns
+    -------
+    bool
+        False for ``invalid_input``, ``internal_error``, ``error`` and (unless
+        ``ends_on_signal``) ``interrupted``.
+    """
+    status = Status(status)
+    return status not in UNFINISHED or (status is Status.INTERRUPTED and ends_on_signal)
+
+
+def holds_result(folder: str | Path) -> bool:
+    """Whether ``folder`` holds a complete earlier result that a run which did not finish must leave as it was.
+
+    Parameters
+    ----------
+    folder : str or pathlib.Path
+        A result folder.
+
+    Returns
+    -------
+    bool
+        True when its ``summary.json`` is a run's, lists a data file (anything but
+        ``summary.json`` and ``report.html``) and its status is not ``invalid_input``,
+        ``internal_error`` or ``error``; a run's ``interrupted`` result with data (a loop's
+        log, the last verified pass of a refinement) counts.
+    """
+    path = Path(folder) / "summary.json"
+    if not _is_run_summary(path):
+        return False
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    files = data.get("files")
+    status = Status(data["status"])
+    return isinstance(files, list) and any(f not in _NOT_DATA for f in files) and (status is Status.INTERRUPTED or finished(status))
+
+
+def kept_message(kept: str | Path, written: str | Path, status: Status | str) -> str:
+    """The line that tells a user their earlier result was kept and where this run's folder went.
+
+    Parameters
+    ----------
+    kept : str or pathlib.Path
+        The result folder left as it was.
+    written : str or pathlib.Path
+        Where this run's folder went (:func:`failed_folder`).
+    status : Status or str
+        This run's status.
+
+    Returns
+    -------
+    str
+    """
+    return (f"gtmodel: the earlier result in {kept}/ is kept as it was; this run ({Status(status).value}) "
+            f"is in {written}/")
 
 
 def json_safe(value: Any) -> Any:
@@ -367,6 +468,8 @@ class ResultFolder:
 
     As a context manager, the partial folder is removed at the end of the block unless it
     was committed (an exception or Ctrl-C inside leaves the earlier target as it was).
+    ``commit(summary, keep_complete=True)`` (a run that did not finish) leaves a complete
+    earlier result as it was and writes ``<target>.failed`` instead.
     """
 
     def __init__(self, target: str | Path) -> None:
@@ -383,14 +486,20 @@ class ResultFolder:
         except OSError as exc:
             raise ResultWriteError(f"cannot create the result folder {self.target}: {exc.strerror or exc}") from None
         self.committed = False
+        self.kept: Path | None = None
 
-    def commit(self, summary: Mapping[str, Any]) -> dict[str, Any]:
+    def commit(self, summary: Mapping[str, Any], keep_complete: bool = False) -> dict[str, Any]:
         """Write ``summary.json`` (listing every file) and replace the target folder.
 
         Parameters
         ----------
         summary : Mapping[str, Any]
             The summary fields (``files`` is set here).
+        keep_complete : bool, optional
+            The run did not finish (:func:`finished`): if the target holds a complete
+            result (:func:`holds_result`), it is left as it was and this folder replaces
+            :func:`failed_folder` instead (checked as a target is; :attr:`kept` is then the
+            target left as it was and :attr:`target` the folder written). Default False.
 
         Returns
         -------
@@ -401,8 +510,14 @@ class ResultFolder:
         ------
         ResultWriteError
             ``summary.json`` cannot be written or the target cannot be replaced (the
-            earlier folder is then left as it was).
+            earlier folder is then left as it was); with ``keep_complete``, the folder beside
+            it is not new, empty nor a gtmodel result folder.
         """
+        if keep_complete and self.kept is None and holds_result(self.target):
+            aside = failed_folder(self.target)
+            check_output_folder(aside)  # never a folder of the user's own files
+            self.kept, self.target = self.target, aside
+            summary = {**summary, "earlier_result_kept": str(self.kept)}
         files = sorted(p.name for p in self.path.iterdir() if p.name != "summary.json")
         out = dict(summary)
         out["files"] = ["summary.json", *files]
@@ -411,14 +526,16 @@ class ResultFolder:
             write_json(self.path / "summary.json", out)
         except ResultWriteError as exc:
             raise self.write_error(exc) from None
-        with _signals.protected():  # a signal here is raised once the target is whole again
+        with _signals.protected():  # a signal here is raised once the target is whole again and the earlier one gone
             try:
                 old = self._swap()
             except OSError as exc:
                 raise ResultWriteError(f"cannot replace the result folder {self.target}: {exc.strerror or exc}") from None
             self.committed = True
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+            if self.kept is None:
+                _remove_stale_failed(self.target)
         return out
 
     def _swap(self) -> Path | None:
@@ -497,6 +614,24 @@ def _exchange(a: Path, b: Path) -> bool:
     if err in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
         return False  # the file system cannot swap
     raise OSError(err, os.strerror(err), str(b))
+
+
+def _remove_stale_failed(target: Path) -> None:
+    """``<target>.failed`` of an earlier run that did not finish, now older than ``target`` (only a folder gtmodel wrote so)."""
+    aside = failed_folder(target)
+    try:
+        data = json.loads((aside / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return
+    kept = data.get("earlier_result_kept") if isinstance(data, dict) else None
+    if aside.is_symlink() or not isinstance(kept, str) or Path(kept).name != target.name or not _is_run_summary(aside / "summary.json"):
+        return
+    gone = target.parent / f".{aside.name}.old-{os.getpid()}"
+    try:
+        os.replace(aside, gone)
+    except OSError:
+        return
+    shutil.rmtree(gone, ignore_errors=True)
 
 
 def _remove_orphans(parent: Path, name: str) -> None:

@@ -25,14 +25,15 @@ from gtmodel.problems.overrides import apply_override
 from gtmodel.errors import GtModelError, ProblemError, ResultWriteError
 from gtmodel.problems.base import Problem, ProblemFile
 from gtmodel.problems.registry import KINDS, LOOP_KINDS, RENAMED, canonical_kind, get_kind, get_schema
-from gtmodel.problems.results import (MARKER, ResultFolder, _is_run_summary, check_output_folder, failure_summary, is_file_name,
-                                     json_safe, output_lock, write_json)
+from gtmodel.problems.results import (MARKER, ResultFolder, _is_run_summary, check_output_folder, failed_folder, failure_summary, finished,
+                                     holds_result, is_file_name, json_safe, kept_message, output_lock, write_json)
 from gtmodel.report.result_page import REPORT_FILE, write_report
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 from gtmodel.problems.schema import validate_document
 from gtmodel.status import Status
 
-__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "write_failure", "add_report", "RunOutcome"]
+__all__ = ["load_problem", "solve_problem", "write_results", "run_problem", "write_failure", "add_report", "RunOutcome",
+           "InterruptedWithResult", "verified_pass_kept"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -116,14 +117,69 @@ def solve_problem(problem: Problem, verbose: bool = False, previous: Any = None,
     KeyboardInterrupt
         Ctrl-C, SIGINT or SIGTERM during the solve (also when the solver swallowed it), unless
         the kind ends on a signal (:attr:`~gtmodel.problems.base.ProblemKind.ends_on_signal`:
-        the loop of ``gtmodel loop``, whose solution then says ``interrupted`` and is written).
+        the loop of ``gtmodel loop``, whose solution then says ``interrupted`` and is written);
+        an :class:`InterruptedWithResult` (carrying the solution) where a mesh refinement had
+        verified a pass before the signal.
     """
     kind = get_kind(problem.kind)
     with InterruptGuard() as guard:
         solution = kind.solve(problem.declaration, verbose=verbose, previous=previous, warm_start=warm_start)
-        if not kind.ends_on_signal:
+        if not kind.ends_on_signal and guard.interrupted:
+            note = verified_pass_kept(solution)
+            if note is not None:
+                raise InterruptedWithResult(solution, note)
             guard.check()
     return solution
+
+
+class InterruptedWithResult(KeyboardInterrupt):
+    """Ctrl-C (SIGINT, SIGTERM) during a mesh refinement that had verified a pass: that pass is the result.
+
+    A :class:`KeyboardInterrupt` (a caller that stops on Ctrl-C stops), carrying the solution
+    the refinement returned (its last verified pass) for a caller that keeps it
+    (:func:`run_problem` writes it with status ``interrupted``).
+
+    Parameters
+    ----------
+    solution : object
+        The kind's solution.
+    note : str
+        What was kept (:func:`verified_pass_kept`).
+    """
+
+    def __init__(self, solution: Any, note: str) -> None:
+        super().__init__(note)
+        self.solution = solution
+        self.note = note
+
+
+def verified_pass_kept(solution: Any) -> str | None:
+    """What a mesh refinement stopped by Ctrl-C kept, if it had verified a pass; else None.
+
+    A signal during a refinement pass's solve ends that pass (the solver stops) and the
+    refinement returns its verified pass with the best objective; that pass is the run's
+    result, with status ``interrupted`` (docs/reliability.md).
+
+    Parameters
+    ----------
+    solution : object
+        A kind's solution: an :class:`~gtmodel.modeling.OptimizationResult` or a solution
+        holding one as ``result``.
+
+    Returns
+    -------
+    str or None
+        E.g. ``"interrupted by the user during mesh refinement; the result is its last
+        verified pass (returned pass 2 of 3)"``.
+    """
+    result = solution if hasattr(solution, "refinement") else getattr(solution, "result", None)
+    verification = getattr(result, "verification", None)
+    if not getattr(result, "refinement", None) or verification is None or not getattr(verification, "passed", False):
+        return None
+    entries = [e for e in result.refinement if isinstance(e, dict)]
+    k = next((i + 1 for i, e in enumerate(entries) if e.get("returned")), len(entries))
+    return (f"interrupted by the user during mesh refinement; the result is its last verified pass "
+            f"(pass {k} of {len(entries)})")
 
 
 def solution_timing(solution: Any) -> dict[str, dict[str, float]]:
@@ -183,26 +239,40 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
         A file or the folder cannot be written (names the path); the earlier folder is
         left as it was.
     """
+    with ResultFolder(out_dir) as folder:
+        return _write_into(folder, problem, solution, plots, report, timing)
+
+
+def _write_into(folder: ResultFolder, problem: Problem, solution: Any, plots: bool, report: bool,
+                timing: Mapping[str, Mapping[str, float]] | None, interrupted: str | None = None) -> dict[str, Any]:
+    """:func:`write_results` into ``folder``; ``interrupted``: the note of a refinement stopped by
+    Ctrl-C after a verified pass (its status is then ``interrupted``). A run that did not finish
+    leaves a complete earlier result as it was (:meth:`ResultFolder.commit`, ``keep_complete``), said on stderr."""
     kind = get_kind(problem.kind)
     phases = {k: dict(v) for k, v in (timing if timing is not None else solution_timing(solution)).items()}
     wall, cpu = time.perf_counter(), time.process_time()
-    with ResultFolder(out_dir) as folder:
-        try:
-            written = kind.write(problem.declaration, solution, folder.path, plots, problem.name)
-            summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
-            if problem.overrides:
-                summary["overrides"] = dict(problem.overrides)
-            summary.update(written.fields)
-            summary["status"] = kind.status(solution)
-            names = {p.name for p in folder.path.iterdir()} | {"summary.json"} | ({REPORT_FILE} if report else set())
-            summary["file_descriptions"] = kind.describe_files(sorted(names))
-            if report:
-                _write_report(folder.path, summary)
-            add_phase(phases, "writing", time.perf_counter() - wall, time.process_time() - cpu)
-            summary["timing"] = ordered_phases(phases)
-            return folder.commit(summary)
-        except OSError as exc:  # a ResultWriteError too: one message, naming the target
-            raise folder.write_error(exc) from None
+    try:
+        written = kind.write(problem.declaration, solution, folder.path, plots, problem.name)
+        summary: dict[str, Any] = {"problem": str(problem.path), "name": problem.name, "kind": problem.kind}
+        if problem.overrides:
+            summary["overrides"] = dict(problem.overrides)
+        summary.update(written.fields)
+        summary["status"] = kind.status(solution)
+        if interrupted:
+            summary["status"] = Status.INTERRUPTED
+            summary["message"] = f"{interrupted}; {summary.get('message')}" if summary.get("message") else interrupted
+        names = {p.name for p in folder.path.iterdir()} | {"summary.json"} | ({REPORT_FILE} if report else set())
+        summary["file_descriptions"] = kind.describe_files(sorted(names))
+        if report:
+            _write_report(folder.path, summary)
+        add_phase(phases, "writing", time.perf_counter() - wall, time.process_time() - cpu)
+        summary["timing"] = ordered_phases(phases)
+        out = folder.commit(summary, keep_complete=not finished(summary["status"], kind.ends_on_signal))
+    except OSError as exc:  # a ResultWriteError too: one message, naming the target
+        raise folder.write_error(exc) from None
+    if folder.kept is not None:
+        _log.warning("%s", kept_message(folder.kept, folder.target, out["status"]))
+    return out
 
 
 def _write_report(path: Path, summary: dict[str, Any]) -> None:
@@ -289,6 +359,10 @@ class RunOutcome:
         The exception that ended the run early, if any.
     written : bool
         Whether the result folder was written.
+    kept : pathlib.Path or None
+        The result folder left as it was: the run did not finish over a complete earlier
+        result, and ``out`` is the folder beside it that it wrote instead
+        (:func:`~gtmodel.problems.results.failed_folder`); None otherwise.
     """
 
     path: Path
@@ -299,6 +373,7 @@ class RunOutcome:
     solution: Any = None
     error: BaseException | None = None
     written: bool = True
+    kept: Path | None = None
 
     @property
     def exit_code(self) -> int:
@@ -358,6 +433,8 @@ def run_problem(
         return _failed(path, target, None, ProblemError(f"{path}: cannot read the problem file ({what})"), Status.INVALID_INPUT,
                        write=False)
     phases: dict[str, dict[str, float]] = {}
+    folder: ResultFolder | None = None
+    solution: Any = None
     try:
         with timed(phases, "load"):
             problem = load_problem(path, overrides, settings)
@@ -365,18 +442,29 @@ def run_problem(
         label = f"solving {problem.name} ({problem.kind})"
         _log.info("%s ...", label)
         call: dict[str, dict[str, float]] = {}
+        interrupted = None
         with Heartbeat(label, enabled=heartbeat), timed(call, "other"):
-            solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
+            try:
+                solution = solve_problem(problem, verbose=verbose, previous=previous, warm_start=warm_start)
+            except InterruptedWithResult as stop:  # the refinement's last verified pass: the result, status interrupted
+                solution, interrupted = stop.solution, stop.note
         own = solution_timing(solution)
         merge_phases(phases, own)
         rest = phase_sum(own)  # what the solve call spent outside its timed phases (flattening, the kind's own work)
         add_phase(phases, "other", call["other"]["wall_s"] - rest["wall_s"], call["other"]["cpu_s"] - rest["cpu_s"])
-        with InterruptGuard() as guard:
-            summary = write_results(problem, solution, target, plots=plots, report=report, timing=phases)
+        if interrupted:  # the run is stopping: its kept pass is written, further signals only counted
+            with _signals.settled(), ResultFolder(target) as folder:
+                summary = _write_into(folder, problem, solution, plots, report, phases, interrupted)
+            return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
+        with InterruptGuard() as guard, ResultFolder(target) as folder:
+            summary = _write_into(folder, problem, solution, plots, report, phases)
             if not get_kind(problem.kind).ends_on_signal:  # a loop's signal ended its run: its results stand
                 guard.check()
-        return RunOutcome(path, target, Status(summary["status"]), summary, problem, solution)
+        return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
     except KeyboardInterrupt as exc:
+        if folder is not None and folder.committed:  # the signal came once the folder was in place: its result stands
+            summary = json.loads((folder.target / "summary.json").read_text(encoding="utf-8"))
+            return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
         return _failed(path, target, problem, exc, Status.INTERRUPTED)
     except GtModelError as exc:  # a ResultWriteError too: the earlier result must not look current
         return _failed(path, target, problem, exc, Status.INVALID_INPUT)
@@ -412,21 +500,25 @@ def _failed(path: Path, target: Path, problem: Problem | None, error: BaseExcept
         path, error, status, kind=problem.kind if problem else _peek_kind(path), name=problem.name if problem else _peek_name(path),
         empty_fields=kind.empty_fields if kind is not None else (),
     )
-    written = False
+    written, kept, out = False, None, target
     if write:
         with _signals.protected():
-            written, summary, why = write_failure(target, summary)
+            written, summary, why, out = write_failure(target, summary)
+        kept = target if out != target else None
         if not written and not isinstance(error, ResultWriteError):  # else the run's own message says it
-            _log.warning("gtmodel: could not write %s: %s", target / "summary.json", why)
-    return RunOutcome(path, target, status, summary, problem, None, error, written)
+            _log.warning("gtmodel: could not write %s: %s", out / "summary.json", why)
+    return RunOutcome(path, out, status, summary, problem, None, error, written, kept)
 
 
-def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str, Any], str]:
-    """Replace a result folder by a failed run's ``summary.json`` alone.
+def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str, Any], str, Path]:
+    """Write a failed run's ``summary.json`` alone, never over a complete earlier result.
 
-    If even that cannot be written (a full disk), the earlier result (a gtmodel result
-    folder, never another) is removed, so that none of it looks current, and the write is
-    tried once more.
+    Where ``target`` holds a complete result (:func:`~gtmodel.problems.results.holds_result`),
+    it is left as it was and the summary goes to the folder beside it,
+    ``<target>.failed`` (:func:`~gtmodel.problems.results.failed_folder`). Else the summary
+    replaces ``target``; if even that cannot be written (a full disk), the earlier folder
+    (a failed run's summary, never a complete result nor a folder of the user's) is
+    removed, so that it cannot look current, and the write is tried once more.
 
     Parameters
     ----------
@@ -437,18 +529,23 @@ def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str
 
     Returns
     -------
-    tuple of (bool, dict, str)
-        Whether it was written, the summary as written, and why not (empty if written).
+    tuple of (bool, dict, str, pathlib.Path)
+        Whether it was written, the summary as written, why not (empty if written), and
+        the folder it went to (``target``, or the folder beside it).
     """
+    out = target
     try:
         with ResultFolder(target) as folder:
-            return True, folder.commit(summary), ""
+            written = folder.commit(summary, keep_complete=True)
+            return True, written, "", folder.target
     except ResultWriteError as exc:
         why = str(exc)
+    if holds_result(target):  # a complete earlier result is never removed for a failed run's summary
+        return False, summary, why, failed_folder(target)
     try:
         check_output_folder(target)  # never remove what is not a gtmodel result folder
     except ResultWriteError:
-        return False, summary, why
+        return False, summary, why, out
     aside = target.parent / f".{target.name}.old-{os.getpid()}"
     try:
         if target.is_dir():
@@ -458,11 +555,11 @@ def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str
         pass
     try:  # the earlier files are gone: there may be room now
         with ResultFolder(target) as folder:
-            return True, folder.commit(summary), ""
+            return True, folder.commit(summary), "", out
     except ResultWriteError:
         pass
-    gone = "; the earlier result there was removed so that it cannot look current" if not target.exists() else ""
-    return False, summary, why + gone
+    gone = "; the earlier summary there was removed so that it cannot look current" if not target.exists() else ""
+    return False, summary, why + gone, out
 
 
 def _peek_name(path: Path) -> str:

@@ -6,10 +6,13 @@ failure, after a SIGKILL mid-run (a real subprocess), and after SIGINT during IP
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import os
+import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -18,7 +21,7 @@ import pytest
 
 from gtmodel.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_NOT_OPTIMAL, main
 from gtmodel.errors import ResultWriteError
-from gtmodel.problems.results import ResultFolder
+from gtmodel.problems.results import MARKER, ResultFolder
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
 
 from ..bad_problems import BASE
@@ -87,30 +90,51 @@ def earlier_run(tmp_path_factory):
     return out
 
 
-@pytest.mark.parametrize(
-    "edit, code, status, match",
-    [
-        (lambda t: t.replace("[limits]", "[limits"), EXIT_BAD_INPUT, "invalid_input", "invalid TOML"),
-        (lambda t: t.replace("force = [450.0, 450.0, 450.0]", "force = [1e308, 450.0, 450.0]"), EXIT_BAD_INPUT, "invalid_input", "limits.force"),
-        (
-            lambda t: t.replace("force = [450.0, 450.0, 450.0]", "force = [152.0, 152.0, 152.0]").replace("elements = 50 ", "elements = 10 "),
-            EXIT_NOT_OPTIMAL, None, "",
-        ),
-    ],
-    ids=["bad_toml", "force_1e308", "infeasible_force_limit"],
-)
-def test_failed_run_leaves_no_file_of_the_earlier_run(tmp_path, earlier_run, edit, code, status, match):
+def _hashes(folder):
+    """Every file under a folder and the SHA-256 of its bytes."""
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+#: Reruns that fail over a complete earlier result: each leaves it byte for byte (issue 67).
+FAILED_RERUNS = {
+    "bad_toml": (lambda t: t.replace("[limits]", "[limits"), "invalid TOML"),
+    "force_1e308": (lambda t: t.replace("force = [450.0, 450.0, 450.0]", "force = [1e308, 450.0, 450.0]"), "limits.force"),
+    "missing_guess_file": (lambda t: t.replace('method = "trapezoid"', 'method = "file"\nfile = "nowhere.csv"'), "initial_guess.file"),
+}
+
+
+@pytest.mark.parametrize("edit, match", FAILED_RERUNS.values(), ids=FAILED_RERUNS)
+def test_a_failed_rerun_leaves_every_file_of_the_earlier_result_byte_identical(tmp_path, capsys, earlier_run, edit, match):
     out = tmp_path / "out"
     subprocess.run(["cp", "-r", str(earlier_run), str(out)], check=True)
+    before = _hashes(out)
     broken = tmp_path / "broken.toml"
     broken.write_text(edit(BASE.read_text()))
-    assert main(["solve", str(broken), "--out", str(out), "--quiet"]) == code
+    assert main(["solve", str(broken), "--out", str(out), "--quiet"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    failed = json.loads((tmp_path / "out.failed" / "summary.json").read_text())
+    assert _hashes(out) == before
+    assert (failed["status"], failed["files"], failed["earlier_result_kept"]) == ("invalid_input", ["summary.json"], str(out))
+    assert match in failed["message"] and f"the earlier result in {out}/ is kept as it was" in err
+    assert _files(tmp_path) == ["broken.toml", "out", "out.failed"]
+
+
+def test_a_complete_rerun_replaces_every_file_and_the_failed_folder_beside(tmp_path, earlier_run):
+    """A run that finished (here: infeasible, exit 1) replaces the folder whole: no file of the earlier
+    run survives, and the ``out.failed`` of an earlier failed run is removed."""
+    out = tmp_path / "out"
+    subprocess.run(["cp", "-r", str(earlier_run), str(out)], check=True)
+    (tmp_path / "bad.toml").write_text("kind = [")
+    assert main(["solve", str(tmp_path / "bad.toml"), "--out", str(out), "--quiet"]) == EXIT_BAD_INPUT
+    assert (tmp_path / "out.failed" / "summary.json").is_file()
+    infeasible = tmp_path / "infeasible.toml"
+    infeasible.write_text(BASE.read_text().replace("force = [450.0, 450.0, 450.0]", "force = [152.0, 152.0, 152.0]")
+                          .replace("elements = 50 ", "elements = 10 "))
+    assert main(["solve", str(infeasible), "--out", str(out), "--quiet"]) == EXIT_NOT_OPTIMAL
     summary = json.loads((out / "summary.json").read_text())
-    expected = ["summary.json"] if code == EXIT_BAD_INPUT else ["report.html", "summary.json"]  # a solved run's page, not optimal
-    assert _files(out) == expected
-    assert sorted(summary["files"]) == expected
-    assert summary["status"] == status if status else summary["status"] in ("infeasible", "error", "max_iterations")
-    assert match in summary["message"]
+    assert _files(out) == sorted(summary["files"]) == ["report.html", "summary.json"]  # a solved run's page, not optimal
+    assert summary["status"] in ("infeasible", "max_iterations") and "earlier_result_kept" not in summary
+    assert _files(tmp_path) == ["bad.toml", "infeasible.toml", "out"]
 
 
 def _solve_process(out, *extra, problem=BASE):
@@ -247,3 +271,132 @@ def test_an_empty_folder_and_an_earlier_result_folder_are_written(tmp_path):
         with ResultFolder(out) as folder:
             folder.commit({"status": "optimal"})
     assert _files(out) == ["summary.json"]
+
+
+def test_an_interrupted_rerun_leaves_the_earlier_result_byte_identical(tmp_path, earlier_run):
+    """SIGINT to a real ``gtmodel solve`` once it is solving: exit 130, the earlier folder as it was."""
+    out = tmp_path / "out"
+    subprocess.run(["cp", "-r", str(earlier_run), str(out)], check=True)
+    before = _hashes(out)
+    slow = tmp_path / "slow.toml"
+    slow.write_text(BASE.read_text().replace("elements = 50 ", "elements = 400 "))
+    proc = _solve_process(out, "-v", problem=slow)
+    _wait_for(proc, "solving")
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    code = proc.wait(timeout=60)
+    err = proc.stderr.read()
+    failed = json.loads((tmp_path / "out.failed" / "summary.json").read_text())
+    assert (code, failed["status"], _hashes(out)) == (EXIT_INTERRUPTED, "interrupted", before), err
+    assert f"the earlier result in {out}/ is kept as it was; this run (interrupted) is in {out}.failed/" in err
+
+
+@pytest.fixture
+def signal_after_refinement(monkeypatch):
+    """The kind's solve returns, then a Ctrl-C is counted: as when IPOPT swallowed it in a refinement's last pass."""
+    from gtmodel import _signals
+    from gtmodel.problems.registry import get_kind
+
+    kind = type(get_kind("point_to_point"))
+    solve = kind.solve
+
+    def solve_then_signal(self, *args, **kwargs):
+        solution = solve(self, *args, **kwargs)
+        _signals._state.count += 1
+        return solution
+
+    monkeypatch.setattr(kind, "solve", solve_then_signal)
+    yield
+    _signals.reset()
+
+
+@pytest.mark.slow  # a refined solve in this process: about 10 s
+def test_ctrl_c_during_refinement_keeps_the_last_verified_pass_as_the_result(tmp_path, capsys, signal_after_refinement):
+    out = tmp_path / "out"
+    code = main(["solve", str(BASE), "--out", str(out), "--quiet", "--no-plots", "--no-report"])
+    summary = json.loads((out / "summary.json").read_text())
+    err = capsys.readouterr().err
+    assert (code, summary["status"], summary["verification"]["passed"]) == (EXIT_INTERRUPTED, "interrupted", True)
+    assert summary["final_time_s"] is not None and {"trajectory.csv", "trajectory.h"} <= set(summary["files"])
+    assert "the result is its last verified pass" in summary["message"] and "gtmodel: interrupted (" in err
+    assert summary["refinement"] and any(p.get("returned") for p in summary["refinement"])
+
+
+def test_commit_keeps_a_complete_result_and_writes_the_failed_folder_beside(tmp_path):
+    target = tmp_path / "out"
+    _earlier_run(target, {"trajectory.csv": "earlier run"})
+    with ResultFolder(target) as folder:
+        written = folder.commit({"status": "invalid_input"}, keep_complete=True)
+    assert (folder.kept, folder.target, written["earlier_result_kept"]) == (target, tmp_path / "out.failed", str(target))
+    assert (target / "trajectory.csv").read_text() == "earlier run" and _files(tmp_path) == ["out", "out.failed"]
+
+
+def test_a_failed_run_over_a_failed_runs_summary_replaces_it(tmp_path):
+    target = tmp_path / "out"
+    for status in ("invalid_input", "interrupted"):
+        with ResultFolder(target) as folder:
+            folder.commit({"status": status}, keep_complete=True)
+    assert json.loads((target / "summary.json").read_text())["status"] == "interrupted" and _files(tmp_path) == ["out"]
+
+
+def test_a_folder_of_the_users_files_beside_is_never_written(tmp_path):
+    """``out.failed`` holding the user's files: the failed run's summary is not written there (nor anywhere)."""
+    target = tmp_path / "out"
+    _earlier_run(target, {"trajectory.csv": "earlier run"})
+    mine = tmp_path / "out.failed"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    folder = ResultFolder(target)
+    with pytest.raises(ResultWriteError, match=f"will not write the result folder {mine}: it holds files that no gtmodel run wrote"):
+        folder.commit({"status": "invalid_input"}, keep_complete=True)
+    folder.discard()
+    assert (mine / "notes.txt").read_text() == "mine" and _files(mine) == ["notes.txt"] and _files(tmp_path) == ["out", "out.failed"]
+    assert (target / "trajectory.csv").read_text() == "earlier run"
+
+
+@pytest.mark.parametrize("status, ends_on_signal, expected", [
+    ("optimal", False, True), ("infeasible", False, True), ("check_failed", False, True), ("error", False, False),
+    ("invalid_input", False, False), ("internal_error", False, False), ("interrupted", False, False), ("interrupted", True, True),
+])
+def test_which_runs_finished(status, ends_on_signal, expected):
+    from gtmodel.problems.results import finished
+
+    assert finished(status, ends_on_signal) is expected
+
+
+@pytest.mark.slow  # a real refinement interrupted in a subprocess: about 10 to 20 s
+def test_sigint_after_a_verified_refinement_pass_writes_that_pass_with_status_interrupted(tmp_path):
+    """The shipped problem refines after its first solve; SIGINT right after pass 2 (verified) is logged."""
+    out = tmp_path / "out"
+    proc = _solve_process(out)
+    _wait_for(proc, "pass 2,")
+    proc.send_signal(signal.SIGINT)
+    code = proc.wait(timeout=120)
+    err = proc.stderr.read()
+    summary = json.loads((out / "summary.json").read_text())
+    assert (code, summary["status"], summary["verification"]["passed"]) == (EXIT_INTERRUPTED, "interrupted", True), err
+    assert summary["final_time_s"] is not None and "trajectory.csv" in summary["files"] and (out / "trajectory.csv").is_file()
+    assert summary["refinement_stop"].startswith("interrupted by the user during pass 3; returned pass 2")
+
+
+@pytest.mark.slow  # the loop's C is generated and compiled: about 20 s
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc: the loop's runtime is compiled")
+def test_a_loop_whose_port_is_taken_keeps_the_earlier_cycle_log(tmp_path):
+    """``gtmodel loop`` exits 1 (status error) when its port is taken: the earlier cycle log stays byte for byte."""
+    out = tmp_path / "loop"
+    _earlier_run(out, {"cycle_log.csv": "cycle,t\n0,0\n"})
+    summary = json.loads((out / "summary.json").read_text())
+    (out / "summary.json").write_text(json.dumps({**summary, "status": "completed", "written_by": MARKER}))
+    before = _hashes(out)
+    taken = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    taken.bind(("127.0.0.1", 0))
+    try:
+        env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(REPO))
+        done = subprocess.run([sys.executable, "-m", "gtmodel.cli", "loop", str(REPO / "loops" / "l1_egm_ilc.toml"), "--out", str(out),
+                               "--listen", f"127.0.0.1:{taken.getsockname()[1]}", "--idle-timeout", "2", "--quiet"],
+                              capture_output=True, text=True, env=env, cwd=tmp_path, timeout=300)
+    finally:
+        taken.close()
+    failed = json.loads((tmp_path / "loop.failed" / "summary.json").read_text())
+    assert (done.returncode, failed["status"], _hashes(out)) == (EXIT_NOT_OPTIMAL, "error", before), done.stderr
+    assert "Address already in use" in failed["message"] and f"the earlier result in {out}/ is kept as it was" in done.stderr

@@ -100,6 +100,7 @@ from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTIO
 from gtmodel.modeling.ocp.verification_bounds import bounds_verdict
 from gtmodel.modeling.ocp.refinement_remedy import refinement_remedy
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
+from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
 
 __all__ = ["solve_refined", "start_cpu", "refine_mesh", "SWITCH_EDGE", "OBJECTIVE_TOLERANCE", "end_deviation", "WORSE", "ANCHOR_END", "WARM_MU", "WARM_PUSH", "POLISH_CPU_S", "switch_elements", "switch_times", "MAX_ELEMENTS", "MAX_PASSES", "SWITCH_FRACTION", "SPURIOUS", "SPURIOUS_DEVIATION"]
@@ -242,6 +243,7 @@ def _pass_entry(n_pass: int, tr: CollocationTranscription, result: OptimizationR
     return entry
 
 
+@keeps_verified_pass  # issue 67: a signal returns the last verified pass (refinement_interrupt)
 @refinement_passes
 def solve_refined(
     optimization: Optimization,
@@ -347,8 +349,8 @@ def solve_refined(
     input_bounds: tuple[np.ndarray, np.ndarray] | None = None
     mesh: np.ndarray | None = None
     guess: Any = initial_guess
-    history: list[dict[str, Any]] = []
-    passes: list[OptimizationResult] = []
+    history: list[dict[str, Any]] = recorded("history")  # issue 67: read by keeps_verified_pass on a signal
+    passes: list[OptimizationResult] = recorded("passes")
     anchor: OptimizationResult | None = None  # the best pass feasible by simulation (_feasible): no later pass may be worse
     stop = "the verification passed and no element is left to split"
     n_elements = elements
