@@ -23,6 +23,7 @@ from gtmodel.cli import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_NOT_OPTIMAL, main
 from gtmodel.errors import ResultWriteError
 from gtmodel.problems.results import MARKER, ResultFolder
 from gtmodel.problems.runtime import Heartbeat, InterruptGuard
+from gtmodel.status import Status
 
 from ..bad_problems import BASE
 from ..conftest import REPO
@@ -400,3 +401,27 @@ def test_a_loop_whose_port_is_taken_keeps_the_earlier_cycle_log(tmp_path):
     failed = json.loads((tmp_path / "loop.failed" / "summary.json").read_text())
     assert (done.returncode, failed["status"], _hashes(out)) == (EXIT_NOT_OPTIMAL, "error", before), done.stderr
     assert "Address already in use" in failed["message"] and f"the earlier result in {out}/ is kept as it was" in done.stderr
+
+
+def test_an_interrupted_comparison_keeps_a_complete_earlier_comparison(tmp_path, monkeypatch):
+    """``gtmodel solve A.toml B.toml``: Ctrl-C before any case finished leaves the earlier comparison byte for byte."""
+    from gtmodel.problems.study import engine
+    from gtmodel.problems.study.design import comparison_study
+
+    from .study.study_fixtures import write_base
+
+    out = tmp_path / "cmp"
+    _earlier_run(out, {"comparison.md": "| earlier |\n", "table.csv": "status\noptimal\n"})
+    before = _hashes(out)
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(engine, "execute", interrupted)
+    base = write_base(tmp_path)
+    other = tmp_path / "other.toml"
+    other.write_text(base.read_text().replace("grid = 50 ", "grid = 40 ", 1))
+    outcome = engine.run_study(comparison_study([base, other], plots=False), out)
+    failed = json.loads((tmp_path / "cmp.failed" / "summary.json").read_text())
+    assert (outcome.status, outcome.out, _hashes(out)) == (Status.INTERRUPTED, (tmp_path / "cmp.failed").resolve(), before)
+    assert (failed["status"], failed["earlier_result_kept"]) == ("interrupted", str(out))

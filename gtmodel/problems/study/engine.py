@@ -41,7 +41,7 @@ import pandas as pd
 from gtmodel import _signals
 from gtmodel._toml import read_toml
 from gtmodel.errors import InputError, ProblemError, ResultWriteError
-from gtmodel.problems.results import ResultFolder, write_json
+from gtmodel.problems.results import ResultFolder, kept_message, write_json
 from gtmodel.problems.study.analyses import ANALYSES
 from gtmodel.problems.study.cases import CaseRecord, CaseTask, case_key, finished_summary, resolve_document, safe_name
 from gtmodel.problems.study.comparison import StudyCase, write_comparison
@@ -351,7 +351,10 @@ def _finish(study: Study, tasks: Sequence[CaseTask], records: dict[str, CaseReco
         "table": ["table.parquet", "table.csv"],
     }
     if folder is not None:
-        summary = folder.commit(summary)
+        summary = folder.commit(summary, keep_complete=interrupted)  # an interrupted comparison keeps a complete one
+        if folder.kept is not None:
+            out = folder.target.resolve()
+            _log.warning("%s", kept_message(folder.kept, folder.target, status))
         for r in records.values():
             r.folder = out / r.folder.relative_to(root)
         root = out
