@@ -160,7 +160,7 @@ class OptimalControl:
             with timed(phases, "refinement"):  # every pass: its build, guess, solve and verification
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
-                    max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                    max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
                     initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, verification=d.refinement.verification,
                     objective_tolerance=d.refinement.objective_tolerance, **kwargs,
                 )
@@ -183,7 +183,7 @@ class OptimalControl:
             with timed(phases, "refinement"):
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
-                    max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                    max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
                     max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification,
                     objective_tolerance=d.refinement.objective_tolerance, **kwargs,
                 )
@@ -239,7 +239,7 @@ class OptimalControl:
             with timed(phases, "refinement"):
                 result = solve_refined(
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
-                    max_elements=max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
+                    max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
                     max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification,
                     objective_tolerance=d.refinement.objective_tolerance, **kwargs,
                 )

@@ -604,8 +604,7 @@ def _scale_objective(tr: CollocationTranscription, problem: PointToPoint, option
 
 
 def _coarse_start(opt: Optimization, problem: PointToPoint, common: dict[str, Any], options: dict[str, Any]) -> OptimizationResult:
-    """The problem on :data:`~gtmodel.trajectory.model_ocp.COARSE_START_ELEMENTS` elements (unverified): fatrop's start on a fine
-    mesh (not IPOPT's: on the L1's 400 elements 580 iterations from it, 99 from the declared guess; fatrop 34 against 110)."""
+    """The problem on :data:`~gtmodel.trajectory.model_ocp.COARSE_START_ELEMENTS` elements (unverified): a fine mesh's start."""
     coarse = CollocationTranscription(opt, elements=COARSE_START_ELEMENTS, points=problem.method.points,
                                       scheme=problem.method.scheme, verify=False, **common)
     _scale_objective(coarse, problem, options)
@@ -676,7 +675,7 @@ def solve_point_to_point(
                                       scheme=problem.method.scheme, verify=ref.verification, **common)
         scaling = _scale_objective(tr, problem, options)
         refined = functools.partial(solve_refined, opt, elements=problem.method.elements, points=problem.method.points,
-                                    scheme=problem.method.scheme, max_elements=max(ref.max_elements, problem.method.elements),
+                                    scheme=problem.method.scheme, max_elements=None if ref.max_elements is None else max(ref.max_elements, problem.method.elements),
                                     max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, parameters=problem.named_parameters,
                                     objective_tolerance=ref.objective_tolerance, verification=ref.verification)
         if ref.refine:
@@ -686,7 +685,8 @@ def solve_point_to_point(
             with timed(phases, "refinement"):  # every pass: its build, guess, solve and verification
                 result = refined(initial_guess=guess, **common)
         else:
-            fine = problem.solver.name == "fatrop" and problem.method.elements >= COARSE_START_MIN_ELEMENTS and guess is None
+            # a fine mesh from a coarse solve, by either solver (IPOPT near it: coarse_start.WARM_MU)
+            fine = problem.method.elements >= COARSE_START_MIN_ELEMENTS and guess is None
             result = solve_from_coarse(tr, (lambda: _coarse_start(opt, problem, common, options)) if fine else None,
                                        initial_guess=guess, parameters=problem.named_parameters)
             merge_phases(phases, result.timing)

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 from gtmodel.errors import InputError
 
-__all__ = ["NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "memory_limit", "check_memory", "estimate_shooting",
+__all__ = ["NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "max_elements", "FALLBACK_ELEMENTS", "MOST_ELEMENTS", "memory_limit", "check_memory", "estimate_shooting",
            "check_shooting_memory"]
 
 #: Environment variable: the memory limit of one NLP in megabytes (default: a share of what is available).
@@ -194,6 +194,38 @@ def check_memory(elements: int, points: int, nx: int, nz: int, nu: int) -> NlpSi
             f"{limit / 1e6:.0f} MB ({'$' + MEMORY_ENV if os.environ.get(MEMORY_ENV, '').strip() else f'{MEMORY_SHARE:.0%} of the available memory'}); "
             f"use fewer elements or points (collocation.elements, collocation.points in a problem file), or set {MEMORY_ENV}")
     return size
+
+
+#: Elements of a refined mesh when the memory available is unknown (no limit to read), and the most ever allowed
+#: (beyond it a pass's IPOPT and verification time, not memory, is what a refinement runs out of).
+FALLBACK_ELEMENTS = 2000
+MOST_ELEMENTS = 20000
+
+
+def max_elements(points: int, nx: int, nz: int, nu: int) -> int:
+    """The most elements a collocation mesh of this DAE may have within :func:`memory_limit` (mesh refinement's cap).
+
+    The largest ``N`` whose :func:`estimate` is within the limit (the estimate is linear in ``N``), at most
+    :data:`MOST_ELEMENTS`; :data:`FALLBACK_ELEMENTS` when the limit is unknown. Issue 64: the cap was a fixed 400
+    elements, whatever the model and the machine.
+
+    Parameters
+    ----------
+    points : int
+        Collocation points per element.
+    nx, nz, nu : int
+        States, algebraic variables and inputs of the DAE.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    limit = memory_limit()
+    if limit is None:
+        return FALLBACK_ELEMENTS
+    per = estimate(1, points, nx, nz, nu).bytes - _BASE
+    return int(max(1, min(MOST_ELEMENTS, (limit - _BASE) // max(per, 1.0))))
 
 
 def estimate_shooting(intervals: int, steps: int, nx: int, nz: int, nu: int) -> NlpSize:

@@ -197,8 +197,9 @@ class Refinement:
         Verification tolerance (scaled deviation of the states from their simulation,
         :mod:`gtmodel.modeling.ocp.verification`); None for the default
         ``defaults["ocp.verification_tolerance"]``.
-    max_elements : int
-        Limit on the elements of a refined mesh.
+    max_elements : int or None
+        Limit on the elements of a refined mesh; None (default): the most the memory estimate
+        allows (:func:`gtmodel.modeling.ocp.budget.max_elements`).
     max_passes : int
         Limit on the solves of the refinement.
     verify : bool
@@ -232,7 +233,7 @@ class Refinement:
 
     refine: bool = False
     tolerance: float | None = None
-    max_elements: int = 400
+    max_elements: int | None = None
     max_passes: int = defaults["ocp.refine_max_passes"]
     verify: bool = True
     integrator: str | None = None
@@ -242,7 +243,8 @@ class Refinement:
     objective_tolerance: float | None = None
 
     def __post_init__(self) -> None:
-        _positive_int("max_elements", self.max_elements)
+        if self.max_elements is not None:
+            _positive_int("max_elements", self.max_elements)
         if self.max_cpu_s is not None and not (isinstance(self.max_cpu_s, (int, float)) and self.max_cpu_s > 0):
             raise InputError(f"max_cpu_s: expected a positive number of seconds, got {self.max_cpu_s!r}")
         _positive_int("max_passes", self.max_passes)

@@ -92,6 +92,7 @@ import numpy as np
 
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
+from gtmodel.modeling.ocp.coarse_start import WARM_MU, WARM_PUSH  # noqa: F401 - re-exported (refinement's warm passes)
 from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.optimization import Optimization
@@ -99,6 +100,7 @@ from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements, verify
 from gtmodel.modeling.ocp.verification_bounds import bounds_verdict
 from gtmodel.modeling.ocp.refinement_remedy import refinement_remedy
+from gtmodel.modeling.ocp.budget import max_elements as memory_max_elements
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
@@ -107,7 +109,9 @@ __all__ = ["solve_refined", "start_cpu", "refine_mesh", "SWITCH_EDGE", "OBJECTIV
 
 _log = logging.getLogger("gtmodel")
 
-#: Default limit on the elements of a refined mesh.
+#: The element limit of a refined mesh that a problem file or caller sets no limit for is the memory estimate's
+#: (:func:`gtmodel.modeling.ocp.budget.max_elements`: about 9,000 elements of a drive model in 24 GiB), not a
+#: fixed number (issue 64: 400, whatever the model and machine); this is the limit of the schemas' examples.
 MAX_ELEMENTS = 400
 #: Default limit on refinement passes (solves).
 MAX_PASSES = defaults["ocp.refine_max_passes"]
@@ -250,7 +254,7 @@ def solve_refined(
     elements: int = 50,
     points: int = 3,
     scheme: str = "radau",
-    max_elements: int = MAX_ELEMENTS,
+    max_elements: int | None = None,
     max_passes: int = MAX_PASSES,
     tolerance: float | None = None,
     initial_guess: OptimizationResult | dict[str, Any] | None = None,
@@ -274,7 +278,8 @@ def solve_refined(
     scheme : {"radau", "legendre"}, optional
         Collocation points; default ``"radau"``.
     max_elements : int, optional
-        Limit on the elements of a refined mesh; default :data:`MAX_ELEMENTS`.
+        Limit on the elements of a refined mesh; default (None) the most the memory estimate allows
+        (:func:`gtmodel.modeling.ocp.budget.max_elements`, read at the first pass).
     max_passes : int, optional
         Limit on the solves (``start`` counted as one); default :data:`MAX_PASSES`.
     tolerance : float, optional
@@ -324,7 +329,7 @@ def solve_refined(
     InputError
         On invalid limits, tolerance, budget or transcription arguments.
     """
-    for label, value, lo in (("max_elements", max_elements, elements), ("max_passes", max_passes, 1)):
+    for label, value, lo in (("max_elements", elements if max_elements is None else max_elements, elements), ("max_passes", max_passes, 1)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
             raise InputError(f"{label}: expected an integer >= {lo}, got {value!r}")
     budget = defaults["ocp.refine_max_cpu_s"] if max_cpu_s is None else max_cpu_s
@@ -449,6 +454,10 @@ def solve_refined(
             state_bounds = optimization.bounds_vectors(result.dae, "x")
         if input_bounds is None and result.dae is not None and result.dae.nu:
             input_bounds = optimization.bounds_vectors(result.dae, "u")
+        if max_elements is None:  # the memory estimate's cap, from the model's size
+            dae = result.dae
+            max_elements = max(elements, memory_max_elements(tr_points, dae.nx, dae.nz, dae.nu)) if dae is not None else MAX_ELEMENTS
+            _log.info("mesh refinement of %s: at most %d elements (the memory estimate)", name, max_elements)
         new, info = refine_mesh(base, tol, max_elements, bounds=state_bounds, input_bounds=input_bounds)
         if base is not result:  # at least as fine as the rejected pass's mesh
             new = finer(new, mesh if mesh is not None else np.full(n_elements, 1.0 / n_elements))
@@ -528,14 +537,14 @@ def solve_refined(
         result.verification.cpu_s = float(sum(e.get("verification_cpu_time", 0.0) for e in history))
     if not verified:
         # the pass's own "likely remedy" (refinement, more elements) is spent: the limit that stopped it, and by how much
-        remedy = refinement_remedy(history, stop, tol, budget, max_passes, max_elements)
+        remedy = refinement_remedy(history, stop, tol, budget, max_passes, max_elements or MAX_ELEMENTS)
         head = str(result.message).split("; likely remedy: ")[0]
         result.message = f"{head}; mesh refinement stopped at {stop} before a pass verified; to finish: {remedy}"
         if result.verification is not None:
             result.verification.remedy = remedy
     elif not _kept(result):  # said in the verification (summary.json verification.bounds), not only the warnings
         result.verification.bounds = {**result.verification.bounds, "remedy": bound_remedy(
-            history, stop, result.verification.bounds, budget, max_passes, max_elements)}
+            history, stop, result.verification.bounds, budget, max_passes, max_elements or MAX_ELEMENTS)}
     return bounds_verdict(result)  # a bound exceeded between the points beyond the tolerance: check_failed, saying which
 
 
@@ -615,12 +624,6 @@ OBJECTIVE_TOLERANCE = defaults["ocp.refine_objective_tolerance"]
 #: CPU limit [s] of the continuation of a pass that IPOPT stopped at its acceptable level.
 POLISH_CPU_S = 20.0
 
-#: IPOPT's initial barrier parameter in a pass started from the previous one.
-WARM_MU = 1e-4
-
-#: IPOPT's push of the start off its bounds in a pass started from the previous one (relative and
-#: absolute, of the variables and the slacks; IPOPT's defaults 1e-2).
-WARM_PUSH = {"bound_push": 1e-8, "bound_frac": 1e-8, "slack_bound_push": 1e-8, "slack_bound_frac": 1e-8}
 
 #: A pass whose minimised objective exceeds that of an earlier pass feasible by simulation (its end
 #: reached, its state bounds kept between the nodes) by more than this fraction (of ``max(1, |objective|)``) has left for another local optimum.

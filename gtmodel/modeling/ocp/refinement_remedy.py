@@ -45,18 +45,20 @@ def knob(stop: str) -> str | None:
 
 
 def _convergence(history: list[dict[str, Any]]) -> tuple[float, int, float, int, float] | None:
-    """``(p, N0, d0, N1, d1)``: the deviation's order over the last two passes on different meshes, or None."""
-    passes = [(int(e["elements"]), float(e["max_scaled_deviation"])) for e in history
-              if e.get("max_scaled_deviation") is not None and math.isfinite(float(e["max_scaled_deviation"]))
-              and float(e["max_scaled_deviation"]) > 0 and "rejected" not in e]
-    best: dict[int, float] = {}
-    for n, d in passes:  # per mesh size its best pass (a polish re-solves the same mesh)
-        best[n] = min(d, best.get(n, math.inf))
-    sizes = sorted(best)
-    if len(sizes) < 2:
+    """``(p, N0, d0, N1, d1)``: the deviation's order from the first mesh to the last, or None (one mesh only).
+
+    The deviation of a refinement's passes is not monotone (each pass moves the solution, and a switch moves
+    with it): the order is fitted to its envelope, the least deviation on at most ``N`` elements, between the
+    first mesh and the last (a held-out ball screw with backlash: 0.30 at 50 elements, 0.023 to 0.20 between
+    131 and 160).
+    """
+    passes = sorted((int(e["elements"]), float(e["max_scaled_deviation"])) for e in history
+                    if e.get("max_scaled_deviation") is not None and math.isfinite(float(e["max_scaled_deviation"]))
+                    and float(e["max_scaled_deviation"]) > 0 and "rejected" not in e)
+    if len({n for n, _ in passes}) < 2:
         return None
-    n0, n1 = sizes[-2], sizes[-1]
-    d0, d1 = best[n0], best[n1]
+    n0, d0 = passes[0][0], min(d for n, d in passes if n == passes[0][0])
+    n1, d1 = passes[-1][0], min(d for _, d in passes)  # the envelope at the last mesh: the best on at most n1
     if not d1 < d0:
         return 0.0, n0, d0, n1, d1
     return math.log(d0 / d1) / math.log(n1 / n0), n0, d0, n1, d1
@@ -95,7 +97,7 @@ def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float
         return f"a larger {which} in [transcription] (now {now[which]}); too few passes to estimate how much"
     p, n0, d0, n1, d1 = conv
     if p < 0.25:  # the deviation did not fall with the elements: not the mesh's resolution
-        return (f"the verification's deviation did not fall with the mesh ({d0:.3g} at {n0} elements, {d1:.3g} at {n1}): "
+        return (f"the verification's deviation did not fall with the mesh ({d0:.3g} at {n0} elements, at best {d1:.3g} up to {n1}): "
                 "larger limits are unlikely to finish it; the likely cause is a non-smooth law narrower than the elements "
                 "(a larger smoothing width in [model.parameters], or [continuation]) or a spurious minimum (a better [initial_guess])")
     need = int(math.ceil(MARGIN * n1 * (d1 / tolerance) ** (1.0 / p)))
@@ -106,7 +108,7 @@ def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float
     steps = max(1, int(math.ceil(math.log(max(need / n1, 1.0 + 1e-9)) / math.log(1.5))))
     sizes = [n1 * (need / n1) ** ((k + 1) / steps) for k in range(steps)]
     cpu = spent + MARGIN * per_element * sum(sizes)
-    estimate = (f"the deviation fell as N^-{p:.2g} ({d0:.3g} at {n0} elements, {d1:.3g} at {n1}), so about {need} elements "
+    estimate = (f"the deviation fell as N^-{p:.2g} ({d0:.3g} at {n0} elements, at best {d1:.3g} up to {n1}), so about {need} elements "
                 f"and {cpu:.0f} CPU-s in all would bring it within {tolerance:g}")
     if which == "max_cpu_s":  # at least twice what stopped it: the limit was reached, whatever the estimate says
         cpu_knob = max(cpu, 2.0 * budget)

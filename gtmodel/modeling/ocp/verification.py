@@ -71,12 +71,12 @@ import numpy as np
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.dae import casadi_name
-from gtmodel.modeling.ocp.collocation_nlp import collocation_coefficients
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.terms import Integral
-from gtmodel.modeling.ocp.verification_bounds import (REFINING, bound_violations, bounds_verdict, check_bounds,
-                                                       element_bound_violations, input_bound_violations)
+from gtmodel.modeling.ocp.verification_bounds import (BOUND_SAMPLES, REFINING, bound_violations, bounds_verdict, check_bounds,
+                                                       dense_grid, element_bound_violations, input_bound_violations)
+from gtmodel.modeling.ocp.verification_remedy import SPURIOUS_DEVIATION, SWITCH_FRACTION, switch_elements, verification_remedy
 from gtmodel.modeling.ocp.verification_methods import (INTEGRAL_FLOOR, QUADRATURE_NOISE, STIFF_STEPS, checked_integrals,
                                                         cvodes_method, explicit_algebraics)
 from gtmodel.modeling.simulation.explicit import damped_newton
@@ -113,12 +113,6 @@ def refinement_passes(func: Callable) -> Callable:
 #: solve on a stiff DC motor (electrical time constant 1.7 ms) for the same deviation to 7 digits.
 INTEGRATOR_RTOL = 1e-10
 
-#: An element holds a switch when an input changes by more than this fraction of its
-#: range over the horizon between the collocation points of the element.
-SWITCH_FRACTION = 0.25
-#: Scaled deviation above which a failed verification is taken for a spurious minimum (the
-#: hanging chain's: 0.24; the L1 motions on 12 elements: up to 0.06).
-SPURIOUS_DEVIATION = 0.1
 
 #: The verifying integrators: SUNDIALS' CVODES (ODEs) and IDAS (DAEs), both BDF with a
 #: Newton iteration on the model's Jacobian (CasADi's algorithmic derivative).
@@ -266,22 +260,6 @@ def skipped(reason: str) -> dict[str, Any]:
         ``{"status": "skipped", "passed": None, "message": reason}``: never ``passed``.
     """
     return {"status": "skipped", "passed": None, "message": reason}
-
-
-#: Equidistant points per element (or shooting interval) at which the global simulation is sampled besides the
-#: comparison points, to find the bounded states' peaks between the nodes (issue 64: a motor current's peak of
-#: 8.094 A against 8 A fell between the collocation points and their midpoints, which read 8.0795 A). A parabolic
-#: peak sampled at h / 24 is missed by at most 1/1152 of its curvature times h squared.
-BOUND_SAMPLES = 24
-
-
-def _dense_grid(taus: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(grid, pick)``: ``taus`` merged with :data:`BOUND_SAMPLES` equidistant points of (0, 1], ``grid[pick] == taus``."""
-    extra = np.linspace(0.0, 1.0, BOUND_SAMPLES + 1)[1:]
-    extra = extra[np.min(np.abs(extra[:, None] - np.asarray(taus)[None, :]), axis=1) > 1e-9]
-    grid = np.sort(np.concatenate([np.asarray(taus, dtype=float), extra]))
-    pick = np.searchsorted(grid, np.asarray(taus, dtype=float))
-    return grid, pick
 
 
 def _check_taus(root: np.ndarray) -> np.ndarray:
@@ -439,7 +417,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         taus = _check_taus(col.tau_root)
         poly = np.einsum("tr,krx->ktx", lagrange_basis(col.tau_root, taus), col.xc)  # (N, T, nx)
     t_check = breaks[:-1, None] + taus[None, :] * h[:, None]
-    grid, pick = _dense_grid(taus)  # the integrator's output points: the comparison's and the bounds' dense ones
+    grid, pick = dense_grid(taus)  # the integrator's output points: the comparison's and the bounds' dense ones
     t_dense = breaks[:-1, None] + grid[None, :] * h[:, None]
     pvec = dae.parameter_vector(result.parameters)
     scale = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
@@ -530,80 +508,11 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
     out = Verification(
         tolerance, passed, float(abs_dev.max()), float(rel_dev.max()), float(scaled.max()), states,
         element_errors, how, message, 0.0, t_check.reshape(-1), xg.reshape(-1, nx), checked,
-        method, "" if passed else _remedy(result, float(scaled.max())),
+        method, "" if passed else verification_remedy(result, float(scaled.max())),
         dense_t=t_dense.reshape(-1), dense_simulated=xd.reshape(-1, nx),
     )
     out.time_s, out.cpu_s = _time.perf_counter() - start, _time.process_time() - cpu_start
     return out
-
-
-def switch_elements(result: OptimizationResult) -> dict[int, float]:
-    """Elements whose inputs switch inside them, and where, as a fraction of the element.
-
-    An input switches inside element ``k`` when it changes by more than
-    :data:`SWITCH_FRACTION` of its range over the horizon between the element's own
-    collocation points (a jump between elements is represented exactly: each element has
-    its own polynomial). Where the levels before and after are those of the neighbouring
-    elements (``a``, ``b``), the switch ``tau_s`` is the one that keeps the input's
-    integral over the element: ``a tau_s + b (1 - tau_s) = sum_j B_j u_j`` with the
-    quadrature weights ``B_j`` of the scheme (a bang-bang input acts on the model through
-    its integral); otherwise where its polynomial crosses the middle of its values.
-
-    Parameters
-    ----------
-    result : OptimizationResult
-        A collocation result.
-
-    Returns
-    -------
-    dict of int to float
-        Element index -> ``tau_s`` in [0.02, 0.98] (the earliest over the inputs that
-        switch there).
-    """
-    col = result.collocation
-    if col is None or col.uc.shape[2] == 0:
-        return {}
-    uc = col.uc  # (N, d, nu)
-    N = col.elements
-    span = uc.max(axis=(0, 1)) - uc.min(axis=(0, 1))
-    span = np.where(span > 0, span, np.inf)
-    change = (uc.max(axis=1) - uc.min(axis=1)) / span
-    B = collocation_coefficients(col.points, col.scheme)["B"]
-    taus = np.linspace(0.0, 1.0, 401)
-    basis = lagrange_basis(col.tau_root[1:], taus)
-    out: dict[int, float] = {}
-    for k, i in zip(*np.nonzero(change > SWITCH_FRACTION)):
-        a = uc[k - 1, -1, i] if k > 0 else uc[k, 0, i]
-        b = uc[k + 1, 0, i] if k < N - 1 else uc[k, -1, i]
-        if abs(a - b) > SWITCH_FRACTION * span[i]:
-            tau = (float(B @ uc[k, :, i]) - b) / (a - b)
-        else:
-            u = basis @ uc[k, :, i]
-            mid = 0.5 * (uc[k, :, i].max() + uc[k, :, i].min())
-            sgn = np.sign(u - mid)
-            cross = np.nonzero(sgn[1:] != sgn[:-1])[0]
-            tau = float(taus[cross[0] + 1]) if cross.size else 0.5
-        out[int(k)] = min(out.get(int(k), 1.0), float(np.clip(tau, 0.02, 0.98)))
-    return out
-
-
-def _remedy(result: OptimizationResult, deviation: float) -> str:
-    """What likely fixes a failed verification: the mesh refined, more elements, or (shooting) more intervals."""
-    col = result.collocation
-    if col.shooting is not None:
-        return (f"more shooting intervals (transcription.intervals, now {col.elements}) or integrator steps "
-                "(transcription.steps), or method = \"collocation\" with refine = true")
-    jumps = switch_elements(result)
-    breaks = col.breaks()
-    if jumps:
-        where = ", ".join(f"{breaks[k] + tau * (breaks[k + 1] - breaks[k]):.4g} s" for k, tau in sorted(jumps.items())[:3])
-        return (f"an input jumps inside {len(jumps)} element(s) (near t = {where}), which no polynomial represents: "
-                "refine = true in [transcription] (solve_refined in Python) moves element boundaries onto the jumps")
-    if deviation > SPURIOUS_DEVIATION:
-        return (f"a spurious minimum of the NLP is likely (deviation {deviation:.2g}): more [collocation] elements "
-                f"(now {col.elements}), a better [initial_guess], or refine = true in [transcription]")
-    return (f"the mesh is too coarse where it deviates: refine = true in [transcription] (solve_refined in Python) "
-            f"or more [collocation] elements (now {col.elements})")
 
 
 def problem_integrals(optimization: Any, result: OptimizationResult, special: np.ndarray | None,

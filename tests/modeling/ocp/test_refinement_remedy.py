@@ -58,5 +58,14 @@ def test_cpu_remedy_is_at_least_twice_the_budget_that_stopped_it():
 def test_a_deviation_that_does_not_fall_promises_no_larger_limit():
     history = [{"elements": 50, "max_scaled_deviation": 0.2, "cpu_s": 1.0}, {"elements": 80, "max_scaled_deviation": 0.3, "cpu_s": 2.0}]
     text = refinement_remedy(history, "the CPU budget (100 s)", 1e-2, 100.0, 16, 400)
-    assert text.startswith("the verification's deviation did not fall with the mesh (0.2 at 50 elements, 0.3 at 80)")
+    assert text.startswith("the verification's deviation did not fall with the mesh (0.2 at 50 elements, at best 0.2 up to 80)")
     assert "smoothing width" in text
+
+
+def test_order_is_fitted_to_the_envelope_of_a_non_monotone_refinement():
+    # a deviation that saws between passes (0.12 after 0.023): the order from the first mesh to the best up to the last
+    history = [{"elements": 50, "max_scaled_deviation": 0.3, "cpu_s": 1.0}, {"elements": 147, "max_scaled_deviation": 0.023, "cpu_s": 5.0},
+               {"elements": 153, "max_scaled_deviation": 0.12, "cpu_s": 12.0}]
+    p = math.log(0.3 / 0.023) / math.log(153 / 50)  # closed form of the envelope's order
+    text = refinement_remedy(history, "the CPU budget (100 s)", 1e-2, 100.0, 16, 400)
+    assert f"fell as N^-{p:.2g} (0.3 at 50 elements, at best 0.023 up to 153)" in text

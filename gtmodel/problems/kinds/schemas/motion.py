@@ -82,8 +82,9 @@ class RefinementSection(Section):
         Verification tolerance: largest deviation of a state's simulation under the
         optimal inputs from the transcribed state, scaled by ``max(1, max |x|)``; default
         1e-2 (``gtmodel.defaults``).
-    max_elements : int
-        Limit on the elements of a refined mesh.
+    max_elements : int, optional
+        Limit on the elements of a refined mesh; unset: the most the memory estimate allows
+        (``gtmodel.modeling.ocp.budget.max_elements``).
     max_passes : int
         Limit on the solves of the refinement.
     refine_on_failure : bool
@@ -100,7 +101,7 @@ class RefinementSection(Section):
 
     refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; also with [[data]]; not with multiple shooting)")
     tolerance: number(gt=0, lt=1, description="verification tolerance: scaled deviation of the states from their simulation (default 1e-2)") | None = None
-    max_elements: integer(1, 10000, description="limit on the elements of a refined mesh") = 400
+    max_elements: integer(1, 20000, description="limit on the elements of a refined mesh (unset: the most the memory estimate allows)") | None = None
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = defaults["ocp.refine_max_passes"]
     refine_on_failure: Flag = Field(True, description="collocation: a single solve whose verification fails is refined from (as refine = true, within max_passes and max_cpu_s); false: it ends check_failed")
     max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 90): no pass starts once it is spent, the best verified pass is returned") | None = None

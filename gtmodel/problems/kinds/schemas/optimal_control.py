@@ -252,8 +252,8 @@ class TranscriptionSection(RefinementSection):
         Verification tolerance (collocation and multiple shooting): largest deviation of
         a state's simulation under the optimal inputs from the transcribed state, scaled
         by ``max(1, max |x|)``; default 1e-2 (``gtmodel.defaults``).
-    max_elements : int
-        Limit on the elements of a refined mesh.
+    max_elements : int, optional
+        Limit on the elements of a refined mesh; unset: the most the memory estimate allows.
     max_passes : int
         Limit on the solves of the refinement.
     refine_on_failure : bool
