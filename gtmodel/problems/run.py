@@ -244,7 +244,7 @@ def write_results(problem: Problem, solution: Any, out_dir: str | Path, plots: b
 
 
 def _write_into(folder: ResultFolder, problem: Problem, solution: Any, plots: bool, report: bool,
-                timing: Mapping[str, Mapping[str, float]] | None, interrupted: str | None = None) -> dict[str, Any]:
+                timing: Mapping[str, Mapping[str, float]] | None, interrupted: str | None = None, keep_earlier: bool = True) -> dict[str, Any]:
     """:func:`write_results` into ``folder``; ``interrupted``: the note of a refinement stopped by
     Ctrl-C after a verified pass (its status is then ``interrupted``). A run that did not finish
     leaves a complete earlier result as it was (:meth:`ResultFolder.commit`, ``keep_complete``), said on stderr."""
@@ -267,7 +267,7 @@ def _write_into(folder: ResultFolder, problem: Problem, solution: Any, plots: bo
             _write_report(folder.path, summary)
         add_phase(phases, "writing", time.perf_counter() - wall, time.process_time() - cpu)
         summary["timing"] = ordered_phases(phases)
-        out = folder.commit(summary, keep_complete=not finished(summary["status"], kind.ends_on_signal))
+        out = folder.commit(summary, keep_complete=keep_earlier and not finished(summary["status"], kind.ends_on_signal))
     except OSError as exc:  # a ResultWriteError too: one message, naming the target
         raise folder.write_error(exc) from None
     if folder.kept is not None:
@@ -392,6 +392,7 @@ def run_problem(
     heartbeat: bool = False,
     report: bool = False,
     settings: Mapping[str, Any] | None = None,
+    keep_earlier: bool = True,
 ) -> RunOutcome:
     """Load, solve and write one problem; every outcome becomes a status and a summary.
 
@@ -417,6 +418,10 @@ def run_problem(
         Also write ``report.html`` (:func:`write_results`).
     settings : Mapping[str, Any], optional
         Command-line settings of fields (:func:`load_problem`).
+    keep_earlier : bool, optional
+        A run that did not finish leaves a complete earlier result in ``out`` as it was
+        and writes ``<out>.failed`` instead (default True; a study's case folders, which
+        the study reruns by its own rules, pass False).
 
     Returns
     -------
@@ -454,10 +459,10 @@ def run_problem(
         add_phase(phases, "other", call["other"]["wall_s"] - rest["wall_s"], call["other"]["cpu_s"] - rest["cpu_s"])
         if interrupted:  # the run is stopping: its kept pass is written, further signals only counted
             with _signals.settled(), ResultFolder(target) as folder:
-                summary = _write_into(folder, problem, solution, plots, report, phases, interrupted)
+                summary = _write_into(folder, problem, solution, plots, report, phases, interrupted, keep_earlier)
             return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
         with InterruptGuard() as guard, ResultFolder(target) as folder:
-            summary = _write_into(folder, problem, solution, plots, report, phases)
+            summary = _write_into(folder, problem, solution, plots, report, phases, keep_earlier=keep_earlier)
             if not get_kind(problem.kind).ends_on_signal:  # a loop's signal ended its run: its results stand
                 guard.check()
         return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
@@ -465,16 +470,16 @@ def run_problem(
         if folder is not None and folder.committed:  # the signal came once the folder was in place: its result stands
             summary = json.loads((folder.target / "summary.json").read_text(encoding="utf-8"))
             return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
-        return _failed(path, target, problem, exc, Status.INTERRUPTED)
+        return _failed(path, target, problem, exc, Status.INTERRUPTED, keep_earlier=keep_earlier)
     except GtModelError as exc:  # a ResultWriteError too: the earlier result must not look current
-        return _failed(path, target, problem, exc, Status.INVALID_INPUT)
+        return _failed(path, target, problem, exc, Status.INVALID_INPUT, keep_earlier=keep_earlier)
     except Exception as exc:  # noqa: BLE001 - a defect: reported with its status, never lost
         if _signals.received():  # CasADi turns a signal inside a solver into NotImplementedError/SystemError
-            return _failed(path, target, problem, KeyboardInterrupt("interrupted"), Status.INTERRUPTED)
+            return _failed(path, target, problem, KeyboardInterrupt("interrupted"), Status.INTERRUPTED, keep_earlier=keep_earlier)
         if isinstance(exc, MemoryError):  # too large for this machine: bad input, with a status and a message
-            return _failed(path, target, problem, out_of_memory(path), Status.INVALID_INPUT)
+            return _failed(path, target, problem, out_of_memory(path), Status.INVALID_INPUT, keep_earlier=keep_earlier)
         _log.debug("internal error", exc_info=True)
-        return _failed(path, target, problem, exc, Status.INTERNAL_ERROR)
+        return _failed(path, target, problem, exc, Status.INTERNAL_ERROR, keep_earlier=keep_earlier)
 
 
 def out_of_memory(what: Path | str) -> ProblemError:
@@ -494,7 +499,8 @@ def out_of_memory(what: Path | str) -> ProblemError:
                         "(reduce collocation.elements/points, the data files, or run where more memory is available)")
 
 
-def _failed(path: Path, target: Path, problem: Problem | None, error: BaseException, status: Status, write: bool = True) -> RunOutcome:
+def _failed(path: Path, target: Path, problem: Problem | None, error: BaseException, status: Status, write: bool = True,
+            keep_earlier: bool = True) -> RunOutcome:
     kind = get_kind(problem.kind) if problem is not None else None
     summary = failure_summary(
         path, error, status, kind=problem.kind if problem else _peek_kind(path), name=problem.name if problem else _peek_name(path),
@@ -503,14 +509,14 @@ def _failed(path: Path, target: Path, problem: Problem | None, error: BaseExcept
     written, kept, out = False, None, target
     if write:
         with _signals.protected():
-            written, summary, why, out = write_failure(target, summary)
+            written, summary, why, out = write_failure(target, summary, keep_earlier)
         kept = target if out != target else None
         if not written and not isinstance(error, ResultWriteError):  # else the run's own message says it
             _log.warning("gtmodel: could not write %s: %s", out / "summary.json", why)
     return RunOutcome(path, out, status, summary, problem, None, error, written, kept)
 
 
-def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str, Any], str, Path]:
+def write_failure(target: Path, summary: dict[str, Any], keep_earlier: bool = True) -> tuple[bool, dict[str, Any], str, Path]:
     """Write a failed run's ``summary.json`` alone, never over a complete earlier result.
 
     Where ``target`` holds a complete result (:func:`~gtmodel.problems.results.holds_result`),
@@ -526,6 +532,9 @@ def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str
         The result folder.
     summary : dict
         The failed run's summary (:func:`~gtmodel.problems.results.failure_summary`).
+    keep_earlier : bool, optional
+        Leave a complete earlier result as it was (default True); False replaces it (a
+        study's case folder).
 
     Returns
     -------
@@ -536,11 +545,11 @@ def write_failure(target: Path, summary: dict[str, Any]) -> tuple[bool, dict[str
     out = target
     try:
         with ResultFolder(target) as folder:
-            written = folder.commit(summary, keep_complete=True)
+            written = folder.commit(summary, keep_complete=keep_earlier)
             return True, written, "", folder.target
     except ResultWriteError as exc:
         why = str(exc)
-    if holds_result(target):  # a complete earlier result is never removed for a failed run's summary
+    if keep_earlier and holds_result(target):  # a complete earlier result is never removed for a failed run's summary
         return False, summary, why, failed_folder(target)
     try:
         check_output_folder(target)  # never remove what is not a gtmodel result folder

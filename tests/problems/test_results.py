@@ -425,3 +425,14 @@ def test_an_interrupted_comparison_keeps_a_complete_earlier_comparison(tmp_path,
     failed = json.loads((tmp_path / "cmp.failed" / "summary.json").read_text())
     assert (outcome.status, outcome.out, _hashes(out)) == (Status.INTERRUPTED, (tmp_path / "cmp.failed").resolve(), before)
     assert (failed["status"], failed["earlier_result_kept"]) == ("interrupted", str(out))
+
+
+@pytest.mark.parametrize("keep_earlier, left", [(True, ["out", "out.failed"]), (False, ["out"])], ids=["a_run", "a_study_case"])
+def test_write_failure_keeps_a_complete_result_unless_told_not_to(tmp_path, keep_earlier, left):
+    from gtmodel.problems.run import write_failure
+
+    target = tmp_path / "out"
+    _earlier_run(target, {"trajectory.csv": "earlier run"})
+    written, summary, why, folder = write_failure(target, {"status": "interrupted"}, keep_earlier)
+    assert (written, why, folder, _files(tmp_path)) == (True, "", tmp_path / left[-1], left)
+    assert ((target / "trajectory.csv").exists(), summary.get("earlier_result_kept")) == (keep_earlier, str(target) if keep_earlier else None)

@@ -257,7 +257,7 @@ def _run_one(task: CaseTask, previous: Any, warm_start: bool, keep_solution: boo
     started = time.time()
     start = time.perf_counter()
     outcome = run_problem(task.path, task.folder, task.overrides, verbose=task.verbose, plots=task.plots,
-                          previous=previous, warm_start=warm_start, heartbeat=task.heartbeat)
+                          previous=previous, warm_start=warm_start, heartbeat=task.heartbeat, keep_earlier=False)  # the study reruns its cases
     wall = time.perf_counter() - start
     summary = outcome.summary
     if task.key and outcome.written and outcome.status is not Status.INTERRUPTED:
