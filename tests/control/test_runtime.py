@@ -123,8 +123,11 @@ def sen(reply: bytes) -> tuple[int, np.ndarray]:
 
 
 def session(exe, out, script, **kw) -> tuple[LoopRun, object]:
-    """run_loop in a thread, the peer script in this one; the run ends by the idle timeout after the script."""
-    kw = {"listen": ("127.0.0.1", 0), "idle_timeout": 0.3, "time_limit": 120, **kw}
+    """run_loop in a thread, the peer script in this one; the run ends by the idle timeout after the script.
+
+    The idle time-out (1 s) outlasts a busy machine's pauses of the peer between two datagrams.
+    """
+    kw = {"listen": ("127.0.0.1", 0), "idle_timeout": 1.0, "time_limit": 120, **kw}
     with ThreadPoolExecutor(1) as pool:
         fut = pool.submit(run_loop, exe, out, **kw)
         peer = Peer(read_ready(out, 20))

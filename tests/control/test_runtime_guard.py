@@ -85,7 +85,7 @@ class Net:
 
 def session(exe, out, script, net: Net | None = None, **kw):
     net = net or Net()
-    kw = {"listen": ("127.0.0.1", 0), "idle_timeout": 0.3, "time_limit": 120, **kw}
+    kw = {"listen": ("127.0.0.1", 0), "idle_timeout": 1.0, "time_limit": 120, **kw}  # 1 s: a busy machine's pauses of this peer
     with ThreadPoolExecutor(1) as pool:
         fut = pool.submit(run_loop, exe, out, **kw)
         net.ready = read_ready(out, 20)
@@ -418,7 +418,7 @@ def test_a_60_s_flood_of_strangers_leaves_the_robot_served_the_log_small_and_mem
           f"RSS {rss[0]}..{max(rss)} kB; ended {ended_after:.2f} s after the robot; p99 {run.summary['reply_latency_ms']['p99']:.3f} ms")
     assert int(out["answered"]) == 0 and 0.99 * sent <= run.summary["strangers"]["datagrams"] <= sent and sent >= 0.95 * 50000 * seconds
     assert replies.count(None) == 0 and run.summary["cycles"] == len(replies) == run.summary["log"]["rows"]
-    assert run.log_path.stat().st_size < 2_000_000 and max(rss) - rss[0] < 1024 and ended_after < 0.3 + 5.0
+    assert run.log_path.stat().st_size < 2_000_000 and max(rss) - rss[0] < 1024 and ended_after < 1.0 + 5.0
 
 
 def test_listening_on_every_interface_warns(exes, tmp_path):

@@ -57,7 +57,9 @@ def test_the_client_receives_the_joints_the_simulator_sent(session):
     assert bad == [] and all(r["motors_on"] and r["rapid_running"] for r in client["received"])
 
 
+@pytest.mark.realtime
 def test_the_clients_commands_are_applied(session):
+    """Real time: a command is the one the robot applies in the next cycle only when it came within the cycle."""
     result, client = session
     commanded = {r["seqno"]: c for r, c in zip(client["received"], client["sent"])}
     seq, late = result.column("seq"), result.column("late")
