@@ -92,3 +92,21 @@ def test_a_shooting_nlp_beyond_the_limit_is_refused_at_once(monkeypatch, interva
                                          rf"{intervals * steps} steps .* more than the limit of 4000 MB .*transcription\.intervals, transcription\.steps"):
         ShootingTranscription(_double_integrator(), intervals=intervals, steps=steps)
     assert time.process_time() - start < 0.5
+
+
+@pytest.mark.parametrize("limit_mb", [500, 2000, 8000])
+def test_refinement_cap_is_the_largest_mesh_within_the_limit(monkeypatch, limit_mb):
+    # independent check: the estimate itself, one element more exceeding the limit (the cap is where it crosses)
+    from gtmodel.modeling.ocp.budget import MOST_ELEMENTS, max_elements
+
+    monkeypatch.setenv(MEMORY_ENV, str(limit_mb))
+    n = max_elements(3, 5, 20, 1)
+    assert estimate(n, 3, 5, 20, 1).bytes <= limit_mb * 1e6 < estimate(n + 1, 3, 5, 20, 1).bytes or n == MOST_ELEMENTS
+
+
+def test_refinement_cap_without_a_known_limit_is_the_fallback(monkeypatch):
+    from gtmodel.modeling.ocp import budget
+
+    monkeypatch.delenv(MEMORY_ENV, raising=False)
+    monkeypatch.setattr(budget, "_available", lambda: None)
+    assert budget.max_elements(3, 5, 20, 1) == budget.FALLBACK_ELEMENTS

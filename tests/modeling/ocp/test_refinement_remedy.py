@@ -69,3 +69,16 @@ def test_order_is_fitted_to_the_envelope_of_a_non_monotone_refinement():
     p = math.log(0.3 / 0.023) / math.log(153 / 50)  # closed form of the envelope's order
     text = refinement_remedy(history, "the CPU budget (100 s)", 1e-2, 100.0, 16, 400)
     assert f"fell as N^-{p:.2g} (0.3 at 50 elements, at best 0.023 up to 153)" in text
+
+
+def test_start_is_charged_its_cpu_time_not_its_wall_time():
+    # issue 64: a start solved in 76.5 CPU-s on a loaded machine (885.7 s of wall time) charged 885.7 s to the budget;
+    # independent check: the sum of the phases' CPU seconds written here
+    from types import SimpleNamespace
+
+    from gtmodel.modeling.ocp.refinement import start_cpu
+
+    phases = {"build": {"wall_s": 50.0, "cpu_s": 1.5}, "solve": {"wall_s": 830.0, "cpu_s": 70.0},
+              "verification": {"wall_s": 5.7, "cpu_s": 5.0}}
+    start = SimpleNamespace(timing=phases, solve_time=885.7, verification=SimpleNamespace(cpu_s=5.0), stats={})
+    assert start_cpu(start) == pytest.approx(76.5)
