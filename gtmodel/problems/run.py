@@ -156,9 +156,10 @@ class InterruptedWithResult(KeyboardInterrupt):
 def verified_pass_kept(solution: Any) -> str | None:
     """What a mesh refinement stopped by Ctrl-C kept, if it had verified a pass; else None.
 
-    A signal during a refinement pass's solve ends that pass (the solver stops) and the
-    refinement returns its verified pass with the best objective; that pass is the run's
-    result, with status ``interrupted`` (docs/reliability.md).
+    A signal during a refinement ends it with its last verified pass
+    (:mod:`gtmodel.modeling.ocp.refinement_interrupt`), or, where the solver swallowed the
+    signal and the pass ended without a solution, with the verified pass the refinement
+    chose; that pass is the run's result, with status ``interrupted`` (docs/reliability.md).
 
     Parameters
     ----------
@@ -170,7 +171,7 @@ def verified_pass_kept(solution: Any) -> str | None:
     -------
     str or None
         E.g. ``"interrupted by the user during mesh refinement; the result is its last
-        verified pass (returned pass 2 of 3)"``.
+        verified pass (pass 2 of 2)"``.
     """
     result = solution if hasattr(solution, "refinement") else getattr(solution, "result", None)
     verification = getattr(result, "verification", None)
