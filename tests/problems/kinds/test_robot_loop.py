@@ -65,7 +65,7 @@ def test_shipped_loop_files_load(path):
 def test_settings_from_the_command_line_reach_the_declaration():
     d = load_problem(RSI_FILE, settings={"interface.listen": "127.0.0.1:40000", "interface.sensor_port": 40010,
                                          "interface.robot": "127.0.0.5"}).declaration
-    assert (d.listen, d.sensor_port, d.robot, d.tracker, d.log_max_mb) == (("127.0.0.1", 40000), 40010, "127.0.0.5", None, None)
+    assert (d.listen, d.sensor_port, d.robot, d.tracker, d.log_max_mb) == (("127.0.0.1", 40000), 40010, "127.0.0.5", "127.0.0.1", None)
 
 
 def test_the_default_log_cap_fits_an_hour_at_250_hz():
@@ -126,7 +126,7 @@ BAD = [
     ({'lead = 100': 'lead = 200'}, EGM_FILE, r"field 'ilc.lead': lead: the window \(lead-in \+ lead-out = 400 samples\) is longer"),
     ({'tukey_points = 200': 'tukey_points = 300'}, EGM_FILE, r"field 'ilc.tukey_points': tukey_points: expected at most 2 \* lead = 200"),
     ({'delta = 5 ': 'delta = 400 '}, EGM_FILE, r"field 'ilc.delta': expected a learning lead shorter than the trajectory \(352 rows\)"),
-    ({'period = 0.004                     # s\n': 'period = 0.004\nrobot = "192.168.1.300"\n'}, EGM_FILE,
+    ({'robot = "127.0.0.1"': 'robot = "192.168.1.300"'}, EGM_FILE,
      r"'interface.robot': expected an IPv4 address, optionally with :PORT"),
     ({'period = 0.004                     # s\n': 'period = 0.004\ntracker = "10.0.0.1:0"\n'}, EGM_FILE, r"'interface.tracker': expected an IPv4 address"),
     ({'period = 0.004                     # s\n': 'period = 0.004\ntracker = "10.0.0.1"\n'}, EGM_FILE,
