@@ -312,6 +312,53 @@ def test_l1_one_ilc_iteration_through_egm_reduces_the_error_as_offline(tmp_path)
 
 
 @pytest.mark.slow
+def test_egm_a_stranger_sending_first_and_throughout_is_never_served_nor_learned_from(tmp_path):
+    """The hostile probe through ``gtmodel loop``: a stranger on 127.0.0.2 sends EgmRobot first and every 4 ms.
+
+    Independent: the stranger's socket counts what it got; the simulated robot's record says where it was
+    commanded from its first cycle (EGM's rate limit of the file, 1 mm per cycle, from its measured start).
+    """
+    import threading
+
+    from gtmodel import _egm_pb2
+
+    port = _free_port()
+    loop = Loop(EGM_FILE, tmp_path / "loop", port, "--idle-timeout", "0.5")
+    stranger = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    stranger.bind(("127.0.0.2", 0))
+    stranger.settimeout(0.004)
+    got, stop = [], threading.Event()
+
+    def send():
+        k = 0
+        while not stop.is_set():
+            k += 1
+            m = _egm_pb2.EgmRobot()
+            m.header.seqno, m.header.tm = k, 4 * k
+            m.feedBack.joints.joints.extend([-67.0, 68.0, 43.0])
+            m.planned.joints.joints.extend([-67.0, 68.0, 43.0])
+            stranger.sendto(m.SerializeToString(), ("127.0.0.1", port))
+            try:
+                got.append(stranger.recv(65536))
+            except socket.timeout:
+                pass
+    sender = threading.Thread(target=send, daemon=True)
+    sender.start()
+    time.sleep(0.2)  # the stranger first
+    sim = simulate("egm", "l1", ("127.0.0.1", port), duration_s=1.6, seed=0, out_dir=tmp_path / "sim")
+    summary = loop.finish()  # the robot's silence ends the session, whatever the stranger sends
+    stop.set()
+    sender.join(2.0)
+    stranger.close()
+    run = summary["loop"]
+    assert (got, summary["status"], run["missing_replies"], run["source"]["robot_rule"]) == ([], "completed", 0, "named_address_first_port")
+    assert run["strangers"]["datagrams"] > 50 and {a["address"].split(":")[0] for a in run["strangers"]["addresses"]} == {"127.0.0.2"}
+    commanded = np.column_stack([sim.column(f"reference_q{i}_mm") for i in (1, 2, 3)])
+    assert np.all(np.abs(np.diff(commanded, axis=0)) <= 1.0 + 1e-9)  # the file's rate from the robot's own start: no jump
+    assert summary["ilc"]["rows_logged"] > 0 and np.all(np.isfinite(summary["ilc"]["error_rms"]))
+
+
+@pytest.mark.slow
 def test_ctrl_c_ends_the_loop_with_its_folder_written(tmp_path):
     """SIGINT to ``gtmodel loop`` stops the runtime cleanly: exit 130 (interrupted), summary and cycle log written."""
     import signal
