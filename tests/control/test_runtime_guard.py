@@ -424,3 +424,18 @@ def test_a_60_s_flood_of_strangers_leaves_the_robot_served_the_log_small_and_mem
 def test_listening_on_every_interface_warns(exes, tmp_path):
     run = run_loop(exes["rsi"], tmp_path / "run", listen=("0.0.0.0", 0), time_limit=1.0)
     assert any("gt_runtime: warning: listening on every interface (0.0.0.0)" in w for w in run.summary["warnings"]), run.summary["warnings"]
+
+
+def test_relative_rsi_with_an_ipoc_step_below_the_period_takes_nothing_back(exes, tmp_path):
+    """IPOC counting by 1 (not the period's 4 ms): no late reply reported, so no increment is taken back."""
+    def script(net: Net):
+        replies = []
+        for k in range(40):
+            net.sample(0.5)
+            replies.append(net.exchange(rob(1000 + k, -1.0, -1.0)))
+        return replies
+    run, replies = session(exes["rsi"], tmp_path / "run", script)
+    held = np.cumsum([sen(r)[1] for r in replies], axis=0)
+    log = read_cycle_log(run.log_path)
+    assert run.summary["faults"]["unapplied"]["count"] == 0
+    assert np.allclose(held[-1], [log["reply:RKorr.X"][-1], log["reply:AKorr.A1"][-1]], atol=1e-9)

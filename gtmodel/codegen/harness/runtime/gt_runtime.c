@@ -525,7 +525,9 @@ static void *gt_cycle(void *arg)
             /* the robot's count of late replies (Delay.D, cumulative): when it grew by the cycles since the last accepted
              * packet, the reply to that packet came late and the robot did not apply its increment */
             if ((present_mask & ((uint64_t)1 << GT_RSI_DELAY)) && isfinite(field[GT_RSI_DELAY])) {
-                if (have_pending && have_delay && field[GT_RSI_DELAY] - prev_delay >= (double)((seq - prev_seq) / seq_step) - 0.5) {
+                uint64_t gap = (seq - prev_seq + seq_step / 2) / seq_step; /* cycles since the last accepted datagram, at least 1 */
+                if (gap < 1) gap = 1;
+                if (have_pending && have_delay && field[GT_RSI_DELAY] - prev_delay >= (double)gap - 0.5) {
                     for (i = 0; i < GT_RT_NU; ++i) last[i] -= pending[i];
                     ++gt_S.unapplied;
                     flags |= F_UNAPPLIED;
