@@ -12,9 +12,15 @@ more parameter of the integrator.
 * Path constraints, variable bounds and the algebraic equations are imposed at the nodes
   (the inputs at the last node are those of the last interval, or its end value when
   piecewise linear); with ``"rk"``/``"radau"`` the inequalities also at every integration
-  step's end inside the intervals (a motor current's bound is not only held at the nodes). Every written row
-  is checked against them; a row beyond a bound by more than :data:`ROW_TOLERANCE` (relative)
-  is reported in the result's ``warnings`` (and the summary's), never silently written.
+  step's end inside the intervals, with ``"collocation"`` at every stage point (a motor
+  current's bound is not only held at the nodes). Every written row is checked against
+  them; a row beyond a bound by more than :data:`ROW_TOLERANCE` (relative) is reported in
+  the result's ``warnings`` (and the summary's), never silently written. A verified solve
+  also checks them at the integrator's points and along a dense re-simulation
+  (:func:`gtmodel.modeling.ocp.shooting_bounds.check_between_nodes`): beyond
+  :data:`~gtmodel.modeling.ocp.shooting_bounds.BOUND_TOLERANCE` (1 % of ``max(1, |bound|)``)
+  the result is ``check_failed``, its message naming the bound, the time, the value and the
+  excess, and ``verification.bounds["between_nodes"]`` holds the true peaks.
 * The Lagrange term and :meth:`Optimization.integral` s are the integrator's quadratures.
 * A timed variable at an interior time is integrated from the start of its interval to
   that time (the same integrator with the step scaled by the fraction of the interval).
@@ -23,16 +29,26 @@ more parameter of the integrator.
   motor's armature) integrate the model's explicit form, the algebraic variables
   eliminated symbolically as codegen eliminates them
   (:mod:`gtmodel.modeling.ocp.shooting_steps`), so DAEs too, without a rootfinder; one step
-  is an SX function repeated by ``mapaccum``; ``"collocation"`` (CasADi's fixed-step
-  implicit integrator with a rootfinder, DAEs whose algebraic equations are not affine in
-  their variables), with exact Hessians; ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step)
+  is an SX function repeated by ``mapaccum``; ``"collocation"`` (gtmodel's fixed-step Radau
+  IIA collocation of degree 3, :func:`~gtmodel.modeling.ocp.shooting_steps.collocation_steps`:
+  a Newton rootfinder per step, on the explicit form where the algebraic variables are
+  eliminated symbolically, else with them among its unknowns, so DAEs whose algebraic
+  equations are not affine in their variables; its rootfinder starts from a simulation of the
+  initial guess, not from constants; with ``integrator_options``, CasADi's ``collocation``
+  plugin as before), with exact Hessians; ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step)
   with a limited-memory Hessian (second-order sensitivities of SUNDIALS are slow). The
-  default is ``"rk"`` for ODEs, ``"radau"`` for DAEs made explicit, ``"collocation"`` else.
+  default is ``"rk"`` for ODEs and ``"collocation"`` for DAEs: on the five drive problems
+  (DAEs made explicit) it was the one integrator ``optimal`` and verified on each
+  (``benchmarks/bench_shooting_integrators.py``, figures in ``docs/problem_language.md``).
 * The memory of the NLP is estimated before anything is built
   (:func:`gtmodel.modeling.ocp.budget.check_shooting_memory`): too many intervals times
   steps are refused at once.
-* A failure (the NLP solver's, or the integrator's at the returned point) is a result with
-  a :class:`~gtmodel.status.Status` and a message, never an exception.
+* A failure (the NLP solver's, an integrator's or a rootfinder's anywhere in the solve: at
+  the start, during the iterations, at the returned point, in the verification) is a result
+  with :class:`~gtmodel.status.Status` ``error`` and one line (the stage, the likely cause,
+  the fix; :func:`~gtmodel.modeling.ocp.shooting_bounds.failure_message`), never an
+  exception; what CasADi prints meanwhile (its dumped inputs) is captured and logged at
+  DEBUG (:func:`~gtmodel.modeling.ocp.shooting_bounds.quiet_casadi`).
 
 The solution is returned as an :class:`~gtmodel.modeling.ocp.result.OptimizationResult`
 whose :class:`~gtmodel.modeling.ocp.result.CollocationData` holds, per interval, the node
@@ -64,7 +80,10 @@ from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.optimization import Integral, Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
 from gtmodel.modeling.ocp.budget import check_shooting_memory
-from gtmodel.modeling.ocp.shooting_steps import EXPLICIT_INTEGRATORS, ExplicitAlgebraics, explicit_algebraics, fixed_steps
+from gtmodel.modeling.ocp.shooting_steps import (EXPLICIT_INTEGRATORS, ExplicitAlgebraics, collocation_steps, explicit_algebraics,
+                                                  fixed_steps, stage_grid, stage_guess)
+from gtmodel.modeling.ocp.shooting_bounds import (EVALUATION_STATUSES, check_between_nodes, clean_casadi_text, failure_message,
+                                                   quiet_casadi)
 from gtmodel.modeling.ocp.verification import check_result, verify_settings
 from gtmodel.status import Status
 
@@ -95,8 +114,8 @@ class ShootingTranscription:
         Inputs piecewise constant (one value per interval) or piecewise linear
         (continuous, one value per node); default ``"constant"``.
     integrator : {"rk", "radau", "collocation", "cvodes", "idas"}, optional
-        Integrator; default ``"rk"`` for ODEs, ``"radau"`` for DAEs whose algebraic
-        variables are eliminated symbolically, ``"collocation"`` for other DAEs.
+        Integrator; default ``"rk"`` for ODEs, ``"collocation"`` for DAEs (measured on the
+        drive problems: ``benchmarks/bench_shooting_integrators.py``).
     steps : int, optional
         Fixed steps per interval of ``"rk"``/``"radau"``/``"collocation"``; default 4.
     verbose : bool, optional
@@ -105,7 +124,9 @@ class ShootingTranscription:
         IPOPT and CasADi nlpsol options (as for
         :class:`~gtmodel.modeling.ocp.collocation.CollocationTranscription`).
     integrator_options : mapping, optional
-        Options of ``casadi.integrator`` (e.g. ``{"abstol": 1e-10}`` for ``"cvodes"``).
+        Options of ``casadi.integrator`` (e.g. ``{"abstol": 1e-10}`` for ``"cvodes"``); with
+        ``"collocation"`` they select CasADi's ``collocation`` plugin (its rootfinder started
+        from constants, the bounds imposed at the nodes only) instead of gtmodel's own.
     verify : bool or VerificationSettings, optional
         Verify every solution by simulation (:func:`gtmodel.modeling.ocp.verification.verify`:
         the piecewise constant or linear inputs drive the model in CVODES or IDAS, compared
@@ -156,7 +177,9 @@ class ShootingTranscription:
         self.size = check_shooting_memory(int(intervals), int(steps), dae.nx, dae.nz, dae.nu)
         eliminated = explicit_algebraics(dae) if dae.nz else ExplicitAlgebraics(ca.SX(0, 1))
         self._z_expr = eliminated.z
-        self.integrator = integrator or ("rk" if dae.nz == 0 else "radau" if eliminated.z is not None else "collocation")
+        # the default by measured speed and correctness on the drive problems (benchmarks/bench_shooting_integrators.py,
+        # docs/problem_language.md): collocation for every DAE, rk for ODEs
+        self.integrator = integrator or ("rk" if dae.nz == 0 else "collocation")
         plugin_rk = self.integrator == "rk" and bool(integrator_options)
         if dae.nz and (self.integrator == "cvodes" or plugin_rk):
             raise InputError(f"integrator {self.integrator!r}{' with integrator_options (CasADi plugin)' if plugin_rk else ''} "
@@ -167,7 +190,12 @@ class ShootingTranscription:
                              f"{dae.name!r} cannot be eliminated symbolically ({eliminated.reason}): use 'collocation' or 'idas'")
         if self.integrator == "radau" and integrator_options:
             raise InputError("integrator_options apply to CasADi's integrator plugins (rk, collocation, cvodes, idas), not to 'radau'")
-        self.explicit = self.integrator in EXPLICIT_INTEGRATORS and not plugin_rk
+        # gtmodel's own collocation (shooting_steps.collocation_steps, its rootfinder started from a simulation of
+        # the guess); with integrator_options, CasADi's plugin (its rootfinder started from constants)
+        self.own_collocation = self.integrator == "collocation" and not integrator_options
+        self.explicit = (self.integrator in EXPLICIT_INTEGRATORS and not plugin_rk) or (self.own_collocation and eliminated.z is not None)
+        #: the interval's integrator returns its steps' ends (and stage points): bounds imposed and checked there
+        self.stepwise = (self.integrator in EXPLICIT_INTEGRATORS and not plugin_rk) or self.own_collocation
         self.intervals, self.controls, self.steps = int(intervals), controls, int(steps)
         self.verbose = bool(verbose)
         options = dict(solver_options or {})
@@ -202,10 +230,16 @@ class ShootingTranscription:
             if dae.nz:
                 ode, quad = ca.substitute([ode, quad], [dae.z], [z_of])
             problem = {"x": dae.x, "p": p, "t": tau, "ode": frac * h * ode, "quad": frac * h * quad, "zout": z_of}
+            self._guess_problem = {"x": dae.x, "p": p, "t": tau, "ode": frac * h * ode}
+            if self.own_collocation:
+                return collocation_steps(problem, self.steps)
             return fixed_steps(problem, self.steps, self.integrator)
         problem = {"x": dae.x, "p": p, "t": tau, "ode": frac * h * ode, "quad": frac * h * quad}
         if dae.nz:
             problem.update(z=dae.z, alg=alg)
+        self._guess_problem = {k: v for k, v in problem.items() if k != "quad"}
+        if self.own_collocation:
+            return collocation_steps(problem, self.steps)
         opts = {"number_of_finite_elements": self.steps} if self.integrator in ("rk", "collocation") else {}
         opts.update(self.integrator_options)
         try:
@@ -237,6 +271,15 @@ class ShootingTranscription:
         Tv = ca.MX.sym("T") if opt.free_final_time else None
         T = Tv if Tv is not None else ca.MX(opt.final_time_value)
         h = (T - t0) / N
+        # the collocation integrator's rootfinder start per interval (stage values less the step's start, from a
+        # simulation of the guess: _stage_guess), NLP parameters after the model's
+        m_dv = int(F.size1_in(3)) if self.own_collocation else 0
+        DV = [ca.MX.sym(f"dv_{k}", m_dv, self.steps) for k in range(N)] if self.own_collocation else []
+        Pn = ca.vertcat(P, *[ca.vec(d) for d in DV])
+        self._dv_shape = (m_dv, self.steps)
+
+        def dv(k: int) -> dict[str, ca.MX]:
+            return {"dv": DV[k]} if DV else {}
 
         def u_node(k: int) -> ca.MX:
             return U[min(k, nU - 1)]
@@ -264,30 +307,36 @@ class ShootingTranscription:
         # inequalities only: an equality path constraint held at every step's end would over-determine
         # the piecewise inputs (it is still checked at the written rows)
         finite = np.flatnonzero((np.isfinite(self._check_lb) | np.isfinite(self._check_ub)) & (self._check_lb < self._check_ub))
-        inner = self.explicit and self.steps > 1 and finite.size > 0
+        # the step ends inside an interval (rk, radau), or every stage point but the interval's end (collocation)
+        c_inner = stage_grid(self.steps)[1].reshape(-1)[:-1] if self.own_collocation else np.arange(1, self.steps) / self.steps
+        inner = self.stepwise and c_inner.size > 0 and finite.size > 0
         if inner:
-            c_inner = np.arange(1, self.steps) / self.steps  # the step ends inside an interval
             ins = self._check_fn.sx_in()
-            inner_map = ca.Function("between", ins, [self._check_fn(*ins)[finite.tolist()]]).map(self.steps - 1)
-            inner_lb = np.tile(self._check_lb[finite], self.steps - 1)
-            inner_ub = np.tile(self._check_ub[finite], self.steps - 1)
+            inner_map = ca.Function("between", ins, [self._check_fn(*ins)[finite.tolist()]]).map(c_inner.size)
+            inner_lb = np.tile(self._check_lb[finite], c_inner.size)
+            inner_ub = np.tile(self._check_ub[finite], c_inner.size)
+        inner_pts: list[list[ca.MX]] = [[], [], [], []]  # t, x, z, u at the integrator's points inside the intervals
         steps_x, steps_z, oks = [], [], []
         for k in range(N):
             ua, ub = u_pair(k)
-            r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, 1.0))
+            r = F(**dv(k), x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, 1.0))
             con(X[k + 1] - r["xf"], 0.0, 0.0)
             J = J + r["qf"][0]
             if opt.integrals:
                 quads = quads + r["qf"][1:]
-            if self.explicit:
+            if self.stepwise:
                 steps_x.append(r["xs"])
                 steps_z.append(r["zs"])
                 oks.append(r["ok"])
-            if inner:
-                u_in = ca.repmat(ua, 1, self.steps - 1) if self.controls == "constant" else \
+            if self.stepwise and c_inner.size:
+                u_in = ca.repmat(ua, 1, c_inner.size) if self.controls == "constant" else \
                     ca.mtimes(ua, ca.DM(1 - c_inner).T) + ca.mtimes(ub, ca.DM(c_inner).T)
                 t_in = t0 + (k + ca.DM(c_inner).T) * h
-                con(ca.vec(inner_map(t_in, r["xs"][:, :-1], r["zs"][:, :-1], u_in, Pm, T)), inner_lb, inner_ub)
+                x_in, z_in = (r["xc"], r["zc"]) if self.own_collocation else (r["xs"], r["zs"])
+                for store, value in zip(inner_pts, (t_in, x_in[:, :-1], z_in[:, :-1], u_in)):
+                    store.append(value)
+                if inner:
+                    con(ca.vec(inner_map(t_in, x_in[:, :-1], z_in[:, :-1], u_in, Pm, T)), inner_lb, inner_ub)
         for k in range(N + 1):
             alg, path = node_fn(t0 + k * h, X[k], Z[k], u_node(k), Pm, T)
             con(alg, 0.0, 0.0)
@@ -308,7 +357,7 @@ class ShootingTranscription:
             k = int(np.clip(np.ceil(s - 1e-9) - 1, 0, N - 1))
             frac = float(np.clip(s - k, 0.0, 1.0))
             ua, ub = u_pair(k)
-            r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, frac))
+            r = F(**dv(k), x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, frac))
             u_t = ua if self.controls == "constant" else (1 - frac) * ua + frac * ub
             t_v = float(v.time) if v.fraction is None else t0 + v.fraction * (T - t0)
             values.append(f(t_v, r["xf"], r["zf"] if nz else ca.MX(0, 1), u_t, Pm, T))
@@ -344,13 +393,13 @@ class ShootingTranscription:
         self._free_idx = np.array(free_idx, dtype=int)
         self._blocks = blocks
         gv = ca.vertcat(*g) if g else ca.MX(0, 1)
-        self._fg = ca.Function("fg", [w, P], [J, gv])
-        self.special_function = ca.Function("special", [w, P], [s_val])
-        self.lagrange_function = ca.Function("lagrange_value", [w, P], [J_lagrange])
+        self._fg = ca.Function("fg", [w, Pn], [J, gv])
+        self.special_function = ca.Function("special", [w, Pn], [s_val])
+        self.lagrange_function = ca.Function("lagrange_value", [w, Pn], [J_lagrange])
         # the result's samples: node states, and the states/inputs at the ends of (up to
         # _SAMPLE_POINTS + 1) integration steps of each interval (explicit form, 3 steps or more:
         # points where the bounds were imposed), else at the Radau points, integrated there
-        samples_at_steps = self.explicit and self.steps >= _SAMPLE_POINTS
+        samples_at_steps = self.stepwise and self.steps >= _SAMPLE_POINTS
         if samples_at_steps:
             d = min(self.steps, _SAMPLE_POINTS + 1)
             ends = [int(round((j + 1) * self.steps / d)) for j in range(d)]
@@ -366,15 +415,20 @@ class ShootingTranscription:
                     xs.append(steps_x[k][:, ends[j] - 1])
                     zs.append(steps_z[k][:, ends[j] - 1])
                 else:
-                    r = F(x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, float(c)))
+                    r = F(**dv(k), x0=X[k], z0=Z[k], p=ca.vertcat(ua, ub, Pm, T, k, float(c)))
                     xs.append(r["xf"])
                     zs.append(r["zf"] if nz else ca.MX(0, 1))
                 us.append(ua if self.controls == "constant" else (1 - c) * ua + c * ub)
         ok = ca.horzcat(*oks) if oks else ca.MX.ones(1, N)
-        self._samples = ca.Function("samples", [w, P], [ca.horzcat(*xs), ca.horzcat(*us), ca.horzcat(*zs), T, Pm,
+        self._samples = ca.Function("samples", [w, Pn], [ca.horzcat(*xs), ca.horzcat(*us), ca.horzcat(*zs), T, Pm,
                                                         ca.horzcat(*Z[:N]), ca.horzcat(*[u_pair(k)[0] for k in range(N)]), ok])
         self._tau = tau
-        self.nlp = {"x": w, "p": P, "f": J, "g": gv}
+        # the integrator's own points inside the intervals (none for cvodes/idas): checked by shooting_bounds
+        self._inner_points = ca.Function("inner_points", [w, Pn], [ca.horzcat(*v) if v else ca.MX(0, 0) for v in inner_pts])
+        # the guess simulation's arguments per interval: node state, node algebraics, the integrator's parameters
+        self._interval_args = ca.Function("interval_args", [w, P], [ca.horzcat(*X[:N]), ca.horzcat(*Z[:N]), ca.horzcat(
+            *[ca.vertcat(*u_pair(k), Pm, T, k, 1.0) for k in range(N)])])
+        self.nlp = {"x": w, "p": Pn, "f": J, "g": gv}
         try:
             self.solver = ca.nlpsol(f"{casadi_name(dae.name)}_shooting", "ipopt", self.nlp, self.options)
         except RuntimeError as exc:
@@ -455,26 +509,78 @@ class ShootingTranscription:
         if w0 is None:
             w0 = self._initial_w(guesses, tf_guess, pvec)
         t_start = _time.perf_counter()
-        error_msg = None
         lam = (None, None)
-        try:
-            sol = self.solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pvec)
-            w = np.array(sol["x"], dtype=float).reshape(-1)
-            lam = (np.array(sol["lam_x"], dtype=float).reshape(-1), np.array(sol["lam_g"], dtype=float).reshape(-1))
-        except RuntimeError as exc:
-            error_msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else repr(exc)
-            w = w0
+        stats: dict = {}
+        with quiet_casadi(passthrough=self.verbose) as out:
+            failure = None
+            try:
+                pfull = np.concatenate([pvec, self._stage_guess(w0, pvec)])
+            except RuntimeError as exc:
+                failure = ("start", exc)
+            else:
+                try:
+                    sol = self.solver(x0=w0, lbx=self._lbw, ubx=self._ubw, lbg=self._lbg, ubg=self._ubg, p=pfull)
+                    w = np.array(sol["x"], dtype=float).reshape(-1)
+                    lam = (np.array(sol["lam_x"], dtype=float).reshape(-1), np.array(sol["lam_g"], dtype=float).reshape(-1))
+                except RuntimeError as exc:
+                    failure = ("solve", exc)
+                stats = dict(self.solver.stats())
         solve_time = _time.perf_counter() - t_start
-        stats = dict(self.solver.stats())
-        message = error_msg or str(stats.get("return_status", "unknown"))
-        status = Status.ERROR if error_msg or not np.all(np.isfinite(w)) else normalize_ipopt_status(message)
-        res = self._result(w, pvec, status, message, stats, solve_time)
+        message = str(stats.get("return_status", "unknown"))
+        evaluation = out.failed_evaluation() or (failure is not None)
+        if failure is not None or (evaluation and message in EVALUATION_STATUSES):
+            stage = failure[0] if failure else "solve"
+            iteration = int(stats.get("iter_count", 0) or 0)
+            message = failure_message(self.integrator, "the start" if stage == "start" else f"iteration {iteration}",
+                                      out.text() + (str(failure[1]) if failure else ""), self.steps)
+            _log.warning("multiple shooting solve of %s: %s", dae.name, message)
+            return self._error(message, stats, solve_time, w0)
+        status = Status.ERROR if not np.all(np.isfinite(w)) else normalize_ipopt_status(message)
+        with quiet_casadi() as out:
+            res = self._result(w, pfull, status, message, stats, solve_time)
+        if res.status == Status.ERROR:
+            return res
         res.lam_w, res.lam_g = lam
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):
-            special = np.array(self.special_function(w, pvec), dtype=float).reshape(-1)
-            check_result(res, opt, special, what="multiple shooting solve", lagrange=float(self.lagrange_function(w, pvec)),
-                         settings=self.verify_settings)
+            with quiet_casadi() as out:
+                try:
+                    special = np.array(self.special_function(w, pfull), dtype=float).reshape(-1)
+                    check_result(res, opt, special, what="multiple shooting solve", lagrange=float(self.lagrange_function(w, pfull)),
+                                 settings=self.verify_settings)
+                except RuntimeError as exc:
+                    message = failure_message(self.integrator, "the verification", out.text() + str(exc), self.steps)
+                    _log.warning("multiple shooting solve of %s: %s", dae.name, message)
+                    return self._error(message, stats, solve_time, w)
+            if res.verification is not None:  # a failed verifying simulation quotes CasADi: its flag only
+                res.verification.message = clean_casadi_text(res.verification.message or "")
+            res.message = clean_casadi_text(res.message)
+        if res.status in (Status.OPTIMAL, Status.ACCEPTABLE, Status.CHECK_FAILED):
+            with quiet_casadi():
+                check_between_nodes(self, res, w, pfull)
         return res
+
+    def _stage_guess(self, w0: np.ndarray, pvec: np.ndarray) -> np.ndarray:
+        """The collocation integrator's rootfinder start (``dv`` of every interval, flattened), from a simulation of ``w0``.
+
+        Empty for the other integrators (:func:`~gtmodel.modeling.ocp.shooting_steps.stage_guess`)."""
+        if not self.own_collocation:
+            return np.zeros(0)
+        xk, zk, pk = (np.array(v, dtype=float) for v in self._interval_args(w0, pvec))
+        dv, failed = stage_guess(self._guess_problem, xk, zk.reshape(-1, self.intervals) if zk.size else np.zeros((0, self.intervals)),
+                                 pk, self.steps)
+        if failed:
+            _log.info("multiple shooting of %s: the guess of %d of %d intervals could not be simulated; their rootfinders start "
+                      "from the node values", self.dae.name, failed, self.intervals)
+        m, n = self._dv_shape
+        # per interval its (m, steps) block, column-major as ca.vec flattens it
+        return np.concatenate([dv[:, k * n:(k + 1) * n].reshape(-1, order="F") for k in range(self.intervals)])
+
+    def _error(self, message: str, stats: dict, solve_time: float, w: np.ndarray) -> OptimizationResult:
+        """A result with status ``error``, ``message`` and no trajectory."""
+        return OptimizationResult(status=Status.ERROR, message=message, iterations=int(stats.get("iter_count", 0) or 0),
+                                  solve_time=solve_time, objective=float("nan"), final_time=float("nan"),
+                                  max_constraint_violation=float("nan"), t=np.zeros(0), states={}, inputs={}, algebraics={},
+                                  outputs={}, last_iterate=True, stats=stats, dae=self.dae, w=w.copy(), transcription_key=self.key)
 
     def _result(self, w: np.ndarray, pvec: np.ndarray, status: str, message: str, stats: dict, solve_time: float) -> OptimizationResult:
         opt, dae, N, d = self.optimization, self.dae, self.intervals, len(self._tau)
@@ -482,13 +588,9 @@ class ShootingTranscription:
             f_val, g_val = (np.array(v, dtype=float).reshape(-1) for v in self._fg(w, pvec))
             xs, us, zs, T, p_all, zn, un, ok = (np.array(v, dtype=float) for v in self._samples(w, pvec))
         except RuntimeError as exc:  # the integrator failed at this point
-            text = str(exc).strip().splitlines()
-            message = f"{message}; the {self.integrator} integrator failed at the returned point: {text[-1] if text else repr(exc)}"
+            message = f"{message}; {failure_message(self.integrator, 'the returned point', str(exc), self.steps)}"
             _log.warning("multiple shooting of %s: %s", dae.name, message)
-            return OptimizationResult(status=Status.ERROR, message=message, iterations=int(stats.get("iter_count", 0) or 0),
-                                      solve_time=solve_time, objective=float("nan"), final_time=float("nan"), max_constraint_violation=float("nan"),
-                                      t=np.zeros(0), states={}, inputs={}, algebraics={}, outputs={},
-                                      last_iterate=True, stats=stats, dae=dae, w=w.copy(), transcription_key=self.key)
+            return self._error(message, stats, solve_time, w)
         viol = [0.0]
         if g_val.size:
             viol.append(float(np.max(np.maximum(self._lbg - g_val, g_val - self._ubg))))
@@ -552,7 +654,7 @@ class ShootingTranscription:
         finite = np.where(np.isfinite(lb), np.abs(lb), 0.0), np.where(np.isfinite(ub), np.abs(ub), 0.0)
         tol = ROW_TOLERANCE * np.maximum(1.0, np.maximum(*finite))[:, None]
         out = []
-        remedy = ("more transcription.intervals or steps" if self.explicit and self.steps > 1 else
+        remedy = ("more transcription.intervals or steps" if self.stepwise else
                   "integrator = \"radau\" or \"rk\" (3 or more transcription.steps) imposes the bounds at every integration step; "
                   "or more transcription.intervals")
         for i in np.flatnonzero(np.any(over > tol, axis=1)):

@@ -237,12 +237,13 @@ class TranscriptionSection(RefinementSection):
     integrator : str, optional
         ``"rk"`` (fixed-step RK4) and ``"radau"`` (fixed-step 2-stage Radau IIA, implicit,
         for stiff models) on the explicit form (the algebraic variables eliminated
-        symbolically, as codegen does), ``"collocation"`` (CasADi's fixed-step implicit
-        integrator, DAEs), ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step); default rk
-        for ODEs, radau for DAEs whose algebraic variables are eliminated, else collocation.
+        symbolically, as codegen does), ``"collocation"`` (fixed-step Radau IIA collocation,
+        a Newton rootfinder per step started from a simulation of the guess; DAEs),
+        ``"cvodes"`` / ``"idas"`` (SUNDIALS, variable step); default rk for ODEs,
+        collocation for DAEs (measured: ``benchmarks/bench_shooting_integrators.py``).
     steps : int
         Fixed integrator steps per interval (rk, radau, collocation); rk and radau impose
-        the bounds and path constraints at every step's end.
+        the bounds and path constraints at every step's end, collocation at every stage point.
     refine : bool
         Collocation: refine the mesh where the solution is least accurate (element
         defects, input switches) until the verification passes or a limit is reached
@@ -269,8 +270,8 @@ class TranscriptionSection(RefinementSection):
     method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"
     intervals: integer(1, 10000, description="multiple shooting: number of intervals") = 50
     controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
-    integrator: choice("rk", "radau", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs; radau, implicit on the explicit form, for DAEs whose algebraic variables are eliminated symbolically, else collocation)") | None = None
-    steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, radau, collocation); rk and radau impose the bounds at every step's end") = 4
+    integrator: choice("rk", "radau", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs: Radau IIA collocation, its rootfinder started from a simulation of the guess)") | None = None
+    steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, radau, collocation); rk and radau impose the bounds at every step's end, collocation at every stage point") = 4
 
 
 class BenchmarkSection(Section):
