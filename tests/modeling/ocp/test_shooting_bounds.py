@@ -65,6 +65,14 @@ def test_an_integrator_failure_is_one_line_and_no_casadi_text(integrator, start,
     assert "casadi" not in _quiet(capfd.readouterr())
 
 
+def test_a_verbose_solve_shows_ipopt_but_not_casadi(capfd):
+    # verbose: IPOPT's log passes through (its EXIT line), CasADi's dump of the failed rootfinder's inputs does not
+    r = ShootingTranscription(_escaping(1.0), intervals=2, steps=1, integrator="collocation", verbose=True).solve()
+    captured = capfd.readouterr()
+    assert r.status == Status.ERROR and "EXIT: Invalid number in NLP function" in captured.out
+    assert "casadi" not in _quiet(captured) and "input 0 (" not in _quiet(captured)
+
+
 def test_the_same_problem_from_a_good_guess_is_optimal(capfd):
     # the control: from x = 0 the trajectory stays bounded over 3 s; the minimum-energy input is 0 (x stays 0)
     r = ShootingTranscription(_escaping(0.0), intervals=2, steps=2, integrator="collocation").solve()
