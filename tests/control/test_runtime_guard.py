@@ -22,7 +22,7 @@ from gtmodel import _egm_pb2 as egm
 from gtmodel.codegen.robot_runtime import RobotRuntime, RuntimeSpec, build_runtime
 from gtmodel.control.runtime import FLAGS, read_cycle_log, read_ready, run_loop
 
-from .test_runtime import LOWER, RATE, UPPER, _huge, _rsi, _step, egm_robot, rob, sen
+from .test_runtime import LOWER, RATE, UPPER, _rsi, _step, egm_robot, rob, sen
 
 EGM_LOWER, EGM_UPPER, EGM_RATE = -90.0, 90.0, 0.5
 WINDOW, RESYNC = 250, 5  # gt_runtime.c: GT_RT_SEQ_WINDOW cycles, GT_RT_RESYNC_PACKETS
@@ -91,7 +91,6 @@ def session(exe, out, script, net: Net | None = None, **kw):
         net.ready = read_ready(out, 20)
         try:
             data = script(net)
-            # a stranger's datagrams after the robot stopped must not keep the session alive
         finally:
             net.close()
         return fut.result(150), data
