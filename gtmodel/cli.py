@@ -128,6 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--data-dir", type=Path, action="append", default=[], metavar="DIR",
                        help="a folder data files may also come from (default: only the problem file's folder); repeatable")
     solve.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    # Optimica (.mop) input, issue 68 (docs/optimica.md)
+    solve.add_argument("--class", dest="class_name", metavar="PKG.OPTCLASS", help="the optimization class of a .mop (Optimica) file")
+    solve.add_argument("--state-start-values-fixed", action="store_true", help="a .mop file: states' starts are initial conditions (JModelica.org)")
 
     study = sub.add_parser("study", help="run a study file (many cases of one problem file), locally or on a Dask cluster")
     study.add_argument("study", type=Path, help="study file (TOML), e.g. studies/l1_table_3_1.toml")
@@ -387,6 +390,8 @@ def _data_dirs(folders: list[Path]) -> None:
 
 def _solve(args: argparse.Namespace) -> int:
     check_problem_files(args.problem)  # before anything is imported or written
+    if args.class_name is not None or args.state_start_values_fixed or args.problem[0].suffix == ".mop":
+        return _solve_optimica(args)
     _data_dirs(args.data_dir)
     target = _solve_target(args)
     single = len(args.problem) == 1 and args.sweep is None
@@ -404,6 +409,27 @@ def _solve(args: argparse.Namespace) -> int:
         _say_written(target, *write_failure(target, summary))
 
     return _guarded(target, run, on_interrupt)
+
+
+# ---- Optimica (.mop) input (issue 68; gtmodel/problems/optimica_run.py): one file and class, as an optimal_control problem
+def _solve_optimica(args: argparse.Namespace) -> int:
+    from gtmodel.problems.optimica_run import optimica_target, run_optimica, write_failure
+    path, target = args.problem[0], optimica_target(args.problem, args.class_name, args.sweep, args.out)
+    def run() -> int:
+        show, beat = _progress(args)
+        o = run_optimica(path, args.class_name, target, state_start_values_fixed=args.state_start_values_fixed, verbose=show,
+                         plots=not args.no_plots, heartbeat=beat, report=not args.no_report)
+        if o.status in (Status.INVALID_INPUT, Status.INTERNAL_ERROR):
+            print(f"gtmodel: error: {o.summary['message']}", file=sys.stderr)
+        else:
+            _print_summary(o.summary, o.out)
+        return o.status.exit_code
+
+    def on_interrupt() -> None:
+        _say_written(target, *write_failure(target, {**failure_summary(path, KeyboardInterrupt(), Status.INTERRUPTED,
+                                                                         name=target.name), "kind": "optimal_control"}))
+    return _guarded(target, run, on_interrupt)
+# ---- end of Optimica input ----
 
 
 def _loop(args: argparse.Namespace) -> int:

@@ -1,0 +1,660 @@
+"""The Optimica layer of a ``.mop`` file: tokens, the ``optimization`` class's own parts, expressions.
+
+Optimica (Akesson 2008; JModelica.org's dialect) adds to Modelica a class kind
+``optimization`` with the class modifiers ``objective``, ``objectiveIntegrand``,
+``startTime`` and ``finalTime(free, initialGuess, min, max)``, a ``constraint`` section, the
+timed variables ``x(finalTime)`` and the attributes ``free`` and ``initialGuess``. pymoca
+parses Modelica only, so this module takes the Optimica parts out with a tokenizer (never
+``eval``): :func:`split_optimica` finds the class, reads its header modifiers and its
+``constraint`` section, and returns the source with those parts blanked (newlines kept, so
+every line number pymoca reports is the file's) and ``optimization`` written ``model``.
+:class:`ExprParser` is a restricted recursive-descent parser of Modelica expressions into
+CasADi SX over a table of names. Every error is an :class:`OptimicaError` naming the file,
+the line and the construct.
+
+Hostile input is refused before any work: a file over :data:`MAX_BYTES`, more than
+:data:`MAX_TOKENS` tokens, parentheses nested deeper than :data:`MAX_DEPTH`, a quoted
+identifier (``'any text'``, which could carry any character into generated code), a
+character outside Modelica's ASCII syntax, or a name longer than :data:`MAX_NAME` characters.
+Names that pass are ``[A-Za-z_][A-Za-z0-9_]*`` (dotted), safe as C identifiers once the
+dots are mapped, and are validated again where generated code names them.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import casadi as ca
+
+from gtmodel.errors import InputError
+
+__all__ = ["OptimicaError", "Token", "Modifier", "OptimicaClass", "tokenize", "split_optimica", "ExprParser",
+           "MAX_BYTES", "MAX_TOKENS", "MAX_DEPTH", "MAX_NAME"]
+
+#: Largest ``.mop`` file read, bytes (JModelica.org's examples are a few kB).
+MAX_BYTES = 2_000_000
+#: Most tokens in a file.
+MAX_TOKENS = 400_000
+#: Deepest nesting of parentheses, brackets and braces (and of an expression's operators).
+MAX_DEPTH = 64
+#: Longest name (one identifier), characters.
+MAX_NAME = 100
+
+_TOKEN_RE = re.compile(r"""
+    (?P<ws>[ \t\r\n\f]+)
+  | (?P<comment>//[^\n]*|/\*.*?\*/)
+  | (?P<string>"(?:[^"\\]|\\.)*")
+  | (?P<quoted>'(?:[^'\\]|\\.)*')
+  | (?P<number>(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)
+  | (?P<ident>[A-Za-z_][A-Za-z0-9_]*)
+  | (?P<op>\.\^|\.\*|\./|\.\+|\.-|<=|>=|==|<>|:=|[-+*/^<>=()\[\]{},;:.])
+""", re.X | re.S)
+_CLASS_KINDS = frozenset({"model", "block", "class", "package", "connector", "record", "function", "type", "optimization",
+                          "operator"})
+_SECTIONS = frozenset({"equation", "algorithm", "public", "protected", "constraint", "initial", "annotation"})
+#: Header modifiers of an ``optimization`` class that gtmodel maps (Optimica, Akesson 2008, section 3).
+HEADER_KEYS = ("objective", "objectiveIntegrand", "startTime", "finalTime")
+
+
+class OptimicaError(InputError):
+    """A ``.mop`` file gtmodel cannot read: the message names the file, the line and the construct."""
+
+
+@dataclass(frozen=True)
+class Token:
+    """One token: its kind (``ident``, ``number``, ``string``, ``op``), text, character offsets and line (from 1)."""
+
+    kind: str
+    text: str
+    start: int
+    end: int
+    line: int
+
+
+@dataclass
+class Modifier:
+    """One modification ``name(sub...) = value`` of a modifier list; ``value`` the expression's tokens."""
+
+    name: str
+    line: int
+    subs: dict[str, "Modifier"] = field(default_factory=dict)
+    value: list[Token] | None = None
+
+
+@dataclass
+class OptimicaClass:
+    """The Optimica parts of one ``optimization`` class (see :func:`split_optimica`).
+
+    Parameters
+    ----------
+    name : str
+        The dotted class name (``"Pkg.Opt"``).
+    line : int
+        The line of its ``optimization`` keyword.
+    header : dict of str to Modifier
+        The class modifiers (``objective``, ``finalTime``, ...).
+    constraints : list of list of Token
+        The statements of its ``constraint`` sections, without the ``;``.
+    attributes : dict of str to Modifier
+        The declarations of the class with an Optimica attribute (``free``,
+        ``initialGuess``): the component path (``"p"``, ``"robot.m"``) -> its modifier list.
+    model_text : str
+        The file's text with the Optimica parts blanked and the class written as a ``model``.
+    """
+
+    name: str
+    line: int
+    header: dict[str, Modifier]
+    constraints: list[list[Token]]
+    attributes: dict[str, Modifier]
+    model_text: str
+
+
+def tokenize(path: Path, text: str) -> list[Token]:
+    """The tokens of a Modelica/Optimica text (comments and white space dropped).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file (for messages).
+    text : str
+        Its contents.
+
+    Returns
+    -------
+    list of Token
+
+    Raises
+    ------
+    OptimicaError
+        A file over :data:`MAX_BYTES` or :data:`MAX_TOKENS`, a quoted identifier, a name over
+        :data:`MAX_NAME` characters, an unterminated comment or string, or a character that is
+        not Modelica syntax (naming the line).
+    """
+    if len(text.encode("utf-8", errors="replace")) > MAX_BYTES:
+        raise OptimicaError(f"{path}: file too large ({len(text)} characters; at most {MAX_BYTES} bytes are read)")
+    out: list[Token] = []
+    pos, line, n = 0, 1, len(text)
+    while pos < n:
+        m = _TOKEN_RE.match(text, pos)
+        if m is None:
+            what = "unterminated comment" if text.startswith("/*", pos) else "unterminated string" if text[pos] == '"' else \
+                f"character {text[pos]!r} is not Modelica syntax"
+            raise OptimicaError(f"{path}:{line}: {what}")
+        kind = m.lastgroup or ""
+        if kind == "quoted":
+            raise OptimicaError(f"{path}:{line}: unsupported construct: quoted identifier {m.group()[:40]!r} "
+                                "(names are [A-Za-z_][A-Za-z0-9_]*)")
+        if kind == "ident" and len(m.group()) > MAX_NAME:
+            raise OptimicaError(f"{path}:{line}: name too long ({len(m.group())} characters, at most {MAX_NAME})")
+        if kind in ("ident", "number", "string", "op"):
+            out.append(Token(kind, m.group(), pos, m.end(), line))
+            if len(out) > MAX_TOKENS:
+                raise OptimicaError(f"{path}:{line}: file too large (more than {MAX_TOKENS} tokens)")
+        line += m.group().count("\n")
+        pos = m.end()
+    return out
+
+
+def _blank(chars: list[str], a: int, b: int) -> None:
+    for i in range(a, b):
+        if chars[i] != "\n":
+            chars[i] = " "
+
+
+class _Cursor:
+    """Token stream helpers with the file name for messages."""
+
+    def __init__(self, path: Path, toks: list[Token]) -> None:
+        self.path, self.toks = path, toks
+
+    def fail(self, tok: Token | None, what: str) -> OptimicaError:
+        line = tok.line if tok is not None else (self.toks[-1].line if self.toks else 1)
+        return OptimicaError(f"{self.path}:{line}: {what}")
+
+    def closing(self, i: int) -> int:
+        """Index of the token closing the bracket at ``i`` (depth-limited)."""
+        depth = 0
+        for j in range(i, len(self.toks)):
+            t = self.toks[j].text
+            if t in "([{" and self.toks[j].kind == "op":
+                depth += 1
+                if depth > MAX_DEPTH:
+                    raise self.fail(self.toks[j], f"nesting deeper than {MAX_DEPTH} levels")
+            elif t in ")]}" and self.toks[j].kind == "op":
+                depth -= 1
+                if depth == 0:
+                    return j
+        raise self.fail(self.toks[i], f"unbalanced {self.toks[i].text!r}")
+
+    def modifiers(self, i: int, j: int) -> dict[str, Modifier]:
+        """The modifier list between the brackets at ``i`` and ``j``: ``name(sub) = value, ...``."""
+        out: dict[str, Modifier] = {}
+        k = i + 1
+        while k < j:
+            t = self.toks[k]
+            while t.text in ("each", "final", "redeclare", "replaceable") and k + 1 < j:
+                k += 1
+                t = self.toks[k]
+            if t.kind != "ident":
+                raise self.fail(t, f"unsupported construct in a modification: {t.text!r}")
+            name, k = t.text, k + 1
+            while k < j and self.toks[k].text == "." and k + 1 < j and self.toks[k + 1].kind == "ident":
+                name += "." + self.toks[k + 1].text
+                k += 2
+            mod = Modifier(name, t.line)
+            if k < j and self.toks[k].text == "(":
+                close = self.closing(k)
+                mod.subs = self.modifiers(k, close)
+                k = close + 1
+            if k < j and self.toks[k].text == "=":
+                end = k + 1
+                while end < j and self.toks[end].text != ",":
+                    end = self.closing(end) + 1 if self.toks[end].text in "([{" and self.toks[end].kind == "op" else end + 1
+                mod.value = self.toks[k + 1:end]
+                if not mod.value:
+                    raise self.fail(self.toks[k], f"modification {name} = without a value")
+                k = end
+            while k < j and self.toks[k].kind == "string":  # a description string
+                k += 1
+            if k < j and self.toks[k].text != ",":
+                raise self.fail(self.toks[k], f"unexpected {self.toks[k].text!r} in the modification of {name}")
+            out[name] = mod
+            k += 1
+        return out
+
+
+def _classes(cur: _Cursor) -> list[tuple[str, str, int, int]]:
+    """(kind, dotted name, index of the kind keyword, index of the ``end``) of every long class definition."""
+    toks, stack, out = cur.toks, [], []
+    for i, t in enumerate(toks):
+        if t.kind != "ident":
+            continue
+        if t.text == "end" and i + 2 < len(toks) and toks[i + 1].kind == "ident" and toks[i + 2].text == ";":
+            if toks[i + 1].text in ("if", "for", "when", "while"):
+                continue
+            if not stack or stack[-1][1] != toks[i + 1].text:
+                raise cur.fail(t, f"'end {toks[i + 1].text};' does not close the open class"
+                               + (f" {stack[-1][1]!r}" if stack else ""))
+            kind, name, at = stack.pop()
+            out.append((kind, ".".join([s[1] for s in stack] + [name]), at, i))
+        elif t.text in _CLASS_KINDS and i + 1 < len(toks) and toks[i + 1].kind == "ident" and (i == 0 or toks[i - 1].text != "end"):
+            nxt = toks[i + 2].text if i + 2 < len(toks) else ""
+            if nxt == "=":  # a short class definition: type T = Real(...);
+                continue
+            if t.text == "operator" and toks[i + 1].text in ("function", "record"):
+                continue
+            stack.append((t.text, toks[i + 1].text, i))
+            if len(stack) > MAX_DEPTH:
+                raise cur.fail(t, f"classes nested deeper than {MAX_DEPTH} levels")
+    if stack:
+        raise cur.fail(toks[stack[-1][2]], f"class {stack[-1][1]!r} has no 'end {stack[-1][1]};'")
+    return out
+
+
+def split_optimica(path: Path, text: str, class_name: str) -> OptimicaClass:
+    """Take the Optimica parts out of ``text`` for the ``optimization`` class ``class_name``.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file (for messages).
+    text : str
+        Its contents.
+    class_name : str
+        The dotted name of the ``optimization`` class (``"Pkg.Opt"``; a bare name matches a
+        unique class of that name in a package).
+
+    Returns
+    -------
+    OptimicaClass
+        Its header modifiers, constraint statements, Optimica attributes and the text for pymoca.
+
+    Raises
+    ------
+    OptimicaError
+        Hostile or malformed input (:func:`tokenize`), no such ``optimization`` class, an
+        unknown header modifier, a ``constraint`` section outside it, or Optimica constructs
+        gtmodel does not map (naming the line).
+    """
+    toks = tokenize(path, text)
+    cur = _Cursor(path, toks)
+    classes = _classes(cur)
+    opts = [c for c in classes if c[0] == "optimization"]
+    found = [c for c in opts if c[1] == class_name] or [c for c in opts if c[1].split(".")[-1] == class_name]
+    if len(found) != 1:
+        names = ", ".join(sorted(c[1] for c in opts)) or "none"
+        what = "is ambiguous" if found else "not found"
+        raise OptimicaError(f"{path}: optimization class {class_name!r} {what} (optimization classes in the file: {names})")
+    _, full, at, end = found[0]
+    chars = list(text)
+    kw = toks[at]
+    chars[kw.start:kw.end] = list("model".ljust(len("optimization")))
+    for kind, _, a, e in classes:  # another optimization class: blanked (pymoca would refuse the keyword)
+        if kind == "optimization" and a != at:
+            _blank(chars, toks[a].start, toks[e + 2].end)
+    inner = [(a, e) for k, n, a, e in classes if a > at and e < end]
+    header: dict[str, Modifier] = {}
+    k = at + 2
+    if k < end and toks[k].text == "(":
+        close = cur.closing(k)
+        header = cur.modifiers(k, close)
+        _blank(chars, toks[k].start, toks[close].end)
+        k = close + 1
+    for key, mod in header.items():
+        if key not in HEADER_KEYS:
+            raise OptimicaError(f"{path}:{mod.line}: unsupported Optimica class modifier {key!r} of {full} (supported: {', '.join(HEADER_KEYS)})")
+    constraints: list[list[Token]] = []
+    attributes: dict[str, Modifier] = {}
+    i = k
+    while i < end:
+        t = toks[i]
+        if any(a <= i <= e for a, e in inner):
+            i += 1
+            continue
+        if t.kind == "ident" and t.text == "constraint":
+            j = i + 1
+            while j < end and not (toks[j].kind == "ident" and toks[j].text in _SECTIONS
+                                   and not any(a <= j <= e for a, e in inner)):
+                j += 1
+            constraints.extend(_statements(cur, i + 1, j))
+            _blank(chars, t.start, toks[j - 1].end if j > i + 1 else t.end)
+            i = j
+            continue
+        if t.kind == "ident" and t.text in ("free", "initialGuess") and i + 1 < end and toks[i + 1].text == "=":
+            path_, mods = _owner(cur, i, at)
+            attributes[path_] = mods
+        i += 1
+    for kind, name, a, e in classes:  # Optimica outside the class: refused, not silently dropped by pymoca
+        if a <= at <= e:
+            continue
+        for j in range(a, e):
+            if toks[j].kind == "ident" and toks[j].text == "constraint" and not (at <= j <= end):
+                raise cur.fail(toks[j], f"unsupported construct: a constraint section in {kind} {name} (only in the "
+                                        "optimization class solved)")
+    return OptimicaClass(full, kw.line, header, constraints, attributes, "".join(chars))
+
+
+def _statements(cur: _Cursor, a: int, b: int) -> list[list[Token]]:
+    """The ``;``-separated statements of tokens ``a..b`` (``for`` loops and ``if`` refused)."""
+    out, stmt, depth = [], [], 0
+    for k in range(a, b):
+        t = cur.toks[k]
+        if t.kind == "ident" and t.text in ("for", "if", "when", "while", "loop") and depth == 0:
+            raise cur.fail(t, f"unsupported construct in a constraint section: {t.text!r} (one constraint per statement)")
+        if t.kind == "op" and t.text in "([{":
+            depth += 1
+        elif t.kind == "op" and t.text in ")]}":
+            depth -= 1
+        if t.text == ";" and depth == 0:
+            if stmt:
+                out.append(stmt)
+            stmt = []
+        else:
+            stmt.append(t)
+    if stmt:
+        raise cur.fail(stmt[0], "constraint without a closing ';'")
+    return out
+
+
+def _owner(cur: _Cursor, i: int, floor: int) -> tuple[str, Modifier]:
+    """The component path and modifier list owning the attribute at token ``i`` (``p(free = true)``)."""
+    toks, path, k, inner = cur.toks, [], i, None
+    while True:
+        depth = 0
+        k -= 1
+        while k > floor and not (toks[k].text == "(" and depth == 0):
+            depth += toks[k].text == ")"
+            depth -= toks[k].text == "(" and depth > 0
+            if toks[k].text == ";" and depth == 0:
+                raise cur.fail(toks[i], f"unsupported construct: Optimica attribute {toks[i].text!r} outside a modification")
+            k -= 1
+        if k <= floor or toks[k - 1].kind != "ident":
+            raise cur.fail(toks[i], f"unsupported construct: Optimica attribute {toks[i].text!r} outside a declaration")
+        mods = cur.modifiers(k, cur.closing(k))
+        inner = inner or mods
+        owner, before = toks[k - 1].text, toks[k - 2] if k >= 2 else None
+        if before is not None and before.text == "extends":
+            break
+        path.insert(0, owner)
+        if before is not None and before.text != "," and before.text != "(":
+            # a declaration "Type name(" (or "Type name[n]("): the component name is the owner
+            break
+        k -= 1
+    name = ".".join(path)
+    return name, Modifier(name, toks[i].line, subs=inner)
+
+
+# ---------------------------------------------------------------------------------------------------- expressions
+_FUNCS: dict[str, tuple[int, Callable[..., Any]]] = {
+    "abs": (1, ca.fabs), "sqrt": (1, ca.sqrt), "exp": (1, ca.exp), "log": (1, ca.log), "log10": (1, ca.log10),
+    "sin": (1, ca.sin), "cos": (1, ca.cos), "tan": (1, ca.tan), "asin": (1, ca.asin), "acos": (1, ca.acos),
+    "atan": (1, ca.atan), "atan2": (2, ca.atan2), "sinh": (1, ca.sinh), "cosh": (1, ca.cosh), "tanh": (1, ca.tanh),
+    "min": (2, ca.fmin), "max": (2, ca.fmax), "sum": (1, ca.sum1),
+}
+_REL = {"<=": "<=", ">=": ">=", "=": "="}
+
+
+class ExprParser:
+    """A restricted recursive-descent parser of Optimica expressions into CasADi SX.
+
+    Grammar (Modelica's, a subset): numbers, names (dotted, with constant 1-based subscripts
+    ``x[2]``), ``time``, ``der(x)``, the functions of ``_FUNCS``, ``+ - * / ^`` (and the
+    element-wise ``.* ./ .^``), unary ``-``/``+``, parentheses, and the timed variable
+    ``v(t)`` of a variable ``v`` at ``t`` = ``startTime``, ``finalTime`` or a number (the
+    ``timed`` callback gives its symbol). Nothing is evaluated as Python.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file (for messages).
+    names : dict of str to casadi.SX
+        Model names (dotted, as written) -> symbol or expression; ``time``, ``startTime``,
+        ``finalTime`` included by the caller.
+    derivative : callable
+        ``derivative(name, token) -> SX``: ``der(name)``.
+    timed : callable or None
+        ``timed(expr, at, token) -> SX`` with ``at`` ``"start"``, ``"final"`` or a float;
+        ``None`` refuses timed variables (an integrand).
+    """
+
+    def __init__(self, path: Path, names: dict[str, ca.SX], derivative: Callable[[str, Token], ca.SX],
+                 timed: Callable[[ca.SX, Any, Token], ca.SX] | None) -> None:
+        self.path, self.names, self.derivative, self.timed = path, names, derivative, timed
+        self.toks: list[Token] = []
+        self.i = 0
+        self.depth = 0
+        self.times: set[Any] = set()
+
+    def fail(self, tok: Token | None, what: str) -> OptimicaError:
+        line = tok.line if tok is not None else (self.toks[-1].line if self.toks else 0)
+        return OptimicaError(f"{self.path}:{line}: {what}")
+
+    def parse(self, toks: list[Token]) -> ca.SX:
+        """The SX of an expression given as tokens.
+
+        Parameters
+        ----------
+        toks : list of Token
+            The expression.
+
+        Returns
+        -------
+        casadi.SX
+            A column (a scalar, or an array variable's elements).
+
+        Raises
+        ------
+        OptimicaError
+            A construct outside the grammar, an unknown name or function, nesting deeper
+            than :data:`MAX_DEPTH` (naming the line).
+        """
+        self.toks, self.i, self.times = toks, 0, set()
+        if not toks:
+            raise self.fail(None, "empty expression")
+        e = self.sum()
+        if self.i < len(toks):
+            raise self.fail(toks[self.i], f"unexpected {toks[self.i].text!r} in an expression")
+        return e
+
+    def relation(self, toks: list[Token]) -> tuple[ca.SX, str, ca.SX]:
+        """``lhs op rhs`` of a constraint, ``op`` one of ``<=``, ``>=``, ``=``.
+
+        Parameters
+        ----------
+        toks : list of Token
+            The statement.
+
+        Returns
+        -------
+        tuple
+            ``(lhs, op, rhs)``.
+
+        Raises
+        ------
+        OptimicaError
+            No relation, ``<``/``>`` (strict), ``==``/``<>``, or a malformed side.
+        """
+        ops = [k for k, t in enumerate(toks) if t.kind == "op" and t.text in ("<=", ">=", "=", "<", ">", "==", "<>")]
+        if len(ops) != 1 or toks[ops[0]].text not in _REL:
+            tok = toks[ops[1]] if len(ops) > 1 else toks[ops[0]] if ops else toks[0]
+            raise self.fail(tok, "unsupported constraint: write one relation lhs <= rhs, lhs >= rhs or lhs = rhs")
+        k = ops[0]
+        if k == 0 or k == len(toks) - 1:
+            raise self.fail(toks[k], "constraint with an empty side")
+        lhs = self.parse(toks[:k])
+        times = set(self.times)
+        rhs = self.parse(toks[k + 1:])
+        self.times |= times
+        return lhs, toks[k].text, rhs
+
+    # grammar ----------------------------------------------------------------------------
+    def peek(self) -> Token | None:
+        return self.toks[self.i] if self.i < len(self.toks) else None
+
+    def take(self, text: str) -> Token:
+        t = self.peek()
+        if t is None or t.text != text:
+            raise self.fail(t, f"expected {text!r}" + (f", got {t.text!r}" if t else " at the end of the expression"))
+        self.i += 1
+        return t
+
+    def nest(self) -> None:
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise self.fail(self.peek(), f"expression nested deeper than {MAX_DEPTH} levels")
+
+    def sum(self) -> ca.SX:
+        self.nest()
+        t = self.peek()
+        sign = 1.0
+        if t is not None and t.text in ("-", "+"):
+            self.i += 1
+            sign = -1.0 if t.text == "-" else 1.0
+        e = sign * self.product()
+        while (t := self.peek()) is not None and t.text in ("+", "-", ".+", ".-"):
+            self.i += 1
+            r = self.product()
+            e = self.combine(e, r, t, lambda a, b, s=t.text.strip("."): a + b if s == "+" else a - b)
+        self.depth -= 1
+        return e
+
+    def product(self) -> ca.SX:
+        e = self.power()
+        while (t := self.peek()) is not None and t.text in ("*", "/", ".*", "./"):
+            self.i += 1
+            r = self.power()
+            if t.text == "*" and e.numel() > 1 and r.numel() > 1:
+                raise self.fail(t, "unsupported construct: '*' of two arrays (matrix product); use '.*' for element-wise")
+            e = self.combine(e, r, t, lambda a, b, s=t.text.strip("."): a * b if s == "*" else a / b)
+        return e
+
+    def power(self) -> ca.SX:
+        e = self.primary()
+        t = self.peek()
+        if t is not None and t.text in ("^", ".^"):
+            self.i += 1
+            u = self.peek()
+            if u is not None and u.text in ("-", "+"):  # 2^-1
+                self.i += 1
+                r = (-1.0 if u.text == "-" else 1.0) * self.primary()
+            else:
+                r = self.primary()
+            e = self.combine(e, r, t, lambda a, b: a ** b)
+        return e
+
+    def combine(self, a: ca.SX, b: ca.SX, tok: Token, op: Callable[[ca.SX, ca.SX], ca.SX]) -> ca.SX:
+        if a.numel() != b.numel() and 1 not in (a.numel(), b.numel()):
+            raise self.fail(tok, f"sizes {a.numel()} and {b.numel()} do not match for {tok.text!r}")
+        return op(a, b)
+
+    def primary(self) -> ca.SX:
+        t = self.peek()
+        if t is None:
+            raise self.fail(None, "expression ends too early")
+        if t.kind == "number":
+            self.i += 1
+            return ca.SX(float(t.text))
+        if t.text == "(":
+            self.i += 1
+            self.nest()
+            e = self.sum()
+            self.depth -= 1
+            self.take(")")
+            return e
+        if t.kind != "ident":
+            raise self.fail(t, f"unsupported construct in an expression: {t.text!r}")
+        if t.text in ("if", "not", "and", "or", "true", "false", "initial", "terminal", "pre", "edge", "sample", "delay"):
+            raise self.fail(t, f"unsupported construct in an Optimica expression: {t.text!r}")
+        name = self.dotted()
+        nxt = self.peek()
+        if nxt is not None and nxt.text == "(":
+            return self.call(t, name)
+        return self.lookup(t, name)
+
+    def dotted(self) -> str:
+        name = self.toks[self.i].text
+        self.i += 1
+        while (t := self.peek()) is not None and t.text == "." and self.i + 1 < len(self.toks) \
+                and self.toks[self.i + 1].kind == "ident":
+            name += "." + self.toks[self.i + 1].text
+            self.i += 2
+        return name
+
+    def lookup(self, tok: Token, name: str) -> ca.SX:
+        t = self.peek()
+        if t is not None and t.text == "[":  # x[2] (1-based), one constant index
+            self.i += 1
+            idx = self.take_int()
+            self.take("]")
+            name = f"{name}[{idx - 1}]" if f"{name}[{idx - 1}]" in self.names else name
+            if name in self.names and self.names[name].numel() > 1:
+                e = self.names[name]
+                if not 1 <= idx <= e.numel():
+                    raise self.fail(tok, f"index {idx} out of range 1..{e.numel()} of {name}")
+                return e[idx - 1]
+        if name not in self.names:
+            raise self.fail(tok, f"unknown name {name!r} in an expression")
+        return self.names[name]
+
+    def take_int(self) -> int:
+        t = self.peek()
+        if t is None or t.kind != "number" or not t.text.isdigit():
+            raise self.fail(t, "unsupported construct: an index must be a positive integer constant")
+        self.i += 1
+        return int(t.text)
+
+    def call(self, tok: Token, name: str) -> ca.SX:
+        open_ = self.i
+        close = _Cursor(self.path, self.toks).closing(open_)
+        args, k, depth = [], open_ + 1, 0
+        start = k
+        while k <= close:
+            s = self.toks[k].text
+            depth += s in "([{" and self.toks[k].kind == "op"
+            depth -= s in ")]}" and self.toks[k].kind == "op" and k != close
+            if (s == "," and depth == 0) or k == close:
+                args.append(self.toks[start:k])
+                start = k + 1
+            k += 1
+        if name == "der":
+            if len(args) != 1 or len(args[0]) != 1 or args[0][0].kind != "ident":
+                raise self.fail(tok, "unsupported construct: der() of anything but one state name")
+            self.i = close + 1
+            return self.derivative(args[0][0].text, tok)
+        if name in self.names:  # a timed variable v(t)
+            if self.timed is None:
+                raise self.fail(tok, f"a timed variable {name}(...) is not allowed here (an integrand is over the whole horizon)")
+            if len(args) != 1 or not args[0]:
+                raise self.fail(tok, f"timed variable {name}(...) needs one time")
+            at = self.time_point(args[0])
+            self.i = close + 1
+            e = self.names[name]
+            self.times.add(at)
+            return ca.vertcat(*[self.timed(e[j], at, tok) for j in range(e.numel())])
+        if name not in _FUNCS:
+            raise self.fail(tok, f"unsupported function {name!r} (supported: der, {', '.join(sorted(_FUNCS))})")
+        nargs, fn = _FUNCS[name]
+        if len(args) != nargs or any(not a for a in args):
+            raise self.fail(tok, f"{name}() takes {nargs} argument{'s' if nargs > 1 else ''}")
+        saved = (self.toks, self.i)
+        values = []
+        for a in args:
+            sub = ExprParser(self.path, self.names, self.derivative, self.timed)
+            sub.depth = self.depth + 1
+            values.append(sub.parse(a))
+            self.times |= sub.times
+        self.toks, self.i = saved[0], close + 1
+        return fn(*values)
+
+    def time_point(self, toks: list[Token]) -> Any:
+        if len(toks) == 1 and toks[0].text in ("finalTime", "startTime"):
+            return "final" if toks[0].text == "finalTime" else "start"
+        sign = -1.0 if toks[0].text == "-" else 1.0
+        body = toks[1:] if toks[0].text in ("-", "+") else toks
+        if len(body) == 1 and body[0].kind == "number":
+            return sign * float(body[0].text)
+        raise self.fail(toks[0], "unsupported construct: the time of a timed variable must be startTime, finalTime or a number")

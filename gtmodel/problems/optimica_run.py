@@ -1,0 +1,189 @@
+"""``gtmodel solve FILE.mop --class Pkg.Opt``: an Optimica class run as an ``optimal_control`` problem.
+
+:func:`load_optimica_problem` reads the class (:func:`gtmodel.exchange.optimica.load_optimica`)
+and wraps its :class:`~gtmodel.modeling.Optimization` in the declaration of the
+``optimal_control`` kind with that kind's defaults (the schema's: direct collocation,
+verification by simulation, mesh refinement, IPOPT), so the solve, the result folder
+(``summary.json``, ``trajectories.csv``, plots, ``report.html``) and the exit codes are those
+of any ``optimal_control`` problem file. :func:`run_optimica` is :func:`gtmodel.problems.run.run_problem`
+for it: every outcome becomes a status and a summary.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+from gtmodel._timing import add_phase, merge_phases, phase_sum, timed
+from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.problems.base import Problem, ProblemFile
+from gtmodel.problems.results import ResultFolder
+from gtmodel.problems.runtime import Heartbeat
+from gtmodel.problems.run import InterruptedWithResult, RunOutcome, _failed, _write_into, solution_timing, solve_problem, write_failure
+from gtmodel.status import Status
+
+__all__ = ["load_optimica_problem", "run_optimica", "optimica_target", "write_failure"]
+
+_log = logging.getLogger("gtmodel")
+
+
+def load_optimica_problem(path: str | Path, class_name: str, *, state_start_values_fixed: bool = False) -> Problem:
+    """An Optimica ``optimization`` class as an ``optimal_control`` :class:`~gtmodel.problems.base.Problem`.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.mop`` file.
+    class_name : str
+        The ``optimization`` class (``"Pkg.Opt"``).
+    state_start_values_fixed : bool, optional
+        JModelica.org's compiler option (:func:`~gtmodel.exchange.optimica.load_optimica`).
+
+    Returns
+    -------
+    Problem
+        Kind ``optimal_control``, named after the class's last part, with the kind's default
+        collocation, verification, refinement and solver settings.
+
+    Raises
+    ------
+    GtModelError
+        The file cannot be read or is outside the supported subset (an
+        :class:`~gtmodel.exchange.optimica.OptimicaError` naming file, line and construct).
+    """
+    from gtmodel.exchange.optimica import load_optimica
+    from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
+    from gtmodel.problems.kinds.optimal_control import _continuation, _refinement, _scalar_variables
+    from gtmodel.problems.kinds.schemas.optimal_control import OptimalControlFile
+    from gtmodel.trajectory.model_ocp import OptimalControl
+
+    path = Path(path)
+    opt = load_optimica(path, class_name, state_start_values_fixed=state_start_values_fixed)
+    fields = OptimalControlFile.model_fields
+    defaults = SimpleNamespace(**{k: fields[k].default for k in ("transcription", "verification", "collocation", "solver",
+                                                                 "continuation")})
+    file = ProblemFile(path)
+    col, sol = defaults.collocation, defaults.solver
+    name = class_name.split(".")[-1]
+    bounds = {}
+    flat = opt.model.flatten()
+    for kind, names in (("x", flat.x_vars), ("u", flat.u_vars), ("z", flat.z_vars)):
+        lb, ub = opt.bounds_vectors(flat, kind)
+        for n, sl in names.items():
+            if sl.stop - sl.start == 1:
+                bounds[n] = (float(lb[sl.start]), float(ub[sl.start]))
+    declaration = OptimalControl(
+        name=name, model_file=path, class_name=opt.optimica["class"], optimization=opt,
+        method=Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics),
+        solver=SolverSettings(name=sol.name, max_iter=sol.max_iter, tol=sol.tol, jit=sol.jit),
+        objective=_objective_text(path, opt), sense="minimize", constraints=tuple(opt.optimica["constraints"]),
+        bounds=bounds, refinement=_refinement(file, defaults), continuation=_continuation(file, defaults),
+        variables=tuple(n for n, (k, _) in _scalar_variables(opt.model).items() if k in ("algebraic", "output")),
+    )
+    return Problem(path=path, name=name, kind="optimal_control", description=f"Optimica class {opt.optimica['class']} of {path.name}",
+                   declaration=declaration, data={}, overrides={})
+
+
+def _objective_text(path: Path, opt: Any) -> str:
+    parts = [] if opt.mayer.is_zero() else [str(opt.mayer)]
+    if not opt.lagrange.is_zero():
+        parts.append(f"integral({opt.lagrange})")
+    return " + ".join(parts) or "0"
+
+
+def optimica_target(problems: list[Path], class_name: str | None, sweep: str | None, out: Path | None) -> Path:
+    """The result folder of ``gtmodel solve FILE.mop --class NAME`` (``--out``, else ``results/<class>``).
+
+    Parameters
+    ----------
+    problems : list of pathlib.Path
+        The command's files (one ``.mop`` file).
+    class_name : str or None
+        ``--class``.
+    sweep : str or None
+        ``--sweep`` (refused).
+    out : pathlib.Path or None
+        ``--out``.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    GtModelError
+        Several files, a sweep, or no ``--class``.
+    """
+    if len(problems) != 1 or sweep is not None or class_name is None:
+        raise GtModelError("an Optimica file is solved alone (no --sweep) and needs --class NAME, its optimization class "
+                           "(e.g. gtmodel solve problems/optimica/double_integrator_min_time.mop --class DoubleIntegrator.MinTime)")
+    return out if out is not None else Path("results") / class_name.split(".")[-1]
+
+
+def run_optimica(path: str | Path, class_name: str, out: str | Path, *, state_start_values_fixed: bool = False,
+                 verbose: bool = False, plots: bool = True, heartbeat: bool = False, report: bool = False) -> RunOutcome:
+    """Load, solve and write an Optimica class as :func:`~gtmodel.problems.run.run_problem` does a problem file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The ``.mop`` file.
+    class_name : str
+        The ``optimization`` class.
+    out : str or pathlib.Path
+        The result folder.
+    state_start_values_fixed : bool, optional
+        JModelica.org's compiler option (:func:`load_optimica_problem`).
+    verbose : bool, optional
+        Solver progress.
+    plots : bool, optional
+        Write PNG plots.
+    heartbeat : bool, optional
+        Log a line every few seconds while solving.
+    report : bool, optional
+        Also write ``report.html``.
+
+    Returns
+    -------
+    RunOutcome
+        Never raises for bad input (status ``invalid_input``, exit 2), solver failure or
+        internal errors; a missing file writes nothing.
+    """
+    path, target = Path(path), Path(out)
+    if not path.is_file():
+        return _failed(path, target, None, ProblemError(f"{path}: cannot read the Optimica file (no such file)"),
+                       Status.INVALID_INPUT, write=False)
+    phases: dict[str, dict[str, float]] = {}
+    problem: Problem | None = None
+    try:
+        with timed(phases, "load"):
+            problem = load_optimica_problem(path, class_name, state_start_values_fixed=state_start_values_fixed)
+        label = f"solving {problem.name} (Optimica, optimal_control)"
+        _log.info("%s ...", label)
+        call: dict[str, dict[str, float]] = {}
+        interrupted = None
+        with Heartbeat(label, enabled=heartbeat), timed(call, "other"):
+            try:
+                solution = solve_problem(problem, verbose=verbose)
+            except InterruptedWithResult as stop:
+                solution, interrupted = stop.solution, stop.note
+        own = solution_timing(solution)
+        merge_phases(phases, own)
+        rest = phase_sum(own)
+        add_phase(phases, "other", call["other"]["wall_s"] - rest["wall_s"], call["other"]["cpu_s"] - rest["cpu_s"])
+        with ResultFolder(target) as folder:
+            summary = _write_into(folder, problem, solution, plots, report, phases, interrupted)
+        return RunOutcome(path, folder.target, Status(summary["status"]), summary, problem, solution, kept=folder.kept)
+    except KeyboardInterrupt as exc:
+        return _failed(path, target, problem, exc, Status.INTERRUPTED)
+    except GtModelError as exc:
+        return _failed(path, target, problem, exc, Status.INVALID_INPUT)
+    except MemoryError:
+        from gtmodel.problems.run import out_of_memory
+
+        return _failed(path, target, problem, out_of_memory(path), Status.INVALID_INPUT)
+    except Exception as exc:  # noqa: BLE001 - a defect: reported with its status, never lost
+        _log.debug("internal error", exc_info=True)
+        return _failed(path, target, problem, exc, Status.INTERNAL_ERROR)
