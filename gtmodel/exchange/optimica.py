@@ -108,7 +108,7 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     """The class as a gtmodel model through pymoca (with ``.mo`` files beside ``path`` if it needs them)."""
     parser, generator = _pymoca()
     ast = _parse(parser, path, text)
-    _check_constructs(path, text)
+    _constructs(path, text)
     try:
         mo = generator.generate(ast, class_name)
     except Exception as first:  # noqa: BLE001 - pymoca raises many types; retried with the sibling .mo files
@@ -120,7 +120,7 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
                 raise OptimicaError(f"{other}: file too large ({other.stat().st_size} bytes)") from None
             other_text = other.read_text(encoding="utf-8", errors="replace")
             split_check(other, other_text)
-            _check_constructs(other, other_text)
+            _constructs(other, other_text)
             ast.extend(_parse(parser, other, other_text))
         try:
             mo = generator.generate(ast, class_name)
@@ -160,6 +160,14 @@ def split_check(path: Path, text: str) -> None:
     from gtmodel.exchange.optimica_syntax import tokenize
 
     tokenize(path, text)
+
+
+def _constructs(path: Path, text: str) -> None:
+    """The Modelica import's refusals (:data:`gtmodel.exchange.modelica.UNSUPPORTED`) as an :class:`OptimicaError`."""
+    try:
+        _check_constructs(path, text)
+    except InputError as exc:
+        raise OptimicaError(str(exc)) from None
 
 
 def _parse(parser: Any, path: Path, text: str) -> Any:
@@ -229,11 +237,10 @@ class _Declarer:
         assert opt is not None
         names = {**self.names, "finalTime": opt.final_time, "startTime": ca.SX(opt.start_time)}
         states = self.model.variables("state")
-        modelica = {v: k for k, v in self.names.items()}
 
         def der(name: str, tok: Token) -> ca.SX:
             sym = self.names.get(name)
-            key = next((k for k, s in states.items() if sym is not None and s is not None and ca.is_equal(s, sym)), None)
+            key = next((k for k, s in states.items() if sym is not None and s.shape == sym.shape and ca.is_equal(s, sym)), None)
             if key is None:
                 raise self.fail(tok.line, f"der({name}): {name!r} is not a state of the model")
             return self.model.der(states[key])
@@ -242,9 +249,8 @@ class _Declarer:
             try:
                 return opt.timed(expr, when)
             except GtModelError as exc:
-                raise self.fail(tok.line, f"timed variable: {exc}") from None
+                raise self.fail(tok.line, str(exc)) from None
 
-        del modelica
         return ExprParser(self.path, names, der, at if timed else None)
 
     def varying(self) -> ca.SX:

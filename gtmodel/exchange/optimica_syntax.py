@@ -31,7 +31,7 @@ import casadi as ca
 
 from gtmodel.errors import InputError
 
-__all__ = ["OptimicaError", "Token", "Modifier", "OptimicaClass", "tokenize", "split_optimica", "ExprParser",
+__all__ = ["CLASS_NAME_RE", "OptimicaError", "Token", "Modifier", "OptimicaClass", "tokenize", "split_optimica", "ExprParser",
            "MAX_BYTES", "MAX_TOKENS", "MAX_DEPTH", "MAX_NAME"]
 
 #: Largest ``.mop`` file read, bytes (JModelica.org's examples are a few kB).
@@ -55,6 +55,8 @@ _TOKEN_RE = re.compile(r"""
 _CLASS_KINDS = frozenset({"model", "block", "class", "package", "connector", "record", "function", "type", "optimization",
                           "operator"})
 _SECTIONS = frozenset({"equation", "algorithm", "public", "protected", "constraint", "initial", "annotation"})
+#: A class name given on the command line: dotted identifiers, nothing else (it names the result folder).
+CLASS_NAME_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,99}(?:\.[A-Za-z_][A-Za-z0-9_]{0,99}){0,31}")
 #: Header modifiers of an ``optimization`` class that gtmodel maps (Optimica, Akesson 2008, section 3).
 HEADER_KEYS = ("objective", "objectiveIntegrand", "startTime", "finalTime")
 
@@ -137,7 +139,7 @@ def tokenize(path: Path, text: str) -> list[Token]:
     if len(text.encode("utf-8", errors="replace")) > MAX_BYTES:
         raise OptimicaError(f"{path}: file too large ({len(text)} characters; at most {MAX_BYTES} bytes are read)")
     out: list[Token] = []
-    pos, line, n = 0, 1, len(text)
+    pos, line, n, depth = 0, 1, len(text), 0
     while pos < n:
         m = _TOKEN_RE.match(text, pos)
         if m is None:
@@ -150,6 +152,12 @@ def tokenize(path: Path, text: str) -> list[Token]:
                                 "(names are [A-Za-z_][A-Za-z0-9_]*)")
         if kind == "ident" and len(m.group()) > MAX_NAME:
             raise OptimicaError(f"{path}:{line}: name too long ({len(m.group())} characters, at most {MAX_NAME})")
+        if kind == "op" and m.group() in ("(", "[", "{"):
+            depth += 1
+            if depth > MAX_DEPTH:
+                raise OptimicaError(f"{path}:{line}: nesting deeper than {MAX_DEPTH} levels of brackets")
+        elif kind == "op" and m.group() in (")", "]", "}"):
+            depth -= 1
         if kind in ("ident", "number", "string", "op"):
             out.append(Token(kind, m.group(), pos, m.end(), line))
             if len(out) > MAX_TOKENS:
@@ -280,6 +288,9 @@ def split_optimica(path: Path, text: str, class_name: str) -> OptimicaClass:
         unknown header modifier, a ``constraint`` section outside it, or Optimica constructs
         gtmodel does not map (naming the line).
     """
+    if not CLASS_NAME_RE.fullmatch(class_name or ""):
+        raise OptimicaError(f"{path}: class name {str(class_name)[:60]!r} is not a dotted Modelica name "
+                            "(Pkg.Opt, [A-Za-z_][A-Za-z0-9_]* parts)")
     toks = tokenize(path, text)
     cur = _Cursor(path, toks)
     classes = _classes(cur)

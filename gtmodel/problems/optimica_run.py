@@ -114,11 +114,15 @@ def optimica_target(problems: list[Path], class_name: str | None, sweep: str | N
     Raises
     ------
     GtModelError
-        Several files, a sweep, or no ``--class``.
+        Several files, a sweep, no ``--class``, or a class name that is not dotted identifiers.
     """
     if len(problems) != 1 or sweep is not None or class_name is None:
         raise GtModelError("an Optimica file is solved alone (no --sweep) and needs --class NAME, its optimization class "
                            "(e.g. gtmodel solve problems/optimica/double_integrator_min_time.mop --class DoubleIntegrator.MinTime)")
+    from gtmodel.exchange.optimica_syntax import CLASS_NAME_RE
+
+    if not CLASS_NAME_RE.fullmatch(class_name):
+        raise GtModelError(f"--class {class_name[:60]!r}: not a dotted Modelica class name (Pkg.Opt)")
     return out if out is not None else Path("results") / class_name.split(".")[-1]
 
 
