@@ -584,7 +584,14 @@ class ExprParser:
         nxt = self.peek()
         if nxt is not None and nxt.text == "(":
             return self.call(t, name)
-        return self.lookup(t, name)
+        e = self.lookup(t, name)
+        nxt = self.peek()
+        if nxt is not None and nxt.text == "(":  # an element's timed variable: q[2](finalTime)
+            close = _Cursor(self.path, self.toks).closing(self.i)
+            args = self.toks[self.i + 1:close]
+            self.i = close + 1
+            return self.timed_value(t, name, e, [args])
+        return e
 
     def dotted(self) -> str:
         name = self.toks[self.i].text
@@ -637,15 +644,8 @@ class ExprParser:
             self.i = close + 1
             return self.derivative(args[0][0].text, tok)
         if name in self.names:  # a timed variable v(t)
-            if self.timed is None:
-                raise self.fail(tok, f"a timed variable {name}(...) is not allowed here (an integrand is over the whole horizon)")
-            if len(args) != 1 or not args[0]:
-                raise self.fail(tok, f"timed variable {name}(...) needs one time")
-            at = self.time_point(args[0])
             self.i = close + 1
-            e = self.names[name]
-            self.times.add(at)
-            return ca.vertcat(*[self.timed(e[j], at, tok) for j in range(e.numel())])
+            return self.timed_value(tok, name, self.names[name], args)
         if name not in _FUNCS:
             raise self.fail(tok, f"unsupported function {name!r} (supported: der, {', '.join(sorted(_FUNCS))})")
         nargs, fn = _FUNCS[name]
@@ -660,6 +660,16 @@ class ExprParser:
             self.times |= sub.times
         self.toks, self.i = saved[0], close + 1
         return fn(*values)
+
+    def timed_value(self, tok: Token, name: str, e: ca.SX, args: list[list[Token]]) -> ca.SX:
+        """The timed variable ``name(t)`` of the elements ``e`` (the ``timed`` callback's symbols)."""
+        if self.timed is None:
+            raise self.fail(tok, f"a timed variable {name}(...) is not allowed here (an integrand is over the whole horizon)")
+        if len(args) != 1 or not args[0]:
+            raise self.fail(tok, f"timed variable {name}(...) needs one time")
+        at = self.time_point(args[0])
+        self.times.add(at)
+        return ca.vertcat(*[self.timed(e[j], at, tok) for j in range(e.numel())])
 
     def time_point(self, toks: list[Token]) -> Any:
         if len(toks) == 1 and toks[0].text in ("finalTime", "startTime"):

@@ -10,7 +10,7 @@ import pytest
 
 from gtmodel.cli import main
 from gtmodel.errors import GtModelError, InputError
-from gtmodel.exchange.optimica import OptimicaError, load_optimica
+from gtmodel.exchange.optimica import FREE_FINAL_TIME_MAX, OptimicaError, load_optimica
 from gtmodel.exchange.optimica_syntax import MAX_BYTES, MAX_DEPTH, MAX_TOKENS
 from gtmodel.problems.optimica_run import run_optimica
 
@@ -209,3 +209,32 @@ def test_command_refuses_a_mop_without_class_and_a_bad_file_exits_2(tmp_path, ca
 def test_optimica_error_is_a_gtmodel_error():
     # independent check: the project's exception hierarchy (gtmodel.errors)
     assert issubclass(OptimicaError, InputError) and issubclass(OptimicaError, GtModelError)
+
+
+def test_model_from_a_mo_file_beside_and_open_final_time_bounds(tmp_path):
+    # independent check: T = 2 sqrt(D / a_max) = 2 s; the free final time without min/max gets the documented defaults
+    (tmp_path / "plants.mo").write_text("package Plants\n" + PLANT.replace("model Plant", "model DI").replace("end Plant", "end DI")
+                                        + "end Plants;\n", encoding="utf-8")
+    path = tmp_path / "opt.mop"
+    path.write_text("optimization MinTime (objective = finalTime, finalTime(free = true, initialGuess = 3))\n"
+                    "  extends Plants.DI;\nconstraint\n  x(finalTime) = 1;\n  v(finalTime) = 0;\nend MinTime;\n", encoding="utf-8")
+    opt = load_optimica(path, "MinTime")
+    assert opt.final_time_bounds == (1e-6, FREE_FINAL_TIME_MAX)
+    out = run_optimica(path, "MinTime", tmp_path / "r", plots=False)
+    assert out.status.value == "optimal" and out.summary["final_time_s"] == pytest.approx(2.0, rel=1e-5)
+
+
+def test_array_variables_in_constraints(tmp_path):
+    # independent check: two independent double integrators with |tau_i| <= 1 reach q = (1, 1/4) at rest; the slower
+    # axis sets the time, T = 2 sqrt(1 / 1) = 2 s (closed form), with the other axis's element constraint q[2](finalTime)
+    text = ("model Axes\n  Real q[2](each start = 0, each fixed = true);\n  Real w[2](each start = 0, each fixed = true);\n"
+            "  input Real tau[2];\nequation\n  der(q) = w;\n  der(w) = tau;\nend Axes;\n"
+            "optimization Opt (objective = finalTime, finalTime(free = true, min = 0.5, max = 10, initialGuess = 3))\n"
+            "  extends Axes;\nconstraint\n  tau <= 1;\n  tau >= -1;\n  q[1](finalTime) = 1;\n  q[2](finalTime) = 0.25;\n"
+            "  w(finalTime) = 0;\nend Opt;\n")
+    path = tmp_path / "axes.mop"
+    path.write_text(text, encoding="utf-8")
+    opt = load_optimica(path, "Opt")
+    assert [int(c.expr.numel()) for c in opt.path_constraints] == [2, 2]
+    out = run_optimica(path, "Opt", tmp_path / "r", plots=False)
+    assert out.status.value == "optimal" and out.summary["final_time_s"] == pytest.approx(2.0, rel=1e-5)
