@@ -91,7 +91,9 @@ class MultipleShooting:
     controls : {"constant", "linear"}
         Input parametrisation per interval.
     integrator : str or None
-        Integrator (None: rk for ODEs, radau for DAEs made explicit, else collocation).
+        Integrator (None: rk for an ODE, collocation with algebraic variables: gtmodel's fixed-step
+        Radau collocation, the only one of rk, radau and collocation that ended optimal and verified
+        on all five shipped drives, ``benchmarks/bench_shooting_integrators.py``).
     steps : int
         Fixed steps per interval of rk/radau/collocation.
     """
