@@ -8,7 +8,7 @@ instantiates Modelica models, with a ``constraint`` section. :func:`load_optimic
 tokenizer, the rest (the class as a ``model``) goes through the Modelica import of
 :mod:`gtmodel.exchange.modelica` (pymoca, its construct checks), and the Optimica parts are
 declared on an :class:`~gtmodel.modeling.Optimization` through expressions parsed by a
-restricted parser (:class:`~gtmodel.exchange.optimica_syntax.ExprParser`, never ``eval``).
+restricted parser (:class:`~gtmodel.exchange.optimica_expr.ExprParser`, never ``eval``).
 
 The mapping (docs/optimica.md has the table):
 
@@ -43,7 +43,8 @@ import numpy as np
 
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.exchange.modelica import _check_constructs, _name, _numeric, _pymoca, _to_model, _truthy
-from gtmodel.exchange.optimica_syntax import MAX_BYTES, ExprParser, Modifier, OptimicaError, Token, split_optimica
+from gtmodel.exchange.optimica_expr import ExprParser
+from gtmodel.exchange.optimica_syntax import MAX_BYTES, Modifier, OptimicaError, Token, split_optimica, tokenize
 from gtmodel.modeling import Model, Optimization
 
 __all__ = ["load_optimica", "OptimicaError", "FREE_FINAL_TIME_MAX"]
@@ -157,8 +158,6 @@ def _numeric_bounds(path: Path, mo: Any) -> None:
 
 def split_check(path: Path, text: str) -> None:
     """Refuse hostile input in a sibling ``.mo`` file (its tokens checked as the ``.mop`` file's)."""
-    from gtmodel.exchange.optimica_syntax import tokenize
-
     tokenize(path, text)
 
 

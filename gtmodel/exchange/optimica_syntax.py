@@ -8,8 +8,8 @@ parses Modelica only, so this module takes the Optimica parts out with a tokeniz
 ``eval``): :func:`split_optimica` finds the class, reads its header modifiers and its
 ``constraint`` section, and returns the source with those parts blanked (newlines kept, so
 every line number pymoca reports is the file's) and ``optimization`` written ``model``.
-:class:`ExprParser` is a restricted recursive-descent parser of Modelica expressions into
-CasADi SX over a table of names. Every error is an :class:`OptimicaError` naming the file,
+:class:`~gtmodel.exchange.optimica_expr.ExprParser` is a restricted recursive-descent parser of Modelica expressions into
+CasADi SX over a table of names (:mod:`gtmodel.exchange.optimica_expr`). Every error is an :class:`OptimicaError` naming the file,
 the line and the construct.
 
 Hostile input is refused before any work: a file over :data:`MAX_BYTES`, more than
@@ -25,13 +25,10 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
-
-import casadi as ca
 
 from gtmodel.errors import InputError
 
-__all__ = ["CLASS_NAME_RE", "OptimicaError", "Token", "Modifier", "OptimicaClass", "tokenize", "split_optimica", "ExprParser",
+__all__ = ["CLASS_NAME_RE", "OptimicaError", "Token", "Modifier", "OptimicaClass", "tokenize", "split_optimica",
            "MAX_BYTES", "MAX_TOKENS", "MAX_DEPTH", "MAX_NAME"]
 
 #: Largest ``.mop`` file read, bytes (JModelica.org's examples are a few kB).
@@ -67,7 +64,19 @@ class OptimicaError(InputError):
 
 @dataclass(frozen=True)
 class Token:
-    """One token: its kind (``ident``, ``number``, ``string``, ``op``), text, character offsets and line (from 1)."""
+    """One token of a Modelica/Optimica text.
+
+    Parameters
+    ----------
+    kind : {"ident", "number", "string", "op"}
+        What it is.
+    text : str
+        Its text.
+    start, end : int
+        Its character offsets in the file.
+    line : int
+        Its line, from 1.
+    """
 
     kind: str
     text: str
@@ -78,7 +87,19 @@ class Token:
 
 @dataclass
 class Modifier:
-    """One modification ``name(sub...) = value`` of a modifier list; ``value`` the expression's tokens."""
+    """One modification ``name(sub...) = value`` of a modifier list.
+
+    Parameters
+    ----------
+    name : str
+        The modified name (``finalTime``, ``free``, ``robot.m``).
+    line : int
+        Its line, from 1.
+    subs : dict of str to Modifier, optional
+        Its own modifications (``finalTime(free = true)``).
+    value : list of Token or None, optional
+        The tokens of the expression after ``=``; None without one.
+    """
 
     name: str
     line: int
@@ -397,285 +418,3 @@ def _owner(cur: _Cursor, i: int, floor: int) -> tuple[str, Modifier]:
         k -= 1
     name = ".".join(path)
     return name, Modifier(name, toks[i].line, subs=inner)
-
-
-# ---------------------------------------------------------------------------------------------------- expressions
-_FUNCS: dict[str, tuple[int, Callable[..., Any]]] = {
-    "abs": (1, ca.fabs), "sqrt": (1, ca.sqrt), "exp": (1, ca.exp), "log": (1, ca.log), "log10": (1, ca.log10),
-    "sin": (1, ca.sin), "cos": (1, ca.cos), "tan": (1, ca.tan), "asin": (1, ca.asin), "acos": (1, ca.acos),
-    "atan": (1, ca.atan), "atan2": (2, ca.atan2), "sinh": (1, ca.sinh), "cosh": (1, ca.cosh), "tanh": (1, ca.tanh),
-    "min": (2, ca.fmin), "max": (2, ca.fmax), "sum": (1, ca.sum1),
-}
-_REL = {"<=": "<=", ">=": ">=", "=": "="}
-
-
-class ExprParser:
-    """A restricted recursive-descent parser of Optimica expressions into CasADi SX.
-
-    Grammar (Modelica's, a subset): numbers, names (dotted, with constant 1-based subscripts
-    ``x[2]``), ``time``, ``der(x)``, the functions of ``_FUNCS``, ``+ - * / ^`` (and the
-    element-wise ``.* ./ .^``), unary ``-``/``+``, parentheses, and the timed variable
-    ``v(t)`` of a variable ``v`` at ``t`` = ``startTime``, ``finalTime`` or a number (the
-    ``timed`` callback gives its symbol). Nothing is evaluated as Python.
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The file (for messages).
-    names : dict of str to casadi.SX
-        Model names (dotted, as written) -> symbol or expression; ``time``, ``startTime``,
-        ``finalTime`` included by the caller.
-    derivative : callable
-        ``derivative(name, token) -> SX``: ``der(name)``.
-    timed : callable or None
-        ``timed(expr, at, token) -> SX`` with ``at`` ``"start"``, ``"final"`` or a float;
-        ``None`` refuses timed variables (an integrand).
-    """
-
-    def __init__(self, path: Path, names: dict[str, ca.SX], derivative: Callable[[str, Token], ca.SX],
-                 timed: Callable[[ca.SX, Any, Token], ca.SX] | None) -> None:
-        self.path, self.names, self.derivative, self.timed = path, names, derivative, timed
-        self.toks: list[Token] = []
-        self.i = 0
-        self.depth = 0
-        self.times: set[Any] = set()
-
-    def fail(self, tok: Token | None, what: str) -> OptimicaError:
-        line = tok.line if tok is not None else (self.toks[-1].line if self.toks else 0)
-        return OptimicaError(f"{self.path}:{line}: {what}")
-
-    def parse(self, toks: list[Token]) -> ca.SX:
-        """The SX of an expression given as tokens.
-
-        Parameters
-        ----------
-        toks : list of Token
-            The expression.
-
-        Returns
-        -------
-        casadi.SX
-            A column (a scalar, or an array variable's elements).
-
-        Raises
-        ------
-        OptimicaError
-            A construct outside the grammar, an unknown name or function, nesting deeper
-            than :data:`MAX_DEPTH` (naming the line).
-        """
-        self.toks, self.i, self.times = toks, 0, set()
-        if not toks:
-            raise self.fail(None, "empty expression")
-        e = self.sum()
-        if self.i < len(toks):
-            raise self.fail(toks[self.i], f"unexpected {toks[self.i].text!r} in an expression")
-        return e
-
-    def relation(self, toks: list[Token]) -> tuple[ca.SX, str, ca.SX]:
-        """``lhs op rhs`` of a constraint, ``op`` one of ``<=``, ``>=``, ``=``.
-
-        Parameters
-        ----------
-        toks : list of Token
-            The statement.
-
-        Returns
-        -------
-        tuple
-            ``(lhs, op, rhs)``.
-
-        Raises
-        ------
-        OptimicaError
-            No relation, ``<``/``>`` (strict), ``==``/``<>``, or a malformed side.
-        """
-        ops = [k for k, t in enumerate(toks) if t.kind == "op" and t.text in ("<=", ">=", "=", "<", ">", "==", "<>")]
-        if len(ops) != 1 or toks[ops[0]].text not in _REL:
-            tok = toks[ops[1]] if len(ops) > 1 else toks[ops[0]] if ops else toks[0]
-            raise self.fail(tok, "unsupported constraint: write one relation lhs <= rhs, lhs >= rhs or lhs = rhs")
-        k = ops[0]
-        if k == 0 or k == len(toks) - 1:
-            raise self.fail(toks[k], "constraint with an empty side")
-        lhs = self.parse(toks[:k])
-        times = set(self.times)
-        rhs = self.parse(toks[k + 1:])
-        self.times |= times
-        return lhs, toks[k].text, rhs
-
-    # grammar ----------------------------------------------------------------------------
-    def peek(self) -> Token | None:
-        return self.toks[self.i] if self.i < len(self.toks) else None
-
-    def take(self, text: str) -> Token:
-        t = self.peek()
-        if t is None or t.text != text:
-            raise self.fail(t, f"expected {text!r}" + (f", got {t.text!r}" if t else " at the end of the expression"))
-        self.i += 1
-        return t
-
-    def nest(self) -> None:
-        self.depth += 1
-        if self.depth > MAX_DEPTH:
-            raise self.fail(self.peek(), f"expression nested deeper than {MAX_DEPTH} levels")
-
-    def sum(self) -> ca.SX:
-        self.nest()
-        t = self.peek()
-        sign = 1.0
-        if t is not None and t.text in ("-", "+"):
-            self.i += 1
-            sign = -1.0 if t.text == "-" else 1.0
-        e = sign * self.product()
-        while (t := self.peek()) is not None and t.text in ("+", "-", ".+", ".-"):
-            self.i += 1
-            r = self.product()
-            e = self.combine(e, r, t, lambda a, b, s=t.text.strip("."): a + b if s == "+" else a - b)
-        self.depth -= 1
-        return e
-
-    def product(self) -> ca.SX:
-        e = self.power()
-        while (t := self.peek()) is not None and t.text in ("*", "/", ".*", "./"):
-            self.i += 1
-            r = self.power()
-            if t.text == "*" and e.numel() > 1 and r.numel() > 1:
-                raise self.fail(t, "unsupported construct: '*' of two arrays (matrix product); use '.*' for element-wise")
-            e = self.combine(e, r, t, lambda a, b, s=t.text.strip("."): a * b if s == "*" else a / b)
-        return e
-
-    def power(self) -> ca.SX:
-        e = self.primary()
-        t = self.peek()
-        if t is not None and t.text in ("^", ".^"):
-            self.i += 1
-            u = self.peek()
-            if u is not None and u.text in ("-", "+"):  # 2^-1
-                self.i += 1
-                r = (-1.0 if u.text == "-" else 1.0) * self.primary()
-            else:
-                r = self.primary()
-            e = self.combine(e, r, t, lambda a, b: a ** b)
-        return e
-
-    def combine(self, a: ca.SX, b: ca.SX, tok: Token, op: Callable[[ca.SX, ca.SX], ca.SX]) -> ca.SX:
-        if a.numel() != b.numel() and 1 not in (a.numel(), b.numel()):
-            raise self.fail(tok, f"sizes {a.numel()} and {b.numel()} do not match for {tok.text!r}")
-        return op(a, b)
-
-    def primary(self) -> ca.SX:
-        t = self.peek()
-        if t is None:
-            raise self.fail(None, "expression ends too early")
-        if t.kind == "number":
-            self.i += 1
-            return ca.SX(float(t.text))
-        if t.text == "(":
-            self.i += 1
-            self.nest()
-            e = self.sum()
-            self.depth -= 1
-            self.take(")")
-            return e
-        if t.kind != "ident":
-            raise self.fail(t, f"unsupported construct in an expression: {t.text!r}")
-        if t.text in ("if", "not", "and", "or", "true", "false", "initial", "terminal", "pre", "edge", "sample", "delay"):
-            raise self.fail(t, f"unsupported construct in an Optimica expression: {t.text!r}")
-        name = self.dotted()
-        nxt = self.peek()
-        if nxt is not None and nxt.text == "(":
-            return self.call(t, name)
-        e = self.lookup(t, name)
-        nxt = self.peek()
-        if nxt is not None and nxt.text == "(":  # an element's timed variable: q[2](finalTime)
-            close = _Cursor(self.path, self.toks).closing(self.i)
-            args = self.toks[self.i + 1:close]
-            self.i = close + 1
-            return self.timed_value(t, name, e, [args])
-        return e
-
-    def dotted(self) -> str:
-        name = self.toks[self.i].text
-        self.i += 1
-        while (t := self.peek()) is not None and t.text == "." and self.i + 1 < len(self.toks) \
-                and self.toks[self.i + 1].kind == "ident":
-            name += "." + self.toks[self.i + 1].text
-            self.i += 2
-        return name
-
-    def lookup(self, tok: Token, name: str) -> ca.SX:
-        t = self.peek()
-        if t is not None and t.text == "[":  # x[2] (1-based), one constant index
-            self.i += 1
-            idx = self.take_int()
-            self.take("]")
-            name = f"{name}[{idx - 1}]" if f"{name}[{idx - 1}]" in self.names else name
-            if name in self.names and self.names[name].numel() > 1:
-                e = self.names[name]
-                if not 1 <= idx <= e.numel():
-                    raise self.fail(tok, f"index {idx} out of range 1..{e.numel()} of {name}")
-                return e[idx - 1]
-        if name not in self.names:
-            raise self.fail(tok, f"unknown name {name!r} in an expression")
-        return self.names[name]
-
-    def take_int(self) -> int:
-        t = self.peek()
-        if t is None or t.kind != "number" or not t.text.isdigit():
-            raise self.fail(t, "unsupported construct: an index must be a positive integer constant")
-        self.i += 1
-        return int(t.text)
-
-    def call(self, tok: Token, name: str) -> ca.SX:
-        open_ = self.i
-        close = _Cursor(self.path, self.toks).closing(open_)
-        args, k, depth = [], open_ + 1, 0
-        start = k
-        while k <= close:
-            s = self.toks[k].text
-            depth += s in "([{" and self.toks[k].kind == "op"
-            depth -= s in ")]}" and self.toks[k].kind == "op" and k != close
-            if (s == "," and depth == 0) or k == close:
-                args.append(self.toks[start:k])
-                start = k + 1
-            k += 1
-        if name == "der":
-            if len(args) != 1 or len(args[0]) != 1 or args[0][0].kind != "ident":
-                raise self.fail(tok, "unsupported construct: der() of anything but one state name")
-            self.i = close + 1
-            return self.derivative(args[0][0].text, tok)
-        if name in self.names:  # a timed variable v(t)
-            self.i = close + 1
-            return self.timed_value(tok, name, self.names[name], args)
-        if name not in _FUNCS:
-            raise self.fail(tok, f"unsupported function {name!r} (supported: der, {', '.join(sorted(_FUNCS))})")
-        nargs, fn = _FUNCS[name]
-        if len(args) != nargs or any(not a for a in args):
-            raise self.fail(tok, f"{name}() takes {nargs} argument{'s' if nargs > 1 else ''}")
-        saved = (self.toks, self.i)
-        values = []
-        for a in args:
-            sub = ExprParser(self.path, self.names, self.derivative, self.timed)
-            sub.depth = self.depth + 1
-            values.append(sub.parse(a))
-            self.times |= sub.times
-        self.toks, self.i = saved[0], close + 1
-        return fn(*values)
-
-    def timed_value(self, tok: Token, name: str, e: ca.SX, args: list[list[Token]]) -> ca.SX:
-        """The timed variable ``name(t)`` of the elements ``e`` (the ``timed`` callback's symbols)."""
-        if self.timed is None:
-            raise self.fail(tok, f"a timed variable {name}(...) is not allowed here (an integrand is over the whole horizon)")
-        if len(args) != 1 or not args[0]:
-            raise self.fail(tok, f"timed variable {name}(...) needs one time")
-        at = self.time_point(args[0])
-        self.times.add(at)
-        return ca.vertcat(*[self.timed(e[j], at, tok) for j in range(e.numel())])
-
-    def time_point(self, toks: list[Token]) -> Any:
-        if len(toks) == 1 and toks[0].text in ("finalTime", "startTime"):
-            return "final" if toks[0].text == "finalTime" else "start"
-        sign = -1.0 if toks[0].text == "-" else 1.0
-        body = toks[1:] if toks[0].text in ("-", "+") else toks
-        if len(body) == 1 and body[0].kind == "number":
-            return sign * float(body[0].text)
-        raise self.fail(toks[0], "unsupported construct: the time of a timed variable must be startTime, finalTime or a number")

@@ -18,11 +18,18 @@ from typing import Any
 
 from gtmodel._timing import add_phase, merge_phases, phase_sum, timed
 from gtmodel.errors import GtModelError, ProblemError
+from gtmodel.exchange.optimica import load_optimica
+from gtmodel.exchange.optimica_syntax import CLASS_NAME_RE
+from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
 from gtmodel.problems.base import Problem, ProblemFile
+from gtmodel.problems.kinds.optimal_control import _continuation, _refinement, _scalar_variables
+from gtmodel.problems.kinds.schemas.optimal_control import OptimalControlFile
 from gtmodel.problems.results import ResultFolder
 from gtmodel.problems.runtime import Heartbeat
-from gtmodel.problems.run import InterruptedWithResult, RunOutcome, _failed, _write_into, solution_timing, solve_problem, write_failure
+from gtmodel.problems.run import (InterruptedWithResult, RunOutcome, _failed, _write_into, out_of_memory, solution_timing, solve_problem,
+                                  write_failure)
 from gtmodel.status import Status
+from gtmodel.trajectory.model_ocp import OptimalControl
 
 __all__ = ["load_optimica_problem", "run_optimica", "optimica_target", "write_failure"]
 
@@ -53,11 +60,6 @@ def load_optimica_problem(path: str | Path, class_name: str, *, state_start_valu
         The file cannot be read or is outside the supported subset (an
         :class:`~gtmodel.exchange.optimica.OptimicaError` naming file, line and construct).
     """
-    from gtmodel.exchange.optimica import load_optimica
-    from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
-    from gtmodel.problems.kinds.optimal_control import _continuation, _refinement, _scalar_variables
-    from gtmodel.problems.kinds.schemas.optimal_control import OptimalControlFile
-    from gtmodel.trajectory.model_ocp import OptimalControl
 
     path = Path(path)
     opt = load_optimica(path, class_name, state_start_values_fixed=state_start_values_fixed)
@@ -119,8 +121,6 @@ def optimica_target(problems: list[Path], class_name: str | None, sweep: str | N
     if len(problems) != 1 or sweep is not None or class_name is None:
         raise GtModelError("an Optimica file is solved alone (no --sweep) and needs --class NAME, its optimization class "
                            "(e.g. gtmodel solve problems/optimica/double_integrator_min_time.mop --class DoubleIntegrator.MinTime)")
-    from gtmodel.exchange.optimica_syntax import CLASS_NAME_RE
-
     if not CLASS_NAME_RE.fullmatch(class_name):
         raise GtModelError(f"--class {class_name[:60]!r}: not a dotted Modelica class name (Pkg.Opt)")
     return out if out is not None else Path("results") / class_name.split(".")[-1]
@@ -185,8 +185,6 @@ def run_optimica(path: str | Path, class_name: str, out: str | Path, *, state_st
     except GtModelError as exc:
         return _failed(path, target, problem, exc, Status.INVALID_INPUT)
     except MemoryError:
-        from gtmodel.problems.run import out_of_memory
-
         return _failed(path, target, problem, out_of_memory(path), Status.INVALID_INPUT)
     except Exception as exc:  # noqa: BLE001 - a defect: reported with its status, never lost
         _log.debug("internal error", exc_info=True)
