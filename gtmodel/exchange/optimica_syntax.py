@@ -367,6 +367,10 @@ def split_optimica(path: Path, text: str, class_name: str) -> OptimicaClass:
             if toks[j].kind == "ident" and toks[j].text == "constraint" and not (at <= j <= end):
                 raise cur.fail(toks[j], f"unsupported construct: a constraint section in {kind} {name} (only in the "
                                         "optimization class solved)")
+            if (toks[j].kind == "ident" and toks[j].text in ("free", "initialGuess") and toks[j + 1].text == "="
+                    and toks[j - 1].text in ("(", ",") and not (at <= j <= end)):
+                raise cur.fail(toks[j], f"unsupported construct: Optimica attribute {toks[j].text!r} in {kind} {name} (pymoca "
+                                        "would drop it; set it in the optimization class, e.g. extends M(p(free = true)))")
     return OptimicaClass(full, kw.line, header, constraints, attributes, "".join(chars))
 
 

@@ -141,6 +141,8 @@ BAD = [
      r"p.mop:17: unsupported construct: '\*' of two arrays"),
     ("constraint in a model", "model M\n  Real y;\nequation\n  der(y) = 1;\nconstraint\n  y <= 1;\nend M;\n" + _opt(MIN_TIME), "Opt",
      r"p.mop:14: unsupported construct: a constraint section in model M"),
+    ("free in a model", PLANT.replace("parameter Real a_max = 1", "parameter Real k(free = true) = 1").replace("model Plant", "model Q")
+     .replace("end Plant", "end Q") + _opt(MIN_TIME), "Opt", r"p.mop:11: unsupported construct: Optimica attribute 'free' in model Q"),
     ("when clause", "model W\n  Real y;\nequation\n  der(y) = 1;\n  when y > 1 then\n  end when;\nend W;\n" + _opt(MIN_TIME), "Opt",
      r"p.mop:14: unsupported Modelica construct: when-clause"),
     ("Modelica syntax", _opt(MIN_TIME, "  extends Plant;\n  Real y\n"), "Opt", r"p.mop:\d+: Modelica syntax error"),
@@ -238,3 +240,11 @@ def test_array_variables_in_constraints(tmp_path):
     assert [int(c.expr.numel()) for c in opt.path_constraints] == [2, 2]
     out = run_optimica(path, "Opt", tmp_path / "r", plots=False)
     assert out.status.value == "optimal" and out.summary["final_time_s"] == pytest.approx(2.0, rel=1e-5)
+
+
+def test_fixed_start_contradicted_by_a_start_constraint_is_refused(tmp_path):
+    # independent check: the file's own values (x starts fixed at 0, the constraint says 0.5); the run names the constraint
+    path = _mop(tmp_path, _opt(MIN_TIME, constraints="  x(startTime) = 0.5;\n  x(finalTime) = 1;\n"))
+    out = run_optimica(path, "Opt", tmp_path / "r", plots=False)
+    assert out.status.value == "invalid_input"
+    assert "fixed start x = 0 contradicts the problem's start constraint 'p.mop:13'" in out.summary["message"]
