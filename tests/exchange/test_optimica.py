@@ -12,7 +12,9 @@ from gtmodel.cli import main
 from gtmodel.errors import GtModelError, InputError
 from gtmodel.exchange.optimica import FREE_FINAL_TIME_MAX, OptimicaError, load_optimica
 from gtmodel.exchange.optimica_syntax import MAX_BYTES, MAX_DEPTH, MAX_TOKENS
+from gtmodel.modeling import CollocationTranscription
 from gtmodel.problems.optimica_run import run_optimica
+from gtmodel.problems.run import run_problem
 
 pytest.importorskip("pymoca")
 
@@ -248,3 +250,13 @@ def test_fixed_start_contradicted_by_a_start_constraint_is_refused(tmp_path):
     out = run_optimica(path, "Opt", tmp_path / "r", plots=False)
     assert out.status.value == "invalid_input"
     assert "fixed start x = 0 contradicts the problem's start constraint 'p.mop:13'" in out.summary["message"]
+
+
+def test_bryson_denham_agrees_with_the_native_problem_file_on_the_same_mesh(tmp_path):
+    # independent check: problems/benchmarks/bryson_denham.toml (the optimal_control kind, its Python model) on the same
+    # 60 Radau elements of 3 points; the two declarations of one problem give one optimum
+    native = run_problem(EXAMPLES.parent / "benchmarks" / "bryson_denham.toml", tmp_path / "native", plots=False)
+    opt = load_optimica(EXAMPLES / "bryson_denham.mop", "BrysonDenham", state_start_values_fixed=True)
+    mop = CollocationTranscription(opt, elements=60, points=3, scheme="radau").solve()
+    assert native.summary["status"] == "optimal" and mop.status == "optimal"
+    assert mop.objective == pytest.approx(native.summary["objective"], rel=1e-7)
