@@ -360,8 +360,9 @@ def split_optimica(path: Path, text: str, class_name: str) -> OptimicaClass:
             path_, mods = _owner(cur, i, at)
             attributes[path_] = mods
         i += 1
+    others = [(a, e) for kind, _, a, e in classes if kind == "optimization" and a != at]  # blanked above
     for kind, name, a, e in classes:  # Optimica outside the class: refused, not silently dropped by pymoca
-        if a <= at <= e:
+        if a <= at <= e or any(oa <= a and e <= oe for oa, oe in others):
             continue
         for j in range(a, e):
             if toks[j].kind == "ident" and toks[j].text == "constraint" and not (at <= j <= end):

@@ -260,3 +260,13 @@ def test_bryson_denham_agrees_with_the_native_problem_file_on_the_same_mesh(tmp_
     mop = CollocationTranscription(opt, elements=60, points=3, scheme="radau").solve()
     assert native.summary["status"] == "optimal" and mop.status == "optimal"
     assert mop.objective == pytest.approx(native.summary["objective"], rel=1e-7)
+
+
+def test_several_optimization_classes_in_one_file(tmp_path):
+    # independent check: each class read alone gives its own declarations (the file's literal values); the other class,
+    # with its Optimica attributes and constraint section, is left out rather than refused
+    second = _opt(MIN_TIME).replace("Opt", "Other").replace("  x(finalTime) = 1;\n", "  x(finalTime) = 2;\n  v <= 3;\n")
+    path = _mop(tmp_path, _opt(MIN_TIME) + second)
+    first, other = load_optimica(path, "Opt"), load_optimica(path, "Other")
+    assert (len(first.path_constraints), len(other.path_constraints)) == (0, 1)
+    assert [float(c.lb[0]) for c in other.declared_point_constraints] == [2.0]
