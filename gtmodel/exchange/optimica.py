@@ -53,7 +53,9 @@ _log = logging.getLogger("gtmodel")
 
 #: Upper bound of a free final time whose ``finalTime`` gives no ``max``, s.
 FREE_FINAL_TIME_MAX = 1.0e4
-#: Most sibling ``.mo`` files read for classes the ``.mop`` file does not declare.
+_IDENT_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_CLASS_DECL_RE = re.compile(r"\b(?:model|block|package|connector|record|function|class|type)\s+([A-Za-z_][A-Za-z0-9_]*)")
+#: Most sibling ``.mo`` files looked at for classes the ``.mop`` file does not declare.
 MAX_SIBLINGS = 50
 
 
@@ -64,7 +66,8 @@ def load_optimica(path: str | Path, class_name: str, *, state_start_values_fixed
     ----------
     path : str or pathlib.Path
         The ``.mop`` (or ``.mo``) file; models it uses are declared in it or in ``.mo``
-        files in the same folder.
+        files in the same folder (read only when the file alone does not translate, and
+        only those declaring a class name the file uses).
     class_name : str
         The ``optimization`` class, dotted inside packages (``"Examples.MinTime"``).
     state_start_values_fixed : bool, optional
@@ -113,13 +116,17 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     try:
         mo = generator.generate(ast, class_name)
     except Exception as first:  # noqa: BLE001 - pymoca raises many types; retried with the sibling .mo files
-        siblings = sorted(p for p in path.parent.glob("*.mo") if p != path)[:MAX_SIBLINGS]
+        used = set(_IDENT_RE.findall(text))
+        siblings = []
+        for other in sorted(p for p in path.parent.glob("*.mo") if p != path)[:MAX_SIBLINGS]:
+            if other.stat().st_size > MAX_BYTES:
+                continue  # not read: a class the file needs from it stays unknown (the error names the class)
+            other_text = other.read_text(encoding="utf-8", errors="replace")
+            if used & set(_CLASS_DECL_RE.findall(other_text)):  # only the files declaring a name the .mop uses
+                siblings.append((other, other_text))
         if not siblings:
             raise _translation_error(path, class_name, first) from None
-        for other in siblings:
-            if other.stat().st_size > MAX_BYTES:
-                raise OptimicaError(f"{other}: file too large ({other.stat().st_size} bytes)") from None
-            other_text = other.read_text(encoding="utf-8", errors="replace")
+        for other, other_text in siblings:
             split_check(other, other_text)
             _constructs(other, other_text)
             ast.extend(_parse(parser, other, other_text))
@@ -201,7 +208,8 @@ class _Declarer:
             for name, sym in model.variables(kind).items():
                 self.names[modelica.get(name, name)] = sym
         self.params = {modelica.get(n, n): s for n, s in model.variables("parameter").items()}
-        self.p_values = model.flatten().p_value
+        params = model.variables("parameter")  # their values as declared (no flattening: the model may be of higher index)
+        self.p_values = np.concatenate([np.ravel(model._vars[n].start) for n in params]) if params else np.zeros(0)
         self.opt: Optimization | None = None
 
     def fail(self, line: int, what: str) -> OptimicaError:
@@ -391,7 +399,10 @@ def _attributes(d: _Declarer, owner: str, mod: Modifier) -> None:
                 _log.info("%s:%d: initialGuess of the fixed parameter %s has no effect", d.path, mod.line, owner)
             return
         lo, hi = num.get("min", -np.inf), num.get("max", np.inf)
-        value = float(np.asarray(d.p_values)[_p_index(d, key)])
+        declared = np.ravel(d.model._vars[key].start)
+        if declared.size != 1:
+            raise d.fail(mod.line, f"unsupported construct: free = true on the array parameter {owner!r} (scalar parameters only)")
+        value = float(declared[0])
         start = num.get("initialGuess", float(np.clip(value, lo, hi)))
         try:
             opt.free_parameter(key, lo, hi, start=start)
@@ -408,11 +419,3 @@ def _attributes(d: _Declarer, owner: str, mod: Modifier) -> None:
         except GtModelError as exc:
             raise d.fail(mod.line, f"initialGuess of {owner}: {exc}") from None
 
-
-def _p_index(d: _Declarer, key: str) -> int:
-    """The flat index of scalar parameter ``key`` (array parameters cannot be free here)."""
-    dae = d.model.flatten()
-    sl = dae.p_vars[key] if hasattr(dae, "p_vars") else None
-    if sl is None or sl.stop - sl.start != 1:
-        raise d.fail(0, f"free parameter {key}: only scalar parameters can be free")
-    return sl.start

@@ -270,3 +270,12 @@ def test_several_optimization_classes_in_one_file(tmp_path):
     first, other = load_optimica(path, "Opt"), load_optimica(path, "Other")
     assert (len(first.path_constraints), len(other.path_constraints)) == (0, 1)
     assert [float(c.lb[0]) for c in other.declared_point_constraints] == [2.0]
+
+
+def test_connected_components_from_a_mo_beside_the_file(tmp_path):
+    # independent check: the closed form of minimum-dissipation charging, R C^2 U^2 / T = 0.5 J (constant current);
+    # the folder also holds broken .mo files (syntax_error.mo), which declare no class the .mop uses and are not read
+    data = Path(__file__).parent / "data"
+    out = run_optimica(data / "rc_charge.mop", "Charge", tmp_path / "r", plots=False)
+    assert out.status.value == "optimal" and out.summary["verification"]["passed"]
+    assert out.summary["objective"] == pytest.approx(0.5, rel=1e-8)
