@@ -279,3 +279,16 @@ def test_connected_components_from_a_mo_beside_the_file(tmp_path):
     out = run_optimica(data / "rc_charge.mop", "Charge", tmp_path / "r", plots=False)
     assert out.status.value == "optimal" and out.summary["verification"]["passed"]
     assert out.summary["objective"] == pytest.approx(0.5, rel=1e-8)
+
+
+@pytest.mark.parametrize(("start", "final", "at", "target"), [(0.0, 1.0, "finalTime", 1.0), (1.0, 2.0, "1.5", 0.25)])
+def test_free_parameter_with_interior_time_and_start_time(tmp_path, start, final, at, target):
+    # independent check: x(t) = a (t - t0)^2 / 2, so x(t1) = target gives a = 2 target / (t1 - t0)^2 = 2 (closed form)
+    text = (EXAMPLES / "constant_thrust.mop").read_text().replace("startTime = 0, finalTime = 1",
+                                                                   f"startTime = {start}, finalTime = {final}")
+    text = text.replace("x(finalTime) = 1;", f"x({at}) = {target};")
+    path = tmp_path / "thrust.mop"
+    path.write_text(text, encoding="utf-8")
+    out = run_optimica(path, "ConstantThrust", tmp_path / "r", plots=False)
+    assert out.status.value == "optimal"
+    assert out.summary["model_parameters"]["a"] == pytest.approx(2.0, rel=1e-7)
