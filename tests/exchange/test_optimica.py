@@ -292,3 +292,13 @@ def test_free_parameter_with_interior_time_and_start_time(tmp_path, start, final
     out = run_optimica(path, "ConstantThrust", tmp_path / "r", plots=False)
     assert out.status.value == "optimal"
     assert out.summary["model_parameters"]["a"] == pytest.approx(2.0, rel=1e-7)
+
+
+def test_initial_guess_attributes_of_variables(tmp_path):
+    # independent check: the guesses read back against the file's literal values, top-level and inside a component
+    text = ("optimization Opt (objective = finalTime, finalTime(free = true, min = 0.5, max = 10, initialGuess = 2.5))\n"
+            "  Plant p(x(initialGuess = 0.25));\n  input Real w(initialGuess = 0.5);\nequation\n  p.u = w;\n"
+            "constraint\n  p.x(finalTime) = 1;\nend Opt;\n")
+    opt = load_optimica(_mop(tmp_path, text), "Opt")
+    guesses = {k: np.ravel(v).tolist() for k, v in opt.initial_guesses.items()}
+    assert guesses == {"p.x": [0.25], "w": [0.5]} and opt.final_time_guess == 2.5
