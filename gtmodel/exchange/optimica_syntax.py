@@ -1,4 +1,4 @@
-"""The Optimica layer of a ``.mop`` file: tokens, the ``optimization`` class's own parts, expressions.
+"""The Optimica layer of a ``.mop`` file: its tokens and the ``optimization`` class's own parts.
 
 Optimica (Akesson 2008; JModelica.org's dialect) adds to Modelica a class kind
 ``optimization`` with the class modifiers ``objective``, ``objectiveIntegrand``,
@@ -8,9 +8,9 @@ parses Modelica only, so this module takes the Optimica parts out with a tokeniz
 ``eval``): :func:`split_optimica` finds the class, reads its header modifiers and its
 ``constraint`` section, and returns the source with those parts blanked (newlines kept, so
 every line number pymoca reports is the file's) and ``optimization`` written ``model``.
-:class:`~gtmodel.exchange.optimica_expr.ExprParser` is a restricted recursive-descent parser of Modelica expressions into
-CasADi SX over a table of names (:mod:`gtmodel.exchange.optimica_expr`). Every error is an :class:`OptimicaError` naming the file,
-the line and the construct.
+:class:`~gtmodel.exchange.optimica_expr.ExprParser` parses the expressions into CasADi SX
+over the same tokens. Every error is an :class:`OptimicaError` naming the file, the line
+and the construct.
 
 Hostile input is refused before any work: a file over :data:`MAX_BYTES`, more than
 :data:`MAX_TOKENS` tokens, parentheses nested deeper than :data:`MAX_DEPTH`, a quoted
