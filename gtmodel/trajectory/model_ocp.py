@@ -11,7 +11,9 @@ declared :class:`~gtmodel.modeling.Optimization` is not changed by a solve).
 
 from __future__ import annotations
 
+import contextlib
 import logging
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,6 +28,7 @@ from gtmodel.modeling.ocp.coarse_start import linear_quadratic, solve_from_coars
 from gtmodel.modeling.ocp.continuation import Continuation, continue_smoothing, record_final, smoothing_widths
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.modeling.ocp.verification_bounds import REFINING
 from gtmodel.errors import InputError
 from gtmodel.status import Status
 
@@ -43,6 +46,22 @@ __all__ = ["OptimalControl", "MultipleShooting", "COARSE_START_MIN_ELEMENTS", "C
 #: solve (``benchmarks/bench_large_mesh.py``). A coarse solve that fails is not used.
 COARSE_START_MIN_ELEMENTS = 200  # not for a linear-quadratic problem (coarse_start.linear_quadratic)
 COARSE_START_ELEMENTS = 50
+
+
+@contextlib.contextmanager
+def _quiet_if_refined(refined: bool) -> Iterator[None]:
+    """A single solve that refinement will start from if it fails logs its failed checks as a pass does (INFO).
+
+    Its "likely remedy: refine = true" as a warning told a user whose run then refined by itself, and ended
+    ``optimal``, that it had failed (issue 67: 16 lines of stderr for a verified first solve); the stop of the
+    refinement, or its result, says what came of it.
+    """
+    token = REFINING.set(True) if refined else None
+    try:
+        yield
+    finally:
+        if token is not None:
+            REFINING.reset(token)
 
 
 @dataclass
@@ -169,7 +188,8 @@ class OptimalControl:
         tr = CollocationTranscription(d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme, **single)
         coarse = (lambda: self.coarse_solve(kwargs)) if (guess is None and d.method.elements >= COARSE_START_MIN_ELEMENTS
                                                          and not linear_quadratic(d.optimization, tr.dae)) else None
-        result = solve_from_coarse(tr, coarse, initial_guess=guess)
+        with _quiet_if_refined(d.refinement.on_failure and bool(check) and not d.optimization.data_fits):
+            result = solve_from_coarse(tr, coarse, initial_guess=guess)
         bounds = getattr(result.verification, "bounds", None) or {}
         # a state bound exceeded between the nodes beyond the tolerance fails as the deviations do: refinement splits there
         exceeded = result.status in (Status.OPTIMAL, Status.ACCEPTABLE) and not bounds.get("within_tolerance", True)
@@ -225,7 +245,8 @@ class OptimalControl:
                 start, record = continue_smoothing(d.optimization, solve, d.continuation)
             finally:
                 tr.verify = verify
-        result = solve(None, start)
+        with _quiet_if_refined(d.refinement.on_failure and bool(check) and not d.optimization.data_fits):
+            result = solve(None, start)
         merge_phases(phases, result.timing)
         result.continuation = record_final(record, start, result)
         failed = result.status == Status.CHECK_FAILED or (result.status in (Status.OPTIMAL, Status.ACCEPTABLE)
