@@ -219,15 +219,18 @@ class Verification:
         Returns
         -------
         dict
-            ``passed``, ``tolerance``, the largest deviations, per-state deviations, the
-            integrator, the largest element defect, the message.
+            ``passed`` (the deviations within the tolerance and the state bounds kept between the
+            points), ``deviations_passed`` (the deviations alone), ``tolerance``, the largest deviations,
+            per-state deviations, the integrator, the largest element defect, the message.
         """
         def num(v: float) -> float | str:
             return float(v) if np.isfinite(v) else str(v)
 
+        kept = bool(self.bounds.get("within_tolerance", True))  # a bound exceeded between the points fails it (issue 64)
         return {
-            "status": self.status,
-            "passed": bool(self.passed),
+            "status": "passed" if self.passed and kept else "failed",
+            "passed": bool(self.passed) and kept,
+            "deviations_passed": bool(self.passed),
             "tolerance": float(self.tolerance),
             "max_abs_deviation": num(self.max_abs_deviation),
             "max_rel_deviation": num(self.max_rel_deviation),
