@@ -201,12 +201,7 @@ class OptimalControl:
                          d.refinement.max_passes, "the default" if d.refinement.max_cpu_s is None else f"{d.refinement.max_cpu_s:g}")
             phases = {k: dict(v) for k, v in result.timing.items()}  # the single solve's, then every pass's
             with timed(phases, "refinement"):
-                result = solve_refined(
-                    d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
-                    max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification,
-                    objective_tolerance=d.refinement.objective_tolerance, **kwargs,
-                )
+                result = self._refined_from(result, kwargs)
             result.timing = phases
         return self._estimated(tr, result)
 
@@ -258,15 +253,20 @@ class OptimalControl:
                           "(refine_on_failure)", d.optimization.model.name)
             continued = result.continuation
             with timed(phases, "refinement"):
-                result = solve_refined(
-                    d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
-                    max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
-                    max_cpu_s=d.refinement.max_cpu_s, start=result, verification=d.refinement.verification,
-                    objective_tolerance=d.refinement.objective_tolerance, **kwargs,
-                )
+                result = self._refined_from(result, kwargs)
             result.continuation = continued
         result.timing = phases
         return result
+
+    def _refined_from(self, start: OptimizationResult, kwargs: dict[str, Any]) -> OptimizationResult:
+        """Mesh refinement from a verified solve at hand (``refine_on_failure``, or after a continuation)."""
+        d = self
+        return solve_refined(
+            d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
+            max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements),
+            max_passes=d.refinement.max_passes, max_cpu_s=d.refinement.max_cpu_s, start=start,
+            verification=d.refinement.verification, objective_tolerance=d.refinement.objective_tolerance, **kwargs,
+        )
 
     def coarse_solve(self, kwargs: dict[str, Any]) -> OptimizationResult:
         """The problem solved on :data:`COARSE_START_ELEMENTS` elements (unverified), the start of a fine mesh.
