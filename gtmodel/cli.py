@@ -426,7 +426,7 @@ def _solve_optimica(args: argparse.Namespace) -> int:
 
     def on_interrupt() -> None:
         _say_written(target, *write_failure(target, {**failure_summary(path, KeyboardInterrupt(), Status.INTERRUPTED,
-                                                                         name=target.name), "kind": "optimal_control"}))
+                                                                         name=target.name), "kind": "optimica"}))
     return _guarded(target, run, on_interrupt)
 # ---- end of Optimica input ----
 

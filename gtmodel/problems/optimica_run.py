@@ -1,11 +1,11 @@
-"""``gtmodel solve FILE.mop --class Pkg.Opt``: an Optimica class run as an ``optimal_control`` problem.
+"""``gtmodel solve FILE.mop --class Pkg.Opt``: an Optimica class run as an ``optimica`` problem file would run it.
 
-:func:`load_optimica_problem` reads the class (:func:`gtmodel.exchange.optimica.load_optimica`)
-and wraps its :class:`~gtmodel.modeling.Optimization` in the declaration of the
-``optimal_control`` kind with that kind's defaults (the schema's: direct collocation,
-verification by simulation, mesh refinement, IPOPT), so the solve, the result folder
-(``summary.json``, ``trajectories.csv``, plots, ``report.html``) and the exit codes are those
-of any ``optimal_control`` problem file. :func:`run_optimica` is :func:`gtmodel.problems.run.run_problem`
+:func:`load_optimica_problem` declares the class by the ``optimica`` kind's own path
+(:func:`gtmodel.problems.kinds.optimica.optimica_declaration`, the kind's tables at their
+defaults: direct collocation, verification by simulation, refinement on a failed
+verification, IPOPT), so the solve, the result folder (``summary.json``, ``trajectories.csv``,
+plots, ``report.html``) and the exit codes are those of an ``optimica`` problem file (and of
+any ``optimal_control`` one). :func:`run_optimica` is :func:`gtmodel.problems.run.run_problem`
 for it: every outcome becomes a status and a summary.
 """
 
@@ -13,23 +13,17 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from types import SimpleNamespace
-from typing import Any
 
 from gtmodel._timing import add_phase, merge_phases, phase_sum, timed
 from gtmodel.errors import GtModelError, ProblemError
-from gtmodel.exchange.optimica import load_optimica
 from gtmodel.exchange.optimica_syntax import CLASS_NAME_RE
-from gtmodel.modeling.ocp.methods import Collocation, SolverSettings
 from gtmodel.problems.base import Problem, ProblemFile
-from gtmodel.problems.kinds.optimal_control import _continuation, _refinement, _scalar_variables
-from gtmodel.problems.kinds.schemas.optimal_control import OptimalControlFile
+from gtmodel.problems.kinds.optimica import default_settings, optimica_declaration
 from gtmodel.problems.results import ResultFolder
 from gtmodel.problems.runtime import Heartbeat
 from gtmodel.problems.run import (InterruptedWithResult, RunOutcome, _failed, _write_into, out_of_memory, solution_timing, solve_problem,
                                   write_failure)
 from gtmodel.status import Status
-from gtmodel.trajectory.model_ocp import OptimalControl
 
 __all__ = ["load_optimica_problem", "run_optimica", "optimica_target", "write_failure"]
 
@@ -37,7 +31,7 @@ _log = logging.getLogger("gtmodel")
 
 
 def load_optimica_problem(path: str | Path, class_name: str, *, state_start_values_fixed: bool = False) -> Problem:
-    """An Optimica ``optimization`` class as an ``optimal_control`` :class:`~gtmodel.problems.base.Problem`.
+    """An Optimica ``optimization`` class as an ``optimica`` :class:`~gtmodel.problems.base.Problem` (the kind's tables at their defaults).
 
     Parameters
     ----------
@@ -51,8 +45,8 @@ def load_optimica_problem(path: str | Path, class_name: str, *, state_start_valu
     Returns
     -------
     Problem
-        Kind ``optimal_control``, named after the class's last part, with the kind's default
-        collocation, verification, refinement and solver settings.
+        Kind ``optimica`` (an ``optimal_control`` declaration), named after the class's last
+        part, with the kind's default collocation, verification, refinement and solver settings.
 
     Raises
     ------
@@ -60,39 +54,12 @@ def load_optimica_problem(path: str | Path, class_name: str, *, state_start_valu
         The file cannot be read or is outside the supported subset (an
         :class:`~gtmodel.exchange.optimica.OptimicaError` naming file, line and construct).
     """
-
     path = Path(path)
-    opt = load_optimica(path, class_name, state_start_values_fixed=state_start_values_fixed)
-    fields = OptimalControlFile.model_fields
-    defaults = SimpleNamespace(**{k: fields[k].default for k in ("transcription", "verification", "collocation", "solver",
-                                                                 "continuation")})
-    file = ProblemFile(path)
-    col, sol = defaults.collocation, defaults.solver
     name = class_name.split(".")[-1]
-    bounds = {}
-    flat = opt.model.flatten()
-    for kind, names in (("x", flat.x_vars), ("u", flat.u_vars), ("z", flat.z_vars)):
-        lb, ub = opt.bounds_vectors(flat, kind)
-        for n, sl in names.items():
-            if sl.stop - sl.start == 1:
-                bounds[n] = (float(lb[sl.start]), float(ub[sl.start]))
-    declaration = OptimalControl(
-        name=name, model_file=path, class_name=opt.optimica["class"], optimization=opt,
-        method=Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics),
-        solver=SolverSettings(name=sol.name, max_iter=sol.max_iter, tol=sol.tol, jit=sol.jit),
-        objective=_objective_text(path, opt), sense="minimize", constraints=tuple(opt.optimica["constraints"]),
-        bounds=bounds, refinement=_refinement(file, defaults), continuation=_continuation(file, defaults),
-        variables=tuple(n for n, (k, _) in _scalar_variables(opt.model).items() if k in ("algebraic", "output")),
-    )
-    return Problem(path=path, name=name, kind="optimal_control", description=f"Optimica class {opt.optimica['class']} of {path.name}",
+    declaration = optimica_declaration(path, class_name, state_start_values_fixed=state_start_values_fixed,
+                                       settings=default_settings(), file=ProblemFile(path), name=name)
+    return Problem(path=path, name=name, kind="optimica", description=f"Optimica class {declaration.class_name} of {path.name}",
                    declaration=declaration, data={}, overrides={})
-
-
-def _objective_text(path: Path, opt: Any) -> str:
-    parts = [] if opt.mayer.is_zero() else [str(opt.mayer)]
-    if not opt.lagrange.is_zero():
-        parts.append(f"integral({opt.lagrange})")
-    return " + ".join(parts) or "0"
 
 
 def optimica_target(problems: list[Path], class_name: str | None, sweep: str | None, out: Path | None) -> Path:

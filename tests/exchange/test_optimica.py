@@ -61,7 +61,7 @@ def test_shipped_double_integrator_through_the_command(tmp_path, capsys):
     code = main(["solve", str(EXAMPLES / "double_integrator_min_time.mop"), "--class", "DoubleIntegrator.MinTime",
                  "--out", str(tmp_path / "r"), "-q", "--no-plots"])
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
-    assert code == 0 and summary["kind"] == "optimal_control" and summary["status"] == "optimal"
+    assert code == 0 and summary["kind"] == "optimica" and summary["status"] == "optimal"
     assert summary["final_time_s"] == pytest.approx(2.0, rel=1e-5)
     assert (tmp_path / "r" / "trajectories.csv").is_file() and (tmp_path / "r" / "report.html").is_file()
 

@@ -49,7 +49,9 @@ def test_default_solve_passes_the_arguments_on():
 def test_declarations_live_in_the_domain_packages(name):
     # the one exception: replay's declaration holds another problem file's kind
     # robot_loop's shipped files serve a robot: they live in loops/ (gtmodel loop), not problems/
+    # an optimica file lives beside its .mop (problems/optimica/)
     files = [p for p in sorted(PROBLEMS_DIR.glob("*.toml")) + sorted((PROBLEMS_DIR.parent / "loops").glob("*.toml"))
+             + sorted((PROBLEMS_DIR / "optimica").glob("*.toml"))
              if tomllib.loads(p.read_text())["kind"] == name]
     decl = load_problem(files[0]).declaration
     module = type(decl).__module__

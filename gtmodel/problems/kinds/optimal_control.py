@@ -278,32 +278,7 @@ class OptimalControlKind(ProblemKind):
                 raise _unknown(file, f"nominal.{key}", key, set(variables) | {"final_time"} | set(opt.free_parameters))
         declare_initial_guess(file, doc.initial_guess, opt, boundary, variables, vkeys, table,
                               doc.optimization.final_time.initial_guess is not None)
-        col, tr = doc.collocation, doc.transcription
-        method: Collocation | MultipleShooting = Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics)
-        if tr.method == "multiple_shooting":
-            if doc.nominal:
-                raise file.fail("nominal", 'no nominal values with [transcription] method = "multiple_shooting" (scaling is for collocation)')
-            flat = opt.model.flatten()
-            if flat.nz and tr.integrator == "cvodes":
-                raise file.fail("transcription.integrator", "rk, radau, collocation or idas for a model with algebraic variables "
-                                "(CVODES takes none)", tr.integrator)
-            if flat.nz and tr.integrator in EXPLICIT_INTEGRATORS and explicit_algebraics(flat).z is None:
-                raise file.fail("transcription.integrator", "collocation or idas: the algebraic variables cannot be eliminated "
-                                f"symbolically for {tr.integrator} ({explicit_algebraics(flat).reason})", tr.integrator)
-            try:  # refused at load, before anything is built
-                check_shooting_memory(tr.intervals, tr.steps, flat.nx, flat.nz, flat.nu)
-            except InputError as exc:
-                raise file.wrap("transcription.intervals", exc) from None
-            method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
-        if doc.verification.integrator == "cvodes" and opt.model.flatten().nz:
-            raise file.fail("verification.integrator", "idas or auto for a model with algebraic variables (CVODES takes none)", "cvodes")
-        if doc.solver.name != "ipopt" and tr.method == "multiple_shooting":
-            raise file.fail("solver.name", 'ipopt with method = "multiple_shooting" (fatrop solves the stage-wise '
-                            'collocation NLP only; method = "collocation" for fatrop)', doc.solver.name)
-        if tr.refine and tr.method == "multiple_shooting":
-            raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement splits '
-                            'collocation elements; shooting is verified as it is: raise transcription.intervals or steps, '
-                            'or refine with method = "collocation")', True)
+        method = _method(file, doc, opt)
         shown = _shown_variables(file, doc.output.variables, opt, variables, vkeys)
         bench = doc.benchmark.model_dump() if doc.benchmark is not None else None
         if bench is not None and bench["sign"] not in (1.0, -1.0):
@@ -441,6 +416,38 @@ def applied_inputs(result: OptimizationResult, optimization: Optimization,
         if np.ndim(v) == 1 and sl.stop - sl.start == 1:
             out[k] = np.clip(np.asarray(v, dtype=float), lower[sl.start], upper[sl.start])
     return t, out
+
+
+def _method(file: ProblemFile, doc: Any, opt: Optimization) -> Collocation | MultipleShooting:
+    """``[collocation]`` or ``[transcription]`` multiple shooting as the declaration's method, checked against the
+    model (algebraic variables and integrators), ``[verification]`` and ``[solver]`` (also the ``optimica`` kind's)."""
+    col, tr = doc.collocation, doc.transcription
+    method: Collocation | MultipleShooting = Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics)
+    if tr.method == "multiple_shooting":
+        if getattr(doc, "nominal", None):
+            raise file.fail("nominal", 'no nominal values with [transcription] method = "multiple_shooting" (scaling is for collocation)')
+        flat = opt.model.flatten()
+        if flat.nz and tr.integrator == "cvodes":
+            raise file.fail("transcription.integrator", "rk, radau, collocation or idas for a model with algebraic variables "
+                            "(CVODES takes none)", tr.integrator)
+        if flat.nz and tr.integrator in EXPLICIT_INTEGRATORS and explicit_algebraics(flat).z is None:
+            raise file.fail("transcription.integrator", "collocation or idas: the algebraic variables cannot be eliminated "
+                            f"symbolically for {tr.integrator} ({explicit_algebraics(flat).reason})", tr.integrator)
+        try:  # refused at load, before anything is built
+            check_shooting_memory(tr.intervals, tr.steps, flat.nx, flat.nz, flat.nu)
+        except InputError as exc:
+            raise file.wrap("transcription.intervals", exc) from None
+        method = MultipleShooting(tr.intervals, tr.controls, tr.integrator, tr.steps)
+    if doc.verification.integrator == "cvodes" and opt.model.flatten().nz:
+        raise file.fail("verification.integrator", "idas or auto for a model with algebraic variables (CVODES takes none)", "cvodes")
+    if doc.solver.name != "ipopt" and tr.method == "multiple_shooting":
+        raise file.fail("solver.name", 'ipopt with method = "multiple_shooting" (fatrop solves the stage-wise '
+                        'collocation NLP only; method = "collocation" for fatrop)', doc.solver.name)
+    if tr.refine and tr.method == "multiple_shooting":
+        raise file.fail("transcription.refine", 'false with method = "multiple_shooting" (mesh refinement splits '
+                        'collocation elements; shooting is verified as it is: raise transcription.intervals or steps, '
+                        'or refine with method = "collocation")', True)
+    return method
 
 
 def _continuation(file: ProblemFile, doc: Any) -> Continuation:
