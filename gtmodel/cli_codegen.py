@@ -137,7 +137,8 @@ def add_codegen_parser(sub: Any) -> argparse.ArgumentParser:
     _common(robot)
 
     model = target("model")
-    model.add_argument("model", metavar="FILE:CLASS", help="the model, e.g. models/cart_pendulum.py:CartPendulum")
+    model.add_argument("model", metavar="FILE:CLASS", help="the model, e.g. models/cart_pendulum.py:CartPendulum, or Modelica "
+                       "source: drive.mo:Pkg.Drive, an Optimica class's model: file.mop:Pkg.Opt")
     model.add_argument("--functions", default=None, help="comma-separated subset of ode, outputs, step_rk4, step_implicit (default all)")
     model.add_argument("--period", type=float, default=None, metavar="S", help="period of the fixed steps (default 0.004 s)")
     _real(model)

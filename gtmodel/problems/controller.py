@@ -30,6 +30,7 @@ from gtmodel.control.tracking import TrackingController, tracking_controller
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import SOLVED, DeclaredBounds, dae_bounds, summary_bounds, unverified_reason
+from gtmodel.problems.registry import MODEL_OCP_KINDS
 from gtmodel.problems.loop_file import RESULT_TABLE, CheckSection, LoopModel, LoopSetup, loop_samples, loop_setup
 from gtmodel.problems.user_model import load_user_model
 
@@ -69,7 +70,7 @@ def tracking_from_result(
     R: Any = None,
     accept_unverified: bool = False,
 ) -> tuple[TrackingController, ExplicitODE]:
-    """Feedforward + time-varying LQR along the optimal motion of an ``optimal_control`` result.
+    """Feedforward + time-varying LQR along the optimal motion of an ``optimal_control`` (or ``optimica``) result.
 
     Parameters
     ----------
@@ -111,8 +112,8 @@ def tracking_from_result(
         summary = json.loads(summary_file.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         raise InputError(f"{summary_file}: cannot read the result summary ({exc})") from None
-    if summary.get("kind") != "optimal_control":
-        raise InputError(f"{summary_file}: kind: expected an optimal_control result, got {summary.get('kind')!r}")
+    if summary.get("kind") not in MODEL_OCP_KINDS:
+        raise InputError(f"{summary_file}: kind: expected an optimal_control (or optimica) result, got {summary.get('kind')!r}")
     status = summary.get("status")
     if status not in (*SOLVED, "check_failed"):
         raise InputError(f"{summary_file}: status: expected a solved problem ({' or '.join(SOLVED)}), got {status!r}")

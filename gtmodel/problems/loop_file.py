@@ -79,7 +79,7 @@ from gtmodel.problems.loop_bounds import DeclaredBounds, input_limits, accept_re
 from gtmodel.problems.loop_limits import (MAX_LOOP_SAMPLES, MAX_MAGNITUDE, MAX_PERIOD_S, MAX_TABLE_NUMBERS, MAX_WEIGHT, MIN_PERIOD_S,
                                           Bounds, Period, StateBounds, Weights, loop_samples)
 from gtmodel.problems.references import robot_parameters
-from gtmodel.problems.registry import get_loop_kind
+from gtmodel.problems.registry import MODEL_OCP_KINDS, get_loop_kind
 from gtmodel.problems.run import load_problem, solve_problem
 from gtmodel.problems.kinds.schemas.loop import CheckSection, LoopFile, ReferenceSection
 from gtmodel.problems.schema import problem_error
@@ -317,7 +317,7 @@ def _result_summary(table: Path) -> dict[str, Any] | None:
         summary = json.loads(summary_file.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    return summary if isinstance(summary, dict) and summary.get("kind") == "optimal_control" else None
+    return summary if isinstance(summary, dict) and summary.get("kind") in MODEL_OCP_KINDS else None
 
 
 def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, dt: float, bounds_field: str | None = None,
@@ -377,7 +377,7 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         except GtModelError as exc:
             raise file.wrap("reference.problem", exc) from None
         wanted = "point_to_point" if robot else "optimal_control"
-        if loaded.kind != wanted:
+        if loaded.kind != wanted and (robot or loaded.kind not in MODEL_OCP_KINDS):
             raise file.fail("reference.problem", f"a problem file of kind {wanted} (for this model)", loaded.kind)
         solution = solve_point_to_point(loaded.declaration) if robot else solve_problem(loaded)
         if robot:

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from gtmodel.problems.base import ProblemKind
     from gtmodel.problems.schema import ProblemSchema
 
-__all__ = ["KINDS", "LOOP_KINDS", "LOOP_OUTPUT", "RENAMED", "LoopKind", "canonical_kind", "get_kind", "get_loop_kind", "get_schema",
+__all__ = ["KINDS", "LOOP_KINDS", "LOOP_OUTPUT", "MODEL_OCP_KINDS", "RENAMED", "LoopKind", "canonical_kind", "get_kind", "get_loop_kind", "get_schema",
            "kind_titles", "all_kinds"]
 
 log = logging.getLogger("gtmodel")
@@ -82,6 +82,11 @@ _SCHEMAS: dict[str, str] = {
     "robot_loop": "gtmodel.problems.kinds.schemas.robot_loop:RobotLoopFile",
 }
 
+
+#: The kinds whose results are an optimal trajectory of a user's model (``summary.json``'s ``model`` and
+#: ``trajectories.csv`` as ``optimal_control`` writes them): an ``optimica`` file's class is that kind's
+#: declaration, so its result folder serves a tracking controller or a loop file's reference as well.
+MODEL_OCP_KINDS: tuple[str, ...] = ("optimal_control", "optimica")
 
 #: Former kind name -> its name now: a file of the former name is read as the new kind, with a
 #: deprecation warning (``tracking``: the L1 replay, renamed so that "tracking" names one thing,

@@ -20,6 +20,13 @@ or ``gtmodel codegen --model models/cart_pendulum.py:CartPendulum``):
   state, an algebraic variable, or an output for an eliminated alias);
 * its parameters have default values, which a problem file may override by name.
 
+A Modelica or Optimica source file (:data:`MODELICA_SUFFIXES`: ``models/drive.mo:Drive``,
+``problems/optimica/double_integrator_min_time.mop:DoubleIntegrator.MinTime``) is read, not
+run: a ``.mo`` class through :func:`gtmodel.exchange.modelica.load_modelica`, a ``.mop`` file's
+``optimization`` class through :func:`gtmodel.exchange.optimica.load_optimica` (its model, the
+Optimica parts left out); so ``gtmodel codegen model FILE.mo:CLASS`` and the tracking
+controller of an ``optimica`` result folder reach a model that came from Modelica source.
+
 Every failure (missing file, syntax error, an exception while importing or
 instantiating, class not defined, not a Model, a model that does not flatten) is one
 :class:`~gtmodel.errors.ModelError` whose message starts with the file path.
@@ -36,14 +43,18 @@ from pathlib import Path
 from typing import Any
 
 from gtmodel.errors import GtModelError, ModelError
+from gtmodel.exchange.modelica import load_modelica
+from gtmodel.exchange.optimica import load_optimica
 from gtmodel.modeling import Model, structural_simplify
 
-__all__ = ["load_user_model", "reduced_model", "split_model_reference", "ModelFileError", "BUILD_METHODS"]
+__all__ = ["load_user_model", "reduced_model", "split_model_reference", "ModelFileError", "BUILD_METHODS", "MODELICA_SUFFIXES"]
 
 _log = logging.getLogger("gtmodel")
 
 #: Methods tried, in this order, on an instance that is not itself a Model.
 BUILD_METHODS = ("build", "to_model")
+#: Endings of the model files read as Modelica (``.mo``) or Optimica (``.mop``) source, not imported as Python.
+MODELICA_SUFFIXES = (".mo", ".mop")
 
 
 class ModelFileError(ModelError):
@@ -75,10 +86,12 @@ def load_user_model(path: str | Path, class_name: str, reduce: bool = True) -> M
     Parameters
     ----------
     path : str or pathlib.Path
-        The Python file (absolute or relative to the working directory).
+        The Python file (absolute or relative to the working directory), or a Modelica
+        ``.mo`` / Optimica ``.mop`` file (:data:`MODELICA_SUFFIXES`).
     class_name : str
         Name of a class at the top level of the file (see the module docstring for the
-        protocol).
+        protocol); of a Modelica file, the dotted class name (of a ``.mop`` file, an
+        ``optimization`` class).
     reduce : bool, optional
         Reduce a model that does not flatten (:func:`reduced_model`; default). False: the
         model as written, unchecked (for :class:`~gtmodel.modeling.Optimization`, which
@@ -105,6 +118,12 @@ def load_user_model(path: str | Path, class_name: str, reduce: bool = True) -> M
         found = False
     if not found:
         raise ModelFileError(f"{p}: no such model file")
+    if p.suffix.lower() in MODELICA_SUFFIXES:
+        model = _modelica_model(p, class_name)
+        try:
+            return reduced_model(model) if reduce else model
+        except GtModelError as exc:
+            raise ModelError(f"{p}: class {class_name}: {exc}") from None
     if not isinstance(class_name, str) or not class_name.isidentifier():
         raise ModelError(f"{p}: class name must be a Python identifier, got {class_name!r}")
     module = _import(p)
@@ -139,6 +158,16 @@ def load_user_model(path: str | Path, class_name: str, reduce: bool = True) -> M
         raise ModelError(f"{p}: class {class_name}: {exc}") from None
     _log.debug("loaded model %r from %s:%s", model.name, p, class_name)
     return model
+
+
+def _modelica_model(path: Path, class_name: str) -> Model:
+    """The model of a Modelica class (``.mo``) or of an Optimica ``optimization`` class (``.mop``), as written."""
+    try:
+        if path.suffix.lower() == ".mop":
+            return load_optimica(path, class_name).user_model
+        return load_modelica(path, class_name)
+    except GtModelError as exc:  # each names the file (and the line and construct where it has one)
+        raise ModelError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
 
 
 def reduced_model(model: Model) -> Model:

@@ -1,0 +1,87 @@
+"""``gtmodel codegen`` of a model that came from Modelica source (issue 68: "codegen generates and checks the C of a
+model that came from a .mo file").
+
+Two routes: ``gtmodel codegen model FILE.mo:CLASS`` (and ``FILE.mop:Pkg.Opt``, the model of an
+Optimica class) generates, compiles and checks the model's C against Python; and ``gtmodel
+codegen tracking RESULT_DIR`` builds the tracking controller of an ``optimica`` problem's
+result folder and checks it in closed loop. Each compiles C (a few seconds each).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from gtmodel.cli import EXIT_BAD_INPUT, EXIT_OK, main
+from gtmodel.codegen.build import find_compiler
+from gtmodel.errors import ModelError
+from gtmodel.problems.user_model import load_user_model
+
+from ..conftest import PROBLEMS_DIR, REPO
+
+RC = REPO / "tests" / "exchange" / "data" / "rc_circuit.mo"
+OPTIMICA = PROBLEMS_DIR / "optimica"
+
+#: A DC motor driving an inertia through a gear, in plain Modelica (its input the voltage).
+DRIVE = """
+model Drive "a DC motor (R, L, k) behind a gear (ratio) on an inertia"
+  parameter Real R = 1.0 "armature resistance [Ohm]";
+  parameter Real L = 0.01 "armature inductance [H]";
+  parameter Real k = 0.05 "torque constant [N.m/A]";
+  parameter Real J = 0.002 "inertia at the load [kg.m2]";
+  parameter Real ratio = 10 "gear ratio";
+  input Real v(min = -24, max = 24) "voltage [V]";
+  Real i(start = 0, fixed = true) "current [A]";
+  Real phi(start = 0, fixed = true) "load angle [rad]";
+  Real w(start = 0, fixed = true) "load speed [rad/s]";
+equation
+  L * der(i) = v - R * i - k * ratio * w;
+  der(phi) = w;
+  J * der(w) = ratio * k * i;
+end Drive;
+"""
+
+needs_cc = pytest.mark.skipif(find_compiler() is None, reason="no C compiler")
+
+
+@needs_cc
+@pytest.mark.parametrize("source, cls", [("drive.mo", "Drive"), ("rc", "Circuit.RC"),
+                                         ("mop", "DoubleIntegrator.MinTime")], ids=["drive_mo", "connected_mo", "optimica_mop"])
+def test_codegen_model_of_modelica_source_generates_and_checks(tmp_path, capsys, source, cls):
+    if source == "drive.mo":
+        path = tmp_path / "drive.mo"
+        path.write_text(DRIVE)
+    else:
+        path = RC if source == "rc" else OPTIMICA / "double_integrator_min_time.mop"
+    out = tmp_path / "c"
+    assert main(["codegen", "model", f"{path}:{cls}", "--out", str(out), "--check", "-n", "200", "-q"]) == EXIT_OK
+    printed = capsys.readouterr().out
+    assert "PASSED" in printed and "step_rk4 over 250 periods vs simulate()" in printed
+    assert sorted(p.suffix for p in out.glob("gt_*")) == [".c", ".c", ".h", ".h"]
+
+
+@needs_cc
+def test_tracking_controller_of_an_optimica_result_is_checked_in_closed_loop(tmp_path, capsys):
+    result = tmp_path / "r"
+    assert main(["solve", str(OPTIMICA / "double_integrator_min_time.toml"), "--out", str(result), "--no-plots", "--no-report",
+                 "-q"]) == EXIT_OK
+    assert main(["codegen", "tracking", str(result), "--out", str(tmp_path / "c"), "--check", "-n", "100", "-q"]) == EXIT_OK
+    printed = capsys.readouterr().out
+    assert "closed-loop check: PASSED" in printed and "u in [-1, 1]: held" in printed
+
+
+def test_model_of_a_mop_file_is_its_optimization_class(tmp_path):
+    model = load_user_model(OPTIMICA / "double_integrator_min_time.mop", "DoubleIntegrator.MinTime")
+    assert list(model.variables("state")) == ["x", "v"] and list(model.variables("input")) == ["u"]
+
+
+@pytest.mark.parametrize("text, cls, match", [
+    (DRIVE, "Motor", r"drive\.mo"),
+    ("model Drive\n  Real x;\nequation\n  der(x) = ;\nend Drive;\n", "Drive", r"drive\.mo:4"),
+], ids=["class_not_found", "syntax_error"])
+def test_bad_modelica_model_is_refused_naming_the_file(tmp_path, capsys, text, cls, match):
+    path = tmp_path / "drive.mo"
+    path.write_text(text)
+    with pytest.raises(ModelError, match=match):
+        load_user_model(path, cls)
+    assert main(["codegen", "model", f"{path}:{cls}", "--out", str(tmp_path / "c")]) == EXIT_BAD_INPUT
+    assert str(path) in capsys.readouterr().err
