@@ -27,7 +27,14 @@ machines are noisy:
   options, with the same Radau collocation (``DirectCollocation``, the file's elements and
   points; rockit holds a control constant on each element), its whole call (building the
   ``Ocp`` and solving; ``expand=True``, rockit's fastest evaluation), objective, relative
-  error and iterations; ``ratio_to_rockit`` is ``whole_call_s / rockit_whole_call_s``;
+  error and iterations; ``ratio_to_rockit`` is ``whole_call_s / rockit_whole_call_s``, and
+  no ratio at all (null, with ``peer_failed`` saying why, e.g. ``"rockit:
+  Infeasible_Problem_Detected, no ratio"``; the printed row says it too) when a call of
+  rockit did not reach its optimum (a status other than ``optimal``, a NaN objective);
+  a model with algebraic variables is given to rockit as the explicit ODE a rockit user
+  writes (the algebraic variables eliminated symbolically, as gtmodel's collocation does),
+  its bounds as double inequalities and its guess as numbers (a straight line in
+  ``ocp.t`` where it moves; a zero guess, rockit's default, not written);
   rockit holds a control constant per element, so where the optimal control jumps inside
   an element (bang-bang, state constraints) its optimum is further from the published one;
 - ``rockit_refined_mesh_*`` (files with ``[transcription] refine``): rockit solved once more,
@@ -81,6 +88,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -124,23 +132,46 @@ def _fn(opt: Any, dae: Any, exprs: list, specials: Any = None) -> Any:
     return call
 
 
-def _guess_expr(spec: Any, t: Any, t0: float, default: np.ndarray) -> Any:
-    """A rockit initial-guess expression of time from a gtmodel guess specification."""
-    if spec is None:
-        return default
+def _guess_value(spec: Any, t: Any, t0: float, default: np.ndarray) -> Any:
+    """A rockit initial guess from a gtmodel guess specification, as a rockit user writes it.
+
+    A constant guess (none given: the start value) is a number or a vector; a guess through
+    two points a straight line in ``ocp.t``, through more a piecewise linear expression.
+    (Rockit evaluates an expression of ``ocp.t`` symbolically at every collocation point, about
+    2 CPU-s per state on 200 elements; a constant, given as one, costs nothing; rockit 0.6.7's
+    numeric ``(n, N + 1)`` guess for a state fails in ``DirectCollocation`` with a NameError.)
+    """
+    if spec is None or callable(spec):
+        return np.asarray(default, dtype=float).reshape(-1)
     if isinstance(spec, tuple):
         tg, vg = np.asarray(spec[0], dtype=float), np.asarray(spec[1], dtype=float).reshape(len(spec[0]), -1)
-        if tg.size == 1:
+        if tg.size == 1 or np.all(vg == vg[0]):
             return vg[0]
-        # piecewise linear through the guess points (the problem files' guesses have two)
+        if tg.size == 2:
+            return vg[0] + (vg[1] - vg[0]) / (tg[1] - tg[0]) * (t - tg[0])
         out = vg[0]
         for k in range(tg.size - 1):
             slope = (vg[k + 1] - vg[k]) / (tg[k + 1] - tg[k])
             out = out + slope * (ca.fmin(ca.fmax(t, tg[k]), tg[k + 1]) - tg[k])
         return out
-    if callable(spec):
-        return default
     return np.asarray(spec, dtype=float).reshape(-1)
+
+
+def _bound(ocp: Any, e: Any, lb: float, ub: float) -> None:
+    """``lb <= e <= ub`` in rockit, as a user writes it: one double inequality where both bounds are finite."""
+    if np.isfinite(lb) and np.isfinite(ub):
+        ocp.subject_to(lb <= (e <= ub))
+    elif np.isfinite(lb):
+        ocp.subject_to(e >= lb)
+    elif np.isfinite(ub):
+        ocp.subject_to(e <= ub)
+
+
+def _set_initial(ocp: Any, var: Any, value: Any) -> None:
+    """``ocp.set_initial(var, value)`` unless ``value`` is numeric zero, rockit's default guess."""
+    if isinstance(value, np.ndarray) and not np.any(value):
+        return
+    ocp.set_initial(var, value)
 
 
 def _data_fit_objective(ocp: Any, opt: Any, dae: Any, args: tuple, N: int) -> Any:
@@ -203,6 +234,20 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
     start, cpu = time.perf_counter(), time.process_time()
     opt = decl.optimization
     dae = opt.flat()
+    if dae.nz:
+        # a rockit user writes the model's explicit ODE (the 3-state motor of dc_motor_min_energy,
+        # not its 29 algebraic aliases): the algebraic variables eliminated symbolically, as
+        # gtmodel's collocation does (gtmodel.modeling.ocp.elimination); before, the peer passed
+        # no algebraic variables at all, so der() read zero and IPOPT reported the NLP infeasible
+        from gtmodel.modeling.ocp.elimination import reduced_problem
+
+        idx = [np.arange(dae.p_vars[n].start, dae.p_vars[n].stop) for n in opt.free_parameters]
+        free_index = np.concatenate(idx).astype(int) if idx else np.zeros(0, dtype=int)
+        reduction = reduced_problem(opt, dae, free_index)
+        if reduction is None:
+            return {"objective": float("nan"), "iterations": -1, "whole_call_s": float("nan"),
+                    "status": "not translated: algebraic variables that do not reduce to an explicit ODE"}
+        opt, dae = reduction.optimization, reduction.dae
     t0 = opt.start_time
     ocp = Ocp(t0=t0, T=FreeTime(opt.final_time_guess) if opt.free_final_time else opt.final_time_value)
     noms = decl.nominal
@@ -220,10 +265,7 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
         var = ocp.variable(sl.stop - sl.start)
         for i, k in enumerate(range(sl.start, sl.stop)):
             P[k] = var[i]
-            if np.isfinite(lb[i]):
-                ocp.subject_to(var[i] >= lb[i])
-            if np.isfinite(ub[i]):
-                ocp.subject_to(var[i] <= ub[i])
+            _bound(ocp, var[i], lb[i], ub[i])
         ocp.set_initial(var, start_value if start_value is not None else np.clip(pvec[sl], lb, ub))
     Pv = ca.vertcat(*P) if P else ca.MX(0, 1)
     Z = ca.MX(0, 1)
@@ -258,21 +300,14 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
     for kind, var in (("x", Xv), ("u", Uv)):
         lb, ub = opt.bounds_vectors(dae, kind)
         for i in range(lb.size):
-            if np.isfinite(lb[i]):
-                ocp.subject_to(var[i] >= lb[i])
-            if np.isfinite(ub[i]):
-                ocp.subject_to(var[i] <= ub[i])
+            _bound(ocp, var[i], lb[i], ub[i])
     if opt.free_final_time:
         lo, hi = opt.final_time_bounds
-        ocp.subject_to(T >= lo)
-        ocp.subject_to(T <= hi)
+        _bound(ocp, T, lo, hi)
     for c in opt.path_constraints:
         e = _fn(opt, dae, [c.expr], specials)(*args)
         for i in range(c.lb.size):
-            if np.isfinite(c.lb[i]):
-                ocp.subject_to(e[i] >= c.lb[i])
-            if np.isfinite(c.ub[i]):
-                ocp.subject_to(e[i] <= c.ub[i])
+            _bound(ocp, e[i], c.lb[i], c.ub[i])
     syms = [v.symbol for v in opt.special_symbols()]
     for c in opt.point_constraints:
         e = _fn(opt, dae, [c.expr], specials)(*args)
@@ -288,10 +323,7 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
             if c.lb[i] == c.ub[i]:
                 ocp.subject_to(at(e[i]) == c.lb[i])
                 continue
-            if np.isfinite(c.lb[i]):
-                ocp.subject_to(at(e[i]) >= c.lb[i])
-            if np.isfinite(c.ub[i]):
-                ocp.subject_to(at(e[i]) <= c.ub[i])
+            _bound(ocp, at(e[i]), c.lb[i], c.ub[i])
     if data_term is not None:
         # the least-squares Mayer term of the data tables is the control-grid sum (checked in
         # _data_fit_objective); a timed value outside it is not translated
@@ -306,11 +338,13 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
         objective = objective + ocp.integral(_fn(opt, dae, [opt.lagrange])(*args))
     sign = opt.objective_sign  # maximize: rockit minimises the negative
     ocp.add_objective(sign * objective)
+    # the initial guess; a zero guess is rockit's default and not written (rockit 0.6.7 sets a
+    # guess element by element, each call hashing the whole NLP: 2 CPU-s for a zero input on 200 elements)
     for name, sl in dae.x_vars.items():
-        ocp.set_initial(X[list(dae.x_vars).index(name)], _guess_expr(opt.initial_guesses.get(name), ocp.t, t0, dae.x_start[sl]))
+        _set_initial(ocp, X[list(dae.x_vars).index(name)], _guess_value(opt.initial_guesses.get(name), ocp.t, t0, dae.x_start[sl]))
     for k, name in enumerate(dae.u_vars):
         default = opt.model._vars[name].start
-        ocp.set_initial(U[k], _guess_expr(opt.initial_guesses.get(name), ocp.t, t0, default))
+        _set_initial(ocp, U[k], _guess_value(opt.initial_guesses.get(name), ocp.t, t0, default))
     ocp.solver("ipopt", {"print_time": False, "expand": True,
                          "ipopt": {"print_level": 0, "sb": "yes", "max_iter": decl.solver.max_iter, "tol": decl.solver.tol}})
     if mesh is None:
@@ -322,8 +356,9 @@ def rockit_solve(decl: Any, mesh: np.ndarray | None = None) -> dict[str, Any]:
         sol = ocp.solve()
     except RuntimeError as exc:  # IPOPT did not converge (rockit raises): no solution to report
         elapsed = time.perf_counter() - start
+        found = re.search(r"return_status is '([^']+)'", str(exc))
         return {"objective": float("nan"), "iterations": -1, "whole_call_s": elapsed, "whole_call_cpu_s": time.process_time() - cpu,
-                "status": f"failed: {str(exc).splitlines()[-1][:120]}"}
+                "status": f"failed: {found.group(1) if found else str(exc).splitlines()[-1][:120]}"}
     elapsed, elapsed_cpu = time.perf_counter() - start, time.process_time() - cpu
     stats = sol.stats
     value = float(sol.value(objective))  # the objective itself (a maximum reported positive, as gtmodel does)
@@ -391,6 +426,72 @@ def solve_cpu(res: Any) -> float:
     return float(res.solve_time)
 
 
+def peer_failure(peers: list[dict[str, Any]], name: str = "rockit") -> str | None:
+    """Why a peer's calls give no ratio, or None when every call reached its optimum.
+
+    Parameters
+    ----------
+    peers : list of dict
+        The peer's records of one problem (:func:`rockit_solve`'s), one per repeat.
+    name : str, optional
+        The peer's name in the reason. Default ``"rockit"``.
+
+    Returns
+    -------
+    str or None
+        ``"rockit: Infeasible_Problem_Detected, no ratio"`` and the like: the first record whose
+        status is not ``optimal`` or whose objective or time is not a finite number.
+    """
+    for q in peers:
+        status = str(q.get("status", "no status"))
+        if status != "optimal":
+            return f"{name}: {status.removeprefix('failed: ')}, no ratio"
+        for key in ("objective", "whole_call_s", "whole_call_cpu_s"):
+            value = q.get(key)
+            if value is None or not np.isfinite(value):
+                return f"{name}: optimal but its {key} is {value}, no ratio"
+    return None
+
+
+def peer_columns(peers: list[dict[str, Any]], bench: dict[str, Any], whole: float, whole_cpu: float) -> dict[str, Any]:
+    """The ``rockit_*`` columns of a row and the ratios to it, None (with ``peer_failed``) when rockit failed.
+
+    Parameters
+    ----------
+    peers : list of dict
+        rockit's records of the problem, one per repeat (:func:`rockit_solve`).
+    bench : dict
+        The problem's ``[benchmark]`` table (``sign``, ``published``).
+    whole, whole_cpu : float
+        gtmodel's whole call, the medians of wall and CPU seconds.
+
+    Returns
+    -------
+    dict
+        The columns; ``ratio_to_rockit`` and ``ratio_to_rockit_cpu`` are the ratios of the
+        medians, or None when a call of the peer did not reach its optimum; ``peer_failed``
+        then says why (else None).
+    """
+    peer, pub = peers[-1], bench["published"]
+    pv = bench["sign"] * peer["objective"]
+    pw = float(np.median([q["whole_call_s"] for q in peers]))
+    pc = float(np.median([q.get("whole_call_cpu_s", float("nan")) for q in peers]))
+    failed = peer_failure(peers)
+    return {
+        "rockit_objective": pv, "rockit_relative_error": abs(pv - pub) / abs(pub), "rockit_iterations": peer["iterations"],
+        "rockit_status": peer["status"], "rockit_whole_call_s": pw, "rockit_whole_call_cpu_s": pc,
+        "rockit_whole_call_s_all": [q["whole_call_s"] for q in peers],
+        "ratio_to_rockit": None if failed else whole / pw, "ratio_to_rockit_cpu": None if failed else whole_cpu / pc,
+        "peer_failed": failed,
+    }
+
+
+def _ratio_text(r: dict[str, Any], key: str, width: int) -> str:
+    """A ratio column of the printed tables: the number, or ``-`` (no peer, or a failed one: the row says why)."""
+    value = r.get(key)
+    return f"{value:{width}.3f}" if value is not None else f"{'-':>{width}s}"
+
+
 def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, Any]:
     """Solve one benchmark file with gtmodel (and rockit, and the CLI); the figures of one row.
 
@@ -445,16 +546,7 @@ def run_one(path: Path, cli: bool, rockit: bool, repeat: int = 1) -> dict[str, A
         "whole_call_s_all": walls,
     }
     if rockit:
-        peer = peers[-1]
-        pv = bench["sign"] * peer["objective"]
-        pw = float(np.median([q["whole_call_s"] for q in peers]))
-        pc = float(np.median([q.get("whole_call_cpu_s", float("nan")) for q in peers]))
-        row.update({
-            "rockit_objective": pv, "rockit_relative_error": abs(pv - pub) / abs(pub), "rockit_iterations": peer["iterations"],
-            "rockit_status": peer["status"], "rockit_whole_call_s": pw, "rockit_whole_call_cpu_s": pc,
-            "rockit_whole_call_s_all": [q["whole_call_s"] for q in peers],
-            "ratio_to_rockit": whole / pw, "ratio_to_rockit_cpu": whole_cpu / pc,
-        })
+        row.update(peer_columns(peers, bench, whole, whole_cpu))
     if rockit and res.refinement and res.collocation is not None:
         # not timed, not in the ratio: rockit on the mesh gtmodel's refinement ended with
         # (rockit has no refinement), to show both transcriptions reach the same optimum there
@@ -516,20 +608,31 @@ def main(argv: list[str] | None = None) -> int:
     for f in files:
         r = run_one(Path(f), cli=not a.no_cli, rockit=not a.no_rockit, repeat=a.repeat)
         rows.append(r)
-        dev = r["max_scaled_deviation"]
-        nan = float("nan")
-        print(f"{r['name']:28s} {r['published']:12.7g} {r['objective']:12.7g} {r['relative_error']:8.1e} {r['iterations']:5d} "
-              f"{str(r['verified']):>8s} {dev if dev is not None else nan:8.1e} {r['solve_s']:8.3f} "
-              f"{r['verification_s'] if r['verification_s'] is not None else nan:8.3f} {r['whole_call_s']:8.3f} "
-              f"{r.get('cli_s', nan):6.2f} {r.get('cli_minus_whole_call_s', nan):9.2f} {r.get('rockit_whole_call_s', nan):8.3f} "
-              f"{r.get('rockit_relative_error', nan):10.1e} {r.get('ratio_to_rockit', nan):6.3f} {r.get('ratio_to_rockit_cpu', nan):9.3f} "
-              f"{r['solve_cpu_s']:9.3f} {r['verification_cpu_s'] if r['verification_cpu_s'] is not None else nan:10.3f} "
-              f"{r['whole_call_over_solve_cpu']:15.2f}",
-              flush=True)
+        print_row(r)
     print_time_table(rows)
     if a.json:
         print(json.dumps({"problems": rows}))
     return 0
+
+
+def print_row(r: dict[str, Any]) -> None:
+    """Print one row of the main table; a failed peer's row ends with why it has no ratio (``peer_failed``).
+
+    Parameters
+    ----------
+    r : dict
+        A row of :func:`run_one`.
+    """
+    dev = r["max_scaled_deviation"]
+    nan = float("nan")
+    print(f"{r['name']:28s} {r['published']:12.7g} {r['objective']:12.7g} {r['relative_error']:8.1e} {r['iterations']:5d} "
+          f"{str(r['verified']):>8s} {dev if dev is not None else nan:8.1e} {r['solve_s']:8.3f} "
+          f"{r['verification_s'] if r['verification_s'] is not None else nan:8.3f} {r['whole_call_s']:8.3f} "
+          f"{r.get('cli_s', nan):6.2f} {r.get('cli_minus_whole_call_s', nan):9.2f} {r.get('rockit_whole_call_s', nan):8.3f} "
+          f"{r.get('rockit_relative_error', nan):10.1e} {_ratio_text(r, 'ratio_to_rockit', 6)} {_ratio_text(r, 'ratio_to_rockit_cpu', 9)} "
+          f"{r['solve_cpu_s']:9.3f} {r['verification_cpu_s'] if r['verification_cpu_s'] is not None else nan:10.3f} "
+          f"{r['whole_call_over_solve_cpu']:15.2f}" + (f"  {r['peer_failed']}" if r.get("peer_failed") else ""),
+          flush=True)
 
 
 def print_time_table(rows: list[dict[str, Any]]) -> None:
@@ -551,7 +654,8 @@ def print_time_table(rows: list[dict[str, Any]]) -> None:
         solver, check = r.get("process_solver_cpu_s", nan), r.get("process_verification_cpu_s", nan)
         print(f"{r['name']:36s} {r.get('process_cpu_s', nan):8.3f} {solver:7.3f} {r.get('process_over_solver_cpu', nan):14.2f} "
               f"{r.get('process_run_cpu_s', nan):6.3f} {check:7.3f} {check / solver if solver else nan:13.2f} "
-              f"{r['whole_call_over_solve_cpu']:10.2f} {r.get('ratio_to_rockit', nan):7.3f} {r.get('ratio_to_rockit_cpu', nan):10.3f}",
+              f"{r['whole_call_over_solve_cpu']:10.2f} {_ratio_text(r, 'ratio_to_rockit', 7)} {_ratio_text(r, 'ratio_to_rockit_cpu', 10)}"
+              + (f"  {r['peer_failed']}" if r.get("peer_failed") else ""),
               flush=True)
 
 
