@@ -45,11 +45,15 @@ measured side by side in one run, because these machines are noisy:
   ``acados_sqp_first_control_rel_diff`` (the same against gtmodel's line-search SQP, 40 iterations: the horizon
   problem may have several local optima, and the full step and the line search may end in different ones; on the
   L1 at one of the 5 states the line search's objective is 17.34 and the full steps' 17.69, 0.11 apart in the
-  first input), ``acados_config`` (QP solver
-  ``PARTIAL_CONDENSING_HPIPM``, acados' default), the same as ``acados_fastest_*`` for
-  ``FULL_CONDENSING_QPOASES``, and ``ratio_to_acados_median``, ``ratio_to_acados_p99``,
-  ``tracking_rms_ratio_to_acados`` (printed first); ``acados_skipped`` with the reason instead
-  when the venv cannot be made (or ``--no-acados``).
+  first input). The headline is acados at its fastest configuration that converged (of
+  :data:`ACADOS_QPS`, the least median CPU per step among those whose every step returned
+  status 0 and whose plant did not diverge): ``acados_config``, ``acados_cpu_step_*``,
+  ``acados_tracking_rms`` and ``ratio_to_acados_median``, ``ratio_to_acados_p99``,
+  ``tracking_rms_ratio_to_acados`` (printed first); acados' default QP solver
+  (``PARTIAL_CONDENSING_HPIPM``) beside it, ``acados_default_*`` and
+  ``ratio_to_acados_default_median`` / ``_p99``; every configuration's figures in
+  ``acados_qps``. No configuration converged: no ratio (None) and ``peer_failed`` says why.
+  ``acados_skipped`` with the reason instead when the venv cannot be made (or ``--no-acados``).
 
 With ``--json`` the last line of stdout is one JSON object
 ``{"mpc": [{"name", "horizon", "period_s", "step_median_s", "step_p99_s", "step_max_s",
@@ -246,35 +250,90 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
             out[qp] = {"cpu_step_median_s": float(np.median(cpu)), "cpu_step_p99_s": float(np.percentile(cpu, 99)),
                        "cpu_step_max_s": float(np.max(cpu[1:])), "tracking_rms": runs[qp][0].rms_error,
                        "first_control_rel_diff": rel if compared else None,
-                       "sqp_first_control_rel_diff": rel_sqp if compared else None, "agreement_states": compared}
+                       "sqp_first_control_rel_diff": rel_sqp if compared else None, "agreement_states": compared,
+                       "failed_steps": int(sum(np.count_nonzero(run.status) for run in runs[qp])),
+                       "diverged": any(run.diverged for run in runs[qp])}
     finally:
         for peer in peers.values():
             peer.close()
     return out
 
 
-def _worst(a: dict, b: dict, key: str) -> float | None:
-    """The larger of two peers' ``key``; ``None`` (with ``acados_agreement_states`` 0) where neither had a state to compare."""
-    return max((v for v in (a[key], b[key]) if v is not None), default=None)
+def acados_failure(figures: dict) -> str:
+    """Why an acados configuration's run does not count as converged (empty when it does).
+
+    Parameters
+    ----------
+    figures : dict
+        One QP solver's figures of :func:`acados_finish`.
+
+    Returns
+    -------
+    str
+        ``"3 steps not converged"``, ``"the plant diverged"``, ``"a step time not finite"``, or ``""``.
+    """
+    if figures.get("failed_steps"):
+        return f"{figures['failed_steps']} steps not converged"
+    if figures.get("diverged"):
+        return "the plant diverged"
+    if not np.isfinite(figures["cpu_step_median_s"]) or not np.isfinite(figures["tracking_rms"]):
+        return "a step time or the tracking not finite"
+    return ""
+
+
+def _acados_config(qp: str, horizon: int) -> str:
+    return f"SQP_RTI {qp}, GAUSS_NEWTON, DISCRETE (the same step), N = {horizon}, no blocking, no constraint rows, no disturbance estimate"
 
 
 def acados_keys(row: dict, acados: dict | str) -> dict:
-    """The acados keys of a row: its default QP solver's figures and the ratios (or ``acados_skipped``)."""
+    """The acados keys of a row: the headline at acados' fastest configuration that converged, its default beside it.
+
+    Parameters
+    ----------
+    row : dict
+        gtmodel's figures of one configuration (``horizon``, ``cpu_step_median_s``, ``cpu_step_p99_s``, ``tracking_rms``).
+    acados : dict or str
+        Per QP solver of :data:`ACADOS_QPS` its figures (:func:`acados_finish`), or why acados did not run.
+
+    Returns
+    -------
+    dict
+        ``row`` with ``acados_skipped``; or with ``acados_config`` and ``acados_*`` of the fastest
+        configuration whose every step converged (no failed status, no divergence; the least median
+        CPU per step), ``ratio_to_acados_median``, ``ratio_to_acados_p99`` and
+        ``tracking_rms_ratio_to_acados`` against it, ``acados_default_*`` and
+        ``ratio_to_acados_default_median`` / ``_p99`` against acados' default QP solver
+        (the first of :data:`ACADOS_QPS`) beside it, and ``acados_qps`` (every configuration's figures and
+        its ``failure``). No configuration converged: the ratios None and ``peer_failed`` says
+        why (else ``peer_failed`` None); a failed default has no default ratio.
+    """
     if isinstance(acados, str):
         return {**row, "acados_skipped": acados}
-    a, fast = acados[ACADOS_QPS[0]], acados[ACADOS_QPS[1]]
-    return {**row, "acados_config": f"SQP_RTI {ACADOS_QPS[0]}, GAUSS_NEWTON, DISCRETE (the same step), N = {row['horizon']}, no blocking, "
-                                     "no constraint rows, no disturbance estimate",
+    failures = {qp: acados_failure(f) for qp, f in acados.items()}
+    good = [qp for qp in acados if not failures[qp]]
+    head = min(good, key=lambda qp: acados[qp]["cpu_step_median_s"]) if good else None
+    a, default = acados[head or ACADOS_QPS[0]], acados[ACADOS_QPS[0]]
+    peer_failed = None if head else ("acados: no configuration converged (" +
+                                     "; ".join(f"{qp}: {why}" for qp, why in failures.items()) + "), no ratio")
+    default_ok = not failures[ACADOS_QPS[0]]
+    ratio = (lambda ours, theirs: ours / theirs) if head else (lambda ours, theirs: None)
+    return {**row, "acados_config": _acados_config(head or ACADOS_QPS[0], row["horizon"]),
             "acados_cpu_step_median_s": a["cpu_step_median_s"], "acados_cpu_step_p99_s": a["cpu_step_p99_s"],
             "acados_cpu_step_max_s": a["cpu_step_max_s"], "acados_tracking_rms": a["tracking_rms"],
-            "acados_first_control_rel_diff": _worst(a, fast, "first_control_rel_diff"),
-            "acados_sqp_first_control_rel_diff": _worst(a, fast, "sqp_first_control_rel_diff"),
-            "acados_agreement_states": min(a["agreement_states"], fast["agreement_states"]),
-            "acados_fastest_config": f"SQP_RTI {ACADOS_QPS[1]}", "acados_fastest_cpu_step_median_s": fast["cpu_step_median_s"],
-            "acados_fastest_cpu_step_p99_s": fast["cpu_step_p99_s"], "acados_fastest_tracking_rms": fast["tracking_rms"],
-            "ratio_to_acados_median": row["cpu_step_median_s"] / a["cpu_step_median_s"],
-            "ratio_to_acados_p99": row["cpu_step_p99_s"] / a["cpu_step_p99_s"],
-            "tracking_rms_ratio_to_acados": row["tracking_rms"] / a["tracking_rms"]}
+            "acados_first_control_rel_diff": max((v for f in acados.values() if (v := f["first_control_rel_diff"]) is not None), default=None),
+            "acados_sqp_first_control_rel_diff": max((v for f in acados.values() if (v := f["sqp_first_control_rel_diff"]) is not None),
+                                                     default=None),
+            "acados_agreement_states": min(f["agreement_states"] for f in acados.values()),
+            "ratio_to_acados_median": ratio(row["cpu_step_median_s"], a["cpu_step_median_s"]),
+            "ratio_to_acados_p99": ratio(row["cpu_step_p99_s"], a["cpu_step_p99_s"]),
+            "tracking_rms_ratio_to_acados": ratio(row["tracking_rms"], a["tracking_rms"]),
+            "acados_default_config": _acados_config(ACADOS_QPS[0], row["horizon"]),
+            "acados_default_cpu_step_median_s": default["cpu_step_median_s"], "acados_default_cpu_step_p99_s": default["cpu_step_p99_s"],
+            "acados_default_tracking_rms": default["tracking_rms"], "acados_default_failure": failures[ACADOS_QPS[0]] or None,
+            "ratio_to_acados_default_median": row["cpu_step_median_s"] / default["cpu_step_median_s"] if default_ok else None,
+            "ratio_to_acados_default_p99": row["cpu_step_p99_s"] / default["cpu_step_p99_s"] if default_ok else None,
+            "acados_qps": {qp: {**f, "failure": failures[qp] or None} for qp, f in acados.items()},
+            "peer_failed": peer_failed}
 
 
 def prepare(path: Path, build: Path, unblocked: bool = False, solver: str = "") -> tuple:
@@ -328,8 +387,16 @@ def _print_row(r: dict) -> None:
     if "acados_skipped" in r:
         print(f"{r['name']}: acados skipped ({r['acados_skipped']})")
     else:
-        print(f"{r['name']}: C step CPU / acados SQP-RTI + HPIPM: median {r['ratio_to_acados_median']:.2f}x, p99 {r['ratio_to_acados_p99']:.2f}x; "
-              f"tracking RMS {r['tracking_rms_ratio_to_acados']:.2f}x acados'")
+        if r["peer_failed"]:
+            print(f"{r['name']}: {r['peer_failed']}")
+        else:
+            print(f"{r['name']}: C step CPU / acados' fastest that converged ({r['acados_config'].split(',')[0]}): "
+                  f"median {r['ratio_to_acados_median']:.2f}x, p99 {r['ratio_to_acados_p99']:.2f}x; "
+                  f"tracking RMS {r['tracking_rms_ratio_to_acados']:.2f}x acados'")
+        default = r["ratio_to_acados_default_median"]
+        print(f"  beside it, acados' default ({r['acados_default_config'].split(',')[0]}): "
+              + (f"median {default:.2f}x, p99 {r['ratio_to_acados_default_p99']:.2f}x" if default is not None
+                 else f"no ratio ({r['acados_default_failure']})"))
         print(f"  acados {r['acados_config']}: CPU median {r['acados_cpu_step_median_s'] * 1e6:.1f} us, p99 {r['acados_cpu_step_p99_s'] * 1e6:.1f} us, "
               f"max {r['acados_cpu_step_max_s'] * 1e6:.1f} us, tracking RMS {r['acados_tracking_rms']:.4g}; converged first input "
               f"{'n/a' if r['acados_first_control_rel_diff'] is None else format(r['acados_first_control_rel_diff'], '.1e')} "
@@ -337,8 +404,9 @@ def _print_row(r: dict) -> None:
               f"{AGREEMENT_STATES} states where acados' iterations converged ("
               f"{'n/a' if r['acados_sqp_first_control_rel_diff'] is None else format(r['acados_sqp_first_control_rel_diff'], '.1e')}"
               " from its line-search SQP)")
-        print(f"  acados {r['acados_fastest_config']}: CPU median {r['acados_fastest_cpu_step_median_s'] * 1e6:.1f} us, "
-              f"p99 {r['acados_fastest_cpu_step_p99_s'] * 1e6:.1f} us, tracking RMS {r['acados_fastest_tracking_rms']:.4g}")
+        for qp, f in r["acados_qps"].items():
+            print(f"  acados SQP_RTI {qp}: CPU median {f['cpu_step_median_s'] * 1e6:.1f} us, p99 {f['cpu_step_p99_s'] * 1e6:.1f} us, "
+                  f"tracking RMS {f['tracking_rms']:.4g}" + (f"; {f['failure']}" if f["failure"] else ""))
     print(f"{r['name']}: {r['solver']} {r['qpsol']}, horizon {r['horizon']} x {r['period_s'] * 1e3:g} ms, {r['blocks']} input blocks, "
           f"{r['sqp_iterations']} SQP iteration(s), {r['constraint_rows']} constraint rows, {r['steps']} C steps")
     if r["hpipm_libraries"]:
