@@ -34,6 +34,8 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
+from gtmodel.exchange import msl
+from gtmodel.exchange.msl import code_only as _code_only
 from gtmodel.modeling import Model
 
 __all__ = ["load_modelica", "UNSUPPORTED"]
@@ -55,7 +57,6 @@ UNSUPPORTED = {
     "assert()": r"\bassert\s*\(",
     "terminate()": r"\bterminate\s*\(",
 }
-_COMMENT_RE = re.compile(r"//[^\n]*|/\*.*?\*/|\"(?:[^\"\\]|\\.)*\"", re.S)
 
 
 def _pymoca() -> tuple[Any, Any]:
@@ -64,12 +65,12 @@ def _pymoca() -> tuple[Any, Any]:
         generator = importlib.import_module("pymoca.backends.casadi.generator")
     except ImportError as exc:
         raise InputError(f"Modelica import needs pymoca: pip install 'gtmodel[modelica]' (or pip install pymoca) ({exc})") from None
+    op_map = getattr(generator, "OP_MAP", {})
+    if op_map.get("/") == "__div__" and not hasattr(ca.MX, "__div__"):
+        # pymoca 0.12 divides by MX.__div__, which CasADi 3.8's MX no longer has: every "/" of an equation
+        # failed ("'MX' object has no attribute '__div__'"); Python 3's name of the same operation
+        op_map["/"] = "__truediv__"
     return parser, generator
-
-
-def _code_only(text: str) -> str:
-    """The text with comments and strings blanked (newlines kept, so line numbers stay)."""
-    return _COMMENT_RE.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
 
 
 _CLASS_RE = re.compile(r"\bend\s+([A-Za-z_][\w.]*)\s*;|\b(model|block|function|class|package|connector|record|type)\s+([A-Za-z_]\w*)")
@@ -147,7 +148,7 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such Modelica file")
-    text = path.read_text(encoding="utf-8", errors="replace")
+    text = msl.prepare(path, path.read_text(encoding="utf-8", errors="replace"))  # MSL class paths checked (file:line)
     parser, generator = _pymoca()
     try:
         ast = parser.parse(text)
@@ -167,6 +168,8 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
         top = ast.classes[user[-1]]
         models = [n for n, c in top.classes.items() if c.type in ("model", "block")] if top.type == "package" else []
         class_name = f"{user[-1]}.{models[-1]}" if models else user[-1]
+    if msl.uses_msl(_code_only(text)):  # the library under the MSL's class paths (gtmodel.exchange.msl)
+        msl.extend(parser, ast)
     try:
         mo = generator.generate(ast, class_name)
     except Exception as exc:  # noqa: BLE001 - pymoca raises many types

@@ -42,6 +42,8 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import GtModelError, InputError
+from gtmodel.exchange import msl
+from gtmodel.exchange.msl import code_only
 from gtmodel.exchange.modelica import _check_constructs, _name, _numeric, _pymoca, _to_model, _truthy
 from gtmodel.exchange.optimica_expr import ExprParser
 from gtmodel.exchange.optimica_syntax import MAX_BYTES, Modifier, OptimicaError, Token, split_optimica, tokenize
@@ -111,8 +113,12 @@ def load_optimica(path: str | Path, class_name: str, *, state_start_values_fixed
 def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     """The class as a gtmodel model through pymoca (with ``.mo`` files beside ``path`` if it needs them)."""
     parser, generator = _pymoca()
+    text = _msl_prepared(path, text)
     ast = _parse(parser, path, text)
     _constructs(path, text)
+    with_msl = msl.uses_msl(code_only(text))  # the library under the MSL's class paths (gtmodel.exchange.msl)
+    if with_msl:
+        msl.extend(parser, ast)
     try:
         mo = generator.generate(ast, class_name)
     except Exception as first:  # noqa: BLE001 - pymoca raises many types; retried with the sibling .mo files
@@ -128,8 +134,12 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
             raise _translation_error(path, class_name, first) from None
         for other, other_text in siblings:
             split_check(other, other_text)
+            other_text = _msl_prepared(other, other_text)
             _constructs(other, other_text)
             ast.extend(_parse(parser, other, other_text))
+            if not with_msl and msl.uses_msl(code_only(other_text)):
+                with_msl = True
+                msl.extend(parser, ast)
         try:
             mo = generator.generate(ast, class_name)
         except Exception as exc:  # noqa: BLE001
@@ -139,6 +149,14 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     _numeric_bounds(path, mo)
     try:
         return _to_model(path, ast, mo, class_name), mo
+    except InputError as exc:
+        raise OptimicaError(str(exc)) from None
+
+
+def _msl_prepared(path: Path, text: str) -> str:
+    """:func:`gtmodel.exchange.msl.prepare` (MSL class paths checked, its connectors read) as an :class:`OptimicaError`."""
+    try:
+        return msl.prepare(path, text)
     except InputError as exc:
         raise OptimicaError(str(exc)) from None
 

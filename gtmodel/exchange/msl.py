@@ -1,0 +1,159 @@
+"""The component library under the Modelica Standard Library's class paths, for Modelica and Optimica source.
+
+A drive written for the MSL (``Modelica.Mechanics.Rotational.Components.Inertia motor(J =
+1e-4)``, ``Modelica.Electrical.Analog.Basic.RotationalEMF emf(k = 0.05)``, ``connect(emf.flange,
+motor.flange_a)``) loads unchanged as far as the shipped classes go: gtmodel ships a package
+``Modelica`` of its own (``modelica_library/Modelica.mo``), written from the Modelica Language
+Specification and the MSL's documented interfaces (class paths, connector names ``flange_a``/
+``flange_b``, ``p``/``n``, ``u``/``y``, parameter names and the equations each class's
+documentation states), and adds it to the file's classes when the file names ``Modelica.``
+(:func:`prepare`, :func:`extend`). What the file names under ``Modelica.`` and the package does
+not hold is refused with the file, line and class (:func:`prepare`), never left to a pymoca
+error without a line. The shipped classes: :func:`msl_classes` (``docs/optimica.md`` lists them).
+
+``Modelica.Blocks.Interfaces.RealInput``/``RealOutput`` are short connector classes (``connector
+RealInput = input Real``) that pymoca 0.12 drops without a word; a file's declarations of them
+are read as ``input Real``/``output Real`` (the same variable, the same ``connect``), which is
+what they mean.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import re
+from pathlib import Path
+from typing import Any
+
+from gtmodel.errors import InputError
+
+__all__ = ["MSL_SOURCE", "CONNECTOR_TYPES", "code_only", "msl_classes", "uses_msl", "prepare", "extend"]
+
+_log = logging.getLogger("gtmodel")
+
+#: The shipped package ``Modelica`` (Modelica source).
+MSL_SOURCE = Path(__file__).parent / "modelica_library" / "Modelica.mo"
+#: MSL short connector classes, read as the declarations they stand for.
+CONNECTOR_TYPES = {"Modelica.Blocks.Interfaces.RealInput": "input Real", "Modelica.Blocks.Interfaces.RealOutput": "output Real"}
+_COMMENT_RE = re.compile(r"//[^\n]*|/\*.*?\*/|\"(?:[^\"\\]|\\.)*\"", re.S)
+_REF_RE = re.compile(r"(?<![\w.])Modelica(?:\s*\.\s*[A-Za-z_][A-Za-z0-9_]*)+")
+_OWN_RE = re.compile(r"\b(?:package|model|class|block)\s+Modelica\b")
+_CLASS_RE = re.compile(r"\b(?:package|model|block|connector|record|type|function|class)\s+([A-Za-z_]\w*)|\bend\s+([A-Za-z_]\w*)\s*;"
+                       r"|\bconstant\s+Real\s+([A-Za-z_]\w*)")
+
+
+def code_only(text: str) -> str:
+    """The text with comments and strings blanked (newlines kept, so line numbers and offsets stay).
+
+    Parameters
+    ----------
+    text : str
+        Modelica source.
+
+    Returns
+    -------
+    str
+        Of the same length.
+    """
+    return _COMMENT_RE.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+
+
+@functools.lru_cache(maxsize=1)
+def msl_classes() -> frozenset[str]:
+    """The class paths (and constants, ``Modelica.Constants.pi``) of the shipped package, read from its source.
+
+    Returns
+    -------
+    frozenset of str
+        Dotted paths from ``Modelica`` on, packages included, and the names of
+        :data:`CONNECTOR_TYPES`.
+    """
+    code = code_only(MSL_SOURCE.read_text(encoding="utf-8"))
+    names: set[str] = set(CONNECTOR_TYPES) | {"Modelica.Blocks.Interfaces"}
+    stack: list[str] = []
+    for m in _CLASS_RE.finditer(code):
+        opened, closed, constant = m.groups()
+        if opened:
+            if not code[max(0, m.start() - 4):m.start()].strip().endswith("end"):
+                names.add(".".join([*stack, opened]))
+                if not re.match(r"\s*=", code[m.end():]):  # a short class (type T = Real(...);) has no end
+                    stack.append(opened)
+        elif closed:
+            if stack and stack[-1] == closed:
+                stack.pop()
+        elif constant:
+            names.add(".".join([*stack, constant]))
+    return frozenset(names)
+
+
+def uses_msl(code: str) -> bool:
+    """Whether a Modelica text names a class under ``Modelica.`` (and does not declare a package ``Modelica`` itself).
+
+    Parameters
+    ----------
+    code : str
+        The text (comments and strings may be blanked first).
+
+    Returns
+    -------
+    bool
+    """
+    return bool(_REF_RE.search(code)) and not _OWN_RE.search(code)
+
+
+def prepare(path: Path, text: str) -> str:
+    """Check a file's references under ``Modelica.`` against the shipped classes, and read its MSL connectors.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file (for messages).
+    text : str
+        Its text.
+
+    Returns
+    -------
+    str
+        The text, ``Modelica.Blocks.Interfaces.RealInput``/``RealOutput`` declarations written
+        as ``input Real``/``output Real`` (lines and the rest unchanged); the text itself when
+        it names nothing under ``Modelica.`` or declares its own package ``Modelica``.
+
+    Raises
+    ------
+    InputError
+        ``FILE:LINE: unsupported Modelica Standard Library class NAME``: a name under
+        ``Modelica.`` that the shipped package does not hold.
+    """
+    code = code_only(text)
+    if not uses_msl(code):
+        return text
+    known = msl_classes()
+    out, last = [], 0
+    for m in _REF_RE.finditer(code):
+        name = re.sub(r"\s+", "", m.group())
+        if name not in known:
+            parts = name.split(".")
+            held = next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in known or k == 1)
+            line = code.count("\n", 0, m.start()) + 1
+            raise InputError(f"{path}:{line}: unsupported Modelica Standard Library class {name[:200]} (gtmodel ships "
+                             f"{len(known)} MSL classes under their names; {held} holds: "
+                             f"{', '.join(sorted(k.rsplit('.', 1)[-1] for k in known if k.rsplit('.', 1)[0] == held)) or 'none'}; "
+                             "docs/optimica.md lists them)")
+        if name in CONNECTOR_TYPES:
+            out.append(text[last:m.start()] + CONNECTOR_TYPES[name])
+            last = m.end()
+    return "".join(out) + text[last:]
+
+
+def extend(parser: Any, ast: Any) -> None:
+    """Add the shipped package ``Modelica`` to a parsed file's classes (pymoca's tree, in place).
+
+    Parameters
+    ----------
+    parser : module
+        ``pymoca.parser``.
+    ast : pymoca.tree.Tree
+        The file's parsed classes (without a class ``Modelica`` of their own).
+    """
+    ast.extend(parser.parse(MSL_SOURCE.read_text(encoding="utf-8")))
+    _log.debug("Modelica Standard Library classes added from %s", MSL_SOURCE)
