@@ -4,7 +4,8 @@ model that came from a .mo file").
 Two routes: ``gtmodel codegen model FILE.mo:CLASS`` (and ``FILE.mop:Pkg.Opt``, the model of an
 Optimica class) generates, compiles and checks the model's C against Python; and ``gtmodel
 codegen tracking RESULT_DIR`` builds the tracking controller of an ``optimica`` problem's
-result folder and checks it in closed loop. Each compiles C (a few seconds each).
+result folder and checks it in closed loop. Each compiles C (a few seconds each; the drive written
+with the MSL's class paths about 12 s, marked slow).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from gtmodel.problems.user_model import load_user_model
 from ..conftest import PROBLEMS_DIR, REPO
 
 RC = REPO / "tests" / "exchange" / "data" / "rc_circuit.mo"
+MSL_DRIVE = REPO / "tests" / "exchange" / "data" / "msl_drive.mop"
 OPTIMICA = PROBLEMS_DIR / "optimica"
 
 #: A DC motor driving an inertia through a gear, in plain Modelica (its input the voltage).
@@ -44,14 +46,16 @@ needs_cc = pytest.mark.skipif(find_compiler() is None, reason="no C compiler")
 
 
 @needs_cc
-@pytest.mark.parametrize("source, cls", [("drive.mo", "Drive"), ("rc", "Circuit.RC"),
-                                         ("mop", "DoubleIntegrator.MinTime")], ids=["drive_mo", "connected_mo", "optimica_mop"])
+@pytest.mark.parametrize("source, cls", [
+    ("drive.mo", "Drive"), ("rc", "Circuit.RC"), ("mop", "DoubleIntegrator.MinTime"),
+    pytest.param("msl", "MinTime", marks=pytest.mark.slow),
+], ids=["drive_mo", "connected_mo", "optimica_mop", "msl_drive_mop"])
 def test_codegen_model_of_modelica_source_generates_and_checks(tmp_path, capsys, source, cls):
     if source == "drive.mo":
         path = tmp_path / "drive.mo"
         path.write_text(DRIVE)
-    else:
-        path = RC if source == "rc" else OPTIMICA / "double_integrator_min_time.mop"
+    else:  # msl: a drive written with the MSL's class paths, higher index as written (reduced before the C)
+        path = {"rc": RC, "mop": OPTIMICA / "double_integrator_min_time.mop", "msl": MSL_DRIVE}[source]
     out = tmp_path / "c"
     assert main(["codegen", "model", f"{path}:{cls}", "--out", str(out), "--check", "-n", "200", "-q"]) == EXIT_OK
     printed = capsys.readouterr().out
