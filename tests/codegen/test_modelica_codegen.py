@@ -20,7 +20,7 @@ from gtmodel.problems.user_model import load_user_model
 from ..conftest import PROBLEMS_DIR, REPO
 
 RC = REPO / "tests" / "exchange" / "data" / "rc_circuit.mo"
-MSL_DRIVE = REPO / "tests" / "exchange" / "data" / "msl_drive.mop"
+MSL_DRIVE = PROBLEMS_DIR / "optimica" / "msl_drive_min_time.mop"
 OPTIMICA = PROBLEMS_DIR / "optimica"
 
 #: A DC motor driving an inertia through a gear, in plain Modelica (its input the voltage).

@@ -25,6 +25,7 @@ from gtmodel.problems.optimica_run import run_optimica
 pytest.importorskip("pymoca")
 
 DATA = Path(__file__).parent / "data"
+MSL_DRIVE = Path(__file__).resolve().parents[2] / "problems" / "optimica" / "msl_drive_min_time.mop"
 
 #: The classes issue 68 names, under their MSL paths.
 NAMED = [
@@ -44,7 +45,7 @@ def test_the_named_classes_are_shipped():
 
 
 def test_msl_drive_solves_min_time_as_the_drive_written_by_hand(tmp_path):
-    msl = run_optimica(DATA / "msl_drive.mop", "MinTime", tmp_path / "msl", plots=False)
+    msl = run_optimica(MSL_DRIVE, "MinTime", tmp_path / "msl", plots=False)
     hand = run_optimica(DATA / "drive_equations.mop", "MinTime", tmp_path / "hand", plots=False)
     a, b = msl.summary, hand.summary
     assert a["status"] == b["status"] == "optimal" and a["verification"]["passed"] and b["verification"]["passed"]
@@ -55,7 +56,7 @@ def test_msl_drive_solves_min_time_as_the_drive_written_by_hand(tmp_path):
 
 
 def test_msl_drive_model_as_loaded():
-    opt = load_optimica(DATA / "msl_drive.mop", "MinTime")
+    opt = load_optimica(MSL_DRIVE, "MinTime")
     model = opt.user_model
     assert list(model.variables("input")) == ["u"]  # Modelica.Blocks.Interfaces.RealInput u: an input
     assert model.units["load.phi"] == "rad" and model.units["emf.tau"] == "N.m"  # the SI types' units
