@@ -10,7 +10,7 @@ file and the field, the CLI exits with 2):
 
 ``[reference]``
     The motion tracked: ``problem`` (a ``point_to_point`` problem file of the robot, or an
-    ``optimal_control`` problem file of the user's model, solved first; ``overrides`` its
+    ``optimal_control`` or ``optimica`` problem file of the user's model, solved first; ``overrides`` its
     dotted fields, e.g. a tighter force limit for the plan than the actuators' bounds; the
     default input bounds are that problem's without the overrides) or ``file`` (a CSV table
     with ``t`` and the model's state and input names, e.g. a result folder's

@@ -89,3 +89,15 @@ def test_bad_modelica_model_is_refused_naming_the_file(tmp_path, capsys, text, c
         load_user_model(path, cls)
     assert main(["codegen", "model", f"{path}:{cls}", "--out", str(tmp_path / "c")]) == EXIT_BAD_INPUT
     assert str(path) in capsys.readouterr().err
+
+
+@needs_cc
+def test_tracking_controller_file_with_an_optimica_reference_problem(tmp_path, capsys):
+    # a loop file's [reference] problem may be an optimica problem file, its model the .mop's class
+    (tmp_path / "di.mop").write_text((OPTIMICA / "double_integrator_min_time.mop").read_text())
+    (tmp_path / "p.toml").write_text('kind = "optimica"\n[optimica]\nfile = "di.mop"\nclass = "DoubleIntegrator.MinTime"\n')
+    (tmp_path / "tc.toml").write_text('name = "di_tracking"\n[controller]\nmodel = "di.mop:DoubleIntegrator.MinTime"\nperiod = 0.004\n'
+                                      '[reference]\nproblem = "p.toml"\nsettle_time = 0.2\n[check]\nparameter_factor = 1.0\n')
+    assert main(["codegen", "tracking", str(tmp_path / "tc.toml"), "--out", str(tmp_path / "c"), "--check", "-n", "100", "-q"]) == EXIT_OK
+    assert "closed-loop check: PASSED" in capsys.readouterr().out
+    assert (tmp_path / "c" / "gt_di_tracking.c").is_file()
