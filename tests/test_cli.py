@@ -206,8 +206,12 @@ def test_infeasible_duration_bounds_give_status_infeasible(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "infeasible"
     assert summary["last_iterate"] is True
+    # the bound named as the likely culprit (issue 67: the L1's minimum time is 0.67 s), in the summary and the terminal
+    culprit = "likely culprit: final_time at its upper bound 0.2 s at the last iterate: the minimum time may be above it"
+    assert culprit in summary["message"]
     assert not (out / "trajectory.csv").exists()
-    assert "Traceback" not in capsys.readouterr().err
+    printed = capsys.readouterr()
+    assert "Traceback" not in printed.err and culprit in printed.out
 
 
 #: Heavy libraries the fast paths of the command must not import (issue 24, item 7).

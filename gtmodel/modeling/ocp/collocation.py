@@ -48,6 +48,7 @@ from gtmodel.modeling.ocp.budget import check_memory
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, nlp_solver, resolve_function
 from gtmodel.modeling.ocp.diagnostics import without_inputs
+from gtmodel.modeling.ocp.infeasibility import with_culprit
 from gtmodel.modeling.ocp.elimination import fill_algebraics, reduced_problem
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, SOLVERS
 from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
@@ -451,12 +452,12 @@ class CollocationTranscription:
         else:
             message = error_msg or str(stats.get("return_status", "unknown"))
             status = Status.ERROR if error_msg else normalize_ipopt_status(message)
-            if message in IPOPT_HINTS:
-                message = f"{message}: {IPOPT_HINTS[message]}"
+            message = f"{message}: {IPOPT_HINTS[message]}" if message in IPOPT_HINTS else message
             message = without_inputs(opt, dae, message)
         if not np.all(np.isfinite(w_opt)):
             status = Status.ERROR
         res = self._result(w_opt, pvec, status, message, stats, solve_time)
+        res.message = with_culprit(res.message, res, self.optimization)  # a failed solve names its likely culprit
         res.lam_w, res.lam_g = lam
         res.timing = phases
         if self.verify and res.status in (Status.OPTIMAL, Status.ACCEPTABLE):

@@ -1,0 +1,104 @@
+"""An infeasible solve names its likely culprit (issue 67, item 5): the final time at a bound, or the worst rows by name.
+
+Reference: the double integrator x'' = u, |u| <= 1, from rest at 0 to rest at 1 takes at least
+2 s (bang-bang, switch at 1 s; Bryson and Ho 1975, sec. 7.3), so an upper bound of 1 s on the
+final time, or a fixed final time of 1 s, leaves no feasible point.
+"""
+
+from __future__ import annotations
+
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from gtmodel.modeling import CollocationTranscription, Model, Optimization
+from gtmodel.modeling.ocp.infeasibility import likely_culprit, with_culprit
+
+from ...conftest import REPO
+
+
+class DoubleIntegrator(Model):
+    def __init__(self) -> None:
+        super().__init__("double_integrator")
+        x, v = self.state("x"), self.state("v")
+        u = self.input("u")
+        self.equation(self.der(x), v)
+        self.equation(self.der(v), u)
+
+
+def _problem(free: bool, tf: float, upper: float = 10.0) -> Optimization:
+    m = DoubleIntegrator()
+    opt = Optimization(m, final_time=tf, free_final_time=free, final_time_bounds=(0.1, upper) if free else None)
+    s, u = m.variables("state"), m.variables("input")["u"]
+    for name, at, value in (("x", "start", 0.0), ("v", "start", 0.0), ("x", "final", 1.0), ("v", "final", 0.0)):
+        opt.add_point_constraint(s[name], at=at, lb=value, ub=value, name=None if name == "x" else f"{name}({at})")
+    opt.set_bounds(u, -1.0, 1.0)
+    opt.set_objective(mayer=opt.final_time if free else 0, lagrange=0 if free else u**2)
+    return opt
+
+
+def test_a_final_time_bound_below_the_minimum_time_is_named():
+    res = CollocationTranscription(_problem(True, 0.5, upper=1.0), elements=20).solve()
+    assert res.status == "infeasible" and res.last_iterate
+    assert res.message == ("Infeasible_Problem_Detected; likely culprit: final_time at its upper bound 1 s at the last "
+                           "iterate: the minimum time may be above it (raise the final time's upper bound)")
+
+
+def test_otherwise_the_rows_violated_most_are_named():
+    """A fixed final time too short: the final position is what the last iterate misses most (automatic names with their expression)."""
+    res = CollocationTranscription(_problem(False, 1.0), elements=20).solve()
+    assert res.status == "infeasible"
+    prefix = "Infeasible_Problem_Detected; likely culprit: the largest violations at the last iterate: "
+    assert res.message.startswith(prefix + "'point2' (x) at the final time by ")
+    assert res.message.count(" by ") <= 3
+
+
+def test_a_solution_keeps_its_message():
+    res = CollocationTranscription(_problem(True, 3.0), elements=20).solve()
+    assert res.status in ("optimal", "check_failed") and "likely culprit" not in res.message
+    assert abs(res.final_time - 2.0) < 0.05
+
+
+def test_with_culprit_diagnoses_only_a_last_iterate():
+    opt = _problem(True, 0.5, upper=1.0)
+    at_bound = SimpleNamespace(last_iterate=True, final_time=1.0)
+    assert with_culprit("Infeasible_Problem_Detected", at_bound, opt).endswith("final_time at its upper bound 1 s at the last "
+                                                                             "iterate: the minimum time may be above it (raise the final time's upper bound)")
+    assert with_culprit("Solve_Succeeded", SimpleNamespace(last_iterate=False, final_time=1.0), opt) == "Solve_Succeeded"
+    low = SimpleNamespace(last_iterate=True, final_time=0.1)
+    assert "final_time at its lower bound 0.1 s" in likely_culprit(low, opt)
+
+
+def test_a_result_without_a_trajectory_gives_no_diagnosis_and_no_error():
+    opt = _problem(False, 1.0)
+    empty = SimpleNamespace(last_iterate=True, final_time=1.0, dae=None, t=np.zeros(0))
+    assert likely_culprit(empty, opt) == ""
+    broken = SimpleNamespace(last_iterate=True, final_time=1.0, dae=opt.flat(), t=np.zeros(3), states={"x": [1, 2]},
+                             algebraics={}, inputs={}, parameters={})
+    assert with_culprit("Infeasible_Problem_Detected", broken, opt) == "Infeasible_Problem_Detected"
+
+
+def test_the_command_line_and_summary_name_the_bound(tmp_path, capsys):
+    """The published double integrator (minimum time 2 s) with the final time bounded to 1.5 s, through `gtmodel solve`."""
+    from gtmodel.cli import main
+
+    text = (REPO / "problems" / "benchmarks" / "double_integrator_min_time.toml").read_text(encoding="utf-8")
+    for old, new in (("bounds = [0.5, 10.0]", "bounds = [0.5, 1.5]"), ("initial_guess = 3.0", "initial_guess = 1.0"),
+                     ('file = "models/', f'file = "{(REPO / "problems" / "benchmarks").as_posix()}/models/')):
+        assert old in text, f"test out of date: {old!r} is not in the file"
+        text = text.replace(old, new, 1)
+    (tmp_path / "short.toml").write_text(text, encoding="utf-8")
+    assert main(["solve", str(tmp_path / "short.toml"), "--out", str(tmp_path / "R"), "--no-plots", "--quiet"]) == 1
+    culprit = "likely culprit: final_time at its upper bound 1.5 s at the last iterate: the minimum time may be above it"
+    assert culprit in capsys.readouterr().out
+    summary = json.loads((tmp_path / "R" / "summary.json").read_text())
+    assert summary["status"] == "infeasible" and culprit in summary["message"]
+
+
+@pytest.mark.parametrize("name, shown", [("point3", "'point3' (x)"), ("T(final)", "'T(final)'")])
+def test_automatic_names_show_their_expression(name, shown):
+    from gtmodel.modeling.ocp.infeasibility import _label
+
+    assert _label(SimpleNamespace(name=name, expr="x")) == shown
