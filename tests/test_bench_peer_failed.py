@@ -111,3 +111,47 @@ def test_an_acados_configuration_with_failed_steps_is_not_the_headline(mpc):
     both = mpc.acados_keys(ROW, {"PARTIAL_CONDENSING_HPIPM": _acados(260e-6, failed=1), "FULL_CONDENSING_QPOASES": _acados(140e-6, failed=3)})
     assert both["ratio_to_acados_median"] is None and both["ratio_to_acados_p99"] is None
     assert both["peer_failed"].startswith("acados: no configuration converged")
+
+
+@pytest.fixture(scope="module")
+def solve_bench():
+    """benchmarks/bench_solve.py as a module."""
+    with benchmark_module("bench_solve") as module:
+        yield module
+
+
+def _acados_solve(cpu: float, status: int = 0) -> dict:
+    """A fake answer of the acados peer's ``--serve`` mode (one solve)."""
+    return {"solve_cpu_s": cpu, "time_tot_s": cpu, "iterations": 65, "status": status, "final_time_s": 0.671593,
+            "final_state_violation": 0.0, "config": "acados 0.2.2 SQP (fake)"}
+
+
+def test_bench_solve_alternates_acados_with_gtmodel_in_the_same_rounds(solve_bench, monkeypatch):
+    """Each round: gtmodel (IPOPT, fatrop), then acados, then the Opti peers; never acados in a phase of its own."""
+    calls = []
+
+    class Server:
+        def solve(self):
+            calls.append("acados")
+            return _acados_solve(0.36)
+
+    monkeypatch.setattr(solve_bench, "ours", lambda decl: calls.append(f"gtmodel {decl}") or (0.2, 0.675, 49, "optimal", 0.24, None, {}))
+    monkeypatch.setattr(solve_bench, "peer_opti", lambda decl, expand=False: calls.append(f"opti {expand}") or (1.0, 0.675, 69, "ok", 0.9))
+    mine, fruns, aruns, fast, peer = solve_bench.solve_rounds("ipopt", "fatrop", Server(), 3)
+    assert calls == ["gtmodel ipopt", "gtmodel fatrop", "acados", "opti True", "opti False"] * 3
+    assert len(mine) == len(fruns) == len(aruns) == len(fast) == len(peer) == 3
+
+
+def test_bench_solve_ratio_is_like_with_like(solve_bench):
+    """The ratio of medians over the same rounds, the faster configuration named; a failed acados round: no ratio."""
+    runs = [_acados_solve(0.36), _acados_solve(0.40), _acados_solve(0.30)]
+    summary = solve_bench.acados_summary(runs, 0.6754484)
+    assert summary["acados_solve_cpu_s"] == pytest.approx(0.36) and summary["acados_failed"] is None
+    ratio = solve_bench.ratio_to_acados({"IPOPT": [0.24, 0.26, 0.22], "fatrop": [0.21, 0.25, 0.20]},
+                                        summary["acados_solve_cpu_s_all"], summary["acados_failed"])
+    assert ratio["ratio_cpu_to_acados_config"] == "fatrop" and ratio["ratio_cpu_to_acados"] == pytest.approx(0.21 / 0.36)
+    assert ratio["ratio_cpu_to_acados_rounds"] == pytest.approx([0.21 / 0.36, 0.25 / 0.40, 0.20 / 0.30])
+    failed = solve_bench.acados_summary([_acados_solve(0.36), _acados_solve(0.5, status=4)], 0.6754484)
+    assert failed["acados_failed"] == "acados: status 4 in 1 of 2 rounds, no ratio"
+    none = solve_bench.ratio_to_acados({"IPOPT": [0.24, 0.26]}, failed["acados_solve_cpu_s_all"], failed["acados_failed"])
+    assert none["ratio_cpu_to_acados"] is None and none["peer_failed"] == failed["acados_failed"]

@@ -1,8 +1,10 @@
 """acados SQP on gtmodel's minimum-time point-to-point problem: the offline peer of ``benchmarks/bench_solve.py`` (issue 46).
 
 Runs ONLY in acados' own venv (``benchmarks/acados_env.sh python benchmarks/peers/acados_ocp.py
-PROBLEM.npz [--build DIR] [--repeat 3] [--hessian EXACT]``); it imports nothing of gtmodel and prints
-one JSON line on stdout (acados' build messages go to stderr).
+PROBLEM.npz [--build DIR] [--repeat 3] [--hessian EXACT] [--serve]``); it imports nothing of gtmodel and prints
+one JSON line on stdout (acados' build messages go to stderr); with ``--serve`` it builds, prints
+``{"ready": true}`` and then answers each line ``solve`` on stdin with one solve's JSON line until
+``quit`` (``benchmarks/bench_solve.py`` alternates these solves with gtmodel's, round by round).
 
 The problem is the one gtmodel exports (``bench_solve.export_acados``): ``PROBLEM.npz`` with the
 element count ``N``, the Radau points ``tau`` (``d`` of them, the last one 1) and their basis at 0,
@@ -384,6 +386,8 @@ def main() -> None:
     ap.add_argument("--globalization", default="MERIT_BACKTRACKING", choices=("MERIT_BACKTRACKING", "FIXED_STEP"))
     ap.add_argument("--soft", type=float, default=0.0, help="L1 weight of the softened final constraints (0: hard)")
     ap.add_argument("--levenberg", type=float, default=0.0, help="acados levenberg_marquardt")
+    ap.add_argument("--serve", action="store_true", help="after the build, one solve per line 'solve' on stdin (its JSON line), "
+                    "until 'quit': bench_solve.py alternates it with gtmodel's solves")
     args = ap.parse_args()
     problem = dict(np.load(args.problem))
     here = os.path.dirname(os.path.abspath(args.problem))
@@ -391,29 +395,83 @@ def main() -> None:
     folder = args.build or os.path.join(here, "acados_ocp_build")
     solver, dims = build(problem, funcs, folder, args.hessian, args.regularize, args.tol, args.globalization, args.levenberg, args.soft,
                          controls=args.controls)
-    N, n = int(problem["N"]), dims["n"]
+    if args.serve:  # one solve per line "solve" on stdin, its JSON line on stdout; "quit" ends (bench_solve.py's rounds)
+        print(json.dumps({"ready": True}), flush=True)
+        for line in sys.stdin:
+            if line.strip() != "solve":
+                break
+            one = solve_once(solver, problem, dims)
+            print(json.dumps({**one, **outcome(solver, problem, dims, args)}), flush=True)
+        return
     cpu, tot, its, statuses = [], [], [], []
     for _ in range(max(1, args.repeat)):
-        initialise(solver, problem, dims)
-        t0 = time.thread_time()
-        status = solver.solve()
-        cpu.append(time.thread_time() - t0)
-        tot.append(float(np.ravel(solver.get_stats("time_tot"))[0]))
-        its.append(int(np.ravel(solver.get_stats("sqp_iter"))[0]))
-        statuses.append(int(status))
+        one = solve_once(solver, problem, dims)
+        cpu.append(one["solve_cpu_s"])
+        tot.append(one["time_tot_s"])
+        its.append(one["iterations"])
+        statuses.append(one["status"])
+    print(json.dumps({
+        "solve_cpu_s": statistics.median(cpu), "time_tot_s": statistics.median(tot), "cpu_s_all": cpu,
+        "iterations": its[0], "status": statuses[0], "statuses": statuses, **outcome(solver, problem, dims, args),
+    }), flush=True)
+
+
+def solve_once(solver: AcadosOcpSolver, problem: dict, dims: dict) -> dict:
+    """One solve from the exported guess: its thread CPU, acados' ``time_tot``, SQP iterations and status.
+
+    Parameters
+    ----------
+    solver : AcadosOcpSolver
+        From :func:`build`.
+    problem : dict
+        The arrays of ``PROBLEM.npz``.
+    dims : dict
+        From :func:`build`.
+
+    Returns
+    -------
+    dict
+        ``solve_cpu_s``, ``time_tot_s``, ``iterations``, ``status``.
+    """
+    initialise(solver, problem, dims)
+    t0 = time.thread_time()
+    status = solver.solve()
+    cpu = time.thread_time() - t0
+    return {"solve_cpu_s": cpu, "time_tot_s": float(np.ravel(solver.get_stats("time_tot"))[0]),
+            "iterations": int(np.ravel(solver.get_stats("sqp_iter"))[0]), "status": int(status)}
+
+
+def outcome(solver: AcadosOcpSolver, problem: dict, dims: dict, args: argparse.Namespace) -> dict:
+    """The last solve's final time, final-state violation and residuals, and the configuration's description.
+
+    Parameters
+    ----------
+    solver : AcadosOcpSolver
+        After a solve.
+    problem : dict
+        The arrays of ``PROBLEM.npz``.
+    dims : dict
+        From :func:`build`.
+    args : argparse.Namespace
+        The peer's options.
+
+    Returns
+    -------
+    dict
+        ``final_time_s``, ``final_state_violation``, ``residuals``, ``config``.
+    """
+    N, n = int(problem["N"]), dims["n"]
     res = solver.get_residuals()
     xs = np.array([solver.get(k, "x") for k in range(N + 1)])
     fb = dims["final_nl"]
     final_violation = float(np.max(np.abs(xs[N, fb["idx"]] - np.clip(xs[N, fb["idx"]], fb["lbx"], fb["ubx"])), initial=0.0))
-    print(json.dumps({
-        "solve_cpu_s": statistics.median(cpu), "time_tot_s": statistics.median(tot), "cpu_s_all": cpu,
-        "iterations": its[0], "status": statuses[0], "statuses": statuses,
+    return {
         "final_time_s": float(xs[0, n]), "final_state_violation": final_violation, "residuals": [float(r) for r in np.ravel(res)],
         "config": f"acados 0.2.2 SQP, {args.hessian} Hessian ({args.regularize}), IRK GAUSS_RADAU_IIA {int(problem['d'])} stages x 1 step, "
                   f"N = {N}, forces {args.controls} per interval{f', final constraints soft (L1 {args.soft:g})' if args.soft else ''}"
                   f"{f', Levenberg-Marquardt {args.levenberg:g}' if args.levenberg else ''}, PARTIAL_CONDENSING_HPIPM, {args.globalization}, tol {args.tol:g}, "
                   "T a state with zero dynamics (time-scaled)",
-    }), flush=True)
+    }
 
 
 if __name__ == "__main__":
