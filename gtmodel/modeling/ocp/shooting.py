@@ -76,6 +76,7 @@ import numpy as np
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.dae import FlatDAE, _eval_outputs, _unpack, casadi_name
 from gtmodel.modeling.ocp.guesses import _guess_fn
+from gtmodel.modeling.ocp.infeasibility import with_culprit
 from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.optimization import Integral, Optimization
 from gtmodel.modeling.ocp.result import CollocationData, OptimizationResult, normalize_ipopt_status
@@ -538,6 +539,7 @@ class ShootingTranscription:
         status = Status.ERROR if not np.all(np.isfinite(w)) else normalize_ipopt_status(message)
         with quiet_casadi() as out:
             res = self._result(w, pfull, status, message, stats, solve_time)
+        res.message = with_culprit(res.message, res, self.optimization)  # a failed solve names its likely culprit
         if res.status == Status.ERROR:
             return res
         res.lam_w, res.lam_g = lam

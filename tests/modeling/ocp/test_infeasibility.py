@@ -102,3 +102,11 @@ def test_automatic_names_show_their_expression(name, shown):
     from gtmodel.modeling.ocp.infeasibility import _label
 
     assert _label(SimpleNamespace(name=name, expr="x")) == shown
+
+
+def test_multiple_shooting_names_the_bound_too():
+    from gtmodel.modeling.ocp.shooting import ShootingTranscription
+
+    res = ShootingTranscription(_problem(True, 0.5, upper=1.0), intervals=20).solve()
+    assert res.status == "infeasible"
+    assert "likely culprit: final_time at its upper bound 1 s at the last iterate" in res.message
