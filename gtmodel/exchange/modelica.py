@@ -123,7 +123,8 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
     Parameters
     ----------
     path : str or pathlib.Path
-        The ``.mo`` file.
+        The ``.mo`` file; classes it names under ``Modelica.`` come from the library under the
+        MSL's class paths (:mod:`gtmodel.exchange.msl`).
     class_name : str, optional
         The class to translate, dotted inside packages (``"Circuit.RC"``); default the
         last top-level ``model`` of the file (or the only class).
@@ -132,7 +133,8 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
     -------
     Model
         Parameters (values, units, descriptions in ``model.exchange_metadata``; a name that
-        is a Python keyword gets a trailing ``_``, e.g. ``lambda_``), states
+        is a Python keyword gets a trailing ``_``, e.g. ``lambda_``; one of ``quantity =
+        "SmoothingWidth"`` a smoothing width, :data:`gtmodel.exchange.msl.SMOOTHING_QUANTITY`), states
         with start values and bounds, algebraic variables, inputs, outputs (the Modelica
         ``output`` variables), equations and initial equations; ``model.source`` is the file.
 
@@ -227,7 +229,7 @@ def _to_model(path: Path, ast: Any, mo: Any, class_name: str) -> Model:
         value = _numeric(p.value if p.value is not None else p.start, (p_syms, p_vals), f"parameter {name}", path)
         if not np.all(np.isfinite(value)):
             raise InputError(f"{path}: parameter {name} has no value")
-        sym = m.parameter(_name(name), value)
+        sym = m.parameter(_name(name), value, smoothing=getattr(p, "quantity", "") == msl.SMOOTHING_QUANTITY and value.size == 1)
         mx.append(p.symbol)
         sx.append(sym)
         p_syms.append(p.symbol)

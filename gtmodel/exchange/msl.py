@@ -9,12 +9,16 @@ Specification and the MSL's documented interfaces (class paths, connector names 
 documentation states), and adds it to the file's classes when the file names ``Modelica.``
 (:func:`prepare`, :func:`extend`). What the file names under ``Modelica.`` and the package does
 not hold is refused with the file, line and class (:func:`prepare`), never left to a pymoca
-error without a line. The shipped classes: :func:`msl_classes` (``docs/optimica.md`` lists them).
+error without a line. The shipped classes: :func:`msl_classes` (``docs/optimica.md`` lists them). The
+non-smooth ones (``ElastoBacklash``, ``Blocks.Nonlinear.Limiter``/``DeadZone``) follow the smoothed laws of
+gtmodel's library with a width ``smoothing`` of quantity :data:`SMOOTHING_QUANTITY`, which the Modelica import
+declares a smoothing width (so the continuation over widths runs on them).
 
 ``Modelica.Blocks.Interfaces.RealInput``/``RealOutput`` are short connector classes (``connector
 RealInput = input Real``) that pymoca 0.12 drops without a word; a file's declarations of them
 are read as ``input Real``/``output Real`` (the same variable, the same ``connect``), which is
-what they mean.
+what they mean; and ``Modelica.Constants.pi`` as its number (:data:`CONSTANTS`: pymoca 0.12 does not
+look a constant up in another package).
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["MSL_SOURCE", "CONNECTOR_TYPES", "code_only", "msl_classes", "uses_msl", "prepare", "extend"]
+__all__ = ["MSL_SOURCE", "CONNECTOR_TYPES", "CONSTANTS", "SMOOTHING_QUANTITY", "code_only", "msl_classes", "uses_msl", "prepare", "extend"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -35,6 +39,13 @@ _log = logging.getLogger("gtmodel")
 MSL_SOURCE = Path(__file__).parent / "modelica_library" / "Modelica.mo"
 #: MSL short connector classes, read as the declarations they stand for.
 CONNECTOR_TYPES = {"Modelica.Blocks.Interfaces.RealInput": "input Real", "Modelica.Blocks.Interfaces.RealOutput": "output Real"}
+#: MSL constants, read as their numbers (pymoca 0.12 does not look a constant up in another package).
+CONSTANTS = {"Modelica.Constants.pi": "3.14159265358979323846", "Modelica.Constants.e": "2.71828182845904523536",
+             "Modelica.Constants.g_n": "9.80665"}
+#: The ``quantity`` of a parameter that is a smoothing width (``parameter Real smoothing(quantity =
+#: "SmoothingWidth") = 1e-5``): the shipped non-smooth classes' ``smoothing``, or a user's own; such a
+#: parameter is a smoothing width of the model (``Model.smoothing``, the continuation's).
+SMOOTHING_QUANTITY = "SmoothingWidth"
 _COMMENT_RE = re.compile(r"//[^\n]*|/\*.*?\*/|\"(?:[^\"\\]|\\.)*\"", re.S)
 _REF_RE = re.compile(r"(?<![\w.])Modelica(?:\s*\.\s*[A-Za-z_][A-Za-z0-9_]*)+")
 _OWN_RE = re.compile(r"\b(?:package|model|class|block)\s+Modelica\b")
@@ -115,7 +126,8 @@ def prepare(path: Path, text: str) -> str:
     -------
     str
         The text, ``Modelica.Blocks.Interfaces.RealInput``/``RealOutput`` declarations written
-        as ``input Real``/``output Real`` (lines and the rest unchanged); the text itself when
+        as ``input Real``/``output Real`` and ``Modelica.Constants.pi`` (``e``, ``g_n``) as its number
+        (:data:`CONSTANTS`; lines and the rest unchanged); the text itself when
         it names nothing under ``Modelica.`` or declares its own package ``Modelica``.
 
     Raises
@@ -139,8 +151,8 @@ def prepare(path: Path, text: str) -> str:
                              f"{len(known)} MSL classes under their names; {held} holds: "
                              f"{', '.join(sorted(k.rsplit('.', 1)[-1] for k in known if k.rsplit('.', 1)[0] == held)) or 'none'}; "
                              "docs/optimica.md lists them)")
-        if name in CONNECTOR_TYPES:
-            out.append(text[last:m.start()] + CONNECTOR_TYPES[name])
+        if name in CONNECTOR_TYPES or name in CONSTANTS:
+            out.append(text[last:m.start()] + (CONNECTOR_TYPES.get(name) or f"({CONSTANTS[name]})"))
             last = m.end()
     return "".join(out) + text[last:]
 

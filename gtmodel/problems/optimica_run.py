@@ -131,7 +131,7 @@ def run_optimica(path: str | Path, class_name: str, out: str | Path, *, state_st
     try:
         with timed(phases, "load"):
             problem = load_optimica_problem(path, class_name, state_start_values_fixed=state_start_values_fixed)
-        label = f"solving {problem.name} (Optimica, optimal_control)"
+        label = f"solving {problem.name} (Optimica, kind optimica)"
         _log.info("%s ...", label)
         call: dict[str, dict[str, float]] = {}
         interrupted = None

@@ -36,6 +36,7 @@ NAMED = [
     "Modelica.Electrical.Analog.Sources.SignalVoltage", "Modelica.Electrical.Analog.Basic.RotationalEMF",
     "Modelica.Electrical.Analog.Basic.EMF", "Modelica.Blocks.Sources.Constant", "Modelica.Blocks.Sources.Step",
     "Modelica.Mechanics.Translational.Components.Mass", "Modelica.Blocks.Interfaces.RealInput", "Modelica.Units.SI.Torque",
+    "Modelica.Mechanics.Rotational.Components.ElastoBacklash", "Modelica.Blocks.Nonlinear.Limiter", "Modelica.Blocks.Nonlinear.DeadZone",
 ]
 
 
@@ -79,6 +80,41 @@ def test_translational_and_block_classes_simulate_as_scipy():
     ref = solve_ivp(rhs, (0.0, 2.0), [0.0, 0.0, 0.0], t_eval=t, rtol=1e-11, atol=1e-12, max_step=0.01)
     np.testing.assert_allclose(sim.x["mass.s"] - 0.1, ref.y[0], atol=1e-5)
     np.testing.assert_allclose(sim.outputs["y_out"], ref.y[0], atol=1e-5)  # the position sensor at flange_a
+
+
+def _softplus(y, eps):
+    return np.maximum(y, 0.0) + eps * np.log1p(np.exp(-np.abs(y) / eps))
+
+
+@pytest.fixture(scope="module")
+def rattle():
+    model = load_modelica(DATA / "msl_nonsmooth.mo", "Rattle")
+    t = np.linspace(0.0, 1.0, 21)
+    return model, t, model.simulate(t, rtol=1e-10, atol=1e-12)
+
+
+def test_nonsmooth_classes_declare_their_smoothing_widths(rattle):
+    assert rattle[0].smoothing == {"limiter.smoothing": 1e-4, "deadZone.smoothing": 1e-4, "gap.smoothing": 1e-4}  # continuation's
+
+
+@pytest.mark.parametrize("smooth, tol", [(True, 1e-6), (False, 2e-3)], ids=["smoothed_law", "exact_law"])
+def test_nonsmooth_classes_follow_their_laws(rattle, smooth, tol):
+    _, t, sim = rattle
+    eps, c, d, half, J = 1e-4, 100.0, 0.5, 0.01, 0.1
+
+    def backlash(x, w):
+        if not smooth:  # the exact law: a spring-damper outside the gap
+            return c * (x - np.clip(x, -half, half)) + d * w * (abs(x) > half)
+        contact = 0.5 * (1 + np.tanh((x - half) / (2 * eps))) + 0.5 * (1 + np.tanh((-x - half) / (2 * eps)))
+        return c * (_softplus(x - half, eps) - _softplus(-x - half, eps)) + d * w * contact
+
+    def rhs(tt, z):  # the load on the backlash; the Sine (amplitude 2, 1 Hz) limited to [-1, 1] and dead-zoned, integrated
+        u = 2.0 * np.sin(2 * np.pi * tt)
+        return [z[1], -backlash(z[0], z[1]) / J, np.clip(u, -1, 1), u - np.clip(u, -1, 1)]
+
+    ref = solve_ivp(rhs, (0.0, 1.0), [0.05, 0.0, 0.0, 0.0], t_eval=t, rtol=1e-11, atol=1e-12, max_step=1e-3)
+    got = np.column_stack([sim.x["load.phi"], sim.x["limited.y"], sim.x["dead.y"]])
+    np.testing.assert_allclose(got, ref.y[[0, 2, 3]].T, atol=tol)
 
 
 def test_electrical_classes_charge_a_capacitor_with_rc():

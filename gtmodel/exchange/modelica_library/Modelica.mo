@@ -9,8 +9,15 @@
 //    the MSL's defaults); no temperature dependence of the resistor (alpha = 0);
 //  * Modelica.Blocks.Interfaces.RealInput/RealOutput are declared as `input Real` /
 //    `output Real` (pymoca drops short connector classes; gtmodel rewrites a user's
-//    `Modelica.Blocks.Interfaces.RealInput u` the same way);
-//  * no annotations, icons or units checking (types carry their unit).
+//    `Modelica.Blocks.Interfaces.RealInput u` the same way), and Modelica.Constants are
+//    written as their numbers where used (pymoca does not look constants up across packages;
+//    gtmodel writes a user's `Modelica.Constants.pi` as its number too);
+//  * no annotations, icons or units checking (types carry their unit);
+//  * the non-smooth elements (ElastoBacklash, Blocks.Nonlinear.Limiter and DeadZone) follow the
+//    smoothed laws of gtmodel's library (gtmodel.modeling.library.rotational, .blocks: softplus
+//    dead zone, logistic contact) with a parameter `smoothing`, the width, that the MSL does not
+//    have; its quantity "SmoothingWidth" marks it for the continuation over smoothing
+//    widths. MSL's damping clamp of ElastoBacklash and its strict/homotopy options are not modelled.
 // A class the user's file names under `Modelica.` that is not here is refused with the
 // file, line and class (gtmodel.exchange.msl).
 package Modelica "the subset of the Modelica Standard Library gtmodel ships"
@@ -106,7 +113,7 @@ package Modelica "the subset of the Modelica Standard Library gtmodel ships"
         parameter Real startTime = 0 "[s]";
         output Real y;
       equation
-        y = offset + (if time < startTime then 0 else amplitude * sin(2 * Modelica.Constants.pi * f * (time - startTime) + phase));
+        y = offset + (if time < startTime then 0 else amplitude * sin(2 * 3.14159265358979323846 * f * (time - startTime) + phase));
       end Sine;
     end Sources;
 
@@ -137,6 +144,28 @@ package Modelica "the subset of the Modelica Standard Library gtmodel ships"
         y = k1 * u1 + k2 * u2;
       end Add;
     end Math;
+
+    package Nonlinear
+      block Limiter "y = min(max(u, uMin), uMax), smoothed (gtmodel's smoothing width)"
+        parameter Real uMax(start = 1) "upper limit";
+        parameter Real uMin = -uMax "lower limit";
+        parameter Real smoothing(quantity = "SmoothingWidth", min = 0) = 1.0e-3 "smoothing width (gtmodel's; not in the MSL)";
+        input Real u;
+        output Real y;
+      equation
+        y = uMin + max(u - uMin, 0) + smoothing * log(1 + exp(-abs(u - uMin) / smoothing)) - (max(u - uMax, 0) + smoothing * log(1 + exp(-abs(u - uMax) / smoothing)));
+      end Limiter;
+
+      block DeadZone "y = u - min(max(u, uMin), uMax), smoothed (gtmodel's smoothing width)"
+        parameter Real uMax(start = 1) "upper end of the dead band";
+        parameter Real uMin = -uMax "lower end of the dead band";
+        parameter Real smoothing(quantity = "SmoothingWidth", min = 0) = 1.0e-3 "smoothing width (gtmodel's; not in the MSL)";
+        input Real u;
+        output Real y;
+      equation
+        y = max(u - uMax, 0) + smoothing * log(1 + exp(-abs(u - uMax) / smoothing)) - (max(uMin - u, 0) + smoothing * log(1 + exp(-abs(uMin - u) / smoothing)));
+      end DeadZone;
+    end Nonlinear;
 
     package Continuous
       block Integrator "der(y) = k u"
@@ -252,6 +281,24 @@ package Modelica "the subset of the Modelica Standard Library gtmodel ships"
         equation
           tau = c * (phi_rel - phi_rel0) + d * w_rel;
         end SpringDamper;
+
+        model ElastoBacklash "backlash b in series with a spring-damper contact, smoothed (gtmodel's smoothing width)"
+          extends Modelica.Mechanics.Rotational.Interfaces.PartialCompliantWithRelativeStates;
+          parameter Modelica.Units.SI.RotationalSpringConstant c(min = 0, start = 1.0e5);
+          parameter Modelica.Units.SI.RotationalDampingConstant d(min = 0, start = 0);
+          parameter Modelica.Units.SI.Angle b(min = 0) = 0 "total backlash";
+          parameter Modelica.Units.SI.Angle phi_rel0 = 0;
+          parameter Real smoothing(quantity = "SmoothingWidth", unit = "rad", min = 0) = 1.0e-5 "smoothing width of the dead zone (gtmodel's; not in the MSL)";
+        equation
+          // x = phi_rel - phi_rel0; tau = c dz(x) + d w_rel contact(x), written out (no algebraic variables of
+          // their own: an initialisation from x = 0 would have to cross the corners), with
+          // dz(x) = softplus(x - b/2) - softplus(-x - b/2), softplus(y) = max(y, 0) + eps log(1 + exp(-|y|/eps)),
+          // contact(x) = s(x - b/2) + s(-x - b/2), s(y) = (1 + tanh(y / (2 eps))) / 2
+          tau = c * (max(phi_rel - phi_rel0 - b / 2, 0) + smoothing * log(1 + exp(-abs(phi_rel - phi_rel0 - b / 2) / smoothing))
+                     - (max(phi_rel0 - phi_rel - b / 2, 0) + smoothing * log(1 + exp(-abs(phi_rel0 - phi_rel - b / 2) / smoothing))))
+                + d * w_rel * (0.5 * (1 + tanh((phi_rel - phi_rel0 - b / 2) / (2 * smoothing)))
+                               + 0.5 * (1 + tanh((phi_rel0 - phi_rel - b / 2) / (2 * smoothing))));
+        end ElastoBacklash;
 
         model IdealGear "flange_a.phi = ratio flange_b.phi, lossless"
           parameter Real ratio(start = 1) "transmission ratio (flange_a.phi / flange_b.phi)";
