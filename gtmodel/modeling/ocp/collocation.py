@@ -45,6 +45,7 @@ import numpy as np
 from gtmodel._timing import add_phase, timed
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
+from gtmodel.modeling.ocp.collocation_bounds import bound_point_taus
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, nlp_solver, resolve_function
 from gtmodel.modeling.ocp.diagnostics import without_inputs
@@ -133,6 +134,11 @@ class CollocationTranscription:
         Substitute the algebraic variables by their expressions of the states, inputs and parameters
         where :mod:`~gtmodel.modeling.ocp.elimination` can (the NLP then has none; the result's are
         evaluated at the solution); else each is an NLP variable at every collocation point. Default True.
+    bound_points : int, optional
+        Extra points per element at which the state bounds hold on the polynomial too (the rows the
+        mesh refinement adds once a state exceeds a bound between the points:
+        :mod:`~gtmodel.modeling.ocp.collocation_bounds`); 0 (default): at the collocation points only.
+        Not with fatrop (its stage structure): ignored there, with a log line.
 
     Raises
     ------
@@ -163,6 +169,7 @@ class CollocationTranscription:
         mesh: Any = None,
         verify: Any = True,
         eliminate_algebraics: bool = True,
+        bound_points: int = 0,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -198,6 +205,7 @@ class CollocationTranscription:
                 raise InputError("solver fatrop: a free final time must be copied per element (banded=True), its stage structure has no shared variable")
             self.banded = True
         self.verbose, self.eliminate_algebraics = bool(verbose), bool(eliminate_algebraics)
+        self.bound_points = int(bound_points) if bound_points and bound_point_taus(bound_points).size else 0
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
@@ -245,7 +253,6 @@ class CollocationTranscription:
         idx = [np.arange(p_vars[n].start, p_vars[n].stop) for n in self.optimization.free_parameters]
         return np.concatenate(idx).astype(int) if idx else np.zeros(0, dtype=int)
 
-    # ------------------------------------------------------------------ build
     def _build(self) -> None:
         opt, dae = self.optimization, self.dae
         self._co = co = collocation_coefficients(self.points, self.scheme)
@@ -268,7 +275,7 @@ class CollocationTranscription:
         self.size = check_memory(self.elements, self.points, dae.nx, dae.nz, dae.nu)
         nlp = transcribe(
             opt, dae, self.elements, self.points, co, self._noms, free_index, inline_points=not assembled, final_time_copies=self.banded,
-            fractions=self.fractions, stagewise=stagewise,
+            fractions=self.fractions, stagewise=stagewise, bound_points=self.bound_points,
         )
         self.nlp = nlp
         wv, gv, P_nlp = nlp.w, nlp.g, nlp.p
@@ -280,7 +287,9 @@ class CollocationTranscription:
         #: The objective's Lagrange term as the NLP integrates it (its quadrature), signed as the NLP minimises it.
         self.lagrange_function = ca.Function("lagrange_value", [wv, P_nlp], [nlp.f - nlp.mayer])
         self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
-        self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()),
+        if self.bound_points and stagewise:
+            _log.info("collocation of %s: no state bounds between the points with fatrop", dae.name)
+        self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()), self.bound_points,
                     None if self.fractions is None else tuple(self.fractions.tolist()))
         self.derivative_functions: dict[str, ca.Function] = {}
         self.evaluation = "CasADi interpreter (whole NLP graph" + (", differentiated by the fatrop plugin)" if stagewise else ")")
@@ -311,7 +320,6 @@ class CollocationTranscription:
         solver, self.objective_scale = nlp_solver(self.nlp, self.plugin, options, self.derivative_functions, casadi_name(self.dae.name))
         return solver
 
-    # ------------------------------------------------------------------ guesses
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:
         opt, dae, co = self.optimization, self.nlp_dae, self._co  # no algebraic variables when eliminated
         N, t0 = self.elements, opt.start_time
@@ -348,7 +356,6 @@ class CollocationTranscription:
             out.append(start if start is not None else np.clip(pvec[self.dae.p_vars[name]], lb, ub))
         return np.concatenate(out) if out else np.zeros(0)
 
-    # ------------------------------------------------------------------ solve
     def solve(
         self,
         parameters: Mapping[str, Any] | None = None,

@@ -40,6 +40,7 @@ import numpy as np
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
 from gtmodel.modeling.dae import FlatDAE
+from gtmodel.modeling.ocp.collocation_bounds import interior_state_bounds
 from gtmodel.modeling.ocp.collocation_stages import stage_order
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import lagrange_basis
@@ -50,22 +51,9 @@ __all__ = ["CASADI_OPTIONS", "IPOPT_DEFAULTS", "merge_options", "collocation_coe
 
 #: CasADi-level nlpsol options passed through unchanged (others are options of the solver plugin).
 CASADI_OPTIONS = {
-    "print_time",
-    "expand",
-    "error_on_fail",
-    "record_time",
-    "verbose",
-    "calc_lam_p",
-    "calc_lam_x",
-    "calc_f",
-    "calc_g",
-    "bound_consistency",
-    "show_eval_warnings",
-    "iteration_callback",
-    "regularity_check",
-    "structure_detection",
-    "equality",
-    "debug",
+    "print_time", "expand", "error_on_fail", "record_time", "verbose", "calc_lam_p", "calc_lam_x", "calc_f", "calc_g",
+    "bound_consistency", "show_eval_warnings", "iteration_callback", "regularity_check", "structure_detection",
+    "equality", "debug",
 }
 
 #: IPOPT options every collocation NLP starts from (``solver_options`` override them): the
@@ -315,6 +303,7 @@ def transcribe(
     final_time_copies: bool = True,
     fractions: np.ndarray | None = None,
     stagewise: bool = False,
+    bound_points: int = 0,
 ) -> CollocationNLP:
     """Transcribe ``opt`` by direct collocation (see the module docstring).
 
@@ -348,6 +337,10 @@ def transcribe(
         the element's point constraints; the point constraints at the final time and the
         Mayer term read the last element's end state (equal to the final state wherever the
         continuity holds). Needs ``final_time_copies`` and no free parameters. Default False.
+    bound_points : int, optional
+        Extra points per element at which the state bounds hold on the polynomial too
+        (:func:`~gtmodel.modeling.ocp.collocation_bounds.interior_state_bounds`); 0 (default):
+        at the collocation points only. Not with ``stagewise``.
 
     Returns
     -------
@@ -564,6 +557,10 @@ def transcribe(
         e = final_fn(T, XF, z_final, u_final, P, T)
         ends.append((con(e, np.concatenate([c.lb for c in final_c]), np.concatenate([c.ub for c in final_c])), e))
         at.append("final")
+    if bound_points and not stagewise:  # the state bounds between the points too (the rows the refinement adds)
+        e, lo, hi = interior_state_bounds(X_all, nx, co["root"], x_lb, x_ub, noms["x"], bound_points)
+        if e.numel():
+            ends.append((con(e, lo, hi), e))
     start_args = PointArgs(ca.SX(t0), X0[:, 0], z_start, u_start, T_first)
     final_args = PointArgs(T, XF, z_final, u_final, T)
     element_vars = _ElementVars(X_all, Up, Zp, Trow, nx, nu, nz, d)

@@ -1,0 +1,99 @@
+"""State bounds imposed on the collocation polynomial between its points, not only at them.
+
+Direct collocation imposes a state's bounds at the collocation points; between them the
+state's polynomial (and the trajectory it approximates) may cross the bound. On the drive
+family's ball-screw axis (``drive0_03``, minimum time, the current at its bound through the
+deceleration) the current's polynomial reached 14.54 A between the points of a pass whose
+points all kept 14.3 A, and refinement by splitting alone stalled at a 1.9 % excess over 16
+passes. :func:`interior_state_bounds` writes the bounds at ``points`` more places in every
+element as linear rows of the NLP: the polynomial through the element's start and its
+collocation points evaluated there (Betts, *Practical Methods for Optimal Control*, 2nd ed.,
+sec. 4.8: path constraints enforced at intermediate points), so that the verification's dense
+check (:mod:`~gtmodel.modeling.ocp.verification_bounds`) sees the excess shrink with the
+element, as the defect does. The mesh refinement switches them on once a pass's verifying
+simulation exceeds a state bound between the points (:data:`BOUND_POINTS` per element).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError
+from gtmodel.modeling.ocp.result import lagrange_basis
+
+__all__ = ["BOUND_POINTS", "bound_point_taus", "interior_state_bounds"]
+
+#: The extra points per element at which the refinement imposes the state bounds once a pass exceeds one between the points.
+BOUND_POINTS = 4
+
+
+def bound_point_taus(points: int) -> np.ndarray:
+    """The places of the extra bound rows on the unit element: the midpoints of ``points`` equal parts.
+
+    Parameters
+    ----------
+    points : int
+        Extra points per element, >= 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(j + 1/2) / points`` for ``j = 0 .. points - 1``, shape ``(points,)``.
+
+    Raises
+    ------
+    InputError
+        If ``points`` is not a positive integer.
+    """
+    if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or points < 1:
+        raise InputError(f"bound_points: expected a positive integer, got {points!r}")
+    return (np.arange(points) + 0.5) / points
+
+
+def interior_state_bounds(X_all: ca.SX, nx: int, root: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                          nominal: np.ndarray, points: int) -> tuple[ca.SX, np.ndarray, np.ndarray]:
+    """Rows ``lower <= x(t_k + tau h_k) <= upper`` of the bounded states at :func:`bound_point_taus` in every element.
+
+    Parameters
+    ----------
+    X_all : casadi.SX
+        The elements' states, shape ``(nx (d + 1), N)``: column ``k`` stacks the state at the
+        element's start and at its ``d`` collocation points (physical units).
+    nx : int
+        States.
+    root : numpy.ndarray
+        ``[0, tau_1, ..., tau_d]`` on the unit element, shape ``(d + 1,)``.
+    lower, upper : numpy.ndarray
+        The states' bounds, each shape ``(nx,)`` (``-inf``/``inf`` for none).
+    nominal : numpy.ndarray
+        The states' nominal values, shape ``(nx,)``: the rows are divided by them.
+    points : int
+        Extra points per element, >= 1.
+
+    Returns
+    -------
+    tuple of (casadi.SX, numpy.ndarray, numpy.ndarray)
+        The rows (``points * nb * N``, element-major; ``nb`` the bounded states) and their
+        lower and upper bounds (scaled as the rows). No rows when no state is bounded.
+
+    Raises
+    ------
+    InputError
+        If ``points`` is not a positive integer.
+    """
+    bounded = np.flatnonzero(np.isfinite(lower) | np.isfinite(upper))
+    taus = bound_point_taus(points)
+    if not bounded.size:
+        return ca.SX(0, 1), np.zeros(0), np.zeros(0)
+    basis = lagrange_basis(np.asarray(root, dtype=float), taus)  # (points, d + 1)
+    nom = np.asarray(nominal, dtype=float)[bounded]
+    A = np.zeros((points * bounded.size, X_all.shape[0]))
+    for e in range(points):
+        for b, s in enumerate(bounded):
+            A[e * bounded.size + b, s::nx] = basis[e] / nom[b]
+    rows = ca.vec(ca.mtimes(ca.DM(A), X_all))
+    n_el = int(X_all.shape[1])
+    lo = np.tile(np.tile(np.asarray(lower, dtype=float)[bounded] / nom, points), n_el)
+    hi = np.tile(np.tile(np.asarray(upper, dtype=float)[bounded] / nom, points), n_el)
+    return rows, lo, hi
