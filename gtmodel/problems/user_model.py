@@ -43,8 +43,6 @@ from pathlib import Path
 from typing import Any
 
 from gtmodel.errors import GtModelError, ModelError
-from gtmodel.exchange.modelica import load_modelica
-from gtmodel.exchange.optimica import load_optimica
 from gtmodel.modeling import Model, structural_simplify
 
 __all__ = ["load_user_model", "reduced_model", "split_model_reference", "ModelFileError", "BUILD_METHODS", "MODELICA_SUFFIXES"]
@@ -162,10 +160,12 @@ def load_user_model(path: str | Path, class_name: str, reduce: bool = True) -> M
 
 def _modelica_model(path: Path, class_name: str) -> Model:
     """The model of a Modelica class (``.mo``) or of an Optimica ``optimization`` class (``.mop``), as written."""
+    # the exchange layer (pymoca, and its package's FMU export, the acausal components) imported for Modelica source
+    # only: solving a Python model's problem does not load it (tests/test_cli.py checks the solve path's sys.modules)
     try:
         if path.suffix.lower() == ".mop":
-            return load_optimica(path, class_name).user_model
-        return load_modelica(path, class_name)
+            return importlib.import_module("gtmodel.exchange.optimica").load_optimica(path, class_name).user_model
+        return importlib.import_module("gtmodel.exchange.modelica").load_modelica(path, class_name)
     except GtModelError as exc:  # each names the file (and the line and construct where it has one)
         raise ModelError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
 
