@@ -48,6 +48,7 @@ CONSTANTS = {"Modelica.Constants.pi": "3.14159265358979323846", "Modelica.Consta
 SMOOTHING_QUANTITY = "SmoothingWidth"
 _COMMENT_RE = re.compile(r"//[^\n]*|/\*.*?\*/|\"(?:[^\"\\]|\\.)*\"", re.S)
 _REF_RE = re.compile(r"(?<![\w.])Modelica(?:\s*\.\s*[A-Za-z_][A-Za-z0-9_]*)+")
+_IMPORT_RE = re.compile(r"\bimport\s+(?:([A-Za-z_]\w*)\s*=\s*)?(Modelica(?:\s*\.\s*[A-Za-z_]\w*)*)\s*;")
 _OWN_RE = re.compile(r"\b(?:package|model|class|block)\s+Modelica\b")
 _CLASS_RE = re.compile(r"\b(?:package|model|block|connector|record|type|function|class)\s+([A-Za-z_]\w*)|\bend\s+([A-Za-z_]\w*)\s*;"
                        r"|\bconstant\s+Real\s+([A-Za-z_]\w*)")
@@ -134,27 +135,51 @@ def prepare(path: Path, text: str) -> str:
     ------
     InputError
         ``FILE:LINE: unsupported Modelica Standard Library class NAME``: a name under
-        ``Modelica.`` that the shipped package does not hold.
+        ``Modelica.`` that the shipped package does not hold, written out or through an
+        ``import`` (``import SI = Modelica.Units.SI;``, ``import Modelica.Mechanics.Rotational.Components;``
+        then ``Components.LossyGear``; a wildcard import is not followed).
     """
     code = code_only(text)
     if not uses_msl(code):
         return text
     known = msl_classes()
-    out, last = [], 0
-    for m in _REF_RE.finditer(code):
-        name = re.sub(r"\s+", "", m.group())
+    spans = []  # (start, end, replacement) of the references read as what they stand for
+    imports = [(imp.start(), imp.end()) for imp in _IMPORT_RE.finditer(code)]
+    for m, name in _references(code):
         if name not in known:
-            parts = name.split(".")
-            held = next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in known or k == 1)
-            line = code.count("\n", 0, m.start()) + 1
-            raise InputError(f"{path}:{line}: unsupported Modelica Standard Library class {name[:200]} (gtmodel ships "
-                             f"{len(known)} MSL classes under their names; {held} holds: "
-                             f"{', '.join(sorted(k.rsplit('.', 1)[-1] for k in known if k.rsplit('.', 1)[0] == held)) or 'none'}; "
-                             "docs/optimica.md lists them)")
-        if name in CONNECTOR_TYPES or name in CONSTANTS:
-            out.append(text[last:m.start()] + (CONNECTOR_TYPES.get(name) or f"({CONSTANTS[name]})"))
-            last = m.end()
+            raise _unsupported(path, code.count("\n", 0, m.start()) + 1, name, known)
+        inside = next(((a, b) for a, b in imports if a <= m.start() < b), None)
+        if inside is not None and (name in CONNECTOR_TYPES or name in CONSTANTS):  # an import of one: nothing left to import
+            spans.append((inside[0], inside[1], re.sub(r"[^\n]", " ", text[inside[0]:inside[1]])))
+        elif inside is None and (name in CONNECTOR_TYPES or name in CONSTANTS):
+            spans.append((m.start(), m.end(), CONNECTOR_TYPES.get(name) or f"({CONSTANTS[name]})"))
+    out, last = [], 0
+    for a, b, replacement in sorted(set(spans)):
+        out.append(text[last:a] + replacement)
+        last = b
     return "".join(out) + text[last:]
+
+
+def _references(code: str) -> list[tuple[re.Match[str], str]]:
+    """Every reference to a class under ``Modelica.``: written out, or through an ``import`` of it (its dotted full name)."""
+    found = [(m, re.sub(r"\s+", "", m.group())) for m in _REF_RE.finditer(code)]
+    for imp in _IMPORT_RE.finditer(code):  # import A = Modelica.P; / import Modelica.P.Q; (a wildcard import is not followed)
+        target = re.sub(r"\s+", "", imp.group(2))
+        alias = imp.group(1) or target.rsplit(".", 1)[-1]
+        for m in re.finditer(rf"(?<![\w.]){re.escape(alias)}(?:\s*\.\s*[A-Za-z_][A-Za-z0-9_]*)*(?!\w)", code):
+            if imp.start() <= m.start() < imp.end():
+                continue
+            rest = re.sub(r"\s+", "", m.group())[len(alias):]
+            found.append((m, target + rest))
+    return found
+
+
+def _unsupported(path: Path, line: int, name: str, known: frozenset[str]) -> InputError:
+    parts = name.split(".")
+    held = next(".".join(parts[:k]) for k in range(len(parts), 0, -1) if ".".join(parts[:k]) in known or k == 1)
+    inside = sorted(k.rsplit(".", 1)[-1] for k in known if k.rsplit(".", 1)[0] == held)
+    return InputError(f"{path}:{line}: unsupported Modelica Standard Library class {name[:200]} (gtmodel ships {len(known)} MSL "
+                      f"classes under their names; {held} holds: {', '.join(inside) or 'none'}; docs/optimica.md lists them)")
 
 
 def extend(parser: Any, ast: Any) -> None:

@@ -165,6 +165,30 @@ def test_unsupported_msl_class_names_file_line_and_class(tmp_path, capsys, decl,
     assert f"opt.mop:{line}: unsupported Modelica Standard Library class {name}" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("text, line, name", [
+    ("  import Modelica.Mechanics.Rotational.Components;\n  Components.LossyGear gear;\n", 3,
+     "Modelica.Mechanics.Rotational.Components.LossyGear"),
+    ("  import R = Modelica.Mechanics.Rotational;\n  R.Components.Inertia i(J = 1);\n  R.Sources.Brake brake;\n", 4,
+     "Modelica.Mechanics.Rotational.Sources.Brake"),
+    ("  import Modelica.Mechanics.Rotational.Components.LossyGear;\n", 2, "Modelica.Mechanics.Rotational.Components.LossyGear"),
+], ids=["package_import", "renaming_import", "class_import"])
+def test_unsupported_msl_class_through_an_import(tmp_path, text, line, name):
+    path = tmp_path / "m.mo"
+    path.write_text(f"model M\n{text}  Real x(start = 0);\nequation\n  der(x) = 1;\nend M;\n")
+    with pytest.raises(InputError, match=rf"m\.mo:{line}: unsupported Modelica Standard Library class {name} "):
+        load_modelica(path, "M")
+
+
+def test_imported_msl_names_load(tmp_path):
+    path = tmp_path / "m.mo"
+    path.write_text("model M\n  import Modelica.Blocks.Interfaces.RealInput;\n  import C = Modelica.Constants;\n  import Modelica.Units.SI;\n"
+                    "  RealInput u \"a rate [rad/s]\";\n  SI.Angle phi(start = 0);\nequation\n  der(phi) = C.pi * u;\nend M;\n")
+    model = load_modelica(path, "M")
+    assert list(model.variables("input")) == ["u"] and model.units["phi"] == "rad"
+    sim = model.simulate(np.array([0.0, 1.0]), u=2.0, rtol=1e-10, atol=1e-12)
+    assert sim.x["phi"][-1] == pytest.approx(2 * np.pi, rel=1e-9)
+
+
 def test_unsupported_msl_class_in_a_mo_beside_the_mop(tmp_path):
     (tmp_path / "plant.mo").write_text("model Plant\n  Modelica.Mechanics.Rotational.Components.Brake brake;\n  Real x(start = 0);\n"
                                        "equation\n  der(x) = 1;\nend Plant;\n")
