@@ -69,9 +69,8 @@ def test_the_printed_rows_say_why_and_print_no_number(suite, capsys):
     suite.print_time_table([row])
     lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("dc_motor_min_energy")]
     assert len(lines) == 2
-    for line in lines:
-        assert line.endswith("rockit: Infeasible_Problem_Detected, no ratio")
-        assert "0.071" not in line  # 0.7 / 9.8: the ratio a failed peer used to get
+    # 0.071 = 0.7 / 9.8: the ratio a failed peer used to get
+    assert [line for line in lines if not line.endswith("rockit: Infeasible_Problem_Detected, no ratio") or "0.071" in line] == []
 
 
 def test_run_one_against_a_failed_peer(suite, monkeypatch):
