@@ -24,8 +24,7 @@ Modules by job:
 * :mod:`~gtmodel.control.runtime`: the compiled robot runtime (RSI/EGM over UDP, built by
   :mod:`gtmodel.codegen.robot_runtime`) run as a child process, its cycle log and counts read.
 
-The names below are imported on first use (:mod:`gtmodel._lazy`). The former paths
-``gtmodel.estimation.mpc`` etc. are kept as thin modules re-exporting from here.
+The names below are imported on first use (:mod:`gtmodel._lazy`).
 
 Lower layers only: modeling and the base modules.
 """

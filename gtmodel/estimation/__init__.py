@@ -20,10 +20,9 @@ Rooms by job (lower rooms never import higher ones; an import-linter contract ch
   study (uses ``filters``).
 
 The loop's controllers (tracking, MPC, their references and the plant bounds) live in
-:mod:`gtmodel.control`; the former paths ``gtmodel.estimation.mpc``, ``.mpc_constraints``,
-``.mpc_fatrop``, ``.tracking``, ``.reference`` and ``.closed_loop.bounds`` re-export from it.
+:mod:`gtmodel.control` (import them from there).
 
-Lower layers only: control (the former paths above), robots, modeling and the base modules.
+Lower layers only: control, robots, modeling and the base modules.
 """
 
 from gtmodel.estimation.filters.complementary import THESIS_CUTOFFS_HZ, ComplementaryFilter

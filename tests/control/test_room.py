@@ -1,7 +1,7 @@
-"""gtmodel.control is the loop controllers' one room: the former estimation paths are only shims.
+"""gtmodel.control is the loop controllers' one room: the former estimation paths are gone (issue 67).
 
 Independent checks: a text scan of the sources (no import of the package under test) for
-the former paths, and object identity between a shim's names and the room's.
+the former paths, and an import of each that fails.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 
-#: Former path -> the module of gtmodel.control it re-exports.
+#: Former path -> the module of gtmodel.control that replaces it.
 MOVED = {
     "gtmodel.estimation.mpc": "gtmodel.control.mpc",
     "gtmodel.estimation.mpc_constraints": "gtmodel.control.mpc_constraints",
@@ -23,16 +23,13 @@ MOVED = {
     "gtmodel.estimation.reference": "gtmodel.control.reference",
     "gtmodel.estimation.closed_loop.bounds": "gtmodel.control.bounds",
 }
-#: The shims themselves, as files of the repository.
-SHIMS = {(REPO / (old.replace(".", "/") + ".py")).resolve() for old in MOVED}
 #: A use of a former path: dotted (imports, docs) or ``from gtmodel.estimation import mpc``.
 OLD_PATH = re.compile(r"gtmodel\.estimation\.(?:mpc|mpc_constraints|mpc_fatrop|tracking|reference|closed_loop\.bounds)\b"
                       r"|from\s+gtmodel\.estimation(?:\.closed_loop)?\s+import\s+[^\n]*\b(?:mpc|mpc_constraints|mpc_fatrop|tracking|reference|bounds)\b")
 #: Where code is written: every Python module, notebook and Markdown page of the project.
 ROOTS = ["gtmodel", "tests", "benchmarks", "docs", "notebooks"]
-#: Prose that names the former paths on purpose (they are kept for existing code).
-NAMING_THE_SHIMS = {REPO / "gtmodel" / "control" / "__init__.py", REPO / "gtmodel" / "estimation" / "__init__.py",
-                    REPO / "docs" / "layout.md", Path(__file__).resolve()}
+#: Prose that names the former paths on purpose: this test (docs/layout.md is generated from the modules).
+NAMING_THE_FORMER_PATHS = {REPO / "docs" / "layout.md", Path(__file__).resolve()}
 
 
 def _sources() -> list[Path]:
@@ -40,9 +37,9 @@ def _sources() -> list[Path]:
                   for p in (REPO / root).rglob(f"*.{ext}") if ".ipynb_checkpoints" not in p.parts)
 
 
-def test_nothing_but_the_shims_uses_the_former_paths():
+def test_nothing_uses_the_former_paths():
     sources = _sources()
-    users = [f"{p.relative_to(REPO)}: {m.group(0)}" for p in sources if p not in SHIMS | NAMING_THE_SHIMS
+    users = [f"{p.relative_to(REPO)}: {m.group(0)}" for p in sources if p not in NAMING_THE_FORMER_PATHS
              for m in OLD_PATH.finditer(p.read_text(encoding="utf-8"))]
     assert len(sources) > 100 and users == []
 
@@ -54,10 +51,10 @@ def test_the_scan_finds_a_former_path():
 
 
 @pytest.mark.parametrize(("old", "new"), MOVED.items(), ids=list(MOVED))
-def test_a_former_path_re_exports_the_same_objects(old, new):
-    shim, room = importlib.import_module(old), importlib.import_module(new)
-    assert shim.__all__ == room.__all__
-    assert all(getattr(shim, name) is getattr(room, name) for name in room.__all__)
+def test_a_former_path_is_gone_and_its_room_module_imports(old, new):
+    with pytest.raises(ModuleNotFoundError, match=old.replace(".", r"\.")):
+        importlib.import_module(old)
+    assert importlib.import_module(new).__all__
 
 
 def test_the_room_exports_its_names_lazily():

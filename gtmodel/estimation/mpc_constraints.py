@@ -1,6 +1,0 @@
-"""Moved to :mod:`gtmodel.control.mpc_constraints`; this path is kept for existing code."""
-
-import gtmodel.control.mpc_constraints as _moved
-from gtmodel.control.mpc_constraints import *  # noqa: F401,F403
-
-__all__ = list(_moved.__all__)
