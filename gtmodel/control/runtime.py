@@ -324,10 +324,52 @@ def _stop(proc: subprocess.Popen, grace: float = 3.0) -> None:
     proc.wait()
 
 
+class _Serving:
+    """The cycle log's rows so far, counted from the bytes added since the last look (the writer flushes when idle)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path, self.offset, self.lines, self.start = path, 0, 0, time.monotonic()
+
+    def rows(self) -> int:
+        try:
+            with open(self.path, "rb") as f:
+                f.seek(self.offset)
+                chunk = f.read()
+        except OSError:
+            return 0
+        self.offset += len(chunk)
+        self.lines += chunk.count(b"\n")
+        return max(self.lines - 1, 0)  # the header row
+
+    def say(self) -> None:
+        rows, seconds = self.rows(), time.monotonic() - self.start
+        if rows:
+            log.info("loop: serving, %d cycles (%.0f s)", rows, seconds)
+        else:
+            log.info("loop: serving, waiting for the robot's first datagram (%.0f s)", seconds)
+
+
+def _wait(proc: subprocess.Popen, time_limit: float | None, serving: _Serving, progress: float | None) -> None:
+    """``proc.wait(time_limit)``, saying every ``progress`` s how the serving goes."""
+    if progress is None:
+        proc.wait(timeout=time_limit)
+        return
+    deadline = None if time_limit is None else time.monotonic() + time_limit
+    while True:
+        left = None if deadline is None else deadline - time.monotonic()
+        try:
+            proc.wait(timeout=progress if left is None else max(min(progress, left), 0.0))
+            return
+        except subprocess.TimeoutExpired:
+            if deadline is not None and time.monotonic() >= deadline:
+                raise
+            serving.say()
+
+
 def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, int] | None = None, sensor_port: int | None = None,
              idle_timeout: float = 2.0, max_cycles: int | None = None, time_limit: float | None = None,
              reply_deadline: float | None = None, realtime: bool = True, end_on_signal: bool = False, robot: str | None = None,
-             tracker: str | None = None, log_max_mb: float | None = None) -> LoopRun:
+             tracker: str | None = None, log_max_mb: float | None = None, progress: float | None = 5.0) -> LoopRun:
     """Run the robot runtime until it ends, and read its counts and log.
 
     Parameters
@@ -365,6 +407,10 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     log_max_mb : float, optional
         The cycle log's cap [MB] (rows past it are counted in ``log.capped``, not written);
         None: the runtime's default, 1024 MB.
+    progress : float, optional
+        Seconds between the progress lines logged (INFO) while the runtime serves:
+        ``loop: serving, N cycles (T s)``, the cycle log's rows so far, or ``loop: serving,
+        waiting for the robot's first datagram (T s)``; None: no lines. Default 5.
 
     Returns
     -------
@@ -416,7 +462,7 @@ def run_loop(executable: str | Path, out_dir: str | Path, *, listen: tuple[str, 
     pump.start()
     try:
         try:
-            proc.wait(timeout=time_limit)
+            _wait(proc, time_limit, _Serving(out / LOG_NAME), progress)
         except subprocess.TimeoutExpired:
             timed_out = True
             _stop(proc)

@@ -7,7 +7,8 @@ Solvers called through CasADi catch Ctrl-C themselves and return a failure statu
 run stops with status ``interrupted`` (exit code 130), also inside a study.
 
 :class:`Heartbeat` logs one line every few seconds while a long solve runs and nothing
-else shows progress (output piped, or ``--quiet`` off a terminal).
+else shows progress (output piped, or ``--quiet`` off a terminal); it keeps quiet while the
+run says something itself (e.g. ``gtmodel loop``'s serving lines, issue 67).
 """
 
 from __future__ import annotations
@@ -81,6 +82,9 @@ class InterruptGuard:
 class Heartbeat:
     """Log ``"<label>: still running (N s)"`` every ``interval`` seconds until stopped.
 
+    A line is left out when another line went to the ``gtmodel`` logger within the last
+    1.5 intervals (the run shows its own progress then, e.g. the loop's ``serving`` lines).
+
     Parameters
     ----------
     label : str
@@ -97,14 +101,23 @@ class Heartbeat:
         self.enabled = enabled
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._last_other = -float("inf")  # time.monotonic() of the last line that was not this heartbeat's
+
+    def _seen(self, record: logging.LogRecord) -> bool:
+        # a filter of the gtmodel logger while running: notes when anything else was said
+        if self._thread is None or record.thread != self._thread.ident:
+            self._last_other = time.monotonic()
+        return True
 
     def _run(self) -> None:
         start = time.monotonic()
         while not self._stop.wait(self.interval):
-            _log.info("%s: still running (%.0f s)", self.label, time.monotonic() - start)
+            if time.monotonic() - self._last_other >= 1.5 * self.interval:
+                _log.info("%s: still running (%.0f s)", self.label, time.monotonic() - start)
 
     def __enter__(self) -> "Heartbeat":
         if self.enabled:
+            _log.addFilter(self._seen)
             self._thread = threading.Thread(target=self._run, name="gtmodel-heartbeat", daemon=True)
             self._thread.start()
         return self
@@ -113,3 +126,4 @@ class Heartbeat:
         self._stop.set()
         if self._thread is not None:
             self._thread.join()
+            _log.removeFilter(self._seen)

@@ -11,6 +11,7 @@ bounds; ok = 0 when the first input exceeds 500, a failed step).
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
 import signal
@@ -311,6 +312,22 @@ def test_realtime_not_asked_is_said(exes, tmp_path):
 def test_time_limit_stops_a_run_that_never_ends(exes, tmp_path):
     run = run_loop(exes["rsi_plain"], tmp_path / "run", listen=("127.0.0.1", 0), time_limit=0.5)
     assert run.status == Status.MAX_ITERATIONS and run.stats["end"] == "signal" and run.summary["cycles"] == 0
+
+
+def test_serving_says_its_cycle_count_while_it_serves(exes, tmp_path, caplog):
+    """``gtmodel loop`` says "serving" with the cycles so far (issue 67), first that it waits for the robot."""
+    caplog.set_level(logging.INFO, logger="gtmodel")
+
+    def script(peer: Peer):
+        time.sleep(0.5)
+        for k in range(30):
+            peer.exchange(rob(1000 + 4 * k))
+        time.sleep(0.5)
+    run, _ = session(exes["rsi_plain"], tmp_path / "run", script, idle_timeout=1.0, progress=0.2)
+    lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("loop: serving")]
+    assert run.summary["cycles"] == 30
+    assert lines[0].startswith("loop: serving, waiting for the robot's first datagram")
+    assert "loop: serving, 30 cycles" in {line.split(" (")[0] for line in lines}
 
 
 def test_setup_failures_are_a_status(exes, tmp_path):

@@ -222,6 +222,19 @@ def test_heartbeat_logs_while_running(caplog):
     assert lines[0].startswith("solving x: still running")
 
 
+def test_heartbeat_keeps_quiet_while_the_run_says_something_itself(caplog):
+    """The loop's serving lines replace the heartbeat's (issue 67): a line at least every interval silences it."""
+    caplog.set_level(logging.INFO, logger="gtmodel")
+    with Heartbeat("solving x", interval=0.1):
+        for _ in range(8):
+            logging.getLogger("gtmodel").info("serving")
+            time.sleep(0.05)
+        time.sleep(0.45)  # then silence: the heartbeat speaks again
+    lines = [r.getMessage() for r in caplog.records]
+    first = lines.index(next(m for m in lines if "still running" in m))
+    assert lines.count("serving") == 8 and first >= 8
+
+
 def test_heartbeat_disabled_is_silent(caplog):
     caplog.set_level(logging.INFO, logger="gtmodel")
     with Heartbeat("solving x", interval=0.05, enabled=False):
