@@ -59,6 +59,7 @@ CACHE = ROOT / "tests" / "modeling" / "library" / "data" / "drive_family_referen
 #: The resolutions (intervals) of a reference, each solve started from the previous: the two finest are the
 #: reference's two resolutions, the coarsest only measures the order of their error for the extrapolation.
 RESOLUTIONS = (75, 150, 300)
+_SUCCEEDED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 G_ACC = 9.81
 
 
@@ -143,6 +144,38 @@ def _substeps(p: dict, intervals: int) -> int:
     return max(2, math.ceil(horizon / intervals * _rates(p) / 0.5))
 
 
+def rigid_guess(p: dict, intervals: int) -> dict:
+    """A start for :func:`solve`: the load on a smooth rest-to-rest profile, the drive rigid along it.
+
+    ``q(t) = d (3 s^2 - 2 s^3)`` (``s = t / T``), whose peak acceleration is ``6 d / T^2`` and peak
+    speed ``1.5 d / T``. For a minimum time, ``T`` is the longest of the family's ``final_time``
+    and the times at which the rigid drive's current (the force available after gravity and
+    friction) and speed limits are met by that profile, times 1.2. The force on the load
+    ``F = M q'' + f(v) + g(q)``, the current ``i = (Jm q'' / G + G F) / k``, the deflection
+    ``delta`` from :func:`_deflection`, the voltage ``R i + k w_m`` (the armature's ``L di/dt``
+    neglected). Returns the dict :func:`solve` takes as ``guess`` (``X``, ``U``, ``final_time``).
+    """
+    G, d, M = _G(p), p["distance"], p["load"]
+    T = p["final_time"]
+    if p["task"] == "min_time":
+        m_eff = M + p["Jm"] / G**2
+        spare = p["k"] * p["imax"] / G - p["gravity"] - p["Fc"] - p["Fs"]
+        t_force = math.sqrt(6 * d * m_eff / spare) if spare > 0 else p["time_bounds"][1] / 2
+        t_speed = 1.5 * d / (G * p["wmax"]) if p["wmax"] else 0.0
+        T = min(max(T, t_force, t_speed) * 1.2, p["time_bounds"][1])
+    t = np.linspace(0.0, T, intervals + 1)
+    s = t / T
+    q, v, a = d * (3 * s**2 - 2 * s**3), d * (6 * s - 6 * s**2) / T, d * (6 - 12 * s) / T**2
+    grav = p["gravity"] * np.sin(q) if p["transmission"] == "gear" else p["gravity"] * np.ones_like(q)
+    fric = np.array([float(friction_force(vk, p)) for vk in v])
+    F = M * a + fric + grav
+    i = (p["Jm"] * a / G + G * F) / p["k"]
+    delta = np.zeros_like(q) if p.get("rigid") else np.array([_deflection(float(fk), p) if fk else 0.0 for fk in F])
+    X = np.vstack([i, (q + delta) / G, v / G, q, v])
+    U = np.clip(p["R"] * (i[:-1] + i[1:]) / 2 + p["k"] * (v[:-1] + v[1:]) / (2 * G), -p["vmax"], p["vmax"])
+    return {"X": X, "U": U, "final_time": T}
+
+
 def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
     """One multiple-shooting solve (see the module's docstring) at ``intervals`` intervals.
 
@@ -216,6 +249,12 @@ def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
 def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
     """The member's reference: :func:`solve` at each resolution, each started from the previous.
 
+    The coarsest is solved from straight lines between the rest states and from :func:`rigid_guess`;
+    the lower objective of those IPOPT solved is kept. A resolution whose objective is more than
+    1 % above the best resolution's (another local optimum: drive0_13 ended 0.355 s at 75 and
+    0.924 s at 150 intervals, 0.129 s at 300) is solved again from the best one's solution, and
+    the lower kept.
+
     The objective is the Richardson extrapolation of the two finest solves with the order their
     differences show (``p = log2((E_1 - E_2) / (E_2 - E_3))`` over the three resolutions, used when
     the differences have one sign and ``0.5 <= p <= 3``; else the finest solve's value). A
@@ -232,8 +271,22 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
     """
     runs, prev = [], None
     for n in resolutions:
-        prev = solve(p, n, guess=prev)
+        run = solve(p, n, guess=prev)
+        if prev is None:  # the coarsest from the rigid profile too: the lower of the two that succeeded (drive0_13 from
+            # straight lines: 0.452 s at 75 intervals, 0.931 s at 150 from it, 0.129 s at 300; drive0_09: infeasible)
+            other = solve(p, n, guess=rigid_guess(p, n))
+            cpu = run["cpu_s"] + other["cpu_s"]
+            ok = [r for r in (run, other) if r["status"] in _SUCCEEDED]
+            run = min(ok, key=lambda r: r["objective"]) if ok else run
+            run["cpu_s"] = cpu
+        prev = run
         runs.append(prev)
+    best = min((r for r in runs if r["status"] in _SUCCEEDED), key=lambda r: r["objective"], default=None)
+    for j, run in enumerate(runs):  # a resolution left in a worse local optimum: again from the best one's solution
+        if best is not None and run is not best and run["objective"] - best["objective"] > 0.01 * abs(best["objective"]):
+            again = solve(p, run["intervals"], guess=best)
+            again["cpu_s"] += run["cpu_s"]
+            runs[j] = again if again["status"] in _SUCCEEDED and again["objective"] < run["objective"] else run
     fine, e = runs[-1], [r["objective"] for r in runs]
     order, extrapolated = None, fine["objective"]
     if len(e) >= 3 and (e[-3] - e[-2]) * (e[-2] - e[-1]) > 0:
