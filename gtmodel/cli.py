@@ -35,13 +35,16 @@
     rehearsal of ``gtmodel loop``.
 ``gtmodel export-fmu (--model FILE:CLASS | --robot NAME | --modelica FILE.mo[:CLASS] | --controller FILE) --out NAME.fmu``
     Export a model as an FMU (:func:`gtmodel.exchange.export_fmu`, docs/fmu.md): FMI 2.0
-    or 3.0 (``--fmi-version``), model exchange and co-simulation, C sources and a binary
+    or 3.0 (``--fmi-version``), model exchange and/or co-simulation as ``--interface`` says
+    (FMI 3.0 always with model exchange: ``cs`` alone is refused), C sources and a binary
     for this platform; a controller file's Kalman step as a discrete-time
     co-simulation FMU (:func:`gtmodel.exchange.fmu_step.export_step_fmu`).
-``gtmodel import-fmu FILE.fmu [--stop-time T --out CSV] [--max-members N --max-member-mb MB --max-total-mb MB --max-description-mb MB]``
+``gtmodel import-fmu FILE.fmu [--stop-time T [--start NAME=VALUE ...] [--input CSV] --out CSV] [--max-members N ...]``
     Load an FMU as gtmodel does (:func:`gtmodel.exchange.import_fmu`): its variables and
-    where its derivatives come from; simulate it with CVODES. The archive is unpacked
-    under caps (:class:`gtmodel.exchange.fmu_archive.ArchiveLimits`) the options raise.
+    where its derivatives come from; simulate it with CVODES from its start values (changed
+    by ``--start``), inputs from a table (``--input``). The archive is unpacked under caps
+    (:class:`gtmodel.exchange.fmu_archive.ArchiveLimits`) the options raise. Both FMU
+    commands live in :mod:`gtmodel.cli_fmu`.
 ``gtmodel report RESULT_DIR``
     Write ``RESULT_DIR/report.html``: one self-contained page of a result folder (status,
     objective, verification, warnings, zoomable trajectories with their bounds, the
@@ -166,30 +169,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_robot_sim_parser(sub)
 
-    fx = sub.add_parser("export-fmu", help="export a model as an FMU (FMI 2.0 / 3.0, model exchange and co-simulation), sources and a binary")
-    what = fx.add_mutually_exclusive_group(required=True)
-    what.add_argument("--model", default=None, metavar="FILE:CLASS", help="a user model, e.g. models/cart_pendulum.py:CartPendulum")
-    what.add_argument("--robot", default=None, help="a robot's rigid-body dynamics with friction (cart states q, q_dot; input tau): L1, D1, ... or a parameter TOML")
-    what.add_argument("--modelica", default=None, metavar="FILE.mo[:CLASS]", help="a Modelica model (through pymoca, docs/fmu.md)")
-    what.add_argument("--controller", default=None, metavar="FILE", help="a controller file's Kalman step as a discrete-time co-simulation FMU (FMI 2.0, its sample period)")
-    fx.add_argument("--out", type=Path, required=True, help="the .fmu file to write")
-    fx.add_argument("--fmi-version", default="2.0", choices=("2.0", "3.0"), help="FMI version (default 2.0)")
-    fx.add_argument("--interface", default="both", choices=("me", "cs", "both"), help="model exchange, co-simulation or both (default both)")
-    fx.add_argument("--step", type=float, default=1e-3, help="fixed step [s] of the co-simulation's embedded RK4 (default 1e-3)")
-    fx.add_argument("--sources-only", action="store_true", help="pack the C sources without building a binary")
-    fx.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    from gtmodel.cli_fmu import add_fmu_parsers  # gtmodel export-fmu / import-fmu
 
-    fi = sub.add_parser("import-fmu", help="load an FMU (FMI 2.0/3.0 model exchange) as gtmodel does, list it, simulate it")
-    fi.add_argument("fmu", type=Path, help="the .fmu file")
-    fi.add_argument("--stop-time", type=float, default=None, help="simulate from 0 to this time [s] with CVODES (start values, inputs at their start)")
-    fi.add_argument("--points", type=int, default=101, help="output points of the simulation (default 101)")
-    fi.add_argument("--out", type=Path, default=None, help="write the simulation to this CSV file (columns t, states, outputs)")
-    fi.add_argument("--finite-differences", action="store_true", help="derivatives by finite differences even if the FMU provides directional derivatives")
-    fi.add_argument("--max-members", type=int, default=None, metavar="N", help="raise the cap on the archive's members (default 10000, docs/fmu.md)")
-    fi.add_argument("--max-member-mb", type=int, default=None, metavar="MB", help="raise the cap on one member's unpacked size (default 256 MiB)")
-    fi.add_argument("--max-total-mb", type=int, default=None, metavar="MB", help="raise the cap on the archive's unpacked size (default 1024 MiB)")
-    fi.add_argument("--max-description-mb", type=int, default=None, metavar="MB", help="raise the cap on modelDescription.xml (default 8 MiB)")
-    fi.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
+    add_fmu_parsers(sub)
     return parser
 
 
@@ -528,97 +510,6 @@ def _schema(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _export_fmu(args: argparse.Namespace) -> int:
-    if args.out.suffix != ".fmu":  # the checks that need no model first (fast, no CasADi)
-        raise GtModelError(f"--out {args.out}: the file name must end in .fmu")
-    source = args.model.rpartition(":")[0] if args.model else args.modelica or args.controller
-    if source is not None:
-        source = source if source.endswith((".py", ".mo")) or ":" not in source else source.rpartition(":")[0]
-        if not Path(source).is_file():
-            raise GtModelError(f"{source}: no such model file")
-    if args.controller is not None:
-        return _export_step_fmu(args)
-    from gtmodel.exchange import export_fmu
-
-    if args.model is not None:
-        from gtmodel.problems.user_model import load_user_model, split_model_reference
-
-        model = load_user_model(*split_model_reference(args.model))
-    elif args.modelica is not None:
-        from gtmodel.exchange.modelica import load_modelica
-
-        file, sep, cls = args.modelica.rpartition(":")
-        if not sep or not file.endswith(".mo"):
-            file, cls = args.modelica, ""
-        model = load_modelica(file, cls or None)
-    else:
-        from gtmodel.robots.model import gantry_tau_model
-
-        model = gantry_tau_model(args.robot, states="cart")
-    fmu = export_fmu(model, args.out, version=args.fmi_version, interface=args.interface, step=args.step, binary=not args.sources_only)
-    em = fmu.model
-    print(f"wrote {fmu.path} (FMI {fmu.version} {' + '.join(fmu.interfaces)}, binary {fmu.platform or 'none: sources only'})")
-    print(f"model {em.name}: {em.nx} states, {len(em.u_names)} inputs, {len(em.p_names)} parameters, {em.ny} outputs"
-          + (f", {em.algebraic} algebraic variables solved inside" if em.algebraic else ""))
-    if fmu.step is not None:
-        print(f"co-simulation: fixed-step RK4, step <= {fmu.step:g} s")
-    return EXIT_OK
-
-
-def _import_fmu(args: argparse.Namespace) -> int:
-    if not args.fmu.is_file():  # before the heavy imports
-        raise GtModelError(f"{args.fmu}: no such FMU file")
-    from gtmodel.exchange import import_fmu, simulate_explicit
-    from gtmodel.exchange.fmu_archive import ArchiveLimits
-
-    mb = 1 << 20
-    given = {"max_members": args.max_members, "max_member_bytes": args.max_member_mb and args.max_member_mb * mb,
-             "max_total_bytes": args.max_total_mb and args.max_total_mb * mb,
-             "max_description_bytes": args.max_description_mb and args.max_description_mb * mb}
-    for option, value in (("--max-members", args.max_members), ("--max-member-mb", args.max_member_mb),
-                          ("--max-total-mb", args.max_total_mb), ("--max-description-mb", args.max_description_mb)):
-        if value is not None and value <= 0:
-            raise GtModelError(f"{option}: expected a positive integer, got {value}")
-    limits = ArchiveLimits(**{k: v for k, v in given.items() if v is not None})
-    imported = import_fmu(args.fmu, derivatives="finite_differences" if args.finite_differences else "auto", limits=limits)
-    em = imported.model
-    print(f"{args.fmu}: FMI {imported.version} model exchange, model {em.name!r}"
-          + (" (binary built here from its sources)" if imported.built_from_sources else ""))
-    for label, names in (("states", em.x_names), ("inputs", em.u_names), ("parameters", em.p_names), ("outputs", em.y_names)):
-        print(f"{label:<11} {', '.join(names) or '-'}")
-    print(f"derivatives {imported.derivatives}")
-    if args.stop_time is None:
-        return EXIT_OK
-    if not args.stop_time > 0 or args.points < 2:
-        raise GtModelError(f"--stop-time must be positive and --points at least 2, got {args.stop_time}, {args.points}")
-    sim = simulate_explicit(em, [args.stop_time * k / (args.points - 1) for k in range(args.points)])
-    columns = {"t": sim.t, **sim.x, **sim.outputs}
-    if args.out is not None:
-        try:
-            args.out.write_text(",".join(columns) + "\n" + "\n".join(
-                ",".join(repr(float(columns[c][k])) for c in columns) for k in range(sim.t.size)) + "\n", encoding="utf-8")
-        except OSError as exc:
-            raise GtModelError(f"--out {args.out}: cannot write ({exc.strerror or exc})") from None
-        print(f"wrote {args.out} ({sim.t.size} rows)")
-    print("at t = " + f"{args.stop_time:g} s: " + ", ".join(f"{n} = {sim.x[n][-1]:.6g}" for n in em.x_names))
-    return EXIT_OK
-
-
-def _export_step_fmu(args: argparse.Namespace) -> int:
-    from gtmodel.codegen import load_controller
-    from gtmodel.exchange.fmu_step import export_step_fmu
-
-    controller = load_controller(args.controller)
-    if controller.kalman_step is None:
-        raise GtModelError(f"{args.controller}: the controller has no kalman_step to export (the filters' steps carry a covariance matrix)")
-    if args.fmi_version != "2.0" or args.interface == "me":
-        raise GtModelError("--controller: a discrete-time step is exported as FMI 2.0 co-simulation only")
-    fmu = export_step_fmu(controller.kalman_step, args.out, dt=controller.dt, binary=not args.sources_only)
-    print(f"wrote {fmu.path} (FMI 2.0 CoSimulation, discrete step every {fmu.dt:g} s, binary {fmu.platform or 'none: sources only'})")
-    print(f"states {', '.join(fmu.x_names)}; inputs {', '.join(fmu.u_names)}; outputs {', '.join(fmu.y_names)}")
-    return EXIT_OK
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``gtmodel`` command.
 
@@ -656,10 +547,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return _schema(args)
             if args.command == "report":
                 return _report(args)
-            if args.command == "export-fmu":
-                return _export_fmu(args)
-            if args.command == "import-fmu":
-                return _import_fmu(args)
+            if args.command in ("export-fmu", "import-fmu"):
+                from gtmodel.cli_fmu import export_fmu_command, import_fmu_command
+
+                return (export_fmu_command if args.command == "export-fmu" else import_fmu_command)(args)
             if args.command == "robot-sim":
                 from gtmodel.robot_sim.cli import robot_sim_command
 

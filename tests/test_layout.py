@@ -27,9 +27,11 @@ LAZY_OK = ("matplotlib", "sklearn", "dask", "distributed")
 #: input error; issue 24, item 7): each sub-command imports the layers it needs (the whole
 #: problem layer pulls in CasADi, SciPy, pandas and matplotlib: 4-6 s) when it runs.
 #: (``gtmodel/cli_codegen.py`` holds the routes of ``gtmodel codegen``, ``gtmodel/cli_loop.py`` that of
-#: ``gtmodel loop``, likewise.)
+#: ``gtmodel loop``, ``gtmodel/cli_fmu.py`` those of ``gtmodel export-fmu`` / ``import-fmu``, ``gtmodel/cli_examples.py``
+#: that of ``gtmodel examples``, likewise; cli_fmu imports NumPy in its commands too, its parsers are built by ``--help``.)
 #: ``gtmodel/__main__.py`` installs the signal handlers before it imports the command (issue 26).
 LAZY_GTMODEL_OK = {"gtmodel/cli.py": ("gtmodel.",), "gtmodel/cli_codegen.py": ("gtmodel.",), "gtmodel/cli_loop.py": ("gtmodel.",),
+                   "gtmodel/cli_fmu.py": ("gtmodel.", "numpy"), "gtmodel/cli_examples.py": ("gtmodel.",),
                    "gtmodel/__main__.py": ("gtmodel.cli",)}
 MAX_LINES = 700
 
