@@ -45,6 +45,9 @@
     by ``--start``), inputs from a table (``--input``). The archive is unpacked under caps
     (:class:`gtmodel.exchange.fmu_archive.ArchiveLimits`) the options raise. Both FMU
     commands live in :mod:`gtmodel.cli_fmu`.
+``gtmodel examples DIR``
+    Copy the shipped example problems, their models, the studies and the loop files into
+    ``DIR`` (new or empty; :mod:`gtmodel.cli_examples`), and say how to run one.
 ``gtmodel report RESULT_DIR``
     Write ``RESULT_DIR/report.html``: one self-contained page of a result folder (status,
     objective, verification, warnings, zoomable trajectories with their bounds, the
@@ -172,6 +175,9 @@ def build_parser() -> argparse.ArgumentParser:
     from gtmodel.cli_fmu import add_fmu_parsers  # gtmodel export-fmu / import-fmu
 
     add_fmu_parsers(sub)
+    from gtmodel.cli_examples import add_examples_parser  # gtmodel examples DIR: the shipped problems and models copied out
+
+    add_examples_parser(sub)
     return parser
 
 
@@ -547,6 +553,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return _schema(args)
             if args.command == "report":
                 return _report(args)
+            if args.command == "examples":
+                from gtmodel.cli_examples import examples_command
+
+                return examples_command(args)
             if args.command in ("export-fmu", "import-fmu"):
                 from gtmodel.cli_fmu import export_fmu_command, import_fmu_command
 
