@@ -73,3 +73,21 @@ def test_no_module_reads_the_checkout_outside_the_package():
     offenders = [p.relative_to(REPO).as_posix() for p in (REPO / "gtmodel").rglob("*.py")
                  if re.search(r"""["']tests["']\s*/|/\s*["']tests["']""", p.read_text(encoding="utf-8"))]
     assert offenders == []
+
+
+#: What a package index shows of the wheel (issue 67, item 6): each must be filled in pyproject.toml.
+METADATA = ("description", "readme", "license", "authors", "keywords", "classifiers", "requires-python")
+
+
+def test_the_wheel_metadata_is_complete():
+    project = PYPROJECT["project"]
+    assert [key for key in METADATA if not project.get(key)] == []
+    assert (REPO / project["readme"]).is_file() and (REPO / "LICENSE").read_text().startswith(f"{project['license']['text']} License")
+
+
+def test_the_classifiers_are_trove_names_that_agree_with_the_project():
+    classifiers = PYPROJECT["project"]["classifiers"]
+    assert [c for c in classifiers if not re.fullmatch(r"[A-Z][A-Za-z ]+( :: [A-Za-z0-9+/()., -]+)+", c)] == []
+    assert "License :: OSI Approved :: MIT License" in classifiers
+    minimum = PYPROJECT["project"]["requires-python"].removeprefix(">=")
+    assert f"Programming Language :: Python :: {minimum}" in classifiers
