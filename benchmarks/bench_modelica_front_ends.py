@@ -547,6 +547,12 @@ def main() -> None:
     if args.worker:
         _worker()
         return
+    try:
+        import gtmodel  # noqa: F401
+        import pymoca  # noqa: F401
+    except ImportError as exc:
+        raise SystemExit(f"{exc}: run this script with the project's Python (gtmodel and pymoca installed); it runs "
+                         f"rumoca in --rumoca-python ({args.rumoca_python}) as a child process") from None
     jobs = make_jobs()
     if _library_with_connectors.cache_info().currsize:
         atexit.register(shutil.rmtree, _library_with_connectors(), True)
