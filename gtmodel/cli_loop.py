@@ -49,9 +49,9 @@ def add_loop_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--listen", default=None, metavar="HOST:PORT", help="where the runtime listens (overrides [interface] listen)")
     p.add_argument("--robot", default=None, metavar="ADDR[:PORT]", help="the robot controller's address: only its datagrams are answered "
                    "(overrides [interface] robot; default the first valid packet's source)")
-    p.add_argument("--sensor-port", type=int, default=None, metavar="PORT", help="UDP port of the sensor stream on the listen address (overrides [interface] sensor_port)")
-    p.add_argument("--idle-timeout", type=float, default=None, metavar="S", help="end when the robot has sent nothing this long (overrides the file)")
-    p.add_argument("--max-cycles", type=int, default=None, metavar="N", help="end after N cycles (overrides the file)")
+    p.add_argument("--sensor-port", type=_ascii_int, default=None, metavar="PORT", help="UDP port of the sensor stream on the listen address (overrides [interface] sensor_port)")
+    p.add_argument("--idle-timeout", type=_ascii_float, default=None, metavar="S", help="end when the robot has sent nothing this long (overrides the file)")
+    p.add_argument("--max-cycles", type=_ascii_int, default=None, metavar="N", help="end after N cycles (overrides the file)")
     p.add_argument("--correction-file", default=None, metavar="CSV", help="streaming: the learned correction to add (a previous run's ilc_next.csv)")
     p.add_argument("--data-dir", type=Path, action="append", default=[], metavar="DIR",
                    help="a folder data files may also come from (default: the loop file's folder and that of --correction-file); repeatable")
@@ -59,6 +59,22 @@ def add_loop_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.add_argument("--debug", action="store_true", help="show tracebacks of internal errors")
     return p
+
+
+def _ascii_int(text: str) -> int:
+    # int() also reads other scripts' digits (Arabic-Indic, fullwidth): a port or a count is written in ASCII
+    if not (text.isascii() and text.strip().lstrip("+-").isdigit()):
+        raise argparse.ArgumentTypeError(f"expected an integer in ASCII digits, got {text!r}")
+    return int(text)
+
+
+def _ascii_float(text: str) -> float:
+    if not text.isascii():
+        raise argparse.ArgumentTypeError(f"expected a number in ASCII digits, got {text!r}")
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
 
 
 def loop_settings(args: argparse.Namespace) -> dict[str, Any]:
@@ -80,7 +96,7 @@ def loop_settings(args: argparse.Namespace) -> dict[str, Any]:
     InputError
         An option's value of the wrong form (the message names the option, e.g. ``--listen``).
     """
-    from gtmodel.problems.kinds.schemas.robot_loop import parse_address, parse_source
+    from gtmodel.problems.kinds.schemas.robot_loop import local_address_problem, parse_address, parse_source
 
     for option, parse in (("listen", parse_address), ("robot", parse_source)):
         value = getattr(args, option)
@@ -89,6 +105,9 @@ def loop_settings(args: argparse.Namespace) -> dict[str, Any]:
                 parse(value)
             except ValueError as exc:
                 raise InputError(f"--{option}: {exc}") from None
+    problem = local_address_problem(parse_address(args.listen)[0]) if args.listen is not None else None
+    if problem is not None:
+        raise InputError(f"--listen: expected {problem}, got {args.listen!r}")
     for option, lo, hi in (("sensor_port", 1, 65535), ("max_cycles", 0, 100_000_000)):
         value = getattr(args, option)
         if value is not None and not lo <= value <= hi:

@@ -43,12 +43,19 @@ from gtmodel.control.position_loop import PoseCorrection, ReferenceStreaming
 from gtmodel.errors import GtModelError
 from gtmodel.estimation.ilc.lifted import LearningFilter, QFilter, time_window
 from gtmodel.problems.base import KIND_DOCS, Column, ProblemFile, ProblemKind, Written
-from gtmodel.problems.kinds.schemas.robot_loop import DEFAULT_PORTS, RobotLoopFile, parse_address
+from gtmodel.problems.kinds.schemas.robot_loop import DEFAULT_PORTS, RobotLoopFile, local_address_problem, parse_address
 
 __all__ = ["RobotLoopFile", "RobotLoopKind", "MAX_TRAJECTORY_ROWS"]
 
 #: Most rows of a streamed trajectory (an hour at 4 ms).
 MAX_TRAJECTORY_ROWS = 900_000
+
+
+#: The runtime's rules (:class:`~gtmodel.codegen.robot_runtime.RuntimeSpec`, whose messages start with its field)
+#: -> the file's field they come from.
+_SPEC_FIELDS = {"reply_deadline_s": "interface.reply_deadline", "period": "interface.period", "sen_type": "interface.sen_type",
+                "correction": "interface.correction", "egm_mode": "interface.egm_mode", "rate": "limits.rate",
+                "fallback": "faults.fallback", "stale_cycles": "faults.stale_cycles", "interface": "interface.type"}
 
 
 def _read_table(path: Path, what: str, file: ProblemFile, field_name: str, width: int | None = None) -> np.ndarray:
@@ -123,6 +130,12 @@ class RobotLoopKind(ProblemKind):
         """
         it, ct, lim = doc.interface, doc.controller, doc.limits
         listen = parse_address(it.listen) if it.listen else ("127.0.0.1", DEFAULT_PORTS[it.type])
+        problem = local_address_problem(listen[0])
+        if problem is not None:  # here, not at the runtime's bind after the build (exit 1)
+            raise file.fail("interface.listen", problem, it.listen)
+        if it.reply_deadline >= it.period:
+            raise file.fail("interface.reply_deadline", f"a deadline shorter than the period ({it.period:g} s): the reply is due "
+                                                        "before the robot's next packet", it.reply_deadline)
         sensor = None
         if ct.type == "pose_correction":
             sensor = it.sensor_port or (listen[1] + 1 if listen[1] < 65535 else listen[1] - 1)
@@ -155,7 +168,7 @@ class RobotLoopKind(ProblemKind):
                                sen_type=it.sen_type, fallback=doc.faults.fallback, stale_cycles=doc.faults.stale_cycles,
                                reply_deadline_s=it.reply_deadline, period=it.period)
         except GtModelError as exc:
-            raise file.wrap("limits", exc) from None
+            raise file.wrap(_SPEC_FIELDS.get(str(exc).split(":")[0], "limits"), exc) from None
         ilc = ILCLaw(**doc.ilc.model_dump()) if doc.ilc is not None else None
         if ilc is not None:
             _check_ilc(file, ilc, controller.length, it.period)

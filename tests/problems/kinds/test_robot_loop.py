@@ -86,7 +86,27 @@ CLI_BAD = [
     (["--robot", "robot.local"], r"--robot: expected an IPv4 address, optionally with :PORT"),
     (["--sensor-port", "70000"], r"--sensor-port: expected an integer in 1..65535, got 70000"),
     (["--idle-timeout", "0"], r"--idle-timeout: expected a number in \(0, 3600\] s"),
+    (["--listen", "8.8.8.8:49152"], r"--listen: expected an address of this machine .*8.8.8.8 is not one of its interfaces' addresses"),
+    (["--listen", "127.0.0.1:\u0664\u0669\u0661\u0665\u0662"], r"--listen: expected HOST:PORT with an IPv4 address"),
+    (["--robot", "127.0.0.1:\u0664\u0669"], r"--robot: expected an IPv4 address, optionally with :PORT"),
 ]
+
+#: Options argparse refuses by their type (exit 2 before anything runs, the option named).
+CLI_TYPES = [
+    (["--sensor-port", "\u0664\u0669\u0661\u0665\u0663"], r"argument --sensor-port: expected an integer in ASCII digits"),
+    (["--max-cycles", "\uff11\uff10"], r"argument --max-cycles: expected an integer in ASCII digits"),
+    (["--idle-timeout", "\u0661.5"], r"argument --idle-timeout: expected a number in ASCII digits"),
+]
+
+
+@pytest.mark.parametrize("argv, match", CLI_TYPES, ids=[a[0] for a, _ in CLI_TYPES])
+def test_digits_of_other_scripts_are_refused_by_the_option(tmp_path, capsys, argv, match):
+    from gtmodel.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["loop", str(RSI_FILE), "--out", str(tmp_path / "out"), *argv])
+    err = capsys.readouterr().err
+    assert (stop.value.code, bool(re.search(match, err)), (tmp_path / "out").exists()) == (2, True, False), err
 
 
 @pytest.mark.parametrize("argv, match", CLI_BAD, ids=[a[0] for a, _ in CLI_BAD])
@@ -132,6 +152,19 @@ BAD = [
     ({'period = 0.004                     # s\n': 'period = 0.004\ntracker = "10.0.0.1"\n'}, EGM_FILE,
      r"'interface.tracker': expected no tracker for a streaming loop"),
     ({'period = 0.004                     # s\n': 'period = 0.004\nlog_max_mb = 0\n'}, EGM_FILE, r"'interface.log_max_mb': expected a positive number"),
+    # issue 67, item 7: addresses and deadlines named at load, before any code is generated or built
+    ({'listen = "127.0.0.1:49152"': 'listen = "8.8.8.8:49152"'}, RSI_FILE,
+     r"'interface.listen': expected an address of this machine \(0.0.0.0: every interface, 127.0.0.1: this machine only\); 8.8.8.8 is not"),
+    ({'listen = "127.0.0.1:49152"': 'listen = "127.0.0.1:\u0664\u0669\u0661\u0665\u0662"'}, RSI_FILE,
+     r"'interface.listen': expected HOST:PORT with an IPv4 address and a port in 1..65535"),
+    ({'listen = "127.0.0.1:49152"': 'listen = "127.0.0.1:\uff14\uff19\uff11\uff15\uff12"'}, RSI_FILE,
+     r"'interface.listen': expected HOST:PORT with an IPv4 address"),
+    ({'robot = "127.0.0.1"': 'robot = "127.0.0.1:\u0664\u0669"'}, EGM_FILE, r"'interface.robot': expected an IPv4 address, optionally with :PORT"),
+    ({'reply_deadline = 0.002': 'reply_deadline = 0.004'}, RSI_FILE,
+     r"'interface.reply_deadline': expected a deadline shorter than the period \(0.004 s\).*got 0.004"),
+    ({'reply_deadline = 0.002': 'reply_deadline = 0.009'}, EGM_FILE, r"'interface.reply_deadline': expected a deadline shorter than the period"),
+    ({'period = 0.004                     # s, the KR C4': 'period = 0.001                     # s, the KR C4'}, RSI_FILE,
+     r"'interface.reply_deadline': expected a deadline shorter than the period \(0.001 s\)"),
 ]
 
 

@@ -12,7 +12,9 @@ and the guide ``docs/robot.md``.
 
 from __future__ import annotations
 
+import errno
 import ipaddress
+import socket
 from typing import Annotated, Literal
 
 from pydantic import BeforeValidator, Field, model_validator
@@ -22,7 +24,7 @@ from gtmodel.defaults import INTERFACE_PORTS, LOOP_PERIOD_S
 from gtmodel.problems.base import KIND_DOCS
 from gtmodel.problems.schema import Flag, NonEmptyText, ProblemSchema, Section, _fail, choice, integer, number, vector
 
-__all__ = ["RobotLoopFile", "DEFAULT_PORTS", "parse_address", "parse_source", "MAX_AXES", "MAX_SEN_TYPE"]
+__all__ = ["RobotLoopFile", "DEFAULT_PORTS", "parse_address", "parse_source", "local_address_problem", "MAX_AXES", "MAX_SEN_TYPE"]
 
 #: The interfaces' usual ports (the sensor side listens, the robot sends to it).
 DEFAULT_PORTS = INTERFACE_PORTS
@@ -58,9 +60,42 @@ def parse_address(text: str) -> tuple[str, int]:
         ipaddress.IPv4Address(host)
     except ValueError:
         raise ValueError(f"expected {expected}, got {text!r}") from None
-    if not port.isdigit() or not 1 <= int(port) <= 65535:
+    if not _ascii_port(port):
         raise ValueError(f"expected {expected}, got {text!r}")
     return host, int(port)
+
+
+def _ascii_port(text: str) -> bool:
+    """A port written in ASCII digits 1..65535 (``str.isdigit`` and ``int`` also take other scripts' digits, e.g. Arabic-Indic)."""
+    return text.isascii() and text.isdigit() and 1 <= int(text) <= 65535
+
+
+def local_address_problem(host: str) -> str | None:
+    """Why the runtime could not listen on ``host`` of this machine, or None when it can.
+
+    Checked when a loop file is loaded (before anything is generated or built) by binding a
+    UDP socket to ``host`` and a free port, then closing it: an address of another machine
+    (``8.8.8.8``) is refused here, not at the runtime's bind after the build.
+
+    Parameters
+    ----------
+    host : str
+        An IPv4 address (:func:`parse_address`'s).
+
+    Returns
+    -------
+    str or None
+        What is wrong, in words, or None.
+    """
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.bind((host, 0))
+        except OSError as exc:
+            if exc.errno == errno.EADDRNOTAVAIL:
+                return (f"an address of this machine (0.0.0.0: every interface, 127.0.0.1: this machine only); {host} is "
+                        "not one of its interfaces' addresses")
+            return f"an address this machine can listen on ({exc.strerror or exc})"
+    return None
 
 
 def _address(v: object) -> object:
@@ -102,7 +137,7 @@ def parse_source(text: str) -> tuple[str, int | None]:
         ipaddress.IPv4Address(host)
     except ValueError:
         raise ValueError(f"expected {expected}, got {text!r}") from None
-    if ":" in text and not (port.isdigit() and 1 <= int(port) <= 65535):
+    if ":" in text and not _ascii_port(port):
         raise ValueError(f"expected {expected}, got {text!r}")
     return host, (int(port) if port else None)
 
