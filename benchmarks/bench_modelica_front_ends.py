@@ -288,6 +288,7 @@ def _library_with_connectors() -> Path:
     text = (LIBRARY / "Modelica.mo").read_text(encoding="utf-8")
     text = re.sub(r"^(  package Blocks\b[^\n]*\n)", lambda m: m.group(1) + MSL_CONNECTORS, text, count=1, flags=re.M)
     folder = Path(tempfile.mkdtemp(prefix="msl_connectors_"))
+    atexit.register(shutil.rmtree, folder, True)  # removed when the process ends (the rumoca child reads it before)
     (folder / "Modelica.mo").write_text(text, encoding="utf-8")
     return folder
 
@@ -554,8 +555,6 @@ def main() -> None:
         raise SystemExit(f"{exc}: run this script with the project's Python (gtmodel and pymoca installed); it runs "
                          f"rumoca in --rumoca-python ({args.rumoca_python}) as a child process") from None
     jobs = make_jobs()
-    if _library_with_connectors.cache_info().currsize:
-        atexit.register(shutil.rmtree, _library_with_connectors(), True)
     py = pymoca_side(jobs, args.repeat)
     ru = _run_rumoca(jobs, args.repeat, args.rumoca_python)
     gt = gtmodel_side(jobs)
