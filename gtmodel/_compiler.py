@@ -205,10 +205,11 @@ def _source_size(cmd: list[str]) -> str:
             size += path.stat().st_size
     if not size:
         return ""
-    return (f" on {size / 1e6:.3g} MB of C; generated code that large comes from a large expression graph: an implicit "
-            "step ('radau2', 'implicit_euler') unrolled over its substeps and Newton iterations (15.9 MB for a 5-state "
-            "model's radau2 step with its Jacobian, against 1.6 MB for rk4), or many SQP iterations; use an explicit "
-            "method with the substeps its stability check names, or fewer substeps")
+    return (f" on {size / 1e6:.3g} MB of C; generated code that large comes from a large expression graph: a step "
+            "unrolled over many substeps and a long horizon (the Jacobian by every input), an implicit step ('radau2', "
+            "'implicit_euler') with its Newton iterations (15.9 MB for a 5-state model's radau2 step with its Jacobian, "
+            "against 1.6 MB for rk4), or many SQP iterations; give fewer substeps (with an explicit method, the fewest "
+            "its stability check allows), a shorter horizon or fewer input blocks, or an explicit method for an implicit one")
 
 
 def run_compiler(cmd: list[str], what: str) -> str:

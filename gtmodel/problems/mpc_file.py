@@ -8,7 +8,7 @@ error names the file and the field, the CLI exits with 2):
     friction in TCP states ``T``, ``T_dot`` and input ``tau`` (:func:`gtmodel.robots.model.gantry_tau_model`),
     or ``"FILE.py:Class"`` a user's model), ``horizon`` (periods, 1 .. 1000; with the
     model's sizes at most :data:`MAX_QP_ENTRIES` entries of the horizon problem,
-    :func:`qp_entries`), ``period`` [s] (1e-5 .. 1, default the 4 ms loop), ``blocks``
+    :func:`qp_entries`, and at most :data:`MAX_CODE_BYTES` of generated C, :func:`code_bytes`), ``period`` [s] (1e-5 .. 1, default the 4 ms loop), ``blocks``
     (input blocks, a divisor of the horizon; default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
     ``solver`` (``"sqpmethod"``: CasADi's SQP with ``qrqp``), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
@@ -43,6 +43,7 @@ import numpy as np
 from gtmodel.errors import GtModelError
 from gtmodel.control.mpc import mpc_controller
 from gtmodel.control.mpc_constraints import problem_constraints
+from gtmodel.control.problem import substep_states
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds
 from gtmodel.problems.kinds.schemas.mpc import MAX_HORIZON, MPCFile, MPCSection
@@ -50,7 +51,8 @@ from gtmodel.problems.loop_file import LoopModel, LoopSetup, loop_inputs, loop_s
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
 
-__all__ = ["MPCFile", "MPCSection", "MPCSetup", "load_mpc_file", "qp_entries", "MAX_HORIZON", "MAX_QP_ENTRIES"]
+__all__ = ["MPCFile", "MPCSection", "MPCSetup", "load_mpc_file", "qp_entries", "code_bytes", "MAX_HORIZON", "MAX_QP_ENTRIES",
+           "MAX_CODE_BYTES"]
 
 #: Most entries of the dense parts of the horizon problem (:func:`qp_entries`): the generated C
 #: grows with them, about 64 bytes each beyond a base of about 0.5 MB (measured on the composed
@@ -85,6 +87,45 @@ def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
         return horizon * (nx + nu) ** 2
     n = nu * blocks
     return horizon * (nx + nu) * n + n * n
+
+
+#: Largest generated C of an MPC step estimated by :func:`code_bytes` before it is built: 16 MB. The
+#: compiler takes minutes on code this large (a 100-substep MPC with hard rows: 38.7 MB of C, refused
+#: by the compiler's time-out after 437 s, issue 67); the shipped MPC files need at most 1.4 MB.
+MAX_CODE_BYTES = 16_000_000
+#: :func:`code_bytes`' coefficients [bytes]: per operation of the prediction step and period, per
+#: operation, period and input direction of the Jacobian, and the base. Fitted on the composed DC motor
+#: (nx = 3, nu = 1, rk4, blocks = horizon): horizon 20, 100, 200, 400 with 2 substeps (0.68, 3.97, 12.8,
+#: 46 MB of C) and horizon 20 with 10 and 20 substeps and hard rows (1.79, 3.59 MB): within 20 %.
+CODE_PER_OPERATION, CODE_PER_DIRECTION, CODE_BASE = 5.6, 0.11, 300_000
+
+
+def code_bytes(step_operations: int, horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
+    """The generated C of the MPC's step, estimated before it is built [bytes].
+
+    The code is the prediction unrolled over the horizon and its Jacobian by the inputs: about
+    ``horizon * step_operations * (CODE_PER_OPERATION + CODE_PER_DIRECTION * directions)`` plus a
+    base, with ``directions = nu * blocks`` (``sqpmethod``, single shooting: every predicted state
+    depends on every earlier input) or ``nx + nu`` (``fatrop``, ``hpipm``: one stage's).
+
+    Parameters
+    ----------
+    step_operations : int
+        Operations of one period's prediction step with all its substeps
+        (``substep_states(...).n_instructions()``).
+    horizon, blocks : int
+        Periods predicted and input blocks.
+    nx, nu : int
+        States and inputs of the model.
+    solver : str
+        :data:`~gtmodel.control.mpc.MPC_SOLVERS`.
+
+    Returns
+    -------
+    int
+    """
+    directions = nx + nu if solver in ("fatrop", "hpipm") else nu * blocks
+    return int(CODE_BASE + horizon * step_operations * (CODE_PER_OPERATION + CODE_PER_DIRECTION * directions))
 
 
 #: What an MPC file builds (:class:`~gtmodel.problems.loop_file.LoopSetup` with an
@@ -156,7 +197,9 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
         number not finite or out of its documented range, e.g. a horizon outside 1..1000, a
         period outside 1e-5..1 s, a weight above 1e12), an unknown variable in a weight table,
         blocks that do not divide the horizon, a horizon problem above
-        :data:`MAX_QP_ENTRIES` (:func:`qp_entries`, before the reference is solved), too many
+        :data:`MAX_QP_ENTRIES` (:func:`qp_entries`, before the reference is solved), generated C
+        estimated above :data:`MAX_CODE_BYTES` (:func:`code_bytes`, naming ``mpc.substeps``, or
+        ``mpc.horizon`` with one substep), too many
         loop periods (:func:`~gtmodel.problems.loop_file.loop_samples`), a reference that
         cannot be read or solved.
     """
@@ -172,6 +215,14 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
             raise file.fail("mpc.horizon", f"a horizon problem of at most {MAX_QP_ENTRIES} entries (horizon {m.horizon}, blocks {blocks}, "
                                            f"{model.ode.nx} states, {model.ode.nu} inputs, solver {m.solver}: about {entries}; the generated C "
                                            "grows with them, about 64 bytes each); fewer periods or input blocks", m.horizon)
+        operations = substep_states(model.ode, m.period, m.method, m.substeps).n_instructions()
+        size = code_bytes(operations, m.horizon, blocks, model.ode.nx, model.ode.nu, m.solver)
+        if size > MAX_CODE_BYTES:
+            field = "mpc.substeps" if m.substeps > 1 else "mpc.horizon"
+            raise file.fail(field, f"generated C of at most {MAX_CODE_BYTES / 1e6:.0f} MB (estimated before building: about {size / 1e6:.1f} MB "
+                                   f"for horizon {m.horizon}, {m.substeps} {m.method} substeps per period ({operations} operations), "
+                                   f"blocks {blocks}, solver {m.solver}); fewer substeps, a shorter horizon or fewer input blocks",
+                            getattr(m, field.split(".")[1]))
 
     i = loop_inputs(file, doc, "mpc", before_reference=qp_size)
     ode = i.model.ode

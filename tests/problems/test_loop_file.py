@@ -22,10 +22,12 @@ import pytest
 from gtmodel._tables import write_table
 from gtmodel.cli import main
 from gtmodel.errors import ProblemError
-from gtmodel.problems import loop_file
+from gtmodel.problems import loop_file, mpc_file
 from gtmodel.problems.loop_file import MAX_LOOP_SAMPLES, MAX_TABLE_NUMBERS, loop_samples
 from gtmodel.problems.base import ProblemFile
-from gtmodel.problems.mpc_file import MAX_QP_ENTRIES, load_mpc_file, qp_entries
+from gtmodel.control.problem import substep_states
+from gtmodel.problems.loop_file import loop_inputs, read_loop_file
+from gtmodel.problems.mpc_file import MAX_CODE_BYTES, MAX_QP_ENTRIES, code_bytes, load_mpc_file, qp_entries
 from gtmodel.problems.registry import LOOP_KINDS
 
 from ..conftest import REPO
@@ -82,6 +84,11 @@ BAD = [
     ("blocks above 1000", "mpc", MPC_L1, "blocks = 5 ", "blocks = 2000 ", "mpc.blocks"),
     # 300 x 4 x 300 + 300^2 = 450,000 entries (about 26 MB of C) > MAX_QP_ENTRIES
     ("horizon problem too large, one block per period", "mpc", MPC_MOTOR, "horizon = 20", "horizon = 300", "mpc.horizon"),
+    # the generated C estimated before building (issue 67: 100 substeps with hard rows compiled for 437 s): about 18 MB > 16 MB
+    ("generated C too large, 100 substeps with hard rows", "mpc", MPC_MOTOR, "substeps = 2", "substeps = 100\nhard_constraints = true",
+     "mpc.substeps"),
+    ("generated C too large, 60 radau2 substeps", "mpc", MPC_MOTOR, 'method = "rk4"\nsubsteps = 2', 'method = "radau2"\nsubsteps = 60',
+     "mpc.substeps"),
     # the number of loop periods: the settling hold alone is too long at 10 us
     ("settling hold of 6 million periods", "mpc", MPC_MOTOR, "period = 0.004", "period = 1e-5",
      "mpc.period"),  # with settle_time 60 s below
@@ -221,6 +228,36 @@ def test_qp_entries_hand_counted(horizon, blocks, nx, nu, solver, expected):
     assert qp_entries(horizon, blocks, nx, nu, solver) == expected
 
 
+#: The motor's generated C measured (gtmodel codegen --mpc, MB of C) against code_bytes: (horizon, substeps, operations, MB).
+#: Horizons 20 to 400 at 2 substeps (the shipped file's); 10 and 20 substeps with hard rows, 2026-11-26.
+MEASURED_C = [(20, 2, 2328, 0.68), (100, 2, 2328, 3.97), (200, 2, 2328, 12.8), (400, 2, 2328, 46.0), (20, 10, 11544, 1.80),
+              (20, 20, 23064, 3.60)]
+
+
+def test_the_code_size_estimate_is_within_20_percent_of_the_measured_c():
+    ratios = [code_bytes(ops, horizon, horizon, 3, 1, "sqpmethod") / (mb * 1e6) for horizon, _, ops, mb in MEASURED_C]
+    assert all(0.8 < r < 1.2 for r in ratios), ratios
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "codegen" / "mpc").glob("*.toml")), ids=lambda p: p.stem)
+def test_the_shipped_mpc_files_are_far_below_the_code_size_limit(path):
+    doc, file = read_loop_file(path, "mpc")
+    m, seen = doc.mpc, []
+
+    def size(model):
+        ops = substep_states(model.ode, m.period, m.method, m.substeps).n_instructions()
+        seen.append(code_bytes(ops, m.horizon, m.blocks or m.horizon, model.ode.nx, model.ode.nu, m.solver))
+        raise _Stop
+
+    with pytest.raises(_Stop):
+        loop_inputs(file, doc, "mpc", before_reference=size)
+    assert seen[0] < MAX_CODE_BYTES / 10
+
+
+class _Stop(Exception):
+    """Ends a load before the reference is solved."""
+
+
 def test_the_shipped_horizons_are_far_below_the_limit():
     assert qp_entries(20, 5, 6, 3, "sqpmethod") < MAX_QP_ENTRIES / 50
 
@@ -237,7 +274,9 @@ def _doc(x: float) -> str:
     f"at most {MAX_LOOP_SAMPLES:,}",
     f"at most {MAX_TABLE_NUMBERS:,}",
     f"at most {MAX_QP_ENTRIES:,}",
-], ids=["period", "weights", "magnitude", "periods", "tables", "qp"])
+    f"generated C at most {MAX_CODE_BYTES // 1_000_000} MB",
+    f"`0.3 MB + horizon ops ({mpc_file.CODE_PER_OPERATION:g} + {mpc_file.CODE_PER_DIRECTION:g} directions)`",
+], ids=["period", "weights", "magnitude", "periods", "tables", "qp", "code", "code formula"])
 def test_the_documented_ranges_are_the_declared_ones(text):
     # docs/model_in_the_loop.md's table against the constants the schema declares
     assert text in (REPO / "docs" / "model_in_the_loop.md").read_text()
