@@ -18,12 +18,10 @@ Conventions:
 * Point constraints at the start time use the initial state, for the inputs the first
   element's Lagrange polynomial through its collocation points evaluated at ``tau = 0``
   (an extrapolation for both schemes; the input bounds are imposed on it too), and the
-  algebraic variables consistent with them
-  (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`; the extrapolated
-  polynomial does not satisfy the algebraic equations; their bounds and the path
-  constraints are imposed there too). The result's tables hold the same values at the
-  start, and say at each time which kind of point it is
-  (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
+  algebraic variables consistent with them (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`;
+  the extrapolated polynomial does not satisfy the algebraic equations; their bounds and the path constraints
+  are imposed there too). The result's tables hold the same values at the start, and say at each time which
+  kind of point it is (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
 * The Lagrange term uses the quadrature of the collocation points.
 
 Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
@@ -136,9 +134,12 @@ class CollocationTranscription:
         evaluated at the solution); else each is an NLP variable at every collocation point. Default True.
     bound_points : int, optional
         Extra points per element at which the state bounds hold on the polynomial too (the rows the
-        mesh refinement adds once a state exceeds a bound between the points:
+        mesh refinement adds where a state exceeded a bound between the points:
         :mod:`~gtmodel.modeling.ocp.collocation_bounds`); 0 (default): at the collocation points only.
         Not with fatrop (its stage structure): ignored there, with a log line.
+    bound_spans : list of tuple of (float, float), optional
+        With ``bound_points``: only the elements overlapping these parts of the horizon (fractions of
+        it, ``(s0, s1)``) get the rows; default every element.
 
     Raises
     ------
@@ -170,6 +171,7 @@ class CollocationTranscription:
         verify: Any = True,
         eliminate_algebraics: bool = True,
         bound_points: int = 0,
+        bound_spans: Any = None,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -206,6 +208,7 @@ class CollocationTranscription:
             self.banded = True
         self.verbose, self.eliminate_algebraics = bool(verbose), bool(eliminate_algebraics)
         self.bound_points = int(bound_points) if bound_points and bound_point_taus(bound_points).size else 0
+        self.bound_spans = None if bound_spans is None else [(float(a), float(b)) for a, b in bound_spans]
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
@@ -275,8 +278,7 @@ class CollocationTranscription:
         self.size = check_memory(self.elements, self.points, dae.nx, dae.nz, dae.nu)
         nlp = transcribe(
             opt, dae, self.elements, self.points, co, self._noms, free_index, inline_points=not assembled, final_time_copies=self.banded,
-            fractions=self.fractions, stagewise=stagewise, bound_points=self.bound_points,
-        )
+            fractions=self.fractions, stagewise=stagewise, bound_points=self.bound_points, bound_spans=self.bound_spans)
         self.nlp = nlp
         wv, gv, P_nlp = nlp.w, nlp.g, nlp.p
         self._blocks = nlp.blocks
@@ -287,8 +289,6 @@ class CollocationTranscription:
         #: The objective's Lagrange term as the NLP integrates it (its quadrature), signed as the NLP minimises it.
         self.lagrange_function = ca.Function("lagrange_value", [wv, P_nlp], [nlp.f - nlp.mayer])
         self._extract = ca.Function("extract", [wv, P_nlp], [nlp.xc, nlp.uc, nlp.zc, nlp.xn, nlp.tf, nlp.p_model])
-        if self.bound_points and stagewise:
-            _log.info("collocation of %s: no state bounds between the points with fatrop", dae.name)
         self.key = (id(self), self.elements, self.points, self.scheme, int(wv.numel()), self.bound_points,
                     None if self.fractions is None else tuple(self.fractions.tolist()))
         self.derivative_functions: dict[str, ca.Function] = {}

@@ -22,7 +22,7 @@ import numpy as np
 from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.result import lagrange_basis
 
-__all__ = ["BOUND_POINTS", "bound_point_taus", "interior_state_bounds"]
+__all__ = ["BOUND_POINTS", "bound_point_taus", "interior_state_bounds", "elements_in_spans", "excess_spans", "merged_spans"]
 
 #: The extra points per element at which the refinement imposes the state bounds once a pass exceeds one between the points.
 BOUND_POINTS = 4
@@ -52,7 +52,7 @@ def bound_point_taus(points: int) -> np.ndarray:
 
 
 def interior_state_bounds(X_all: ca.SX, nx: int, root: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                          nominal: np.ndarray, points: int) -> tuple[ca.SX, np.ndarray, np.ndarray]:
+                          nominal: np.ndarray, points: int, elements: np.ndarray | None = None) -> tuple[ca.SX, np.ndarray, np.ndarray]:
     """Rows ``lower <= x(t_k + tau h_k) <= upper`` of the bounded states at :func:`bound_point_taus` in every element.
 
     Parameters
@@ -70,11 +70,13 @@ def interior_state_bounds(X_all: ca.SX, nx: int, root: np.ndarray, lower: np.nda
         The states' nominal values, shape ``(nx,)``: the rows are divided by them.
     points : int
         Extra points per element, >= 1.
+    elements : numpy.ndarray of int, optional
+        The elements that get the rows (default all ``N``; :func:`elements_in_spans`).
 
     Returns
     -------
     tuple of (casadi.SX, numpy.ndarray, numpy.ndarray)
-        The rows (``points * nb * N``, element-major; ``nb`` the bounded states) and their
+        The rows (``points * nb * n``, element-major; ``nb`` the bounded states, ``n`` the elements) and their
         lower and upper bounds (scaled as the rows). No rows when no state is bounded.
 
     Raises
@@ -84,7 +86,9 @@ def interior_state_bounds(X_all: ca.SX, nx: int, root: np.ndarray, lower: np.nda
     """
     bounded = np.flatnonzero(np.isfinite(lower) | np.isfinite(upper))
     taus = bound_point_taus(points)
-    if not bounded.size:
+    if elements is not None:
+        X_all = X_all[:, [int(k) for k in elements]]
+    if not bounded.size or not X_all.shape[1]:
         return ca.SX(0, 1), np.zeros(0), np.zeros(0)
     basis = lagrange_basis(np.asarray(root, dtype=float), taus)  # (points, d + 1)
     nom = np.asarray(nominal, dtype=float)[bounded]
@@ -97,3 +101,71 @@ def interior_state_bounds(X_all: ca.SX, nx: int, root: np.ndarray, lower: np.nda
     lo = np.tile(np.tile(np.asarray(lower, dtype=float)[bounded] / nom, points), n_el)
     hi = np.tile(np.tile(np.asarray(upper, dtype=float)[bounded] / nom, points), n_el)
     return rows, lo, hi
+
+
+def elements_in_spans(fractions: np.ndarray, spans: list[tuple[float, float]]) -> np.ndarray:
+    """The elements of a mesh that overlap any of ``spans`` (parts of the horizon, as fractions of it).
+
+    Parameters
+    ----------
+    fractions : numpy.ndarray
+        The mesh's element lengths as fractions of the horizon, shape ``(N,)``, summing to 1.
+    spans : list of tuple of (float, float)
+        ``(s0, s1)`` with ``0 <= s0 <= s1 <= 1``.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Increasing element indices.
+    """
+    edges = np.concatenate([[0.0], np.cumsum(np.asarray(fractions, dtype=float))])
+    hit = np.zeros(edges.size - 1, dtype=bool)
+    for s0, s1 in spans:
+        hit |= (edges[:-1] < s1) & (edges[1:] > s0)
+    return np.flatnonzero(hit)
+
+
+def excess_spans(fractions: np.ndarray, excess: np.ndarray, level: float) -> list[tuple[float, float]]:
+    """The parts of the horizon where a pass exceeded a state bound: its elements over ``level``, one more each side.
+
+    Parameters
+    ----------
+    fractions : numpy.ndarray
+        The pass's element lengths as fractions of the horizon, shape ``(N,)``.
+    excess : numpy.ndarray
+        Per element the largest scaled excess of its verifying simulation over the state bounds, shape ``(N,)``
+        (:func:`~gtmodel.modeling.ocp.verification_bounds.element_bound_violations`).
+    level : float
+        The excess that marks an element, >= 0.
+
+    Returns
+    -------
+    list of tuple of (float, float)
+        ``(s0, s1)`` fractions of the horizon, one per marked element (widened by its neighbours: the next pass's
+        solution moves by about an element).
+    """
+    edges = np.concatenate([[0.0], np.cumsum(np.asarray(fractions, dtype=float))])
+    n = edges.size - 1
+    return [(float(edges[max(k - 1, 0)]), float(edges[min(k + 2, n)])) for k in np.flatnonzero(np.asarray(excess) > level)]
+
+
+def merged_spans(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """``spans`` sorted, overlapping ones merged.
+
+    Parameters
+    ----------
+    spans : list of tuple of (float, float)
+        ``(s0, s1)`` fractions of the horizon.
+
+    Returns
+    -------
+    list of tuple of (float, float)
+        Disjoint, increasing.
+    """
+    out: list[tuple[float, float]] = []
+    for s0, s1 in sorted(spans):
+        if out and s0 <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], s1))
+        else:
+            out.append((s0, s1))
+    return out

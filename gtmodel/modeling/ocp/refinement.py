@@ -31,8 +31,9 @@ choose the elements to split:
   verifying simulation exceeds a state bound by more than the tolerance (scaled as the deviations;
   :mod:`~gtmodel.modeling.ocp.verification_bounds`) is cut where its state's polynomial first crosses
   the bound, at its input's switch, and into 2 to 4 parts (Betts, *Practical Methods*, ch. 4; GPOPS-II).
-  From the pass after the first such excess on, the state bounds also hold on each element's polynomial at
-  :data:`~gtmodel.modeling.ocp.collocation_bounds.BOUND_POINTS` more points (IPOPT; not fatrop's stage structure).
+  From the pass after such an excess on, the state bounds also hold on the polynomial at
+  :data:`~gtmodel.modeling.ocp.collocation_bounds.BOUND_POINTS` more points per element in the elements around
+  where it was (IPOPT; not fatrop's stage structure; :mod:`~gtmodel.modeling.ocp.collocation_bounds`).
   A pass is verified only if it keeps the bounds too; if no pass does, the verified pass that keeps them
   best is returned, its ``verification.bounds`` holding a ``remedy`` (issue 49: the drives' motor current).
 
@@ -100,10 +101,10 @@ from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements, verify
-from gtmodel.modeling.ocp.verification_bounds import bounds_verdict
+from gtmodel.modeling.ocp.verification_bounds import bounds_verdict, element_bound_violations
 from gtmodel.modeling.ocp.refinement_remedy import refinement_remedy
 from gtmodel.modeling.ocp.budget import max_elements as memory_max_elements
-from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS
+from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, merged_spans
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
@@ -366,6 +367,10 @@ def solve_refined(
     polish = False  # the next pass re-solves the same mesh with IPOPT's acceptable termination off
     warm_from: CollocationTranscription | None = None  # the last pass's transcription (a polish re-solves its NLP)
     checking: OptimizationResult | None = None  # the verified pass whose objective this pass checks on its mesh halved
+    bound_spans: list[tuple[float, float]] = []  # where state bounds were exceeded between the points (collocation_bounds)
+
+    def state_bounds_of(r: OptimizationResult) -> tuple[np.ndarray, np.ndarray] | None:
+        return optimization.bounds_vectors(r.dae, "x") if r.dae is not None and r.dae.nx and r.collocation is not None else None
     for n_pass in range(1, int(max_passes) + 1):
         c0, w0 = _time.process_time(), _time.perf_counter()
         if n_pass == 1 and start is not None:
@@ -427,15 +432,20 @@ def solve_refined(
         if v is None:  # the solve failed: nothing to refine from
             stop = f"pass {n_pass} ended {result.status} without a solution to refine"
             break
-        if (entry.get("max_bound_violation", 0.0) > tol and not transcription.get("bound_points")
-                and transcription.get("solver", "ipopt") == "ipopt"):
-            # a state bound exceeded between the points: from the next pass on imposed between them too (drive0_03: the
-            # current's polynomial 1.7 % over between points that kept it, splitting alone stalled at 1.9 % for 16 passes)
-            transcription = {**transcription, "bound_points": BOUND_POINTS}
-            entry["bound_points"] = BOUND_POINTS
+        if entry.get("max_bound_violation", 0.0) > tol and transcription.get("solver", "ipopt") == "ipopt" and state_bounds_of(result):
+            # a state bound exceeded between the points: from the next pass on imposed between them too, in the elements
+            # around where it was (drive0_03: the current's polynomial 1.7 % over between points that kept it, splitting
+            # alone stalled at 1.9 % for 16 passes); not everywhere: on a bound arc the rows and the points' bounds are
+            # active together, dependent, and IPOPT's iterations grew (drive0_04: 444 to 729 a pass)
+            col = result.collocation
+            fractions = col.fractions if col.fractions is not None else np.full(col.elements, 1.0 / col.elements)
+            spans = excess_spans(fractions, element_bound_violations(result, *state_bounds_of(result)), 0.5 * tol)
+            bound_spans = merged_spans(bound_spans + spans)
+            transcription = {**transcription, "bound_points": BOUND_POINTS, "bound_spans": bound_spans}
+            entry["bound_points"] = {"points": BOUND_POINTS, "spans": len(bound_spans)}
             warm_from, polish = None, False
-            _log.info("mesh refinement of %s: state bounds imposed at %d more points per element from pass %d on",
-                      name, BOUND_POINTS, n_pass + 1)
+            _log.info("mesh refinement of %s: state bounds at %d more points per element in %d part(s) of the horizon "
+                      "from pass %d on", name, BOUND_POINTS, len(bound_spans), n_pass + 1)
         if checking is not None:
             # this pass is the previous verified pass's mesh with every element halved: the objective's change with the
             # mesh (the compliant screw of the held-out drives, verified at 90 elements 0.45 % above its optimum, which a

@@ -12,7 +12,8 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
-from gtmodel.modeling.ocp.collocation_bounds import bound_point_taus, interior_state_bounds
+from gtmodel.modeling.ocp.collocation_bounds import (bound_point_taus, elements_in_spans, excess_spans, interior_state_bounds,
+                                                     merged_spans)
 
 RADAU3 = np.array([0.0, (4 - np.sqrt(6)) / 10, (4 + np.sqrt(6)) / 10, 1.0])
 
@@ -36,6 +37,30 @@ def test_rows_are_the_polynomial_through_the_nodes_at_the_midpoints():
     expected = np.concatenate([np.polyval(np.polyfit(RADAU3, values[k, :, 1], 3), taus) / 2.0 for k in range(2)])
     assert np.allclose(np.array(ca.DM(rows)).ravel(), expected, atol=1e-12)
     assert np.array_equal(lo, np.full(8, -0.5)) and np.array_equal(hi, np.full(8, 1.5))
+
+
+def test_rows_of_chosen_elements_only():
+    # the same values as above, element 1 alone: the second half of the rows
+    rng = np.random.default_rng(3)
+    values = rng.normal(size=(2, 4, 2))
+    X_all = ca.SX(ca.DM(values.transpose(1, 2, 0).reshape(8, 2)))
+    args = (X_all, 2, RADAU3, np.array([-np.inf, -1.0]), np.array([np.inf, 3.0]), np.array([1.0, 2.0]), 4)
+    both, one = (np.array(ca.DM(interior_state_bounds(*args, elements=e)[0])).ravel() for e in (None, np.array([1])))
+    assert np.array_equal(one, both[4:])
+
+
+# a mesh of fractions 0.1, 0.2, 0.3, 0.4 (edges 0, 0.1, 0.3, 0.6, 1): which elements overlap the spans, by hand
+@pytest.mark.parametrize("spans, expected", [([(0.0, 0.05)], [0]), ([(0.1, 0.3)], [1]), ([(0.25, 0.65)], [1, 2, 3]),
+                                             ([(0.0, 0.05), (0.9, 1.0)], [0, 3]), ([], [])])
+def test_elements_in_spans(spans, expected):
+    assert elements_in_spans(np.array([0.1, 0.2, 0.3, 0.4]), spans).tolist() == expected
+
+
+def test_excess_spans_widen_each_marked_element_by_its_neighbours_and_merge():
+    fractions = np.array([0.1, 0.2, 0.3, 0.4])
+    spans = excess_spans(fractions, np.array([0.0, 0.02, 0.004, 0.0]), 0.005)  # element 1 marked: elements 0 to 2
+    assert len(spans) == 1 and np.allclose(spans[0], (0.0, 0.6))
+    assert merged_spans([(0.5, 0.7), (0.0, 0.2), (0.1, 0.3)]) == [(0.0, 0.3), (0.5, 0.7)]
 
 
 def test_no_rows_without_a_bounded_state():

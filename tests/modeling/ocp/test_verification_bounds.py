@@ -314,13 +314,13 @@ def test_refinement_stopped_by_the_element_limit_says_so_and_names_max_elements(
 
 def test_refinement_imposes_the_bounds_between_the_points_after_an_excess():
     # the motor from 60 elements at 10 A: pass 1 exceeds the current limit between its points (0.26 scaled); from pass 2
-    # on the bound holds at 4 more points per element (collocation_bounds), and the refinement ends optimal with the
+    # on the bound holds at 4 more points per element around the excess (collocation_bounds), and the refinement ends optimal with the
     # current within the tolerance between the points (without the rows it stalled above it at 0.044: see above)
     from gtmodel.modeling.ocp.refinement import solve_refined
 
     res = solve_refined(min_time_motor(10.0), elements=60, points=3)
     first = res.refinement[0]
-    assert (first["max_bound_violation"] > 0.1, first.get("bound_points")) == (True, 4)
+    assert (first["max_bound_violation"] > 0.1, first["bound_points"]["points"]) == (True, 4)
     assert res.status == Status.OPTIMAL and res.verification.bounds["within_tolerance"]
 
 
