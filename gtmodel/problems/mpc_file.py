@@ -95,8 +95,8 @@ def qp_entries(horizon: int, blocks: int, nx: int, nu: int, solver: str) -> int:
 MAX_CODE_BYTES = 16_000_000
 #: :func:`code_bytes`' coefficients [bytes]: per operation of the prediction step and period, per
 #: operation, period and input direction of the Jacobian, and the base. Fitted on the composed DC motor
-#: (nx = 3, nu = 1, rk4, blocks = horizon): horizon 20, 100, 200, 400 with 2 substeps (0.68, 3.97, 12.8,
-#: 46 MB of C) and horizon 20 with 10 and 20 substeps and hard rows (1.79, 3.59 MB): within 20 %.
+#: (nx = 3, nu = 1, rk4, blocks = horizon): horizon 20, 100, 200, 400 with 2 substeps (0.73, 4.07, 12.8,
+#: 46 MB of C) and horizon 20 with 10 and 20 substeps and hard rows (1.80, 3.60 MB): within 20 %.
 CODE_PER_OPERATION, CODE_PER_DIRECTION, CODE_BASE = 5.6, 0.11, 300_000
 
 
