@@ -148,7 +148,7 @@ class RobotLoopDeclaration:
         if not check.passed:
             return RobotLoopRun(status=Status.CHECK_FAILED, work=work, check=check,
                                 message="the step's C disagrees with its CasADi Function; nothing ran (code/ holds the check)")
-        executable = build_runtime(source, work / "code", prefix=prefix)
+        executable = build_runtime(source, work / "code", prefix=prefix, generated=generated)  # the checked code, not generated again
         _log.info("loop %s: listening on %s:%d (%s); the robot or gtmodel robot-sim sends there", d.name, *d.listen, d.spec.interface.upper())
         run = run_loop(executable, work / "run", listen=d.listen, sensor_port=d.sensor_port,
                        idle_timeout=d.idle_timeout, max_cycles=d.max_cycles or None, time_limit=d.time_limit, end_on_signal=True,

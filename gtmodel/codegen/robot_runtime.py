@@ -385,7 +385,8 @@ static const char *const gt_rt_u_names[GT_RT_NU] = {{{", ".join(c_string(f) for 
 BUILD_FLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Werror", "-pthread")
 
 
-def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "double", prefix: str | None = None) -> Path:
+def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "double", prefix: str | None = None,
+                  generated: Any = None) -> Path:
     """Generate the runtime's sources into ``out_dir`` and compile ONE executable.
 
     Parameters
@@ -398,6 +399,9 @@ def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "dou
         The step's real type.
     prefix : str, optional
         The step's C prefix (default ``gt_loop``).
+    generated : GeneratedCode, optional
+        What ``source.generate(out_dir, real=real, prefix=prefix)`` returned already (``gtmodel
+        loop`` checks the code before it builds): compiled as it is, not generated again.
 
     Returns
     -------
@@ -415,7 +419,10 @@ def build_runtime(source: RobotRuntime, out_dir: str | Path, *, real: str = "dou
     """
     if not isinstance(source, RobotRuntime):
         raise InputError(f"source: expected a RobotRuntime, got {type(source).__name__}")
-    generated = source.generate(out_dir, real=real, prefix=prefix)
+    if generated is None:
+        generated = source.generate(out_dir, real=real, prefix=prefix)
+    elif Path(generated.out_dir).resolve() != Path(out_dir).resolve():
+        raise InputError(f"generated: expected the code generated into {out_dir}, got {generated.out_dir}")
     out = generated.out_dir
     exe = out / "gt_runtime"
     cc = find_compiler()

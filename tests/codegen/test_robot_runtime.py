@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import ctypes
 import json
+import logging
 import os
 import random
 import subprocess
@@ -116,6 +117,18 @@ def test_build_runtime_makes_one_executable(tmp_path, real):
     assert exe.is_file() and os.access(exe, os.X_OK)
     proc = subprocess.run([str(exe), "--listen", "127.0.0.1:0"], capture_output=True, text=True, timeout=10)
     assert proc.returncode == 2 and "--out DIR is required" in proc.stderr and proc.stderr.count("\n") == 1
+
+
+def test_build_runtime_compiles_code_generated_before_without_generating_it_again(tmp_path, caplog):
+    """gtmodel loop generates and checks the step first, then builds: one 'codegen: wrote' per file (issue 67)."""
+    caplog.set_level(logging.INFO, logger="gtmodel")
+    source = RobotRuntime(_step(2, 2), RuntimeSpec(**GOOD))
+    generated = source.generate(tmp_path / "code")
+    exe = build_runtime(source, tmp_path / "code", generated=generated)
+    wrote = [r.getMessage() for r in caplog.records if r.getMessage().startswith("codegen: wrote")]
+    assert exe.is_file() and len(wrote) == len(set(wrote)) == 2, wrote
+    with pytest.raises(InputError, match="generated: expected the code generated into"):
+        build_runtime(source, tmp_path / "elsewhere", generated=generated)
 
 
 def test_build_runtime_refuses_another_source(tmp_path):
