@@ -95,7 +95,9 @@ def copy_examples(folder: str | Path, source: Path | None = None) -> dict[str, i
         ``folder`` exists and is not an empty folder, or cannot be written.
     """
     target = Path(folder)
-    if target.is_symlink() or (target.exists() and not target.is_dir()):
+    if target.is_symlink():
+        raise GtModelError(f"{target}: is a symbolic link; give a new or empty folder for the examples")
+    if target.exists() and not target.is_dir():
         raise GtModelError(f"{target}: exists and is not a folder; give a new or empty folder for the examples")
     if target.is_dir() and any(target.iterdir()):
         raise GtModelError(f"{target}: the folder is not empty; give a new or empty folder for the examples (nothing was copied)")
