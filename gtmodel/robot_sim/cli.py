@@ -54,7 +54,7 @@ def host_port(text: str) -> tuple[str, int]:
         No colon, an empty host, or a port outside 1..65535.
     """
     host, sep, port = str(text).rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if not sep or not host or not (port.isascii() and port.isdigit()) or not 0 < int(port) < 65536:  # ASCII: int() reads other scripts' digits
         raise argparse.ArgumentTypeError(f"expected HOST:PORT with a port in 1..65535, got {text!r}")
     return host, int(port)
 

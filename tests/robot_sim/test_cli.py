@@ -23,7 +23,7 @@ def test_parser_defaults():
     assert (a.plant, a.to, a.duration, a.correction, a.seed, a.faults) == (None, None, 60.0, "relative", 0, None)
 
 
-@pytest.mark.parametrize("bad", ["localhost", ":80", "host:0", "host:70000", "host:port"])
+@pytest.mark.parametrize("bad", ["localhost", ":80", "host:0", "host:70000", "host:port", "127.0.0.1:\u0664\u0669\u0661\u0665\u0662"])
 def test_bad_address_is_refused(bad, capsys):
     with pytest.raises(SystemExit):
         _parser().parse_args(["robot-sim", "--interface", "rsi", "--to", bad, "--out", "x"])
