@@ -107,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     -------
     argparse.ArgumentParser
         Parser with the sub-commands ``solve``, ``study``, ``report``, ``schema``, ``codegen``,
-        ``loop``, ``robot-sim``, ``export-fmu`` and ``import-fmu``.
+        ``loop``, ``robot-sim``, ``export-fmu``, ``import-fmu`` and ``examples``.
     """
     parser = argparse.ArgumentParser(
         prog="gtmodel",
