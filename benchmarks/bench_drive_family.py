@@ -1,7 +1,7 @@
 """The drive family solved by gtmodel's default path, each member against its independent reference (a benchmark, not a test).
 
 Usage: python benchmarks/bench_drive_family.py [--members N] [--seed S] [--json] [--cached] [--update-cache]
-[--only NAME,...] [--keep DIR]
+[--no-reference] [--only NAME,...] [--keep DIR]
 
 For each member of :func:`gtmodel.modeling.library.drive_family.drive_family` (the first N,
 default all 40), in this one process:
@@ -17,7 +17,9 @@ default all 40), in this one process:
   (``cpu_ratio = cpu_s / reference_cpu_s``); with ``--cached``, read from the cache
   ``tests/modeling/library/data/drive_family_references.json`` when its parameter hash is the
   member's (``reference_cpu_s`` then as measured when it was cached; ``reference_cached`` true);
-  ``--update-cache`` writes the references solved in the run to the cache;
+  ``--update-cache`` writes the references solved in the run to the cache; with ``--no-reference`` none is
+  solved (a member without a fresh cached one has no relative error: gtmodel's status, verification, CPU and
+  bound excess alone);
 - ``relative_error``: gtmodel's objective against the reference's (the final time, or the copper loss);
 - ``worst_bound_excess``: gtmodel's answer re-simulated densely by SciPy on the hand-written
   ODE under its own input (each element's polynomial, clipped to the voltage bound), the
@@ -89,8 +91,14 @@ def gtmodel_pieces(solution: Any, vmax: float) -> list[tuple[float, float, np.nd
             for k in range(col.elements)]
 
 
-def run_member(member: DriveMember, folder: Path, reference: dict | None) -> dict:
-    """Solve one member by ``gtmodel solve``'s path and compare it with its reference (solved here if None)."""
+#: The reference of a member run with ``--no-reference`` and no fresh cache entry: none (no relative error, not passed).
+MISSING = {"objective": float("nan"), "spread": float("nan"), "status": "not computed (--no-reference)", "cpu_s": 0.0,
+           "worst_bound_excess": float("nan")}
+
+
+def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_reference: bool = True) -> dict:
+    """Solve one member by ``gtmodel solve``'s path and compare it with its reference (solved here if None and
+    ``solve_reference``; else :data:`MISSING`)."""
     problem = write_problem(member, folder)
     cpu = time.process_time()
     outcome = run_problem(problem, folder / f"{member.name}_out", plots=False)
@@ -99,7 +107,7 @@ def run_member(member: DriveMember, folder: Path, reference: dict | None) -> dic
     p = member.parameters()
     cached = reference is not None
     if reference is None:
-        reference = ref.reference(p)
+        reference = ref.reference(p) if solve_reference else dict(MISSING)
     objective = summary.get("objective")
     row: dict[str, Any] = {
         "name": member.name, "status": str(outcome.status), "verified": bool((summary.get("verification") or {}).get("passed")),
@@ -139,6 +147,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--keep", type=Path, default=None, help="write the problem files and result folders here (kept)")
     ap.add_argument("--only", default="", help="comma-separated member names (of the first N)")
     ap.add_argument("--update-cache", action="store_true", help="add the references solved in this run to the cache")
+    ap.add_argument("--no-reference", action="store_true",
+                    help="solve no reference: a member without a fresh cached one gets no relative error (and does not pass)")
     a = ap.parse_args(argv)
     logging.getLogger("gtmodel").setLevel(logging.ERROR)  # gtmodel solve --quiet: the rows say what happened
     cache = ref.load_cache() if a.cached else {}
@@ -150,9 +160,9 @@ def main(argv: list[str] | None = None) -> dict:
         for member in drive_family(max(a.members, 1), a.seed):
             if only and member.name not in only:
                 continue
-            row = run_member(member, folder, ref.cached(cache, member.name, member.parameter_hash()))
+            row = run_member(member, folder, ref.cached(cache, member.name, member.parameter_hash()), not a.no_reference)
             rows.append(row)
-            if a.update_cache and not row["reference_cached"]:
+            if a.update_cache and not row["reference_cached"] and row["reference_status"] != MISSING["status"]:
                 fresh = ref.load_cache()  # re-read: another run may have added members meanwhile
                 fresh[member.name] = {"parameter_hash": member.parameter_hash(), **row.pop("reference")}
                 ref.CACHE.parent.mkdir(parents=True, exist_ok=True)
@@ -165,7 +175,8 @@ def main(argv: list[str] | None = None) -> dict:
                   f"x{ratio})  excess {_pct(row['worst_bound_excess'], '{:.3f}'):>9s}  "
                   f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
             if not row["passed"]:
-                why = [f"the reference failed: IPOPT {row['reference_status']}, its resolutions {100 * row['reference_spread']:+.2f} % "
+                why = ["no reference: none cached, none solved (--no-reference)" if row["reference_status"] == MISSING["status"] else
+                       f"the reference failed: IPOPT {row['reference_status']}, its resolutions {100 * row['reference_spread']:+.2f} % "
                        "apart" if row["reference_failed"] else "",
                        row["message"], row["refinement_stop"], *row["warnings"]]
                 print("    " + "\n    ".join(w for w in why if w), flush=True)
