@@ -637,7 +637,7 @@ def check_result(result: OptimizationResult, optimization: Any, special: np.ndar
         bounds_verdict(result)           # (within a refinement, the refinement decides on its returned pass)
     if not v.passed and result.status in (Status.OPTIMAL, Status.ACCEPTABLE):
         remedy = f"; likely remedy: {v.remedy}" if v.remedy else ""  # none when the verifying simulation itself failed
-        _log.log(logging.INFO if REFINING.get() else logging.WARNING, "%s of %s: %s was %s, but %s%s", what, result.dae.name,
+        _log.log(logging.DEBUG if REFINING.get() else logging.WARNING, "%s of %s: %s was %s, but %s%s", what, result.dae.name,
                  result.message, result.status, v.message, "" if REFINING.get() else remedy)  # refining: its remedy is spent
         result.message = f"{result.message}; verification failed: {v.message}{remedy}"
         result.status = Status.CHECK_FAILED

@@ -399,14 +399,14 @@ def check_bounds(result: OptimizationResult, optimization: Any, polynomial: Any 
         if b["within_tolerance"]:
             continue
         if polynomial is not None:  # the verdict clipped it: reported (verification.bounds.inputs), not a warning
-            _log.info("verification of %s: the polynomial of input %r reaches %.6g against its bound %.6g at t = %.6g s; "
+            _log.debug("verification of %s: the polynomial of input %r reaches %.6g against its bound %.6g at t = %.6g s; "
                       "verified under it clipped to its bounds", result.dae.name, name, b["value"], b["bound"], b["at_time_s"])
             continue
         texts.append(f"the polynomial of input {name!r} reaches {b['value']:.6g} against its bound {b['bound']:.6g} at t = {b['at_time_s']:.6g} s "
                      f"(between the collocation points, which keep it; scaled excess {b['max_scaled_violation']:.3g} > tolerance "
                      f"{v.tolerance:g}): the verifying simulation drove the model with it, a saturating amplifier clips it")
     for text in texts:
-        _log.log(logging.INFO if REFINING.get() else logging.WARNING, "verification of %s: %s", result.dae.name, text)
+        _log.log(logging.DEBUG if REFINING.get() else logging.WARNING, "verification of %s: %s", result.dae.name, text)
         if text not in result.warnings:  # the summary's warnings and the printed result say it, not only the log
             result.warnings.append(text)
 

@@ -347,18 +347,18 @@ def test_bound_remedy_tells_a_stalled_excess_from_a_converging_one(excess, stop,
     assert re.search(expected, text), text
 
 
-def test_refinement_passes_log_their_failed_checks_as_info_not_warnings(caplog):
+def test_refinement_passes_log_their_failed_checks_as_debug_not_warnings(caplog):
     # the motor from 30 elements: its first passes fail the verification (and exceed the current limit between the
-    # nodes), which refinement refines; outside a
-    # refinement the same failed check is a warning (the single solve below)
+    # nodes), which refinement refines: each pass's own line says so (INFO), its checks' details are DEBUG (issue 67:
+    # a calm first run); outside a refinement the same failed check is a warning (the single solve below)
     from gtmodel.modeling.ocp.refinement import solve_refined
 
-    with caplog.at_level(logging.INFO, logger="gtmodel"):
+    with caplog.at_level(logging.DEBUG, logger="gtmodel"):
         res = solve_refined(min_time_motor(10.0), elements=30, points=3)
     checks = [r for r in caplog.records if "was optimal, but" in r.getMessage()]
-    assert res.status == Status.OPTIMAL and checks and {r.levelno for r in checks} == {logging.INFO}
+    assert res.status == Status.OPTIMAL and checks and {r.levelno for r in checks} == {logging.DEBUG}
     # the passes' between-node bound reports too (check_bounds)
-    assert all(r.levelno == logging.INFO for r in caplog.records if r.getMessage().startswith("verification of "))
+    assert {r.levelno for r in caplog.records if r.getMessage().startswith("verification of ")} <= {logging.DEBUG}
     caplog.clear()
     with caplog.at_level(logging.INFO, logger="gtmodel"):
         single = CollocationTranscription(min_time_motor(10.0), elements=30, points=3).solve()
