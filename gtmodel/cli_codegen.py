@@ -242,12 +242,62 @@ def codegen_command(args: argparse.Namespace) -> int:
         raise GtModelError("--accept-unverified applies to a --controller result folder (a controller or MPC file says "
                            "[reference] accept_unverified = true)")
     if route == "mpc":
-        return _codegen_mpc(args)
+        return _staged(args, lambda: _codegen_mpc(args))
     if route == "model":
-        return _codegen_model(args, functions)
+        return _staged(args, lambda: _codegen_model(args, functions))
     if route == "tracking":
-        return _codegen_tracking_file(args) if args.controller.suffix.lower() == ".toml" else _codegen_tracking(args)
-    return _codegen_robot(args, functions)
+        return _staged(args, lambda: _codegen_tracking_file(args) if args.controller.suffix.lower() == ".toml" else _codegen_tracking(args))
+    return _staged(args, lambda: _codegen_robot(args, functions))
+
+
+#: The partial folder of the run under way and the ``--out`` it replaces when complete (the paths printed are the latter).
+_STAGE: dict[str, str] = {}
+
+
+def _staged(args: argparse.Namespace, run: Any) -> int:
+    """Run a route into a partial folder beside ``--out`` and put it in place of ``--out`` when it has finished.
+
+    A run that fails or is interrupted (an exception, Ctrl-C) leaves an earlier ``--out`` as it was and its partial
+    folder removed (issue 67: the rule of ``solve --out``, :class:`gtmodel.problems.results.ResultFolder`).
+    """
+    import os
+    import shutil
+
+    from gtmodel import _signals
+    from gtmodel.problems.results import remove_orphans, replace_folder
+
+    target = Path(args.out)
+    partial = target.parent / f".{target.name}.partial-{os.getpid()}"
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        remove_orphans(target.parent, target.name)
+        shutil.rmtree(partial, ignore_errors=True)
+        partial.mkdir()
+    except OSError as exc:
+        raise GtModelError(f"--out: cannot create the folder {target}: {exc.strerror or exc}") from None
+    args.out, _STAGE[str(partial)] = partial, str(target)
+    old = None
+    try:
+        code = run()
+        with _signals.protected():  # a signal here is raised once --out is whole again
+            old = replace_folder(partial, target)
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
+    finally:
+        args.out = target
+        _STAGE.clear()
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+    return code
+
+
+def _shown(path: Any) -> str:
+    """A path as the user named it: inside ``--out``, not inside the partial folder it is written to."""
+    text = str(path)
+    for partial, target in _STAGE.items():
+        text = text.replace(partial, target)
+    return text
 
 
 def _verdict(args: argparse.Namespace, generated: Any, **options: Any) -> int:
@@ -256,12 +306,12 @@ def _verdict(args: argparse.Namespace, generated: Any, **options: Any) -> int:
 
     with _step(args, f"checking {generated.prefix}", f"checking {generated.prefix}"):
         result = check_code(generated, seed=args.seed, progress=_progress(args), **options)
-    print("\n".join(result.summary_lines()))
+    print("\n".join(_shown(line) for line in result.summary_lines()))
     return result.status.exit_code
 
 
 def _wrote(generated: Any) -> None:
-    print(f"wrote {', '.join(str(p) for p in generated.files)}")
+    print(f"wrote {', '.join(_shown(p) for p in generated.files)}")
     print(generated.version)
 
 
@@ -299,7 +349,7 @@ def _codegen_mpc(args: argparse.Namespace) -> int:
     with _step(args, f"generating and compiling the MPC {setup.name} (CasADi's sqpmethod + qrqp inside one step)",
                f"generating and compiling {setup.name}"):
         generated, _ = build_step(mpc_step(setup.controller, setup.name, real=args.real), args.out, f"gt_{setup.name}", real=args.real)
-    print(f"wrote {generated.source}, {generated.header}, {generated.casadi_source}")
+    print(f"wrote {_shown(generated.source)}, {_shown(generated.header)}, {_shown(generated.casadi_source)}")
     print(generated.version)
     if not args.check:
         return EXIT_OK

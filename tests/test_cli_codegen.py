@@ -8,6 +8,7 @@ names the option the user typed (exit 2).
 from __future__ import annotations
 
 import pytest
+from pathlib import Path
 
 from gtmodel.cli import build_parser, main
 from gtmodel.cli_codegen import SUBCOMMANDS, _reference_line, _route
@@ -101,3 +102,36 @@ def test_a_bad_file_is_refused_before_any_progress_line(sub, name, field, tmp_pa
     err = capsys.readouterr().err
     assert f"field '{field}'" in err and "re-planned" not in err and "reading" not in err
     assert not (tmp_path / "c").exists()
+
+
+def _tree(folder):
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_a_failed_rerun_leaves_the_earlier_output_as_it_was(tmp_path, monkeypatch, capsys):
+    # issue 67: codegen --out written into a partial folder and put in place when complete; a rerun that fails while
+    # generating (here: the generator raises, as Ctrl-C would inside it) leaves the earlier C byte-identical, no partial
+    out = tmp_path / "C"
+    assert main(["codegen", "robot", "L1", "--functions", "ik", "--out", str(out), "-q"]) == 0
+    before = _tree(out)
+    import gtmodel.codegen as codegen
+
+    def interrupted(source, out, *args, **kwargs):  # half of the files written, then Ctrl-C
+        for name in before:
+            (Path(out) / name).parent.mkdir(parents=True, exist_ok=True)
+            (Path(out) / name).write_text("half written")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(codegen, "generate_code", interrupted)
+    code = main(["codegen", "robot", "L1", "--functions", "fk", "--out", str(out), "-q"])  # the CLI's exit for Ctrl-C
+    assert (code != 0, _tree(out) == before, sorted(p.name for p in tmp_path.iterdir())) == (True, True, ["C"])
+
+
+def test_a_complete_rerun_replaces_the_output_and_prints_its_paths(tmp_path, capsys):
+    out = tmp_path / "C"
+    assert main(["codegen", "robot", "L1", "--functions", "ik", "--out", str(out), "-q"]) == 0
+    assert main(["codegen", "robot", "L1", "--functions", "fk", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    wrote = [line for line in printed.splitlines() if line.startswith("wrote ")]
+    assert wrote and ".partial-" not in printed and f"{out}/" in wrote[-1]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["C"] and b"fk" in b"".join(_tree(out).values())

@@ -45,7 +45,7 @@ from gtmodel.errors import GtModelError, ResultWriteError
 from gtmodel.status import Status
 
 __all__ = ["check_output_folder", "is_file_name", "MAX_FILE_NAME", "output_lock", "ResultFolder", "json_safe", "write_json", "failure_summary", "MARKER", "verification_fields",
-           "FAILED_SUFFIX", "failed_folder", "holds_result", "finished", "kept_message"]
+           "FAILED_SUFFIX", "failed_folder", "holds_result", "finished", "kept_message", "replace_folder", "remove_orphans"]
 
 #: The ``written_by`` field of every ``summary.json`` gtmodel writes (how a result folder is recognised).
 MARKER = f"gtmodel {__version__}"
@@ -479,7 +479,7 @@ class ResultFolder:
         self.path = parent / f".{self.target.name}.partial-{os.getpid()}"
         try:
             parent.mkdir(parents=True, exist_ok=True)
-            _remove_orphans(parent, self.target.name)
+            remove_orphans(parent, self.target.name)
             if self.path.exists():
                 shutil.rmtree(self.path)
             self.path.mkdir()
@@ -540,26 +540,7 @@ class ResultFolder:
 
     def _swap(self) -> Path | None:
         """Put the partial folder in place of the target; the earlier target's new path (to remove)."""
-        target = self.target
-        if target.is_symlink() or (target.exists() and not target.is_dir()):
-            raise ResultWriteError(f"cannot write the result folder {target}: a file of that name is in the way")
-        if not target.exists():
-            try:
-                os.rename(self.path, target)
-                return None
-            except OSError as exc:
-                if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
-                    raise  # else another process created the target meanwhile: swap with it
-        if _exchange(self.path, target):
-            return self.path  # the partial path now holds the earlier folder
-        old = target.parent / f".{target.name}.old-{os.getpid()}"
-        os.replace(target, old)  # no atomic swap here: the target is missing for a moment
-        try:
-            os.replace(self.path, target)
-        except OSError:
-            os.replace(old, target)
-            raise
-        return old
+        return replace_folder(self.path, self.target)
 
     def write_error(self, exc: OSError) -> ResultWriteError:
         """One message for a failed write into the folder, naming the target, never the partial folder.
@@ -588,6 +569,49 @@ class ResultFolder:
     def __exit__(self, *exc: Any) -> None:
         if not self.committed:
             self.discard()
+
+
+def replace_folder(partial: Path, target: Path) -> Path | None:
+    """Put a complete folder in place of ``target`` in one step where the system can (``renameat2`` exchange).
+
+    Parameters
+    ----------
+    partial : pathlib.Path
+        The complete folder, beside ``target`` (same file system).
+    target : pathlib.Path
+        The folder it replaces (or creates).
+
+    Returns
+    -------
+    pathlib.Path or None
+        Where the earlier ``target`` now is (the caller removes it), None if there was none.
+
+    Raises
+    ------
+    ResultWriteError
+        A file (or a symbolic link) of ``target``'s name is in the way.
+    OSError
+        The rename failed (the earlier ``target`` is then left as it was).
+    """
+    if target.is_symlink() or (target.exists() and not target.is_dir()):
+        raise ResultWriteError(f"cannot write the result folder {target}: a file of that name is in the way")
+    if not target.exists():
+        try:
+            os.rename(partial, target)
+            return None
+        except OSError as exc:
+            if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                raise  # else another process created the target meanwhile: swap with it
+    if _exchange(partial, target):
+        return partial  # the partial path now holds the earlier folder
+    old = target.parent / f".{target.name}.old-{os.getpid()}"
+    os.replace(target, old)  # no atomic swap here: the target is missing for a moment
+    try:
+        os.replace(partial, target)
+    except OSError:
+        os.replace(old, target)
+        raise
+    return old
 
 
 _RENAME_EXCHANGE = 2
@@ -634,8 +658,16 @@ def _remove_stale_failed(target: Path) -> None:
     shutil.rmtree(gone, ignore_errors=True)
 
 
-def _remove_orphans(parent: Path, name: str) -> None:
-    """Partial and old folders of earlier runs whose process no longer exists."""
+def remove_orphans(parent: Path, name: str) -> None:
+    """Partial and old folders of ``parent / name`` left by earlier runs whose process no longer exists.
+
+    Parameters
+    ----------
+    parent : pathlib.Path
+        The folder that holds them.
+    name : str
+        The target folder's name (they are ``.<name>.partial-<pid>`` and ``.<name>.old-<pid>``).
+    """
     for prefix in (f".{name}.partial-", f".{name}.old-"):
         for p in parent.glob(prefix + "*"):
             try:
