@@ -70,5 +70,5 @@ def test_drive_minimum_time_is_within_half_a_percent_of_the_reference(name, tmp_
     assert str(outcome.status) == "optimal" and summary["verification"]["passed"] is True
     # issue 49 item 1: the current limit kept between the nodes (the verifying simulation within the tolerance of it),
     # refinement splitting where it is not; the flexible joint needs 13 passes (66 user + 2 system CPU-s under SkylakeX),
-    # within the default pass limit of 16 (defaults["ocp.refine_max_passes"])
+    # within the default pass limit of 30 (defaults["ocp.refine_max_passes"])
     assert summary["verification"]["bounds"]["within_tolerance"]
