@@ -22,9 +22,12 @@ import argparse
 import contextlib
 import logging
 import math
+import os
+import shutil
 from pathlib import Path
 from typing import Any, Iterator
 
+from gtmodel import _signals
 from gtmodel.errors import GtModelError
 from gtmodel.status import Status
 
@@ -260,10 +263,6 @@ def _staged(args: argparse.Namespace, run: Any) -> int:
     A run that fails or is interrupted (an exception, Ctrl-C) leaves an earlier ``--out`` as it was and its partial
     folder removed (issue 67: the rule of ``solve --out``, :class:`gtmodel.problems.results.ResultFolder`).
     """
-    import os
-    import shutil
-
-    from gtmodel import _signals
     from gtmodel.problems.results import remove_orphans, replace_folder
 
     target = Path(args.out)

@@ -178,7 +178,7 @@ def test_delay_compensating_controller_c_equals_python(tmp_path, motion):
 @pytest.mark.parametrize(
     "kind, args, match",
     [
-        ("point_to_point", [], r"summary\.json: kind: expected an optimal_control result, got 'point_to_point'"),
+        ("point_to_point", [], r"summary\.json: kind: expected an optimal_control \(or optimica\) result, got 'point_to_point'"),
         ("optimal_control", ["--q", "1,x"], r"--q: expected comma-separated numbers, got '1,x'"),
         ("optimal_control", ["--robot", "L1"], r"--controller RESULT_DIR generates the tracking controller alone"),
         ("optimal_control", ["--mismatch", "0"], r"--mismatch: expected a factor in \(0, 10\] on the plant's parameters, got 0\.0"),

@@ -33,6 +33,7 @@ SHIPPED = {
     "state_estimation": ("kr500_state_estimation.toml", True),
     "correction_stability": ("kr500_correction_stability.toml", True),
     "optimal_control": ("benchmarks/goddard_rocket.toml", False),
+    "optimica": ("optimica/double_integrator_min_time.toml", False),
     "lead_through": ("irb140_lead_through_peg.toml", True),
     "pose_accuracy": ("d1_pose_accuracy.toml", True),
     "automated_calibration": ("l1_automated_calibration.toml", True),
