@@ -43,7 +43,7 @@ import numpy as np
 from gtmodel._timing import add_phase, timed
 from gtmodel.errors import InputError, SolverError
 from gtmodel.modeling.ocp.budget import check_memory
-from gtmodel.modeling.ocp.collocation_bounds import bound_point_taus
+from gtmodel.modeling.ocp.collocation_bounds import bound_point_taus, checked_spans
 from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, nlp_solver, resolve_function
 from gtmodel.modeling.ocp.diagnostics import without_inputs
@@ -208,7 +208,7 @@ class CollocationTranscription:
             self.banded = True
         self.verbose, self.eliminate_algebraics = bool(verbose), bool(eliminate_algebraics)
         self.bound_points = int(bound_points) if bound_points and bound_point_taus(bound_points).size else 0
-        self.bound_spans = None if bound_spans is None else [(float(a), float(b)) for a, b in bound_spans]
+        self.bound_spans = None if bound_spans is None else checked_spans(bound_spans)
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve

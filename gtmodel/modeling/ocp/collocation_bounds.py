@@ -16,13 +16,15 @@ simulation exceeds a state bound between the points (:data:`BOUND_POINTS` per el
 
 from __future__ import annotations
 
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.result import lagrange_basis
 
-__all__ = ["BOUND_POINTS", "bound_point_taus", "interior_state_bounds", "elements_in_spans", "excess_spans", "merged_spans"]
+__all__ = ["BOUND_POINTS", "bound_point_taus", "interior_state_bounds", "elements_in_spans", "excess_spans", "merged_spans", "checked_spans"]
 
 #: The extra points per element at which the refinement imposes the state bounds once a pass exceeds one between the points.
 BOUND_POINTS = 4
@@ -168,4 +170,37 @@ def merged_spans(spans: list[tuple[float, float]]) -> list[tuple[float, float]]:
             out[-1] = (out[-1][0], max(out[-1][1], s1))
         else:
             out.append((s0, s1))
+    return out
+
+
+def checked_spans(spans: Any) -> list[tuple[float, float]]:
+    """``spans`` as pairs of floats ``0 <= s0 <= s1 <= 1`` (fractions of the horizon), checked up front.
+
+    Parameters
+    ----------
+    spans : iterable of pairs of float
+        ``(s0, s1)`` per part of the horizon.
+
+    Returns
+    -------
+    list of tuple of (float, float)
+
+    Raises
+    ------
+    InputError
+        Naming ``bound_spans`` and the pair that is not two numbers with ``0 <= s0 <= s1 <= 1``.
+    """
+    out = []
+    try:
+        pairs = list(spans)
+    except TypeError:
+        raise InputError(f"bound_spans: expected pairs (s0, s1) of fractions of the horizon, got {spans!r}") from None
+    for pair in pairs:
+        try:
+            s0, s1 = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise InputError(f"bound_spans: expected a pair (s0, s1) of numbers, got {pair!r}") from None
+        if not 0.0 <= s0 <= s1 <= 1.0:
+            raise InputError(f"bound_spans: expected 0 <= s0 <= s1 <= 1 (fractions of the horizon), got {pair!r}")
+        out.append((s0, s1))
     return out

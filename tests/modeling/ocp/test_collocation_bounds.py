@@ -12,7 +12,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
-from gtmodel.modeling.ocp.collocation_bounds import (bound_point_taus, elements_in_spans, excess_spans, interior_state_bounds,
+from gtmodel.modeling.ocp.collocation_bounds import (bound_point_taus, checked_spans, elements_in_spans, excess_spans, interior_state_bounds,
                                                      merged_spans)
 
 RADAU3 = np.array([0.0, (4 - np.sqrt(6)) / 10, (4 + np.sqrt(6)) / 10, 1.0])
@@ -23,6 +23,13 @@ RADAU3 = np.array([0.0, (4 - np.sqrt(6)) / 10, (4 + np.sqrt(6)) / 10, 1.0])
 def test_bound_points_must_be_a_positive_integer(points, match):
     with pytest.raises(InputError, match=match):
         bound_point_taus(points)
+
+
+@pytest.mark.parametrize("spans, match", [(3, "pairs"), (["ab"], "pair"), ([(0.5, 0.2)], "s0 <= s1"), ([(0.0, 1.5)], "s1 <= 1"),
+                                           ([(float("nan"), 0.5)], "s0 <= s1")])
+def test_bound_spans_are_checked(spans, match):
+    with pytest.raises(InputError, match=match):
+        checked_spans(spans)
 
 
 def test_rows_are_the_polynomial_through_the_nodes_at_the_midpoints():
