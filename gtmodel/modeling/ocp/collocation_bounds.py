@@ -146,7 +146,8 @@ def excess_spans(fractions: np.ndarray, excess: np.ndarray, level: float) -> lis
         ``(s0, s1)`` fractions of the horizon, one per marked element (widened by its neighbours: the next pass's
         solution moves by about an element).
     """
-    edges = np.concatenate([[0.0], np.cumsum(np.asarray(fractions, dtype=float))])
+    edges = np.clip(np.concatenate([[0.0], np.cumsum(np.asarray(fractions, dtype=float))]), 0.0, 1.0)
+    edges[-1] = 1.0  # the horizon's end, not the sum's round-off above it
     n = edges.size - 1
     return [(float(edges[max(k - 1, 0)]), float(edges[min(k + 2, n)])) for k in np.flatnonzero(np.asarray(excess) > level)]
 
