@@ -3,7 +3,10 @@
 A loop controller (the tracking controller of :mod:`gtmodel.control.tracking`, the MPC of
 :mod:`gtmodel.control.mpc`) tracks a motion ``x*(t), u*(t)`` given at some times (an
 optimal control result's mesh, a CSV table). :func:`sample_reference` puts it on the loop's
-grid ``t_k = t_0 + k dt`` (linear interpolation of each column), and :func:`period_index`
+grid ``t_k = t_0 + k dt``: the states linearly interpolated there, each input the mean of the
+reference's input over the period it is held (:func:`period_means`; a loop holds its input for
+a period: an input that switches inside the period, such as a minimum-time plan's bang-bang
+voltage, held at its value at ``t_k`` would act a whole period), and :func:`period_index`
 is the row read at time ``t``: ``k = floor((t - t_0) / dt + eps)`` clamped to ``0 .. last``,
 the same expression for a number (Python) and a CasADi expression (the generated C, where
 a NaN ``t`` reads row 0 and the controller's ``ok`` flags it).
@@ -20,7 +23,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "PERIOD_EPS", "FLOAT_PERIOD_LIMIT", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "sampled", "sample_reference", "period_index",
+__all__ = ["INDEX_EPS", "PERIOD_EPS", "FLOAT_PERIOD_LIMIT", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "sampled", "period_means", "sample_reference", "period_index",
            "reference_scales", "plausible_range"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
@@ -207,6 +210,45 @@ def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> n
     return np.column_stack([np.interp(grid, t, values[:, j]) for j in range(values.shape[1])]) if values.shape[1] else np.zeros((grid.size, 0))
 
 
+def period_means(t: np.ndarray, values: np.ndarray, grid: np.ndarray, dt: float) -> np.ndarray:
+    """The mean of each column over the periods ``[g, g + dt]`` of a grid: what a zero-order hold applies.
+
+    The columns are linearly interpolated between the rows and held at the first or last
+    row outside ``t``; the means are exact for that interpolation (the trapezoidal integral
+    on the rows' times merged with the periods' edges). The input a loop holds for a period
+    then has the reference input's integral over it (the same volt-seconds of a voltage), not
+    its value at the period's start.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        ``(M,)`` increasing times of the rows [s].
+    values : numpy.ndarray
+        ``(M, n)`` finite values, one row per time.
+    grid : numpy.ndarray
+        ``(N,)`` increasing start times of the periods [s].
+    dt : float
+        Period [s], > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, n)``.
+
+    Raises
+    ------
+    InputError
+        ``values`` not a finite ``(M, n)`` array.
+    """
+    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
+        raise InputError(f"u_ref: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
+    edges = np.union1d(t, np.r_[grid, grid + dt])
+    merged = sampled(t, values, edges, "u_ref")
+    area = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(0.5 * np.diff(edges)[:, None] * (merged[1:] + merged[:-1]), axis=0)])
+    start, end = np.searchsorted(edges, grid), np.searchsorted(edges, grid + dt)
+    return (area[end] - area[start]) / dt
+
+
 def sample_reference(t: Any, x_ref: Any, u_ref: Any, dt: float, min_samples: int = 1, eps: float = INDEX_EPS) -> tuple[float, np.ndarray, np.ndarray]:
     """A reference motion sampled at the loop period from its first time to its last.
 
@@ -232,7 +274,8 @@ def sample_reference(t: Any, x_ref: Any, u_ref: Any, dt: float, min_samples: int
     x : numpy.ndarray
         ``(N, nx)`` states at ``t_0 + k dt``, ``N = floor((t_M - t_0) / dt + eps) + 1``.
     u : numpy.ndarray
-        ``(N, nu)`` inputs there.
+        ``(N, nu)`` inputs held from ``t_0 + k dt`` for a period: the given inputs' means over
+        it (:func:`period_means`; after the last time the last input counts).
 
     Raises
     ------
@@ -251,7 +294,7 @@ def sample_reference(t: Any, x_ref: Any, u_ref: Any, dt: float, min_samples: int
         raise InputError(f"t: the reference ({tt[-1] - tt[0]:g} s) is shorter than {span} ({dt:g} s)")
     grid = tt[0] + dt * np.arange(n)
     xs = sampled(tt, np.asarray(x_ref, dtype=float).reshape(tt.size, -1), grid, "x_ref")
-    us = sampled(tt, np.asarray(u_ref, dtype=float).reshape(tt.size, -1), grid, "u_ref")
+    us = period_means(tt, np.asarray(u_ref, dtype=float).reshape(tt.size, -1), grid, dt)
     return float(tt[0]), xs, us
 
 

@@ -4,8 +4,9 @@ From an optimal motion ``x*(t), u*(t)`` of a model (e.g. an ``optimal_control`` 
 the model's explicit ODE (:func:`gtmodel.modeling.explicit_ode`), :func:`tracking_controller`
 builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
 
-* the reference sampled at ``t_k = t_0 + k dt``: ``x*_k``, ``u*_k`` (linear interpolation of
-  the given samples);
+* the reference sampled at ``t_k = t_0 + k dt``: ``x*_k`` (linear interpolation of the given
+  samples), ``u*_k`` the given input's mean over ``[t_k, t_k + dt]``, the period it is held
+  (:func:`~gtmodel.control.reference.period_means`);
 * the discretised linearisation along it: ``A_k = d step / d x``, ``B_k = d step / d u`` at
   ``(x*_k, u*_k)``, the Jacobians (CasADi AD) of the model's fixed step
   (:meth:`~gtmodel.modeling.ExplicitODE.step`, the same one the generated C integrates);

@@ -11,8 +11,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+import scipy.integrate
 
-from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, PERIOD_EPS, hold_input, period_index, start_input
+from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, PERIOD_EPS, hold_input, period_index, period_means, sample_reference, start_input
 from gtmodel.modeling import explicit_ode
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.model import gantry_tau_model
@@ -58,3 +59,32 @@ def test_period_index_reads_the_row_of_a_grid_time_and_of_a_time_just_before(k):
     assert period_index(k * dt, 0.0, dt, 10_000) == k
     assert period_index(k * dt - 0.5 * PERIOD_EPS * dt, 0.0, dt, 10_000) == k  # within the slack: jitter
     assert period_index(k * dt - 2 * PERIOD_EPS * dt, 0.0, dt, 10_000) == max(k - 1, 0)
+
+
+# period_means: what a zero-order hold applies, against closed forms and SciPy's quadrature of the same interpolant
+@pytest.mark.parametrize(("t", "u", "grid", "dt", "expected"), [
+    ([0.0, 1.0], [0.0, 1.0], [0.0, 0.5], 0.5, [0.25, 0.75]),            # a ramp: its value at each period's middle
+    ([0.0, 0.3, 0.3 + 1e-12, 1.0], [40.0, 40.0, -40.0, -40.0], [0.0], 0.5, [40.0 * 0.3 / 0.5 - 40.0 * 0.2 / 0.5]),  # a switch inside: duty-weighted
+    ([0.0, 1.0], [2.0, 4.0], [0.8], 0.4, [(0.2 * 3.8 + 0.2 * 4.0) / 0.4]),  # past the last time: the last value held
+])
+def test_period_means_are_what_a_zero_order_hold_applies(t, u, grid, dt, expected):
+    got = period_means(np.asarray(t), np.asarray(u, dtype=float)[:, None], np.asarray(grid), dt)
+    np.testing.assert_allclose(got[:, 0], expected, rtol=1e-9)
+
+
+def test_period_means_of_a_bang_bang_plan_match_scipy_quad():
+    rng = np.random.default_rng(0)
+    t = np.sort(np.r_[0.0, rng.uniform(0.0, 0.1, 60), 0.1])
+    u = np.sign(np.sin(200.0 * t)) * 40.0 + rng.normal(0.0, 1.0, t.size)
+    grid = 0.004 * np.arange(26)
+    quad = [scipy.integrate.quad(lambda s: np.interp(s, t, u), g, g + 0.004, points=t[(t > g) & (t < g + 0.004)], limit=200)[0] / 0.004
+            for g in grid]
+    np.testing.assert_allclose(period_means(t, u[:, None], grid, 0.004)[:, 0], quad, rtol=1e-7, atol=1e-9)
+
+
+def test_sample_reference_holds_each_period_the_plans_mean_input():
+    # a minimum-time plan's voltage switching inside a 4 ms period (the ball-screw drive's last 2 ms) held at its value at
+    # the period's start drove the plant's current to 40 A of 10: the loop holds the period's mean
+    t = np.array([0.0, 0.001, 0.001 + 1e-9, 0.008])
+    t0, xs, us = sample_reference(t, np.zeros((4, 1)), np.array([[40.0], [40.0], [-40.0], [-40.0]]), 0.004)
+    np.testing.assert_allclose(us[:, 0], [(40.0 * 0.001 - 40.0 * 0.003) / 0.004, -40.0, -40.0], rtol=1e-6)
