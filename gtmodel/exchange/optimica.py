@@ -42,7 +42,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import GtModelError, InputError
-from gtmodel.exchange import msl
+from gtmodel.exchange import msl, robot_library
 from gtmodel.exchange.msl import code_only
 from gtmodel.exchange.modelica import _check_constructs, _name, _numeric, _pymoca, _to_model, _truthy
 from gtmodel.exchange.optimica_expr import ExprParser
@@ -119,6 +119,10 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     with_msl = msl.uses_msl(code_only(text))  # the library under the MSL's class paths (gtmodel.exchange.msl)
     if with_msl:
         msl.extend(parser, ast)
+    input_texts = [text]
+    if robot_library.uses_robots(code_only(text)):  # the shipped Gantry-Tau robots (gtmodel.exchange.robot_library)
+        robot_library.extend(parser, ast)
+        input_texts.append(robot_library.ROBOT_SOURCE.read_text(encoding="utf-8"))
     try:
         mo = generator.generate(ast, class_name)
     except Exception as first:  # noqa: BLE001 - pymoca raises many types; retried with the sibling .mo files
@@ -137,6 +141,7 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
             other_text = _msl_prepared(other, other_text)
             _constructs(other, other_text)
             ast.extend(_parse(parser, other, other_text))
+            input_texts.append(other_text)
             if not with_msl and msl.uses_msl(code_only(other_text)):
                 with_msl = True
                 msl.extend(parser, ast)
@@ -147,10 +152,40 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     if getattr(mo, "delay_states", None):
         raise OptimicaError(f"{path}: unsupported Modelica construct: delay() in class {class_name!r}")
     _numeric_bounds(path, mo)
+    # a for loop of k equations over n indices is one n x k matrix in pymoca's result: a column each
+    mo.equations = [ca.vec(e) for e in mo.equations]
+    mo.initial_equations = [ca.vec(e) for e in mo.initial_equations]
+    _component_inputs(mo, input_texts)
     try:
         return _to_model(path, ast, mo, class_name), mo
     except InputError as exc:
         raise OptimicaError(str(exc)) from None
+
+
+_INPUT_DECL_RE = re.compile(r"\binput\s+[A-Za-z_][\w.]*\s*(?:\[[^\]]*\]\s*)?([A-Za-z_]\w*)")
+
+
+def _component_inputs(mo: Any, texts: list[str]) -> None:
+    """Inputs of components left unbound (``robot.tau``) made inputs of the problem, as JModelica.org read them (in place).
+
+    pymoca drops the ``input`` prefix of a component's variables (MLS 9.1.1: only top-level
+    inputs are inputs); an Optimica problem on a component (the thesis' ``opt_robot`` bounds
+    ``robot.tau``) has them as its inputs. A component variable whose name is declared
+    ``input`` in the classes read becomes an input when the model lacks exactly as many
+    equations as these variables have elements (connected inputs have their equations; then
+    nothing moves and the model's own count error stands).
+    """
+    declared = {m.group(1) for t in texts for m in _INPUT_DECL_RE.finditer(code_only(t))}
+    cands = [v for v in mo.alg_states if "." in v.symbol.name() and v.symbol.name().rsplit(".", 1)[1] in declared]
+    if not cands:
+        return
+    unknowns = sum(v.symbol.numel() for v in [*mo.states, *mo.alg_states])
+    equations = sum(e.numel() for e in mo.equations)
+    if unknowns - equations != sum(v.symbol.numel() for v in cands):
+        return
+    mo.alg_states = [v for v in mo.alg_states if all(v is not c for c in cands)]
+    mo.inputs = [*mo.inputs, *cands]
+    _log.debug("component inputs read as the problem's inputs: %s", ", ".join(v.symbol.name() for v in cands))
 
 
 def _msl_prepared(path: Path, text: str) -> str:
@@ -235,16 +270,22 @@ class _Declarer:
 
     def constant(self, toks: list[Token], what: str) -> float:
         """A number or an expression of the model's parameters (at their values), e.g. ``min = 2 * L``."""
+        value = self.constant_array(toks, what)
+        if value.size != 1:
+            raise self.fail(toks[0].line, f"{what} must be a scalar")
+        return float(value[0])
+
+    def constant_array(self, toks: list[Token], what: str) -> np.ndarray:
+        """A constant as :meth:`constant`, or an array of them (``initialGuess = {1, 2, 3}``), flattened."""
         p = ExprParser(self.path, {**self.params}, lambda n, t: self._no_der(t), None)
         e = p.parse(toks)
         dae_p = ca.vertcat(*[ca.vec(s) for s in self.model.variables("parameter").values()])
-        if e.numel() != 1:
-            raise self.fail(toks[0].line, f"{what} must be a scalar")
         try:
-            value = float(ca.DM(ca.evalf(ca.substitute(e, dae_p, ca.DM(self.p_values)) if dae_p.numel() else e)))
+            value = np.ravel(np.asarray(ca.DM(ca.evalf(ca.substitute(e, dae_p, ca.DM(self.p_values)) if dae_p.numel() else e)),
+                                        dtype=float))
         except RuntimeError:
             raise self.fail(toks[0].line, f"{what} must be a constant expression of parameters") from None
-        if not np.isfinite(value):
+        if not np.all(np.isfinite(value)):
             raise self.fail(toks[0].line, f"{what} is not finite")
         return value
 
@@ -408,25 +449,29 @@ def _attributes(d: _Declarer, owner: str, mod: Modifier) -> None:
     assert opt is not None
     subs = mod.subs
     free = d.flag(subs["free"], f"{owner}(free)") if "free" in subs else False
-    num = {k: d.constant(subs[k].value, f"{owner}({k})") for k in ("min", "max", "initialGuess")
-           if k in subs and subs[k].value}
     if owner in d.params:
         key = _name(owner)
+        arr = {k: d.constant_array(subs[k].value, f"{owner}({k})") for k in ("min", "max", "initialGuess")
+               if k in subs and subs[k].value}
         if not free:
-            if "initialGuess" in num:
+            if "initialGuess" in arr:
                 _log.info("%s:%d: initialGuess of the fixed parameter %s has no effect", d.path, mod.line, owner)
             return
-        lo, hi = num.get("min", -np.inf), num.get("max", np.inf)
-        declared = np.ravel(d.model._vars[key].start)
-        if declared.size != 1:
-            raise d.fail(mod.line, f"unsupported construct: free = true on the array parameter {owner!r} (scalar parameters only)")
-        value = float(declared[0])
-        start = num.get("initialGuess", float(np.clip(value, lo, hi)))
+        declared = np.ravel(np.asarray(d.model._vars[key].start, dtype=float))
+        for k, v in arr.items():  # a scalar for every element (Modelica's each), or one value per element
+            if v.size not in (1, declared.size):
+                raise d.fail(mod.line, f"{owner}({k}): {v.size} values for a parameter of {declared.size} elements")
+        lo = np.broadcast_to(arr.get("min", -np.inf), declared.shape).copy()
+        hi = np.broadcast_to(arr.get("max", np.inf), declared.shape).copy()
+        guess = np.broadcast_to(arr["initialGuess"], declared.shape) if "initialGuess" in arr else np.clip(declared, lo, hi)
+        lo, hi, start = (lo[0], hi[0], float(guess[0])) if declared.size == 1 else (lo, hi, np.array(guess, dtype=float))
         try:
             opt.free_parameter(key, lo, hi, start=start)
         except GtModelError as exc:
             raise d.fail(mod.line, f"free parameter {owner}: {exc}") from None
         return
+    num = {k: d.constant(subs[k].value, f"{owner}({k})") for k in ("min", "max", "initialGuess")
+           if k in subs and subs[k].value}
     if owner not in d.names:
         raise d.fail(mod.line, f"Optimica attribute of {owner!r}: not a variable of the model")
     if free:

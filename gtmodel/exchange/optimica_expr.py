@@ -196,6 +196,18 @@ class ExprParser:
             self.depth -= 1
             self._take(")")
             return e
+        if t.text == "{":  # an array constructor {e1, e2, ...} (one dimension)
+            self.i += 1
+            self._nest()
+            items = [self._sum()]
+            while (c := self._peek()) is not None and c.text == ",":
+                self.i += 1
+                items.append(self._sum())
+            self.depth -= 1
+            self._take("}")
+            if any(e.numel() != 1 for e in items):
+                raise self._fail(t, "unsupported construct: an array constructor of arrays (one dimension only)")
+            return ca.vertcat(*items)
         if t.kind != "ident":
             raise self._fail(t, f"unsupported construct in an expression: {t.text!r}")
         if t.text in ("if", "not", "and", "or", "true", "false", "initial", "terminal", "pre", "edge", "sample", "delay"):
