@@ -5,21 +5,35 @@ class (inheritance, modifications, connectors and ``connect`` with flow variable
 and translates it to CasADi (``pymoca.backends.casadi``): parameters, states, algebraic
 variables, inputs, outputs and residual equations as MX expressions. This module checks the
 file for the constructs the translation drops or changes without a word (pymoca 0.12 turns
-a ``when`` clause or an ``algorithm`` section into *no* equations) and rejects them with the
-file, line and construct; then it rebuilds the model as a gtmodel ``Model`` (SX), which
-simulates, linearises, optimises and exports as an FMU like any other.
+a ``when`` clause or an ``algorithm`` section into *no* equations, ignores the condition of a
+conditional component) and rejects them with the file, line and construct; then it rebuilds
+the model as a gtmodel ``Model`` (SX), which simulates, linearises, optimises and exports as
+an FMU like any other.
 
 Supported subset (docs/fmu.md has the table): ``model``/``block``/``package`` classes,
 ``parameter``/``constant``/``input``/``output`` Real variables with ``start``, ``min``,
 ``max``, ``unit`` and comments, ``der()``, equations (also ``if``-expressions and ``for``
 equations as pymoca expands them), ``initial equation``, ``extends``, modifications,
-connectors with ``flow`` and ``connect``, arrays of Reals, the built-in math functions.
+connectors with ``flow`` and ``connect``, arrays of Reals (``each`` on them), the built-in math functions.
 ``function`` classes with an ``algorithm`` (pymoca translates them; a function nested in a
 model gets a dotted name CasADi 3.8 refuses, so declare it at the top level of the file).
+Also, checked on pymoca 0.12 (:mod:`gtmodel.exchange.modelica_checks` says what it does with each):
+short classes without a prefix or dimensions (``type Voltage = Real(unit = "V", min = 0);``
+with its attributes kept, ``connector PositivePin = Pin;``, ``model M = Base(k = 5);``),
+``final`` in the class loaded (its value kept; nothing modifies that class), a class
+redeclaration (``replaceable model C = A; C a;`` and ``redeclare model C = B``), ``inner``
+alone, ``protected``/``public``, Boolean and Integer parameters in equations.
 Rejected: ``when``, ``algorithm`` outside functions, ``pre``/``edge``/``change``/``reinit``/``sample``/
-``initial()``/``terminal()``, ``delay``, ``discrete`` variables, non-Real variables
-that are not parameters, external functions, ``assert()``/``terminate()`` (pymoca 0.12 fails
-on them without a line).
+``initial()``/``terminal()``, ``delay``, ``discrete`` variables, external functions,
+``assert()``/``terminate()`` (pymoca 0.12 fails on them without a line); and what pymoca 0.12
+reads as something else without a word (:data:`~gtmodel.exchange.modelica_checks.MISREAD`): a
+short class with a prefix (``connector RealIn = input Real;``, the prefix dropped) or with array
+dimensions (``type Vec = Real[3];``, a scalar), a conditional component (``Resistor r if useR;``,
+the condition ignored), ``final`` in a class other than the one loaded (an override from outside
+wins silently), a component redeclaration (``redeclare B a``, both classes merged), ``outer``
+(not bound to its ``inner``), ``enumeration`` types, and Boolean or Integer variables that are
+not parameters (read as continuous Reals, without events). Each error names the file, the line,
+the construct, what pymoca does and what to write instead.
 """
 
 from __future__ import annotations
@@ -35,6 +49,7 @@ import numpy as np
 
 from gtmodel.errors import InputError, ModelError
 from gtmodel.exchange import msl
+from gtmodel.exchange.modelica_checks import class_spans, find_misread
 from gtmodel.exchange.msl import code_only as _code_only
 from gtmodel.modeling import Model
 
@@ -73,38 +88,25 @@ def _pymoca() -> tuple[Any, Any]:
     return parser, generator
 
 
-_CLASS_RE = re.compile(r"\bend\s+([A-Za-z_][\w.]*)\s*;|\b(model|block|function|class|package|connector|record|type)\s+([A-Za-z_]\w*)")
+def _check_constructs(path: Path, text: str, loaded: str | None = None) -> None:
+    """Refuse the constructs pymoca drops (:data:`UNSUPPORTED`) or misreads (:data:`~gtmodel.exchange.modelica_checks.MISREAD`).
 
-
-def _function_spans(code: str) -> list[tuple[int, int]]:
-    """Character ranges of ``function`` classes (an algorithm section is allowed there)."""
-    stack: list[tuple[str, str, int]] = []
-    spans = []
-    for m in _CLASS_RE.finditer(code):
-        if m.group(1):  # "end NAME;" closes the class of that name
-            if stack and stack[-1][1] == m.group(1).split(".")[-1]:
-                kind, _, start = stack.pop()
-                if kind == "function":
-                    spans.append((start, m.end()))
-        elif code[max(0, m.start() - 4):m.start()].strip() != "end":
-            stack.append((m.group(2), m.group(3), m.start()))
-    return spans
-
-
-def _check_constructs(path: Path, text: str) -> None:
+    ``loaded`` is the class being translated (``final`` is accepted in it only; None: nowhere).
+    The error names the file, the first line of such a construct, and the construct.
+    """
     code = _code_only(text)
-    functions = _function_spans(code)
+    functions = [(a, b) for kind, _, a, b in class_spans(code) if kind == "function"]
     hits = []
     for what, pattern in UNSUPPORTED.items():
         for m in re.finditer(pattern, code):
             if what == "algorithm section" and any(a <= m.start() < b for a, b in functions):
                 continue  # a function's algorithm: pymoca translates it
-            hits.append((code.count("\n", 0, m.start()) + 1, what))
+            hits.append((code.count("\n", 0, m.start()) + 1, what, "pymoca would drop it; see the supported subset in docs/fmu.md"))
             break
+    hits += find_misread(code, loaded)
     if hits:
-        line, what = min(hits)
-        raise InputError(f"{path}:{line}: unsupported Modelica construct: {what} (pymoca would drop it; "
-                         "see the supported subset in docs/fmu.md)")
+        line, what, why = min(hits)
+        raise InputError(f"{path}:{line}: unsupported Modelica construct: {what} ({why})")
 
 
 def _numeric(value: Any, subs: tuple[list[ca.MX], list[float]], what: str, path: Path) -> np.ndarray:
@@ -142,7 +144,8 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
     ------
     InputError
         Naming the file (and line): missing file, pymoca not installed, a syntax error,
-        an unsupported construct (:data:`UNSUPPORTED`), an unknown class, or pymoca's
+        an unsupported construct (:data:`UNSUPPORTED`, and what pymoca misreads:
+        :data:`gtmodel.exchange.modelica_checks.MISREAD`), an unknown class, or pymoca's
         translation failing.
     ModelError
         A start or parameter value that is not a function of the parameters.
@@ -162,7 +165,6 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
         raise InputError(f"{where}: Modelica syntax error: {msg}") from None
     if ast is None:
         raise InputError(f"{path}: Modelica syntax error: the parser returned nothing")
-    _check_constructs(path, text)
     user = [c for c in ast.classes if c not in ("Real", "Integer", "Boolean", "String", "StateSelect", "Clock")]
     if class_name is None:
         if not user:
@@ -170,6 +172,7 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
         top = ast.classes[user[-1]]
         models = [n for n, c in top.classes.items() if c.type in ("model", "block")] if top.type == "package" else []
         class_name = f"{user[-1]}.{models[-1]}" if models else user[-1]
+    _check_constructs(path, text, class_name)
     if msl.uses_msl(_code_only(text)):  # the library under the MSL's class paths (gtmodel.exchange.msl)
         msl.extend(parser, ast)
     try:
