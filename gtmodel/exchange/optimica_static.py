@@ -57,6 +57,8 @@ class StaticResult:
         CPU time of the NLP's construction and solve, s.
     message : str
         IPOPT's return status.
+    initial_parameters : dict of str to numpy.ndarray
+        The free parameters' start values (``initialGuess``), by name.
     """
 
     status: str
