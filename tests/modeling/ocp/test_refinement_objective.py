@@ -16,7 +16,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.modeling import CollocationTranscription
-from gtmodel.modeling.ocp import Refinement
+from gtmodel.modeling.ocp import Refinement, refinement
 from gtmodel.modeling.ocp.refinement import OBJECTIVE_TOLERANCE, solve_refined
 from gtmodel.modeling.ocp.refinement_mesh import finer, halved
 from gtmodel.status import Status
@@ -88,3 +88,16 @@ def test_halved_and_finer_meshes():
     mesh = np.array([0.5, 0.3, 0.2])
     np.testing.assert_allclose(halved(mesh), [0.25, 0.25, 0.15, 0.15, 0.1, 0.1])
     np.testing.assert_allclose(finer(mesh, np.array([0.25, 0.75])), [0.25, 0.25, 0.3, 0.2])
+
+
+# which pass may anchor the rejection of worse passes (refinement._feasible): the flexible joint's first pass (end within
+# 0.063, bounds kept) anchors; drive0_35's first pass (its current 2.5 A off its simulation, scaled 0.89: its objective,
+# the current's integral, is not the motion's) does not, nor one that misses its end or exceeds a bound between the nodes
+@pytest.mark.parametrize(("entry", "anchors"), [
+    ({"end_deviation": 0.063, "max_bound_violation": 0.0, "max_scaled_deviation": 0.063}, True),
+    ({"end_deviation": 0.057, "max_bound_violation": 0.0, "max_scaled_deviation": 0.886}, False),
+    ({"end_deviation": 0.2, "max_bound_violation": 0.0, "max_scaled_deviation": 0.05}, False),
+    ({"end_deviation": 0.01, "max_bound_violation": 0.02, "max_scaled_deviation": 0.05}, False),
+])
+def test_only_a_pass_that_follows_its_simulation_anchors(entry, anchors):
+    assert refinement._feasible(entry, 0.01) is anchors
