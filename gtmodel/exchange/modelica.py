@@ -13,7 +13,7 @@ an FMU like any other.
 Supported subset (docs/fmu.md has the table): ``model``/``block``/``package`` classes,
 ``parameter``/``constant``/``input``/``output`` Real variables with ``start``, ``min``,
 ``max``, ``unit`` and comments, ``der()``, equations (also ``if``-expressions and ``for``
-equations as pymoca expands them), ``initial equation``, ``extends``, modifications,
+equations, of one or several equations, as pymoca expands them), ``initial equation``, ``extends``, modifications,
 connectors with ``flow`` and ``connect``, arrays of Reals (``each`` on them), the built-in math functions.
 ``function`` classes with an ``algorithm`` (pymoca translates them; a function nested in a
 model gets a dotted name CasADi 3.8 refuses, so declare it at the top level of the file).
@@ -32,7 +32,8 @@ dimensions (``type Vec = Real[3];``, a scalar), a conditional component (``Resis
 the condition ignored), ``final`` in a class other than the one loaded (an override from outside
 wins silently), a component redeclaration (``redeclare B a``, both classes merged), ``outer``
 (not bound to its ``inner``), ``enumeration`` types, and Boolean or Integer variables that are
-not parameters (read as continuous Reals, without events). Each error names the file, the line,
+not parameters (read as continuous Reals, without events), reduction expressions
+(``sum(x[i]^2 for i in 1:3)``: write ``sum(x.^2)``). Each error names the file, the line,
 the construct, what pymoca does and what to write instead.
 """
 
@@ -217,6 +218,16 @@ def _unit(v: Any) -> str:
     return unit if isinstance(unit, str) else ""
 
 
+def _residuals(equations: list[ca.MX]) -> ca.MX:
+    """pymoca's residual equations as one column.
+
+    A ``for`` loop of k equations over n indices is one n x k matrix in pymoca's result:
+    each is flattened to a column (column-major: the loop's first equation for every index,
+    then the second, ...) before they are stacked.
+    """
+    return ca.vertcat(*[ca.vec(e) for e in equations]) if equations else ca.MX(0, 1)
+
+
 def _to_model(path: Path, ast: Any, mo: Any, class_name: str) -> Model:
     m = Model(class_name.split(".")[-1])
     m.source = path
@@ -254,8 +265,7 @@ def _to_model(path: Path, ast: Any, mo: Any, class_name: str) -> Model:
         sx.append(m.der(m.variables("state")[_name(x.symbol.name())]))
     mx.append(mo.time)
     sx.append(m.time)
-    eq = ca.Function("eq", mx, [ca.vertcat(*mo.equations) if mo.equations else ca.MX(0, 1),
-                                ca.vertcat(*mo.initial_equations) if mo.initial_equations else ca.MX(0, 1)])
+    eq = ca.Function("eq", mx, [_residuals(mo.equations), _residuals(mo.initial_equations)])
     res, init = eq(*sx)
     for i in range(res.numel()):
         m.equation(res[i], 0, name=f"eq{i + 1}")

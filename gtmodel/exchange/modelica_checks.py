@@ -23,6 +23,10 @@ does); what pymoca did is said with each entry of :data:`MISREAD`:
 - an ``outer`` element: pymoca does not bind it to the ``inner`` one; it is a separate variable
   without a value or equation.
 - an ``enumeration`` type: pymoca fails with a bare ``'Mode'``, without a line.
+- a reduction expression (an array comprehension), ``sum(x[i]^2 for i in 1:3)`` (also ``product``,
+  ``max``, ``{e for i in r}``): pymoca fails with a bare ``'i'``, without a line, when the iterator
+  occurs in the expression; when it does not (``sum(1.0 for i in 1:3)``, ``sum(x[1] for i in 1:3)``)
+  it reads the expression once (1.0, not 3.0). A ``for`` equation (``for i in 1:3 loop``) is not one.
 - a ``Boolean`` or ``Integer`` variable (not a parameter or constant): pymoca reads it as a continuous
   Real variable, with no event at its changes (``Boolean on; on = time > 0.5;`` is a discontinuous
   algebraic equation the integrator stops on).
@@ -71,6 +75,12 @@ MISREAD = {
     "enumeration type": (r"\benumeration\s*\(",
                          "pymoca 0.12 cannot translate it",
                          "use an Integer parameter with a constant for each value"),
+    "reduction expression": (r"\bfor\s+[A-Za-z_]\w*\s+in\b(?:(?!\bloop\b)[^;])*;",
+                             "pymoca 0.12 cannot translate it (a bare error naming the iterator) or, when the "
+                             "iterator does not occur in the expression (sum(1.0 for i in 1:3)), reads it as the "
+                             "expression once",
+                             "write it with array operations (sum(x.^2) for sum(x[i]^2 for i in 1:3), "
+                             "sum(x) for sum(x[i] for i in 1:3)) or as an explicit sum (x[1]^2 + x[2]^2 + x[3]^2)"),
     "Boolean or Integer variable": (rf"(?m)(?:^|;)[ \t]*(?:(?:input|output|flow|stream|discrete|inner|outer|final|replaceable|public|protected)\s+)*"
                                     r"(?:Boolean|Integer)\s*(?:\[[^\]]*\])?\s+[A-Za-z_]",
                                     "pymoca 0.12 reads it as a continuous Real variable, with no event where it changes",

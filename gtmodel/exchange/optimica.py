@@ -152,9 +152,6 @@ def _model(path: Path, text: str, class_name: str) -> tuple[Model, Any]:
     if getattr(mo, "delay_states", None):
         raise OptimicaError(f"{path}: unsupported Modelica construct: delay() in class {class_name!r}")
     _numeric_bounds(path, mo)
-    # a for loop of k equations over n indices is one n x k matrix in pymoca's result: a column each
-    mo.equations = [ca.vec(e) for e in mo.equations]
-    mo.initial_equations = [ca.vec(e) for e in mo.initial_equations]
     _component_inputs(mo, input_texts)
     try:
         return _to_model(path, ast, mo, class_name), mo

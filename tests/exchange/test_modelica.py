@@ -72,3 +72,32 @@ def test_arrays_for_equations_extends_if_expressions_and_functions():
 def test_bad_modelica_names_file_line_and_construct(file, cls, match):
     with pytest.raises(InputError, match=match):
         load_modelica(DATA / file, cls)
+
+
+FOR_LOOP_MO = """model ForLoop
+  parameter Real a = 0.5;
+  Real z(start = 1, fixed = true);
+  Real x[3](start = {1, 2, 3}, each fixed = true);
+  Real y[3];
+equation
+  der(z) = -z;
+  for i in 1:3 loop
+    der(x[i]) = -a*x[i];
+    y[i] = 2*x[i];
+  end for;
+end ForLoop;
+"""
+
+
+@pytest.mark.parametrize("scalar_first", [True, False])
+def test_for_loop_of_several_equations_loads_and_simulates(tmp_path, scalar_first):
+    # pymoca gives the loop as one 3 x 2 matrix of residuals; stacked with the scalar equation it needs a column each
+    text = FOR_LOOP_MO if scalar_first else FOR_LOOP_MO.replace("  der(z) = -z;\n", "").replace("end for;\n", "end for;\n  der(z) = -z;\n")
+    (tmp_path / "for_loop.mo").write_text(text)
+    model = load_modelica(tmp_path / "for_loop.mo")
+    t = np.linspace(0.0, 2.0, 9)
+    sim = model.simulate(t, rtol=1e-11, atol=1e-12)
+    closed = np.exp(-0.5 * t)[:, None] * np.array([1.0, 2.0, 3.0])  # x_i' = -a x_i, x_i(0) = i
+    np.testing.assert_allclose(sim.x["x"], closed, atol=1e-8)
+    np.testing.assert_allclose(sim.z["y"], 2.0 * closed, atol=1e-8)
+    np.testing.assert_allclose(sim.x["z"], np.exp(-t), atol=1e-8)

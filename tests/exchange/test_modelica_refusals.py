@@ -71,6 +71,14 @@ BAD = [
      "  der(x) = if on then -3 * x else -x;\nend M;\n", 3, "Boolean or Integer variable"),
     ("integer_output", "model M\n  Real x(start = 1);\n  output Integer n;\nequation\n  n = 3;\n  der(x) = -x;\nend M;\n",
      3, "Boolean or Integer variable"),
+    ("reduction_sum", "model M\n  Real x[3](each start = 1);\n  Real s;\nequation\n  der(x) = -x;\n"
+     "  s = sum(x[i]^2 for i in 1:3);\nend M;\n", 6, "reduction expression"),
+    ("reduction_without_iterator", "model M\n  Real x(start = 1);\n  Real s;\nequation\n  der(x) = -x;\n"
+     "  s = sum(1.0 for i in 1:3);\nend M;\n", 6, "reduction expression"),  # pymoca: s = 1.0, not 3.0
+    ("reduction_in_for_equation", "model M\n  Real x[2](each start = 1);\n  Real y[2];\nequation\n  der(x) = -x;\n"
+     "  for i in 1:2 loop\n    y[i] = max(\n      x[j] for j in 1:2);\n  end for;\nend M;\n", 8, "reduction expression"),
+    ("array_comprehension_binding", "model M\n  parameter Real w[3] = {2 * k for k in 1:3};" + _DECAY + "end M;\n",
+     2, "reduction expression"),
 ]
 
 
@@ -123,6 +131,8 @@ GOOD = [
      {}, "x", 1.0, 1.0, 0.0),
     ("inner_alone_each_on_array", "model M\n  inner parameter Real g = 4;\n  Real x[2](each start = 1);\nequation\n"
      "  der(x) = -g * x;\nend M;\n", {"g": 4.0}, "x", 4.0, 1.0, 0.0),
+    ("for_equation_and_array_sum", "model M\n  parameter Real w[2] = {1, 2};\n  Real x[2](each start = 1);\nequation\n"
+     "  for i in 1:2 loop\n    der(x[i]) = -sum(w.^2) * x[i];\n  end for;\nend M;\n", {}, "x", 5.0, 1.0, 0.0),
 ]
 
 
