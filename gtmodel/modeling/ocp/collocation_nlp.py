@@ -461,7 +461,7 @@ def transcribe(
     Xp = scaled(E[o:o + d * nx, :], noms["x"], d)
     Up = scaled(E[o + d * nx:o + d * (nx + nu), :], noms["u"], d)
     Zp = scaled(E[o + d * (nx + nu):se, :], noms["z"], d)
-    XN = scaled(w_sym[N * se:N * se + nx], noms["x"], 1)
+    XN = scaled(ca.reshape(w_sym[N * se:N * se + nx], nx, 1), noms["x"], 1)  # (nx, 1) also of a 1 x 1 w_sym
     n_el_a, c0_a = element_scaling(N, fractions)
     if copies:
         Trow = E[nx:nx + 1, :] * tf_nom if tf_nom != 1.0 else E[nx:nx + 1, :]
