@@ -11,7 +11,10 @@ class read as a ``model``, its Optimica parts taken out by
 :func:`gtmodel.exchange.optimica_syntax.split_optimica`: neither front end reads Optimica;
 rumoca is also tried on the ``.mop`` file as written); with the MSL subset available when the
 text names ``Modelica.`` (pymoca: its classes parsed and added to the tree; rumoca: its folder
-as a library root). No gtmodel rewriting (``gtmodel.exchange.msl.prepare``) is applied, so
+as a library root); with the package ``GantryTau`` gtmodel ships
+(:mod:`gtmodel.exchange.robot_library`, ``modelica_library/GantryTau.mo``) when the text names
+``GantryTau.``, as gtmodel's Optimica front end adds it (pymoca: the package parsed and added to
+the tree; rumoca: its folder as a library root). No gtmodel rewriting (``gtmodel.exchange.msl.prepare``) is applied, so
 what a front end does with the file itself shows. A file naming ``RealInput``/``RealOutput`` is
 read twice more, each front end as it can: ``[msl.prepare]`` (the text as gtmodel rewrites it
 for pymoca: ``input Real u``) and ``[MSL RealInput]`` (the library with the MSL's own
@@ -105,7 +108,8 @@ def rumoca_read(job: dict[str, Any]) -> dict[str, Any]:
     Parameters
     ----------
     job : dict
-        ``text``, ``class``, ``filename`` and ``msl`` (whether the MSL subset's folder is a library root).
+        ``text``, ``class``, ``filename``, ``msl`` (whether the MSL subset's folder is a library root)
+        and ``robots`` (the ``GantryTau.mo`` file whose folder is a library root too, or "").
 
     Returns
     -------
@@ -114,7 +118,8 @@ def rumoca_read(job: dict[str, Any]) -> dict[str, Any]:
     """
     import rumoca
 
-    session = rumoca.Session(roots=[job["library"]] if job["msl"] else [])
+    roots = ([job["library"]] if job["msl"] else []) + ([str(Path(job["robots"]).parent)] if job.get("robots") else [])
+    session = rumoca.Session(roots=list(dict.fromkeys(roots)))
     t0 = time.perf_counter()
     try:
         model = session.loads(job["text"], model=job["class"], filename=job["filename"])
@@ -232,9 +237,11 @@ def make_jobs() -> list[dict[str, Any]]:
     list of dict
         ``label``, ``path`` (relative), ``kind`` (``mo``, ``mop``, ``library``), ``class``,
         ``text`` (what the front ends read), ``raw`` (the file as written), ``filename``,
-        ``msl``, ``library``.
+        ``msl``, ``library``, ``robots`` (the path of the shipped ``GantryTau`` package when the
+        text names ``GantryTau.``, as gtmodel adds it; else "").
     """
-    from gtmodel.exchange import msl
+    from gtmodel.exchange import msl, robot_library
+    from gtmodel.exchange.msl import code_only
     from gtmodel.exchange.optimica_syntax import split_optimica
 
     jobs = []
@@ -243,13 +250,14 @@ def make_jobs() -> list[dict[str, Any]]:
     for path in files:
         rel = path.relative_to(REPO).as_posix()
         raw = path.read_text(encoding="utf-8", errors="replace")
-        base = {"path": rel, "raw": raw, "filename": path.name, "library": str(LIBRARY)}
+        base = {"path": rel, "raw": raw, "filename": path.name, "library": str(LIBRARY), "robots": ""}
         if path.suffix == ".mop":
             for bare in _OPT_RE.findall(raw):
                 oc = split_optimica(path, raw, bare)
                 text = oc.model_text + _siblings(path, oc.model_text)
+                robots = str(robot_library.ROBOT_SOURCE) if robot_library.uses_robots(code_only(text)) else ""
                 jobs.append({**base, "label": f"{rel}:{oc.name}", "kind": "mop", "class": oc.name, "text": text,
-                             "msl": bool(_MSL_REF.search(text))})
+                             "msl": bool(_MSL_REF.search(text)), "robots": robots})
         else:
             try:
                 cls = _default_class(raw)
@@ -257,7 +265,9 @@ def make_jobs() -> list[dict[str, Any]]:
                 names = re.findall(r"^\s*(?:model|block)\s+([A-Za-z_]\w*)", raw, re.M)
                 cls = names[-1] if names else "?"
                 base["note"] = f"pymoca cannot parse it to pick a class: {_first_line(exc)}"
-            jobs.append({**base, "label": f"{rel}:{cls}", "kind": "mo", "class": cls, "text": raw, "msl": bool(_MSL_REF.search(raw))})
+            robots = str(robot_library.ROBOT_SOURCE) if robot_library.uses_robots(code_only(raw)) else ""
+            jobs.append({**base, "label": f"{rel}:{cls}", "kind": "mo", "class": cls, "text": raw, "msl": bool(_MSL_REF.search(raw)),
+                         "robots": robots})
         last = jobs[-1]
         if last["msl"] and re.search(r"\bReal(?:In|Out)put\b", last["text"]):  # the MSL's own short connector classes
             jobs.append({**last, "label": last["label"] + " [MSL RealInput]", "kind": last["kind"] + "-msl-connectors",
@@ -270,10 +280,10 @@ def make_jobs() -> list[dict[str, Any]]:
     lib_rel = (LIBRARY / "Modelica.mo").relative_to(REPO).as_posix()
     for cls in _library_classes():
         jobs.append({"label": f"Modelica.mo:{cls}", "path": lib_rel, "kind": "library", "class": cls, "text": lib, "raw": lib,
-                     "filename": "Modelica.mo", "msl": False, "library": str(LIBRARY)})
+                     "filename": "Modelica.mo", "msl": False, "library": str(LIBRARY), "robots": ""})
     for what, text in PROBES.items():
         jobs.append({"label": f"probe: {what}", "path": "", "kind": "probe", "class": "M", "text": text, "raw": text,
-                     "filename": "probe.mo", "msl": False, "library": str(LIBRARY)})
+                     "filename": "probe.mo", "msl": False, "library": str(LIBRARY), "robots": ""})
     return jobs
 
 
@@ -310,7 +320,7 @@ def pymoca_read(job: dict[str, Any]) -> tuple[Any, float]:
     Parameters
     ----------
     job : dict
-        See :func:`make_jobs`; the MSL subset is parsed in each run, as gtmodel does.
+        See :func:`make_jobs`; the MSL subset and the ``GantryTau`` package are parsed in each run, as gtmodel does.
 
     Returns
     -------
@@ -327,6 +337,8 @@ def pymoca_read(job: dict[str, Any]) -> tuple[Any, float]:
             raise ValueError("the parser returned nothing")
         if job["msl"]:
             ast.extend(parser.parse((Path(job["library"]) / "Modelica.mo").read_text(encoding="utf-8")))
+        if job.get("robots"):  # the shipped Gantry-Tau robots, as gtmodel.exchange.robot_library.extend adds them
+            ast.extend(parser.parse(Path(job["robots"]).read_text(encoding="utf-8")))
         mo = generator.generate(ast, job["class"])
     except Exception as exc:  # noqa: BLE001 - pymoca raises many types
         return exc, time.perf_counter() - t0
@@ -439,8 +451,9 @@ def _equations(model: Any) -> list[Any]:
 
 def _run_rumoca(jobs: list[dict[str, Any]], repeat: int, python: str) -> dict[str, Any]:
     """The rumoca side: in this Python if it imports rumoca, else in ``python`` (``--worker``), else skipped."""
-    wire = [{k: j[k] for k in ("label", "text", "class", "filename", "msl", "library")} for j in jobs]
-    wire += [{**{k: j[k] for k in ("class", "filename", "msl", "library")}, "label": j["label"] + " [as written]", "text": j["raw"]}
+    wire = [{k: j.get(k, "") for k in ("label", "text", "class", "filename", "msl", "library", "robots")} for j in jobs]
+    wire += [{**{k: j.get(k, "") for k in ("class", "filename", "msl", "library", "robots")}, "label": j["label"] + " [as written]",
+              "text": j["raw"]}
              for j in jobs if j["kind"] == "mop"]
     try:
         import rumoca  # noqa: F401

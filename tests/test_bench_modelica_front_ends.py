@@ -55,3 +55,13 @@ def test_rumoca_side_is_skipped_with_a_message_without_rumoca(bench, jobs, tmp_p
     """No rumoca here and no Python with it: the side is skipped, the message saying how to get it."""
     side = bench._run_rumoca(jobs[:1], 1, str(tmp_path / "no_python"))
     assert "pip install rumoca" in side["skipped"]
+
+
+def test_a_file_naming_gantry_tau_gets_the_shipped_package_as_gtmodel_adds_it(bench, jobs):
+    """opt_robot.mop names GantryTau.L1: its job carries the package, and pymoca flattens it (7 states, 3 robot.tau left open)."""
+    robot = [j for j in jobs if j["label"] == "problems/optimica/opt_robot.mop:opt_robot"]
+    assert len(robot) == 1 and robot[0]["robots"].endswith("GantryTau.mo")
+    assert not next(j for j in jobs if j["label"] == "tests/exchange/data/oscillator.mo:Oscillator")["robots"]
+    entry = bench.pymoca_side(robot, 1)["results"][robot[0]["label"]]
+    assert entry["ok"] and {k: entry["counts"][k] for k in ("unknowns", "equations", "states")} == {
+        "unknowns": 31, "equations": 28, "states": 7}
