@@ -486,7 +486,8 @@ def solve_refined(
             dae = result.dae
             max_elements = max(elements, memory_max_elements(tr_points, dae.nx, dae.nz, dae.nu)) if dae is not None else MAX_ELEMENTS
             _log.info("mesh refinement of %s: at most %d elements (the memory estimate)", name, max_elements)
-        new, info = refine_mesh(base, tol, max_elements, bounds=state_bounds, input_bounds=input_bounds)
+        persistent = len(history) > 1 and min(history[-2].get("max_bound_violation", 0.0), entry.get("max_bound_violation", 0.0)) > tol
+        new, info = refine_mesh(base, tol, max_elements, bounds=state_bounds, input_bounds=input_bounds, persistent=persistent)
         if base is not result:  # at least as fine as the rejected pass's mesh
             new = finer(new, mesh if mesh is not None else np.full(n_elements, 1.0 / n_elements))
         entry["switches_s"] = info["switches"]
