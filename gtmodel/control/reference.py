@@ -240,10 +240,8 @@ def period_means(t: np.ndarray, values: np.ndarray, grid: np.ndarray, dt: float)
     InputError
         ``values`` not a finite ``(M, n)`` array.
     """
-    if values.ndim != 2 or values.shape[0] != t.size or not np.all(np.isfinite(values)):
-        raise InputError(f"u_ref: expected a finite ({t.size}, n) array (one row per reference time), got shape {values.shape}")
     edges = np.union1d(t, np.r_[grid, grid + dt])
-    merged = sampled(t, values, edges, "u_ref")
+    merged = sampled(t, values, edges, "u_ref")  # checks values
     area = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(0.5 * np.diff(edges)[:, None] * (merged[1:] + merged[:-1]), axis=0)])
     start, end = np.searchsorted(edges, grid), np.searchsorted(edges, grid + dt)
     return (area[end] - area[start]) / dt

@@ -14,6 +14,7 @@ import pytest
 import scipy.integrate
 
 from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, PERIOD_EPS, hold_input, period_index, period_means, sample_reference, start_input
+from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
 from gtmodel.robots.dynamics import GantryTau3Dynamics
 from gtmodel.robots.model import gantry_tau_model
@@ -88,3 +89,10 @@ def test_sample_reference_holds_each_period_the_plans_mean_input():
     t = np.array([0.0, 0.001, 0.001 + 1e-9, 0.008])
     t0, xs, us = sample_reference(t, np.zeros((4, 1)), np.array([[40.0], [40.0], [-40.0], [-40.0]]), 0.004)
     np.testing.assert_allclose(us[:, 0], [(40.0 * 0.001 - 40.0 * 0.003) / 0.004, -40.0, -40.0], rtol=1e-6)
+
+
+@pytest.mark.parametrize(("values", "match"), [(np.array([[1.0], [np.nan]]), "u_ref: expected a finite"),
+                                              (np.ones((3, 1)), r"u_ref: expected a finite \(2, n\) array")])
+def test_period_means_refuses_bad_values(values, match):
+    with pytest.raises(InputError, match=match):
+        period_means(np.array([0.0, 1.0]), values, np.array([0.0]), 0.5)
