@@ -49,7 +49,7 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.errors import InputError, ModelError
-from gtmodel.exchange import msl
+from gtmodel.exchange import msl, robot_library
 from gtmodel.exchange.modelica_checks import class_spans, find_misread
 from gtmodel.exchange.msl import code_only as _code_only
 from gtmodel.modeling import Model
@@ -176,6 +176,8 @@ def load_modelica(path: str | Path, class_name: str | None = None) -> Model:
     _check_constructs(path, text, class_name)
     if msl.uses_msl(_code_only(text)):  # the library under the MSL's class paths (gtmodel.exchange.msl)
         msl.extend(parser, ast)
+    if robot_library.uses_robots(_code_only(text)):  # the shipped Gantry-Tau robots, as the Optimica loader adds them
+        robot_library.extend(parser, ast)
     try:
         mo = generator.generate(ast, class_name)
     except Exception as exc:  # noqa: BLE001 - pymoca raises many types
