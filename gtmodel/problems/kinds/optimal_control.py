@@ -362,11 +362,11 @@ class OptimalControlKind(ProblemKind):
         r.to_csv(out / "trajectories.csv", units=d.model.units or {})  # headers "name [unit]" (gtmodel._tables.split_unit)
         written.files.append("trajectories.csv")
         if plots:
-            values = {**r.states, **r.algebraics, **r.outputs, **r.inputs}
-            shown = {k: values[k] for k in d.variables if k in values and np.ndim(values[k]) == 1}
+            values = scalar_signals({**r.states, **r.algebraics, **r.outputs, **r.inputs})
+            shown = {k: values[k] for k in d.variables if k in values}
             t_in, applied = applied_inputs(r, d.optimization)
             for group, fname, t, signals in (
-                ("states", "states.png", r.t, {k: v for k, v in r.states.items() if np.ndim(v) == 1}),
+                ("states", "states.png", r.t, scalar_signals(r.states)),
                 ("inputs as verified", "inputs.png", t_in, applied),
                 ("variables", "variables.png", r.t, shown),
             ):
@@ -378,7 +378,7 @@ class OptimalControlKind(ProblemKind):
 
 def applied_inputs(result: OptimizationResult, optimization: Optimization,
                    per_element: int = 10) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """The scalar inputs as the verification applies them: the polynomials between the points, clipped to the bounds.
+    """The inputs as the verification applies them: the polynomials between the points, clipped to the bounds.
 
     A collocation input is a polynomial on each element, which may pass its bound between the
     collocation points; the verification simulates the model under it clipped to the bound, as
@@ -400,11 +400,11 @@ def applied_inputs(result: OptimizationResult, optimization: Optimization,
     t : numpy.ndarray
         ``(K,)`` [s]: the written times and ``per_element - 1`` more between each two.
     inputs : dict of str to numpy.ndarray
-        Scalar input name -> ``(K,)`` values.
+        Input name (an array input's elements ``name[j]``) -> ``(K,)`` values.
     """
     t_mesh = np.asarray(result.t, dtype=float)
     if result.collocation is None or result.dae is None or t_mesh.size < 2:
-        return t_mesh, {k: np.asarray(v) for k, v in result.inputs.items() if np.ndim(v) == 1}
+        return t_mesh, scalar_signals(result.inputs)
     n = max(1, min(int(per_element), 20_000 // (t_mesh.size - 1)))
     frac = np.arange(n) / n
     t = np.append((t_mesh[:-1, None] + frac[None, :] * np.diff(t_mesh)[:, None]).ravel(), t_mesh[-1])
@@ -413,9 +413,34 @@ def applied_inputs(result: OptimizationResult, optimization: Optimization,
     out = {}
     for k, v in sampled.items():
         sl = result.dae.u_vars[k]
-        if np.ndim(v) == 1 and sl.stop - sl.start == 1:
-            out[k] = np.clip(np.asarray(v, dtype=float), lower[sl.start], upper[sl.start])
+        columns = np.asarray(v, dtype=float).reshape(t.size, sl.stop - sl.start)
+        for j in range(columns.shape[1]):  # an array input (the Optimica robot's tau[3]) as its elements k[0], k[1], ...
+            out[k if np.ndim(v) == 1 else f"{k}[{j}]"] = np.clip(columns[:, j], lower[sl.start + j], upper[sl.start + j])
     return t, out
+
+
+def scalar_signals(values: dict[str, Any]) -> dict[str, np.ndarray]:
+    """Signals for a plot: each array-valued variable split into its elements ``name[0]``, ``name[1]``, ...
+
+    Parameters
+    ----------
+    values : dict of str to array_like
+        Name -> ``(K,)`` samples of a scalar or ``(K, m)`` of an array variable (a Modelica
+        ``Real x[3]``, written to ``trajectories.csv`` as ``x[0]``, ``x[1]``, ``x[2]``).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Name -> ``(K,)`` samples, scalars unchanged (other shapes left out).
+    """
+    out: dict[str, np.ndarray] = {}
+    for k, v in values.items():
+        a = np.asarray(v, dtype=float)
+        if a.ndim == 1:
+            out[k] = a
+        elif a.ndim == 2:
+            out.update({f"{k}[{j}]": a[:, j] for j in range(a.shape[1])})
+    return out
 
 
 def _method(file: ProblemFile, doc: Any, opt: Optimization) -> Collocation | MultipleShooting:

@@ -18,7 +18,7 @@ from scipy.linalg import expm as scipy_expm
 
 from gtmodel._tables import read_table
 from gtmodel.problems import load_problem, run_problem
-from gtmodel.problems.kinds.optimal_control import OptimalControl, applied_inputs
+from gtmodel.problems.kinds.optimal_control import OptimalControl, applied_inputs, scalar_signals
 from gtmodel.status import Status
 
 from ...conftest import PROBLEMS_DIR, REPO, assert_bad_problem_through_cli, replace_once as _edit
@@ -202,3 +202,15 @@ def test_inputs_plot_draws_the_inputs_as_verified():
     assert set(inputs) == {"F"} and np.isin(result.t, t).all()
     np.testing.assert_allclose(inputs["F"], np.clip(result.sample(t)["inputs"]["F"], -20.0, 20.0), rtol=0, atol=1e-12)
     assert t.size == 10 * (result.t.size - 1) + 1 and np.all(np.diff(t) > 0)
+
+
+# the plots of a model with array variables (the Optimica robot's tcp[3], tau[3]): each element its own signal, as
+# trajectories.csv names them (before, every array variable was left out: opt_robot's plots showed only its cost)
+@pytest.mark.parametrize(("values", "expected"), [
+    ({"x": np.arange(3.0)}, {"x": [0.0, 1.0, 2.0]}),
+    ({"q": np.array([[1.0, 2.0], [3.0, 4.0]])}, {"q[0]": [1.0, 3.0], "q[1]": [2.0, 4.0]}),
+    ({"s": np.zeros((2, 2, 2))}, {}),
+])
+def test_scalar_signals_split_array_variables_into_their_elements(values, expected):
+    got = scalar_signals(values)
+    assert {k: v.tolist() for k, v in got.items()} == expected
