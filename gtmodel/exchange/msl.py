@@ -31,7 +31,7 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["MSL_SOURCE", "CONNECTOR_TYPES", "CONSTANTS", "SMOOTHING_QUANTITY", "code_only", "msl_classes", "uses_msl", "prepare", "extend"]
+__all__ = ["MSL_SOURCE", "CONNECTOR_TYPES", "CONSTANTS", "SMOOTHING_QUANTITY", "code_only", "msl_classes", "uses_msl", "names_library", "add_library", "prepare", "extend"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -110,7 +110,44 @@ def uses_msl(code: str) -> bool:
     -------
     bool
     """
-    return bool(_REF_RE.search(code)) and not _OWN_RE.search(code)
+    return names_library(code, _REF_RE, _OWN_RE)
+
+
+def names_library(code: str, reference: re.Pattern[str], own: re.Pattern[str]) -> bool:
+    """Whether a Modelica text refers to a shipped library's classes and does not declare that library itself.
+
+    Parameters
+    ----------
+    code : str
+        The text (comments and strings may be blanked first).
+    reference : re.Pattern
+        Finds a reference to the library's classes (``Modelica.``, ``GantryTau.``).
+    own : re.Pattern
+        Finds a declaration of a class of the library's name in the text.
+
+    Returns
+    -------
+    bool
+    """
+    return bool(reference.search(code)) and not own.search(code)
+
+
+def add_library(parser: Any, ast: Any, source: Path, what: str) -> None:
+    """Add a shipped library's source to a parsed file's classes (pymoca's tree, in place).
+
+    Parameters
+    ----------
+    parser : module
+        ``pymoca.parser``.
+    ast : pymoca.tree.Tree
+        The file's parsed classes.
+    source : pathlib.Path
+        The library's ``.mo`` file, shipped as package data.
+    what : str
+        The library's name in the debug log.
+    """
+    ast.extend(parser.parse(source.read_text(encoding="utf-8")))
+    _log.debug("%s classes added from %s", what, source)
 
 
 def prepare(path: Path, text: str) -> str:
@@ -192,5 +229,4 @@ def extend(parser: Any, ast: Any) -> None:
     ast : pymoca.tree.Tree
         The file's parsed classes (without a class ``Modelica`` of their own).
     """
-    ast.extend(parser.parse(MSL_SOURCE.read_text(encoding="utf-8")))
-    _log.debug("Modelica Standard Library classes added from %s", MSL_SOURCE)
+    add_library(parser, ast, MSL_SOURCE, "Modelica Standard Library")

@@ -12,14 +12,13 @@ subset is added for ``Modelica.`` (:mod:`gtmodel.exchange.msl`).
 
 from __future__ import annotations
 
-import logging
 import re
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ROBOT_SOURCE", "uses_robots", "extend"]
+from gtmodel.exchange import msl
 
-_log = logging.getLogger("gtmodel")
+__all__ = ["ROBOT_SOURCE", "uses_robots", "extend"]
 
 #: The shipped Modelica source of the package ``GantryTau``.
 ROBOT_SOURCE = Path(__file__).parent / "modelica_library" / "GantryTau.mo"
@@ -39,7 +38,7 @@ def uses_robots(code: str) -> bool:
     -------
     bool
     """
-    return bool(_REF_RE.search(code)) and not _OWN_RE.search(code)
+    return msl.names_library(code, _REF_RE, _OWN_RE)
 
 
 def extend(parser: Any, ast: Any) -> None:
@@ -52,5 +51,4 @@ def extend(parser: Any, ast: Any) -> None:
     ast : pymoca.tree.Tree
         The file's parsed classes.
     """
-    ast.extend(parser.parse(ROBOT_SOURCE.read_text(encoding="utf-8")))
-    _log.debug("Gantry-Tau robot classes added from %s", ROBOT_SOURCE)
+    msl.add_library(parser, ast, ROBOT_SOURCE, "Gantry-Tau robot")
