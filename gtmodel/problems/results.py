@@ -282,13 +282,17 @@ def verification_fields(result: Any) -> dict[str, Any]:
         ``{"verification": {...}}`` when the result was verified (``passed``,
         ``tolerance``, largest deviations, per-state deviations, integrator), plus
         ``{"refinement": [...]}`` (one entry per pass) and ``"refinement_stop"`` (why it
-        ended, which pass was returned) when its mesh was refined; else
+        ended, which pass was returned) when its mesh was refined, and ``"regularization"`` where the
+        transcription regularised a minimum-time problem's inputs
+        (:mod:`gtmodel.modeling.ocp.regularization`); else
         ``{"verification": None}`` for a collocation result that was not verified.
     """
     if not hasattr(result, "verification"):
         return {}
     v = result.verification
     out: dict[str, Any] = {"verification": v.to_dict() if v is not None else None}
+    if (getattr(result, "stats", None) or {}).get("regularization"):  # a minimum-time problem's inputs regularised
+        out["regularization"] = json_safe(result.stats["regularization"])
     if getattr(result, "refinement", None):
         out["refinement"] = json_safe(result.refinement)
         if getattr(result, "refinement_stop", None):

@@ -181,7 +181,7 @@ class OptimalControl:
                     d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
                     max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements), max_passes=d.refinement.max_passes,
                     initial_guess=guess, max_cpu_s=d.refinement.max_cpu_s, verification=d.refinement.verification,
-                    objective_tolerance=d.refinement.objective_tolerance, **kwargs,
+                    objective_tolerance=d.refinement.objective_tolerance, regularization=d.refinement.regularization, **kwargs,
                 )
             result.timing = phases
             return self._estimated_final(result, kwargs)
@@ -265,7 +265,8 @@ class OptimalControl:
             d.optimization, elements=d.method.elements, points=d.method.points, scheme=d.method.scheme,
             max_elements=None if d.refinement.max_elements is None else max(d.refinement.max_elements, d.method.elements),
             max_passes=d.refinement.max_passes, max_cpu_s=d.refinement.max_cpu_s, start=start,
-            verification=d.refinement.verification, objective_tolerance=d.refinement.objective_tolerance, **kwargs,
+            verification=d.refinement.verification, objective_tolerance=d.refinement.objective_tolerance,
+            regularization=d.refinement.regularization, **kwargs,
         )
 
     def coarse_solve(self, kwargs: dict[str, Any]) -> OptimizationResult:

@@ -676,7 +676,8 @@ def solve_point_to_point(
         refined = functools.partial(solve_refined, opt, elements=problem.method.elements, points=problem.method.points,
                                     scheme=problem.method.scheme, max_elements=None if ref.max_elements is None else max(ref.max_elements, problem.method.elements),
                                     max_passes=ref.max_passes, max_cpu_s=ref.max_cpu_s, parameters=problem.named_parameters,
-                                    objective_tolerance=ref.objective_tolerance, verification=ref.verification)
+                                    objective_tolerance=ref.objective_tolerance, verification=ref.verification,
+                                    regularization=ref.regularization)
         if ref.refine:
             tr = None  # each pass is a new mesh (with the first mesh's objective scaling): no NLP kept for a sweep to reuse
             if scaling is not None:

@@ -1,33 +1,31 @@
 """Direct collocation transcription of an :class:`~gtmodel.modeling.Optimization` to an NLP.
 
-The transcription itself (variables ordered stage by stage, a copy of a free final time
-per element) is :mod:`gtmodel.modeling.ocp.collocation_nlp`; the constraint Jacobian and
-Lagrangian Hessian assembled from per-point derivatives (optionally compiled C) are
-:mod:`gtmodel.modeling.ocp.collocation_derivatives`; warm-started re-solves as one function
-of the parameters are :mod:`gtmodel.modeling.ocp.collocation_function`. This module holds
-the solvable transcription: guesses, solves and results.
+The transcription itself (variables ordered stage by stage, a copy of a free final time per element) is
+:mod:`gtmodel.modeling.ocp.collocation_nlp`; the constraint Jacobian and Lagrangian Hessian assembled from per-point
+derivatives (optionally compiled C) are :mod:`gtmodel.modeling.ocp.collocation_derivatives`; warm-started re-solves
+as one function of the parameters are :mod:`gtmodel.modeling.ocp.collocation_function`; a minimum-time objective's
+input regularisation is :mod:`gtmodel.modeling.ocp.regularization`. This module holds the solvable transcription:
+guesses, solves and results.
 
 Conventions:
 
-* Path constraints and variable bounds of inputs/algebraics are enforced at the
-  collocation points; state bounds also at element boundaries.
-* Point constraints and the Mayer term at the final time use the final state and, for
-  inputs/algebraics, the last element's polynomial at ``tau = 1`` (for Radau a
-  collocation point; for Legendre an extrapolation, bounded, and the algebraic variables
-  consistent with it).
-* Point constraints at the start time use the initial state, for the inputs the first
-  element's Lagrange polynomial through its collocation points evaluated at ``tau = 0``
-  (an extrapolation for both schemes; the input bounds are imposed on it too), and the
-  algebraic variables consistent with them (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`;
-  the extrapolated polynomial does not satisfy the algebraic equations; their bounds and the path constraints
-  are imposed there too). The result's tables hold the same values at the start, and say at each time which
-  kind of point it is (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
+* Path constraints and variable bounds of inputs/algebraics are enforced at the collocation points; state bounds
+  also at element boundaries.
+* Point constraints and the Mayer term at the final time use the final state and, for inputs/algebraics, the last
+  element's polynomial at ``tau = 1`` (for Radau a collocation point; for Legendre an extrapolation, bounded, and
+  the algebraic variables consistent with it).
+* Point constraints at the start time use the initial state, for the inputs the first element's Lagrange polynomial
+  through its collocation points evaluated at ``tau = 0`` (an extrapolation for both schemes; the input bounds are
+  imposed on it too), and the algebraic variables consistent with them
+  (:func:`~gtmodel.modeling.ocp.collocation_nlp.consistent_algebraics`; the extrapolated polynomial does not satisfy
+  the algebraic equations; their bounds and the path constraints are imposed there too). The result's tables hold
+  the same values at the start, and say at each time which kind of point it is
+  (:meth:`~gtmodel.modeling.ocp.result.CollocationData.point_kinds`).
 * The Lagrange term uses the quadrature of the collocation points.
 
-Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be
-solved repeatedly for new parameter values and initial guesses. Free parameters
-(:meth:`Optimization.free_parameter`) are NLP variables instead, one per scalar element,
-shared by all collocation points.
+Model parameters are NLP parameters (``p`` of ``nlpsol``), so one transcription can be solved repeatedly for new
+parameter values and initial guesses. Free parameters (:meth:`Optimization.free_parameter`) are NLP variables
+instead, one per scalar element, shared by all collocation points.
 """
 
 from __future__ import annotations
@@ -48,6 +46,7 @@ from gtmodel.modeling.ocp.collocation_derivatives import assembled_derivatives
 from gtmodel.modeling.ocp.collocation_function import WARM_START_OPTIONS, nlp_solver, resolve_function
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.infeasibility import with_culprit
+from gtmodel.modeling.ocp.regularization import regularization_weight, regularized
 from gtmodel.modeling.ocp.elimination import fill_algebraics, reduced_problem
 from gtmodel.modeling.ocp.collocation_stages import FATROP_STATUS, FATROP_WARM_START_OPTIONS, SOLVERS
 from gtmodel.modeling.ocp.guesses import ResultGuess, guess_values
@@ -85,73 +84,69 @@ class CollocationTranscription:
     verbose : bool, optional
         Show IPOPT output and timing; default False.
     solver_options : mapping, optional
-        IPOPT options (plain names such as ``"max_iter"`` or ``"ipopt.max_iter"``, or a
-        nested ``{"ipopt": {...}}``) and CasADi nlpsol options (``"print_time"``,
-        ``"expand"``, ...); merged over the defaults ``max_iter=3000``, ``tol=1e-8``,
-        ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings)
-        unless ``verbose``, and with IPOPT
-        :data:`~gtmodel.modeling.ocp.collocation_nlp.IPOPT_DEFAULTS`.
+        IPOPT options (plain names such as ``"max_iter"`` or ``"ipopt.max_iter"``, or a nested ``{"ipopt": {...}}``)
+        and CasADi nlpsol options (``"print_time"``, ``"expand"``, ...); merged over the defaults ``max_iter=3000``,
+        ``tol=1e-8``, ``print_level=0``, ``print_time=False`` (and no CasADi evaluation warnings) unless ``verbose``,
+        and with IPOPT :data:`~gtmodel.modeling.ocp.collocation_nlp.IPOPT_DEFAULTS`.
     nominal : mapping of str to float or array_like, optional
-        Nominal magnitudes of states, inputs, algebraic variables, free parameters
-        (by name) and of ``"final_time"``: the NLP works with ``variable / nominal`` (Modelica's
-        ``nominal`` attribute, JModelica's variable scaling), so that variables of
-        different units (forces in hundreds of N, positions in m) are of order one.
-        Results, guesses and bounds stay in the model's units. Default: no scaling.
+        Nominal magnitudes of states, inputs, algebraic variables, free parameters (by name) and of ``"final_time"``:
+        the NLP works with ``variable / nominal`` (Modelica's ``nominal`` attribute, JModelica's variable scaling), so
+        that variables of different units (forces in hundreds of N, positions in m) are of order one. Results, guesses
+        and bounds stay in the model's units. Default: no scaling.
     derivatives : {"assembled", "casadi"}, optional
-        How the Jacobian of the constraints and the Hessian of the Lagrangian are
-        built. ``"assembled"`` (default): differentiate the per-point functions (model
-        equations, path constraints, Lagrange integrand) once and assemble the sparse
-        matrices from their values at each collocation point; the collocation
-        constraints call the per-point function instead of copying its expression
-        graph. ``"casadi"``: CasADi differentiates the whole expression graph of the
-        NLP (several times slower to build, the same values).
+        How the Jacobian of the constraints and the Hessian of the Lagrangian are built. ``"assembled"`` (default):
+        differentiate the per-point functions (model equations, path constraints, Lagrange integrand) once and
+        assemble the sparse matrices from their values at each collocation point; the collocation constraints call the
+        per-point function instead of copying its expression graph. ``"casadi"``: CasADi differentiates the whole
+        expression graph of the NLP (several times slower to build, the same values).
     compile : bool, optional
-        With ``derivatives="assembled"``: evaluate the per-point derivatives through C
-        generated from their CasADi graph, compiled once with the system compiler and
-        cached by a hash of the source (:func:`gtmodel._compiler.compiled_function`);
-        the same values, several times faster per evaluation. Without a compiler (or
-        with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
+        With ``derivatives="assembled"``: evaluate the per-point derivatives through C generated from their CasADi
+        graph, compiled once with the system compiler and cached by a hash of the source
+        (:func:`gtmodel._compiler.compiled_function`); the same values, several times faster per evaluation. Without a
+        compiler (or with ``GTMODEL_COMPILE=0``) the interpreter is used. Default False.
     solver : {"ipopt", "fatrop"}, optional
-        The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options.
-        ``"fatrop"``: stage by stage with final-time copies (``banded``), the same derivatives
+        The ``casadi.nlpsol`` plugin (:data:`SOLVERS`); ``solver_options`` are its options. ``"fatrop"``: stage by
+        stage with final-time copies (``banded``), the same derivatives
         (:func:`~gtmodel.modeling.ocp.collocation_stages.fatrop_cache`); not with free parameters.
     banded : bool, optional
-        A free final time as one copy per element tied by equalities, so that the KKT
-        matrix is banded, or as one variable shared by all elements (a dense row and
-        column). The same optimum (see :mod:`gtmodel.modeling.ocp.collocation_nlp`); default
-        banded from :data:`BANDED_MIN_ELEMENTS` elements on.
+        A free final time as one copy per element tied by equalities, so that the KKT matrix is banded, or as one
+        variable shared by all elements (a dense row and column). The same optimum (see
+        :mod:`gtmodel.modeling.ocp.collocation_nlp`); default banded from :data:`BANDED_MIN_ELEMENTS` elements on.
     mesh : array_like, optional
-        Relative element lengths, shape ``(N,)`` (positive; normalised to sum to 1), for
-        a non-uniform mesh (mesh refinement, :mod:`gtmodel.modeling.ocp.refinement`);
-        ``elements`` is then ``N``. Default: ``elements`` uniform elements.
+        Relative element lengths, shape ``(N,)`` (positive; normalised to sum to 1), for a non-uniform mesh (mesh
+        refinement, :mod:`gtmodel.modeling.ocp.refinement`); ``elements`` is then ``N``. Default: ``elements`` uniform
+        elements.
     verify : bool or VerificationSettings, optional
         Verify every solution by simulation (:func:`~gtmodel.modeling.ocp.verification.verify`) with these
-        :class:`~gtmodel.modeling.ocp.methods.VerificationSettings` (True: the problem's own; never written
-        onto it): the result's ``verification``; a failing solution is ``check_failed``. Default True.
+        :class:`~gtmodel.modeling.ocp.methods.VerificationSettings` (True: the problem's own; never written onto it):
+        the result's ``verification``; a failing solution is ``check_failed``. Default True.
     eliminate_algebraics : bool, optional
-        Substitute the algebraic variables by their expressions of the states, inputs and parameters
-        where :mod:`~gtmodel.modeling.ocp.elimination` can (the NLP then has none; the result's are
-        evaluated at the solution); else each is an NLP variable at every collocation point. Default True.
+        Substitute the algebraic variables by their expressions of the states, inputs and parameters where
+        :mod:`~gtmodel.modeling.ocp.elimination` can (the NLP then has none; the result's are evaluated at the
+        solution); else each is an NLP variable at every collocation point. Default True.
     bound_points : int, optional
-        Extra points per element at which the state bounds hold on the polynomial too (the rows the
-        mesh refinement adds where a state exceeded a bound between the points:
-        :mod:`~gtmodel.modeling.ocp.collocation_bounds`); 0 (default): at the collocation points only.
-        Not with fatrop (its stage structure): ignored there, with a log line.
+        Extra points per element at which the state bounds hold on the polynomial too (the rows the mesh refinement
+        adds where a state exceeded a bound between the points: :mod:`~gtmodel.modeling.ocp.collocation_bounds`); 0
+        (default): at the collocation points only. Not with fatrop (its stage structure): ignored there, with a log
+        line.
     bound_spans : list of tuple of (float, float), optional
-        With ``bound_points``: only the elements overlapping these parts of the horizon (fractions of
-        it, ``(s0, s1)``) get the rows; default every element.
+        With ``bound_points``: only the elements overlapping these parts of the horizon (fractions of it, ``(s0,
+        s1)``) get the rows; default every element.
+    regularization : float or tuple of (float, dict of str to float), optional
+        Weight of the input energy added to a minimum-time objective, or the weight and the inputs' scales
+        (:mod:`~gtmodel.modeling.ocp.regularization`; the result's objective is the declared one); None: the default
+        weight, ``defaults["ocp.input_regularization"]``; default 0, off (mesh refinement's later passes set it).
 
     Raises
     ------
     InputError
-        If ``elements``/``points``/``scheme`` are invalid, or the NLP's estimated memory
-        exceeds the limit (:func:`gtmodel.modeling.ocp.budget.check_memory`; checked
-        before anything is built).
+        If ``elements``/``points``/``scheme`` are invalid, or the NLP's estimated memory exceeds the limit
+        (:func:`gtmodel.modeling.ocp.budget.check_memory`; checked before anything is built).
     ModelError
         If the model cannot be flattened.
     SolverError
-        If CasADi cannot build the NLP solver: raised where it is first needed (the first
-        :meth:`solve`, or :attr:`solver`), since it is built then.
+        If CasADi cannot build the NLP solver: raised where it is first needed (the first :meth:`solve`, or
+        :attr:`solver`), since it is built then.
     """
 
     def __init__(
@@ -172,6 +167,7 @@ class CollocationTranscription:
         eliminate_algebraics: bool = True,
         bound_points: int = 0,
         bound_spans: Any = None,
+        regularization: float | None = 0.0,
     ) -> None:
         if not isinstance(optimization, Optimization):
             raise InputError(f"expected an Optimization, got {type(optimization).__name__}")
@@ -209,6 +205,7 @@ class CollocationTranscription:
         self.verbose, self.eliminate_algebraics = bool(verbose), bool(eliminate_algebraics)
         self.bound_points = int(bound_points) if bound_points and bound_point_taus(bound_points).size else 0
         self.bound_spans = None if bound_spans is None else checked_spans(bound_spans)
+        self.regularization_weight = regularization_weight(regularization)
         self._solver_options = dict(solver_options or {})
         self.options = merge_options(verbose, solver_options, solver)
         self._unreported: dict[str, dict[str, float]] = {}  # the build's time, reported with the first solve
@@ -273,6 +270,7 @@ class CollocationTranscription:
         self.reduction = reduced_problem(opt, dae, free_index, self.scheme != "radau") if self.eliminate_algebraics else None
         if self.reduction is not None:
             opt, dae, self._noms = self.reduction.optimization, self.reduction.dae, {**self.nominal, "z": np.ones(0)}
+        opt, self.regularization = regularized(opt, dae, *self.regularization_weight)  # a minimum-time problem's inputs pinned
         self.nlp_dae = dae
         # before any of the NLP is built, with the algebraic variables it carries (none when eliminated)
         self.size = check_memory(self.elements, self.points, dae.nx, dae.nz, dae.nu)
@@ -588,7 +586,8 @@ class CollocationTranscription:
         dae, opt, co = self.dae, self.optimization, self._co
         N, d = self.elements, self.points
         f_val, g_val = self._fg(w, pvec)
-        f_val = opt.objective_sign * float(f_val)  # the NLP minimises sign * objective
+        reg = self.regularization and self.regularization.report(float(self.lagrange_function(w, pvec)), float(self._extract(w, pvec)[4]))
+        f_val = opt.objective_sign * (float(f_val) - (reg["value"] if reg else 0.0))  # the NLP minimises sign * objective
         g_val = np.array(g_val, dtype=float).reshape(-1)
         viol = [0.0]
         if g_val.size:
@@ -621,6 +620,7 @@ class CollocationTranscription:
             outs = {}
         iterations = int(stats.get("iter_count", 0) or 0)
         stats["eliminated_algebraics"] = self.reduction.eliminated if self.reduction is not None else 0
+        stats.update({"regularization": reg} if reg else {})
         if status != "optimal":
             _log.warning("collocation solve of %s ended with status %s (%s)", dae.name, status, message)
         return OptimizationResult(

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 from gtmodel.defaults import defaults
 from gtmodel.errors import InputError
+from gtmodel.modeling.ocp.regularization import regularization_weight
 
 __all__ = ["Collocation", "MultipleShooting", "SolverSettings", "Refinement", "VerificationSettings", "SCHEMES", "NLP_SOLVERS"]
 
@@ -226,6 +227,9 @@ class Refinement:
         element halved, and refined on from there while that improves the objective by more
         than this fraction; 0: no such check; None for
         ``defaults["ocp.refine_objective_tolerance"]``.
+    regularization : float or None
+        Weight of the input energy a refinement adds to a minimum-time objective from its second pass on
+        (:mod:`gtmodel.modeling.ocp.regularization`); 0 off; None for ``defaults["ocp.input_regularization"]``.
 
     Raises
     ------
@@ -243,8 +247,11 @@ class Refinement:
     on_failure: bool = True
     max_cpu_s: float | None = None
     objective_tolerance: float | None = None
+    regularization: float | None = None
 
     def __post_init__(self) -> None:
+        if self.regularization is not None:
+            regularization_weight(self.regularization)  # the one check of a weight
         if self.max_elements is not None:
             _positive_int("max_elements", self.max_elements)
         if self.max_cpu_s is not None and not (isinstance(self.max_cpu_s, (int, float)) and self.max_cpu_s > 0):

@@ -491,7 +491,7 @@ def _refinement(file: ProblemFile, doc: Any) -> Refinement:
     return Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes, verify=ver.enabled,
                       integrator=None if ver.integrator == "auto" else ver.integrator, rtol=ver.rtol,
                       on_failure=tr.refine_on_failure and ver.enabled and tr.method != "multiple_shooting", max_cpu_s=tr.max_cpu_s,
-                      objective_tolerance=tr.objective_tolerance)
+                      objective_tolerance=tr.objective_tolerance, regularization=tr.regularization)
 
 
 def _used_integrator(result: OptimizationResult) -> str:

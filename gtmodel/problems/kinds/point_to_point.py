@@ -135,7 +135,8 @@ class PointToPointKind(ProblemKind):
                 method=Collocation(col.elements, col.points, col.scheme, col.eliminate_algebraics),
                 solver=SolverSettings(sol.name, sol.max_iter, sol.tol, sol.jit),
                 refinement=Refinement(tr.refine, tr.tolerance, tr.max_elements, tr.max_passes, on_failure=tr.refine_on_failure,
-                                      max_cpu_s=tr.max_cpu_s, objective_tolerance=tr.objective_tolerance),
+                                      max_cpu_s=tr.max_cpu_s, objective_tolerance=tr.objective_tolerance,
+                                      regularization=tr.regularization),
             )
         except (InputError, UnreachablePoseError) as exc:
             raise _field_error(file, exc) from None

@@ -289,7 +289,9 @@ def test_refinement_verifies_the_motor_under_its_clipped_voltage(elements, curre
     poly = np.column_stack([states[n] for n in ("i", "phi", "w")])
     scale = np.maximum(1.0, np.max(np.abs(res.collocation.xc), axis=(0, 1)))
     deviation = np.max(np.abs(sim - poly) / scale)
-    assert deviation <= v.tolerance and deviation == pytest.approx(v.max_scaled_deviation, abs=1e-4)
+    # within what the verifying integrator's rtol (1e-3 x the tolerance, 1e-5) allows: 1.4e-4 apart on the regularised
+    # passes (gtmodel.modeling.ocp.regularization) at 8 A, against scipy's Radau at 1e-10
+    assert deviation <= v.tolerance and deviation == pytest.approx(v.max_scaled_deviation, abs=3e-4)
     assert np.max(np.abs(sim[:, 0])) <= current_limit * (1 + v.tolerance)  # the current limit kept by the clipped plan
 
 
@@ -300,14 +302,16 @@ def test_refinement_stopped_by_the_element_limit_says_so_and_names_max_elements(
     # max_elements = 75 leaves no room. The stop and the bound's remedy name the element limit and max_elements (they
     # said "the verification passed and no element is left to split" and "a larger max_cpu_s or max_passes": neither
     # helps at the limit; held-out drive held_heavy_flex, issue 49)
-    default = solve_refined(min_time_motor(10.0), elements=60, points=3, max_elements=75)
+    # unregularised (regularization=0), as measured: the regularised passes (gtmodel.modeling.ocp.regularization) verify
+    # this motor within 75 elements, and the limit would not be met
+    default = solve_refined(min_time_motor(10.0), elements=60, points=3, max_elements=75, regularization=0)
     # by default (the excess split beside the deviations from pass 2 on) pass 4 does not verify at 75 elements: the
     # stop names the limit, the remedy the elements it would take
     assert default.status == Status.CHECK_FAILED and default.refinement_stop.startswith("the element limit (75 elements)")
     assert re.search(r"max_elements = \d+ in \[transcription\] \(now 75", default.message), default.message
     split = refinement.refine_mesh
     monkeypatch.setattr(refinement, "refine_mesh", lambda *a, **k: split(*a, **{**k, "persistent": False}))
-    res = solve_refined(min_time_motor(10.0), elements=60, points=3, max_elements=75)
+    res = solve_refined(min_time_motor(10.0), elements=60, points=3, max_elements=75, regularization=0)
     # verified, but the current exceeds its bound between the nodes beyond the tolerance: not optimal (issue 64), the
     # message naming the state, its bound and the excess relative to it, and the remedy
     assert res.status == Status.CHECK_FAILED and res.verification.passed and not res.verification.bounds["within_tolerance"]

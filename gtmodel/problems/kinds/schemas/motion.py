@@ -97,6 +97,10 @@ class RefinementSection(Section):
         element halved, and refined on from there while that improves the objective by more
         than this fraction; 0 ends at the first verified pass; default
         ``defaults["ocp.refine_objective_tolerance"]`` (1e-3).
+    regularization : float, optional
+        Weight of the input energy a refinement adds to a minimum-time objective from its second pass on, each input
+        scaled by its RMS in the previous pass (:mod:`gtmodel.modeling.ocp.regularization`): the minimum time rises by
+        about this fraction per input; 0 off; default ``defaults["ocp.input_regularization"]`` (1e-3).
     """
 
     refine: Flag = Field(False, description="collocation: refine the mesh until the verification passes (h-refinement, switches located; also with [[data]]; not with multiple shooting)")
@@ -106,6 +110,7 @@ class RefinementSection(Section):
     refine_on_failure: Flag = Field(True, description="collocation: a single solve whose verification fails is refined from (as refine = true, within max_passes and max_cpu_s); false: it ends check_failed")
     max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 90): no pass starts once it is spent, the best verified pass is returned") | None = None
     objective_tolerance: number(ge=0, lt=1, description="a refinement's verified pass with nothing left to split is solved again with every element halved, and refined on while that improves the objective by more than this fraction (default 1e-3; 0: no such check)") | None = None
+    regularization: number(ge=0, le=0.01, description="a refinement's passes after the first add this weight of input energy (each input scaled by its RMS) to a minimum-time objective, so that inputs a bound arc leaves free do not ring; the minimum time rises by about this fraction per input (default 1e-3; 0: off)") | None = None
 
 
 class VerificationSection(Section):

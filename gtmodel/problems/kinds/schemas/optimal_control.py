@@ -265,6 +265,9 @@ class TranscriptionSection(RefinementSection):
         A refinement's verified pass with nothing left to split is solved again with every
         element halved, and refined on from there while that improves the objective by more
         than this fraction; 0 ends at the first verified pass; default 1e-3.
+    regularization : float, optional
+        Weight of the input energy a refinement adds to a minimum-time objective from its second pass on, each input
+        scaled by its RMS in the previous pass (:mod:`gtmodel.modeling.ocp.regularization`); 0 off; default 1e-3.
     """
 
     method: choice("collocation", "multiple_shooting", description="direct collocation ([collocation]) or direct multiple shooting") = "collocation"
