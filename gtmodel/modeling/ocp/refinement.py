@@ -338,7 +338,8 @@ def solve_refined(
         per pass (elements, points, status, objective, largest element error and deviation,
         the simulation's end deviation and bound violation, CPU and wall time, what was
         done next; ``check_next`` on a verified pass whose objective the next pass checks,
-        ``objective_check`` (``{"pass", "relative_improvement"}``) on that next pass, ``returned``
+        ``objective_check`` (``{"pass", "relative_improvement"}``) on that next pass, ``regularization`` (the
+        input regularisation's value in its NLP objective) on a regularised pass, ``returned``
         on the pass returned) and ``refinement_stop`` why it ended; ``solve_time`` is the sum over the
         passes.
 
@@ -440,6 +441,8 @@ def solve_refined(
             entry["continued"] = result.stats["continued"]  # the acceptable stop continued to IPOPT's tolerance
         if polish:
             entry["polished"] = True  # IPOPT's acceptable stop off in this pass
+        if (result.stats or {}).get("regularization"):  # the input regularisation's value in this pass's NLP objective
+            entry["regularization"] = result.stats["regularization"]["value"]
         v = result.verification
         _log.info("mesh refinement of %s: pass %d, %d elements x %d points, %s, objective %.10g, largest element error %.3g, "
                   "deviation %.3g, %.1f CPU-s", name, n_pass, n_elements, tr_points, result.status, result.objective

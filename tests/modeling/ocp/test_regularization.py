@@ -129,3 +129,11 @@ def test_problem_file_sets_the_weight_of_its_refinement(value, expected):
 def test_problem_file_weight_out_of_range_is_refused(value, match):
     with pytest.raises(ProblemError, match=match):
         load_problem(REPO / "problems" / "drive_two_mass.toml", settings={"transcription": {"regularization": value}})
+
+
+def test_refinement_records_which_passes_were_regularised():
+    # the double integrator refined from 20 elements: its first pass unregularised, the passes after it regularised
+    res = solve_refined(_min_time(), elements=20)
+    assert "regularization" not in res.refinement[0]
+    assert all(0 < e["regularization"] <= 2 * defaults["ocp.input_regularization"] * e["final_time"] for e in res.refinement[1:])
+    assert len(res.refinement) >= 2
