@@ -27,7 +27,8 @@ references; 1e-4 was too weak to stop drive0_38's ringing (30 passes, deviation 
 1e-3 it verifies in 14 passes (25 CPU-s; unregularised, 21 passes ``check_failed``), and drive0_04, a ball screw
 that sawed alike, verifies 0.02 % above its independent reference. The result's ``objective`` is the
 declared one (``c t_f``), not ``J_eps``; its ``stats["regularization"]`` states the term (weight, inputs and scales,
-its value, and ``bound``: ``varepsilon c n t_f``, what it costs where each input's RMS is its scale).
+its value, and ``at_scales``: ``varepsilon c n t_f``, its value where each input's RMS equals its scale; the value
+itself may exceed it by what the RMS grew over the previous pass's, and is the estimate of what the term costs).
 
 Only minimum-time objectives are regularised: a Lagrange term of the user's (energy, tracking) has
 its own dependence on the inputs, and a general Mayer term no scale that would bound the bias.
@@ -82,12 +83,12 @@ class Regularization:
         Returns
         -------
         dict
-            ``{"kind", "weight", "inputs", "value", "bound"}``: ``bound`` is ``varepsilon c n t_f``, what the term
-            costs at most where each input stays within its scale (the declared objective's units).
+            ``{"kind", "weight", "inputs", "value", "at_scales"}``: ``at_scales`` is ``varepsilon c n t_f``, the term's
+            value where each input's RMS equals its scale (the declared objective's units).
         """
         return {"kind": "input energy of a minimum-time problem", "weight": self.weight,
                 "inputs": dict(self.inputs), "value": float(value),
-                "bound": float(self.weight * self.scale * len(self.inputs) * final_time)}
+                "at_scales": float(self.weight * self.scale * len(self.inputs) * final_time)}
 
 
 def regularization_weight(value: Any) -> tuple[float, dict[str, float]]:

@@ -60,7 +60,7 @@ def test_regularised_minimum_time_within_the_bound_and_reported_as_declared():
     assert 2.0 - 1e-6 <= res.final_time <= 2.0 * (1 + weight) + 1e-6
     assert res.objective == pytest.approx(res.final_time, rel=1e-12)  # the declared objective, not J_eps
     assert reg["weight"] == weight and reg["inputs"] == {"u": 1.0}
-    assert 0 < reg["value"] <= reg["bound"] == pytest.approx(weight * res.final_time)
+    assert 0 < reg["value"] <= reg["at_scales"] == pytest.approx(weight * res.final_time)  # scaled by the bound 1 = |u|
 
 
 def test_regularisation_off_by_default_on_a_single_solve():
@@ -112,7 +112,8 @@ def test_belt_member_whose_refinement_sawed_now_verifies(tmp_path):
     outcome = run_problem(problem, tmp_path / "out", plots=False)
     summary = outcome.summary
     assert summary["status"] == "optimal" and summary["verification"]["passed"]
-    assert summary["regularization"]["value"] <= summary["regularization"]["bound"]
+    # the value within 1 % of its figure at the previous pass's RMS (the RMS barely moves between passes)
+    assert summary["regularization"]["value"] <= 1.01 * summary["regularization"]["at_scales"]
 
 
 @pytest.mark.parametrize("value, expected", [(0.0, 0.0), (5e-4, 5e-4), (None, None)])
