@@ -74,6 +74,54 @@ def test_resimulation_sees_an_excess_between_the_nodes(ref):
     assert sim["worst_bound_excess"] == pytest.approx(15.0 * (1 - math.exp(-2.0)) / 10.0 - 1.0, rel=2e-3)
 
 
+def _runs(objectives, intervals=(75, 150, 300), status="Solve_Succeeded"):
+    return [{"objective": e, "intervals": n, "status": status} for e, n in zip(objectives, intervals)]
+
+
+# E(h) = 1 + h^p exactly (h = 1/N): Richardson's closed form returns the order p and the limit 1
+@pytest.mark.parametrize(("order", "objectives"), [
+    (1.0, [1 + 1 / 75, 1 + 1 / 150, 1 + 1 / 300]),
+    (2.0, [1 + 1 / 75**2, 1 + 1 / 150**2, 1 + 1 / 300**2]),
+    (0.55, [1 + 75**-0.55, 1 + 150**-0.55, 1 + 300**-0.55]),
+])
+def test_extrapolate_recovers_the_order_and_the_limit_of_a_power_law(ref, order, objectives):
+    observed, limit = ref._extrapolate(_runs(objectives))
+    assert observed == pytest.approx(order, rel=1e-9) and limit == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize(("runs", "expected"), [
+    (_runs([1.2, 1.1, 1.15]), (None, 1.15)),                                  # differences of two signs
+    (_runs([1.2, 1.1, 1.0999]), (None, 1.0999)),                              # order 10: beyond 3
+    (_runs([1.2, 1.1, 1.05], status="Infeasible_Problem_Detected"), (None, 1.05)),  # not solved
+    (_runs([1.2, 1.1], intervals=(150, 300)), (1.0, 1.0)),                    # two runs: O(h)
+])
+def test_extrapolate_declines_what_measures_no_order(ref, runs, expected):
+    observed, limit = ref._extrapolate(runs)
+    assert observed == expected[0] and limit == pytest.approx(expected[1])
+
+
+def test_reference_adds_a_resolution_when_the_order_is_pre_asymptotic(ref, monkeypatch):
+    # a fake solve: E(N) = 1 + 0.05 N^-0.55 at 75, 150 and 300 intervals (order 0.55 < MIN_ORDER, as drive0_38's reference
+    # showed), then at 600 half the last difference below 300's (order 1: the asymptotic O(h) reached). The reference
+    # asks for 600 intervals, extrapolates from 150/300/600 with order 1 and stops there
+    values = {n: 1 + 0.05 * n**-0.55 for n in (75, 150, 300)}  # within 1 %: no resolution is solved again
+    values[600] = values[300] - 0.5 * (values[150] - values[300])
+    solved = []
+
+    def fake_solve(p, n, guess=None):
+        solved.append(n)
+        e = values[n]
+        return {"objective": e, "final_time": e, "status": "Solve_Succeeded", "cpu_s": 0.0, "steps": 1, "intervals": n,
+                "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
+
+    monkeypatch.setattr(ref, "solve", fake_solve)
+    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
+    out = ref.reference(RIGID)
+    assert solved == [75, 75, 150, 300, 600] and list(out["by_intervals"]) == ["75", "150", "300", "600"]
+    assert out["order"] == pytest.approx(1.0) and out["fine_objective"] == values[600]
+    assert out["objective"] == pytest.approx(values[600] - (values[300] - values[600]))
+
+
 def _cached_params() -> list:
     """The cached members; one whose reference failed (bench_drive_family.reference_failed) an expected failure."""
     with benchmark_module("bench_drive_family") as bench:
