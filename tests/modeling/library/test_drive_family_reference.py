@@ -10,11 +10,13 @@ with gtmodel's default path (``gtmodel solve``'s: ``run_problem``) against the c
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from gtmodel.modeling.library.drive_family import drive_family, write_problem
+from gtmodel.modeling.ocp.result import CollocationData
 
 from ...conftest import benchmark_module
 
@@ -166,6 +168,54 @@ def test_default_path_meets_the_reference(name, tmp_path, cache):
         row = bench.run_member(FAMILY[name], tmp_path, cache[name])
     assert row["status"] == "optimal" and row["verified"], row
     assert abs(row["relative_error"]) <= 5e-3 and row["worst_bound_excess"] <= 1e-2, row
+
+
+def _shooting_solution(kind: str):
+    """A three-interval multiple-shooting solution of one input ``src.v``: constant 1, 2, 3 V, or linear from 0 to 3 V."""
+    tau = np.array([0.0, 1 / 3, 1.0])  # node, then the samples (radau-like)
+    edges = np.array([0.0, 0.1, 0.2, 0.3])
+    if kind == "constant":
+        un = np.array([[1.0], [2.0], [3.0]])
+        uc = np.repeat(un[:, None, :], 2, axis=1)
+    else:  # linear over the horizon: u = 10 t
+        un = (10 * edges[:-1])[:, None]
+        uc = (10 * (edges[:-1, None] + 0.1 * tau[None, 1:]))[:, :, None]
+    col = CollocationData(t0=0.0, tf=0.3, elements=3, points=2, scheme="radau", tau_root=tau, xc=np.zeros((3, 3, 1)),
+                          uc=uc, zc=np.zeros((3, 2, 0)), shooting=kind, zn=np.zeros((3, 0)), un=un)
+    return SimpleNamespace(collocation=col, dae=SimpleNamespace(u_vars={"src.v": slice(0, 1)}))
+
+
+@pytest.mark.parametrize(("kind", "at", "expected"), [
+    ("constant", [0.05, 0.15, 0.25], [1.0, 2.0, 3.0]),
+    ("linear", [0.05, 0.15, 0.25], [0.5, 1.5, 2.5]),   # closed form: u = 10 t
+])
+def test_shooting_input_pieces_hold_the_solution_input(kind, at, expected):
+    # bench_drive_family.gtmodel_pieces on a multiple-shooting result: one piece per interval, each evaluated in its
+    # own unit time tau = (t - t0) / (t1 - t0) gives the input the solution held there
+    with benchmark_module("bench_drive_family") as bench:
+        pieces = bench.gtmodel_pieces(_shooting_solution(kind), 24.0)
+    values = [float(np.polyval(c, (t - t0) / (t1 - t0))) for t in at for (t0, t1, c) in pieces if t0 <= t < t1]
+    assert len(pieces) == 3 and values == pytest.approx(expected, abs=1e-12)
+
+
+@pytest.mark.parametrize(("message", "raw"), [
+    ("Error in Function::call for 'F' [IdasInterface] at .../casadi/core/function.cpp:1458", True),
+    ("error: stage 'integrator' failed: the collocation integrator's Newton iteration did not converge; fix: ...", False),
+])
+def test_raw_casadi_text_is_recognised(message, raw):
+    with benchmark_module("bench_drive_family") as bench:
+        assert bool(bench.RAW_CASADI.search(message)) is raw
+
+
+@pytest.mark.slow  # a multiple-shooting solve of a drive: about 15 CPU-s
+def test_multiple_shooting_member_meets_the_shooting_criteria(tmp_path, cache):
+    # issue 64's criteria for multiple shooting: no crash, no raw CasADi text, and not optimal with a bound exceeded
+    # by over 1 % between the nodes (SciPy's dense re-simulation on the hand-written ODE, not gtmodel's verification)
+    name = "drive0_02_belt_min_energy"
+    with benchmark_module("bench_drive_family") as bench:
+        row = bench.run_member(FAMILY[name], tmp_path, cache[name], method="multiple_shooting")
+    assert row["status"] != "raised" and row["passed"], row
+    assert row["worst_bound_excess"] is not None and (row["status"] != "optimal" or row["worst_bound_excess"] <= 1e-2), row
 
 
 def test_written_problem_names_the_model_module(tmp_path):
