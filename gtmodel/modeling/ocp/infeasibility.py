@@ -9,7 +9,12 @@ solver's last iterate, the trajectory a failed result carries (``last_iterate``)
   time may be above it``); at the lower bound, the bound likely holds the motion back;
 - otherwise the declared constraint rows with the largest violation at the last iterate, by
   name (path constraints at the result's samples, point constraints at the start and final
-  time, the state and input bounds), each with its excess and where it is largest.
+  time, the state and input bounds), each with its excess and where it is largest;
+- and an input that has (almost) no effect on the states over much of the horizon
+  (:func:`inert_inputs`): saturated inside the model (a ``Limiter``'s input beyond its
+  corner), it leaves the NLP singular there, whatever the solver's step. A servo whose
+  torque command passed a ``Limiter`` (smoothing 1e-3) ended ``Error_In_Step_Computation``
+  with every constraint met (4e-14) and IPOPT's Hessian regularisation at 1e15.
 
 :func:`with_culprit` appends that to a failed result's message (the result's, hence
 ``summary.json``'s and the command line's), and leaves a solution's message alone.
@@ -24,7 +29,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["likely_culprit", "with_culprit", "AT_BOUND_RTOL", "VIOLATION_TOL", "TOP_ROWS"]
+__all__ = ["likely_culprit", "with_culprit", "inert_inputs", "AT_BOUND_RTOL", "VIOLATION_TOL", "TOP_ROWS", "INERT_RATIO",
+           "INERT_FRACTION"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -34,6 +40,13 @@ AT_BOUND_RTOL = 1e-6
 VIOLATION_TOL = 1e-6
 #: Constraint rows named at most.
 TOP_ROWS = 3
+#: An input is inert at a sample where its effect on the state derivatives is below this fraction of its largest (the
+#: servo's torque command hovered at 0.503-0.509 N m, 3 to 9 smoothing widths past its Limiter's corner at 0.5 N m:
+#: effect 1e-4 to 7e-2 of its largest, each further gain in torque below 1e-4 N m, IPOPT's steps there all
+#: regularisation). An input that enters a model linearly (a voltage, a torque) has one effect everywhere.
+INERT_RATIO = 0.1
+#: ... and named when it is inert at more than this fraction of the samples.
+INERT_FRACTION = 0.2
 
 
 def _final_time_at_bound(result: Any, opt: Any) -> str:
@@ -122,6 +135,64 @@ def _rows(result: Any, opt: Any) -> list[tuple[float, str, float, float]]:
     return sorted(out, reverse=True)
 
 
+def inert_inputs(result: Any, optimization: Any = None) -> list[tuple[str, float]]:
+    """The inputs with (almost) no effect on the states over much of a result's horizon.
+
+    The effect of input ``j`` at a sample is the norm of column ``j`` of ``d xdot / d u`` (through
+    the algebraic equations: ``f_u - f_z g_z^-1 g_u``), each state row divided by the largest of
+    its row over the samples (so that a state's units do not weigh). An input whose effect is below
+    :data:`INERT_RATIO` of its largest at more than :data:`INERT_FRACTION` of the samples is
+    inert: there the NLP's Hessian is singular in it (any value does the same), which interior-point
+    solvers regularise without end.
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A result with a trajectory (``t``, ``states``, ``algebraics``, ``inputs``) and its ``dae``.
+    optimization : Optimization, optional
+        The problem it solved: its parameter values under the result's own.
+
+    Returns
+    -------
+    list of tuple
+        ``(input name, fraction of the samples where it is inert)``, largest fraction first; empty
+        when every input acts (or the result has no inputs).
+    """
+    dae = result.dae
+    t = np.asarray(result.t, dtype=float).reshape(-1)
+    n = t.size
+    if dae is None or not dae.nu or not dae.nx or n == 0:
+        return []
+    x = _stacked(result.states, dae.x_vars, n, dae.nx)
+    z = _stacked(result.algebraics, dae.z_vars, n, dae.nz)
+    u = _stacked(result.inputs, dae.u_vars, n, dae.nu)
+    given = {**dict(getattr(optimization, "parameters", None) or {}), **dict(result.parameters or {})}
+    p = np.asarray(dae.parameter_vector(given), dtype=float).reshape(-1)
+    f, g = dae.ode_expr, dae.alg_expr
+    parts = [ca.jacobian(f, dae.u)]
+    if dae.nz:
+        parts += [ca.jacobian(f, dae.z), ca.jacobian(g, dae.z), ca.jacobian(g, dae.u)]
+    jac = ca.Function("effect", [dae.t, dae.x, dae.z, dae.u, dae.p], parts)
+    effect = np.zeros((n, dae.nx, dae.nu))
+    for k in range(n):
+        out = [np.array(m, dtype=float) for m in jac.call([t[k], x[k], z[k], u[k], p])]
+        if not all(np.all(np.isfinite(m)) for m in out):
+            return []
+        effect[k] = out[0] if not dae.nz else out[0] - out[1] @ np.linalg.lstsq(out[2], out[3], rcond=None)[0]
+    scale = np.abs(effect).max(axis=(0, 2))  # each state's largest response to any input
+    scaled = np.abs(effect) / np.where(scale > 0, scale, 1.0)[None, :, None]
+    norm = np.linalg.norm(scaled, axis=1)  # (n, nu)
+    found = []
+    for name, sl in dae.u_vars.items():
+        col = norm[:, sl].max(axis=1)
+        if col.max() <= 0:
+            continue  # acts nowhere: the model's own matter, not a saturation
+        share = float(np.mean(col < INERT_RATIO * col.max()))
+        if share > INERT_FRACTION:
+            found.append((name, share))
+    return sorted(found, key=lambda item: -item[1])
+
+
 def likely_culprit(result: Any, optimization: Any) -> str:
     """What most likely stands in the way of a failed solve, read from its last iterate; ``""`` when nothing stands out.
 
@@ -138,20 +209,30 @@ def likely_culprit(result: Any, optimization: Any) -> str:
         ``"final_time at its upper bound 0.3 s at the last iterate: the minimum time may be above
         it (...)"``; or ``"the largest violations at the last iterate: 'name' by 0.012 at t =
         0.21 s; ..."`` (at most :data:`TOP_ROWS` rows, relative violations above
-        :data:`VIOLATION_TOL`); or ``""``.
+        :data:`VIOLATION_TOL`), and/or ``"an input with almost no effect on the states over much of the
+        horizon ('u' at 60 % of the samples; ...)"`` (:func:`inert_inputs`); or ``""``.
     """
     at_bound = _final_time_at_bound(result, optimization)
     if at_bound:
         return at_bound
-    try:
-        rows = _rows(result, optimization)
-    except (RuntimeError, ValueError, KeyError, AttributeError, TypeError) as exc:  # a diagnosis never hides the failure itself
-        _log.debug("no diagnosis of the failed solve: %s", exc)
-        return ""
-    if not rows:
-        return ""
-    worst = "; ".join(f"{name} by {excess:.3g} at t = {t:.4g} s" for _, name, excess, t in rows[:TOP_ROWS])
-    return f"the largest violations at the last iterate: {worst}"
+    rows, inert = [], []
+    for diagnose in (_rows, inert_inputs):
+        try:
+            found = diagnose(result, optimization)
+        except (RuntimeError, ValueError, KeyError, AttributeError, TypeError, np.linalg.LinAlgError) as exc:
+            _log.debug("no diagnosis of the failed solve by %s: %s", diagnose.__name__, exc)  # never hides the failure
+            continue
+        rows, inert = (found, inert) if diagnose is _rows else (rows, found)
+    said = []
+    if rows:
+        worst = "; ".join(f"{name} by {excess:.3g} at t = {t:.4g} s" for _, name, excess, t in rows[:TOP_ROWS])
+        said.append(f"the largest violations at the last iterate: {worst}")
+    if inert:
+        names = ", ".join(f"'{name}' at {100 * share:.0f} % of the samples" for name, share in inert)
+        said.append(f"an input with almost no effect on the states over much of the horizon ({names}; below {INERT_RATIO:g} "
+                    "of its largest effect): saturated inside the model (a Limiter on it?), where a larger input buys "
+                    "almost nothing and the NLP is nearly singular; bound the input within the saturation in [bounds]")
+    return "; ".join(said)
 
 
 def with_culprit(message: str, result: Any, optimization: Any) -> str:

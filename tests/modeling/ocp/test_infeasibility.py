@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from gtmodel.modeling import CollocationTranscription, Model, Optimization
-from gtmodel.modeling.ocp.infeasibility import likely_culprit, with_culprit
+from gtmodel.modeling.library.blocks import smooth_limit
+from gtmodel.modeling.ocp.infeasibility import INERT_RATIO, inert_inputs, likely_culprit, with_culprit
 
 from ...conftest import REPO
 
@@ -111,3 +112,64 @@ def test_multiple_shooting_names_the_bound_too():
     res = ShootingTranscription(_problem(True, 0.5, upper=1.0), intervals=20).solve()
     assert res.status == "infeasible"
     assert "likely culprit: final_time at its upper bound 1 s at the last iterate" in res.message
+
+
+class SaturatedIntegrator(Model):
+    """``x'' = sat(u)``: a double integrator whose input passes a smooth limiter at +-1 (width 1e-3), or none."""
+
+    def __init__(self, limited: bool) -> None:
+        super().__init__("saturated_integrator")
+        x, v = self.state("x"), self.state("v")
+        u = self.input("u")
+        self.equation(self.der(x), v)
+        self.equation(self.der(v), smooth_limit(u, -1.0, 1.0, 1e-3) if limited else u)
+
+
+def _trajectory(limited: bool, u: np.ndarray) -> SimpleNamespace:
+    opt = Optimization(SaturatedIntegrator(limited), final_time=1.0)
+    n = u.size
+    return SimpleNamespace(dae=opt.flat(), t=np.linspace(0.0, 1.0, n), states={"x": np.zeros(n), "v": np.zeros(n)},
+                           algebraics={}, inputs={"u": u}, parameters={}, last_iterate=True, final_time=1.0), opt
+
+
+# the input at 0 (effect 1: the limiter's slope sigma((u+1)/eps) - sigma((u-1)/eps)) at 2 samples in 5, and at 1.005,
+# 5 widths past the corner (slope sigma(-5) = 6.7e-3 < INERT_RATIO) at 3 in 5: inert at 60 % of the samples;
+# without the limiter the same input acts equally everywhere
+@pytest.mark.parametrize(("limited", "expected"), [(True, [("u", 0.6)]), (False, [])])
+def test_an_input_saturated_inside_the_model_is_named_inert(limited, expected):
+    u = np.array([0.0, 1.005, 1.005, 0.0, 1.005] * 4)
+    result, opt = _trajectory(limited, u)
+    assert 1 / (1 + np.exp(5.0)) < INERT_RATIO
+    assert inert_inputs(result, opt) == pytest.approx(expected)
+
+
+def test_a_failed_solve_names_the_saturated_input_and_the_remedy():
+    result, opt = _trajectory(True, np.array([0.0, 1.005, 1.005, 0.0, 1.005] * 4))
+    message = with_culprit("Error_In_Step_Computation", result, opt)
+    assert message.startswith("Error_In_Step_Computation; likely culprit: an input with almost no effect on the states "
+                              "over much of the horizon ('u' at 60 % of the samples")
+    assert message.endswith("bound the input within the saturation in [bounds]")
+
+
+@pytest.mark.slow  # two solves of a servo with backlash and friction: about a minute of CPU
+def test_a_servo_commanded_through_a_limiter_is_diagnosed_and_the_remedy_solves(tmp_path, capsys):
+    """A model nobody tuned for: the torque command passes a smooth Limiter (0.5 N m, width 1e-3) inside the model.
+
+    Commanded up to 0.6 N m, the solve ends ``error`` with every constraint met: the message names the command as
+    saturated. Bounded within the saturation, as the message says, it ends optimal and verified, above the closed-form
+    bang-bang minimum time without friction or play, 2 sqrt(1 rad / (0.5 N m / 0.06 kg m^2)) = 0.6928 s.
+    """
+    from gtmodel.cli import main
+
+    for name in ("servo_limited.py", "servo_limited.toml"):
+        (tmp_path / name).write_text((REPO / "tests" / "modeling" / "ocp" / "data" / name).read_text(encoding="utf-8"))
+    problem = tmp_path / "servo_limited.toml"
+    assert main(["solve", str(problem), "--out", str(tmp_path / "A"), "--no-plots", "--quiet"]) == 1
+    summary = json.loads((tmp_path / "A" / "summary.json").read_text())
+    assert summary["status"] == "error" and "('cmd' at " in summary["message"]
+    assert "bound the input within the saturation in [bounds]" in summary["message"]
+    problem.write_text(problem.read_text().replace('"cmd" = [-0.6, 0.6]', '"cmd" = [-0.5, 0.5]'))
+    assert main(["solve", str(problem), "--out", str(tmp_path / "B"), "--no-plots", "--quiet"]) == 0
+    summary = json.loads((tmp_path / "B" / "summary.json").read_text())
+    assert summary["status"] == "optimal" and summary["verification"]["passed"]
+    assert 2 * np.sqrt(1.0 / (0.5 / 0.06)) < summary["final_time_s"] < 0.8
