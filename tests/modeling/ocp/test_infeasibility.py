@@ -173,3 +173,4 @@ def test_a_servo_commanded_through_a_limiter_is_diagnosed_and_the_remedy_solves(
     summary = json.loads((tmp_path / "B" / "summary.json").read_text())
     assert summary["status"] == "optimal" and summary["verification"]["passed"]
     assert 2 * np.sqrt(1.0 / (0.5 / 0.06)) < summary["final_time_s"] < 0.8
+    assert summary["final_time_s"] == pytest.approx(0.736, abs=1e-3)  # docs/own_model.md, section 6, quotes it
