@@ -158,8 +158,22 @@ class OptimalControl:
                 shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
                                                  steps=m.steps, verbose=verbose, solver_options=options, verify=check)
             same = isinstance(previous, OptimizationResult) and previous.collocation is not None
+            start, record = None, {}
+            if d.continuation.enabled and smoothing_widths(d.optimization):
+                # the smoothing widths continued as on the collocation path, each step started from the last's primal
+                # point (a servo with a torque limiter, backlash and friction: infeasible from the declared guess)
+                def solve(parameters: dict[str, float] | None, begin: OptimizationResult | None) -> OptimizationResult:
+                    return shooting.solve(parameters=parameters, initial_guess=begin if begin is not None else
+                                          (previous if warm_start and same else None))
+                with timed(phases, "continuation"):
+                    shooting.verify = False  # the intermediate problems are not the user's: solved, not verified
+                    try:
+                        start, record = continue_smoothing(d.optimization, solve, d.continuation)
+                    finally:
+                        shooting.verify = bool(check)
             with timed(phases, "solve"):  # its guess and verification included, the verification moved out below
-                result = shooting.solve(initial_guess=previous if warm_start and same else None)
+                result = shooting.solve(initial_guess=start if start is not None else (previous if warm_start and same else None))
+            result.continuation = record_final(record, start, result)
             ver = result.verification
             if getattr(ver, "cpu_s", None) is not None:
                 add_phase(phases, "solve", -ver.time_s, -ver.cpu_s)

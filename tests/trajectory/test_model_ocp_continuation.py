@@ -131,3 +131,21 @@ def test_fatrop_named_in_the_file_is_the_solver_that_runs(tmp_path):
 def test_bad_continuation_or_solver_is_refused_naming_the_field(tmp_path, extra, match):
     with pytest.raises(GtModelError, match=match):
         load_problem(problem(tmp_path, extra))
+
+
+SHOOTING = '\n[transcription]\nmethod = "multiple_shooting"\n'
+
+
+@pytest.fixture(scope="module")
+def shooting(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("slide_shooting")
+    return load_problem(problem(tmp, SHOOTING)).declaration.solve()
+
+
+def test_multiple_shooting_is_continued_too(shooting):
+    # the same steps as collocation's, each from the last's primal point; the declared solve verified, and the closed
+    # form met to the O(h) of a piecewise-constant force (the switch inside one of 50 intervals)
+    c = shooting.continuation
+    assert [s["factor"] for s in c["steps"]] == [100.0, 10.0] and c["started_from_factor"] == 10.0
+    assert str(shooting.status) == "optimal" and shooting.verification.passed
+    assert shooting.final_time == pytest.approx(T_CLOSED, rel=2e-2)

@@ -174,3 +174,21 @@ def test_a_servo_commanded_through_a_limiter_is_diagnosed_and_the_remedy_solves(
     assert summary["status"] == "optimal" and summary["verification"]["passed"]
     assert 2 * np.sqrt(1.0 / (0.5 / 0.06)) < summary["final_time_s"] < 0.8
     assert summary["final_time_s"] == pytest.approx(0.736, abs=1e-3)  # docs/own_model.md, section 6, quotes it
+
+
+@pytest.mark.slow  # a continued multiple-shooting solve of the servo: about 30 CPU-s
+def test_the_servo_within_its_saturation_solves_by_multiple_shooting_too(tmp_path):
+    """Continued over the smoothing widths (docs/verification.md): infeasible from the declared guess without it."""
+    from gtmodel.cli import main
+
+    for name in ("servo_limited.py", "servo_limited.toml"):
+        (tmp_path / name).write_text((REPO / "tests" / "modeling" / "ocp" / "data" / name).read_text(encoding="utf-8"))
+    problem = tmp_path / "servo_limited.toml"
+    problem.write_text(problem.read_text().replace('"cmd" = [-0.6, 0.6]', '"cmd" = [-0.5, 0.5]')
+                       + '\n[transcription]\nmethod = "multiple_shooting"\n')
+    assert main(["solve", str(problem), "--out", str(tmp_path / "S"), "--no-plots", "--quiet"]) == 0
+    summary = json.loads((tmp_path / "S" / "summary.json").read_text())
+    assert summary["status"] == "optimal" and summary["verification"]["passed"]
+    assert [s["factor"] for s in summary["continuation"]["steps"]] == [100.0, 10.0]
+    # piecewise-constant torque on 50 intervals: above the collocation optimum (0.736 s) by the O(h) of its switches
+    assert 0.736 < summary["final_time_s"] < 0.76
