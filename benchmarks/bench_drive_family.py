@@ -147,6 +147,10 @@ def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_
         "warnings": summary.get("warnings", []), "reference": reference,
     }
     row["reference_failed"] = reference_failed(reference)
+    finer = reference.get("finer_failed")
+    row["reference_note"] = (f"the reference's order {reference['order']:.2f} is pre-asymptotic (below 1) and its solve at "
+                             f"{finer['intervals']} intervals ended {finer['status']}: extrapolated from the three before"
+                             if finer and reference.get("order") is not None else "")
     if objective is not None and np.isfinite(objective) and not row["reference_failed"]:
         row["relative_error"] = (objective - reference["objective"]) / abs(reference["objective"])
     pieces = gtmodel_pieces(outcome.solution, member.vmax) if outcome.solution is not None else None
@@ -213,7 +217,7 @@ def main(argv: list[str] | None = None) -> dict:
                 why = ["no reference: none cached, none solved (--no-reference)" if row["reference_status"] == MISSING["status"] else
                        f"the reference failed: IPOPT {row['reference_status']}, its resolutions {100 * row['reference_spread']:+.2f} % "
                        "apart" if row["reference_failed"] else "",
-                       row["message"], row["refinement_stop"], *row["warnings"]]
+                       row["message"], row["refinement_stop"], row.get("reference_note", ""), *row["warnings"]]
                 print("    " + "\n    ".join(w for w in why if w), flush=True)
     passed = sum(r["passed"] for r in rows)
     cpu = [r["cpu_s"] for r in rows]

@@ -224,3 +224,21 @@ def test_written_problem_names_the_model_module(tmp_path):
     path = write_problem(member, tmp_path)
     assert path.exists() and (tmp_path / f"{member.name}.py").exists()
     assert f"file = \"{member.name}.py\"" in path.read_text()
+
+
+def test_a_finer_resolution_ipopt_did_not_finish_is_left_out_and_said(ref, monkeypatch):
+    # drive0_38's case: the order 0.55 asks for 600 intervals, which end Maximum_Iterations_Exceeded far above (16 %):
+    # the reference stays that of 75/150/300 (order 0.55 and its extrapolation), and says what failed
+    values = {n: 1 + 0.05 * n**-0.55 for n in (75, 150, 300)}
+    values[600] = 1.16
+
+    def fake_solve(p, n, guess=None):
+        status = "Maximum_Iterations_Exceeded" if n == 600 else "Solve_Succeeded"
+        return {"objective": values[n], "final_time": values[n], "status": status, "cpu_s": 1.0, "steps": 1,
+                "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
+
+    monkeypatch.setattr(ref, "solve", fake_solve)
+    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
+    out = ref.reference(RIGID)
+    assert list(out["by_intervals"]) == ["75", "150", "300"] and out["order"] == pytest.approx(0.55)
+    assert out["finer_failed"] == {"intervals": 600, "status": "Maximum_Iterations_Exceeded", "objective": 1.16, "cpu_s": 1.0}
