@@ -57,6 +57,17 @@ def test_an_objective_improved_by_the_halved_mesh_is_refined_on_and_returned():
     assert res.final_time == pytest.approx(2.0, abs=1e-6) and not res.refinement[0].get("returned")
 
 
+def test_a_halved_mesh_worse_by_more_than_the_tolerance_is_no_convergence():
+    # the start's objective set 1 % below the optimum (as drive0_38's pass 13, whose halved mesh ended 0.44 % worse in
+    # another local optimum): the halved pass is 1 % worse, which the stop says as the objective's uncertainty
+    opt, start = _verified_start(objective_offset=-0.02)
+    res = solve_refined(opt, elements=10, start=start, max_passes=6)
+    assert res.refinement[1]["objective_check"]["relative_improvement"] == pytest.approx(-0.02 / 1.98, rel=1e-4)
+    assert res.refinement_stop == ("the objective did not improve: pass 1's mesh with every element halved ended +0.01 "
+                                   "worse (relative; tolerance 0.001; another local optimum or an unsettled switch), so "
+                                   "pass 1's objective is known to about 0.01; returned pass 1 of 2")
+
+
 @pytest.mark.parametrize("kwargs, reason", [
     ({"objective_tolerance": 0.0}, None),  # off: no check, the stop as before
     ({"max_elements": 15}, "the element limit leaves no room for it"),
