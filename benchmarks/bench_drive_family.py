@@ -129,6 +129,8 @@ def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_
                 "reference_cpu_s": 0.0, "reference_cached": False, "cpu_ratio": None, "reference_failed": True,
                 "passed": False}
     cpu = time.process_time() - cpu
+    if str(outcome.status) == "interrupted":  # Ctrl-C or SIGTERM (gtmodel's handler made it a status): the run ends here
+        raise KeyboardInterrupt(outcome.summary.get("message", "interrupted"))
     summary = outcome.summary
     p = member.parameters()
     cached = reference is not None
