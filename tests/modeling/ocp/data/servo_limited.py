@@ -1,5 +1,6 @@
-"""A servo nobody tuned for: a torque command through a smooth Limiter (a saturation inside the model), a backlash, and
-friction on the load; the problem's input is the command (tests/modeling/ocp/test_infeasibility.py)."""
+"""Servos nobody tuned for: a torque command through a smooth signal block inside the model (a Limiter: saturation,
+or a DeadZone), a backlash, and friction on the load; the problem's input is the command
+(tests/modeling/ocp/test_infeasibility.py, tests/modeling/ocp/test_refinement_objective.py)."""
 from gtmodel.modeling import Component, connect
 from gtmodel.modeling.components.component import Input, Variable
 from gtmodel.modeling.library import blocks
@@ -28,3 +29,9 @@ class LimitedDrive(Component):
         connect(self.friction.flange_a, self.fixed.flange)
         self.equation(self.limit.u, self.cmd)
         self.equation(self.torque.tau, self.limit.y)
+
+
+class DeadZoneDrive(LimitedDrive):
+    """The same servo with a dead zone of +-0.1 N m on its command in place of the limiter."""
+
+    limit = blocks.DeadZone(uMax=0.1, uMin=-0.1, smoothing=1e-3)
