@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -149,39 +150,7 @@ class OptimalControl:
         check = d.refinement.verification if d.refinement.verify else False  # passed down, never set on the declaration
         options = {"max_iter": d.solver.max_iter, "tol": d.solver.tol}
         if isinstance(d.method, MultipleShooting):
-            if d.solver.name != "ipopt":  # the solver named is the one that runs, or the call says why not
-                raise InputError(f"solver {d.solver.name!r}: multiple shooting is solved by IPOPT only (its NLP has no stage "
-                                 "structure for fatrop); solver = \"ipopt\", or method = \"collocation\" for fatrop")
-            m = d.method
-            phases: dict[str, dict[str, float]] = {}
-            with timed(phases, "build"):
-                shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
-                                                 steps=m.steps, verbose=verbose, solver_options=options, verify=check)
-            same = isinstance(previous, OptimizationResult) and previous.collocation is not None
-            start, record = None, {}
-            if d.continuation.enabled and smoothing_widths(d.optimization):
-                # the smoothing widths continued as on the collocation path, each step started from the last's primal
-                # point (a servo with a torque limiter, backlash and friction: infeasible from the declared guess)
-                def solve(parameters: dict[str, float] | None, begin: OptimizationResult | None) -> OptimizationResult:
-                    return shooting.solve(parameters=parameters, initial_guess=begin if begin is not None else
-                                          (previous if warm_start and same else None))
-                with timed(phases, "continuation"):
-                    shooting.verify = False  # the intermediate problems are not the user's: solved, not verified
-                    try:
-                        start, record = continue_smoothing(d.optimization, solve, d.continuation)
-                    finally:
-                        shooting.verify = bool(check)
-            with timed(phases, "solve"):  # its guess and verification included, the verification moved out below
-                result = shooting.solve(initial_guess=start if start is not None else (previous if warm_start and same else None))
-            result.continuation = record_final(record, start, result)
-            ver = result.verification
-            if getattr(ver, "cpu_s", None) is not None:
-                add_phase(phases, "solve", -ver.time_s, -ver.cpu_s)
-                add_phase(phases, "verification", ver.time_s, ver.cpu_s)
-            result.timing = phases
-            if result.dae is not None:
-                result.message = without_inputs(d.optimization, result.dae, result.message)
-            return self._estimated(shooting, result)
+            return self._shot(check, options, verbose, previous if warm_start else None)
         kwargs = {"verbose": verbose, "solver_options": options, "nominal": d.nominal, "eliminate_algebraics": d.method.eliminate_algebraics,
                   "solver": d.solver.name, "compile": d.solver.jit}
         single = {**kwargs, "verify": check}
@@ -229,6 +198,57 @@ class OptimalControl:
         final = CollocationTranscription(self.optimization, elements=col.elements, points=col.points, scheme=col.scheme,
                                          mesh=col.fractions, **kwargs)
         return self._estimated(final, result)
+
+    def _shot(self, check: Any, options: dict[str, Any], verbose: bool, previous: Any) -> OptimizationResult:
+        """The multiple-shooting solve: continued over the smoothing widths where the model declares any.
+
+        A declared ``max_cpu_s`` (:attr:`Refinement.max_cpu_s`) bounds the whole of it, the continuation's steps
+        included: each solve gets what is left as IPOPT's ``max_cpu_time``, and a solve it stopped says so, naming
+        the knob. Undeclared, IPOPT's ``max_iter`` alone bounds each solve (shooting is not refined).
+        """
+        d = self
+        if d.solver.name != "ipopt":  # the solver named is the one that runs, or the call says why not
+            raise InputError(f"solver {d.solver.name!r}: multiple shooting is solved by IPOPT only (its NLP has no stage "
+                             "structure for fatrop); solver = \"ipopt\", or method = \"collocation\" for fatrop")
+        m, budget, cpu0 = d.method, d.refinement.max_cpu_s, time.process_time()
+        phases: dict[str, dict[str, float]] = {}
+        with timed(phases, "build"):
+            shooting = ShootingTranscription(d.optimization, intervals=m.intervals, controls=m.controls, integrator=m.integrator,
+                                             steps=m.steps, verbose=verbose, solver_options=options, verify=check)
+        guess = previous if isinstance(previous, OptimizationResult) and previous.collocation is not None else None
+
+        def solve(parameters: dict[str, float] | None, begin: OptimizationResult | None) -> OptimizationResult:
+            if budget is not None:  # what is left of the budget, at least a token (IPOPT then stops at once)
+                shooting.set_solver_options({"max_cpu_time": max(budget - (time.process_time() - cpu0), 1e-2)})
+            return shooting.solve(parameters=parameters, initial_guess=begin if begin is not None else guess)
+
+        start, record = None, {}
+        if d.continuation.enabled and smoothing_widths(d.optimization):
+            # the smoothing widths continued as on the collocation path, each step started from the last's primal
+            # point (a servo with a torque limiter, backlash and friction: infeasible from the declared guess)
+            with timed(phases, "continuation"):
+                shooting.verify = False  # the intermediate problems are not the user's: solved, not verified
+                try:
+                    start, record = continue_smoothing(d.optimization, solve, d.continuation)
+                finally:
+                    shooting.verify = bool(check)
+        with timed(phases, "solve"):  # its guess and verification included, the verification moved out below
+            result = solve(None, start)
+        result.continuation = record_final(record, start, result)
+        ver = result.verification
+        if getattr(ver, "cpu_s", None) is not None:
+            add_phase(phases, "solve", -ver.time_s, -ver.cpu_s)
+            add_phase(phases, "verification", ver.time_s, ver.cpu_s)
+        result.timing = phases
+        if result.dae is not None:
+            result.message = without_inputs(d.optimization, result.dae, result.message)
+        if budget is not None and str(result.message).startswith("Maximum_CpuTime_Exceeded"):
+            spent = time.process_time() - cpu0
+            head, _, rest = str(result.message).partition(";")  # the knob that stopped it first, then any culprit
+            result.message = (f"{head}; the CPU budget max_cpu_s = {budget:g} in [transcription] is spent ({spent:.3g} "
+                              f"CPU-s, {phases.get('continuation', {}).get('cpu_s', 0.0):.3g} of them in the continuation "
+                              "over the smoothing widths): raise max_cpu_s, or solve by collocation" + (f";{rest}" if rest else ""))
+        return self._estimated(shooting, result)
 
     def _continued(self, kwargs: dict[str, Any], check: Any, guess: OptimizationResult | None) -> OptimizationResult:
         """The collocation solve of a model with smoothing widths: continued over them, then refined as declared.

@@ -149,3 +149,17 @@ def test_multiple_shooting_is_continued_too(shooting):
     assert [s["factor"] for s in c["steps"]] == [100.0, 10.0] and c["started_from_factor"] == 10.0
     assert str(shooting.status) == "optimal" and shooting.verification.passed
     assert shooting.final_time == pytest.approx(T_CLOSED, rel=2e-2)
+
+
+def test_multiple_shooting_keeps_a_declared_cpu_budget_and_names_it(tmp_path):
+    # the budget bounds the whole solve, the continuation's steps included (IPOPT's max_cpu_time: what is left of it)
+    spent = load_problem(problem(tmp_path, SHOOTING + "max_cpu_s = 0.05\n")).declaration.solve()
+    assert str(spent.status) == "max_iterations"
+    assert all(s["status"] == "max_iterations" for s in spent.continuation["steps"])
+    assert "Maximum_CpuTime_Exceeded; the CPU budget max_cpu_s = 0.05 in [transcription] is spent" in spent.message
+    assert "raise max_cpu_s, or solve by collocation" in spent.message
+
+
+def test_a_generous_cpu_budget_changes_nothing(tmp_path, shooting):
+    kept = load_problem(problem(tmp_path, SHOOTING + "max_cpu_s = 600\n")).declaration.solve()
+    assert str(kept.status) == "optimal" and kept.final_time == pytest.approx(shooting.final_time, rel=1e-9)

@@ -221,7 +221,9 @@ class Refinement:
         limits; default True.
     max_cpu_s : float or None
         CPU-time budget of a refinement [s]; None for
-        ``defaults["ocp.refine_max_cpu_s"]``.
+        ``defaults["ocp.refine_max_cpu_s"]``. Multiple shooting
+        (:meth:`gtmodel.trajectory.model_ocp.OptimalControl.solve`) takes it as the budget of
+        its whole solve, continuation included; None there: no budget.
     objective_tolerance : float or None
         A refinement's verified pass with nothing left to split is solved again with every
         element halved, and refined on from there while that improves the objective by more

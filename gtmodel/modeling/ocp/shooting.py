@@ -202,6 +202,7 @@ class ShootingTranscription:
         options = dict(solver_options or {})
         if self.integrator in ("cvodes", "idas"):
             options.setdefault("hessian_approximation", "limited-memory")
+        self._solver_options = options
         self.options = merge_options(verbose, options, "ipopt")
         self.integrator_options = dict(integrator_options or {})
         self.verify, self.verify_settings = bool(verify), verify_settings(verify)  # settings None: the declaration's own
@@ -436,6 +437,27 @@ class ShootingTranscription:
             raise SolverError(f"could not build the ipopt solver: {exc}") from exc
         self.key = (id(self), "multiple_shooting", N, self.controls, int(w.numel()), self.integrator)
         _log.debug("multiple shooting NLP for %s: %d variables, %d constraints", dae.name, w.numel(), gv.numel())
+
+    def set_solver_options(self, solver_options: Mapping[str, Any]) -> None:
+        """Rebuild the solver with further IPOPT options (the NLP is kept; about a second for a drive).
+
+        Parameters
+        ----------
+        solver_options : mapping
+            Options merged over the current ones, as ``solver_options`` of the constructor
+            (plain IPOPT names, e.g. ``{"max_cpu_time": 120.0}``).
+
+        Raises
+        ------
+        SolverError
+            The solver cannot be built with these options.
+        """
+        self._solver_options.update(solver_options)
+        self.options = merge_options(self.verbose, self._solver_options, "ipopt")
+        try:
+            self.solver = ca.nlpsol(f"{casadi_name(self.dae.name)}_shooting", "ipopt", self.nlp, self.options)
+        except RuntimeError as exc:
+            raise SolverError(f"could not build the ipopt solver: {exc}") from exc
 
     # ------------------------------------------------------------------ guesses
     def _initial_w(self, guesses: Mapping[str, Any], tf_guess: float, pvec: np.ndarray) -> np.ndarray:

@@ -260,7 +260,9 @@ class TranscriptionSection(RefinementSection):
     refine_on_failure : bool
         A single collocation solve whose verification fails is refined from (default).
     max_cpu_s : float, optional
-        CPU-time budget of a refinement [s]; default ``defaults["ocp.refine_max_cpu_s"]``.
+        CPU-time budget of a refinement [s]; default ``defaults["ocp.refine_max_cpu_s"]``. With multiple
+        shooting, the budget of the whole solve, its continuation over smoothing widths included (IPOPT's
+        ``max_cpu_time``, what is left of it per solve); unset there: none (``[solver] max_iter`` alone).
     objective_tolerance : float, optional
         A refinement's verified pass with nothing left to split is solved again with every
         element halved, and refined on from there while that improves the objective by more
@@ -275,6 +277,7 @@ class TranscriptionSection(RefinementSection):
     controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
     integrator: choice("rk", "radau", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs: Radau IIA collocation, its rootfinder started from a simulation of the guess)") | None = None
     steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, radau, collocation); rk and radau impose the bounds at every step's end, collocation at every stage point") = 4
+    max_cpu_s: number(gt=0, description="CPU-time budget, s: of a mesh refinement (default 250: no pass starts once it is spent, the best verified pass is returned); with multiple shooting, of the whole solve, its continuation included (unset: none)") | None = None
 
 
 class BenchmarkSection(Section):
