@@ -609,7 +609,7 @@ def render(data: dict[str, Any]) -> str:
             "`python -m gtmodel.report.fidelity collect results` writes from the shipped problems' result folders "
             f"({', '.join(f'`{p}`' for p in PROBLEMS)}; run each with `gtmodel solve problems/<name>.toml --out results/<name>`, the `*_thesis` and `*_fitted` problems, `kr500_table_10` and `kr500_table_2` from `problems/thesis/`). "
             "The fitted quantities and the rows predicted with them come from `docs/fidelity_fits.json`, which "
-            "`python -m gtmodel.problems.fidelity_fits` writes (a slow test checks that it reproduces the file). "
+            "`python -m gtmodel.problems.fidelity_fits` writes (a slow test reproduces each kind of part of the file: every fit once, on one noise seed per feed and the first swept value). "
             "Do not edit by hand: `tests/report/test_fidelity.py` fails while this page is stale.\n\n"
             + RULES + "\n" + REVISITED + "\n" + NOT_DIGITISED + "\n"
             "`[l1_ilc_thesis]`: the ILC set-up the thesis' text "
