@@ -181,13 +181,8 @@ def rigid_guess(p: dict, intervals: int) -> dict:
     return {"X": X, "U": U, "final_time": T}
 
 
-def solve(p: dict, intervals: int, guess: dict | None = None, simulate_guess: bool = False) -> dict:
+def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
     """One multiple-shooting solve (see the module's docstring) at ``intervals`` intervals.
-
-    Started from straight lines between the rest states (no ``guess``), from ``guess``'s states and
-    voltages interpolated onto this grid, or (``simulate_guess``) from ``guess``'s voltage held
-    piecewise constant on this grid and integrated from the start state by this grid's own RK4
-    steps (:func:`simulated_start`): a start that meets every shooting constraint but the end's.
 
     Returns a dict: ``objective``, ``final_time``, ``status`` (IPOPT's), ``cpu_s``, ``steps``,
     ``X`` (5, N+1), ``U`` (N,).
@@ -236,13 +231,7 @@ def solve(p: dict, intervals: int, guess: dict | None = None, simulate_guess: bo
         opti.set_initial(U, p["R"] * x0[0])
         if free:
             opti.set_initial(T, p["final_time"])
-    start = simulated_start(step, x0 / scale, guess, intervals, steps, None if free else p["final_time"]) if simulate_guess else None
-    if start is not None:
-        opti.set_initial(X, start["X"])
-        opti.set_initial(U, start["U"])
-        if free:
-            opti.set_initial(T, start["final_time"])
-    elif guess is not None:  # the coarser solve's, on the same normalised time
+    else:  # the coarser solve's, on the same normalised time
         s_old, s_new = np.linspace(0, 1, guess["X"].shape[1]), np.linspace(0, 1, intervals + 1)
         opti.set_initial(X, np.vstack([np.interp(s_new, s_old, row) for row in guess["X"] / scale[:, None]]))
         mid_old, mid_new = (s_old[:-1] + s_old[1:]) / 2, (s_new[:-1] + s_new[1:]) / 2
@@ -251,37 +240,15 @@ def solve(p: dict, intervals: int, guess: dict | None = None, simulate_guess: bo
             opti.set_initial(T, guess["final_time"])
     opti.solver("ipopt", {"print_time": False, "expand": True},
                 {"print_level": 0, "max_iter": 3000, "tol": 1e-9, "sb": "yes"})
-    cpu = time.process_time()
+    start = time.process_time()
     try:
         sol = opti.solve()
     except RuntimeError:
         sol = opti.debug
     status = opti.stats()["return_status"]
     return {"objective": float(sol.value(opti.f)), "final_time": float(sol.value(T)) if free else p["final_time"],
-            "status": status, "cpu_s": time.process_time() - cpu, "steps": steps, "intervals": intervals,
+            "status": status, "cpu_s": time.process_time() - start, "steps": steps, "intervals": intervals,
             "X": np.atleast_2d(sol.value(X)) * scale[:, None], "U": np.atleast_1d(sol.value(U)).astype(float)}
-
-
-def simulated_start(step: ca.Function, x0: np.ndarray, guess: dict, intervals: int, steps: int,
-                    final_time: float | None = None) -> dict | None:
-    """A start on a grid of ``intervals`` from another grid's solve: its voltage sampled at this grid's interval
-    midpoints (held piecewise constant, so a coarser grid's input is kept exactly when this grid divides it), its final
-    time (or ``final_time``), the states integrated from ``x0`` by ``step`` (:func:`solve`'s interval of ``steps`` RK4
-    steps, scaled states). None when the integration leaves the finite numbers.
-
-    Interpolated states of a stiff drive meet no shooting constraint of a finer grid: drive0_38 at 600 intervals from
-    its 300 ended Maximum_Iterations_Exceeded at 0.4199 s after 946 CPU-s, its 300-interval optimum 0.3521 s.
-    """
-    u_old = np.atleast_1d(np.asarray(guess["U"], dtype=float))
-    pick = np.minimum(((np.arange(intervals) + 0.5) * u_old.size / intervals).astype(int), u_old.size - 1)
-    u = u_old[pick]
-    tf = guess["final_time"] if final_time is None else final_time
-    h = tf / (intervals * steps)
-    cols = [np.asarray(x0, dtype=float)]
-    for k in range(intervals):
-        cols.append(np.asarray(step.call([cols[-1], u[k], h])[0], dtype=float).ravel())
-    X = np.column_stack(cols)
-    return {"X": X, "U": u, "final_time": tf} if np.all(np.isfinite(X)) else None
 
 
 def _extrapolate(runs: list[dict]) -> tuple[float | None, float]:
@@ -317,10 +284,9 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
     piecewise-constant voltage makes the minimum time's error O(h) (a switch of the current
     inside an interval; measured on the rigid closed form: 2.6 % and 1.3 % at 40 and 80
     intervals) and a smooth optimum's O(h^2). An observed order below :data:`MIN_ORDER` is therefore
-    pre-asymptotic: the reference solves at twice the finest resolution (up to :data:`MAX_INTERVALS`),
-    started from the finest's voltage simulated on the finer grid (:func:`simulated_start`; from the
-    interpolated solution if IPOPT does not finish from it), and extrapolates from the three finest; a
-    finer solve that IPOPT does not finish from either start is left out and recorded (``finer_failed``: its intervals, status, objective and CPU-s).
+    pre-asymptotic: the reference solves at twice the finest resolution (up to :data:`MAX_INTERVALS`)
+    and extrapolates from the three finest; a finer solve that IPOPT does not finish is left out and
+    recorded (``finer_failed``: its intervals, status, objective and CPU-s).
 
     Returns a dict: ``objective`` (extrapolated), ``fine_objective`` and ``final_time`` (the
     finest's), ``order`` (None: not extrapolated), ``status`` (IPOPT's, finest) and
@@ -352,13 +318,11 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
     while order is not None and order < MIN_ORDER and runs[-1]["intervals"] < MAX_INTERVALS:
         # pre-asymptotic (drive0_38: 0.3568, 0.3540, 0.3521 at 75/150/300, order 0.55, extrapolated 0.3481):
         # the error of a piecewise-constant input is at least O(h), so one finer resolution decides
-        finer = solve(p, 2 * runs[-1]["intervals"], guess=runs[-1], simulate_guess=True)
-        if finer["status"] not in _SUCCEEDED:  # from the interpolated start too, the better kept
-            again = solve(p, finer["intervals"], guess=runs[-1])
-            again["cpu_s"] += finer["cpu_s"]
-            finer = again if again["status"] in _SUCCEEDED else finer | {"cpu_s": again["cpu_s"]}
+        finer = solve(p, 2 * runs[-1]["intervals"], guess=runs[-1])
         if finer["status"] not in _SUCCEEDED:  # a finer solve IPOPT did not finish decides nothing (drive0_38 at 600
-            # intervals: Maximum_Iterations_Exceeded at 0.4199, 1,970 CPU-s): the three before kept, the failure said
+            # intervals: Maximum_Iterations_Exceeded at 0.4199, 1,970 CPU-s; from the 300's voltage held on the 600 grid and
+            # simulated by its own RK4 steps, a start meeting every shooting constraint but the end's, as well:
+            # Maximum_Iterations_Exceeded at 0.3727, 947 CPU-s, measured 2026-11-27): the three before kept, the failure said
             finer_failed = {"intervals": finer["intervals"], "status": finer["status"], "objective": finer["objective"],
                             "cpu_s": finer["cpu_s"]}
             break

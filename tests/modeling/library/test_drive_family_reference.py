@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 from types import SimpleNamespace
 
-import casadi as ca
 import numpy as np
 import pytest
 
@@ -111,7 +110,7 @@ def test_reference_adds_a_resolution_when_the_order_is_pre_asymptotic(ref, monke
     values[600] = values[300] - 0.5 * (values[150] - values[300])
     solved = []
 
-    def fake_solve(p, n, guess=None, simulate_guess=False):
+    def fake_solve(p, n, guess=None):
         solved.append(n)
         e = values[n]
         return {"objective": e, "final_time": e, "status": "Solve_Succeeded", "cpu_s": 0.0, "steps": 1, "intervals": n,
@@ -233,7 +232,7 @@ def test_a_finer_resolution_ipopt_did_not_finish_is_left_out_and_said(ref, monke
     values = {n: 1 + 0.05 * n**-0.55 for n in (75, 150, 300)}
     values[600] = 1.16
 
-    def fake_solve(p, n, guess=None, simulate_guess=False):
+    def fake_solve(p, n, guess=None):
         status = "Maximum_Iterations_Exceeded" if n == 600 else "Solve_Succeeded"
         return {"objective": values[n], "final_time": values[n], "status": status, "cpu_s": 1.0, "steps": 1,
                 "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
@@ -242,73 +241,4 @@ def test_a_finer_resolution_ipopt_did_not_finish_is_left_out_and_said(ref, monke
     monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
     out = ref.reference(RIGID)
     assert list(out["by_intervals"]) == ["75", "150", "300"] and out["order"] == pytest.approx(0.55)
-    # tried from the simulated start and from the interpolated one: both solves' CPU
-    assert out["finer_failed"] == {"intervals": 600, "status": "Maximum_Iterations_Exceeded", "objective": 1.16, "cpu_s": 2.0}
-
-
-def test_a_finer_resolution_from_the_interpolated_start_counts_when_the_simulated_one_fails(ref, monkeypatch):
-    # the finer solve starts from the finest's voltage simulated on its grid; IPOPT not finishing from it, the
-    # interpolated start is solved and, finishing, counts (order 1 once the 600 intervals are in)
-    values = {n: 1 + 0.05 * n**-0.55 for n in (75, 150, 300)}
-    values[600] = values[300] - (values[150] - values[300]) / 2
-    starts = []
-
-    def fake_solve(p, n, guess=None, simulate_guess=False):
-        starts.append((n, simulate_guess))
-        status = "Maximum_Iterations_Exceeded" if n == 600 and simulate_guess else "Solve_Succeeded"
-        return {"objective": values[n], "final_time": values[n], "status": status, "cpu_s": 1.0, "steps": 1,
-                "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
-
-    monkeypatch.setattr(ref, "solve", fake_solve)
-    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
-    out = ref.reference(RIGID)
-    assert starts[-2:] == [(600, True), (600, False)] and "finer_failed" not in out
-    assert list(out["by_intervals"]) == ["75", "150", "300", "600"] and out["order"] == pytest.approx(1.0)
-
-
-@pytest.fixture(scope="module")
-def rigid_starts(ref):
-    """The rigid drive solved at 20 intervals, then at 40 from its simulated and from its interpolated solution (about 2 CPU-s)."""
-    coarse = ref.solve(RIGID, 20)
-    return coarse, ref.solve(RIGID, 40, guess=coarse, simulate_guess=True), ref.solve(RIGID, 40, guess=coarse)
-
-
-def test_simulated_start_holds_the_coarse_voltage_and_meets_the_dynamics(ref, rigid_starts):
-    # the 20 intervals' voltage held on 40 (each value twice) and integrated by the 40-interval grid's RK4 steps: a
-    # second integration (SciPy's DOP853, 1e-10) of the same voltage ends at the start's last state; and the coarse
-    # solve reached its target, so the start is near it (the same input, finer steps)
-    coarse = rigid_starts[0]
-    x0, xf = ref.boundary(RIGID)
-    scale = np.array([RIGID["imax"], max(abs(xf[1]), 1.0), RIGID["vmax"] / RIGID["k"], RIGID["distance"], 1.0])
-    step = _rk4_step(ref, RIGID, steps=8, scale=scale)
-    start = ref.simulated_start(step, x0 / scale, coarse, 40, 8)
-    assert np.array_equal(start["U"], np.repeat(coarse["U"], 2)) and start["final_time"] == coarse["final_time"]
-    sim = ref.resimulate(RIGID, ref.constant_pieces(coarse["final_time"], coarse["U"]))
-    assert sim["end_error"] <= 1e-3
-    assert np.max(np.abs(start["X"][:, -1] * scale - xf) / scale) <= 1e-2
-
-
-def test_simulated_start_is_none_when_the_integration_blows_up(ref):
-    step = ca.Function("step", [ca.SX.sym("x", 5), ca.SX.sym("u"), ca.SX.sym("h")], [ca.DM.ones(5) * np.inf])
-    assert ref.simulated_start(step, np.zeros(5), {"U": np.zeros(3), "final_time": 1.0}, 6, 1) is None
-
-
-def test_finer_solve_from_the_simulated_start_reaches_the_same_optimum(rigid_starts):
-    # the same NLP from two starts: the same minimum time (to IPOPT's tolerance)
-    _, simulated, interpolated = rigid_starts
-    assert simulated["status"] == interpolated["status"] == "Solve_Succeeded"
-    assert simulated["objective"] == pytest.approx(interpolated["objective"], rel=1e-6)
-
-
-def _rk4_step(ref, p, steps, scale):
-    """One interval of ``steps`` RK4 steps of the hand-written ODE on scaled states (as :func:`solve` builds it)."""
-    f = ref.ode(p)
-    xs, us, hs = ca.SX.sym("x", 5), ca.SX.sym("u"), ca.SX.sym("h")
-    xk = xs * scale
-    for _ in range(steps):
-        k1, _e = f(xk, us)
-        k2, _e = f(xk + hs / 2 * k1, us)
-        k3, _e = f(xk + hs / 2 * k2, us)
-        k4, _e = f(xk + hs * k3, us)
-        xk = xk + hs / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("step", [xs, us, hs], [xk / scale])
+    assert out["finer_failed"] == {"intervals": 600, "status": "Maximum_Iterations_Exceeded", "objective": 1.16, "cpu_s": 1.0}
