@@ -1,7 +1,7 @@
 """The drive family solved by gtmodel's default path, each member against its independent reference (a benchmark, not a test).
 
 Usage: python benchmarks/bench_drive_family.py [--members N] [--seed S] [--json] [--cached] [--update-cache]
-[--no-reference] [--only NAME,...] [--keep DIR] [--method collocation|multiple_shooting]
+[--no-reference] [--only NAME,...] [--keep DIR] [--method collocation|multiple_shooting] [--reference-start own|gtmodel]
 
 For each member of :func:`gtmodel.modeling.library.drive_family.drive_family` (the first N,
 default all 40), in this one process:
@@ -16,7 +16,10 @@ default all 40), in this one process:
   resolutions) solved in the same run, its CPU time ``reference_cpu_s`` the peer of ``cpu_s``
   (``cpu_ratio = cpu_s / reference_cpu_s``); with ``--cached``, read from the cache
   ``tests/modeling/library/data/drive_family_references.json`` when its parameter hash is the
-  member's (``reference_cpu_s`` then as measured when it was cached; ``reference_cached`` true);
+  member's (``reference_cpu_s`` then as measured when it was cached; ``reference_cached`` true); with
+  ``--reference-start gtmodel`` a reference solved in the run starts its coarsest solve from gtmodel's answer
+  (:func:`gtmodel_start`; its solves stay its own, the start selects the basin) and says so
+  (``reference_start``, the cache's ``start``);
   ``--update-cache`` writes the references solved in the run to the cache; with ``--no-reference`` none is
   solved (a member without a fresh cached one has no relative error: gtmodel's status, verification, CPU and
   bound excess alone);
@@ -110,15 +113,43 @@ def gtmodel_pieces(solution: Any, vmax: float) -> list[tuple[float, float, np.nd
             for k in range(col.elements)]
 
 
+#: Where the rest state's motor angle is found in a result when the reduction kept its alias (the EMF's flange).
+ALIASES = {"rotor.phi": ("rotor.phi", "emf.phi")}
+
+
+def gtmodel_start(member: DriveMember, solution: Any, intervals: int = 2 * ref.RESOLUTIONS[-1]) -> dict | None:
+    """gtmodel's answer as a start for the reference's coarsest solve (``--reference-start gtmodel``).
+
+    The five states of :meth:`DriveMember.rest_state` at ``intervals + 1`` equal steps over the
+    answer's final time and the voltage at the steps' midpoints (:meth:`OptimizationResult.sample`);
+    None when the answer holds no polynomials or a state is not found.
+    """
+    try:
+        tf = float(solution.final_time)
+        t = np.linspace(0.0, tf, intervals + 1)
+        at, mid = solution.sample(t), solution.sample((t[:-1] + t[1:]) / 2)
+    except Exception:  # no collocation data (a failed run): no start
+        return None
+    found = {**at["outputs"], **at["algebraics"], **at["states"]}
+    rows = []
+    for name in member.rest_state(0.0):
+        hit = next((found[a] for a in ALIASES.get(name, (name,)) if a in found), None)
+        if hit is None:
+            return None
+        rows.append(np.asarray(hit, dtype=float).reshape(-1))
+    return {"X": np.vstack(rows), "U": np.asarray(mid["inputs"]["src.v"], dtype=float).reshape(-1), "final_time": tf}
+
+
 #: The reference of a member run with ``--no-reference`` and no fresh cache entry: none (no relative error, not passed).
 MISSING = {"objective": float("nan"), "spread": float("nan"), "status": "not computed (--no-reference)", "cpu_s": 0.0,
            "worst_bound_excess": float("nan")}
 
 
 def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_reference: bool = True,
-               method: str = "collocation") -> dict:
+               method: str = "collocation", reference_start: str = "own") -> dict:
     """Solve one member by ``gtmodel solve``'s path and compare it with its reference (solved here if None and
-    ``solve_reference``; else :data:`MISSING`); ``method`` the problem file's ``[transcription] method``."""
+    ``solve_reference``; else :data:`MISSING`); ``method`` the problem file's ``[transcription] method``;
+    ``reference_start`` ``"gtmodel"`` starts a reference solved here from gtmodel's answer (:func:`gtmodel_start`)."""
     problem = write_problem(member, folder)
     if method != "collocation":
         problem.write_text(problem.read_text(encoding="utf-8") + f'\n[transcription]\nmethod = "{method}"\n'
@@ -139,14 +170,19 @@ def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_
     summary = outcome.summary
     p = member.parameters()
     cached = reference is not None
-    if reference is None:
-        reference = ref.reference(p) if solve_reference else dict(MISSING)
+    if reference is None and solve_reference:
+        start = gtmodel_start(member, outcome.solution) if reference_start == "gtmodel" else None
+        reference = ref.reference(p, start=start)
+        if start is not None:
+            reference["start"] = "gtmodel"
+    elif reference is None:
+        reference = dict(MISSING)
     objective = summary.get("objective")
     row: dict[str, Any] = {
         "name": member.name, "status": str(outcome.status), "verified": bool((summary.get("verification") or {}).get("passed")),
         "relative_error": None, "cpu_s": cpu, "worst_bound_excess": None, "objective": objective,
         "reference_objective": reference["objective"], "reference_spread": reference["spread"],
-        "reference_status": reference["status"], "reference_cpu_s": reference["cpu_s"], "reference_cached": cached,
+        "reference_status": reference["status"], "reference_start": reference.get("start", "own"), "reference_cpu_s": reference["cpu_s"], "reference_cached": cached,
         "cpu_ratio": cpu / reference["cpu_s"] if reference["cpu_s"] else None,
         "reference_worst_bound_excess": reference["worst_bound_excess"], "end_error": None,
         "elements": (summary.get("transcription") or {}).get("elements"),
@@ -192,6 +228,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--update-cache", action="store_true", help="add the references solved in this run to the cache")
     ap.add_argument("--method", choices=("collocation", "multiple_shooting"), default="collocation",
                     help="the problem files' [transcription] method (default collocation)")
+    ap.add_argument("--reference-start", choices=("own", "gtmodel"), default="own",
+                    help="start a reference solved here from its own guesses (default) or from gtmodel's answer")
     ap.add_argument("--no-reference", action="store_true",
                     help="solve no reference: a member without a fresh cached one gets no relative error (and does not pass)")
     a = ap.parse_args(argv)
@@ -206,7 +244,7 @@ def main(argv: list[str] | None = None) -> dict:
             if only and member.name not in only:
                 continue
             row = run_member(member, folder, ref.cached(cache, member.name, member.parameter_hash()), not a.no_reference,
-                             a.method)
+                             a.method, a.reference_start)
             rows.append(row)
             if a.update_cache and not row["reference_cached"] and row["reference_status"] != MISSING["status"]:
                 fresh = ref.load_cache()  # re-read: another run may have added members meanwhile
@@ -217,7 +255,8 @@ def main(argv: list[str] | None = None) -> dict:
             ratio = "-" if row["cpu_ratio"] is None else f"{row['cpu_ratio']:.2f}"
             print(f"{row['name']:34s} {row['status']:14s} verified={str(row['verified']):5s} "
                   f"error {_pct(row['relative_error']):>11s} (ref spread {_pct(row['reference_spread'])})  "
-                  f"{row['cpu_s']:7.1f} CPU-s (reference {row['reference_cpu_s']:.1f}{', cached' if row['reference_cached'] else ''}: "
+                  f"{row['cpu_s']:7.1f} CPU-s (reference {row['reference_cpu_s']:.1f}{', cached' if row['reference_cached'] else ''}"
+                  f"{', from gtmodel' if row.get('reference_start') == 'gtmodel' else ''}: "
                   f"x{ratio})  excess {_pct(row['worst_bound_excess'], '{:.3f}'):>9s}  "
                   f"{'PASS' if row['passed'] else 'FAIL'}", flush=True)
             if not row["passed"]:

@@ -64,6 +64,10 @@ RESOLUTIONS = (75, 150, 300)
 #: reference then solves at twice the finest resolution, up to :data:`MAX_INTERVALS`, and extrapolates again.
 MIN_ORDER = 0.9
 MAX_INTERVALS = 600
+#: IPOPT's initial barrier parameter from a given start (gtmodel's answer): its default 0.1 lets the first
+#: iterations leave the start's basin (drive0_33 at 300 intervals: restoration by iteration 60, 0.38 s at 100,
+#: unfinished after 26 CPU-min); 1e-4: Solve_Succeeded, 0.24056 s in 24.2 CPU-s (measured 2026-11-27).
+WARM_MU = 1e-4
 _SUCCEEDED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 G_ACC = 9.81
 
@@ -181,8 +185,33 @@ def rigid_guess(p: dict, intervals: int) -> dict:
     return {"X": X, "U": U, "final_time": T}
 
 
-def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
+def _coordinates(p: dict, xf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The shooting's coordinates ``z = A x`` and their scales: ``(i, delta, w_m, q, v)``, ``delta = G phi_m - q``.
+
+    The transmission's deflection replaces the motor angle: a stiff coupling (up to 6e7 N/m) makes the
+    deflection micrometres between two states of tenths of a metre, and a shooting constraint in
+    ``(phi_m, q)`` then differences them (drive0_33 at 150 intervals from gtmodel's answer, IPOPT's
+    defaults: Solve_Succeeded in 58.6 CPU-s in these coordinates, unfinished after 15 CPU-min in
+    ``(phi_m, q)``; measured 2026-11-27). RK4 commutes with a constant
+    linear map, so the discrete problem, and its optimum, are those of ``x``. The deflection's
+    scale: half the gap plus the coupling's deflection under the rated current's force. A rigid
+    member keeps ``x`` (its deflection is zero).
+    """
+    G = _G(p)
+    wscale = p["wmax"] or p["vmax"] / p["k"]
+    A = np.eye(5)
+    if p.get("rigid"):
+        return A, np.array([p["imax"], max(abs(xf[1]), 1.0), wscale, max(p["distance"], 1e-3), G * wscale])
+    A[1, 1], A[1, 3] = G, -1.0
+    deflection = p["backlash"] / 2 + p["k"] * p["imax"] / (G * p["c"])
+    return A, np.array([p["imax"], deflection, wscale, max(p["distance"], 1e-3), G * wscale])
+
+
+def solve(p: dict, intervals: int, guess: dict | None = None, mu_init: float | None = None) -> dict:
     """One multiple-shooting solve (see the module's docstring) at ``intervals`` intervals.
+
+    ``mu_init`` IPOPT's initial barrier parameter (None: its default, 0.1); :data:`WARM_MU` for a
+    start near the answer (:func:`reference` with ``start``).
 
     Returns a dict: ``objective``, ``final_time``, ``status`` (IPOPT's), ``cpu_s``, ``steps``,
     ``X`` (5, N+1), ``U`` (N,).
@@ -190,12 +219,11 @@ def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
     f = ode(p)
     x0, xf = boundary(p)
     steps = _substeps(p, intervals)
-    G = _G(p)
-    wscale = p["wmax"] or p["vmax"] / p["k"]
-    scale = np.array([p["imax"], max(abs(xf[1]), 1.0), wscale, max(p["distance"], 1e-3), G * wscale])
+    A, scale = _coordinates(p, xf)
+    A_inv = np.linalg.inv(A)
     # one interval: S RK4 steps, the current and speed at every step's end, the copper loss (RK4 quadrature)
     xs, us, hs = ca.SX.sym("x", 5), ca.SX.sym("u"), ca.SX.sym("h")
-    xk, energy, cur, spd = xs * scale, 0, [], []
+    xk, energy, cur, spd = ca.mtimes(ca.DM(A_inv), xs * scale), 0, [], []
     for _ in range(steps):
         k1, e1 = f(xk, us)
         k2, e2 = f(xk + hs / 2 * k1, us)
@@ -205,7 +233,8 @@ def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
         energy = energy + hs / 6 * (e1 + 2 * e2 + 2 * e3 + e4)
         cur.append(xk[0])
         spd.append(xk[2])
-    step = ca.Function("step", [xs, us, hs], [xk / scale, energy, ca.vertcat(*cur), ca.vertcat(*spd)])
+    step = ca.Function("step", [xs, us, hs], [ca.mtimes(ca.DM(A), xk) / scale, energy, ca.vertcat(*cur),
+                                              ca.vertcat(*spd)])
     opti = ca.Opti()
     X = opti.variable(5, intervals + 1)
     U = opti.variable(1, intervals)
@@ -214,8 +243,8 @@ def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
     h = T / (intervals * steps)
     nxt, e, cur_all, spd_all = step.map(intervals)(X[:, :-1], U, ca.repmat(h, 1, intervals))
     opti.subject_to(X[:, 1:] == nxt)
-    opti.subject_to(X[:, 0] == x0 / scale)
-    opti.subject_to(X[:, -1] == xf / scale)
+    opti.subject_to(X[:, 0] == A @ x0 / scale)
+    opti.subject_to(X[:, -1] == A @ xf / scale)
     opti.subject_to(opti.bounded(-p["vmax"], U, p["vmax"]))
     opti.subject_to(opti.bounded(-p["imax"], ca.vec(cur_all), p["imax"]))
     if p["wmax"]:
@@ -227,19 +256,19 @@ def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
         opti.minimize(ca.sum2(e))
     if guess is None:  # straight lines between the rest states, the holding voltage
         s = np.linspace(0.0, 1.0, intervals + 1)
-        opti.set_initial(X, np.outer(x0 / scale, 1 - s) + np.outer(xf / scale, s))
+        opti.set_initial(X, np.outer(A @ x0 / scale, 1 - s) + np.outer(A @ xf / scale, s))
         opti.set_initial(U, p["R"] * x0[0])
         if free:
             opti.set_initial(T, p["final_time"])
     else:  # the coarser solve's, on the same normalised time
         s_old, s_new = np.linspace(0, 1, guess["X"].shape[1]), np.linspace(0, 1, intervals + 1)
-        opti.set_initial(X, np.vstack([np.interp(s_new, s_old, row) for row in guess["X"] / scale[:, None]]))
+        opti.set_initial(X, np.vstack([np.interp(s_new, s_old, row) for row in A @ guess["X"] / scale[:, None]]))
         mid_old, mid_new = (s_old[:-1] + s_old[1:]) / 2, (s_new[:-1] + s_new[1:]) / 2
         opti.set_initial(U, np.interp(mid_new, mid_old, guess["U"]))
         if free:
             opti.set_initial(T, guess["final_time"])
     opti.solver("ipopt", {"print_time": False, "expand": True},
-                {"print_level": 0, "max_iter": 3000, "tol": 1e-9, "sb": "yes"})
+                {"print_level": 0, "max_iter": 3000, "tol": 1e-9, "sb": "yes", **({"mu_init": mu_init} if mu_init else {})})
     start = time.process_time()
     try:
         sol = opti.solve()
@@ -248,7 +277,7 @@ def solve(p: dict, intervals: int, guess: dict | None = None) -> dict:
     status = opti.stats()["return_status"]
     return {"objective": float(sol.value(opti.f)), "final_time": float(sol.value(T)) if free else p["final_time"],
             "status": status, "cpu_s": time.process_time() - start, "steps": steps, "intervals": intervals,
-            "X": np.atleast_2d(sol.value(X)) * scale[:, None], "U": np.atleast_1d(sol.value(U)).astype(float)}
+            "X": A_inv @ (np.atleast_2d(sol.value(X)) * scale[:, None]), "U": np.atleast_1d(sol.value(U)).astype(float)}
 
 
 def _extrapolate(runs: list[dict]) -> tuple[float | None, float]:
@@ -270,11 +299,18 @@ def _extrapolate(runs: list[dict]) -> tuple[float | None, float]:
     return None, e[-1]
 
 
-def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
+def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict | None = None) -> dict:
     """The member's reference: :func:`solve` at each resolution, each started from the previous.
 
     The coarsest is solved from straight lines between the rest states and from :func:`rigid_guess`;
-    the lower objective of those IPOPT solved is kept. A resolution whose objective is more than
+    the lower objective of those IPOPT solved is kept. With ``start`` (a guess as :func:`solve` takes
+    it: ``X`` (5, K) at equal steps over ``final_time``, ``U`` (K-1,) on the steps between) every resolution
+    is solved from it alone, with IPOPT's barrier started at :data:`WARM_MU` (the stiff ball screws, whose
+    own starts IPOPT does not finish at 75 intervals:
+    drive0_33 from straight lines: in restoration after 550 iterations; through a continuation of the smoothing widths
+    (x100, x10, x1: 33 and 21 CPU-s for the first two) Maximum_Iterations_Exceeded at 2.73 s after
+    568 CPU-s). The solves and their discretisation stay this module's own; the start selects the
+    basin. A resolution whose objective is more than
     1 % above the best resolution's (another local optimum: drive0_13 ended 0.355 s at 75 and
     0.924 s at 150 intervals, 0.129 s at 300) is solved again from the best one's solution, and
     the lower kept.
@@ -289,7 +325,7 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
     recorded (``finer_failed``: its intervals, status, objective and CPU-s).
 
     Returns a dict: ``objective`` (extrapolated), ``fine_objective`` and ``final_time`` (the
-    finest's), ``order`` (None: not extrapolated), ``status`` (IPOPT's, finest) and
+    finest's), ``start`` (``"own"`` or ``"given"``), ``order`` (None: not extrapolated), ``status`` (IPOPT's, finest) and
     ``coarse_status`` (the worst of the others), ``cpu_s`` (all solves), ``by_intervals``
     (objective per resolution), ``spread`` (the two finest's difference, relative), ``U``
     (the finest's voltages), and of its dense re-simulation ``worst_bound_excess``,
@@ -297,6 +333,11 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
     """
     runs, prev = [], None
     for n in resolutions:
+        if start is not None:  # each resolution from the given start, warm (drive0_33 from gtmodel's answer at 300
+            # intervals: 24.2 CPU-s; from the 150's solution, IPOPT's default barrier: unfinished after 5 CPU-min)
+            prev = solve(p, n, guess=start, mu_init=WARM_MU)
+            runs.append(prev)
+            continue
         run = solve(p, n, guess=prev)
         if prev is None:  # the coarsest from the rigid profile too: the lower of the two that succeeded (drive0_13 from
             # straight lines: 0.452 s at 75 intervals, 0.931 s at 150 from it, 0.129 s at 300; drive0_09: infeasible)
@@ -337,7 +378,8 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS) -> dict:
             "by_intervals": {str(r["intervals"]): r["objective"] for r in runs},
             "spread": (e[-2] - e[-1]) / abs(e[-1]), "steps": fine["steps"],
             "U": fine["U"].tolist(), "worst_bound_excess": sim["worst_bound_excess"], "end_error": sim["end_error"],
-            "simulated_objective": sim["objective"], **({"finer_failed": finer_failed} if finer_failed else {})}
+            "simulated_objective": sim["objective"], "start": "own" if start is None else "given",
+            **({"finer_failed": finer_failed} if finer_failed else {})}
 
 
 def constant_pieces(final_time: float, U: Any) -> list[tuple[float, float, np.ndarray]]:

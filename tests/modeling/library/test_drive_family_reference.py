@@ -242,3 +242,68 @@ def test_a_finer_resolution_ipopt_did_not_finish_is_left_out_and_said(ref, monke
     out = ref.reference(RIGID)
     assert list(out["by_intervals"]) == ["75", "150", "300"] and out["order"] == pytest.approx(0.55)
     assert out["finer_failed"] == {"intervals": 600, "status": "Maximum_Iterations_Exceeded", "objective": 1.16, "cpu_s": 1.0}
+
+
+def test_a_given_start_replaces_the_own_starts_of_the_coarsest(ref, monkeypatch):
+    # with a start (gtmodel's answer, --reference-start gtmodel) each resolution is solved once, from it, with the warm
+    # barrier; the reference says it was started so. Without one: the coarsest twice (lines, rigid), each finer one
+    # from the coarser, at IPOPT's default barrier
+    values = {n: 1 + 0.05 / n for n in (75, 150, 300)}  # order 1: no finer resolution asked for
+    guesses = []
+
+    def fake_solve(p, n, guess=None, mu_init=None):
+        guesses.append((n, None if guess is None else guess.get("tag", guess.get("intervals")), mu_init))
+        return {"objective": values[n], "final_time": values[n], "status": "Solve_Succeeded", "cpu_s": 1.0, "steps": 1,
+                "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
+
+    monkeypatch.setattr(ref, "solve", fake_solve)
+    monkeypatch.setattr(ref, "rigid_guess", lambda p, n: {"tag": "rigid"})
+    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
+    given = ref.reference(RIGID, start={"tag": "given"})
+    warm = ref.WARM_MU
+    assert guesses == [(75, "given", warm), (150, "given", warm), (300, "given", warm)] and given["start"] == "given"
+    guesses.clear()
+    own = ref.reference(RIGID)
+    assert guesses == [(75, None, None), (75, "rigid", None), (150, 75, None), (300, 150, None)] and own["start"] == "own"
+    assert own["objective"] == pytest.approx(given["objective"]) == pytest.approx(1.0)
+
+
+class _Answer:
+    """A result's ``sample`` over a linear motion: each state ``s`` holds ``scale * t``, the voltage ``10 t``."""
+
+    final_time = 0.3
+
+    def __init__(self, states):
+        self.states = states
+
+    def sample(self, t):
+        t = np.asarray(t, dtype=float)
+        return {"t": t, "states": {n: k * t for n, k in self.states.items()}, "algebraics": {}, "outputs": {},
+                "inputs": {"src.v": 10 * t}}
+
+
+LINEAR = {"ind.i": 1.0, "emf.phi": 2.0, "rotor.w": 3.0, "load.s": 4.0, "load.v": 5.0}
+
+
+@pytest.mark.parametrize(("states", "expected"), [
+    (LINEAR, [1.0, 2.0, 3.0, 4.0, 5.0]),   # the motor angle found under the EMF's alias
+    ({**LINEAR, "rotor.phi": 7.0}, [1.0, 7.0, 3.0, 4.0, 5.0]),  # its own name first
+    ({n: k for n, k in LINEAR.items() if n != "load.v"}, None),  # a state missing: no start
+])
+def test_gtmodel_start_samples_the_answer_in_the_reference_states(states, expected):
+    # bench_drive_family.gtmodel_start: the rest state's five states at 4 equal steps of the answer's 0.3 s (closed form
+    # of the linear answer: scale * t), the voltage at the steps' midpoints
+    member = FAMILY["drive0_33_ball_screw_min_time"]
+    with benchmark_module("bench_drive_family") as bench:
+        start = bench.gtmodel_start(member, _Answer(states), intervals=3)
+    t = np.linspace(0.0, 0.3, 4)
+    if expected is None:
+        assert start is None
+    else:
+        assert start["final_time"] == 0.3 and start["X"] == pytest.approx(np.outer(expected, t))
+        assert start["U"] == pytest.approx(10 * (t[:-1] + t[1:]) / 2)
+
+
+def test_gtmodel_start_of_an_answer_without_polynomials_is_none():
+    with benchmark_module("bench_drive_family") as bench:
+        assert bench.gtmodel_start(FAMILY["drive0_33_ball_screw_min_time"], SimpleNamespace(final_time=0.3)) is None
