@@ -351,7 +351,7 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
     best = min((r for r in runs if r["status"] in _SUCCEEDED), key=lambda r: r["objective"], default=None)
     for j, run in enumerate(runs):  # a resolution left in a worse local optimum: again from the best one's solution
         if best is not None and run is not best and run["objective"] - best["objective"] > 0.01 * abs(best["objective"]):
-            again = solve(p, run["intervals"], guess=best)
+            again = solve(p, run["intervals"], guess=best, mu_init=None if start is None else WARM_MU)  # warm as the start
             again["cpu_s"] += run["cpu_s"]
             runs[j] = again if again["status"] in _SUCCEEDED and again["objective"] < run["objective"] else run
     order, extrapolated = _extrapolate(runs)

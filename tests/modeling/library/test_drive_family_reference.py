@@ -307,3 +307,24 @@ def test_gtmodel_start_samples_the_answer_in_the_reference_states(states, expect
 def test_gtmodel_start_of_an_answer_without_polynomials_is_none():
     with benchmark_module("bench_drive_family") as bench:
         assert bench.gtmodel_start(FAMILY["drive0_33_ball_screw_min_time"], SimpleNamespace(final_time=0.3)) is None
+
+
+def test_a_given_start_solves_a_worse_resolution_again_warm_from_the_best(ref, monkeypatch):
+    # drive0_33 from gtmodel's answer: 0.2499 s at 75 intervals, 0.2406 s at 300 (the 75 over 1 % worse: another local
+    # optimum), so the 75 is solved again from the 300's solution, with the warm barrier as the start's own solves
+    values = {75: 1.05, 150: 1.0005, 300: 1.0}
+    calls = []
+
+    def fake_solve(p, n, guess=None, mu_init=None):
+        again = guess is not None and "intervals" in guess
+        calls.append((n, guess["intervals"] if again else "given", mu_init))
+        e = values[n] - (0.04 if again else 0.0)
+        return {"objective": e, "final_time": e, "status": "Solve_Succeeded", "cpu_s": 1.0, "steps": 1, "intervals": n,
+                "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
+
+    monkeypatch.setattr(ref, "solve", fake_solve)
+    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
+    out = ref.reference(RIGID, start={"tag": "given"})
+    warm = ref.WARM_MU
+    assert calls == [(75, "given", warm), (150, "given", warm), (300, "given", warm), (75, 300, warm)]
+    assert out["by_intervals"]["75"] == pytest.approx(1.01)
