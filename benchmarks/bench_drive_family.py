@@ -68,6 +68,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # drive_family_referen
 
 import drive_family_reference as ref  # noqa: E402
 
+from gtmodel.errors import GtModelError  # noqa: E402
 from gtmodel.modeling.library.drive_family import DriveMember, drive_family, write_problem  # noqa: E402
 from gtmodel.problems import run_problem  # noqa: E402
 
@@ -122,13 +123,14 @@ def gtmodel_start(member: DriveMember, solution: Any, intervals: int = 2 * ref.R
 
     The five states of :meth:`DriveMember.rest_state` at ``intervals + 1`` equal steps over the
     answer's final time and the voltage at the steps' midpoints (:meth:`OptimizationResult.sample`);
-    None when the answer holds no polynomials or a state is not found.
+    None when the answer holds no polynomials (``sample`` missing or raising a
+    :class:`~gtmodel.errors.GtModelError`) or a state is not found: the reference then uses its own starts.
     """
     try:
         tf = float(solution.final_time)
         t = np.linspace(0.0, tf, intervals + 1)
         at, mid = solution.sample(t), solution.sample((t[:-1] + t[1:]) / 2)
-    except Exception:  # no collocation data (a failed run): no start
+    except (AttributeError, TypeError, GtModelError):  # no answer (a failed run) or no polynomials: no start
         return None
     found = {**at["outputs"], **at["algebraics"], **at["states"]}
     rows = []

@@ -15,6 +15,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from gtmodel.errors import InputError
 from gtmodel.modeling.library.drive_family import drive_family, write_problem
 from gtmodel.modeling.ocp.result import CollocationData
 
@@ -304,11 +305,6 @@ def test_gtmodel_start_samples_the_answer_in_the_reference_states(states, expect
         assert start["U"] == pytest.approx(10 * (t[:-1] + t[1:]) / 2)
 
 
-def test_gtmodel_start_of_an_answer_without_polynomials_is_none():
-    with benchmark_module("bench_drive_family") as bench:
-        assert bench.gtmodel_start(FAMILY["drive0_33_ball_screw_min_time"], SimpleNamespace(final_time=0.3)) is None
-
-
 def test_a_given_start_solves_a_worse_resolution_again_warm_from_the_best(ref, monkeypatch):
     # drive0_33 from gtmodel's answer: 0.2499 s at 75 intervals, 0.2406 s at 300 (the 75 over 1 % worse: another local
     # optimum), so the 75 is solved again from the 300's solution, with the warm barrier as the start's own solves
@@ -328,3 +324,19 @@ def test_a_given_start_solves_a_worse_resolution_again_warm_from_the_best(ref, m
     warm = ref.WARM_MU
     assert calls == [(75, "given", warm), (150, "given", warm), (300, "given", warm), (75, 300, warm)]
     assert out["by_intervals"]["75"] == pytest.approx(1.01)
+
+
+class _NoPolynomials:
+    """A result whose ``sample`` raises as OptimizationResult.sample does without collocation data."""
+
+    final_time = 0.3
+
+    def sample(self, t):
+        raise InputError("this result holds no collocation data to sample")
+
+
+@pytest.mark.parametrize("answer", [SimpleNamespace(final_time=0.3), _NoPolynomials(), SimpleNamespace(final_time=None)],
+                         ids=["no_sample", "sample_raises", "no_final_time"])
+def test_gtmodel_start_of_an_answer_without_polynomials_is_none(answer):
+    with benchmark_module("bench_drive_family") as bench:
+        assert bench.gtmodel_start(FAMILY["drive0_33_ball_screw_min_time"], answer) is None
