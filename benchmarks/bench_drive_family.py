@@ -238,11 +238,16 @@ def main(argv: list[str] | None = None) -> dict:
     logging.getLogger("gtmodel").setLevel(logging.ERROR)  # gtmodel solve --quiet: the rows say what happened
     cache = ref.load_cache() if a.cached else {}
     print(f"load average {os.getloadavg()[0]:.2f}; drive family seed {a.seed}, {a.members} member(s)", flush=True)
+    members = drive_family(max(a.members, 1), a.seed)
+    only = {n for n in a.only.split(",") if n}
+    unknown = sorted(only - {m.name for m in members})
+    if unknown:  # up-front, like argparse's own errors: exit 2, naming the argument and what it expected
+        ap.error(f"--only: {', '.join(unknown)} not among the first {len(members)} member(s) of seed {a.seed} "
+                 f"(names such as {members[0].name})")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         folder = a.keep or Path(tmp)
-        only = {n for n in a.only.split(",") if n}
-        for member in drive_family(max(a.members, 1), a.seed):
+        for member in members:
             if only and member.name not in only:
                 continue
             row = run_member(member, folder, ref.cached(cache, member.name, member.parameter_hash()), not a.no_reference,

@@ -10,6 +10,7 @@ with gtmodel's default path (``gtmodel solve``'s: ``run_problem``) against the c
 from __future__ import annotations
 
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -340,3 +341,16 @@ class _NoPolynomials:
 def test_gtmodel_start_of_an_answer_without_polynomials_is_none(answer):
     with benchmark_module("bench_drive_family") as bench:
         assert bench.gtmodel_start(FAMILY["drive0_33_ball_screw_min_time"], answer) is None
+
+
+@pytest.mark.parametrize("only, match", [
+    ("nope", r"--only: nope not among the first 2 member\(s\) of seed 0"),
+    ("drive0_05_gear_min_time", r"--only: drive0_05_gear_min_time not among the first 2"),  # a member, past --members
+])
+def test_only_naming_no_member_is_an_up_front_error(only, match, capsys):
+    # bench_drive_family.main: an --only name outside the family is argparse's error (exit 2) before any solve
+    with benchmark_module("bench_drive_family") as bench:
+        with pytest.raises(SystemExit) as stop:
+            bench.main(["--members", "2", "--only", only, "--no-reference"])
+    assert stop.value.code == 2
+    assert re.search(match, capsys.readouterr().err)
