@@ -79,8 +79,8 @@ MAX_BOUND_EXCESS = 1e-2
 SHOOTING_CPU_S = 300.0
 #: IPOPT's statuses of a reference that counts, and the largest relative difference of its two resolutions: otherwise
 #: (a failed solve, or local optima at different resolutions) the member has no relative error and does not pass.
-REFERENCE_OK = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
-MAX_REFERENCE_SPREAD = 0.02
+REFERENCE_OK = ref._SUCCEEDED
+MAX_REFERENCE_SPREAD = ref.MAX_SPREAD
 #: CasADi's own error text, which no message of a multiple-shooting run may carry (issue 64: "one line: the stage, the
 #: likely cause, the fix").
 RAW_CASADI = re.compile(r"Error in Function|casadi_|\.cpp:\d+|CasADi - ")

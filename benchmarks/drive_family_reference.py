@@ -68,6 +68,14 @@ MAX_INTERVALS = 600
 #: iterations leave the start's basin (drive0_33 at 300 intervals: restoration by iteration 60, 0.38 s at 100,
 #: unfinished after 26 CPU-min); 1e-4: Solve_Succeeded, 0.24056 s in 24.2 CPU-s (measured 2026-11-27).
 WARM_MU = 1e-4
+#: The most RK4 steps in all (intervals x steps per interval) for which the NLP is expanded into one SX graph
+#: (IPOPT's callbacks fastest); above, each interval's steps stay one SX function, mapped over the intervals, its
+#: derivatives generated once. drive0_36 at 75 intervals (183 steps each, 13,725 in all) from its own start:
+#: expanded, Solve_Succeeded in 397.5 CPU-s, 9.5 GB; not, 355 MB but unfinished after 15 CPU-min. drive0_23
+#: (539 steps each, 40,425): expanded, 16 GB and the OOM killer (measured 2026-11-27).
+EXPAND_STEPS = 20000
+#: The most the two finest resolutions of a reference that counts may differ, relative (bench_drive_family.reference_failed).
+MAX_SPREAD = 0.02
 _SUCCEEDED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 G_ACC = 9.81
 
@@ -207,7 +215,8 @@ def _coordinates(p: dict, xf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return A, np.array([p["imax"], deflection, wscale, max(p["distance"], 1e-3), G * wscale])
 
 
-def solve(p: dict, intervals: int, guess: dict | None = None, mu_init: float | None = None) -> dict:
+def solve(p: dict, intervals: int, guess: dict | None = None, mu_init: float | None = None,
+          expand: bool | None = None) -> dict:
     """One multiple-shooting solve (see the module's docstring) at ``intervals`` intervals.
 
     ``mu_init`` IPOPT's initial barrier parameter (None: its default, 0.1); :data:`WARM_MU` for a
@@ -267,7 +276,9 @@ def solve(p: dict, intervals: int, guess: dict | None = None, mu_init: float | N
         opti.set_initial(U, np.interp(mid_new, mid_old, guess["U"]))
         if free:
             opti.set_initial(T, guess["final_time"])
-    opti.solver("ipopt", {"print_time": False, "expand": True},
+    if expand is None:
+        expand = intervals * steps <= EXPAND_STEPS
+    opti.solver("ipopt", {"print_time": False, "expand": bool(expand)},
                 {"print_level": 0, "max_iter": 3000, "tol": 1e-9, "sb": "yes", **({"mu_init": mu_init} if mu_init else {})})
     start = time.process_time()
     try:
@@ -322,7 +333,11 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
     intervals) and a smooth optimum's O(h^2). An observed order below :data:`MIN_ORDER` is therefore
     pre-asymptotic: the reference solves at twice the finest resolution (up to :data:`MAX_INTERVALS`)
     and extrapolates from the three finest; a finer solve that IPOPT does not finish is left out and
-    recorded (``finer_failed``: its intervals, status, objective and CPU-s).
+    recorded (``finer_failed``: its intervals, status, objective and CPU-s). Without an order, a
+    reference that would not count (its two finest more than :data:`MAX_SPREAD` apart, or one of them
+    unsolved) goes finer the same way; a coarser resolution its objective does not rest on (the three
+    finest with an order, else the two finest) no longer decides ``coarse_status``, and one IPOPT did
+    not solve is recorded in ``left_out`` (intervals: status).
 
     Returns a dict: ``objective`` (extrapolated), ``fine_objective`` and ``final_time`` (the
     finest's), ``start`` (``"own"`` or ``"given"``), ``order`` (None: not extrapolated), ``status`` (IPOPT's, finest) and
@@ -356,10 +371,13 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
             runs[j] = again if again["status"] in _SUCCEEDED and again["objective"] < run["objective"] else run
     order, extrapolated = _extrapolate(runs)
     finer_failed = None
-    while order is not None and order < MIN_ORDER and runs[-1]["intervals"] < MAX_INTERVALS:
+    while runs[-1]["intervals"] < MAX_INTERVALS and (order is not None and order < MIN_ORDER or order is None and _undecided(runs)):
         # pre-asymptotic (drive0_38: 0.3568, 0.3540, 0.3521 at 75/150/300, order 0.55, extrapolated 0.3481):
-        # the error of a piecewise-constant input is at least O(h), so one finer resolution decides
-        finer = solve(p, 2 * runs[-1]["intervals"], guess=runs[-1])
+        # the error of a piecewise-constant input is at least O(h), so one finer resolution decides; likewise no order and
+        # a reference that would not count (drive0_16 from gtmodel's answer: 75 intervals Infeasible_Problem_Detected,
+        # 150/300 solved 1.17 % apart; drive0_11: 1.207, 1.183, 1.155 s, 2.37 % apart)
+        finer = solve(p, 2 * runs[-1]["intervals"], guess=runs[-1] if start is None else start,
+                      mu_init=None if start is None else WARM_MU)
         if finer["status"] not in _SUCCEEDED:  # a finer solve IPOPT did not finish decides nothing (drive0_38 at 600
             # intervals: Maximum_Iterations_Exceeded at 0.4199, 1,970 CPU-s; from the 300's voltage held on the 600 grid and
             # simulated by its own RK4 steps, a start meeting every shooting constraint but the end's, as well:
@@ -371,7 +389,9 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
         order, extrapolated = _extrapolate(runs)
     fine, e = runs[-1], [r["objective"] for r in runs]
     sim = resimulate(p, constant_pieces(fine["final_time"], fine["U"]))
-    ok = [r["status"] for r in runs[:-1] if r["status"] != "Solve_Succeeded"]
+    used = _used(runs, order)
+    ok = [r["status"] for r in used[:-1] if r["status"] != "Solve_Succeeded"]
+    left_out = {str(r["intervals"]): r["status"] for r in runs if r not in used and r["status"] not in _SUCCEEDED}
     return {"objective": extrapolated, "fine_objective": fine["objective"], "order": order,
             "final_time": fine["final_time"], "status": fine["status"], "coarse_status": ok[0] if ok else "Solve_Succeeded",
             "cpu_s": sum(r["cpu_s"] for r in runs),
@@ -379,7 +399,19 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
             "spread": (e[-2] - e[-1]) / abs(e[-1]), "steps": fine["steps"],
             "U": fine["U"].tolist(), "worst_bound_excess": sim["worst_bound_excess"], "end_error": sim["end_error"],
             "simulated_objective": sim["objective"], "start": "own" if start is None else "given",
-            **({"finer_failed": finer_failed} if finer_failed else {})}
+            **({"finer_failed": finer_failed} if finer_failed else {}), **({"left_out": left_out} if left_out else {})}
+
+
+def _used(runs: list[dict], order: float | None) -> list[dict]:
+    """The runs a reference's objective rests on: the three finest with an order (two only: both), else the two finest."""
+    return runs[-3:] if order is not None else runs[-2:]
+
+
+def _undecided(runs: list[dict]) -> bool:
+    """True when a reference without an order would not count: a run it rests on unsolved, or its two finest over
+    :data:`MAX_SPREAD` apart (a finer resolution may decide it)."""
+    a, b = _used(runs, None)
+    return a["status"] not in _SUCCEEDED or b["status"] not in _SUCCEEDED or not abs(a["objective"] - b["objective"]) <= MAX_SPREAD * abs(b["objective"])
 
 
 def constant_pieces(final_time: float, U: Any) -> list[tuple[float, float, np.ndarray]]:

@@ -112,7 +112,7 @@ def test_reference_adds_a_resolution_when_the_order_is_pre_asymptotic(ref, monke
     values[600] = values[300] - 0.5 * (values[150] - values[300])
     solved = []
 
-    def fake_solve(p, n, guess=None):
+    def fake_solve(p, n, guess=None, mu_init=None):
         solved.append(n)
         e = values[n]
         return {"objective": e, "final_time": e, "status": "Solve_Succeeded", "cpu_s": 0.0, "steps": 1, "intervals": n,
@@ -234,7 +234,7 @@ def test_a_finer_resolution_ipopt_did_not_finish_is_left_out_and_said(ref, monke
     values = {n: 1 + 0.05 * n**-0.55 for n in (75, 150, 300)}
     values[600] = 1.16
 
-    def fake_solve(p, n, guess=None):
+    def fake_solve(p, n, guess=None, mu_init=None):
         status = "Maximum_Iterations_Exceeded" if n == 600 else "Solve_Succeeded"
         return {"objective": values[n], "final_time": values[n], "status": status, "cpu_s": 1.0, "steps": 1,
                 "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
@@ -354,3 +354,46 @@ def test_only_naming_no_member_is_an_up_front_error(only, match, capsys):
             bench.main(["--members", "2", "--only", only, "--no-reference"])
     assert stop.value.code == 2
     assert re.search(match, capsys.readouterr().err)
+
+
+def _fake_runs(values: dict, status: dict | None = None):
+    """A fake solve returning ``values[n]`` (status ``status.get(n)`` or solved) and the list of calls it saw."""
+    calls = []
+
+    def fake_solve(p, n, guess=None, mu_init=None):
+        calls.append((n, mu_init))
+        return {"objective": values[n], "final_time": values[n], "status": (status or {}).get(n, "Solve_Succeeded"),
+                "cpu_s": 1.0, "steps": 1, "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
+    return fake_solve, calls
+
+
+START = {"X": np.zeros((5, 4)), "U": np.zeros(3), "final_time": 1.0}
+
+
+@pytest.mark.parametrize("case, values, status, solved, coarse, left_out, counts", [
+    # drive0_16 from gtmodel's answer: 75 intervals infeasible, 150/300 1.17 % apart: no order, the two finest carry it
+    # (within 2 %: nothing finer) and the infeasible 75 is said in left_out, no longer its coarse_status
+    ("coarsest unsolved", {75: 19.5, 150: 7.682, 300: 7.593}, {75: "Infeasible_Problem_Detected"},
+     [75, 150, 300, 75, 150], "Solve_Succeeded", {"75": "Infeasible_Problem_Detected"}, True),
+    # drive0_11's shape: differences that grow (no order), the two finest 2.4 % apart: 600 added; 1.13 then within 2 %
+    ("no order, over 2 %", {75: 1.2073, 150: 1.1828, 300: 1.1554, 600: 1.1450}, {}, [75, 150, 300, 75, 150, 600],
+     "Solve_Succeeded", None, True),
+    # no order but the two finest within 2 % (a sign change of the differences): nothing finer, as before
+    ("no order, within 2 %", {75: 1.0, 150: 1.008, 300: 1.004}, {}, [75, 150, 300], "Solve_Succeeded", None, True),
+    # 600 unsolved too: the reference stays the 150/300 one and does not count (its two finest 2.4 % apart)
+    ("finer unsolved", {75: 1.2073, 150: 1.1828, 300: 1.1554, 600: 1.3}, {600: "Maximum_Iterations_Exceeded"},
+     [75, 150, 300, 75, 150, 600], "Solve_Succeeded", None, False),
+])
+def test_a_reference_without_an_order_that_would_not_count_goes_finer(ref, monkeypatch, case, values, status, solved,
+                                                                        coarse, left_out, counts):
+    # drive_family_reference.reference with a given start (each resolution warm from it): the rule checked on fake solves;
+    # a resolution over 1 % above the best is solved again from it (the fake returns the same), hence 75 and 150 twice
+    fake, calls = _fake_runs(values, status)
+    monkeypatch.setattr(ref, "solve", fake)
+    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
+    out = ref.reference(RIGID, start=START)
+    assert [n for n, _ in calls] == solved
+    assert {mu for _, mu in calls} == {ref.WARM_MU}  # every solve, the finer one too, warm from the start
+    assert out["coarse_status"] == coarse and out.get("left_out") == left_out
+    with benchmark_module("bench_drive_family") as bench:
+        assert bench.reference_failed(out) is (not counts)
