@@ -11,8 +11,8 @@ choose the elements to split:
   An element above the tolerance is split into 2, 3 or 4 equal parts (by how far it is
   above: below ``10 tol``, ``100 tol``, beyond). When every element is within the tolerance but
   the simulation over the horizon is not (the local errors add up), the elements are compared
-  with ``tol * tol / deviation`` instead (with half the largest defect where none exceeds that), so that the
-  largest contributors are split. Where an input's polynomial exceeds its bound, the verification simulates the
+  with ``ADD_UP * max(defect) * tol / deviation`` instead (:data:`~gtmodel.modeling.ocp.refinement_mesh.ADD_UP`),
+  so that the contributors are split together. Where an input's polynomial exceeds its bound, the verification simulates the
   inputs clipped to their bounds (:func:`~gtmodel.modeling.ocp.verification.check_result`), and an element split
   for its defect is cut where its input's polynomial leaves and re-enters the bound too (the clipped input's
   kinks: :func:`~gtmodel.modeling.ocp.verification_bounds.input_bound_crossings`).
