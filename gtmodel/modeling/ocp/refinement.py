@@ -106,13 +106,14 @@ from gtmodel.modeling.ocp.collocation import CollocationTranscription
 from gtmodel.modeling.ocp.methods import VerificationSettings
 from gtmodel.modeling.ocp.optimization import Optimization
 from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
-from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements, verify
+from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements
 from gtmodel.modeling.ocp.verification_bounds import bounds_verdict, element_bound_violations
 from gtmodel.modeling.ocp.refinement_remedy import refinement_remedy
 from gtmodel.modeling.ocp.budget import max_elements as memory_max_elements
 from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, merged_spans
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
+from gtmodel.modeling.ocp.refinement_guess import guess_from, repaired_guess, solved_cold
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
 
@@ -132,44 +133,6 @@ STALL_PASSES = 4
 #: :data:`SPURIOUS_DEVIATION`, marks a spurious minimum of the NLP rather than a
 #: discretisation error: the next pass starts from a repaired guess.
 SPURIOUS = 100.0
-
-
-def _guess_from(result: OptimizationResult) -> dict[str, Any]:
-    """An initial guess mapping from a result: its trajectories on its mesh and its final time."""
-    out: dict[str, Any] = {"final_time": result.final_time}
-    t = np.asarray(result.t, dtype=float)
-    keep = np.concatenate([[True], np.diff(t) > 0])
-    for group in (result.states, result.inputs, result.algebraics):
-        for name, values in group.items():
-            out[name] = (t[keep], np.asarray(values, dtype=float)[keep])
-    return out
-
-
-def _repaired_guess(result: OptimizationResult, tolerance: float) -> dict[str, Any]:
-    """A guess away from a spurious minimum: the inputs of the elements whose defect exceeds
-    the tolerance interpolated from the other elements', the states simulated under them."""
-    col, v = result.collocation, result.verification
-    bad = np.asarray(v.element_errors) > tolerance
-    guess = _guess_from(result)
-    if col is None or not bad.any() or bad.all() or col.uc.shape[2] == 0:
-        return guess
-    breaks = col.breaks()
-    tc = breaks[:-1, None] + col.tau_root[None, 1:] * np.diff(breaks)[:, None]  # (N, d)
-    uc = col.uc.copy()
-    for i in range(uc.shape[2]):
-        uc[bad, :, i] = np.interp(tc[bad], tc[~bad].ravel(), uc[~bad, :, i].ravel())
-    repaired = copy.copy(result)
-    repaired.collocation = dataclasses.replace(col, uc=uc)
-    sim = verify(repaired, tolerance)
-    if sim.simulated.size == 0:
-        return guess
-    t_sim = np.concatenate([[col.t0], sim.t])
-    x_sim = np.vstack([col.xc[0, 0][None, :], sim.simulated])
-    for name, sl in result.dae.x_vars.items():
-        guess[name] = (t_sim, x_sim[:, sl])
-    for name, sl in result.dae.u_vars.items():
-        guess[name] = (tc.ravel(), uc.reshape(-1, uc.shape[2])[:, sl])
-    return guess
 
 
 def end_deviation(result: OptimizationResult) -> float:
@@ -420,6 +383,8 @@ def solve_refined(
             else:
                 tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
                 result = tr.solve(parameters=parameters, initial_guess=guess)
+                if warm and result.verification is None and options.get("solver", "ipopt") == "ipopt":  # no solution warm
+                    result = solved_cold(tr, result, guess, parameters, budget - (_time.process_time() - cpu0))
             warm_from = tr if result.lam_g is not None else None
             if (not polish and warm_from is not None and options.get("solver", "ipopt") == "ipopt"
                     and result.stats.get("return_status") == "Solved_To_Acceptable_Level"):
@@ -438,8 +403,9 @@ def solve_refined(
         entry = _pass_entry(n_pass, _Mesh(n_elements, tr_points), result, cpu, wall)
         history.append(entry)
         passes.append(result)
-        if "continued" in result.stats:
-            entry["continued"] = result.stats["continued"]  # the acceptable stop continued to IPOPT's tolerance
+        for key in ("continued", "cold_retry"):  # the acceptable stop continued; a warm pass without a solution cold again
+            if key in result.stats:
+                entry[key] = result.stats[key]
         if polish:
             entry["polished"] = True  # IPOPT's acceptable stop off in this pass
         if (result.stats or {}).get("regularization"):  # the input regularisation's value in this pass's NLP objective
@@ -549,9 +515,9 @@ def solve_refined(
             # not a discretisation error but a spurious minimum of the NLP (its simulation does not reach its
             # end): start the next pass away from it (its own trajectory would lead back)
             entry["restart"] = "inputs of the failing elements interpolated, states simulated"
-            guess, warm = _repaired_guess(result, tol), False
+            guess, warm = repaired_guess(result, tol), False
         else:
-            guess, warm = _guess_from(base), True
+            guess, warm = guess_from(base), True
         scales = input_scales(base) if reg_weight > 0 else None  # a minimum-time problem's inputs regularised from here on
     # verified: the deviations within the tolerance and the state bounds kept between the nodes (_kept); else a verified
     # pass at IPOPT's acceptable level: the best of them, not the smallest deviation (the flexible joint's pass 9,

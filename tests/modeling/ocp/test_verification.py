@@ -356,3 +356,36 @@ def test_refinement_from_a_start_does_not_solve_it_again():
     res = solve_refined(opt, elements=11, start=start, max_passes=3)
     assert res.refinement[0]["objective"] == start.objective and res.refinement[0]["elements"] == 11
     assert res.final_time <= start.final_time + 1e-9  # never worse than its feasible start
+
+
+def test_a_warm_pass_without_a_solution_is_solved_again_cold(monkeypatch):
+    # refinement_guess.solved_cold: the second pass's warm solve is held to 2 IPOPT iterations (no solution, as
+    # drive1_18's Restoration_Failed); solved again from the same start with IPOPT's own barrier and bound push, the
+    # refinement goes on and ends at the closed form's 2 s
+    real = refinement.CollocationTranscription
+    made: list = []
+
+    def spy(*args, **kwargs):
+        tr = real(*args, **kwargs)
+        made.append(tr)
+        if len(made) == 2:
+            solve = tr.solve
+
+            def failing_once(*a, **k):
+                tr.set_solver_options({"max_iter": 2})
+                failed = solve(*a, **k)
+                tr.set_solver_options({"max_iter": 3000})
+                tr.solve = solve
+                return failed
+            tr.solve = failing_once
+        return tr
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    opt = min_time_double_integrator()
+    opt.verification_tolerance = 1e-6
+    res = solve_refined(opt, elements=11)
+    retry = res.refinement[1]["cold_retry"]
+    assert retry["warm_status"] == "max_iterations" and retry["warm_iterations"] == 2 and retry["status"] == "optimal"
+    assert made[1]._solver_options["mu_init"] == 0.1 and made[1]._solver_options["bound_push"] == 1e-2
+    assert res.status == Status.OPTIMAL and res.final_time == pytest.approx(2.0, abs=1e-6)
+    assert all("cold_retry" not in e for e in res.refinement[2:])
