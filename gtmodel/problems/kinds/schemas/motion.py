@@ -108,7 +108,7 @@ class RefinementSection(Section):
     max_elements: integer(1, 20000, description="limit on the elements of a refined mesh (unset: the most the memory estimate allows)") | None = None
     max_passes: integer(1, 100, description="limit on the solves of the refinement") = defaults["ocp.refine_max_passes"]
     refine_on_failure: Flag = Field(True, description="collocation: a single solve whose verification fails is refined from (as refine = true, within max_passes and max_cpu_s); false: it ends check_failed")
-    max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 250): no pass starts once it is spent, the best verified pass is returned") | None = None
+    max_cpu_s: number(gt=0, description="CPU-time budget of a mesh refinement, s (default 290): no pass starts once it is spent, the best verified pass is returned") | None = None
     objective_tolerance: number(ge=0, lt=1, description="a refinement's verified pass with nothing left to split is solved again with every element halved, and refined on while that improves the objective by more than this fraction (default 1e-3; 0: no such check)") | None = None
     regularization: number(ge=0, le=0.01, description="a refinement's passes after the first add this weight of input energy (each input scaled by its RMS) to a minimum-time objective, so that inputs a bound arc leaves free do not ring; the minimum time rises by about this fraction per input (default 1e-3; 0: off)") | None = None
 

@@ -277,7 +277,7 @@ class TranscriptionSection(RefinementSection):
     controls: choice("constant", "linear", description="multiple shooting: inputs piecewise constant or piecewise linear") = "constant"
     integrator: choice("rk", "radau", "collocation", "cvodes", "idas", description="multiple shooting: integrator per interval (default rk for ODEs, collocation for DAEs: Radau IIA collocation, its rootfinder started from a simulation of the guess)") | None = None
     steps: integer(1, 1000, description="multiple shooting: fixed integrator steps per interval (rk, radau, collocation); rk and radau impose the bounds at every step's end, collocation at every stage point") = 4
-    max_cpu_s: number(gt=0, description="CPU-time budget, s: of a mesh refinement (default 250: no pass starts once it is spent, the best verified pass is returned); with multiple shooting, of the whole solve, its continuation included (unset: none)") | None = None
+    max_cpu_s: number(gt=0, description="CPU-time budget, s: of a mesh refinement (default 290: no pass starts once it is spent, the best verified pass is returned); with multiple shooting, of the whole solve, its continuation included (unset: none)") | None = None
 
 
 class BenchmarkSection(Section):
