@@ -49,7 +49,8 @@ worse by more than :data:`WORSE` than an earlier pass feasible by simulation (it
 reaches its final state, :func:`end_deviation` within :data:`ANCHOR_END`: no spurious minimum,
 and keeps the state bounds between the nodes within the tolerance) has left for another
 local optimum: it is rejected and the earlier pass refined instead. The refinement stops at the
-verification passing, at ``max_passes``, or at its CPU budget (``max_cpu_s``). A pass that IPOPT stopped at its
+verification passing, at ``max_passes``, or at its CPU budget (``max_cpu_s``; each pass's IPOPT held to what is
+left of it, ``max_cpu_time``). A pass that IPOPT stopped at its
 acceptable level (``acceptable_iter`` iterations within ``acceptable_tol``) is continued in the same pass from
 its primal-dual point (IPOPT's warm start: its multipliers and a small barrier parameter) with that early stop off,
 within :data:`POLISH_CPU_S`: on the flexible-joint drive such stops were crawls (Newton steps regularised at every
@@ -372,6 +373,10 @@ def solve_refined(
                     # iterations, 99 CPU-s, past the budget): held to what is left of the budget
                     left = max(budget - (_time.process_time() - cpu0), 1.0)
                     options["solver_options"].update(acceptable_iter=0, max_cpu_time=float(left))
+            if options.get("solver", "ipopt") == "ipopt":  # every pass held to what is left of the budget: drive0_35's pass
+                # 16 ran 3,000 iterations, several times its predecessor's cost, and the run ended at 368 CPU-s against 250
+                left = max(budget - (_time.process_time() - cpu0), 1.0)
+                options["solver_options"] = {"max_cpu_time": float(left), **dict(options.get("solver_options") or {})}
             if polish and warm_from is not None and options.get("solver", "ipopt") == "ipopt":
                 # the previous pass's own NLP re-solved from its primal-dual point (IPOPT's warm start: its multipliers,
                 # a small barrier parameter): from the flexible joint's acceptable pass 9 (0.3347391), a start without
@@ -416,7 +421,8 @@ def solve_refined(
                   if result.objective is not None else float("nan"), entry.get("max_element_error", float("nan")),
                   entry.get("max_scaled_deviation", float("nan")), cpu)
         if v is None:  # the solve failed: nothing to refine from
-            stop = f"pass {n_pass} ended {result.status} without a solution to refine"
+            stop = (f"the CPU budget ({budget:g} s; pass {n_pass} stopped at IPOPT's CPU limit, what was left of it)"
+                    if "CpuTime" in str(result.message) else f"pass {n_pass} ended {result.status} without a solution to refine")
             break
         if entry.get("max_bound_violation", 0.0) > tol and transcription.get("solver", "ipopt") == "ipopt" and state_bounds_of(result):
             # a state bound exceeded between the points: from the next pass on imposed between them too, in the elements

@@ -389,3 +389,29 @@ def test_a_warm_pass_without_a_solution_is_solved_again_cold(monkeypatch):
     assert made[1]._solver_options["mu_init"] == 0.1 and made[1]._solver_options["bound_push"] == 1e-2
     assert res.status == Status.OPTIMAL and res.final_time == pytest.approx(2.0, abs=1e-6)
     assert all("cold_retry" not in e for e in res.refinement[2:])
+
+
+def test_every_pass_is_held_to_the_budget_left_and_a_pass_it_stops_names_it(refinement_solves, monkeypatch):
+    # each pass's IPOPT gets max_cpu_time = what is left of max_cpu_s (drive0_35: a pass of 3,000 iterations took the
+    # run to 368 CPU-s against a 250 s budget); a pass stopped by it ends the refinement at "the CPU budget", whose
+    # remedy names max_cpu_s (forced here: pass 2's limit set to 1e-9 s, its cold retry off)
+    seen = refinement_solves
+    opt = min_time_double_integrator()
+    opt.verification_tolerance = 1e-6
+    done = solve_refined(opt, elements=11, max_cpu_s=100.0)
+    assert done.status == Status.OPTIMAL and all(0 < o["max_cpu_time"] <= 100.0 for o in seen)
+    real = refinement.CollocationTranscription
+    made: list = []
+
+    def spy(*args, **kwargs):
+        made.append(real(*args, **kwargs))
+        if len(made) == 2:
+            made[-1].set_solver_options({"max_cpu_time": 1e-9})
+        return made[-1]
+
+    monkeypatch.setattr(refinement, "CollocationTranscription", spy)
+    monkeypatch.setattr(refinement, "solved_cold", lambda tr, failed, *a: failed)
+    res = solve_refined(opt, elements=11, max_cpu_s=100.0)
+    assert res.refinement[1]["status"] == "max_iterations" and len(res.refinement) == 2
+    assert res.refinement_stop.startswith("the CPU budget (100 s; pass 2 stopped at IPOPT's CPU limit")
+    assert "max_cpu_s" in res.message and res.status == Status.CHECK_FAILED
