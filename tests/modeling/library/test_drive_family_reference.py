@@ -133,7 +133,7 @@ def _cached_params() -> list:
         failed = {n: bench.reference_failed(e) for n, e in cache.items()}
     return [pytest.param(n, marks=pytest.mark.xfail(
         reason=f"the reference itself failed: IPOPT {cache[n]['status']}, {cache[n]['coarse_status']} below, its two finest "
-        f"resolutions {100 * cache[n]['spread']:+.3g} % apart (measured 2026-11-26)", strict=True) if failed[n] else ())
+        f"resolutions {100 * cache[n]['spread']:+.3g} % apart (the cache entry's own figures)", strict=True) if failed[n] else ())
         for n in sorted(cache)]
 
 
