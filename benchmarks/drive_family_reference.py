@@ -333,9 +333,9 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
     intervals) and a smooth optimum's O(h^2). An observed order below :data:`MIN_ORDER` is therefore
     pre-asymptotic: the reference solves at twice the finest resolution (up to :data:`MAX_INTERVALS`)
     and extrapolates from the three finest; a finer solve that IPOPT does not finish is left out and
-    recorded (``finer_failed``: its intervals, status, objective and CPU-s). Without an order, a
-    reference that would not count (its two finest more than :data:`MAX_SPREAD` apart, or one of them
-    unsolved) goes finer the same way; a coarser resolution its objective does not rest on (the three
+    recorded (``finer_failed``: its intervals, status, objective and CPU-s). A reference that would
+    not count (its two finest more than :data:`MAX_SPREAD` apart, or one of them unsolved) goes finer
+    the same way, with an order or without; a coarser resolution its objective does not rest on (the three
     finest with an order, else the two finest) no longer decides ``coarse_status``, and one IPOPT did
     not solve is recorded in ``left_out`` (intervals: status).
 
@@ -371,11 +371,12 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
             runs[j] = again if again["status"] in _SUCCEEDED and again["objective"] < run["objective"] else run
     order, extrapolated = _extrapolate(runs)
     finer_failed = None
-    while runs[-1]["intervals"] < MAX_INTERVALS and (order is not None and order < MIN_ORDER or order is None and _undecided(runs)):
+    while runs[-1]["intervals"] < MAX_INTERVALS and (order is not None and order < MIN_ORDER or _undecided(runs)):
         # pre-asymptotic (drive0_38: 0.3568, 0.3540, 0.3521 at 75/150/300, order 0.55, extrapolated 0.3481):
         # the error of a piecewise-constant input is at least O(h), so one finer resolution decides; likewise no order and
-        # a reference that would not count (drive0_16 from gtmodel's answer: 75 intervals Infeasible_Problem_Detected,
-        # 150/300 solved 1.17 % apart; drive0_11: 1.207, 1.183, 1.155 s, 2.37 % apart)
+        # a reference that would not count, with an order or without (drive0_16 from gtmodel's answer: 75 intervals
+        # Infeasible_Problem_Detected, 150/300 1.17 % apart; drive0_11: 1.207, 1.183, 1.155 s, 2.37 % apart; drive0_36:
+        # 1.972, 1.755, 1.715, order 2.44 but 2.32 % apart)
         finer = solve(p, 2 * runs[-1]["intervals"], guess=runs[-1] if start is None else start,
                       mu_init=None if start is None else WARM_MU)
         if finer["status"] not in _SUCCEEDED:  # a finer solve IPOPT did not finish decides nothing (drive0_38 at 600
@@ -408,7 +409,7 @@ def _used(runs: list[dict], order: float | None) -> list[dict]:
 
 
 def _undecided(runs: list[dict]) -> bool:
-    """True when a reference without an order would not count: a run it rests on unsolved, or its two finest over
+    """True when a reference would not count: a run it rests on unsolved, or its two finest over
     :data:`MAX_SPREAD` apart (a finer resolution may decide it)."""
     a, b = _used(runs, None)
     return a["status"] not in _SUCCEEDED or b["status"] not in _SUCCEEDED or not abs(a["objective"] - b["objective"]) <= MAX_SPREAD * abs(b["objective"])

@@ -380,11 +380,14 @@ START = {"X": np.zeros((5, 4)), "U": np.zeros(3), "final_time": 1.0}
      "Solve_Succeeded", None, True),
     # no order but the two finest within 2 % (a sign change of the differences): nothing finer, as before
     ("no order, within 2 %", {75: 1.0, 150: 1.008, 300: 1.004}, {}, [75, 150, 300], "Solve_Succeeded", None, True),
+    # drive0_36's shape: an order (2.44) but the two finest 2.3 % apart: 600 added, the three finest extrapolated
+    ("order, over 2 %", {75: 1.9719, 150: 1.7551, 300: 1.7153, 600: 1.7085}, {}, [75, 150, 300, 75, 150, 600],
+     "Solve_Succeeded", None, True),
     # 600 unsolved too: the reference stays the 150/300 one and does not count (its two finest 2.4 % apart)
     ("finer unsolved", {75: 1.2073, 150: 1.1828, 300: 1.1554, 600: 1.3}, {600: "Maximum_Iterations_Exceeded"},
      [75, 150, 300, 75, 150, 600], "Solve_Succeeded", None, False),
 ])
-def test_a_reference_without_an_order_that_would_not_count_goes_finer(ref, monkeypatch, case, values, status, solved,
+def test_a_reference_that_would_not_count_goes_finer(ref, monkeypatch, case, values, status, solved,
                                                                         coarse, left_out, counts):
     # drive_family_reference.reference with a given start (each resolution warm from it): the rule checked on fake solves;
     # a resolution over 1 % above the best is solved again from it (the fake returns the same), hence 75 and 150 twice
