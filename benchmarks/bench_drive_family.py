@@ -27,7 +27,8 @@ default all 40), in this one process:
 - ``worst_bound_excess``: gtmodel's answer re-simulated densely by SciPy on the hand-written
   ODE under its own input (each element's polynomial, clipped to the voltage bound), the
   largest excess of the current or speed over its bound anywhere, relative (0.01 = 1 %);
-  ``end_error`` the re-simulated end state's distance from the target (relative to each state's scale);
+  ``end_error`` the re-simulated end state's distance from the target (relative to each state's scale) and
+  ``simulated_objective`` the objective of that motion (the final time, or the copper loss integrated along);
 - ``passed``: ``optimal``, verified, ``|relative_error| <= 0.5 %`` and ``worst_bound_excess <= 1 %``;
   ``pass_rate`` over the members run. A member whose reference failed (IPOPT's status not
   :data:`REFERENCE_OK`; ``reference_failed``) has no relative error and does not pass:
@@ -202,6 +203,7 @@ def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_
     if pieces:
         sim = ref.resimulate(p, pieces)
         row["worst_bound_excess"], row["end_error"] = sim["worst_bound_excess"], sim["end_error"]
+        row["simulated_objective"] = sim["objective"]  # the objective of the motion SciPy re-simulated (T, or the copper loss)
     row["method"] = method
     if method != "collocation":  # multiple shooting: no crash, no raw CasADi text, never optimal over a bound by > 1 %
         excess = row["worst_bound_excess"]
