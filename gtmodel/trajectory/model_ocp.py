@@ -255,7 +255,8 @@ class OptimalControl:
 
         The steps (:func:`~gtmodel.modeling.ocp.continuation.continue_smoothing`) on the declared mesh, one NLP whose
         parameters are the widths, each solve warm from the last (its multipliers); then the declared widths from
-        the last step, verified; then mesh refinement from it where ``refine`` or ``refine_on_failure`` asks.
+        the last step, verified (solved again cold from the last step's primal point where IPOPT ends it warm without a
+        solution: ``continuation["cold_retry"]``); then mesh refinement from it where ``refine`` or ``refine_on_failure`` asks.
         """
         d = self
         phases: dict[str, dict[str, float]] = {}
@@ -276,8 +277,20 @@ class OptimalControl:
                 tr.verify = verify
         with _quiet_if_refined(d.refinement.on_failure and bool(check) and not d.optimization.data_fits):
             result = solve(None, start)
+            retried = None
+            if result.verification is None and start is not None and start.lam_g is not None:
+                # warm from the last step (its multipliers, a small barrier) IPOPT found no solution at the declared
+                # widths (drive2_12: Restoration_Failed after 1,151 iterations, the last iterate feasible to 7e-8):
+                # solved again from the same primal point with IPOPT's own barrier and bound push
+                retried = {"warm_status": str(result.status), "warm_message": str(result.message)[:200],
+                           "warm_iterations": result.iterations}
+                result = tr.solve(parameters=None, initial_guess=start, warm_start=False)
+                retried.update(status=str(result.status), iterations=result.iterations)
+                _log.info("%s: the declared widths solved again cold: %s", d.optimization.model.name, result.status)
         merge_phases(phases, result.timing)
         result.continuation = record_final(record, start, result)
+        if retried is not None:
+            result.continuation["cold_retry"] = retried
         failed = result.status == Status.CHECK_FAILED or (result.status in (Status.OPTIMAL, Status.ACCEPTABLE)
                                                           and not (getattr(result.verification, "bounds", None) or {}).get("within_tolerance", True))
         if check and result.verification is not None and (d.refinement.refine or (d.refinement.on_failure and failed

@@ -163,3 +163,16 @@ def test_multiple_shooting_keeps_a_declared_cpu_budget_and_names_it(tmp_path):
 def test_a_generous_cpu_budget_changes_nothing(tmp_path, shooting):
     kept = load_problem(problem(tmp_path, SHOOTING + "max_cpu_s = 600\n")).declaration.solve()
     assert str(kept.status) == "optimal" and kept.final_time == pytest.approx(shooting.final_time, rel=1e-9)
+
+
+def test_declared_widths_that_fail_warm_are_solved_again_cold(tmp_path, monkeypatch):
+    # every warm solve held to 2 iterations (drive2_12 of the drive family's seed 2 ended Restoration_Failed warm from
+    # its last step): the steps after the first and the declared widths fail warm; solved again cold from the last
+    # step's primal point, the declared widths reach the closed form
+    import gtmodel.modeling.ocp.collocation as collocation
+
+    monkeypatch.setattr(collocation, "WARM_START_OPTIONS", {**collocation.WARM_START_OPTIONS, "max_iter": 2})
+    res = load_problem(problem(tmp_path)).declaration.solve()
+    retry = res.continuation["cold_retry"]
+    assert retry["warm_status"] == "max_iterations" and retry["warm_iterations"] == 2 and retry["status"] == "optimal"
+    assert str(res.status) == "optimal" and res.final_time == pytest.approx(T_CLOSED, rel=5e-3)
