@@ -550,8 +550,8 @@ class CollocationTranscription:
             fatrop with :data:`~gtmodel.modeling.ocp.collocation_stages.FATROP_WARM_START_OPTIONS`.
         """
         if self._warm_solver is None:
-            own = {k: v for k, v in self.options[self.plugin].items() if k.startswith("warm_start_")}  # a caller's win
-            opts = {**self.options, self.plugin: {**self.options[self.plugin], **(WARM_START_OPTIONS if self.plugin == "ipopt" else FATROP_WARM_START_OPTIONS), **own}}
+            warm = WARM_START_OPTIONS if self.plugin == "ipopt" else FATROP_WARM_START_OPTIONS
+            opts = {**self.options, self.plugin: {**self.options[self.plugin], **warm}}
             self._warm_solver = self._nlpsol(opts)
         return self._warm_solver
 

@@ -44,8 +44,7 @@ first element): the next pass starts from a repaired guess instead of the spurio
 trajectory (the inputs of the failing elements interpolated from their neighbours', the
 states simulated under those inputs). Each pass starts from the previous solution interpolated onto its mesh, with IPOPT's barrier
 parameter started at :data:`WARM_MU` and its start not pushed off its bounds (:data:`WARM_PUSH`)
-so that it stays near it, and from the previous pass's multipliers carried onto the new mesh (IPOPT's warm start,
-:mod:`~gtmodel.modeling.ocp.refinement_multipliers`) where it refines that pass. A pass whose objective is
+so that it stays near it. A pass whose objective is
 worse by more than :data:`WORSE` than an earlier pass feasible by simulation (its simulation
 reaches its final state, :func:`end_deviation` within :data:`ANCHOR_END`: no spurious minimum,
 and keeps the state bounds between the nodes within the tolerance) has left for another
@@ -115,7 +114,6 @@ from gtmodel.modeling.ocp.budget import max_elements as memory_max_elements
 from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, merged_spans
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
-from gtmodel.modeling.ocp.refinement_multipliers import CARRIED_PUSH, multiplier_source, warm_start
 from gtmodel.modeling.ocp.refinement_guess import guess_from, repaired_guess, solved_cold
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
@@ -350,7 +348,6 @@ def solve_refined(
     warm = False
     polish = False  # the next pass re-solves the same mesh with IPOPT's acceptable termination off
     warm_from: CollocationTranscription | None = None  # the last pass's transcription (a polish re-solves its NLP)
-    source = carried = None  # the last pass's multipliers (refinement_multipliers), carried to the next pass from it
     checking: OptimizationResult | None = None  # the verified pass whose objective this pass checks on its mesh halved
     bound_spans: list[tuple[float, float]] = []  # where state bounds were exceeded between the points (collocation_bounds)
 
@@ -389,15 +386,11 @@ def solve_refined(
                 tr.set_solver_options({k: options["solver_options"][k] for k in ("acceptable_iter", "max_cpu_time")})
                 result = tr.solve(parameters=parameters, initial_guess=passes[-1], warm_start=True)
             else:
-                if warm and carried is not None and options.get("solver", "ipopt") == "ipopt":
-                    options["solver_options"] = {**CARRIED_PUSH, **options["solver_options"]}
                 tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
-                begun = warm_start(tr, carried, guess, passes[-1], parameters) if warm and carried is not None else None
-                result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
+                result = tr.solve(parameters=parameters, initial_guess=guess)
                 if warm and result.verification is None and options.get("solver", "ipopt") == "ipopt":  # no solution warm
                     result = solved_cold(tr, result, guess, parameters, budget - (_time.process_time() - cpu0))
             warm_from = tr if result.lam_g is not None else None
-            source = multiplier_source(tr, result) if options.get("solver", "ipopt") == "ipopt" else None
             if (not polish and warm_from is not None and options.get("solver", "ipopt") == "ipopt"
                     and result.stats.get("return_status") == "Solved_To_Acceptable_Level"):
                 # IPOPT stopped at its acceptable level in a crawl (the flexible joint: regularised Newton steps at a
@@ -531,7 +524,6 @@ def solve_refined(
             guess, warm = repaired_guess(result, tol), False
         else:
             guess, warm = guess_from(base), True
-            carried = source if base is result else None
         scales = input_scales(base) if reg_weight > 0 else None  # a minimum-time problem's inputs regularised from here on
     # verified: the deviations within the tolerance and the state bounds kept between the nodes (_kept); else a verified
     # pass at IPOPT's acceptable level: the best of them, not the smallest deviation (the flexible joint's pass 9,
