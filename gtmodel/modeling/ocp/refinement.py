@@ -44,7 +44,10 @@ first element): the next pass starts from a repaired guess instead of the spurio
 trajectory (the inputs of the failing elements interpolated from their neighbours', the
 states simulated under those inputs). Each pass starts from the previous solution interpolated onto its mesh, with IPOPT's barrier
 parameter started at :data:`WARM_MU` and its start not pushed off its bounds (:data:`WARM_PUSH`)
-so that it stays near it. A pass whose objective is
+so that it stays near it; IPOPT first solves the pass's NLP with a proximal term that keeps it near that start, then
+the NLP itself warm from that point and its multipliers (:mod:`~gtmodel.modeling.ocp.refinement_proximal`: from the
+start alone, IPOPT's steps jumped between neighbouring local optima of the stiff drives, hundreds of iterations a
+pass); a proximal solve without a solution leaves the pass to start from the interpolation alone. A pass whose objective is
 worse by more than :data:`WORSE` than an earlier pass feasible by simulation (its simulation
 reaches its final state, :func:`end_deviation` within :data:`ANCHOR_END`: no spurious minimum,
 and keeps the state bounds between the nodes within the tolerance) has left for another
@@ -115,6 +118,7 @@ from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, 
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
 from gtmodel.modeling.ocp.refinement_guess import guess_from, repaired_guess, solved_cold
+from gtmodel.modeling.ocp.refinement_proximal import proximal_start
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
 
@@ -387,7 +391,11 @@ def solve_refined(
                 result = tr.solve(parameters=parameters, initial_guess=passes[-1], warm_start=True)
             else:
                 tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
-                result = tr.solve(parameters=parameters, initial_guess=guess)
+                begun = (proximal_start(tr, guess, parameters, budget - (_time.process_time() - cpu0))
+                         if warm and options.get("solver", "ipopt") == "ipopt" and isinstance(guess, dict) else None)
+                result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
+                if begun is not None:
+                    result.stats = {**(result.stats or {}), "proximal": begun.stats["proximal"]}
                 if warm and result.verification is None and options.get("solver", "ipopt") == "ipopt":  # no solution warm
                     result = solved_cold(tr, result, guess, parameters, budget - (_time.process_time() - cpu0))
             warm_from = tr if result.lam_g is not None else None
@@ -408,7 +416,7 @@ def solve_refined(
         entry = _pass_entry(n_pass, _Mesh(n_elements, tr_points), result, cpu, wall)
         history.append(entry)
         passes.append(result)
-        for key in ("continued", "cold_retry"):  # the acceptable stop continued; a warm pass without a solution cold again
+        for key in ("continued", "cold_retry", "proximal"):  # the acceptable stop continued; a warm pass without a solution cold again
             if key in result.stats:
                 entry[key] = result.stats[key]
         if polish:

@@ -1,0 +1,70 @@
+"""Tests of a refinement pass's proximal start (gtmodel.modeling.ocp.refinement_proximal).
+
+References: the double integrator x'' = u, |u| <= 1, |x'| <= 0.6, rest to rest over 1 has the minimum time
+0.6 + 0.6 + 0.64 / 0.6 = 2.26667 s (closed form: bang, cruise at the speed bound, bang); and the same NLP solved
+from the same guess without the proximal term (a second method: the term's bias must be gone after the warm re-solve).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gtmodel.modeling import CollocationTranscription, Optimization
+from gtmodel.modeling.ocp.coarse_start import WARM_MU, WARM_PUSH
+from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.modeling.ocp.refinement_guess import guess_from
+from gtmodel.modeling.ocp.refinement_proximal import proximal_start
+
+from .._builders import double_integrator, rest_to_rest
+
+T_CLOSED = 0.6 + 0.6 + 0.64 / 0.6
+
+
+def _problem() -> Optimization:
+    m, x, v, u = double_integrator()
+    opt = Optimization(m, free_final_time=True, final_time=2.5, final_time_bounds=(0.5, 5.0), final_time_guess=1.0)
+    opt.set_objective(mayer=opt.final_time)
+    opt.set_bounds(u, -1.0, 1.0)
+    opt.set_bounds(v, -0.6, 0.6)
+    rest_to_rest(opt, x, v)
+    return opt
+
+
+@pytest.fixture(scope="module")
+def coarse():
+    opt = _problem()
+    return opt, CollocationTranscription(opt, elements=20).solve()
+
+
+def _finer(opt, derivatives):
+    mesh = np.full(20, 1 / 20)
+    finer = np.concatenate([[f / 2, f / 2] if k in (2, 9, 15) else [f] for k, f in enumerate(mesh)])
+    return CollocationTranscription(opt, elements=finer.size, mesh=finer, derivatives=derivatives,
+                                    solver_options={"mu_init": WARM_MU, **WARM_PUSH})
+
+
+@pytest.mark.parametrize("derivatives", ["assembled", "casadi"])
+def test_the_warm_resolve_from_the_proximal_start_is_the_nlps_own_optimum(coarse, derivatives):
+    opt, res = coarse
+    tr = _finer(opt, derivatives)
+    start = proximal_start(tr, guess_from(res), None, 100.0)
+    assert start.stats["proximal"]["status"] == "Solve_Succeeded" and start.stats["proximal"]["weight"] > 0
+    out = tr.solve(initial_guess=start, warm_start=True)
+    plain = _finer(opt, derivatives).solve(initial_guess=guess_from(res))
+    # solved (its verification may fail: the switches inside this mesh's elements are the refinement's to place)
+    assert out.verification is not None and out.iterations < plain.iterations + 20
+    assert out.objective == pytest.approx(T_CLOSED, rel=2e-3)
+    assert out.objective == pytest.approx(plain.objective, rel=1e-7)  # no bias of the proximal term left
+
+
+def test_no_cpu_left_no_proximal_start(coarse):
+    opt, res = coarse
+    assert proximal_start(_finer(opt, "assembled"), guess_from(res), None, 0.5) is None
+
+
+def test_the_refinement_records_its_proximal_starts():
+    res = solve_refined(_problem(), elements=10)
+    assert res.status == "optimal" and res.final_time == pytest.approx(T_CLOSED, rel=1e-3)
+    started = [e for e in res.refinement[1:] if "proximal" in e]
+    assert started and all(e["proximal"]["status"] in ("Solve_Succeeded", "Solved_To_Acceptable_Level") for e in started)
