@@ -29,6 +29,7 @@ from gtmodel.modeling.ocp.coarse_start import linear_quadratic, solve_from_coars
 from gtmodel.modeling.ocp.continuation import Continuation, continue_smoothing, record_final, smoothing_widths
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
+from gtmodel.modeling.ocp.refinement_guess import solved_cold
 from gtmodel.modeling.ocp.verification_bounds import REFINING
 from gtmodel.errors import InputError
 from gtmodel.status import Status
@@ -281,12 +282,10 @@ class OptimalControl:
             if result.verification is None and start is not None and start.lam_g is not None:
                 # warm from the last step (its multipliers, a small barrier) IPOPT found no solution at the declared
                 # widths (drive2_12: Restoration_Failed after 1,151 iterations, the last iterate feasible to 7e-8):
-                # solved again from the same primal point with IPOPT's own barrier and bound push
-                retried = {"warm_status": str(result.status), "warm_message": str(result.message)[:200],
-                           "warm_iterations": result.iterations}
-                result = tr.solve(parameters=None, initial_guess=start, warm_start=False)
-                retried.update(status=str(result.status), iterations=result.iterations)
-                _log.info("%s: the declared widths solved again cold: %s", d.optimization.model.name, result.status)
+                # solved again from the same primal point with IPOPT's own barrier and bound push (no budget here:
+                # IPOPT's default max_cpu_time)
+                result = solved_cold(tr, result, start, None, 1e20)
+                retried = result.stats.get("cold_retry")
         merge_phases(phases, result.timing)
         result.continuation = record_final(record, start, result)
         if retried is not None:
