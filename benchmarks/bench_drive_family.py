@@ -194,9 +194,10 @@ def run_member(member: DriveMember, folder: Path, reference: dict | None, solve_
     }
     row["reference_failed"] = reference_failed(reference)
     finer = reference.get("finer_failed")
-    row["reference_note"] = (f"the reference's order {reference['order']:.2f} is pre-asymptotic (below 1) and its solve at "
-                             f"{finer['intervals']} intervals ended {finer['status']}: extrapolated from the three before"
-                             if finer and reference.get("order") is not None else "")
+    observed = reference.get("observed_order", reference.get("order"))
+    row["reference_note"] = (f"the reference's observed order {observed:.2f} is pre-asymptotic (below {ref.MIN_ORDER:g}) and its "
+                             f"solve at {finer['intervals']} intervals ended {finer['status']}: its two finest extrapolated "
+                             f"with order {reference['order']:g}" if finer and observed is not None and reference.get("order") else "")
     if objective is not None and np.isfinite(objective) and not row["reference_failed"]:
         row["relative_error"] = (objective - reference["objective"]) / abs(reference["objective"])
     pieces = gtmodel_pieces(outcome.solution, member.vmax) if outcome.solution is not None else None
