@@ -339,9 +339,10 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
     intervals) and a smooth optimum's O(h^2). An observed order below :data:`MIN_ORDER` is therefore
     pre-asymptotic: the reference solves at twice the finest resolution (up to :data:`MAX_INTERVALS`)
     and extrapolates from the three finest; a finer solve that IPOPT does not finish is left out and
-    recorded (``finer_failed``: its intervals, status, objective and CPU-s), and the two finest are
-    then extrapolated with order 1, the least the O(h) error has (``observed_order`` keeps the
-    pre-asymptotic one). A reference that would
+    recorded (``finer_failed``: its intervals, status, objective and CPU-s). An order still below
+    :data:`MIN_ORDER` when nothing finer is solved (failed, or :data:`MAX_INTERVALS` reached)
+    extrapolates the two finest with order 1, the least the O(h) error has (``observed_order``
+    keeps the pre-asymptotic one). A reference that would
     not count (its two finest more than :data:`MAX_SPREAD` apart, or one of them unsolved) goes finer
     the same way, with an order or without; a coarser resolution its objective does not rest on (the three
     finest with an order, else the two finest) no longer decides ``coarse_status``, and one IPOPT did
@@ -398,7 +399,7 @@ def reference(p: dict, resolutions: tuple[int, ...] = RESOLUTIONS, start: dict |
         runs.append(finer)
         order, extrapolated = _extrapolate(runs)
     observed = order
-    if finer_failed is not None and order is not None and order < MIN_ORDER:  # still pre-asymptotic, nothing finer solved:
+    if order is not None and order < MIN_ORDER:  # still pre-asymptotic, nothing finer solved (failed, or MAX_INTERVALS):
         # the order the error has at least (a piecewise-constant input's O(h)), not the pre-asymptotic one, which
         # extrapolates beyond any O(h) limit (drive0_38: 0.3571, 0.3540, 0.3519 at 75/150/300, observed order 0.53 and
         # 0.3470; order 1: 0.3497; gtmodel's verified answer 0.3507, below the finest solve)

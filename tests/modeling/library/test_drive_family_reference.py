@@ -249,6 +249,23 @@ def test_a_finer_resolution_ipopt_did_not_finish_is_left_out_and_said(ref, monke
     assert out["finer_failed"] == {"intervals": 600, "status": "Maximum_Iterations_Exceeded", "objective": 1.16, "cpu_s": 1.0}
 
 
+def test_an_order_still_pre_asymptotic_at_the_finest_resolution_extrapolates_with_order_one(ref, monkeypatch):
+    # E(N) = 1 + 0.05 N^-0.55 at 75 to 600 intervals: MAX_INTERVALS solved and the order still 0.55; nothing finer is
+    # tried, and the two finest are extrapolated with order 1 (E_600 - (E_300 - E_600)), the least an O(h) error has
+    values = {n: 1 + 0.05 * n**-0.55 for n in (75, 150, 300, 600)}
+
+    def fake_solve(p, n, guess=None, mu_init=None):
+        return {"objective": values[n], "final_time": values[n], "status": "Solve_Succeeded", "cpu_s": 1.0, "steps": 1,
+                "intervals": n, "X": np.zeros((5, n + 1)), "U": np.zeros(n)}
+
+    monkeypatch.setattr(ref, "solve", fake_solve)
+    monkeypatch.setattr(ref, "resimulate", lambda p, pieces: {"worst_bound_excess": 0.0, "end_error": 0.0, "objective": 0.0})
+    out = ref.reference(RIGID)
+    assert list(out["by_intervals"]) == ["75", "150", "300", "600"] and "finer_failed" not in out
+    assert out["observed_order"] == pytest.approx(0.55) and out["order"] == 1.0
+    assert out["objective"] == pytest.approx(values[600] - (values[300] - values[600]))
+
+
 def test_a_given_start_replaces_the_own_starts_of_the_coarsest(ref, monkeypatch):
     # with a start (gtmodel's answer, --reference-start gtmodel) each resolution is solved once, from it, with the warm
     # barrier; the reference says it was started so. Without one: the coarsest twice (lines, rigid), each finer one
