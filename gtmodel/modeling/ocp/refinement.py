@@ -391,8 +391,13 @@ def solve_refined(
                 result = tr.solve(parameters=parameters, initial_guess=passes[-1], warm_start=True)
             else:
                 tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
-                begun = (proximal_start(tr, guess, parameters, budget - (_time.process_time() - cpu0))
-                         if warm and options.get("solver", "ipopt") == "ipopt" and isinstance(guess, dict) else None)
+                proximal = warm and options.get("solver", "ipopt") == "ipopt" and isinstance(guess, dict)
+                begun = proximal_start(tr, guess, parameters, budget - (_time.process_time() - cpu0)) if proximal else None
+                if proximal:  # the pass's own solve held to what the proximal one left (drive0_33's pass 26: the proximal
+                    # solve ran to the CPU limit, then the pass's own as long again: 350 CPU-s, the run 478 against 290)
+                    left = max(budget - (_time.process_time() - cpu0), 1.0)
+                    held = float(tr.options.get("ipopt", {}).get("max_cpu_time", left))  # its own limit, if smaller
+                    tr.set_solver_options({"max_cpu_time": min(held, left)})
                 result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
                 if begun is not None:
                     result.stats = {**(result.stats or {}), "proximal": begun.stats["proximal"]}

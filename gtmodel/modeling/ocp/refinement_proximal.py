@@ -33,7 +33,7 @@ from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.result import OptimizationResult
 from gtmodel.status import Status
 
-__all__ = ["proximal_start", "PROXIMAL_WEIGHT"]
+__all__ = ["proximal_start", "PROXIMAL_WEIGHT", "PROXIMAL_CPU_SHARE"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -41,6 +41,9 @@ _log = logging.getLogger("gtmodel")
 #: * max(|f(w_0)|, 1e-6) / n_w``). On ``drive0_04``'s pass the weights 1e-6 to 1e-4 absolute (0.02 to 2.4 relative)
 #: gave the same optimum in 39 to 78 iterations.
 PROXIMAL_WEIGHT = 0.1
+#: The share of the CPU left of the refinement's budget that the proximal solve may take (IPOPT's ``max_cpu_time``):
+#: the rest is the pass's own solve's (drive0_33's 2,170-element pass: its proximal solve took all that was left).
+PROXIMAL_CPU_SHARE = 0.5
 
 _SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
@@ -59,7 +62,8 @@ def proximal_start(transcription: Any, guess: Mapping[str, Any], parameters: Map
     parameters : mapping or None
         Parameter values of the solve (:meth:`CollocationTranscription.solve`).
     cpu_left : float
-        CPU seconds left of the refinement's budget: IPOPT's ``max_cpu_time``.
+        CPU seconds left of the refinement's budget: IPOPT's ``max_cpu_time`` is
+        :data:`PROXIMAL_CPU_SHARE` of it.
 
     Returns
     -------
@@ -70,7 +74,7 @@ def proximal_start(transcription: Any, guess: Mapping[str, Any], parameters: Map
         proximal solve without a solution (the pass then starts from ``guess`` alone).
     """
     tr = transcription
-    if tr.plugin != "ipopt" or not cpu_left > 1.0:
+    if tr.plugin != "ipopt" or not PROXIMAL_CPU_SHARE * cpu_left > 1.0:
         return None
     cpu0 = _time.process_time()
     opt, nlp = tr.optimization, tr.nlp
@@ -80,7 +84,7 @@ def proximal_start(transcription: Any, guess: Mapping[str, Any], parameters: Map
     w0 = np.asarray(tr._initial_w(guesses, tf, pvec), dtype=float)
     f0 = float(ca.Function("f0", [nlp.w, nlp.p], [nlp.f])(w0, pvec))
     rho = PROXIMAL_WEIGHT * max(abs(f0), 1e-6) / max(w0.size, 1)
-    options = merge_options(False, {**tr._solver_options, "max_cpu_time": float(cpu_left)}, "ipopt")
+    options = merge_options(False, {**tr._solver_options, "max_cpu_time": float(PROXIMAL_CPU_SHARE * cpu_left)}, "ipopt")
     derivatives = dict(tr.derivative_functions)
     if "hess_lag" in derivatives:  # the pass's assembled Hessian of the Lagrangian plus the term's, 2 rho lam_f I
         x, p = ca.MX.sym("x", nlp.w.numel()), ca.MX.sym("p", nlp.p.numel())

@@ -186,6 +186,10 @@ class Verification:
         bounded states' peaks between the nodes are looked for (:func:`bound_violations`).
     dense_simulated : numpy.ndarray
         The simulated states there, shape ``(K2, nx)`` (empty if the simulation failed).
+    local_dense_simulated : numpy.ndarray
+        The same samples with each element simulated from the collocation's own state at its start
+        (the local simulation of :attr:`element_errors`), shape ``(K2, nx)``; empty where not
+        computed (multiple shooting, a failed simulation).
     """
 
     tolerance: float
@@ -207,6 +211,7 @@ class Verification:
     bounds: dict[str, Any] = field(default_factory=dict)
     dense_t: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     dense_simulated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    local_dense_simulated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
 
     @property
     def status(self) -> str:
@@ -463,6 +468,12 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         xd = np.array(Fd.map(N)(x0=starts, z0=z0 if Fd.size1_in("z0") else np.zeros((0, N)), p=P)["xf"], dtype=float)
         xd = xd.reshape(nx, N, grid.size).transpose(1, 2, 0)
         xd[:, pick, :] = xg  # the comparison points as the global simulation has them
+        # the same dense samples of each element from the collocation's own state at its start (the local simulation):
+        # where the global one has drifted off the collocation, its excess over a bound is the drift's, not the
+        # element's, and mesh refinement splits by this one (refinement_mesh.refine_mesh)
+        xdl = np.array(Fd.map(N)(x0=col.xc[:, 0, :].T, z0=z0 if Fd.size1_in("z0") else np.zeros((0, N)), p=P)["xf"],
+                       dtype=float).reshape(nx, N, grid.size).transpose(1, 2, 0)
+        xdl[:, pick, :] = xl
         q_sim = np.array(q_all, dtype=float).reshape(m, N).sum(axis=1) if m else np.zeros(0)
         dev = np.abs(xg - poly)
         if not np.all(np.isfinite(dev)):
@@ -512,7 +523,7 @@ def verify(result: OptimizationResult, tolerance: float | None = None, rtol: flo
         tolerance, passed, float(abs_dev.max()), float(rel_dev.max()), float(scaled.max()), states,
         element_errors, how, message, 0.0, t_check.reshape(-1), xg.reshape(-1, nx), checked,
         method, "" if passed else verification_remedy(result, float(scaled.max())),
-        dense_t=t_dense.reshape(-1), dense_simulated=xd.reshape(-1, nx),
+        dense_t=t_dense.reshape(-1), dense_simulated=xd.reshape(-1, nx), local_dense_simulated=xdl.reshape(-1, nx),
     )
     out.time_s, out.cpu_s = _time.perf_counter() - start, _time.process_time() - cpu_start
     return out

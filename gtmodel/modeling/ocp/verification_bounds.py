@@ -125,13 +125,18 @@ def bound_scale(lower: np.ndarray, upper: np.ndarray, values: np.ndarray, typica
     return excess, np.where(excess > 0, excess / ref, 0.0)
 
 
-def _scaled_excess(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
-    """``(t, sim, excess, relative)``: the dense simulation's violation of the bounds, model units and relative to the bound."""
+def _scaled_excess(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray,
+                   local: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(t, sim, excess, relative)``: the dense simulation's violation of the bounds, model units and relative to the bound
+    (``local``: the elements' local simulations where the verification holds them)."""
     v, col = result.verification, result.collocation
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     if v is None or col is None or v.simulated.size == 0 or not (np.isfinite(lower).any() or np.isfinite(upper).any()):
         return None
     t, sim = _samples(v)
+    held = getattr(v, "local_dense_simulated", None)
+    if local and held is not None and np.shape(held) == np.shape(sim):
+        sim = np.asarray(held, dtype=float)
     typical = np.maximum(1.0, np.max(np.abs(col.xc), axis=(0, 1)))
     excess, relative = bound_scale(lower, upper, sim, typical)
     return t, sim, excess, relative
@@ -173,7 +178,7 @@ def bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.nd
             "samples_per_element": int(sim.shape[0] // max(result.collocation.elements, 1))}
 
 
-def element_bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+def element_bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray, local: bool = False) -> np.ndarray:
     """Per element, the largest scaled violation of the state bounds by the verifying simulation.
 
     Parameters
@@ -183,6 +188,11 @@ def element_bound_violations(result: OptimizationResult, lower: np.ndarray, uppe
         element, the same number of samples in each).
     lower, upper : numpy.ndarray
         The states' bounds, shape ``(nx,)`` (as for :func:`bound_violations`).
+    local : bool, optional
+        Judge each element by its local simulation, from the collocation's own state at its
+        start (:attr:`~gtmodel.modeling.ocp.verification.Verification.local_dense_simulated`),
+        not by the global one, which enters it wherever it has drifted to; the global one where
+        the verification holds no local samples. Default False.
 
     Returns
     -------
@@ -191,7 +201,7 @@ def element_bound_violations(result: OptimizationResult, lower: np.ndarray, uppe
         :func:`bound_violations`; zeros without bounded states, empty without a simulation.
     """
     col = result.collocation
-    out = _scaled_excess(result, lower, upper)
+    out = _scaled_excess(result, lower, upper, local)
     if col is None:
         return np.zeros(0)
     if out is None:

@@ -7,10 +7,13 @@ from the same guess without the proximal term (a second method: the term's bias 
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
 from gtmodel.modeling import CollocationTranscription, Optimization
+from gtmodel.modeling.ocp import refinement
 from gtmodel.modeling.ocp.coarse_start import WARM_MU, WARM_PUSH
 from gtmodel.modeling.ocp.refinement import solve_refined
 from gtmodel.modeling.ocp.refinement_guess import guess_from
@@ -58,9 +61,36 @@ def test_the_warm_resolve_from_the_proximal_start_is_the_nlps_own_optimum(coarse
     assert out.objective == pytest.approx(plain.objective, rel=1e-7)  # no bias of the proximal term left
 
 
-def test_no_cpu_left_no_proximal_start(coarse):
+@pytest.mark.parametrize("cpu_left", [0.5, 1.9])  # half of it (PROXIMAL_CPU_SHARE) under a second: no proximal solve
+def test_no_cpu_left_no_proximal_start(coarse, cpu_left):
     opt, res = coarse
-    assert proximal_start(_finer(opt, "assembled"), guess_from(res), None, 0.5) is None
+    assert proximal_start(_finer(opt, "assembled"), guess_from(res), None, cpu_left) is None
+
+
+def test_the_passes_own_solve_is_held_to_what_the_proximal_start_left(monkeypatch):
+    # a proximal start that spends 0.4 CPU-s and finds nothing: each pass's own IPOPT is then held to the budget less
+    # what was spent (drive0_33: a 2,170-element pass's proximal solve ran to the limit, then its own solve as long again)
+    seen = []
+
+    def burning(tr, guess, parameters, cpu_left):
+        t0 = time.process_time()
+        while time.process_time() - t0 < 0.4:
+            pass
+        seen.append({"left": cpu_left})
+        return None
+
+    original = CollocationTranscription.set_solver_options
+
+    def spy(self, solver_options):
+        if set(solver_options) == {"max_cpu_time"}:
+            seen[-1]["limit"] = solver_options["max_cpu_time"]
+        return original(self, solver_options)
+
+    monkeypatch.setattr(refinement, "proximal_start", burning)
+    monkeypatch.setattr(CollocationTranscription, "set_solver_options", spy)
+    res = solve_refined(_problem(), elements=10, max_cpu_s=60.0)
+    assert res.status == "optimal" and seen and all("limit" in s for s in seen)
+    assert all(s["limit"] <= s["left"] - 0.39 for s in seen)
 
 
 def test_the_refinement_records_its_proximal_starts():

@@ -7,6 +7,8 @@ integrator (final time 2 s, switch at 1 s; Bryson and Ho 1975, sec. 7.3).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -192,6 +194,20 @@ def test_refinement_splits_where_the_local_errors_add_up_beyond_the_tolerance():
     assert fractions == pytest.approx([0.125, 0.125, 0.125, 0.125, 0.25, 0.25])
     refined = solve_refined(step_response(4, 1), elements=4, points=1, tolerance=0.07)
     assert refined.verification.passed and refined.status == Status.OPTIMAL and len(refined.refinement) >= 2
+
+
+@pytest.mark.parametrize(("errors", "split"), [
+    ([0.060, 0.040, 0.027, 0.018], [0, 1]),     # the largest's level (0.030) and the sum's agree
+    ([0.060, 0.024, 0.024, 0.024], [0, 1, 2, 3]),  # the largest alone 0.060: the rest would hold 55 % of the sum
+])
+def test_refinement_splits_until_the_elements_left_hold_little_of_the_errors_sum(errors, split):
+    # the deviation 0.084 against 0.07, every element within it: the elements split hold all but ADD_UP * 0.07 / 0.084
+    # = 50 % of the errors' sum (hand-counted: 0.060 + 0.040 of 0.145; 0.060 alone of 0.132 leaves 0.072 > 0.066, and
+    # the three equal ones go together), or lie above ADD_UP * max * 0.07 / 0.084 (0.030), whichever takes more
+    res = CollocationTranscription(step_response(4, 1), elements=4, points=1).solve()
+    res.verification = dataclasses.replace(res.verification, element_errors=np.asarray(errors), max_scaled_deviation=0.084)
+    _, info = refine_mesh(res, tolerance=0.07, max_elements=100)
+    assert info["split"] == split
 
 
 @pytest.mark.parametrize("kwargs, match", [({"max_elements": 5}, "max_elements"), ({"max_passes": 0}, "max_passes"),

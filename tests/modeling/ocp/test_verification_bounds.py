@@ -385,3 +385,29 @@ def test_a_persistent_bound_excess_is_split_beside_the_other_splits(step, monkey
     monkeypatch.setattr(refinement_mesh, "switch_elements", lambda result: {2: 0.5})
     _, info = refine_mesh(step, 1e-2, 400, bounds=(LOWER, UPPER), persistent=persistent)
     assert info["split"] == split
+
+
+def _drifted(result, deviation: float):
+    """``result`` with its global simulation 0.3 above the collocation (a drift its deviation reports) and no element defect."""
+    out = copy.copy(result)
+    out.verification = dataclasses.replace(result.verification, dense_simulated=result.verification.dense_simulated + 0.3,
+                                           max_scaled_deviation=deviation, element_errors=np.zeros(10))
+    return out
+
+
+@pytest.mark.parametrize("k", range(10))
+def test_local_element_violation_is_the_closed_forms_whatever_the_global_drift(step, k):
+    # each element simulated from the collocation's own state at its start (the local simulation) keeps the closed form
+    # 1 - exp(-t) however far the global simulation has drifted (here 0.3 above it everywhere)
+    expected = max(0.0, 1.0 - np.exp(-0.2 * (k + 1)) - 0.8) / 0.8
+    assert element_bound_violations(_drifted(step, 0.3), LOWER, UPPER, local=True)[k] == pytest.approx(expected, abs=1e-5)
+
+
+@pytest.mark.parametrize(("deviation", "split"), [(1e-3, list(range(3, 10))), (0.3, [8, 9])])
+def test_a_drifted_simulations_bound_excess_is_split_where_the_element_exceeds_it(step, deviation, split):
+    # the global simulation 0.3 above the closed form exceeds 0.8 from t = ln 2 on (elements 3 to 9); each element's own
+    # simulation only from t = ln 5 (elements 8 and 9). Within the tolerance the global one decides; beyond it the local
+    # one, as its excess is then the drift's (drive0_33: every element of the current's braking arc split, pass after
+    # pass, while its deviation stayed at 5 %)
+    _, info = refine_mesh(_drifted(step, deviation), 1e-2, 400, bounds=(LOWER, UPPER))
+    assert info["split"] == split
