@@ -179,8 +179,7 @@ def refine_mesh(result: OptimizationResult, tolerance: float, max_elements: int,
         # collocation, it crosses a bound the trajectory rides all along its arc, and splitting every element there
         # resolved nothing (drive0_33: 469 and 1,286 elements split for the current's arc, pass after pass, its 5 %
         # excess the drift's, while the three elements with the largest defects were left unsplit at the element limit)
-        drifted = not (np.isfinite(deviation) and deviation <= limit)
-        over = element_bound_violations(result, *bounds, local=drifted) / limit
+        over = element_bound_violations(result, *bounds, local=None) / limit
         over = over if over.size == N else np.zeros(N)
         bad = [int(k) for k in np.nonzero(over > 1.0)[0] if int(k) not in plans]
         crossings = bound_crossings(result, *bounds, bad, 0.25 * limit)

@@ -178,7 +178,8 @@ def bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.nd
             "samples_per_element": int(sim.shape[0] // max(result.collocation.elements, 1))}
 
 
-def element_bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray, local: bool = False) -> np.ndarray:
+def element_bound_violations(result: OptimizationResult, lower: np.ndarray, upper: np.ndarray,
+                             local: bool | None = False) -> np.ndarray:
     """Per element, the largest scaled violation of the state bounds by the verifying simulation.
 
     Parameters
@@ -188,11 +189,13 @@ def element_bound_violations(result: OptimizationResult, lower: np.ndarray, uppe
         element, the same number of samples in each).
     lower, upper : numpy.ndarray
         The states' bounds, shape ``(nx,)`` (as for :func:`bound_violations`).
-    local : bool, optional
+    local : bool or None, optional
         Judge each element by its local simulation, from the collocation's own state at its
         start (:attr:`~gtmodel.modeling.ocp.verification.Verification.local_dense_simulated`),
         not by the global one, which enters it wherever it has drifted to; the global one where
-        the verification holds no local samples. Default False.
+        the verification holds no local samples. None: the local one while the verification's
+        deviation exceeds its tolerance (the global one has drifted: mesh refinement's choice).
+        Default False.
 
     Returns
     -------
@@ -200,7 +203,9 @@ def element_bound_violations(result: OptimizationResult, lower: np.ndarray, uppe
         Shape ``(N,)`` over the elements (or shooting intervals), scaled as in
         :func:`bound_violations`; zeros without bounded states, empty without a simulation.
     """
-    col = result.collocation
+    col, v = result.collocation, result.verification
+    if local is None:
+        local = v is not None and not v.max_scaled_deviation <= v.tolerance
     out = _scaled_excess(result, lower, upper, local)
     if col is None:
         return np.zeros(0)

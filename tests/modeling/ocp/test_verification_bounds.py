@@ -411,3 +411,12 @@ def test_a_drifted_simulations_bound_excess_is_split_where_the_element_exceeds_i
     # pass, while its deviation stayed at 5 %)
     _, info = refine_mesh(_drifted(step, deviation), 1e-2, 400, bounds=(LOWER, UPPER))
     assert info["split"] == split
+
+
+@pytest.mark.parametrize(("deviation", "local"), [(1e-3, False), (0.3, True)])
+def test_local_none_chooses_the_local_simulation_while_the_deviation_exceeds_the_tolerance(step, deviation, local):
+    # refinement's choice (local=None): within the verification's tolerance (0.01) the global simulation, beyond it each
+    # element's own
+    drifted = _drifted(step, deviation)
+    expected = element_bound_violations(drifted, LOWER, UPPER, local=local)
+    assert np.array_equal(element_bound_violations(drifted, LOWER, UPPER, local=None), expected)
