@@ -28,11 +28,14 @@ The limit is :data:`MEMORY_SHARE` of the memory available when the check runs (t
 Linux ``MemAvailable`` or the free physical pages, a cgroup's memory limit minus its use, and
 ``ulimit -v`` minus the process's virtual size), or the number of megabytes in the
 environment variable :data:`MEMORY_ENV`.
+
+A refinement's CPU budget reaches IPOPT as ``max_cpu_time``: :func:`ipopt_left` gives it.
 """
 
 from __future__ import annotations
 
 import os
+import time as _time
 
 try:  # POSIX only: the address-space limit (ulimit -v)
     import resource
@@ -42,7 +45,7 @@ from dataclasses import dataclass
 
 from gtmodel.errors import InputError
 
-__all__ = ["NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "max_elements", "FALLBACK_ELEMENTS", "MOST_ELEMENTS", "memory_limit", "check_memory", "estimate_shooting",
+__all__ = ["IPOPT_CPU_SHARE", "ipopt_left", "NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "max_elements", "FALLBACK_ELEMENTS", "MOST_ELEMENTS", "memory_limit", "check_memory", "estimate_shooting",
            "check_shooting_memory"]
 
 #: Environment variable: the memory limit of one NLP in megabytes (default: a share of what is available).
@@ -281,3 +284,27 @@ def check_shooting_memory(intervals: int, steps: int, nx: int, nz: int, nu: int)
             f"({'$' + MEMORY_ENV if os.environ.get(MEMORY_ENV, '').strip() else f'{MEMORY_SHARE:.0%} of the available memory'}); "
             f"use fewer intervals or steps (transcription.intervals, transcription.steps in a problem file), or set {MEMORY_ENV}")
     return size
+
+
+#: IPOPT's CPU limits are this share of what is left of the budget: IPOPT reads its clock once an iteration and counts
+#: less than the process does (user and system time): drive2_10's 786-element pass, its two solves held to the 241.5 s
+#: left, took 258 CPU-s, and the run 307.6 against the 290 s budget (measured 2026-11-27 beside two reference solves).
+IPOPT_CPU_SHARE = 0.8
+
+
+def ipopt_left(budget: float, cpu0: float) -> float:
+    """IPOPT's ``max_cpu_time`` for what is left of a CPU budget.
+
+    Parameters
+    ----------
+    budget : float
+        The refinement's CPU budget, s.
+    cpu0 : float
+        ``time.process_time()`` when the refinement began, s.
+
+    Returns
+    -------
+    float
+        :data:`IPOPT_CPU_SHARE` of ``budget`` less the CPU time spent since ``cpu0``, at least 1 s.
+    """
+    return max(IPOPT_CPU_SHARE * (budget - (_time.process_time() - cpu0)), 1.0)

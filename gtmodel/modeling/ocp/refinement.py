@@ -113,7 +113,7 @@ from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements
 from gtmodel.modeling.ocp.verification_bounds import bounds_verdict, element_bound_violations
 from gtmodel.modeling.ocp.refinement_remedy import refinement_remedy
-from gtmodel.modeling.ocp.budget import max_elements as memory_max_elements
+from gtmodel.modeling.ocp.budget import ipopt_left, max_elements as memory_max_elements
 from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, merged_spans
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
@@ -375,11 +375,11 @@ def solve_refined(
                 if polish:
                     # without the early stop IPOPT may iterate long (the flexible joint under another BLAS kernel: 1608
                     # iterations, 99 CPU-s, past the budget): held to what is left of the budget
-                    left = max(budget - (_time.process_time() - cpu0), 1.0)
+                    left = ipopt_left(budget, cpu0)
                     options["solver_options"].update(acceptable_iter=0, max_cpu_time=float(left))
             if options.get("solver", "ipopt") == "ipopt":  # every pass held to what is left of the budget: drive0_35's pass
                 # 16 ran 3,000 iterations, several times its predecessor's cost, and the run ended at 368 CPU-s against 250
-                left = max(budget - (_time.process_time() - cpu0), 1.0)
+                left = ipopt_left(budget, cpu0)
                 options["solver_options"] = {"max_cpu_time": float(left), **dict(options.get("solver_options") or {})}
             if polish and warm_from is not None and options.get("solver", "ipopt") == "ipopt":
                 # the previous pass's own NLP re-solved from its primal-dual point (IPOPT's warm start: its multipliers,
@@ -392,24 +392,24 @@ def solve_refined(
             else:
                 tr = CollocationTranscription(optimization, elements=elements, points=points, scheme=scheme, mesh=mesh, verify=settings, **options)
                 proximal = warm and options.get("solver", "ipopt") == "ipopt" and isinstance(guess, dict)
-                begun = proximal_start(tr, guess, parameters, budget - (_time.process_time() - cpu0)) if proximal else None
+                begun = proximal_start(tr, guess, parameters, ipopt_left(budget, cpu0)) if proximal else None
                 if proximal:  # the pass's own solve held to what the proximal one left (drive0_33's pass 26: the proximal
                     # solve ran to the CPU limit, then the pass's own as long again: 350 CPU-s, the run 478 against 290)
-                    left = max(budget - (_time.process_time() - cpu0), 1.0)
+                    left = ipopt_left(budget, cpu0)
                     held = float(tr.options.get("ipopt", {}).get("max_cpu_time", left))  # its own limit, if smaller
                     tr.set_solver_options({"max_cpu_time": min(held, left)})
                 result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
                 if begun is not None:
                     result.stats = {**(result.stats or {}), "proximal": begun.stats["proximal"]}
                 if warm and result.verification is None and options.get("solver", "ipopt") == "ipopt":  # no solution warm
-                    result = solved_cold(tr, result, guess, parameters, budget - (_time.process_time() - cpu0))
+                    result = solved_cold(tr, result, guess, parameters, ipopt_left(budget, cpu0))
             warm_from = tr if result.lam_g is not None else None
             if (not polish and warm_from is not None and options.get("solver", "ipopt") == "ipopt"
                     and result.stats.get("return_status") == "Solved_To_Acceptable_Level"):
                 # IPOPT stopped at its acceptable level in a crawl (the flexible joint: regularised Newton steps at a
                 # barrier parameter of 1e-9, 2e-5 s of objective per iteration), not at a minimum of this mesh's NLP:
                 # continued from its primal-dual point (warm, the crawl left in 20 to 80 iterations) to IPOPT's tolerance
-                left = max(budget - (_time.process_time() - cpu0), 1.0)
+                left = ipopt_left(budget, cpu0)
                 tr.set_solver_options({"acceptable_iter": 0, "max_cpu_time": float(min(left, POLISH_CPU_S))})
                 polished = tr.solve(parameters=parameters, initial_guess=result, warm_start=True)
                 continued = {"from": float(result.objective), "status": str(polished.status), "objective": polished.objective}

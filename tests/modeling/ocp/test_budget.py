@@ -7,12 +7,14 @@ is built (a limit of 1 MB that no build could meet).
 
 from __future__ import annotations
 
+import time
+
 import casadi as ca
 import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.modeling import Model, Optimization
-from gtmodel.modeling.ocp.budget import MEMORY_ENV, check_memory, estimate, memory_limit
+from gtmodel.modeling.ocp.budget import IPOPT_CPU_SHARE, MEMORY_ENV, check_memory, estimate, ipopt_left, memory_limit
 from gtmodel.modeling.ocp.collocation import CollocationTranscription
 
 
@@ -110,3 +112,9 @@ def test_refinement_cap_without_a_known_limit_is_the_fallback(monkeypatch):
     monkeypatch.delenv(MEMORY_ENV, raising=False)
     monkeypatch.setattr(budget, "_available", lambda: None)
     assert budget.max_elements(3, 5, 20, 1) == budget.FALLBACK_ELEMENTS
+
+
+@pytest.mark.parametrize(("spent", "expected"), [(0.0, IPOPT_CPU_SHARE * 100.0), (99.5, 1.0)])
+def test_ipopt_is_held_to_its_share_of_the_cpu_left(spent, expected):
+    # max_cpu_time = IPOPT_CPU_SHARE of (budget - spent), at least 1 s (the closed form of its definition)
+    assert ipopt_left(100.0, time.process_time() - spent) == pytest.approx(expected, abs=0.05)

@@ -14,6 +14,7 @@ import pytest
 
 from gtmodel.modeling import CollocationTranscription, Optimization
 from gtmodel.modeling.ocp import refinement
+from gtmodel.modeling.ocp.budget import IPOPT_CPU_SHARE
 from gtmodel.modeling.ocp.coarse_start import WARM_MU, WARM_PUSH
 from gtmodel.modeling.ocp.refinement import solve_refined
 from gtmodel.modeling.ocp.refinement_guess import guess_from
@@ -90,7 +91,7 @@ def test_the_passes_own_solve_is_held_to_what_the_proximal_start_left(monkeypatc
     monkeypatch.setattr(CollocationTranscription, "set_solver_options", spy)
     res = solve_refined(_problem(), elements=10, max_cpu_s=60.0)
     assert res.status == "optimal" and seen and all("limit" in s for s in seen)
-    assert all(s["limit"] <= s["left"] - 0.39 for s in seen)
+    assert all(s["limit"] <= s["left"] - IPOPT_CPU_SHARE * 0.39 for s in seen)
 
 
 def test_the_refinement_records_its_proximal_starts():
