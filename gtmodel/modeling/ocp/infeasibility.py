@@ -6,10 +6,15 @@ solver's last iterate, the trajectory a failed result carries (``last_iterate``)
 
 - a free final time sitting at one of its bounds: at the upper bound, the minimum time is
   likely above it (``final_time at its upper bound 0.3 s at the last iterate: the minimum
-  time may be above it``); at the lower bound, the bound likely holds the motion back;
-- otherwise the declared constraint rows with the largest violation at the last iterate, by
-  name (path constraints at the result's samples, point constraints at the start and final
-  time, the state and input bounds), each with its excess and where it is largest;
+  time may be above it``); at the lower bound, the solver found the constraints violated
+  least at the shortest time allowed, so a longer one does not help and the rest is named;
+- otherwise (and after a lower bound) the declared constraint rows with the largest violation
+  at the last iterate, by name (path constraints at the result's samples, point constraints
+  at the start and final time, the state and input bounds), each with its excess and where
+  it is largest;
+- the bounded states and inputs held at a bound over most of the horizon
+  (:func:`held_bounds`): a bound met everywhere is never a violated row, yet it is what
+  stops a motion whose voltage may not change sign;
 - and an input that has (almost) no effect on the states over much of the horizon
   (:func:`inert_inputs`): saturated inside the model (a ``Limiter``'s input beyond its
   corner), it leaves the NLP singular there, whatever the solver's step. A servo whose
@@ -29,8 +34,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["likely_culprit", "with_culprit", "inert_inputs", "AT_BOUND_RTOL", "VIOLATION_TOL", "TOP_ROWS", "INERT_RATIO",
-           "INERT_FRACTION"]
+__all__ = ["likely_culprit", "with_culprit", "inert_inputs", "held_bounds", "AT_BOUND_RTOL", "VIOLATION_TOL", "TOP_ROWS",
+           "INERT_RATIO", "INERT_FRACTION", "HELD_RTOL", "HELD_FRACTION"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -47,6 +52,11 @@ TOP_ROWS = 3
 INERT_RATIO = 0.1
 #: ... and named when it is inert at more than this fraction of the samples.
 INERT_FRACTION = 0.2
+#: A bounded state or input within this fraction of its bounds' span (of ``max(1, |bound|)`` for a one-sided bound) of a
+#: bound is "at" it ...
+HELD_RTOL = 1e-4
+#: ... and named as held when it is at a bound at least this fraction of the samples.
+HELD_FRACTION = 0.5
 
 
 def _final_time_at_bound(result: Any, opt: Any) -> str:
@@ -61,8 +71,11 @@ def _final_time_at_bound(result: Any, opt: Any) -> str:
         return (f"final_time at its upper bound {hi:g} s at the last iterate: the minimum time may be above it "
                 "(raise the final time's upper bound)")
     if np.isfinite(lo) and tf <= lo + AT_BOUND_RTOL * max(1.0, abs(lo)):
-        return (f"final_time at its lower bound {lo:g} s at the last iterate: the bound may hold the motion back "
-                "(lower the final time's lower bound)")
+        # the solver's infeasibility is smallest at the shortest time allowed: a longer one does not remove it, so the
+        # constraints (named after this) stand in the way, not the final time (a double integrator with its input held
+        # to [-1, -0.5] V ended here; naming the lower bound sent the user to the one knob that could not help)
+        return (f"final_time at its lower bound {lo:g} s at the last iterate: a longer time does not meet the "
+                "constraints, so look at those named")
     return ""
 
 
@@ -193,6 +206,53 @@ def inert_inputs(result: Any, optimization: Any = None) -> list[tuple[str, float
     return sorted(found, key=lambda item: -item[1])
 
 
+def held_bounds(result: Any, optimization: Any) -> list[tuple[str, str, float, float]]:
+    """The bounded states and inputs that sit at a bound over most of a result's horizon.
+
+    A failed solve whose last iterate holds a variable at its bound almost everywhere is being
+    stopped by that bound (a motor whose voltage may not be positive cannot turn its load
+    forwards, however long it is given); the variable bound itself is met, so the violated rows
+    name only its consequences (the final position missed).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A result with a trajectory (``t``, ``states``, ``inputs``) and its ``dae``.
+    optimization : Optimization
+        The problem it solved (its bounds).
+
+    Returns
+    -------
+    list of tuple
+        ``(name, "lower" or "upper", bound, fraction of the samples at it)`` for each bounded state
+        or input element within :data:`HELD_RTOL` of a bound at no fewer than :data:`HELD_FRACTION`
+        of the samples, largest fraction first; empty when none is (or there is no trajectory).
+    """
+    dae = result.dae
+    t = np.asarray(result.t, dtype=float).reshape(-1)
+    n = t.size
+    if dae is None or n == 0:
+        return []
+    found = []
+    for kind, variables, values in (("x", dae.x_vars, result.states), ("u", dae.u_vars, result.inputs)):
+        lb, ub = (np.asarray(v, dtype=float) for v in optimization.bounds_vectors(dae, kind))
+        for name, sl in variables.items():
+            if name not in values:
+                continue
+            vals = np.asarray(values[name], dtype=float).reshape(n, -1)
+            for j, (lo, hi) in enumerate(zip(lb[sl], ub[sl])):
+                span = hi - lo if np.isfinite(hi - lo) else np.nan
+                label = name if vals.shape[1] == 1 else f"{name}[{j}]"
+                for side, bound in (("lower", lo), ("upper", hi)):
+                    if not np.isfinite(bound):
+                        continue
+                    tol = HELD_RTOL * (span if np.isfinite(span) and span > 0 else max(1.0, abs(bound)))
+                    share = float(np.mean(np.abs(vals[:, j] - bound) <= tol))
+                    if share >= HELD_FRACTION:
+                        found.append((label, side, float(bound), share))
+    return sorted(found, key=lambda item: -item[3])
+
+
 def likely_culprit(result: Any, optimization: Any) -> str:
     """What most likely stands in the way of a failed solve, read from its last iterate; ``""`` when nothing stands out.
 
@@ -209,31 +269,43 @@ def likely_culprit(result: Any, optimization: Any) -> str:
         ``"final_time at its upper bound 0.3 s at the last iterate: the minimum time may be above
         it (...)"``; or ``"the largest violations at the last iterate: 'name' by 0.012 at t =
         0.21 s; ..."`` (at most :data:`TOP_ROWS` rows, relative violations above
-        :data:`VIOLATION_TOL`), and/or ``"an input with almost no effect on the states over much of the
+        :data:`VIOLATION_TOL`), and/or ``"bounds held over most of the horizon ('u' at its upper
+        bound -0.5 at 100 % of the samples): ..."`` (:func:`held_bounds`; after the upper bound of
+        the final time too), and/or ``"an input with almost no effect on the states over much of the
         horizon ('u' at 60 % of the samples; ...)"`` (:func:`inert_inputs`); or ``""``.
     """
     at_bound = _final_time_at_bound(result, optimization)
-    if at_bound:
-        return at_bound
-    rows, inert = [], []
-    for diagnose in (_rows, inert_inputs):
+    # at the upper bound the horizon is what the solver ran out of: a longer one, or looser held bounds (a bang-bang
+    # input at its limits, or a voltage allowed no sign), are the remedies; the rows missed say nothing more then
+    diagnoses = (held_bounds,) if "upper bound" in at_bound else (_rows, inert_inputs, held_bounds)
+    rows, inert, held = [], [], []
+    for diagnose in diagnoses:
         try:
             found = diagnose(result, optimization)
         except (RuntimeError, ValueError, KeyError, AttributeError, TypeError, np.linalg.LinAlgError) as exc:
             _log.debug("no diagnosis of the failed solve by %s: %s", diagnose.__name__, exc)  # never hides the failure
             continue
-        rows, inert = (found, inert) if diagnose is _rows else (rows, found)
-    said = []
+        if diagnose is _rows:
+            rows = found
+        elif diagnose is inert_inputs:
+            inert = found
+        else:
+            held = found
+    said = [at_bound] if at_bound else []
     if rows:
         worst = "; ".join(f"{name} by {excess:.3g} at t = {t:.4g} s" for _, name, excess, t in rows[:TOP_ROWS])
         said.append(f"the largest violations at the last iterate: {worst}")
+    if held:
+        names = ", ".join(f"'{name}' at its {side} bound {bound:g} at {100 * share:.0f} % of the samples"
+                          for name, side, bound, share in held[:TOP_ROWS])
+        said.append(f"bounds held over most of the horizon ({names}): the motion may need more than they allow "
+                    "(loosen them in [bounds])")
     if inert:
         names = ", ".join(f"'{name}' at {100 * share:.0f} % of the samples" for name, share in inert)
         said.append(f"an input with almost no effect on the states over much of the horizon ({names}; below {INERT_RATIO:g} "
                     "of its largest effect): saturated inside the model (a Limiter on it?), where a larger input buys "
                     "almost nothing and the NLP is nearly singular; bound the input within the saturation in [bounds]")
     return "; ".join(said)
-
 
 def with_culprit(message: str, result: Any, optimization: Any) -> str:
     """``message`` with the likely culprit of a failed solve appended (unchanged for a solution).
