@@ -26,7 +26,8 @@ from gtmodel.modeling.ocp.estimation import estimate_statistics
 from gtmodel.modeling.ocp.shooting import ShootingTranscription
 from gtmodel.modeling.ocp.methods import Collocation, MultipleShooting, Refinement, SolverSettings
 from gtmodel.modeling.ocp.coarse_start import linear_quadratic, solve_from_coarse
-from gtmodel.modeling.ocp.continuation import Continuation, continue_smoothing, record_final, smoothing_widths
+from gtmodel.modeling.ocp.continuation import (Continuation, continue_smoothing, narrowed_steps, record_final, smoothing_widths,
+                                               solved_declared)
 from gtmodel.modeling.ocp.diagnostics import without_inputs
 from gtmodel.modeling.ocp.refinement import solve_refined
 from gtmodel.modeling.ocp.refinement_guess import solved_cold
@@ -235,6 +236,16 @@ class OptimalControl:
                     shooting.verify = bool(check)
         with timed(phases, "solve"):  # its guess and verification included, the verification moved out below
             result = solve(None, start)
+            if not solved_declared(result) and start is not None:  # the last step too long: steps inserted before it
+
+                def step(parameters: dict[str, float] | None, begin: OptimizationResult | None) -> OptimizationResult:
+                    shooting.verify = False
+                    try:
+                        return solve(parameters, begin)
+                    finally:
+                        shooting.verify = bool(check)
+
+                start, result = narrowed_steps(d.optimization, step, lambda begin: solve(None, begin), start, record, result)
         result.continuation = record_final(record, start, result)
         ver = result.verification
         if getattr(ver, "cpu_s", None) is not None:
@@ -276,16 +287,29 @@ class OptimalControl:
                 start, record = continue_smoothing(d.optimization, solve, d.continuation)
             finally:
                 tr.verify = verify
-        with _quiet_if_refined(d.refinement.on_failure and bool(check) and not d.optimization.data_fits):
-            result = solve(None, start)
-            retried = None
-            if result.verification is None and start is not None and start.lam_g is not None:
+        def declared(begin: OptimizationResult | None) -> OptimizationResult:
+            out = solve(None, begin)
+            if out.verification is None and begin is not None and begin.lam_g is not None:
                 # warm from the last step (its multipliers, a small barrier) IPOPT found no solution at the declared
                 # widths (drive2_12: Restoration_Failed after 1,151 iterations, the last iterate feasible to 7e-8):
                 # solved again from the same primal point with IPOPT's own barrier and bound push (no budget here:
                 # IPOPT's default max_cpu_time)
-                result = solved_cold(tr, result, start, None, 1e20)
-                retried = result.stats.get("cold_retry")
+                out = solved_cold(tr, out, begin, None, 1e20)
+            return out
+
+        def step(parameters: dict[str, float] | None, begin: OptimizationResult | None) -> OptimizationResult:
+            tr.verify = False
+            try:
+                return solve(parameters, begin)
+            finally:
+                tr.verify = verify
+
+        with _quiet_if_refined(d.refinement.on_failure and bool(check) and not d.optimization.data_fits):
+            result = declared(start)
+            if not solved_declared(result) and start is not None:  # the last step too long: steps inserted before it
+                # (their CPU in the record's steps; the declared solve's in the phases below, from its result)
+                start, result = narrowed_steps(d.optimization, step, declared, start, record, result)
+            retried = result.stats.get("cold_retry")
         merge_phases(phases, result.timing)
         result.continuation = record_final(record, start, result)
         if retried is not None:

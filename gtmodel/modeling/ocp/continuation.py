@@ -32,7 +32,8 @@ from gtmodel.errors import InputError
 from gtmodel.modeling.ocp.result import OptimizationResult
 from gtmodel.status import Status
 
-__all__ = ["Continuation", "smoothing_widths", "schedule", "continue_smoothing", "record_final"]
+__all__ = ["Continuation", "smoothing_widths", "schedule", "continue_smoothing", "record_final", "narrowed_steps",
+           "solved_declared", "MAX_INSERTED_STEPS"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -165,6 +166,86 @@ def continue_smoothing(optimization: Any, solve: Callable[[dict[str, float], Opt
             continue
         start = result
     return start, record
+
+
+#: The most steps :func:`narrowed_steps` inserts between the last width that solved and the declared one.
+MAX_INSERTED_STEPS = 3
+
+
+def narrowed_steps(optimization: Any, solve: Callable[[dict[str, float], OptimizationResult | None], OptimizationResult],
+                   declared: Callable[[OptimizationResult], OptimizationResult], start: OptimizationResult | None,
+                   record: dict[str, Any], failed: OptimizationResult) -> tuple[OptimizationResult | None, OptimizationResult]:
+    """Steps inserted where the solve at the declared widths failed from the last step: the continuation's step halved.
+
+    The step from the last width that solved to the declared one was too long (its start outside the declared
+    problem's basin): a step at the geometric middle of the two factors is solved from the last, and the declared
+    widths again from it; a middle step that fails halves the step towards the last that solved instead (step-length
+    control of a continuation, Allgower and Georg 2003, sec. 6.1). At most :data:`MAX_INSERTED_STEPS` steps. A held-out
+    arm swung up through two gear stages with a 0.01 rad backlash smoothed over 5e-4 rad (steps x100, x10, x1):
+    ``Restoration_Failed`` at x1 from x10, then ``Infeasible_Problem_Detected`` solved again cold; the steps x100 /
+    3 ... x1.23, x1: optimal, verified after refinement.
+
+    Parameters
+    ----------
+    optimization : Optimization
+        The problem (:func:`smoothing_widths`).
+    solve : callable
+        As :func:`continue_smoothing`'s: an intermediate step, unverified.
+    declared : callable
+        ``declared(start) -> OptimizationResult``: the solve at the declared widths from ``start`` (verified; without
+        a solution its status is none of :func:`solved_declared`'s).
+    start : OptimizationResult or None
+        The last step that solved (None: nothing to insert from).
+    record : dict
+        :func:`continue_smoothing`'s record; each inserted step is added to its ``steps`` with ``"inserted": True``.
+    failed : OptimizationResult
+        The declared solve that failed from ``start``.
+
+    Returns
+    -------
+    tuple
+        ``(start, result)``: the last step that solved and the declared solve from it (``failed`` when no inserted
+        step led to a solution).
+    """
+    done = [s for s in record.get("steps", []) if s["status"] in ("optimal", "acceptable")]
+    if start is None or not done or solved_declared(failed):
+        return start, failed
+    widths, name = smoothing_widths(optimization), optimization.model.name
+    solved, target, result = float(done[-1]["factor"]), 1.0, failed
+    for _ in range(MAX_INSERTED_STEPS):
+        factor = float(np.sqrt(solved * target))
+        if not solved > factor * (1.0 + 1e-9) > 1.0:
+            break
+        cpu0 = _time.process_time()
+        step_result = solve({k: w * factor for k, w in widths.items()}, start)
+        ok = step_result.status in (Status.OPTIMAL, Status.ACCEPTABLE)
+        record["steps"].append({"factor": factor, "status": str(step_result.status), "objective": _number(step_result.objective),
+                                "iterations": int(step_result.iterations), "cpu_s": _time.process_time() - cpu0, "inserted": True})
+        _log.info("continuation of %s: a step inserted at widths x %g (the declared solve failed from x %g): %s", name,
+                  factor, solved, step_result.status)
+        if not ok:  # still too long: halve towards the last that solved
+            target = factor
+            continue
+        start, solved, target = step_result, factor, 1.0
+        result = declared(start)
+        if solved_declared(result):
+            break
+    return start, result
+
+
+def solved_declared(result: OptimizationResult) -> bool:
+    """True when a solve ended with a solution, verified or not (``optimal``, ``acceptable`` or ``check_failed``).
+
+    Parameters
+    ----------
+    result : OptimizationResult
+        A solve's result.
+
+    Returns
+    -------
+    bool
+    """
+    return result.status in (Status.OPTIMAL, Status.ACCEPTABLE, Status.CHECK_FAILED)
 
 
 def record_final(record: dict[str, Any], start: OptimizationResult | None, final: OptimizationResult) -> dict[str, Any]:

@@ -150,9 +150,9 @@ def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float
         shown = ", ".join(f"{v:.4g}" for v in drifting[-(UNSETTLED_CHANGES + 1):])
         return (f"the optimum has not settled: its objective changed by more than {100 * UNSETTLED_CHANGE:g} % at each of the "
                 f"last {UNSETTLED_CHANGES} passes ({drifting[0]:.4g} at the first, then {shown}), each finer mesh finding "
-                "another motion; larger limits may not finish it. The likely cause is fast dynamics the optimum exploits "
-                "more finely as the mesh grows (a contact rattling through its gap, friction's stick), narrower than the "
-                "elements: a larger smoothing width in [model.parameters] makes it a motion a mesh resolves")
+                "another motion; larger limits may not finish it. The likely cause is fast dynamics narrower than the "
+                "elements (a contact rattling through its gap, friction's stick), which each mesh resolves differently: "
+                "a larger smoothing width in [model.parameters] makes it a motion a mesh resolves")
     conv = _convergence(history)
     spent = sum(float(e.get("cpu_s") or 0.0) for e in history)
     now = {"max_cpu_s": f"{budget:g} CPU-s", "max_elements": f"{max_elements}", "max_passes": f"{max_passes}"}
