@@ -308,12 +308,20 @@ class OptimalControl:
             finally:
                 tr.verify = verify
 
+        wall0, cpu0 = time.perf_counter(), time.process_time()
         with _quiet_if_refined(d.refinement.on_failure and bool(check) and not d.optimization.data_fits):
             result = declared(start)
             if not solved_declared(result) and start is not None:  # the last step too long: steps inserted before it
                 # (their CPU in the record's steps; the declared solve's in the phases below, from its result)
                 start, result = narrowed_steps(d.optimization, step, declared, start, record, result)
             retried = result.stats.get("cold_retry")
+        # the solves that failed on the way to the declared one (a warm attempt, inserted steps) are the continuation's;
+        # the declared solve's own phases follow from its result
+        own = [v for k, v in (result.timing or {}).items() if k != "total"]
+        failed_wall = time.perf_counter() - wall0 - sum(v.get("wall_s", 0.0) for v in own)
+        failed_cpu = time.process_time() - cpu0 - sum(v.get("cpu_s", 0.0) for v in own)
+        if failed_cpu > 1e-3:
+            add_phase(phases, "continuation", max(failed_wall, 0.0), failed_cpu)
         merge_phases(phases, result.timing)
         result.continuation = record_final(record, start, result)
         if retried is not None:
