@@ -22,6 +22,24 @@ class CommandedVoltage(el.SignalVoltage):
     v = Variable(unit="V", description="voltage from a signal")
 
 
+class _Armature(Component):
+    """Voltage source, resistor, inductor and EMF on the rotor (each drive's own values below)."""
+    src = el.SignalVoltage()
+    gnd = el.Ground()
+    r = el.Resistor(R=1.0)
+    ind = el.Inductor(L=1e-3)
+    emf = el.EMF(k=0.1)
+    rotor = rot.Inertia(J=1e-4)
+
+    def equations(self):
+        connect(self.src.p, self.r.p)
+        connect(self.r.n, self.ind.p)
+        connect(self.ind.n, self.emf.p)
+        connect(self.emf.n, self.src.n)
+        connect(self.src.n, self.gnd.p)
+        connect(self.emf.flange, self.rotor.flange_a)
+
+
 class Gravity(Component):
     mgl = Parameter(2.0, unit="N.m")
     flange = rot.Flange_b("link")
@@ -30,13 +48,12 @@ class Gravity(Component):
         self.equation(self.flange.tau, self.mgl * ca.sin(self.flange.phi))
 
 
-class DeadBandArm(Component):
+class DeadBandArm(_Armature):
     """Voltage command through an amplifier dead band, two gear stages with backlash between them, a compliant
     shaft, an arm under gravity with Stribeck friction."""
     u = Input(unit="V")
     band = blocks.DeadZone(uMax=0.5, uMin=-0.5, smoothing=0.02)
     src = CommandedVoltage()
-    gnd = el.Ground()
     r = el.Resistor(R=0.8)
     ind = el.Inductor(L=1.2e-3)
     emf = el.EMF(k=0.08)
@@ -54,12 +71,7 @@ class DeadBandArm(Component):
     def equations(self):
         self.equation(self.band.u, self.u)
         self.equation(self.src.v, self.band.y)
-        connect(self.src.p, self.r.p)
-        connect(self.r.n, self.ind.p)
-        connect(self.ind.n, self.emf.p)
-        connect(self.emf.n, self.src.n)
-        connect(self.src.n, self.gnd.p)
-        connect(self.emf.flange, self.rotor.flange_a)
+        super().equations()
         connect(self.rotor.flange_b, self.gear1.flange_a)
         connect(self.gear1.flange_b, self.backlash.flange_a)
         connect(self.backlash.flange_b, self.mid.flange_a)
@@ -76,13 +88,12 @@ class Arm:
         return structural_simplify(DeadBandArm().to_model("dead_band_arm"))
 
 
-class LimitedConveyor(Component):
+class LimitedConveyor(_Armature):
     """Voltage command through a Limiter (amplifier saturation at +-20 V), pulley, a belt, a carriage, a tool holder
     with backlash against the carriage, Stribeck friction on the tool."""
     u = Input(unit="V")
     sat = blocks.Limiter(uMax=20.0, uMin=-20.0, smoothing=0.05)
     src = CommandedVoltage()
-    gnd = el.Ground()
     r = el.Resistor(R=1.5)
     ind = el.Inductor(L=2e-3)
     emf = el.EMF(k=0.3)
@@ -98,12 +109,7 @@ class LimitedConveyor(Component):
     def equations(self):
         self.equation(self.sat.u, self.u)
         self.equation(self.src.v, self.sat.y)
-        connect(self.src.p, self.r.p)
-        connect(self.r.n, self.ind.p)
-        connect(self.ind.n, self.emf.p)
-        connect(self.emf.n, self.src.n)
-        connect(self.src.n, self.gnd.p)
-        connect(self.emf.flange, self.rotor.flange_a)
+        super().equations()
         connect(self.rotor.flange_b, self.pulley.flangeR)
         connect(self.pulley.flangeT, self.belt.flange_a)
         connect(self.belt.flange_b, self.carriage.flange_a)
@@ -126,11 +132,9 @@ class Weight(Component):
         self.equation(self.flange.f, self.mg)
 
 
-class TableDrive(Component):
+class TableDrive(_Armature):
     """Rotary table: motor with its own bearing friction, gear 100 with backlash on its output, table inertia with
     Stribeck friction; the voltage is the input."""
-    src = el.SignalVoltage()
-    gnd = el.Ground()
     r = el.Resistor(R=2.0)
     ind = el.Inductor(L=3e-3)
     emf = el.EMF(k=0.15)
@@ -144,12 +148,7 @@ class TableDrive(Component):
     fixed2 = rot.Fixed()
 
     def equations(self):
-        connect(self.src.p, self.r.p)
-        connect(self.r.n, self.ind.p)
-        connect(self.ind.n, self.emf.p)
-        connect(self.emf.n, self.src.n)
-        connect(self.src.n, self.gnd.p)
-        connect(self.emf.flange, self.rotor.flange_a)
+        super().equations()
         connect(self.rotor.flange_b, self.bearing.flange_b)
         connect(self.bearing.flange_a, self.fixed1.flange)
         connect(self.rotor.flange_b, self.gear.flange_a)
@@ -164,11 +163,9 @@ class Table:
         return structural_simplify(TableDrive().to_model("rotary_table"))
 
 
-class LiftDrive(Component):
+class LiftDrive(_Armature):
     """Vertical lift: motor, drum (radius 5 cm) winding a rope (a spring-damper) lifting a cage under gravity, with
     guide friction; the voltage is the input."""
-    src = el.SignalVoltage()
-    gnd = el.Ground()
     r = el.Resistor(R=0.5)
     ind = el.Inductor(L=1e-3)
     emf = el.EMF(k=0.5)
@@ -182,12 +179,7 @@ class LiftDrive(Component):
     weight = Weight(mg=294.3)
 
     def equations(self):
-        connect(self.src.p, self.r.p)
-        connect(self.r.n, self.ind.p)
-        connect(self.ind.n, self.emf.p)
-        connect(self.emf.n, self.src.n)
-        connect(self.src.n, self.gnd.p)
-        connect(self.emf.flange, self.rotor.flange_a)
+        super().equations()
         connect(self.rotor.flange_b, self.gear.flange_a)
         connect(self.gear.flange_b, self.drum.flangeR)
         connect(self.drum.flangeT, self.rope.flange_a)
