@@ -551,7 +551,8 @@ class ShootingTranscription:
         solve_time = _time.perf_counter() - t_start
         message = str(stats.get("return_status", "unknown"))
         evaluation = out.failed_evaluation() or (failure is not None)
-        if failure is not None or (evaluation and message in EVALUATION_STATUSES):
+        # IPOPT's own NaN/Inf check (an RK step overflowing, no exception raised) is such a failure too: one line
+        if failure is not None or (evaluation and message in EVALUATION_STATUSES) or message == "Invalid_Number_Detected":
             stage = failure[0] if failure else "solve"
             iteration = int(stats.get("iter_count", 0) or 0)
             message = failure_message(self.integrator, "the start" if stage == "start" else f"iteration {iteration}",
