@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 from gtmodel.errors import InputError
 
-__all__ = ["IPOPT_CPU_SHARE", "ipopt_left", "NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "max_elements", "FALLBACK_ELEMENTS", "MOST_ELEMENTS", "memory_limit", "check_memory", "estimate_shooting",
+__all__ = ["IPOPT_CPU_SHARE", "ipopt_left", "STALL_FACTOR", "STALL_FLOOR_S", "stall_cap", "NlpSize", "MEMORY_ENV", "MEMORY_SHARE", "estimate", "max_elements", "FALLBACK_ELEMENTS", "MOST_ELEMENTS", "memory_limit", "check_memory", "estimate_shooting",
            "check_shooting_memory"]
 
 #: Environment variable: the memory limit of one NLP in megabytes (default: a share of what is available).
@@ -308,3 +308,35 @@ def ipopt_left(budget: float, cpu0: float) -> float:
         :data:`IPOPT_CPU_SHARE` of ``budget`` less the CPU time spent since ``cpu0``, at least 1 s.
     """
     return max(IPOPT_CPU_SHARE * (budget - (_time.process_time() - cpu0)), 1.0)
+
+
+#: A warm refinement pass's IPOPT is held to this many times the costliest pass before it, per element ...
+STALL_FACTOR = 20.0
+#: ... and never to less than this, CPU-s.
+STALL_FLOOR_S = 10.0
+
+
+def stall_cap(history: list[dict], elements: int) -> float | None:
+    """IPOPT's ``max_cpu_time`` for a warm refinement pass: a multiple of what the passes before it cost.
+
+    A warm pass that stalls (IPOPT wandering from the last pass's point) would otherwise hold the whole budget left
+    before its cold retry may run: a rotary table with a power limit, its passes 1.2 to 1.8 CPU-s up to a verified
+    pass of 144 elements, ran its warm 146-element pass into IPOPT's CPU limit (250 s of the 290) and the cold retry
+    that followed ended in seconds, the budget spent (measured 2026-11-27).
+
+    Parameters
+    ----------
+    history : list of dict
+        The passes so far (``elements``, ``cpu_s``).
+    elements : int
+        The warm pass's elements.
+
+    Returns
+    -------
+    float or None
+        ``max(STALL_FLOOR_S, STALL_FACTOR * max_k(cpu_k / elements_k) * elements)``, CPU-s; None without a pass before.
+    """
+    rates = [float(e["cpu_s"]) / max(int(e["elements"]), 1) for e in history if e.get("cpu_s") and e.get("elements")]
+    if not rates:
+        return None
+    return max(STALL_FLOOR_S, STALL_FACTOR * max(rates) * int(elements))

@@ -113,7 +113,7 @@ from gtmodel.modeling.ocp.result import OptimizationResult, lagrange_basis
 from gtmodel.modeling.ocp.verification import SPURIOUS_DEVIATION, SWITCH_FRACTION, refinement_passes, switch_elements
 from gtmodel.modeling.ocp.verification_bounds import bounds_verdict, element_bound_violations
 from gtmodel.modeling.ocp.refinement_remedy import refinement_remedy
-from gtmodel.modeling.ocp.budget import ipopt_left, max_elements as memory_max_elements
+from gtmodel.modeling.ocp.budget import ipopt_left, max_elements as memory_max_elements, stall_cap
 from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, merged_spans
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
@@ -398,6 +398,9 @@ def solve_refined(
                     left = ipopt_left(budget, cpu0)
                     held = float(tr.options.get("ipopt", {}).get("max_cpu_time", left))  # its own limit, if smaller
                     tr.set_solver_options({"max_cpu_time": min(held, left)})
+                cap = stall_cap(history, tr.elements) if warm and options.get("solver", "ipopt") == "ipopt" else None
+                if cap is not None:  # a warm solve that stalls leaves the cold retry what is left (budget.stall_cap)
+                    tr.set_solver_options({"max_cpu_time": min(float(tr.options.get("ipopt", {}).get("max_cpu_time", cap)), cap)})
                 result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
                 if begun is not None:
                     result.stats = {**(result.stats or {}), "proximal": begun.stats["proximal"]}

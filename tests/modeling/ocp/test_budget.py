@@ -118,3 +118,15 @@ def test_refinement_cap_without_a_known_limit_is_the_fallback(monkeypatch):
 def test_ipopt_is_held_to_its_share_of_the_cpu_left(spent, expected):
     # max_cpu_time = IPOPT_CPU_SHARE of (budget - spent), at least 1 s (the closed form of its definition)
     assert ipopt_left(100.0, time.process_time() - spent) == pytest.approx(expected, abs=0.05)
+
+
+@pytest.mark.parametrize("history, elements, expected", [
+    # the rotary table's passes (1.2 CPU-s on 144 elements the costliest per element): 20 x 1.2/144 x 146 = 24.3 s
+    ([{"elements": 50, "cpu_s": 0.3}, {"elements": 144, "cpu_s": 1.2}], 146, 20.0 * 1.2 / 144 * 146),
+    ([{"elements": 50, "cpu_s": 0.1}], 60, 10.0),  # the floor
+    ([], 60, None),  # nothing to compare with: no cap
+])
+def test_stall_cap_is_a_multiple_of_the_costliest_pass_per_element(history, elements, expected):
+    from gtmodel.modeling.ocp.budget import stall_cap
+
+    assert stall_cap(history, elements) == (None if expected is None else pytest.approx(expected))
