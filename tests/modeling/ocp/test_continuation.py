@@ -22,9 +22,10 @@ def _problem():
                            free_parameters={})
 
 
-def _result(factor, ok, verified=False):
-    return SimpleNamespace(factor=factor, status="optimal" if ok else "error", objective=factor if ok else float("nan"),
-                           iterations=10, verification=object() if verified else None)
+def _result(factor, ok, verified=False, failure="infeasible", message="Infeasible_Problem_Detected"):
+    return SimpleNamespace(factor=factor, status="optimal" if ok else failure, objective=factor if ok else float("nan"),
+                           iterations=10, verification=object() if verified else None, message="Solve_Succeeded" if ok else message,
+                           stats={})
 
 
 def _solvers(reach):
@@ -73,3 +74,20 @@ def test_nothing_is_inserted_without_a_start_or_after_a_solution(start, failed):
     step, declared, calls = _solvers(reach=4.0)
     out = narrowed_steps(_problem(), step, declared, start, _record(10.0), failed)
     assert calls == [] and out == (start, failed)
+
+
+@pytest.mark.parametrize("failure, message", [
+    ("error", "Error_In_Step_Computation"),  # a singular NLP (an input inert beyond a Limiter): no matter of the step
+    ("max_iterations", "Maximum_Iterations_Exceeded"),
+])
+def test_a_failure_that_is_no_matter_of_the_step_inserts_nothing(failure, message):
+    step, declared, calls = _solvers(reach=4.0)
+    failed = _result(1.0, False, failure=failure, message=message)
+    out = narrowed_steps(_problem(), step, declared, _result(10.0, True), _record(10.0), failed)
+    assert calls == [] and out[1] is failed
+
+
+def test_a_restoration_failure_is_a_start_too_far():
+    from gtmodel.modeling.ocp.continuation import start_too_far
+
+    assert start_too_far(_result(1.0, False, failure="error", message="Restoration_Failed: IPOPT's feasibility restoration ..."))
