@@ -118,7 +118,7 @@ from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, 
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
 from gtmodel.modeling.ocp.refinement_guess import guess_from, repaired_guess, solved_cold
-from gtmodel.modeling.ocp.refinement_proximal import proximal_start
+from gtmodel.modeling.ocp.refinement_proximal import kept_proximal, proximal_start
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
 
@@ -404,6 +404,7 @@ def solve_refined(
                 result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
                 if begun is not None:
                     result.stats = {**(result.stats or {}), "proximal": begun.stats["proximal"]}
+                    result = kept_proximal(tr, begun, result, parameters, objective_tol)  # no worse than its proximal start
                 if warm and result.verification is None and options.get("solver", "ipopt") == "ipopt":  # no solution warm
                     result = solved_cold(tr, result, guess, parameters, ipopt_left(budget, cpu0))
             warm_from = tr if result.lam_g is not None else None
@@ -424,7 +425,7 @@ def solve_refined(
         entry = _pass_entry(n_pass, _Mesh(n_elements, tr_points), result, cpu, wall)
         history.append(entry)
         passes.append(result)
-        for key in ("continued", "cold_retry", "proximal"):  # the acceptable stop continued; a warm pass without a solution cold again
+        for key in ("continued", "cold_retry", "proximal", "proximal_kept"):  # the acceptable stop continued; a warm pass without a solution cold again
             if key in result.stats:
                 entry[key] = result.stats[key]
         if polish:

@@ -377,7 +377,9 @@ def test_refinement_from_a_start_does_not_solve_it_again():
 def test_a_warm_pass_without_a_solution_is_solved_again_cold(monkeypatch):
     # refinement_guess.solved_cold: the second pass's warm solve is held to 2 IPOPT iterations (no solution, as
     # drive1_18's Restoration_Failed); solved again from the same start with IPOPT's own barrier and bound push, the
-    # refinement goes on and ends at the closed form's 2 s
+    # refinement goes on and ends at the closed form's 2 s. Without a proximal point (its proximal solve found none):
+    # a pass with one keeps it instead (refinement_proximal.kept_proximal, tested in test_refinement_proximal)
+    monkeypatch.setattr(refinement, "proximal_start", lambda *args, **kwargs: None)
     real = refinement.CollocationTranscription
     made: list = []
 
@@ -410,7 +412,7 @@ def test_a_warm_pass_without_a_solution_is_solved_again_cold(monkeypatch):
 def test_every_pass_is_held_to_the_budget_left_and_a_pass_it_stops_names_it(refinement_solves, monkeypatch):
     # each pass's IPOPT gets max_cpu_time = what is left of max_cpu_s (drive0_35: a pass of 3,000 iterations took the
     # run to 368 CPU-s against a 250 s budget); a pass stopped by it ends the refinement at "the CPU budget", whose
-    # remedy names max_cpu_s (forced here: pass 2's limit set to 1e-9 s, its cold retry off)
+    # remedy names max_cpu_s (forced here: pass 2's limit set to 1e-9 s, its cold retry and proximal start off)
     seen = refinement_solves
     opt = min_time_double_integrator()
     opt.verification_tolerance = 1e-6
@@ -427,6 +429,7 @@ def test_every_pass_is_held_to_the_budget_left_and_a_pass_it_stops_names_it(refi
 
     monkeypatch.setattr(refinement, "CollocationTranscription", spy)
     monkeypatch.setattr(refinement, "solved_cold", lambda tr, failed, *a: failed)
+    monkeypatch.setattr(refinement, "proximal_start", lambda *args, **kwargs: None)  # else its point is kept (kept_proximal)
     res = solve_refined(opt, elements=11, max_cpu_s=100.0)
     assert res.refinement[1]["status"] == "max_iterations" and len(res.refinement) == 2
     assert res.refinement_stop.startswith("the CPU budget (100 s; pass 2 stopped at IPOPT's CPU limit")
