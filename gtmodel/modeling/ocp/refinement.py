@@ -118,7 +118,7 @@ from gtmodel.modeling.ocp.collocation_bounds import BOUND_POINTS, excess_spans, 
 from gtmodel.modeling.ocp.refinement_mesh import SWITCH_EDGE, finer, halved, refine_mesh, switch_times
 from gtmodel.modeling.ocp.regularization import input_scales, regularization_weight
 from gtmodel.modeling.ocp.refinement_guess import guess_from, repaired_guess, solved_cold
-from gtmodel.modeling.ocp.refinement_proximal import kept_proximal, proximal_start
+from gtmodel.modeling.ocp.refinement_proximal import OWN_MAX_ITER, kept_proximal, proximal_start
 from gtmodel.modeling.ocp.refinement_interrupt import keeps_verified_pass, recorded  # issue 67: Ctrl-C keeps a verified pass
 from gtmodel.status import Status
 
@@ -397,14 +397,15 @@ def solve_refined(
                     # solve ran to the CPU limit, then the pass's own as long again: 350 CPU-s, the run 478 against 290)
                     left = ipopt_left(budget, cpu0)
                     held = float(tr.options.get("ipopt", {}).get("max_cpu_time", left))  # its own limit, if smaller
-                    tr.set_solver_options({"max_cpu_time": min(held, left)})
+                    iterations = int(tr.options.get("ipopt", {}).get("max_iter", 3000))  # from a proximal point: OWN_MAX_ITER
+                    tr.set_solver_options({"max_cpu_time": min(held, left), **({"max_iter": min(iterations, OWN_MAX_ITER)} if begun else {})})
                 cap = stall_cap(history, tr.elements) if warm and options.get("solver", "ipopt") == "ipopt" else None
                 if cap is not None:  # a warm solve that stalls leaves the cold retry what is left (budget.stall_cap)
                     tr.set_solver_options({"max_cpu_time": min(float(tr.options.get("ipopt", {}).get("max_cpu_time", cap)), cap)})
                 result = tr.solve(parameters=parameters, initial_guess=guess if begun is None else begun, warm_start=begun is not None)
                 if begun is not None:
                     result.stats = {**(result.stats or {}), "proximal": begun.stats["proximal"]}
-                    result = kept_proximal(tr, begun, result, parameters, objective_tol)  # no worse than its proximal start
+                    result = kept_proximal(tr, begun, result, parameters, objective_tol, ipopt_left(budget, cpu0))
                 if warm and result.verification is None and options.get("solver", "ipopt") == "ipopt":  # no solution warm
                     result = solved_cold(tr, result, guess, parameters, ipopt_left(budget, cpu0))
             warm_from = tr if result.lam_g is not None else None

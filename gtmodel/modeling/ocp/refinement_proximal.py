@@ -21,9 +21,10 @@ The pass's own solve can still leave the proximal point's neighbourhood: ``drive
 copper loss, its table parked in the middle of its gap) at 553 elements, from a proximal point reached in 22
 iterations, ran 2,342 iterations (115 CPU-s) to an optimum 1.6 % worse, its deviation 1.0 where its predecessor's was
 0.043; at 251 elements it ended ``Restoration_Failed``, and the cold solve after it found another trajectory (deviation
-2.1 after 0.025). The proximal point is a solution of the pass's constraints whose objective is within the term's
-value of the nearest minimum's; :func:`kept_proximal` returns it, verified, where the own solve ends without a
-solution or with an objective worse than it.
+2.1 after 0.025). The proximal point solves the pass's constraints, but its objective is pulled towards the start;
+where the own solve ends without a solution or worse than it, :func:`kept_proximal` goes on by the proximal point
+method itself (each solve centred on the last point, until a step no longer changes the objective) and returns its
+last point, verified. The own solve is held to :data:`OWN_MAX_ITER` iterations.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from gtmodel.modeling.ocp.collocation_nlp import merge_options
 from gtmodel.modeling.ocp.result import OptimizationResult
 from gtmodel.status import Status
 
-__all__ = ["proximal_start", "kept_proximal", "PROXIMAL_WEIGHT", "PROXIMAL_CPU_SHARE"]
+__all__ = ["proximal_start", "kept_proximal", "PROXIMAL_WEIGHT", "PROXIMAL_CPU_SHARE", "OWN_MAX_ITER", "MAX_PROXIMAL_STEPS", "PROXIMAL_SETTLED"]
 
 _log = logging.getLogger("gtmodel")
 
@@ -52,6 +53,15 @@ PROXIMAL_WEIGHT = 0.1
 #: The share of the CPU left of the refinement's budget that the proximal solve may take (IPOPT's ``max_cpu_time``):
 #: the rest is the pass's own solve's (drive0_33's 2,170-element pass: its proximal solve took all that was left).
 PROXIMAL_CPU_SHARE = 0.5
+
+#: IPOPT's iteration limit for a pass's own solve from its proximal point (its own ``max_iter`` if smaller). The drive
+#: family's seed 0: 265 such solves, the median 22 iterations, all but four within 205; those four, ``drive0_23``'s, ran
+#: to 3,000 iterations (26 to 84 CPU-s each, 208 of its 290) and its proximal points were kept (measured 2026-11-28).
+OWN_MAX_ITER = 500
+#: The proximal point method's steps after a failed own solve (:func:`kept_proximal`): at most this many ...
+MAX_PROXIMAL_STEPS = 10
+#: ... until a step changes the objective by at most this (relative): then its point is taken as stationary.
+PROXIMAL_SETTLED = 1e-4
 
 _SOLVED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
 
@@ -84,15 +94,20 @@ def proximal_start(transcription: Any, guess: Mapping[str, Any], parameters: Map
     tr = transcription
     if tr.plugin != "ipopt" or not PROXIMAL_CPU_SHARE * cpu_left > 1.0:
         return None
-    cpu0 = _time.process_time()
-    opt, nlp = tr.optimization, tr.nlp
+    opt = tr.optimization
     pvec = tr.dae.parameter_vector({**opt.parameters, **(parameters or {})})
     guesses = {**opt.initial_guesses, **{k: v for k, v in guess.items() if k != "final_time"}}
     tf = float(np.clip(float(guess.get("final_time", opt.final_time_guess)), *opt.final_time_bounds))
-    w0 = np.asarray(tr._initial_w(guesses, tf, pvec), dtype=float)
+    return _proximal_point(tr, np.asarray(tr._initial_w(guesses, tf, pvec), dtype=float), pvec, PROXIMAL_CPU_SHARE * cpu_left)
+
+
+def _proximal_point(tr: Any, w0: np.ndarray, pvec: Any, cpu_limit: float) -> OptimizationResult | None:
+    """The NLP of ``tr`` solved with the term ``rho |w - w0|^2`` added, as a result of ``tr`` (None without a solution)."""
+    cpu0 = _time.process_time()
+    nlp = tr.nlp
     f0 = float(ca.Function("f0", [nlp.w, nlp.p], [nlp.f])(w0, pvec))
     rho = PROXIMAL_WEIGHT * max(abs(f0), 1e-6) / max(w0.size, 1)
-    options = merge_options(False, {**tr._solver_options, "max_cpu_time": float(PROXIMAL_CPU_SHARE * cpu_left)}, "ipopt")
+    options = merge_options(False, {**tr._solver_options, "max_cpu_time": float(cpu_limit)}, "ipopt")
     derivatives = dict(tr.derivative_functions)
     if "hess_lag" in derivatives:  # the pass's assembled Hessian of the Lagrangian plus the term's, 2 rho lam_f I
         x, p = ca.MX.sym("x", nlp.w.numel()), ca.MX.sym("p", nlp.p.numel())
@@ -112,7 +127,7 @@ def proximal_start(transcription: Any, guess: Mapping[str, Any], parameters: Map
     record = {"status": str(stats.get("return_status")), "iterations": int(stats.get("iter_count", 0)), "weight": rho,
               "cpu_s": _time.process_time() - cpu0, "term": float(rho * np.sum((w - w0) ** 2))}
     if record["status"] not in _SOLVED or not np.all(np.isfinite(w)):
-        _log.info("mesh refinement: the proximal start ended %s; the pass starts from its guess", record["status"])
+        _log.info("mesh refinement: the proximal solve ended %s", record["status"])
         return None
     start = tr._result(w, pvec, Status.OPTIMAL, record["status"], {"proximal": record}, 0.0)
     start.lam_w = np.array(sol["lam_x"], dtype=float).reshape(-1)
@@ -121,8 +136,16 @@ def proximal_start(transcription: Any, guess: Mapping[str, Any], parameters: Map
 
 
 def kept_proximal(transcription: Any, start: OptimizationResult | None, result: OptimizationResult,
-                  parameters: Mapping[str, Any] | None, objective_tolerance: float) -> OptimizationResult:
-    """The pass's result, or its proximal start where the pass's own solve from it did worse (see the module).
+                  parameters: Mapping[str, Any] | None, objective_tolerance: float,
+                  cpu_left: float = float("inf")) -> OptimizationResult:
+    """The pass's result, or the proximal point method from its start where the own solve from it did worse.
+
+    Where the own solve ends without a solution, or worse than ``start``, the proximal solve is repeated, each
+    centred on the last point (the proximal point method, Rockafellar 1976: each step's objective no higher than
+    the last, their fixed point a stationary point of the pass's NLP), until a step changes the objective by at
+    most :data:`PROXIMAL_SETTLED` (relative), at most :data:`MAX_PROXIMAL_STEPS` steps. The last point is a KKT
+    point of the pass's NLP but for the term's gradient, ``2 rho (w - w0)``: its norm (the NLP's scaled units) is
+    recorded as ``stationarity``.
 
     Parameters
     ----------
@@ -137,14 +160,18 @@ def kept_proximal(transcription: Any, start: OptimizationResult | None, result: 
     objective_tolerance : float
         Relative: the own solve is worse where its minimised objective exceeds the start's by more than this
         times the start's magnitude.
+    cpu_left : float, optional
+        CPU seconds left of the refinement's budget: each proximal step's IPOPT is held to
+        :data:`PROXIMAL_CPU_SHARE` of what is left of it (default: no limit).
 
     Returns
     -------
     OptimizationResult
         ``result`` where it holds a solution (verified or not) no worse than ``start``, or where ``start`` is
-        None; else ``start``, verified by :meth:`CollocationTranscription.check` (``check_failed`` if it
-        fails), its message naming the proximal solve and the own solve's outcome, ``stats["proximal_kept"]``
-        the own solve's status, iterations and objective.
+        None; else the last proximal point, verified by :meth:`CollocationTranscription.check` (``check_failed``
+        if it fails), ``max_iterations`` if its steps had not settled; its message names the proximal steps and
+        the own solve's outcome, ``stats["proximal_kept"]`` the own solve's status, iterations and objective, the
+        steps, whether they settled, the last step's relative change and ``stationarity``.
     """
     if start is None or start.objective is None or not np.isfinite(start.objective):
         return result
@@ -153,18 +180,32 @@ def kept_proximal(transcription: Any, start: OptimizationResult | None, result: 
         else sign * float(result.objective)
     if own <= sign * float(start.objective) + objective_tolerance * max(abs(float(start.objective)), 1e-12):
         return result
-    tr, opt = transcription, transcription.optimization
+    tr, opt, cpu0 = transcription, transcription.optimization, _time.process_time()
     pvec = tr.dae.parameter_vector({**opt.parameters, **(parameters or {})})
-    tr.check(start, special=np.array(tr.special_function(start.w, pvec), dtype=float).reshape(-1),
-             lagrange=float(tr.lagrange_function(start.w, pvec)))
-    record = {"status": str(result.status), "iterations": result.iterations,
+    point, steps, change = start, 0, float("nan")
+    while steps < MAX_PROXIMAL_STEPS and not change <= PROXIMAL_SETTLED:
+        left = PROXIMAL_CPU_SHARE * (cpu_left - (_time.process_time() - cpu0))
+        nxt = _proximal_point(tr, np.asarray(point.w, dtype=float), pvec, left) if left > 1.0 else None
+        if nxt is None:
+            break
+        steps, change = steps + 1, abs(nxt.objective - point.objective) / max(abs(float(point.objective)), 1e-12)
+        point = nxt
+    last = point.stats["proximal"]  # the term's gradient norm 2 rho |w - w0| = 2 sqrt(rho * rho |w - w0|^2)
+    settled = bool(change <= PROXIMAL_SETTLED)
+    record = {"status": str(result.status), "iterations": result.iterations, "steps": steps, "settled": settled,
+              "last_change": change, "stationarity": 2.0 * float(np.sqrt(last["weight"] * last["term"])), "cpu_s": _time.process_time() - cpu0,
               "objective": None if result.objective is None or not np.isfinite(result.objective) else float(result.objective)}
-    start.message = (f"{start.stats['proximal']['status']}, the proximal solve's point, kept: the pass's own solve from it ended "
-                     f"{result.status} after {result.iterations} iterations"
-                     + ("" if record["objective"] is None else f" at {record['objective']:.10g}")
-                     + ("" if start.status == Status.OPTIMAL else f"; {start.message}"))
-    start.stats = {**start.stats, "proximal_kept": record}
-    start.solve_time = float(result.solve_time or 0.0)
-    _log.info("mesh refinement: the pass's own solve ended %s at %s; its proximal start (%.10g) kept", result.status,
-              record["objective"], start.objective)
-    return start
+    point.stats = {**point.stats, "proximal": start.stats["proximal"], "proximal_kept": record}
+    if not settled:
+        point.status = Status.MAX_ITERATIONS
+    tr.check(point, special=np.array(tr.special_function(point.w, pvec), dtype=float).reshape(-1),
+             lagrange=float(tr.lagrange_function(point.w, pvec)))
+    own_text = (f"the pass's own solve from its proximal start ended {result.status} after {result.iterations} iterations"
+                + ("" if record["objective"] is None else f" at {record['objective']:.10g}"))
+    steps_text = (f"{steps} further proximal step(s), the last changing the objective by {change:.2g} (relative), "
+                  + ("settled" if settled else f"not settled (more than {PROXIMAL_SETTLED:g})"))
+    point.message = (f"{start.stats['proximal']['status']}, a proximal point kept: {own_text}; {steps_text}"
+                     + ("" if point.status in (Status.OPTIMAL, Status.MAX_ITERATIONS) else f"; {point.message}"))
+    point.solve_time = float(result.solve_time or 0.0)
+    _log.info("mesh refinement: %s; the proximal point (%.10g) kept", own_text, point.objective)
+    return point
