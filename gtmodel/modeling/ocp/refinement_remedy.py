@@ -113,6 +113,21 @@ def _unsettled(history: list[dict[str, Any]]) -> list[float] | None:
     return objectives if all(c > UNSETTLED_CHANGE for c in changes) else None
 
 
+def _singular(history: list[dict[str, Any]]) -> list[dict[str, Any]] | None:
+    """The ``proximal_kept`` records of the last :data:`UNSETTLED_CHANGES` passes when each kept a proximal point whose
+    steps had not settled (:func:`~gtmodel.modeling.ocp.refinement_proximal.kept_proximal`), else None.
+
+    ``drive0_23`` (a vertical ball screw at minimum copper loss, its load creeping down against its smoothed
+    friction): at each of its passes IPOPT's own solve from the proximal point ran to its iteration limit and ten
+    proximal steps still changed the objective by 1.3e-3 to 1.5e-4 each, its objective falling 0.2 % a pass; the
+    deviation's power law promised a verified pass at 1,100 elements, which would still not be an optimum.
+    """
+    kept = [e.get("proximal_kept") for e in history if e.get("max_scaled_deviation") is not None][-UNSETTLED_CHANGES:]
+    if len(kept) < UNSETTLED_CHANGES or not all(k is not None and not k.get("settled", True) for k in kept):
+        return None
+    return kept
+
+
 def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float, budget: float,
                       max_passes: int, max_elements: int) -> str:
     """What would finish a refinement that stopped before a pass verified: the limit that stopped it and by how much.
@@ -153,6 +168,13 @@ def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float
                 "another motion; larger limits may not finish it. The likely cause is fast dynamics narrower than the "
                 "elements (a contact rattling through its gap, friction's stick), which each mesh resolves differently: "
                 "a larger smoothing width in [model.parameters] makes it a motion a mesh resolves")
+    singular = _singular(history)
+    if singular is not None:  # no optimum of any pass's NLP: a verified deviation would not make one
+        return (f"the passes' NLPs are nearly singular: at each of the last {UNSETTLED_CHANGES} passes IPOPT's own solve ended "
+                f"{singular[-1]['status']} and the proximal steps had not settled ({singular[-1]['steps']} steps, the last changing "
+                f"the objective by {singular[-1]['last_change']:.2g}); larger limits may verify the motion but not its optimum. "
+                "The likely cause is a flat optimum: a state held near the zero of a smoothed law (a load creeping against "
+                "its friction, a body parked inside a gap), which a larger smoothing width in [model.parameters] makes definite")
     conv = _convergence(history)
     spent = sum(float(e.get("cpu_s") or 0.0) for e in history)
     now = {"max_cpu_s": f"{budget:g} CPU-s", "max_elements": f"{max_elements}", "max_passes": f"{max_passes}"}

@@ -116,3 +116,21 @@ def test_an_objective_that_changed_once_gets_the_estimate():
     history = [dict(e, objective=j) for e, j in zip(power_law(2.0, sizes=(50, 100, 200, 400)), (1.0, 0.99, 0.9724, 0.9724))]
     text = refinement_remedy(history, "the element limit (400 elements)", 1e-2, 100.0, 16, 400)
     assert text.startswith("max_elements = ")
+
+
+def _kept(settled):
+    return {"status": "max_iterations", "iterations": 500, "steps": 10, "settled": settled, "last_change": 2e-4}
+
+
+@pytest.mark.parametrize("kept, singular", [
+    ([None, _kept(False), _kept(False)], True),   # drive0_23: the last two passes' proximal steps unsettled
+    ([None, _kept(False), _kept(True)], False),   # the last settled: an optimum of its NLP
+    ([None, None, _kept(False)], False),          # one pass alone
+])
+def test_unsettled_proximal_steps_promise_no_optimum_from_larger_limits(kept, singular):
+    # the power law alone (p = 2) would name max_cpu_s and an element count; a pass whose proximal steps did not settle
+    # is no optimum of its NLP, whatever its deviation
+    history = [{**e, **({"proximal_kept": k} if k else {})} for e, k in zip(power_law(2.0), kept)]
+    text = refinement_remedy(history, "the CPU budget (290 s; 276 s spent)", 1e-2, 290.0, 30, 4000)
+    assert ("nearly singular" in text and "max_cpu_s =" not in text) == singular
+    assert ("max_cpu_s =" in text) == (not singular)
