@@ -14,6 +14,7 @@ not the mesh's resolution (a spurious minimum, a non-smooth law narrower than an
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 __all__ = ["refinement_remedy", "knob"]
@@ -208,4 +209,14 @@ def refinement_remedy(history: list[dict[str, Any]], stop: str, tolerance: float
     if which == "max_passes":
         return f"max_passes = {max_passes + steps + 1} in [transcription] (now {max_passes}; {estimate})" + (
             f", with max_cpu_s >= {math.ceil(cpu / 10) * 10:.0f} (now {budget:g})" if cpu > budget else "")
+    unsolved = re.match(r"pass \d+ ended (\w+) without a solution to refine", stop)
+    if unsolved and unsolved.group(1) in ("infeasible", "error"):
+        # a finer mesh's NLP without a solution near a coarser one's: the coarser was feasible by its discretisation
+        # error (the conveyor of the held-out topologies, its tool parked mid-gap by friction alone: pass 3, 74 elements,
+        # Infeasible_Problem_Detected from the proximal, warm and cold starts; at the declared widths no solution
+        # below twice the friction's smoothing, measured 2026-11-27)
+        return ("the finer mesh's NLP has no solution near the coarser passes', whose "
+                "feasibility rested on their discretisation error, so larger limits will not finish it (had it solved: "
+                f"{estimate}). The problem as declared may have no solution near this motion: a larger smoothing width in "
+                "[model.parameters] or looser bounds, and the infeasibility report of a solve at the declared widths")
     return f"refinement stopped at {stop} ({estimate})"

@@ -134,3 +134,12 @@ def test_unsettled_proximal_steps_promise_no_optimum_from_larger_limits(kept, si
     text = refinement_remedy(history, "the CPU budget (290 s; 276 s spent)", 1e-2, 290.0, 30, 4000)
     assert ("nearly singular" in text and "max_cpu_s =" not in text) == singular
     assert ("max_cpu_s =" in text) == (not singular)
+
+
+@pytest.mark.parametrize("status, unsolved", [("infeasible", True), ("error", True), ("max_iterations", False)])
+def test_a_finer_pass_without_a_solution_promises_no_larger_limit(status, unsolved):
+    # the conveyor of the held-out topologies: pass 3 (74 elements) Infeasible_Problem_Detected from every start, its
+    # coarser passes feasible by their discretisation error; the power law's estimate is no remedy there
+    text = refinement_remedy(power_law(2.0), f"pass 3 ended {status} without a solution to refine", 1e-2, 290.0, 30, 4000)
+    assert ("no solution near the coarser passes'" in text and "larger limits will not finish it" in text) == unsolved
+    assert "fell as N^-2" in text
