@@ -5,7 +5,8 @@ The front door (:mod:`gtmodel.codegen.sources`): every kind of code is a ``CodeS
 an MPC, ``ControllerSource``) that supplies its declarations, its Python reference and its
 writer; ``generate_code(source, out_dir)`` writes it, ``check_code(generated)`` checks it
 (C against Python, the closed loop of a loop controller) with one shared ``Status``.
-``generate`` and ``check`` below take a source too and keep their former calls.
+``generate`` and ``check_generated`` below take a source too (``check_generated`` was ``check``,
+which shadowed the package :mod:`gtmodel.codegen.check`).
 
 ``generate`` writes C and a header for the model functions of a robot (3-link sets: ``ik``,
 ``fk``, ``jacobian``, ``jacobian_inverse``, ``acceleration``, ``inverse_dynamics``,
@@ -14,7 +15,7 @@ writer; ``generate_code(source, out_dir)`` writes it, ``check_code(generated)`` 
 steps of the laser tracker + IMU fusion (:mod:`gtmodel.codegen.specs.filter`), with
 ``retime_n_max`` the online re-timing along a path (:mod:`gtmodel.codegen.retime`);
 ``compile_shared``
-builds a shared library with the system C compiler; ``check`` compares the compiled C with
+builds a shared library with the system C compiler; ``check_generated`` compares the compiled C with
 the Python evaluation, probes the edge cases and times every function. The hand-written
 harness (Makefile, 4 ms loop, C unit tests) is in ``codegen/`` at the top of the repository.
 
@@ -61,7 +62,7 @@ from gtmodel.codegen.loop_step import LoopStep, generate_loop_step
 from gtmodel.codegen.robot import load_robot, parameter_hash
 from gtmodel.codegen.specs import FUNCTION_SPECS
 from gtmodel.codegen.sources import CodeSource, ControllerSource, RobotSource, UserModelSource, generate, generate_code
-from gtmodel.codegen.verdict import CodeCheck, check, check_code
+from gtmodel.codegen.verdict import CodeCheck, check_code, check_generated
 
 __all__ = [
     "CodeSource",
@@ -80,7 +81,7 @@ __all__ = [
     "compile_shared",
     "find_compiler",
     "load_library",
-    "check",
+    "check_generated",
     "EstimatorILCBundle",
     "Controller",
     "check_controller",

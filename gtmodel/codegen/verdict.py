@@ -4,8 +4,9 @@ A robot's functions, a user model's, a controller bundle's run, a loop controlle
 its closed loop are checked by their own harness (:mod:`gtmodel.codegen.check`); their
 reports are joined in one :class:`CodeCheck` whose :attr:`CodeCheck.status` is the shared
 :class:`~gtmodel.status.Status` (``converged`` when every part passed, ``check_failed``
-otherwise; exit codes from :data:`gtmodel.status.EXIT_CODES`). :func:`check` is the
-package's ``gtmodel.codegen.check``: one source's report, as before for a robot.
+otherwise; exit codes from :data:`gtmodel.status.EXIT_CODES`). :func:`check_generated` is
+one source's report (``gtmodel.codegen.check_generated``; named so that the package
+:mod:`gtmodel.codegen.check` is not shadowed: ``import gtmodel.codegen.check.closed_loop`` works).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.errors import InputError
 from gtmodel.status import Status
 
-__all__ = ["CodeCheck", "check_code", "check"]
+__all__ = ["CodeCheck", "check_code", "check_generated"]
 
 log = logging.getLogger("gtmodel")
 
@@ -76,6 +77,23 @@ class CodeCheck:
             elif not r.passed:
                 out.append("the C differs from Python" if isinstance(self.source, LoopStep) else f"{type(r).__name__} failed")
         return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The verdict and every part's figures as JSON-able values (``DIR/summary.json`` of ``gtmodel codegen ... --check``).
+
+        Returns
+        -------
+        dict
+            ``status`` (the shared :class:`~gtmodel.status.Status`, as a string), ``passed``, ``failures`` and ``parts``:
+            per report its ``part`` (the report's class), ``status`` and, for a closed loop, its figures
+            (:meth:`gtmodel.codegen.check.closed_loop.LoopCheck.to_dict`: the ratio to the feedforward, every declared
+            bound's value, limit, percent and time at the samples and between them, the step times).
+        """
+        parts = []
+        for r in self.reports:
+            entry = r.to_dict() if hasattr(r, "to_dict") else {"status": str(r.status)}
+            parts.append({"part": type(r).__name__, **entry})
+        return {"status": str(self.status), "passed": bool(self.passed), "failures": self.failures(), "parts": parts}
 
     def summary_lines(self) -> list[str]:
         """The parts' summaries; with a closed loop the verdict ``closed-loop check: PASSED | FAILED (why) [notes]``.
@@ -166,8 +184,8 @@ def check_code(generated: GeneratedCode, *, n: int = 1000, seed: int = 0, timing
     return result
 
 
-def check(generated: GeneratedCode, *args: Any, **options: Any) -> Any:
-    """``gtmodel.codegen.check``: the check of any generated code, dispatching on its source; its report has a ``status``.
+def check_generated(generated: GeneratedCode, *args: Any, **options: Any) -> Any:
+    """``gtmodel.codegen.check_generated``: the check of one part of any generated code, dispatching on its source; its report has a ``status``.
 
     Parameters
     ----------

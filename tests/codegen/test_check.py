@@ -12,7 +12,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from gtmodel.codegen import check, generate
+from gtmodel.codegen import check_generated as check, generate
 from gtmodel.codegen.check import (
     FK_TOLERANCE,
     IK_TOLERANCE,

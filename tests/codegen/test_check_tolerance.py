@@ -12,7 +12,7 @@ import re
 
 import numpy as np
 
-from gtmodel.codegen import check, generate
+from gtmodel.codegen import check_generated as check, generate
 from gtmodel.codegen.check import FLOAT_RELATIVE_TOLERANCE, CheckReport, FunctionCheck, within
 
 

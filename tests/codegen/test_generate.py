@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import gtmodel
-from gtmodel.codegen import FUNCTION_SPECS, FunctionSpec, check, compile_shared, generate, load_library, parameter_hash
+from gtmodel.codegen import FUNCTION_SPECS, FunctionSpec, check_generated as check, compile_shared, generate, load_library, parameter_hash
 from gtmodel.codegen.check import SENTINEL
 from gtmodel.codegen.declarations import ArgSpec, OutputSpec
 from gtmodel.codegen.writer import _hoist_invariants, _renamed, _residual_part

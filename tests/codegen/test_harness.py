@@ -22,7 +22,7 @@ import pytest
 
 import gtmodel.codegen
 from gtmodel.cli import main
-from gtmodel.codegen import check, generate
+from gtmodel.codegen import check_generated as check, generate
 from gtmodel.codegen.check import HARNESS_FILES, harness_dir, run_harness_unit_tests
 
 check_module = importlib.import_module("gtmodel.codegen.check.harness")

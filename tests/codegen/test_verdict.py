@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from gtmodel.codegen import CheckReport, CodeCheck, Controller, ControllerSource, RobotSource, UserModelSource, check, check_code, generate_code
+from gtmodel.codegen import CheckReport, CodeCheck, Controller, ControllerSource, RobotSource, UserModelSource, check_code, check_generated, generate_code
 from gtmodel.errors import InputError
 from gtmodel.problems.user_model import load_user_model, split_model_reference
 from gtmodel.status import Status
@@ -49,5 +49,15 @@ def test_each_check_returns_a_status(which, robot_code, filter_code, model_code)
     result = check_code(generated, n=50)
     assert isinstance(result, CodeCheck) and isinstance(result.status, Status)
     assert result.status is Status.CONVERGED and result.passed and result.failures() == []
-    report = check(generated, n=50) if which != "filter" else check(generated)
+    report = check_generated(generated, n=50) if which != "filter" else check_generated(generated)
     assert isinstance(report, CheckReport) and report.status is (Status.CONVERGED if report.passed else Status.CHECK_FAILED)
+
+
+def test_the_check_package_is_not_shadowed_by_a_function():
+    """``import gtmodel.codegen.check.closed_loop`` works (a function named ``check`` in ``gtmodel.codegen`` hid the package)."""
+    import importlib
+
+    module = importlib.import_module("gtmodel.codegen.check.closed_loop")
+    import gtmodel.codegen
+
+    assert gtmodel.codegen.check is importlib.import_module("gtmodel.codegen.check") and callable(module.closed_loop_check)
