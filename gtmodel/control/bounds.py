@@ -39,7 +39,15 @@ class BoundExcess:
     samples : int
         Samples beyond the bound by more than :data:`EXCESS_TOLERANCE` (relative).
     value : float
-        The value at the largest excess (NaN when none).
+        The value at the largest excess, or where the bounds held, the value nearest a bound (relative to its
+        size; NaN when there are no samples).
+    limit : float, optional
+        The bound that ``value`` is beyond or nearest (``lb`` or ``ub``; NaN when unknown).
+    signed : float, optional
+        ``value``'s distance beyond ``limit`` over the bound's size: positive beyond it, negative inside
+        (``-0.017``: 1.7 % inside); ``relative`` is its positive part (NaN when unknown).
+    time : float, optional
+        When ``value`` was reached [s] (NaN when the samples had no times).
     """
 
     name: str
@@ -49,6 +57,9 @@ class BoundExcess:
     relative: float
     samples: int
     value: float
+    limit: float = math.nan
+    signed: float = math.nan
+    time: float = math.nan
 
     @property
     def beyond_tolerance(self) -> bool:
@@ -56,18 +67,43 @@ class BoundExcess:
         return not self.relative <= EXCESS_TOLERANCE
 
     def line(self) -> str:
-        """One summary line: the bounds, the largest excess (absolute and relative) and the samples beyond 1 %.
+        """One summary line: the bounds, the value nearest or furthest beyond them with its limit, percent and time,
+        and the samples beyond 1 %.
 
         Returns
         -------
         str
+            E.g. ``"ind.i in [-15, 15]: 15.355 at t = 0.124 s, limit 15, +2.37 % (beyond 1 %; 12 samples)"``, or
+            ``"... 9.83 at t = 0.2 s, limit 10, -1.7 % (held)"``.
         """
-        if self.excess <= 0:
-            return f"{self.name} in [{self.lb:g}, {self.ub:g}]: held"
+        head = f"{self.name} in [{self.lb:g}, {self.ub:g}]"
         if not math.isfinite(self.excess):  # a diverged plant (its states not finite): no figure to print
-            return f"{self.name} in [{self.lb:g}, {self.ub:g}]: not finite on the plant (diverged)"
-        return (f"{self.name} in [{self.lb:g}, {self.ub:g}]: max excess {self.excess:.4g} ({100 * self.relative:.3g} %, value "
-                f"{self.value:.6g}), {self.samples} samples beyond {100 * EXCESS_TOLERANCE:g} %")
+            return f"{head}: not finite on the plant (diverged)"
+        if not math.isfinite(self.value):
+            return f"{head}: no samples"
+        when = f" at t = {self.time:.4g} s" if math.isfinite(self.time) else ""
+        limit = f", limit {self.limit:g}, {100 * self.signed:+.3g} %" if math.isfinite(self.signed) else ""
+        if self.beyond_tolerance:
+            verdict = f"beyond {100 * EXCESS_TOLERANCE:g} %; excess {self.excess:.4g}, {self.samples} samples beyond {100 * EXCESS_TOLERANCE:g} %"
+        else:
+            verdict = "held" if self.excess <= 0 else f"within the {100 * EXCESS_TOLERANCE:g} % tolerance"
+        return f"{head}: {self.value:.6g}{when}{limit} ({verdict})"
+
+    def to_dict(self) -> dict[str, float | int | str | bool | None]:
+        """The figures as JSON-able values (a ``summary.json`` entry; non-finite numbers as None).
+
+        Returns
+        -------
+        dict
+            ``name``, ``lb``, ``ub``, ``value``, ``limit``, ``percent`` (``100 * signed``), ``time`` [s], ``excess``,
+            ``samples`` beyond the tolerance and ``held`` (within :data:`EXCESS_TOLERANCE`).
+        """
+        def num(v: float) -> float | None:
+            return float(v) if math.isfinite(v) else None
+
+        return {"name": self.name, "lb": num(self.lb), "ub": num(self.ub), "value": num(self.value), "limit": num(self.limit),
+                "percent": num(100 * self.signed), "time": num(self.time), "excess": num(self.excess), "samples": int(self.samples),
+                "held": not self.beyond_tolerance}
 
 
 def _size(bound: float, lb: float, ub: float) -> float:
@@ -76,8 +112,9 @@ def _size(bound: float, lb: float, ub: float) -> float:
     return ub - lb if math.isfinite(lb) and math.isfinite(ub) and ub > lb else 1.0
 
 
-def bound_report(values: dict[str, np.ndarray], lb: dict[str, float], ub: dict[str, float]) -> list[BoundExcess]:
-    """The excess of every bounded variable over its bounds.
+def bound_report(values: dict[str, np.ndarray], lb: dict[str, float], ub: dict[str, float],
+                 times: np.ndarray | dict[str, np.ndarray] | None = None) -> list[BoundExcess]:
+    """The excess of every bounded variable over its bounds, with the value nearest or furthest beyond them and when.
 
     Parameters
     ----------
@@ -85,6 +122,8 @@ def bound_report(values: dict[str, np.ndarray], lb: dict[str, float], ub: dict[s
         ``(K,)`` samples by scalar name (variables without a bound are skipped).
     lb, ub : dict of str to float
         Declared bounds by name (a name with either is reported).
+    times : numpy.ndarray or dict of str to numpy.ndarray, optional
+        ``(K,)`` the samples' times [s], shared or by name (default none: :attr:`BoundExcess.time` NaN).
 
     Returns
     -------
@@ -97,11 +136,22 @@ def bound_report(values: dict[str, np.ndarray], lb: dict[str, float], ub: dict[s
             continue
         v = np.asarray(values[name], dtype=float).reshape(-1)
         lo, hi = float(lb[name]), float(ub.get(name, math.inf))
-        below, above = np.maximum(lo - v, 0.0), np.maximum(v - hi, 0.0)
         size_lo, size_hi = _size(lo, lo, hi), _size(hi, lo, hi)
-        rel = np.where(~np.isfinite(v), np.inf, np.maximum(below / size_lo, above / size_hi))
-        exc = np.where(~np.isfinite(v), np.inf, np.maximum(below, above))
-        k = int(np.argmax(rel)) if v.size else 0
-        out.append(BoundExcess(name=name, lb=lo, ub=hi, excess=float(exc[k]) if v.size else 0.0, relative=float(rel[k]) if v.size else 0.0,
-                               samples=int(np.count_nonzero(rel > EXCESS_TOLERANCE)), value=float(v[k]) if v.size else math.nan))
+        with np.errstate(invalid="ignore"):
+            side_lo, side_hi = (lo - v) / size_lo, (v - hi) / size_hi  # > 0 beyond; -inf for an infinite bound
+            signed = np.where(~np.isfinite(v), np.inf, np.maximum(side_lo, side_hi))
+        if not v.size:
+            out.append(BoundExcess(name=name, lb=lo, ub=hi, excess=0.0, relative=0.0, samples=0, value=math.nan))
+            continue
+        k = int(np.argmax(signed))
+        rel = np.maximum(signed, 0.0)
+        t = times.get(name) if isinstance(times, dict) else times
+        when = float(np.asarray(t, dtype=float).reshape(-1)[k]) if t is not None and np.size(t) == v.size else math.nan
+        limit = lo if np.isfinite(v[k]) and side_lo[k] >= side_hi[k] else hi
+        excess = math.inf if not np.isfinite(v[k]) else max(lo - v[k], v[k] - hi, 0.0)
+        out.append(BoundExcess(name=name, lb=lo, ub=hi, excess=float(excess), relative=float(rel[k]),
+                               samples=int(np.count_nonzero(rel > EXCESS_TOLERANCE)), value=float(v[k]),
+                               limit=float(limit) if math.isfinite(limit) else math.nan,
+                               signed=float(signed[k]) if np.isfinite(signed[k]) else (math.inf if signed[k] > 0 else math.nan),
+                               time=when))
     return out

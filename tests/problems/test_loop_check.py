@@ -109,8 +109,9 @@ def test_a_state_bound_exceeded_between_the_samples_fails_the_check():
     check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, bounds=[at_samples], bounds_between=[between])
     (why,) = check.failures()
     assert why.startswith("x beyond its bound between the samples by 0.09 (5.26 % > 1 %")
-    assert any(line.startswith("  between the samples (the plant step's substeps): x in [-inf, 1.71]: max excess 0.09")
-               and "value 1.8" in line for line in check.summary_lines())
+    when = closed.t[3] + 0.5 * (closed.t[4] - closed.t[3])  # the one interior state of period 3: half-way through it
+    assert f"  between the samples (the plant step's substeps): x in [-inf, 1.71]: 1.8 at t = {when:.4g} s, limit 1.71, +5.26 % " \
+           "(beyond 1 %; excess 0.09, 1 samples beyond 1 %)" in check.summary_lines()
 
 
 def test_a_diverged_plant_prints_no_ratio():
@@ -131,7 +132,8 @@ def test_declared_bounds_beyond_one_percent_fail_per_variable():
     assert strict[0].samples == 2 and strict[0].excess == pytest.approx(0.2, rel=1e-9) and strict[0].value == pytest.approx(1.7)
     check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, bounds=strict)
     assert [f for f in check.failures() if f.startswith("x beyond its bound by 0.2 (13.3 %")]
-    assert any("x in [-inf, 1.5]: max excess 0.2" in line for line in check.summary_lines())
+    assert any("x in [-inf, 1.5]: 1.7, limit 1.5, +13.3 % (beyond 1 %; excess 0.2, 2 samples" in line  # no times given: none printed
+               for line in check.summary_lines())
 
 
 def test_notes_head_the_summary():

@@ -182,6 +182,32 @@ class LoopCheck:
         """Calls of the step that did not return ``GT_OK``."""
         return int(np.count_nonzero(self.closed.status != STATUS_CODES["GT_OK"][0]))
 
+    def to_dict(self) -> dict[str, Any]:
+        """The figures of :meth:`summary_lines` as JSON-able values (``DIR/summary.json`` of ``gtmodel codegen ... --check``).
+
+        Returns
+        -------
+        dict
+            ``status`` (the shared :class:`~gtmodel.status.Status`), ``failures``, ``label``, ``real``,
+            ``ratio_to_feedforward`` (None when the plant diverged) and ``max_ratio``, ``rms_error`` and ``max_error`` of
+            the controller and of the feedforward, ``bounds`` and ``bounds_between`` (the controller's, per bound:
+            :meth:`~gtmodel.control.bounds.BoundExcess.to_dict`), ``bounds_feedforward``, ``step_time_s`` (``median``,
+            ``p99``, ``max``, ``first``, ``budget``, ``clock``), ``failed_steps``, ``input_bound_violations``,
+            ``memory_bytes``, ``work_bytes``, ``notes``.
+        """
+        times = self.closed.step_times()
+        return {"status": str(self.status), "failures": self.failures(), "label": self.label, "real": self.real,
+                "ratio_to_feedforward": None if self.plant_diverged else float(self.ratio_to_feedforward),
+                "max_ratio": float(self.max_ratio),
+                "controller": {"rms_error": float(self.closed.rms_error), "max_error": float(self.closed.max_error), "diverged": bool(self.closed.diverged)},
+                "feedforward": {"rms_error": float(self.feedforward.rms_error), "max_error": float(self.feedforward.max_error),
+                                "diverged": bool(self.feedforward.diverged)},
+                "bounds": [b.to_dict() for b in self.bounds], "bounds_between": [b.to_dict() for b in self.bounds_between],
+                "bounds_feedforward": [b.to_dict() for b in self.bounds_feedforward],
+                "step_time_s": {**{k: float(v) for k, v in times.items()}, "budget": float(self.step_budget_s), "clock": self.clock},
+                "failed_steps": self.failed_steps, "input_bound_violations": int(self.closed.bound_violations),
+                "memory_bytes": int(self.memory_bytes), "work_bytes": int(self.work_bytes), "notes": list(self.notes)}
+
     def summary_lines(self) -> list[str]:
         """Human-readable summary.
 
@@ -197,9 +223,7 @@ class LoopCheck:
             r = self.ratio_to_feedforward
             ratio = f"RMS ratio {self.label} / feedforward: {r:.4g} ({'below' if r < self.max_ratio else 'NOT below'} the limit {self.max_ratio:g})"
         held = [f"  {b.line()}" for b in self.bounds]
-        between = [b for b in self.bounds_between if b.beyond_tolerance]
-        if between:
-            held += [f"  between the samples (the plant step's substeps): {b.line()}" for b in between]
+        held += [f"  between the samples (the plant step's substeps): {b.line()}" for b in self.bounds_between]
         ff_beyond = [b.name for b in self.bounds_feedforward if b.beyond_tolerance]
         return ([f"notes: {n}" for n in self.notes]
                 + [f"closed loop, generated C {self.label}" + (" (real float: float32 step, double plant; the same criteria)" if self.real == "float" else "") + ":"] + ["  " + line for line in self.closed.summary_lines()]
@@ -379,13 +403,16 @@ def plant_bounds(setup: LoopSetup, run: LoopSummary, between: bool = False) -> l
         inner = run.x_interior if run.x_interior is not None and run.x_interior.ndim == 3 else None
         if inner is None or "output" in setup.loop or len(x_names) != inner.shape[2]:
             return []
-        return bound_report({n: inner[:, :, j].ravel() for j, n in enumerate(x_names)}, setup.bounds.lb, setup.bounds.ub)
+        t = np.asarray(run.t, dtype=float).reshape(-1)
+        period = np.diff(t, append=t[-1] + (t[-1] - t[-2] if t.size > 1 else 0.0))
+        when = t[:, None] + period[:, None] * np.arange(1, inner.shape[1] + 1) / (inner.shape[1] + 1)  # the substeps' times
+        return bound_report({n: inner[:, :, j].ravel() for j, n in enumerate(x_names)}, setup.bounds.lb, setup.bounds.ub, times=when.ravel())
     if "output" not in setup.loop and len(x_names) == run.x.shape[1]:
         values.update({n: run.x[:, j] for j, n in enumerate(x_names)})
         if setup.outputs is not None and y_names and np.all(np.isfinite(run.x)):
             y = np.asarray(setup.outputs.map(run.t.size)(run.x.T, run.u.T, setup.plant_p), dtype=float).T
             values.update({n: y[:, j] for j, n in enumerate(y_names)})
-    return bound_report(values, setup.bounds.lb, setup.bounds.ub)
+    return bound_report(values, setup.bounds.lb, setup.bounds.ub, times=np.asarray(run.t, dtype=float))
 
 
 def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path | CompiledLibrary, repeat: int = 1,
