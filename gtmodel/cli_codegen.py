@@ -27,7 +27,7 @@ import shutil
 from pathlib import Path
 from typing import Any, Iterator
 
-from gtmodel import _signals
+from gtmodel import __version__, _signals
 from gtmodel.errors import GtModelError
 from gtmodel.status import Status
 
@@ -67,6 +67,11 @@ def _common(p: argparse.ArgumentParser, samples: int = 10000, hidden: bool = Fal
 def _real(p: argparse.ArgumentParser, hidden: bool = False) -> None:
     p.add_argument("--real", default="double", choices=("double", "float"),
                    help=argparse.SUPPRESS if hidden else "floating-point type (default double)")
+
+
+def _replan(p: argparse.ArgumentParser, hidden: bool = False) -> None:
+    p.add_argument("--replan", action="store_true", help=argparse.SUPPRESS if hidden else
+                   "solve the file's [reference] problem even when its plan is cached (and cache it again)")
 
 
 def _robot_options(p: argparse.ArgumentParser, hidden: bool = False) -> None:
@@ -120,6 +125,7 @@ def add_codegen_parser(sub: Any) -> argparse.ArgumentParser:
     cg.add_argument("--controller", type=Path, default=None, help=argparse.SUPPRESS)
     cg.add_argument("--mpc", type=Path, default=None, help=argparse.SUPPRESS)
     cg.add_argument("--functions", default=None, help=argparse.SUPPRESS)
+    _replan(cg, hidden=True)
     _real(cg, hidden=True)
     _robot_options(cg, hidden=True)
     _tracking_options(cg, hidden=True)
@@ -151,12 +157,14 @@ def add_codegen_parser(sub: Any) -> argparse.ArgumentParser:
     tracking.add_argument("controller", type=Path, metavar="FILE.toml|RESULT_DIR",
                           help="a tracking-controller file ([controller], [reference], [check]; docs/model_in_the_loop.md) or an "
                                "optimal_control result folder")
+    _replan(tracking)
     _real(tracking)
     _tracking_options(tracking)
     _common(tracking, samples=2000)
 
     mpc = target("mpc")
     mpc.add_argument("mpc", type=Path, metavar="FILE.toml", help="an MPC file ([mpc], [reference], [check]; docs/model_in_the_loop.md)")
+    _replan(mpc)
     _real(mpc)
     _common(mpc, samples=200)
 
@@ -199,18 +207,28 @@ def _route(args: argparse.Namespace) -> str:
     return "robot"
 
 
-def _reference_line(path: Path, kind: str) -> str | None:
+def _reference_line(path: Path, kind: str, replan: bool = False) -> str | None:
     """What the file's ``[reference]`` plans (a problem re-planned with overrides), said before it is solved.
 
     The file is read and validated first (:func:`gtmodel.problems.loop_file.read_loop_file`), so
-    that a bad file is refused, naming its field, before any progress line.
+    that a bad file is refused, naming its field, before any progress line. A plan in the plan cache
+    (:mod:`gtmodel.problems.plan_cache`) is said to be reused (unless ``--replan``); an entry found
+    damaged is warned about and solved when it is read.
     """
     from gtmodel.problems.loop_file import read_loop_file
+    from gtmodel.problems.plan_cache import cached_entry
 
-    ref = read_loop_file(Path(path), kind)[0].reference
+    doc, file = read_loop_file(Path(path), kind)
+    ref = doc.reference
     if ref.problem is None:
         return None
     how = (" with " + ", ".join(f"{k} = {v}" for k, v in ref.overrides.items()) + " (the file's [reference] overrides)") if ref.overrides else ""
+    try:
+        entry = None if replan else cached_entry(file.reference("reference.problem", ref.problem), ref.overrides)
+    except GtModelError:
+        entry = None  # a missing problem file: refused, naming the field, when the reference is read
+    if entry is not None:
+        return f"the reference {ref.problem}{how} is not solved here: its plan is read from the plan cache ({entry}); --replan solves it again"
     return (f"the reference is re-planned: {ref.problem} solved here{how}; a solver's line that follows is this "
             "re-planned reference's, not the problem file's own plan")
 
@@ -241,6 +259,8 @@ def codegen_command(args: argparse.Namespace) -> int:
     check_out_dir(args.out)  # the rule of solve --out: never a folder of the user's own files
     route = _route(args)
     functions = [f.strip() for f in args.functions.split(",") if f.strip()] if args.functions else None
+    if args.replan and not (route == "mpc" or (route == "tracking" and args.controller.suffix.lower() == ".toml")):
+        raise GtModelError("--replan applies to an MPC or tracking-controller file (its [reference] problem)")
     if args.accept_unverified and not (route == "tracking" and args.controller.is_dir()):
         raise GtModelError("--accept-unverified applies to a --controller result folder (a controller or MPC file says "
                            "[reference] accept_unverified = true)")
@@ -303,9 +323,15 @@ def _verdict(args: argparse.Namespace, generated: Any, **options: Any) -> int:
     """Check generated code (:func:`gtmodel.codegen.check_code`), print every part and the verdict; the status's exit code."""
     from gtmodel.codegen import check_code
 
+    from gtmodel.problems.results import write_json
+
     with _step(args, f"checking {generated.prefix}", f"checking {generated.prefix}"):
         result = check_code(generated, seed=args.seed, progress=_progress(args), **options)
     print("\n".join(_shown(line) for line in result.summary_lines()))
+    summary = Path(args.out) / "summary.json"  # inside the partial folder: in place with the C, or not at all
+    write_json(summary, {"kind": f"codegen_{_route(args)}", "prefix": generated.prefix, "gtmodel": __version__,
+                         "version": str(generated.version), **result.to_dict()})
+    _log.info("wrote %s (status %s)", _shown(summary), result.status)  # stderr: stdout ends with the verdict
     return result.status.exit_code
 
 
@@ -342,9 +368,9 @@ def _codegen_mpc(args: argparse.Namespace) -> int:
 
     if args.model is not None or args.robot is not None or args.controller is not None:
         raise GtModelError("--mpc generates the MPC of its file alone: give it without --model, --robot and --controller")
-    planned = _reference_line(args.mpc, "mpc")
+    planned = _reference_line(args.mpc, "mpc", args.replan)
     with _step(args, f"reading {args.mpc}" + (f"; {planned}" if planned else ""), f"reading {args.mpc}"):
-        setup = load_mpc_file(args.mpc)
+        setup = load_mpc_file(args.mpc, replan=args.replan)
     with _step(args, f"generating and compiling the MPC {setup.name} (CasADi's sqpmethod + qrqp inside one step)",
                f"generating and compiling {setup.name}"):
         generated, _ = build_step(mpc_step(setup.controller, setup.name, real=args.real), args.out, f"gt_{setup.name}", real=args.real)
@@ -365,10 +391,10 @@ def _codegen_tracking_file(args: argparse.Namespace) -> int:
     if given:
         raise GtModelError(f"--controller FILE.toml generates the tracking controller of its file alone: give it without {', '.join(given)} "
                            "(the period, weights and plant are the file's)")
-    planned = _reference_line(args.controller, "tracking_controller")
+    planned = _reference_line(args.controller, "tracking_controller", args.replan)
     with _step(args, f"reading {args.controller} and computing the LQR gains" + (f"; {planned}" if planned else ""),
                f"reading {args.controller}"):
-        setup = load_tracking_file(args.controller)
+        setup = load_tracking_file(args.controller, replan=args.replan)
     c = setup.controller
     with _step(args, f"generating the tracking controller {setup.name}"):
         generated = generate_loop_step(tracking_step(c, setup.name), args.out, prefix=f"gt_{setup.name}", real=args.real)

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import importlib.util
 import os
+import shutil
 import sys
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -14,6 +17,11 @@ import pytest
 from gtmodel.defaults import defaults
 
 os.environ.setdefault("MPLBACKEND", "Agg")
+# codegen's planned references (gtmodel.problems.plan_cache): a folder of this session (each xdist worker its own,
+# inherited by the CLI's subprocesses), never the user's ~/.cache; shared by the session's tests (a test of the cache
+# sets its own), removed at exit. The compiled libraries stay in gtmodel's cache (GTMODEL_CACHE_DIR or ~/.cache).
+os.environ["GTMODEL_PLAN_CACHE_DIR"] = tempfile.mkdtemp(prefix="gtmodel-plans-")
+atexit.register(shutil.rmtree, os.environ["GTMODEL_PLAN_CACHE_DIR"], ignore_errors=True)
 
 REPO = Path(__file__).resolve().parents[1]
 PROBLEMS_DIR = REPO / "problems"

@@ -76,6 +76,7 @@ from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.step_stability import step_stability
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds, input_limits, accept_reference, dae_bounds, input_bounds, summary_bounds
+from gtmodel.problems.plan_cache import planned
 from gtmodel.problems.loop_limits import (MAX_LOOP_SAMPLES, MAX_MAGNITUDE, MAX_PERIOD_S, MAX_TABLE_NUMBERS, MAX_WEIGHT, MIN_PERIOD_S,
                                           Bounds, Period, StateBounds, Weights, loop_samples)
 from gtmodel.problems.references import robot_parameters
@@ -321,7 +322,7 @@ def _result_summary(table: Path) -> dict[str, Any] | None:
 
 
 def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, dt: float, bounds_field: str | None = None,
-                   period_field: str = "period", per_sample: int | None = None) -> LoopReference:
+                   period_field: str = "period", per_sample: int | None = None, replan: bool = False) -> LoopReference:
     """The reference motion of ``[reference]``, with the settling hold, its declared bounds and whether it was verified.
 
     A reference problem solved here, or a result folder's ``trajectories.csv`` (as gtmodel
@@ -349,6 +350,8 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         (:func:`loop_samples`, checked once its length is known, before it is sampled).
     per_sample : int, optional
         Numbers of each sample in the generated C (default ``nx + nu``).
+    replan : bool, optional
+        Solve a user model's reference problem even when its plan is cached (:mod:`~gtmodel.problems.plan_cache`).
 
     Returns
     -------
@@ -379,7 +382,8 @@ def loop_reference(file: ProblemFile, ref: ReferenceSection, model: LoopModel, d
         wanted = "point_to_point" if robot else "optimal_control"
         if loaded.kind != wanted and (robot or loaded.kind not in MODEL_OCP_KINDS):
             raise file.fail("reference.problem", f"a problem file of kind {wanted} (for this model)", loaded.kind)
-        solution = solve_point_to_point(loaded.declaration) if robot else solve_problem(loaded)
+        solution = solve_point_to_point(loaded.declaration) if robot else planned(loaded, lambda: solve_problem(loaded), replan,
+                                                                                  [*ode.x_names, *ode.u_names])
         if robot:
             if not solution.success:
                 raise file.fail("reference.problem", f"a problem that solves (status {solution.status})")
@@ -632,7 +636,7 @@ class LoopInputs:
 
 
 def loop_inputs(file: ProblemFile, doc: LoopFile, section: str, per_sample: Callable[[ExplicitODE], int] | None = None,
-                before_reference: Callable[[LoopModel], None] | None = None) -> LoopInputs:
+                before_reference: Callable[[LoopModel], None] | None = None, replan: bool = False) -> LoopInputs:
     """The model, weights, reference and input bounds of a controller's table ``section``.
 
     Parameters
@@ -650,6 +654,8 @@ def loop_inputs(file: ProblemFile, doc: LoopFile, section: str, per_sample: Call
     before_reference : callable, optional
         ``before_reference(model)``, called once the model is known and before the
         reference is solved (a controller's own size estimate).
+    replan : bool, optional
+        Solve the reference problem even when its plan is cached (:func:`loop_reference`).
 
     Returns
     -------
@@ -676,6 +682,6 @@ def loop_inputs(file: ProblemFile, doc: LoopFile, section: str, per_sample: Call
     R = weight_diagonal(file, f"{section}.input_weights", sec.input_weights, names_u)
     Qf = weight_diagonal(file, f"{section}.terminal_weights", sec.terminal_weights, names_x)
     ref = loop_reference(file, doc.reference, model, sec.period, bounds_field=None if sec.u_lb is not None and sec.u_ub is not None else section,
-                         period_field=f"{section}.period", per_sample=width)
+                         period_field=f"{section}.period", per_sample=width, replan=replan)
     u_lb, u_ub = input_bounds(file, section, sec.u_lb, sec.u_ub, ref.limits, ode)
     return LoopInputs(model=model, Q=Q, R=R, Qf=Qf, t=ref.t, x_ref=ref.x, u_ref=ref.u, u_lb=u_lb, u_ub=u_ub, bounds=ref.bounds, notes=ref.notes)

@@ -178,13 +178,16 @@ def _constraints(file: ProblemFile, doc: MPCFile, ode: Any, robot: bool, declare
     return dict(out, x_lb=x_lb, x_ub=x_ub)
 
 
-def load_mpc_file(path: str | Path) -> MPCSetup:
+def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
     """Read, validate and build an MPC file (see the module docstring).
 
     Parameters
     ----------
     path : str or pathlib.Path
         The TOML file.
+    replan : bool, optional
+        Solve ``[reference] problem`` even when its plan is cached (``--replan``,
+        :mod:`~gtmodel.problems.plan_cache`).
 
     Returns
     -------
@@ -224,7 +227,7 @@ def load_mpc_file(path: str | Path) -> MPCSetup:
                                    f"blocks {blocks}, solver {m.solver}); fewer substeps, a shorter horizon or fewer input blocks",
                             getattr(m, field.split(".")[1]))
 
-    i = loop_inputs(file, doc, "mpc", before_reference=qp_size)
+    i = loop_inputs(file, doc, "mpc", before_reference=qp_size, replan=replan)
     ode = i.model.ode
     cons = _constraints(file, doc, ode, i.model.robot, i.bounds)
     try:
