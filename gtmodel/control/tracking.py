@@ -14,7 +14,9 @@ builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
   (Anderson & Moore, Optimal Control: Linear Quadratic Methods, sec. 2.4)
   ``P_N = Q_f``, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``,
   ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``;
-* the law ``u = sat(u*_k - K_k (x - x*_k))``, saturated at the input bounds; after the
+* the law ``u = sat(u*_k - K_k (x - x*_k))``, saturated at the input bounds (and, with
+  declared state bounds, first projected so that the bounded states stay within them over
+  the period it acts: :mod:`gtmodel.control.state_limits`); after the
   reference ends, its final state is held: the input that holds it (least squares
   ``f(x*_end, u) = 0``, e.g. zero voltage for a motor at rest) and the stationary LQR gain
   there (before the start, the first sample).
@@ -40,7 +42,8 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.control.problem import tracking_problem, weight_matrix
+from gtmodel.control.problem import substep_states, tracking_problem, weight_matrix
+from gtmodel.control.state_limits import StateLimits, state_limits
 from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
 
@@ -198,6 +201,11 @@ class TrackingController(SampledReference):
         ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`):
         :func:`~gtmodel.control.reference.start_input`, the input that holds a start at rest;
         None: ``u*_0``.
+    state_limits : StateLimits or None, optional
+        The declared state bounds the law holds over the period its input acts
+        (:class:`~gtmodel.control.state_limits.StateLimits`: the input projected so that the bounded states after
+        each substep stay within them, then saturated; the integrator holds while the projection or the
+        saturation changes the input); None: the input bounds alone.
     """
 
     K: np.ndarray
@@ -218,6 +226,7 @@ class TrackingController(SampledReference):
     Ki_hold: np.ndarray | None = None
     Qi: np.ndarray | None = None
     u_start: np.ndarray | None = None
+    state_limits: StateLimits | None = None
 
     @property
     def ni(self) -> int:
@@ -269,13 +278,13 @@ class TrackingController(SampledReference):
             off = base + nx + nu + nu * nx
             gain_i = ca.vertcat(*[ca.horzcat(*[values[off + i * ni + j] for j in range(ni)]) for i in range(nu)])
             free = free - ca.mtimes(gain_i, w)
-        u = saturate(free, self.u_lb, self.u_ub)
+        u = saturate(free, self.u_lb, self.u_ub) if self.state_limits is None else self.state_limits.project(x, free, self.u_lb, self.u_ub)
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         if not ni:
             ok = total < math.inf  # 0 for NaN or infinite entries
             return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
         error = ca.vertcat(*[x[i] - xs[i] for i in self.integral_states])
-        unsaturated = ca.sum1(ca.fabs(u - free)) == 0  # conditional integration: hold xi while the input saturates
+        unsaturated = ca.sum1(ca.fabs(u - free)) == 0  # conditional integration: hold xi while the input saturates (or is limited)
         w_next = ca.if_else(unsaturated, w + self.dt * error, w)
         ok = (total + ca.sum1(ca.fabs(w_next))) < math.inf
         return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
@@ -360,6 +369,7 @@ def tracking_controller(
     time_varying: bool = True,
     delay: int = 0,
     integral_weights: Mapping[str, float] | None = None,
+    state_bounds: Mapping[str, tuple[float, float]] | None = None,
 ) -> TrackingController:
     """Feedforward and time-varying LQR along a reference motion of a model.
 
@@ -409,6 +419,11 @@ def tracking_controller(
         x*_k)`` (as ``control.dlqr(..., integral_action=dt C)``), with the weight
         ``blkdiag(Q, Qi)``; after the end, the augmented stationary LQR (Franklin, Powell &
         Workman, Digital Control of Dynamic Systems, 3rd ed., sec. 8.5).
+    state_bounds : mapping of str to (float, float), optional
+        Declared state bounds ``(lb, ub)`` by state name the law holds over the period its input acts
+        (:attr:`TrackingController.state_limits`, :func:`~gtmodel.control.state_limits.state_limits`: the same
+        fixed step, ``method`` and ``substeps``, at every substep); names that are not states are ignored; default
+        none.
 
     Returns
     -------
@@ -460,7 +475,8 @@ def tracking_controller(
     K_hold = K[-1] if K_hold is None else K_hold
     nx = ode.nx
     integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
-    return TrackingController(delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
+    held = None if not state_bounds else state_limits(substep_states(ode, dt, method, substeps), list(ode.x_names), state_bounds, pv, lb, ub, us)
+    return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
                               K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), **integral)

@@ -16,7 +16,9 @@ error names the file and the field, the CLI exits with 2):
     the input computed at ``t_k`` acts from ``t_{k+1}``, and the law applies the gain to
     the state predicted then by the model's step from the last input), ``integral_weights``
     (a table by state name: integral action on those states, each weight in (0, 1e12] that of
-    its integrated error; default none).
+    its integrated error; default none), ``hold_state_bounds`` (default true: the declared state
+    bounds, a motor's current limit, held over the period each input acts,
+    :mod:`gtmodel.control.state_limits`).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``, as in an MPC file
     (:mod:`gtmodel.problems.loop_file`).
@@ -39,13 +41,16 @@ from gtmodel.problems.loop_file import LoopSetup, loop_inputs, loop_setup, read_
 __all__ = ["ControllerSection", "TrackingFile", "load_tracking_file"]
 
 
-def load_tracking_file(path: str | Path) -> LoopSetup:
+def load_tracking_file(path: str | Path, replan: bool = False) -> LoopSetup:
     """Read, validate and build a tracking-controller file (see the module docstring).
 
     Parameters
     ----------
     path : str or pathlib.Path
         The TOML file.
+    replan : bool, optional
+        Solve ``[reference] problem`` even when its plan is cached (``--replan``,
+        :mod:`~gtmodel.problems.plan_cache`).
 
     Returns
     -------
@@ -68,11 +73,13 @@ def load_tracking_file(path: str | Path) -> LoopSetup:
     c = doc.controller
     ni = len(c.integral_weights)
     i = loop_inputs(file, doc, "controller", per_sample=lambda ode: ode.nx + ode.nu + ode.nu * (ode.nx + ni),  # x*, u*, K, Ki per sample
-                    before_reference=lambda model: weight_diagonal(file, "controller.integral_weights", c.integral_weights, list(model.ode.x_names)))
+                    before_reference=lambda model: weight_diagonal(file, "controller.integral_weights", c.integral_weights, list(model.ode.x_names)),
+                    replan=replan)
     try:
         controller = tracking_controller(i.model.ode, i.t, i.x_ref, i.u_ref, dt=c.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb, u_ub=i.u_ub,
                                          method=c.method, substeps=c.substeps, time_varying=c.time_varying, delay=c.input_delay,
-                                         integral_weights=c.integral_weights or None)
+                                         integral_weights=c.integral_weights or None,
+                                         state_bounds={n: (i.bounds.lb[n], i.bounds.ub[n]) for n in i.bounds.lb} if c.hold_state_bounds else None)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, c.period, bounds=i.bounds, notes=i.notes)

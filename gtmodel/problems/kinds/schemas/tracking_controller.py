@@ -50,6 +50,9 @@ class ControllerSection(Section):
         Input delay [periods] the law compensates by predicting the state one period ahead (0 or 1).
     integral_weights : dict, optional
         Integral action on these states: the weight (> 0) of each one's integrated error (default none).
+    hold_state_bounds : bool, optional
+        Hold the declared state bounds over the period each input acts (the input projected, then saturated;
+        default true).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -64,6 +67,7 @@ class ControllerSection(Section):
     time_varying: bool = Field(default=True, strict=True, description="time-varying LQR along the reference (false: the held end's time-invariant LQR)")
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
     integral_weights: dict[str, number(gt=0, le=MAX_WEIGHT)] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
+    hold_state_bounds: bool = Field(default=True, strict=True, description="hold the declared state bounds (a current limit) over the period each input acts: the law's input projected onto the inputs that keep the bounded states within them at every substep, then saturated (default true)")
 
 
 class TrackingFile(LoopFile):

@@ -1,0 +1,164 @@
+"""Declared state bounds held by a loop law without constraint rows: the input projected onto the admissible set of one period.
+
+A tracking law ``u = sat(u* - K (x - x*))`` knows its input bounds but not the declared state bounds of its plant (a
+motor current limit): a held-out ball-screw axis's TV-LQR, its plan at 12 of 15 A and its plant 20 % heavier, drew
+100 A (issue 65). :class:`StateLimits` gives the law what an MPC's constraint rows give it, for one period: the
+bounded states ``c(u)`` after each substep of the period the input acts over (the prediction's fixed step,
+:func:`gtmodel.control.problem.substep_states`, from the state when the input starts to act), linearised in the
+input at the law's own ``u0``,
+
+.. math::
+
+    c(u) \\approx c(u_0) + J (u - u_0), \\qquad lb \\le c(u) \\le ub,
+
+and the law's input projected onto these half-spaces one after the other and then onto the input box (the method of
+alternating projections; von Neumann 1950, Bauschke & Borwein, SIAM Review 38, 1996). With one input the
+projections are intervals and one sweep ends in their intersection when it is not empty (each projection moves
+the input towards the next interval without leaving the earlier ones); with several, :data:`SWEEPS` sweeps approach
+it. Where the intersection is empty (the state is beyond its bound whatever the input does within one period),
+the sweep ends at the last row's side: the input that pulls the state back hardest within its bounds.
+A row the input cannot move by :data:`MIN_REACH` of its bound's size within one period is left out (a position,
+the speed of a large inertia): this one-period look-ahead cannot hold it, the reference must.
+
+Everything is one CasADi graph (:meth:`StateLimits.project`), generated into the law's C step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import casadi as ca
+import numpy as np
+
+from gtmodel.errors import InputError
+
+__all__ = ["SWEEPS", "MIN_REACH", "StateLimits", "state_limits"]
+
+#: Sweeps of the alternating projections with more than one input (one input: one sweep is exact).
+SWEEPS = 10
+#: A row enters the projection when the input's range moves it by at least this fraction of its bound's size in one period.
+MIN_REACH = 1e-3
+
+
+@dataclass
+class StateLimits:
+    """The bounded states of one period and their bounds (see the module docstring).
+
+    Parameters
+    ----------
+    rows : casadi.Function
+        ``rows(x (nx,1), u (nu,1)) -> (c (m,1), J (m,nu))``: the bounded states after each substep of one period
+        from ``x`` under ``u`` held, and their Jacobian in ``u``.
+    lb, ub : numpy.ndarray
+        ``(m,)`` each row's bounds (``-inf`` / ``inf``: none).
+    names : list of str
+        ``(m,)`` ``"<state>@<substep>"`` per row.
+    reach : numpy.ndarray
+        ``(m,)`` the smallest ``|J_r| * span(u)`` that enters a row (:data:`MIN_REACH` times the bound's size).
+    span : numpy.ndarray
+        ``(nu,)`` the inputs' ranges (``u_ub - u_lb``; the feedforward's range where a bound is infinite).
+    """
+
+    rows: ca.Function
+    lb: np.ndarray
+    ub: np.ndarray
+    names: list[str]
+    reach: np.ndarray
+    span: np.ndarray
+
+    @property
+    def n_rows(self) -> int:
+        """Number of rows ``m`` (bounded states times substeps)."""
+        return int(self.lb.size)
+
+    def project(self, x: Any, u0: Any, u_lb: np.ndarray, u_ub: np.ndarray) -> Any:
+        """The input nearest the law's ``u0`` that keeps the linearised rows within their bounds, then saturated.
+
+        Parameters
+        ----------
+        x : casadi.MX
+            ``(nx, 1)`` the state when the input starts to act.
+        u0 : casadi.MX
+            ``(nu, 1)`` the law's input.
+        u_lb, u_ub : numpy.ndarray
+            ``(nu,)`` the input bounds (applied last: the result is always within them).
+
+        Returns
+        -------
+        casadi.MX
+            ``(nu, 1)``.
+        """
+        c0, J = self.rows(x, u0)
+        nu = int(np.size(u_lb))
+        u = u0
+        for _ in range(1 if nu == 1 else SWEEPS):
+            for r in range(self.n_rows):
+                a = J[r, :].T
+                norm2 = ca.sumsqr(a)
+                reach = ca.sqrt(ca.sumsqr(a * ca.DM(self.span))) if nu > 1 else ca.fabs(a[0]) * float(self.span[0])
+                value = c0[r] + ca.dot(a, u - u0)
+                over = ca.fmax(value - float(self.ub[r]), 0) if np.isfinite(self.ub[r]) else 0
+                under = ca.fmax(float(self.lb[r]) - value, 0) if np.isfinite(self.lb[r]) else 0
+                step = ca.if_else(reach >= float(self.reach[r]), (under - over) / ca.fmax(norm2, 1e-300), 0)
+                u = u + a * step
+            u = ca.fmin(ca.fmax(u, ca.DM(u_lb)), ca.DM(u_ub))
+        return u
+
+
+def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str, tuple[float, float]], p: np.ndarray,
+                 u_lb: np.ndarray, u_ub: np.ndarray, u_ref: np.ndarray) -> StateLimits | None:
+    """The rows of the declared state bounds over one period of a model's fixed step.
+
+    Parameters
+    ----------
+    substeps : casadi.Function
+        ``S(x, u, p) -> (nx, s)`` the states after each substep (:func:`gtmodel.control.problem.substep_states`).
+    x_names : list of str
+        ``(nx,)`` the state names.
+    bounds : mapping of str to (float, float)
+        Declared bounds by state name (names that are not states are ignored; both sides infinite: none).
+    p : numpy.ndarray
+        ``(np,)`` the model's parameters (the prediction's).
+    u_lb, u_ub : numpy.ndarray
+        ``(nu,)`` input bounds.
+    u_ref : numpy.ndarray
+        ``(N, nu)`` the feedforward (the inputs' span where a bound is infinite).
+
+    Returns
+    -------
+    StateLimits or None
+        None when no state has a finite bound.
+
+    Raises
+    ------
+    InputError
+        A bound with ``lb > ub`` or not a number.
+    """
+    picked = []
+    for j, name in enumerate(x_names):
+        if name not in bounds:
+            continue
+        try:
+            lo, hi = (float(v) for v in bounds[name])
+        except (TypeError, ValueError):
+            raise InputError(f"state bounds: {name!r}: expected (lb, ub) numbers, got {bounds[name]!r}") from None
+        if not lo <= hi:
+            raise InputError(f"state bounds: {name!r}: expected lb <= ub, got [{lo}, {hi}]")
+        if np.isfinite(lo) or np.isfinite(hi):
+            picked.append((j, name, lo, hi))
+    if not picked:
+        return None
+    nx, nu = len(x_names), int(np.size(u_lb))
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+    states = substeps(x, u, ca.DM(np.asarray(p, dtype=float)))
+    s = int(states.size2())
+    c = ca.vertcat(*[states[j, k] for k in range(s) for j, _, _, _ in picked])
+    rows = ca.Function("state_rows", [x, u], [c, ca.jacobian(c, u)], ["x", "u"], ["c", "J"])
+    lb = np.array([lo for _ in range(s) for _, _, lo, _ in picked])
+    ub = np.array([hi for _ in range(s) for _, _, _, hi in picked])
+    size = np.array([max(abs(v) for v in (lo, hi) if np.isfinite(v)) or 1.0 for _ in range(s) for _, _, lo, hi in picked])
+    ref = np.atleast_2d(np.asarray(u_ref, dtype=float))
+    span = np.where(np.isfinite(u_ub - u_lb), u_ub - u_lb, np.ptp(ref, axis=0) + 1.0)
+    names = [f"{name}@{k + 1}" for k in range(s) for _, name, _, _ in picked]
+    return StateLimits(rows=rows, lb=lb, ub=ub, names=names, reach=MIN_REACH * size, span=np.asarray(span, dtype=float))

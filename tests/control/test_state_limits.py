@@ -1,0 +1,120 @@
+"""Declared state bounds held by a law without constraint rows (``gtmodel.control.state_limits``).
+
+Independent checks: the largest voltage that keeps an RL circuit's current within its bound over one period, in
+closed form (``i(h) = i0 e^{-h/tau} + v/R (1 - e^{-h/tau})``); the tracking law's input on a DC motor far off its
+reference, integrated over the period by SciPy's adaptive RK45 (not the law's fixed step): the current stays within
+its bound where the saturated law alone exceeds it.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from gtmodel.control.problem import substep_states
+from gtmodel.control.state_limits import state_limits
+from gtmodel.control.tracking import tracking_controller
+from gtmodel.errors import InputError
+from gtmodel.modeling import explicit_ode
+from gtmodel.problems.user_model import load_user_model
+
+from ..conftest import REPO
+
+R_OHM, TAU, DT = 2.0, 0.01, 0.004
+
+
+def _rl_rows(n_circuits: int = 1):
+    """``n`` RL circuits ``di/dt = (v - R i) / L`` as RK4 substeps over one period (1 ms steps: 1e-7 off the exponential)."""
+    x, u = ca.SX.sym("x", n_circuits), ca.SX.sym("u", n_circuits)
+    p = ca.SX.sym("p", 0)
+    h, states, xi = DT / 4, [], x
+    f = lambda z: (u - R_OHM * z) / (R_OHM * TAU)  # noqa: E731
+    for _ in range(4):
+        k1 = f(xi)
+        k2 = f(xi + h / 2 * k1)
+        k3 = f(xi + h / 2 * k2)
+        k4 = f(xi + h * k3)
+        xi = xi + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        states.append(xi)
+    return ca.Function("S", [x, u, p], [ca.horzcat(*states)])
+
+
+def _project(limits, x, u0, lb, ub):
+    xs, us = ca.MX.sym("x", x.size), ca.MX.sym("u", u0.size)
+    return np.asarray(ca.Function("f", [xs, us], [limits.project(xs, us, lb, ub)])(x, u0)).ravel()
+
+
+@pytest.mark.parametrize("i0", [0.0, 3.0, 9.0], ids=["at_rest", "part_way", "near_the_bound"])
+def test_one_input_reaches_the_closed_form_largest_voltage(i0):
+    """The law asks 100 V; the projection gives the voltage whose current ends the period at 10 A (closed form)."""
+    limits = state_limits(_rl_rows(), ["i"], {"i": (-10.0, 10.0)}, np.zeros(0), np.array([-200.0]), np.array([200.0]), np.zeros((2, 1)))
+    decay = np.exp(-DT / TAU)
+    v_max = R_OHM * (10.0 - i0 * decay) / (1 - decay)
+    assert _project(limits, np.array([i0]), np.array([100.0]), np.array([-200.0]), np.array([200.0])) == pytest.approx([v_max], rel=1e-5)
+
+
+def test_an_admissible_input_is_left_as_it_is():
+    """Within every bound the law's input is the result (the saturated law's)."""
+    limits = state_limits(_rl_rows(), ["i"], {"i": (-10.0, 10.0)}, np.zeros(0), np.array([-200.0]), np.array([200.0]), np.zeros((2, 1)))
+    assert _project(limits, np.array([1.0]), np.array([5.0]), np.array([-200.0]), np.array([200.0])) == pytest.approx([5.0], abs=1e-12)
+
+
+def test_the_input_bounds_come_last():
+    """A bound the input box cannot reach: the box's side (never beyond the input bounds)."""
+    limits = state_limits(_rl_rows(), ["i"], {"i": (-10.0, 10.0)}, np.zeros(0), np.array([-5.0]), np.array([5.0]), np.zeros((2, 1)))
+    assert _project(limits, np.array([30.0]), np.array([5.0]), np.array([-5.0]), np.array([5.0])) == pytest.approx([-5.0])
+
+
+def test_two_inputs_end_within_both_rows():
+    """Two circuits, each asked 100 V: the alternating projections end at each one's closed-form largest voltage."""
+    limits = state_limits(_rl_rows(2), ["a", "b"], {"a": (-10.0, 10.0), "b": (-4.0, 4.0)}, np.zeros(0), np.full(2, -200.0),
+                          np.full(2, 200.0), np.zeros((2, 2)))
+    decay = np.exp(-DT / TAU)
+    expected = R_OHM * np.array([10.0, 4.0]) / (1 - decay)
+    assert _project(limits, np.zeros(2), np.full(2, 100.0), np.full(2, -200.0), np.full(2, 200.0)) == pytest.approx(expected, rel=1e-5)
+
+
+@pytest.mark.parametrize("bounds, match", [
+    ({"i": (3.0, 1.0)}, r"'i': expected lb <= ub"),
+    ({"i": ("a", 1.0)}, r"'i': expected \(lb, ub\) numbers"),
+], ids=["crossed", "not_a_number"])
+def test_bad_bounds_are_refused(bounds, match):
+    with pytest.raises(InputError, match=match):
+        state_limits(_rl_rows(), ["i"], bounds, np.zeros(0), np.array([-1.0]), np.array([1.0]), np.zeros((2, 1)))
+
+
+def test_no_finite_bound_gives_none():
+    assert state_limits(_rl_rows(), ["i"], {"i": (-np.inf, np.inf), "other": (0.0, 1.0)}, np.zeros(0), np.array([-1.0]),
+                        np.array([1.0]), np.zeros((2, 1))) is None
+
+
+@pytest.fixture(scope="module")
+def motor():
+    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
+    t = np.linspace(0.0, 1.0, 101)
+    u = (6.0 * np.sin(2 * np.pi * t))[:, None]
+    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
+    return ode, t, x, u
+
+
+def _peak_current(ode, x0, v):
+    """The largest armature current over one period under ``v`` held, by SciPy's RK45 at 1e-10 (not the law's step)."""
+    f = lambda _, z: np.asarray(ode.f(z, [v], ode.p_default)).ravel()  # noqa: E731
+    sol = solve_ivp(f, (0.0, DT), x0, rtol=1e-10, atol=1e-12, dense_output=True)
+    return float(np.max(sol.sol(np.linspace(0.0, DT, 401))[0]))
+
+
+def test_the_tracking_law_holds_the_current_where_the_saturated_law_exceeds_it(motor):
+    """The motor far behind its reference: the LQR asks the full 24 V; held at 5 A, its input keeps the current there."""
+    ode, t, x, u = motor
+    i = ode.x_names.index("ind.i")
+    kwargs = dict(u_lb=[-24.0], u_ub=[24.0], Q=[1e-2, 1.0, 1e-4], method="rk4", substeps=4)
+    free = tracking_controller(ode, t, x, u, **kwargs)
+    held = tracking_controller(ode, t, x, u, state_bounds={"ind.i": (-5.0, 5.0), "not_a_state": (0.0, 1.0)}, **kwargs)
+    state = free.x_ref[50] - np.array([0.0, 5.0, 0.0])
+    v_free, v_held = float(free(50 * DT, state)[0]), float(held(50 * DT, state)[0])
+    assert v_free == pytest.approx(24.0) and _peak_current(ode, state, v_free) > 5.5
+    assert -24.0 <= v_held < v_free and _peak_current(ode, state, v_held) == pytest.approx(5.0, rel=2e-3)
+    assert held.state_limits.names == ["ind.i@1", "ind.i@2", "ind.i@3", "ind.i@4"] and i == 0
