@@ -318,6 +318,9 @@ def mpc_step(controller: MPCController, name: str = "mpc", real: str = "double")
             + (f"Offset-free: an input disturbance d estimated each period (gain {c.disturbance_gain:g}) from the\n"
                "one-period prediction error; the memory w holds the warm start, d, the last x and u_last, a flag.\n"
                if c.disturbance_gain else "")
+            + ("Constraint rows tightened each period by the one-period prediction error measured in the loop (back-off;\n"
+               "gtmodel.control.mpc_memory.row_backoff); the memory w holds the last x and u_last for it.\n"
+               if c.estimates and c.constraint_backoff else "")
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     ftol = max(FLOAT_RELATIVE_TOLERANCE, c.float_tolerance()) if real == "float" else FLOAT_RELATIVE_TOLERANCE
     return LoopStep(name=name, function=c.function(real), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,

@@ -42,7 +42,7 @@ import numpy as np
 from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
-from gtmodel.control.mpc_memory import disturbance_estimate, memory_predict, memory_reset
+from gtmodel.control.mpc_memory import disturbance_estimate, memory_predict, memory_reset, row_backoff
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp
@@ -54,9 +54,8 @@ __all__ = ["MPC_METHODS", "MPC_SOLVERS", "QP_ROW", "MPCController", "mpc_control
 
 #: Prediction steps: explicit Euler on ``f`` or the ExplicitODE's fixed steps (the tracking problem's).
 MPC_METHODS = PREDICTION_METHODS
-#: NLP solvers of the generated step: ``sqpmethod`` (single shooting, Gauss-Newton SQP) or
-#: ``fatrop`` (multiple shooting in stage order, interior point; :mod:`gtmodel.control.mpc_fatrop`) or ``hpipm``
-#: (multiple shooting, real-time iteration with HPIPM's Riccati QP; :mod:`gtmodel.control.mpc_hpipm`).
+#: NLP solvers of the step: ``sqpmethod`` (single shooting, Gauss-Newton SQP), ``fatrop`` (multiple shooting, interior
+#: point; :mod:`gtmodel.control.mpc_fatrop`), ``hpipm`` (multiple shooting, RTI with HPIPM; :mod:`gtmodel.control.mpc_hpipm`).
 MPC_SOLVERS = ("sqpmethod", "fatrop", "hpipm")
 #: Bounds of the NLP's one constraint row ``g = w_0``, never active (a workaround of CasADi 3.8's
 #: ``qrqp``, which reads and writes past its work block on a QP without constraint rows).
@@ -64,10 +63,9 @@ QP_ROW = {"lbg": -math.inf, "ubg": math.inf}
 #: Largest scaled violation of a hard constraint row at the step's result with ``ok = 1`` (a
 #: larger one: the QP was infeasible, or the linearisation of the real-time iteration missed).
 HARD_TOLERANCE = 1e-3
-#: ``qrqp``'s primal and dual stopping tolerances (``constr_viol_tol``, ``dual_inf_tol``) in a
-#: single-precision step (``real="float"``): its default 1e-8 lies below float32's round-off of
-#: the QP's residuals (epsilon 1.2e-7 times their size), so the active-set loop ran to its
-#: iteration limit each period (p99 9.7 ms on ``codegen/mpc/dc_motor_mpc.toml``, 0.12 ms with 1e-4).
+#: ``qrqp``'s primal and dual stopping tolerances (``constr_viol_tol``, ``dual_inf_tol``) in a single-precision step
+#: (``real="float"``): its default 1e-8 lies below float32's round-off of the QP's residuals (epsilon 1.2e-7 times their
+#: size), so the active-set loop ran to its iteration limit each period (p99 9.7 ms on ``dc_motor_mpc.toml``, 0.12 ms with 1e-4).
 QP_FLOAT_TOLERANCE = 1e-4
 #: Added to ``(t - t_0) / dt`` before ``floor`` (a time on the grid reads its own sample).
 INDEX_EPS = 1e-9
@@ -124,6 +122,9 @@ class MPCController(SampledReference):
         the horizon's inputs are the ones the plant sees, ``v = u + d`` (their bounds shifted
         by ``d``, their reference the planned ``u*``), the applied input is the optimum less
         ``d``, saturated. The estimator's state is kept in the step's memory after the warm start.
+    constraint_backoff : bool, optional
+        Tighten the constraint rows by the prediction's one-period error measured in the loop
+        (:func:`~gtmodel.control.mpc_memory.row_backoff`; the memory as with :attr:`disturbance_gain`); default False.
     u_start : numpy.ndarray or None, optional
         ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`, the
         memory's ``u_last``): :func:`~gtmodel.control.reference.start_input`, the input that
@@ -150,6 +151,7 @@ class MPCController(SampledReference):
     substep_states: ca.Function | None = field(default=None, repr=False)
     delay: int = 0
     disturbance_gain: float = 0.0
+    constraint_backoff: bool = False
     u_start: np.ndarray | None = None
 
     @property
@@ -159,15 +161,20 @@ class MPCController(SampledReference):
 
     @property
     def n_memory(self) -> int:
-        """Length of the step's memory: the warm start, and with :attr:`disturbance_gain` the estimate
+        """Length of the step's memory: the warm start, and with :attr:`estimates` the estimate
         ``d (nu)``, the last measured state ``(nx)``, the last ``u_last (nu)`` and a flag (1 once a step ran)."""
-        return self.nw + (2 * self.nu + self.nx + 1 if self.disturbance_gain else 0)
+        return self.nw + (2 * self.nu + self.nx + 1 if self.estimates else 0)
+
+    @property
+    def estimates(self) -> bool:
+        """Whether the memory holds the estimator's state (:attr:`disturbance_gain` or :attr:`constraint_backoff`)."""
+        return bool(self.disturbance_gain) or bool(self.constraint_backoff and self.constraints is not None)
 
     @property
     def memory_initial(self) -> np.ndarray:
         """``(n_memory,)`` the step's first memory: :attr:`w_initial` (and a zero estimate, the reference's first
         state as the last state, ``u_initial``, flag 0)."""
-        extra = np.r_[np.zeros(self.nu), self.x_ref[0], self.u_initial, 0.0] if self.disturbance_gain else np.zeros(0)
+        extra = np.r_[np.zeros(self.nu), self.x_ref[0], self.u_initial, 0.0] if self.estimates else np.zeros(0)
         return np.r_[self.w_initial, extra]
 
     @property
@@ -454,6 +461,8 @@ class MPCController(SampledReference):
             cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
         else:
             bounds = self.bounds()
+            if self.estimates and self.constraint_backoff and self.constraints is not None:  # rows tightened by the observed error
+                bounds["lbg"] = ca.vertcat(ca.DM(bounds["lbg"][:1]), row_backoff(self, x_in, x, w, u_last, mem))
             if d is not None:
                 pad = ca.DM.zeros(self.n_slack)
                 bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
@@ -475,7 +484,8 @@ class MPCController(SampledReference):
         if d is not None:  # the input less the estimate; the estimate, this measurement and the input acting now, for the next period
             u = saturate(u - d, self.u_lb, self.u_ub)
             ok = ca.logic_and(ok, ca.sum1(ca.fabs(d)) < math.inf)
-            w_next = ca.vertcat(w_next, d, x_in, u_last, 1.0)
+        if self.estimates:
+            w_next = ca.vertcat(w_next, ca.DM.zeros(self.nu) if d is None else d, x_in, u_last, 1.0)
         return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
     def limits(self) -> dict[str, np.ndarray]:
@@ -497,7 +507,7 @@ class MPCController(SampledReference):
         _, u_scale, x, u = self.plausible_ranges(self.u_lb, self.u_ub)
         d = np.where(np.isfinite(self.u_lb) & np.isfinite(self.u_ub), MEMORY_LIMIT, MEASUREMENT_LIMIT) * u_scale
         parts = [np.tile(u + np.vstack([-d, d]), (1, self.blocks))]
-        if self.disturbance_gain:
+        if self.estimates:
             parts += [np.vstack([-d, d]), x, u, np.array([[0.0], [1.0]])]
         return {"x": x, "u_last": u, "memory": np.hstack(parts)}
 
@@ -509,26 +519,21 @@ class MPCController(SampledReference):
         casadi.Function
             ``reset(t (1,1), x (nx,1)) -> (u_last (nu,1), w (n_memory,1))``: ``u_last = u*_k`` saturated
             (``k = floor((t - t_0) / dt)``, clamped), the warm start ``u*`` saturated at the first period of each
-            input block of the horizon (which starts at ``t + dt`` with :attr:`delay` 1), and with
-            :attr:`disturbance_gain` a zero estimate, ``x`` as the last state, ``u_last`` as the last input and
-            the flag 0 (the estimate is not updated by the next step).
+            input block of the horizon (which starts at ``t + dt`` with :attr:`delay` 1), and with :attr:`estimates`
+            a zero estimate, ``x`` as the last state, ``u_last`` as the last input and the flag 0.
         """
         return memory_reset(self)
 
     def memory_predict(self) -> ca.Function | None:
-        """The state the step's memory predicts for now: what replaces a rejected measurement (with :attr:`disturbance_gain`).
+        """The state the step's memory predicts for now: what replaces a rejected measurement (with :attr:`estimates`).
 
         Returns
         -------
         casadi.Function or None
-            ``predict(u_last (nu,1), w (n_memory,1)) -> x (nx,1)``: :attr:`step` from the last measured state
-            with the input that acted over the last period plus the estimate (the prediction of the estimate's
-            innovation, see :attr:`disturbance_gain`), so that the estimate is unchanged by a step fed with it;
-            None without the estimate (the memory holds no state).
+            ``predict(u_last (nu,1), w (n_memory,1)) -> x (nx,1)`` (:func:`~gtmodel.control.mpc_memory.memory_predict`:
+            the innovation's prediction, so that a step fed with it changes no estimate); None without the memory.
         """
-        if not self.disturbance_gain:
-            return None
-        return memory_predict(self)
+        return memory_predict(self) if self.estimates else None
 
 
 def _positive_int(value: Any, name: str, low: int = 1) -> int:
@@ -573,6 +578,7 @@ def mpc_controller(
     constraint_every: int = 1,
     constraint_substeps: bool = True,
     disturbance_gain: float = 0.0,
+    constraint_backoff: bool | None = None,
 ) -> MPCController:
     """A real-time nonlinear MPC of a model along a reference motion (see the module docstring).
 
@@ -634,6 +640,9 @@ def mpc_controller(
         In ``[0, 1]``: the input-disturbance estimate's gain per period (default 0: none;
         :attr:`MPCController.disturbance_gain`). Not with ``solver="fatrop"`` nor with
         constraints that depend on the inputs.
+    constraint_backoff : bool, optional
+        Tighten the rows by the prediction's error measured in the loop (:attr:`MPCController.constraint_backoff`);
+        default None: on with soft or hard constraint rows and ``solver="sqpmethod"``, off otherwise.
 
     Returns
     -------
@@ -682,8 +691,10 @@ def mpc_controller(
     if disturbance_gain and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("disturbance_gain: the estimate shifts the horizon's inputs by d, which constraints of the inputs "
                          "would see; give state constraints only or no estimate")
+    if (backoff := cons is not None and solver == "sqpmethod" if constraint_backoff is None else _flag(constraint_backoff, "constraint_backoff")) and (cons is None or solver != "sqpmethod"):
+        raise InputError("constraint_backoff: tightens the constraint rows of solver sqpmethod; give rows (x_lb, x_ub, path) and sqpmethod")
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
-                         substep_states=inside, delay=int(delay), disturbance_gain=float(disturbance_gain),
+                         substep_states=inside, delay=int(delay), disturbance_gain=float(disturbance_gain), constraint_backoff=backoff,
                          u_start=start_input(ode.f, prob.x_given[0], us[0], prob.p))

@@ -27,7 +27,8 @@ error names the file and the field, the CLI exits with 2):
     predicted state or every ``constraint_every``-th and the last, and at the states after the
     prediction's substeps inside those periods (``constraint_substeps``, default true); ``disturbance_gain``
     (default 0; in ``[0, 1]``: offset-free MPC, an input disturbance estimated from the
-    one-period prediction error, :attr:`gtmodel.control.mpc.MPCController.disturbance_gain`).
+    one-period prediction error, :attr:`gtmodel.control.mpc.MPCController.disturbance_gain`); ``constraint_backoff``
+    (default on with rows: the rows tightened by that error, :func:`gtmodel.control.mpc_memory.row_backoff`).
 ``[reference]``, ``[check]``
     The motion tracked and the closed loop of ``--check``: the tables shared by every
     loop-controller file, :mod:`gtmodel.problems.loop_file`.
@@ -235,7 +236,8 @@ def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
                                     u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
                                     solver=m.solver, hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
                                     constraint_every=m.constraint_every,
-                                    constraint_substeps=m.constraint_substeps, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain), **cons)
+                                    constraint_substeps=m.constraint_substeps, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain),
+                                    constraint_backoff=m.constraint_backoff, **cons)
     except GtModelError as exc:
-        raise file.wrap("mpc.disturbance_gain" if "disturbance_gain" in str(exc) else "mpc", exc) from None
+        raise file.wrap(next((f"mpc.{k}" for k in ("disturbance_gain", "constraint_backoff") if k in str(exc)), "mpc"), exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)

@@ -100,7 +100,7 @@ def test_infeasible_state_soft_solves_hard_fails(integrator, which, ok):
     # 5 m/s at 5 cm from the bound cannot stop in time: the soft QP still solves, the hard one reports ok = 0
     _, t, soft, hard, _ = integrator
     c = soft if which == "soft" else hard
-    u, _, flag = c.function()(t[40], INFEASIBLE, c.u_initial, c.w_initial)
+    u, _, flag = c.function()(t[40], INFEASIBLE, c.u_initial, c.memory_initial)
     assert float(flag) == ok
     assert np.isfinite(float(u))
 
@@ -112,7 +112,7 @@ def test_closed_loop_holds_the_bound(integrator, which):
     ode, t, soft, _, free = integrator
     c = soft if which == "soft" else free
     f = c.function()
-    mem = {"w": c.w_initial}
+    mem = {"w": c.memory_initial}
 
     def controller(tk, y):
         uk, w_next, ok = f(tk, y, c.u_initial, mem["w"])
@@ -167,7 +167,7 @@ def test_fatrop_step_agrees_with_scipy(integrator, fatrop_integrator, hard):
     # the multiple-shooting NLP by fatrop (interior point to 1e-8) in the loop-step Function against SLSQP
     _, t, soft, *_ = integrator
     c = fatrop_integrator[hard]
-    u, _, ok = c.function()(t[40], FEASIBLE, c.u_initial, c.w_initial)
+    u, _, ok = c.function()(t[40], FEASIBLE, c.u_initial, c.memory_initial)
     ref = _scipy_first_input(soft, 40, FEASIBLE)
     assert float(ok) == 1.0
     assert abs(float(u) - ref) <= 1e-5 * (1 + abs(ref))
@@ -175,7 +175,7 @@ def test_fatrop_step_agrees_with_scipy(integrator, fatrop_integrator, hard):
 
 def test_fatrop_hard_infeasible_fails_soft_solves(fatrop_integrator):
     # the safe-input contract for fatrop: an infeasible hard problem gives ok = 0 (its result violates the rows)
-    flags = [float(c.function()(0.16, INFEASIBLE, c.u_initial, c.w_initial)[2]) for c in (fatrop_integrator[False], fatrop_integrator[True])]
+    flags = [float(c.function()(0.16, INFEASIBLE, c.u_initial, c.memory_initial)[2]) for c in (fatrop_integrator[False], fatrop_integrator[True])]
     assert flags == [1.0, 0.0]
 
 

@@ -74,6 +74,9 @@ class MPCSection(Section):
         Also constrain the states after each of the prediction's substeps within the constrained periods (between the samples).
     disturbance_gain : float, optional
         Offset-free MPC: the gain of the input-disturbance estimate per period (0: none).
+    constraint_backoff : bool, optional
+        Tighten the constraint rows by the prediction's one-period error measured in the loop (default: on with
+        rows and sqpmethod).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -98,6 +101,7 @@ class MPCSection(Section):
     constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
     constraint_substeps: bool = Field(default=True, strict=True, description="also constrain the states after each of the prediction's substeps within the constrained periods (between the samples)")
     disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
+    constraint_backoff: bool | None = Field(default=None, strict=True, description="tighten the constraint rows by the prediction's one-period error measured in the loop, carried to each bounded quantity (a bound never loosened; default: on with constraint rows and solver sqpmethod)")
 
 
 class MPCFile(LoopFile):

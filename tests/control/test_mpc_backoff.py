@@ -1,0 +1,82 @@
+"""The MPC's constraint rows tightened by the prediction's error measured in the loop (``gtmodel.control.mpc_memory.row_backoff``).
+
+References: the double integrator x'' = u under explicit Euler over 4 ms, whose one-period prediction is
+``(x + dt v, v + dt u)`` by hand, so the rows' lower bounds are written out by hand from a measured error; and a
+closed loop whose plant is pushed towards the bound by a force the model does not know (measured from the first
+periods on): the soft-constrained MPC without the back-off passes its position bound, with it the bound holds.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gtmodel.control.mpc import mpc_controller
+from gtmodel.control.mpc_memory import row_backoff
+from gtmodel.errors import InputError
+from gtmodel.modeling import explicit_ode
+
+from ..modeling._builders import double_integrator
+
+DT, H, BOUND = 0.004, 20, 0.5
+
+
+@pytest.fixture(scope="module")
+def integrator():
+    ode = explicit_ode(double_integrator()[0])
+    t = DT * np.arange(101)
+    x_ref = np.column_stack([np.minimum(t / 0.2, 1.0), np.where(t < 0.2, 5.0, 0.0)])  # to 1 m: beyond the bound
+    kw = dict(horizon=H, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0], method="euler", x_ub={"x": BOUND})
+    return ode, t, x_ref, {flag: mpc_controller(ode, t, x_ref, np.zeros((101, 1)), constraint_backoff=flag, **kw) for flag in (True, False)}
+
+
+def _backoff(c, x, u_last, mem):
+    """The rows' lower bounds with the horizon starting at the measured ``x`` (no delay) under the warm start."""
+    xs, us, ms = ca.MX.sym("x", c.nx), ca.MX.sym("u", c.nu), ca.MX.sym("w", c.n_memory)
+    rows = row_backoff(c, xs, xs, ms[:c.nw], us, ms)
+    return np.asarray(ca.Function("b", [xs, us, ms], [rows])(x, u_last, mem)).ravel()
+
+
+@pytest.mark.parametrize("error, ran", [
+    ([0.01, 0.3], 1.0),    # position and speed under-predicted: every upper row tightened
+    ([-0.01, 0.3], 1.0),   # the position over-predicted, the speed under: tightened only where the sum is positive
+    ([0.01, 0.3], 0.0),    # before a step ran: no error measured, nothing tightened
+], ids=["under_predicted", "mixed", "first_step"])
+def test_rows_are_tightened_by_the_recurring_error_by_hand(integrator, error, ran):
+    """``e`` added after every period of explicit Euler: the position's shift at stage j is j e_x + dt e_v j (j - 1) / 2."""
+    _, _, _, mpcs = integrator
+    c = mpcs[True]
+    x_prev, u_act, e = np.array([0.3, 2.0]), np.array([7.0]), np.asarray(error)
+    predicted = np.array([x_prev[0] + DT * x_prev[1], x_prev[1] + DT * u_act[0]])  # explicit Euler, by hand
+    mem = np.r_[c.w_initial, 0.0, x_prev, u_act, ran]
+    lbg = _backoff(c, predicted + e, u_act, mem)
+    j = np.arange(1, H + 1)
+    shift = ran * (j * e[0] + DT * e[1] * j * (j - 1) / 2)
+    assert c.constraint_rows == H and lbg == pytest.approx(np.maximum(shift, 0.0) / c.constraints.scale[0], rel=1e-9, abs=1e-15)
+
+
+def _peak(c, push):
+    """The largest position of a closed loop whose plant is pushed towards the bound by ``push`` [m/s^2] the model does
+    not know (explicit Euler by hand)."""
+    f = c.function()
+    w, u_last, x, peak = c.memory_initial, c.u_initial, c.x_ref[0].copy(), -np.inf
+    for k in range(c.length - 1):
+        u, w, ok = f(c.t0 + k * DT, x, u_last, w)
+        assert float(ok) == 1.0
+        u_last = np.asarray(u).ravel()
+        x = np.array([x[0] + DT * x[1], x[1] + DT * (u_last[0] + push)])
+        peak = max(peak, x[0])
+    return peak
+
+
+def test_the_back_off_holds_the_bound_on_a_plant_pushed_towards_it(integrator):
+    _, _, _, mpcs = integrator
+    without, with_backoff = _peak(mpcs[False], 10.0), _peak(mpcs[True], 10.0)  # the plant pushed on at 10 m/s^2
+    assert without > BOUND * 1.04 and with_backoff <= BOUND * 1.01
+
+
+def test_the_back_off_needs_rows_of_sqpmethod(integrator):
+    ode, t, x_ref, _ = integrator
+    with pytest.raises(InputError, match="constraint_backoff: tightens the constraint rows of solver sqpmethod"):
+        mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=H, constraint_backoff=True)
