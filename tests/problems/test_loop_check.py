@@ -139,3 +139,13 @@ def test_declared_bounds_beyond_one_percent_fail_per_variable():
 def test_notes_head_the_summary():
     check = LoopCheck(closed=PASSING[0], feedforward=PASSING[1], memory_bytes=0, work_bytes=0, notes=["reference NOT verified (x)"])
     assert check.summary_lines()[0] == "notes: reference NOT verified (x)"
+
+
+def test_a_ratio_that_fails_names_the_bounds_the_controller_rode():
+    # x_k = 1 + 0.1 k: the largest state 1.7 at k = 7 against x <= 1.71 (0.58 % inside: binding, by hand), and the ratio
+    # 0.2 above a limit of 0.1: the failure says which bound held the controller back, with its figures
+    closed, feedforward = PASSING
+    (bound,) = bound_report({"x": closed.x[:, 0]}, {"x": -np.inf}, {"x": 1.71}, times=closed.t)
+    check = LoopCheck(closed=closed, feedforward=feedforward, memory_bytes=0, work_bytes=0, max_ratio=0.1, bounds=[bound])
+    (why,) = check.failures()
+    assert why.endswith(f"; the bounds it rode: x 1.7 of 1.71 (-0.58 %) at t = {closed.t[7]:.4g} s")

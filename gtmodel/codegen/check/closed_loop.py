@@ -19,6 +19,7 @@ errors); the summary states the real type. Its :attr:`LoopCheck.status` is the s
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -58,6 +59,8 @@ BETWEEN_REMEDY = {
     "": "the controller has no constraint rows: plan with margin below the bound ([reference] overrides) or weight the variable more",
 }
 
+#: A declared bound the controller came within this fraction of (relative to its size) counts as binding in the ratio's failure.
+BINDING = 0.02
 #: Seconds between the closed loop's progress lines (``progress`` of :func:`closed_loop_check`).
 PROGRESS_INTERVAL_S = 2.0
 
@@ -165,12 +168,18 @@ class LoopCheck:
                f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})", True)
               for b in self.bounds_between if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
-            (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)",
-             not diverged and not self.ratio_to_feedforward < self.max_ratio),
+            (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)"
+             + self._binding(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
             (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
              "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s),
             (f"{self.heap[1] if self.heap else 0} allocations of the QP solver on the heap (its arena of "
              f"{self.heap[2] if self.heap else 0} bytes too small)", bool(self.heap and self.heap[1] > 0))) if bad]
+
+    def _binding(self) -> str:
+        """The declared bounds the controller reached (within :data:`BINDING` of the limit): why it could not track better."""
+        near = [b for b in self.bounds + self.bounds_between if math.isfinite(b.signed) and b.signed >= -BINDING]
+        return ("; the bounds it rode: " + ", ".join(f"{b.name} {b.value:.4g} of {b.limit:g} ({100 * b.signed:+.2g} %) at t = {b.time:.4g} s"
+                                                      for b in near)) if near else ""
 
     @property
     def step_p99_s(self) -> float:
