@@ -275,9 +275,12 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
                "by the model's fixed step from u_last (the input acting until this one arrives).\n" if c.delay else "")
             + (f"Integral action on {', '.join(c.x_names[i] for i in c.integral_states)}: u -= Ki_k xi, the integrator state xi\n"
                "(memory w) += dt (x - x*_k) of those states, held while the input saturates.\n" if c.ni else "")
+            + ("Declared state bounds held over the period the input acts (the input projected onto the linearised rows at\n"
+               "every substep, backed off by the measured one-period prediction error; gtmodel.control.state_limits).\n"
+               if c.state_limits is not None else "")
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
-                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=np.zeros(c.ni), description=text,
+                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text,
                     t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
 
 

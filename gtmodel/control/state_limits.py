@@ -25,7 +25,7 @@ Everything is one CasADi graph (:meth:`StateLimits.project`), generated into the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import casadi as ca
@@ -58,6 +58,10 @@ class StateLimits:
         ``(m,)`` the smallest ``|J_r| * span(u)`` that enters a row (:data:`MIN_REACH` times the bound's size).
     span : numpy.ndarray
         ``(nu,)`` the inputs' ranges (``u_ub - u_lb``; the feedforward's range where a bound is infinite).
+    index : numpy.ndarray, optional
+        ``(m,)`` each row's state index.
+    fraction : numpy.ndarray, optional
+        ``(m,)`` each row's substep's share of the period (``(k + 1) / substeps``).
     """
 
     rows: ca.Function
@@ -66,13 +70,15 @@ class StateLimits:
     names: list[str]
     reach: np.ndarray
     span: np.ndarray
+    index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    fraction: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_rows(self) -> int:
         """Number of rows ``m`` (bounded states times substeps)."""
         return int(self.lb.size)
 
-    def project(self, x: Any, u0: Any, u_lb: np.ndarray, u_ub: np.ndarray) -> Any:
+    def project(self, x: Any, u0: Any, u_lb: np.ndarray, u_ub: np.ndarray, error: Any = None, delay: int = 0) -> Any:
         """The input nearest the law's ``u0`` that keeps the linearised rows within their bounds, then saturated.
 
         Parameters
@@ -83,6 +89,12 @@ class StateLimits:
             ``(nu, 1)`` the law's input.
         u_lb, u_ub : numpy.ndarray
             ``(nu,)`` the input bounds (applied last: the result is always within them).
+        error : casadi.MX, optional
+            ``(nx, 1)`` the model's one-period prediction error measured in the loop, taken to recur: the rows are
+            also predicted from ``x + delay * error`` with each substep's share of it added, and each bound is
+            held by the nearer of the two predictions (the back-off; a bound is never loosened). None: none.
+        delay : int, optional
+            Periods between the measurement and ``x`` (the input delay the law compensates: 0 or 1).
 
         Returns
         -------
@@ -90,6 +102,10 @@ class StateLimits:
             ``(nu, 1)``.
         """
         c0, J = self.rows(x, u0)
+        c_lo = c_hi = c0
+        if error is not None:
+            shifted = self.rows(x + delay * error, u0)[0] + ca.DM(self.fraction) * error[[int(i) for i in self.index]]
+            c_lo, c_hi = ca.fmin(c0, shifted), ca.fmax(c0, shifted)
         nu = int(np.size(u_lb))
         u = u0
         for _ in range(1 if nu == 1 else SWEEPS):
@@ -97,9 +113,9 @@ class StateLimits:
                 a = J[r, :].T
                 norm2 = ca.sumsqr(a)
                 reach = ca.sqrt(ca.sumsqr(a * ca.DM(self.span))) if nu > 1 else ca.fabs(a[0]) * float(self.span[0])
-                value = c0[r] + ca.dot(a, u - u0)
-                over = ca.fmax(value - float(self.ub[r]), 0) if np.isfinite(self.ub[r]) else 0
-                under = ca.fmax(float(self.lb[r]) - value, 0) if np.isfinite(self.lb[r]) else 0
+                move = ca.dot(a, u - u0)
+                over = ca.fmax(c_hi[r] + move - float(self.ub[r]), 0) if np.isfinite(self.ub[r]) else 0
+                under = ca.fmax(float(self.lb[r]) - c_lo[r] - move, 0) if np.isfinite(self.lb[r]) else 0
                 step = ca.if_else(reach >= float(self.reach[r]), (under - over) / ca.fmax(norm2, 1e-300), 0)
                 u = u + a * step
             u = ca.fmin(ca.fmax(u, ca.DM(u_lb)), ca.DM(u_ub))
@@ -161,4 +177,6 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
     ref = np.atleast_2d(np.asarray(u_ref, dtype=float))
     span = np.where(np.isfinite(u_ub - u_lb), u_ub - u_lb, np.ptp(ref, axis=0) + 1.0)
     names = [f"{name}@{k + 1}" for k in range(s) for _, name, _, _ in picked]
-    return StateLimits(rows=rows, lb=lb, ub=ub, names=names, reach=MIN_REACH * size, span=np.asarray(span, dtype=float))
+    return StateLimits(rows=rows, lb=lb, ub=ub, names=names, reach=MIN_REACH * size, span=np.asarray(span, dtype=float),
+                       index=np.array([j for _ in range(s) for j, _, _, _ in picked], dtype=int),
+                       fraction=np.array([(k + 1) / s for k in range(s) for _ in picked]))

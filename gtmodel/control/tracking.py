@@ -184,7 +184,7 @@ class TrackingController(SampledReference):
         one), and applies ``u = sat(u*_{k+1} - K_{k+1} (x^_{k+1} - x*_{k+1}))``.
     predict : casadi.Function, optional
         ``predict(x (nx,1), u (nu,1)) -> x_next``: the model's fixed step over one period
-        (the one linearised), needed when ``delay`` is 1.
+        (the one linearised), needed when ``delay`` is 1 or with ``state_limits``.
     integral_states : tuple of int, optional
         Indices of the states with integral action (default none): the integrator state
         ``xi (ni,)``, ``xi_{k+1} = xi_k + dt (x - x*_k)[integral_states]``, is the step's
@@ -205,7 +205,10 @@ class TrackingController(SampledReference):
         The declared state bounds the law holds over the period its input acts
         (:class:`~gtmodel.control.state_limits.StateLimits`: the input projected so that the bounded states after
         each substep stay within them, then saturated; the integrator holds while the projection or the
-        saturation changes the input); None: the input bounds alone.
+        saturation changes the input); None: the input bounds alone. With it the step's memory also holds the last
+        measured state, the input that acted since and a flag (:attr:`n_memory`): each period the model's
+        one-period prediction error is measured and the rows are tightened by it (the back-off of
+        :meth:`~gtmodel.control.state_limits.StateLimits.project`).
     """
 
     K: np.ndarray
@@ -234,6 +237,17 @@ class TrackingController(SampledReference):
         return len(self.integral_states)
 
     @property
+    def n_memory(self) -> int:
+        """Length of the step's memory ``w``: the integrator states, and with :attr:`state_limits` the last measured
+        state ``(nx)``, the last ``u_last (nu)`` and a flag (1 once a step ran)."""
+        return self.ni + (self.nx + self.nu + 1 if self.state_limits is not None else 0)
+
+    @property
+    def memory_initial(self) -> np.ndarray:
+        """``(n_memory,)`` the step's first memory: zero integrator states (and the reference's first state, :attr:`u_initial`, flag 0)."""
+        return np.r_[np.zeros(self.ni), (np.r_[self.x_ref[0], self.u_initial, 0.0] if self.state_limits is not None else np.zeros(0))]
+
+    @property
     def u_initial(self) -> np.ndarray:
         """``(nu,)`` the input before the first step: :attr:`u_start` (default ``u*_0``) saturated."""
         return saturate(self.u_ref[0] if self.u_start is None else self.u_start, self.u_lb, self.u_ub)
@@ -245,8 +259,8 @@ class TrackingController(SampledReference):
         -------
         casadi.Function
             ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``, with
-            integral action ``control(t, x, u_last, w (ni,1)) -> (u, w_next (ni,1), ok)``
-            (``w`` the integrator state, see :attr:`integral_states`):
+            a memory (integral action, :attr:`state_limits`) ``control(t, x, u_last, w (n_memory,1)) -> (u, w_next, ok)``
+            (``w`` the integrator states, see :attr:`integral_states`, then the last measured state, input and flag):
             ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N`` (a NaN ``t`` gives
             ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
             reference ends) holds the final state: :attr:`x_hold`, :attr:`u_hold`,
@@ -257,9 +271,9 @@ class TrackingController(SampledReference):
             ``predict(x, u_last)`` and ``t`` by ``t + dt``. The tables are constants of the
             graph, indexed parametrically (the generated C looks them up; no heap).
         """
-        n, nx, nu, ni = self.length, self.nx, self.nu, self.ni
-        t, x, u_last, w = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", ni)
-        t_in, x_in = t, x
+        n, nx, nu, ni, nm = self.length, self.nx, self.nu, self.ni, self.n_memory
+        t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", nm)
+        t_in, x_in, w = t, x, mem[:ni]
         if self.delay:
             t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
         k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
@@ -278,16 +292,22 @@ class TrackingController(SampledReference):
             off = base + nx + nu + nu * nx
             gain_i = ca.vertcat(*[ca.horzcat(*[values[off + i * ni + j] for j in range(ni)]) for i in range(nu)])
             free = free - ca.mtimes(gain_i, w)
-        u = saturate(free, self.u_lb, self.u_ub) if self.state_limits is None else self.state_limits.project(x, free, self.u_lb, self.u_ub)
+        if self.state_limits is None:
+            u, kept = saturate(free, self.u_lb, self.u_ub), ca.MX(0, 1)
+        else:  # the declared state bounds over the period the input acts, the rows backed off by the measured error
+            x_prev, u_prev, ran = mem[ni:ni + nx], mem[ni + nx:ni + nx + nu], mem[nm - 1]
+            measured = ca.if_else(ran > 0.5, x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev), ca.DM.zeros(nx))
+            u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=measured, delay=self.delay)
+            kept = ca.vertcat(x_in, u_last, 1.0)  # this measurement and the input acting now, for the next period
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
-        if not ni:
+        if not nm:
             ok = total < math.inf  # 0 for NaN or infinite entries
             return ca.Function("control", [t_in, x_in, u_last], [u, ok], ["t", "x", "u_last"], ["u", "ok"])
         error = ca.vertcat(*[x[i] - xs[i] for i in self.integral_states])
         unsaturated = ca.sum1(ca.fabs(u - free)) == 0  # conditional integration: hold xi while the input saturates (or is limited)
-        w_next = ca.if_else(unsaturated, w + self.dt * error, w)
+        w_next = ca.vertcat(ca.if_else(unsaturated, w + self.dt * error, w) if ni else ca.MX(0, 1), kept)
         ok = (total + ca.sum1(ca.fabs(w_next))) < math.inf
-        return ca.Function("control", [t_in, x_in, u_last, w], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+        return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
     def limits(self) -> dict[str, np.ndarray]:
         """The plausible ranges the generated step checks its measurement and its memory against
@@ -299,12 +319,16 @@ class TrackingController(SampledReference):
             ``"x"`` ``(2, nx)``: the reference's range widened by :data:`~gtmodel.control.reference.MEASUREMENT_LIMIT`
             state scales (:func:`~gtmodel.control.reference.reference_scales`); ``"u_last"`` ``(2, nu)``: the input
             bounds (where infinite, the reference's range widened by ``MEASUREMENT_LIMIT`` input scales);
-            ``"memory"`` ``(2, ni)``: the integrator states within ``MEMORY_LIMIT`` scales of their states times the
-            reference's duration (at least 1 s; :data:`~gtmodel.control.reference.MEMORY_LIMIT`).
+            ``"memory"`` ``(2, n_memory)``: the integrator states within ``MEMORY_LIMIT`` scales of their states times the
+            reference's duration (at least 1 s; :data:`~gtmodel.control.reference.MEMORY_LIMIT`), and with
+            :attr:`state_limits` the last state as ``"x"``, the last input as ``"u_last"``, the flag in ``[0, 1]``.
         """
         x_scale, _, x, u = self.plausible_ranges(self.u_lb, self.u_ub)
         xi = MEMORY_LIMIT * x_scale[list(self.integral_states)] * max(self.dt * self.length, 1.0)
-        return {"x": x, "u_last": u, "memory": np.vstack([-xi, xi])}
+        memory = np.vstack([-xi, xi])
+        if self.state_limits is not None:  # the last state and input as the measurement's and u_last's, the flag in [0, 1]
+            memory = np.hstack([memory, x, u, np.array([[0.0], [1.0]])])
+        return {"x": x, "u_last": u, "memory": memory}
 
     def memory_reset(self) -> ca.Function:
         """The step's memory reset to the reference's at the current period (what ``_init`` sets at the first).
@@ -312,9 +336,10 @@ class TrackingController(SampledReference):
         Returns
         -------
         casadi.Function
-            ``reset(t (1,1), x (nx,1)) -> (u_last (nu,1)[, w (ni,1)])``: ``u_last = u*_k`` saturated
+            ``reset(t (1,1), x (nx,1)) -> (u_last (nu,1)[, w (n_memory,1)])``: ``u_last = u*_k`` saturated
             (``k = floor((t - t_0) / dt)`` clamped to ``0 .. N``, row ``N`` the held end's :attr:`u_hold`), and
-            with :attr:`integral_states` zero integrator states (``x`` is not used: the interface of
+            with :attr:`integral_states` zero integrator states, with :attr:`state_limits` ``x`` as the last state,
+            ``u_last`` as the last input and the flag 0 (the interface of
             :meth:`gtmodel.control.mpc.MPCController.memory_reset`).
         """
         t, x = ca.MX.sym("t"), ca.MX.sym("x", self.nx)
@@ -322,9 +347,10 @@ class TrackingController(SampledReference):
         values = ca.MX(ca.DM(np.vstack([self.u_ref, self.u_hold]).reshape(-1)))
         k = period_index(t, self.t0, self.dt, self.length)
         u_last = saturate(ca.vertcat(*[values[nu * k + i] for i in range(nu)]), self.u_lb, self.u_ub)
-        if not self.ni:
+        if not self.n_memory:
             return ca.Function("reset", [t, x], [u_last], ["t", "x"], ["u_last"])
-        return ca.Function("reset", [t, x], [u_last, ca.DM.zeros(self.ni)], ["t", "x"], ["u_last", "w"])
+        w = ca.vertcat(ca.DM.zeros(self.ni), *((x, u_last, 0.0) if self.state_limits is not None else ()))
+        return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
 
     def __call__(self, t: float, x: Any, u_last: Any = None, w: Any = None) -> np.ndarray:
         """The control law evaluated from Python (the same Function): ``u (nu,)`` at time ``t`` [s], state ``x (nx,)``.
@@ -338,7 +364,8 @@ class TrackingController(SampledReference):
         u_last : array_like, optional
             ``(nu,)`` the input acting now (used with :attr:`delay` 1; default :attr:`u_initial`).
         w : array_like, optional
-            ``(ni,)`` the integrator state (with :attr:`integral_states`; default zeros).
+            ``(n_memory,)`` the step's memory (the integrator states, and with :attr:`state_limits` the last state,
+            input and flag; default :attr:`memory_initial`).
 
         Returns
         -------
@@ -346,8 +373,8 @@ class TrackingController(SampledReference):
             ``(nu,)`` the saturated input.
         """
         args = [t, np.asarray(x, dtype=float), self.u_initial if u_last is None else np.asarray(u_last, dtype=float)]
-        if self.ni:
-            args.append(np.zeros(self.ni) if w is None else np.asarray(w, dtype=float))
+        if self.n_memory:
+            args.append(self.memory_initial if w is None else np.asarray(w, dtype=float))
         u = self.function()(*args)[0]
         return np.asarray(u).reshape(-1)
 
@@ -476,7 +503,7 @@ def tracking_controller(
     nx = ode.nx
     integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
     held = None if not state_bounds else state_limits(substep_states(ode, dt, method, substeps), list(ode.x_names), state_bounds, pv, lb, ub, us)
-    return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
+    return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay or held else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
                               K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), **integral)

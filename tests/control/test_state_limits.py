@@ -118,3 +118,19 @@ def test_the_tracking_law_holds_the_current_where_the_saturated_law_exceeds_it(m
     assert v_free == pytest.approx(24.0) and _peak_current(ode, state, v_free) > 5.5
     assert -24.0 <= v_held < v_free and _peak_current(ode, state, v_held) == pytest.approx(5.0, rel=2e-3)
     assert held.state_limits.names == ["ind.i@1", "ind.i@2", "ind.i@3", "ind.i@4"] and i == 0
+
+
+def test_the_measured_prediction_error_backs_the_bound_off(motor):
+    """The last period's current came out 0.2 A above the model's prediction: the law holds the current at 4.8 A (SciPy)."""
+    ode, t, x, u = motor
+    held = tracking_controller(ode, t, x, u, u_lb=[-24.0], u_ub=[24.0], Q=[1e-2, 1.0, 1e-4], method="rk4", substeps=4,
+                               state_bounds={"ind.i": (-5.0, 5.0)})
+    before, acted = held.x_ref[49], np.array([3.0])
+    state = np.asarray(held.predict(before, acted)).ravel() + np.array([0.2, 0.0, 0.0])  # the plant's current 0.2 A higher
+    state[1] -= 5.0  # far behind the reference: the LQR asks the full 24 V
+    memory = np.r_[before, acted, 1.0]  # the last measured state, the input that acted since, a step ran
+    fresh = np.r_[before, acted, 0.0]  # no step ran yet: nothing measured
+    v_backed, v_plain = float(held(50 * DT, state, acted, memory)[0]), float(held(50 * DT, state, acted, fresh)[0])
+    assert held.n_memory == 3 + 1 + 1 and v_backed < v_plain
+    assert _peak_current(ode, state, v_plain) == pytest.approx(5.0, rel=2e-3)
+    assert _peak_current(ode, state, v_backed) == pytest.approx(4.8, rel=2e-3)
