@@ -17,21 +17,8 @@ from gtmodel.control.mpc import mpc_controller
 from gtmodel.control.problem import TrackingProblem, tracking_problem
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.errors import InputError
-from gtmodel.modeling import explicit_ode
-from gtmodel.problems.user_model import load_user_model
-
-from ..conftest import REPO
 
 DT = 0.004
-
-
-@pytest.fixture(scope="module")
-def motor():
-    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
-    t = np.linspace(0.0, 1.0, 101)
-    u = (6.0 * np.sin(2 * np.pi * t))[:, None]
-    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
-    return ode, t, x, u
 
 
 @pytest.fixture(scope="module")

@@ -13,14 +13,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from gtmodel.control.problem import substep_states
 from gtmodel.control.state_limits import state_limits
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.errors import InputError
-from gtmodel.modeling import explicit_ode
-from gtmodel.problems.user_model import load_user_model
 
-from ..conftest import REPO
 
 R_OHM, TAU, DT = 2.0, 0.01, 0.004
 
@@ -88,15 +84,6 @@ def test_bad_bounds_are_refused(bounds, match):
 def test_no_finite_bound_gives_none():
     assert state_limits(_rl_rows(), ["i"], {"i": (-np.inf, np.inf), "other": (0.0, 1.0)}, np.zeros(0), np.array([-1.0]),
                         np.array([1.0]), np.zeros((2, 1))) is None
-
-
-@pytest.fixture(scope="module")
-def motor():
-    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
-    t = np.linspace(0.0, 1.0, 101)
-    u = (6.0 * np.sin(2 * np.pi * t))[:, None]
-    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
-    return ode, t, x, u
 
 
 def _peak_current(ode, x0, v):

@@ -25,15 +25,6 @@ DT = 0.004
 Q_ANGLE = [1e-2, 1.0, 1e-4]
 
 
-@pytest.fixture(scope="module")
-def motor():
-    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
-    t = np.linspace(0.0, 1.0, 101)
-    u = (6.0 * np.sin(2 * np.pi * t))[:, None]
-    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
-    return ode, t, x, u
-
-
 def _linearisation(ode, x, u):
     xs, us = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
     xn = ode.step(DT, "rk4")(xs, us, ode.p_default)[0]
