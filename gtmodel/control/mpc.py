@@ -42,7 +42,7 @@ import numpy as np
 from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
-from gtmodel.control.mpc_memory import disturbance_estimate, memory_predict, memory_reset, row_backoff
+from gtmodel.control.mpc_memory import disturbance_estimate, memory_extra, memory_layout, memory_predict, memory_reset, row_backoff
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp
@@ -161,9 +161,8 @@ class MPCController(SampledReference):
 
     @property
     def n_memory(self) -> int:
-        """Length of the step's memory: the warm start, and with :attr:`estimates` the estimate
-        ``d (nu)``, the last measured state ``(nx)``, the last ``u_last (nu)`` and a flag (1 once a step ran)."""
-        return self.nw + (2 * self.nu + self.nx + 1 if self.estimates else 0)
+        """Length of the step's memory: the warm start, and with :attr:`estimates` the estimator's (:func:`~gtmodel.control.mpc_memory.memory_layout`)."""
+        return self.nw + sum(memory_layout(self).values())
 
     @property
     def estimates(self) -> bool:
@@ -173,9 +172,8 @@ class MPCController(SampledReference):
     @property
     def memory_initial(self) -> np.ndarray:
         """``(n_memory,)`` the step's first memory: :attr:`w_initial` (and a zero estimate, the reference's first
-        state as the last state, ``u_initial``, flag 0)."""
-        extra = np.r_[np.zeros(self.nu), self.x_ref[0], self.u_initial, 0.0] if self.estimates else np.zeros(0)
-        return np.r_[self.w_initial, extra]
+        state as the last state, ``u_initial``, a zero error, flag 0)."""
+        return np.r_[self.w_initial, memory_extra(self, np.zeros(self.nu), self.x_ref[0], self.u_initial, 0.0)]
 
     @property
     def u_initial(self) -> np.ndarray:
@@ -431,7 +429,7 @@ class MPCController(SampledReference):
         InputError
             Another real type.
         """
-        nx, nu, n, nw = self.nx, self.nu, self.length, self.nw
+        nx, nu, n, nw, error = self.nx, self.nu, self.length, self.nw, None
         t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.n_memory)
         t_in, x_in = t, x
         w = mem[:nw]
@@ -461,8 +459,9 @@ class MPCController(SampledReference):
             cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
         else:
             bounds = self.bounds()
-            if self.estimates and self.constraint_backoff and self.constraints is not None:  # rows tightened by the observed error
-                bounds["lbg"] = ca.vertcat(ca.DM(bounds["lbg"][:1]), row_backoff(self, x_in, x, w, u_last, mem))
+            if memory_layout(self).get("error"):  # rows tightened by the observed error, its filtered value kept
+                tightened, error = row_backoff(self, x_in, x, w, u_last, mem)
+                bounds["lbg"] = ca.vertcat(ca.DM(bounds["lbg"][:1]), tightened)
             if d is not None:
                 pad = ca.DM.zeros(self.n_slack)
                 bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
@@ -485,7 +484,7 @@ class MPCController(SampledReference):
             u = saturate(u - d, self.u_lb, self.u_ub)
             ok = ca.logic_and(ok, ca.sum1(ca.fabs(d)) < math.inf)
         if self.estimates:
-            w_next = ca.vertcat(w_next, ca.DM.zeros(self.nu) if d is None else d, x_in, u_last, 1.0)
+            w_next = ca.vertcat(w_next, memory_extra(self, ca.DM.zeros(self.nu) if d is None else d, x_in, u_last, 1.0, error=error))
         return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
 
     def limits(self) -> dict[str, np.ndarray]:
@@ -508,7 +507,7 @@ class MPCController(SampledReference):
         d = np.where(np.isfinite(self.u_lb) & np.isfinite(self.u_ub), MEMORY_LIMIT, MEASUREMENT_LIMIT) * u_scale
         parts = [np.tile(u + np.vstack([-d, d]), (1, self.blocks))]
         if self.estimates:
-            parts += [np.vstack([-d, d]), x, u, np.array([[0.0], [1.0]])]
+            parts += [memory_extra(self, np.vstack([-d, d]), x, u, np.array([[0.0], [1.0]]), error=np.vstack([x[0] - x[1], x[1] - x[0]]))]
         return {"x": x, "u_last": u, "memory": np.hstack(parts)}
 
     def memory_reset(self) -> ca.Function:

@@ -18,12 +18,65 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
 from gtmodel.control.mpc_nlp import between_rows, period_states
 from gtmodel.control.reference import period_index
+from gtmodel.control.state_limits import BACKOFF_GAIN
 from gtmodel.control.tracking import saturate
 
-__all__ = ["disturbance_estimate", "memory_predict", "memory_reset", "row_backoff"]
+__all__ = ["disturbance_estimate", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
+
+
+def memory_layout(c: Any) -> dict[str, int]:
+    """The estimator's part of the step's memory after the warm start, in order, by name and length.
+
+    Parameters
+    ----------
+    c : MPCController
+        The controller.
+
+    Returns
+    -------
+    dict of str to int
+        Empty without :attr:`~gtmodel.control.mpc.MPCController.estimates`; else ``d`` (``nu``), ``x`` (``nx``, the last
+        measured state), ``u`` (``nu``, the last ``u_last``), with the back-off ``error`` (``nx``, the filtered
+        one-period prediction error, :func:`row_backoff`), and ``ran`` (1, a flag: 1 once a step ran).
+    """
+    if not c.estimates:
+        return {}
+    backoff = bool(c.constraint_backoff and c.constraints is not None)
+    return {"d": c.nu, "x": c.nx, "u": c.nu, **({"error": c.nx} if backoff else {}), "ran": 1}
+
+
+def memory_extra(c: Any, d: Any, x: Any, u: Any, ran: Any, error: Any = None) -> Any:
+    """The estimator's part of the memory from its pieces (:func:`memory_layout`), NumPy rows or CasADi columns.
+
+    Parameters
+    ----------
+    c : MPCController
+        The controller.
+    d, x, u, ran : numpy.ndarray or casadi.MX
+        The estimate, the last measured state, the last input and the flag: ``(n,)`` vectors, or ``(2, n)`` ranges
+        (NumPy, stacked by columns), or CasADi columns.
+    error : numpy.ndarray or casadi.MX, optional
+        The filtered prediction error (zeros of ``x``'s shape when None), used only with the back-off.
+
+    Returns
+    -------
+    numpy.ndarray or casadi.MX
+        The pieces joined (an empty array without :attr:`~gtmodel.control.mpc.MPCController.estimates`).
+    """
+    layout = memory_layout(c)
+    if not layout:
+        return np.zeros(0)
+    symbolic = isinstance(x, (ca.MX, ca.SX))
+    zero = (ca.DM.zeros(c.nx) if symbolic else np.zeros_like(np.asarray(x, dtype=float))) if error is None else error
+    parts = [d, x, u] + ([zero] if "error" in layout else []) + [ran]
+    if symbolic:
+        return ca.vertcat(*parts)
+    arrays = [np.asarray(v, dtype=float) for v in parts]
+    return np.hstack(arrays) if arrays[1].ndim == 2 else np.concatenate([np.atleast_1d(v) for v in arrays])
 
 
 def _estimator_memory(c: Any, u_last: ca.MX, mem: ca.MX) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX]:
@@ -108,15 +161,18 @@ def memory_reset(c: Any) -> ca.Function:
     k = period_index(t + c.delay * c.dt, c.t0, c.dt, n - 1)
     w = ca.vertcat(*[u_star(k + s * b) for s in range(c.blocks)])
     if c.estimates:
-        w = ca.vertcat(w, ca.DM.zeros(nu), x, u_last, 0.0)
+        w = ca.vertcat(w, memory_extra(c, ca.DM.zeros(nu), x, u_last, 0.0))
     return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
 
 
 def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
     """The lower bounds of the constraint rows: each declared bound tightened by the prediction's observed error.
 
-    The one-period prediction error of the state, ``e = x - F(x_prev, u_act + d)`` (the memory's prediction,
-    :func:`memory_predict`; zero before a step ran), is taken to recur every period: the horizon is predicted
+    The one-period prediction error of the state, ``x - F(x_prev, u_act + d)`` (the memory's prediction,
+    :func:`memory_predict`), low-pass filtered in the memory, ``e += BACKOFF_GAIN (x - F(...) - e)``
+    (:data:`~gtmodel.control.state_limits.BACKOFF_GAIN`; zero before a step ran: the error's slowly varying part, the
+    state disturbance of offset-free MPC, Pannocchia & Rawlings 2003, not the last period's swing, which an input
+    changing sign each period feeds back into), is taken to recur every period: the horizon is predicted
     from its start under the warm start's inputs twice, as the model predicts it and with ``e`` added after every
     period (and the input delay's), ``x'_{j+1} = F(x'_j, u_j) + e``, at every point that carries rows (the
     substeps inside a constrained period get the error of their fraction of it). Where the disturbed prediction
@@ -144,13 +200,17 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
 
     Returns
     -------
-    casadi.MX
+    lbg : casadi.MX
         ``(constraint_rows, 1)`` the rows' lower bounds (``>= 0``), in the NLP's order (per constrained stage the
         rows inside its period then its end, each in the order of the constraints' sides).
+    error : casadi.MX
+        ``(nx, 1)`` the filtered error, for the memory.
     """
     cons = c.constraints
     _, _, _, ran = _estimator_memory(c, u_last, mem)
-    error = ca.if_else(ran > 0.5, x - memory_predict(c)(u_last, mem), ca.DM.zeros(c.nx))
+    start = c.nw + 2 * c.nu + c.nx  # the filtered error's place (memory_layout)
+    kept = mem[start:start + c.nx]
+    error = ca.if_else(ran > 0.5, kept + BACKOFF_GAIN * (x - memory_predict(c)(u_last, mem) - kept), kept)
     b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
     inner = between_rows(c)
     nominal, disturbed = x_start, x_start + c.delay * error
@@ -171,4 +231,4 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
             out.append(tightening(nominal, disturbed, u_row))
         else:
             nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + error
-    return ca.vertcat(*out)
+    return ca.vertcat(*out), error

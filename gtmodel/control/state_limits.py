@@ -33,12 +33,23 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["SWEEPS", "MIN_REACH", "StateLimits", "state_limits"]
+__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "state_limits"]
 
 #: Sweeps of the alternating projections with more than one input (one input: one sweep is exact).
 SWEEPS = 10
 #: A row enters the projection when the input's range moves it by at least this fraction of its bound's size in one period.
 MIN_REACH = 1e-3
+#: Gain per period of the low-pass filter of the model's one-period prediction error the back-off uses (the MPC's rows,
+#: :func:`gtmodel.control.mpc_memory.row_backoff`; the tracking law's, :meth:`StateLimits.project`): the slowly varying
+#: part of the error, not the last period's swing (a vertical ball screw's MPC, backed off by the raw error, swung its
+#: voltage between 2 and 20 V each period and its current beyond the bound by 16 %).
+BACKOFF_GAIN = 0.3
+#: The rows' order in the projection: by the input's authority over each state within one period along the reference
+#: (the median over its samples of ``|dx/du| span(u) / |bound|``), the weakest first. With one input the last
+#: projection's row always holds and an earlier one holds where the rows are consistent: where they are not (a
+#: motor speed near its limit that one period's voltage barely moves, and the current), the state the input
+#: commands directly wins (a belt drive's TV-LQR, its speed row last, drove the current to -43.9 A of 14.2).
+ORDER = "authority, weakest first"
 
 
 @dataclass
@@ -123,7 +134,7 @@ class StateLimits:
 
 
 def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str, tuple[float, float]], p: np.ndarray,
-                 u_lb: np.ndarray, u_ub: np.ndarray, u_ref: np.ndarray) -> StateLimits | None:
+                 u_lb: np.ndarray, u_ub: np.ndarray, u_ref: np.ndarray, x_ref: np.ndarray | None = None) -> StateLimits | None:
     """The rows of the declared state bounds over one period of a model's fixed step.
 
     Parameters
@@ -140,6 +151,9 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
         ``(nu,)`` input bounds.
     u_ref : numpy.ndarray
         ``(N, nu)`` the feedforward (the inputs' span where a bound is infinite).
+    x_ref : numpy.ndarray, optional
+        ``(N, nx)`` the reference's states: where the input's authority over each bounded state is measured (the
+        rows' order, :data:`ORDER`); default none (the states' order).
 
     Returns
     -------
@@ -169,14 +183,18 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
     x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
     states = substeps(x, u, ca.DM(np.asarray(p, dtype=float)))
     s = int(states.size2())
-    c = ca.vertcat(*[states[j, k] for k in range(s) for j, _, _, _ in picked])
-    rows = ca.Function("state_rows", [x, u], [c, ca.jacobian(c, u)], ["x", "u"], ["c", "J"])
-    lb = np.array([lo for _ in range(s) for _, _, lo, _ in picked])
-    ub = np.array([hi for _ in range(s) for _, _, _, hi in picked])
-    size = np.array([max(abs(v) for v in (lo, hi) if np.isfinite(v)) or 1.0 for _ in range(s) for _, _, lo, hi in picked])
     ref = np.atleast_2d(np.asarray(u_ref, dtype=float))
     span = np.where(np.isfinite(u_ub - u_lb), u_ub - u_lb, np.ptp(ref, axis=0) + 1.0)
-    names = [f"{name}@{k + 1}" for k in range(s) for _, name, _, _ in picked]
-    return StateLimits(rows=rows, lb=lb, ub=ub, names=names, reach=MIN_REACH * size, span=np.asarray(span, dtype=float),
-                       index=np.array([j for _ in range(s) for j, _, _, _ in picked], dtype=int),
-                       fraction=np.array([(k + 1) / s for k in range(s) for _ in picked]))
+    size = {j: max(abs(v) for v in (lo, hi) if np.isfinite(v)) or 1.0 for j, _, lo, hi in picked}
+    if x_ref is not None:  # the weakest authority first: the last projection's row holds (one input), the current over a speed
+        sens = ca.Function("sens", [x, u], [ca.jacobian(states[:, -1], u)]).map(ref.shape[0])
+        gain = np.abs(np.asarray(sens(np.asarray(x_ref, dtype=float).T, ref.T))).reshape(nx, ref.shape[0], nu)
+        authority = {j: float(np.median(gain[j] @ span)) / size[j] for j, _, _, _ in picked}
+        picked.sort(key=lambda row: authority[row[0]])
+    order = [(k, row) for row in picked for k in range(s)]  # a state's rows together, the states in ORDER
+    c = ca.vertcat(*[states[j, k] for k, (j, _, _, _) in order])
+    rows = ca.Function("state_rows", [x, u], [c, ca.jacobian(c, u)], ["x", "u"], ["c", "J"])
+    return StateLimits(rows=rows, lb=np.array([lo for _, (_, _, lo, _) in order]), ub=np.array([hi for _, (_, _, _, hi) in order]),
+                       names=[f"{name}@{k + 1}" for k, (_, name, _, _) in order],
+                       reach=MIN_REACH * np.array([size[j] for _, (j, _, _, _) in order]), span=np.asarray(span, dtype=float),
+                       index=np.array([j for _, (j, _, _, _) in order], dtype=int), fraction=np.array([(k + 1) / s for k, _ in order]))

@@ -43,7 +43,7 @@ import scipy.linalg
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.problem import substep_states, tracking_problem, weight_matrix
-from gtmodel.control.state_limits import StateLimits, state_limits
+from gtmodel.control.state_limits import BACKOFF_GAIN, StateLimits, state_limits
 from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
 
@@ -206,8 +206,9 @@ class TrackingController(SampledReference):
         (:class:`~gtmodel.control.state_limits.StateLimits`: the input projected so that the bounded states after
         each substep stay within them, then saturated; the integrator holds while the projection or the
         saturation changes the input); None: the input bounds alone. With it the step's memory also holds the last
-        measured state, the input that acted since and a flag (:attr:`n_memory`): each period the model's
-        one-period prediction error is measured and the rows are tightened by it (the back-off of
+        measured state, the input that acted since, the filtered error and a flag (:attr:`n_memory`): each period the
+        model's one-period prediction error is measured, low-pass filtered
+        (:data:`~gtmodel.control.state_limits.BACKOFF_GAIN`) and the rows are tightened by it (the back-off of
         :meth:`~gtmodel.control.state_limits.StateLimits.project`).
     """
 
@@ -239,13 +240,13 @@ class TrackingController(SampledReference):
     @property
     def n_memory(self) -> int:
         """Length of the step's memory ``w``: the integrator states, and with :attr:`state_limits` the last measured
-        state ``(nx)``, the last ``u_last (nu)`` and a flag (1 once a step ran)."""
-        return self.ni + (self.nx + self.nu + 1 if self.state_limits is not None else 0)
+        state ``(nx)``, the last ``u_last (nu)``, the filtered prediction error ``(nx)`` and a flag (1 once a step ran)."""
+        return self.ni + (2 * self.nx + self.nu + 1 if self.state_limits is not None else 0)
 
     @property
     def memory_initial(self) -> np.ndarray:
         """``(n_memory,)`` the step's first memory: zero integrator states (and the reference's first state, :attr:`u_initial`, flag 0)."""
-        return np.r_[np.zeros(self.ni), (np.r_[self.x_ref[0], self.u_initial, 0.0] if self.state_limits is not None else np.zeros(0))]
+        return np.r_[np.zeros(self.ni), (np.r_[self.x_ref[0], self.u_initial, np.zeros(self.nx), 0.0] if self.state_limits is not None else np.zeros(0))]
 
     @property
     def u_initial(self) -> np.ndarray:
@@ -295,10 +296,11 @@ class TrackingController(SampledReference):
         if self.state_limits is None:
             u, kept = saturate(free, self.u_lb, self.u_ub), ca.MX(0, 1)
         else:  # the declared state bounds over the period the input acts, the rows backed off by the measured error
-            x_prev, u_prev, ran = mem[ni:ni + nx], mem[ni + nx:ni + nx + nu], mem[nm - 1]
-            measured = ca.if_else(ran > 0.5, x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev), ca.DM.zeros(nx))
+            x_prev, u_prev, last, ran = mem[ni:ni + nx], mem[ni + nx:ni + nx + nu], mem[ni + nx + nu:nm - 1], mem[nm - 1]
+            innovation = x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev) - last
+            measured = ca.if_else(ran > 0.5, last + BACKOFF_GAIN * innovation, last)  # the error's low-pass filter
             u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=measured, delay=self.delay)
-            kept = ca.vertcat(x_in, u_last, 1.0)  # this measurement and the input acting now, for the next period
+            kept = ca.vertcat(x_in, u_last, measured, 1.0)  # this measurement, the input acting now and the error, for the next period
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         if not nm:
             ok = total < math.inf  # 0 for NaN or infinite entries
@@ -327,7 +329,7 @@ class TrackingController(SampledReference):
         xi = MEMORY_LIMIT * x_scale[list(self.integral_states)] * max(self.dt * self.length, 1.0)
         memory = np.vstack([-xi, xi])
         if self.state_limits is not None:  # the last state and input as the measurement's and u_last's, the flag in [0, 1]
-            memory = np.hstack([memory, x, u, np.array([[0.0], [1.0]])])
+            memory = np.hstack([memory, x, u, np.vstack([x[0] - x[1], x[1] - x[0]]), np.array([[0.0], [1.0]])])
         return {"x": x, "u_last": u, "memory": memory}
 
     def memory_reset(self) -> ca.Function:
@@ -349,7 +351,7 @@ class TrackingController(SampledReference):
         u_last = saturate(ca.vertcat(*[values[nu * k + i] for i in range(nu)]), self.u_lb, self.u_ub)
         if not self.n_memory:
             return ca.Function("reset", [t, x], [u_last], ["t", "x"], ["u_last"])
-        w = ca.vertcat(ca.DM.zeros(self.ni), *((x, u_last, 0.0) if self.state_limits is not None else ()))
+        w = ca.vertcat(ca.DM.zeros(self.ni), *((x, u_last, ca.DM.zeros(self.nx), 0.0) if self.state_limits is not None else ()))
         return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
 
     def __call__(self, t: float, x: Any, u_last: Any = None, w: Any = None) -> np.ndarray:
@@ -502,7 +504,7 @@ def tracking_controller(
     K_hold = K[-1] if K_hold is None else K_hold
     nx = ode.nx
     integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
-    held = None if not state_bounds else state_limits(substep_states(ode, dt, method, substeps), list(ode.x_names), state_bounds, pv, lb, ub, us)
+    held = None if not state_bounds else state_limits(substep_states(ode, dt, method, substeps), list(ode.x_names), state_bounds, pv, lb, ub, us, xs)
     return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay or held else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),

@@ -14,6 +14,7 @@ import pytest
 
 from gtmodel.control.mpc import mpc_controller
 from gtmodel.control.mpc_memory import row_backoff
+from gtmodel.control.state_limits import BACKOFF_GAIN
 from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
 
@@ -34,26 +35,31 @@ def integrator():
 def _backoff(c, x, u_last, mem):
     """The rows' lower bounds with the horizon starting at the measured ``x`` (no delay) under the warm start."""
     xs, us, ms = ca.MX.sym("x", c.nx), ca.MX.sym("u", c.nu), ca.MX.sym("w", c.n_memory)
-    rows = row_backoff(c, xs, xs, ms[:c.nw], us, ms)
-    return np.asarray(ca.Function("b", [xs, us, ms], [rows])(x, u_last, mem)).ravel()
+    rows, error = row_backoff(c, xs, xs, ms[:c.nw], us, ms)
+    lbg, filtered = ca.Function("b", [xs, us, ms], [rows, error])(x, u_last, mem)
+    return np.asarray(lbg).ravel(), np.asarray(filtered).ravel()
 
 
 @pytest.mark.parametrize("error, ran", [
     ([0.01, 0.3], 1.0),    # position and speed under-predicted: every upper row tightened
-    ([-0.01, 0.3], 1.0),   # the position over-predicted, the speed under: tightened only where the sum is positive
-    ([0.01, 0.3], 0.0),    # before a step ran: no error measured, nothing tightened
+    ([-0.05, 0.3], 1.0),   # the position over-predicted: no row tightened (a bound is never loosened)
+    ([0.01, 0.3], 0.0),    # before a step ran: the filter's value as it was (tightening the first rows only)
 ], ids=["under_predicted", "mixed", "first_step"])
 def test_rows_are_tightened_by_the_recurring_error_by_hand(integrator, error, ran):
-    """``e`` added after every period of explicit Euler: the position's shift at stage j is j e_x + dt e_v j (j - 1) / 2."""
+    """The filtered error ``f`` added after every period of explicit Euler: the position's shift at stage j is
+    j f_x + dt f_v j (j - 1) / 2, ``f = kept + BACKOFF_GAIN (e - kept)`` once a step ran."""
     _, _, _, mpcs = integrator
     c = mpcs[True]
     x_prev, u_act, e = np.array([0.3, 2.0]), np.array([7.0]), np.asarray(error)
     predicted = np.array([x_prev[0] + DT * x_prev[1], x_prev[1] + DT * u_act[0]])  # explicit Euler, by hand
-    mem = np.r_[c.w_initial, 0.0, x_prev, u_act, ran]
-    lbg = _backoff(c, predicted + e, u_act, mem)
+    kept = np.array([0.002, -0.1])  # the filtered error so far
+    mem = np.r_[c.w_initial, 0.0, x_prev, u_act, kept, ran]
+    lbg, filtered = _backoff(c, predicted + e, u_act, mem)
+    f = kept + ran * BACKOFF_GAIN * (e - kept)  # the filter's step, by hand
     j = np.arange(1, H + 1)
-    shift = ran * (j * e[0] + DT * e[1] * j * (j - 1) / 2)
-    assert c.constraint_rows == H and lbg == pytest.approx(np.maximum(shift, 0.0) / c.constraints.scale[0], rel=1e-9, abs=1e-15)
+    shift = j * f[0] + DT * f[1] * j * (j - 1) / 2
+    assert c.constraint_rows == H and filtered == pytest.approx(f, rel=1e-12)
+    assert lbg == pytest.approx(np.maximum(shift, 0.0) / c.constraints.scale[0], rel=1e-9, abs=1e-15)
 
 
 def _peak(c, push):

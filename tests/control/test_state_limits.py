@@ -115,9 +115,10 @@ def test_the_measured_prediction_error_backs_the_bound_off(motor):
     before, acted = held.x_ref[49], np.array([3.0])
     state = np.asarray(held.predict(before, acted)).ravel() + np.array([0.2, 0.0, 0.0])  # the plant's current 0.2 A higher
     state[1] -= 5.0  # far behind the reference: the LQR asks the full 24 V
-    memory = np.r_[before, acted, 1.0]  # the last measured state, the input that acted since, a step ran
-    fresh = np.r_[before, acted, 0.0]  # no step ran yet: nothing measured
+    filtered = np.array([0.2, 0.0, 0.0])  # the filter at 0.2 A stays there (the angle's error reaches no current row)
+    memory = np.r_[before, acted, filtered, 1.0]  # the last measured state, the input that acted since, the error, a step ran
+    fresh = np.r_[before, acted, np.zeros(3), 0.0]  # no step ran yet: nothing measured
     v_backed, v_plain = float(held(50 * DT, state, acted, memory)[0]), float(held(50 * DT, state, acted, fresh)[0])
-    assert held.n_memory == 3 + 1 + 1 and v_backed < v_plain
+    assert held.n_memory == 3 + 1 + 3 + 1 and v_backed < v_plain
     assert _peak_current(ode, state, v_plain) == pytest.approx(5.0, rel=2e-3)
     assert _peak_current(ode, state, v_backed) == pytest.approx(4.8, rel=2e-3)
