@@ -459,7 +459,7 @@ class MPCController(SampledReference):
             cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
         else:
             bounds = self.bounds()
-            if memory_layout(self).get("error"):  # rows tightened by the observed error, its filtered value kept
+            if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
                 tightened, error = row_backoff(self, x_in, x, w, u_last, mem)
                 bounds["lbg"] = ca.vertcat(ca.DM(bounds["lbg"][:1]), tightened)
             if d is not None:

@@ -22,7 +22,7 @@ import numpy as np
 
 from gtmodel.control.mpc_nlp import between_rows, period_states
 from gtmodel.control.reference import period_index
-from gtmodel.control.state_limits import BACKOFF_GAIN
+from gtmodel.control.state_limits import envelope
 from gtmodel.control.tracking import saturate
 
 __all__ = ["disturbance_estimate", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
@@ -40,8 +40,8 @@ def memory_layout(c: Any) -> dict[str, int]:
     -------
     dict of str to int
         Empty without :attr:`~gtmodel.control.mpc.MPCController.estimates`; else ``d`` (``nu``), ``x`` (``nx``, the last
-        measured state), ``u`` (``nu``, the last ``u_last``), with the back-off ``error`` (``nx``, the filtered
-        one-period prediction error, :func:`row_backoff`), and ``ran`` (1, a flag: 1 once a step ran).
+        measured state), ``u`` (``nu``, the last ``u_last``), with the back-off ``error`` (``nx``, the envelope of the
+        one-period prediction errors, :func:`row_backoff`), and ``ran`` (1, a flag: 1 once a step ran).
     """
     if not c.estimates:
         return {}
@@ -60,7 +60,7 @@ def memory_extra(c: Any, d: Any, x: Any, u: Any, ran: Any, error: Any = None) ->
         The estimate, the last measured state, the last input and the flag: ``(n,)`` vectors, or ``(2, n)`` ranges
         (NumPy, stacked by columns), or CasADi columns.
     error : numpy.ndarray or casadi.MX, optional
-        The filtered prediction error (zeros of ``x``'s shape when None), used only with the back-off.
+        The prediction errors' envelope (zeros of ``x``'s shape when None), used only with the back-off.
 
     Returns
     -------
@@ -165,19 +165,17 @@ def memory_reset(c: Any) -> ca.Function:
     return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
 
 
-def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
+def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX) -> tuple[ca.MX, ca.MX]:
     """The lower bounds of the constraint rows: each declared bound tightened by the prediction's observed error.
 
     The one-period prediction error of the state, ``x - F(x_prev, u_act + d)`` (the memory's prediction,
-    :func:`memory_predict`), low-pass filtered in the memory, ``e += BACKOFF_GAIN (x - F(...) - e)``
-    (:data:`~gtmodel.control.state_limits.BACKOFF_GAIN`; zero before a step ran: the error's slowly varying part, the
-    state disturbance of offset-free MPC, Pannocchia & Rawlings 2003, not the last period's swing, which an input
-    changing sign each period feeds back into), is taken to recur every period: the horizon is predicted
-    from its start under the warm start's inputs twice, as the model predicts it and with ``e`` added after every
-    period (and the input delay's), ``x'_{j+1} = F(x'_j, u_j) + e``, at every point that carries rows (the
-    substeps inside a constrained period get the error of their fraction of it). Where the disturbed prediction
-    of a constrained quantity lies nearer a bound than the model's, the row is tightened by the difference
-    ``Delta c``: the lower bound by ``max(-Delta c, 0)``, the upper by ``max(Delta c, 0)`` (a bound is never
+    :func:`memory_predict`), is kept in the memory as its envelope ``e`` (:func:`~gtmodel.control.state_limits.envelope`:
+    a larger error at once, a smaller one approached slowly; zero before a step ran), taken to recur every period: the
+    horizon is predicted from its start under the warm start's inputs as the model predicts it and with ``e`` added
+    after every period (and the input delay's), ``x'_{j+1} = F(x'_j, u_j) + e``, at every point that carries rows (the
+    substeps inside a constrained period get the error of their fraction of it). Where the disturbed prediction of a
+    constrained quantity lies nearer a bound than the model's, the row is tightened by the difference ``Delta c``:
+    the lower bound by ``max(-Delta c, 0)``, the upper by ``max(Delta c, 0)`` (a bound is never
     loosened), scaled as the rows are (:mod:`gtmodel.control.mpc_constraints`). The back-off of robust MPC (Mayne,
     Seron & Rakovic, Automatica 41 (2005)) from the error measured in the loop rather than a bound assumed: a
     flexible joint's plant 20 % heavier than its model drew 8.47 A under rows at 8 A, the prediction
@@ -204,13 +202,13 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
         ``(constraint_rows, 1)`` the rows' lower bounds (``>= 0``), in the NLP's order (per constrained stage the
         rows inside its period then its end, each in the order of the constraints' sides).
     error : casadi.MX
-        ``(nx, 1)`` the filtered error, for the memory.
+        ``(nx, 1)`` the errors' envelope, for the memory.
     """
     cons = c.constraints
     _, _, _, ran = _estimator_memory(c, u_last, mem)
-    start = c.nw + 2 * c.nu + c.nx  # the filtered error's place (memory_layout)
+    start = c.nw + 2 * c.nu + c.nx  # the envelope's place (memory_layout)
     kept = mem[start:start + c.nx]
-    error = ca.if_else(ran > 0.5, kept + BACKOFF_GAIN * (x - memory_predict(c)(u_last, mem) - kept), kept)
+    error = ca.if_else(ran > 0.5, envelope(kept, x - memory_predict(c)(u_last, mem), c.plausible_ranges(c.u_lb, c.u_ub)[0]), kept)
     b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
     inner = between_rows(c)
     nominal, disturbed = x_start, x_start + c.delay * error

@@ -33,16 +33,14 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "state_limits"]
+__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "envelope", "state_limits"]
 
 #: Sweeps of the alternating projections with more than one input (one input: one sweep is exact).
 SWEEPS = 10
 #: A row enters the projection when the input's range moves it by at least this fraction of its bound's size in one period.
 MIN_REACH = 1e-3
-#: Gain per period of the low-pass filter of the model's one-period prediction error the back-off uses (the MPC's rows,
-#: :func:`gtmodel.control.mpc_memory.row_backoff`; the tracking law's, :meth:`StateLimits.project`): the slowly varying
-#: part of the error, not the last period's swing (a vertical ball screw's MPC, backed off by the raw error, swung its
-#: voltage between 2 and 20 V each period and its current beyond the bound by 16 %).
+#: Gain per period at which the back-off's error falls towards a smaller or opposite measurement (:func:`envelope`; the
+#: MPC's rows, :func:`gtmodel.control.mpc_memory.row_backoff`; the tracking law's, :meth:`StateLimits.project`).
 BACKOFF_GAIN = 0.3
 #: The rows' order in the projection: by the input's authority over each state within one period along the reference
 #: (the median over its samples of ``|dx/du| span(u) / |bound|``), the weakest first. With one input the last
@@ -50,6 +48,36 @@ BACKOFF_GAIN = 0.3
 #: motor speed near its limit that one period's voltage barely moves, and the current), the state the input
 #: commands directly wins (a belt drive's TV-LQR, its speed row last, drove the current to -43.9 A of 14.2).
 ORDER = "authority, weakest first"
+
+
+def envelope(kept: Any, measured: Any, scale: np.ndarray) -> Any:
+    """The back-off's error: the envelope of the measured one-period prediction errors (fast attack, slow release).
+
+    A measurement larger than the kept error (in the norm of the errors scaled by the states' scales; the whole
+    vector, so that the errors of a current and of the speed whose back-EMF drives it stay together) replaces it at
+    once: an error that grows as a mismatched load accelerates is met the period it shows. A smaller one is approached
+    at :data:`BACKOFF_GAIN` per period, so that an input swinging each period does not swing the rows with it: a
+    back-off that followed each period's error fed a vertical ball screw's MPC its own swing (its voltage between
+    2 and 20 V each period, its current 16 % beyond the bound), and a plain low-pass filter lagged the error's growth
+    (a flexible joint: 2.1 % over its current limit at the samples).
+
+    Parameters
+    ----------
+    kept : casadi.MX
+        ``(n, 1)`` the error kept from the last period.
+    measured : casadi.MX
+        ``(n, 1)`` this period's measurement.
+    scale : numpy.ndarray
+        ``(n,)`` positive scales of the states (:func:`~gtmodel.control.reference.reference_scales`).
+
+    Returns
+    -------
+    casadi.MX
+        ``(n, 1)`` the new kept error.
+    """
+    weight = ca.DM(1.0 / np.asarray(scale, dtype=float))
+    larger = ca.sumsqr(measured * weight) > ca.sumsqr(kept * weight)
+    return ca.if_else(larger, measured, kept + BACKOFF_GAIN * (measured - kept))
 
 
 @dataclass
@@ -101,9 +129,10 @@ class StateLimits:
         u_lb, u_ub : numpy.ndarray
             ``(nu,)`` the input bounds (applied last: the result is always within them).
         error : casadi.MX, optional
-            ``(nx, 1)`` the model's one-period prediction error measured in the loop, taken to recur: the rows are
-            also predicted from ``x + delay * error`` with each substep's share of it added, and each bound is
-            held by the nearer of the two predictions (the back-off; a bound is never loosened). None: none.
+            ``(nx, 1)`` the model's one-period prediction error measured in the loop (:func:`envelope`), taken to
+            recur: the rows are also predicted from ``x + delay * error`` with each substep's share of it added, and
+            each bound is held by the nearer of the two predictions (the back-off; a bound is never loosened).
+            None: none.
         delay : int, optional
             Periods between the measurement and ``x`` (the input delay the law compensates: 0 or 1).
 
@@ -114,9 +143,9 @@ class StateLimits:
         """
         c0, J = self.rows(x, u0)
         c_lo = c_hi = c0
-        if error is not None:
-            shifted = self.rows(x + delay * error, u0)[0] + ca.DM(self.fraction) * error[[int(i) for i in self.index]]
-            c_lo, c_hi = ca.fmin(c0, shifted), ca.fmax(c0, shifted)
+        for e in () if error is None else (error,):
+            shifted = self.rows(x + delay * e, u0)[0] + ca.DM(self.fraction) * e[[int(i) for i in self.index]]
+            c_lo, c_hi = ca.fmin(c_lo, shifted), ca.fmax(c_hi, shifted)
         nu = int(np.size(u_lb))
         u = u0
         for _ in range(1 if nu == 1 else SWEEPS):

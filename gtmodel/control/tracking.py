@@ -43,7 +43,7 @@ import scipy.linalg
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.problem import substep_states, tracking_problem, weight_matrix
-from gtmodel.control.state_limits import BACKOFF_GAIN, StateLimits, state_limits
+from gtmodel.control.state_limits import StateLimits, envelope, state_limits
 from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
 
@@ -206,9 +206,9 @@ class TrackingController(SampledReference):
         (:class:`~gtmodel.control.state_limits.StateLimits`: the input projected so that the bounded states after
         each substep stay within them, then saturated; the integrator holds while the projection or the
         saturation changes the input); None: the input bounds alone. With it the step's memory also holds the last
-        measured state, the input that acted since, the filtered error and a flag (:attr:`n_memory`): each period the
-        model's one-period prediction error is measured, low-pass filtered
-        (:data:`~gtmodel.control.state_limits.BACKOFF_GAIN`) and the rows are tightened by it (the back-off of
+        measured state, the input that acted since, the errors' envelope and a flag (:attr:`n_memory`): each period the
+        model's one-period prediction error is measured, kept as the errors' envelope
+        (:func:`~gtmodel.control.state_limits.envelope`) and the rows are tightened by it (the back-off of
         :meth:`~gtmodel.control.state_limits.StateLimits.project`).
     """
 
@@ -240,7 +240,7 @@ class TrackingController(SampledReference):
     @property
     def n_memory(self) -> int:
         """Length of the step's memory ``w``: the integrator states, and with :attr:`state_limits` the last measured
-        state ``(nx)``, the last ``u_last (nu)``, the filtered prediction error ``(nx)`` and a flag (1 once a step ran)."""
+        state ``(nx)``, the last ``u_last (nu)``, the prediction errors' envelope ``(nx)`` and a flag (1 once a step ran)."""
         return self.ni + (2 * self.nx + self.nu + 1 if self.state_limits is not None else 0)
 
     @property
@@ -297,10 +297,10 @@ class TrackingController(SampledReference):
             u, kept = saturate(free, self.u_lb, self.u_ub), ca.MX(0, 1)
         else:  # the declared state bounds over the period the input acts, the rows backed off by the measured error
             x_prev, u_prev, last, ran = mem[ni:ni + nx], mem[ni + nx:ni + nx + nu], mem[ni + nx + nu:nm - 1], mem[nm - 1]
-            innovation = x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev) - last
-            measured = ca.if_else(ran > 0.5, last + BACKOFF_GAIN * innovation, last)  # the error's low-pass filter
-            u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=measured, delay=self.delay)
-            kept = ca.vertcat(x_in, u_last, measured, 1.0)  # this measurement, the input acting now and the error, for the next period
+            error = x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev)
+            error = ca.if_else(ran > 0.5, envelope(last, error, self.plausible_ranges(self.u_lb, self.u_ub)[0]), last)
+            u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=error, delay=self.delay)
+            kept = ca.vertcat(x_in, u_last, error, 1.0)  # this measurement, the input acting now, the envelope, for the next period
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         if not nm:
             ok = total < math.inf  # 0 for NaN or infinite entries
@@ -329,7 +329,7 @@ class TrackingController(SampledReference):
         xi = MEMORY_LIMIT * x_scale[list(self.integral_states)] * max(self.dt * self.length, 1.0)
         memory = np.vstack([-xi, xi])
         if self.state_limits is not None:  # the last state and input as the measurement's and u_last's, the flag in [0, 1]
-            memory = np.hstack([memory, x, u, np.vstack([x[0] - x[1], x[1] - x[0]]), np.array([[0.0], [1.0]])])
+            memory = np.hstack([memory, x, u, np.vstack([x[0] - x[1], x[1] - x[0]]), np.array([[0.0], [1.0]])])  # the envelope within a span
         return {"x": x, "u_last": u, "memory": memory}
 
     def memory_reset(self) -> ca.Function:

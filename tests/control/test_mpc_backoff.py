@@ -42,23 +42,27 @@ def _backoff(c, x, u_last, mem):
 
 @pytest.mark.parametrize("error, ran", [
     ([0.01, 0.3], 1.0),    # position and speed under-predicted: every upper row tightened
-    ([-0.05, 0.3], 1.0),   # the position over-predicted: no row tightened (a bound is never loosened)
-    ([0.01, 0.3], 0.0),    # before a step ran: the filter's value as it was (tightening the first rows only)
+    ([-0.05, 0.3], 1.0),   # the position over-predicted, the speed under: the later rows tightened, the first not
+    ([0.01, 0.3], 0.0),    # before a step ran: the envelope as it was
 ], ids=["under_predicted", "mixed", "first_step"])
 def test_rows_are_tightened_by_the_recurring_error_by_hand(integrator, error, ran):
-    """The filtered error ``f`` added after every period of explicit Euler: the position's shift at stage j is
-    j f_x + dt f_v j (j - 1) / 2, ``f = kept + BACKOFF_GAIN (e - kept)`` once a step ran."""
+    """The errors' envelope ``f`` added after every period of explicit Euler: the position's shift at stage j is
+    j f_x + dt f_v j (j - 1) / 2; the upper row is tightened by it where positive (never loosened)."""
     _, _, _, mpcs = integrator
     c = mpcs[True]
     x_prev, u_act, e = np.array([0.3, 2.0]), np.array([7.0]), np.asarray(error)
     predicted = np.array([x_prev[0] + DT * x_prev[1], x_prev[1] + DT * u_act[0]])  # explicit Euler, by hand
-    kept = np.array([0.002, -0.1])  # the filtered error so far
+    kept = np.array([0.002, -0.1])  # the envelope so far
     mem = np.r_[c.w_initial, 0.0, x_prev, u_act, kept, ran]
-    lbg, filtered = _backoff(c, predicted + e, u_act, mem)
-    f = kept + ran * BACKOFF_GAIN * (e - kept)  # the filter's step, by hand
+    lbg, new = _backoff(c, predicted + e, u_act, mem)
+    scale = c.plausible_ranges(c.u_lb, c.u_ub)[0]
+    if ran:  # the envelope's step, by hand: a larger error (scaled norm) at once, else approached at BACKOFF_GAIN
+        f = e if np.sum((e / scale) ** 2) > np.sum((kept / scale) ** 2) else kept + BACKOFF_GAIN * (e - kept)
+    else:
+        f = kept
     j = np.arange(1, H + 1)
     shift = j * f[0] + DT * f[1] * j * (j - 1) / 2
-    assert c.constraint_rows == H and filtered == pytest.approx(f, rel=1e-12)
+    assert c.constraint_rows == H and new == pytest.approx(f, rel=1e-12, abs=1e-15)
     assert lbg == pytest.approx(np.maximum(shift, 0.0) / c.constraints.scale[0], rel=1e-9, abs=1e-15)
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from gtmodel.control.state_limits import state_limits
+from gtmodel.control.state_limits import BACKOFF_GAIN, envelope, state_limits
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.errors import InputError
 
@@ -115,10 +115,23 @@ def test_the_measured_prediction_error_backs_the_bound_off(motor):
     before, acted = held.x_ref[49], np.array([3.0])
     state = np.asarray(held.predict(before, acted)).ravel() + np.array([0.2, 0.0, 0.0])  # the plant's current 0.2 A higher
     state[1] -= 5.0  # far behind the reference: the LQR asks the full 24 V
-    filtered = np.array([0.2, 0.0, 0.0])  # the filter at 0.2 A stays there (the angle's error reaches no current row)
-    memory = np.r_[before, acted, filtered, 1.0]  # the last measured state, the input that acted since, the error, a step ran
+    kept = np.array([0.2, -5.0, 0.0])  # the envelope: as this period's error, so it stays (the angle's reaches no current row)
+    memory = np.r_[before, acted, kept, 1.0]  # the last measured state, the input that acted since, the envelope, a step ran
     fresh = np.r_[before, acted, np.zeros(3), 0.0]  # no step ran yet: nothing measured
     v_backed, v_plain = float(held(50 * DT, state, acted, memory)[0]), float(held(50 * DT, state, acted, fresh)[0])
     assert held.n_memory == 3 + 1 + 3 + 1 and v_backed < v_plain
     assert _peak_current(ode, state, v_plain) == pytest.approx(5.0, rel=2e-3)
     assert _peak_current(ode, state, v_backed) == pytest.approx(4.8, rel=2e-3)
+
+
+@pytest.mark.parametrize("kept, measured, expected", [
+    ([0.0, 0.0], [0.4, -1.0], [0.4, -1.0]),                               # from zero: at once
+    ([0.2, 0.0], [0.1, 3.0], [0.1, 3.0]),                                 # larger in the scaled norm: at once, the whole vector
+    ([0.5, 0.0], [0.2, 0.0], [0.5 + BACKOFF_GAIN * (0.2 - 0.5), 0.0]),    # smaller: approached slowly
+    ([0.5, 0.0], [-0.5, 0.0], [0.5 * (1 - 2 * BACKOFF_GAIN), 0.0]),       # as large, opposite (an input's swing): approached
+], ids=["from_zero", "growing", "smaller", "opposite"])
+def test_the_back_offs_error_is_the_envelope_of_the_measured_ones(kept, measured, expected):
+    """Fast attack, slow release, written out by hand (scales 1 and 10: the second entry's 3.0 is 0.3 scaled)."""
+    k, m = ca.MX.sym("k", 2), ca.MX.sym("m", 2)
+    got = ca.Function("e", [k, m], [envelope(k, m, np.array([1.0, 10.0]))])(kept, measured)
+    assert np.asarray(got).ravel() == pytest.approx(expected, abs=1e-15)
