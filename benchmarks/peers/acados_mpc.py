@@ -1,7 +1,8 @@
 """acados SQP-RTI on gtmodel's MPC problem: the peer of ``benchmarks/bench_mpc.py`` (issue 46).
 
 Runs ONLY in acados' own venv (``benchmarks/acados_env.sh python benchmarks/peers/acados_mpc.py
-PROBLEM.npz [--qp PARTIAL_CONDENSING_HPIPM|FULL_CONDENSING_QPOASES] [--build DIR]``); it imports
+PROBLEM.npz [--qp PARTIAL_CONDENSING_HPIPM|FULL_CONDENSING_HPIPM|FULL_CONDENSING_QPOASES]
+[--hpipm-mode BALANCE|SPEED_ABS|SPEED|ROBUST] [--build DIR]``); it imports
 nothing of gtmodel.
 
 The problem is the one gtmodel exports (:func:`bench_mpc.export_problem`): ``PROBLEM.npz`` with the
@@ -16,7 +17,8 @@ for the NLP parameter ``p = [x; x*_{k+1..k+H}; u*_{k..k+H-1}]`` of ``MPCControll
 is written for acados as a multiple-shooting OCP with a DISCRETE integrator (``disc_dyn_expr = F``),
 LINEAR_LS costs (stage ``j``: ``y = [x_j; u_j]``, ``W = blkdiag(Q, R) / dt``: acados 0.2.2 multiplies
 the stage costs by the time step and not the terminal one, ``W_e = Qf``; the ``Q`` term of stage 0
-is constant), the Gauss-Newton Hessian, ``SQP_RTI`` (one SQP iteration per call) and the given QP solver.
+is constant), the Gauss-Newton Hessian, ``SQP_RTI`` (one SQP iteration per call) and the given QP solver (an HPIPM one in
+the given ``hpipm_mode``, acados' default ``BALANCE`` when not given).
 
 The closed loop stays in gtmodel's process (the same plant, noise, disturbance, delay and error as its
 check); this script answers it through stdin/stdout, one line per request:
@@ -59,8 +61,8 @@ def _num(v) -> str:
     return repr(float(v))
 
 
-def build(problem: dict, step: ca.Function, qp: str, folder: str) -> AcadosOcpSolver:
-    """The acados solver of the problem (generated and compiled in ``folder``)."""
+def build(problem: dict, step: ca.Function, qp: str, folder: str, hpipm_mode: str | None = None) -> AcadosOcpSolver:
+    """The acados solver of the problem (generated and compiled in ``folder``; ``hpipm_mode`` of an HPIPM QP solver)."""
     nx, nu = step.size1_in(0), step.size1_in(1)
     H, dt = int(problem["horizon"]), float(problem["period"])
     x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
@@ -90,6 +92,8 @@ def build(problem: dict, step: ca.Function, qp: str, folder: str) -> AcadosOcpSo
     o.hessian_approx = "GAUSS_NEWTON"
     o.nlp_solver_type = "SQP_RTI"
     o.qp_solver = qp
+    if hpipm_mode:
+        o.hpipm_mode = hpipm_mode
     o.print_level = 0
     os.makedirs(folder, exist_ok=True)
     cwd = os.getcwd()
@@ -110,6 +114,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("problem", help="the .npz exported by bench_mpc.py")
     ap.add_argument("--qp", default="PARTIAL_CONDENSING_HPIPM", help="acados qp_solver")
+    ap.add_argument("--hpipm-mode", default=None, choices=("BALANCE", "SPEED_ABS", "SPEED", "ROBUST"),
+                    help="hpipm_mode of an HPIPM QP solver (default acados' BALANCE)")
     ap.add_argument("--warm", choices=("shift", "rollout"), default="shift",
                     help="warm start of a step: the last solution's states and inputs shifted (default), or its inputs shifted and "
                          "the states they predict from the new x (the single-shooting warm start of gtmodel's step)")
@@ -120,7 +126,7 @@ def main() -> None:
     nx, nu = step.size1_in(0), step.size1_in(1)
     H = int(problem["horizon"])
     folder = args.build or os.path.join(os.path.dirname(os.path.abspath(args.problem)), f"acados_{args.qp.lower()}")
-    solver = build(problem, step, args.qp, folder)
+    solver = build(problem, step, args.qp, folder, args.hpipm_mode)
     times: list[float] = []
     pending: np.ndarray | None = None
 
@@ -163,8 +169,8 @@ def main() -> None:
             pending = vals.reshape(H, nu)
             continue
         if cmd == "stats":
-            print(json.dumps({"cpu_step_s": times, "qp_solver": args.qp, "qp_variables": H * (nx + nu) + nx
-                              if args.qp.startswith("PARTIAL") else H * nu}), flush=True)
+            print(json.dumps({"cpu_step_s": times, "qp_solver": args.qp, "hpipm_mode": args.hpipm_mode,
+                              "qp_variables": H * (nx + nu) + nx if args.qp.startswith("PARTIAL") else H * nu}), flush=True)
             times = []
             continue
         load(vals)
