@@ -20,9 +20,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gtmodel.control.bounds import aimed
 from gtmodel.control.mpc_nlp import between_rows, period_states
 from gtmodel.control.reference import period_index
-from gtmodel.control.state_limits import envelope
+from gtmodel.control.state_limits import BACKOFF_GAIN, envelope
 from gtmodel.control.tracking import saturate
 
 __all__ = ["disturbance_estimate", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
@@ -170,13 +171,18 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
 
     The one-period prediction error of the state, ``x - F(x_prev, u_act + d)`` (the memory's prediction,
     :func:`memory_predict`), is kept in the memory as its envelope ``e`` (:func:`~gtmodel.control.state_limits.envelope`:
-    a larger error at once, a smaller one approached slowly; zero before a step ran), taken to recur every period: the
-    horizon is predicted from its start under the warm start's inputs as the model predicts it and with ``e`` added
-    after every period (and the input delay's), ``x'_{j+1} = F(x'_j, u_j) + e``, at every point that carries rows (the
-    substeps inside a constrained period get the error of their fraction of it). Where the disturbed prediction of a
-    constrained quantity lies nearer a bound than the model's, the row is tightened by the difference ``Delta c``:
-    the lower bound by ``max(-Delta c, 0)``, the upper by ``max(Delta c, 0)`` (a bound is never
-    loosened), scaled as the rows are (:mod:`gtmodel.control.mpc_constraints`). The back-off of robust MPC (Mayne,
+    a larger error at once, a smaller one approached slowly; zero before a step ran), and taken to recur, each
+    period's share of it :data:`~gtmodel.control.state_limits.BACKOFF_GAIN` smaller than the last's: the horizon is
+    predicted from its start under the warm start's inputs as the model predicts it and with ``e`` added over the
+    input delay's period and ``0.7^j e`` after period ``j``, at every point that carries rows (the substeps inside
+    get their fraction of the period's share). The loop measures again each period, so an error does not add up over
+    the whole horizon (a speed's error, carried undiminished through 20 periods, reached the current rows many times
+    over and drove a belt drive 6 % beyond its current limit), yet a persistent push towards a bound still shows. Where
+    the disturbed prediction of a constrained quantity lies nearer a bound than the model's, the row is tightened by
+    the difference ``Delta c``:
+    the lower bound by ``max(-Delta c, 0)``, the upper by ``max(Delta c, 0)``, each from the bound the controller
+    aims at, :data:`~gtmodel.control.bounds.TARGET_MARGIN` inside the declared one (:func:`~gtmodel.control.bounds.aimed`;
+    a bound is never loosened), scaled as the rows are (:mod:`gtmodel.control.mpc_constraints`). The back-off of robust MPC (Mayne,
     Seron & Rakovic, Automatica 41 (2005)) from the error measured in the loop rather than a bound assumed: a
     flexible joint's plant 20 % heavier than its model drew 8.47 A under rows at 8 A, the prediction
     under-estimating the current by 0.36 A per period (issue 65).
@@ -211,22 +217,24 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     error = ca.if_else(ran > 0.5, envelope(kept, x - memory_predict(c)(u_last, mem), c.plausible_ranges(c.u_lb, c.u_ub)[0]), kept)
     b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
     inner = between_rows(c)
-    nominal, disturbed = x_start, x_start + c.delay * error
-    out = []
+    aim = [aimed(float(lo), float(hi)) for lo, hi in zip(cons.lb, cons.ub)]  # each side TARGET_MARGIN inside the declared
+    margin = [(aim[i][0] - float(cons.lb[i])) if s > 0 else (float(cons.ub[i]) - aim[i][1]) for i, s in cons.sides]
 
     def tightening(xa: ca.MX, xb: ca.MX, u: ca.MX) -> ca.MX:
         dc = cons.function(xb, u) - cons.function(xa, u)
-        return ca.vertcat(*[ca.fmax(-s * dc[i], 0) / float(cons.scale[i]) for i, s in cons.sides])
+        return ca.vertcat(*[(ca.fmax(-s * dc[i], 0) + m) / float(cons.scale[i]) for (i, s), m in zip(cons.sides, margin)])
 
-    for j in range(c.horizon):
+    nominal, disturbed, share, out = x_start, x_start + c.delay * error, 1.0, []
+    for j in range(c.horizon):  # the error recurs, each period's share of it BACKOFF_GAIN smaller than the last's
         u = w[(j // b) * c.nu:(j // b + 1) * c.nu]
         if j + 1 in stages:
             end_a, inside_a = period_states(c, nominal, u)
             end_b, inside_b = period_states(c, disturbed, u)
-            out += [tightening(xa, xb + (m + 1) / (inner + 1) * error, u) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
-            nominal, disturbed = end_a, end_b + error
+            out += [tightening(xa, xb + share * (m + 1) / (inner + 1) * error, u) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
+            nominal, disturbed = end_a, end_b + share * error
             u_row = w[(min(j + 1, c.horizon - 1) // b) * c.nu:(min(j + 1, c.horizon - 1) // b + 1) * c.nu]
             out.append(tightening(nominal, disturbed, u_row))
         else:
-            nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + error
+            nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + share * error
+        share *= 1 - BACKOFF_GAIN
     return ca.vertcat(*out), error

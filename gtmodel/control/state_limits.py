@@ -31,6 +31,7 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
+from gtmodel.control.bounds import aimed
 from gtmodel.errors import InputError
 
 __all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "envelope", "state_limits"]
@@ -173,7 +174,8 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
     x_names : list of str
         ``(nx,)`` the state names.
     bounds : mapping of str to (float, float)
-        Declared bounds by state name (names that are not states are ignored; both sides infinite: none).
+        Declared bounds by state name (names that are not states are ignored; both sides infinite: none); the rows
+        aim :data:`~gtmodel.control.bounds.TARGET_MARGIN` inside them (:func:`~gtmodel.control.bounds.aimed`).
     p : numpy.ndarray
         ``(np,)`` the model's parameters (the prediction's).
     u_lb, u_ub : numpy.ndarray
@@ -205,7 +207,7 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
         if not lo <= hi:
             raise InputError(f"state bounds: {name!r}: expected lb <= ub, got [{lo}, {hi}]")
         if np.isfinite(lo) or np.isfinite(hi):
-            picked.append((j, name, lo, hi))
+            picked.append((j, name, *aimed(lo, hi)))  # TARGET_MARGIN inside the declared bound
     if not picked:
         return None
     nx, nu = len(x_names), int(np.size(u_lb))
