@@ -149,3 +149,15 @@ def test_a_ratio_that_fails_names_the_bounds_the_controller_rode():
     check = LoopCheck(closed=closed, feedforward=feedforward, memory_bytes=0, work_bytes=0, max_ratio=0.1, bounds=[bound])
     (why,) = check.failures()
     assert why.endswith(f"; the bounds it rode: x 1.7 of 1.71 (-0.58 %) at t = {closed.t[7]:.4g} s")
+
+
+@pytest.mark.parametrize("law, expected", [
+    (lambda t, y: (0, [0.5 * (-1) ** round(t / (T[1] - T[0]))]), 1.0),  # +-0.5 of a [-1, 1] input each period: every period turns back
+    (lambda t, y: (0, [0.1]), 0.0),                                      # a steady input: none
+], ids=["alternating", "steady"])
+def test_an_input_that_turns_back_every_period_is_named(law, expected):
+    # the applied input u_k = 0.5 (-1)^k (by hand: each step of 1.0 is half the bounds' range, beyond SWING, and reverses)
+    closed = _run(1.0, law)
+    check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, max_ratio=1e-9)
+    assert check.alternation == pytest.approx(expected)
+    assert ("limit cycle at half the sampling frequency" in check.failures()[0]) == (expected > 0)

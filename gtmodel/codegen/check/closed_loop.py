@@ -59,6 +59,10 @@ BETWEEN_REMEDY = {
     "": "the controller has no constraint rows: plan with margin below the bound ([reference] overrides) or weight the variable more",
 }
 
+#: An input step larger than this fraction of the input's range counts towards :attr:`LoopCheck.alternation`.
+SWING = 0.05
+#: :attr:`LoopCheck.alternation` above which a failure says the loop cycles at half the sampling frequency.
+ALTERNATION_NOTE = 0.2
 #: A declared bound the controller came within this fraction of (relative to its size) counts as binding in the ratio's failure.
 BINDING = 0.02
 #: Seconds between the closed loop's progress lines (``progress`` of :func:`closed_loop_check`).
@@ -162,18 +166,40 @@ class LoopCheck:
             ("the plant diverged (a stiff model's explicit plant step? [check] plant_method = \"radau2\"; the RMS errors "
              "of a runaway run say nothing)", diverged),
             (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
-            *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)", True)
+            *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)" + self._cycling(), True)
               for b in self.bounds if b.beyond_tolerance and not diverged],
             *[(f"{b.name} beyond its bound between the samples by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %; "
                f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})", True)
               for b in self.bounds_between if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)"
-             + self._binding(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
+             + self._binding() + self._cycling(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
             (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
              "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s),
             (f"{self.heap[1] if self.heap else 0} allocations of the QP solver on the heap (its arena of "
              f"{self.heap[2] if self.heap else 0} bytes too small)", bool(self.heap and self.heap[1] > 0))) if bad]
+
+    @property
+    def alternation(self) -> float:
+        """Fraction of the periods whose applied input turns back by more than :data:`SWING` of its range each period
+        (``(u_k - u_{k-1}) (u_{k+1} - u_k) < 0`` with both steps that large, in any input): above
+        :data:`ALTERNATION_NOTE` the summary and a failure say the loop cycles at half the sampling frequency."""
+        u = np.asarray(self.closed.u, dtype=float)
+        if u.shape[0] < 3:
+            return 0.0
+        lb, ub = np.asarray(self.closed.u_lb, dtype=float), np.asarray(self.closed.u_ub, dtype=float)
+        span = np.where(np.isfinite(ub - lb), ub - lb, np.ptp(u, axis=0) + 1e-300)
+        du = np.diff(u, axis=0)
+        big = np.abs(du) > SWING * span
+        turns = (du[:-1] * du[1:] < 0) & big[:-1] & big[1:]
+        return float(np.mean(np.any(turns, axis=1)))
+
+    def _cycling(self) -> str:
+        """Why a bound or the ratio failed when the loop cycles at half the sampling frequency (empty otherwise)."""
+        a = self.alternation
+        return (f"; the applied input turns back every period in {100 * a:.0f} % of the periods: a limit cycle at half the "
+                "sampling frequency (a mode the period and the input delay leave no phase margin for; weight the input more, "
+                "or the states of that mode less)") if a > ALTERNATION_NOTE else ""
 
     def _binding(self) -> str:
         """The declared bounds the controller reached (within :data:`BINDING` of the limit): why it could not track better."""
@@ -201,7 +227,7 @@ class LoopCheck:
             ``ratio_to_feedforward`` (None when the plant diverged) and ``max_ratio``, ``rms_error`` and ``max_error`` of
             the controller and of the feedforward, ``bounds`` and ``bounds_between`` (the controller's, per bound:
             :meth:`~gtmodel.control.bounds.BoundExcess.to_dict`), ``bounds_feedforward``, ``step_time_s`` (``median``,
-            ``p99``, ``max``, ``first``, ``budget``, ``clock``), ``failed_steps``, ``input_bound_violations``,
+            ``p99``, ``max``, ``first``, ``budget``, ``clock``), ``failed_steps``, ``alternation`` (:attr:`alternation`), ``input_bound_violations``,
             ``memory_bytes``, ``work_bytes``, ``notes``.
         """
         times = self.closed.step_times()
@@ -214,7 +240,7 @@ class LoopCheck:
                 "bounds": [b.to_dict() for b in self.bounds], "bounds_between": [b.to_dict() for b in self.bounds_between],
                 "bounds_feedforward": [b.to_dict() for b in self.bounds_feedforward],
                 "step_time_s": {**{k: float(v) for k, v in times.items()}, "budget": float(self.step_budget_s), "clock": self.clock},
-                "failed_steps": self.failed_steps, "input_bound_violations": int(self.closed.bound_violations),
+                "failed_steps": self.failed_steps, "alternation": self.alternation, "input_bound_violations": int(self.closed.bound_violations),
                 "memory_bytes": int(self.memory_bytes), "work_bytes": int(self.work_bytes), "notes": list(self.notes)}
 
     def summary_lines(self) -> list[str]:
