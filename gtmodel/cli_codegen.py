@@ -323,12 +323,13 @@ def _verdict(args: argparse.Namespace, generated: Any, **options: Any) -> int:
     """Check generated code (:func:`gtmodel.codegen.check_code`), print every part and the verdict; the status's exit code."""
     from gtmodel.codegen import check_code
 
+    from gtmodel.codegen.out_dir import SUMMARY
     from gtmodel.problems.results import write_json
 
     with _step(args, f"checking {generated.prefix}", f"checking {generated.prefix}"):
         result = check_code(generated, seed=args.seed, progress=_progress(args), **options)
     print("\n".join(_shown(line) for line in result.summary_lines()))
-    summary = Path(args.out) / "summary.json"  # inside the partial folder: in place with the C, or not at all
+    summary = Path(args.out) / SUMMARY  # inside the partial folder: in place with the C, or not at all
     write_json(summary, {"kind": f"codegen_{_route(args)}", "prefix": generated.prefix, "gtmodel": __version__,
                          "version": str(generated.version), **result.to_dict()})
     _log.info("wrote %s (status %s)", _shown(summary), result.status)  # stderr: stdout ends with the verdict
