@@ -49,10 +49,11 @@ from gtmodel import __version__
 from gtmodel._compiler import cache_dir as compiled_cache_dir
 from gtmodel.defaults import defaults
 from gtmodel.errors import GtModelError
+from gtmodel.problems.base import _SPECIAL, data_dirs
 from gtmodel.problems.loop_bounds import SOLVED
 from gtmodel.problems.overrides import apply_override
 
-__all__ = ["CACHE_ENV", "FORMAT", "MAX_ENTRY_BYTES", "CachedPlan", "CachedVerification", "cache_dir", "plan_key", "cached_entry",
+__all__ = ["CACHE_ENV", "FORMAT", "MAX_ENTRY_BYTES", "MAX_HASHED_BYTES", "CachedPlan", "CachedVerification", "cache_dir", "plan_key", "cached_entry",
            "planned"]
 
 _log = logging.getLogger("gtmodel")
@@ -65,9 +66,10 @@ PLAN_CACHE_ENV = "GTMODEL_PLAN_CACHE_DIR"
 FORMAT = 1
 #: Largest entry read [bytes]; a larger file is ignored (and a larger plan not stored).
 MAX_ENTRY_BYTES = 64 * 2**20
+#: A file the problem names above this size enters the key by its size and time of change, not read whole [bytes].
+MAX_HASHED_BYTES = 256 * 2**20
 #: Statuses of a solve that ended with a solution: the only plans stored.
 STORED = (*SOLVED, "check_failed")
-_SPECIAL = (Path("/proc"), Path("/sys"), Path("/dev"))
 _MAX_REFERENCE_CHARS = 4096
 
 
@@ -155,6 +157,9 @@ def _source_digest() -> str:
 def _file_digest(path: Path) -> str:
     h = hashlib.sha256()
     try:
+        info = path.stat()
+        if info.st_size > MAX_HASHED_BYTES:  # its size and time of change stand for it: never a huge file read whole
+            return f"size {info.st_size}, changed {info.st_mtime_ns}"
         with open(path, "rb") as f:
             for block in iter(lambda: f.read(1 << 20), b""):
                 h.update(block)
@@ -174,8 +179,14 @@ def _strings(value: Any) -> list[str]:
 
 
 def _referenced(problem: Path, data: Mapping[str, Any]) -> list[tuple[str, Path]]:
-    """Every (reference as written, resolved regular file) a problem document names."""
+    """Every (reference as written, resolved regular file) a problem document names that its load reads: the model
+    file of ``[model] file`` wherever it is (the loader reads it there), any other file only inside the problem file's
+    folder or a ``--data-dir`` folder (the rule of :meth:`~gtmodel.problems.base.ProblemFile.data_file`): a string of
+    someone else's problem file never makes the cache read another file of the machine."""
     found: dict[str, Path] = {}
+    model = data.get("model") if isinstance(data.get("model"), Mapping) else {}
+    model_file = model.get("file") if isinstance(model.get("file"), str) else None
+    roots = [problem.parent.resolve(), *data_dirs()]
     for text in _strings(data):
         if not text or len(text) > _MAX_REFERENCE_CHARS or "\0" in text or "\n" in text:
             continue
@@ -184,7 +195,8 @@ def _referenced(problem: Path, data: Mapping[str, Any]) -> list[tuple[str, Path]
                 continue
             try:
                 real = (Path(ref) if Path(ref).is_absolute() else problem.parent / ref).resolve()
-                if not any(real.is_relative_to(s) for s in _SPECIAL) and real.is_file():
+                inside = ref == model_file or any(real.is_relative_to(r) for r in roots)
+                if inside and not any(real.is_relative_to(s) for s in _SPECIAL) and real.is_file():
                     found.setdefault(ref, real)
             except (OSError, ValueError, RuntimeError):
                 continue

@@ -290,3 +290,23 @@ def test_the_plans_own_folder_comes_before_gtmodels_cache(tmp_path, monkeypatch)
     assert cache_dir() == tmp_path / "own"
     monkeypatch.delenv("GTMODEL_PLAN_CACHE_DIR")
     assert cache_dir() == tmp_path / "root" / "plans"
+
+
+def test_the_key_reads_no_file_outside_the_problems_folder(tmp_path, monkeypatch):
+    """A string of someone else's problem file naming a file elsewhere is not read for the key; one inside its folder is."""
+    import builtins
+
+    from gtmodel.problems.plan_cache import plan_key
+
+    outside = tmp_path / "secret.txt"
+    outside.write_text("not yours")
+    folder = tmp_path / "p"
+    folder.mkdir()
+    (folder / "table.csv").write_text("t\n0\n")
+    problem = folder / "x.toml"
+    problem.write_text(f'name = "x"\nkind = "optimal_control"\ndescription = "{outside}"\nnote = "../secret.txt"\ndata = "table.csv"\n')
+    opened = []
+    real_open = builtins.open
+    monkeypatch.setattr(builtins, "open", lambda f, *a, **k: (opened.append(str(f)), real_open(f, *a, **k))[1])
+    plan_key(problem)
+    assert str(outside) not in opened and str((folder / "table.csv").resolve()) in opened
