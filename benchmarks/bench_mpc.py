@@ -78,9 +78,12 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 
 from gtmodel.codegen.hpipm_source import HPIPM_ENV, hpipm_libraries
+from gtmodel.control.mpc_hpipm import row_box
+from gtmodel.control.mpc_nlp import period_states
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
 from gtmodel.problems.loop_check import STATUS_NAMES
 from gtmodel.problems.mpc_check import build_mpc, closed_loop_check
@@ -97,8 +100,8 @@ ACADOS_PEER = ROOT / "benchmarks" / "peers" / "acados_mpc.py"
 #: configuration is ``"QP_SOLVER"`` or ``"QP_SOLVER HPIPM_MODE"``.
 ACADOS_QPS = ("PARTIAL_CONDENSING_HPIPM", "PARTIAL_CONDENSING_HPIPM SPEED_ABS", "FULL_CONDENSING_HPIPM",
               "FULL_CONDENSING_HPIPM SPEED_ABS", "FULL_CONDENSING_QPOASES")
-#: The configurations of each file: (unblocked, solver); "" the file's solver.
-CONFIGURATIONS = ((True, "hpipm"), (True, ""), (False, ""))
+#: The configurations of each file: (acados' NLP, solver); "" the file's solver.
+CONFIGURATIONS = ((True, "hpipm"), (True, "sqpmethod"), (False, ""))
 #: States of the closed loop at which the converged first inputs are compared.
 AGREEMENT_STATES = 5
 #: The acados peer's ``converge`` tolerance (``benchmarks/peers/acados_mpc.py``: ``CONVERGE_TOL``): a state where its
@@ -114,11 +117,21 @@ def _num(v) -> str:
 
 
 def export_problem(c, folder: Path) -> Path:
-    """The controller's horizon problem for the acados peer: ``problem.npz`` and the step's CasADi file."""
+    """The controller's horizon problem for the acados peer: ``problem.npz`` and the step's CasADi file; with soft
+    constraint rows (on every predicted state) the rows of one period as a CasADi file, their upper bounds and ``rho``."""
     folder.mkdir(parents=True, exist_ok=True)
     c.step.save(str(folder / "step.casadi"))
     path = folder / "problem.npz"
-    np.savez(path, Q=c.Q, R=c.R, Qf=c.Qf, u_lb=c.u_lb, u_ub=c.u_ub, horizon=c.horizon, period=c.dt, step="step.casadi")
+    extra = {}
+    cons = c.constraints
+    if cons is not None:
+        if cons.hard or cons.every != 1:
+            raise ValueError(f"the acados peer takes soft rows on every predicted state (hard {cons.hard}, every {cons.every})")
+        x, u = ca.SX.sym("x", c.nx), ca.SX.sym("u", c.nu)
+        x_next, inside = period_states(c, x, u)  # the rows of period j as the hpipm step has them: inside, then its end
+        ca.Function("rows", [x, u], [ca.vertcat(*[cons.rows(xi, u) for xi in (*inside, x_next)])]).save(str(folder / "rows.casadi"))
+        extra = {"rows": "rows.casadi", "rows_upper": np.tile(row_box(c), len(inside) + 1), "rho": cons.weight}
+    np.savez(path, Q=c.Q, R=c.R, Qf=c.Qf, u_lb=c.u_lb, u_ub=c.u_ub, horizon=c.horizon, period=c.dt, step="step.casadi", **extra)
     return path
 
 
@@ -209,7 +222,7 @@ def acados_available() -> str:
 
 def acados_open(setup, build: Path) -> tuple:
     """The acados peers of :data:`ACADOS_QPS` on the unblocked horizon problem without constraint rows, and their runs so far."""
-    c = replace(setup.controller, blocks=setup.controller.horizon, constraints=None, disturbance_gain=0.0)
+    c = same_nlp(setup.controller)
     problem = export_problem(c, build / f"{setup.name}_acados")
     peers = {}
     try:
@@ -289,8 +302,9 @@ def acados_failure(figures: dict) -> str:
     return ""
 
 
-def _acados_config(qp: str, horizon: int) -> str:
-    return f"SQP_RTI {qp}, GAUSS_NEWTON, DISCRETE (the same step), N = {horizon}, no blocking, no constraint rows, no disturbance estimate"
+def _acados_config(qp: str, horizon: int, rows: int = 0) -> str:
+    rows_text = f"the {rows} soft constraint rows (a slack each)" if rows else "no constraint rows"
+    return f"SQP_RTI {qp}, GAUSS_NEWTON, DISCRETE (the same step), N = {horizon}, no blocking, {rows_text}, no disturbance estimate"
 
 
 def acados_keys(row: dict, acados: dict | str) -> dict:
@@ -330,7 +344,7 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
                                      "; ".join(f"{qp}: {why}" for qp, why in failures.items()) + "), no ratio")
     default_ok = not failures[ACADOS_QPS[0]]
     ratio = (lambda ours, theirs: ours / theirs) if head else (lambda ours, theirs: None)
-    return {**row, "acados_config": _acados_config(head or ACADOS_QPS[0], row["horizon"]),
+    return {**row, "acados_config": _acados_config(head or ACADOS_QPS[0], row["horizon"], row.get("acados_rows", 0)),
             "acados_cpu_step_median_s": a["cpu_step_median_s"], "acados_cpu_step_p99_s": a["cpu_step_p99_s"],
             "acados_cpu_step_max_s": a["cpu_step_max_s"], "acados_tracking_rms": a["tracking_rms"],
             "acados_first_control_rel_diff": first,
@@ -340,13 +354,13 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
             "ratio_to_acados_median": ratio(row["cpu_step_median_s"], a["cpu_step_median_s"]),
             "ratio_to_acados_p99": ratio(row["cpu_step_p99_s"], a["cpu_step_p99_s"]),
             "tracking_rms_ratio_to_acados": ratio(row["tracking_rms"], a["tracking_rms"]),
-            "acados_default_config": _acados_config(ACADOS_QPS[0], row["horizon"]),
+            "acados_default_config": _acados_config(ACADOS_QPS[0], row["horizon"], row.get("acados_rows", 0)),
             "acados_default_cpu_step_median_s": default["cpu_step_median_s"], "acados_default_cpu_step_p99_s": default["cpu_step_p99_s"],
             "acados_default_tracking_rms": default["tracking_rms"], "acados_default_failure": failures[ACADOS_QPS[0]] or None,
             "ratio_to_acados_default_median": row["cpu_step_median_s"] / default["cpu_step_median_s"] if default_ok else None,
             "ratio_to_acados_default_p99": row["cpu_step_p99_s"] / default["cpu_step_p99_s"] if default_ok else None,
             "acados_qps": {qp: {**f, "failure": failures[qp] or None} for qp, f in acados.items()},
-            "acados_best_config": best and _acados_config(best, row["horizon"]),
+            "acados_best_config": best and _acados_config(best, row["horizon"], row.get("acados_rows", 0)),
             "acados_best_cpu_step_median_s": best and acados[best]["cpu_step_median_s"],
             "acados_best_cpu_step_p99_s": best and acados[best]["cpu_step_p99_s"],
             "acados_best_p99_ratio": best and row["cpu_step_p99_s"] / acados[best]["cpu_step_p99_s"],
@@ -354,16 +368,21 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
             "peer_failed": peer_failed}
 
 
+def same_nlp(c):
+    """The MPC on acados' NLP: one input per period, the file's constraint rows with their bounds as declared (no
+    back-off), no disturbance estimate."""
+    return replace(c, blocks=c.horizon, disturbance_gain=0.0, constraint_backoff=False)
+
+
 def prepare(path: Path, build: Path, unblocked: bool = False, solver: str = "") -> tuple:
-    """One configuration of an MPC file, generated and compiled (``unblocked``: one input per period, no constraint rows,
-    no disturbance estimate; ``solver``: another NLP solver of the step, e.g. ``"hpipm"``)."""
+    """One configuration of an MPC file, generated and compiled (``unblocked``: acados' NLP, :func:`same_nlp`;
+    ``solver``: another NLP solver of the step, e.g. ``"hpipm"``)."""
     setup = load_mpc_file(path)
     if unblocked:
-        c = setup.controller
-        setup = replace(setup, name=setup.name + "_unblocked" + (f"_{solver}" if solver else ""),
-                        controller=replace(c, blocks=c.horizon, constraints=None, disturbance_gain=0.0, solver=solver or c.solver))
+        setup = replace(setup, name=setup.name + "_same_nlp" + (f"_{solver}" if solver else ""),
+                        controller=replace(same_nlp(setup.controller), solver=solver or setup.controller.solver))
     generated, library = build_mpc(setup, build / setup.name)
-    label = ("unblocked" + (f" {solver}" if solver else "")) if unblocked else "shipped"
+    label = ("same NLP" + (f" {solver}" if solver else "")) if unblocked else "shipped"
     return setup, generated, library, label
 
 
@@ -382,7 +401,7 @@ def bench(prepared: tuple, cpu: np.ndarray, violations: int) -> dict:
     py = python_step_s(setup, wall.mpc)
     c = setup.controller
     return {
-        "name": setup.name, "configuration": label, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
+        "name": setup.name, "configuration": label, "acados_rows": same_nlp(c).constraint_rows, "solver": c.solver, "qpsol": c.qpsol if c.solver == "sqpmethod" else "", "constraint_rows": c.constraint_rows,
         "horizon": c.horizon, "period_s": c.dt, "blocks": c.blocks, "sqp_iterations": c.sqp_iterations,
         "steps": int(wall.mpc.step_s.size), "first_step_s": st["first"],
         "step_median_s": st["median"], "step_p99_s": st["p99"], "step_max_s": st["max"],

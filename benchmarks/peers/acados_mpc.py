@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -61,8 +62,10 @@ def _num(v) -> str:
     return repr(float(v))
 
 
-def build(problem: dict, step: ca.Function, qp: str, folder: str, hpipm_mode: str | None = None) -> AcadosOcpSolver:
-    """The acados solver of the problem (generated and compiled in ``folder``; ``hpipm_mode`` of an HPIPM QP solver)."""
+def build(problem: dict, step: ca.Function, qp: str, folder: str, hpipm_mode: str | None = None,
+          rows: ca.Function | None = None) -> AcadosOcpSolver:
+    """The acados solver of the problem (generated and compiled in ``folder``; ``hpipm_mode`` of an HPIPM QP solver;
+    ``rows`` gtmodel's constraint rows of a period, ``h(x, u) -> (m,1)``, soft)."""
     nx, nu = step.size1_in(0), step.size1_in(1)
     H, dt = int(problem["horizon"]), float(problem["period"])
     x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
@@ -86,6 +89,17 @@ def build(problem: dict, step: ca.Function, qp: str, folder: str, hpipm_mode: st
     ocp.constraints.lbu, ocp.constraints.ubu = np.asarray(problem["u_lb"], float), np.asarray(problem["u_ub"], float)
     ocp.constraints.idxbu = np.arange(nu)
     ocp.constraints.x0 = np.zeros(nx)
+    if rows is not None:  # gtmodel's soft constraint rows of each period as h(x_j, u_j) >= lh, every row its own slack
+        # gtmodel's penalty rho (s + s^2) of a row's slack s, written as its hpipm step does, in the slack sqrt(rho) s
+        # (the rows times sqrt(rho)): z = sqrt(rho), Z = 2, scaled as W (1 / dt). With z = rho, Z = 2 rho (2e7 on the
+        # two-mass drive) acados' HPIPM stopped at its minimum step (status 3) in most steps
+        k = math.sqrt(float(problem["rho"]))
+        model.con_h_expr = k * rows(x, u)
+        m = int(rows.size1_out(0))
+        ocp.constraints.lh, ocp.constraints.uh = np.zeros(m), k * np.asarray(problem["rows_upper"], dtype=float)
+        ocp.constraints.idxsh = np.arange(m)
+        ocp.cost.zl, ocp.cost.zu = np.full(m, k / dt), np.zeros(m)
+        ocp.cost.Zl, ocp.cost.Zu = np.full(m, 2.0 / dt), np.zeros(m)
     o = ocp.solver_options
     o.tf = H * dt
     o.integrator_type = "DISCRETE"
@@ -126,7 +140,8 @@ def main() -> None:
     nx, nu = step.size1_in(0), step.size1_in(1)
     H = int(problem["horizon"])
     folder = args.build or os.path.join(os.path.dirname(os.path.abspath(args.problem)), f"acados_{args.qp.lower()}")
-    solver = build(problem, step, args.qp, folder, args.hpipm_mode)
+    rows = ca.Function.load(os.path.join(os.path.dirname(os.path.abspath(args.problem)), str(problem["rows"]))) if "rows" in problem else None
+    solver = build(problem, step, args.qp, folder, args.hpipm_mode, rows)
     times: list[float] = []
     pending: np.ndarray | None = None
 
@@ -158,6 +173,10 @@ def main() -> None:
             solver.set(j, "x", xs[j + 1])
             solver.set(j, "u", us[min(j + 1, H - 1)])
 
+    # the protocol on a copy of stdout; the process's own stdout (acados' C prints, e.g. a QP's failed status) to stderr
+    proto = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
+    sys.stdout = proto
     for line in sys.stdin:
         words = line.split()
         if not words:

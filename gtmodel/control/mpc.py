@@ -372,7 +372,7 @@ class MPCController(SampledReference):
         if plugin == "hpipm":
             w_start = self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1)
             lbu, ubu = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
-            w = np.asarray(hpipm_rti(self, _sqrt_psd, iterations)(x, w_start, self.parameters(t, x), lbu, ubu)[0]).reshape(-1)
+            w = np.asarray(hpipm_rti(self, _sqrt_psd, iterations)(x, w_start, self.parameters(t, x), lbu, ubu, np.zeros(self.constraint_rows))[0]).reshape(-1)
             return w[: self.nu].copy(), w
         if plugin == "fatrop":
             solver, first, b = fatrop_problem(self, _sqrt_psd)
@@ -450,8 +450,11 @@ class MPCController(SampledReference):
             shift = ca.repmat(d, self.blocks, 1)
             lbx, ubx = ca.DM(lbx) + shift, ca.DM(ubx) + shift
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
+        lbg = self.bounds()["lbg"][1:]
+        if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
+            lbg, error = row_backoff(self, x_in, x, w, u_last, mem)
         if self.solver == "hpipm":
-            full, cost, _ = hpipm_rti(self, _sqrt_psd)(x, w, p, lbx, ubx)
+            full, cost, _ = hpipm_rti(self, _sqrt_psd)(x, w, p, lbx, ubx, lbg)
             rows = None
         elif self.solver == "fatrop":
             solver, first, b = fatrop_problem(self, _sqrt_psd)
@@ -459,9 +462,7 @@ class MPCController(SampledReference):
             cost, full, rows = b["cost"](z, p), z[[int(i) for i in b["inputs"]]], None
         else:
             bounds = self.bounds()
-            if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
-                tightened, error = row_backoff(self, x_in, x, w, u_last, mem)
-                bounds["lbg"] = ca.vertcat(ca.DM(bounds["lbg"][:1]), tightened)
+            bounds["lbg"] = ca.vertcat(ca.DM(bounds["lbg"][:1]), lbg)
             if d is not None:
                 pad = ca.DM.zeros(self.n_slack)
                 bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
@@ -678,11 +679,9 @@ def mpc_controller(
                            cost_scale=horizon * float(np.max(np.diag(Qm) * prob.x_scale**2)), every=constraint_every,
                            between=_flag(constraint_substeps, "constraint_substeps"))
     inside = prob.prediction(method, substeps, "F_substeps", every_substep=True) if cons is not None and cons.between and substeps > 1 else None
-    if solver == "fatrop" and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
-        raise InputError("solver: fatrop takes state and path constraints of the states only (a stage cannot see the next "
+    if solver in ("fatrop", "hpipm") and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
+        raise InputError(f"solver: {solver} takes state and path constraints of the states only (a stage cannot see the next "
                          "stage's input that the last state's constraint uses); give sqpmethod")
-    if solver == "hpipm" and cons is not None:
-        raise InputError("solver: hpipm takes no state or path constraints (its QP has input bounds only); give sqpmethod or fatrop")
     if isinstance(disturbance_gain, bool) or not isinstance(disturbance_gain, (int, float)) or not 0.0 <= disturbance_gain <= 1.0:
         raise InputError(f"disturbance_gain: expected a number in [0, 1] (0: no disturbance estimate), got {disturbance_gain!r}")
     if disturbance_gain and solver == "fatrop":
@@ -690,8 +689,8 @@ def mpc_controller(
     if disturbance_gain and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("disturbance_gain: the estimate shifts the horizon's inputs by d, which constraints of the inputs "
                          "would see; give state constraints only or no estimate")
-    if (backoff := cons is not None and solver == "sqpmethod" if constraint_backoff is None else _flag(constraint_backoff, "constraint_backoff")) and (cons is None or solver != "sqpmethod"):
-        raise InputError("constraint_backoff: tightens the constraint rows of solver sqpmethod; give rows (x_lb, x_ub, path) and sqpmethod")
+    if (backoff := cons is not None and solver != "fatrop" if constraint_backoff is None else _flag(constraint_backoff, "constraint_backoff")) and (cons is None or solver == "fatrop"):
+        raise InputError("constraint_backoff: tightens the constraint rows of solver sqpmethod or hpipm; give rows (x_lb, x_ub, path) and one of them")
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,

@@ -41,12 +41,15 @@ taken (:func:`gtmodel.control.mpc.mpc_controller` refuses them with this solver)
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-__all__ = ["HPIPM_MAX_ITER", "HPIPM_MODE", "hpipm_rti"]
+from gtmodel.control.mpc_nlp import between_rows, period_states
+
+__all__ = ["HPIPM_MAX_ITER", "HPIPM_MODE", "hpipm_rti", "row_box"]
 
 #: The box of the predicted states: the reference's range widened by this many state scales
 #: (:func:`~gtmodel.control.reference.reference_scales`) each side.
@@ -55,6 +58,39 @@ STATE_BOX = 10.0
 #: absolute formulation, residuals not computed in the iterations) took 0.80x the generated L1 step's
 #: time of ``speed`` and 0.60x ``balance``'s, the same first input to 1e-9 (2026-11-23, one state sweep).
 HPIPM_MAX_ITER, HPIPM_MODE = 50, "speed_abs"
+#: HPIPM's first barrier parameter without soft rows (CasADi's default).
+HPIPM_MU0 = 10.0
+
+
+def _stage_rows(c: Any) -> tuple[int, int, list[int]]:
+    """``(nr, ns, rowsets)``: the sides of the constraints, the slacks per constrained stage, and per stage ``k`` the
+    states whose rows it carries (those inside period ``k`` and its end ``x_{k+1}``; 0 where ``x_{k+1}`` has none)."""
+    cons = c.constraints
+    if cons is None:
+        return 0, 0, [0] * c.horizon
+    nr, stages = len(cons.sides), set(cons.stages(c.horizon))
+    return nr, 0 if cons.hard else nr, [(between_rows(c) + 1) * (k + 1 in stages) for k in range(c.horizon)]
+
+
+def row_box(c: Any) -> np.ndarray:
+    """The upper bounds of the scaled constraint rows (HPIPM bounds every row on both sides; see the module docstring).
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC with constraint rows.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(len(sides),)`` per side the largest scaled row along the reference plus :data:`STATE_BOX`
+        (the rows' scales are the spreads of the constrained quantities along it: a row stays below this
+        while the state stays within the box of the predicted states).
+    """
+    cons = c.constraints
+    f = ca.Function("rows", [X := ca.SX.sym("x", c.nx), U := ca.SX.sym("u", c.nu)], [cons.rows(X, U)])
+    along = np.asarray(f.map(c.x_ref.shape[0])(c.x_ref.T, c.u_ref.T))
+    return np.max(along, axis=1) + STATE_BOX
 
 
 def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Function:
@@ -63,7 +99,7 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     Parameters
     ----------
     c : MPCController
-        The MPC (``blocks == horizon``, no constraints).
+        The MPC (``blocks == horizon``; constraints of the states only).
     sqrt_psd : callable
         ``L`` with ``L^T L = M`` of a weight matrix (the single shooting's factor).
     iterations : int, optional
@@ -72,62 +108,97 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     Returns
     -------
     casadi.Function
-        ``rti(x0 (nx,1), w (nu H,1), p, lbu (nu H,1), ubu (nu H,1)) -> (u (nu H,1), f (1,1), lam)``:
+        ``rti(x0 (nx,1), w (nu H,1), p, lbu (nu H,1), ubu (nu H,1), lbg (m,1)) -> (u (nu H,1), f (1,1), lam)``:
         ``w`` the warm start's inputs, ``p`` as :meth:`MPCController.parameters`, ``lbu``/``ubu``
-        the inputs' bounds; ``u`` the inputs after the iterations, ``f`` the cost there (NaN
-        when the prediction fails), ``lam`` ``(iterations H nx,1)`` the gaps' multipliers of each QP.
+        the inputs' bounds, ``lbg`` the lower bounds of the ``m`` (:attr:`~MPCController.constraint_rows`)
+        scaled constraint rows (0, or tightened: :func:`~gtmodel.control.mpc_memory.row_backoff`), in the
+        single shooting's order; ``u`` the inputs after the iterations, ``f`` the cost there (NaN
+        when the prediction fails), ``lam`` ``(iterations (H nx + m),1)`` the multipliers of each QP's rows.
     """
     H, nx, nu = c.horizon, c.nx, c.nu
     k_it = c.sqp_iterations if iterations is None else int(iterations)
+    cons = c.constraints
+    nr, ns, rowsets = _stage_rows(c)
+    # the slacks' variables scaled by 1 / sqrt(rho): the penalty sqrt(rho) s + s^2 (a Hessian of 2 beside the inputs' and
+    # states', not rho's 2e7), and HPIPM's first barrier parameter that scale (its default 10 took 18 iterations on
+    # average and 50 at worst on the two-mass drive's rows, 8.5 and 11 so)
+    k_s = 1.0 / math.sqrt(cons.weight) if ns else 1.0
+    mu0 = max(HPIPM_MU0, 1.0 / k_s)
     Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
     x0, xr, ur = ca.SX.sym("x0", nx), ca.SX.sym("xr", nx, H), ca.SX.sym("ur", nu, H)
     U = [ca.SX.sym(f"u{k}", nu) for k in range(H)]
+    S = [ca.SX.sym(f"s{k}", ns if rowsets[k] else 0) for k in range(H)]
     X = [x0] + [ca.SX.sym(f"x{k}", nx) for k in range(1, H + 1)]
-    z = ca.vertcat(*[e for k in range(H) for e in (U[k], X[k + 1])])
-    g = ca.vertcat(*[c.step(X[k], U[k]) - X[k + 1] for k in range(H)])
+    z = ca.vertcat(*[e for k in range(H) for e in (U[k], S[k], X[k + 1])])
+    g, kind = [], []  # per stage its gap, then its rows (HPIPM's order); kind: 0 gap, 1 row
+    for k in range(H):
+        if rowsets[k]:  # the rows of the states inside period k, then its end, functions of (x_k, u_k)
+            xn, inside = period_states(c, X[k], U[k])
+            here = [cons.rows(xi, U[k]) + (k_s * S[k] if ns else 0) for xi in (*inside, xn)]
+        else:
+            xn, here = c.step(X[k], U[k]), []
+        g += [xn - X[k + 1], *here]
+        kind += [0] * nx + [1] * (nr * rowsets[k])
+    g = ca.vertcat(*g)
     r = ca.vertcat(*[e for k in range(H) for e in (ca.mtimes(Lr, U[k] - ur[:, k]),
                                                     ca.mtimes(Lf if k == H - 1 else Lq, X[k + 1] - xr[:, k]))])
-    f = ca.sumsqr(r)
+    s_all = ca.vertcat(*S)
+    f = ca.sumsqr(r) + (cons.weight * (ca.sum1(k_s * s_all) + ca.sumsqr(k_s * s_all)) if ns else 0)
     p = ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
     hess = ca.evalf(ca.substitute(ca.hessian(f, z)[0], ca.vertcat(z, p), ca.DM.zeros(z.numel() + p.numel())))
     jac = ca.sparsify(ca.jacobian(g, z))  # the -I blocks of x_{k+1} diagonal, as the conic requires
     lin = ca.Function("lin", [z, p], [g, jac, ca.gradient(f, z)], ["z", "p"], ["g", "jac", "grad"])
     cost_f = ca.Function("cost", [z, p], [f], ["z", "p"], ["f"])  # apart: a call of lin computes all its outputs
-    # the states predicted from the warm start's inputs
+    # the first iteration at the states predicted from the warm start's inputs (slacks 0): the prediction and the
+    # linearisation in one Function, its common subexpressions (the prediction's steps) evaluated once
     ws = ca.SX.sym("w", nu * H)
     xk, parts = x0, []
     for k in range(H):
         xk = c.step(xk, ws[k * nu:(k + 1) * nu])
-        parts += [ws[k * nu:(k + 1) * nu], xk]
-    start = ca.Function("start", [x0, ws], [ca.vertcat(*parts)])
-    opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu] * H + [0], "ng": [0] * (H + 1), "error_on_fail": False,
-            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER}}
+        parts += [ws[k * nu:(k + 1) * nu], ca.DM.zeros(S[k].numel()), xk]
+    z_start = ca.vertcat(*parts)
+    first = ca.Function("first", [ws, p], [z_start, *lin(z_start, p)], ["w", "p"], ["z", "g", "jac", "grad"], {"cse": True})
+    opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu + S[k].numel() for k in range(H)] + [0],
+            "ng": [nr * n for n in rowsets] + [0], "error_on_fail": False,
+            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": mu0}}
     qp = ca.conic("mpc_hpipm", "hpipm", {"h": hess.sparsity(), "a": jac.sparsity()}, opts)
-    u_idx = np.concatenate([np.arange(k * (nu + nx), k * (nu + nx) + nu) for k in range(H)])
-    x_idx = np.setdiff1d(np.arange(z.numel()), u_idx)
+    sizes = [(nu, S[k].numel(), nx) for k in range(H)]
+    offsets = np.cumsum([0] + [sum(t) for t in sizes])
+    u_idx = np.concatenate([np.arange(o, o + nu) for o in offsets[:-1]])
+    s_idx = np.concatenate([np.arange(o + nu, o + nu + m) for o, (_, m, _) in zip(offsets[:-1], sizes)]).astype(int)
+    x_idx = np.setdiff1d(np.arange(z.numel()), np.r_[u_idx, s_idx])
+    row_idx = np.flatnonzero(np.array(kind) == 1)
+    m = int(row_idx.size)
     X0, W, P = ca.MX.sym("x0", nx), ca.MX.sym("w", nu * H), ca.MX.sym("p", p.numel())
-    LBU, UBU = ca.MX.sym("lbu", nu * H), ca.MX.sym("ubu", nu * H)
-    Z = start(X0, W)
-    # HPIPM bounds every variable (CasADi's interface replaces an infinite bound by 1e8, with which its
-    # interior point stops at its iteration limit): the predicted states within STATE_BOX scales of the
-    # reference's range, the inputs within their bounds or, where none, their plausible range
+    LBU, UBU, LBG = ca.MX.sym("lbu", nu * H), ca.MX.sym("ubu", nu * H), ca.MX.sym("lbg", m)
+    # HPIPM bounds every variable and row on both sides (CasADi's interface replaces an infinite bound by 1e8, with
+    # which its interior point stops at its iteration limit): the predicted states within STATE_BOX scales of the
+    # reference's range, the inputs within their bounds or, where none, their plausible range, the rows below
+    # row_box, the slacks within [0, row_box]
     lim = c.limits()
     x_scale, _, _, _ = c.plausible_ranges(c.u_lb, c.u_ub)
     x_lo = ca.DM(np.tile(np.min(c.x_ref, axis=0) - STATE_BOX * x_scale, H))
     x_hi = ca.DM(np.tile(np.max(c.x_ref, axis=0) + STATE_BOX * x_scale, H))
     u_lo = ca.fmax(LBU, ca.DM(np.tile(lim["u_last"][0], H)))
     u_hi = ca.fmin(UBU, ca.DM(np.tile(lim["u_last"][1], H)))
+    top = row_box(c) if nr else np.zeros(0)
+    g_hi = ca.DM(np.tile(top, m // nr if nr else 0))
+    s_hi = ca.DM(np.tile(top, s_idx.size // ns if ns else 0)) / k_s
     lam = []
-    for _ in range(k_it):
-        gz, jz, grad = lin(Z, P)
+    for it in range(k_it):
+        Z, gz, jz, grad = first(W, P) if it == 0 else (Z, *lin(Z, P))
         lb, ub = ca.MX(z.numel(), 1), ca.MX(z.numel(), 1)
         lb[u_idx], ub[u_idx] = u_lo - Z[u_idx], u_hi - Z[u_idx]
         lb[x_idx], ub[x_idx] = x_lo - Z[x_idx], x_hi - Z[x_idx]
-        sol = qp(h=hess, g=grad, a=jz, lba=-gz, uba=-gz, lbx=lb, ubx=ub)
+        lba, uba = -gz, -gz
+        if m:
+            lb[s_idx], ub[s_idx] = -Z[s_idx], s_hi - Z[s_idx]
+            lba[row_idx], uba[row_idx] = LBG - gz[row_idx], g_hi - gz[row_idx]
+        sol = qp(h=hess, g=grad, a=jz, lba=lba, uba=uba, lbx=lb, ubx=ub)
         Z = Z + sol["x"]
         lam.append(sol["lam_a"])
     cost = cost_f(Z, P)
     # the multipliers are an output: CasADi 3.8.2's HPIPM runtime writes them unconditionally (a call
     # whose lam_a output is unused gets a NULL pointer there and crashes)
-    return ca.Function("rti", [X0, W, P, LBU, UBU], [Z[u_idx], cost, ca.vertcat(*lam)], ["x0", "w", "p", "lbu", "ubu"],
-                       ["u", "f", "lam"])
+    return ca.Function("rti", [X0, W, P, LBU, UBU, LBG], [Z[u_idx], cost, ca.vertcat(*lam)],
+                       ["x0", "w", "p", "lbu", "ubu", "lbg"], ["u", "f", "lam"])

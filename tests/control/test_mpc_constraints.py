@@ -155,41 +155,71 @@ def test_problem_constraints_of_the_robot():
     assert np.all(h[:3] > -1.0) and np.all(h[:3] < 1.0) and np.all(h[3:] >= lb[3:])  # the start pose is inside
 
 
+MULTIPLE_SHOOTING = ["fatrop", "hpipm"]
+
+
 @pytest.fixture(scope="module")
-def fatrop_integrator(integrator):
+def multiple_shooting(integrator):
     ode, t, soft, *_ = integrator
-    kw = dict(horizon=H, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0], method="euler", solver="fatrop")
-    return {hard: mpc_controller(ode, t, soft.x_ref, soft.u_ref, x_ub={"x": BOUND}, hard_constraints=hard, **kw) for hard in (False, True)}
+    kw = dict(horizon=H, Q=[1.0, 0.0], R=[1e-4], u_lb=[-50.0], u_ub=[50.0], method="euler")
+    return {(solver, hard): mpc_controller(ode, t, soft.x_ref, soft.u_ref, x_ub={"x": BOUND}, hard_constraints=hard, solver=solver,
+                                           constraint_backoff=False, **kw)  # the rows as declared (no aim inside): SLSQP's problem
+            for solver in MULTIPLE_SHOOTING for hard in (False, True)}
 
 
 @pytest.mark.parametrize("hard", [False, True], ids=["soft", "hard"])
-def test_fatrop_step_agrees_with_scipy(integrator, fatrop_integrator, hard):
-    # the multiple-shooting NLP by fatrop (interior point to 1e-8) in the loop-step Function against SLSQP
+@pytest.mark.parametrize("solver", MULTIPLE_SHOOTING)
+def test_multiple_shooting_step_agrees_with_scipy(integrator, multiple_shooting, solver, hard):
+    # the multiple-shooting NLP by fatrop (interior point to 1e-8), or hpipm's one real-time iteration (its QP is
+    # the horizon problem itself here: linear dynamics, quadratic cost; the soft rows a slack per side and stage),
+    # in the loop-step Function against SLSQP
     _, t, soft, *_ = integrator
-    c = fatrop_integrator[hard]
+    c = multiple_shooting[solver, hard]
     u, _, ok = c.function()(t[40], FEASIBLE, c.u_initial, c.memory_initial)
     ref = _scipy_first_input(soft, 40, FEASIBLE)
+    # HPIPM's speed_abs mode stops on the complementarity alone (1e-8): on the hard rows, whose multipliers are large,
+    # its first input is 1.2e-5 off SLSQP's (the second iteration gets 1e-9)
+    tol = 2e-5 if (solver, hard) == ("hpipm", True) else 1e-5
     assert float(ok) == 1.0
-    assert abs(float(u) - ref) <= 1e-5 * (1 + abs(ref))
+    assert abs(float(u) - ref) <= tol * (1 + abs(ref))
 
 
-def test_fatrop_hard_infeasible_fails_soft_solves(fatrop_integrator):
-    # the safe-input contract for fatrop: an infeasible hard problem gives ok = 0 (its result violates the rows)
-    flags = [float(c.function()(0.16, INFEASIBLE, c.u_initial, c.memory_initial)[2]) for c in (fatrop_integrator[False], fatrop_integrator[True])]
+@pytest.mark.parametrize("solver", MULTIPLE_SHOOTING)
+def test_multiple_shooting_hard_infeasible_fails_soft_solves(multiple_shooting, solver):
+    # the safe-input contract: an infeasible hard problem gives ok = 0 (its result violates the rows)
+    flags = [float(c.function()(0.16, INFEASIBLE, c.u_initial, c.memory_initial)[2]) for c in (multiple_shooting[solver, False], multiple_shooting[solver, True])]
     assert flags == [1.0, 0.0]
 
 
-def test_fatrop_refuses_input_dependent_constraints(integrator):
+@pytest.mark.parametrize("solver", MULTIPLE_SHOOTING)
+def test_multiple_shooting_refuses_input_dependent_constraints(integrator, solver):
     import casadi as ca
 
     ode, t, soft, *_ = integrator
     x, u = ca.SX.sym("x", 2), ca.SX.sym("u")
     path = ca.Function("h", [x, u], [x[1] + 0.01 * u])
-    with pytest.raises(InputError, match="solver: fatrop takes state and path constraints of the states only"):
-        mpc_controller(ode, t, soft.x_ref, soft.u_ref, path=path, path_ub=[1.0], solver="fatrop")
+    with pytest.raises(InputError, match=f"solver: {solver} takes state and path constraints of the states only"):
+        mpc_controller(ode, t, soft.x_ref, soft.u_ref, path=path, path_ub=[1.0], solver=solver)
 
 
-@pytest.mark.parametrize("solver", ["sqpmethod", "fatrop"])
+def test_hpipm_closed_loop_holds_the_bound(integrator, multiple_shooting):
+    # the soft rows of the hpipm step in the loop (a second QP solver for test_closed_loop_holds_the_bound's bound)
+    ode, t, soft, *_ = integrator
+    c = multiple_shooting["hpipm", False]
+    f = c.function()
+    mem = {"w": c.memory_initial}
+
+    def controller(tk, y):
+        uk, w_next, ok = f(tk, y, c.u_initial, mem["w"])
+        mem["w"] = np.asarray(w_next).ravel()
+        return (0 if float(ok) else 6), np.asarray(uk).ravel()
+
+    run = run_controller_loop(controller, ode.step(DT, "rk4"), c.x_ref[0], t, c.x_ref, u_lb=c.u_lb, u_ub=c.u_ub, delay=0)
+    assert float(np.max(run.x[:, 0])) <= BOUND + 1e-3
+    assert run.status_counts == {"0": t.size}
+
+
+@pytest.mark.parametrize("solver", ["sqpmethod", "fatrop", "hpipm"])
 def test_constraint_every_kth_state_agrees_with_scipy(integrator, solver):
     # a reference that rises above the bound and falls back within the horizon; rows on x_7, x_14 and
     # x_20 only: SLSQP on the same thinned QP (a second method), whose optimum is not the one
@@ -201,7 +231,7 @@ def test_constraint_every_kth_state_agrees_with_scipy(integrator, solver):
     every = mpc_controller(ode, t, x_ref, np.zeros((t.size, 1)), **kw)
     assert c.constraints.stages(H) == [7, 14, 20]
     x0 = x_ref[0]
-    _, w = c.solve(t[0], x0, plugin="fatrop" if solver == "fatrop" else "sqpmethod", iterations=3)
+    _, w = c.solve(t[0], x0, plugin=solver, iterations=3)
     ref = _scipy_first_input(c, 0, x0, stages=[7, 14, 20], whole=True, method="trust-constr")
     assert np.max(np.abs(w - ref)) <= 1e-4 * (1 + np.max(np.abs(ref)))
     assert np.max(np.abs(ref - _scipy_first_input(every, 0, x0, whole=True, method="trust-constr"))) > 1.0  # N: not the everywhere-constrained optimum
