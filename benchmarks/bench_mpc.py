@@ -28,11 +28,12 @@ measured side by side in one run, because these machines are noisy:
   Function ``F`` saved by CasADi, the same weights, reference window, bounds, horizon and
   period): the thread CPU of acados' solve call per step, its tracking RMS, and the first input
   of its SQP iterated to convergence against gtmodel's (30 Gauss-Newton iterations) at 5 states
-  of its run. acados 0.2.2 has neither move blocking nor per-stage constraint rows: it always
-  solves the unblocked problem without rows and without the input-disturbance estimate, so
-  each file gives three rows, ``configuration`` ``"unblocked hpipm"`` (gtmodel on the same NLP,
-  ``solver = "hpipm"``: the real-time iteration on the multiple-shooting QP by HPIPM, as acados'),
-  ``"unblocked"`` (the same NLP by the file's solver, single shooting, dense QP) and ``"shipped"``
+  of its run. acados 0.2.2 has no move blocking and no input-disturbance estimate: it solves the
+  problem with one input per period and the file's soft constraint rows as declared (its nonlinear
+  constraints, a slack per row: ``peers/acados_mpc.py``; no back-off), so each file gives three rows,
+  ``configuration`` ``"same NLP hpipm"`` (gtmodel on that NLP, ``solver = "hpipm"``: the real-time
+  iteration on the multiple-shooting QP by HPIPM, as acados'), ``"same NLP sqpmethod"`` (that NLP
+  by single shooting and a dense QP, DAQP with rows) and ``"shipped"``
   (the file's blocks and rows), all against that acados run. The CPU per step is measured in
   ``--rounds`` alternated rounds (default 3: acados' peers, then each configuration, each
   round about ``--steps / rounds`` steps), so that the machine's load falls on all of them, and
@@ -118,19 +119,20 @@ def _num(v) -> str:
 
 def export_problem(c, folder: Path) -> Path:
     """The controller's horizon problem for the acados peer: ``problem.npz`` and the step's CasADi file; with soft
-    constraint rows (on every predicted state) the rows of one period as a CasADi file, their upper bounds and ``rho``."""
+    constraint rows the rows of one period as a CasADi file, their upper bounds, ``rho`` and the periods that carry them."""
     folder.mkdir(parents=True, exist_ok=True)
     c.step.save(str(folder / "step.casadi"))
     path = folder / "problem.npz"
     extra = {}
     cons = c.constraints
     if cons is not None:
-        if cons.hard or cons.every != 1:
-            raise ValueError(f"the acados peer takes soft rows on every predicted state (hard {cons.hard}, every {cons.every})")
+        if cons.hard:
+            raise ValueError("the acados peer takes soft rows only")
         x, u = ca.SX.sym("x", c.nx), ca.SX.sym("u", c.nu)
         x_next, inside = period_states(c, x, u)  # the rows of period j as the hpipm step has them: inside, then its end
         ca.Function("rows", [x, u], [ca.vertcat(*[cons.rows(xi, u) for xi in (*inside, x_next)])]).save(str(folder / "rows.casadi"))
-        extra = {"rows": "rows.casadi", "rows_upper": np.tile(row_box(c), len(inside) + 1), "rho": cons.weight}
+        extra = {"rows": "rows.casadi", "rows_upper": np.tile(row_box(c), len(inside) + 1), "rho": cons.weight,
+                 "rows_stages": np.array([j + 1 in cons.stages(c.horizon) for j in range(c.horizon)])}
     np.savez(path, Q=c.Q, R=c.R, Qf=c.Qf, u_lb=c.u_lb, u_ub=c.u_ub, horizon=c.horizon, period=c.dt, step="step.casadi", **extra)
     return path
 

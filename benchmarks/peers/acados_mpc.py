@@ -20,6 +20,13 @@ the stage costs by the time step and not the terminal one, ``W_e = Qf``; the ``Q
 is constant), the Gauss-Newton Hessian, ``SQP_RTI`` (one SQP iteration per call) and the given QP solver (an HPIPM one in
 the given ``hpipm_mode``, acados' default ``BALANCE`` when not given).
 
+With gtmodel's soft constraint rows (``rows`` in the file: ``h(x_j, u_j)``, the scaled rows of the states inside
+period ``j`` and at its end, ``>= 0``; ``rows_upper``, ``rho``, ``rows_stages``) they are acados' nonlinear
+constraints ``con_h_expr`` of stages ``0..H-1``, soft, a slack per row (acados' own form; gtmodel's hpipm step has one
+per side and stage, the same optimum wherever the rows can be held), penalised as gtmodel's ``rho (s + s^2)`` in the
+slack's scale ``sqrt(rho) s``; acados' template puts ``h`` on every stage, so a stage whose period gtmodel leaves
+without rows (``constraint_every``) gets them never active (``lh = -uh``).
+
 The closed loop stays in gtmodel's process (the same plant, noise, disturbance, delay and error as its
 check); this script answers it through stdin/stdout, one line per request:
 
@@ -142,6 +149,10 @@ def main() -> None:
     folder = args.build or os.path.join(os.path.dirname(os.path.abspath(args.problem)), f"acados_{args.qp.lower()}")
     rows = ca.Function.load(os.path.join(os.path.dirname(os.path.abspath(args.problem)), str(problem["rows"]))) if "rows" in problem else None
     solver = build(problem, step, args.qp, folder, args.hpipm_mode, rows)
+    if rows is not None:  # acados' template puts h on every stage: where gtmodel's period has no rows, never active
+        upper = math.sqrt(float(problem["rho"])) * np.asarray(problem["rows_upper"], dtype=float)
+        for j in np.flatnonzero(~np.asarray(problem["rows_stages"], dtype=bool)):
+            solver.constraints_set(int(j), "lh", -upper)
     times: list[float] = []
     pending: np.ndarray | None = None
 

@@ -611,8 +611,8 @@ def mpc_controller(
         SQP iterations per period, ``>= 1`` (default 1: the real-time iteration).
     solver : {"sqpmethod", "fatrop", "hpipm"}, optional
         NLP solver (:data:`MPC_SOLVERS`): ``sqpmethod`` (``qrqp`` QPs, ``daqp`` with
-        constraints), ``fatrop`` (multiple shooting, ``blocks = horizon``) or ``hpipm``
-        (multiple shooting, ``blocks = horizon``, no state or path constraints).
+        constraints), ``fatrop`` or ``hpipm`` (multiple shooting, ``blocks = horizon``, constraints of the
+        states only; :mod:`~gtmodel.control.mpc_hpipm`).
     delay : int, optional
         Input delay [periods] the step compensates, 0 (default) or 1 (:attr:`MPCController.delay`).
     x_lb, x_ub : array_like or dict, optional
@@ -642,7 +642,7 @@ def mpc_controller(
         constraints that depend on the inputs.
     constraint_backoff : bool, optional
         Tighten the rows by the prediction's error measured in the loop (:attr:`MPCController.constraint_backoff`);
-        default None: on with soft or hard constraint rows and ``solver="sqpmethod"``, off otherwise.
+        default None: on with soft or hard constraint rows and ``solver`` sqpmethod or hpipm, off otherwise.
 
     Returns
     -------

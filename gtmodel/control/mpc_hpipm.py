@@ -2,29 +2,55 @@
 
 The same optimal control problem as :mod:`gtmodel.control.mpc` (one input per period: no
 move blocking), with the predicted states kept as variables (multiple shooting; Bock &
-Plitt, IFAC 1984), in the order HPIPM's OCP QP takes them: ``z = [u_0, x_1, u_1, ...,
-x_{H-1}, u_{H-1}, x_H]`` (the measured state ``x_0`` is a parameter, not a variable), the
-rows the gaps ``F(x_k, u_k) - x_{k+1} = 0``. HPIPM bounds every variable (CasADi's interface
-replaces an infinite bound by 1e8, with which HPIPM's interior point does not converge): the
-predicted states are kept within the plausible range of the step's measurement
-(:meth:`MPCController.limits`, the reference's range widened by
-:data:`~gtmodel.control.reference.MEASUREMENT_LIMIT` scales: never active on a sane horizon), an
-input without bounds within its plausible range. The cost is the single shooting's sum of
-squares ``sum ||L_R (u_k - u*_k)||^2 + ||L_Q (x_{k+1} - x*_{k+1})||^2`` (``L_{Q_f}`` at the
-last state), linear residuals in ``z``: its Gauss-Newton Hessian is the exact one and
-constant, block-diagonal ``2 diag(R, Q, R, ..., Q_f)``.
+Plitt, IFAC 1984), in the order HPIPM's OCP QP takes them: ``z = [u_0, s_0, x_1, u_1, s_1, ...,
+x_{H-1}, u_{H-1}, s_{H-1}, x_H]`` (the measured state ``x_0`` is a parameter, not a variable;
+``s_k`` the slacks of stage ``k``'s soft rows), the rows per stage the gap ``F(x_k, u_k) - x_{k+1}
+= 0``, then the constraint rows of :class:`~gtmodel.control.mpc_constraints.MPCConstraints` of
+period ``k``: those of the states after each substep inside it and of its end ``x_{k+1}``, all
+functions of ``(x_k, u_k)`` (:func:`~gtmodel.control.mpc_nlp.period_states`; where ``x_{k+1}``
+is constrained), in the single shooting's order. The constraints must not depend on the input
+(the single shooting imposes ``x_{k+1}``'s at ``u_{k+1}``, another stage's variable): refused. Soft
+rows have one slack per side and stage (a stage-wise L1 penalty, fatrop's; the single shooting
+shares one per side over the horizon: the same optimum wherever the rows can be held), with the
+single shooting's ``rho (s + s^2)`` written in the slack ``sqrt(rho) s`` (a Hessian of 2 there, beside the
+inputs' and states' weights, rather than ``2 rho``, 2e7 on the two-mass drive).
+
+HPIPM's tolerances are absolute (``speed_abs``: a complementarity of 1e-8), so each QP's cost is
+divided by its own scale, the larger of the inputs' and states' largest Hessian entry and their
+largest gradient entry at the linearisation point (the slacks' penalty left out: it would swamp
+the tracking cost's accuracy), with the first barrier parameter ``mu0 = 1`` (:data:`HPIPM_MU0`) in
+that unit; the multipliers are scaled back. Unscaled, a QP whose multipliers ran to 1e4 (a state
+far from the reference) did not reach the tolerance: on the motor + gear + load drive 8 of the
+codegen check's 50 random states stopped at the iteration limit, 0 scaled, and along the shipped
+drives' references the iterations fell from 8-12 to 7-11 on average. The price is accuracy in the
+directions of least curvature: the first input agrees with the single shooting's exact QP to
+1e-5 relative, the horizon's last inputs to 2e-4 (``tests/control/test_mpc_hpipm.py``).
+The rows' lower bounds are 0 or the back-off's (:func:`~gtmodel.control.mpc_memory.row_backoff`,
+the step's input ``lbg``).
+
+HPIPM bounds every variable and row on both sides (CasADi's interface replaces an infinite bound
+by 1e8, with which HPIPM's interior point does not converge): the predicted states are kept
+within :data:`STATE_BOX` reference scales beyond the reference's range (never active on a sane
+horizon), an input without bounds within its plausible range, a row below its value along the
+reference plus :data:`STATE_BOX` (:func:`row_box`), a slack below that too. The cost is the
+single shooting's sum of squares ``sum ||L_R (u_k - u*_k)||^2 + ||L_Q (x_{k+1} - x*_{k+1})||^2``
+(``L_{Q_f}`` at the last state), linear residuals in ``z``, and the slacks' penalty: its
+Gauss-Newton Hessian is the exact one and constant, block-diagonal ``2 diag(R, 1, Q, R, 1, ...,
+Q_f)``.
 
 One iteration (the real-time iteration of Diehl, Bock & Schloeder, SIAM J. Control Optim.
-43 (2005), as acados' SQP-RTI): the gaps and their Jacobians ``A_k = dF/dx``, ``B_k =
-dF/du`` at ``z``, the QP in ``dz`` with the input bounds shifted by ``z``, solved by
+43 (2005), as acados' SQP-RTI): the gaps, the rows and their Jacobians ``A_k = dF/dx``, ``B_k =
+dF/du``, ``C_k``, ``D_k`` at ``z``, the QP in ``dz`` with the bounds shifted by ``z``, solved by
 HPIPM (Frison & Diehl, IFAC 2020: an interior-point method whose linear algebra is a
 Riccati recursion over the stages, ``O(H (nx + nu)^3)``, on BLASFEO) through CasADi's
 ``hpipm`` conic with the stage structure given (``N = H``, ``nx = [0, nx, ...]``,
-``nu = [nu, ..., nu, 0]``, ``ng = 0``), and the full step ``z + dz``. ``sqp_iterations``
-such iterations per period. The states start from the warm start's inputs predicted from
-``x_0`` (no gaps at the first iteration: its QP is the single shooting's, so the converged
-point is the same; acados' SQP-RTI keeps its last states, shifted, instead: that prediction is
-0.9 % of the generated L1 step's instructions, callgrind 2026-11-25, so it stays).
+``nu = [nu + slacks, ..., 0]``, ``ng`` the rows per stage), and the full step ``z + dz``.
+``sqp_iterations`` such iterations per period. The states start from the warm start's inputs
+predicted from ``x_0``, slacks 0 (no gaps at the first iteration: its QP is the single shooting's
+but for the slacks, so the converged point is the same; acados' SQP-RTI keeps its last states,
+shifted, instead); that prediction and the first iteration's linearisation are one Function whose
+common subexpressions CasADi evaluates once (``cse``: the prediction's steps are the
+linearisation's points).
 
 CasADi 3.8.2 generates C for the conic; it includes ``hpipm_d_ocp_qp_ipm.h`` and links the
 wheel's ``libhpipm`` and ``libblasfeo`` (:data:`gtmodel.codegen.loop_step.SOLVER_LIBRARIES`),
@@ -35,8 +61,7 @@ created at a thread's first QP (:func:`~gtmodel.codegen.hpipm_source.patch_hpipm
 runtime sets it up in every QP) in the generated step's static arena
 (:data:`gtmodel.codegen.loop_step.HEAP_ARENA_BYTES`). A QP that
 HPIPM does not solve (iteration limit, a NaN) makes the generated call return an error: the
-step returns its failure status and the last input. State or path constraint rows are not
-taken (:func:`gtmodel.control.mpc.mpc_controller` refuses them with this solver).
+step returns its failure status and the last input.
 """
 
 from __future__ import annotations
@@ -58,8 +83,8 @@ STATE_BOX = 10.0
 #: absolute formulation, residuals not computed in the iterations) took 0.80x the generated L1 step's
 #: time of ``speed`` and 0.60x ``balance``'s, the same first input to 1e-9 (2026-11-23, one state sweep).
 HPIPM_MAX_ITER, HPIPM_MODE = 50, "speed_abs"
-#: HPIPM's first barrier parameter without soft rows (CasADi's default).
-HPIPM_MU0 = 10.0
+#: HPIPM's first barrier parameter, in the unit of the QP's cost divided by its scale (see the module docstring).
+HPIPM_MU0 = 1.0
 
 
 def _stage_rows(c: Any) -> tuple[int, int, list[int]]:
@@ -119,11 +144,7 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     k_it = c.sqp_iterations if iterations is None else int(iterations)
     cons = c.constraints
     nr, ns, rowsets = _stage_rows(c)
-    # the slacks' variables scaled by 1 / sqrt(rho): the penalty sqrt(rho) s + s^2 (a Hessian of 2 beside the inputs' and
-    # states', not rho's 2e7), and HPIPM's first barrier parameter that scale (its default 10 took 18 iterations on
-    # average and 50 at worst on the two-mass drive's rows, 8.5 and 11 so)
-    k_s = 1.0 / math.sqrt(cons.weight) if ns else 1.0
-    mu0 = max(HPIPM_MU0, 1.0 / k_s)
+    k_s = 1.0 / math.sqrt(cons.weight) if ns else 1.0  # the slacks' variable sqrt(rho) s (see the module docstring)
     Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
     x0, xr, ur = ca.SX.sym("x0", nx), ca.SX.sym("xr", nx, H), ca.SX.sym("ur", nu, H)
     U = [ca.SX.sym(f"u{k}", nu) for k in range(H)]
@@ -160,7 +181,7 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     first = ca.Function("first", [ws, p], [z_start, *lin(z_start, p)], ["w", "p"], ["z", "g", "jac", "grad"], {"cse": True})
     opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu + S[k].numel() for k in range(H)] + [0],
             "ng": [nr * n for n in rowsets] + [0], "error_on_fail": False,
-            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": mu0}}
+            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": HPIPM_MU0}}
     qp = ca.conic("mpc_hpipm", "hpipm", {"h": hess.sparsity(), "a": jac.sparsity()}, opts)
     sizes = [(nu, S[k].numel(), nx) for k in range(H)]
     offsets = np.cumsum([0] + [sum(t) for t in sizes])
@@ -184,7 +205,8 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     top = row_box(c) if nr else np.zeros(0)
     g_hi = ca.DM(np.tile(top, m // nr if nr else 0))
     s_hi = ca.DM(np.tile(top, s_idx.size // ns if ns else 0)) / k_s
-    lam = []
+    ux = np.setdiff1d(np.arange(z.numel()), s_idx)  # the inputs and states: the tracking cost's scale, not the penalty's
+    h_max, lam = float(np.max(np.abs(np.asarray(hess[ux, ux].nonzeros())))), []
     for it in range(k_it):
         Z, gz, jz, grad = first(W, P) if it == 0 else (Z, *lin(Z, P))
         lb, ub = ca.MX(z.numel(), 1), ca.MX(z.numel(), 1)
@@ -194,9 +216,10 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
         if m:
             lb[s_idx], ub[s_idx] = -Z[s_idx], s_hi - Z[s_idx]
             lba[row_idx], uba[row_idx] = LBG - gz[row_idx], g_hi - gz[row_idx]
-        sol = qp(h=hess, g=grad, a=jz, lba=lba, uba=uba, lbx=lb, ubx=ub)
+        scale = ca.fmax(h_max, ca.mmax(ca.fabs(grad[ux])))  # the QP's cost in its own unit (see the module docstring)
+        sol = qp(h=hess / scale, g=grad / scale, a=jz, lba=lba, uba=uba, lbx=lb, ubx=ub)
         Z = Z + sol["x"]
-        lam.append(sol["lam_a"])
+        lam.append(sol["lam_a"] * scale)
     cost = cost_f(Z, P)
     # the multipliers are an output: CasADi 3.8.2's HPIPM runtime writes them unconditionally (a call
     # whose lam_a output is unused gets a NULL pointer there and crashes)

@@ -76,7 +76,7 @@ class MPCSection(Section):
         Offset-free MPC: the gain of the input-disturbance estimate per period (0: none).
     constraint_backoff : bool, optional
         Tighten the constraint rows by the prediction's one-period error measured in the loop (default: on with
-        rows and sqpmethod).
+        rows and sqpmethod or hpipm).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -84,7 +84,7 @@ class MPCSection(Section):
     period: Period = LOOP_PERIOD_S
     blocks: int | None = Field(default=None, ge=1, le=MAX_HORIZON, strict=True, description="input blocks over the horizon (a divisor; default the horizon)")
     sqp_iterations: int = Field(default=1, ge=1, le=100, strict=True, description="SQP iterations per period (1: real-time iteration)")
-    solver: choice(*MPC_SOLVER_NAMES, description="NLP solver of the step (qrqp QPs)") = "sqpmethod"
+    solver: choice(*MPC_SOLVER_NAMES, description="NLP solver of the step: sqpmethod (single shooting, qrqp or DAQP QPs), fatrop or hpipm (multiple shooting, one input per period, constraints of the states only)") = "sqpmethod"
     method: choice(*MPC_METHOD_NAMES, description="prediction step over one period (euler: cheapest; implicit_euler, radau2: stiff models)") = "rk4"
     substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
     state_weights: Weights = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
@@ -101,7 +101,7 @@ class MPCSection(Section):
     constraint_every: int = Field(default=1, ge=1, le=MAX_HORIZON, strict=True, description="constrain every k-th predicted state and the last (1: all)")
     constraint_substeps: bool = Field(default=True, strict=True, description="also constrain the states after each of the prediction's substeps within the constrained periods (between the samples)")
     disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
-    constraint_backoff: bool | None = Field(default=None, strict=True, description="tighten the constraint rows by the prediction's one-period error measured in the loop, carried to each bounded quantity (a bound never loosened; default: on with constraint rows and solver sqpmethod)")
+    constraint_backoff: bool | None = Field(default=None, strict=True, description="tighten the constraint rows by the prediction's one-period error measured in the loop, carried to each bounded quantity (a bound never loosened; default: on with constraint rows and solver sqpmethod or hpipm)")
 
 
 class MPCFile(LoopFile):
