@@ -207,8 +207,10 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     s_hi = ca.DM(np.tile(top, s_idx.size // ns if ns else 0)) / k_s
     ux = np.setdiff1d(np.arange(z.numel()), s_idx)  # the inputs and states: the tracking cost's scale, not the penalty's
     h_max, lam = float(np.max(np.abs(np.asarray(hess[ux, ux].nonzeros())))), []
+    Z, gz, jz, grad = first(W, P)
     for it in range(k_it):
-        Z, gz, jz, grad = first(W, P) if it == 0 else (Z, *lin(Z, P))
+        if it:
+            gz, jz, grad = lin(Z, P)
         lb, ub = ca.MX(z.numel(), 1), ca.MX(z.numel(), 1)
         lb[u_idx], ub[u_idx] = u_lo - Z[u_idx], u_hi - Z[u_idx]
         lb[x_idx], ub[x_idx] = x_lo - Z[x_idx], x_hi - Z[x_idx]

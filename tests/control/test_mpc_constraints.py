@@ -105,12 +105,8 @@ def test_infeasible_state_soft_solves_hard_fails(integrator, which, ok):
     assert np.isfinite(float(u))
 
 
-@pytest.mark.parametrize("which", ["free", "soft"])
-def test_closed_loop_holds_the_bound(integrator, which):
-    # the reference runs to 1 m; the unconstrained MPC follows it past 0.5 m, the soft-constrained one
-    # stays below 0.5 m (to 1e-3 m: the slack of the linearised real-time iteration)
-    ode, t, soft, _, free = integrator
-    c = soft if which == "soft" else free
+def _closed_loop(c, ode, t):
+    """The MPC's loop-step Function in closed loop with the RK4 plant of the model (no delay)."""
     f = c.function()
     mem = {"w": c.memory_initial}
 
@@ -119,7 +115,15 @@ def test_closed_loop_holds_the_bound(integrator, which):
         mem["w"] = np.asarray(w_next).ravel()
         return (0 if float(ok) else 6), np.asarray(uk).ravel()
 
-    run = run_controller_loop(controller, ode.step(DT, "rk4"), c.x_ref[0], t, c.x_ref, u_lb=c.u_lb, u_ub=c.u_ub, delay=0)
+    return run_controller_loop(controller, ode.step(DT, "rk4"), c.x_ref[0], t, c.x_ref, u_lb=c.u_lb, u_ub=c.u_ub, delay=0)
+
+
+@pytest.mark.parametrize("which", ["free", "soft"])
+def test_closed_loop_holds_the_bound(integrator, which):
+    # the reference runs to 1 m; the unconstrained MPC follows it past 0.5 m, the soft-constrained one
+    # stays below 0.5 m (to 1e-3 m: the slack of the linearised real-time iteration)
+    ode, t, soft, _, free = integrator
+    run = _closed_loop(soft if which == "soft" else free, ode, t)
     peak = float(np.max(run.x[:, 0]))
     if which == "free":
         assert peak > BOUND + 0.1
@@ -204,17 +208,8 @@ def test_multiple_shooting_refuses_input_dependent_constraints(integrator, solve
 
 def test_hpipm_closed_loop_holds_the_bound(integrator, multiple_shooting):
     # the soft rows of the hpipm step in the loop (a second QP solver for test_closed_loop_holds_the_bound's bound)
-    ode, t, soft, *_ = integrator
-    c = multiple_shooting["hpipm", False]
-    f = c.function()
-    mem = {"w": c.memory_initial}
-
-    def controller(tk, y):
-        uk, w_next, ok = f(tk, y, c.u_initial, mem["w"])
-        mem["w"] = np.asarray(w_next).ravel()
-        return (0 if float(ok) else 6), np.asarray(uk).ravel()
-
-    run = run_controller_loop(controller, ode.step(DT, "rk4"), c.x_ref[0], t, c.x_ref, u_lb=c.u_lb, u_ub=c.u_ub, delay=0)
+    ode, t, *_ = integrator
+    run = _closed_loop(multiple_shooting["hpipm", False], ode, t)
     assert float(np.max(run.x[:, 0])) <= BOUND + 1e-3
     assert run.status_counts == {"0": t.size}
 
