@@ -408,7 +408,7 @@ class CompiledLibrary:
         Returns
         -------
         LoopStepRunner
-            ``runner(t, x) -> (status, u)``, ``runner.reset()``, ``runner.memory_bytes``.
+            ``runner(t, x) -> (status, u)``, ``runner.reset()``, ``runner.memory()``, ``runner.memory_bytes``.
 
         Raises
         ------
@@ -457,6 +457,7 @@ class LoopStepRunner:
         self._ref = ctypes.byref(self._mem)
         step, real = library.generated.parameters, library.real_type
         self._x, self._u = (real * step.nx)(), (real * step.nu)()
+        self._nw = int(step.nw)
         self.memory_bytes = ctypes.sizeof(memory)
         self.reset()
 
@@ -480,6 +481,16 @@ class LoopStepRunner:
         self._x[:] = [float(v) for v in x]
         code = self._step(self._ref, t, self._x, self._u)
         return code, np.array(self._u[:], dtype=float)
+
+    def memory(self) -> np.ndarray:
+        """The memory's ``w`` (the warm start and the estimator's state) as it is now.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(nw,)`` float64 copy.
+        """
+        return np.array(self._mem.w[:self._nw], dtype=float)
 
     def reset(self) -> int:
         """Call ``<prefix>_init`` on the memory.

@@ -26,7 +26,7 @@ from gtmodel.control.reference import period_index
 from gtmodel.control.state_limits import BACKOFF_GAIN, envelope
 from gtmodel.control.tracking import saturate
 
-__all__ = ["disturbance_estimate", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
+__all__ = ["disturbance_estimate", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
 
 
 def memory_layout(c: Any) -> dict[str, int]:
@@ -238,3 +238,53 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
             nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + share * error
         share *= 1 - BACKOFF_GAIN
     return ca.vertcat(*out), error
+
+
+#: The estimates :func:`memory_estimates` reports: the memory's part, what it is, and the names it goes by.
+ESTIMATES = {"d": ("input disturbance", "u_names"), "error": ("prediction error envelope", "x_names")}
+
+
+def memory_estimates(c: Any, t: np.ndarray, memories: np.ndarray) -> list[dict[str, Any]]:
+    """The estimator's figures along a closed loop, read from the step's memory after each period (the check's report).
+
+    Parameters
+    ----------
+    c : MPCController or Any
+        The controller; anything without the estimator's memory (:func:`memory_layout`) gives none.
+    t : numpy.ndarray
+        ``(n,)`` the periods' times [s].
+    memories : numpy.ndarray
+        ``(n, n_memory)`` the step's memory after each period (``<prefix>_memory.w``).
+
+    Returns
+    -------
+    list of dict
+        Per input of the disturbance estimate ``d`` (with a gain) and per state of the back-off's error envelope: ``kind``
+        (:data:`ESTIMATES`), ``name``, ``largest`` (the value of the largest magnitude, the input's or state's unit),
+        ``time`` [s] of it, ``last``, and ``relative``: ``|largest|`` over the input's range (its bounds' span) or the
+        state's scale (:meth:`~gtmodel.control.mpc.MPCController.plausible_ranges`). Empty without an estimator.
+
+    Raises
+    ------
+    ValueError
+        ``memories`` not ``(len(t), n_memory)``.
+    """
+    if not isinstance(getattr(c, "disturbance_gain", None), float) or not memory_layout(c):
+        return []
+    m = np.asarray(memories, dtype=float)
+    if m.ndim != 2 or m.shape != (np.size(t), c.n_memory):
+        raise ValueError(f"memories: expected ({np.size(t)}, {c.n_memory}), got {m.shape}")
+    span = np.asarray(c.u_ub, dtype=float) - np.asarray(c.u_lb, dtype=float)
+    scales = {"d": np.where(np.isfinite(span), span, c.plausible_ranges(c.u_lb, c.u_ub)[1]),
+              "error": c.plausible_ranges(c.u_lb, c.u_ub)[0]}
+    out, start = [], c.nw
+    for key, n in memory_layout(c).items():
+        if key in ESTIMATES and (key != "d" or c.disturbance_gain):  # without a gain the estimate stays 0
+            kind, names = ESTIMATES[key]
+            block = m[:, start:start + n]
+            for i, name in enumerate(getattr(c, names)):
+                k = int(np.argmax(np.abs(block[:, i])))
+                out.append({"kind": kind, "name": name, "largest": float(block[k, i]), "time": float(np.asarray(t)[k]),
+                            "last": float(block[-1, i]), "relative": float(abs(block[k, i]) / scales[key][i])})
+        start += n
+    return out

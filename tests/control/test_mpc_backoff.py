@@ -16,7 +16,7 @@ import pytest
 
 from gtmodel.control.bounds import TARGET_MARGIN
 from gtmodel.control.mpc import mpc_controller
-from gtmodel.control.mpc_memory import row_backoff
+from gtmodel.control.mpc_memory import memory_estimates, row_backoff
 from gtmodel.control.state_limits import BACKOFF_GAIN
 from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
@@ -100,3 +100,37 @@ def test_the_back_off_needs_rows_of_sqpmethod_or_hpipm(integrator, kwargs):
     ode, t, x_ref, _ = integrator
     with pytest.raises(InputError, match="constraint_backoff: tightens the constraint rows of solver sqpmethod or hpipm"):
         mpc_controller(ode, t, x_ref, np.zeros((101, 1)), horizon=H, constraint_backoff=True, **kwargs)
+
+
+def test_memory_estimates_read_the_estimator_by_hand(integrator):
+    # the memory after three periods written by hand (layout of memory_layout: w, d, x, u, error, ran): the figures are
+    # the entries of largest magnitude, their times, the last values, over the input's range and the states' scales
+    ode, t, x_ref, mpcs = integrator
+    c = replace(mpcs[True], disturbance_gain=0.3)
+    d, err = np.array([0.5, -2.0, 1.0]), np.array([[0.001, 0.0], [-0.004, 0.2], [0.002, -0.3]])
+    rows = np.array([np.r_[c.w_initial, d[k], 0.1, 0.2, 3.0, err[k], 1.0] for k in range(3)])
+    got = {(e["kind"], e["name"]): e for e in memory_estimates(c, t[:3], rows)}
+    scale = c.plausible_ranges(c.u_lb, c.u_ub)[0]
+    assert got["input disturbance", "u"] == {"kind": "input disturbance", "name": "u", "largest": -2.0, "time": t[1], "last": 1.0,
+                                              "relative": 2.0 / 100.0}  # the bounds' span, 100 m/s^2
+    assert got["prediction error envelope", "v"]["largest"] == -0.3 and got["prediction error envelope", "v"]["time"] == t[2]
+    assert got["prediction error envelope", "x"]["relative"] == pytest.approx(0.004 / scale[0])
+
+
+@pytest.mark.parametrize("rows, match", [(np.zeros((2, 5)), r"memories: expected \(3, ")], ids=["short"])
+def test_memory_estimates_refuse_a_memory_of_another_shape(integrator, rows, match):
+    *_, mpcs = integrator
+    with pytest.raises(ValueError, match=match):
+        memory_estimates(mpcs[True], np.zeros(3), rows)
+
+
+def test_no_estimator_no_estimates(integrator):
+    *_, mpcs = integrator
+    assert memory_estimates(mpcs[False], np.zeros(3), np.zeros((3, mpcs[False].n_memory))) == []
+
+
+def test_without_a_gain_only_the_envelope_is_reported(integrator):
+    *_, mpcs = integrator
+    c = mpcs[True]  # the back-off's memory, no disturbance gain: its d stays 0 and is not reported
+    kinds = {e["kind"] for e in memory_estimates(c, np.zeros(2), np.zeros((2, c.n_memory)))}
+    assert kinds == {"prediction error envelope"}

@@ -151,6 +151,18 @@ def test_a_ratio_that_fails_names_the_bounds_the_controller_rode():
     assert why.endswith(f"; the bounds it rode: x 1.7 of 1.71 (-0.58 %) at t = {closed.t[7]:.4g} s")
 
 
+def test_the_estimates_are_printed_written_and_named_where_the_ratio_fails():
+    # an MPC's input-disturbance estimate as closed_loop_check reads it from the memory (memory_estimates): a summary
+    # line, summary.json's "estimates", and the ratio's failure says what the controller compensated
+    closed, feedforward = PASSING
+    est = {"kind": "input disturbance", "name": "src.v", "largest": -1.5, "time": 0.1, "last": -1.2, "relative": 0.03125}
+    check = LoopCheck(closed=closed, feedforward=feedforward, memory_bytes=0, work_bytes=0, max_ratio=0.1, label="MPC", estimates=[est])
+    text = "input disturbance src.v: largest -1.5 at t = 0.1 s (3.12 % of its range), last -1.2"
+    assert f"  {text}" in check.summary_lines() and "the MPC's estimates (its memory after each period):" in check.summary_lines()
+    assert check.failures()[0].endswith(f"; its estimates: {text}")
+    assert check.to_dict()["estimates"] == [est]
+
+
 @pytest.mark.parametrize("law, expected", [
     (lambda t, y: (0, [0.5 * (-1) ** round(t / (T[1] - T[0]))]), 1.0),  # +-0.5 of a [-1, 1] input each period: every period turns back
     (lambda t, y: (0, [0.1]), 0.0),                                      # a steady input: none

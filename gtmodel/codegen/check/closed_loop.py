@@ -32,6 +32,7 @@ from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import build_step
 from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
+from gtmodel.control.mpc_memory import ESTIMATES, memory_estimates
 from gtmodel.control.reference import period_index
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
 from gtmodel.status import Status
@@ -117,6 +118,9 @@ class LoopCheck:
     states_at_bounds : dict of str to float
         Per declared state bound the reference rides, the fraction of its samples there
         (:func:`reference_states_at_bounds`); above :data:`STATE_AUTHORITY_WARNING` the summary notes it.
+    estimates : list of dict
+        The MPC's estimator read from the step's memory along the run (:func:`~gtmodel.control.mpc_memory.memory_estimates`:
+        the input disturbance it compensated, the back-off's error envelope); printed, and named where the ratio fails.
     """
 
     closed: LoopSummary
@@ -135,6 +139,7 @@ class LoopCheck:
     notes: list[str] = field(default_factory=list)
     real: str = "double"
     states_at_bounds: dict[str, float] = field(default_factory=dict)
+    estimates: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def status(self) -> Status:
@@ -173,7 +178,7 @@ class LoopCheck:
               for b in self.bounds_between if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)"
-             + self._binding() + self._cycling(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
+             + self._binding() + self._estimated() + self._cycling(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
             (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
              "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s),
             (f"{self.heap[1] if self.heap else 0} allocations of the QP solver on the heap (its arena of "
@@ -207,6 +212,10 @@ class LoopCheck:
         return ("; the bounds it rode: " + ", ".join(f"{b.name} {b.value:.4g} of {b.limit:g} ({100 * b.signed:+.2g} %) at t = {b.time:.4g} s"
                                                       for b in near)) if near else ""
 
+    def _estimated(self) -> str:
+        """The estimates the controller worked with (:attr:`estimates`), for the ratio's failure (empty without)."""
+        return ("; its estimates: " + "; ".join(_estimate_text(e) for e in self.estimates)) if self.estimates else ""
+
     @property
     def step_p99_s(self) -> float:
         """99th percentile of the step times after the first [s] (:meth:`LoopSummary.step_times`)."""
@@ -228,7 +237,7 @@ class LoopCheck:
             the controller and of the feedforward, ``bounds`` and ``bounds_between`` (the controller's, per bound:
             :meth:`~gtmodel.control.bounds.BoundExcess.to_dict`), ``bounds_feedforward``, ``step_time_s`` (``median``,
             ``p99``, ``max``, ``first``, ``budget``, ``clock``), ``failed_steps``, ``alternation`` (:attr:`alternation`), ``input_bound_violations``,
-            ``memory_bytes``, ``work_bytes``, ``notes``.
+            ``memory_bytes``, ``work_bytes``, ``notes``, ``estimates`` (:attr:`estimates`).
         """
         times = self.closed.step_times()
         return {"status": str(self.status), "failures": self.failures(), "label": self.label, "real": self.real,
@@ -241,7 +250,8 @@ class LoopCheck:
                 "bounds_feedforward": [b.to_dict() for b in self.bounds_feedforward],
                 "step_time_s": {**{k: float(v) for k, v in times.items()}, "budget": float(self.step_budget_s), "clock": self.clock},
                 "failed_steps": self.failed_steps, "alternation": self.alternation, "input_bound_violations": int(self.closed.bound_violations),
-                "memory_bytes": int(self.memory_bytes), "work_bytes": int(self.work_bytes), "notes": list(self.notes)}
+                "memory_bytes": int(self.memory_bytes), "work_bytes": int(self.work_bytes), "notes": list(self.notes),
+                "estimates": [dict(e) for e in self.estimates]}
 
     def summary_lines(self) -> list[str]:
         """Human-readable summary.
@@ -264,6 +274,8 @@ class LoopCheck:
                 + [f"closed loop, generated C {self.label}" + (" (real float: float32 step, double plant; the same criteria)" if self.real == "float" else "") + ":"] + ["  " + line for line in self.closed.summary_lines()]
                 + ([f"declared bounds on the plant under the {self.label} (tolerance {100 * EXCESS_TOLERANCE:g} %):"] + held if held
                    else ["declared bounds on the plant: none"])
+                + ([f"the {self.label}'s estimates (its memory after each period):"] + [f"  {_estimate_text(e)}" for e in self.estimates]
+                   if self.estimates else [])
                 + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}"]
                 + ([f"  beyond a declared bound by more than {100 * EXCESS_TOLERANCE:g} %: {', '.join(ff_beyond)}"] if ff_beyond else [])
                 + [ratio,
@@ -279,6 +291,12 @@ class LoopCheck:
                    "room there on a plant unlike the model (plan that state with margin below its bound: a controller or MPC file's "
                    "[reference] overrides, docs/model_in_the_loop.md)"
                    for name, share in self.states_at_bounds.items() if share > STATE_AUTHORITY_WARNING])
+
+
+def _estimate_text(e: dict[str, Any]) -> str:
+    """One estimate of :attr:`LoopCheck.estimates` as a line."""
+    return (f"{e['kind']} {e['name']}: largest {e['largest']:.4g} at t = {e['time']:.4g} s ({100 * e['relative']:.3g} % of its "
+            f"{'range' if e['kind'] == ESTIMATES['d'][0] else 'scale'}), last {e['last']:.4g}")
 
 
 def compiled_step(generated: GeneratedCode, library: Path | CompiledLibrary) -> tuple[Any, Any, int]:
@@ -485,8 +503,17 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
     args = (setup.plant_step, setup.plant_x0, setup.t, setup.x_ref)
     kw = dict(setup.loop, plant_p=setup.plant_p, status_names=STATUS_NAMES, clock=clock)
     n = int(np.size(setup.t))
-    controller = runner if progress is None else _reporting(runner, f"closed loop, generated C {label}", n, progress)
+    memories: list[np.ndarray] = []
+
+    def recording(t: float, x: np.ndarray) -> tuple[int, np.ndarray]:  # the first run's memory after each period
+        out = runner(t, x)
+        if len(memories) < n:
+            memories.append(runner.memory())
+        return out
+
+    controller = recording if progress is None else _reporting(recording, f"closed loop, generated C {label}", n, progress)
     first = run_controller_loop(controller, *args, **kw)
+    estimates = memory_estimates(setup.controller, first.t[:len(memories)], np.array(memories)) if memories else []
     times, statuses = [first.step_s], [first.status]
     for _ in range(max(int(repeat), 1) - 1):
         runner.reset()
@@ -503,7 +530,8 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
                      clock=getattr(clock, "__name__", str(clock)),
                      reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub),
                      bounds=plant_bounds(setup, first), bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes),
-                     states_at_bounds=reference_states_at_bounds(setup), bounds_between=plant_bounds(setup, first, between=True))
+                     states_at_bounds=reference_states_at_bounds(setup), bounds_between=plant_bounds(setup, first, between=True),
+                     estimates=estimates)
 
 
 def _reporting(law: Any, what: str, n: int, progress: Any) -> Any:
