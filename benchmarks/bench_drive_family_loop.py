@@ -28,9 +28,9 @@ axis' scale squared, :data:`MPC_A`, :data:`TRACKING_A`):
   ``load.s``, or the friction's relative position to the housing, found as the state the model's
   output ``load.flange_b.phi|s`` equals); where the reduction kept no such state (a gear whose
   backlash deflection is a state) the motor angle ``emf.phi``, weighted and judged as the position;
-* ``[mpc]``: ``model = "<name>.py:Member"``, horizon 20, period 4 ms, 1 SQP iteration, ``solver = "hpipm"``
-  (the shipped drive MPCs' form), rk4 with 4 substeps, ``input_delay = 1``; the problem's current (and speed)
-  limits the MPC's soft rows (``problem_constraints`` default, with the back-off);
+* ``[mpc]``: ``model = "<name>.py:Member"``, horizon 20, period 4 ms, 1 SQP iteration, rk4 with
+  4 substeps, ``input_delay = 1``; the problem's current (and speed) limits the MPC's soft rows
+  (``problem_constraints`` default, not tightened);
 * ``[controller]``: the same model, period, rk4 with 4 substeps, ``time_varying = true``, ``input_delay = 1``;
 * ``[reference]``: ``problem = "<name>.toml"``, ``overrides`` the bounds ``src.v``, ``ind.i`` (and
   ``rotor.w`` where declared) at ``--plan-margin`` (default 0.8) of the member's, ``settle_time = 0.3``;
@@ -293,7 +293,7 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
               + ("" if is_load else " (the motor angle: the reduction kept no load position state)") + ".",
               f"Plan at {plan_margin:g} of the bounds; plant: {', '.join(f'{k} x{v:g}' for k, v in factors.items())}."]
     mpc = {"name": f"{m.name}_mpc", "description": f"{m.name}: MPC, horizon 20 x 4 ms, RTI, rk4 x4, plant 20 % off",
-           "mpc": {"model": model, "horizon": 20, "period": 0.004, "sqp_iterations": 1, "solver": "hpipm", "method": "rk4", "substeps": 4,
+           "mpc": {"model": model, "horizon": 20, "period": 0.004, "sqp_iterations": 1, "method": "rk4", "substeps": 4,
                    "input_delay": 1, "state_weights": state_weights(roles, scales, MPC_A), "input_weights": {"src.v": u_w["mpc"]}},
            "reference": reference, "check": check}
     trk = {"name": f"{m.name}_trk", "description": f"{m.name}: feedforward + TV-LQR at 4 ms, rk4 x4, plant 20 % off",

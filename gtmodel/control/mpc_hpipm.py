@@ -12,19 +12,21 @@ is constrained), in the single shooting's order. The constraints must not depend
 (the single shooting imposes ``x_{k+1}``'s at ``u_{k+1}``, another stage's variable): refused. Soft
 rows have one slack per side and stage (a stage-wise L1 penalty, fatrop's; the single shooting
 shares one per side over the horizon: the same optimum wherever the rows can be held), with the
-single shooting's ``rho (s + s^2)`` written in the slack ``sqrt(rho) s`` (a Hessian of 2 there, beside the
-inputs' and states' weights, rather than ``2 rho``, 2e7 on the two-mass drive).
+single shooting's ``rho (s + s^2)`` written in the slack ``sqrt(rho) s``: the QP's Hessian is then
+2 there, beside the inputs' and states' weights, rather than ``2 rho`` (2e7 on the two-mass drive,
+where HPIPM took 18 iterations on average and 50, its limit, at worst), and HPIPM's first barrier
+parameter ``mu0`` is ``sqrt(rho)`` (8.5 iterations on average, 11 at worst; 10, CasADi's default,
+without soft rows).
 
-HPIPM's tolerances are absolute (``speed_abs``: a complementarity of 1e-8), so each QP's cost is
-divided by its own scale, the larger of the inputs' and states' largest Hessian entry and their
-largest gradient entry at the linearisation point (the slacks' penalty left out: it would swamp
-the tracking cost's accuracy), with the first barrier parameter ``mu0 = 1`` (:data:`HPIPM_MU0`) in
-that unit; the multipliers are scaled back. Unscaled, a QP whose multipliers ran to 1e4 (a state
-far from the reference) did not reach the tolerance: on the motor + gear + load drive 8 of the
-codegen check's 50 random states stopped at the iteration limit, 0 scaled, and along the shipped
-drives' references the iterations fell from 8-12 to 7-11 on average. The price is accuracy in the
-directions of least curvature: the first input agrees with the single shooting's exact QP to
-1e-5 relative, the horizon's last inputs to 2e-4 (``tests/control/test_mpc_hpipm.py``).
+HPIPM's mode ``speed_abs`` stops on the complementarity alone (1e-8, absolute): exact where it gets
+there (the converged iterations agree with IPOPT to 1e-10), but where a soft row is far beyond its
+bound at the horizon's start (the multipliers near the penalty's ``sqrt(rho)``) it may stop at its
+iteration limit or its minimum step, and the generated step then returns its failure status and the
+last input: 6 of the codegen check's 50 random states of the motor + gear + load drive (current
+noise of 10 % of its range). Dividing each QP's cost by its scale made those converge but stopped
+HPIPM early elsewhere, 0.9 % off IPOPT's first input beside a nearly active row (the belt drive), so
+the shipped drive MPCs stay with ``sqpmethod`` and DAQP's active set (``benchmarks/bench_mpc.py``
+measures both).
 The rows' lower bounds are 0 or the back-off's (:func:`~gtmodel.control.mpc_memory.row_backoff`,
 the step's input ``lbg``).
 
@@ -83,8 +85,8 @@ STATE_BOX = 10.0
 #: absolute formulation, residuals not computed in the iterations) took 0.80x the generated L1 step's
 #: time of ``speed`` and 0.60x ``balance``'s, the same first input to 1e-9 (2026-11-23, one state sweep).
 HPIPM_MAX_ITER, HPIPM_MODE = 50, "speed_abs"
-#: HPIPM's first barrier parameter, in the unit of the QP's cost divided by its scale (see the module docstring).
-HPIPM_MU0 = 1.0
+#: HPIPM's first barrier parameter without soft rows (CasADi's default; with them ``sqrt(rho)``, the module docstring).
+HPIPM_MU0 = 10.0
 
 
 def _stage_rows(c: Any) -> tuple[int, int, list[int]]:
@@ -144,7 +146,10 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     k_it = c.sqp_iterations if iterations is None else int(iterations)
     cons = c.constraints
     nr, ns, rowsets = _stage_rows(c)
-    k_s = 1.0 / math.sqrt(cons.weight) if ns else 1.0  # the slacks' variable sqrt(rho) s (see the module docstring)
+    # the slacks' variables scaled by 1 / sqrt(rho): the penalty sqrt(rho) s + s^2 (a Hessian of 2 beside the inputs' and
+    # states', not rho's 2e7), and HPIPM's first barrier parameter that scale (see the module docstring)
+    k_s = 1.0 / math.sqrt(cons.weight) if ns else 1.0
+    mu0 = max(HPIPM_MU0, 1.0 / k_s)
     Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
     x0, xr, ur = ca.SX.sym("x0", nx), ca.SX.sym("xr", nx, H), ca.SX.sym("ur", nu, H)
     U = [ca.SX.sym(f"u{k}", nu) for k in range(H)]
@@ -181,7 +186,7 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     first = ca.Function("first", [ws, p], [z_start, *lin(z_start, p)], ["w", "p"], ["z", "g", "jac", "grad"], {"cse": True})
     opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu + S[k].numel() for k in range(H)] + [0],
             "ng": [nr * n for n in rowsets] + [0], "error_on_fail": False,
-            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": HPIPM_MU0}}
+            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": mu0}}
     qp = ca.conic("mpc_hpipm", "hpipm", {"h": hess.sparsity(), "a": jac.sparsity()}, opts)
     sizes = [(nu, S[k].numel(), nx) for k in range(H)]
     offsets = np.cumsum([0] + [sum(t) for t in sizes])
@@ -205,8 +210,7 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     top = row_box(c) if nr else np.zeros(0)
     g_hi = ca.DM(np.tile(top, m // nr if nr else 0))
     s_hi = ca.DM(np.tile(top, s_idx.size // ns if ns else 0)) / k_s
-    ux = np.setdiff1d(np.arange(z.numel()), s_idx)  # the inputs and states: the tracking cost's scale, not the penalty's
-    h_max, lam = float(np.max(np.abs(np.asarray(hess[ux, ux].nonzeros())))), []
+    lam = []
     Z, gz, jz, grad = first(W, P)
     for it in range(k_it):
         if it:
@@ -218,10 +222,9 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
         if m:
             lb[s_idx], ub[s_idx] = -Z[s_idx], s_hi - Z[s_idx]
             lba[row_idx], uba[row_idx] = LBG - gz[row_idx], g_hi - gz[row_idx]
-        scale = ca.fmax(h_max, ca.mmax(ca.fabs(grad[ux])))  # the QP's cost in its own unit (see the module docstring)
-        sol = qp(h=hess / scale, g=grad / scale, a=jz, lba=lba, uba=uba, lbx=lb, ubx=ub)
+        sol = qp(h=hess, g=grad, a=jz, lba=lba, uba=uba, lbx=lb, ubx=ub)
         Z = Z + sol["x"]
-        lam.append(sol["lam_a"] * scale)
+        lam.append(sol["lam_a"])
     cost = cost_f(Z, P)
     # the multipliers are an output: CasADi 3.8.2's HPIPM runtime writes them unconditionally (a call
     # whose lam_a output is unused gets a NULL pointer there and crashes)

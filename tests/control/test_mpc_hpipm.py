@@ -57,11 +57,8 @@ def test_step_is_the_single_shooting_gauss_newton_step(motor):
     u, w_next, ok = c.function()(tk, xk, c.u_initial, c.w_initial)
     u_ss, w_ss, ok_ss = ss.function()(tk, xk, c.u_initial, c.w_initial)
     assert float(ok) == float(ok_ss) == 1.0
-    # HPIPM's interior point stops at a complementarity of 1e-8 of the QP in its own cost unit (the module's scaling):
-    # the first input within 1e-5 relative of qrqp's active set; the horizon's last inputs, which only the last
-    # states' weights see (curvature 1e-5 of the largest), within 2e-4
-    np.testing.assert_allclose(np.asarray(u).ravel(), np.asarray(u_ss).ravel(), rtol=1e-5, atol=1e-4)
-    np.testing.assert_allclose(np.asarray(w_next).ravel(), np.asarray(w_ss).ravel(), rtol=1e-3, atol=1e-4)
+    np.testing.assert_allclose(np.asarray(u).ravel(), np.asarray(u_ss).ravel(), rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(np.asarray(w_next).ravel(), np.asarray(w_ss).ravel(), rtol=1e-8, atol=1e-8)
 
 
 BAD = [
@@ -101,7 +98,7 @@ def test_generated_step_matches_the_function_without_heap(motor, tmp_path):
 
 def test_disturbance_estimate_and_delay_as_with_sqpmethod(motor):
     # the estimate shifts the input bounds and the delay moves the horizon's start; both are the step's, not the
-    # solver's: with hpipm the step equals sqpmethod's (single shooting, one Gauss-Newton iteration) to HPIPM's tolerance
+    # solver's: with hpipm the step equals sqpmethod's (single shooting, one Gauss-Newton iteration) to 1e-8
     *_, c = motor
     hp = dataclasses.replace(c, disturbance_gain=0.3, delay=1)
     ss = dataclasses.replace(hp, solver="sqpmethod")
@@ -111,4 +108,4 @@ def test_disturbance_estimate_and_delay_as_with_sqpmethod(motor):
     xk, tk, u_last = c.x_ref[40] + np.array([0.1, 0.01, 0.5]), c.t0 + 40 * DT, np.array([3.0])
     got = [np.asarray(v).ravel() for v in hp.function()(tk, xk, u_last, mem)]
     want = [np.asarray(v).ravel() for v in ss.function()(tk, xk, u_last, mem)]
-    np.testing.assert_allclose(np.concatenate(got), np.concatenate(want), rtol=1e-5, atol=1e-4)  # HPIPM's tolerance, as above
+    np.testing.assert_allclose(np.concatenate(got), np.concatenate(want), rtol=1e-8, atol=1e-8)
