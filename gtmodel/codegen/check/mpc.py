@@ -70,6 +70,8 @@ class MPCCheck(LoopCheck):
         Per declared state bound the reference rides, the fraction of its samples there.
     bounds_between : list of BoundExcess
         The declared state bounds counted between the samples (judged as ``bounds``).
+    estimates : list of dict
+        The MPC's estimator read from its memory along the run (:func:`~gtmodel.control.mpc_memory.memory_estimates`).
     """
 
     @property
