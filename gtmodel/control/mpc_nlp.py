@@ -14,7 +14,6 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
 __all__ = ["between_rows", "period_states", "single_shooting_nlp"]
 
