@@ -75,8 +75,9 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.control.mpc_nlp import between_rows, period_states
+from gtmodel.errors import InputError
 
-__all__ = ["HPIPM_MAX_ITER", "HPIPM_MODE", "hpipm_rti", "row_box"]
+__all__ = ["HPIPM_MAX_ITER", "HPIPM_MODE", "REFERENCE_QP", "hpipm_rti", "row_box"]
 
 #: The box of the predicted states: the reference's range widened by this many state scales
 #: (:func:`~gtmodel.control.reference.reference_scales`) each side.
@@ -85,6 +86,9 @@ STATE_BOX = 10.0
 #: absolute formulation, residuals not computed in the iterations) took 0.80x the generated L1 step's
 #: time of ``speed`` and 0.60x ``balance``'s, the same first input to 1e-9 (2026-11-23, one state sweep).
 HPIPM_MAX_ITER, HPIPM_MODE = 50, "speed_abs"
+#: The QP options of the IPOPT reference (``hpipm_rti(plugin="ipopt")``): CasADi's ``nlpsol`` conic, tolerance 1e-12.
+REFERENCE_QP = {"nlpsol": "ipopt", "nlpsol_options": {"ipopt.tol": 1e-12, "ipopt.max_iter": 3000, "ipopt.print_level": 0,
+                                                     "ipopt.sb": "yes", "print_time": False}}
 #: HPIPM's first barrier parameter without soft rows (CasADi's default; with them ``sqrt(rho)``, the module docstring).
 HPIPM_MU0 = 10.0
 
@@ -120,7 +124,7 @@ def row_box(c: Any) -> np.ndarray:
     return np.max(along, axis=1) + STATE_BOX
 
 
-def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Function:
+def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None, plugin: str = "hpipm", strict: bool = False) -> ca.Function:
     """The MPC's real-time iteration(s) by HPIPM on the multiple-shooting QP (see the module docstring).
 
     Parameters
@@ -131,6 +135,18 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
         ``L`` with ``L^T L = M`` of a weight matrix (the single shooting's factor).
     iterations : int, optional
         Iterations (default ``c.sqp_iterations``).
+    plugin : {"hpipm", "qpoases", "ipopt"}, optional
+        The solver of each QP: HPIPM (the step's), or as a reference for HPIPM's answers on the same QPs
+        (``benchmarks/bench_hpipm_rows.py``) qpOASES (an active-set method) or IPOPT to 1e-12 (:data:`REFERENCE_QP`).
+    strict : bool, optional
+        Raise (CasADi's ``error_on_fail``) where a QP is not solved, HPIPM at its iteration limit or minimum step
+        included; by default the Function returns the solver's last iterate, as the generated step does not (it
+        returns its failure status there).
+
+    Raises
+    ------
+    InputError
+        Another ``plugin``.
 
     Returns
     -------
@@ -185,9 +201,13 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None) -> ca.Functi
     z_start = ca.vertcat(*parts)
     first = ca.Function("first", [ws, p], [z_start, *lin(z_start, p)], ["w", "p"], ["z", "g", "jac", "grad"], {"cse": True})
     opts = {"N": H, "nx": [0] + [nx] * H, "nu": [nu + S[k].numel() for k in range(H)] + [0],
-            "ng": [nr * n for n in rowsets] + [0], "error_on_fail": False,
-            "print_time": False, "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": mu0}}
-    qp = ca.conic("mpc_hpipm", "hpipm", {"h": hess.sparsity(), "a": jac.sparsity()}, opts)
+            "ng": [nr * n for n in rowsets] + [0],
+            "hpipm": {"mode": HPIPM_MODE, "iter_max": HPIPM_MAX_ITER, "stat_max": HPIPM_MAX_ITER, "mu0": mu0}} if plugin == "hpipm" else \
+        {"printLevel": "none", "nWSR": 100 * z.numel()} if plugin == "qpoases" else REFERENCE_QP
+    if plugin not in ("hpipm", "qpoases", "ipopt"):
+        raise InputError(f"plugin: expected 'hpipm', 'qpoases' or 'ipopt', got {plugin!r}")
+    qp = ca.conic(f"mpc_{plugin}", "nlpsol" if plugin == "ipopt" else plugin, {"h": hess.sparsity(), "a": jac.sparsity()},
+                  {**opts, "error_on_fail": bool(strict), "print_time": False})
     sizes = [(nu, S[k].numel(), nx) for k in range(H)]
     offsets = np.cumsum([0] + [sum(t) for t in sizes])
     u_idx = np.concatenate([np.arange(o, o + nu) for o in offsets[:-1]])

@@ -3,7 +3,8 @@
 References: IPOPT to convergence on the same horizon problem (the iteration repeated at a fixed
 state must reach IPOPT's first input, 1e-6); the single-shooting SQP's one Gauss-Newton
 iteration (the first multiple-shooting QP from the warm start's rollout has no gaps: it is the
-same QP, so the same step, a second method); the generated C against the Python Function (slow).
+same QP, so the same step, a second method); qpOASES and IPOPT on the step's own QP (``plugin``); HPIPM's
+own verdict (``strict``) where it stops at its limit; the generated C against the Python Function (slow).
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ import pytest
 
 from gtmodel.codegen.build import compile_shared
 from gtmodel.codegen.loop_step import generate_loop_step, mpc_step, uses_heap_arena
-from gtmodel.control.mpc import mpc_controller
+from gtmodel.control.mpc import _sqrt_psd, mpc_controller
+from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.mpc_check import compiled_step
@@ -94,6 +96,43 @@ def test_generated_step_matches_the_function_without_heap(motor, tmp_path):
         want.append(u_last)
     assert statuses == [0] * 6
     np.testing.assert_allclose(np.array(got), np.array(want), rtol=1e-9, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def limited(motor):
+    """The motor's hpipm MPC with a soft current row of +-2 A."""
+    ode, t, x, u, _ = motor
+    return mpc_controller(ode, t, x, u, horizon=20, Q=[1e-2, 100.0, 1e-2], R=[1e-3], u_lb=[-12.0], u_ub=[12.0], method="rk4",
+                          substeps=2, solver="hpipm", x_lb={"ind.i": -2.0}, x_ub={"ind.i": 2.0})
+
+
+def _rti_args(c, k, xk):
+    return (xk, c.w_initial, c.parameters(c.t0 + k * DT, xk), np.tile(c.u_lb, c.horizon), np.tile(c.u_ub, c.horizon),
+            np.zeros(c.constraint_rows))
+
+
+@pytest.mark.parametrize("plugin", ["qpoases", "ipopt"])
+def test_reference_qp_solvers_agree_with_hpipm_where_it_converges(limited, plugin):
+    # the same QP by an active-set method and by IPOPT (a second method each) at a state near the reference: HPIPM converges there
+    k, c = 40, limited
+    args = _rti_args(c, k, c.x_ref[k] + np.array([0.1, 0.01, 0.5]))
+    u = [np.asarray(hpipm_rti(c, _sqrt_psd, plugin=p, strict=True)(*args)[0]).ravel() for p in ("hpipm", plugin)]
+    np.testing.assert_allclose(u[0], u[1], rtol=0, atol=1e-6 * 24.0)
+
+
+def test_strict_raises_where_hpipm_stops_at_its_limit(limited):
+    # a current 20x beyond the soft row: the row's multiplier is at least the penalty rho, and HPIPM's absolute
+    # complementarity tolerance is out of reach (module docstring); the lenient Function returns the iterate
+    c, k = limited, 40
+    args = _rti_args(c, k, np.array([-40.0, c.x_ref[k][1], 100.0]))
+    assert np.all(np.isfinite(np.asarray(hpipm_rti(c, _sqrt_psd)(*args)[0])))
+    with pytest.raises(RuntimeError, match="mpc_hpipm"):
+        hpipm_rti(c, _sqrt_psd, strict=True)(*args)
+
+
+def test_unknown_reference_solver_is_refused(limited):
+    with pytest.raises(InputError, match="plugin: expected 'hpipm', 'qpoases' or 'ipopt', got 'osqp'"):
+        hpipm_rti(limited, _sqrt_psd, plugin="osqp")
 
 
 def test_disturbance_estimate_and_delay_as_with_sqpmethod(motor):

@@ -28,13 +28,31 @@ from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import LOOP_KIND, LoopStep
 from gtmodel.errors import CodegenError, InputError
 
-__all__ = ["check_loop_step"]
+__all__ = ["check_loop_step", "loop_samples"]
 
 log = logging.getLogger("gtmodel")
 
 
-def _samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    """Random inputs of the inner step: times in (and a little beyond) ``t_range``, states about ``x_samples``."""
+def loop_samples(step: LoopStep, n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """The random inputs of the inner step the check compares C with Python on.
+
+    Parameters
+    ----------
+    step : LoopStep
+        The loop controller's description.
+    n : int
+        Samples.
+    rng : numpy.random.Generator
+        The random generator.
+
+    Returns
+    -------
+    dict
+        ``"t"`` ``(n, 1)`` times in (and 5 % of the span beyond) ``t_range``; ``"x"`` ``(n, nx)`` rows of
+        ``x_samples`` plus normal noise of 10 % of ``1 + max |x_samples|`` per state; ``"u_last"`` ``(n, nu)``
+        uniform within the input bounds (``u_init +- 1`` where a bound is infinite); with a warm start,
+        ``"w_start"`` ``(n, nw)`` its first value.
+    """
     t0, t1 = step.t_range
     span = max(t1 - t0, step.dt)
     xs = step.x_samples if step.x_samples.size else np.zeros((1, step.nx))
@@ -173,7 +191,7 @@ def check_loop_step(generated: GeneratedCode, n: int = 500, seed: int = 0, build
     build = Path(build_dir) if build_dir is not None else generated.out_dir / "build"
     library = load_strict(generated, build)
     step: LoopStep = generated.parameters
-    samples = _samples(step, int(n), np.random.default_rng(seed))
+    samples = loop_samples(step, int(n), np.random.default_rng(seed))
     spec = generated.specs[0]
     spec = FunctionSpec(**{**spec.__dict__, "reference": lambda source, inputs: _reference(source, inputs)})
     cf = library["control"]
