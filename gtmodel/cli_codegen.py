@@ -373,7 +373,7 @@ def _codegen_mpc(args: argparse.Namespace) -> int:
     with _step(args, f"reading {args.mpc}" + (f"; {planned}" if planned else ""), f"reading {args.mpc}"):
         setup = load_mpc_file(args.mpc, replan=args.replan)
     c = setup.controller
-    how = f"CasADi's sqpmethod + {c.qpsol}" if c.solver == "sqpmethod" else {"hpipm": "its real-time iteration by HPIPM", "fatrop": "fatrop"}.get(c.solver, c.solver)
+    how = f"its real-time iteration, the QP by {c.qpsol}" if c.solver == "sqpmethod" else {"hpipm": "its real-time iteration by HPIPM", "fatrop": "fatrop"}.get(c.solver, c.solver)
     with _step(args, f"generating and compiling the MPC {setup.name} ({how} inside one step)",
                f"generating and compiling {setup.name}"):
         generated, _ = build_step(mpc_step(setup.controller, setup.name, real=args.real), args.out, f"gt_{setup.name}", real=args.real)

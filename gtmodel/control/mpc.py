@@ -17,10 +17,10 @@ inputs are piecewise constant over ``blocks`` equal blocks of the horizon (move 
 ``blocks = H`` is one input per period) and the states are eliminated (single shooting), so
 the QP has ``nu * blocks`` variables and only bounds. The Hessian is the Gauss-Newton one
 ``2 J_r^T J_r`` of the residuals ``r`` above (positive semi-definite; exact for the
-quadratic cost, without the second derivatives of the dynamics), handed to CasADi's
-``sqpmethod`` as its ``hess_lag``; each QP is solved by ``qrqp``. ``sqp_iterations`` SQP
-iterations per period (1: the real-time iteration), warm-started from the last solution
-shifted by one period.
+quadratic cost, without the second derivatives of the dynamics); each QP is solved by ``qrqp``
+(DAQP with constraint rows). ``sqp_iterations`` full-step SQP iterations per period (1: the
+real-time iteration; :func:`~gtmodel.control.mpc_nlp.single_shooting_rti`), warm-started from
+the last solution shifted by one period.
 
 :meth:`MPCController.function` is the loop-step Function
 ``control(t, x, u_last, w) -> (u, w_next, ok)`` of :mod:`gtmodel.codegen.loop_step`: the
@@ -45,7 +45,7 @@ from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.mpc_memory import disturbance_estimate, memory_extra, memory_layout, memory_predict, memory_reset, row_backoff
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
-from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp
+from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp, single_shooting_rti
 from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
 from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
 from gtmodel.control.tracking import saturate
@@ -230,7 +230,7 @@ class MPCController(SampledReference):
         return single_shooting_nlp(self, _sqrt_psd)
 
     def nlp_solver(self, plugin: str = "sqpmethod", iterations: int | None = None, real: str = "double") -> ca.Function:
-        """The horizon NLP as a CasADi ``nlpsol``: ``sqpmethod`` + ``qrqp`` (the generated one) or ``ipopt``.
+        """The horizon NLP as a CasADi ``nlpsol``: ``sqpmethod`` (the step's iterations, with a line search) or ``ipopt``.
 
         Parameters
         ----------
@@ -268,10 +268,12 @@ class MPCController(SampledReference):
         return ca.nlpsol("mpc_sqp", "sqpmethod", nlp, {
             "qpsol": self.qpsol, "hess_lag": hess, "max_iter": k, "min_iter": k, "tol_pr": 1e-14, "tol_du": 1e-14,
             "print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
-            "error_on_fail": False,
-            "qpsol_options": {"error_on_fail": False, **({} if self.qpsol == "daqp" else {"print_iter": False, "print_header": False, "print_info": False}),
-                              **({"constr_viol_tol": QP_FLOAT_TOLERANCE, "dual_inf_tol": QP_FLOAT_TOLERANCE}
-                                 if real == "float" and self.qpsol == "qrqp" else {})}})
+            "error_on_fail": False, "qpsol_options": self._qp_options(real)})
+
+    def _qp_options(self, real: str) -> dict:
+        """The options of :attr:`qpsol` (``real = "float"``: qrqp's tolerances :data:`QP_FLOAT_TOLERANCE`)."""
+        return {"error_on_fail": False, **({} if self.qpsol == "daqp" else {"print_iter": False, "print_header": False, "print_info": False}),
+                **({"constr_viol_tol": QP_FLOAT_TOLERANCE, "dual_inf_tol": QP_FLOAT_TOLERANCE} if real == "float" and self.qpsol == "qrqp" else {})}
 
     def float_tolerance(self, rows: int = 20) -> float:
         """How far a single-precision step may differ from its double-precision Python reference.
@@ -406,18 +408,18 @@ class MPCController(SampledReference):
         ----------
         real : {"double", "float"}, optional
             Real type the Function is generated in: the QP solver's tolerances
-            (:meth:`nlp_solver`; ``sqpmethod`` only).
+            (as :meth:`nlp_solver`'s; ``sqpmethod`` only).
 
         Returns
         -------
         casadi.Function
             ``control(t (1,1), x (nx,1), u_last (nu,1), w (nw,1)) -> (u (nu,1), w_next (nw,1), ok (1,1))``:
             the reference window at ``k = floor((t - t_0) / dt)`` (clamped; a NaN ``t`` gives
-            ``ok = 0``), ``sqp_iterations`` SQP iterations from the warm start ``w``, ``u``
+            ``ok = 0``), ``sqp_iterations`` real-time iterations from the warm start ``w``
+            (``sqpmethod``: :func:`~gtmodel.control.mpc_nlp.single_shooting_rti`), ``u``
             the first block saturated at the bounds, ``w_next`` the solution shifted by one
-            period, ``ok`` 1 when ``u``, ``w_next`` and the cost of the solution are finite (the
-            generated SQP does not stop on a NaN of the prediction: a state outside the
-            model's domain leaves the warm start as its result, whose cost is NaN then) and,
+            period, ``ok`` 1 when ``u``, ``w_next`` and the cost are finite (a state outside
+            the model's domain makes the prediction, and so the cost, NaN) and,
             with hard constraints, every constraint row holds to :data:`HARD_TOLERANCE`
             (scaled) at the result (an infeasible QP's result does not).
             ``u_last`` is the safe input of the C memory on failure and, with :attr:`delay` 1,
@@ -466,10 +468,9 @@ class MPCController(SampledReference):
             if d is not None:
                 pad = ca.DM.zeros(self.n_slack)
                 bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
-            full = self.nlp_solver("sqpmethod", real=real)(x0=ca.vertcat(w, ca.DM.zeros(self.n_slack)), p=p, **bounds)["x"]
-            nlp, _ = self._nlp()
-            cost, rows = ca.Function("cost", [nlp["x"], nlp["p"]], [nlp["f"], nlp["g"]])(full, p)  # NaN when the prediction fails
-            rows = rows[1:]
+            rti = single_shooting_rti(self, _sqrt_psd, self._qp_options(real))
+            full, cost = rti(ca.vertcat(w, ca.DM.zeros(self.n_slack)), p, *(bounds[k] for k in ("lbx", "ubx", "lbg", "ubg")))
+            rows = None
         if self.constraints is not None and self.constraints.hard:  # an infeasible QP's result violates the rows
             if rows is None:  # the rows of the single shooting at fatrop's inputs
                 nlp, _ = self._nlp()

@@ -19,14 +19,14 @@ parameter ``mu0`` is ``sqrt(rho)`` (8.5 iterations on average, 11 at worst; 10, 
 without soft rows).
 
 HPIPM's mode ``speed_abs`` stops on the complementarity alone (1e-8, absolute): exact where it gets
-there (the converged iterations agree with IPOPT to 1e-10), but where a soft row is far beyond its
-bound at the horizon's start (the multipliers near the penalty's ``sqrt(rho)``) it may stop at its
-iteration limit or its minimum step, and the generated step then returns its failure status and the
-last input: 6 of the codegen check's 50 random states of the motor + gear + load drive (current
-noise of 10 % of its range). Dividing each QP's cost by its scale made those converge but stopped
-HPIPM early elsewhere, 0.9 % off IPOPT's first input beside a nearly active row (the belt drive), so
-the shipped drive MPCs stay with ``sqpmethod`` and DAQP's active set (``benchmarks/bench_mpc.py``
-measures both).
+there (the converged iterations agree with IPOPT to 1e-10 along the closed loops), but where a soft
+row is beyond its bound at the solution the row's multiplier is at least the penalty ``rho`` (2e7 to
+3e9 on the drives) and that complementarity is out of reach: HPIPM stops at its iteration limit, and
+the generated step returns its failure status and the last input (at 12 to 37 of 100 of the codegen
+check's random states of three drives; ``benchmarks/bench_hpipm_rows.py``, which compares each
+answer with IPOPT's on the same QP: ``plugin``, ``strict``). Dividing each QP's cost by its scale made
+those converge but stopped HPIPM early elsewhere, 0.9 % off IPOPT's first input beside a nearly active
+row (the belt drive), so the shipped drive MPCs stay with ``sqpmethod`` and DAQP's active set.
 The rows' lower bounds are 0 or the back-off's (:func:`~gtmodel.control.mpc_memory.row_backoff`,
 the step's input ``lbg``).
 

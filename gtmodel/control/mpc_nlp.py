@@ -15,7 +15,7 @@ from typing import Any
 
 import casadi as ca
 
-__all__ = ["between_rows", "period_states", "single_shooting_nlp"]
+__all__ = ["between_rows", "period_states", "single_shooting_nlp", "single_shooting_rti"]
 
 
 def between_rows(c: Any) -> int:
@@ -63,26 +63,8 @@ def period_states(c: Any, x: Any, u: Any) -> tuple[Any, list[Any]]:
     return s[:, m], [s[:, i] for i in range(m)]
 
 
-def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Function]:
-    """The single-shooting NLP of an MPC over its blocked inputs (and slacks) and its Gauss-Newton Hessian.
-
-    Parameters
-    ----------
-    c : MPCController
-        The MPC.
-    sqrt_psd : callable
-        ``L`` with ``L^T L = M`` of a weight matrix.
-
-    Returns
-    -------
-    nlp : dict
-        ``x`` (``nw + n_slack``), ``p`` (:meth:`~gtmodel.control.mpc.MPCController.parameters`),
-        ``f``, ``g`` (one inactive row, then the constraint rows ``>= 0``: per constrained
-        predicted state ``x_j``, the rows of the states inside period ``j - 1`` then those of
-        ``x_j``).
-    hess : casadi.Function
-        ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``: ``2 lam_f (J_r^T J_r + diag(0, rho))``.
-    """
+def _single_shooting(c: Any, sqrt_psd: Any) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX, ca.MX, float]:
+    """``(w, p, r, g, f, rho)`` of :func:`single_shooting_nlp`: its variables, parameters, cost residuals, rows, cost, penalty."""
     H, nx, nu, b = c.horizon, c.nx, c.nu, c.horizon // c.blocks
     W = ca.MX.sym("w", nu, c.blocks)
     s = ca.MX.sym("s", c.n_slack)
@@ -111,10 +93,82 @@ def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Fun
     # casadi_qrqp_dual_blocking); with one constraint row it stays inside. Then the constraint rows >= 0
     g = ca.vertcat(w[0], *rows)
     rho = 0.0 if cons is None else cons.weight
-    f = ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s))
+    return w, p, r, g, ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s)), rho
+
+
+def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Function]:
+    """The single-shooting NLP of an MPC over its blocked inputs (and slacks) and its Gauss-Newton Hessian.
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC.
+    sqrt_psd : callable
+        ``L`` with ``L^T L = M`` of a weight matrix.
+
+    Returns
+    -------
+    nlp : dict
+        ``x`` (``nw + n_slack``), ``p`` (:meth:`~gtmodel.control.mpc.MPCController.parameters`),
+        ``f``, ``g`` (one inactive row, then the constraint rows ``>= 0``: per constrained
+        predicted state ``x_j``, the rows of the states inside period ``j - 1`` then those of
+        ``x_j``).
+    hess : casadi.Function
+        ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``: ``2 lam_f (J_r^T J_r + diag(0, rho))``.
+    """
+    w, p, r, g, f, rho = _single_shooting(c, sqrt_psd)
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
     jr = ca.jacobian(r, w)
     gn = ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack)))
     hess = ca.Function("nlp_hess_l", [w, p, lam_f, lam_g], [2 * lam_f * ca.densify(gn)],
                        ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
     return {"x": w, "p": p, "f": f, "g": g}, hess
+
+
+def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int | None = None) -> ca.Function:
+    """The MPC's real-time iteration(s) on the single-shooting NLP, each QP by the MPC's ``qpsol``.
+
+    One iteration (Diehl, Bock & Schloeder, SIAM J. Control Optim. 43 (2005)): the cost residuals
+    ``r``, the rows ``g`` and their Jacobians at ``w`` in one sensitivity sweep of the prediction
+    (``jacobian([r; g], w)``), the Gauss-Newton QP (Hessian ``2 (J_r^T J_r + diag(0, rho))``, gradient
+    ``2 J_r^T r + (0, rho (1 + 2 s))``, the rows linearised, the bounds shifted by ``w``), and the
+    full step. CasADi's ``sqpmethod`` with one iteration computes the same step but evaluates the
+    rows' Jacobian again at its result, the prediction once more in its line search and the
+    residuals' Jacobian apart for its Hessian (three sensitivity sweeps, four predictions).
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC (single shooting: :func:`single_shooting_nlp`).
+    sqrt_psd : callable
+        ``L`` with ``L^T L = M`` of a weight matrix.
+    qp_options : dict
+        Options of the QP solver ``c.qpsol``.
+    iterations : int, optional
+        Iterations (default ``c.sqp_iterations``).
+
+    Returns
+    -------
+    casadi.Function
+        ``rti(x0 (nw + n_slack,1), p, lbx, ubx, lbg, ubg) -> (x (nw + n_slack,1), f (1,1))``: the arguments
+        of :meth:`~gtmodel.control.mpc.MPCController.nlp_solver`'s call; ``x`` after the iterations, ``f``
+        the last QP's model of the cost there (NaN where the prediction at the last iterate is).
+    """
+    w, p, r, g, f, rho = _single_shooting(c, sqrt_psd)
+    k_it = c.sqp_iterations if iterations is None else int(iterations)
+    nr = r.numel()
+    jac = ca.jacobian(ca.vertcat(r, g), w)
+    jr, jg = jac[:nr, :], jac[nr:, :]
+    s = w[c.nw:]
+    hess = 2 * ca.densify(ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack))))
+    grad = 2 * ca.mtimes(jr.T, r) + ca.vertcat(ca.DM.zeros(c.nw), rho * (1 + 2 * s))
+    lin = ca.Function("lin", [w, p], [f, g, hess, grad, jg], ["w", "p"], ["f", "g", "h", "grad", "jac_g"])
+    qp = ca.conic("mpc_qp", c.qpsol, {"h": hess.sparsity(), "a": jg.sparsity()}, qp_options)
+    Z, P = ca.MX.sym("x0", w.numel()), ca.MX.sym("p", p.numel())
+    LBX, UBX, LBG, UBG = ca.MX.sym("lbx", w.numel()), ca.MX.sym("ubx", w.numel()), ca.MX.sym("lbg", g.numel()), ca.MX.sym("ubg", g.numel())
+    z, cost = Z, None
+    for _ in range(k_it):
+        fz, gz, hz, gradz, jz = lin(z, P)
+        dz = qp(h=hz, g=gradz, a=jz, lba=LBG - gz, uba=UBG - gz, lbx=LBX - z, ubx=UBX - z)["x"]
+        z, cost = z + dz, fz + ca.dot(gradz, dz) + 0.5 * ca.bilin(hz, dz, dz)
+    return ca.Function("rti", [Z, P, LBX, UBX, LBG, UBG], [z, cost], ["x0", "p", "lbx", "ubx", "lbg", "ubg"], ["x", "f"])

@@ -6,7 +6,9 @@ rest under |v| <= 24 V, its current bounded to 10 A (hard rows), predicted by RK
 ``solve_ivp`` (RK45 at rtol 1e-10, a second integrator) on a fine grid inside every period.
 With rows at the samples only the current passes the bound between them; with the rows at
 the substeps it holds there, and within 1 % between those. The multiple shooting (fatrop)
-solves the same NLP.
+solves the same NLP. The step's real-time iteration (``single_shooting_rti``): CasADi's ``sqpmethod``
+with one iteration (a second implementation of the same step) and IPOPT to convergence (the
+iterations repeated reach it).
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gtmodel.errors import InputError
-from gtmodel.control.mpc import mpc_controller
+from gtmodel.control.mpc import _sqrt_psd, mpc_controller
+from gtmodel.control.mpc_nlp import single_shooting_rti
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
@@ -102,3 +105,34 @@ def test_soft_rows_inside_the_periods_agree_across_solvers(motor, method):
     ref = c.solve(0.0, np.zeros(3))[1]
     np.testing.assert_allclose(c.solve(0.0, np.zeros(3), plugin="sqpmethod", iterations=30)[1], ref, atol=1e-9 * 24.0)
     np.testing.assert_allclose(replace(c, solver="fatrop").solve(0.0, np.zeros(3), plugin="fatrop")[1], ref, atol=1e-6 * 24.0)
+
+
+def _soft_or_hard(motor, hard):
+    ode, c = motor
+    return c[True] if hard else replace(c[True], constraints=replace(c[True].constraints, hard=False))
+
+
+def _rti_first_input(c, k, x, iterations):
+    b = c.bounds()
+    rti = single_shooting_rti(c, _sqrt_psd, c._qp_options("double"), iterations)
+    z, _ = rti(np.r_[c.w_initial, np.zeros(c.n_slack)], c.parameters(c.t0 + k * DT, x), b["lbx"], b["ubx"], b["lbg"], b["ubg"])
+    return np.asarray(z).ravel()[: c.nu]
+
+
+@pytest.mark.parametrize("hard", [True, False], ids=["hard rows", "soft rows"])
+def test_real_time_iteration_is_sqpmethods_first_iteration(motor, hard):
+    # a second implementation: CasADi's sqpmethod, one iteration with the same Gauss-Newton Hessian and QP solver, whose
+    # line search takes the full step here; the same first input
+    c = _soft_or_hard(motor, hard)
+    k, x = 3, c.x_ref[3] + np.array([0.5, 0.0, 5.0])
+    sol = c.nlp_solver("sqpmethod", 1)(x0=np.r_[c.w_initial, np.zeros(c.n_slack)], p=c.parameters(c.t0 + k * DT, x), **c.bounds())
+    np.testing.assert_allclose(_rti_first_input(c, k, x, 1), np.asarray(sol["x"]).ravel()[: c.nu], rtol=0, atol=1e-9 * 24.0)
+
+
+@pytest.mark.parametrize("hard", [True, False], ids=["hard rows", "soft rows"])
+def test_real_time_iterations_converge_to_ipopt(motor, hard):
+    # IPOPT to convergence on the same NLP (a second method): the iterations repeated reach its first input
+    c = _soft_or_hard(motor, hard)
+    k, x = 3, c.x_ref[3] + np.array([0.5, 0.0, 5.0])
+    u_ip, _ = c.solve(c.t0 + k * DT, x, plugin="ipopt")
+    np.testing.assert_allclose(_rti_first_input(c, k, x, 30), u_ip, rtol=0, atol=1e-6 * 24.0)
