@@ -316,7 +316,9 @@ def mpc_step(controller: MPCController, name: str = "mpc", real: str = "double")
         raise InputError(f"real: expected 'double' or 'float', got {real!r}")
     text = (f"Real-time nonlinear MPC: horizon {c.horizon} periods of {c.dt!r} s, {c.blocks} input blocks, "
             f"{c.sqp_iterations} SQP iteration(s) per period\n"
-            "(CasADi sqpmethod with qrqp, Gauss-Newton Hessian, single shooting, warm start shifted by one period;\n"
+            + {"sqpmethod": f"(single shooting, Gauss-Newton QPs by {c.qpsol}, full steps, warm start shifted by one period;\n",
+               "hpipm": "(multiple shooting, Gauss-Newton QPs by HPIPM's Riccati recursion, full steps, warm start shifted by one period;\n",
+               "fatrop": "(multiple shooting, fatrop's interior point, warm start shifted by one period;\n"}[c.solver] +
             "tracking of the reference x*, u* sampled at the period; gtmodel.control.mpc).\n"
             + (f"Offset-free: an input disturbance d estimated each period (gain {c.disturbance_gain:g}) from the\n"
                "one-period prediction error; the memory w holds the warm start, d, the last x and u_last, a flag.\n"

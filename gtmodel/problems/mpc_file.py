@@ -10,7 +10,7 @@ error names the file and the field, the CLI exits with 2):
     model's sizes at most :data:`MAX_QP_ENTRIES` entries of the horizon problem,
     :func:`qp_entries`, and at most :data:`MAX_CODE_BYTES` of generated C, :func:`code_bytes`), ``period`` [s] (1e-5 .. 1, default the 4 ms loop), ``blocks``
     (input blocks, a divisor of the horizon; default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
-    ``solver`` (``"sqpmethod"``: CasADi's SQP with ``qrqp``), ``method`` (prediction step),
+    ``solver`` (``"sqpmethod"``: single shooting, real-time iterations, QPs by ``qrqp`` or DAQP), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
     an unknown variable is refused; each weight 0 .. 1e12), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
     :mod:`gtmodel.problems.loop_bounds`: the reference problem's force limits or ``[bounds]``
