@@ -58,10 +58,13 @@ def cluster(tmp_path):
     try:
         procs.append(subprocess.Popen([*dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                        "--scheduler-file", str(scheduler_file)], env=env, stdout=log, stderr=log, start_new_session=True))
-        deadline = time.monotonic() + 60
-        while not scheduler_file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(scheduler_file.read_text())["address"]
+        deadline, address = time.monotonic() + 60, None
+        while address is None and time.monotonic() < deadline:  # the scheduler writes its file in more than one call
+            try:
+                address = json.loads(scheduler_file.read_text())["address"]
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
+        assert address is not None, "the dask scheduler wrote no scheduler file in 60 s"
         workers = [subprocess.Popen([*dask, "worker", "--scheduler-file", str(scheduler_file), "--nthreads", "1", "--nworkers", "1",
                                      "--host", "127.0.0.1", "--no-dashboard", "--death-timeout", "60"],
                                     env=env, stdout=log, stderr=log, start_new_session=True) for _ in range(2)]
