@@ -121,7 +121,8 @@ def _num(v) -> str:
 
 def export_problem(c, folder: Path) -> Path:
     """The controller's horizon problem for the acados peer: ``problem.npz`` and the step's CasADi file; with soft
-    constraint rows the rows of one period as a CasADi file, their upper bounds, ``rho`` and the periods that carry them."""
+    constraint rows the rows of one period as a CasADi file, their upper bounds, ``rho``, the number of sides (a slack
+    each per stage) and the periods that carry them."""
     folder.mkdir(parents=True, exist_ok=True)
     c.step.save(str(folder / "step.casadi"))
     path = folder / "problem.npz"
@@ -133,7 +134,7 @@ def export_problem(c, folder: Path) -> Path:
         x, u = ca.SX.sym("x", c.nx), ca.SX.sym("u", c.nu)
         x_next, inside = period_states(c, x, u)  # the rows of period j as the hpipm step has them: inside, then its end
         ca.Function("rows", [x, u], [ca.vertcat(*[cons.rows(xi, u) for xi in (*inside, x_next)])]).save(str(folder / "rows.casadi"))
-        extra = {"rows": "rows.casadi", "rows_upper": np.tile(row_box(c), len(inside) + 1), "rho": cons.weight,
+        extra = {"rows": "rows.casadi", "rows_upper": np.tile(row_box(c), len(inside) + 1), "rho": cons.weight, "rows_sides": len(cons.sides),
                  "rows_stages": np.array([j + 1 in cons.stages(c.horizon) for j in range(c.horizon)])}
     np.savez(path, Q=c.Q, R=c.R, Qf=c.Qf, u_lb=c.u_lb, u_ub=c.u_ub, horizon=c.horizon, period=c.dt, step="step.casadi", **extra)
     return path
@@ -255,14 +256,17 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
 
     Returns, per QP solver of :data:`ACADOS_QPS`, the thread CPU per step (the solve call,
     median, p99, max over all its runs), the tracking RMS of the first run and the largest
-    relative difference of the converged first input from the gtmodel SQP's (30 iterations,
-    Gauss-Newton) at :data:`AGREEMENT_STATES` states of that run.
+    difference of the converged first input from gtmodel's repeated real-time iterations at
+    :data:`AGREEMENT_STATES` states of that run, relative to gtmodel's input
+    (``first_control_rel_diff``) and over the input range (``first_control_range_diff``; a settled
+    state's input near 0 makes the first large).
     """
     out = {}
     try:
         for qp, peer in peers.items():
             cpu = peer.step_times()
-            rel, rel_sqp, compared = 0.0, 0.0, 0
+            rel, rel_sqp, rel_range, compared = 0.0, 0.0, 0.0, 0
+            span = np.where(np.isfinite(c.u_ub - c.u_lb), c.u_ub - c.u_lb, np.nan)
             for k in np.linspace(0, setup.t.size - 1, AGREEMENT_STATES + 2)[1:-1].round().astype(int):
                 t, x = runs[qp][0].t[k], runs[qp][0].x[k]
                 ua, done = peer.converged(t, x)
@@ -271,11 +275,13 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
                 ug, _ = c.solve(t, x, plugin="hpipm", iterations=AGREEMENT_RTI_ITERATIONS)  # the same iteration as acados'
                 us, _ = c.solve(t, x, plugin="sqpmethod", iterations=40)  # 40: converged to 2e-11 on the L1 (notebook 15)
                 rel = max(rel, float(np.max(np.abs(ua - ug)) / max(np.max(np.abs(ug)), 1e-300)))
+                rel_range = max(rel_range, float(np.max(np.abs(ua - ug) / span)))  # NaN without finite bounds
                 rel_sqp = max(rel_sqp, float(np.max(np.abs(ua - us)) / max(np.max(np.abs(us)), 1e-300)))
                 compared += 1
             out[qp] = {"cpu_step_median_s": float(np.median(cpu)), "cpu_step_p99_s": float(np.percentile(cpu, 99)),
                        "cpu_step_max_s": float(np.max(cpu[1:])), "tracking_rms": runs[qp][0].rms_error,
                        "first_control_rel_diff": rel if compared else None,
+                       "first_control_range_diff": rel_range if compared and np.isfinite(rel_range) else None,
                        "sqp_first_control_rel_diff": rel_sqp if compared else None, "agreement_states": compared,
                        "failed_steps": int(sum(np.count_nonzero(run.status) for run in runs[qp])),
                        "diverged": any(run.diverged for run in runs[qp])}
@@ -308,7 +314,7 @@ def acados_failure(figures: dict) -> str:
 
 
 def _acados_config(qp: str, horizon: int, rows: int = 0) -> str:
-    rows_text = f"the {rows} soft constraint rows (a slack each)" if rows else "no constraint rows"
+    rows_text = f"the {rows} soft constraint rows (a slack per side and stage, as gtmodel's hpipm step)" if rows else "no constraint rows"
     return f"SQP_RTI {qp}, GAUSS_NEWTON, DISCRETE (the same step), N = {horizon}, no blocking, {rows_text}, no disturbance estimate"
 
 
@@ -332,7 +338,8 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
         ``ratio_to_acados_default_median`` / ``_p99`` against acados' default QP solver
         (the first of :data:`ACADOS_QPS`) beside it, and ``acados_qps`` (every configuration's figures and
         its ``failure``); issue 65's ``acados_best_config``, ``acados_best_cpu_step_median_s`` / ``_p99_s`` and
-        ``acados_best_p99_ratio`` (gtmodel's p99 over it) at the converged configuration of least p99, and
+        ``acados_best_p99_ratio`` (gtmodel's p99 over it) and ``acados_best_first_control_rel_diff`` / ``_range_diff`` (its
+        converged first input against gtmodel's) at the converged configuration of least p99, and
         ``first_control_rel_diff`` (= ``acados_first_control_rel_diff``). No configuration converged: the ratios
         (and ``acados_best_*``) None and ``peer_failed`` says why (else ``peer_failed`` None); a failed default has
         no default ratio.
@@ -371,6 +378,8 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
             "acados_best_cpu_step_median_s": best and acados[best]["cpu_step_median_s"],
             "acados_best_cpu_step_p99_s": best and acados[best]["cpu_step_p99_s"],
             "acados_best_p99_ratio": best and row["cpu_step_p99_s"] / acados[best]["cpu_step_p99_s"],
+            "acados_best_first_control_rel_diff": best and acados[best]["first_control_rel_diff"],
+            "acados_best_first_control_range_diff": best and acados[best]["first_control_range_diff"],
             "first_control_rel_diff": first,
             "peer_failed": peer_failed}
 
@@ -442,7 +451,11 @@ def _print_row(r: dict) -> None:
                   "the ratios are to acados without them")
         if r["acados_best_config"]:
             print(f"  issue 65: C step CPU p99 / acados' least p99 that converged ({r['acados_best_config'].split(',')[0]}, "
-                  f"{r['acados_best_cpu_step_p99_s'] * 1e6:.1f} us): {r['acados_best_p99_ratio']:.2f}x")
+                  f"{r['acados_best_cpu_step_p99_s'] * 1e6:.1f} us): {r['acados_best_p99_ratio']:.2f}x; its converged first input "
+                  + ("n/a" if r["acados_best_first_control_rel_diff"] is None else
+                     f"{r['acados_best_first_control_rel_diff']:.1e} relative, "
+                     + ("n/a" if r["acados_best_first_control_range_diff"] is None else f"{r['acados_best_first_control_range_diff']:.1e}")
+                     + " of the input range off gtmodel's"))
         default = r["ratio_to_acados_default_median"]
         print(f"  beside it, acados' default ({r['acados_default_config'].split(',')[0]}): "
               + (f"median {default:.2f}x, p99 {r['ratio_to_acados_default_p99']:.2f}x" if default is not None

@@ -22,10 +22,12 @@ the given ``hpipm_mode``, acados' default ``BALANCE`` when not given).
 
 With gtmodel's soft constraint rows (``rows`` in the file: ``h(x_j, u_j)``, the scaled rows of the states inside
 period ``j`` and at its end, ``>= 0``; ``rows_upper``, ``rho``, ``rows_stages``) they are acados' nonlinear
-constraints ``con_h_expr`` of stages ``0..H-1``, soft, a slack per row (acados' own form; gtmodel's hpipm step has one
-per side and stage, the same optimum wherever the rows can be held), penalised as gtmodel's ``rho (s + s^2)`` in the
-slack's scale ``sqrt(rho) s``; acados' template puts ``h`` on every stage, so a stage whose period gtmodel leaves
-without rows (``constraint_every``) gets them never active (``lh = -uh``).
+constraints ``con_h_expr`` of stages ``0..H-1``, with gtmodel's hpipm step's slacks: one per side (``rows_sides``) and
+stage as extra inputs, ``sqrt(rho) h + s >= 0``, penalised as gtmodel's ``rho (s + s^2)`` in the slack's scale ``sqrt(rho) s``
+by a least-squares term beside the tracking's (the same NLP; acados' own soft constraints, a slack per row, penalise
+the sum of a side's violations inside a period rather than its largest, another NLP where a row cannot be held:
+4.4e-4 off gtmodel's converged first input on the belt drive); acados' template puts ``h`` on every stage, so a stage
+whose period gtmodel leaves without rows (``constraint_every``) gets them never active (``lh = -uh``).
 
 The closed loop stays in gtmodel's process (the same plant, noise, disturbance, delay and error as its
 check); this script answers it through stdin/stdout, one line per request:
@@ -75,38 +77,39 @@ def build(problem: dict, step: ca.Function, qp: str, folder: str, hpipm_mode: st
     ``rows`` gtmodel's constraint rows of a period, ``h(x, u) -> (m,1)``, soft)."""
     nx, nu = step.size1_in(0), step.size1_in(1)
     H, dt = int(problem["horizon"]), float(problem["period"])
-    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+    ns = int(problem["rows_sides"]) if rows is not None else 0  # the slacks, one per side and stage: extra inputs
+    x, u, s = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("s", ns)
     model = AcadosModel()
     model.name = "gt_peer"
-    model.x, model.u = x, u
+    model.x, model.u = x, ca.vertcat(u, s)
     model.disc_dyn_expr = step(x, u)
     ocp = AcadosOcp()
     ocp.model = model
     ocp.dims.N = H
     ocp.cost.cost_type, ocp.cost.cost_type_e = "LINEAR_LS", "LINEAR_LS"
-    ny = nx + nu
+    ny = nx + nu + ns
     W = np.zeros((ny, ny))
-    W[:nx, :nx], W[nx:, nx:] = problem["Q"], problem["R"]
+    W[:nx, :nx], W[nx:nx + nu, nx:nx + nu], W[nx + nu:, nx + nu:] = problem["Q"], problem["R"], np.eye(ns)
     ocp.cost.W = W / dt
     ocp.cost.W_e = np.asarray(problem["Qf"], dtype=float)
-    ocp.cost.Vx = np.vstack([np.eye(nx), np.zeros((nu, nx))])
-    ocp.cost.Vu = np.vstack([np.zeros((nx, nu)), np.eye(nu)])
+    ocp.cost.Vx = np.vstack([np.eye(nx), np.zeros((nu + ns, nx))])
+    ocp.cost.Vu = np.vstack([np.zeros((nx, nu + ns)), np.eye(nu + ns)])
     ocp.cost.Vx_e = np.eye(nx)
     ocp.cost.yref, ocp.cost.yref_e = np.zeros(ny), np.zeros(nx)
-    ocp.constraints.lbu, ocp.constraints.ubu = np.asarray(problem["u_lb"], float), np.asarray(problem["u_ub"], float)
-    ocp.constraints.idxbu = np.arange(nu)
+    lbu, ubu = np.asarray(problem["u_lb"], float), np.asarray(problem["u_ub"], float)
     ocp.constraints.x0 = np.zeros(nx)
-    if rows is not None:  # gtmodel's soft constraint rows of each period as h(x_j, u_j) >= lh, every row its own slack
-        # gtmodel's penalty rho (s + s^2) of a row's slack s, written as its hpipm step does, in the slack sqrt(rho) s
-        # (the rows times sqrt(rho)): z = sqrt(rho), Z = 2, scaled as W (1 / dt). With z = rho, Z = 2 rho (2e7 on the
-        # two-mass drive) acados' HPIPM stopped at its minimum step (status 3) in most steps
+    if rows is not None:  # gtmodel's soft constraint rows of each period as its hpipm step has them (the same NLP)
+        # each row plus its side's slack of the stage, h = sqrt(rho) rows + s >= 0 (hard), the slack s = sqrt(rho) s_true in
+        # [0, sqrt(rho) upper], and gtmodel's penalty rho (s_true + s_true^2) = s^2 + sqrt(rho) s = (s + sqrt(rho)/2)^2 - rho/4
+        # as a least-squares term beside the tracking's (weight 1 / dt as theirs, reference -sqrt(rho)/2: stage yref)
         k = math.sqrt(float(problem["rho"]))
-        model.con_h_expr = k * rows(x, u)
         m = int(rows.size1_out(0))
-        ocp.constraints.lh, ocp.constraints.uh = np.zeros(m), k * np.asarray(problem["rows_upper"], dtype=float)
-        ocp.constraints.idxsh = np.arange(m)
-        ocp.cost.zl, ocp.cost.zu = np.full(m, k / dt), np.zeros(m)
-        ocp.cost.Zl, ocp.cost.Zu = np.full(m, 2.0 / dt), np.zeros(m)
+        upper = k * np.asarray(problem["rows_upper"], dtype=float)
+        model.con_h_expr = k * rows(x, u) + ca.repmat(s, m // ns, 1)
+        ocp.constraints.lh, ocp.constraints.uh = np.zeros(m), upper
+        lbu, ubu = np.r_[lbu, np.zeros(ns)], np.r_[ubu, upper[:ns]]
+    ocp.constraints.lbu, ocp.constraints.ubu = lbu, ubu
+    ocp.constraints.idxbu = np.arange(nu + ns)
     o = ocp.solver_options
     o.tf = H * dt
     o.integrator_type = "DISCRETE"
@@ -149,6 +152,8 @@ def main() -> None:
     folder = args.build or os.path.join(os.path.dirname(os.path.abspath(args.problem)), f"acados_{args.qp.lower()}")
     rows = ca.Function.load(os.path.join(os.path.dirname(os.path.abspath(args.problem)), str(problem["rows"]))) if "rows" in problem else None
     solver = build(problem, step, args.qp, folder, args.hpipm_mode, rows)
+    ns = int(problem["rows_sides"]) if rows is not None else 0
+    s_ref = np.full(ns, -0.5 * math.sqrt(float(problem["rho"]))) if ns else np.zeros(0)
     if rows is not None:  # acados' template puts h on every stage: where gtmodel's period has no rows, never active
         upper = math.sqrt(float(problem["rho"])) * np.asarray(problem["rows_upper"], dtype=float)
         for j in np.flatnonzero(~np.asarray(problem["rows_stages"], dtype=bool)):
@@ -162,14 +167,14 @@ def main() -> None:
         solver.set(0, "lbx", x0)
         solver.set(0, "ubx", x0)
         for j in range(H):
-            solver.set(j, "yref", np.r_[x0 if j == 0 else xr[j - 1], ur[j]])
+            solver.set(j, "yref", np.r_[x0 if j == 0 else xr[j - 1], ur[j], s_ref])
         solver.set(H, "yref", xr[H - 1])
 
     def rollout(x0: np.ndarray, w: np.ndarray) -> None:
         x = x0.copy()
         solver.set(0, "x", x)
         for j in range(H):
-            solver.set(j, "u", w[j])
+            solver.set(j, "u", np.r_[w[j], np.zeros(ns)])
             x = np.asarray(step(x, w[j])).reshape(-1)
             solver.set(j + 1, "x", x)
 
@@ -200,7 +205,7 @@ def main() -> None:
             continue
         if cmd == "stats":
             print(json.dumps({"cpu_step_s": times, "qp_solver": args.qp, "hpipm_mode": args.hpipm_mode,
-                              "qp_variables": H * (nx + nu) + nx if args.qp.startswith("PARTIAL") else H * nu}), flush=True)
+                              "qp_variables": H * (nx + nu + ns) + nx if args.qp.startswith("PARTIAL") else H * (nu + ns)}), flush=True)
             times = []
             continue
         load(vals)
@@ -208,14 +213,14 @@ def main() -> None:
             rollout(vals[:nx], pending)
             pending = None
         elif cmd == "step" and args.warm == "rollout":
-            rollout(vals[:nx], [solver.get(min(j + 1, H - 1), "u") for j in range(H)])
+            rollout(vals[:nx], [solver.get(min(j + 1, H - 1), "u")[:nu] for j in range(H)])
         elif cmd == "step":
             shift()
         if cmd == "step":
             t0 = time.thread_time()
             status = solver.solve()
             times.append(time.thread_time() - t0)
-            print(status, *map(_num, solver.get(0, "u")), flush=True)
+            print(status, *map(_num, solver.get(0, "u")[:nu]), flush=True)
         elif cmd == "converge":
             z_old, status, it, change = primal(), 0, 0, np.inf
             for it in range(1, CONVERGE_MAX_ITER + 1):
@@ -225,7 +230,7 @@ def main() -> None:
                 if change <= CONVERGE_TOL:
                     break
                 z_old = z
-            print(status, it, _num(change), *map(_num, solver.get(0, "u")), flush=True)
+            print(status, it, _num(change), *map(_num, solver.get(0, "u")[:nu]), flush=True)
 
 
 if __name__ == "__main__":
