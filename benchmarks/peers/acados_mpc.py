@@ -25,8 +25,8 @@ period ``j`` and at its end, ``>= 0``; ``rows_upper``, ``rho``, ``rows_stages``)
 constraints ``con_h_expr`` of stages ``0..H-1``, with gtmodel's hpipm step's slacks: one per side (``rows_sides``) and
 stage as extra inputs, ``sqrt(rho) h + s >= 0``, penalised as gtmodel's ``rho (s + s^2)`` in the slack's scale ``sqrt(rho) s``
 by a least-squares term beside the tracking's (the same NLP; acados' own soft constraints, a slack per row, penalise
-the sum of a side's violations inside a period rather than its largest, another NLP where a row cannot be held:
-4.4e-4 off gtmodel's converged first input on the belt drive); acados' template puts ``h`` on every stage, so a stage
+the sum of a side's violations inside a period rather than its largest, another NLP where a row cannot be held);
+acados' template puts ``h`` on every stage, so a stage
 whose period gtmodel leaves without rows (``constraint_every``) gets them never active (``lh = -uh``).
 
 The closed loop stays in gtmodel's process (the same plant, noise, disturbance, delay and error as its
