@@ -40,6 +40,7 @@ from gtmodel.codegen.check.loop_step import loop_samples  # noqa: E402
 from gtmodel.codegen.loop_step import mpc_step  # noqa: E402
 from gtmodel.control.mpc import _sqrt_psd  # noqa: E402  (the MPC's own weight factor: the step's QP exactly)
 from gtmodel.control.mpc_hpipm import hpipm_rti  # noqa: E402
+from gtmodel.errors import GtModelError  # noqa: E402
 from gtmodel.problems.mpc_file import load_mpc_file  # noqa: E402
 
 #: The ``near`` states' noise, a fraction of the check's.
@@ -107,8 +108,13 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=100, help="random states per file and kind (default 100)")
     ap.add_argument("--json", action="store_true", help="print one JSON object per file")
     args = ap.parse_args()
+    if args.samples < 1:
+        ap.error(f"--samples: expected a positive number, got {args.samples}")
     for path in args.files:
-        r = measure(path, args.samples)
+        try:
+            r = measure(path, args.samples)
+        except GtModelError as e:
+            sys.exit(f"bench_hpipm_rows.py: {e}")
         if args.json:
             print(json.dumps(r), flush=True)
             continue
