@@ -143,11 +143,6 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None, plugin: str 
         included; by default the Function returns the solver's last iterate, as the generated step does not (it
         returns its failure status there).
 
-    Raises
-    ------
-    InputError
-        Another ``plugin``.
-
     Returns
     -------
     casadi.Function
@@ -157,6 +152,11 @@ def hpipm_rti(c: Any, sqrt_psd: Any, iterations: int | None = None, plugin: str 
         scaled constraint rows (0, or tightened: :func:`~gtmodel.control.mpc_memory.row_backoff`), in the
         single shooting's order; ``u`` the inputs after the iterations, ``f`` the cost there (NaN
         when the prediction fails), ``lam`` ``(iterations (H nx + m),1)`` the multipliers of each QP's rows.
+
+    Raises
+    ------
+    InputError
+        Another ``plugin``.
     """
     H, nx, nu = c.horizon, c.nx, c.nu
     k_it = c.sqp_iterations if iterations is None else int(iterations)
