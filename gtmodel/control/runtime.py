@@ -57,7 +57,7 @@ STATS_KEYS = ("format", "interface", "end", "signal", "packets", "cycles", "repl
               "duplicate_or_old", "missing_field", "held_replies", "fallback_cycles", "fallback", "deadline_held", "late_dropped",
               "no_safe_reply", "send_errors", "compose_errors", "limit_clamps", "sensor", "step_calls", "step_status", "log",
               "realtime", "source", "strangers", "sequence", "relative", "sent_late", "start_outside_limits", "silences", "alarms",
-              "events_dropped", "events", "first_ipoc_or_seq", "last_ipoc_or_seq", "max_latency_us", "period_s", "reply_deadline_s",
+              "events_dropped", "events", "receive_queue", "first_ipoc_or_seq", "last_ipoc_or_seq", "max_latency_us", "period_s", "reply_deadline_s",
               "stale_cycles")
 LOG_NAME, STATS_NAME, READY_NAME = "cycle_log.csv", "runtime_stats.json", "ready.json"
 #: What the runtime does with each fault (the summary's ``faults``).
@@ -77,6 +77,8 @@ _ACTIONS = {
     "before_lock": "no reply: not a valid packet, and no robot locked yet",
     "unapplied": "the robot reported the reply late (RSI Delay): its increment taken back from the total",
     "sent_late": "sent, but sendto returned after the period (the process stalled inside it)",
+    "kernel_dropped": "dropped by the kernel before the runtime read them (the receive queue was full): a robot packet "
+                      "among them gets no reply and the robot counts that cycle late (summary: receive_queue)",
 }
 _OWN_FILES = {LOG_NAME, STATS_NAME, READY_NAME, READY_NAME + ".tmp", STATS_NAME + ".tmp", "summary.json"}
 
@@ -212,7 +214,8 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
         session and how each was fixed), ``strangers`` (datagrams and addresses), ``sequence``
         (out of the window, resynchronisations), ``start_outside_limits``, ``silences`` (count,
         longest, events), ``alarms`` (holds of more than ``hold_alarm_cycles``, resynchronisations,
-        events) and ``events`` (all, at most 256; more in ``events_dropped``).
+        events), ``events`` (all, at most 256; more in ``events_dropped``) and ``receive_queue`` (the
+        datagrams the kernel dropped on each socket for a full queue, and each queue's granted size).
     """
     period = float(stats.get("period_s", LOOP_PERIOD_S))
     latency = np.zeros(0)
@@ -233,6 +236,7 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
     counts["strangers"] = stats.get("strangers", {}).get("datagrams", 0)
     counts["before_lock"] = stats.get("source", {}).get("before_lock", 0)
     counts["unapplied"] = stats.get("relative", {}).get("unapplied", 0)
+    counts["kernel_dropped"] = stats.get("receive_queue", {}).get("kernel_dropped", 0)
     events = list(stats.get("events", []))
     faults = {k: {"count": int(v), "action": _ACTIONS[k].format(rule=rule)} for k, v in counts.items()}
     cycles = int(stats.get("cycles", 0))
@@ -263,6 +267,7 @@ def summarize(stats: dict, columns: dict[str, np.ndarray] | None) -> dict:
         "alarms": {**stats.get("alarms", {"holds": 0}), "events": [e for e in events if e.get("kind") in ("hold", "resync", "sensor_resync")]},
         "events": events,
         "events_dropped": int(stats.get("events_dropped", 0)),
+        "receive_queue": stats.get("receive_queue", {}),
     }
 
 

@@ -1,7 +1,10 @@
 /* gt_guard.c: one source per socket, strangers counted, the sequence window (see gt_guard.h). */
+#define _GNU_SOURCE /* SO_RXQ_OVFL, CMSG_* */
 #include "gt_guard.h"
 
 #include <arpa/inet.h>
+#include <sys/socket.h>
+#include <sys/uio.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -118,4 +121,34 @@ int gt_seq_check(gt_seqwin *w, uint64_t seq, int bits, uint64_t window, int resy
         return GT_SEQ_RESYNC;
     }
     return GT_SEQ_OUT;
+}
+
+/* one datagram without blocking (recvfrom's result), and the kernel's running count of the datagrams it
+ * dropped on this socket for a full receive queue (SO_RXQ_OVFL, carried by the datagram) into *dropped */
+ssize_t gt_recv(int fd, void *data, size_t size, struct sockaddr_in *from, socklen_t *fromlen, uint64_t *dropped)
+{
+    union { char buf[CMSG_SPACE(sizeof(uint32_t))]; struct cmsghdr align; } control;
+    struct iovec iov;
+    struct msghdr msg;
+    struct cmsghdr *c;
+    ssize_t n;
+    iov.iov_base = data;
+    iov.iov_len = size;
+    memset(&msg, 0, sizeof msg);
+    msg.msg_name = from;
+    msg.msg_namelen = *fromlen;
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = control.buf;
+    msg.msg_controllen = sizeof control.buf;
+    n = recvmsg(fd, &msg, MSG_DONTWAIT | MSG_TRUNC);
+    if (n < 0) return n;
+    *fromlen = msg.msg_namelen;
+    for (c = CMSG_FIRSTHDR(&msg); c != NULL; c = CMSG_NXTHDR(&msg, c))
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL && c->cmsg_len >= CMSG_LEN(sizeof(uint32_t))) {
+            uint32_t count;
+            memcpy(&count, CMSG_DATA(c), sizeof count);
+            if (count > *dropped) *dropped = count;
+        }
+    return n;
 }

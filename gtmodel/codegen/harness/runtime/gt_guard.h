@@ -22,6 +22,8 @@
 #include <netinet/in.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <sys/socket.h>
+#include <sys/types.h>
 
 #define GT_GUARD_MAX_STRANGERS 16
 
@@ -71,5 +73,9 @@ typedef struct gt_seqwin {
 
 /* Check seq (bits: 32 or 64, the field's width) against the window; updates *w. */
 int gt_seq_check(gt_seqwin *w, uint64_t seq, int bits, uint64_t window, int resync_n);
+
+/* one datagram without blocking (recvfrom's result, MSG_TRUNC: the datagram's length); *dropped raised to the
+ * kernel's running count of datagrams it dropped on this socket for a full receive queue (SO_RXQ_OVFL, set on the socket) */
+ssize_t gt_recv(int fd, void *data, size_t size, struct sockaddr_in *from, socklen_t *fromlen, uint64_t *dropped);
 
 #endif

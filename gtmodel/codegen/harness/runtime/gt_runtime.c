@@ -283,7 +283,7 @@ static void gt_drain_sensor(int32_t age_of_new)
     for (k = 0; k < 256; ++k) {
         struct sockaddr_in from;
         socklen_t fromlen = sizeof from;
-        ssize_t m = recvfrom(gt_sensor_fd, sbuf, sizeof sbuf, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
+        ssize_t m = gt_recv(gt_sensor_fd, sbuf, sizeof sbuf, &from, &fromlen, &gt_S.kernel_dropped_sensor);
         int r;
         double now;
         if (m < 0) break;
@@ -431,7 +431,7 @@ static void *gt_cycle(void *arg)
             nfd = 2;
         }
         if (poll(pf, (nfds_t)nfd, 20) < 0 && errno != EINTR) break;
-        n = recvfrom(gt_fd, buf, sizeof buf, MSG_DONTWAIT | MSG_TRUNC, (struct sockaddr *)&from, &fromlen);
+        n = gt_recv(gt_fd, buf, sizeof buf, &from, &fromlen, &gt_S.kernel_dropped_robot);
         if (n < 0) {
             gt_drain_sensor(-1); /* a sample between robot cycles: age 0 at the next one */
             continue;
@@ -710,12 +710,18 @@ static double gt_number_arg(const char *name, const char *text, double lo, doubl
     return v;
 }
 
-static int gt_udp(struct sockaddr_in *a, const char *what)
+static int gt_udp(struct sockaddr_in *a, const char *what, uint64_t *buffer_bytes)
 {
     int fd = socket(AF_INET, SOCK_DGRAM, 0); /* no SO_REUSEADDR: a second runtime on the port is a bind error */
-    socklen_t len = sizeof *a;
+    int one = 1, size = GT_RT_RCVBUF_BYTES;
+    socklen_t len = sizeof *a, slen = sizeof size;
     char where[96];
     if (fd < 0) gt_fail(3, "cannot open a UDP socket", strerror(errno));
+    /* a deeper queue than the default ~200 kB (ms of a flood; capped by net.core.rmem_max, the granted size
+     * reported); SO_RXQ_OVFL: the kernel's count of datagrams dropped for a full queue (gt_recv) */
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, sizeof size);
+    if (getsockopt(fd, SOL_SOCKET, SO_RCVBUF, &size, &slen) == 0 && size > 0) *buffer_bytes = (uint64_t)size;
+    setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one);
     if (bind(fd, (struct sockaddr *)a, sizeof *a) != 0) {
         char ip[INET_ADDRSTRLEN] = "?";
         inet_ntop(AF_INET, &a->sin_addr, ip, sizeof ip);
@@ -797,13 +803,13 @@ int main(int argc, char **argv)
     if (!gt_robot_src.named)
         fprintf(stderr, "gt_runtime: warning: no robot address named (--robot): the first valid packet's source is the robot "
                         "for this session\n");
-    gt_fd = gt_udp(&gt_O.listen, "robot");
+    gt_fd = gt_udp(&gt_O.listen, "robot", &gt_S.rcvbuf_robot);
     if (GT_RT_NSENSOR > 0) {
         uint16_t port = gt_O.sensor_port_given ? ntohs(gt_O.sensor.sin_port)
                         : (ntohs(gt_O.listen.sin_port) == 0 || ntohs(gt_O.listen.sin_port) == 65535 ? 0 : (uint16_t)(ntohs(gt_O.listen.sin_port) + 1));
         gt_O.sensor = gt_O.listen;
         gt_O.sensor.sin_port = htons(port);
-        gt_sensor_fd = gt_udp(&gt_O.sensor, "sensor");
+        gt_sensor_fd = gt_udp(&gt_O.sensor, "sensor", &gt_S.rcvbuf_sensor);
     }
     gt_log_file = fopen(gt_O.log_path, "w");
     if (gt_log_file == NULL) gt_fail(3, "cannot open the cycle log", strerror(errno));

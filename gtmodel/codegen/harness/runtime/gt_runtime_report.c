@@ -97,6 +97,10 @@ static void gt_write_guard(FILE *f)
                 (unsigned long long)gt_strangers_seen.e[i].count);
     }
     fprintf(f, "]},\n");
+    fprintf(f, "  \"receive_queue\": {\"kernel_dropped\": %llu, \"buffer_bytes\": %llu, \"sensor_kernel_dropped\": %llu, "
+               "\"sensor_buffer_bytes\": %llu},\n",
+            (unsigned long long)gt_S.kernel_dropped_robot, (unsigned long long)gt_S.rcvbuf_robot,
+            (unsigned long long)gt_S.kernel_dropped_sensor, (unsigned long long)gt_S.rcvbuf_sensor);
     fprintf(f, "  \"sequence\": {\"out_of_window\": %llu, \"resyncs\": %llu, \"window_cycles\": %d, \"resync_packets\": %d, "
                "\"sensor_out_of_window\": %llu, \"sensor_resyncs\": %llu, \"sensor_window\": %d},\n",
             (unsigned long long)gt_robot_seq.out_of_window, (unsigned long long)gt_robot_seq.resyncs, GT_RT_SEQ_WINDOW,

@@ -41,6 +41,7 @@
 #define GT_RT_NSTATUS 32
 #define GT_RT_CYCLE_STACK (1u << 20)  /* the step's CasADi work arrays live on it */
 #define GT_RT_WRITER_STACK (256u << 10)
+#define GT_RT_RCVBUF_BYTES (1 << 20) /* asked for each socket's receive queue; the kernel caps it (net.core.rmem_max) */
 
 typedef struct {
     uint64_t cycle, seq;
@@ -58,6 +59,7 @@ typedef struct {
     uint64_t sensor_accepted, sensor_malformed, sensor_non_finite, sensor_old, sensor_short;
     uint64_t log_written, log_dropped, log_write_errors, log_capped, log_bytes, first_seq, last_seq;
     uint64_t before_lock, log_unlogged_repeats, unapplied, sent_late, start_outside, holds, hold_longest, silences, events_dropped;
+    uint64_t rcvbuf_robot, rcvbuf_sensor, kernel_dropped_robot, kernel_dropped_sensor;
     double max_latency_us, silence_longest_s;
     int realtime_fifo, realtime_mlock;
     char realtime_reason[160];
