@@ -33,12 +33,13 @@ the same SQP.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from gtmodel._arrays import positive_int
 from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
@@ -46,7 +47,8 @@ from gtmodel.control.mpc_memory import disturbance_estimate, memory_extra, memor
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp, single_shooting_rti
-from gtmodel.control.problem import PREDICTION_METHODS, tracking_problem
+from gtmodel.control.mpc_solve import horizon_solve
+from gtmodel.control.problem import PREDICTION_METHODS, sqrt_psd as _sqrt_psd, tracking_problem, weight_matrix
 from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
 from gtmodel.control.tracking import saturate
 
@@ -69,12 +71,6 @@ HARD_TOLERANCE = 1e-3
 QP_FLOAT_TOLERANCE = 1e-4
 #: Added to ``(t - t_0) / dt`` before ``floor`` (a time on the grid reads its own sample).
 INDEX_EPS = 1e-9
-
-
-def _sqrt_psd(m: np.ndarray) -> np.ndarray:
-    """``L`` with ``L^T L = m`` for a symmetric positive semi-definite ``m``."""
-    val, vec = np.linalg.eigh(0.5 * (m + m.T))
-    return (vec * np.sqrt(np.clip(val, 0.0, None))).T
 
 
 @dataclass
@@ -129,6 +125,11 @@ class MPCController(SampledReference):
         ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`, the
         memory's ``u_last``): :func:`~gtmodel.control.reference.start_input`, the input that
         holds a start at rest; None: ``u*_0``.
+    R_rate : numpy.ndarray or None, optional
+        ``(nu, nu)`` weight of the input's change per period, ``sum_j |u_j - u_{j-1}|^2_{R_rate}``
+        with ``u_{-1}`` the input acting before the horizon (the step's ``u_last``; the move
+        suppression of MPC practice, e.g. Maciejowski, *Predictive Control* (2002), sec. 2.4);
+        None: no such term (``sqpmethod`` only).
     """
 
     dt: float
@@ -153,6 +154,7 @@ class MPCController(SampledReference):
     disturbance_gain: float = 0.0
     constraint_backoff: bool = False
     u_start: np.ndarray | None = None
+    R_rate: np.ndarray | None = None
 
     @property
     def nw(self) -> int:
@@ -323,7 +325,7 @@ class MPCController(SampledReference):
         ur = [[lookup(j, self.nx + i) for i in range(self.nu)] for j in range(self.horizon)]
         return xr, ur
 
-    def parameters(self, t: float, x: Any) -> np.ndarray:
+    def parameters(self, t: float, x: Any, u_prev: Any = None) -> np.ndarray:
         """The NLP parameter vector ``p`` at time ``t`` [s] and state ``x`` ``(nx,)`` (see :meth:`nlp_solver`).
 
         Parameters
@@ -332,18 +334,24 @@ class MPCController(SampledReference):
             Time [s].
         x : array_like
             ``(nx,)`` measured state.
+        u_prev : array_like, optional
+            ``(nu,)`` the input acting before the horizon (with :attr:`R_rate`; default the
+            reference's input of the period before ``t``, saturated).
 
         Returns
         -------
         numpy.ndarray
-            ``(nx + H (nx + nu),)``.
+            ``(nx + H (nx + nu),)``, and ``u_prev`` after them with :attr:`R_rate`.
         """
         k = period_index(t, self.t0, self.dt, self.length - 1)
         table = np.hstack([self.x_ref, self.u_ref])
         xr, ur = self._window(t, lambda j, c: table[min(k + j, self.length - 1), c])
-        return np.concatenate([np.asarray(x, dtype=float).reshape(-1), np.ravel(xr), np.ravel(ur)])
+        prev = [] if self.R_rate is None else [saturate(self.u_ref[max(k - 1, 0)], self.u_lb, self.u_ub) if u_prev is None
+                                                 else np.asarray(u_prev, dtype=float).reshape(self.nu)]
+        return np.concatenate([np.asarray(x, dtype=float).reshape(-1), np.ravel(xr), np.ravel(ur), *prev])
 
-    def solve(self, t: float, x: Any, w0: Any = None, plugin: str = "ipopt", iterations: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def solve(self, t: float, x: Any, w0: Any = None, plugin: str = "ipopt", iterations: int | None = None,
+              u_prev: Any = None) -> tuple[np.ndarray, np.ndarray]:
         """Solve the horizon problem at ``(t, x)`` from Python (the reference of the generated step).
 
         Parameters
@@ -363,6 +371,8 @@ class MPCController(SampledReference):
             ``hpipm``: ``iterations`` real-time iterations of :func:`~gtmodel.control.mpc_hpipm.hpipm_rti`.
         iterations : int, optional
             SQP iterations (``sqpmethod``, ``hpipm``).
+        u_prev : array_like, optional
+            ``(nu,)`` the input acting before the horizon (:meth:`parameters`).
 
         Returns
         -------
@@ -371,35 +381,7 @@ class MPCController(SampledReference):
         w : numpy.ndarray
             ``(nw,)`` the blocked inputs.
         """
-        if plugin == "hpipm":
-            w_start = self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1)
-            lbu, ubu = np.tile(self.u_lb, self.blocks), np.tile(self.u_ub, self.blocks)
-            w = np.asarray(hpipm_rti(self, _sqrt_psd, iterations)(x, w_start, self.parameters(t, x), lbu, ubu, np.zeros(self.constraint_rows))[0]).reshape(-1)
-            return w[: self.nu].copy(), w
-        if plugin == "fatrop":
-            solver, first, b = fatrop_problem(self, _sqrt_psd)
-            z0 = first(x, self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1))
-            z = np.asarray(solver(x0=z0, p=self.parameters(t, x), **{k: b[k] for k in ("lbx", "ubx", "lbg", "ubg")})["x"]).reshape(-1)
-            w = z[b["inputs"]]
-            return w[: self.nu].copy(), w
-        w_start = self.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1)
-        if plugin == "ipopt" and self.n_slack:
-            # the exact penalty's theorem (Nocedal & Wright, Numerical Optimization, 2nd ed., thm. 17.3):
-            # where the hard problem has a solution whose multipliers are below rho, the soft problem's
-            # solution is the same point; IPOPT reaches it on the hard form far more accurately
-            # (the slacks' gradient rho, ~1e10 on the L1, spoils its gradient-based scaling: 4.7e-6
-            # off the converged SQP on the soft form, 2e-11 on the hard one)
-            hard = replace(self, constraints=replace(self.constraints, hard=True))
-            solver = hard.nlp_solver("ipopt")
-            sol = solver(x0=w_start, p=self.parameters(t, x), **hard.bounds())
-            lam = float(np.sum(np.abs(np.asarray(sol["lam_g"]))))  # one slack per side serves all its rows: their sum
-            if solver.stats()["success"] and lam < self.constraints.weight:
-                w = np.asarray(sol["x"]).reshape(-1)
-                return w[: self.nu].copy(), w
-        solver = self.nlp_solver(plugin, iterations)
-        sol = solver(x0=np.r_[w_start, np.zeros(self.n_slack)], p=self.parameters(t, x), **self.bounds())
-        w = np.asarray(sol["x"]).reshape(-1)[: self.nw]
-        return w[: self.nu].copy(), w
+        return horizon_solve(self, t, x, w0, plugin, iterations, u_prev)
 
     def function(self, real: str = "double") -> ca.Function:
         """The MPC as ONE CasADi Function of the loop-step interface (:mod:`gtmodel.codegen.loop_step`).
@@ -451,7 +433,8 @@ class MPCController(SampledReference):
         if d is not None:  # the horizon's inputs are the plant's, v = u + d: their bounds shifted by d, their reference u* as planned
             shift = ca.repmat(d, self.blocks, 1)
             lbx, ubx = ca.DM(lbx) + shift, ca.DM(ubx) + shift
-        p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row])
+        prev = [] if self.R_rate is None else [u_last if d is None else u_last + d]  # the horizon's inputs are v = u + d
+        p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row], *prev)
         lbg = self.bounds()["lbg"][1:]
         if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
             lbg, error = row_backoff(self, x_in, x, w, u_last, mem)
@@ -537,12 +520,6 @@ class MPCController(SampledReference):
         return memory_predict(self) if self.estimates else None
 
 
-def _positive_int(value: Any, name: str, low: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise InputError(f"{name}: expected an integer >= {low}, got {value!r}")
-    return int(value)
-
-
 def _flag(value: Any, name: str) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise InputError(f"{name}: expected true or false, got {value!r}")
@@ -580,6 +557,7 @@ def mpc_controller(
     constraint_substeps: bool = True,
     disturbance_gain: float = 0.0,
     constraint_backoff: bool | None = None,
+    R_rate: Any = None,
 ) -> MPCController:
     """A real-time nonlinear MPC of a model along a reference motion (see the module docstring).
 
@@ -644,6 +622,9 @@ def mpc_controller(
     constraint_backoff : bool, optional
         Tighten the rows by the prediction's error measured in the loop (:attr:`MPCController.constraint_backoff`);
         default None: on with soft or hard constraint rows and ``solver`` sqpmethod or hpipm, off otherwise.
+    R_rate : array_like, optional
+        Weight of the input's change per period, a diagonal or a matrix (:attr:`MPCController.R_rate`;
+        default none). ``solver="sqpmethod"`` only.
 
     Returns
     -------
@@ -655,12 +636,12 @@ def mpc_controller(
         A horizon, block count or iteration count out of range; a bad period, method,
         solver, reference, weight or bound; an unknown state in a bound table.
     """
-    horizon = _positive_int(horizon, "horizon")
-    blocks = horizon if blocks is None else _positive_int(blocks, "blocks")
+    horizon = positive_int(horizon, "horizon")
+    blocks = horizon if blocks is None else positive_int(blocks, "blocks")
     if horizon % blocks:
         raise InputError(f"blocks: expected a divisor of the horizon {horizon}, got {blocks}")
-    sqp_iterations = _positive_int(sqp_iterations, "sqp_iterations")
-    substeps = _positive_int(substeps, "substeps")
+    sqp_iterations = positive_int(sqp_iterations, "sqp_iterations")
+    substeps = positive_int(substeps, "substeps")
     if method not in MPC_METHODS:
         raise InputError(f"method: expected one of {', '.join(MPC_METHODS)}, got {method!r}")
     if delay not in (0, 1) or isinstance(delay, bool):
@@ -690,10 +671,13 @@ def mpc_controller(
     if disturbance_gain and cons is not None and ca.depends_on(cons.function(xsym, usym), usym):
         raise InputError("disturbance_gain: the estimate shifts the horizon's inputs by d, which constraints of the inputs "
                          "would see; give state constraints only or no estimate")
+    if R_rate is not None and solver != "sqpmethod":
+        raise InputError(f"R_rate: the input's rate term is built for sqpmethod; give solver sqpmethod, or no rate weights (got solver {solver})")
+    R_rate = None if R_rate is None else weight_matrix(R_rate, ode.nu, np.zeros(ode.nu), "R_rate")
     if (backoff := cons is not None and solver != "fatrop" if constraint_backoff is None else _flag(constraint_backoff, "constraint_backoff")) and (cons is None or solver == "fatrop"):
         raise InputError("constraint_backoff: tightens the constraint rows of solver sqpmethod or hpipm; give rows (x_lb, x_ub, path) and one of them")
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
                          substep_states=inside, delay=int(delay), disturbance_gain=float(disturbance_gain), constraint_backoff=backoff,
-                         u_start=start_input(ode.f, prob.x_given[0], us[0], prob.p))
+                         u_start=start_input(ode.f, prob.x_given[0], us[0], prob.p), R_rate=R_rate)

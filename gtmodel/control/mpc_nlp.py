@@ -72,13 +72,17 @@ def _single_shooting(c: Any, sqrt_psd: Any) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX,
     xr = ca.MX.sym("xr", nx, H)
     ur = ca.MX.sym("ur", nu, H)
     Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
+    up = None if c.R_rate is None else ca.MX.sym("u_prev", nu)  # the input acting before the horizon's first
     cons = c.constraints
     slack = s if c.n_slack else 0
-    x, res, rows = x0, [], []
+    x, res, rows, prev = x0, [], [], up
     stages = set() if cons is None else set(cons.stages(H))
     for j in range(H):
         u = W[:, j // b]
         res.append(ca.mtimes(Lr, u - ur[:, j]))
+        if up is not None and j % b == 0:  # the input's change at each block's start (within a block: none)
+            res.append(ca.mtimes(ca.DM(sqrt_psd(c.R_rate)), u - prev))
+            prev = u
         if j + 1 in stages:
             x, inside = period_states(c, x, u)
             rows += [cons.rows(xi, u) + slack for xi in inside]  # between the samples: the period's own input
@@ -87,7 +91,7 @@ def _single_shooting(c: Any, sqrt_psd: Any) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX,
             x = c.step(x, u)
         res.append(ca.mtimes(Lf if j == H - 1 else Lq, x - xr[:, j]))
     r = ca.vertcat(*res)
-    w, p = ca.vertcat(ca.vec(W), s), ca.vertcat(x0, ca.vec(xr), ca.vec(ur))
+    w, p = ca.vertcat(ca.vec(W), s), ca.vertcat(x0, ca.vec(xr), ca.vec(ur), *([] if up is None else [up]))
     # g: first one inactive linear row (bounds -inf, inf; see QP_ROW): CasADi 3.8's qrqp reads and
     # writes one entry past its work block on a QP with bounds only (valgrind:
     # casadi_qrqp_dual_blocking); with one constraint row it stays inside. Then the constraint rows >= 0
@@ -125,16 +129,55 @@ def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Fun
     return {"x": w, "p": p, "f": f, "g": g}, hess
 
 
+#: The line search of CasADi's ``sqpmethod`` (3.8, its defaults) that the step's iteration repeats:
+#: at most ``LS_TRIES`` trial steps, each ``LS_BETA`` times the last, the Armijo factor ``LS_C1`` on the
+#: L1 merit function, the penalty ``LS_SIGMA_FACTOR`` times the largest QP multiplier.
+LS_TRIES, LS_BETA, LS_C1, LS_SIGMA_FACTOR = 3, 0.8, 1e-4, 1.01
+
+
+def _violation(z: Any, lb: Any, ub: Any) -> Any:
+    """``sum(max(0, lb - z) + max(0, z - ub))``: the L1 violation of bounds (infinite bounds count 0)."""
+    return ca.sum1(ca.fmax(0, lb - z)) + ca.sum1(ca.fmax(0, z - ub))
+
+
+def _line_search(fg: ca.Function, nz: int, ng: int, npar: int) -> ca.Function:
+    """The step length of ``sqpmethod``'s backtracking line search (:data:`LS_TRIES` trials), each trial's
+    prediction evaluated only when the one before was refused (a ``Switch``: the later trials' branch).
+
+    ``ls(z, dz, p, lbx, ubx, lbg, ubg, merit, slope, sigma) -> t``: ``merit`` the L1 merit at ``z``,
+    ``slope`` its directional derivative's model ``grad' dz - sigma viol(z)``.
+    """
+    Z, D, P = ca.MX.sym("z", nz), ca.MX.sym("dz", nz), ca.MX.sym("p", npar)
+    LBX, UBX, LBG, UBG = ca.MX.sym("lbx", nz), ca.MX.sym("ubx", nz), ca.MX.sym("lbg", ng), ca.MX.sym("ubg", ng)
+    M, S, SIG = ca.MX.sym("merit"), ca.MX.sym("slope"), ca.MX.sym("sigma")
+    args = [Z, D, P, LBX, UBX, LBG, UBG, M, S, SIG]
+
+    def accepted(t: float) -> ca.MX:
+        f, g = fg(Z + t * D, P)
+        return f + SIG * (_violation(Z + t * D, LBX, UBX) + _violation(g, LBG, UBG)) <= M + t * LS_C1 * S
+
+    t_last = LS_BETA ** (LS_TRIES - 1)  # the last trial is taken whatever its merit (sqpmethod: "not successful, but we accept it")
+    later = ca.Function("ls_last", args, [ca.DM(t_last)])
+    for k in range(LS_TRIES - 2, -1, -1):  # trial k: t = beta^k, accepted, or the trials after it
+        t = LS_BETA ** k
+        here = ca.Function(f"ls_{k}_taken", args, [ca.DM(t)])
+        later = ca.Function(f"ls_{k}", args, [ca.Function.if_else(f"ls_{k}_switch", here, later)(accepted(t), *args)])
+    return later
+
+
 def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int | None = None) -> ca.Function:
     """The MPC's real-time iteration(s) on the single-shooting NLP, each QP by the MPC's ``qpsol``.
 
     One iteration (Diehl, Bock & Schloeder, SIAM J. Control Optim. 43 (2005)): the cost residuals
     ``r``, the rows ``g`` and their Jacobians at ``w`` in one sensitivity sweep of the prediction
     (``jacobian([r; g], w)``), the Gauss-Newton QP (Hessian ``2 (J_r^T J_r + diag(0, rho))``, gradient
-    ``2 J_r^T r + (0, rho (1 + 2 s))``, the rows linearised, the bounds shifted by ``w``), and the
-    full step. CasADi's ``sqpmethod`` with one iteration computes the same step but evaluates the
-    rows' Jacobian again at its result, the prediction once more in its line search and the
-    residuals' Jacobian apart for its Hessian (three sensitivity sweeps, four predictions).
+    ``2 J_r^T r + (0, rho (1 + 2 s))``, the rows linearised, the bounds shifted by ``w``), then
+    ``sqpmethod``'s backtracking line search on the L1 merit ``f + sigma viol`` (``sigma`` 1.01 times
+    the largest QP multiplier, kept over the iterations; trial steps 1, 0.8, 0.64, the last taken
+    whatever its merit; Armijo factor 1e-4; :data:`LS_TRIES`): the first trial's prediction is
+    evaluated every period, the second's only when the first is refused. CasADi's ``sqpmethod``
+    with one iteration computes the same step but evaluates the rows' Jacobian again at its
+    result and the residuals' Jacobian apart for its Hessian (three sensitivity sweeps).
 
     Parameters
     ----------
@@ -152,7 +195,7 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
     casadi.Function
         ``rti(x0 (nw + n_slack,1), p, lbx, ubx, lbg, ubg) -> (x (nw + n_slack,1), f (1,1))``: the arguments
         of :meth:`~gtmodel.control.mpc.MPCController.nlp_solver`'s call; ``x`` after the iterations, ``f``
-        the last QP's model of the cost there (NaN where the prediction at the last iterate is).
+        the last QP's model of the cost at the step taken (NaN where the prediction at the last iterate is).
     """
     w, p, r, g, f, rho = _single_shooting(c, sqrt_psd)
     k_it = c.sqp_iterations if iterations is None else int(iterations)
@@ -163,12 +206,17 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
     hess = 2 * ca.densify(ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack))))
     grad = 2 * ca.mtimes(jr.T, r) + ca.vertcat(ca.DM.zeros(c.nw), rho * (1 + 2 * s))
     lin = ca.Function("lin", [w, p], [f, g, hess, grad, jg], ["w", "p"], ["f", "g", "h", "grad", "jac_g"])
+    search = _line_search(ca.Function("fg", [w, p], [f, g]), w.numel(), g.numel(), p.numel())
     qp = ca.conic("mpc_qp", c.qpsol, {"h": hess.sparsity(), "a": jg.sparsity()}, qp_options)
     Z, P = ca.MX.sym("x0", w.numel()), ca.MX.sym("p", p.numel())
     LBX, UBX, LBG, UBG = ca.MX.sym("lbx", w.numel()), ca.MX.sym("ubx", w.numel()), ca.MX.sym("lbg", g.numel()), ca.MX.sym("ubg", g.numel())
-    z, cost = Z, None
+    z, cost, sigma = Z, None, 0.0
     for _ in range(k_it):
         fz, gz, hz, gradz, jz = lin(z, P)
-        dz = qp(h=hz, g=gradz, a=jz, lba=LBG - gz, uba=UBG - gz, lbx=LBX - z, ubx=UBX - z)["x"]
-        z, cost = z + dz, fz + ca.dot(gradz, dz) + 0.5 * ca.bilin(hz, dz, dz)
+        sol = qp(h=hz, g=gradz, a=jz, lba=LBG - gz, uba=UBG - gz, lbx=LBX - z, ubx=UBX - z)
+        dz = sol["x"]
+        sigma = ca.fmax(sigma, LS_SIGMA_FACTOR * ca.fmax(ca.norm_inf(sol["lam_x"]), ca.norm_inf(sol["lam_a"])))
+        viol = _violation(z, LBX, UBX) + _violation(gz, LBG, UBG)
+        t = search(z, dz, P, LBX, UBX, LBG, UBG, fz + sigma * viol, ca.dot(gradz, dz) - sigma * viol, sigma)
+        z, cost = z + t * dz, fz + t * ca.dot(gradz, dz) + 0.5 * t**2 * ca.bilin(hz, dz, dz)
     return ca.Function("rti", [Z, P, LBX, UBX, LBG, UBG], [z, cost], ["x0", "p", "lbx", "ubx", "lbg", "ubg"], ["x", "f"])

@@ -24,7 +24,7 @@ from gtmodel.control.reference import INDEX_EPS, reference_scales, sample_refere
 from gtmodel.modeling import ExplicitODE
 from gtmodel.modeling.simulation.step_stability import step_stability
 
-__all__ = ["PREDICTION_METHODS", "TrackingProblem", "substep_states", "tracking_problem", "weight_matrix"]
+__all__ = ["PREDICTION_METHODS", "TrackingProblem", "sqrt_psd", "substep_states", "tracking_problem", "weight_matrix"]
 
 #: Prediction steps over one period: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
 PREDICTION_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
@@ -74,6 +74,24 @@ def substep_states(ode: ExplicitODE, dt: float, method: str = "rk4", substeps: i
         xk = xk + h * ode.f(xk, u, p) if single is None else single(xk, u, p)[0]
         states.append(xk)
     return ca.Function("substeps", [x, u, p], [ca.horzcat(*states)], ["x", "u", "p"], ["x_substeps"])
+
+
+def sqrt_psd(m: np.ndarray) -> np.ndarray:
+    """A square root of a weight matrix: ``L`` with ``L^T L = m`` (the residuals ``L e`` of a cost ``e^T m e``).
+
+    Parameters
+    ----------
+    m : numpy.ndarray
+        ``(n, n)`` symmetric positive semi-definite.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, n)`` ``L = diag(sqrt(lambda)) V^T`` of the eigendecomposition ``m = V diag(lambda) V^T``
+        (negative round-off eigenvalues taken as 0).
+    """
+    val, vec = np.linalg.eigh(0.5 * (m + m.T))
+    return (vec * np.sqrt(np.clip(val, 0.0, None))).T
 
 
 def weight_matrix(value: Any, size: int, default: np.ndarray, name: str) -> np.ndarray:

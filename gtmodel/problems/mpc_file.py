@@ -11,8 +11,9 @@ error names the file and the field, the CLI exits with 2):
     :func:`qp_entries`, and at most :data:`MAX_CODE_BYTES` of generated C, :func:`code_bytes`), ``period`` [s] (1e-5 .. 1, default the 4 ms loop), ``blocks``
     (input blocks, a divisor of the horizon; default the horizon), ``sqp_iterations`` (default 1: the real-time iteration),
     ``solver`` (``"sqpmethod"``: single shooting, real-time iterations, QPs by ``qrqp`` or DAQP), ``method`` (prediction step),
-    ``state_weights`` / ``input_weights`` / ``terminal_weights`` (tables by variable name:
-    an unknown variable is refused; each weight 0 .. 1e12), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
+    ``state_weights`` / ``input_weights`` / ``terminal_weights`` / ``input_rate_weights`` (tables by variable name:
+    an unknown variable is refused; each weight 0 .. 1e12; the last weighs each input's change per period,
+    :attr:`gtmodel.control.mpc.MPCController.R_rate`), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
     :mod:`gtmodel.problems.loop_bounds`: the reference problem's force limits or ``[bounds]``
     over the model's, a result folder's recorded ones, else the model's; one declared nowhere is
     named in the summary); the state bounds and path constraints
@@ -48,7 +49,7 @@ from gtmodel.control.problem import substep_states
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds
 from gtmodel.problems.kinds.schemas.mpc import MAX_HORIZON, MPCFile, MPCSection
-from gtmodel.problems.loop_file import LoopModel, LoopSetup, loop_inputs, loop_setup, read_loop_file
+from gtmodel.problems.loop_file import LoopModel, LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
 
@@ -231,13 +232,15 @@ def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
     i = loop_inputs(file, doc, "mpc", before_reference=qp_size, replan=replan)
     ode = i.model.ode
     cons = _constraints(file, doc, ode, i.model.robot, i.bounds)
+    R_rate = weight_diagonal(file, "mpc.input_rate_weights", m.input_rate_weights, list(ode.u_names))
     try:
         controller = mpc_controller(ode, i.t, i.x_ref, i.u_ref, horizon=m.horizon, dt=m.period, Q=i.Q, R=i.R, Qf=i.Qf, u_lb=i.u_lb,
                                     u_ub=i.u_ub, method=m.method, substeps=m.substeps, blocks=m.blocks, sqp_iterations=m.sqp_iterations,
                                     solver=m.solver, hard_constraints=m.hard_constraints, constraint_weight=m.constraint_weight,
                                     constraint_every=m.constraint_every,
                                     constraint_substeps=m.constraint_substeps, delay=m.input_delay, disturbance_gain=float(m.disturbance_gain),
-                                    constraint_backoff=m.constraint_backoff, **cons)
+                                    constraint_backoff=m.constraint_backoff, R_rate=R_rate, **cons)
     except GtModelError as exc:
-        raise file.wrap(next((f"mpc.{k}" for k in ("disturbance_gain", "constraint_backoff") if k in str(exc)), "mpc"), exc) from None
+        fields = {"disturbance_gain": "mpc.disturbance_gain", "constraint_backoff": "mpc.constraint_backoff", "R_rate": "mpc.input_rate_weights"}
+        raise file.wrap(next((f for k, f in fields.items() if k in str(exc)), "mpc"), exc) from None
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)

@@ -37,9 +37,9 @@ def motor():
 
 
 BAD = [
-    ({"horizon": 0}, "horizon: expected an integer >= 1"),
+    ({"horizon": 0}, "horizon: expected a positive integer"),
     ({"horizon": 20, "blocks": 3}, "blocks: expected a divisor of the horizon 20"),
-    ({"sqp_iterations": 0}, "sqp_iterations: expected an integer >= 1"),
+    ({"sqp_iterations": 0}, "sqp_iterations: expected a positive integer"),
     ({"dt": 0.0}, "dt: expected a positive loop period"),
     ({"method": "euler2"}, "method: expected one of"),
     ({"solver": "osqp"}, "solver: expected one of sqpmethod, fatrop, hpipm"),

@@ -50,6 +50,8 @@ class MPCSection(Section):
         Diagonal of Q by state name (default: Bryson's rule).
     input_weights : dict, optional
         Diagonal of R by input name.
+    input_rate_weights : dict, optional
+        Weight of each input's change per period by input name (move suppression; sqpmethod only).
     terminal_weights : dict, optional
         Diagonal of Qf by state name (default Q).
     u_lb : list of float, optional
@@ -89,6 +91,7 @@ class MPCSection(Section):
     substeps: int = Field(default=1, ge=1, le=100, strict=True, description="steps of the method per period")
     state_weights: Weights = Field(default_factory=dict, description="diagonal of Q by state name (default: Bryson's rule)")
     input_weights: Weights = Field(default_factory=dict, description="diagonal of R by input name")
+    input_rate_weights: Weights = Field(default_factory=dict, description="weight of each input's change per period by input name, sum_j R_rate (u_j - u_{j-1})^2 with u_{-1} the input acting before the horizon (move suppression; sqpmethod only)")
     terminal_weights: Weights = Field(default_factory=dict, description="diagonal of Qf by state name (default Q)")
     u_lb: Bounds = Field(default=None, description="input lower bounds")
     u_ub: Bounds = Field(default=None, description="input upper bounds")
