@@ -1,7 +1,7 @@
 """The loop controllers of issue 65 on drive-family members nobody tuned for (a benchmark, not a test).
 
 Usage: python -P benchmarks/bench_drive_family_loop.py [--members N] [--seed S] [--only NAME,...]
-[--routes mpc,tracking] [--keep DIR] [--json] [--plan-margin F] [--noise F] [--gravity-factor F]
+[--routes mpc,tracking] [--keep DIR] [--json] [--plan-margin F] [--noise F] [--gravity-factor F] [--rate-factor F]
 
 For each of the first N members of :func:`gtmodel.modeling.library.drive_family.drive_family`
 (default 8, seed 0) the member's problem and model are written into DIR
@@ -30,7 +30,8 @@ axis' scale squared, :data:`MPC_A`, :data:`TRACKING_A`):
   backlash deflection is a state) the motor angle ``emf.phi``, weighted and judged as the position;
 * ``[mpc]``: ``model = "<name>.py:Member"``, horizon 20, period 4 ms, 1 SQP iteration, rk4 with
   4 substeps, ``input_delay = 1``; the problem's current (and speed) limits the MPC's soft rows
-  (``problem_constraints`` default, not tightened);
+  (``problem_constraints`` default, not tightened); with ``--rate-factor F`` also
+  ``input_rate_weights`` ``F`` times the input weight (move suppression);
 * ``[controller]``: the same model, period, rk4 with 4 substeps, ``time_varying = true``, ``input_delay = 1``;
 * ``[reference]``: ``problem = "<name>.toml"``, ``overrides`` the bounds ``src.v``, ``ind.i`` (and
   ``rotor.w`` where declared) at ``--plan-margin`` (default 0.8) of the member's, ``settle_time = 0.3``;
@@ -242,7 +243,7 @@ def toml_text(doc: dict[str, Any], comments: list[str]) -> str:
 
 
 def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: float, gravity_factor: float,
-                     accept_unverified: bool) -> dict[str, Any]:
+                     accept_unverified: bool, rate_factor: float = 0.0) -> dict[str, Any]:
     """Write the member's problem, model, MPC file and tracking-controller file by the recipe.
 
     Parameters
@@ -259,6 +260,8 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
         The plant's weight ``gravity.mg`` / ``gravity.mgl`` over the model's.
     accept_unverified : bool
         ``[reference] accept_unverified``.
+    rate_factor : float, optional
+        The MPC's ``input_rate_weights`` over its ``input_weights`` (default 0: no rate term).
 
     Returns
     -------
@@ -294,7 +297,8 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
               f"Plan at {plan_margin:g} of the bounds; plant: {', '.join(f'{k} x{v:g}' for k, v in factors.items())}."]
     mpc = {"name": f"{m.name}_mpc", "description": f"{m.name}: MPC, horizon 20 x 4 ms, RTI, rk4 x4, plant 20 % off",
            "mpc": {"model": model, "horizon": 20, "period": 0.004, "sqp_iterations": 1, "method": "rk4", "substeps": 4,
-                   "input_delay": 1, "state_weights": state_weights(roles, scales, MPC_A), "input_weights": {"src.v": u_w["mpc"]}},
+                   "input_delay": 1, "state_weights": state_weights(roles, scales, MPC_A), "input_weights": {"src.v": u_w["mpc"]},
+                   **({"input_rate_weights": {"src.v": _sig(rate_factor * u_w["mpc"])}} if rate_factor else {})},
            "reference": reference, "check": check}
     trk = {"name": f"{m.name}_trk", "description": f"{m.name}: feedforward + TV-LQR at 4 ms, rk4 x4, plant 20 % off",
            "controller": {"model": model, "period": 0.004, "method": "rk4", "substeps": 4, "time_varying": True, "input_delay": 1,
@@ -379,7 +383,7 @@ def run_route(m: DriveMember, route: str, path: Path, folder: Path) -> dict[str,
 def run_member(m: DriveMember, folder: Path, routes: list[str], a: argparse.Namespace) -> list[dict[str, Any]]:
     """Both routes of one member; an unverified plan is retried once with ``accept_unverified`` (for both routes)."""
     try:
-        files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, False)
+        files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, False, a.rate_factor)
     except Exception as exc:  # noqa: BLE001
         return [{"name": m.name, "route": r, "status": "load_failed", "error": f"writing the files: {type(exc).__name__}: {exc}"[:800],
                  "ratio": None, "cpu_s": {}, "passed": False} for r in routes]
@@ -388,7 +392,7 @@ def run_member(m: DriveMember, folder: Path, routes: list[str], a: argparse.Name
         row = run_route(m, route, files[route], folder)
         if not row["status"] and verified:  # refused as unverified: retry once, accepting it
             verified = False
-            files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, True)
+            files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, True, a.rate_factor)
             first = row["cpu_s"]
             row = run_route(m, route, files[route], folder)
             row["cpu_s"] = {**first, **row["cpu_s"]}
@@ -467,12 +471,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--plan-margin", type=float, default=0.8, help="the plan's bounds over the member's (default 0.8)")
     ap.add_argument("--noise", type=float, default=1e-3, help="measurement noise relative to each state's scale (default 1e-3)")
     ap.add_argument("--gravity-factor", type=float, default=1.0, help="the plant's weight over the model's (default 1)")
+    ap.add_argument("--rate-factor", type=float, default=0.0,
+                    help="the MPC's input_rate_weights over its input_weights (default 0: no rate term)")
     a = ap.parse_args(argv)
     routes = [r for r in a.routes.split(",") if r]
     if not routes or set(routes) - {"mpc", "tracking"}:
         ap.error(f"--routes: expected mpc and/or tracking, got {a.routes!r}")
     if not 0 < a.plan_margin <= 1:
         ap.error(f"--plan-margin: expected a number in (0, 1], got {a.plan_margin}")
+    if not 0 <= a.rate_factor <= 1e6:
+        ap.error(f"--rate-factor: expected a number in [0, 1e6], got {a.rate_factor}")
     log.setLevel(logging.ERROR)
     members = drive_family(max(a.members, 1), a.seed)
     only = {n for n in a.only.split(",") if n}
@@ -482,7 +490,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     tree = provenance()
     print(f"gtmodel at {tree['commit']}" + (f", changed: {' '.join(c.split()[-1] for c in tree['changed'])}" if tree["changed"] else ""))
     print(f"load average {os.getloadavg()[0]:.2f}; drive family seed {a.seed}, {a.members} member(s), routes {', '.join(routes)}, "
-          f"plan margin {a.plan_margin:g}, noise {a.noise:g}", flush=True)
+          f"plan margin {a.plan_margin:g}, noise {a.noise:g}, rate factor {a.rate_factor:g}", flush=True)
     rows: list[dict[str, Any]] = []
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
@@ -503,7 +511,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{s['ff_exceeds']}; plans unverified {s['plan_unverified']})")
     out = {"rows": rows, "summary": summary, "seed": a.seed, "gtmodel": tree,
            "recipe": {"mpc_A": MPC_A, "tracking_A": TRACKING_A, "plan_margin": a.plan_margin, "noise": a.noise,
-                      "gravity_factor": a.gravity_factor, "load_factor": LOAD_FACTOR, "friction_factor": FRICTION_FACTOR}}
+                      "gravity_factor": a.gravity_factor, "rate_factor": a.rate_factor, "load_factor": LOAD_FACTOR, "friction_factor": FRICTION_FACTOR}}
     if a.json:
         print(json.dumps(out, default=float))
     return out

@@ -136,3 +136,31 @@ def test_real_time_iterations_converge_to_ipopt(motor, hard):
     k, x = 3, c.x_ref[3] + np.array([0.5, 0.0, 5.0])
     u_ip, _ = c.solve(c.t0 + k * DT, x, plugin="ipopt")
     np.testing.assert_allclose(_rti_first_input(c, k, x, 30), u_ip, rtol=0, atol=1e-6 * 24.0)
+
+
+@pytest.fixture(scope="module")
+def sine_drive():
+    """x' = 50 sin(u): far enough up the sine the Gauss-Newton step overshoots and sqpmethod's line search backs off."""
+    import casadi as ca
+
+    from gtmodel.modeling import Model
+
+    m = Model("sine_drive")
+    x, u = m.state("x"), m.input("u")
+    m.equation(m.der(x), 50 * ca.sin(u))
+    t = DT * np.arange(101)
+    return mpc_controller(explicit_ode(m), t, np.minimum(t / 0.1, 1.0)[:, None] * 5.0, np.zeros((101, 1)), horizon=10, Q=[1.0],
+                          R=[1e-4], u_lb=[-3.0], u_ub=[3.0], method="rk4")
+
+
+@pytest.mark.parametrize("w0, trials", [(1.40, 1), (1.482, 2), (1.55, 3)], ids=["full step", "second trial", "last trial"])
+def test_the_line_search_is_sqpmethods(sine_drive, w0, trials):
+    # a second implementation: CasADi's sqpmethod (one iteration, its default line search); its count of predictions
+    # (n_call_nlp_fg) shows which trial step it took; the written-out iteration lands on the same point
+    c, b = sine_drive, sine_drive.bounds()
+    solver = c.nlp_solver("sqpmethod", 1)
+    p = c.parameters(0.0, [0.0])
+    sol = solver(x0=np.full(c.nw, w0), p=p, **b)
+    z, _ = single_shooting_rti(c, _sqrt_psd, c._qp_options("double"), 1)(np.full(c.nw, w0), p, b["lbx"], b["ubx"], b["lbg"], b["ubg"])
+    assert solver.stats()["n_call_nlp_fg"] == trials
+    np.testing.assert_allclose(np.asarray(z).ravel(), np.asarray(sol["x"]).ravel(), rtol=0, atol=1e-12)
