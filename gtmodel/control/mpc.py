@@ -624,7 +624,8 @@ def mpc_controller(
         default None: on with soft or hard constraint rows and ``solver`` sqpmethod or hpipm, off otherwise.
     R_rate : array_like, optional
         Weight of the input's change per period, a diagonal or a matrix (:attr:`MPCController.R_rate`;
-        default none). ``solver="sqpmethod"`` only.
+        default none, as zero; an MPC file's default with constraint rows is
+        :data:`gtmodel.problems.mpc_file.RATE_FACTOR` times ``R``). ``solver="sqpmethod"`` only.
 
     Returns
     -------
@@ -674,6 +675,7 @@ def mpc_controller(
     if R_rate is not None and solver != "sqpmethod":
         raise InputError(f"R_rate: the input's rate term is built for sqpmethod; give solver sqpmethod, or no rate weights (got solver {solver})")
     R_rate = None if R_rate is None else weight_matrix(R_rate, ode.nu, np.zeros(ode.nu), "R_rate")
+    R_rate = R_rate if R_rate is not None and np.any(R_rate) else None  # zero: no rate term
     if (backoff := cons is not None and solver != "fatrop" if constraint_backoff is None else _flag(constraint_backoff, "constraint_backoff")) and (cons is None or solver == "fatrop"):
         raise InputError("constraint_backoff: tightens the constraint rows of solver sqpmethod or hpipm; give rows (x_lb, x_ub, path) and one of them")
     return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,

@@ -13,7 +13,8 @@ error names the file and the field, the CLI exits with 2):
     ``solver`` (``"sqpmethod"``: single shooting, real-time iterations, QPs by ``qrqp`` or DAQP), ``method`` (prediction step),
     ``state_weights`` / ``input_weights`` / ``terminal_weights`` / ``input_rate_weights`` (tables by variable name:
     an unknown variable is refused; each weight 0 .. 1e12; the last weighs each input's change per period,
-    :attr:`gtmodel.control.mpc.MPCController.R_rate`), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
+    :attr:`gtmodel.control.mpc.MPCController.R_rate`, default :data:`RATE_FACTOR` times the input weights
+    with ``solver = "sqpmethod"`` and constraint rows, 0 for every input: none), ``u_lb`` / ``u_ub`` (default: the declared input bounds,
     :mod:`gtmodel.problems.loop_bounds`: the reference problem's force limits or ``[bounds]``
     over the model's, a result folder's recorded ones, else the model's; one declared nowhere is
     named in the summary); the state bounds and path constraints
@@ -37,6 +38,7 @@ error names the file and the field, the CLI exits with 2):
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -48,13 +50,14 @@ from gtmodel.control.mpc_constraints import problem_constraints
 from gtmodel.control.problem import substep_states
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds
-from gtmodel.problems.kinds.schemas.mpc import MAX_HORIZON, MPCFile, MPCSection
+from gtmodel.problems.kinds.schemas.mpc import MAX_HORIZON, RATE_FACTOR, MPCFile, MPCSection
 from gtmodel.problems.loop_file import LoopModel, LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
 
 __all__ = ["MPCFile", "MPCSection", "MPCSetup", "load_mpc_file", "qp_entries", "code_bytes", "MAX_HORIZON", "MAX_QP_ENTRIES",
-           "MAX_CODE_BYTES"]
+           "MAX_CODE_BYTES", "RATE_FACTOR"]
+
 
 #: Most entries of the dense parts of the horizon problem (:func:`qp_entries`): the generated C
 #: grows with them, about 64 bytes each beyond a base of about 0.5 MB (measured on the composed
@@ -243,4 +246,6 @@ def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
     except GtModelError as exc:
         fields = {"disturbance_gain": "mpc.disturbance_gain", "constraint_backoff": "mpc.constraint_backoff", "R_rate": "mpc.input_rate_weights"}
         raise file.wrap(next((f for k, f in fields.items() if k in str(exc)), "mpc"), exc) from None
+    if R_rate is None and m.solver == "sqpmethod" and controller.constraints is not None:  # the default (RATE_FACTOR)
+        controller = replace(controller, R_rate=RATE_FACTOR * controller.R)
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)
