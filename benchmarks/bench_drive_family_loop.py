@@ -30,8 +30,8 @@ axis' scale squared, :data:`MPC_A`, :data:`TRACKING_A`):
   backlash deflection is a state) the motor angle ``emf.phi``, weighted and judged as the position;
 * ``[mpc]``: ``model = "<name>.py:Member"``, horizon 20, period 4 ms, 1 SQP iteration, rk4 with
   4 substeps, ``input_delay = 1``; the problem's current (and speed) limits the MPC's soft rows
-  (``problem_constraints`` default, not tightened); with ``--rate-factor F`` also
-  ``input_rate_weights`` ``F`` times the input weight (move suppression);
+  (``problem_constraints`` default, not tightened); with ``--rate-factor F``
+  ``input_rate_weights`` ``F`` times the input weight (move suppression; 0: none), else the file's default;
 * ``[controller]``: the same model, period, rk4 with 4 substeps, ``time_varying = true``, ``input_delay = 1``;
 * ``[reference]``: ``problem = "<name>.toml"``, ``overrides`` the bounds ``src.v``, ``ind.i`` (and
   ``rotor.w`` where declared) at ``--plan-margin`` (default 0.8) of the member's, ``settle_time = 0.3``;
@@ -243,7 +243,7 @@ def toml_text(doc: dict[str, Any], comments: list[str]) -> str:
 
 
 def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: float, gravity_factor: float,
-                     accept_unverified: bool, rate_factor: float = 0.0) -> dict[str, Any]:
+                     accept_unverified: bool, rate_factor: float | None = None) -> dict[str, Any]:
     """Write the member's problem, model, MPC file and tracking-controller file by the recipe.
 
     Parameters
@@ -261,7 +261,8 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
     accept_unverified : bool
         ``[reference] accept_unverified``.
     rate_factor : float, optional
-        The MPC's ``input_rate_weights`` over its ``input_weights`` (default 0: no rate term).
+        The MPC's ``input_rate_weights`` over its ``input_weights`` (0: no rate term); default None: the
+        file gives none, the MPC file's default applies (:data:`gtmodel.problems.kinds.schemas.mpc.RATE_FACTOR`).
 
     Returns
     -------
@@ -298,7 +299,7 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
     mpc = {"name": f"{m.name}_mpc", "description": f"{m.name}: MPC, horizon 20 x 4 ms, RTI, rk4 x4, plant 20 % off",
            "mpc": {"model": model, "horizon": 20, "period": 0.004, "sqp_iterations": 1, "method": "rk4", "substeps": 4,
                    "input_delay": 1, "state_weights": state_weights(roles, scales, MPC_A), "input_weights": {"src.v": u_w["mpc"]},
-                   **({"input_rate_weights": {"src.v": _sig(rate_factor * u_w["mpc"])}} if rate_factor else {})},
+                   **({} if rate_factor is None else {"input_rate_weights": {"src.v": _sig(rate_factor * u_w["mpc"])}})},
            "reference": reference, "check": check}
     trk = {"name": f"{m.name}_trk", "description": f"{m.name}: feedforward + TV-LQR at 4 ms, rk4 x4, plant 20 % off",
            "controller": {"model": model, "period": 0.004, "method": "rk4", "substeps": 4, "time_varying": True, "input_delay": 1,
@@ -471,15 +472,16 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--plan-margin", type=float, default=0.8, help="the plan's bounds over the member's (default 0.8)")
     ap.add_argument("--noise", type=float, default=1e-3, help="measurement noise relative to each state's scale (default 1e-3)")
     ap.add_argument("--gravity-factor", type=float, default=1.0, help="the plant's weight over the model's (default 1)")
-    ap.add_argument("--rate-factor", type=float, default=0.0,
-                    help="the MPC's input_rate_weights over its input_weights (default 0: no rate term)")
+    ap.add_argument("--rate-factor", type=float, default=None,
+                    help="the MPC's input_rate_weights over its input_weights (0: no rate term; default: the file "
+                         "gives none, the MPC file's default applies)")
     a = ap.parse_args(argv)
     routes = [r for r in a.routes.split(",") if r]
     if not routes or set(routes) - {"mpc", "tracking"}:
         ap.error(f"--routes: expected mpc and/or tracking, got {a.routes!r}")
     if not 0 < a.plan_margin <= 1:
         ap.error(f"--plan-margin: expected a number in (0, 1], got {a.plan_margin}")
-    if not 0 <= a.rate_factor <= 1e6:
+    if a.rate_factor is not None and not 0 <= a.rate_factor <= 1e6:
         ap.error(f"--rate-factor: expected a number in [0, 1e6], got {a.rate_factor}")
     log.setLevel(logging.ERROR)
     members = drive_family(max(a.members, 1), a.seed)
@@ -490,7 +492,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     tree = provenance()
     print(f"gtmodel at {tree['commit']}" + (f", changed: {' '.join(c.split()[-1] for c in tree['changed'])}" if tree["changed"] else ""))
     print(f"load average {os.getloadavg()[0]:.2f}; drive family seed {a.seed}, {a.members} member(s), routes {', '.join(routes)}, "
-          f"plan margin {a.plan_margin:g}, noise {a.noise:g}, rate factor {a.rate_factor:g}", flush=True)
+          f"plan margin {a.plan_margin:g}, noise {a.noise:g}, rate factor {'the default' if a.rate_factor is None else format(a.rate_factor, 'g')}", flush=True)
     rows: list[dict[str, Any]] = []
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
