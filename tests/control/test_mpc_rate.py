@@ -98,11 +98,32 @@ def test_a_file_naming_an_unknown_input_is_refused(tmp_path):
     """The file's table by input name: an unknown name is refused naming the field."""
     from gtmodel.problems.mpc_file import load_mpc_file
 
+    with pytest.raises(ProblemError, match=r"mpc\.input_rate_weights\.src\.w"):
+        load_mpc_file(_dc_motor_file(tmp_path, 'input_rate_weights = { "src.w" = 1.0 }\n'))
+
+
+def _dc_motor_file(tmp_path, extra: str):
     from ..conftest import REPO
 
-    text = (REPO / "codegen" / "mpc" / "dc_motor_mpc.toml").read_text()
-    text = text.replace("[mpc]\n", "[mpc]\ninput_rate_weights = { \"src.w\" = 1.0 }\n", 1)
+    text = (REPO / "codegen" / "mpc" / "dc_motor_mpc.toml").read_text().replace("[mpc]\n", "[mpc]\n" + extra, 1)
     path = tmp_path / "m.toml"
     path.write_text(text.replace('"../../', f'"{REPO.as_posix()}/'))
-    with pytest.raises(ProblemError, match=r"mpc\.input_rate_weights\.src\.w"):
-        load_mpc_file(path)
+    return path
+
+
+@pytest.mark.parametrize("extra, factor", [
+    ("", None),  # no rows (qrqp): no default
+    ('state_ub = { "ind.i" = 20.0 }\n', 100.0),  # rows: RATE_FACTOR times R
+    ('state_ub = { "ind.i" = 20.0 }\ninput_rate_weights = { "src.v" = 0.0 }\n', None),  # 0: off
+    ('state_ub = { "ind.i" = 20.0 }\ninput_rate_weights = { "src.v" = 0.5 }\n', "given"),
+], ids=["no rows", "rows", "rows, zero", "rows, given"])
+def test_an_mpc_files_default_rate_weight(tmp_path, extra, factor):
+    from gtmodel.problems.mpc_file import RATE_FACTOR, load_mpc_file
+
+    c = load_mpc_file(_dc_motor_file(tmp_path, extra)).controller
+    if factor is None:
+        assert c.R_rate is None
+    elif factor == "given":
+        assert np.array_equal(c.R_rate, [[0.5]])
+    else:
+        assert RATE_FACTOR == factor and np.array_equal(c.R_rate, factor * c.R) and c.constraints is not None
