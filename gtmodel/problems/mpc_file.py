@@ -215,6 +215,8 @@ def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
     m = doc.mpc
     if m.blocks is not None and m.horizon % m.blocks:
         raise file.fail("mpc.blocks", f"a divisor of the horizon {m.horizon}", m.blocks)
+    if any(m.input_rate_weights.values()) and m.solver != "sqpmethod":  # before the reference is planned
+        raise file.fail("mpc.input_rate_weights", f"none with solver {m.solver} (the rate term is built for sqpmethod)", m.input_rate_weights)
 
     def qp_size(model: LoopModel) -> None:
         blocks = m.horizon if m.blocks is None else m.blocks

@@ -127,3 +127,13 @@ def test_an_mpc_files_default_rate_weight(tmp_path, extra, factor):
         assert np.array_equal(c.R_rate, [[0.5]])
     else:
         assert RATE_FACTOR == factor and np.array_equal(c.R_rate, factor * c.R) and c.constraints is not None
+
+
+def test_a_file_with_rate_weights_and_another_solver_is_refused_before_planning(tmp_path, monkeypatch):
+    import gtmodel.problems.mpc_file as mpc_file
+
+    monkeypatch.setattr(mpc_file, "loop_inputs", lambda *a, **k: pytest.fail("planned before refusing"))
+    path = _dc_motor_file(tmp_path, 'input_rate_weights = { "src.v" = 1.0 }\n')
+    path.write_text(path.read_text().replace('solver = "sqpmethod"', 'solver = "hpipm"'))
+    with pytest.raises(ProblemError, match=r"mpc\.input_rate_weights.*rate term is built for sqpmethod"):
+        mpc_file.load_mpc_file(path)
