@@ -101,6 +101,7 @@ def test_sweep_with_two_files_is_rejected(tmp_path, capsys):
     assert "exactly one problem file" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_free_path_is_faster_and_the_straight_line_uses_less_energy(tmp_path):
     """Dressler (2012), Table 3.1 / ch. 3.5: the time-optimal free path is faster than the
     path-constrained straight line, at more energy. Both files declare the same poses and limits."""

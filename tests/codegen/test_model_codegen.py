@@ -203,7 +203,8 @@ STRICT = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic")
 
 @pytest.mark.parametrize(
     "cls, functions",
-    [("Axis", ("ode", "outputs", "step_rk4", "step_implicit")), ("PushedTwoMass", ("ode", "step_rk4", "step_implicit"))],
+    [("Axis", ("ode", "outputs", "step_rk4", "step_implicit")),
+     pytest.param("PushedTwoMass", ("ode", "step_rk4", "step_implicit"), marks=pytest.mark.slow)],
 )
 def test_composed_library_models_compile_strictly_and_equal_python(tmp_path, cls, functions):
     # reference: the model's own CasADi Functions from Python (check_model, 1e-12); the sources
@@ -225,6 +226,7 @@ def test_composed_library_models_compile_strictly_and_equal_python(tmp_path, cls
     assert max(r.max_rel_diff for r in report.functions if "periods" not in r.name) <= MODEL_TOLERANCE
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_cli_codegen_composed_axis_check_passes(tmp_path, capsys):
     # reference: check_model's comparison with Python (1e-12), through the command line
     f = tmp_path / "composed.py"

@@ -45,6 +45,7 @@ def test_the_named_classes_are_shipped():
     assert "Modelica.Units.SI.Time.Angle" not in msl_classes()  # a short class (type T = ...;) nests nothing
 
 
+@pytest.mark.slow  # 17 s; the default run solves the same file by docs/optimica.md's block
 def test_msl_drive_solves_min_time_as_the_drive_written_by_hand(tmp_path):
     msl = run_optimica(MSL_DRIVE, "MinTime", tmp_path / "msl", plots=False)
     hand = run_optimica(DATA / "drive_equations.mop", "MinTime", tmp_path / "hand", plots=False)

@@ -144,6 +144,7 @@ def test_failed_step_returns_a_status_and_the_last_input_saturated(motor, motor_
     np.testing.assert_array_equal(u, np.clip(u_ok, motor.controller.u_lb, motor.controller.u_ub))
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_l1_tracking_file_halves_the_feedforward_error_in_closed_loop(tmp_path):
     # the L1 plant 10 % off in masses and friction, with the tool structure of eq. 6.14, noise, a 20 N step and one
     # sample of delay: the MPC's bar (half the feedforward's RMS error; measured 0.0096), no bound violated, no step failed

@@ -160,6 +160,7 @@ def test_multiple_shooting_keeps_a_declared_cpu_budget_and_names_it(tmp_path):
     assert "raise max_cpu_s, or solve by collocation" in spent.message
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_a_generous_cpu_budget_changes_nothing(tmp_path, shooting):
     kept = load_problem(problem(tmp_path, SHOOTING + "max_cpu_s = 600\n")).declaration.solve()
     assert str(kept.status) == "optimal" and kept.final_time == pytest.approx(shooting.final_time, rel=1e-9)

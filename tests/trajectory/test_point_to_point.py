@@ -173,6 +173,7 @@ def test_an_energy_weight_does_not_stall_the_solver(w):
     assert sol.result.final_time > 1.0 and sol.energy < 3.0e5
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_fatrop_on_a_fine_mesh_starts_from_the_coarse_solve(monkeypatch):
     # second path: the cold fatrop solve of the same 60-element NLP, and IPOPT's optimum on it (to 1e-6)
     from gtmodel.trajectory import point_to_point as ptp

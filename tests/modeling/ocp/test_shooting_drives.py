@@ -140,6 +140,7 @@ def test_motor_minimum_time_against_collocation(motor, controls, within):
 # number, the written rows' warning: tests/modeling/ocp/test_shooting_bounds.py
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_two_mass_drive_from_a_collocation_start():
     # a status, never an exception; the bound and the gear's kinematics in every written row
     opt = two_mass_problem()

@@ -273,7 +273,8 @@ def clipped_motor_simulation(result, times):
     return out
 
 
-@pytest.mark.parametrize("elements, current_limit, voltage_over", [(30, 10.0, True), (60, 10.0, True), (60, 8.0, False)])
+@pytest.mark.parametrize("elements, current_limit, voltage_over", [
+    pytest.param(30, 10.0, True, marks=pytest.mark.slow), pytest.param(60, 10.0, True, marks=pytest.mark.slow), (60, 8.0, False)])
 def test_refinement_verifies_the_motor_under_its_clipped_voltage(elements, current_limit, voltage_over):
     from gtmodel.modeling.ocp.refinement import solve_refined
 

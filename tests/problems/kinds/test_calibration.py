@@ -270,6 +270,7 @@ def test_problem_file_not_utf8(tmp_path):
         load_problem(f)
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_d1_piecewise_actuator_models_beat_the_linear_ones(tmp_path):
     """Dressler (2012), Table 5.3: with actuator non-linearity in the data, the piecewise-linear
     actuator models (2, 4) are more accurate than their linear counterparts (1, 3)."""

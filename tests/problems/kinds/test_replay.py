@@ -75,6 +75,7 @@ def test_final_actuator_error_is_the_dc_gain_error(shipped):
     np.testing.assert_allclose(r.actuator_error[-1], (DC_GAINS - 1) * move, atol=SETTLE_RESIDUAL_M)
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_replayed_reference_is_the_time_optimal_trajectory(shipped, tmp_path):
     # independent: the trajectory l1_time_optimal writes when solved on its own
     outcome, _ = shipped

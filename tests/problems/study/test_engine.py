@@ -195,6 +195,7 @@ def test_an_unreachable_scheduler_is_bad_input(small, tmp_path, capsys):
     assert "scheduler 'tcp://127.0.0.1:9': cannot connect" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # tens of seconds of the default run's budget (measured 2026-11-28)
 def test_warm_started_chains_on_a_local_cluster(tmp_path):
     """The same chains as units of two worker processes: the same keys and statuses as in this process."""
     design = SMALL_DESIGN.replace("[60.0, 60.0, 60.0], ", "")
