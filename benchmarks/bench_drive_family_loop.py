@@ -2,6 +2,7 @@
 
 Usage: python -P benchmarks/bench_drive_family_loop.py [--members N] [--seed S] [--only NAME,...]
 [--routes mpc,tracking] [--keep DIR] [--json] [--plan-margin F] [--noise F] [--gravity-factor F] [--rate-factor F]
+[--disturbance-gain G]
 
 For each of the first N members of :func:`gtmodel.modeling.library.drive_family.drive_family`
 (default 8, seed 0) the member's problem and model are written into DIR
@@ -32,6 +33,7 @@ axis' scale squared, :data:`MPC_A`, :data:`TRACKING_A`):
   4 substeps, ``input_delay = 1``; the problem's current (and speed) limits the MPC's soft rows
   (``problem_constraints`` default, not tightened); with ``--rate-factor F``
   ``input_rate_weights`` ``F`` times the input weight (move suppression; 0: none), else the file's default;
+  with ``--disturbance-gain G`` ``disturbance_gain = G`` (the input-disturbance estimate; default: none);
 * ``[controller]``: the same model, period, rk4 with 4 substeps, ``time_varying = true``, ``input_delay = 1``;
 * ``[reference]``: ``problem = "<name>.toml"``, ``overrides`` the bounds ``src.v``, ``ind.i`` (and
   ``rotor.w`` where declared) at ``--plan-margin`` (default 0.8) of the member's, ``settle_time = 0.3``;
@@ -243,7 +245,7 @@ def toml_text(doc: dict[str, Any], comments: list[str]) -> str:
 
 
 def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: float, gravity_factor: float,
-                     accept_unverified: bool, rate_factor: float | None = None) -> dict[str, Any]:
+                     accept_unverified: bool, rate_factor: float | None = None, disturbance_gain: float | None = None) -> dict[str, Any]:
     """Write the member's problem, model, MPC file and tracking-controller file by the recipe.
 
     Parameters
@@ -263,6 +265,9 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
     rate_factor : float, optional
         The MPC's ``input_rate_weights`` over its ``input_weights`` (0: no rate term); default None: the
         file gives none, the MPC file's default applies (:data:`gtmodel.problems.kinds.schemas.mpc.RATE_FACTOR`).
+    disturbance_gain : float, optional
+        The MPC's ``disturbance_gain`` in [0, 1] (the offset-free input-disturbance estimate); default None: the
+        file gives none (no estimate).
 
     Returns
     -------
@@ -299,7 +304,8 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
     mpc = {"name": f"{m.name}_mpc", "description": f"{m.name}: MPC, horizon 20 x 4 ms, RTI, rk4 x4, plant 20 % off",
            "mpc": {"model": model, "horizon": 20, "period": 0.004, "sqp_iterations": 1, "method": "rk4", "substeps": 4,
                    "input_delay": 1, "state_weights": state_weights(roles, scales, MPC_A), "input_weights": {"src.v": u_w["mpc"]},
-                   **({} if rate_factor is None else {"input_rate_weights": {"src.v": _sig(rate_factor * u_w["mpc"])}})},
+                   **({} if rate_factor is None else {"input_rate_weights": {"src.v": _sig(rate_factor * u_w["mpc"])}}),
+                   **({} if disturbance_gain is None else {"disturbance_gain": float(disturbance_gain)})},
            "reference": reference, "check": check}
     trk = {"name": f"{m.name}_trk", "description": f"{m.name}: feedforward + TV-LQR at 4 ms, rk4 x4, plant 20 % off",
            "controller": {"model": model, "period": 0.004, "method": "rk4", "substeps": 4, "time_varying": True, "input_delay": 1,
@@ -384,7 +390,7 @@ def run_route(m: DriveMember, route: str, path: Path, folder: Path) -> dict[str,
 def run_member(m: DriveMember, folder: Path, routes: list[str], a: argparse.Namespace) -> list[dict[str, Any]]:
     """Both routes of one member; an unverified plan is retried once with ``accept_unverified`` (for both routes)."""
     try:
-        files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, False, a.rate_factor)
+        files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, False, a.rate_factor, a.disturbance_gain)
     except Exception as exc:  # noqa: BLE001
         return [{"name": m.name, "route": r, "status": "load_failed", "error": f"writing the files: {type(exc).__name__}: {exc}"[:800],
                  "ratio": None, "cpu_s": {}, "passed": False} for r in routes]
@@ -393,7 +399,7 @@ def run_member(m: DriveMember, folder: Path, routes: list[str], a: argparse.Name
         row = run_route(m, route, files[route], folder)
         if not row["status"] and verified:  # refused as unverified: retry once, accepting it
             verified = False
-            files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, True, a.rate_factor)
+            files = controller_files(m, folder, a.plan_margin, a.noise, a.gravity_factor, True, a.rate_factor, a.disturbance_gain)
             first = row["cpu_s"]
             row = run_route(m, route, files[route], folder)
             row["cpu_s"] = {**first, **row["cpu_s"]}
@@ -475,6 +481,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--rate-factor", type=float, default=None,
                     help="the MPC's input_rate_weights over its input_weights (0: no rate term; default: the file "
                          "gives none, the MPC file's default applies)")
+    ap.add_argument("--disturbance-gain", type=float, default=None,
+                    help="the MPC's disturbance_gain in [0, 1] (default: the file gives none)")
     a = ap.parse_args(argv)
     routes = [r for r in a.routes.split(",") if r]
     if not routes or set(routes) - {"mpc", "tracking"}:
@@ -483,6 +491,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         ap.error(f"--plan-margin: expected a number in (0, 1], got {a.plan_margin}")
     if a.rate_factor is not None and not 0 <= a.rate_factor <= 1e6:
         ap.error(f"--rate-factor: expected a number in [0, 1e6], got {a.rate_factor}")
+    if a.disturbance_gain is not None and not 0 <= a.disturbance_gain <= 1:
+        ap.error(f"--disturbance-gain: expected a number in [0, 1], got {a.disturbance_gain}")
     log.setLevel(logging.ERROR)
     members = drive_family(max(a.members, 1), a.seed)
     only = {n for n in a.only.split(",") if n}
@@ -492,7 +502,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     tree = provenance()
     print(f"gtmodel at {tree['commit']}" + (f", changed: {' '.join(c.split()[-1] for c in tree['changed'])}" if tree["changed"] else ""))
     print(f"load average {os.getloadavg()[0]:.2f}; drive family seed {a.seed}, {a.members} member(s), routes {', '.join(routes)}, "
-          f"plan margin {a.plan_margin:g}, noise {a.noise:g}, rate factor {'the default' if a.rate_factor is None else format(a.rate_factor, 'g')}", flush=True)
+          f"plan margin {a.plan_margin:g}, noise {a.noise:g}, rate factor {'the default' if a.rate_factor is None else format(a.rate_factor, 'g')}, "
+          f"disturbance gain {'none' if a.disturbance_gain is None else format(a.disturbance_gain, 'g')}", flush=True)
     rows: list[dict[str, Any]] = []
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
@@ -513,7 +524,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
               f"{s['ff_exceeds']}; plans unverified {s['plan_unverified']})")
     out = {"rows": rows, "summary": summary, "seed": a.seed, "gtmodel": tree,
            "recipe": {"mpc_A": MPC_A, "tracking_A": TRACKING_A, "plan_margin": a.plan_margin, "noise": a.noise,
-                      "gravity_factor": a.gravity_factor, "rate_factor": a.rate_factor, "load_factor": LOAD_FACTOR, "friction_factor": FRICTION_FACTOR}}
+                      "gravity_factor": a.gravity_factor, "rate_factor": a.rate_factor, "disturbance_gain": a.disturbance_gain, "load_factor": LOAD_FACTOR, "friction_factor": FRICTION_FACTOR}}
     if a.json:
         print(json.dumps(out, default=float))
     return out
