@@ -31,7 +31,7 @@ from gtmodel.codegen.build import CompiledLibrary, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import build_step
-from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
+from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report, bound_size
 from gtmodel.control.mpc_memory import ESTIMATES, memory_estimates
 from gtmodel.control.reference import period_index
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
@@ -42,7 +42,8 @@ from gtmodel.status import Status
 #: ``bounds``, ``names``, ``outputs``, ``max_ratio``, ``max_step_time``, ``notes``).
 LoopSetup = Any
 
-__all__ = ["AUTHORITY_WARNING", "STATE_AUTHORITY_WARNING", "reference_states_at_bounds", "STATUS_NAMES", "PROGRESS_INTERVAL_S", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
+__all__ = ["AUTHORITY_WARNING", "STATE_AUTHORITY_WARNING", "reference_states_at_bounds", "STATUS_NAMES", "PROGRESS_INTERVAL_S", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law",
+           "excess_predictions"]
 
 #: Fraction of the reference's samples at an input bound above which the check's summary notes the
 #: feedback's lack of authority (a minimum-time plan at the bounds: bang-bang).
@@ -121,6 +122,9 @@ class LoopCheck:
     estimates : list of dict
         The MPC's estimator read from the step's memory along the run (:func:`~gtmodel.control.mpc_memory.memory_estimates`:
         the input disturbance it compensated, the back-off's error envelope); printed, and named where the ratio fails.
+    predictions : list of dict
+        Per state bound beyond the tolerance at the samples, what the controller's own model predicted there
+        (:func:`excess_predictions`): printed, and named in that bound's failure.
     """
 
     closed: LoopSummary
@@ -140,6 +144,7 @@ class LoopCheck:
     real: str = "double"
     states_at_bounds: dict[str, float] = field(default_factory=dict)
     estimates: list[dict[str, Any]] = field(default_factory=list)
+    predictions: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def status(self) -> Status:
@@ -171,7 +176,8 @@ class LoopCheck:
             ("the plant diverged (a stiff model's explicit plant step? [check] plant_method = \"radau2\"; the RMS errors "
              "of a runaway run say nothing)", diverged),
             (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
-            *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)" + self._cycling(), True)
+            *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)" + self._predicted(b.name)
+               + self._cycling(), True)
               for b in self.bounds if b.beyond_tolerance and not diverged],
             *[(f"{b.name} beyond its bound between the samples by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %; "
                f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})", True)
@@ -212,6 +218,10 @@ class LoopCheck:
         return ("; the bounds it rode: " + ", ".join(f"{b.name} {b.value:.4g} of {b.limit:g} ({100 * b.signed:+.2g} %) at t = {b.time:.4g} s"
                                                       for b in near)) if near else ""
 
+    def _predicted(self, name: str) -> str:
+        """What the controller's model predicted where ``name`` went furthest beyond its bound (:attr:`predictions`; empty without)."""
+        return "".join("; " + _prediction_text(e) for e in self.predictions if e["name"] == name)
+
     def _estimated(self) -> str:
         """The estimates the controller worked with (:attr:`estimates`), for the ratio's failure (empty without)."""
         return ("; its estimates: " + "; ".join(_estimate_text(e) for e in self.estimates)) if self.estimates else ""
@@ -237,7 +247,7 @@ class LoopCheck:
             the controller and of the feedforward, ``bounds`` and ``bounds_between`` (the controller's, per bound:
             :meth:`~gtmodel.control.bounds.BoundExcess.to_dict`), ``bounds_feedforward``, ``step_time_s`` (``median``,
             ``p99``, ``max``, ``first``, ``budget``, ``clock``), ``failed_steps``, ``alternation`` (:attr:`alternation`), ``input_bound_violations``,
-            ``memory_bytes``, ``work_bytes``, ``notes``, ``estimates`` (:attr:`estimates`).
+            ``memory_bytes``, ``work_bytes``, ``notes``, ``estimates`` (:attr:`estimates`), ``predictions`` (:attr:`predictions`).
         """
         times = self.closed.step_times()
         return {"status": str(self.status), "failures": self.failures(), "label": self.label, "real": self.real,
@@ -251,7 +261,7 @@ class LoopCheck:
                 "step_time_s": {**{k: float(v) for k, v in times.items()}, "budget": float(self.step_budget_s), "clock": self.clock},
                 "failed_steps": self.failed_steps, "alternation": self.alternation, "input_bound_violations": int(self.closed.bound_violations),
                 "memory_bytes": int(self.memory_bytes), "work_bytes": int(self.work_bytes), "notes": list(self.notes),
-                "estimates": [dict(e) for e in self.estimates]}
+                "estimates": [dict(e) for e in self.estimates], "predictions": [dict(e) for e in self.predictions]}
 
     def summary_lines(self) -> list[str]:
         """Human-readable summary.
@@ -276,6 +286,8 @@ class LoopCheck:
                    else ["declared bounds on the plant: none"])
                 + ([f"the {self.label}'s estimates (its memory after each period):"] + [f"  {_estimate_text(e)}" for e in self.estimates]
                    if self.estimates else [])
+                + ([f"where a bound was exceeded, the {self.label}'s model:"] + [f"  {_prediction_text(e)}" for e in self.predictions]
+                   if self.predictions else [])
                 + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}"]
                 + ([f"  beyond a declared bound by more than {100 * EXCESS_TOLERANCE:g} %: {', '.join(ff_beyond)}"] if ff_beyond else [])
                 + [ratio,
@@ -297,6 +309,81 @@ def _estimate_text(e: dict[str, Any]) -> str:
     """One estimate of :attr:`LoopCheck.estimates` as a line."""
     return (f"{e['kind']} {e['name']}: largest {e['largest']:.4g} at t = {e['time']:.4g} s ({100 * e['relative']:.3g} % of its "
             f"{'range' if e['kind'] == ESTIMATES['d'][0] else 'scale'}), last {e['last']:.4g}")
+
+
+def _prediction_text(e: dict[str, Any]) -> str:
+    """One entry of :attr:`LoopCheck.predictions` as a clause."""
+    saturated = [f"{n} {v:.4g}" for n, v in e["inputs_at_bounds"].items()]
+    cause = ("the model predicted the bound held: the excess is the model's error on this plant (plan with more margin "
+             "below the bound, or the MPC's constraint_backoff)" if e["predicted_percent"] <= 100 * EXCESS_TOLERANCE else
+             "the model predicted the excess too: the controller chose it (weight the variable more, or give it constraint rows)")
+    return (f"{e['name']} {e['value']:.4g} of {e['limit']:g} at t = {e['time']:.4g} s; the {e['controller']}'s model, run "
+            f"{e['periods']} period(s) from the plant's state with the inputs applied, predicted {e['predicted']:.4g} "
+            f"({e['predicted_percent']:+.3g} % of the bound beyond it; the model's error {e['error']:+.4g}, "
+            f"{100 * e['error_relative']:+.3g} % of the bound): {cause}"
+            + (f"; the inputs at their bounds then: {', '.join(saturated)}" if saturated else ""))
+
+
+def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExcess], label: str = "controller") -> list[dict[str, Any]]:
+    """What the controller's own model predicted where a state went furthest beyond its declared bound.
+
+    For each state bound of ``bounds`` beyond :data:`~gtmodel.control.bounds.EXCESS_TOLERANCE` at sample ``k``,
+    the controller's one-period prediction (the MPC's :attr:`~gtmodel.control.mpc.MPCController.step`, the tracking
+    law's ``predict``) is run from the plant's state at ``k - 1 - delay`` (what the controller had measured when it
+    chose the input acting before ``k``) through the inputs applied, to ``k``: a prediction inside the bound says the
+    excess is the model's error on this plant (a margin or a back-off answers it), one beyond it that the controller
+    chose it. Without a prediction function (a tracking law without delay or state limits), a plant in other states
+    than the model's, or an excess before ``1 + delay`` periods: nothing.
+
+    Parameters
+    ----------
+    setup : LoopSetup
+        The file's controller, bounds, names and loop options (``delay``).
+    run : LoopSummary
+        The closed-loop run under the controller.
+    bounds : list of BoundExcess
+        Its bounds at the samples (:func:`plant_bounds`).
+    label : str, optional
+        The controller's name in the text (``"MPC"``).
+
+    Returns
+    -------
+    list of dict
+        ``name``, ``time`` [s], ``value`` (the plant's), ``limit``, ``predicted``, ``error`` (value - predicted),
+        ``error_relative`` (over the bound's size), ``predicted_percent`` (the prediction beyond the limit, signed as
+        :attr:`~gtmodel.control.bounds.BoundExcess.signed`, in %), ``periods`` (predicted), ``inputs_at_bounds`` (input name
+        to its last applied value, for the inputs at a bound, within 1e-9 of their range, in any period predicted), ``controller``.
+    """
+    F = getattr(setup.controller, "step", None)
+    F = F if F is not None else getattr(setup.controller, "predict", None)
+    x_names, u_names, _ = setup.names
+    if F is None or "output" in setup.loop or len(x_names) != run.x.shape[1] or int(F.size1_in(0)) != run.x.shape[1]:
+        return []
+    delay = int(setup.loop.get("delay", 1))
+    t = np.asarray(run.t, dtype=float).reshape(-1)
+    lb, ub = np.asarray(run.u_lb, dtype=float), np.asarray(run.u_ub, dtype=float)
+    out = []
+    for b in bounds:
+        if not (b.beyond_tolerance and b.name in x_names and math.isfinite(b.time)):
+            continue
+        k, j = int(np.argmin(np.abs(t - b.time))), x_names.index(b.name)
+        start = k - 1 - delay
+        if start < 0 or not np.all(np.isfinite(run.x[start:k + 1])):
+            continue
+        x = run.x[start].copy()
+        for i in range(start, k):
+            x = np.asarray(F(x, run.u[i]), dtype=float).reshape(-1)
+        applied = run.u[start:k]
+        span = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
+        at = {u_names[i] if i < len(u_names) else f"u[{i}]": float(applied[-1, i]) for i in range(applied.shape[1])
+              if np.any(np.minimum(np.abs(applied[:, i] - lb[i]), np.abs(applied[:, i] - ub[i])) <= 1e-9 * span[i])}
+        size = bound_size(b.limit, b.lb, b.ub)
+        side = 1.0 if b.limit == b.ub else -1.0
+        out.append({"name": b.name, "time": float(t[k]), "value": float(run.x[k, j]), "limit": float(b.limit), "predicted": float(x[j]),
+                    "error": float(run.x[k, j] - x[j]), "error_relative": float((run.x[k, j] - x[j]) / size),
+                    "predicted_percent": float(100 * side * (x[j] - b.limit) / size), "periods": k - start,
+                    "inputs_at_bounds": at, "controller": label})
+    return out
 
 
 def compiled_step(generated: GeneratedCode, library: Path | CompiledLibrary) -> tuple[Any, Any, int]:
@@ -524,14 +611,15 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
     law = feedforward_law(setup.controller)
     ff = run_controller_loop(law if progress is None else _reporting(law, "feedforward alone", n, progress), *args, **kw)
     budget = setup.max_step_time if setup.max_step_time is not None else float(setup.controller.dt)
+    bounds = plant_bounds(setup, first)
     return LoopCheck(closed=first, feedforward=ff, memory_bytes=runner.memory_bytes, work_bytes=lib.work_bytes("control"), label=label,
                      real=getattr(generated, "real", "double"),
                      max_ratio=float(setup.max_ratio), step_budget_s=float(budget), heap=lib.heap_stats(),
                      clock=getattr(clock, "__name__", str(clock)),
                      reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub),
-                     bounds=plant_bounds(setup, first), bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes),
+                     bounds=bounds, bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes),
                      states_at_bounds=reference_states_at_bounds(setup), bounds_between=plant_bounds(setup, first, between=True),
-                     estimates=estimates)
+                     estimates=estimates, predictions=excess_predictions(setup, first, bounds, label))
 
 
 def _reporting(law: Any, what: str, n: int, progress: Any) -> Any:

@@ -72,6 +72,9 @@ class MPCCheck(LoopCheck):
         The declared state bounds counted between the samples (judged as ``bounds``).
     estimates : list of dict
         The MPC's estimator read from its memory along the run (:func:`~gtmodel.control.mpc_memory.memory_estimates`).
+    predictions : list of dict
+        Where a state went beyond its bound, what the MPC's model predicted there
+        (:func:`~gtmodel.codegen.check.closed_loop.excess_predictions`).
     """
 
     @property
