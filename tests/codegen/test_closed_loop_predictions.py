@@ -80,7 +80,7 @@ def test_the_prediction_held_means_a_model_error_and_beyond_means_the_controller
     failures = {"held": " ".join(check_held.failures()), "chose": " ".join(check_chose.failures())}
     assert "predicted 5.95 (-0.833 % of the bound beyond it" in failures["held"]
     assert "the excess is the model's error on this plant" in failures["held"]
-    assert "the controller chose it" in failures["chose"] and "the inputs at their bounds then: v 10" in failures["chose"]
+    assert "not the model's error, the step did not hold the bound" in failures["chose"] and "the inputs at their bounds then: v 10" in failures["chose"]
     assert "where a bound was exceeded, the MPC's model:" in "\n".join(check_held.summary_lines())
     assert check_held.to_dict()["predictions"] == [held]
 

@@ -316,7 +316,9 @@ def _prediction_text(e: dict[str, Any]) -> str:
     saturated = [f"{n} {v:.4g}" for n, v in e["inputs_at_bounds"].items()]
     cause = ("the model predicted the bound held: the excess is the model's error on this plant (plan with more margin "
              "below the bound, or the MPC's constraint_backoff)" if e["predicted_percent"] <= 100 * EXCESS_TOLERANCE else
-             "the model predicted the excess too: the controller chose it (weight the variable more, or give it constraint rows)")
+             "the inputs it applied take its own model beyond the bound too: not the model's error, the step did not hold "
+             "the bound (an MPC's single real-time iteration or soft rows, a law without rows; weight the variable more, or plan "
+             "with more margin below the bound)")
     return (f"{e['name']} {e['value']:.4g} of {e['limit']:g} at t = {e['time']:.4g} s; the {e['controller']}'s model, run "
             f"{e['periods']} period(s) from the plant's state with the inputs applied, predicted {e['predicted']:.4g} "
             f"({e['predicted_percent']:+.3g} % of the bound beyond it; the model's error {e['error']:+.4g}, "
@@ -331,8 +333,11 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
     the controller's one-period prediction (the MPC's :attr:`~gtmodel.control.mpc.MPCController.step`, the tracking
     law's ``predict``) is run from the plant's state at ``k - 1 - delay`` (what the controller had measured when it
     chose the input acting before ``k``) through the inputs applied, to ``k``: a prediction inside the bound says the
-    excess is the model's error on this plant (a margin or a back-off answers it), one beyond it that the controller
-    chose it. Without a prediction function (a tracking law without delay or state limits), a plant in other states
+    excess is the model's error on this plant (a margin or a back-off answers it), one beyond it that the step's own
+    inputs take its model there (the step did not hold the bound: a real-time iteration's one linearisation, soft rows
+    outweighed, or no rows). On a drive-family vertical ball screw (``drive0_03``) the MPC's current reached 16.83 A
+    of 14.3 where its model, from the plant's state two periods before, predicted 15.87 A: the model's error was
+    0.96 A, the rest the step's. Without a prediction function (a tracking law without delay or state limits), a plant in other states
     than the model's, or an excess before ``1 + delay`` periods: nothing.
 
     Parameters
