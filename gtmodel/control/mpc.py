@@ -437,7 +437,7 @@ class MPCController(SampledReference):
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row], *prev)
         lbg = self.bounds()["lbg"][1:]
         if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
-            lbg, error = row_backoff(self, x_in, x, w, u_last, mem)
+            lbg, error = row_backoff(self, x_in, x, w, u_last, mem, xr, ur)
         if self.solver == "hpipm":
             full, cost, _ = hpipm_rti(self, _sqrt_psd)(x, w, p, lbx, ubx, lbg)
             rows = None

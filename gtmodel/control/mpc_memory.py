@@ -20,13 +20,21 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from gtmodel.control.bounds import aimed
+from gtmodel.control.bounds import aimed, bound_size
 from gtmodel.control.mpc_nlp import between_rows, period_states
 from gtmodel.control.reference import period_index
 from gtmodel.control.state_limits import BACKOFF_GAIN, envelope
 from gtmodel.control.tracking import saturate
 
-__all__ = ["disturbance_estimate", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
+__all__ = ["BACKOFF_CAP", "disturbance_estimate", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
+
+#: With the reference given, :func:`row_backoff` tightens a row by at most the larger of the plan's own room to the bound
+#: there and this fraction of the bound's size (the model error a plan's margin is chosen for: a load 20 % heavier,
+#: docs/model_in_the_loop.md). A larger back-off excludes the plan itself, the rows turn infeasible and their penalty
+#: steers: a vertical ball screw's error envelope, swollen by the loop's own swing to 48 % of the current's scale, cut
+#: its rows to a third of the bound (tracking RMS 0.74 of the feedforward's, the current 17.7 % beyond; capped, 0.16
+#: and 10.8 %).
+BACKOFF_CAP = 0.2
 
 
 def memory_layout(c: Any) -> dict[str, int]:
@@ -166,7 +174,7 @@ def memory_reset(c: Any) -> ca.Function:
     return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
 
 
-def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX) -> tuple[ca.MX, ca.MX]:
+def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX, x_ref: Any = None, u_ref: Any = None) -> tuple[ca.MX, ca.MX]:
     """The lower bounds of the constraint rows: each declared bound tightened by the prediction's observed error.
 
     The one-period prediction error of the state, ``x - F(x_prev, u_act + d)`` (the memory's prediction,
@@ -182,7 +190,9 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     the difference ``Delta c``:
     the lower bound by ``max(-Delta c, 0)``, the upper by ``max(Delta c, 0)``, each from the bound the controller
     aims at, :data:`~gtmodel.control.bounds.TARGET_MARGIN` inside the declared one (:func:`~gtmodel.control.bounds.aimed`;
-    a bound is never loosened), scaled as the rows are (:mod:`gtmodel.control.mpc_constraints`). The back-off of robust MPC (Mayne,
+    a bound is never loosened), scaled as the rows are (:mod:`gtmodel.control.mpc_constraints`); with the reference given,
+    never tightened by more than the larger of the plan's own distance to the bound at that stage and :data:`BACKOFF_CAP`
+    of the bound's size (nor by less than the aim's margin). The back-off of robust MPC (Mayne,
     Seron & Rakovic, Automatica 41 (2005)) from the error measured in the loop rather than a bound assumed: a
     flexible joint's plant 20 % heavier than its model drew 8.47 A under rows at 8 A, the prediction
     under-estimating the current by 0.36 A per period (issue 65).
@@ -201,6 +211,9 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
         ``(nu, 1)`` the step's ``u_last``.
     mem : casadi.MX
         ``(n_memory, 1)`` the step's memory.
+    x_ref, u_ref : list of list of casadi.MX, optional
+        The horizon's reference window (:meth:`~gtmodel.control.mpc.MPCController._window`: ``H`` rows of ``nx`` states
+        at the periods' ends and of ``nu`` inputs), for the cap; default None: no cap.
 
     Returns
     -------
@@ -219,10 +232,17 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     inner = between_rows(c)
     aim = [aimed(float(lo), float(hi)) for lo, hi in zip(cons.lb, cons.ub)]  # each side TARGET_MARGIN inside the declared
     margin = [(aim[i][0] - float(cons.lb[i])) if s > 0 else (float(cons.ub[i]) - aim[i][1]) for i, s in cons.sides]
+    cap = ca.DM([max(BACKOFF_CAP * bound_size(float(cons.lb[i] if s > 0 else cons.ub[i]), float(cons.lb[i]), float(cons.ub[i])), m)
+                 / float(cons.scale[i]) for (i, s), m in zip(cons.sides, margin)])
 
-    def tightening(xa: ca.MX, xb: ca.MX, u: ca.MX) -> ca.MX:
+    def tightening(xa: ca.MX, xb: ca.MX, u: ca.MX, j: int) -> ca.MX:
         dc = cons.function(xb, u) - cons.function(xa, u)
-        return ca.vertcat(*[(ca.fmax(-s * dc[i], 0) + m) / float(cons.scale[i]) for (i, s), m in zip(cons.sides, margin)])
+        out = ca.vertcat(*[(ca.fmax(-s * dc[i], 0) + m) / float(cons.scale[i]) for (i, s), m in zip(cons.sides, margin)])
+        if x_ref is None:
+            return out
+        # never tightened past the plan's own room there nor BACKOFF_CAP of the bound, whichever is larger
+        room = cons.rows(ca.vertcat(*x_ref[j]), ca.vertcat(*u_ref[min(j + 1, c.horizon - 1)]))
+        return ca.fmin(out, ca.fmax(room, cap))
 
     nominal, disturbed, share, out = x_start, x_start + c.delay * error, 1.0, []
     for j in range(c.horizon):  # the error recurs, each period's share of it BACKOFF_GAIN smaller than the last's
@@ -230,10 +250,10 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
         if j + 1 in stages:
             end_a, inside_a = period_states(c, nominal, u)
             end_b, inside_b = period_states(c, disturbed, u)
-            out += [tightening(xa, xb + share * (m + 1) / (inner + 1) * error, u) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
+            out += [tightening(xa, xb + share * (m + 1) / (inner + 1) * error, u, j) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
             nominal, disturbed = end_a, end_b + share * error
             u_row = w[(min(j + 1, c.horizon - 1) // b) * c.nu:(min(j + 1, c.horizon - 1) // b + 1) * c.nu]
-            out.append(tightening(nominal, disturbed, u_row))
+            out.append(tightening(nominal, disturbed, u_row, j))
         else:
             nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + share * error
         share *= 1 - BACKOFF_GAIN

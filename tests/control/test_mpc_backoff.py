@@ -16,7 +16,7 @@ import pytest
 
 from gtmodel.control.bounds import TARGET_MARGIN
 from gtmodel.control.mpc import mpc_controller
-from gtmodel.control.mpc_memory import memory_estimates, row_backoff
+from gtmodel.control.mpc_memory import BACKOFF_CAP, memory_estimates, row_backoff
 from gtmodel.control.state_limits import BACKOFF_GAIN
 from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
@@ -70,6 +70,28 @@ def test_rows_are_tightened_by_the_recurring_error_by_hand(integrator, error, ra
     assert c.constraint_rows == H and new == pytest.approx(f, rel=1e-12, abs=1e-15)
     margin = TARGET_MARGIN * BOUND  # the bound aimed at, 1 % inside the declared
     assert lbg == pytest.approx((np.maximum(shift, 0.0) + margin) / c.constraints.scale[0], rel=1e-9, abs=1e-15)
+
+
+def test_rows_are_never_tightened_past_the_plans_room_or_the_cap(integrator):
+    """A large recurring error would tighten the rows far beyond the plan's own distance to the bound (the rows then
+    infeasible, the soft penalty steering): each row's lower bound is at most the larger of the reference's room there
+    and BACKOFF_CAP of the bound (by hand: ``max(BOUND - x*_j, 0.2 BOUND) / scale``); without the reference the
+    uncapped rows of the test above."""
+    _, t, x_ref, mpcs = integrator
+    c = mpcs[True]
+    x_prev, u_act, e = np.array([0.0, 0.0]), np.array([0.0]), np.array([0.2, 5.0])  # 0.2 m a period: far beyond the room
+    mem = np.r_[c.w_initial, 0.0, x_prev, u_act, np.zeros(2), 1.0]
+    xr = [[ca.DM(v) for v in x_ref[j + 1]] for j in range(H)]  # the window at t = 0: rows k+1..k+H
+    ur = [[ca.DM(0.0)] for _ in range(H)]
+    xs, us, ms = ca.MX.sym("x", c.nx), ca.MX.sym("u", c.nu), ca.MX.sym("w", c.n_memory)
+    capped, _ = row_backoff(c, xs, xs, ms[:c.nw], us, ms, xr, ur)
+    free, _ = row_backoff(c, xs, xs, ms[:c.nw], us, ms)
+    f = ca.Function("b", [xs, us, ms], [capped, free])
+    lbg, uncapped = (np.asarray(v).ravel() for v in f(x_prev + e, u_act, mem))
+    scale = c.constraints.scale[0]
+    cap = np.maximum(BOUND - x_ref[1:H + 1, 0], BACKOFF_CAP * BOUND) / scale  # by hand: the plan's room, or 20 % of the bound
+    assert np.count_nonzero(uncapped > cap) == H - 2  # the error alone would cut past both at all but the first two stages
+    assert lbg == pytest.approx(np.minimum(uncapped, cap), rel=1e-12)
 
 
 def _peak(c, push):
