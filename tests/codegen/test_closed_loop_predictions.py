@@ -100,3 +100,31 @@ def test_the_tracking_laws_predict_is_used():
     run = run_of(b_plant=0.15)
     (p,) = excess_predictions(setup_of(SimpleNamespace(predict=model_step()), 1), run, bounds_of(run), label="tracking")
     assert p["controller"] == "tracking" and p["periods"] == 2
+
+
+def test_an_excess_the_noise_carried_is_named_so():
+    """The plant is the model (no model error) and beyond its bound; from the state the controller measured (1.0
+    below the true one at the prediction's start, by hand) its model keeps the bound: the noise's, not the step's."""
+    run = run_of(b_plant=B_MODEL, n=12, u=U_MAX)  # rises to 6.86 at the last sample: beyond 6
+    k = run.t.size - 1
+    run.y = run.x.copy()
+    run.y[k - 2, 0] -= 1.0  # what the controller measured two periods before the worst sample
+    (p,) = excess_predictions(setup_of(SimpleNamespace(step=model_step()), 1), run, bounds_of(run), label="MPC")
+    assert p["error"] == pytest.approx(0.0, abs=1e-12) and p["predicted_percent"] > 1
+    assert p["predicted_from_measured"] == pytest.approx(closed_form(run.x[k - 2, 0] - 1.0, 2), rel=1e-12)
+    assert p["measured_percent"] < 1
+    check = LoopCheck(closed=run, feedforward=run, bounds=bounds_of(run), predictions=[p], label="MPC", memory_bytes=0, work_bytes=0)
+    assert "the measurement's noise carried the step beyond it" in " ".join(check.failures())
+
+
+def test_the_loop_records_what_the_controller_measured():
+    """run_controller_loop's ``y``: the plant's state plus the noise drawn from its seed (NumPy's generator, by hand)."""
+    from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
+
+    x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 0)
+    plant = ca.Function("plant", [x, u, p], [A * x + B_MODEL * u, 1])
+    t = DT * np.arange(5)
+    run = run_controller_loop(lambda tk, y: (0, np.array([1.0])), plant, np.array([0.5]), t, np.zeros((5, 1)),
+                              u_lb=np.array([-U_MAX]), u_ub=np.array([U_MAX]), noise_std=0.1, seed=3, delay=0)
+    noise = 0.1 * np.random.default_rng(3).standard_normal((5, 1))
+    np.testing.assert_allclose(run.y, run.x + noise, rtol=0, atol=1e-15)

@@ -314,16 +314,33 @@ def _estimate_text(e: dict[str, Any]) -> str:
 def _prediction_text(e: dict[str, Any]) -> str:
     """One entry of :attr:`LoopCheck.predictions` as a clause."""
     saturated = [f"{n} {v:.4g}" for n, v in e["inputs_at_bounds"].items()]
-    cause = ("the model predicted the bound held: the excess is the model's error on this plant (plan with more margin "
-             "below the bound, or the MPC's constraint_backoff)" if e["predicted_percent"] <= 100 * EXCESS_TOLERANCE else
-             "the inputs it applied take its own model beyond the bound too: not the model's error, the step did not hold "
-             "the bound (an MPC's single real-time iteration or soft rows, a law without rows; weight the variable more, or plan "
-             "with more margin below the bound)")
+    tolerance = 100 * EXCESS_TOLERANCE
+    seen = e.get("predicted_from_measured", math.nan)
+    if e["predicted_percent"] <= tolerance:
+        cause = ("the model predicted the bound held: the excess is the model's error on this plant (plan with more margin "
+                 "below the bound, or the MPC's constraint_backoff)")
+    elif math.isfinite(seen) and e["measured_percent"] <= tolerance:
+        cause = (f"from the state it measured (the check's noise) its model predicted {seen:.4g}, within the bound: the "
+                 "measurement's noise carried the step beyond it (filter the measurement, weight the noisy states less, or "
+                 "plan with more margin below the bound)")
+    else:
+        cause = ("the inputs it applied take its own model beyond the bound too"
+                 + (f" (from the state it measured: {seen:.4g})" if math.isfinite(seen) else "")
+                 + ": not the model's error, the step did not hold the bound (an MPC's single real-time iteration or soft "
+                 "rows, a law without rows; weight the variable more, or plan with more margin below the bound)")
     return (f"{e['name']} {e['value']:.4g} of {e['limit']:g} at t = {e['time']:.4g} s; the {e['controller']}'s model, run "
             f"{e['periods']} period(s) from the plant's state with the inputs applied, predicted {e['predicted']:.4g} "
             f"({e['predicted_percent']:+.3g} % of the bound beyond it; the model's error {e['error']:+.4g}, "
             f"{100 * e['error_relative']:+.3g} % of the bound): {cause}"
             + (f"; the inputs at their bounds then: {', '.join(saturated)}" if saturated else ""))
+
+
+def _rollout(F: Any, x: np.ndarray, inputs: np.ndarray) -> np.ndarray:
+    """``F`` applied from ``x`` under each row of ``inputs`` in turn: the state after them."""
+    x = np.asarray(x, dtype=float).reshape(-1)
+    for u in inputs:
+        x = np.asarray(F(x, u), dtype=float).reshape(-1)
+    return x
 
 
 def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExcess], label: str = "controller") -> list[dict[str, Any]]:
@@ -332,10 +349,13 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
     For each state bound of ``bounds`` beyond :data:`~gtmodel.control.bounds.EXCESS_TOLERANCE` at sample ``k``,
     the controller's one-period prediction (the MPC's :attr:`~gtmodel.control.mpc.MPCController.step`, the tracking
     law's ``predict``) is run from the plant's state at ``k - 1 - delay`` (what the controller had measured when it
-    chose the input acting before ``k``) through the inputs applied, to ``k``: a prediction inside the bound says the
-    excess is the model's error on this plant (a margin or a back-off answers it), one beyond it that the step's own
-    inputs take its model there (the step did not hold the bound: a real-time iteration's one linearisation, soft rows
-    outweighed, or no rows). On a drive-family vertical ball screw (``drive0_03``) the MPC's current reached 16.83 A
+    chose the input acting before ``k``) through the inputs applied, to ``k``, and again from the state it measured
+    (with the check's noise, :attr:`~gtmodel.estimation.closed_loop.controller_loop.LoopSummary.y`). A prediction
+    inside the bound says the excess is the model's error on this plant (a margin or a back-off answers it); one
+    beyond it from the true state but inside from the measured one, that the measurement's noise carried the step
+    there (the step held the bound for what it saw: filter the measurement, or plan with margin); one beyond it from
+    the measured state too, that the step's own inputs take its model there (the step did not hold the bound: a
+    real-time iteration's one linearisation, soft rows outweighed, or no rows). On a drive-family vertical ball screw (``drive0_03``) the MPC's current reached 16.83 A
     of 14.3 where its model, from the plant's state two periods before, predicted 15.87 A: the model's error was
     0.96 A, the rest the step's. Without a prediction function (a tracking law without delay or state limits), a plant in other states
     than the model's, or an excess before ``1 + delay`` periods: nothing.
@@ -356,7 +376,9 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
     list of dict
         ``name``, ``time`` [s], ``value`` (the plant's), ``limit``, ``predicted``, ``error`` (value - predicted),
         ``error_relative`` (over the bound's size), ``predicted_percent`` (the prediction beyond the limit, signed as
-        :attr:`~gtmodel.control.bounds.BoundExcess.signed`, in %), ``periods`` (predicted), ``inputs_at_bounds`` (input name
+        :attr:`~gtmodel.control.bounds.BoundExcess.signed`, in %), ``predicted_from_measured`` and ``measured_percent``
+        (the same prediction from the state the controller measured, with the check's noise: NaN where the run recorded
+        no measurements of every state), ``periods`` (predicted), ``inputs_at_bounds`` (input name
         to its last applied value, for the inputs at a bound, within 1e-9 of their range, in any period predicted), ``controller``.
     """
     F = getattr(setup.controller, "step", None)
@@ -375,9 +397,9 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
         start = k - 1 - delay
         if start < 0 or not np.all(np.isfinite(run.x[start:k + 1])):
             continue
-        x = run.x[start].copy()
-        for i in range(start, k):
-            x = np.asarray(F(x, run.u[i]), dtype=float).reshape(-1)
+        x = _rollout(F, run.x[start], run.u[start:k])
+        y = getattr(run, "y", None)
+        seen = float(_rollout(F, y[start], run.u[start:k])[j]) if y is not None and np.shape(y) == np.shape(run.x) else math.nan
         applied = run.u[start:k]
         span = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
         at = {u_names[i] if i < len(u_names) else f"u[{i}]": float(applied[-1, i]) for i in range(applied.shape[1])
@@ -387,6 +409,7 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
         out.append({"name": b.name, "time": float(t[k]), "value": float(run.x[k, j]), "limit": float(b.limit), "predicted": float(x[j]),
                     "error": float(run.x[k, j] - x[j]), "error_relative": float((run.x[k, j] - x[j]) / size),
                     "predicted_percent": float(100 * side * (x[j] - b.limit) / size), "periods": k - start,
+                    "predicted_from_measured": seen, "measured_percent": float(100 * side * (seen - b.limit) / size),
                     "inputs_at_bounds": at, "controller": label})
     return out
 

@@ -72,6 +72,9 @@ class LoopSummary:
     x_interior : numpy.ndarray, optional
         ``(K, m, nx)`` the plant's states inside each period (its step's substeps after the sample's,
         ``interior`` of :func:`run_controller_loop`; default ``(K, 0, nx)``: none recorded).
+    y : numpy.ndarray, optional
+        ``(K, nm)`` what the controller measured at each sample (the measured states with their noise; default None:
+        not recorded).
     """
 
     t: np.ndarray
@@ -86,6 +89,7 @@ class LoopSummary:
     status_names: dict[int, str] = field(default_factory=dict)
     state_names: tuple[str, ...] = ()
     x_interior: np.ndarray | None = None
+    y: np.ndarray | None = None
 
     @property
     def error(self) -> np.ndarray:
@@ -290,13 +294,14 @@ def run_controller_loop(
     dist = np.zeros(nu) if disturbance is None else np.asarray(disturbance, dtype=float).reshape(nu)
     rng = np.random.default_rng(seed)
     K = tt.size
-    xs, us, status, times = np.zeros((K, nx)), np.zeros((K, nu)), np.zeros(K, dtype=int), np.zeros(K)
+    xs, us, status, times, ys = np.zeros((K, nx)), np.zeros((K, nu)), np.zeros(K, dtype=int), np.zeros(K), np.zeros((K, nm))
     inner: list[np.ndarray] = []
     pending: list[np.ndarray] = []
     applied = None if u_before is None else np.asarray(u_before, dtype=float).reshape(nu)
     for k in range(K):
         xs[k] = np.asarray(out(x), dtype=float).reshape(-1)
         y = x[:nm] + sigma * rng.standard_normal(nm)
+        ys[k] = y
         start = clock()
         code, u = controller(float(tt[k]), y)
         times[k] = clock() - start
@@ -314,7 +319,7 @@ def run_controller_loop(
     return LoopSummary(t=tt, x=xs, x_ref=xr, u=us, status=status, step_s=times,
                        error_states=tuple(range(nx)) if error_states is None else tuple(int(i) for i in error_states),
                        u_lb=lb, u_ub=ub, status_names=dict(status_names or {}),
-                       state_names=tuple(state_names or ()), x_interior=np.stack(inner) if inner else None)
+                       state_names=tuple(state_names or ()), x_interior=np.stack(inner) if inner else None, y=ys)
 
 
 def compliant_plant(ode: Any, structure: ToolStructure | None = None, dt: float = LOOP_PERIOD_S, substeps: int = 4) -> tuple[ca.Function, Callable, int]:
