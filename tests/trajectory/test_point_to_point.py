@@ -14,7 +14,7 @@ import pytest
 from tests.conftest import PROBLEMS_DIR, verification_tolerance
 from gtmodel.errors import InputError, UnreachablePoseError
 from gtmodel.problems import load_problem
-from gtmodel.trajectory.point_to_point import PointToPoint, build_optimization, solve_point_to_point, trapezoid_profile
+from gtmodel.trajectory.point_to_point import PointToPoint, solve_point_to_point, trapezoid_profile
 
 START = np.array([-0.2, 2.75, -0.40])
 END = np.array([0.2, 3.0, -0.6])
