@@ -355,10 +355,12 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
     beyond it from the true state but inside from the measured one, that the measurement's noise carried the step
     there (the step held the bound for what it saw: filter the measurement, or plan with margin); one beyond it from
     the measured state too, that the step's own inputs take its model there (the step did not hold the bound: a
-    real-time iteration's one linearisation, soft rows outweighed, or no rows). On a drive-family vertical ball screw (``drive0_03``) the MPC's current reached 16.83 A
-    of 14.3 where its model, from the plant's state two periods before, predicted 15.87 A: the model's error was
-    0.96 A, the rest the step's. Without a prediction function (a tracking law without delay or state limits), a plant in other states
-    than the model's, or an excess before ``1 + delay`` periods: nothing.
+    real-time iteration's one linearisation, soft rows outweighed, or no rows). On a drive-family vertical ball screw
+    (``drive0_03``) the MPC's current reached 15.84 A of 14.3 where its model predicted 14.86 A from the plant's state
+    two periods before and 13.22 A from the measured one: the model's error 0.98 A, the noise's effect 1.64 A.
+    Without a prediction function (a tracking law without delay or state limits), a plant in other states
+    than the model's, or an excess before ``1 + delay`` periods: nothing. The prediction is the model's alone: an
+    MPC's input-disturbance estimate (``disturbance_gain``) and its back-off are not in it.
 
     Parameters
     ----------
