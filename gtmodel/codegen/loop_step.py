@@ -279,9 +279,9 @@ def tracking_step(controller: TrackingController, name: str = "tracking") -> Loo
                "every substep, backed off by the measured one-period prediction error; gtmodel.control.state_limits).\n"
                if c.state_limits is not None else "")
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
-    return LoopStep(name=name, function=c.function(), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
-                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text,
-                    t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
+    return LoopStep(name=name, dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), description=text + _filter_text(c),
+                    t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c, c.function, ()))
 
 
 def mpc_step(controller: MPCController, name: str = "mpc", real: str = "double") -> LoopStep:
@@ -328,9 +328,9 @@ def mpc_step(controller: MPCController, name: str = "mpc", real: str = "double")
                if c.estimates and c.constraint_backoff else "")
             + f"States x: {', '.join(c.x_names)}\nInputs u: {', '.join(c.u_names)}")
     ftol = max(FLOAT_RELATIVE_TOLERANCE, c.float_tolerance()) if real == "float" else FLOAT_RELATIVE_TOLERANCE
-    return LoopStep(name=name, function=c.function(real), dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
-                    x_names=list(c.x_names), u_names=list(c.u_names), w_init=c.memory_initial, description=text, real=real, float_tolerance=ftol,
-                    fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c))
+    return LoopStep(name=name, dt=c.dt, u_lb=c.u_lb.copy(), u_ub=c.u_ub.copy(), u_init=c.u_initial,
+                    x_names=list(c.x_names), u_names=list(c.u_names), description=text + _filter_text(c), real=real, float_tolerance=ftol,
+                    fail_status="GT_NOT_CONVERGED", t_range=(c.t0, c.t0 + c.dt * (c.length - 1)), x_samples=c.x_ref, **_guards(c, c.function, (real,)))
 
 
 def position_step(controller: PoseCorrection | ReferenceStreaming, name: str = "position") -> LoopStep:
@@ -366,11 +366,29 @@ def position_step(controller: PoseCorrection | ReferenceStreaming, name: str = "
                     x_range=lim["x"], u_range=lim["u_last"])
 
 
-def _guards(controller: TrackingController | MPCController) -> dict[str, Any]:
-    """The plausible measurement and memory of a controller and its memory reset (the LoopStep's fields)."""
-    lim = controller.limits()
-    return {"x_range": lim["x"], "u_range": lim["u_last"], "w_range": lim["memory"] if lim["memory"].shape[1] else None,
-            "reset": controller.memory_reset(), "predict": getattr(controller, "memory_predict", lambda: None)()}
+def _guards(controller: TrackingController | MPCController, build: Any, args: tuple) -> dict[str, Any]:
+    """The step's Function (``build(*args[, filtered=True])``), first memory, plausible measurement and memory, memory
+    reset and prediction (the LoopStep's fields), with the controller's
+    :attr:`~gtmodel.control.mpc.MPCController.state_filter` in front when it has one."""
+    c, lim = controller, controller.limits()
+    f = c.state_filter
+    fields = {"function": build(*args) if f is None else None, "w_init": c.memory_initial, "x_range": lim["x"], "u_range": lim["u_last"],
+              "w_range": lim["memory"] if lim["memory"].shape[1] else None, "reset": c.memory_reset(),
+              "predict": getattr(c, "memory_predict", lambda: None)()}
+    if f is None:
+        return fields
+    control, reset, predict = f.wrap(build(*args, filtered=True), fields["reset"], c.n_memory)
+    w_range = np.hstack([lim["memory"].reshape(2, -1), f.memory_range(lim["x"], lim["u_last"])])
+    return {**fields, "function": control, "reset": reset, "predict": predict, "w_range": w_range,
+            "w_init": np.concatenate([np.asarray(c.memory_initial, dtype=float).reshape(-1), f.memory_initial(c.x_ref[0], c.u_initial)])}
+
+
+def _filter_text(controller: TrackingController | MPCController) -> str:
+    """The header's line on the measurement filter (empty without one)."""
+    f = controller.state_filter
+    return "" if f is None else ("\nThe measurement filtered first: the extended Kalman filter of the controller's own step (noise per state "
+                                 + ", ".join(f"{n} {s:.3g}" for n, s in zip(controller.x_names, f.sigma))
+                                 + ";\ngtmodel.control.state_filter); the memory w ends with x^, P, u_last and a flag.")
 
 
 def _c_array(values: Any) -> str:

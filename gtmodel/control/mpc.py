@@ -43,6 +43,7 @@ from gtmodel._arrays import positive_int
 from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
+from gtmodel.control.state_filter import StateFilter
 from gtmodel.control.mpc_memory import disturbance_estimate, memory_extra, memory_layout, memory_predict, memory_reset, row_backoff
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
@@ -130,6 +131,10 @@ class MPCController(SampledReference):
         with ``u_{-1}`` the input acting before the horizon (the step's ``u_last``; the move
         suppression of MPC practice, e.g. Maciejowski, *Predictive Control* (2002), sec. 2.4);
         None: no such term (``sqpmethod`` only).
+    state_filter : StateFilter or None, optional
+        The filter of the measurement in front of the step (:mod:`gtmodel.control.state_filter`: the extended
+        Kalman filter of :attr:`step`); the loop step (:func:`~gtmodel.codegen.loop_step.mpc_step`) runs it before
+        :meth:`function` and keeps its memory after the step's own; None (default): the measurement as it is.
     """
 
     dt: float
@@ -155,6 +160,7 @@ class MPCController(SampledReference):
     constraint_backoff: bool = False
     u_start: np.ndarray | None = None
     R_rate: np.ndarray | None = None
+    state_filter: StateFilter | None = field(default=None, repr=False)
 
     @property
     def nw(self) -> int:
@@ -383,7 +389,7 @@ class MPCController(SampledReference):
         """
         return horizon_solve(self, t, x, w0, plugin, iterations, u_prev)
 
-    def function(self, real: str = "double") -> ca.Function:
+    def function(self, real: str = "double", filtered: bool = False) -> ca.Function:
         """The MPC as ONE CasADi Function of the loop-step interface (:mod:`gtmodel.codegen.loop_step`).
 
         Parameters
@@ -391,11 +397,16 @@ class MPCController(SampledReference):
         real : {"double", "float"}, optional
             Real type the Function is generated in: the QP solver's tolerances
             (as :meth:`nlp_solver`'s; ``sqpmethod`` only).
+        filtered : bool, optional
+            With a last input ``x_hat (nx,1)``, the filtered state (:attr:`state_filter`): the horizon starts from it and
+            the memory keeps it as the last state, while the disturbance estimate and the back-off's error are measured
+            from ``x``, the measurement itself (the filter's innovation, ``x`` less the memory's prediction); default
+            False: ``x`` for all.
 
         Returns
         -------
         casadi.Function
-            ``control(t (1,1), x (nx,1), u_last (nu,1), w (nw,1)) -> (u (nu,1), w_next (nw,1), ok (1,1))``:
+            ``control(t (1,1), x (nx,1), u_last (nu,1), w (nw,1)[, x_hat (nx,1)]) -> (u (nu,1), w_next (nw,1), ok (1,1))``:
             the reference window at ``k = floor((t - t_0) / dt)`` (clamped; a NaN ``t`` gives
             ``ok = 0``), ``sqp_iterations`` real-time iterations from the warm start ``w``
             (``sqpmethod``: :func:`~gtmodel.control.mpc_nlp.single_shooting_rti`), ``u``
@@ -415,9 +426,11 @@ class MPCController(SampledReference):
         """
         nx, nu, n, nw, error = self.nx, self.nu, self.length, self.nw, None
         t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", self.n_memory)
+        extra = [ca.MX.sym("x_hat", nx)] if filtered else []
         t_in, x_in = t, x
         w = mem[:nw]
         d = disturbance_estimate(self, x, u_last, mem) if self.disturbance_gain else None
+        x = x_kept = extra[0] if filtered else x  # the state the horizon starts from (and the memory keeps)
         if self.delay:  # the input computed now acts from t + dt: the horizon starts from the state then
             t, x = t + self.dt, self.step(x, u_last if d is None else u_last + d)
         k = period_index(t, self.t0, self.dt, n - 1)  # a NaN time reads row 0; ok is then 0
@@ -469,8 +482,9 @@ class MPCController(SampledReference):
             u = saturate(u - d, self.u_lb, self.u_ub)
             ok = ca.logic_and(ok, ca.sum1(ca.fabs(d)) < math.inf)
         if self.estimates:
-            w_next = ca.vertcat(w_next, memory_extra(self, ca.DM.zeros(self.nu) if d is None else d, x_in, u_last, 1.0, error=error))
-        return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+            w_next = ca.vertcat(w_next, memory_extra(self, ca.DM.zeros(self.nu) if d is None else d, x_kept, u_last, 1.0, error=error))
+        return ca.Function("control", [t_in, x_in, u_last, mem, *extra], [u, w_next, ok], ["t", "x", "u_last", "w"] + ["x_hat"] * len(extra),
+                           ["u", "w_next", "ok"])
 
     def limits(self) -> dict[str, np.ndarray]:
         """The plausible ranges the generated step checks its measurement and its memory against

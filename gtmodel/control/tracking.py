@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -43,6 +43,7 @@ import scipy.linalg
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
 from gtmodel.control.problem import substep_states, tracking_problem, weight_matrix
+from gtmodel.control.state_filter import StateFilter
 from gtmodel.control.state_limits import StateLimits, envelope, state_limits
 from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
@@ -184,7 +185,8 @@ class TrackingController(SampledReference):
         one), and applies ``u = sat(u*_{k+1} - K_{k+1} (x^_{k+1} - x*_{k+1}))``.
     predict : casadi.Function, optional
         ``predict(x (nx,1), u (nu,1)) -> x_next``: the model's fixed step over one period
-        (the one linearised), needed when ``delay`` is 1 or with ``state_limits``.
+        (the one linearised), needed when ``delay`` is 1, with ``state_limits`` or a ``state_filter``
+        (:func:`tracking_controller` always sets it).
     integral_states : tuple of int, optional
         Indices of the states with integral action (default none): the integrator state
         ``xi (ni,)``, ``xi_{k+1} = xi_k + dt (x - x*_k)[integral_states]``, is the step's
@@ -210,6 +212,10 @@ class TrackingController(SampledReference):
         model's one-period prediction error is measured, kept as the errors' envelope
         (:func:`~gtmodel.control.state_limits.envelope`) and the rows are tightened by it (the back-off of
         :meth:`~gtmodel.control.state_limits.StateLimits.project`).
+    state_filter : StateFilter or None, optional
+        The filter of the measurement in front of the law (:mod:`gtmodel.control.state_filter`: the extended Kalman
+        filter of :attr:`predict`); the loop step (:func:`~gtmodel.codegen.loop_step.tracking_step`) runs it before
+        :meth:`function` and keeps its memory after the law's own; None (default): the measurement as it is.
     """
 
     K: np.ndarray
@@ -231,6 +237,7 @@ class TrackingController(SampledReference):
     Qi: np.ndarray | None = None
     u_start: np.ndarray | None = None
     state_limits: StateLimits | None = None
+    state_filter: StateFilter | None = field(default=None, repr=False)
 
     @property
     def ni(self) -> int:
@@ -253,14 +260,22 @@ class TrackingController(SampledReference):
         """``(nu,)`` the input before the first step: :attr:`u_start` (default ``u*_0``) saturated."""
         return saturate(self.u_ref[0] if self.u_start is None else self.u_start, self.u_lb, self.u_ub)
 
-    def function(self) -> ca.Function:
+    def function(self, filtered: bool = False) -> ca.Function:
         """The controller as ONE CasADi Function of the loop-step interface.
+
+        Parameters
+        ----------
+        filtered : bool, optional
+            With a memory (:attr:`n_memory`), a last input ``x_hat (nx,1)``, the filtered state (:attr:`state_filter`):
+            the law acts on it and the memory keeps it as the last state, while the back-off's error is measured from
+            ``x``, the measurement itself (the filter's innovation); default False: ``x`` for all. Without a memory
+            the filtered state is simply given as ``x``.
 
         Returns
         -------
         casadi.Function
             ``control(t (1,1), x (nx,1), u_last (nu,1)) -> (u (nu,1), ok (1,1))``, with
-            a memory (integral action, :attr:`state_limits`) ``control(t, x, u_last, w (n_memory,1)) -> (u, w_next, ok)``
+            a memory (integral action, :attr:`state_limits`) ``control(t, x, u_last, w (n_memory,1)[, x_hat]) -> (u, w_next, ok)``
             (``w`` the integrator states, see :attr:`integral_states`, then the last measured state, input and flag):
             ``k = floor((t - t_0) / dt)`` clamped to ``0 .. N`` (a NaN ``t`` gives
             ``ok = 0``), ``u = sat(u*_k - K_k (x - x*_k))``, where row ``N`` (after the
@@ -274,7 +289,9 @@ class TrackingController(SampledReference):
         """
         n, nx, nu, ni, nm = self.length, self.nx, self.nu, self.ni, self.n_memory
         t, x, u_last, mem = ca.MX.sym("t"), ca.MX.sym("x", nx), ca.MX.sym("u_last", nu), ca.MX.sym("w", nm)
+        extra = [ca.MX.sym("x_hat", nx)] if filtered and nm else []
         t_in, x_in, w = t, x, mem[:ni]
+        x = x_kept = extra[0] if extra else x  # the state the law acts on (and the memory keeps)
         if self.delay:
             t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
         k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
@@ -300,7 +317,7 @@ class TrackingController(SampledReference):
             error = x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev)
             error = ca.if_else(ran > 0.5, envelope(last, error, self.plausible_ranges(self.u_lb, self.u_ub)[0]), last)
             u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=error, delay=self.delay)
-            kept = ca.vertcat(x_in, u_last, error, 1.0)  # this measurement, the input acting now, the envelope, for the next period
+            kept = ca.vertcat(x_kept, u_last, error, 1.0)  # this state, the input acting now, the envelope, for the next period
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         if not nm:
             ok = total < math.inf  # 0 for NaN or infinite entries
@@ -309,7 +326,8 @@ class TrackingController(SampledReference):
         unsaturated = ca.sum1(ca.fabs(u - free)) == 0  # conditional integration: hold xi while the input saturates (or is limited)
         w_next = ca.vertcat(ca.if_else(unsaturated, w + self.dt * error, w) if ni else ca.MX(0, 1), kept)
         ok = (total + ca.sum1(ca.fabs(w_next))) < math.inf
-        return ca.Function("control", [t_in, x_in, u_last, mem], [u, w_next, ok], ["t", "x", "u_last", "w"], ["u", "w_next", "ok"])
+        return ca.Function("control", [t_in, x_in, u_last, mem, *extra], [u, w_next, ok], ["t", "x", "u_last", "w"] + ["x_hat"] * len(extra),
+                           ["u", "w_next", "ok"])
 
     def limits(self) -> dict[str, np.ndarray]:
         """The plausible ranges the generated step checks its measurement and its memory against
@@ -505,7 +523,7 @@ def tracking_controller(
     nx = ode.nx
     integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
     held = None if not state_bounds else state_limits(substep_states(ode, dt, method, substeps), list(ode.x_names), state_bounds, pv, lb, ub, us, xs)
-    return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict") if delay or held else None, dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
+    return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict"), dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
                               K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), **integral)

@@ -51,6 +51,7 @@ from gtmodel.control.problem import substep_states
 from gtmodel.problems.base import ProblemFile
 from gtmodel.problems.loop_bounds import DeclaredBounds
 from gtmodel.problems.kinds.schemas.mpc import MAX_HORIZON, RATE_FACTOR, MPCFile, MPCSection
+from gtmodel.problems.loop_filter import with_measurement_filter
 from gtmodel.problems.loop_file import LoopModel, LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
 from gtmodel.problems.run import load_problem
 from gtmodel.trajectory.point_to_point import build_optimization
@@ -250,4 +251,5 @@ def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
         raise file.wrap(next((f for k, f in fields.items() if k in str(exc)), "mpc"), exc) from None
     if R_rate is None and m.solver == "sqpmethod" and controller.constraints is not None:  # the default (RATE_FACTOR)
         controller = replace(controller, R_rate=RATE_FACTOR * controller.R)
+    controller = with_measurement_filter(file, "mpc.measurement_noise", controller, m.measurement_noise, doc.check.noise)
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)

@@ -36,6 +36,7 @@ from pathlib import Path
 from gtmodel.errors import GtModelError
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.problems.kinds.schemas.tracking_controller import ControllerSection, TrackingFile
+from gtmodel.problems.loop_filter import with_measurement_filter
 from gtmodel.problems.loop_file import LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
 
 __all__ = ["ControllerSection", "TrackingFile", "load_tracking_file"]
@@ -82,4 +83,5 @@ def load_tracking_file(path: str | Path, replan: bool = False) -> LoopSetup:
                                          state_bounds={n: (i.bounds.lb[n], i.bounds.ub[n]) for n in i.bounds.lb} if c.hold_state_bounds else None)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
+    controller = with_measurement_filter(file, "controller.measurement_noise", controller, c.measurement_noise, doc.check.noise)
     return loop_setup(file, doc.name, controller, i.model, doc.check, c.period, bounds=i.bounds, notes=i.notes)

@@ -118,11 +118,13 @@ def motor_loop(motor, tmp_path_factory):
 def test_motor_closed_loop_c_equals_python_and_beats_the_feedforward(motor, motor_loop):
     generated, library = motor_loop
     check = closed_loop_check(motor, generated, library, label="tracking controller")
-    # the same loop (plant, noise, delay, disturbance) with the Function evaluated from Python, u_last and the
-    # integrator state (the file's integral action on the angle) carried as the C memory does
-    c, law = motor.controller, motor.controller.function()
-    assert c.integral_states == (1,)
-    memory = {"u": c.u_initial, "w": np.zeros(c.ni)}
+    # the same loop (plant, noise, delay, disturbance) with the step's Function evaluated from Python, u_last and the
+    # memory (the file's integral action on the angle, then the measurement filter of its [check] noise) carried as
+    # the C memory does
+    c = motor.controller
+    step = tracking_step(c, motor.name)
+    assert c.integral_states == (1,) and c.state_filter is not None
+    law, memory = step.function, {"u": c.u_initial, "w": step.w_init}
 
     def python(t, x):
         out = law(t, x, memory["u"], memory["w"])

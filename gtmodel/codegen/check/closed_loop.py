@@ -630,7 +630,8 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
 
     controller = recording if progress is None else _reporting(recording, f"closed loop, generated C {label}", n, progress)
     first = run_controller_loop(controller, *args, **kw)
-    estimates = memory_estimates(setup.controller, first.t[:len(memories)], np.array(memories)) if memories else []
+    own = getattr(setup.controller, "n_memory", 0)  # the controller's own memory (a measurement filter's follows it)
+    estimates = memory_estimates(setup.controller, first.t[:len(memories)], np.array(memories)[:, :own]) if memories else []
     times, statuses = [first.step_s], [first.status]
     for _ in range(max(int(repeat), 1) - 1):
         runner.reset()

@@ -12,7 +12,7 @@ from pydantic import Field
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.problems.kinds.schemas.loop import LoopFile
-from gtmodel.problems.loop_limits import Bounds, Period, StateBounds, Weights
+from gtmodel.problems.loop_limits import MAX_MAGNITUDE, Bounds, Period, StateBounds, Weights
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number
 
 __all__ = ["MAX_HORIZON", "MPC_METHOD_NAMES", "MPC_SOLVER_NAMES", "RATE_FACTOR", "MPCSection", "MPCFile"]
@@ -87,6 +87,9 @@ class MPCSection(Section):
     constraint_backoff : bool, optional
         Tighten the constraint rows by the prediction's one-period error measured in the loop (default: on with
         rows and sqpmethod or hpipm).
+    measurement_noise : list of float, optional
+        The sensors' noise standard deviation per state (state units, each >= 0), which the step's extended Kalman
+        filter of the measurement assumes (default: ``[check] noise``; all zeros or an empty list: no filter).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -113,6 +116,7 @@ class MPCSection(Section):
     constraint_substeps: bool = Field(default=True, strict=True, description="also constrain the states after each of the prediction's substeps within the constrained periods (between the samples)")
     disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
     constraint_backoff: bool | None = Field(default=None, strict=True, description="tighten the constraint rows by the prediction's one-period error measured in the loop, carried to each bounded quantity (a bound never loosened; default: on with constraint rows and solver sqpmethod or hpipm)")
+    measurement_noise: list[number(ge=0, le=MAX_MAGNITUDE)] | None = Field(default=None, max_length=10_000, description="the sensors' noise standard deviation per state, which the step's extended Kalman filter of the measurement assumes (default: [check] noise; all zeros or []: no filter)")
 
 
 class MPCFile(LoopFile):
