@@ -24,7 +24,7 @@ from gtmodel.control.reference import INDEX_EPS, reference_scales, sample_refere
 from gtmodel.modeling import ExplicitODE
 from gtmodel.modeling.simulation.step_stability import step_stability
 
-__all__ = ["PREDICTION_METHODS", "TrackingProblem", "sqrt_psd", "substep_states", "tracking_problem", "weight_matrix"]
+__all__ = ["PREDICTION_METHODS", "TrackingProblem", "fixed_step", "sqrt_psd", "substep_states", "tracking_problem", "weight_matrix"]
 
 #: Prediction steps over one period: explicit Euler on ``f`` or the ExplicitODE's fixed steps.
 PREDICTION_METHODS = ("euler", "rk4", "implicit_euler", "radau2")
@@ -225,14 +225,7 @@ class TrackingProblem:
         InputError
             An unknown method.
         """
-        if method != "euler":
-            return self.ode.step(self.dt, method, substeps=substeps)
-        ode = self.ode
-        x, u, p = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
-        h, xn = self.dt / substeps, x
-        for _ in range(substeps):
-            xn = xn + h * ode.f(xn, u, p)
-        return ca.Function("euler_step", [x, u, p], [xn], ["x", "u", "p"], ["x_next"])
+        return fixed_step(self.ode, self.dt, method, substeps)
 
     def check_step(self, method: str, substeps: int, what: str) -> None:
         """Refuse a prediction step that is unstable for the model along the reference.
@@ -289,6 +282,40 @@ class TrackingProblem:
             states = substep_states(self.ode, self.dt, method, substeps)(x, u, self.p)
             return ca.Function(name, [x, u], [states], ["x", "u"], ["x_substeps"])
         return ca.Function(name, [x, u], [self.step(method, substeps).call([x, u, self.p])[0]], ["x", "u"], ["x_next"])
+
+
+def fixed_step(ode: ExplicitODE, dt: float, method: str = "rk4", substeps: int = 1) -> ca.Function:
+    """A model's fixed step over one period, its parameters free: ``F(x, u, p) -> x_next`` (:meth:`TrackingProblem.step`).
+
+    Parameters
+    ----------
+    ode : ExplicitODE
+        The model.
+    dt : float
+        The period [s].
+    method : {"euler", "rk4", "implicit_euler", "radau2"}, optional
+        :data:`PREDICTION_METHODS` (``"euler"``: explicit Euler on ``f``; the others:
+        :meth:`~gtmodel.modeling.simulation.explicit.ExplicitODE.step`).
+    substeps : int, optional
+        Steps of ``method`` within one period.
+
+    Returns
+    -------
+    casadi.Function
+        ``(x (nx,1), u (nu,1), p (np,1)) -> x_next (nx,1)``, first output the next state.
+
+    Raises
+    ------
+    InputError
+        An unknown method.
+    """
+    if method != "euler":
+        return ode.step(dt, method, substeps=substeps)
+    x, u, p = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu), ca.SX.sym("p", ode.np)
+    h, xn = dt / substeps, x
+    for _ in range(substeps):
+        xn = xn + h * ode.f(xn, u, p)
+    return ca.Function("euler_step", [x, u, p], [xn], ["x", "u", "p"], ["x_next"])
 
 
 def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float = LOOP_PERIOD_S, Q: Any = None, R: Any = None,

@@ -11,9 +11,10 @@ sec. 13.2; Pannocchia & Rawlings, AIChE J. 49 (2003), the estimator of offset-fr
 - prediction over the last period, with the input that acted then ``u_act`` (the input delay's) plus the
   controller's input-disturbance estimate ``d`` where it keeps one:
   ``x^- = F(x^, u_act + d)``, ``P^- = A P A' + Q``, ``A = dF/dx``, ``B = dF/du`` there;
-- the model's error per period ``Q = B diag((rho u_scale)^2) B' + diag((eps x_scale)^2)``: an input-side error of
-  :data:`INPUT_ERROR` of each input's scale per period (the load, the friction the model has wrong act through the
-  input's channel) and :data:`STATE_ERROR` of each state's scale (scales of
+- the model's error per period ``Q = J_p diag((pi p)^2) J_p' + B diag((rho u_scale)^2) B' + diag((eps x_scale)^2)``:
+  each of the model's parameters ``p`` :data:`PARAMETER_ERROR` off (``J_p = dF/dp``: a heavier load, more friction
+  act where the model has them, on the load's side as on the motor's), an input-side error of :data:`INPUT_ERROR` of
+  each input's scale per period, and :data:`STATE_ERROR` of each state's scale (scales of
   :func:`~gtmodel.control.reference.reference_scales`);
 - the update with ``R = diag(sigma^2)``: ``L = P^- (P^- + R)^-1``, ``x^ = x^- + L (y - x^-)``, ``P = (I - L) P^-``
   (symmetrised).
@@ -38,12 +39,15 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INPUT_ERROR", "STATE_ERROR", "StateFilter", "measurement_filter", "state_filter"]
+__all__ = ["INPUT_ERROR", "PARAMETER_ERROR", "STATE_ERROR", "StateFilter", "measurement_filter", "state_filter"]
 
 #: The model's input-side error per period the filter allows, as a fraction of each input's scale (``rho`` of ``Q``).
 INPUT_ERROR = 0.05
 #: The model's error per period in each state directly, as a fraction of its scale (``eps`` of ``Q``).
 STATE_ERROR = 1e-4
+#: Each of the model's parameters taken as uncertain by this fraction of its value (``pi`` of ``Q``): a load 20 % heavier,
+#: the model error a plan's margin and the back-off's cap are chosen for (:data:`~gtmodel.control.mpc_memory.BACKOFF_CAP`).
+PARAMETER_ERROR = 0.2
 
 
 @dataclass(frozen=True)
@@ -63,8 +67,13 @@ class StateFilter:
     disturbance : tuple of int, optional
         ``(start, stop)``: where the controller's own memory holds its input-disturbance estimate ``d`` (added to the
         input of the prediction); default None: none.
-    input_error, state_error : float, optional
-        ``rho`` and ``eps`` of ``Q`` (default :data:`INPUT_ERROR`, :data:`STATE_ERROR`).
+    parametric : casadi.Function, optional
+        ``F(x, u, p) -> x_next``: the same step with the model's parameters free, for ``Q``'s parameter term;
+        default None: none.
+    p : numpy.ndarray, optional
+        ``(np,)`` the parameters ``step`` has (with ``parametric``).
+    input_error, state_error, parameter_error : float, optional
+        ``rho``, ``eps`` and ``pi`` of ``Q`` (default :data:`INPUT_ERROR`, :data:`STATE_ERROR`, :data:`PARAMETER_ERROR`).
     """
 
     step: ca.Function
@@ -73,8 +82,11 @@ class StateFilter:
     u_scale: np.ndarray
     delay: int
     disturbance: tuple[int, int] | None = None
+    parametric: ca.Function | None = None
+    p: np.ndarray | None = None
     input_error: float = INPUT_ERROR
     state_error: float = STATE_ERROR
+    parameter_error: float = PARAMETER_ERROR
 
     @property
     def nx(self) -> int:
@@ -130,9 +142,15 @@ class StateFilter:
         x_prev, P_prev, _, ran = self._parts(wf)
         xs, us = ca.MX.sym("x", nx), ca.MX.sym("u", self.nu)
         xn = self.step(xs, us)
-        jac = ca.Function("AB", [xs, us], [xn, ca.jacobian(xn, xs), ca.jacobian(xn, us)])
-        x_minus, A, B = jac(x_prev, self._input(u_last, wf, inner))
-        Q = ca.mtimes([B, ca.DM(np.diag((self.input_error * self.u_scale) ** 2)), B.T]) + ca.DM(np.diag((self.state_error * self.x_scale) ** 2))
+        if self.parametric is not None and self.p is not None and self.p.size:  # each parameter parameter_error off
+            ps = ca.MX.sym("p", self.p.size)
+            jp = ca.substitute(ca.jacobian(self.parametric.call([xs, us, ps])[0], ps), ps, ca.DM(self.p))
+            spread = ca.mtimes([jp, ca.DM(np.diag((self.parameter_error * self.p) ** 2)), jp.T])
+        else:
+            spread = ca.DM.zeros(nx, nx)
+        jac = ca.Function("AB", [xs, us], [xn, ca.jacobian(xn, xs), ca.jacobian(xn, us), spread])
+        x_minus, A, B, Qp = jac(x_prev, self._input(u_last, wf, inner))
+        Q = ca.mtimes([B, ca.DM(np.diag((self.input_error * self.u_scale) ** 2)), B.T]) + ca.DM(np.diag((self.state_error * self.x_scale) ** 2)) + Qp
         P_minus = ca.mtimes([A, P_prev, A.T]) + Q
         R = ca.DM(np.diag(self.sigma ** 2))
         L = ca.solve(P_minus + R, P_minus).T  # P^- (P^- + R)^-1, both symmetric
@@ -241,7 +259,7 @@ class StateFilter:
 
 
 def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, delay: int = 0,
-                 disturbance: tuple[int, int] | None = None) -> StateFilter | None:
+                 disturbance: tuple[int, int] | None = None, parametric: ca.Function | None = None, p: Any = None) -> StateFilter | None:
     """The measurement filter of a loop controller, or None where no state is noisy (see the module docstring).
 
     Parameters
@@ -256,6 +274,10 @@ def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, dela
         The controller's input delay (0 or 1).
     disturbance : tuple of int, optional
         Where the controller's memory holds its input-disturbance estimate (``(start, stop)``).
+    parametric : casadi.Function, optional
+        ``F(x, u, p) -> x_next``: the step with the parameters free (``Q``'s parameter term, :data:`PARAMETER_ERROR`).
+    p : array_like, optional
+        ``(np,)`` the parameters of ``step`` (with ``parametric``).
 
     Returns
     -------
@@ -266,7 +288,7 @@ def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, dela
     ------
     InputError
         ``sigma`` not ``(nx,)`` finite and >= 0, scales not finite and > 0, a step not ``F(x, u)`` of those sizes, a
-        delay not 0 or 1.
+        delay not 0 or 1, ``parametric`` not ``F(x, u, p)`` of those sizes with ``p`` finite.
     """
     s = np.asarray(sigma, dtype=float).reshape(-1)
     xs, us = np.asarray(x_scale, dtype=float).reshape(-1), np.asarray(u_scale, dtype=float).reshape(-1)
@@ -278,13 +300,19 @@ def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, dela
         raise InputError("x_scale, u_scale: expected finite scales > 0, one per state and per input")
     if isinstance(delay, bool) or delay not in (0, 1):
         raise InputError(f"delay: expected 0 or 1, got {delay!r}")
+    pv = None if p is None else np.asarray(p, dtype=float).reshape(-1)
+    if parametric is not None and (pv is None or not isinstance(parametric, ca.Function) or parametric.n_in() < 3
+                                   or parametric.numel_in(0) != s.size or parametric.numel_in(1) != us.size
+                                   or parametric.numel_in(2) != pv.size or not np.all(np.isfinite(pv))):
+        raise InputError(f"parametric, p: expected F(x ({s.size}), u ({us.size}), p) and its finite parameters")
     if not np.any(s > 0):
         return None
     x, u = ca.MX.sym("x", s.size), ca.MX.sym("u", us.size)
-    return StateFilter(step=ca.Function("F", [x, u], [step.call([x, u])[0]]), sigma=s, x_scale=xs, u_scale=us, delay=int(delay), disturbance=disturbance)
+    return StateFilter(step=ca.Function("F", [x, u], [step.call([x, u])[0]]), sigma=s, x_scale=xs, u_scale=us, delay=int(delay),
+                       disturbance=disturbance, parametric=parametric, p=pv)
 
 
-def measurement_filter(controller: Any, sigma: Any) -> StateFilter | None:
+def measurement_filter(controller: Any, sigma: Any, parametric: ca.Function | None = None, p: Any = None) -> StateFilter | None:
     """The measurement filter of a built loop controller: its own fixed step, scales, delay and disturbance estimate.
 
     Parameters
@@ -294,6 +322,11 @@ def measurement_filter(controller: Any, sigma: Any) -> StateFilter | None:
         ``disturbance_gain``).
     sigma : array_like
         ``(nx,)`` the measurement noise's standard deviation per state.
+    parametric : casadi.Function, optional
+        ``F(x, u, p) -> x_next``: the controller's step with the parameters free
+        (:func:`~gtmodel.control.problem.fixed_step`); default None: no parameter term in ``Q``.
+    p : array_like, optional
+        ``(np,)`` the controller's parameters (with ``parametric``).
 
     Returns
     -------
@@ -311,4 +344,4 @@ def measurement_filter(controller: Any, sigma: Any) -> StateFilter | None:
     x_scale, u_scale = controller.plausible_ranges(controller.u_lb, controller.u_ub)[:2]
     nw, nu = getattr(controller, "nw", 0), len(controller.u_names)
     disturbance = (nw, nw + nu) if getattr(controller, "disturbance_gain", 0.0) else None
-    return state_filter(step, sigma, x_scale, u_scale, delay=int(controller.delay), disturbance=disturbance)
+    return state_filter(step, sigma, x_scale, u_scale, delay=int(controller.delay), disturbance=disturbance, parametric=parametric, p=p)

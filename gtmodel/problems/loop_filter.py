@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from gtmodel.control.problem import fixed_step
 from gtmodel.control.state_filter import measurement_filter
 from gtmodel.errors import GtModelError
 from gtmodel.problems.base import ProblemFile
@@ -18,7 +19,8 @@ from gtmodel.problems.base import ProblemFile
 __all__ = ["with_measurement_filter"]
 
 
-def with_measurement_filter(file: ProblemFile, field: str, controller: Any, declared: list[float] | None, check_noise: list[float]) -> Any:
+def with_measurement_filter(file: ProblemFile, field: str, controller: Any, declared: list[float] | None, check_noise: list[float],
+                            ode: Any = None, method: str = "rk4", substeps: int = 1) -> Any:
     """The controller with the filter of its measurement (:attr:`~gtmodel.control.mpc.MPCController.state_filter`).
 
     Parameters
@@ -33,6 +35,13 @@ def with_measurement_filter(file: ProblemFile, field: str, controller: Any, decl
         The field's value (None: not given).
     check_noise : list of float
         ``[check] noise`` (the default; empty: none).
+    ode : ExplicitODE, optional
+        The controller's model, at its default parameters (``ode.p_default``): ``Q``'s parameter term, each parameter
+        :data:`~gtmodel.control.state_filter.PARAMETER_ERROR` off (default None: none).
+    method : str, optional
+        The controller's prediction step (with ``ode``).
+    substeps : int, optional
+        Its substeps per period.
 
     Returns
     -------
@@ -51,7 +60,8 @@ def with_measurement_filter(file: ProblemFile, field: str, controller: Any, decl
     if len(sigma) != len(names):
         raise file.fail(field, f"{len(names)} standard deviations, one per state ({', '.join(names)})", sigma)
     try:
-        f = measurement_filter(controller, sigma)
+        parametric = None if ode is None else fixed_step(ode, controller.dt, method, substeps)
+        f = measurement_filter(controller, sigma, parametric, None if ode is None else ode.p_default)
     except GtModelError as exc:
         raise file.wrap(field, exc) from None
     return controller if f is None else replace(controller, state_filter=f)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from gtmodel.control.state_filter import INPUT_ERROR, STATE_ERROR, measurement_filter, state_filter
+from gtmodel.control.state_filter import INPUT_ERROR, PARAMETER_ERROR, STATE_ERROR, measurement_filter, state_filter
 from gtmodel.errors import InputError
 
 DT = 0.004
@@ -41,15 +41,25 @@ def _run(f, ys, us):
     return np.array(out), np.asarray(wf, dtype=float).reshape(-1)
 
 
-def test_the_update_is_the_kalman_filter_written_out_by_hand():
-    f = state_filter(_linear_step(), SIGMA, X_SCALE, U_SCALE)
+def _parametric_step() -> ca.Function:
+    """The same step with the speed's decay ``A[1, 1] = p`` a parameter: ``dF/dp = (0, v)``."""
+    x, u, p = ca.MX.sym("x", 2), ca.MX.sym("u", 1), ca.MX.sym("p", 1)
+    return ca.Function("Fp", [x, u, p], [ca.vertcat(x[0] + DT * x[1], p * x[1]) + ca.mtimes(ca.DM(B), u)])
+
+
+@pytest.mark.parametrize("parametric", [False, True])
+def test_the_update_is_the_kalman_filter_written_out_by_hand(parametric):
+    extra = {"parametric": _parametric_step(), "p": [A[1, 1]]} if parametric else {}
+    f = state_filter(_linear_step(), SIGMA, X_SCALE, U_SCALE, **extra)
     rng = np.random.default_rng(1)
     ys, us = rng.normal(size=(4, 2)) * [0.1, 1.0], rng.normal(size=(4, 1)) * 10
     got, _ = _run(f, ys, us)
     R = np.diag(SIGMA**2)
     x, P, expected = ys[0], R.copy(), [ys[0]]  # the first step takes the measurement, P = R
     for y, u_prev in zip(ys[1:], us[1:]):  # without a delay u_last (computed a period ago) acted over the last period
-        xm, Pm = A @ x + B @ u_prev, A @ P @ A.T + _Q()
+        # each parameter PARAMETER_ERROR off: dF/dp = (0, v) at the last estimate
+        Qp = np.outer([0.0, x[1]], [0.0, x[1]]) * (PARAMETER_ERROR * A[1, 1]) ** 2 if parametric else 0.0
+        xm, Pm = A @ x + B @ u_prev, A @ P @ A.T + _Q() + Qp
         L = Pm @ np.linalg.inv(Pm + R)
         x, P = xm + L @ (y - xm), (np.eye(2) - L) @ Pm
         expected.append(x)
@@ -143,6 +153,9 @@ def test_no_noise_builds_no_filter():
     ({"u_scale": [np.inf]}, "x_scale, u_scale: expected finite scales > 0"),
     ({"delay": 2}, "delay: expected 0 or 1"),
     ({"delay": True}, "delay: expected 0 or 1"),
+    ({"parametric": "F"}, "parametric, p: expected F"),
+    ({"parametric": _parametric_step(), "p": [np.inf]}, "parametric, p: expected F"),
+    ({"parametric": _parametric_step(), "p": [1.0, 2.0]}, "parametric, p: expected F"),
 ])
 def test_bad_arguments_are_refused(kwargs, match):
     args = {"step": _linear_step(), "sigma": SIGMA, "x_scale": X_SCALE, "u_scale": U_SCALE, **kwargs}
