@@ -50,6 +50,10 @@ BAD = [
     ("unknown error state", MOTOR, 'error_states = ["emf.phi"]', 'error_states = ["phi"]', "check.error_states.phi"),
     ("integral of an unknown state", MOTOR, '"emf.phi" = 1e4 }', '"phi" = 1e4 }', "controller.integral_weights.phi"),
     ("integral weight 0", MOTOR, '"emf.phi" = 1e4 }', '"emf.phi" = 0.0 }', "controller.integral_weights.emf.phi"),
+    ("measurement noise of another length", MOTOR, "time_varying = true", "time_varying = true\nmeasurement_noise = [1e-3, 1e-3]",
+     "controller.measurement_noise"),
+    ("measurement noise negative", MOTOR, "time_varying = true", "time_varying = true\nmeasurement_noise = [1e-3, -1e-3, 1e-2]",
+     "controller.measurement_noise"),
 ]
 
 
@@ -176,3 +180,18 @@ def test_an_unstable_explicit_step_is_refused_with_the_substeps_it_needs(tmp_pat
             load_tracking_file(path)
     finally:
         path.unlink()
+
+
+@pytest.mark.parametrize("declared, filtered", [(None, True), ("[0.0, 0.0, 0.0]", False), ("[]", False), ("[1e-3, 1e-3, 1e-2]", True)])
+def test_the_measurement_filter_follows_the_declared_noise(tmp_path, declared, filtered):
+    # default: [check] noise (the shipped file's); zeros or an empty list: none
+    text = MOTOR if declared is None else MOTOR.replace("time_varying = true", f"time_varying = true\nmeasurement_noise = {declared}", 1)
+    path = _write(tmp_path, text, "[check]", "[check]")
+    try:
+        c = load_tracking_file(path).controller
+    finally:
+        path.unlink()
+    assert (c.state_filter is not None) is filtered
+    if filtered:
+        np.testing.assert_array_equal(c.state_filter.sigma, [1e-3, 1e-3, 1e-2])
+        assert c.state_filter.p is not None and c.state_filter.p.size > 0
