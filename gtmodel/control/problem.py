@@ -205,20 +205,19 @@ class TrackingProblem:
         return default if Qf is None else weight_matrix(Qf, self.ode.nx, np.ones(self.ode.nx), "Qf")
 
     def step(self, method: str = "rk4", substeps: int = 1) -> ca.Function:
-        """The model's fixed step over one period, its parameters free: ``F(x, u, p) -> x_next``.
+        """:func:`fixed_step` of the problem's model over its period: ``F(x, u, p) -> x_next``.
 
         Parameters
         ----------
-        method : {"euler", "rk4", "implicit_euler", "radau2"}, optional
-            :data:`PREDICTION_METHODS` (``"euler"``: explicit Euler on ``f``; the others:
-            :meth:`~gtmodel.modeling.simulation.explicit.ExplicitODE.step`).
+        method : str, optional
+            :data:`PREDICTION_METHODS`.
         substeps : int, optional
             Steps of ``method`` within one period.
 
         Returns
         -------
         casadi.Function
-            ``(x (nx,1), u (nu,1), p (np,1)) -> x_next (nx,1)``, first output the next state.
+            As :func:`fixed_step`'s.
 
         Raises
         ------
