@@ -1,9 +1,9 @@
-"""The measurement filter a loop-controller file gives its controller (``measurement_noise``, default ``[check] noise``).
+"""The measurement filter a loop-controller file gives its controller (``measurement_noise``; default none).
 
-The sensors' noise is declared once: ``[check] noise`` is what the check adds to the plant's state, and, unless the
-controller's table gives its own ``measurement_noise``, what the controller's Kalman filter assumes
+The controller's table declares its sensors' noise, ``measurement_noise`` (one standard deviation per state; e.g. the
+``[check] noise`` the check adds to the plant's state), and the step's Kalman filter assumes it
 (:mod:`gtmodel.control.state_filter`). The plant's mismatch (``parameter_factor`` and the rest of ``[check]``) stays
-unknown to the controller.
+unknown to the controller. Not declared, zeros or ``[]``: no filter.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from gtmodel.problems.base import ProblemFile
 __all__ = ["with_measurement_filter"]
 
 
-def with_measurement_filter(file: ProblemFile, field: str, controller: Any, declared: list[float] | None, check_noise: list[float],
+def with_measurement_filter(file: ProblemFile, field: str, controller: Any, declared: list[float] | None,
                             ode: Any = None, method: str = "rk4", substeps: int = 1) -> Any:
     """The controller with the filter of its measurement (:attr:`~gtmodel.control.mpc.MPCController.state_filter`).
 
@@ -32,9 +32,7 @@ def with_measurement_filter(file: ProblemFile, field: str, controller: Any, decl
     controller : MPCController or TrackingController
         The built controller.
     declared : list of float or None
-        The field's value (None: not given).
-    check_noise : list of float
-        ``[check] noise`` (the default; empty: none).
+        The field's value (None: not given, no filter).
     ode : ExplicitODE, optional
         The controller's model, at its default parameters (``ode.p_default``): ``Q``'s parameter term, each parameter
         :data:`~gtmodel.control.state_filter.PARAMETER_ERROR` off (default None: none).
@@ -53,7 +51,7 @@ def with_measurement_filter(file: ProblemFile, field: str, controller: Any, decl
     ProblemError
         Naming ``field``: not one standard deviation per state.
     """
-    sigma = check_noise if declared is None else declared
+    sigma = declared
     if not sigma:
         return controller
     names = list(controller.x_names)
