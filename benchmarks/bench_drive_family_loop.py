@@ -305,13 +305,11 @@ def controller_files(m: DriveMember, folder: Path, plan_margin: float, noise: fl
            "mpc": {"model": model, "horizon": 20, "period": 0.004, "sqp_iterations": 1, "method": "rk4", "substeps": 4,
                    "input_delay": 1, "state_weights": state_weights(roles, scales, MPC_A), "input_weights": {"src.v": u_w["mpc"]},
                    **({} if rate_factor is None else {"input_rate_weights": {"src.v": _sig(rate_factor * u_w["mpc"])}}),
-                   **({} if disturbance_gain is None else {"disturbance_gain": float(disturbance_gain)}),
-                   "measurement_noise": noise_row},  # the sensors the check adds: the step's Kalman filter assumes them
+                   **({} if disturbance_gain is None else {"disturbance_gain": float(disturbance_gain)})},
            "reference": reference, "check": check}
     trk = {"name": f"{m.name}_trk", "description": f"{m.name}: feedforward + TV-LQR at 4 ms, rk4 x4, plant 20 % off",
            "controller": {"model": model, "period": 0.004, "method": "rk4", "substeps": 4, "time_varying": True, "input_delay": 1,
-                          "state_weights": state_weights(roles, scales, TRACKING_A), "input_weights": {"src.v": u_w["tracking"]},
-                          "measurement_noise": noise_row},
+                          "state_weights": state_weights(roles, scales, TRACKING_A), "input_weights": {"src.v": u_w["tracking"]}},
            "reference": reference, "check": check}
     paths = {"mpc": folder / f"{m.name}_mpc.toml", "tracking": folder / f"{m.name}_trk.toml"}
     paths["mpc"].write_text(toml_text(mpc, common), encoding="utf-8")

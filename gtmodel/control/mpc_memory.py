@@ -227,7 +227,10 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     _, _, _, ran = _estimator_memory(c, u_last, mem)
     start = c.nw + 2 * c.nu + c.nx  # the envelope's place (memory_layout)
     kept = mem[start:start + c.nx]
-    error = ca.if_else(ran > 0.5, envelope(kept, x - memory_predict(c)(u_last, mem), c.plausible_ranges(c.u_lb, c.u_ub)[0]), kept)
+    measured = x - memory_predict(c)(u_last, mem)
+    if c.state_filter is not None:  # the innovation less the sensors' noise band
+        measured = c.state_filter.model_error(measured)
+    error = ca.if_else(ran > 0.5, envelope(kept, measured, c.plausible_ranges(c.u_lb, c.u_ub)[0]), kept)
     b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
     inner = between_rows(c)
     aim = [aimed(float(lo), float(hi)) for lo, hi in zip(cons.lb, cons.ub)]  # each side TARGET_MARGIN inside the declared

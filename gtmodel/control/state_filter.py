@@ -12,12 +12,17 @@ sec. 13.2; Pannocchia & Rawlings, AIChE J. 49 (2003), the estimator of offset-fr
   controller's input-disturbance estimate ``d`` where it keeps one:
   ``x^- = F(x^, u_act + d)``, ``P^- = A P A' + Q``, ``A = dF/dx``, ``B = dF/du`` there;
 - the model's error per period ``Q = J_p diag((pi p)^2) J_p' + B diag((rho u_scale)^2) B' + diag((eps x_scale)^2)``:
-  each of the model's parameters ``p`` :data:`PARAMETER_ERROR` off (``J_p = dF/dp``: a heavier load, more friction
-  act where the model has them, on the load's side as on the motor's), an input-side error of :data:`INPUT_ERROR` of
+  each of the model's parameters ``p`` :data:`PARAMETER_ERROR` off (a heavier load, more friction act where the model
+  has them, on the load's side as on the motor's), ``J_p = Gamma df/dp`` the right-hand side's sensitivity held over
+  the period, ``Gamma = dt (I + A) / 2`` (the trapezoidal rule of the integral of the transition matrix, which the step's
+  ``A`` ends: second order in ``dt``, as stable as the step; the step's own ``dF/dp`` through every substep made the
+  generated C ten times larger, 1.8 MB of a belt drive's 2 MB filter), an input-side error of :data:`INPUT_ERROR` of
   each input's scale per period, and :data:`STATE_ERROR` of each state's scale (scales of
   :func:`~gtmodel.control.reference.reference_scales`);
-- the update with ``R = diag(sigma^2)``: ``L = P^- (P^- + R)^-1``, ``x^ = x^- + L (y - x^-)``, ``P = (I - L) P^-``
-  (symmetrised).
+- the update with ``R = diag(sigma^2)``: ``L = P^- (P^- + R)^-1``, ``x^ = x^- + L (y - x^-)``,
+  ``P = (I - L) P^- (I - L)' + L R L'`` (Joseph's form, equal to ``(I - L) P^-`` for this gain but a sum of two
+  covariances in round-off: with ``(I - L) P^-`` a float32 step's ``P`` lost its positive diagonal, and the step
+  reset its memory 17 times in 132 periods), symmetrised, its diagonal kept >= 0.
 
 The controller then acts on ``x^``; its own estimators (the MPC's disturbance estimate, the back-off's error envelope)
 go on measuring their error from ``y``: the innovation ``y - x^-``, not the filtered correction ``L (y - x^-)``, which
@@ -39,12 +44,15 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INPUT_ERROR", "PARAMETER_ERROR", "STATE_ERROR", "StateFilter", "measurement_filter", "state_filter"]
+__all__ = ["INPUT_ERROR", "NOISE_BAND", "PARAMETER_ERROR", "STATE_ERROR", "StateFilter", "measurement_filter", "state_filter"]
 
 #: The model's input-side error per period the filter allows, as a fraction of each input's scale (``rho`` of ``Q``).
 INPUT_ERROR = 0.05
 #: The model's error per period in each state directly, as a fraction of its scale (``eps`` of ``Q``).
 STATE_ERROR = 1e-4
+#: The innovation within this many of its state's noise standard deviations is taken as noise, not the model's error
+#: (:meth:`StateFilter.model_error`).
+NOISE_BAND = 3.0
 #: Each of the model's parameters taken as uncertain by this fraction of its value (``pi`` of ``Q``): a load 20 % heavier,
 #: the model error a plan's margin and the back-off's cap are chosen for (:data:`~gtmodel.control.mpc_memory.BACKOFF_CAP`).
 PARAMETER_ERROR = 0.2
@@ -67,11 +75,13 @@ class StateFilter:
     disturbance : tuple of int, optional
         ``(start, stop)``: where the controller's own memory holds its input-disturbance estimate ``d`` (added to the
         input of the prediction); default None: none.
-    parametric : casadi.Function, optional
-        ``F(x, u, p) -> x_next``: the same step with the model's parameters free, for ``Q``'s parameter term;
+    rhs : casadi.Function, optional
+        ``f(x, u, p) -> dx/dt``: the model's right-hand side with its parameters free, for ``Q``'s parameter term;
         default None: none.
     p : numpy.ndarray, optional
-        ``(np,)`` the parameters ``step`` has (with ``parametric``).
+        ``(np,)`` the parameters ``step`` has (with ``rhs``).
+    dt : float, optional
+        The period [s] ``step`` spans (with ``rhs``).
     input_error, state_error, parameter_error : float, optional
         ``rho``, ``eps`` and ``pi`` of ``Q`` (default :data:`INPUT_ERROR`, :data:`STATE_ERROR`, :data:`PARAMETER_ERROR`).
     """
@@ -82,8 +92,9 @@ class StateFilter:
     u_scale: np.ndarray
     delay: int
     disturbance: tuple[int, int] | None = None
-    parametric: ca.Function | None = None
+    rhs: ca.Function | None = None
     p: np.ndarray | None = None
+    dt: float = 0.0
     input_error: float = INPUT_ERROR
     state_error: float = STATE_ERROR
     parameter_error: float = PARAMETER_ERROR
@@ -114,6 +125,28 @@ class StateFilter:
             u_act = u_act + inner[self.disturbance[0]:self.disturbance[1]]
         return u_act
 
+    def model_error(self, innovation: Any) -> Any:
+        """The model's error in an innovation: each state's part beyond :data:`NOISE_BAND` of its noise's standard deviation.
+
+        ``e_i = v_i - clip(v_i, -b sigma_i, b sigma_i)``, ``b`` = :data:`NOISE_BAND` (a soft threshold; a state without
+        noise keeps its innovation). What the controller's own estimators (the back-off's error envelope) take from
+        ``y - x^-``: the innovation whole carried the sensors' noise into them, and a ball-screw axis' TV-LQR, its rows
+        backed off by a motor angle's noise (0.17 rad, with a transmission of 10^7 N/m a force of 3 kN), chattered its
+        current to -27 A of 18.1 (issue 65); the filtered correction ``L (y - x^-)`` alone hid the model's error.
+
+        Parameters
+        ----------
+        innovation : casadi.MX or casadi.SX
+            ``(nx, 1)`` the measurement less the filter's prediction.
+
+        Returns
+        -------
+        casadi.MX or casadi.SX
+            ``(nx, 1)``.
+        """
+        band = ca.DM(NOISE_BAND * self.sigma)
+        return innovation - ca.fmin(ca.fmax(innovation, -band), band)
+
     def prediction(self) -> ca.Function:
         """The state the filter's memory predicts for now (what replaces a rejected measurement).
 
@@ -142,21 +175,25 @@ class StateFilter:
         x_prev, P_prev, _, ran = self._parts(wf)
         xs, us = ca.MX.sym("x", nx), ca.MX.sym("u", self.nu)
         xn = self.step(xs, us)
-        if self.parametric is not None and self.p is not None and self.p.size:  # each parameter parameter_error off
+        Ax = ca.jacobian(xn, xs)
+        if self.rhs is not None and self.p is not None and self.p.size:  # each parameter parameter_error off
             ps = ca.MX.sym("p", self.p.size)
-            jp = ca.substitute(ca.jacobian(self.parametric.call([xs, us, ps])[0], ps), ps, ca.DM(self.p))
+            jf = ca.substitute(ca.jacobian(self.rhs.call([xs, us, ps])[0], ps), ps, ca.DM(self.p))
+            jp = ca.mtimes(self.dt / 2 * (ca.DM.eye(nx) + Ax), jf)  # Gamma df/dp, Gamma = dt (I + A) / 2
             spread = ca.mtimes([jp, ca.DM(np.diag((self.parameter_error * self.p) ** 2)), jp.T])
         else:
             spread = ca.DM.zeros(nx, nx)
-        jac = ca.Function("AB", [xs, us], [xn, ca.jacobian(xn, xs), ca.jacobian(xn, us), spread])
+        jac = ca.Function("AB", [xs, us], [xn, Ax, ca.jacobian(xn, us), spread])
         x_minus, A, B, Qp = jac(x_prev, self._input(u_last, wf, inner))
         Q = ca.mtimes([B, ca.DM(np.diag((self.input_error * self.u_scale) ** 2)), B.T]) + ca.DM(np.diag((self.state_error * self.x_scale) ** 2)) + Qp
         P_minus = ca.mtimes([A, P_prev, A.T]) + Q
         R = ca.DM(np.diag(self.sigma ** 2))
         L = ca.solve(P_minus + R, P_minus).T  # P^- (P^- + R)^-1, both symmetric
         x_hat = x_minus + ca.mtimes(L, y - x_minus)
-        P = ca.mtimes(ca.DM.eye(nx) - L, P_minus)
+        IL = ca.DM.eye(nx) - L
+        P = ca.mtimes([IL, P_minus, IL.T]) + ca.mtimes([L, R, L.T])  # Joseph's form: a sum of two covariances
         P = (P + P.T) / 2
+        P = P + ca.diag(ca.fmax(-ca.diag(P), 0))  # its diagonal >= 0 whatever the round-off (a float32 step's)
         x_hat, P = ca.if_else(ran > 0.5, x_hat, y), ca.if_else(ran > 0.5, P, R)
         f = ca.Function("filter", [y, u_last, inner, wf], [x_hat, ca.vertcat(x_hat, ca.reshape(P, -1, 1), u_last, 1.0)],
                         ["y", "u_last", "w", "wf"], ["x", "wf_next"])
@@ -259,7 +296,8 @@ class StateFilter:
 
 
 def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, delay: int = 0,
-                 disturbance: tuple[int, int] | None = None, parametric: ca.Function | None = None, p: Any = None) -> StateFilter | None:
+                 disturbance: tuple[int, int] | None = None, rhs: ca.Function | None = None, p: Any = None,
+                 dt: float | None = None) -> StateFilter | None:
     """The measurement filter of a loop controller, or None where no state is noisy (see the module docstring).
 
     Parameters
@@ -274,10 +312,13 @@ def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, dela
         The controller's input delay (0 or 1).
     disturbance : tuple of int, optional
         Where the controller's memory holds its input-disturbance estimate (``(start, stop)``).
-    parametric : casadi.Function, optional
-        ``F(x, u, p) -> x_next``: the step with the parameters free (``Q``'s parameter term, :data:`PARAMETER_ERROR`).
+    rhs : casadi.Function, optional
+        ``f(x, u, p) -> dx/dt``: the model's right-hand side with the parameters free (``Q``'s parameter term,
+        :data:`PARAMETER_ERROR`).
     p : array_like, optional
-        ``(np,)`` the parameters of ``step`` (with ``parametric``).
+        ``(np,)`` the parameters of ``step`` (with ``rhs``).
+    dt : float, optional
+        The period ``step`` spans [s] (> 0; with ``rhs``).
 
     Returns
     -------
@@ -288,7 +329,7 @@ def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, dela
     ------
     InputError
         ``sigma`` not ``(nx,)`` finite and >= 0, scales not finite and > 0, a step not ``F(x, u)`` of those sizes, a
-        delay not 0 or 1, ``parametric`` not ``F(x, u, p)`` of those sizes with ``p`` finite.
+        delay not 0 or 1, ``rhs`` not ``f(x, u, p)`` of those sizes with ``p`` finite and ``dt`` > 0.
     """
     s = np.asarray(sigma, dtype=float).reshape(-1)
     xs, us = np.asarray(x_scale, dtype=float).reshape(-1), np.asarray(u_scale, dtype=float).reshape(-1)
@@ -301,18 +342,18 @@ def state_filter(step: ca.Function, sigma: Any, x_scale: Any, u_scale: Any, dela
     if isinstance(delay, bool) or delay not in (0, 1):
         raise InputError(f"delay: expected 0 or 1, got {delay!r}")
     pv = None if p is None else np.asarray(p, dtype=float).reshape(-1)
-    if parametric is not None and (pv is None or not isinstance(parametric, ca.Function) or parametric.n_in() < 3
-                                   or parametric.numel_in(0) != s.size or parametric.numel_in(1) != us.size
-                                   or parametric.numel_in(2) != pv.size or not np.all(np.isfinite(pv))):
-        raise InputError(f"parametric, p: expected F(x ({s.size}), u ({us.size}), p) and its finite parameters")
+    if rhs is not None and (pv is None or not isinstance(rhs, ca.Function) or rhs.n_in() < 3 or rhs.numel_in(0) != s.size
+                            or rhs.numel_in(1) != us.size or rhs.numel_in(2) != pv.size or not np.all(np.isfinite(pv))
+                            or dt is None or not (math.isfinite(dt) and dt > 0)):
+        raise InputError(f"rhs, p, dt: expected f(x ({s.size}), u ({us.size}), p), its finite parameters and the period > 0")
     if not np.any(s > 0):
         return None
     x, u = ca.MX.sym("x", s.size), ca.MX.sym("u", us.size)
     return StateFilter(step=ca.Function("F", [x, u], [step.call([x, u])[0]]), sigma=s, x_scale=xs, u_scale=us, delay=int(delay),
-                       disturbance=disturbance, parametric=parametric, p=pv)
+                       disturbance=disturbance, rhs=rhs, p=pv, dt=float(dt or 0.0))
 
 
-def measurement_filter(controller: Any, sigma: Any, parametric: ca.Function | None = None, p: Any = None) -> StateFilter | None:
+def measurement_filter(controller: Any, sigma: Any, rhs: ca.Function | None = None, p: Any = None) -> StateFilter | None:
     """The measurement filter of a built loop controller: its own fixed step, scales, delay and disturbance estimate.
 
     Parameters
@@ -322,11 +363,11 @@ def measurement_filter(controller: Any, sigma: Any, parametric: ca.Function | No
         ``disturbance_gain``).
     sigma : array_like
         ``(nx,)`` the measurement noise's standard deviation per state.
-    parametric : casadi.Function, optional
-        ``F(x, u, p) -> x_next``: the controller's step with the parameters free
-        (:func:`~gtmodel.control.problem.fixed_step`); default None: no parameter term in ``Q``.
+    rhs : casadi.Function, optional
+        ``f(x, u, p) -> dx/dt``: the controller's model's right-hand side with the parameters free
+        (:attr:`~gtmodel.modeling.simulation.explicit.ExplicitODE.f`); default None: no parameter term in ``Q``.
     p : array_like, optional
-        ``(np,)`` the controller's parameters (with ``parametric``).
+        ``(np,)`` the controller's parameters (with ``rhs``).
 
     Returns
     -------
@@ -344,4 +385,5 @@ def measurement_filter(controller: Any, sigma: Any, parametric: ca.Function | No
     x_scale, u_scale = controller.plausible_ranges(controller.u_lb, controller.u_ub)[:2]
     nw, nu = getattr(controller, "nw", 0), len(controller.u_names)
     disturbance = (nw, nw + nu) if getattr(controller, "disturbance_gain", 0.0) else None
-    return state_filter(step, sigma, x_scale, u_scale, delay=int(controller.delay), disturbance=disturbance, parametric=parametric, p=p)
+    return state_filter(step, sigma, x_scale, u_scale, delay=int(controller.delay), disturbance=disturbance, rhs=rhs, p=p,
+                        dt=float(controller.dt))

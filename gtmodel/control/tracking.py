@@ -268,7 +268,8 @@ class TrackingController(SampledReference):
         filtered : bool, optional
             With a memory (:attr:`n_memory`), a last input ``x_hat (nx,1)``, the filtered state (:attr:`state_filter`):
             the law acts on it and the memory keeps it as the last state, while the back-off's error is measured from
-            ``x``, the measurement itself (the filter's innovation); default False: ``x`` for all. Without a memory
+            ``x``, the measurement itself (the filter's innovation, less the sensors' noise band:
+            :meth:`~gtmodel.control.state_filter.StateFilter.model_error`); default False: ``x`` for all. Without a memory
             the filtered state is simply given as ``x``.
 
         Returns
@@ -315,6 +316,8 @@ class TrackingController(SampledReference):
         else:  # the declared state bounds over the period the input acts, the rows backed off by the measured error
             x_prev, u_prev, last, ran = mem[ni:ni + nx], mem[ni + nx:ni + nx + nu], mem[ni + nx + nu:nm - 1], mem[nm - 1]
             error = x_in - self.predict(x_prev, u_last if self.delay == 0 else u_prev)
+            if extra:  # the innovation less the sensors' noise
+                error = self.state_filter.model_error(error)
             error = ca.if_else(ran > 0.5, envelope(last, error, self.plausible_ranges(self.u_lb, self.u_ub)[0]), last)
             u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=error, delay=self.delay)
             kept = ca.vertcat(x_kept, u_last, error, 1.0)  # this state, the input acting now, the envelope, for the next period

@@ -251,5 +251,5 @@ def load_mpc_file(path: str | Path, replan: bool = False) -> MPCSetup:
         raise file.wrap(next((f for k, f in fields.items() if k in str(exc)), "mpc"), exc) from None
     if R_rate is None and m.solver == "sqpmethod" and controller.constraints is not None:  # the default (RATE_FACTOR)
         controller = replace(controller, R_rate=RATE_FACTOR * controller.R)
-    controller = with_measurement_filter(file, "mpc.measurement_noise", controller, m.measurement_noise, ode, m.method, m.substeps)
+    controller = with_measurement_filter(file, "mpc.measurement_noise", controller, m.measurement_noise, doc.check.noise, ode)
     return loop_setup(file, doc.name, controller, i.model, doc.check, m.period, bounds=i.bounds, notes=i.notes)

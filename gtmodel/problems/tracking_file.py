@@ -83,6 +83,5 @@ def load_tracking_file(path: str | Path, replan: bool = False) -> LoopSetup:
                                          state_bounds={n: (i.bounds.lb[n], i.bounds.ub[n]) for n in i.bounds.lb} if c.hold_state_bounds else None)
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
-    controller = with_measurement_filter(file, "controller.measurement_noise", controller, c.measurement_noise,
-                                         i.model.ode, c.method, c.substeps)
+    controller = with_measurement_filter(file, "controller.measurement_noise", controller, c.measurement_noise, doc.check.noise, i.model.ode)
     return loop_setup(file, doc.name, controller, i.model, doc.check, c.period, bounds=i.bounds, notes=i.notes)

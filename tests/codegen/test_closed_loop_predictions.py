@@ -117,6 +117,24 @@ def test_an_excess_the_noise_carried_is_named_so():
     assert "the measurement's noise carried the step beyond it" in " ".join(check.failures())
 
 
+def test_an_excess_the_filters_estimate_carried_is_named_so():
+    """The plant is the model; the measurement filter's estimate two periods before the worst sample 1.0 below the
+    plant's state (10 times its noise, by hand): from it the model keeps the bound; the text names both shares."""
+    run = run_of(b_plant=B_MODEL, n=12, u=U_MAX)
+    k = run.t.size - 1
+    x_hat = run.x.copy()
+    x_hat[k - 2, 0] -= 1.0
+    mpc = SimpleNamespace(step=model_step(), state_filter=SimpleNamespace(sigma=np.array([0.1])))
+    (p,) = excess_predictions(setup_of(mpc, 1), run, bounds_of(run), label="MPC", x_hat=x_hat)
+    assert p["predicted_from_estimate"] == pytest.approx(closed_form(run.x[k - 2, 0] - 1.0, 2), rel=1e-12)
+    assert p["estimate_percent"] < 1 and p["estimate_worst"] == {"name": "x", "estimate": pytest.approx(x_hat[k - 2, 0]),
+                                                                 "value": pytest.approx(run.x[k - 2, 0]), "sigmas": pytest.approx(10.0)}
+    check = LoopCheck(closed=run, feedforward=run, bounds=bounds_of(run), predictions=[p], label="MPC", memory_bytes=0, work_bytes=0)
+    text = " ".join(check.failures())
+    assert "from the state its measurement filter estimated its model predicted" in text
+    assert f"the estimate's share {p['predicted'] - p['predicted_from_estimate']:+.4g}, the model's error's +0" in text
+
+
 def test_the_loop_records_what_the_controller_measured():
     """run_controller_loop's ``y``: the plant's state plus the noise drawn from its seed (NumPy's generator, by hand)."""
     from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop

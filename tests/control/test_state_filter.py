@@ -8,12 +8,14 @@ measured with noise, whose filtered position is closer to the truth than the mea
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 import pytest
 import scipy.linalg
 
-from gtmodel.control.state_filter import INPUT_ERROR, PARAMETER_ERROR, STATE_ERROR, measurement_filter, state_filter
+from gtmodel.control.state_filter import INPUT_ERROR, NOISE_BAND, PARAMETER_ERROR, STATE_ERROR, measurement_filter, state_filter
 from gtmodel.errors import InputError
 
 DT = 0.004
@@ -41,15 +43,18 @@ def _run(f, ys, us):
     return np.array(out), np.asarray(wf, dtype=float).reshape(-1)
 
 
-def _parametric_step() -> ca.Function:
-    """The same step with the speed's decay ``A[1, 1] = p`` a parameter: ``dF/dp = (0, v)``."""
+def _rhs() -> ca.Function:
+    """A right-hand side with a damping ``p`` of the speed: ``f = (v, -p v + u)``, ``df/dp = (0, -v)``."""
     x, u, p = ca.MX.sym("x", 2), ca.MX.sym("u", 1), ca.MX.sym("p", 1)
-    return ca.Function("Fp", [x, u, p], [ca.vertcat(x[0] + DT * x[1], p * x[1]) + ca.mtimes(ca.DM(B), u)])
+    return ca.Function("f", [x, u, p], [ca.vertcat(x[1], -p * x[1] + u)])
+
+
+P_DAMPING = 5.0
 
 
 @pytest.mark.parametrize("parametric", [False, True])
 def test_the_update_is_the_kalman_filter_written_out_by_hand(parametric):
-    extra = {"parametric": _parametric_step(), "p": [A[1, 1]]} if parametric else {}
+    extra = {"rhs": _rhs(), "p": [P_DAMPING], "dt": DT} if parametric else {}
     f = state_filter(_linear_step(), SIGMA, X_SCALE, U_SCALE, **extra)
     rng = np.random.default_rng(1)
     ys, us = rng.normal(size=(4, 2)) * [0.1, 1.0], rng.normal(size=(4, 1)) * 10
@@ -57,13 +62,50 @@ def test_the_update_is_the_kalman_filter_written_out_by_hand(parametric):
     R = np.diag(SIGMA**2)
     x, P, expected = ys[0], R.copy(), [ys[0]]  # the first step takes the measurement, P = R
     for y, u_prev in zip(ys[1:], us[1:]):  # without a delay u_last (computed a period ago) acted over the last period
-        # each parameter PARAMETER_ERROR off: dF/dp = (0, v) at the last estimate
-        Qp = np.outer([0.0, x[1]], [0.0, x[1]]) * (PARAMETER_ERROR * A[1, 1]) ** 2 if parametric else 0.0
+        # each parameter PARAMETER_ERROR off: J_p = Gamma df/dp, Gamma = DT (I + A) / 2, df/dp = (0, -v) at the estimate
+        jp = DT / 2 * (np.eye(2) + A) @ [0.0, -x[1]]
+        Qp = np.outer(jp, jp) * (PARAMETER_ERROR * P_DAMPING) ** 2 if parametric else 0.0
         xm, Pm = A @ x + B @ u_prev, A @ P @ A.T + _Q() + Qp
         L = Pm @ np.linalg.inv(Pm + R)
         x, P = xm + L @ (y - xm), (np.eye(2) - L) @ Pm
         expected.append(x)
     np.testing.assert_allclose(got, np.array(expected), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("decay, rel", [(10.0, 0.03), (100.0, 0.26)])
+def test_the_parameter_term_is_the_steps_sensitivity_to_second_order(decay, rel):
+    """``Q``'s parameter term ``Gamma df/dp`` against the exact sensitivity of the step of ``dx/dt = -a x``
+    (closed form ``dF/da = -dt x e^(-a dt)``): 2 % apart at ``a dt = 0.04``, 25 % at ``a dt = 0.4`` (the held
+    sensitivity over-states a fast state's, never under-states it)."""
+    x0 = 2.0
+    ad = math.exp(-decay * DT)
+    x, u, p = ca.MX.sym("x", 1), ca.MX.sym("u", 1), ca.MX.sym("p", 1)
+    step = ca.Function("F", [x, u], [ad * x + (1 - ad) / decay * u])
+    rhs = ca.Function("f", [x, u, p], [-p * x + u])
+    f = state_filter(step, [1e3], [1e-12], [1e-12], rhs=rhs, p=[decay], dt=DT)  # R huge: the update keeps P^- = Q
+    wf = f.memory_initial([x0], [0.0])
+    wf[1], wf[-1] = 0.0, 1.0  # P = 0, a step has run
+    spread = math.sqrt(float(f.update()([x0], [0.0], ca.DM(0, 1), wf)[1][1]))  # |J_p| 0.2 a
+    exact = PARAMETER_ERROR * decay * DT * x0 * ad
+    assert spread == pytest.approx(exact, rel=rel)
+    assert spread >= exact
+
+
+@pytest.mark.parametrize("innovation, expected", [
+    ([0.5 * SIGMA[0], -2.0 * SIGMA[1]], [0.0, 0.0]),                      # within the band: noise
+    ([4.0 * SIGMA[0], -5.0 * SIGMA[1]], [1.0 * SIGMA[0], -2.0 * SIGMA[1]]),  # beyond it: the part beyond
+], ids=["within", "beyond"])
+def test_the_models_error_is_the_innovation_beyond_the_noise_band(innovation, expected):
+    f = state_filter(_linear_step(), SIGMA, X_SCALE, U_SCALE)
+    got = np.asarray(ca.evalf(f.model_error(ca.DM(innovation))), dtype=float).reshape(-1)
+    assert NOISE_BAND == 3.0
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15)
+
+
+def test_a_state_without_noise_keeps_its_innovation():
+    f = state_filter(_linear_step(), [0.0, SIGMA[1]], X_SCALE, U_SCALE)
+    got = np.asarray(ca.evalf(f.model_error(ca.DM([1e-9, SIGMA[1]]))), dtype=float).reshape(-1)
+    np.testing.assert_allclose(got, [1e-9, 0.0], atol=1e-15)
 
 
 def test_the_covariance_settles_at_the_riccati_equations_steady_state():
@@ -153,9 +195,11 @@ def test_no_noise_builds_no_filter():
     ({"u_scale": [np.inf]}, "x_scale, u_scale: expected finite scales > 0"),
     ({"delay": 2}, "delay: expected 0 or 1"),
     ({"delay": True}, "delay: expected 0 or 1"),
-    ({"parametric": "F"}, "parametric, p: expected F"),
-    ({"parametric": _parametric_step(), "p": [np.inf]}, "parametric, p: expected F"),
-    ({"parametric": _parametric_step(), "p": [1.0, 2.0]}, "parametric, p: expected F"),
+    ({"rhs": "f", "p": [1.0], "dt": DT}, "rhs, p, dt: expected f"),
+    ({"rhs": _rhs(), "p": [np.inf], "dt": DT}, "rhs, p, dt: expected f"),
+    ({"rhs": _rhs(), "p": [1.0, 2.0], "dt": DT}, "rhs, p, dt: expected f"),
+    ({"rhs": _rhs(), "p": [1.0]}, "rhs, p, dt: expected f"),
+    ({"rhs": _rhs(), "p": [1.0], "dt": -DT}, "rhs, p, dt: expected f"),
 ])
 def test_bad_arguments_are_refused(kwargs, match):
     args = {"step": _linear_step(), "sigma": SIGMA, "x_scale": X_SCALE, "u_scale": U_SCALE, **kwargs}

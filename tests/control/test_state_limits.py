@@ -8,6 +8,8 @@ its bound where the saturated law alone exceeds it.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -15,6 +17,7 @@ from scipy.integrate import solve_ivp
 
 from gtmodel.control.bounds import TARGET_MARGIN
 from gtmodel.control.state_limits import BACKOFF_GAIN, envelope, state_limits
+from gtmodel.control.state_filter import NOISE_BAND, measurement_filter
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.errors import InputError
 
@@ -125,6 +128,22 @@ def test_the_measured_prediction_error_backs_the_bound_off(motor):
     assert held.n_memory == 3 + 1 + 3 + 1 and v_backed < v_plain
     assert _peak_current(ode, state, v_plain) == pytest.approx(AIM * 5.0, rel=2e-3)
     assert _peak_current(ode, state, v_backed) == pytest.approx(AIM * 5.0 - 0.2, rel=2e-3)
+
+
+@pytest.mark.parametrize("excess, backed_off", [(0.2, 0.0), (0.5, 0.2)], ids=["within_the_noise_band", "beyond_it"])
+def test_with_a_filter_the_back_off_takes_the_innovation_beyond_the_noise_band(motor, excess, backed_off):
+    """The current 0.2 A above the prediction, within 3 standard deviations (0.1 A) of its sensor: noise, no back-off;
+    0.5 A above: 0.2 A of it the model's error, held 0.2 A below the aim (SciPy, as above)."""
+    ode, t, x, u = motor
+    held = tracking_controller(ode, t, x, u, u_lb=[-24.0], u_ub=[24.0], Q=[1e-2, 1.0, 1e-4], method="rk4", substeps=4,
+                               state_bounds={"ind.i": (-5.0, 5.0)})
+    held = replace(held, state_filter=measurement_filter(held, [0.1, 1e-3, 1e-2]))
+    before, acted = held.x_ref[49], np.array([3.0])
+    state = np.asarray(held.predict(before, acted)).ravel() + np.array([excess, -5.0, 0.0])  # far behind, the current higher
+    memory = np.r_[before, acted, np.zeros(3), 1.0]
+    v = float(held.function(filtered=True)(50 * DT, state, acted, memory, state)[0])  # measured and filtered alike
+    assert NOISE_BAND == 3.0
+    assert _peak_current(ode, state, v) == pytest.approx(AIM * 5.0 - backed_off, rel=2e-3)
 
 
 @pytest.mark.parametrize("kept, measured, expected", [

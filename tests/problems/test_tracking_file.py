@@ -123,10 +123,11 @@ def test_motor_closed_loop_c_equals_python_and_beats_the_feedforward(motor, moto
     generated, library = motor_loop
     check = closed_loop_check(motor, generated, library, label="tracking controller")
     # the same loop (plant, noise, delay, disturbance) with the step's Function evaluated from Python, u_last and the
-    # memory (the file's integral action on the angle) carried as the C memory does
+    # memory (the file's integral action on the angle, then the measurement filter of its [check] noise) carried as
+    # the C memory does
     c = motor.controller
     step = tracking_step(c, motor.name)
-    assert c.integral_states == (1,)
+    assert c.integral_states == (1,) and c.state_filter is not None
     law, memory = step.function, {"u": c.u_initial, "w": step.w_init}
 
     def python(t, x):
@@ -181,9 +182,9 @@ def test_an_unstable_explicit_step_is_refused_with_the_substeps_it_needs(tmp_pat
         path.unlink()
 
 
-@pytest.mark.parametrize("declared, filtered", [(None, False), ("[0.0, 0.0, 0.0]", False), ("[]", False), ("[1e-3, 1e-3, 1e-2]", True)])
+@pytest.mark.parametrize("declared, filtered", [(None, True), ("[0.0, 0.0, 0.0]", False), ("[]", False), ("[1e-3, 1e-3, 1e-2]", True)])
 def test_the_measurement_filter_follows_the_declared_noise(tmp_path, declared, filtered):
-    # default: none (the shipped file declares only its [check] noise); zeros or an empty list: none
+    # default: [check] noise (the shipped file's); zeros or an empty list: none
     text = MOTOR if declared is None else MOTOR.replace("time_varying = true", f"time_varying = true\nmeasurement_noise = {declared}", 1)
     path = _write(tmp_path, text, "[check]", "[check]")
     try:

@@ -319,6 +319,12 @@ def _prediction_text(e: dict[str, Any]) -> str:
     if e["predicted_percent"] <= tolerance:
         cause = ("the model predicted the bound held: the excess is the model's error on this plant (plan with more margin "
                  "below the bound, or the MPC's constraint_backoff)")
+    elif math.isfinite(estimated := e.get("predicted_from_estimate", math.nan)) and e["estimate_percent"] <= tolerance:
+        worst = e["estimate_worst"]
+        cause = (f"from the state its measurement filter estimated its model predicted {estimated:.4g}, within the bound: the "
+                 f"estimate's share {e['predicted'] - estimated:+.4g}, the model's error's {e['error']:+.4g} (the estimate most off "
+                 f"in {worst['name']}, {worst['estimate']:.4g} for {worst['value']:.4g}, {worst['sigmas']:.3g} times its noise; the "
+                 "filter's model is the controller's, not this plant's: plan with more margin below the bound)")
     elif math.isfinite(seen) and e["measured_percent"] <= tolerance:
         cause = (f"from the state it measured (the check's noise) its model predicted {seen:.4g}, within the bound: the "
                  "measurement's noise carried the step beyond it (filter the measurement, weight the noisy states less, or "
@@ -343,7 +349,8 @@ def _rollout(F: Any, x: np.ndarray, inputs: np.ndarray) -> np.ndarray:
     return x
 
 
-def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExcess], label: str = "controller") -> list[dict[str, Any]]:
+def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExcess], label: str = "controller",
+                       x_hat: np.ndarray | None = None) -> list[dict[str, Any]]:
     """What the controller's own model predicted where a state went furthest beyond its declared bound.
 
     For each state bound of ``bounds`` beyond :data:`~gtmodel.control.bounds.EXCESS_TOLERANCE` at sample ``k``,
@@ -372,6 +379,9 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
         Its bounds at the samples (:func:`plant_bounds`).
     label : str, optional
         The controller's name in the text (``"MPC"``).
+    x_hat : numpy.ndarray, optional
+        ``(n, nx)`` the state the controller's measurement filter estimated at each sample (its memory,
+        :attr:`~gtmodel.control.mpc.MPCController.state_filter`); default None: no filter.
 
     Returns
     -------
@@ -380,7 +390,10 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
         ``error_relative`` (over the bound's size), ``predicted_percent`` (the prediction beyond the limit, signed as
         :attr:`~gtmodel.control.bounds.BoundExcess.signed`, in %), ``predicted_from_measured`` and ``measured_percent``
         (the same prediction from the state the controller measured, with the check's noise: NaN where the run recorded
-        no measurements of every state), ``periods`` (predicted), ``inputs_at_bounds`` (input name
+        no measurements of every state), with ``x_hat`` also ``predicted_from_estimate`` and ``estimate_percent``
+        (from the filter's estimate) and ``estimate_worst`` (``name``, ``estimate``, ``value``, ``sigmas``: the state whose
+        estimate was furthest off the plant's, in standard deviations of its noise), ``periods`` (predicted),
+        ``inputs_at_bounds`` (input name
         to its last applied value, for the inputs at a bound, within 1e-9 of their range, in any period predicted), ``controller``.
     """
     F = getattr(setup.controller, "step", None)
@@ -403,17 +416,25 @@ def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExc
         y = getattr(run, "y", None)
         seen = float(_rollout(F, y[start], run.u[start:k])[j]) if y is not None and np.shape(y) == np.shape(run.x) else math.nan
         applied = run.u[start:k]
+        size, side, extra = bound_size(b.limit, b.lb, b.ub), 1.0 if b.limit == b.ub else -1.0, {}
+        if x_hat is not None and len(x_hat) > start and np.all(np.isfinite(x_hat[start])):
+            est = float(_rollout(F, x_hat[start], run.u[start:k])[j])
+            sigma = np.asarray(setup.controller.state_filter.sigma, dtype=float)
+            off = np.abs(x_hat[start] - run.x[start]) / np.where(sigma > 0, sigma, np.inf)
+            i = int(np.argmax(off))
+            extra = {"predicted_from_estimate": est, "estimate_percent": float(100 * side * (est - b.limit) / size),
+                     "estimate_worst": {"name": x_names[i], "estimate": float(x_hat[start][i]), "value": float(run.x[start, i]),
+                                        "sigmas": float(off[i])}}
         span = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
         at = {u_names[i] if i < len(u_names) else f"u[{i}]": float(applied[-1, i]) for i in range(applied.shape[1])
               if np.any(np.minimum(np.abs(applied[:, i] - lb[i]), np.abs(applied[:, i] - ub[i])) <= 1e-9 * span[i])}
-        size = bound_size(b.limit, b.lb, b.ub)
-        side = 1.0 if b.limit == b.ub else -1.0
         out.append({"name": b.name, "time": float(t[k]), "value": float(run.x[k, j]), "limit": float(b.limit), "predicted": float(x[j]),
                     "error": float(run.x[k, j] - x[j]), "error_relative": float((run.x[k, j] - x[j]) / size),
                     "predicted_percent": float(100 * side * (x[j] - b.limit) / size), "periods": k - start,
                     "predicted_from_measured": seen, "measured_percent": float(100 * side * (seen - b.limit) / size),
-                    "inputs_at_bounds": at, "controller": label})
+                    "inputs_at_bounds": at, "controller": label, **extra})
     return out
+
 
 
 def compiled_step(generated: GeneratedCode, library: Path | CompiledLibrary) -> tuple[Any, Any, int]:
@@ -650,7 +671,16 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
                      reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub),
                      bounds=bounds, bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes),
                      states_at_bounds=reference_states_at_bounds(setup), bounds_between=plant_bounds(setup, first, between=True),
-                     estimates=estimates, predictions=excess_predictions(setup, first, bounds, label))
+                     estimates=estimates, predictions=excess_predictions(setup, first, bounds, label, x_hat=_filter_estimates(setup, memories)))
+
+
+def _filter_estimates(setup: LoopSetup, memories: list[np.ndarray]) -> np.ndarray | None:
+    """``(n, nx)`` the measurement filter's estimate after each period (its memory's ``x^``), or None without a filter."""
+    f = getattr(setup.controller, "state_filter", None)
+    if f is None or not memories:
+        return None
+    own = getattr(setup.controller, "n_memory", 0)
+    return np.array(memories, dtype=float)[:, own:own + f.nx]
 
 
 def _reporting(law: Any, what: str, n: int, progress: Any) -> Any:

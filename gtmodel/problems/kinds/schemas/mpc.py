@@ -89,8 +89,7 @@ class MPCSection(Section):
         rows and sqpmethod or hpipm).
     measurement_noise : list of float, optional
         The sensors' noise standard deviation per state (state units, each >= 0), which the step's extended Kalman
-        filter of the measurement assumes (default none: no filter; e.g. the ``[check] noise``; all zeros or an
-        empty list: no filter).
+        filter of the measurement assumes (default: ``[check] noise``; all zeros or an empty list: no filter).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -117,7 +116,7 @@ class MPCSection(Section):
     constraint_substeps: bool = Field(default=True, strict=True, description="also constrain the states after each of the prediction's substeps within the constrained periods (between the samples)")
     disturbance_gain: number(ge=0, le=1.0, description="offset-free MPC: the gain of the input-disturbance estimate per period (0: none)") = 0.0
     constraint_backoff: bool | None = Field(default=None, strict=True, description="tighten the constraint rows by the prediction's one-period error measured in the loop, carried to each bounded quantity (a bound never loosened; default: on with constraint rows and solver sqpmethod or hpipm)")
-    measurement_noise: list[number(ge=0, le=MAX_MAGNITUDE)] | None = Field(default=None, max_length=10_000, description="the sensors' noise standard deviation per state, which the step's extended Kalman filter of the measurement assumes (default none: no filter, e.g. the [check] noise; all zeros or []: no filter)")
+    measurement_noise: list[number(ge=0, le=MAX_MAGNITUDE)] | None = Field(default=None, max_length=10_000, description="the sensors' noise standard deviation per state, which the step's extended Kalman filter of the measurement assumes (default: [check] noise; all zeros or []: no filter)")
 
 
 class MPCFile(LoopFile):

@@ -55,8 +55,7 @@ class ControllerSection(Section):
         default true).
     measurement_noise : list of float, optional
         The sensors' noise standard deviation per state (state units, each >= 0), which the step's extended Kalman
-        filter of the measurement assumes (default none: no filter; e.g. the ``[check] noise``; all zeros or an
-        empty list: no filter).
+        filter of the measurement assumes (default: ``[check] noise``; all zeros or an empty list: no filter).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -72,7 +71,7 @@ class ControllerSection(Section):
     input_delay: int = Field(default=0, ge=0, le=1, strict=True, description="input delay [periods] the law compensates by predicting the state one period ahead (0 or 1)")
     integral_weights: dict[str, number(gt=0, le=MAX_WEIGHT)] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
     hold_state_bounds: bool = Field(default=True, strict=True, description="hold the declared state bounds (a current limit) over the period each input acts: the law's input projected onto the inputs that keep the bounded states within them at every substep, then saturated (default true)")
-    measurement_noise: list[number(ge=0, le=MAX_MAGNITUDE)] | None = Field(default=None, max_length=10_000, description="the sensors' noise standard deviation per state, which the step's extended Kalman filter of the measurement assumes (default none: no filter, e.g. the [check] noise; all zeros or []: no filter)")
+    measurement_noise: list[number(ge=0, le=MAX_MAGNITUDE)] | None = Field(default=None, max_length=10_000, description="the sensors' noise standard deviation per state, which the step's extended Kalman filter of the measurement assumes (default: [check] noise; all zeros or []: no filter)")
 
 
 class TrackingFile(LoopFile):
