@@ -386,8 +386,9 @@ def acados_keys(row: dict, acados: dict | str) -> dict:
 
 def same_nlp(c):
     """The MPC on acados' NLP: one input per period, the file's constraint rows with their bounds as declared (no
-    back-off), no disturbance estimate, no weight on the input's rate."""
-    return replace(c, blocks=c.horizon, disturbance_gain=0.0, constraint_backoff=False, R_rate=None)
+    back-off), no disturbance estimate, no weight on the input's rate, no measurement filter (acados' step is given
+    the state)."""
+    return replace(c, blocks=c.horizon, disturbance_gain=0.0, constraint_backoff=False, R_rate=None, state_filter=None)
 
 
 def prepare(path: Path, build: Path, unblocked: bool = False, solver: str = "") -> tuple:
