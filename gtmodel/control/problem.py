@@ -20,7 +20,7 @@ import numpy as np
 
 from gtmodel.defaults import LOOP_PERIOD_S
 from gtmodel.errors import InputError
-from gtmodel.control.reference import INDEX_EPS, reference_scales, sample_reference
+from gtmodel.control.reference import INDEX_EPS, delayed_start, reference_scales, sample_reference
 from gtmodel.modeling import ExplicitODE
 from gtmodel.modeling.simulation.step_stability import step_stability
 
@@ -154,6 +154,8 @@ class TrackingProblem:
         ``(nx,)``, ``(nu,)`` the scales of :func:`~gtmodel.control.reference.reference_scales`.
     Q, R : numpy.ndarray
         ``(nx, nx)`` state and ``(nu, nu)`` positive definite input weights.
+    lead : int, optional
+        Periods at rest before the given reference (:func:`~gtmodel.control.reference.delayed_start`; default 0).
     """
 
     ode: ExplicitODE = field(repr=False)
@@ -170,6 +172,7 @@ class TrackingProblem:
     u_scale: np.ndarray
     Q: np.ndarray
     R: np.ndarray
+    lead: int = 0
 
     @property
     def x_names(self) -> list[str]:
@@ -318,7 +321,8 @@ def fixed_step(ode: ExplicitODE, dt: float, method: str = "rk4", substeps: int =
 
 
 def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float = LOOP_PERIOD_S, Q: Any = None, R: Any = None,
-                     u_lb: Any = None, u_ub: Any = None, p: Any = None, min_samples: int = 1, eps: float = INDEX_EPS) -> TrackingProblem:
+                     u_lb: Any = None, u_ub: Any = None, p: Any = None, min_samples: int = 1, eps: float = INDEX_EPS,
+                     delay: int = 0) -> TrackingProblem:
     """The tracking problem of a model along a reference (what the TV-LQR and the MPC share).
 
     The reference is sampled at the loop period from its first time to its last
@@ -348,6 +352,10 @@ def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float
     eps : float, optional
         Slack of the last grid point (default :data:`~gtmodel.control.reference.INDEX_EPS`;
         the MPC's grid: its own).
+    delay : int, optional
+        Periods of input delay the controller compensates (default 0): a reference starting
+        at rest with another first input than the one holding it there is led by that many
+        periods at rest (:func:`~gtmodel.control.reference.delayed_start`, :attr:`TrackingProblem.lead`).
 
     Returns
     -------
@@ -364,8 +372,6 @@ def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float
     t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=min_samples, eps=eps)
     if xs.shape[1] != ode.nx or us.shape[1] != ode.nu or ode.nu == 0:
         raise InputError(f"x_ref, u_ref: expected {ode.nx} state and {ode.nu} (>= 1) input columns, got {xs.shape[1]} and {us.shape[1]}")
-    m = np.asarray(t).size
-    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
     lb = ode.u_lb if u_lb is None else np.asarray(u_lb, dtype=float).reshape(-1)
     ub = ode.u_ub if u_ub is None else np.asarray(u_ub, dtype=float).reshape(-1)
     if lb.size != ode.nu or ub.size != ode.nu or np.any(lb > ub) or np.any(np.isnan(lb)) or np.any(np.isnan(ub)):
@@ -373,10 +379,15 @@ def tracking_problem(ode: ExplicitODE, t: Any, x_ref: Any, u_ref: Any, dt: float
     pv = ode.p_default if p is None else np.asarray(p, dtype=float).reshape(-1)
     if pv.size != ode.np:
         raise InputError(f"p: expected {ode.np} parameter values, got {pv.size}")
+    t, x_ref, u_ref, lead = delayed_start(ode.f, t, x_ref, u_ref, pv, dt, delay)
+    if lead:
+        t0, xs, us = sample_reference(t, x_ref, u_ref, dt, min_samples=min_samples, eps=eps)
+    m = np.asarray(t).size
+    x_given, u_given = np.asarray(x_ref, dtype=float).reshape(m, -1), np.asarray(u_ref, dtype=float).reshape(m, -1)
     x_scale, u_scale = reference_scales(xs, us, lb, ub)
     Qm = weight_matrix(Q, ode.nx, 1.0 / x_scale**2, "Q")
     Rm = weight_matrix(R, ode.nu, 1.0 / u_scale**2, "R")
     if np.min(np.linalg.eigvalsh(Rm)) <= 0:
         raise InputError("R: expected a positive definite input weight")
     return TrackingProblem(ode=ode, dt=float(dt), t0=t0, x_ref=xs, u_ref=us, x_given=x_given, u_given=u_given, u_lb=lb.copy(),
-                           u_ub=ub.copy(), p=pv, x_scale=x_scale, u_scale=u_scale, Q=Qm, R=Rm)
+                           u_ub=ub.copy(), p=pv, x_scale=x_scale, u_scale=u_scale, Q=Qm, R=Rm, lead=lead)

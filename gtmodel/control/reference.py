@@ -23,7 +23,7 @@ import numpy as np
 
 from gtmodel.errors import InputError
 
-__all__ = ["INDEX_EPS", "PERIOD_EPS", "FLOAT_PERIOD_LIMIT", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "sampled", "period_means", "sample_reference", "period_index",
+__all__ = ["INDEX_EPS", "PERIOD_EPS", "FLOAT_PERIOD_LIMIT", "MEASUREMENT_LIMIT", "MEMORY_LIMIT", "SampledReference", "hold_input", "start_input", "delayed_start", "sampled", "period_means", "sample_reference", "period_index",
            "reference_scales", "plausible_range"]
 
 #: Added to ``(t - t_0) / dt`` before ``floor``: a time on the grid (``k dt`` in floating
@@ -179,6 +179,66 @@ def start_input(f: ca.Function, x0: Any, u0: Any, p: Any, rtol: float = 1e-6) ->
     rest = np.max(np.abs(np.asarray(f(x0, held, p), dtype=float)), initial=0.0)
     moving = np.max(np.abs(np.asarray(f(x0, u0, p), dtype=float)), initial=0.0)
     return held if rest <= rtol * (1.0 + moving) else u0.copy()
+
+
+def delayed_start(f: ca.Function, t: Any, x_ref: Any, u_ref: Any, p: Any, dt: float, delay: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """A reference that starts at rest for the periods an input delay holds the plant there.
+
+    With an input delay of ``delay`` periods, the input a loop computes from its first
+    measurement acts ``delay`` periods later; until then the plant gets the input acting
+    before the loop (:func:`start_input`: the one that holds a start at rest). A plan whose
+    first input ``u*_0`` differs from it is one the plant cannot follow in those periods: the
+    loop starts ``delay`` periods behind and catches up against its bounds (held-out ball-screw
+    drives' TV-LQR and MPC beyond their current bound in the second period: the lead's effect
+    is measured in ``docs/model_in_the_loop.md``). The rule: the reference gets ``delay``
+    periods at rest before the plan, ``x*_0`` held by that input, and the plan follows
+    unchanged (its end ``delay`` periods later in the loop's time). A start that no input
+    holds (a motion under way), a plan whose first input is that input, or no delay: the
+    reference as given.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``f(x (nx,1), u (nu,1), p (np,1)) -> xdot (nx,1)``, the explicit ODE.
+    t : array_like
+        ``(M,)`` increasing reference times [s].
+    x_ref, u_ref : array_like
+        ``(M, nx)``, ``(M, nu)`` the reference's states and inputs.
+    p : array_like
+        ``(np,)`` parameters.
+    dt : float
+        Loop period [s], > 0.
+    delay : int
+        Periods of input delay, >= 0.
+
+    Returns
+    -------
+    t, x_ref, u_ref : numpy.ndarray
+        ``(M', )``, ``(M', nx)``, ``(M', nu)`` the reference led by the rest: rows at
+        ``t_0 - delay dt`` and just before ``t_0`` (``t_0 - 1e-9 dt``, so that the
+        first period's input mean is the rest's, :func:`period_means`) with ``x*_0`` and
+        the resting input, then the given rows; ``M' = M`` without a lead.
+    lead : int
+        The periods led: ``delay`` or 0.
+
+    Raises
+    ------
+    InputError
+        ``delay`` not an integer >= 0.
+    """
+    if isinstance(delay, bool) or not isinstance(delay, (int, np.integer)) or delay < 0:
+        raise InputError(f"delay: expected a number of periods >= 0, got {delay!r}")
+    tt = np.asarray(t, dtype=float).reshape(-1)
+    xs = np.asarray(x_ref, dtype=float).reshape(tt.size, -1)
+    us = np.asarray(u_ref, dtype=float).reshape(tt.size, -1)
+    if not delay or tt.size == 0:
+        return tt, xs, us, 0
+    rest = start_input(f, xs[0], us[0], p)
+    if np.allclose(rest, us[0], rtol=1e-9, atol=1e-12):
+        return tt, xs, us, 0
+    before = np.array([tt[0] - delay * dt, tt[0] - 1e-9 * dt])
+    return (np.r_[before, tt], np.vstack([np.tile(xs[0], (2, 1)), xs]),
+            np.vstack([np.tile(rest, (2, 1)), us]), int(delay))
 
 
 def sampled(t: np.ndarray, values: np.ndarray, grid: np.ndarray, name: str) -> np.ndarray:

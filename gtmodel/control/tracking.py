@@ -203,6 +203,9 @@ class TrackingController(SampledReference):
         ``(nu,)`` the input acting before the first step arrives (:attr:`u_initial`):
         :func:`~gtmodel.control.reference.start_input`, the input that holds a start at rest;
         None: ``u*_0``.
+    lead : int, optional
+        Periods at rest the reference starts with before the plan (the input delay's:
+        :func:`~gtmodel.control.reference.delayed_start`; default 0).
     state_limits : StateLimits or None, optional
         The declared state bounds the law holds over the period its input acts
         (:class:`~gtmodel.control.state_limits.StateLimits`: the input projected so that the bounded states after
@@ -236,6 +239,7 @@ class TrackingController(SampledReference):
     Ki_hold: np.ndarray | None = None
     Qi: np.ndarray | None = None
     u_start: np.ndarray | None = None
+    lead: int = 0
     state_limits: StateLimits | None = None
     state_filter: StateFilter | None = field(default=None, repr=False)
 
@@ -489,7 +493,7 @@ def tracking_controller(
     """
     if isinstance(delay, bool) or delay not in (0, 1):
         raise InputError(f"delay: expected 0 or 1 period of input delay to compensate, got {delay!r}")
-    prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, min_samples=2)
+    prob = tracking_problem(ode, t, x_ref, u_ref, dt, Q=Q, R=R, u_lb=u_lb, u_ub=u_ub, p=p, min_samples=2, delay=delay)
     xs, us, lb, ub, pv, Qm, Rm = prob.x_ref, prob.u_ref, prob.u_lb, prob.u_ub, prob.p, prob.Q, prob.R
     n = xs.shape[0]
     prob.check_step(method, substeps, "the tracking controller's step")
@@ -529,7 +533,7 @@ def tracking_controller(
     return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict"), dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
-                              K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), **integral)
+                              K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), lead=prob.lead, **integral)
 
 
 def _integral(weights: Mapping[str, float] | None, names: list[str]) -> tuple[tuple[int, ...], np.ndarray | None]:

@@ -518,6 +518,10 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
     for j, n in enumerate(ode.u_names):  # an input without a declared bound: the controller's saturation
         if n not in counted.lb:
             counted.add(n, controller.u_lb[j], controller.u_ub[j])
+    if getattr(controller, "lead", 0):  # gtmodel.control.reference.delayed_start
+        notes = list(notes or []) + [f"reference: {controller.lead} period(s) at rest before the plan, held by the input "
+                                     f"{np.array2string(np.asarray(controller.u_initial), precision=4)} (the controller's input delay: the input "
+                                     "computed from the first measurement acts a period later); the plan follows unchanged"]
     outputs = None
     if not c.compliance and ode.y_names and any(n in counted.lb for n in ode.y_names):
         try:

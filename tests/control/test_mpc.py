@@ -15,6 +15,7 @@ import pytest
 from gtmodel.errors import InputError
 from gtmodel.estimation.closed_loop.controller_loop import run_controller_loop
 from gtmodel.control.mpc import mpc_controller
+from gtmodel.control.reference import period_means
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
@@ -186,3 +187,20 @@ def test_float_tolerance_refuses_bad_rows(rows):
 def test_nlp_solver_refuses_bad_options(motor, plugin, real, match):
     with pytest.raises(InputError, match=match):
         motor[-1].nlp_solver(plugin, real=real)
+
+
+def test_a_delayed_mpc_computes_the_plans_first_input_from_the_rest_before_it():
+    # reference: the plan's own first-period input (period_means of the given one). A plan starting at rest with 6 V
+    # (0 V holds the motor there) and one period of input delay: the reference gets one period at rest
+    # (delayed_start), and the first real-time iteration, from the plant at rest under the held 0 V, computes the
+    # plan's first input (within 2 %: one Gauss-Newton step on the reference the model's own RK4 made) instead of
+    # catching up a period late
+    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
+    t = DT * np.arange(151)
+    u = (6.0 * np.cos(2 * np.pi * t / 0.6))[:, None]
+    x, _ = ode.simulate_steps(ode.step(DT, "rk4", substeps=4), u[:-1])
+    c = mpc_controller(ode, t, x, u, horizon=20, Q=[1e-2, 100.0, 1e-2], R=[1e-3], u_lb=[-12.0], u_ub=[12.0], method="rk4",
+                       substeps=2, delay=1)
+    assert c.lead == 1 and c.t0 == pytest.approx(-DT) and c.u_initial == pytest.approx([0.0], abs=1e-9)
+    first = np.asarray(c.function()(c.t0, x[0], c.u_initial, c.memory_initial)[0]).ravel()
+    assert first == pytest.approx(period_means(t, u, np.array([0.0]), DT)[0], rel=0.02)

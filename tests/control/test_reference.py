@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 
-from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, PERIOD_EPS, hold_input, period_index, period_means, sample_reference, start_input
+from gtmodel.control.reference import FLOAT_PERIOD_LIMIT, PERIOD_EPS, delayed_start, hold_input, period_index, period_means, sample_reference, start_input
 from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
 from gtmodel.robots.dynamics import GantryTau3Dynamics
@@ -42,6 +42,41 @@ def test_the_input_before_the_loop_holds_a_start_at_rest(x0, u0, expected):
     x, u, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("p", 2)  # p = (m, c)
     f = ca.Function("f", [x, u, p], [ca.vertcat(x[1], (u - p[1] * x[0]) / p[0])])
     assert start_input(f, x0, u0, [2.0, 40.0]) == pytest.approx(expected, rel=1e-12)
+
+
+def _spring():
+    x, u, p = ca.SX.sym("x", 2), ca.SX.sym("u"), ca.SX.sym("p", 2)  # p = (m, c)
+    return ca.Function("f", [x, u, p], [ca.vertcat(x[1], (u - p[1] * x[0]) / p[0])])
+
+
+def test_a_delay_leads_a_start_at_rest_by_its_periods_held_by_c_s():
+    # reference: the mass on a spring at rest at s = 0.3 (held by c s = 12, closed form) with a plan starting at -50:
+    # one period of delay puts one period at rest before the plan, its mean input the holding force (period_means)
+    t, x, u = np.array([0.0, 0.01, 0.02]), np.array([[0.3, 0.0], [0.29, -1.0], [0.27, -2.0]]), np.array([[-50.0], [-40.0], [-30.0]])
+    tt, xx, uu, lead = delayed_start(_spring(), t, x, u, [2.0, 40.0], 0.004, 1)
+    assert lead == 1 and tt[0] == pytest.approx(-0.004) and tt[1] < 0.0 and np.array_equal(tt[2:], t)
+    np.testing.assert_allclose(xx[:2], [[0.3, 0.0], [0.3, 0.0]], rtol=1e-12)
+    np.testing.assert_allclose(uu[:2, 0], [12.0, 12.0], rtol=1e-12)
+    t0, xs, us = sample_reference(tt, xx, uu, 0.004)
+    assert t0 == pytest.approx(-0.004) and us[0, 0] == pytest.approx(12.0, rel=1e-6)
+    np.testing.assert_allclose(xs[1], [0.3, 0.0], atol=1e-9)  # the plan's first state at the plan's first time
+
+
+@pytest.mark.parametrize("x0, u0, delay", [
+    ([0.3, 1.0], -50.0, 1),  # a motion under way: no input holds it, the plan's first input acts
+    ([0.3, 0.0], 12.0, 1),   # the plan starts with the holding force: nothing to lead
+    ([0.3, 0.0], -50.0, 0),  # no delay
+])
+def test_no_lead_without_a_start_that_another_input_holds_or_without_delay(x0, u0, delay):
+    t, x, u = np.array([0.0, 0.01]), np.array([x0, [0.29, 0.5]]), np.array([[u0], [0.0]])
+    tt, xx, uu, lead = delayed_start(_spring(), t, x, u, [2.0, 40.0], 0.004, delay)
+    assert lead == 0 and np.array_equal(tt, t) and np.array_equal(xx, x) and np.array_equal(uu, u)
+
+
+@pytest.mark.parametrize("delay", [-1, 1.5, True, "1"])
+def test_a_delay_that_is_not_a_count_of_periods_is_refused(delay):
+    with pytest.raises(InputError, match=r"delay: expected a number of periods >= 0"):
+        delayed_start(_spring(), [0.0, 0.01], [[0.3, 0.0], [0.3, 0.0]], [[1.0], [1.0]], [2.0, 40.0], 0.004, delay)
 
 
 @pytest.mark.parametrize("dt", [0.004, 0.001, 0.0125])

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from gtmodel.errors import InputError
+from gtmodel.control.reference import period_means
 from gtmodel.control.tracking import dlqr, riccati_gains, tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
@@ -184,3 +185,18 @@ def test_delay_other_than_0_or_1_is_refused(pendulum):
     ode, t, x, u = pendulum
     with pytest.raises(InputError, match=r"delay: expected 0 or 1 period of input delay to compensate, got 2"):
         tracking_controller(ode, t, x, u, delay=2)
+
+
+def test_a_delayed_law_computes_the_plans_first_input_from_the_rest_before_it(motor):
+    # reference: the plan's own first-period input (period_means of the given one) and the law's closed form at zero
+    # error. A plan starting at rest with 6 V (0 V holds the motor there) and one period of input delay: the reference
+    # gets one period at rest (delayed_start); at the first measurement the plant rests under the held 0 V, the state
+    # predicted one period on is the plan's first, and the input computed there, acting from the plan's first time on,
+    # is the plan's first input
+    ode, t, _, _ = motor
+    u = (6.0 * np.cos(2 * np.pi * t))[:, None]
+    x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
+    c = tracking_controller(ode, t, x, u, u_lb=[-24.0], u_ub=[24.0], Q=Q_ANGLE, delay=1)
+    assert c.lead == 1 and c.t0 == pytest.approx(-DT) and c.u_initial == pytest.approx([0.0], abs=1e-9)
+    first = np.asarray(c.function()(c.t0, x[0], c.u_initial)[0]).ravel()
+    assert first == pytest.approx(period_means(t, u, np.array([0.0]), DT)[0], rel=1e-9)
