@@ -520,7 +520,7 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
             counted.add(n, controller.u_lb[j], controller.u_ub[j])
     if getattr(controller, "lead", 0):  # gtmodel.control.reference.delayed_start
         notes = list(notes or []) + [f"reference: {controller.lead} period(s) at rest before the plan, held by the input "
-                                     f"{np.array2string(np.asarray(controller.u_initial), precision=4)} (the controller's input delay: the input "
+                                     f"{', '.join(f'{v:.4g}' for v in np.where(np.abs(controller.u_initial) < 1e-9, 0.0, controller.u_initial))} (the controller's input delay: the input "
                                      "computed from the first measurement acts a period later); the plan follows unchanged"]
     outputs = None
     if not c.compliance and ode.y_names and any(n in counted.lb for n in ode.y_names):

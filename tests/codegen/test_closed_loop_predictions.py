@@ -1,5 +1,5 @@
 """Where a state went beyond its bound, what the controller's own model predicted there
-(gtmodel.codegen.check.closed_loop.excess_predictions, named in the check's failure).
+(gtmodel.codegen.check.loop_causes.excess_predictions, named in the check's failure).
 
 Reference: a scalar first-order model ``x+ = a x + b u`` whose prediction over ``n`` periods with a
 held input is the closed form ``a^n x + b u (1 - a^n) / (1 - a)``; the plant's run is written out by
@@ -15,7 +15,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gtmodel.codegen.check.closed_loop import LoopCheck, excess_predictions
+from gtmodel.codegen.check.closed_loop import LoopCheck
+from gtmodel.codegen.check.loop_causes import excess_predictions
 from gtmodel.control.bounds import bound_report
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary
 

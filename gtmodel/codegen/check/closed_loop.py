@@ -31,7 +31,8 @@ from gtmodel.codegen.build import CompiledLibrary, load_library
 from gtmodel.codegen.declarations import STATUS_CODES
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import build_step
-from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report, bound_size
+from gtmodel.codegen.check.loop_causes import excess_predictions, noise_gain, noise_gain_text, prediction_text
+from gtmodel.control.bounds import EXCESS_TOLERANCE, BoundExcess, bound_report
 from gtmodel.control.mpc_memory import ESTIMATES, memory_estimates
 from gtmodel.control.reference import period_index
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary, run_controller_loop
@@ -42,8 +43,7 @@ from gtmodel.status import Status
 #: ``bounds``, ``names``, ``outputs``, ``max_ratio``, ``max_step_time``, ``notes``).
 LoopSetup = Any
 
-__all__ = ["AUTHORITY_WARNING", "STATE_AUTHORITY_WARNING", "reference_states_at_bounds", "STATUS_NAMES", "PROGRESS_INTERVAL_S", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law",
-           "excess_predictions"]
+__all__ = ["AUTHORITY_WARNING", "STATE_AUTHORITY_WARNING", "reference_states_at_bounds", "STATUS_NAMES", "PROGRESS_INTERVAL_S", "LoopCheck", "plant_bounds", "reference_at_bounds", "build_step", "compiled_step", "heap_stats", "closed_loop_check", "feedforward_law"]
 
 #: Fraction of the reference's samples at an input bound above which the check's summary notes the
 #: feedback's lack of authority (a minimum-time plan at the bounds: bang-bang).
@@ -124,7 +124,10 @@ class LoopCheck:
         the input disturbance it compensated, the back-off's error envelope); printed, and named where the ratio fails.
     predictions : list of dict
         Per state bound beyond the tolerance at the samples, what the controller's own model predicted there
-        (:func:`excess_predictions`): printed, and named in that bound's failure.
+        (:func:`~gtmodel.codegen.check.loop_causes.excess_predictions`): printed, and named in that bound's failure.
+    noise_gain : dict or None
+        A tracking law's largest input response to a one-sigma state error
+        (:func:`~gtmodel.codegen.check.loop_causes.noise_gain`): named where the check fails, when above its note.
     """
 
     closed: LoopSummary
@@ -145,6 +148,7 @@ class LoopCheck:
     states_at_bounds: dict[str, float] = field(default_factory=dict)
     estimates: list[dict[str, Any]] = field(default_factory=list)
     predictions: list[dict[str, Any]] = field(default_factory=list)
+    noise_gain: dict[str, Any] | None = None
 
     @property
     def status(self) -> Status:
@@ -177,14 +181,14 @@ class LoopCheck:
              "of a runaway run say nothing)", diverged),
             (f"{self.closed.bound_violations} input bound violations", self.closed.bound_violations > 0),
             *[(f"{b.name} beyond its bound by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %)" + self._predicted(b.name)
-               + self._cycling(), True)
+               + self._cycling() + self._gain(), True)
               for b in self.bounds if b.beyond_tolerance and not diverged],
             *[(f"{b.name} beyond its bound between the samples by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %; "
-               f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})", True)
+               f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})" + self._cycling() + self._gain(), True)
               for b in self.bounds_between if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)"
-             + self._binding() + self._estimated() + self._cycling(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
+             + self._binding() + self._estimated() + self._cycling() + self._gain(), not diverged and not self.ratio_to_feedforward < self.max_ratio),
             (f"99th-percentile step time {self.step_p99_s * 1e6:.1f} us above the budget {self.step_budget_s * 1e6:.1f} us "
              "([check] max_step_time, default the period)", not self.step_p99_s <= self.step_budget_s),
             (f"{self.heap[1] if self.heap else 0} allocations of the QP solver on the heap (its arena of "
@@ -212,6 +216,11 @@ class LoopCheck:
                 "sampling frequency (a mode the period and the input delay leave no phase margin for; weight the input more, "
                 "or the states of that mode less)") if a > ALTERNATION_NOTE else ""
 
+    def _gain(self) -> str:
+        """The law's gain on the noise, for a failure (empty below its note)."""
+        text = noise_gain_text(self.noise_gain)
+        return "; " + text if text else ""
+
     def _binding(self) -> str:
         """The declared bounds the controller reached (within :data:`BINDING` of the limit): why it could not track better."""
         near = [b for b in self.bounds + self.bounds_between if math.isfinite(b.signed) and b.signed >= -BINDING]
@@ -220,7 +229,7 @@ class LoopCheck:
 
     def _predicted(self, name: str) -> str:
         """What the controller's model predicted where ``name`` went furthest beyond its bound (:attr:`predictions`; empty without)."""
-        return "".join("; " + _prediction_text(e) for e in self.predictions if e["name"] == name)
+        return "".join("; " + prediction_text(e) for e in self.predictions if e["name"] == name)
 
     def _estimated(self) -> str:
         """The estimates the controller worked with (:attr:`estimates`), for the ratio's failure (empty without)."""
@@ -247,7 +256,8 @@ class LoopCheck:
             the controller and of the feedforward, ``bounds`` and ``bounds_between`` (the controller's, per bound:
             :meth:`~gtmodel.control.bounds.BoundExcess.to_dict`), ``bounds_feedforward``, ``step_time_s`` (``median``,
             ``p99``, ``max``, ``first``, ``budget``, ``clock``), ``failed_steps``, ``alternation`` (:attr:`alternation`), ``input_bound_violations``,
-            ``memory_bytes``, ``work_bytes``, ``notes``, ``estimates`` (:attr:`estimates`), ``predictions`` (:attr:`predictions`).
+            ``memory_bytes``, ``work_bytes``, ``notes``, ``estimates`` (:attr:`estimates`), ``predictions`` (:attr:`predictions`),
+            ``noise_gain`` (:attr:`noise_gain`, its infinite time, the held end's, as null).
         """
         times = self.closed.step_times()
         return {"status": str(self.status), "failures": self.failures(), "label": self.label, "real": self.real,
@@ -261,7 +271,9 @@ class LoopCheck:
                 "step_time_s": {**{k: float(v) for k, v in times.items()}, "budget": float(self.step_budget_s), "clock": self.clock},
                 "failed_steps": self.failed_steps, "alternation": self.alternation, "input_bound_violations": int(self.closed.bound_violations),
                 "memory_bytes": int(self.memory_bytes), "work_bytes": int(self.work_bytes), "notes": list(self.notes),
-                "estimates": [dict(e) for e in self.estimates], "predictions": [dict(e) for e in self.predictions]}
+                "estimates": [dict(e) for e in self.estimates], "predictions": [dict(e) for e in self.predictions],
+                "noise_gain": None if self.noise_gain is None else {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                                                                    for k, v in self.noise_gain.items()}}
 
     def summary_lines(self) -> list[str]:
         """Human-readable summary.
@@ -286,7 +298,8 @@ class LoopCheck:
                    else ["declared bounds on the plant: none"])
                 + ([f"the {self.label}'s estimates (its memory after each period):"] + [f"  {_estimate_text(e)}" for e in self.estimates]
                    if self.estimates else [])
-                + ([f"where a bound was exceeded, the {self.label}'s model:"] + [f"  {_prediction_text(e)}" for e in self.predictions]
+                + ([f"note: {noise_gain_text(self.noise_gain)}"] if noise_gain_text(self.noise_gain) else [])
+                + ([f"where a bound was exceeded, the {self.label}'s model:"] + [f"  {prediction_text(e)}" for e in self.predictions]
                    if self.predictions else [])
                 + ["feedforward alone:", f"  tracking error: RMS {self.feedforward.rms_error:.4g}, max {self.feedforward.max_error:.4g}"]
                 + ([f"  beyond a declared bound by more than {100 * EXCESS_TOLERANCE:g} %: {', '.join(ff_beyond)}"] if ff_beyond else [])
@@ -309,132 +322,6 @@ def _estimate_text(e: dict[str, Any]) -> str:
     """One estimate of :attr:`LoopCheck.estimates` as a line."""
     return (f"{e['kind']} {e['name']}: largest {e['largest']:.4g} at t = {e['time']:.4g} s ({100 * e['relative']:.3g} % of its "
             f"{'range' if e['kind'] == ESTIMATES['d'][0] else 'scale'}), last {e['last']:.4g}")
-
-
-def _prediction_text(e: dict[str, Any]) -> str:
-    """One entry of :attr:`LoopCheck.predictions` as a clause."""
-    saturated = [f"{n} {v:.4g}" for n, v in e["inputs_at_bounds"].items()]
-    tolerance = 100 * EXCESS_TOLERANCE
-    seen = e.get("predicted_from_measured", math.nan)
-    if e["predicted_percent"] <= tolerance:
-        cause = ("the model predicted the bound held: the excess is the model's error on this plant (plan with more margin "
-                 "below the bound, or the MPC's constraint_backoff)")
-    elif math.isfinite(estimated := e.get("predicted_from_estimate", math.nan)) and e["estimate_percent"] <= tolerance:
-        worst = e["estimate_worst"]
-        cause = (f"from the state its measurement filter estimated its model predicted {estimated:.4g}, within the bound: the "
-                 f"estimate's share {e['predicted'] - estimated:+.4g}, the model's error's {e['error']:+.4g} (the estimate most off "
-                 f"in {worst['name']}, {worst['estimate']:.4g} for {worst['value']:.4g}, {worst['sigmas']:.3g} times its noise; the "
-                 "filter's model is the controller's, not this plant's: plan with more margin below the bound)")
-    elif math.isfinite(seen) and e["measured_percent"] <= tolerance:
-        cause = (f"from the state it measured (the check's noise) its model predicted {seen:.4g}, within the bound: the "
-                 "measurement's noise carried the step beyond it (filter the measurement, weight the noisy states less, or "
-                 "plan with more margin below the bound)")
-    else:
-        cause = ("the inputs it applied take its own model beyond the bound too"
-                 + (f" (from the state it measured: {seen:.4g})" if math.isfinite(seen) else "")
-                 + ": not the model's error, the step did not hold the bound (an MPC's single real-time iteration or soft "
-                 "rows, a law without rows; weight the variable more, or plan with more margin below the bound)")
-    return (f"{e['name']} {e['value']:.4g} of {e['limit']:g} at t = {e['time']:.4g} s; the {e['controller']}'s model, run "
-            f"{e['periods']} period(s) from the plant's state with the inputs applied, predicted {e['predicted']:.4g} "
-            f"({e['predicted_percent']:+.3g} % of the bound beyond it; the model's error {e['error']:+.4g}, "
-            f"{100 * e['error_relative']:+.3g} % of the bound): {cause}"
-            + (f"; the inputs at their bounds then: {', '.join(saturated)}" if saturated else ""))
-
-
-def _rollout(F: Any, x: np.ndarray, inputs: np.ndarray) -> np.ndarray:
-    """``F`` applied from ``x`` under each row of ``inputs`` in turn: the state after them."""
-    x = np.asarray(x, dtype=float).reshape(-1)
-    for u in inputs:
-        x = np.asarray(F(x, u), dtype=float).reshape(-1)
-    return x
-
-
-def excess_predictions(setup: LoopSetup, run: LoopSummary, bounds: list[BoundExcess], label: str = "controller",
-                       x_hat: np.ndarray | None = None) -> list[dict[str, Any]]:
-    """What the controller's own model predicted where a state went furthest beyond its declared bound.
-
-    For each state bound of ``bounds`` beyond :data:`~gtmodel.control.bounds.EXCESS_TOLERANCE` at sample ``k``,
-    the controller's one-period prediction (the MPC's :attr:`~gtmodel.control.mpc.MPCController.step`, the tracking
-    law's ``predict``) is run from the plant's state at ``k - 1 - delay`` (what the controller had measured when it
-    chose the input acting before ``k``) through the inputs applied, to ``k``, and again from the state it measured
-    (with the check's noise, :attr:`~gtmodel.estimation.closed_loop.controller_loop.LoopSummary.y`). A prediction
-    inside the bound says the excess is the model's error on this plant (a margin or a back-off answers it); one
-    beyond it from the true state but inside from the measured one, that the measurement's noise carried the step
-    there (the step held the bound for what it saw: filter the measurement, or plan with margin); one beyond it from
-    the measured state too, that the step's own inputs take its model there (the step did not hold the bound: a
-    real-time iteration's one linearisation, soft rows outweighed, or no rows). On a drive-family vertical ball screw
-    (``drive0_03``) the MPC's current reached 15.84 A of 14.3 where its model predicted 14.86 A from the plant's state
-    two periods before and 13.22 A from the measured one: the model's error 0.98 A, the noise's effect 1.64 A.
-    Without a prediction function (a tracking law without delay or state limits), a plant in other states
-    than the model's, or an excess before ``1 + delay`` periods: nothing. The prediction is the model's alone: an
-    MPC's input-disturbance estimate (``disturbance_gain``) and its back-off are not in it.
-
-    Parameters
-    ----------
-    setup : LoopSetup
-        The file's controller, bounds, names and loop options (``delay``).
-    run : LoopSummary
-        The closed-loop run under the controller.
-    bounds : list of BoundExcess
-        Its bounds at the samples (:func:`plant_bounds`).
-    label : str, optional
-        The controller's name in the text (``"MPC"``).
-    x_hat : numpy.ndarray, optional
-        ``(n, nx)`` the state the controller's measurement filter estimated at each sample (its memory,
-        :attr:`~gtmodel.control.mpc.MPCController.state_filter`); default None: no filter.
-
-    Returns
-    -------
-    list of dict
-        ``name``, ``time`` [s], ``value`` (the plant's), ``limit``, ``predicted``, ``error`` (value - predicted),
-        ``error_relative`` (over the bound's size), ``predicted_percent`` (the prediction beyond the limit, signed as
-        :attr:`~gtmodel.control.bounds.BoundExcess.signed`, in %), ``predicted_from_measured`` and ``measured_percent``
-        (the same prediction from the state the controller measured, with the check's noise: NaN where the run recorded
-        no measurements of every state), with ``x_hat`` also ``predicted_from_estimate`` and ``estimate_percent``
-        (from the filter's estimate) and ``estimate_worst`` (``name``, ``estimate``, ``value``, ``sigmas``: the state whose
-        estimate was furthest off the plant's, in standard deviations of its noise), ``periods`` (predicted),
-        ``inputs_at_bounds`` (input name
-        to its last applied value, for the inputs at a bound, within 1e-9 of their range, in any period predicted), ``controller``.
-    """
-    F = getattr(setup.controller, "step", None)
-    F = F if F is not None else getattr(setup.controller, "predict", None)
-    x_names, u_names, _ = setup.names
-    if F is None or "output" in setup.loop or len(x_names) != run.x.shape[1] or int(F.size1_in(0)) != run.x.shape[1]:
-        return []
-    delay = int(setup.loop.get("delay", 1))
-    t = np.asarray(run.t, dtype=float).reshape(-1)
-    lb, ub = np.asarray(run.u_lb, dtype=float), np.asarray(run.u_ub, dtype=float)
-    out = []
-    for b in bounds:
-        if not (b.beyond_tolerance and b.name in x_names and math.isfinite(b.time)):
-            continue
-        k, j = int(np.argmin(np.abs(t - b.time))), x_names.index(b.name)
-        start = k - 1 - delay
-        if start < 0 or not np.all(np.isfinite(run.x[start:k + 1])):
-            continue
-        x = _rollout(F, run.x[start], run.u[start:k])
-        y = getattr(run, "y", None)
-        seen = float(_rollout(F, y[start], run.u[start:k])[j]) if y is not None and np.shape(y) == np.shape(run.x) else math.nan
-        applied = run.u[start:k]
-        size, side, extra = bound_size(b.limit, b.lb, b.ub), 1.0 if b.limit == b.ub else -1.0, {}
-        if x_hat is not None and len(x_hat) > start and np.all(np.isfinite(x_hat[start])):
-            est = float(_rollout(F, x_hat[start], run.u[start:k])[j])
-            sigma = np.asarray(setup.controller.state_filter.sigma, dtype=float)
-            off = np.abs(x_hat[start] - run.x[start]) / np.where(sigma > 0, sigma, np.inf)
-            i = int(np.argmax(off))
-            extra = {"predicted_from_estimate": est, "estimate_percent": float(100 * side * (est - b.limit) / size),
-                     "estimate_worst": {"name": x_names[i], "estimate": float(x_hat[start][i]), "value": float(run.x[start, i]),
-                                        "sigmas": float(off[i])}}
-        span = np.where(np.isfinite(ub - lb), ub - lb, 1.0)
-        at = {u_names[i] if i < len(u_names) else f"u[{i}]": float(applied[-1, i]) for i in range(applied.shape[1])
-              if np.any(np.minimum(np.abs(applied[:, i] - lb[i]), np.abs(applied[:, i] - ub[i])) <= 1e-9 * span[i])}
-        out.append({"name": b.name, "time": float(t[k]), "value": float(run.x[k, j]), "limit": float(b.limit), "predicted": float(x[j]),
-                    "error": float(run.x[k, j] - x[j]), "error_relative": float((run.x[k, j] - x[j]) / size),
-                    "predicted_percent": float(100 * side * (x[j] - b.limit) / size), "periods": k - start,
-                    "predicted_from_measured": seen, "measured_percent": float(100 * side * (seen - b.limit) / size),
-                    "inputs_at_bounds": at, "controller": label, **extra})
-    return out
-
 
 
 def compiled_step(generated: GeneratedCode, library: Path | CompiledLibrary) -> tuple[Any, Any, int]:
@@ -671,7 +558,8 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
                      reference_at_bounds=reference_at_bounds(setup.u_ref, setup.controller.u_lb, setup.controller.u_ub),
                      bounds=bounds, bounds_feedforward=plant_bounds(setup, ff), notes=list(setup.notes),
                      states_at_bounds=reference_states_at_bounds(setup), bounds_between=plant_bounds(setup, first, between=True),
-                     estimates=estimates, predictions=excess_predictions(setup, first, bounds, label, x_hat=_filter_estimates(setup, memories)))
+                     estimates=estimates, predictions=excess_predictions(setup, first, bounds, label, x_hat=_filter_estimates(setup, memories)),
+                     noise_gain=noise_gain(setup.controller, setup.loop.get("noise_std", 0.0), *setup.names[:2]))
 
 
 def _filter_estimates(setup: LoopSetup, memories: list[np.ndarray]) -> np.ndarray | None:

@@ -74,7 +74,9 @@ class MPCCheck(LoopCheck):
         The MPC's estimator read from its memory along the run (:func:`~gtmodel.control.mpc_memory.memory_estimates`).
     predictions : list of dict
         Where a state went beyond its bound, what the MPC's model predicted there
-        (:func:`~gtmodel.codegen.check.closed_loop.excess_predictions`).
+        (:func:`~gtmodel.codegen.check.loop_causes.excess_predictions`).
+    noise_gain : dict or None
+        None: an MPC has no gain table (:func:`~gtmodel.codegen.check.loop_causes.noise_gain`).
     """
 
     @property
