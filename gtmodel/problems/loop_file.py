@@ -522,6 +522,11 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         notes = list(notes or []) + [f"reference: {controller.lead} period(s) at rest before the plan, held by the input "
                                      f"{', '.join(f'{v:.4g}' for v in np.where(np.abs(controller.u_initial) < 1e-9, 0.0, controller.u_initial))} (the controller's input delay: the input "
                                      "computed from the first measurement acts a period later); the plan follows unchanged"]
+    scale = getattr(controller, "gain_scale", None)
+    if scale is not None and np.any(scale < 1.0):  # gtmodel.control.tracking.limit_noise_gain
+        notes = list(notes or []) + [f"the law's gain limited in {int(np.sum(np.any(scale < 1.0, axis=1)))} of {scale.shape[0]} periods "
+                                     f"(the held end's included; smallest factor {float(np.min(scale)):.3g}): there a one-sigma measurement "
+                                     "error would have moved an input by more than noise_gain_limit of its half range"]
     outputs = None
     if not c.compliance and ode.y_names and any(n in counted.lb for n in ode.y_names):
         try:

@@ -34,7 +34,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from gtmodel.errors import GtModelError
-from gtmodel.control.tracking import tracking_controller
+from gtmodel.control.tracking import limit_noise_gain, tracking_controller
 from gtmodel.problems.kinds.schemas.tracking_controller import ControllerSection, TrackingFile
 from gtmodel.problems.loop_filter import with_measurement_filter
 from gtmodel.problems.loop_file import LoopSetup, loop_inputs, loop_setup, read_loop_file, weight_diagonal
@@ -84,4 +84,6 @@ def load_tracking_file(path: str | Path, replan: bool = False) -> LoopSetup:
     except GtModelError as exc:
         raise file.wrap("controller", exc) from None
     controller = with_measurement_filter(file, "controller.measurement_noise", controller, c.measurement_noise, doc.check.noise, i.model.ode)
+    if c.noise_gain_limit and controller.state_filter is not None:  # the noise the law's filter assumes
+        controller = limit_noise_gain(controller, controller.state_filter.sigma, c.noise_gain_limit)
     return loop_setup(file, doc.name, controller, i.model, doc.check, c.period, bounds=i.bounds, notes=i.notes)

@@ -14,7 +14,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.control.reference import period_means
-from gtmodel.control.tracking import dlqr, riccati_gains, tracking_controller
+from gtmodel.control.tracking import dlqr, limit_noise_gain, riccati_gains, tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
@@ -200,3 +200,43 @@ def test_a_delayed_law_computes_the_plans_first_input_from_the_rest_before_it(mo
     assert c.lead == 1 and c.t0 == pytest.approx(-DT) and c.u_initial == pytest.approx([0.0], abs=1e-9)
     first = np.asarray(c.function()(c.t0, x[0], c.u_initial)[0]).ravel()
     assert first == pytest.approx(period_means(t, u, np.array([0.0]), DT)[0], rel=1e-9)
+
+
+def _response(K, sigma):
+    return np.sqrt(np.sum((np.asarray(K) * sigma) ** 2, axis=-1))
+
+
+def test_noise_gain_limit_scales_only_the_rows_above_it_to_it(pendulum):
+    # reference: the one-sigma response sqrt(sum_j (K_ij sigma_j)^2) by hand; the rows above the limit (the median
+    # response along the swing) end exactly there, the others are the Riccati gains untouched
+    ode, t, x, u = pendulum
+    c = tracking_controller(ode, t, x, u, u_lb=[-50.0], u_ub=[50.0], integral_weights={ode.x_names[0]: 1.0})
+    sigma = np.full(ode.nx, 1e-2)
+    before = _response(np.concatenate([c.K, c.K_hold[None]]), sigma)[:, 0]
+    limit = float(np.median(before))
+    assert np.any(before > limit * (1 + 1e-6)) and np.any(before < limit * (1 - 1e-6))  # the case tests both sides
+    lim = limit_noise_gain(c, sigma, limit / 50.0)
+    after = _response(np.concatenate([lim.K, lim.K_hold[None]]), sigma)[:, 0]
+    np.testing.assert_allclose(after, np.minimum(before, limit), rtol=1e-12)
+    np.testing.assert_allclose(lim.gain_scale[:, 0], np.minimum(1.0, limit / before), rtol=1e-12)
+    np.testing.assert_allclose(lim.Ki, c.Ki * lim.gain_scale[:-1, :, None], rtol=1e-12)
+
+
+def test_noise_gain_limit_leaves_a_law_below_it_as_it_is(motor):
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u, u_lb=[-24.0], u_ub=[24.0], Q=Q_ANGLE)
+    assert limit_noise_gain(c, [0.0, 1e-9, 1e-9]) is c and limit_noise_gain(c, [0.0, 0.0, 0.0]) is c
+
+
+@pytest.mark.parametrize("sigma, fraction, match", [
+    ([0.1, 0.1], 0.1, r"sigma: expected 3 finite standard deviations >= 0"),
+    ([0.1, -0.1, 0.1], 0.1, r"sigma: expected 3 finite standard deviations >= 0"),
+    ([0.1, np.nan, 0.1], 0.1, r"sigma: expected 3 finite standard deviations >= 0"),
+    ([0.1, 0.1, 0.1], 0.0, r"fraction: expected a finite number > 0, got 0.0"),
+    ([0.1, 0.1, 0.1], True, r"fraction: expected a finite number > 0, got True"),
+])
+def test_noise_gain_limit_refuses_bad_noise_or_fractions(motor, sigma, fraction, match):
+    ode, t, x, u = motor
+    c = tracking_controller(ode, t, x, u, u_lb=[-24.0], u_ub=[24.0], Q=Q_ANGLE)
+    with pytest.raises(InputError, match=match):
+        limit_noise_gain(c, sigma, fraction)

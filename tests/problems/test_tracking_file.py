@@ -54,6 +54,8 @@ BAD = [
      "controller.measurement_noise"),
     ("measurement noise negative", MOTOR, "time_varying = true", "time_varying = true\nmeasurement_noise = [1e-3, -1e-3, 1e-2]",
      "controller.measurement_noise"),
+    ("noise gain limit above 1", MOTOR, "time_varying = true", "time_varying = true\nnoise_gain_limit = 1.5", "controller.noise_gain_limit"),
+    ("noise gain limit negative", MOTOR, "time_varying = true", "time_varying = true\nnoise_gain_limit = -0.1", "controller.noise_gain_limit"),
 ]
 
 
@@ -195,3 +197,23 @@ def test_the_measurement_filter_follows_the_declared_noise(tmp_path, declared, f
     if filtered:
         np.testing.assert_array_equal(c.state_filter.sigma, [1e-3, 1e-3, 1e-2])
         assert c.state_filter.p is not None and c.state_filter.p.size > 0
+
+
+@pytest.mark.parametrize("limit, noise, limited", [
+    (None, "[1e-3, 1e-3, 1e-2]", False),   # the shipped motor's gains: a one-sigma error moves its 20 V by far less than 10 %
+    ("1e-4", "[1e-3, 1e-3, 1e-2]", True),  # a limit of 1e-4 of the half range: every row scaled down to it
+    ("0.0", "[1e-3, 1e-3, 1e-2]", False),  # no limit
+    ("1e-4", "[]", False),                 # no filter, no noise assumed: no limit
+])
+def test_the_noise_gain_limit_scales_the_gains_the_filters_noise_would_carry_too_far(tmp_path, limit, noise, limited):
+    # reference: limit_noise_gain (tests/control/test_tracking.py): the limited rows' one-sigma response equals the limit
+    extra = f"\nmeasurement_noise = {noise}" + ("" if limit is None else f"\nnoise_gain_limit = {limit}")
+    path = _write(tmp_path, MOTOR, "time_varying = true", "time_varying = true" + extra)
+    try:
+        c = load_tracking_file(path).controller
+    finally:
+        path.unlink()
+    assert (c.gain_scale is not None) is limited
+    if limited:
+        sigma, half = c.state_filter.sigma, (c.u_ub - c.u_lb) / 2
+        np.testing.assert_allclose(np.sqrt(np.sum((c.K * sigma) ** 2, axis=2))[:, 0], 1e-4 * half[0], rtol=1e-9)

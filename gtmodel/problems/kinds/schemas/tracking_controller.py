@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from gtmodel.defaults import LOOP_PERIOD_S
+from gtmodel.defaults import LOOP_PERIOD_S, NOISE_GAIN_LIMIT
 from gtmodel.problems.kinds.schemas.loop import STEP_METHOD_NAMES, LoopFile
 from gtmodel.problems.loop_limits import MAX_MAGNITUDE, MAX_WEIGHT, Bounds, Period, Weights
 from gtmodel.problems.schema import NonEmptyText, Section, choice, number
@@ -56,6 +56,9 @@ class ControllerSection(Section):
     measurement_noise : list of float, optional
         The sensors' noise standard deviation per state (state units, each >= 0), which the step's extended Kalman
         filter of the measurement assumes (default: ``[check] noise``; all zeros or an empty list: no filter).
+    noise_gain_limit : float, optional
+        The largest response of an input to a one-sigma error of the measured states (``measurement_noise``), as a
+        fraction of its half range: each period's gain rows above it scaled down to it (0: no limit; default 0.1).
     """
 
     model: NonEmptyText = Field(description='a robot parameter set ("L1") or a user model "FILE.py:Class"')
@@ -72,6 +75,7 @@ class ControllerSection(Section):
     integral_weights: dict[str, number(gt=0, le=MAX_WEIGHT)] = Field(default_factory=dict, description="integral action on these states: the weight (> 0) of each one's integrated error (default none)")
     hold_state_bounds: bool = Field(default=True, strict=True, description="hold the declared state bounds (a current limit) over the period each input acts: the law's input projected onto the inputs that keep the bounded states within them at every substep, then saturated (default true)")
     measurement_noise: list[number(ge=0, le=MAX_MAGNITUDE)] | None = Field(default=None, max_length=10_000, description="the sensors' noise standard deviation per state, which the step's extended Kalman filter of the measurement assumes (default: [check] noise; all zeros or []: no filter)")
+    noise_gain_limit: number(ge=0, le=1) = Field(default=NOISE_GAIN_LIMIT, description="the largest response of an input to a one-sigma error of the measured states (measurement_noise), as a fraction of its half range: each period's gain rows above it scaled down to it (0: no limit)")
 
 
 class TrackingFile(LoopFile):
