@@ -184,15 +184,19 @@ def test_an_unstable_explicit_step_is_refused_with_the_substeps_it_needs(tmp_pat
         path.unlink()
 
 
+def _motor_controller(tmp_path, extra: str):
+    """The shipped motor file's controller with ``extra`` lines after its ``time_varying``."""
+    path = _write(tmp_path, MOTOR, "time_varying = true", "time_varying = true" + extra)
+    try:
+        return load_tracking_file(path).controller
+    finally:
+        path.unlink()
+
+
 @pytest.mark.parametrize("declared, filtered", [(None, True), ("[0.0, 0.0, 0.0]", False), ("[]", False), ("[1e-3, 1e-3, 1e-2]", True)])
 def test_the_measurement_filter_follows_the_declared_noise(tmp_path, declared, filtered):
     # default: [check] noise (the shipped file's); zeros or an empty list: none
-    text = MOTOR if declared is None else MOTOR.replace("time_varying = true", f"time_varying = true\nmeasurement_noise = {declared}", 1)
-    path = _write(tmp_path, text, "[check]", "[check]")
-    try:
-        c = load_tracking_file(path).controller
-    finally:
-        path.unlink()
+    c = _motor_controller(tmp_path, "" if declared is None else f"\nmeasurement_noise = {declared}")
     assert (c.state_filter is not None) is filtered
     if filtered:
         np.testing.assert_array_equal(c.state_filter.sigma, [1e-3, 1e-3, 1e-2])
@@ -207,12 +211,7 @@ def test_the_measurement_filter_follows_the_declared_noise(tmp_path, declared, f
 ])
 def test_the_noise_gain_limit_scales_the_gains_the_filters_noise_would_carry_too_far(tmp_path, limit, noise, limited):
     # reference: limit_noise_gain (tests/control/test_tracking.py): the limited rows' one-sigma response equals the limit
-    extra = f"\nmeasurement_noise = {noise}" + ("" if limit is None else f"\nnoise_gain_limit = {limit}")
-    path = _write(tmp_path, MOTOR, "time_varying = true", "time_varying = true" + extra)
-    try:
-        c = load_tracking_file(path).controller
-    finally:
-        path.unlink()
+    c = _motor_controller(tmp_path, f"\nmeasurement_noise = {noise}" + ("" if limit is None else f"\nnoise_gain_limit = {limit}"))
     assert (c.gain_scale is not None) is limited
     if limited:
         sigma, half = c.state_filter.sigma, (c.u_ub - c.u_lb) / 2
