@@ -204,3 +204,13 @@ def test_a_delayed_mpc_computes_the_plans_first_input_from_the_rest_before_it():
     assert c.lead == 1 and c.t0 == pytest.approx(-DT) and c.u_initial == pytest.approx([0.0], abs=1e-9)
     first = np.asarray(c.function()(c.t0, x[0], c.u_initial, c.memory_initial)[0]).ravel()
     assert first == pytest.approx(period_means(t, u, np.array([0.0]), DT)[0], rel=0.02)
+
+
+@pytest.mark.parametrize("blocks, delay, rows", [(20, 0, list(range(20))), (4, 1, [1, 6, 11, 16])])
+def test_the_first_warm_start_is_the_reference_input_where_each_block_acts(motor, blocks, delay, rows):
+    # reference: the reference's rows read by hand (delay + j H / blocks), saturated at 5 V
+    ode, t, x, u, _ = motor
+    c = mpc_controller(ode, t, x, u, horizon=20, blocks=blocks, Q=[1e-2, 100.0, 1e-2], R=[1e-3], u_lb=[-5.0], u_ub=[5.0],
+                       method="rk4", substeps=2, delay=delay)
+    np.testing.assert_array_equal(c.w_initial, np.clip(c.u_ref[rows, 0], -5.0, 5.0))
+    assert np.ptp(c.w_initial) > 0  # the case tests the rows, not a constant

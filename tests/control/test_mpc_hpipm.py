@@ -107,7 +107,9 @@ def limited(motor):
 
 
 def _rti_args(c, k, xk):
-    return (xk, c.w_initial, c.parameters(c.t0 + k * DT, xk), np.tile(c.u_lb, c.horizon), np.tile(c.u_ub, c.horizon),
+    # the warm start: the input holding the start in every stage (from the reference's inputs, w_initial, HPIPM
+    # converges at the strict test's state below)
+    return (xk, np.tile(c.u_initial, c.horizon), c.parameters(c.t0 + k * DT, xk), np.tile(c.u_lb, c.horizon), np.tile(c.u_ub, c.horizon),
             np.zeros(c.constraint_rows))
 
 
