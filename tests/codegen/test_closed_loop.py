@@ -100,12 +100,12 @@ def mpc_runs(tmp_path_factory):
 #: init" (a random state, the first warm start) returns GT_NUMERIC_ERROR. Until the first warm start became the
 #: reference's inputs (MPCController.w_initial) the probe's QP converged and the loop's first one did not; the loop
 #: now tracks as the double step does (the test below). A tolerance scaled to the gradient would loosen the C-Python
-#: comparison to volts (2 tau / lambda_min(H)).
+#: comparison to volts (2 tau / lambda_min(H)). Not strict: another compiler's float rounding may converge there.
 FLOAT_QP_STALL = "the float32 qrqp stalls at its iteration limit on the contract probe's cold start (see FLOAT_QP_STALL)"
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("real", ["double", pytest.param("float", marks=pytest.mark.xfail(strict=True, reason=FLOAT_QP_STALL))])
+@pytest.mark.parametrize("real", ["double", pytest.param("float", marks=pytest.mark.xfail(strict=False, reason=FLOAT_QP_STALL))])
 def test_the_mpc_passes_its_check_in_both_real_types(mpc_runs, real):
     """The shipped MPC: C equal to Python within its real type's tolerance (float: derived from the
     QP's conditioning, MPCController.float_tolerance; before, 2.6e-3 V failed the fixed 1e-4) and the
