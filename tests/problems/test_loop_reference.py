@@ -64,7 +64,8 @@ def test_result_folder_table_is_the_solved_reference(result, tmp_path):
     np.testing.assert_allclose(a.x_ref, b.x_ref, rtol=0, atol=1e-9 * np.max(np.abs(b.x_ref)))
     np.testing.assert_allclose(a.u_ref, b.u_ref, rtol=0, atol=1e-9 * 24)
     assert (a.u_lb.tolist(), a.u_ub.tolist()) == ([-24.0], [24.0])  # the summary's bounds, not the model's (none)
-    assert by_table.bounds.lb == {"src.v": -24.0} and by_table.notes == []
+    assert by_table.bounds.lb == {"src.v": -24.0} and by_table.notes == by_problem.notes  # verified: the delay's lead alone
+    assert [n.split(",")[0] for n in by_table.notes] == ["reference: 1 period(s) at rest before the plan"]
 
 
 def test_unverified_result_table_needs_the_opt_in(result, tmp_path):
