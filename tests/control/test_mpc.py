@@ -27,12 +27,18 @@ DT = 0.004
 IPOPT_AGREEMENT = 1e-6
 
 
-@pytest.fixture(scope="module")
-def motor():
+def _motor_motion(wave):
+    """The DC motor along ``6 wave(2 pi t / 0.6)`` volts over 0.6 s, simulated by its own RK4: ``(ode, t, x, u)``."""
     ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
     t = DT * np.arange(151)
-    u = (6.0 * np.sin(2 * np.pi * t / 0.6))[:, None]
+    u = (6.0 * wave(2 * np.pi * t / 0.6))[:, None]
     x, _ = ode.simulate_steps(ode.step(DT, "rk4", substeps=4), u[:-1])
+    return ode, t, x, u
+
+
+@pytest.fixture(scope="module")
+def motor():
+    ode, t, x, u = _motor_motion(np.sin)
     c = mpc_controller(ode, t, x, u, horizon=20, Q=[1e-2, 100.0, 1e-2], R=[1e-3], u_lb=[-12.0], u_ub=[12.0], method="rk4", substeps=2)
     return ode, t, x, u, c
 
@@ -195,10 +201,7 @@ def test_a_delayed_mpc_computes_the_plans_first_input_from_the_rest_before_it():
     # (delayed_start), and the first real-time iteration, from the plant at rest under the held 0 V, computes the
     # plan's first input (within 2 %: one Gauss-Newton step on the reference the model's own RK4 made) instead of
     # catching up a period late
-    ode = explicit_ode(load_user_model(REPO / "models" / "dc_motor.py", "DCMotorModel"))
-    t = DT * np.arange(151)
-    u = (6.0 * np.cos(2 * np.pi * t / 0.6))[:, None]
-    x, _ = ode.simulate_steps(ode.step(DT, "rk4", substeps=4), u[:-1])
+    ode, t, x, u = _motor_motion(np.cos)
     c = mpc_controller(ode, t, x, u, horizon=20, Q=[1e-2, 100.0, 1e-2], R=[1e-3], u_lb=[-12.0], u_ub=[12.0], method="rk4",
                        substeps=2, delay=1)
     assert c.lead == 1 and c.t0 == pytest.approx(-DT) and c.u_initial == pytest.approx([0.0], abs=1e-9)
