@@ -55,7 +55,9 @@ def test_links_between_pages_resolve():
 
 
 def test_ci_runs_the_slow_tests_after_the_readme_command():
-    """The slow-marked tests are left out of the default run; CI runs them after it."""
+    """The slow-marked tests are left out of the default run; CI runs them after it, the real-time ones in a step of their own."""
     lines = [ln.strip() for ln in (REPO / ".ci" / "run").read_text().splitlines()]
     readme_line = next(i for i, ln in enumerate(lines) if "pytest" in ln)
-    assert any(ln.endswith("python -P -m pytest -m slow") for ln in lines[readme_line + 1 :])
+    after = lines[readme_line + 1 :]
+    slow = next(i for i, ln in enumerate(after) if ln.endswith('python -P -m pytest -m "slow and not realtime"'))
+    assert any(ln.endswith("python -P -m pytest -m realtime -n 0") for ln in after[slow + 1 :])
