@@ -100,7 +100,7 @@ from typing import Any
 
 from gtmodel.errors import InputError
 
-__all__ = ["LOOP_PERIOD_S", "NOISE_GAIN_LIMIT", "REAL_TYPES", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "INTERFACE_PORTS", "defaults", "reset_defaults", "get"]
+__all__ = ["LOOP_PERIOD_S", "NOISE_GAIN_LIMIT", "REST_NEIGHBOURHOOD", "REAL_TYPES", "FRICTION_FORMS", "DEFAULT_FRICTION_WIDTH", "PATH_METHODS", "STANDARD_GRAVITY", "INTERFACE_PORTS", "defaults", "reset_defaults", "get"]
 
 #: Period of the controller loop [s], the fallback where no robot data file is at hand
 #: (Dressler (2012), ch. 3.2: the L1's 4 ms loop). The one place this number is written.
@@ -108,6 +108,10 @@ LOOP_PERIOD_S = 0.004
 #: A tracking law's largest one-sigma response of an input to the measurement noise, over the input's half range
 #: (:func:`gtmodel.control.tracking.limit_noise_gain`, a tracking-controller file's ``noise_gain_limit``).
 NOISE_GAIN_LIMIT = 0.1
+#: The neighbourhood of a rest point in which a tracking law's gain there must be stable, over each state's range along
+#: the reference (:func:`gtmodel.control.lqr.rest_linearization`: a regularised friction's slope at zero speed is
+#: not a damping the loop keeps).
+REST_NEIGHBOURHOOD = 0.1
 #: Selectable floating-point types of generated code (``real=``; CasADi's ``casadi_real``).
 REAL_TYPES = ("double", "float")
 #: The selectable forms of the sign function of the friction model, and the default

@@ -42,6 +42,7 @@ import scipy.linalg
 
 from gtmodel.defaults import LOOP_PERIOD_S, NOISE_GAIN_LIMIT
 from gtmodel.errors import InputError
+from gtmodel.control.lqr import RestLinearization, dlqr, rest_groups, rest_linearization, riccati_gains
 from gtmodel.control.problem import substep_states, tracking_problem, weight_matrix
 from gtmodel.control.state_filter import StateFilter
 from gtmodel.control.state_limits import StateLimits, envelope, state_limits
@@ -49,82 +50,6 @@ from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference,
 from gtmodel.modeling import ExplicitODE
 
 __all__ = ["TrackingController", "tracking_controller", "limit_noise_gain", "weight_matrix", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
-
-
-def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Time-invariant discrete LQR: the gain of ``u = -K x`` minimising ``sum x'Qx + u'Ru``.
-
-    Parameters
-    ----------
-    A : array_like
-        ``(nx, nx)`` state matrix of ``x_{k+1} = A x_k + B u_k``.
-    B : array_like
-        ``(nx, nu)`` input matrix.
-    Q : array_like
-        ``(nx, nx)`` state weight, symmetric positive semi-definite.
-    R : array_like
-        ``(nu, nu)`` input weight, symmetric positive definite.
-
-    Returns
-    -------
-    K : numpy.ndarray
-        ``(nu, nx)`` gain, ``K = (R + B'PB)^{-1} B'PA``.
-    P : numpy.ndarray
-        ``(nx, nx)`` stabilising solution of the discrete algebraic Riccati equation
-        (:func:`scipy.linalg.solve_discrete_are`).
-
-    Raises
-    ------
-    InputError
-        Inconsistent shapes, or no stabilising solution (the pair is not stabilisable).
-    """
-    A, B, Q, R = (np.atleast_2d(np.asarray(v, dtype=float)) for v in (A, B, Q, R))
-    nx, nu = B.shape
-    if A.shape != (nx, nx) or Q.shape != (nx, nx) or R.shape != (nu, nu):
-        raise InputError(f"dlqr: expected A ({nx}, {nx}), B ({nx}, {nu}), Q ({nx}, {nx}), R ({nu}, {nu}); "
-                         f"got {A.shape}, {B.shape}, {Q.shape}, {R.shape}")
-    try:
-        P = scipy.linalg.solve_discrete_are(A, B, Q, R)
-    except (np.linalg.LinAlgError, ValueError) as exc:
-        raise InputError(f"dlqr: no stabilising solution of the Riccati equation ({exc})") from None
-    K = np.linalg.solve(R + B.T @ P @ B, B.T @ P @ A)
-    return K, P
-
-
-def riccati_gains(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, Qf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Time-varying LQR gains by the backward discrete Riccati recursion.
-
-    Parameters
-    ----------
-    A : numpy.ndarray
-        ``(N, nx, nx)`` state matrices ``A_k``.
-    B : numpy.ndarray
-        ``(N, nx, nu)`` input matrices ``B_k``.
-    Q : numpy.ndarray
-        ``(nx, nx)`` stage state weight.
-    R : numpy.ndarray
-        ``(nu, nu)`` input weight (positive definite).
-    Qf : numpy.ndarray
-        ``(nx, nx)`` terminal weight ``P_N``.
-
-    Returns
-    -------
-    K : numpy.ndarray
-        ``(N, nu, nx)`` gains, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``.
-    P : numpy.ndarray
-        ``(N + 1, nx, nx)`` cost-to-go matrices, ``P_k = Q + A_k' P_{k+1} (A_k - B_k K_k)``
-        (symmetrised).
-    """
-    n, nx, nu = B.shape
-    K = np.zeros((n, nu, nx))
-    P = np.zeros((n + 1, nx, nx))
-    P[n] = Qf
-    for k in range(n - 1, -1, -1):
-        Pk = P[k + 1]
-        K[k] = np.linalg.solve(R + B[k].T @ Pk @ B[k], B[k].T @ Pk @ A[k])
-        Pn = Q + A[k].T @ Pk @ (A[k] - B[k] @ K[k])
-        P[k] = 0.5 * (Pn + Pn.T)
-    return K, P
 
 
 def saturate(u: Any, lb: Any, ub: Any) -> Any:
@@ -222,6 +147,9 @@ class TrackingController(SampledReference):
         The filter of the measurement in front of the law (:mod:`gtmodel.control.state_filter`: the extended Kalman
         filter of :attr:`predict`); the loop step (:func:`~gtmodel.codegen.loop_step.tracking_step`) runs it before
         :meth:`function` and keeps its memory after the law's own; None (default): the measurement as it is.
+    rest : RestLinearization or None, optional
+        The linearisation the held end's gain was designed on (:func:`~gtmodel.control.lqr.rest_linearization`: the
+        end's own, or a neighbour's where the end's own gain is unstable a little away from it); None: not recorded.
     """
 
     K: np.ndarray
@@ -246,6 +174,7 @@ class TrackingController(SampledReference):
     gain_scale: np.ndarray | None = None
     state_limits: StateLimits | None = None
     state_filter: StateFilter | None = field(default=None, repr=False)
+    rest: RestLinearization | None = field(default=None, repr=False)
 
     @property
     def ni(self) -> int:
@@ -511,16 +440,29 @@ def tracking_controller(
     # after the end: the input that holds the final state (least squares f(x*_N, u) = 0) and the stationary gain there
     x_hold = prob.x_given[-1]
     u_hold = saturate(hold_input(ode.f, x_hold, prob.u_given[-1], pv), lb, ub)
-    Ah, Bh = (np.asarray(v) for v in ab(x_hold, u_hold, pv))
     idx, Qi = _integral(integral_weights, list(ode.x_names))
     if idx:  # the model augmented with the integrators of the selected states' errors
         C = np.eye(ode.nx)[list(idx)]
         ni = len(idx)
         A = np.stack([np.block([[a, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]]) for a in A])
         B = np.concatenate([B, np.zeros((n, ni, ode.nu))], axis=1)
-        Ah = np.block([[Ah, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]])
-        Bh = np.vstack([Bh, np.zeros((ni, ode.nu))])
         Qm = scipy.linalg.block_diag(Qm, Qi)
+
+    def jacobians(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a, b = (np.asarray(v) for v in ab(x, u, pv))
+        if idx:
+            a = np.block([[a, np.zeros((ode.nx, ni))], [dt * C, np.eye(ni)]])
+            b = np.vstack([b, np.zeros((ni, ode.nu))])
+        return a, b
+
+    # at rest, the linearisation whose gain holds the rest point's neighbourhood (gtmodel.control.lqr)
+    names = list(ode.x_names)
+    hold = rest_linearization(lambda x: jacobians(x, u_hold), x_hold, prob.x_scale, Qm, Rm, delay, names)
+    Ah, Bh = hold.A, hold.B
+    for a, stop in rest_groups(xs, prob.x_scale):
+        last = stop if stop == n else stop - 1  # the run's last sample starts the motion unless it ends the reference
+        design = rest_linearization(lambda x, u=us[a]: jacobians(x, u), xs[a], prob.x_scale, Qm, Rm, delay, names)
+        A[a:last], B[a:last] = design.A, design.B
     try:
         K_hold, P_hold = dlqr(Ah, Bh, Qm, Rm)
     except InputError as exc:
@@ -537,7 +479,8 @@ def tracking_controller(
     return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict"), dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
-                              K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), lead=prob.lead, **integral)
+                              K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), lead=prob.lead,
+                              rest=hold, **integral)
 
 
 def limit_noise_gain(c: TrackingController, sigma: Any, fraction: float = NOISE_GAIN_LIMIT) -> TrackingController:

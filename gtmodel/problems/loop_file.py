@@ -75,6 +75,7 @@ from gtmodel.control.reference import hold_input
 from gtmodel.modeling import ExplicitODE, explicit_ode
 from gtmodel.modeling.simulation.step_stability import step_stability
 from gtmodel.problems.base import ProblemFile
+from gtmodel.problems.loop_notes import controller_notes, row_points_note
 from gtmodel.problems.loop_bounds import DeclaredBounds, input_limits, accept_reference, dae_bounds, input_bounds, summary_bounds
 from gtmodel.problems.plan_cache import planned
 from gtmodel.problems.loop_limits import (MAX_LOOP_SAMPLES, MAX_MAGNITUDE, MAX_PERIOD_S, MAX_TABLE_NUMBERS, MAX_WEIGHT, MIN_PERIOD_S,
@@ -513,20 +514,12 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
         plant_x0 = np.r_[xs[0], np.zeros(4)]
     elif c.plant_substeps > 1:  # its states at the step's substeps: the declared bounds counted between the samples too
         loop["interior"] = _interior_states(model.plant, dt, c.plant_method, c.plant_substeps)
-        notes = list(notes or []) + _row_points_note(controller, c.plant_substeps)
+        notes = list(notes or []) + row_points_note(controller, c.plant_substeps)
     counted = DeclaredBounds(source="the controller's input bounds") if bounds is None else bounds.restricted(bounds.names)
     for j, n in enumerate(ode.u_names):  # an input without a declared bound: the controller's saturation
         if n not in counted.lb:
             counted.add(n, controller.u_lb[j], controller.u_ub[j])
-    if getattr(controller, "lead", 0):  # gtmodel.control.reference.delayed_start
-        notes = list(notes or []) + [f"reference: {controller.lead} period(s) at rest before the plan, held by the input "
-                                     f"{', '.join(f'{v:.4g}' for v in np.where(np.abs(controller.u_initial) < 1e-9, 0.0, controller.u_initial))} (the controller's input delay: the input "
-                                     "computed from the first measurement acts a period later); the plan follows unchanged"]
-    scale = getattr(controller, "gain_scale", None)
-    if scale is not None and np.any(scale < 1.0):  # gtmodel.control.tracking.limit_noise_gain
-        notes = list(notes or []) + [f"the law's gain limited in {int(np.sum(np.any(scale < 1.0, axis=1)))} of {scale.shape[0]} periods "
-                                     f"(the held end's included; smallest factor {float(np.min(scale)):.3g}): there a one-sigma measurement "
-                                     "error would have moved an input by more than noise_gain_limit of its half range"]
+    notes = list(notes or []) + controller_notes(controller)
     outputs = None
     if not c.compliance and ode.y_names and any(n in counted.lb for n in ode.y_names):
         try:
@@ -537,18 +530,6 @@ def loop_setup(file: ProblemFile, name: str, controller: Any, model: LoopModel, 
                      t=grid, x_ref=xs, u_ref=controller.u_ref, loop=loop, plant_x0=plant_x0,
                      max_ratio=c.max_ratio, max_step_time=c.max_step_time, bounds=counted,
                      names=(list(ode.x_names), list(ode.u_names), list(ode.y_names)), outputs=outputs, notes=list(notes or []))
-
-
-def _row_points_note(controller: Any, plant_substeps: int) -> list[str]:
-    """A note when an MPC's constraint rows act at fewer points per period than the check counts the plant's states."""
-    if getattr(controller, "constraints", None) is None:
-        return []
-    inside = getattr(controller, "substep_states", None)
-    points = 1 if inside is None else int(inside.size2_out(0))
-    if points >= plant_substeps:
-        return []
-    return [f"the MPC's constraint rows act at {points} point(s) per period, the check counts the plant's states at {plant_substeps}: "
-            f"a bound may be exceeded between the rows ([mpc] substeps = {plant_substeps} and constraint_substeps = true put them there)"]
 
 
 def _interior_states(plant: ExplicitODE, dt: float, method: str, substeps: int) -> ca.Function:

@@ -14,7 +14,7 @@ import pytest
 
 from gtmodel.errors import InputError
 from gtmodel.control.reference import period_means
-from gtmodel.control.tracking import dlqr, limit_noise_gain, riccati_gains, tracking_controller
+from gtmodel.control.tracking import limit_noise_gain, tracking_controller
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
@@ -31,27 +31,6 @@ def _linearisation(ode, x, u):
     xn = ode.step(DT, "rk4")(xs, us, ode.p_default)[0]
     f = ca.Function("AB", [xs, us], [ca.jacobian(xn, xs), ca.jacobian(xn, us)])
     return (np.asarray(m) for m in f(x, u))
-
-
-def test_dlqr_equals_python_control(motor):
-    ode, *_ = motor
-    A, B = _linearisation(ode, np.zeros(3), 0.0)
-    Q, R = np.diag([1.0, 10.0, 0.01]), np.array([[0.1]])
-    K, P = dlqr(A, B, Q, R)
-    K_ref, P_ref, _ = control.dlqr(A, B, Q, R)
-    np.testing.assert_allclose(K, K_ref, rtol=1e-9)
-    np.testing.assert_allclose(P, P_ref, rtol=1e-9)
-
-
-def test_riccati_recursion_converges_to_dlqr(motor):
-    # a long horizon of constant A, B: the first gain is the stationary (dlqr) one
-    ode, *_ = motor
-    A, B = _linearisation(ode, np.zeros(3), 0.0)
-    Q, R = np.diag([1.0, 10.0, 0.01]), np.array([[0.1]])
-    K, P = riccati_gains(np.tile(A, (2000, 1, 1)), np.tile(B, (2000, 1, 1)), Q, R, np.zeros((3, 3)))
-    K_ref, P_ref, _ = control.dlqr(A, B, Q, R)
-    np.testing.assert_allclose(K[0], K_ref, rtol=1e-8)
-    np.testing.assert_allclose(P[0], P_ref, rtol=1e-8)
 
 
 def test_linear_motor_gains_are_the_stationary_ones(motor):
