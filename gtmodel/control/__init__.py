@@ -73,7 +73,7 @@ __getattr__, __dir__ = lazy_exports(__name__, {
     "hold_input": "reference", "sampled": "reference", "sample_reference": "reference", "period_index": "reference",
     "reference_scales": "reference", "plausible_range": "reference",
     "PREDICTION_METHODS": "problem", "TrackingProblem": "problem", "tracking_problem": "problem", "weight_matrix": "problem",
-    "TrackingController": "tracking", "tracking_controller": "tracking", "dlqr": "tracking", "riccati_gains": "tracking",
+    "TrackingController": "tracking", "tracking_controller": "tracking", "dlqr": "lqr", "riccati_gains": "lqr",
     "saturate": "tracking",
     "DEFAULT_PENALTY": "mpc_constraints", "MPCConstraints": "mpc_constraints", "problem_constraints": "mpc_constraints",
     "MPC_METHODS": "mpc", "MPC_SOLVERS": "mpc", "QP_ROW": "mpc", "MPCController": "mpc", "mpc_controller": "mpc",

@@ -9,7 +9,10 @@ builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
   (:func:`~gtmodel.control.reference.period_means`);
 * the discretised linearisation along it: ``A_k = d step / d x``, ``B_k = d step / d u`` at
   ``(x*_k, u*_k)``, the Jacobians (CasADi AD) of the model's fixed step
-  (:meth:`~gtmodel.modeling.ExplicitODE.step`, the same one the generated C integrates);
+  (:meth:`~gtmodel.modeling.ExplicitODE.step`, the same one the generated C integrates); where the
+  reference rests (its start, its settling, the held end), the linearisation whose LQR gain is stable
+  within :data:`~gtmodel.defaults.REST_NEIGHBOURHOOD` of the states' ranges around the rest point
+  (:func:`~gtmodel.control.lqr.rest_linearization`: the rest point's own unless its gain fails there);
 * the time-varying LQR gains from the backward discrete Riccati recursion
   (Anderson & Moore, Optimal Control: Linear Quadratic Methods, sec. 2.4)
   ``P_N = Q_f``, ``K_k = (R + B_k' P_{k+1} B_k)^{-1} B_k' P_{k+1} A_k``,
@@ -25,8 +28,9 @@ builds the controller of the loop with period ``dt`` (the 4 ms loop by default):
 by the loop controllers (:mod:`gtmodel.codegen.loop_step`): ``control(t, x, u_last) -> (u,
 ok)``, the tables (references and gains) constant inside it, indexed by the period
 ``k = floor((t - t_0) / dt)`` (the first sample before the start, the held end after it);
-:func:`gtmodel.codegen.loop_step.generate_loop_step` writes it as C. :func:`dlqr` is the
-time-invariant LQR (the stationary solution of the same recursion).
+:func:`gtmodel.codegen.loop_step.generate_loop_step` writes it as C. The LQR designs, and the gain at a rest point
+designed for its neighbourhood (a friction's slope at rest is not a damping the loop keeps), are
+:mod:`gtmodel.control.lqr`'s.
 """
 
 from __future__ import annotations
@@ -49,7 +53,7 @@ from gtmodel.control.state_limits import StateLimits, envelope, state_limits
 from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
 
-__all__ = ["TrackingController", "tracking_controller", "limit_noise_gain", "weight_matrix", "dlqr", "riccati_gains", "saturate", "INDEX_EPS"]
+__all__ = ["TrackingController", "tracking_controller", "limit_noise_gain", "weight_matrix", "saturate", "INDEX_EPS"]
 
 
 def saturate(u: Any, lb: Any, ub: Any) -> Any:
@@ -392,7 +396,7 @@ def tracking_controller(
         Its steps within one period.
     time_varying : bool, optional
         True (default): the gains ``K_k`` of the backward Riccati recursion along the
-        reference. False: one time-invariant LQR gain for every sample, :func:`dlqr` of the
+        reference. False: one time-invariant LQR gain for every sample, :func:`~gtmodel.control.lqr.dlqr` of the
         linearisation at the held end (``x*_end``, the input that holds it), i.e.
         :attr:`TrackingController.K_hold`.
     delay : {0, 1}, optional
