@@ -40,12 +40,13 @@ from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.state_filter import StateFilter
-from gtmodel.control.mpc_memory import disturbance_estimate, memory_extra, memory_layout, memory_predict, memory_reset, row_backoff
+from gtmodel.control.mpc_memory import disturbance_estimate, first_stage_rows, memory_extra, memory_layout, memory_predict, memory_reset, row_backoff
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp, single_shooting_rti
-from gtmodel.control.mpc_solve import horizon_solve
-from gtmodel.control.problem import PREDICTION_METHODS, sqrt_psd as _sqrt_psd, tracking_problem, weight_matrix
+from gtmodel.control.mpc_solve import float_tolerance, horizon_solve
+from gtmodel.control.problem import PREDICTION_METHODS, sqrt_psd as _sqrt_psd, substep_states, tracking_problem, weight_matrix
+from gtmodel.control.state_limits import parameter_margin
 from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
 from gtmodel.control.tracking import saturate
 
@@ -133,6 +134,11 @@ class MPCController(SampledReference):
         The filter of the measurement in front of the step (:mod:`gtmodel.control.state_filter`: the extended
         Kalman filter of :attr:`step`); the loop step (:func:`~gtmodel.codegen.loop_step.mpc_step`) runs it before
         :meth:`function` and keeps its memory after the step's own; None (default): the measurement as it is.
+    margin : numpy.ndarray or None, optional
+        ``(N, (between + 1) m)`` with :attr:`constraint_backoff`, the a-priori errors of the first period's constrained
+        quantities per period (:func:`~gtmodel.control.state_limits.parameter_margin` of
+        :func:`~gtmodel.control.mpc_memory.first_stage_rows`: the parameters 20 % off, faded as the loop measures);
+        None: none.
     """
 
     dt: float
@@ -160,6 +166,7 @@ class MPCController(SampledReference):
     lead: int = 0
     R_rate: np.ndarray | None = None
     state_filter: StateFilter | None = field(default=None, repr=False)
+    margin: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def nw(self) -> int:
@@ -285,14 +292,8 @@ class MPCController(SampledReference):
                 **({"constr_viol_tol": QP_FLOAT_TOLERANCE, "dual_inf_tol": QP_FLOAT_TOLERANCE} if real == "float" and self.qpsol == "qrqp" else {})}
 
     def float_tolerance(self, rows: int = 20) -> float:
-        """How far a single-precision step may differ from its double-precision Python reference.
-
-        Both stop the QP of each SQP iteration once its dual infeasibility ``|H w + g|`` is
-        below ``tau`` (:data:`QP_FLOAT_TOLERANCE`; ``qrqp`` only, else 0), each within
-        ``tau / lambda_min(H)`` of the QP's solution, and float32 adds a forward error of about
-        ``eps cond(H)`` relative (Higham, *Accuracy and Stability of Numerical Algorithms*,
-        2002, Thm. 7.2; ``eps = 2^-23``). ``H`` is the Gauss-Newton Hessian of the blocked
-        inputs, evaluated at ``rows`` reference rows spread over the reference.
+        """How far a single-precision step may differ from its double-precision Python reference
+        (:func:`gtmodel.control.mpc_solve.float_tolerance`, ``tau`` = :data:`QP_FLOAT_TOLERANCE` with ``qrqp``).
 
         Parameters
         ----------
@@ -302,29 +303,14 @@ class MPCController(SampledReference):
         Returns
         -------
         float
-            ``max over rows of 2 tau / lambda_min(H) + eps cond(H)``; the check bounds each
-            output by it times ``(1 + |Python|)``.  ``inf`` when ``H`` is singular somewhere.
+            The bound relative to ``1 + |Python|`` (``inf`` where the Gauss-Newton Hessian is singular).
 
         Raises
         ------
         InputError
             ``rows`` not a positive integer.
         """
-        if isinstance(rows, bool) or not isinstance(rows, (int, np.integer)) or rows < 1:
-            raise InputError(f"rows: expected a positive number of reference rows, got {rows!r}")
-        nlp, hess = self._nlp()
-        tau = QP_FLOAT_TOLERANCE if self.solver == "sqpmethod" and self.qpsol == "qrqp" else 0.0
-        eps = float(np.finfo(np.float32).eps)
-        worst = 0.0
-        for k in np.unique(np.linspace(0, self.length - 1, int(rows)).astype(int)):
-            u = saturate(self.u_ref[k], self.u_lb, self.u_ub)
-            w = np.r_[np.tile(u, self.blocks), np.zeros(self.n_slack)]
-            h = np.array(hess(w, self.parameters(self.t0 + k * self.dt, self.x_ref[k]), 1.0, np.zeros(nlp["g"].numel())))
-            lam = np.linalg.eigvalsh(h[: self.nw, : self.nw])
-            if not lam[0] > 0.0:
-                return math.inf
-            worst = max(worst, 2.0 * tau / lam[0] + eps * lam[-1] / lam[0])
-        return float(worst)
+        return float_tolerance(self, rows, QP_FLOAT_TOLERANCE if self.solver == "sqpmethod" and self.qpsol == "qrqp" else 0.0)
 
     def _window(self, t: Any, lookup) -> tuple[Any, Any]:
         """Reference rows ``k+1..k+H`` (states) and ``k..k+H-1`` (inputs) by ``lookup(row, column)``."""
@@ -435,7 +421,7 @@ class MPCController(SampledReference):
         if self.delay:  # the input computed now acts from t + dt: the horizon starts from the state then
             t, x = t + self.dt, self.step(x, u_last if d is None else u_last + d)
         k = period_index(t, self.t0, self.dt, n - 1)  # a NaN time reads row 0; ok is then 0
-        table = np.hstack([self.x_ref, self.u_ref])
+        table = np.hstack([self.x_ref, self.u_ref] + ([self.margin] if self.margin is not None else []))
         values = ca.MX(ca.DM(table.reshape(-1)))
         width = table.shape[1]
 
@@ -451,7 +437,8 @@ class MPCController(SampledReference):
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row], *prev)
         lbg = self.bounds()["lbg"][1:]
         if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
-            lbg, error = row_backoff(self, x_in, x, w, u_last, mem, xr, ur)
+            margin = None if self.margin is None else ca.vertcat(*[lookup(0, nx + nu + r) for r in range(self.margin.shape[1])])
+            lbg, error = row_backoff(self, x_in, x, w, u_last, mem, xr, ur, margin)
         if self.solver == "hpipm":
             full, cost, _ = hpipm_rti(self, _sqrt_psd)(x, w, p, lbx, ubx, lbg)
             rows = None
@@ -693,7 +680,10 @@ def mpc_controller(
     R_rate = R_rate if R_rate is not None and np.any(R_rate) else None  # zero: no rate term
     if (backoff := cons is not None and solver != "fatrop" if constraint_backoff is None else _flag(constraint_backoff, "constraint_backoff")) and (cons is None or solver == "fatrop"):
         raise InputError("constraint_backoff: tightens the constraint rows of solver sqpmethod or hpipm; give rows (x_lb, x_ub, path) and one of them")
-    return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks,
+    margin = None if not backoff or 1 not in cons.stages(horizon) else parameter_margin(
+        first_stage_rows(cons, substep_states(ode, dt, method, substeps), substeps - 1 if inside is not None else 0),
+        prob.step(method, substeps), xs, us, prob.p, delay, prob.lead)
+    return MPCController(dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, step=step, horizon=horizon, blocks=blocks, margin=margin,
                          Q=Qm, R=Rm, Qf=Qfm, u_lb=lb, u_ub=ub, x_names=list(ode.x_names),
                          u_names=list(ode.u_names), sqp_iterations=sqp_iterations, solver=solver, constraints=cons,
                          substep_states=inside, delay=int(delay), disturbance_gain=float(disturbance_gain), constraint_backoff=backoff,

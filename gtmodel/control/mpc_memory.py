@@ -26,7 +26,7 @@ from gtmodel.control.reference import period_index
 from gtmodel.control.state_limits import BACKOFF_GAIN, envelope
 from gtmodel.control.tracking import saturate
 
-__all__ = ["BACKOFF_CAP", "disturbance_estimate", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
+__all__ = ["BACKOFF_CAP", "disturbance_estimate", "first_stage_rows", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
 
 #: With the reference given, :func:`row_backoff` tightens a row by at most the larger of the plan's own room to the bound
 #: there and this fraction of the bound's size (the model error a plan's margin is chosen for: a load 20 % heavier,
@@ -174,7 +174,33 @@ def memory_reset(c: Any) -> ca.Function:
     return ca.Function("reset", [t, x], [u_last, w], ["t", "x"], ["u_last", "w"])
 
 
-def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX, x_ref: Any = None, u_ref: Any = None) -> tuple[ca.MX, ca.MX]:
+def first_stage_rows(cons: Any, substeps: ca.Function, between: int) -> ca.Function:
+    """The constrained quantities over an MPC's first period with the model's parameters free (its a-priori margin).
+
+    Parameters
+    ----------
+    cons : MPCConstraints
+        The MPC's constraints.
+    substeps : casadi.Function
+        ``S(x, u, p) -> (nx, s)`` the prediction's states after each substep (:func:`gtmodel.control.problem.substep_states`).
+    between : int
+        The states inside the period that carry rows (:func:`~gtmodel.control.mpc_nlp.between_rows`; 0: the end only).
+
+    Returns
+    -------
+    casadi.Function
+        ``rows_p(x, u, p) -> c ((between + 1) m, 1)``: ``cons.function`` at each of those states and the period's end, in
+        :func:`row_backoff`'s order (for :func:`~gtmodel.control.state_limits.parameter_margin`).
+    """
+    nx, nu = cons.function.size1_in(0), cons.function.size1_in(1)
+    x, u, p = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("p", substeps.size1_in(2))
+    states = substeps(x, u, p)
+    points = list(range(between)) + [int(states.size2()) - 1]
+    return ca.Function("rows_p", [x, u, p], [ca.vertcat(*[cons.function(states[:, m], u) for m in points])], ["x", "u", "p"], ["c"])
+
+
+def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: ca.MX, x_ref: Any = None, u_ref: Any = None,
+                margin: Any = None) -> tuple[ca.MX, ca.MX]:
     """The lower bounds of the constraint rows: each declared bound tightened by the prediction's observed error.
 
     The one-period prediction error of the state, ``x - F(x_prev, u_act + d)`` (the memory's prediction,
@@ -214,6 +240,10 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     x_ref, u_ref : list of list of casadi.MX, optional
         The horizon's reference window (:meth:`~gtmodel.control.mpc.MPCController._window`: ``H`` rows of ``nx`` states
         at the periods' ends and of ``nu`` inputs), for the cap; default None: no cap.
+    margin : casadi.MX, optional
+        ``((between + 1) m, 1)`` the first period's a-priori errors of the constrained quantities
+        (:attr:`~gtmodel.control.mpc.MPCController.margin`, :func:`first_stage_rows`' order): each of its rows is tightened
+        by at least them (within the cap); default None: none.
 
     Returns
     -------
@@ -234,13 +264,15 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
     inner = between_rows(c)
     aim = [aimed(float(lo), float(hi)) for lo, hi in zip(cons.lb, cons.ub)]  # each side TARGET_MARGIN inside the declared
-    margin = [(aim[i][0] - float(cons.lb[i])) if s > 0 else (float(cons.ub[i]) - aim[i][1]) for i, s in cons.sides]
+    aim_margin = [(aim[i][0] - float(cons.lb[i])) if s > 0 else (float(cons.ub[i]) - aim[i][1]) for i, s in cons.sides]
     cap = ca.DM([max(BACKOFF_CAP * bound_size(float(cons.lb[i] if s > 0 else cons.ub[i]), float(cons.lb[i]), float(cons.ub[i])), m)
-                 / float(cons.scale[i]) for (i, s), m in zip(cons.sides, margin)])
+                 / float(cons.scale[i]) for (i, s), m in zip(cons.sides, aim_margin)])
+    first = [None] * (inner + 1) if margin is None else [margin[q * cons.size:(q + 1) * cons.size] for q in range(inner + 1)]
 
-    def tightening(xa: ca.MX, xb: ca.MX, u: ca.MX, j: int) -> ca.MX:
+    def tightening(xa: ca.MX, xb: ca.MX, u: ca.MX, j: int, prior: Any = None) -> ca.MX:
         dc = cons.function(xb, u) - cons.function(xa, u)
-        out = ca.vertcat(*[(ca.fmax(-s * dc[i], 0) + m) / float(cons.scale[i]) for (i, s), m in zip(cons.sides, margin)])
+        held = [ca.fmax(-s * dc[i], 0) if prior is None else ca.fmax(ca.fmax(-s * dc[i], 0), prior[i]) for i, s in cons.sides]
+        out = ca.vertcat(*[(h + m) / float(cons.scale[i]) for h, (i, _), m in zip(held, cons.sides, aim_margin)])
         if x_ref is None:
             return out
         # never tightened past the plan's own room there nor BACKOFF_CAP of the bound, whichever is larger
@@ -253,10 +285,11 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
         if j + 1 in stages:
             end_a, inside_a = period_states(c, nominal, u)
             end_b, inside_b = period_states(c, disturbed, u)
-            out += [tightening(xa, xb + share * (m + 1) / (inner + 1) * error, u, j) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
+            prior = first if j == 0 else [None] * (inner + 1)  # the a-priori margin: the first period's rows
+            out += [tightening(xa, xb + share * (m + 1) / (inner + 1) * error, u, j, prior[m]) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
             nominal, disturbed = end_a, end_b + share * error
             u_row = w[(min(j + 1, c.horizon - 1) // b) * c.nu:(min(j + 1, c.horizon - 1) // b + 1) * c.nu]
-            out.append(tightening(nominal, disturbed, u_row, j))
+            out.append(tightening(nominal, disturbed, u_row, j, prior[inner]))
         else:
             nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + share * error
         share *= 1 - BACKOFF_GAIN

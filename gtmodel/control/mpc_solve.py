@@ -6,6 +6,7 @@ IPOPT, CasADi's ``sqpmethod``, or the step's own ``hpipm`` and ``fatrop`` forms.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from typing import Any
 
@@ -14,8 +15,10 @@ import numpy as np
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.problem import sqrt_psd as _sqrt_psd
+from gtmodel.control.tracking import saturate
+from gtmodel.errors import InputError
 
-__all__ = ["horizon_solve"]
+__all__ = ["float_tolerance", "horizon_solve"]
 
 
 def horizon_solve(c: Any, t: float, x: Any, w0: Any, plugin: str, iterations: int | None, u_prev: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -74,3 +77,49 @@ def horizon_solve(c: Any, t: float, x: Any, w0: Any, plugin: str, iterations: in
     sol = solver(x0=np.r_[w_start, np.zeros(c.n_slack)], p=c.parameters(t, x, u_prev), **c.bounds())
     w = np.asarray(sol["x"]).reshape(-1)[: c.nw]
     return w[: c.nu].copy(), w
+
+
+def float_tolerance(c: Any, rows: int = 20, tau: float = 0.0) -> float:
+    """How far a single-precision step may differ from its double-precision Python reference.
+
+    Both stop the QP of each SQP iteration once its dual infeasibility ``|H w + g|`` is
+    below ``tau``, each within ``tau / lambda_min(H)`` of the QP's solution, and float32 adds a forward error of about
+    ``eps cond(H)`` relative (Higham, *Accuracy and Stability of Numerical Algorithms*,
+    2002, Thm. 7.2; ``eps = 2^-23``). ``H`` is the Gauss-Newton Hessian of the blocked
+    inputs, evaluated at ``rows`` reference rows spread over the reference.
+
+    Parameters
+    ----------
+    c : MPCController
+        The MPC.
+    rows : int, optional
+        Reference rows evaluated (default 20; at least 1).
+    tau : float, optional
+        The QP's dual infeasibility tolerance (:data:`gtmodel.control.mpc.QP_FLOAT_TOLERANCE` for ``qrqp``; 0: exact).
+
+    Returns
+    -------
+    float
+        ``max over rows of 2 tau / lambda_min(H) + eps cond(H)``; the check bounds each
+        output by it times ``(1 + |Python|)``.  ``inf`` when ``H`` is singular somewhere.
+
+    Raises
+    ------
+    InputError
+        ``rows`` not a positive integer.
+    """
+    if isinstance(rows, bool) or not isinstance(rows, (int, np.integer)) or rows < 1:
+        raise InputError(f"rows: expected a positive number of reference rows, got {rows!r}")
+    nlp, hess = c._nlp()
+    eps = float(np.finfo(np.float32).eps)
+    worst = 0.0
+    for k in np.unique(np.linspace(0, c.length - 1, int(rows)).astype(int)):
+        u = saturate(c.u_ref[k], c.u_lb, c.u_ub)
+        w = np.r_[np.tile(u, c.blocks), np.zeros(c.n_slack)]
+        h = np.array(hess(w, c.parameters(c.t0 + k * c.dt, c.x_ref[k]), 1.0, np.zeros(nlp["g"].numel())))
+        lam = np.linalg.eigvalsh(h[: c.nw, : c.nw])
+        if not lam[0] > 0.0:
+            return math.inf
+        worst = max(worst, 2.0 * tau / lam[0] + eps * lam[-1] / lam[0])
+    return float(worst)
+

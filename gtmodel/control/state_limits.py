@@ -32,9 +32,10 @@ import casadi as ca
 import numpy as np
 
 from gtmodel.control.bounds import aimed
+from gtmodel.control.state_filter import PARAMETER_ERROR
 from gtmodel.errors import InputError
 
-__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "envelope", "state_limits"]
+__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "envelope", "parameter_margin", "state_limits"]
 
 #: Sweeps of the alternating projections with more than one input (one input: one sweep is exact).
 SWEEPS = 10
@@ -102,6 +103,8 @@ class StateLimits:
         ``(m,)`` each row's state index.
     fraction : numpy.ndarray, optional
         ``(m,)`` each row's substep's share of the period (``(k + 1) / substeps``).
+    rows_p : casadi.Function or None, optional
+        ``rows_p(x, u, p) -> c``: the rows with the model's parameters free (:func:`parameter_margin`).
     """
 
     rows: ca.Function
@@ -112,13 +115,15 @@ class StateLimits:
     span: np.ndarray
     index: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     fraction: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    rows_p: ca.Function | None = field(default=None, repr=False)
 
     @property
     def n_rows(self) -> int:
         """Number of rows ``m`` (bounded states times substeps)."""
         return int(self.lb.size)
 
-    def project(self, x: Any, u0: Any, u_lb: np.ndarray, u_ub: np.ndarray, error: Any = None, delay: int = 0) -> Any:
+    def project(self, x: Any, u0: Any, u_lb: np.ndarray, u_ub: np.ndarray, error: Any = None, delay: int = 0,
+                margin: Any = None) -> Any:
         """The input nearest the law's ``u0`` that keeps the linearised rows within their bounds, then saturated.
 
         Parameters
@@ -136,6 +141,9 @@ class StateLimits:
             None: none.
         delay : int, optional
             Periods between the measurement and ``x`` (the input delay the law compensates: 0 or 1).
+        margin : casadi.MX, optional
+            ``(m, 1)`` each row's a-priori error, held off either side (:func:`parameter_margin`; the back-off is
+            the larger of it and the measured error's); None: none.
 
         Returns
         -------
@@ -147,6 +155,8 @@ class StateLimits:
         for e in () if error is None else (error,):
             shifted = self.rows(x + delay * e, u0)[0] + ca.DM(self.fraction) * e[[int(i) for i in self.index]]
             c_lo, c_hi = ca.fmin(c_lo, shifted), ca.fmax(c_hi, shifted)
+        if margin is not None:
+            c_lo, c_hi = ca.fmin(c_lo, c0 - margin), ca.fmax(c_hi, c0 + margin)
         nu = int(np.size(u_lb))
         u = u0
         for _ in range(1 if nu == 1 else SWEEPS):
@@ -225,7 +235,66 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
     order = [(k, row) for row in picked for k in range(s)]  # a state's rows together, the states in ORDER
     c = ca.vertcat(*[states[j, k] for k, (j, _, _, _) in order])
     rows = ca.Function("state_rows", [x, u], [c, ca.jacobian(c, u)], ["x", "u"], ["c", "J"])
+    psym = ca.SX.sym("p", int(np.size(p)))
+    free = substeps(x, u, psym)
+    rows_p = ca.Function("state_rows_p", [x, u, psym], [ca.vertcat(*[free[j, k] for k, (j, _, _, _) in order])], ["x", "u", "p"], ["c"])
     return StateLimits(rows=rows, lb=np.array([lo for _, (_, _, lo, _) in order]), ub=np.array([hi for _, (_, _, _, hi) in order]),
                        names=[f"{name}@{k + 1}" for k, (_, name, _, _) in order],
                        reach=MIN_REACH * np.array([size[j] for _, (j, _, _, _) in order]), span=np.asarray(span, dtype=float),
-                       index=np.array([j for _, (j, _, _, _) in order], dtype=int), fraction=np.array([(k + 1) / s for k, _ in order]))
+                       index=np.array([j for _, (j, _, _, _) in order], dtype=int), fraction=np.array([(k + 1) / s for k, _ in order]),
+                       rows_p=rows_p)
+
+
+def parameter_margin(rows_p: ca.Function, step: ca.Function, x_ref: np.ndarray, u_ref: np.ndarray, p: np.ndarray, delay: int = 0,
+                     lead: int = 0, error: float = PARAMETER_ERROR) -> np.ndarray:
+    """Each row's a-priori error along the reference: what the model's parameters ``error`` off move it, faded as measured.
+
+    Before the loop has measured its model's error (the back-off's envelope, :func:`envelope`, needs a period of the
+    plan under way and the input delay's), the rows are held off by the error the filter's model assumes
+    (:data:`~gtmodel.control.state_filter.PARAMETER_ERROR` of each parameter): at period ``k`` of the reference, the
+    rows over the period from the state the law predicts for it (with ``delay`` 1, one period from ``x*_{k-1}`` under
+    ``u*_{k-1}``; else ``x*_k``) under ``u*_k``, each row's sensitivity to the parameters, ``|dc_r/dp_j| error |p_j|``
+    summed in squares, then faded at :data:`BACKOFF_GAIN` per period from the first period whose error the loop has
+    measured (``lead + delay`` periods in), as the envelope releases a kept error. A ball-screw axis's TV-LQR (plan at
+    0.8 of its 18.1 A, its table 20 % heavier) drew 18.34 A after the plan's first period, its model's prediction
+    16.2 A (issue 65's drive family, drive0_11).
+
+    Parameters
+    ----------
+    rows_p : casadi.Function
+        ``rows_p(x, u, p) -> c (m, 1)``: the rows over one period from ``x`` under ``u`` held, the parameters free
+        (:attr:`StateLimits.rows_p`; an MPC's first stage, :func:`gtmodel.control.mpc_memory.first_stage_rows`).
+    step : casadi.Function
+        ``step(x, u, p) -> x_next``: the model's fixed step over one period (the prediction's).
+    x_ref : numpy.ndarray
+        ``(N, nx)`` the sampled reference.
+    u_ref : numpy.ndarray
+        ``(N, nu)`` its inputs.
+    p : numpy.ndarray
+        ``(np,)`` the model's parameters.
+    delay : {0, 1}, optional
+        The input delay the law compensates.
+    lead : int, optional
+        Periods at rest before the plan (:func:`~gtmodel.control.reference.delayed_start`).
+    error : float, optional
+        Each parameter's relative error (default :data:`~gtmodel.control.state_filter.PARAMETER_ERROR`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, m)`` the rows' margins per period (>= 0).
+    """
+    x_ref, u_ref, p = (np.asarray(v, dtype=float) for v in (x_ref, u_ref, p))
+    n, nx, nu = x_ref.shape[0], x_ref.shape[1], u_ref.shape[1]
+    x, u_prev, u, ps = ca.SX.sym("x", nx), ca.SX.sym("u_prev", nu), ca.SX.sym("u", nu), ca.SX.sym("p", p.size)
+    start = step(x, u_prev, ps) if delay else x
+    start = start[0] if isinstance(start, (list, tuple)) else start
+    c = rows_p(start, u, ps)
+    sens = ca.Function("sens", [x, u_prev, u, ps], [ca.jacobian(c, ps)]).map(n)
+    before = np.vstack([x_ref[:1], x_ref[:-1]]) if delay else x_ref
+    u_before = np.vstack([u_ref[:1], u_ref[:-1]])
+    m = int(c.numel())
+    J = np.asarray(sens(before.T, u_before.T, u_ref.T, np.tile(p[:, None], (1, n)))).reshape(m, n, p.size).transpose(1, 0, 2)
+    margin = np.sqrt(np.sum((J * (error * np.abs(p)))**2, axis=2))
+    fade = (1.0 - BACKOFF_GAIN) ** np.maximum(np.arange(n) - lead - delay, 0)
+    return margin * fade[:, None]

@@ -49,7 +49,7 @@ from gtmodel.errors import InputError
 from gtmodel.control.lqr import RestLinearization, dlqr, rest_groups, rest_linearization, riccati_gains
 from gtmodel.control.problem import substep_states, tracking_problem, weight_matrix
 from gtmodel.control.state_filter import StateFilter
-from gtmodel.control.state_limits import StateLimits, envelope, state_limits
+from gtmodel.control.state_limits import StateLimits, envelope, parameter_margin, state_limits
 from gtmodel.control.reference import INDEX_EPS, MEMORY_LIMIT, SampledReference, hold_input, period_index, start_input
 from gtmodel.modeling import ExplicitODE
 
@@ -151,6 +151,11 @@ class TrackingController(SampledReference):
         The filter of the measurement in front of the law (:mod:`gtmodel.control.state_filter`: the extended Kalman
         filter of :attr:`predict`); the loop step (:func:`~gtmodel.codegen.loop_step.tracking_step`) runs it before
         :meth:`function` and keeps its memory after the law's own; None (default): the measurement as it is.
+    margin : numpy.ndarray or None, optional
+        ``(N, m)`` with :attr:`state_limits`, each row's a-priori error per period
+        (:func:`~gtmodel.control.state_limits.parameter_margin`: the model's parameters
+        :data:`~gtmodel.control.state_filter.PARAMETER_ERROR` off, faded as the loop measures its error), held off
+        beside the measured back-off; after the end none. None: none.
     rest : RestLinearization or None, optional
         The linearisation the held end's gain was designed on (:func:`~gtmodel.control.lqr.rest_linearization`: the
         end's own, or a neighbour's where the end's own gain is unstable a little away from it); None: not recorded.
@@ -179,6 +184,7 @@ class TrackingController(SampledReference):
     state_limits: StateLimits | None = None
     state_filter: StateFilter | None = field(default=None, repr=False)
     rest: RestLinearization | None = field(default=None, repr=False)
+    margin: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def ni(self) -> int:
@@ -237,8 +243,11 @@ class TrackingController(SampledReference):
         if self.delay:
             t, x = t + self.dt, self.predict(x, u_last)  # the state when this input starts to act
         k = period_index(t, self.t0, self.dt, n)  # a NaN time reads sample 0; ok is then 0 below
+        margin = self.margin if self.state_limits is not None and self.margin is not None else None
         rows = [self.x_ref, self.u_ref, self.K.reshape(n, nu * nx)] + ([self.Ki.reshape(n, nu * ni)] if ni else [])
         hold = [self.x_hold, self.u_hold, self.K_hold.reshape(-1)] + ([self.Ki_hold.reshape(-1)] if ni else [])
+        if margin is not None:  # the rows' a-priori errors, last in each row (none after the end)
+            rows, hold = rows + [margin], hold + [np.zeros(margin.shape[1])]
         table = np.vstack([np.hstack(rows),  # row k: x*_k, u*_k, K_k (row-major)[, Ki_k]
                            np.hstack(hold)])  # row N: hold the end
         width = table.shape[1]
@@ -260,7 +269,8 @@ class TrackingController(SampledReference):
             if extra:  # the innovation less the sensors' noise
                 error = self.state_filter.model_error(error)
             error = ca.if_else(ran > 0.5, envelope(last, error, self.plausible_ranges(self.u_lb, self.u_ub)[0]), last)
-            u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=error, delay=self.delay)
+            margin_k = None if margin is None else ca.vertcat(*[values[base + width - margin.shape[1] + r] for r in range(margin.shape[1])])
+            u = self.state_limits.project(x, free, self.u_lb, self.u_ub, error=error, delay=self.delay, margin=margin_k)
             kept = ca.vertcat(x_kept, u_last, error, 1.0)  # this state, the input acting now, the envelope, for the next period
         total = ca.sum1(ca.fabs(u)) + ca.fabs(t) + ca.sum1(ca.fabs(x))
         if not nm:
@@ -480,11 +490,12 @@ def tracking_controller(
     nx = ode.nx
     integral = dict(integral_states=idx, Ki=K[:, :, nx:], Ki_hold=K_hold[:, nx:], Qi=Qi) if idx else {}
     held = None if not state_bounds else state_limits(substep_states(ode, dt, method, substeps), list(ode.x_names), state_bounds, pv, lb, ub, us, xs)
+    margin = None if held is None else parameter_margin(held.rows_p, step, xs, us, pv, delay, prob.lead)
     return TrackingController(state_limits=held, delay=int(delay), predict=prob.prediction(method, substeps, "predict"), dt=float(dt), t0=prob.t0, x_ref=xs, u_ref=us, K=K[:, :, :nx],
                               u_lb=lb.copy(), u_ub=ub.copy(), x_names=list(ode.x_names), u_names=list(ode.u_names), Q=Qm[:nx, :nx], R=Rm,
                               Qf=Qfm[:nx, :nx], x_hold=x_hold.copy(), u_hold=np.asarray(u_hold, dtype=float).reshape(-1),
                               K_hold=K_hold[:, :nx], u_start=start_input(ode.f, prob.x_given[0], us[0], pv), lead=prob.lead,
-                              rest=hold, **integral)
+                              rest=hold, margin=margin, **integral)
 
 
 def limit_noise_gain(c: TrackingController, sigma: Any, fraction: float = NOISE_GAIN_LIMIT) -> TrackingController:

@@ -16,7 +16,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gtmodel.control.bounds import TARGET_MARGIN
-from gtmodel.control.state_limits import BACKOFF_GAIN, envelope, state_limits
+from gtmodel.control.state_limits import BACKOFF_GAIN, envelope, parameter_margin, state_limits
+from gtmodel.control.state_filter import PARAMETER_ERROR
 from gtmodel.control.state_filter import NOISE_BAND, measurement_filter
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.errors import InputError
@@ -42,9 +43,64 @@ def _rl_rows(n_circuits: int = 1):
     return ca.Function("S", [x, u, p], [ca.horzcat(*states)])
 
 
-def _project(limits, x, u0, lb, ub):
+def _project(limits, x, u0, lb, ub, margin=None):
     xs, us = ca.MX.sym("x", x.size), ca.MX.sym("u", u0.size)
-    return np.asarray(ca.Function("f", [xs, us], [limits.project(xs, us, lb, ub)])(x, u0)).ravel()
+    held = None if margin is None else ca.MX(ca.DM(margin))
+    return np.asarray(ca.Function("f", [xs, us], [limits.project(xs, us, lb, ub, margin=held)])(x, u0)).ravel()
+
+
+def _rl_p():
+    """One RL circuit with its parameters free, ``p = (R, L)``: ``(substeps S(x, u, p), step F(x, u, p))``."""
+    x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 2)
+    h, states, xi = DT / 4, [], x
+    f = lambda z: (u - p[0] * z) / p[1]  # noqa: E731
+    for _ in range(4):
+        k1 = f(xi)
+        k2 = f(xi + h / 2 * k1)
+        k3 = f(xi + h / 2 * k2)
+        k4 = f(xi + h * k3)
+        xi = xi + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        states.append(xi)
+    return ca.Function("S", [x, u, p], [ca.horzcat(*states)]), ca.Function("F", [x, u, p], [xi])
+
+
+def _rl_current(i0, v, R, L, t):
+    return i0 * np.exp(-t * R / L) + v / R * (1 - np.exp(-t * R / L))
+
+
+def test_the_parameter_margin_is_the_closed_forms_sensitivity():
+    """Independent: the closed-form current's derivatives in R and L by central differences, 20 % of each, in squares."""
+    S, F = _rl_p()
+    p = np.array([R_OHM, R_OHM * TAU])
+    limits = state_limits(S, ["i"], {"i": (-10.0, 10.0)}, p, np.array([-200.0]), np.array([200.0]), np.zeros((2, 1)))
+    x_ref, u_ref = np.array([[3.0]]), np.array([[12.0]])
+    got = parameter_margin(limits.rows_p, F, x_ref, u_ref, p)[0]
+    t = DT * np.arange(1, 5) / 4
+    d = [(_rl_current(3.0, 12.0, *(p + e), t) - _rl_current(3.0, 12.0, *(p - e), t)) / (2 * e.sum()) for e in np.diag(1e-6 * p)]
+    expected = np.sqrt(sum((dj * PARAMETER_ERROR * pj) ** 2 for dj, pj in zip(d, p)))
+    np.testing.assert_allclose(got, expected, rtol=1e-4)
+
+
+def test_the_parameter_margin_fades_once_the_loop_has_measured():
+    """Full over the lead and the delay's periods, then BACKOFF_GAIN smaller each period (a reference at rest: the same
+    sensitivity every period)."""
+    S, F = _rl_p()
+    p = np.array([R_OHM, R_OHM * TAU])
+    limits = state_limits(S, ["i"], {"i": (-10.0, 10.0)}, p, np.array([-200.0]), np.array([200.0]), np.zeros((2, 1)))
+    x_ref, u_ref = np.full((6, 1), 3.0), np.full((6, 1), 3.0 * R_OHM)
+    m = parameter_margin(limits.rows_p, F, x_ref, u_ref, p, delay=1, lead=1)
+    fade = (1 - BACKOFF_GAIN) ** np.array([0, 0, 0, 1, 2, 3])
+    np.testing.assert_allclose(m / m[0], np.broadcast_to(fade[:, None], m.shape), rtol=1e-9)
+
+
+def test_the_projection_holds_the_margin_off_the_bound():
+    """Closed form: the voltage whose current ends the period at the aimed 9.9 A less the last row's margin."""
+    limits = state_limits(_rl_rows(), ["i"], {"i": (-10.0, 10.0)}, np.zeros(0), np.array([-200.0]), np.array([200.0]), np.zeros((2, 1)))
+    decay = np.exp(-DT / TAU)
+    margin = np.array([0.1, 0.2, 0.3, 0.5])
+    v_max = R_OHM * (AIM * 10.0 - 0.5 - 3.0 * decay) / (1 - decay)
+    got = _project(limits, np.array([3.0]), np.array([100.0]), np.array([-200.0]), np.array([200.0]), margin)
+    assert got == pytest.approx([v_max], rel=1e-5)
 
 
 @pytest.mark.parametrize("i0", [0.0, 3.0, 9.0], ids=["at_rest", "part_way", "near_the_bound"])
