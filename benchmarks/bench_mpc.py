@@ -171,9 +171,10 @@ class AcadosPeer:
         return " ".join(map(_num, self.c.parameters(t, x)))
 
     def reset(self) -> None:
-        """The next step from the gtmodel step's first warm start (``u*_0`` everywhere)."""
+        """The next step from the gtmodel step's first warm start (``w_initial``, each block's input over its periods)."""
         self.u_last = self.c.u_initial
-        self.proc.stdin.write("reset " + " ".join(map(_num, np.tile(self.c.u_initial, self.c.horizon))) + "\n")
+        w = np.repeat(self.c.w_initial.reshape(self.c.blocks, self.c.nu), self.c.horizon // self.c.blocks, axis=0)
+        self.proc.stdin.write("reset " + " ".join(map(_num, w.reshape(-1))) + "\n")
 
     def __call__(self, t: float, x: np.ndarray) -> tuple[int, np.ndarray]:
         words = self._ask(f"step {self._p(t, x)}")
