@@ -15,7 +15,9 @@ range away; in the closed loop a limit cycle of 16 A around the end position).
 :data:`~gtmodel.defaults.REST_NEIGHBOURHOOD` of each state's range, either way, one state at a
 time, and keeps the rest point's own linearisation when its LQR gain is stable on every one of
 them (:func:`closed_loop_radius`, with the input delay the law compensates); otherwise it takes
-the linearisation whose LQR gain has the least largest spectral radius over all of them (a
+the linearisation whose LQR gain is stable on all of them with the least largest spectral radius, if
+one is (a gear drive's end, a tenth of its motor speed's range away, 47 rad/s through its backlash,
+left every candidate above 1: its own is kept) (a
 robust choice among the sampled models; the multi-model view of Boyd & Barratt, *Linear
 Controller Design: Limits of Performance*, ch. 10, by enumeration instead of an LMI).
 """
@@ -196,8 +198,8 @@ def rest_linearization(jacobians: Callable[[np.ndarray], tuple[np.ndarray, np.nd
     Returns
     -------
     RestLinearization
-        The rest point's own linearisation when its gain's largest radius over the neighbours is below 1 (or no
-        neighbour's gain does better), else the neighbour's whose gain has the least largest radius.
+        The rest point's own linearisation when its gain's largest radius over the neighbours is below 1, or when no
+        neighbour's gain brings it below 1; else the neighbour's whose gain has the least largest radius.
     """
     x = np.asarray(x, dtype=float)
     points, labels = [x], [""]
@@ -221,6 +223,8 @@ def rest_linearization(jacobians: Callable[[np.ndarray], tuple[np.ndarray, np.nd
         return RestLinearization(*pairs[0], radius_own=own, radius=own)
     radii = [own] + [worst(j) for j in range(1, len(pairs))]
     best = int(np.argmin(radii))
+    if radii[best] >= 1.0:  # no neighbour's gain holds them all: the rest point's own (the loop may still hold it)
+        return RestLinearization(*pairs[0], radius_own=own, radius=own)
     return RestLinearization(*pairs[best], radius_own=own, radius=radii[best], moved=labels[best])
 
 

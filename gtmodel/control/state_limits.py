@@ -35,7 +35,7 @@ from gtmodel.control.bounds import aimed
 from gtmodel.control.state_filter import PARAMETER_ERROR
 from gtmodel.errors import InputError
 
-__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "StateLimits", "envelope", "parameter_margin", "state_limits"]
+__all__ = ["SWEEPS", "MIN_REACH", "ORDER", "BACKOFF_GAIN", "MARGIN_ERROR", "StateLimits", "envelope", "parameter_margin", "state_limits"]
 
 #: Sweeps of the alternating projections with more than one input (one input: one sweep is exact).
 SWEEPS = 10
@@ -50,6 +50,13 @@ BACKOFF_GAIN = 0.3
 #: motor speed near its limit that one period's voltage barely moves, and the current), the state the input
 #: commands directly wins (a belt drive's TV-LQR, its speed row last, drove the current to -43.9 A of 14.2).
 ORDER = "authority, weakest first"
+#: Each of the model's parameters' relative error the a-priori margin of the first periods assumes
+#: (:func:`parameter_margin`): half the filter's :data:`~gtmodel.control.state_filter.PARAMETER_ERROR`, since the margin
+#: sums every parameter's change in squares (a drive has 10-20 parameters). With 20 % the margin ate the room a
+#: minimum-time plan leaves below its current bound, which the heavier plant needs from the first period (drive0_22's
+#: TV-LQR: ratio 0.42 to the feedforward against 0.12 with 10 %); with 10 % the family's first-period excesses are
+#: still held (drive0_11: 17.37 A of 18.1 after the first period, 18.34 A without a margin).
+MARGIN_ERROR = 0.5 * PARAMETER_ERROR
 
 
 def envelope(kept: Any, measured: Any, scale: np.ndarray) -> Any:
@@ -246,12 +253,12 @@ def state_limits(substeps: ca.Function, x_names: list[str], bounds: Mapping[str,
 
 
 def parameter_margin(rows_p: ca.Function, step: ca.Function, x_ref: np.ndarray, u_ref: np.ndarray, p: np.ndarray, delay: int = 0,
-                     lead: int = 0, error: float = PARAMETER_ERROR) -> np.ndarray:
+                     lead: int = 0, error: float = MARGIN_ERROR) -> np.ndarray:
     """Each row's a-priori error along the reference: what the model's parameters ``error`` off move it, faded as measured.
 
     Before the loop has measured its model's error (the back-off's envelope, :func:`envelope`, needs a period of the
-    plan under way and the input delay's), the rows are held off by the error the filter's model assumes
-    (:data:`~gtmodel.control.state_filter.PARAMETER_ERROR` of each parameter): at period ``k`` of the reference, the
+    plan under way and the input delay's), the rows are held off by an error of the model assumed a priori
+    (:data:`MARGIN_ERROR` of each parameter): at period ``k`` of the reference, the
     rows over the period from the state the law predicts for it (with ``delay`` 1, one period from ``x*_{k-1}`` under
     ``u*_{k-1}``; else ``x*_k``) under ``u*_k``, each row's change with each parameter ``error`` off, either way (the
     larger), summed in squares over the parameters (a change, not a derivative: a drive's current row read 260 A of
@@ -278,7 +285,7 @@ def parameter_margin(rows_p: ca.Function, step: ca.Function, x_ref: np.ndarray, 
     lead : int, optional
         Periods at rest before the plan (:func:`~gtmodel.control.reference.delayed_start`).
     error : float, optional
-        Each parameter's relative error (default :data:`~gtmodel.control.state_filter.PARAMETER_ERROR`).
+        Each parameter's relative error (default :data:`MARGIN_ERROR`).
 
     Returns
     -------

@@ -17,7 +17,7 @@ from scipy.integrate import solve_ivp
 
 from gtmodel.control.bounds import TARGET_MARGIN
 from gtmodel.control.state_limits import BACKOFF_GAIN, envelope, parameter_margin, state_limits
-from gtmodel.control.state_filter import PARAMETER_ERROR
+from gtmodel.control.state_limits import MARGIN_ERROR
 from gtmodel.control.state_filter import NOISE_BAND, measurement_filter
 from gtmodel.control.tracking import tracking_controller
 from gtmodel.errors import InputError
@@ -69,7 +69,7 @@ def _rl_current(i0, v, R, L, t):
 
 
 def test_the_parameter_margin_is_the_closed_forms_change():
-    """Independent: the closed-form current with R, then L, 20 % off either way, the larger change, summed in squares."""
+    """Independent: the closed-form current with R, then L, MARGIN_ERROR (10 %) off either way, the larger change, summed in squares."""
     S, F = _rl_p()
     p = np.array([R_OHM, R_OHM * TAU])
     limits = state_limits(S, ["i"], {"i": (-10.0, 10.0)}, p, np.array([-200.0]), np.array([200.0]), np.zeros((2, 1)))
@@ -77,7 +77,7 @@ def test_the_parameter_margin_is_the_closed_forms_change():
     got = parameter_margin(limits.rows_p, F, x_ref, u_ref, p)[0]
     t = DT * np.arange(1, 5) / 4
     nominal = _rl_current(3.0, 12.0, *p, t)
-    change = [np.maximum(*(np.abs(_rl_current(3.0, 12.0, *(p + s * e), t) - nominal) for s in (-1, 1))) for e in np.diag(PARAMETER_ERROR * p)]
+    change = [np.maximum(*(np.abs(_rl_current(3.0, 12.0, *(p + s * e), t) - nominal) for s in (-1, 1))) for e in np.diag(MARGIN_ERROR * p)]
     expected = np.sqrt(sum(c**2 for c in change))
     np.testing.assert_allclose(got, expected, rtol=1e-4)
 
