@@ -26,3 +26,13 @@ def motor():
     u = (6.0 * np.sin(2 * np.pi * t))[:, None]
     x, _ = ode.simulate_steps(ode.step(0.01, "rk4", substeps=10), u[:-1])
     return ode, t, x, u
+
+
+def linearisation(ode, x, u, dt=0.004):
+    """``(A, B)``: the Jacobians of the model's RK4 step over ``dt`` at ``(x, u)`` (CasADi AD), formed in the tests."""
+    import casadi as ca
+
+    xs, us = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
+    xn = ode.step(dt, "rk4")(xs, us, ode.p_default)[0]
+    f = ca.Function("AB", [xs, us], [ca.jacobian(xn, xs), ca.jacobian(xn, us)])
+    return (np.asarray(m) for m in f(x, u))

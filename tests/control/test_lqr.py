@@ -18,19 +18,14 @@ from gtmodel.control.tracking import tracking_controller
 from gtmodel.defaults import REST_NEIGHBOURHOOD
 from gtmodel.modeling import Model, explicit_ode
 
+from .conftest import linearisation
+
 DT = 0.004
-
-
-def _linearisation(ode, x, u):
-    xs, us = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
-    xn = ode.step(DT, "rk4")(xs, us, ode.p_default)[0]
-    f = ca.Function("AB", [xs, us], [ca.jacobian(xn, xs), ca.jacobian(xn, us)])
-    return (np.asarray(m) for m in f(x, u))
 
 
 def test_dlqr_equals_python_control(motor):
     ode, *_ = motor
-    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    A, B = linearisation(ode, np.zeros(3), 0.0)
     Q, R = np.diag([1.0, 10.0, 0.01]), np.array([[0.1]])
     K, P = dlqr(A, B, Q, R)
     K_ref, P_ref, _ = control.dlqr(A, B, Q, R)
@@ -41,7 +36,7 @@ def test_dlqr_equals_python_control(motor):
 def test_riccati_recursion_converges_to_dlqr(motor):
     # a long horizon of constant A, B: the first gain is the stationary (dlqr) one
     ode, *_ = motor
-    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    A, B = linearisation(ode, np.zeros(3), 0.0)
     Q, R = np.diag([1.0, 10.0, 0.01]), np.array([[0.1]])
     K, P = riccati_gains(np.tile(A, (2000, 1, 1)), np.tile(B, (2000, 1, 1)), Q, R, np.zeros((3, 3)))
     K_ref, P_ref, _ = control.dlqr(A, B, Q, R)
@@ -109,9 +104,9 @@ def test_the_gain_at_rest_holds_where_a_friction_leaves_its_band(friction_mass, 
     assert (r.moved.startswith("v "), r.radius_own > 1.0, r.radius < 1.0, ran > 1.0, settled < 1e-9) == (True,) * 5, (r, ran, settled)
 
 
-def test_a_linear_model_keeps_the_rest_points_own_linearisation(motor):
+def test_a_linear_model_keeps_the_rest_points_ownlinearisation(motor):
     ode, *_ = motor
-    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    A, B = linearisation(ode, np.zeros(3), 0.0)
     r = rest_linearization(lambda x: (A, B), np.zeros(3), np.ones(3), np.diag([1.0, 10.0, 0.01]), np.array([[0.1]]))
     assert (r.moved, r.radius == r.radius_own, r.radius < 1.0, np.array_equal(r.A, A)) == ("", True, True, True)
 
@@ -135,7 +130,7 @@ def test_a_tracking_laws_held_end_is_designed_on_the_neighbour_its_own_gain_fail
     c = tracking_controller(ode, t, x, u, Q=np.diag([1e6, 1.0]), R=[1e-4], u_lb=[-1e3], u_ub=[1e3])
     d = REST_NEIGHBOURHOOD * (v.max() - v.min())
     sign = -1.0 if "v - " in c.rest.moved else 1.0
-    A, B = _linearisation(ode, c.x_hold + [0.0, sign * d], c.u_hold)
+    A, B = linearisation(ode, c.x_hold + [0.0, sign * d], c.u_hold)
     K_ref = control.dlqr(A, B, c.Q, c.R)[0]
     np.testing.assert_allclose(c.K_hold, K_ref, rtol=1e-8)
     assert (c.rest.moved.startswith("v "), c.rest.radius_own > 1.0, c.rest.radius < 1.0) == (True, True, True), c.rest

@@ -27,12 +27,9 @@ R_OHM, TAU, DT = 2.0, 0.01, 0.004
 AIM = 1 - TARGET_MARGIN  # the controllers aim inside each bound by the check's tolerance
 
 
-def _rl_rows(n_circuits: int = 1):
-    """``n`` RL circuits ``di/dt = (v - R i) / L`` as RK4 substeps over one period (1 ms steps: 1e-7 off the exponential)."""
-    x, u = ca.SX.sym("x", n_circuits), ca.SX.sym("u", n_circuits)
-    p = ca.SX.sym("p", 0)
+def _rk4_substeps(f, x):
+    """The states after each of 4 RK4 substeps of ``x' = f(x)`` over one period."""
     h, states, xi = DT / 4, [], x
-    f = lambda z: (u - R_OHM * z) / (R_OHM * TAU)  # noqa: E731
     for _ in range(4):
         k1 = f(xi)
         k2 = f(xi + h / 2 * k1)
@@ -40,6 +37,14 @@ def _rl_rows(n_circuits: int = 1):
         k4 = f(xi + h * k3)
         xi = xi + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         states.append(xi)
+    return states
+
+
+def _rl_rows(n_circuits: int = 1):
+    """``n`` RL circuits ``di/dt = (v - R i) / L`` as RK4 substeps over one period (1 ms steps: 1e-7 off the exponential)."""
+    x, u = ca.SX.sym("x", n_circuits), ca.SX.sym("u", n_circuits)
+    p = ca.SX.sym("p", 0)
+    states = _rk4_substeps(lambda z: (u - R_OHM * z) / (R_OHM * TAU), x)
     return ca.Function("S", [x, u, p], [ca.horzcat(*states)])
 
 
@@ -52,16 +57,8 @@ def _project(limits, x, u0, lb, ub, margin=None):
 def _rl_p():
     """One RL circuit with its parameters free, ``p = (R, L)``: ``(substeps S(x, u, p), step F(x, u, p))``."""
     x, u, p = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("p", 2)
-    h, states, xi = DT / 4, [], x
-    f = lambda z: (u - p[0] * z) / p[1]  # noqa: E731
-    for _ in range(4):
-        k1 = f(xi)
-        k2 = f(xi + h / 2 * k1)
-        k3 = f(xi + h / 2 * k2)
-        k4 = f(xi + h * k3)
-        xi = xi + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        states.append(xi)
-    return ca.Function("S", [x, u, p], [ca.horzcat(*states)]), ca.Function("F", [x, u, p], [xi])
+    states = _rk4_substeps(lambda z: (u - p[0] * z) / p[1], x)
+    return ca.Function("S", [x, u, p], [ca.horzcat(*states)]), ca.Function("F", [x, u, p], [states[-1]])
 
 
 def _rl_current(i0, v, R, L, t):

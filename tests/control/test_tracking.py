@@ -19,6 +19,7 @@ from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
 from ..conftest import REPO
+from .conftest import linearisation
 
 DT = 0.004
 #: Angle-tracking weights of the motor: the armature current is an internal state (weighting
@@ -26,18 +27,11 @@ DT = 0.004
 Q_ANGLE = [1e-2, 1.0, 1e-4]
 
 
-def _linearisation(ode, x, u):
-    xs, us = ca.SX.sym("x", ode.nx), ca.SX.sym("u", ode.nu)
-    xn = ode.step(DT, "rk4")(xs, us, ode.p_default)[0]
-    f = ca.Function("AB", [xs, us], [ca.jacobian(xn, xs), ca.jacobian(xn, us)])
-    return (np.asarray(m) for m in f(x, u))
-
-
 def test_linear_motor_gains_are_the_stationary_ones(motor):
     # the motor is linear: A_k, B_k constant; with Qf the stationary P every K_k is dlqr's
     ode, t, x, u = motor
     c = tracking_controller(ode, t, x, u, u_lb=[-10.0], u_ub=[10.0])
-    A, B = _linearisation(ode, np.zeros(3), 0.0)
+    A, B = linearisation(ode, np.zeros(3), 0.0)
     K_ref, _, _ = control.dlqr(A, B, c.Q, c.R)
     assert c.K.shape == (251, 1, 3)
     np.testing.assert_allclose(c.K, np.broadcast_to(K_ref, c.K.shape), rtol=1e-8)
