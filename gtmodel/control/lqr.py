@@ -40,6 +40,9 @@ __all__ = ["dlqr", "riccati_gains", "closed_loop_radius", "RestLinearization", "
 def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
     """Time-invariant discrete LQR: the gain of ``u = -K x`` minimising ``sum x'Qx + u'Ru``.
 
+    The stationary solution of the discrete algebraic Riccati equation (Anderson & Moore, *Optimal Control: Linear
+    Quadratic Methods*, sec. 2.4), as python-control's ``dlqr``.
+
     Parameters
     ----------
     A : array_like
@@ -78,7 +81,7 @@ def dlqr(A: Any, B: Any, Q: Any, R: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def riccati_gains(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, Qf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Time-varying LQR gains by the backward discrete Riccati recursion.
+    """Time-varying LQR gains by the backward discrete Riccati recursion (Anderson & Moore, sec. 2.4).
 
     Parameters
     ----------
@@ -115,6 +118,9 @@ def riccati_gains(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray, Qf
 
 def closed_loop_radius(K: np.ndarray, A: np.ndarray, B: np.ndarray, delay: int = 0) -> float:
     """Spectral radius of ``u = -K x`` on ``x_{k+1} = A x_k + B u_k``, with the law's input delay.
+
+    The closed loop's state matrix, its eigenvalues by :func:`numpy.linalg.eigvals` (a discrete loop is asymptotically
+    stable iff all lie inside the unit circle; Franklin, Powell & Workman, *Digital Control of Dynamic Systems*, sec. 4.4).
 
     Parameters
     ----------
