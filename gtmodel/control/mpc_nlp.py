@@ -63,8 +63,39 @@ def period_states(c: Any, x: Any, u: Any) -> tuple[Any, list[Any]]:
     return s[:, m], [s[:, i] for i in range(m)]
 
 
-def _single_shooting(c: Any, sqrt_psd: Any) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX, ca.MX, float]:
-    """``(w, p, r, g, f, rho)`` of :func:`single_shooting_nlp`: its variables, parameters, cost residuals, rows, cost, penalty."""
+def _with_jacobian(fun: ca.Function, nx: int, nu: int, name: str) -> ca.Function:
+    """``name(x, u) -> (y, dy/dx, dy/du)`` of a stage Function ``fun(x, u)`` (its output as a column ``y``), in SX."""
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u", nu)
+    y = ca.vec(fun(x, u))
+    return ca.Function(name, [x, u], [y, ca.jacobian(y, x), ca.jacobian(y, u)], ["x", "u"], ["y", "y_x", "y_u"])
+
+
+def _selection(n: int, nz: int, start: int) -> ca.DM:
+    """``(n, nz)`` the structurally sparse selection of entries ``start .. start + n - 1`` of ``nz``."""
+    return ca.DM.triplet(list(range(n)), list(range(start, start + n)), ca.DM.ones(n), n, nz)
+
+
+class _Chain:
+    """The stage functions of the prediction with their Jacobians, for :func:`_single_shooting`'s chain rule."""
+
+    def __init__(self, c: Any, nz: int, n_slack: int):
+        cons = c.constraints
+        self.step = _with_jacobian(c.step, c.nx, c.nu, "F_jac")
+        self.inside = _with_jacobian(c.substep_states, c.nx, c.nu, "F_substeps_jac") if between_rows(c) else None
+        self.rows = None if cons is None else _with_jacobian(lambda x, u: cons.rows(x, u), c.nx, c.nu, "rows_jac")
+        self.slack = _selection(n_slack, nz, nz - n_slack) if n_slack else 0  # d(rows + s)/ds
+
+
+def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tuple:
+    """``(w, p, r, g, f, rho, J_r, J_g)`` of :func:`single_shooting_nlp`: its variables, parameters, cost residuals,
+    rows, cost, penalty and, with ``sensitivities``, the Jacobians of ``r`` and ``g`` in ``w`` (else None).
+
+    The Jacobians by the chain rule along the prediction: each stage's Jacobians ``dF/dx``, ``dF/du`` (one SX Function
+    for the steps, one for the states inside the constrained periods, each called once per stage) carry the states'
+    sensitivity ``S_{j+1} = F_x S_j + F_u E_j`` (``E_j`` selects period ``j``'s block) — the forward sensitivity
+    sweep a ``jacobian`` of the whole prediction would run, in a few small functions rather than one derivative
+    function per number of directions (a belt drive's step: 2.6 MB of machine code, most of it read each period).
+    """
     H, nx, nu, b = c.horizon, c.nx, c.nu, c.horizon // c.blocks
     W = ca.MX.sym("w", nu, c.blocks)
     s = ca.MX.sym("s", c.n_slack)
@@ -73,23 +104,57 @@ def _single_shooting(c: Any, sqrt_psd: Any) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX,
     ur = ca.MX.sym("ur", nu, H)
     Lq, Lf, Lr = (ca.DM(sqrt_psd(m)) for m in (c.Q, c.Qf, c.R))
     up = None if c.R_rate is None else ca.MX.sym("u_prev", nu)  # the input acting before the horizon's first
+    Lrate = None if up is None else ca.DM(sqrt_psd(c.R_rate))
     cons = c.constraints
     slack = s if c.n_slack else 0
-    x, res, rows, prev = x0, [], [], up
+    nz = nu * c.blocks + c.n_slack
+    chain = _Chain(c, nz, c.n_slack) if sensitivities else None
+
+    def pick(j: int) -> ca.DM:  # E_j: the inputs of period j's block among w
+        return _selection(nu, nz, (j // b) * nu)
+
+    def rows_at(xi: Any, si: Any, u: Any, j_u: int) -> tuple[Any, Any]:
+        if chain is None:
+            return cons.rows(xi, u) + slack, None
+        v, vx, vu = chain.rows(xi, u)
+        return v + slack, ca.mtimes(vx, si) + ca.mtimes(vu, pick(j_u)) + chain.slack
+
+    x, sx = x0, ca.MX(nx, nz)
+    res, rows, jres, jrows, prev, e_prev = [], [], [], [], up, None
     stages = set() if cons is None else set(cons.stages(H))
     for j in range(H):
-        u = W[:, j // b]
+        u, e = W[:, j // b], pick(j)
         res.append(ca.mtimes(Lr, u - ur[:, j]))
+        jres.append(ca.mtimes(Lr, e))
         if up is not None and j % b == 0:  # the input's change at each block's start (within a block: none)
-            res.append(ca.mtimes(ca.DM(sqrt_psd(c.R_rate)), u - prev))
-            prev = u
-        if j + 1 in stages:
-            x, inside = period_states(c, x, u)
-            rows += [cons.rows(xi, u) + slack for xi in inside]  # between the samples: the period's own input
-            rows.append(cons.rows(x, W[:, min(j + 1, H - 1) // b]) + slack)  # x_{j+1} with the input of its own period
+            res.append(ca.mtimes(Lrate, u - prev))
+            jres.append(ca.mtimes(Lrate, e if e_prev is None else e - e_prev))
+            prev, e_prev = u, e
+        inside, s_inside = [], []
+        if chain is None:
+            if j + 1 in stages:
+                x, inside = period_states(c, x, u)
+            else:
+                x = c.step(x, u)
         else:
-            x = c.step(x, u)
-        res.append(ca.mtimes(Lf if j == H - 1 else Lq, x - xr[:, j]))
+            fun = chain.inside if j + 1 in stages and chain.inside is not None else chain.step
+            y, yx, yu = fun(x, u)
+            sy = ca.mtimes(yx, sx) + ca.mtimes(yu, e)
+            m = y.numel() // nx - 1
+            inside = [y[i * nx:(i + 1) * nx] for i in range(m)]
+            s_inside = [sy[i * nx:(i + 1) * nx, :] for i in range(m)]
+            x, sx = y[m * nx:], sy[m * nx:, :]
+        if j + 1 in stages:
+            for i, xi in enumerate(inside):  # between the samples: the period's own input
+                v, jv = rows_at(xi, s_inside[i] if chain is not None else None, u, j)
+                rows.append(v)
+                jrows.append(jv)
+            v, jv = rows_at(x, sx, W[:, min(j + 1, H - 1) // b], min(j + 1, H - 1))  # x_{j+1} with the input of its own period
+            rows.append(v)
+            jrows.append(jv)
+        L = Lf if j == H - 1 else Lq
+        res.append(ca.mtimes(L, x - xr[:, j]))
+        jres.append(None if chain is None else ca.mtimes(L, sx))
     r = ca.vertcat(*res)
     w, p = ca.vertcat(ca.vec(W), s), ca.vertcat(x0, ca.vec(xr), ca.vec(ur), *([] if up is None else [up]))
     # g: first one inactive linear row (bounds -inf, inf; see QP_ROW): CasADi 3.8's qrqp reads and
@@ -97,7 +162,10 @@ def _single_shooting(c: Any, sqrt_psd: Any) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX,
     # casadi_qrqp_dual_blocking); with one constraint row it stays inside. Then the constraint rows >= 0
     g = ca.vertcat(w[0], *rows)
     rho = 0.0 if cons is None else cons.weight
-    return w, p, r, g, ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s)), rho
+    f = ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s))
+    if chain is None:
+        return w, p, r, g, f, rho, None, None
+    return w, p, r, g, f, rho, ca.vertcat(*jres), ca.vertcat(_selection(1, nz, 0), *jrows)
 
 
 def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Function]:
@@ -120,7 +188,7 @@ def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Fun
     hess : casadi.Function
         ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``: ``2 lam_f (J_r^T J_r + diag(0, rho))``.
     """
-    w, p, r, g, f, rho = _single_shooting(c, sqrt_psd)
+    w, p, r, g, f, rho, _, _ = _single_shooting(c, sqrt_psd)
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
     jr = ca.jacobian(r, w)
     gn = ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack)))
@@ -169,8 +237,8 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
     """The MPC's real-time iteration(s) on the single-shooting NLP, each QP by the MPC's ``qpsol``.
 
     One iteration (Diehl, Bock & Schloeder, SIAM J. Control Optim. 43 (2005)): the cost residuals
-    ``r``, the rows ``g`` and their Jacobians at ``w`` in one sensitivity sweep of the prediction
-    (``jacobian([r; g], w)``), the Gauss-Newton QP (Hessian ``2 (J_r^T J_r + diag(0, rho))``, gradient
+    ``r``, the rows ``g`` and their Jacobians at ``w`` in one forward sensitivity sweep of the prediction
+    (the chain rule of the stages' Jacobians, :func:`_single_shooting`), the Gauss-Newton QP (Hessian ``2 (J_r^T J_r + diag(0, rho))``, gradient
     ``2 J_r^T r + (0, rho (1 + 2 s))``, the rows linearised, the bounds shifted by ``w``), then
     ``sqpmethod``'s backtracking line search on the L1 merit ``f + sigma viol`` (``sigma`` 1.01 times
     the largest QP multiplier, kept over the iterations; trial steps 1, 0.8, 0.64, the last taken
@@ -197,16 +265,14 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
         of :meth:`~gtmodel.control.mpc.MPCController.nlp_solver`'s call; ``x`` after the iterations, ``f``
         the last QP's model of the cost at the step taken (NaN where the prediction at the last iterate is).
     """
-    w, p, r, g, f, rho = _single_shooting(c, sqrt_psd)
+    w, p, r, g, f, rho, jr, jg = _single_shooting(c, sqrt_psd, sensitivities=True)
     k_it = c.sqp_iterations if iterations is None else int(iterations)
-    nr = r.numel()
-    jac = ca.jacobian(ca.vertcat(r, g), w)
-    jr, jg = jac[:nr, :], jac[nr:, :]
     s = w[c.nw:]
     hess = 2 * ca.densify(ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack))))
     grad = 2 * ca.mtimes(jr.T, r) + ca.vertcat(ca.DM.zeros(c.nw), rho * (1 + 2 * s))
     lin = ca.Function("lin", [w, p], [f, g, hess, grad, jg], ["w", "p"], ["f", "g", "h", "grad", "jac_g"])
-    search = _line_search(ca.Function("fg", [w, p], [f, g]), w.numel(), g.numel(), p.numel())
+    w1, p1, _, g1, f1, _, _, _ = _single_shooting(c, sqrt_psd)  # the trial points' prediction, without the sensitivities
+    search = _line_search(ca.Function("fg", [w1, p1], [f1, g1]), w.numel(), g.numel(), p.numel())
     qp = ca.conic("mpc_qp", c.qpsol, {"h": hess.sparsity(), "a": jg.sparsity()}, qp_options)
     Z, P = ca.MX.sym("x0", w.numel()), ca.MX.sym("p", p.numel())
     LBX, UBX, LBG, UBG = ca.MX.sym("lbx", w.numel()), ca.MX.sym("ubx", w.numel()), ca.MX.sym("lbg", g.numel()), ca.MX.sym("ubg", g.numel())

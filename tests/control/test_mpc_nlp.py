@@ -21,7 +21,7 @@ from scipy.integrate import solve_ivp
 
 from gtmodel.errors import InputError
 from gtmodel.control.mpc import _sqrt_psd, mpc_controller
-from gtmodel.control.mpc_nlp import single_shooting_rti
+from gtmodel.control.mpc_nlp import _single_shooting, single_shooting_rti
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
 
@@ -164,3 +164,24 @@ def test_the_line_search_is_sqpmethods(sine_drive, w0, trials):
     z, _ = single_shooting_rti(c, _sqrt_psd, c._qp_options("double"), 1)(np.full(c.nw, w0), p, b["lbx"], b["ubx"], b["lbg"], b["ubg"])
     assert solver.stats()["n_call_nlp_fg"] == trials
     np.testing.assert_allclose(np.asarray(z).ravel(), np.asarray(sol["x"]).ravel(), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("between, hard, blocks, rate", [(True, True, H, None), (True, False, H, None), (False, False, 5, None),
+                                                         (True, False, 5, [1e-3])],
+                         ids=["substep rows hard", "substep rows soft", "sample rows blocked", "blocked with rate"])
+def test_chain_rule_sensitivities_are_casadis_jacobian(motor, between, hard, blocks, rate):
+    # a second method: CasADi's jacobian() of the whole prediction (one forward sweep through the chained steps); the
+    # step's Jacobians by the chain rule of the stages' own, the same values and the same structural nonzeros
+    import casadi as ca
+
+    c = _soft_or_hard(motor, hard) if between else replace(motor[1][False], constraints=replace(motor[1][False].constraints, hard=False))
+    c = replace(c, blocks=blocks, R_rate=None if rate is None else np.diag(rate))
+    w, p, r, g, _, _, jr, jg = _single_shooting(c, _sqrt_psd, sensitivities=True)
+    mine = ca.Function("mine", [w, p], [jr, jg])
+    theirs = ca.Function("theirs", [w, p], [ca.jacobian(r, w), ca.jacobian(g, w)])
+    rng = np.random.default_rng(1)
+    wv = np.r_[rng.uniform(-24.0, 24.0, c.nw), rng.uniform(0.0, 1.0, c.n_slack)]
+    pv = c.parameters(c.t0 + 3 * DT, c.x_ref[3] + np.array([0.5, 0.0, 5.0]))
+    got, want = mine(wv, pv), theirs(wv, pv)
+    assert [m.sparsity() == t.sparsity() for m, t in zip(got, want)] == [True, True]
+    np.testing.assert_allclose(np.vstack([m.full() for m in got]), np.vstack([t.full() for t in want]), rtol=1e-12, atol=1e-12)
