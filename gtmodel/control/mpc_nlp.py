@@ -75,15 +75,49 @@ def _selection(n: int, nz: int, start: int) -> ca.DM:
     return ca.DM.triplet(list(range(n)), list(range(start, start + n)), ca.DM.ones(n), n, nz)
 
 
-class _Chain:
-    """The stage functions of the prediction with their Jacobians, for :func:`_single_shooting`'s chain rule."""
+def _stage_sensitivities(c: Any, fun: ca.Function, nz: int, rows: bool) -> ca.Function:
+    """One stage of the prediction with its sensitivities, dense in SX (see :func:`_single_shooting`).
 
-    def __init__(self, c: Any, nz: int, n_slack: int):
-        cons = c.constraints
-        self.step = _with_jacobian(c.step, c.nx, c.nu, "F_jac")
-        self.inside = _with_jacobian(c.substep_states, c.nx, c.nu, "F_substeps_jac") if between_rows(c) else None
-        self.rows = None if cons is None else _with_jacobian(lambda x, u: cons.rows(x, u), c.nx, c.nu, "rows_jac")
-        self.slack = _selection(n_slack, nz, nz - n_slack) if n_slack else 0  # d(rows + s)/ds
+    ``stage(x, u, u_row, S, E, E_row, Q, x_ref) -> (x_next, S_next, g, G, H, q)``: ``fun``'s states ``y`` (``(nx, m + 1)``,
+    the last ``x_next``), ``S_next = dy/dx S + dy/du E`` of the last; with ``rows`` the stage's constraint rows ``g`` (at
+    the states inside with ``u``, at ``x_next`` with ``u_row``; without the slacks) and their Jacobian ``G`` in ``w``
+    (the slacks' columns included), else empty; the state residual's share of the Gauss-Newton Hessian and gradient,
+    ``H = S_next' Q S_next`` and ``q = S_next' Q (x_next - x_ref)``.
+    """
+    nx, nu, cons = c.nx, c.nu, c.constraints
+    x, u, u_row = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("u_row", nu)
+    S, E, E_row = ca.SX.sym("S", nx, nz), ca.SX.sym("E", nu, nz), ca.SX.sym("E_row", nu, nz)
+    Q, x_ref = ca.SX.sym("Q", nx, nx), ca.SX.sym("x_ref", nx)
+    y = ca.vec(fun(x, u))
+    sy = ca.mtimes(ca.jacobian(y, x), S) + ca.mtimes(ca.jacobian(y, u), E)
+    m = y.numel() // nx - 1
+    g, G = [], []
+    if rows:
+        xv, uv = ca.SX.sym("xv", nx), ca.SX.sym("uv", nu)
+        rv = cons.rows(xv, uv)
+        row_fun = ca.Function("rows", [xv, uv], [rv, ca.jacobian(rv, xv), ca.jacobian(rv, uv)])
+        n_slack = c.n_slack
+        slack = ca.SX(_selection(n_slack, nz, nz - n_slack)) if n_slack else ca.SX(rv.numel(), nz)
+        for i in range(m + 1):
+            ui, ei = (u, E) if i < m else (u_row, E_row)
+            v, vx, vu = row_fun(y[i * nx:(i + 1) * nx], ui)
+            g.append(v)
+            G.append(ca.mtimes(vx, sy[i * nx:(i + 1) * nx, :]) + ca.mtimes(vu, ei) + slack)
+    x_next, s_next = y[m * nx:], sy[m * nx:, :]
+    qs = ca.mtimes(Q, s_next)
+    return ca.Function("stage_rows" if rows else "stage", [x, u, u_row, S, E, E_row, Q, x_ref],
+                       [x_next, s_next, ca.vertcat(*g), ca.vertcat(*G), ca.mtimes(s_next.T, qs), ca.mtimes(qs.T, x_next - x_ref)],
+                       ["x", "u", "u_row", "S", "E", "E_row", "Q", "x_ref"], ["x_next", "S_next", "g", "G", "H", "q"])
+
+
+class _Chain:
+    """The stage functions of the prediction with their sensitivities, for :func:`_single_shooting`'s chain rule."""
+
+    def __init__(self, c: Any, nz: int):
+        self.step = _stage_sensitivities(c, c.step, nz, False)
+        self.rows = None
+        if c.constraints is not None:
+            self.rows = _stage_sensitivities(c, c.substep_states if between_rows(c) else c.step, nz, True)
 
 
 def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tuple:
@@ -108,51 +142,45 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
     cons = c.constraints
     slack = s if c.n_slack else 0
     nz = nu * c.blocks + c.n_slack
-    chain = _Chain(c, nz, c.n_slack) if sensitivities else None
+    chain = _Chain(c, nz) if sensitivities else None
 
     def pick(j: int) -> ca.DM:  # E_j: the inputs of period j's block among w
         return _selection(nu, nz, (j // b) * nu)
 
-    def rows_at(xi: Any, si: Any, u: Any, j_u: int) -> tuple[Any, Any]:
-        if chain is None:
-            return cons.rows(xi, u) + slack, None
-        v, vx, vu = chain.rows(xi, u)
-        return v + slack, ca.mtimes(vx, si) + ca.mtimes(vu, pick(j_u)) + chain.slack
-
     x, sx = x0, ca.MX(nx, nz)
     res, rows, jres, jrows, prev, e_prev = [], [], [], [], up, None
+    gn, jtr = ca.DM(nz, nz), []  # J_r' J_r and J_r' r: the inputs' constant share, the states' from the stages
+
+    def residual(value: Any, jac: ca.DM) -> None:  # a residual linear in w with a constant Jacobian
+        nonlocal gn
+        res.append(value)
+        jres.append(jac)
+        gn += ca.mtimes(jac.T, jac)
+        jtr.append(ca.mtimes(jac.T, value))
+
     stages = set() if cons is None else set(cons.stages(H))
     for j in range(H):
         u, e = W[:, j // b], pick(j)
-        res.append(ca.mtimes(Lr, u - ur[:, j]))
-        jres.append(ca.mtimes(Lr, e))
+        residual(ca.mtimes(Lr, u - ur[:, j]), ca.mtimes(Lr, e))
         if up is not None and j % b == 0:  # the input's change at each block's start (within a block: none)
-            res.append(ca.mtimes(Lrate, u - prev))
-            jres.append(ca.mtimes(Lrate, e if e_prev is None else e - e_prev))
+            residual(ca.mtimes(Lrate, u - prev), ca.mtimes(Lrate, e if e_prev is None else e - e_prev))
             prev, e_prev = u, e
-        inside, s_inside = [], []
-        if chain is None:
-            if j + 1 in stages:
-                x, inside = period_states(c, x, u)
-            else:
-                x = c.step(x, u)
-        else:
-            fun = chain.inside if j + 1 in stages and chain.inside is not None else chain.step
-            y, yx, yu = fun(x, u)
-            sy = ca.mtimes(yx, sx) + ca.mtimes(yu, e)
-            m = y.numel() // nx - 1
-            inside = [y[i * nx:(i + 1) * nx] for i in range(m)]
-            s_inside = [sy[i * nx:(i + 1) * nx, :] for i in range(m)]
-            x, sx = y[m * nx:], sy[m * nx:, :]
-        if j + 1 in stages:
-            for i, xi in enumerate(inside):  # between the samples: the period's own input
-                v, jv = rows_at(xi, s_inside[i] if chain is not None else None, u, j)
-                rows.append(v)
-                jrows.append(jv)
-            v, jv = rows_at(x, sx, W[:, min(j + 1, H - 1) // b], min(j + 1, H - 1))  # x_{j+1} with the input of its own period
-            rows.append(v)
-            jrows.append(jv)
+        j_row = min(j + 1, H - 1)  # x_{j+1}'s row with the input of its own period; between the samples the period's own
         L = Lf if j == H - 1 else Lq
+        if chain is not None:
+            fun = chain.rows if j + 1 in stages else chain.step
+            x, sx, v, jv, hj, qj = fun(x, u, W[:, j_row // b], ca.densify(sx), ca.densify(e), ca.densify(pick(j_row)),
+                                       ca.densify(ca.mtimes(L.T, L)), xr[:, j])
+            gn, jtr = gn + hj, jtr + [qj]
+            if j + 1 in stages:
+                rows.append(v + ca.repmat(slack, v.numel() // max(c.n_slack, 1), 1) if c.n_slack else v)
+                jrows.append(jv)
+        elif j + 1 in stages:
+            x, inside = period_states(c, x, u)
+            rows += [cons.rows(xi, u) + slack for xi in inside]
+            rows.append(cons.rows(x, W[:, j_row // b]) + slack)
+        else:
+            x = c.step(x, u)
         res.append(ca.mtimes(L, x - xr[:, j]))
         jres.append(None if chain is None else ca.mtimes(L, sx))
     r = ca.vertcat(*res)
@@ -164,8 +192,8 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
     rho = 0.0 if cons is None else cons.weight
     f = ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s))
     if chain is None:
-        return w, p, r, g, f, rho, None, None
-    return w, p, r, g, f, rho, ca.vertcat(*jres), ca.vertcat(_selection(1, nz, 0), *jrows)
+        return w, p, r, g, f, rho, None
+    return w, p, r, g, f, rho, {"J_r": ca.vertcat(*jres), "J_g": ca.vertcat(_selection(1, nz, 0), *jrows), "JtJ": gn, "Jtr": sum(jtr)}
 
 
 def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Function]:
@@ -188,7 +216,7 @@ def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Fun
     hess : casadi.Function
         ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``: ``2 lam_f (J_r^T J_r + diag(0, rho))``.
     """
-    w, p, r, g, f, rho, _, _ = _single_shooting(c, sqrt_psd)
+    w, p, r, g, f, rho, _ = _single_shooting(c, sqrt_psd)
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", g.numel())
     jr = ca.jacobian(r, w)
     gn = ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack)))
@@ -265,13 +293,14 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
         of :meth:`~gtmodel.control.mpc.MPCController.nlp_solver`'s call; ``x`` after the iterations, ``f``
         the last QP's model of the cost at the step taken (NaN where the prediction at the last iterate is).
     """
-    w, p, r, g, f, rho, jr, jg = _single_shooting(c, sqrt_psd, sensitivities=True)
+    w, p, r, g, f, rho, sens = _single_shooting(c, sqrt_psd, sensitivities=True)
     k_it = c.sqp_iterations if iterations is None else int(iterations)
+    jg = sens["J_g"]
     s = w[c.nw:]
-    hess = 2 * ca.densify(ca.mtimes(jr.T, jr) + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack))))
-    grad = 2 * ca.mtimes(jr.T, r) + ca.vertcat(ca.DM.zeros(c.nw), rho * (1 + 2 * s))
+    hess = 2 * ca.densify(sens["JtJ"] + ca.diag(ca.vertcat(ca.DM.zeros(c.nw), rho * ca.DM.ones(c.n_slack))))
+    grad = 2 * sens["Jtr"] + ca.vertcat(ca.DM.zeros(c.nw), rho * (1 + 2 * s))
     lin = ca.Function("lin", [w, p], [f, g, hess, grad, jg], ["w", "p"], ["f", "g", "h", "grad", "jac_g"])
-    w1, p1, _, g1, f1, _, _, _ = _single_shooting(c, sqrt_psd)  # the trial points' prediction, without the sensitivities
+    w1, p1, _, g1, f1, _, _ = _single_shooting(c, sqrt_psd)  # the trial points' prediction, without the sensitivities
     search = _line_search(ca.Function("fg", [w1, p1], [f1, g1]), w.numel(), g.numel(), p.numel())
     qp = ca.conic("mpc_qp", c.qpsol, {"h": hess.sparsity(), "a": jg.sparsity()}, qp_options)
     Z, P = ca.MX.sym("x0", w.numel()), ca.MX.sym("p", p.numel())
