@@ -40,7 +40,8 @@ from gtmodel.defaults import LOOP_PERIOD_S, REAL_TYPES
 from gtmodel.errors import InputError
 from gtmodel.control.mpc_constraints import MPCConstraints, mpc_constraints
 from gtmodel.control.state_filter import StateFilter
-from gtmodel.control.mpc_memory import disturbance_estimate, first_stage_rows, memory_extra, memory_layout, memory_predict, memory_reset, row_backoff
+from gtmodel.control.mpc_memory import (backoff_error, backoff_rows, disturbance_estimate, first_stage_rows, memory_extra, memory_layout,
+                                         memory_predict, memory_reset, row_backoff)
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp, single_shooting_rti
@@ -435,10 +436,14 @@ class MPCController(SampledReference):
             lbx, ubx = ca.DM(lbx) + shift, ca.DM(ubx) + shift
         prev = [] if self.R_rate is None else [u_last if d is None else u_last + d]  # the horizon's inputs are v = u + d
         p = ca.vertcat(x, *[e for row in xr for e in row], *[e for row in ur for e in row], *prev)
-        lbg = self.bounds()["lbg"][1:]
+        lbg, tighten, e = self.bounds()["lbg"][1:], None, []
         if memory_layout(self).get("error"):  # rows tightened by the observed error, their envelope kept
             margin = None if self.margin is None else ca.vertcat(*[lookup(0, nx + nu + r) for r in range(self.margin.shape[1])])
-            lbg, error = row_backoff(self, x_in, x, w, u_last, mem, xr, ur, margin)
+            if self.solver == "sqpmethod":  # from the rows the step's linearisation predicts
+                error = backoff_error(self, x_in, u_last, mem)
+                tighten, e = backoff_rows(self, margin is not None), [ca.vertcat(error, *([] if margin is None else [margin]))]
+            else:
+                lbg, error = row_backoff(self, x_in, x, w, u_last, mem, xr, ur, margin)
         if self.solver == "hpipm":
             full, cost, _ = hpipm_rti(self, _sqrt_psd)(x, w, p, lbx, ubx, lbg)
             rows = None
@@ -452,8 +457,8 @@ class MPCController(SampledReference):
             if d is not None:
                 pad = ca.DM.zeros(self.n_slack)
                 bounds["lbx"], bounds["ubx"] = ca.DM(bounds["lbx"]) + ca.vertcat(shift, pad), ca.DM(bounds["ubx"]) + ca.vertcat(shift, pad)
-            rti = single_shooting_rti(self, _sqrt_psd, self._qp_options(real))
-            full, cost = rti(ca.vertcat(w, ca.DM.zeros(self.n_slack)), p, *(bounds[k] for k in ("lbx", "ubx", "lbg", "ubg")))
+            rti = single_shooting_rti(self, _sqrt_psd, self._qp_options(real), tighten=tighten)
+            full, cost = rti(ca.vertcat(w, ca.DM.zeros(self.n_slack)), p, *(bounds[k] for k in ("lbx", "ubx", "lbg", "ubg")), *e)
             rows = None
         if self.constraints is not None and self.constraints.hard:  # an infeasible QP's result violates the rows
             if rows is None:  # the rows of the single shooting at fatrop's inputs

@@ -26,7 +26,8 @@ from gtmodel.control.reference import period_index
 from gtmodel.control.state_limits import BACKOFF_GAIN, envelope
 from gtmodel.control.tracking import saturate
 
-__all__ = ["BACKOFF_CAP", "disturbance_estimate", "first_stage_rows", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff"]
+__all__ = ["BACKOFF_CAP", "disturbance_estimate", "first_stage_rows", "memory_estimates", "memory_extra", "memory_layout", "memory_predict", "memory_reset", "row_backoff",
+           "backoff_error", "backoff_rows", "tightened_rows"]
 
 #: With the reference given, :func:`row_backoff` tightens a row by at most the larger of the plan's own room to the bound
 #: there and this fraction of the bound's size (the model error a plan's margin is chosen for: a load 20 % heavier,
@@ -253,47 +254,140 @@ def row_backoff(c: Any, x: ca.MX, x_start: ca.MX, w: ca.MX, u_last: ca.MX, mem: 
     error : casadi.MX
         ``(nx, 1)`` the errors' envelope, for the memory.
     """
-    cons = c.constraints
+    error = backoff_error(c, x, u_last, mem)
+    cols = (lambda rows: None if rows is None else [ca.vertcat(*r) for r in rows])
+    return tightened_rows(c, x_start, w, error, cols(x_ref), cols(u_ref), margin), error
+
+
+def backoff_error(c: Any, x: ca.MX, u_last: ca.MX, mem: ca.MX) -> ca.MX:
+    """``(nx, 1)`` the envelope of the one-period prediction error after this period's measurement (:func:`row_backoff`).
+
+    Parameters
+    ----------
+    c : MPCController
+        A controller with the estimator's memory.
+    x : casadi.MX
+        ``(nx, 1)`` the measured state.
+    u_last : casadi.MX
+        ``(nu, 1)`` the step's ``u_last``.
+    mem : casadi.MX
+        ``(n_memory, 1)`` the step's memory.
+
+    Returns
+    -------
+    casadi.MX
+        ``(nx, 1)``: the memory's envelope updated by ``x - F(x_prev, u_act + d)`` (less the filter's noise band);
+        the memory's own before a step ran.
+    """
     _, _, _, ran = _estimator_memory(c, u_last, mem)
     start = c.nw + 2 * c.nu + c.nx  # the envelope's place (memory_layout)
     kept = mem[start:start + c.nx]
     measured = x - memory_predict(c)(u_last, mem)
     if c.state_filter is not None:  # the innovation less the sensors' noise band
         measured = c.state_filter.model_error(measured)
-    error = ca.if_else(ran > 0.5, envelope(kept, measured, c.plausible_ranges(c.u_lb, c.u_ub)[0]), kept)
-    b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
-    inner = between_rows(c)
-    aim = [aimed(float(lo), float(hi)) for lo, hi in zip(cons.lb, cons.ub)]  # each side TARGET_MARGIN inside the declared
-    aim_margin = [(aim[i][0] - float(cons.lb[i])) if s > 0 else (float(cons.ub[i]) - aim[i][1]) for i, s in cons.sides]
-    cap = ca.DM([max(BACKOFF_CAP * bound_size(float(cons.lb[i] if s > 0 else cons.ub[i]), float(cons.lb[i]), float(cons.ub[i])), m)
-                 / float(cons.scale[i]) for (i, s), m in zip(cons.sides, aim_margin)])
-    first = [None] * (inner + 1) if margin is None else [margin[q * cons.size:(q + 1) * cons.size] for q in range(inner + 1)]
+    return ca.if_else(ran > 0.5, envelope(kept, measured, c.plausible_ranges(c.u_lb, c.u_ub)[0]), kept)
 
-    def tightening(xa: ca.MX, xb: ca.MX, u: ca.MX, j: int, prior: Any = None) -> ca.MX:
-        dc = cons.function(xb, u) - cons.function(xa, u)
-        held = [ca.fmax(-s * dc[i], 0) if prior is None else ca.fmax(ca.fmax(-s * dc[i], 0), prior[i]) for i, s in cons.sides]
-        out = ca.vertcat(*[(h + m) / float(cons.scale[i]) for h, (i, _), m in zip(held, cons.sides, aim_margin)])
+
+def backoff_rows(c: Any, with_margin: bool) -> tuple[Any, int]:
+    """The back-off for :func:`~gtmodel.control.mpc_nlp.single_shooting_rti`: the rows' lower bounds from the rows its
+    linearisation predicts under the warm start (one prediction, the disturbed one, besides the step's).
+
+    Parameters
+    ----------
+    c : MPCController
+        A controller with constraint rows and the estimator's memory (``solver = "sqpmethod"``).
+    with_margin : bool
+        Whether the inputs ``e`` carry the first period's a-priori margin after the envelope.
+
+    Returns
+    -------
+    rows : callable
+        ``rows(nominal, w, p, e) -> lbg``: :func:`tightened_rows` at the parameters ``p``
+        (:meth:`~gtmodel.control.mpc.MPCController.parameters`' layout: the horizon's first state, then its reference
+        window), ``e`` = the envelope ``(nx,)`` then the margin.
+    n_e : int
+        The size of ``e``.
+    """
+    nx, nu, H = c.nx, c.nu, c.horizon
+    n_margin = (between_rows(c) + 1) * c.constraints.size if with_margin else 0
+
+    def rows(nominal: Any, w: Any, p: Any, e: Any) -> Any:
+        x_ref = [p[nx + j * nx:nx + (j + 1) * nx] for j in range(H)]
+        u_ref = [p[nx + H * nx + j * nu:nx + H * nx + (j + 1) * nu] for j in range(H)]
+        return tightened_rows(c, p[:nx], w[:c.nw], e[:nx], x_ref, u_ref, e[nx:] if n_margin else None, nominal)
+
+    return rows, nx + n_margin
+
+
+def tightened_rows(c: Any, x_start: Any, w: Any, error: Any, x_ref: Any = None, u_ref: Any = None, margin: Any = None,
+                   nominal: Any = None) -> Any:
+    """The rows' lower bounds of :func:`row_backoff` from the error envelope ``error``.
+
+    Parameters
+    ----------
+    c : MPCController
+        A controller with constraint rows.
+    x_start : casadi.MX
+        ``(nx, 1)`` the horizon's first state.
+    w : casadi.MX
+        ``(nu * blocks, 1)`` the warm start.
+    error : casadi.MX
+        ``(nx, 1)`` the envelope of the one-period prediction error.
+    x_ref, u_ref : list of casadi.MX, optional
+        ``H`` columns ``(nx, 1)`` / ``(nu, 1)``: the horizon's reference window, for the cap; default None: no cap.
+    margin : casadi.MX, optional
+        ``((between + 1) m, 1)`` the first period's a-priori errors (:func:`row_backoff`).
+    nominal : casadi.MX, optional
+        ``(constraint_rows, 1)`` the rows at the model's prediction under ``w`` in the NLP's order (the step's
+        linearisation has them: :func:`~gtmodel.control.mpc_nlp.single_shooting_rti`); default None: predicted here.
+
+    Returns
+    -------
+    casadi.MX
+        ``(constraint_rows, 1)`` the rows' lower bounds (``>= 0``).
+    """
+    cons = c.constraints
+    b, stages = c.horizon // c.blocks, set(cons.stages(c.horizon))
+    inner, ns = between_rows(c), len(cons.sides)
+    aim = [aimed(float(lo), float(hi)) for lo, hi in zip(cons.lb, cons.ub)]  # each side TARGET_MARGIN inside the declared
+    aim_raw = [(aim[i][0] - float(cons.lb[i])) if s > 0 else (float(cons.ub[i]) - aim[i][1]) for i, s in cons.sides]
+    scale = ca.DM([float(cons.scale[i]) for i, _ in cons.sides])
+    aim_margin = ca.DM(aim_raw) / scale
+    cap = ca.DM([max(BACKOFF_CAP * bound_size(float(cons.lb[i] if s > 0 else cons.ub[i]), float(cons.lb[i]), float(cons.ub[i])), m)
+                 for (i, s), m in zip(cons.sides, aim_raw)]) / scale
+    first = [None] * (inner + 1) if margin is None else [margin[q * cons.size:(q + 1) * cons.size] for q in range(inner + 1)]
+    count = [0]
+
+    def tightening(xa: Any, xb: Any, u: Any, j: int, prior: Any = None) -> Any:
+        k = count[0]
+        count[0] += 1
+        rows_a = cons.rows(xa, u) if nominal is None else nominal[k * ns:(k + 1) * ns]
+        held = ca.fmax(rows_a - cons.rows(xb, u), 0)  # the disturbed prediction's approach to the bound, scaled
+        if prior is not None:
+            held = ca.fmax(held, ca.vertcat(*[prior[i] for i, _ in cons.sides]) / scale)
+        out = held + aim_margin
         if x_ref is None:
             return out
         # never tightened past the plan's own room there nor BACKOFF_CAP of the bound, whichever is larger
-        room = cons.rows(ca.vertcat(*x_ref[j]), ca.vertcat(*u_ref[min(j + 1, c.horizon - 1)]))
+        room = cons.rows(x_ref[j], u_ref[min(j + 1, c.horizon - 1)])
         return ca.fmin(out, ca.fmax(room, cap))
 
-    nominal, disturbed, share, out = x_start, x_start + c.delay * error, 1.0, []
+    nominal_x, disturbed, share, out = x_start, x_start + c.delay * error, 1.0, []
     for j in range(c.horizon):  # the error recurs, each period's share of it BACKOFF_GAIN smaller than the last's
         u = w[(j // b) * c.nu:(j // b + 1) * c.nu]
         if j + 1 in stages:
-            end_a, inside_a = period_states(c, nominal, u)
             end_b, inside_b = period_states(c, disturbed, u)
+            end_a, inside_a = period_states(c, nominal_x, u) if nominal is None else (None, [None] * len(inside_b))
             prior = first if j == 0 else [None] * (inner + 1)  # the a-priori margin: the first period's rows
             out += [tightening(xa, xb + share * (m + 1) / (inner + 1) * error, u, j, prior[m]) for m, (xa, xb) in enumerate(zip(inside_a, inside_b))]
-            nominal, disturbed = end_a, end_b + share * error
+            nominal_x, disturbed = end_a, end_b + share * error
             u_row = w[(min(j + 1, c.horizon - 1) // b) * c.nu:(min(j + 1, c.horizon - 1) // b + 1) * c.nu]
-            out.append(tightening(nominal, disturbed, u_row, j, prior[inner]))
+            out.append(tightening(nominal_x, disturbed, u_row, j, prior[inner]))
         else:
-            nominal, disturbed = c.step(nominal, u), c.step(disturbed, u) + share * error
+            nominal_x = c.step(nominal_x, u) if nominal is None else None
+            disturbed = c.step(disturbed, u) + share * error
         share *= 1 - BACKOFF_GAIN
-    return ca.vertcat(*out), error
+    return ca.vertcat(*out)
 
 
 #: The estimates :func:`memory_estimates` reports: the memory's part, what it is, and the names it goes by.

@@ -261,7 +261,8 @@ def _line_search(fg: ca.Function, nz: int, ng: int, npar: int) -> ca.Function:
     return later
 
 
-def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int | None = None) -> ca.Function:
+def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int | None = None,
+                        tighten: tuple[Any, int] | None = None) -> ca.Function:
     """The MPC's real-time iteration(s) on the single-shooting NLP, each QP by the MPC's ``qpsol``.
 
     One iteration (Diehl, Bock & Schloeder, SIAM J. Control Optim. 43 (2005)): the cost residuals
@@ -285,12 +286,17 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
         Options of the QP solver ``c.qpsol``.
     iterations : int, optional
         Iterations (default ``c.sqp_iterations``).
+    tighten : tuple of (callable, int), optional
+        ``(rows, n_e)``: the constraint rows' lower bounds ``rows(nominal, x0, p, e)`` from the rows at ``x0`` (its
+        first linearisation's, less the slacks), ``x0``, ``p`` and ``n_e`` more inputs ``e`` (the step's back-off:
+        :func:`~gtmodel.control.mpc_memory.backoff_rows`), for every iteration; ``lbg`` then bounds the first row only.
+        Default None: ``lbg`` as given.
 
     Returns
     -------
     casadi.Function
-        ``rti(x0 (nw + n_slack,1), p, lbx, ubx, lbg, ubg) -> (x (nw + n_slack,1), f (1,1))``: the arguments
-        of :meth:`~gtmodel.control.mpc.MPCController.nlp_solver`'s call; ``x`` after the iterations, ``f``
+        ``rti(x0 (nw + n_slack,1), p, lbx, ubx, lbg, ubg[, e]) -> (x (nw + n_slack,1), f (1,1))``: the arguments
+        of :meth:`~gtmodel.control.mpc.MPCController.nlp_solver`'s call (and ``e``); ``x`` after the iterations, ``f``
         the last QP's model of the cost at the step taken (NaN where the prediction at the last iterate is).
     """
     w, p, r, g, f, rho, sens = _single_shooting(c, sqrt_psd, sensitivities=True)
@@ -305,13 +311,19 @@ def single_shooting_rti(c: Any, sqrt_psd: Any, qp_options: dict, iterations: int
     qp = ca.conic("mpc_qp", c.qpsol, {"h": hess.sparsity(), "a": jg.sparsity()}, qp_options)
     Z, P = ca.MX.sym("x0", w.numel()), ca.MX.sym("p", p.numel())
     LBX, UBX, LBG, UBG = ca.MX.sym("lbx", w.numel()), ca.MX.sym("ubx", w.numel()), ca.MX.sym("lbg", g.numel()), ca.MX.sym("ubg", g.numel())
+    LBG_IN = LBG
+    E = [ca.MX.sym("e", tighten[1])] if tighten else []
     z, cost, sigma = Z, None, 0.0
-    for _ in range(k_it):
+    for it in range(k_it):
         fz, gz, hz, gradz, jz = lin(z, P)
+        if tighten and it == 0:  # the rows under the warm start, less its slacks
+            nominal = gz[1:] - (ca.repmat(Z[c.nw:], (g.numel() - 1) // c.n_slack, 1) if c.n_slack else 0)
+            LBG = ca.vertcat(LBG[0], tighten[0](nominal, Z, P, E[0]))
         sol = qp(h=hz, g=gradz, a=jz, lba=LBG - gz, uba=UBG - gz, lbx=LBX - z, ubx=UBX - z)
         dz = sol["x"]
         sigma = ca.fmax(sigma, LS_SIGMA_FACTOR * ca.fmax(ca.norm_inf(sol["lam_x"]), ca.norm_inf(sol["lam_a"])))
         viol = _violation(z, LBX, UBX) + _violation(gz, LBG, UBG)
         t = search(z, dz, P, LBX, UBX, LBG, UBG, fz + sigma * viol, ca.dot(gradz, dz) - sigma * viol, sigma)
         z, cost = z + t * dz, fz + t * ca.dot(gradz, dz) + 0.5 * t**2 * ca.bilin(hz, dz, dz)
-    return ca.Function("rti", [Z, P, LBX, UBX, LBG, UBG], [z, cost], ["x0", "p", "lbx", "ubx", "lbg", "ubg"], ["x", "f"])
+    args = [Z, P, LBX, UBX, LBG_IN, UBG] + E
+    return ca.Function("rti", args, [z, cost], ["x0", "p", "lbx", "ubx", "lbg", "ubg"] + ["e"] * len(E), ["x", "f"])

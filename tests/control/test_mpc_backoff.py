@@ -16,7 +16,9 @@ import pytest
 
 from gtmodel.control.bounds import TARGET_MARGIN
 from gtmodel.control.mpc import mpc_controller
-from gtmodel.control.mpc_memory import BACKOFF_CAP, memory_estimates, row_backoff
+from gtmodel.control.mpc_memory import BACKOFF_CAP, backoff_error, backoff_rows, memory_estimates, row_backoff
+from gtmodel.control.mpc_nlp import single_shooting_nlp
+from gtmodel.control.problem import sqrt_psd
 from gtmodel.control.state_limits import BACKOFF_GAIN
 from gtmodel.errors import InputError
 from gtmodel.modeling import explicit_ode
@@ -92,6 +94,32 @@ def test_rows_are_never_tightened_past_the_plans_room_or_the_cap(integrator):
     cap = np.maximum(BOUND - x_ref[1:H + 1, 0], BACKOFF_CAP * BOUND) / scale  # by hand: the plan's room, or 20 % of the bound
     assert np.count_nonzero(uncapped > cap) == H - 2  # the error alone would cut past both at all but the first two stages
     assert lbg == pytest.approx(np.minimum(uncapped, cap), rel=1e-12)
+
+
+@pytest.mark.parametrize("slack", [0.0, 0.3], ids=["no_slack", "slack"])
+def test_the_linearisations_rows_tighten_as_row_backoff(integrator, slack):
+    """The sqpmethod step's back-off (backoff_rows) reads the nominal rows off the NLP's own rows at the warm start (less
+    its slacks) instead of predicting them a second time: the same lower bounds as row_backoff's own prediction."""
+    _, t, x_ref, mpcs = integrator
+    c = mpcs[True]
+    x_prev, u_act, e = np.array([0.1, 2.0]), np.array([7.0]), np.array([0.01, 0.3])
+    w = np.linspace(-20.0, 30.0, c.nw)  # a warm start that moves the rows
+    mem = np.r_[w, 0.0, x_prev, u_act, np.zeros(2), 1.0]
+    x_start = x_prev + e
+    xr = [[ca.DM(v) for v in x_ref[j + 1]] for j in range(H)]
+    ur = [[ca.DM(0.0)] for _ in range(H)]
+    xs, us, ms = ca.MX.sym("x", c.nx), ca.MX.sym("u", c.nu), ca.MX.sym("w", c.n_memory)
+    expected, _ = row_backoff(c, xs, xs, ms[:c.nw], us, ms, xr, ur)
+    error = backoff_error(c, xs, us, ms)
+    nlp, _ = single_shooting_nlp(c, sqrt_psd)
+    z = np.r_[w, np.full(c.n_slack, slack)]
+    p = np.r_[x_start, x_ref[1:H + 1].ravel(), np.zeros(H)]
+    g = ca.Function("g", [nlp["x"], nlp["p"]], [nlp["g"]])(z, p)
+    rows, n_e = backoff_rows(c, False)
+    got = rows(g[1:] - slack, ca.DM(z), ca.DM(p), error)
+    f = ca.Function("b", [xs, us, ms], [expected, got])
+    a, b = (np.asarray(v).ravel() for v in f(x_start, u_act, mem))
+    assert n_e == c.nx and np.count_nonzero(a > a.min()) > 0 and b == pytest.approx(a, rel=1e-12, abs=1e-15)
 
 
 def _peak(c, push):
