@@ -86,6 +86,7 @@ def _acados(cpu: float, failed: int = 0) -> dict:
     """A fake acados figure of :func:`bench_mpc.acados_finish` for one QP solver."""
     return {"cpu_step_median_s": cpu, "cpu_step_p99_s": 2 * cpu, "cpu_step_max_s": 3 * cpu, "tracking_rms": 1e-3,
             "first_control_rel_diff": 1e-9, "first_control_range_diff": 1e-10, "sqp_first_control_rel_diff": 1e-9, "agreement_states": 5,
+            "nearest_first_control_rel_diff": cpu * 1e-3, "nearest_first_control_range_diff": cpu * 1e-4,
             "failed_steps": failed, "diverged": False}
 
 
@@ -103,6 +104,8 @@ def test_the_acados_headline_is_its_fastest_converging_configuration(mpc):
     # issue 65's figures at the least p99 (qpOASES here): the ratio and its agreement, relative and over the input range
     assert keys["acados_best_p99_ratio"] == pytest.approx(400 / 280)
     assert (keys["acados_best_first_control_rel_diff"], keys["acados_best_first_control_range_diff"]) == (1e-9, 1e-10)
+    # and the agreement judged: that configuration's against the nearer of gtmodel's converged inputs (qpOASES' fake ones)
+    assert (keys["first_control_rel_diff"], keys["first_control_range_diff"]) == pytest.approx((140e-9, 140e-10), rel=1e-12)
 
 
 def test_an_acados_configuration_with_failed_steps_is_not_the_headline(mpc):
