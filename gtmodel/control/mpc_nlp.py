@@ -15,7 +15,7 @@ from typing import Any
 
 import casadi as ca
 
-__all__ = ["between_rows", "period_states", "single_shooting_nlp", "single_shooting_rti"]
+__all__ = ["UNROLLED_HESSIAN_MAX", "between_rows", "period_states", "single_shooting_nlp", "single_shooting_rti"]
 
 
 def between_rows(c: Any) -> int:
@@ -75,14 +75,21 @@ def _selection(n: int, nz: int, start: int) -> ca.DM:
     return ca.DM.triplet(list(range(n)), list(range(start, start + n)), ca.DM.ones(n), n, nz)
 
 
-def _stage_sensitivities(c: Any, fun: ca.Function, nz: int, rows: bool) -> ca.Function:
+#: The Gauss-Newton Hessian's state share ``S' Q S`` of a stage is written out in the stage's SX Function while
+#: ``nx nz^2`` (``nz`` the NLP's variables) is at most this, else one dense product of the state residuals' Jacobian
+#: in MX: unrolled, the belt drive's step (``nx nz^2`` = 2,420) is 14 % faster in median; beyond, the unrolled products
+#: fill the generated C (the composed motor unblocked at horizon 200: 6 of its 8.8 MB; 2.8 MB with the product).
+UNROLLED_HESSIAN_MAX = 10_000
+
+
+def _stage_sensitivities(c: Any, fun: ca.Function, nz: int, rows: bool, hessian: bool = True) -> ca.Function:
     """One stage of the prediction with its sensitivities, dense in SX (see :func:`_single_shooting`).
 
     ``stage(x, u, u_row, S, E, E_row, Q, x_ref) -> (x_next, S_next, g, G, H, q)``: ``fun``'s states ``y`` (``(nx, m + 1)``,
     the last ``x_next``), ``S_next = dy/dx S + dy/du E`` of the last; with ``rows`` the stage's constraint rows ``g`` (at
     the states inside with ``u``, at ``x_next`` with ``u_row``; without the slacks) and their Jacobian ``G`` in ``w``
     (the slacks' columns included), else empty; the state residual's share of the Gauss-Newton Hessian and gradient,
-    ``H = S_next' Q S_next`` and ``q = S_next' Q (x_next - x_ref)``.
+    ``H = S_next' Q S_next`` (without ``hessian``: ``(1, 1)`` zero) and ``q = S_next' Q (x_next - x_ref)``.
     """
     nx, nu, cons = c.nx, c.nu, c.constraints
     x, u, u_row = ca.SX.sym("x", nx), ca.SX.sym("u", nu), ca.SX.sym("u_row", nu)
@@ -106,7 +113,8 @@ def _stage_sensitivities(c: Any, fun: ca.Function, nz: int, rows: bool) -> ca.Fu
     x_next, s_next = y[m * nx:], sy[m * nx:, :]
     qs = ca.mtimes(Q, s_next)
     return ca.Function("stage_rows" if rows else "stage", [x, u, u_row, S, E, E_row, Q, x_ref],
-                       [x_next, s_next, ca.vertcat(*g), ca.vertcat(*G), ca.mtimes(s_next.T, qs), ca.mtimes(qs.T, x_next - x_ref)],
+                       [x_next, s_next, ca.vertcat(*g), ca.vertcat(*G), ca.mtimes(s_next.T, qs) if hessian else ca.SX(1, 1),
+                        ca.mtimes(qs.T, x_next - x_ref)],
                        ["x", "u", "u_row", "S", "E", "E_row", "Q", "x_ref"], ["x_next", "S_next", "g", "G", "H", "q"])
 
 
@@ -114,10 +122,11 @@ class _Chain:
     """The stage functions of the prediction with their sensitivities, for :func:`_single_shooting`'s chain rule."""
 
     def __init__(self, c: Any, nz: int):
-        self.step = _stage_sensitivities(c, c.step, nz, False)
+        self.hessian = c.nx * nz * nz <= UNROLLED_HESSIAN_MAX  # the stages' Hessian shares unrolled (else one product)
+        self.step = _stage_sensitivities(c, c.step, nz, False, self.hessian)
         self.rows = None
         if c.constraints is not None:
-            self.rows = _stage_sensitivities(c, c.substep_states if between_rows(c) else c.step, nz, True)
+            self.rows = _stage_sensitivities(c, c.substep_states if between_rows(c) else c.step, nz, True, self.hessian)
 
 
 def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tuple:
@@ -149,14 +158,17 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
 
     x, sx = x0, ca.MX(nx, nz)
     res, rows, jres, jrows, prev, e_prev = [], [], [], [], up, None
-    gn, jtr = ca.DM(nz, nz), []  # J_r' J_r and J_r' r: the inputs' constant share, the states' from the stages
+    # J_r' J_r and J_r' r: the states' shares from the stages; the inputs' residuals, linear in w, apart (their Hessian
+    # a constant summed here, their gradient one product at the end: a constant added to each stage's share would be
+    # written into the C densely, nz^2 numbers per stage)
+    gn, jtr, gn_inputs, inputs = [], [], ca.DM(nz, nz), []
 
     def residual(value: Any, jac: ca.DM) -> None:  # a residual linear in w with a constant Jacobian
-        nonlocal gn
+        nonlocal gn_inputs
         res.append(value)
         jres.append(jac)
-        gn += ca.mtimes(jac.T, jac)
-        jtr.append(ca.mtimes(jac.T, value))
+        gn_inputs += ca.mtimes(jac.T, jac)
+        inputs.append((value, jac))
 
     stages = set() if cons is None else set(cons.stages(H))
     for j in range(H):
@@ -171,7 +183,7 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
             fun = chain.rows if j + 1 in stages else chain.step
             x, sx, v, jv, hj, qj = fun(x, u, W[:, j_row // b], ca.densify(sx), ca.densify(e), ca.densify(pick(j_row)),
                                        ca.densify(ca.mtimes(L.T, L)), xr[:, j])
-            gn, jtr = gn + hj, jtr + [qj]
+            gn, jtr = gn + [hj if chain.hessian else ca.mtimes(L, sx)], jtr + [qj]
             if j + 1 in stages:
                 rows.append(v + ca.repmat(slack, v.numel() // max(c.n_slack, 1), 1) if c.n_slack else v)
                 jrows.append(jv)
@@ -193,7 +205,12 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
     f = ca.sumsqr(r) + rho * (ca.sum1(s) + ca.sumsqr(s))
     if chain is None:
         return w, p, r, g, f, rho, None
-    return w, p, r, g, f, rho, {"J_r": ca.vertcat(*jres), "J_g": ca.vertcat(_selection(1, nz, 0), *jrows), "JtJ": gn, "Jtr": sum(jtr)}
+    jtr.append(ca.mtimes(ca.vertcat(*[a for _, a in inputs]).T, ca.vertcat(*[v for v, _ in inputs])))
+    if not chain.hessian:  # gn: the state residuals' Jacobians, their share one product
+        states = ca.vertcat(*gn)
+        gn = [ca.mtimes(states.T, states)]
+    return w, p, r, g, f, rho, {"J_r": ca.vertcat(*jres), "J_g": ca.vertcat(_selection(1, nz, 0), *jrows), "JtJ": gn_inputs + sum(gn),
+                                "Jtr": sum(jtr)}
 
 
 def single_shooting_nlp(c: Any, sqrt_psd: Any) -> tuple[dict[str, ca.MX], ca.Function]:

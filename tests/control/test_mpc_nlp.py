@@ -21,6 +21,7 @@ from scipy.integrate import solve_ivp
 
 from gtmodel.errors import InputError
 from gtmodel.control.mpc import _sqrt_psd, mpc_controller
+from gtmodel.control import mpc_nlp
 from gtmodel.control.mpc_nlp import _single_shooting, single_shooting_rti
 from gtmodel.modeling import explicit_ode
 from gtmodel.problems.user_model import load_user_model
@@ -166,14 +167,19 @@ def test_the_line_search_is_sqpmethods(sine_drive, w0, trials):
     np.testing.assert_allclose(np.asarray(z).ravel(), np.asarray(sol["x"]).ravel(), rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize("between, hard, blocks, rate", [(True, True, H, None), (True, False, H, None), (False, False, 5, None),
-                                                         (True, False, 5, [1e-3])],
-                         ids=["substep rows hard", "substep rows soft", "sample rows blocked", "blocked with rate"])
-def test_chain_rule_sensitivities_are_casadis_jacobian(motor, between, hard, blocks, rate):
+@pytest.mark.parametrize("between, hard, blocks, rate, unrolled", [(True, True, H, None, True), (True, False, H, None, True),
+                                                                   (False, False, 5, None, True), (True, False, 5, [1e-3], True),
+                                                                   (True, False, H, [1e-3], False)],
+                         ids=["substep rows hard", "substep rows soft", "sample rows blocked", "blocked with rate", "one product"])
+def test_chain_rule_sensitivities_are_casadis_jacobian(motor, monkeypatch, between, hard, blocks, rate, unrolled):
     # a second method: CasADi's jacobian() of the whole prediction (one forward sweep through the chained steps); the
     # step's Jacobians by the chain rule of the stages' own, the same values; the Gauss-Newton J_r' J_r and J_r' r the
-    # stages accumulate, those of jacobian()'s J_r
+    # stages accumulate (or, "one product", J_r' J_r of the states' share in one MX product: UNROLLED_HESSIAN_MAX),
+    # those of jacobian()'s J_r
     import casadi as ca
+
+    if not unrolled:
+        monkeypatch.setattr(mpc_nlp, "UNROLLED_HESSIAN_MAX", 0)
 
     c = _soft_or_hard(motor, hard) if between else replace(motor[1][False], constraints=replace(motor[1][False].constraints, hard=False))
     c = replace(c, blocks=blocks, R_rate=None if rate is None else np.diag(rate))

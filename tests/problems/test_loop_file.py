@@ -228,16 +228,19 @@ def test_qp_entries_hand_counted(horizon, blocks, nx, nu, solver, expected):
     assert qp_entries(horizon, blocks, nx, nu, solver) == expected
 
 
-#: The motor's generated C measured (gtmodel codegen --mpc, MB of the .c files) against code_bytes: (horizon, substeps,
-#: operations, MB). Horizons 20 and 100 at 2 substeps (the shipped file's), 10 and 20 substeps with hard rows: measured
-#: 2026-11-26; horizons 200 and 400: the figures of MAX_QP_ENTRIES' comment.
-MEASURED_C = [(20, 2, 2328, 0.73), (100, 2, 2328, 4.07), (200, 2, 2328, 12.8), (400, 2, 2328, 46.0), (20, 10, 11544, 1.80),
-              (20, 20, 23064, 3.60)]
+#: The motor's generated C measured (MB of the .c files, generated without the load-time refusal) against code_bytes:
+#: (horizon, substeps, operations, MB). Horizons 20 to 200 at 2 substeps (the shipped file's), 10 and 20 substeps with hard
+#: rows; measured 2026-11-29 on the step whose Jacobians are the chain rule of the stages' (2026-11-26, CasADi's
+#: jacobian() of the whole prediction: 0.73, 4.07, 12.8 MB at horizons 20, 100, 200 and 1.80, 3.60 MB at 10, 20 substeps).
+MEASURED_C = [(20, 2, 2328, 0.42), (50, 2, 2328, 0.96), (100, 2, 2328, 1.19), (150, 2, 2328, 1.90), (200, 2, 2328, 2.76),
+              (20, 10, 11544, 1.66), (20, 20, 23064, 3.02)]
 
 
-def test_the_code_size_estimate_is_within_20_percent_of_the_measured_c():
-    ratios = [code_bytes(ops, horizon, horizon, 3, 1, "sqpmethod") / (mb * 1e6) for horizon, _, ops, mb in MEASURED_C]
-    assert all(0.8 < r < 1.2 for r in ratios), ratios
+@pytest.mark.parametrize("horizon, substeps, ops, mb", MEASURED_C, ids=[f"h{h} s{s}" for h, s, _, _ in MEASURED_C])
+def test_the_code_size_estimate_bounds_the_measured_c(horizon, substeps, ops, mb):
+    # fitted on jacobian()'s code (within 20 % there), the estimate is now an upper bound on the motor's, at most 5x
+    # (a refusal on the safe side; long horizons are the most overestimated)
+    assert 1.0 < code_bytes(ops, horizon, horizon, 3, 1, "sqpmethod") / (mb * 1e6) < 5.0
 
 
 @pytest.mark.parametrize("path", sorted((REPO / "codegen" / "mpc").glob("*.toml")), ids=lambda p: p.stem)
