@@ -264,9 +264,9 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
     (``first_control_rel_diff``) and over the input range (``first_control_range_diff``; a settled
     state's input near 0 makes the first large), against the line-search SQP's (``sqp_first_control_rel_diff``),
     and at each state against the nearer of the two (``nearest_first_control_rel_diff`` / ``_range_diff``): the
-    horizon problem may have several optima, the two iterations may settle in different ones, and HPIPM's
-    interior point leaves its full steps' fixed point off the optimum (the belt drive's, 3.2e-5 of the input range
-    from IPOPT's, which the SQP and acados' qpOASES give to 1e-10).
+    horizon problem may have several optima, the two iterations may settle in different ones, and gtmodel's HPIPM
+    full steps may settle off the optimum (the belt drive's, 3.2e-5 of the input range from IPOPT's, which the SQP
+    gives to 1e-10 and acados' configurations to 2.6e-6 of the range).
     """
     out = {}
     try:
