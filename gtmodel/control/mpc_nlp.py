@@ -77,8 +77,10 @@ def _selection(n: int, nz: int, start: int) -> ca.DM:
 
 #: The Gauss-Newton Hessian's state share ``S' Q S`` of a stage is written out in the stage's SX Function while
 #: ``nx nz^2`` (``nz`` the NLP's variables) is at most this, else one dense product of the state residuals' Jacobian
-#: in MX: unrolled, the belt drive's step (``nx nz^2`` = 2,420) is 14 % faster in median; beyond, the unrolled products
-#: fill the generated C (the composed motor unblocked at horizon 200: 6 of its 8.8 MB; 2.8 MB with the product).
+#: in MX with the Jacobian's structural zeros (the inputs of later blocks): unrolled, the belt drive's step
+#: (``nx nz^2`` = 2,420) is 14 % faster in median; beyond, the unrolled products fill the generated C (the composed
+#: motor unblocked at horizon 200: 6 of its 8.8 MB; 4.1 MB with the product), and a dense product does three times the
+#: work (that motor at horizon 100: 1.55x the step time of CasADi's ``jacobian()``; 1.0x with the zeros).
 UNROLLED_HESSIAN_MAX = 10_000
 
 
@@ -183,7 +185,10 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
             fun = chain.rows if j + 1 in stages else chain.step
             x, sx, v, jv, hj, qj = fun(x, u, W[:, j_row // b], ca.densify(sx), ca.densify(e), ca.densify(pick(j_row)),
                                        ca.densify(ca.mtimes(L.T, L)), xr[:, j])
-            gn, jtr = gn + [hj if chain.hessian else ca.mtimes(L, sx)], jtr + [qj]
+            if not chain.hessian:  # x_{j+1}'s residual's Jacobian with its structural zeros: the inputs of later blocks, the slacks
+                k = (j // b + 1) * nu
+                hj = ca.horzcat(ca.mtimes(L, sx[:, :k]), ca.MX(nx, nz - k))
+            gn, jtr = gn + [hj], jtr + [qj]
             if j + 1 in stages:
                 rows.append(v + ca.repmat(slack, v.numel() // max(c.n_slack, 1), 1) if c.n_slack else v)
                 jrows.append(jv)
@@ -206,7 +211,7 @@ def _single_shooting(c: Any, sqrt_psd: Any, sensitivities: bool = False) -> tupl
     if chain is None:
         return w, p, r, g, f, rho, None
     jtr.append(ca.mtimes(ca.vertcat(*[a for _, a in inputs]).T, ca.vertcat(*[v for v, _ in inputs])))
-    if not chain.hessian:  # gn: the state residuals' Jacobians, their share one product
+    if not chain.hessian:  # gn: the state residuals' Jacobians, their share one sparse product (a third of the dense one's work)
         states = ca.vertcat(*gn)
         gn = [ca.mtimes(states.T, states)]
     return w, p, r, g, f, rho, {"J_r": ca.vertcat(*jres), "J_g": ca.vertcat(_selection(1, nz, 0), *jrows), "JtJ": gn_inputs + sum(gn),

@@ -104,8 +104,8 @@ MAX_CODE_BYTES = 16_000_000
 #: (nx = 3, nu = 1, rk4, blocks = horizon) when the step's Jacobian was CasADi's ``jacobian()`` of the whole
 #: prediction: horizon 20, 100, 200, 400 with 2 substeps (0.73, 4.07, 12.8, 46 MB of C) and horizon 20 with 10
 #: and 20 substeps and hard rows (1.80, 3.60 MB), within 20 %. Since the chain rule of the stages' Jacobians
-#: (:mod:`gtmodel.control.mpc_nlp`) the same MPCs need 0.42 to 2.76 MB and 1.66, 3.02 MB: the estimate is an upper
-#: bound there, 1.2 to 4.8 times the code (tests/problems/test_loop_file.py). It does not count the constraint rows
+#: (:mod:`gtmodel.control.mpc_nlp`) the same MPCs need 0.42 to 4.11 MB and 1.66, 3.02 MB: the estimate is an upper
+#: bound there, 1.3 to 3.2 times the code (tests/problems/test_loop_file.py). It does not count the constraint rows
 #: (the flexible-joint drive's 160: 1.02 MB for 0.41 MB estimated).
 CODE_PER_OPERATION, CODE_PER_DIRECTION, CODE_BASE = 5.6, 0.11, 300_000
 
