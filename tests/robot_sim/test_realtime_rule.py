@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import os
+import time
 
+import numpy as np
 import pytest
 
-from .realtime import busy_reason
+from .realtime import MachinePauses, busy_reason
 
 
 @pytest.mark.parametrize("load, cores, busy", [(0.5, 2, False), (2.0, 2, False), (2.5, 2, True), (15.0, 2, True), (15.0, 16, False)])
@@ -32,3 +34,53 @@ def test_always_runs_them_whatever_the_load(monkeypatch):
     monkeypatch.setattr(os, "getloadavg", lambda: (50.0, 50.0, 50.0))
     monkeypatch.setenv("GTMODEL_REALTIME_TESTS", "always")
     assert busy_reason() is None
+
+
+# ---- the machine's pauses: a reply late or missing only by them is the machine's ----
+
+def _machine(pauses: dict, above: bool = True) -> MachinePauses:
+    m = MachinePauses(None)
+    m.pauses = {cpu: np.array(p, dtype=float).reshape(-1, 2) for cpu, p in pauses.items()}
+    m.above_runtime = above
+    return m
+
+
+@pytest.mark.parametrize("pauses, above, window, explained", [
+    ({0: [[0.0, 0.2]]}, True, (0.0, 0.2), True),  # the whole round trip paused
+    ({0: [[0.0015, 0.25]]}, True, (0.0, 0.2), True),  # all but 1.5 ms of it (the budget is 2 ms)
+    ({0: [[0.01, 0.2]]}, True, (0.0, 0.2), False),  # 10 ms with the machine running: the runtime's own
+    ({0: [[0.0, 0.1]], 1: [[0.1, 0.2]]}, True, (0.0, 0.2), False),  # halves on two CPUs do not add up
+    ({0: [[0.0, 0.1], [0.1005, 0.2]]}, True, (0.0, 0.2), True),  # two pauses of one CPU do
+    ({0: [[0.0, 0.2]]}, False, (0.0, 0.2), False),  # canaries not above the runtime explain nothing
+    ({0: [[0.0, 0.0045]]}, True, (0.0, 0.005), True),  # a reply 5 ms late, 4.5 ms of it paused
+    ({0: []}, True, (0.0, 0.005), False),
+])
+def test_a_round_trip_is_the_machines_only_when_one_cpu_paused_all_but_the_budget(pauses, above, window, explained):
+    assert _machine(pauses, above).explains(*window) == explained
+
+
+def test_judge_splits_misses_and_late_rounds_by_the_pauses():
+    m = _machine({0: [[10.0, 10.3]], 1: [[20.0005, 20.0045]]})
+    rounds = [(1.0, 1.0001), (10.0, None), (15.0, None), (20.0, 20.005), (30.0, 30.0001), (40.0, 40.006)]
+    # round 4: logged 5 ms late but its reply came back in 0.1 ms (the previous one, read late): judged by the whole wait
+    unexplained, explained = m.judge(rounds, late={3: 0.0045, 4: 0.005, 5: 0.0055}, timeout=0.2, ignore=frozenset({2}))
+    assert [line.split(":")[0] for line in explained] == ["round 1", "round 3"]
+    assert [line.split(":")[0] for line in unexplained] == ["round 4", "round 5"] and "over 200.0 ms" in unexplained[0]
+
+
+def test_a_canary_sees_a_pause_it_was_given(tmp_path):
+    """Independent: the canary is stopped by SIGSTOP for 80 ms (this test's clock); its record must cover that stop."""
+    import signal
+
+    with MachinePauses(tmp_path) as m:
+        cpu, proc = m._procs[0]
+        time.sleep(0.05)
+        stopped = time.monotonic()
+        proc.send_signal(signal.SIGSTOP)
+        time.sleep(0.08)
+        resumed = time.monotonic()
+        proc.send_signal(signal.SIGCONT)
+        time.sleep(0.05)
+    p = m.pauses[cpu]
+    assert m.overlap(stopped + 0.002, resumed - 0.002) >= resumed - stopped - 0.004 - 1e-9
+    assert np.any((p[:, 0] <= stopped + 0.002) & (p[:, 1] >= resumed))
