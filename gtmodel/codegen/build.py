@@ -34,6 +34,7 @@ __all__ = [
     "CompiledFunction",
     "CompiledLibrary",
     "LoopStepRunner",
+    "stack_work_bytes",
 ]
 
 log = logging.getLogger("gtmodel")
@@ -334,9 +335,7 @@ class CompiledLibrary:
             CasADi's ``sz_arg`` + ``sz_res`` pointers, ``sz_iw`` integers (``casadi_int``,
             ``long long``) and ``sz_w`` reals of the library's real type.
         """
-        sz = self.generated.work_sizes[name]
-        return (ctypes.sizeof(ctypes.c_void_p) * (sz[0] + sz[1]) + ctypes.sizeof(ctypes.c_longlong) * sz[2]
-                + ctypes.sizeof(self.real_type) * sz[3])
+        return stack_work_bytes(self.generated.work_sizes[name], getattr(self.generated, "real", "double"))
 
     def bind(self, name: str, restype: Any, argtypes: Sequence[Any], optional: bool = False) -> Any:
         """The exported C function ``<prefix>_<name>`` with its ctypes signature set.
@@ -553,3 +552,24 @@ def load_strict(generated: GeneratedCode, build_dir: str | Path | None = None) -
         Compilation (a warning included) or loading failed.
     """
     return load_library(generated, compile_shared(generated, build_dir, werror=True, extra_flags=STRICT_EXTRA))
+
+
+def stack_work_bytes(sizes: Sequence[int], real: str = "double") -> int:
+    """Stack work arrays of one call of a generated function [bytes].
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        CasADi's ``(sz_arg, sz_res, sz_iw, sz_w)`` (:attr:`GeneratedCode.work_sizes`).
+    real : {"double", "float"}, optional
+        The generated code's real type.
+
+    Returns
+    -------
+    int
+        ``sz_arg`` + ``sz_res`` pointers, ``sz_iw`` integers (``casadi_int``, ``long long``) and
+        ``sz_w`` reals, the arrays the generated wrapper declares on the stack.
+    """
+    sz = [int(v) for v in sizes]
+    return (ctypes.sizeof(ctypes.c_void_p) * (sz[0] + sz[1]) + ctypes.sizeof(ctypes.c_longlong) * sz[2]
+            + ctypes.sizeof(ctypes.c_float if real == "float" else ctypes.c_double) * sz[3])

@@ -50,6 +50,7 @@ from typing import Any
 
 from gtmodel._compiler import find_compiler, run_compiler
 from gtmodel._escape import c_string, check_c_identifier
+from gtmodel.codegen.build import stack_work_bytes
 from gtmodel.codegen.code_source import CodeSource
 from gtmodel.codegen.declarations import FunctionSpec
 from gtmodel.codegen.loop_step import LoopStep, generate_loop_step
@@ -58,7 +59,8 @@ from gtmodel.errors import CodegenError, InputError
 from gtmodel.defaults import INTERFACE_PORTS, LOOP_PERIOD_S
 
 __all__ = ["RSI_INPUTS", "RSI_OUTPUTS", "EGM_INPUTS", "EGM_OUTPUTS", "SENSOR_INPUTS", "DEFAULT_PORTS", "RUNTIME_FLAGS",
-           "RUNTIME_SOURCES", "BUILD_FLAGS", "RuntimeSpec", "RobotRuntime", "build_runtime"]
+           "RUNTIME_SOURCES", "BUILD_FLAGS", "CYCLE_STACK_BASE", "CYCLE_STACK_MAX", "RuntimeSpec", "RobotRuntime", "build_runtime",
+           "cycle_stack_bytes"]
 
 log = logging.getLogger("gtmodel")
 
@@ -291,24 +293,66 @@ class RobotRuntime(CodeSource):
     def _write(self, out_dir: str | Path, real: str, prefix: str | None) -> GeneratedCode:
         prefix = check_c_identifier(prefix or "gt_loop", "prefix", "gt_loop")
         generated = generate_loop_step(self.step, out_dir, prefix=prefix, real=real)
+        stack = cycle_stack_bytes(generated)
         out = Path(out_dir)
         try:
             (out / "nanopb").mkdir(exist_ok=True)
             for name in RUNTIME_SOURCES:
                 shutil.copyfile(_HARNESS / name, out / name)
-            (out / "gt_runtime_config.h").write_text(_config(self.spec, prefix))
+            (out / "gt_runtime_config.h").write_text(_config(self.spec, prefix, stack))
         except OSError as exc:
             raise CodegenError(f"cannot write the runtime's sources to {out}: {exc.strerror or exc}") from None
-        log.info("codegen: wrote the %s runtime around %s in %s", self.spec.interface.upper(), self.step.name, out)
+        log.info("codegen: wrote the %s runtime around %s in %s (cycle thread stack %d bytes)", self.spec.interface.upper(),
+                 self.step.name, out, stack)
         return generated
+
+
+#: The cycle thread's stack besides the step's work arrays [bytes]: the runtime's own frames (its buffers are static).
+CYCLE_STACK_BASE = 1 << 20
+#: The largest cycle-thread stack a runtime is built with [bytes] (``mlockall`` locks it where permitted).
+CYCLE_STACK_MAX = 256 << 20
+
+
+def cycle_stack_bytes(generated: GeneratedCode) -> int:
+    """The runtime's cycle-thread stack for a generated step [bytes].
+
+    The generated wrappers declare CasADi's work arrays on the stack (an MPC's run to megabytes),
+    so the thread that calls the step gets :data:`CYCLE_STACK_BASE` plus the stack work of every
+    generated function (:func:`~gtmodel.codegen.build.stack_work_bytes`; summed, though the step
+    calls them one after another), rounded up to 64 KiB. A fixed 1 MiB stack let a step with
+    1.6 MB of work arrays kill the runtime by SIGSEGV at its first cycle.
+
+    Parameters
+    ----------
+    generated : GeneratedCode
+        The step's generated code (its ``work_sizes`` and ``real``).
+
+    Returns
+    -------
+    int
+        Bytes, at least :data:`CYCLE_STACK_BASE`.
+
+    Raises
+    ------
+    CodegenError
+        The stack would exceed :data:`CYCLE_STACK_MAX`.
+    """
+    real = getattr(generated, "real", "double")
+    work = sum(stack_work_bytes(sizes, real) for sizes in generated.work_sizes.values())
+    stack = CYCLE_STACK_BASE + -(-work // 65536) * 65536
+    if stack > CYCLE_STACK_MAX:
+        raise CodegenError(f"the step's stack work arrays take {work} bytes: over the runtime's cycle-thread stack cap of "
+                           f"{CYCLE_STACK_MAX} bytes with its {CYCLE_STACK_BASE} of its own (a shorter horizon or blocked inputs "
+                           "shrink an MPC's)")
+    return stack
 
 
 def _c_doubles(values: tuple[float, ...]) -> str:
     return ", ".join(repr(float(v)) for v in values)
 
 
-def _config(spec: RuntimeSpec, prefix: str) -> str:
-    """``gt_runtime_config.h``: the spec as C (validated names; numbers as ``repr``)."""
+def _config(spec: RuntimeSpec, prefix: str, cycle_stack: int = CYCLE_STACK_BASE) -> str:
+    """``gt_runtime_config.h``: the spec as C (validated names; numbers as ``repr``), the cycle thread's stack (bytes)."""
     table = RSI_INPUTS if spec.interface == "rsi" else EGM_INPUTS
     x_source = [-1 - SENSOR_INPUTS.index(f) if f in SENSOR_INPUTS else table.index(f) for f in spec.inputs]
     nsensor = max([SENSOR_INPUTS.index(f) + 1 for f in spec.inputs if f in SENSOR_INPUTS], default=0)
@@ -355,6 +399,7 @@ def _config(spec: RuntimeSpec, prefix: str) -> str:
 #define GT_RT_REPLY_DEADLINE_S {float(spec.reply_deadline_s)!r}
 #define GT_RT_SEN_TYPE {c_string(spec.sen_type)}
 #define GT_RT_RSI_ELEMENTS {elements}u
+#define GT_RT_CYCLE_STACK ((size_t){int(cycle_stack)}u) /* the step's stack work arrays and the runtime's own frames */
 
 typedef {prefix}_memory gt_rt_memory;
 typedef {prefix}_real gt_rt_real;

@@ -25,8 +25,10 @@ import pytest
 from gtmodel import _egm_pb2 as egm
 from gtmodel._compiler import find_compiler
 from gtmodel.codegen.loop_step import LoopStep
-from gtmodel.codegen.robot_runtime import (EGM_INPUTS, RSI_INPUTS, RUNTIME_SOURCES, RobotRuntime, RuntimeSpec, build_runtime)
-from gtmodel.errors import InputError
+from gtmodel.codegen.build import stack_work_bytes
+from gtmodel.codegen.robot_runtime import (CYCLE_STACK_BASE, CYCLE_STACK_MAX, EGM_INPUTS, RSI_INPUTS, RUNTIME_SOURCES, RobotRuntime,
+                                          RuntimeSpec, build_runtime, cycle_stack_bytes)
+from gtmodel.errors import CodegenError, InputError
 
 HARNESS = os.path.join(os.path.dirname(__import__("gtmodel.codegen", fromlist=["x"]).__file__), "harness", "runtime")
 
@@ -109,6 +111,23 @@ def test_egm_joint_configuration_starts_from_the_measured_joints(tmp_path):
     assert f"gt_rt_u_init[GT_RT_NU] = {{{EGM_INPUTS.index('feedback.joints.1')}, {EGM_INPUTS.index('feedback.joints.0')}}}" in cfg
     assert f"gt_rt_u_init2[GT_RT_NU] = {{{EGM_INPUTS.index('planned.joints.1')}, {EGM_INPUTS.index('planned.joints.0')}}}" in cfg
     assert "gt_rt_u_reply[GT_RT_NU] = {1, 0}" in cfg and "#define GT_RT_NREPLY 2" in cfg
+
+
+def test_the_cycle_threads_stack_holds_the_steps_work_arrays(tmp_path):
+    """Independent: the work-array sizes the generated wrapper declares (its #defines, read from gt_loop.c)."""
+    import re
+    from types import SimpleNamespace
+
+    RobotRuntime(_step(2, 2), RuntimeSpec(**GOOD)).generate(tmp_path)
+    sizes = {k: int(v) for k, v in re.findall(r"#define GT_LOOP_\w+_SZ_(ARG|RES|IW|W) (\d+)", (tmp_path / "gt_loop.c").read_text())}
+    stack = int(re.search(r"#define GT_RT_CYCLE_STACK \(\(size_t\)(\d+)u\)", (tmp_path / "gt_runtime_config.h").read_text())[1])
+    assert stack >= CYCLE_STACK_BASE + 8 * sum(sizes.values()) and stack % 65536 == 0 and stack < CYCLE_STACK_BASE + 65536 * 2
+    assert stack_work_bytes((1, 2, 3, 100), "float") == 8 * 3 + 8 * 3 + 4 * 100
+    big = SimpleNamespace(work_sizes={"control": (0, 0, 0, 1_000_000)}, real="double")  # 8 MB of reals
+    assert cycle_stack_bytes(big) == CYCLE_STACK_BASE + 8_060_928  # 8,000,000 rounded up to 64 KiB
+    with pytest.raises(CodegenError, match="stack work arrays take 2000000000 bytes: over the runtime's cycle-thread stack cap"):
+        cycle_stack_bytes(SimpleNamespace(work_sizes={"control": (0, 0, 0, 250_000_000)}, real="double"))
+    assert CYCLE_STACK_MAX >= 64 * CYCLE_STACK_BASE
 
 
 @pytest.mark.parametrize("real", ["double", "float"])

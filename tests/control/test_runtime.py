@@ -366,6 +366,25 @@ def test_read_cycle_log_refuses_a_bad_file(tmp_path):
         read_cycle_log(tmp_path / "none.csv")
 
 
+def test_a_step_with_megabytes_of_stack_work_runs_in_the_cycle_thread(tmp_path):
+    """A dense 260 x 260 QR solve (CasADi's linear solver, kept as MX: 1.6 MB of work arrays on the stack). With the
+    cycle thread's stack fixed at 1 MiB this runtime was killed by SIGSEGV at its first cycle; now it is sized from the
+    step's work (robot_runtime.cycle_stack_bytes). The solve takes longer than a period here: replies may be dropped
+    as late, which is the deadline rule's business (not counted)."""
+    n = 260
+    t, x, ul = ca.MX.sym("t"), ca.MX.sym("x", 3), ca.MX.sym("u_last", 2)
+    y = ca.solve((1 + x[0] ** 2) * ca.DM.eye(n) + 1e-3 * ca.repmat(x[1], n, n), ca.DM.ones(n), "qr")
+    f = ca.Function("control", [t, x, ul], [ca.vertcat(1e-6 * ca.sum1(y), 0.0), ca.MX(1)], ["t", "x", "u_last"], ["u", "ok"])
+    step = LoopStep("test", f, 0.004, np.full(2, -np.inf), np.full(2, np.inf), np.zeros(2), ["x0", "x1", "x2"], ["u0", "u1"])
+    spec = RuntimeSpec(interface="rsi", inputs=["RIst.X", "RIst.Y", "sensor.0"], outputs=["RKorr.X", "AKorr.A1"], lower=LOWER,
+                       upper=UPPER, rate=RATE, correction="relative", fallback="hold", stale_cycles=5)
+    source = RobotRuntime(step, spec)
+    generated = source.generate(tmp_path / "code")
+    assert 8 * generated.work_sizes["control"][3] > 1.5e6
+    run, _ = session(build_runtime(source, tmp_path / "code", generated=generated), tmp_path / "run", rsi_script(10))
+    assert run.status == Status.COMPLETED and run.summary["cycles"] == run.summary["log"]["rows"] == 10, run.message
+
+
 PERIOD = 0.004  # s, the runtime's cycle (RuntimeSpec's default)
 
 

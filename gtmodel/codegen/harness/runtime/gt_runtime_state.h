@@ -39,7 +39,7 @@
 #define GT_RT_LOG_REPEATS 100     /* consecutive duplicate / out-of-window datagrams logged row by row; more are counted */
 #define GT_RT_MAX_DATAGRAM 4096
 #define GT_RT_NSTATUS 32
-#define GT_RT_CYCLE_STACK (1u << 20)  /* the step's CasADi work arrays live on it */
+/* GT_RT_CYCLE_STACK: gt_runtime_config.h, sized from the step's stack work arrays (robot_runtime.cycle_stack_bytes) */
 #define GT_RT_WRITER_STACK (256u << 10)
 #define GT_RT_RCVBUF_BYTES (1 << 20) /* asked for each socket's receive queue; the kernel caps it (net.core.rmem_max) */
 
