@@ -48,7 +48,9 @@ measured side by side in one run, because these machines are noisy:
   ``acados_sqp_first_control_rel_diff`` (the same against gtmodel's line-search SQP, 40 iterations: the horizon
   problem may have several local optima, and the full step and the line search may end in different ones; on the
   L1 at one of the 5 states the line search's objective is 17.34 and the full steps' 17.69, 0.11 apart in the
-  first input). The headline is acados at its fastest configuration that converged (of
+  first input). The nearest-input figures (``nearest_*``) take only gtmodel's inputs whose solver says it solved
+  (:class:`~gtmodel.control.mpc_solve.HorizonSolution`: every QP of the HPIPM iterations solved, the SQP converged);
+  a state with neither is left out and counted (``agreement_states_unsolved``). The headline is acados at its fastest configuration that converged (of
   :data:`ACADOS_QPS`, the least median CPU per step among those whose every step returned
   status 0 and whose plant did not diverge): ``acados_config``, ``acados_cpu_step_*``,
   ``acados_tracking_rms`` and ``ratio_to_acados_median``, ``ratio_to_acados_p99``,
@@ -272,19 +274,24 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
     try:
         for qp, peer in peers.items():
             cpu = peer.step_times()
-            rel, rel_sqp, rel_range, near, near_range, compared = 0.0, 0.0, 0.0, 0.0, 0.0, 0
+            rel, rel_sqp, rel_range, near, near_range, compared, unsolved = 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0
             span = np.where(np.isfinite(c.u_ub - c.u_lb), c.u_ub - c.u_lb, np.nan)
             for k in np.linspace(0, setup.t.size - 1, AGREEMENT_STATES + 2)[1:-1].round().astype(int):
                 t, x = runs[qp][0].t[k], runs[qp][0].x[k]
                 ua, done = peer.converged(t, x)
                 if not done:  # the peer's full-step Gauss-Newton iterations did not settle: no optimum to compare
                     continue
-                ug, _ = c.solve(t, x, plugin="hpipm", iterations=AGREEMENT_RTI_ITERATIONS)  # the same iteration as acados'
-                us, _ = c.solve(t, x, plugin="sqpmethod", iterations=40)  # 40: converged to 2e-11 on the L1 (notebook 15)
+                sg = c.solve(t, x, plugin="hpipm", iterations=AGREEMENT_RTI_ITERATIONS)  # the same iteration as acados'
+                ss = c.solve(t, x, plugin="sqpmethod", iterations=40)  # 40: converged to 2e-11 on the L1 (notebook 15)
+                ug, us = sg.u, ss.u
+                own = [sol.u for sol in (sg, ss) if sol.success]  # gtmodel's inputs whose solver says it converged
+                if not own:
+                    unsolved += 1
+                    continue
                 rel = max(rel, float(np.max(np.abs(ua - ug)) / max(np.max(np.abs(ug)), 1e-300)))
                 rel_range = max(rel_range, float(np.max(np.abs(ua - ug) / span)))  # NaN without finite bounds
                 rel_sqp = max(rel_sqp, float(np.max(np.abs(ua - us)) / max(np.max(np.abs(us)), 1e-300)))
-                nearer = min((ug, us), key=lambda u: float(np.max(np.abs(ua - u))))  # the optimum acados' settled in
+                nearer = min(own, key=lambda u: float(np.max(np.abs(ua - u))))  # the optimum acados' settled in
                 near = max(near, float(np.max(np.abs(ua - nearer)) / max(np.max(np.abs(nearer)), 1e-300)))
                 near_range = max(near_range, float(np.max(np.abs(ua - nearer) / span)))
                 compared += 1
@@ -293,6 +300,7 @@ def acados_finish(setup, c, peers: dict, runs: dict) -> dict:
                        "first_control_rel_diff": rel if compared else None,
                        "first_control_range_diff": rel_range if compared and np.isfinite(rel_range) else None,
                        "sqp_first_control_rel_diff": rel_sqp if compared else None, "agreement_states": compared,
+                       "agreement_states_unsolved": unsolved,
                        "nearest_first_control_rel_diff": near if compared else None,
                        "nearest_first_control_range_diff": near_range if compared and np.isfinite(near_range) else None,
                        "failed_steps": int(sum(np.count_nonzero(run.status) for run in runs[qp])),

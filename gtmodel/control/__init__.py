@@ -60,6 +60,7 @@ __all__ = [
     "MPC_SOLVERS",
     "QP_ROW",
     "MPCController",
+    "HorizonSolution",
     "mpc_controller",
     "EXCESS_TOLERANCE",
     "BoundExcess",
@@ -77,5 +78,6 @@ __getattr__, __dir__ = lazy_exports(__name__, {
     "saturate": "tracking",
     "DEFAULT_PENALTY": "mpc_constraints", "MPCConstraints": "mpc_constraints", "problem_constraints": "mpc_constraints",
     "MPC_METHODS": "mpc", "MPC_SOLVERS": "mpc", "QP_ROW": "mpc", "MPCController": "mpc", "mpc_controller": "mpc",
+    "HorizonSolution": "mpc_solve",
     "EXCESS_TOLERANCE": "bounds", "BoundExcess": "bounds", "bound_report": "bounds",
 })

@@ -45,7 +45,7 @@ from gtmodel.control.mpc_memory import (backoff_error, backoff_rows, disturbance
 from gtmodel.control.mpc_fatrop import fatrop_problem
 from gtmodel.control.mpc_hpipm import hpipm_rti
 from gtmodel.control.mpc_nlp import between_rows, single_shooting_nlp, single_shooting_rti
-from gtmodel.control.mpc_solve import float_tolerance, horizon_solve
+from gtmodel.control.mpc_solve import HorizonSolution, float_tolerance, horizon_solve
 from gtmodel.control.problem import PREDICTION_METHODS, sqrt_psd as _sqrt_psd, substep_states, tracking_problem, weight_matrix
 from gtmodel.control.state_limits import parameter_margin
 from gtmodel.control.reference import MEASUREMENT_LIMIT, MEMORY_LIMIT, SampledReference, period_index, start_input
@@ -345,7 +345,7 @@ class MPCController(SampledReference):
         return np.concatenate([np.asarray(x, dtype=float).reshape(-1), np.ravel(xr), np.ravel(ur), *prev])
 
     def solve(self, t: float, x: Any, w0: Any = None, plugin: str = "ipopt", iterations: int | None = None,
-              u_prev: Any = None) -> tuple[np.ndarray, np.ndarray]:
+              u_prev: Any = None) -> HorizonSolution:
         """Solve the horizon problem at ``(t, x)`` from Python (the reference of the generated step).
 
         Parameters
@@ -370,10 +370,10 @@ class MPCController(SampledReference):
 
         Returns
         -------
-        u : numpy.ndarray
-            ``(nu,)`` the first input (not saturated beyond the bounds of the NLP).
-        w : numpy.ndarray
-            ``(nw,)`` the blocked inputs.
+        HorizonSolution
+            ``u`` ``(nu,)`` the first input (not saturated beyond the bounds of the NLP), ``w``
+            ``(nw,)`` the blocked inputs, and the solver's ``status`` and ``message``
+            (:class:`~gtmodel.control.mpc_solve.HorizonSolution`); unpacks as ``u, w``.
         """
         return horizon_solve(self, t, x, w0, plugin, iterations, u_prev)
 

@@ -7,21 +7,93 @@ IPOPT, CasADi's ``sqpmethod``, or the step's own ``hpipm`` and ``fatrop`` forms.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import Any, Iterator
 
 import numpy as np
 
 from gtmodel.control.mpc_fatrop import fatrop_problem
-from gtmodel.control.mpc_hpipm import hpipm_rti
+from gtmodel.control.mpc_hpipm import HPIPM_MAX_ITER, hpipm_rti
 from gtmodel.control.problem import sqrt_psd as _sqrt_psd
 from gtmodel.control.tracking import saturate
 from gtmodel.errors import InputError
+from gtmodel.modeling.ocp.result import normalize_ipopt_status
+from gtmodel.modeling.ocp.shooting_bounds import quiet_casadi
+from gtmodel.status import Status
 
-__all__ = ["float_tolerance", "horizon_solve"]
+__all__ = ["HorizonSolution", "float_tolerance", "horizon_solve"]
 
 
-def horizon_solve(c: Any, t: float, x: Any, w0: Any, plugin: str, iterations: int | None, u_prev: Any) -> tuple[np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class HorizonSolution:
+    """The horizon problem solved from Python, with the solver's verdict.
+
+    Unpacks as ``u, w = controller.solve(...)`` (and ``[0]``, ``[1]``), as python-control's
+    response objects unpack into their arrays.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        ``(nu,)`` the first input.
+    w : numpy.ndarray
+        ``(nw,)`` the blocked inputs.
+    status : Status
+        ``optimal`` where the NLP solver converged (IPOPT, ``sqpmethod``, FATROP; IPOPT's statuses by
+        :func:`~gtmodel.modeling.ocp.result.normalize_ipopt_status`); ``completed`` where a fixed count of
+        iterations ran (``sqpmethod``'s ``iterations``, every one taken; ``hpipm``'s real-time iterations with
+        every QP solved); ``error`` where HPIPM did not solve one (its iteration limit or its minimum step: ``w`` is
+        then its last iterate) or the SQP stopped otherwise, and wherever ``u`` or ``w`` is not finite.
+    message : str
+        The solver's own status and what it means.
+    plugin : str
+        The solver.
+    """
+
+    u: np.ndarray
+    w: np.ndarray
+    status: Status
+    message: str
+    plugin: str
+
+    @property
+    def success(self) -> bool:
+        """Whether :attr:`status` is a success (``optimal``, ``converged``, ``completed``)."""
+        return self.status.success
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        return iter((self.u, self.w))
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        return (self.u, self.w)[i]
+
+    def __len__(self) -> int:
+        return 2
+
+
+def _solution(w: np.ndarray, nu: int, status: Status, message: str, plugin: str) -> HorizonSolution:
+    """The result, ``error`` wherever the inputs are not finite (never a silent NaN)."""
+    w = np.asarray(w, dtype=float).reshape(-1)
+    if not np.all(np.isfinite(w)):
+        status, message = Status.ERROR, f"non-finite inputs ({message})"
+    return HorizonSolution(u=w[:nu].copy(), w=w, status=status, message=message, plugin=plugin)
+
+
+def _nlp_status(stats: dict, fixed: int | None = None) -> tuple[Status, str]:
+    """A CasADi NLP solver's verdict (IPOPT's, ``sqpmethod``'s, FATROP's ``stats()``) as a status and its message.
+
+    ``fixed``: the SQP runs exactly that many iterations (``sqpmethod``'s ``min_iter = max_iter``, tolerances
+    1e-14): reaching the count is ``completed``, not a failure.
+    """
+    rs = str(stats.get("return_status", ""))
+    if stats.get("success"):
+        return Status.OPTIMAL, rs or "converged"
+    if fixed is not None and rs == "Maximum_Iterations_Exceeded":
+        return Status.COMPLETED, f"{fixed} SQP iterations, the count asked for ({rs})"
+    status = normalize_ipopt_status(rs)
+    return (Status.ERROR if status.success else status), rs or "not converged"
+
+
+def horizon_solve(c: Any, t: float, x: Any, w0: Any, plugin: str, iterations: int | None, u_prev: Any) -> HorizonSolution:
     """:meth:`gtmodel.control.mpc.MPCController.solve` of the MPC ``c`` (its arguments and results).
 
     Parameters
@@ -43,22 +115,28 @@ def horizon_solve(c: Any, t: float, x: Any, w0: Any, plugin: str, iterations: in
 
     Returns
     -------
-    u : numpy.ndarray
-        ``(nu,)`` the first input.
-    w : numpy.ndarray
-        ``(nw,)`` the blocked inputs.
+    HorizonSolution
+        The first input, the blocked inputs and the solver's verdict (unpacks as ``u, w``).
     """
     if plugin == "hpipm":
         w_start = c.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1)
-        lbu, ubu = np.tile(c.u_lb, c.blocks), np.tile(c.u_ub, c.blocks)
-        w = np.asarray(hpipm_rti(c, _sqrt_psd, iterations)(x, w_start, c.parameters(t, x), lbu, ubu, np.zeros(c.constraint_rows))[0]).reshape(-1)
-        return w[: c.nu].copy(), w
+        args = (x, w_start, c.parameters(t, x), np.tile(c.u_lb, c.blocks), np.tile(c.u_ub, c.blocks), np.zeros(c.constraint_rows))
+        k_it = c.sqp_iterations if iterations is None else int(iterations)
+        try:  # HPIPM's own verdict on every QP (CasADi's error_on_fail; its dump of the QP kept off the terminal), then the
+            # same iterations leniently for the iterate (CasADi has no stats of a solver inside a Function)
+            with quiet_casadi():
+                w = np.asarray(hpipm_rti(c, _sqrt_psd, iterations, strict=True)(*args)[0])
+            status, message = Status.COMPLETED, f"{k_it} real-time iterations, every QP solved by HPIPM"
+        except RuntimeError:
+            w = np.asarray(hpipm_rti(c, _sqrt_psd, iterations)(*args)[0])
+            status, message = Status.ERROR, (f"HPIPM did not solve a QP of the {k_it} real-time iterations (its limit of "
+                                             f"{HPIPM_MAX_ITER} iterations or its minimum step): its last iterate")
+        return _solution(w, c.nu, status, message, plugin)
     if plugin == "fatrop":
         solver, first, b = fatrop_problem(c, _sqrt_psd)
         z0 = first(x, c.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1))
         z = np.asarray(solver(x0=z0, p=c.parameters(t, x), **{k: b[k] for k in ("lbx", "ubx", "lbg", "ubg")})["x"]).reshape(-1)
-        w = z[b["inputs"]]
-        return w[: c.nu].copy(), w
+        return _solution(z[b["inputs"]], c.nu, *_nlp_status(solver.stats()), plugin)
     w_start = c.w_initial if w0 is None else np.asarray(w0, dtype=float).reshape(-1)
     if plugin == "ipopt" and c.n_slack:
         # the exact penalty's theorem (Nocedal & Wright, Numerical Optimization, 2nd ed., thm. 17.3):
@@ -71,12 +149,12 @@ def horizon_solve(c: Any, t: float, x: Any, w0: Any, plugin: str, iterations: in
         sol = solver(x0=w_start, p=c.parameters(t, x, u_prev), **hard.bounds())
         lam = float(np.sum(np.abs(np.asarray(sol["lam_g"]))))  # one slack per side serves all its rows: their sum
         if solver.stats()["success"] and lam < c.constraints.weight:
-            w = np.asarray(sol["x"]).reshape(-1)
-            return w[: c.nu].copy(), w
+            status, message = _nlp_status(solver.stats())
+            return _solution(sol["x"], c.nu, status, f"{message} (the hard form; its multipliers below the penalty)", plugin)
     solver = c.nlp_solver(plugin, iterations)
     sol = solver(x0=np.r_[w_start, np.zeros(c.n_slack)], p=c.parameters(t, x, u_prev), **c.bounds())
-    w = np.asarray(sol["x"]).reshape(-1)[: c.nw]
-    return w[: c.nu].copy(), w
+    fixed = (c.sqp_iterations if iterations is None else int(iterations)) if plugin == "sqpmethod" else None
+    return _solution(np.asarray(sol["x"]).reshape(-1)[: c.nw], c.nu, *_nlp_status(solver.stats(), fixed), plugin)
 
 
 def float_tolerance(c: Any, rows: int = 20, tau: float = 0.0) -> float:

@@ -72,6 +72,20 @@ def test_converged_sqp_agrees_with_ipopt(motor, k):
     assert np.max(np.abs(u_sqp - u_ip)) / (1 + np.max(np.abs(u_ip))) <= IPOPT_AGREEMENT
 
 
+@pytest.mark.parametrize("plugin, iterations, status, message", [
+    ("ipopt", None, "optimal", "Solve_Succeeded"),
+    ("sqpmethod", 30, "completed", "30 SQP iterations, the count asked for (Maximum_Iterations_Exceeded)"),  # exactly 30
+    ("sqpmethod", 1, "completed", "1 SQP iterations, the count asked for (Maximum_Iterations_Exceeded)"),
+])
+def test_solve_carries_the_solvers_verdict_and_unpacks_as_u_w(motor, plugin, iterations, status, message):
+    """Independent: CasADi's own stats (return_status) of the solver, read through the result."""
+    *_, c = motor
+    sol = c.solve(c.t0 + 60 * DT, c.x_ref[60] + np.array([0.5, 0.02, 1.0]), plugin=plugin, iterations=iterations)
+    u, w = sol
+    assert (sol.status, sol.message, sol.plugin, sol.success) == (status, message, plugin, True)
+    assert u is sol.u and w is sol[1] and len(sol) == 2 and u.shape == (c.nu,) and w.shape == (c.nw,) and np.all(np.isfinite(w))
+
+
 def test_step_function_is_the_rti_with_a_shifted_warm_start(motor):
     # the loop-step Function's u equals one SQP iteration of the same NLP from the same warm start
     *_, c = motor

@@ -132,6 +132,19 @@ def test_strict_raises_where_hpipm_stops_at_its_limit(limited):
         hpipm_rti(c, _sqrt_psd, strict=True)(*args)
 
 
+def test_solve_says_where_hpipm_stops_at_its_limit(limited, capfd):
+    # the state of the test above: MPCController.solve returns HPIPM's last iterate with status error (HPIPM's own
+    # verdict, strict), and CasADi's dump of the failed QP stays off the terminal; at a state where HPIPM converges,
+    # completed
+    c, k = limited, 40
+    w0 = np.tile(c.u_initial, c.horizon)
+    bad = c.solve(c.t0 + k * DT, np.array([-40.0, c.x_ref[k][1], 100.0]), w0=w0, plugin="hpipm")
+    good = c.solve(c.t0 + k * DT, c.x_ref[k] + np.array([0.1, 0.01, 0.5]), w0=w0, plugin="hpipm")
+    assert (bad.status, bad.success, good.status, good.success) == ("error", False, "completed", True)
+    assert bad.message.startswith("HPIPM did not solve a QP of the 1 real-time iterations") and np.all(np.isfinite(bad.w))
+    assert capfd.readouterr().err == ""
+
+
 def test_unknown_reference_solver_is_refused(limited):
     with pytest.raises(InputError, match="plugin: expected 'hpipm', 'qpoases' or 'ipopt', got 'osqp'"):
         hpipm_rti(limited, _sqrt_psd, plugin="osqp")

@@ -38,6 +38,21 @@ def test_l1_mpc_halves_the_feedforward_error_without_bound_violations(l1):
     assert check.mpc.status_counts == {"GT_OK": setup.t.size}
 
 
+def test_agreement_refuses_a_reference_ipopt_did_not_solve(l1, monkeypatch):
+    from gtmodel.control.mpc import MPCController
+    from gtmodel.control.mpc_solve import HorizonSolution
+    from gtmodel.errors import SolverError
+    from gtmodel.status import Status
+
+    setup, _, _, check = l1
+    failed = HorizonSolution(u=np.zeros(setup.controller.nu), w=np.zeros(setup.controller.nw), status=Status.MAX_ITERATIONS,
+                             message="Maximum_Iterations_Exceeded", plugin="ipopt")
+    monkeypatch.setattr(MPCController, "solve", lambda *a, **k: failed)
+    with pytest.raises(SolverError, match=r"IPOPT, the reference, did not solve the horizon problem at t = .* max_iterations "
+                                          r"\(Maximum_Iterations_Exceeded\)"):
+        ipopt_agreement(setup, check.mpc, samples=1)
+
+
 def test_converged_rti_agrees_with_ipopt_near_the_reference(l1):
     # states 1 mm and 10 mm/s off the reference while every axis moves (the plant's state is the
     # tool's with the compliance model; the MPC's is T, T_dot); 40 SQP iterations: on the refined

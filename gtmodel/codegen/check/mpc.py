@@ -25,7 +25,7 @@ from gtmodel.codegen.check import closed_loop as loop_check
 from gtmodel.codegen.check.closed_loop import STATUS_NAMES, LoopCheck, compiled_step
 from gtmodel.codegen.writer import GeneratedCode
 from gtmodel.codegen.loop_step import build_step, mpc_step
-from gtmodel.errors import InputError
+from gtmodel.errors import InputError, SolverError
 from gtmodel.estimation.closed_loop.controller_loop import LoopSummary
 
 #: An MPC file's setup (:class:`gtmodel.problems.mpc_file.MPCSetup`), used through its attributes.
@@ -164,6 +164,8 @@ def ipopt_agreement(setup: MPCSetup, summary: LoopSummary, samples: int = 5, ite
     ------
     InputError
         No state of the run moves faster than ``min_speed``.
+    SolverError
+        IPOPT, the reference, did not solve the horizon problem at a sample (its status and time).
 
     Returns
     -------
@@ -177,7 +179,11 @@ def ipopt_agreement(setup: MPCSetup, summary: LoopSummary, samples: int = 5, ite
     idx = moving[np.linspace(0, moving.size - 1, samples).round().astype(int)]
     out = []
     for k in idx:
-        u_ip, _ = c.solve(summary.t[k], summary.x[k], plugin="ipopt")
+        ref = c.solve(summary.t[k], summary.x[k], plugin="ipopt")
+        if not ref.success:
+            raise SolverError(f"IPOPT, the reference, did not solve the horizon problem at t = {summary.t[k]!r} s: {ref.status} "
+                              f"({ref.message})")
+        u_ip = ref.u
         u_sqp, _ = c.solve(summary.t[k], summary.x[k], plugin="sqpmethod", iterations=iterations)
         out.append(np.max(np.abs(u_sqp - u_ip)) / (1 + np.max(np.abs(u_ip))))
     return np.asarray(out)
