@@ -7,7 +7,8 @@ cycles, a signal, or ``time_limit``: then SIGTERM, so that the log is flushed, a
 does not end), and reads what it wrote into ``out_dir``:
 
 - ``cycle_log.csv``: one row per datagram from the robot (:func:`read_cycle_log`), columns
-  ``cycle, ipoc_or_seq, t, flags, status, latency_us, sensor_age``, then ``x:<field>`` (the
+  ``cycle, ipoc_or_seq, t, flags, status, latency_us, sensor_age, t_monotonic`` (the runtime's
+  ``CLOCK_MONOTONIC`` at the datagram's arrival [s]: :func:`time.monotonic`'s clock on Linux), then ``x:<field>`` (the
   step's inputs), ``u:<field>`` (the step's outputs), ``reply:<field>`` (the limited value sent:
   the total correction, or the absolute position) and, for relative RSI corrections,
   ``sent:<field>`` (the increment in the datagram); numbers ``%.17g``, ``nan`` where a value does

@@ -60,12 +60,32 @@ def test_a_round_trip_is_the_machines_only_when_one_cpu_paused_all_but_the_budge
 
 
 def test_judge_splits_misses_and_late_rounds_by_the_pauses():
-    m = _machine({0: [[10.0, 10.3]], 1: [[20.0005, 20.0045]]})
-    rounds = [(1.0, 1.0001), (10.0, None), (15.0, None), (20.0, 20.005), (30.0, 30.0001), (40.0, 40.006)]
-    # round 4: logged 5 ms late but its reply came back in 0.1 ms (the previous one, read late): judged by the whole wait
-    unexplained, explained = m.judge(rounds, late={3: 0.0045, 4: 0.005, 5: 0.0055}, timeout=0.2, ignore=frozenset({2}))
-    assert [line.split(":")[0] for line in explained] == ["round 1", "round 3"]
-    assert [line.split(":")[0] for line in unexplained] == ["round 4", "round 5"] and "over 200.0 ms" in unexplained[0]
+    m = _machine({0: [[10.0, 10.3], [30.0005, 30.0095]], 1: [[20.0005, 20.0045]]})
+    rounds = [(1.0, 1.0001), (10.0, None), (15.0, None), (20.0, 20.005), (30.0, 30.0001)]
+    # round 3: received at 20.0002, 4.5 ms late, paused all but 0.5 ms of [20.0002, 20.0047];
+    # round 4: the reply in the peer's hands in 0.1 ms, yet the runtime's latency (ending after sendto) 9.5 ms from
+    # 30.0001: judged over the runtime's window, paused all but 0.6 ms of it
+    unexplained, explained = m.judge(rounds, late={3: (20.0002, 0.0045), 4: (30.0001, 0.0095)}, timeout=0.2, ignore=frozenset({2}))
+    assert ([line.split(":")[0] for line in explained], unexplained) == (["round 1", "round 3", "round 4"], [])
+
+
+def test_judge_keeps_what_the_pauses_do_not_cover():
+    m = _machine({0: [[40.003, 40.005]]})  # 2 ms of round 2's 5 ms: the runtime's own 3 ms remain
+    rounds = [(1.0, 1.0001), (10.0, None), (40.0, 40.0001)]
+    unexplained, explained = m.judge(rounds, late={2: (40.0, 0.005)}, timeout=0.2)
+    assert explained == [] and unexplained == ["round 1: no reply over 200.0 ms, the machine paused 0.0 ms of it",
+                                               "round 2: late over 5.0 ms, the machine paused 2.0 ms of it"]
+
+
+@pytest.mark.parametrize("paused, busy", [(0.005, False), (0.01, False), (0.011, True), (0.09, True)])
+def test_a_machine_paused_over_one_percent_of_the_run_is_too_busy(monkeypatch, paused, busy):
+    monkeypatch.delenv("GTMODEL_REALTIME_TESTS", raising=False)
+    m = _machine({0: [[1.0, 1.0 + 100.0 * paused / 2]], 1: [[2.0, 2.0 + 100.0 * paused]]})
+    m.started, m.ended = 0.0, 100.0
+    reason = m.busy_reason()
+    assert (reason is not None) == busy and (reason is None or f"paused {100 * paused:.1f} % of the run" in reason)
+    monkeypatch.setenv("GTMODEL_REALTIME_TESTS", "always")
+    assert m.busy_reason() is None
 
 
 def test_a_canary_sees_a_pause_it_was_given(tmp_path):

@@ -121,7 +121,7 @@ static void gt_log_push(const gt_rt_entry *e)
     atomic_store_explicit(&gt_ring_head, head + 1, memory_order_release);
 }
 
-#define GT_RT_ROW_MAX ((GT_RT_NX + 4 * GT_RT_NU + 8) * 26)
+#define GT_RT_ROW_MAX ((GT_RT_NX + 4 * GT_RT_NU + 9) * 26)
 
 /* one row of the log, within the cap (--log-max-mb): a row past it is counted, not written */
 static void gt_write_row(const gt_rt_entry *e)
@@ -130,8 +130,8 @@ static void gt_write_row(const gt_rt_entry *e)
     size_t n = 0;
     int i;
 #define GT_ROW(...) n += (size_t)snprintf(row + n, n < sizeof row ? sizeof row - n : 0, __VA_ARGS__)
-    GT_ROW("%llu,%llu,%.17g,%u,%d,%.17g,%d", (unsigned long long)e->cycle, (unsigned long long)e->seq, e->t, (unsigned)e->flags,
-           (int)e->status, e->latency_us, (int)e->sensor_age);
+    GT_ROW("%llu,%llu,%.17g,%u,%d,%.17g,%d,%.17g", (unsigned long long)e->cycle, (unsigned long long)e->seq, e->t, (unsigned)e->flags,
+           (int)e->status, e->latency_us, (int)e->sensor_age, e->t_monotonic);
     for (i = 0; i < GT_RT_NX; ++i) GT_ROW(",%.17g", e->x[i]);
     for (i = 0; i < GT_RT_NU; ++i) GT_ROW(",%.17g", e->u[i]);
     for (i = 0; i < GT_RT_NU; ++i) GT_ROW(",%.17g", e->y[i]);
@@ -647,6 +647,7 @@ static void *gt_cycle(void *arg)
         if (!(flags & F_SENT))
             for (i = 0; i < GT_RT_NU; ++i) e.sent[i] = NAN;
         e.latency_us = 1e6 * (gt_now() - t_rx);
+        e.t_monotonic = t_rx; /* CLOCK_MONOTONIC at the datagram's arrival: other programs' logs on this machine line up with it */
         if ((flags & F_SENT) && e.latency_us > gt_S.max_latency_us) gt_S.max_latency_us = e.latency_us;
         /* a hold longer than GT_RT_HOLD_ALARM cycles: an alarm (summary.json and stderr) */
         if (!(flags & F_SENT) || (flags & F_NOT_STEPPED)) {
@@ -814,7 +815,7 @@ int main(int argc, char **argv)
     gt_log_file = fopen(gt_O.log_path, "w");
     if (gt_log_file == NULL) gt_fail(3, "cannot open the cycle log", strerror(errno));
     setvbuf(gt_log_file, NULL, _IOFBF, 1 << 16);
-    fprintf(gt_log_file, "cycle,ipoc_or_seq,t,flags,status,latency_us,sensor_age");
+    fprintf(gt_log_file, "cycle,ipoc_or_seq,t,flags,status,latency_us,sensor_age,t_monotonic");
     for (i = 0; i < GT_RT_NX; ++i) fprintf(gt_log_file, ",x:%s", gt_rt_x_names[i]);
     for (i = 0; i < GT_RT_NU; ++i) fprintf(gt_log_file, ",u:%s", gt_rt_u_names[i]);
     for (i = 0; i < GT_RT_NU; ++i) fprintf(gt_log_file, ",reply:%s", gt_rt_u_names[i]);

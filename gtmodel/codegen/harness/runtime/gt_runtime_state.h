@@ -45,7 +45,7 @@
 
 typedef struct {
     uint64_t cycle, seq;
-    double t, latency_us;
+    double t, latency_us, t_monotonic;
     uint32_t flags;
     int32_t status, sensor_age;
     double x[GT_RT_NX], u[GT_RT_NU], y[GT_RT_NU], sent[GT_RT_NU];
