@@ -261,10 +261,12 @@ def test_kr500_correction_halves_the_tcp_path_error(kr500_runs):
 
 @pytest.mark.slow
 def test_kr500_every_reply_echoes_and_keeps_its_limits(kr500_runs):
-    """Counts that do not depend on the wall clock: every cycle answered, echoed, logged (the late ones: below)."""
+    """Counts that do not depend on the wall clock: every cycle answered, echoed, logged; a cycle without a reply only where
+    the deadline rule dropped a reply computed past the period (a machine's pause can cause one; those are counted in the
+    real-time step, below)."""
     summary, sim = kr500_runs["closed"]
     loop = summary["loop"]
-    assert (loop["missing_replies"], sim.summary["mismatched_replies"]) == (0, 0)
+    assert (loop["missing_replies"] - loop["faults"]["late_dropped"]["count"], sim.summary["mismatched_replies"]) == (0, 0)
     assert loop["log"]["dropped"] == 0 and loop["log"]["rows"] == loop["cycles"] == sim.summary["cycles_sent"]
 
 
@@ -274,7 +276,7 @@ def test_kr500_every_reply_comes_within_its_deadline(request, kr500_runs):
     """A wall-clock count (a busy machine makes a reply late): in the real-time step, skipped when the load is over the cores."""
     skip_when_busy(request.node)
     summary, sim = kr500_runs["closed"]
-    assert (summary["loop"]["late_replies"], sim.summary["late"]) == (0, 0)
+    assert (summary["loop"]["late_replies"], summary["loop"]["faults"]["late_dropped"]["count"], sim.summary["late"]) == (0, 0, 0)
 
 
 @pytest.mark.slow
