@@ -108,7 +108,10 @@ def test_a_state_bound_exceeded_between_the_samples_fails_the_check():
     assert plant_bounds(setup, dataclasses.replace(closed, x_interior=None), between=True) == []
     check = LoopCheck(closed=closed, feedforward=PASSING[1], memory_bytes=0, work_bytes=0, bounds=[at_samples], bounds_between=[between])
     (why,) = check.failures()
-    assert why.startswith("x beyond its bound between the samples by 0.09 (5.26 % > 1 %")
+    assert why.startswith("x beyond its bound between the samples by 0.09 (5.26 % > 1 %") and "has no constraint rows" in why
+    # a tracking controller that holds the state bounds itself: the remedy names its back-off, not 'no constraint rows'
+    (why_limited,) = dataclasses.replace(check, state_limits=True).failures()
+    assert "backed off by its measured one-period prediction error" in why_limited and "no constraint rows" not in why_limited
     when = closed.t[3] + 0.5 * (closed.t[4] - closed.t[3])  # the one interior state of period 3: half-way through it
     assert f"  between the samples (the plant step's substeps): x in [-inf, 1.71]: 1.8 at t = {when:.4g} s, limit 1.71, +5.26 % " \
            "(beyond 1 %; excess 0.09, 1 samples beyond 1 %)" in check.summary_lines()

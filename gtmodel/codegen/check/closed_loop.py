@@ -58,6 +58,9 @@ STATUS_NAMES = {code: name for name, (code, _) in STATUS_CODES.items()}
 BETWEEN_REMEDY = {
     "mpc": ("the MPC's rows act at its prediction's substeps with [mpc] substeps as fine as the plant's and constraint_substeps = "
             "true; where they do, the plant needs more than the bound to follow the plan: plan with margin below it ([reference] overrides)"),
+    "state_limits": ("the controller holds the declared state bounds on its linearised rows at its substeps, backed off by its "
+                     "measured one-period prediction error, which it measures only at the samples; a larger error inside the period "
+                     "(the model's error on this plant) is beyond it: plan with margin below the bound ([reference] overrides)"),
     "": "the controller has no constraint rows: plan with margin below the bound ([reference] overrides) or weight the variable more",
 }
 
@@ -88,6 +91,9 @@ class LoopCheck:
         integers, ``sz_w`` reals).
     label : str
         What the controller is, for the summary (e.g. ``"MPC"``).
+    state_limits : bool
+        Whether the controller (a tracking controller) holds the declared state bounds itself
+        (:mod:`gtmodel.control.state_limits`): a failure's remedy says so (:data:`BETWEEN_REMEDY`).
     max_ratio : float
         The largest RMS ratio to the feedforward that passes (exclusive; default 1).
     step_budget_s : float
@@ -135,6 +141,7 @@ class LoopCheck:
     memory_bytes: int
     work_bytes: int
     label: str = "controller"
+    state_limits: bool = False
     max_ratio: float = 1.0
     step_budget_s: float = float("inf")
     heap: tuple[int, int, int] | None = None
@@ -184,7 +191,8 @@ class LoopCheck:
                + self._cycling() + self._gain(), True)
               for b in self.bounds if b.beyond_tolerance and not diverged],
             *[(f"{b.name} beyond its bound between the samples by {b.excess:.4g} ({100 * b.relative:.3g} % > {100 * EXCESS_TOLERANCE:g} %; "
-               f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY[''])})" + self._cycling() + self._gain(), True)
+               f"{BETWEEN_REMEDY.get(self.label.lower(), BETWEEN_REMEDY['state_limits' if self.state_limits else ''])})"
+               + self._cycling() + self._gain(), True)
               for b in self.bounds_between if b.beyond_tolerance and not diverged],
             (f"{self.failed_steps} failed steps", self.failed_steps > 0),
             (f"RMS ratio to the feedforward {self.ratio_to_feedforward:.4g} not below {self.max_ratio:g} ([check] max_ratio)"
@@ -552,6 +560,7 @@ def closed_loop_check(setup: LoopSetup, generated: GeneratedCode, library: Path 
     budget = setup.max_step_time if setup.max_step_time is not None else float(setup.controller.dt)
     bounds = plant_bounds(setup, first)
     return LoopCheck(closed=first, feedforward=ff, memory_bytes=runner.memory_bytes, work_bytes=lib.work_bytes("control"), label=label,
+                     state_limits=getattr(setup.controller, "state_limits", None) is not None,
                      real=getattr(generated, "real", "double"),
                      max_ratio=float(setup.max_ratio), step_budget_s=float(budget), heap=lib.heap_stats(),
                      clock=getattr(clock, "__name__", str(clock)),

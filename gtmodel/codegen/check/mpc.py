@@ -49,6 +49,8 @@ class MPCCheck(LoopCheck):
         Stack work arrays of one step.
     label : str
         ``"MPC"``.
+    state_limits : bool
+        False: the MPC holds the bounds by its constraint rows (its remedy is the MPC's).
     max_ratio : float
         The largest RMS ratio to the feedforward that passes (exclusive).
     step_budget_s : float
