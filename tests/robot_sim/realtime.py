@@ -210,19 +210,30 @@ class MachinePauses:
             rows = [line.split() for line in out if line and line[0].isdigit()]
             self.pauses[cpu] = np.array(rows, dtype=float).reshape(-1, 2)
 
-    def overlap(self, t0: float, t1: float) -> float:
-        """The most time one CPU was paused within ``[t0, t1]`` (s, monotonic)."""
-        return max((float(np.clip(np.minimum(p[:, 1], t1) - np.maximum(p[:, 0], t0), 0.0, None).sum())
-                    for p in self.pauses.values()), default=0.0)
+    def overlap(self, t0: float, t1: float, union: bool = False) -> float:
+        """The most time one CPU was paused within ``[t0, t1]`` (s, monotonic); with ``union``, the time some CPU was."""
+        def within(p: np.ndarray) -> np.ndarray:
+            clipped = np.column_stack([np.maximum(p[:, 0], t0), np.minimum(p[:, 1], t1)]) if p.size else np.zeros((0, 2))
+            return clipped[clipped[:, 1] > clipped[:, 0]]
+        if not union:
+            return max((float(np.diff(within(p), axis=1).sum()) for p in self.pauses.values()), default=0.0)
+        spans = sorted(map(tuple, np.vstack([within(p) for p in self.pauses.values()] or [np.zeros((0, 2))])))
+        total, end = 0.0, -np.inf
+        for a, b in spans:  # merge the intervals of all CPUs
+            if b > end:
+                total += b - max(a, end)
+                end = b
+        return total
 
-    def explains(self, t0: float, t1: float, budget: float = 0.002) -> bool:
-        """Whether a round trip ``[t0, t1]`` was long only by a pause of the machine.
+    def explains(self, t0: float, t1: float, budget: float = 0.002, union: bool = False) -> bool:
+        """Whether a round ``[t0, t1]`` was long only by a pause of the machine.
 
-        True when the canaries ran above the runtime and one CPU was paused for all of the window
-        but at most ``budget`` seconds (half the 4 ms period by default: the round trip, less the
+        True when the canaries ran above the runtime and one CPU (with ``union``: at each moment some
+        CPU, for a datagram's way through the peer's CPU and the runtime's) was paused for all of the
+        window but at most ``budget`` seconds (half the 4 ms period by default: the round, less the
         machine's pause, would have been on time with room).
         """
-        return self.above_runtime and self.overlap(t0, t1) >= (t1 - t0) - budget
+        return self.above_runtime and self.overlap(t0, t1, union) >= (t1 - t0) - budget
 
     def paused_fraction(self) -> float:
         """The largest share of the canaries' run that one CPU spent paused."""
@@ -255,7 +266,8 @@ class MachinePauses:
             The rounds the runtime itself logged later than its period: when it received the datagram
             (its ``t_monotonic``, s) and its latency ``L`` (s); the window judged is ``[received, received + L]``
             (the latency ends after ``sendto`` returns: a reply may be in the peer's hands before it does).
-            A round with no reply is judged by the peer's whole wait.
+            A round with no reply is judged by the peer's whole wait, paused on any CPU at each moment
+            (the datagram crosses the peer's CPU and the runtime's).
         timeout : float
             The peer's wait for a reply (s).
         ignore : frozenset of int, optional
@@ -270,7 +282,8 @@ class MachinePauses:
         for k in sorted(({k for k, (_, got) in enumerate(rounds) if got is None} | set(late)) - ignore):
             sent, got = rounds[k]
             start, end = (sent, sent + timeout) if got is None else (late[k][0], late[k][0] + late[k][1])
+            union = got is None  # the datagram's way: the peer's CPU, then the runtime's; a late reply: the runtime's own CPU
             line = (f"round {k}: {'no reply' if got is None else 'late'} over {1e3 * (end - start):.1f} ms, "
-                    f"the machine paused {1e3 * self.overlap(start, end):.1f} ms of it")
-            (explained if self.explains(start, end) else unexplained).append(line)
+                    f"the machine paused {1e3 * self.overlap(start, end, union):.1f} ms of it")
+            (explained if self.explains(start, end, union=union) else unexplained).append(line)
         return unexplained, explained

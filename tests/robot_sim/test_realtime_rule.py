@@ -69,6 +69,23 @@ def test_judge_splits_misses_and_late_rounds_by_the_pauses():
     assert ([line.split(":")[0] for line in explained], unexplained) == (["round 1", "round 3", "round 4"], [])
 
 
+@pytest.mark.parametrize("pauses, union, paused", [
+    ({0: [[0.0, 0.1]], 1: [[0.1, 0.2]]}, False, 0.1),
+    ({0: [[0.0, 0.1]], 1: [[0.1, 0.2]]}, True, 0.2),  # halves on two CPUs: some CPU paused all the time
+    ({0: [[0.0, 0.15]], 1: [[0.1, 0.3]]}, True, 0.2),  # overlapping, clipped to the window
+    ({0: [], 1: [[0.05, 0.06]]}, True, 0.01),
+])
+def test_overlap_per_cpu_and_over_all_cpus(pauses, union, paused):
+    assert _machine(pauses).overlap(0.0, 0.2, union) == pytest.approx(paused)
+
+
+def test_a_missed_reply_is_judged_over_all_cpus_a_late_one_per_cpu():
+    m = _machine({0: [[1.0, 1.1], [2.0, 2.0025]], 1: [[1.1, 1.2], [2.0025, 2.005]]})
+    rounds = [(1.0, None), (2.0, 2.0001)]
+    unexplained, explained = m.judge(rounds, late={1: (2.0, 0.005)}, timeout=0.2)
+    assert [line.split(":")[0] for line in explained] == ["round 0"] and [line.split(":")[0] for line in unexplained] == ["round 1"]
+
+
 def test_judge_keeps_what_the_pauses_do_not_cover():
     m = _machine({0: [[40.003, 40.005]]})  # 2 ms of round 2's 5 ms: the runtime's own 3 ms remain
     rounds = [(1.0, 1.0001), (10.0, None), (40.0, 40.0001)]
