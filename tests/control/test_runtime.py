@@ -385,6 +385,28 @@ def test_a_step_with_megabytes_of_stack_work_runs_in_the_cycle_thread(tmp_path):
     assert run.status == Status.COMPLETED and run.summary["cycles"] == run.summary["log"]["rows"] == 10, run.message
 
 
+@pytest.mark.slow
+def test_an_unblocked_mpc_of_horizon_100_runs_behind_rsi(tmp_path, motor):
+    """A user's case: the DC motor's MPC (horizon 100, every input free: 1.07 MB of work arrays) as the runtime's step.
+    With the fixed 1 MiB cycle stack this runtime was killed by SIGSEGV (measured, 2026-11-29); now every step runs
+    (the replies it computes past the deadline are the deadline rule's business, not counted here)."""
+    from gtmodel.codegen.loop_step import mpc_step
+    from gtmodel.codegen.robot_runtime import CYCLE_STACK_BASE, cycle_stack_bytes
+    from gtmodel.control.mpc import mpc_controller
+
+    ode = motor[0]
+    tt = 0.004 * np.arange(301)
+    uu = (6.0 * np.sin(2 * np.pi * tt / 0.6))[:, None]
+    xx, _ = ode.simulate_steps(ode.step(0.004, "rk4", substeps=4), uu[:-1])
+    c = mpc_controller(ode, tt, xx, uu, horizon=100, Q=[1e-2, 100.0, 1e-2], R=[1e-3], u_lb=[-12.0], u_ub=[12.0], method="rk4", substeps=2)
+    spec = RuntimeSpec(interface="rsi", inputs=["RIst.X", "RIst.Y", "RIst.Z"], outputs=["RKorr.X"], lower=[-12.0], upper=[12.0], rate=[1.0])
+    source = RobotRuntime(mpc_step(c), spec)
+    generated = source.generate(tmp_path / "code")
+    assert cycle_stack_bytes(generated) > CYCLE_STACK_BASE + 1_000_000
+    run, _ = session(build_runtime(source, tmp_path / "code", generated=generated), tmp_path / "run", rsi_script(20, sensor=False))
+    assert run.status == Status.COMPLETED and run.summary["cycles"] == 20 and run.summary["step_status"] == {"GT_OK": 20}, run.message
+
+
 PERIOD = 0.004  # s, the runtime's cycle (RuntimeSpec's default)
 
 
